@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Sets up, builds and runs every test through CTest.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+cd "$here"
+bash scripts/setup.sh
+build=${PALP_BUILD_DIR:-build}
+cd "$build"
+ctest --output-on-failure -j"$(nproc)" --timeout 300

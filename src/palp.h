@@ -1,0 +1,261 @@
+/*
+ * palp.h - the real-time viscoelastic breast-phantom model (Widmer & Hu 2011).
+ *
+ * A world is created from a def struct, stepped at a fixed time step through a
+ * pipeline of named stages, and queried for its state. Units are SI throughout
+ * (m, kg, s, N, Pa); convert at the edges. Functions return 0 or a negative
+ * PALP_E* code. The library holds no globals: every piece of state hangs off a
+ * palp_world, which its creator owns and destroys.
+ *
+ * This header never pulls in DDS, SQLite or any I/O library.
+ */
+#ifndef PALP_H
+#define PALP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- errors ------------------------------------------------------------ */
+enum {
+  PALP_OK = 0,
+  PALP_EINVAL = -1,    /* an argument or parameter is out of its domain */
+  PALP_ENOMEM = -2,    /* allocation failed */
+  PALP_ERANGE = -3,    /* an index (vertex, contact) is out of range */
+  PALP_EPARSE = -4,    /* a scene or parameter file is malformed */
+  PALP_EIO = -5,       /* a file could not be read or written */
+  PALP_EUNSTABLE = -6, /* the state became non-finite; the world refuses to step */
+  PALP_EFULL = -7,     /* no free contact slot */
+  PALP_ESOLVER = -8    /* the sparse factorisation failed */
+};
+const char *palp_strerror(int err);
+
+typedef struct palp_vec3 {
+  double x, y, z;
+} palp_vec3;
+
+/* ---- mesh --------------------------------------------------------------- */
+/* A hemisphere of radius `radius` [m] on the plane z = 0, pole at +z. The dome
+ * holds `vertex_count` vertices on latitude rings; the rim ring lies on z = 0 and
+ * is fixed. The flat base is closed with triangles between rim vertices only, so
+ * the surface is a closed, consistently outward-oriented triangle mesh. */
+typedef struct palp_mesh_def {
+  double radius;    /* [m], default 0.04 (8.0 cm diameter) */
+  int vertex_count; /* default 338; any value from 19 to 200000 */
+} palp_mesh_def;
+
+typedef struct palp_mesh {
+  int vertex_count;
+  int triangle_count; /* dome triangles first, then base triangles */
+  int dome_triangle_count;
+  int link_count; /* unique edges with at least one free end */
+  int ring_count; /* latitude rings below the pole; ring_count is the rim */
+  palp_vec3 *rest;  /* [vertex_count] rest positions [m] */
+  int (*tri)[3];    /* [triangle_count] counter-clockwise seen from outside */
+  int (*link)[2];   /* [link_count] vertex pairs, first < second */
+  uint8_t *fixed;   /* [vertex_count] 1 for rim (base) vertices */
+  int *ring_start;  /* [ring_count + 2] first vertex of each ring; pole is ring 0 */
+  double *vertex_area; /* [vertex_count] lumped (one-third) dome area [m^2] */
+  int top_vertex;   /* the pole */
+} palp_mesh;
+
+palp_mesh_def palp_mesh_default_def(void);
+int palp_mesh_create(const palp_mesh_def *def, palp_mesh *out);
+void palp_mesh_destroy(palp_mesh *mesh);
+/* Enclosed volume by the divergence theorem, V = sum_t x_a . (x_b x x_c) / 6 [m^3]. */
+double palp_mesh_volume(const palp_mesh *mesh, const palp_vec3 *pos);
+/* Index of the dome vertex nearest to a point [m]. */
+int palp_mesh_nearest_vertex(const palp_mesh *mesh, const palp_vec3 *pos, palp_vec3 p);
+
+/* ---- contact loads ------------------------------------------------------- */
+/* The paper's four force distributions. */
+typedef enum palp_distribution {
+  PALP_DIST_SINGLE = 1,          /* I: all force on one vertex */
+  PALP_DIST_UNIFORM = 2,         /* II: uniform pressure over a patch */
+  PALP_DIST_GAUSSIAN = 3,        /* III: 2D Gaussian peaked at the patch centre */
+  PALP_DIST_GAUSSIAN_OFFSET = 4  /* IV: 2D Gaussian peaked off-centre (distal finger) */
+} palp_distribution;
+
+typedef struct palp_contact_def {
+  palp_distribution distribution;
+  palp_vec3 center;       /* a point on or near the surface [m]; snapped to the nearest vertex */
+  double patch_area;      /* [m^2], default 5.2e-4 (5.2 cm^2) */
+  double sigma_fraction;  /* Gaussian sigma as a fraction of the patch radius, default 0.5 */
+  double offset_fraction; /* IV: peak offset as a fraction of the patch radius, default 0.5 */
+  palp_vec3 offset_dir;   /* IV: direction of the offset (projected on the tangent plane) */
+} palp_contact_def;
+
+palp_contact_def palp_contact_default_def(palp_distribution d, palp_vec3 center);
+
+/* Per-vertex weights of a distribution on a mesh: fills vertices[] and weights[]
+ * (sum of weights = 1) and returns how many (<= cap), or a negative error.
+ * Shared by the real-time model and the FEM reference so both load the same points. */
+int palp_contact_weights(const palp_mesh *mesh, const palp_vec3 *pos, const palp_contact_def *def,
+                         int *vertices, double *weights, int cap);
+
+/* ---- force profiles ------------------------------------------------------ */
+typedef enum palp_profile_kind {
+  PALP_PROFILE_STEP = 1,     /* magnitude during [t_on, t_off), else 0; no ramp */
+  PALP_PROFILE_RAMP = 2,     /* 0 -> magnitude over [t_on, t_off], then held */
+  PALP_PROFILE_SINE = 3,     /* offset + magnitude sin(2 pi f (t - t_on)) during [t_on, t_off) */
+  PALP_PROFILE_KEYFRAMES = 4 /* piecewise linear through (t_i, f_i); held after the last */
+} palp_profile_kind;
+
+#define PALP_PROFILE_MAX_KEYS 64
+typedef struct palp_profile {
+  palp_profile_kind kind;
+  double magnitude; /* [N] */
+  double t_on, t_off; /* [s] */
+  double frequency; /* [Hz], sine only */
+  double offset;    /* [N], sine only */
+  int key_count;
+  double key_t[PALP_PROFILE_MAX_KEYS]; /* [s] */
+  double key_f[PALP_PROFILE_MAX_KEYS]; /* [N] */
+} palp_profile;
+
+/* The paper's 3 N step held for 2 s, then released. */
+palp_profile palp_profile_paper_step(void);
+double palp_profile_eval(const palp_profile *p, double t);
+
+/* ---- material and world -------------------------------------------------- */
+/* Burgers element (Maxwell spring E1 + dashpot eta1, in series with a Kelvin
+ * spring E2 || dashpot eta2), Eq. 1 of the paper, in stress-strain form. Each link
+ * carries it over an effective cross-section thickness * (adjacent area) / rest length. */
+typedef struct palp_membrane_params {
+  double thickness; /* [m], 2 mm (Table I) */
+  double density;   /* [kg/m^3], 950 (Table I) */
+  double E1;        /* Maxwell spring [Pa] */
+  double eta1;      /* Maxwell dashpot [Pa s] */
+  double E2;        /* Kelvin spring [Pa] */
+  double eta2;      /* Kelvin dashpot [Pa s] */
+} palp_membrane_params;
+
+typedef enum palp_gel_law {
+  /* p = P [(V0/V)^a1 - 1] - a2 dV/dt: Eq. 3's a1 term integrated exactly, a2 as
+   * damping of the volume rate; a3 unused. See docs/model.md. */
+  PALP_GEL_POLYTROPIC = 0,
+  /* Eq. 3 as printed, read incrementally frame to frame (see docs/model.md). */
+  PALP_GEL_PAPER_LITERAL = 1
+} palp_gel_law;
+
+typedef struct palp_gel_params {
+  palp_gel_law law;
+  double pressure; /* P: reference internal pressure [Pa], balanced by the outside at rest */
+  double a1;       /* polytropic exponent [-]; bulk modulus = a1 P */
+  double a2;       /* volume-rate damping [Pa s / m^3] */
+  double a3;       /* literal law only: pressure momentum [s^2] */
+} palp_gel_params;
+
+typedef enum palp_effect {
+  PALP_EFFECT_MEMBRANE_ELASTICITY = 1u << 0,
+  PALP_EFFECT_MEMBRANE_VISCOSITY = 1u << 1, /* needs elasticity */
+  PALP_EFFECT_GEL_PRESSURE = 1u << 2,
+  PALP_EFFECT_GEL_DAMPING = 1u << 3, /* needs gel pressure */
+  PALP_EFFECT_GRAVITY = 1u << 4,
+  PALP_EFFECT_FORCE_FEEDBACK = 1u << 5,
+  PALP_EFFECT_ALL = (1u << 6) - 1u
+} palp_effect;
+
+/* Names as used in scene files: "membrane_elasticity", ... ; NULL if unknown. */
+const char *palp_effect_name(palp_effect e);
+int palp_effect_from_name(const char *name, palp_effect *out);
+
+typedef struct palp_world_def {
+  palp_mesh_def mesh;
+  palp_membrane_params membrane;
+  palp_gel_params gel;
+  double dt;          /* fixed step [s]: 0.01 as in the paper, 0.001 for haptics */
+  uint32_t effects;   /* PALP_EFFECT_* mask */
+  palp_vec3 gravity;  /* [m/s^2], default (0, 0, -9.81) */
+  int max_contacts;   /* force-driven contacts and fingers together, default 8 */
+  double sleep_speed; /* below this vertex speed [m/s] with no load the world may sleep, default 1e-5 */
+  double sleep_time;  /* [s] of quiet before sleeping, default 0.5 */
+} palp_world_def;
+
+palp_world_def palp_world_default_def(void);
+
+typedef struct palp_world palp_world;
+
+/* Validates def and builds the world; on failure returns NULL and sets *err. */
+palp_world *palp_world_create(const palp_world_def *def, int *err);
+void palp_world_destroy(palp_world *w);
+
+/* Advances one fixed step of def.dt. A sleeping world returns at once. */
+int palp_world_step(palp_world *w);
+/* Advances by an arbitrary dt [s] (jittery clocks); refactors the solver when dt changes. */
+int palp_world_step_dt(palp_world *w, double dt);
+
+/* Force-driven contact: returns a contact id >= 0 or a negative error. The force
+ * vector [N] is spread over the distribution's vertices by their weights. */
+int palp_world_add_contact(palp_world *w, const palp_contact_def *def);
+int palp_world_set_contact_force(palp_world *w, int contact, palp_vec3 force);
+/* Position-driven finger: a sphere of radius [m] at centre [m]; the surface is kept
+ * outside it and the force needed to do so is the finger's feedback. */
+int palp_world_add_finger(palp_world *w, palp_vec3 center, double radius);
+int palp_world_set_finger(palp_world *w, int contact, palp_vec3 center, double radius);
+int palp_world_remove_contact(palp_world *w, int contact);
+
+/* Force the phantom exerts back on the contact [N] (sum over its vertices), and per
+ * vertex: fills up to cap entries, returns the count. Needs PALP_EFFECT_FORCE_FEEDBACK. */
+int palp_world_contact_feedback(const palp_world *w, int contact, palp_vec3 *total);
+int palp_world_contact_vertices(const palp_world *w, int contact, int *vertices, palp_vec3 *feedback,
+                                int cap);
+
+const palp_mesh *palp_world_mesh(const palp_world *w);
+const palp_vec3 *palp_world_positions(const palp_world *w); /* [vertex_count] [m] */
+const palp_vec3 *palp_world_velocities(const palp_world *w); /* [m/s] */
+double palp_world_time(const palp_world *w);      /* simulated time [s] */
+int64_t palp_world_frame(const palp_world *w);    /* steps taken, sleeping ones included */
+double palp_world_volume(const palp_world *w);    /* [m^3] */
+double palp_world_rest_volume(const palp_world *w);
+double palp_world_pressure(const palp_world *w);  /* gauge gel pressure [Pa] */
+int palp_world_is_awake(const palp_world *w);
+void palp_world_wake(palp_world *w);
+const palp_world_def *palp_world_get_def(const palp_world *w);
+
+/* FNV-1a over the full dynamic state; equal hashes mean bit-identical states. */
+uint64_t palp_world_hash(const palp_world *w);
+
+/* Per-stage timings of the last step and accumulated totals [s]. */
+#define PALP_STAGE_COUNT 8
+typedef struct palp_stage_timings {
+  const char *name[PALP_STAGE_COUNT];
+  double last[PALP_STAGE_COUNT];
+  double total[PALP_STAGE_COUNT];
+  int64_t steps;
+} palp_stage_timings;
+void palp_world_timings(const palp_world *w, palp_stage_timings *out);
+
+/* ---- scenes (JSON) --------------------------------------------------------- */
+#define PALP_SCENE_MAX_CONTACTS 8
+typedef struct palp_scene_contact {
+  palp_contact_def def;
+  palp_vec3 direction; /* unit force direction; zero means the inward normal at the centre */
+  palp_profile profile; /* magnitude over time [N] */
+} palp_scene_contact;
+
+typedef struct palp_scene {
+  char name[64];
+  palp_world_def world;
+  int frames;           /* output frames */
+  double frame_period;  /* [s] between output frames (>= world.dt, a multiple of it) */
+  int contact_count;
+  palp_scene_contact contact[PALP_SCENE_MAX_CONTACTS];
+} palp_scene;
+
+/* Loads a scene. On error returns a negative code and writes a message naming the
+ * offending field (e.g. "membrane.E1: expected a number") into err. */
+int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen);
+int palp_scene_parse(const char *json, palp_scene *out, char *err, size_t errlen);
+/* Creates the world and its contacts; contact ids are 0..contact_count-1. */
+palp_world *palp_scene_create_world(const palp_scene *s, int *err);
+/* Applies every contact's profile at time t [s] (call before each step). */
+int palp_scene_apply(const palp_scene *s, palp_world *w, double t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
