@@ -1,0 +1,2 @@
+/* placeholder until the statistics module lands */
+#include "palp.h"
