@@ -1,0 +1,147 @@
+/* palp_dds.c - topic names, QoS and helpers shared by every palp DDS process. */
+/* realpath() is XSI. */
+#define _XOPEN_SOURCE 700
+#include "palp_dds.h"
+
+#include <limits.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "palp.h" /* PALP_E* codes only; the model is not linked */
+
+static const char *const topic_names[PALP_TOPIC_COUNT] = {
+    "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
+    "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status"};
+
+const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
+  return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
+}
+
+const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind) {
+  switch (kind) {
+  case PALP_TOPIC_CATALOGUE: return &palp_Phantom_desc;
+  case PALP_TOPIC_SESSION_REQUEST: return &palp_SessionRequest_desc;
+  case PALP_TOPIC_SESSION_REPLY: return &palp_SessionReply_desc;
+  case PALP_TOPIC_SESSION_STATE: return &palp_SessionState_desc;
+  case PALP_TOPIC_CONTACT: return &palp_Contact_desc;
+  case PALP_TOPIC_FEEDBACK: return &palp_Feedback_desc;
+  case PALP_TOPIC_DEFORMATION: return &palp_Deformation_desc;
+  case PALP_TOPIC_SERVER_STATUS: return &palp_ServerStatus_desc;
+  default: return NULL;
+  }
+}
+
+dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
+  dds_qos_t *q = dds_create_qos();
+  const dds_duration_t lease = (dds_duration_t)(PALP_DDS_STATION_LEASE_S * 1e9);
+  switch (kind) {
+  case PALP_TOPIC_CATALOGUE:
+  case PALP_TOPIC_SESSION_REPLY:
+  case PALP_TOPIC_SESSION_STATE:
+    /* State that a late joiner must see: the last value per key, kept by the writer. */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    break;
+  case PALP_TOPIC_SESSION_REQUEST:
+    /* Transient-local so a request written before the server's reader matched
+     * is still delivered; automatic liveliness tells the server when the station
+     * is gone. */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, lease);
+    break;
+  case PALP_TOPIC_CONTACT:
+    /* Only the newest finger state matters; a lost sample is superseded within
+     * a millisecond, a retransmitted old one would be harmful. */
+    dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+    dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, lease);
+    break;
+  case PALP_TOPIC_FEEDBACK:
+  case PALP_TOPIC_SERVER_STATUS:
+    dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+    dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    break;
+  case PALP_TOPIC_DEFORMATION:
+    /* Reliable keep-last 1: a display always ends on the newest frame (e.g. the
+     * rest shape after release) without the writer ever blocking on it. */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_MSECS(10));
+    dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    break;
+  default: break;
+  }
+  return q;
+}
+
+dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind) {
+  const dds_topic_descriptor_t *desc = palp_dds_topic_descriptor(kind);
+  if (!desc) return DDS_RETCODE_BAD_PARAMETER;
+  dds_qos_t *q = palp_dds_qos(kind);
+  dds_entity_t t = dds_create_topic(pp, desc, palp_dds_topic_name(kind), q, NULL);
+  dds_delete_qos(q);
+  return t;
+}
+
+dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+  dds_qos_t *q = palp_dds_qos(kind);
+  dds_entity_t r = dds_create_reader(parent, topic, q, NULL);
+  dds_delete_qos(q);
+  return r;
+}
+
+dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+  dds_qos_t *q = palp_dds_qos(kind);
+  dds_entity_t w = dds_create_writer(parent, topic, q, NULL);
+  dds_delete_qos(q);
+  return w;
+}
+
+static dds_qos_t *partition_qos(const char *partition) {
+  dds_qos_t *q = dds_create_qos();
+  dds_qset_partition1(q, partition);
+  return q;
+}
+
+dds_entity_t palp_dds_session_publisher(dds_entity_t pp, const char *partition) {
+  dds_qos_t *q = partition_qos(partition);
+  dds_entity_t p = dds_create_publisher(pp, q, NULL);
+  dds_delete_qos(q);
+  return p;
+}
+
+dds_entity_t palp_dds_session_subscriber(dds_entity_t pp, const char *partition) {
+  dds_qos_t *q = partition_qos(partition);
+  dds_entity_t s = dds_create_subscriber(pp, q, NULL);
+  dds_delete_qos(q);
+  return s;
+}
+
+void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len) {
+  snprintf(buf, len, PALP_DDS_SESSION_PARTITION_FMT, session_id);
+}
+
+int palp_dds_use_config(const char *path) {
+  const char *cur = getenv("CYCLONEDDS_URI");
+  if (cur && *cur) return 0;
+  if (!path) path = PALP_DDS_DEFAULT_CONFIG;
+  char abs[PATH_MAX];
+  if (access(path, R_OK) != 0 || !realpath(path, abs)) return PALP_EIO;
+  char uri[PATH_MAX + 16];
+  int n = snprintf(uri, sizeof uri, "file://%s", abs);
+  if (n < 0 || (size_t)n >= sizeof uri) return PALP_EINVAL;
+  return setenv("CYCLONEDDS_URI", uri, 1) == 0 ? PALP_OK : PALP_EINVAL;
+}
+
+int64_t palp_dds_now_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}

@@ -1,0 +1,71 @@
+/*
+ * palp_dds.h - topic names, QoS and small helpers shared by every palp DDS
+ * process (server, stations, tests, benchmarks).
+ *
+ * The topic names and QoS here are the public wire contract (docs/server.md).
+ */
+#ifndef PALP_DDS_H
+#define PALP_DDS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <dds/dds.h>
+
+#include "palp_types.h" /* generated from idl/palp_types.idl: palp_Contact, ... */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum palp_dds_topic_kind {
+  PALP_TOPIC_CATALOGUE = 0,
+  PALP_TOPIC_SESSION_REQUEST,
+  PALP_TOPIC_SESSION_REPLY,
+  PALP_TOPIC_SESSION_STATE,
+  PALP_TOPIC_CONTACT,
+  PALP_TOPIC_FEEDBACK,
+  PALP_TOPIC_DEFORMATION,
+  PALP_TOPIC_SERVER_STATUS,
+  PALP_TOPIC_COUNT
+} palp_dds_topic_kind;
+
+/* Liveliness lease of every station writer [s]: automatic, so the DDS stack
+ * asserts it; a station that vanishes is seen as not alive after ~this long. */
+#define PALP_DDS_STATION_LEASE_S 0.5
+
+/* Partition of a session's contact/feedback/deformation traffic. */
+#define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"
+
+const char *palp_dds_topic_name(palp_dds_topic_kind kind);
+const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind);
+
+/* QoS for the topic and for both its readers and writers (caller deletes). */
+dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind);
+
+/* Creates (or finds) the topic on participant pp with its QoS. */
+dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind);
+
+/* A reader/writer on `parent` (participant, subscriber or publisher) for a topic
+ * made by palp_dds_create_topic, with the topic's QoS. */
+dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
+dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
+
+/* Publisher / subscriber confined to one session's partition. */
+dds_entity_t palp_dds_session_publisher(dds_entity_t pp, const char *partition);
+dds_entity_t palp_dds_session_subscriber(dds_entity_t pp, const char *partition);
+void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len);
+
+/* Points CYCLONEDDS_URI at the loopback config unless the environment already
+ * sets it. path NULL uses the build's config/cyclonedds-loopback.xml. Returns 0
+ * or a negative PALP_E* code (the file does not exist). */
+int palp_dds_use_config(const char *path);
+
+/* CLOCK_MONOTONIC in ns; shared by every process on the host, so a contact's
+ * source time and its feedback's receive time compare directly. */
+int64_t palp_dds_now_ns(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

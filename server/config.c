@@ -1,0 +1,254 @@
+/* config.c - palp-server configuration from JSON (cJSON). */
+#include "config.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "palp.h"
+
+static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
+  if (err && errlen) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+  }
+  return code;
+}
+
+void palp_srv_config_defaults(palp_srv_config *cfg) {
+  memset(cfg, 0, sizeof *cfg);
+  cfg->domain_id = 0;
+  cfg->tick_rate_hz = 100.0;
+  cfg->tick_threads = 0;
+  cfg->deformation_rate_hz = 30.0;
+  cfg->status_rate_hz = 1.0;
+  cfg->max_sessions = 32;
+  cfg->max_force = 20.0; /* well above the paper's 3 N; a real finger stays < 10 N */
+  cfg->force_policy = PALP_SRV_FORCE_CLAMP;
+  cfg->finger_radius_min = 0.002;
+  cfg->finger_radius_max = 0.03;
+  cfg->log_interval = 1.0;
+  snprintf(cfg->dds_config, sizeof cfg->dds_config, "cyclonedds-loopback.xml");
+}
+
+static int resolve(const char *base_dir, const char *rel, char *out, size_t outlen) {
+  int n;
+  if (rel[0] == '/' || !base_dir || !base_dir[0])
+    n = snprintf(out, outlen, "%s", rel);
+  else
+    n = snprintf(out, outlen, "%s/%s", base_dir, rel);
+  return (n < 0 || (size_t)n >= outlen) ? -1 : 0;
+}
+
+/* Number in [lo, hi]; a missing optional field keeps *v. */
+static int get_number(const cJSON *obj, const char *key, const char *where, double lo, double hi,
+                      int required, double *v, char *err, size_t errlen) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return required ? fail(err, errlen, PALP_EPARSE, "%s%s: missing", where, key) : 0;
+  if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble))
+    return fail(err, errlen, PALP_EPARSE, "%s%s: expected a number", where, key);
+  if (it->valuedouble < lo || it->valuedouble > hi)
+    return fail(err, errlen, PALP_EINVAL, "%s%s: %g is outside [%g, %g]", where, key, it->valuedouble,
+                lo, hi);
+  *v = it->valuedouble;
+  return 0;
+}
+
+static int get_int(const cJSON *obj, const char *key, const char *where, double lo, double hi,
+                   int required, int64_t *v, char *err, size_t errlen) {
+  double d = (double)*v;
+  int rc = get_number(obj, key, where, lo, hi, required, &d, err, errlen);
+  if (rc) return rc;
+  if (d != floor(d)) return fail(err, errlen, PALP_EPARSE, "%s%s: expected an integer", where, key);
+  *v = (int64_t)d;
+  return 0;
+}
+
+static int get_string(const cJSON *obj, const char *key, const char *where, int required, char *out,
+                      size_t outlen, char *err, size_t errlen) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return required ? fail(err, errlen, PALP_EPARSE, "%s%s: missing", where, key) : 0;
+  if (!cJSON_IsString(it)) return fail(err, errlen, PALP_EPARSE, "%s%s: expected a string", where, key);
+  if (strlen(it->valuestring) >= outlen)
+    return fail(err, errlen, PALP_EINVAL, "%s%s: longer than %zu characters", where, key, outlen - 1);
+  snprintf(out, outlen, "%s", it->valuestring);
+  return 0;
+}
+
+/* A misspelt key would otherwise silently fall back to a default. */
+static int check_keys(const cJSON *obj, const char *where, const char *const *known, char *err,
+                      size_t errlen) {
+  for (const cJSON *it = obj->child; it; it = it->next) {
+    int ok = 0;
+    for (const char *const *k = known; *k; k++)
+      if (strcmp(*k, it->string) == 0) ok = 1;
+    if (!ok) return fail(err, errlen, PALP_EPARSE, "%s%s: unknown field", where, it->string);
+  }
+  return 0;
+}
+
+static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick_threads",
+                                       "deformation_rate_hz", "status_rate_hz", "max_sessions",
+                                       "max_force",      "force_policy",   "finger_radius_min",
+                                       "finger_radius_max", "log_interval", "dds_config",
+                                       "database",       "phantoms",       "comment",
+                                       NULL};
+static const char *const phantom_keys[] = {"id", "name", "scene", "comment", NULL};
+
+static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_config *cfg, char *err,
+                          size_t errlen) {
+  if (!arr) return fail(err, errlen, PALP_EPARSE, "phantoms: missing");
+  if (!cJSON_IsArray(arr)) return fail(err, errlen, PALP_EPARSE, "phantoms: expected an array");
+  int n = cJSON_GetArraySize(arr);
+  if (n < 1) return fail(err, errlen, PALP_EINVAL, "phantoms: at least one phantom is needed");
+  if (n > PALP_SRV_MAX_PHANTOMS)
+    return fail(err, errlen, PALP_EINVAL, "phantoms: %d phantoms, at most %d", n, PALP_SRV_MAX_PHANTOMS);
+  for (int i = 0; i < n; i++) {
+    const cJSON *p = cJSON_GetArrayItem(arr, i);
+    char where[32];
+    snprintf(where, sizeof where, "phantoms[%d].", i);
+    if (!cJSON_IsObject(p)) return fail(err, errlen, PALP_EPARSE, "phantoms[%d]: expected an object", i);
+    int rc = check_keys(p, where, phantom_keys, err, errlen);
+    if (rc) return rc;
+    palp_srv_phantom_cfg *ph = &cfg->phantom[i];
+    int64_t id = 0;
+    if ((rc = get_int(p, "id", where, 1, 4294967295.0, 1, &id, err, errlen))) return rc;
+    ph->id = (uint32_t)id;
+    for (int j = 0; j < i; j++)
+      if (cfg->phantom[j].id == ph->id)
+        return fail(err, errlen, PALP_EINVAL, "%sid: %u is already used by phantoms[%d]", where, ph->id,
+                    j);
+    if ((rc = get_string(p, "name", where, 1, ph->name, sizeof ph->name, err, errlen))) return rc;
+    char scene[PALP_SRV_PATH_MAX];
+    if ((rc = get_string(p, "scene", where, 1, scene, sizeof scene, err, errlen))) return rc;
+    if (resolve(base_dir, scene, ph->scene_path, sizeof ph->scene_path))
+      return fail(err, errlen, PALP_EINVAL, "%sscene: path too long", where);
+  }
+  cfg->phantom_count = n;
+  return 0;
+}
+
+int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_config *cfg, char *err,
+                          size_t errlen) {
+  palp_srv_config_defaults(cfg);
+  cJSON *root = cJSON_Parse(json);
+  if (!root) {
+    const char *at = cJSON_GetErrorPtr();
+    return fail(err, errlen, PALP_EPARSE, "not valid JSON near \"%.20s\"", at ? at : "");
+  }
+  int rc = 0;
+  const char *w = "";
+  int64_t i64;
+  if (!cJSON_IsObject(root)) {
+    rc = fail(err, errlen, PALP_EPARSE, "top level: expected an object");
+    goto out;
+  }
+  if ((rc = check_keys(root, w, top_keys, err, errlen))) goto out;
+  i64 = cfg->domain_id;
+  /* 232 is the largest domain whose RTPS ports fit in 16 bits. */
+  if ((rc = get_int(root, "domain_id", w, 0, 232, 0, &i64, err, errlen))) goto out;
+  cfg->domain_id = (uint32_t)i64;
+  if ((rc = get_number(root, "tick_rate_hz", w, 1, 10000, 0, &cfg->tick_rate_hz, err, errlen))) goto out;
+  i64 = cfg->tick_threads;
+  if ((rc = get_int(root, "tick_threads", w, 0, 64, 0, &i64, err, errlen))) goto out;
+  cfg->tick_threads = (int)i64;
+  if ((rc = get_number(root, "deformation_rate_hz", w, 0.1, 1000, 0, &cfg->deformation_rate_hz, err,
+                       errlen)))
+    goto out;
+  if ((rc = get_number(root, "status_rate_hz", w, 0.1, 100, 0, &cfg->status_rate_hz, err, errlen)))
+    goto out;
+  i64 = cfg->max_sessions;
+  if ((rc = get_int(root, "max_sessions", w, 1, 1024, 0, &i64, err, errlen))) goto out;
+  cfg->max_sessions = (int)i64;
+  if ((rc = get_number(root, "max_force", w, 0.01, 1000, 0, &cfg->max_force, err, errlen))) goto out;
+  if ((rc = get_number(root, "finger_radius_min", w, 1e-4, 0.1, 0, &cfg->finger_radius_min, err, errlen)))
+    goto out;
+  if ((rc = get_number(root, "finger_radius_max", w, 1e-4, 0.1, 0, &cfg->finger_radius_max, err, errlen)))
+    goto out;
+  if (cfg->finger_radius_max < cfg->finger_radius_min) {
+    rc = fail(err, errlen, PALP_EINVAL, "finger_radius_max: %g is below finger_radius_min %g",
+              cfg->finger_radius_max, cfg->finger_radius_min);
+    goto out;
+  }
+  if ((rc = get_number(root, "log_interval", w, 0, 3600, 0, &cfg->log_interval, err, errlen))) goto out;
+  {
+    char policy[16] = "clamp";
+    if ((rc = get_string(root, "force_policy", w, 0, policy, sizeof policy, err, errlen))) goto out;
+    if (strcmp(policy, "clamp") == 0)
+      cfg->force_policy = PALP_SRV_FORCE_CLAMP;
+    else if (strcmp(policy, "reject") == 0)
+      cfg->force_policy = PALP_SRV_FORCE_REJECT;
+    else {
+      rc = fail(err, errlen, PALP_EINVAL, "force_policy: \"%s\" is neither \"clamp\" nor \"reject\"",
+                policy);
+      goto out;
+    }
+  }
+  {
+    char tmp[PALP_SRV_PATH_MAX];
+    snprintf(tmp, sizeof tmp, "%s", cfg->dds_config);
+    if ((rc = get_string(root, "dds_config", w, 0, tmp, sizeof tmp, err, errlen))) goto out;
+    if (resolve(base_dir, tmp, cfg->dds_config, sizeof cfg->dds_config)) {
+      rc = fail(err, errlen, PALP_EINVAL, "dds_config: path too long");
+      goto out;
+    }
+    tmp[0] = 0;
+    if ((rc = get_string(root, "database", w, 0, tmp, sizeof tmp, err, errlen))) goto out;
+    if (tmp[0] && resolve(base_dir, tmp, cfg->database, sizeof cfg->database)) {
+      rc = fail(err, errlen, PALP_EINVAL, "database: path too long");
+      goto out;
+    }
+  }
+  rc = parse_phantoms(cJSON_GetObjectItemCaseSensitive(root, "phantoms"), base_dir, cfg, err, errlen);
+out:
+  cJSON_Delete(root);
+  return rc;
+}
+
+int palp_srv_config_load(const char *path, palp_srv_config *cfg, char *err, size_t errlen) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return fail(err, errlen, PALP_EIO, "%s: cannot open", path);
+  char *buf = NULL;
+  size_t len = 0, cap = 0;
+  for (;;) {
+    if (len + 4096 + 1 > cap) {
+      cap = cap ? 2 * cap : 16384;
+      char *nb = realloc(buf, cap);
+      if (!nb) {
+        free(buf);
+        fclose(f);
+        return fail(err, errlen, PALP_ENOMEM, "%s: out of memory", path);
+      }
+      buf = nb;
+    }
+    size_t n = fread(buf + len, 1, cap - len - 1, f);
+    len += n;
+    if (n == 0) break;
+  }
+  int ioerr = ferror(f);
+  fclose(f);
+  if (ioerr) {
+    free(buf);
+    return fail(err, errlen, PALP_EIO, "%s: read error", path);
+  }
+  buf[len] = 0;
+  char dir[PALP_SRV_PATH_MAX];
+  snprintf(dir, sizeof dir, "%s", path);
+  char *slash = strrchr(dir, '/');
+  if (slash)
+    *slash = 0;
+  else
+    snprintf(dir, sizeof dir, ".");
+  char inner[512];
+  int rc = palp_srv_config_parse(buf, dir, cfg, inner, sizeof inner);
+  free(buf);
+  if (rc) return fail(err, errlen, rc, "%s: %s", path, inner);
+  return 0;
+}

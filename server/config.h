@@ -1,0 +1,56 @@
+/*
+ * config.h - palp-server configuration (config/server.json).
+ *
+ * Parsing is a pure function of the JSON text and the directory relative paths
+ * are resolved against, so tests can feed it strings. Every error names the
+ * offending field, e.g. "phantoms[1].scene: expected a string".
+ */
+#ifndef PALP_SRV_CONFIG_H
+#define PALP_SRV_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define PALP_SRV_MAX_PHANTOMS 16
+#define PALP_SRV_PATH_MAX 1024
+
+typedef enum palp_srv_force_policy {
+  PALP_SRV_FORCE_CLAMP = 0, /* scale the force down to the limit, apply it, count it */
+  PALP_SRV_FORCE_REJECT = 1 /* drop the sample, count it */
+} palp_srv_force_policy;
+
+typedef struct palp_srv_phantom_cfg {
+  uint32_t id;                        /* > 0, unique */
+  char name[64];
+  char scene_path[PALP_SRV_PATH_MAX]; /* resolved against the config's directory */
+} palp_srv_phantom_cfg;
+
+typedef struct palp_srv_config {
+  uint32_t domain_id;          /* DDS domain, 0..232 */
+  double tick_rate_hz;         /* session step rate [Hz]: 100 (paper) or 1000 (haptics) */
+  int tick_threads;            /* tick thread pool size; 0 = number of online cores */
+  double deformation_rate_hz;  /* full-mesh rate to visual stations [Hz] */
+  double status_rate_hz;       /* palp_server_status rate [Hz] */
+  int max_sessions;            /* open trainee sessions at once */
+  double max_force;            /* contact force limit [N] */
+  palp_srv_force_policy force_policy;
+  double finger_radius_min;    /* [m] */
+  double finger_radius_max;    /* [m] */
+  double log_interval;         /* minimum seconds between two log lines of one reject reason */
+  char dds_config[PALP_SRV_PATH_MAX]; /* Cyclone XML, resolved against the config's directory */
+  char database[PALP_SRV_PATH_MAX];   /* SQLite session log; "" disables logging */
+  int phantom_count;
+  palp_srv_phantom_cfg phantom[PALP_SRV_MAX_PHANTOMS];
+} palp_srv_config;
+
+/* Defaults for every optional field; no phantoms. */
+void palp_srv_config_defaults(palp_srv_config *cfg);
+
+/* Parses JSON text; base_dir resolves relative paths ("" or NULL: as given).
+ * Returns 0 or a negative PALP_E* code with a message naming the field in err. */
+int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_config *cfg, char *err,
+                          size_t errlen);
+/* Reads and parses a file; relative paths resolve against the file's directory. */
+int palp_srv_config_load(const char *path, palp_srv_config *cfg, char *err, size_t errlen);
+
+#endif
