@@ -1,0 +1,138 @@
+/*
+ * stats.h - the paper's agreement statistics (Widmer & Hu 2011, Sec. II-D):
+ * RMSE, one-way ANOVA and Bland-Altman agreement, as small pure functions over
+ * caller-provided arrays. No allocation, no globals, no I/O.
+ *
+ * Every function returns PALP_OK (0) or a negative PALP_E* code from palp.h and
+ * leaves *out untouched on error. Units are whatever the caller's data carry
+ * (the evaluation passes metres and newtons); results share them, squared for
+ * sums of squares and mean squares.
+ *
+ * Numerics: every sum is taken about a data value (an exact subtraction for data
+ * that share leading digits), in two passes (means first, then deviations) with
+ * Neumaier-compensated accumulation. Data that share 13 leading digits, such as
+ * NIST StRD SmLs07-09, keep F and the sums of squares to 9+ significant digits of
+ * the exact result for the binary64 values given. See docs/statistics.md.
+ */
+#ifndef PALP_STATS_H
+#define PALP_STATS_H
+
+#include <stddef.h>
+
+#include "palp.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The paper's success criteria (Sec. II-D): ANOVA p above this ... */
+#define PALP_STATS_PAPER_ALPHA 0.05
+/* ... and more than this share of the differences within bias +- 2 SD. */
+#define PALP_STATS_PAPER_AGREEMENT 0.95
+/* Half-width of the paper's agreement band, in SDs of the differences. */
+#define PALP_STATS_PAPER_BAND_SD 2.0
+/* Bland & Altman (1986) limits of agreement: bias +- 1.96 SD. */
+#define PALP_STATS_LOA_SD 1.96
+
+/* ---- RMSE ------------------------------------------------------------------ */
+/* RMSE = sqrt( sum_i (a_i - b_i)^2 / n ). n >= 1, all values finite.
+ * Scaled like BLAS dnrm2, so it neither overflows nor underflows. */
+int palp_stats_rmse(const double *a, const double *b, size_t n, double *out);
+
+/* ---- one-way ANOVA ------------------------------------------------------------ */
+/* Flags describing degenerate but well-defined results. */
+enum {
+  /* Every group is constant inside (SS_within = 0) but the group means differ:
+   * F = +inf, p = 0 (the groups certainly differ). */
+  PALP_STATS_ZERO_WITHIN = 1u << 0,
+  /* Every value is the same (SS_within = SS_between = 0): F = 0, p = 1 (no
+   * evidence of any difference; the paper's criterion p > 0.05 holds). */
+  PALP_STATS_ALL_EQUAL = 1u << 1
+};
+
+typedef struct palp_stats_anova {
+  int group_count;    /* k >= 2 */
+  size_t n;           /* total observations N */
+  double grand_mean;  /* sum of all values / N */
+  double ss_between;  /* sum_g n_g (mean_g - grand_mean)^2 */
+  double ss_within;   /* sum_g sum_i (x_gi - mean_g)^2 */
+  double ss_total;    /* ss_between + ss_within */
+  int df_between;     /* k - 1 */
+  long df_within;     /* N - k */
+  double ms_between;  /* ss_between / df_between */
+  double ms_within;   /* ss_within / df_within */
+  double f;           /* ms_between / ms_within (see flags) */
+  double p;           /* P(F(df_between, df_within) > f) = gsl_cdf_fdist_Q */
+  double r_squared;   /* ss_between / ss_total (0 when ss_total = 0) */
+  unsigned flags;     /* PALP_STATS_ZERO_WITHIN, PALP_STATS_ALL_EQUAL */
+} palp_stats_anova;
+
+/* Groups are stored back to back: group g holds values[start[g] .. start[g+1]),
+ * so start has group_count + 1 entries, start[0] = 0 and start ascending.
+ * Errors (PALP_EINVAL): group_count < 2, a group with fewer than 2 values (one
+ * value carries no within-group spread and usually means a mistyped group label),
+ * a non-finite value, start not ascending. */
+int palp_stats_anova_oneway(const double *values, const size_t *start, int group_count,
+                            palp_stats_anova *out);
+
+/* The paper's use: two groups of n values each (real-time model vs FEM). */
+int palp_stats_anova_two(const double *a, const double *b, size_t n, palp_stats_anova *out);
+
+/* Two groups of different sizes. */
+int palp_stats_anova_two_n(const double *a, size_t na, const double *b, size_t nb,
+                           palp_stats_anova *out);
+
+/* ---- Bland-Altman agreement ---------------------------------------------------- */
+typedef struct palp_stats_ba {
+  size_t n;            /* pairs, >= 2 */
+  double mean_a, mean_b;
+  double bias;         /* mean of d_i = a_i - b_i */
+  double sd;           /* SD of d_i with n - 1 in the denominator */
+  double loa_lower;    /* bias - 1.96 sd */
+  double loa_upper;    /* bias + 1.96 sd */
+  double band_lower;   /* bias - 2 sd: the paper's agreement band */
+  double band_upper;   /* bias + 2 sd */
+  size_t within_band;  /* pairs with band_lower <= d_i <= band_upper */
+  double agreement;    /* within_band / n, a share in [0, 1] (the paper prints %) */
+  size_t within_loa;   /* pairs with loa_lower <= d_i <= loa_upper */
+} palp_stats_ba;
+
+/* Errors (PALP_EINVAL): n < 2, a non-finite value. With sd = 0 every pair lies
+ * on the bias, so agreement = 1. */
+int palp_stats_bland_altman(const double *a, const double *b, size_t n,
+                            palp_stats_ba *out);
+
+/* The paper's verdict for one distribution: ANOVA p > 0.05 and more than 95% of
+ * the differences within bias +- 2 SD. Returns 1 when both hold, else 0. */
+int palp_stats_meets_paper_criteria(const palp_stats_anova *anova,
+                                    const palp_stats_ba *ba);
+
+/* ---- building blocks ----------------------------------------------------------- */
+/* Neumaier (improved Kahan-Babuska) compensated sum: the running sum plus the
+ * rounding errors lost so far. */
+typedef struct palp_stats_sum {
+  double s, c;
+} palp_stats_sum;
+
+static inline void palp_stats_sum_add(palp_stats_sum *acc, double x) {
+  double t = acc->s + x;
+  /* The branch picks the operand whose low bits were rounded away. */
+  if ((acc->s >= 0 ? acc->s : -acc->s) >= (x >= 0 ? x : -x))
+    acc->c += (acc->s - t) + x;
+  else
+    acc->c += (x - t) + acc->s;
+  acc->s = t;
+}
+
+static inline double palp_stats_sum_value(const palp_stats_sum *acc) { return acc->s + acc->c; }
+
+/* Mean and sum of squared deviations of x[0..n) in two compensated passes about
+ * the shift x[0]: mean = x0 + sum(x - x0)/n, refined once by the mean residual,
+ * then ssd = sum (x - mean)^2. n >= 1; ssd = 0 for n = 1. */
+void palp_stats_mean_ssd(const double *x, size_t n, double *mean, double *ssd);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PALP_STATS_H */
