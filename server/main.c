@@ -1,0 +1,152 @@
+/* main.c - palp-server: the classroom server's command line. */
+#include <errno.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "config.h"
+#include "palp.h"
+#include "palp_dds.h"
+#include "server.h"
+
+static void usage(FILE *f) {
+  fprintf(f,
+          "usage: palp-server [options]\n"
+          "  --config PATH        server configuration (default %s/server.json)\n"
+          "  --domain N           override domain_id\n"
+          "  --tick-rate HZ       override tick_rate_hz (100 as in the paper, 1000 for haptics)\n"
+          "  --threads N          override tick_threads (0 = one per core)\n"
+          "  --max-sessions N     override max_sessions\n"
+          "  --duration S         stop after S seconds (default: until SIGINT/SIGTERM)\n"
+          "  --check              validate the configuration and the scenes, then exit\n"
+          "  --verbose            log every station join/leave\n",
+          PALP_CONFIG_DIR);
+}
+
+/* Signals are blocked in every thread and taken here with sigwait: the stop
+ * request then runs in an ordinary thread, where DDS calls are allowed. */
+typedef struct sig_ctx {
+  sigset_t set;
+  palp_srv *srv;
+  int signo;
+} sig_ctx;
+
+static void *signal_main(void *arg) {
+  sig_ctx *c = arg;
+  int sig = 0;
+  if (sigwait(&c->set, &sig) == 0) {
+    c->signo = sig;
+    if (sig != SIGUSR2) {
+      fprintf(stderr, "palp-server: %s: shutting down\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
+      palp_srv_request_stop(c->srv);
+    }
+  }
+  return NULL;
+}
+
+static int parse_num(const char *opt, const char *arg, double lo, double hi, double *out) {
+  char *end = NULL;
+  errno = 0;
+  double v = arg ? strtod(arg, &end) : 0;
+  if (!arg || errno || end == arg || *end || !(v >= lo && v <= hi)) {
+    fprintf(stderr, "palp-server: %s: expected a number in [%g, %g], got \"%s\"\n", opt, lo, hi, arg ? arg : "");
+    return -1;
+  }
+  *out = v;
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  const char *config_path = PALP_CONFIG_DIR "/server.json";
+  double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0;
+  int check = 0, verbose = 0;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    int bad = 0;
+    if (!strcmp(a, "--config") && v) config_path = argv[++i];
+    else if (!strcmp(a, "--domain")) bad = parse_num(a, v, 0, 232, &domain), i++;
+    else if (!strcmp(a, "--tick-rate")) bad = parse_num(a, v, 1, 10000, &rate), i++;
+    else if (!strcmp(a, "--threads")) bad = parse_num(a, v, 0, 64, &threads), i++;
+    else if (!strcmp(a, "--max-sessions")) bad = parse_num(a, v, 1, 1024, &max_sessions), i++;
+    else if (!strcmp(a, "--duration")) bad = parse_num(a, v, 0, 1e7, &duration), i++;
+    else if (!strcmp(a, "--check")) check = 1;
+    else if (!strcmp(a, "--verbose")) verbose = 1;
+    else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+      usage(stdout);
+      return 0;
+    } else {
+      fprintf(stderr, "palp-server: unknown option or missing value: %s\n", a);
+      usage(stderr);
+      return 2;
+    }
+    if (bad) return 2;
+  }
+
+  palp_srv_def def;
+  memset(&def, 0, sizeof def);
+  char err[768];
+  int rc = palp_srv_config_load(config_path, &def.cfg, err, sizeof err);
+  if (rc < 0) {
+    fprintf(stderr, "palp-server: bad configuration: %s\n", err);
+    return 1;
+  }
+  if (domain >= 0) def.cfg.domain_id = (uint32_t)domain;
+  if (rate > 0) def.cfg.tick_rate_hz = rate;
+  if (threads >= 0) def.cfg.tick_threads = (int)threads;
+  if (max_sessions > 0) def.cfg.max_sessions = (int)max_sessions;
+  def.verbose = verbose;
+  if (palp_dds_use_config(def.cfg.dds_config) < 0) {
+    fprintf(stderr, "palp-server: bad configuration: %s: dds_config: cannot read %s\n", config_path,
+            def.cfg.dds_config);
+    return 1;
+  }
+  if (check) {
+    /* Build every phantom's world once, without DDS. */
+    for (int i = 0; i < def.cfg.phantom_count; i++) {
+      palp_scene sc;
+      char msg[256] = "";
+      rc = palp_scene_load(def.cfg.phantom[i].scene_path, &sc, msg, sizeof msg);
+      if (rc < 0) {
+        fprintf(stderr, "palp-server: bad configuration: phantoms[%d].scene: %s: %s\n", i,
+                def.cfg.phantom[i].scene_path, msg[0] ? msg : palp_strerror(rc));
+        return 1;
+      }
+    }
+    printf("palp-server: %s: ok (%d phantoms, %.0f Hz, domain %u)\n", config_path, def.cfg.phantom_count,
+           def.cfg.tick_rate_hz, def.cfg.domain_id);
+    return 0;
+  }
+
+  sig_ctx sc;
+  memset(&sc, 0, sizeof sc);
+  sigemptyset(&sc.set);
+  sigaddset(&sc.set, SIGINT);
+  sigaddset(&sc.set, SIGTERM);
+  sigaddset(&sc.set, SIGUSR2);
+  /* Block before any thread exists (DDS and tick threads inherit the mask). */
+  pthread_sigmask(SIG_BLOCK, &sc.set, NULL);
+
+  palp_srv *srv = palp_srv_create(&def, &rc, err, sizeof err);
+  if (!srv) {
+    fprintf(stderr, "palp-server: %s: %s\n", config_path, err);
+    return 1;
+  }
+  sc.srv = srv;
+  pthread_t sig_thread;
+  if (pthread_create(&sig_thread, NULL, signal_main, &sc) != 0) {
+    fprintf(stderr, "palp-server: cannot start the signal thread\n");
+    palp_srv_destroy(srv);
+    return 1;
+  }
+  rc = palp_srv_run(srv, duration);
+  /* Wake the signal thread if no signal came (SIGUSR2 is ours only). */
+  if (!sc.signo) pthread_kill(sig_thread, SIGUSR2);
+  pthread_join(sig_thread, NULL);
+  printf("\npalp-server session summary\n");
+  palp_srv_print_summary(srv, stdout);
+  fflush(stdout);
+  palp_srv_destroy(srv);
+  return rc < 0 ? 1 : 0;
+}

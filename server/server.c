@@ -1,0 +1,652 @@
+/* server.c - the classroom server's DDS front end and session bookkeeping. */
+#include "server.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <dds/dds.h>
+
+#include "palp.h"
+#include "palp_dds.h"
+#include "session.h"
+#include "ticker.h"
+
+#define MAX_STATIONS 256
+
+typedef struct station {
+  int in_use;
+  char id[64];
+  int role;            /* palp_Role */
+  uint32_t session_id; /* 0: not in a session */
+  int want_feedback, want_deformation;
+} station;
+
+typedef struct closed_session {
+  palp_srv_session_summary sum;
+  char phantom_name[64], station[64], name[64], partition[64], reason[128];
+  int open; /* still open at print time (filled from a live session) */
+} closed_session;
+
+struct palp_srv {
+  palp_srv_config cfg;
+  const palp_srv_events *events;
+  int verbose;
+  char server_id[64];
+  int64_t start_ns;
+
+  palp_srv_phantom phantom[PALP_SRV_MAX_PHANTOMS];
+  int phantom_count;
+
+  dds_entity_t pp;
+  dds_entity_t topic[PALP_TOPIC_COUNT];
+  dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w;
+  dds_entity_t request_rc, stop_gc, waitset;
+
+  palp_srv_ticker *ticker;
+  palp_srv_session **sessions; /* open sessions, [cfg.max_sessions] */
+  int session_count;
+  uint32_t next_session_id;
+  uint64_t sessions_total;
+  uint64_t rejected_closed[PALP_SRV_REJ_COUNT]; /* counters of sessions already closed */
+
+  station stations[MAX_STATIONS];
+
+  closed_session *closed;
+  int closed_count, closed_cap;
+
+  palp_SessionLoad *loads;
+  atomic_int stop;
+};
+
+static int fail(char *err, size_t errlen, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(err, errlen, fmt, ap);
+  va_end(ap);
+  return 0;
+}
+
+static void logf_(const palp_srv *srv, const char *fmt, ...) {
+  if (!srv->verbose) return;
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "palp-server: ");
+  vfprintf(stderr, fmt, ap);
+  fputc('\n', stderr);
+  va_end(ap);
+}
+
+/* ---- phantoms and catalogue ------------------------------------------------ */
+
+static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_phantom *ph, char *err,
+                        size_t errlen) {
+  char msg[256] = "";
+  ph->cfg = *pc;
+  int rc = palp_scene_load(pc->scene_path, &ph->scene, msg, sizeof msg);
+  if (rc < 0) {
+    fail(err, errlen, "phantoms (id %u): scene %s: %s", pc->id, pc->scene_path, msg[0] ? msg : palp_strerror(rc));
+    return rc;
+  }
+  /* Stations drive the contacts: the scene's scripted contacts are not applied.
+   * Every session steps at the server's tick rate and reports contact forces. */
+  ph->scene.contact_count = 0;
+  ph->scene.world.dt = 1.0 / srv->cfg.tick_rate_hz;
+  ph->scene.world.effects |= PALP_EFFECT_FORCE_FEEDBACK;
+  if (ph->scene.world.max_contacts < PALP_SRV_MAX_FINGERS) ph->scene.world.max_contacts = PALP_SRV_MAX_FINGERS;
+  ph->template_world = palp_scene_create_world(&ph->scene, &rc);
+  if (!ph->template_world) {
+    fail(err, errlen, "phantoms (id %u): scene %s: cannot build the world: %s", pc->id, pc->scene_path,
+         palp_strerror(rc));
+    return rc < 0 ? rc : PALP_EINVAL;
+  }
+  ph->mesh = palp_world_mesh(ph->template_world);
+  return 0;
+}
+
+static int phantom_sessions(const palp_srv *srv, uint32_t phantom_id) {
+  int n = 0;
+  for (int i = 0; i < srv->session_count; i++) n += srv->sessions[i]->phantom->cfg.id == phantom_id;
+  return n;
+}
+
+static void publish_catalogue(palp_srv *srv, const palp_srv_phantom *ph) {
+  const palp_mesh *m = ph->mesh;
+  const palp_world_def *wd = &ph->scene.world;
+  palp_Phantom msg;
+  memset(&msg, 0, sizeof msg);
+  msg.phantom_id = ph->cfg.id;
+  snprintf(msg.name, sizeof msg.name, "%s", ph->cfg.name);
+  snprintf(msg.scene_name, sizeof msg.scene_name, "%s", ph->scene.name);
+  msg.radius = wd->mesh.radius;
+  msg.tick_rate_hz = srv->cfg.tick_rate_hz;
+  msg.max_force = srv->cfg.max_force;
+  msg.effects = wd->effects;
+  msg.membrane = (palp_MembraneParams){wd->membrane.thickness, wd->membrane.density, wd->membrane.E1,
+                                       wd->membrane.eta1, wd->membrane.E2, wd->membrane.eta2};
+  msg.gel = (palp_GelParams){(int32_t)wd->gel.law, wd->gel.pressure, wd->gel.a1, wd->gel.a2, wd->gel.a3};
+  msg.top_vertex = m->top_vertex;
+  msg.dome_triangle_count = m->dome_triangle_count;
+  palp_Vec3 *rest = malloc((size_t)m->vertex_count * sizeof *rest);
+  int32_t *tri = malloc((size_t)m->triangle_count * 3 * sizeof *tri);
+  if (!rest || !tri) {
+    free(rest);
+    free(tri);
+    return;
+  }
+  for (int i = 0; i < m->vertex_count; i++) rest[i] = (palp_Vec3){m->rest[i].x, m->rest[i].y, m->rest[i].z};
+  for (int i = 0; i < m->triangle_count; i++)
+    for (int k = 0; k < 3; k++) tri[3 * i + k] = m->tri[i][k];
+  msg.rest = (dds_sequence_palp_Vec3){(uint32_t)m->vertex_count, (uint32_t)m->vertex_count, rest, false};
+  msg.triangles = (dds_sequence_long){(uint32_t)m->triangle_count * 3, (uint32_t)m->triangle_count * 3, tri, false};
+  msg.active_sessions = (uint32_t)phantom_sessions(srv, ph->cfg.id);
+  dds_write(srv->catalogue_w, &msg);
+  free(rest);
+  free(tri);
+}
+
+static palp_srv_phantom *find_phantom(palp_srv *srv, uint32_t id) {
+  for (int i = 0; i < srv->phantom_count; i++)
+    if (srv->phantom[i].cfg.id == id) return &srv->phantom[i];
+  return NULL;
+}
+
+/* ---- session state ----------------------------------------------------------- */
+
+typedef struct stats_snapshot {
+  uint32_t id;
+  palp_srv_session_stats st;
+  int found;
+} stats_snapshot;
+
+static void snap_one(void *ctx, palp_srv_session *s) {
+  stats_snapshot *sn = ctx;
+  if (s->id == sn->id) {
+    sn->st = s->stats;
+    sn->found = 1;
+  }
+}
+
+static palp_srv_session_stats session_stats(palp_srv *srv, palp_srv_session *s) {
+  stats_snapshot sn = {.id = s->id};
+  palp_srv_ticker_each(srv->ticker, snap_one, &sn);
+  return sn.found ? sn.st : s->stats; /* detached: the tick thread no longer writes it */
+}
+
+static void member_counts(const palp_srv *srv, uint32_t sid, uint32_t *visual, uint32_t *observer) {
+  *visual = *observer = 0;
+  for (int i = 0; i < MAX_STATIONS; i++) {
+    const station *st = &srv->stations[i];
+    if (!st->in_use || st->session_id != sid) continue;
+    if (st->role == palp_ROLE_VISUAL) ++*visual;
+    if (st->role == palp_ROLE_OBSERVER) ++*observer;
+  }
+}
+
+static void publish_state(palp_srv *srv, palp_srv_session *s, int closed, const char *reason,
+                          const palp_srv_session_stats *stp) {
+  palp_srv_session_stats st = stp ? *stp : session_stats(srv, s);
+  palp_SessionState m;
+  memset(&m, 0, sizeof m);
+  m.session_id = s->id;
+  m.phantom_id = s->phantom->cfg.id;
+  m.phase = closed ? palp_PHASE_CLOSED : palp_PHASE_OPEN;
+  snprintf(m.partition, sizeof m.partition, "%s", s->partition);
+  snprintf(m.trainee_station, sizeof m.trainee_station, "%s", s->trainee_station);
+  snprintf(m.trainee_name, sizeof m.trainee_name, "%s", s->trainee_name);
+  member_counts(srv, s->id, &m.visual_count, &m.observer_count);
+  m.tick_rate_hz = srv->cfg.tick_rate_hz;
+  m.duration = (double)(palp_dds_now_ns() - s->opened_ns) * 1e-9;
+  m.ticks = st.ticks;
+  m.overruns = st.overruns;
+  m.contact_samples = st.contact_samples;
+  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++)
+    if (r != PALP_SRV_REJ_FORCE_LIMIT || srv->cfg.force_policy == PALP_SRV_FORCE_REJECT)
+      m.rejected_samples += st.rejected[r];
+  m.peak_force = st.peak_force;
+  m.peak_displacement = st.peak_displacement;
+  snprintf(m.reason, sizeof m.reason, "%s", reason ? reason : "");
+  dds_write(srv->state_w, &m);
+}
+
+static void reply(palp_srv *srv, const palp_SessionRequest *rq, palp_srv_session *s, const char *why) {
+  palp_SessionReply r;
+  memset(&r, 0, sizeof r);
+  snprintf(r.station_id, sizeof r.station_id, "%s", rq->station_id);
+  r.request_seq = rq->request_seq;
+  r.status = s ? palp_REPLY_ACCEPTED : palp_REPLY_REJECTED;
+  r.tick_rate_hz = srv->cfg.tick_rate_hz;
+  if (s) {
+    r.session_id = s->id;
+    r.phantom_id = s->phantom->cfg.id;
+    snprintf(r.partition, sizeof r.partition, "%s", s->partition);
+  } else {
+    r.phantom_id = rq->phantom_id;
+    snprintf(r.reason, sizeof r.reason, "%s", why ? why : "rejected");
+  }
+  dds_write(srv->reply_w, &r);
+}
+
+static palp_srv_session *find_session(palp_srv *srv, uint32_t id) {
+  for (int i = 0; i < srv->session_count; i++)
+    if (srv->sessions[i]->id == id) return srv->sessions[i];
+  return NULL;
+}
+
+static station *find_station(palp_srv *srv, const char *id, int create) {
+  station *free_slot = NULL;
+  for (int i = 0; i < MAX_STATIONS; i++) {
+    station *st = &srv->stations[i];
+    if (st->in_use && strcmp(st->id, id) == 0) return st;
+    if (!st->in_use && !free_slot) free_slot = st;
+  }
+  if (!create || !free_slot) return NULL;
+  memset(free_slot, 0, sizeof *free_slot);
+  free_slot->in_use = 1;
+  snprintf(free_slot->id, sizeof free_slot->id, "%s", id);
+  return free_slot;
+}
+
+static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, int open) {
+  if (srv->closed_count == srv->closed_cap) {
+    int cap = srv->closed_cap ? 2 * srv->closed_cap : 16;
+    closed_session *n = realloc(srv->closed, (size_t)cap * sizeof *n);
+    if (!n) return;
+    srv->closed = n;
+    srv->closed_cap = cap;
+  }
+  closed_session *c = &srv->closed[srv->closed_count++];
+  c->sum = *sum;
+  c->open = open;
+  snprintf(c->phantom_name, sizeof c->phantom_name, "%s", sum->info.phantom_name);
+  snprintf(c->station, sizeof c->station, "%s", sum->info.trainee_station);
+  snprintf(c->name, sizeof c->name, "%s", sum->info.trainee_name);
+  snprintf(c->partition, sizeof c->partition, "%s", sum->info.partition);
+  snprintf(c->reason, sizeof c->reason, "%s", sum->close_reason ? sum->close_reason : "");
+  c->sum.info.phantom_name = c->phantom_name;
+  c->sum.info.trainee_station = c->station;
+  c->sum.info.trainee_name = c->name;
+  c->sum.info.partition = c->partition;
+  c->sum.close_reason = c->reason;
+}
+
+static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason) {
+  palp_srv_ticker_remove(srv->ticker, s);
+  /* Detached: the stats are final and owned by this thread now. */
+  palp_srv_session_summary sum;
+  palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
+  publish_state(srv, s, 1, reason, &s->stats);
+  remember_closed(srv, &sum, 0);
+  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
+  if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
+  fprintf(stderr, "palp-server: session %u closed after %.1f s (%s)\n", s->id, sum.duration, reason);
+  for (int i = 0; i < MAX_STATIONS; i++)
+    if (srv->stations[i].in_use && srv->stations[i].session_id == s->id) srv->stations[i].session_id = 0;
+  for (int i = 0; i < srv->session_count; i++)
+    if (srv->sessions[i] == s) {
+      srv->sessions[i] = srv->sessions[--srv->session_count];
+      break;
+    }
+  palp_srv_phantom *ph = s->phantom;
+  palp_srv_session_destroy(s);
+  publish_catalogue(srv, ph);
+}
+
+/* The station leaves whatever it is in: a trainee's session closes, a viewer
+ * only stops being counted. */
+static void station_leave(palp_srv *srv, station *st, const char *reason) {
+  palp_srv_session *s = st->session_id ? find_session(srv, st->session_id) : NULL;
+  uint32_t sid = st->session_id;
+  int role = st->role;
+  st->session_id = 0;
+  if (!s) return;
+  if (role == palp_ROLE_TRAINEE && strcmp(s->trainee_station, st->id) == 0) {
+    char why[160];
+    snprintf(why, sizeof why, "trainee station %s", reason);
+    close_session(srv, s, why);
+    return;
+  }
+  if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
+  if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
+  if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
+  logf_(srv, "station %s (%s) left session %u: %s", st->id, role == palp_ROLE_VISUAL ? "visual" : "observer",
+        sid, reason);
+  publish_state(srv, s, 0, NULL, NULL);
+}
+
+static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
+  char why[128];
+  if (rq->role > palp_ROLE_OBSERVER) {
+    reply(srv, rq, NULL, "unknown role");
+    return;
+  }
+  station *st = find_station(srv, rq->station_id, 1);
+  if (!st) {
+    reply(srv, rq, NULL, "too many stations");
+    return;
+  }
+  if (st->session_id) station_leave(srv, st, "re-joined");
+  st->role = (int)rq->role;
+  st->want_feedback = rq->want_feedback;
+  st->want_deformation = rq->want_deformation;
+  palp_srv_session *s = NULL;
+  if (rq->role == palp_ROLE_TRAINEE) {
+    palp_srv_phantom *ph = find_phantom(srv, rq->phantom_id);
+    if (!ph) {
+      snprintf(why, sizeof why, "unknown phantom %u", rq->phantom_id);
+      reply(srv, rq, NULL, why);
+      return;
+    }
+    if (srv->session_count >= srv->cfg.max_sessions) {
+      snprintf(why, sizeof why, "server full: %d sessions open (max_sessions)", srv->session_count);
+      reply(srv, rq, NULL, why);
+      return;
+    }
+    palp_srv_session_def d = {.id = srv->next_session_id,
+                              .phantom = ph,
+                              .cfg = &srv->cfg,
+                              .trainee_station = rq->station_id,
+                              .trainee_name = rq->user_name,
+                              .participant = srv->pp,
+                              .contact_topic = srv->topic[PALP_TOPIC_CONTACT],
+                              .feedback_topic = srv->topic[PALP_TOPIC_FEEDBACK],
+                              .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
+                              .events = srv->events};
+    int rc = 0;
+    s = palp_srv_session_create(&d, &rc);
+    if (!s) {
+      snprintf(why, sizeof why, "cannot create the session: %s", palp_strerror(rc));
+      reply(srv, rq, NULL, why);
+      return;
+    }
+    atomic_store(&s->want_feedback, rq->want_feedback ? 1 : 0);
+    atomic_store(&s->deform_members, rq->want_deformation ? 1 : 0);
+    if (palp_srv_ticker_add(srv->ticker, s) < 0) {
+      palp_srv_session_destroy(s);
+      reply(srv, rq, NULL, "tick pool full");
+      return;
+    }
+    srv->next_session_id++;
+    srv->sessions_total++;
+    srv->sessions[srv->session_count++] = s;
+    st->session_id = s->id;
+    reply(srv, rq, s, NULL);
+    publish_state(srv, s, 0, NULL, NULL);
+    publish_catalogue(srv, ph);
+    palp_srv_session_info info;
+    palp_srv_session_info_fill(s, &info);
+    if (srv->events && srv->events->session_opened) srv->events->session_opened(srv->events->ctx, &info);
+    fprintf(stderr, "palp-server: session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s\n",
+            s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
+    return;
+  }
+  /* Visual station or observer: a given session, else the newest on the phantom. */
+  if (rq->session_id) {
+    s = find_session(srv, rq->session_id);
+  } else {
+    for (int i = 0; i < srv->session_count; i++) {
+      palp_srv_session *c = srv->sessions[i];
+      if ((rq->phantom_id == 0 || c->phantom->cfg.id == rq->phantom_id) && (!s || c->id > s->id)) s = c;
+    }
+  }
+  if (!s) {
+    if (rq->session_id)
+      snprintf(why, sizeof why, "no open session %u", rq->session_id);
+    else
+      snprintf(why, sizeof why, "no open session on phantom %u", rq->phantom_id);
+    reply(srv, rq, NULL, why);
+    return;
+  }
+  st->session_id = s->id;
+  if (st->want_deformation) atomic_fetch_add(&s->deform_members, 1);
+  if (st->want_feedback) atomic_fetch_add(&s->want_feedback, 1);
+  reply(srv, rq, s, NULL);
+  publish_state(srv, s, 0, NULL, NULL);
+  if (srv->events && srv->events->member_changed)
+    srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
+  fprintf(stderr, "palp-server: station %s joined session %u as %s\n", st->id, s->id,
+          rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
+}
+
+static void handle_requests(palp_srv *srv) {
+  enum { N = 16 };
+  palp_SessionRequest buf[N];
+  void *ptr[N];
+  dds_sample_info_t info[N];
+  for (int i = 0; i < N; i++) ptr[i] = &buf[i];
+  int n;
+  while ((n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
+    for (int i = 0; i < n; i++) {
+      if (info[i].valid_data) {
+        if (buf[i].op == palp_OP_JOIN)
+          handle_join(srv, &buf[i]);
+        else {
+          station *st = find_station(srv, buf[i].station_id, 0);
+          if (st) {
+            station_leave(srv, st, "left");
+            st->in_use = 0;
+          }
+          reply(srv, &buf[i], NULL, "left");
+        }
+        continue;
+      }
+      if (info[i].instance_state == DDS_IST_ALIVE) continue;
+      palp_SessionRequest key;
+      memset(&key, 0, sizeof key);
+      if (dds_instance_get_key(srv->request_r, info[i].instance_handle, &key) != 0) continue;
+      station *st = find_station(srv, key.station_id, 0);
+      if (!st) continue;
+      /* Disposed: the station said goodbye. No writers: its liveliness lease
+       * (0.5 s automatic) or its participant's lease (1 s) expired. */
+      station_leave(srv, st,
+                    info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED ? "left"
+                                                                         : "lost (liveliness lease expired)");
+      st->in_use = 0;
+    }
+    if (n < N) break;
+  }
+}
+
+/* ---- status -------------------------------------------------------------------- */
+
+typedef struct load_ctx {
+  palp_srv *srv;
+  uint32_t n;
+  uint64_t rejected[PALP_SRV_REJ_COUNT];
+} load_ctx;
+
+static void load_one(void *ctx, palp_srv_session *s) {
+  load_ctx *lc = ctx;
+  if (lc->n >= (uint32_t)lc->srv->cfg.max_sessions) return;
+  palp_SessionLoad *l = &lc->srv->loads[lc->n++];
+  memset(l, 0, sizeof *l);
+  l->session_id = s->id;
+  l->phantom_id = s->phantom->cfg.id;
+  l->ticks = s->stats.ticks;
+  l->overruns = s->stats.overruns;
+  l->awake_ticks = s->stats.awake_ticks;
+  l->contact_samples = s->stats.contact_samples;
+  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) {
+    l->rejected[r] = s->stats.rejected[r];
+    lc->rejected[r] += s->stats.rejected[r];
+  }
+  l->step_us_max = s->stats.step_us_max;
+  s->stats.step_us_max = 0;
+}
+
+static void publish_status(palp_srv *srv) {
+  palp_srv_tick_stats ts;
+  palp_srv_ticker_stats(srv->ticker, &ts);
+  load_ctx lc = {.srv = srv};
+  palp_srv_ticker_each(srv->ticker, load_one, &lc);
+  palp_ServerStatus m;
+  memset(&m, 0, sizeof m);
+  snprintf(m.server_id, sizeof m.server_id, "%s", srv->server_id);
+  m.uptime = (double)(palp_dds_now_ns() - srv->start_ns) * 1e-9;
+  m.tick_rate_hz = srv->cfg.tick_rate_hz;
+  m.tick_threads = (uint32_t)palp_srv_ticker_threads(srv->ticker);
+  m.sessions_open = (uint32_t)srv->session_count;
+  m.sessions_total = srv->sessions_total;
+  m.load = ts.load;
+  m.tick_us_p50 = ts.tick_us_p50;
+  m.tick_us_p99 = ts.tick_us_p99;
+  m.tick_us_max = ts.tick_us_max;
+  m.ticks = ts.ticks;
+  m.overruns = ts.overruns;
+  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) m.rejected[r] = lc.rejected[r] + srv->rejected_closed[r];
+  m.sessions = (dds_sequence_palp_SessionLoad){lc.n, lc.n, srv->loads, false};
+  dds_write(srv->status_w, &m);
+  for (int i = 0; i < srv->session_count; i++) publish_state(srv, srv->sessions[i], 0, NULL, NULL);
+}
+
+/* ---- lifecycle ------------------------------------------------------------------- */
+
+palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t errlen) {
+  palp_srv *srv = calloc(1, sizeof *srv);
+  if (!srv) {
+    *rc = PALP_ENOMEM;
+    fail(err, errlen, "out of memory");
+    return NULL;
+  }
+  srv->cfg = def->cfg;
+  srv->events = def->events;
+  srv->verbose = def->verbose;
+  srv->next_session_id = 1;
+  srv->start_ns = palp_dds_now_ns();
+  char host[32] = "host";
+  gethostname(host, sizeof host - 1);
+  snprintf(srv->server_id, sizeof srv->server_id, "palp-server/%s/%ld", host, (long)getpid());
+  srv->sessions = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->sessions);
+  srv->loads = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->loads);
+  if (!srv->sessions || !srv->loads) {
+    *rc = PALP_ENOMEM;
+    fail(err, errlen, "out of memory");
+    goto fail;
+  }
+  for (int i = 0; i < srv->cfg.phantom_count; i++) {
+    *rc = load_phantom(srv, &srv->cfg.phantom[i], &srv->phantom[i], err, errlen);
+    srv->phantom_count = i + (srv->phantom[i].template_world != NULL);
+    if (*rc < 0) goto fail;
+  }
+  srv->pp = dds_create_participant((dds_domainid_t)srv->cfg.domain_id, NULL, NULL);
+  if (srv->pp < 0) {
+    *rc = PALP_EIO;
+    fail(err, errlen, "dds_config: cannot create a DDS participant on domain %u: %s (CYCLONEDDS_URI=%s)",
+         srv->cfg.domain_id, dds_strretcode(srv->pp), getenv("CYCLONEDDS_URI") ? getenv("CYCLONEDDS_URI") : "");
+    goto fail;
+  }
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+    srv->topic[k] = palp_dds_create_topic(srv->pp, (palp_dds_topic_kind)k);
+    if (srv->topic[k] < 0) {
+      *rc = PALP_EIO;
+      fail(err, errlen, "cannot create topic %s: %s", palp_dds_topic_name((palp_dds_topic_kind)k),
+           dds_strretcode(srv->topic[k]));
+      goto fail;
+    }
+  }
+  srv->catalogue_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
+  srv->request_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  srv->reply_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
+  srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
+  srv->status_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  srv->waitset = dds_create_waitset(srv->pp);
+  srv->stop_gc = dds_create_guardcondition(srv->pp);
+  srv->request_rc = dds_create_readcondition(srv->request_r, DDS_ANY_STATE);
+  if (srv->catalogue_w < 0 || srv->request_r < 0 || srv->reply_w < 0 || srv->state_w < 0 || srv->status_w < 0 ||
+      srv->waitset < 0 || srv->stop_gc < 0 || srv->request_rc < 0 ||
+      dds_waitset_attach(srv->waitset, srv->request_rc, 0) < 0 || dds_waitset_attach(srv->waitset, srv->stop_gc, 0) < 0) {
+    *rc = PALP_EIO;
+    fail(err, errlen, "cannot create the server's DDS readers and writers");
+    goto fail;
+  }
+  srv->ticker = palp_srv_ticker_create(srv->cfg.tick_threads, srv->cfg.tick_rate_hz, srv->cfg.max_sessions, rc);
+  if (!srv->ticker) {
+    fail(err, errlen, "cannot start the tick threads: %s", palp_strerror(*rc));
+    goto fail;
+  }
+  for (int i = 0; i < srv->phantom_count; i++) publish_catalogue(srv, &srv->phantom[i]);
+  *rc = 0;
+  return srv;
+fail:
+  palp_srv_destroy(srv);
+  return NULL;
+}
+
+void palp_srv_request_stop(palp_srv *srv) {
+  atomic_store(&srv->stop, 1);
+  dds_set_guardcondition(srv->stop_gc, true);
+}
+
+int palp_srv_run(palp_srv *srv, double duration) {
+  const int64_t status_period = (int64_t)(1e9 / srv->cfg.status_rate_hz);
+  int64_t next_status = palp_dds_now_ns() + status_period;
+  int64_t end = duration > 0 ? palp_dds_now_ns() + (int64_t)(duration * 1e9) : INT64_MAX;
+  fprintf(stderr, "palp-server: %s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions\n",
+          srv->server_id, srv->cfg.domain_id, srv->phantom_count, srv->cfg.tick_rate_hz,
+          palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
+  while (!atomic_load(&srv->stop)) {
+    int64_t now = palp_dds_now_ns();
+    if (now >= end) break;
+    int64_t wake = next_status < end ? next_status : end;
+    /* Wake at least every 100 ms to notice sessions whose model failed. */
+    if (wake - now > 100000000) wake = now + 100000000;
+    dds_waitset_wait(srv->waitset, NULL, 0, wake - now > 0 ? wake - now : 0);
+    handle_requests(srv);
+    for (int i = 0; i < srv->session_count; i++) {
+      palp_srv_session *s = srv->sessions[i];
+      int f = atomic_load(&s->failed);
+      if (f) {
+        char why[128];
+        snprintf(why, sizeof why, "model step failed: %s", palp_strerror(f));
+        close_session(srv, s, why);
+        i--;
+      }
+    }
+    if (palp_dds_now_ns() >= next_status) {
+      publish_status(srv);
+      next_status += status_period;
+      if (next_status < palp_dds_now_ns()) next_status = palp_dds_now_ns() + status_period;
+    }
+  }
+  dds_set_guardcondition(srv->stop_gc, false);
+  while (srv->session_count > 0) close_session(srv, srv->sessions[srv->session_count - 1], "server shutdown");
+  publish_status(srv);
+  return 0;
+}
+
+int palp_srv_open_sessions(const palp_srv *srv) { return srv->session_count; }
+
+static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state) {
+  uint64_t rej = 0;
+  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) rej += s->rejected[r];
+  fprintf(out, "%-7u %-16.16s %-26.26s %8.2f %9llu %8.2f %9.2f %9llu %8llu %8llu  %s\n", s->info.session_id,
+          s->info.trainee_name, s->info.phantom_name, s->duration, (unsigned long long)s->contact_samples,
+          s->peak_force, s->peak_displacement * 1e3, (unsigned long long)s->ticks,
+          (unsigned long long)s->overruns, (unsigned long long)rej, state);
+}
+
+void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
+  fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
+          "contacts", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
+  for (int i = 0; i < srv->closed_count; i++) print_row(out, &srv->closed[i].sum, srv->closed[i].reason);
+  for (int i = 0; i < srv->session_count; i++) {
+    palp_srv_session_summary sum;
+    palp_srv_session_summary_fill(srv->sessions[i], "(open)", palp_dds_now_ns(), &sum);
+    print_row(out, &sum, "(open)");
+  }
+}
+
+void palp_srv_destroy(palp_srv *srv) {
+  if (!srv) return;
+  palp_srv_ticker_destroy(srv->ticker);
+  for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
+  if (srv->pp > 0) dds_delete(srv->pp);
+  for (int i = 0; i < srv->phantom_count; i++) palp_world_destroy(srv->phantom[i].template_world);
+  free(srv->sessions);
+  free(srv->loads);
+  free(srv->closed);
+  free(srv);
+}

@@ -1,0 +1,40 @@
+/*
+ * server.h - the classroom server: hosts phantoms, answers session requests,
+ * runs each trainee's session on the tick pool and publishes catalogue, session
+ * states and server status over DDS.
+ *
+ * Threads: the caller's thread runs palp_srv_run (a waitset loop over session
+ * requests, a guard condition for stop, and a timeout for the status period);
+ * the tick pool (ticker.h) steps the sessions. palp_srv_request_stop may be
+ * called from any thread (not from a signal handler: use sigwait, see main.c).
+ */
+#ifndef PALP_SRV_SERVER_H
+#define PALP_SRV_SERVER_H
+
+#include <stdio.h>
+
+#include "config.h"
+#include "events.h"
+
+typedef struct palp_srv palp_srv;
+
+typedef struct palp_srv_def {
+  palp_srv_config cfg;
+  const palp_srv_events *events; /* may be NULL; must outlive the server */
+  int verbose;                   /* log joins/leaves to stderr */
+} palp_srv_def;
+
+/* Loads every phantom's scene, creates the DDS participant (CYCLONEDDS_URI must
+ * be set by the caller, see palp_dds_use_config) and starts the tick pool.
+ * On failure returns NULL, *rc < 0 and a message in err. */
+palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t errlen);
+/* Runs until palp_srv_request_stop or, when duration > 0, for duration [s];
+ * then closes every session ("server shutdown"). Returns 0 or a negative code. */
+int palp_srv_run(palp_srv *srv, double duration);
+void palp_srv_request_stop(palp_srv *srv);
+/* Per-session table of every session the server ran (open ones too). */
+void palp_srv_print_summary(const palp_srv *srv, FILE *out);
+int palp_srv_open_sessions(const palp_srv *srv);
+void palp_srv_destroy(palp_srv *srv);
+
+#endif

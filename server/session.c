@@ -1,0 +1,326 @@
+/* session.c - one trainee's session: its world, its partition, its tick. */
+#include "session.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "palp_dds.h"
+
+#define TAKE_BATCH 8
+/* While the world sleeps with no finger down, feedback (all zero, unchanged) is
+ * repeated at 10 Hz instead of every tick: a station still sees the server alive,
+ * and 32 idle sessions do not cost 32 000 writes per second. */
+#define IDLE_FEEDBACK_PERIOD_NS 100000000
+/* A force contact whose centre moves by more than this is re-snapped [m]. */
+#define RESNAP_DISTANCE 1e-4
+
+static double norm3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+static double dist3(palp_vec3 a, palp_vec3 b) {
+  return norm3((palp_vec3){a.x - b.x, a.y - b.y, a.z - b.z});
+}
+
+palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err) {
+  palp_srv_session *s = calloc(1, sizeof *s);
+  if (!s) {
+    *err = PALP_ENOMEM;
+    return NULL;
+  }
+  s->id = def->id;
+  s->phantom = def->phantom;
+  s->events = def->events;
+  s->log_interval = def->cfg->log_interval;
+  s->deformation_period = 1.0 / def->cfg->deformation_rate_hz;
+  snprintf(s->trainee_station, sizeof s->trainee_station, "%s", def->trainee_station);
+  snprintf(s->trainee_name, sizeof s->trainee_name, "%s", def->trainee_name);
+  palp_dds_session_partition(s->id, s->partition, sizeof s->partition);
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) s->finger[i].world_contact = -1;
+
+  s->world = palp_scene_create_world(&def->phantom->scene, err);
+  if (!s->world) goto fail;
+  const palp_mesh *mesh = palp_world_mesh(s->world);
+  s->limits = (palp_srv_limits){.session_id = s->id,
+                                .max_force = def->cfg->max_force,
+                                .force_policy = def->cfg->force_policy,
+                                .finger_radius_min = def->cfg->finger_radius_min,
+                                .finger_radius_max = def->cfg->finger_radius_max,
+                                .phantom_radius = def->phantom->scene.world.mesh.radius,
+                                .vertex_count = mesh->vertex_count,
+                                .rest = mesh->rest};
+
+  s->deformation.session_id = s->id;
+  s->deformation.positions._buffer = calloc((size_t)mesh->vertex_count, sizeof(palp_Vec3));
+  if (!s->deformation.positions._buffer) {
+    *err = PALP_ENOMEM;
+    goto fail;
+  }
+  s->deformation.positions._maximum = s->deformation.positions._length = (uint32_t)mesh->vertex_count;
+  s->deformation.rest_volume = palp_world_rest_volume(s->world);
+  s->fb.session_id = s->id;
+  s->fb.fingers._buffer = s->fb_fingers;
+  s->fb.fingers._maximum = PALP_SRV_MAX_FINGERS;
+
+  s->sub = palp_dds_session_subscriber(def->participant, s->partition);
+  s->pub = palp_dds_session_publisher(def->participant, s->partition);
+  if (s->sub < 0 || s->pub < 0) goto dds_fail;
+  s->contact_reader = palp_dds_create_reader(s->sub, def->contact_topic, PALP_TOPIC_CONTACT);
+  s->feedback_writer = palp_dds_create_writer(s->pub, def->feedback_topic, PALP_TOPIC_FEEDBACK);
+  s->deformation_writer = palp_dds_create_writer(s->pub, def->deformation_topic, PALP_TOPIC_DEFORMATION);
+  if (s->contact_reader < 0 || s->feedback_writer < 0 || s->deformation_writer < 0) goto dds_fail;
+  s->opened_ns = palp_dds_now_ns();
+  *err = 0;
+  return s;
+dds_fail:
+  *err = PALP_EIO;
+fail:
+  palp_srv_session_destroy(s);
+  return NULL;
+}
+
+void palp_srv_session_destroy(palp_srv_session *s) {
+  if (!s) return;
+  /* Deleting the publisher/subscriber deletes their readers and writers. */
+  if (s->sub > 0) dds_delete(s->sub);
+  if (s->pub > 0) dds_delete(s->pub);
+  free(s->deformation.positions._buffer);
+  palp_world_destroy(s->world);
+  free(s);
+}
+
+static void count_reject(palp_srv_session *s, palp_srv_reject_reason r, int clamped, int64_t now_ns) {
+  s->stats.rejected[r]++;
+  if (s->events && s->events->contact_rejected) s->events->contact_rejected(s->events->ctx, s->id, r, clamped);
+  /* Rate-limited: a station flooding NaN at 1 kHz yields one line per interval. */
+  if (now_ns - s->last_log_ns[r] >= (int64_t)(s->log_interval * 1e9)) {
+    fprintf(stderr, "palp-server: session %u: contact %s: %s (%llu more since last report)\n", s->id,
+            clamped ? "clamped" : "rejected", palp_srv_reject_name(r),
+            (unsigned long long)s->log_suppressed[r]);
+    s->last_log_ns[r] = now_ns;
+    s->log_suppressed[r] = 0;
+  } else {
+    s->log_suppressed[r]++;
+  }
+}
+
+static void lift(palp_srv_session *s, palp_srv_finger_state *f) {
+  if (f->world_contact >= 0) palp_world_remove_contact(s->world, f->world_contact);
+  f->world_contact = -1;
+  f->mode = palp_CONTACT_RELEASE;
+  f->feedback = (palp_vec3){0, 0, 0};
+}
+
+/* Applies a validated command; returns 0 or a negative model error. */
+static int apply(palp_srv_session *s, const palp_srv_contact *c) {
+  palp_srv_finger_state *f = &s->finger[c->finger];
+  int rc = 0;
+  switch (c->mode) {
+  case palp_CONTACT_RELEASE: lift(s, f); break;
+  case palp_CONTACT_FORCE: {
+    int resnap = f->mode != palp_CONTACT_FORCE || f->world_contact < 0 ||
+                 f->cmd.distribution != c->distribution || dist3(f->cmd.center, c->center) > RESNAP_DISTANCE ||
+                 f->cmd.patch_area != c->patch_area || dist3(f->cmd.offset_dir, c->offset_dir) > 1e-9;
+    if (resnap) {
+      lift(s, f);
+      palp_contact_def d = palp_contact_default_def(c->distribution, c->center);
+      if (c->patch_area > 0) d.patch_area = c->patch_area;
+      if (norm3(c->offset_dir) > 0) d.offset_dir = c->offset_dir;
+      int id = palp_world_add_contact(s->world, &d);
+      if (id < 0) return id;
+      f->world_contact = id;
+      f->mode = palp_CONTACT_FORCE;
+    }
+    rc = palp_world_set_contact_force(s->world, f->world_contact, c->force);
+    double fm = norm3(c->force);
+    if (fm > s->stats.peak_force) s->stats.peak_force = fm;
+    break;
+  }
+  case palp_CONTACT_FINGER:
+    if (f->mode != palp_CONTACT_FINGER || f->world_contact < 0) {
+      lift(s, f);
+      int id = palp_world_add_finger(s->world, c->center, c->radius);
+      if (id < 0) return id;
+      f->world_contact = id;
+      f->mode = palp_CONTACT_FINGER;
+    } else {
+      rc = palp_world_set_finger(s->world, f->world_contact, c->center, c->radius);
+    }
+    break;
+  default: return PALP_EINVAL;
+  }
+  if (rc < 0) return rc;
+  f->cmd = *c;
+  palp_world_wake(s->world);
+  return 0;
+}
+
+static void take_contacts(palp_srv_session *s, int64_t now_ns) {
+  palp_Contact buf[TAKE_BATCH];
+  void *ptr[TAKE_BATCH];
+  dds_sample_info_t info[TAKE_BATCH];
+  for (int i = 0; i < TAKE_BATCH; i++) ptr[i] = &buf[i];
+  for (;;) {
+    int n = dds_take(s->contact_reader, ptr, info, TAKE_BATCH, TAKE_BATCH);
+    if (n <= 0) break;
+    for (int i = 0; i < n; i++) {
+      if (!info[i].valid_data) {
+        /* The finger's writer is gone or disposed it: lift that finger so a
+         * vanished station does not keep pressing until its session closes. */
+        if (info[i].instance_state != DDS_IST_ALIVE) {
+          palp_Contact key;
+          if (dds_instance_get_key(s->contact_reader, info[i].instance_handle, &key) == 0 &&
+              key.finger < PALP_SRV_MAX_FINGERS)
+            lift(s, &s->finger[key.finger]);
+        }
+        continue;
+      }
+      palp_srv_contact c;
+      palp_srv_reject_reason why = PALP_SRV_REJ_COUNT;
+      int v = palp_srv_validate_contact(&buf[i], &s->limits, &c, &why);
+      if (v == PALP_SRV_REJECT) {
+        count_reject(s, why, 0, now_ns);
+        continue;
+      }
+      if (v == PALP_SRV_CLAMPED) count_reject(s, why, 1, now_ns);
+      if (apply(s, &c) < 0) {
+        count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
+        continue;
+      }
+      s->stats.contact_samples++;
+      if (s->events && s->events->contact_applied)
+        s->events->contact_applied(s->events->ctx, s->id, &c, palp_world_time(s->world));
+    }
+    if (n < TAKE_BATCH) break;
+  }
+}
+
+static void publish_feedback(palp_srv_session *s, int64_t now_ns, double top_disp) {
+  s->fb.frame = (uint64_t)palp_world_frame(s->world);
+  s->fb.sim_time = palp_world_time(s->world);
+  s->fb.top_displacement = top_disp;
+  uint32_t n = 0;
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+    const palp_srv_finger_state *f = &s->finger[i];
+    if (f->mode == palp_CONTACT_RELEASE && f->cmd.seq == 0) continue; /* never used */
+    palp_FingerFeedback *o = &s->fb_fingers[n++];
+    o->finger = (uint8_t)i;
+    o->active = f->world_contact >= 0;
+    o->force = (palp_Vec3){f->feedback.x, f->feedback.y, f->feedback.z};
+    o->contact_seq = f->cmd.seq;
+    o->contact_source_time_ns = f->cmd.source_time_ns;
+  }
+  s->fb.fingers._length = n;
+  s->fb.server_time_ns = palp_dds_now_ns();
+  dds_write(s->feedback_writer, &s->fb);
+  s->last_feedback_ns = now_ns;
+}
+
+static void publish_deformation(palp_srv_session *s) {
+  const palp_vec3 *p = palp_world_positions(s->world);
+  palp_Vec3 *o = s->deformation.positions._buffer;
+  for (uint32_t i = 0; i < s->deformation.positions._length; i++) o[i] = (palp_Vec3){p[i].x, p[i].y, p[i].z};
+  s->deformation.frame = (uint64_t)palp_world_frame(s->world);
+  s->deformation.sim_time = palp_world_time(s->world);
+  s->deformation.volume = palp_world_volume(s->world);
+  s->deformation.pressure = palp_world_pressure(s->world);
+  s->deformation.awake = palp_world_is_awake(s->world) != 0;
+  dds_write(s->deformation_writer, &s->deformation);
+}
+
+int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
+  int64_t t0 = palp_dds_now_ns();
+  s->stats.ticks++;
+  if (atomic_load_explicit(&s->failed, memory_order_relaxed)) return 0;
+  take_contacts(s, now_ns);
+
+  int any_down = 0;
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) any_down |= s->finger[i].world_contact >= 0;
+  int awake = palp_world_is_awake(s->world);
+  double top_disp = 0;
+  const palp_mesh *mesh = palp_world_mesh(s->world);
+  /* Stepped every tick: a sleeping world returns at once but keeps its clock. */
+  int rc = palp_world_step(s->world);
+  if (rc < 0) {
+      fprintf(stderr, "palp-server: session %u: model step failed: %s; closing the session\n", s->id,
+              palp_strerror(rc));
+    atomic_store(&s->failed, rc);
+    return palp_dds_now_ns() - t0;
+  }
+  if (awake) {
+    s->stats.awake_ticks++;
+    s->deformation_sent_asleep = 0;
+    /* Peak displacement over the dome: O(vertices), only while the world moves. */
+    const palp_vec3 *pos = palp_world_positions(s->world);
+    double peak2 = 0;
+    for (int v = 0; v < mesh->vertex_count; v++) {
+      double dx = pos[v].x - mesh->rest[v].x, dy = pos[v].y - mesh->rest[v].y, dz = pos[v].z - mesh->rest[v].z;
+      double d2 = dx * dx + dy * dy + dz * dz;
+      if (d2 > peak2) peak2 = d2;
+    }
+    double peak = sqrt(peak2);
+    if (peak > s->stats.peak_displacement) s->stats.peak_displacement = peak;
+    for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+      palp_srv_finger_state *f = &s->finger[i];
+      if (f->world_contact < 0) continue;
+      palp_vec3 fb = {0, 0, 0};
+      if (palp_world_contact_feedback(s->world, f->world_contact, &fb) == 0) f->feedback = fb;
+      double m = norm3(f->feedback);
+      if (f->mode == palp_CONTACT_FINGER && m > s->stats.peak_force) s->stats.peak_force = m;
+    }
+  }
+  top_disp = mesh->rest[mesh->top_vertex].z - palp_world_positions(s->world)[mesh->top_vertex].z;
+  s->stats.last_frame = palp_world_frame(s->world);
+  s->stats.sim_time = palp_world_time(s->world);
+
+  if (awake && s->events && s->events->frame) {
+    palp_vec3 ff[PALP_SRV_MAX_FINGERS];
+    uint8_t act[PALP_SRV_MAX_FINGERS];
+    for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+      ff[i] = s->finger[i].feedback;
+      act[i] = s->finger[i].world_contact >= 0;
+    }
+    s->events->frame(s->events->ctx, s->id, s->stats.last_frame, s->stats.sim_time, top_disp, ff, act,
+                     PALP_SRV_MAX_FINGERS);
+  }
+
+  if (atomic_load_explicit(&s->want_feedback, memory_order_relaxed) &&
+      (awake || any_down || now_ns - s->last_feedback_ns >= IDLE_FEEDBACK_PERIOD_NS))
+    publish_feedback(s, now_ns, top_disp);
+
+  if (atomic_load_explicit(&s->deform_members, memory_order_relaxed) > 0 && now_ns >= s->next_deformation_ns &&
+      (awake || !s->deformation_sent_asleep)) {
+    publish_deformation(s);
+    s->deformation_sent_asleep = !awake;
+    s->next_deformation_ns = now_ns + (int64_t)(s->deformation_period * 1e9);
+  }
+  int64_t dt = palp_dds_now_ns() - t0;
+  double us = (double)dt * 1e-3;
+  if (us > s->stats.step_us_max) s->stats.step_us_max = us;
+  return dt;
+}
+
+void palp_srv_session_info_fill(const palp_srv_session *s, palp_srv_session_info *out) {
+  out->session_id = s->id;
+  out->phantom_id = s->phantom->cfg.id;
+  out->phantom_name = s->phantom->cfg.name;
+  out->trainee_station = s->trainee_station;
+  out->trainee_name = s->trainee_name;
+  out->partition = s->partition;
+  out->tick_rate_hz = 1.0 / s->phantom->scene.world.dt;
+  out->opened_ns = s->opened_ns;
+}
+
+void palp_srv_session_summary_fill(const palp_srv_session *s, const char *reason, int64_t now_ns,
+                                   palp_srv_session_summary *out) {
+  memset(out, 0, sizeof *out);
+  palp_srv_session_info_fill(s, &out->info);
+  out->duration = (double)(now_ns - s->opened_ns) * 1e-9;
+  out->ticks = s->stats.ticks;
+  out->overruns = s->stats.overruns;
+  out->awake_ticks = s->stats.awake_ticks;
+  out->contact_samples = s->stats.contact_samples;
+  memcpy(out->rejected, s->stats.rejected, sizeof out->rejected);
+  out->peak_force = s->stats.peak_force;
+  out->peak_displacement = s->stats.peak_displacement;
+  out->close_reason = reason;
+}

@@ -1,0 +1,106 @@
+/*
+ * session.h - one trainee's session: its own palp_world, its partition's DDS
+ * endpoints, and the per-tick pipeline (take contacts -> validate -> apply ->
+ * step -> publish feedback / deformation).
+ *
+ * A session is created and destroyed by the server's main thread and ticked by
+ * exactly one tick thread; fields marked [main] are written by the main thread
+ * only (atomics), the rest belong to the tick thread and are read by the main
+ * thread under the tick group's lock.
+ */
+#ifndef PALP_SRV_SESSION_H
+#define PALP_SRV_SESSION_H
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include <dds/dds.h>
+
+#include "config.h"
+#include "events.h"
+#include "palp.h"
+#include "palp_types.h"
+#include "validate.h"
+
+/* A hosted phantom: its scene (contacts stripped, dt set to the tick period) and
+ * a template world whose mesh feeds the catalogue and the validation limits. */
+typedef struct palp_srv_phantom {
+  palp_srv_phantom_cfg cfg;
+  palp_scene scene;
+  palp_world *template_world;
+  const palp_mesh *mesh;
+} palp_srv_phantom;
+
+typedef struct palp_srv_session_stats {
+  uint64_t ticks, overruns, awake_ticks;
+  uint64_t contact_samples;                 /* applied (accepted or clamped) */
+  uint64_t rejected[PALP_SRV_REJ_COUNT];    /* per reason; force_limit counts clamps too */
+  double peak_force;                        /* [N] */
+  double peak_displacement;                 /* [m] */
+  double step_us_max;                       /* longest tick of this session in the status period [us] */
+  int64_t last_frame;
+  double sim_time;                          /* [s] */
+} palp_srv_session_stats;
+
+typedef struct palp_srv_finger_state {
+  int world_contact;      /* model contact id, -1 when lifted */
+  int mode;               /* palp_ContactMode of the applied command */
+  palp_srv_contact cmd;   /* last applied command */
+  palp_vec3 feedback;     /* [N] after the last step */
+} palp_srv_finger_state;
+
+typedef struct palp_srv_session_def {
+  uint32_t id;
+  palp_srv_phantom *phantom;
+  const palp_srv_config *cfg;
+  const char *trainee_station;
+  const char *trainee_name;
+  dds_entity_t participant;
+  dds_entity_t contact_topic, feedback_topic, deformation_topic;
+  const palp_srv_events *events; /* may be NULL */
+} palp_srv_session_def;
+
+typedef struct palp_srv_session {
+  uint32_t id;
+  palp_srv_phantom *phantom;
+  palp_world *world;
+  char partition[64];
+  char trainee_station[64];
+  char trainee_name[64];
+  int64_t opened_ns;
+  dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer;
+  palp_srv_limits limits;
+  const palp_srv_events *events;
+  double log_interval;        /* [s] */
+  double deformation_period;  /* [s] */
+
+  /* [main] */
+  atomic_int want_feedback;   /* haptic trainee present */
+  atomic_int deform_members;  /* members that asked for palp_deformation */
+  atomic_int failed;          /* set by the tick thread: the model refused to step */
+
+  /* tick thread */
+  palp_srv_finger_state finger[PALP_SRV_MAX_FINGERS];
+  palp_srv_session_stats stats;
+  int64_t next_deformation_ns;
+  int64_t last_feedback_ns;
+  int deformation_sent_asleep; /* the sleeping shape was already sent */
+  int64_t last_log_ns[PALP_SRV_REJ_COUNT];
+  uint64_t log_suppressed[PALP_SRV_REJ_COUNT];
+  palp_Feedback fb;
+  palp_FingerFeedback fb_fingers[PALP_SRV_MAX_FINGERS];
+  palp_Deformation deformation;
+} palp_srv_session;
+
+palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err);
+void palp_srv_session_destroy(palp_srv_session *s);
+
+/* One tick at CLOCK_MONOTONIC time now_ns. Returns the time spent [ns]. */
+int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns);
+
+/* Fills a summary (strings point into s; valid while s lives). */
+void palp_srv_session_summary_fill(const palp_srv_session *s, const char *reason, int64_t now_ns,
+                                   palp_srv_session_summary *out);
+void palp_srv_session_info_fill(const palp_srv_session *s, palp_srv_session_info *out);
+
+#endif

@@ -1,0 +1,211 @@
+/* ticker.c - the tick thread pool. */
+#include "ticker.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "palp.h"
+#include "palp_dds.h"
+
+typedef struct tick_group {
+  palp_srv_ticker *owner;
+  pthread_t thread;
+  pthread_mutex_t lock;
+  palp_srv_session **sessions;
+  int count;
+  /* timing, under lock */
+  double *work_us;   /* ring of this period's tick work times [us] */
+  int work_n, work_cap;
+  int64_t busy_ns, period_start_ns;
+  uint64_t ticks, overruns, period_ticks, period_overruns;
+} tick_group;
+
+struct palp_srv_ticker {
+  int n;
+  int64_t period_ns;
+  int max_sessions;
+  atomic_int stop;
+  tick_group *g;
+  int started;
+};
+
+static struct timespec ts_of(int64_t ns) {
+  return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
+}
+
+static void *group_main(void *arg) {
+  tick_group *g = arg;
+  palp_srv_ticker *t = g->owner;
+  int64_t next = palp_dds_now_ns() + t->period_ns;
+  while (!atomic_load(&t->stop)) {
+    struct timespec ts = ts_of(next);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+    int64_t t0 = palp_dds_now_ns();
+    pthread_mutex_lock(&g->lock);
+    for (int i = 0; i < g->count; i++) palp_srv_session_tick(g->sessions[i], next);
+    int64_t t1 = palp_dds_now_ns();
+    /* Overrun: this tick's work ended after the next tick should have started. */
+    int overrun = t1 > next + t->period_ns;
+    if (overrun)
+      for (int i = 0; i < g->count; i++) g->sessions[i]->stats.overruns++;
+    g->ticks++;
+    g->period_ticks++;
+    g->overruns += (uint64_t)overrun;
+    g->period_overruns += (uint64_t)overrun;
+    g->busy_ns += t1 - t0;
+    if (g->work_n < g->work_cap) g->work_us[g->work_n++] = (double)(t1 - t0) * 1e-3;
+    pthread_mutex_unlock(&g->lock);
+    next += t->period_ns;
+    if (next <= t1) {
+      /* Behind schedule: drop the lost slots rather than burst. */
+      int64_t lost = (t1 - next) / t->period_ns + 1;
+      next += lost * t->period_ns;
+    }
+  }
+  return NULL;
+}
+
+palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int *err) {
+  if (threads <= 0) {
+    long c = sysconf(_SC_NPROCESSORS_ONLN);
+    threads = c > 0 ? (int)c : 1;
+  }
+  if (!(rate_hz > 0) || max_sessions < 1) {
+    *err = PALP_EINVAL;
+    return NULL;
+  }
+  palp_srv_ticker *t = calloc(1, sizeof *t);
+  if (!t) goto nomem;
+  t->n = threads;
+  t->period_ns = (int64_t)(1e9 / rate_hz + 0.5);
+  t->max_sessions = max_sessions;
+  t->g = calloc((size_t)threads, sizeof *t->g);
+  if (!t->g) goto nomem;
+  /* Keep up to 4 s of tick times per status period (1 kHz, 0.25 Hz status). */
+  int cap = (int)(rate_hz * 4) + 16;
+  for (int i = 0; i < threads; i++) {
+    tick_group *g = &t->g[i];
+    g->owner = t;
+    pthread_mutex_init(&g->lock, NULL);
+    g->sessions = calloc((size_t)max_sessions, sizeof *g->sessions);
+    g->work_us = calloc((size_t)cap, sizeof *g->work_us);
+    g->work_cap = cap;
+    g->period_start_ns = palp_dds_now_ns();
+    if (!g->sessions || !g->work_us) goto nomem;
+  }
+  for (int i = 0; i < threads; i++) {
+    if (pthread_create(&t->g[i].thread, NULL, group_main, &t->g[i]) != 0) {
+      atomic_store(&t->stop, 1);
+      for (int j = 0; j < i; j++) pthread_join(t->g[j].thread, NULL);
+      t->started = 0;
+      palp_srv_ticker_destroy(t);
+      *err = PALP_ENOMEM;
+      return NULL;
+    }
+    t->started = i + 1;
+  }
+  *err = 0;
+  return t;
+nomem:
+  palp_srv_ticker_destroy(t);
+  *err = PALP_ENOMEM;
+  return NULL;
+}
+
+void palp_srv_ticker_destroy(palp_srv_ticker *t) {
+  if (!t) return;
+  atomic_store(&t->stop, 1);
+  for (int i = 0; i < t->started; i++) pthread_join(t->g[i].thread, NULL);
+  if (t->g)
+    for (int i = 0; i < t->n; i++) {
+      pthread_mutex_destroy(&t->g[i].lock);
+      free(t->g[i].sessions);
+      free(t->g[i].work_us);
+    }
+  free(t->g);
+  free(t);
+}
+
+int palp_srv_ticker_threads(const palp_srv_ticker *t) { return t->n; }
+
+int palp_srv_ticker_add(palp_srv_ticker *t, palp_srv_session *s) {
+  int best = 0;
+  for (int i = 1; i < t->n; i++)
+    if (t->g[i].count < t->g[best].count) best = i;
+  tick_group *g = &t->g[best];
+  pthread_mutex_lock(&g->lock);
+  int rc = PALP_EFULL;
+  if (g->count < t->max_sessions) {
+    g->sessions[g->count++] = s;
+    rc = 0;
+  }
+  pthread_mutex_unlock(&g->lock);
+  return rc;
+}
+
+void palp_srv_ticker_remove(palp_srv_ticker *t, palp_srv_session *s) {
+  for (int i = 0; i < t->n; i++) {
+    tick_group *g = &t->g[i];
+    pthread_mutex_lock(&g->lock);
+    for (int k = 0; k < g->count; k++)
+      if (g->sessions[k] == s) {
+        g->sessions[k] = g->sessions[--g->count];
+        break;
+      }
+    pthread_mutex_unlock(&g->lock);
+  }
+}
+
+void palp_srv_ticker_each(palp_srv_ticker *t, void (*fn)(void *ctx, palp_srv_session *s), void *ctx) {
+  for (int i = 0; i < t->n; i++) {
+    tick_group *g = &t->g[i];
+    pthread_mutex_lock(&g->lock);
+    for (int k = 0; k < g->count; k++) fn(ctx, g->sessions[k]);
+    pthread_mutex_unlock(&g->lock);
+  }
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+void palp_srv_ticker_stats(palp_srv_ticker *t, palp_srv_tick_stats *out) {
+  memset(out, 0, sizeof *out);
+  int total = 0;
+  for (int i = 0; i < t->n; i++) total += t->g[i].work_cap;
+  double *all = malloc((size_t)total * sizeof *all);
+  int n = 0;
+  int64_t now = palp_dds_now_ns();
+  for (int i = 0; i < t->n; i++) {
+    tick_group *g = &t->g[i];
+    pthread_mutex_lock(&g->lock);
+    if (all) memcpy(all + n, g->work_us, (size_t)g->work_n * sizeof *all);
+    n += all ? g->work_n : 0;
+    double span = (double)(now - g->period_start_ns);
+    double load = span > 0 ? (double)g->busy_ns / span : 0;
+    if (load > out->load) out->load = load;
+    out->ticks += g->ticks;
+    out->overruns += g->overruns;
+    out->period_ticks += g->period_ticks;
+    out->period_overruns += g->period_overruns;
+    g->work_n = 0;
+    g->busy_ns = 0;
+    g->period_ticks = g->period_overruns = 0;
+    g->period_start_ns = now;
+    pthread_mutex_unlock(&g->lock);
+  }
+  if (all && n > 0) {
+    qsort(all, (size_t)n, sizeof *all, cmp_double);
+    out->tick_us_p50 = all[(n - 1) / 2];
+    out->tick_us_p99 = all[(int)((n - 1) * 0.99)];
+    out->tick_us_max = all[n - 1];
+  }
+  free(all);
+}

@@ -1,0 +1,41 @@
+/*
+ * ticker.h - the tick thread pool.
+ *
+ * A small fixed set of threads (default: one per core), each owning a group of
+ * sessions. Each thread wakes on absolute CLOCK_MONOTONIC deadlines
+ * (clock_nanosleep TIMER_ABSTIME), ticks every session of its group once, and
+ * records the tick's work time. A tick whose work ends after the next tick's
+ * start is an overrun; the thread then skips the lost slots instead of bursting
+ * to catch up (simulated time lags wall time, the station sees it in sim_time).
+ */
+#ifndef PALP_SRV_TICKER_H
+#define PALP_SRV_TICKER_H
+
+#include <stdint.h>
+
+#include "session.h"
+
+typedef struct palp_srv_ticker palp_srv_ticker;
+
+typedef struct palp_srv_tick_stats {
+  double tick_us_p50, tick_us_p99, tick_us_max; /* work time per tick over the period, all threads [us] */
+  double load;                                  /* worst thread's busy fraction over the period */
+  uint64_t ticks, overruns;                     /* since start, all threads */
+  uint64_t period_ticks, period_overruns;       /* since the previous call */
+} palp_srv_tick_stats;
+
+/* threads <= 0: one per online core. max_sessions bounds every group. */
+palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int *err);
+/* Stops and joins the threads; sessions still attached are not destroyed. */
+void palp_srv_ticker_destroy(palp_srv_ticker *t);
+int palp_srv_ticker_threads(const palp_srv_ticker *t);
+/* Attaches to the group with the fewest sessions. */
+int palp_srv_ticker_add(palp_srv_ticker *t, palp_srv_session *s);
+/* Detaches; on return no tick thread touches s any more. */
+void palp_srv_ticker_remove(palp_srv_ticker *t, palp_srv_session *s);
+/* Calls fn for every attached session under its group's lock (short work only). */
+void palp_srv_ticker_each(palp_srv_ticker *t, void (*fn)(void *ctx, palp_srv_session *s), void *ctx);
+/* Snapshot of the timing since the previous call. */
+void palp_srv_ticker_stats(palp_srv_ticker *t, palp_srv_tick_stats *out);
+
+#endif
