@@ -1,0 +1,280 @@
+/*
+ * palp_db.h - the session log: SQLite storage of palpation sessions for instructor review.
+ *
+ * Two sides share one file:
+ *  - the writer (server side): palp_db_writer_open() starts a worker thread that owns the only
+ *    writing connection. The palp_db_log_*() calls copy a record into a bounded in-memory queue
+ *    and return at once; they never block on disk and never take longer than a mutex hand-off and
+ *    a memcpy (plus one malloc for records that carry a mesh or strings). A full queue returns
+ *    PALP_EFULL and the record is counted as shed, never silently lost. The worker batches
+ *    records into transactions (WAL, synchronous=NORMAL, prepared statements) and commits at least
+ *    every opts.commit_interval_s. A disk error never reaches the caller: the worker backs off,
+ *    retries the batch, then drops it and counts it as failed; palp_db_writer_stats() reports it.
+ *  - readers (palp-review, tests): palp_db_open() works on a file the server is writing at the
+ *    same time (WAL readers never block the writer; busy_timeout covers checkpoints).
+ *
+ * Units are SI everywhere ([m], [N], [Pa], [m^3], [s]); wall times are Unix seconds (UTC).
+ *
+ * REPLAY CONTRACT (what the server must do so that `palp-review replay` reproduces a session
+ * bit for bit):
+ *  1. Build the world with palp_db_world_from_scene(scene_json, dt_s, ...) (or the same steps:
+ *     palp_scene_parse, world.dt = dt_s, palp_scene_create_world, remove the scene's own contacts
+ *     0..contact_count-1) and log that same scene_json and dt_s in palp_db_log_session_begin().
+ *  2. Step only with palp_world_step() (fixed dt), never palp_world_step_dt().
+ *  3. Every world call that changes a contact is logged, in the order made, with frame =
+ *     palp_world_frame(w) at the time of the call (i.e. before the step from frame f to f + 1):
+ *       palp_world_add_contact(def) + palp_world_set_contact_force(id, F)
+ *                                      -> op ADD,    kind FORCE,  slot = id, def, force F
+ *       palp_world_set_contact_force(id, F)   -> op UPDATE, kind FORCE,  slot = id, force F
+ *       palp_world_add_finger(c, r)           -> op ADD,    kind FINGER, slot = id, center c, radius r
+ *       palp_world_set_finger(id, c, r)       -> op UPDATE, kind FINGER, slot = id, center c, radius r
+ *       palp_world_remove_contact(id)         -> op REMOVE, slot = id
+ *     Inputs that the server rejected (never applied) are not contact inputs: log them as events.
+ *  4. After each palp_world_step(), log the frame summary filled by palp_db_frame_summarize(w, ...)
+ *     (frame = the new frame number, state_hash = palp_world_hash(w)). Frames may be logged at a
+ *     reduced rate; replay checks those that are logged.
+ *  5. Feedback (palp_db_log_feedback) and meshes (palp_db_log_mesh) carry the frame after the step
+ *     they were computed from.
+ */
+#ifndef PALP_DB_H
+#define PALP_DB_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "palp.h" /* PALP_E* codes, palp_vec3, palp_contact_def; header only */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The schema version this library writes (= number of embedded migrations). */
+int palp_db_schema_version(void);
+/* Error text for PALP_E* codes and the palp_db-specific ones below. */
+const char *palp_db_strerror(int err);
+enum {
+  PALP_DB_ENEWER = -100, /* the file's schema is newer than this palp */
+  PALP_DB_ENOTFOUND = -101, /* no such session */
+  PALP_DB_ESQL = -102, /* SQLite reported an error; see the message */
+  PALP_DB_EAMBIGUOUS = -103 /* a session prefix matches several sessions */
+};
+
+/* ---- records --------------------------------------------------------------- */
+typedef enum palp_db_end_reason {
+  PALP_DB_END_NORMAL = 1,
+  PALP_DB_END_STATION_VANISHED = 2,
+  PALP_DB_END_SERVER_SHUTDOWN = 3,
+  PALP_DB_END_ERROR = 4
+} palp_db_end_reason;
+const char *palp_db_end_reason_name(palp_db_end_reason r); /* "normal", ... ; NULL if unknown */
+
+typedef enum palp_db_contact_op {
+  PALP_DB_OP_ADD = 1,
+  PALP_DB_OP_UPDATE = 2,
+  PALP_DB_OP_REMOVE = 3
+} palp_db_contact_op;
+
+typedef enum palp_db_contact_kind {
+  PALP_DB_KIND_FORCE = 1, /* force-driven contact (palp_world_add_contact) */
+  PALP_DB_KIND_FINGER = 2 /* position-driven finger (palp_world_add_finger) */
+} palp_db_contact_kind;
+
+typedef enum palp_db_event_kind {
+  PALP_DB_EVENT_JOIN = 1,
+  PALP_DB_EVENT_LEAVE = 2,
+  PALP_DB_EVENT_REJECT = 3,    /* a sample rejected; detail says why */
+  PALP_DB_EVENT_CLAMP = 4,     /* a sample clamped to a limit */
+  PALP_DB_EVENT_OVERRUN = 5,   /* a tick overran its period */
+  PALP_DB_EVENT_SHED = 6,      /* the log queue shed records (written by the writer itself) */
+  PALP_DB_EVENT_DISK_ERROR = 7, /* the log lost records to a disk error (written by the writer) */
+  PALP_DB_EVENT_INFO = 8
+} palp_db_event_kind;
+#define PALP_DB_EVENT_KIND_COUNT 9
+const char *palp_db_event_kind_name(palp_db_event_kind k); /* "join", ... */
+
+typedef struct palp_db_session_def {
+  const char *uid;          /* unique across server runs, e.g. "<run uuid>-<n>"; required */
+  const char *trainee;
+  const char *station;
+  const char *phantom_id;
+  const char *phantom_name;
+  const char *scene_json;   /* the scene the world was built from; required for replay */
+  const char *params_json;  /* server-side parameters (limits, ...), "{}" if none */
+  double tick_hz;           /* [Hz] */
+  double dt_s;              /* [s] fixed step of the world */
+  double start_unix_s;      /* wall time [s]; 0 = now */
+} palp_db_session_def;
+
+typedef struct palp_db_contact {
+  int64_t frame;       /* world frame at which the input took effect (before stepping from it) */
+  double sim_time_s;   /* palp_world_time at that moment [s] */
+  int slot;            /* contact id in the world */
+  palp_db_contact_op op;
+  palp_db_contact_kind kind;
+  palp_contact_def def; /* force contacts: the contact definition; def.center is the centre [m] */
+  palp_vec3 force_n;    /* force contacts: force vector [N] */
+  palp_vec3 center_m;   /* fingers: sphere centre [m]; readers fill it for force contacts too */
+  double radius_m;      /* fingers: sphere radius [m] */
+} palp_db_contact;
+
+typedef struct palp_db_frame {
+  int64_t frame;          /* palp_world_frame after the step */
+  double sim_time_s;      /* [s] */
+  double top_disp_m;      /* |x - X| of the top vertex [m] */
+  double max_disp_m;      /* max |x - X| over vertices [m] */
+  double volume_m3;       /* [m^3] */
+  double pressure_pa;     /* gauge gel pressure [Pa] */
+  double contact_force_n; /* |sum of the contacts' feedback| [N] */
+  uint64_t state_hash;    /* palp_world_hash */
+} palp_db_frame;
+
+/* ---- writer (server side) ----------------------------------------------------- */
+typedef struct palp_db_writer palp_db_writer;
+typedef int32_t palp_db_session; /* a writer-local handle for a logged session, > 0 */
+
+typedef struct palp_db_writer_opts {
+  int queue_capacity;       /* records, default 131072 (about 1.3 s of 32 sessions at 1 kHz x 3) */
+  size_t queue_max_bytes;   /* bytes held by meshes and strings in the queue, default 64 MiB */
+  int batch_records;        /* wake the worker when this many records wait, default 4096 */
+  double commit_interval_s; /* commit at least this often while records arrive [s], default 0.1 */
+  double retry_backoff_s;   /* first back-off after a disk error [s], doubles, default 0.05 */
+  int retry_limit;          /* retries of a failed batch before dropping it, default 3 */
+  int64_t max_db_bytes;     /* cap on the file size (PRAGMA max_page_count); 0 = no cap */
+  const char *app_version;  /* recorded in meta and writer_run; default the palp version */
+} palp_db_writer_opts;
+palp_db_writer_opts palp_db_writer_default_opts(void);
+
+/* Opens (creating or upgrading) the database and starts the worker. On failure returns a
+ * negative code and writes a message into err (if errlen > 0). */
+int palp_db_writer_open(const char *path, const palp_db_writer_opts *opts, palp_db_writer **out,
+                        char *err, size_t errlen);
+/* Flushes everything queued, records the run's counts and stops the worker. NULL is a no-op. */
+void palp_db_writer_close(palp_db_writer *w);
+/* Blocks until every record enqueued before the call is committed or dropped, or timeout_s
+ * passes. For tests and shutdown, never for the tick loop. Returns 0 or PALP_EIO on timeout. */
+int palp_db_writer_flush(palp_db_writer *w, double timeout_s);
+
+/* The enqueue calls: never block on disk. Return 0, PALP_EFULL (queue full: shed and counted),
+ * PALP_EINVAL (bad argument or unknown session) or PALP_ENOMEM. */
+int palp_db_log_session_begin(palp_db_writer *w, const palp_db_session_def *def, palp_db_session *out);
+int palp_db_log_contact(palp_db_writer *w, palp_db_session s, const palp_db_contact *c);
+int palp_db_log_feedback(palp_db_writer *w, palp_db_session s, int64_t frame, int slot, palp_vec3 force_n);
+int palp_db_log_frame(palp_db_writer *w, palp_db_session s, const palp_db_frame *f);
+/* Copies vertex_count positions [m]. */
+int palp_db_log_mesh(palp_db_writer *w, palp_db_session s, int64_t frame, const palp_vec3 *pos,
+                     int vertex_count);
+/* s = 0 for a server-wide event; frame < 0 if none; detail may be NULL. */
+int palp_db_log_event(palp_db_writer *w, palp_db_session s, palp_db_event_kind kind, int64_t frame,
+                      const char *detail, int64_t count);
+/* end_unix_s = 0 means now. After this the handle is invalid. */
+int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_reason reason,
+                            const char *detail, double end_unix_s);
+
+typedef enum palp_db_record_kind {
+  PALP_DB_REC_SESSION_BEGIN = 0,
+  PALP_DB_REC_SESSION_END,
+  PALP_DB_REC_CONTACT,
+  PALP_DB_REC_FEEDBACK,
+  PALP_DB_REC_FRAME,
+  PALP_DB_REC_MESH,
+  PALP_DB_REC_EVENT,
+  PALP_DB_REC_KIND_COUNT
+} palp_db_record_kind;
+const char *palp_db_record_kind_name(palp_db_record_kind k);
+
+typedef struct palp_db_writer_stats {
+  int64_t enqueued;     /* accepted into the queue */
+  int64_t written;      /* committed to the file */
+  int64_t shed;         /* refused because the queue was full */
+  int64_t failed;       /* dropped after a disk error (or rejected by a constraint) */
+  int64_t shed_by_kind[PALP_DB_REC_KIND_COUNT];
+  int64_t failed_by_kind[PALP_DB_REC_KIND_COUNT];
+  int queued;           /* in the queue now */
+  int queue_high_water; /* most records ever queued at once */
+  int queue_capacity;
+  int64_t commits;      /* transactions committed */
+  int64_t disk_errors;  /* failed batch attempts */
+  int in_error;         /* 1 while the last attempt failed */
+  int last_error_code;  /* SQLite extended result code of the last error, 0 if none */
+  char last_error[256]; /* text of the last error, "" if none */
+} palp_db_writer_stats;
+void palp_db_writer_stats_get(palp_db_writer *w, palp_db_writer_stats *out);
+
+/* ---- frame summary (needs the palp model library: link palp_db_sim) -------------- */
+/* Fills f from the world's current state with the definitions above. Server and replay both
+ * call this, so the logged and replayed summaries are computed by the same code. */
+void palp_db_frame_summarize(const palp_world *w, palp_db_frame *f);
+/* Builds the world the replay contract names. Returns NULL and sets *err (and msg) on failure. */
+palp_world *palp_db_world_from_scene(const char *scene_json, double dt_s, int *err, char *msg,
+                                     size_t msglen);
+
+/* ---- readers ---------------------------------------------------------------- */
+typedef struct palp_db palp_db;
+
+/* Opens for reading (and annotating). A file with an older schema is upgraded in a transaction;
+ * one with a newer schema is refused (PALP_DB_ENEWER) with a message saying so. create = 0
+ * refuses a missing file. */
+int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t errlen);
+void palp_db_close(palp_db *db);
+/* The file's schema version (PRAGMA user_version). */
+int palp_db_file_version(palp_db *db);
+/* The underlying connection, for ad-hoc queries (palp-review, tests). */
+struct sqlite3 *palp_db_handle(palp_db *db);
+const char *palp_db_errmsg(palp_db *db);
+
+typedef struct palp_db_session_info {
+  int64_t id;
+  char uid[128];
+  char trainee[128];
+  char station[128];
+  char phantom_id[128];
+  char phantom_name[128];
+  double tick_hz, dt_s;
+  double start_unix_s;
+  double end_unix_s;   /* 0 if not ended */
+  char end_reason[32]; /* "" if not ended */
+  char end_detail[256];
+  int64_t records_shed, records_failed;
+  int64_t frames, contact_inputs, meshes, events, notes;
+  double sim_duration_s; /* last logged frame's sim time */
+} palp_db_session_info;
+
+typedef struct palp_db_filter {
+  const char *trainee;    /* exact match, NULL = any */
+  const char *phantom;    /* matches phantom_id or phantom_name, NULL = any */
+  double since_unix_s;    /* start >= since; 0 = no bound */
+  double until_unix_s;    /* start < until; 0 = no bound */
+} palp_db_filter;
+
+/* Lists matching sessions, oldest first; *out is malloc'd (free()). */
+int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count);
+/* Finds a session by its uid or a unique prefix of it. */
+int palp_db_find_session(palp_db *db, const char *uid_or_prefix, palp_db_session_info *out);
+/* Session's scene and params JSON; malloc'd strings (free()). */
+int palp_db_session_json(palp_db *db, int64_t session_id, char **scene_json, char **params_json);
+
+/* Iterators in frame order (contacts in the order applied). A callback returning non-zero stops
+ * the walk and its value is returned. */
+typedef int (*palp_db_contact_fn)(void *user, const palp_db_contact *c);
+typedef int (*palp_db_frame_fn)(void *user, const palp_db_frame *f);
+typedef int (*palp_db_feedback_fn)(void *user, int64_t frame, int slot, palp_vec3 force_n);
+typedef int (*palp_db_mesh_fn)(void *user, int64_t frame, const palp_vec3 *pos, int vertex_count);
+typedef int (*palp_db_event_fn)(void *user, double wall_unix_s, int64_t frame, const char *kind,
+                                const char *detail, int64_t count);
+typedef int (*palp_db_note_fn)(void *user, double wall_unix_s, const char *author, const char *text,
+                               const char *grade);
+int palp_db_each_contact(palp_db *db, int64_t session_id, palp_db_contact_fn fn, void *user);
+int palp_db_each_frame(palp_db *db, int64_t session_id, palp_db_frame_fn fn, void *user);
+int palp_db_each_feedback(palp_db *db, int64_t session_id, palp_db_feedback_fn fn, void *user);
+int palp_db_each_mesh(palp_db *db, int64_t session_id, palp_db_mesh_fn fn, void *user);
+int palp_db_each_event(palp_db *db, int64_t session_id, palp_db_event_fn fn, void *user);
+int palp_db_each_note(palp_db *db, int64_t session_id, palp_db_note_fn fn, void *user);
+
+/* Adds an instructor note; grade may be NULL. */
+int palp_db_add_note(palp_db *db, int64_t session_id, const char *author, const char *text,
+                     const char *grade);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

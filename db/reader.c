@@ -1,0 +1,342 @@
+/* Reading a session log: listing, finding and walking sessions, adding notes.
+ * Readers run beside the server's writer: WAL gives them a consistent snapshot per statement
+ * without blocking it, and busy_timeout covers the moments a checkpoint holds a lock. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "db_internal.h"
+#include "palp_db.h"
+
+struct palp_db {
+  sqlite3 *db;
+};
+
+int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t errlen) {
+  if (!out) return PALP_EINVAL;
+  *out = NULL;
+  palp_db *d = calloc(1, sizeof *d);
+  if (!d) return PALP_ENOMEM;
+  int rc = palp_db__connect(path, create, NULL, &d->db, err, errlen);
+  if (rc) {
+    free(d);
+    return rc;
+  }
+  *out = d;
+  return 0;
+}
+
+void palp_db_close(palp_db *db) {
+  if (!db) return;
+  sqlite3_close(db->db);
+  free(db);
+}
+
+struct sqlite3 *palp_db_handle(palp_db *db) { return db->db; }
+const char *palp_db_errmsg(palp_db *db) { return sqlite3_errmsg(db->db); }
+
+int palp_db_file_version(palp_db *db) {
+  sqlite3_stmt *st;
+  int v = -1;
+  if (sqlite3_prepare_v2(db->db, "PRAGMA user_version", -1, &st, NULL) != SQLITE_OK) return -1;
+  if (sqlite3_step(st) == SQLITE_ROW) v = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  return v;
+}
+
+static void col_str(sqlite3_stmt *st, int i, char *dst, size_t len) {
+  const unsigned char *s = sqlite3_column_text(st, i);
+  palp_db__fmt(dst, len, "%s", s ? (const char *)s : "");
+}
+
+#define SESSION_COLS                                                                                \
+  "s.id, s.uid, s.trainee, s.station, s.phantom_id, s.phantom_name, s.tick_hz, s.dt_s, "           \
+  "s.start_unix_s, s.end_unix_s, s.end_reason, s.end_detail, s.records_shed, s.records_failed, "   \
+  "(SELECT count(*) FROM frame f WHERE f.session_id = s.id), "                                      \
+  "(SELECT count(*) FROM contact_input c WHERE c.session_id = s.id), "                              \
+  "(SELECT count(*) FROM mesh m WHERE m.session_id = s.id), "                                       \
+  "(SELECT count(*) FROM event e WHERE e.session_id = s.id), "                                      \
+  "(SELECT count(*) FROM note n WHERE n.session_id = s.id), "                                       \
+  "(SELECT sim_time_s FROM frame f WHERE f.session_id = s.id ORDER BY frame DESC LIMIT 1) "
+
+static void read_info(sqlite3_stmt *st, palp_db_session_info *o) {
+  memset(o, 0, sizeof *o);
+  o->id = sqlite3_column_int64(st, 0);
+  col_str(st, 1, o->uid, sizeof o->uid);
+  col_str(st, 2, o->trainee, sizeof o->trainee);
+  col_str(st, 3, o->station, sizeof o->station);
+  col_str(st, 4, o->phantom_id, sizeof o->phantom_id);
+  col_str(st, 5, o->phantom_name, sizeof o->phantom_name);
+  o->tick_hz = sqlite3_column_double(st, 6);
+  o->dt_s = sqlite3_column_double(st, 7);
+  o->start_unix_s = sqlite3_column_double(st, 8);
+  o->end_unix_s = sqlite3_column_double(st, 9);
+  col_str(st, 10, o->end_reason, sizeof o->end_reason);
+  col_str(st, 11, o->end_detail, sizeof o->end_detail);
+  o->records_shed = sqlite3_column_int64(st, 12);
+  o->records_failed = sqlite3_column_int64(st, 13);
+  o->frames = sqlite3_column_int64(st, 14);
+  o->contact_inputs = sqlite3_column_int64(st, 15);
+  o->meshes = sqlite3_column_int64(st, 16);
+  o->events = sqlite3_column_int64(st, 17);
+  o->notes = sqlite3_column_int64(st, 18);
+  o->sim_duration_s = sqlite3_column_double(st, 19);
+}
+
+int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count) {
+  *out = NULL;
+  *count = 0;
+  sqlite3_stmt *st;
+  const char *sql = "SELECT " SESSION_COLS "FROM session s WHERE "
+                    "(?1 IS NULL OR s.trainee = ?1) AND "
+                    "(?2 IS NULL OR s.phantom_id = ?2 OR s.phantom_name = ?2) AND "
+                    "(?3 IS NULL OR s.start_unix_s >= ?3) AND (?4 IS NULL OR s.start_unix_s < ?4) "
+                    "ORDER BY s.start_unix_s, s.id";
+  if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
+  if (f && f->trainee) sqlite3_bind_text(st, 1, f->trainee, -1, SQLITE_STATIC);
+  if (f && f->phantom) sqlite3_bind_text(st, 2, f->phantom, -1, SQLITE_STATIC);
+  if (f && f->since_unix_s > 0) sqlite3_bind_double(st, 3, f->since_unix_s);
+  if (f && f->until_unix_s > 0) sqlite3_bind_double(st, 4, f->until_unix_s);
+  int cap = 0, n = 0, rc;
+  palp_db_session_info *v = NULL;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+    if (n == cap) {
+      cap = cap ? 2 * cap : 16;
+      palp_db_session_info *nv = realloc(v, (size_t)cap * sizeof *nv);
+      if (!nv) {
+        free(v);
+        sqlite3_finalize(st);
+        return PALP_ENOMEM;
+      }
+      v = nv;
+    }
+    read_info(st, &v[n++]);
+  }
+  sqlite3_finalize(st);
+  if (rc != SQLITE_DONE) {
+    free(v);
+    return PALP_DB_ESQL;
+  }
+  *out = v;
+  *count = n;
+  return 0;
+}
+
+int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out) {
+  if (!uid || !*uid) return PALP_EINVAL;
+  sqlite3_stmt *st;
+  /* An exact uid wins; otherwise a unique prefix (uids are long: "<run uuid>-<n>"). */
+  const char *sql = "SELECT " SESSION_COLS "FROM session s WHERE s.uid = ?1 "
+                    "UNION ALL SELECT " SESSION_COLS "FROM session s WHERE substr(s.uid, 1, length(?1)) = ?1 "
+                    "AND s.uid <> ?1 AND NOT EXISTS (SELECT 1 FROM session WHERE uid = ?1) LIMIT 2";
+  if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
+  sqlite3_bind_text(st, 1, uid, -1, SQLITE_STATIC);
+  int rc = sqlite3_step(st);
+  if (rc != SQLITE_ROW) {
+    sqlite3_finalize(st);
+    return rc == SQLITE_DONE ? PALP_DB_ENOTFOUND : PALP_DB_ESQL;
+  }
+  read_info(st, out);
+  rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  return rc == SQLITE_ROW ? PALP_DB_EAMBIGUOUS : 0;
+}
+
+static char *dup_col(sqlite3_stmt *st, int i) {
+  const unsigned char *s = sqlite3_column_text(st, i);
+  size_t n = s ? strlen((const char *)s) : 0;
+  char *d = malloc(n + 1);
+  if (d) {
+    if (n) memcpy(d, s, n);
+    d[n] = '\0';
+  }
+  return d;
+}
+
+int palp_db_session_json(palp_db *db, int64_t session_id, char **scene_json, char **params_json) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(db->db, "SELECT scene_json, params_json FROM session WHERE id = ?1", -1, &st,
+                         NULL) != SQLITE_OK)
+    return PALP_DB_ESQL;
+  sqlite3_bind_int64(st, 1, session_id);
+  int rc = sqlite3_step(st);
+  if (rc != SQLITE_ROW) {
+    sqlite3_finalize(st);
+    return rc == SQLITE_DONE ? PALP_DB_ENOTFOUND : PALP_DB_ESQL;
+  }
+  if (scene_json) *scene_json = dup_col(st, 0);
+  if (params_json) *params_json = dup_col(st, 1);
+  sqlite3_finalize(st);
+  return 0;
+}
+
+static int prep(palp_db *db, const char *sql, int64_t sid, sqlite3_stmt **st) {
+  if (sqlite3_prepare_v2(db->db, sql, -1, st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
+  sqlite3_bind_int64(*st, 1, sid);
+  return 0;
+}
+
+static int finish(sqlite3_stmt *st, int rc, int stopped) {
+  sqlite3_finalize(st);
+  if (stopped) return stopped;
+  return rc == SQLITE_DONE ? 0 : PALP_DB_ESQL;
+}
+
+static palp_vec3 col_vec(sqlite3_stmt *st, int i) {
+  palp_vec3 v = {sqlite3_column_double(st, i), sqlite3_column_double(st, i + 1),
+                 sqlite3_column_double(st, i + 2)};
+  return v;
+}
+
+int palp_db_each_contact(palp_db *db, int64_t sid, palp_db_contact_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db,
+           "SELECT frame, sim_time_s, slot, op, kind, distribution, center_x_m, center_y_m, center_z_m, "
+           "force_x_n, force_y_n, force_z_n, radius_m, patch_area_m2, sigma_fraction, offset_fraction, "
+           "offset_dir_x, offset_dir_y, offset_dir_z FROM contact_input WHERE session_id = ?1 ORDER BY id",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+    palp_db_contact c;
+    memset(&c, 0, sizeof c);
+    c.frame = sqlite3_column_int64(st, 0);
+    c.sim_time_s = sqlite3_column_double(st, 1);
+    c.slot = sqlite3_column_int(st, 2);
+    const char *op = (const char *)sqlite3_column_text(st, 3);
+    const char *kind = (const char *)sqlite3_column_text(st, 4);
+    c.op = !strcmp(op, "add") ? PALP_DB_OP_ADD : !strcmp(op, "update") ? PALP_DB_OP_UPDATE : PALP_DB_OP_REMOVE;
+    c.kind = !strcmp(kind, "force") ? PALP_DB_KIND_FORCE : PALP_DB_KIND_FINGER;
+    c.def.distribution = (palp_distribution)sqlite3_column_int(st, 5);
+    c.center_m = col_vec(st, 6);
+    c.def.center = c.center_m;
+    c.force_n = col_vec(st, 9);
+    c.radius_m = sqlite3_column_double(st, 12);
+    c.def.patch_area = sqlite3_column_double(st, 13);
+    c.def.sigma_fraction = sqlite3_column_double(st, 14);
+    c.def.offset_fraction = sqlite3_column_double(st, 15);
+    c.def.offset_dir = col_vec(st, 16);
+    stop = fn(user, &c);
+  }
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_each_frame(palp_db *db, int64_t sid, palp_db_frame_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db,
+           "SELECT frame, sim_time_s, top_disp_m, max_disp_m, volume_m3, pressure_pa, contact_force_n, "
+           "state_hash FROM frame WHERE session_id = ?1 ORDER BY frame",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+    palp_db_frame f;
+    f.frame = sqlite3_column_int64(st, 0);
+    f.sim_time_s = sqlite3_column_double(st, 1);
+    f.top_disp_m = sqlite3_column_double(st, 2);
+    f.max_disp_m = sqlite3_column_double(st, 3);
+    f.volume_m3 = sqlite3_column_double(st, 4);
+    f.pressure_pa = sqlite3_column_double(st, 5);
+    f.contact_force_n = sqlite3_column_double(st, 6);
+    int64_t h = sqlite3_column_int64(st, 7);
+    memcpy(&f.state_hash, &h, sizeof h);
+    stop = fn(user, &f);
+  }
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_each_feedback(palp_db *db, int64_t sid, palp_db_feedback_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db,
+           "SELECT frame, slot, force_x_n, force_y_n, force_z_n FROM feedback WHERE session_id = ?1 "
+           "ORDER BY frame, slot",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW)
+    stop = fn(user, sqlite3_column_int64(st, 0), sqlite3_column_int(st, 1), col_vec(st, 2));
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_each_mesh(palp_db *db, int64_t sid, palp_db_mesh_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db, "SELECT frame, vertex_count, positions_m FROM mesh WHERE session_id = ?1 ORDER BY frame",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  palp_vec3 *pos = NULL;
+  int cap = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+    int n = sqlite3_column_int(st, 1);
+    const unsigned char *b = sqlite3_column_blob(st, 2);
+    if (n <= 0 || sqlite3_column_bytes(st, 2) != n * 24 || !b) continue; /* malformed row: skip */
+    if (n > cap) {
+      palp_vec3 *np = realloc(pos, (size_t)n * sizeof *np);
+      if (!np) {
+        free(pos);
+        sqlite3_finalize(st);
+        return PALP_ENOMEM;
+      }
+      pos = np;
+      cap = n;
+    }
+    for (int i = 0; i < n; i++) {
+      double v[3];
+      for (int k = 0; k < 3; k++) {
+        uint64_t u = 0;
+        for (int j = 0; j < 8; j++) u |= (uint64_t)b[(size_t)(i * 3 + k) * 8 + (size_t)j] << (8 * j);
+        memcpy(&v[k], &u, 8);
+      }
+      pos[i].x = v[0];
+      pos[i].y = v[1];
+      pos[i].z = v[2];
+    }
+    stop = fn(user, sqlite3_column_int64(st, 0), pos, n);
+  }
+  free(pos);
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_each_event(palp_db *db, int64_t sid, palp_db_event_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db,
+           "SELECT wall_unix_s, coalesce(frame, -1), kind, detail, count FROM event "
+           "WHERE session_id = ?1 ORDER BY id",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW)
+    stop = fn(user, sqlite3_column_double(st, 0), sqlite3_column_int64(st, 1),
+              (const char *)sqlite3_column_text(st, 2), (const char *)sqlite3_column_text(st, 3),
+              sqlite3_column_int64(st, 4));
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_each_note(palp_db *db, int64_t sid, palp_db_note_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db, "SELECT wall_unix_s, author, text, grade FROM note WHERE session_id = ?1 ORDER BY id", sid,
+           &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW)
+    stop = fn(user, sqlite3_column_double(st, 0), (const char *)sqlite3_column_text(st, 1),
+              (const char *)sqlite3_column_text(st, 2), (const char *)sqlite3_column_text(st, 3));
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_add_note(palp_db *db, int64_t sid, const char *author, const char *text, const char *grade) {
+  if (!author || !*author || !text) return PALP_EINVAL;
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(db->db,
+                         "INSERT INTO note(session_id, author, wall_unix_s, text, grade) "
+                         "VALUES(?1,?2,?3,?4,?5)",
+                         -1, &st, NULL) != SQLITE_OK)
+    return PALP_DB_ESQL;
+  sqlite3_bind_int64(st, 1, sid);
+  sqlite3_bind_text(st, 2, author, -1, SQLITE_STATIC);
+  sqlite3_bind_double(st, 3, palp_db__now());
+  sqlite3_bind_text(st, 4, text, -1, SQLITE_STATIC);
+  if (grade) sqlite3_bind_text(st, 5, grade, -1, SQLITE_STATIC);
+  int rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  return rc == SQLITE_DONE ? 0 : PALP_DB_ESQL;
+}

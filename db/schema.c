@@ -1,0 +1,185 @@
+/* Opening a session log: connection settings, schema versioning and migrations.
+ *
+ * The version lives in PRAGMA user_version (one integer in the file header, readable without a
+ * table) and, for people reading the file with sqlite3, in the meta table along with the palp
+ * version that created or last upgraded it. Migrations run in one IMMEDIATE transaction, so a
+ * crash or a concurrent opener sees either the old schema or the new one, never a mix. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "db_internal.h"
+#include "migrations.h"
+#include "palp_db.h"
+
+#ifndef PALP_VERSION_STRING
+#define PALP_VERSION_STRING "unknown"
+#endif
+
+int palp_db_schema_version(void) { return palp_db_migration_count; }
+
+double palp_db__now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void palp_db__fmt(char *buf, size_t len, const char *fmt, ...) {
+  if (!buf || len == 0) return;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(buf, len, fmt, ap);
+  va_end(ap);
+}
+
+const char *palp_db_strerror(int err) {
+  switch (err) {
+  case PALP_DB_ENEWER: return "database schema is newer than this palp";
+  case PALP_DB_ENOTFOUND: return "no such session";
+  case PALP_DB_ESQL: return "SQLite error";
+  case PALP_DB_EAMBIGUOUS: return "session prefix is ambiguous";
+  case PALP_OK: return "ok";
+  case PALP_EINVAL: return "invalid argument";
+  case PALP_ENOMEM: return "out of memory";
+  case PALP_EIO: return "I/O error";
+  case PALP_EFULL: return "queue full";
+  default: return "unknown error";
+  }
+}
+
+static int exec_fmt(sqlite3 *db, char *err, size_t errlen, const char *what, const char *sql) {
+  char *msg = NULL;
+  int rc = sqlite3_exec(db, sql, NULL, NULL, &msg);
+  if (rc != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: %s", what, msg ? msg : sqlite3_errstr(rc));
+    sqlite3_free(msg);
+    return PALP_DB_ESQL;
+  }
+  return 0;
+}
+
+static int user_version(sqlite3 *db, int *out) {
+  sqlite3_stmt *st;
+  int rc = sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &st, NULL);
+  if (rc != SQLITE_OK) return rc;
+  rc = sqlite3_step(st);
+  if (rc == SQLITE_ROW) {
+    *out = sqlite3_column_int(st, 0);
+    rc = SQLITE_OK;
+  }
+  sqlite3_finalize(st);
+  return rc;
+}
+
+static int set_meta(sqlite3 *db, const char *key, const char *value) {
+  sqlite3_stmt *st;
+  int rc = sqlite3_prepare_v2(db,
+                              "INSERT INTO meta(key, value) VALUES(?1, ?2) "
+                              "ON CONFLICT(key) DO UPDATE SET value = excluded.value",
+                              -1, &st, NULL);
+  if (rc != SQLITE_OK) return rc;
+  sqlite3_bind_text(st, 1, key, -1, SQLITE_STATIC);
+  sqlite3_bind_text(st, 2, value, -1, SQLITE_STATIC);
+  rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  return rc == SQLITE_DONE ? SQLITE_OK : rc;
+}
+
+/* Brings the schema from its version to palp_db_migration_count inside one transaction. */
+static int migrate(sqlite3 *db, const char *path, const char *app_version, char *err, size_t errlen) {
+  int v = 0;
+  if (user_version(db, &v) != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: cannot read the schema version: %s", path, sqlite3_errmsg(db));
+    return PALP_DB_ESQL;
+  }
+  const int current = palp_db_migration_count;
+  if (v > current) {
+    palp_db__fmt(err, errlen, "%s: database schema version %d is newer than this palp (%d); upgrade palp",
+                 path, v, current);
+    return PALP_DB_ENEWER;
+  }
+  if (v == current) return 0;
+
+  /* IMMEDIATE takes the write lock now, so two openers cannot both migrate; re-read inside. */
+  int rc = exec_fmt(db, err, errlen, path, "BEGIN IMMEDIATE");
+  if (rc) return rc;
+  if (user_version(db, &v) != SQLITE_OK) goto sqlfail;
+  if (v > current) {
+    sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+    palp_db__fmt(err, errlen, "%s: database schema version %d is newer than this palp (%d); upgrade palp",
+                 path, v, current);
+    return PALP_DB_ENEWER;
+  }
+  const int was = v;
+  for (int i = 0; i < palp_db_migration_count; i++) {
+    const palp_db_migration *m = &palp_db_migrations[i];
+    if (m->version <= v) continue;
+    char *msg = NULL;
+    if (sqlite3_exec(db, m->sql, NULL, NULL, &msg) != SQLITE_OK) {
+      palp_db__fmt(err, errlen, "%s: migration %s failed: %s", path, m->name, msg ? msg : "?");
+      sqlite3_free(msg);
+      sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+      return PALP_DB_ESQL;
+    }
+    v = m->version;
+  }
+  char sql[64], now[32];
+  snprintf(sql, sizeof sql, "PRAGMA user_version = %d", current);
+  snprintf(now, sizeof now, "%.3f", palp_db__now());
+  if (sqlite3_exec(db, sql, NULL, NULL, NULL) != SQLITE_OK) goto sqlfail;
+  if (was == 0 && set_meta(db, "created_unix_s", now) != SQLITE_OK) goto sqlfail;
+  if (was != 0 && set_meta(db, "upgraded_unix_s", now) != SQLITE_OK) goto sqlfail;
+  if (set_meta(db, "app_version", app_version) != SQLITE_OK) goto sqlfail;
+  snprintf(sql, sizeof sql, "%d", current);
+  if (set_meta(db, "schema_version", sql) != SQLITE_OK) goto sqlfail;
+  return exec_fmt(db, err, errlen, path, "COMMIT");
+sqlfail:
+  palp_db__fmt(err, errlen, "%s: schema upgrade failed: %s", path, sqlite3_errmsg(db));
+  sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+  return PALP_DB_ESQL;
+}
+
+int palp_db__connect(const char *path, int create, const char *app_version, sqlite3 **out,
+                     char *err, size_t errlen) {
+  *out = NULL;
+  if (!path || !*path) {
+    palp_db__fmt(err, errlen, "no database path given");
+    return PALP_EINVAL;
+  }
+  if (!app_version) app_version = PALP_VERSION_STRING;
+  sqlite3 *db = NULL;
+  int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX | (create ? SQLITE_OPEN_CREATE : 0);
+  int rc = sqlite3_open_v2(path, &db, flags, NULL);
+  if (rc != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: cannot open: %s", path, db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
+    sqlite3_close(db);
+    return PALP_EIO;
+  }
+  sqlite3_extended_result_codes(db, 1);
+  sqlite3_busy_timeout(db, PALP_DB_BUSY_TIMEOUT_MS);
+  /* Refuse a newer schema before touching anything else in the file. */
+  int v = 0;
+  if (user_version(db, &v) != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: not a palp session log: %s", path, sqlite3_errmsg(db));
+    sqlite3_close(db);
+    return PALP_EIO;
+  }
+  if (v > palp_db_migration_count) {
+    palp_db__fmt(err, errlen, "%s: database schema version %d is newer than this palp (%d); upgrade palp",
+                 path, v, palp_db_migration_count);
+    sqlite3_close(db);
+    return PALP_DB_ENEWER;
+  }
+  /* WAL: readers (palp-review) never block the server's writer and vice versa. synchronous=NORMAL
+   * in WAL mode survives a process crash with every commit; only power loss can roll back the
+   * commits made since the last checkpoint. */
+  if ((rc = exec_fmt(db, err, errlen, path, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; "
+                                             "PRAGMA foreign_keys=ON")) != 0 ||
+      (rc = migrate(db, path, app_version, err, errlen)) != 0) {
+    sqlite3_close(db);
+    return rc;
+  }
+  *out = db;
+  return 0;
+}

@@ -1,0 +1,387 @@
+/* Writer and schema tests on real SQLite files (no model library needed).
+ * usage: test_db_writer TMPDIR MIGRATION_0001_SQL
+ * Values are compared exactly (tolerance 0): SQLite stores IEEE doubles and int64 bit for bit. */
+#include <sqlite3.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "palp_db.h"
+
+static char dir[512];
+
+static void path_in(char *buf, size_t n, const char *name) {
+  snprintf(buf, n, "%s/%s", dir, name);
+  unlink(buf);
+  char aux[600];
+  snprintf(aux, sizeof aux, "%s-wal", buf);
+  unlink(aux);
+  snprintf(aux, sizeof aux, "%s-shm", buf);
+  unlink(aux);
+}
+
+static int64_t count_rows(sqlite3 *db, const char *sql) {
+  sqlite3_stmt *st;
+  int64_t n = -1;
+  if (sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) return -2;
+  if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int64(st, 0);
+  sqlite3_finalize(st);
+  return n;
+}
+
+static palp_db_frame frame_of(int64_t i) {
+  palp_db_frame f;
+  f.frame = i;
+  f.sim_time_s = 0.001 * (double)i;
+  f.top_disp_m = 1e-3 / 3.0 * (double)i;
+  f.max_disp_m = 2e-3 / 7.0 * (double)i;
+  f.volume_m3 = 1.3404e-4 - 1e-9 * (double)i;
+  f.pressure_pa = 101.25 + (double)i;
+  f.contact_force_n = 3.0 / 11.0 * (double)i;
+  f.state_hash = 0xF000000000000000ull ^ (uint64_t)i * 0x9E3779B97F4A7C15ull; /* high bit set */
+  return f;
+}
+
+/* --- round trip ----------------------------------------------------------------------- */
+typedef struct {
+  int n, bad;
+} frame_chk;
+static int on_frame(void *u, const palp_db_frame *f) {
+  frame_chk *c = u;
+  palp_db_frame e = frame_of(c->n + 1);
+  if (memcmp(&e, f, sizeof e) != 0) c->bad++;
+  c->n++;
+  return 0;
+}
+typedef struct {
+  int n, bad;
+  palp_db_contact sent[3];
+} contact_chk;
+static int on_contact(void *u, const palp_db_contact *c) {
+  contact_chk *k = u;
+  const palp_db_contact *e = &k->sent[k->n++];
+  if (c->frame != e->frame || c->sim_time_s != e->sim_time_s || c->slot != e->slot || c->op != e->op ||
+      c->kind != e->kind)
+    k->bad++;
+  if (e->kind == PALP_DB_KIND_FORCE && e->op == PALP_DB_OP_ADD &&
+      (c->def.distribution != e->def.distribution || c->def.center.x != e->def.center.x ||
+       c->def.center.z != e->def.center.z || c->force_n.z != e->force_n.z ||
+       c->def.patch_area != e->def.patch_area || c->def.offset_dir.y != e->def.offset_dir.y))
+    k->bad++;
+  if (e->kind == PALP_DB_KIND_FINGER && (c->center_m.y != e->center_m.y || c->radius_m != e->radius_m))
+    k->bad++;
+  return 0;
+}
+static int on_mesh(void *u, int64_t frame, const palp_vec3 *pos, int n) {
+  int *bad = u;
+  if (frame != 10 || n != 4) (*bad)++;
+  for (int i = 0; i < n; i++)
+    if (pos[i].x != 0.1 * i || pos[i].y != -0.2 * i || pos[i].z != 1.0 / (i + 3)) (*bad)++;
+  return 0;
+}
+
+static void test_round_trip(void) {
+  char p[600];
+  path_in(p, sizeof p, "roundtrip.db");
+  char err[512];
+  palp_db_writer *w;
+  int rc = palp_db_writer_open(p, NULL, &w, err, sizeof err);
+  REQUIRE(rc == 0, "writer_open: %s", err);
+  palp_db_session_def d = {.uid = "run-abc-1", .trainee = "alice", .station = "haptic-1",
+                           .phantom_id = "p1", .phantom_name = "soft dome",
+                           .scene_json = "{\"name\":\"x\"}", .params_json = "{\"force_limit_n\":20}",
+                           .tick_hz = 1000, .dt_s = 0.001, .start_unix_s = 1.7e9};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "session_begin");
+  contact_chk cc = {0};
+  palp_vec3 c0 = {0.001, 0.002, 0.04};
+  cc.sent[0] = (palp_db_contact){.frame = 0, .sim_time_s = 0, .slot = 0, .op = PALP_DB_OP_ADD,
+                                 .kind = PALP_DB_KIND_FORCE,
+                                 .def = {.distribution = PALP_DIST_GAUSSIAN, .center = c0,
+                                         .sigma_fraction = 0.5, .offset_fraction = 0.5}};
+  cc.sent[0].def.patch_area = 5.2e-4;
+  cc.sent[0].def.offset_dir = (palp_vec3){0, 1.0 / 3.0, 0};
+  cc.sent[0].force_n = (palp_vec3){0, 0, -3.0};
+  cc.sent[1] = (palp_db_contact){.frame = 5, .sim_time_s = 0.005, .slot = 1, .op = PALP_DB_OP_ADD,
+                                 .kind = PALP_DB_KIND_FINGER, .center_m = {0.0, 0.01 / 3.0, 0.041},
+                                 .radius_m = 0.008};
+  cc.sent[2] = (palp_db_contact){.frame = 9, .sim_time_s = 0.009, .slot = 0, .op = PALP_DB_OP_REMOVE,
+                                 .kind = PALP_DB_KIND_FORCE};
+  for (int i = 0; i < 3; i++) CHECK(palp_db_log_contact(w, s, &cc.sent[i]) == 0, "log_contact %d", i);
+  for (int64_t i = 1; i <= 2000; i++) {
+    palp_db_frame f = frame_of(i);
+    CHECK(palp_db_log_frame(w, s, &f) == 0, "log_frame");
+    CHECK(palp_db_log_feedback(w, s, i, 0, (palp_vec3){0, 0, 0.5 * (double)i}) == 0, "log_feedback");
+  }
+  palp_vec3 mesh[4];
+  for (int i = 0; i < 4; i++) mesh[i] = (palp_vec3){0.1 * i, -0.2 * i, 1.0 / (i + 3)};
+  CHECK(palp_db_log_mesh(w, s, 10, mesh, 4) == 0, "log_mesh");
+  CHECK(palp_db_log_event(w, s, PALP_DB_EVENT_REJECT, 7, "force 50 N beyond the 20 N limit", 1) == 0, "event");
+  CHECK(palp_db_log_session_end(w, s, PALP_DB_END_STATION_VANISHED, "liveliness lost", 1.7e9 + 2) == 0, "end");
+  /* After the end the handle is dead: a late record is refused, not written under another name. */
+  palp_db_frame late = frame_of(9999);
+  CHECK(palp_db_log_frame(w, s, &late) == PALP_EINVAL, "record after session end must be refused");
+  CHECK(palp_db_writer_flush(w, 10) == 0, "flush");
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(w, &st);
+  /* 1 begin + 3 contacts + 2000 frames + 2000 feedback + 1 mesh + 1 event + 1 end */
+  CHECK(st.enqueued == 4007 && st.written == 4007, "enqueued %lld written %lld (expected 4007)",
+        (long long)st.enqueued, (long long)st.written);
+  CHECK(st.shed == 0 && st.failed == 0, "shed %lld failed %lld", (long long)st.shed, (long long)st.failed);
+  palp_db_writer_close(w);
+
+  palp_db *db;
+  REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_info info;
+  REQUIRE(palp_db_find_session(db, "run-abc", &info) == 0, "find by prefix");
+  CHECK(!strcmp(info.uid, "run-abc-1") && !strcmp(info.trainee, "alice") && !strcmp(info.phantom_name, "soft dome"),
+        "session strings");
+  CHECK(info.frames == 2000 && info.contact_inputs == 3 && info.meshes == 1 && info.events == 1, "counts");
+  CHECK(!strcmp(info.end_reason, "station_vanished") && info.end_unix_s == 1.7e9 + 2, "end %s", info.end_reason);
+  CHECK(info.sim_duration_s == 2.0, "sim duration %.17g (expected 2.0, last frame 2000 x 1 ms)", info.sim_duration_s);
+  frame_chk fc = {0};
+  CHECK(palp_db_each_frame(db, info.id, on_frame, &fc) == 0 && fc.n == 2000 && fc.bad == 0,
+        "frames n=%d bad=%d (exact)", fc.n, fc.bad);
+  int nc = cc.n;
+  cc.n = 0;
+  (void)nc;
+  CHECK(palp_db_each_contact(db, info.id, on_contact, &cc) == 0 && cc.n == 3 && cc.bad == 0,
+        "contacts n=%d bad=%d", cc.n, cc.bad);
+  int mbad = 0;
+  CHECK(palp_db_each_mesh(db, info.id, on_mesh, &mbad) == 0 && mbad == 0, "mesh bad=%d", mbad);
+  char *scene, *params;
+  CHECK(palp_db_session_json(db, info.id, &scene, &params) == 0 && !strcmp(scene, "{\"name\":\"x\"}") &&
+            !strcmp(params, "{\"force_limit_n\":20}"),
+        "json");
+  free(scene);
+  free(params);
+  CHECK(palp_db_add_note(db, info.id, "dr. b", "good pressure", "A") == 0, "note");
+  palp_db_filter f = {.trainee = "alice"};
+  palp_db_session_info *list;
+  int n;
+  CHECK(palp_db_list_sessions(db, &f, &list, &n) == 0 && n == 1, "list alice n=%d", n);
+  free(list);
+  f.trainee = "bob";
+  CHECK(palp_db_list_sessions(db, &f, &list, &n) == 0 && n == 0, "list bob n=%d", n);
+  free(list);
+  f = (palp_db_filter){.since_unix_s = 1.7e9 + 1};
+  CHECK(palp_db_list_sessions(db, &f, &list, &n) == 0 && n == 0, "list since n=%d", n);
+  free(list);
+  sqlite3 *h = palp_db_handle(db);
+  CHECK(count_rows(h, "SELECT count(*) FROM feedback WHERE force_z_n = 1000.0 AND frame = 2000") == 1, "feedback");
+  CHECK(count_rows(h, "SELECT records_written FROM writer_run") == 4007, "writer_run records");
+  palp_db_close(db);
+}
+
+/* --- shedding: a tiny queue flooded faster than any disk must count every refused record ------ */
+static void test_shed(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "shed.db");
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  o.queue_capacity = 64;
+  o.batch_records = 32;
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, &o, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_def d = {.uid = "shed-1", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "begin");
+  int ok = 0, full = 0;
+  for (int64_t i = 1; i <= 200000; i++) {
+    palp_db_frame f = frame_of(i);
+    int rc = palp_db_log_frame(w, s, &f);
+    if (rc == 0) ok++;
+    else if (rc == PALP_EFULL) full++;
+  }
+  CHECK(ok + full == 200000, "every call returns 0 or PALP_EFULL (%d + %d)", ok, full);
+  CHECK(full > 0, "a 64-record queue fed 200000 records in a tight loop must shed");
+  CHECK(palp_db_log_session_end(w, s, PALP_DB_END_NORMAL, NULL, 0) == 0, "end fits in the control reserve");
+  palp_db_writer_flush(w, 10);
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(w, &st);
+  CHECK(st.shed == full && st.shed_by_kind[PALP_DB_REC_FRAME] == full, "shed %lld vs EFULL %d",
+        (long long)st.shed, full);
+  /* 64 data records plus the end record, which may use the control reserve. */
+  CHECK(st.queue_high_water <= 65, "data records never exceed the capacity (hw %d)", st.queue_high_water);
+  palp_db_writer_close(w);
+  palp_db *db;
+  REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open: %s", err);
+  sqlite3 *h = palp_db_handle(db);
+  CHECK(count_rows(h, "SELECT count(*) FROM frame") == ok, "frames written = accepted (%d)", ok);
+  char q[128];
+  snprintf(q, sizeof q, "SELECT count(*) FROM session WHERE records_shed = %d AND end_reason = 'normal'", full);
+  CHECK(count_rows(h, q) == 1, "session.records_shed = %d", full);
+  snprintf(q, sizeof q, "SELECT sum(count) FROM event WHERE kind = 'shed'");
+  CHECK(count_rows(h, q) == full, "shed events account for all %d shed records (got %lld)", full,
+        (long long)count_rows(h, q));
+  palp_db_close(db);
+}
+
+/* --- a duplicate frame is refused alone; the rest of its batch lands ----------------------- */
+static void test_duplicate(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "dup.db");
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, NULL, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_def d = {.uid = "dup-1", .scene_json = "{}", .tick_hz = 100, .dt_s = 0.01};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "begin");
+  for (int64_t i = 1; i <= 10; i++) {
+    palp_db_frame f = frame_of(i == 5 ? 4 : i);
+    palp_db_log_frame(w, s, &f);
+  }
+  palp_db_writer_flush(w, 10);
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(w, &st);
+  CHECK(st.written == 10 && st.failed == 1 && st.failed_by_kind[PALP_DB_REC_FRAME] == 1,
+        "written %lld failed %lld (expected 10 incl. begin, 1)", (long long)st.written, (long long)st.failed);
+  palp_db_writer_close(w);
+}
+
+/* --- migrations ------------------------------------------------------------------------ */
+static char *slurp(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *b = malloc((size_t)n + 1);
+  if (b && fread(b, 1, (size_t)n, f) != (size_t)n) n = 0;
+  if (b) b[n] = '\0';
+  fclose(f);
+  return b;
+}
+
+static void test_migration(const char *v1_sql) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "v1.db");
+  /* A file as palp 0.1 with schema 1 left it, built from the original script. */
+  sqlite3 *h;
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "sqlite3_open");
+  char *sql = slurp(v1_sql);
+  REQUIRE(sql, "cannot read %s", v1_sql);
+  REQUIRE(sqlite3_exec(h, sql, NULL, NULL, NULL) == SQLITE_OK, "v1 script: %s", sqlite3_errmsg(h));
+  free(sql);
+  REQUIRE(sqlite3_exec(h,
+                       "PRAGMA user_version = 1;"
+                       "INSERT INTO meta VALUES('app_version', '0.0.9');"
+                       "INSERT INTO session(uid, trainee, station, phantom_id, phantom_name, scene_json, "
+                       "params_json, tick_hz, dt_s, start_unix_s) VALUES('old-1', 'carol', 's', 'p', 'n', "
+                       "'{}', '{}', 100, 0.01, 1.6e9);"
+                       "INSERT INTO frame VALUES(1, 1, 0.01, 1e-3, 2e-3, 1e-4, 5.0, 3.0, -42);",
+                       NULL, NULL, NULL) == SQLITE_OK,
+          "v1 rows: %s", sqlite3_errmsg(h));
+  sqlite3_close(h);
+
+  palp_db *db;
+  REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open v1: %s", err);
+  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 2,
+        "upgraded to %d (library %d, expected 2)", palp_db_file_version(db), palp_db_schema_version());
+  palp_db_session_info info;
+  CHECK(palp_db_find_session(db, "old-1", &info) == 0 && !strcmp(info.trainee, "carol") && info.frames == 1 &&
+            info.records_shed == 0,
+        "v1 data survives the upgrade with the new columns at their defaults");
+  h = palp_db_handle(db);
+  CHECK(count_rows(h, "SELECT count(*) FROM writer_run") == 0, "writer_run created by migration 2");
+  CHECK(count_rows(h, "SELECT count(*) FROM meta WHERE key = 'upgraded_unix_s'") == 1, "meta.upgraded_unix_s");
+  CHECK(count_rows(h, "SELECT count(*) FROM frame WHERE state_hash = -42") == 1, "v1 frame intact");
+  palp_db_close(db);
+
+  /* Opening again is a no-op. */
+  REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "reopen: %s", err);
+  palp_db_close(db);
+
+  /* A fresh file starts at the current version with its creation time recorded. */
+  path_in(p, sizeof p, "fresh.db");
+  REQUIRE(palp_db_open(p, 1, &db, err, sizeof err) == 0, "create: %s", err);
+  h = palp_db_handle(db);
+  CHECK(palp_db_file_version(db) == 2, "fresh version");
+  CHECK(count_rows(h, "SELECT count(*) FROM meta WHERE key IN ('created_unix_s','app_version','schema_version')") == 3,
+        "meta rows");
+  CHECK(count_rows(h, "PRAGMA journal_mode = WAL") >= -1, "wal");
+  palp_db_close(db);
+
+  /* A missing file is not created by a reader. */
+  path_in(p, sizeof p, "missing.db");
+  CHECK(palp_db_open(p, 0, &db, err, sizeof err) != 0 && access(p, F_OK) != 0, "reader must not create %s", p);
+}
+
+static void test_newer(void) {
+  char p[600], err[512] = "";
+  path_in(p, sizeof p, "newer.db");
+  sqlite3 *h;
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+  REQUIRE(sqlite3_exec(h, "CREATE TABLE future(x); PRAGMA user_version = 99;", NULL, NULL, NULL) == SQLITE_OK, "v99");
+  sqlite3_close(h);
+  palp_db *db;
+  int rc = palp_db_open(p, 0, &db, err, sizeof err);
+  CHECK(rc == PALP_DB_ENEWER, "newer file refused (rc %d)", rc);
+  CHECK(strstr(err, "database schema version 99 is newer than this palp (2); upgrade palp") != NULL,
+        "clear message, got: %s", err);
+  palp_db_writer *w;
+  err[0] = '\0';
+  rc = palp_db_writer_open(p, NULL, &w, err, sizeof err);
+  CHECK(rc == PALP_DB_ENEWER && strstr(err, "upgrade palp"), "writer refuses too: %s", err);
+  /* ... and leaves the file untouched. */
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+  CHECK(count_rows(h, "PRAGMA user_version") == 99 && count_rows(h, "SELECT count(*) FROM sqlite_master") == 1,
+        "file untouched");
+  sqlite3_close(h);
+}
+
+/* --- a full disk: the caller never fails except by EFULL, and the loss is reported ----------- */
+static void test_full_disk(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "full.db");
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  o.max_db_bytes = 160 * 1024; /* room for the schema and a few hundred rows */
+  o.retry_backoff_s = 0.005;
+  o.retry_limit = 1;
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, &o, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_def d = {.uid = "full-1", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "begin");
+  int bad = 0;
+  for (int64_t i = 1; i <= 20000; i++) {
+    palp_db_frame f = frame_of(i);
+    int rc = palp_db_log_frame(w, s, &f);
+    if (rc != 0 && rc != PALP_EFULL) bad++;
+  }
+  CHECK(bad == 0, "%d enqueue calls failed with something other than EFULL", bad);
+  palp_db_writer_flush(w, 20);
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(w, &st);
+  CHECK(st.failed > 0 && st.disk_errors > 0, "a full file must fail batches (failed %lld)", (long long)st.failed);
+  CHECK((st.last_error_code & 0xff) == SQLITE_FULL && strstr(st.last_error, "full"), "last error: %s (%d)",
+        st.last_error, st.last_error_code);
+  CHECK(st.written + st.failed == st.enqueued, "every record is written or counted as failed (%lld + %lld vs %lld)",
+        (long long)st.written, (long long)st.failed, (long long)st.enqueued);
+  palp_db_writer_close(w);
+  sqlite3 *h;
+  sqlite3_open(p, &h);
+  CHECK(count_rows(h, "PRAGMA integrity_check") != -2, "integrity");
+  sqlite3_stmt *q;
+  sqlite3_prepare_v2(h, "PRAGMA integrity_check", -1, &q, NULL);
+  CHECK(sqlite3_step(q) == SQLITE_ROW && !strcmp((const char *)sqlite3_column_text(q, 0), "ok"), "integrity ok");
+  sqlite3_finalize(q);
+  sqlite3_close(h);
+}
+
+int main(int argc, char **argv) {
+  if (argc < 3) {
+    fprintf(stderr, "usage: %s TMPDIR MIGRATION_0001_SQL\n", argv[0]);
+    return 2;
+  }
+  snprintf(dir, sizeof dir, "%s", argv[1]);
+  test_round_trip();
+  test_shed();
+  test_duplicate();
+  test_migration(argv[2]);
+  test_newer();
+  test_full_disk();
+  CHECK_DONE();
+}
