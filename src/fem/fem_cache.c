@@ -1,0 +1,2 @@
+/* fem_cache.c - placeholder */
+#include "fem_internal.h"

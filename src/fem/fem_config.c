@@ -1,0 +1,276 @@
+/*
+ * fem_config.c - defaults (paper Tables I-II and Eq. 4) and JSON overrides.
+ *
+ * Table I (membrane): thickness 2 mm, density 950 kg/m^3, C10 = 700.3 kPa,
+ * D1 = 0.001 1/MPa. Table II (gel): density 950 kg/m^3, C10 = 10.3 kPa,
+ * D1 = 0.001 1/MPa. The Prony constants printed beside the tables (g1 = 0.9,
+ * tau1 = 0.002 s; g2 = 0.09, tau2 = 0.005 s) are applied to both materials: the
+ * text says "Both materials use a two-term Prony series" and prints one set.
+ *
+ * JSON form (every key optional; unknown keys are errors):
+ * { "mesh": {"level": 2, "radius": 0.04, "membrane_thickness": 0.002,
+ *            "core_fraction": 0.5, "membrane_layers": 0},
+ *   "inp": "phantom.inp",
+ *   "membrane": {"density": 950, "c10": 700.3e3, "d1": 1e-9,
+ *                "prony": [{"g": 0.9, "tau": 0.002}, {"g": 0.09, "tau": 0.005}]},
+ *   "gel": {...}, "c10_reading": "long_term" | "instantaneous",
+ *   "dt": 0.01, "newmark_beta": 0.25, "newmark_gamma": 0.5, "max_newton": 12,
+ *   "newton_rtol": 1e-6, "newton_atol": 1e-9, "max_cutbacks": 8, "cache_dir": "cache/fem" }
+ * Units: SI (m, kg/m^3, Pa, 1/Pa, s).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "fem_internal.h"
+
+static palp_fem_material paper_material(double c10) {
+  palp_fem_material m = {.density = 950.0, .c10 = c10, .d1 = 0.001e-6, .prony_count = 2};
+  m.g[0] = 0.9;
+  m.tau[0] = 0.002;
+  m.g[1] = 0.09;
+  m.tau[1] = 0.005;
+  return m;
+}
+
+palp_fem_config palp_fem_default_config(void) {
+  palp_fem_config c;
+  memset(&c, 0, sizeof c);
+  c.mesh = palp_fem_mesh_default_def();
+  c.membrane = paper_material(700.3e3);
+  c.gel = paper_material(10.3e3);
+  c.c10_reading = PALP_FEM_C10_LONG_TERM;
+  c.dt = 0.0;
+  c.newmark_beta = 0.25;
+  c.newmark_gamma = 0.5;
+  c.max_newton = 12;
+  c.newton_rtol = 1e-6;
+  c.newton_atol = 1e-9;
+  c.max_cutbacks = 8;
+  snprintf(c.cache_dir, sizeof c.cache_dir, "cache/fem");
+  return c;
+}
+
+static int number(const cJSON *o, const char *key, const char *ctx, double *out, char *err, size_t errlen) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
+  if (!v) return 0;
+  if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) {
+    snprintf(err, errlen, "%s%s: expected a number", ctx, key);
+    return PALP_EPARSE;
+  }
+  *out = v->valuedouble;
+  return 0;
+}
+
+static int integer(const cJSON *o, const char *key, const char *ctx, int *out, char *err, size_t errlen) {
+  double d = *out;
+  int rc = number(o, key, ctx, &d, err, errlen);
+  if (rc) return rc;
+  if (d != floor(d) || fabs(d) > 1e9) {
+    snprintf(err, errlen, "%s%s: expected an integer", ctx, key);
+    return PALP_EPARSE;
+  }
+  *out = (int)d;
+  return 0;
+}
+
+static int string(const cJSON *o, const char *key, const char *ctx, char *out, size_t cap, char *err, size_t errlen) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
+  if (!v) return 0;
+  if (!cJSON_IsString(v) || strlen(v->valuestring) >= cap) {
+    snprintf(err, errlen, "%s%s: expected a string shorter than %zu bytes", ctx, key, cap);
+    return PALP_EPARSE;
+  }
+  snprintf(out, cap, "%s", v->valuestring);
+  return 0;
+}
+
+static int only_keys(const cJSON *o, const char *const *keys, const char *ctx, char *err, size_t errlen) {
+  for (const cJSON *c = o->child; c; c = c->next) {
+    int ok = 0;
+    for (const char *const *k = keys; *k; ++k) ok |= strcmp(*k, c->string) == 0;
+    if (!ok) {
+      snprintf(err, errlen, "%s%s: unknown key", ctx, c->string);
+      return PALP_EPARSE;
+    }
+  }
+  return 0;
+}
+
+static int material(const cJSON *o, const char *ctx, palp_fem_material *m, char *err, size_t errlen) {
+  if (!cJSON_IsObject(o)) {
+    snprintf(err, errlen, "%s: expected an object", ctx);
+    return PALP_EPARSE;
+  }
+  static const char *const keys[] = {"density", "c10", "d1", "prony", NULL};
+  char c[64];
+  snprintf(c, sizeof c, "%s.", ctx);
+  int rc = only_keys(o, keys, c, err, errlen);
+  if (!rc) rc = number(o, "density", c, &m->density, err, errlen);
+  if (!rc) rc = number(o, "c10", c, &m->c10, err, errlen);
+  if (!rc) rc = number(o, "d1", c, &m->d1, err, errlen);
+  if (rc) return rc;
+  const cJSON *p = cJSON_GetObjectItemCaseSensitive(o, "prony");
+  if (!p) return 0;
+  if (!cJSON_IsArray(p) || cJSON_GetArraySize(p) > PALP_FEM_MAX_PRONY) {
+    snprintf(err, errlen, "%sprony: expected an array of at most %d {g, tau} objects", c, PALP_FEM_MAX_PRONY);
+    return PALP_EPARSE;
+  }
+  m->prony_count = 0;
+  const cJSON *t;
+  cJSON_ArrayForEach(t, p) {
+    char cc[96];
+    snprintf(cc, sizeof cc, "%sprony[%d].", c, m->prony_count);
+    static const char *const tk[] = {"g", "tau", NULL};
+    if (!cJSON_IsObject(t)) {
+      snprintf(err, errlen, "%sprony[%d]: expected an object", c, m->prony_count);
+      return PALP_EPARSE;
+    }
+    double g = NAN, tau = NAN;
+    rc = only_keys(t, tk, cc, err, errlen);
+    if (!rc) rc = number(t, "g", cc, &g, err, errlen);
+    if (!rc) rc = number(t, "tau", cc, &tau, err, errlen);
+    if (rc) return rc;
+    if (isnan(g) || isnan(tau)) {
+      snprintf(err, errlen, "%s: needs both g and tau", cc);
+      return PALP_EPARSE;
+    }
+    m->g[m->prony_count] = g;
+    m->tau[m->prony_count] = tau;
+    m->prony_count++;
+  }
+  return 0;
+}
+
+int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, size_t errlen) {
+  cJSON *root = cJSON_Parse(json);
+  if (!root || !cJSON_IsObject(root)) {
+    const char *at = cJSON_GetErrorPtr();
+    snprintf(err, errlen, "config: not a JSON object%s%.20s", at ? " near: " : "", at ? at : "");
+    cJSON_Delete(root);
+    return PALP_EPARSE;
+  }
+  static const char *const keys[] = {"mesh",         "inp",        "membrane",    "gel",          "c10_reading",
+                                     "dt",           "newmark_beta", "newmark_gamma", "max_newton", "newton_rtol",
+                                     "newton_atol",  "max_cutbacks", "cache_dir",   NULL};
+  int rc = only_keys(root, keys, "", err, errlen);
+  const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
+  if (!rc && mesh) {
+    static const char *const mk[] = {"level", "radius", "membrane_thickness", "core_fraction", "membrane_layers", NULL};
+    if (!cJSON_IsObject(mesh)) {
+      snprintf(err, errlen, "mesh: expected an object");
+      rc = PALP_EPARSE;
+    }
+    if (!rc) rc = only_keys(mesh, mk, "mesh.", err, errlen);
+    if (!rc) rc = integer(mesh, "level", "mesh.", &cfg->mesh.level, err, errlen);
+    if (!rc) rc = number(mesh, "radius", "mesh.", &cfg->mesh.radius, err, errlen);
+    if (!rc) rc = number(mesh, "membrane_thickness", "mesh.", &cfg->mesh.membrane_thickness, err, errlen);
+    if (!rc) rc = number(mesh, "core_fraction", "mesh.", &cfg->mesh.core_fraction, err, errlen);
+    if (!rc) rc = integer(mesh, "membrane_layers", "mesh.", &cfg->mesh.membrane_layers, err, errlen);
+  }
+  if (!rc) rc = string(root, "inp", "", cfg->inp_path, sizeof cfg->inp_path, err, errlen);
+  const cJSON *o;
+  if (!rc && (o = cJSON_GetObjectItemCaseSensitive(root, "membrane"))) rc = material(o, "membrane", &cfg->membrane, err, errlen);
+  if (!rc && (o = cJSON_GetObjectItemCaseSensitive(root, "gel"))) rc = material(o, "gel", &cfg->gel, err, errlen);
+  if (!rc && (o = cJSON_GetObjectItemCaseSensitive(root, "c10_reading"))) {
+    if (cJSON_IsString(o) && strcmp(o->valuestring, "long_term") == 0) cfg->c10_reading = PALP_FEM_C10_LONG_TERM;
+    else if (cJSON_IsString(o) && strcmp(o->valuestring, "instantaneous") == 0)
+      cfg->c10_reading = PALP_FEM_C10_INSTANTANEOUS;
+    else {
+      snprintf(err, errlen, "c10_reading: expected \"long_term\" or \"instantaneous\"");
+      rc = PALP_EPARSE;
+    }
+  }
+  if (!rc) rc = number(root, "dt", "", &cfg->dt, err, errlen);
+  if (!rc) rc = number(root, "newmark_beta", "", &cfg->newmark_beta, err, errlen);
+  if (!rc) rc = number(root, "newmark_gamma", "", &cfg->newmark_gamma, err, errlen);
+  if (!rc) rc = integer(root, "max_newton", "", &cfg->max_newton, err, errlen);
+  if (!rc) rc = number(root, "newton_rtol", "", &cfg->newton_rtol, err, errlen);
+  if (!rc) rc = number(root, "newton_atol", "", &cfg->newton_atol, err, errlen);
+  if (!rc) rc = integer(root, "max_cutbacks", "", &cfg->max_cutbacks, err, errlen);
+  if (!rc) rc = string(root, "cache_dir", "", cfg->cache_dir, sizeof cfg->cache_dir, err, errlen);
+  cJSON_Delete(root);
+  if (!rc) rc = palp_fem_config_validate(cfg, err, errlen);
+  return rc;
+}
+
+int palp_fem_config_load(const char *path, palp_fem_config *cfg, char *err, size_t errlen) {
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    snprintf(err, errlen, "%s: cannot open", path);
+    return PALP_EIO;
+  }
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  if (n < 0 || n > (1L << 24)) {
+    fclose(f);
+    snprintf(err, errlen, "%s: unreadable or larger than 16 MiB", path);
+    return PALP_EIO;
+  }
+  char *buf = malloc((size_t)n + 1);
+  if (!buf) {
+    fclose(f);
+    return PALP_ENOMEM;
+  }
+  size_t got = fread(buf, 1, (size_t)n, f);
+  fclose(f);
+  buf[got] = 0;
+  char e2[200];
+  int rc = palp_fem_config_parse(buf, cfg, e2, sizeof e2);
+  if (rc) snprintf(err, errlen, "%s: %s", path, e2);
+  free(buf);
+  return rc;
+}
+
+static int check_material(const palp_fem_material *m, const char *name, char *err, size_t errlen) {
+  if (!(m->density > 0.0) || !(m->c10 > 0.0) || !(m->d1 > 0.0)) {
+    snprintf(err, errlen, "%s: density, c10 and d1 must be positive", name);
+    return PALP_EINVAL;
+  }
+  if (m->prony_count < 0 || m->prony_count > PALP_FEM_MAX_PRONY) {
+    snprintf(err, errlen, "%s: at most %d Prony terms", name, PALP_FEM_MAX_PRONY);
+    return PALP_EINVAL;
+  }
+  double sum = 0.0;
+  for (int k = 0; k < m->prony_count; ++k) {
+    if (!(m->g[k] >= 0.0) || !(m->tau[k] > 0.0)) {
+      snprintf(err, errlen, "%s.prony[%d]: need g >= 0 and tau > 0 s", name, k);
+      return PALP_EINVAL;
+    }
+    sum += m->g[k];
+  }
+  if (!(sum < 1.0)) {
+    snprintf(err, errlen, "%s.prony: the g_k must sum to less than 1 (got %g)", name, sum);
+    return PALP_EINVAL;
+  }
+  return 0;
+}
+
+int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen) {
+  int rc = check_material(&c->membrane, "membrane", err, errlen);
+  if (!rc) rc = check_material(&c->gel, "gel", err, errlen);
+  if (rc) return rc;
+  if (!c->inp_path[0] && (c->mesh.level < 1 || c->mesh.level > 16)) {
+    snprintf(err, errlen, "mesh.level: expected 1..16");
+    return PALP_EINVAL;
+  }
+  if (!(c->dt >= 0.0) || c->dt > 1.0) {
+    snprintf(err, errlen, "dt: expected 0 (one step per frame) or a step in (0, 1] s");
+    return PALP_EINVAL;
+  }
+  if (!(c->newmark_beta > 0.0) || !(c->newmark_gamma >= 0.5) ||
+      c->newmark_beta < 0.25 * (c->newmark_gamma + 0.5) * (c->newmark_gamma + 0.5) - 1e-12) {
+    snprintf(err, errlen, "newmark: need gamma >= 1/2 and beta >= (gamma + 1/2)^2 / 4 (unconditional stability)");
+    return PALP_EINVAL;
+  }
+  if (c->max_newton < 1 || c->max_newton > 60 || c->max_cutbacks < 0 || c->max_cutbacks > 20 ||
+      !(c->newton_rtol > 0.0) || !(c->newton_atol >= 0.0)) {
+    snprintf(err, errlen, "newton: max_newton 1..60, max_cutbacks 0..20, rtol > 0, atol >= 0");
+    return PALP_EINVAL;
+  }
+  return 0;
+}

@@ -1,0 +1,204 @@
+/*
+ * fem_element.c - the Q1/P0 (mean-dilatation) viscoelastic hexahedron.
+ *
+ * The element's stored energy is
+ *   Pi_e = int_Ve0 W_iso(C) dV + Ve0 U(theta),   theta = ve / Ve0,
+ * where ve is the element's current volume. The isochoric Neo-Hookean part is
+ * integrated at the 2x2x2 Gauss points (total Lagrangian, with the Prony history
+ * per Gauss point); the volumetric part sees only the element's mean dilatation
+ * theta, i.e. one constant pressure per element (P0). A trilinear hex with a
+ * pointwise J has 8 volumetric constraints per element against ~3 free DOFs, and
+ * locks when the gel's K/mu ~ 1e5; the mean dilatation leaves one. Because the
+ * Abaqus energy is split into I1bar (independent of J) and J, this is exactly the
+ * Simo-Taylor-Pister mixed Q1/P0 element, and its tangent is symmetric:
+ *   f_a   = int B_a^T S dV0 + p dve/dx_a,                       p = 2 (theta - 1) / D1
+ *   K_ab  = int B_a^T (gamma CC0) B_b + (dN_a . S dN_b) I dV0
+ *         + (2 / D1) / Ve0 (dve/dx_a)(dve/dx_b)^T + p d2ve/dx_a dx_b
+ *   dve/dx_a          = int grad_x N_a dv
+ *   d2ve/dx_ai dx_bj  = int (N_a,i N_b,j - N_a,j N_b,i) dv
+ */
+#include <math.h>
+#include <string.h>
+
+#include "fem_internal.h"
+
+static double det3(double F[3][3]) {
+  return F[0][0] * (F[1][1] * F[2][2] - F[1][2] * F[2][1]) - F[0][1] * (F[1][0] * F[2][2] - F[1][2] * F[2][0]) +
+         F[0][2] * (F[1][0] * F[2][1] - F[1][1] * F[2][0]);
+}
+
+static void inv3(double F[3][3], double det, double Fi[3][3]) {
+  Fi[0][0] = (F[1][1] * F[2][2] - F[1][2] * F[2][1]) / det;
+  Fi[0][1] = (F[0][2] * F[2][1] - F[0][1] * F[2][2]) / det;
+  Fi[0][2] = (F[0][1] * F[1][2] - F[0][2] * F[1][1]) / det;
+  Fi[1][0] = (F[1][2] * F[2][0] - F[1][0] * F[2][2]) / det;
+  Fi[1][1] = (F[0][0] * F[2][2] - F[0][2] * F[2][0]) / det;
+  Fi[1][2] = (F[0][2] * F[1][0] - F[0][0] * F[1][2]) / det;
+  Fi[2][0] = (F[1][0] * F[2][1] - F[1][1] * F[2][0]) / det;
+  Fi[2][1] = (F[0][1] * F[2][0] - F[0][0] * F[2][1]) / det;
+  Fi[2][2] = (F[0][0] * F[1][1] - F[0][1] * F[1][0]) / det;
+}
+
+/* Deformation gradient F = sum_a x_a (x) dN_a/dX at one Gauss point. */
+static void deformation(const double *x, const double *dN, double F[3][3]) {
+  memset(F, 0, 9 * sizeof(double));
+  for (int a = 0; a < 8; ++a)
+    for (int i = 0; i < 3; ++i)
+      for (int J = 0; J < 3; ++J) F[i][J] += x[3 * a + i] * dN[3 * a + J];
+}
+
+int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt, double *fe,
+                     double (*ke)[24], double *S0t, double *Ht) {
+  const palp_fem_mesh *mesh = m->mesh;
+  const palp_fem_material *mat = &m->mat[mesh->region[e]];
+  const int np = m->nprony;
+  double x[8][3];
+  for (int a = 0; a < 8; ++a)
+    for (int i = 0; i < 3; ++i) x[a][i] = mesh->x[mesh->hex[e][a]][i] + ue[3 * a + i];
+  double g[24] = {0}, ve = 0.0;
+  static const double zeroH[PALP_FEM_MAX_PRONY * 6] = {0};
+  double Hv[24][24];
+  memset(fe, 0, 24 * sizeof(double));
+  if (ke) {
+    memset(ke, 0, 24 * 24 * sizeof(double));
+    memset(Hv, 0, sizeof Hv);
+  }
+  for (int gp = 0; gp < 8; ++gp) {
+    const size_t q = (size_t)e * 8 + (size_t)gp;
+    const double(*dN)[3] = (const double(*)[3])(m->gp_dNdX + q * 24);
+    const double w = m->gp_w[q];
+    double F[3][3];
+    deformation(&x[0][0], &dN[0][0], F);
+    const double J = det3(F);
+    if (!(J > 0.0)) return PALP_EUNSTABLE;
+    const double C[6] = {F[0][0] * F[0][0] + F[1][0] * F[1][0] + F[2][0] * F[2][0],
+                         F[0][1] * F[0][1] + F[1][1] * F[1][1] + F[2][1] * F[2][1],
+                         F[0][2] * F[0][2] + F[1][2] * F[1][2] + F[2][2] * F[2][2],
+                         F[0][0] * F[0][1] + F[1][0] * F[1][1] + F[2][0] * F[2][1],
+                         F[0][1] * F[0][2] + F[1][1] * F[1][2] + F[2][1] * F[2][2],
+                         F[0][0] * F[0][2] + F[1][0] * F[1][2] + F[2][0] * F[2][2]};
+    double S0[6], D0[6][6], S[6];
+    palp_fem_nh_iso(mat->c10, C, S0, ke ? D0 : NULL);
+    const double *S0old = m->S0 ? m->S0 + q * 6 : S0;
+    const double *Hold = m->H ? m->H + q * (size_t)np * 6 : zeroH;
+    double Hnew[PALP_FEM_MAX_PRONY * 6];
+    const double gamma = palp_fem_prony_update(mat, dt, S0, S0old, Hold, Hnew, S);
+    if (S0t) memcpy(S0t + gp * 6, S0, sizeof S0);
+    if (Ht) memcpy(Ht + (size_t)gp * np * 6, Hnew, sizeof(double) * (size_t)np * 6);
+    /* B: variation of the Green-Lagrange strain, engineering shear */
+    double B[6][24];
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) {
+        const int c = 3 * a + i;
+        B[0][c] = F[i][0] * dN[a][0];
+        B[1][c] = F[i][1] * dN[a][1];
+        B[2][c] = F[i][2] * dN[a][2];
+        B[3][c] = F[i][0] * dN[a][1] + F[i][1] * dN[a][0];
+        B[4][c] = F[i][1] * dN[a][2] + F[i][2] * dN[a][1];
+        B[5][c] = F[i][0] * dN[a][2] + F[i][2] * dN[a][0];
+      }
+    for (int c = 0; c < 24; ++c) {
+      double s = 0.0;
+      for (int p = 0; p < 6; ++p) s += B[p][c] * S[p];
+      fe[c] += w * s;
+    }
+    /* volumetric: current volume and its gradient */
+    double Fi[3][3];
+    inv3(F, J, Fi);
+    const double jw = J * w;
+    double nx[8][3]; /* grad_x N_a = F^-T dN_a/dX */
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) {
+        nx[a][i] = dN[a][0] * Fi[0][i] + dN[a][1] * Fi[1][i] + dN[a][2] * Fi[2][i];
+        g[3 * a + i] += nx[a][i] * jw;
+      }
+    ve += jw;
+    if (!ke) continue;
+    double DB[6][24];
+    for (int p = 0; p < 6; ++p)
+      for (int c = 0; c < 24; ++c) {
+        double s = 0.0;
+        for (int r = 0; r < 6; ++r) s += D0[p][r] * B[r][c];
+        DB[p][c] = gamma * w * s;
+      }
+    for (int r = 0; r < 24; ++r)
+      for (int c = r; c < 24; ++c) {
+        double s = 0.0;
+        for (int p = 0; p < 6; ++p) s += B[p][r] * DB[p][c];
+        ke[r][c] += s;
+      }
+    for (int a = 0; a < 8; ++a)
+      for (int b = a; b < 8; ++b) {
+        const double SdN[3] = {S[0] * dN[b][0] + S[3] * dN[b][1] + S[5] * dN[b][2],
+                               S[3] * dN[b][0] + S[1] * dN[b][1] + S[4] * dN[b][2],
+                               S[5] * dN[b][0] + S[4] * dN[b][1] + S[2] * dN[b][2]};
+        const double G = w * (dN[a][0] * SdN[0] + dN[a][1] * SdN[1] + dN[a][2] * SdN[2]);
+        for (int i = 0; i < 3; ++i) ke[3 * a + i][3 * b + i] += G;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) Hv[3 * a + i][3 * b + j] += (nx[a][i] * nx[b][j] - nx[a][j] * nx[b][i]) * jw;
+      }
+  }
+  const double V0 = m->vol0[e];
+  const double theta = ve / V0;
+  if (!(theta > 0.0)) return PALP_EUNSTABLE;
+  const double p = palp_fem_pressure(mat->d1, theta);
+  for (int c = 0; c < 24; ++c) fe[c] += p * g[c];
+  if (ke) {
+    const double kv = 2.0 / mat->d1 / V0;
+    for (int r = 0; r < 24; ++r)
+      for (int c = r; c < 24; ++c) ke[r][c] += kv * g[r] * g[c] + p * Hv[r][c];
+    /* Hv was filled for node pairs a <= b; entries r < c inside a node pair a == b
+     * and all of b > a are set; mirror the upper triangle. */
+    for (int r = 0; r < 24; ++r)
+      for (int c = 0; c < r; ++c) ke[r][c] = ke[c][r];
+  }
+  return PALP_OK;
+}
+
+int palp_fem_element_cauchy(const palp_fem_model *m, int e, int gp, const double *u, double dt, double sigma[6]) {
+  const palp_fem_mesh *mesh = m->mesh;
+  const palp_fem_material *mat = &m->mat[mesh->region[e]];
+  double x[8][3];
+  double ve = 0.0, Fg[3][3] = {{0}}, Sg[6] = {0};
+  for (int a = 0; a < 8; ++a)
+    for (int i = 0; i < 3; ++i) x[a][i] = mesh->x[mesh->hex[e][a]][i] + u[3 * mesh->hex[e][a] + i];
+  for (int q = 0; q < 8; ++q) {
+    const size_t k = (size_t)e * 8 + (size_t)q;
+    const double(*dN)[3] = (const double(*)[3])(m->gp_dNdX + k * 24);
+    double F[3][3];
+    deformation(&x[0][0], &dN[0][0], F);
+    const double J = det3(F);
+    if (!(J > 0.0)) return PALP_EUNSTABLE;
+    ve += J * m->gp_w[k];
+    if (q != gp) continue;
+    memcpy(Fg, F, sizeof F);
+    const double C[6] = {F[0][0] * F[0][0] + F[1][0] * F[1][0] + F[2][0] * F[2][0],
+                         F[0][1] * F[0][1] + F[1][1] * F[1][1] + F[2][1] * F[2][1],
+                         F[0][2] * F[0][2] + F[1][2] * F[1][2] + F[2][2] * F[2][2],
+                         F[0][0] * F[0][1] + F[1][0] * F[1][1] + F[2][0] * F[2][1],
+                         F[0][1] * F[0][2] + F[1][1] * F[1][2] + F[2][1] * F[2][2],
+                         F[0][0] * F[0][2] + F[1][0] * F[1][2] + F[2][0] * F[2][2]};
+    double S0[6], Hn[PALP_FEM_MAX_PRONY * 6];
+    static const double zeroH[PALP_FEM_MAX_PRONY * 6] = {0};
+    palp_fem_nh_iso(mat->c10, C, S0, NULL);
+    const double *S0old = m->S0 ? m->S0 + k * 6 : S0;
+    const double *Hold = m->H ? m->H + k * (size_t)m->nprony * 6 : zeroH;
+    palp_fem_prony_update(mat, dt, S0, S0old, Hold, Hn, Sg);
+  }
+  const double J = det3(Fg);
+  const double p = palp_fem_pressure(mat->d1, ve / m->vol0[e]);
+  /* sigma = F S F^T / J + p I */
+  const double S[3][3] = {{Sg[0], Sg[3], Sg[5]}, {Sg[3], Sg[1], Sg[4]}, {Sg[5], Sg[4], Sg[2]}};
+  double T[3][3] = {{0}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) T[i][j] += Fg[i][k] * S[k][l] * Fg[j][l] / J;
+  sigma[0] = T[0][0] + p;
+  sigma[1] = T[1][1] + p;
+  sigma[2] = T[2][2] + p;
+  sigma[3] = T[0][1];
+  sigma[4] = T[1][2];
+  sigma[5] = T[0][2];
+  return PALP_OK;
+}

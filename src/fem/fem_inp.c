@@ -1,0 +1,2 @@
+/* fem_inp.c - placeholder */
+#include "fem_internal.h"

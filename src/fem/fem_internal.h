@@ -1,0 +1,160 @@
+/*
+ * fem_internal.h - the FE reference's building blocks, exposed to its tests and
+ * benchmark: material law, hexahedral element, model state and Newton solvers,
+ * surface mapping. Not part of the stable palp_fem API.
+ *
+ * Voigt order for symmetric tensors: 11, 22, 33, 12, 23, 13 (stresses as is;
+ * tangent moduli as the 6x6 matrix of d S / d(E) with engineering shear).
+ */
+#ifndef PALP_FEM_INTERNAL_H
+#define PALP_FEM_INTERNAL_H
+
+#include "palp_fem.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PALP_FEM_PI 3.14159265358979323846
+
+/* ---- mesh helpers (fem_mesh.c) -------------------------------------------- */
+int palp_fem_mesh_add_set(palp_fem_mesh *m, const char *name, int is_element, int *items, int count);
+void palp_fem_mesh_orient(palp_fem_mesh *m);
+int palp_fem_mesh_standard_sets(palp_fem_mesh *m);
+
+/* ---- material law (fem_material.c) -------------------------------------- */
+/* Relaxed fraction g_inf = 1 - sum g_k. */
+double palp_fem_ginf(const palp_fem_material *m);
+/* Instantaneous C10 [Pa] under a reading. */
+double palp_fem_c10_instant(const palp_fem_material *m, palp_fem_c10_reading r);
+
+/* Isochoric Neo-Hookean 2nd Piola-Kirchhoff stress and its material tangent
+ * for right Cauchy-Green tensor C (Voigt, C11..C13) with instantaneous C10 [Pa]:
+ *   S = 2 C10 J^(-2/3) (I - I1/3 C^-1)
+ *   CC = 4/3 C10 J^(-2/3) [ I1 C^-1 (.) C^-1 + I1/3 C^-1 x C^-1 - I x C^-1 - C^-1 x I ]
+ * D may be NULL. */
+void palp_fem_nh_iso(double c10, const double C[6], double S[6], double D[6][6]);
+/* Volumetric pressure p = dU/dJ = 2 (J - 1) / D1 [Pa], dp/dJ = 2 / D1. */
+static inline double palp_fem_pressure(double d1, double J) { return 2.0 * (J - 1.0) / d1; }
+
+/* Prony hereditary integral with the recursive update exact for S0 linear in time
+ * over the step (FEBio, Abaqus):
+ *   H_k+ = exp(-x_k) H_k + g_k (1 - exp(-x_k)) / x_k (S0+ - S0),  x_k = dt / tau_k
+ *   S+   = g_inf S0+ + sum_k H_k+,   dS+/dS0+ = gamma = g_inf + sum_k g_k (1 - exp(-x_k)) / x_k
+ * dt = 0 gives the instantaneous response, dt = INFINITY the relaxed one.
+ * Hold and Hnew are [prony_count * 6]. Returns gamma. */
+double palp_fem_prony_update(const palp_fem_material *m, double dt, const double S0new[6],
+                             const double S0old[6], const double *Hold, double *Hnew,
+                             double S[6]);
+
+/* ---- hexahedron (fem_hex.c) ---------------------------------------------- */
+/* Trilinear shape-function derivatives dN/dxi at the 2x2x2 Gauss points. */
+void palp_fem_hex_dshape(const double xi[3], double dN[8][3]);
+extern const double palp_fem_gauss[8][3];
+
+/* ---- model (fem_model.c) --------------------------------------------------- */
+typedef struct palp_fem_solver palp_fem_solver;
+
+typedef struct palp_fem_model {
+  const palp_fem_mesh *mesh; /* borrowed */
+  palp_fem_material mat[2];  /* [PALP_FEM_GEL], [PALP_FEM_MEMBRANE], C10 already instantaneous */
+  int ndof;                  /* 3 * node_count */
+  int nfree;
+  int *eq;             /* [ndof] equation number or -1 when prescribed */
+  double *prescribed;  /* [ndof] prescribed displacement [m] (used where eq < 0) */
+  double *mass;        /* [node_count] lumped mass [kg] */
+  /* per element per Gauss point: dN/dX [8][3] and weight * det J0 [m^3] */
+  double *gp_dNdX;     /* [E * 8 * 24] */
+  double *gp_w;        /* [E * 8] */
+  double *vol0;        /* [E] */
+  /* committed state */
+  double *u, *v, *a;   /* [ndof] [m], [m/s], [m/s^2] */
+  double *S0, *H;      /* [E*8*6], [E*8*nprony*6] viscoelastic history */
+  double time;         /* [s] */
+  /* trial state */
+  double *S0t, *Ht;    /* trial history of the last evaluation */
+  double *fint;        /* [ndof] internal force at the last evaluation [N] */
+  double *fext;        /* [ndof] */
+  double *res, *du, *utrial, *atrial;
+  /* sparse structure: upper triangle in compressed columns over free equations */
+  int *colp, *rowi; /* [nfree+1], [nnz] */
+  long nnz;
+  int *emap;        /* [E * 576] value index or -1 */
+  double *kval;     /* [nnz] */
+  palp_fem_solver *solver;
+  int nprony;
+  /* statistics */
+  long steps, newton_iterations, cutbacks, factorizations;
+  /* Newton trace of the last step (residual norms), for convergence tests */
+  int trace_count;
+  double trace[64];
+  double newmark_beta, newmark_gamma;
+  double rtol, atol;
+  int max_newton, max_cutbacks;
+  char err[256];
+} palp_fem_model;
+
+/* Builds the model over a mesh: base nodes (mesh->fixed) prescribed to zero. */
+int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const palp_fem_config *cfg);
+void palp_fem_model_destroy(palp_fem_model *m);
+/* Prescribes one DOF (node, dir) to value [m]; call before palp_fem_model_finalize. */
+void palp_fem_model_prescribe(palp_fem_model *m, int node, int dir, double value);
+/* Numbers the free equations, builds the sparsity pattern and the symbolic factor. */
+int palp_fem_model_finalize(palp_fem_model *m);
+
+/* Internal force and (if want_tangent) the tangent at displacement u under a
+ * viscoelastic step of length dt from the committed history (dt = 0: instantaneous,
+ * INFINITY: relaxed). Fills m->fint, m->S0t, m->Ht and m->kval (free part only).
+ * Returns PALP_EUNSTABLE when an element inverts (det F <= 0). */
+int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_tangent);
+/* Element-level evaluation used by the tests: internal force fe[24] and tangent
+ * ke[24][24] (may be NULL) of element e at nodal displacements ue[24]. */
+int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt, double *fe,
+                     double (*ke)[24], double *S0t, double *Ht);
+/* Cauchy stress [Pa] at Gauss point g of element e at displacement u after dt. */
+int palp_fem_element_cauchy(const palp_fem_model *m, int e, int g, const double *u, double dt,
+                            double sigma[6]);
+
+/* Static equilibrium f_int(u) = fext with prescribed DOFs ramped over `increments`
+ * (viscous step dt per increment; INFINITY for the relaxed solid). Commits. */
+int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments, double dt);
+/* One implicit Newmark step of length dt with external force fext [ndof] at its end,
+ * cut back by halving up to max_cutbacks times. Commits on success. */
+int palp_fem_step(palp_fem_model *m, const double *fext, double dt);
+
+/* ---- sparse solver (fem_solver.c) -------------------------------------------- */
+palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi, long nnz);
+void palp_fem_solver_destroy(palp_fem_solver *s);
+/* Numeric Cholesky of the upper-triangle values; PALP_ESOLVER if not positive definite. */
+int palp_fem_solver_factor(palp_fem_solver *s, const double *val);
+int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x);
+/* Nonzeros of L and flops of the last factorisation. */
+double palp_fem_solver_factor_nnz(const palp_fem_solver *s);
+double palp_fem_solver_factor_flops(const palp_fem_solver *s);
+
+/* ---- surface map (fem_map.c) ------------------------------------------------- */
+/* Each real-time vertex maps to 4 FE nodes with bilinear weights on the FE outer
+ * surface face hit by the ray from the base centre through the vertex. */
+typedef struct palp_fem_map {
+  int count;
+  int (*node)[4];
+  double (*w)[4];
+} palp_fem_map;
+int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int count, palp_fem_map *out);
+void palp_fem_map_destroy(palp_fem_map *map);
+
+/* ---- hashing -------------------------------------------------------------- */
+static inline uint64_t palp_fem_fnv(uint64_t h, const void *data, size_t n) {
+  const unsigned char *p = (const unsigned char *)data;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+#define PALP_FEM_FNV_SEED 14695981039346656037ull
+
+#ifdef __cplusplus
+}
+#endif
+#endif

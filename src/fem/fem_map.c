@@ -1,0 +1,2 @@
+/* fem_map.c - placeholder */
+#include "fem_internal.h"

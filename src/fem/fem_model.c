@@ -1,0 +1,431 @@
+/*
+ * fem_model.c - model state, assembly, and the Newton solvers (static and
+ * implicit Newmark dynamics with automatic step cut-back).
+ *
+ * Newmark (beta, gamma), lumped mass M:
+ *   a+ = (u+ - u - dt v) / (beta dt^2) - (1 / (2 beta) - 1) a
+ *   v+ = v + dt ((1 - gamma) a + gamma a+)
+ *   r(u+) = f_ext+ - M a+ - f_int(u+) = 0,   K_eff = K_T + M / (beta dt^2)
+ * Newton stops when ||r|| <= rtol * max(||f_ext||, ||f_int||, ||M a||) + atol, r over
+ * the free equations, ||f_int|| over all (reactions included). A step that does not converge within max_newton
+ * iterations, inverts an element, or meets an indefinite K_eff is retried with
+ * half the step (the mass term M / (beta dt^2) grows as dt shrinks, which is
+ * what restores definiteness); after max_cutbacks halvings the step fails.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fem_internal.h"
+
+void palp_fem_model_destroy(palp_fem_model *m) {
+  if (!m) return;
+  free(m->eq);
+  free(m->prescribed);
+  free(m->mass);
+  free(m->gp_dNdX);
+  free(m->gp_w);
+  free(m->vol0);
+  free(m->u);
+  free(m->v);
+  free(m->a);
+  free(m->S0);
+  free(m->H);
+  free(m->S0t);
+  free(m->Ht);
+  free(m->fint);
+  free(m->fext);
+  free(m->res);
+  free(m->du);
+  free(m->utrial);
+  free(m->atrial);
+  free(m->colp);
+  free(m->rowi);
+  free(m->emap);
+  free(m->kval);
+  palp_fem_solver_destroy(m->solver);
+  memset(m, 0, sizeof *m);
+}
+
+int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const palp_fem_config *cfg) {
+  memset(m, 0, sizeof *m);
+  m->mesh = mesh;
+  m->mat[PALP_FEM_GEL] = cfg->gel;
+  m->mat[PALP_FEM_MEMBRANE] = cfg->membrane;
+  for (int r = 0; r < 2; ++r) m->mat[r].c10 = palp_fem_c10_instant(&m->mat[r], cfg->c10_reading);
+  m->nprony = cfg->gel.prony_count > cfg->membrane.prony_count ? cfg->gel.prony_count : cfg->membrane.prony_count;
+  /* a material with fewer terms gets zero-weight extra terms */
+  for (int r = 0; r < 2; ++r)
+    for (int k = m->mat[r].prony_count; k < m->nprony; ++k) {
+      m->mat[r].g[k] = 0.0;
+      m->mat[r].tau[k] = 1.0;
+    }
+  for (int r = 0; r < 2; ++r) m->mat[r].prony_count = m->nprony;
+  m->newmark_beta = cfg->newmark_beta;
+  m->newmark_gamma = cfg->newmark_gamma;
+  m->rtol = cfg->newton_rtol;
+  m->atol = cfg->newton_atol;
+  m->max_newton = cfg->max_newton;
+  m->max_cutbacks = cfg->max_cutbacks;
+  const int N = mesh->node_count, E = mesh->element_count, np = m->nprony;
+  m->ndof = 3 * N;
+  const size_t nd = (size_t)m->ndof;
+  m->eq = malloc(sizeof(int) * nd);
+  m->prescribed = calloc(nd, sizeof(double));
+  m->mass = calloc((size_t)N, sizeof(double));
+  m->gp_dNdX = malloc(sizeof(double) * (size_t)E * 8 * 24);
+  m->gp_w = malloc(sizeof(double) * (size_t)E * 8);
+  m->vol0 = malloc(sizeof(double) * (size_t)E);
+  m->u = calloc(nd, sizeof(double));
+  m->v = calloc(nd, sizeof(double));
+  m->a = calloc(nd, sizeof(double));
+  m->S0 = calloc((size_t)E * 8 * 6, sizeof(double));
+  m->H = calloc((size_t)E * 8 * (size_t)(np ? np : 1) * 6, sizeof(double));
+  m->S0t = calloc((size_t)E * 8 * 6, sizeof(double));
+  m->Ht = calloc((size_t)E * 8 * (size_t)(np ? np : 1) * 6, sizeof(double));
+  m->fint = calloc(nd, sizeof(double));
+  m->fext = calloc(nd, sizeof(double));
+  m->res = calloc(nd, sizeof(double));
+  m->du = calloc(nd, sizeof(double));
+  m->utrial = calloc(nd, sizeof(double));
+  m->atrial = calloc(nd, sizeof(double));
+  if (!m->eq || !m->prescribed || !m->mass || !m->gp_dNdX || !m->gp_w || !m->vol0 || !m->u || !m->v || !m->a ||
+      !m->S0 || !m->H || !m->S0t || !m->Ht || !m->fint || !m->fext || !m->res || !m->du || !m->utrial ||
+      !m->atrial) {
+    palp_fem_model_destroy(m);
+    return PALP_ENOMEM;
+  }
+  for (size_t d = 0; d < nd; ++d) m->eq[d] = mesh->fixed[d / 3] ? -1 : 0;
+  /* reference geometry at the Gauss points: dN/dX = dN/dxi J0^-1 */
+  for (int e = 0; e < E; ++e) {
+    double vol = 0.0;
+    for (int g = 0; g < 8; ++g) {
+      double dN[8][3], J[3][3] = {{0}};
+      palp_fem_hex_dshape(palp_fem_gauss[g], dN);
+      for (int a = 0; a < 8; ++a) {
+        const double *x = mesh->x[mesh->hex[e][a]];
+        for (int i = 0; i < 3; ++i)
+          for (int k = 0; k < 3; ++k) J[i][k] += x[i] * dN[a][k];
+      }
+      const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                         J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                         J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+      if (!(det > 0.0)) {
+        snprintf(m->err, sizeof m->err, "element %d has a non-positive Jacobian at Gauss point %d", e + 1, g + 1);
+        palp_fem_model_destroy(m);
+        return PALP_EINVAL;
+      }
+      double Ji[3][3];
+      Ji[0][0] = (J[1][1] * J[2][2] - J[1][2] * J[2][1]) / det;
+      Ji[0][1] = (J[0][2] * J[2][1] - J[0][1] * J[2][2]) / det;
+      Ji[0][2] = (J[0][1] * J[1][2] - J[0][2] * J[1][1]) / det;
+      Ji[1][0] = (J[1][2] * J[2][0] - J[1][0] * J[2][2]) / det;
+      Ji[1][1] = (J[0][0] * J[2][2] - J[0][2] * J[2][0]) / det;
+      Ji[1][2] = (J[0][2] * J[1][0] - J[0][0] * J[1][2]) / det;
+      Ji[2][0] = (J[1][0] * J[2][1] - J[1][1] * J[2][0]) / det;
+      Ji[2][1] = (J[0][1] * J[2][0] - J[0][0] * J[2][1]) / det;
+      Ji[2][2] = (J[0][0] * J[1][1] - J[0][1] * J[1][0]) / det;
+      double *out = m->gp_dNdX + ((size_t)e * 8 + (size_t)g) * 24;
+      for (int a = 0; a < 8; ++a)
+        for (int k = 0; k < 3; ++k) out[3 * a + k] = dN[a][0] * Ji[0][k] + dN[a][1] * Ji[1][k] + dN[a][2] * Ji[2][k];
+      m->gp_w[(size_t)e * 8 + (size_t)g] = det; /* Gauss weights are 1 */
+      vol += det;
+      /* row-sum lumped mass: m_a = rho int N_a dV0 */
+      const double *xi = palp_fem_gauss[g];
+      for (int a = 0; a < 8; ++a) {
+        static const double s[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                       {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+        const double Na = 0.125 * (1 + xi[0] * s[a][0]) * (1 + xi[1] * s[a][1]) * (1 + xi[2] * s[a][2]);
+        m->mass[mesh->hex[e][a]] += m->mat[mesh->region[e]].density * Na * det;
+      }
+    }
+    m->vol0[e] = vol;
+  }
+  return PALP_OK;
+}
+
+void palp_fem_model_prescribe(palp_fem_model *m, int node, int dir, double value) {
+  m->eq[3 * node + dir] = -1;
+  m->prescribed[3 * node + dir] = value;
+}
+
+static int cmp_int(const void *a, const void *b) {
+  const int x = *(const int *)a, y = *(const int *)b;
+  return (x > y) - (x < y);
+}
+
+int palp_fem_model_finalize(palp_fem_model *m) {
+  const palp_fem_mesh *mesh = m->mesh;
+  const int N = mesh->node_count, E = mesh->element_count;
+  int nf = 0;
+  for (int d = 0; d < m->ndof; ++d) m->eq[d] = m->eq[d] < 0 ? -1 : nf++;
+  m->nfree = nf;
+  for (int d = 0; d < m->ndof; ++d)
+    if (m->eq[d] < 0) m->u[d] = 0.0;
+  /* node adjacency through elements */
+  int *deg = calloc((size_t)N + 1, sizeof(int));
+  if (!deg) return PALP_ENOMEM;
+  for (int e = 0; e < E; ++e)
+    for (int a = 0; a < 8; ++a) deg[mesh->hex[e][a] + 1] += 8;
+  for (int i = 0; i < N; ++i) deg[i + 1] += deg[i];
+  int *adj = malloc(sizeof(int) * (size_t)deg[N]);
+  int *fill = calloc((size_t)N, sizeof(int));
+  int *adjn = calloc((size_t)N, sizeof(int));
+  if (!adj || !fill || !adjn) {
+    free(deg), free(adj), free(fill), free(adjn);
+    return PALP_ENOMEM;
+  }
+  for (int e = 0; e < E; ++e)
+    for (int a = 0; a < 8; ++a) {
+      const int na = mesh->hex[e][a];
+      for (int b = 0; b < 8; ++b) adj[deg[na] + fill[na]++] = mesh->hex[e][b];
+    }
+  for (int i = 0; i < N; ++i) {
+    int *l = adj + deg[i], n = fill[i];
+    qsort(l, (size_t)n, sizeof(int), cmp_int);
+    int k = 0;
+    for (int j = 0; j < n; ++j)
+      if (k == 0 || l[j] != l[k - 1]) l[k++] = l[j];
+    adjn[i] = k;
+  }
+  /* columns in equation order; rows <= column, ascending (eq is monotone in dof) */
+  free(m->colp);
+  m->colp = malloc(sizeof(int) * ((size_t)nf + 1));
+  long nnz = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    nnz = 0;
+    for (int d = 0; d < m->ndof; ++d) {
+      const int c = m->eq[d];
+      if (c < 0) continue;
+      if (pass == 0) m->colp[c] = (int)nnz;
+      const int node = d / 3;
+      for (int j = 0; j < adjn[node]; ++j)
+        for (int k = 0; k < 3; ++k) {
+          const int r = m->eq[3 * adj[deg[node] + j] + k];
+          if (r < 0 || r > c) continue;
+          if (pass == 1) m->rowi[nnz] = r;
+          ++nnz;
+        }
+    }
+    if (pass == 0) {
+      m->colp[nf] = (int)nnz;
+      free(m->rowi);
+      m->rowi = malloc(sizeof(int) * (size_t)(nnz ? nnz : 1));
+      if (!m->rowi) break;
+    }
+  }
+  free(deg), free(adj), free(fill), free(adjn);
+  if (!m->colp || !m->rowi) return PALP_ENOMEM;
+  m->nnz = nnz;
+  free(m->kval);
+  free(m->emap);
+  m->kval = calloc((size_t)(nnz ? nnz : 1), sizeof(double));
+  m->emap = malloc(sizeof(int) * (size_t)E * 576);
+  if (!m->kval || !m->emap) return PALP_ENOMEM;
+  for (int e = 0; e < E; ++e)
+    for (int A = 0; A < 24; ++A)
+      for (int B = 0; B < 24; ++B) {
+        const int rA = m->eq[3 * mesh->hex[e][A / 3] + A % 3], rB = m->eq[3 * mesh->hex[e][B / 3] + B % 3];
+        int idx = -1;
+        if (rA >= 0 && rB >= 0 && rA <= rB) {
+          int lo = m->colp[rB], hi = m->colp[rB + 1] - 1;
+          while (lo <= hi) {
+            const int mid = (lo + hi) / 2;
+            if (m->rowi[mid] < rA) lo = mid + 1;
+            else if (m->rowi[mid] > rA) hi = mid - 1;
+            else {
+              idx = mid;
+              break;
+            }
+          }
+        }
+        m->emap[(size_t)e * 576 + (size_t)A * 24 + (size_t)B] = idx;
+      }
+  palp_fem_solver_destroy(m->solver);
+  m->solver = palp_fem_solver_create(nf, m->colp, m->rowi, nnz);
+  if (!m->solver) {
+    snprintf(m->err, sizeof m->err, "CHOLMOD symbolic analysis failed");
+    return PALP_ESOLVER;
+  }
+  return PALP_OK;
+}
+
+int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
+  const palp_fem_mesh *mesh = m->mesh;
+  const int E = mesh->element_count, np = m->nprony;
+  memset(m->fint, 0, sizeof(double) * (size_t)m->ndof);
+  if (want_tangent) memset(m->kval, 0, sizeof(double) * (size_t)m->nnz);
+  double ue[24], fe[24], ke[24][24];
+  for (int e = 0; e < E; ++e) {
+    const int *h = mesh->hex[e];
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) ue[3 * a + i] = u[3 * h[a] + i];
+    const int rc = palp_fem_element(m, e, ue, dt, fe, want_tangent ? ke : NULL, m->S0t + (size_t)e * 48,
+                                    m->Ht + (size_t)e * 8 * (size_t)np * 6);
+    if (rc) return rc;
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) m->fint[3 * h[a] + i] += fe[3 * a + i];
+    if (!want_tangent) continue;
+    const int *map = m->emap + (size_t)e * 576;
+    for (int k = 0; k < 576; ++k)
+      if (map[k] >= 0) m->kval[map[k]] += (&ke[0][0])[k];
+  }
+  return PALP_OK;
+}
+
+static double norm_all(const palp_fem_model *m, const double *v) {
+  double s = 0.0;
+  for (int d = 0; d < m->ndof; ++d) s += v[d] * v[d];
+  return sqrt(s);
+}
+
+static double norm_free(const palp_fem_model *m, const double *v) {
+  double s = 0.0;
+  for (int d = 0; d < m->ndof; ++d)
+    if (m->eq[d] >= 0) s += v[d] * v[d];
+  return sqrt(s);
+}
+
+/* Solves K du = res on the free equations (kval holds K). */
+static int newton_solve(palp_fem_model *m) {
+  int rc = palp_fem_solver_factor(m->solver, m->kval);
+  m->factorizations++;
+  if (rc) return rc;
+  double *b = m->du; /* pack, solve in place, unpack into du */
+  double *x = malloc(sizeof(double) * 2 * (size_t)(m->nfree ? m->nfree : 1));
+  if (!x) return PALP_ENOMEM;
+  double *bb = x + m->nfree;
+  for (int d = 0; d < m->ndof; ++d)
+    if (m->eq[d] >= 0) bb[m->eq[d]] = m->res[d];
+  rc = palp_fem_solver_solve(m->solver, bb, x);
+  for (int d = 0; d < m->ndof; ++d) b[d] = m->eq[d] >= 0 ? x[m->eq[d]] : 0.0;
+  free(x);
+  return rc;
+}
+
+static void commit(palp_fem_model *m) {
+  const size_t E = (size_t)m->mesh->element_count;
+  memcpy(m->S0, m->S0t, sizeof(double) * E * 48);
+  memcpy(m->H, m->Ht, sizeof(double) * E * 8 * (size_t)m->nprony * 6);
+}
+
+int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments, double dt) {
+  if (increments < 1) increments = 1;
+  const size_t nd = (size_t)m->ndof;
+  for (int inc = 1; inc <= increments; ++inc) {
+    const double lam = (double)inc / increments;
+    double *u = m->utrial;
+    memcpy(u, m->u, sizeof(double) * nd);
+    for (size_t d = 0; d < nd; ++d)
+      if (m->eq[d] < 0) u[d] = lam * m->prescribed[d];
+    m->trace_count = 0;
+    int converged = 0;
+    for (int it = 0; it <= m->max_newton; ++it) {
+      int rc = palp_fem_assemble(m, u, dt, 1);
+      if (rc) return rc;
+      for (size_t d = 0; d < nd; ++d) m->res[d] = (fext ? lam * fext[d] : 0.0) - m->fint[d];
+      const double r = norm_free(m, m->res);
+      /* the force scale includes the reactions: at equilibrium f_int vanishes on
+       the free equations but not on the prescribed ones */
+      const double scale = fmax(fext ? lam * norm_free(m, fext) : 0.0, norm_all(m, m->fint));
+      if (m->trace_count < 64) m->trace[m->trace_count++] = r;
+      if (!isfinite(r)) return PALP_EUNSTABLE;
+      if (r <= m->rtol * scale + m->atol) {
+        converged = 1;
+        break;
+      }
+      if (it == m->max_newton) break;
+      rc = newton_solve(m);
+      if (rc) return rc;
+      m->newton_iterations++;
+      for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
+    }
+    if (!converged) {
+      snprintf(m->err, sizeof m->err, "static increment %d/%d did not converge in %d Newton iterations", inc,
+               increments, m->max_newton);
+      return PALP_ESOLVER;
+    }
+    memcpy(m->u, u, sizeof(double) * nd);
+    commit(m);
+    m->steps++;
+  }
+  return PALP_OK;
+}
+
+/* One Newmark step of length dt without cut-back; leaves the trial state in
+ * utrial / atrial / S0t / Ht on success. */
+static int try_step(palp_fem_model *m, const double *fext, double dt) {
+  const size_t nd = (size_t)m->ndof;
+  const double beta = m->newmark_beta;
+  const double c0 = 1.0 / (beta * dt * dt), c1 = 1.0 / (beta * dt), c2 = 1.0 / (2.0 * beta) - 1.0;
+  double *u = m->utrial, *a = m->atrial;
+  memcpy(u, m->u, sizeof(double) * nd);
+  for (size_t d = 0; d < nd; ++d)
+    if (m->eq[d] < 0) u[d] = m->prescribed[d];
+  m->trace_count = 0;
+  const double fnorm = fext ? norm_free(m, fext) : 0.0;
+  double r0 = 0.0;
+  for (int it = 0; it <= m->max_newton; ++it) {
+    for (size_t d = 0; d < nd; ++d) a[d] = c0 * (u[d] - m->u[d]) - c1 * m->v[d] - c2 * m->a[d];
+    int rc = palp_fem_assemble(m, u, dt, 1);
+    if (rc) return rc;
+    double ma2 = 0.0;
+    for (size_t d = 0; d < nd; ++d) {
+      const double ma = m->mass[d / 3] * a[d];
+      m->res[d] = (fext ? fext[d] : 0.0) - ma - m->fint[d];
+      if (m->eq[d] >= 0) ma2 += ma * ma;
+    }
+    const double r = norm_free(m, m->res);
+    const double scale = fmax(fmax(fnorm, sqrt(ma2)), norm_all(m, m->fint));
+    if (m->trace_count < 64) m->trace[m->trace_count++] = r;
+    if (!isfinite(r)) return PALP_EUNSTABLE;
+    if (it == 0) r0 = r;
+    if (r <= m->rtol * scale + m->atol) return PALP_OK;
+    if (it == m->max_newton || (it > 2 && r > 1e3 * r0)) break;
+    /* K_eff = K_T + M / (beta dt^2): the diagonal is the last entry of each column */
+    for (size_t d = 0; d < nd; ++d) {
+      const int c = m->eq[d];
+      if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
+    }
+    rc = newton_solve(m);
+    if (rc) return rc;
+    m->newton_iterations++;
+    for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
+  }
+  return PALP_ESOLVER;
+}
+
+int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
+  const size_t nd = (size_t)m->ndof;
+  const double hmin = dt / (double)(1L << m->max_cutbacks);
+  double done = 0.0, h = dt;
+  while (done < dt * (1.0 - 1e-12)) {
+    if (h > dt - done) h = dt - done;
+    const int rc = try_step(m, fext, h);
+    if (rc == PALP_ENOMEM) return rc;
+    if (rc) {
+      if (h * 0.5 < hmin * (1.0 - 1e-12)) {
+        snprintf(m->err, sizeof m->err,
+                 "time step at t = %.6g s failed after %d cut-backs (dt = %.3g s): %s", m->time,
+                 m->max_cutbacks, h, palp_strerror(rc));
+        return rc == PALP_ESOLVER ? PALP_ESOLVER : PALP_EUNSTABLE;
+      }
+      h *= 0.5;
+      m->cutbacks++;
+      continue;
+    }
+    const double g = m->newmark_gamma;
+    for (size_t d = 0; d < nd; ++d) {
+      m->v[d] += h * ((1.0 - g) * m->a[d] + g * m->atrial[d]);
+      m->a[d] = m->atrial[d];
+      m->u[d] = m->utrial[d];
+    }
+    commit(m);
+    m->time += h;
+    done += h;
+    m->steps++;
+    if (h < dt) h *= 2.0; /* let the step grow back after a cut */
+  }
+  return PALP_OK;
+}

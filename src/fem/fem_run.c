@@ -1,0 +1,2 @@
+/* fem_run.c - placeholder */
+#include "fem_internal.h"

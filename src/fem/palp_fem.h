@@ -1,0 +1,161 @@
+/*
+ * palp_fem.h - the nonlinear viscoelastic finite-element reference ("golden
+ * standard") for the breast phantom of Widmer & Hu 2011.
+ *
+ * A structured hexahedral mesh of the 8.0 cm hemisphere (gel core under a 2 mm
+ * membrane, base fixed) is loaded at the very points the real-time model is loaded
+ * at, and integrated implicitly in time. The result is the same per-frame record
+ * the real-time model produces, so the two can be compared vertex by vertex.
+ *
+ * Units are SI throughout (m, kg, s, N, Pa; D1 in 1/Pa). Functions return 0 or a
+ * negative PALP_E* code from palp.h. No globals: every handle is owned by its
+ * creator and released by the matching destroy call.
+ */
+#ifndef PALP_FEM_H
+#define PALP_FEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "palp.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Bumped whenever a change alters results, so cached references are recomputed. */
+#define PALP_FEM_CODE_VERSION 1
+
+/* ---- mesh ---------------------------------------------------------------- */
+enum { PALP_FEM_GEL = 0, PALP_FEM_MEMBRANE = 1 };
+
+typedef struct palp_fem_set {
+  char name[32];  /* upper case, as in the .inp file */
+  int is_element; /* 0: node set, 1: element set */
+  int count;
+  int *items; /* 0-based node or element indices */
+} palp_fem_set;
+
+/* 8-node hexahedra, Abaqus C3D8 node order (1-4 one face counter-clockwise seen
+ * from inside the element, 5-8 the opposite face), positive reference volume. */
+typedef struct palp_fem_mesh {
+  int node_count;
+  int element_count;
+  double (*x)[3];    /* [node_count] reference positions [m] */
+  int (*hex)[8];     /* [element_count] node indices */
+  uint8_t *region;   /* [element_count] PALP_FEM_GEL or PALP_FEM_MEMBRANE */
+  uint8_t *fixed;    /* [node_count] 1 on the clamped base */
+  int top_node;      /* node at the pole (largest z on the surface) */
+  int set_count;
+  palp_fem_set *sets;
+} palp_fem_mesh;
+
+/* The O-grid hemisphere: a half-cube core of half-size core_fraction * (radius -
+ * membrane_thickness), five radial gel blocks out to the membrane, and
+ * membrane_layers element layers through the membrane. Level n >= 1 uses 2n core
+ * cells across half the cube and 2n gel layers; level 4 has 10,496 hexahedra. */
+typedef struct palp_fem_mesh_def {
+  double radius;             /* [m], 0.04 */
+  double membrane_thickness; /* [m], 0.002 (Table I) */
+  double core_fraction;      /* [-], 0.5 */
+  int level;                 /* >= 1, default 2 */
+  int membrane_layers;       /* >= 2; 0 picks max(2, level - 1) */
+} palp_fem_mesh_def;
+
+palp_fem_mesh_def palp_fem_mesh_default_def(void);
+int palp_fem_mesh_create(const palp_fem_mesh_def *def, palp_fem_mesh *out);
+void palp_fem_mesh_destroy(palp_fem_mesh *mesh);
+const palp_fem_set *palp_fem_mesh_find_set(const palp_fem_mesh *mesh, const char *name, int is_element);
+/* Signed volume of element e in the reference configuration [m^3]. */
+double palp_fem_element_volume(const palp_fem_mesh *mesh, int e);
+
+/* Abaqus .inp exchange: *NODE, *ELEMENT TYPE=C3D8, *NSET, *ELSET (BASE, SURFACE,
+ * TOP, MEMBRANE, GEL). Reading accepts any C3D8-family hex mesh; regions come from
+ * the MEMBRANE / GEL element sets (all gel if absent), the clamped base from NSET
+ * BASE (else every node with z <= 1e-9 m). err receives a message naming the line. */
+int palp_fem_inp_write(const palp_fem_mesh *mesh, const char *path, const char *heading);
+int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t errlen);
+
+/* ---- material ------------------------------------------------------------ */
+#define PALP_FEM_MAX_PRONY 4
+
+/* Abaqus compressible Neo-Hookean, U = C10 (I1bar - 3) + (J - 1)^2 / D1, with a
+ * Prony series g(t) = 1 - sum_k g_k (1 - exp(-t / tau_k)) on the deviatoric part. */
+typedef struct palp_fem_material {
+  double density; /* [kg/m^3] */
+  double c10;     /* [Pa]; instantaneous or long-term, see palp_fem_c10_reading */
+  double d1;      /* [1/Pa]; bulk modulus K = 2 / D1 */
+  int prony_count;
+  double g[PALP_FEM_MAX_PRONY];   /* [-], sum < 1 */
+  double tau[PALP_FEM_MAX_PRONY]; /* [s] */
+} palp_fem_material;
+
+typedef enum palp_fem_c10_reading {
+  PALP_FEM_C10_LONG_TERM = 0,    /* C10 is the relaxed modulus; instantaneous = C10 / g_inf */
+  PALP_FEM_C10_INSTANTANEOUS = 1 /* C10 is the instantaneous modulus; relaxed = g_inf C10 */
+} palp_fem_c10_reading;
+
+/* ---- configuration ------------------------------------------------------- */
+typedef struct palp_fem_config {
+  palp_fem_mesh_def mesh;
+  char inp_path[512]; /* non-empty: read the mesh from this .inp instead */
+  palp_fem_material membrane;
+  palp_fem_material gel;
+  palp_fem_c10_reading c10_reading;
+  double dt;            /* [s] time step; 0 means one step per output frame */
+  double newmark_beta;  /* 0.25 (average acceleration) */
+  double newmark_gamma; /* 0.5 */
+  int max_newton;       /* iterations per step before the step is cut back, 12 */
+  double newton_rtol;   /* residual tolerance relative to the force scale, 1e-6 */
+  double newton_atol;   /* absolute residual floor [N], 1e-9 */
+  int max_cutbacks;     /* dt halvings allowed per step, 8 */
+  char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
+} palp_fem_config;
+
+palp_fem_config palp_fem_default_config(void);
+/* Overrides fields of *cfg from a JSON file; unknown keys are errors. */
+int palp_fem_config_load(const char *path, palp_fem_config *cfg, char *err, size_t errlen);
+int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, size_t errlen);
+int palp_fem_config_validate(const palp_fem_config *cfg, char *err, size_t errlen);
+
+/* ---- runs ---------------------------------------------------------------- */
+/* The per-frame record, frames x vertices, frame f at time[f] = (f + 1) * frame_period. */
+typedef struct palp_fem_result {
+  int frames;
+  int vertex_count;  /* real-time mesh vertices */
+  int top_vertex;
+  double *time;      /* [frames] [s] */
+  palp_vec3 *disp;   /* [frames * vertex_count] displacement of each mapped vertex [m] */
+  palp_vec3 *top_disp; /* [frames] [m] */
+  int contact_vertex_count;
+  int *contact_vertex; /* [contact_vertex_count] real-time vertex index */
+  int *contact_of;     /* [contact_vertex_count] scene contact index */
+  palp_vec3 *feedback; /* [frames * contact_vertex_count] force on the finger [N] */
+  /* statistics of the run that produced it */
+  int node_count, element_count, dof_count;
+  long steps, newton_iterations, cutbacks, factorizations;
+  double wall_seconds; /* of the original computation (also when read from cache) */
+  int from_cache;
+  uint64_t key;        /* cache key */
+} palp_fem_result;
+
+void palp_fem_result_destroy(palp_fem_result *r);
+
+/* Return non-zero to cancel the run (palp_fem_run then returns PALP_EINVAL). */
+typedef int (*palp_fem_progress_fn)(void *ud, int frame, int frames, double sim_time);
+
+/* Runs a scene (its contacts, profiles, frames and frame period; the real-time
+ * mesh from scene->world.mesh) through the FE reference. Looks the result up in
+ * cfg->cache_dir first and stores it there afterwards. err gets a message. */
+int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_result *out,
+                 palp_fem_progress_fn cb, void *ud, char *err, size_t errlen);
+/* The cache key of a run: FNV-1a over every input and PALP_FEM_CODE_VERSION. */
+uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_scene *scene);
+
+int palp_fem_cache_load(const char *dir, uint64_t key, palp_fem_result *out);
+int palp_fem_cache_store(const char *dir, const palp_fem_result *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
