@@ -1,0 +1,314 @@
+/*
+ * test_cli.c - palp-stats end to end: good CSV gives the right numbers (JSON parsed
+ * with cJSON), bad CSV gives a clear message naming file, line and column, and a
+ * non-zero exit status.
+ *
+ * usage: test_cli PATH/TO/palp-stats WORKDIR
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <cjson/cJSON.h>
+
+static const char *tool;
+static const char *dir;
+static int failures = 0, checks = 0;
+
+static void check(const char *what, int cond) {
+  ++checks;
+  if (!cond) {
+    ++failures;
+    fprintf(stderr, "FAIL %s\n", what);
+  }
+}
+
+static void check_rel(const char *what, double got, double want, double rtol) {
+  ++checks;
+  if (!(fabs(got - want) <= rtol * fabs(want))) {
+    ++failures;
+    fprintf(stderr, "FAIL %s: got %.17g want %.17g (rtol %.1g)\n", what, got, want, rtol);
+  }
+}
+
+static void write_file(const char *name, const char *text) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "w");
+  if (!f) {
+    perror(path);
+    exit(2);
+  }
+  fputs(text, f);
+  fclose(f);
+}
+
+static char *slurp(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return calloc(1, 1);
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *s = malloc((size_t)n + 1);
+  size_t got = fread(s, 1, (size_t)n, f);
+  s[got] = '\0';
+  fclose(f);
+  return s;
+}
+
+typedef struct result {
+  int status;
+  char *out, *err;
+} result;
+
+/* Runs palp-stats with args (already shell-quoted) inside dir. */
+static result run(const char *args) {
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s >out.txt 2>err.txt", dir, tool, args);
+  int st = system(cmd);
+  result r;
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  char path[1024];
+  snprintf(path, sizeof path, "%s/out.txt", dir);
+  r.out = slurp(path);
+  snprintf(path, sizeof path, "%s/err.txt", dir);
+  r.err = slurp(path);
+  return r;
+}
+
+static void result_free(result *r) {
+  free(r->out);
+  free(r->err);
+}
+
+static double num(const cJSON *o, const char *path) {
+  /* "a.b" walks nested objects */
+  char buf[128];
+  snprintf(buf, sizeof buf, "%s", path);
+  const cJSON *cur = o;
+  for (char *tok = strtok(buf, "."); tok && cur; tok = strtok(NULL, "."))
+    cur = cJSON_GetObjectItemCaseSensitive(cur, tok);
+  if (!cJSON_IsNumber(cur)) {
+    fprintf(stderr, "  (no number at %s)\n", path);
+    return NAN;
+  }
+  return cur->valuedouble;
+}
+
+static int smls_digit(int i) { return i == 1 ? 2 : (i % 2 == 0 ? 1 : 3); }
+
+/* NIST StRD SmLs07 written as its decimal text (13 constant leading digits), with a
+ * quoted header field containing a comma. Certified: SS between 1.68 (df 8),
+ * SS within 1.80 (df 180), F 21. The CLI subtracts an origin in exact decimal
+ * arithmetic, so it must reproduce them to 9 digits, which binary64 input
+ * conversion alone cannot (it gives F = 21.0008). */
+static void test_smls07(void) {
+  size_t cap = 64 * 200, len = 0;
+  char *csv = malloc(cap);
+  len += (size_t)snprintf(csv + len, cap - len, "treatment,\"value, as read\"\r\n");
+  for (int t = 1; t <= 9; ++t)
+    for (int r = 1; r <= 21; ++r)
+      len += (size_t)snprintf(csv + len, cap - len, "T%d,1000000000000.%d\r\n", t,
+                              smls_digit(t) + smls_digit(r));
+  write_file("smls07.csv", csv);
+  free(csv);
+  result r = run("anova smls07.csv --group treatment --value 'value, as read' --json");
+  check("SmLs07 exit 0", r.status == 0);
+  cJSON *j = cJSON_Parse(r.out);
+  check("SmLs07 JSON parses", j != NULL);
+  if (j) {
+    check_rel("SmLs07 F = 21 (9 digits)", num(j, "anova.f"), 21.0, 1e-9);
+    check_rel("SmLs07 SS between 1.68", num(j, "anova.between.ss"), 1.68, 1e-9);
+    check_rel("SmLs07 SS within 1.80", num(j, "anova.within.ss"), 1.80, 1e-9);
+    check("SmLs07 df 8 / 180",
+          num(j, "anova.between.df") == 8.0 && num(j, "anova.within.df") == 180.0);
+    const cJSON *g = cJSON_GetObjectItemCaseSensitive(j, "groups");
+    check("SmLs07 9 groups", cJSON_GetArraySize(g) == 9);
+    /* Group 1 mean is 1000000000000.4 to within one binary64 spacing (1.2e-4). */
+    const cJSON *g0 = cJSON_GetArrayItem(g, 0);
+    check("SmLs07 group T1 mean", g0 && fabs(num(g0, "mean") - 1000000000000.4) <= 1.3e-4);
+    check_rel("SmLs07 group T1 SD 0.1", num(g0, "sd"), 0.1, 1e-9);
+    cJSON_Delete(j);
+  }
+  result_free(&r);
+}
+
+/* Three groups by hand (see test_stats.c): SS 26 and 6, F = 13 on (2, 6) df,
+ * p = (1 + 2F/6)^-3 = 27/4096. Rows interleaved and labels quoted to exercise the
+ * reader. */
+static void test_anova_hand(void) {
+  write_file("three.csv",
+             "\xEF\xBB\xBFid,group,length_mm\n"
+             "1,\"low\",1\n2,mid,2\n3,high,5\n\n"
+             "4,low,2\n5,mid,3\n6,high,6\n"
+             "7,low,3\n8,mid,4\n9, high ,7\n");
+  result r = run("anova three.csv --group group --value length_mm --json");
+  check("hand anova exit 0", r.status == 0);
+  cJSON *j = cJSON_Parse(r.out);
+  check("hand anova JSON", j != NULL);
+  if (j) {
+    check_rel("hand F 13", num(j, "anova.f"), 13.0, 1e-12);
+    check_rel("hand p 27/4096", num(j, "anova.p"), 27.0 / 4096.0, 1e-9);
+    check_rel("hand SS between 26", num(j, "anova.between.ss"), 26.0, 1e-12);
+    check_rel("hand SS within 6", num(j, "anova.within.ss"), 6.0, 1e-12);
+    check("hand 3 groups", cJSON_GetArraySize(cJSON_GetObjectItem(j, "groups")) == 3);
+    cJSON_Delete(j);
+  }
+  result_free(&r);
+  /* The readable table says the same. */
+  r = run("anova three.csv --group group --value length_mm");
+  check("hand table exit 0", r.status == 0);
+  check("hand table shows F 13 and the verdict",
+        strstr(r.out, " 13 ") != NULL && strstr(r.out, "differ significantly") != NULL);
+  result_free(&r);
+}
+
+/* The hand-worked Bland-Altman example of test_stats.c as a CSV file:
+ * bias 0.1, SD sqrt(0.84/9), 9 of 10 within 2 SD (90 %), RMSE sqrt(0.94/10);
+ * ANOVA a vs b: means 1.45 and 1.35, SS_between = 2*10*0.05^2 = 0.05,
+ * SS_within = 1.945 + 1.225 = 3.17, F = 0.05 / (3.17/18). */
+static void test_bland_altman(void) {
+  write_file("ba.csv",
+             "frame,realtime_cm,fem_cm\n"
+             "0,1.3,1.2\n1,1.4,1.5\n2,1.0,0.8\n3,2.0,2.0\n4,0.9,1.1\n"
+             "5,1.0,0.9\n6,1.7,1.7\n7,1.2,1.3\n8,1.7,1.6\n9,2.3,1.4\n");
+  result r = run("bland-altman ba.csv --a realtime_cm --b fem_cm --json --svg ba.svg");
+  check("BA exit 0", r.status == 0);
+  cJSON *j = cJSON_Parse(r.out);
+  check("BA JSON", j != NULL);
+  if (j) {
+    check_rel("BA bias", num(j, "bias"), 0.1, 1e-12);
+    check_rel("BA sd", num(j, "sd"), sqrt(0.84 / 9.0), 1e-12);
+    check_rel("BA loa upper", num(j, "loa_upper"), 0.1 + 1.96 * sqrt(0.84 / 9.0), 1e-12);
+    check("BA within band 9", num(j, "within_band") == 9.0);
+    check_rel("BA agreement 90%", num(j, "agreement_percent"), 90.0, 1e-12);
+    check_rel("BA rmse", num(j, "rmse"), sqrt(0.094), 1e-12);
+    check_rel("BA anova F", num(j, "anova_a_vs_b.f"), 0.05 / (3.17 / 18.0), 1e-10);
+    check_rel("BA mean a", num(j, "mean_a"), 1.45, 1e-12);
+    const cJSON *m = cJSON_GetObjectItem(j, "meets_paper_criteria");
+    check("BA 90% does not meet the paper's criteria", cJSON_IsFalse(m));
+    cJSON_Delete(j);
+  }
+  char path[1024];
+  snprintf(path, sizeof path, "%s/ba.svg", dir);
+  struct stat sb;
+  check("BA --svg wrote the plot", stat(path, &sb) == 0 && sb.st_size > 500);
+  result_free(&r);
+
+  /* rmse with columns given by number; the table names the columns. */
+  r = run("rmse ba.csv --a 2 --b 3 --json");
+  check("rmse exit 0", r.status == 0);
+  j = cJSON_Parse(r.out);
+  if (j) {
+    check_rel("rmse by column number", num(j, "rmse"), sqrt(0.094), 1e-12);
+    cJSON_Delete(j);
+  } else {
+    check("rmse JSON", 0);
+  }
+  result_free(&r);
+  r = run("bland-altman ba.csv --a realtime_cm --b fem_cm");
+  check("BA table exit 0", r.status == 0);
+  check("BA table verdict", strstr(r.out, "NOT met") != NULL && strstr(r.out, "90.0 %") != NULL);
+  result_free(&r);
+}
+
+/* Bad input: exit 1, nothing on stdout, and a message with the file, the line and
+ * the column or group at fault. */
+static void expect_error(const char *what, const char *args, int status, const char **needles) {
+  int before = failures;
+  result r = run(args);
+  char buf[256];
+  snprintf(buf, sizeof buf, "%s: exit status %d", what, status);
+  check(buf, r.status == status);
+  snprintf(buf, sizeof buf, "%s: no output on stdout", what);
+  check(buf, r.out[0] == '\0');
+  for (const char **n = needles; *n; ++n) {
+    snprintf(buf, sizeof buf, "%s: message contains \"%s\"", what, *n);
+    check(buf, strstr(r.err, *n) != NULL);
+  }
+  if (failures > before) fprintf(stderr, "  stderr was: %s", r.err);
+  result_free(&r);
+}
+
+static void test_errors(void) {
+  write_file("groups.csv", "group,value\nA,1.0\nA,1.2\nB,2.0\nb,2.1\nB,2.2\n");
+  write_file("nonnum.csv", "group,value\nA,1.0\nA,\"1,2\"\nB,2.0\nB,abc\n");
+  write_file("single.csv", "group,value\nA,1.0\nA,1.2\nA,2.0\n");
+  write_file("empty.csv", "");
+  write_file("headonly.csv", "group,value\n");
+  write_file("ragged.csv", "group,value\nA,1\nA,2,3\n");
+  write_file("quote.csv", "group,value\nA,\"1\nA,2\n");
+  write_file("semi.csv", "group;value\nA;1\nA;2\nB;3\nB;4\n");
+
+  const char *missing[] = {"groups.csv:1", "no column \"grp\"", "--group", "did you mean \"group\"",
+                           NULL};
+  expect_error("missing column", "anova groups.csv --group grp --value value", 1, missing);
+
+  const char *nonnum[] = {"nonnum.csv:3", "column \"value\" (column 2)", "\"1,2\" is not a number",
+                          "decimal separator", NULL};
+  expect_error("non-numeric cell", "anova nonnum.csv --group group --value value", 1, nonnum);
+
+  const char *one[] = {"groups.csv:5", "group \"b\" has only one value", "at least 2 values",
+                       "a group \"B\" exists", NULL};
+  expect_error("group with one value", "anova groups.csv --group group --value value", 1, one);
+
+  const char *single[] = {"single.csv", "single group (\"A\", 3 values)", "at least 2 groups",
+                          NULL};
+  expect_error("fewer than 2 groups", "anova single.csv --group group --value value", 1, single);
+
+  const char *empty[] = {"empty.csv", "the file is empty", "header row", NULL};
+  expect_error("empty file", "anova empty.csv --group group --value value", 1, empty);
+
+  const char *head[] = {"headonly.csv:1", "no data rows", NULL};
+  expect_error("header only", "bland-altman headonly.csv --a group --b value", 1, head);
+
+  const char *ragged[] = {"ragged.csv:3", "3 comma-separated fields", "header (line 1) has 2",
+                          NULL};
+  expect_error("ragged row", "anova ragged.csv --group group --value value", 1, ragged);
+
+  const char *quote[] = {"quote.csv:2", "never closed", NULL};
+  expect_error("unterminated quote", "anova quote.csv --group group --value value", 1, quote);
+
+  const char *semi[] = {"semi.csv:1", "--sep ';'", NULL};
+  expect_error("semicolon file", "anova semi.csv --group group --value value", 1, semi);
+
+  const char *nofile[] = {"nosuch.csv", "cannot open", NULL};
+  expect_error("missing file", "rmse nosuch.csv --a x --b y", 1, nofile);
+
+  const char *usage[] = {"needs --a COL and --b COL", NULL};
+  expect_error("usage: missing --b", "bland-altman groups.csv --a value", 2, usage);
+  const char *unknown[] = {"unknown command \"anvoa\"", NULL};
+  expect_error("usage: unknown command", "anvoa groups.csv", 2, unknown);
+
+  /* The semicolon file works once told. */
+  result r = run("anova semi.csv --group group --value value --sep ';' --json");
+  check("--sep ';' exit 0", r.status == 0);
+  cJSON *j = cJSON_Parse(r.out);
+  /* groups {1,2} and {3,4}: SS_between = 4 (means 1.5, 3.5, grand 2.5), SS_within = 1, F = 8 */
+  if (j) {
+    check_rel("--sep ';' F = 8", num(j, "anova.f"), 8.0, 1e-12);
+    cJSON_Delete(j);
+  } else {
+    check("--sep ';' JSON", 0);
+  }
+  result_free(&r);
+}
+
+int main(int argc, char **argv) {
+  if (argc != 3) {
+    fprintf(stderr, "usage: %s PALP_STATS WORKDIR\n", argv[0]);
+    return 2;
+  }
+  tool = argv[1];
+  dir = argv[2];
+  mkdir(dir, 0755);
+  test_smls07();
+  test_anova_hand();
+  test_bland_altman();
+  test_errors();
+  printf("%d checks, %d failures\n", checks, failures);
+  return failures ? 1 : 0;
+}
