@@ -147,16 +147,22 @@ typedef struct palp_gel_params {
   double a1;       /* polytropic exponent [-]; bulk modulus = a1 P */
   double a2;       /* volume-rate damping [Pa s / m^3] */
   double a3;       /* literal law only: pressure momentum [s^2] */
+  /* Gel support (an elastic foundation under the membrane, docs/model.md): the
+   * gel's shear stiffness, which a uniform pressure cannot represent, resists each
+   * vertex's displacement u with a traction k u + c du/dt over its lumped area. */
+  double support_modulus;   /* k [Pa/m] */
+  double support_viscosity; /* c [Pa s/m], applied with gel damping */
 } palp_gel_params;
 
 typedef enum palp_effect {
   PALP_EFFECT_MEMBRANE_ELASTICITY = 1u << 0,
   PALP_EFFECT_MEMBRANE_VISCOSITY = 1u << 1, /* needs elasticity */
   PALP_EFFECT_GEL_PRESSURE = 1u << 2,
-  PALP_EFFECT_GEL_DAMPING = 1u << 3, /* needs gel pressure */
+  PALP_EFFECT_GEL_DAMPING = 1u << 3, /* needs gel pressure or gel support */
   PALP_EFFECT_GRAVITY = 1u << 4,
   PALP_EFFECT_FORCE_FEEDBACK = 1u << 5,
-  PALP_EFFECT_ALL = (1u << 6) - 1u
+  PALP_EFFECT_GEL_SUPPORT = 1u << 6,
+  PALP_EFFECT_ALL = (1u << 7) - 1u
 } palp_effect;
 
 /* Names as used in scene files: "membrane_elasticity", ... ; NULL if unknown. */
@@ -220,12 +226,15 @@ const palp_world_def *palp_world_get_def(const palp_world *w);
 uint64_t palp_world_hash(const palp_world *w);
 
 /* Per-stage timings of the last step and accumulated totals [s]. */
-#define PALP_STAGE_COUNT 8
+#define PALP_STAGE_COUNT 12
 typedef struct palp_stage_timings {
   const char *name[PALP_STAGE_COUNT];
   double last[PALP_STAGE_COUNT];
   double total[PALP_STAGE_COUNT];
   int64_t steps;
+  int64_t refactors; /* factorisations so far (step size changes, lagged tangent rebuilds) */
+  int factor_nnz;    /* off-diagonal entries of the current L */
+  int unknowns;      /* size of the implicit system */
 } palp_stage_timings;
 void palp_world_timings(const palp_world *w, palp_stage_timings *out);
 
@@ -246,10 +255,14 @@ typedef struct palp_scene {
   palp_scene_contact contact[PALP_SCENE_MAX_CONTACTS];
 } palp_scene;
 
-/* Loads a scene. On error returns a negative code and writes a message naming the
+/* Loads a scene. A "parameters" entry names a JSON file (relative to the scene) whose
+ * "membrane" and "gel" objects replace the scene's. On error returns a negative code and writes a message naming the
  * offending field (e.g. "membrane.E1: expected a number") into err. */
 int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen);
 int palp_scene_parse(const char *json, palp_scene *out, char *err, size_t errlen);
+/* The fully resolved scene as self-contained JSON (parameters inlined), so a logged
+ * session can be rebuilt exactly; malloc'd, the caller frees it. NULL on failure. */
+char *palp_scene_to_json(const palp_scene *s);
 /* Creates the world and its contacts; contact ids are 0..contact_count-1. */
 palp_world *palp_scene_create_world(const palp_scene *s, int *err);
 /* Applies every contact's profile at time t [s] (call before each step). */

@@ -1,2 +1,458 @@
-/* placeholder until the model lands */
+/*
+ * scene.c - scene files (JSON, cJSON): geometry, material, time step, effects,
+ * contacts and force profiles. Keys carry their SI unit (radius_m, E1_Pa, ...).
+ * Every error names the field it is about, as "contacts[1].profile.t_off_s: ...".
+ */
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "palp.h"
+#include "vec3.h"
+
+typedef struct ctx {
+  char *err;
+  size_t errlen;
+} ctx;
+
+static int fail(ctx *c, int code, const char *fmt, ...) {
+  if (c->err && c->errlen) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(c->err, c->errlen, fmt, ap);
+    va_end(ap);
+  }
+  return code;
+}
+
+/* Reads a required (or optional, keeping *out) finite number. */
+static int get_num(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double *out) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return required ? fail(c, PALP_EPARSE, "%s%s: missing (a number is required)", path, key) : PALP_OK;
+  if (!cJSON_IsNumber(it)) return fail(c, PALP_EPARSE, "%s%s: expected a number", path, key);
+  if (!isfinite(it->valuedouble)) return fail(c, PALP_EPARSE, "%s%s: must be finite", path, key);
+  *out = it->valuedouble;
+  return PALP_OK;
+}
+
+static int get_pos(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double *out) {
+  double v = *out;
+  int e = get_num(c, obj, path, key, required, &v);
+  if (e) return e;
+  if (!(v > 0.0)) return fail(c, PALP_EPARSE, "%s%s: must be > 0 (got %g)", path, key, v);
+  *out = v;
+  return PALP_OK;
+}
+
+static int get_int(ctx *c, const cJSON *obj, const char *path, const char *key, int required, int lo, int hi,
+                   int *out) {
+  double v = *out;
+  int e = get_num(c, obj, path, key, required, &v);
+  if (e) return e;
+  if (v != floor(v) || v < lo || v > hi)
+    return fail(c, PALP_EPARSE, "%s%s: expected an integer in [%d, %d] (got %g)", path, key, lo, hi, v);
+  *out = (int)v;
+  return PALP_OK;
+}
+
+static int get_vec(ctx *c, const cJSON *obj, const char *path, const char *key, int required, palp_vec3 *out) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!it) return required ? fail(c, PALP_EPARSE, "%s%s: missing (an array of 3 numbers is required)", path, key) : 0;
+  if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3)
+    return fail(c, PALP_EPARSE, "%s%s: expected an array of 3 numbers", path, key);
+  double v[3];
+  for (int i = 0; i < 3; ++i) {
+    const cJSON *x = cJSON_GetArrayItem(it, i);
+    if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
+      return fail(c, PALP_EPARSE, "%s%s[%d]: expected a finite number", path, key, i);
+    v[i] = x->valuedouble;
+  }
+  *out = v3(v[0], v[1], v[2]);
+  return PALP_OK;
+}
+
+static const cJSON *get_obj(ctx *c, const cJSON *obj, const char *path, const char *key, int required, int *e) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  *e = PALP_OK;
+  if (!it) {
+    if (required) *e = fail(c, PALP_EPARSE, "%s%s: missing (an object is required)", path, key);
+    return NULL;
+  }
+  if (!cJSON_IsObject(it)) {
+    *e = fail(c, PALP_EPARSE, "%s%s: expected an object", path, key);
+    return NULL;
+  }
+  return it;
+}
+
+static const char *const dist_names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
+static const char *const profile_names[] = {"step", "ramp", "sine", "keyframes"};
+
+static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
+  int e;
+  if ((e = get_pos(c, m, "membrane.", "thickness_m", 1, &p->thickness))) return e;
+  if ((e = get_pos(c, m, "membrane.", "density_kg_m3", 1, &p->density))) return e;
+  if ((e = get_pos(c, m, "membrane.", "E1_Pa", 1, &p->E1))) return e;
+  if ((e = get_pos(c, m, "membrane.", "eta1_Pa_s", 1, &p->eta1))) return e;
+  if ((e = get_pos(c, m, "membrane.", "E2_Pa", 1, &p->E2))) return e;
+  return get_pos(c, m, "membrane.", "eta2_Pa_s", 1, &p->eta2);
+}
+
+static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
+  int e;
+  const cJSON *law = cJSON_GetObjectItemCaseSensitive(g, "law");
+  if (!law) return fail(c, PALP_EPARSE, "gel.law: missing (\"polytropic\" or \"paper_literal\")");
+  if (!cJSON_IsString(law)) return fail(c, PALP_EPARSE, "gel.law: expected a string");
+  if (strcmp(law->valuestring, "polytropic") == 0) p->law = PALP_GEL_POLYTROPIC;
+  else if (strcmp(law->valuestring, "paper_literal") == 0) p->law = PALP_GEL_PAPER_LITERAL;
+  else return fail(c, PALP_EPARSE, "gel.law: unknown law \"%s\" (polytropic, paper_literal)", law->valuestring);
+  if ((e = get_pos(c, g, "gel.", "pressure_Pa", 1, &p->pressure))) return e;
+  if ((e = get_pos(c, g, "gel.", "a1", 1, &p->a1))) return e;
+  if ((e = get_num(c, g, "gel.", "a2_Pa_s_m3", 1, &p->a2))) return e;
+  if (p->a2 < 0.0) return fail(c, PALP_EPARSE, "gel.a2_Pa_s_m3: must be >= 0");
+  p->a3 = 0.0;
+  if ((e = get_num(c, g, "gel.", "a3_s2", 0, &p->a3))) return e;
+  if ((e = get_num(c, g, "gel.", "support_modulus_Pa_m", 0, &p->support_modulus))) return e;
+  if (p->support_modulus < 0.0) return fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be >= 0");
+  if ((e = get_num(c, g, "gel.", "support_viscosity_Pa_s_m", 0, &p->support_viscosity))) return e;
+  if (p->support_viscosity < 0.0) return fail(c, PALP_EPARSE, "gel.support_viscosity_Pa_s_m: must be >= 0");
+  return PALP_OK;
+}
+
+static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile *p) {
+  memset(p, 0, sizeof *p);
+  const cJSON *kind = cJSON_GetObjectItemCaseSensitive(o, "kind");
+  if (!kind || !cJSON_IsString(kind)) return fail(c, PALP_EPARSE, "%skind: missing or not a string", path);
+  int k = 0;
+  for (int i = 0; i < 4; ++i)
+    if (strcmp(kind->valuestring, profile_names[i]) == 0) k = i + 1;
+  if (!k) return fail(c, PALP_EPARSE, "%skind: unknown profile \"%s\" (step, ramp, sine, keyframes)", path,
+                      kind->valuestring);
+  p->kind = (palp_profile_kind)k;
+  int e;
+  if (p->kind == PALP_PROFILE_KEYFRAMES) {
+    const cJSON *keys = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
+    if (!cJSON_IsArray(keys)) return fail(c, PALP_EPARSE, "%skeyframes: expected an array of [t_s, force_N]", path);
+    const int n = cJSON_GetArraySize(keys);
+    if (n < 1 || n > PALP_PROFILE_MAX_KEYS)
+      return fail(c, PALP_EPARSE, "%skeyframes: needs 1 to %d entries", path, PALP_PROFILE_MAX_KEYS);
+    for (int i = 0; i < n; ++i) {
+      const cJSON *kf = cJSON_GetArrayItem(keys, i);
+      const cJSON *t = cJSON_GetArrayItem(kf, 0), *f = cJSON_GetArrayItem(kf, 1);
+      if (!cJSON_IsArray(kf) || cJSON_GetArraySize(kf) != 2 || !cJSON_IsNumber(t) || !cJSON_IsNumber(f) ||
+          !isfinite(t->valuedouble) || !isfinite(f->valuedouble))
+        return fail(c, PALP_EPARSE, "%skeyframes[%d]: expected [t_s, force_N]", path, i);
+      if (i > 0 && !(t->valuedouble > p->key_t[i - 1]))
+        return fail(c, PALP_EPARSE, "%skeyframes[%d]: times must increase", path, i);
+      p->key_t[i] = t->valuedouble;
+      p->key_f[i] = f->valuedouble;
+    }
+    p->key_count = n;
+    return PALP_OK;
+  }
+  if ((e = get_num(c, o, path, "magnitude_N", 1, &p->magnitude))) return e;
+  if ((e = get_num(c, o, path, "t_on_s", 1, &p->t_on))) return e;
+  if ((e = get_num(c, o, path, "t_off_s", 1, &p->t_off))) return e;
+  if (p->t_off < p->t_on) return fail(c, PALP_EPARSE, "%st_off_s: must be >= t_on_s", path);
+  if (p->kind == PALP_PROFILE_SINE) {
+    if ((e = get_pos(c, o, path, "frequency_Hz", 1, &p->frequency))) return e;
+    if ((e = get_num(c, o, path, "offset_N", 0, &p->offset))) return e;
+  }
+  return PALP_OK;
+}
+
+static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_scene_contact *sc) {
+  char path[48];
+  snprintf(path, sizeof path, "contacts[%d].", idx);
+  if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "contacts[%d]: expected an object", idx);
+  const cJSON *d = cJSON_GetObjectItemCaseSensitive(o, "distribution");
+  int dist = 0;
+  if (cJSON_IsString(d)) {
+    for (int i = 0; i < 4; ++i)
+      if (strcmp(d->valuestring, dist_names[i]) == 0) dist = i + 1;
+  } else if (cJSON_IsNumber(d) && d->valuedouble >= 1 && d->valuedouble <= 4 && d->valuedouble == floor(d->valuedouble)) {
+    dist = (int)d->valuedouble;
+  }
+  if (!d) return fail(c, PALP_EPARSE, "%sdistribution: missing", path);
+  if (!dist)
+    return fail(c, PALP_EPARSE, "%sdistribution: expected single, uniform, gaussian, gaussian_offset or 1-4", path);
+  palp_vec3 center = v3(0, 0, radius);
+  const cJSON *deg = cJSON_GetObjectItemCaseSensitive(o, "center_deg");
+  int e;
+  if (deg) {
+    if (!cJSON_IsObject(deg)) return fail(c, PALP_EPARSE, "%scenter_deg: expected {\"polar\": .., \"azimuth\": ..}", path);
+    char p2[64];
+    snprintf(p2, sizeof p2, "%scenter_deg.", path);
+    double polar = 0, az = 0;
+    if ((e = get_num(c, deg, p2, "polar", 1, &polar)) || (e = get_num(c, deg, p2, "azimuth", 1, &az))) return e;
+    if (polar < 0 || polar > 90) return fail(c, PALP_EPARSE, "%spolar: must be within [0, 90] degrees", p2);
+    const double th = polar * PALP_PI / 180.0, ph = az * PALP_PI / 180.0;
+    center = v3(radius * sin(th) * cos(ph), radius * sin(th) * sin(ph), radius * cos(th));
+  } else if ((e = get_vec(c, o, path, "center_m", 1, &center))) {
+    return fail(c, PALP_EPARSE, "%scenter_m or center_deg: missing or malformed", path);
+  }
+  sc->def = palp_contact_default_def((palp_distribution)dist, center);
+  if ((e = get_pos(c, o, path, "patch_area_m2", 0, &sc->def.patch_area))) return e;
+  if ((e = get_pos(c, o, path, "sigma_fraction", 0, &sc->def.sigma_fraction))) return e;
+  if ((e = get_num(c, o, path, "offset_fraction", 0, &sc->def.offset_fraction))) return e;
+  if ((e = get_vec(c, o, path, "offset_dir", 0, &sc->def.offset_dir))) return e;
+  sc->direction = v3(0, 0, 0);
+  if ((e = get_vec(c, o, path, "direction", 0, &sc->direction))) return e;
+  const cJSON *prof = get_obj(c, o, path, "profile", 1, &e);
+  if (e) return e;
+  char p3[64];
+  snprintf(p3, sizeof p3, "%sprofile.", path);
+  return parse_profile(c, prof, p3, &sc->profile);
+}
+
+static char *read_file(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  char *buf = NULL;
+  if (fseek(f, 0, SEEK_END) == 0) {
+    long n = ftell(f);
+    if (n >= 0 && n < (1L << 26) && fseek(f, 0, SEEK_SET) == 0) {
+      buf = malloc((size_t)n + 1);
+      if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+        free(buf);
+        buf = NULL;
+      }
+      if (buf) buf[n] = 0;
+    }
+  }
+  fclose(f);
+  return buf;
+}
+
+static int parse_params_file(ctx *c, const char *dir, const char *name, palp_scene *s) {
+  char path[1024];
+  if (name[0] == '/' || !dir[0]) snprintf(path, sizeof path, "%s", name);
+  else snprintf(path, sizeof path, "%s/%s", dir, name);
+  char *txt = read_file(path);
+  if (!txt) return fail(c, PALP_EIO, "parameters: cannot read \"%s\"", path);
+  cJSON *root = cJSON_Parse(txt);
+  free(txt);
+  if (!root) return fail(c, PALP_EPARSE, "parameters: \"%s\" is not valid JSON", path);
+  int e;
+  const cJSON *m = get_obj(c, root, "parameters.", "membrane", 1, &e);
+  if (!e) e = parse_membrane(c, m, &s->world.membrane);
+  const cJSON *g = e ? NULL : get_obj(c, root, "parameters.", "gel", 1, &e);
+  if (!e) e = parse_gel(c, g, &s->world.gel);
+  cJSON_Delete(root);
+  return e;
+}
+
+static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s) {
+  memset(s, 0, sizeof *s);
+  s->world = palp_world_default_def();
+  if (!cJSON_IsObject(root)) return fail(c, PALP_EPARSE, "scene: expected a JSON object");
+  int e;
+  const cJSON *name = cJSON_GetObjectItemCaseSensitive(root, "name");
+  if (!cJSON_IsString(name)) return fail(c, PALP_EPARSE, "name: missing or not a string");
+  snprintf(s->name, sizeof s->name, "%s", name->valuestring);
+
+  const cJSON *mesh = get_obj(c, root, "", "mesh", 1, &e);
+  if (e) return e;
+  if ((e = get_pos(c, mesh, "mesh.", "radius_m", 1, &s->world.mesh.radius))) return e;
+  if ((e = get_int(c, mesh, "mesh.", "vertex_count", 1, 19, 200000, &s->world.mesh.vertex_count))) return e;
+
+  const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
+  if (params) {
+    if (!cJSON_IsString(params)) return fail(c, PALP_EPARSE, "parameters: expected a file name");
+    if ((e = parse_params_file(c, dir, params->valuestring, s))) return e;
+  } else {
+    const cJSON *m = get_obj(c, root, "", "membrane", 1, &e);
+    if (e || (e = parse_membrane(c, m, &s->world.membrane))) return e;
+    const cJSON *g = get_obj(c, root, "", "gel", 1, &e);
+    if (e || (e = parse_gel(c, g, &s->world.gel))) return e;
+  }
+
+  const cJSON *t = get_obj(c, root, "", "time", 1, &e);
+  if (e) return e;
+  if ((e = get_pos(c, t, "time.", "dt_s", 1, &s->world.dt))) return e;
+  if (s->world.dt > 0.1) return fail(c, PALP_EPARSE, "time.dt_s: must be <= 0.1 s");
+  if ((e = get_int(c, t, "time.", "frames", 1, 1, 100000000, &s->frames))) return e;
+  s->frame_period = s->world.dt;
+  if ((e = get_pos(c, t, "time.", "frame_period_s", 0, &s->frame_period))) return e;
+  const double ratio = s->frame_period / s->world.dt;
+  if (ratio < 1.0 - 1e-9 || fabs(ratio - round(ratio)) > 1e-6)
+    return fail(c, PALP_EPARSE, "time.frame_period_s: must be a whole multiple of time.dt_s");
+
+  const cJSON *fx = cJSON_GetObjectItemCaseSensitive(root, "effects");
+  if (!fx) return fail(c, PALP_EPARSE, "effects: missing (an array of effect names is required)");
+  if (!cJSON_IsArray(fx)) return fail(c, PALP_EPARSE, "effects: expected an array of effect names");
+  s->world.effects = 0;
+  for (int i = 0; i < cJSON_GetArraySize(fx); ++i) {
+    const cJSON *it = cJSON_GetArrayItem(fx, i);
+    palp_effect ef;
+    if (!cJSON_IsString(it)) return fail(c, PALP_EPARSE, "effects[%d]: expected a string", i);
+    if (palp_effect_from_name(it->valuestring, &ef))
+      return fail(c, PALP_EPARSE,
+                  "effects[%d]: unknown effect \"%s\" (membrane_elasticity, membrane_viscosity, gel_pressure, "
+                  "gel_damping, gel_support, gravity, force_feedback)",
+                  i, it->valuestring);
+    s->world.effects |= (uint32_t)ef;
+  }
+  if ((s->world.effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(s->world.effects & PALP_EFFECT_MEMBRANE_ELASTICITY))
+    return fail(c, PALP_EPARSE, "effects: membrane_viscosity needs membrane_elasticity");
+  if ((s->world.effects & PALP_EFFECT_GEL_DAMPING) &&
+      !(s->world.effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
+    return fail(c, PALP_EPARSE, "effects: gel_damping needs gel_pressure or gel_support");
+  if ((s->world.effects & PALP_EFFECT_GEL_SUPPORT) && !(s->world.gel.support_modulus > 0.0))
+    return fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be > 0 when the gel_support effect is on");
+  if ((e = get_vec(c, root, "", "gravity_m_s2", 0, &s->world.gravity))) return e;
+  if ((e = get_int(c, root, "", "max_contacts", 0, 1, 64, &s->world.max_contacts))) return e;
+
+  const cJSON *cs = cJSON_GetObjectItemCaseSensitive(root, "contacts");
+  if (!cs) return fail(c, PALP_EPARSE, "contacts: missing (an array, possibly empty, is required)");
+  if (!cJSON_IsArray(cs)) return fail(c, PALP_EPARSE, "contacts: expected an array");
+  const int nc = cJSON_GetArraySize(cs);
+  if (nc > PALP_SCENE_MAX_CONTACTS) return fail(c, PALP_EPARSE, "contacts: at most %d", PALP_SCENE_MAX_CONTACTS);
+  if (nc > s->world.max_contacts) s->world.max_contacts = nc;
+  for (int i = 0; i < nc; ++i)
+    if ((e = parse_contact(c, cJSON_GetArrayItem(cs, i), i, s->world.mesh.radius, &s->contact[i]))) return e;
+  s->contact_count = nc;
+  return PALP_OK;
+}
+
+static int parse_with_dir(const char *json, const char *dir, palp_scene *out, char *err, size_t errlen) {
+  ctx c = {err, errlen};
+  if (err && errlen) err[0] = 0;
+  if (!json || !out) return fail(&c, PALP_EINVAL, "scene: no input");
+  cJSON *root = cJSON_Parse(json);
+  if (!root) {
+    const char *at = cJSON_GetErrorPtr();
+    return fail(&c, PALP_EPARSE, "scene: invalid JSON near \"%.24s\"", at ? at : "");
+  }
+  int e = parse_root(&c, root, dir, out);
+  cJSON_Delete(root);
+  return e;
+}
+
+int palp_scene_parse(const char *json, palp_scene *out, char *err, size_t errlen) {
+  return parse_with_dir(json, "", out, err, errlen);
+}
+
+int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen) {
+  char *txt = read_file(path);
+  if (!txt) {
+    if (err && errlen) snprintf(err, errlen, "%s: cannot read the scene file", path);
+    return PALP_EIO;
+  }
+  char dir[1024];
+  snprintf(dir, sizeof dir, "%s", path);
+  char *slash = strrchr(dir, '/');
+  if (slash) *slash = 0;
+  else dir[0] = 0;
+  int e = parse_with_dir(txt, dir, out, err, errlen);
+  free(txt);
+  return e;
+}
+
+static cJSON *vec_json(palp_vec3 v) {
+  const double a[3] = {v.x, v.y, v.z};
+  return cJSON_CreateDoubleArray(a, 3);
+}
+
+char *palp_scene_to_json(const palp_scene *s) {
+  cJSON *r = cJSON_CreateObject();
+  if (!r) return NULL;
+  cJSON_AddStringToObject(r, "name", s->name);
+  cJSON *m = cJSON_AddObjectToObject(r, "mesh");
+  cJSON_AddNumberToObject(m, "radius_m", s->world.mesh.radius);
+  cJSON_AddNumberToObject(m, "vertex_count", s->world.mesh.vertex_count);
+  const palp_membrane_params *mp = &s->world.membrane;
+  cJSON *mb = cJSON_AddObjectToObject(r, "membrane");
+  cJSON_AddNumberToObject(mb, "thickness_m", mp->thickness);
+  cJSON_AddNumberToObject(mb, "density_kg_m3", mp->density);
+  cJSON_AddNumberToObject(mb, "E1_Pa", mp->E1);
+  cJSON_AddNumberToObject(mb, "eta1_Pa_s", mp->eta1);
+  cJSON_AddNumberToObject(mb, "E2_Pa", mp->E2);
+  cJSON_AddNumberToObject(mb, "eta2_Pa_s", mp->eta2);
+  const palp_gel_params *gp = &s->world.gel;
+  cJSON *g = cJSON_AddObjectToObject(r, "gel");
+  cJSON_AddStringToObject(g, "law", gp->law == PALP_GEL_POLYTROPIC ? "polytropic" : "paper_literal");
+  cJSON_AddNumberToObject(g, "pressure_Pa", gp->pressure);
+  cJSON_AddNumberToObject(g, "a1", gp->a1);
+  cJSON_AddNumberToObject(g, "a2_Pa_s_m3", gp->a2);
+  cJSON_AddNumberToObject(g, "a3_s2", gp->a3);
+  cJSON_AddNumberToObject(g, "support_modulus_Pa_m", gp->support_modulus);
+  cJSON_AddNumberToObject(g, "support_viscosity_Pa_s_m", gp->support_viscosity);
+  cJSON *t = cJSON_AddObjectToObject(r, "time");
+  cJSON_AddNumberToObject(t, "dt_s", s->world.dt);
+  cJSON_AddNumberToObject(t, "frames", s->frames);
+  cJSON_AddNumberToObject(t, "frame_period_s", s->frame_period);
+  cJSON *fx = cJSON_AddArrayToObject(r, "effects");
+  for (int i = 0; i < 7; ++i)
+    if (s->world.effects & (1u << i)) cJSON_AddItemToArray(fx, cJSON_CreateString(palp_effect_name((palp_effect)(1u << i))));
+  cJSON_AddItemToObject(r, "gravity_m_s2", vec_json(s->world.gravity));
+  cJSON_AddNumberToObject(r, "max_contacts", s->world.max_contacts);
+  cJSON *cs = cJSON_AddArrayToObject(r, "contacts");
+  for (int i = 0; i < s->contact_count; ++i) {
+    const palp_scene_contact *sc = &s->contact[i];
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "distribution", dist_names[sc->def.distribution - 1]);
+    cJSON_AddItemToObject(o, "center_m", vec_json(sc->def.center));
+    cJSON_AddNumberToObject(o, "patch_area_m2", sc->def.patch_area);
+    cJSON_AddNumberToObject(o, "sigma_fraction", sc->def.sigma_fraction);
+    cJSON_AddNumberToObject(o, "offset_fraction", sc->def.offset_fraction);
+    cJSON_AddItemToObject(o, "offset_dir", vec_json(sc->def.offset_dir));
+    cJSON_AddItemToObject(o, "direction", vec_json(sc->direction));
+    cJSON *p = cJSON_AddObjectToObject(o, "profile");
+    const palp_profile *pr = &sc->profile;
+    cJSON_AddStringToObject(p, "kind", profile_names[pr->kind - 1]);
+    if (pr->kind == PALP_PROFILE_KEYFRAMES) {
+      cJSON *keys = cJSON_AddArrayToObject(p, "keyframes");
+      for (int k = 0; k < pr->key_count; ++k) {
+        const double kv[2] = {pr->key_t[k], pr->key_f[k]};
+        cJSON_AddItemToArray(keys, cJSON_CreateDoubleArray(kv, 2));
+      }
+    } else {
+      cJSON_AddNumberToObject(p, "magnitude_N", pr->magnitude);
+      cJSON_AddNumberToObject(p, "t_on_s", pr->t_on);
+      cJSON_AddNumberToObject(p, "t_off_s", pr->t_off);
+      if (pr->kind == PALP_PROFILE_SINE) {
+        cJSON_AddNumberToObject(p, "frequency_Hz", pr->frequency);
+        cJSON_AddNumberToObject(p, "offset_N", pr->offset);
+      }
+    }
+    cJSON_AddItemToArray(cs, o);
+  }
+  char *out = cJSON_Print(r);
+  cJSON_Delete(r);
+  return out;
+}
+
+palp_world *palp_scene_create_world(const palp_scene *s, int *err) {
+  palp_world *w = palp_world_create(&s->world, err);
+  if (!w) return NULL;
+  for (int i = 0; i < s->contact_count; ++i) {
+    const int id = palp_world_add_contact(w, &s->contact[i].def);
+    if (id < 0) {
+      palp_world_destroy(w);
+      if (err) *err = id;
+      return NULL;
+    }
+  }
+  return w;
+}
+
+int palp_scene_apply(const palp_scene *s, palp_world *w, double t) {
+  const palp_mesh *m = palp_world_mesh(w);
+  for (int i = 0; i < s->contact_count; ++i) {
+    const palp_scene_contact *sc = &s->contact[i];
+    palp_vec3 dir = sc->direction;
+    if (v3_len(dir) == 0.0) {
+      /* Inward normal at the contact centre: the rest surface normal of a sphere. */
+      const int v = palp_mesh_nearest_vertex(m, m->rest, sc->def.center);
+      dir = v3_scale(m->rest[v], -1.0);
+    }
+    dir = v3_scale(dir, 1.0 / v3_len(dir));
+    const int e = palp_world_set_contact_force(w, i, v3_scale(dir, palp_profile_eval(&sc->profile, t)));
+    if (e) return e;
+  }
+  return PALP_OK;
+}

@@ -1,2 +1,857 @@
-/* placeholder until the model lands */
+/*
+ * world.c - the phantom world: state, the step pipeline, contacts and queries.
+ *
+ * Time integration (argued in docs/model.md): linearly implicit Euler,
+ *   (M + h^2 K~ + c g g^T) v_{n+1} = M v_n + h f_n,   x_{n+1} = x_n + h v_{n+1},
+ * where f_n holds the external loads, the membrane forces predicted at the end of
+ * the step for unchanged strain (Burgers relaxation over the step included) and the
+ * gel pressure force; K~ is the membrane's algorithmic tangent along the links'
+ * rest directions, factored once per step size (see refactor()); and
+ * c g g^T is the gel's rank-1 volume stiffness and damping, applied with the
+ * Sherman-Morrison formula. Burgers states are then advanced exactly with the new
+ * strains. The membrane's physical vertex masses make explicit schemes need
+ * h < ~50 us; this one is stable at the paper's 10 ms and the haptic 1 ms.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "burgers.h"
+#include "gel.h"
 #include "palp.h"
+#include "sparse_ldl.h"
+#include "vec3.h"
+
+enum { CONTACT_NONE = 0, CONTACT_FORCE = 1, CONTACT_FINGER = 2 };
+
+typedef struct contact {
+  int kind;
+  int count;       /* vertices loaded (force) or touched last step (finger) */
+  int cap;
+  int *vertex;     /* [cap] */
+  double *weight;  /* [cap] force contacts only */
+  palp_vec3 *feedback; /* [cap] per-vertex force of the phantom on the finger [N] */
+  palp_vec3 force;  /* [N] */
+  palp_vec3 center; /* finger tip [m] */
+  double radius;    /* finger radius [m] */
+  palp_vec3 total;  /* summed feedback [N] */
+} contact;
+
+typedef void (*stage_fn)(palp_world *w, double h);
+typedef struct stage {
+  const char *name;
+  stage_fn fn;
+} stage;
+
+struct palp_world {
+  palp_world_def def;
+  palp_mesh mesh;
+
+  /* Vertices (SoA). */
+  palp_vec3 *pos, *vel, *force;
+  double *mass;  /* [kg] lumped from membrane thickness x density x area */
+  int *row_of;   /* vertex -> free row, -1 if fixed */
+  int *vertex_of; /* free row -> vertex */
+  int nfree;
+
+  /* Membrane links (allocated only with membrane elasticity). */
+  int nlink;
+  double *rest_len; /* [m] */
+  double *xsec;     /* effective cross-section t (A_left + A_right) / L0 [m^2] */
+  double *eps;      /* current strain [-] */
+  palp_vec3 *dir;   /* current unit direction first -> second vertex */
+  double *sigma;    /* current stress [Pa] */
+  palp_vec3 *fdir;  /* direction the factor was built with */
+  double *fbeta;    /* transverse stiffness fraction the factor was built with */
+  int stale;        /* the factor left its stability region: rebuild before the next step */
+  int64_t refactors;
+  double (*xs)[2];  /* Burgers internal strains (only with membrane viscosity) */
+  palp_burgers burgers;
+  double E_static;  /* elastic-only modulus: E1 E2 / (E1 + E2) [Pa] */
+
+  /* Gel (allocated only with gel pressure). */
+  double V0, V, Vdot; /* [m^3], [m^3/s] */
+  palp_vec3 *grad;    /* dV/dx [m^2] */
+  double p_gauge;     /* reported gauge pressure [Pa] */
+  double p_abs, p_abs_prev; /* literal law state [Pa] */
+  double c_rank1;     /* coefficient of g g^T in the system [kg] */
+  double *u;          /* A^{-1} g_u, [nfree*3] */
+  double *g_u;        /* gradient u was computed for, [nfree*3] */
+  int u_valid;
+
+  /* Solver. */
+  palp_ldl ldl;
+  double h_factored;
+  double *rhs;  /* [nfree*6]: 3 columns of M v + h f, 3 of g when u is refreshed */
+  double *work; /* [nfree*6] */
+
+  /* Contacts. */
+  contact *contacts;
+  palp_vec3 *f_int; /* internal force per vertex [N] (only with force feedback) */
+
+  /* Pipeline. */
+  stage stages[PALP_STAGE_COUNT];
+  int stage_count;
+  palp_stage_timings timings;
+
+  double t;
+  int64_t frame;
+  int awake;
+  double quiet; /* [s] without load below the sleep speed */
+  int broken;
+};
+
+/* ---- defaults and effects --------------------------------------------- */
+
+palp_world_def palp_world_default_def(void) {
+  /* Real-time parameters before calibration (docs/model.md): a membrane at the
+   * paper's Table I modulus scale (E ~ 6 C10), a gel whose bulk modulus a1 P = 1 MPa
+   * keeps the volume within 0.2% under 3 N, and a gel support (foundation modulus
+   * ~ E_gel / R with E_gel = 6 x 10.3 kPa) whose viscosity gives the paper's ~1 s
+   * recovery. Gravity is off by default: the paper's experiment has none. */
+  palp_world_def d = {
+      .mesh = palp_mesh_default_def(),
+      .membrane = {.thickness = 0.002, .density = 950.0, .E1 = 4.2e6, .eta1 = 2.0e8, .E2 = 8.0e6, .eta2 = 8.0e5},
+      .gel = {.law = PALP_GEL_POLYTROPIC,
+              .pressure = 101325.0,
+              .a1 = 10.0,
+              .a2 = 5.0e6,
+              .a3 = 0.0,
+              .support_modulus = 1.5e6,
+              .support_viscosity = 6.0e5},
+      .dt = 0.01,
+      .effects = PALP_EFFECT_ALL & ~(uint32_t)PALP_EFFECT_GRAVITY,
+      .gravity = {0.0, 0.0, -9.81},
+      .max_contacts = 8,
+      .sleep_speed = 1e-5,
+      .sleep_time = 0.5,
+  };
+  return d;
+}
+
+static const char *const effect_names[] = {"membrane_elasticity", "membrane_viscosity", "gel_pressure",
+                                           "gel_damping",         "gravity",            "force_feedback",
+                                           "gel_support"};
+#define PALP_EFFECT_COUNT 7
+
+const char *palp_effect_name(palp_effect e) {
+  for (int i = 0; i < PALP_EFFECT_COUNT; ++i)
+    if (e == (palp_effect)(1u << i)) return effect_names[i];
+  return NULL;
+}
+
+int palp_effect_from_name(const char *name, palp_effect *out) {
+  for (int i = 0; i < PALP_EFFECT_COUNT; ++i)
+    if (name && strcmp(name, effect_names[i]) == 0) {
+      *out = (palp_effect)(1u << i);
+      return PALP_OK;
+    }
+  return PALP_EINVAL;
+}
+
+static int has(const palp_world *w, palp_effect e) { return (w->def.effects & e) != 0; }
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- stages ------------------------------------------------------------- */
+
+static void stage_loads(palp_world *w, double h) {
+  (void)h;
+  const int gravity = has(w, PALP_EFFECT_GRAVITY);
+  for (int i = 0; i < w->mesh.vertex_count; ++i)
+    w->force[i] = gravity ? v3_scale(w->def.gravity, w->mass[i]) : v3(0, 0, 0);
+  for (int c = 0; c < w->def.max_contacts; ++c) {
+    const contact *k = &w->contacts[c];
+    if (k->kind != CONTACT_FORCE) continue;
+    for (int q = 0; q < k->count; ++q)
+      w->force[k->vertex[q]] = v3_add(w->force[k->vertex[q]], v3_scale(k->force, k->weight[q]));
+  }
+}
+
+static void stage_membrane_forces(palp_world *w, double h) {
+  (void)h;
+  const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
+  for (int l = 0; l < w->nlink; ++l) {
+    /* Stress at the end of the step if the strain stayed put [Pa]; the change of
+     * strain over the step enters through the implicit matrix. */
+    const double sigma = visc ? palp_burgers_predict(&w->burgers, w->xs[l], w->eps[l]) : w->E_static * w->eps[l];
+    const palp_vec3 f = v3_scale(w->dir[l], sigma * w->xsec[l]); /* [N], tension pulls the ends together */
+    const int a = w->mesh.link[l][0], b = w->mesh.link[l][1];
+    w->force[a] = v3_add(w->force[a], f);
+    w->force[b] = v3_sub(w->force[b], f);
+  }
+}
+
+static void stage_gel_forces(palp_world *w, double h) {
+  double dp_dV, p;
+  if (w->def.gel.law == PALP_GEL_POLYTROPIC) {
+    p = palp_gel_polytropic(&w->def.gel, w->V0, w->V, &dp_dV);
+    /* Implicit volume stiffness h^2 (-dp/dV) and damping h a2 on the g g^T mode. */
+    w->c_rank1 = h * h * (-dp_dV) + (has(w, PALP_EFFECT_GEL_DAMPING) ? h * w->def.gel.a2 : 0.0);
+  } else {
+    p = w->p_abs - w->def.gel.pressure;
+    const double k = w->def.gel.a1 * w->p_abs / w->V + (has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.a2 / h : 0.0);
+    w->c_rank1 = h * h * k;
+  }
+  for (int i = 0; i < w->mesh.vertex_count; ++i) w->force[i] = v3_add(w->force[i], v3_scale(w->grad[i], p));
+}
+
+static void stage_gel_support(palp_world *w, double h) {
+  (void)h;
+  /* Elastic part explicit at x_n; the h^2 A k and h A c terms sit on the factor's
+   * diagonal, which makes the whole support implicit. */
+  const double k = w->def.gel.support_modulus; /* [Pa/m] */
+  for (int r = 0; r < w->nfree; ++r) {
+    const int i = w->vertex_of[r];
+    const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
+    w->force[i] = v3_sub(w->force[i], v3_scale(u, k * w->mesh.vertex_area[i]));
+  }
+}
+
+static int refactor(palp_world *w, double h);
+
+static void stage_solve(palp_world *w, double h) {
+  const int n = w->nfree;
+  const int gel = has(w, PALP_EFFECT_GEL_PRESSURE);
+  /* Refresh u = A^{-1} g when the gradient has turned by more than 1e-4 of its
+   * norm since u was computed; in between, the Jacobian uses g_u, which stays a
+   * consistent (slightly stale) linearisation and keeps the step stable. */
+  int refresh = 0;
+  if (gel) {
+    double dd = 0.0, gg = 0.0;
+    for (int r = 0; r < n; ++r) {
+      const palp_vec3 g = w->grad[w->vertex_of[r]];
+      const double *gu = w->g_u + 3 * r;
+      dd += (g.x - gu[0]) * (g.x - gu[0]) + (g.y - gu[1]) * (g.y - gu[1]) + (g.z - gu[2]) * (g.z - gu[2]);
+      gg += v3_dot(g, g);
+    }
+    refresh = !w->u_valid || dd > 1e-8 * gg;
+  }
+  /* Unknowns are the 3n velocity components; a refresh solves for u alongside. */
+  const int width = refresh ? 2 : 1;
+  double *x = w->rhs;
+  for (int r = 0; r < n; ++r) {
+    const int i = w->vertex_of[r];
+    const palp_vec3 b = v3_add(v3_scale(w->vel[i], w->mass[i]), v3_scale(w->force[i], h));
+    const double bv[3] = {b.x, b.y, b.z};
+    const double gv[3] = {w->grad ? w->grad[i].x : 0.0, w->grad ? w->grad[i].y : 0.0, w->grad ? w->grad[i].z : 0.0};
+    for (int c = 0; c < 3; ++c) {
+      x[width * (3 * r + c)] = bv[c];
+      if (refresh) {
+        x[width * (3 * r + c) + 1] = gv[c];
+        w->g_u[3 * r + c] = gv[c];
+      }
+    }
+  }
+  palp_ldl_solve(&w->ldl, x, width, w->work);
+  if (refresh) {
+    for (int k = 0; k < 3 * n; ++k) {
+      w->u[k] = x[2 * k + 1];
+      x[k] = x[2 * k]; /* compact the velocity column; k <= 2k keeps it in place */
+    }
+    w->u_valid = 1;
+  }
+  if (gel) {
+    /* (A + c g g^T)^{-1} b = y - u c (g.y) / (1 + c g.u) with y = A^{-1} b, u = A^{-1} g. */
+    double gy = 0.0, gu = 0.0;
+    for (int k = 0; k < 3 * n; ++k) {
+      gy += w->g_u[k] * x[k];
+      gu += w->g_u[k] * w->u[k];
+    }
+    const double s = w->c_rank1 * gy / (1.0 + w->c_rank1 * gu);
+    for (int k = 0; k < 3 * n; ++k) x[k] -= s * w->u[k];
+  }
+}
+
+static void stage_integrate(palp_world *w, double h) {
+  for (int r = 0; r < w->nfree; ++r) {
+    const int i = w->vertex_of[r];
+    const double *x = w->rhs + 3 * r;
+    w->vel[i] = v3(x[0], x[1], x[2]);
+    w->pos[i] = v3_add(w->pos[i], v3_scale(w->vel[i], h));
+  }
+}
+
+static void stage_fingers(palp_world *w, double h) {
+  (void)h;
+  /* A finger is a rigid sphere: vertices inside are put back on its surface and
+   * lose their inward normal velocity (a velocity-level contact constraint). */
+  for (int c = 0; c < w->def.max_contacts; ++c) {
+    contact *k = &w->contacts[c];
+    if (k->kind != CONTACT_FINGER) continue;
+    k->count = 0;
+    for (int r = 0; r < w->nfree; ++r) {
+      const int i = w->vertex_of[r];
+      const palp_vec3 d = v3_sub(w->pos[i], k->center);
+      const double len = v3_len(d);
+      if (len >= k->radius) continue;
+      const palp_vec3 nrm = len > 1e-12 ? v3_scale(d, 1.0 / len) : v3(0, 0, 1);
+      w->pos[i] = v3_add(k->center, v3_scale(nrm, k->radius));
+      const double vn = v3_dot(w->vel[i], nrm);
+      if (vn < 0.0) w->vel[i] = v3_sub(w->vel[i], v3_scale(nrm, vn));
+      if (k->count < k->cap) k->vertex[k->count++] = i;
+    }
+  }
+}
+
+static void stage_membrane_state(palp_world *w, double h) {
+  (void)h;
+  const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
+  const int fb = w->f_int != NULL;
+  const double tangent = visc ? w->burgers.tangent : w->E_static; /* [Pa] */
+  if (fb) memset(w->f_int, 0, sizeof *w->f_int * (size_t)w->mesh.vertex_count);
+  for (int l = 0; l < w->nlink; ++l) {
+    const int a = w->mesh.link[l][0], b = w->mesh.link[l][1];
+    const palp_vec3 d = v3_sub(w->pos[b], w->pos[a]);
+    const double len = v3_len(d);
+    w->dir[l] = v3_scale(d, 1.0 / len);
+    const double eps = (len - w->rest_len[l]) / w->rest_len[l];
+    const double sigma = visc ? palp_burgers_advance(&w->burgers, w->xs[l], w->eps[l], eps) : w->E_static * eps;
+    w->eps[l] = eps;
+    w->sigma[l] = sigma;
+    /* Leaving the factor's stability region (see refactor): turned by > 30 degrees,
+     * or tension stiffness across the link above beta k (half the margin). */
+    const double c = v3_dot(w->dir[l], w->fdir[l]);
+    if (c * c < 0.75 || sigma * w->xsec[l] / len > w->fbeta[l] * tangent * w->xsec[l] / w->rest_len[l]) w->stale = 1;
+    if (fb) {
+      const palp_vec3 f = v3_scale(w->dir[l], sigma * w->xsec[l]);
+      w->f_int[a] = v3_add(w->f_int[a], f);
+      w->f_int[b] = v3_sub(w->f_int[b], f);
+    }
+  }
+}
+
+static void stage_gel_state(palp_world *w, double h) {
+  const double V_prev = w->V;
+  w->V = palp_gel_volume_gradient(&w->mesh, w->pos, w->grad);
+  w->Vdot = (w->V - V_prev) / h;
+  if (w->def.gel.law == PALP_GEL_POLYTROPIC) {
+    w->p_gauge = palp_gel_polytropic(&w->def.gel, w->V0, w->V, NULL) -
+                 (has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.a2 * w->Vdot : 0.0);
+  } else {
+    const double pn = palp_gel_literal_step(&w->def.gel, w->p_abs, w->p_abs_prev, w->V, V_prev, h,
+                                            has(w, PALP_EFFECT_GEL_DAMPING));
+    w->p_abs_prev = w->p_abs;
+    w->p_abs = pn;
+    w->p_gauge = pn - w->def.gel.pressure;
+  }
+}
+
+static void stage_feedback(palp_world *w, double h) {
+  (void)h;
+  const int gel = has(w, PALP_EFFECT_GEL_PRESSURE), support = has(w, PALP_EFFECT_GEL_SUPPORT);
+  const double ks = w->def.gel.support_modulus; /* [Pa/m] */
+  const double cs = has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.support_viscosity : 0.0; /* [Pa s/m] */
+  for (int c = 0; c < w->def.max_contacts; ++c) {
+    contact *k = &w->contacts[c];
+    if (k->kind == CONTACT_NONE) continue;
+    k->total = v3(0, 0, 0);
+    for (int q = 0; q < k->count; ++q) {
+      const int i = k->vertex[q];
+      /* The force of membrane and gel on the vertex is what the finger feels. */
+      palp_vec3 f = w->f_int ? w->f_int[i] : v3(0, 0, 0);
+      if (gel) f = v3_add(f, v3_scale(w->grad[i], w->p_gauge));
+      if (support) {
+        const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
+        f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->mesh.vertex_area[i]));
+      }
+      k->feedback[q] = f;
+      k->total = v3_add(k->total, f);
+    }
+  }
+}
+
+/* ---- creation ------------------------------------------------------------- */
+
+static int validate(const palp_world_def *d) {
+  const palp_membrane_params *m = &d->membrane;
+  const palp_gel_params *g = &d->gel;
+  if (!(d->dt > 0.0 && d->dt <= 0.1) || !isfinite(d->dt)) return PALP_EINVAL;
+  if (d->max_contacts < 0 || d->max_contacts > 64) return PALP_EINVAL;
+  if (!(m->thickness > 0.0 && m->density > 0.0) || !isfinite(m->thickness) || !isfinite(m->density))
+    return PALP_EINVAL;
+  if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
+  if ((d->effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY))
+    return PALP_EINVAL;
+  if ((d->effects & PALP_EFFECT_GEL_DAMPING) && !(d->effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
+    return PALP_EINVAL;
+  if (d->effects & PALP_EFFECT_GEL_SUPPORT) {
+    if (!(g->support_modulus > 0.0) || !isfinite(g->support_modulus)) return PALP_EINVAL;
+    if (!(g->support_viscosity >= 0.0) || !isfinite(g->support_viscosity)) return PALP_EINVAL;
+  }
+  if (d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY) {
+    if (!(m->E1 > 0.0 && m->E2 > 0.0) || !isfinite(m->E1) || !isfinite(m->E2)) return PALP_EINVAL;
+    if ((d->effects & PALP_EFFECT_MEMBRANE_VISCOSITY) &&
+        (!(m->eta1 > 0.0 && m->eta2 > 0.0) || !isfinite(m->eta1) || !isfinite(m->eta2)))
+      return PALP_EINVAL;
+  }
+  if (d->effects & PALP_EFFECT_GEL_PRESSURE) {
+    if (!(g->pressure > 0.0 && g->a1 > 0.0) || !isfinite(g->pressure) || !isfinite(g->a1)) return PALP_EINVAL;
+    if (!(g->a2 >= 0.0) || !isfinite(g->a2) || !isfinite(g->a3)) return PALP_EINVAL;
+    if (g->law != PALP_GEL_POLYTROPIC && g->law != PALP_GEL_PAPER_LITERAL) return PALP_EINVAL;
+    /* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / h^2 is stable only
+     * for |a3| / h^2 < 1. */
+    if (g->law == PALP_GEL_PAPER_LITERAL && fabs(g->a3) >= d->dt * d->dt) return PALP_EINVAL;
+  }
+  if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;
+  return PALP_OK;
+}
+
+static void build_pipeline(palp_world *w) {
+  int n = 0;
+  w->stages[n++] = (stage){"loads", stage_loads};
+  if (w->nlink) w->stages[n++] = (stage){"membrane_forces", stage_membrane_forces};
+  if (has(w, PALP_EFFECT_GEL_PRESSURE)) w->stages[n++] = (stage){"gel_forces", stage_gel_forces};
+  if (has(w, PALP_EFFECT_GEL_SUPPORT)) w->stages[n++] = (stage){"gel_support", stage_gel_support};
+  w->stages[n++] = (stage){"solve", stage_solve};
+  w->stages[n++] = (stage){"integrate", stage_integrate};
+  w->stages[n++] = (stage){"fingers", stage_fingers};
+  if (w->nlink) w->stages[n++] = (stage){"membrane_state", stage_membrane_state};
+  if (has(w, PALP_EFFECT_GEL_PRESSURE)) w->stages[n++] = (stage){"gel_state", stage_gel_state};
+  if (has(w, PALP_EFFECT_FORCE_FEEDBACK)) w->stages[n++] = (stage){"feedback", stage_feedback};
+  w->stage_count = n;
+  memset(&w->timings, 0, sizeof w->timings);
+  for (int s = 0; s < n; ++s) w->timings.name[s] = w->stages[s].name;
+}
+
+static void *xcalloc(size_t n, size_t size, int *fail) {
+  void *p = calloc(n ? n : 1, size);
+  if (!p) *fail = 1;
+  return p;
+}
+
+palp_world *palp_world_create(const palp_world_def *def, int *err) {
+  int e = validate(def);
+  if (e) {
+    if (err) *err = e;
+    return NULL;
+  }
+  palp_world *w = calloc(1, sizeof *w);
+  if (!w) {
+    if (err) *err = PALP_ENOMEM;
+    return NULL;
+  }
+  w->def = *def;
+  e = palp_mesh_create(&def->mesh, &w->mesh);
+  if (e) {
+    free(w);
+    if (err) *err = e;
+    return NULL;
+  }
+  const int nv = w->mesh.vertex_count;
+  int fail = 0;
+  w->pos = xcalloc((size_t)nv, sizeof *w->pos, &fail);
+  w->vel = xcalloc((size_t)nv, sizeof *w->vel, &fail);
+  w->force = xcalloc((size_t)nv, sizeof *w->force, &fail);
+  w->mass = xcalloc((size_t)nv, sizeof *w->mass, &fail);
+  w->row_of = xcalloc((size_t)nv, sizeof *w->row_of, &fail);
+  w->vertex_of = xcalloc((size_t)nv, sizeof *w->vertex_of, &fail);
+  w->contacts = xcalloc((size_t)def->max_contacts, sizeof *w->contacts, &fail);
+  if (fail) goto nomem;
+  memcpy(w->pos, w->mesh.rest, sizeof *w->pos * (size_t)nv);
+  for (int i = 0; i < nv; ++i) {
+    w->mass[i] = def->membrane.density * def->membrane.thickness * w->mesh.vertex_area[i]; /* [kg] */
+    w->row_of[i] = w->mesh.fixed[i] ? -1 : w->nfree;
+    if (!w->mesh.fixed[i]) w->vertex_of[w->nfree++] = i;
+  }
+  w->rhs = xcalloc((size_t)w->nfree * 6, sizeof(double), &fail);
+  w->work = xcalloc((size_t)w->nfree * 6, sizeof(double), &fail);
+  if (fail) goto nomem;
+
+  if (has(w, PALP_EFFECT_MEMBRANE_ELASTICITY)) {
+    const int nl = w->mesh.link_count;
+    w->nlink = nl;
+    w->rest_len = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->xsec = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->eps = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->dir = xcalloc((size_t)nl, sizeof *w->dir, &fail);
+    w->sigma = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->fdir = xcalloc((size_t)nl, sizeof *w->fdir, &fail);
+    w->fbeta = xcalloc((size_t)nl, sizeof(double), &fail);
+    if (has(w, PALP_EFFECT_MEMBRANE_VISCOSITY)) w->xs = xcalloc((size_t)nl, sizeof *w->xs, &fail);
+    if (fail) goto nomem;
+    /* Each link carries the membrane over the area of its two triangles: a spring
+     * k = E t (A_l + A_r) / L0^2 reproduces an isotropic membrane's modulus on an
+     * equilateral lattice (Van Gelder 1998), so the cross-section is t (A_l + A_r) / L0. */
+    double *tri_area_sum = xcalloc((size_t)nl, sizeof(double), &fail);
+    if (fail) goto nomem;
+    for (int t = 0; t < w->mesh.dome_triangle_count; ++t) {
+      const int *T = w->mesh.tri[t];
+      const palp_vec3 cr = v3_cross(v3_sub(w->pos[T[1]], w->pos[T[0]]), v3_sub(w->pos[T[2]], w->pos[T[0]]));
+      const double area = 0.5 * v3_len(cr);
+      for (int q = 0; q < 3; ++q) {
+        int a = T[q], b = T[(q + 1) % 3];
+        if (a > b) {
+          int s = a;
+          a = b, b = s;
+        }
+        /* binary search: links are sorted by (first, second) */
+        int lo = 0, hi = nl - 1;
+        while (lo <= hi) {
+          const int mid = (lo + hi) / 2;
+          const int *L = w->mesh.link[mid];
+          if (L[0] == a && L[1] == b) {
+            tri_area_sum[mid] += area;
+            break;
+          }
+          if (L[0] < a || (L[0] == a && L[1] < b)) lo = mid + 1;
+          else hi = mid - 1;
+        }
+      }
+    }
+    for (int l = 0; l < nl; ++l) {
+      const palp_vec3 d = v3_sub(w->pos[w->mesh.link[l][1]], w->pos[w->mesh.link[l][0]]);
+      w->rest_len[l] = v3_len(d);
+      w->dir[l] = v3_scale(d, 1.0 / w->rest_len[l]);
+      w->xsec[l] = def->membrane.thickness * tri_area_sum[l] / w->rest_len[l];
+    }
+    free(tri_area_sum);
+    w->E_static = def->membrane.E1 * def->membrane.E2 / (def->membrane.E1 + def->membrane.E2);
+  }
+
+  if (has(w, PALP_EFFECT_GEL_PRESSURE)) {
+    w->grad = xcalloc((size_t)nv, sizeof *w->grad, &fail);
+    w->u = xcalloc((size_t)w->nfree * 3, sizeof(double), &fail);
+    w->g_u = xcalloc((size_t)w->nfree * 3, sizeof(double), &fail);
+    if (fail) goto nomem;
+    w->V0 = w->V = palp_gel_volume_gradient(&w->mesh, w->pos, w->grad);
+    w->p_abs = w->p_abs_prev = def->gel.pressure;
+  } else {
+    w->V0 = w->V = palp_mesh_volume(&w->mesh, w->pos);
+  }
+  if (has(w, PALP_EFFECT_FORCE_FEEDBACK)) {
+    w->f_int = xcalloc((size_t)nv, sizeof *w->f_int, &fail);
+    if (fail) goto nomem;
+  }
+  e = refactor(w, def->dt);
+  if (e) {
+    palp_world_destroy(w);
+    if (err) *err = e;
+    return NULL;
+  }
+  build_pipeline(w);
+  w->awake = 1;
+  if (err) *err = PALP_OK;
+  return w;
+nomem:
+  palp_world_destroy(w);
+  if (err) *err = PALP_ENOMEM;
+  return NULL;
+}
+
+void palp_world_destroy(palp_world *w) {
+  if (!w) return;
+  for (int c = 0; w->contacts && c < w->def.max_contacts; ++c) {
+    free(w->contacts[c].vertex);
+    free(w->contacts[c].weight);
+    free(w->contacts[c].feedback);
+  }
+  free(w->contacts);
+  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->row_of), free(w->vertex_of);
+  free(w->rest_len), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
+  free(w->sigma), free(w->fdir), free(w->fbeta);
+  free(w->grad), free(w->u), free(w->g_u), free(w->f_int);
+  free(w->rhs), free(w->work);
+  palp_ldl_free(&w->ldl);
+  palp_mesh_destroy(&w->mesh);
+  free(w);
+}
+
+/* Builds and factors A = M + h^2 K~ over the free degrees of freedom (3 per free
+ * vertex) for step h, with the lagged tangent of each link,
+ *   K~_l = k_l [d d^T + beta_l (I - d d^T)],  k_l = E_alg a_l / L0_l [N/m],
+ * d its current direction and beta_l = max(beta_min, 2 rho_l), where
+ * rho_l = (sigma_l a_l / L_l) / k_l is the tension's stiffness across the link
+ * relative to k_l. A linearly implicit step stays stable while K~ holds at least
+ * half of the true stiffness in every mode, so the factor serves until a link turns
+ * by more than 30 degrees or its tension outgrows beta_l (checked every step in
+ * stage_membrane_state). An isotropic k_l I would never need rebuilding, but it
+ * adds stiffness across the links, which damped a pressed patch by ~90%. */
+#define PALP_BETA_MIN 0.01
+static int refactor(palp_world *w, double h) {
+  if (has(w, PALP_EFFECT_MEMBRANE_VISCOSITY)) {
+    const palp_membrane_params *m = &w->def.membrane;
+    int e = palp_burgers_init(&w->burgers, m->E1, m->eta1, m->E2, m->eta2, h);
+    if (e) return e;
+  }
+  const double E = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) ? w->burgers.tangent : w->E_static; /* [Pa] */
+  const int nnz_max = 3 * w->nfree + 21 * w->nlink; /* 3 masses; 2 x 6 + 9 per link */
+  int *ti = malloc(sizeof(int) * (size_t)nnz_max), *tj = malloc(sizeof(int) * (size_t)nnz_max);
+  double *tx = malloc(sizeof(double) * (size_t)nnz_max);
+  if (!ti || !tj || !tx) {
+    free(ti), free(tj), free(tx);
+    return PALP_ENOMEM;
+  }
+  int nnz = 0;
+  /* Lower triangle of each 3x3 diagonal block (duplicates are summed). */
+  const double ks = has(w, PALP_EFFECT_GEL_SUPPORT) ? w->def.gel.support_modulus : 0.0; /* [Pa/m] */
+  const double cs = has(w, PALP_EFFECT_GEL_SUPPORT) && has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.support_viscosity : 0.0;
+  for (int r = 0; r < w->nfree; ++r)
+    for (int i = 0; i < 3; ++i) {
+      const int v = w->vertex_of[r];
+      ti[nnz] = tj[nnz] = 3 * r + i;
+      tx[nnz++] = w->mass[v] + (h * h * ks + h * cs) * w->mesh.vertex_area[v];
+    }
+  for (int l = 0; l < w->nlink; ++l) {
+    const double k = E * w->xsec[l] / w->rest_len[l]; /* [N/m] */
+    const palp_vec3 d = w->dir[l];
+    const double dv[3] = {d.x, d.y, d.z};
+    const double len = w->rest_len[l] * (1.0 + w->eps[l]);
+    const double rho = fmax(0.0, w->sigma[l] * w->xsec[l] / len) / k;
+    const double beta = fmax(PALP_BETA_MIN, 2.0 * rho);
+    w->fdir[l] = d;
+    w->fbeta[l] = beta;
+    const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double b = h * h * k * ((1.0 - beta) * dv[i] * dv[j] + (i == j ? beta : 0.0));
+        if (ra >= 0) ti[nnz] = 3 * ra + i, tj[nnz] = 3 * ra + j, tx[nnz++] = b;
+        if (rb >= 0) ti[nnz] = 3 * rb + i, tj[nnz] = 3 * rb + j, tx[nnz++] = b;
+      }
+    if (ra >= 0 && rb >= 0) {
+      const int hi = ra > rb ? ra : rb, lo = ra > rb ? rb : ra;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          ti[nnz] = 3 * hi + i, tj[nnz] = 3 * lo + j,
+          tx[nnz++] = -h * h * k * ((1.0 - beta) * dv[i] * dv[j] + (i == j ? beta : 0.0));
+    }
+  }
+  palp_ldl_free(&w->ldl);
+  int e = palp_ldl_factor(&w->ldl, 3 * w->nfree, nnz, ti, tj, tx);
+  free(ti), free(tj), free(tx);
+  if (e) return e;
+  w->h_factored = h;
+  w->u_valid = 0;
+  w->stale = 0;
+  w->refactors++;
+  return PALP_OK;
+}
+
+/* ---- stepping ----------------------------------------------------------- */
+
+static int has_load(const palp_world *w) {
+  for (int c = 0; c < w->def.max_contacts; ++c) {
+    const contact *k = &w->contacts[c];
+    if (k->kind == CONTACT_FORCE && v3_dot(k->force, k->force) > 0.0) return 1;
+    if (k->kind == CONTACT_FINGER) {
+      for (int r = 0; r < w->nfree; ++r)
+        if (v3_len(v3_sub(w->pos[w->vertex_of[r]], k->center)) < k->radius) return 1;
+    }
+  }
+  return 0;
+}
+
+int palp_world_step_dt(palp_world *w, double h) {
+  if (!w) return PALP_EINVAL;
+  if (w->broken) return PALP_EUNSTABLE;
+  if (!(h > 0.0 && h <= 0.1) || !isfinite(h)) return PALP_EINVAL;
+  if (!w->awake) {
+    if (!has_load(w)) {
+      w->t += h;
+      w->frame++;
+      return PALP_OK;
+    }
+    w->awake = 1;
+    w->quiet = 0.0;
+  }
+  if (h != w->h_factored || w->stale) {
+    int e = refactor(w, h);
+    if (e) return e;
+  }
+  for (int s = 0; s < w->stage_count; ++s) {
+    const double t0 = now_s();
+    w->stages[s].fn(w, h);
+    const double dt = now_s() - t0;
+    w->timings.last[s] = dt;
+    w->timings.total[s] += dt;
+  }
+  w->timings.steps++;
+  w->t += h;
+  w->frame++;
+
+  /* Finite check and sleep: one pass over the free velocities. */
+  double vmax2 = 0.0, vsum = 0.0;
+  for (int r = 0; r < w->nfree; ++r) {
+    const palp_vec3 v = w->vel[w->vertex_of[r]];
+    const double v2 = v3_dot(v, v);
+    vsum += v2;
+    if (v2 > vmax2) vmax2 = v2;
+  }
+  if (!isfinite(vsum)) {
+    w->broken = 1;
+    return PALP_EUNSTABLE;
+  }
+  if (w->def.sleep_time > 0.0 && vmax2 < w->def.sleep_speed * w->def.sleep_speed && !has_load(w)) {
+    w->quiet += h;
+    if (w->quiet >= w->def.sleep_time) {
+      w->awake = 0;
+      for (int i = 0; i < w->mesh.vertex_count; ++i) w->vel[i] = v3(0, 0, 0);
+    }
+  } else {
+    w->quiet = 0.0;
+  }
+  return PALP_OK;
+}
+
+int palp_world_step(palp_world *w) { return w ? palp_world_step_dt(w, w->def.dt) : PALP_EINVAL; }
+
+/* ---- contacts ----------------------------------------------------------- */
+
+static int free_slot(palp_world *w) {
+  for (int c = 0; c < w->def.max_contacts; ++c)
+    if (w->contacts[c].kind == CONTACT_NONE) return c;
+  return PALP_EFULL;
+}
+
+static int ensure_cap(contact *k, int cap) {
+  if (k->cap >= cap) return PALP_OK;
+  int *v = realloc(k->vertex, sizeof(int) * (size_t)cap);
+  if (v) k->vertex = v;
+  double *wt = realloc(k->weight, sizeof(double) * (size_t)cap);
+  if (wt) k->weight = wt;
+  palp_vec3 *fb = realloc(k->feedback, sizeof(palp_vec3) * (size_t)cap);
+  if (fb) k->feedback = fb;
+  if (!v || !wt || !fb) return PALP_ENOMEM;
+  k->cap = cap;
+  return PALP_OK;
+}
+
+int palp_world_add_contact(palp_world *w, const palp_contact_def *def) {
+  if (!w || !def) return PALP_EINVAL;
+  const int c = free_slot(w);
+  if (c < 0) return c;
+  contact *k = &w->contacts[c];
+  int e = ensure_cap(k, w->mesh.vertex_count);
+  if (e) return e;
+  const int n = palp_contact_weights(&w->mesh, w->mesh.rest, def, k->vertex, k->weight, k->cap);
+  if (n < 0) return n;
+  k->kind = CONTACT_FORCE;
+  k->count = n;
+  k->force = v3(0, 0, 0);
+  k->total = v3(0, 0, 0);
+  memset(k->feedback, 0, sizeof *k->feedback * (size_t)n);
+  return c;
+}
+
+static contact *get_contact(palp_world *w, int c, int kind) {
+  if (!w || c < 0 || c >= w->def.max_contacts) return NULL;
+  contact *k = &w->contacts[c];
+  return (kind == CONTACT_NONE ? k->kind != CONTACT_NONE : k->kind == kind) ? k : NULL;
+}
+
+int palp_world_set_contact_force(palp_world *w, int c, palp_vec3 f) {
+  contact *k = get_contact(w, c, CONTACT_FORCE);
+  if (!k) return PALP_ERANGE;
+  if (!v3_isfinite(f)) return PALP_EINVAL;
+  if (f.x != k->force.x || f.y != k->force.y || f.z != k->force.z) palp_world_wake(w);
+  k->force = f;
+  return PALP_OK;
+}
+
+int palp_world_add_finger(palp_world *w, palp_vec3 center, double radius) {
+  if (!w || !v3_isfinite(center) || !(radius > 0.0) || !isfinite(radius)) return PALP_EINVAL;
+  const int c = free_slot(w);
+  if (c < 0) return c;
+  contact *k = &w->contacts[c];
+  int e = ensure_cap(k, w->mesh.vertex_count);
+  if (e) return e;
+  k->kind = CONTACT_FINGER;
+  k->count = 0;
+  k->center = center;
+  k->radius = radius;
+  k->total = v3(0, 0, 0);
+  palp_world_wake(w);
+  return c;
+}
+
+int palp_world_set_finger(palp_world *w, int c, palp_vec3 center, double radius) {
+  contact *k = get_contact(w, c, CONTACT_FINGER);
+  if (!k) return PALP_ERANGE;
+  if (!v3_isfinite(center) || !(radius > 0.0) || !isfinite(radius)) return PALP_EINVAL;
+  k->center = center;
+  k->radius = radius;
+  return PALP_OK;
+}
+
+int palp_world_remove_contact(palp_world *w, int c) {
+  contact *k = get_contact(w, c, CONTACT_NONE);
+  if (!k) return PALP_ERANGE;
+  k->kind = CONTACT_NONE;
+  k->count = 0;
+  palp_world_wake(w);
+  return PALP_OK;
+}
+
+int palp_world_contact_feedback(const palp_world *w, int c, palp_vec3 *total) {
+  const contact *k = get_contact((palp_world *)w, c, CONTACT_NONE);
+  if (!k) return PALP_ERANGE;
+  if (!(w->def.effects & PALP_EFFECT_FORCE_FEEDBACK)) return PALP_EINVAL;
+  if (total) *total = k->total;
+  return PALP_OK;
+}
+
+int palp_world_contact_vertices(const palp_world *w, int c, int *vertices, palp_vec3 *feedback, int cap) {
+  const contact *k = get_contact((palp_world *)w, c, CONTACT_NONE);
+  if (!k) return PALP_ERANGE;
+  const int n = k->count < cap ? k->count : cap;
+  const int fb = (w->def.effects & PALP_EFFECT_FORCE_FEEDBACK) != 0;
+  for (int q = 0; q < n; ++q) {
+    if (vertices) vertices[q] = k->vertex[q];
+    if (feedback) feedback[q] = fb ? k->feedback[q] : v3(0, 0, 0);
+  }
+  return k->count;
+}
+
+/* ---- queries ------------------------------------------------------------ */
+
+const palp_mesh *palp_world_mesh(const palp_world *w) { return &w->mesh; }
+const palp_vec3 *palp_world_positions(const palp_world *w) { return w->pos; }
+const palp_vec3 *palp_world_velocities(const palp_world *w) { return w->vel; }
+double palp_world_time(const palp_world *w) { return w->t; }
+int64_t palp_world_frame(const palp_world *w) { return w->frame; }
+double palp_world_volume(const palp_world *w) {
+  return (w->def.effects & PALP_EFFECT_GEL_PRESSURE) ? w->V : palp_mesh_volume(&w->mesh, w->pos);
+}
+double palp_world_rest_volume(const palp_world *w) { return w->V0; }
+double palp_world_pressure(const palp_world *w) { return w->p_gauge; }
+int palp_world_is_awake(const palp_world *w) { return w->awake; }
+void palp_world_wake(palp_world *w) {
+  w->awake = 1;
+  w->quiet = 0.0;
+}
+const palp_world_def *palp_world_get_def(const palp_world *w) { return &w->def; }
+
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
+  const unsigned char *p = data;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+uint64_t palp_world_hash(const palp_world *w) {
+  uint64_t h = 14695981039346656037ull;
+  const size_t nv = (size_t)w->mesh.vertex_count;
+  h = fnv1a(h, w->pos, sizeof *w->pos * nv);
+  h = fnv1a(h, w->vel, sizeof *w->vel * nv);
+  if (w->nlink) h = fnv1a(h, w->eps, sizeof(double) * (size_t)w->nlink);
+  if (w->xs) h = fnv1a(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
+  h = fnv1a(h, &w->V, sizeof w->V);
+  h = fnv1a(h, &w->p_abs, sizeof w->p_abs);
+  h = fnv1a(h, &w->t, sizeof w->t);
+  h = fnv1a(h, &w->frame, sizeof w->frame);
+  return h;
+}
+
+void palp_world_timings(const palp_world *w, palp_stage_timings *out) {
+  *out = w->timings;
+  out->refactors = w->refactors;
+  out->factor_nnz = w->ldl.n ? w->ldl.colp[w->ldl.n] : 0;
+  out->unknowns = w->ldl.n;
+}

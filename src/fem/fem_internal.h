@@ -140,6 +140,9 @@ typedef struct palp_fem_map {
   int (*node)[4];
   double (*w)[4];
 } palp_fem_map;
+/* Outer surface faces (single-owner hex faces not entirely on the clamped base),
+ * outward oriented; *faces is malloc'ed. */
+int palp_fem_surface_faces(const palp_fem_mesh *mesh, int (**faces)[4], int *count);
 int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int count, palp_fem_map *out);
 void palp_fem_map_destroy(palp_fem_map *map);
 

@@ -1,2 +1,204 @@
-/* fem_map.c - placeholder */
+/*
+ * fem_map.c - where each real-time vertex sits on the FE outer surface.
+ *
+ * The outer surface is every hexahedron face that belongs to one element only and
+ * does not lie on the clamped base. A real-time vertex p is projected radially
+ * from the base centre: the ray s p / |p| meets a bilinear face
+ *   X(xi, eta) = sum_a N_a(xi, eta) X_a
+ * where the component of X orthogonal to the ray vanishes, (I - u u^T) X = 0,
+ * solved by Gauss-Newton from the face centre. The face with a solution inside
+ * [-1, 1]^2 (small tolerance) farthest along the ray wins; the vertex then carries
+ * the face's four bilinear weights N_a(xi, eta). Loads are spread and
+ * displacements gathered with the same weights, so both models talk about the
+ * same material points.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "fem_internal.h"
+
+/* Local faces of a C3D8 element, ordered so the normal points out of the element. */
+static const int hex_face[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                   {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+
+typedef struct face_key {
+  int s[4]; /* sorted nodes */
+  int e, f;
+} face_key;
+
+static int cmp_face(const void *a, const void *b) {
+  const face_key *x = a, *y = b;
+  for (int i = 0; i < 4; ++i)
+    if (x->s[i] != y->s[i]) return x->s[i] < y->s[i] ? -1 : 1;
+  return 0;
+}
+
+static int cmp_int4(const void *a, const void *b) {
+  const int x = *(const int *)a, y = *(const int *)b;
+  return (x > y) - (x < y);
+}
+
+int palp_fem_surface_faces(const palp_fem_mesh *mesh, int (**faces)[4], int *count) {
+  const int E = mesh->element_count;
+  face_key *k = malloc(sizeof *k * (size_t)E * 6);
+  if (!k) return PALP_ENOMEM;
+  for (int e = 0; e < E; ++e)
+    for (int f = 0; f < 6; ++f) {
+      face_key *q = &k[e * 6 + f];
+      for (int i = 0; i < 4; ++i) q->s[i] = mesh->hex[e][hex_face[f][i]];
+      qsort(q->s, 4, sizeof(int), cmp_int4);
+      q->e = e, q->f = f;
+    }
+  qsort(k, (size_t)E * 6, sizeof *k, cmp_face);
+  int (*out)[4] = malloc(sizeof *out * (size_t)E * 6);
+  if (!out) {
+    free(k);
+    return PALP_ENOMEM;
+  }
+  int n = 0;
+  for (int i = 0; i < E * 6;) {
+    int j = i + 1;
+    while (j < E * 6 && cmp_face(&k[i], &k[j]) == 0) ++j;
+    if (j == i + 1) {
+      int base = 1;
+      for (int c = 0; c < 4; ++c) {
+        const int node = mesh->hex[k[i].e][hex_face[k[i].f][c]];
+        out[n][c] = node;
+        base &= mesh->fixed[node];
+      }
+      if (!base) ++n;
+    }
+    i = j;
+  }
+  free(k);
+  *faces = out;
+  *count = n;
+  return PALP_OK;
+}
+
+static void bilinear(double xi, double eta, double N[4], double dxi[4], double deta[4]) {
+  static const double s[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  for (int a = 0; a < 4; ++a) {
+    N[a] = 0.25 * (1 + s[a][0] * xi) * (1 + s[a][1] * eta);
+    dxi[a] = 0.25 * s[a][0] * (1 + s[a][1] * eta);
+    deta[a] = 0.25 * s[a][1] * (1 + s[a][0] * xi);
+  }
+}
+
+/* Gauss-Newton for (I - u u^T) X(xi, eta) = 0; returns the residual distance [m]. */
+static double ray_face(const palp_fem_mesh *mesh, const int f[4], const double u[3], double *xi, double *eta,
+                       double *along) {
+  double a = 0.0, b = 0.0, r2 = 0.0;
+  for (int it = 0; it < 20; ++it) {
+    double N[4], dx[4], de[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
+    bilinear(a, b, N, dx, de);
+    for (int c = 0; c < 4; ++c)
+      for (int d = 0; d < 3; ++d) {
+        X[d] += N[c] * mesh->x[f[c]][d];
+        Xa[d] += dx[c] * mesh->x[f[c]][d];
+        Xb[d] += de[c] * mesh->x[f[c]][d];
+      }
+    const double xu = X[0] * u[0] + X[1] * u[1] + X[2] * u[2];
+    const double au = Xa[0] * u[0] + Xa[1] * u[1] + Xa[2] * u[2];
+    const double bu = Xb[0] * u[0] + Xb[1] * u[1] + Xb[2] * u[2];
+    double r[3], ja[3], jb[3];
+    for (int d = 0; d < 3; ++d) {
+      r[d] = X[d] - xu * u[d];
+      ja[d] = Xa[d] - au * u[d];
+      jb[d] = Xb[d] - bu * u[d];
+    }
+    r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+    *along = xu;
+    const double A = ja[0] * ja[0] + ja[1] * ja[1] + ja[2] * ja[2];
+    const double B = ja[0] * jb[0] + ja[1] * jb[1] + ja[2] * jb[2];
+    const double C = jb[0] * jb[0] + jb[1] * jb[1] + jb[2] * jb[2];
+    const double ga = ja[0] * r[0] + ja[1] * r[1] + ja[2] * r[2];
+    const double gb = jb[0] * r[0] + jb[1] * r[1] + jb[2] * r[2];
+    const double det = A * C - B * B;
+    if (!(det > 0.0)) break;
+    const double da = -(C * ga - B * gb) / det, db = -(A * gb - B * ga) / det;
+    a += da, b += db;
+    if (fabs(a) > 3 || fabs(b) > 3) break; /* far outside: not this face */
+    if (fabs(da) + fabs(db) < 1e-14) break;
+  }
+  *xi = a, *eta = b;
+  return sqrt(r2);
+}
+
+int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int count, palp_fem_map *out) {
+  memset(out, 0, sizeof *out);
+  int (*faces)[4] = NULL, nf = 0;
+  int rc = palp_fem_surface_faces(mesh, &faces, &nf);
+  if (rc) return rc;
+  /* angular extent of each face around its centre direction, for a quick cull */
+  double (*cdir)[4] = malloc(sizeof *cdir * (size_t)(nf ? nf : 1));
+  out->node = malloc(sizeof *out->node * (size_t)(count ? count : 1));
+  out->w = malloc(sizeof *out->w * (size_t)(count ? count : 1));
+  if (!cdir || !out->node || !out->w) {
+    free(faces), free(cdir);
+    palp_fem_map_destroy(out);
+    return PALP_ENOMEM;
+  }
+  double scale = 0.0;
+  for (int f = 0; f < nf; ++f) {
+    double c[3] = {0};
+    for (int k = 0; k < 4; ++k)
+      for (int d = 0; d < 3; ++d) c[d] += 0.25 * mesh->x[faces[f][k]][d];
+    const double l = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    scale = fmax(scale, l);
+    double mincos = 1.0;
+    for (int k = 0; k < 4; ++k) {
+      const double *x = mesh->x[faces[f][k]];
+      const double lx = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+      const double cs = lx > 0 && l > 0 ? (x[0] * c[0] + x[1] * c[1] + x[2] * c[2]) / (lx * l) : -1.0;
+      mincos = fmin(mincos, cs);
+    }
+    for (int d = 0; d < 3; ++d) cdir[f][d] = l > 0 ? c[d] / l : 0.0;
+    cdir[f][3] = acos(fmax(-1.0, fmin(1.0, mincos)));
+  }
+  for (int v = 0; v < count; ++v) {
+    double u[3] = {points[v].x, points[v].y, points[v].z};
+    const double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (!(lu > 0.0)) {
+      rc = PALP_EINVAL;
+      break;
+    }
+    for (int d = 0; d < 3; ++d) u[d] /= lu;
+    int best = -1;
+    double best_along = -INFINITY, bxi = 0, beta_ = 0;
+    for (int f = 0; f < nf; ++f) {
+      const double cs = u[0] * cdir[f][0] + u[1] * cdir[f][1] + u[2] * cdir[f][2];
+      if (acos(fmax(-1.0, fmin(1.0, cs))) > cdir[f][3] * 1.5 + 1e-6) continue;
+      double xi, eta, along;
+      const double r = ray_face(mesh, faces[f], u, &xi, &eta, &along);
+      const double tol = 1e-6;
+      if (r > 1e-9 * scale || fabs(xi) > 1 + tol || fabs(eta) > 1 + tol || along <= 0.0) continue;
+      if (along > best_along) {
+        best_along = along, best = f, bxi = xi, beta_ = eta;
+      }
+    }
+    if (best < 0) {
+      rc = PALP_ERANGE; /* the ray misses the FE surface: geometries do not match */
+      break;
+    }
+    double N[4], dx[4], de[4];
+    bilinear(fmax(-1.0, fmin(1.0, bxi)), fmax(-1.0, fmin(1.0, beta_)), N, dx, de);
+    for (int k = 0; k < 4; ++k) {
+      out->node[v][k] = faces[best][k];
+      out->w[v][k] = N[k];
+    }
+  }
+  out->count = count;
+  free(faces);
+  free(cdir);
+  if (rc) palp_fem_map_destroy(out);
+  return rc;
+}
+
+void palp_fem_map_destroy(palp_fem_map *map) {
+  if (!map) return;
+  free(map->node);
+  free(map->w);
+  memset(map, 0, sizeof *map);
+}

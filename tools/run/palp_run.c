@@ -1,0 +1,219 @@
+/*
+ * palp-run - runs a scene offline and writes per-frame results as CSV.
+ *
+ *   palp-run SCENE.json [--distribution single|uniform|gaussian|gaussian_offset|all]
+ *            [--dt S] [--vertices N] [--frames N] [--out PREFIX] [--quiet]
+ *
+ * PREFIX_frames.csv: time, top-vertex displacement, max displacement, volume,
+ * pressure, applied and feedback force per frame; PREFIX_vertices.csv: the
+ * displacement of every vertex per frame. A summary goes to stdout.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "palp.h"
+
+typedef struct run_summary {
+  double peak_top, t_peak, top_at_release, residual_1s, recovery_time, max_vol_err, peak_pressure;
+  palp_vec3 feedback_at_release;
+  double step_median_us, step_p99_us;
+} run_summary;
+
+static int cmp_double(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static const char *dist_label[] = {"", "I single", "II uniform", "III gaussian", "IV gaussian_offset"};
+
+static int run(const palp_scene *s, const char *prefix, run_summary *sum) {
+  int err;
+  palp_world *w = palp_scene_create_world(s, &err);
+  if (!w) {
+    fprintf(stderr, "palp-run: cannot create the world: %s\n", palp_strerror(err));
+    return 1;
+  }
+  const palp_mesh *m = palp_world_mesh(w);
+  const int nv = m->vertex_count, top = m->top_vertex;
+  const int sub = (int)lround(s->frame_period / s->world.dt);
+  FILE *ff = NULL, *fv = NULL;
+  if (prefix) {
+    char path[1100];
+    snprintf(path, sizeof path, "%s_frames.csv", prefix);
+    ff = fopen(path, "w");
+    snprintf(path, sizeof path, "%s_vertices.csv", prefix);
+    fv = fopen(path, "w");
+    if (!ff || !fv) {
+      fprintf(stderr, "palp-run: cannot write %s_*.csv\n", prefix);
+      if (ff) fclose(ff);
+      if (fv) fclose(fv);
+      palp_world_destroy(w);
+      return 1;
+    }
+    fprintf(ff, "time_s,top_dx_m,top_dy_m,top_dz_m,top_disp_m,max_disp_m,volume_m3,volume_rel_err,pressure_Pa,"
+                "applied_N,feedback_x_N,feedback_y_N,feedback_z_N,feedback_N\n");
+    fprintf(fv, "time_s");
+    for (int i = 0; i < nv; ++i) fprintf(fv, ",dx%d_m,dy%d_m,dz%d_m", i, i, i);
+    fprintf(fv, "\n");
+  }
+  const long nsteps = (long)s->frames * sub;
+  double *st = malloc(sizeof(double) * (size_t)(nsteps > 0 ? nsteps : 1));
+  memset(sum, 0, sizeof *sum);
+  sum->recovery_time = NAN;
+  double t_release = -1.0;
+  for (int c = 0; c < s->contact_count; ++c)
+    if (s->contact[c].profile.kind == PALP_PROFILE_STEP) t_release = s->contact[c].profile.t_off;
+  const double V0 = palp_world_rest_volume(w);
+  long k = 0;
+  for (int f = 0; f < s->frames; ++f) {
+    double applied = 0.0;
+    for (int q = 0; q < sub; ++q, ++k) {
+      palp_scene_apply(s, w, palp_world_time(w));
+      const double t0 = now_s();
+      err = palp_world_step(w);
+      st[k] = now_s() - t0;
+      if (err) {
+        fprintf(stderr, "palp-run: step %ld failed: %s\n", k, palp_strerror(err));
+        free(st);
+        palp_world_destroy(w);
+        return 1;
+      }
+    }
+    for (int c = 0; c < s->contact_count; ++c)
+      applied += palp_profile_eval(&s->contact[c].profile, palp_world_time(w) - s->world.dt);
+    const palp_vec3 *p = palp_world_positions(w);
+    const double t = palp_world_time(w);
+    const palp_vec3 d = {p[top].x - m->rest[top].x, p[top].y - m->rest[top].y, p[top].z - m->rest[top].z};
+    const double top_disp = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    double maxd = 0.0;
+    for (int i = 0; i < nv; ++i) {
+      const double dx = p[i].x - m->rest[i].x, dy = p[i].y - m->rest[i].y, dz = p[i].z - m->rest[i].z;
+      maxd = fmax(maxd, sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    const double V = palp_world_volume(w), verr = (V - V0) / V0;
+    palp_vec3 fb = {0, 0, 0};
+    for (int c = 0; c < s->contact_count; ++c) {
+      palp_vec3 one;
+      if (palp_world_contact_feedback(w, c, &one) == PALP_OK) fb.x += one.x, fb.y += one.y, fb.z += one.z;
+    }
+    const double fbn = sqrt(fb.x * fb.x + fb.y * fb.y + fb.z * fb.z);
+    if (top_disp > sum->peak_top) sum->peak_top = top_disp, sum->t_peak = t;
+    if (t_release > 0 && fabs(t - t_release) < 0.5 * s->frame_period) {
+      sum->top_at_release = top_disp;
+      sum->feedback_at_release = fb;
+    }
+    if (t_release > 0 && fabs(t - (t_release + 1.0)) < 0.5 * s->frame_period) sum->residual_1s = top_disp;
+    if (t_release > 0 && t > t_release && isnan(sum->recovery_time) && top_disp <= 0.05 * sum->peak_top)
+      sum->recovery_time = t - t_release;
+    sum->max_vol_err = fmax(sum->max_vol_err, fabs(verr));
+    sum->peak_pressure = fmax(sum->peak_pressure, palp_world_pressure(w));
+    if (ff) {
+      fprintf(ff, "%.6f,%.9e,%.9e,%.9e,%.9e,%.9e,%.9e,%.3e,%.6e,%.6f,%.6e,%.6e,%.6e,%.6e\n", t, d.x, d.y, d.z,
+              top_disp, maxd, V, verr, palp_world_pressure(w), applied, fb.x, fb.y, fb.z, fbn);
+      fprintf(fv, "%.6f", t);
+      for (int i = 0; i < nv; ++i)
+        fprintf(fv, ",%.6e,%.6e,%.6e", p[i].x - m->rest[i].x, p[i].y - m->rest[i].y, p[i].z - m->rest[i].z);
+      fprintf(fv, "\n");
+    }
+  }
+  qsort(st, (size_t)nsteps, sizeof *st, cmp_double);
+  sum->step_median_us = 1e6 * st[nsteps / 2];
+  sum->step_p99_us = 1e6 * st[(long)(0.99 * (double)(nsteps - 1))];
+  free(st);
+  if (ff) fclose(ff);
+  if (fv) fclose(fv);
+  palp_world_destroy(w);
+  return 0;
+}
+
+static void usage(void) {
+  fprintf(stderr, "usage: palp-run SCENE.json [--distribution single|uniform|gaussian|gaussian_offset|all]\n"
+                  "                [--dt S] [--vertices N] [--frames N] [--out PREFIX] [--quiet]\n");
+}
+
+int main(int argc, char **argv) {
+  const char *scene_path = NULL, *prefix = NULL, *dist = NULL;
+  double dt = 0.0;
+  int vertices = 0, frames = 0, quiet = 0;
+  for (int i = 1; i < argc; ++i) {
+    const char *a = argv[i];
+    const char *v = (i + 1 < argc) ? argv[i + 1] : NULL;
+    if (!strcmp(a, "--distribution") && v) dist = v, ++i;
+    else if (!strcmp(a, "--dt") && v) dt = atof(v), ++i;
+    else if (!strcmp(a, "--vertices") && v) vertices = atoi(v), ++i;
+    else if (!strcmp(a, "--frames") && v) frames = atoi(v), ++i;
+    else if (!strcmp(a, "--out") && v) prefix = v, ++i;
+    else if (!strcmp(a, "--quiet")) quiet = 1;
+    else if (!strcmp(a, "-h") || !strcmp(a, "--help")) return usage(), 0;
+    else if (a[0] != '-' && !scene_path) scene_path = a;
+    else return usage(), 2;
+  }
+  if (!scene_path) return usage(), 2;
+  palp_scene s;
+  char err[256];
+  if (palp_scene_load(scene_path, &s, err, sizeof err)) {
+    fprintf(stderr, "palp-run: %s: %s\n", scene_path, err);
+    return 2;
+  }
+  if (dt > 0.0) {
+    if (!(dt <= s.frame_period)) {
+      fprintf(stderr, "palp-run: --dt must be > 0 and <= the frame period %g s\n", s.frame_period);
+      return 2;
+    }
+    s.world.dt = s.frame_period / lround(s.frame_period / dt);
+  }
+  if (vertices) s.world.mesh.vertex_count = vertices;
+  if (frames > 0) s.frames = frames;
+  int first = 1, last = 1;
+  if (dist) {
+    if (!strcmp(dist, "all")) first = 1, last = 4;
+    else {
+      int d = 0;
+      const char *names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
+      for (int i = 0; i < 4; ++i)
+        if (!strcmp(dist, names[i])) d = i + 1;
+      if (!d) {
+        fprintf(stderr, "palp-run: unknown distribution \"%s\"\n", dist);
+        return 2;
+      }
+      first = last = d;
+    }
+  }
+  if (!quiet)
+    printf("palp-run: scene \"%s\", %d vertices, dt %.4g s, %d frames of %.4g s\n", s.name,
+           s.world.mesh.vertex_count, s.world.dt, s.frames, s.frame_period);
+  int rc = 0;
+  for (int d = first; d <= last; ++d) {
+    palp_scene sd = s;
+    if (dist)
+      for (int c = 0; c < sd.contact_count; ++c) sd.contact[c].def.distribution = (palp_distribution)d;
+    char pre[1024];
+    if (prefix && first != last) snprintf(pre, sizeof pre, "%s_d%d", prefix, d);
+    else if (prefix) snprintf(pre, sizeof pre, "%s", prefix);
+    run_summary sum;
+    if (run(&sd, prefix ? pre : NULL, &sum)) {
+      rc = 1;
+      continue;
+    }
+    const int dd = sd.contact_count ? (int)sd.contact[0].def.distribution : 0;
+    printf("distribution %-20s peak top displacement %.3f mm at %.2f s; at release %.3f mm; 1 s after release "
+           "%.3f mm (%.1f%% of peak); back within 5%% of peak after %.2f s\n",
+           dd ? dist_label[dd] : "-", 1e3 * sum.peak_top, sum.t_peak, 1e3 * sum.top_at_release,
+           1e3 * sum.residual_1s, sum.peak_top > 0 ? 100.0 * sum.residual_1s / sum.peak_top : 0.0,
+           sum.recovery_time);
+    printf("    max |volume error| %.4f%%, peak gauge pressure %.1f Pa, feedback at release (%.3f, %.3f, %.3f) N, "
+           "step median %.1f us, p99 %.1f us\n",
+           100.0 * sum.max_vol_err, sum.peak_pressure, sum.feedback_at_release.x, sum.feedback_at_release.y,
+           sum.feedback_at_release.z, sum.step_median_us, sum.step_p99_us);
+  }
+  return rc;
+}
