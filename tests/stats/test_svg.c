@@ -171,6 +171,35 @@ static void test_bland_altman_plot(void) {
   free(svg);
   def.sd = -1.0;
   check("negative SD -> EINVAL", palp_svg_bland_altman(stdout, &def) == PALP_EINVAL);
+
+  /* Thinning: 20000 pairs, d_i = +-0.01 alternating except 3 pairs at 1.0, so
+   * bias ~ 1.5e-4 and SD ~ 0.016: exactly those 3 lie outside 2 SD. With
+   * max_points 1000 the stride is 20: pairs 0, 20, ..., 19980 (1000) plus the 3
+   * outliers (placed at odd indices, so not already drawn) = 1003 circles. */
+  enum { NB = 20000 };
+  static double ta[NB], tb[NB];
+  double sum = 0.0, sq = 0.0;
+  for (int i = 0; i < NB; ++i) {
+    tb[i] = 1.0 + 1e-4 * i;
+    ta[i] = tb[i] + ((i == 101 || i == 5001 || i == 15001) ? 1.0 : (i % 2 ? 0.01 : -0.01));
+    sum += ta[i] - tb[i];
+  }
+  double bias = sum / NB;
+  for (int i = 0; i < NB; ++i) sq += (ta[i] - tb[i] - bias) * (ta[i] - tb[i] - bias);
+  def.a = ta;
+  def.b = tb;
+  def.n = NB;
+  def.bias = bias;
+  def.sd = sqrt(sq / (NB - 1));
+  def.max_points = 1000;
+  snprintf(path, sizeof path, "%s/ba_thin.svg", dir);
+  check("thinned BA plot written", palp_svg_bland_altman_file(path, &def, err, sizeof err) == 0);
+  check_well_formed(path);
+  svg = slurp(path);
+  check("thinned: 1003 circles", count(svg, "<circle") == 1003);
+  check("thinned: the 3 outliers marked", count(svg, "fill=\"#D55E00\"") == 3);
+  check("thinned: summary says so", strstr(svg, "1003 pairs drawn: every 20-th") != NULL);
+  free(svg);
 }
 
 int main(int argc, char **argv) {

@@ -141,7 +141,7 @@ static void write_header(FILE *out, int w, int h, const char *title) {
   fputs("</title>\n", out);
   fprintf(out, "<rect x=\"0\" y=\"0\" width=\"%d\" height=\"%d\" fill=\"#ffffff\"/>\n", w, h);
   if (title) {
-    fprintf(out, "<text class=\"title\" x=\"%.1f\" y=\"28\" text-anchor=\"middle\" font-size=\"16\" "
+    fprintf(out, "<text class=\"title\" x=\"%.1f\" y=\"22\" text-anchor=\"middle\" font-size=\"16\" "
                  "font-weight=\"bold\">",
             w / 2.0);
     palp_svg_write_text(out, title);
@@ -328,7 +328,8 @@ int palp_svg_bland_altman(FILE *out, const palp_svg_bland_altman_def *def) {
   f.y0 = MARGIN_T;
   f.w = def->width - MARGIN_L - MARGIN_R;
   f.h = def->height - MARGIN_T - MARGIN_B;
-  f.ax = make_axis(xlo, xhi, 8);
+  double xpad = 0.03 * (xhi - xlo); /* keep points off the frame */
+  f.ax = make_axis(xlo - xpad, xhi + xpad, 8);
   f.ay = make_axis(ylo - pad, yhi + pad, 6);
 
   char xl[256], yl[256];
@@ -345,12 +346,19 @@ int palp_svg_bland_altman(FILE *out, const palp_svg_bland_altman_def *def) {
   hline(out, &f, def->bias - 1.96 * def->sd, "loa", "7 4", "-1.96 SD", def->bias - 1.96 * def->sd, 1);
   hline(out, &f, def->bias, "bias", NULL, "bias", def->bias, 0);
 
-  size_t outside = 0;
+  /* Thinning keeps every k-th pair and every pair outside the band, so the
+   * picture of the spread and all the disagreeing points survive. */
+  size_t stride = 1;
+  if (def->max_points > 0 && def->n > def->max_points)
+    stride = (def->n + def->max_points - 1) / def->max_points;
+  size_t outside = 0, drawn = 0;
   fputs("<g class=\"points\" fill-opacity=\"0.75\">\n", out);
   for (size_t i = 0; i < def->n; ++i) {
     double m = 0.5 * (def->a[i] + def->b[i]), d = def->a[i] - def->b[i];
     int out_band = fabs(d - def->bias) > 2.0 * def->sd;
     outside += (size_t)out_band;
+    if (!out_band && i % stride != 0) continue;
+    drawn++;
     fprintf(out, "<circle cx=\"%.2f\" cy=\"%.2f\" r=\"2.6\" fill=\"%s\"/>\n", px(&f, m), py(&f, d),
             out_band ? "#D55E00" : "#0072B2");
   }
@@ -358,8 +366,11 @@ int palp_svg_bland_altman(FILE *out, const palp_svg_bland_altman_def *def) {
   double within = 100.0 * (double)(def->n - outside) / (double)def->n;
   fprintf(out,
           "<text class=\"summary\" x=\"%.2f\" y=\"%.2f\" font-size=\"12\">n = %zu, %.1f %% within "
-          "bias &#177; 2 SD (orange: outside)</text>\n",
-          f.x0, f.y0 - 8, def->n, within);
+          "bias &#177; 2 SD (orange: outside)",
+          f.x0, f.y0 - 6, def->n, within);
+  if (drawn < def->n)
+    fprintf(out, "; %zu pairs drawn: every %zu-th and all outside", drawn, stride);
+  fputs("</text>\n", out);
   fputs("</svg>\n", out);
   return finish(out);
 }

@@ -53,11 +53,16 @@ typedef struct palp_svg_bland_altman_def {
   size_t n;
   double bias, sd;               /* from palp_stats_bland_altman */
   int width, height;             /* [px], default 800 x 480 */
+  size_t max_points;             /* draw at most about this many circles (every k-th pair
+                                    plus every pair outside bias +- 2 SD); 0 draws all.
+                                    Default 4000: 400 frames x 338 vertices would
+                                    otherwise make a 10 MB file no viewer enjoys */
 } palp_svg_bland_altman_def;
 
 palp_svg_bland_altman_def palp_svg_bland_altman_default_def(void);
 
-/* One <circle> per pair at ((a+b)/2, a-b), points outside bias +- 2 SD marked;
+/* One <circle> per pair at ((a+b)/2, a-b) (thinned by max_points), points outside
+ * bias +- 2 SD marked;
  * horizontal lines at the bias (solid), bias +- 1.96 SD (dashed) and bias +- 2 SD
  * (dotted), each labelled with its value. */
 int palp_svg_bland_altman(FILE *out, const palp_svg_bland_altman_def *def);
