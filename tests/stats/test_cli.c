@@ -5,6 +5,7 @@
  *
  * usage: test_cli PATH/TO/palp-stats WORKDIR
  */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -302,7 +303,13 @@ int main(int argc, char **argv) {
     fprintf(stderr, "usage: %s PALP_STATS WORKDIR\n", argv[0]);
     return 2;
   }
-  tool = argv[1];
+  /* Commands run inside dir, so the tool path must not be relative. */
+  static char tool_abs[4096];
+  if (!realpath(argv[1], tool_abs)) {
+    perror(argv[1]);
+    return 2;
+  }
+  tool = tool_abs;
   dir = argv[2];
   mkdir(dir, 0755);
   test_smls07();
