@@ -1,0 +1,30 @@
+/* input_device.c - loads a haptic device driver from a shared object. */
+#include <dlfcn.h>
+#include <stdio.h>
+
+#include "input.h"
+
+int palp_cli_device_input(const char *path, const char *arg, palp_cli_input *out, char *err, size_t errlen) {
+  void *h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+  if (!h) {
+    snprintf(err, errlen, "device driver %s: %s", path, dlerror());
+    return PALP_EIO;
+  }
+  /* POSIX guarantees data and function pointers convert through dlsym. */
+  palp_cli_device_entry entry;
+  *(void **)(&entry) = dlsym(h, "palp_cli_device_driver");
+  if (!entry) {
+    snprintf(err, errlen, "device driver %s: no symbol palp_cli_device_driver", path);
+    dlclose(h);
+    return PALP_EINVAL;
+  }
+  int rc = entry(arg ? arg : "", out);
+  if (rc < 0 || !out->poll) {
+    snprintf(err, errlen, "device driver %s: initialisation failed (%d)", path, rc);
+    dlclose(h);
+    return rc < 0 ? rc : PALP_EINVAL;
+  }
+  /* The handle stays open for the life of the process: the driver's code runs
+   * until palp-client exits. */
+  return 0;
+}

@@ -1,0 +1,105 @@
+/* input_replay.c - replays a contact CSV written by palp-client --contact-csv. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "input.h"
+
+typedef struct row {
+  double t;
+  palp_cli_cmd c;
+} row;
+
+typedef struct replay {
+  row *rows;
+  int n, next;
+  palp_cli_cmd cur[PALP_CLI_MAX_FINGERS];
+  int used[PALP_CLI_MAX_FINGERS];
+} replay;
+
+void palp_cli_contact_csv_header(FILE *f) {
+  fprintf(f, "t_s,finger,mode,distribution,cx_m,cy_m,cz_m,fx_N,fy_N,fz_N,radius_m\n");
+}
+
+void palp_cli_contact_csv_row(FILE *f, double t, const palp_cli_cmd *c) {
+  fprintf(f, "%.6f,%d,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", t, c->finger, c->mode, c->distribution,
+          c->center.x, c->center.y, c->center.z, c->force.x, c->force.y, c->force.z, c->radius);
+}
+
+static int r_open(void *ctx, double R) {
+  (void)ctx;
+  (void)R;
+  return 0;
+}
+
+static int r_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
+  replay *r = ctx;
+  while (r->next < r->n && r->rows[r->next].t <= t) {
+    const palp_cli_cmd *c = &r->rows[r->next++].c;
+    r->cur[c->finger] = *c;
+    r->used[c->finger] = 1;
+  }
+  /* Ends half a second after the last row so the last release is delivered. */
+  if (r->next >= r->n && (r->n == 0 || t > r->rows[r->n - 1].t + 0.5)) return PALP_CLI_INPUT_END;
+  int k = 0;
+  for (int f = 0; f < PALP_CLI_MAX_FINGERS && k < cap; f++)
+    if (r->used[f]) cmd[k++] = r->cur[f];
+  return k;
+}
+
+static void r_close(void *ctx) {
+  replay *r = ctx;
+  free(r->rows);
+  free(r);
+}
+
+int palp_cli_replay_input(const char *path, palp_cli_input *out, char *err, size_t errlen) {
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    snprintf(err, errlen, "%s: cannot open", path);
+    return PALP_EIO;
+  }
+  replay *r = calloc(1, sizeof *r);
+  int cap = 0, line = 0, rc = 0;
+  char buf[512];
+  while (r && fgets(buf, sizeof buf, f)) {
+    line++;
+    if (line == 1 && strncmp(buf, "t_s,", 4) == 0) continue;
+    if (buf[0] == '\n' || buf[0] == '#') continue;
+    row w;
+    memset(&w, 0, sizeof w);
+    int n = sscanf(buf, "%lf,%d,%d,%d,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &w.t, &w.c.finger, &w.c.mode,
+                   &w.c.distribution, &w.c.center.x, &w.c.center.y, &w.c.center.z, &w.c.force.x, &w.c.force.y,
+                   &w.c.force.z, &w.c.radius);
+    if (n != 11 || w.c.finger < 0 || w.c.finger >= PALP_CLI_MAX_FINGERS || w.c.mode < 0 || w.c.mode > 2 ||
+        (r->n > 0 && w.t < r->rows[r->n - 1].t)) {
+      snprintf(err, errlen, "%s:%d: expected t_s,finger(0-3),mode(0-2),distribution,cx,cy,cz,fx,fy,fz,radius "
+               "with non-decreasing t_s", path, line);
+      rc = PALP_EPARSE;
+      break;
+    }
+    if (r->n == cap) {
+      cap = cap ? 2 * cap : 1024;
+      row *nr = realloc(r->rows, (size_t)cap * sizeof *nr);
+      if (!nr) {
+        rc = PALP_ENOMEM;
+        break;
+      }
+      r->rows = nr;
+    }
+    r->rows[r->n++] = w;
+  }
+  fclose(f);
+  if (!r) rc = PALP_ENOMEM;
+  if (rc == 0 && r->n == 0) {
+    snprintf(err, errlen, "%s: no contact rows", path);
+    rc = PALP_EPARSE;
+  }
+  if (rc) {
+    if (rc == PALP_ENOMEM) snprintf(err, errlen, "%s: out of memory", path);
+    if (r) r_close(r);
+    return rc;
+  }
+  *out = (palp_cli_input){.name = "replay", .ctx = r, .open = r_open, .poll = r_poll, .close = r_close};
+  return 0;
+}

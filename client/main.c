@@ -1,0 +1,631 @@
+/* main.c - palp-client: a trainee, visual or observer station. */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "input.h"
+#include "palp.h"
+#include "palp_dds.h"
+#include "station.h"
+#include "view.h"
+
+static volatile sig_atomic_t g_stop; /* set by SIGINT/SIGTERM; polled by the loops */
+static void on_signal(int sig) {
+  (void)sig;
+  g_stop = 1;
+}
+
+typedef struct opts {
+  const char *role;
+  uint32_t domain, phantom, session;
+  const char *name;
+  const char *input;
+  const char *profile;
+  int distribution;
+  double magnitude, t_on, t_off, frequency, offset, polar, azimuth;
+  double finger_radius_mm, patch_area_cm2;
+  double rate, duration, timeout, print_period;
+  const char *feedback_csv, *contact_csv, *svg;
+  double svg_every, map_every;
+  int color, quiet, map, no_map;
+  int have_magnitude, have_t_off;
+} opts;
+
+static void usage(FILE *f) {
+  fprintf(f,
+          "usage: palp-client --role trainee|visual|observer [options]\n"
+          "common:   --domain N  --phantom ID  --session ID  --name NAME  --duration S  --timeout S  --quiet\n"
+          "trainee:  --input script|replay:FILE|keyboard|device:LIB.so[:ARG]   (default script)\n"
+          "          --profile paper|step|ramp|sine  --distribution 1-4  --magnitude N  --t-on S --t-off S\n"
+          "          --frequency HZ --offset N  --polar DEG --azimuth DEG  --patch-area CM2\n"
+          "          --finger-radius MM  (position-driven finger: magnitude is the depth in mm)\n"
+          "          --rate HZ  --feedback-csv FILE  --contact-csv FILE  --print-period S\n"
+          "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
+          "observer: follows --session ID, or the newest session on --phantom ID\n");
+}
+
+static int num(const char *opt, const char *v, double lo, double hi, double *out) {
+  char *end = NULL;
+  errno = 0;
+  double x = v ? strtod(v, &end) : 0;
+  if (!v || errno || end == v || *end || !(x >= lo && x <= hi)) {
+    fprintf(stderr, "palp-client: %s: expected a number in [%g, %g], got \"%s\"\n", opt, lo, hi, v ? v : "");
+    return -1;
+  }
+  *out = x;
+  return 0;
+}
+
+static int parse(int argc, char **argv, opts *o) {
+  *o = (opts){.role = NULL, .name = "", .input = "script", .profile = "paper", .distribution = 2, .polar = 30,
+              .azimuth = 40, .timeout = 10, .print_period = 0.5, .color = isatty(STDOUT_FILENO), .map_every = 0.5};
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    double x = 0;
+#define NUM(flag, lo, hi, dst)                                                                                 \
+  if (!strcmp(a, flag)) {                                                                                      \
+    if (num(a, v, lo, hi, &x)) return -1;                                                                      \
+    dst = x;                                                                                                   \
+    i++;                                                                                                       \
+    continue;                                                                                                  \
+  }
+#define STR(flag, dst)                                                                                         \
+  if (!strcmp(a, flag)) {                                                                                      \
+    if (!v) {                                                                                                  \
+      fprintf(stderr, "palp-client: %s: missing value\n", a);                                                \
+      return -1;                                                                                               \
+    }                                                                                                          \
+    dst = v;                                                                                                   \
+    i++;                                                                                                       \
+    continue;                                                                                                  \
+  }
+    STR("--role", o->role)
+    NUM("--domain", 0, 232, o->domain)
+    NUM("--phantom", 0, 4294967295.0, o->phantom)
+    NUM("--session", 0, 4294967295.0, o->session)
+    STR("--name", o->name)
+    STR("--input", o->input)
+    STR("--profile", o->profile)
+    NUM("--distribution", 1, 4, o->distribution)
+    if (!strcmp(a, "--magnitude")) o->have_magnitude = 1;
+    NUM("--magnitude", -1000, 1000, o->magnitude)
+    NUM("--t-on", 0, 1e6, o->t_on)
+    if (!strcmp(a, "--t-off")) o->have_t_off = 1;
+    NUM("--t-off", 0, 1e6, o->t_off)
+    NUM("--frequency", 0, 1000, o->frequency)
+    NUM("--offset", -1000, 1000, o->offset)
+    NUM("--polar", 0, 90, o->polar)
+    NUM("--azimuth", -360, 360, o->azimuth)
+    NUM("--finger-radius", 0.1, 100, o->finger_radius_mm)
+    NUM("--patch-area", 0.01, 100, o->patch_area_cm2)
+    NUM("--rate", 1, 10000, o->rate)
+    NUM("--duration", 0, 1e6, o->duration)
+    NUM("--timeout", 0.1, 3600, o->timeout)
+    NUM("--print-period", 0, 3600, o->print_period)
+    STR("--feedback-csv", o->feedback_csv)
+    STR("--contact-csv", o->contact_csv)
+    STR("--svg", o->svg)
+    NUM("--svg-every", 0.01, 3600, o->svg_every)
+    NUM("--map-every", 0.01, 3600, o->map_every)
+    if (!strcmp(a, "--map")) { o->map = 1; continue; }
+    if (!strcmp(a, "--no-map")) { o->no_map = 1; continue; }
+    if (!strcmp(a, "--no-color")) { o->color = 0; continue; }
+    if (!strcmp(a, "--quiet")) { o->quiet = 1; continue; }
+    if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); exit(0); }
+    fprintf(stderr, "palp-client: unknown option: %s\n", a);
+    return -1;
+#undef NUM
+#undef STR
+  }
+  if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
+    fprintf(stderr, "palp-client: --role: expected trainee, visual or observer\n");
+    return -1;
+  }
+  if (!strcmp(o->role, "trainee") && o->phantom == 0) {
+    fprintf(stderr, "palp-client: --phantom: a trainee needs the id of the phantom to palpate\n");
+    return -1;
+  }
+  return 0;
+}
+
+static double norm3(palp_Vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* ---- input selection --------------------------------------------------------------- */
+
+static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errlen) {
+  if (!strcmp(o->input, "script")) {
+    palp_cli_script_def d = {.finger_mode = o->finger_radius_mm > 0, .distribution = o->distribution,
+                             .polar_deg = o->polar, .azimuth_deg = o->azimuth,
+                             .radius = o->finger_radius_mm * 1e-3, .patch_area = o->patch_area_cm2 * 1e-4};
+    palp_profile p = palp_profile_paper_step();
+    double mag = o->have_magnitude ? o->magnitude : (d.finger_mode ? 5.0 : p.magnitude); /* 3 N, or 5 mm */
+    if (!strcmp(o->profile, "paper")) {
+      /* the paper's 3 N step held 2 s (or a 5 mm indentation for a finger) */
+    } else if (!strcmp(o->profile, "step")) {
+      p.kind = PALP_PROFILE_STEP;
+    } else if (!strcmp(o->profile, "ramp")) {
+      p.kind = PALP_PROFILE_RAMP;
+    } else if (!strcmp(o->profile, "sine")) {
+      p.kind = PALP_PROFILE_SINE;
+      p.frequency = o->frequency > 0 ? o->frequency : 1.0;
+      p.offset = o->offset != 0 ? o->offset : mag;
+    } else {
+      snprintf(err, errlen, "--profile: expected paper, step, ramp or sine, got \"%s\"", o->profile);
+      return PALP_EINVAL;
+    }
+    p.magnitude = d.finger_mode ? mag * 1e-3 : mag;
+    if (d.finger_mode) p.offset *= 1e-3;
+    if (strcmp(o->profile, "paper")) {
+      p.t_on = o->t_on;
+      p.t_off = o->have_t_off ? o->t_off : o->t_on + 2.0;
+    }
+    d.profile = p;
+    /* Run to the end of the profile plus 1 s of recovery unless told otherwise. */
+    d.end_time = o->duration > 0 ? o->duration : p.t_off + 1.0;
+    return palp_cli_script_input(&d, in);
+  }
+  if (!strncmp(o->input, "replay:", 7)) return palp_cli_replay_input(o->input + 7, in, err, errlen);
+  if (!strcmp(o->input, "keyboard")) return palp_cli_keyboard_input(in, err, errlen);
+  if (!strncmp(o->input, "device:", 7)) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s", o->input + 7);
+    char *arg = strchr(path, ':');
+    if (arg) *arg++ = 0;
+    return palp_cli_device_input(path, arg, in, err, errlen);
+  }
+  snprintf(err, errlen, "--input: expected script, replay:FILE, keyboard or device:LIB.so[:ARG], got \"%s\"", o->input);
+  return PALP_EINVAL;
+}
+
+/* ---- trainee ------------------------------------------------------------------------- */
+
+typedef struct latency {
+  double *us;
+  size_t n, cap;
+} latency;
+
+static void lat_add(latency *l, double us) {
+  if (l->n == l->cap) {
+    size_t cap = l->cap ? 2 * l->cap : 4096;
+    double *p = realloc(l->us, cap * sizeof *p);
+    if (!p) return;
+    l->us = p;
+    l->cap = cap;
+  }
+  l->us[l->n++] = us;
+}
+
+typedef struct feedback_ctx {
+  palp_cli_station *st;
+  palp_cli_input *in;
+  FILE *csv;
+  int64_t t0;
+  uint64_t echoed[PALP_CLI_MAX_FINGERS];
+  uint64_t samples;
+  double peak, last, last_top;
+  latency lat;
+} feedback_ctx;
+
+/* Takes every feedback sample; latency from the echoed contact stamp. */
+static void drain_feedback(feedback_ctx *c) {
+  for (;;) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    if (dds_take(c->st->feedback_r, ptr, &info, 1, 1) <= 0) break;
+    const palp_Feedback *fb = ptr[0];
+    int64_t rx = palp_dds_now_ns();
+    if (info.valid_data) {
+      c->samples++;
+      c->last_top = fb->top_displacement;
+      for (uint32_t k = 0; k < fb->fingers._length; k++) {
+        const palp_FingerFeedback *ff = &fb->fingers._buffer[k];
+        double lat_us = NAN;
+        if (ff->finger < PALP_CLI_MAX_FINGERS && ff->contact_seq > c->echoed[ff->finger]) {
+          c->echoed[ff->finger] = ff->contact_seq;
+          lat_us = (double)(rx - ff->contact_source_time_ns) * 1e-3;
+          lat_add(&c->lat, lat_us);
+        }
+        double m = norm3(ff->force);
+        if (ff->finger == 0) c->last = m;
+        if (m > c->peak) c->peak = m;
+        if (c->in->feedback && ff->finger < PALP_CLI_MAX_FINGERS)
+          c->in->feedback(c->in->ctx, ff->finger, (palp_vec3){ff->force.x, ff->force.y, ff->force.z});
+        if (c->csv)
+          fprintf(c->csv, "%.6f,%llu,%.6f,%u,%d,%.6g,%.6g,%.6g,%.6g,%.1f\n", (double)(rx - c->t0) * 1e-9,
+                  (unsigned long long)fb->frame, fb->sim_time, ff->finger, ff->active, ff->force.x, ff->force.y,
+                  ff->force.z, fb->top_displacement, lat_us);
+      }
+    }
+    dds_return_loan(c->st->feedback_r, ptr, 1);
+  }
+}
+
+static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph) {
+  char err[512] = "";
+  palp_cli_input in;
+  int rc = make_input(o, &in, err, sizeof err);
+  if (rc < 0) {
+    fprintf(stderr, "palp-client: %s\n", err);
+    return 1;
+  }
+  if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
+    fprintf(stderr, "palp-client: input %s: cannot open: %s\n", in.name, palp_strerror(rc));
+    if (in.close) in.close(in.ctx);
+    return 1;
+  }
+  FILE *fb_csv = o->feedback_csv ? fopen(o->feedback_csv, "w") : NULL;
+  FILE *ct_csv = o->contact_csv ? fopen(o->contact_csv, "w") : NULL;
+  if ((o->feedback_csv && !fb_csv) || (o->contact_csv && !ct_csv)) {
+    fprintf(stderr, "palp-client: cannot write %s\n", o->feedback_csv && !fb_csv ? o->feedback_csv : o->contact_csv);
+    if (in.close) in.close(in.ctx);
+    if (fb_csv) fclose(fb_csv);
+    if (ct_csv) fclose(ct_csv);
+    return 1;
+  }
+  if (fb_csv) fprintf(fb_csv, "t_s,frame,sim_time_s,finger,active,fx_N,fy_N,fz_N,top_displacement_m,latency_us\n");
+  if (ct_csv) palp_cli_contact_csv_header(ct_csv);
+
+  double rate = o->rate > 0 ? o->rate : (st->tick_rate_hz > 0 ? st->tick_rate_hz : 100);
+  const int64_t period = (int64_t)(1e9 / rate);
+  const int64_t t0 = palp_dds_now_ns();
+  int64_t next = t0, next_print = t0, next_state_check = t0;
+  uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
+  int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
+  uint64_t sent = 0;
+  feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0};
+  /* Feedback is taken as it arrives (waitset) so its receive time is exact. */
+  dds_entity_t ws = dds_create_waitset(st->pp);
+  dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, fb_cond, 0);
+  char reason[128] = "";
+  int closed = 0, ended = 0;
+  while (!g_stop) {
+    int64_t now = palp_dds_now_ns();
+    double t = (double)(now - t0) * 1e-9;
+    if (o->duration > 0 && t >= o->duration) break;
+    palp_cli_cmd cmd[PALP_CLI_MAX_FINGERS];
+    int n = in.poll(in.ctx, t, cmd, PALP_CLI_MAX_FINGERS);
+    if (n == PALP_CLI_INPUT_END) {
+      ended = 1;
+      break;
+    }
+    if (n < 0) {
+      fprintf(stderr, "palp-client: input %s failed: %s\n", in.name, palp_strerror(n));
+      break;
+    }
+    int want[PALP_CLI_MAX_FINGERS] = {0};
+    for (int k = 0; k < n; k++) {
+      const palp_cli_cmd *c = &cmd[k];
+      if (c->finger < 0 || c->finger >= PALP_CLI_MAX_FINGERS) continue;
+      palp_Contact m;
+      memset(&m, 0, sizeof m);
+      m.session_id = st->session_id;
+      m.finger = (uint8_t)c->finger;
+      m.mode = (palp_ContactMode)c->mode;
+      m.distribution = (uint8_t)c->distribution;
+      m.vertex = -1;
+      m.center = (palp_Vec3){c->center.x, c->center.y, c->center.z};
+      m.force = (palp_Vec3){c->force.x, c->force.y, c->force.z};
+      m.radius = c->radius;
+      m.patch_area = c->patch_area;
+      if (c->mode == 0) {
+        if (!down[c->finger] && release_left[c->finger] == 0) continue;
+      } else {
+        want[c->finger] = 1;
+      }
+      m.seq = ++seq[c->finger];
+      m.source_time_ns = palp_dds_now_ns();
+      dds_write(st->contact_w, &m);
+      sent++;
+      if (ct_csv) palp_cli_contact_csv_row(ct_csv, t, c);
+      if (c->mode == 0) {
+        down[c->finger] = 0;
+        if (release_left[c->finger] > 0) release_left[c->finger]--;
+      }
+    }
+    for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++) {
+      if (want[f]) {
+        down[f] = 1;
+        /* Best-effort: a lift is repeated on the next ticks so one lost sample
+         * cannot leave the finger pressing. */
+        release_left[f] = 3;
+      } else if (down[f] || release_left[f] > 0) {
+        palp_Contact m;
+        memset(&m, 0, sizeof m);
+        m.session_id = st->session_id;
+        m.finger = (uint8_t)f;
+        m.mode = palp_CONTACT_RELEASE;
+        m.vertex = -1;
+        m.seq = ++seq[f];
+        m.source_time_ns = palp_dds_now_ns();
+        dds_write(st->contact_w, &m);
+        sent++;
+        if (ct_csv && down[f]) {
+          palp_cli_cmd rel = {.finger = f, .mode = 0};
+          palp_cli_contact_csv_row(ct_csv, t, &rel);
+        }
+        down[f] = 0;
+        if (release_left[f] > 0) release_left[f]--;
+      }
+    }
+    drain_feedback(&fx);
+    if (o->print_period > 0 && !o->quiet && now >= next_print) {
+      printf("[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole down %5.2f mm\n", o->name, t,
+             down[0] ? "pressing" : "lifted  ", fx.last, fx.last_top * 1e3);
+      fflush(stdout);
+      next_print += (int64_t)(o->print_period * 1e9);
+    }
+    if (now >= next_state_check) {
+      if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
+        closed = 1;
+        break;
+      }
+      next_state_check = now + 100000000;
+    }
+    next += period;
+    if (next < palp_dds_now_ns()) next = palp_dds_now_ns();
+    for (int64_t w; !g_stop && (w = next - palp_dds_now_ns()) > 0;) {
+      dds_waitset_wait(ws, NULL, 0, w);
+      drain_feedback(&fx);
+    }
+  }
+  dds_delete(fb_cond);
+  dds_delete(ws);
+  /* Lift every finger (three times: best-effort), then leave. */
+  for (int rep = 0; rep < 3 && !closed; rep++)
+    for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++)
+      if (seq[f]) {
+        palp_Contact m;
+        memset(&m, 0, sizeof m);
+        m.session_id = st->session_id;
+        m.finger = (uint8_t)f;
+        m.mode = palp_CONTACT_RELEASE;
+        m.vertex = -1;
+        m.seq = ++seq[f];
+        m.source_time_ns = palp_dds_now_ns();
+        dds_write(st->contact_w, &m);
+      }
+  if (in.close) in.close(in.ctx);
+  if (fb_csv) fclose(fb_csv);
+  if (ct_csv) fclose(ct_csv);
+  latency lat = fx.lat;
+  double p50 = NAN, p99 = NAN;
+  if (lat.n) {
+    qsort(lat.us, lat.n, sizeof *lat.us, cmp_double);
+    p50 = lat.us[(lat.n - 1) / 2];
+    p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
+  }
+  printf("[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
+         "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s\n",
+         o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
+         lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "");
+  free(lat.us);
+  (void)ended;
+  return closed ? 3 : 0;
+}
+
+/* ---- visual station and observer ------------------------------------------------------------ */
+
+typedef struct deform_copy {
+  palp_Deformation d;
+  palp_Vec3 *pos;
+  uint32_t cap;
+  int valid;
+} deform_copy;
+
+static void deform_store(deform_copy *c, const palp_Deformation *d) {
+  if (d->positions._length > c->cap) {
+    palp_Vec3 *p = realloc(c->pos, d->positions._length * sizeof *p);
+    if (!p) return;
+    c->pos = p;
+    c->cap = d->positions._length;
+  }
+  c->d = *d;
+  memcpy(c->pos, d->positions._buffer, d->positions._length * sizeof *c->pos);
+  c->d.positions._buffer = c->pos;
+  c->d.positions._release = false;
+  c->valid = 1;
+}
+
+static const char *dist_name(int d) {
+  static const char *n[] = {"?", "I (single vertex)", "II (uniform)", "III (Gaussian)", "IV (offset Gaussian)"};
+  return d >= 1 && d <= 4 ? n[d] : n[0];
+}
+
+static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *ph, int observer) {
+  palp_cli_view view;
+  int show_map = o->map || (!observer && !o->no_map);
+  if (show_map && palp_cli_view_init(&view, ph, 2 * 21, 21, 0) < 0) return 1;
+  deform_copy last = {0}, peak = {0};
+  double peak_disp = 0;
+  const int64_t t0 = palp_dds_now_ns();
+  int64_t next_map = t0, next_svg = t0 + (int64_t)(o->svg_every * 1e9), next_print = t0, next_check = t0;
+  int svg_no = 0;
+  uint64_t frames = 0, contacts = 0, feedbacks = 0;
+  palp_Contact last_contact;
+  memset(&last_contact, 0, sizeof last_contact);
+  int have_contact = 0, pressing = 0;
+  double last_fb = 0, last_top = 0;
+  char reason[128] = "";
+  int closed = 0;
+  dds_entity_t ws = dds_create_waitset(st->pp);
+  dds_entity_t conds[3];
+  int nc = 0;
+  if (st->deformation_r > 0) conds[nc++] = dds_create_readcondition(st->deformation_r, DDS_ANY_STATE);
+  if (st->contact_r > 0) conds[nc++] = dds_create_readcondition(st->contact_r, DDS_ANY_STATE);
+  if (st->feedback_r > 0) conds[nc++] = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
+  for (int i = 0; i < nc; i++) dds_waitset_attach(ws, conds[i], 0);
+  while (!g_stop) {
+    int64_t now = palp_dds_now_ns();
+    double t = (double)(now - t0) * 1e-9;
+    if (o->duration > 0 && t >= o->duration) break;
+    dds_waitset_wait(ws, NULL, 0, DDS_MSECS(50));
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (st->deformation_r > 0 && dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data) {
+        const palp_Deformation *d = ptr[0];
+        frames++;
+        deform_store(&last, d);
+        double m = palp_cli_max_displacement(ph, d, NULL);
+        if (m >= peak_disp) {
+          peak_disp = m;
+          deform_store(&peak, d);
+        }
+      }
+      dds_return_loan(st->deformation_r, ptr, 1);
+    }
+    while (st->contact_r > 0 && dds_take(st->contact_r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data) {
+        const palp_Contact *c = ptr[0];
+        contacts++;
+        int now_pressing = c->mode != palp_CONTACT_RELEASE;
+        if (observer && !o->quiet && now_pressing != pressing) {
+          if (now_pressing) {
+            double r = norm3(c->center);
+            double polar = r > 0 ? acos(c->center.z / r) * 180 / 3.14159265358979 : 0;
+            double az = atan2(c->center.y, c->center.x) * 180 / 3.14159265358979;
+            if (c->mode == palp_CONTACT_FORCE)
+              printf("[observer] t=%6.2f s  trainee presses: force-driven, distribution %s, at polar %.0f deg "
+                     "azimuth %.0f deg, |F| = %.2f N\n", t, dist_name(c->distribution), polar, az, norm3(c->force));
+            else
+              printf("[observer] t=%6.2f s  trainee presses: finger of radius %.1f mm at polar %.0f deg azimuth "
+                     "%.0f deg\n", t, c->radius * 1e3, polar, az);
+          } else {
+            printf("[observer] t=%6.2f s  trainee lifts the finger\n", t);
+          }
+          fflush(stdout);
+        }
+        pressing = now_pressing;
+        last_contact = *c;
+        have_contact = 1;
+      }
+      dds_return_loan(st->contact_r, ptr, 1);
+    }
+    while (st->feedback_r > 0 && dds_take(st->feedback_r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data) {
+        const palp_Feedback *fb = ptr[0];
+        feedbacks++;
+        last_top = fb->top_displacement;
+        last_fb = fb->fingers._length ? norm3(fb->fingers._buffer[0].force) : 0;
+      }
+      dds_return_loan(st->feedback_r, ptr, 1);
+    }
+    now = palp_dds_now_ns();
+    if (observer && !o->quiet && o->print_period > 0 && now >= next_print) {
+      printf("[observer] t=%6.2f s  session %u: %s  |F| applied %.2f N, feedback %.2f N, pole down %.2f mm, "
+             "max displacement %.2f mm\n", t, st->session_id, pressing ? "pressing" : "lifted  ",
+             have_contact && pressing ? norm3(last_contact.force) : 0.0, last_fb, last_top * 1e3,
+             last.valid ? palp_cli_max_displacement(ph, &last.d, NULL) * 1e3 : 0.0);
+      fflush(stdout);
+      next_print += (int64_t)(o->print_period * 1e9);
+    }
+    if (show_map && last.valid && now >= next_map) {
+      if (o->color && isatty(STDOUT_FILENO)) fputs("\033[H\033[2J", stdout);
+      printf("session %u, phantom %u \"%s\"\n", st->session_id, ph->phantom_id, ph->name);
+      palp_cli_view_render(&view, &last.d, stdout, o->color);
+      fflush(stdout);
+      next_map = now + (int64_t)(o->map_every * 1e9);
+    }
+    if (o->svg && o->svg_every > 0 && last.valid && now >= next_svg) {
+      char path[1100], title[160];
+      snprintf(path, sizeof path, "%s-%04d.svg", o->svg, ++svg_no);
+      snprintf(title, sizeof title, "palp session %u, phantom \"%s\"", st->session_id, ph->name);
+      palp_cli_view_svg(ph, &last.d, title, path);
+      next_svg = now + (int64_t)(o->svg_every * 1e9);
+    }
+    if (now >= next_check) {
+      if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
+        closed = 1;
+        break;
+      }
+      next_check = now + 100000000;
+    }
+  }
+  for (int i = 0; i < nc; i++) dds_delete(conds[i]);
+  dds_delete(ws);
+  if (o->svg && peak.valid) {
+    char title[160];
+    snprintf(title, sizeof title, "palp session %u, \"%s\", peak frame", st->session_id, ph->name);
+    if (palp_cli_view_svg(ph, &peak.d, title, o->svg) < 0)
+      fprintf(stderr, "palp-client: cannot write %s\n", o->svg);
+  }
+  printf("[%s] session %u: %llu deformation frames, %llu contact samples seen, %llu feedback samples, peak "
+         "displacement %.2f mm%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
+         (unsigned long long)contacts, (unsigned long long)feedbacks, peak_disp * 1e3,
+         o->svg && peak.valid ? ", snapshot " : "", o->svg && peak.valid ? o->svg : "",
+         closed ? "; session closed: " : "", closed ? reason : "");
+  if (show_map) palp_cli_view_free(&view);
+  free(last.pos);
+  free(peak.pos);
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  opts o;
+  if (parse(argc, argv, &o) < 0) {
+    usage(stderr);
+    return 2;
+  }
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+  if (palp_dds_use_config(NULL) < 0) {
+    fprintf(stderr, "palp-client: cannot read the DDS config %s (set CYCLONEDDS_URI)\n", PALP_DDS_DEFAULT_CONFIG);
+    return 1;
+  }
+  int trainee = !strcmp(o.role, "trainee"), observer = !strcmp(o.role, "observer");
+  char label[64];
+  snprintf(label, sizeof label, "%s%s%s", o.role, o.name[0] ? ":" : "", o.name);
+  palp_cli_station st;
+  char err[512];
+  if (palp_cli_station_open(&st, o.domain, label, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s\n", err);
+    return 1;
+  }
+  palp_cli_join j = {.role = trainee ? palp_ROLE_TRAINEE : observer ? palp_ROLE_OBSERVER : palp_ROLE_VISUAL,
+                     .phantom_id = o.phantom,
+                     .session_id = o.session,
+                     .user_name = o.name,
+                     .want_feedback = 1,
+                     .want_deformation = !trainee,
+                     .timeout = o.timeout};
+  int rc = 1;
+  if (palp_cli_station_join(&st, &j, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s\n", err);
+    palp_cli_station_close(&st);
+    return 1;
+  }
+  palp_Phantom ph;
+  if (palp_cli_station_catalogue(&st, st.phantom_id, o.timeout, &ph, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s\n", err);
+    palp_cli_station_leave(&st);
+    palp_cli_station_close(&st);
+    return 1;
+  }
+  if (!o.quiet)
+    printf("[%s %s] joined session %u on phantom %u \"%s\" (%u vertices, %.0f Hz), partition %s\n", o.role, o.name,
+           st.session_id, ph.phantom_id, ph.name, ph.rest._length, st.tick_rate_hz, st.partition);
+  fflush(stdout);
+  rc = trainee ? run_trainee(&o, &st, &ph) : run_viewer(&o, &st, &ph, observer);
+  palp_cli_station_leave(&st);
+  /* Give the disposal a moment to reach the server before the participant goes. */
+  struct timespec ts = {0, 100000000};
+  nanosleep(&ts, NULL);
+  palp_cli_phantom_free(&ph);
+  palp_cli_station_close(&st);
+  return rc;
+}

@@ -1,0 +1,209 @@
+/* station.c - the DDS side of a palp station. */
+#include "station.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
+  if (err && errlen) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+  }
+  return code;
+}
+
+static void nap(double s) {
+  struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+  nanosleep(&ts, NULL);
+}
+
+int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *label, char *err, size_t errlen) {
+  memset(st, 0, sizeof *st);
+  char host[32] = "host";
+  gethostname(host, sizeof host - 1);
+  snprintf(st->station_id, sizeof st->station_id, "%.24s/%ld/%.24s", host, (long)getpid(), label ? label : "station");
+  st->pp = dds_create_participant((dds_domainid_t)domain, NULL, NULL);
+  if (st->pp < 0)
+    return fail(err, errlen, PALP_EIO, "cannot create a DDS participant on domain %u: %s", domain,
+                dds_strretcode(st->pp));
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+    st->topic[k] = palp_dds_create_topic(st->pp, (palp_dds_topic_kind)k);
+    if (st->topic[k] < 0) {
+      palp_cli_station_close(st);
+      return fail(err, errlen, PALP_EIO, "cannot create topic %s", palp_dds_topic_name((palp_dds_topic_kind)k));
+    }
+  }
+  st->catalogue_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
+  st->request_w = palp_dds_create_writer(st->pp, st->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  st->reply_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
+  st->state_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
+  if (st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
+    palp_cli_station_close(st);
+    return fail(err, errlen, PALP_EIO, "cannot create the station's DDS endpoints");
+  }
+  return 0;
+}
+
+void palp_cli_station_close(palp_cli_station *st) {
+  if (st->pp > 0) dds_delete(st->pp);
+  st->pp = 0;
+}
+
+int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Phantom *out,
+                               char *err, size_t errlen) {
+  int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
+  dds_entity_t ws = dds_create_waitset(st->pp);
+  dds_entity_t rc = dds_create_readcondition(st->catalogue_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  int result = PALP_EIO;
+  for (;;) {
+    void *ptr[8] = {NULL};
+    dds_sample_info_t info[8];
+    /* read, not take: the catalogue stays available to later calls. */
+    int n = dds_read(st->catalogue_r, ptr, info, 8, 8);
+    for (int i = 0; i < n && result != 0; i++) {
+      const palp_Phantom *p = ptr[i];
+      if (!info[i].valid_data || (phantom_id && p->phantom_id != phantom_id)) continue;
+      *out = *p;
+      size_t nv = p->rest._length, nt = p->triangles._length;
+      out->rest._buffer = malloc((nv ? nv : 1) * sizeof(palp_Vec3));
+      out->triangles._buffer = malloc((nt ? nt : 1) * sizeof(int32_t));
+      if (!out->rest._buffer || !out->triangles._buffer) {
+        palp_cli_phantom_free(out);
+        result = PALP_ENOMEM;
+        break;
+      }
+      memcpy(out->rest._buffer, p->rest._buffer, nv * sizeof(palp_Vec3));
+      memcpy(out->triangles._buffer, p->triangles._buffer, nt * sizeof(int32_t));
+      out->rest._maximum = (uint32_t)nv;
+      out->triangles._maximum = (uint32_t)nt;
+      out->rest._release = out->triangles._release = false;
+      result = 0;
+    }
+    if (n > 0) dds_return_loan(st->catalogue_r, ptr, n);
+    if (result != PALP_EIO) break;
+    int64_t now = palp_dds_now_ns();
+    if (now >= end) break;
+    dds_waitset_wait(ws, NULL, 0, end - now < DDS_MSECS(100) ? end - now : DDS_MSECS(100));
+  }
+  dds_delete(rc);
+  dds_delete(ws);
+  if (result == PALP_ENOMEM) return fail(err, errlen, result, "out of memory");
+  if (result != 0)
+    return fail(err, errlen, PALP_EIO, "no catalogue entry for phantom %u within %.1f s (is palp-server running on this domain?)",
+                phantom_id, timeout);
+  return 0;
+}
+
+void palp_cli_phantom_free(palp_Phantom *p) {
+  free(p->rest._buffer);
+  free(p->triangles._buffer);
+  p->rest._buffer = NULL;
+  p->triangles._buffer = NULL;
+}
+
+static int send_request(palp_cli_station *st, const palp_cli_join *j, int op) {
+  palp_SessionRequest rq;
+  memset(&rq, 0, sizeof rq);
+  snprintf(rq.station_id, sizeof rq.station_id, "%s", st->station_id);
+  rq.request_seq = ++st->request_seq;
+  rq.op = op;
+  rq.role = (palp_Role)j->role;
+  rq.phantom_id = j->phantom_id;
+  rq.session_id = j->session_id;
+  snprintf(rq.user_name, sizeof rq.user_name, "%s", j->user_name ? j->user_name : "");
+  rq.want_feedback = j->want_feedback != 0;
+  rq.want_deformation = j->want_deformation != 0;
+  return dds_write(st->request_w, &rq) < 0 ? PALP_EIO : 0;
+}
+
+/* Waits for the reply to request_seq until end_ns: 1 accepted, 0 rejected, -1 timeout. */
+static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *out) {
+  dds_entity_t ws = dds_create_waitset(st->pp);
+  dds_entity_t rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  int result = -1;
+  while (result < 0) {
+    palp_SessionReply buf[4];
+    void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
+    dds_sample_info_t info[4];
+    int n;
+    while (result < 0 && (n = dds_take(st->reply_r, ptr, info, 4, 4)) > 0)
+      for (int i = 0; i < n; i++)
+        if (info[i].valid_data && strcmp(buf[i].station_id, st->station_id) == 0 &&
+            buf[i].request_seq == st->request_seq) {
+          *out = buf[i];
+          result = buf[i].status == palp_REPLY_ACCEPTED;
+        }
+    int64_t now = palp_dds_now_ns();
+    if (result >= 0 || now >= end_ns) break;
+    dds_waitset_wait(ws, NULL, 0, end_ns - now < DDS_MSECS(50) ? end_ns - now : DDS_MSECS(50));
+  }
+  dds_delete(rc);
+  dds_delete(ws);
+  return result;
+}
+
+int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen) {
+  int64_t end = palp_dds_now_ns() + (int64_t)(j->timeout * 1e9);
+  palp_SessionReply r;
+  memset(&r, 0, sizeof r);
+  for (;;) {
+    if (send_request(st, j, palp_OP_JOIN) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
+    int got = await_reply(st, end, &r);
+    if (got == 1) break;
+    if (got < 0)
+      return fail(err, errlen, PALP_EIO, "no answer from palp-server within %.1f s (is it running on this domain?)",
+                  j->timeout);
+    /* A viewer may start before the trainee it follows: ask again until the timeout. */
+    int retry = j->role != palp_ROLE_TRAINEE && strncmp(r.reason, "no open session", 15) == 0;
+    if (!retry || palp_dds_now_ns() + DDS_MSECS(250) >= end)
+      return fail(err, errlen, PALP_EINVAL, "join rejected: %s", r.reason);
+    nap(0.25);
+  }
+  st->session_id = r.session_id;
+  st->phantom_id = r.phantom_id;
+  st->tick_rate_hz = r.tick_rate_hz;
+  snprintf(st->partition, sizeof st->partition, "%s", r.partition);
+  st->pub = palp_dds_session_publisher(st->pp, st->partition);
+  st->sub = palp_dds_session_subscriber(st->pp, st->partition);
+  if (st->pub < 0 || st->sub < 0) return fail(err, errlen, PALP_EIO, "cannot create the session's publisher/subscriber");
+  if (j->role == palp_ROLE_TRAINEE)
+    st->contact_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+  else
+    st->contact_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+  if (j->want_feedback)
+    st->feedback_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
+  if (j->want_deformation)
+    st->deformation_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+  if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0)
+    return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
+  return 0;
+}
+
+int palp_cli_station_leave(palp_cli_station *st) {
+  palp_SessionRequest key;
+  memset(&key, 0, sizeof key);
+  snprintf(key.station_id, sizeof key.station_id, "%s", st->station_id);
+  return dds_dispose(st->request_w, &key) < 0 ? PALP_EIO : 0;
+}
+
+int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
+  palp_SessionState buf[4];
+  void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
+  dds_sample_info_t info[4];
+  int n, closed = 0;
+  while ((n = dds_take(st->state_r, ptr, info, 4, 4)) > 0)
+    for (int i = 0; i < n; i++)
+      if (info[i].valid_data && buf[i].session_id == st->session_id && buf[i].phase == palp_PHASE_CLOSED) {
+        closed = 1;
+        if (reason) snprintf(reason, len, "%s", buf[i].reason);
+      }
+  return closed;
+}

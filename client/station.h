@@ -1,0 +1,65 @@
+/*
+ * station.h - the DDS side of a palp station: participant, catalogue, joining a
+ * session (request -> reply), and the session partition's endpoints.
+ *
+ * Used by palp-client and, in-process, by the server tests and the benchmark.
+ * Functions return 0 or a negative PALP_E* code; messages go to the err buffer.
+ */
+#ifndef PALP_CLI_STATION_H
+#define PALP_CLI_STATION_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <dds/dds.h>
+
+#include "palp.h"
+#include "palp_dds.h"
+
+typedef struct palp_cli_station {
+  char station_id[64];
+  dds_entity_t pp;
+  dds_entity_t topic[PALP_TOPIC_COUNT];
+  dds_entity_t catalogue_r, request_w, reply_r, state_r;
+  /* session endpoints, valid after a successful join */
+  uint32_t session_id;
+  uint32_t phantom_id;
+  char partition[64];
+  double tick_rate_hz;
+  dds_entity_t pub, sub;
+  dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
+  uint32_t request_seq;
+} palp_cli_station;
+
+typedef struct palp_cli_join {
+  int role;                 /* palp_Role */
+  uint32_t phantom_id;
+  uint32_t session_id;      /* viewers: 0 = newest session on the phantom */
+  const char *user_name;
+  int want_feedback;
+  int want_deformation;
+  double timeout;           /* [s] to wait for the reply (and, for viewers, for a session) */
+} palp_cli_join;
+
+/* Creates the participant on `domain` (CYCLONEDDS_URI must be set) and the
+ * global endpoints. label goes into the station id ("host/pid/label"). */
+int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *label, char *err, size_t errlen);
+void palp_cli_station_close(palp_cli_station *st);
+
+/* Waits up to timeout [s] for phantom_id in the catalogue (0: any; the first
+ * seen). On success *out is a copy the caller frees with palp_cli_phantom_free. */
+int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Phantom *out,
+                               char *err, size_t errlen);
+
+void palp_cli_phantom_free(palp_Phantom *p);
+
+/* Sends a join and waits for the reply; on acceptance creates the session's
+ * publisher/subscriber in its partition and the role's readers/writers. */
+int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen);
+/* Disposes the request instance: the server closes/leaves the session now. */
+int palp_cli_station_leave(palp_cli_station *st);
+
+/* Non-blocking: 1 and the state when the session's state changed to closed. */
+int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);
+
+#endif

@@ -1,0 +1,32 @@
+/*
+ * view.h - what a visual station shows: a terminal displacement map of the dome
+ * seen from above, and SVG snapshots of the deformed surface.
+ */
+#ifndef PALP_CLI_VIEW_H
+#define PALP_CLI_VIEW_H
+
+#include <stdio.h>
+
+#include "palp_types.h"
+
+typedef struct palp_cli_view {
+  const palp_Phantom *phantom; /* rest mesh; borrowed */
+  int w, h;                    /* character cells */
+  int *cell_vertex;            /* [w*h] nearest dome vertex seen from above, -1 outside */
+  double scale;                /* displacement at full colour [m]; 0 = automatic */
+} palp_cli_view;
+
+int palp_cli_view_init(palp_cli_view *v, const palp_Phantom *ph, int w, int h, double scale);
+void palp_cli_view_free(palp_cli_view *v);
+
+/* Largest vertex displacement from rest [m] and the vertex it is at. */
+double palp_cli_max_displacement(const palp_Phantom *ph, const palp_Deformation *d, int *vertex);
+
+/* Draws the map (colour: ANSI 256-colour background cells; else characters). */
+void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FILE *out, int color);
+
+/* Top view of the deformed dome, triangles coloured by displacement, drawn from
+ * the lowest up. Returns 0 or a negative PALP_E* code. */
+int palp_cli_view_svg(const palp_Phantom *ph, const palp_Deformation *d, const char *title, const char *path);
+
+#endif
