@@ -33,11 +33,12 @@ int palp_burgers_init(palp_burgers *b, double E1, double eta1, double E2, double
       P2[i][j] = (A[i][j] - l1 * d) / (l2 - l1);
     }
   /* Phi = e^{Ah}; Psi0 = int_0^h e^{A s} ds = h phi0(Ah);
-   * Psi1 = int_0^h e^{A (h - s)} s/h ds = h [phi0(Ah) - phi1(Ah)]. Then
+   * Psi1 = int_0^h e^{A (h - s)} s/h ds = h phi1(Ah) (substitute tau = h - s and
+   * integrate tau e^{A tau} by parts). Then
    * x_{n+1} = Phi x_n + (Psi0 - Psi1) b eps_n + Psi1 b eps_{n+1}. */
   const double e1 = exp(l1 * h), e2 = exp(l2 * h);
   const double q0_1 = h * phi0(l1 * h), q0_2 = h * phi0(l2 * h);
-  const double q1_1 = h * (phi0(l1 * h) - phi1(l1 * h)), q1_2 = h * (phi0(l2 * h) - phi1(l2 * h));
+  const double q1_1 = h * phi1(l1 * h), q1_2 = h * phi1(l2 * h);
   for (int i = 0; i < 2; ++i) {
     b->g0[i] = 0.0;
     b->g1[i] = 0.0;
@@ -58,6 +59,6 @@ double palp_burgers_creep(double E1, double eta1, double E2, double eta2, double
    * eps(t) = s0 t1/eta1 + s0/E2 (1 - e^{-t1 E2/eta2}) e^{-(t - t1) E2/eta2}   (after removal) */
   const double r = E2 / eta2;
   if (t < 0.0) return 0.0;
-  if (t1 <= 0.0 || t < t1) return s0 / E1 + s0 * t / eta1 + s0 / E2 * (-expm1(-r * t));
+  if (t1 <= 0.0 || t <= t1) return s0 / E1 + s0 * t / eta1 + s0 / E2 * (-expm1(-r * t));
   return s0 * t1 / eta1 + s0 / E2 * (-expm1(-r * t1)) * exp(-r * (t - t1));
 }

@@ -46,7 +46,7 @@ static inline double palp_burgers_predict(const palp_burgers *b, const double x[
 }
 
 /* Closed-form creep strain under a stress step sigma0 [Pa] applied at t = 0 and removed
- * at t1 [s] (t1 <= 0: never removed), Findley, Lai & Onaran (1976) Ch. 5. */
+ * just after t1 [s] (t1 <= 0: never removed), Findley, Lai & Onaran (1976) Ch. 5. */
 double palp_burgers_creep(double E1, double eta1, double E2, double eta2, double sigma0, double t1, double t);
 
 #endif
