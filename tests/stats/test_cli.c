@@ -138,14 +138,15 @@ static void test_smls07(void) {
 }
 
 /* Three groups by hand (see test_stats.c): SS 26 and 6, F = 13 on (2, 6) df,
- * p = (1 + 2F/6)^-3 = 27/4096. Rows interleaved and labels quoted to exercise the
+ * p = (1 + 2F/6)^-3 = 27/4096. Rows interleaved, a BOM, a blank line, a quoted and a
+ * space-padded label and trailing ",," rows (as spreadsheets export) exercise the
  * reader. */
 static void test_anova_hand(void) {
   write_file("three.csv",
              "\xEF\xBB\xBFid,group,length_mm\n"
              "1,\"low\",1\n2,mid,2\n3,high,5\n\n"
              "4,low,2\n5,mid,3\n6,high,6\n"
-             "7,low,3\n8,mid,4\n9, high ,7\n");
+             "7,low,3\n8,mid,4\n9, high ,7\n,,\n,,\n");
   result r = run("anova three.csv --group group --value length_mm --json");
   check("hand anova exit 0", r.status == 0);
   cJSON *j = cJSON_Parse(r.out);
@@ -258,6 +259,13 @@ static void test_errors(void) {
 
   const char *single[] = {"single.csv", "single group (\"A\", 3 values)", "at least 2 groups",
                           NULL};
+  /* --group and --value swapped: every value its own group. */
+  write_file("trials.csv", "trial,depth_mm\n1,1.25\n1,1.31\n2,1.40\n2,1.38\n");
+  const char *swapped[] = {"trials.csv:2", "group \"1.25\" has only one value",
+                           "--group and --value swapped?", NULL};
+  expect_error("swapped columns", "anova trials.csv --group depth_mm --value trial", 1, swapped);
+  const char *label[] = {"groups.csv:2", "\"A\" is not a number", "looks like a label", NULL};
+  expect_error("label as value", "anova groups.csv --group value --value group", 1, label);
   expect_error("fewer than 2 groups", "anova single.csv --group group --value value", 1, single);
 
   const char *empty[] = {"empty.csv", "the file is empty", "header row", NULL};

@@ -111,13 +111,15 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
   while (i < len) {
     /* One record. */
     size_t rec_line = line;
-    int blank = 1; /* nothing but whitespace so far */
+    int blank = 1;  /* nothing but whitespace so far */
+    int quoted = 0; /* a quoted field was seen (even "" is content) */
     for (;;) {
       /* One field. */
       size_t j = i;
       while (j < len && (text[j] == ' ' || text[j] == '\t') && text[j] != delim) ++j;
       if (j < len && text[j] == '"') {
         blank = 0;
+        quoted = 1;
         size_t quote_line = line;
         strbuf b = {0};
         if ((rc = sb_put(&b, '\0')) < 0) goto fail;
@@ -189,6 +191,15 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
     if (blank && rec.n == 1) { /* empty line */
       pv_free(&rec);
       continue;
+    }
+    if (!quoted && ncols >= 0) {
+      /* ",,," rows: spreadsheets export them below the data; they hold nothing. */
+      size_t k = 0;
+      while (k < rec.n && rec.p[k][0] == '\0') ++k;
+      if (k == rec.n) {
+        pv_free(&rec);
+        continue;
+      }
     }
     if (ncols < 0) {
       ncols = (int)rec.n;

@@ -4,7 +4,8 @@
  * Accepts: a header row (required), one record per line (LF, CRLF or CR), fields
  * separated by a single delimiter (',' unless told otherwise), fields optionally
  * enclosed in double quotes with "" for a literal quote and line breaks allowed
- * inside quotes, a UTF-8 byte-order mark, blank lines (skipped). Unquoted fields
+ * inside quotes, a UTF-8 byte-order mark, blank lines and rows of empty fields
+ * (",,," as spreadsheets export them) skipped. Unquoted fields
  * are trimmed of spaces and tabs. Every record remembers the line it starts on so
  * error messages can point at it.
  */

@@ -201,6 +201,10 @@ static int cell_number(const palp_csv *csv, const options *o, size_t row, int co
     fputs("  missing or non-finite values are not accepted; remove the row or pass "
           "--skip-empty with an empty cell\n",
           stderr);
+  else if (strpbrk(text, "0123456789") == NULL)
+    fputs("  this looks like a label, not a measurement: does the option name the column "
+          "holding the numbers (--value, --a, --b)?\n",
+          stderr);
   else if (isdigit((unsigned char)text[0]) || text[0] == '-' || text[0] == '.')
     fputs("  write plain numbers without units or thousands separators (e.g. 0.0125, "
           "1.2e-3); put the unit in the column name\n",
@@ -341,6 +345,10 @@ static int run_anova(const options *o, const palp_csv *csv) {
                        edit_distance(groups[h].name, groups[g].name) == 1))
           fprintf(stderr, "  a group \"%s\" exists (first on line %zu): the same group mistyped?\n",
                   groups[h].name, groups[h].first_line);
+      if ((size_t)ng * 2 > used)
+        fprintf(stderr, "  %d different labels in %zu rows: does --group name the column that "
+                        "identifies the groups (--group and --value swapped?)\n",
+                ng, used);
       goto done;
     }
 
