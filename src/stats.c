@@ -7,7 +7,8 @@
  * measurements with many constant leading digits. The textbook one-pass formula
  * SS = sum x^2 - (sum x)^2 / n then cancels catastrophically (NIST SmLs09 loses
  * every digit). Here every sum is
- *   1. taken about a shift c = one of the data values, so x - c is exact by
+ *   1. taken about a shift c = one of the data values (the group's first one
+ *      inside a group), so x - c is exact by
  *      Sterbenz' lemma whenever x and c are within a factor of two (the
  *      ill-conditioned case) and the magnitudes summed are the spreads, not the
  *      levels;
@@ -107,7 +108,8 @@ int palp_stats_rmse(const double *a, const double *b, size_t n, double *out) {
  *   SS_within  = sum_g sum_i (x_gi - m_g)^2     df_within  = N - k
  *   MS = SS / df,  F = MS_between / MS_within,  p = Q_F(F; k - 1, N - k).
  * All means are kept relative to the shift c = values[0], so m_g - G is a
- * difference of small, accurately known numbers.
+ * difference of small, accurately known numbers; within-group sums are taken about
+ * each group's first value.
  */
 int palp_stats_anova_oneway(const double *values, const size_t *start, int group_count,
                             palp_stats_anova *out) {
@@ -120,15 +122,18 @@ int palp_stats_anova_oneway(const double *values, const size_t *start, int group
 
   const double c = values[0];
 
-  /* Pass 1 and 2 per group: shifted means m_g - c and within-group SS. */
+  /* Within each group the shift is the group's own first value x_g0, so its SS is
+   * exact-differenced even when the groups sit far apart; relative to the global
+   * shift its mean is m_g - c = (x_g0 - c) + (m_g - x_g0), an exact difference plus a
+   * small accurate number. */
   palp_stats_sum weighted = {0.0, 0.0}; /* sum n_g (m_g - c) */
   palp_stats_sum within = {0.0, 0.0};
   for (int g = 0; g < group_count; ++g) {
     const double *x = values + start[g];
     size_t ng = start[g + 1] - start[g];
-    double m = shifted_mean(x, ng, c);
-    palp_stats_sum_add(&weighted, (double)ng * m);
-    palp_stats_sum_add(&within, shifted_ssd(x, ng, c, m));
+    double m = shifted_mean(x, ng, x[0]);
+    palp_stats_sum_add(&weighted, (double)ng * ((x[0] - c) + m));
+    palp_stats_sum_add(&within, shifted_ssd(x, ng, x[0], m));
   }
   double gm = palp_stats_sum_value(&weighted) / (double)n; /* G - c */
 
@@ -136,8 +141,9 @@ int palp_stats_anova_oneway(const double *values, const size_t *start, int group
    * cheaper than a workspace and keep the function allocation-free). */
   palp_stats_sum between = {0.0, 0.0};
   for (int g = 0; g < group_count; ++g) {
+    const double *x = values + start[g];
     size_t ng = start[g + 1] - start[g];
-    double e = shifted_mean(values + start[g], ng, c) - gm;
+    double e = ((x[0] - c) + shifted_mean(x, ng, x[0])) - gm;
     palp_stats_sum_add(&between, (double)ng * e * e);
   }
 
@@ -178,15 +184,16 @@ int palp_stats_anova_two_n(const double *a, size_t na, const double *b, size_t n
   if (!all_finite(a, na) || !all_finite(b, nb)) return PALP_EINVAL;
   /* Same algorithm as palp_stats_anova_oneway, for two separate arrays. */
   const double c = a[0];
-  double ma = shifted_mean(a, na, c), mb = shifted_mean(b, nb, c);
+  double la = shifted_mean(a, na, a[0]), lb = shifted_mean(b, nb, b[0]);
+  double ma = la, mb = (b[0] - c) + lb; /* group means minus c */
   double n = (double)(na + nb);
   palp_stats_sum w = {0.0, 0.0};
   palp_stats_sum_add(&w, (double)na * ma);
   palp_stats_sum_add(&w, (double)nb * mb);
   double gm = palp_stats_sum_value(&w) / n;
   palp_stats_sum within = {0.0, 0.0};
-  palp_stats_sum_add(&within, shifted_ssd(a, na, c, ma));
-  palp_stats_sum_add(&within, shifted_ssd(b, nb, c, mb));
+  palp_stats_sum_add(&within, shifted_ssd(a, na, a[0], la));
+  palp_stats_sum_add(&within, shifted_ssd(b, nb, b[0], lb));
   palp_stats_sum between = {0.0, 0.0};
   palp_stats_sum_add(&between, (double)na * (ma - gm) * (ma - gm));
   palp_stats_sum_add(&between, (double)nb * (mb - gm) * (mb - gm));

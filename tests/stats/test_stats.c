@@ -261,6 +261,22 @@ static void test_anova_hand(void) {
   check_rel("shifted 1e12 F", a.f, 13.0, 1e-9);
 }
 
+/* Groups far apart: B near 1e12 first (exact in binary64: 1e12 + 0.25 k), A near 1.
+ * SS_within = 0.125 (B: deviations -0.25 0 0.25) + 0.02 (A: 1.1 1.2 1.3) = 0.145.
+ * Differencing A against a 1e12 shift would round its values to 1.2e-4 and its SS
+ * by ~1e-3; each group's spread must survive the gap (1e-12). */
+static void test_anova_far_groups(void) {
+  const double v[6] = {1e12 + 0.25, 1e12 + 0.5, 1e12 + 0.75, 1.1, 1.2, 1.3};
+  const size_t start[3] = {0, 3, 6};
+  palp_stats_anova a;
+  check_true("far groups ok", palp_stats_anova_oneway(v, start, 2, &a) == PALP_OK);
+  check_rel("far groups SS within", a.ss_within, 0.145, 1e-12);
+  /* means 1e12 + 0.5 and 1.2: SS_between = 3 * 2 * ((1e12 - 0.7)/2)^2 = 1.5 (1e12 - 0.7)^2 */
+  check_rel("far groups SS between", a.ss_between, 1.5 * (1e12 - 0.7) * (1e12 - 0.7), 1e-12);
+  check_true("far groups two-array ok", palp_stats_anova_two_n(v, 3, v + 3, 3, &a) == PALP_OK);
+  check_rel("far groups two-array SS within", a.ss_within, 0.145, 1e-12);
+}
+
 static void test_anova_edges(void) {
   palp_stats_anova a;
   memset(&a, 0, sizeof a);
@@ -437,6 +453,7 @@ int main(void) {
   test_smls_ill_conditioned("SmLs08", 201, 201.01300409594845);
   test_smls_ill_conditioned("SmLs09", 2001, 2001.1349262209505);
   test_anova_hand();
+  test_anova_far_groups();
   test_anova_edges();
   test_rmse();
   test_bland_altman();
