@@ -1,0 +1,240 @@
+/* export: a session as CSV (one table) or JSON (everything but the meshes).
+ * Numbers are printed with 17 significant digits, which round-trips every IEEE double exactly,
+ * so an export gives back the logged values bit for bit. The 64-bit state hash is written as a
+ * hexadecimal string: JSON readers commonly hold numbers as doubles and would round it. */
+#include <inttypes.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "review.h"
+
+typedef struct exp_ctx {
+  FILE *f;
+  int first;
+  int csv;
+} exp_ctx;
+
+static void sep(exp_ctx *x) {
+  if (!x->csv) fputs(x->first ? "\n    " : ",\n    ", x->f);
+  x->first = 0;
+}
+
+static const char *op_name(palp_db_contact_op op) {
+  return op == PALP_DB_OP_ADD ? "add" : op == PALP_DB_OP_UPDATE ? "update" : "remove";
+}
+
+static int frame_cb(void *u, const palp_db_frame *f) {
+  exp_ctx *x = u;
+  sep(x);
+  if (x->csv)
+    fprintf(x->f, "%" PRId64 ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0x%016" PRIx64 "\n", f->frame, f->sim_time_s,
+            f->top_disp_m, f->max_disp_m, f->volume_m3, f->pressure_pa, f->contact_force_n, f->state_hash);
+  else
+    fprintf(x->f,
+            "{\"frame\": %" PRId64 ", \"sim_time_s\": %.17g, \"top_disp_m\": %.17g, \"max_disp_m\": %.17g, "
+            "\"volume_m3\": %.17g, \"pressure_pa\": %.17g, \"contact_force_n\": %.17g, "
+            "\"state_hash\": \"0x%016" PRIx64 "\"}",
+            f->frame, f->sim_time_s, f->top_disp_m, f->max_disp_m, f->volume_m3, f->pressure_pa,
+            f->contact_force_n, f->state_hash);
+  return 0;
+}
+
+static int contact_cb(void *u, const palp_db_contact *c) {
+  exp_ctx *x = u;
+  sep(x);
+  const int force = c->kind == PALP_DB_KIND_FORCE;
+  if (x->csv) {
+    fprintf(x->f, "%" PRId64 ",%.17g,%d,%s,%s,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                  "%.17g,%.17g,%.17g\n",
+            c->frame, c->sim_time_s, c->slot, op_name(c->op), force ? "force" : "finger", (int)c->def.distribution,
+            c->center_m.x, c->center_m.y, c->center_m.z, c->force_n.x, c->force_n.y, c->force_n.z, c->radius_m,
+            c->def.patch_area, c->def.sigma_fraction, c->def.offset_fraction, c->def.offset_dir.x,
+            c->def.offset_dir.y, c->def.offset_dir.z);
+    return 0;
+  }
+  fprintf(x->f, "{\"frame\": %" PRId64 ", \"sim_time_s\": %.17g, \"slot\": %d, \"op\": \"%s\", \"kind\": \"%s\"",
+          c->frame, c->sim_time_s, c->slot, op_name(c->op), force ? "force" : "finger");
+  if (c->op != PALP_DB_OP_REMOVE) {
+    fprintf(x->f, ", \"center_m\": [%.17g, %.17g, %.17g]", c->center_m.x, c->center_m.y, c->center_m.z);
+    if (force) fprintf(x->f, ", \"force_n\": [%.17g, %.17g, %.17g]", c->force_n.x, c->force_n.y, c->force_n.z);
+    else fprintf(x->f, ", \"radius_m\": %.17g", c->radius_m);
+    if (force && c->def.distribution)
+      fprintf(x->f,
+              ", \"distribution\": %d, \"patch_area_m2\": %.17g, \"sigma_fraction\": %.17g, "
+              "\"offset_fraction\": %.17g, \"offset_dir\": [%.17g, %.17g, %.17g]",
+              (int)c->def.distribution, c->def.patch_area, c->def.sigma_fraction, c->def.offset_fraction,
+              c->def.offset_dir.x, c->def.offset_dir.y, c->def.offset_dir.z);
+  }
+  fputc('}', x->f);
+  return 0;
+}
+
+static int feedback_cb(void *u, int64_t frame, int slot, palp_vec3 f) {
+  exp_ctx *x = u;
+  sep(x);
+  if (x->csv) fprintf(x->f, "%" PRId64 ",%d,%.17g,%.17g,%.17g\n", frame, slot, f.x, f.y, f.z);
+  else
+    fprintf(x->f, "{\"frame\": %" PRId64 ", \"slot\": %d, \"force_n\": [%.17g, %.17g, %.17g]}", frame, slot, f.x,
+            f.y, f.z);
+  return 0;
+}
+
+static void csv_str(FILE *f, const char *s) {
+  fputc('"', f);
+  for (const char *p = s ? s : ""; *p; p++) {
+    if (*p == '"') fputc('"', f);
+    fputc(*p, f);
+  }
+  fputc('"', f);
+}
+
+static int event_cb(void *u, double wall, int64_t frame, const char *kind, const char *detail, int64_t count) {
+  exp_ctx *x = u;
+  sep(x);
+  if (x->csv) {
+    fprintf(x->f, "%.17g,%" PRId64 ",%s,%" PRId64 ",", wall, frame, kind, count);
+    csv_str(x->f, detail);
+    fputc('\n', x->f);
+    return 0;
+  }
+  fprintf(x->f, "{\"wall_unix_s\": %.17g, \"frame\": %" PRId64 ", \"kind\": ", wall, frame);
+  json_str(x->f, kind);
+  fprintf(x->f, ", \"count\": %" PRId64 ", \"detail\": ", count);
+  json_str(x->f, detail);
+  fputc('}', x->f);
+  return 0;
+}
+
+static int note_cb(void *u, double wall, const char *author, const char *text, const char *grade) {
+  exp_ctx *x = u;
+  sep(x);
+  if (x->csv) {
+    fprintf(x->f, "%.17g,", wall);
+    csv_str(x->f, author);
+    fputc(',', x->f);
+    csv_str(x->f, text);
+    fputc(',', x->f);
+    csv_str(x->f, grade);
+    fputc('\n', x->f);
+    return 0;
+  }
+  fprintf(x->f, "{\"wall_unix_s\": %.17g, \"author\": ", wall);
+  json_str(x->f, author);
+  fputs(", \"text\": ", x->f);
+  json_str(x->f, text);
+  fputs(", \"grade\": ", x->f);
+  if (grade) json_str(x->f, grade);
+  else fputs("null", x->f);
+  fputc('}', x->f);
+  return 0;
+}
+
+enum { T_CONTACTS, T_FEEDBACK, T_FRAMES, T_EVENTS, T_NOTES };
+static int json_array(palp_db *db, exp_ctx *x, const char *name, int last, int table, int64_t sid) {
+  fprintf(x->f, "  \"%s\": [", name);
+  x->first = 1;
+  int rc;
+  switch (table) {
+  case T_CONTACTS: rc = palp_db_each_contact(db, sid, contact_cb, x); break;
+  case T_FEEDBACK: rc = palp_db_each_feedback(db, sid, feedback_cb, x); break;
+  case T_FRAMES: rc = palp_db_each_frame(db, sid, frame_cb, x); break;
+  case T_EVENTS: rc = palp_db_each_event(db, sid, event_cb, x); break;
+  default: rc = palp_db_each_note(db, sid, note_cb, x); break;
+  }
+  fprintf(x->f, "%s]%s\n", x->first ? "" : "\n  ", last ? "" : ",");
+  return rc;
+}
+
+/* The logged JSON goes in as JSON when it parses, else as a string, so the export stays valid. */
+static void json_embed(FILE *f, const char *s) {
+  cJSON *j = s && *s ? cJSON_Parse(s) : NULL;
+  if (j) fputs(s, f);
+  else if (s && *s) json_str(f, s);
+  else fputs("null", f);
+  cJSON_Delete(j);
+}
+
+int review_export(palp_db *db, const palp_db_session_info *s, const char *format, const char *table,
+                  const char *out_path) {
+  if (!format || (strcmp(format, "csv") && strcmp(format, "json"))) {
+    fprintf(stderr, "palp-review export: --format csv|json is required\n");
+    return REVIEW_ERROR;
+  }
+  const int csv = !strcmp(format, "csv");
+  if (csv && strcmp(table, "frames") && strcmp(table, "contacts") && strcmp(table, "feedback") &&
+      strcmp(table, "events") && strcmp(table, "notes")) {
+    fprintf(stderr, "palp-review export: --table must be frames, contacts, feedback, events or notes\n");
+    return REVIEW_ERROR;
+  }
+  FILE *f = stdout;
+  if (out_path && strcmp(out_path, "-") && !(f = fopen(out_path, "w"))) {
+    perror(out_path);
+    return REVIEW_ERROR;
+  }
+  exp_ctx x = {f, 1, csv};
+  int rc = 0;
+  if (csv) {
+    if (!strcmp(table, "frames")) {
+      fputs("frame,sim_time_s,top_disp_m,max_disp_m,volume_m3,pressure_pa,contact_force_n,state_hash\n", f);
+      rc = palp_db_each_frame(db, s->id, frame_cb, &x);
+    } else if (!strcmp(table, "contacts")) {
+      fputs("frame,sim_time_s,slot,op,kind,distribution,center_x_m,center_y_m,center_z_m,force_x_n,force_y_n,"
+            "force_z_n,radius_m,patch_area_m2,sigma_fraction,offset_fraction,offset_dir_x,offset_dir_y,"
+            "offset_dir_z\n",
+            f);
+      rc = palp_db_each_contact(db, s->id, contact_cb, &x);
+    } else if (!strcmp(table, "feedback")) {
+      fputs("frame,slot,force_x_n,force_y_n,force_z_n\n", f);
+      rc = palp_db_each_feedback(db, s->id, feedback_cb, &x);
+    } else if (!strcmp(table, "events")) {
+      fputs("wall_unix_s,frame,kind,count,detail\n", f);
+      rc = palp_db_each_event(db, s->id, event_cb, &x);
+    } else {
+      fputs("wall_unix_s,author,text,grade\n", f);
+      rc = palp_db_each_note(db, s->id, note_cb, &x);
+    }
+  } else {
+    char *scene = NULL, *params = NULL;
+    palp_db_session_json(db, s->id, &scene, &params);
+    fputs("{\n  \"session\": {\"uid\": ", f);
+    json_str(f, s->uid);
+    fputs(", \"trainee\": ", f);
+    json_str(f, s->trainee);
+    fputs(", \"station\": ", f);
+    json_str(f, s->station);
+    fputs(", \"phantom_id\": ", f);
+    json_str(f, s->phantom_id);
+    fputs(", \"phantom_name\": ", f);
+    json_str(f, s->phantom_name);
+    fprintf(f, ", \"tick_hz\": %.17g, \"dt_s\": %.17g, \"start_unix_s\": %.17g, \"end_unix_s\": ", s->tick_hz,
+            s->dt_s, s->start_unix_s);
+    if (s->end_reason[0]) fprintf(f, "%.17g, \"end_reason\": ", s->end_unix_s), json_str(f, s->end_reason);
+    else fputs("null, \"end_reason\": null", f);
+    fputs(", \"end_detail\": ", f);
+    json_str(f, s->end_detail);
+    fprintf(f, ", \"records_shed\": %lld, \"records_failed\": %lld,\n    \"scene\": ", (long long)s->records_shed,
+            (long long)s->records_failed);
+    json_embed(f, scene);
+    fputs(",\n    \"params\": ", f);
+    json_embed(f, params);
+    fputs("},\n", f);
+    free(scene);
+    free(params);
+    rc = json_array(db, &x, "contacts", 0, T_CONTACTS, s->id);
+    if (!rc) rc = json_array(db, &x, "feedback", 0, T_FEEDBACK, s->id);
+    if (!rc) rc = json_array(db, &x, "frames", 0, T_FRAMES, s->id);
+    if (!rc) rc = json_array(db, &x, "events", 0, T_EVENTS, s->id);
+    if (!rc) rc = json_array(db, &x, "notes", 1, T_NOTES, s->id);
+    fputs("}\n", f);
+  }
+  int werr = ferror(f);
+  if (f != stdout) werr |= fclose(f);
+  else werr |= fflush(f);
+  if (rc || werr) {
+    fprintf(stderr, "palp-review export: %s\n", rc ? palp_db_errmsg(db) : "write error");
+    return REVIEW_ERROR;
+  }
+  return REVIEW_OK;
+}

@@ -1,0 +1,174 @@
+/* replay: re-simulate a session from its logged scene and contact inputs and check that every
+ * logged frame comes back bit for bit (state hash and every summary field, compared as bits).
+ *
+ * Follows the replay contract in db/palp_db.h: the world is built by palp_db_world_from_scene;
+ * inputs logged at frame f are applied, in log order, before the step from f to f + 1; a logged
+ * frame F is compared after the step that reaches F. */
+#include <inttypes.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "review.h"
+
+#define MAX_SLOTS 4096
+
+typedef struct replay_ctx {
+  palp_world *w;
+  const review_contacts *in;
+  int next; /* next input to apply */
+  int map[MAX_SLOTS]; /* logged slot -> replayed contact id, -1 if none */
+  int verbose;
+  int64_t checked;
+  int mismatch;
+  int apply_errors;
+  int step_error;
+} replay_ctx;
+
+static int bits_eq(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static void apply(replay_ctx *r, const palp_db_contact *c) {
+  int rc = 0;
+  if (c->slot < 0 || c->slot >= MAX_SLOTS) {
+    fprintf(stderr, "replay: frame %" PRId64 ": contact slot %d out of range\n", c->frame, c->slot);
+    r->apply_errors++;
+    return;
+  }
+  int *id = &r->map[c->slot];
+  if (c->op == PALP_DB_OP_ADD) {
+    if (c->kind == PALP_DB_KIND_FORCE) {
+      rc = palp_world_add_contact(r->w, &c->def);
+      if (rc >= 0) {
+        *id = rc;
+        rc = palp_world_set_contact_force(r->w, *id, c->force_n);
+      }
+    } else {
+      rc = palp_world_add_finger(r->w, c->center_m, c->radius_m);
+      if (rc >= 0) *id = rc, rc = 0;
+    }
+  } else if (*id < 0) {
+    fprintf(stderr, "replay: frame %" PRId64 ": %s of slot %d that was never added\n", c->frame,
+            c->op == PALP_DB_OP_UPDATE ? "update" : "removal", c->slot);
+    r->apply_errors++;
+    return;
+  } else if (c->op == PALP_DB_OP_UPDATE) {
+    rc = c->kind == PALP_DB_KIND_FORCE ? palp_world_set_contact_force(r->w, *id, c->force_n)
+                                       : palp_world_set_finger(r->w, *id, c->center_m, c->radius_m);
+  } else {
+    rc = palp_world_remove_contact(r->w, *id);
+    *id = -1;
+  }
+  if (rc < 0) {
+    fprintf(stderr, "replay: frame %" PRId64 ": applying input to slot %d: %s\n", c->frame, c->slot,
+            palp_strerror(rc));
+    r->apply_errors++;
+  }
+}
+
+static void print_diff(const palp_db_frame *log, const palp_db_frame *got) {
+  printf("replay: MISMATCH at frame %" PRId64 " (t = %.6f s):\n", log->frame, log->sim_time_s);
+#define DIFF(field, unit)                                                                          \
+  if (!bits_eq(log->field, got->field))                                                            \
+    printf("  %-16s logged %.17g %s, replayed %.17g %s (difference %.3g)\n", #field, log->field, unit,  \
+           got->field, unit, got->field - log->field);
+  DIFF(sim_time_s, "s")
+  DIFF(top_disp_m, "m")
+  DIFF(max_disp_m, "m")
+  DIFF(volume_m3, "m^3")
+  DIFF(pressure_pa, "Pa")
+  DIFF(contact_force_n, "N")
+#undef DIFF
+  if (log->state_hash != got->state_hash)
+    printf("  %-16s logged 0x%016" PRIx64 ", replayed 0x%016" PRIx64 "\n", "state_hash", log->state_hash,
+           got->state_hash);
+}
+
+static int frame_cb(void *u, const palp_db_frame *logged) {
+  replay_ctx *r = u;
+  while (palp_world_frame(r->w) < logged->frame) {
+    const int64_t f = palp_world_frame(r->w);
+    while (r->next < r->in->n && r->in->v[r->next].frame <= f) apply(r, &r->in->v[r->next++]);
+    int rc = palp_world_step(r->w);
+    if (rc) {
+      printf("replay: the world refused to step at frame %" PRId64 ": %s\n", f, palp_strerror(rc));
+      r->step_error = 1;
+      return 1;
+    }
+  }
+  palp_db_frame got;
+  palp_db_frame_summarize(r->w, &got);
+  int same = got.frame == logged->frame && got.state_hash == logged->state_hash &&
+             bits_eq(got.sim_time_s, logged->sim_time_s) && bits_eq(got.top_disp_m, logged->top_disp_m) &&
+             bits_eq(got.max_disp_m, logged->max_disp_m) && bits_eq(got.volume_m3, logged->volume_m3) &&
+             bits_eq(got.pressure_pa, logged->pressure_pa) && bits_eq(got.contact_force_n, logged->contact_force_n);
+  if (!same) {
+    if (got.frame != logged->frame)
+      printf("replay: MISMATCH: logged frame %" PRId64 " but the world is at %" PRId64 "\n", logged->frame, got.frame);
+    else print_diff(logged, &got);
+    r->mismatch = 1;
+    return 1;
+  }
+  r->checked++;
+  if (r->verbose && r->checked % 1000 == 0)
+    printf("replay: %" PRId64 " frames identical (frame %" PRId64 ")\n", r->checked, logged->frame);
+  return 0;
+}
+
+int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
+  char *scene = NULL;
+  if (palp_db_session_json(db, s->id, &scene, NULL)) {
+    fprintf(stderr, "replay: %s\n", palp_db_errmsg(db));
+    return REVIEW_ERROR;
+  }
+  char msg[512];
+  int err;
+  palp_world *w = palp_db_world_from_scene(scene, s->dt_s, &err, msg, sizeof msg);
+  free(scene);
+  if (!w) {
+    fprintf(stderr, "replay: session %s: cannot rebuild the world: %s\n", s->uid, msg);
+    return REVIEW_ERROR;
+  }
+  review_contacts in;
+  if (review_load_contacts(db, s->id, &in)) {
+    fprintf(stderr, "replay: %s\n", palp_db_errmsg(db));
+    palp_world_destroy(w);
+    return REVIEW_ERROR;
+  }
+  if (s->records_shed || s->records_failed)
+    fprintf(stderr, "replay: warning: the log of %s is incomplete (%lld shed, %lld lost); if contact inputs are "
+                    "among them the replay will diverge\n",
+            s->uid, (long long)s->records_shed, (long long)s->records_failed);
+  replay_ctx *r = calloc(1, sizeof *r);
+  if (!r) {
+    free(in.v);
+    palp_world_destroy(w);
+    return REVIEW_ERROR;
+  }
+  r->w = w;
+  r->in = &in;
+  r->verbose = verbose;
+  for (int i = 0; i < MAX_SLOTS; i++) r->map[i] = -1;
+  int rc = palp_db_each_frame(db, s->id, frame_cb, r);
+  int result;
+  if (rc < 0) {
+    fprintf(stderr, "replay: reading frames: %s\n", palp_db_errmsg(db));
+    result = REVIEW_ERROR;
+  } else if (r->step_error) {
+    result = REVIEW_MISMATCH;
+  } else if (r->mismatch) {
+    printf("replay: %s diverges after %" PRId64 " identical frames\n", s->uid, r->checked);
+    result = REVIEW_MISMATCH;
+  } else if (r->checked == 0) {
+    printf("replay: %s has no logged frames to compare\n", s->uid);
+    result = REVIEW_MISMATCH;
+  } else {
+    printf("replay: %s: %" PRId64 " logged frames reproduced bit-identically (state hash and summary), "
+           "%d contact inputs applied, last frame %" PRId64 "\n",
+           s->uid, r->checked, r->next, palp_world_frame(w));
+    result = REVIEW_OK;
+  }
+  if (r->apply_errors) printf("replay: %d contact inputs could not be applied\n", r->apply_errors);
+  free(r);
+  free(in.v);
+  palp_world_destroy(w);
+  return result;
+}

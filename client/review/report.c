@@ -1,0 +1,348 @@
+/* report: one self-contained HTML page per session (inline CSS and SVG, no script, no external
+ * resource), readable in any browser from a USB stick: force over time, displacement over time,
+ * and where the trainee pressed, drawn on a top view of the phantom's rest mesh shaded by the
+ * largest deformation logged. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "review.h"
+
+#define PLOT_POINTS 1500 /* time-series points per plot; buckets keep their maxima so peaks survive */
+
+typedef struct series {
+  const char *name, *color;
+  const double *x, *y;
+  int n;
+} series;
+
+/* A "nice" tick step (1, 2 or 5 times a power of ten) giving about `target` intervals. */
+static double nice_step(double range, int target) {
+  if (!(range > 0)) return 1.0;
+  double raw = range / target, p = pow(10.0, floor(log10(raw))), m = raw / p;
+  return p * (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10);
+}
+
+static void svg_plot(FILE *f, const char *id, const char *title, const char *xlabel, const char *ylabel,
+                     const series *s, int ns) {
+  const double W = 760, H = 300, L = 70, R = 20, T = 36, B = 46;
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  int any = 0;
+  for (int k = 0; k < ns; k++)
+    for (int i = 0; i < s[k].n; i++) {
+      if (!any) x0 = x1 = s[k].x[i], any = 1;
+      if (s[k].x[i] < x0) x0 = s[k].x[i];
+      if (s[k].x[i] > x1) x1 = s[k].x[i];
+      if (s[k].y[i] > y1) y1 = s[k].y[i];
+      if (s[k].y[i] < y0) y0 = s[k].y[i];
+    }
+  if (!(x1 > x0)) x1 = x0 + 1;
+  if (!(y1 > y0)) y1 = y0 + 1;
+  const double ys = nice_step(y1 - y0, 5), xs = nice_step(x1 - x0, 8);
+  y1 = ceil(y1 / ys) * ys;
+  y0 = floor(y0 / ys) * ys;
+#define PX(v) (L + ((v) - x0) / (x1 - x0) * (W - L - R))
+#define PY(v) (H - B - ((v) - y0) / (y1 - y0) * (H - T - B))
+  fprintf(f, "<svg id=\"%s\" class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+             "viewBox=\"0 0 %.0f %.0f\" role=\"img\" aria-label=\"%s\">\n",
+          id, W, H, W, H, title);
+  fprintf(f, "<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"#ffffff\"/>\n", W, H);
+  fprintf(f, "<text x=\"%.0f\" y=\"20\" font-size=\"15\" font-weight=\"bold\">%s</text>\n", L, title);
+  for (double v = y0; v <= y1 + 1e-9 * ys; v += ys) {
+    fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#e2e2e2\"/>", L, PY(v), W - R, PY(v));
+    fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"end\">%g</text>\n", L - 6, PY(v) + 4,
+            fabs(v) < 1e-12 ? 0.0 : v);
+  }
+  for (double v = ceil(x0 / xs) * xs; v <= x1 + 1e-9 * xs; v += xs) {
+    fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#f0f0f0\"/>", PX(v), T, PX(v), H - B);
+    fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"middle\">%g</text>\n", PX(v), H - B + 16,
+            fabs(v) < 1e-12 ? 0.0 : v);
+  }
+  fprintf(f, "<rect x=\"%.0f\" y=\"%.0f\" width=\"%.0f\" height=\"%.0f\" fill=\"none\" stroke=\"#444\"/>\n", L, T,
+          W - L - R, H - T - B);
+  fprintf(f, "<text x=\"%.0f\" y=\"%.0f\" font-size=\"12\" text-anchor=\"middle\">%s</text>\n", (L + W - R) / 2,
+          H - 8, xlabel);
+  fprintf(f, "<text x=\"14\" y=\"%.0f\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 %.0f)\">%s</text>\n",
+          (T + H - B) / 2, (T + H - B) / 2, ylabel);
+  for (int k = 0; k < ns; k++) {
+    fprintf(f, "<polyline class=\"series\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.6\" points=\"", s[k].color);
+    for (int i = 0; i < s[k].n; i++) fprintf(f, "%.1f,%.1f ", PX(s[k].x[i]), PY(s[k].y[i]));
+    fputs("\"/>\n", f);
+    fprintf(f, "<rect x=\"%.0f\" y=\"%.0f\" width=\"14\" height=\"3\" fill=\"%s\"/>", W - R - 190, T + 10 + 16.0 * k,
+            s[k].color);
+    fprintf(f, "<text x=\"%.0f\" y=\"%.0f\" font-size=\"12\">%s</text>\n", W - R - 170, T + 15 + 16.0 * k, s[k].name);
+  }
+#undef PX
+#undef PY
+  fputs("</svg>\n", f);
+}
+
+/* ---- time series, bucketed -------------------------------------------------------------- */
+typedef struct ts_ctx {
+  int64_t per_bucket, in_bucket;
+  int n, cap;
+  double *t, *force, *top, *max;
+} ts_ctx;
+
+static int ts_cb(void *u, const palp_db_frame *fr) {
+  ts_ctx *c = u;
+  if (c->in_bucket == 0) {
+    if (c->n == c->cap) return 1;
+    c->t[c->n] = fr->sim_time_s;
+    c->force[c->n] = fr->contact_force_n;
+    c->top[c->n] = fr->top_disp_m * 1e3;
+    c->max[c->n] = fr->max_disp_m * 1e3;
+    c->n++;
+  } else {
+    int i = c->n - 1;
+    if (fr->contact_force_n > c->force[i]) c->force[i] = fr->contact_force_n;
+    if (fr->top_disp_m * 1e3 > c->top[i]) c->top[i] = fr->top_disp_m * 1e3;
+    if (fr->max_disp_m * 1e3 > c->max[i]) c->max[i] = fr->max_disp_m * 1e3;
+  }
+  if (++c->in_bucket == c->per_bucket) c->in_bucket = 0;
+  return 0;
+}
+
+/* ---- the deformed mesh with the largest displacement ------------------------------------- */
+typedef struct mesh_ctx {
+  const palp_mesh *rest;
+  palp_vec3 *best;
+  double best_max;
+  int64_t best_frame;
+} mesh_ctx;
+
+static int mesh_cb(void *u, int64_t frame, const palp_vec3 *pos, int n) {
+  mesh_ctx *c = u;
+  if (!c->rest || n != c->rest->vertex_count) return 0;
+  double m = 0;
+  for (int i = 0; i < n; i++) {
+    double dx = pos[i].x - c->rest->rest[i].x, dy = pos[i].y - c->rest->rest[i].y, dz = pos[i].z - c->rest->rest[i].z;
+    double d = sqrt(dx * dx + dy * dy + dz * dz);
+    if (d > m) m = d;
+  }
+  if (m > c->best_max) {
+    c->best_max = m;
+    c->best_frame = frame;
+    memcpy(c->best, pos, (size_t)n * sizeof *pos);
+  }
+  return 0;
+}
+
+static const char *const press_colors[] = {"#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"};
+
+static void svg_topview(FILE *f, const palp_mesh *m, const mesh_ctx *mc, const review_contacts *in,
+                        const review_press *pr, int np) {
+  const double S = 440, C = S / 2, R = m ? sqrt(m->rest[0].x * m->rest[0].x + m->rest[0].y * m->rest[0].y +
+                                                m->rest[0].z * m->rest[0].z) : 0.04;
+  const double k = (S / 2 - 30) / R; /* px per m */
+#define TX(p) (C + (p).x * k)
+#define TY(p) (C - (p).y * k)
+  fprintf(f, "<svg id=\"plot-topview\" class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" "
+             "height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" role=\"img\" aria-label=\"where the trainee pressed\">\n",
+          S, S + 30, S, S + 30);
+  fprintf(f, "<rect width=\"%.0f\" height=\"%.0f\" fill=\"#ffffff\"/>\n", S, S + 30);
+  if (m) {
+    fputs("<g class=\"mesh\" stroke=\"#b9a89e\" stroke-width=\"0.4\">\n", f);
+    for (int t = 0; t < m->dome_triangle_count; t++) {
+      const int *v = m->tri[t];
+      double shade = 0;
+      if (mc->best_max > 0) {
+        for (int j = 0; j < 3; j++) {
+          const palp_vec3 a = mc->best[v[j]], b = m->rest[v[j]];
+          shade += sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+        }
+        shade /= 3 * mc->best_max;
+      }
+      /* Skin tone at rest towards deep red at the largest displacement. */
+      int r = (int)(246 - shade * (246 - 178)), g = (int)(226 - shade * (226 - 24)), b = (int)(212 - shade * (212 - 43));
+      fprintf(f, "<polygon fill=\"rgb(%d,%d,%d)\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f\"/>\n", r, g, b,
+              TX(m->rest[v[0]]), TY(m->rest[v[0]]), TX(m->rest[v[1]]), TY(m->rest[v[1]]), TX(m->rest[v[2]]),
+              TY(m->rest[v[2]]));
+    }
+    fputs("</g>\n", f);
+  }
+  fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"none\" stroke=\"#555\"/>\n", C, C, R * k);
+  fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2\" fill=\"#555\"/>\n", C, C);
+  const char *lab[4] = {"12", "3", "6", "9"};
+  const double lx[4] = {C, C + R * k + 14, C, C - R * k - 14}, ly[4] = {C - R * k - 8, C + 4, C + R * k + 18, C + 4};
+  for (int i = 0; i < 4; i++)
+    fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" text-anchor=\"middle\">%s</text>\n", lx[i], ly[i], lab[i]);
+  /* Finger paths: every logged centre of the slot while it lived. */
+  for (int p = 0; p < np; p++) {
+    const char *col = press_colors[p % 6];
+    if (pr[p].kind == PALP_DB_KIND_FINGER) {
+      fprintf(f, "<polyline class=\"finger-path\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.5\" stroke-opacity=\"0.8\" points=\"", col);
+      int live = 0;
+      for (int i = 0; i < in->n; i++) {
+        const palp_db_contact *c = &in->v[i];
+        if (c->slot != pr[p].slot || c->kind != PALP_DB_KIND_FINGER) continue;
+        if (c->op == PALP_DB_OP_ADD) live = c->sim_time_s == pr[p].t_on_s;
+        if (!live || c->op == PALP_DB_OP_REMOVE) {
+          if (c->op == PALP_DB_OP_REMOVE) live = 0;
+          continue;
+        }
+        fprintf(f, "%.1f,%.1f ", TX(c->center_m), TY(c->center_m));
+      }
+      fputs("\"/>\n", f);
+    }
+    const double rad = 5 + 3 * sqrt(pr[p].peak_force_n);
+    fprintf(f, "<circle class=\"press\" cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"%s\" fill-opacity=\"0.45\" "
+               "stroke=\"%s\" stroke-width=\"1.5\"><title>slot %d, %s, peak %.2f N</title></circle>\n",
+            TX(pr[p].first_center_m), TY(pr[p].first_center_m), rad, col, col, pr[p].slot,
+            pr[p].kind == PALP_DB_KIND_FORCE ? "force contact" : "finger", pr[p].peak_force_n);
+    fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"middle\">%d</text>\n",
+            TX(pr[p].first_center_m), TY(pr[p].first_center_m) + 4, p + 1);
+  }
+  if (mc->best_max > 0)
+    fprintf(f, "<text x=\"8\" y=\"%.0f\" font-size=\"12\">shading: displacement at frame %lld, max %.2f mm</text>\n",
+            S + 20, (long long)mc->best_frame, mc->best_max * 1e3);
+  else fprintf(f, "<text x=\"8\" y=\"%.0f\" font-size=\"12\">rest shape (no deformed mesh logged)</text>\n", S + 20);
+#undef TX
+#undef TY
+  fputs("</svg>\n", f);
+}
+
+static int ev_row(void *u, double wall, int64_t frame, const char *kind, const char *detail, int64_t count) {
+  FILE *f = u;
+  char ts[64];
+  review_fmt_time(wall, ts, sizeof ts);
+  fprintf(f, "<tr><td>%s</td><td>%lld</td><td>", ts, (long long)frame);
+  html_str(f, kind);
+  fprintf(f, "</td><td>%lld</td><td>", (long long)count);
+  html_str(f, detail);
+  fputs("</td></tr>\n", f);
+  return 0;
+}
+
+static int note_row(void *u, double wall, const char *author, const char *text, const char *grade) {
+  FILE *f = u;
+  char ts[64];
+  review_fmt_time(wall, ts, sizeof ts);
+  fprintf(f, "<tr><td>%s</td><td>", ts);
+  html_str(f, author);
+  fputs("</td><td>", f);
+  html_str(f, grade ? grade : "");
+  fputs("</td><td>", f);
+  html_str(f, text);
+  fputs("</td></tr>\n", f);
+  return 0;
+}
+
+static void info_row(FILE *f, const char *k, const char *v) {
+  fprintf(f, "<tr><th>%s</th><td>", k);
+  html_str(f, v);
+  fputs("</td></tr>\n", f);
+}
+
+int review_report(palp_db *db, const palp_db_session_info *s, const char *out_path) {
+  /* The phantom's rest mesh from the logged scene. */
+  char *scene_json = NULL;
+  palp_db_session_json(db, s->id, &scene_json, NULL);
+  palp_scene sc;
+  char perr[256];
+  palp_mesh mesh;
+  int have_mesh = 0;
+  if (scene_json && palp_scene_parse(scene_json, &sc, perr, sizeof perr) == 0)
+    have_mesh = palp_mesh_create(&sc.world.mesh, &mesh) == 0;
+  else fprintf(stderr, "report: the logged scene does not parse (%s); drawing without the phantom\n", perr);
+  free(scene_json);
+
+  ts_ctx ts = {0};
+  ts.per_bucket = s->frames > PLOT_POINTS ? (s->frames + PLOT_POINTS - 1) / PLOT_POINTS : 1;
+  ts.cap = PLOT_POINTS + 1;
+  ts.t = malloc(sizeof(double) * (size_t)ts.cap);
+  ts.force = malloc(sizeof(double) * (size_t)ts.cap);
+  ts.top = malloc(sizeof(double) * (size_t)ts.cap);
+  ts.max = malloc(sizeof(double) * (size_t)ts.cap);
+  mesh_ctx mc = {have_mesh ? &mesh : NULL, have_mesh ? malloc((size_t)mesh.vertex_count * sizeof(palp_vec3)) : NULL, 0, 0};
+  review_contacts in = {0};
+  review_press *pr = NULL;
+  int np = 0;
+  int rc = 0;
+  if (!ts.t || !ts.force || !ts.top || !ts.max || (have_mesh && !mc.best)) rc = PALP_ENOMEM;
+  if (!rc) rc = palp_db_each_frame(db, s->id, ts_cb, &ts);
+  if (rc == 1) rc = 0; /* the bucket array filled: the last frames share the final point */
+  if (!rc && have_mesh) rc = palp_db_each_mesh(db, s->id, mesh_cb, &mc);
+  if (!rc) rc = review_load_contacts(db, s->id, &in);
+  if (!rc) rc = review_presses(db, s->id, &in, &pr, &np);
+  FILE *f = NULL;
+  if (!rc && !(f = fopen(out_path, "w"))) {
+    perror(out_path);
+    rc = PALP_EIO;
+  }
+  if (!rc) {
+    fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>palp session ", f);
+    html_str(f, s->uid);
+    fputs("</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222;max-width:1000px}"
+          "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 8px;"
+          "text-align:left;font-size:13px}th{background:#f4f4f4}.warn{color:#a00;font-weight:bold}"
+          "svg.plot{display:block;margin:8px 0 20px;border:1px solid #ddd}</style>\n</head><body>\n", f);
+    fputs("<h1>Palpation session <span id=\"session-uid\">", f);
+    html_str(f, s->uid);
+    fputs("</span></h1>\n<table id=\"session-info\">\n", f);
+    char buf[512], t0[64], t1[64];
+    info_row(f, "Trainee", s->trainee);
+    info_row(f, "Station", s->station);
+    snprintf(buf, sizeof buf, "%s (%s)", s->phantom_id, s->phantom_name);
+    info_row(f, "Phantom", buf);
+    review_fmt_time(s->start_unix_s, t0, sizeof t0);
+    info_row(f, "Started", t0);
+    review_fmt_time(s->end_unix_s, t1, sizeof t1);
+    snprintf(buf, sizeof buf, "%s (%s%s%s)", s->end_reason[0] ? t1 : "-", s->end_reason[0] ? s->end_reason : "not ended",
+             s->end_detail[0] ? ": " : "", s->end_detail);
+    info_row(f, "Ended", buf);
+    snprintf(buf, sizeof buf, "%.3f s simulated, %lld frames at %.0f Hz", s->sim_duration_s, (long long)s->frames,
+             s->tick_hz);
+    info_row(f, "Duration", buf);
+    fputs("</table>\n", f);
+    if (s->records_shed || s->records_failed)
+      fprintf(f, "<p class=\"warn\">This log is incomplete: %lld records were shed and %lld lost to disk errors.</p>\n",
+              (long long)s->records_shed, (long long)s->records_failed);
+
+    fputs("<h2>Force</h2>\n", f);
+    series fs = {"contact force", "#c0392b", ts.t, ts.force, ts.n};
+    svg_plot(f, "plot-force", "Contact force over time", "simulated time [s]", "force [N]", &fs, 1);
+    fputs("<h2>Displacement</h2>\n", f);
+    series ds[2] = {{"top vertex", "#1f77b4", ts.t, ts.top, ts.n}, {"largest, any vertex", "#ff7f0e", ts.t, ts.max, ts.n}};
+    svg_plot(f, "plot-displacement", "Displacement over time", "simulated time [s]", "displacement [mm]", ds, 2);
+
+    fputs("<h2>Where the trainee pressed</h2>\n<p>Top view of the phantom (12 o'clock = +y). Circles mark where each "
+          "contact started, sized by its peak force; lines follow a finger's path.</p>\n", f);
+    svg_topview(f, have_mesh ? &mesh : NULL, &mc, &in, pr, np);
+    fputs("<table id=\"presses\"><tr><th>#</th><th>slot</th><th>kind</th><th>centre x, y, z [mm]</th>"
+          "<th>clock</th><th>on [s]</th><th>off [s]</th><th>peak force [N]</th></tr>\n", f);
+    for (int p = 0; p < np; p++) {
+      const palp_vec3 c = pr[p].first_center_m;
+      fprintf(f, "<tr><td>%d</td><td>%d</td><td>%s</td><td>%.1f, %.1f, %.1f</td><td>%.1f h</td><td>%.3f</td><td>",
+              p + 1, pr[p].slot, pr[p].kind == PALP_DB_KIND_FORCE ? "force" : "finger", c.x * 1e3, c.y * 1e3,
+              c.z * 1e3, review_clock_hours(c), pr[p].t_on_s);
+      if (pr[p].t_off_s >= 0) fprintf(f, "%.3f", pr[p].t_off_s);
+      else fputs("end", f);
+      fprintf(f, "</td><td>%.3f</td></tr>\n", pr[p].peak_force_n);
+    }
+    fputs("</table>\n<h2>Events</h2>\n<table id=\"events\"><tr><th>time</th><th>frame</th><th>kind</th>"
+          "<th>count</th><th>detail</th></tr>\n", f);
+    palp_db_each_event(db, s->id, ev_row, f);
+    fputs("</table>\n<h2>Instructor notes</h2>\n<table id=\"notes\"><tr><th>time</th><th>author</th><th>grade</th>"
+          "<th>note</th></tr>\n", f);
+    palp_db_each_note(db, s->id, note_row, f);
+    fputs("</table>\n<p style=\"font-size:11px;color:#777\">Generated by palp-review from the session log.</p>\n"
+          "</body></html>\n", f);
+    if (ferror(f)) rc = PALP_EIO;
+    if (fclose(f)) rc = PALP_EIO;
+  }
+  free(ts.t);
+  free(ts.force);
+  free(ts.top);
+  free(ts.max);
+  free(mc.best);
+  free(in.v);
+  free(pr);
+  if (have_mesh) palp_mesh_destroy(&mesh);
+  if (rc) {
+    fprintf(stderr, "report: %s: %s\n", out_path, rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+    return REVIEW_ERROR;
+  }
+  printf("report: wrote %s\n", out_path);
+  return REVIEW_OK;
+}
