@@ -101,49 +101,75 @@ int palp_stats_rmse(const double *a, const double *b, size_t n, double *out) {
 
 /* ---- one-way ANOVA ------------------------------------------------------------ */
 
+/* df, mean squares, F, p and the degenerate cases from the sums of squares. */
+static void anova_finish(palp_stats_anova *r) {
+  r->ss_total = r->ss_between + r->ss_within;
+  r->df_between = r->group_count - 1;
+  r->df_within = (long)(r->n - (size_t)r->group_count);
+  r->ms_between = r->ss_between / (double)r->df_between;
+  r->ms_within = r->ss_within / (double)r->df_within;
+  r->flags = 0;
+  if (r->ss_within > 0.0) {
+    r->f = r->ms_between / r->ms_within;
+    r->p = gsl_cdf_fdist_Q(r->f, (double)r->df_between, (double)r->df_within);
+  } else if (r->ss_between > 0.0) {
+    /* No noise at all, yet the groups differ: the difference is certain. */
+    r->flags |= PALP_STATS_ZERO_WITHIN;
+    r->f = INFINITY;
+    r->p = 0.0;
+  } else {
+    /* Every value identical: nothing distinguishes the groups. */
+    r->flags |= PALP_STATS_ZERO_WITHIN | PALP_STATS_ALL_EQUAL;
+    r->f = 0.0;
+    r->p = 1.0;
+  }
+  r->r_squared = r->ss_total > 0.0 ? r->ss_between / r->ss_total : 0.0;
+}
+
 /*
  * With groups g = 1..k of sizes n_g, N = sum n_g, group means m_g and grand mean
  * G = sum_g n_g m_g / N:
  *   SS_between = sum_g n_g (m_g - G)^2          df_between = k - 1
  *   SS_within  = sum_g sum_i (x_gi - m_g)^2     df_within  = N - k
  *   MS = SS / df,  F = MS_between / MS_within,  p = Q_F(F; k - 1, N - k).
- * All means are kept relative to the shift c = values[0], so m_g - G is a
- * difference of small, accurately known numbers; within-group sums are taken about
- * each group's first value.
+ * Within each group the sums are taken about the group's own first value x_g0, so
+ * its SS is exact-differenced even when groups sit far apart. Group means are kept
+ * relative to an origin c: M_g = m_g - c = (x_g0 - c) + (m_g - x_g0), an exact
+ * difference plus a small accurate number, so M_g - G is a difference of small,
+ * accurately known numbers. Without offsets c = values[0]; with offsets the true
+ * values are offset[g] + x and M_g = offset[g] + x_g0 + (m_g - x_g0).
  */
-int palp_stats_anova_oneway(const double *values, const size_t *start, int group_count,
-                            palp_stats_anova *out) {
+static int anova_core(const double *values, const size_t *start, int group_count,
+                      const double *offset, palp_stats_anova *out) {
   if (!values || !start || !out || group_count < 2) return PALP_EINVAL;
   if (start[0] != 0) return PALP_EINVAL;
   for (int g = 0; g < group_count; ++g)
     if (start[g + 1] < start[g] || start[g + 1] - start[g] < 2) return PALP_EINVAL;
   size_t n = start[group_count];
   if (!all_finite(values, n)) return PALP_EINVAL;
+  if (offset && !all_finite(offset, (size_t)group_count)) return PALP_EINVAL;
 
-  const double c = values[0];
-
-  /* Within each group the shift is the group's own first value x_g0, so its SS is
-   * exact-differenced even when the groups sit far apart; relative to the global
-   * shift its mean is m_g - c = (x_g0 - c) + (m_g - x_g0), an exact difference plus a
-   * small accurate number. */
-  palp_stats_sum weighted = {0.0, 0.0}; /* sum n_g (m_g - c) */
+  const double c = offset ? 0.0 : values[0];
+  palp_stats_sum weighted = {0.0, 0.0}; /* sum n_g M_g */
   palp_stats_sum within = {0.0, 0.0};
   for (int g = 0; g < group_count; ++g) {
     const double *x = values + start[g];
     size_t ng = start[g + 1] - start[g];
     double m = shifted_mean(x, ng, x[0]);
-    palp_stats_sum_add(&weighted, (double)ng * ((x[0] - c) + m));
+    double base = offset ? offset[g] + x[0] : x[0] - c;
+    palp_stats_sum_add(&weighted, (double)ng * (base + m));
     palp_stats_sum_add(&within, shifted_ssd(x, ng, x[0], m));
   }
   double gm = palp_stats_sum_value(&weighted) / (double)n; /* G - c */
 
-  /* Between-group SS from the same shifted means (recomputed: k small passes are
-   * cheaper than a workspace and keep the function allocation-free). */
+  /* Between-group SS from the same means (recomputed: k small passes are cheaper
+   * than a workspace and keep the function allocation-free). */
   palp_stats_sum between = {0.0, 0.0};
   for (int g = 0; g < group_count; ++g) {
     const double *x = values + start[g];
     size_t ng = start[g + 1] - start[g];
-    double e = ((x[0] - c) + shifted_mean(x, ng, x[0])) - gm;
+    double base = offset ? offset[g] + x[0] : x[0] - c;
+    double e = (base + shifted_mean(x, ng, x[0])) - gm;
     palp_stats_sum_add(&between, (double)ng * e * e);
   }
 
@@ -153,36 +179,27 @@ int palp_stats_anova_oneway(const double *values, const size_t *start, int group
   r.grand_mean = c + gm;
   r.ss_between = palp_stats_sum_value(&between);
   r.ss_within = palp_stats_sum_value(&within);
-  r.ss_total = r.ss_between + r.ss_within;
-  r.df_between = group_count - 1;
-  r.df_within = (long)(n - (size_t)group_count);
-  r.ms_between = r.ss_between / (double)r.df_between;
-  r.ms_within = r.ss_within / (double)r.df_within;
-  r.flags = 0;
-  if (r.ss_within > 0.0) {
-    r.f = r.ms_between / r.ms_within;
-    r.p = gsl_cdf_fdist_Q(r.f, (double)r.df_between, (double)r.df_within);
-  } else if (r.ss_between > 0.0) {
-    /* No noise at all, yet the groups differ: the difference is certain. */
-    r.flags |= PALP_STATS_ZERO_WITHIN;
-    r.f = INFINITY;
-    r.p = 0.0;
-  } else {
-    /* Every value identical: nothing distinguishes the groups. */
-    r.flags |= PALP_STATS_ZERO_WITHIN | PALP_STATS_ALL_EQUAL;
-    r.f = 0.0;
-    r.p = 1.0;
-  }
-  r.r_squared = r.ss_total > 0.0 ? r.ss_between / r.ss_total : 0.0;
+  anova_finish(&r);
   *out = r;
   return PALP_OK;
+}
+
+int palp_stats_anova_oneway(const double *values, const size_t *start, int group_count,
+                            palp_stats_anova *out) {
+  return anova_core(values, start, group_count, NULL, out);
+}
+
+int palp_stats_anova_offset(const double *values, const size_t *start, int group_count,
+                            const double *offset, palp_stats_anova *out) {
+  if (!offset) return PALP_EINVAL;
+  return anova_core(values, start, group_count, offset, out);
 }
 
 int palp_stats_anova_two_n(const double *a, size_t na, const double *b, size_t nb,
                            palp_stats_anova *out) {
   if (!a || !b || !out || na < 2 || nb < 2) return PALP_EINVAL;
   if (!all_finite(a, na) || !all_finite(b, nb)) return PALP_EINVAL;
-  /* Same algorithm as palp_stats_anova_oneway, for two separate arrays. */
+  /* Same algorithm as anova_core, for two separate arrays. */
   const double c = a[0];
   double la = shifted_mean(a, na, a[0]), lb = shifted_mean(b, nb, b[0]);
   double ma = la, mb = (b[0] - c) + lb; /* group means minus c */
@@ -204,25 +221,7 @@ int palp_stats_anova_two_n(const double *a, size_t na, const double *b, size_t n
   r.grand_mean = c + gm;
   r.ss_between = palp_stats_sum_value(&between);
   r.ss_within = palp_stats_sum_value(&within);
-  r.ss_total = r.ss_between + r.ss_within;
-  r.df_between = 1;
-  r.df_within = (long)(na + nb - 2);
-  r.ms_between = r.ss_between;
-  r.ms_within = r.ss_within / (double)r.df_within;
-  r.flags = 0;
-  if (r.ss_within > 0.0) {
-    r.f = r.ms_between / r.ms_within;
-    r.p = gsl_cdf_fdist_Q(r.f, 1.0, (double)r.df_within);
-  } else if (r.ss_between > 0.0) {
-    r.flags |= PALP_STATS_ZERO_WITHIN;
-    r.f = INFINITY;
-    r.p = 0.0;
-  } else {
-    r.flags |= PALP_STATS_ZERO_WITHIN | PALP_STATS_ALL_EQUAL;
-    r.f = 0.0;
-    r.p = 1.0;
-  }
-  r.r_squared = r.ss_total > 0.0 ? r.ss_between / r.ss_total : 0.0;
+  anova_finish(&r);
   *out = r;
   return PALP_OK;
 }

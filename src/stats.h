@@ -75,6 +75,14 @@ typedef struct palp_stats_anova {
 int palp_stats_anova_oneway(const double *values, const size_t *start, int group_count,
                             palp_stats_anova *out);
 
+/* As palp_stats_anova_oneway for values given relative to a per-group offset:
+ * group g holds the values offset[g] + values[i]. For callers that can subtract
+ * exactly (palp-stats subtracts decimal text): values relative to their group keep
+ * their spread, and offsets relative to one common origin keep the between-group
+ * differences; grand_mean is then relative to that origin. */
+int palp_stats_anova_offset(const double *values, const size_t *start, int group_count,
+                            const double *offset, palp_stats_anova *out);
+
 /* The paper's use: two groups of n values each (real-time model vs FEM). */
 int palp_stats_anova_two(const double *a, const double *b, size_t n, palp_stats_anova *out);
 

@@ -217,6 +217,46 @@ static void test_bland_altman(void) {
   result_free(&r);
 }
 
+/* Data at very different levels: the command subtracts in decimal per group (ANOVA)
+ * and per pair (differences), so nothing is lost to a common 1e12 offset.
+ * Groups: big = 1e12 + {.3 .4 .5}, small = {1.1 1.2 1.3}: SS_within = 0.02 + 0.02,
+ * group SDs 0.1, SS_between = 3 * 2 * ((1e12 - 0.8)/2)^2 = 1.5 (1e12 - 0.8)^2.
+ * Pairs: d = 0.2 0.3 0.1 0.2: bias 0.2, SD sqrt(0.02/3), RMSE sqrt(0.18/4). */
+static void test_far_apart(void) {
+  write_file("far.csv", "group,value\nbig,1000000000000.3\nbig,1000000000000.4\n"
+                        "big,1000000000000.5\nsmall,1.1\nsmall,1.2\nsmall,1.3\n");
+  result r = run("anova far.csv --group group --value value --json");
+  check("far groups exit 0", r.status == 0);
+  cJSON *j = cJSON_Parse(r.out);
+  if (j) {
+    check_rel("far groups SS within 0.04", num(j, "anova.within.ss"), 0.04, 1e-9);
+    check_rel("far groups SS between", num(j, "anova.between.ss"),
+              1.5 * (1e12 - 0.8) * (1e12 - 0.8), 1e-9);
+    const cJSON *g = cJSON_GetObjectItem(j, "groups");
+    check_rel("far groups: big SD 0.1", num(cJSON_GetArrayItem(g, 0), "sd"), 0.1, 1e-9);
+    check_rel("far groups: small SD 0.1", num(cJSON_GetArrayItem(g, 1), "sd"), 0.1, 1e-9);
+    cJSON_Delete(j);
+  } else {
+    check("far groups JSON", 0);
+  }
+  result_free(&r);
+
+  write_file("farpairs.csv", "a,b\n1000000000000.3,1000000000000.1\n1.5,1.2\n"
+                             "1000000000000.4,1000000000000.3\n2.0,1.8\n");
+  r = run("bland-altman farpairs.csv --a a --b b --json");
+  check("far pairs exit 0", r.status == 0);
+  j = cJSON_Parse(r.out);
+  if (j) {
+    check_rel("far pairs bias 0.2", num(j, "bias"), 0.2, 1e-9);
+    check_rel("far pairs SD", num(j, "sd"), sqrt(0.02 / 3.0), 1e-9);
+    check_rel("far pairs RMSE", num(j, "rmse"), sqrt(0.18 / 4.0), 1e-9);
+    cJSON_Delete(j);
+  } else {
+    check("far pairs JSON", 0);
+  }
+  result_free(&r);
+}
+
 /* Bad input: exit 1, nothing on stdout, and a message with the file, the line and
  * the column or group at fault. */
 static void expect_error(const char *what, const char *args, int status, const char **needles) {
@@ -323,6 +363,7 @@ int main(int argc, char **argv) {
   test_smls07();
   test_anova_hand();
   test_bland_altman();
+  test_far_apart();
   test_errors();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;

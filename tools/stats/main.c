@@ -271,7 +271,7 @@ static void print_anova_table(const palp_stats_anova *a) {
 
 typedef struct group {
   char *name;
-  size_t n, first_line;
+  size_t n, first_line, first_row;
 } group;
 
 static int run_anova(const options *o, const palp_csv *csv) {
@@ -292,6 +292,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
   group *groups = calloc(nr, sizeof *groups);
   double *values = malloc(nr * sizeof *values);
   size_t *start = NULL, *fill = NULL;
+  double *offset = NULL;
   int ng = 0, rc = EXIT_DATA;
   size_t used = 0, skipped = 0;
   if (!gid || !dv || !groups || !values) {
@@ -317,6 +318,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
     if (g == ng) {
       groups[ng].name = (char *)label;
       groups[ng].first_line = csv->line[r];
+      groups[ng].first_row = r;
       ng++;
     }
     groups[g].n++;
@@ -352,24 +354,29 @@ static int run_anova(const options *o, const palp_csv *csv) {
       goto done;
     }
 
-  /* Exact decimal shift by the first used value, then group-contiguous layout. */
-  const palp_dec *origin = NULL;
-  for (size_t r = 0; r < nr && !origin; ++r)
-    if (gid[r] >= 0) origin = &dv[r];
+  /* Exact decimal shifts: each value relative to its group's first value (keeps
+   * the spread inside the group), each group's first value relative to the first
+   * value of the file (keeps the differences between groups); then a
+   * group-contiguous layout. */
+  const palp_dec *origin = &dv[groups[0].first_row];
   start = malloc((size_t)(ng + 1) * sizeof *start);
   fill = malloc((size_t)ng * sizeof *fill);
-  if (!start || !fill) {
+  offset = malloc((size_t)ng * sizeof *offset);
+  if (!start || !fill || !offset) {
     data_error("out of memory");
     goto done;
   }
   start[0] = 0;
   for (int g = 0; g < ng; ++g) start[g + 1] = start[g] + groups[g].n;
-  for (int g = 0; g < ng; ++g) fill[g] = start[g];
+  for (int g = 0; g < ng; ++g) {
+    fill[g] = start[g];
+    offset[g] = palp_dec_sub(&dv[groups[g].first_row], origin);
+  }
   for (size_t r = 0; r < nr; ++r)
-    if (gid[r] >= 0) values[fill[gid[r]]++] = palp_dec_sub(&dv[r], origin);
+    if (gid[r] >= 0) values[fill[gid[r]]++] = palp_dec_sub(&dv[r], &dv[groups[gid[r]].first_row]);
 
   palp_stats_anova a;
-  int err = palp_stats_anova_oneway(values, start, ng, &a);
+  int err = palp_stats_anova_offset(values, start, ng, offset, &a);
   if (err < 0) {
     data_error("%s: the ANOVA could not be computed (error %d)", o->file, err);
     goto done;
@@ -391,7 +398,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
       cJSON *gj = cJSON_CreateObject();
       cJSON_AddStringToObject(gj, "name", groups[g].name);
       cJSON_AddNumberToObject(gj, "n", (double)groups[g].n);
-      cJSON_AddNumberToObject(gj, "mean", m + origin->value);
+      cJSON_AddNumberToObject(gj, "mean", dv[groups[g].first_row].value + m);
       cJSON_AddNumberToObject(gj, "sd", sqrt(ssd / (double)(groups[g].n - 1)));
       cJSON_AddItemToArray(garr, gj);
     }
@@ -406,7 +413,8 @@ static int run_anova(const options *o, const palp_csv *csv) {
     for (int g = 0; g < ng; ++g) {
       double m, ssd;
       palp_stats_mean_ssd(values + start[g], groups[g].n, &m, &ssd);
-      printf("  %-20.20s %8zu %22.15g %14.6g\n", groups[g].name, groups[g].n, m + origin->value,
+      printf("  %-20.20s %8zu %22.15g %14.6g\n", groups[g].name, groups[g].n,
+             dv[groups[g].first_row].value + m,
              sqrt(ssd / (double)(groups[g].n - 1)));
     }
     printf("\n");
@@ -426,21 +434,27 @@ done:
   free(values);
   free(start);
   free(fill);
+  free(offset);
   return rc;
 }
 
 /* ---- paired columns ---------------------------------------------------------------------- */
 
+/* Paired columns, each subtraction done exactly in decimal and rounded once:
+ *   d[i]      = a_i - b_i           (Bland-Altman, RMSE: exact per pair)
+ *   ab[i]     = a_i - a_0,  ab[n+i] = b_i - b_0   (ANOVA groups, spread kept)
+ *   off[1]    = b_0 - a_0           (ANOVA between-group difference kept) */
 typedef struct paired {
   int ca, cb;
   size_t n, skipped;
-  double *a, *b; /* shifted by origin */
-  double origin;
+  double *d, *zero, *ab;
+  double a0, b0, off[2];
 } paired;
 
 static void paired_free(paired *p) {
-  free(p->a);
-  free(p->b);
+  free(p->d);
+  free(p->zero);
+  free(p->ab);
 }
 
 static int read_paired(const options *o, const palp_csv *csv, size_t min_n, const char *why,
@@ -455,14 +469,15 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
   size_t nr = csv->nrows;
   palp_dec *da = malloc(nr * sizeof *da), *db = malloc(nr * sizeof *db);
   unsigned char *use = calloc(nr, 1);
-  p->a = malloc(nr * sizeof *p->a);
-  p->b = malloc(nr * sizeof *p->b);
+  p->d = malloc(nr * sizeof *p->d);
+  p->zero = calloc(nr, sizeof *p->zero);
+  p->ab = malloc(2 * nr * sizeof *p->ab);
   int rc = -1;
-  if (!da || !db || !use || !p->a || !p->b) {
+  if (!da || !db || !use || !p->d || !p->zero || !p->ab) {
     data_error("out of memory");
     goto done;
   }
-  const palp_dec *origin = NULL;
+  size_t first = nr;
   for (size_t r = 0; r < nr; ++r) {
     if (o->skip_empty && (cell_is_empty(csv, r, p->ca) || cell_is_empty(csv, r, p->cb))) {
       p->skipped++;
@@ -471,19 +486,26 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
     if (cell_number(csv, o, r, p->ca, &da[r]) < 0) goto done;
     if (cell_number(csv, o, r, p->cb, &db[r]) < 0) goto done;
     use[r] = 1;
-    if (!origin) origin = &da[r];
+    if (first == nr) first = r;
   }
-  if (!origin) {
+  if (first == nr) {
     data_error("%s: every data row was skipped as empty; nothing to analyse", o->file);
     goto done;
   }
-  for (size_t r = 0; r < nr; ++r)
+  size_t used = 0;
+  for (size_t r = 0; r < nr; ++r) used += use[r];
+  for (size_t r = 0, i = 0; r < nr; ++r)
     if (use[r]) {
-      p->a[p->n] = palp_dec_sub(&da[r], origin);
-      p->b[p->n] = palp_dec_sub(&db[r], origin);
-      p->n++;
+      p->d[i] = palp_dec_sub(&da[r], &db[r]);
+      p->ab[i] = palp_dec_sub(&da[r], &da[first]);
+      p->ab[used + i] = palp_dec_sub(&db[r], &db[first]);
+      ++i;
     }
-  p->origin = origin->value;
+  p->n = used;
+  p->a0 = da[first].value;
+  p->b0 = db[first].value;
+  p->off[0] = 0.0;
+  p->off[1] = palp_dec_sub(&db[first], &da[first]);
   if (p->n < min_n) {
     data_error("%s: %zu data row%s; %s needs at least %zu pairs", o->file, p->n,
                p->n == 1 ? "" : "s", why, min_n);
@@ -503,7 +525,7 @@ static int run_rmse(const options *o, const palp_csv *csv) {
   paired p;
   if (read_paired(o, csv, 1, "RMSE", &p) < 0) return EXIT_DATA;
   double r;
-  int err = palp_stats_rmse(p.a, p.b, p.n, &r);
+  int err = palp_stats_rmse(p.d, p.zero, p.n, &r);
   if (err < 0) {
     data_error("%s: RMSE could not be computed (error %d)", o->file, err);
     paired_free(&p);
@@ -535,17 +557,22 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
   palp_stats_ba ba;
   palp_stats_anova an;
   double rmse;
-  int err = palp_stats_bland_altman(p.a, p.b, p.n, &ba);
-  if (err == 0) err = palp_stats_anova_two(p.a, p.b, p.n, &an);
-  if (err == 0) err = palp_stats_rmse(p.a, p.b, p.n, &rmse);
+  size_t start[3] = {0, p.n, 2 * p.n};
+  int err = palp_stats_bland_altman(p.d, p.zero, p.n, &ba);
+  if (err == 0) err = palp_stats_anova_offset(p.ab, start, 2, p.off, &an);
+  if (err == 0) err = palp_stats_rmse(p.d, p.zero, p.n, &rmse);
   if (err < 0) {
     data_error("%s: the statistics could not be computed (error %d)", o->file, err);
     paired_free(&p);
     return EXIT_DATA;
   }
-  ba.mean_a += p.origin;
-  ba.mean_b += p.origin;
-  an.grand_mean += p.origin;
+  /* The means of the columns themselves (ba was computed from d and 0). */
+  double ssd;
+  palp_stats_mean_ssd(p.ab, p.n, &ba.mean_a, &ssd);
+  palp_stats_mean_ssd(p.ab + p.n, p.n, &ba.mean_b, &ssd);
+  ba.mean_a += p.a0;
+  ba.mean_b += p.b0;
+  an.grand_mean += p.a0;
   int meets = palp_stats_meets_paper_criteria(&an, &ba);
 
   if (o->svg) {
@@ -560,7 +587,7 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
       paired_free(&p);
       return EXIT_DATA;
     }
-    for (size_t i = 0; i < p.n; ++i) ma[i] = p.a[i] + p.origin, mb[i] = p.b[i] + p.origin;
+    for (size_t i = 0; i < p.n; ++i) ma[i] = p.a0 + p.ab[i], mb[i] = p.b0 + p.ab[p.n + i];
     palp_svg_bland_altman_def def = palp_svg_bland_altman_default_def();
     def.title = title;
     def.a = ma;
