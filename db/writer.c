@@ -498,8 +498,9 @@ static void set_error(palp_db_writer *w, int rc, const char *what) {
   w->st_.in_error = 1;
   w->st_.disk_errors++;
   w->st_.last_error_code = rc;
-  palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s: %s (%s)", what, sqlite3_errmsg(w->db),
-               sqlite3_errstr(rc));
+  const char *msg = sqlite3_errmsg(w->db), *gen = sqlite3_errstr(rc);
+  if (strcmp(msg, gen) == 0) palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s: %s", what, msg);
+  else palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s: %s (%s)", what, msg, gen);
   pthread_mutex_unlock(&w->mu);
 }
 
