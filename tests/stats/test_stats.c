@@ -277,6 +277,30 @@ static void test_anova_far_groups(void) {
   check_rel("far groups two-array SS within", a.ss_within, 0.145, 1e-12);
 }
 
+/* palp_stats_anova_offset: SmLs07 as an exact-subtracting caller hands it over.
+ * True value = 1e12 + 0.4 (origin) + offset[t] + y: offset = first value of the
+ * treatment minus the origin = b(t) + 0.2 - 0.4, y = b(r) - 0.2 (b as above). The
+ * certified values (SS 1.68 and 1.80, F 21) must come back to 9 digits. */
+static void test_anova_offset(void) {
+  double y[9 * 21], off[9];
+  size_t start[10];
+  for (int t = 1; t <= 9; ++t) {
+    start[t - 1] = (size_t)(t - 1) * 21;
+    off[t - 1] = 0.1 * smls_digit(t) - 0.2;
+    for (int r = 1; r <= 21; ++r) y[(t - 1) * 21 + (r - 1)] = 0.1 * smls_digit(r) - 0.2;
+  }
+  start[9] = 9 * 21;
+  palp_stats_anova a;
+  check_true("offset ok", palp_stats_anova_offset(y, start, 9, off, &a) == PALP_OK);
+  check_rel("offset SmLs07 SS between", a.ss_between, 1.68, 1e-9);
+  check_rel("offset SmLs07 SS within", a.ss_within, 1.80, 1e-9);
+  check_rel("offset SmLs07 F", a.f, 21.0, 1e-9);
+  check_abs("offset SmLs07 grand mean relative to the origin", a.grand_mean, 0.0, 1e-15);
+  check_true("offset NULL -> EINVAL", palp_stats_anova_offset(y, start, 9, NULL, &a) == PALP_EINVAL);
+  off[3] = NAN;
+  check_true("offset NaN -> EINVAL", palp_stats_anova_offset(y, start, 9, off, &a) == PALP_EINVAL);
+}
+
 static void test_anova_edges(void) {
   palp_stats_anova a;
   memset(&a, 0, sizeof a);
@@ -454,6 +478,7 @@ int main(void) {
   test_smls_ill_conditioned("SmLs09", 2001, 2001.1349262209505);
   test_anova_hand();
   test_anova_far_groups();
+  test_anova_offset();
   test_anova_edges();
   test_rmse();
   test_bland_altman();
