@@ -120,11 +120,11 @@ typedef struct press_acc {
 
 static int fb_peak_cb(void *u, int64_t frame, int slot, palp_vec3 f) {
   press_acc *a = u;
-  (void)frame;
   const double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
-  /* The latest press on this slot owns the sample (slots are reused after removal). */
+  /* Slots are reused after removal: the press on this slot live at that frame owns the sample
+   * (feedback carries the frame after the step, so the live range is (on, off]). */
   for (int i = a->n - 1; i >= 0; i--)
-    if (a->v[i].slot == slot) {
+    if (a->v[i].slot == slot && frame > a->v[i].frame_on && (a->v[i].frame_off < 0 || frame <= a->v[i].frame_off)) {
       if (a->v[i].kind == PALP_DB_KIND_FINGER && m > a->v[i].peak_force_n) a->v[i].peak_force_n = m;
       break;
     }
@@ -145,6 +145,8 @@ int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_pr
       p->first_center_m = p->last_center_m = x->center_m;
       p->t_on_s = x->sim_time_s;
       p->t_off_s = -1;
+      p->frame_on = x->frame;
+      p->frame_off = -1;
       if (x->kind == PALP_DB_KIND_FORCE)
         p->peak_force_n = sqrt(x->force_n.x * x->force_n.x + x->force_n.y * x->force_n.y + x->force_n.z * x->force_n.z);
       continue;
@@ -154,6 +156,7 @@ int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_pr
       if (p->slot != x->slot || p->t_off_s >= 0) continue;
       if (x->op == PALP_DB_OP_REMOVE) {
         p->t_off_s = x->sim_time_s;
+        p->frame_off = x->frame;
       } else {
         p->updates++;
         if (x->kind == PALP_DB_KIND_FINGER) p->last_center_m = x->center_m;

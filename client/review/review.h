@@ -23,6 +23,7 @@ typedef struct review_press {
   palp_distribution distribution;
   palp_vec3 first_center_m, last_center_m;
   double t_on_s, t_off_s; /* t_off_s < 0: never removed */
+  int64_t frame_on, frame_off; /* frame_off < 0: never removed */
   double peak_force_n;    /* force contacts: max |F| applied; fingers: max |feedback| */
   int updates;
 } review_press;
