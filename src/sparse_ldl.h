@@ -11,18 +11,35 @@
 #define PALP_SPARSE_LDL_H
 
 typedef struct palp_ldl {
+  void *symbolic; /* CHOLMOD's analysis (ordering, pattern), kept across refactorisations */
+  void *common;   /* the cholmod_common it belongs to */
   int n;
   int *colp;   /* [n+1] column starts of the strictly lower part of L (unit diagonal) */
   int *row;    /* [nnz] row indices (in permuted order) */
   double *val; /* [nnz] */
   double *dinv; /* [n] 1 / D */
   int *perm;   /* [n] permuted index -> original index */
+  /* Block form (palp_ldl_factor_blocks): L in 3x3 vertex blocks, one index per block. */
+  int nb;         /* block columns (vertices); 0 when the scalar form is used */
+  int *bcolp;     /* [nb+1] starts of each block column's off-diagonal blocks */
+  int *brow;      /* [nblocks] block row of each off-diagonal block */
+  double *bval;   /* [nblocks*9] row-major 3x3 blocks */
+  double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
 } palp_ldl;
 
 /* Factors the symmetric positive definite matrix given by lower-triangle triplets
- * (i >= j; duplicates are summed). Returns 0, PALP_ENOMEM or PALP_ESOLVER. */
+ * (i >= j; duplicates are summed). The first call orders and analyses the pattern;
+ * later calls with the same n and triplet pattern reuse that analysis and only redo
+ * the numeric factorisation. Returns 0, PALP_ENOMEM or PALP_ESOLVER. */
 int palp_ldl_factor(palp_ldl *f, int n, int nnz, const int *ti, const int *tj, const double *tx);
-void palp_ldl_free(palp_ldl *f);
+void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
+
+/* As palp_ldl_factor for a matrix of 3x3 blocks (unknown 3v + c belongs to vertex
+ * v), given the vertex graph (CSC, both triangles, nb vertices). Orders the vertices
+ * with AMD and keeps each vertex's 3 unknowns together, so the factor is stored and
+ * solved in dense 3x3 blocks. */
+int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, int nnz, const int *ti,
+                           const int *tj, const double *tx);
 
 /* Solves A X = B in place for w interleaved right-hand sides (x[i*w + k]);
  * work needs n*w doubles. */

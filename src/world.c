@@ -621,8 +621,28 @@ static int refactor(palp_world *w, double h) {
           tx[nnz++] = -h * h * k * ((1.0 - beta) * dv[i] * dv[j] + (i == j ? beta : 0.0));
     }
   }
-  palp_ldl_free(&w->ldl);
-  int e = palp_ldl_factor(&w->ldl, 3 * w->nfree, nnz, ti, tj, tx);
+  /* The free-vertex graph (CSC, both triangles) orders the 3x3 blocks. */
+  const int nf = w->nfree;
+  int *gp = calloc((size_t)nf + 1, sizeof(int)), *gi = malloc(sizeof(int) * (size_t)(2 * w->nlink + 1));
+  int e = PALP_ENOMEM;
+  if (gp && gi) {
+    for (int l = 0; l < w->nlink; ++l) {
+      const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
+      if (ra >= 0 && rb >= 0) gp[ra + 1]++, gp[rb + 1]++;
+    }
+    for (int r = 0; r < nf; ++r) gp[r + 1] += gp[r];
+    int *fill = malloc(sizeof(int) * (size_t)(nf ? nf : 1));
+    if (fill) {
+      memcpy(fill, gp, sizeof(int) * (size_t)nf);
+      for (int l = 0; l < w->nlink; ++l) {
+        const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
+        if (ra >= 0 && rb >= 0) gi[fill[ra]++] = rb, gi[fill[rb]++] = ra;
+      }
+      free(fill);
+      e = palp_ldl_factor_blocks(&w->ldl, nf, gp, gi, nnz, ti, tj, tx);
+    }
+  }
+  free(gp), free(gi);
   free(ti), free(tj), free(tx);
   if (e) return e;
   w->h_factored = h;
