@@ -361,8 +361,8 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     }
     drain_feedback(&fx);
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
-      printf("[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole down %5.2f mm\n", o->name, t,
-             down[0] ? "pressing" : "lifted  ", fx.last, fx.last_top * 1e3);
+      printf("[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, t,
+             down[0] ? "pressing" : "lifted  ", fx.last, -fx.last_top * 1e3);
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
     }
@@ -524,9 +524,9 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     }
     now = palp_dds_now_ns();
     if (observer && !o->quiet && o->print_period > 0 && now >= next_print) {
-      printf("[observer] t=%6.2f s  session %u: %s  |F| applied %.2f N, feedback %.2f N, pole down %.2f mm, "
+      printf("[observer] t=%6.2f s  session %u: %s  |F| applied %.2f N, feedback %.2f N, pole z %+.2f mm, "
              "max displacement %.2f mm\n", t, st->session_id, pressing ? "pressing" : "lifted  ",
-             have_contact && pressing ? norm3(last_contact.force) : 0.0, last_fb, last_top * 1e3,
+             have_contact && pressing ? norm3(last_contact.force) : 0.0, last_fb, -last_top * 1e3,
              last.valid ? palp_cli_max_displacement(ph, &last.d, NULL) * 1e3 : 0.0);
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);

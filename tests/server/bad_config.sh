@@ -1,0 +1,31 @@
+#!/bin/sh
+# palp-server with a bad configuration: a non-zero exit and a message naming the
+# field; the shipped configuration passes --check.
+set -u
+server=$1
+config_dir=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect() { # json field
+  printf '%s\n' "$1" > "$tmp/server.json"
+  out=$("$server" --config "$tmp/server.json" --check 2>&1)
+  rc=$?
+  if [ $rc -ne 0 ] && printf '%s' "$out" | grep -qF "$2"; then
+    echo "ok   exit $rc: $out"
+  else
+    echo "FAIL exit $rc (want non-zero and \"$2\"): $out"; fail=1
+  fi
+}
+expect '{"tick_rate_hz": -5, "phantoms": [{"id": 1, "name": "a", "scene": "x.json"}]}' 'tick_rate_hz'
+expect '{"phantoms": [{"id": 1, "name": "a"}]}' 'phantoms[0].scene: missing'
+expect "{\"dds_config\": \"$config_dir/cyclonedds-loopback.xml\", \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"missing-scene.json\"}]}" 'phantoms[0].scene'
+expect '{"dds_config": "nope.xml", "phantoms": [{"id": 1, "name": "a", "scene": "x.json"}]}' 'dds_config'
+expect '{"phantoms": 3' 'not valid JSON'
+out=$("$server" --config /nonexistent/server.json 2>&1); rc=$?
+if [ $rc -ne 0 ] && printf '%s' "$out" | grep -q "cannot open"; then echo "ok   exit $rc: $out"; else echo "FAIL missing file: $out"; fail=1; fi
+out=$("$server" --tick-rate fast 2>&1); rc=$?
+if [ $rc -ne 0 ] && printf '%s' "$out" | grep -q -- "--tick-rate"; then echo "ok   exit $rc: $out"; else echo "FAIL bad option: $out"; fail=1; fi
+out=$("$server" --config "$config_dir/server.json" --check 2>&1); rc=$?
+if [ $rc -eq 0 ]; then echo "ok   shipped config: $out"; else echo "FAIL shipped config: $out"; fail=1; fi
+exit $fail

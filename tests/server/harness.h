@@ -1,0 +1,70 @@
+/*
+ * harness.h - an in-process palp server on a test's own DDS domain, plus small
+ * helpers for stations and assertions. Every test uses a domain id of its own so
+ * CTest can run them in parallel on the loopback config.
+ */
+#ifndef PALP_TEST_SERVER_HARNESS_H
+#define PALP_TEST_SERVER_HARNESS_H
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "palp_dds.h"
+#include "server.h"
+#include "station.h"
+
+extern int palp_test_failures;
+
+/* Evaluates cond exactly once; returns through `palp_test_last` for REQUIRE. */
+extern int palp_test_last;
+#define CHECK(cond, ...)                                                                                     \
+  do {                                                                                                       \
+    palp_test_last = (cond) ? 1 : 0;                                                                         \
+    if (!palp_test_last) {                                                                                   \
+      palp_test_failures++;                                                                                  \
+      fprintf(stderr, "FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                        \
+      fprintf(stderr, __VA_ARGS__);                                                                          \
+      fputc('\n', stderr);                                                                                   \
+    } else {                                                                                                 \
+      fprintf(stderr, "ok   ");                                                                              \
+      fprintf(stderr, __VA_ARGS__);                                                                          \
+      fputc('\n', stderr);                                                                                   \
+    }                                                                                                        \
+  } while (0)
+
+#define REQUIRE(cond, ...)                                                                                   \
+  do {                                                                                                       \
+    CHECK(cond, __VA_ARGS__);                                                                                \
+    if (!palp_test_last) exit(1);                                                                            \
+  } while (0)
+
+typedef struct test_server {
+  palp_srv *srv;
+  pthread_t thread;
+  int running;
+} test_server;
+
+/* Config JSON for the shipped paper scene, hosted as phantoms 1 and 2. */
+void test_config(palp_srv_config *cfg, unsigned domain, double tick_rate_hz);
+/* Starts palp_srv_run on a thread; exits the test on failure. */
+void test_server_start(test_server *ts, const palp_srv_config *cfg);
+void test_server_stop(test_server *ts);
+
+/* Opens a station and joins; exits the test on failure. */
+void test_station_join(palp_cli_station *st, unsigned domain, const char *label, int role, uint32_t phantom,
+                       uint32_t session, int want_feedback, int want_deformation);
+
+/* Sends one force-driven contact (distribution d, at polar/azimuth [deg], |F| [N] along -normal). */
+void test_send_force(palp_cli_station *st, int finger, int d, double polar, double azimuth, double force,
+                     uint64_t seq);
+void test_send_raw(palp_cli_station *st, const palp_Contact *c);
+
+/* Takes feedback samples for `seconds`, returning the last finger-0 force magnitude [N]. */
+double test_last_feedback(palp_cli_station *st, double seconds, int *samples);
+
+void test_sleep(double seconds);
+/* Uses the loopback config (CYCLONEDDS_URI) unless set. */
+void test_init(void);
+
+#endif

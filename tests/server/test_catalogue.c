@@ -1,0 +1,59 @@
+/* test_catalogue.c - a station that starts after the server still receives the
+ * phantom catalogue (reliable, transient-local), with the rest mesh. */
+#include <math.h>
+#include <string.h>
+
+#include "harness.h"
+
+#define DOMAIN 101
+
+int main(void) {
+  test_init();
+  palp_srv_config cfg;
+  test_config(&cfg, DOMAIN, 100);
+  test_server ts = {0};
+  test_server_start(&ts, &cfg);
+  /* The server has published (and its writer holds) the catalogue well before
+   * this station exists: a late joiner by 1.5 s. */
+  test_sleep(1.5);
+  palp_cli_station st;
+  char err[512];
+  REQUIRE(palp_cli_station_open(&st, DOMAIN, "late", err, sizeof err) == 0, "late station opens (%s)", err);
+  int64_t t0 = palp_dds_now_ns();
+  for (uint32_t id = 1; id <= 2; id++) {
+    palp_Phantom ph;
+    int rc = palp_cli_station_catalogue(&st, id, 5.0, &ph, err, sizeof err);
+    REQUIRE(rc == 0, "phantom %u in the catalogue after %.0f ms (within 5 s) %s", id,
+            (double)(palp_dds_now_ns() - t0) * 1e-6, rc ? err : "");
+    /* From config/paper_step.json: 338 vertices on a 4 cm dome; a closed
+     * triangulated surface of sphere topology has F = 2V - 4 faces (Euler). */
+    CHECK(ph.rest._length == 338, "phantom %u: %u rest vertices, want 338 (paper_step.json)", id, ph.rest._length);
+    CHECK(ph.triangles._length == 3 * (2 * 338 - 4), "phantom %u: %u triangle indices, want 3 (2V - 4) = %d", id,
+          ph.triangles._length, 3 * (2 * 338 - 4));
+    CHECK(fabs(ph.radius - 0.04) < 1e-12, "phantom %u: radius %g m, want 0.04", id, ph.radius);
+    CHECK(ph.tick_rate_hz == 100 && ph.max_force == 20, "phantom %u: %g Hz, limit %g N (config: 100 Hz, 20 N)", id,
+          ph.tick_rate_hz, ph.max_force);
+    CHECK(strcmp(ph.name, id == 1 ? "test dome A" : "test dome B") == 0, "phantom %u is named \"%s\"", id, ph.name);
+    double rmax = 0;
+    int bad = 0;
+    for (uint32_t i = 0; i < ph.rest._length; i++) {
+      palp_Vec3 p = ph.rest._buffer[i];
+      double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+      if (r > rmax) rmax = r;
+      bad += p.z < -1e-12;
+    }
+    CHECK(fabs(rmax - 0.04) < 1e-9 && bad == 0, "rest vertices on a hemisphere of radius 0.04 m (max |x| %.6f m, %d below z=0)",
+          rmax, bad);
+    int range = 1;
+    for (uint32_t i = 0; i < ph.triangles._length; i++)
+      range &= ph.triangles._buffer[i] >= 0 && ph.triangles._buffer[i] < (int32_t)ph.rest._length;
+    CHECK(range, "every triangle index is a vertex");
+    palp_cli_phantom_free(&ph);
+  }
+  palp_Phantom none;
+  CHECK(palp_cli_station_catalogue(&st, 99, 0.5, &none, err, sizeof err) < 0, "phantom 99 is not hosted: %s", err);
+  palp_cli_station_close(&st);
+  test_server_stop(&ts);
+  fprintf(stderr, "%d failure(s)\n", palp_test_failures);
+  return palp_test_failures ? 1 : 0;
+}

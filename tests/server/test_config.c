@@ -1,0 +1,78 @@
+/* test_config.c - server configuration: defaults, path resolution, and errors that name the field. */
+#include <stdio.h>
+#include <string.h>
+
+#include "config.h"
+#include "palp.h"
+
+static int failures;
+
+static void expect_error(const char *json, const char *field, int code) {
+  palp_srv_config cfg;
+  char err[512] = "";
+  int rc = palp_srv_config_parse(json, "/base", &cfg, err, sizeof err);
+  int ok = rc == code && strncmp(err, field, strlen(field)) == 0;
+  fprintf(stderr, "%s error %d \"%s\" (want code %d, message starting with \"%s\")\n", ok ? "ok  " : "FAIL", rc, err,
+          code, field);
+  failures += !ok;
+}
+
+#define PH "\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s.json\"}]"
+
+int main(void) {
+  /* Every message starts with the offending field, so an instructor can find it. */
+  expect_error("{", "not valid JSON", PALP_EPARSE);
+  expect_error("[]", "top level", PALP_EPARSE);
+  expect_error("{}", "phantoms: missing", PALP_EPARSE);
+  expect_error("{\"phantoms\": []}", "phantoms: at least one", PALP_EINVAL);
+  expect_error("{\"tick_rate_hz\": \"fast\", " PH "}", "tick_rate_hz: expected a number", PALP_EPARSE);
+  expect_error("{\"tick_rate_hz\": 0, " PH "}", "tick_rate_hz: 0 is outside", PALP_EINVAL);
+  expect_error("{\"domain_id\": 1.5, " PH "}", "domain_id: expected an integer", PALP_EPARSE);
+  expect_error("{\"domain_id\": 233, " PH "}", "domain_id: 233 is outside", PALP_EINVAL);
+  expect_error("{\"max_force\": -1, " PH "}", "max_force:", PALP_EINVAL);
+  expect_error("{\"force_policy\": \"maybe\", " PH "}", "force_policy:", PALP_EINVAL);
+  expect_error("{\"tick_rate\": 100, " PH "}", "tick_rate: unknown field", PALP_EPARSE);
+  expect_error("{\"finger_radius_min\": 0.02, \"finger_radius_max\": 0.01, " PH "}", "finger_radius_max:", PALP_EINVAL);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\"}]}", "phantoms[0].scene: missing", PALP_EPARSE);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": 3}]}", "phantoms[0].scene: expected a string",
+               PALP_EPARSE);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\"}, {\"id\": 1, \"name\": \"b\", "
+               "\"scene\": \"s\"}]}",
+               "phantoms[1].id: 1 is already used", PALP_EINVAL);
+  expect_error("{\"phantoms\": [{\"id\": 0, \"name\": \"a\", \"scene\": \"s\"}]}", "phantoms[0].id:", PALP_EINVAL);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"colour\": 1}]}",
+               "phantoms[0].colour: unknown field", PALP_EPARSE);
+
+  /* Defaults (docs/server.md) and relative paths resolved against the config's directory. */
+  palp_srv_config cfg;
+  char err[512] = "";
+  int rc = palp_srv_config_parse("{" PH "}", "/base", &cfg, err, sizeof err);
+  int ok = rc == 0 && cfg.tick_rate_hz == 100 && cfg.domain_id == 0 && cfg.max_sessions == 32 &&
+           cfg.deformation_rate_hz == 30 && cfg.max_force == 20 && cfg.force_policy == PALP_SRV_FORCE_CLAMP &&
+           cfg.phantom_count == 1 && strcmp(cfg.phantom[0].scene_path, "/base/s.json") == 0 &&
+           strcmp(cfg.dds_config, "/base/cyclonedds-loopback.xml") == 0 && cfg.database[0] == 0;
+  fprintf(stderr, "%s defaults: rc %d, %g Hz, %d sessions, scene %s, dds %s\n", ok ? "ok  " : "FAIL", rc,
+          cfg.tick_rate_hz, cfg.max_sessions, cfg.phantom[0].scene_path, cfg.dds_config);
+  failures += !ok;
+
+  rc = palp_srv_config_parse("{\"phantoms\": [{\"id\": 7, \"name\": \"a\", \"scene\": \"/abs/s.json\"}], "
+                             "\"database\": \"../out/x.db\", \"force_policy\": \"reject\", \"tick_rate_hz\": 1000}",
+                             "/base", &cfg, err, sizeof err);
+  ok = rc == 0 && strcmp(cfg.phantom[0].scene_path, "/abs/s.json") == 0 && strcmp(cfg.database, "/base/../out/x.db") == 0 &&
+       cfg.force_policy == PALP_SRV_FORCE_REJECT && cfg.tick_rate_hz == 1000 && cfg.phantom[0].id == 7;
+  fprintf(stderr, "%s absolute scene path kept, database resolved (%s)\n", ok ? "ok  " : "FAIL", cfg.database);
+  failures += !ok;
+
+  /* The shipped configuration loads. */
+  rc = palp_srv_config_load(PALP_CONFIG_DIR "/server.json", &cfg, err, sizeof err);
+  ok = rc == 0 && cfg.phantom_count >= 1 && cfg.tick_rate_hz == 100;
+  fprintf(stderr, "%s shipped config/server.json: rc %d %s\n", ok ? "ok  " : "FAIL", rc, err);
+  failures += !ok;
+  rc = palp_srv_config_load("/nonexistent/server.json", &cfg, err, sizeof err);
+  ok = rc == PALP_EIO && strstr(err, "/nonexistent/server.json: cannot open") != NULL;
+  fprintf(stderr, "%s missing file: %s\n", ok ? "ok  " : "FAIL", err);
+  failures += !ok;
+
+  fprintf(stderr, "%d failure(s)\n", failures);
+  return failures ? 1 : 0;
+}

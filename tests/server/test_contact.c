@@ -1,0 +1,98 @@
+/* test_contact.c - a force contact deforms the phantom near where it presses and
+ * the feedback force balances it; lifting the finger lets it recover. */
+#include <math.h>
+#include <string.h>
+
+#include "harness.h"
+#include "input.h"
+#include "view.h"
+
+#define DOMAIN 102
+
+/* Latest deformation: max displacement [m] and where. */
+static int latest_deformation(palp_cli_station *st, const palp_Phantom *ph, double wait, double *maxd, palp_Vec3 *at) {
+  int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  int got = 0;
+  while (palp_dds_now_ns() < end) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data) {
+        const palp_Deformation *d = ptr[0];
+        int v = -1;
+        *maxd = palp_cli_max_displacement(ph, d, &v);
+        if (v >= 0) *at = ph->rest._buffer[v];
+        got = 1;
+      }
+      dds_return_loan(st->deformation_r, ptr, 1);
+    }
+    test_sleep(0.01);
+  }
+  return got;
+}
+
+int main(void) {
+  test_init();
+  palp_srv_config cfg;
+  test_config(&cfg, DOMAIN, 100);
+  test_server ts = {0};
+  test_server_start(&ts, &cfg);
+  palp_cli_station tr, vis;
+  test_station_join(&tr, DOMAIN, "trainee", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  test_station_join(&vis, DOMAIN, "visual", palp_ROLE_VISUAL, 1, 0, 0, 1);
+  CHECK(vis.session_id == tr.session_id, "the visual station follows the trainee's session %u (got %u)", tr.session_id,
+        vis.session_id);
+  char err[256];
+  palp_Phantom ph;
+  REQUIRE(palp_cli_station_catalogue(&vis, 1, 5, &ph, err, sizeof err) == 0, "catalogue %s", err);
+
+  double d0 = 0;
+  palp_Vec3 at0 = {0, 0, 0};
+  latest_deformation(&vis, &ph, 0.3, &d0, &at0); /* may be none: an idle world sends its rest shape once */
+
+  /* 3 N (the paper's force) along the inward normal, distribution II, at polar
+   * 30 deg, azimuth 40 deg, resent at 100 Hz for 1.5 s. */
+  uint64_t seq = 0;
+  int64_t end = palp_dds_now_ns() + 1500000000;
+  while (palp_dds_now_ns() < end) {
+    test_send_force(&tr, 0, 2, 30, 40, 3.0, ++seq);
+    test_sleep(0.01);
+  }
+  int n = 0;
+  double f = test_last_feedback(&tr, 0.1, &n);
+  /* Quasi-static after 1.5 s (the model relaxes within ~1 s): the phantom pushes
+   * back with the applied force, Newton's third law; 10 % covers the residual creep. */
+  CHECK(n > 0 && fabs(f - 3.0) < 0.3, "feedback |F| = %.3f N while pressing with 3 N (tolerance 0.3 N), %d samples", f, n);
+  double d1 = 0;
+  palp_Vec3 at1 = {0, 0, 0};
+  int got = latest_deformation(&vis, &ph, 0.2, &d1, &at1);
+  palp_vec3 p = palp_cli_dome_point(0.04, 30, 40, NULL);
+  double dist = sqrt((at1.x - p.x) * (at1.x - p.x) + (at1.y - p.y) * (at1.y - p.y) + (at1.z - p.z) * (at1.z - p.z));
+  CHECK(got && d1 > 1e-3, "pressing displaces the surface by %.2f mm (want > 1 mm; rest frame showed %.3f mm)", d1 * 1e3,
+        d0 * 1e3);
+  /* The patch of 5.2 cm^2 has a radius of 1.3 cm; the largest displacement is inside it. */
+  CHECK(got && dist < 0.013, "largest displacement %.1f mm from the contact centre (want < 13 mm, the patch radius)",
+        dist * 1e3);
+
+  /* Lift: the finger's feedback goes to zero and the dome recovers (paper: ~1 s). */
+  for (int i = 0; i < 3; i++) {
+    test_send_force(&tr, 0, 2, 30, 40, 0.0, ++seq);
+    test_sleep(0.01);
+  }
+  test_sleep(2.0);
+  f = test_last_feedback(&tr, 0.3, &n);
+  CHECK(f < 1e-9, "feedback after lifting: %.3g N (want 0: no contact)", f);
+  double d2 = 1;
+  latest_deformation(&vis, &ph, 0.3, &d2, &at1);
+  CHECK(d2 < 0.3 * d1, "2 s after lifting the displacement fell from %.2f to %.2f mm (want < 30 %%)", d1 * 1e3, d2 * 1e3);
+
+  palp_cli_phantom_free(&ph);
+  palp_cli_station_leave(&vis);
+  palp_cli_station_leave(&tr);
+  test_sleep(0.2);
+  palp_cli_station_close(&vis);
+  palp_cli_station_close(&tr);
+  test_server_stop(&ts);
+  fprintf(stderr, "%d failure(s)\n", palp_test_failures);
+  return palp_test_failures ? 1 : 0;
+}

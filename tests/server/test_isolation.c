@@ -1,0 +1,104 @@
+/* test_isolation.c - two trainees on the same phantom get two sessions in two
+ * partitions: one pressing leaves the other's world, feedback and contact
+ * stream untouched. */
+#include <math.h>
+#include <string.h>
+
+#include "harness.h"
+#include "view.h"
+
+#define DOMAIN 103
+
+typedef struct seen {
+  int feedback, foreign_feedback, contacts, deformations, foreign_deformations;
+  double max_fb, max_disp;
+} seen;
+
+static void drain(palp_cli_station *st, const palp_Phantom *ph, seen *s) {
+  void *ptr[1] = {NULL};
+  dds_sample_info_t info;
+  while (st->feedback_r > 0 && dds_take(st->feedback_r, ptr, &info, 1, 1) > 0) {
+    const palp_Feedback *fb = ptr[0];
+    if (info.valid_data) {
+      s->feedback++;
+      s->foreign_feedback += fb->session_id != st->session_id;
+      for (uint32_t k = 0; k < fb->fingers._length; k++) {
+        palp_Vec3 f = fb->fingers._buffer[k].force;
+        double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+        if (m > s->max_fb) s->max_fb = m;
+      }
+    }
+    dds_return_loan(st->feedback_r, ptr, 1);
+  }
+  while (st->contact_r > 0 && dds_take(st->contact_r, ptr, &info, 1, 1) > 0) {
+    s->contacts += info.valid_data;
+    dds_return_loan(st->contact_r, ptr, 1);
+  }
+  while (st->deformation_r > 0 && dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
+    if (info.valid_data) {
+      const palp_Deformation *d = ptr[0];
+      s->deformations++;
+      s->foreign_deformations += d->session_id != st->session_id;
+      double m = palp_cli_max_displacement(ph, d, NULL);
+      if (m > s->max_disp) s->max_disp = m;
+    }
+    dds_return_loan(st->deformation_r, ptr, 1);
+  }
+}
+
+int main(void) {
+  test_init();
+  palp_srv_config cfg;
+  test_config(&cfg, DOMAIN, 100);
+  test_server ts = {0};
+  test_server_start(&ts, &cfg);
+  palp_cli_station a, b, obs_a, obs_b;
+  test_station_join(&a, DOMAIN, "trainee-a", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  test_station_join(&b, DOMAIN, "trainee-b", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  REQUIRE(a.session_id != b.session_id && strcmp(a.partition, b.partition) != 0,
+          "same phantom, two sessions: %u in %s and %u in %s", a.session_id, a.partition, b.session_id, b.partition);
+  test_station_join(&obs_a, DOMAIN, "observer-a", palp_ROLE_OBSERVER, 0, a.session_id, 1, 1);
+  test_station_join(&obs_b, DOMAIN, "observer-b", palp_ROLE_OBSERVER, 0, b.session_id, 1, 1);
+  char err[256];
+  palp_Phantom ph;
+  REQUIRE(palp_cli_station_catalogue(&a, 1, 5, &ph, err, sizeof err) == 0, "catalogue %s", err);
+  seen sa = {0}, sb = {0}, soa = {0}, sob = {0};
+  /* A presses 4 N for 1.5 s; B does nothing. */
+  uint64_t seq = 0;
+  int64_t end = palp_dds_now_ns() + 1500000000;
+  while (palp_dds_now_ns() < end) {
+    test_send_force(&a, 0, 3, 20, 0, 4.0, ++seq);
+    test_sleep(0.01);
+    drain(&a, &ph, &sa);
+    drain(&b, &ph, &sb);
+    drain(&obs_a, &ph, &soa);
+    drain(&obs_b, &ph, &sob);
+  }
+  test_sleep(0.2);
+  drain(&a, &ph, &sa);
+  drain(&b, &ph, &sb);
+  drain(&obs_a, &ph, &soa);
+  drain(&obs_b, &ph, &sob);
+
+  CHECK(sa.max_fb > 3.0, "A's feedback reaches %.2f N (pressing 4 N; want > 3 N)", sa.max_fb);
+  CHECK(soa.contacts > 50 && soa.max_disp > 1e-3, "A's observer sees %d of A's contacts and %.2f mm displacement",
+        soa.contacts, soa.max_disp * 1e3);
+  CHECK(sb.max_fb == 0.0, "B's feedback stays exactly 0 N (max %.3g N over %d samples)", sb.max_fb, sb.feedback);
+  CHECK(sob.contacts == 0, "B's observer sees %d contact samples (want 0: A's are in another partition)", sob.contacts);
+  /* B's world never received a load: its only motion is settling under gravity,
+   * far below A's millimetres. 0.1 mm tolerance. */
+  CHECK(sob.max_disp < 1e-4, "B's displacement stays below 0.1 mm (max %.4f mm over %d frames)", sob.max_disp * 1e3,
+        sob.deformations);
+  CHECK(sa.foreign_feedback == 0 && sb.foreign_feedback == 0 && soa.foreign_deformations == 0 &&
+            sob.foreign_deformations == 0,
+        "no station received a sample of the other session (%d, %d, %d, %d)", sa.foreign_feedback, sb.foreign_feedback,
+        soa.foreign_deformations, sob.foreign_deformations);
+  palp_cli_phantom_free(&ph);
+  palp_cli_station *all[] = {&obs_a, &obs_b, &a, &b};
+  for (int i = 0; i < 4; i++) palp_cli_station_leave(all[i]);
+  test_sleep(0.2);
+  for (int i = 0; i < 4; i++) palp_cli_station_close(all[i]);
+  test_server_stop(&ts);
+  fprintf(stderr, "%d failure(s)\n", palp_test_failures);
+  return palp_test_failures ? 1 : 0;
+}

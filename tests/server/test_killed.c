@@ -1,0 +1,78 @@
+/* test_killed.c - a trainee station killed with SIGKILL (no goodbye) is noticed
+ * through DDS liveliness and its session closed within 2 s. */
+#include <signal.h>
+#include <spawn.h>
+#include <string.h>
+#include <sys/wait.h>
+
+#include "harness.h"
+
+#define DOMAIN 104
+
+extern char **environ;
+
+/* Newest state of a session named by trainee (or id): returns 1 when found. */
+static int poll_state(palp_cli_station *st, const char *trainee, uint32_t id, palp_SessionState *out) {
+  palp_SessionState buf[8];
+  void *ptr[8];
+  dds_sample_info_t info[8];
+  for (int i = 0; i < 8; i++) ptr[i] = &buf[i];
+  int n, found = 0;
+  while ((n = dds_take(st->state_r, ptr, info, 8, 8)) > 0)
+    for (int i = 0; i < n; i++)
+      if (info[i].valid_data && (id ? buf[i].session_id == id : strcmp(buf[i].trainee_name, trainee) == 0)) {
+        *out = buf[i];
+        found = 1;
+      }
+  return found;
+}
+
+int main(void) {
+  test_init();
+  palp_srv_config cfg;
+  test_config(&cfg, DOMAIN, 100);
+  test_server ts = {0};
+  test_server_start(&ts, &cfg);
+  palp_cli_station watch;
+  char err[256];
+  REQUIRE(palp_cli_station_open(&watch, DOMAIN, "watch", err, sizeof err) == 0, "watcher %s", err);
+
+  /* A real palp-client process, pressing the paper's profile for up to a minute. */
+  char *argv[] = {PALP_CLIENT_PATH, "--role", "trainee", "--domain", "104", "--phantom", "1", "--name", "victim",
+                  "--profile", "sine", "--magnitude", "1", "--duration", "60", "--quiet", NULL};
+  pid_t pid;
+  REQUIRE(posix_spawn(&pid, PALP_CLIENT_PATH, NULL, NULL, argv, environ) == 0, "spawned %s", PALP_CLIENT_PATH);
+  palp_SessionState s;
+  memset(&s, 0, sizeof s);
+  int64_t end = palp_dds_now_ns() + 10000000000LL;
+  int open = 0;
+  while (!open && palp_dds_now_ns() < end) {
+    if (poll_state(&watch, "victim", 0, &s) && s.phase == palp_PHASE_OPEN) open = 1;
+    test_sleep(0.02);
+  }
+  if (!open) kill(pid, SIGKILL);
+  REQUIRE(open, "the client's session %u opened", s.session_id);
+  uint32_t sid = s.session_id;
+  test_sleep(1.0); /* let it press for a while */
+  int64_t t_kill = palp_dds_now_ns();
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  CHECK(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL, "client killed by SIGKILL");
+  int closed = 0;
+  end = t_kill + 5000000000LL;
+  while (!closed && palp_dds_now_ns() < end) {
+    if (poll_state(&watch, NULL, sid, &s) && s.phase == palp_PHASE_CLOSED) closed = 1;
+    else test_sleep(0.01);
+  }
+  double dt = (double)(palp_dds_now_ns() - t_kill) * 1e-9;
+  /* Budget: writer liveliness lease 0.5 s, participant lease 1 s, plus the
+   * server's 100 ms loop and delivery: 2 s. */
+  CHECK(closed && dt <= 2.0, "session %u closed %.2f s after SIGKILL (want <= 2 s): \"%s\"", sid, dt,
+        closed ? s.reason : "(not closed)");
+  CHECK(closed && strstr(s.reason, "lost") != NULL, "the reason says the station was lost: \"%s\"", s.reason);
+  palp_cli_station_close(&watch);
+  test_server_stop(&ts);
+  fprintf(stderr, "%d failure(s)\n", palp_test_failures);
+  return palp_test_failures ? 1 : 0;
+}
