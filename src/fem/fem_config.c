@@ -15,7 +15,8 @@
  *                "prony": [{"g": 0.9, "tau": 0.002}, {"g": 0.09, "tau": 0.005}]},
  *   "gel": {...}, "c10_reading": "long_term" | "instantaneous",
  *   "dt": 0.01, "newmark_beta": 0.25, "newmark_gamma": 0.5, "max_newton": 12,
- *   "newton_rtol": 1e-6, "newton_atol": 1e-9, "max_cutbacks": 8, "cache_dir": "cache/fem" }
+ *   "newton_rtol": 1e-6, "newton_atol": 1e-9, "max_cutbacks": 8, "cache_dir": "cache/fem",
+ *   "full_newton": 0, "pcg_refactor": 20 }
  * Units: SI (m, kg/m^3, Pa, 1/Pa, s).
  */
 #include <math.h>
@@ -50,6 +51,8 @@ palp_fem_config palp_fem_default_config(void) {
   c.newton_rtol = 1e-6;
   c.newton_atol = 1e-9;
   c.max_cutbacks = 8;
+  c.full_newton = 0;
+  c.pcg_refactor = 20;
   snprintf(c.cache_dir, sizeof c.cache_dir, "cache/fem");
   return c;
 }
@@ -155,7 +158,7 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   }
   static const char *const keys[] = {"mesh",         "inp",        "membrane",    "gel",          "c10_reading",
                                      "dt",           "newmark_beta", "newmark_gamma", "max_newton", "newton_rtol",
-                                     "newton_atol",  "max_cutbacks", "cache_dir",   NULL};
+                                     "newton_atol",  "max_cutbacks", "cache_dir",   "full_newton", "pcg_refactor", NULL};
   int rc = only_keys(root, keys, "", err, errlen);
   const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
   if (!rc && mesh) {
@@ -192,6 +195,8 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   if (!rc) rc = number(root, "newton_atol", "", &cfg->newton_atol, err, errlen);
   if (!rc) rc = integer(root, "max_cutbacks", "", &cfg->max_cutbacks, err, errlen);
   if (!rc) rc = string(root, "cache_dir", "", cfg->cache_dir, sizeof cfg->cache_dir, err, errlen);
+  if (!rc) rc = integer(root, "full_newton", "", &cfg->full_newton, err, errlen);
+  if (!rc) rc = integer(root, "pcg_refactor", "", &cfg->pcg_refactor, err, errlen);
   cJSON_Delete(root);
   if (!rc) rc = palp_fem_config_validate(cfg, err, errlen);
   return rc;

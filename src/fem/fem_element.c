@@ -77,31 +77,23 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
                          F[0][0] * F[0][1] + F[1][0] * F[1][1] + F[2][0] * F[2][1],
                          F[0][1] * F[0][2] + F[1][1] * F[1][2] + F[2][1] * F[2][2],
                          F[0][0] * F[0][2] + F[1][0] * F[1][2] + F[2][0] * F[2][2]};
-    double S0[6], D0[6][6], S[6];
-    palp_fem_nh_iso(mat->c10, C, S0, ke ? D0 : NULL);
+    double S0[6], S[6];
+    palp_fem_nh_iso(mat->c10, C, S0, NULL);
     const double *S0old = m->S0 ? m->S0 + q * 6 : S0;
     const double *Hold = m->H ? m->H + q * (size_t)np * 6 : zeroH;
     double Hnew[PALP_FEM_MAX_PRONY * 6];
     const double gamma = palp_fem_prony_update(mat, dt, S0, S0old, Hold, Hnew, S);
     if (S0t) memcpy(S0t + gp * 6, S0, sizeof S0);
     if (Ht) memcpy(Ht + (size_t)gp * np * 6, Hnew, sizeof(double) * (size_t)np * 6);
-    /* B: variation of the Green-Lagrange strain, engineering shear */
-    double B[6][24];
-    for (int a = 0; a < 8; ++a)
-      for (int i = 0; i < 3; ++i) {
-        const int c = 3 * a + i;
-        B[0][c] = F[i][0] * dN[a][0];
-        B[1][c] = F[i][1] * dN[a][1];
-        B[2][c] = F[i][2] * dN[a][2];
-        B[3][c] = F[i][0] * dN[a][1] + F[i][1] * dN[a][0];
-        B[4][c] = F[i][1] * dN[a][2] + F[i][2] * dN[a][1];
-        B[5][c] = F[i][0] * dN[a][2] + F[i][2] * dN[a][0];
-      }
-    for (int c = 0; c < 24; ++c) {
-      double s = 0.0;
-      for (int p = 0; p < 6; ++p) s += B[p][c] * S[p];
-      fe[c] += w * s;
+    /* internal force: f_a = w F S dN_a (the B^T S of the Voigt form, B = sym(F^T grad N)) */
+    double FS[3][3];
+    for (int i = 0; i < 3; ++i) {
+      FS[i][0] = F[i][0] * S[0] + F[i][1] * S[3] + F[i][2] * S[5];
+      FS[i][1] = F[i][0] * S[3] + F[i][1] * S[1] + F[i][2] * S[4];
+      FS[i][2] = F[i][0] * S[5] + F[i][1] * S[4] + F[i][2] * S[2];
     }
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) fe[3 * a + i] += w * (FS[i][0] * dN[a][0] + FS[i][1] * dN[a][1] + FS[i][2] * dN[a][2]);
     /* volumetric: current volume and its gradient */
     double Fi[3][3];
     inv3(F, J, Fi);
@@ -114,28 +106,43 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
       }
     ve += jw;
     if (!ke) continue;
-    double DB[6][24];
-    for (int p = 0; p < 6; ++p)
-      for (int c = 0; c < 24; ++c) {
-        double s = 0.0;
-        for (int r = 0; r < 6; ++r) s += D0[p][r] * B[r][c];
-        DB[p][c] = gamma * w * s;
+    /* Material part in spatial form. The push-forward of gamma CC0 is gamma times
+     * the Kirchhoff-based Neo-Hookean modulus (Holzapfel 6.170, mu = 2 C10_inst):
+     *   J c = 2/3 mu tr(bb) [II - 1/3 I x I] - 2/3 mu [dev(bb) x I + I x dev(bb)],
+     * bb = J^(-2/3) F F^T. Contracted with grad_x N_a (A) and grad_x N_b (B):
+     *   K_ab,ik = w gamma [ al/2 (A.B) d_ik + al/2 B_i A_k - al/3 A_i B_k
+     *                      - 2/3 mu ((dA)_i B_k + A_i (dB)_k) ],  al = 2/3 mu tr(bb),
+     * d = dev(bb). Geometric part in reference form: (dN_a . S dN_b) I. */
+    const double mu = 2.0 * mat->c10, Jm23 = pow(J, -2.0 / 3.0);
+    double bb[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) bb[i][j] = Jm23 * (F[i][0] * F[j][0] + F[i][1] * F[j][1] + F[i][2] * F[j][2]);
+    const double trb = bb[0][0] + bb[1][1] + bb[2][2];
+    for (int i = 0; i < 3; ++i) bb[i][i] -= trb / 3.0; /* now dev(bb) */
+    const double wg = w * gamma, al = 2.0 / 3.0 * mu * trb, c23 = 2.0 / 3.0 * mu;
+    double dA[8][3], SdN[8][3];
+    for (int a = 0; a < 8; ++a)
+      for (int i = 0; i < 3; ++i) {
+        dA[a][i] = bb[i][0] * nx[a][0] + bb[i][1] * nx[a][1] + bb[i][2] * nx[a][2];
+        SdN[a][i] = 0.0;
       }
-    for (int r = 0; r < 24; ++r)
-      for (int c = r; c < 24; ++c) {
-        double s = 0.0;
-        for (int p = 0; p < 6; ++p) s += B[p][r] * DB[p][c];
-        ke[r][c] += s;
-      }
+    for (int a = 0; a < 8; ++a) {
+      SdN[a][0] = S[0] * dN[a][0] + S[3] * dN[a][1] + S[5] * dN[a][2];
+      SdN[a][1] = S[3] * dN[a][0] + S[1] * dN[a][1] + S[4] * dN[a][2];
+      SdN[a][2] = S[5] * dN[a][0] + S[4] * dN[a][1] + S[2] * dN[a][2];
+    }
     for (int a = 0; a < 8; ++a)
       for (int b = a; b < 8; ++b) {
-        const double SdN[3] = {S[0] * dN[b][0] + S[3] * dN[b][1] + S[5] * dN[b][2],
-                               S[3] * dN[b][0] + S[1] * dN[b][1] + S[4] * dN[b][2],
-                               S[5] * dN[b][0] + S[4] * dN[b][1] + S[2] * dN[b][2]};
-        const double G = w * (dN[a][0] * SdN[0] + dN[a][1] * SdN[1] + dN[a][2] * SdN[2]);
-        for (int i = 0; i < 3; ++i) ke[3 * a + i][3 * b + i] += G;
+        const double *A = nx[a], *B = nx[b];
+        const double AB = A[0] * B[0] + A[1] * B[1] + A[2] * B[2];
+        const double G = w * (dN[a][0] * SdN[b][0] + dN[a][1] * SdN[b][1] + dN[a][2] * SdN[b][2]);
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) Hv[3 * a + i][3 * b + j] += (nx[a][i] * nx[b][j] - nx[a][j] * nx[b][i]) * jw;
+          for (int k = 0; k < 3; ++k) {
+            double v = wg * (0.5 * al * B[i] * A[k] - al / 3.0 * A[i] * B[k] - c23 * (dA[a][i] * B[k] + A[i] * dA[b][k]));
+            Hv[3 * a + i][3 * b + k] += jw * (A[i] * B[k] - A[k] * B[i]);
+            if (i == k) v += wg * 0.5 * al * AB + G;
+            ke[3 * a + i][3 * b + k] += v;
+          }
       }
   }
   const double V0 = m->vol0[e];

@@ -82,6 +82,13 @@ typedef struct palp_fem_model {
   int *emap;        /* [E * 576] value index or -1 */
   double *kval;     /* [nnz] */
   palp_fem_solver *solver;
+  double *pcg;        /* [6 * nfree] CG work vectors */
+  int factored;       /* the solver holds a usable factor */
+  double factor_c0;   /* mass coefficient 1 / (beta dt^2) the factor was made with */
+  int last_pcg;       /* CG iterations of the last solve */
+  int full_newton;    /* refactor every iteration */
+  int pcg_refactor;   /* renew the factor when CG needed more than this */
+  long pcg_iterations;
   int nprony;
   /* statistics */
   long steps, newton_iterations, cutbacks, factorizations;
@@ -125,12 +132,14 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt);
 /* ---- sparse solver (fem_solver.c) -------------------------------------------- */
 palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi, long nnz);
 void palp_fem_solver_destroy(palp_fem_solver *s);
-/* Numeric Cholesky of the upper-triangle values; PALP_ESOLVER if not positive definite. */
+/* Numeric Cholesky of the upper-triangle values, LDL^T if indefinite;
+ * PALP_ESOLVER if singular. */
 int palp_fem_solver_factor(palp_fem_solver *s, const double *val);
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x);
 /* Nonzeros of L and flops of the last factorisation. */
 double palp_fem_solver_factor_nnz(const palp_fem_solver *s);
 double palp_fem_solver_factor_flops(const palp_fem_solver *s);
+long palp_fem_solver_ldl_count(const palp_fem_solver *s);
 
 /* ---- surface map (fem_map.c) ------------------------------------------------- */
 /* Each real-time vertex maps to 4 FE nodes with bilinear weights on the FE outer

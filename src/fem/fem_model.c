@@ -44,6 +44,7 @@ void palp_fem_model_destroy(palp_fem_model *m) {
   free(m->rowi);
   free(m->emap);
   free(m->kval);
+  free(m->pcg);
   palp_fem_solver_destroy(m->solver);
   memset(m, 0, sizeof *m);
 }
@@ -68,6 +69,8 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   m->atol = cfg->newton_atol;
   m->max_newton = cfg->max_newton;
   m->max_cutbacks = cfg->max_cutbacks;
+  m->full_newton = cfg->full_newton;
+  m->pcg_refactor = cfg->pcg_refactor > 0 ? cfg->pcg_refactor : 20;
   const int N = mesh->node_count, E = mesh->element_count, np = m->nprony;
   m->ndof = 3 * N;
   const size_t nd = (size_t)m->ndof;
@@ -221,6 +224,10 @@ int palp_fem_model_finalize(palp_fem_model *m) {
   free(m->kval);
   free(m->emap);
   m->kval = calloc((size_t)(nnz ? nnz : 1), sizeof(double));
+  free(m->pcg);
+  m->pcg = malloc(sizeof(double) * 6 * (size_t)(nf ? nf : 1));
+  m->factored = 0;
+  if (!m->pcg) return PALP_ENOMEM;
   m->emap = malloc(sizeof(int) * (size_t)E * 576);
   if (!m->kval || !m->emap) return PALP_ENOMEM;
   for (int e = 0; e < E; ++e)
@@ -287,20 +294,98 @@ static double norm_free(const palp_fem_model *m, const double *v) {
   return sqrt(s);
 }
 
-/* Solves K du = res on the free equations (kval holds K). */
-static int newton_solve(palp_fem_model *m) {
-  int rc = palp_fem_solver_factor(m->solver, m->kval);
-  m->factorizations++;
-  if (rc) return rc;
-  double *b = m->du; /* pack, solve in place, unpack into du */
-  double *x = malloc(sizeof(double) * 2 * (size_t)(m->nfree ? m->nfree : 1));
-  if (!x) return PALP_ENOMEM;
-  double *bb = x + m->nfree;
+/* y = K x for the symmetric K stored as its upper triangle (colp, rowi, kval). */
+static void symv(const palp_fem_model *m, const double *x, double *y) {
+  memset(y, 0, sizeof(double) * (size_t)m->nfree);
+  for (int c = 0; c < m->nfree; ++c) {
+    double yc = 0.0;
+    const double xc = x[c];
+    for (int p = m->colp[c]; p < m->colp[c + 1]; ++p) {
+      const int r = m->rowi[p];
+      const double v = m->kval[p];
+      y[r] += v * xc;
+      if (r != c) yc += v * x[r];
+    }
+    y[c] += yc;
+  }
+}
+
+static double dot(const double *a, const double *b, int n) {
+  double s = 0.0;
+  for (int i = 0; i < n; ++i) s += a[i] * b[i];
+  return s;
+}
+
+/* Solves K du = res on the free equations (kval holds the consistent K).
+ *
+ * A Cholesky factorisation costs ~1e10 flops at 10^4 elements, a solve with it
+ * ~5e7: so the factor is kept and reused as the preconditioner of conjugate
+ * gradients on the current consistent tangent, which it approximates closely while
+ * strains stay moderate (Newton's quadratic convergence needs the exact tangent
+ * system solved, not the exact tangent factored). The factor is renewed when the
+ * effective mass term changed (dt), when CG needed more than pcg_refactor
+ * iterations last time, or when CG fails; full_newton renews it every iteration.
+ * CG stops at ||K du - r|| <= eta ||r||, eta = min(0.1, ||r|| / force scale), a
+ * forcing term that keeps the Newton iteration quadratic. */
+static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
+  const int n = m->nfree;
+  double *b = m->pcg, *x = b + n, *r = x + n, *z = r + n, *p = z + n, *q = p + n;
   for (int d = 0; d < m->ndof; ++d)
-    if (m->eq[d] >= 0) bb[m->eq[d]] = m->res[d];
-  rc = palp_fem_solver_solve(m->solver, bb, x);
-  for (int d = 0; d < m->ndof; ++d) b[d] = m->eq[d] >= 0 ? x[m->eq[d]] : 0.0;
-  free(x);
+    if (m->eq[d] >= 0) b[m->eq[d]] = m->res[d];
+  int fresh = 0;
+  if (!m->factored || m->full_newton || m->factor_c0 != kscale_c0 || m->last_pcg > m->pcg_refactor) {
+    int rc = palp_fem_solver_factor(m->solver, m->kval);
+    m->factorizations++;
+    m->factored = rc == 0;
+    if (rc) return rc;
+    m->factor_c0 = kscale_c0;
+    fresh = 1;
+  }
+  int rc = 0;
+  if (fresh) {
+    rc = palp_fem_solver_solve(m->solver, b, x); /* the factor is of this very K */
+    m->last_pcg = 0;
+  } else {
+    const double bn = sqrt(dot(b, b, n));
+    memcpy(r, b, sizeof(double) * (size_t)n);
+    memset(x, 0, sizeof(double) * (size_t)n);
+    rc = palp_fem_solver_solve(m->solver, r, z);
+    memcpy(p, z, sizeof(double) * (size_t)n);
+    double rz = dot(r, z, n);
+    int it = 0, ok = 0;
+    while (!rc && it < 4 * m->pcg_refactor + 20) {
+      symv(m, p, q);
+      const double pq = dot(p, q, n);
+      if (!(pq > 0.0)) break; /* indefinite direction: fall back to a fresh factor */
+      const double alpha = rz / pq;
+      for (int i = 0; i < n; ++i) {
+        x[i] += alpha * p[i];
+        r[i] -= alpha * q[i];
+      }
+      ++it;
+      if (sqrt(dot(r, r, n)) <= eta * bn) {
+        ok = 1;
+        break;
+      }
+      rc = palp_fem_solver_solve(m->solver, r, z);
+      const double rz2 = dot(r, z, n);
+      const double beta = rz2 / rz;
+      rz = rz2;
+      for (int i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    }
+    m->pcg_iterations += it;
+    m->last_pcg = it;
+    if (!rc && !ok) { /* CG stalled: renew the factor and solve directly */
+      rc = palp_fem_solver_factor(m->solver, m->kval);
+      m->factorizations++;
+      m->factored = rc == 0;
+      if (rc) return rc;
+      m->factor_c0 = kscale_c0;
+      m->last_pcg = 0;
+      rc = palp_fem_solver_solve(m->solver, b, x);
+    }
+  }
+  for (int d = 0; d < m->ndof; ++d) m->du[d] = m->eq[d] >= 0 ? x[m->eq[d]] : 0.0;
   return rc;
 }
 
@@ -336,7 +421,7 @@ int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments,
         break;
       }
       if (it == m->max_newton) break;
-      rc = newton_solve(m);
+      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)));
       if (rc) return rc;
       m->newton_iterations++;
       for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
@@ -388,7 +473,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
       const int c = m->eq[d];
       if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
     }
-    rc = newton_solve(m);
+    rc = newton_solve(m, c0, fmin(0.1, r / fmax(scale, 1e-300)));
     if (rc) return rc;
     m->newton_iterations++;
     for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];

@@ -6,8 +6,12 @@
  * AMD and, if METIS is built in, nested dissection, and keeps the one with less
  * fill); every Newton iteration only refactors numerically. CHOLMOD picks a
  * supernodal factorisation for the 3D meshes here (dense BLAS on the fronts). A
- * matrix that is not positive definite is reported, never solved: the caller cuts
- * the time step, which adds M / (beta dt^2) to the diagonal.
+ * matrix that is not positive definite falls back to a simplicial LDL^T of the
+ * same pattern (analysed on first need): the tangent of a nearly incompressible
+ * solid under large compressive pressure (p > mu, e.g. the relaxed gel under a
+ * point load) is legitimately indefinite on a few mesh-scale modes, and Newton
+ * still converges quadratically with an indefinite but non-singular tangent. Only
+ * a singular matrix is reported (the caller then cuts the time step).
  */
 #include <stdlib.h>
 #include <string.h>
@@ -20,9 +24,12 @@ struct palp_fem_solver {
   cholmod_common cc;
   cholmod_sparse *A;
   cholmod_factor *L;
+  cholmod_factor *Lldl; /* simplicial LDL^T fallback */
+  cholmod_factor *last; /* the factor the next solve uses */
   cholmod_dense *b;
   cholmod_dense *x, *Y, *E; /* reusable workspaces of cholmod_solve2 */
   int n;
+  long ldl_count; /* factorisations that needed the LDL^T fallback */
 };
 
 palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi, long nnz) {
@@ -53,6 +60,7 @@ palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi,
 void palp_fem_solver_destroy(palp_fem_solver *s) {
   if (!s) return;
   if (s->L) cholmod_free_factor(&s->L, &s->cc);
+  if (s->Lldl) cholmod_free_factor(&s->Lldl, &s->cc);
   if (s->A) cholmod_free_sparse(&s->A, &s->cc);
   if (s->b) cholmod_free_dense(&s->b, &s->cc);
   if (s->x) cholmod_free_dense(&s->x, &s->cc);
@@ -65,14 +73,29 @@ void palp_fem_solver_destroy(palp_fem_solver *s) {
 int palp_fem_solver_factor(palp_fem_solver *s, const double *val) {
   const int *p = s->A->p;
   memcpy(s->A->x, val, sizeof(double) * (size_t)p[s->n]);
-  if (!cholmod_factorize(s->A, s->L, &s->cc)) return PALP_ESOLVER;
-  if (s->cc.status == CHOLMOD_NOT_POSDEF || s->L->minor < (size_t)s->n) return PALP_ESOLVER;
+  s->last = s->L;
+  if (cholmod_factorize(s->A, s->L, &s->cc) && s->cc.status == CHOLMOD_OK && s->L->minor >= (size_t)s->n)
+    return PALP_OK;
+  if (!s->Lldl) {
+    const int sn = s->cc.supernodal, ll = s->cc.final_ll;
+    s->cc.supernodal = CHOLMOD_SIMPLICIAL;
+    s->cc.final_ll = 0;
+    s->Lldl = cholmod_analyze(s->A, &s->cc);
+    s->cc.supernodal = sn;
+    s->cc.final_ll = ll;
+    if (!s->Lldl) return PALP_ESOLVER;
+  }
+  s->ldl_count++;
+  s->last = s->Lldl;
+  const int ok = cholmod_factorize(s->A, s->Lldl, &s->cc);
+  if (!ok || s->Lldl->minor < (size_t)s->n) return PALP_ESOLVER;
+  /* a zero or non-finite pivot leaves minor < n; anything else is usable */
   return PALP_OK;
 }
 
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
   memcpy(s->b->x, b, sizeof(double) * (size_t)s->n);
-  if (!cholmod_solve2(CHOLMOD_A, s->L, s->b, NULL, &s->x, NULL, &s->Y, &s->E, &s->cc)) return PALP_ESOLVER;
+  if (!cholmod_solve2(CHOLMOD_A, s->last ? s->last : s->L, s->b, NULL, &s->x, NULL, &s->Y, &s->E, &s->cc)) return PALP_ESOLVER;
   memcpy(x, s->x->x, sizeof(double) * (size_t)s->n);
   return PALP_OK;
 }
@@ -80,3 +103,4 @@ int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
 /* Fill statistics of the factor, for the benchmark and docs. */
 double palp_fem_solver_factor_nnz(const palp_fem_solver *s) { return s->cc.lnz; }
 double palp_fem_solver_factor_flops(const palp_fem_solver *s) { return s->cc.fl; }
+long palp_fem_solver_ldl_count(const palp_fem_solver *s) { return s->ldl_count; }

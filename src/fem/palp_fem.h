@@ -109,6 +109,8 @@ typedef struct palp_fem_config {
   double newton_rtol;   /* residual tolerance relative to the force scale, 1e-6 */
   double newton_atol;   /* absolute residual floor [N], 1e-9 */
   int max_cutbacks;     /* dt halvings allowed per step, 8 */
+  int full_newton;      /* 1: factor the tangent every iteration; 0: reuse the factor as CG preconditioner */
+  int pcg_refactor;     /* renew the factor when CG took more iterations than this, 20 */
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
 } palp_fem_config;
 
@@ -133,7 +135,7 @@ typedef struct palp_fem_result {
   palp_vec3 *feedback; /* [frames * contact_vertex_count] force on the finger [N] */
   /* statistics of the run that produced it */
   int node_count, element_count, dof_count;
-  long steps, newton_iterations, cutbacks, factorizations;
+  long steps, newton_iterations, cutbacks, factorizations, pcg_iterations;
   double wall_seconds; /* of the original computation (also when read from cache) */
   int from_cache;
   uint64_t key;        /* cache key */

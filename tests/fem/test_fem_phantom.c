@@ -1,0 +1,237 @@
+/*
+ * test_fem_phantom.c - the FE reference on the phantom itself: mesh sanity, the
+ * surface map, Newton's quadratic convergence, and convergence under time-step
+ * halving and mesh refinement. Usage: test_fem_phantom <case>.
+ */
+#include <time.h>
+
+#include "fem_test.h"
+
+/* Nodal forces [N] of a vertical traction t(x) = -q0 exp(-r^2 / s^2) e_z on the
+ * outer surface (r: distance from the axis), integrated with 2x2 Gauss points on
+ * every surface face; q0 = F / (pi s^2) makes the total about F for s << R. */
+static void cap_load(const palp_fem_mesh *mesh, double F, double s, double *f) {
+  int (*faces)[4], nf;
+  palp_fem_surface_faces(mesh, &faces, &nf);
+  memset(f, 0, sizeof(double) * 3 * (size_t)mesh->node_count);
+  const double q0 = F / (PALP_FEM_PI * s * s), g = 0.57735026918962576451;
+  static const double sg[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  for (int k = 0; k < nf; ++k)
+    for (int q = 0; q < 4; ++q) {
+      const double xi = g * sg[q][0], eta = g * sg[q][1];
+      double N[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
+      for (int a = 0; a < 4; ++a) {
+        N[a] = 0.25 * (1 + sg[a][0] * xi) * (1 + sg[a][1] * eta);
+        const double da = 0.25 * sg[a][0] * (1 + sg[a][1] * eta), db = 0.25 * sg[a][1] * (1 + sg[a][0] * xi);
+        for (int d = 0; d < 3; ++d) {
+          X[d] += N[a] * mesh->x[faces[k][a]][d];
+          Xa[d] += da * mesh->x[faces[k][a]][d];
+          Xb[d] += db * mesh->x[faces[k][a]][d];
+        }
+      }
+      const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2], Xa[0] * Xb[1] - Xa[1] * Xb[0]};
+      const double dA = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const double t = -q0 * exp(-(X[0] * X[0] + X[1] * X[1]) / (s * s));
+      for (int a = 0; a < 4; ++a) f[3 * faces[k][a] + 2] += N[a] * t * dA;
+    }
+  free(faces);
+}
+
+static double now(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Level 1..4 element counts are 224, 1408, 4320, 10496 (2n x 2n x n core cells
+ * plus 12 n^2 columns of 2n + L_m layers, n = 2 level); every element has positive
+ * volume; the mesh volume is the hemisphere's 2/3 pi R^3 within the faceting error
+ * (1.5% at level 2), the membrane's 2 pi R^2 t within 3%; the base is z = 0. */
+static void test_mesh(void) {
+  const int expect[4] = {224, 1408, 4320, 10496};
+  for (int L = 1; L <= 4; ++L) {
+    palp_fem_mesh_def d = palp_fem_mesh_default_def();
+    d.level = L;
+    palp_fem_mesh m;
+    CHECK(palp_fem_mesh_create(&d, &m) == 0, "mesh level %d", L);
+    CHECK(m.element_count == expect[L - 1], "level %d: %d elements, expected %d", L, m.element_count, expect[L - 1]);
+    double vol = 0.0, vm = 0.0, vmin = INFINITY;
+    for (int e = 0; e < m.element_count; ++e) {
+      const double v = palp_fem_element_volume(&m, e);
+      vol += v;
+      vmin = fmin(vmin, v);
+      if (m.region[e] == PALP_FEM_MEMBRANE) vm += v;
+    }
+    const double R = d.radius, t = d.membrane_thickness;
+    const double vex = 2.0 / 3.0 * PALP_FEM_PI * R * R * R;
+    const double vmex = 2.0 / 3.0 * PALP_FEM_PI * (R * R * R - (R - t) * (R - t) * (R - t));
+    CHECK(vmin > 0.0, "level %d: smallest element volume %.3g m^3", L, vmin);
+    if (L >= 2) {
+      CHECK(fabs(vol - vex) <= 0.015 * vex, "level %d: volume %.6g m^3 vs %.6g (tolerance 1.5%%)", L, vol, vex);
+      CHECK(fabs(vm - vmex) <= 0.03 * vmex, "level %d: membrane %.6g m^3 vs %.6g (tolerance 3%%)", L, vm, vmex);
+    }
+    CHECK(fabs(m.x[m.top_node][2] - R) < 1e-12, "level %d: top node at z = %.9g", L, m.x[m.top_node][2]);
+    int nbase = 0;
+    for (int n = 0; n < m.node_count; ++n) {
+      nbase += m.fixed[n];
+      if (m.fixed[n]) CHECK(fabs(m.x[n][2]) < 1e-15, "base node off z = 0");
+    }
+    printf("level %d: %d nodes, %d elements, volume %.4f%% off, membrane %.3f%% off, %d base nodes\n", L,
+           m.node_count, m.element_count, 100 * (vol - vex) / vex, 100 * (vm - vmex) / vmex, nbase);
+    palp_fem_mesh_destroy(&m);
+  }
+}
+
+/* The surface map: points on the R = 4 cm sphere (a spiral of 400 directions over
+ * the dome, rim included) map onto a face with weights summing to 1, and the mapped
+ * point lies on the ray through the point (1e-9 m) within the faceting sagitta
+ * (0.3 mm at level 2) of the sphere. */
+static void test_map(void) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = 2;
+  palp_fem_mesh m;
+  CHECK(palp_fem_mesh_create(&d, &m) == 0, "mesh");
+  enum { NP = 400 };
+  palp_vec3 p[NP];
+  for (int i = 0; i < NP; ++i) {
+    const double z = (double)i / (NP - 1), rho = sqrt(1 - z * z), ph = 2.399963229728653 * i;
+    p[i] = (palp_vec3){0.04 * rho * cos(ph), 0.04 * rho * sin(ph), 0.04 * z};
+  }
+  palp_fem_map map;
+  CHECK(palp_fem_map_create(&m, p, NP, &map) == 0, "map");
+  double worst_ray = 0.0, worst_rad = 0.0, worst_w = 0.0;
+  for (int i = 0; i < NP && map.count == NP; ++i) {
+    double X[3] = {0}, ws = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      ws += map.w[i][k];
+      for (int dd = 0; dd < 3; ++dd) X[dd] += map.w[i][k] * m.x[map.node[i][k]][dd];
+      CHECK(map.w[i][k] >= -1e-12, "negative weight");
+    }
+    const double u[3] = {p[i].x / 0.04, p[i].y / 0.04, p[i].z / 0.04};
+    const double c[3] = {X[1] * u[2] - X[2] * u[1], X[2] * u[0] - X[0] * u[2], X[0] * u[1] - X[1] * u[0]};
+    worst_ray = fmax(worst_ray, sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]));
+    worst_rad = fmax(worst_rad, fabs(sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]) - 0.04));
+    worst_w = fmax(worst_w, fabs(ws - 1.0));
+  }
+  CHECK(worst_w <= 1e-12, "map: weights sum off 1 by %.3g", worst_w);
+  CHECK(worst_ray <= 1e-9, "map: mapped points off the ray by %.3g m (tolerance 1e-9 m)", worst_ray);
+  CHECK(worst_rad <= 3e-4, "map: mapped points %.3g m inside the sphere (tolerance 0.3 mm)", worst_rad);
+  printf("map: %d points, off-ray %.2g m, sagitta %.3g mm\n", NP, worst_ray, 1e3 * worst_rad);
+  palp_fem_map_destroy(&map);
+  palp_fem_mesh_destroy(&m);
+}
+
+/* Newton on the level-1 phantom, relaxed paper materials, a 3 N cap load (s = 1 cm),
+ * one increment: away from round-off the convergence order
+ * q = log(r_k+1 / r_k) / log(r_k / r_k-1) must reach 1.8 (quadratic: 2). */
+static void test_newton(void) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = 1;
+  palp_fem_mesh mesh;
+  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  palp_fem_config cfg = palp_fem_default_config();
+  palp_fem_model m;
+  CHECK(palp_fem_model_create(&m, &mesh, &cfg) == 0, "model");
+  CHECK(palp_fem_model_finalize(&m) == 0, "finalize");
+  double *f = calloc((size_t)m.ndof, sizeof(double));
+  cap_load(&mesh, 3.0, 0.01, f);
+  m.rtol = 1e-13;
+  m.atol = 0.0;
+  m.max_newton = 15;
+  palp_fem_solve_static(&m, f, 1, INFINITY); /* may stop at round-off; the trace is what counts */
+  double best = 0.0;
+  printf("newton residuals [N]:");
+  for (int k = 0; k < m.trace_count; ++k) printf(" %.3e", m.trace[k]);
+  printf("\n");
+  for (int k = 1; k + 1 < m.trace_count; ++k) {
+    if (m.trace[k + 1] < 1e-11 * m.trace[0]) break; /* round-off floor */
+    const double q = log(m.trace[k + 1] / m.trace[k]) / log(m.trace[k] / m.trace[k - 1]);
+    printf("  order at iteration %d: %.2f\n", k + 1, q);
+    best = fmax(best, q);
+  }
+  CHECK(best >= 1.8, "newton: best convergence order %.2f (tolerance: >= 1.8)", best);
+  CHECK(m.trace_count >= 3 && m.trace[m.trace_count - 1] < 1e-8 * m.trace[0], "newton: did not reach 1e-8 r0");
+  printf("newton: top displacement %.4f mm\n", 1e3 * m.u[3 * mesh.top_node + 2]);
+  free(f);
+  palp_fem_model_destroy(&m);
+  palp_fem_mesh_destroy(&mesh);
+}
+
+/* Top-node displacement at t = 40 ms of the level-1 phantom under a 3 N cap load
+ * ramped over 30 ms, with dt = 4, 2, 1 ms: the differences between successive
+ * halvings must shrink by at least a factor 2.5 (second order gives 4). */
+static double run_dt(double dt, const palp_fem_mesh *mesh, const double *f3) {
+  palp_fem_config cfg = palp_fem_default_config();
+  palp_fem_model m;
+  palp_fem_model_create(&m, mesh, &cfg);
+  palp_fem_model_finalize(&m);
+  double *f = calloc((size_t)m.ndof, sizeof(double));
+  const int steps = (int)lround(0.04 / dt);
+  for (int s = 1; s <= steps; ++s) {
+    const double t = s * dt, lam = t < 0.03 ? t / 0.03 : 1.0;
+    for (int k = 0; k < m.ndof; ++k) f[k] = lam * f3[k];
+    CHECK(palp_fem_step(&m, f, dt) == 0, "step: %s", m.err);
+  }
+  const double uz = m.u[3 * mesh->top_node + 2];
+  free(f);
+  palp_fem_model_destroy(&m);
+  return uz;
+}
+
+static void test_dt(void) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = 1;
+  palp_fem_mesh mesh;
+  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  double *f3 = calloc((size_t)mesh.node_count * 3, sizeof(double));
+  cap_load(&mesh, 3.0, 0.01, f3);
+  const double u4 = run_dt(0.004, &mesh, f3), u2 = run_dt(0.002, &mesh, f3), u1 = run_dt(0.001, &mesh, f3);
+  const double e1 = fabs(u4 - u2), e2 = fabs(u2 - u1);
+  printf("dt: top uz at 40 ms = %.6f / %.6f / %.6f mm for dt = 4 / 2 / 1 ms; differences %.3g, %.3g mm (ratio %.2f)\n",
+         1e3 * u4, 1e3 * u2, 1e3 * u1, 1e3 * e1, 1e3 * e2, e1 / e2);
+  CHECK(e2 * 2.5 <= e1, "dt halving: differences %.3g then %.3g m (need a ratio >= 2.5)", e1, e2);
+  free(f3);
+  palp_fem_mesh_destroy(&mesh);
+}
+
+/* Relaxed static top displacement under the 3 N cap load at levels 1, 2, 3: the
+ * change from each refinement to the next must shrink (ratio <= 0.7), and the
+ * finest two agree within 10%. */
+static void test_refine(void) {
+  double u[3];
+  for (int L = 1; L <= 3; ++L) {
+    palp_fem_mesh_def d = palp_fem_mesh_default_def();
+    d.level = L;
+    palp_fem_mesh mesh;
+    CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+    palp_fem_config cfg = palp_fem_default_config();
+    palp_fem_model m;
+    palp_fem_model_create(&m, &mesh, &cfg);
+    palp_fem_model_finalize(&m);
+    double *f = calloc((size_t)m.ndof, sizeof(double));
+    cap_load(&mesh, 3.0, 0.01, f);
+    const double t0 = now();
+    CHECK(palp_fem_solve_static(&m, f, 1, INFINITY) == 0, "level %d: %s", L, m.err);
+    u[L - 1] = m.u[3 * mesh.top_node + 2];
+    printf("refine: level %d (%d elements): top uz %.5f mm, %d Newton residuals, %.2f s\n", L, mesh.element_count,
+           1e3 * u[L - 1], m.trace_count, now() - t0);
+    free(f);
+    palp_fem_model_destroy(&m);
+    palp_fem_mesh_destroy(&mesh);
+  }
+  const double e1 = fabs(u[1] - u[0]), e2 = fabs(u[2] - u[1]);
+  CHECK(e2 <= 0.7 * e1, "refinement: changes %.3g then %.3g m (need ratio <= 0.7)", e1, e2);
+  CHECK(e2 <= 0.1 * fabs(u[2]), "refinement: levels 2 and 3 differ by %.3g of %.3g m (tolerance 10%%)", e2, u[2]);
+}
+
+int main(int argc, char **argv) {
+  const char *c = argc > 1 ? argv[1] : "all";
+  const int all = strcmp(c, "all") == 0;
+  if (all || !strcmp(c, "mesh")) test_mesh();
+  if (all || !strcmp(c, "map")) test_map();
+  if (all || !strcmp(c, "newton")) test_newton();
+  if (all || !strcmp(c, "dt")) test_dt();
+  if (all || !strcmp(c, "refine")) test_refine();
+  if (fem_failures) fprintf(stderr, "%d check(s) failed\n", fem_failures);
+  return fem_failures ? 1 : 0;
+}
