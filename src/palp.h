@@ -179,6 +179,8 @@ typedef struct palp_world_def {
   int max_contacts;   /* force-driven contacts and fingers together, default 8 */
   double sleep_speed; /* below this vertex speed [m/s] with no load the world may sleep, default 1e-5 */
   double sleep_time;  /* [s] of quiet before sleeping, default 0.5 */
+  double max_speed;   /* a solved vertex speed above this [m/s] (default 20) means the
+                         step cannot be trusted: it is retried as two half steps */
 } palp_world_def;
 
 palp_world_def palp_world_default_def(void);
@@ -221,6 +223,19 @@ double palp_world_pressure(const palp_world *w);  /* gauge gel pressure [Pa] */
 int palp_world_is_awake(const palp_world *w);
 void palp_world_wake(palp_world *w);
 const palp_world_def *palp_world_get_def(const palp_world *w);
+
+/* What the world had to do to stay faithful, and where it was pushed beyond its
+ * model. Counters accumulate from creation. */
+typedef struct palp_world_health {
+  int64_t substeps;           /* steps retried as two half steps (velocity non-finite or
+                                 above max_speed after the solve) */
+  int64_t refactors;          /* factorisations: step size changes beyond the factor's
+                                 stability margin, lagged-tangent rebuilds */
+  int64_t large_strain_steps; /* steps with a link strained beyond +-50%, where a linear
+                                 Burgers law on engineering strain is a poor model */
+  double max_strain;          /* largest |link strain| seen [-] */
+} palp_world_health;
+void palp_world_get_health(const palp_world *w, palp_world_health *out);
 
 /* FNV-1a over the full dynamic state; equal hashes mean bit-identical states. */
 uint64_t palp_world_hash(const palp_world *w);

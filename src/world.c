@@ -66,8 +66,12 @@ struct palp_world {
   double *fbeta;    /* transverse stiffness fraction the factor was built with */
   int stale;        /* the factor left its stability region: rebuild before the next step */
   int64_t refactors;
+  int reject;       /* the solve produced velocities that cannot be trusted */
+  int64_t substeps, large_strain_steps;
+  double max_strain, step_max_strain;
   double (*xs)[2];  /* Burgers internal strains (only with membrane viscosity) */
-  palp_burgers burgers;
+  palp_burgers burgers; /* coefficients for h_burgers */
+  double h_burgers;
   double E_static;  /* elastic-only modulus: E1 E2 / (E1 + E2) [Pa] */
 
   /* Gel (allocated only with gel pressure). */
@@ -126,6 +130,7 @@ palp_world_def palp_world_default_def(void) {
       .max_contacts = 8,
       .sleep_speed = 1e-5,
       .sleep_time = 0.5,
+      .max_speed = 20.0,
   };
   return d;
 }
@@ -266,6 +271,11 @@ static void stage_solve(palp_world *w, double h) {
     const double s = w->c_rank1 * gy / (1.0 + w->c_rank1 * gu);
     for (int k = 0; k < 3 * n; ++k) x[k] -= s * w->u[k];
   }
+  /* Nothing has moved yet: a solution that is not finite or faster than max_speed
+   * is rejected here and the step retried in halves (palp_world_step_dt). */
+  double v2max = 0.0;
+  for (int k = 0; k < 3 * n; ++k) v2max = fmax(v2max, x[k] * x[k]);
+  if (!(v2max <= w->def.max_speed * w->def.max_speed / 3.0)) w->reject = 1;
 }
 
 static void stage_integrate(palp_world *w, double h) {
@@ -314,6 +324,7 @@ static void stage_membrane_state(palp_world *w, double h) {
     const double sigma = visc ? palp_burgers_advance(&w->burgers, w->xs[l], w->eps[l], eps) : w->E_static * eps;
     w->eps[l] = eps;
     w->sigma[l] = sigma;
+    if (fabs(eps) > w->step_max_strain) w->step_max_strain = fabs(eps);
     /* Leaving the factor's stability region (see refactor): turned by > 30 degrees,
      * or tension stiffness across the link above beta k (half the margin). */
     const double c = v3_dot(w->dir[l], w->fdir[l]);
@@ -399,6 +410,7 @@ static int validate(const palp_world_def *d) {
     if (g->law == PALP_GEL_PAPER_LITERAL && fabs(g->a3) >= d->dt * d->dt) return PALP_EINVAL;
   }
   if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;
+  if (!(d->max_speed > 0.0)) return PALP_EINVAL;
   return PALP_OK;
 }
 
@@ -573,12 +585,17 @@ void palp_world_destroy(palp_world *w) {
  * stage_membrane_state). An isotropic k_l I would never need rebuilding, but it
  * adds stiffness across the links, which damped a pressed patch by ~90%. */
 #define PALP_BETA_MIN 0.01
+static int set_burgers(palp_world *w, double h) {
+  if (!has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) || h == w->h_burgers) return PALP_OK;
+  const palp_membrane_params *m = &w->def.membrane;
+  const int e = palp_burgers_init(&w->burgers, m->E1, m->eta1, m->E2, m->eta2, h);
+  if (!e) w->h_burgers = h;
+  return e;
+}
+
 static int refactor(palp_world *w, double h) {
-  if (has(w, PALP_EFFECT_MEMBRANE_VISCOSITY)) {
-    const palp_membrane_params *m = &w->def.membrane;
-    int e = palp_burgers_init(&w->burgers, m->E1, m->eta1, m->E2, m->eta2, h);
-    if (e) return e;
-  }
+  int e0 = set_burgers(w, h);
+  if (e0) return e0;
   const double E = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) ? w->burgers.tangent : w->E_static; /* [Pa] */
   const int nnz_max = 3 * w->nfree + 21 * w->nlink; /* 3 masses; 2 x 6 + 9 per link */
   int *ti = malloc(sizeof(int) * (size_t)nnz_max), *tj = malloc(sizeof(int) * (size_t)nnz_max);
@@ -666,6 +683,47 @@ static int has_load(const palp_world *w) {
   return 0;
 }
 
+/* One attempt at a step of h; PALP_EAGAIN-like 1 when the solve was rejected
+ * (nothing but the force arrays has changed then). */
+static int try_step(palp_world *w, double h) {
+  /* The factor built for h_f serves steps up to 1.25 h_f: the implicit stiffness is
+   * then at least (1/1.25)^2 = 64% of what h needs, above the half that stability
+   * requires; shorter steps only damp a little more. Beyond, or after a lagged-
+   * tangent trigger, rebuild. The Burgers step is always exact for h. */
+  if (w->stale || h > 1.25 * w->h_factored || h < 0.5 * w->h_factored) {
+    int e = refactor(w, h);
+    if (e) return e;
+  }
+  int e = set_burgers(w, h);
+  if (e) return e;
+  w->reject = 0;
+  w->step_max_strain = 0.0;
+  for (int s = 0; s < w->stage_count; ++s) {
+    const double t0 = now_s();
+    w->stages[s].fn(w, h);
+    const double dt = now_s() - t0;
+    w->timings.last[s] = dt;
+    w->timings.total[s] += dt;
+    if (w->reject) return 1; /* rejected in the solve, before anything moved */
+  }
+  w->timings.steps++;
+  w->t += h;
+  if (w->step_max_strain > 0.5) w->large_strain_steps++;
+  if (w->step_max_strain > w->max_strain) w->max_strain = w->step_max_strain;
+  return PALP_OK;
+}
+
+/* Retries a rejected step as two halves, down to h/16. */
+static int step_split(palp_world *w, double h, int depth) {
+  int e = try_step(w, h);
+  if (e <= 0) return e;
+  if (depth >= 4) return PALP_EUNSTABLE;
+  w->substeps++;
+  e = step_split(w, 0.5 * h, depth + 1);
+  if (e) return e;
+  return step_split(w, 0.5 * h, depth + 1);
+}
+
 int palp_world_step_dt(palp_world *w, double h) {
   if (!w) return PALP_EINVAL;
   if (w->broken) return PALP_EUNSTABLE;
@@ -679,19 +737,13 @@ int palp_world_step_dt(palp_world *w, double h) {
     w->awake = 1;
     w->quiet = 0.0;
   }
-  if (h != w->h_factored || w->stale) {
-    int e = refactor(w, h);
-    if (e) return e;
+  const double t_end = w->t + h;
+  int e = step_split(w, h, 0);
+  if (e) {
+    w->broken = (e == PALP_EUNSTABLE);
+    return e;
   }
-  for (int s = 0; s < w->stage_count; ++s) {
-    const double t0 = now_s();
-    w->stages[s].fn(w, h);
-    const double dt = now_s() - t0;
-    w->timings.last[s] = dt;
-    w->timings.total[s] += dt;
-  }
-  w->timings.steps++;
-  w->t += h;
+  w->t = t_end; /* halves sum to h exactly in binary, but keep the clock exact anyway */
   w->frame++;
 
   /* Finite check and sleep: one pass over the free velocities. */
@@ -867,6 +919,13 @@ uint64_t palp_world_hash(const palp_world *w) {
   h = fnv1a(h, &w->t, sizeof w->t);
   h = fnv1a(h, &w->frame, sizeof w->frame);
   return h;
+}
+
+void palp_world_get_health(const palp_world *w, palp_world_health *out) {
+  out->substeps = w->substeps;
+  out->refactors = w->refactors;
+  out->large_strain_steps = w->large_strain_steps;
+  out->max_strain = w->max_strain;
 }
 
 void palp_world_timings(const palp_world *w, palp_stage_timings *out) {
