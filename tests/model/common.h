@@ -20,4 +20,5 @@ static inline palp_scene paper_scene(void) {
 static inline double vdist(palp_vec3 a, palp_vec3 b) {
   return sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
 }
+static inline palp_vec3 v3_scaled(palp_vec3 a, double s) { return (palp_vec3){a.x * s, a.y * s, a.z * s}; }
 #endif
