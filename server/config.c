@@ -94,7 +94,7 @@ static int check_keys(const cJSON *obj, const char *where, const char *const *kn
   return 0;
 }
 
-static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick_threads",
+static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick_threads", "tick_priority",
                                        "deformation_rate_hz", "status_rate_hz", "max_sessions",
                                        "max_force",      "force_policy",   "finger_radius_min",
                                        "finger_radius_max", "log_interval", "dds_config",
@@ -159,6 +159,9 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   i64 = cfg->tick_threads;
   if ((rc = get_int(root, "tick_threads", w, 0, 64, 0, &i64, err, errlen))) goto out;
   cfg->tick_threads = (int)i64;
+  i64 = cfg->tick_priority;
+  if ((rc = get_int(root, "tick_priority", w, 0, 99, 0, &i64, err, errlen))) goto out;
+  cfg->tick_priority = (int)i64;
   if ((rc = get_number(root, "deformation_rate_hz", w, 0.1, 1000, 0, &cfg->deformation_rate_hz, err,
                        errlen)))
     goto out;

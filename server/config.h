@@ -29,6 +29,7 @@ typedef struct palp_srv_config {
   uint32_t domain_id;          /* DDS domain, 0..232 */
   double tick_rate_hz;         /* session step rate [Hz]: 100 (paper) or 1000 (haptics) */
   int tick_threads;            /* tick thread pool size; 0 = number of online cores */
+  int tick_priority;           /* 0: normal scheduling; 1..99: SCHED_FIFO priority of the tick threads */
   double deformation_rate_hz;  /* full-mesh rate to visual stations [Hz] */
   double status_rate_hz;       /* palp_server_status rate [Hz] */
   int max_sessions;            /* open trainee sessions at once */

@@ -18,6 +18,7 @@ static void usage(FILE *f) {
           "  --domain N           override domain_id\n"
           "  --tick-rate HZ       override tick_rate_hz (100 as in the paper, 1000 for haptics)\n"
           "  --threads N          override tick_threads (0 = one per core)\n"
+          "  --rt-priority N      override tick_priority (1..99: SCHED_FIFO tick threads; 0: normal)\n"
           "  --max-sessions N     override max_sessions\n"
           "  --duration S         stop after S seconds (default: until SIGINT/SIGTERM)\n"
           "  --check              validate the configuration and the scenes, then exit\n"
@@ -60,7 +61,7 @@ static int parse_num(const char *opt, const char *arg, double lo, double hi, dou
 
 int main(int argc, char **argv) {
   const char *config_path = PALP_CONFIG_DIR "/server.json";
-  double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0;
+  double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
   int check = 0, verbose = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -69,6 +70,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--domain")) bad = parse_num(a, v, 0, 232, &domain), i++;
     else if (!strcmp(a, "--tick-rate")) bad = parse_num(a, v, 1, 10000, &rate), i++;
     else if (!strcmp(a, "--threads")) bad = parse_num(a, v, 0, 64, &threads), i++;
+    else if (!strcmp(a, "--rt-priority")) bad = parse_num(a, v, 0, 99, &prio), i++;
     else if (!strcmp(a, "--max-sessions")) bad = parse_num(a, v, 1, 1024, &max_sessions), i++;
     else if (!strcmp(a, "--duration")) bad = parse_num(a, v, 0, 1e7, &duration), i++;
     else if (!strcmp(a, "--check")) check = 1;
@@ -96,6 +98,7 @@ int main(int argc, char **argv) {
   if (rate > 0) def.cfg.tick_rate_hz = rate;
   if (threads >= 0) def.cfg.tick_threads = (int)threads;
   if (max_sessions > 0) def.cfg.max_sessions = (int)max_sessions;
+  if (prio >= 0) def.cfg.tick_priority = (int)prio;
   def.verbose = verbose;
   if (palp_dds_use_config(def.cfg.dds_config) < 0) {
     fprintf(stderr, "palp-server: bad configuration: %s: dds_config: cannot read %s\n", config_path,

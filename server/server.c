@@ -439,11 +439,11 @@ static void handle_requests(palp_srv *srv) {
       if (dds_instance_get_key(srv->request_r, info[i].instance_handle, &key) != 0) continue;
       station *st = find_station(srv, key.station_id, 0);
       if (!st) continue;
-      /* Disposed: the station said goodbye. No writers: its liveliness lease
-       * (0.5 s automatic) or its participant's lease (1 s) expired. */
-      station_leave(srv, st,
-                    info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED ? "left"
-                                                                         : "lost (liveliness lease expired)");
+      /* A station that says goodbye sends OP_LEAVE first (handled above, which
+       * forgets it), so reaching here means it vanished: its writer's automatic
+       * liveliness (0.5 s) or its participant's lease (1 s) expired, and
+       * Cyclone unregistered (or, autodispose, disposed) its instance. */
+      station_leave(srv, st, "lost (liveliness lease expired)");
       st->in_use = 0;
     }
     if (n < N) break;
@@ -562,11 +562,16 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     fail(err, errlen, "cannot create the server's DDS readers and writers");
     goto fail;
   }
-  srv->ticker = palp_srv_ticker_create(srv->cfg.tick_threads, srv->cfg.tick_rate_hz, srv->cfg.max_sessions, rc);
+  int rt_ok = 0;
+  srv->ticker = palp_srv_ticker_create(srv->cfg.tick_threads, srv->cfg.tick_rate_hz, srv->cfg.max_sessions,
+                                       srv->cfg.tick_priority, &rt_ok, rc);
   if (!srv->ticker) {
     fail(err, errlen, "cannot start the tick threads: %s", palp_strerror(*rc));
     goto fail;
   }
+  if (srv->cfg.tick_priority > 0 && !rt_ok)
+    fprintf(stderr, "palp-server: tick_priority %d: SCHED_FIFO refused (needs CAP_SYS_NICE or an rtprio limit); "
+                    "tick threads run at normal priority\n", srv->cfg.tick_priority);
   for (int i = 0; i < srv->phantom_count; i++) publish_catalogue(srv, &srv->phantom[i]);
   *rc = 0;
   return srv;

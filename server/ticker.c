@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -71,7 +72,9 @@ static void *group_main(void *arg) {
   return NULL;
 }
 
-palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int *err) {
+palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int priority, int *rt_ok,
+                                        int *err) {
+  *rt_ok = 0;
   if (threads <= 0) {
     long c = sysconf(_SC_NPROCESSORS_ONLN);
     threads = c > 0 ? (int)c : 1;
@@ -100,7 +103,21 @@ palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_ses
     if (!g->sessions || !g->work_us) goto nomem;
   }
   for (int i = 0; i < threads; i++) {
-    if (pthread_create(&t->g[i].thread, NULL, group_main, &t->g[i]) != 0) {
+    int created = 0;
+    if (priority > 0) {
+      /* A tick preempted by a compiler or a browser is a missed haptic deadline:
+       * a real-time class keeps the tick threads ahead of ordinary work. */
+      pthread_attr_t attr;
+      struct sched_param sp = {.sched_priority = priority};
+      pthread_attr_init(&attr);
+      pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+      pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
+      pthread_attr_setschedparam(&attr, &sp);
+      created = pthread_create(&t->g[i].thread, &attr, group_main, &t->g[i]) == 0;
+      pthread_attr_destroy(&attr);
+      if (created && i == 0) *rt_ok = 1;
+    }
+    if (!created && pthread_create(&t->g[i].thread, NULL, group_main, &t->g[i]) != 0) {
       atomic_store(&t->stop, 1);
       for (int j = 0; j < i; j++) pthread_join(t->g[j].thread, NULL);
       t->started = 0;

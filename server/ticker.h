@@ -24,8 +24,11 @@ typedef struct palp_srv_tick_stats {
   uint64_t period_ticks, period_overruns;       /* since the previous call */
 } palp_srv_tick_stats;
 
-/* threads <= 0: one per online core. max_sessions bounds every group. */
-palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int *err);
+/* threads <= 0: one per online core. max_sessions bounds every group.
+ * priority 1..99 asks for SCHED_FIFO (needs CAP_SYS_NICE / rtprio limit); when
+ * refused the threads run at normal priority and *rt_ok is 0. */
+palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int priority, int *rt_ok,
+                                        int *err);
 /* Stops and joins the threads; sessions still attached are not destroyed. */
 void palp_srv_ticker_destroy(palp_srv_ticker *t);
 int palp_srv_ticker_threads(const palp_srv_ticker *t);

@@ -1,0 +1,436 @@
+/*
+ * bench_server.c - palp-server figures over real DDS on loopback.
+ *
+ * 1. Contact -> feedback latency: this process is a trainee station; palp-server
+ *    runs as a separate process. Contacts are sent at jittered times (uniform in
+ *    [0.5, 1.5] tick periods, so their phase against the server's tick is
+ *    random); the latency of a contact is the time from its send to the first
+ *    feedback sample echoing its sequence number: wait for the next tick + step
+ *    + two DDS hops. Measured at 100 Hz and 1 kHz.
+ * 2. Baseline: a plain DDS round trip of the same samples (palp_Contact out,
+ *    palp_Feedback back) through an echo process on the same QoS, same run.
+ * 3. Capacity: sessions at 1 kHz added step by step (each pressing with a
+ *    time-varying force so its world never sleeps) until more than 1 % of ticks
+ *    overrun over a 2 s window, read from palp_server_status.
+ *
+ * usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N]
+ *        [--contact-rate HZ] [--rt-priority N]
+ */
+#include <fcntl.h>
+#include <math.h>
+#include <signal.h>
+#include <spawn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+
+#include "input.h"
+#include "palp_dds.h"
+#include "station.h"
+
+extern char **environ;
+
+#define DOMAIN_LAT 150
+#define DOMAIN_CAP 151
+#define DOMAIN_RTT 152
+
+static double seconds = 5.0;
+static int threads = 2, max_sessions = 48;
+static double contact_rate = 100.0;
+static int rt_priority = 0;
+
+static void nap(double s) {
+  struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+  while (nanosleep(&ts, &ts) != 0) {
+  }
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+typedef struct stats {
+  double p50, p99, max, mean;
+  size_t n;
+} stats;
+
+static stats summarize(double *v, size_t n) {
+  stats s = {NAN, NAN, NAN, NAN, n};
+  if (!n) return s;
+  qsort(v, n, sizeof *v, cmp_double);
+  double sum = 0;
+  for (size_t i = 0; i < n; i++) sum += v[i];
+  s.p50 = v[(n - 1) / 2];
+  s.p99 = v[(size_t)((double)(n - 1) * 0.99)];
+  s.max = v[n - 1];
+  s.mean = sum / (double)n;
+  return s;
+}
+
+static pid_t spawn_server(unsigned domain, double rate) {
+  char d[16], r[32], t[16], m[16], pr[16];
+  snprintf(pr, sizeof pr, "%d", rt_priority);
+  snprintf(d, sizeof d, "%u", domain);
+  snprintf(r, sizeof r, "%g", rate);
+  snprintf(t, sizeof t, "%d", threads);
+  snprintf(m, sizeof m, "%d", max_sessions);
+  char *argv[] = {PALP_SERVER_PATH, "--config", PALP_CONFIG_DIR "/server.json", "--domain", d, "--tick-rate", r,
+                  "--threads", t, "--max-sessions", m, "--rt-priority", pr, NULL};
+  pid_t pid;
+  /* The server's own log goes to a file; the bench prints its figures. */
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/tmp/palp-bench-server.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  if (posix_spawn(&pid, PALP_SERVER_PATH, &fa, NULL, argv, environ) != 0) {
+    fprintf(stderr, "bench: cannot start %s\n", PALP_SERVER_PATH);
+    exit(1);
+  }
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
+
+static void stop_child(pid_t pid) {
+  kill(pid, SIGINT);
+  int st;
+  waitpid(pid, &st, 0);
+}
+
+static void join_or_die(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom) {
+  char err[512];
+  if (palp_cli_station_open(st, domain, label, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: %s\n", err);
+    exit(1);
+  }
+  palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = phantom, .user_name = label, .want_feedback = 1,
+                     .timeout = 15};
+  if (palp_cli_station_join(st, &j, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: %s: %s\n", label, err);
+    exit(1);
+  }
+}
+
+static void fill_contact(palp_Contact *c, uint32_t session, uint64_t seq, double force) {
+  palp_vec3 n;
+  palp_vec3 p = palp_cli_dome_point(0.04, 25, 60, &n);
+  memset(c, 0, sizeof *c);
+  c->session_id = session;
+  c->seq = seq;
+  c->mode = palp_CONTACT_FORCE;
+  c->distribution = 3;
+  c->vertex = -1;
+  c->center = (palp_Vec3){p.x, p.y, p.z};
+  c->force = (palp_Vec3){-force * n.x, -force * n.y, -force * n.z};
+  c->source_time_ns = palp_dds_now_ns();
+}
+
+/* ---- 1. contact -> feedback latency ------------------------------------------------------ */
+
+static stats latency_run(double rate) {
+  pid_t srv = spawn_server(DOMAIN_LAT, rate);
+  palp_cli_station st;
+  join_or_die(&st, DOMAIN_LAT, "bench-latency", 1);
+  dds_entity_t ws = dds_create_waitset(st.pp);
+  dds_entity_t rc = dds_create_readcondition(st.feedback_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  size_t cap = (size_t)(seconds * rate * 2) + 16, n = 0;
+  double *lat = malloc(cap * sizeof *lat);
+  int64_t *sent_at = calloc(cap + 1, sizeof *sent_at);
+  const double period = 1.0 / rate;
+  uint64_t seq = 0, echoed = 0;
+  int64_t t0 = palp_dds_now_ns(), warm = t0 + 1000000000, end = warm + (int64_t)(seconds * 1e9);
+  int64_t next = t0;
+  unsigned rng = 12345;
+  while (palp_dds_now_ns() < end && seq < cap) {
+    int64_t now = palp_dds_now_ns();
+    if (now >= next) {
+      palp_Contact c;
+      /* 2 N +- 0.5 N so every sample is a new command */
+      seq++;
+      fill_contact(&c, st.session_id, seq, 2.0 + 0.5 * sin((double)seq * 0.1));
+      sent_at[seq] = c.source_time_ns;
+      dds_write(st.contact_w, &c);
+      rng = rng * 1103515245u + 12345u;
+      double jitter = 0.5 + (double)((rng >> 8) & 0xffff) / 65535.0; /* [0.5, 1.5] */
+      next = now + (int64_t)(jitter * period * 1e9);
+    }
+    int64_t wait = next - palp_dds_now_ns();
+    dds_waitset_wait(ws, NULL, 0, wait > 0 ? wait : 0);
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(st.feedback_r, ptr, &info, 1, 1) > 0) {
+      int64_t rx = palp_dds_now_ns();
+      const palp_Feedback *fb = ptr[0];
+      if (info.valid_data)
+        for (uint32_t k = 0; k < fb->fingers._length; k++) {
+          const palp_FingerFeedback *ff = &fb->fingers._buffer[k];
+          if (ff->finger != 0 || ff->contact_seq <= echoed || ff->contact_seq > seq) continue;
+          /* every sequence superseded before a tick took it is skipped, not counted */
+          echoed = ff->contact_seq;
+          if (sent_at[echoed] >= warm && n < cap) lat[n++] = (double)(rx - sent_at[echoed]) * 1e-3;
+        }
+      dds_return_loan(st.feedback_r, ptr, 1);
+    }
+  }
+  dds_delete(rc);
+  dds_delete(ws);
+  palp_cli_station_leave(&st);
+  nap(0.1);
+  palp_cli_station_close(&st);
+  stop_child(srv);
+  stats s = summarize(lat, n);
+  free(lat);
+  free(sent_at);
+  return s;
+}
+
+/* ---- 2. plain DDS round trip ------------------------------------------------------------------- */
+
+/* Child: takes palp_Contact on "palp_bench_ping", answers a palp_Feedback echoing it on "palp_bench_pong". */
+static int echo_main(void) {
+  dds_entity_t pp = dds_create_participant(DOMAIN_RTT, NULL, NULL);
+  dds_qos_t *qc = palp_dds_qos(PALP_TOPIC_CONTACT), *qf = palp_dds_qos(PALP_TOPIC_FEEDBACK);
+  dds_entity_t tping = dds_create_topic(pp, &palp_Contact_desc, "palp_bench_ping", qc, NULL);
+  dds_entity_t tpong = dds_create_topic(pp, &palp_Feedback_desc, "palp_bench_pong", qf, NULL);
+  dds_entity_t r = dds_create_reader(pp, tping, qc, NULL);
+  dds_entity_t w = dds_create_writer(pp, tpong, qf, NULL);
+  dds_entity_t ws = dds_create_waitset(pp);
+  dds_entity_t rc = dds_create_readcondition(r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  palp_FingerFeedback ff[1];
+  palp_Feedback fb;
+  memset(&fb, 0, sizeof fb);
+  memset(ff, 0, sizeof ff);
+  fb.fingers._buffer = ff;
+  fb.fingers._maximum = fb.fingers._length = 1;
+  int64_t idle_until = palp_dds_now_ns() + 30000000000LL;
+  while (palp_dds_now_ns() < idle_until) {
+    dds_waitset_wait(ws, NULL, 0, DDS_MSECS(100));
+    palp_Contact c;
+    void *ptr[1] = {&c};
+    dds_sample_info_t info;
+    while (dds_take(r, ptr, &info, 1, 1) > 0) {
+      if (!info.valid_data) continue;
+      if (c.seq == UINT64_MAX) idle_until = 0; /* done */
+      fb.session_id = c.session_id;
+      ff[0].contact_seq = c.seq;
+      ff[0].contact_source_time_ns = c.source_time_ns;
+      ff[0].force = c.force;
+      dds_write(w, &fb);
+    }
+  }
+  dds_delete_qos(qc);
+  dds_delete_qos(qf);
+  dds_delete(pp);
+  return 0;
+}
+
+static stats rtt_run(double rate, const char *self) {
+  char *argv[] = {(char *)self, "echo", NULL};
+  pid_t pid;
+  if (posix_spawn(&pid, self, NULL, NULL, argv, environ) != 0) exit(1);
+  dds_entity_t pp = dds_create_participant(DOMAIN_RTT, NULL, NULL);
+  dds_qos_t *qc = palp_dds_qos(PALP_TOPIC_CONTACT), *qf = palp_dds_qos(PALP_TOPIC_FEEDBACK);
+  dds_entity_t tping = dds_create_topic(pp, &palp_Contact_desc, "palp_bench_ping", qc, NULL);
+  dds_entity_t tpong = dds_create_topic(pp, &palp_Feedback_desc, "palp_bench_pong", qf, NULL);
+  dds_entity_t w = dds_create_writer(pp, tping, qc, NULL);
+  dds_entity_t r = dds_create_reader(pp, tpong, qf, NULL);
+  dds_entity_t ws = dds_create_waitset(pp);
+  dds_entity_t rc = dds_create_readcondition(r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  /* wait for the echo to match both ways */
+  dds_publication_matched_status_t pm = {0};
+  dds_subscription_matched_status_t sm = {0};
+  for (int i = 0; i < 500 && (pm.current_count == 0 || sm.current_count == 0); i++) {
+    dds_get_publication_matched_status(w, &pm);
+    dds_get_subscription_matched_status(r, &sm);
+    nap(0.01);
+  }
+  size_t cap = (size_t)(seconds * rate) + 16, n = 0;
+  double *lat = malloc(cap * sizeof *lat);
+  uint64_t seq = 0;
+  int64_t t0 = palp_dds_now_ns(), warm = t0 + 500000000, end = warm + (int64_t)(seconds * 1e9);
+  while (palp_dds_now_ns() < end && n < cap) {
+    int64_t next = palp_dds_now_ns() + (int64_t)(1e9 / rate);
+    palp_Contact c;
+    fill_contact(&c, 1, ++seq, 2.0);
+    dds_write(w, &c);
+    for (;;) {
+      int64_t left = next - palp_dds_now_ns();
+      if (left <= 0) break;
+      dds_waitset_wait(ws, NULL, 0, left);
+      void *ptr[1] = {NULL};
+      dds_sample_info_t info;
+      while (dds_take(r, ptr, &info, 1, 1) > 0) {
+        const palp_Feedback *f = ptr[0];
+        int64_t rx = palp_dds_now_ns();
+        if (info.valid_data && f->fingers._length == 1 && f->fingers._buffer[0].contact_seq == seq &&
+            f->fingers._buffer[0].contact_source_time_ns >= warm)
+          lat[n++] = (double)(rx - f->fingers._buffer[0].contact_source_time_ns) * 1e-3;
+        dds_return_loan(r, ptr, 1);
+      }
+    }
+  }
+  palp_Contact done;
+  fill_contact(&done, 1, UINT64_MAX, 0);
+  for (int i = 0; i < 3; i++) {
+    dds_write(w, &done);
+    nap(0.01);
+  }
+  dds_delete_qos(qc);
+  dds_delete_qos(qf);
+  dds_delete(pp);
+  int st;
+  waitpid(pid, &st, 0);
+  stats s = summarize(lat, n);
+  free(lat);
+  return s;
+}
+
+/* ---- 3. capacity -------------------------------------------------------------------------------- */
+
+typedef struct status_window {
+  uint64_t ticks, overruns;
+  double p99, max, load;
+  uint32_t open;
+  int ok;
+} status_window;
+
+static status_window read_status(dds_entity_t r, double wait) {
+  status_window w = {0};
+  int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  while (palp_dds_now_ns() < end && !w.ok) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(r, ptr, &info, 1, 1) > 0) {
+      const palp_ServerStatus *s = ptr[0];
+      if (info.valid_data)
+        w = (status_window){s->ticks, s->overruns, s->tick_us_p99, s->tick_us_max, s->load, s->sessions_open, 1};
+      dds_return_loan(r, ptr, 1);
+    }
+    nap(0.02);
+  }
+  return w;
+}
+
+static void press_all(palp_cli_station *st, int n, uint64_t *seq, double t) {
+  for (int i = 0; i < n; i++) {
+    palp_Contact c;
+    /* 1.5 N +- 1 N at 0.7 Hz: the world keeps moving, never sleeps */
+    fill_contact(&c, st[i].session_id, ++seq[i], 1.5 + sin(2 * 3.14159265 * 0.7 * t + i));
+    dds_write(st[i].contact_w, &c);
+  }
+}
+
+static void drain_all(palp_cli_station *st, int n) {
+  for (int i = 0; i < n; i++) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(st[i].feedback_r, ptr, &info, 1, 1) > 0) dds_return_loan(st[i].feedback_r, ptr, 1);
+  }
+}
+
+static void capacity_run(void) {
+  pid_t srv = spawn_server(DOMAIN_CAP, 1000);
+  palp_cli_station *st = calloc((size_t)max_sessions, sizeof *st);
+  uint64_t *seq = calloc((size_t)max_sessions, sizeof *seq);
+  char err[256];
+  palp_cli_station mon;
+  if (palp_cli_station_open(&mon, DOMAIN_CAP, "bench-monitor", err, sizeof err) < 0) exit(1);
+  dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  static const int steps[] = {1, 2, 4, 8, 12, 16, 20, 24, 28, 32, 36, 40, 44, 48, 56, 64};
+  int n = 0, held = 0;
+  printf("capacity: 1 kHz sessions on %d tick thread(s); stations press at %.0f Hz; window 2 s per step\n", threads,
+         contact_rate);
+  printf("  sessions  overrun%%  tick p99 [us]  tick max [us]  load\n");
+  int64_t t0 = palp_dds_now_ns();
+  for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions; k++) {
+    while (n < steps[k]) {
+      char label[32];
+      snprintf(label, sizeof label, "bench-%02d", n);
+      join_or_die(&st[n], DOMAIN_CAP, label, (uint32_t)(1 + n % 2));
+      n++;
+    }
+    /* settle 1 s, then a 2 s window between two status samples */
+    int64_t settle = palp_dds_now_ns() + 1000000000, next = palp_dds_now_ns();
+    status_window a = {0}, b = {0};
+    int64_t window_end = 0;
+    for (;;) {
+      int64_t now = palp_dds_now_ns();
+      if (now >= next) {
+        press_all(st, n, seq, (double)(now - t0) * 1e-9);
+        next += (int64_t)(1e9 / contact_rate);
+      }
+      drain_all(st, n);
+      if (now >= settle && !a.ok) {
+        a = read_status(status_r, 1.5);
+        window_end = palp_dds_now_ns() + 2000000000;
+      }
+      if (a.ok && now >= window_end) {
+        /* first status published after the window ends */
+        b = read_status(status_r, 1.5);
+        if (b.ok && b.ticks > a.ticks) break;
+        window_end = palp_dds_now_ns() + 200000000;
+      }
+      nap(0.001);
+    }
+    double frac = (double)(b.overruns - a.overruns) / (double)(b.ticks - a.ticks);
+    printf("  %8d  %7.2f%%  %13.0f  %13.0f  %4.0f%%\n", n, 100 * frac, b.p99, b.max, 100 * b.load);
+    fflush(stdout);
+    if (frac > 0.01) break;
+    held = n;
+  }
+  printf("capacity: %d concurrent 1 kHz sessions held with <= 1%% overrun ticks (target 32)\n", held);
+  for (int i = 0; i < n; i++) palp_cli_station_leave(&st[i]);
+  nap(0.2);
+  for (int i = 0; i < n; i++) palp_cli_station_close(&st[i]);
+  palp_cli_station_close(&mon);
+  stop_child(srv);
+  free(st);
+  free(seq);
+}
+
+int main(int argc, char **argv) {
+  const char *what = "all";
+  for (int i = 1; i < argc; i++) {
+    if (!strcmp(argv[i], "--seconds") && i + 1 < argc) seconds = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--max") && i + 1 < argc) max_sessions = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--contact-rate") && i + 1 < argc) contact_rate = atof(argv[++i]);
+    else if (!strcmp(argv[i], "--rt-priority") && i + 1 < argc) rt_priority = atoi(argv[++i]);
+    else if (argv[i][0] != '-') what = argv[i];
+    else {
+      fprintf(stderr, "usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N] "
+                      "[--contact-rate HZ] [--rt-priority N]\n");
+      return 2;
+    }
+  }
+  if (palp_dds_use_config(NULL) < 0) {
+    fprintf(stderr, "bench: cannot read %s\n", PALP_DDS_DEFAULT_CONFIG);
+    return 1;
+  }
+  if (!strcmp(what, "echo")) return echo_main();
+  int all = !strcmp(what, "all");
+  if (all || !strcmp(what, "latency") || !strcmp(what, "rtt")) {
+    printf("contact -> feedback latency over DDS (palp-server in its own process), %.0f s per rate\n", seconds);
+    printf("  %-34s %9s %9s %9s %9s %7s\n", "", "p50[us]", "p99[us]", "max[us]", "mean[us]", "n");
+    for (int k = 0; k < 2; k++) {
+      double rate = k ? 1000.0 : 100.0;
+      if (all || !strcmp(what, "latency")) {
+        stats s = latency_run(rate);
+        printf("  contact->feedback at %4.0f Hz ticks   %9.0f %9.0f %9.0f %9.0f %7zu\n", rate, s.p50, s.p99, s.max,
+               s.mean, s.n);
+      }
+      stats b = rtt_run(rate, argv[0]);
+      printf("  plain DDS round trip, %4.0f Hz sends %9.0f %9.0f %9.0f %9.0f %7zu\n", rate, b.p50, b.p99, b.max, b.mean,
+             b.n);
+      fflush(stdout);
+    }
+    printf("  (target: p99 < 3000 us at 1 kHz; the tick adds up to one period of waiting, mean half a period)\n");
+  }
+  if (all || !strcmp(what, "capacity")) capacity_run();
+  return 0;
+}
