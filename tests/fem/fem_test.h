@@ -28,7 +28,7 @@ static int fem_failures;
 
 /* An nx x ny x nz block of hexes on [0,1]^3 [m]; interior nodes jittered by up to
  * `jitter` of a cell (deterministic). No node is fixed; region gel. */
-static void block_mesh(palp_fem_mesh *m, int nx, int ny, int nz, double jitter) {
+static inline void block_mesh(palp_fem_mesh *m, int nx, int ny, int nz, double jitter) {
   memset(m, 0, sizeof *m);
   m->node_count = (nx + 1) * (ny + 1) * (nz + 1);
   m->element_count = nx * ny * nz;
@@ -64,7 +64,7 @@ static void block_mesh(palp_fem_mesh *m, int nx, int ny, int nz, double jitter) 
 }
 
 /* A config with one hyperelastic material everywhere: C10 [Pa], D1 [1/Pa], no Prony. */
-static palp_fem_config elastic_config(double c10, double d1) {
+static inline palp_fem_config elastic_config(double c10, double d1) {
   palp_fem_config c = palp_fem_default_config();
   c.gel.c10 = c.membrane.c10 = c10;
   c.gel.d1 = c.membrane.d1 = d1;
@@ -75,7 +75,7 @@ static palp_fem_config elastic_config(double c10, double d1) {
 
 /* Analytic Cauchy stress of the Abaqus Neo-Hookean for a deformation gradient F:
  *   sigma = 2 C10 / J (Bbar - tr(Bbar)/3 I) + 2 (J - 1) / D1 I,  Bbar = J^(-2/3) F F^T */
-static void nh_cauchy(double c10, double d1, const double F[3][3], double s[3][3]) {
+static inline void nh_cauchy(double c10, double d1, const double F[3][3], double s[3][3]) {
   const double J = F[0][0] * (F[1][1] * F[2][2] - F[1][2] * F[2][1]) - F[0][1] * (F[1][0] * F[2][2] - F[1][2] * F[2][0]) +
                    F[0][2] * (F[1][0] * F[2][1] - F[1][1] * F[2][0]);
   double B[3][3] = {{0}};
@@ -87,6 +87,6 @@ static void nh_cauchy(double c10, double d1, const double F[3][3], double s[3][3
     for (int j = 0; j < 3; ++j) s[i][j] = 2.0 * c10 / J * (B[i][j] - (i == j) * tr / 3.0) + (i == j) * 2.0 * (J - 1.0) / d1;
 }
 
-static void free_block(palp_fem_mesh *m) { palp_fem_mesh_destroy(m); }
+static inline void free_block(palp_fem_mesh *m) { palp_fem_mesh_destroy(m); }
 
 #endif

@@ -1,0 +1,352 @@
+/*
+ * palp-fem - the FE reference ("golden standard") from the command line.
+ *
+ *   palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json]
+ *                [--inp MESH.inp] [--reading long_term|instantaneous] [--frames N]
+ *                [--distribution single|uniform|gaussian|gaussian_offset]
+ *                [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]
+ *   palp-fem export-inp [--level N] [--config FEM.json] OUT.inp
+ *   palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]
+ *
+ * run writes one CSV row per output frame: time, top-vertex displacement, total
+ * feedback force, every real-time vertex's displacement and every contact
+ * vertex's feedback (units in the column names), and prints a summary. On a
+ * terminal a progress bar with an ETA goes to stderr.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "fem_internal.h"
+
+static double now_s(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void usage(void) {
+  fprintf(stderr,
+          "usage: palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json] [--inp MESH.inp]\n"
+          "                    [--reading long_term|instantaneous] [--frames N]\n"
+          "                    [--distribution single|uniform|gaussian|gaussian_offset]\n"
+          "                    [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]\n"
+          "       palp-fem export-inp [--level N] [--config FEM.json] OUT.inp\n"
+          "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n");
+}
+
+typedef struct progress {
+  double t0;
+  int tty;
+  int last_pct;
+} progress;
+
+static int on_progress(void *ud, int frame, int frames, double sim_time) {
+  progress *p = ud;
+  if (!p->tty) return 0;
+  const int pct = (int)(1000.0 * frame / frames);
+  if (pct == p->last_pct && frame != frames) return 0;
+  p->last_pct = pct;
+  const double el = now_s() - p->t0, eta = frame > 0 ? el * (frames - frame) / frame : 0.0;
+  char bar[41];
+  const int fill = (int)(40.0 * frame / frames);
+  for (int i = 0; i < 40; ++i) bar[i] = i < fill ? '#' : '.';
+  bar[40] = 0;
+  fprintf(stderr, "\r[%s] %5.1f%% frame %d/%d t=%.2fs elapsed %.0fs ETA %.0fs ", bar, 100.0 * frame / frames, frame,
+          frames, sim_time, el, eta);
+  if (frame == frames) fprintf(stderr, "\n");
+  fflush(stderr);
+  return 0;
+}
+
+static int parse_dist(const char *s, palp_distribution *d) {
+  static const char *names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
+  for (int i = 0; i < 4; ++i)
+    if (strcmp(s, names[i]) == 0) {
+      *d = (palp_distribution)(i + 1);
+      return 0;
+    }
+  return -1;
+}
+
+static double vlen(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+static int write_csv(const char *path, const palp_fem_result *r) {
+  char tmp[1100];
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  FILE *f = fopen(tmp, "w");
+  if (!f) return -1;
+  fprintf(f, "time_s,top_dx_m,top_dy_m,top_dz_m,top_disp_m,feedback_x_N,feedback_y_N,feedback_z_N,feedback_N");
+  for (int v = 0; v < r->vertex_count; ++v) fprintf(f, ",dx%d_m,dy%d_m,dz%d_m", v, v, v);
+  for (int k = 0; k < r->contact_vertex_count; ++k) {
+    const int v = r->contact_vertex[k], c = r->contact_of[k];
+    fprintf(f, ",fb_c%d_v%d_x_N,fb_c%d_v%d_y_N,fb_c%d_v%d_z_N", c, v, c, v, c, v);
+  }
+  fprintf(f, "\n");
+  for (int fr = 0; fr < r->frames; ++fr) {
+    const palp_vec3 t = r->top_disp[fr];
+    palp_vec3 fb = {0, 0, 0};
+    const palp_vec3 *row = r->feedback + (size_t)fr * (size_t)r->contact_vertex_count;
+    for (int k = 0; k < r->contact_vertex_count; ++k) fb.x += row[k].x, fb.y += row[k].y, fb.z += row[k].z;
+    fprintf(f, "%.6f,%.9e,%.9e,%.9e,%.9e,%.6e,%.6e,%.6e,%.6e", r->time[fr], t.x, t.y, t.z, vlen(t), fb.x, fb.y, fb.z,
+            vlen(fb));
+    const palp_vec3 *d = r->disp + (size_t)fr * (size_t)r->vertex_count;
+    for (int v = 0; v < r->vertex_count; ++v) fprintf(f, ",%.6e,%.6e,%.6e", d[v].x, d[v].y, d[v].z);
+    for (int k = 0; k < r->contact_vertex_count; ++k) fprintf(f, ",%.6e,%.6e,%.6e", row[k].x, row[k].y, row[k].z);
+    fprintf(f, "\n");
+  }
+  const int bad = ferror(f);
+  if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
+    remove(tmp);
+    return -1;
+  }
+  return 0;
+}
+
+static void summary(const palp_scene *s, const palp_fem_result *r, double wall) {
+  double peak = 0.0, t_peak = 0.0, at_release = NAN, residual = NAN, recovery = NAN, t_release = -1.0;
+  palp_vec3 fb_release = {NAN, NAN, NAN};
+  for (int c = 0; c < s->contact_count; ++c)
+    if (s->contact[c].profile.kind == PALP_PROFILE_STEP) t_release = s->contact[c].profile.t_off;
+  for (int f = 0; f < r->frames; ++f) {
+    const double d = vlen(r->top_disp[f]), t = r->time[f];
+    if (d > peak) peak = d, t_peak = t;
+    if (t_release > 0 && fabs(t - t_release) < 0.5 * s->frame_period) {
+      at_release = d;
+      palp_vec3 fb = {0, 0, 0};
+      for (int k = 0; k < r->contact_vertex_count; ++k) {
+        const palp_vec3 q = r->feedback[(size_t)f * (size_t)r->contact_vertex_count + (size_t)k];
+        fb.x += q.x, fb.y += q.y, fb.z += q.z;
+      }
+      fb_release = fb;
+    }
+    if (t_release > 0 && fabs(t - (t_release + 1.0)) < 0.5 * s->frame_period) residual = d;
+    if (t_release > 0 && t > t_release && isnan(recovery) && d <= 0.05 * peak) recovery = t - t_release;
+  }
+  printf("scene            %s: %d contact(s), %d frames of %.3f s\n", s->name, s->contact_count, r->frames,
+         s->frame_period);
+  printf("mesh             %d nodes, %d hexahedra, %d free DOFs\n", r->node_count, r->element_count, r->dof_count);
+  printf("top vertex       peak %.3f mm at %.2f s; at release %.3f mm; 1 s after release %.3f mm\n", 1e3 * peak,
+         t_peak, 1e3 * at_release, 1e3 * residual);
+  printf("recovery         %s%.2f s after release (to 5%% of the peak)\n", isnan(recovery) ? "not within the run; " : "",
+         recovery);
+  printf("feedback         (%.3f, %.3f, %.3f) N at release, |f| = %.3f N over %d contact vertices\n", fb_release.x,
+         fb_release.y, fb_release.z, vlen(fb_release), r->contact_vertex_count);
+  printf("solver           %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations, %ld cut-backs\n",
+         r->steps, r->newton_iterations, r->pcg_iterations, r->factorizations, r->cutbacks);
+  printf("time             %.1f s computed (%.3f s per frame; the paper: 22.5 s per step)%s\n", r->wall_seconds,
+         r->wall_seconds / r->frames, r->from_cache ? "; this run read it from the cache" : "");
+  printf("wall             %.2f s\n", wall);
+}
+
+typedef struct opts {
+  const char *scene, *config, *inp, *out, *cache_dir, *reading, *dist, *positional;
+  int level, frames, no_cache, quiet;
+  double dt;
+} opts;
+
+static int parse(int argc, char **argv, opts *o) {
+  memset(o, 0, sizeof *o);
+  o->level = -1;
+  o->frames = -1;
+  o->dt = -1.0;
+  for (int i = 2; i < argc; ++i) {
+    const char *a = argv[i];
+    const int has = i + 1 < argc;
+#define ARG(name, dst)                                                                                             \
+  if (strcmp(a, name) == 0) {                                                                                      \
+    if (!has) {                                                                                                    \
+      fprintf(stderr, "palp-fem: %s needs a value\n", name);                                                       \
+      return -1;                                                                                                   \
+    }                                                                                                              \
+    dst = argv[++i];                                                                                               \
+    continue;                                                                                                      \
+  }
+    ARG("--scene", o->scene)
+    ARG("--config", o->config)
+    ARG("--inp", o->inp)
+    ARG("--out", o->out)
+    ARG("--cache-dir", o->cache_dir)
+    ARG("--reading", o->reading)
+    ARG("--distribution", o->dist)
+#undef ARG
+    if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--dt") == 0) && has) {
+      char *end;
+      const double v = strtod(argv[++i], &end);
+      if (*end || !isfinite(v)) {
+        fprintf(stderr, "palp-fem: %s: not a number: %s\n", a, argv[i]);
+        return -1;
+      }
+      if (strcmp(a, "--dt") == 0) o->dt = v;
+      else if (v != floor(v) || v < 1 || v > 1e7) {
+        fprintf(stderr, "palp-fem: %s: expected a positive integer\n", a);
+        return -1;
+      } else if (strcmp(a, "--level") == 0) o->level = (int)v;
+      else o->frames = (int)v;
+      continue;
+    }
+    if (strcmp(a, "--no-cache") == 0) {
+      o->no_cache = 1;
+      continue;
+    }
+    if (strcmp(a, "--quiet") == 0) {
+      o->quiet = 1;
+      continue;
+    }
+    if (a[0] == '-' || o->positional) {
+      fprintf(stderr, "palp-fem: unexpected argument %s\n", a);
+      return -1;
+    }
+    o->positional = a;
+  }
+  return 0;
+}
+
+static int build_config(const opts *o, palp_fem_config *cfg) {
+  *cfg = palp_fem_default_config();
+  char err[256];
+  if (o->config && palp_fem_config_load(o->config, cfg, err, sizeof err) != 0) {
+    fprintf(stderr, "palp-fem: %s\n", err);
+    return -1;
+  }
+  if (o->level > 0) cfg->mesh.level = o->level;
+  if (o->dt >= 0.0) cfg->dt = o->dt;
+  if (o->inp) snprintf(cfg->inp_path, sizeof cfg->inp_path, "%s", o->inp);
+  if (o->cache_dir) snprintf(cfg->cache_dir, sizeof cfg->cache_dir, "%s", o->cache_dir);
+  if (o->no_cache) cfg->cache_dir[0] = 0;
+  if (o->reading) {
+    if (strcmp(o->reading, "long_term") == 0) cfg->c10_reading = PALP_FEM_C10_LONG_TERM;
+    else if (strcmp(o->reading, "instantaneous") == 0) cfg->c10_reading = PALP_FEM_C10_INSTANTANEOUS;
+    else {
+      fprintf(stderr, "palp-fem: --reading: expected long_term or instantaneous\n");
+      return -1;
+    }
+  }
+  if (palp_fem_config_validate(cfg, err, sizeof err) != 0) {
+    fprintf(stderr, "palp-fem: %s\n", err);
+    return -1;
+  }
+  return 0;
+}
+
+static int cmd_run(const opts *o) {
+  if (!o->scene) {
+    fprintf(stderr, "palp-fem run: --scene is required\n");
+    usage();
+    return 2;
+  }
+  palp_fem_config cfg;
+  if (build_config(o, &cfg)) return 2;
+  palp_scene scene;
+  char err[512];
+  if (palp_scene_load(o->scene, &scene, err, sizeof err) != 0) {
+    fprintf(stderr, "palp-fem: %s: %s\n", o->scene, err);
+    return 2;
+  }
+  if (o->frames > 0) scene.frames = o->frames;
+  if (o->dist) {
+    palp_distribution d;
+    if (parse_dist(o->dist, &d)) {
+      fprintf(stderr, "palp-fem: --distribution: expected single, uniform, gaussian or gaussian_offset\n");
+      return 2;
+    }
+    for (int c = 0; c < scene.contact_count; ++c) scene.contact[c].def.distribution = d;
+  }
+  progress p = {.t0 = now_s(), .tty = !o->quiet && isatty(2), .last_pct = -1};
+  palp_fem_result r;
+  const double t0 = now_s();
+  const int rc = palp_fem_run(&cfg, &scene, &r, on_progress, &p, err, sizeof err);
+  if (rc) {
+    if (p.tty) fprintf(stderr, "\n");
+    fprintf(stderr, "palp-fem: run failed: %s (%s)\n", err, palp_strerror(rc));
+    return 1;
+  }
+  if (err[0]) fprintf(stderr, "palp-fem: %s\n", err);
+  if (o->out && write_csv(o->out, &r) != 0) {
+    fprintf(stderr, "palp-fem: cannot write %s\n", o->out);
+    palp_fem_result_destroy(&r);
+    return 1;
+  }
+  if (!o->quiet) summary(&scene, &r, now_s() - t0);
+  palp_fem_result_destroy(&r);
+  return 0;
+}
+
+static int load_mesh(const palp_fem_config *cfg, palp_fem_mesh *m) {
+  char err[256];
+  if (cfg->inp_path[0]) {
+    if (palp_fem_inp_read(cfg->inp_path, m, err, sizeof err) != 0) {
+      fprintf(stderr, "palp-fem: %s\n", err);
+      return -1;
+    }
+  } else if (palp_fem_mesh_create(&cfg->mesh, m) != 0) {
+    fprintf(stderr, "palp-fem: invalid mesh definition (level %d)\n", cfg->mesh.level);
+    return -1;
+  }
+  return 0;
+}
+
+static int cmd_export(const opts *o) {
+  if (!o->positional) {
+    fprintf(stderr, "palp-fem export-inp: the output file is required\n");
+    usage();
+    return 2;
+  }
+  palp_fem_config cfg;
+  if (build_config(o, &cfg)) return 2;
+  palp_fem_mesh m;
+  if (load_mesh(&cfg, &m)) return 2;
+  char heading[128];
+  snprintf(heading, sizeof heading, "palp hemisphere R = %.4g m, membrane %.4g m, level %d", cfg.mesh.radius,
+           cfg.mesh.membrane_thickness, cfg.mesh.level);
+  const int rc = palp_fem_inp_write(&m, o->positional, heading);
+  if (rc) fprintf(stderr, "palp-fem: cannot write %s: %s\n", o->positional, palp_strerror(rc));
+  else if (!o->quiet) printf("wrote %s: %d nodes, %d C3D8 elements, %d sets\n", o->positional, m.node_count, m.element_count, m.set_count);
+  palp_fem_mesh_destroy(&m);
+  return rc ? 1 : 0;
+}
+
+static int cmd_info(const opts *o) {
+  palp_fem_config cfg;
+  if (build_config(o, &cfg)) return 2;
+  palp_fem_mesh m;
+  if (load_mesh(&cfg, &m)) return 2;
+  int nm = 0, nf = 0;
+  double vol = 0.0;
+  for (int e = 0; e < m.element_count; ++e) {
+    nm += m.region[e] == PALP_FEM_MEMBRANE;
+    vol += palp_fem_element_volume(&m, e);
+  }
+  for (int n = 0; n < m.node_count; ++n) nf += m.fixed[n];
+  printf("mesh      %d nodes (%d clamped), %d hexahedra (%d membrane, %d gel), volume %.4g m^3\n", m.node_count, nf,
+         m.element_count, nm, m.element_count - nm, vol);
+  for (int r = 0; r < 2; ++r) {
+    const palp_fem_material *mat = r ? &cfg.membrane : &cfg.gel;
+    const double ginf = palp_fem_ginf(mat), c0 = palp_fem_c10_instant(mat, cfg.c10_reading);
+    printf("%-9s C10 %.4g Pa (instantaneous %.4g, relaxed %.4g), K = 2/D1 = %.3g Pa, rho %.0f kg/m^3\n",
+           r ? "membrane" : "gel", mat->c10, c0, c0 * ginf, 2.0 / mat->d1, mat->density);
+  }
+  palp_fem_mesh_destroy(&m);
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
+    usage();
+    return argc < 2 ? 2 : 0;
+  }
+  opts o;
+  if (parse(argc, argv, &o)) {
+    usage();
+    return 2;
+  }
+  if (strcmp(argv[1], "run") == 0) return cmd_run(&o);
+  if (strcmp(argv[1], "export-inp") == 0) return cmd_export(&o);
+  if (strcmp(argv[1], "info") == 0) return cmd_info(&o);
+  fprintf(stderr, "palp-fem: unknown command %s\n", argv[1]);
+  usage();
+  return 2;
+}
