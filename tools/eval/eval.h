@@ -1,0 +1,214 @@
+/*
+ * eval.h - the evaluation of the real-time model against the FEM reference
+ * (Widmer & Hu 2011, Sec. II-D, Tables V and VI) and the calibration of its
+ * parameters. Prefix palp_eval_.
+ *
+ * A run of either model becomes a palp_eval_record: the displacement of every
+ * real-time vertex and the feedback at every contact vertex, per output frame.
+ * Two records of the same scene are compared pair by pair (same vertex, same
+ * frame) with the statistics of src/stats.h.
+ *
+ * Units: SI inside (m, N, s); the tables convert to the paper's cm and N at the
+ * edge. Functions return PALP_OK or a negative PALP_E* code and write a message
+ * into err when one is given.
+ */
+#ifndef PALP_EVAL_H
+#define PALP_EVAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "palp.h"
+#include "stats.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- records ------------------------------------------------------------- */
+typedef struct palp_eval_record {
+  int frames;
+  int vertex_count;
+  int top_vertex;
+  double *time;          /* [frames] end of each output frame [s] */
+  palp_vec3 *disp;       /* [frames * vertex_count] displacement from rest [m] */
+  uint8_t *fixed;        /* [vertex_count] 1 for the clamped rim (equal in both models) */
+  int contact_vertex_count;
+  int *contact_vertex;   /* [contact_vertex_count] real-time vertex index */
+  int *contact_of;       /* [contact_vertex_count] scene contact index */
+  palp_vec3 *feedback;   /* [frames * contact_vertex_count] force on the finger [N] */
+  double wall_seconds;   /* time taken to produce it */
+} palp_eval_record;
+
+void palp_eval_record_destroy(palp_eval_record *r);
+
+/* Runs the real-time model through a scene exactly as palp-run does (apply the
+ * profiles at the world's time, step, read back per output frame). Fails with
+ * PALP_EUNSTABLE when the model blows up (e.g. during a calibration trial). */
+int palp_eval_run_rt(const palp_scene *s, palp_eval_record *out, char *err, size_t errlen);
+
+/* ---- comparison ---------------------------------------------------------- */
+/* One row of Table V or VI: the statistics of the paired data set. */
+typedef struct palp_eval_row {
+  size_t n;               /* pairs */
+  double rmse;            /* [m] or [N] */
+  palp_stats_anova anova; /* real-time values vs reference values, two groups */
+  palp_stats_ba ba;       /* a = real-time, b = reference */
+  int meets;              /* the paper's verdict: p > 0.05 and agreement > 95% */
+  double max_abs_diff;    /* largest |a - b| */
+  double ref_peak;        /* largest reference value (scale for the reader) */
+} palp_eval_row;
+
+/* The paired data sets of one distribution, in SI units:
+ *   displacement: |u| of every free (non-rim) vertex at every frame, a = real-time,
+ *                 b = reference, ordered frame-major (frame 0 vertices ..., frame 1 ...);
+ *   force: |f| of the feedback at every contact vertex present in both records at
+ *          every frame, paired by (contact, vertex).
+ * Arrays are malloc'd; palp_eval_pairs_destroy frees them. */
+typedef struct palp_eval_pairs {
+  size_t n_disp;
+  double *disp_rt, *disp_ref;
+  size_t n_force;
+  double *force_rt, *force_ref;
+  int force_vertices; /* contact vertices paired */
+} palp_eval_pairs;
+
+int palp_eval_pairs_build(const palp_eval_record *rt, const palp_eval_record *ref, palp_eval_pairs *out,
+                          char *err, size_t errlen);
+void palp_eval_pairs_destroy(palp_eval_pairs *p);
+
+/* Fills one row from paired values (RMSE, ANOVA of the two groups, Bland-Altman,
+ * verdict). Needs n >= 2. */
+int palp_eval_row_compute(const double *a, const double *b, size_t n, palp_eval_row *out);
+
+/* ---- the paper's Tables V and VI ------------------------------------------- */
+typedef struct palp_eval_paper_row {
+  double rmse, f, p, sd, agree_percent; /* cm or N, -, -, cm or N, % */
+} palp_eval_paper_row;
+/* [0] Table V (displacement, cm), [1] Table VI (force, N); rows I..IV. */
+extern const palp_eval_paper_row palp_eval_paper[2][4];
+
+/* ---- calibration ------------------------------------------------------------ */
+enum {
+  PALP_EVAL_P_E1 = 0,
+  PALP_EVAL_P_ETA1,
+  PALP_EVAL_P_E2,
+  PALP_EVAL_P_ETA2,
+  PALP_EVAL_P_A1,
+  PALP_EVAL_P_A2,
+  PALP_EVAL_P_SUPPORT_K,
+  PALP_EVAL_P_SUPPORT_C,
+  PALP_EVAL_P_COUNT
+};
+/* "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity" */
+extern const char *const palp_eval_param_name[PALP_EVAL_P_COUNT];
+/* Units for reports: "Pa", "Pa s", ... */
+extern const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT];
+
+void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]);
+void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]);
+/* Parses "E1,eta2,..." (or "all") into a mask of 1u << PALP_EVAL_P_*. */
+int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, size_t errlen);
+
+/* Recovery of the paper's top-contact experiment with the scene's parameters:
+ * uniform patch at the pole, the scene's first profile if it is a step (else the
+ * paper's 3 N for 2 s), top-vertex displacement magnitude. t_recover is the time
+ * after release at which it falls to 5% of its peak, interpolated linearly
+ * between frames so that it varies smoothly with the parameters; if it never
+ * does within the 2.5 s simulated after release, it is extrapolated from the
+ * last frames (and flagged). */
+typedef struct palp_eval_recovery {
+  double peak;        /* [m] */
+  double t_recover;   /* [s] after release */
+  double residual_1s; /* displacement 1 s after release / peak [-] */
+  int reached;        /* 1 when the 5% level was crossed inside the run */
+} palp_eval_recovery;
+int palp_eval_recovery_measure(const palp_scene *s, palp_eval_recovery *out, char *err, size_t errlen);
+
+typedef struct palp_eval_calib_def {
+  unsigned mask;          /* parameters fitted (1u << PALP_EVAL_P_*) */
+  int frame_stride;       /* residual every k-th frame, >= 1 */
+  int vertex_stride;      /* residual every k-th free vertex, >= 1 */
+  double force_weight;    /* force residuals [N] are multiplied by this and compared to
+                             displacement residuals [cm]; 0 leaves force out */
+  double prior_weight;    /* [cm] Tikhonov weight on ln(p / p_start): a factor e costs
+                             as much as this RMS displacement error over all residuals */
+  double recovery_weight; /* [cm] penalty: (t_recover - target) / recovery_tol costs as
+                             much as this RMS error; 0 = no penalty */
+  double recovery_target; /* [s], 1.0 (the paper) */
+  double recovery_tol;    /* [s], 0.1 */
+  int max_iter;           /* trust-region iterations, 40 */
+  double h_df;            /* finite-difference step in ln p, 1e-3 */
+  int verbose;            /* progress to stderr */
+} palp_eval_calib_def;
+
+palp_eval_calib_def palp_eval_calib_default_def(void);
+
+typedef struct palp_eval_calib_result {
+  double start[PALP_EVAL_P_COUNT];
+  double fitted[PALP_EVAL_P_COUNT];
+  double rmse_before[4], rmse_after[4]; /* displacement magnitude RMSE per reference [m] */
+  double cost_before, cost_after;       /* 0.5 sum r^2 of the fit residuals */
+  int iterations;
+  int evaluations;
+  int status;         /* GSL status of the driver (0 converged) */
+  int reason;         /* 1 small step, 2 small gradient */
+  double seconds;
+  palp_eval_recovery recovery_before, recovery_after;
+  int recovery_penalised; /* 1 when the penalty residual was active in the final fit */
+} palp_eval_calib_result;
+
+/* Fits the real-time parameters of `base` (its world def is the start) so that
+ * running the scenes scenes[0..count) reproduces refs[0..count) (the reference
+ * records, e.g. the FEM under the four distributions). Residuals: the real-time
+ * minus reference displacement components [cm] of every vertex_stride-th free
+ * vertex at every frame_stride-th frame, optionally feedback, plus the prior and
+ * recovery terms. Parameters are fitted as x = ln(p / p_start) (positive, and equal
+ * finite-difference steps in relative terms). GSL trust region (Levenberg-
+ * Marquardt), QR solver, forward-difference Jacobian. */
+int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, int count,
+                        const palp_eval_calib_def *def, palp_eval_calib_result *out, char *err,
+                        size_t errlen);
+
+/* Writes a parameter file in the format of config/params/realtime_default.json. */
+int palp_eval_params_write(const char *path, const palp_world_def *w, const char *comment, char *err,
+                           size_t errlen);
+
+
+/* ---- the evaluation report ---------------------------------------------------- */
+typedef struct palp_eval_dist {
+  int distribution;   /* 1..4 (I..IV) */
+  palp_eval_row disp; /* Table V row, data in cm */
+  palp_eval_row force; /* Table VI row, data in N; valid when has_force */
+  int has_force;
+  int disp_vertices;  /* free vertices per frame */
+  int force_vertices; /* paired contact vertices per frame */
+  double rt_seconds, ref_seconds;
+  int ref_from_cache;
+} palp_eval_dist;
+
+typedef struct palp_eval_report {
+  char scene[512];       /* scene file */
+  char scene_name[64];
+  char parameters[512];  /* what the real-time parameters were (file or "scene") */
+  int frames;
+  double frame_period;   /* [s] */
+  int vertex_count;
+  int ref_level;         /* FEM mesh level */
+  int ref_elements, ref_nodes;
+  int dist_count;
+  palp_eval_dist dist[4];
+} palp_eval_report;
+
+/* "I", "II", "III", "IV" */
+const char *palp_eval_roman(int distribution);
+/* Both tables beside the paper's, readable. */
+void palp_eval_report_print(FILE *out, const palp_eval_report *r);
+/* tables.csv (one row per table and distribution), tables.json, tables.md. */
+int palp_eval_report_write(const char *dir, const palp_eval_report *r, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

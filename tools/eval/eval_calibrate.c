@@ -1,0 +1,514 @@
+/*
+ * eval_calibrate.c - fitting the real-time parameters to a reference with GSL's
+ * nonlinear least squares.
+ *
+ * Unknowns x_j = ln(p_j / p_start_j) for the fitted parameters: the parameters
+ * stay positive whatever step the solver takes, and one finite-difference step
+ * h_df in x is the same relative change (h_df = 1e-3: 0.1%) for a modulus of
+ * 1e6 Pa and an exponent of 10. The step has to be that large because the model
+ * makes discrete choices (a lagged-tangent rebuild when a link has turned by
+ * 30 degrees), so its output is only piecewise smooth at the 1e-8 level GSL's
+ * default step would probe.
+ *
+ * Residual vector r(x), all in cm-equivalents so one scale fits all:
+ *   data:     100 (u_rt - u_ref) per component [cm], every vertex_stride-th free
+ *             vertex at every frame_stride-th frame, for every reference;
+ *   force:    force_weight (f_rt - f_ref) per component [N] at the paired contact
+ *             vertices (optional);
+ *   prior:    lambda_p x_j, lambda_p = prior_weight sqrt(N_data): a factor e on one
+ *             parameter costs as much as an RMS error of prior_weight cm over all
+ *             data residuals. It only decides directions the data do not (eta1's
+ *             slow flow, a2's volume damping when the gel is incompressible);
+ *   recovery: lambda_r (t_recover - target) / tol, lambda_r = recovery_weight
+ *             sqrt(N_data), the paper's ~1 s recovery kept as a soft constraint.
+ * Minimised: 0.5 |r|^2 by the trust-region method (Levenberg-Marquardt steps,
+ * More's scaling), QR on the Jacobian, forward differences for the Jacobian.
+ * A trial whose model blows up gets residuals of 1 m per entry, which the trust
+ * region rejects like any worse step.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <cjson/cJSON.h>
+#include <gsl/gsl_blas.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_multifit_nlinear.h>
+#include <gsl/gsl_vector.h>
+
+#include "eval.h"
+
+const char *const palp_eval_param_name[PALP_EVAL_P_COUNT] = {
+    "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity"};
+const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT] = {"Pa", "Pa s", "Pa", "Pa s", "-", "Pa s/m^3", "Pa/m",
+                                                              "Pa s/m"};
+
+void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) {
+  p[PALP_EVAL_P_E1] = w->membrane.E1;
+  p[PALP_EVAL_P_ETA1] = w->membrane.eta1;
+  p[PALP_EVAL_P_E2] = w->membrane.E2;
+  p[PALP_EVAL_P_ETA2] = w->membrane.eta2;
+  p[PALP_EVAL_P_A1] = w->gel.a1;
+  p[PALP_EVAL_P_A2] = w->gel.a2;
+  p[PALP_EVAL_P_SUPPORT_K] = w->gel.support_modulus;
+  p[PALP_EVAL_P_SUPPORT_C] = w->gel.support_viscosity;
+}
+
+void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) {
+  w->membrane.E1 = p[PALP_EVAL_P_E1];
+  w->membrane.eta1 = p[PALP_EVAL_P_ETA1];
+  w->membrane.E2 = p[PALP_EVAL_P_E2];
+  w->membrane.eta2 = p[PALP_EVAL_P_ETA2];
+  w->gel.a1 = p[PALP_EVAL_P_A1];
+  w->gel.a2 = p[PALP_EVAL_P_A2];
+  w->gel.support_modulus = p[PALP_EVAL_P_SUPPORT_K];
+  w->gel.support_viscosity = p[PALP_EVAL_P_SUPPORT_C];
+}
+
+int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, size_t errlen) {
+  if (!list || !*list) {
+    snprintf(err, errlen, "--fit: empty parameter list");
+    return PALP_EINVAL;
+  }
+  if (!strcmp(list, "all")) {
+    *mask = (1u << PALP_EVAL_P_COUNT) - 1u;
+    return PALP_OK;
+  }
+  unsigned m = 0;
+  const char *s = list;
+  while (*s) {
+    const char *e = strchr(s, ',');
+    size_t len = e ? (size_t)(e - s) : strlen(s);
+    int found = -1;
+    for (int j = 0; j < PALP_EVAL_P_COUNT; ++j)
+      if (strlen(palp_eval_param_name[j]) == len && !strncmp(palp_eval_param_name[j], s, len)) found = j;
+    if (found < 0) {
+      snprintf(err, errlen,
+               "--fit: unknown parameter \"%.*s\" (E1, eta1, E2, eta2, a1, a2, support_modulus, "
+               "support_viscosity, or all)",
+               (int)len, s);
+      return PALP_EINVAL;
+    }
+    m |= 1u << found;
+    s = e ? e + 1 : s + len;
+  }
+  *mask = m;
+  return PALP_OK;
+}
+
+/* ---- recovery ---------------------------------------------------------------- */
+
+int palp_eval_recovery_measure(const palp_scene *base, palp_eval_recovery *out, char *err, size_t errlen) {
+  palp_scene s = *base;
+  const double R = s.world.mesh.radius;
+  palp_profile prof = palp_profile_paper_step();
+  if (s.contact_count > 0 && s.contact[0].profile.kind == PALP_PROFILE_STEP) prof = s.contact[0].profile;
+  s.contact_count = 1;
+  memset(&s.contact[0], 0, sizeof s.contact[0]);
+  s.contact[0].def = palp_contact_default_def(PALP_DIST_UNIFORM, (palp_vec3){0, 0, R});
+  s.contact[0].profile = prof;
+  /* 2.5 s after release: enough to see the 5% crossing of a model that is
+   * 2.5 times slower than the paper's, without wasting a calibration's time. */
+  const double t_release = prof.t_off, t_end = t_release + 2.5;
+  s.frames = (int)ceil(t_end / s.frame_period - 1e-9);
+  s.world.effects &= ~(uint32_t)PALP_EFFECT_FORCE_FEEDBACK;
+  palp_eval_record r;
+  int rc = palp_eval_run_rt(&s, &r, err, errlen);
+  if (rc) return rc;
+  const int top = r.top_vertex, nv = r.vertex_count;
+  double peak = 0.0;
+  int last_loaded = -1;
+  for (int f = 0; f < r.frames; ++f) {
+    const palp_vec3 d = r.disp[(size_t)f * (size_t)nv + (size_t)top];
+    const double u = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (r.time[f] <= t_release + 1e-9) {
+      peak = fmax(peak, u);
+      last_loaded = f;
+    }
+  }
+  palp_eval_recovery res = {.peak = peak, .t_recover = NAN, .residual_1s = NAN, .reached = 0};
+  const double level = 0.05 * peak;
+  double prev_u = peak, prev_t = t_release;
+  if (last_loaded >= 0) {
+    const palp_vec3 d = r.disp[(size_t)last_loaded * (size_t)nv + (size_t)top];
+    prev_u = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    prev_t = r.time[last_loaded];
+  }
+  double u_last = prev_u, t_last = prev_t, u_before = prev_u, t_before = prev_t;
+  for (int f = last_loaded + 1; f < r.frames; ++f) {
+    const palp_vec3 d = r.disp[(size_t)f * (size_t)nv + (size_t)top];
+    const double u = sqrt(d.x * d.x + d.y * d.y + d.z * d.z), t = r.time[f];
+    if (isnan(res.residual_1s) && t >= t_release + 1.0 - 1e-9) {
+      /* linear interpolation to exactly 1 s after release */
+      const double w = (t - prev_t) > 0 ? (t_release + 1.0 - prev_t) / (t - prev_t) : 1.0;
+      res.residual_1s = peak > 0 ? (prev_u + w * (u - prev_u)) / peak : 0.0;
+    }
+    if (!res.reached && u <= level && prev_u > level) {
+      res.t_recover = prev_t + (t - prev_t) * (prev_u - level) / (prev_u - u) - t_release;
+      res.reached = 1;
+    }
+    u_before = u_last, t_before = t_last;
+    u_last = u, t_last = t;
+    prev_u = u, prev_t = t;
+  }
+  if (!res.reached && peak > 0) {
+    /* Not back within the run: extrapolate the last frames' exponential decay
+     * (continuous in the parameters, so the fit's penalty still has a slope). */
+    double rate = (u_before > u_last && u_last > 0 && t_last > t_before) ? log(u_before / u_last) / (t_last - t_before)
+                                                                           : 0.0;
+    res.t_recover = rate > 0 ? (t_last - t_release) + log(u_last / level) / rate : 10.0 * (t_end - t_release);
+  }
+  res.t_recover = fmin(res.t_recover, 10.0 * (t_end - t_release));
+  palp_eval_record_destroy(&r);
+  *out = res;
+  return PALP_OK;
+}
+
+/* ---- calibration ----------------------------------------------------------------- */
+
+typedef struct fit_ws {
+  const palp_scene *scenes;
+  const palp_eval_record *refs;
+  int count;
+  const palp_eval_calib_def *def;
+  double start[PALP_EVAL_P_COUNT];
+  int idx[PALP_EVAL_P_COUNT]; /* fitted parameter of each unknown */
+  int np;
+  int *sel_vertex; /* selected free vertices */
+  int nsel;
+  int **force_match; /* [count][rt contact vertex] -> ref contact vertex or -1, built on first run */
+  size_t n_data;     /* data and force residuals */
+  size_t n_force_expected;
+  double lambda_prior, lambda_rec;
+  int with_recovery;
+  int evaluations;
+  int verbose;
+  char err[256];
+} fit_ws;
+
+static void params_of_x(const fit_ws *ws, const gsl_vector *x, double p[PALP_EVAL_P_COUNT]) {
+  memcpy(p, ws->start, sizeof ws->start);
+  for (int j = 0; j < ws->np; ++j) p[ws->idx[j]] = ws->start[ws->idx[j]] * exp(gsl_vector_get(x, (size_t)j));
+}
+
+static size_t force_pairs(const palp_eval_record *ref, const palp_scene *s) {
+  (void)s;
+  return (size_t)ref->contact_vertex_count;
+}
+
+/* Fills the data and force residuals of one reference; returns 0 or an error. */
+static int residuals_one(fit_ws *ws, int i, const double p[PALP_EVAL_P_COUNT], double *r, size_t *k) {
+  palp_scene s = ws->scenes[i];
+  palp_eval_params_set(&s.world, p);
+  const palp_eval_record *ref = &ws->refs[i];
+  palp_eval_record rt;
+  int rc = palp_eval_run_rt(&s, &rt, ws->err, sizeof ws->err);
+  if (rc) return rc;
+  if (rt.frames != ref->frames || rt.vertex_count != ref->vertex_count) {
+    palp_eval_record_destroy(&rt);
+    snprintf(ws->err, sizeof ws->err, "reference %d has %d frames x %d vertices, the model %d x %d", i,
+             ref->frames, ref->vertex_count, rt.frames, rt.vertex_count);
+    return PALP_EINVAL;
+  }
+  const int nv = rt.vertex_count, stride = ws->def->frame_stride;
+  for (int f = stride - 1; f < rt.frames; f += stride) {
+    const palp_vec3 *a = rt.disp + (size_t)f * (size_t)nv, *b = ref->disp + (size_t)f * (size_t)nv;
+    for (int q = 0; q < ws->nsel; ++q) {
+      const int v = ws->sel_vertex[q];
+      r[(*k)++] = 100.0 * (a[v].x - b[v].x);
+      r[(*k)++] = 100.0 * (a[v].y - b[v].y);
+      r[(*k)++] = 100.0 * (a[v].z - b[v].z);
+    }
+  }
+  if (ws->def->force_weight > 0) {
+    const double wgt = ws->def->force_weight;
+    for (int f = stride - 1; f < rt.frames; f += stride)
+      for (int j = 0; j < ref->contact_vertex_count; ++j) {
+        int m = -1;
+        for (int q = 0; q < rt.contact_vertex_count; ++q)
+          if (rt.contact_vertex[q] == ref->contact_vertex[j] && rt.contact_of[q] == ref->contact_of[j]) m = q;
+        const palp_vec3 fr = ref->feedback[(size_t)f * (size_t)ref->contact_vertex_count + (size_t)j];
+        const palp_vec3 fa = m >= 0 ? rt.feedback[(size_t)f * (size_t)rt.contact_vertex_count + (size_t)m]
+                                    : (palp_vec3){0, 0, 0};
+        r[(*k)++] = wgt * (fa.x - fr.x);
+        r[(*k)++] = wgt * (fa.y - fr.y);
+        r[(*k)++] = wgt * (fa.z - fr.z);
+      }
+  }
+  palp_eval_record_destroy(&rt);
+  return PALP_OK;
+}
+
+static int fit_f(const gsl_vector *x, void *ud, gsl_vector *fvec) {
+  fit_ws *ws = ud;
+  double p[PALP_EVAL_P_COUNT];
+  params_of_x(ws, x, p);
+  ws->evaluations++;
+  const size_t n = fvec->size;
+  double *r = malloc(sizeof(double) * n);
+  if (!r) return GSL_ENOMEM;
+  size_t k = 0;
+  int rc = 0;
+  for (int i = 0; !rc && i < ws->count; ++i) rc = residuals_one(ws, i, p, r, &k);
+  if (!rc && ws->with_recovery) {
+    palp_eval_recovery rec;
+    palp_scene s = ws->scenes[0];
+    palp_eval_params_set(&s.world, p);
+    rc = palp_eval_recovery_measure(&s, &rec, ws->err, sizeof ws->err);
+    if (!rc)
+      r[k++] = ws->lambda_rec * (rec.t_recover - ws->def->recovery_target) / ws->def->recovery_tol;
+  }
+  if (rc == PALP_EUNSTABLE || rc == PALP_ESOLVER || rc == PALP_EINVAL) {
+    /* A trial the model cannot run: a residual of 1 m everywhere, worse than any
+     * real fit, so the trust region shrinks and tries a shorter step. */
+    if (ws->verbose) fprintf(stderr, "calibrate: trial rejected (%s)\n", ws->err);
+    for (size_t i = 0; i < n; ++i) gsl_vector_set(fvec, i, 100.0);
+    free(r);
+    return GSL_SUCCESS;
+  }
+  if (rc) {
+    free(r);
+    return GSL_EFAILED;
+  }
+  for (int j = 0; j < ws->np; ++j) r[k++] = ws->lambda_prior * gsl_vector_get(x, (size_t)j);
+  if (k != n) {
+    snprintf(ws->err, sizeof ws->err, "internal: %zu residuals filled, %zu expected", k, n);
+    free(r);
+    return GSL_EBADLEN;
+  }
+  for (size_t i = 0; i < n; ++i) gsl_vector_set(fvec, i, r[i]);
+  free(r);
+  return GSL_SUCCESS;
+}
+
+static void fit_callback(const size_t iter, void *ud, const gsl_multifit_nlinear_workspace *w) {
+  fit_ws *ws = ud;
+  if (!ws->verbose) return;
+  const gsl_vector *f = gsl_multifit_nlinear_residual(w), *x = gsl_multifit_nlinear_position(w);
+  double chi = gsl_blas_dnrm2(f);
+  fprintf(stderr, "calibrate: iteration %2zu  |r| %.6g  (evaluations %d)  ", iter, chi, ws->evaluations);
+  for (int j = 0; j < ws->np; ++j)
+    fprintf(stderr, " %s=%.4g", palp_eval_param_name[ws->idx[j]],
+            ws->start[ws->idx[j]] * exp(gsl_vector_get(x, (size_t)j)));
+  fprintf(stderr, "\n");
+}
+
+palp_eval_calib_def palp_eval_calib_default_def(void) {
+  palp_eval_calib_def d;
+  memset(&d, 0, sizeof d);
+  d.mask = (1u << PALP_EVAL_P_COUNT) - 1u;
+  d.frame_stride = 2;
+  d.vertex_stride = 1;
+  d.force_weight = 0.0;
+  d.prior_weight = 1e-3;
+  d.recovery_weight = 0.0;
+  d.recovery_target = 1.0;
+  d.recovery_tol = 0.1;
+  d.max_iter = 40;
+  d.h_df = 1e-3;
+  return d;
+}
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* RMSE of the displacement magnitude (Table V's data set) of each reference. */
+static int rmse_all(const palp_scene *scenes, const palp_eval_record *refs, int count, const double *p, double *rmse,
+                    char *err, size_t errlen) {
+  for (int i = 0; i < count; ++i) {
+    palp_scene s = scenes[i];
+    palp_eval_params_set(&s.world, p);
+    palp_eval_record rt;
+    int rc = palp_eval_run_rt(&s, &rt, err, errlen);
+    if (rc) return rc;
+    palp_eval_pairs pr;
+    rc = palp_eval_pairs_build(&rt, &refs[i], &pr, err, errlen);
+    if (!rc) rc = palp_stats_rmse(pr.disp_rt, pr.disp_ref, pr.n_disp, &rmse[i]);
+    palp_eval_pairs_destroy(&pr);
+    palp_eval_record_destroy(&rt);
+    if (rc) return rc;
+  }
+  return PALP_OK;
+}
+
+int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, int count,
+                        const palp_eval_calib_def *def, palp_eval_calib_result *out, char *err, size_t errlen) {
+  const double t0 = now_s();
+  if (count < 1 || count > 4) {
+    snprintf(err, errlen, "calibrate: 1 to 4 references expected, got %d", count);
+    return PALP_EINVAL;
+  }
+  if (def->frame_stride < 1 || def->vertex_stride < 1 || !(def->h_df > 0) || def->max_iter < 1 ||
+      !(def->prior_weight >= 0) || !(def->force_weight >= 0) || !(def->recovery_weight >= 0) ||
+      !(def->recovery_tol > 0)) {
+    snprintf(err, errlen, "calibrate: strides and iterations must be >= 1, h_df and recovery_tol > 0, weights >= 0");
+    return PALP_EINVAL;
+  }
+  fit_ws ws;
+  memset(&ws, 0, sizeof ws);
+  ws.scenes = scenes;
+  ws.refs = refs;
+  ws.count = count;
+  ws.def = def;
+  ws.verbose = def->verbose;
+  palp_eval_params_get(&scenes[0].world, ws.start);
+  for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
+    if (!(ws.start[j] > 0) || !isfinite(ws.start[j])) {
+      snprintf(err, errlen, "calibrate: start value of %s is %g; parameters must be positive to fit in log space",
+               palp_eval_param_name[j], ws.start[j]);
+      return PALP_EINVAL;
+    }
+    if (def->mask & (1u << j)) ws.idx[ws.np++] = j;
+  }
+  if (ws.np == 0) {
+    snprintf(err, errlen, "calibrate: no parameter to fit");
+    return PALP_EINVAL;
+  }
+  const palp_eval_record *r0 = &refs[0];
+  for (int i = 0; i < count; ++i)
+    if (refs[i].vertex_count != r0->vertex_count || refs[i].frames != scenes[i].frames) {
+      snprintf(err, errlen, "calibrate: reference %d does not match its scene (%d frames, scene %d)", i,
+               refs[i].frames, scenes[i].frames);
+      return PALP_EINVAL;
+    }
+  ws.sel_vertex = malloc(sizeof(int) * (size_t)r0->vertex_count);
+  if (!ws.sel_vertex) return PALP_ENOMEM;
+  for (int v = 0, q = 0; v < r0->vertex_count; ++v)
+    if (!r0->fixed[v] && (q++ % def->vertex_stride) == 0) ws.sel_vertex[ws.nsel++] = v;
+  size_t n_data = 0;
+  for (int i = 0; i < count; ++i) {
+    const size_t frames_used = (size_t)(refs[i].frames / def->frame_stride);
+    n_data += frames_used * (size_t)ws.nsel * 3;
+    if (def->force_weight > 0) n_data += frames_used * force_pairs(&refs[i], &scenes[i]) * 3;
+  }
+  ws.n_data = n_data;
+  ws.lambda_prior = def->prior_weight * sqrt((double)n_data);
+  ws.lambda_rec = def->recovery_weight * sqrt((double)n_data);
+  ws.with_recovery = def->recovery_weight > 0;
+  const size_t n = n_data + (size_t)ws.with_recovery + (size_t)ws.np, np = (size_t)ws.np;
+
+  palp_eval_calib_result res;
+  memset(&res, 0, sizeof res);
+  memcpy(res.start, ws.start, sizeof ws.start);
+  int rc = rmse_all(scenes, refs, count, ws.start, res.rmse_before, err, errlen);
+  if (!rc) rc = palp_eval_recovery_measure(&scenes[0], &res.recovery_before, err, errlen);
+  if (rc) {
+    free(ws.sel_vertex);
+    return rc;
+  }
+
+  gsl_multifit_nlinear_fdf fdf;
+  memset(&fdf, 0, sizeof fdf);
+  fdf.f = fit_f;
+  fdf.df = NULL; /* forward differences */
+  fdf.fvv = NULL;
+  fdf.n = n;
+  fdf.p = np;
+  fdf.params = &ws;
+  gsl_multifit_nlinear_parameters fp = gsl_multifit_nlinear_default_parameters();
+  fp.trs = gsl_multifit_nlinear_trs_lm;
+  fp.scale = gsl_multifit_nlinear_scale_more;
+  fp.solver = gsl_multifit_nlinear_solver_qr;
+  fp.fdtype = GSL_MULTIFIT_NLINEAR_FWDIFF;
+  fp.h_df = def->h_df;
+  gsl_multifit_nlinear_workspace *w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &fp, n, np);
+  gsl_vector *x = gsl_vector_calloc(np);
+  if (!w || !x) {
+    if (w) gsl_multifit_nlinear_free(w);
+    gsl_vector_free(x);
+    free(ws.sel_vertex);
+    snprintf(err, errlen, "calibrate: cannot allocate the solver for %zu residuals x %zu unknowns", n, np);
+    return PALP_ENOMEM;
+  }
+  int gs = gsl_multifit_nlinear_init(x, &fdf, w);
+  if (gs) {
+    snprintf(err, errlen, "calibrate: initial evaluation failed: %s%s%s", gsl_strerror(gs), ws.err[0] ? ": " : "",
+             ws.err);
+    gsl_multifit_nlinear_free(w);
+    gsl_vector_free(x);
+    free(ws.sel_vertex);
+    return PALP_EINVAL;
+  }
+  {
+    const gsl_vector *f = gsl_multifit_nlinear_residual(w);
+    double c = gsl_blas_dnrm2(f);
+    res.cost_before = 0.5 * c * c;
+  }
+  int info = 0;
+  gs = gsl_multifit_nlinear_driver((size_t)def->max_iter, 1e-5, 1e-8, 1e-10, fit_callback, &ws, &info, w);
+  res.status = gs;
+  res.reason = info;
+  res.iterations = (int)gsl_multifit_nlinear_niter(w);
+  if (gs && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
+    snprintf(err, errlen, "calibrate: the solver stopped: %s%s%s", gsl_strerror(gs), ws.err[0] ? ": " : "",
+             ws.err);
+    gsl_multifit_nlinear_free(w);
+    gsl_vector_free(x);
+    free(ws.sel_vertex);
+    return PALP_EINVAL;
+  }
+  {
+    const gsl_vector *f = gsl_multifit_nlinear_residual(w);
+    double c = gsl_blas_dnrm2(f);
+    res.cost_after = 0.5 * c * c;
+  }
+  params_of_x(&ws, gsl_multifit_nlinear_position(w), res.fitted);
+  res.evaluations = ws.evaluations;
+  res.recovery_penalised = ws.with_recovery;
+  gsl_multifit_nlinear_free(w);
+  gsl_vector_free(x);
+  free(ws.sel_vertex);
+  rc = rmse_all(scenes, refs, count, res.fitted, res.rmse_after, err, errlen);
+  if (!rc) {
+    palp_scene s = scenes[0];
+    palp_eval_params_set(&s.world, res.fitted);
+    rc = palp_eval_recovery_measure(&s, &res.recovery_after, err, errlen);
+  }
+  if (rc) return rc;
+  res.seconds = now_s() - t0;
+  *out = res;
+  return PALP_OK;
+}
+
+/* ---- parameter file ---------------------------------------------------------------- */
+
+int palp_eval_params_write(const char *path, const palp_world_def *w, const char *comment, char *err,
+                           size_t errlen) {
+  char tmp[1100];
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  FILE *f = fopen(tmp, "w");
+  if (!f) {
+    snprintf(err, errlen, "cannot write %s", tmp);
+    return PALP_EIO;
+  }
+  /* The comment goes through cJSON so any text is a valid JSON string. */
+  cJSON *c = cJSON_CreateString(comment ? comment : "");
+  char *cs = c ? cJSON_PrintUnformatted(c) : NULL;
+  const palp_membrane_params *m = &w->membrane;
+  const palp_gel_params *g = &w->gel;
+  fprintf(f, "{\n  \"comment\": %s,\n", cs ? cs : "\"\"");
+  fprintf(f,
+          "  \"membrane\": { \"thickness_m\": %.9g, \"density_kg_m3\": %.9g,\n"
+          "                \"E1_Pa\": %.9g, \"eta1_Pa_s\": %.9g, \"E2_Pa\": %.9g, \"eta2_Pa_s\": %.9g },\n",
+          m->thickness, m->density, m->E1, m->eta1, m->E2, m->eta2);
+  fprintf(f,
+          "  \"gel\": { \"law\": \"%s\", \"pressure_Pa\": %.9g, \"a1\": %.9g, \"a2_Pa_s_m3\": %.9g, \"a3_s2\": %.9g,\n"
+          "           \"support_modulus_Pa_m\": %.9g, \"support_viscosity_Pa_s_m\": %.9g }\n}\n",
+          g->law == PALP_GEL_PAPER_LITERAL ? "paper_literal" : "polytropic", g->pressure, g->a1, g->a2, g->a3,
+          g->support_modulus, g->support_viscosity);
+  free(cs);
+  cJSON_Delete(c);
+  int bad = ferror(f);
+  bad |= fclose(f) != 0;
+  if (bad || rename(tmp, path) != 0) {
+    remove(tmp);
+    snprintf(err, errlen, "cannot write %s", path);
+    return PALP_EIO;
+  }
+  return PALP_OK;
+}

@@ -1,0 +1,220 @@
+/*
+ * eval_report.c - Tables V and VI beside the paper's: terminal, CSV, JSON and
+ * Markdown. Values are in the paper's units (cm for displacement, N for force).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "eval.h"
+
+const char *palp_eval_roman(int d) {
+  static const char *const r[] = {"?", "I", "II", "III", "IV"};
+  return (d >= 1 && d <= 4) ? r[d] : r[0];
+}
+
+static const char *const table_name[2] = {"V", "VI"};
+static const char *const quantity[2] = {"displacement", "force"};
+static const char *const unit[2] = {"cm", "N"};
+
+static const palp_eval_row *row_of(const palp_eval_dist *d, int t) {
+  return t == 0 ? &d->disp : (d->has_force ? &d->force : NULL);
+}
+
+/* Why a row fails the paper's criteria, for the reader. */
+static void verdict_text(const palp_eval_row *w, char *buf, size_t len) {
+  if (w->meets) {
+    snprintf(buf, len, "meets");
+    return;
+  }
+  const int p_bad = !(w->anova.p > PALP_STATS_PAPER_ALPHA), a_bad = !(w->ba.agreement > PALP_STATS_PAPER_AGREEMENT);
+  snprintf(buf, len, "fails (%s%s%s)", p_bad ? "p <= 0.05" : "", p_bad && a_bad ? ", " : "",
+           a_bad ? "agreement <= 95%" : "");
+}
+
+void palp_eval_report_print(FILE *out, const palp_eval_report *r) {
+  fprintf(out, "scene %s (%s): %d frames of %.4g s, %d vertices; parameters %s\n", r->scene_name, r->scene,
+           r->frames, r->frame_period, r->vertex_count, r->parameters);
+  fprintf(out, "reference: FEM level %d (%d elements, %d nodes)\n\n", r->ref_level, r->ref_elements, r->ref_nodes);
+  for (int t = 0; t < 2; ++t) {
+    fprintf(out, "Table %s: %s, real-time model vs FEM (paper | measured)\n", table_name[t], quantity[t]);
+    fprintf(out, "%-10s %8s %17s %15s %15s %17s %15s  %s\n", "", "pairs", "RMSE [", "F", "p", "SD [", "Agree [%]",
+            "verdict");
+    fprintf(out, "%-10s %8s %17s\n", "", "", t == 0 ? "cm]" : "N]");
+    for (int i = 0; i < r->dist_count; ++i) {
+      const palp_eval_dist *d = &r->dist[i];
+      const palp_eval_paper_row *pp = &palp_eval_paper[t][d->distribution - 1];
+      const palp_eval_row *w = row_of(d, t);
+      char name[16];
+      snprintf(name, sizeof name, "Distr. %s", palp_eval_roman(d->distribution));
+      if (!w) {
+        fprintf(out, "%-10s %8s   (no force feedback recorded)\n", name, "-");
+        continue;
+      }
+      char v[64];
+      verdict_text(w, v, sizeof v);
+      fprintf(out, "%-10s %8zu %6.2f | %-8.4f %5.2f | %-7.3g %5.2f | %-7.3g %6.2f | %-8.4f %5.1f | %-6.1f  %s\n", name,
+              w->n, pp->rmse, w->rmse, pp->f, w->anova.f, pp->p, w->anova.p, pp->sd, w->ba.sd, pp->agree_percent,
+              100.0 * w->ba.agreement, v);
+    }
+    fprintf(out, "\n");
+  }
+  fprintf(out, "criteria (paper, Sec. II-D): one-way ANOVA p > 0.05 and more than 95%% of the differences within "
+               "bias +- 2 SD\n");
+}
+
+static int write_csv(const char *path, const palp_eval_report *r) {
+  FILE *f = fopen(path, "w");
+  if (!f) return PALP_EIO;
+  fprintf(f, "table,quantity,unit,distribution,pairs,rmse,bias,sd,loa_lower,loa_upper,agreement_percent,"
+             "anova_f,anova_p,df_between,df_within,ss_between,ss_within,mean_rt,mean_ref,max_abs_diff,meets,"
+             "paper_rmse,paper_f,paper_p,paper_sd,paper_agreement_percent\n");
+  for (int t = 0; t < 2; ++t)
+    for (int i = 0; i < r->dist_count; ++i) {
+      const palp_eval_dist *d = &r->dist[i];
+      const palp_eval_row *w = row_of(d, t);
+      if (!w) continue;
+      const palp_eval_paper_row *pp = &palp_eval_paper[t][d->distribution - 1];
+      fprintf(f, "%s,%s,%s,%s,%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%ld,%.17g,%.17g,%.17g,%.17g,"
+                 "%.17g,%d,%g,%g,%g,%g,%g\n",
+              table_name[t], quantity[t], unit[t], palp_eval_roman(d->distribution), w->n, w->rmse, w->ba.bias,
+              w->ba.sd, w->ba.loa_lower, w->ba.loa_upper, 100.0 * w->ba.agreement, w->anova.f, w->anova.p,
+              w->anova.df_between, w->anova.df_within, w->anova.ss_between, w->anova.ss_within, w->ba.mean_a,
+              w->ba.mean_b, w->max_abs_diff, w->meets, pp->rmse, pp->f, pp->p, pp->sd, pp->agree_percent);
+    }
+  int bad = ferror(f);
+  bad |= fclose(f) != 0;
+  return bad ? PALP_EIO : PALP_OK;
+}
+
+static cJSON *row_json(const palp_eval_row *w, const palp_eval_paper_row *pp) {
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddNumberToObject(o, "pairs", (double)w->n);
+  cJSON_AddNumberToObject(o, "rmse", w->rmse);
+  cJSON_AddNumberToObject(o, "bias", w->ba.bias);
+  cJSON_AddNumberToObject(o, "sd", w->ba.sd);
+  cJSON_AddNumberToObject(o, "loa_lower", w->ba.loa_lower);
+  cJSON_AddNumberToObject(o, "loa_upper", w->ba.loa_upper);
+  cJSON_AddNumberToObject(o, "within_band", (double)w->ba.within_band);
+  cJSON_AddNumberToObject(o, "agreement_percent", 100.0 * w->ba.agreement);
+  cJSON_AddNumberToObject(o, "mean_rt", w->ba.mean_a);
+  cJSON_AddNumberToObject(o, "mean_ref", w->ba.mean_b);
+  cJSON_AddNumberToObject(o, "max_abs_diff", w->max_abs_diff);
+  cJSON_AddNumberToObject(o, "ref_peak", w->ref_peak);
+  cJSON *a = cJSON_AddObjectToObject(o, "anova");
+  if (isfinite(w->anova.f)) cJSON_AddNumberToObject(a, "f", w->anova.f);
+  else cJSON_AddNullToObject(a, "f");
+  cJSON_AddNumberToObject(a, "p", w->anova.p);
+  cJSON_AddNumberToObject(a, "df_between", w->anova.df_between);
+  cJSON_AddNumberToObject(a, "df_within", (double)w->anova.df_within);
+  cJSON_AddNumberToObject(a, "ss_between", w->anova.ss_between);
+  cJSON_AddNumberToObject(a, "ss_within", w->anova.ss_within);
+  cJSON_AddBoolToObject(o, "meets_paper_criteria", w->meets);
+  cJSON *p = cJSON_AddObjectToObject(o, "paper");
+  cJSON_AddNumberToObject(p, "rmse", pp->rmse);
+  cJSON_AddNumberToObject(p, "f", pp->f);
+  cJSON_AddNumberToObject(p, "p", pp->p);
+  cJSON_AddNumberToObject(p, "sd", pp->sd);
+  cJSON_AddNumberToObject(p, "agreement_percent", pp->agree_percent);
+  return o;
+}
+
+static int write_json(const char *path, const palp_eval_report *r) {
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddStringToObject(root, "scene", r->scene);
+  cJSON_AddStringToObject(root, "scene_name", r->scene_name);
+  cJSON_AddStringToObject(root, "parameters", r->parameters);
+  cJSON_AddNumberToObject(root, "frames", r->frames);
+  cJSON_AddNumberToObject(root, "frame_period_s", r->frame_period);
+  cJSON_AddNumberToObject(root, "vertex_count", r->vertex_count);
+  cJSON *ref = cJSON_AddObjectToObject(root, "reference");
+  cJSON_AddStringToObject(ref, "model", "FEM (src/fem)");
+  cJSON_AddNumberToObject(ref, "level", r->ref_level);
+  cJSON_AddNumberToObject(ref, "elements", r->ref_elements);
+  cJSON_AddNumberToObject(ref, "nodes", r->ref_nodes);
+  cJSON *crit = cJSON_AddObjectToObject(root, "criteria");
+  cJSON_AddNumberToObject(crit, "p_above", PALP_STATS_PAPER_ALPHA);
+  cJSON_AddNumberToObject(crit, "agreement_above", PALP_STATS_PAPER_AGREEMENT);
+  cJSON_AddNumberToObject(crit, "band_sd", PALP_STATS_PAPER_BAND_SD);
+  cJSON *tables = cJSON_AddArrayToObject(root, "tables");
+  for (int t = 0; t < 2; ++t) {
+    cJSON *tab = cJSON_CreateObject();
+    cJSON_AddStringToObject(tab, "table", table_name[t]);
+    cJSON_AddStringToObject(tab, "quantity", quantity[t]);
+    cJSON_AddStringToObject(tab, "unit", unit[t]);
+    cJSON *rows = cJSON_AddArrayToObject(tab, "rows");
+    for (int i = 0; i < r->dist_count; ++i) {
+      const palp_eval_dist *d = &r->dist[i];
+      const palp_eval_row *w = row_of(d, t);
+      if (!w) continue;
+      cJSON *o = row_json(w, &palp_eval_paper[t][d->distribution - 1]);
+      cJSON_AddStringToObject(o, "distribution", palp_eval_roman(d->distribution));
+      cJSON_AddNumberToObject(o, "vertices_per_frame", t == 0 ? d->disp_vertices : d->force_vertices);
+      cJSON_AddNumberToObject(o, "rt_seconds", d->rt_seconds);
+      cJSON_AddNumberToObject(o, "ref_seconds", d->ref_seconds);
+      cJSON_AddBoolToObject(o, "ref_from_cache", d->ref_from_cache);
+      cJSON_AddItemToArray(rows, o);
+    }
+    cJSON_AddItemToArray(tables, tab);
+  }
+  char *txt = cJSON_Print(root);
+  cJSON_Delete(root);
+  if (!txt) return PALP_ENOMEM;
+  FILE *f = fopen(path, "w");
+  if (!f) {
+    free(txt);
+    return PALP_EIO;
+  }
+  fprintf(f, "%s\n", txt);
+  free(txt);
+  int bad = ferror(f);
+  bad |= fclose(f) != 0;
+  return bad ? PALP_EIO : PALP_OK;
+}
+
+static int write_md(const char *path, const palp_eval_report *r) {
+  FILE *f = fopen(path, "w");
+  if (!f) return PALP_EIO;
+  fprintf(f, "Scene `%s` (%d frames of %g s, %d vertices), parameters `%s`; reference: FEM level %d (%d elements). "
+             "Each cell: paper / measured.\n\n",
+          r->scene_name, r->frames, r->frame_period, r->vertex_count, r->parameters, r->ref_level, r->ref_elements);
+  for (int t = 0; t < 2; ++t) {
+    fprintf(f, "**Table %s: %s**\n\n", table_name[t], quantity[t]);
+    fprintf(f, "| | pairs | RMSE [%s] | F | p | SD [%s] | Agree [%%] | verdict |\n", unit[t], unit[t]);
+    fprintf(f, "|---|---|---|---|---|---|---|---|\n");
+    for (int i = 0; i < r->dist_count; ++i) {
+      const palp_eval_dist *d = &r->dist[i];
+      const palp_eval_row *w = row_of(d, t);
+      if (!w) continue;
+      const palp_eval_paper_row *pp = &palp_eval_paper[t][d->distribution - 1];
+      char v[64];
+      verdict_text(w, v, sizeof v);
+      fprintf(f, "| Distr. %s | %zu | %.2f / %.4f | %.2f / %.3g | %.2f / %.3g | %.2f / %.4f | %.1f / %.1f | %s |\n",
+              palp_eval_roman(d->distribution), w->n, pp->rmse, w->rmse, pp->f, w->anova.f, pp->p, w->anova.p, pp->sd,
+              w->ba.sd, pp->agree_percent, 100.0 * w->ba.agreement, v);
+    }
+    fprintf(f, "\n");
+  }
+  int bad = ferror(f);
+  bad |= fclose(f) != 0;
+  return bad ? PALP_EIO : PALP_OK;
+}
+
+int palp_eval_report_write(const char *dir, const palp_eval_report *r, char *err, size_t errlen) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/tables.csv", dir);
+  int rc = write_csv(path, r);
+  if (!rc) {
+    snprintf(path, sizeof path, "%s/tables.json", dir);
+    rc = write_json(path, r);
+  }
+  if (!rc) {
+    snprintf(path, sizeof path, "%s/tables.md", dir);
+    rc = write_md(path, r);
+  }
+  if (rc) snprintf(err, errlen, "cannot write %s: %s", path, palp_strerror(rc));
+  return rc;
+}
