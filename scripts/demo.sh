@@ -3,13 +3,18 @@
 # trainee stations palpating their own phantom with scripted profiles, a visual
 # station showing one of them and an instructor observer following the other,
 # for about 8 s. Then everything stops cleanly and a summary of every session is
-# printed. Assumes the project is built in build/ (PALP_BUILD_DIR overrides).
+# printed. Builds first through scripts/setup.sh (idempotent: installs only missing
+# packages, rebuilds only what changed) unless PALP_SKIP_SETUP=1; PALP_BUILD_DIR
+# selects the build directory (default build/).
 #
 #   bash scripts/demo.sh            # logs and the SVG snapshot go to out/demo/
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
 build=${PALP_BUILD_DIR:-build}
+if [ "${PALP_SKIP_SETUP:-0}" != 1 ]; then
+  bash scripts/setup.sh
+fi
 server=$build/server/palp-server
 client=$build/client/palp-client
 for exe in "$server" "$client"; do
