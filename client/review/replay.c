@@ -114,9 +114,20 @@ static int frame_cb(void *u, const palp_db_frame *logged) {
 }
 
 int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
-  char *scene = NULL;
-  if (palp_db_session_json(db, s->id, &scene, NULL)) {
+  char *scene = NULL, *params = NULL;
+  if (palp_db_session_json(db, s->id, &scene, &params)) {
     fprintf(stderr, "replay: %s\n", palp_db_errmsg(db));
+    return REVIEW_ERROR;
+  }
+  const int recorded = params && strstr(params, "\"recorded_by\"") != NULL;
+  free(params);
+  if (recorded) {
+    /* palp-recorder logs inputs as received over DDS, not as the server applied them. */
+    fprintf(stderr, "replay: session %s was recorded over DDS by palp-recorder: its contact inputs are stamped "
+                    "with the frames the recorder saw, not the frames the server applied them at, and its frames "
+                    "carry no state hash, so it cannot be replayed exactly; replay the server's own log instead\n",
+            s->uid);
+    free(scene);
     return REVIEW_ERROR;
   }
   char msg[512];

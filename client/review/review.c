@@ -295,6 +295,10 @@ static int cmd_show(palp_db *db, const palp_db_session_info *s) {
   printf("session    %s\n", s->uid);
   printf("trainee    %s   station %s\n", s->trainee, s->station);
   printf("phantom    %s (%s)\n", s->phantom_id, s->phantom_name);
+  char *params = NULL;
+  if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params && strstr(params, "\"recorded_by\""))
+    printf("source     recorded over DDS by palp-recorder (inputs as received; not replayable)\n");
+  free(params);
   printf("started    %s\n", t0);
   if (s->end_reason[0])
     printf("ended      %s  (%s%s%s)\n", t1, s->end_reason, s->end_detail[0] ? ": " : "", s->end_detail);

@@ -1,0 +1,490 @@
+/* palp-recorder: logs classroom sessions from DDS into the session log, as its own process, so a
+ * logging machine can serve several servers.
+ *
+ *   palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S]
+ *
+ * It subscribes to the catalogue and session state (default partition) and, through a subscriber
+ * on the partition pattern "palp/session/" + "*", to every session's contact, feedback and
+ * deformation topics, and writes them through the same palp_db writer the server uses.
+ *
+ * What it can and cannot know: contact samples are logged as the recorder received them, stamped
+ * with the newest frame it has seen from that session's feedback; the server's own log records the
+ * frame each input was applied at. Frame summaries come from the deformation topic (30 Hz by
+ * default) and carry no state hash. So a recorded session supports show, export and report but
+ * not an exact replay; its params_json says "recorded_by": "palp-recorder" and replay refuses it.
+ * Best-effort topics (contact, feedback) may lose samples; readers keep 256 samples per instance
+ * so a busy recorder does not overwrite them itself. */
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <dds/dds.h>
+
+#include "palp_db.h"
+#include "palp_dds.h"
+
+#define MAX_PHANTOMS 64
+#define MAX_SESSIONS 1024
+#define FINGERS 4
+#define TAKE 64
+
+typedef struct phantom {
+  uint32_t id;
+  int used;
+  char name[64];
+  double tick_hz, max_force;
+  int top_vertex;
+  int n;
+  palp_vec3 *rest;
+  char *scene_json;
+} phantom;
+
+typedef struct rsession {
+  uint32_t id;
+  int open;
+  palp_db_session h;
+  const phantom *ph;
+  int64_t frame;   /* newest frame seen from the server (feedback or deformation) */
+  double t;        /* its simulated time [s] */
+  uint8_t live[FINGERS];
+  uint8_t kind[FINGERS];
+  palp_vec3 force[FINGERS];
+  uint8_t active[FINGERS];
+} rsession;
+
+/* A session that opened before its phantom's catalogue entry arrived (the two topics race). */
+typedef struct pending_open {
+  int used;
+  palp_SessionState state;
+  dds_time_t since;
+} pending_open;
+#define MAX_PENDING 64
+#define PENDING_WAIT DDS_SECS(2)
+
+typedef struct recorder {
+  palp_db_writer *w;
+  pending_open pending[MAX_PENDING];
+  phantom ph[MAX_PHANTOMS];
+  rsession s[MAX_SESSIONS];
+  int64_t unknown_session_samples, refused;
+} recorder;
+
+static volatile sig_atomic_t stop_flag;
+static void on_signal(int sig) {
+  (void)sig;
+  stop_flag = 1;
+}
+
+static double now_unix(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void count(recorder *r, int rc) {
+  if (rc == PALP_EFULL) r->refused++;
+}
+
+static phantom *find_phantom(recorder *r, uint32_t id, int create) {
+  for (int i = 0; i < MAX_PHANTOMS; i++)
+    if (r->ph[i].used && r->ph[i].id == id) return &r->ph[i];
+  if (!create) return NULL;
+  for (int i = 0; i < MAX_PHANTOMS; i++)
+    if (!r->ph[i].used) {
+      r->ph[i].used = 1;
+      r->ph[i].id = id;
+      return &r->ph[i];
+    }
+  return NULL;
+}
+
+static rsession *find_session(recorder *r, uint32_t id, int create) {
+  rsession *free_slot = NULL;
+  for (int i = 0; i < MAX_SESSIONS; i++) {
+    if (r->s[i].open && r->s[i].id == id) return &r->s[i];
+    if (!r->s[i].open && !free_slot) free_slot = &r->s[i];
+  }
+  return create ? free_slot : NULL;
+}
+
+/* The scene as far as the catalogue describes it: geometry, material, gel, effects, rate. */
+static char *scene_from_catalogue(const palp_Phantom *p) {
+  palp_scene sc;
+  memset(&sc, 0, sizeof sc);
+  snprintf(sc.name, sizeof sc.name, "%s", p->scene_name[0] ? p->scene_name : p->name);
+  sc.world = palp_world_default_def();
+  sc.world.mesh.radius = p->radius;
+  sc.world.mesh.vertex_count = (int)p->rest._length;
+  sc.world.membrane.thickness = p->membrane.thickness;
+  sc.world.membrane.density = p->membrane.density;
+  sc.world.membrane.E1 = p->membrane.E1;
+  sc.world.membrane.eta1 = p->membrane.eta1;
+  sc.world.membrane.E2 = p->membrane.E2;
+  sc.world.membrane.eta2 = p->membrane.eta2;
+  sc.world.gel.law = (palp_gel_law)p->gel.law;
+  sc.world.gel.pressure = p->gel.pressure;
+  sc.world.gel.a1 = p->gel.a1;
+  sc.world.gel.a2 = p->gel.a2;
+  sc.world.gel.a3 = p->gel.a3;
+  sc.world.effects = p->effects;
+  if (p->tick_rate_hz > 0) sc.world.dt = 1.0 / p->tick_rate_hz;
+  sc.frames = 1;
+  sc.frame_period = sc.world.dt;
+  return palp_scene_to_json(&sc);
+}
+
+static void on_phantom(recorder *r, const palp_Phantom *p) {
+  phantom *ph = find_phantom(r, p->phantom_id, 1);
+  if (!ph) return;
+  snprintf(ph->name, sizeof ph->name, "%s", p->name);
+  ph->tick_hz = p->tick_rate_hz;
+  ph->max_force = p->max_force;
+  ph->top_vertex = p->top_vertex;
+  palp_vec3 *rest = realloc(ph->rest, sizeof *rest * (p->rest._length ? p->rest._length : 1));
+  if (rest) {
+    ph->rest = rest;
+    ph->n = (int)p->rest._length;
+    for (uint32_t i = 0; i < p->rest._length; i++)
+      ph->rest[i] = (palp_vec3){p->rest._buffer[i].x, p->rest._buffer[i].y, p->rest._buffer[i].z};
+  }
+  free(ph->scene_json);
+  ph->scene_json = scene_from_catalogue(p);
+}
+
+static palp_db_end_reason end_reason(const char *why) {
+  if (strstr(why, "shutdown")) return PALP_DB_END_SERVER_SHUTDOWN;
+  if (strstr(why, "lost") || strstr(why, "vanish") || strstr(why, "liveliness")) return PALP_DB_END_STATION_VANISHED;
+  if (strstr(why, "error")) return PALP_DB_END_ERROR;
+  return PALP_DB_END_NORMAL;
+}
+
+static void open_session(recorder *r, const palp_SessionState *m) {
+  rsession *s = find_session(r, m->session_id, 1);
+  {
+    if (!s || s->open) return; /* already recording (transient-local re-delivery) */
+    const phantom *ph = find_phantom(r, m->phantom_id, 0);
+    const double start = now_unix() - m->duration;
+    char uid[128], pid[32], params[512];
+    /* Session ids restart with each server run: the start time makes the uid unique. */
+    snprintf(uid, sizeof uid, "dds-%u-%u-%.0f", m->phantom_id, m->session_id, start * 1e3);
+    snprintf(pid, sizeof pid, "%u", m->phantom_id);
+    snprintf(params, sizeof params,
+             "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
+             "\"max_force_n\": %.17g}",
+             m->partition, ph ? ph->max_force : 0.0);
+    palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
+                             .phantom_id = pid, .phantom_name = ph ? ph->name : "",
+                             .scene_json = ph && ph->scene_json ? ph->scene_json : "{}", .params_json = params,
+                             .tick_hz = m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000,
+                             .dt_s = 1.0 / (m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000), .start_unix_s = start};
+    memset(s, 0, sizeof *s);
+    if (palp_db_log_session_begin(r->w, &d, &s->h) != 0) return;
+    s->id = m->session_id;
+    s->open = 1;
+    s->ph = ph;
+    char detail[160];
+    snprintf(detail, sizeof detail, "%s joined as trainee from %s", m->trainee_name, m->trainee_station);
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_JOIN, -1, detail, 1));
+    fprintf(stderr, "palp-recorder: recording session %u as %s\n", m->session_id, uid);
+  }
+}
+
+/* Opens pending sessions whose phantom is now known, that waited long enough, or (force) whose
+ * samples are arriving. */
+static void resolve_pending(recorder *r, uint32_t session_id, int force) {
+  const dds_time_t now = dds_time();
+  for (int i = 0; i < MAX_PENDING; i++) {
+    pending_open *p = &r->pending[i];
+    if (!p->used) continue;
+    if (find_phantom(r, p->state.phantom_id, 0) || now - p->since > PENDING_WAIT ||
+        (force && p->state.session_id == session_id)) {
+      p->used = 0;
+      open_session(r, &p->state);
+    }
+  }
+}
+
+static void on_state(recorder *r, const palp_SessionState *m) {
+  if (m->phase == palp_PHASE_OPEN) {
+    if (find_session(r, m->session_id, 0)) return;
+    if (!find_phantom(r, m->phantom_id, 0)) { /* wait (briefly) for its catalogue entry */
+      for (int i = 0; i < MAX_PENDING; i++) {
+        if (r->pending[i].used && r->pending[i].state.session_id == m->session_id) return;
+      }
+      for (int i = 0; i < MAX_PENDING; i++)
+        if (!r->pending[i].used) {
+          r->pending[i].used = 1;
+          r->pending[i].state = *m; /* fixed-size strings: a plain copy */
+          r->pending[i].since = dds_time();
+          return;
+        }
+    }
+    open_session(r, m);
+    return;
+  }
+  resolve_pending(r, m->session_id, 1); /* opened and closed before its catalogue arrived */
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || !s->open) return;
+  if (m->rejected_samples)
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, "samples rejected by the server",
+                               (int64_t)m->rejected_samples));
+  if (m->overruns)
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_OVERRUN, s->frame, "tick overruns reported by the server",
+                               (int64_t)m->overruns));
+  count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
+  count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
+  fprintf(stderr, "palp-recorder: session %u closed (%s)\n", m->session_id, m->reason);
+  s->open = 0;
+}
+
+static void on_contact(recorder *r, const palp_Contact *m) {
+  resolve_pending(r, m->session_id, 1);
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || m->finger >= FINGERS) {
+    r->unknown_session_samples++;
+    return;
+  }
+  const int f = m->finger;
+  palp_db_contact c;
+  memset(&c, 0, sizeof c);
+  c.frame = s->frame;
+  c.sim_time_s = s->t;
+  c.slot = f;
+  const int kind = m->mode == palp_CONTACT_FORCE ? PALP_DB_KIND_FORCE : PALP_DB_KIND_FINGER;
+  if (m->mode == palp_CONTACT_RELEASE) {
+    if (!s->live[f]) return;
+    c.op = PALP_DB_OP_REMOVE;
+    c.kind = s->kind[f];
+    s->live[f] = 0;
+    count(r, palp_db_log_contact(r->w, s->h, &c));
+    return;
+  }
+  if (s->live[f] && s->kind[f] != kind) { /* switched mode: the server replaces the contact */
+    palp_db_contact rm = c;
+    rm.op = PALP_DB_OP_REMOVE;
+    rm.kind = s->kind[f];
+    count(r, palp_db_log_contact(r->w, s->h, &rm));
+    s->live[f] = 0;
+  }
+  c.op = s->live[f] ? PALP_DB_OP_UPDATE : PALP_DB_OP_ADD;
+  c.kind = kind;
+  const palp_vec3 ctr = {m->center.x, m->center.y, m->center.z};
+  if (kind == PALP_DB_KIND_FORCE) {
+    c.def.distribution = (palp_distribution)(m->distribution >= 1 && m->distribution <= 4 ? m->distribution : 1);
+    c.def.center = ctr;
+    c.def.patch_area = m->patch_area > 0 ? m->patch_area : 5.2e-4;
+    c.def.sigma_fraction = 0.5;
+    c.def.offset_fraction = 0.5;
+    c.def.offset_dir = (palp_vec3){m->offset_dir.x, m->offset_dir.y, m->offset_dir.z};
+    c.force_n = (palp_vec3){m->force.x, m->force.y, m->force.z};
+  } else {
+    c.center_m = ctr;
+    c.radius_m = m->radius;
+  }
+  s->live[f] = 1;
+  s->kind[f] = (uint8_t)kind;
+  count(r, palp_db_log_contact(r->w, s->h, &c));
+}
+
+static void on_feedback(recorder *r, const palp_Feedback *m) {
+  resolve_pending(r, m->session_id, 1);
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s) {
+    r->unknown_session_samples++;
+    return;
+  }
+  if ((int64_t)m->frame > s->frame) s->frame = (int64_t)m->frame, s->t = m->sim_time;
+  for (uint32_t i = 0; i < m->fingers._length; i++) {
+    const palp_FingerFeedback *ff = &m->fingers._buffer[i];
+    if (ff->finger >= FINGERS) continue;
+    s->active[ff->finger] = ff->active;
+    s->force[ff->finger] = (palp_vec3){ff->force.x, ff->force.y, ff->force.z};
+    if (ff->active) count(r, palp_db_log_feedback(r->w, s->h, (int64_t)m->frame, ff->finger, s->force[ff->finger]));
+  }
+}
+
+static void on_deformation(recorder *r, const palp_Deformation *m) {
+  resolve_pending(r, m->session_id, 1);
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s) {
+    r->unknown_session_samples++;
+    return;
+  }
+  if ((int64_t)m->frame > s->frame) s->frame = (int64_t)m->frame, s->t = m->sim_time;
+  const int n = (int)m->positions._length;
+  palp_vec3 *pos = malloc(sizeof *pos * (size_t)(n ? n : 1));
+  if (!pos) return;
+  for (int i = 0; i < n; i++) pos[i] = (palp_vec3){m->positions._buffer[i].x, m->positions._buffer[i].y, m->positions._buffer[i].z};
+  /* The summary's definitions (db/palp_db.h), from what the topic carries; no state hash. */
+  palp_db_frame f = {.frame = (int64_t)m->frame, .sim_time_s = m->sim_time, .volume_m3 = m->volume,
+                     .pressure_pa = m->pressure};
+  const phantom *ph = s->ph;
+  if (ph && ph->n == n) {
+    double max2 = 0;
+    for (int i = 0; i < n; i++) {
+      const double dx = pos[i].x - ph->rest[i].x, dy = pos[i].y - ph->rest[i].y, dz = pos[i].z - ph->rest[i].z;
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      if (d2 > max2) max2 = d2;
+      if (i == ph->top_vertex) f.top_disp_m = sqrt(d2);
+    }
+    f.max_disp_m = sqrt(max2);
+  }
+  palp_vec3 sum = {0, 0, 0};
+  for (int k = 0; k < FINGERS; k++)
+    if (s->active[k]) sum.x += s->force[k].x, sum.y += s->force[k].y, sum.z += s->force[k].z;
+  f.contact_force_n = sqrt(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z);
+  count(r, palp_db_log_frame(r->w, s->h, &f));
+  if (n > 0) count(r, palp_db_log_mesh(r->w, s->h, (int64_t)m->frame, pos, n));
+  free(pos);
+}
+
+static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+  /* The topic's QoS, but a deeper reader history: the recorder, not a display, must see every
+   * sample that arrives, and history depth is not part of the writer/reader match. */
+  dds_qos_t *q = palp_dds_qos(kind);
+  if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION)
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
+  dds_entity_t rd = dds_create_reader(parent, topic, q, NULL);
+  dds_delete_qos(q);
+  return rd;
+}
+
+static void usage(FILE *f) {
+  fputs("usage: palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S]\n"
+        "Records every classroom session seen on DDS into the session log until SIGINT/SIGTERM\n"
+        "(or for S seconds). The DDS config defaults to the loopback-only config/cyclonedds-loopback.xml.\n",
+        f);
+}
+
+int main(int argc, char **argv) {
+  const char *db = NULL, *config = NULL;
+  dds_domainid_t domain = DDS_DOMAIN_DEFAULT;
+  double duration = 0;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i];
+    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+      usage(stdout);
+      return 0;
+    }
+    if (i + 1 >= argc) {
+      fprintf(stderr, "palp-recorder: %s needs a value\n", a);
+      return 2;
+    }
+    if (!strcmp(a, "--db")) db = argv[++i];
+    else if (!strcmp(a, "--dds-config")) config = argv[++i];
+    else if (!strcmp(a, "--domain")) {
+      char *end;
+      long v = strtol(argv[++i], &end, 10);
+      if (*end || v < 0 || v > 232) {
+        fprintf(stderr, "palp-recorder: --domain: expected 0..232, got '%s'\n", argv[i]);
+        return 2;
+      }
+      domain = (dds_domainid_t)v;
+    } else if (!strcmp(a, "--duration")) {
+      duration = atof(argv[++i]);
+      if (!(duration > 0)) {
+        fprintf(stderr, "palp-recorder: --duration: expected seconds > 0\n");
+        return 2;
+      }
+    } else {
+      fprintf(stderr, "palp-recorder: unknown option %s\n", a);
+      usage(stderr);
+      return 2;
+    }
+  }
+  if (!db) {
+    usage(stderr);
+    return 2;
+  }
+  if (palp_dds_use_config(config) != 0) {
+    fprintf(stderr, "palp-recorder: DDS config %s not found\n", config ? config : "(default)");
+    return 2;
+  }
+  recorder *r = calloc(1, sizeof *r);
+  char err[512];
+  if (!r || palp_db_writer_open(db, NULL, &r->w, err, sizeof err) != 0) {
+    fprintf(stderr, "palp-recorder: %s\n", r ? err : "out of memory");
+    free(r);
+    return 1;
+  }
+  dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
+  if (pp < 0) {
+    fprintf(stderr, "palp-recorder: cannot create a DDS participant: %s\n", dds_strretcode(pp));
+    palp_db_writer_close(r->w);
+    free(r);
+    return 1;
+  }
+  dds_entity_t t[PALP_TOPIC_COUNT];
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) t[k] = palp_dds_create_topic(pp, (palp_dds_topic_kind)k);
+  char wildcard[64];
+  snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
+  char *z = strrchr(wildcard, '/');
+  if (z) snprintf(z + 1, sizeof wildcard - (size_t)(z + 1 - wildcard), "*");
+  dds_entity_t sub = palp_dds_session_subscriber(pp, wildcard);
+  dds_entity_t rd[5] = {
+      reader_deep(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
+      reader_deep(pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE),
+      reader_deep(sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
+      reader_deep(sub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK),
+      reader_deep(sub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION),
+  };
+  dds_entity_t ws = dds_create_waitset(pp);
+  for (int k = 0; k < 5; k++) {
+    if (rd[k] < 0) {
+      fprintf(stderr, "palp-recorder: cannot create a reader: %s\n", dds_strretcode(rd[k]));
+      dds_delete(pp);
+      palp_db_writer_close(r->w);
+      free(r);
+      return 1;
+    }
+    dds_set_status_mask(rd[k], DDS_DATA_AVAILABLE_STATUS);
+    dds_waitset_attach(ws, rd[k], k);
+  }
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  fprintf(stderr, "palp-recorder: recording domain %d into %s (sessions on partition %s)\n", (int)domain, db, wildcard);
+  const dds_time_t t_end = duration > 0 ? dds_time() + (dds_duration_t)(duration * 1e9) : 0;
+  while (!stop_flag && (!t_end || dds_time() < t_end)) {
+    dds_waitset_wait(ws, NULL, 0, DDS_MSECS(100));
+    /* Catalogue and session state first, so a session's samples find it open. */
+    for (int k = 0; k < 5; k++) {
+      void *samples[TAKE] = {NULL};
+      dds_sample_info_t info[TAKE];
+      int n;
+      while ((n = dds_take(rd[k], samples, info, TAKE, TAKE)) > 0) {
+        for (int i = 0; i < n; i++) {
+          if (!info[i].valid_data) continue;
+          switch (k) {
+          case 0: on_phantom(r, samples[i]); break;
+          case 1: on_state(r, samples[i]); break;
+          case 2: on_contact(r, samples[i]); break;
+          case 3: on_feedback(r, samples[i]); break;
+          default: on_deformation(r, samples[i]); break;
+          }
+        }
+        dds_return_loan(rd[k], samples, n);
+        if (n < TAKE) break;
+      }
+      if (k == 0) resolve_pending(r, 0, 0);
+    }
+    resolve_pending(r, 0, 0);
+  }
+  dds_delete(pp);
+  palp_db_writer_stats st;
+  palp_db_writer_flush(r->w, 10);
+  palp_db_writer_stats_get(r->w, &st);
+  palp_db_writer_close(r->w);
+  fprintf(stderr,
+          "palp-recorder: stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions%s%s\n",
+          (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
+          st.last_error[0] ? "; last error: " : "", st.last_error);
+  for (int i = 0; i < MAX_PHANTOMS; i++) {
+    free(r->ph[i].rest);
+    free(r->ph[i].scene_json);
+  }
+  free(r);
+  return st.shed + st.failed ? 1 : 0;
+}

@@ -1,0 +1,230 @@
+/* palp-recorder over real DDS on loopback (domain 161, of its own).
+ * usage: test_db_recorder TMPDIR PALP_RECORDER PALP_REVIEW DDS_CONFIG
+ *
+ * The test plays the server: it publishes a catalogue entry (the default 338-vertex rest mesh), a
+ * session opening, 60 ticks of a trainee's finger contact and the server's feedback (in the
+ * session's partition), a deformation every 6 ticks, the release, and the session closing because
+ * the station was lost (3 rejected samples, 1 overrun). Then it stops the recorder with SIGTERM
+ * and checks the file:
+ *  - one session: trainee, station, phantom name, start, end reason station_vanished;
+ *  - the 10 deformations (reliable) are 10 meshes and 10 frames whose top displacement is the
+ *    1e-5 m x k the test pushed the pole down by (tolerance 1e-12 m, the rounding of x - X);
+ *  - contact inputs: one add, one remove, and at least 54 of the 59 updates (best-effort topic on
+ *    loopback: tolerance 10 %), feedback samples likewise at least 54 of 60;
+ *  - join, reject x3, overrun x1, leave events; `show` works and `replay` refuses (exit 2). */
+#include <math.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "palp.h"
+#include "palp_dds.h"
+
+#define DOMAIN 161
+#define SESSION 7u
+#define PHANTOM 3u
+
+static void sleep_ms(int ms) {
+  struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
+  nanosleep(&ts, NULL);
+}
+
+static int wait_matched(dds_entity_t w, int want, double timeout_s) {
+  for (int i = 0; i < (int)(timeout_s * 100); i++) {
+    dds_publication_matched_status_t st;
+    if (dds_get_publication_matched_status(w, &st) == 0 && (int)st.current_count >= want) return 0;
+    sleep_ms(10);
+  }
+  return -1;
+}
+
+static int64_t one(sqlite3 *h, const char *sql) {
+  sqlite3_stmt *st;
+  int64_t v = -1;
+  if (sqlite3_prepare_v2(h, sql, -1, &st, NULL) != SQLITE_OK) return -2;
+  if (sqlite3_step(st) == SQLITE_ROW) v = sqlite3_column_int64(st, 0);
+  sqlite3_finalize(st);
+  return v;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 5) {
+    fprintf(stderr, "usage: %s TMPDIR PALP_RECORDER PALP_REVIEW DDS_CONFIG\n", argv[0]);
+    return 2;
+  }
+  char db[600], aux[700];
+  snprintf(db, sizeof db, "%s/recorder.db", argv[1]);
+  unlink(db);
+  snprintf(aux, sizeof aux, "%s-wal", db);
+  unlink(aux);
+  REQUIRE(palp_dds_use_config(argv[4]) == 0, "DDS config %s", argv[4]);
+
+  char dom[16];
+  snprintf(dom, sizeof dom, "%d", DOMAIN);
+  pid_t pid = fork();
+  REQUIRE(pid >= 0, "fork");
+  if (pid == 0) {
+    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", (char *)NULL);
+    _exit(127);
+  }
+
+  dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
+  REQUIRE(pp > 0, "participant: %s", dds_strretcode(pp));
+  dds_entity_t t[PALP_TOPIC_COUNT];
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) t[k] = palp_dds_create_topic(pp, (palp_dds_topic_kind)k);
+  char part[64];
+  palp_dds_session_partition(SESSION, part, sizeof part);
+  dds_entity_t pub = palp_dds_session_publisher(pp, part);
+  dds_entity_t w_cat = palp_dds_create_writer(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
+  dds_entity_t w_state = palp_dds_create_writer(pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
+  dds_entity_t w_con = palp_dds_create_writer(pub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+  dds_entity_t w_fb = palp_dds_create_writer(pub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
+  dds_entity_t w_def = palp_dds_create_writer(pub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+  /* The recorder's readers must be there before best-effort samples are worth sending. */
+  const dds_entity_t all[5] = {w_cat, w_state, w_con, w_fb, w_def};
+  for (int k = 0; k < 5; k++) REQUIRE(wait_matched(all[k], 1, 20) == 0, "writer %d never matched the recorder", k);
+
+  palp_mesh_def md = palp_mesh_default_def();
+  palp_mesh mesh;
+  REQUIRE(palp_mesh_create(&md, &mesh) == 0, "mesh");
+  palp_Vec3 *rest = calloc((size_t)mesh.vertex_count, sizeof *rest);
+  for (int i = 0; i < mesh.vertex_count; i++) rest[i] = (palp_Vec3){mesh.rest[i].x, mesh.rest[i].y, mesh.rest[i].z};
+  palp_Phantom ph;
+  memset(&ph, 0, sizeof ph);
+  ph.phantom_id = PHANTOM;
+  snprintf(ph.name, sizeof ph.name, "left dome");
+  snprintf(ph.scene_name, sizeof ph.scene_name, "paper_step");
+  ph.radius = md.radius;
+  ph.tick_rate_hz = 1000;
+  ph.max_force = 20;
+  ph.effects = PALP_EFFECT_ALL;
+  ph.membrane = (palp_MembraneParams){0.002, 950, 4.2e6, 2e8, 8e6, 8e5};
+  ph.gel = (palp_GelParams){0, 101325, 10, 5e6, 0};
+  ph.top_vertex = mesh.top_vertex;
+  ph.dome_triangle_count = mesh.dome_triangle_count;
+  ph.rest._length = ph.rest._maximum = (uint32_t)mesh.vertex_count;
+  ph.rest._buffer = rest;
+  REQUIRE(dds_write(w_cat, &ph) == 0, "catalogue");
+
+  palp_SessionState ss;
+  memset(&ss, 0, sizeof ss);
+  ss.session_id = SESSION;
+  ss.phantom_id = PHANTOM;
+  ss.phase = palp_PHASE_OPEN;
+  snprintf(ss.partition, sizeof ss.partition, "%s", part);
+  snprintf(ss.trainee_station, sizeof ss.trainee_station, "host/4242/haptic-1");
+  snprintf(ss.trainee_name, sizeof ss.trainee_name, "dana");
+  ss.tick_rate_hz = 1000;
+  REQUIRE(dds_write(w_state, &ss) == 0, "state open");
+  sleep_ms(300); /* reliable and transient-local: the open reaches the recorder before the samples */
+
+  palp_Vec3 *pos = calloc((size_t)mesh.vertex_count, sizeof *pos);
+  int deformations = 0;
+  for (int k = 0; k < 60; k++) {
+    palp_Contact c;
+    memset(&c, 0, sizeof c);
+    c.session_id = SESSION;
+    c.finger = 0;
+    c.seq = (uint64_t)k + 1;
+    c.mode = palp_CONTACT_FINGER;
+    c.center = (palp_Vec3){0.001 * k * 0.1, 0, 0.047 - 1e-5 * k};
+    c.radius = 0.008;
+    dds_write(w_con, &c);
+    palp_Feedback fb;
+    memset(&fb, 0, sizeof fb);
+    palp_FingerFeedback ff = {.finger = 0, .active = true, .force = {0, 0, 0.05 * k}, .contact_seq = c.seq};
+    fb.session_id = SESSION;
+    fb.frame = (uint64_t)k + 1;
+    fb.sim_time = 0.001 * (k + 1);
+    fb.top_displacement = 1e-5 * k;
+    fb.fingers._length = fb.fingers._maximum = 1;
+    fb.fingers._buffer = &ff;
+    dds_write(w_fb, &fb);
+    if ((k + 1) % 6 == 0) {
+      for (int i = 0; i < mesh.vertex_count; i++) pos[i] = rest[i];
+      pos[mesh.top_vertex].z -= 1e-5 * (k + 1); /* the pole pushed down by 1e-5 m x frame */
+      palp_Deformation d;
+      memset(&d, 0, sizeof d);
+      d.session_id = SESSION;
+      d.frame = (uint64_t)k + 1;
+      d.sim_time = 0.001 * (k + 1);
+      d.volume = 1.3e-4;
+      d.pressure = 10.0 + k;
+      d.positions._length = d.positions._maximum = (uint32_t)mesh.vertex_count;
+      d.positions._buffer = pos;
+      dds_write(w_def, &d);
+      deformations++;
+    }
+    sleep_ms(4);
+  }
+  palp_Contact rel;
+  memset(&rel, 0, sizeof rel);
+  rel.session_id = SESSION;
+  rel.mode = palp_CONTACT_RELEASE;
+  rel.seq = 61;
+  dds_write(w_con, &rel);
+  sleep_ms(100);
+  ss.phase = palp_PHASE_CLOSED;
+  ss.rejected_samples = 3;
+  ss.overruns = 1;
+  ss.duration = 0.6;
+  snprintf(ss.reason, sizeof ss.reason, "lost (liveliness lease expired)");
+  REQUIRE(dds_write(w_state, &ss) == 0, "state closed");
+  sleep_ms(600);
+  kill(pid, SIGTERM);
+  int status;
+  waitpid(pid, &status, 0);
+  CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0, "recorder exit status %d", status);
+  dds_delete(pp);
+
+  sqlite3 *h;
+  REQUIRE(sqlite3_open(db, &h) == SQLITE_OK, "open");
+  CHECK(one(h, "SELECT count(*) FROM session WHERE trainee = 'dana' AND station = 'host/4242/haptic-1' AND "
+               "phantom_id = '3' AND phantom_name = 'left dome' AND end_reason = 'station_vanished'") == 1,
+        "one session with trainee, station, phantom and end reason");
+  CHECK(one(h, "SELECT count(*) FROM mesh") == deformations && one(h, "SELECT count(*) FROM frame") == deformations,
+        "%d deformations -> meshes %lld, frames %lld", deformations, (long long)one(h, "SELECT count(*) FROM mesh"),
+        (long long)one(h, "SELECT count(*) FROM frame"));
+  CHECK(one(h, "SELECT count(*) FROM frame WHERE abs(top_disp_m - 1e-5 * frame) < 1e-12 AND "
+               "abs(max_disp_m - 1e-5 * frame) < 1e-12 AND pressure_pa = 9.0 + frame") == deformations,
+        "frame summaries from the deformations (tolerance 1e-12 m)");
+  int64_t adds = one(h, "SELECT count(*) FROM contact_input WHERE op = 'add' AND kind = 'finger'");
+  int64_t upd = one(h, "SELECT count(*) FROM contact_input WHERE op = 'update'");
+  int64_t rem = one(h, "SELECT count(*) FROM contact_input WHERE op = 'remove'");
+  int64_t fbn = one(h, "SELECT count(*) FROM feedback");
+  printf("recorded: %lld add, %lld of 59 updates, %lld remove, %lld of 60 feedback samples\n", (long long)adds,
+         (long long)upd, (long long)rem, (long long)fbn);
+  CHECK(adds == 1 && rem == 1 && upd >= 54 && upd <= 59, "contact inputs (best effort, >= 90 %% of updates)");
+  CHECK(fbn >= 54 && fbn <= 60, "feedback samples (best effort, >= 90 %%): %lld", (long long)fbn);
+  CHECK(one(h, "SELECT count(*) FROM contact_input WHERE op = 'update' AND radius_m = 0.008 AND center_z_m < 0.047") >= 54,
+        "finger radius and centre recorded");
+  CHECK(one(h, "SELECT sum(count) FROM event WHERE kind = 'reject'") == 3 &&
+            one(h, "SELECT sum(count) FROM event WHERE kind = 'overrun'") == 1 &&
+            one(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave')") == 2,
+        "join, reject x3, overrun x1, leave");
+  char uid[128] = "";
+  sqlite3_stmt *q;
+  sqlite3_prepare_v2(h, "SELECT uid FROM session", -1, &q, NULL);
+  if (sqlite3_step(q) == SQLITE_ROW) snprintf(uid, sizeof uid, "%s", (const char *)sqlite3_column_text(q, 0));
+  sqlite3_finalize(q);
+  sqlite3_close(h);
+
+  char cmd[2000];
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' show %s > /dev/null", argv[3], db, uid);
+  int st = system(cmd);
+  CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "show a recorded session");
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' replay %s 2>/dev/null", argv[3], db, uid);
+  st = system(cmd);
+  CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 2, "replay refuses a recorded session with exit 2 (got %d)",
+        WIFEXITED(st) ? WEXITSTATUS(st) : -1);
+  free(pos);
+  free(rest);
+  palp_mesh_destroy(&mesh);
+  CHECK_DONE();
+}
