@@ -31,7 +31,7 @@ typedef struct opts {
   double magnitude, t_on, t_off, frequency, offset, polar, azimuth;
   double finger_radius_mm, patch_area_cm2;
   double rate, duration, timeout, print_period;
-  const char *feedback_csv, *contact_csv, *svg;
+  const char *feedback_csv, *contact_csv, *svg, *trainee;
   double svg_every, map_every;
   int color, quiet, map, no_map;
   int have_magnitude, have_t_off;
@@ -47,7 +47,8 @@ static void usage(FILE *f) {
           "          --finger-radius MM  (position-driven finger: magnitude is the depth in mm)\n"
           "          --rate HZ  --feedback-csv FILE  --contact-csv FILE  --print-period S\n"
           "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
-          "observer: follows --session ID, or the newest session on --phantom ID\n");
+          "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
+          "          session on --phantom ID\n");
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out) {
@@ -90,6 +91,7 @@ static int parse(int argc, char **argv, opts *o) {
     NUM("--phantom", 0, 4294967295.0, o->phantom)
     NUM("--session", 0, 4294967295.0, o->session)
     STR("--name", o->name)
+    STR("--trainee", o->trainee)
     STR("--input", o->input)
     STR("--profile", o->profile)
     NUM("--distribution", 1, 4, o->distribution)
@@ -604,6 +606,31 @@ int main(int argc, char **argv) {
                      .want_deformation = !trainee,
                      .timeout = o.timeout};
   int rc = 1;
+  if (!trainee && o.trainee && !o.session) {
+    /* Find the trainee's open session in the (transient-local) session states. */
+    int64_t end = palp_dds_now_ns() + (int64_t)(o.timeout * 1e9);
+    while (!j.session_id && palp_dds_now_ns() < end && !g_stop) {
+      palp_SessionState buf[8];
+      void *ptr[8];
+      dds_sample_info_t info[8];
+      for (int i = 0; i < 8; i++) ptr[i] = &buf[i];
+      int n = dds_read(st.state_r, ptr, info, 8, 8);
+      for (int i = 0; i < n; i++)
+        if (info[i].valid_data && buf[i].phase == palp_PHASE_OPEN && !strcmp(buf[i].trainee_name, o.trainee) &&
+            (!o.phantom || buf[i].phantom_id == o.phantom))
+          j.session_id = buf[i].session_id;
+      if (!j.session_id) {
+        struct timespec ts = {0, 100000000};
+        nanosleep(&ts, NULL);
+      }
+    }
+    if (!j.session_id) {
+      fprintf(stderr, "palp-client: --trainee %s: no open session of that trainee within %.0f s\n", o.trainee,
+              o.timeout);
+      palp_cli_station_close(&st);
+      return 1;
+    }
+  }
   if (palp_cli_station_join(&st, &j, err, sizeof err) < 0) {
     fprintf(stderr, "palp-client: %s\n", err);
     palp_cli_station_close(&st);

@@ -70,7 +70,7 @@ bob=$!
   --svg "$out/bob-peak.svg" --duration 8 >"$out/visual.log" 2>&1 &
 pids+=($!)
 visual=$!
-"$client" --role observer --domain "$domain" --phantom 1 --name instructor --print-period 1 --duration 8 \
+"$client" --role observer --domain "$domain" --trainee alice --name instructor --print-period 1 --duration 8 \
   >"$out/observer.log" 2>&1 &
 pids+=($!)
 observer=$!

@@ -1,0 +1,130 @@
+/* test_inputs.c - station input sources and the SVG snapshot, with hand-worked values. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "input.h"
+#include "palp.h"
+#include "view.h"
+
+static int failures;
+#define CHECK(c, ...)                                                                                        \
+  do {                                                                                                       \
+    int ok_ = (c);                                                                                           \
+    fprintf(stderr, ok_ ? "ok   " : "FAIL ");                                                                \
+    fprintf(stderr, __VA_ARGS__);                                                                            \
+    fputc('\n', stderr);                                                                                     \
+    failures += !ok_;                                                                                        \
+  } while (0)
+
+int main(void) {
+  /* Paper step (3 N for 2 s from t = 0), distribution II at polar 30 deg, azimuth 40 deg
+   * on R = 0.04 m: centre R (sin30 cos40, sin30 sin40, cos30) = (0.0153209, 0.0128558, 0.0346410) m,
+   * force 3 N along the inward normal = -3 (0.383022, 0.321394, 0.866025) N. */
+  palp_cli_script_def d = {.distribution = 2, .polar_deg = 30, .azimuth_deg = 40,
+                           .profile = palp_profile_paper_step(), .end_time = 3.0};
+  palp_cli_input in;
+  CHECK(palp_cli_script_input(&d, &in) == 0 && in.open(in.ctx, 0.04) == 0, "script input opens");
+  palp_cli_cmd c[4];
+  int n = in.poll(in.ctx, 1.0, c, 4);
+  CHECK(n == 1 && c[0].mode == 1 && c[0].distribution == 2, "t = 1 s: one force-driven finger (n %d, mode %d)", n,
+        c[0].mode);
+  CHECK(fabs(c[0].center.x - 0.0153209) < 1e-7 && fabs(c[0].center.y - 0.0128558) < 1e-7 &&
+            fabs(c[0].center.z - 0.0346410) < 1e-7,
+        "centre (%.7f, %.7f, %.7f) m (hand: 0.0153209, 0.0128558, 0.0346410; 1e-7 m)", c[0].center.x, c[0].center.y,
+        c[0].center.z);
+  CHECK(fabs(c[0].force.x + 1.149067) < 1e-6 && fabs(c[0].force.y + 0.964181) < 1e-6 &&
+            fabs(c[0].force.z + 2.598076) < 1e-6,
+        "force (%.6f, %.6f, %.6f) N (hand: -1.149067, -0.964181, -2.598076; 1e-6 N)", c[0].force.x, c[0].force.y,
+        c[0].force.z);
+  n = in.poll(in.ctx, 2.5, c, 4);
+  CHECK(n == 1 && c[0].mode == 0, "t = 2.5 s: after the 2 s step the finger is lifted (mode %d)", c[0].mode);
+  CHECK(in.poll(in.ctx, 3.0, c, 4) == PALP_CLI_INPUT_END, "t = 3 s: the script has ended");
+  in.close(in.ctx);
+
+  /* Position-driven finger of radius 8 mm pressed 5 mm deep at the pole: tip centre at
+   * z = R + r - depth = 0.04 + 0.008 - 0.005 = 0.043 m. */
+  palp_cli_script_def f = {.finger_mode = 1, .polar_deg = 0, .radius = 0.008, .end_time = 1,
+                           .profile = {.kind = PALP_PROFILE_STEP, .magnitude = 0.005, .t_on = 0, .t_off = 1}};
+  palp_cli_script_input(&f, &in);
+  in.open(in.ctx, 0.04);
+  n = in.poll(in.ctx, 0.5, c, 4);
+  CHECK(n == 1 && c[0].mode == 2 && fabs(c[0].center.z - 0.043) < 1e-12 && fabs(c[0].center.x) < 1e-12 &&
+            c[0].radius == 0.008,
+        "finger tip at z = %.6f m, radius %.3f m (hand: 0.043 m, 0.008 m)", c[0].center.z, c[0].radius);
+  in.close(in.ctx);
+
+  /* Replay: rows come back at their times, the latest per finger wins. */
+  const char *path = "test_inputs_replay.csv";
+  FILE *w = fopen(path, "w");
+  palp_cli_contact_csv_header(w);
+  palp_cli_cmd a = {.finger = 0, .mode = 1, .distribution = 3, .center = {0, 0, 0.04}, .force = {0, 0, -1}};
+  palp_cli_cmd b = a;
+  b.force.z = -2;
+  palp_cli_cmd r = {.finger = 0, .mode = 0};
+  palp_cli_contact_csv_row(w, 0.10, &a);
+  palp_cli_contact_csv_row(w, 0.20, &b);
+  palp_cli_contact_csv_row(w, 0.30, &r);
+  fclose(w);
+  char err[256] = "";
+  CHECK(palp_cli_replay_input(path, &in, err, sizeof err) == 0, "replay opens %s %s", path, err);
+  n = in.poll(in.ctx, 0.05, c, 4);
+  CHECK(n == 0, "before the first row nothing is pressed (n %d)", n);
+  n = in.poll(in.ctx, 0.15, c, 4);
+  CHECK(n == 1 && c[0].mode == 1 && c[0].force.z == -1 && c[0].distribution == 3, "t = 0.15 s: row 1 (-1 N)");
+  n = in.poll(in.ctx, 0.25, c, 4);
+  CHECK(n == 1 && c[0].force.z == -2, "t = 0.25 s: row 2 (-2 N)");
+  n = in.poll(in.ctx, 0.35, c, 4);
+  CHECK(n == 1 && c[0].mode == 0, "t = 0.35 s: released");
+  CHECK(in.poll(in.ctx, 0.81, c, 4) == PALP_CLI_INPUT_END, "0.5 s after the last row the replay ends");
+  in.close(in.ctx);
+  w = fopen(path, "w");
+  fprintf(w, "t_s,finger\n0.1,9,1,1,0,0,0,0,0,0,0\n");
+  fclose(w);
+  CHECK(palp_cli_replay_input(path, &in, err, sizeof err) == PALP_EPARSE && strstr(err, ":2:"),
+        "finger 9 is refused with its line number: %s", err);
+  remove(path);
+
+  /* SVG: one polygon per dome triangle of a 19-vertex mesh. */
+  palp_mesh_def md = {.radius = 0.04, .vertex_count = 19};
+  palp_mesh mesh;
+  CHECK(palp_mesh_create(&md, &mesh) == 0, "19-vertex mesh");
+  palp_Phantom ph;
+  memset(&ph, 0, sizeof ph);
+  palp_Vec3 rest[64], pos[64];
+  int32_t tri[3 * 128];
+  for (int i = 0; i < mesh.vertex_count; i++) {
+    rest[i] = (palp_Vec3){mesh.rest[i].x, mesh.rest[i].y, mesh.rest[i].z};
+    pos[i] = rest[i];
+  }
+  for (int t = 0; t < mesh.triangle_count; t++)
+    for (int k = 0; k < 3; k++) tri[3 * t + k] = mesh.tri[t][k];
+  pos[mesh.top_vertex].z -= 0.002; /* 2 mm dent at the pole */
+  ph.radius = 0.04;
+  ph.rest = (dds_sequence_palp_Vec3){(uint32_t)mesh.vertex_count, (uint32_t)mesh.vertex_count, rest, false};
+  ph.triangles = (dds_sequence_long){(uint32_t)(3 * mesh.triangle_count), (uint32_t)(3 * mesh.triangle_count), tri, false};
+  ph.dome_triangle_count = mesh.dome_triangle_count;
+  palp_Deformation def;
+  memset(&def, 0, sizeof def);
+  def.positions = (dds_sequence_palp_Vec3){(uint32_t)mesh.vertex_count, (uint32_t)mesh.vertex_count, pos, false};
+  int v = -1;
+  double m = palp_cli_max_displacement(&ph, &def, &v);
+  CHECK(fabs(m - 0.002) < 1e-15 && v == mesh.top_vertex, "max displacement %.6f m at vertex %d (hand: 0.002 m at the pole %d)",
+        m, v, mesh.top_vertex);
+  const char *svg = "test_inputs.svg";
+  CHECK(palp_cli_view_svg(&ph, &def, "a <b> & c", svg) == 0, "SVG written");
+  FILE *s = fopen(svg, "r");
+  int polys = 0, esc = 0;
+  char line[512];
+  while (s && fgets(line, sizeof line, s)) {
+    polys += strncmp(line, "<polygon", 8) == 0;
+    esc += strstr(line, "a &lt;b&gt; &amp; c") != NULL;
+  }
+  if (s) fclose(s);
+  CHECK(polys == mesh.dome_triangle_count && esc == 1, "%d polygons (want %d dome triangles), title escaped %d", polys,
+        mesh.dome_triangle_count, esc);
+  remove(svg);
+  palp_mesh_destroy(&mesh);
+  fprintf(stderr, "%d failure(s)\n", failures);
+  return failures ? 1 : 0;
+}
