@@ -69,8 +69,10 @@ typedef struct palp_eval_row {
 typedef struct palp_eval_pairs {
   size_t n_disp;
   double *disp_rt, *disp_ref;
+  int *disp_frame, *disp_vertex;   /* [n_disp] where each pair comes from */
   size_t n_force;
   double *force_rt, *force_ref;
+  int *force_frame, *force_vertex; /* [n_force] */
   int force_vertices; /* contact vertices paired */
 } palp_eval_pairs;
 

@@ -35,6 +35,10 @@ void palp_eval_pairs_destroy(palp_eval_pairs *p) {
   free(p->disp_ref);
   free(p->force_rt);
   free(p->force_ref);
+  free(p->disp_frame);
+  free(p->disp_vertex);
+  free(p->force_frame);
+  free(p->force_vertex);
   memset(p, 0, sizeof *p);
 }
 
@@ -76,7 +80,12 @@ int palp_eval_pairs_build(const palp_eval_record *rt, const palp_eval_record *re
   out->disp_ref = malloc(sizeof(double) * (out->n_disp + 1));
   out->force_rt = malloc(sizeof(double) * (out->n_force + 1));
   out->force_ref = malloc(sizeof(double) * (out->n_force + 1));
-  if (!out->disp_rt || !out->disp_ref || !out->force_rt || !out->force_ref) {
+  out->disp_frame = malloc(sizeof(int) * (out->n_disp + 1));
+  out->disp_vertex = malloc(sizeof(int) * (out->n_disp + 1));
+  out->force_frame = malloc(sizeof(int) * (out->n_force + 1));
+  out->force_vertex = malloc(sizeof(int) * (out->n_force + 1));
+  if (!out->disp_rt || !out->disp_ref || !out->force_rt || !out->force_ref || !out->disp_frame || !out->disp_vertex ||
+      !out->force_frame || !out->force_vertex) {
     free(match);
     palp_eval_pairs_destroy(out);
     return PALP_ENOMEM;
@@ -88,6 +97,8 @@ int palp_eval_pairs_build(const palp_eval_record *rt, const palp_eval_record *re
       if (!rt->fixed[i]) {
         out->disp_rt[k] = norm3(a[i]);
         out->disp_ref[k] = norm3(b[i]);
+        out->disp_frame[k] = f;
+        out->disp_vertex[k] = i;
         ++k;
       }
     for (int i = 0; i < rt->contact_vertex_count; ++i)
@@ -95,6 +106,8 @@ int palp_eval_pairs_build(const palp_eval_record *rt, const palp_eval_record *re
         out->force_rt[q] = norm3(rt->feedback[(size_t)f * (size_t)rt->contact_vertex_count + (size_t)i]);
         out->force_ref[q] =
             norm3(ref->feedback[(size_t)f * (size_t)ref->contact_vertex_count + (size_t)match[i]]);
+        out->force_frame[q] = f;
+        out->force_vertex[q] = rt->contact_vertex[i];
         ++q;
       }
   }
