@@ -87,7 +87,7 @@ typedef struct palp_fem_model {
   double factor_c0;   /* mass coefficient 1 / (beta dt^2) the factor was made with */
   int last_pcg;       /* CG iterations of the last solve */
   int full_newton;    /* refactor every iteration */
-  int pcg_refactor;   /* renew the factor when CG needed more than this */
+  int pcg_refactor;   /* renew the factor when CG needed more than this (0: automatic) */
   long pcg_iterations;
   int nprony;
   /* statistics */

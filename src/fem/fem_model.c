@@ -70,7 +70,7 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   m->max_newton = cfg->max_newton;
   m->max_cutbacks = cfg->max_cutbacks;
   m->full_newton = cfg->full_newton;
-  m->pcg_refactor = cfg->pcg_refactor > 0 ? cfg->pcg_refactor : 20;
+  m->pcg_refactor = cfg->pcg_refactor;
   const int N = mesh->node_count, E = mesh->element_count, np = m->nprony;
   m->ndof = 3 * N;
   const size_t nd = (size_t)m->ndof;
@@ -322,9 +322,12 @@ static double dot(const double *a, const double *b, int n) {
  * ~5e7: so the factor is kept and reused as the preconditioner of conjugate
  * gradients on the current consistent tangent, which it approximates closely while
  * strains stay moderate (Newton's quadratic convergence needs the exact tangent
- * system solved, not the exact tangent factored). The factor is renewed when the
- * effective mass term changed (dt), when CG needed more than pcg_refactor
- * iterations last time, or when CG fails; full_newton renews it every iteration.
+ * system solved, not the exact tangent factored). The factor is renewed when CG
+ * needed more than pcg_refactor iterations last time (0: automatically, when
+ * those iterations' solves, ~4 nnz(L) flops each, cost half a factorisation), or
+ * when CG fails; full_newton renews it every iteration. A changed dt (cut-back)
+ * keeps the factor: the mass term is small beside the stiffness and CG absorbs
+ * the change of the viscous factor gamma.
  * CG stops at ||K du - r|| <= eta ||r||, eta = min(0.1, ||r|| / force scale), a
  * forcing term that keeps the Newton iteration quadratic. */
 static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
@@ -333,7 +336,13 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
   for (int d = 0; d < m->ndof; ++d)
     if (m->eq[d] >= 0) b[m->eq[d]] = m->res[d];
   int fresh = 0;
-  if (!m->factored || m->full_newton || m->factor_c0 != kscale_c0 || m->last_pcg > m->pcg_refactor) {
+  (void)kscale_c0;
+  int limit = m->pcg_refactor;
+  if (limit <= 0) { /* automatic: when CG's solves cost about half a factorisation */
+    const double lnz = palp_fem_solver_factor_nnz(m->solver), fl = palp_fem_solver_factor_flops(m->solver);
+    limit = lnz > 0.0 && fl > 0.0 ? (int)fmin(400.0, fmax(10.0, 0.5 * fl / (4.0 * lnz))) : 20;
+  }
+  if (!m->factored || m->full_newton || m->last_pcg > limit) {
     int rc = palp_fem_solver_factor(m->solver, m->kval);
     m->factorizations++;
     m->factored = rc == 0;
@@ -353,7 +362,7 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
     memcpy(p, z, sizeof(double) * (size_t)n);
     double rz = dot(r, z, n);
     int it = 0, ok = 0;
-    while (!rc && it < 4 * m->pcg_refactor + 20) {
+    while (!rc && it < 2 * limit + 20) {
       symv(m, p, q);
       const double pq = dot(p, q, n);
       if (!(pq > 0.0)) break; /* indefinite direction: fall back to a fresh factor */

@@ -110,7 +110,7 @@ typedef struct palp_fem_config {
   double newton_atol;   /* absolute residual floor [N], 1e-9 */
   int max_cutbacks;     /* dt halvings allowed per step, 8 */
   int full_newton;      /* 1: factor the tangent every iteration; 0: reuse the factor as CG preconditioner */
-  int pcg_refactor;     /* renew the factor when CG took more iterations than this, 20 */
+  int pcg_refactor;     /* renew the factor when CG took more iterations than this; 0 = automatic */
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
 } palp_fem_config;
 

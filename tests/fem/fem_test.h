@@ -69,6 +69,7 @@ static inline palp_fem_config elastic_config(double c10, double d1) {
   c.gel.c10 = c.membrane.c10 = c10;
   c.gel.d1 = c.membrane.d1 = d1;
   c.gel.prony_count = c.membrane.prony_count = 0;
+  c.c10_reading = PALP_FEM_C10_LONG_TERM; /* C10 is the relaxed modulus when Prony terms are added */
   c.cache_dir[0] = 0;
   return c;
 }

@@ -1,0 +1,234 @@
+/*
+ * test_fem_io.c - mesh exchange (.inp), the run driver (real-time loads, the
+ * per-frame record, force feedback) and the result cache.
+ * Usage: test_fem_io inp|run|cache [SCENE.json]
+ */
+#include <unistd.h>
+
+#include "fem_test.h"
+
+/* Export level 1 and read it back: coordinates bit-identical (written with 17
+ * significant digits), connectivity, regions, base and sets equal. A hand-written
+ * file with arbitrary ids, a continuation line, GENERATE and foreign keywords
+ * reads as intended; wrong element types and dangling node ids are refused. */
+static void test_inp(void) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = 1;
+  palp_fem_mesh a, b;
+  CHECK(palp_fem_mesh_create(&d, &a) == 0, "mesh");
+  char path[] = "/tmp/palp_fem_test_XXXXXX";
+  const int fd = mkstemp(path);
+  CHECK(fd >= 0, "mkstemp");
+  close(fd);
+  CHECK(palp_fem_inp_write(&a, path, "round trip") == 0, "write");
+  char err[256] = "";
+  CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == 0, "read: %s", err);
+  CHECK(a.node_count == b.node_count && a.element_count == b.element_count, "counts differ");
+  int xdiff = 0, hdiff = 0, rdiff = 0, fdiff = 0;
+  for (int n = 0; n < a.node_count && n < b.node_count; ++n) {
+    xdiff += memcmp(a.x[n], b.x[n], sizeof a.x[n]) != 0;
+    fdiff += a.fixed[n] != b.fixed[n];
+  }
+  for (int e = 0; e < a.element_count && e < b.element_count; ++e) {
+    hdiff += memcmp(a.hex[e], b.hex[e], sizeof a.hex[e]) != 0;
+    rdiff += a.region[e] != b.region[e];
+  }
+  CHECK(xdiff == 0, "inp: %d nodes moved (tolerance: bit-identical)", xdiff);
+  CHECK(hdiff == 0 && rdiff == 0 && fdiff == 0, "inp: %d connectivity, %d region, %d base differences", hdiff, rdiff,
+        fdiff);
+  CHECK(a.top_node == b.top_node, "inp: top node %d vs %d", a.top_node, b.top_node);
+  CHECK(a.set_count == b.set_count, "inp: %d vs %d sets", a.set_count, b.set_count);
+  for (int s = 0; s < a.set_count; ++s) {
+    const palp_fem_set *q = palp_fem_mesh_find_set(&b, a.sets[s].name, a.sets[s].is_element);
+    CHECK(q && q->count == a.sets[s].count && !memcmp(q->items, a.sets[s].items, sizeof(int) * (size_t)q->count),
+          "inp: set %s differs", a.sets[s].name);
+  }
+  printf("inp: %d nodes, %d elements, %d sets round-tripped exactly\n", b.node_count, b.element_count, b.set_count);
+  palp_fem_mesh_destroy(&a);
+  palp_fem_mesh_destroy(&b);
+
+  /* two unit cubes side by side, ids 101.., the second element continued on a new line */
+  FILE *f = fopen(path, "w");
+  fprintf(f, "** hand written\n*Heading\nx\n*Node\n101, 0, 0, 0\n102, 1, 0, 0\n103, 1, 1, 0\n104, 0, 1, 0\n"
+             "105, 0, 0, 1\n106, 1, 0, 1\n107, 1, 1, 1\n108, 0, 1, 1\n109, 2, 0, 0\n110, 2, 1, 0\n111, 2, 0, 1\n"
+             "112, 2, 1, 1\n*Element, type=C3D8R, elset=Skin\n7, 101, 102, 103, 104, 105, 106, 107, 108\n"
+             "9, 102, 109, 110, 103,\n 106, 111, 112, 107\n*Material, name=gel\n*Hyperelastic, neo hooke\n"
+             "1.0, 2.0\n*Nset, nset=base, generate\n101, 104, 1\n109, 110\n*Elset, elset=membrane\n9\n");
+  fclose(f);
+  CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == 0, "hand-written read: %s", err);
+  CHECK(b.node_count == 12 && b.element_count == 2, "hand-written: %d nodes %d elements", b.node_count,
+        b.element_count);
+  int nfix = 0;
+  for (int n = 0; n < b.node_count; ++n) nfix += b.fixed[n];
+  CHECK(nfix == 6, "hand-written: %d clamped nodes, expected 6 (NSET BASE)", nfix);
+  CHECK(b.region[0] == PALP_FEM_GEL && b.region[1] == PALP_FEM_MEMBRANE, "hand-written: regions");
+  CHECK(fabs(palp_fem_element_volume(&b, 1) - 1.0) < 1e-12, "hand-written: element volume");
+  CHECK(palp_fem_mesh_find_set(&b, "SKIN", 1) != NULL, "hand-written: ELSET from *ELEMENT");
+  palp_fem_mesh_destroy(&b);
+
+  f = fopen(path, "w");
+  fprintf(f, "*Node\n1, 0, 0, 0\n*Element, type=C3D4\n1, 1, 1, 1, 1\n");
+  fclose(f);
+  CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == PALP_EPARSE && strstr(err, "C3D4"), "C3D4 refused: %s", err);
+  f = fopen(path, "w");
+  fprintf(f, "*Node\n1, 0, 0, 0\n*Element, type=C3D8\n1, 1, 2, 3, 4, 5, 6, 7, 8\n");
+  fclose(f);
+  CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == PALP_EPARSE && strstr(err, "undefined node"),
+        "dangling node refused: %s", err);
+  printf("inp: bad files refused (\"%s\")\n", err);
+  remove(path);
+}
+
+static const char *scene_path = "config/paper_step.json";
+
+/* The paper's scene (3 N step for 2 s at 30 deg polar, 40 deg azimuth) with the
+ * frame count and distribution overridden. */
+static int make_scene(palp_scene *s, int frames, const char *dist) {
+  char err[256];
+  const int rc = palp_scene_load(scene_path, s, err, sizeof err);
+  if (rc) {
+    fprintf(stderr, "scene %s: %s\n", scene_path, err);
+    return rc;
+  }
+  static const char *names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
+  for (int i = 0; i < 4; ++i)
+    if (!strcmp(dist, names[i])) s->contact[0].def.distribution = (palp_distribution)(i + 1);
+  s->frames = frames;
+  return s->contact_count == 1 ? 0 : PALP_EINVAL;
+}
+
+/* A 3 N step held 1.5 s (creep settles within ~0.3 s: the relaxed/instantaneous
+ * modulus ratio of 100 stretches the 2-5 ms Prony times into creep times of
+ * ~0.2-0.5 s) on the level-1 mesh: the summed feedback must be minus the applied
+ * force within 1% (static equilibrium), every contact vertex's feedback minus its
+ * own load within 5%, the top displacement the top vertex's, and the contact
+ * vertices those of palp_contact_weights. */
+static void test_run(void) {
+  palp_scene s;
+  if (make_scene(&s, 150, "uniform")) {
+    CHECK(0, "scene");
+    return;
+  }
+  palp_fem_config cfg = palp_fem_default_config();
+  cfg.c10_reading = PALP_FEM_C10_LONG_TERM; /* sub-mm response: fast, and the check is of statics */
+  cfg.mesh.level = 1;
+  cfg.cache_dir[0] = 0;
+  palp_fem_result r;
+  char err[256];
+  CHECK(palp_fem_run(&cfg, &s, &r, NULL, NULL, err, sizeof err) == 0, "run: %s", err);
+  palp_mesh rt;
+  palp_mesh_create(&s.world.mesh, &rt);
+  int vv[400];
+  double ww[400];
+  const int n = palp_contact_weights(&rt, rt.rest, &s.contact[0].def, vv, ww, 400);
+  CHECK(n == r.contact_vertex_count, "contact vertices %d vs %d", r.contact_vertex_count, n);
+  const int v0 = palp_mesh_nearest_vertex(&rt, rt.rest, s.contact[0].def.center);
+  const double len = sqrt(rt.rest[v0].x * rt.rest[v0].x + rt.rest[v0].y * rt.rest[v0].y + rt.rest[v0].z * rt.rest[v0].z);
+  const double F[3] = {-3.0 * rt.rest[v0].x / len, -3.0 * rt.rest[v0].y / len, -3.0 * rt.rest[v0].z / len};
+  const int last = r.frames - 1;
+  double sum[3] = {0, 0, 0}, worst = 0.0;
+  for (int k = 0; k < r.contact_vertex_count; ++k) {
+    const palp_vec3 fb = r.feedback[(size_t)last * (size_t)r.contact_vertex_count + (size_t)k];
+    sum[0] += fb.x, sum[1] += fb.y, sum[2] += fb.z;
+    CHECK(r.contact_vertex[k] == vv[k], "contact vertex order");
+    const double e = sqrt(pow(fb.x + ww[k] * F[0], 2) + pow(fb.y + ww[k] * F[1], 2) + pow(fb.z + ww[k] * F[2], 2));
+    worst = fmax(worst, e / (3.0 * ww[k]));
+  }
+  const double e = sqrt(pow(sum[0] + F[0], 2) + pow(sum[1] + F[1], 2) + pow(sum[2] + F[2], 2));
+  printf("run: feedback sum (%.4f, %.4f, %.4f) N vs applied (%.4f, %.4f, %.4f) N; worst vertex %.2f%%\n", sum[0],
+         sum[1], sum[2], F[0], F[1], F[2], 100 * worst);
+  CHECK(e <= 0.03, "run: summed feedback off -F by %.4f N (tolerance 1%% of 3 N)", e);
+  CHECK(worst <= 0.05, "run: a vertex's feedback off its load by %.1f%% (tolerance 5%%)", 100 * worst);
+  const palp_vec3 t = r.top_disp[last], d = r.disp[(size_t)last * (size_t)r.vertex_count + (size_t)rt.top_vertex];
+  CHECK(t.x == d.x && t.y == d.y && t.z == d.z, "top displacement is the top vertex's");
+  CHECK(fabs(r.time[last] - 1.5) < 1e-12, "last frame time %.6f s, expected 1.5 s", r.time[last]);
+  double dmax = 0.0;
+  for (int v = 0; v < r.vertex_count; ++v) {
+    const palp_vec3 q = r.disp[(size_t)last * (size_t)r.vertex_count + (size_t)v];
+    dmax = fmax(dmax, sqrt(q.x * q.x + q.y * q.y + q.z * q.z));
+    if (rt.fixed[v]) CHECK(sqrt(q.x * q.x + q.y * q.y + q.z * q.z) < 1e-12, "rim vertex %d moved", v);
+  }
+  printf("run: largest displacement %.3f mm, top %.3f mm\n", 1e3 * dmax, 1e3 * sqrt(t.x * t.x + t.y * t.y + t.z * t.z));
+  CHECK(dmax > 1e-5 && dmax < 5e-3, "run: largest displacement %.3g m outside 0.01-5 mm", dmax);
+  palp_fem_result_destroy(&r);
+  /* the other three distributions load the same total */
+  const char *dists[] = {"single", "gaussian", "gaussian_offset"};
+  for (int i = 0; i < 3; ++i) {
+    CHECK(make_scene(&s, 3, dists[i]) == 0, "scene");
+    CHECK(palp_fem_run(&cfg, &s, &r, NULL, NULL, err, sizeof err) == 0, "run %s: %s", dists[i], err);
+    printf("run: %s: %d contact vertices, top %.4f mm at 30 ms\n", dists[i], r.contact_vertex_count,
+           1e3 * sqrt(r.top_disp[2].x * r.top_disp[2].x + r.top_disp[2].y * r.top_disp[2].y + r.top_disp[2].z * r.top_disp[2].z));
+    CHECK(r.contact_vertex_count >= 1, "run %s: no contact vertices", dists[i]);
+    palp_fem_result_destroy(&r);
+  }
+  palp_mesh_destroy(&rt);
+}
+
+static int count_progress(void *ud, int frame, int frames, double t) {
+  (void)frames, (void)t;
+  *(int *)ud = frame;
+  return 0;
+}
+
+/* The cache: a second identical run is read back bit-identical; any input change
+ * (a material constant, the profile, the mesh level) changes the key. */
+static void test_cache(void) {
+  char dir[] = "/tmp/palp_fem_cache_XXXXXX";
+  CHECK(mkdtemp(dir) != NULL, "mkdtemp");
+  palp_scene s;
+  if (make_scene(&s, 5, "gaussian")) {
+    CHECK(0, "scene");
+    return;
+  }
+  palp_fem_config cfg = palp_fem_default_config();
+  cfg.c10_reading = PALP_FEM_C10_LONG_TERM;
+  cfg.mesh.level = 1;
+  snprintf(cfg.cache_dir, sizeof cfg.cache_dir, "%s/sub", dir);
+  palp_fem_result a, b;
+  char err[256];
+  int seen = 0;
+  CHECK(palp_fem_run(&cfg, &s, &a, count_progress, &seen, err, sizeof err) == 0, "run: %s", err);
+  CHECK(seen == 5 && !a.from_cache, "first run: progress %d, from_cache %d", seen, a.from_cache);
+  seen = 0;
+  CHECK(palp_fem_run(&cfg, &s, &b, count_progress, &seen, err, sizeof err) == 0, "run: %s", err);
+  CHECK(b.from_cache && seen == 0, "second run not from the cache");
+  CHECK(a.key == b.key && a.frames == b.frames && a.vertex_count == b.vertex_count &&
+            !memcmp(a.disp, b.disp, sizeof(palp_vec3) * (size_t)a.frames * (size_t)a.vertex_count) &&
+            !memcmp(a.feedback, b.feedback, sizeof(palp_vec3) * (size_t)a.frames * (size_t)a.contact_vertex_count) &&
+            !memcmp(a.time, b.time, sizeof(double) * (size_t)a.frames),
+        "cached result differs");
+  palp_fem_mesh_def d = cfg.mesh;
+  palp_fem_mesh mesh;
+  palp_fem_mesh_create(&d, &mesh);
+  const uint64_t k0 = palp_fem_run_key(&cfg, &mesh, &s);
+  palp_fem_config c2 = cfg;
+  c2.gel.c10 *= 1.0000001;
+  CHECK(palp_fem_run_key(&c2, &mesh, &s) != k0, "key ignores gel C10");
+  palp_scene s2 = s;
+  s2.contact[0].profile.magnitude = 2.9;
+  CHECK(palp_fem_run_key(&cfg, &mesh, &s2) != k0, "key ignores the profile");
+  palp_fem_mesh m2;
+  d.level = 2;
+  palp_fem_mesh_create(&d, &m2);
+  CHECK(palp_fem_run_key(&cfg, &m2, &s) != k0, "key ignores the mesh");
+  CHECK(k0 == a.key, "key of the run differs from palp_fem_run_key");
+  printf("cache: hit after %.2f s of computing, key %016llx\n", a.wall_seconds, (unsigned long long)a.key);
+  palp_fem_mesh_destroy(&mesh);
+  palp_fem_mesh_destroy(&m2);
+  palp_fem_result_destroy(&a);
+  palp_fem_result_destroy(&b);
+  char cmd[200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  CHECK(system(cmd) == 0, "cleanup");
+}
+
+int main(int argc, char **argv) {
+  const char *c = argc > 1 ? argv[1] : "all";
+  if (argc > 2) scene_path = argv[2];
+  const int all = strcmp(c, "all") == 0;
+  if (all || !strcmp(c, "inp")) test_inp();
+  if (all || !strcmp(c, "run")) test_run();
+  if (all || !strcmp(c, "cache")) test_cache();
+  if (fem_failures) fprintf(stderr, "%d check(s) failed\n", fem_failures);
+  return fem_failures ? 1 : 0;
+}
