@@ -198,51 +198,61 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
   return e > 0 ? PALP_OK : e == PALP_ENOMEM ? e : PALP_OK;
 }
 
-/* Block solve for w interleaved right-hand sides: 3x3 blocks times 3-vectors. */
+/* Block solve for W interleaved right-hand sides: 3x3 blocks times 3-vectors. A
+ * macro so that each width is compiled with W constant (unrolled inner loops). */
+#define PALP_LDL_BLOCK_SOLVE_BODY(W)                                                     \
+  do {                                                                                   \
+    for (int k = 0; k < n; ++k)                                                          \
+      for (int r = 0; r < (W); ++r) y[k * (W) + r] = x[f->perm[k] * (W) + r];            \
+    for (int J = 0; J < nb; ++J) {                                                       \
+      double *yj = y + 3 * J * (W);                                                      \
+      const double *d = f->bdiag + 3 * J;                                                \
+      for (int r = 0; r < (W); ++r) {                                                    \
+        yj[(W) + r] -= d[0] * yj[r];                                                     \
+        yj[2 * (W) + r] -= d[1] * yj[r] + d[2] * yj[(W) + r];                            \
+      }                                                                                  \
+      for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {                              \
+        double *yi = y + 3 * f->brow[p] * (W);                                           \
+        const double *B = f->bval + 9 * p;                                               \
+        for (int r = 0; r < (W); ++r) {                                                  \
+          const double a = yj[r], b = yj[(W) + r], c = yj[2 * (W) + r];                  \
+          yi[r] -= B[0] * a + B[1] * b + B[2] * c;                                       \
+          yi[(W) + r] -= B[3] * a + B[4] * b + B[5] * c;                                 \
+          yi[2 * (W) + r] -= B[6] * a + B[7] * b + B[8] * c;                             \
+        }                                                                                \
+      }                                                                                  \
+    }                                                                                    \
+    for (int j = 0; j < n; ++j)                                                          \
+      for (int r = 0; r < (W); ++r) y[j * (W) + r] *= f->dinv[j];                        \
+    for (int J = nb - 1; J >= 0; --J) {                                                  \
+      double *yj = y + 3 * J * (W);                                                      \
+      for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {                              \
+        const double *yi = y + 3 * f->brow[p] * (W);                                     \
+        const double *B = f->bval + 9 * p;                                               \
+        for (int r = 0; r < (W); ++r) {                                                  \
+          const double a = yi[r], b = yi[(W) + r], c = yi[2 * (W) + r];                  \
+          yj[r] -= B[0] * a + B[3] * b + B[6] * c;                                       \
+          yj[(W) + r] -= B[1] * a + B[4] * b + B[7] * c;                                 \
+          yj[2 * (W) + r] -= B[2] * a + B[5] * b + B[8] * c;                             \
+        }                                                                                \
+      }                                                                                  \
+      const double *d = f->bdiag + 3 * J;                                                \
+      for (int r = 0; r < (W); ++r) {                                                    \
+        yj[(W) + r] -= d[2] * yj[2 * (W) + r];                                           \
+        yj[r] -= d[0] * yj[(W) + r] + d[1] * yj[2 * (W) + r];                            \
+      }                                                                                  \
+    }                                                                                    \
+    for (int k = 0; k < n; ++k)                                                          \
+      for (int r = 0; r < (W); ++r) x[f->perm[k] * (W) + r] = y[k * (W) + r];            \
+  } while (0)
+
 static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
   const int nb = f->nb, n = f->n;
-  for (int k = 0; k < n; ++k)
-    for (int r = 0; r < w; ++r) y[k * w + r] = x[f->perm[k] * w + r];
-  for (int J = 0; J < nb; ++J) {
-    double *yj = y + 3 * J * w;
-    const double *d = f->bdiag + 3 * J;
-    for (int r = 0; r < w; ++r) {
-      yj[w + r] -= d[0] * yj[r];
-      yj[2 * w + r] -= d[1] * yj[r] + d[2] * yj[w + r];
-    }
-    for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {
-      double *yi = y + 3 * f->brow[p] * w;
-      const double *B = f->bval + 9 * p;
-      for (int r = 0; r < w; ++r) {
-        const double a = yj[r], b = yj[w + r], c = yj[2 * w + r];
-        yi[r] -= B[0] * a + B[1] * b + B[2] * c;
-        yi[w + r] -= B[3] * a + B[4] * b + B[5] * c;
-        yi[2 * w + r] -= B[6] * a + B[7] * b + B[8] * c;
-      }
-    }
+  switch (w) {
+  case 1: PALP_LDL_BLOCK_SOLVE_BODY(1); break;
+  case 2: PALP_LDL_BLOCK_SOLVE_BODY(2); break;
+  default: PALP_LDL_BLOCK_SOLVE_BODY(w); break;
   }
-  for (int j = 0; j < n; ++j)
-    for (int r = 0; r < w; ++r) y[j * w + r] *= f->dinv[j];
-  for (int J = nb - 1; J >= 0; --J) {
-    double *yj = y + 3 * J * w;
-    for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {
-      const double *yi = y + 3 * f->brow[p] * w;
-      const double *B = f->bval + 9 * p;
-      for (int r = 0; r < w; ++r) {
-        const double a = yi[r], b = yi[w + r], c = yi[2 * w + r];
-        yj[r] -= B[0] * a + B[3] * b + B[6] * c;
-        yj[w + r] -= B[1] * a + B[4] * b + B[7] * c;
-        yj[2 * w + r] -= B[2] * a + B[5] * b + B[8] * c;
-      }
-    }
-    const double *d = f->bdiag + 3 * J;
-    for (int r = 0; r < w; ++r) {
-      yj[w + r] -= d[2] * yj[2 * w + r];
-      yj[r] -= d[0] * yj[w + r] + d[1] * yj[2 * w + r];
-    }
-  }
-  for (int k = 0; k < n; ++k)
-    for (int r = 0; r < w; ++r) x[f->perm[k] * w + r] = y[k * w + r];
 }
 
 /* A = P^T L D L^T P: y = P b; L z = y; z /= D; L^T w = z; x = P^T w. */
