@@ -227,19 +227,21 @@ static int cmd_list(palp_db *db, int argc, char **argv) {
 typedef struct peaks {
   double f, f_t, top, top_t, max, max_t;
   double p_min, p_max, v_min, v_max;
-  int64_t n;
+  int64_t n, ngel;
 } peaks;
 
 static int peaks_cb(void *u, const palp_db_frame *f) {
   peaks *p = u;
-  if (p->n == 0) {
-    p->p_min = p->p_max = f->pressure_pa;
-    p->v_min = p->v_max = f->volume_m3;
-  }
   p->n++;
   if (f->contact_force_n > p->f) p->f = f->contact_force_n, p->f_t = f->sim_time_s;
   if (f->top_disp_m > p->top) p->top = f->top_disp_m, p->top_t = f->sim_time_s;
   if (f->max_disp_m > p->max) p->max = f->max_disp_m, p->max_t = f->sim_time_s;
+  /* Volume 0 marks a frame without gel data (palp-recorder before its first deformation sample). */
+  if (!(f->volume_m3 > 0)) return 0;
+  if (p->ngel++ == 0) {
+    p->p_min = p->p_max = f->pressure_pa;
+    p->v_min = p->v_max = f->volume_m3;
+  }
   if (f->pressure_pa < p->p_min) p->p_min = f->pressure_pa;
   if (f->pressure_pa > p->p_max) p->p_max = f->pressure_pa;
   if (f->volume_m3 < p->v_min) p->v_min = f->volume_m3;
@@ -311,7 +313,7 @@ static int cmd_show(palp_db *db, const palp_db_session_info *s) {
   printf("peak force           %.4f N at t = %.3f s\n", p.f, p.f_t);
   printf("peak displacement    top vertex %.3f mm at t = %.3f s; any vertex %.3f mm at t = %.3f s\n",
          p.top * 1e3, p.top_t, p.max * 1e3, p.max_t);
-  if (p.n)
+  if (p.ngel)
     printf("gel                  pressure %.3f .. %.3f Pa, volume %.4f .. %.4f cm^3\n", p.p_min, p.p_max,
            p.v_min * 1e6, p.v_max * 1e6);
 

@@ -53,6 +53,7 @@ typedef struct rsession {
   uint8_t kind[FINGERS];
   palp_vec3 force[FINGERS];
   uint8_t active[FINGERS];
+  double volume, pressure, max_disp; /* from the newest deformation sample, 0 until one arrives */
 } rsession;
 
 /* A session that opened before its phantom's catalogue entry arrived (the two topics race). */
@@ -304,6 +305,17 @@ static void on_feedback(recorder *r, const palp_Feedback *m) {
     s->force[ff->finger] = (palp_vec3){ff->force.x, ff->force.y, ff->force.z};
     if (ff->active) count(r, palp_db_log_feedback(r->w, s->h, (int64_t)m->frame, ff->finger, s->force[ff->finger]));
   }
+  /* One frame row per feedback sample (every tick while a haptic station listens): force and
+   * pole displacement are exact; volume, pressure and the largest displacement come from the
+   * newest deformation sample, which the server sends only while a display watches. */
+  palp_vec3 sum = {0, 0, 0};
+  for (int k = 0; k < FINGERS; k++)
+    if (s->active[k]) sum.x += s->force[k].x, sum.y += s->force[k].y, sum.z += s->force[k].z;
+  palp_db_frame f = {.frame = (int64_t)m->frame, .sim_time_s = m->sim_time, .top_disp_m = fabs(m->top_displacement),
+                     .volume_m3 = s->volume, .pressure_pa = s->pressure,
+                     .contact_force_n = sqrt(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z)};
+  f.max_disp_m = s->max_disp > f.top_disp_m ? s->max_disp : f.top_disp_m;
+  count(r, palp_db_log_frame(r->w, s->h, &f));
 }
 
 static void on_deformation(recorder *r, const palp_Deformation *m) {
@@ -318,9 +330,9 @@ static void on_deformation(recorder *r, const palp_Deformation *m) {
   palp_vec3 *pos = malloc(sizeof *pos * (size_t)(n ? n : 1));
   if (!pos) return;
   for (int i = 0; i < n; i++) pos[i] = (palp_vec3){m->positions._buffer[i].x, m->positions._buffer[i].y, m->positions._buffer[i].z};
-  /* The summary's definitions (db/palp_db.h), from what the topic carries; no state hash. */
-  palp_db_frame f = {.frame = (int64_t)m->frame, .sim_time_s = m->sim_time, .volume_m3 = m->volume,
-                     .pressure_pa = m->pressure};
+  /* Kept for the frame rows the feedback writes: volume, pressure and the largest |x - X|. */
+  s->volume = m->volume;
+  s->pressure = m->pressure;
   const phantom *ph = s->ph;
   if (ph && ph->n == n) {
     double max2 = 0;
@@ -328,15 +340,9 @@ static void on_deformation(recorder *r, const palp_Deformation *m) {
       const double dx = pos[i].x - ph->rest[i].x, dy = pos[i].y - ph->rest[i].y, dz = pos[i].z - ph->rest[i].z;
       const double d2 = dx * dx + dy * dy + dz * dz;
       if (d2 > max2) max2 = d2;
-      if (i == ph->top_vertex) f.top_disp_m = sqrt(d2);
     }
-    f.max_disp_m = sqrt(max2);
+    s->max_disp = sqrt(max2);
   }
-  palp_vec3 sum = {0, 0, 0};
-  for (int k = 0; k < FINGERS; k++)
-    if (s->active[k]) sum.x += s->force[k].x, sum.y += s->force[k].y, sum.z += s->force[k].z;
-  f.contact_force_n = sqrt(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z);
-  count(r, palp_db_log_frame(r->w, s->h, &f));
   if (n > 0) count(r, palp_db_log_mesh(r->w, s->h, (int64_t)m->frame, pos, n));
   free(pos);
 }
