@@ -14,6 +14,28 @@
 #include "palp.h"
 #include "validate.h"
 
+/* A change the server made to a session's world contacts, in the order made.
+ * Logging every one with its frame lets a recorder replay the session bit for
+ * bit (db/palp_db.h, "replay contract"). */
+typedef enum palp_srv_world_op_kind {
+  PALP_SRV_OP_ADD = 1,    /* palp_world_add_contact (+ set force) or palp_world_add_finger */
+  PALP_SRV_OP_UPDATE = 2, /* palp_world_set_contact_force or palp_world_set_finger */
+  PALP_SRV_OP_REMOVE = 3  /* palp_world_remove_contact */
+} palp_srv_world_op_kind;
+
+typedef struct palp_srv_world_op {
+  int64_t frame;          /* palp_world_frame when applied (before the next step) */
+  double sim_time;        /* [s] */
+  int finger;             /* station finger 0..3 */
+  int slot;               /* model contact id */
+  palp_srv_world_op_kind op;
+  int kind;               /* 1 force-driven, 2 position-driven finger */
+  palp_contact_def def;   /* force-driven ADD: the definition */
+  palp_vec3 force;        /* force-driven: [N] */
+  palp_vec3 center;       /* finger: sphere centre [m] */
+  double radius;          /* finger: [m] */
+} palp_srv_world_op;
+
 typedef struct palp_srv_session_info {
   uint32_t session_id;
   uint32_t phantom_id;
@@ -22,6 +44,11 @@ typedef struct palp_srv_session_info {
   const char *trainee_name;
   const char *partition;
   double tick_rate_hz;
+  double dt;                   /* world step [s] = 1 / tick_rate_hz */
+  const char *scene_path;      /* the scene file the world was built from: palp_scene_load,
+                                * world.dt = dt, palp_scene_create_world, then the scene's own
+                                * contacts 0..n-1 removed */
+  double max_force;            /* [N] */
   int64_t opened_ns;           /* CLOCK_MONOTONIC */
 } palp_srv_session_info;
 
@@ -46,12 +73,17 @@ typedef struct palp_srv_events {
   void (*member_changed)(void *ctx, uint32_t session_id, const char *station, int role, int joined);
   /* [tick thread] a validated contact was applied at simulated time t [s]. */
   void (*contact_applied)(void *ctx, uint32_t session_id, const palp_srv_contact *c, double t);
+  /* [tick thread] every world contact change, in order (see palp_srv_world_op). */
+  void (*world_op)(void *ctx, uint32_t session_id, const palp_srv_world_op *op);
   /* [tick thread] a sample was rejected (reason) or clamped. */
   void (*contact_rejected)(void *ctx, uint32_t session_id, palp_srv_reject_reason reason, int clamped);
-  /* [tick thread] after a step that had contacts or motion: frame, simulated
-   * time [s], pole displacement [m] and per-finger feedback force [N]. */
-  void (*frame)(void *ctx, uint32_t session_id, int64_t frame, double t, double top_displacement,
-                const palp_vec3 *finger_force, const uint8_t *finger_active, int fingers);
+  /* [tick thread] after every palp_world_step (sleeping ones too): the world may
+   * be read (palp_world_frame/_hash/_positions...) but not changed; per-finger
+   * feedback force [N] and whether the finger is down. */
+  void (*frame)(void *ctx, uint32_t session_id, const palp_world *w, const palp_vec3 *finger_force,
+                const uint8_t *finger_active, int fingers);
+  /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
+  void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
 } palp_srv_events;
 
 #endif

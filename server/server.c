@@ -91,12 +91,22 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
     fail(err, errlen, "phantoms (id %u): scene %s: %s", pc->id, pc->scene_path, msg[0] ? msg : palp_strerror(rc));
     return rc;
   }
-  /* Stations drive the contacts: the scene's scripted contacts are not applied.
-   * Every session steps at the server's tick rate and reports contact forces. */
-  ph->scene.contact_count = 0;
+  /* Every session steps at the server's tick rate. Stations drive the contacts:
+   * each session removes the scene's scripted contacts after building its world
+   * (session.c). The server needs contact feedback and a slot per finger besides
+   * the scene's contacts; a scene without them is refused rather than altered,
+   * so a recorded scene file always rebuilds the world the session ran. */
   ph->scene.world.dt = 1.0 / srv->cfg.tick_rate_hz;
-  ph->scene.world.effects |= PALP_EFFECT_FORCE_FEEDBACK;
-  if (ph->scene.world.max_contacts < PALP_SRV_MAX_FINGERS) ph->scene.world.max_contacts = PALP_SRV_MAX_FINGERS;
+  if (!(ph->scene.world.effects & PALP_EFFECT_FORCE_FEEDBACK)) {
+    fail(err, errlen, "phantoms (id %u): scene %s: effects must include \"force_feedback\" for stations", pc->id,
+         pc->scene_path);
+    return PALP_EINVAL;
+  }
+  if (ph->scene.world.max_contacts < PALP_SRV_MAX_FINGERS) {
+    fail(err, errlen, "phantoms (id %u): scene %s: max_contacts %d is below the %d fingers of a station", pc->id,
+         pc->scene_path, ph->scene.world.max_contacts, PALP_SRV_MAX_FINGERS);
+    return PALP_EINVAL;
+  }
   ph->template_world = palp_scene_create_world(&ph->scene, &rc);
   if (!ph->template_world) {
     fail(err, errlen, "phantoms (id %u): scene %s: cannot build the world: %s", pc->id, pc->scene_path,

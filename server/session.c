@@ -37,8 +37,11 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   palp_dds_session_partition(s->id, s->partition, sizeof s->partition);
   for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) s->finger[i].world_contact = -1;
 
+  /* Built the way a recorder replays it (db/palp_db.h): the scene with its own
+   * contacts, then those contacts removed; stations drive the contacts. */
   s->world = palp_scene_create_world(&def->phantom->scene, err);
   if (!s->world) goto fail;
+  for (int i = 0; i < def->phantom->scene.contact_count; i++) palp_world_remove_contact(s->world, i);
   const palp_mesh *mesh = palp_world_mesh(s->world);
   s->limits = (palp_srv_limits){.session_id = s->id,
                                 .max_force = def->cfg->max_force,
@@ -103,8 +106,30 @@ static void count_reject(palp_srv_session *s, palp_srv_reject_reason r, int clam
   }
 }
 
+static void emit_op(palp_srv_session *s, int finger, int slot, palp_srv_world_op_kind op, int kind,
+                    const palp_contact_def *def, palp_vec3 force, palp_vec3 center, double radius) {
+  if (!s->events || !s->events->world_op) return;
+  palp_srv_world_op o;
+  memset(&o, 0, sizeof o);
+  o.frame = palp_world_frame(s->world);
+  o.sim_time = palp_world_time(s->world);
+  o.finger = finger;
+  o.slot = slot;
+  o.op = op;
+  o.kind = kind;
+  if (def) o.def = *def;
+  o.force = force;
+  o.center = center;
+  o.radius = radius;
+  s->events->world_op(s->events->ctx, s->id, &o);
+}
+
 static void lift(palp_srv_session *s, palp_srv_finger_state *f) {
-  if (f->world_contact >= 0) palp_world_remove_contact(s->world, f->world_contact);
+  if (f->world_contact >= 0) {
+    palp_world_remove_contact(s->world, f->world_contact);
+    emit_op(s, (int)(f - s->finger), f->world_contact, PALP_SRV_OP_REMOVE, 0, NULL, (palp_vec3){0, 0, 0},
+            (palp_vec3){0, 0, 0}, 0);
+  }
   f->world_contact = -1;
   f->mode = palp_CONTACT_RELEASE;
   f->feedback = (palp_vec3){0, 0, 0};
@@ -129,8 +154,12 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
       if (id < 0) return id;
       f->world_contact = id;
       f->mode = palp_CONTACT_FORCE;
+      rc = palp_world_set_contact_force(s->world, f->world_contact, c->force);
+      emit_op(s, c->finger, id, PALP_SRV_OP_ADD, 1, &d, c->force, c->center, 0);
+    } else {
+      rc = palp_world_set_contact_force(s->world, f->world_contact, c->force);
+      emit_op(s, c->finger, f->world_contact, PALP_SRV_OP_UPDATE, 1, NULL, c->force, c->center, 0);
     }
-    rc = palp_world_set_contact_force(s->world, f->world_contact, c->force);
     double fm = norm3(c->force);
     if (fm > s->stats.peak_force) s->stats.peak_force = fm;
     break;
@@ -142,8 +171,11 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
       if (id < 0) return id;
       f->world_contact = id;
       f->mode = palp_CONTACT_FINGER;
+      emit_op(s, c->finger, id, PALP_SRV_OP_ADD, 2, NULL, (palp_vec3){0, 0, 0}, c->center, c->radius);
     } else {
       rc = palp_world_set_finger(s->world, f->world_contact, c->center, c->radius);
+      emit_op(s, c->finger, f->world_contact, PALP_SRV_OP_UPDATE, 2, NULL, (palp_vec3){0, 0, 0}, c->center,
+              c->radius);
     }
     break;
   default: return PALP_EINVAL;
@@ -272,15 +304,14 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   s->stats.last_frame = palp_world_frame(s->world);
   s->stats.sim_time = palp_world_time(s->world);
 
-  if (awake && s->events && s->events->frame) {
+  if (s->events && s->events->frame) {
     palp_vec3 ff[PALP_SRV_MAX_FINGERS];
     uint8_t act[PALP_SRV_MAX_FINGERS];
     for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
       ff[i] = s->finger[i].feedback;
       act[i] = s->finger[i].world_contact >= 0;
     }
-    s->events->frame(s->events->ctx, s->id, s->stats.last_frame, s->stats.sim_time, top_disp, ff, act,
-                     PALP_SRV_MAX_FINGERS);
+    s->events->frame(s->events->ctx, s->id, s->world, ff, act, PALP_SRV_MAX_FINGERS);
   }
 
   if (atomic_load_explicit(&s->want_feedback, memory_order_relaxed) &&
@@ -307,6 +338,9 @@ void palp_srv_session_info_fill(const palp_srv_session *s, palp_srv_session_info
   out->trainee_name = s->trainee_name;
   out->partition = s->partition;
   out->tick_rate_hz = 1.0 / s->phantom->scene.world.dt;
+  out->dt = s->phantom->scene.world.dt;
+  out->scene_path = s->phantom->cfg.scene_path;
+  out->max_force = s->limits.max_force;
   out->opened_ns = s->opened_ns;
 }
 

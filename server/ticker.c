@@ -54,7 +54,11 @@ static void *group_main(void *arg) {
     /* Overrun: this tick's work ended after the next tick should have started. */
     int overrun = t1 > next + t->period_ns;
     if (overrun)
-      for (int i = 0; i < g->count; i++) g->sessions[i]->stats.overruns++;
+      for (int i = 0; i < g->count; i++) {
+        palp_srv_session *s = g->sessions[i];
+        s->stats.overruns++;
+        if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, t1 - (next + t->period_ns));
+      }
     g->ticks++;
     g->period_ticks++;
     g->overruns += (uint64_t)overrun;
