@@ -35,6 +35,7 @@
  *     reduced rate; replay checks those that are logged.
  *  5. Feedback (palp_db_log_feedback) and meshes (palp_db_log_mesh) carry the frame after the step
  *     they were computed from.
+ * The palp_db_world_* wrappers below do 3 and 4 for the caller.
  */
 #ifndef PALP_DB_H
 #define PALP_DB_H
@@ -207,6 +208,25 @@ void palp_db_frame_summarize(const palp_world *w, palp_db_frame *f);
 /* Builds the world the replay contract names. Returns NULL and sets *err (and msg) on failure. */
 palp_world *palp_db_world_from_scene(const char *scene_json, double dt_s, int *err, char *msg,
                                      size_t msglen);
+
+/* Logged world calls (palp_db_sim): each makes the palp_world call and, when it succeeds, logs
+ * it as the replay contract says, so a server that changes contacts and steps only through these
+ * is replayable by construction. w may be NULL (logging off): then they are the plain world calls.
+ * They return what the world call returns; a full log queue is counted by the writer, never
+ * reported here, so the simulation does not depend on the disk. */
+int palp_db_world_add_contact(palp_db_writer *w, palp_db_session s, palp_world *world,
+                              const palp_contact_def *def, palp_vec3 force_n);
+int palp_db_world_set_contact_force(palp_db_writer *w, palp_db_session s, palp_world *world, int id,
+                                    palp_vec3 force_n);
+int palp_db_world_add_finger(palp_db_writer *w, palp_db_session s, palp_world *world, palp_vec3 center_m,
+                             double radius_m);
+int palp_db_world_set_finger(palp_db_writer *w, palp_db_session s, palp_world *world, int id,
+                             palp_vec3 center_m, double radius_m);
+/* kind: what the caller is removing (the world does not say); readers show it. */
+int palp_db_world_remove_contact(palp_db_writer *w, palp_db_session s, palp_world *world, int id,
+                                 palp_db_contact_kind kind);
+/* palp_world_step, then the frame summary is logged; *out (may be NULL) receives it. */
+int palp_db_world_step(palp_db_writer *w, palp_db_session s, palp_world *world, palp_db_frame *out);
 
 /* ---- readers ---------------------------------------------------------------- */
 typedef struct palp_db palp_db;

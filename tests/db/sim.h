@@ -1,5 +1,6 @@
 /* A scripted palpation session driven through the session-log writer exactly as the server does
- * (the replay contract in db/palp_db.h): a real palp_world at the tick rate, a force contact
+ * (the replay contract in db/palp_db.h, through the palp_db_world_* logged calls): a real
+ * palp_world at the tick rate, a force contact
  * ramped by a trainee, a sliding finger updated every tick, feedback, meshes at ~30 Hz, events. */
 #ifndef PALP_TEST_DB_SIM_H
 #define PALP_TEST_DB_SIM_H
@@ -27,9 +28,9 @@ typedef struct sim_sent_fb {
 
 typedef struct sim_result {
   int64_t frames_stepped;   /* palp_world_step calls that returned 0 */
-  int64_t frames_logged;    /* palp_db_log_frame returned 0 */
-  int64_t records_refused;  /* any log call that returned PALP_EFULL */
-  int64_t log_errors;       /* any log call that returned something else */
+  int64_t frames_logged;    /* frames the writer accepted (stepped - shed frame records) */
+  int64_t records_refused;  /* direct log calls (feedback, mesh, events) that returned PALP_EFULL */
+  int64_t log_errors;       /* direct log calls that returned anything but 0 or PALP_EFULL */
   int meshes, events;
   palp_db_writer_stats st;  /* after close-time flush */
   /* with keep: everything sent, in order */
