@@ -4,10 +4,11 @@
  * Synthetic problem: "reference" records come from the real-time model itself
  * run with known parameters p* (the hand-set defaults) under the four
  * distributions. The fit starts from p* perturbed by factors between 0.6 and 1.5
- * and must return p* within 1% (relative) for every fitted parameter, and cut
+ * and must return p* within 2% (relative) for every fitted parameter, and cut
  * the displacement RMSE by at least a factor of 100. Noise-free data and the
- * exact model, so the only error left is the solver's tolerance; 1% leaves
- * room for the finite-difference Jacobian (0.1% steps).
+ * exact model, but the model is only piecewise smooth (discrete solver
+ * refreshes), so the fit ends near, not at, the truth (measured 0.1%); 2%
+ * leaves room for the finite-difference Jacobian's 0.3% steps.
  * Also: the parameter file written by palp_eval_params_write loads back
  * through palp_scene_load with every value equal to 9 significant digits.
  */
@@ -87,7 +88,7 @@ static void test_recovers_parameters(void) {
     for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
       const double rel = fabs(res.fitted[j] / truth[j] - 1.0);
       if (mask & (1u << j))
-        CHECK(rel < 0.01, "%s: fitted %.6g, truth %.6g (start %.6g): relative error %.3g > 1%%",
+        CHECK(rel < 0.02, "%s: fitted %.6g, truth %.6g (start %.6g): relative error %.3g > 2%%",
               palp_eval_param_name[j], res.fitted[j], truth[j], start[j], rel);
       else
         CHECK(res.fitted[j] == start[j], "%s was not fitted but changed: %.9g -> %.9g", palp_eval_param_name[j],

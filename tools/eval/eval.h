@@ -141,7 +141,7 @@ typedef struct palp_eval_calib_def {
   double recovery_target; /* [s], 1.0 (the paper) */
   double recovery_tol;    /* [s], 0.1 */
   int max_iter;           /* trust-region iterations, 40 */
-  double h_df;            /* finite-difference step in ln p, 1e-3 */
+  double h_df;            /* finite-difference step in ln p, 3e-3 (0.3%) */
   int verbose;            /* progress to stderr */
 } palp_eval_calib_def;
 

@@ -441,8 +441,12 @@ static int cmd_evaluate(const options *o) {
     palp_eval_record_destroy(&ref);
     if (rc) return 1;
     if (!o->quiet)
-      fprintf(stderr, "palp-eval: distribution %s done (real-time %.2f s, FEM %s %.1f s)\n", palp_eval_roman(d),
-              row->rt_seconds, row->ref_from_cache ? "from cache, computed in" : "", row->ref_seconds);
+      fprintf(stderr,
+              "palp-eval: distribution %s done (real-time %.2f s; FEM %s%.1f s: %d elements, %ld steps, %ld Newton "
+              "iterations, %ld cutbacks, %ld factorisations)\n",
+              palp_eval_roman(d), row->rt_seconds, row->ref_from_cache ? "from cache, computed in " : "",
+              row->ref_seconds, info.element_count, info.steps, info.newton_iterations, info.cutbacks,
+              info.factorizations);
   }
   palp_eval_report_print(stdout, &rep);
   char err[512] = "";

@@ -1,0 +1,259 @@
+#!/usr/bin/env python3
+"""test_eval_evaluate - palp-eval evaluate, checked from the outside.
+
+    test_eval_evaluate.py PALP_EVAL SCENE tables|errors
+
+tables: runs `evaluate` on the paper's scene with the coarsest FEM level and a
+few frames, then recomputes every statistic of Tables V and VI from the written
+pair files (displacement_dN.csv, force_dN.csv) with an independent
+implementation in this file (math.fsum sums, its own regularised incomplete
+beta function for the F distribution's p-value) and compares with tables.csv
+and tables.json. Tolerances: 1e-9 relative for RMSE, bias, SD, F, sums of
+squares (the CSVs carry 17 significant digits, so only summation order
+differs); 1e-7 relative (or 1e-12 absolute) for p; agreement counts exactly.
+The paper's columns must be the published numbers. A second run must take the
+FEM reference from the cache and give byte-identical tables.
+
+errors: bad inputs end with a clear message on stderr, nothing on stdout and a
+non-zero exit status (1 for unusable inputs, 2 for command-line errors).
+"""
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+failures = 0
+
+
+def check(cond, msg):
+    global failures
+    if not cond:
+        failures += 1
+        print("FAIL: " + msg, file=sys.stderr)
+
+
+def close(a, b, rel, absol=0.0):
+    return abs(a - b) <= max(rel * max(abs(a), abs(b)), absol)
+
+
+# ---- an independent F-distribution tail -------------------------------------------
+def betacf(a, b, x):
+    """Continued fraction of the incomplete beta function (modified Lentz)."""
+    tiny = 1e-300
+    qab, qap, qam = a + b, a + 1.0, a - 1.0
+    c, d = 1.0, 1.0 - qab * x / qap
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 200000):
+        m2 = 2 * m
+        aa = m * (b - m) * x / ((qam + m2) * (a + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (d if abs(d) > tiny else tiny)
+        c = 1.0 + aa / c
+        c = c if abs(c) > tiny else tiny
+        h *= d * c
+        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
+        d = 1.0 + aa * d
+        d = 1.0 / (d if abs(d) > tiny else tiny)
+        c = 1.0 + aa / c
+        c = c if abs(c) > tiny else tiny
+        de = d * c
+        h *= de
+        if abs(de - 1.0) < 1e-16:
+            return h
+    raise RuntimeError("betacf did not converge")
+
+
+def betainc(a, b, x):
+    """Regularised incomplete beta I_x(a, b)."""
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    lbt = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x)
+    if x < (a + 1.0) / (a + b + 2.0):
+        return math.exp(lbt) * betacf(a, b, x) / a
+    return 1.0 - math.exp(lbt) * betacf(b, a, 1.0 - x) / b
+
+
+def f_tail(f, d1, d2):
+    """P(F(d1, d2) > f) = I_{d2 / (d2 + d1 f)}(d2 / 2, d1 / 2)."""
+    if math.isinf(f):
+        return 0.0
+    return betainc(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f))
+
+
+def stats(a, b):
+    """The paper's statistics of paired values, computed from the definitions."""
+    n = len(a)
+    d = [x - y for x, y in zip(a, b)]
+    rmse = math.sqrt(math.fsum(x * x for x in d) / n)
+    bias = math.fsum(d) / n
+    sd = math.sqrt(math.fsum((x - bias) ** 2 for x in d) / (n - 1))
+    lo, hi = bias - 2 * sd, bias + 2 * sd
+    within = sum(1 for x in d if lo <= x <= hi)
+    ma, mb = math.fsum(a) / n, math.fsum(b) / n
+    g = (ma + mb) / 2
+    ss_b = n * (ma - g) ** 2 + n * (mb - g) ** 2
+    ss_w = math.fsum((x - ma) ** 2 for x in a) + math.fsum((y - mb) ** 2 for y in b)
+    df_w = 2 * n - 2
+    f = (ss_b / 1) / (ss_w / df_w)
+    p = f_tail(f, 1, df_w)
+    return dict(n=n, rmse=rmse, bias=bias, sd=sd, within=within, agreement_percent=100.0 * within / n,
+                mean_rt=ma, mean_ref=mb, ss_between=ss_b, ss_within=ss_w, f=f, p=p, df_within=df_w,
+                meets=int(p > 0.05 and within / n > 0.95))
+
+
+PAPER = {  # Widmer & Hu 2011, Tables V (cm) and VI (N): RMSE, F, p, SD, agree %
+    "V": {"I": (0.17, 2.37, 0.12, 0.27, 95.2), "II": (0.21, 1.52, 0.36, 0.29, 95.0),
+          "III": (0.26, 1.69, 0.32, 0.32, 95.3), "IV": (0.32, 0.96, 0.48, 0.33, 96.5)},
+    "VI": {"I": (0.05, 0.12, 0.86, 0.01, 98.6), "II": (0.12, 12.0, 0.31, 0.12, 96.1),
+           "III": (0.15, 1.93, 0.29, 0.21, 95.2), "IV": (0.16, 2.02, 0.21, 0.25, 95.1)},
+}
+ROMAN = ["I", "II", "III", "IV"]
+FRAMES = 4
+
+
+def run(args, **kw):
+    return subprocess.run(args, capture_output=True, text=True, timeout=600, **kw)
+
+
+def test_tables(tool, scene):
+    tmp = tempfile.mkdtemp(prefix="palp_eval_test_")
+    out, cache = os.path.join(tmp, "out"), os.path.join(tmp, "cache")
+    cmd = [tool, "evaluate", "--scene", scene, "--level", "1", "--frames", str(FRAMES), "--out", out,
+           "--cache-dir", cache, "--quiet"]
+    r = run(cmd)
+    check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
+    if r.returncode:
+        return
+    check("Table V" in r.stdout and "Table VI" in r.stdout, "tables not printed:\n" + r.stdout)
+    rows = list(csv.DictReader(open(os.path.join(out, "tables.csv"))))
+    check(len(rows) == 8, "tables.csv has %d rows, 8 expected (2 tables x 4 distributions)" % len(rows))
+    js = json.load(open(os.path.join(out, "tables.json")))
+    md = open(os.path.join(out, "tables.md")).read()
+    for row in rows:
+        t, dist = row["table"], row["distribution"]
+        k = ROMAN.index(dist) + 1
+        fname = ("displacement_d%d.csv" if t == "V" else "force_d%d.csv") % k
+        pairs = list(csv.DictReader(open(os.path.join(out, fname))))
+        col = ("rt_cm", "fem_cm") if t == "V" else ("rt_N", "fem_N")
+        a = [float(p[col[0]]) for p in pairs]
+        b = [float(p[col[1]]) for p in pairs]
+        frames = sorted({int(p["frame"]) for p in pairs})
+        check(frames == list(range(FRAMES)), "%s: frames %s, expected 0..%d" % (fname, frames, FRAMES - 1))
+        for p in pairs[:50]:
+            check(close(float(p["time_s"]), 0.01 * (int(p["frame"]) + 1), 1e-9),
+                  "%s: frame %s at t = %s s, expected (frame + 1) x 0.01 s" % (fname, p["frame"], p["time_s"]))
+        verts = {int(p["vertex"]) for p in pairs}
+        check(len(pairs) == len(verts) * FRAMES, "%s: %d pairs for %d vertices x %d frames" %
+              (fname, len(pairs), len(verts), FRAMES))
+        if t == "V":
+            # 338 vertices minus the fixed rim: the rim is one ring, so at least
+            # 250 and at most 337 free vertices carry data
+            check(250 <= len(verts) <= 337, "%s: %d vertices with displacement data" % (fname, len(verts)))
+        else:
+            check(len(verts) >= 1 and (len(verts) == 1) == (dist == "I"),
+                  "%s: %d contact vertices (distribution I has one, the others a patch)" % (fname, len(verts)))
+        s = stats(a, b)
+        where = "Table %s, Distr. %s" % (t, dist)
+        check(int(row["pairs"]) == s["n"], "%s: pairs %s vs %d in the pair file" % (where, row["pairs"], s["n"]))
+        for key in ("rmse", "bias", "sd", "mean_rt", "mean_ref", "ss_between", "ss_within"):
+            check(close(float(row[key]), s[key], 1e-9, 1e-15),
+                  "%s: %s = %s, recomputed %.17g" % (where, key, row[key], s[key]))
+        check(close(float(row["anova_f"]), s["f"], 1e-8, 1e-12),
+              "%s: F = %s, recomputed %.17g" % (where, row["anova_f"], s["f"]))
+        check(close(float(row["anova_p"]), s["p"], 1e-7, 1e-12),
+              "%s: p = %s, recomputed %.17g" % (where, row["anova_p"], s["p"]))
+        check(int(row["df_within"]) == s["df_within"] and int(row["df_between"]) == 1,
+              "%s: degrees of freedom %s, %s" % (where, row["df_between"], row["df_within"]))
+        check(close(float(row["agreement_percent"]), s["agreement_percent"], 1e-12),
+              "%s: agreement %s%%, recomputed %.6f%% (%d of %d)" % (where, row["agreement_percent"],
+                                                                    s["agreement_percent"], s["within"], s["n"]))
+        check(int(row["meets"]) == s["meets"], "%s: verdict %s, recomputed %d" % (where, row["meets"], s["meets"]))
+        paper = PAPER[t][dist]
+        got = tuple(float(row[c]) for c in ("paper_rmse", "paper_f", "paper_p", "paper_sd", "paper_agreement_percent"))
+        check(got == paper, "%s: paper columns %s, published %s" % (where, got, paper))
+        jt = [x for x in js["tables"] if x["table"] == t][0]
+        jr = [x for x in jt["rows"] if x["distribution"] == dist][0]
+        check(close(jr["rmse"], s["rmse"], 1e-9) and close(jr["anova"]["p"], s["p"], 1e-7, 1e-12) and
+              jr["meets_paper_criteria"] == bool(s["meets"]), "%s: tables.json disagrees" % where)
+        check(("| Distr. %s |" % dist) in md, "tables.md lacks the row of Distr. %s" % dist)
+    # plots: well-formed SVG for every distribution
+    for k in range(1, 5):
+        for name in ("top_vertex_d%d.svg", "peak_vertex_d%d.svg", "bland_altman_displacement_d%d.svg",
+                     "bland_altman_force_d%d.svg"):
+            path = os.path.join(out, name % k)
+            try:
+                root = ET.parse(path).getroot()
+                check(root.tag.endswith("svg"), "%s is not an SVG document" % path)
+            except Exception as e:  # noqa: BLE001 - any parse failure is the finding
+                check(False, "%s: %s" % (path, e))
+    # a rerun takes the reference from the cache and reproduces the tables exactly
+    first = open(os.path.join(out, "tables.csv")).read()
+    r2 = run(cmd)
+    check(r2.returncode == 0, "second evaluate exited %d: %s" % (r2.returncode, r2.stderr))
+    check(open(os.path.join(out, "tables.csv")).read() == first, "rerun (FEM from cache) changed tables.csv")
+    js2 = json.load(open(os.path.join(out, "tables.json")))
+    check(all(r["ref_from_cache"] for t in js2["tables"] for r in t["rows"]),
+          "rerun did not take the FEM reference from the cache")
+
+
+def test_errors(tool, scene):
+    tmp = tempfile.mkdtemp(prefix="palp_eval_err_")
+    bad_json = os.path.join(tmp, "bad.json")
+    open(bad_json, "w").write("{ \"name\": \"x\", \"mesh\": { \"radius_m\": 0.04, ")
+    no_contact = os.path.join(tmp, "nocontact.json")
+    open(no_contact, "w").write(
+        '{"name": "n", "mesh": {"radius_m": 0.04, "vertex_count": 100},'
+        ' "membrane": {"thickness_m": 0.002, "density_kg_m3": 950, "E1_Pa": 4.2e6, "eta1_Pa_s": 2e8,'
+        ' "E2_Pa": 8e6, "eta2_Pa_s": 8e5},'
+        ' "gel": {"law": "polytropic", "pressure_Pa": 101325, "a1": 10, "a2_Pa_s_m3": 5e6,'
+        ' "support_modulus_Pa_m": 1.5e6, "support_viscosity_Pa_s_m": 6e5},'
+        ' "time": {"dt_s": 0.01, "frames": 10, "frame_period_s": 0.01},'
+        ' "effects": ["membrane_elasticity"], "contacts": []}')
+    out = os.path.join(tmp, "out")
+    cases = [
+        # (arguments, exit status, words the message must contain)
+        (["evaluate", "--scene", os.path.join(tmp, "missing.json")], 1, ["missing.json", "not found"]),
+        (["evaluate", "--scene", bad_json], 1, ["bad.json"]),
+        (["evaluate", "--scene", no_contact], 1, ["no contact"]),
+        (["evaluate", "--scene", scene, "--level", "0"], 2, ["--level", "\"0\""]),
+        (["evaluate", "--scene", scene, "--level", "two"], 2, ["--level", "two"]),
+        (["evaluate", "--scene", scene, "--level"], 2, ["--level"]),
+        (["evaluate", "--scene", scene, "--fem-config", os.path.join(tmp, "nofem.json")], 1, ["nofem.json"]),
+        (["evaluate", "--scene", scene, "--frames", "-3"], 2, ["--frames"]),
+        (["evaluate", "--scene", scene, "--distributions", "1,5"], 2, ["--distributions"]),
+        (["evaluate", "--bogus"], 2, ["--bogus"]),
+        (["judge"], 2, ["judge"]),
+        (["calibrate", "--scene", scene, "--fit", "E1,E9"], 2, ["E9"]),
+        (["calibrate", "--scene", os.path.join(tmp, "missing.json")], 1, ["not found"]),
+    ]
+    for args, status, words in cases:
+        r = run([tool] + args + ["--out", out] if args[0] in ("evaluate", "calibrate") and "--out" not in args
+                else [tool] + args)
+        what = "palp-eval " + " ".join(args)
+        check(r.returncode == status, "%s: exit %d, expected %d (stderr: %s)" % (what, r.returncode, status,
+                                                                                  r.stderr.strip()))
+        check(r.stdout == "", "%s: wrote to stdout on error: %r" % (what, r.stdout[:200]))
+        for w in words:
+            check(w in r.stderr, "%s: message lacks %r: %s" % (what, w, r.stderr.strip()))
+        check("Segmentation" not in r.stderr and r.returncode > 0, "%s: crashed" % what)
+
+
+def main():
+    tool, scene, which = sys.argv[1], sys.argv[2], sys.argv[3]
+    {"tables": test_tables, "errors": test_errors}[which](tool, scene)
+    if failures:
+        print("%d check(s) failed" % failures, file=sys.stderr)
+        return 1
+    print("ok")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
