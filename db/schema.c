@@ -72,6 +72,17 @@ static int user_version(sqlite3 *db, int *out) {
   return rc;
 }
 
+static int has_tables(sqlite3 *db) {
+  sqlite3_stmt *st;
+  int n = 0;
+  if (sqlite3_prepare_v2(db, "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite_%'", -1, &st, NULL) !=
+      SQLITE_OK)
+    return 0;
+  if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  return n > 0;
+}
+
 static int set_meta(sqlite3 *db, const char *key, const char *value) {
   sqlite3_stmt *st;
   int rc = sqlite3_prepare_v2(db,
@@ -170,6 +181,12 @@ int palp_db__connect(const char *path, int create, const char *app_version, sqli
                  path, v, palp_db_migration_count);
     sqlite3_close(db);
     return PALP_DB_ENEWER;
+  }
+  if (v == 0 && has_tables(db)) {
+    /* Version 0 with tables: somebody else's database. Never add our schema to it. */
+    palp_db__fmt(err, errlen, "%s: not a palp session log (it holds tables but no palp schema version)", path);
+    sqlite3_close(db);
+    return PALP_EINVAL;
   }
   /* WAL: readers (palp-review) never block the server's writer and vice versa. synchronous=NORMAL
    * in WAL mode survives a process crash with every commit; only power loss can roll back the

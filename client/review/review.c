@@ -402,12 +402,21 @@ static int cmd_annotate(palp_db *db, const palp_db_session_info *s, int argc, ch
 int main(int argc, char **argv) {
   const char *path = getenv("PALP_DB");
   if (!path || !*path) path = "palp-sessions.db";
+  /* --db may come anywhere: take it out before the command's own options are parsed. */
+  for (int k = 1; k < argc; k++) {
+    if (strcmp(argv[k], "--db")) continue;
+    if (k + 1 >= argc) {
+      fprintf(stderr, "palp-review: --db needs a file\n");
+      return REVIEW_ERROR;
+    }
+    path = argv[k + 1];
+    for (int j = k; j + 2 <= argc; j++) argv[j] = argv[j + 2];
+    argc -= 2;
+    k--;
+  }
   int i = 1;
   while (i < argc && argv[i][0] == '-') {
-    if (!strcmp(argv[i], "--db") && i + 1 < argc) {
-      path = argv[i + 1];
-      i += 2;
-    } else if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
+    if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
       usage(stdout);
       return REVIEW_OK;
     } else {

@@ -304,6 +304,18 @@ static void test_migration(const char *v1_sql) {
   CHECK(count_rows(h, "PRAGMA journal_mode = WAL") >= -1, "wal");
   palp_db_close(db);
 
+  /* Somebody else's SQLite file (tables, no palp version) is refused, not "upgraded". */
+  path_in(p, sizeof p, "foreign.db");
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+  REQUIRE(sqlite3_exec(h, "CREATE TABLE invoices(id INTEGER PRIMARY KEY, total REAL)", NULL, NULL, NULL) == SQLITE_OK,
+          "foreign table");
+  sqlite3_close(h);
+  CHECK(palp_db_open(p, 1, &db, err, sizeof err) != 0 && strstr(err, "not a palp session log"),
+        "foreign database refused: %s", err);
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "reopen");
+  CHECK(count_rows(h, "SELECT count(*) FROM sqlite_master") == 1, "foreign database untouched");
+  sqlite3_close(h);
+
   /* A missing file is not created by a reader. */
   path_in(p, sizeof p, "missing.db");
   CHECK(palp_db_open(p, 0, &db, err, sizeof err) != 0 && access(p, F_OK) != 0, "reader must not create %s", p);
