@@ -95,4 +95,5 @@ echo "== sessions (palp-server) =="
 sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2
 echo
 echo "demo: peak-displacement snapshot of bob's phantom: $out/bob-peak.svg; alice's feedback: $out/alice-feedback.csv"
+grep -E "logging sessions to|session log:" "$out/server.log" | sed 's/^palp-server: /demo: /' || true
 exit "$status"

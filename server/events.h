@@ -45,9 +45,10 @@ typedef struct palp_srv_session_info {
   const char *partition;
   double tick_rate_hz;
   double dt;                   /* world step [s] = 1 / tick_rate_hz */
-  const char *scene_path;      /* the scene file the world was built from: palp_scene_load,
-                                * world.dt = dt, palp_scene_create_world, then the scene's own
-                                * contacts 0..n-1 removed */
+  const char *scene_path;      /* the scene file of the phantom */
+  const palp_scene *scene;     /* the resolved scene the world was built from (world.dt = dt):
+                                * palp_scene_create_world, then its own contacts 0..n-1 removed;
+                                * palp_scene_to_json gives it self-contained for the log */
   double max_force;            /* [N] */
   int64_t opened_ns;           /* CLOCK_MONOTONIC */
 } palp_srv_session_info;
@@ -78,10 +79,10 @@ typedef struct palp_srv_events {
   /* [tick thread] a sample was rejected (reason) or clamped. */
   void (*contact_rejected)(void *ctx, uint32_t session_id, palp_srv_reject_reason reason, int clamped);
   /* [tick thread] after every palp_world_step (sleeping ones too): the world may
-   * be read (palp_world_frame/_hash/_positions...) but not changed; per-finger
-   * feedback force [N] and whether the finger is down. */
-  void (*frame)(void *ctx, uint32_t session_id, const palp_world *w, const palp_vec3 *finger_force,
-                const uint8_t *finger_active, int fingers);
+   * be read (palp_world_frame/_hash/_positions...) but not changed; per finger:
+   * its model contact id (-1 when lifted) and feedback force [N]. */
+  void (*frame)(void *ctx, uint32_t session_id, const palp_world *w, const int *finger_slot,
+                const palp_vec3 *finger_force, int fingers);
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
 } palp_srv_events;

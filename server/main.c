@@ -5,8 +5,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "config.h"
+#include "db_log.h"
 #include "palp.h"
 #include "palp_dds.h"
 #include "server.h"
@@ -22,7 +24,8 @@ static void usage(FILE *f) {
           "  --max-sessions N     override max_sessions\n"
           "  --duration S         stop after S seconds (default: until SIGINT/SIGTERM)\n"
           "  --check              validate the configuration and the scenes, then exit\n"
-          "  --verbose            log every station join/leave\n",
+          "  --verbose            log every station join/leave\n"
+          "  --no-db              do not write the session log (config \"database\")\n",
           PALP_CONFIG_DIR);
 }
 
@@ -62,7 +65,7 @@ static int parse_num(const char *opt, const char *arg, double lo, double hi, dou
 int main(int argc, char **argv) {
   const char *config_path = PALP_CONFIG_DIR "/server.json";
   double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
-  int check = 0, verbose = 0;
+  int check = 0, verbose = 0, no_db = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     int bad = 0;
@@ -75,6 +78,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--duration")) bad = parse_num(a, v, 0, 1e7, &duration), i++;
     else if (!strcmp(a, "--check")) check = 1;
     else if (!strcmp(a, "--verbose")) verbose = 1;
+    else if (!strcmp(a, "--no-db")) no_db = 1;
     else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       usage(stdout);
       return 0;
@@ -131,9 +135,28 @@ int main(int argc, char **argv) {
   /* Block before any thread exists (DDS and tick threads inherit the mask). */
   pthread_sigmask(SIG_BLOCK, &sc.set, NULL);
 
+  palp_srv_db_log *log = NULL;
+  if (def.cfg.database[0] && !no_db) {
+    /* The log's directory (e.g. out/) is created on first use; one level only. */
+    char dir[PALP_SRV_PATH_MAX];
+    snprintf(dir, sizeof dir, "%s", def.cfg.database);
+    char *slash = strrchr(dir, '/');
+    if (slash && slash != dir) {
+      *slash = 0;
+      mkdir(dir, 0777);
+    }
+    rc = palp_srv_db_log_open(def.cfg.database, def.cfg.tick_rate_hz, &log, err, sizeof err);
+    if (rc < 0) {
+      fprintf(stderr, "palp-server: bad configuration: %s: database: %s: %s\n", config_path, def.cfg.database, err);
+      return 1;
+    }
+    def.events = palp_srv_db_log_events(log);
+    fprintf(stderr, "palp-server: logging sessions to %s\n", def.cfg.database);
+  }
   palp_srv *srv = palp_srv_create(&def, &rc, err, sizeof err);
   if (!srv) {
     fprintf(stderr, "palp-server: %s: %s\n", config_path, err);
+    palp_srv_db_log_close(log, stderr);
     return 1;
   }
   sc.srv = srv;
@@ -151,5 +174,6 @@ int main(int argc, char **argv) {
   palp_srv_print_summary(srv, stdout);
   fflush(stdout);
   palp_srv_destroy(srv);
+  palp_srv_db_log_close(log, stderr);
   return rc < 0 ? 1 : 0;
 }

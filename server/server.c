@@ -374,7 +374,14 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     }
     atomic_store(&s->want_feedback, rq->want_feedback ? 1 : 0);
     atomic_store(&s->deform_members, rq->want_deformation ? 1 : 0);
+    /* The log learns of the session before its first tick can report on it. */
+    palp_srv_session_info info;
+    palp_srv_session_info_fill(s, &info);
+    if (srv->events && srv->events->session_opened) srv->events->session_opened(srv->events->ctx, &info);
     if (palp_srv_ticker_add(srv->ticker, s) < 0) {
+      palp_srv_session_summary sum;
+      palp_srv_session_summary_fill(s, "tick pool full", palp_dds_now_ns(), &sum);
+      if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
       palp_srv_session_destroy(s);
       reply(srv, rq, NULL, "tick pool full");
       return;
@@ -386,9 +393,6 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     reply(srv, rq, s, NULL);
     publish_state(srv, s, 0, NULL, NULL);
     publish_catalogue(srv, ph);
-    palp_srv_session_info info;
-    palp_srv_session_info_fill(s, &info);
-    if (srv->events && srv->events->session_opened) srv->events->session_opened(srv->events->ctx, &info);
     fprintf(stderr, "palp-server: session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s\n",
             s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
     return;

@@ -306,12 +306,12 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
 
   if (s->events && s->events->frame) {
     palp_vec3 ff[PALP_SRV_MAX_FINGERS];
-    uint8_t act[PALP_SRV_MAX_FINGERS];
+    int slot[PALP_SRV_MAX_FINGERS];
     for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
       ff[i] = s->finger[i].feedback;
-      act[i] = s->finger[i].world_contact >= 0;
+      slot[i] = s->finger[i].world_contact;
     }
-    s->events->frame(s->events->ctx, s->id, s->world, ff, act, PALP_SRV_MAX_FINGERS);
+    s->events->frame(s->events->ctx, s->id, s->world, slot, ff, PALP_SRV_MAX_FINGERS);
   }
 
   if (atomic_load_explicit(&s->want_feedback, memory_order_relaxed) &&
@@ -340,6 +340,7 @@ void palp_srv_session_info_fill(const palp_srv_session *s, palp_srv_session_info
   out->tick_rate_hz = 1.0 / s->phantom->scene.world.dt;
   out->dt = s->phantom->scene.world.dt;
   out->scene_path = s->phantom->cfg.scene_path;
+  out->scene = &s->phantom->scene;
   out->max_force = s->limits.max_force;
   out->opened_ns = s->opened_ns;
 }

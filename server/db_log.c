@@ -1,0 +1,217 @@
+/* db_log.c - palp-server's session log through the db/ writer. */
+#include "db_log.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "palp_db.h"
+#include "palp_dds.h"
+
+#define SLOTS 1024 /* open sessions are far fewer; a slot is found by id % SLOTS */
+#define FLUSH_NS 1000000000 /* reject/clamp/overrun counts are logged once a second per session */
+
+typedef struct slot {
+  uint32_t id;           /* 0: free */
+  palp_db_session h;
+  int64_t next_mesh_frame;
+  int64_t last_flush_ns;
+  int64_t last_frame;
+  uint64_t rejected[PALP_SRV_REJ_COUNT], clamped, overruns;
+} slot;
+
+struct palp_srv_db_log {
+  palp_db_writer *w;
+  palp_srv_events ev;
+  char run_id[48];
+  int frame_every, mesh_every;
+  slot s[SLOTS];
+};
+
+static slot *find(palp_srv_db_log *l, uint32_t id) {
+  slot *s = &l->s[id % SLOTS];
+  return s->id == id ? s : NULL;
+}
+
+static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
+  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++)
+    if (s->rejected[r]) {
+      palp_db_log_event(l->w, s->h, PALP_DB_EVENT_REJECT, frame, palp_srv_reject_name((palp_srv_reject_reason)r),
+                        (int64_t)s->rejected[r]);
+      s->rejected[r] = 0;
+    }
+  if (s->clamped) {
+    palp_db_log_event(l->w, s->h, PALP_DB_EVENT_CLAMP, frame, "force_limit", (int64_t)s->clamped);
+    s->clamped = 0;
+  }
+  if (s->overruns) {
+    palp_db_log_event(l->w, s->h, PALP_DB_EVENT_OVERRUN, frame, "tick ended after the next tick's start",
+                      (int64_t)s->overruns);
+    s->overruns = 0;
+  }
+}
+
+/* ---- main-thread hooks ----------------------------------------------------------- */
+
+static void on_opened(void *ctx, const palp_srv_session_info *i) {
+  palp_srv_db_log *l = ctx;
+  slot *s = &l->s[i->session_id % SLOTS];
+  if (s->id) {
+    fprintf(stderr, "palp-server: session log: slot of session %u busy; session %u not logged\n", s->id, i->session_id);
+    return;
+  }
+  char uid[96], phantom[16], params[160];
+  snprintf(uid, sizeof uid, "%s-%u", l->run_id, i->session_id);
+  snprintf(phantom, sizeof phantom, "%u", i->phantom_id);
+  snprintf(params, sizeof params, "{\"max_force_n\": %.17g, \"tick_rate_hz\": %.17g, \"partition\": \"%s\"}",
+           i->max_force, i->tick_rate_hz, i->partition);
+  /* Self-contained (parameters inlined), so the log alone rebuilds the world. */
+  char *scene = palp_scene_to_json(i->scene);
+  palp_db_session_def d = {.uid = uid,
+                           .trainee = i->trainee_name,
+                           .station = i->trainee_station,
+                           .phantom_id = phantom,
+                           .phantom_name = i->phantom_name,
+                           .scene_json = scene ? scene : "{}",
+                           .params_json = params,
+                           .tick_hz = i->tick_rate_hz,
+                           .dt_s = i->dt};
+  palp_db_session h = 0;
+  int rc = palp_db_log_session_begin(l->w, &d, &h);
+  free(scene);
+  if (rc < 0) {
+    fprintf(stderr, "palp-server: session log: session %u not logged: %s\n", i->session_id, palp_db_strerror(rc));
+    return;
+  }
+  memset(s, 0, sizeof *s);
+  s->id = i->session_id;
+  s->h = h;
+  s->last_flush_ns = palp_dds_now_ns();
+  palp_db_log_event(l->w, h, PALP_DB_EVENT_JOIN, 0, i->trainee_station, 1);
+}
+
+static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, sum->info.session_id);
+  if (!s) return;
+  flush_counts(l, s, s->last_frame);
+  const char *why = sum->close_reason ? sum->close_reason : "";
+  palp_db_end_reason r = PALP_DB_END_NORMAL;
+  if (strstr(why, "lost")) r = PALP_DB_END_STATION_VANISHED;
+  else if (strstr(why, "shutdown")) r = PALP_DB_END_SERVER_SHUTDOWN;
+  else if (strstr(why, "failed") || strstr(why, "full")) r = PALP_DB_END_ERROR;
+  palp_db_log_event(l->w, s->h, PALP_DB_EVENT_LEAVE, s->last_frame, sum->info.trainee_station, 1);
+  palp_db_log_session_end(l->w, s->h, r, why, 0);
+  memset(s, 0, sizeof *s);
+}
+
+static void on_member(void *ctx, uint32_t session_id, const char *station, int role, int joined) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  char detail[128];
+  snprintf(detail, sizeof detail, "%s (%s)", station, role == palp_ROLE_VISUAL ? "visual" : "observer");
+  palp_db_log_event(l->w, s->h, joined ? PALP_DB_EVENT_JOIN : PALP_DB_EVENT_LEAVE, -1, detail, 1);
+}
+
+/* ---- tick-thread hooks: enqueue only ------------------------------------------------- */
+
+static void on_world_op(void *ctx, uint32_t session_id, const palp_srv_world_op *op) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  palp_db_contact c;
+  memset(&c, 0, sizeof c);
+  c.frame = op->frame;
+  c.sim_time_s = op->sim_time;
+  c.slot = op->slot;
+  c.op = (palp_db_contact_op)op->op;
+  c.kind = op->kind == 2 ? PALP_DB_KIND_FINGER : PALP_DB_KIND_FORCE;
+  c.def = op->def;
+  c.force_n = op->force;
+  c.center_m = op->center;
+  c.radius_m = op->radius;
+  palp_db_log_contact(l->w, s->h, &c);
+}
+
+static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r, int clamped) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  if (clamped) s->clamped++;
+  else if ((unsigned)r < PALP_SRV_REJ_COUNT) s->rejected[r]++;
+}
+
+static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {
+  (void)late_ns;
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (s) s->overruns++;
+}
+
+static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const int *finger_slot,
+                     const palp_vec3 *finger_force, int fingers) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  int64_t frame = palp_world_frame(w);
+  s->last_frame = frame;
+  if (frame % l->frame_every == 0) {
+    palp_db_frame f;
+    palp_db_frame_summarize(w, &f);
+    palp_db_log_frame(l->w, s->h, &f);
+    for (int i = 0; i < fingers; i++)
+      if (finger_slot[i] >= 0) palp_db_log_feedback(l->w, s->h, frame, finger_slot[i], finger_force[i]);
+  }
+  if (palp_world_is_awake(w) && frame >= s->next_mesh_frame) {
+    palp_db_log_mesh(l->w, s->h, frame, palp_world_positions(w), palp_world_mesh(w)->vertex_count);
+    s->next_mesh_frame = frame + l->mesh_every;
+  }
+  int64_t now = palp_dds_now_ns();
+  if (now - s->last_flush_ns >= FLUSH_NS) {
+    flush_counts(l, s, frame);
+    s->last_flush_ns = now;
+  }
+}
+
+int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_srv_db_log **out, char *err, size_t errlen) {
+  palp_srv_db_log *l = calloc(1, sizeof *l);
+  if (!l) return PALP_ENOMEM;
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  int rc = palp_db_writer_open(path, &o, &l->w, err, errlen);
+  if (rc < 0) {
+    free(l);
+    return rc;
+  }
+  /* uid = <start time>-<pid>-<session>: unique across server runs on one host. */
+  snprintf(l->run_id, sizeof l->run_id, "%lld-%ld", (long long)time(NULL), (long)getpid());
+  l->frame_every = tick_rate_hz > 100 ? (int)lround(tick_rate_hz / 100) : 1;
+  l->mesh_every = (int)lround(tick_rate_hz / 2) > 0 ? (int)lround(tick_rate_hz / 2) : 1;
+  l->ev = (palp_srv_events){.ctx = l,
+                            .session_opened = on_opened,
+                            .session_closed = on_closed,
+                            .member_changed = on_member,
+                            .world_op = on_world_op,
+                            .contact_rejected = on_rejected,
+                            .frame = on_frame,
+                            .overrun = on_overrun};
+  *out = l;
+  return 0;
+}
+
+const palp_srv_events *palp_srv_db_log_events(palp_srv_db_log *l) { return &l->ev; }
+
+void palp_srv_db_log_close(palp_srv_db_log *l, FILE *f) {
+  if (!l) return;
+  palp_db_writer_flush(l->w, 10.0);
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(l->w, &st);
+  if (f)
+    fprintf(f, "palp-server: session log: %lld records written, %lld shed (queue full), %lld failed%s%s\n",
+            (long long)st.written, (long long)st.shed, (long long)st.failed, st.last_error[0] ? ": " : "",
+            st.last_error);
+  palp_db_writer_close(l->w);
+  free(l);
+}

@@ -1,0 +1,26 @@
+/*
+ * db_log.h - palp-server's session log: the server events (events.h) written
+ * to SQLite through the db/ writer (palp_db_log_*), following the replay
+ * contract of db/palp_db.h so `palp-review replay` reproduces a session bit for
+ * bit. The tick-thread hooks only enqueue (the writer's worker thread does the
+ * disk work); a full queue sheds records and counts them, never stalls a tick.
+ */
+#ifndef PALP_SRV_DB_LOG_H
+#define PALP_SRV_DB_LOG_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "events.h"
+
+typedef struct palp_srv_db_log palp_srv_db_log;
+
+/* Opens (creating or upgrading) the database at path. tick_rate_hz sets the
+ * logging cadence: frame summaries and feedback at <= 100 per second per
+ * session, meshes twice a second while the phantom moves. */
+int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_srv_db_log **out, char *err, size_t errlen);
+const palp_srv_events *palp_srv_db_log_events(palp_srv_db_log *l);
+/* Flushes and closes; prints the writer's counts (written, shed, failed) to f. */
+void palp_srv_db_log_close(palp_srv_db_log *l, FILE *f);
+
+#endif
