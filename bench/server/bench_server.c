@@ -77,7 +77,22 @@ static pid_t spawn_server(unsigned domain, double rate) {
   snprintf(r, sizeof r, "%g", rate);
   snprintf(t, sizeof t, "%d", threads);
   snprintf(m, sizeof m, "%d", max_sessions);
-  char *argv[] = {PALP_SERVER_PATH, "--config", PALP_CONFIG_DIR "/server.json", "--domain", d, "--tick-rate", r,
+  /* The shipped phantoms, logging to a scratch database (the real server's cost,
+   * without touching the class's session log). */
+  const char *cfg_path = "/tmp/palp-bench-server.json", *db_path = "/tmp/palp-bench-sessions.db";
+  remove(db_path);
+  FILE *cf = fopen(cfg_path, "w");
+  if (!cf) {
+    fprintf(stderr, "bench: cannot write %s\n", cfg_path);
+    exit(1);
+  }
+  fprintf(cf,
+          "{\"database\": \"%s\", \"dds_config\": \"%s\",\n"
+          " \"phantoms\": [{\"id\": 1, \"name\": \"bench A\", \"scene\": \"%s/paper_step.json\"},\n"
+          "              {\"id\": 2, \"name\": \"bench B\", \"scene\": \"%s/paper_step.json\"}]}\n",
+          db_path, PALP_DDS_DEFAULT_CONFIG, PALP_CONFIG_DIR, PALP_CONFIG_DIR);
+  fclose(cf);
+  char *argv[] = {PALP_SERVER_PATH, "--config", (char *)cfg_path, "--domain", d, "--tick-rate", r,
                   "--threads", t, "--max-sessions", m, "--rt-priority", pr, NULL};
   pid_t pid;
   /* The server's own log goes to a file; the bench prints its figures. */
