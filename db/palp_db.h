@@ -194,6 +194,7 @@ typedef struct palp_db_writer_stats {
   int queue_high_water; /* most records ever queued at once */
   int queue_capacity;
   int64_t commits;      /* transactions committed */
+  double worker_cpu_s;  /* CPU time the writer thread has used [s]: its load on the machine */
   int64_t disk_errors;  /* failed batch attempts */
   int in_error;         /* 1 while the last attempt failed */
   int last_error_code;  /* SQLite extended result code of the last error, 0 if none */

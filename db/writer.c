@@ -876,7 +876,10 @@ static void *worker(void *arg) {
         w->ws[s].blob = NULL;
       }
 
+    struct timespec cpu;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu);
     pthread_mutex_lock(&w->mu);
+    w->st_.worker_cpu_s = (double)cpu.tv_sec + 1e-9 * (double)cpu.tv_nsec;
     if (w->stop && w->count == 0) break;
   }
   pthread_mutex_unlock(&w->mu);
