@@ -13,6 +13,7 @@
  * what restores definiteness); after max_cutbacks halvings the step fails.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,7 @@ void palp_fem_model_destroy(palp_fem_model *m) {
   free(m->emap);
   free(m->kval);
   free(m->pcg);
+  free(m->tbuf);
   palp_fem_solver_destroy(m->solver);
   memset(m, 0, sizeof *m);
 }
@@ -71,6 +73,7 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   m->max_cutbacks = cfg->max_cutbacks;
   m->full_newton = cfg->full_newton;
   m->pcg_refactor = cfg->pcg_refactor;
+  m->threads = cfg->threads < 1 ? 1 : cfg->threads > 16 ? 16 : cfg->threads;
   const int N = mesh->node_count, E = mesh->element_count, np = m->nprony;
   m->ndof = 3 * N;
   const size_t nd = (size_t)m->ndof;
@@ -228,6 +231,13 @@ int palp_fem_model_finalize(palp_fem_model *m) {
   m->pcg = malloc(sizeof(double) * 6 * (size_t)(nf ? nf : 1));
   m->factored = 0;
   if (!m->pcg) return PALP_ENOMEM;
+  free(m->tbuf);
+  m->tbuf = NULL;
+  if (m->threads > 1 && E >= 256) {
+    m->tbuf = malloc(sizeof(double) * (size_t)(m->threads - 1) * ((size_t)m->ndof + (size_t)nnz));
+    if (!m->tbuf) m->threads = 1; /* fall back to one worker rather than fail */
+  } else
+    m->threads = 1;
   m->emap = malloc(sizeof(int) * (size_t)E * 576);
   if (!m->kval || !m->emap) return PALP_ENOMEM;
   for (int e = 0; e < E; ++e)
@@ -258,25 +268,78 @@ int palp_fem_model_finalize(palp_fem_model *m) {
   return PALP_OK;
 }
 
-int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
+/* One worker's share of the assembly: elements [e0, e1) into its own fint / kval. */
+typedef struct assembly_job {
+  palp_fem_model *m;
+  const double *u;
+  double dt;
+  int want_tangent;
+  int e0, e1;
+  double *fint, *kval;
+  int rc;
+} assembly_job;
+
+static void *assemble_range(void *arg) {
+  assembly_job *j = arg;
+  palp_fem_model *m = j->m;
   const palp_fem_mesh *mesh = m->mesh;
-  const int E = mesh->element_count, np = m->nprony;
-  memset(m->fint, 0, sizeof(double) * (size_t)m->ndof);
-  if (want_tangent) memset(m->kval, 0, sizeof(double) * (size_t)m->nnz);
+  const int np = m->nprony;
+  memset(j->fint, 0, sizeof(double) * (size_t)m->ndof);
+  if (j->want_tangent) memset(j->kval, 0, sizeof(double) * (size_t)m->nnz);
   double ue[24], fe[24], ke[24][24];
-  for (int e = 0; e < E; ++e) {
+  j->rc = PALP_OK;
+  for (int e = j->e0; e < j->e1; ++e) {
     const int *h = mesh->hex[e];
     for (int a = 0; a < 8; ++a)
-      for (int i = 0; i < 3; ++i) ue[3 * a + i] = u[3 * h[a] + i];
-    const int rc = palp_fem_element(m, e, ue, dt, fe, want_tangent ? ke : NULL, m->S0t + (size_t)e * 48,
+      for (int i = 0; i < 3; ++i) ue[3 * a + i] = j->u[3 * h[a] + i];
+    const int rc = palp_fem_element(m, e, ue, j->dt, fe, j->want_tangent ? ke : NULL, m->S0t + (size_t)e * 48,
                                     m->Ht + (size_t)e * 8 * (size_t)np * 6);
-    if (rc) return rc;
+    if (rc) {
+      j->rc = rc;
+      return NULL;
+    }
     for (int a = 0; a < 8; ++a)
-      for (int i = 0; i < 3; ++i) m->fint[3 * h[a] + i] += fe[3 * a + i];
-    if (!want_tangent) continue;
+      for (int i = 0; i < 3; ++i) j->fint[3 * h[a] + i] += fe[3 * a + i];
+    if (!j->want_tangent) continue;
     const int *map = m->emap + (size_t)e * 576;
     for (int k = 0; k < 576; ++k)
-      if (map[k] >= 0) m->kval[map[k]] += (&ke[0][0])[k];
+      if (map[k] >= 0) j->kval[map[k]] += (&ke[0][0])[k];
+  }
+  return NULL;
+}
+
+/* Elements are split into `threads` contiguous ranges; each worker scatters into
+ * private buffers that are summed afterwards, so no locks and a deterministic
+ * result for a given thread count. */
+int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
+  const int E = m->mesh->element_count, T = m->threads > 1 && m->tbuf ? m->threads : 1;
+  assembly_job job[16];
+  pthread_t tid[16];
+  int started[16] = {0};
+  for (int t = 0; t < T; ++t) {
+    job[t] = (assembly_job){.m = m, .u = u, .dt = dt, .want_tangent = want_tangent,
+                            .e0 = (int)((long)E * t / T), .e1 = (int)((long)E * (t + 1) / T)};
+    if (t == 0) {
+      job[t].fint = m->fint;
+      job[t].kval = m->kval;
+    } else {
+      double *b = m->tbuf + (size_t)(t - 1) * ((size_t)m->ndof + (size_t)m->nnz);
+      job[t].fint = b;
+      job[t].kval = b + m->ndof;
+    }
+  }
+  for (int t = 1; t < T; ++t) started[t] = pthread_create(&tid[t], NULL, assemble_range, &job[t]) == 0;
+  assemble_range(&job[0]);
+  for (int t = 1; t < T; ++t) {
+    if (started[t]) pthread_join(tid[t], NULL);
+    else assemble_range(&job[t]); /* no thread available: do its share here */
+  }
+  for (int t = 0; t < T; ++t)
+    if (job[t].rc) return job[t].rc;
+  for (int t = 1; t < T; ++t) {
+    for (int d = 0; d < m->ndof; ++d) m->fint[d] += job[t].fint[d];
+    if (want_tangent)
+      for (long k = 0; k < m->nnz; ++k) m->kval[k] += job[t].kval[k];
   }
   return PALP_OK;
 }
@@ -454,9 +517,12 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
   const double beta = m->newmark_beta;
   const double c0 = 1.0 / (beta * dt * dt), c1 = 1.0 / (beta * dt), c2 = 1.0 / (2.0 * beta) - 1.0;
   double *u = m->utrial, *a = m->atrial;
-  memcpy(u, m->u, sizeof(double) * nd);
-  for (size_t d = 0; d < nd; ++d)
-    if (m->eq[d] < 0) u[d] = m->prescribed[d];
+  /* Newton starts from the last converged state: extrapolating with the velocity
+   * (u + dt v, or + dt^2/2 a) was tried and costs more iterations and cut-backs,
+   * because the undamped Newmark velocity carries the high-frequency ringing of
+   * the step load and the gel's volumetric penalty (K = 2 GPa) turns any error of
+   * the start point into a residual K (grad du)^2. */
+  for (size_t d = 0; d < nd; ++d) u[d] = m->eq[d] < 0 ? m->prescribed[d] : m->u[d];
   m->trace_count = 0;
   const double fnorm = fext ? norm_free(m, fext) : 0.0;
   double r0 = 0.0;

@@ -66,6 +66,7 @@ uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
   H(cfg->max_cutbacks);
   H(cfg->full_newton);
   H(cfg->pcg_refactor);
+  H(cfg->threads);
   /* the scene: real-time mesh, timing, contacts */
   H(s->world.mesh.radius);
   H(s->world.mesh.vertex_count);

@@ -106,11 +106,12 @@ typedef struct palp_fem_config {
   double newmark_beta;  /* 0.25 (average acceleration) */
   double newmark_gamma; /* 0.5 */
   int max_newton;       /* iterations per step before the step is cut back, 12 */
-  double newton_rtol;   /* residual tolerance relative to the force scale, 1e-6 */
+  double newton_rtol;   /* residual tolerance relative to the force scale, 1e-4 */
   double newton_atol;   /* absolute residual floor [N], 1e-9 */
   int max_cutbacks;     /* dt halvings allowed per step, 8 */
   int full_newton;      /* 1: factor the tangent every iteration; 0: reuse the factor as CG preconditioner */
   int pcg_refactor;     /* renew the factor when CG took more iterations than this; 0 = automatic */
+  int threads;          /* assembly threads, 2 (results do not depend on it beyond round-off) */
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
 } palp_fem_config;
 
