@@ -188,6 +188,10 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
 }
 
 int palp_cli_station_leave(palp_cli_station *st) {
+  /* An explicit leave first, so the server can tell a goodbye from a crash;
+   * then the disposal, which also ends the request's transient-local history. */
+  palp_cli_join none = {.role = palp_ROLE_TRAINEE};
+  send_request(st, &none, palp_OP_LEAVE);
   palp_SessionRequest key;
   memset(&key, 0, sizeof key);
   snprintf(key.station_id, sizeof key.station_id, "%s", st->station_id);
@@ -200,10 +204,23 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
   dds_sample_info_t info[4];
   int n, closed = 0;
   while ((n = dds_take(st->state_r, ptr, info, 4, 4)) > 0)
-    for (int i = 0; i < n; i++)
-      if (info[i].valid_data && buf[i].session_id == st->session_id && buf[i].phase == palp_PHASE_CLOSED) {
-        closed = 1;
-        if (reason) snprintf(reason, len, "%s", buf[i].reason);
+    for (int i = 0; i < n; i++) {
+      if (info[i].valid_data) {
+        if (buf[i].session_id == st->session_id && buf[i].phase == palp_PHASE_CLOSED) {
+          closed = 1;
+          if (reason) snprintf(reason, len, "%s", buf[i].reason);
+        }
+      } else if (info[i].instance_state != DDS_IST_ALIVE) {
+        /* The server never disposes a state; a not-alive one means its writer
+         * is gone (crash: its participant lease expired and Cyclone unregistered,
+         * and with autodispose disposed, the instance). The session cannot go on. */
+        palp_SessionState key;
+        memset(&key, 0, sizeof key);
+        if (dds_instance_get_key(st->state_r, info[i].instance_handle, &key) == 0 && key.session_id == st->session_id) {
+          closed = 1;
+          if (reason) snprintf(reason, len, "server lost (liveliness lease expired)");
+        }
       }
+    }
   return closed;
 }
