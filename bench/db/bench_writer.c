@@ -58,7 +58,7 @@ static void *run_producer(void *arg) {
       palp_db_contact c = {.frame = f, .sim_time_s = f * 1e-3, .slot = 0, .op = f ? PALP_DB_OP_UPDATE : PALP_DB_OP_ADD,
                            .kind = PALP_DB_KIND_FINGER, .center_m = {0.01, 0.002 * k, 0.045}, .radius_m = 0.008};
       double t0 = now();
-      timed(p, palp_db_log_contact(p->w, p->s[k], &c), t0);
+      if (!getenv("BENCH_NO_CONTACT")) timed(p, palp_db_log_contact(p->w, p->s[k], &c), t0);
       palp_db_frame fr = {.frame = f + 1, .sim_time_s = (f + 1) * 1e-3, .top_disp_m = 1e-3, .max_disp_m = 2e-3,
                           .volume_m3 = 1.3e-4, .pressure_pa = 12.0, .contact_force_n = 2.5,
                           .state_hash = (uint64_t)f * 0x9E3779B97F4A7C15ull};
@@ -66,7 +66,7 @@ static void *run_producer(void *arg) {
       timed(p, palp_db_log_frame(p->w, p->s[k], &fr), t0);
       t0 = now();
       timed(p, palp_db_log_feedback(p->w, p->s[k], f + 1, 0, (palp_vec3){0, 0, 2.5}), t0);
-      if ((f + 1) % 33 == 0) {
+      if ((f + 1) % 33 == 0 && !getenv("BENCH_NO_MESH")) {
         t0 = now();
         timed(p, palp_db_log_mesh(p->w, p->s[k], f + 1, mesh, MESH_VERTICES), t0);
       }
