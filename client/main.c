@@ -76,6 +76,17 @@ static int parse(int argc, char **argv, opts *o) {
     i++;                                                                                                       \
     continue;                                                                                                  \
   }
+#define INT(flag, lo, hi, dst)                                                                                 \
+  if (!strcmp(a, flag)) {                                                                                      \
+    if (num(a, v, lo, hi, &x)) return -1;                                                                      \
+    if (x != floor(x)) {                                                                                       \
+      fprintf(stderr, "palp-client: %s: expected a whole number, got \"%s\"\n", a, v);                         \
+      return -1;                                                                                               \
+    }                                                                                                          \
+    dst = x;                                                                                                   \
+    i++;                                                                                                       \
+    continue;                                                                                                  \
+  }
 #define STR(flag, dst)                                                                                         \
   if (!strcmp(a, flag)) {                                                                                      \
     if (!v) {                                                                                                  \
@@ -87,14 +98,14 @@ static int parse(int argc, char **argv, opts *o) {
     continue;                                                                                                  \
   }
     STR("--role", o->role)
-    NUM("--domain", 0, 232, o->domain)
-    NUM("--phantom", 0, 4294967295.0, o->phantom)
-    NUM("--session", 0, 4294967295.0, o->session)
+    INT("--domain", 0, 232, o->domain)
+    INT("--phantom", 0, 4294967295.0, o->phantom)
+    INT("--session", 0, 4294967295.0, o->session)
     STR("--name", o->name)
     STR("--trainee", o->trainee)
     STR("--input", o->input)
     STR("--profile", o->profile)
-    NUM("--distribution", 1, 4, o->distribution)
+    INT("--distribution", 1, 4, o->distribution)
     if (!strcmp(a, "--magnitude")) o->have_magnitude = 1;
     NUM("--magnitude", -1000, 1000, o->magnitude)
     NUM("--t-on", 0, 1e6, o->t_on)
@@ -123,6 +134,7 @@ static int parse(int argc, char **argv, opts *o) {
     fprintf(stderr, "palp-client: unknown option: %s\n", a);
     return -1;
 #undef NUM
+#undef INT
 #undef STR
   }
   if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
@@ -253,14 +265,8 @@ static void drain_feedback(feedback_ctx *c) {
   }
 }
 
-static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph) {
-  char err[512] = "";
-  palp_cli_input in;
-  int rc = make_input(o, &in, err, sizeof err);
-  if (rc < 0) {
-    fprintf(stderr, "palp-client: %s\n", err);
-    return 1;
-  }
+static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
+  int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
     fprintf(stderr, "palp-client: input %s: cannot open: %s\n", in.name, palp_strerror(rc));
     if (in.close) in.close(in.ctx);
@@ -590,12 +596,20 @@ int main(int argc, char **argv) {
     return 1;
   }
   int trainee = !strcmp(o.role, "trainee"), observer = !strcmp(o.role, "observer");
+  char err[512];
+  /* The input source is checked before anything goes on the network. */
+  palp_cli_input in;
+  memset(&in, 0, sizeof in);
+  if (trainee && make_input(&o, &in, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s\n", err);
+    return 1;
+  }
   char label[64];
   snprintf(label, sizeof label, "%s%s%s", o.role, o.name[0] ? ":" : "", o.name);
   palp_cli_station st;
-  char err[512];
   if (palp_cli_station_open(&st, o.domain, label, err, sizeof err) < 0) {
     fprintf(stderr, "palp-client: %s\n", err);
+    if (in.close) in.close(in.ctx);
     return 1;
   }
   palp_cli_join j = {.role = trainee ? palp_ROLE_TRAINEE : observer ? palp_ROLE_OBSERVER : palp_ROLE_VISUAL,
@@ -633,12 +647,14 @@ int main(int argc, char **argv) {
   }
   if (palp_cli_station_join(&st, &j, err, sizeof err) < 0) {
     fprintf(stderr, "palp-client: %s\n", err);
+    if (in.close) in.close(in.ctx);
     palp_cli_station_close(&st);
     return 1;
   }
   palp_Phantom ph;
   if (palp_cli_station_catalogue(&st, st.phantom_id, o.timeout, &ph, err, sizeof err) < 0) {
     fprintf(stderr, "palp-client: %s\n", err);
+    if (in.close) in.close(in.ctx);
     palp_cli_station_leave(&st);
     palp_cli_station_close(&st);
     return 1;
@@ -647,7 +663,7 @@ int main(int argc, char **argv) {
     printf("[%s %s] joined session %u on phantom %u \"%s\" (%u vertices, %.0f Hz), partition %s\n", o.role, o.name,
            st.session_id, ph.phantom_id, ph.name, ph.rest._length, st.tick_rate_hz, st.partition);
   fflush(stdout);
-  rc = trainee ? run_trainee(&o, &st, &ph) : run_viewer(&o, &st, &ph, observer);
+  rc = trainee ? run_trainee(&o, &st, &ph, in) : run_viewer(&o, &st, &ph, observer);
   palp_cli_station_leave(&st);
   /* Give the disposal a moment to reach the server before the participant goes. */
   struct timespec ts = {0, 100000000};
