@@ -152,13 +152,18 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
       if (norm3(c->offset_dir) > 0) d.offset_dir = c->offset_dir;
       int id = palp_world_add_contact(s->world, &d);
       if (id < 0) return id;
+      rc = palp_world_set_contact_force(s->world, id, c->force);
+      if (rc < 0) {
+        /* Undo, so the world and the log agree that nothing happened. */
+        palp_world_remove_contact(s->world, id);
+        return rc;
+      }
       f->world_contact = id;
       f->mode = palp_CONTACT_FORCE;
-      rc = palp_world_set_contact_force(s->world, f->world_contact, c->force);
       emit_op(s, c->finger, id, PALP_SRV_OP_ADD, 1, &d, c->force, c->center, 0);
     } else {
       rc = palp_world_set_contact_force(s->world, f->world_contact, c->force);
-      emit_op(s, c->finger, f->world_contact, PALP_SRV_OP_UPDATE, 1, NULL, c->force, c->center, 0);
+      if (rc == 0) emit_op(s, c->finger, f->world_contact, PALP_SRV_OP_UPDATE, 1, NULL, c->force, c->center, 0);
     }
     double fm = norm3(c->force);
     if (fm > s->stats.peak_force) s->stats.peak_force = fm;
@@ -174,8 +179,9 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
       emit_op(s, c->finger, id, PALP_SRV_OP_ADD, 2, NULL, (palp_vec3){0, 0, 0}, c->center, c->radius);
     } else {
       rc = palp_world_set_finger(s->world, f->world_contact, c->center, c->radius);
-      emit_op(s, c->finger, f->world_contact, PALP_SRV_OP_UPDATE, 2, NULL, (palp_vec3){0, 0, 0}, c->center,
-              c->radius);
+      if (rc == 0)
+        emit_op(s, c->finger, f->world_contact, PALP_SRV_OP_UPDATE, 2, NULL, (palp_vec3){0, 0, 0}, c->center,
+                c->radius);
     }
     break;
   default: return PALP_EINVAL;
