@@ -169,8 +169,8 @@ int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
     printf("replay: %s diverges after %" PRId64 " identical frames\n", s->uid, r->checked);
     result = REVIEW_MISMATCH;
   } else if (r->checked == 0) {
-    printf("replay: %s has no logged frames to compare\n", s->uid);
-    result = REVIEW_MISMATCH;
+    fprintf(stderr, "replay: %s has no logged frames to compare\n", s->uid);
+    result = REVIEW_ERROR;
   } else {
     printf("replay: %s: %" PRId64 " logged frames reproduced bit-identically (state hash and summary), "
            "%d contact inputs applied, last frame %" PRId64 "\n",
