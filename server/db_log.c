@@ -176,6 +176,15 @@ static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const 
   }
 }
 
+static void on_log_counts(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed) {
+  palp_srv_db_log *l = ctx;
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(l->w, &st);
+  *written = (uint64_t)st.written;
+  *shed = (uint64_t)st.shed;
+  *failed = (uint64_t)st.failed;
+}
+
 int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_srv_db_log **out, char *err, size_t errlen) {
   palp_srv_db_log *l = calloc(1, sizeof *l);
   if (!l) return PALP_ENOMEM;
@@ -196,7 +205,8 @@ int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_srv_db_log 
                             .world_op = on_world_op,
                             .contact_rejected = on_rejected,
                             .frame = on_frame,
-                            .overrun = on_overrun};
+                            .overrun = on_overrun,
+                            .log_counts = on_log_counts};
   *out = l;
   return 0;
 }

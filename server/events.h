@@ -83,6 +83,9 @@ typedef struct palp_srv_events {
    * its model contact id (-1 when lifted) and feedback force [N]. */
   void (*frame)(void *ctx, uint32_t session_id, const palp_world *w, const int *finger_slot,
                 const palp_vec3 *finger_force, int fingers);
+  /* [main thread] the log's counters for palp_server_status: records written,
+   * shed (queue full) and failed (disk errors). */
+  void (*log_counts)(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed);
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
 } palp_srv_events;

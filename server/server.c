@@ -511,6 +511,13 @@ static void publish_status(palp_srv *srv) {
   m.ticks = ts.ticks;
   m.overruns = ts.overruns;
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) m.rejected[r] = lc.rejected[r] + srv->rejected_closed[r];
+  if (srv->events && srv->events->log_counts) {
+    uint64_t w = 0, sh = 0, f = 0;
+    srv->events->log_counts(srv->events->ctx, &w, &sh, &f);
+    m.log_written = w;
+    m.log_shed = sh;
+    m.log_failed = f;
+  }
   m.sessions = (dds_sequence_palp_SessionLoad){lc.n, lc.n, srv->loads, false};
   dds_write(srv->status_w, &m);
   for (int i = 0; i < srv->session_count; i++) publish_state(srv, srv->sessions[i], 0, NULL, NULL);
