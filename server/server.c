@@ -43,7 +43,8 @@ struct palp_srv {
 
   dds_entity_t pp;
   dds_entity_t topic[PALP_TOPIC_COUNT];
-  dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w;
+  dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r;
+  int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
 
   palp_srv_ticker *ticker;
@@ -491,7 +492,25 @@ static void load_one(void *ctx, palp_srv_session *s) {
   s->stats.step_us_max = 0;
 }
 
+static void check_other_servers(palp_srv *srv) {
+  void *ptr[4] = {NULL};
+  dds_sample_info_t info[4];
+  int n;
+  while ((n = dds_take(srv->status_r, ptr, info, 4, 4)) > 0) {
+    for (int i = 0; i < n; i++) {
+      const palp_ServerStatus *st = ptr[i];
+      if (info[i].valid_data && strcmp(st->server_id, srv->server_id) != 0 && !srv->warned_other_server) {
+        fprintf(stderr, "palp-server: WARNING: another server (%s) runs on domain %u; both answer every join. "
+                        "Give each class its own domain_id.\n", st->server_id, srv->cfg.domain_id);
+        srv->warned_other_server = 1;
+      }
+    }
+    dds_return_loan(srv->status_r, ptr, n);
+  }
+}
+
 static void publish_status(palp_srv *srv) {
+  check_other_servers(srv);
   palp_srv_tick_stats ts;
   palp_srv_ticker_stats(srv->ticker, &ts);
   load_ctx lc = {.srv = srv};
@@ -573,10 +592,13 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->reply_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   srv->status_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  /* Only to notice a second server on the domain: both would answer every join. */
+  srv->status_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   srv->waitset = dds_create_waitset(srv->pp);
   srv->stop_gc = dds_create_guardcondition(srv->pp);
   srv->request_rc = dds_create_readcondition(srv->request_r, DDS_ANY_STATE);
   if (srv->catalogue_w < 0 || srv->request_r < 0 || srv->reply_w < 0 || srv->state_w < 0 || srv->status_w < 0 ||
+      srv->status_r < 0 ||
       srv->waitset < 0 || srv->stop_gc < 0 || srv->request_rc < 0 ||
       dds_waitset_attach(srv->waitset, srv->request_rc, 0) < 0 || dds_waitset_attach(srv->waitset, srv->stop_gc, 0) < 0) {
     *rc = PALP_EIO;
