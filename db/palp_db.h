@@ -29,6 +29,9 @@
  *       palp_world_add_finger(c, r)           -> op ADD,    kind FINGER, slot = id, center c, radius r
  *       palp_world_set_finger(id, c, r)       -> op UPDATE, kind FINGER, slot = id, center c, radius r
  *       palp_world_remove_contact(id)         -> op REMOVE, slot = id
+ *     After each applied input the world is woken (palp_world_wake); replay does the same. Waking
+ *     is idempotent: one wake after several inputs at the same frame is equivalent. No other call
+ *     that changes the world (palp_world_wake included) may happen between steps.
  *     Inputs that the server rejected (never applied) are not contact inputs: log them as events.
  *  4. After each palp_world_step(), log the frame summary filled by palp_db_frame_summarize(w, ...)
  *     (frame = the new frame number, state_hash = palp_world_hash(w)). Frames may be logged at a

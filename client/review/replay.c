@@ -61,7 +61,9 @@ static void apply(replay_ctx *r, const palp_db_contact *c) {
     fprintf(stderr, "replay: frame %" PRId64 ": applying input to slot %d: %s\n", c->frame, c->slot,
             palp_strerror(rc));
     r->apply_errors++;
+    return;
   }
+  palp_world_wake(r->w); /* contract item 3: every applied input wakes the world */
 }
 
 static void print_diff(const palp_db_frame *log, const palp_db_frame *got) {

@@ -11,7 +11,8 @@
  *    nudged by one ulp it names that frame and exits 1.
  * 4. A full disk (the writer's file capped with max_page_count) does not stop the stepping loop:
  *    it keeps its frame count, the enqueue calls only ever return 0 or PALP_EFULL, and the writer
- *    reports SQLITE_FULL and counts every lost record. */
+ *    reports SQLITE_FULL and counts every lost record.
+ * 5. A session that sleeps and is woken by a finger move replays bit-identically. */
 #include <inttypes.h>
 #include <math.h>
 #include <stdarg.h>
@@ -268,6 +269,75 @@ static void check_full_disk(const char *dir, const char *scene) {
   sim_result_free(&r);
 }
 
+/* Sleep and wake across a replay. A finger presses 0.2 mm in for 0.35 s and lifts to hover 5 mm
+ * above the pole, drifting every tick for 1.8 s while the membrane creeps back slower than the
+ * sleep speed (1e-5 m/s). The wake after every input (contract item 3) keeps the world awake and creeping; a
+ * twin world given the same finger moves without the wakes falls asleep (velocities zeroed), which
+ * shows that the scenario depends on them. Then the finger rests, the world sleeps, and a final
+ * press wakes it. Replay must follow the logged world bit for bit. */
+static void check_sleep_wake(const char *dir, const char *scene_path) {
+  char db[600], err[512];
+  snprintf(db, sizeof db, "%s/session_sleep.db", dir);
+  unlink(db);
+  palp_scene sc;
+  REQUIRE(palp_scene_load(scene_path, &sc, err, sizeof err) == 0, "scene: %s", err);
+  sc.world.dt = 0.001;
+  char *json = palp_scene_to_json(&sc);
+  int rc;
+  palp_world *w = palp_db_world_from_scene(json, 0.001, &rc, err, sizeof err);
+  palp_world *twin = palp_db_world_from_scene(json, 0.001, &rc, err, sizeof err);
+  REQUIRE(w && twin, "world: %s", err);
+  palp_db_writer *lw;
+  REQUIRE(palp_db_writer_open(db, NULL, &lw, err, sizeof err) == 0, "writer: %s", err);
+  palp_db_session_def d = {.uid = "sleep-wake-1", .trainee = "t", .station = "s", .phantom_id = "p",
+                           .phantom_name = "p", .scene_json = json, .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(lw, &d, &s) == 0, "begin");
+  const double R = sc.world.mesh.radius, r = 0.008;
+  const palp_mesh *m = palp_world_mesh(w);
+  int finger = -1, tf = -1, awake_while_moving = 0, twin_slept = 0, asleep_after_rest = 0;
+  double top_before = 0;
+  for (int f = 0; f < 3200; f++) {
+    const palp_vec3 press = {0, 0, R + r - 0.0002}, hover = {1e-6 * (f - 400), 0, R + r + 0.005};
+    if (f == 50) {
+      finger = palp_db_world_add_finger(lw, s, w, press, r);
+      tf = palp_world_add_finger(twin, press, r);
+    }
+    if (f >= 400 && f < 2200) { /* lifted, hovering and drifting 1 um per tick */
+      palp_db_world_set_finger(lw, s, w, finger, hover, r);
+      palp_world_set_finger(twin, tf, hover, r); /* the same move, no wake */
+    }
+    if (f == 2199) {
+      awake_while_moving = palp_world_is_awake(w);
+      twin_slept = !palp_world_is_awake(twin);
+    }
+    if (f == 3000) {
+      asleep_after_rest = !palp_world_is_awake(w);
+      top_before = m->rest[m->top_vertex].z - palp_world_positions(w)[m->top_vertex].z;
+      palp_db_world_set_finger(lw, s, w, finger, (palp_vec3){0, 0, R + r - 0.0015}, r);
+    }
+    REQUIRE(palp_db_world_step(lw, s, w, NULL) == 0, "step %d", f);
+    if (f < 2200) palp_world_step(twin);
+  }
+  const double top_after = m->rest[m->top_vertex].z - palp_world_positions(w)[m->top_vertex].z;
+  CHECK(awake_while_moving, "a finger moved every tick keeps the world awake");
+  CHECK(twin_slept, "without the wakes the creeping world falls asleep (sleep_time 0.5 s): the scenario "
+                    "must depend on the wakes");
+  CHECK(asleep_after_rest, "0.7 s without input puts the world to sleep");
+  CHECK(top_after - top_before > 1e-4, "the last press moved the pole in (%.3g m; want > 0.1 mm)",
+        top_after - top_before);
+  palp_db_log_session_end(lw, s, PALP_DB_END_NORMAL, NULL, 0);
+  palp_db_writer_close(lw);
+  palp_world_destroy(w);
+  palp_world_destroy(twin);
+  free(json);
+  int st;
+  char *out = run(&st, "--db '%s' replay sleep-wake-1", db);
+  CHECK(st == 0 && out && strstr(out, "bit-identically"), "replay across sleep and wake: exit %d\n%s", st,
+        out ? out : "");
+  free(out);
+}
+
 int main(int argc, char **argv) {
   if (argc < 4) {
     fprintf(stderr, "usage: %s TMPDIR SCENE PALP_REVIEW\n", argv[0]);
@@ -289,5 +359,6 @@ int main(int argc, char **argv) {
   check_replay(db, o.uid);
   sim_result_free(&r);
   check_full_disk(argv[1], argv[2]);
+  check_sleep_wake(argv[1], argv[2]);
   CHECK_DONE();
 }
