@@ -1,0 +1,463 @@
+/*
+ * palp-sweep - what accuracy costs in time.
+ *
+ *   palp-sweep [--scene config/paper_step.json] [--distribution uniform]
+ *              [--ref-level 2] [--frames N] [--out out/sweep] [--quick]
+ *
+ * Sweeps the fidelity knobs of the real-time model (mesh resolution, time step,
+ * effects, gel law) and of the FEM reference (mesh level) and measures, for each
+ * point, the cost (median step time, and wall time per simulated second) and the
+ * error against the finest FEM reference run: displacement RMSE over every vertex
+ * and frame, total contact-force RMSE per frame, and the Bland-Altman agreement
+ * (share of |displacement| differences within bias +- 2 SD). Writes a table (CSV,
+ * Markdown) and an SVG plot of error against cost with the Pareto front marked and
+ * the server's default configuration circled.
+ *
+ * Meshes differ between points, so errors are measured on the reference's probe
+ * mesh: the FEM is mapped to a 1,300-vertex real-time mesh, every point's vertex is
+ * compared with the nearest probe vertex (rest positions), and forces as the total
+ * force on the contact, which does not depend on the mesh.
+ */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "eval_fem.h"
+#include "palp.h"
+#include "palp_fem.h"
+#include "stats.h"
+
+#define PROBE_VERTICES 1300
+
+typedef struct point {
+  char name[64];
+  int fem; /* 0 real-time, 1 FEM */
+  int vertices, level;
+  double dt;
+  double step_median_s;  /* median step (RT) or mean frame (FEM) time [s] */
+  double cost;           /* wall time per simulated second [s/s] */
+  double disp_rmse;      /* [m] */
+  double force_rmse;     /* [N] */
+  double agreement;      /* share of |d| differences within bias +- 2 SD */
+  int pareto, is_default;
+} point;
+
+typedef struct reference {
+  int frames, nv;
+  palp_vec3 *rest;  /* probe mesh rest positions [nv] */
+  palp_vec3 *disp;  /* [frames * nv] */
+  double *force;    /* [frames] |total contact force| [N] */
+} reference;
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+static int cmpd(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+static double dist2(palp_vec3 a, palp_vec3 b) {
+  return (a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z);
+}
+static double norm(palp_vec3 a) { return sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
+
+static int progress(void *ud, int frame, int frames, double t) {
+  (void)t;
+  if (isatty(2)) fprintf(stderr, "\r  %s: frame %d/%d ", (const char *)ud, frame, frames);
+  return 0;
+}
+
+/* Reference or FEM point: the FE run mapped to the probe mesh. */
+static int run_fem(const palp_scene *probe_scene, int level, palp_fem_result *r, char *err, size_t errlen) {
+  palp_fem_config cfg = palp_fem_default_config();
+  cfg.mesh.level = level;
+  char label[32];
+  snprintf(label, sizeof label, "FEM level %d", level);
+  const int e = palp_fem_run(&cfg, probe_scene, r, progress, label, err, errlen);
+  if (isatty(2)) fprintf(stderr, "\n");
+  return e;
+}
+
+static double total_force(const palp_fem_result *r, int f) {
+  palp_vec3 s = {0, 0, 0};
+  for (int k = 0; k < r->contact_vertex_count; ++k) {
+    const palp_vec3 v = r->feedback[(size_t)f * r->contact_vertex_count + k];
+    s.x += v.x, s.y += v.y, s.z += v.z;
+  }
+  return norm(s);
+}
+
+/* Errors of a displacement field sampled at `rest` positions against the reference,
+ * accumulated over frames; |d| pairs go to a, b for Bland-Altman. */
+typedef struct errs {
+  double se_disp, se_force;
+  size_t n_disp, n_force;
+  double *a, *b;
+  size_t n, cap;
+} errs;
+
+static void add_frame(errs *e, const reference *R, int f, const palp_vec3 *rest, const palp_vec3 *disp, int nv,
+                      const int *map, double force) {
+  for (int i = 0; i < nv; ++i) {
+    const palp_vec3 d = disp[i], r = R->disp[(size_t)f * R->nv + map[i]];
+    e->se_disp += dist2(d, r);
+    e->n_disp++;
+    if (e->n < e->cap) {
+      e->a[e->n] = norm(d);
+      e->b[e->n] = norm(r);
+      e->n++;
+    }
+  }
+  (void)rest;
+  e->se_force += (force - R->force[f]) * (force - R->force[f]);
+  e->n_force++;
+}
+
+static void finish(errs *e, point *pt) {
+  pt->disp_rmse = sqrt(e->se_disp / (double)(e->n_disp ? e->n_disp : 1));
+  pt->force_rmse = sqrt(e->se_force / (double)(e->n_force ? e->n_force : 1));
+  palp_stats_ba ba;
+  pt->agreement = palp_stats_bland_altman(e->a, e->b, e->n, &ba) == PALP_OK ? ba.agreement : NAN;
+}
+
+/* Nearest probe vertex of each vertex of a mesh (rest positions). */
+static int *nearest_map(const palp_vec3 *rest, int nv, const reference *R) {
+  int *map = malloc(sizeof(int) * (size_t)nv);
+  for (int i = 0; i < nv; ++i) {
+    double bd = INFINITY;
+    for (int j = 0; j < R->nv; ++j) {
+      const double d = dist2(rest[i], R->rest[j]);
+      if (d < bd) bd = d, map[i] = j;
+    }
+  }
+  return map;
+}
+
+static int run_rt(const palp_scene *s, const reference *R, point *pt) {
+  int err;
+  palp_world *w = palp_scene_create_world(s, &err);
+  if (!w) {
+    fprintf(stderr, "palp-sweep: %s: %s\n", pt->name, palp_strerror(err));
+    return -1;
+  }
+  const palp_mesh *m = palp_world_mesh(w);
+  const int nv = m->vertex_count;
+  int *map = nearest_map(m->rest, nv, R);
+  const int sub = (int)lround(s->frame_period / s->world.dt);
+  const long nsteps = (long)R->frames * sub;
+  double *st = malloc(sizeof(double) * (size_t)nsteps);
+  palp_vec3 *disp = malloc(sizeof(palp_vec3) * (size_t)nv);
+  errs e = {0};
+  e.cap = (size_t)R->frames * (size_t)nv;
+  e.a = malloc(sizeof(double) * e.cap);
+  e.b = malloc(sizeof(double) * e.cap);
+  long k = 0;
+  double wall = 0.0;
+  for (int f = 0; f < R->frames; ++f) {
+    for (int q = 0; q < sub; ++q, ++k) {
+      const double t0 = now_s();
+      palp_scene_apply(s, w, palp_world_time(w));
+      palp_world_step(w);
+      st[k] = now_s() - t0;
+      wall += st[k];
+    }
+    const palp_vec3 *p = palp_world_positions(w);
+    for (int i = 0; i < nv; ++i)
+      disp[i] = (palp_vec3){p[i].x - m->rest[i].x, p[i].y - m->rest[i].y, p[i].z - m->rest[i].z};
+    palp_vec3 fb = {0, 0, 0};
+    for (int c = 0; c < s->contact_count; ++c) {
+      palp_vec3 one;
+      if (palp_world_contact_feedback(w, c, &one) == PALP_OK) fb.x += one.x, fb.y += one.y, fb.z += one.z;
+    }
+    add_frame(&e, R, f, m->rest, disp, nv, map, norm(fb));
+  }
+  qsort(st, (size_t)nsteps, sizeof *st, cmpd);
+  pt->step_median_s = st[nsteps / 2];
+  pt->cost = wall / (R->frames * s->frame_period);
+  finish(&e, pt);
+  free(st), free(disp), free(map), free(e.a), free(e.b);
+  palp_world_destroy(w);
+  return 0;
+}
+
+static void mark_pareto(point *p, int n) {
+  for (int i = 0; i < n; ++i) {
+    p[i].pareto = 1;
+    for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
+      const int no_worse = p[j].cost <= p[i].cost && p[j].disp_rmse <= p[i].disp_rmse;
+      const int better = p[j].cost < p[i].cost || p[j].disp_rmse < p[i].disp_rmse;
+      if (no_worse && better) {
+        p[i].pareto = 0;
+        break;
+      }
+    }
+  }
+}
+
+static int cmp_cost(const void *a, const void *b) {
+  const point *x = a, *y = b;
+  return (x->cost > y->cost) - (x->cost < y->cost);
+}
+
+static void write_svg(const char *path, const point *p, int n) {
+  FILE *f = fopen(path, "w");
+  if (!f) return;
+  const double W = 760, H = 480, L = 80, Rm = 20, T = 40, B = 60;
+  double xmin = INFINITY, xmax = 0, ymin = INFINITY, ymax = 0;
+  for (int i = 0; i < n; ++i) {
+    xmin = fmin(xmin, p[i].cost), xmax = fmax(xmax, p[i].cost);
+    ymin = fmin(ymin, p[i].disp_rmse), ymax = fmax(ymax, p[i].disp_rmse);
+  }
+  const double lx0 = floor(log10(xmin)), lx1 = ceil(log10(xmax)), ly0 = floor(log10(ymin * 1e3)),
+               ly1 = ceil(log10(ymax * 1e3));
+#define SX(c) (L + (log10(c) - lx0) / (lx1 - lx0 > 0 ? lx1 - lx0 : 1) * (W - L - Rm))
+#define SY(e) (H - B - (log10((e) * 1e3) - ly0) / (ly1 - ly0 > 0 ? ly1 - ly0 : 1) * (H - T - B))
+  fprintf(f,
+          "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" "
+          "height=\"%g\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" "
+          "fill=\"white\"/>\n<text x=\"%g\" y=\"22\" font-size=\"15\">What accuracy costs: displacement RMSE against "
+          "the finest FEM reference vs wall time per simulated second</text>\n",
+          W, H, L);
+  for (double e = lx0; e <= lx1 + 1e-9; e += 1) {
+    const double x = SX(pow(10, e));
+    fprintf(f, "<line x1=\"%.1f\" y1=\"%g\" x2=\"%.1f\" y2=\"%g\" stroke=\"#ddd\"/><text x=\"%.1f\" y=\"%g\" "
+               "text-anchor=\"middle\">1e%g</text>\n",
+            x, T, x, H - B, x, H - B + 18, e);
+  }
+  for (double e = ly0; e <= ly1 + 1e-9; e += 1) {
+    const double y = SY(pow(10, e) * 1e-3);
+    fprintf(f, "<line x1=\"%g\" y1=\"%.1f\" x2=\"%g\" y2=\"%.1f\" stroke=\"#ddd\"/><text x=\"%g\" y=\"%.1f\" "
+               "text-anchor=\"end\">1e%g</text>\n",
+            L, y, W - Rm, y, L - 6, y + 4, e);
+  }
+  fprintf(f, "<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">cost: wall seconds per simulated second (log)</text>\n",
+          (L + W - Rm) / 2, H - 18);
+  fprintf(f, "<text x=\"18\" y=\"%g\" transform=\"rotate(-90 18 %g)\" text-anchor=\"middle\">displacement RMSE "
+             "[mm] (log)</text>\n",
+          (T + H - B) / 2, (T + H - B) / 2);
+  /* Pareto front as a line through its points in order of cost. */
+  point *sorted = malloc(sizeof(point) * (size_t)n);
+  memcpy(sorted, p, sizeof(point) * (size_t)n);
+  qsort(sorted, (size_t)n, sizeof *sorted, cmp_cost);
+  fprintf(f, "<polyline fill=\"none\" stroke=\"#d62728\" stroke-width=\"1.5\" points=\"");
+  for (int i = 0; i < n; ++i)
+    if (sorted[i].pareto) fprintf(f, "%.1f,%.1f ", SX(sorted[i].cost), SY(sorted[i].disp_rmse));
+  fprintf(f, "\"/>\n");
+  free(sorted);
+  for (int i = 0; i < n; ++i) {
+    const double x = SX(p[i].cost), y = SY(p[i].disp_rmse);
+    fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"%s\"/>\n", x, y, p[i].fem ? "#1f77b4" : "#2ca02c");
+    if (p[i].is_default)
+      fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"9\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n", x,
+              y);
+    if (p[i].pareto || p[i].is_default)
+      fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"10\">%s%s</text>\n", x + 7, y - 6, p[i].name,
+              p[i].is_default ? " (server default)" : "");
+  }
+  fprintf(f, "<text x=\"%g\" y=\"%g\" font-size=\"11\"><tspan fill=\"#2ca02c\">&#9679; real-time model</tspan> "
+             "<tspan fill=\"#1f77b4\">&#9679; FEM</tspan> <tspan fill=\"#d62728\">&#8212; Pareto front</tspan> "
+             "&#9711; server default</text>\n</svg>\n",
+          L, T + 12);
+  fclose(f);
+#undef SX
+#undef SY
+}
+
+static void usage(void) {
+  fprintf(stderr, "usage: palp-sweep [--scene FILE] [--distribution single|uniform|gaussian|gaussian_offset]\n"
+                  "                  [--ref-level N] [--frames N] [--out DIR] [--quick]\n");
+}
+
+int main(int argc, char **argv) {
+  const char *scene_path = "config/paper_step.json", *out = "out/sweep", *dist = "uniform";
+  int ref_level = 2, frames = 0, quick = 0;
+  for (int i = 1; i < argc; ++i) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    if (!strcmp(a, "--scene") && v) scene_path = v, ++i;
+    else if (!strcmp(a, "--distribution") && v) dist = v, ++i;
+    else if (!strcmp(a, "--ref-level") && v) ref_level = atoi(v), ++i;
+    else if (!strcmp(a, "--frames") && v) frames = atoi(v), ++i;
+    else if (!strcmp(a, "--out") && v) out = v, ++i;
+    else if (!strcmp(a, "--quick")) quick = 1;
+    else return usage(), 2;
+  }
+  if (ref_level < 1 || ref_level > 6) {
+    fprintf(stderr, "palp-sweep: --ref-level must be 1 to 6\n");
+    return 2;
+  }
+  palp_scene s;
+  char err[512];
+  if (palp_scene_load(scene_path, &s, err, sizeof err)) {
+    fprintf(stderr, "palp-sweep: %s: %s\n", scene_path, err);
+    return 2;
+  }
+  const char *names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
+  int d = 0;
+  for (int i = 0; i < 4; ++i)
+    if (!strcmp(dist, names[i])) d = i + 1;
+  if (!d || s.contact_count < 1) {
+    fprintf(stderr, "palp-sweep: unknown distribution \"%s\" or a scene without contacts\n", dist);
+    return 2;
+  }
+  s.contact[0].def.distribution = (palp_distribution)d;
+  if (frames > 0) s.frames = frames;
+  if (mkdir(out, 0755) && errno != EEXIST) {
+    fprintf(stderr, "palp-sweep: cannot create %s: %s\n", out, strerror(errno));
+    return 1;
+  }
+
+  /* The reference: the finest FEM level asked for, mapped to the probe mesh. */
+  palp_scene probe = s;
+  probe.world.mesh.vertex_count = PROBE_VERTICES;
+  palp_fem_result ref;
+  printf("palp-sweep: scene %s, distribution %s, %d frames; reference FEM level %d on a %d-vertex probe mesh\n",
+         scene_path, dist, s.frames, ref_level, PROBE_VERTICES);
+  fflush(stdout);
+  if (run_fem(&probe, ref_level, &ref, err, sizeof err)) {
+    fprintf(stderr, "palp-sweep: reference FEM failed: %s\n", err);
+    return 1;
+  }
+  reference R = {.frames = ref.frames, .nv = ref.vertex_count};
+  palp_mesh pm;
+  palp_mesh_create(&probe.world.mesh, &pm);
+  R.rest = pm.rest;
+  R.disp = ref.disp;
+  R.force = malloc(sizeof(double) * (size_t)R.frames);
+  for (int f = 0; f < R.frames; ++f) R.force[f] = total_force(&ref, f);
+
+  point pts[40];
+  int n = 0;
+  /* Real-time model: mesh x step with every effect of the scene on. */
+  const int vcounts[] = {100, 338, 1300, 5000};
+  const double dts[] = {0.01, 0.005, 0.002, 0.001};
+  const int nvc = quick ? 2 : 4, ndt = quick ? 2 : 4;
+  for (int a = 0; a < nvc; ++a)
+    for (int b = 0; b < ndt; ++b) {
+      if (vcounts[a] == 5000 && dts[b] < 0.005) continue; /* minutes per point; the trend is clear without */
+      palp_scene q = s;
+      q.world.mesh.vertex_count = vcounts[a];
+      q.world.dt = quick && b ? 0.002 : dts[b];
+      point *p = &pts[n];
+      memset(p, 0, sizeof *p);
+      snprintf(p->name, sizeof p->name, "RT %d v, %g ms", vcounts[a], 1e3 * q.world.dt);
+      p->vertices = vcounts[a], p->dt = q.world.dt;
+      p->is_default = vcounts[a] == 338 && fabs(q.world.dt - 0.01) < 1e-12;
+      if (run_rt(&q, &R, p) == 0) n++;
+      printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
+             1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
+      fflush(stdout);
+    }
+  /* Effects and gel law at the default mesh and step. */
+  struct {
+    const char *name;
+    uint32_t off;
+    int literal;
+  } fx[] = {{"RT 338 v, no viscosity", PALP_EFFECT_MEMBRANE_VISCOSITY | PALP_EFFECT_GEL_DAMPING, 0},
+            {"RT 338 v, no gel support", PALP_EFFECT_GEL_SUPPORT, 0},
+            {"RT 338 v, no gel pressure", PALP_EFFECT_GEL_PRESSURE, 0},
+            {"RT 338 v, literal Eq. 3", 0, 1}};
+  for (size_t k = 0; k < (quick ? 1 : sizeof fx / sizeof *fx); ++k) {
+    palp_scene q = s;
+    q.world.mesh.vertex_count = 338;
+    q.world.effects &= ~fx[k].off;
+    if (!(q.world.effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
+      q.world.effects &= ~(uint32_t)PALP_EFFECT_GEL_DAMPING;
+    if (fx[k].literal) q.world.gel.law = PALP_GEL_PAPER_LITERAL, q.world.gel.a3 = 0.0;
+    point *p = &pts[n];
+    memset(p, 0, sizeof *p);
+    snprintf(p->name, sizeof p->name, "%s", fx[k].name);
+    p->vertices = 338, p->dt = q.world.dt;
+    if (run_rt(&q, &R, p) == 0) n++;
+    printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
+           1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
+    fflush(stdout);
+  }
+  /* The FEM's own fidelity: coarser levels against the finest. */
+  for (int level = 1; level < ref_level; ++level) {
+    palp_fem_result r;
+    if (run_fem(&probe, level, &r, err, sizeof err)) {
+      fprintf(stderr, "palp-sweep: FEM level %d failed: %s\n", level, err);
+      continue;
+    }
+    point *p = &pts[n];
+    memset(p, 0, sizeof *p);
+    snprintf(p->name, sizeof p->name, "FEM level %d (%d hex)", level, r.element_count);
+    p->fem = 1, p->level = level, p->vertices = PROBE_VERTICES;
+    p->step_median_s = r.wall_seconds / r.frames;
+    p->cost = r.wall_seconds / (r.frames * s.frame_period);
+    errs e = {0};
+    e.cap = (size_t)R.frames * (size_t)R.nv;
+    e.a = malloc(sizeof(double) * e.cap);
+    e.b = malloc(sizeof(double) * e.cap);
+    int *id = malloc(sizeof(int) * (size_t)R.nv);
+    for (int i = 0; i < R.nv; ++i) id[i] = i;
+    for (int f = 0; f < R.frames; ++f)
+      add_frame(&e, &R, f, R.rest, r.disp + (size_t)f * r.vertex_count, r.vertex_count, id, total_force(&r, f));
+    finish(&e, p);
+    free(id), free(e.a), free(e.b);
+    palp_fem_result_destroy(&r);
+    n++;
+    printf("  %-28s cost %.4f s/s, frame %.3f s, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
+           p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
+  }
+  /* The reference itself: zero error by construction, its cost for the plot's scale. */
+  {
+    point *p = &pts[n++];
+    memset(p, 0, sizeof *p);
+    snprintf(p->name, sizeof p->name, "FEM level %d (reference)", ref_level);
+    p->fem = 1, p->level = ref_level, p->vertices = PROBE_VERTICES;
+    p->step_median_s = ref.wall_seconds / ref.frames;
+    p->cost = ref.wall_seconds / (ref.frames * s.frame_period);
+    p->disp_rmse = NAN;
+  }
+  /* The reference has no error to plot: leave it out of the front and the plot. */
+  const int nplot = n - 1;
+  mark_pareto(pts, nplot);
+
+  char path[1024];
+  snprintf(path, sizeof path, "%s/sweep.csv", out);
+  FILE *csv = fopen(path, "w");
+  snprintf(path, sizeof path, "%s/sweep.md", out);
+  FILE *md = fopen(path, "w");
+  if (!csv || !md) {
+    fprintf(stderr, "palp-sweep: cannot write into %s\n", out);
+    return 1;
+  }
+  fprintf(csv, "name,model,vertices,fem_level,dt_s,step_or_frame_s,cost_s_per_sim_s,disp_rmse_m,force_rmse_N,"
+               "agreement,pareto,server_default\n");
+  fprintf(md, "| point | cost [s per simulated s] | step or frame | displacement RMSE [mm] | force RMSE [N] | "
+              "agreement | Pareto |\n|---|---|---|---|---|---|---|\n");
+  for (int i = 0; i < n; ++i) {
+    const point *p = &pts[i];
+    fprintf(csv, "\"%s\",%s,%d,%d,%g,%.6g,%.6g,%.6g,%.6g,%.4f,%d,%d\n", p->name, p->fem ? "fem" : "rt", p->vertices,
+            p->level, p->dt, p->step_median_s, p->cost, p->disp_rmse, p->force_rmse, p->agreement, p->pareto,
+            p->is_default);
+    if (i < nplot)
+      fprintf(md, "| %s%s | %.4f | %s%.4g %s | %.3f | %.3f | %.1f%% | %s |\n", p->name,
+              p->is_default ? " **(server default)**" : "", p->cost, "", p->fem ? p->step_median_s : 1e6 * p->step_median_s,
+              p->fem ? "s/frame" : "us/step", 1e3 * p->disp_rmse, p->force_rmse, 100 * p->agreement,
+              p->pareto ? "yes" : "");
+    else
+      fprintf(md, "| %s | %.4f | %.4g s/frame | (reference) | | | |\n", p->name, p->cost, p->step_median_s);
+  }
+  fclose(csv);
+  fclose(md);
+  snprintf(path, sizeof path, "%s/sweep.svg", out);
+  write_svg(path, pts, nplot);
+  int front = 0;
+  for (int i = 0; i < nplot; ++i) front += pts[i].pareto;
+  printf("wrote %s/sweep.csv, sweep.md, sweep.svg (%d points, %d on the Pareto front)\n", out, n, front);
+  free(R.force);
+  palp_mesh_destroy(&pm);
+  palp_fem_result_destroy(&ref);
+  return 0;
+}
