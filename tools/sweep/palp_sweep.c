@@ -4,6 +4,7 @@
  *   palp-sweep [--scene config/paper_step.json] [--distribution uniform]
  *              [--ref-level 2] [--frames N] [--out out/sweep] [--quick]
  *
+ * Names never hold commas, so the CSV reads with any splitter.
  * Sweeps the fidelity knobs of the real-time model (mesh resolution, time step,
  * effects, gel law) and of the FEM reference (mesh level) and measures, for each
  * point, the cost (median step time, and wall time per simulated second) and the
@@ -348,7 +349,7 @@ int main(int argc, char **argv) {
       q.world.dt = quick && b ? 0.002 : dts[b];
       point *p = &pts[n];
       memset(p, 0, sizeof *p);
-      snprintf(p->name, sizeof p->name, "RT %d v, %g ms", vcounts[a], 1e3 * q.world.dt);
+      snprintf(p->name, sizeof p->name, "RT %d v %g ms", vcounts[a], 1e3 * q.world.dt);
       p->vertices = vcounts[a], p->dt = q.world.dt;
       p->is_default = vcounts[a] == 338 && fabs(q.world.dt - 0.01) < 1e-12;
       if (run_rt(&q, &R, p) == 0) n++;
@@ -361,10 +362,10 @@ int main(int argc, char **argv) {
     const char *name;
     uint32_t off;
     int literal;
-  } fx[] = {{"RT 338 v, no viscosity", PALP_EFFECT_MEMBRANE_VISCOSITY | PALP_EFFECT_GEL_DAMPING, 0},
-            {"RT 338 v, no gel support", PALP_EFFECT_GEL_SUPPORT, 0},
-            {"RT 338 v, no gel pressure", PALP_EFFECT_GEL_PRESSURE, 0},
-            {"RT 338 v, literal Eq. 3", 0, 1}};
+  } fx[] = {{"RT 338 v no viscosity", PALP_EFFECT_MEMBRANE_VISCOSITY | PALP_EFFECT_GEL_DAMPING, 0},
+            {"RT 338 v no gel support", PALP_EFFECT_GEL_SUPPORT, 0},
+            {"RT 338 v no gel pressure", PALP_EFFECT_GEL_PRESSURE, 0},
+            {"RT 338 v literal Eq. 3", 0, 1}};
   for (size_t k = 0; k < (quick ? 1 : sizeof fx / sizeof *fx); ++k) {
     palp_scene q = s;
     q.world.mesh.vertex_count = 338;
