@@ -33,7 +33,7 @@ typedef struct opts {
   double rate, duration, timeout, print_period;
   const char *feedback_csv, *contact_csv, *svg, *trainee;
   double svg_every, map_every;
-  int color, quiet, map, no_map;
+  int color, quiet, map, no_map, plot;
   int have_magnitude, have_t_off;
 } opts;
 
@@ -46,6 +46,7 @@ static void usage(FILE *f) {
           "          --frequency HZ --offset N  --polar DEG --azimuth DEG  --patch-area CM2\n"
           "          --finger-radius MM  (position-driven finger: magnitude is the depth in mm)\n"
           "          --rate HZ  --feedback-csv FILE  --contact-csv FILE  --print-period S\n"
+          "          --plot (chart of the feedback force at the end)\n"
           "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
           "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
           "          session on --phantom ID\n");
@@ -128,6 +129,7 @@ static int parse(int argc, char **argv, opts *o) {
     NUM("--map-every", 0.01, 3600, o->map_every)
     if (!strcmp(a, "--map")) { o->map = 1; continue; }
     if (!strcmp(a, "--no-map")) { o->no_map = 1; continue; }
+    if (!strcmp(a, "--plot")) { o->plot = 1; continue; }
     if (!strcmp(a, "--no-color")) { o->color = 0; continue; }
     if (!strcmp(a, "--quiet")) { o->quiet = 1; continue; }
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); exit(0); }
@@ -220,6 +222,9 @@ static void lat_add(latency *l, double us) {
   l->us[l->n++] = us;
 }
 
+#define PLOT_BINS 4096
+#define PLOT_BIN_S 0.02
+
 typedef struct feedback_ctx {
   palp_cli_station *st;
   palp_cli_input *in;
@@ -229,6 +234,9 @@ typedef struct feedback_ctx {
   uint64_t samples;
   double peak, last, last_top;
   latency lat;
+  /* finger-0 force magnitude [N] per 20 ms bin since t0, for --plot */
+  double plot[PLOT_BINS];
+  int plot_bins;
 } feedback_ctx;
 
 /* Takes every feedback sample; latency from the echoed contact stamp. */
@@ -251,7 +259,14 @@ static void drain_feedback(feedback_ctx *c) {
           lat_add(&c->lat, lat_us);
         }
         double m = norm3(ff->force);
-        if (ff->finger == 0) c->last = m;
+        if (ff->finger == 0) {
+          c->last = m;
+          int bin = (int)((double)(rx - c->t0) * 1e-9 / PLOT_BIN_S);
+          if (bin >= 0 && bin < PLOT_BINS) {
+            if (m > c->plot[bin]) c->plot[bin] = m;
+            if (bin + 1 > c->plot_bins) c->plot_bins = bin + 1;
+          }
+        }
         if (m > c->peak) c->peak = m;
         if (c->in->feedback && ff->finger < PALP_CLI_MAX_FINGERS)
           c->in->feedback(c->in->ctx, ff->finger, (palp_vec3){ff->force.x, ff->force.y, ff->force.z});
@@ -263,6 +278,30 @@ static void drain_feedback(feedback_ctx *c) {
     }
     dds_return_loan(c->st->feedback_r, ptr, 1);
   }
+}
+
+/* Feedback force over time as a terminal chart: 16 rows, one column per group of bins. */
+static void plot_feedback(const feedback_ctx *c, FILE *out) {
+  enum { W = 64, H = 16 };
+  if (c->plot_bins < 2) return;
+  int per = (c->plot_bins + W - 1) / W;
+  int cols = (c->plot_bins + per - 1) / per;
+  double col[W] = {0}, top = 0;
+  for (int k = 0; k < cols; k++) {
+    for (int b = k * per; b < (k + 1) * per && b < c->plot_bins; b++)
+      if (c->plot[b] > col[k]) col[k] = c->plot[b];
+    if (col[k] > top) top = col[k];
+  }
+  if (top <= 0) top = 1;
+  fprintf(out, "feedback |F| on finger 0 [N] over %.1f s\n", c->plot_bins * PLOT_BIN_S);
+  for (int r = H; r >= 1; r--) {
+    fprintf(out, r == H ? "%6.2f |" : (r == 1 ? "%6.2f |" : "       |"), r == H ? top : 0.0);
+    for (int k = 0; k < cols; k++) fputc(col[k] >= top * (r - 0.5) / H ? '#' : ' ', out);
+    fputc('\n', out);
+  }
+  fprintf(out, "       +");
+  for (int k = 0; k < cols; k++) fputc('-', out);
+  fprintf(out, "\n        0 s%*s%.1f s\n", cols > 10 ? cols - 8 : 1, "", c->plot_bins * PLOT_BIN_S);
 }
 
 static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
@@ -418,6 +457,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
          "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s\n",
          o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
          lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "");
+  if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
   (void)ended;
   return closed ? 3 : 0;

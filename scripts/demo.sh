@@ -55,7 +55,7 @@ done
 # distribution II (5.2 cm^2 uniform patch), then release and recovery.
 "$client" --role trainee --domain "$domain" --phantom 1 --name alice \
   --profile step --magnitude 3 --t-on 0.5 --t-off 2.5 --distribution 2 --polar 30 --azimuth 40 \
-  --duration 7 --print-period 1 --feedback-csv "$out/alice-feedback.csv" --contact-csv "$out/alice-contact.csv" \
+  --duration 7 --print-period 1 --plot --feedback-csv "$out/alice-feedback.csv" --contact-csv "$out/alice-contact.csv" \
   >"$out/alice.log" 2>&1 &
 pids+=($!)
 alice=$!
@@ -88,8 +88,11 @@ echo
 echo "== visual station (bob's phantom), last terminal map =="
 awk '/^session [0-9]+, phantom/{buf=""} {buf=buf $0 "\n"} END{printf "%s", buf}' "$out/visual.log" | head -24
 echo
+echo "== alice's haptic station: the force she felt =="
+sed -n '/^feedback |F|/,$p' "$out/alice.log"
+echo
 echo "== stations =="
-for f in alice bob visual observer; do tail -n 1 "$out/$f.log"; done
+for f in alice bob visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
 echo
 echo "== sessions (palp-server) =="
 sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2
