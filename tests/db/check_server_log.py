@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""A real palp-server session lands in the log and comes back out.
+
+Starts palp-server (1 kHz, loopback, domain 162, its own database) and one palp-client trainee
+pressing with the paper's profile, which records what it sent (--contact-csv) and the feedback it
+received (--feedback-csv). Then, from the database, through palp-review:
+  - the session is there, ended normally, with the trainee's name and the tick rate;
+  - every logged contact force equals one the client sent (relative 1e-8: the client prints
+    9 significant digits);
+  - every logged feedback sample whose frame the client also received equals it (relative 1e-5:
+    the client prints 6 significant digits), for at least 50 frames;
+  - replay reproduces every logged frame bit-identically.
+usage: check_server_log.py PALP_SERVER PALP_CLIENT PALP_REVIEW CONFIG_DIR TMPDIR"""
+import csv
+import json
+import os
+import subprocess
+import sys
+import time
+
+server, client, review, config_dir, tmp = sys.argv[1:6]
+work = os.path.join(tmp, "server_log")
+os.makedirs(work, exist_ok=True)
+db = os.path.join(work, "server.db")
+for suffix in ("", "-wal", "-shm"):
+    if os.path.exists(db + suffix):
+        os.unlink(db + suffix)
+
+cfg = json.load(open(os.path.join(config_dir, "server.json")))
+cfg.update({"domain_id": 162, "tick_rate_hz": 1000, "database": db,
+            "dds_config": os.path.join(config_dir, "cyclonedds-loopback.xml")})
+for ph in cfg["phantoms"]:
+    ph["scene"] = os.path.join(config_dir, ph["scene"])
+cfg_path = os.path.join(work, "server.json")
+json.dump(cfg, open(cfg_path, "w"))
+
+fails = []
+srv = subprocess.Popen([server, "--config", cfg_path, "--duration", "7"], stdout=subprocess.PIPE,
+                       stderr=subprocess.STDOUT, text=True)
+time.sleep(1.0)
+fb_csv, ct_csv = os.path.join(work, "feedback.csv"), os.path.join(work, "contact.csv")
+cli = subprocess.run([client, "--role", "trainee", "--domain", "162", "--phantom", "1", "--name", "ivy",
+                      "--duration", "2.5", "--quiet", "--feedback-csv", fb_csv, "--contact-csv", ct_csv],
+                     capture_output=True, text=True, timeout=60)
+out, _ = srv.communicate(timeout=60)
+if cli.returncode != 0:
+    fails.append("palp-client exit %d: %s" % (cli.returncode, cli.stderr[-500:]))
+if srv.returncode != 0:
+    fails.append("palp-server exit %d: %s" % (srv.returncode, out[-800:]))
+
+
+def rv(*args):
+    return subprocess.run([review, "--db", db] + list(args), capture_output=True, text=True, timeout=60)
+
+
+ls = rv("list", "--trainee", "ivy")
+uids = [l.split()[0] for l in ls.stdout.splitlines()[1:] if l and not l.endswith("session") and not l.endswith("sessions")]
+if len(uids) != 1:
+    print(out)
+    print("FAIL: expected one session of ivy, list said:\n" + ls.stdout + ls.stderr)
+    sys.exit(1)
+uid = uids[0]
+exp = rv("export", uid, "--format", "json")
+doc = json.loads(exp.stdout)
+s = doc["session"]
+if s["trainee"] != "ivy" or s["end_reason"] != "normal" or s["tick_hz"] != 1000:
+    fails.append("session fields: %r" % {k: s[k] for k in ("trainee", "end_reason", "tick_hz")})
+frames, contacts, feedback = doc["frames"], doc["contacts"], doc["feedback"]
+print("logged: %d frames, %d contact inputs, %d feedback samples" % (len(frames), len(contacts), len(feedback)))
+if len(frames) < 100 or len(contacts) < 100:
+    fails.append("too little logged: %d frames, %d contacts (want >= 100 each)" % (len(frames), len(contacts)))
+
+
+def close(a, b, rel, floor):
+    return all(abs(x - y) <= rel * max(abs(x), abs(y)) + floor for x, y in zip(a, b))
+
+
+sent = [tuple(float(r[k]) for k in ("fx_N", "fy_N", "fz_N")) for r in csv.DictReader(open(ct_csv))]
+unmatched = 0
+for c in contacts:
+    if "force_n" not in c:
+        continue
+    if not any(close(c["force_n"], v, 1e-8, 1e-12) for v in sent):
+        unmatched += 1
+if unmatched:
+    fails.append("%d logged contact forces were never sent by the client (relative 1e-8)" % unmatched)
+
+got = {int(r["frame"]): (float(r["fx_N"]), float(r["fy_N"]), float(r["fz_N"]))
+       for r in csv.DictReader(open(fb_csv)) if r["active"] == "1"}
+common = bad = 0
+for f in feedback:
+    if f["frame"] in got:
+        common += 1
+        if not close(f["force_n"], got[f["frame"]], 1e-5, 1e-9):
+            bad += 1
+print("feedback: %d logged frames also received by the client, %d differ" % (common, bad))
+if common < 50 or bad:
+    fails.append("feedback: %d common frames (want >= 50), %d differ beyond relative 1e-5" % (common, bad))
+
+rp = rv("replay", uid)
+print(rp.stdout.strip())
+if rp.returncode != 0 or "bit-identically" not in rp.stdout:
+    fails.append("replay exit %d: %s %s" % (rp.returncode, rp.stdout[-600:], rp.stderr[-300:]))
+for f in fails:
+    print("FAIL:", f)
+sys.exit(1 if fails else 0)
