@@ -9,7 +9,7 @@
  *    PALP_EFULL and the record is counted as shed, never silently lost. The worker batches
  *    records into transactions (WAL, synchronous=NORMAL, prepared statements) and commits at least
  *    every opts.commit_interval_s. A disk error never reaches the caller: the worker backs off,
- *    retries the batch, then drops it and counts it as failed; palp_db_writer_stats() reports it.
+ *    retries the batch, then drops it and counts it as failed; palp_db_writer_stats_get() reports it.
  *  - readers (palp-review, tests): palp_db_open() works on a file the server is writing at the
  *    same time (WAL readers never block the writer; busy_timeout covers checkpoints).
  *
@@ -30,8 +30,8 @@
  *       palp_world_set_finger(id, c, r)       -> op UPDATE, kind FINGER, slot = id, center c, radius r
  *       palp_world_remove_contact(id)         -> op REMOVE, slot = id
  *     After each applied input the world is woken (palp_world_wake); replay does the same. Waking
- *     is idempotent: one wake after several inputs at the same frame is equivalent. No other call
- *     that changes the world (palp_world_wake included) may happen between steps.
+ *     is idempotent: one wake after several inputs at the same frame is equivalent. Apart from
+ *     these inputs and their wakes, nothing may change the world between steps.
  *     Inputs that the server rejected (never applied) are not contact inputs: log them as events.
  *  4. After each palp_world_step(), log the frame summary filled by palp_db_frame_summarize(w, ...)
  *     (frame = the new frame number, state_hash = palp_world_hash(w)). Frames may be logged at a
