@@ -14,7 +14,7 @@
  *    overrun over a 2 s window, read from palp_server_status.
  *
  * usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N]
- *        [--contact-rate HZ] [--rt-priority N]
+ *        [--contact-rate HZ] [--rt-priority N] [--no-db]
  */
 #include <fcntl.h>
 #include <math.h>
@@ -40,6 +40,7 @@ static double seconds = 5.0;
 static int threads = 2, max_sessions = 48;
 static double contact_rate = 100.0;
 static int rt_priority = 0;
+static int no_db = 0;
 
 static void nap(double s) {
   struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
@@ -93,7 +94,7 @@ static pid_t spawn_server(unsigned domain, double rate) {
           db_path, PALP_DDS_DEFAULT_CONFIG, PALP_CONFIG_DIR, PALP_CONFIG_DIR);
   fclose(cf);
   char *argv[] = {PALP_SERVER_PATH, "--config", (char *)cfg_path, "--domain", d, "--tick-rate", r,
-                  "--threads", t, "--max-sessions", m, "--rt-priority", pr, NULL};
+                  "--threads", t, "--max-sessions", m, "--rt-priority", pr, no_db ? "--no-db" : NULL, NULL};
   pid_t pid;
   /* The server's own log goes to a file; the bench prints its figures. */
   posix_spawn_file_actions_t fa;
@@ -356,7 +357,7 @@ static void capacity_run(void) {
   palp_cli_station mon;
   if (palp_cli_station_open(&mon, DOMAIN_CAP, "bench-monitor", err, sizeof err) < 0) exit(1);
   dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
-  static const int steps[] = {1, 2, 4, 8, 12, 16, 20, 24, 28, 32, 36, 40, 44, 48, 56, 64};
+  static const int steps[] = {1, 2, 4, 8, 10, 12, 14, 16, 20, 24, 28, 32, 36, 40, 44, 48, 56, 64};
   int n = 0, held = 0;
   printf("capacity: 1 kHz sessions on %d tick thread(s); stations press at %.0f Hz; window 2 s per step\n", threads,
          contact_rate);
@@ -416,10 +417,11 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--max") && i + 1 < argc) max_sessions = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--contact-rate") && i + 1 < argc) contact_rate = atof(argv[++i]);
     else if (!strcmp(argv[i], "--rt-priority") && i + 1 < argc) rt_priority = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--no-db")) no_db = 1;
     else if (argv[i][0] != '-') what = argv[i];
     else {
       fprintf(stderr, "usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N] "
-                      "[--contact-rate HZ] [--rt-priority N]\n");
+                      "[--contact-rate HZ] [--rt-priority N] [--no-db]\n");
       return 2;
     }
   }
