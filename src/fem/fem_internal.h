@@ -89,6 +89,8 @@ typedef struct palp_fem_model {
   int full_newton;    /* refactor every iteration */
   int pcg_refactor;   /* renew the factor when CG needed more than this (0: automatic) */
   long pcg_iterations;
+  double h_next;      /* step to try next [s] after cut-backs (0: the full dt) */
+  int streak;         /* successful steps since the last cut or growth */
   int threads;        /* assembly workers */
   double *tbuf;       /* [(threads - 1) * (ndof + nnz)] private force and stiffness of extra workers */
   int nprony;

@@ -559,7 +559,10 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
 int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
   const size_t nd = (size_t)m->ndof;
   const double hmin = dt / (double)(1L << m->max_cutbacks);
-  double done = 0.0, h = dt;
+  /* A cut step is remembered across calls and doubles back only after three
+   * successes in a row: retrying the full dt at once after every cut wastes a
+   * failing Newton sequence each time. */
+  double done = 0.0, h = m->h_next > 0.0 && m->h_next < dt ? m->h_next : dt;
   while (done < dt * (1.0 - 1e-12)) {
     if (h > dt - done) h = dt - done;
     const int rc = try_step(m, fext, h);
@@ -573,6 +576,7 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
       }
       h *= 0.5;
       m->cutbacks++;
+      m->streak = 0;
       continue;
     }
     const double g = m->newmark_gamma;
@@ -585,7 +589,11 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
     m->time += h;
     done += h;
     m->steps++;
-    if (h < dt) h *= 2.0; /* let the step grow back after a cut */
+    if (h < dt && ++m->streak >= 3) {
+      h = fmin(dt, 2.0 * h);
+      m->streak = 0;
+    }
   }
+  m->h_next = h;
   return PALP_OK;
 }
