@@ -328,7 +328,12 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
       (awake || !s->deformation_sent_asleep)) {
     publish_deformation(s);
     s->deformation_sent_asleep = !awake;
-    s->next_deformation_ns = now_ns + (int64_t)(s->deformation_period * 1e9);
+    /* Advance by the period, not from now: at 100 Hz ticks a 30 Hz display then
+     * gets 3- and 4-tick gaps averaging 30 Hz, not a steady 4 (25 Hz). After a
+     * pause (sleep, no viewer) the schedule restarts from now. */
+    const int64_t period = (int64_t)(s->deformation_period * 1e9);
+    s->next_deformation_ns =
+        now_ns - s->next_deformation_ns > period ? now_ns + period : s->next_deformation_ns + period;
   }
   int64_t dt = palp_dds_now_ns() - t0;
   double us = (double)dt * 1e-3;

@@ -39,7 +39,45 @@ int main(void) {
   test_server_start(&ts, &cfg);
   palp_cli_station tr, vis;
   test_station_join(&tr, DOMAIN, "trainee", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+
+  /* The full mesh is sent only while a member asked for it: a deformation reader
+   * in the trainee's partition sees nothing while the trainee (who did not ask)
+   * presses alone, then the display rate (30 Hz) once a visual station joins. */
+  dds_entity_t spy = palp_dds_create_reader(tr.sub, tr.topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+  uint64_t seq = 0;
+  int spied = 0;
+  for (int i = 0; i < 60; i++) { /* 0.6 s of pressing, world awake */
+    test_send_force(&tr, 0, 2, 30, 40, 1.0, ++seq);
+    test_sleep(0.01);
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(spy, ptr, &info, 1, 1) > 0) {
+      spied += info.valid_data;
+      dds_return_loan(spy, ptr, 1);
+    }
+  }
+  CHECK(spied == 0, "no deformation sample while no member asked for one (%d seen in 0.6 s)", spied);
   test_station_join(&vis, DOMAIN, "visual", palp_ROLE_VISUAL, 1, 0, 0, 1);
+  spied = 0;
+  int64_t t_spy = palp_dds_now_ns();
+  while (palp_dds_now_ns() - t_spy < 1000000000) { /* 1 s, still pressing */
+    test_send_force(&tr, 0, 2, 30, 40, 1.0, ++seq);
+    test_sleep(0.005);
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(spy, ptr, &info, 1, 1) > 0) {
+      spied += info.valid_data;
+      dds_return_loan(spy, ptr, 1);
+    }
+  }
+  /* 30 Hz for 1 s: 30 frames; +-4 for the window edges and the 5 ms polling. */
+  CHECK(spied >= 26 && spied <= 34, "%d deformation frames in 1 s with a visual station (want 30 +- 4, 30 Hz)", spied);
+  dds_delete(spy);
+  for (int i = 0; i < 3; i++) { /* lift and let it recover before the measured press */
+    test_send_force(&tr, 0, 2, 30, 40, 0.0, ++seq);
+    test_sleep(0.01);
+  }
+  test_sleep(1.5);
   CHECK(vis.session_id == tr.session_id, "the visual station follows the trainee's session %u (got %u)", tr.session_id,
         vis.session_id);
   char err[256];
@@ -48,11 +86,10 @@ int main(void) {
 
   double d0 = 0;
   palp_Vec3 at0 = {0, 0, 0};
-  latest_deformation(&vis, &ph, 0.3, &d0, &at0); /* may be none: an idle world sends its rest shape once */
+  latest_deformation(&vis, &ph, 0.3, &d0, &at0); /* the shape before the measured press */
 
   /* 3 N (the paper's force) along the inward normal, distribution II, at polar
    * 30 deg, azimuth 40 deg, resent at 100 Hz for 1.5 s. */
-  uint64_t seq = 0;
   int64_t end = palp_dds_now_ns() + 1500000000;
   while (palp_dds_now_ns() < end) {
     test_send_force(&tr, 0, 2, 30, 40, 3.0, ++seq);
