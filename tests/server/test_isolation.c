@@ -93,6 +93,35 @@ int main(void) {
             sob.foreign_deformations == 0,
         "no station received a sample of the other session (%d, %d, %d, %d)", sa.foreign_feedback, sb.foreign_feedback,
         soa.foreign_deformations, sob.foreign_deformations);
+  /* An idle phantom sleeps: B, never touched, is ticked but not stepped. Two
+   * server statuses about a second apart: B keeps ticking (~100 at 100 Hz),
+   * its awake ticks not at all. */
+  dds_entity_t status_r = palp_dds_create_reader(b.pp, b.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  uint64_t ticks[2] = {0, 0}, awake[2] = {0, 0};
+  for (int k = 0; k < 2; k++) {
+    int got = 0;
+    int64_t until = palp_dds_now_ns() + 3000000000LL;
+    while (!got && palp_dds_now_ns() < until) {
+      void *ptr[1] = {NULL};
+      dds_sample_info_t info;
+      while (dds_take(status_r, ptr, &info, 1, 1) > 0) {
+        const palp_ServerStatus *st = ptr[0];
+        if (info.valid_data)
+          for (uint32_t i = 0; i < st->sessions._length; i++)
+            if (st->sessions._buffer[i].session_id == b.session_id) {
+              ticks[k] = st->sessions._buffer[i].ticks;
+              awake[k] = st->sessions._buffer[i].awake_ticks;
+              got = 1;
+            }
+        dds_return_loan(status_r, ptr, 1);
+      }
+      test_sleep(0.02);
+    }
+    if (k == 0) test_sleep(1.0);
+  }
+  CHECK(ticks[1] - ticks[0] >= 50 && awake[1] == awake[0],
+        "idle B: %llu ticks, %llu of them awake, between two statuses (want >= 50: ticking, and 0: asleep)",
+        (unsigned long long)(ticks[1] - ticks[0]), (unsigned long long)(awake[1] - awake[0]));
   palp_cli_phantom_free(&ph);
   palp_cli_station *all[] = {&obs_a, &obs_b, &a, &b};
   for (int i = 0; i < 4; i++) palp_cli_station_leave(all[i]);
