@@ -1,0 +1,25 @@
+#!/bin/sh
+# The keyboard input in a real terminal (a pty from script(1)): space presses with
+# the default 1 N, "++" raises it to 1.5 N, space lifts, q quits. The station's
+# peak feedback is the force the phantom pushes back with at quasi-static
+# equilibrium: 1.5 N (Newton's third law), within 0.15 N. Domain 109.
+set -u
+server=$1 client=$2 config_dir=$3
+command -v script >/dev/null || { echo "FAIL script(1) not installed (util-linux)"; exit 1; }
+export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
+tmp=$(mktemp -d)
+trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
+"$server" --config "$config_dir/server.json" --domain 109 --no-db > "$tmp/server.log" 2>&1 &
+spid=$!
+(sleep 1.5; printf ' '; sleep 0.8; printf '++'; sleep 1.5; printf ' '; sleep 0.5; printf 'q') |
+  script -qec "$client --role trainee --domain 109 --phantom 1 --name keys --input keyboard --print-period 0" \
+    /dev/null > "$tmp/client.log" 2>&1
+crc=$?
+peak=$(tr '\r' '\n' < "$tmp/client.log" | sed -n 's/.*peak feedback \([0-9.]*\) N.*/\1/p' | tail -n 1)
+if [ $crc -eq 0 ] && [ -n "$peak" ] && awk -v p="$peak" 'BEGIN { exit !(p >= 1.35 && p <= 1.65) }'; then
+  echo "ok   keyboard session: exit 0, peak feedback $peak N (want 1.5 +- 0.15 N)"
+  exit 0
+fi
+echo "FAIL exit $crc, peak feedback '$peak' (want 1.5 +- 0.15 N):"
+tr '\r' '\n' < "$tmp/client.log"
+exit 1
