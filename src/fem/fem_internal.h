@@ -88,7 +88,9 @@ typedef struct palp_fem_model {
   int last_pcg;       /* CG iterations of the last solve */
   int full_newton;    /* refactor every iteration */
   int pcg_refactor;   /* renew the factor when CG needed more than this (0: automatic) */
-  long pcg_iterations;
+  long pcg_iterations; /* CG and GMRES iterations */
+  long gmres_solves;  /* solves that needed GMRES (indefinite tangent or preconditioner) */
+  double *gmres_ws;   /* GMRES basis, allocated on first need */
   double h_next;      /* step to try next [s] after cut-backs (0: the full dt) */
   int streak;         /* successful steps since the last cut or growth */
   int threads;        /* assembly workers */

@@ -46,6 +46,7 @@ void palp_fem_model_destroy(palp_fem_model *m) {
   free(m->emap);
   free(m->kval);
   free(m->pcg);
+  free(m->gmres_ws);
   free(m->tbuf);
   palp_fem_solver_destroy(m->solver);
   memset(m, 0, sizeof *m);
@@ -379,6 +380,77 @@ static double dot(const double *a, const double *b, int n) {
   return s;
 }
 
+/* Right-preconditioned restarted GMRES(k) for K x = b with the (stale) factor as
+ * preconditioner, used where CG cannot go: an indefinite tangent or an LDL^T
+ * (indefinite) preconditioner. Modified Gram-Schmidt, Givens rotations.
+ * Returns the iterations taken, or -1 if ||b - K x|| <= eta ||b|| was not reached
+ * within max_it. W holds (2k + 1) n doubles. */
+#define GMRES_K 30
+static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int max_it, double *W, int *rc) {
+  const int n = m->nfree, k = GMRES_K;
+  double *V = W, *Z = W + (size_t)(k + 1) * (size_t)n;
+  double H[GMRES_K + 1][GMRES_K], cs[GMRES_K], sn[GMRES_K], g[GMRES_K + 1], y[GMRES_K];
+  const double bn = sqrt(dot(b, b, n));
+  memset(x, 0, sizeof(double) * (size_t)n);
+  if (!(bn > 0.0)) return 0;
+  int total = 0;
+  *rc = 0;
+  while (total < max_it) {
+    /* r = b - K x into V[0] */
+    symv(m, x, V);
+    for (int i = 0; i < n; ++i) V[i] = b[i] - V[i];
+    double beta = sqrt(dot(V, V, n));
+    if (beta <= eta * bn) return total;
+    for (int i = 0; i < n; ++i) V[i] /= beta;
+    memset(g, 0, sizeof g);
+    g[0] = beta;
+    int j = 0, done = 0;
+    for (; j < k && total < max_it; ++j, ++total) {
+      double *vj = V + (size_t)j * (size_t)n, *zj = Z + (size_t)j * (size_t)n, *w = V + (size_t)(j + 1) * (size_t)n;
+      *rc = palp_fem_solver_solve(m->solver, vj, zj);
+      if (*rc) return -1;
+      symv(m, zj, w);
+      for (int i = 0; i <= j; ++i) {
+        const double *vi = V + (size_t)i * (size_t)n;
+        H[i][j] = dot(w, vi, n);
+        for (int q = 0; q < n; ++q) w[q] -= H[i][j] * vi[q];
+      }
+      H[j + 1][j] = sqrt(dot(w, w, n));
+      if (H[j + 1][j] > 0.0)
+        for (int q = 0; q < n; ++q) w[q] /= H[j + 1][j];
+      for (int i = 0; i < j; ++i) { /* previous rotations */
+        const double t = cs[i] * H[i][j] + sn[i] * H[i + 1][j];
+        H[i + 1][j] = -sn[i] * H[i][j] + cs[i] * H[i + 1][j];
+        H[i][j] = t;
+      }
+      const double den = hypot(H[j][j], H[j + 1][j]);
+      cs[j] = den > 0.0 ? H[j][j] / den : 1.0;
+      sn[j] = den > 0.0 ? H[j + 1][j] / den : 0.0;
+      H[j][j] = den;
+      H[j + 1][j] = 0.0;
+      g[j + 1] = -sn[j] * g[j];
+      g[j] = cs[j] * g[j];
+      if (fabs(g[j + 1]) <= eta * bn) {
+        ++j, ++total;
+        done = 1;
+        break;
+      }
+    }
+    /* x += Z y, H y = g (upper triangular, j columns) */
+    for (int i = j - 1; i >= 0; --i) {
+      double t = g[i];
+      for (int q = i + 1; q < j; ++q) t -= H[i][q] * y[q];
+      y[i] = H[i][i] != 0.0 ? t / H[i][i] : 0.0;
+    }
+    for (int i = 0; i < j; ++i) {
+      const double *zi = Z + (size_t)i * (size_t)n;
+      for (int q = 0; q < n; ++q) x[q] += y[i] * zi[q];
+    }
+    if (done) return total;
+  }
+  return -1;
+}
+
 /* Solves K du = res on the free equations (kval holds the consistent K).
  *
  * A Cholesky factorisation costs ~1e10 flops at 10^4 elements, a solve with it
@@ -424,11 +496,14 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
     rc = palp_fem_solver_solve(m->solver, r, z);
     memcpy(p, z, sizeof(double) * (size_t)n);
     double rz = dot(r, z, n);
-    int it = 0, ok = 0;
+    int it = 0, ok = 0, broke = 0;
     while (!rc && it < 2 * limit + 20) {
       symv(m, p, q);
       const double pq = dot(p, q, n);
-      if (!(pq > 0.0)) break; /* indefinite direction: fall back to a fresh factor */
+      if (!(pq > 0.0)) { /* indefinite direction (tangent or LDL^T preconditioner) */
+        broke = 1;
+        break;
+      }
       const double alpha = rz / pq;
       for (int i = 0; i < n; ++i) {
         x[i] += alpha * p[i];
@@ -447,7 +522,19 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
     }
     m->pcg_iterations += it;
     m->last_pcg = it;
-    if (!rc && !ok) { /* CG stalled: renew the factor and solve directly */
+    if (!rc && !ok && broke) { /* indefinite: GMRES with the same preconditioner */
+      if (!m->gmres_ws) m->gmres_ws = malloc(sizeof(double) * (size_t)(2 * GMRES_K + 1) * (size_t)n);
+      if (m->gmres_ws) {
+        const int git = gmres(m, b, x, eta, 2 * limit + 20, m->gmres_ws, &rc);
+        if (git >= 0) {
+          ok = 1;
+          m->pcg_iterations += git;
+          m->gmres_solves++;
+          m->last_pcg = it + git;
+        }
+      }
+    }
+    if (!rc && !ok) { /* CG/GMRES stalled: renew the factor and solve directly */
       rc = palp_fem_solver_factor(m->solver, m->kval);
       m->factorizations++;
       m->factored = rc == 0;
@@ -563,7 +650,7 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
    * successes in a row: retrying the full dt at once after every cut wastes a
    * failing Newton sequence each time. */
   double done = 0.0, h = m->h_next > 0.0 && m->h_next < dt ? m->h_next : dt;
-  while (done < dt * (1.0 - 1e-12)) {
+  while (done < dt * (1.0 - 1e-9)) { /* sums of halved steps carry round-off */
     if (h > dt - done) h = dt - done;
     const int rc = try_step(m, fext, h);
     if (rc == PALP_ENOMEM) return rc;
@@ -588,6 +675,7 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
     commit(m);
     m->time += h;
     done += h;
+    if (dt - done < 1e-9 * dt) m->time += dt - done; /* land exactly on the frame */
     m->steps++;
     if (h < dt && ++m->streak >= 3) {
       h = fmin(dt, 2.0 * h);
