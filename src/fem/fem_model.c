@@ -465,7 +465,7 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
  * the change of the viscous factor gamma.
  * CG stops at ||K du - r|| <= eta ||r||, eta = min(0.1, ||r|| / force scale), a
  * forcing term that keeps the Newton iteration quadratic. */
-static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
+static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
   const int n = m->nfree;
   double *b = m->pcg, *x = b + n, *r = x + n, *z = r + n, *p = z + n, *q = p + n;
   for (int d = 0; d < m->ndof; ++d)
@@ -522,10 +522,10 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
     }
     m->pcg_iterations += it;
     m->last_pcg = it;
-    if (!rc && !ok && broke) { /* indefinite: GMRES with the same preconditioner */
+    if (!rc && !ok && broke && allow_gmres) { /* indefinite: GMRES with the same preconditioner */
       if (!m->gmres_ws) m->gmres_ws = malloc(sizeof(double) * (size_t)(2 * GMRES_K + 1) * (size_t)n);
       if (m->gmres_ws) {
-        const int git = gmres(m, b, x, eta, 2 * limit + 20, m->gmres_ws, &rc);
+        const int git = gmres(m, b, x, fmin(eta, 1e-2), 2 * limit + 20, m->gmres_ws, &rc);
         if (git >= 0) {
           ok = 1;
           m->pcg_iterations += git;
@@ -548,6 +548,8 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta) {
   return rc;
 }
 
+static int solve_static(palp_fem_model *m, const double *fext, int increments, double dt);
+
 static void commit(palp_fem_model *m) {
   const size_t E = (size_t)m->mesh->element_count;
   memcpy(m->S0, m->S0t, sizeof(double) * E * 48);
@@ -556,6 +558,16 @@ static void commit(palp_fem_model *m) {
 
 int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments, double dt) {
   if (increments < 1) increments = 1;
+  /* Static solves serve verification: full Newton (a fresh factor every
+   * iteration, LDL^T where indefinite) for exact Newton steps. */
+  const int full = m->full_newton;
+  m->full_newton = 1;
+  const int rc = solve_static(m, fext, increments, dt);
+  m->full_newton = full;
+  return rc;
+}
+
+static int solve_static(palp_fem_model *m, const double *fext, int increments, double dt) {
   const size_t nd = (size_t)m->ndof;
   for (int inc = 1; inc <= increments; ++inc) {
     const double lam = (double)inc / increments;
@@ -567,7 +579,19 @@ int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments,
     int converged = 0;
     for (int it = 0; it <= m->max_newton; ++it) {
       int rc = palp_fem_assemble(m, u, dt, 1);
-      if (rc) return rc;
+      /* an iterate that inverts an element is pulled back along the step */
+      for (int half = 0; rc == PALP_EUNSTABLE && it > 0 && half < 6; ++half) {
+        for (size_t d = 0; d < nd; ++d) {
+          m->du[d] *= 0.5;
+          u[d] -= m->du[d];
+        }
+        rc = palp_fem_assemble(m, u, dt, 1);
+      }
+      if (rc) {
+        snprintf(m->err, sizeof m->err, "static increment %d/%d: %s", inc, increments,
+                 rc == PALP_EUNSTABLE ? "an element inverted (det F <= 0); use more increments" : palp_strerror(rc));
+        return rc;
+      }
       for (size_t d = 0; d < nd; ++d) m->res[d] = (fext ? lam * fext[d] : 0.0) - m->fint[d];
       const double r = norm_free(m, m->res);
       /* the force scale includes the reactions: at equilibrium f_int vanishes on
@@ -580,7 +604,7 @@ int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments,
         break;
       }
       if (it == m->max_newton) break;
-      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)));
+      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0);
       if (rc) return rc;
       m->newton_iterations++;
       for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
@@ -635,7 +659,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
       const int c = m->eq[d];
       if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
     }
-    rc = newton_solve(m, c0, fmin(0.1, r / fmax(scale, 1e-300)));
+    rc = newton_solve(m, c0, fmin(0.1, r / fmax(scale, 1e-300)), 1);
     if (rc) return rc;
     m->newton_iterations++;
     for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
@@ -658,7 +682,9 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
       if (h * 0.5 < hmin * (1.0 - 1e-12)) {
         snprintf(m->err, sizeof m->err,
                  "time step at t = %.6g s failed after %d cut-backs (dt = %.3g s): %s", m->time,
-                 m->max_cutbacks, h, palp_strerror(rc));
+                 m->max_cutbacks, h,
+                 rc == PALP_EUNSTABLE ? "an element inverted or the residual became non-finite"
+                                      : "Newton did not converge or the tangent was singular");
         return rc == PALP_ESOLVER ? PALP_ESOLVER : PALP_EUNSTABLE;
       }
       h *= 0.5;
