@@ -586,7 +586,7 @@ void palp_world_destroy(palp_world *w) {
  * by more than 30 degrees or its tension outgrows beta_l (checked every step in
  * stage_membrane_state). An isotropic k_l I would never need rebuilding, but it
  * adds stiffness across the links, which damped a pressed patch by ~90%. */
-#define PALP_BETA_MIN 0.01
+#define PALP_BETA_MIN 0.001
 static int set_burgers(palp_world *w, double h) {
   if (!has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) || h == w->h_burgers) return PALP_OK;
   const palp_membrane_params *m = &w->def.membrane;
