@@ -127,7 +127,9 @@ static void emit_op(palp_srv_session *s, int finger, int slot, palp_srv_world_op
 static void lift(palp_srv_session *s, palp_srv_finger_state *f) {
   if (f->world_contact >= 0) {
     palp_world_remove_contact(s->world, f->world_contact);
-    emit_op(s, (int)(f - s->finger), f->world_contact, PALP_SRV_OP_REMOVE, 0, NULL, (palp_vec3){0, 0, 0},
+    /* The log names what was lifted: 1 force-driven, 2 position-driven finger. */
+    const int kind = f->mode == palp_CONTACT_FINGER ? 2 : 1;
+    emit_op(s, (int)(f - s->finger), f->world_contact, PALP_SRV_OP_REMOVE, kind, NULL, (palp_vec3){0, 0, 0},
             (palp_vec3){0, 0, 0}, 0);
   }
   f->world_contact = -1;
