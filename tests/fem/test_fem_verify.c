@@ -334,6 +334,31 @@ static void test_tangent(double d1, const char *label) {
   free_block(&mesh);
 }
 
+/* The material-level modulus of palp_fem_nh_iso (Voigt, engineering shear)
+ * against central differences of S(C): D_pq = 2 dS_p/dC_q for normal q, dS_p/dC_q
+ * for shear q (one Voigt entry stands for C_ij and C_ji). Tolerance 1e-7 of max |D|. */
+static void test_material_modulus(void) {
+  const double C[6] = {1.3, 0.9, 1.1, 0.12, -0.05, 0.08}, c10 = 1e5, eps = 1e-6;
+  double S[6], D[6][6], Sp[6], Sm[6], dmax = 0.0, err = 0.0;
+  palp_fem_nh_iso(c10, C, S, D);
+  for (int q = 0; q < 6; ++q) {
+    double Cp[6], Cm[6];
+    memcpy(Cp, C, sizeof Cp);
+    memcpy(Cm, C, sizeof Cm);
+    Cp[q] += eps;
+    Cm[q] -= eps;
+    palp_fem_nh_iso(c10, Cp, Sp, NULL);
+    palp_fem_nh_iso(c10, Cm, Sm, NULL);
+    for (int p = 0; p < 6; ++p) {
+      const double fd = (q < 3 ? 2.0 : 1.0) * (Sp[p] - Sm[p]) / (2 * eps);
+      err = fmax(err, fabs(fd - D[p][q]));
+      dmax = fmax(dmax, fabs(D[p][q]));
+    }
+  }
+  CHECK(err <= 1e-7 * dmax, "material modulus: FD mismatch %.3g of %.3g (tolerance 1e-7 relative)", err, dmax);
+  printf("material modulus: max |D - D_fd| = %.3g of %.3g\n", err, dmax);
+}
+
 int main(int argc, char **argv) {
   const char *c = argc > 1 ? argv[1] : "all";
   const int all = strcmp(c, "all") == 0;
@@ -347,6 +372,7 @@ int main(int argc, char **argv) {
   if (all || !strcmp(c, "rotation")) test_rotation();
   if (all || !strcmp(c, "prony")) test_prony();
   if (all || !strcmp(c, "tangent")) {
+    test_material_modulus();
     test_tangent(4e-6, "compressible gel");
     test_tangent(1e-9, "paper gel, D1 = 0.001 1/MPa");
   }
