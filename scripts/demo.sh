@@ -37,6 +37,8 @@ cleanup() {
 }
 trap cleanup EXIT
 
+# Sessions of this run only, for the review at the end (the log keeps every run).
+since=$(date +%Y-%m-%dT%H:%M:%S)
 echo "demo: palp-server on DDS domain $domain (loopback only), logs in $out/"
 "$server" --config config/server.json --domain "$domain" >"$out/server.log" 2>&1 &
 server_pid=$!
@@ -99,4 +101,22 @@ sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2
 echo
 echo "demo: peak-displacement snapshot of bob's phantom: $out/bob-peak.svg; alice's feedback: $out/alice-feedback.csv"
 grep -E "logging sessions to|session log:" "$out/server.log" | sed 's/^palp-server: /demo: /' || true
+
+# The instructor's review, read back from the SQLite session log: every session of
+# this run listed, summarised, re-simulated from its logged inputs (bit-identical
+# replay of every frame) and written as a self-contained HTML report.
+review=$build/client/review/palp-review
+db=$(sed -n 's/^palp-server: logging sessions to //p' "$out/server.log" | tail -n 1)
+if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
+  echo
+  echo "== instructor review (palp-review, from $db) =="
+  "$review" --db "$db" list --since "$since"
+  for uid in $("$review" --db "$db" list --since "$since" | awk 'NR > 1 && $1 ~ /-/ { print $1 }'); do
+    echo
+    "$review" --db "$db" show "$uid" | sed -n '1,/^events/p' | sed '$d'
+    "$review" --db "$db" replay "$uid" || status=1
+    "$review" --db "$db" report "$uid" --out "$out/report-$uid.html" >/dev/null &&
+      echo "report: $out/report-$uid.html (opens in any browser, no server needed)"
+  done
+fi
 exit "$status"

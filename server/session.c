@@ -108,6 +108,10 @@ static void count_reject(palp_srv_session *s, palp_srv_reject_reason r, int clam
 
 static void emit_op(palp_srv_session *s, int finger, int slot, palp_srv_world_op_kind op, int kind,
                     const palp_contact_def *def, palp_vec3 force, palp_vec3 center, double radius) {
+  /* Replay contract: every world operation, and nothing else, wakes the world. An
+   * input that changes nothing (a release with nothing pressed) must not wake it,
+   * or the live world would step where the replayed one sleeps. */
+  palp_world_wake(s->world);
   if (!s->events || !s->events->world_op) return;
   palp_srv_world_op o;
   memset(&o, 0, sizeof o);
@@ -189,8 +193,7 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
   default: return PALP_EINVAL;
   }
   if (rc < 0) return rc;
-  f->cmd = *c;
-  palp_world_wake(s->world);
+  f->cmd = *c; /* the world was woken by emit_op if anything changed in it */
   return 0;
 }
 
