@@ -134,18 +134,33 @@ typedef struct palp_eval_calib_def {
   int vertex_stride;      /* residual every k-th free vertex, >= 1 */
   double force_weight;    /* force residuals [N] are multiplied by this and compared to
                              displacement residuals [cm]; 0 leaves force out */
+  double bias_weight;     /* [-] per reference, lambda_b (mean |u_rt| - mean |u_ref|) [cm] with
+                             lambda_b = bias_weight sqrt(N_data): the mean displacement the
+                             paper's ANOVA compares; 0 leaves it to the data residuals */
   double prior_weight;    /* [cm] Tikhonov weight on ln(p / p_start): a factor e costs
                              as much as this RMS displacement error over all residuals */
-  double recovery_weight; /* [cm] penalty: (t_recover - target) / recovery_tol costs as
-                             much as this RMS error; 0 = no penalty */
+  double recovery_weight; /* [cm] penalty: (|t_recover - target| - band)+ / recovery_tol costs
+                             as much as this RMS error; 0 = no penalty */
   double recovery_target; /* [s], 1.0 (the paper) */
   double recovery_tol;    /* [s], 0.1 */
+  double recovery_band;   /* [s], 0.2: the penalty is a hinge, zero while |t_recover - target|
+                             <= band ("about 1 s"), growing linearly outside it */
+  double bound_factor;    /* each parameter stays within [p_start / b, p_start b]: the solver's
+                             unknown x maps to ln(p / p_start) = ln(b) tanh(x / ln(b)); 0 = no
+                             bound. Default 30: directions the data barely see (eta1, a2)
+                             otherwise drift by ten decades chasing the last 1% of cost */
   int max_iter;           /* trust-region iterations, 40 */
+  double max_seconds;     /* wall-clock budget of the fit [s]; 0 = none. The best point so
+                             far is returned when it runs out (status PALP_EVAL_FIT_TIMEOUT) */
   double h_df;            /* finite-difference step in ln p, 3e-3 (0.3%) */
   int verbose;            /* progress to stderr */
 } palp_eval_calib_def;
 
 palp_eval_calib_def palp_eval_calib_default_def(void);
+
+/* Fit status beyond GSL's codes (which are positive). */
+#define PALP_EVAL_FIT_TIMEOUT 1000
+const char *palp_eval_fit_status_text(int status);
 
 typedef struct palp_eval_calib_result {
   double start[PALP_EVAL_P_COUNT];
@@ -154,7 +169,8 @@ typedef struct palp_eval_calib_result {
   double cost_before, cost_after;       /* 0.5 sum r^2 of the fit residuals */
   int iterations;
   int evaluations;
-  int status;         /* GSL status of the driver (0 converged) */
+  int status;         /* GSL status: 0 converged, GSL_EMAXITER, GSL_ENOPROG (no step lowers
+                         the cost), PALP_EVAL_FIT_TIMEOUT (max_seconds ran out) */
   int reason;         /* 1 small step, 2 small gradient */
   double seconds;
   palp_eval_recovery recovery_before, recovery_after;

@@ -2,7 +2,8 @@
  * eval_calibrate.c - fitting the real-time parameters to a reference with GSL's
  * nonlinear least squares.
  *
- * Unknowns x_j = ln(p_j / p_start_j) for the fitted parameters: the parameters
+ * Unknowns x_j = ln(p_j / p_start_j) for the fitted parameters (optionally
+ * bounded, ln(p_j / p_start_j) = B tanh(x_j / B), B = ln(bound_factor)): the parameters
  * stay positive whatever step the solver takes, and one finite-difference step
  * h_df in x is the same relative change (h_df = 3e-3: 0.3%) for a modulus of
  * 1e6 Pa and an exponent of 10. The step has to be that large because the model
@@ -17,12 +18,19 @@
  *             vertex at every frame_stride-th frame, for every reference;
  *   force:    force_weight (f_rt - f_ref) per component [N] at the paired contact
  *             vertices (optional);
+ *   bias:     lambda_b (mean |u_rt| - mean |u_ref|) [cm] per reference over the
+ *             same vertices and frames, lambda_b = bias_weight sqrt(N_data). The
+ *             paper's one-way ANOVA compares exactly these means, and with some
+ *             10^5 values per group it flags a mean difference of a few
+ *             micrometres: least squares on components alone leaves a bias
+ *             of that size without caring;
  *   prior:    lambda_p x_j, lambda_p = prior_weight sqrt(N_data): a factor e on one
  *             parameter costs as much as an RMS error of prior_weight cm over all
  *             data residuals. It only decides directions the data do not (eta1's
  *             slow flow, a2's volume damping when the gel is incompressible);
- *   recovery: lambda_r (t_recover - target) / tol, lambda_r = recovery_weight
- *             sqrt(N_data), the paper's ~1 s recovery kept as a soft constraint.
+ *   recovery: lambda_r (|t_recover - target| - band)+ / tol (signed), lambda_r =
+ *             recovery_weight sqrt(N_data): the paper's "about 1 s" recovery as a
+ *             soft constraint that is free inside target +- band.
  * Minimised: 0.5 |r|^2 by the trust-region method (Levenberg-Marquardt steps,
  * More's scaling), QR on the Jacobian, forward differences for the Jacobian.
  * A trial whose model blows up gets residuals of 1 m per entry, which the trust
@@ -180,19 +188,30 @@ typedef struct fit_ws {
   int np;
   int *sel_vertex; /* selected free vertices */
   int nsel;
-  int **force_match; /* [count][rt contact vertex] -> ref contact vertex or -1, built on first run */
+
   size_t n_data;     /* data and force residuals */
   size_t n_force_expected;
-  double lambda_prior, lambda_rec;
+  double lambda_prior, lambda_rec, lambda_bias;
   int with_recovery;
   int evaluations;
   int verbose;
   char err[256];
 } fit_ws;
 
+/* ln(p / p_start) of the solver's unknown: the identity, or B tanh(x / B) with
+ * B = ln(bound_factor), which is the identity near the start (slope 1) and
+ * never leaves [-B, B]. */
+static double log_ratio(const fit_ws *ws, double x) {
+  const double b = ws->def->bound_factor;
+  if (!(b > 1.0)) return x;
+  const double B = log(b);
+  return B * tanh(x / B);
+}
+
 static void params_of_x(const fit_ws *ws, const gsl_vector *x, double p[PALP_EVAL_P_COUNT]) {
   memcpy(p, ws->start, sizeof ws->start);
-  for (int j = 0; j < ws->np; ++j) p[ws->idx[j]] = ws->start[ws->idx[j]] * exp(gsl_vector_get(x, (size_t)j));
+  for (int j = 0; j < ws->np; ++j)
+    p[ws->idx[j]] = ws->start[ws->idx[j]] * exp(log_ratio(ws, gsl_vector_get(x, (size_t)j)));
 }
 
 static size_t force_pairs(const palp_eval_record *ref, const palp_scene *s) {
@@ -215,6 +234,8 @@ static int residuals_one(fit_ws *ws, int i, const double p[PALP_EVAL_P_COUNT], d
     return PALP_EINVAL;
   }
   const int nv = rt.vertex_count, stride = ws->def->frame_stride;
+  palp_stats_sum sum_a = {0, 0}, sum_b = {0, 0};
+  size_t count = 0;
   for (int f = stride - 1; f < rt.frames; f += stride) {
     const palp_vec3 *a = rt.disp + (size_t)f * (size_t)nv, *b = ref->disp + (size_t)f * (size_t)nv;
     for (int q = 0; q < ws->nsel; ++q) {
@@ -222,8 +243,14 @@ static int residuals_one(fit_ws *ws, int i, const double p[PALP_EVAL_P_COUNT], d
       r[(*k)++] = 100.0 * (a[v].x - b[v].x);
       r[(*k)++] = 100.0 * (a[v].y - b[v].y);
       r[(*k)++] = 100.0 * (a[v].z - b[v].z);
+      palp_stats_sum_add(&sum_a, sqrt(a[v].x * a[v].x + a[v].y * a[v].y + a[v].z * a[v].z));
+      palp_stats_sum_add(&sum_b, sqrt(b[v].x * b[v].x + b[v].y * b[v].y + b[v].z * b[v].z));
+      ++count;
     }
   }
+  if (ws->lambda_bias > 0)
+    r[(*k)++] = ws->lambda_bias * 100.0 *
+                (palp_stats_sum_value(&sum_a) - palp_stats_sum_value(&sum_b)) / (double)(count ? count : 1);
   if (ws->def->force_weight > 0) {
     const double wgt = ws->def->force_weight;
     for (int f = stride - 1; f < rt.frames; f += stride)
@@ -259,8 +286,10 @@ static int fit_f(const gsl_vector *x, void *ud, gsl_vector *fvec) {
     palp_scene s = ws->scenes[0];
     palp_eval_params_set(&s.world, p);
     rc = palp_eval_recovery_measure(&s, &rec, ws->err, sizeof ws->err);
-    if (!rc)
-      r[k++] = ws->lambda_rec * (rec.t_recover - ws->def->recovery_target) / ws->def->recovery_tol;
+    if (!rc) {
+      const double dev = rec.t_recover - ws->def->recovery_target, out = fabs(dev) - ws->def->recovery_band;
+      r[k++] = out > 0 ? ws->lambda_rec * copysign(out, dev) / ws->def->recovery_tol : 0.0;
+    }
   }
   if (rc == PALP_EUNSTABLE || rc == PALP_ESOLVER || rc == PALP_EINVAL) {
     /* A trial the model cannot run: a residual of 1 m everywhere, worse than any
@@ -293,7 +322,7 @@ static void fit_callback(const size_t iter, void *ud, const gsl_multifit_nlinear
   fprintf(stderr, "calibrate: iteration %2zu  |r| %.6g  (evaluations %d)  ", iter, chi, ws->evaluations);
   for (int j = 0; j < ws->np; ++j)
     fprintf(stderr, " %s=%.4g", palp_eval_param_name[ws->idx[j]],
-            ws->start[ws->idx[j]] * exp(gsl_vector_get(x, (size_t)j)));
+            ws->start[ws->idx[j]] * exp(log_ratio(ws, gsl_vector_get(x, (size_t)j))));
   fprintf(stderr, "\n");
 }
 
@@ -304,10 +333,13 @@ palp_eval_calib_def palp_eval_calib_default_def(void) {
   d.frame_stride = 2;
   d.vertex_stride = 1;
   d.force_weight = 0.0;
+  d.bias_weight = 0.0;
   d.prior_weight = 1e-3;
   d.recovery_weight = 0.0;
   d.recovery_target = 1.0;
   d.recovery_tol = 0.1;
+  d.recovery_band = 0.2;
+  d.bound_factor = 30.0;
   d.max_iter = 40;
   d.h_df = 3e-3;
   return d;
@@ -346,8 +378,8 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
     return PALP_EINVAL;
   }
   if (def->frame_stride < 1 || def->vertex_stride < 1 || !(def->h_df > 0) || def->max_iter < 1 ||
-      !(def->prior_weight >= 0) || !(def->force_weight >= 0) || !(def->recovery_weight >= 0) ||
-      !(def->recovery_tol > 0)) {
+      !(def->prior_weight >= 0) || !(def->bias_weight >= 0) || !(def->force_weight >= 0) || !(def->recovery_weight >= 0) ||
+      !(def->recovery_tol > 0) || !(def->recovery_band >= 0)) {
     snprintf(err, errlen, "calibrate: strides and iterations must be >= 1, h_df and recovery_tol > 0, weights >= 0");
     return PALP_EINVAL;
   }
@@ -391,8 +423,10 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   ws.n_data = n_data;
   ws.lambda_prior = def->prior_weight * sqrt((double)n_data);
   ws.lambda_rec = def->recovery_weight * sqrt((double)n_data);
+  ws.lambda_bias = def->bias_weight * sqrt((double)n_data);
   ws.with_recovery = def->recovery_weight > 0;
-  const size_t n = n_data + (size_t)ws.with_recovery + (size_t)ws.np, np = (size_t)ws.np;
+  const size_t n = n_data + (ws.lambda_bias > 0 ? (size_t)count : 0) + (size_t)ws.with_recovery + (size_t)ws.np,
+               np = (size_t)ws.np;
 
   palp_eval_calib_result res;
   memset(&res, 0, sizeof res);
@@ -441,12 +475,36 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
     double c = gsl_blas_dnrm2(f);
     res.cost_before = 0.5 * c * c;
   }
+  /* gsl_multifit_nlinear_driver's loop, plus a wall-clock budget: a model run
+   * gets slower as the fit softens the phantom, and a calibration should end
+   * when its user said it should. */
   int info = 0;
-  gs = gsl_multifit_nlinear_driver((size_t)def->max_iter, 1e-5, 1e-8, 1e-10, fit_callback, &ws, &info, w);
+  gs = GSL_EMAXITER;
+  for (int it = 0; it < def->max_iter; ++it) {
+    int st = gsl_multifit_nlinear_iterate(w);
+    fit_callback((size_t)(it + 1), &ws, w);
+    if (st == GSL_ENOPROG) {
+      gs = GSL_ENOPROG; /* no step lowers the cost: a (local) minimum at the model's smoothness */
+      break;
+    }
+    if (st) {
+      gs = st;
+      break;
+    }
+    if (gsl_multifit_nlinear_test(1e-5, 1e-8, 1e-10, &info, w) == GSL_SUCCESS) {
+      gs = GSL_SUCCESS;
+      break;
+    }
+    if (def->max_seconds > 0 && now_s() - t0 > def->max_seconds) {
+      gs = PALP_EVAL_FIT_TIMEOUT;
+      info = 0;
+      break;
+    }
+  }
   res.status = gs;
   res.reason = info;
   res.iterations = (int)gsl_multifit_nlinear_niter(w);
-  if (gs && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
+  if (gs && gs != GSL_EMAXITER && gs != GSL_ENOPROG && gs != PALP_EVAL_FIT_TIMEOUT) {
     snprintf(err, errlen, "calibrate: the solver stopped: %s%s%s", gsl_strerror(gs), ws.err[0] ? ": " : "",
              ws.err);
     gsl_multifit_nlinear_free(w);
@@ -475,6 +533,16 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   res.seconds = now_s() - t0;
   *out = res;
   return PALP_OK;
+}
+
+const char *palp_eval_fit_status_text(int status) {
+  switch (status) {
+  case GSL_SUCCESS: return "converged (step, gradient or cost change below tolerance)";
+  case GSL_EMAXITER: return "iteration limit reached";
+  case GSL_ENOPROG: return "no further step lowers the cost";
+  case PALP_EVAL_FIT_TIMEOUT: return "time budget ran out (best point so far kept)";
+  default: return gsl_strerror(status);
+  }
 }
 
 /* ---- parameter file ---------------------------------------------------------------- */

@@ -40,7 +40,8 @@ typedef struct options {
   int quiet;
   int plots;
   int frame_stride, vertex_stride, max_iter;
-  double force_weight, prior_weight, recovery_weight;
+  double max_minutes;
+  double force_weight, prior_weight, recovery_weight, bias_weight, bound;
   int recovery_auto;
 } options;
 
@@ -51,7 +52,8 @@ static void usage(FILE *f) {
           "       palp-eval calibrate [--scene FILE] [--level N] [--out FILE] [--fem-config FILE]\n"
           "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
-          "                           [--prior-weight CM] [--recovery auto|off|CM] [--max-iter N]\n"
+          "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM]\n"
+          "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
           "defaults: --scene config/paper_step.json, --out out/eval (evaluate) or\n"
           "          config/params/calibrated.json (calibrate), --level from the FEM config (2)\n");
@@ -87,6 +89,8 @@ static int parse_args(int argc, char **argv, options *o) {
   o->vertex_stride = 1;
   o->max_iter = 40;
   o->prior_weight = 1e-3;
+  o->bias_weight = 0.0;
+  o->bound = 30.0;
   o->recovery_auto = 1;
   if (argc < 2) return -1;
   o->cmd = argv[1];
@@ -113,6 +117,9 @@ static int parse_args(int argc, char **argv, options *o) {
     else if (!strcmp(a, "--vertex-stride")) bad = parse_int(a, v, 1, 1000, &o->vertex_stride);
     else if (!strcmp(a, "--max-iter")) bad = parse_int(a, v, 1, 10000, &o->max_iter);
     else if (!strcmp(a, "--force-weight")) bad = parse_double(a, v, 0.0, &o->force_weight);
+    else if (!strcmp(a, "--bound")) bad = parse_double(a, v, 0.0, &o->bound);
+    else if (!strcmp(a, "--bias-weight")) bad = parse_double(a, v, 0.0, &o->bias_weight);
+    else if (!strcmp(a, "--max-minutes")) bad = parse_double(a, v, 0.0, &o->max_minutes);
     else if (!strcmp(a, "--prior-weight")) bad = parse_double(a, v, 0.0, &o->prior_weight);
     else if (!strcmp(a, "--recovery")) {
       if (v && !strcmp(v, "auto")) o->recovery_auto = 1, o->recovery_weight = 0;
@@ -482,8 +489,11 @@ static int cmd_calibrate(const options *o) {
   def.vertex_stride = o->vertex_stride;
   def.force_weight = o->force_weight;
   def.prior_weight = o->prior_weight;
+  def.bias_weight = o->bias_weight;
+  def.bound_factor = o->bound;
   def.recovery_weight = o->recovery_weight;
   def.max_iter = o->max_iter;
+  def.max_seconds = 60.0 * o->max_minutes;
   def.verbose = !o->quiet;
   palp_scene scenes[4];
   palp_eval_record refs[4];
@@ -508,7 +518,7 @@ static int cmd_calibrate(const options *o) {
   }
   /* The paper's ~1 s recovery must survive; if the free fit lost it, refit with
    * it as a penalty residual, starting from the free fit. */
-  const double target = def.recovery_target, band = 0.2;
+  const double target = def.recovery_target, band = def.recovery_band;
   const int broke = !(fabs(res.recovery_after.t_recover - target) <= band);
   int refit = 0;
   if (o->recovery_auto && broke) {
@@ -516,7 +526,7 @@ static int cmd_calibrate(const options *o) {
       fprintf(stderr, "palp-eval: the fit moved the recovery to %.3f s (outside %.1f +- %.1f s); refitting with it "
                       "as a penalty\n",
               res.recovery_after.t_recover, target, band);
-    def.recovery_weight = 0.01;
+    def.recovery_weight = 0.05;
     for (int k = 0; k < s.dist_count; ++k) palp_eval_params_set(&scenes[k].world, res.fitted);
     rc = palp_eval_calibrate(scenes, refs, s.dist_count, &def, &res2, err, sizeof err);
     if (rc) {
@@ -534,7 +544,7 @@ static int cmd_calibrate(const options *o) {
   printf("  references %.1f s; fit %d iterations, %d model evaluations, %.1f s%s; GSL: %s\n", t_ref,
          res.iterations + (refit ? res2.iterations : 0), res.evaluations + (refit ? res2.evaluations : 0),
          res.seconds + (refit ? res2.seconds : 0), refit ? " (free fit + refit with the recovery penalty)" : "",
-         gsl_strerror(fin->status));
+         palp_eval_fit_status_text(fin->status));
   printf("\n  %-18s %14s %14s  %s\n", "parameter", "start", "fitted", "unit");
   for (int j = 0; j < PALP_EVAL_P_COUNT; ++j)
     printf("  %-18s %14.6g %14.6g  %s%s\n", palp_eval_param_name[j], res.start[j], fin->fitted[j],
