@@ -237,7 +237,8 @@ typedef struct palp_world_health {
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 
-/* FNV-1a over the full dynamic state; equal hashes mean bit-identical states. */
+/* FNV-1a over the full dynamic state, in 64-bit words; equal hashes mean
+ * bit-identical states. */
 uint64_t palp_world_hash(const palp_world *w);
 
 /* Per-stage timings of the last step and accumulated totals [s]. */

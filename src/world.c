@@ -900,9 +900,18 @@ void palp_world_wake(palp_world *w) {
 }
 const palp_world_def *palp_world_get_def(const palp_world *w) { return &w->def; }
 
-static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
+/* FNV-1a over 64-bit words (the state is arrays of doubles): one multiply per 8
+ * bytes instead of per byte, so hashing every frame at 1 kHz stays cheap. */
+static uint64_t fnv1a64(uint64_t h, const void *data, size_t n) {
   const unsigned char *p = data;
-  for (size_t i = 0; i < n; ++i) {
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    uint64_t w;
+    memcpy(&w, p + i, 8);
+    h ^= w;
+    h *= 1099511628211ull;
+  }
+  for (; i < n; ++i) {
     h ^= p[i];
     h *= 1099511628211ull;
   }
@@ -912,14 +921,14 @@ static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
 uint64_t palp_world_hash(const palp_world *w) {
   uint64_t h = 14695981039346656037ull;
   const size_t nv = (size_t)w->mesh.vertex_count;
-  h = fnv1a(h, w->pos, sizeof *w->pos * nv);
-  h = fnv1a(h, w->vel, sizeof *w->vel * nv);
-  if (w->nlink) h = fnv1a(h, w->eps, sizeof(double) * (size_t)w->nlink);
-  if (w->xs) h = fnv1a(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
-  h = fnv1a(h, &w->V, sizeof w->V);
-  h = fnv1a(h, &w->p_abs, sizeof w->p_abs);
-  h = fnv1a(h, &w->t, sizeof w->t);
-  h = fnv1a(h, &w->frame, sizeof w->frame);
+  h = fnv1a64(h, w->pos, sizeof *w->pos * nv);
+  h = fnv1a64(h, w->vel, sizeof *w->vel * nv);
+  if (w->nlink) h = fnv1a64(h, w->eps, sizeof(double) * (size_t)w->nlink);
+  if (w->xs) h = fnv1a64(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
+  h = fnv1a64(h, &w->V, sizeof w->V);
+  h = fnv1a64(h, &w->p_abs, sizeof w->p_abs);
+  h = fnv1a64(h, &w->t, sizeof w->t);
+  h = fnv1a64(h, &w->frame, sizeof w->frame);
   return h;
 }
 
