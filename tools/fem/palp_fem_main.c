@@ -129,12 +129,17 @@ static void summary(const palp_scene *s, const palp_fem_result *r, double wall) 
   printf("scene            %s: %d contact(s), %d frames of %.3f s\n", s->name, s->contact_count, r->frames,
          s->frame_period);
   printf("mesh             %d nodes, %d hexahedra, %d free DOFs\n", r->node_count, r->element_count, r->dof_count);
-  printf("top vertex       peak %.3f mm at %.2f s; at release %.3f mm; 1 s after release %.3f mm\n", 1e3 * peak,
-         t_peak, 1e3 * at_release, 1e3 * residual);
-  printf("recovery         %s%.2f s after release (to 5%% of the peak)\n", isnan(recovery) ? "not within the run; " : "",
-         recovery);
-  printf("feedback         (%.3f, %.3f, %.3f) N at release, |f| = %.3f N over %d contact vertices\n", fb_release.x,
-         fb_release.y, fb_release.z, vlen(fb_release), r->contact_vertex_count);
+  printf("top vertex       peak %.3f mm at %.2f s", 1e3 * peak, t_peak);
+  if (!isnan(at_release)) printf("; at release %.3f mm", 1e3 * at_release);
+  if (!isnan(residual)) printf("; 1 s after release %.3f mm", 1e3 * residual);
+  printf("\n");
+  if (!isnan(recovery)) printf("recovery         %.2f s after release (to 5%% of the peak)\n", recovery);
+  else printf("recovery         not within the run\n");
+  if (!isnan(at_release))
+    printf("feedback         (%.3f, %.3f, %.3f) N at release, |f| = %.3f N over %d contact vertices\n", fb_release.x,
+           fb_release.y, fb_release.z, vlen(fb_release), r->contact_vertex_count);
+  else
+    printf("feedback         %d contact vertices (the run ends before the release)\n", r->contact_vertex_count);
   printf("solver           %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations, %ld cut-backs\n",
          r->steps, r->newton_iterations, r->pcg_iterations, r->factorizations, r->cutbacks);
   printf("time             %.1f s computed (%.3f s per frame; the paper: 22.5 s per step)%s\n", r->wall_seconds,
