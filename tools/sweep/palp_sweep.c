@@ -212,7 +212,7 @@ static int cmp_cost(const void *a, const void *b) {
 static void write_svg(const char *path, const point *p, int n) {
   FILE *f = fopen(path, "w");
   if (!f) return;
-  const double W = 760, H = 480, L = 80, Rm = 20, T = 40, B = 60;
+  const double W = 920, H = 520, L = 80, Rm = 190, T = 62, B = 60;
   double xmin = INFINITY, xmax = 0, ymin = INFINITY, ymax = 0;
   for (int i = 0; i < n; ++i) {
     xmin = fmin(xmin, p[i].cost), xmax = fmax(xmax, p[i].cost);
@@ -225,9 +225,11 @@ static void write_svg(const char *path, const point *p, int n) {
   fprintf(f,
           "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" "
           "height=\"%g\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" "
-          "fill=\"white\"/>\n<text x=\"%g\" y=\"22\" font-size=\"15\">What accuracy costs: displacement RMSE against "
-          "the finest FEM reference vs wall time per simulated second</text>\n",
-          W, H, L);
+          "fill=\"white\"/>\n<text x=\"%g\" y=\"20\" font-size=\"15\">What accuracy costs: displacement RMSE against "
+          "the finest FEM reference</text>\n<text x=\"%g\" y=\"38\" font-size=\"12\" fill=\"#555\">against "
+          "wall time per simulated second, on this machine; labels on the Pareto front and the server "
+          "default</text>\n",
+          W, H, L, L);
   for (double e = lx0; e <= lx1 + 1e-9; e += 1) {
     const double x = SX(pow(10, e));
     fprintf(f, "<line x1=\"%.1f\" y1=\"%g\" x2=\"%.1f\" y2=\"%g\" stroke=\"#ddd\"/><text x=\"%.1f\" y=\"%g\" "
@@ -254,20 +256,28 @@ static void write_svg(const char *path, const point *p, int n) {
     if (sorted[i].pareto) fprintf(f, "%.1f,%.1f ", SX(sorted[i].cost), SY(sorted[i].disp_rmse));
   fprintf(f, "\"/>\n");
   free(sorted);
+  int labelled = 0;
   for (int i = 0; i < n; ++i) {
     const double x = SX(p[i].cost), y = SY(p[i].disp_rmse);
     fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"%s\"/>\n", x, y, p[i].fem ? "#1f77b4" : "#2ca02c");
     if (p[i].is_default)
       fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"9\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n", x,
               y);
-    if (p[i].pareto || p[i].is_default)
-      fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"10\">%s%s</text>\n", x + 7, y - 6, p[i].name,
-              p[i].is_default ? " (server default)" : "");
+    if (p[i].pareto || p[i].is_default) {
+      /* Stagger labels of nearby points above and below, with a leader line. */
+      const double dy = (labelled++ % 2) ? 22.0 + 12.0 * (labelled % 3) : -(10.0 + 12.0 * (labelled % 3));
+      fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\" stroke-width=\"0.6\"/>"
+                 "<text x=\"%.1f\" y=\"%.1f\" font-size=\"10\">%s%s</text>\n",
+              x, y, x + 4, y + dy - 3, x + 5, y + dy, p[i].name, p[i].is_default ? " (server default)" : "");
+    }
   }
-  fprintf(f, "<text x=\"%g\" y=\"%g\" font-size=\"11\"><tspan fill=\"#2ca02c\">&#9679; real-time model</tspan> "
-             "<tspan fill=\"#1f77b4\">&#9679; FEM</tspan> <tspan fill=\"#d62728\">&#8212; Pareto front</tspan> "
-             "&#9711; server default</text>\n</svg>\n",
-          L, T + 12);
+  const double lx = W - Rm + 14;
+  fprintf(f,
+          "<g font-size=\"11\"><text x=\"%g\" y=\"%g\" fill=\"#2ca02c\">&#9679; real-time model</text>"
+          "<text x=\"%g\" y=\"%g\" fill=\"#1f77b4\">&#9679; FEM (coarser levels)</text>"
+          "<text x=\"%g\" y=\"%g\" fill=\"#d62728\">&#8212; Pareto front</text>"
+          "<text x=\"%g\" y=\"%g\">&#9711; server default</text></g>\n</svg>\n",
+          lx, T + 12, lx, T + 28, lx, T + 44, lx, T + 60);
   fclose(f);
 #undef SX
 #undef SY
