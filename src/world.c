@@ -92,7 +92,12 @@ struct palp_world {
 
   /* Contacts. */
   contact *contacts;
-  palp_vec3 *f_int; /* internal force per vertex [N] (only with force feedback) */
+  /* Links at each vertex (only with force feedback): the feedback needs the membrane
+   * force at contact vertices only, so it is summed there from the links' stresses
+   * rather than accumulated over the whole mesh every step. Entry +(l+1) when the
+   * vertex is the link's first end, -(l+1) when its second. */
+  int *vlink_start; /* [vertex_count + 1] */
+  int *vlink;       /* [2 * nlink] */
 
   /* Pipeline. */
   stage stages[PALP_STAGE_COUNT];
@@ -314,9 +319,7 @@ static void stage_fingers(palp_world *w, double h) {
 static void stage_membrane_state(palp_world *w, double h) {
   (void)h;
   const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
-  const int fb = w->f_int != NULL;
   const double tangent = visc ? w->burgers.tangent : w->E_static; /* [Pa] */
-  if (fb) memset(w->f_int, 0, sizeof *w->f_int * (size_t)w->mesh.vertex_count);
   for (int l = 0; l < w->nlink; ++l) {
     const int a = w->mesh.link[l][0], b = w->mesh.link[l][1];
     const palp_vec3 d = v3_sub(w->pos[b], w->pos[a]);
@@ -331,11 +334,6 @@ static void stage_membrane_state(palp_world *w, double h) {
      * or tension stiffness across the link above beta k (half the margin). */
     const double c = v3_dot(w->dir[l], w->fdir[l]);
     if (c * c < 0.75 || sigma * w->xsec[l] / len > w->fbeta[l] * tangent * w->xsec[l] / w->rest_len[l]) w->stale = 1;
-    if (fb) {
-      const palp_vec3 f = v3_scale(w->dir[l], sigma * w->xsec[l]);
-      w->f_int[a] = v3_add(w->f_int[a], f);
-      w->f_int[b] = v3_sub(w->f_int[b], f);
-    }
   }
 }
 
@@ -367,7 +365,13 @@ static void stage_feedback(palp_world *w, double h) {
     for (int q = 0; q < k->count; ++q) {
       const int i = k->vertex[q];
       /* The force of membrane and gel on the vertex is what the finger feels. */
-      palp_vec3 f = w->f_int ? w->f_int[i] : v3(0, 0, 0);
+      palp_vec3 f = v3(0, 0, 0);
+      for (int e = w->vlink_start[i]; e < w->vlink_start[i + 1]; ++e) {
+        const int l = abs(w->vlink[e]) - 1;
+        /* tension sigma a pulls the first end towards the second, along dir */
+        const palp_vec3 fl = v3_scale(w->dir[l], w->sigma[l] * w->xsec[l]);
+        f = w->vlink[e] > 0 ? v3_add(f, fl) : v3_sub(f, fl);
+      }
       if (gel) f = v3_add(f, v3_scale(w->grad[i], w->p_gauge));
       if (support) {
         const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
@@ -539,8 +543,19 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     w->V0 = w->V = palp_mesh_volume(&w->mesh, w->pos);
   }
   if (has(w, PALP_EFFECT_FORCE_FEEDBACK)) {
-    w->f_int = xcalloc((size_t)nv, sizeof *w->f_int, &fail);
+    w->vlink_start = xcalloc((size_t)nv + 1, sizeof(int), &fail);
+    w->vlink = xcalloc((size_t)(2 * w->nlink), sizeof(int), &fail);
     if (fail) goto nomem;
+    for (int l = 0; l < w->nlink; ++l) w->vlink_start[w->mesh.link[l][0] + 1]++, w->vlink_start[w->mesh.link[l][1] + 1]++;
+    for (int i = 0; i < nv; ++i) w->vlink_start[i + 1] += w->vlink_start[i];
+    int *fill = xcalloc((size_t)nv, sizeof(int), &fail);
+    if (fail) goto nomem;
+    for (int l = 0; l < w->nlink; ++l) {
+      const int a = w->mesh.link[l][0], b = w->mesh.link[l][1];
+      w->vlink[w->vlink_start[a] + fill[a]++] = l + 1;
+      w->vlink[w->vlink_start[b] + fill[b]++] = -(l + 1);
+    }
+    free(fill);
   }
   e = refactor(w, def->dt);
   if (e) {
@@ -569,7 +584,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta);
-  free(w->grad), free(w->u), free(w->g_u), free(w->f_int);
+  free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work);
   palp_ldl_free(&w->ldl);
   palp_mesh_destroy(&w->mesh);
