@@ -226,6 +226,8 @@ def test_errors(tool, scene):
         (["evaluate", "--scene", scene, "--level", "two"], 2, ["--level", "two"]),
         (["evaluate", "--scene", scene, "--level"], 2, ["--level"]),
         (["evaluate", "--scene", scene, "--fem-config", os.path.join(tmp, "nofem.json")], 1, ["nofem.json"]),
+        (["evaluate", "--scene", scene, "--params", os.path.join(tmp, "noparams.json")], 1, ["noparams.json",
+                                                                                           "not found"]),
         (["evaluate", "--scene", scene, "--frames", "-3"], 2, ["--frames"]),
         (["evaluate", "--scene", scene, "--distributions", "1,5"], 2, ["--distributions"]),
         (["evaluate", "--bogus"], 2, ["--bogus"]),

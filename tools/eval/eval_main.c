@@ -17,7 +17,10 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include <cjson/cJSON.h>
 #include <gsl/gsl_errno.h>
+#include <limits.h>
+#include <unistd.h>
 
 #include "eval.h"
 #include "eval_fem.h"
@@ -32,6 +35,7 @@ typedef struct options {
   const char *scene;
   const char *out;
   const char *fem_config;
+  const char *params;
   const char *cache_dir;
   const char *fit;
   const char *distributions;
@@ -47,9 +51,9 @@ typedef struct options {
 
 static void usage(FILE *f) {
   fprintf(f,
-          "usage: palp-eval evaluate  [--scene FILE] [--level N] [--out DIR] [--fem-config FILE]\n"
+          "usage: palp-eval evaluate  [--scene FILE] [--params FILE] [--level N] [--out DIR] [--fem-config FILE]\n"
           "                           [--frames N] [--distributions 1,2,3,4] [--cache-dir DIR] [--no-plots] [--quiet]\n"
-          "       palp-eval calibrate [--scene FILE] [--level N] [--out FILE] [--fem-config FILE]\n"
+          "       palp-eval calibrate [--scene FILE] [--params FILE] [--level N] [--out FILE] [--fem-config FILE]\n"
           "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
           "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM]\n"
@@ -108,6 +112,7 @@ static int parse_args(int argc, char **argv, options *o) {
     if (!strcmp(a, "--scene")) o->scene = v;
     else if (!strcmp(a, "--out")) o->out = v;
     else if (!strcmp(a, "--fem-config")) o->fem_config = v;
+    else if (!strcmp(a, "--params")) o->params = v;
     else if (!strcmp(a, "--cache-dir")) o->cache_dir = v;
     else if (!strcmp(a, "--fit")) o->fit = v;
     else if (!strcmp(a, "--distributions")) o->distributions = v;
@@ -175,6 +180,75 @@ static double now_s(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The scene with its "parameters" entry pointing at another parameter file
+ * (--params): the scene's JSON with that one key replaced, loaded through
+ * palp_scene_load so the file is read and checked exactly as scenes read it.
+ * Returns -100 when the parameter file itself is missing. */
+static int load_with_params(const char *scene_path, const char *params, palp_scene *out, char *err, size_t errlen) {
+  if (!file_exists(params)) {
+    snprintf(err, errlen, "parameter file not found");
+    return -100;
+  }
+  /* absolute, because the scene resolves "parameters" relative to itself */
+  char abs_params[PATH_MAX], cwd[PATH_MAX];
+  size_t lp = strlen(params), lc = 0;
+  if (params[0] != '/') {
+    if (!getcwd(cwd, sizeof cwd)) cwd[0] = 0;
+    lc = strlen(cwd);
+  }
+  if ((params[0] != '/' && lc == 0) || lc + lp + 2 > sizeof abs_params) {
+    snprintf(err, errlen, "cannot resolve the parameter file's path");
+    return -100;
+  }
+  if (lc) {
+    memcpy(abs_params, cwd, lc);
+    abs_params[lc] = '/';
+    memcpy(abs_params + lc + 1, params, lp + 1);
+  } else
+    memcpy(abs_params, params, lp + 1);
+  FILE *f = fopen(scene_path, "rb");
+  if (!f) {
+    snprintf(err, errlen, "cannot read the scene");
+    return PALP_EIO;
+  }
+  fseek(f, 0, SEEK_END);
+  long len = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *txt = len >= 0 ? malloc((size_t)len + 1) : NULL;
+  size_t got = txt ? fread(txt, 1, (size_t)len, f) : 0;
+  fclose(f);
+  if (!txt || got != (size_t)len) {
+    free(txt);
+    snprintf(err, errlen, "cannot read the scene");
+    return PALP_EIO;
+  }
+  txt[len] = 0;
+  cJSON *root = cJSON_Parse(txt);
+  free(txt);
+  if (!root || !cJSON_IsObject(root)) {
+    cJSON_Delete(root);
+    /* let the scene loader say what is wrong with it */
+    return palp_scene_load(scene_path, out, err, errlen);
+  }
+  cJSON_DeleteItemFromObjectCaseSensitive(root, "parameters");
+  cJSON_AddStringToObject(root, "parameters", abs_params);
+  char *json = cJSON_PrintUnformatted(root);
+  cJSON_Delete(root);
+  char tmp[] = "/tmp/palp_eval_scene_XXXXXX";
+  int fd = json ? mkstemp(tmp) : -1;
+  FILE *t = fd >= 0 ? fdopen(fd, "w") : NULL;
+  int rc = PALP_EIO;
+  if (t) {
+    fputs(json, t);
+    rc = fclose(t) == 0 ? palp_scene_load(tmp, out, err, errlen) : PALP_EIO;
+    remove(tmp);
+  } else if (fd >= 0)
+    close(fd);
+  if (rc == PALP_EIO && !err[0]) snprintf(err, errlen, "cannot write a temporary scene");
+  free(json);
+  return rc;
+}
+
 /* ---- shared set-up: scene, FEM configuration, references -------------------------------- */
 
 typedef struct setup {
@@ -195,9 +269,10 @@ static int load_setup(const options *o, setup *s) {
     fprintf(stderr, "palp-eval: scene file \"%s\" not found\n", s->scene_path);
     return 1;
   }
-  int rc = palp_scene_load(s->scene_path, &s->scene, err, sizeof err);
+  int rc = o->params ? load_with_params(s->scene_path, o->params, &s->scene, err, sizeof err)
+                     : palp_scene_load(s->scene_path, &s->scene, err, sizeof err);
   if (rc) {
-    fprintf(stderr, "palp-eval: %s: %s\n", s->scene_path, err);
+    fprintf(stderr, "palp-eval: %s: %s\n", rc == -100 ? o->params : s->scene_path, err);
     return 1;
   }
   if (s->scene.contact_count < 1) {
@@ -376,9 +451,9 @@ static int cmd_evaluate(const options *o) {
   memset(&rep, 0, sizeof rep);
   snprintf(rep.scene, sizeof rep.scene, "%s", s.scene_path);
   snprintf(rep.scene_name, sizeof rep.scene_name, "%s", s.scene.name);
-  snprintf(rep.parameters, sizeof rep.parameters, "E1 %.4g Pa, eta1 %.4g Pa s, E2 %.4g Pa, eta2 %.4g Pa s, a1 %.4g, "
+  snprintf(rep.parameters, sizeof rep.parameters, "%s%sE1 %.4g Pa, eta1 %.4g Pa s, E2 %.4g Pa, eta2 %.4g Pa s, a1 %.4g, "
                                                   "a2 %.4g Pa s/m^3, support %.4g Pa/m, %.4g Pa s/m",
-           s.scene.world.membrane.E1, s.scene.world.membrane.eta1, s.scene.world.membrane.E2,
+           o->params ? o->params : "", o->params ? ": " : "", s.scene.world.membrane.E1, s.scene.world.membrane.eta1, s.scene.world.membrane.E2,
            s.scene.world.membrane.eta2, s.scene.world.gel.a1, s.scene.world.gel.a2, s.scene.world.gel.support_modulus,
            s.scene.world.gel.support_viscosity);
   rep.frames = s.scene.frames;
