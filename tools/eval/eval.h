@@ -129,7 +129,7 @@ typedef struct palp_eval_recovery {
 int palp_eval_recovery_measure(const palp_scene *s, palp_eval_recovery *out, char *err, size_t errlen);
 
 typedef struct palp_eval_calib_def {
-  unsigned mask;          /* parameters fitted (1u << PALP_EVAL_P_*) */
+  unsigned mask;          /* parameters fitted (1u << PALP_EVAL_P_*); default all but a1 */
   int frame_stride;       /* residual every k-th frame, >= 1 */
   int vertex_stride;      /* residual every k-th free vertex, >= 1 */
   double force_weight;    /* force residuals [N] are multiplied by this and compared to
@@ -147,7 +147,7 @@ typedef struct palp_eval_calib_def {
                              <= band ("about 1 s"), growing linearly outside it */
   double bound_factor;    /* each parameter stays within [p_start / b, p_start b]: the solver's
                              unknown x maps to ln(p / p_start) = ln(b) tanh(x / ln(b)); 0 = no
-                             bound. Default 30: directions the data barely see (eta1, a2)
+                             bound. Default 100: directions the data barely see (eta1, a2)
                              otherwise drift by ten decades chasing the last 1% of cost */
   int max_iter;           /* trust-region iterations, 40 */
   double max_seconds;     /* wall-clock budget of the fit [s]; 0 = none. The best point so

@@ -94,7 +94,7 @@ static int parse_args(int argc, char **argv, options *o) {
   o->max_iter = 40;
   o->prior_weight = 1e-3;
   o->bias_weight = 0.0;
-  o->bound = 30.0;
+  o->bound = 100.0;
   o->recovery_auto = 1;
   if (argc < 2) return -1;
   o->cmd = argv[1];
@@ -556,6 +556,7 @@ static int cmd_calibrate(const options *o) {
   const char *out = o->out ? o->out : "config/params/calibrated.json";
   palp_eval_calib_def def = palp_eval_calib_default_def();
   char err[512] = "";
+  const double band = def.recovery_band;
   if (o->fit && palp_eval_params_parse_mask(o->fit, &def.mask, err, sizeof err)) {
     fprintf(stderr, "palp-eval: %s\n", err);
     return 2;
@@ -593,7 +594,7 @@ static int cmd_calibrate(const options *o) {
   }
   /* The paper's ~1 s recovery must survive; if the free fit lost it, refit with
    * it as a penalty residual, starting from the free fit. */
-  const double target = def.recovery_target, band = def.recovery_band;
+  const double target = def.recovery_target;
   const int broke = !(fabs(res.recovery_after.t_recover - target) <= band);
   int refit = 0;
   if (o->recovery_auto && broke) {
@@ -601,7 +602,10 @@ static int cmd_calibrate(const options *o) {
       fprintf(stderr, "palp-eval: the fit moved the recovery to %.3f s (outside %.1f +- %.1f s); refitting with it "
                       "as a penalty\n",
               res.recovery_after.t_recover, target, band);
-    def.recovery_weight = 0.05;
+    def.recovery_weight = 0.1;
+    /* aim inside the checked band, so the hinge's balance point does not land
+     * just outside it */
+    def.recovery_band = 0.75 * band;
     for (int k = 0; k < s.dist_count; ++k) palp_eval_params_set(&scenes[k].world, res.fitted);
     rc = palp_eval_calibrate(scenes, refs, s.dist_count, &def, &res2, err, sizeof err);
     if (rc) {
