@@ -15,6 +15,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "fem_internal.h" /* the model itself, for the FE volume and kinetic energy */
 #include "palp.h"
 #include "palp_fem.h"
 
@@ -89,6 +90,7 @@ typedef struct measured {
   double max_dv;       /* max over frames of the relative volume change */
   double dent;         /* at the frame of the peak: sum |u . n| A_v, the volume the dent sweeps [m^3] */
   double dv_at_peak;   /* |V - V0| at that frame [m^3] */
+  double min_z;        /* lowest z of any deformed vertex [m]; the base plane is z = 0 */
   double wall;         /* [s] */
   palp_fem_result r;   /* kept for case-specific checks; destroyed by done() */
 } measured;
@@ -119,12 +121,14 @@ static measured run(const palp_fem_config *cfg, const palp_scene *s) {
   palp_vec3 *pos = malloc((size_t)nv * sizeof *pos);
   const double V0 = palp_mesh_volume(&mesh, mesh.rest);
   m.finite = 1;
+  m.min_z = INFINITY;
   int fpeak = 0;
   for (int f = 0; f < m.r.frames; ++f) {
     const palp_vec3 *u = m.r.disp + (size_t)f * (size_t)nv;
     for (int v = 0; v < nv; ++v) {
       pos[v] = (palp_vec3){mesh.rest[v].x + u[v].x, mesh.rest[v].y + u[v].y, mesh.rest[v].z + u[v].z};
       if (!isfinite(u[v].x) || !isfinite(u[v].y) || !isfinite(u[v].z)) m.finite = 0;
+      if (!(pos[v].z >= m.min_z)) m.min_z = pos[v].z;
     }
     for (int k = 0; k < m.r.contact_vertex_count; ++k) {
       const palp_vec3 fb = m.r.feedback[(size_t)f * (size_t)m.r.contact_vertex_count + (size_t)k];
@@ -172,11 +176,11 @@ static void report(const char *name, const measured *m) {
     printf("%-44s error %d (%s) after %.2f s\n", name, m->rc, m->err, m->wall);
     return;
   }
-  printf("%-44s peak %.4f mm (top %.4f mm), final %.4f mm, max volume change %.4f%% (dV/dent %.3f), steps %ld, "
-         "Newton %ld, cut-backs %ld, factorisations %ld, wall %.2f s\n",
+  printf("%-44s peak %.4f mm (top %.4f mm), final %.4f mm, max volume change %.4f%% (dV/dent %.3f), lowest z "
+         "%.3f mm, steps %ld, Newton %ld, cut-backs %ld, factorisations %ld, wall %.2f s\n",
          name, 1e3 * m->peak, 1e3 * m->top_peak, 1e3 * frame_max(&m->r, m->r.frames - 1), 100 * m->max_dv,
-         m->dent > 0 ? m->dv_at_peak / m->dent : 0.0, m->r.steps, m->r.newton_iterations, m->r.cutbacks,
-         m->r.factorizations, m->wall);
+         m->dent > 0 ? m->dv_at_peak / m->dent : 0.0, 1e3 * m->min_z, m->r.steps, m->r.newton_iterations,
+         m->r.cutbacks, m->r.factorizations, m->wall);
 }
 
 /* The common bar: the run succeeded, everything finite, the peak below the radius,
@@ -189,6 +193,10 @@ static void stable(const char *name, const measured *m, double t_check, double f
   CHECK(m->finite && isfinite(m->peak), "%s: every displacement and feedback finite", name);
   CHECK(m->peak > 0 && m->peak < R, "%s: peak displacement %.3f mm in (0, radius 40 mm)", name, 1e3 * m->peak);
   CHECK(m->max_dv < 0.01, "%s: enclosed volume within 1%% of rest (max %.4f%%)", name, 100 * m->max_dv);
+  /* The phantom sits on its clamped base: no material point may pass below the
+   * base plane (tolerance 0.1 mm, a tenth of the finest FE cell's size). */
+  CHECK(m->min_z > -1e-4, "%s: no vertex below the base plane (lowest z %.3f mm, tolerance -0.1 mm)", name,
+        1e3 * m->min_z);
   const double d = disp_at(m, t_check);
   CHECK(d < frac * m->peak, "%s: at %.2f s displacement %.4f mm below %.0f%% of the peak %.4f mm", name, t_check,
         1e3 * d, 100 * frac, 1e3 * m->peak);
@@ -446,6 +454,166 @@ static void case_newton(void) {
   done(&c);
 }
 
+/* Steps of another size: the FE step must divide the 10 ms frame.
+ * (1) dt = 3 ms does not: refused up front with PALP_EINVAL and a message, no run.
+ * (2) 30 N step, level 1, held 0.3 s, at dt = 10 ms and dt = 5 ms: the displacement
+ *     at the end of the hold (0.3 s, a creep state: creep times 0.2-0.5 s >> dt)
+ *     agrees within 5% between the two, and both stay finite and keep their volume.
+ *     The ringing right after the unramped step is not compared: its period is a
+ *     few ms, so each dt samples it differently. */
+static void case_dt(void) {
+  palp_scene s;
+  if (base_scene(&s, 40)) {
+    CHECK(0, "scene %s", scene_path);
+    return;
+  }
+  set_contact(&s, 0, PALP_DIST_UNIFORM, 30, 40, 30.0, 0.0, 0.3);
+  palp_fem_config bad = fast_config(1);
+  bad.dt = 0.003;
+  measured x = run(&bad, &s);
+  report("dt = 3 ms (does not divide 10 ms)", &x);
+  CHECK(x.rc == PALP_EINVAL && strstr(x.err, "divide"), "dt = 3 ms refused with PALP_EINVAL (%d) and a message (\"%s\")",
+        x.rc, x.err);
+  done(&x);
+
+  palp_fem_config c10 = fast_config(1), c5 = fast_config(1);
+  c5.dt = 0.005;
+  measured a = run(&c10, &s), b = run(&c5, &s);
+  report("30 N, dt = 10 ms, level 1", &a);
+  report("30 N, dt = 5 ms, level 1", &b);
+  CHECK(a.rc == 0 && b.rc == 0, "both complete (%s; %s)", a.err, b.err);
+  if (a.rc == 0 && b.rc == 0) {
+    const double da = vnorm(a.r.top_disp[29]), db = vnorm(b.r.top_disp[29]);
+    printf("  top displacement at 0.30 s: %.4f mm (10 ms) vs %.4f mm (5 ms)\n", 1e3 * da, 1e3 * db);
+    CHECK(a.finite && b.finite && a.max_dv < 0.01 && b.max_dv < 0.01, "finite, volume within 1%% (%.4f%%, %.4f%%)",
+          100 * a.max_dv, 100 * b.max_dv);
+    CHECK(fabs(da - db) < 0.05 * db, "top displacement at 0.3 s: 10 ms %.4f mm within 5%% of 5 ms %.4f mm", 1e3 * da,
+          1e3 * db);
+  }
+  done(&a);
+  done(&b);
+}
+
+/* The FE solid itself (not the mapped surface): a 30 N vertical load with no ramp
+ * on the level-1 model's surface nodes around the pole (weights exp(-r^2 / s^2),
+ * s = 1 cm, summing to exactly 30 N), held 0.2 s, then 0.3 s free, dt = 10 ms,
+ * under both readings. Measured at every step: the deformed FE volume (sum over
+ * hexahedra of the 2x2x2-Gauss integral of det(dx/dxi), exact for trilinear
+ * hexahedra) and the kinetic energy 1/2 sum m_a |v_a|^2.
+ *   - volume within 0.1% of the undeformed mesh: J - 1 = p / K, and even 200 kPa
+ *     of pressure (30 N on 1.5 cm^2) against K = 2 GPa gives 1e-4;
+ *   - finite; long-term: the top node's displacement below the radius and no node
+ *     below the base plane z = 0 (tolerance 0.1 mm);
+ *   - energy: once released, the Prony series dissipates and average-acceleration
+ *     Newmark adds none; the motion left is creep, whose velocity decays at least
+ *     as fast as the slowest creep time 0.5 s allows, so the kinetic energy (its
+ *     square) 0.3 s after release is below exp(-2 x 0.3 / 0.5) = 30% of its peak
+ *     after release;
+ *   - long-term reading: the top node back below 50% of its peak 0.3 s after release
+ *     (slowest creep time 0.5 s). The instantaneous reading's creep is not over
+ *     then (its displacement is ~60x larger for the same creep times), and 30 N
+ *     is far outside its faithful range: the bound is the diameter, 80 mm. Its
+ *     lowest node is printed, not asserted: the model has no contact with the
+ *     support, and this load pushes the pole through the base plane (see the
+ *     "Hard cases" section of docs/fem.md). */
+static double fe_volume(const palp_fem_mesh *mesh, const double *u) {
+  double vol = 0.0;
+  for (int e = 0; e < mesh->element_count; ++e)
+    for (int g = 0; g < 8; ++g) {
+      double dN[8][3], J[3][3] = {{0}};
+      palp_fem_hex_dshape(palp_fem_gauss[g], dN);
+      for (int a = 0; a < 8; ++a) {
+        const int n = mesh->hex[e][a];
+        for (int i = 0; i < 3; ++i)
+          for (int k = 0; k < 3; ++k) J[i][k] += (mesh->x[n][i] + u[3 * n + i]) * dN[a][k];
+      }
+      vol += J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) - J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+             J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    }
+  return vol;
+}
+
+static void case_fevolume(void) {
+  for (int inst = 0; inst <= 1; ++inst) {
+    palp_fem_config cfg = fast_config(1);
+    if (inst) cfg.c10_reading = PALP_FEM_C10_INSTANTANEOUS;
+    palp_fem_mesh mesh;
+    palp_fem_model m;
+    if (palp_fem_mesh_create(&cfg.mesh, &mesh)) {
+      CHECK(0, "mesh");
+      return;
+    }
+    if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) {
+      CHECK(0, "model: %s", m.err);
+      palp_fem_mesh_destroy(&mesh);
+      return;
+    }
+    const double t0 = now();
+    double *f = calloc((size_t)m.ndof, sizeof(double)), *zero = calloc((size_t)m.ndof, sizeof(double));
+    const palp_fem_set *surf = palp_fem_mesh_find_set(&mesh, "SURFACE", 0);
+    double wsum = 0.0;
+    const double sw = 0.01; /* [m] */
+    for (int i = 0; surf && i < surf->count; ++i) {
+      const double *x = mesh.x[surf->items[i]];
+      if (!mesh.fixed[surf->items[i]]) wsum += exp(-(x[0] * x[0] + x[1] * x[1]) / (sw * sw));
+    }
+    for (int i = 0; surf && i < surf->count; ++i) {
+      const double *x = mesh.x[surf->items[i]];
+      if (!mesh.fixed[surf->items[i]]) f[3 * surf->items[i] + 2] = -30.0 * exp(-(x[0] * x[0] + x[1] * x[1]) / (sw * sw)) / wsum;
+    }
+    double V0 = 0.0;
+    {
+      double *u0 = calloc((size_t)m.ndof, sizeof(double));
+      V0 = fe_volume(&mesh, u0);
+      free(u0);
+    }
+    double max_dv = 0.0, top_peak = 0.0, ke_peak = 0.0, ke_end = 0.0, top_end = 0.0, zmin = INFINITY;
+    int rc = 0, finite = 1;
+    const int hold = 20, total = 50;
+    for (int k = 0; k < total && rc == 0; ++k) {
+      rc = palp_fem_step(&m, k < hold ? f : zero, 0.01);
+      if (rc) break;
+      const double dv = fabs(fe_volume(&mesh, m.u) / V0 - 1.0);
+      if (!(dv <= max_dv)) max_dv = dv;
+      double ke = 0.0;
+      for (int d = 0; d < m.ndof; ++d) {
+        ke += 0.5 * m.mass[d / 3] * m.v[d] * m.v[d];
+        if (!isfinite(m.u[d]) || !isfinite(m.v[d])) finite = 0;
+      }
+      const int tn = mesh.top_node;
+      const double top = sqrt(m.u[3 * tn] * m.u[3 * tn] + m.u[3 * tn + 1] * m.u[3 * tn + 1] + m.u[3 * tn + 2] * m.u[3 * tn + 2]);
+      if (!(top <= top_peak)) top_peak = top;
+      if (k >= hold && !(ke <= ke_peak)) ke_peak = ke;
+      ke_end = ke, top_end = top;
+      for (int n = 0; n < mesh.node_count; ++n)
+        if (!(mesh.x[n][2] + m.u[3 * n + 2] >= zmin)) zmin = mesh.x[n][2] + m.u[3 * n + 2];
+    }
+    const char *name = inst ? "FE solid, 30 N at the pole, instantaneous" : "FE solid, 30 N at the pole, long-term";
+    printf("%-44s top peak %.4f mm, 0.3 s after release %.4f mm, max FE volume change %.2e, kinetic energy after "
+           "release peak %.3g J, at the end %.3g J, lowest node z %.3f mm, steps %ld, cut-backs %ld, wall %.2f s\n",
+           name, 1e3 * top_peak, 1e3 * top_end, max_dv, ke_peak, ke_end, 1e3 * zmin, m.steps, m.cutbacks,
+           now() - t0);
+    CHECK(rc == 0, "%s: every step completes (%d: %s)", name, rc, m.err);
+    if (rc == 0) {
+      CHECK(finite && top_peak > 0 && top_peak < (inst ? 2 * R : R), "%s: finite, top peak %.3f mm below the %s",
+            name, 1e3 * top_peak, inst ? "diameter 80 mm" : "radius 40 mm");
+      if (!inst)
+        CHECK(zmin > -1e-4, "%s: no node below the base plane (lowest z %.3f mm, tolerance -0.1 mm)", name,
+              1e3 * zmin);
+      CHECK(max_dv < 1e-3, "%s: FE volume within 0.1%% of the undeformed mesh (max %.2e)", name, max_dv);
+      CHECK(ke_end < 0.3 * ke_peak, "%s: kinetic energy 0.3 s after release %.3g J below 30%% of its peak %.3g J",
+            name, ke_end, ke_peak);
+      if (!inst)
+        CHECK(top_end < 0.5 * top_peak, "%s: 0.3 s after release %.4f mm below 50%% of the peak %.4f mm", name,
+              1e3 * top_end, 1e3 * top_peak);
+    }
+    free(f);
+    free(zero);
+    palp_fem_model_destroy(&m);
+    palp_fem_mesh_destroy(&mesh);
+  }
+}
+
 /* A longer run without drift: 400 frames at level 1, the paper's 3 N press twice
  * (keyframes: press 0-1 s, release, press 2-3 s, release). The displacement 1 s
  * after the second release is within 2% of the first press's peak of the one 1 s
@@ -482,7 +650,7 @@ static void case_twice(void) {
 
 int main(int argc, char **argv) {
   if (argc < 2) {
-    fprintf(stderr, "usage: %s force30|point|rim|multi|fasttau|stiffsoft|cutback|newton|twice [SCENE]\n", argv[0]);
+    fprintf(stderr, "usage: %s force30|point|rim|multi|fasttau|stiffsoft|cutback|newton|dt|fevolume|twice [SCENE]\n", argv[0]);
     return 2;
   }
   if (argc > 2) scene_path = argv[2];
@@ -491,7 +659,7 @@ int main(int argc, char **argv) {
     void (*fn)(void);
   } cases[] = {{"force30", case_force30}, {"point", case_point},         {"rim", case_rim},
                {"multi", case_multi},     {"fasttau", case_fasttau},     {"stiffsoft", case_stiffsoft},
-               {"cutback", case_cutback}, {"newton", case_newton},   {"twice", case_twice}};
+               {"cutback", case_cutback}, {"newton", case_newton},   {"dt", case_dt}, {"fevolume", case_fevolume}, {"twice", case_twice}};
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)
     if (!strcmp(argv[1], cases[i].name)) {
       const double t0 = now();
