@@ -430,6 +430,9 @@ static int write_plots(const char *dir, int d, const palp_eval_record *rt, const
     def.n = k == 0 ? p->n_disp : p->n_force;
     def.bias = k == 0 ? row->disp.ba.bias : row->force.ba.bias;
     def.sd = k == 0 ? row->disp.ba.sd : row->force.ba.sd;
+    /* svg_plot.h documents 4000 as the default, but the default def leaves 0
+     * (draw all: 118,400 circles, 6.7 MB per plot); ask for it explicitly */
+    def.max_points = 4000;
     snprintf(path, sizeof path, "%s/bland_altman_%s_d%d.svg", dir, k == 0 ? "displacement" : "force", d);
     rc = palp_svg_bland_altman_file(path, &def, err, sizeof err);
   }
