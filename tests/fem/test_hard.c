@@ -408,8 +408,8 @@ static void case_cutback(void) {
 
 /* The cut-back path gives the same answer, and a solver that cannot go on says so:
  * (1) 30 N step at level 1 (long-term), 60 frames, with max_newton = 4 instead of
- *     12: the first steps after the load's onset need 5 iterations, so they are cut
- *     back (counted), and the top peak agrees with the unrestricted run within 2%
+ *     12: some steps of the unramped load need 5 iterations, so they are cut back
+ *     (counted), and the top peak agrees with the unrestricted run within 2%
  *     (halved steps change the time discretisation, not the equilibrium).
  * (2) the same with 1 Newton iteration and no cut-back: fails at once with a
  *     negative code and a message naming the time, never NaN, never hangs. */
