@@ -289,6 +289,7 @@ palp_svg_bland_altman_def palp_svg_bland_altman_default_def(void) {
   memset(&d, 0, sizeof d);
   d.width = 800;
   d.height = 480;
+  d.max_points = 4000; /* as the header documents */
   return d;
 }
 
