@@ -390,16 +390,24 @@ int palp_db_log_mesh(palp_db_writer *w, palp_db_session s, int64_t frame, const 
   return r ? 0 : PALP_EFULL;
 }
 
+/* A caller's text copied for the queue (the caller's buffer may not outlive the
+ * call); NULL stays NULL. *bytes counts the terminator, for the queue's accounting. */
+static int copy_text(const char *src, char **out, size_t *bytes) {
+  *out = NULL;
+  *bytes = 0;
+  if (!src) return 0;
+  *bytes = strlen(src) + 1;
+  if (!(*out = malloc(*bytes))) return -1;
+  memcpy(*out, src, *bytes);
+  return 0;
+}
+
 int palp_db_log_event(palp_db_writer *w, palp_db_session s, palp_db_event_kind kind, int64_t frame,
                       const char *detail, int64_t count) {
   if (!w || !palp_db_event_kind_name(kind)) return PALP_EINVAL;
   char *d = NULL;
   size_t bytes = 0;
-  if (detail) {
-    bytes = strlen(detail) + 1;
-    if (!(d = malloc(bytes))) return PALP_ENOMEM;
-    memcpy(d, detail, bytes);
-  }
+  if (copy_text(detail, &d, &bytes)) return PALP_ENOMEM;
   pthread_mutex_lock(&w->mu);
   if (s != 0 && !session_ok(w, s)) {
     pthread_mutex_unlock(&w->mu);
@@ -424,11 +432,7 @@ int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_re
   if (!w || !palp_db_end_reason_name(reason)) return PALP_EINVAL;
   char *d = NULL;
   size_t bytes = 0;
-  if (detail) {
-    bytes = strlen(detail) + 1;
-    if (!(d = malloc(bytes))) return PALP_ENOMEM;
-    memcpy(d, detail, bytes);
-  }
+  if (copy_text(detail, &d, &bytes)) return PALP_ENOMEM;
   pthread_mutex_lock(&w->mu);
   if (!session_ok(w, s)) {
     pthread_mutex_unlock(&w->mu);

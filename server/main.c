@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "config.h"
 #include "db_log.h"
@@ -29,23 +30,36 @@ static void usage(FILE *f) {
           PALP_CONFIG_DIR);
 }
 
-/* Signals are blocked in every thread and taken here with sigwait: the stop
- * request then runs in an ordinary thread, where DDS calls are allowed. */
+/* A signal may land on any thread, including ones that libraries start before
+ * main (OpenBLAS's pool, under CHOLMOD), which no mask set here can reach; so the
+ * handler only writes the signal number into a pipe (async-signal-safe), and this
+ * thread reads it and makes the stop request, where DDS calls are allowed. */
 typedef struct sig_ctx {
-  sigset_t set;
+  int fd[2]; /* [0] read by signal_main, [1] written by the handler and by main */
   palp_srv *srv;
   int signo;
 } sig_ctx;
 
+static int sig_pipe_w = -1; /* the handler's only state: a process-wide fd is unavoidable */
+
+static void on_signal(int sig) {
+  const int saved = errno;
+  const unsigned char b = (unsigned char)sig;
+  if (sig_pipe_w >= 0 && write(sig_pipe_w, &b, 1) < 0) { /* nothing safe to do */
+  }
+  errno = saved;
+}
+
 static void *signal_main(void *arg) {
   sig_ctx *c = arg;
-  int sig = 0;
-  if (sigwait(&c->set, &sig) == 0) {
-    c->signo = sig;
-    if (sig != SIGUSR2) {
-      fprintf(stderr, "palp-server: %s: shutting down\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
-      palp_srv_request_stop(c->srv);
-    }
+  unsigned char b = 0;
+  ssize_t n;
+  while ((n = read(c->fd[0], &b, 1)) < 0 && errno == EINTR) {
+  }
+  if (n == 1 && b != 0) { /* 0 is main's own wake-up when the run ends by itself */
+    c->signo = b;
+    fprintf(stderr, "palp-server: %s: shutting down\n", b == SIGINT ? "SIGINT" : "SIGTERM");
+    palp_srv_request_stop(c->srv);
   }
   return NULL;
 }
@@ -128,12 +142,20 @@ int main(int argc, char **argv) {
 
   sig_ctx sc;
   memset(&sc, 0, sizeof sc);
-  sigemptyset(&sc.set);
-  sigaddset(&sc.set, SIGINT);
-  sigaddset(&sc.set, SIGTERM);
-  sigaddset(&sc.set, SIGUSR2);
-  /* Block before any thread exists (DDS and tick threads inherit the mask). */
-  pthread_sigmask(SIG_BLOCK, &sc.set, NULL);
+  if (pipe(sc.fd) != 0) {
+    fprintf(stderr, "palp-server: cannot create the signal pipe: %s\n", strerror(errno));
+    return 1;
+  }
+  sig_pipe_w = sc.fd[1];
+  /* sigaction also replaces the SIG_IGN that a shell gives a script's background
+   * jobs for SIGINT, so `kill -INT` from a script stops us cleanly. */
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
 
   palp_srv_db_log *log = NULL;
   if (def.cfg.database[0] && !no_db) {
@@ -167,8 +189,9 @@ int main(int argc, char **argv) {
     return 1;
   }
   rc = palp_srv_run(srv, duration);
-  /* Wake the signal thread if no signal came (SIGUSR2 is ours only). */
-  if (!sc.signo) pthread_kill(sig_thread, SIGUSR2);
+  /* Wake the signal thread if no signal came. */
+  const unsigned char zero = 0;
+  if (!sc.signo && write(sc.fd[1], &zero, 1) < 0) pthread_cancel(sig_thread);
   pthread_join(sig_thread, NULL);
   printf("\npalp-server session summary\n");
   palp_srv_print_summary(srv, stdout);

@@ -7,7 +7,7 @@
 set -u
 server=$1 client=$2 review=$3 driver=$4 config_dir=$5
 tmp=$(mktemp -d)
-trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
+trap 'kill $spid 2>/dev/null; [ -n "${KEEP_TMP:-}" ] || rm -rf "$tmp"' EXIT
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 cat > "$tmp/server.json" <<JSON
 {"domain_id": 106, "tick_rate_hz": 1000, "database": "log/sessions.db",
