@@ -304,6 +304,19 @@ static void plot_feedback(const feedback_ctx *c, FILE *out) {
   fprintf(out, "\n        0 s%*s%.1f s\n", cols > 10 ? cols - 8 : 1, "", c->plot_bins * PLOT_BIN_S);
 }
 
+/* One release sample for finger f (best-effort topic: callers repeat it). */
+static void send_release(palp_cli_station *st, int f, uint64_t *seq) {
+  palp_Contact m;
+  memset(&m, 0, sizeof m);
+  m.session_id = st->session_id;
+  m.finger = (uint8_t)f;
+  m.mode = palp_CONTACT_RELEASE;
+  m.vertex = -1;
+  m.seq = ++*seq;
+  m.source_time_ns = palp_dds_now_ns();
+  dds_write(st->contact_w, &m);
+}
+
 static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
@@ -388,15 +401,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
          * cannot leave the finger pressing. */
         release_left[f] = 3;
       } else if (down[f] || release_left[f] > 0) {
-        palp_Contact m;
-        memset(&m, 0, sizeof m);
-        m.session_id = st->session_id;
-        m.finger = (uint8_t)f;
-        m.mode = palp_CONTACT_RELEASE;
-        m.vertex = -1;
-        m.seq = ++seq[f];
-        m.source_time_ns = palp_dds_now_ns();
-        dds_write(st->contact_w, &m);
+        send_release(st, f, &seq[f]);
         sent++;
         if (ct_csv && down[f]) {
           palp_cli_cmd rel = {.finger = f, .mode = 0};
@@ -432,17 +437,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   /* Lift every finger (three times: best-effort), then leave. */
   for (int rep = 0; rep < 3 && !closed; rep++)
     for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++)
-      if (seq[f]) {
-        palp_Contact m;
-        memset(&m, 0, sizeof m);
-        m.session_id = st->session_id;
-        m.finger = (uint8_t)f;
-        m.mode = palp_CONTACT_RELEASE;
-        m.vertex = -1;
-        m.seq = ++seq[f];
-        m.source_time_ns = palp_dds_now_ns();
-        dds_write(st->contact_w, &m);
-      }
+      if (seq[f]) send_release(st, f, &seq[f]);
   if (in.close) in.close(in.ctx);
   if (fb_csv) fclose(fb_csv);
   if (ct_csv) fclose(ct_csv);

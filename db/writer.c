@@ -248,6 +248,17 @@ static int session_ok(const palp_db_writer *w, palp_db_session s) {
   return s > 0 && s < w->next_session && s < w->ps_cap && w->ps[s].open;
 }
 
+/* Takes the queue lock for a record of session s (0 allowed only where none_ok).
+ * On an unknown or closed session it unlocks, frees the caller's copied payload
+ * (may be NULL) and fails, so every enqueue function checks the same way. */
+static int lock_session(palp_db_writer *w, palp_db_session s, int none_ok, void *owned) {
+  pthread_mutex_lock(&w->mu);
+  if ((none_ok && s == 0) || session_ok(w, s)) return 0;
+  pthread_mutex_unlock(&w->mu);
+  free(owned);
+  return PALP_EINVAL;
+}
+
 static size_t str_size(const char *s) { return (s ? strlen(s) : 0) + 1; }
 static char *pack(char **p, const char *s) {
   char *d = *p;
@@ -312,11 +323,7 @@ int palp_db_log_contact(palp_db_writer *w, palp_db_session s, const palp_db_cont
   if (!w || !c || c->op < PALP_DB_OP_ADD || c->op > PALP_DB_OP_REMOVE || c->kind < PALP_DB_KIND_FORCE ||
       c->kind > PALP_DB_KIND_FINGER)
     return PALP_EINVAL;
-  pthread_mutex_lock(&w->mu);
-  if (!session_ok(w, s)) {
-    pthread_mutex_unlock(&w->mu);
-    return PALP_EINVAL;
-  }
+  if (lock_session(w, s, 0, NULL)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_CONTACT, s, 0);
   if (r) r->u.contact = *c;
   publish(w);
@@ -325,11 +332,7 @@ int palp_db_log_contact(palp_db_writer *w, palp_db_session s, const palp_db_cont
 
 int palp_db_log_feedback(palp_db_writer *w, palp_db_session s, int64_t frame, int slot, palp_vec3 force_n) {
   if (!w) return PALP_EINVAL;
-  pthread_mutex_lock(&w->mu);
-  if (!session_ok(w, s)) {
-    pthread_mutex_unlock(&w->mu);
-    return PALP_EINVAL;
-  }
+  if (lock_session(w, s, 0, NULL)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_FEEDBACK, s, 0);
   if (r) {
     r->u.fb.frame = frame;
@@ -342,11 +345,7 @@ int palp_db_log_feedback(palp_db_writer *w, palp_db_session s, int64_t frame, in
 
 int palp_db_log_frame(palp_db_writer *w, palp_db_session s, const palp_db_frame *f) {
   if (!w || !f) return PALP_EINVAL;
-  pthread_mutex_lock(&w->mu);
-  if (!session_ok(w, s)) {
-    pthread_mutex_unlock(&w->mu);
-    return PALP_EINVAL;
-  }
+  if (lock_session(w, s, 0, NULL)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_FRAME, s, 0);
   if (r) r->u.frame = *f;
   publish(w);
@@ -373,12 +372,7 @@ int palp_db_log_mesh(palp_db_writer *w, palp_db_session s, int64_t frame, const 
   double *xyz = malloc(bytes);
   if (!xyz) return PALP_ENOMEM;
   put_le_doubles(xyz, pos, vertex_count);
-  pthread_mutex_lock(&w->mu);
-  if (!session_ok(w, s)) {
-    pthread_mutex_unlock(&w->mu);
-    free(xyz);
-    return PALP_EINVAL;
-  }
+  if (lock_session(w, s, 0, xyz)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_MESH, s, bytes);
   if (r) {
     r->u.mesh.frame = frame;
@@ -408,12 +402,7 @@ int palp_db_log_event(palp_db_writer *w, palp_db_session s, palp_db_event_kind k
   char *d = NULL;
   size_t bytes = 0;
   if (copy_text(detail, &d, &bytes)) return PALP_ENOMEM;
-  pthread_mutex_lock(&w->mu);
-  if (s != 0 && !session_ok(w, s)) {
-    pthread_mutex_unlock(&w->mu);
-    free(d);
-    return PALP_EINVAL;
-  }
+  if (lock_session(w, s, 1, d)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_EVENT, s, bytes);
   if (r) {
     r->u.ev.kind = kind;
@@ -433,12 +422,7 @@ int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_re
   char *d = NULL;
   size_t bytes = 0;
   if (copy_text(detail, &d, &bytes)) return PALP_ENOMEM;
-  pthread_mutex_lock(&w->mu);
-  if (!session_ok(w, s)) {
-    pthread_mutex_unlock(&w->mu);
-    free(d);
-    return PALP_EINVAL;
-  }
+  if (lock_session(w, s, 0, d)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_SESSION_END, s, bytes);
   if (r) {
     w->ps[s].open = 0;
