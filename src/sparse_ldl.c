@@ -122,10 +122,6 @@ done:
   return rc;
 }
 
-int palp_ldl_factor(palp_ldl *f, int n, int nnz, const int *ti, const int *tj, const double *tx) {
-  return factor(f, n, nnz, ti, tj, tx, NULL);
-}
-
 /* Regroups the scalar factor into 3x3 blocks; returns 0, or -1 when the ordering did
  * not keep each vertex's unknowns together (the scalar form then stays in use). */
 static int to_blocks(palp_ldl *f, int nb) {

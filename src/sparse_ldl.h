@@ -27,17 +27,16 @@ typedef struct palp_ldl {
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
 } palp_ldl;
 
-/* Factors the symmetric positive definite matrix given by lower-triangle triplets
- * (i >= j; duplicates are summed). The first call orders and analyses the pattern;
- * later calls with the same n and triplet pattern reuse that analysis and only redo
- * the numeric factorisation. Returns 0, PALP_ENOMEM or PALP_ESOLVER. */
-int palp_ldl_factor(palp_ldl *f, int n, int nnz, const int *ti, const int *tj, const double *tx);
 void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
 
-/* As palp_ldl_factor for a matrix of 3x3 blocks (unknown 3v + c belongs to vertex
- * v), given the vertex graph (CSC, both triangles, nb vertices). Orders the vertices
- * with AMD and keeps each vertex's 3 unknowns together, so the factor is stored and
- * solved in dense 3x3 blocks. */
+/* Factors the symmetric positive definite matrix of 3x3 blocks (unknown 3v + c
+ * belongs to vertex v) given by lower-triangle triplets (i >= j; duplicates summed).
+ * The first call orders the vertices with AMD on the vertex graph (CSC, both
+ * triangles, nb vertices), keeping each vertex's 3 unknowns together, and analyses
+ * the pattern; later calls with the same pattern reuse that analysis (gp, gi may
+ * then be NULL) and redo only the numeric factorisation. The factor is stored and
+ * solved in dense 3x3 blocks (scalar form if the ordering split a vertex).
+ * Returns 0, PALP_ENOMEM or PALP_ESOLVER. */
 int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, int nnz, const int *ti,
                            const int *tj, const double *tx);
 

@@ -655,27 +655,32 @@ static int refactor(palp_world *w, double h) {
           tx[nnz++] = -h * h * k * ((1.0 - beta) * dv[i] * dv[j] + (i == j ? beta : 0.0));
     }
   }
-  /* The free-vertex graph (CSC, both triangles) orders the 3x3 blocks. */
+  /* The free-vertex graph (CSC, both triangles) orders the 3x3 blocks; only the
+   * first factorisation analyses the pattern, later ones reuse it. */
   const int nf = w->nfree;
-  int *gp = calloc((size_t)nf + 1, sizeof(int)), *gi = malloc(sizeof(int) * (size_t)(2 * w->nlink + 1));
-  int e = PALP_ENOMEM;
-  if (gp && gi) {
-    for (int l = 0; l < w->nlink; ++l) {
-      const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
-      if (ra >= 0 && rb >= 0) gp[ra + 1]++, gp[rb + 1]++;
-    }
-    for (int r = 0; r < nf; ++r) gp[r + 1] += gp[r];
+  int *gp = NULL, *gi = NULL;
+  int e = PALP_OK;
+  if (!w->ldl.symbolic) {
+    gp = calloc((size_t)nf + 1, sizeof(int));
+    gi = malloc(sizeof(int) * (size_t)(2 * w->nlink + 1));
     int *fill = malloc(sizeof(int) * (size_t)(nf ? nf : 1));
-    if (fill) {
+    if (!gp || !gi || !fill) {
+      e = PALP_ENOMEM;
+    } else {
+      for (int l = 0; l < w->nlink; ++l) {
+        const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
+        if (ra >= 0 && rb >= 0) gp[ra + 1]++, gp[rb + 1]++;
+      }
+      for (int r = 0; r < nf; ++r) gp[r + 1] += gp[r];
       memcpy(fill, gp, sizeof(int) * (size_t)nf);
       for (int l = 0; l < w->nlink; ++l) {
         const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
         if (ra >= 0 && rb >= 0) gi[fill[ra]++] = rb, gi[fill[rb]++] = ra;
       }
-      free(fill);
-      e = palp_ldl_factor_blocks(&w->ldl, nf, gp, gi, nnz, ti, tj, tx);
     }
+    free(fill);
   }
+  if (!e) e = palp_ldl_factor_blocks(&w->ldl, nf, gp, gi, nnz, ti, tj, tx);
   free(gp), free(gi);
   free(ti), free(tj), free(tx);
   if (e) return e;

@@ -105,7 +105,7 @@ typedef struct errs {
   size_t n, cap;
 } errs;
 
-static void add_frame(errs *e, const reference *R, int f, const palp_vec3 *rest, const palp_vec3 *disp, int nv,
+static void add_frame(errs *e, const reference *R, int f, const palp_vec3 *disp, int nv,
                       const int *map, double force) {
   for (int i = 0; i < nv; ++i) {
     const palp_vec3 d = disp[i], r = R->disp[(size_t)f * R->nv + map[i]];
@@ -117,7 +117,6 @@ static void add_frame(errs *e, const reference *R, int f, const palp_vec3 *rest,
       e->n++;
     }
   }
-  (void)rest;
   e->se_force += (force - R->force[f]) * (force - R->force[f]);
   e->n_force++;
 }
@@ -178,7 +177,7 @@ static int run_rt(const palp_scene *s, const reference *R, point *pt) {
       palp_vec3 one;
       if (palp_world_contact_feedback(w, c, &one) == PALP_OK) fb.x += one.x, fb.y += one.y, fb.z += one.z;
     }
-    add_frame(&e, R, f, m->rest, disp, nv, map, norm(fb));
+    add_frame(&e, R, f, disp, nv, map, norm(fb));
   }
   qsort(st, (size_t)nsteps, sizeof *st, cmpd);
   pt->step_median_s = st[nsteps / 2];
@@ -412,7 +411,7 @@ int main(int argc, char **argv) {
     int *id = malloc(sizeof(int) * (size_t)R.nv);
     for (int i = 0; i < R.nv; ++i) id[i] = i;
     for (int f = 0; f < R.frames; ++f)
-      add_frame(&e, &R, f, R.rest, r.disp + (size_t)f * r.vertex_count, r.vertex_count, id, total_force(&r, f));
+      add_frame(&e, &R, f, r.disp + (size_t)f * r.vertex_count, r.vertex_count, id, total_force(&r, f));
     finish(&e, p);
     free(id), free(e.a), free(e.b);
     palp_fem_result_destroy(&r);
