@@ -152,6 +152,11 @@ typedef struct palp_gel_params {
    * vertex's displacement u with a traction k u + c du/dt over its lumped area. */
   double support_modulus;   /* k [Pa/m] */
   double support_viscosity; /* c [Pa s/m], applied with gel damping */
+  /* The gel moves with the membrane, so its inertia belongs to the surface
+   * vertices: each free vertex carries added_mass_fraction of the gel's mass
+   * density V0, shared by lumped area (docs/model.md, "Vertex weights"). */
+  double density;             /* [kg/m^3], Table II: 950 */
+  double added_mass_fraction; /* [-], 0 = membrane mass only */
 } palp_gel_params;
 
 typedef enum palp_effect {
@@ -228,7 +233,8 @@ const palp_world_def *palp_world_get_def(const palp_world *w);
  * model. Counters accumulate from creation. */
 typedef struct palp_world_health {
   int64_t substeps;           /* steps retried as two half steps (velocity non-finite or
-                                 above max_speed after the solve) */
+                                 above max_speed after the solve, or a link turned by
+                                 > 30 deg / strained by > 0.25 within the step) */
   int64_t refactors;          /* factorisations: step size changes beyond the factor's
                                  stability margin, lagged-tangent rebuilds */
   int64_t large_strain_steps; /* steps with a link strained beyond +-50%, where a linear

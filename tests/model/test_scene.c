@@ -50,6 +50,8 @@ int main(void) {
   expect_error("\"kind\":\"step\"", "\"kind\":5", "contacts[0].profile.kind");
   expect_error("\"distribution\":\"gaussian\"", "\"distribution\":\"round\"", "contacts[0].distribution");
   expect_error("\"gel_support\"", "\"gel_suport\"", "effects[4]");
+  expect_error("\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"added_mass_fraction\":-1",
+               "gel.added_mass_fraction");
   expect_error("\"effects\":[", "\"effects\":{\"a\":1},\"x\":[", "effects");
   expect_error("{\"name\":\"t\",", "{\"name\":\"t\",,", "invalid JSON");
   expect_error("\"mesh\":{", "\"parameters\":\"/nonexistent/p.json\",\"mesh\":{", "parameters");

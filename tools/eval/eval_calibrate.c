@@ -51,9 +51,9 @@
 #include "eval.h"
 
 const char *const palp_eval_param_name[PALP_EVAL_P_COUNT] = {
-    "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity"};
+    "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass"};
 const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT] = {"Pa", "Pa s", "Pa", "Pa s", "-", "Pa s/m^3", "Pa/m",
-                                                              "Pa s/m"};
+                                                              "Pa s/m", "-"};
 
 void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) {
   p[PALP_EVAL_P_E1] = w->membrane.E1;
@@ -64,6 +64,7 @@ void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) 
   p[PALP_EVAL_P_A2] = w->gel.a2;
   p[PALP_EVAL_P_SUPPORT_K] = w->gel.support_modulus;
   p[PALP_EVAL_P_SUPPORT_C] = w->gel.support_viscosity;
+  p[PALP_EVAL_P_ADDED_MASS] = w->gel.added_mass_fraction;
 }
 
 void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) {
@@ -75,6 +76,7 @@ void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) 
   w->gel.a2 = p[PALP_EVAL_P_A2];
   w->gel.support_modulus = p[PALP_EVAL_P_SUPPORT_K];
   w->gel.support_viscosity = p[PALP_EVAL_P_SUPPORT_C];
+  w->gel.added_mass_fraction = p[PALP_EVAL_P_ADDED_MASS];
 }
 
 int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, size_t errlen) {
@@ -97,7 +99,7 @@ int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, siz
     if (found < 0) {
       snprintf(err, errlen,
                "--fit: unknown parameter \"%.*s\" (E1, eta1, E2, eta2, a1, a2, support_modulus, "
-               "support_viscosity, or all)",
+               "support_viscosity, added_mass, or all)",
                (int)len, s);
       return PALP_EINVAL;
     }
@@ -395,7 +397,12 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   ws.def = def;
   ws.verbose = def->verbose;
   palp_eval_params_get(&scenes[0].world, ws.start);
+  /* A model without added gel mass (fraction 0) cannot be left in log space:
+   * the fit starts it from the whole gel's mass (fraction 1). */
+  if ((def->mask & (1u << PALP_EVAL_P_ADDED_MASS)) && ws.start[PALP_EVAL_P_ADDED_MASS] == 0.0)
+    ws.start[PALP_EVAL_P_ADDED_MASS] = 1.0;
   for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
+    if (!(def->mask & (1u << j))) continue; /* held parameters may be 0 */
     if (!(ws.start[j] > 0) || !isfinite(ws.start[j])) {
       snprintf(err, errlen, "calibrate: start value of %s is %g; parameters must be positive to fit in log space",
                palp_eval_param_name[j], ws.start[j]);
@@ -572,9 +579,10 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
           m->thickness, m->density, m->E1, m->eta1, m->E2, m->eta2);
   fprintf(f,
           "  \"gel\": { \"law\": \"%s\", \"pressure_Pa\": %.9g, \"a1\": %.9g, \"a2_Pa_s_m3\": %.9g, \"a3_s2\": %.9g,\n"
-          "           \"support_modulus_Pa_m\": %.9g, \"support_viscosity_Pa_s_m\": %.9g }\n}\n",
+          "           \"support_modulus_Pa_m\": %.9g, \"support_viscosity_Pa_s_m\": %.9g,\n"
+          "           \"density_kg_m3\": %.9g, \"added_mass_fraction\": %.9g }\n}\n",
           g->law == PALP_GEL_PAPER_LITERAL ? "paper_literal" : "polytropic", g->pressure, g->a1, g->a2, g->a3,
-          g->support_modulus, g->support_viscosity);
+          g->support_modulus, g->support_viscosity, g->density, g->added_mass_fraction);
   free(cs);
   cJSON_Delete(c);
   int bad = ferror(f);
