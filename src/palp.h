@@ -240,6 +240,10 @@ typedef struct palp_world_health {
   int64_t large_strain_steps; /* steps with a link strained beyond +-50%, where a linear
                                  Burgers law on engineering strain is a poor model */
   double max_strain;          /* largest |link strain| seen [-] */
+  int64_t clamped_steps;      /* sub-steps at the last halving (h/16) whose velocities were
+                                 capped at max_speed rather than failing the world: a load
+                                 far beyond the model (e.g. 30 N on one vertex of a soft
+                                 phantom) */
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 

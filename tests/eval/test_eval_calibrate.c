@@ -39,7 +39,7 @@ static const char *scene_json =
     "  \"membrane\": {\"thickness_m\": 0.002, \"density_kg_m3\": 950, \"E1_Pa\": 4.2e6, \"eta1_Pa_s\": 2e8,"
     "                 \"E2_Pa\": 8e6, \"eta2_Pa_s\": 8e5},"
     "  \"gel\": {\"law\": \"polytropic\", \"pressure_Pa\": 101325, \"a1\": 10, \"a2_Pa_s_m3\": 5e6, \"a3_s2\": 0,"
-    "            \"support_modulus_Pa_m\": 1.5e6, \"support_viscosity_Pa_s_m\": 6e5},"
+    "            \"support_modulus_Pa_m\": 1.5e6, \"support_viscosity_Pa_s_m\": 6e5, \"added_mass_fraction\": 0},"
     "  \"time\": {\"dt_s\": 0.01, \"frames\": 260, \"frame_period_s\": 0.01},"
     "  \"effects\": [\"membrane_elasticity\", \"membrane_viscosity\", \"gel_pressure\", \"gel_damping\","
     "              \"gel_support\", \"force_feedback\"],"

@@ -17,6 +17,25 @@ static inline palp_scene paper_scene(void) {
   return s;
 }
 
+/* The library's defaults with the hand-set parameters of config/params/handset.json:
+ * a phantom ~20x stiffer than the calibrated default, on which each effect is visible
+ * at the paper's load and 30 N stays well inside the dome. */
+static inline palp_world_def handset_def(void) {
+  palp_scene s;
+  char err[256];
+  const char *json = "{\"name\": \"handset\", \"mesh\": {\"radius_m\": 0.04, \"vertex_count\": 338},"
+                     " \"parameters\": \"" PALP_CONFIG_DIR "/params/handset.json\","
+                     " \"time\": {\"dt_s\": 0.01, \"frames\": 1}, \"effects\": [], \"contacts\": []}";
+  if (palp_scene_parse(json, &s, err, sizeof err)) {
+    fprintf(stderr, "cannot load the hand-set parameters: %s\n", err);
+    exit(2);
+  }
+  palp_world_def d = palp_world_default_def();
+  d.membrane = s.world.membrane;
+  d.gel = s.world.gel;
+  return d;
+}
+
 static inline double vdist(palp_vec3 a, palp_vec3 b) {
   return sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
 }

@@ -9,7 +9,7 @@ static size_t heap_in_use(void) { return mallinfo2().uordblks; }
 /* Pushes the pole with 3 N for `hold` s and returns the pole's inward displacement [m]
  * at 0.5 s and at the end, and the largest relative volume change. */
 static void press(uint32_t effects, double hold, double *d_early, double *d_end, double *dv) {
-  palp_world_def d = palp_world_default_def();
+  palp_world_def d = handset_def();
   d.effects = effects;
   int e;
   palp_world *w = palp_world_create(&d, &e);
@@ -40,7 +40,7 @@ int main(void) {
   const uint32_t all = PALP_EFFECT_ALL & ~(uint32_t)PALP_EFFECT_GRAVITY;
   int e;
   /* Stages follow the effects. */
-  palp_world_def d = palp_world_default_def();
+  palp_world_def d = handset_def();
   d.effects = PALP_EFFECT_MEMBRANE_ELASTICITY;
   palp_world *w = palp_world_create(&d, &e);
   CHECK(w && !has_stage(w, "gel_forces") && !has_stage(w, "gel_state") && !has_stage(w, "feedback") &&
@@ -50,7 +50,7 @@ int main(void) {
 
   /* Memory: a world without viscosity holds no Burgers states (2 doubles per link),
    * one without the gel no gradient and Sherman-Morrison vectors. */
-  d = palp_world_default_def();
+  d = handset_def();
   size_t h0 = heap_in_use();
   w = palp_world_create(&d, &e);
   const size_t full = heap_in_use() - h0;
@@ -92,7 +92,7 @@ int main(void) {
 
   /* Gravity: without it the unloaded rest shape stays exactly at rest; with it the
    * pole sags (membrane weight 0.19 N pulls it down by a measurable amount). */
-  d = palp_world_default_def();
+  d = handset_def();
   w = palp_world_create(&d, &e);
   for (int k = 0; k < 100; ++k) palp_world_step(w);
   CHECK(palp_world_positions(w)[0].z == 0.04, "no gravity: the pole does not move (z = %.17g)",
@@ -107,7 +107,7 @@ int main(void) {
   palp_world_destroy(w);
 
   /* Invalid combinations are refused. */
-  d = palp_world_default_def();
+  d = handset_def();
   d.effects = PALP_EFFECT_MEMBRANE_VISCOSITY;
   CHECK(palp_world_create(&d, &e) == NULL && e == PALP_EINVAL, "viscosity without elasticity refused");
   CHECK_DONE();

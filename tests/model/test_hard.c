@@ -76,8 +76,27 @@ static void faithful(const char *name, result r) {
         1e3 * r.final, 1e3 * r.peak);
 }
 
+/* On the calibrated default phantom (as soft as the FEM reference: a 3 N point load
+ * settles 39 mm deep) the server's largest force, 20 N, and 30 N crush the dome
+ * through its base plane, which the model does not represent (nor does the FEM's
+ * instantaneous reading, docs/fem.md). The bar there: the world never fails, the
+ * volume stays within 2%, the phantom comes back within 10% of its peak 2 s after
+ * release, and the health counters say the strain was beyond the model. */
+static void survives(const char *name, result r) {
+  report(name, r);
+  CHECK(r.err == PALP_OK && isfinite(r.peak) && isfinite(r.final), "%s: finite, world not failed (error %d)", name,
+        r.err);
+  CHECK(r.max_dv < 0.02, "%s: volume within 2%% (%.3f%%)", name, 100 * r.max_dv);
+  CHECK(r.final < 0.1 * r.peak, "%s: back within 10%% of the peak 2 s after release (%.3f of %.3f mm)", name,
+        1e3 * r.final, 1e3 * r.peak);
+  CHECK(r.health.large_strain_steps > 0, "%s: reported as large strain (max %.2f)", name, r.health.max_strain);
+}
+
 int main(void) {
-  const palp_world_def d10 = palp_world_default_def();
+  /* The numerical hard cases run on the stiff hand-set phantom, where 30 N stays
+   * inside the dome and the figures below are physical; the shipped phantom's
+   * cases follow them. */
+  const palp_world_def d10 = handset_def();
   palp_world_def d1 = d10;
   d1.dt = 0.001;
   const palp_vec3 off = on_sphere(30, 40), rim = on_sphere(86, 0);
@@ -157,6 +176,20 @@ int main(void) {
     CHECK(hl.max_strain < 2.0, "soft point load: link strain %.2f (bound 2)", hl.max_strain);
     CHECK(dv < 0.01, "soft point load: volume within 1%% (%.3f%%)", 100 * dv);
     palp_world_destroy(w);
+  }
+
+  /* The shipped (calibrated) phantom: the paper's 3 N under every distribution at
+   * both steps is faithful; 20 N (the server's max_force) and 30 N survive. */
+  {
+    const palp_world_def c10 = palp_world_default_def();
+    palp_world_def c1 = c10;
+    c1.dt = 0.001;
+    faithful("calibrated: 3 N single vertex, 10 ms", press(c10, PALP_DIST_SINGLE, off, 3, 0, 0));
+    faithful("calibrated: 3 N gaussian, 1 ms", press(c1, PALP_DIST_GAUSSIAN, off, 3, 0, 0));
+    faithful("calibrated: 3 N uniform at the rim, 10 ms", press(c10, PALP_DIST_UNIFORM, rim, 3, 0, 0));
+    survives("calibrated: 20 N single vertex, 1 ms", press(c1, PALP_DIST_SINGLE, off, 20, 0, 0));
+    survives("calibrated: 30 N uniform, 10 ms", press(c10, PALP_DIST_UNIFORM, off, 30, 0, 0));
+    survives("calibrated: 30 N on/off every tick, 1 kHz", press(c1, PALP_DIST_SINGLE, off, 30, 1, 0));
   }
 
   /* Several fingers at once (position-driven): three spheres pressed 5 mm into the

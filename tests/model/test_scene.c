@@ -38,6 +38,21 @@ int main(void) {
   CHECK(palp_scene_parse(base, &s, err, sizeof err) == PALP_OK, "base scene parses: %s", err);
   CHECK(s.world.mesh.vertex_count == 120 && s.frames == 50 && s.contact_count == 1, "fields read");
   CHECK(s.contact[0].def.distribution == PALP_DIST_GAUSSIAN, "distribution read");
+  {
+    /* The library's defaults are the shipped calibrated parameters: the same decimal
+     * strings, so the same doubles. Recalibrating means updating both. */
+    const palp_scene paper = paper_scene();
+    const palp_world_def d = palp_world_default_def();
+    const palp_membrane_params *a = &paper.world.membrane, *b = &d.membrane;
+    const palp_gel_params *g = &paper.world.gel, *h = &d.gel;
+    CHECK(a->thickness == b->thickness && a->density == b->density && a->E1 == b->E1 && a->eta1 == b->eta1 &&
+              a->E2 == b->E2 && a->eta2 == b->eta2,
+          "palp_world_default_def's membrane equals config/params/calibrated.json");
+    CHECK(g->law == h->law && g->pressure == h->pressure && g->a1 == h->a1 && g->a2 == h->a2 && g->a3 == h->a3 &&
+              g->support_modulus == h->support_modulus && g->support_viscosity == h->support_viscosity &&
+              g->density == h->density && g->added_mass_fraction == h->added_mass_fraction,
+          "palp_world_default_def's gel equals config/params/calibrated.json");
+  }
   CHECK_NEAR(s.contact[0].def.center.z, 0.04 * cos(20 * 3.14159265358979323846 / 180), 1e-15, "centre from degrees [m]");
 
   expect_error("\"mesh\":{", "\"meshes\":{", "mesh");

@@ -190,7 +190,7 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
                         const palp_eval_calib_def *def, palp_eval_calib_result *out, char *err,
                         size_t errlen);
 
-/* Writes a parameter file in the format of config/params/realtime_default.json. */
+/* Writes a parameter file in the format of config/params/calibrated.json. */
 int palp_eval_params_write(const char *path, const palp_world_def *w, const char *comment, char *err,
                            size_t errlen);
 

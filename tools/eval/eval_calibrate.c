@@ -200,20 +200,28 @@ typedef struct fit_ws {
   char err[256];
 } fit_ws;
 
-/* ln(p / p_start) of the solver's unknown: the identity, or B tanh(x / B) with
- * B = ln(bound_factor), which is the identity near the start (slope 1) and
- * never leaves [-B, B]. */
-static double log_ratio(const fit_ws *ws, double x) {
+/* ln(p / p_start) of the solver's unknown j: the identity, or a tanh that is the
+ * identity's tangent at the start and never leaves [lo, hi]: lo = -B, hi = B with
+ * B = ln(bound_factor), except that hi is ln(p_max / p_start) for a parameter with
+ * a physical ceiling (the added gel mass cannot exceed the whole gel, fraction 1).
+ *   y(x) = m + r tanh((x + x0) / r),  m = (hi + lo) / 2, r = (hi - lo) / 2,
+ *   x0 = r atanh(-m / r), so that y(0) = 0. */
+static const double param_max[PALP_EVAL_P_COUNT] = {0, 0, 0, 0, 0, 0, 0, 0, 1.0}; /* 0: none */
+
+static double log_ratio(const fit_ws *ws, int j, double x) {
   const double b = ws->def->bound_factor;
-  if (!(b > 1.0)) return x;
-  const double B = log(b);
-  return B * tanh(x / B);
+  const double B = b > 1.0 ? log(b) : INFINITY;
+  const double lo = -B, hi = param_max[j] > 0 ? fmin(B, log(param_max[j] / ws->start[j])) : B;
+  if (!isfinite(lo) && !isfinite(hi)) return x;
+  if (!isfinite(lo)) return hi - log1p(exp(log(expm1(hi)) - x)); /* softplus ceiling, y(0) = 0 */
+  const double m = 0.5 * (hi + lo), r = 0.5 * (hi - lo);
+  return m + r * tanh((x + r * atanh(-m / r)) / r);
 }
 
 static void params_of_x(const fit_ws *ws, const gsl_vector *x, double p[PALP_EVAL_P_COUNT]) {
   memcpy(p, ws->start, sizeof ws->start);
   for (int j = 0; j < ws->np; ++j)
-    p[ws->idx[j]] = ws->start[ws->idx[j]] * exp(log_ratio(ws, gsl_vector_get(x, (size_t)j)));
+    p[ws->idx[j]] = ws->start[ws->idx[j]] * exp(log_ratio(ws, ws->idx[j], gsl_vector_get(x, (size_t)j)));
 }
 
 static size_t force_pairs(const palp_eval_record *ref, const palp_scene *s) {
@@ -324,7 +332,7 @@ static void fit_callback(const size_t iter, void *ud, const gsl_multifit_nlinear
   fprintf(stderr, "calibrate: iteration %2zu  |r| %.6g  (evaluations %d)  ", iter, chi, ws->evaluations);
   for (int j = 0; j < ws->np; ++j)
     fprintf(stderr, " %s=%.4g", palp_eval_param_name[ws->idx[j]],
-            ws->start[ws->idx[j]] * exp(log_ratio(ws, gsl_vector_get(x, (size_t)j))));
+            ws->start[ws->idx[j]] * exp(log_ratio(ws, ws->idx[j], gsl_vector_get(x, (size_t)j))));
   fprintf(stderr, "\n");
 }
 
@@ -397,10 +405,12 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   ws.def = def;
   ws.verbose = def->verbose;
   palp_eval_params_get(&scenes[0].world, ws.start);
-  /* A model without added gel mass (fraction 0) cannot be left in log space:
-   * the fit starts it from the whole gel's mass (fraction 1). */
-  if ((def->mask & (1u << PALP_EVAL_P_ADDED_MASS)) && ws.start[PALP_EVAL_P_ADDED_MASS] == 0.0)
-    ws.start[PALP_EVAL_P_ADDED_MASS] = 1.0;
+  /* A model without added gel mass (fraction 0) cannot be left in log space, and
+   * one at the ceiling (the whole gel, 1) has no room inside it: the fit starts
+   * such a mass from half the gel's. */
+  if ((def->mask & (1u << PALP_EVAL_P_ADDED_MASS)) &&
+      !(ws.start[PALP_EVAL_P_ADDED_MASS] > 0.0 && ws.start[PALP_EVAL_P_ADDED_MASS] < 0.99))
+    ws.start[PALP_EVAL_P_ADDED_MASS] = 0.5;
   for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
     if (!(def->mask & (1u << j))) continue; /* held parameters may be 0 */
     if (!(ws.start[j] > 0) || !isfinite(ws.start[j])) {
