@@ -14,7 +14,9 @@
  *    overrun over a 2 s window, read from palp_server_status.
  *
  * usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N]
- *        [--contact-rate HZ] [--rt-priority N] [--no-db]
+ *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE]
+ * --scene: the phantoms' scene (absolute path; default config/paper_step.json with the
+ * shipped calibrated parameters), e.g. one with params/handset.json as a baseline.
  */
 #include <fcntl.h>
 #include <math.h>
@@ -38,6 +40,7 @@ extern char **environ;
 
 static double seconds = 5.0;
 static int threads = 2, max_sessions = 48;
+static const char *scene_path = PALP_CONFIG_DIR "/paper_step.json"; /* --scene: the phantoms' scene */
 static double contact_rate = 100.0;
 static int rt_priority = 0;
 static int no_db = 0;
@@ -89,9 +92,9 @@ static pid_t spawn_server(unsigned domain, double rate) {
   }
   fprintf(cf,
           "{\"database\": \"%s\", \"dds_config\": \"%s\",\n"
-          " \"phantoms\": [{\"id\": 1, \"name\": \"bench A\", \"scene\": \"%s/paper_step.json\"},\n"
-          "              {\"id\": 2, \"name\": \"bench B\", \"scene\": \"%s/paper_step.json\"}]}\n",
-          db_path, PALP_DDS_DEFAULT_CONFIG, PALP_CONFIG_DIR, PALP_CONFIG_DIR);
+          " \"phantoms\": [{\"id\": 1, \"name\": \"bench A\", \"scene\": \"%s\"},\n"
+          "              {\"id\": 2, \"name\": \"bench B\", \"scene\": \"%s\"}]}\n",
+          db_path, PALP_DDS_DEFAULT_CONFIG, scene_path, scene_path);
   fclose(cf);
   char *argv[] = {PALP_SERVER_PATH, "--config", (char *)cfg_path, "--domain", d, "--tick-rate", r,
                   "--threads", t, "--max-sessions", m, "--rt-priority", pr, no_db ? "--no-db" : NULL, NULL};
@@ -418,10 +421,11 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--contact-rate") && i + 1 < argc) contact_rate = atof(argv[++i]);
     else if (!strcmp(argv[i], "--rt-priority") && i + 1 < argc) rt_priority = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--no-db")) no_db = 1;
+    else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_path = argv[++i];
     else if (argv[i][0] != '-') what = argv[i];
     else {
       fprintf(stderr, "usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N] "
-                      "[--contact-rate HZ] [--rt-priority N] [--no-db]\n");
+                      "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE]\n");
       return 2;
     }
   }

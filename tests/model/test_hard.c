@@ -190,6 +190,34 @@ int main(void) {
     survives("calibrated: 20 N single vertex, 1 ms", press(c1, PALP_DIST_SINGLE, off, 20, 0, 0));
     survives("calibrated: 30 N uniform, 10 ms", press(c10, PALP_DIST_UNIFORM, off, 30, 0, 0));
     survives("calibrated: 30 N on/off every tick, 1 kHz", press(c1, PALP_DIST_SINGLE, off, 30, 1, 0));
+
+    /* A haptic station's typical load at 1 kHz: 1.5 +- 1 N at 0.7 Hz. Each rebuild of
+     * the lagged tangent costs ~2 ms, two 1 kHz ticks, so rebuilds must be rare: the
+     * mass term's share of the stability margin is counted before a link's growing
+     * tension forces one. Measured 4 in 4,000 steps (88 before); bound 0.5%. The run
+     * stays stable: volume within 1%, finite. */
+    int e;
+    palp_world *w = palp_world_create(&c1, &e);
+    palp_contact_def c = palp_contact_default_def(PALP_DIST_GAUSSIAN, on_sphere(25, 60));
+    const int id = palp_world_add_contact(w, &c);
+    double dv = 0.0;
+    int ok = 1;
+    for (int s = 0; s < 4000 && ok; ++s) {
+      const double f = 1.5 + sin(2 * 3.14159265358979323846 * 0.7 * palp_world_time(w));
+      const palp_vec3 n = on_sphere(25, 60);
+      palp_world_set_contact_force(w, id, (palp_vec3){-f * n.x / R, -f * n.y / R, -f * n.z / R});
+      ok = palp_world_step(w) == PALP_OK;
+      dv = fmax(dv, vol_err(w));
+    }
+    palp_world_health hl;
+    palp_world_get_health(w, &hl);
+    printf("calibrated: 0.7 Hz press at 1 kHz, 4 s: %lld refactorisations in 4000 steps, volume %.3f%%, peak now "
+           "%.2f mm\n",
+           (long long)hl.refactors, 100 * dv, 1e3 * max_disp(w));
+    CHECK(ok && dv < 0.01, "0.7 Hz press: stable, volume within 1%% (%.3f%%)", 100 * dv);
+    CHECK(hl.refactors < 20, "0.7 Hz press at 1 kHz: %lld tangent rebuilds in 4000 steps (bound 20)",
+          (long long)hl.refactors);
+    palp_world_destroy(w);
   }
 
   /* Several fingers at once (position-driven): three spheres pressed 5 mm into the
