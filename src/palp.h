@@ -152,6 +152,11 @@ typedef struct palp_gel_params {
    * vertex's displacement u with a traction k u + c du/dt over its lumped area. */
   double support_modulus;   /* k [Pa/m] */
   double support_viscosity; /* c [Pa s/m], applied with gel damping */
+  /* phi in [0, 1]: the support resists each vertex's displacement relative to phi
+   * times the free surface's area-weighted mean displacement (the gel body's bulk
+   * shift), -k A_i (u_i - phi u_mean) - c A_i (v_i - phi v_mean); 0 anchors every
+   * vertex to its rest position (experimental, branch exp-bulk-support). */
+  double support_bulk_fraction; /* [-] */
   /* The gel moves with the membrane, so its inertia belongs to the surface
    * vertices: each free vertex carries added_mass_fraction of the gel's mass
    * density V0, shared by lumped area (docs/model.md, "Vertex weights"). */

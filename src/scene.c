@@ -119,6 +119,9 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   if (p->support_modulus < 0.0) return fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be >= 0");
   if ((e = get_num(c, g, "gel.", "support_viscosity_Pa_s_m", 0, &p->support_viscosity))) return e;
   if (p->support_viscosity < 0.0) return fail(c, PALP_EPARSE, "gel.support_viscosity_Pa_s_m: must be >= 0");
+  if ((e = get_num(c, g, "gel.", "support_bulk_fraction", 0, &p->support_bulk_fraction))) return e;
+  if (!(p->support_bulk_fraction >= 0.0 && p->support_bulk_fraction <= 1.0))
+    return fail(c, PALP_EPARSE, "gel.support_bulk_fraction: must be in [0, 1] (the share of the gel's bulk shift the support follows)");
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
   if (!(p->density > 0.0)) return fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
@@ -386,6 +389,7 @@ char *palp_scene_to_json(const palp_scene *s) {
   cJSON_AddNumberToObject(g, "a3_s2", gp->a3);
   cJSON_AddNumberToObject(g, "support_modulus_Pa_m", gp->support_modulus);
   cJSON_AddNumberToObject(g, "support_viscosity_Pa_s_m", gp->support_viscosity);
+  cJSON_AddNumberToObject(g, "support_bulk_fraction", gp->support_bulk_fraction);
   cJSON_AddNumberToObject(g, "density_kg_m3", gp->density);
   cJSON_AddNumberToObject(g, "added_mass_fraction", gp->added_mass_fraction);
   cJSON *t = cJSON_AddObjectToObject(r, "time");

@@ -134,6 +134,7 @@ palp_world_def palp_world_default_def(void) {
               .a3 = 0.0,
               .support_modulus = 13372.585,
               .support_viscosity = 5124.22221,
+              .support_bulk_fraction = 0.0,
               .density = 950.0,
               .added_mass_fraction = 0.67085273},
       .dt = 0.01,
@@ -218,6 +219,21 @@ static void stage_gel_forces(palp_world *w, double h) {
   for (int i = 0; i < w->mesh.vertex_count; ++i) w->force[i] = v3_add(w->force[i], v3_scale(w->grad[i], p));
 }
 
+/* Area-weighted mean displacement [m] and velocity [m/s] of the free surface. */
+static void support_means(const palp_world *w, palp_vec3 *um, palp_vec3 *vm) {
+  palp_vec3 su = v3(0, 0, 0), sv = v3(0, 0, 0);
+  double sa = 0.0;
+  for (int r = 0; r < w->nfree; ++r) {
+    const int i = w->vertex_of[r];
+    const double a = w->mesh.vertex_area[i];
+    su = v3_add(su, v3_scale(v3_sub(w->pos[i], w->mesh.rest[i]), a));
+    sv = v3_add(sv, v3_scale(w->vel[i], a));
+    sa += a;
+  }
+  *um = sa > 0.0 ? v3_scale(su, 1.0 / sa) : v3(0, 0, 0);
+  *vm = sa > 0.0 ? v3_scale(sv, 1.0 / sa) : v3(0, 0, 0);
+}
+
 static void stage_gel_support(palp_world *w, double h) {
   (void)h;
   /* Elastic part explicit at x_n; the h^2 A k and h A c terms sit on the factor's
@@ -227,6 +243,20 @@ static void stage_gel_support(palp_world *w, double h) {
     const int i = w->vertex_of[r];
     const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
     w->force[i] = v3_sub(w->force[i], v3_scale(u, k * w->mesh.vertex_area[i]));
+  }
+  const double phi = w->def.gel.support_bulk_fraction;
+  if (phi > 0.0) {
+    /* Bulk shift: the support resists u_i - phi u_mean (and v_i - phi v_mean), with
+     * the means taken at the start of the step, explicitly; the implicit diagonal
+     * h^2 A k + h A c stays (over-stiff, so it only damps). */
+    const double c = has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.support_viscosity : 0.0; /* [Pa s/m] */
+    palp_vec3 um, vm;
+    support_means(w, &um, &vm);
+    const palp_vec3 b = v3_add(v3_scale(um, phi * k), v3_scale(vm, phi * c)); /* [Pa] */
+    for (int r = 0; r < w->nfree; ++r) {
+      const int i = w->vertex_of[r];
+      w->force[i] = v3_add(w->force[i], v3_scale(b, w->mesh.vertex_area[i]));
+    }
   }
 }
 
@@ -411,6 +441,15 @@ static void stage_feedback(palp_world *w, double h) {
   const int gel = has(w, PALP_EFFECT_GEL_PRESSURE), support = has(w, PALP_EFFECT_GEL_SUPPORT);
   const double ks = w->def.gel.support_modulus; /* [Pa/m] */
   const double cs = has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.support_viscosity : 0.0; /* [Pa s/m] */
+  const double phi = w->def.gel.support_bulk_fraction;
+  /* The bulk shift's share of the support, with the means of the state the
+   * feedback reports (the end of the step). */
+  palp_vec3 bulk = v3(0, 0, 0); /* [Pa] */
+  if (support && phi > 0.0) {
+    palp_vec3 um, vm;
+    support_means(w, &um, &vm);
+    bulk = v3_add(v3_scale(um, phi * ks), v3_scale(vm, phi * cs));
+  }
   for (int c = 0; c < w->def.max_contacts; ++c) {
     contact *k = &w->contacts[c];
     if (k->kind == CONTACT_NONE) continue;
@@ -429,6 +468,7 @@ static void stage_feedback(palp_world *w, double h) {
       if (support) {
         const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
         f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->mesh.vertex_area[i]));
+        if (phi > 0.0) f = v3_add(f, v3_scale(bulk, w->mesh.vertex_area[i]));
       }
       k->feedback[q] = f;
       k->total = v3_add(k->total, f);
@@ -453,6 +493,7 @@ static int validate(const palp_world_def *d) {
   if (d->effects & PALP_EFFECT_GEL_SUPPORT) {
     if (!(g->support_modulus > 0.0) || !isfinite(g->support_modulus)) return PALP_EINVAL;
     if (!(g->support_viscosity >= 0.0) || !isfinite(g->support_viscosity)) return PALP_EINVAL;
+    if (!(g->support_bulk_fraction >= 0.0 && g->support_bulk_fraction <= 1.0)) return PALP_EINVAL;
   }
   if (d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY) {
     if (!(m->E1 > 0.0 && m->E2 > 0.0) || !isfinite(m->E1) || !isfinite(m->E2)) return PALP_EINVAL;

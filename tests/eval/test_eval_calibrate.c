@@ -68,7 +68,7 @@ static void test_recovers_parameters(void) {
    * determine (stiffnesses and the recovery's viscosities). eta1 (flow of 1.4%
    * over 2 s), a1 and a2 (the gel is nearly incompressible either way) stay at
    * the truth, as the prior would keep them in a real calibration. */
-  const double factor[PALP_EVAL_P_COUNT] = {1.2, 1.0, 0.8, 1.25, 1.0, 1.0, 0.8, 1.2, 1.0};
+  const double factor[PALP_EVAL_P_COUNT] = {1.2, 1.0, 0.8, 1.25, 1.0, 1.0, 0.8, 1.2, 1.0, 1.0};
   const unsigned mask = (1u << PALP_EVAL_P_E1) | (1u << PALP_EVAL_P_E2) | (1u << PALP_EVAL_P_ETA2) |
                         (1u << PALP_EVAL_P_SUPPORT_K) | (1u << PALP_EVAL_P_SUPPORT_C);
   double start[PALP_EVAL_P_COUNT];
@@ -125,7 +125,8 @@ static void test_param_file_roundtrip(void) {
   if (rc) return;
   /* Values with 9 significant digits that no default has. */
   const double p[PALP_EVAL_P_COUNT] = {3.14159265e6, 1.23456789e8, 7.65432101e6, 9.87654321e5,
-                                       11.1111111,   4.44444444e6, 1.71828183e6, 5.55555556e5, 0.314159265};
+                                       11.1111111,   4.44444444e6, 1.71828183e6, 5.55555556e5, 0.314159265,
+                                       0.271828183};
   palp_eval_params_set(&s.world, p);
   char dir[] = "/tmp/palp_eval_paramsXXXXXX";
   CHECK(mkdtemp(dir) != NULL, "mkdtemp");

@@ -50,7 +50,8 @@ int main(void) {
           "palp_world_default_def's membrane equals config/params/calibrated.json");
     CHECK(g->law == h->law && g->pressure == h->pressure && g->a1 == h->a1 && g->a2 == h->a2 && g->a3 == h->a3 &&
               g->support_modulus == h->support_modulus && g->support_viscosity == h->support_viscosity &&
-              g->density == h->density && g->added_mass_fraction == h->added_mass_fraction,
+              g->density == h->density && g->added_mass_fraction == h->added_mass_fraction &&
+              g->support_bulk_fraction == h->support_bulk_fraction,
           "palp_world_default_def's gel equals config/params/calibrated.json");
   }
   CHECK_NEAR(s.contact[0].def.center.z, 0.04 * cos(20 * 3.14159265358979323846 / 180), 1e-15, "centre from degrees [m]");
@@ -67,6 +68,8 @@ int main(void) {
   expect_error("\"gel_support\"", "\"gel_suport\"", "effects[4]");
   expect_error("\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"added_mass_fraction\":-1",
                "gel.added_mass_fraction");
+  expect_error("\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"support_bulk_fraction\":1.5",
+               "gel.support_bulk_fraction");
   expect_error("\"effects\":[", "\"effects\":{\"a\":1},\"x\":[", "effects");
   expect_error("{\"name\":\"t\",", "{\"name\":\"t\",,", "invalid JSON");
   expect_error("\"mesh\":{", "\"parameters\":\"/nonexistent/p.json\",\"mesh\":{", "parameters");

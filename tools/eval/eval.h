@@ -102,9 +102,11 @@ enum {
   PALP_EVAL_P_SUPPORT_K,
   PALP_EVAL_P_SUPPORT_C,
   PALP_EVAL_P_ADDED_MASS,
+  PALP_EVAL_P_BULK_FRACTION,
   PALP_EVAL_P_COUNT
 };
-/* "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass" */
+/* "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass",
+ * "support_bulk_fraction" */
 extern const char *const palp_eval_param_name[PALP_EVAL_P_COUNT];
 /* Units for reports: "Pa", "Pa s", ... */
 extern const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT];

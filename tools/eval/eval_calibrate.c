@@ -51,9 +51,10 @@
 #include "eval.h"
 
 const char *const palp_eval_param_name[PALP_EVAL_P_COUNT] = {
-    "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass"};
+    "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass",
+    "support_bulk_fraction"};
 const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT] = {"Pa", "Pa s", "Pa", "Pa s", "-", "Pa s/m^3", "Pa/m",
-                                                              "Pa s/m", "-"};
+                                                              "Pa s/m", "-", "-"};
 
 void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) {
   p[PALP_EVAL_P_E1] = w->membrane.E1;
@@ -65,6 +66,7 @@ void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) 
   p[PALP_EVAL_P_SUPPORT_K] = w->gel.support_modulus;
   p[PALP_EVAL_P_SUPPORT_C] = w->gel.support_viscosity;
   p[PALP_EVAL_P_ADDED_MASS] = w->gel.added_mass_fraction;
+  p[PALP_EVAL_P_BULK_FRACTION] = w->gel.support_bulk_fraction;
 }
 
 void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) {
@@ -77,6 +79,7 @@ void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) 
   w->gel.support_modulus = p[PALP_EVAL_P_SUPPORT_K];
   w->gel.support_viscosity = p[PALP_EVAL_P_SUPPORT_C];
   w->gel.added_mass_fraction = p[PALP_EVAL_P_ADDED_MASS];
+  w->gel.support_bulk_fraction = p[PALP_EVAL_P_BULK_FRACTION];
 }
 
 int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, size_t errlen) {
@@ -99,7 +102,7 @@ int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, siz
     if (found < 0) {
       snprintf(err, errlen,
                "--fit: unknown parameter \"%.*s\" (E1, eta1, E2, eta2, a1, a2, support_modulus, "
-               "support_viscosity, added_mass, or all)",
+               "support_viscosity, added_mass, support_bulk_fraction, or all)",
                (int)len, s);
       return PALP_EINVAL;
     }
@@ -206,7 +209,7 @@ typedef struct fit_ws {
  * a physical ceiling (the added gel mass cannot exceed the whole gel, fraction 1).
  *   y(x) = m + r tanh((x + x0) / r),  m = (hi + lo) / 2, r = (hi - lo) / 2,
  *   x0 = r atanh(-m / r), so that y(0) = 0. */
-static const double param_max[PALP_EVAL_P_COUNT] = {0, 0, 0, 0, 0, 0, 0, 0, 1.0}; /* 0: none */
+static const double param_max[PALP_EVAL_P_COUNT] = {0, 0, 0, 0, 0, 0, 0, 0, 1.0, 1.0}; /* 0: none */
 
 static double log_ratio(const fit_ws *ws, int j, double x) {
   const double b = ws->def->bound_factor;
@@ -411,6 +414,10 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   if ((def->mask & (1u << PALP_EVAL_P_ADDED_MASS)) &&
       !(ws.start[PALP_EVAL_P_ADDED_MASS] > 0.0 && ws.start[PALP_EVAL_P_ADDED_MASS] < 0.99))
     ws.start[PALP_EVAL_P_ADDED_MASS] = 0.5;
+  /* The support's bulk fraction likewise lives in (0, 1]. */
+  if ((def->mask & (1u << PALP_EVAL_P_BULK_FRACTION)) &&
+      !(ws.start[PALP_EVAL_P_BULK_FRACTION] > 0.0 && ws.start[PALP_EVAL_P_BULK_FRACTION] < 0.99))
+    ws.start[PALP_EVAL_P_BULK_FRACTION] = 0.5;
   for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
     if (!(def->mask & (1u << j))) continue; /* held parameters may be 0 */
     if (!(ws.start[j] > 0) || !isfinite(ws.start[j])) {
@@ -590,9 +597,10 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
   fprintf(f,
           "  \"gel\": { \"law\": \"%s\", \"pressure_Pa\": %.9g, \"a1\": %.9g, \"a2_Pa_s_m3\": %.9g, \"a3_s2\": %.9g,\n"
           "           \"support_modulus_Pa_m\": %.9g, \"support_viscosity_Pa_s_m\": %.9g,\n"
+          "           \"support_bulk_fraction\": %.9g,\n"
           "           \"density_kg_m3\": %.9g, \"added_mass_fraction\": %.9g }\n}\n",
           g->law == PALP_GEL_PAPER_LITERAL ? "paper_literal" : "polytropic", g->pressure, g->a1, g->a2, g->a3,
-          g->support_modulus, g->support_viscosity, g->density, g->added_mass_fraction);
+          g->support_modulus, g->support_viscosity, g->support_bulk_fraction, g->density, g->added_mass_fraction);
   free(cs);
   cJSON_Delete(c);
   int bad = ferror(f);
