@@ -85,9 +85,11 @@ int main(void) {
     CHECK(o.ok, "finite and stable at dt %.3f", dts[i]);
     CHECK(o.max_vol_err < 0.01, "volume within 1%% of rest under 3 N (%.3f%%)", 100 * o.max_vol_err);
     /* "About 1.0 s": within +-40% of the paper's figure at the paper's 10 ms step, where
-     * the parameters were calibrated. At 1 ms the last 5-10% of the peak decays more
-     * slowly (the traces differ by < 2% of the peak, checked below, but the 5% level is
-     * crossed in that tail): measured 1.53 s, bound 1.8 s. */
+     * the parameters were calibrated. The 5% level is crossed in a slow tail where the
+     * 10 ms and 1 ms traces differ by < 3% of the peak (checked below), so the crossing
+     * moves with the step and with when the lagged tangent happens to be rebuilt
+     * (measured 1.23 s at 10 ms, 1.13 s at 1 ms; 1.53 s at 1 ms before the mass-aware
+     * rebuild trigger): bound 1.8 s at 1 ms. */
     CHECK(o.recover_t >= 0.6 && o.recover_t <= (dts[i] > 0.005 ? 1.4 : 1.8), "recovery to 5%% of peak (%.2f s)",
           o.recover_t);
     CHECK(o.fb_err < 0.02, "feedback balances the 3 N load within 2%% (%.2f%%)", 100 * o.fb_err);
@@ -106,8 +108,8 @@ int main(void) {
   /* The step size changes the trajectory by little: outside the first 0.15 s after
    * each jump of the load, the 10 ms and 1 ms traces of the pole agree within 4% of
    * the peak (measured 2.7%, in the slow tail). Inside those windows the 10 ms step
-   * lags by its first-order error (measured 3.0 mm, 11% of the peak, at the first
-   * frame): bound 15%. */
+   * lags by its first-order error, ~h / tau for the ~50 ms rise (measured 3.6 mm, 13%
+   * of the peak, at the first frame): bound 20%. */
   double worst = 0.0, worst_jump = 0.0;
   for (int k = 0; k < 400; ++k) {
     const double t = 0.01 * (k + 1), e = fabs(tops[0].trace[k] - tops[1].trace[k]);
@@ -118,7 +120,7 @@ int main(void) {
          "0.15 s after a jump of the load\n",
          1e3 * worst, 100 * worst / tops[1].peak, 1e3 * worst_jump, 100 * worst_jump / tops[1].peak);
   CHECK(worst < 0.04 * tops[1].peak, "10 ms and 1 ms traces within 4%% of the peak (%.3f mm)", 1e3 * worst);
-  CHECK(worst_jump < 0.15 * tops[1].peak, "10 ms lag after a jump within 15%% of the peak (%.3f mm)",
+  CHECK(worst_jump < 0.20 * tops[1].peak, "10 ms lag after a jump within 20%% of the peak (%.3f mm)",
         1e3 * worst_jump);
 
   /* The four distributions at the off-centre contact, at both steps. */
