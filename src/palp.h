@@ -161,7 +161,7 @@ typedef struct palp_gel_params {
    * vertices: each free vertex carries added_mass_fraction of the gel's mass
    * density V0, shared by lumped area (docs/model.md, "Vertex weights"). */
   double density;             /* [kg/m^3], Table II: 950 */
-  double added_mass_fraction; /* [-], 0 = membrane mass only */
+  double added_mass_fraction; /* [-] in [0, 1]: 0 = membrane mass only, 1 = the whole gel */
 } palp_gel_params;
 
 typedef enum palp_effect {

@@ -125,8 +125,8 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
   if (!(p->density > 0.0)) return fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
-  if (!(p->added_mass_fraction >= 0.0 && p->added_mass_fraction <= 10.0))
-    return fail(c, PALP_EPARSE, "gel.added_mass_fraction: must be in [0, 10] (the share of the gel's mass the surface carries)");
+  if (!(p->added_mass_fraction >= 0.0 && p->added_mass_fraction <= 1.0))
+    return fail(c, PALP_EPARSE, "gel.added_mass_fraction: must be in [0, 1] (the share of the gel's mass the surface carries)");
   return PALP_OK;
 }
 

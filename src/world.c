@@ -68,7 +68,7 @@ struct palp_world {
   double *fslack;   /* [N/m] transverse stiffness the mass term absorbs at the factor's step */
   int stale;        /* the factor left its stability region: rebuild before the next step */
   int64_t refactors;
-  int reject;       /* the solve produced velocities that cannot be trusted */
+  int reject;       /* the solve cannot be used: 1 not finite or too fast, 2 left its linearisation */
   int last_resort;  /* at the last halving: cap speeds instead of rejecting, accept inaccuracy */
   int64_t clamped_steps;
   double min_rest_len; /* [m] shortest link */
@@ -510,7 +510,7 @@ static int validate(const palp_world_def *d) {
     if (g->law == PALP_GEL_PAPER_LITERAL && fabs(g->a3) >= d->dt * d->dt) return PALP_EINVAL;
   }
   if (!(g->density > 0.0) || !isfinite(g->density) || !(g->added_mass_fraction >= 0.0) ||
-      !(g->added_mass_fraction <= 10.0))
+      !(g->added_mass_fraction <= 1.0)) /* at most the whole gel */
     return PALP_EINVAL;
   if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;
   if (!(d->max_speed > 0.0)) return PALP_EINVAL;
