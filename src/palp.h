@@ -155,7 +155,7 @@ typedef struct palp_gel_params {
   /* phi in [0, 1]: the support resists each vertex's displacement relative to phi
    * times the free surface's area-weighted mean displacement (the gel body's bulk
    * shift), -k A_i (u_i - phi u_mean) - c A_i (v_i - phi v_mean); 0 anchors every
-   * vertex to its rest position (experimental, branch exp-bulk-support). */
+   * vertex to its rest position (docs/model.md, "The gel body may shift"). */
   double support_bulk_fraction; /* [-] */
   /* The gel moves with the membrane, so its inertia belongs to the surface
    * vertices: each free vertex carries added_mass_fraction of the gel's mass
