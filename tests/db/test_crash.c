@@ -21,28 +21,15 @@
 #include <unistd.h>
 
 #include "check.h"
-
-static int64_t one(sqlite3 *h, const char *sql) {
-  sqlite3_stmt *st;
-  int64_t v = -1;
-  if (sqlite3_prepare_v2(h, sql, -1, &st, NULL) != SQLITE_OK) return -2;
-  if (sqlite3_step(st) == SQLITE_ROW) v = sqlite3_column_int64(st, 0);
-  sqlite3_finalize(st);
-  return v;
-}
+#include "sqlite_util.h"
 
 int main(int argc, char **argv) {
   if (argc < 5) {
     fprintf(stderr, "usage: %s TMPDIR SIM_SESSION SCENE PALP_REVIEW\n", argv[0]);
     return 2;
   }
-  char db[600], aux[700];
-  snprintf(db, sizeof db, "%s/crash.db", argv[1]);
-  unlink(db);
-  snprintf(aux, sizeof aux, "%s-wal", db);
-  unlink(aux);
-  snprintf(aux, sizeof aux, "%s-shm", db);
-  unlink(aux);
+  char db[600];
+  db_fresh_path(db, sizeof db, argv[1], "crash.db");
   const char *uid = "crash-run-9b2d-0001";
   int fds[2];
   REQUIRE(pipe(fds) == 0, "pipe");
@@ -90,9 +77,9 @@ int main(int argc, char **argv) {
   CHECK(sqlite3_step(st) == SQLITE_ROW && !strcmp((const char *)sqlite3_column_text(st, 0), "ok"),
         "integrity_check after SIGKILL");
   sqlite3_finalize(st);
-  int64_t frames = one(h, "SELECT count(*) FROM frame f JOIN session s ON s.id = f.session_id "
+  int64_t frames = db_scalar(h, "SELECT count(*) FROM frame f JOIN session s ON s.id = f.session_id "
                           "WHERE s.uid = 'crash-run-9b2d-0001'");
-  int64_t contiguous = one(h, "SELECT max(frame) - min(frame) + 1 FROM frame");
+  int64_t contiguous = db_scalar(h, "SELECT max(frame) - min(frame) + 1 FROM frame");
   printf("reported %lld frames before SIGKILL; the file holds %lld (lost %lld = %.3f s at 1 kHz)\n", n,
          (long long)frames, n - (long long)frames, (double)(n - frames) / 1000.0);
   CHECK(frames >= n - 1000, "the file holds %lld frames, fewer than %lld - 1000 (more than 1 s lost)",
@@ -100,9 +87,9 @@ int main(int argc, char **argv) {
   CHECK(frames <= n + 11, "the file holds %lld frames, more than were enqueued (%lld + 11)", (long long)frames, n);
   CHECK(contiguous == frames, "frames are a gap-free prefix (%lld span, %lld rows)", (long long)contiguous,
         (long long)frames);
-  CHECK(one(h, "SELECT count(*) FROM session WHERE end_unix_s IS NULL AND end_reason IS NULL") == 1,
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE end_unix_s IS NULL AND end_reason IS NULL") == 1,
         "the killed session has no end");
-  CHECK(one(h, "SELECT count(*) FROM writer_run WHERE closed_unix_s IS NULL") == 1, "the writer run never closed");
+  CHECK(db_scalar(h, "SELECT count(*) FROM writer_run WHERE closed_unix_s IS NULL") == 1, "the writer run never closed");
   sqlite3_close(h);
 
   char cmd[1400];

@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "sqlite_util.h"
 #include "palp.h"
 #include "palp_dds.h"
 
@@ -44,25 +45,13 @@ static int wait_matched(dds_entity_t w, int want, double timeout_s) {
   return -1;
 }
 
-static int64_t one(sqlite3 *h, const char *sql) {
-  sqlite3_stmt *st;
-  int64_t v = -1;
-  if (sqlite3_prepare_v2(h, sql, -1, &st, NULL) != SQLITE_OK) return -2;
-  if (sqlite3_step(st) == SQLITE_ROW) v = sqlite3_column_int64(st, 0);
-  sqlite3_finalize(st);
-  return v;
-}
-
 int main(int argc, char **argv) {
   if (argc < 5) {
     fprintf(stderr, "usage: %s TMPDIR PALP_RECORDER PALP_REVIEW DDS_CONFIG\n", argv[0]);
     return 2;
   }
-  char db[600], aux[700];
-  snprintf(db, sizeof db, "%s/recorder.db", argv[1]);
-  unlink(db);
-  snprintf(aux, sizeof aux, "%s-wal", db);
-  unlink(aux);
+  char db[600];
+  db_fresh_path(db, sizeof db, argv[1], "recorder.db");
   REQUIRE(palp_dds_use_config(argv[4]) == 0, "DDS config %s", argv[4]);
 
   char dom[16];
@@ -185,33 +174,33 @@ int main(int argc, char **argv) {
 
   sqlite3 *h;
   REQUIRE(sqlite3_open(db, &h) == SQLITE_OK, "open");
-  CHECK(one(h, "SELECT count(*) FROM session WHERE trainee = 'dana' AND station = 'host/4242/haptic-1' AND "
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'dana' AND station = 'host/4242/haptic-1' AND "
                "phantom_id = '3' AND phantom_name = 'left dome' AND end_reason = 'station_vanished'") == 1,
         "one session with trainee, station, phantom and end reason");
-  CHECK(one(h, "SELECT count(*) FROM mesh") == deformations, "%d deformations -> %lld meshes", deformations,
-        (long long)one(h, "SELECT count(*) FROM mesh"));
-  CHECK(one(h, "SELECT count(*) FROM mesh WHERE vertex_count = 338 AND length(positions_m) = 338 * 24") == deformations,
+  CHECK(db_scalar(h, "SELECT count(*) FROM mesh") == deformations, "%d deformations -> %lld meshes", deformations,
+        (long long)db_scalar(h, "SELECT count(*) FROM mesh"));
+  CHECK(db_scalar(h, "SELECT count(*) FROM mesh WHERE vertex_count = 338 AND length(positions_m) = 338 * 24") == deformations,
         "meshes hold 338 x 3 doubles");
   /* One frame row per feedback sample: pole displacement 1e-5 m x (frame - 1) and force 0.05 N x
    * (frame - 1) as sent (tolerance 1e-12); max_disp never below the pole's. */
-  CHECK(one(h, "SELECT count(*) FROM frame") == one(h, "SELECT count(*) FROM feedback"), "a frame row per feedback");
-  CHECK(one(h, "SELECT count(*) FROM frame WHERE abs(top_disp_m - 1e-5 * (frame - 1)) < 1e-12 AND "
+  CHECK(db_scalar(h, "SELECT count(*) FROM frame") == db_scalar(h, "SELECT count(*) FROM feedback"), "a frame row per feedback");
+  CHECK(db_scalar(h, "SELECT count(*) FROM frame WHERE abs(top_disp_m - 1e-5 * (frame - 1)) < 1e-12 AND "
                "abs(contact_force_n - 0.05 * (frame - 1)) < 1e-12 AND max_disp_m >= top_disp_m") ==
-            one(h, "SELECT count(*) FROM frame"),
+            db_scalar(h, "SELECT count(*) FROM frame"),
         "frame rows carry the sent displacement and force");
-  int64_t adds = one(h, "SELECT count(*) FROM contact_input WHERE op = 'add' AND kind = 'finger'");
-  int64_t upd = one(h, "SELECT count(*) FROM contact_input WHERE op = 'update'");
-  int64_t rem = one(h, "SELECT count(*) FROM contact_input WHERE op = 'remove'");
-  int64_t fbn = one(h, "SELECT count(*) FROM feedback");
+  int64_t adds = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'add' AND kind = 'finger'");
+  int64_t upd = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'update'");
+  int64_t rem = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'remove'");
+  int64_t fbn = db_scalar(h, "SELECT count(*) FROM feedback");
   printf("recorded: %lld add, %lld of 59 updates, %lld remove, %lld of 60 feedback samples\n", (long long)adds,
          (long long)upd, (long long)rem, (long long)fbn);
   CHECK(adds == 1 && rem == 1 && upd >= 54 && upd <= 59, "contact inputs (best effort, >= 90 %% of updates)");
   CHECK(fbn >= 54 && fbn <= 60, "feedback samples (best effort, >= 90 %%): %lld", (long long)fbn);
-  CHECK(one(h, "SELECT count(*) FROM contact_input WHERE op = 'update' AND radius_m = 0.008 AND center_z_m < 0.047") >= 54,
+  CHECK(db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'update' AND radius_m = 0.008 AND center_z_m < 0.047") >= 54,
         "finger radius and centre recorded");
-  CHECK(one(h, "SELECT sum(count) FROM event WHERE kind = 'reject'") == 3 &&
-            one(h, "SELECT sum(count) FROM event WHERE kind = 'overrun'") == 1 &&
-            one(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave')") == 2,
+  CHECK(db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'reject'") == 3 &&
+            db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'overrun'") == 1 &&
+            db_scalar(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave')") == 2,
         "join, reject x3, overrun x1, leave");
   char uid[128] = "";
   sqlite3_stmt *q;

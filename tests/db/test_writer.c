@@ -10,28 +10,12 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "sqlite_util.h"
 #include "palp_db.h"
 
 static char dir[512];
 
-static void path_in(char *buf, size_t n, const char *name) {
-  snprintf(buf, n, "%s/%s", dir, name);
-  unlink(buf);
-  char aux[600];
-  snprintf(aux, sizeof aux, "%s-wal", buf);
-  unlink(aux);
-  snprintf(aux, sizeof aux, "%s-shm", buf);
-  unlink(aux);
-}
-
-static int64_t count_rows(sqlite3 *db, const char *sql) {
-  sqlite3_stmt *st;
-  int64_t n = -1;
-  if (sqlite3_prepare_v2(db, sql, -1, &st, NULL) != SQLITE_OK) return -2;
-  if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int64(st, 0);
-  sqlite3_finalize(st);
-  return n;
-}
+static void path_in(char *buf, size_t n, const char *name) { db_fresh_path(buf, n, dir, name); }
 
 static palp_db_frame frame_of(int64_t i) {
   palp_db_frame f;
@@ -172,8 +156,8 @@ static void test_round_trip(void) {
   CHECK(palp_db_list_sessions(db, &f, &list, &n) == 0 && n == 0, "list since n=%d", n);
   free(list);
   sqlite3 *h = palp_db_handle(db);
-  CHECK(count_rows(h, "SELECT count(*) FROM feedback WHERE force_z_n = 1000.0 AND frame = 2000") == 1, "feedback");
-  CHECK(count_rows(h, "SELECT records_written FROM writer_run") == 4007, "writer_run records");
+  CHECK(db_scalar(h, "SELECT count(*) FROM feedback WHERE force_z_n = 1000.0 AND frame = 2000") == 1, "feedback");
+  CHECK(db_scalar(h, "SELECT records_written FROM writer_run") == 4007, "writer_run records");
   palp_db_close(db);
 }
 
@@ -210,13 +194,13 @@ static void test_shed(void) {
   palp_db *db;
   REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open: %s", err);
   sqlite3 *h = palp_db_handle(db);
-  CHECK(count_rows(h, "SELECT count(*) FROM frame") == ok, "frames written = accepted (%d)", ok);
+  CHECK(db_scalar(h, "SELECT count(*) FROM frame") == ok, "frames written = accepted (%d)", ok);
   char q[128];
   snprintf(q, sizeof q, "SELECT count(*) FROM session WHERE records_shed = %d AND end_reason = 'normal'", full);
-  CHECK(count_rows(h, q) == 1, "session.records_shed = %d", full);
+  CHECK(db_scalar(h, q) == 1, "session.records_shed = %d", full);
   snprintf(q, sizeof q, "SELECT sum(count) FROM event WHERE kind = 'shed'");
-  CHECK(count_rows(h, q) == full, "shed events account for all %d shed records (got %lld)", full,
-        (long long)count_rows(h, q));
+  CHECK(db_scalar(h, q) == full, "shed events account for all %d shed records (got %lld)", full,
+        (long long)db_scalar(h, q));
   palp_db_close(db);
 }
 
@@ -285,9 +269,9 @@ static void test_migration(const char *v1_sql) {
             info.records_shed == 0,
         "v1 data survives the upgrade with the new columns at their defaults");
   h = palp_db_handle(db);
-  CHECK(count_rows(h, "SELECT count(*) FROM writer_run") == 0, "writer_run created by migration 2");
-  CHECK(count_rows(h, "SELECT count(*) FROM meta WHERE key = 'upgraded_unix_s'") == 1, "meta.upgraded_unix_s");
-  CHECK(count_rows(h, "SELECT count(*) FROM frame WHERE state_hash = -42") == 1, "v1 frame intact");
+  CHECK(db_scalar(h, "SELECT count(*) FROM writer_run") == 0, "writer_run created by migration 2");
+  CHECK(db_scalar(h, "SELECT count(*) FROM meta WHERE key = 'upgraded_unix_s'") == 1, "meta.upgraded_unix_s");
+  CHECK(db_scalar(h, "SELECT count(*) FROM frame WHERE state_hash = -42") == 1, "v1 frame intact");
   palp_db_close(db);
 
   /* Opening again is a no-op. */
@@ -299,9 +283,9 @@ static void test_migration(const char *v1_sql) {
   REQUIRE(palp_db_open(p, 1, &db, err, sizeof err) == 0, "create: %s", err);
   h = palp_db_handle(db);
   CHECK(palp_db_file_version(db) == 2, "fresh version");
-  CHECK(count_rows(h, "SELECT count(*) FROM meta WHERE key IN ('created_unix_s','app_version','schema_version')") == 3,
+  CHECK(db_scalar(h, "SELECT count(*) FROM meta WHERE key IN ('created_unix_s','app_version','schema_version')") == 3,
         "meta rows");
-  CHECK(count_rows(h, "PRAGMA journal_mode = WAL") >= -1, "wal");
+  CHECK(db_scalar(h, "PRAGMA journal_mode = WAL") >= -1, "wal");
   palp_db_close(db);
 
   /* Somebody else's SQLite file (tables, no palp version) is refused, not "upgraded". */
@@ -313,7 +297,7 @@ static void test_migration(const char *v1_sql) {
   CHECK(palp_db_open(p, 1, &db, err, sizeof err) != 0 && strstr(err, "not a palp session log"),
         "foreign database refused: %s", err);
   REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "reopen");
-  CHECK(count_rows(h, "SELECT count(*) FROM sqlite_master") == 1, "foreign database untouched");
+  CHECK(db_scalar(h, "SELECT count(*) FROM sqlite_master") == 1, "foreign database untouched");
   sqlite3_close(h);
 
   /* A missing file is not created by a reader. */
@@ -339,7 +323,7 @@ static void test_newer(void) {
   CHECK(rc == PALP_DB_ENEWER && strstr(err, "upgrade palp"), "writer refuses too: %s", err);
   /* ... and leaves the file untouched. */
   REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
-  CHECK(count_rows(h, "PRAGMA user_version") == 99 && count_rows(h, "SELECT count(*) FROM sqlite_master") == 1,
+  CHECK(db_scalar(h, "PRAGMA user_version") == 99 && db_scalar(h, "SELECT count(*) FROM sqlite_master") == 1,
         "file untouched");
   sqlite3_close(h);
 }
@@ -375,7 +359,7 @@ static void test_full_disk(void) {
   palp_db_writer_close(w);
   sqlite3 *h;
   sqlite3_open(p, &h);
-  CHECK(count_rows(h, "PRAGMA integrity_check") != -2, "integrity");
+  CHECK(db_scalar(h, "PRAGMA integrity_check") != -2, "integrity");
   sqlite3_stmt *q;
   sqlite3_prepare_v2(h, "PRAGMA integrity_check", -1, &q, NULL);
   CHECK(sqlite3_step(q) == SQLITE_ROW && !strcmp((const char *)sqlite3_column_text(q, 0), "ok"), "integrity ok");
