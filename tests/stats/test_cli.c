@@ -15,17 +15,10 @@
 
 #include <cjson/cJSON.h>
 
+#include "harness.h"
+
 static const char *tool;
 static const char *dir;
-static int failures = 0, checks = 0;
-
-static void check(const char *what, int cond) {
-  ++checks;
-  if (!cond) {
-    ++failures;
-    fprintf(stderr, "FAIL %s\n", what);
-  }
-}
 
 static void check_rel(const char *what, double got, double want, double rtol) {
   ++checks;
@@ -45,19 +38,6 @@ static void write_file(const char *name, const char *text) {
   }
   fputs(text, f);
   fclose(f);
-}
-
-static char *slurp(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return calloc(1, 1);
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  size_t got = fread(s, 1, (size_t)n, f);
-  s[got] = '\0';
-  fclose(f);
-  return s;
 }
 
 typedef struct result {

@@ -15,29 +15,9 @@
 
 #include "svg_plot.h"
 
+#include "harness.h"
+
 static const char *dir;
-static int failures = 0, checks = 0;
-
-static void check(const char *what, int cond) {
-  ++checks;
-  if (!cond) {
-    ++failures;
-    fprintf(stderr, "FAIL %s\n", what);
-  }
-}
-
-static char *slurp(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return calloc(1, 1);
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  size_t got = fread(s, 1, (size_t)n, f);
-  s[got] = '\0';
-  fclose(f);
-  return s;
-}
 
 static int count(const char *hay, const char *needle) {
   int n = 0;
