@@ -16,19 +16,9 @@
 #include <time.h>
 
 #include "fem_internal.h" /* the model itself, for the FE volume and kinetic energy */
+#include "fem_test.h"
 #include "palp.h"
 #include "palp_fem.h"
-
-static int failures;
-#define CHECK(cond, ...)                                                                                         \
-  do {                                                                                                           \
-    if (!(cond)) {                                                                                               \
-      fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                                       \
-      fprintf(stderr, __VA_ARGS__);                                                                              \
-      fprintf(stderr, "\n");                                                                                     \
-      failures++;                                                                                                \
-    }                                                                                                            \
-  } while (0)
 
 static const double R = 0.04; /* [m] phantom radius */
 static const char *scene_path = "config/paper_step.json";
@@ -664,8 +654,8 @@ int main(int argc, char **argv) {
     if (!strcmp(argv[1], cases[i].name)) {
       const double t0 = now();
       cases[i].fn();
-      printf("case %s: %.2f s wall, %s\n", argv[1], now() - t0, failures ? "FAILED" : "passed");
-      return failures ? 1 : 0;
+      printf("case %s: %.2f s wall, %s\n", argv[1], now() - t0, fem_failures ? "FAILED" : "passed");
+      return fem_failures ? 1 : 0;
     }
   fprintf(stderr, "unknown case \"%s\"\n", argv[1]);
   return 2;
