@@ -210,10 +210,60 @@ int palp_world_step_dt(palp_world *w, double dt);
  * vector [N] is spread over the distribution's vertices by their weights. */
 int palp_world_add_contact(palp_world *w, const palp_contact_def *def);
 int palp_world_set_contact_force(palp_world *w, int contact, palp_vec3 force);
-/* Position-driven finger: a sphere of radius [m] at centre [m]; the surface is kept
- * outside it and the force needed to do so is the finger's feedback. */
+/* Position-driven finger (docs/haptics.md). The trainee's hand moves a device
+ * point; the simulated fingertip, the proxy ("god object"), is a rigid sphere of
+ * the finger's radius that collides with the surface's deforming triangles and
+ * never passes through them. A virtual coupling spring k_c joins proxy and device:
+ * in free space the proxy sits on the device; pressed into the phantom, the device
+ * goes beneath the surface, the proxy stays on it, and the finger's force is
+ * k_c (proxy - device), which the step solves together with the surface's motion
+ * (contact forces over the touched triangles, spread by barycentric weights). The
+ * coupling bounds the stiffness a device is asked to render by k_c. */
+typedef struct palp_finger_def {
+  double radius;             /* fingertip sphere [m], default 0.008 */
+  double coupling_stiffness; /* k_c, proxy to device [N/m], default 2000 */
+} palp_finger_def;
+palp_finger_def palp_finger_default_def(void);
+/* Returns a contact id >= 0 or a negative error; the proxy starts at the device. */
+int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_vec3 device);
+/* Moves the device point [m] (the next step uses it). */
+int palp_world_set_finger_device(palp_world *w, int contact, palp_vec3 device);
+/* Shorthands with the default coupling: center is the device point [m]. */
 int palp_world_add_finger(palp_world *w, palp_vec3 center, double radius);
 int palp_world_set_finger(palp_world *w, int contact, palp_vec3 center, double radius);
+
+/* The local contact model of a finger after the last step: what a station's 1 kHz
+ * haptic loop needs to render the phantom between the server's physics steps
+ * without a round trip (multi-rate rendering, docs/haptics.md). Near the state it
+ * describes, the force on the device at position x and time t is
+ *   F(x, t) = force - K (x - device - drift (t - time)),
+ * K = stiffness (= -dF/dx, symmetric, positive semi-definite, at most k_c), while
+ * the normal component stays pushing (F . normal > 0); otherwise the finger is free
+ * (F = 0). drift is the surface's own motion at the contact: a device that follows
+ * it feels an unchanged force. */
+typedef struct palp_local_model {
+  double time;            /* world time at the end of the step it describes [s] */
+  double period;          /* the step [s]: the next model is due this much later */
+  int contact;            /* 1 when the fingertip touches the surface */
+  int triangles;          /* triangles in contact */
+  palp_vec3 device;       /* device point the step used [m] */
+  palp_vec3 proxy;        /* fingertip centre, on or outside the surface [m] */
+  palp_vec3 normal;       /* unit contact normal, from the surface towards the proxy */
+  palp_vec3 force;        /* force of the phantom on the finger [N] */
+  double stiffness[3][3]; /* K [N/m] */
+  palp_vec3 drift;        /* [m/s] */
+  double area;            /* contact footprint (touched triangles, barycentric share) [m^2] */
+  double depth;           /* device beneath the proxy along the normal [m], >= 0 */
+  palp_vec3 point;        /* force-weighted contact point on the surface [m] */
+} palp_local_model;
+int palp_world_finger_local_model(const palp_world *w, int contact, palp_local_model *out);
+
+/* Force of a local model at device point x [m], `age` [s] after its time. */
+palp_vec3 palp_local_model_force(const palp_local_model *m, palp_vec3 x, double age);
+
+/* Where a finger touches: the touched triangles and each one's contact force on the
+ * surface [N] (normal, outward from the finger); fills up to cap, returns the count. */
+int palp_world_finger_contacts(const palp_world *w, int contact, int *triangles, double *force, int cap);
 int palp_world_remove_contact(palp_world *w, int contact);
 
 /* Force the phantom exerts back on the contact [N] (sum over its vertices), and per
@@ -245,6 +295,8 @@ typedef struct palp_world_health {
   int64_t large_strain_steps; /* steps with a link strained beyond +-50%, where a linear
                                  Burgers law on engineering strain is a poor model */
   double max_strain;          /* largest |link strain| seen [-] */
+  int64_t base_contacts;      /* vertex-steps held at the rigid base plane z = 0 */
+  int64_t finger_unsolved;    /* finger contact solves that ended without converging */
   int64_t clamped_steps;      /* sub-steps at the last halving (h/16) whose velocities were
                                  capped at max_speed rather than failing the world: a load
                                  far beyond the model (e.g. 30 N on one vertex of a soft

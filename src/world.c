@@ -18,6 +18,7 @@
 #include <time.h>
 
 #include "burgers.h"
+#include "finger.h"
 #include "gel.h"
 #include "palp.h"
 #include "sparse_ldl.h"
@@ -33,10 +34,40 @@ typedef struct contact {
   double *weight;  /* [cap] force contacts only */
   palp_vec3 *feedback; /* [cap] per-vertex force of the phantom on the finger [N] */
   palp_vec3 force;  /* [N] */
-  palp_vec3 center; /* finger tip [m] */
-  double radius;    /* finger radius [m] */
   palp_vec3 total;  /* summed feedback [N] */
+  /* Fingers (docs/haptics.md): a rigid sphere (the proxy) coupled to the device. */
+  palp_finger_def fdef;
+  palp_vec3 device, proxy; /* [m] */
+  int ncon, ccap;          /* contact constraints of the last step */
+  int *ctri;               /* [ccap] triangle of each constraint */
+  double (*cbary)[3];      /* barycentric weights of its closest point */
+  palp_vec3 *cn;           /* unit normal, surface -> proxy */
+  palp_vec3 *cq;           /* closest point [m] */
+  double *clam;            /* contact force [N] */
+  palp_local_model lm;
 } contact;
+
+/* Compliance columns for finger contacts: the 3 columns of the factor's inverse
+ * A^{-1} at a free vertex, computed on demand and kept until the next
+ * refactorisation, in a bounded pool reused least-recently first. */
+#define PALP_FINGER_MAX_CON 96 /* constraints per finger and step */
+typedef struct finger_scratch {
+  int slots, n3;        /* pool size, 3 nfree */
+  double *pool;         /* [slots][3][n3] */
+  int *slot_row;        /* [slots] free row held, -1 */
+  int64_t *slot_used;   /* [slots] last step the slot served */
+  int *row_slot;        /* [nfree] slot of a row, -1 */
+  double *solve;        /* [3 n3] interleaved right-hand sides */
+  double *work;         /* [3 n3] */
+  int *vloc;            /* [vertex_count] local index of a contact vertex, -1 */
+  int *lvert;           /* [3 PALP_FINGER_MAX_CON] contact vertices */
+  double *lf;           /* [3 * 3 PALP_FINGER_MAX_CON] local forces [N] */
+  double *y;            /* [PALP_FINGER_MAX_CON][9 PALP_FINGER_MAX_CON] A^{-1} H_s^T n_s at local dofs */
+  double *W, *b, *lwork; /* [m^2], [m], [m^2 + 3m] */
+  uint8_t *cand;        /* [vertex_count] */
+  double max_link;      /* [m] longest rest link */
+  int64_t stamp;
+} finger_scratch;
 
 typedef void (*stage_fn)(palp_world *w, double h);
 typedef struct stage {
@@ -97,6 +128,9 @@ struct palp_world {
 
   /* Contacts. */
   contact *contacts;
+  finger_scratch *fs;   /* allocated with the first finger */
+  double gu_dot, sm_coef; /* g.u and c / (1 + c g.u) of the last solve (gel's rank-1 term) */
+  int64_t base_contacts, finger_unsolved;
   /* Links at each vertex (only with force feedback): the feedback needs the membrane
    * force at contact vertices only, so it is summed there from the links' stresses
    * rather than accumulated over the whole mesh every step. Entry +(l+1) when the
@@ -313,6 +347,10 @@ static void stage_solve(palp_world *w, double h) {
     }
     const double s = w->c_rank1 * gy / (1.0 + w->c_rank1 * gu);
     for (int k = 0; k < 3 * n; ++k) x[k] -= s * w->u[k];
+    w->gu_dot = gu;
+    w->sm_coef = w->c_rank1 / (1.0 + w->c_rank1 * gu);
+  } else {
+    w->sm_coef = 0.0;
   }
   /* Nothing has moved yet: a solution that is not finite or faster than max_speed
    * is rejected here and the step retried in halves (palp_world_step_dt). At the
@@ -375,25 +413,310 @@ static void stage_integrate(palp_world *w, double h) {
   }
 }
 
-static void stage_fingers(palp_world *w, double h) {
-  (void)h;
-  /* A finger is a rigid sphere: vertices inside are put back on its surface and
-   * lose their inward normal velocity (a velocity-level contact constraint). */
-  for (int c = 0; c < w->def.max_contacts; ++c) {
-    contact *k = &w->contacts[c];
-    if (k->kind != CONTACT_FINGER) continue;
-    k->count = 0;
-    for (int r = 0; r < w->nfree; ++r) {
-      const int i = w->vertex_of[r];
-      const palp_vec3 d = v3_sub(w->pos[i], k->center);
-      const double len = v3_len(d);
-      if (len >= k->radius) continue;
-      const palp_vec3 nrm = len > 1e-12 ? v3_scale(d, 1.0 / len) : v3(0, 0, 1);
-      w->pos[i] = v3_add(k->center, v3_scale(nrm, k->radius));
-      const double vn = v3_dot(w->vel[i], nrm);
-      if (vn < 0.0) w->vel[i] = v3_sub(w->vel[i], v3_scale(nrm, vn));
-      if (k->count < k->cap) k->vertex[k->count++] = i;
+/* ---- fingers ------------------------------------------------------------ */
+
+/* The pool slot holding the 3 columns of A^{-1} (the factor, without the gel's
+ * rank-1 term) at free row r, [3][n3] contiguous, computed on first use after a
+ * refactorisation; the pool grows (up to every free row) only when every slot
+ * serves this step. Returns the slot or -1 when out of memory. */
+static int finger_slot(palp_world *w, int r) {
+  finger_scratch *fs = w->fs;
+  const int n3 = fs->n3;
+  int s = fs->row_slot[r];
+  if (s < 0) {
+    int best = -1;
+    for (int q = 0; q < fs->slots; ++q) {
+      if (fs->slot_row[q] < 0) {
+        best = q;
+        break;
+      }
+      if (fs->slot_used[q] != fs->stamp && (best < 0 || fs->slot_used[q] < fs->slot_used[best])) best = q;
     }
+    if (best < 0) {
+      const int grown = fs->slots * 2 < w->nfree ? fs->slots * 2 : w->nfree;
+      if (grown <= fs->slots) return -1;
+      double *pool = realloc(fs->pool, sizeof(double) * 3 * (size_t)n3 * (size_t)grown);
+      int *sr = realloc(fs->slot_row, sizeof(int) * (size_t)grown);
+      int64_t *su = realloc(fs->slot_used, sizeof(int64_t) * (size_t)grown);
+      if (pool) fs->pool = pool;
+      if (sr) fs->slot_row = sr;
+      if (su) fs->slot_used = su;
+      if (!pool || !sr || !su) return -1;
+      for (int q = fs->slots; q < grown; ++q) fs->slot_row[q] = -1, fs->slot_used[q] = 0;
+      best = fs->slots;
+      fs->slots = grown;
+    }
+    s = best;
+    if (fs->slot_row[s] >= 0) fs->row_slot[fs->slot_row[s]] = -1;
+    memset(fs->solve, 0, sizeof(double) * 3 * (size_t)n3);
+    for (int c = 0; c < 3; ++c) fs->solve[3 * (3 * r + c) + c] = 1.0;
+    palp_ldl_solve(&w->ldl, fs->solve, 3, fs->work);
+    double *col = fs->pool + (size_t)s * 3 * (size_t)n3;
+    for (int k = 0; k < n3; ++k)
+      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = fs->solve[3 * k + c];
+    fs->slot_row[s] = r;
+    fs->row_slot[r] = s;
+  }
+  fs->slot_used[s] = fs->stamp;
+  return s;
+}
+
+static void finger_cols_invalidate(palp_world *w) {
+  finger_scratch *fs = w->fs;
+  if (!fs) return;
+  for (int q = 0; q < fs->slots; ++q) {
+    if (fs->slot_row[q] >= 0) fs->row_slot[fs->slot_row[q]] = -1;
+    fs->slot_row[q] = -1;
+  }
+}
+
+/* Free position of vertex i after the solve, before contacts: x + h v_free [m]. */
+static palp_vec3 free_pos(const palp_world *w, int i, double h) {
+  const int r = w->row_of[i];
+  if (r < 0) return w->pos[i];
+  const double *v = w->rhs + 3 * r;
+  return v3_add(w->pos[i], v3_scale(v3(v[0], v[1], v[2]), h));
+}
+
+static double seg_dist2(palp_vec3 p, palp_vec3 a, palp_vec3 b) {
+  const palp_vec3 ab = v3_sub(b, a);
+  const double L2 = v3_dot(ab, ab);
+  double t = L2 > 0.0 ? v3_dot(v3_sub(p, a), ab) / L2 : 0.0;
+  t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+  const palp_vec3 d = v3_sub(p, v3_add(a, v3_scale(ab, t)));
+  return v3_dot(d, d);
+}
+
+/* Collects the constraints of one finger: dome triangles near the proxy's path from
+ * its last position p0 to the device, each linearised at p0 (docs/haptics.md):
+ *   g_t(p, x) = |p0 - q_t| - R + n_t . (p - p0) - n_t . sum_a w_ta dx_a. */
+static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_lam[][2], int nprev) {
+  finger_scratch *fs = w->fs;
+  const palp_mesh *m = &w->mesh;
+  const double R = k->fdef.radius;
+  const palp_vec3 p0 = k->proxy, d = k->device;
+  const double reach = R + fs->max_link + 1e-3; /* [m] */
+  for (int i = 0; i < m->vertex_count; ++i)
+    fs->cand[i] = (uint8_t)(seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
+  int nc = 0;
+  for (int t = 0; t < m->dome_triangle_count; ++t) {
+    const int *T = m->tri[t];
+    if (!fs->cand[T[0]] && !fs->cand[T[1]] && !fs->cand[T[2]]) continue;
+    if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
+    const palp_vec3 a = free_pos(w, T[0], h), b = free_pos(w, T[1], h), c = free_pos(w, T[2], h);
+    double bary[3];
+    const palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
+    const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
+    const double fl = v3_len(face);
+    if (!(fl > 0.0)) continue;
+    const palp_vec3 nf = v3_scale(face, 1.0 / fl);
+    const palp_vec3 pq = v3_sub(p0, q);
+    const double dist = v3_len(pq);
+    const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
+    if (v3_dot(n, nf) <= 0.0) continue; /* the proxy is behind this triangle: it cannot touch it */
+    const double g0 = dist - R;
+    const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
+    if (bt > 1e-3 && g0 > 1e-3) continue;
+    int slot = nc;
+    if (nc == PALP_FINGER_MAX_CON) {
+      /* Full: replace the constraint farthest from contact if this one is closer. */
+      slot = 0;
+      for (int q2 = 1; q2 < nc; ++q2)
+        if (fs->b[q2] > fs->b[slot]) slot = q2;
+      if (!(bt < fs->b[slot])) continue;
+    } else {
+      nc++;
+    }
+    k->ctri[slot] = t;
+    memcpy(k->cbary[slot], bary, sizeof bary);
+    k->cn[slot] = n;
+    k->cq[slot] = q;
+    fs->b[slot] = bt;
+    k->clam[slot] = 0.0;
+    for (int q2 = 0; q2 < nprev; ++q2)
+      if ((int)prev_tri_lam[q2][0] == t) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
+  }
+  return nc;
+}
+
+static void stage_fingers(palp_world *w, double h) {
+  finger_scratch *fs = w->fs;
+  if (!fs) return;
+  const int n3 = fs->n3;
+  double *x = w->rhs; /* free velocities [m/s], 3 per free row */
+  fs->stamp++;
+  for (int ci = 0; ci < w->def.max_contacts; ++ci) {
+    contact *k = &w->contacts[ci];
+    if (k->kind != CONTACT_FINGER) continue;
+    const double kc = k->fdef.coupling_stiffness; /* [N/m] */
+    double prev[PALP_FINGER_MAX_CON][2];
+    int nprev = 0;
+    for (int q = 0; q < k->ncon; ++q)
+      if (k->clam[q] > 0.0) prev[nprev][0] = k->ctri[q], prev[nprev++][1] = k->clam[q];
+    const int m = finger_collect(w, k, h, prev, nprev);
+    k->ncon = m;
+    k->count = 0;
+    k->total = v3(0, 0, 0);
+    palp_local_model *lm = &k->lm;
+    memset(lm, 0, sizeof *lm);
+    lm->period = h;
+    lm->device = k->device;
+    if (!m) {
+      k->proxy = k->device;
+      lm->proxy = k->proxy;
+      lm->normal = v3(0, 0, 1);
+      continue;
+    }
+    /* Local vertices (free ends of the constraints' triangles) and their columns. */
+    int nl = 0;
+    for (int q = 0; q < m; ++q)
+      for (int e = 0; e < 3; ++e) {
+        const int v = w->mesh.tri[k->ctri[q]][e];
+        if (w->row_of[v] >= 0 && fs->vloc[v] < 0) fs->vloc[v] = nl, fs->lvert[nl++] = v;
+      }
+    int slot[3 * PALP_FINGER_MAX_CON];
+    int oom = 0;
+    for (int a = 0; a < nl; ++a) oom |= (slot[a] = finger_slot(w, w->row_of[fs->lvert[a]])) < 0;
+    if (oom) { /* keep the step going without this finger's contact; counted */
+      w->finger_unsolved++;
+      for (int a = 0; a < nl; ++a) fs->vloc[fs->lvert[a]] = -1;
+      k->ncon = 0;
+      continue;
+    }
+    const double *colv[3 * PALP_FINGER_MAX_CON];
+    for (int a = 0; a < nl; ++a) colv[a] = fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
+    /* y_s = A_full^{-1} H_s^T n_s at the local dofs, with the gel's rank-1 term by
+     * Sherman-Morrison: A_full^{-1} e_j = A^{-1} e_j - sm u u_j (A symmetric). */
+    const int L3 = 3 * nl;
+    for (int s = 0; s < m; ++s) {
+      double *ys = fs->y + (size_t)s * (size_t)(9 * PALP_FINGER_MAX_CON);
+      memset(ys, 0, sizeof(double) * (size_t)L3);
+      const palp_vec3 ns = k->cn[s];
+      const double nv[3] = {ns.x, ns.y, ns.z};
+      double un = 0.0; /* u . H_s^T n_s */
+      for (int e = 0; e < 3; ++e) {
+        const int v = w->mesh.tri[k->ctri[s]][e];
+        const int r = w->row_of[v];
+        if (r < 0) continue;
+        const double wb = k->cbary[s][e];
+        const double *cb = colv[fs->vloc[v]];
+        for (int j = 0; j < 3; ++j) {
+          const double c = wb * nv[j];
+          if (c == 0.0) continue;
+          const double *cj = cb + (size_t)j * (size_t)n3;
+          for (int a = 0; a < nl; ++a) {
+            const int ra = w->row_of[fs->lvert[a]];
+            ys[3 * a] += c * cj[3 * ra], ys[3 * a + 1] += c * cj[3 * ra + 1], ys[3 * a + 2] += c * cj[3 * ra + 2];
+          }
+          if (w->sm_coef != 0.0) un += c * w->u[3 * r + j];
+        }
+      }
+      if (w->sm_coef != 0.0)
+        for (int a = 0; a < nl; ++a) {
+          const int ra = w->row_of[fs->lvert[a]];
+          for (int i = 0; i < 3; ++i) ys[3 * a + i] -= w->sm_coef * un * w->u[3 * ra + i];
+        }
+    }
+    /* W_ts = n_t . n_s / k_c + h^2 (H_t ys) . n_t  [m/N] */
+    for (int t = 0; t < m; ++t) {
+      const int *T = w->mesh.tri[k->ctri[t]];
+      for (int s = 0; s < m; ++s) {
+        const double *ys = fs->y + (size_t)s * (size_t)(9 * PALP_FINGER_MAX_CON);
+        palp_vec3 disp = v3(0, 0, 0);
+        for (int e = 0; e < 3; ++e) {
+          const int a = fs->vloc[T[e]];
+          if (w->row_of[T[e]] < 0) continue;
+          disp = v3_add(disp, v3_scale(v3(ys[3 * a], ys[3 * a + 1], ys[3 * a + 2]), k->cbary[t][e]));
+        }
+        fs->W[t * m + s] = v3_dot(k->cn[t], k->cn[s]) / kc + h * h * v3_dot(k->cn[t], disp);
+      }
+    }
+    if (palp_lcp_pgs(m, fs->W, fs->b, k->clam, 200, 1e-8) < 0) w->finger_unsolved++;
+    /* Proxy, force and the surface's velocity correction dv = -h A_full^{-1} sum_s lam_s H_s^T n_s. */
+    palp_vec3 F = v3(0, 0, 0), point = v3(0, 0, 0);
+    double lsum = 0.0;
+    for (int s = 0; s < m; ++s) {
+      F = v3_add(F, v3_scale(k->cn[s], k->clam[s]));
+      point = v3_add(point, v3_scale(k->cq[s], k->clam[s]));
+      lsum += k->clam[s];
+    }
+    k->total = F;
+    k->proxy = v3_add(k->device, v3_scale(F, 1.0 / kc));
+    memset(fs->lf, 0, sizeof(double) * (size_t)L3);
+    for (int s = 0; s < m; ++s) {
+      if (!(k->clam[s] > 0.0)) continue;
+      for (int e = 0; e < 3; ++e) {
+        const int v = w->mesh.tri[k->ctri[s]][e];
+        if (w->row_of[v] < 0) continue;
+        const int a = fs->vloc[v];
+        const double f = -k->clam[s] * k->cbary[s][e]; /* force on the surface, along n_s [N] */
+        fs->lf[3 * a] += f * k->cn[s].x, fs->lf[3 * a + 1] += f * k->cn[s].y, fs->lf[3 * a + 2] += f * k->cn[s].z;
+      }
+    }
+    double uf = 0.0;
+    for (int a = 0; a < nl; ++a) {
+      const int ra = w->row_of[fs->lvert[a]];
+      for (int j = 0; j < 3; ++j) {
+        const double c = h * fs->lf[3 * a + j];
+        if (c == 0.0) continue;
+        const double *cj = colv[a] + (size_t)j * (size_t)n3;
+        for (int q = 0; q < n3; ++q) x[q] += c * cj[q];
+        uf += c * (w->sm_coef != 0.0 ? w->u[3 * ra + j] : 0.0);
+      }
+      /* The finger feels the opposite of what it applies, vertex by vertex. */
+      if (k->count < k->cap) {
+        k->vertex[k->count] = fs->lvert[a];
+        k->feedback[k->count++] = v3(-fs->lf[3 * a], -fs->lf[3 * a + 1], -fs->lf[3 * a + 2]);
+      }
+    }
+    if (w->sm_coef != 0.0)
+      for (int q = 0; q < n3; ++q) x[q] -= w->sm_coef * uf * w->u[q];
+    /* The local contact model (palp.h): K = N_A W_AA^{-1} N_A^T with the active set held. */
+    const int na = palp_contact_stiffness(m, fs->W, k->cn, k->clam, lm->stiffness, fs->lwork);
+    lm->contact = na > 0;
+    lm->triangles = na > 0 ? na : 0;
+    lm->force = F;
+    lm->proxy = k->proxy;
+    const double Fl = v3_len(F);
+    lm->normal = Fl > 0.0 ? v3_scale(F, 1.0 / Fl) : k->cn[0];
+    lm->depth = fmax(0.0, v3_dot(v3_sub(k->proxy, k->device), lm->normal));
+    if (lsum > 0.0) {
+      lm->point = v3_scale(point, 1.0 / lsum);
+      /* drift: the surface's velocity at the contact after the step [m/s] */
+      palp_vec3 vc = v3(0, 0, 0);
+      for (int s = 0; s < m; ++s) {
+        if (!(k->clam[s] > 0.0)) continue;
+        for (int e = 0; e < 3; ++e) {
+          const int r = w->row_of[w->mesh.tri[k->ctri[s]][e]];
+          if (r < 0) continue;
+          vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[s] * k->cbary[s][e]));
+        }
+        /* footprint: the touched triangles' area, each once */
+        int dup = 0;
+        for (int s2 = 0; s2 < s; ++s2) dup |= k->ctri[s2] == k->ctri[s] && k->clam[s2] > 0.0;
+        if (!dup) {
+          const int *T = w->mesh.tri[k->ctri[s]];
+          lm->area += 0.5 * v3_len(v3_cross(v3_sub(w->pos[T[1]], w->pos[T[0]]), v3_sub(w->pos[T[2]], w->pos[T[0]])));
+        }
+      }
+      lm->drift = v3_scale(vc, 1.0 / lsum);
+    } else {
+      lm->point = k->cq[0];
+    }
+    for (int a = 0; a < nl; ++a) fs->vloc[fs->lvert[a]] = -1;
+  }
+}
+
+/* The phantom sits on a rigid base: no vertex goes below z = 0 (a vertex pressed
+ * there keeps its tangential motion and loses the downward one). */
+static void stage_base(palp_world *w, double h) {
+  (void)h;
+  for (int r = 0; r < w->nfree; ++r) {
+    const int i = w->vertex_of[r];
+    if (w->pos[i].z >= 0.0) continue;
+    w->pos[i].z = 0.0;
+    if (w->vel[i].z < 0.0) w->vel[i].z = 0.0;
+    w->base_contacts++;
   }
 }
 
@@ -452,7 +775,7 @@ static void stage_feedback(palp_world *w, double h) {
   }
   for (int c = 0; c < w->def.max_contacts; ++c) {
     contact *k = &w->contacts[c];
-    if (k->kind == CONTACT_NONE) continue;
+    if (k->kind != CONTACT_FORCE) continue; /* a finger's force comes from its contact solve */
     k->total = v3(0, 0, 0);
     for (int q = 0; q < k->count; ++q) {
       const int i = k->vertex[q];
@@ -524,8 +847,9 @@ static void build_pipeline(palp_world *w) {
   if (has(w, PALP_EFFECT_GEL_PRESSURE)) w->stages[n++] = (stage){"gel_forces", stage_gel_forces};
   if (has(w, PALP_EFFECT_GEL_SUPPORT)) w->stages[n++] = (stage){"gel_support", stage_gel_support};
   w->stages[n++] = (stage){"solve", stage_solve};
-  w->stages[n++] = (stage){"integrate", stage_integrate};
   w->stages[n++] = (stage){"fingers", stage_fingers};
+  w->stages[n++] = (stage){"integrate", stage_integrate};
+  w->stages[n++] = (stage){"base", stage_base};
   if (w->nlink) w->stages[n++] = (stage){"membrane_state", stage_membrane_state};
   if (has(w, PALP_EFFECT_GEL_PRESSURE)) w->stages[n++] = (stage){"gel_state", stage_gel_state};
   if (has(w, PALP_EFFECT_FORCE_FEEDBACK)) w->stages[n++] = (stage){"feedback", stage_feedback};
@@ -697,6 +1021,14 @@ void palp_world_destroy(palp_world *w) {
     free(w->contacts[c].vertex);
     free(w->contacts[c].weight);
     free(w->contacts[c].feedback);
+    free(w->contacts[c].ctri), free(w->contacts[c].cbary), free(w->contacts[c].cn), free(w->contacts[c].cq);
+    free(w->contacts[c].clam);
+  }
+  if (w->fs) {
+    finger_scratch *fs = w->fs;
+    free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
+    free(fs->vloc), free(fs->lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
+    free(fs->cand), free(fs);
   }
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->row_of), free(w->vertex_of);
@@ -809,6 +1141,7 @@ static int refactor(palp_world *w, double h) {
   if (e) return e;
   w->h_factored = h;
   w->u_valid = 0;
+  finger_cols_invalidate(w);
   w->stale = 0;
   w->refactors++;
   return PALP_OK;
@@ -821,8 +1154,11 @@ static int has_load(const palp_world *w) {
     const contact *k = &w->contacts[c];
     if (k->kind == CONTACT_FORCE && v3_dot(k->force, k->force) > 0.0) return 1;
     if (k->kind == CONTACT_FINGER) {
+      /* Pressing, or close enough to touch within a step. */
+      if (v3_dot(k->total, k->total) > 0.0) return 1;
+      const double reach = k->fdef.radius + (w->fs ? w->fs->max_link : 0.0);
       for (int r = 0; r < w->nfree; ++r)
-        if (v3_len(v3_sub(w->pos[w->vertex_of[r]], k->center)) < k->radius) return 1;
+        if (v3_len(v3_sub(w->pos[w->vertex_of[r]], k->device)) < reach) return 1;
     }
   }
   return 0;
@@ -973,29 +1309,154 @@ int palp_world_set_contact_force(palp_world *w, int c, palp_vec3 f) {
   return PALP_OK;
 }
 
-int palp_world_add_finger(palp_world *w, palp_vec3 center, double radius) {
-  if (!w || !v3_isfinite(center) || !(radius > 0.0) || !isfinite(radius)) return PALP_EINVAL;
+palp_finger_def palp_finger_default_def(void) {
+  return (palp_finger_def){.radius = 0.008, .coupling_stiffness = 2000.0};
+}
+
+static int finger_scratch_create(palp_world *w) {
+  if (w->fs) return PALP_OK;
+  finger_scratch *fs = calloc(1, sizeof *fs);
+  if (!fs) return PALP_ENOMEM;
+  w->fs = fs;
+  const int nv = w->mesh.vertex_count, M = PALP_FINGER_MAX_CON;
+  fs->n3 = 3 * w->nfree;
+  fs->slots = w->nfree < 32 ? w->nfree : 32;
+  int fail = 0;
+  fs->pool = xcalloc((size_t)fs->slots * 3 * (size_t)fs->n3, sizeof(double), &fail);
+  fs->slot_row = xcalloc((size_t)fs->slots, sizeof(int), &fail);
+  fs->slot_used = xcalloc((size_t)fs->slots, sizeof(int64_t), &fail);
+  fs->row_slot = xcalloc((size_t)w->nfree, sizeof(int), &fail);
+  fs->solve = xcalloc(3 * (size_t)fs->n3, sizeof(double), &fail);
+  fs->work = xcalloc(3 * (size_t)fs->n3, sizeof(double), &fail);
+  fs->vloc = xcalloc((size_t)nv, sizeof(int), &fail);
+  fs->lvert = xcalloc(3 * (size_t)M, sizeof(int), &fail);
+  fs->lf = xcalloc(9 * (size_t)M, sizeof(double), &fail);
+  fs->y = xcalloc((size_t)M * 9 * (size_t)M, sizeof(double), &fail);
+  fs->W = xcalloc((size_t)M * (size_t)M, sizeof(double), &fail);
+  fs->b = xcalloc((size_t)M, sizeof(double), &fail);
+  fs->lwork = xcalloc((size_t)M * (size_t)M + 3 * (size_t)M, sizeof(double), &fail);
+  fs->cand = xcalloc((size_t)nv, 1, &fail);
+  if (fail) return PALP_ENOMEM; /* freed with the world */
+  for (int q = 0; q < fs->slots; ++q) fs->slot_row[q] = -1;
+  for (int r = 0; r < w->nfree; ++r) fs->row_slot[r] = -1;
+  for (int i = 0; i < nv; ++i) fs->vloc[i] = -1;
+  for (int l = 0; l < w->mesh.link_count; ++l) {
+    const palp_vec3 d = v3_sub(w->mesh.rest[w->mesh.link[l][1]], w->mesh.rest[w->mesh.link[l][0]]);
+    fs->max_link = fmax(fs->max_link, v3_len(d));
+  }
+  return PALP_OK;
+}
+
+/* Solid angle of triangle (a, b, c) seen from p (Van Oosterom & Strackee 1983). */
+static double solid_angle(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c) {
+  a = v3_sub(a, p), b = v3_sub(b, p), c = v3_sub(c, p);
+  const double la = v3_len(a), lb = v3_len(b), lc = v3_len(c);
+  const double num = v3_dot(a, v3_cross(b, c));
+  const double den = la * lb * lc + v3_dot(a, b) * lc + v3_dot(a, c) * lb + v3_dot(b, c) * la;
+  return 2.0 * atan2(num, den);
+}
+
+/* 1 when a sphere at p of radius R overlaps the closed surface or lies inside it. */
+static int sphere_in_phantom(const palp_world *w, palp_vec3 p, double R) {
+  double omega = 0.0;
+  for (int t = 0; t < w->mesh.triangle_count; ++t) {
+    const int *T = w->mesh.tri[t];
+    double bary[3];
+    const palp_vec3 q = palp_tri_closest(p, w->pos[T[0]], w->pos[T[1]], w->pos[T[2]], bary);
+    if (v3_len(v3_sub(p, q)) < R) return 1;
+    omega += solid_angle(p, w->pos[T[0]], w->pos[T[1]], w->pos[T[2]]);
+  }
+  return fabs(omega) > 2.0 * PALP_PI; /* winding number above 1/2 */
+}
+
+int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_vec3 device) {
+  if (!w || !def || !v3_isfinite(device) || !(def->radius > 0.0) || !isfinite(def->radius) ||
+      !(def->coupling_stiffness > 0.0) || !isfinite(def->coupling_stiffness))
+    return PALP_EINVAL;
   const int c = free_slot(w);
   if (c < 0) return c;
-  contact *k = &w->contacts[c];
-  int e = ensure_cap(k, w->mesh.vertex_count);
+  int e = finger_scratch_create(w);
   if (e) return e;
+  contact *k = &w->contacts[c];
+  e = ensure_cap(k, w->mesh.vertex_count);
+  if (e) return e;
+  if (!k->ctri) {
+    const size_t M = PALP_FINGER_MAX_CON;
+    k->ctri = calloc(M, sizeof *k->ctri);
+    k->cbary = calloc(M, sizeof *k->cbary);
+    k->cn = calloc(M, sizeof *k->cn);
+    k->cq = calloc(M, sizeof *k->cq);
+    k->clam = calloc(M, sizeof *k->clam);
+    if (!k->ctri || !k->cbary || !k->cn || !k->cq || !k->clam) return PALP_ENOMEM; /* freed with the world */
+  }
   k->kind = CONTACT_FINGER;
-  k->count = 0;
-  k->center = center;
-  k->radius = radius;
+  k->fdef = *def;
+  k->count = k->ncon = 0;
+  k->device = k->proxy = device;
+  /* The proxy must start outside the phantom: a device placed inside it starts its
+   * proxy above the surface on the ray from the base's centre, and the first steps
+   * bring it down onto the surface with the coupling. */
+  if (sphere_in_phantom(w, device, def->radius)) {
+    palp_vec3 dir = v3(device.x, device.y, fmax(device.z, 0.0));
+    const double dl = v3_len(dir);
+    dir = dl > 1e-9 ? v3_scale(dir, 1.0 / dl) : v3(0, 0, 1);
+    double rmax = 0.0;
+    for (int i = 0; i < w->mesh.vertex_count; ++i) rmax = fmax(rmax, v3_len(w->pos[i]));
+    k->proxy = v3_scale(dir, rmax + def->radius + 1e-3);
+  }
   k->total = v3(0, 0, 0);
+  memset(&k->lm, 0, sizeof k->lm);
+  k->lm.device = device, k->lm.proxy = k->proxy, k->lm.normal = v3(0, 0, 1), k->lm.period = w->def.dt;
   palp_world_wake(w);
   return c;
+}
+
+int palp_world_set_finger_device(palp_world *w, int c, palp_vec3 device) {
+  contact *k = get_contact(w, c, CONTACT_FINGER);
+  if (!k) return PALP_ERANGE;
+  if (!v3_isfinite(device)) return PALP_EINVAL;
+  if (device.x != k->device.x || device.y != k->device.y || device.z != k->device.z) {
+    k->device = device;
+    if (has_load(w)) palp_world_wake(w);
+  }
+  return PALP_OK;
+}
+
+int palp_world_add_finger(palp_world *w, palp_vec3 center, double radius) {
+  palp_finger_def d = palp_finger_default_def();
+  d.radius = radius;
+  return palp_world_add_finger_def(w, &d, center);
 }
 
 int palp_world_set_finger(palp_world *w, int c, palp_vec3 center, double radius) {
   contact *k = get_contact(w, c, CONTACT_FINGER);
   if (!k) return PALP_ERANGE;
   if (!v3_isfinite(center) || !(radius > 0.0) || !isfinite(radius)) return PALP_EINVAL;
-  k->center = center;
-  k->radius = radius;
+  k->fdef.radius = radius;
+  return palp_world_set_finger_device(w, c, center);
+}
+
+int palp_world_finger_local_model(const palp_world *w, int c, palp_local_model *out) {
+  const contact *k = get_contact((palp_world *)w, c, CONTACT_FINGER);
+  if (!k || !out) return PALP_ERANGE;
+  *out = k->lm;
+  out->time = w->t;
   return PALP_OK;
+}
+
+int palp_world_finger_contacts(const palp_world *w, int c, int *triangles, double *force, int cap) {
+  const contact *k = get_contact((palp_world *)w, c, CONTACT_FINGER);
+  if (!k) return PALP_ERANGE;
+  int n = 0;
+  for (int q = 0; q < k->ncon; ++q) {
+    if (!(k->clam[q] > 0.0)) continue;
+    if (n < cap) {
+      if (triangles) triangles[n] = k->ctri[q];
+      if (force) force[n] = k->clam[q];
+    }
+    n++;
+  }
+  return n;
 }
 
 int palp_world_remove_contact(palp_world *w, int c) {
@@ -1084,6 +1545,8 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->large_strain_steps = w->large_strain_steps;
   out->max_strain = w->max_strain;
   out->clamped_steps = w->clamped_steps;
+  out->base_contacts = w->base_contacts;
+  out->finger_unsolved = w->finger_unsolved;
 }
 
 void palp_world_timings(const palp_world *w, palp_stage_timings *out) {

@@ -1,0 +1,137 @@
+/*
+ * finger.c - sphere-triangle proximity, the contact LCP and the contact stiffness
+ * (finger.h). Small pure functions over plain arrays.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "finger.h"
+#include "vec3.h"
+
+palp_vec3 palp_tri_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c, double bary[3]) {
+  /* Voronoi regions of the vertices, then the edges, then the face. */
+  const palp_vec3 ab = v3_sub(b, a), ac = v3_sub(c, a), ap = v3_sub(p, a);
+  const double d1 = v3_dot(ab, ap), d2 = v3_dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    bary[0] = 1, bary[1] = 0, bary[2] = 0;
+    return a;
+  }
+  const palp_vec3 bp = v3_sub(p, b);
+  const double d3 = v3_dot(ab, bp), d4 = v3_dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) {
+    bary[0] = 0, bary[1] = 1, bary[2] = 0;
+    return b;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    bary[0] = 1 - v, bary[1] = v, bary[2] = 0;
+    return v3_add(a, v3_scale(ab, v));
+  }
+  const palp_vec3 cp = v3_sub(p, c);
+  const double d5 = v3_dot(ab, cp), d6 = v3_dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) {
+    bary[0] = 0, bary[1] = 0, bary[2] = 1;
+    return c;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double wv = d2 / (d2 - d6);
+    bary[0] = 1 - wv, bary[1] = 0, bary[2] = wv;
+    return v3_add(a, v3_scale(ac, wv));
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double wv = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    bary[0] = 0, bary[1] = 1 - wv, bary[2] = wv;
+    return v3_add(b, v3_scale(v3_sub(c, b), wv));
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, wv = vc * denom;
+  bary[0] = 1 - v - wv, bary[1] = v, bary[2] = wv;
+  return v3_add(a, v3_add(v3_scale(ab, v), v3_scale(ac, wv)));
+}
+
+int palp_lcp_pgs(int m, const double *W, const double *b, double *lambda, int max_iter, double tol) {
+  for (int it = 1; it <= max_iter; ++it) {
+    double worst = 0.0; /* [m] */
+    for (int i = 0; i < m; ++i) {
+      const double *Wi = W + (size_t)i * (size_t)m;
+      double g = b[i];
+      for (int j = 0; j < m; ++j) g += Wi[j] * lambda[j];
+      /* Residual of complementarity as a length: a violated gap, or the gap that a
+       * needlessly positive lambda holds open (lambda W_ii). */
+      const double r = fmin(g, lambda[i] * Wi[i]);
+      if (fabs(r) > worst) worst = fabs(r);
+      const double li = lambda[i] - g / Wi[i];
+      lambda[i] = li > 0.0 ? li : 0.0;
+    }
+    if (worst <= tol) return it;
+  }
+  return -1;
+}
+
+/* In-place Cholesky of an SPD n x n (row-major, lower used); 0 or -1. */
+static int cholesky(double *A, int n) {
+  for (int j = 0; j < n; ++j) {
+    double d = A[j * n + j];
+    for (int k = 0; k < j; ++k) d -= A[j * n + k] * A[j * n + k];
+    if (!(d > 0.0)) return -1;
+    d = sqrt(d);
+    A[j * n + j] = d;
+    for (int i = j + 1; i < n; ++i) {
+      double s = A[i * n + j];
+      for (int k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
+      A[i * n + j] = s / d;
+    }
+  }
+  return 0;
+}
+
+static void chol_solve(const double *L, int n, double *x) {
+  for (int i = 0; i < n; ++i) {
+    double s = x[i];
+    for (int k = 0; k < i; ++k) s -= L[i * n + k] * x[k];
+    x[i] = s / L[i * n + i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    double s = x[i];
+    for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * x[k];
+    x[i] = s / L[i * n + i];
+  }
+}
+
+int palp_contact_stiffness(int m, const double *W, const palp_vec3 *n, const double *lambda, double K[3][3],
+                           double *work) {
+  memset(K, 0, sizeof(double) * 9);
+  int na = 0;
+  int *idx = (int *)(void *)(work + (size_t)m * (size_t)m + 2 * (size_t)m); /* m ints fit in m doubles */
+  for (int i = 0; i < m; ++i)
+    if (lambda[i] > 0.0) idx[na++] = i;
+  if (!na) return 0;
+  double *A = work, *x = work + (size_t)na * (size_t)na;
+  /* Redundant contacts (neighbouring triangles at one point) make W_AA singular;
+   * a relative regularisation of 1e-9 of its largest diagonal changes K by less. */
+  double dmax = 0.0;
+  for (int a = 0; a < na; ++a) dmax = fmax(dmax, W[(size_t)idx[a] * (size_t)m + (size_t)idx[a]]);
+  for (int a = 0; a < na; ++a)
+    for (int c = 0; c < na; ++c)
+      A[a * na + c] = W[(size_t)idx[a] * (size_t)m + (size_t)idx[c]] + (a == c ? 1e-9 * dmax : 0.0);
+  if (cholesky(A, na)) return -1;
+  for (int col = 0; col < 3; ++col) {
+    for (int a = 0; a < na; ++a) {
+      const palp_vec3 q = n[idx[a]];
+      x[a] = col == 0 ? q.x : (col == 1 ? q.y : q.z);
+    }
+    chol_solve(A, na, x);
+    for (int a = 0; a < na; ++a) {
+      const palp_vec3 q = n[idx[a]];
+      K[0][col] += q.x * x[a];
+      K[1][col] += q.y * x[a];
+      K[2][col] += q.z * x[a];
+    }
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < i; ++j) K[i][j] = K[j][i] = 0.5 * (K[i][j] + K[j][i]);
+  return na;
+}

@@ -1,0 +1,136 @@
+/*
+ * haptic.c - the station's 1 kHz haptic renderer over the server's local contact
+ * models (palp_haptic.h, docs/haptics.md).
+ *
+ * Why an offset crossfade: a new model is the server's better answer for a state
+ * the hand has already moved on from, so its force at the device differs from
+ * what the hand feels now by a prediction error delta. Rendering
+ *   F(t) = F_new(x(t)) + delta (1 - s(t)),  s = (t - t_arrival) / blend in [0, 1],
+ * keeps the force continuous at the arrival and lets it reach the new model within
+ * one physics period; a model arriving in the middle of a blend restarts it from
+ * the force actually rendered, so the force stays continuous however models come.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "palp_haptic.h"
+#include "vec3.h"
+
+palp_haptic_def palp_haptic_default_def(void) {
+  return (palp_haptic_def){.max_force = 10.0,
+                           .damping = 2.0,
+                           .blend_time = 0.0,
+                           .max_extrapolation = 0.010,
+                           .stale_time = 0.25,
+                           .fade_time = 0.1};
+}
+
+palp_vec3 palp_local_model_force(const palp_local_model *m, palp_vec3 x, double age) {
+  if (!m || !m->contact || !v3_isfinite(x)) return v3(0, 0, 0);
+  if (!(age > 0.0)) age = 0.0; /* NaN and negative ages evaluate at the model's time */
+  /* d = x - (device + drift age): the device's motion relative to the surface [m] */
+  const palp_vec3 d = v3_sub(x, v3_add(m->device, v3_scale(m->drift, age)));
+  const double(*K)[3] = m->stiffness;
+  const palp_vec3 Kd = v3(K[0][0] * d.x + K[0][1] * d.y + K[0][2] * d.z, K[1][0] * d.x + K[1][1] * d.y + K[1][2] * d.z,
+                          K[2][0] * d.x + K[2][1] * d.y + K[2][2] * d.z);
+  const palp_vec3 f = v3_sub(m->force, Kd); /* [N] */
+  /* Unilateral: the surface pushes, never pulls; past the release point the finger is free. */
+  if (!(v3_dot(f, m->normal) > 0.0)) return v3(0, 0, 0);
+  return f;
+}
+
+static int model_ok(const palp_local_model *m) {
+  if (!(isfinite(m->time) && isfinite(m->period) && m->period >= 0.0)) return 0;
+  if (!v3_isfinite(m->device) || !v3_isfinite(m->force) || !v3_isfinite(m->drift) || !v3_isfinite(m->normal))
+    return 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (!isfinite(m->stiffness[i][j])) return 0;
+  return 1;
+}
+
+int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
+  if (!h) return PALP_EINVAL;
+  const palp_haptic_def d = def ? *def : palp_haptic_default_def();
+  if (!(d.max_force > 0.0) || !(d.damping >= 0.0) || !(d.blend_time >= 0.0) || !(d.max_extrapolation >= 0.0) ||
+      !(d.stale_time > 0.0) || !(d.fade_time > 0.0) || !isfinite(d.max_force) || !isfinite(d.damping))
+    return PALP_EINVAL;
+  memset(h, 0, sizeof *h);
+  h->def = d;
+  return PALP_OK;
+}
+
+static double clamp01(double s) { return s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s); }
+
+/* The models' force before damping, fade and limit: the newest model plus the
+ * decaying offset of the last arrival. */
+static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now) {
+  const double age = fmin(now - h->cur_at, h->def.max_extrapolation);
+  palp_vec3 f = palp_local_model_force(&h->cur, x, age);
+  const double blend = h->def.blend_time > 0.0 ? h->def.blend_time : h->cur.period;
+  const double s = blend > 0.0 ? clamp01((now - h->cur_at) / blend) : 1.0;
+  return v3_add(f, v3_scale(h->prev.force, 1.0 - s)); /* prev.force holds the offset delta */
+}
+
+int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
+  if (!h || !m || !isfinite(now)) return PALP_EINVAL;
+  if (!model_ok(m)) return PALP_EINVAL;
+  if (h->have && !(m->time > h->cur.time)) return 0; /* late or repeated: the newer one stands */
+  palp_vec3 delta = v3(0, 0, 0);
+  if (h->have && h->rendered) {
+    /* What the hand feels now (before damping and limit) minus the new model's answer. */
+    const palp_vec3 was = model_part(h, h->last_x, now);
+    delta = v3_sub(was, palp_local_model_force(m, h->last_x, 0.0));
+  }
+  h->prev = h->cur;
+  h->prev.force = delta;
+  h->prev_at = h->cur_at;
+  h->cur = *m;
+  h->cur_at = now;
+  h->have = h->have ? 2 : 1;
+  h->models++;
+  return 1;
+}
+
+void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out *out) {
+  palp_haptic_out o = {.force = v3(0, 0, 0), .proxy = x, .requested = 0.0, .flags = 0};
+  if (!h->have || !v3_isfinite(x) || !isfinite(now)) {
+    o.flags |= PALP_HAPTIC_NO_MODEL;
+    *out = o;
+    return;
+  }
+  palp_vec3 f = model_part(h, x, now);
+  const palp_vec3 n = h->cur.normal;
+  const int contact = h->cur.contact && v3_dot(f, n) > 0.0;
+  if (contact) {
+    o.flags |= PALP_HAPTIC_CONTACT;
+    /* Shown proxy: the model's, carried along the surface by the device's tangential motion. */
+    const palp_vec3 dx = v3_sub(x, h->cur.device);
+    o.proxy = v3_add(h->cur.proxy, v3_sub(dx, v3_scale(n, v3_dot(dx, n))));
+    const double fn0 = v3_dot(f, n);
+    /* Damper along the normal on the device's velocity, never pulling into the surface. */
+    if (h->rendered && now > h->last_t && h->def.damping > 0.0) {
+      const double vn = v3_dot(v3_sub(x, h->last_x), n) / (now - h->last_t); /* [m/s], < 0 going in */
+      const double fd = -h->def.damping * vn;
+      f = v3_add(f, v3_scale(n, fmax(fd, -fn0)));
+    }
+  }
+  /* A silent server must not leave a force on the hand. */
+  const double age = now - h->cur_at;
+  if (age > h->def.stale_time) {
+    o.flags |= PALP_HAPTIC_STALE;
+    f = v3_scale(f, clamp01(1.0 - (age - h->def.stale_time) / h->def.fade_time));
+  }
+  const double mag = v3_len(f);
+  o.requested = mag;
+  if (mag > h->def.max_force) {
+    f = v3_scale(f, h->def.max_force / mag);
+    o.flags |= PALP_HAPTIC_LIMITED;
+    h->limited_ticks++;
+  }
+  o.force = f;
+  h->last_x = x;
+  h->last_t = now;
+  h->rendered = 1;
+  *out = o;
+}

@@ -1,0 +1,75 @@
+/*
+ * palp_haptic.h - the station's haptic renderer: a 1 kHz loop's force from the
+ * server's local contact models (multi-rate rendering, docs/haptics.md).
+ *
+ * The server steps the phantom at its own physics rate and publishes, per finger,
+ * a palp_local_model (palp.h). Between models the station evaluates the newest one
+ * at the device's current position every haptic tick; when a new model arrives the
+ * force crossfades from the old model's prediction to the new one's over one
+ * physics period, so a correction never reaches the hand as a step. A model that
+ * is late is extrapolated for at most max_extrapolation, then held; a model older
+ * than stale_time fades the force out over fade_time (a vanished server must not
+ * leave a force on the hand). The force is limited to max_force, and the caller is
+ * told when it was (the station shows it). A damper on the device velocity along
+ * the contact normal, active only in contact, keeps the loop passive on a real
+ * device.
+ *
+ * Pure and allocation-free: no threads, clocks or I/O here; the caller passes its
+ * station time. Units SI.
+ */
+#ifndef PALP_HAPTIC_H
+#define PALP_HAPTIC_H
+
+#include "palp.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct palp_haptic_def {
+  double max_force;         /* safe force limit [N], default 10 */
+  double damping;           /* contact damping at the device [N s/m], default 2 */
+  double blend_time;        /* crossfade between models [s]; 0 = the model's period */
+  double max_extrapolation; /* drift extrapolation limit [s], default 0.010 */
+  double stale_time;        /* no model for this long: fade out [s], default 0.25 */
+  double fade_time;         /* [s], default 0.1 */
+} palp_haptic_def;
+
+palp_haptic_def palp_haptic_default_def(void);
+
+enum {
+  PALP_HAPTIC_LIMITED = 1u << 0, /* the force was limited to max_force */
+  PALP_HAPTIC_STALE = 1u << 1,   /* no recent model: fading out */
+  PALP_HAPTIC_CONTACT = 1u << 2, /* the finger touches the surface */
+  PALP_HAPTIC_NO_MODEL = 1u << 3 /* no model yet: zero force */
+};
+
+typedef struct palp_haptic_out {
+  palp_vec3 force;     /* force to render on the device [N] */
+  palp_vec3 proxy;     /* fingertip on the surface, for display [m] */
+  double requested;    /* |force| before the limit [N] */
+  unsigned flags;      /* PALP_HAPTIC_* */
+} palp_haptic_out;
+
+typedef struct palp_haptic {
+  palp_haptic_def def;
+  palp_local_model cur, prev;
+  double cur_at, prev_at; /* station time each model arrived [s] */
+  int have;               /* models received: 0, 1 or 2 (= both valid) */
+  palp_vec3 last_x;       /* device point of the last render [m] */
+  double last_t;          /* [s] */
+  int rendered;
+  unsigned long long models, limited_ticks;
+} palp_haptic;
+
+int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def);
+/* A new model arrived at station time now [s]. Models older than the current one
+ * (by their time) are ignored; returns 1 if taken, 0 if ignored, < 0 on error. */
+int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now);
+/* The force for device point x [m] at station time now [s]. */
+void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
