@@ -135,3 +135,59 @@ int palp_contact_stiffness(int m, const double *W, const palp_vec3 *n, const dou
     for (int j = 0; j < i; ++j) K[i][j] = K[j][i] = 0.5 * (K[i][j] + K[j][i]);
   return na;
 }
+
+int palp_lcp_solve(int m, const double *W, const double *b, double *lambda, double *work) {
+  /* Lawson-Hanson active set for min 1/2 l^T W l + b^T l, l >= 0, whose optimality
+   * conditions are the LCP; W_PP is regularised like palp_contact_stiffness so that
+   * duplicate contacts (one point seen by two triangles) stay solvable. */
+  double dmax = 0.0;
+  for (int i = 0; i < m; ++i) dmax = fmax(dmax, W[(size_t)i * (size_t)m + (size_t)i]);
+  const double eps = 1e-9 * dmax;
+  double *A = work, *z = work + (size_t)m * (size_t)m, *g = z + m;
+  int *P = (int *)(void *)(g + m); /* m ints in m doubles */
+  for (int i = 0; i < m; ++i)
+    if (!(lambda[i] > 0.0)) lambda[i] = 0.0;
+  for (int it = 0; it < 4 * m + 8; ++it) {
+    int np = 0;
+    for (int i = 0; i < m; ++i)
+      if (lambda[i] > 0.0) P[np++] = i;
+    /* Complementarity: add the most violated inactive constraint, if any. */
+    if (np == 0 || it > 0) {
+      for (int i = 0; i < m; ++i) {
+        g[i] = b[i];
+        for (int j = 0; j < m; ++j) g[i] += W[(size_t)i * (size_t)m + (size_t)j] * lambda[j];
+      }
+      int worst = -1;
+      for (int i = 0; i < m; ++i)
+        if (!(lambda[i] > 0.0) && g[i] < -1e-12 && (worst < 0 || g[i] < g[worst])) worst = i;
+      if (worst < 0) return it;
+      P[np++] = worst;
+    }
+    /* Solve on P, stepping back to feasibility while some z_P <= 0. */
+    for (;;) {
+      for (int a = 0; a < np; ++a)
+        for (int c = 0; c < np; ++c)
+          A[a * np + c] = W[(size_t)P[a] * (size_t)m + (size_t)P[c]] + (a == c ? eps : 0.0);
+      if (cholesky(A, np)) return -1;
+      for (int a = 0; a < np; ++a) z[a] = -b[P[a]];
+      chol_solve(A, np, z);
+      double alpha = 1.0;
+      int drop = -1;
+      for (int a = 0; a < np; ++a)
+        if (z[a] <= 0.0) {
+          const double l = lambda[P[a]];
+          const double t = l / (l - z[a]);
+          if (t < alpha) alpha = t, drop = a;
+        }
+      for (int a = 0; a < np; ++a) lambda[P[a]] += alpha * (z[a] - lambda[P[a]]);
+      if (drop < 0) break;
+      lambda[P[drop]] = 0.0;
+      int q = 0;
+      for (int a = 0; a < np; ++a)
+        if (lambda[P[a]] > 0.0) P[q++] = P[a];
+      np = q;
+      if (!np) break;
+    }
+  }
+  return -1;
+}

@@ -20,6 +20,11 @@ palp_vec3 palp_tri_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c, d
  * max_iter sweeps. Returns the sweeps used, or -1 if it did not converge. */
 int palp_lcp_pgs(int m, const double *W, const double *b, double *lambda, int max_iter, double tol);
 
+/* The same LCP by an active-set method (Lawson-Hanson on the equivalent bound-
+ * constrained quadratic program), exact up to round-off, warm-started from lambda.
+ * work needs m*m + 3*m doubles. Returns the iterations used or -1. */
+int palp_lcp_solve(int m, const double *W, const double *b, double *lambda, double *work);
+
 /* K = N_A (W_AA + eps I)^{-1} N_A^T [N/m] over the active contacts (lambda > 0),
  * n[i] the unit normals, W [m/N] row-major m x m: the finger's stiffness with the
  * active set held. work needs m*m + 3*m doubles. Returns the active count. */

@@ -44,6 +44,8 @@ typedef struct contact {
   palp_vec3 *cn;           /* unit normal, surface -> proxy */
   palp_vec3 *cq;           /* closest point [m] */
   double *clam;            /* contact force [N] */
+  int64_t *ckey;           /* closest feature (warm start across steps) */
+  int nfinger;             /* rows [0, nfinger) are the finger's, the rest the base's */
   palp_local_model lm;
 } contact;
 
@@ -487,17 +489,24 @@ static double seg_dist2(palp_vec3 p, palp_vec3 a, palp_vec3 b) {
   return v3_dot(d, d);
 }
 
-/* Collects the constraints of one finger: dome triangles near the proxy's path from
- * its last position p0 to the device, each linearised at p0 (docs/haptics.md):
- *   g_t(p, x) = |p0 - q_t| - R + n_t . (p - p0) - n_t . sum_a w_ta dx_a. */
+/* Collects the constraints of one finger (docs/haptics.md). Finger rows: dome
+ * triangles near the proxy's path from its last position p0 to the device, one per
+ * closest feature (face, edge or vertex: neighbouring triangles that share the
+ * closest point would repeat it), each linearised at p0,
+ *   g_t = |p0 - q_t| - R + n_t . (p - p0) - n_t . sum_a w_ta dx_a >= 0.
+ * Base rows: the free vertices of those triangles near the base plane, z_a >= 0, so
+ * that a finger pressing the surface down onto the base feels it. Constraint c's
+ * surface-force direction J_c (force on the surface per unit multiplier) is
+ * -w_ta n_t on the triangle's vertices, or e_z on the vertex. */
 static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_lam[][2], int nprev) {
   finger_scratch *fs = w->fs;
   const palp_mesh *m = &w->mesh;
+  const int nv = m->vertex_count;
   const double R = k->fdef.radius;
   const palp_vec3 p0 = k->proxy, d = k->device;
   const double reach = R + fs->max_link + 1e-3; /* [m] */
-  for (int i = 0; i < m->vertex_count; ++i)
-    fs->cand[i] = (uint8_t)(seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
+  for (int i = 0; i < nv; ++i) fs->cand[i] = (uint8_t)(seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
+  int64_t key[PALP_FINGER_MAX_CON];
   int nc = 0;
   for (int t = 0; t < m->dome_triangle_count; ++t) {
     const int *T = m->tri[t];
@@ -517,9 +526,20 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     const double g0 = dist - R;
     const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
     if (bt > 1e-3 && g0 > 1e-3) continue;
+    /* closest feature: a vertex (two zero weights), an edge (one) or the face */
+    int zeros = 0, nz[3], nn = 0;
+    for (int e = 0; e < 3; ++e)
+      if (bary[e] == 0.0) zeros++;
+      else nz[nn++] = T[e];
+    int64_t kf = zeros == 2 ? nz[0]
+                 : zeros == 1 ? (int64_t)nv + (int64_t)(nz[0] < nz[1] ? nz[0] : nz[1]) * nv + (nz[0] < nz[1] ? nz[1] : nz[0])
+                              : -1 - (int64_t)t;
+    int dup = 0;
+    for (int q2 = 0; q2 < nc && !dup; ++q2) dup = key[q2] == kf;
+    if (dup) continue;
     int slot = nc;
-    if (nc == PALP_FINGER_MAX_CON) {
-      /* Full: replace the constraint farthest from contact if this one is closer. */
+    if (nc == PALP_FINGER_MAX_CON / 2) {
+      /* Full (half the rows stay for the base): replace the farthest from contact. */
       slot = 0;
       for (int q2 = 1; q2 < nc; ++q2)
         if (fs->b[q2] > fs->b[slot]) slot = q2;
@@ -527,6 +547,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     } else {
       nc++;
     }
+    key[slot] = kf;
     k->ctri[slot] = t;
     memcpy(k->cbary[slot], bary, sizeof bary);
     k->cn[slot] = n;
@@ -534,9 +555,60 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     fs->b[slot] = bt;
     k->clam[slot] = 0.0;
     for (int q2 = 0; q2 < nprev; ++q2)
-      if ((int)prev_tri_lam[q2][0] == t) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
+      if ((int64_t)prev_tri_lam[q2][0] == kf) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
   }
+  /* The table the phantom stands on stops the fingertip too: p_z >= R, a finger row
+   * with no surface share (the device feels the table through the coupling). */
+  if (nc < PALP_FINGER_MAX_CON / 2 && (p0.z - R < reach || d.z - R < reach)) {
+    key[nc] = -(int64_t)2e12;
+    k->ctri[nc] = -1 - nv;
+    k->cn[nc] = v3(0, 0, 1);
+    k->cq[nc] = v3(p0.x, p0.y, 0.0);
+    fs->b[nc] = d.z - R;
+    k->clam[nc] = 0.0;
+    for (int q2 = 0; q2 < nprev; ++q2)
+      if ((int64_t)prev_tri_lam[q2][0] == key[nc]) k->clam[nc] = prev_tri_lam[q2][1];
+    nc++;
+  }
+  k->nfinger = nc;
+  for (int q2 = 0; q2 < nc; ++q2) k->ckey[q2] = key[q2];
+  /* Base rows for the free vertices of those triangles within 1 mm of the base. */
+  for (int q2 = 0; q2 < k->nfinger && nc < PALP_FINGER_MAX_CON; ++q2)
+    for (int e = 0; e < 3 && nc < PALP_FINGER_MAX_CON && k->ctri[q2] >= 0; ++e) {
+      const int v = m->tri[k->ctri[q2]][e];
+      if (w->row_of[v] < 0 || fs->cand[v] == 2) continue;
+      const double z = free_pos(w, v, h).z;
+      if (z > 1e-3) continue;
+      fs->cand[v] = 2; /* once */
+      k->ctri[nc] = -1 - v;
+      k->cn[nc] = v3(0, 0, 0); /* no share in the finger's force */
+      k->cq[nc] = free_pos(w, v, h);
+      fs->b[nc] = z;
+      k->ckey[nc] = -(int64_t)1e12 - v;
+      k->clam[nc] = 0.0;
+      for (int q3 = 0; q3 < nprev; ++q3)
+        if ((int64_t)prev_tri_lam[q3][0] == k->ckey[nc]) k->clam[nc] = prev_tri_lam[q3][1];
+      nc++;
+    }
   return nc;
+}
+
+/* Constraint c's surface-force direction J_c as (vertex, 3-vector) entries. */
+static int constraint_j(const palp_world *w, const contact *k, int c, int *v, palp_vec3 *j) {
+  if (k->ctri[c] == -1 - w->mesh.vertex_count) return 0; /* the table: no surface share */
+  if (k->ctri[c] < 0) {
+    v[0] = -1 - k->ctri[c];
+    j[0] = v3(0, 0, 1);
+    return 1;
+  }
+  int n = 0;
+  for (int e = 0; e < 3; ++e) {
+    const int vv = w->mesh.tri[k->ctri[c]][e];
+    if (w->row_of[vv] < 0 || k->cbary[c][e] == 0.0) continue;
+    v[n] = vv;
+    j[n++] = v3_scale(k->cn[c], -k->cbary[c][e]);
+  }
+  return n;
 }
 
 static void stage_fingers(palp_world *w, double h) {
@@ -552,8 +624,9 @@ static void stage_fingers(palp_world *w, double h) {
     double prev[PALP_FINGER_MAX_CON][2];
     int nprev = 0;
     for (int q = 0; q < k->ncon; ++q)
-      if (k->clam[q] > 0.0) prev[nprev][0] = k->ctri[q], prev[nprev++][1] = k->clam[q];
+      if (k->clam[q] > 0.0) prev[nprev][0] = (double)k->ckey[q], prev[nprev++][1] = k->clam[q];
     const int m = finger_collect(w, k, h, prev, nprev);
+    for (int i = 0; i < w->mesh.vertex_count; ++i) fs->cand[i] = 0;
     k->ncon = m;
     k->count = 0;
     k->total = v3(0, 0, 0);
@@ -561,19 +634,22 @@ static void stage_fingers(palp_world *w, double h) {
     memset(lm, 0, sizeof *lm);
     lm->period = h;
     lm->device = k->device;
-    if (!m) {
+    if (!k->nfinger) {
+      k->ncon = 0;
       k->proxy = k->device;
       lm->proxy = k->proxy;
       lm->normal = v3(0, 0, 1);
       continue;
     }
-    /* Local vertices (free ends of the constraints' triangles) and their columns. */
+    /* Local vertices (every J entry) and their compliance columns. */
+    int cv[PALP_FINGER_MAX_CON][3], cn_[PALP_FINGER_MAX_CON];
+    palp_vec3 cj[PALP_FINGER_MAX_CON][3];
     int nl = 0;
-    for (int q = 0; q < m; ++q)
-      for (int e = 0; e < 3; ++e) {
-        const int v = w->mesh.tri[k->ctri[q]][e];
-        if (w->row_of[v] >= 0 && fs->vloc[v] < 0) fs->vloc[v] = nl, fs->lvert[nl++] = v;
-      }
+    for (int c = 0; c < m; ++c) {
+      cn_[c] = constraint_j(w, k, c, cv[c], cj[c]);
+      for (int e = 0; e < cn_[c]; ++e)
+        if (fs->vloc[cv[c][e]] < 0) fs->vloc[cv[c][e]] = nl, fs->lvert[nl++] = cv[c][e];
+    }
     int slot[3 * PALP_FINGER_MAX_CON];
     int oom = 0;
     for (int a = 0; a < nl; ++a) oom |= (slot[a] = finger_slot(w, w->row_of[fs->lvert[a]])) < 0;
@@ -585,73 +661,67 @@ static void stage_fingers(palp_world *w, double h) {
     }
     const double *colv[3 * PALP_FINGER_MAX_CON];
     for (int a = 0; a < nl; ++a) colv[a] = fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
-    /* y_s = A_full^{-1} H_s^T n_s at the local dofs, with the gel's rank-1 term by
+    /* y_c = A_full^{-1} J_c at the local dofs, with the gel's rank-1 term by
      * Sherman-Morrison: A_full^{-1} e_j = A^{-1} e_j - sm u u_j (A symmetric). */
     const int L3 = 3 * nl;
-    for (int s = 0; s < m; ++s) {
-      double *ys = fs->y + (size_t)s * (size_t)(9 * PALP_FINGER_MAX_CON);
-      memset(ys, 0, sizeof(double) * (size_t)L3);
-      const palp_vec3 ns = k->cn[s];
-      const double nv[3] = {ns.x, ns.y, ns.z};
-      double un = 0.0; /* u . H_s^T n_s */
-      for (int e = 0; e < 3; ++e) {
-        const int v = w->mesh.tri[k->ctri[s]][e];
-        const int r = w->row_of[v];
-        if (r < 0) continue;
-        const double wb = k->cbary[s][e];
-        const double *cb = colv[fs->vloc[v]];
+    for (int c = 0; c < m; ++c) {
+      double *yc = fs->y + (size_t)c * (size_t)(9 * PALP_FINGER_MAX_CON);
+      memset(yc, 0, sizeof(double) * (size_t)L3);
+      double uj = 0.0; /* u . J_c */
+      for (int e = 0; e < cn_[c]; ++e) {
+        const int r = w->row_of[cv[c][e]];
+        const double *cb = colv[fs->vloc[cv[c][e]]];
+        const double jv[3] = {cj[c][e].x, cj[c][e].y, cj[c][e].z};
         for (int j = 0; j < 3; ++j) {
-          const double c = wb * nv[j];
-          if (c == 0.0) continue;
-          const double *cj = cb + (size_t)j * (size_t)n3;
+          if (jv[j] == 0.0) continue;
+          const double *col = cb + (size_t)j * (size_t)n3;
           for (int a = 0; a < nl; ++a) {
             const int ra = w->row_of[fs->lvert[a]];
-            ys[3 * a] += c * cj[3 * ra], ys[3 * a + 1] += c * cj[3 * ra + 1], ys[3 * a + 2] += c * cj[3 * ra + 2];
+            yc[3 * a] += jv[j] * col[3 * ra], yc[3 * a + 1] += jv[j] * col[3 * ra + 1];
+            yc[3 * a + 2] += jv[j] * col[3 * ra + 2];
           }
-          if (w->sm_coef != 0.0) un += c * w->u[3 * r + j];
+          if (w->sm_coef != 0.0) uj += jv[j] * w->u[3 * r + j];
         }
       }
       if (w->sm_coef != 0.0)
         for (int a = 0; a < nl; ++a) {
           const int ra = w->row_of[fs->lvert[a]];
-          for (int i = 0; i < 3; ++i) ys[3 * a + i] -= w->sm_coef * un * w->u[3 * ra + i];
+          for (int i = 0; i < 3; ++i) yc[3 * a + i] -= w->sm_coef * uj * w->u[3 * ra + i];
         }
     }
-    /* W_ts = n_t . n_s / k_c + h^2 (H_t ys) . n_t  [m/N] */
-    for (int t = 0; t < m; ++t) {
-      const int *T = w->mesh.tri[k->ctri[t]];
-      for (int s = 0; s < m; ++s) {
-        const double *ys = fs->y + (size_t)s * (size_t)(9 * PALP_FINGER_MAX_CON);
-        palp_vec3 disp = v3(0, 0, 0);
-        for (int e = 0; e < 3; ++e) {
-          const int a = fs->vloc[T[e]];
-          if (w->row_of[T[e]] < 0) continue;
-          disp = v3_add(disp, v3_scale(v3(ys[3 * a], ys[3 * a + 1], ys[3 * a + 2]), k->cbary[t][e]));
+    /* W_cd = h^2 J_c . y_d (+ n_c . n_d / k_c between finger rows, the coupling) [m/N] */
+    for (int c = 0; c < m; ++c)
+      for (int dd = 0; dd < m; ++dd) {
+        const double *yd = fs->y + (size_t)dd * (size_t)(9 * PALP_FINGER_MAX_CON);
+        double s = 0.0;
+        for (int e = 0; e < cn_[c]; ++e) {
+          const int a = fs->vloc[cv[c][e]];
+          s += v3_dot(cj[c][e], v3(yd[3 * a], yd[3 * a + 1], yd[3 * a + 2]));
         }
-        fs->W[t * m + s] = v3_dot(k->cn[t], k->cn[s]) / kc + h * h * v3_dot(k->cn[t], disp);
+        fs->W[c * m + dd] = h * h * s + v3_dot(k->cn[c], k->cn[dd]) / kc;
       }
-    }
-    if (palp_lcp_pgs(m, fs->W, fs->b, k->clam, 200, 1e-8) < 0) w->finger_unsolved++;
-    /* Proxy, force and the surface's velocity correction dv = -h A_full^{-1} sum_s lam_s H_s^T n_s. */
+    if (palp_lcp_solve(m, fs->W, fs->b, k->clam, fs->lwork) < 0 &&
+        palp_lcp_pgs(m, fs->W, fs->b, k->clam, 500, 1e-8) < 0)
+      w->finger_unsolved++;
+    /* Proxy and force; the surface's velocity correction dv = h A_full^{-1} sum_c lam_c J_c. */
     palp_vec3 F = v3(0, 0, 0), point = v3(0, 0, 0);
     double lsum = 0.0;
-    for (int s = 0; s < m; ++s) {
-      F = v3_add(F, v3_scale(k->cn[s], k->clam[s]));
-      point = v3_add(point, v3_scale(k->cq[s], k->clam[s]));
-      lsum += k->clam[s];
+    for (int c = 0; c < k->nfinger; ++c) {
+      F = v3_add(F, v3_scale(k->cn[c], k->clam[c]));
+      point = v3_add(point, v3_scale(k->cq[c], k->clam[c]));
+      lsum += k->clam[c];
     }
     k->total = F;
     k->proxy = v3_add(k->device, v3_scale(F, 1.0 / kc));
     memset(fs->lf, 0, sizeof(double) * (size_t)L3);
-    for (int s = 0; s < m; ++s) {
-      if (!(k->clam[s] > 0.0)) continue;
-      for (int e = 0; e < 3; ++e) {
-        const int v = w->mesh.tri[k->ctri[s]][e];
-        if (w->row_of[v] < 0) continue;
-        const int a = fs->vloc[v];
-        const double f = -k->clam[s] * k->cbary[s][e]; /* force on the surface, along n_s [N] */
-        fs->lf[3 * a] += f * k->cn[s].x, fs->lf[3 * a + 1] += f * k->cn[s].y, fs->lf[3 * a + 2] += f * k->cn[s].z;
+    for (int c = 0; c < m; ++c) {
+      if (!(k->clam[c] > 0.0)) continue;
+      for (int e = 0; e < cn_[c]; ++e) {
+        const int a = fs->vloc[cv[c][e]];
+        fs->lf[3 * a] += k->clam[c] * cj[c][e].x, fs->lf[3 * a + 1] += k->clam[c] * cj[c][e].y;
+        fs->lf[3 * a + 2] += k->clam[c] * cj[c][e].z;
       }
+      if (k->ctri[c] < 0) w->base_contacts++;
     }
     double uf = 0.0;
     for (int a = 0; a < nl; ++a) {
@@ -659,22 +729,31 @@ static void stage_fingers(palp_world *w, double h) {
       for (int j = 0; j < 3; ++j) {
         const double c = h * fs->lf[3 * a + j];
         if (c == 0.0) continue;
-        const double *cj = colv[a] + (size_t)j * (size_t)n3;
-        for (int q = 0; q < n3; ++q) x[q] += c * cj[q];
+        const double *col = colv[a] + (size_t)j * (size_t)n3;
+        for (int q = 0; q < n3; ++q) x[q] += c * col[q];
         uf += c * (w->sm_coef != 0.0 ? w->u[3 * ra + j] : 0.0);
-      }
-      /* The finger feels the opposite of what it applies, vertex by vertex. */
-      if (k->count < k->cap) {
-        k->vertex[k->count] = fs->lvert[a];
-        k->feedback[k->count++] = v3(-fs->lf[3 * a], -fs->lf[3 * a + 1], -fs->lf[3 * a + 2]);
       }
     }
     if (w->sm_coef != 0.0)
       for (int q = 0; q < n3; ++q) x[q] -= w->sm_coef * uf * w->u[q];
-    /* The local contact model (palp.h): K = N_A W_AA^{-1} N_A^T with the active set held. */
+    /* Per-vertex feedback: what the finger rows push on each vertex, reversed. */
+    for (int c = 0; c < k->nfinger; ++c) {
+      if (!(k->clam[c] > 0.0)) continue;
+      for (int e = 0; e < cn_[c]; ++e) {
+        const palp_vec3 f = v3_scale(cj[c][e], -k->clam[c]);
+        int q = 0;
+        while (q < k->count && k->vertex[q] != cv[c][e]) q++;
+        if (q == k->count) {
+          if (k->count == k->cap) continue;
+          k->vertex[k->count] = cv[c][e], k->feedback[k->count++] = v3(0, 0, 0);
+        }
+        k->feedback[q] = v3_add(k->feedback[q], f);
+      }
+    }
+    /* The local contact model (palp.h): K = N_A W_AA^{-1} N_A^T with the active set
+     * held (base rows carry a zero normal: the device moves none of their gaps). */
     const int na = palp_contact_stiffness(m, fs->W, k->cn, k->clam, lm->stiffness, fs->lwork);
-    lm->contact = na > 0;
-    lm->triangles = na > 0 ? na : 0;
+    lm->contact = lsum > 0.0 && na > 0;
     lm->force = F;
     lm->proxy = k->proxy;
     const double Fl = v3_len(F);
@@ -682,24 +761,18 @@ static void stage_fingers(palp_world *w, double h) {
     lm->depth = fmax(0.0, v3_dot(v3_sub(k->proxy, k->device), lm->normal));
     if (lsum > 0.0) {
       lm->point = v3_scale(point, 1.0 / lsum);
-      /* drift: the surface's velocity at the contact after the step [m/s] */
-      palp_vec3 vc = v3(0, 0, 0);
-      for (int s = 0; s < m; ++s) {
-        if (!(k->clam[s] > 0.0)) continue;
-        for (int e = 0; e < 3; ++e) {
-          const int r = w->row_of[w->mesh.tri[k->ctri[s]][e]];
-          if (r < 0) continue;
-          vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[s] * k->cbary[s][e]));
-        }
-        /* footprint: the touched triangles' area, each once */
-        int dup = 0;
-        for (int s2 = 0; s2 < s; ++s2) dup |= k->ctri[s2] == k->ctri[s] && k->clam[s2] > 0.0;
-        if (!dup) {
-          const int *T = w->mesh.tri[k->ctri[s]];
-          lm->area += 0.5 * v3_len(v3_cross(v3_sub(w->pos[T[1]], w->pos[T[0]]), v3_sub(w->pos[T[2]], w->pos[T[0]])));
+      palp_vec3 vc = v3(0, 0, 0); /* drift: the surface's velocity at the contact after the step [m/s] */
+      for (int c = 0; c < k->nfinger; ++c) {
+        if (!(k->clam[c] > 0.0)) continue;
+        if (k->ctri[c] >= 0) lm->triangles++;
+        for (int e = 0; e < cn_[c]; ++e) {
+          const int r = w->row_of[cv[c][e]];
+          vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[c] * k->cbary[c][e]));
         }
       }
       lm->drift = v3_scale(vc, 1.0 / lsum);
+      /* footprint: the lumped (one-third) areas of the vertices the finger touches [m^2] */
+      for (int q = 0; q < k->count; ++q) lm->area += w->mesh.vertex_area[k->vertex[q]];
     } else {
       lm->point = k->cq[0];
     }
@@ -1022,7 +1095,7 @@ void palp_world_destroy(palp_world *w) {
     free(w->contacts[c].weight);
     free(w->contacts[c].feedback);
     free(w->contacts[c].ctri), free(w->contacts[c].cbary), free(w->contacts[c].cn), free(w->contacts[c].cq);
-    free(w->contacts[c].clam);
+    free(w->contacts[c].clam), free(w->contacts[c].ckey);
   }
   if (w->fs) {
     finger_scratch *fs = w->fs;
@@ -1154,9 +1227,10 @@ static int has_load(const palp_world *w) {
     const contact *k = &w->contacts[c];
     if (k->kind == CONTACT_FORCE && v3_dot(k->force, k->force) > 0.0) return 1;
     if (k->kind == CONTACT_FINGER) {
-      /* Pressing, or close enough to touch within a step. */
+      /* Pressing, or touching: a sphere on a facet is at most about half a link from
+       * the facet's nearest vertex, so a device farther than that hovers. */
       if (v3_dot(k->total, k->total) > 0.0) return 1;
-      const double reach = k->fdef.radius + (w->fs ? w->fs->max_link : 0.0);
+      const double reach = k->fdef.radius + 0.5 * (w->fs ? w->fs->max_link : 0.0);
       for (int r = 0; r < w->nfree; ++r)
         if (v3_len(v3_sub(w->pos[w->vertex_of[r]], k->device)) < reach) return 1;
     }
@@ -1387,7 +1461,8 @@ int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_ve
     k->cn = calloc(M, sizeof *k->cn);
     k->cq = calloc(M, sizeof *k->cq);
     k->clam = calloc(M, sizeof *k->clam);
-    if (!k->ctri || !k->cbary || !k->cn || !k->cq || !k->clam) return PALP_ENOMEM; /* freed with the world */
+    k->ckey = calloc(M, sizeof *k->ckey);
+    if (!k->ctri || !k->cbary || !k->cn || !k->cq || !k->clam || !k->ckey) return PALP_ENOMEM; /* freed with the world */
   }
   k->kind = CONTACT_FINGER;
   k->fdef = *def;
@@ -1448,8 +1523,8 @@ int palp_world_finger_contacts(const palp_world *w, int c, int *triangles, doubl
   const contact *k = get_contact((palp_world *)w, c, CONTACT_FINGER);
   if (!k) return PALP_ERANGE;
   int n = 0;
-  for (int q = 0; q < k->ncon; ++q) {
-    if (!(k->clam[q] > 0.0)) continue;
+  for (int q = 0; q < k->nfinger; ++q) {
+    if (!(k->clam[q] > 0.0) || k->ctri[q] < 0) continue;
     if (n < cap) {
       if (triangles) triangles[n] = k->ctri[q];
       if (force) force[n] = k->clam[q];

