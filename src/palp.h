@@ -179,6 +179,21 @@ typedef enum palp_effect {
 const char *palp_effect_name(palp_effect e);
 int palp_effect_from_name(const char *name, palp_effect *out);
 
+/* A lesion: a sphere of different stiffness inside the gel (docs/haptics.md,
+ * "Lesions"). The gel support under each vertex is a column from the surface to the
+ * dome's centre whose compliance is weighted by the stress a fingertip-sized load
+ * puts at each depth (Boussinesq, a uniformly loaded circle of radius c: sigma_z(z) /
+ * p = 1 - z^3 / (c^2 + z^2)^{3/2}); a lesion cut by the column replaces the gel's
+ * compliance over its chord by 1/ratio of it, so the vertex's support stiffens by
+ *   k_i / k = C0 / (C0 - (1 - 1/ratio) C_chord),  C = integral of sigma_z / p dz. */
+#define PALP_MAX_LESIONS 8
+#define PALP_LESION_CONTACT_SCALE 0.008 /* c [m]: the fingertip the training is for */
+typedef struct palp_lesion {
+  palp_vec3 center;       /* [m], inside the dome, clear of the base */
+  double radius;          /* [m] */
+  double stiffness_ratio; /* E_lesion / E_gel [-], > 0 (> 1: a hard lump; < 1: a soft cyst) */
+} palp_lesion;
+
 typedef struct palp_world_def {
   palp_mesh_def mesh;
   palp_membrane_params membrane;
@@ -191,6 +206,8 @@ typedef struct palp_world_def {
   double sleep_time;  /* [s] of quiet before sleeping, default 0.5 */
   double max_speed;   /* a solved vertex speed above this [m/s] (default 20) means the
                          step cannot be trusted: it is retried as two half steps */
+  int lesion_count;   /* 0..PALP_MAX_LESIONS; lesions act through the gel support */
+  palp_lesion lesion[PALP_MAX_LESIONS];
 } palp_world_def;
 
 palp_world_def palp_world_default_def(void);
@@ -263,6 +280,12 @@ palp_vec3 palp_local_model_force(const palp_local_model *m, palp_vec3 x, double 
 
 /* Where a finger touches: the touched triangles and each one's contact force on the
  * surface [N] (normal, outward from the finger); fills up to cap, returns the count. */
+/* The gel support's per-vertex stiffening by the lesions, k_i / k [-]; 1 where none. */
+double palp_world_support_scale(const palp_world *w, int vertex);
+/* The same factor for a point on the surface with outward unit normal (no world needed). */
+double palp_lesion_support_scale(const palp_lesion *lesions, int count, palp_vec3 surface_point, palp_vec3 normal,
+                                 double column_length);
+
 int palp_world_finger_contacts(const palp_world *w, int contact, int *triangles, double *force, int cap);
 int palp_world_remove_contact(palp_world *w, int contact);
 

@@ -314,6 +314,30 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   if ((e = get_vec(c, root, "", "gravity_m_s2", 0, &s->world.gravity))) return e;
   if ((e = get_int(c, root, "", "max_contacts", 0, 1, 64, &s->world.max_contacts))) return e;
 
+  /* Lesions (optional): hidden inclusions; a trainee's station never sees the scene. */
+  const cJSON *ls = cJSON_GetObjectItemCaseSensitive(root, "lesions");
+  if (ls) {
+    if (!cJSON_IsArray(ls)) return fail(c, PALP_EPARSE, "lesions: expected an array");
+    const int nl = cJSON_GetArraySize(ls);
+    if (nl > PALP_MAX_LESIONS) return fail(c, PALP_EPARSE, "lesions: at most %d", PALP_MAX_LESIONS);
+    for (int i = 0; i < nl; ++i) {
+      const cJSON *o = cJSON_GetArrayItem(ls, i);
+      char path[32];
+      snprintf(path, sizeof path, "lesions[%d].", i);
+      if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
+      palp_lesion *L = &s->world.lesion[i];
+      if ((e = get_vec(c, o, path, "center_m", 1, &L->center))) return e;
+      if ((e = get_pos(c, o, path, "radius_m", 1, &L->radius))) return e;
+      if ((e = get_pos(c, o, path, "stiffness_ratio", 1, &L->stiffness_ratio))) return e;
+      const double R = s->world.mesh.radius;
+      const double cr = sqrt(L->center.x * L->center.x + L->center.y * L->center.y + L->center.z * L->center.z);
+      if (!(cr + L->radius < R) || !(L->center.z - L->radius > 0.0))
+        return fail(c, PALP_EPARSE, "lesions[%d]: the sphere must lie inside the dome (radius %g m) and above its base", i, R);
+      if (!(L->stiffness_ratio <= 1e6)) return fail(c, PALP_EPARSE, "lesions[%d].stiffness_ratio: must be <= 1e6", i);
+    }
+    s->world.lesion_count = nl;
+  }
+
   const cJSON *cs = cJSON_GetObjectItemCaseSensitive(root, "contacts");
   if (!cs) return fail(c, PALP_EPARSE, "contacts: missing (an array, possibly empty, is required)");
   if (!cJSON_IsArray(cs)) return fail(c, PALP_EPARSE, "contacts: expected an array");
@@ -392,6 +416,17 @@ char *palp_scene_to_json(const palp_scene *s) {
   cJSON_AddNumberToObject(g, "support_bulk_fraction", gp->support_bulk_fraction);
   cJSON_AddNumberToObject(g, "density_kg_m3", gp->density);
   cJSON_AddNumberToObject(g, "added_mass_fraction", gp->added_mass_fraction);
+  if (s->world.lesion_count > 0) {
+    cJSON *ls = cJSON_AddArrayToObject(r, "lesions");
+    for (int i = 0; i < s->world.lesion_count; ++i) {
+      const palp_lesion *L = &s->world.lesion[i];
+      cJSON *o = cJSON_CreateObject();
+      cJSON_AddItemToObject(o, "center_m", vec_json(L->center));
+      cJSON_AddNumberToObject(o, "radius_m", L->radius);
+      cJSON_AddNumberToObject(o, "stiffness_ratio", L->stiffness_ratio);
+      cJSON_AddItemToArray(ls, o);
+    }
+  }
   cJSON *t = cJSON_AddObjectToObject(r, "time");
   cJSON_AddNumberToObject(t, "dt_s", s->world.dt);
   cJSON_AddNumberToObject(t, "frames", s->frames);

@@ -84,6 +84,7 @@ struct palp_world {
   /* Vertices (SoA). */
   palp_vec3 *pos, *vel, *force;
   double *mass;  /* [kg] lumped from membrane thickness x density x area */
+  double *sarea; /* [m^2] vertex area x the lesions' support scale: the support's weight */
   int *row_of;   /* vertex -> free row, -1 if fixed */
   int *vertex_of; /* free row -> vertex */
   int nfree;
@@ -278,7 +279,7 @@ static void stage_gel_support(palp_world *w, double h) {
   for (int r = 0; r < w->nfree; ++r) {
     const int i = w->vertex_of[r];
     const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
-    w->force[i] = v3_sub(w->force[i], v3_scale(u, k * w->mesh.vertex_area[i]));
+    w->force[i] = v3_sub(w->force[i], v3_scale(u, k * w->sarea[i]));
   }
   const double phi = w->def.gel.support_bulk_fraction;
   if (phi > 0.0) {
@@ -291,7 +292,7 @@ static void stage_gel_support(palp_world *w, double h) {
     const palp_vec3 b = v3_add(v3_scale(um, phi * k), v3_scale(vm, phi * c)); /* [Pa] */
     for (int r = 0; r < w->nfree; ++r) {
       const int i = w->vertex_of[r];
-      w->force[i] = v3_add(w->force[i], v3_scale(b, w->mesh.vertex_area[i]));
+      w->force[i] = v3_add(w->force[i], v3_scale(b, w->sarea[i]));
     }
   }
 }
@@ -863,8 +864,8 @@ static void stage_feedback(palp_world *w, double h) {
       if (gel) f = v3_add(f, v3_scale(w->grad[i], w->p_gauge));
       if (support) {
         const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
-        f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->mesh.vertex_area[i]));
-        if (phi > 0.0) f = v3_add(f, v3_scale(bulk, w->mesh.vertex_area[i]));
+        f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->sarea[i]));
+        if (phi > 0.0) f = v3_add(f, v3_scale(bulk, w->sarea[i]));
       }
       k->feedback[q] = f;
       k->total = v3_add(k->total, f);
@@ -910,6 +911,14 @@ static int validate(const palp_world_def *d) {
     return PALP_EINVAL;
   if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;
   if (!(d->max_speed > 0.0)) return PALP_EINVAL;
+  if (d->lesion_count < 0 || d->lesion_count > PALP_MAX_LESIONS) return PALP_EINVAL;
+  for (int l = 0; l < d->lesion_count; ++l) {
+    const palp_lesion *L = &d->lesion[l];
+    /* inside the dome and clear of its base; a finite, positive stiffness ratio */
+    if (!v3_isfinite(L->center) || !(L->radius > 0.0) || !(L->stiffness_ratio > 0.0) || !isfinite(L->stiffness_ratio) ||
+        !(v3_len(L->center) + L->radius < d->mesh.radius) || !(L->center.z - L->radius > 0.0))
+      return PALP_EINVAL;
+  }
   return PALP_OK;
 }
 
@@ -961,6 +970,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
   w->vel = xcalloc((size_t)nv, sizeof *w->vel, &fail);
   w->force = xcalloc((size_t)nv, sizeof *w->force, &fail);
   w->mass = xcalloc((size_t)nv, sizeof *w->mass, &fail);
+  w->sarea = xcalloc((size_t)nv, sizeof *w->sarea, &fail);
   w->row_of = xcalloc((size_t)nv, sizeof *w->row_of, &fail);
   w->vertex_of = xcalloc((size_t)nv, sizeof *w->vertex_of, &fail);
   w->contacts = xcalloc((size_t)def->max_contacts, sizeof *w->contacts, &fail);
@@ -968,6 +978,10 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
   memcpy(w->pos, w->mesh.rest, sizeof *w->pos * (size_t)nv);
   double free_area = 0.0; /* [m^2] */
   for (int i = 0; i < nv; ++i) {
+    /* The support's column runs from the surface to the dome's centre. */
+    const double rl = v3_len(w->mesh.rest[i]);
+    const palp_vec3 nrm = rl > 0.0 ? v3_scale(w->mesh.rest[i], 1.0 / rl) : v3(0, 0, 1);
+    w->sarea[i] = w->mesh.vertex_area[i] * palp_lesion_support_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, rl);
     w->mass[i] = def->membrane.density * def->membrane.thickness * w->mesh.vertex_area[i]; /* [kg] */
     w->row_of[i] = w->mesh.fixed[i] ? -1 : w->nfree;
     if (!w->mesh.fixed[i]) w->vertex_of[w->nfree++] = i, free_area += w->mesh.vertex_area[i];
@@ -1104,7 +1118,7 @@ void palp_world_destroy(palp_world *w) {
     free(fs->cand), free(fs);
   }
   free(w->contacts);
-  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->row_of), free(w->vertex_of);
+  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
@@ -1152,7 +1166,7 @@ static int refactor(palp_world *w, double h) {
     for (int i = 0; i < 3; ++i) {
       const int v = w->vertex_of[r];
       ti[nnz] = tj[nnz] = 3 * r + i;
-      tx[nnz++] = w->mass[v] + (h * h * ks + h * cs) * w->mesh.vertex_area[v];
+      tx[nnz++] = w->mass[v] + (h * h * ks + h * cs) * w->sarea[v];
     }
   for (int l = 0; l < w->nlink; ++l) {
     const double k = E * w->xsec[l] / w->rest_len[l]; /* [N/m] */
@@ -1517,6 +1531,11 @@ int palp_world_finger_local_model(const palp_world *w, int c, palp_local_model *
   *out = k->lm;
   out->time = w->t;
   return PALP_OK;
+}
+
+double palp_world_support_scale(const palp_world *w, int i) {
+  if (!w || i < 0 || i >= w->mesh.vertex_count || !(w->mesh.vertex_area[i] > 0.0)) return 1.0;
+  return w->sarea[i] / w->mesh.vertex_area[i];
 }
 
 int palp_world_finger_contacts(const palp_world *w, int c, int *triangles, double *force, int cap) {

