@@ -82,6 +82,8 @@ palp_cli_haptic_def palp_cli_haptic_default_def(void) {
   return (palp_cli_haptic_def){.rate_hz = 1000,
                                .physics_rate_hz = 250,
                                .late_threshold = 0.5e-3,
+                               .latency_compensation = 1,
+                               .max_latency = 0.2,
                                .render = palp_haptic_default_def()};
 }
 
@@ -270,9 +272,23 @@ int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t 
     if (info.valid_data && w->finger == (uint8_t)l->def.finger && w->session_id == l->def.session_id) {
       palp_local_model m;
       if (palp_cli_local_model_from_wire(w, &m) == 0 && isfinite(w->max_force) && w->max_force >= 0) {
+        /* The model describes the surface when the device was at m.device, which
+         * this station sent at contact_source_time_ns on its own clock: the model
+         * is that old, not just as old as its arrival. Advancing its device point
+         * by the surface's drift over that age lets the renderer (which counts age
+         * from arrival) evaluate it against where the surface is now; without it a
+         * 40 ms round trip at 20 mm/s reads 0.8 mm of the hand's motion as
+         * indentation and renders K times that as extra force. Bounded: an age
+         * outside [0, max_latency] is not trusted and the model is taken as is. */
+        const int64_t now = palp_dds_now_ns();
+        const double age = w->contact_source_time_ns > 0 ? (double)(now - w->contact_source_time_ns) * 1e-9 : -1;
+        if (l->def.latency_compensation && age > 0 && age <= l->def.max_latency) {
+          m.device.x += m.drift.x * age;
+          m.device.y += m.drift.y * age;
+          m.device.z += m.drift.z * age;
+        }
         palp_cli_mailbox_put(&l->mailbox, &m, w->flags, w->max_force);
-        if (latency_us && w->contact_source_time_ns > 0)
-          *latency_us = (double)(palp_dds_now_ns() - w->contact_source_time_ns) * 1e-3;
+        if (latency_us && age > 0) *latency_us = age * 1e6;
         taken++;
       } else if (bad) {
         ++*bad;

@@ -70,6 +70,8 @@ typedef struct palp_cli_haptic_def {
   int finger;              /* finger index on the wire, default 0 */
   double radius;           /* fingertip [m]; 0 = the input's, else 8 mm */
   palp_haptic_def render;  /* renderer parameters (max_force: the safe force limit) */
+  int latency_compensation; /* advance each model by its drift over its age (default 1) */
+  double max_latency;       /* ages beyond this [s] are not compensated, default 0.2 */
   palp_cli_input *in;      /* must have read_position */
   dds_entity_t contact_w;  /* palp_contact writer in the session partition; 0: send nothing */
   uint32_t session_id;
