@@ -41,7 +41,32 @@ typedef struct palp_cli_input {
   /* Optional: the force the phantom exerts on a finger [N], every feedback sample. */
   void (*feedback)(void *ctx, int finger, palp_vec3 force);
   void (*close)(void *ctx);
+  /* ---- position in, force out, at 1 kHz (issue 11); all optional, added at the
+   * end so drivers built against the older header (these fields zero) still load.
+   * A source with read_position is a haptic device: palp-client runs its haptic
+   * thread (haptic_loop.h) at 1 kHz, which calls read_position, renders the force
+   * from the server's newest local contact model and calls write_force, every
+   * tick; poll() and feedback() are then not used. Both are called from the
+   * haptic thread only, and must not block. */
+  /* Device point (the fingertip sphere's centre) [m] at time t [s] since the
+   * start: 1 the finger is on (position-driven), 0 lifted (away from the
+   * phantom), PALP_CLI_INPUT_END finished, or a negative PALP_E* code, with
+   * error() saying why. */
+  int (*read_position)(void *ctx, double t, palp_vec3 *x);
+  /* The force to render [N] and PALP_CLI_FORCE_* flags (e.g. the station limited it). */
+  void (*write_force)(void *ctx, palp_vec3 f, unsigned flags);
+  /* A clear message for the last error, or NULL. */
+  const char *(*error)(void *ctx);
+  double finger_radius; /* fingertip sphere [m]; 0 = 8 mm */
 } palp_cli_input;
+
+/* write_force flags (the values of palp_haptic's PALP_HAPTIC_*). */
+enum {
+  PALP_CLI_FORCE_LIMITED = 1u << 0,  /* limited to the safe force: show the trainee */
+  PALP_CLI_FORCE_STALE = 1u << 1,    /* no recent model from the server: fading out */
+  PALP_CLI_FORCE_CONTACT = 1u << 2,  /* the fingertip touches the surface */
+  PALP_CLI_FORCE_NO_MODEL = 1u << 3  /* no model yet */
+};
 
 /* Point on the dome of radius R at polar angle from the pole and azimuth [deg],
  * and the outward unit normal there. */
@@ -66,8 +91,64 @@ int palp_cli_replay_input(const char *path, palp_cli_input *out, char *err, size
 void palp_cli_contact_csv_header(FILE *f);
 void palp_cli_contact_csv_row(FILE *f, double t, const palp_cli_cmd *c);
 
+/* ---- simulated haptic device (input_simdevice.c) -------------------------------
+ * A position-driven device following a scripted trajectory, for tests and demos.
+ * Depth is the fingertip's lowest point below the undeformed surface [m]
+ * (0: touching), measured along the surface normal; the device point is the
+ * sphere's centre. Patterns:
+ *   press:   approach, press to depth at speed, hold, release at speed
+ *   slide:   press, then slide along the surface (towards azimuth + 90 deg) at slide_speed
+ *            over slide_distance, release
+ *   circles: press, then circle_count circles of circle_radius at circle_hz, release
+ *   cycles:  cycle_count press-release cycles to depth at speed (no hold)
+ *   strips:  the MammaCare vertical-strip search: parallel strips (x = const) across
+ *            the dome, each swept at three depths (light, medium, deep = depth/3,
+ *            2 depth/3, depth) at slide_speed, lifting between strips */
+typedef enum palp_cli_sim_pattern {
+  PALP_CLI_SIM_PRESS = 0,
+  PALP_CLI_SIM_SLIDE,
+  PALP_CLI_SIM_CIRCLES,
+  PALP_CLI_SIM_CYCLES,
+  PALP_CLI_SIM_STRIPS
+} palp_cli_sim_pattern;
+
+typedef struct palp_cli_simdevice_def {
+  palp_cli_sim_pattern pattern;
+  double polar_deg, azimuth_deg; /* where the press starts */
+  double depth;          /* [m], default 0.010 */
+  double speed;          /* press/release speed along the normal [m/s], default 0.02 */
+  double hold;           /* [s] at depth before sliding/releasing, default 0.5 */
+  double approach;       /* start this far above the surface [m], default 0.003 */
+  double slide_speed;    /* [m/s], default 0.05 */
+  double slide_distance; /* [m], default 0.02 */
+  double circle_radius;  /* [m], default 0.005 */
+  double circle_hz;      /* default 1 */
+  int circle_count;      /* default 2 */
+  int cycle_count;       /* default 5 */
+  int strip_count;       /* default 4 */
+  double strip_extent;   /* strips cover |x|, |y| <= this [m]; default 0.6 R */
+  double radius;         /* fingertip [m], default 0.008 */
+  double start;          /* idle time before the trajectory [s], default 0.2 */
+  double tail;           /* lifted time after it before the source ends [s], default 0.5 */
+} palp_cli_simdevice_def;
+
+palp_cli_simdevice_def palp_cli_simdevice_default_def(palp_cli_sim_pattern pattern);
+/* Parses "press|slide|circles|cycles|strips[,key=value...]" (keys: depth_mm, speed_mm_s,
+ * hold_s, slide_mm_s, slide_mm, circle_mm, circle_hz, circles, cycles, strips, polar,
+ * azimuth, radius_mm); err names a bad key or value. */
+int palp_cli_simdevice_parse(const char *spec, palp_cli_simdevice_def *out, char *err, size_t errlen);
+int palp_cli_simdevice_input(const palp_cli_simdevice_def *def, palp_cli_input *out);
+/* The trajectory itself, for tests that drive a model directly: device point at t
+ * on a dome of radius R; returns 1 on, 0 lifted, PALP_CLI_INPUT_END after the end. */
+int palp_cli_simdevice_at(const palp_cli_simdevice_def *def, double R, double t, palp_vec3 *x);
+double palp_cli_simdevice_duration(const palp_cli_simdevice_def *def, double R);
+
 /* ---- keyboard (raw terminal) -------------------------------------------------- */
 int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen);
+/* Position-driven keyboard (issue 11): arrows move a virtual fingertip over the
+ * surface, +/- change its depth in 1 mm steps, space lifts/lowers; the force the
+ * station renders is shown. */
+int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen);
 
 /* ---- device driver (shared object) ----------------------------------------------
  * A driver is a shared object exporting

@@ -3,6 +3,7 @@
  * Arrow up/down move the finger towards the pole/rim, left/right around the
  * dome; + and - change the force by 0.25 N; space presses/lifts; 1-4 choose the
  * paper's distribution; q ends. The terminal is restored on close. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -110,5 +111,102 @@ int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen) {
   k->force = 1.0;
   k->distribution = 3;
   *out = (palp_cli_input){.name = "keyboard", .ctx = k, .open = k_open, .poll = k_poll, .close = k_close};
+  return 0;
+}
+
+/* ---- position-driven keyboard (issue 11) ------------------------------------------------
+ * Arrow up/down move the fingertip towards the pole/rim (2 deg), left/right around
+ * the dome (5 deg); + and - press deeper / come up by 1 mm (depth of the tip's
+ * lowest point below the undeformed surface; negative = above it); space lifts or
+ * lowers the finger; q ends. read_position and write_force run on the haptic
+ * thread: reading a key is one non-blocking select() per tick, and the status line
+ * (the force the station renders) is written twice a second. */
+typedef struct kfinger {
+  keyboard k;            /* terminal state, position, quit */
+  double depth;          /* [m] */
+  int lifted;
+  double last_status;
+  double t;
+  palp_vec3 force;
+  unsigned flags;
+  double radius;
+} kfinger;
+
+static int kf_open(void *ctx, double R) {
+  kfinger *f = ctx;
+  int rc = k_open(&f->k, R);
+  if (rc == 0)
+    fprintf(stderr, "keyboard (finger): arrows move the fingertip, +/- press deeper / come up 1 mm, space lift, q quit\n");
+  return rc;
+}
+
+static void fkey(kfinger *f, int c) {
+  keyboard *k = &f->k;
+  if (k->esc) {
+    key(k, c); /* arrows */
+    return;
+  }
+  switch (c) {
+  case '+': case '=': f->depth = f->depth + 0.001 > 0.035 ? 0.035 : f->depth + 0.001; break;
+  case '-': case '_': f->depth = f->depth - 0.001 < -0.010 ? -0.010 : f->depth - 0.001; break;
+  case ' ': f->lifted = !f->lifted; break;
+  default: key(k, c); break;
+  }
+}
+
+static int kf_read(void *ctx, double t, palp_vec3 *x) {
+  kfinger *f = ctx;
+  fd_set fds;
+  struct timeval tv = {0, 0};
+  FD_ZERO(&fds);
+  FD_SET(STDIN_FILENO, &fds);
+  while (select(STDIN_FILENO + 1, &fds, NULL, NULL, &tv) > 0) {
+    unsigned char c;
+    if (read(STDIN_FILENO, &c, 1) != 1) break;
+    fkey(f, c);
+    FD_ZERO(&fds);
+    FD_SET(STDIN_FILENO, &fds);
+  }
+  if (f->k.quit) return PALP_CLI_INPUT_END;
+  f->t = t;
+  palp_vec3 n;
+  palp_vec3 p = palp_cli_dome_point(f->k.R, f->k.polar, f->k.azimuth, &n);
+  const double h = f->radius - f->depth;
+  *x = (palp_vec3){p.x + n.x * h, p.y + n.y * h, p.z + n.z * h};
+  return f->lifted ? 0 : 1;
+}
+
+static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
+  kfinger *f = ctx;
+  f->force = force;
+  f->flags = flags;
+  if (f->t - f->last_status >= 0.5) {
+    const double m = sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
+    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, depth %+.0f mm: force %.2f N%s   ",
+            f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, m,
+            (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "");
+    f->last_status = f->t;
+  }
+}
+
+static void kf_close(void *ctx) {
+  kfinger *f = ctx;
+  if (f->k.raw) tcsetattr(STDIN_FILENO, TCSANOW, &f->k.saved);
+  fputc('\n', stderr);
+  free(f);
+}
+
+int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen) {
+  if (!isatty(STDIN_FILENO)) {
+    snprintf(err, errlen, "--input keyboard-finger needs a terminal on standard input");
+    return PALP_EINVAL;
+  }
+  kfinger *f = calloc(1, sizeof *f);
+  if (!f) return PALP_ENOMEM;
+  f->k.distribution = 3;
+  f->depth = -0.002; /* start 2 mm above the pole */
+  f->radius = 0.008;
+  *out = (palp_cli_input){.name = "keyboard (finger)", .ctx = f, .open = kf_open, .close = kf_close,
+                          .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius};
   return 0;
 }

@@ -9,6 +9,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "haptic_loop.h"
 #include "input.h"
 #include "palp.h"
 #include "palp_dds.h"
@@ -33,6 +34,9 @@ typedef struct opts {
   double rate, duration, timeout, print_period;
   const char *feedback_csv, *contact_csv, *svg, *trainee;
   double svg_every, map_every;
+  double max_force, haptic_rate;
+  int rt_priority;
+  const char *trace_csv;
   int color, quiet, map, no_map, plot;
   int have_magnitude, have_t_off;
 } opts;
@@ -47,6 +51,13 @@ static void usage(FILE *f) {
           "          --finger-radius MM  (position-driven finger: magnitude is the depth in mm)\n"
           "          --rate HZ  --feedback-csv FILE  --contact-csv FILE  --print-period S\n"
           "          --plot (chart of the feedback force at the end)\n"
+          "          position-driven devices (--input sim:TRAJ | keyboard-finger | device:LIB.so with\n"
+          "          read_position): a 1 kHz haptic thread renders the server's local contact models\n"
+          "          --haptic-rate HZ (1000)  --max-force N (safe force, default 10)  --rt-priority 1-99\n"
+          "          --trace-csv FILE (every haptic tick: t, device point, force, flags)\n"
+          "          TRAJ: press|slide|circles|cycles|strips[,depth_mm=10,speed_mm_s=20,hold_s=0.5,\n"
+          "          slide_mm_s=50,slide_mm=20,circle_mm=5,circle_hz=1,circles=2,cycles=5,strips=4,\n"
+          "          polar=0,azimuth=0,radius_mm=8]\n"
           "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
           "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
           "          session on --phantom ID\n");
@@ -119,6 +130,10 @@ static int parse(int argc, char **argv, opts *o) {
     NUM("--finger-radius", 0.1, 100, o->finger_radius_mm)
     NUM("--patch-area", 0.01, 100, o->patch_area_cm2)
     NUM("--rate", 1, 10000, o->rate)
+    NUM("--max-force", 0.01, 1000, o->max_force)
+    NUM("--haptic-rate", 10, 10000, o->haptic_rate)
+    INT("--rt-priority", 1, 99, o->rt_priority)
+    STR("--trace-csv", o->trace_csv)
     NUM("--duration", 0, 1e6, o->duration)
     NUM("--timeout", 0.1, 3600, o->timeout)
     NUM("--print-period", 0, 3600, o->print_period)
@@ -193,6 +208,16 @@ static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errle
   }
   if (!strncmp(o->input, "replay:", 7)) return palp_cli_replay_input(o->input + 7, in, err, errlen);
   if (!strcmp(o->input, "keyboard")) return palp_cli_keyboard_input(in, err, errlen);
+  if (!strcmp(o->input, "keyboard-finger")) return palp_cli_keyboard_finger_input(in, err, errlen);
+  if (!strncmp(o->input, "sim:", 4)) {
+    palp_cli_simdevice_def d;
+    int rc = palp_cli_simdevice_parse(o->input + 4, &d, err, errlen);
+    if (rc < 0) return rc;
+    if (o->finger_radius_mm > 0) d.radius = o->finger_radius_mm * 1e-3;
+    rc = palp_cli_simdevice_input(&d, in);
+    if (rc < 0) snprintf(err, errlen, "--input %s: invalid trajectory", o->input);
+    return rc;
+  }
   if (!strncmp(o->input, "device:", 7)) {
     char path[1024];
     snprintf(path, sizeof path, "%s", o->input + 7);
@@ -200,7 +225,9 @@ static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errle
     if (arg) *arg++ = 0;
     return palp_cli_device_input(path, arg, in, err, errlen);
   }
-  snprintf(err, errlen, "--input: expected script, replay:FILE, keyboard or device:LIB.so[:ARG], got \"%s\"", o->input);
+  snprintf(err, errlen,
+           "--input: expected script, replay:FILE, keyboard, keyboard-finger, sim:TRAJ or device:LIB.so[:ARG], got \"%s\"",
+           o->input);
   return PALP_EINVAL;
 }
 
@@ -281,7 +308,7 @@ static void drain_feedback(feedback_ctx *c) {
 }
 
 /* Feedback force over time as a terminal chart: 16 rows, one column per group of bins. */
-static void plot_feedback(const feedback_ctx *c, FILE *out) {
+static void plot_feedback_titled(const feedback_ctx *c, FILE *out, const char *title) {
   enum { W = 64, H = 16 };
   if (c->plot_bins < 2) return;
   int per = (c->plot_bins + W - 1) / W;
@@ -293,7 +320,7 @@ static void plot_feedback(const feedback_ctx *c, FILE *out) {
     if (col[k] > top) top = col[k];
   }
   if (top <= 0) top = 1;
-  fprintf(out, "feedback |F| on finger 0 [N] over %.1f s\n", c->plot_bins * PLOT_BIN_S);
+  fprintf(out, "%s [N] over %.1f s\n", title, c->plot_bins * PLOT_BIN_S);
   for (int r = H; r >= 1; r--) {
     fprintf(out, r == H ? "%6.2f |" : (r == 1 ? "%6.2f |" : "       |"), r == H ? top : 0.0);
     for (int k = 0; k < cols; k++) fputc(col[k] >= top * (r - 0.5) / H ? '#' : ' ', out);
@@ -303,6 +330,8 @@ static void plot_feedback(const feedback_ctx *c, FILE *out) {
   for (int k = 0; k < cols; k++) fputc('-', out);
   fprintf(out, "\n        0 s%*s%.1f s\n", cols > 10 ? cols - 8 : 1, "", c->plot_bins * PLOT_BIN_S);
 }
+
+static void plot_feedback(const feedback_ctx *c, FILE *out) { plot_feedback_titled(c, out, "feedback |F| on finger 0"); }
 
 /* One release sample for finger f (best-effort topic: callers repeat it). */
 static void send_release(palp_cli_station *st, int f, uint64_t *seq) {
@@ -317,7 +346,168 @@ static void send_release(palp_cli_station *st, int f, uint64_t *seq) {
   dds_write(st->contact_w, &m);
 }
 
+/* ---- position-driven trainee: the 1 kHz haptic thread (issue 11) ---------------------------- */
+
+static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
+  int rc;
+  if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
+    const char *why = in.error ? in.error(in.ctx) : NULL;
+    fprintf(stderr, "palp-client: input %s: cannot open: %s\n", in.name, why ? why : palp_strerror(rc));
+    if (in.close) in.close(in.ctx);
+    return 1;
+  }
+  if (!st->local_model_r) {
+    fprintf(stderr, "palp-client: no palp_local_model reader: the session was joined without feedback\n");
+    if (in.close) in.close(in.ctx);
+    return 1;
+  }
+  palp_cli_haptic_def d = palp_cli_haptic_default_def();
+  if (o->haptic_rate > 0) d.rate_hz = o->haptic_rate;
+  d.physics_rate_hz = st->tick_rate_hz > 0 ? st->tick_rate_hz : ph->tick_rate_hz;
+  d.rt_priority = o->rt_priority;
+  if (o->max_force > 0) d.render.max_force = o->max_force;
+  d.in = &in;
+  d.contact_w = st->contact_w;
+  d.session_id = st->session_id;
+  d.duration = o->duration;
+  FILE *trace = NULL;
+  if (o->trace_csv) {
+    trace = fopen(o->trace_csv, "w");
+    /* Bounded: at most 120 s of ticks are kept for the file. */
+    d.trace_cap = (size_t)(d.rate_hz * 120);
+    d.trace = trace ? calloc(d.trace_cap, sizeof *d.trace) : NULL;
+    if (!trace || !d.trace) {
+      fprintf(stderr, "palp-client: cannot write %s\n", o->trace_csv);
+      if (trace) fclose(trace);
+      if (in.close) in.close(in.ctx);
+      return 1;
+    }
+  }
+  palp_cli_haptic_loop *hl = calloc(1, sizeof *hl);
+  char err[256];
+  if (!hl || palp_cli_haptic_start(hl, &d, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s\n", hl ? err : "out of memory");
+    free(hl);
+    free(d.trace);
+    if (trace) fclose(trace);
+    if (in.close) in.close(in.ctx);
+    return 1;
+  }
+  if (o->rt_priority > 0 && !hl->stats.rt_ok)
+    fprintf(stderr, "palp-client: --rt-priority %d: SCHED_FIFO refused; the haptic thread runs at normal priority\n",
+            o->rt_priority);
+  if (!o->quiet)
+    printf("[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
+           "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
+           d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
+  fflush(stdout);
+  feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns()};
+  latency lat = {0};
+  uint64_t bad = 0, models = 0;
+  dds_entity_t ws = dds_create_waitset(st->pp);
+  dds_entity_t lm_cond = dds_create_readcondition(st->local_model_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, lm_cond, 0);
+  const int64_t t0 = palp_dds_now_ns();
+  int64_t next_print = t0, next_check = t0;
+  int closed = 0, limited_shown = 0;
+  double episode_peak = 0;
+  char reason[128] = "";
+  while (!g_stop && !palp_cli_haptic_done(hl)) {
+    dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
+    double lat_us;
+    int n = palp_cli_haptic_feed(hl, st->local_model_r, &bad, &lat_us);
+    models += (uint64_t)(n > 0 ? n : 0);
+    if (n > 0 && isfinite(lat_us)) lat_add(&lat, lat_us);
+    if (st->feedback_r > 0) { /* the summary topic is not needed here: keep its queue empty */
+      void *ptr[8] = {NULL};
+      dds_sample_info_t info[8];
+      int k = dds_take(st->feedback_r, ptr, info, 8, 8);
+      if (k > 0) dds_return_loan(st->feedback_r, ptr, k);
+    }
+    palp_cli_haptic_view v;
+    palp_cli_haptic_get_view(hl, &v);
+    const double fm = sqrt(v.force.x * v.force.x + v.force.y * v.force.y + v.force.z * v.force.z);
+    const int64_t now = palp_dds_now_ns();
+    int bin = (int)((double)(now - plot.t0) * 1e-9 / PLOT_BIN_S);
+    if (bin >= 0 && bin < PLOT_BINS) {
+      if (fm > plot.plot[bin]) plot.plot[bin] = fm;
+      if (bin + 1 > plot.plot_bins) plot.plot_bins = bin + 1;
+    }
+    if (fm > plot.peak) plot.peak = fm;
+    /* The trainee is told at once when the force on her hand was limited. */
+    const int limited = (v.flags & PALP_CLI_FORCE_LIMITED) != 0;
+    if (limited && v.requested > episode_peak) episode_peak = v.requested;
+    if (limited && !limited_shown && !o->quiet) {
+      printf("[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
+             "device gets %.1f N\n", o->name, v.t, fm, fm);
+      fflush(stdout);
+    }
+    if (!limited && limited_shown && !o->quiet) {
+      printf("[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.1f N)\n", o->name, v.t,
+             episode_peak);
+      fflush(stdout);
+    }
+    if (!limited) episode_peak = 0;
+    limited_shown = limited;
+    if (o->print_period > 0 && !o->quiet && now >= next_print) {
+      printf("[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s\n", o->name,
+             v.t, !v.on ? "lifted " : (v.flags & PALP_CLI_FORCE_CONTACT) ? "touching" : "free   ", v.depth * 1e3, fm,
+             limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
+      fflush(stdout);
+      next_print += (int64_t)(o->print_period * 1e9);
+    }
+    if (now >= next_check) {
+      if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
+        closed = 1;
+        break;
+      }
+      next_check = now + 100000000;
+    }
+  }
+  dds_delete(lm_cond);
+  dds_delete(ws);
+  palp_cli_haptic_stats hs;
+  palp_cli_haptic_join(hl, &hs);
+  if (trace) {
+    fprintf(trace, "t_s,late_s,on,x_m,y_m,z_m,fx_N,fy_N,fz_N,requested_N,flags\n");
+    for (size_t i = 0; i < hs.trace_len; i++) {
+      const palp_cli_haptic_sample *q = &d.trace[i];
+      fprintf(trace, "%.6f,%.6f,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%u\n", q->t, q->late, q->on, q->x.x, q->x.y,
+              q->x.z, q->f.x, q->f.y, q->f.z, q->requested, q->flags);
+    }
+    fclose(trace);
+  }
+  if (hs.failed) fprintf(stderr, "palp-client: %s\n", hs.error);
+  if (in.close) in.close(in.ctx);
+  double p50 = NAN, p99 = NAN;
+  if (lat.n) {
+    qsort(lat.us, lat.n, sizeof *lat.us, cmp_double);
+    p50 = lat.us[(lat.n - 1) / 2];
+    p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
+  }
+  printf("[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms); "
+         "%llu local models (%llu dropped as invalid), %llu contact samples sent at %.0f Hz; contact->model latency "
+         "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s\n",
+         o->name, st->session_id, (unsigned long long)hs.ticks, d.rate_hz, (unsigned long long)hs.late_ticks,
+         d.late_threshold * 1e3, hs.ticks ? 100.0 * (double)hs.late_ticks / (double)hs.ticks : 0.0, hs.late_max * 1e3,
+         (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
+         d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
+         closed ? reason : "");
+  if (hs.limited_ticks)
+    printf("[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.1f N, the device got at most %.1f N\n",
+           o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
+  if (hs.server_limited_models || hs.out_of_range_models)
+    printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range\n",
+           o->name, (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models);
+  if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
+  free(lat.us);
+  free(d.trace);
+  free(hl);
+  return hs.failed ? 1 : (closed ? 3 : 0);
+}
+
 static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
+  if (in.read_position && in.write_force) return run_haptic_trainee(o, st, ph, in);
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
     fprintf(stderr, "palp-client: input %s: cannot open: %s\n", in.name, palp_strerror(rc));

@@ -180,9 +180,11 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     st->contact_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   if (j->want_feedback)
     st->feedback_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
+  if (j->want_feedback && j->role == palp_ROLE_TRAINEE)
+    st->local_model_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);
   if (j->want_deformation)
     st->deformation_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
-  if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0)
+  if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0 || st->local_model_r < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
   return 0;
 }

@@ -28,6 +28,7 @@ typedef struct palp_cli_station {
   double tick_rate_hz;
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
+  dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
   uint32_t request_seq;
 } palp_cli_station;
 

@@ -14,7 +14,8 @@
 
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
-    "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status"};
+    "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status",
+    "palp_local_model"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -30,6 +31,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_FEEDBACK: return &palp_Feedback_desc;
   case PALP_TOPIC_DEFORMATION: return &palp_Deformation_desc;
   case PALP_TOPIC_SERVER_STATUS: return &palp_ServerStatus_desc;
+  case PALP_TOPIC_LOCAL_MODEL: return &palp_LocalModel_desc;
   default: return NULL;
   }
 }
@@ -65,6 +67,9 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
     break;
   case PALP_TOPIC_FEEDBACK:
   case PALP_TOPIC_SERVER_STATUS:
+  case PALP_TOPIC_LOCAL_MODEL:
+    /* Only the newest state matters: a lost local model is superseded by the next
+     * physics step, and the station's renderer extrapolates across the gap. */
     dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
     dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);

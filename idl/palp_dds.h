@@ -27,6 +27,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_FEEDBACK,
   PALP_TOPIC_DEFORMATION,
   PALP_TOPIC_SERVER_STATUS,
+  PALP_TOPIC_LOCAL_MODEL, /* added with issue 11: local contact models for the station's haptic loop */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 

@@ -100,7 +100,7 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "finger_radius_max", "log_interval", "dds_config",
                                        "database",       "phantoms",       "comment",
                                        NULL};
-static const char *const phantom_keys[] = {"id", "name", "scene", "comment", NULL};
+static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 
 static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_config *cfg, char *err,
                           size_t errlen) {
@@ -130,6 +130,8 @@ static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_confi
     if ((rc = get_string(p, "scene", where, 1, scene, sizeof scene, err, errlen))) return rc;
     if (resolve(base_dir, scene, ph->scene_path, sizeof ph->scene_path))
       return fail(err, errlen, PALP_EINVAL, "%sscene: path too long", where);
+    ph->physics_rate_hz = 0;
+    if ((rc = get_number(p, "physics_rate_hz", where, 1, 10000, 0, &ph->physics_rate_hz, err, errlen))) return rc;
   }
   cfg->phantom_count = n;
   return 0;

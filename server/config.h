@@ -23,6 +23,9 @@ typedef struct palp_srv_phantom_cfg {
   uint32_t id;                        /* > 0, unique */
   char name[64];
   char scene_path[PALP_SRV_PATH_MAX]; /* resolved against the config's directory */
+  double physics_rate_hz;             /* this phantom's sessions step at this rate [Hz];
+                                         0 = the server's tick_rate_hz (issue 11: the physics
+                                         rate is decoupled from the stations' 1 kHz haptic rate) */
 } palp_srv_phantom_cfg;
 
 typedef struct palp_srv_config {

@@ -97,7 +97,9 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
    * (session.c). The server needs contact feedback and a slot per finger besides
    * the scene's contacts; a scene without them is refused rather than altered,
    * so a recorded scene file always rebuilds the world the session ran. */
-  ph->scene.world.dt = 1.0 / srv->cfg.tick_rate_hz;
+  /* Each phantom steps at its own physics rate (issue 11), by default the server's. */
+  if (!(ph->cfg.physics_rate_hz > 0)) ph->cfg.physics_rate_hz = srv->cfg.tick_rate_hz;
+  ph->scene.world.dt = 1.0 / ph->cfg.physics_rate_hz;
   if (!(ph->scene.world.effects & PALP_EFFECT_FORCE_FEEDBACK)) {
     fail(err, errlen, "phantoms (id %u): scene %s: effects must include \"force_feedback\" for stations", pc->id,
          pc->scene_path);
@@ -133,7 +135,7 @@ static void publish_catalogue(palp_srv *srv, const palp_srv_phantom *ph) {
   snprintf(msg.name, sizeof msg.name, "%s", ph->cfg.name);
   snprintf(msg.scene_name, sizeof msg.scene_name, "%s", ph->scene.name);
   msg.radius = wd->mesh.radius;
-  msg.tick_rate_hz = srv->cfg.tick_rate_hz;
+  msg.tick_rate_hz = ph->cfg.physics_rate_hz;
   msg.max_force = srv->cfg.max_force;
   msg.effects = wd->effects;
   msg.membrane = (palp_MembraneParams){wd->membrane.thickness, wd->membrane.density, wd->membrane.E1,
@@ -209,7 +211,7 @@ static void publish_state(palp_srv *srv, palp_srv_session *s, int closed, const 
   snprintf(m.trainee_station, sizeof m.trainee_station, "%s", s->trainee_station);
   snprintf(m.trainee_name, sizeof m.trainee_name, "%s", s->trainee_name);
   member_counts(srv, s->id, &m.visual_count, &m.observer_count);
-  m.tick_rate_hz = srv->cfg.tick_rate_hz;
+  m.tick_rate_hz = s->phantom->cfg.physics_rate_hz;
   m.duration = (double)(palp_dds_now_ns() - s->opened_ns) * 1e-9;
   m.ticks = st.ticks;
   m.overruns = st.overruns;
@@ -229,7 +231,7 @@ static void reply(palp_srv *srv, const palp_SessionRequest *rq, palp_srv_session
   snprintf(r.station_id, sizeof r.station_id, "%s", rq->station_id);
   r.request_seq = rq->request_seq;
   r.status = s ? palp_REPLY_ACCEPTED : palp_REPLY_REJECTED;
-  r.tick_rate_hz = srv->cfg.tick_rate_hz;
+  r.tick_rate_hz = s ? s->phantom->cfg.physics_rate_hz : srv->cfg.tick_rate_hz;
   if (s) {
     r.session_id = s->id;
     r.phantom_id = s->phantom->cfg.id;
@@ -365,6 +367,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
                               .contact_topic = srv->topic[PALP_TOPIC_CONTACT],
                               .feedback_topic = srv->topic[PALP_TOPIC_FEEDBACK],
                               .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
+                              .local_model_topic = srv->topic[PALP_TOPIC_LOCAL_MODEL],
                               .events = srv->events};
     int rc = 0;
     s = palp_srv_session_create(&d, &rc);
@@ -379,7 +382,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     palp_srv_session_info info;
     palp_srv_session_info_fill(s, &info);
     if (srv->events && srv->events->session_opened) srv->events->session_opened(srv->events->ctx, &info);
-    if (palp_srv_ticker_add(srv->ticker, s) < 0) {
+    if (palp_srv_ticker_add_rate(srv->ticker, s, ph->cfg.physics_rate_hz) < 0) {
       palp_srv_session_summary sum;
       palp_srv_session_summary_fill(s, "tick pool full", palp_dds_now_ns(), &sum);
       if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
@@ -606,8 +609,17 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     goto fail;
   }
   int rt_ok = 0;
-  srv->ticker = palp_srv_ticker_create(srv->cfg.tick_threads, srv->cfg.tick_rate_hz, srv->cfg.max_sessions,
-                                       srv->cfg.tick_priority, &rt_ok, rc);
+  /* One pool of tick threads per distinct physics rate. */
+  double rates[PALP_SRV_MAX_PHANTOMS];
+  int nrates = 0;
+  for (int i = 0; i < srv->phantom_count; i++) {
+    int seen = 0;
+    for (int k = 0; k < nrates; k++) seen |= rates[k] == srv->phantom[i].cfg.physics_rate_hz;
+    if (!seen) rates[nrates++] = srv->phantom[i].cfg.physics_rate_hz;
+  }
+  if (nrates == 0) rates[nrates++] = srv->cfg.tick_rate_hz;
+  srv->ticker = palp_srv_ticker_create_rates(srv->cfg.tick_threads, rates, nrates, srv->cfg.max_sessions,
+                                             srv->cfg.tick_priority, &rt_ok, rc);
   if (!srv->ticker) {
     fail(err, errlen, "cannot start the tick threads: %s", palp_strerror(*rc));
     goto fail;

@@ -70,7 +70,11 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->contact_reader = palp_dds_create_reader(s->sub, def->contact_topic, PALP_TOPIC_CONTACT);
   s->feedback_writer = palp_dds_create_writer(s->pub, def->feedback_topic, PALP_TOPIC_FEEDBACK);
   s->deformation_writer = palp_dds_create_writer(s->pub, def->deformation_topic, PALP_TOPIC_DEFORMATION);
-  if (s->contact_reader < 0 || s->feedback_writer < 0 || s->deformation_writer < 0) goto dds_fail;
+  if (def->local_model_topic > 0)
+    s->local_model_writer = palp_dds_create_writer(s->pub, def->local_model_topic, PALP_TOPIC_LOCAL_MODEL);
+  if (s->contact_reader < 0 || s->feedback_writer < 0 || s->deformation_writer < 0 || s->local_model_writer < 0)
+    goto dds_fail;
+  palp_world_get_health(s->world, &s->health);
   s->opened_ns = palp_dds_now_ns();
   *err = 0;
   return s;
@@ -258,6 +262,72 @@ static void publish_feedback(palp_srv_session *s, int64_t now_ns, double top_dis
   s->last_feedback_ns = now_ns;
 }
 
+/* Model-validity flags of the step just taken: what the health counters gained. */
+static uint32_t step_flags(palp_srv_session *s) {
+  palp_world_health h;
+  palp_world_get_health(s->world, &h);
+  uint32_t fl = 0;
+  if (h.large_strain_steps > s->health.large_strain_steps) fl |= palp_LM_LARGE_STRAIN;
+  if (h.base_contacts > s->health.base_contacts) fl |= palp_LM_BASE_CONTACT;
+  if (h.clamped_steps > s->health.clamped_steps) fl |= palp_LM_CLAMPED_STEP;
+  if (h.finger_unsolved > s->health.finger_unsolved) fl |= palp_LM_UNSOLVED;
+  if (h.substeps > s->health.substeps) fl |= palp_LM_SUBSTEPPED;
+  s->health = h;
+  return fl;
+}
+
+/* The local contact model of every position-driven finger after the step
+ * (issue 11): the station's 1 kHz loop renders from it between physics steps.
+ * A force above max_force is reported (LM_FORCE_LIMIT), not clamped: with a
+ * position-driven finger the force is the model's output, and the station's
+ * renderer limits what reaches the hand and shows that it did. */
+static void publish_local_models(palp_srv_session *s, int64_t now_ns, uint32_t flags) {
+  const double period = palp_world_get_def(s->world)->dt;
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+    const palp_srv_finger_state *f = &s->finger[i];
+    if (f->mode != palp_CONTACT_FINGER || f->world_contact < 0) continue;
+    palp_local_model m;
+    if (palp_world_finger_local_model(s->world, f->world_contact, &m) < 0) continue;
+    palp_LocalModel *o = &s->lm;
+    memset(o, 0, sizeof *o);
+    o->session_id = s->id;
+    o->finger = (uint8_t)i;
+    o->frame = (uint64_t)palp_world_frame(s->world);
+    o->time = m.time;
+    o->period = m.period > 0 ? m.period : period;
+    o->contact_seq = f->cmd.seq;
+    o->contact_source_time_ns = f->cmd.source_time_ns;
+    o->contact = m.contact != 0;
+    o->triangles = m.triangles;
+    o->device = (palp_Vec3){m.device.x, m.device.y, m.device.z};
+    o->proxy = (palp_Vec3){m.proxy.x, m.proxy.y, m.proxy.z};
+    o->normal = (palp_Vec3){m.normal.x, m.normal.y, m.normal.z};
+    o->force = (palp_Vec3){m.force.x, m.force.y, m.force.z};
+    for (int r = 0; r < 3; r++)
+      for (int c = 0; c < 3; c++) o->stiffness[3 * r + c] = m.stiffness[r][c];
+    o->drift = (palp_Vec3){m.drift.x, m.drift.y, m.drift.z};
+    o->area = m.area;
+    o->depth = m.depth;
+    o->point = (palp_Vec3){m.point.x, m.point.y, m.point.z};
+    o->max_force = s->limits.max_force;
+    o->max_strain = s->health.max_strain;
+    o->flags = flags;
+    const double fm = norm3(m.force);
+    if (fm > s->limits.max_force) {
+      o->flags |= palp_LM_FORCE_LIMIT;
+      s->stats.force_limited_steps++;
+      if (now_ns - s->last_limit_log_ns >= (int64_t)(s->log_interval * 1e9)) {
+        fprintf(stderr, "palp-server: session %u: finger %d pushes back with %.1f N, above max_force %.1f N: "
+                        "reported to the station (which limits it), not clamped\n", s->id, i, fm, s->limits.max_force);
+        s->last_limit_log_ns = now_ns;
+      }
+    }
+    if (flags & palp_LM_OUT_OF_RANGE) s->stats.out_of_range_steps++;
+    o->server_time_ns = palp_dds_now_ns();
+    if (dds_write(s->local_model_writer, o) == 0) s->stats.local_models++;
+  }
+}
+
 static void publish_deformation(palp_srv_session *s) {
   const palp_vec3 *p = palp_world_positions(s->world);
   palp_Vec3 *o = s->deformation.positions._buffer;
@@ -325,8 +395,10 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
     s->events->frame(s->events->ctx, s->id, s->world, slot, ff, PALP_SRV_MAX_FINGERS);
   }
 
-  if (atomic_load_explicit(&s->want_feedback, memory_order_relaxed) &&
-      (awake || any_down || now_ns - s->last_feedback_ns >= IDLE_FEEDBACK_PERIOD_NS))
+  const uint32_t flags = step_flags(s);
+  const int want_feedback = atomic_load_explicit(&s->want_feedback, memory_order_relaxed) != 0;
+  if (want_feedback && s->local_model_writer > 0) publish_local_models(s, now_ns, flags);
+  if (want_feedback && (awake || any_down || now_ns - s->last_feedback_ns >= IDLE_FEEDBACK_PERIOD_NS))
     publish_feedback(s, now_ns, top_disp);
 
   if (atomic_load_explicit(&s->deform_members, memory_order_relaxed) > 0 && now_ns >= s->next_deformation_ns &&

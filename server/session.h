@@ -38,6 +38,9 @@ typedef struct palp_srv_session_stats {
   double peak_force;                        /* [N] */
   double peak_displacement;                 /* [m] */
   double step_us_max;                       /* longest tick of this session in the status period [us] */
+  uint64_t local_models;                    /* palp_local_model samples published */
+  uint64_t force_limited_steps;             /* finger-steps whose force exceeded max_force (reported, not clamped) */
+  uint64_t out_of_range_steps;              /* steps with a model-validity flag (LM_OUT_OF_RANGE) */
   int64_t last_frame;
   double sim_time;                          /* [s] */
 } palp_srv_session_stats;
@@ -57,6 +60,7 @@ typedef struct palp_srv_session_def {
   const char *trainee_name;
   dds_entity_t participant;
   dds_entity_t contact_topic, feedback_topic, deformation_topic;
+  dds_entity_t local_model_topic; /* 0: no local models (older callers) */
   const palp_srv_events *events; /* may be NULL */
 } palp_srv_session_def;
 
@@ -68,7 +72,7 @@ typedef struct palp_srv_session {
   char trainee_station[64];
   char trainee_name[64];
   int64_t opened_ns;
-  dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer;
+  dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer, local_model_writer;
   palp_srv_limits limits;
   const palp_srv_events *events;
   double log_interval;        /* [s] */
@@ -90,6 +94,9 @@ typedef struct palp_srv_session {
   palp_Feedback fb;
   palp_FingerFeedback fb_fingers[PALP_SRV_MAX_FINGERS];
   palp_Deformation deformation;
+  palp_world_health health;   /* after the previous step: per-step flags are deltas */
+  palp_LocalModel lm;
+  int64_t last_limit_log_ns;
 } palp_srv_session;
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err);

@@ -19,6 +19,7 @@ typedef struct tick_group {
   pthread_mutex_t lock;
   palp_srv_session **sessions;
   int count;
+  int64_t period_ns; /* this group's physics period: groups per rate (issue 11) */
   /* timing, under lock */
   double *work_us;   /* ring of this period's tick work times [us] */
   int work_n, work_cap;
@@ -27,8 +28,8 @@ typedef struct tick_group {
 } tick_group;
 
 struct palp_srv_ticker {
-  int n;
-  int64_t period_ns;
+  int n;        /* groups = threads per rate x rates */
+  int per_rate; /* threads per rate */
   int max_sessions;
   atomic_int stop;
   tick_group *g;
@@ -42,7 +43,8 @@ static struct timespec ts_of(int64_t ns) {
 static void *group_main(void *arg) {
   tick_group *g = arg;
   palp_srv_ticker *t = g->owner;
-  int64_t next = palp_dds_now_ns() + t->period_ns;
+  const int64_t period_ns = g->period_ns;
+  int64_t next = palp_dds_now_ns() + period_ns;
   while (!atomic_load(&t->stop)) {
     struct timespec ts = ts_of(next);
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
@@ -52,12 +54,12 @@ static void *group_main(void *arg) {
     for (int i = 0; i < g->count; i++) palp_srv_session_tick(g->sessions[i], next);
     int64_t t1 = palp_dds_now_ns();
     /* Overrun: this tick's work ended after the next tick should have started. */
-    int overrun = t1 > next + t->period_ns;
+    int overrun = t1 > next + period_ns;
     if (overrun)
       for (int i = 0; i < g->count; i++) {
         palp_srv_session *s = g->sessions[i];
         s->stats.overruns++;
-        if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, t1 - (next + t->period_ns));
+        if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, t1 - (next + period_ns));
       }
     g->ticks++;
     g->period_ticks++;
@@ -66,11 +68,11 @@ static void *group_main(void *arg) {
     g->busy_ns += t1 - t0;
     if (g->work_n < g->work_cap) g->work_us[g->work_n++] = (double)(t1 - t0) * 1e-3;
     pthread_mutex_unlock(&g->lock);
-    next += t->period_ns;
+    next += period_ns;
     if (next <= t1) {
       /* Behind schedule: drop the lost slots rather than burst. */
-      int64_t lost = (t1 - next) / t->period_ns + 1;
-      next += lost * t->period_ns;
+      int64_t lost = (t1 - next) / period_ns + 1;
+      next += lost * period_ns;
     }
   }
   return NULL;
@@ -78,27 +80,39 @@ static void *group_main(void *arg) {
 
 palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int priority, int *rt_ok,
                                         int *err) {
+  return palp_srv_ticker_create_rates(threads, &rate_hz, 1, max_sessions, priority, rt_ok, err);
+}
+
+palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_hz, int rate_count, int max_sessions,
+                                              int priority, int *rt_ok, int *err) {
   *rt_ok = 0;
   if (threads <= 0) {
     long c = sysconf(_SC_NPROCESSORS_ONLN);
     threads = c > 0 ? (int)c : 1;
   }
-  if (!(rate_hz > 0) || max_sessions < 1) {
+  if (rate_count < 1 || rate_count > PALP_SRV_TICKER_MAX_RATES || max_sessions < 1) {
     *err = PALP_EINVAL;
     return NULL;
   }
+  for (int r = 0; r < rate_count; r++)
+    if (!(rates_hz[r] > 0) || !(rates_hz[r] <= 1e5)) {
+      *err = PALP_EINVAL;
+      return NULL;
+    }
   palp_srv_ticker *t = calloc(1, sizeof *t);
   if (!t) goto nomem;
-  t->n = threads;
-  t->period_ns = (int64_t)(1e9 / rate_hz + 0.5);
+  t->per_rate = threads;
+  t->n = threads * rate_count;
   t->max_sessions = max_sessions;
-  t->g = calloc((size_t)threads, sizeof *t->g);
+  t->g = calloc((size_t)t->n, sizeof *t->g);
   if (!t->g) goto nomem;
-  /* Keep up to 4 s of tick times per status period (1 kHz, 0.25 Hz status). */
-  int cap = (int)(rate_hz * 4) + 16;
-  for (int i = 0; i < threads; i++) {
+  for (int i = 0; i < t->n; i++) {
     tick_group *g = &t->g[i];
+    const double rate_hz = rates_hz[i / threads];
+    /* Keep up to 4 s of tick times per status period (1 kHz, 0.25 Hz status). */
+    int cap = (int)(rate_hz * 4) + 16;
     g->owner = t;
+    g->period_ns = (int64_t)(1e9 / rate_hz + 0.5);
     pthread_mutex_init(&g->lock, NULL);
     g->sessions = calloc((size_t)max_sessions, sizeof *g->sessions);
     g->work_us = calloc((size_t)cap, sizeof *g->work_us);
@@ -106,6 +120,7 @@ palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_ses
     g->period_start_ns = palp_dds_now_ns();
     if (!g->sessions || !g->work_us) goto nomem;
   }
+  threads = t->n;
   for (int i = 0; i < threads; i++) {
     int created = 0;
     if (priority > 0) {
@@ -156,9 +171,16 @@ void palp_srv_ticker_destroy(palp_srv_ticker *t) {
 int palp_srv_ticker_threads(const palp_srv_ticker *t) { return t->n; }
 
 int palp_srv_ticker_add(palp_srv_ticker *t, palp_srv_session *s) {
-  int best = 0;
-  for (int i = 1; i < t->n; i++)
-    if (t->g[i].count < t->g[best].count) best = i;
+  return palp_srv_ticker_add_rate(t, s, 1e9 / (double)t->g[0].period_ns);
+}
+
+int palp_srv_ticker_add_rate(palp_srv_ticker *t, palp_srv_session *s, double rate_hz) {
+  if (!(rate_hz > 0)) return PALP_EINVAL;
+  const int64_t period_ns = (int64_t)(1e9 / rate_hz + 0.5);
+  int best = -1;
+  for (int i = 0; i < t->n; i++)
+    if (t->g[i].period_ns == period_ns && (best < 0 || t->g[i].count < t->g[best].count)) best = i;
+  if (best < 0) return PALP_EINVAL; /* no group at this rate */
   tick_group *g = &t->g[best];
   pthread_mutex_lock(&g->lock);
   int rc = PALP_EFULL;

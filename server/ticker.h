@@ -29,11 +29,19 @@ typedef struct palp_srv_tick_stats {
  * refused the threads run at normal priority and *rt_ok is 0. */
 palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int priority, int *rt_ok,
                                         int *err);
+/* Groups per rate (issue 11): `threads` threads for each of rate_count rates
+ * (each phantom may step at its own physics rate); a session joins a group of its
+ * phantom's rate. At most PALP_SRV_TICKER_MAX_RATES distinct rates. */
+#define PALP_SRV_TICKER_MAX_RATES PALP_SRV_MAX_PHANTOMS
+palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_hz, int rate_count, int max_sessions,
+                                              int priority, int *rt_ok, int *err);
 /* Stops and joins the threads; sessions still attached are not destroyed. */
 void palp_srv_ticker_destroy(palp_srv_ticker *t);
 int palp_srv_ticker_threads(const palp_srv_ticker *t);
-/* Attaches to the group with the fewest sessions. */
+/* Attaches to the group with the fewest sessions (of the first rate). */
 int palp_srv_ticker_add(palp_srv_ticker *t, palp_srv_session *s);
+/* Attaches to the group at rate_hz with the fewest sessions; PALP_EINVAL if no group runs at it. */
+int palp_srv_ticker_add_rate(palp_srv_ticker *t, palp_srv_session *s, double rate_hz);
 /* Detaches; on return no tick thread touches s any more. */
 void palp_srv_ticker_remove(palp_srv_ticker *t, palp_srv_session *s);
 /* Calls fn for every attached session under its group's lock (short work only). */

@@ -1,0 +1,300 @@
+/* haptic_loop.c - the station's 1 kHz haptic thread (haptic_loop.h). */
+#include "haptic_loop.h"
+
+#include <errno.h>
+#include <math.h>
+#include <sched.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "palp_dds.h"
+
+/* ---- mailbox ------------------------------------------------------------------------- */
+
+int palp_cli_mailbox_init(palp_cli_mailbox *mb) {
+  memset(mb, 0, sizeof *mb);
+  return pthread_mutex_init(&mb->lock, NULL) == 0 ? 0 : PALP_ENOMEM;
+}
+
+void palp_cli_mailbox_destroy(palp_cli_mailbox *mb) { pthread_mutex_destroy(&mb->lock); }
+
+void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint32_t server_flags, double max_force) {
+  pthread_mutex_lock(&mb->lock);
+  mb->model = *m;
+  mb->server_flags = server_flags;
+  mb->max_force = max_force;
+  mb->seq++;
+  pthread_mutex_unlock(&mb->lock);
+}
+
+int palp_cli_mailbox_take(palp_cli_mailbox *mb, uint64_t *seq, palp_local_model *m, uint32_t *server_flags,
+                          double *max_force) {
+  if (pthread_mutex_trylock(&mb->lock) != 0) return 0; /* busy: next tick */
+  int got = 0;
+  if (mb->seq != *seq) {
+    *m = mb->model;
+    *server_flags = mb->server_flags;
+    *max_force = mb->max_force;
+    *seq = mb->seq;
+    got = 1;
+  }
+  pthread_mutex_unlock(&mb->lock);
+  return got;
+}
+
+static int fin3(palp_Vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+static palp_vec3 vec(palp_Vec3 v) { return (palp_vec3){v.x, v.y, v.z}; }
+static double len3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out) {
+  if (!in || !out) return PALP_EINVAL;
+  if (!isfinite(in->time) || !isfinite(in->period) || !(in->period >= 0 && in->period <= 1.0)) return PALP_EINVAL;
+  if (!fin3(in->device) || !fin3(in->proxy) || !fin3(in->normal) || !fin3(in->force) || !fin3(in->drift) ||
+      !fin3(in->point) || !isfinite(in->area) || !isfinite(in->depth))
+    return PALP_EINVAL;
+  for (int i = 0; i < 9; i++)
+    if (!isfinite(in->stiffness[i]) || fabs(in->stiffness[i]) > 1e6) return PALP_EINVAL;
+  const palp_vec3 f = vec(in->force), n = vec(in->normal);
+  if (len3(f) > 1e4 || len3(vec(in->device)) > 10.0 || len3(vec(in->drift)) > 100.0) return PALP_EINVAL;
+  if (in->contact && fabs(len3(n) - 1.0) > 1e-3) return PALP_EINVAL;
+  memset(out, 0, sizeof *out);
+  out->time = in->time;
+  out->period = in->period;
+  out->contact = in->contact ? 1 : 0;
+  out->triangles = in->triangles;
+  out->device = vec(in->device);
+  out->proxy = vec(in->proxy);
+  out->normal = n;
+  out->force = f;
+  for (int r = 0; r < 3; r++)
+    for (int c = 0; c < 3; c++) out->stiffness[r][c] = in->stiffness[3 * r + c];
+  out->drift = vec(in->drift);
+  out->area = in->area;
+  out->depth = in->depth;
+  out->point = vec(in->point);
+  return 0;
+}
+
+/* ---- the thread ------------------------------------------------------------------------ */
+
+palp_cli_haptic_def palp_cli_haptic_default_def(void) {
+  return (palp_cli_haptic_def){.rate_hz = 1000,
+                               .physics_rate_hz = 250,
+                               .late_threshold = 0.5e-3,
+                               .latency_compensation = 1,
+                               .max_latency = 0.2,
+                               .render = palp_haptic_default_def()};
+}
+
+static struct timespec ts_of(int64_t ns) {
+  return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
+}
+
+static void send_contact(palp_cli_haptic_loop *l, int on, palp_vec3 x, int64_t now_ns) {
+  if (l->def.contact_w <= 0) return;
+  palp_Contact m;
+  memset(&m, 0, sizeof m);
+  m.session_id = l->def.session_id;
+  m.finger = (uint8_t)l->def.finger;
+  m.mode = on ? palp_CONTACT_FINGER : palp_CONTACT_RELEASE;
+  m.vertex = -1;
+  m.center = (palp_Vec3){x.x, x.y, x.z};
+  m.radius = l->def.radius;
+  m.seq = ++l->seq;
+  m.source_time_ns = now_ns;
+  if (dds_write(l->def.contact_w, &m) == 0) l->stats.contacts_sent++;
+}
+
+static void *haptic_main(void *arg) {
+  palp_cli_haptic_loop *l = arg;
+  const palp_cli_haptic_def *d = &l->def;
+  palp_cli_haptic_stats *st = &l->stats;
+  const int64_t period = (int64_t)(1e9 / d->rate_hz + 0.5);
+  /* Every k-th tick goes to the server: the physics step uses one sample per step. */
+  const int every = d->physics_rate_hz > 0 && d->physics_rate_hz < d->rate_hz
+                        ? (int)lround(d->rate_hz / d->physics_rate_hz) : 1;
+  const int64_t late_ns = (int64_t)(d->late_threshold * 1e9);
+  const int64_t t0 = palp_dds_now_ns();
+  int64_t next = t0;
+  uint64_t mb_seq = 0;
+  int was_on = 0, release_left = 0;
+  palp_local_model m;
+  for (uint64_t tick = 0; !atomic_load_explicit(&l->stop, memory_order_relaxed); tick++) {
+    next += period;
+    struct timespec ts = ts_of(next);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+    const int64_t now = palp_dds_now_ns();
+    const int64_t late = now - next;
+    st->ticks++;
+    if (late > late_ns) st->late_ticks++;
+    if ((double)late * 1e-9 > st->late_max) st->late_max = (double)late * 1e-9;
+    /* A tick more than a period late is not made up in a burst: the device wants
+     * the newest force, not a queue of old ones. */
+    if (late > period) next = now;
+    const double t = (double)(now - t0) * 1e-9;
+    if (d->duration > 0 && t >= d->duration) break;
+    palp_vec3 x = {0, 0, 0};
+    const int on = d->in->read_position(d->in->ctx, t, &x);
+    if (on == PALP_CLI_INPUT_END) {
+      st->ended = 1;
+      break;
+    }
+    if (on < 0) {
+      const char *why = d->in->error ? d->in->error(d->in->ctx) : NULL;
+      snprintf(st->error, sizeof st->error, "device %s: %s", d->in->name ? d->in->name : "?",
+               why ? why : palp_strerror(on));
+      st->failed = 1;
+      break;
+    }
+    uint32_t sflags = 0;
+    double smax = 0;
+    if (palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax)) {
+      if (palp_haptic_update(&l->renderer, &m, t) >= 0) st->models++;
+      if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
+      if (sflags & palp_LM_OUT_OF_RANGE) st->out_of_range_models++;
+      /* The safe force is the smaller of the station's and the phantom's limits. */
+      if (smax > 0 && smax < l->renderer.def.max_force) l->renderer.def.max_force = smax;
+    }
+    palp_haptic_out o = {.force = {0, 0, 0}, .proxy = x, .requested = 0, .flags = 0};
+    if (on) palp_haptic_render(&l->renderer, x, t, &o);
+    d->in->write_force(d->in->ctx, o.force, o.flags);
+    const double fm = len3(o.force);
+    if (fm > st->peak_force) st->peak_force = fm;
+    if (o.requested > st->peak_requested) st->peak_requested = o.requested;
+    if (o.flags & PALP_HAPTIC_LIMITED) st->limited_ticks++;
+    if (o.flags & PALP_HAPTIC_STALE) st->stale_ticks++;
+    if (o.flags & PALP_HAPTIC_CONTACT) st->contact_ticks++;
+    /* To the server at the physics rate; a lift is sent at once and repeated on
+     * the next ticks (best-effort: one lost sample must not leave the finger down). */
+    if (on && (tick % (uint64_t)every == 0 || !was_on)) send_contact(l, 1, x, now);
+    if (!on && was_on) release_left = 3;
+    if (!on && release_left > 0) {
+      send_contact(l, 0, x, now);
+      release_left--;
+    }
+    was_on = on;
+    if (d->trace && st->trace_len < d->trace_cap)
+      d->trace[st->trace_len++] = (palp_cli_haptic_sample){
+          .t = t, .late = (double)late * 1e-9, .x = x, .f = o.force, .requested = o.requested, .flags = o.flags,
+          .on = on};
+    pthread_mutex_lock(&l->view_lock);
+    l->view = (palp_cli_haptic_view){.t = t, .x = x, .proxy = o.proxy, .force = o.force, .requested = o.requested,
+                                     .depth = len3((palp_vec3){o.proxy.x - x.x, o.proxy.y - x.y, o.proxy.z - x.z}),
+                                     .flags = o.flags, .on = on};
+    pthread_mutex_unlock(&l->view_lock);
+  }
+  if (was_on)
+    for (int r = 0; r < 3; r++) send_contact(l, 0, (palp_vec3){0, 0, 0}, palp_dds_now_ns());
+  d->in->write_force(d->in->ctx, (palp_vec3){0, 0, 0}, 0); /* leave the hand free */
+  st->max_force = l->renderer.def.max_force;
+  atomic_store(&l->done, 1);
+  return NULL;
+}
+
+int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *def, char *err, size_t errlen) {
+  memset(l, 0, sizeof *l);
+  if (!def || !def->in || !def->in->read_position || !def->in->write_force) {
+    snprintf(err, errlen, "haptic loop: the input is not a position-driven device (no read_position/write_force)");
+    return PALP_EINVAL;
+  }
+  if (!(def->rate_hz >= 10 && def->rate_hz <= 10000) || !(def->physics_rate_hz > 0) || def->finger < 0 ||
+      def->finger >= PALP_CLI_MAX_FINGERS || !(def->late_threshold > 0)) {
+    snprintf(err, errlen, "haptic loop: rate %g Hz (10..10000), physics rate %g Hz (> 0) or finger %d invalid",
+             def->rate_hz, def->physics_rate_hz, def->finger);
+    return PALP_EINVAL;
+  }
+  l->def = *def;
+  if (!(l->def.radius > 0)) l->def.radius = def->in->finger_radius > 0 ? def->in->finger_radius : 0.008;
+  int rc = palp_haptic_init(&l->renderer, &def->render);
+  if (rc < 0) {
+    snprintf(err, errlen, "haptic loop: renderer parameters invalid: %s", palp_strerror(rc));
+    return rc;
+  }
+  l->stats.max_force = l->renderer.def.max_force;
+  if (palp_cli_mailbox_init(&l->mailbox) < 0 || pthread_mutex_init(&l->view_lock, NULL) != 0) {
+    snprintf(err, errlen, "haptic loop: cannot create its locks");
+    return PALP_ENOMEM;
+  }
+  int created = 0;
+  if (def->rt_priority > 0) {
+    /* A tick preempted by a compiler is a force the hand feels late: a real-time
+     * class keeps the haptic thread ahead of ordinary work when allowed. */
+    pthread_attr_t attr;
+    struct sched_param sp = {.sched_priority = def->rt_priority};
+    pthread_attr_init(&attr);
+    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+    pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
+    pthread_attr_setschedparam(&attr, &sp);
+    created = pthread_create(&l->thread, &attr, haptic_main, l) == 0;
+    pthread_attr_destroy(&attr);
+    l->stats.rt_ok = created;
+  }
+  if (!created && pthread_create(&l->thread, NULL, haptic_main, l) != 0) {
+    snprintf(err, errlen, "haptic loop: cannot start the thread");
+    palp_cli_mailbox_destroy(&l->mailbox);
+    pthread_mutex_destroy(&l->view_lock);
+    return PALP_ENOMEM;
+  }
+  l->started = 1;
+  return 0;
+}
+
+void palp_cli_haptic_request_stop(palp_cli_haptic_loop *l) { atomic_store(&l->stop, 1); }
+int palp_cli_haptic_done(palp_cli_haptic_loop *l) { return atomic_load(&l->done); }
+
+void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
+  if (l->started) {
+    atomic_store(&l->stop, 1);
+    pthread_join(l->thread, NULL);
+    l->started = 0;
+    palp_cli_mailbox_destroy(&l->mailbox);
+    pthread_mutex_destroy(&l->view_lock);
+  }
+  if (out) *out = l->stats;
+}
+
+void palp_cli_haptic_get_view(palp_cli_haptic_loop *l, palp_cli_haptic_view *out) {
+  pthread_mutex_lock(&l->view_lock);
+  *out = l->view;
+  pthread_mutex_unlock(&l->view_lock);
+}
+
+int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t *bad, double *latency_us) {
+  int taken = 0;
+  if (latency_us) *latency_us = NAN;
+  for (;;) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    if (dds_take(reader, ptr, &info, 1, 1) <= 0) break;
+    const palp_LocalModel *w = ptr[0];
+    if (info.valid_data && w->finger == (uint8_t)l->def.finger && w->session_id == l->def.session_id) {
+      palp_local_model m;
+      if (palp_cli_local_model_from_wire(w, &m) == 0 && isfinite(w->max_force) && w->max_force >= 0) {
+        /* The model describes the surface when the device was at m.device, which
+         * this station sent at contact_source_time_ns on its own clock: the model
+         * is that old, not just as old as its arrival. Advancing its device point
+         * by the surface's drift over that age lets the renderer (which counts age
+         * from arrival) evaluate it against where the surface is now; without it a
+         * 40 ms round trip at 20 mm/s reads 0.8 mm of the hand's motion as
+         * indentation and renders K times that as extra force. Bounded: an age
+         * outside [0, max_latency] is not trusted and the model is taken as is. */
+        const int64_t now = palp_dds_now_ns();
+        const double age = w->contact_source_time_ns > 0 ? (double)(now - w->contact_source_time_ns) * 1e-9 : -1;
+        if (l->def.latency_compensation && age > 0 && age <= l->def.max_latency) {
+          m.device.x += m.drift.x * age;
+          m.device.y += m.drift.y * age;
+          m.device.z += m.drift.z * age;
+        }
+        palp_cli_mailbox_put(&l->mailbox, &m, w->flags, w->max_force);
+        if (latency_us && age > 0) *latency_us = age * 1e6;
+        taken++;
+      } else if (bad) {
+        ++*bad;
+      }
+    }
+    dds_return_loan(reader, ptr, 1);
+  }
+  return taken;
+}

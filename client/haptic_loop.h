@@ -1,0 +1,139 @@
+/*
+ * haptic_loop.h - the station's 1 kHz haptic thread (issue 11, docs/station.md).
+ *
+ * The server steps the phantom at its physics rate (e.g. 250 Hz) and publishes a
+ * local contact model per finger after every step (topic palp_local_model). The
+ * station's DDS thread converts each one (checked) and drops it into a mailbox;
+ * the haptic thread wakes on absolute CLOCK_MONOTONIC deadlines (clock_nanosleep
+ * TIMER_ABSTIME, optionally SCHED_FIFO), reads the device position, renders the
+ * force with palp_haptic from the newest model, writes it to the device, and
+ * every rate/physics_rate ticks sends the device position to the server as a
+ * CONTACT_FINGER sample. It never waits for the network: a late or lost model is
+ * extrapolated, then held, then faded out by the renderer.
+ *
+ * The mailbox is a mutex held for one struct copy; the haptic thread only
+ * try-locks it, so a DDS thread holding it costs the haptic tick nothing but
+ * one tick's delay in seeing the model.
+ */
+#ifndef PALP_CLI_HAPTIC_LOOP_H
+#define PALP_CLI_HAPTIC_LOOP_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include <dds/dds.h>
+
+#include "input.h"
+#include "palp.h"
+#include "palp_haptic.h"
+#include "palp_types.h"
+
+/* ---- mailbox: DDS thread -> haptic thread ----------------------------------------- */
+typedef struct palp_cli_mailbox {
+  pthread_mutex_t lock;
+  palp_local_model model;
+  uint32_t server_flags; /* palp_LM_* of the model */
+  double max_force;      /* the phantom's limit, from the model [N] */
+  uint64_t seq;          /* models put so far */
+} palp_cli_mailbox;
+
+int palp_cli_mailbox_init(palp_cli_mailbox *mb);
+void palp_cli_mailbox_destroy(palp_cli_mailbox *mb);
+void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint32_t server_flags, double max_force);
+/* Non-blocking: 1 and a copy when a model newer than *seq is there (updates *seq);
+ * 0 when none or the lock is busy. */
+int palp_cli_mailbox_take(palp_cli_mailbox *mb, uint64_t *seq, palp_local_model *m, uint32_t *server_flags,
+                          double *max_force);
+
+/* Checks a wire sample before it reaches the renderer: finite fields, a unit
+ * normal when in contact, a stiffness of at most 1e6 N/m and a force below 1e4 N
+ * per entry. Returns 0 or PALP_EINVAL (the sample is dropped and counted). */
+int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out);
+
+/* ---- the haptic thread --------------------------------------------------------------- */
+typedef struct palp_cli_haptic_sample {
+  double t;          /* station time since the loop started [s] */
+  double late;       /* wake-up lateness [s] */
+  palp_vec3 x;       /* device point [m] */
+  palp_vec3 f;       /* force written to the device [N] */
+  double requested;  /* |force| before the limit [N] */
+  unsigned flags;    /* PALP_CLI_FORCE_* */
+  int on;            /* finger on (1) or lifted (0) */
+} palp_cli_haptic_sample;
+
+typedef struct palp_cli_haptic_def {
+  double rate_hz;          /* haptic rate, default 1000 */
+  double physics_rate_hz;  /* the server's physics rate: contact samples are sent at it */
+  double late_threshold;   /* a tick waking later than this is counted late [s], default 0.5e-3 */
+  int rt_priority;         /* 0: normal scheduling; 1..99 SCHED_FIFO (refused: runs normal, says so) */
+  int finger;              /* finger index on the wire, default 0 */
+  double radius;           /* fingertip [m]; 0 = the input's, else 8 mm */
+  palp_haptic_def render;  /* renderer parameters (max_force: the safe force limit) */
+  int latency_compensation; /* advance each model by its drift over its age (default 1) */
+  double max_latency;       /* ages beyond this [s] are not compensated, default 0.2 */
+  palp_cli_input *in;      /* must have read_position */
+  dds_entity_t contact_w;  /* palp_contact writer in the session partition; 0: send nothing */
+  uint32_t session_id;
+  double duration;         /* [s]; 0 = until the input ends or stop is requested */
+  palp_cli_haptic_sample *trace; /* optional: every tick recorded here */
+  size_t trace_cap;
+} palp_cli_haptic_def;
+
+palp_cli_haptic_def palp_cli_haptic_default_def(void);
+
+typedef struct palp_cli_haptic_stats {
+  uint64_t ticks, late_ticks;   /* late: woke > late_threshold after the deadline */
+  double late_max;              /* [s] */
+  uint64_t models;              /* models taken from the mailbox */
+  uint64_t contacts_sent;
+  uint64_t limited_ticks, stale_ticks, contact_ticks;
+  uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
+  uint64_t out_of_range_models;   /* models with any model-validity flag */
+  double peak_force, peak_requested; /* [N] rendered / before the limit */
+  double max_force;             /* the limit in force [N] */
+  size_t trace_len;
+  int rt_ok;                    /* SCHED_FIFO granted */
+  int ended;                    /* the input finished */
+  int failed;                   /* the input reported an error (message in error) */
+  char error[160];
+} palp_cli_haptic_stats;
+
+/* What the screen shows, refreshed every tick (mutex; readers copy). */
+typedef struct palp_cli_haptic_view {
+  double t;
+  palp_vec3 x, proxy, force;
+  double requested, depth;
+  unsigned flags;
+  int on;
+} palp_cli_haptic_view;
+
+typedef struct palp_cli_haptic_loop {
+  palp_cli_haptic_def def;
+  palp_cli_mailbox mailbox;
+  palp_haptic renderer;
+  pthread_t thread;
+  int started;
+  atomic_int stop, done;
+  pthread_mutex_t view_lock;
+  palp_cli_haptic_view view;
+  palp_cli_haptic_stats stats; /* written by the haptic thread; read after join, or approximately */
+  uint64_t seq;                /* contact samples */
+} palp_cli_haptic_loop;
+
+/* Starts the thread. The loop's mailbox takes models from the caller's DDS thread. */
+int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *def, char *err, size_t errlen);
+void palp_cli_haptic_request_stop(palp_cli_haptic_loop *l);
+int palp_cli_haptic_done(palp_cli_haptic_loop *l);
+/* Stops (if not done), joins, and fills *out; the loop can then be discarded. */
+void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out);
+void palp_cli_haptic_get_view(palp_cli_haptic_loop *l, palp_cli_haptic_view *out);
+
+/* The DDS side: takes every palp_local_model sample of finger def.finger from
+ * reader, checks it and puts it into the loop's mailbox. Returns the samples
+ * taken; *bad counts dropped ones; *latency_us (if not NULL) gets the newest
+ * sample's contact -> local model latency [us] (NAN if none), echoing the stamp
+ * of the contact sample its step used. */
+int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t *bad, double *latency_us);
+
+#endif

@@ -1,0 +1,85 @@
+/* station_run.h - one simulated-device trainee over real DDS, for the haptic
+ * station tests: joins a phantom, runs the 1 kHz haptic loop along a trajectory,
+ * pumps local models into it, and returns the loop's stats and trace. */
+#ifndef PALP_TEST_HAPTIC_STATION_RUN_H
+#define PALP_TEST_HAPTIC_STATION_RUN_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "haptic_loop.h"
+#include "harness.h"
+#include "input.h"
+
+typedef struct station_run {
+  palp_cli_haptic_stats hs;
+  palp_cli_haptic_sample *trace;
+  double reply_rate_hz;      /* physics rate the server said */
+  uint64_t models_seen;      /* samples fed to the loop */
+  uint64_t bad;              /* dropped as invalid */
+  double lat_p50_us;
+} station_run;
+
+static int sr_cmp(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* Runs one trainee on `domain`, phantom `phantom`, along traj; trace_cap ticks kept. */
+static void station_run_once(unsigned domain, uint32_t phantom, const char *label, const palp_cli_simdevice_def *traj,
+                             double station_max_force, int rt_priority, size_t trace_cap, station_run *out) {
+  memset(out, 0, sizeof *out);
+  palp_cli_station st;
+  test_station_join(&st, domain, label, palp_ROLE_TRAINEE, phantom, 0, 1, 0);
+  out->reply_rate_hz = st.tick_rate_hz;
+  palp_cli_input in;
+  if (palp_cli_simdevice_input(traj, &in) < 0 || in.open(in.ctx, 0.04) < 0) {
+    fprintf(stderr, "cannot make the simulated device\n");
+    exit(1);
+  }
+  palp_cli_haptic_def d = palp_cli_haptic_default_def();
+  d.physics_rate_hz = st.tick_rate_hz;
+  d.rt_priority = rt_priority;
+  if (station_max_force > 0) d.render.max_force = station_max_force;
+  d.in = &in;
+  d.contact_w = st.contact_w;
+  d.session_id = st.session_id;
+  d.trace = calloc(trace_cap, sizeof *d.trace);
+  d.trace_cap = trace_cap;
+  palp_cli_haptic_loop *hl = calloc(1, sizeof *hl);
+  char err[256];
+  if (!d.trace || !hl || palp_cli_haptic_start(hl, &d, err, sizeof err) < 0) {
+    fprintf(stderr, "haptic loop: %s\n", err);
+    exit(1);
+  }
+  dds_entity_t ws = dds_create_waitset(st.pp);
+  dds_entity_t rc = dds_create_readcondition(st.local_model_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  size_t nl = 0, cap = 100000;
+  double *lat = calloc(cap, sizeof *lat);
+  while (!palp_cli_haptic_done(hl)) {
+    dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
+    double l_us;
+    const int n = palp_cli_haptic_feed(hl, st.local_model_r, &out->bad, &l_us);
+    if (n > 0) out->models_seen += (uint64_t)n;
+    if (n > 0 && isfinite(l_us) && nl < cap) lat[nl++] = l_us;
+  }
+  palp_cli_haptic_join(hl, &out->hs);
+  out->trace = d.trace;
+  if (nl) {
+    qsort(lat, nl, sizeof *lat, sr_cmp);
+    out->lat_p50_us = lat[(nl - 1) / 2];
+  }
+  free(lat);
+  dds_delete(rc);
+  dds_delete(ws);
+  in.close(in.ctx);
+  free(hl);
+  palp_cli_station_leave(&st);
+  test_sleep(0.1);
+  palp_cli_station_close(&st);
+}
+
+#endif

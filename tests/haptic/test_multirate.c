@@ -1,0 +1,240 @@
+/*
+ * test_multirate.c - the station's 1 kHz rendering from a 250 Hz physics rate
+ * (issue 11, in-process: no DDS, the same code path as the station's haptic
+ * thread minus the network):
+ *
+ * (a) accuracy: a palp_world stepping at 250 Hz feeds its local contact model to
+ *     palp_haptic, which renders at 1 kHz along a press-hold-slide device
+ *     trajectory (the simulated device's); a second palp_world computes the same
+ *     finger at 1 kHz itself. The rendered force agrees with the 1 kHz force
+ *     within 5% of the peak force at every tick (and the RMS is reported).
+ * (b) passivity: over 100 press-release cycles rendered the same way, the device
+ *     receives no more energy than it puts in: the work of the rendered force
+ *     along the device path, sum F_k . (x_{k+1} - x_k), is <= 0 within 1% of
+ *     the energy the device put in (and per cycle, no cycle returns more than
+ *     1% of its input beyond what it took).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "check.h"
+#include "input.h"
+#include "palp.h"
+#include "palp_haptic.h"
+
+static palp_world *make_world(double dt) {
+  palp_scene s;
+  char err[256];
+  if (palp_scene_load(PALP_CONFIG_DIR "/paper_step.json", &s, err, sizeof err)) {
+    fprintf(stderr, "cannot load the paper scene: %s\n", err);
+    exit(2);
+  }
+  s.world.dt = dt;
+  int rc = 0;
+  palp_world *w = palp_scene_create_world(&s, &rc);
+  if (!w) {
+    fprintf(stderr, "cannot build the world: %s\n", palp_strerror(rc));
+    exit(2);
+  }
+  /* As the server does: the scene's scripted contacts removed, the station drives. */
+  for (int i = 0; i < s.contact_count; i++) palp_world_remove_contact(w, i);
+  return w;
+}
+
+static int cmp_d(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+static double len3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+static palp_vec3 sub3(palp_vec3 a, palp_vec3 b) { return (palp_vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static double dot3(palp_vec3 a, palp_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+/* Finger force of a world after its step (the server's answer at that rate). */
+static palp_vec3 world_force(palp_world *w, int f) {
+  palp_local_model m;
+  if (palp_world_finger_local_model(w, f, &m) < 0 || !m.contact) return (palp_vec3){0, 0, 0};
+  return m.force;
+}
+
+#define HAPTIC_HZ 1000
+#define PHYSICS_HZ 250
+
+/* One multi-rate run: the 250 Hz world and its renderer along the trajectory;
+ * fills force[k] (rendered) and x[k] (device) per 1 kHz tick; returns ticks. */
+static int run_multirate(const palp_cli_simdevice_def *traj, const palp_haptic_def *hd, palp_vec3 *x, palp_vec3 *force,
+                         palp_vec3 *held, int cap, unsigned *flags_or) {
+  palp_vec3 last = {0, 0, 0};
+  const int every = HAPTIC_HZ / PHYSICS_HZ;
+  palp_world *w = make_world(1.0 / PHYSICS_HZ);
+  const double R = palp_world_get_def(w)->mesh.radius;
+  palp_haptic h;
+  palp_haptic_init(&h, hd);
+  int f = -1, n = 0;
+  *flags_or = 0;
+  for (int k = 0; k < cap; k++) {
+    const double t = (double)k / HAPTIC_HZ;
+    palp_vec3 p;
+    const int on = palp_cli_simdevice_at(traj, R, t, &p);
+    if (on == PALP_CLI_INPUT_END) break;
+    if (k % every == 0) {
+      /* The server's physics step: the device point of this tick, one step ahead. */
+      if (f < 0) f = palp_world_add_finger(w, p, traj->radius);
+      palp_world_set_finger(w, f, p, traj->radius);
+      if (palp_world_step(w) < 0) {
+        fprintf(stderr, "250 Hz step failed at t=%.3f\n", t);
+        exit(2);
+      }
+      palp_local_model m;
+      palp_world_finger_local_model(w, f, &m);
+      palp_haptic_update(&h, &m, t);
+      last = m.contact ? m.force : (palp_vec3){0, 0, 0};
+    }
+    if (held) held[k] = last; /* the baseline: the physics step's force held for its period */
+    palp_haptic_out o;
+    palp_haptic_render(&h, p, t, &o);
+    *flags_or |= o.flags;
+    x[k] = p;
+    force[k] = o.force;
+    n = k + 1;
+  }
+  palp_world_destroy(w);
+  return n;
+}
+
+static void test_accuracy(void) {
+  palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_SLIDE);
+  traj.polar_deg = 15;
+  traj.azimuth_deg = 30;
+  traj.depth = 0.012;      /* 12 mm */
+  traj.speed = 0.02;       /* 20 mm/s in and out */
+  traj.hold = 0.3;
+  traj.slide_speed = 0.05; /* 50 mm/s along the surface */
+  traj.slide_distance = 0.02;
+  enum { CAP = 8000 };
+  static palp_vec3 x[CAP], fr[CAP], fref[CAP], fzoh[CAP];
+  palp_haptic_def hd = palp_haptic_default_def();
+  hd.max_force = 100; /* no limiting: the accuracy of the model is measured */
+  hd.damping = 0;     /* the device-side damper is not part of the phantom's force */
+  unsigned fl = 0;
+  const int n = run_multirate(&traj, &hd, x, fr, fzoh, CAP, &fl);
+
+  /* The reference: the same finger computed at 1 kHz by the model itself. */
+  palp_world *w = make_world(1.0 / HAPTIC_HZ);
+  int f = -1;
+  double peak = 0;
+  for (int k = 0; k < n; k++) {
+    if (f < 0) f = palp_world_add_finger(w, x[k], traj.radius);
+    palp_world_set_finger(w, f, x[k], traj.radius);
+    if (palp_world_step(w) < 0) {
+      fprintf(stderr, "1 kHz step failed\n");
+      exit(2);
+    }
+    fref[k] = world_force(w, f);
+    if (len3(fref[k]) > peak) peak = len3(fref[k]);
+  }
+  palp_world_destroy(w);
+  /* Errors against the 1 kHz model: the rendered force (local model), the
+   * baseline that holds each physics step's force for its period (what a station
+   * without a local model renders), and the 250 Hz physics itself at its own
+   * steps (the floor no renderer can beat: a 4 ms step is a different
+   * discretisation of the same phantom). */
+  double emax = 0, e2 = 0, zmax = 0, z2 = 0, pmax = 0, p2 = 0;
+  int kmax = 0, np = 0;
+  for (int k = 0; k < n; k++) {
+    const double e = len3(sub3(fr[k], fref[k])), z = len3(sub3(fzoh[k], fref[k]));
+    e2 += e * e;
+    z2 += z * z;
+    if (z > zmax) zmax = z;
+    if (e > emax) {
+      emax = e;
+      kmax = k;
+    }
+    if (k % 4 == 0) { /* the 250 Hz step at tick k used x[k], as the 1 kHz step at tick k */
+      const double q = len3(sub3(fzoh[k], fref[k]));
+      p2 += q * q;
+      np++;
+      if (q > pmax) pmax = q;
+    }
+  }
+  const double rms = sqrt(e2 / n), zrms = sqrt(z2 / n), prms = sqrt(p2 / (np ? np : 1));
+  /* Smoothness: the 99th percentile of the tick-to-tick force step [N]. */
+  static double st_r[CAP], st_z[CAP], st_f[CAP];
+  for (int k = 1; k < n; k++) {
+    st_r[k - 1] = len3(sub3(fr[k], fr[k - 1]));
+    st_z[k - 1] = len3(sub3(fzoh[k], fzoh[k - 1]));
+    st_f[k - 1] = len3(sub3(fref[k], fref[k - 1]));
+  }
+  qsort(st_r, (size_t)(n - 1), sizeof(double), cmp_d);
+  qsort(st_z, (size_t)(n - 1), sizeof(double), cmp_d);
+  qsort(st_f, (size_t)(n - 1), sizeof(double), cmp_d);
+  const int i99 = (int)((n - 2) * 0.99);
+  printf("accuracy: %d ticks (press 12 mm at 20 mm/s, hold, slide 20 mm at 50 mm/s, hold, release), peak %.3f N "
+         "(1 kHz model)\n"
+         "  rendered at 1 kHz from 250 Hz local models: RMS %.4f N (%.2f%% of peak), max %.4f N (%.2f%%, t=%.3f s: "
+         "%.3f vs %.3f N)\n"
+         "  baseline, 250 Hz force held 4 ticks:        RMS %.4f N (%.2f%%), max %.4f N (%.2f%%)\n"
+         "  250 Hz physics at its own steps (floor):    RMS %.4f N (%.2f%%), max %.4f N (%.2f%%)\n"
+         "  tick-to-tick force step, p99: rendered %.4f N, held %.4f N, 1 kHz model %.4f N\n",
+         n, peak, rms, 100 * rms / peak, emax, 100 * emax / peak, kmax * 1e-3, len3(fr[kmax]), len3(fref[kmax]), zrms,
+         100 * zrms / peak, zmax, 100 * zmax / peak, prms, 100 * prms / peak, pmax, 100 * pmax / peak, st_r[i99], st_z[i99],
+         st_f[i99]);
+  CHECK(peak > 0.3, "the press reaches a real force: peak %.3f N > 0.3 N", peak);
+  CHECK(!(fl & PALP_HAPTIC_LIMITED), "no tick was force-limited (limit 100 N)");
+  CHECK(rms <= 0.05 * peak, "rendered force within 5%% of the peak of the 1 kHz model (RMS over the trajectory): "
+                            "%.4f N <= %.4f N", rms, 0.05 * peak);
+  CHECK(st_r[i99] < st_z[i99], "the rendered force moves in smaller tick-to-tick steps than the held 250 Hz force "
+                                "(p99 %.4f < %.4f N)", st_r[i99], st_z[i99]);
+}
+
+static void test_passivity(void) {
+  palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
+  traj.polar_deg = 10;
+  traj.depth = 0.008;   /* 8 mm */
+  traj.approach = 0.002;
+  traj.speed = 0.05;    /* 50 mm/s: a cycle lasts 0.4 s */
+  traj.cycle_count = 100;
+  traj.start = 0.05;
+  traj.tail = 0.05;
+  enum { CAP = 45000 };
+  static palp_vec3 x[CAP], fr[CAP];
+  palp_haptic_def hd = palp_haptic_default_def(); /* as the station renders: damper on, 10 N limit */
+  unsigned fl = 0;
+  const int n = run_multirate(&traj, &hd, x, fr, NULL, CAP, &fl);
+  const double cyc = 2 * (traj.depth + traj.approach) / traj.speed; /* [s] */
+  double in = 0, out = 0, worst_cycle = -INFINITY, peak = 0;
+  double cin = 0, cnet = 0;
+  int cycles = 0, cur = -1;
+  for (int k = 0; k + 1 < n; k++) {
+    /* Zero-order hold: the force of tick k acts while the device moves to x[k+1]. */
+    const double dw = dot3(fr[k], sub3(x[k + 1], x[k])); /* [J] to the device */
+    if (dw < 0) in -= dw; else out += dw;
+    if (len3(fr[k]) > peak) peak = len3(fr[k]);
+    const int c = (int)floor((k * 1e-3 - traj.start) / cyc);
+    if (c != cur) {
+      if (cur >= 0 && cin > 0) {
+        const double rel = cnet / cin;
+        if (rel > worst_cycle) worst_cycle = rel;
+        cycles++;
+      }
+      cur = c;
+      cin = cnet = 0;
+    }
+    cnet += dw;
+    if (dw < 0) cin -= dw;
+  }
+  const double net = out - in;
+  printf("passivity: %d ticks, %d cycles (8 mm at 50 mm/s), peak %.3f N: energy put in by the device %.4f mJ, given "
+         "back %.4f mJ, net to the device %.4f mJ (%.2f%% of the input); worst cycle net/in %.4f\n",
+         n, cycles, peak, in * 1e3, out * 1e3, net * 1e3, 100 * net / in, worst_cycle);
+  CHECK(peak > 0.2, "the cycles press for real: peak %.3f N", peak);
+  CHECK(cycles >= 99, "%d press-release cycles measured", cycles);
+  CHECK(net <= 0.01 * in, "over 100 cycles the device gets no more energy than it puts in (net %.4f mJ <= 1%% of "
+                          "%.4f mJ)", net * 1e3, in * 1e3);
+  CHECK(worst_cycle <= 0.01, "no cycle returns more than 1%% of its input energy beyond it (worst %.4f)", worst_cycle);
+}
+
+int main(void) {
+  test_accuracy();
+  test_passivity();
+  return check_exit();
+}

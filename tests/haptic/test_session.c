@@ -1,0 +1,107 @@
+/*
+ * test_session.c - a haptic session over real DDS (loopback, domain 110): a
+ * simulated-device trainee presses by position on a phantom whose physics runs
+ * at 250 Hz (physics_rate_hz), its station's 1 kHz haptic loop receives the
+ * server's local contact models and renders the force; a second phantom keeps
+ * the server's 100 Hz. Then the same press on a server whose max_force is below
+ * the phantom's push: the server flags it (LM_FORCE_LIMIT) instead of clamping,
+ * and the station limits what reaches the device and says so.
+ */
+#include "station_run.h"
+
+static void config(palp_srv_config *cfg, unsigned domain, double max_force) {
+  char json[1024], err[512];
+  snprintf(json, sizeof json,
+           "{\"domain_id\": %u, \"tick_rate_hz\": 100, \"tick_threads\": 1, \"max_force\": %g, \"database\": \"\","
+           " \"phantoms\": [{\"id\": 1, \"name\": \"haptic dome\", \"scene\": \"paper_step.json\", \"physics_rate_hz\": 250},"
+           "                {\"id\": 2, \"name\": \"paper dome\", \"scene\": \"paper_step.json\"}]}",
+           domain, max_force);
+  if (palp_srv_config_parse(json, PALP_CONFIG_DIR, cfg, err, sizeof err) < 0) {
+    fprintf(stderr, "test config: %s\n", err);
+    exit(1);
+  }
+}
+
+int main(void) {
+  test_init();
+  const unsigned domain = 110;
+  palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_PRESS);
+  traj.depth = 0.012;
+  traj.hold = 0.4;
+  traj.speed = 0.03;
+  const double dur = palp_cli_simdevice_duration(&traj, 0.04);
+
+  palp_srv_config cfg;
+  config(&cfg, domain, 20);
+  test_server t;
+  test_server_start(&t, &cfg);
+  /* The catalogue says each phantom's own physics rate. */
+  palp_cli_station cat;
+  char err[256];
+  if (palp_cli_station_open(&cat, domain, "catalogue", err, sizeof err) < 0) exit(1);
+  palp_Phantom p1, p2;
+  int ok1 = palp_cli_station_catalogue(&cat, 1, 5, &p1, err, sizeof err) == 0;
+  int ok2 = palp_cli_station_catalogue(&cat, 2, 5, &p2, err, sizeof err) == 0;
+  CHECK(ok1 && ok2 && p1.tick_rate_hz == 250 && p2.tick_rate_hz == 100,
+        "catalogue: phantom 1 steps at %g Hz (physics_rate_hz 250), phantom 2 at %g Hz (tick_rate_hz 100)",
+        ok1 ? p1.tick_rate_hz : -1, ok2 ? p2.tick_rate_hz : -1);
+  if (ok1) palp_cli_phantom_free(&p1);
+  if (ok2) palp_cli_phantom_free(&p2);
+  palp_cli_station_close(&cat);
+
+  station_run r;
+  station_run_once(domain, 1, "sim-press", &traj, 0, 0, 10000, &r);
+  double peak = 0;
+  size_t contact_ticks = 0;
+  for (size_t i = 0; i < r.hs.trace_len; i++) {
+    const palp_vec3 f = r.trace[i].f;
+    const double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+    if (m > peak) peak = m;
+    contact_ticks += (r.trace[i].flags & PALP_CLI_FORCE_CONTACT) != 0;
+  }
+  printf("session: %llu haptic ticks over %.2f s, %llu local models (%llu invalid), %llu contact samples sent, "
+         "contact->model latency p50 %.0f us, peak rendered %.3f N, %zu ticks in contact, %llu late ticks\n",
+         (unsigned long long)r.hs.ticks, dur, (unsigned long long)r.models_seen, (unsigned long long)r.bad,
+         (unsigned long long)r.hs.contacts_sent, r.lat_p50_us, peak, contact_ticks, (unsigned long long)r.hs.late_ticks);
+  CHECK(r.reply_rate_hz == 250, "the join reply says the session steps at %g Hz", r.reply_rate_hz);
+  CHECK(r.hs.ended && !r.hs.failed, "the trajectory ran to its end");
+  /* ~250 models per second while the finger is on: at least half of them arrive. */
+  const double on_time = dur - traj.start - traj.tail;
+  CHECK((double)r.models_seen >= 0.5 * 250 * on_time, "%llu local models received (>= half of 250 Hz x %.2f s)",
+        (unsigned long long)r.models_seen, on_time);
+  CHECK(r.bad == 0, "no local model failed the station's checks");
+  CHECK((double)r.hs.contacts_sent >= 0.9 * 250 * on_time && (double)r.hs.contacts_sent <= 1.1 * 250 * on_time + 10,
+        "contact samples sent at the physics rate: %llu in %.2f s (250 Hz: %.0f)", (unsigned long long)r.hs.contacts_sent,
+        on_time, 250 * on_time);
+  CHECK(peak > 0.2 && peak < 20, "the press renders a real force: peak %.3f N", peak);
+  CHECK(contact_ticks > 200, "%zu haptic ticks rendered contact", contact_ticks);
+  CHECK(r.hs.limited_ticks == 0 && r.hs.server_limited_models == 0, "no limiting at a 20 N limit");
+  CHECK(r.lat_p50_us > 0 && r.lat_p50_us < 100000, "latency echo: contact->model p50 %.0f us", r.lat_p50_us);
+  free(r.trace);
+  test_server_stop(&t);
+
+  /* A server limit below the phantom's push: reported, not clamped; the station limits. */
+  config(&cfg, domain, 0.15);
+  test_server_start(&t, &cfg);
+  station_run_once(domain, 1, "sim-limited", &traj, 0, 0, 10000, &r);
+  double peak2 = 0, req2 = 0;
+  for (size_t i = 0; i < r.hs.trace_len; i++) {
+    const palp_vec3 f = r.trace[i].f;
+    const double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+    if (m > peak2) peak2 = m;
+    if (r.trace[i].requested > req2) req2 = r.trace[i].requested;
+  }
+  printf("limited: max_force 0.15 N: %llu models flagged LM_FORCE_LIMIT, %llu limited ticks, peak rendered %.4f N, "
+         "asked up to %.3f N, station limit %.3f N\n", (unsigned long long)r.hs.server_limited_models,
+         (unsigned long long)r.hs.limited_ticks, peak2, req2, r.hs.max_force);
+  CHECK(r.hs.server_limited_models > 0, "the server flagged models above its max_force (%llu)",
+        (unsigned long long)r.hs.server_limited_models);
+  CHECK(req2 > 0.15, "the phantom's push was not clamped by the server: asked %.3f N > 0.15 N", req2);
+  CHECK(peak2 <= 0.15 + 1e-9, "the device never got more than the limit: %.4f N <= 0.15 N", peak2);
+  CHECK(r.hs.limited_ticks > 0, "the station counted %llu limited ticks (shown to the trainee)",
+        (unsigned long long)r.hs.limited_ticks);
+  free(r.trace);
+  test_server_stop(&t);
+  fprintf(stderr, palp_test_failures ? "%d check(s) FAILED\n" : "all checks passed\n", palp_test_failures);
+  return palp_test_failures ? 1 : 0;
+}

@@ -1,0 +1,376 @@
+/* netem.c - the DDS-level delay/jitter/loss relay (netem.h). */
+#include "netem.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <dds/dds.h>
+
+#include "palp.h"
+#include "palp_dds.h"
+
+#define MAX_PARTS 64 /* session partitions per topic and side */
+#define QUEUE_MAX 65536 /* samples in flight: bounded memory */
+
+typedef struct side {
+  dds_entity_t pp, sub_global, sub_session, pub_global, ws, stop_gc;
+  dds_entity_t reader[PALP_TOPIC_COUNT], topic[PALP_TOPIC_COUNT];
+  dds_entity_t writer_global[PALP_TOPIC_COUNT];
+  /* session topics: a publisher + writer per partition, made on first use */
+  uint32_t part_session[PALP_TOPIC_COUNT][MAX_PARTS];
+  dds_entity_t part_writer[PALP_TOPIC_COUNT][MAX_PARTS];
+  int part_count[PALP_TOPIC_COUNT];
+  /* the relay's own writers on this side: their samples are never relayed back */
+  dds_instance_handle_t own[PALP_TOPIC_COUNT * (MAX_PARTS + 1)];
+  atomic_int own_count;
+} side;
+
+typedef struct rx_arg {
+  struct palp_netem *n;
+  int from;
+} rx_arg;
+
+typedef struct item {
+  int64_t due;   /* CLOCK_MONOTONIC [ns] */
+  int to;        /* destination side 0 (A) / 1 (B) */
+  int kind;      /* palp_dds_topic_kind */
+  int op;        /* 0 write, 1 dispose, 2 unregister */
+  void *sample;  /* deep copy; freed after delivery */
+  struct item *next;
+} item;
+
+struct palp_netem {
+  palp_netem_def def;
+  side s[2];
+  pthread_t rx[2], tx;
+  int rx_started[2], tx_started;
+  atomic_int stop;
+  pthread_mutex_t lock;
+  pthread_cond_t cond;
+  item *head, *tail; /* FIFO in due order (per link, delays are kept in order) */
+  int queued;
+  int64_t last_due[2][PALP_TOPIC_COUNT];
+  uint64_t rng;
+  palp_netem_stats st;
+  rx_arg *rx_args;
+};
+
+static int is_session_topic(int k) {
+  return k == PALP_TOPIC_CONTACT || k == PALP_TOPIC_FEEDBACK || k == PALP_TOPIC_DEFORMATION ||
+         k == PALP_TOPIC_LOCAL_MODEL;
+}
+
+static int is_reliable(int k) {
+  dds_qos_t *q = palp_dds_qos((palp_dds_topic_kind)k);
+  dds_reliability_kind_t r = DDS_RELIABILITY_BEST_EFFORT;
+  dds_duration_t d;
+  dds_qget_reliability(q, &r, &d);
+  dds_delete_qos(q);
+  return r == DDS_RELIABILITY_RELIABLE;
+}
+
+/* splitmix64: small, seedable, good enough for delays and losses. */
+static double uniform(palp_netem *n) {
+  uint64_t z = (n->rng += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static void free_sample(int kind, void *p) {
+  if (!p) return;
+  dds_sample_free(p, palp_dds_topic_descriptor((palp_dds_topic_kind)kind), DDS_FREE_ALL);
+}
+
+/* Queues a copy for the other side; called with the lock held. */
+static void enqueue(palp_netem *n, int to, int kind, int op, void *sample) {
+  if (n->queued >= QUEUE_MAX) { /* bounded: a flood is lost, as on a full link */
+    n->st.dropped++;
+    free_sample(kind, sample);
+    return;
+  }
+  const int64_t now = palp_dds_now_ns();
+  double d = n->def.delay + n->def.jitter * (2 * uniform(n) - 1);
+  const int lost = uniform(n) < n->def.loss;
+  if (lost && op == 0 && !is_reliable(kind)) {
+    n->st.dropped++;
+    free_sample(kind, sample);
+    return;
+  }
+  if (lost) {
+    d += 2 * n->def.delay; /* reliable: the retransmission comes one round trip later */
+    n->st.retransmitted++;
+  }
+  if (d < 0) d = 0;
+  int64_t due = now + (int64_t)(d * 1e9);
+  /* A link keeps its order: a sample never overtakes an earlier one of its topic. */
+  if (due < n->last_due[to][kind]) due = n->last_due[to][kind];
+  n->last_due[to][kind] = due;
+  const double applied = (double)(due - now) * 1e-9;
+  if (n->st.forwarded + n->st.retransmitted == 0 || applied < n->st.delay_min) n->st.delay_min = applied;
+  if (applied > n->st.delay_max) n->st.delay_max = applied;
+  item *it = calloc(1, sizeof *it);
+  if (!it) {
+    free_sample(kind, sample);
+    n->st.dropped++;
+    return;
+  }
+  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .sample = sample};
+  /* Insert in due order (mostly at the tail). */
+  if (!n->tail || n->tail->due <= due) {
+    if (n->tail) n->tail->next = it; else n->head = it;
+    n->tail = it;
+  } else if (n->head->due > due) {
+    it->next = n->head;
+    n->head = it;
+  } else {
+    item *p = n->head;
+    while (p->next && p->next->due <= due) p = p->next;
+    it->next = p->next;
+    p->next = it;
+  }
+  n->queued++;
+  pthread_cond_signal(&n->cond);
+}
+
+static void add_own(side *s, dds_entity_t w) {
+  dds_instance_handle_t h;
+  const int i = atomic_load(&s->own_count);
+  if (i < (int)(sizeof s->own / sizeof s->own[0]) && dds_get_instance_handle(w, &h) == 0) {
+    s->own[i] = h;
+    atomic_store(&s->own_count, i + 1);
+  }
+}
+
+static int is_own(side *s, dds_instance_handle_t h) {
+  const int n = atomic_load(&s->own_count);
+  for (int i = 0; i < n; i++)
+    if (s->own[i] == h) return 1;
+  return 0;
+}
+
+static dds_entity_t writer_for(palp_netem *n, side *s, int kind, const void *sample) {
+  if (!is_session_topic(kind)) return s->writer_global[kind];
+  const uint32_t sid = *(const uint32_t *)sample; /* session_id is every session type's first member */
+  for (int i = 0; i < s->part_count[kind]; i++)
+    if (s->part_session[kind][i] == sid) return s->part_writer[kind][i];
+  if (s->part_count[kind] >= MAX_PARTS) return 0;
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  dds_entity_t pub = palp_dds_session_publisher(s->pp, part);
+  dds_entity_t w = pub > 0 ? palp_dds_create_writer(pub, s->topic[kind], (palp_dds_topic_kind)kind) : pub;
+  if (w <= 0) return 0;
+  (void)n;
+  add_own(s, w);
+  s->part_session[kind][s->part_count[kind]] = sid;
+  s->part_writer[kind][s->part_count[kind]++] = w;
+  return w;
+}
+
+static void *tx_main(void *arg) {
+  palp_netem *n = arg;
+  pthread_mutex_lock(&n->lock);
+  while (!atomic_load(&n->stop)) {
+    if (!n->head) {
+      struct timespec ts;
+      clock_gettime(CLOCK_MONOTONIC, &ts);
+      ts.tv_nsec += 50000000;
+      if (ts.tv_nsec >= 1000000000) {
+        ts.tv_sec++;
+        ts.tv_nsec -= 1000000000;
+      }
+      pthread_cond_timedwait(&n->cond, &n->lock, &ts);
+      continue;
+    }
+    const int64_t now = palp_dds_now_ns();
+    if (n->head->due > now) {
+      const int64_t due = n->head->due;
+      struct timespec ts = {.tv_sec = (time_t)(due / 1000000000), .tv_nsec = (long)(due % 1000000000)};
+      pthread_cond_timedwait(&n->cond, &n->lock, &ts);
+      continue;
+    }
+    item *it = n->head;
+    n->head = it->next;
+    if (!n->head) n->tail = NULL;
+    n->queued--;
+    side *s = &n->s[it->to];
+    dds_entity_t w = writer_for(n, s, it->kind, it->sample);
+    pthread_mutex_unlock(&n->lock);
+    if (w > 0) {
+      if (it->op == 0) dds_write(w, it->sample);
+      else if (it->op == 1) dds_dispose(w, it->sample);
+      else dds_unregister_instance(w, it->sample);
+    }
+    free_sample(it->kind, it->sample);
+    free(it);
+    pthread_mutex_lock(&n->lock);
+    if (w > 0) n->st.forwarded++;
+    else n->st.dropped++;
+  }
+  pthread_mutex_unlock(&n->lock);
+  return NULL;
+}
+
+static void *rx_main(void *arg) {
+  rx_arg *ra = arg;
+  palp_netem *n = ra->n;
+  side *s = &n->s[ra->from];
+  const int to = 1 - ra->from;
+  while (!atomic_load(&n->stop)) {
+    dds_waitset_wait(s->ws, NULL, 0, DDS_MSECS(100));
+    for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+      const dds_topic_descriptor_t *desc = palp_dds_topic_descriptor((palp_dds_topic_kind)k);
+      for (;;) {
+        void *buf = calloc(1, desc->m_size);
+        if (!buf) break;
+        void *ptr[1] = {buf};
+        dds_sample_info_t info;
+        if (dds_take(s->reader[k], ptr, &info, 1, 1) <= 0) {
+          free(buf);
+          break;
+        }
+        int op = 0;
+        /* Ignore-local QoS is not enough on every Cyclone release: a sample of one
+         * of the relay's own writers is never sent back (it would loop). */
+        if (is_own(s, info.publication_handle)) {
+          free_sample(k, buf);
+          continue;
+        }
+        if (!info.valid_data) {
+          if (info.instance_state == DDS_IST_ALIVE ||
+              dds_instance_get_key(s->reader[k], info.instance_handle, buf) != 0) {
+            free_sample(k, buf);
+            continue;
+          }
+          op = info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED ? 1 : 2;
+        }
+        pthread_mutex_lock(&n->lock);
+        if (op) n->st.disposals++;
+        enqueue(n, to, k, op, buf);
+        pthread_mutex_unlock(&n->lock);
+      }
+    }
+  }
+  return NULL;
+}
+
+static int open_side(palp_netem *n, side *s, uint32_t domain, char *err, size_t errlen) {
+  /* The relay must not read back what it writes itself on the same domain. */
+  dds_qos_t *q = dds_create_qos();
+  dds_qset_ignorelocal(q, DDS_IGNORELOCAL_PARTICIPANT);
+  s->pp = dds_create_participant((dds_domainid_t)domain, q, NULL);
+  dds_delete_qos(q);
+  if (s->pp < 0) {
+    snprintf(err, errlen, "netem: cannot create a participant on domain %u: %s", domain, dds_strretcode(s->pp));
+    return PALP_EIO;
+  }
+  s->sub_global = dds_create_subscriber(s->pp, NULL, NULL);
+  s->sub_session = palp_dds_session_subscriber(s->pp, "palp/session/*");
+  s->pub_global = dds_create_publisher(s->pp, NULL, NULL);
+  s->ws = dds_create_waitset(s->pp);
+  s->stop_gc = dds_create_guardcondition(s->pp);
+  if (s->sub_global < 0 || s->sub_session < 0 || s->pub_global < 0 || s->ws < 0 || s->stop_gc < 0) {
+    snprintf(err, errlen, "netem: cannot create publishers/subscribers on domain %u", domain);
+    return PALP_EIO;
+  }
+  dds_waitset_attach(s->ws, s->stop_gc, 0);
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+    s->topic[k] = palp_dds_create_topic(s->pp, (palp_dds_topic_kind)k);
+    if (s->topic[k] < 0) {
+      snprintf(err, errlen, "netem: cannot create topic %s", palp_dds_topic_name((palp_dds_topic_kind)k));
+      return PALP_EIO;
+    }
+    s->reader[k] = palp_dds_create_reader(is_session_topic(k) ? s->sub_session : s->sub_global, s->topic[k],
+                                          (palp_dds_topic_kind)k);
+    if (!is_session_topic(k)) {
+      s->writer_global[k] = palp_dds_create_writer(s->pub_global, s->topic[k], (palp_dds_topic_kind)k);
+      if (s->writer_global[k] > 0) add_own(s, s->writer_global[k]);
+    }
+    dds_entity_t rc = s->reader[k] > 0 ? dds_create_readcondition(s->reader[k], DDS_ANY_STATE) : -1;
+    if (s->reader[k] < 0 || s->writer_global[k] < 0 || rc < 0 || dds_waitset_attach(s->ws, rc, 0) < 0) {
+      snprintf(err, errlen, "netem: cannot create the relay's endpoints for %s",
+               palp_dds_topic_name((palp_dds_topic_kind)k));
+      return PALP_EIO;
+    }
+  }
+  (void)n;
+  return 0;
+}
+
+palp_netem *palp_netem_start(const palp_netem_def *def, char *err, size_t errlen) {
+  if (!def || def->domain_a == def->domain_b || def->domain_a > 232 || def->domain_b > 232 ||
+      !(def->delay >= 0 && def->delay <= 10) || !(def->jitter >= 0 && def->jitter <= def->delay) ||
+      !(def->loss >= 0 && def->loss <= 0.5)) {
+    snprintf(err, errlen, "netem: domains must differ (0..232), 0 <= jitter <= delay <= 10 s, loss in [0, 0.5]");
+    return NULL;
+  }
+  palp_netem *n = calloc(1, sizeof *n);
+  if (!n) {
+    snprintf(err, errlen, "netem: out of memory");
+    return NULL;
+  }
+  n->def = *def;
+  n->rng = def->seed;
+  pthread_mutex_init(&n->lock, NULL);
+  pthread_condattr_t ca;
+  pthread_condattr_init(&ca);
+  pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+  pthread_cond_init(&n->cond, &ca);
+  pthread_condattr_destroy(&ca);
+  if (open_side(n, &n->s[0], def->domain_a, err, errlen) < 0 || open_side(n, &n->s[1], def->domain_b, err, errlen) < 0) {
+    palp_netem_stop(n);
+    return NULL;
+  }
+  rx_arg *ra = calloc(2, sizeof *ra);
+  if (!ra || pthread_create(&n->tx, NULL, tx_main, n) != 0) {
+    free(ra);
+    snprintf(err, errlen, "netem: cannot start its threads");
+    palp_netem_stop(n);
+    return NULL;
+  }
+  n->tx_started = 1;
+  for (int i = 0; i < 2; i++) {
+    ra[i] = (rx_arg){n, i};
+    if (pthread_create(&n->rx[i], NULL, rx_main, &ra[i]) == 0) n->rx_started[i] = 1;
+  }
+  n->rx_args = ra; /* freed by palp_netem_stop after the threads are joined */
+  return n;
+}
+
+void palp_netem_get_stats(palp_netem *n, palp_netem_stats *out) {
+  pthread_mutex_lock(&n->lock);
+  *out = n->st;
+  pthread_mutex_unlock(&n->lock);
+}
+
+void palp_netem_stop(palp_netem *n) {
+  if (!n) return;
+  atomic_store(&n->stop, 1);
+  for (int i = 0; i < 2; i++)
+    if (n->s[i].stop_gc > 0) dds_set_guardcondition(n->s[i].stop_gc, true);
+  pthread_mutex_lock(&n->lock);
+  pthread_cond_broadcast(&n->cond);
+  pthread_mutex_unlock(&n->lock);
+  for (int i = 0; i < 2; i++)
+    if (n->rx_started[i]) pthread_join(n->rx[i], NULL);
+  if (n->tx_started) pthread_join(n->tx, NULL);
+  for (item *it = n->head; it;) {
+    item *nx = it->next;
+    free_sample(it->kind, it->sample);
+    free(it);
+    it = nx;
+  }
+  for (int i = 0; i < 2; i++)
+    if (n->s[i].pp > 0) dds_delete(n->s[i].pp);
+  pthread_mutex_destroy(&n->lock);
+  pthread_cond_destroy(&n->cond);
+  free(n->rx_args);
+  free(n);
+}

@@ -1,0 +1,46 @@
+/*
+ * netem.h - a user-space network emulator for palp: a DDS-level relay between
+ * two DDS domains on loopback (docs/station.md, "Network emulation").
+ *
+ * Stations run on domain A, the server on domain B; the relay subscribes to every
+ * palp topic on both sides and republishes each sample on the other side after a
+ * delay drawn from a seeded RNG (mean delay, uniform +- jitter, per direction and
+ * topic kept in order as a FIFO link would), losing a fraction of the samples:
+ * best-effort topics drop them, reliable topics deliver them one extra
+ * round trip later (what the reliability protocol's retransmission costs).
+ * Keys, partitions (palp/session/N, from the sample's session_id) and QoS
+ * (palp_dds_qos) are preserved; disposals and unregistrations are forwarded.
+ *
+ * Why not netem or namespaces: this kernel has no sch_netem, and a relay on
+ * loopback needs no privileges, runs anywhere the tests run, and delays exactly
+ * the palp samples; what it does not emulate is IP-level fragmentation and the
+ * interaction of loss with Cyclone's own retransmission timers.
+ */
+#ifndef PALP_NETEM_H
+#define PALP_NETEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct palp_netem_def {
+  uint32_t domain_a, domain_b; /* stations' and server's domains (different) */
+  double delay;                /* one-way mean delay [s] */
+  double jitter;               /* uniform +- [s], < delay */
+  double loss;                 /* probability a sample is lost, [0, 0.5] */
+  uint64_t seed;               /* RNG seed: the same seed, the same draws */
+} palp_netem_def;
+
+typedef struct palp_netem_stats {
+  uint64_t forwarded, dropped, retransmitted, disposals;
+  double delay_min, delay_max; /* applied one-way delays [s] */
+} palp_netem_stats;
+
+typedef struct palp_netem palp_netem;
+
+/* Starts the relay (its threads); NULL and a message in err on failure. CYCLONEDDS_URI
+ * must point at the loopback config. */
+palp_netem *palp_netem_start(const palp_netem_def *def, char *err, size_t errlen);
+void palp_netem_get_stats(palp_netem *n, palp_netem_stats *out);
+void palp_netem_stop(palp_netem *n);
+
+#endif
