@@ -690,6 +690,7 @@ static void publish_status(palp_srv *srv) {
   gm.instances_released = srv->retire.released;
   uint64_t printed = 0, suppressed = 0;
   palp_dds_log_limit_counts(&srv->dds_log, &printed, &suppressed);
+  gm.dds_log_printed = printed;
   gm.dds_log_suppressed = suppressed;
   gm.sessions_forgotten = srv->sessions_forgotten;
   dds_write(srv->guard_w, &gm);
