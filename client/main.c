@@ -707,7 +707,8 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     void *ptr[1] = {NULL};
     dds_sample_info_t info;
     while (st->deformation_r > 0 && dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
-      if (info.valid_data) {
+      /* A frame that does not fit the phantom's mesh is dropped, never indexed. */
+      if (info.valid_data && palp_cli_deformation_check(ph, ptr[0]) == 0) {
         const palp_Deformation *d = ptr[0];
         frames++;
         deform_store(&last, d);

@@ -1,5 +1,6 @@
 /* station.c - the DDS side of a palp station. */
 #include "station.h"
+#include "view.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -62,6 +63,7 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
   dds_entity_t rc = dds_create_readcondition(st->catalogue_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, rc, 0);
   int result = PALP_EIO;
+  char bad[256] = "";
   for (;;) {
     void *ptr[8] = {NULL};
     dds_sample_info_t info[8];
@@ -70,6 +72,14 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
     for (int i = 0; i < n && result != 0; i++) {
       const palp_Phantom *p = ptr[i];
       if (!info[i].valid_data || (phantom_id && p->phantom_id != phantom_id)) continue;
+      /* From the network: checked before any index in it is used (a forged entry
+       * with bad triangle indices crashed the visual station). */
+      char why[200];
+      if (palp_cli_phantom_check(p, why, sizeof why) < 0) {
+        if (strcmp(bad, why) != 0) fprintf(stderr, "palp-client: ignoring a malformed catalogue entry: %s\n", why);
+        snprintf(bad, sizeof bad, "%s", why);
+        continue;
+      }
       *out = *p;
       size_t nv = p->rest._length, nt = p->triangles._length;
       out->rest._buffer = malloc((nv ? nv : 1) * sizeof(palp_Vec3));
@@ -95,6 +105,9 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
   dds_delete(rc);
   dds_delete(ws);
   if (result == PALP_ENOMEM) return fail(err, errlen, result, "out of memory");
+  if (result != 0 && bad[0])
+    return fail(err, errlen, PALP_EINVAL, "no valid catalogue entry for phantom %u within %.1f s: %s", phantom_id,
+                timeout, bad);
   if (result != 0)
     return fail(err, errlen, PALP_EIO, "no catalogue entry for phantom %u within %.1f s (is palp-server running on this domain?)",
                 phantom_id, timeout);
@@ -216,9 +229,8 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
         /* The server never disposes a state; a not-alive one means its writer
          * is gone (crash: its participant lease expired and Cyclone unregistered,
          * and with autodispose disposed, the instance). The session cannot go on. */
-        palp_SessionState key;
-        memset(&key, 0, sizeof key);
-        if (dds_instance_get_key(st->state_r, info[i].instance_handle, &key) == 0 && key.session_id == st->session_id) {
+        /* The key is in the invalid sample (no dds_instance_get_key scan). */
+        if (buf[i].session_id == st->session_id) {
           closed = 1;
           if (reason) snprintf(reason, len, "server lost (liveliness lease expired)");
         }

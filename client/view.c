@@ -2,10 +2,62 @@
 #include "view.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "palp.h"
+
+/* A station renders meshes up to this size; the server's are 338..5,000 vertices. */
+#define MAX_VERTICES 1000000
+
+int palp_cli_phantom_check(const palp_Phantom *ph, char *err, size_t errlen) {
+  const uint32_t nv = ph->rest._length, ni = ph->triangles._length;
+  if (nv < 4 || nv > MAX_VERTICES || !ph->rest._buffer) {
+    snprintf(err, errlen, "phantom %u: %u rest vertices (want 4..%d)", ph->phantom_id, nv, MAX_VERTICES);
+    return PALP_EINVAL;
+  }
+  if (ni == 0 || ni % 3 != 0 || ni / 3 > 2u * MAX_VERTICES || !ph->triangles._buffer) {
+    snprintf(err, errlen, "phantom %u: %u triangle indices (want a positive multiple of 3)", ph->phantom_id, ni);
+    return PALP_EINVAL;
+  }
+  for (uint32_t i = 0; i < ni; i++)
+    if (ph->triangles._buffer[i] < 0 || (uint32_t)ph->triangles._buffer[i] >= nv) {
+      snprintf(err, errlen, "phantom %u: triangle %u has vertex index %d (want 0..%u)", ph->phantom_id, i / 3,
+               (int)ph->triangles._buffer[i], nv - 1);
+      return PALP_EINVAL;
+    }
+  if (ph->dome_triangle_count < 0 || (uint32_t)ph->dome_triangle_count > ni / 3) {
+    snprintf(err, errlen, "phantom %u: dome_triangle_count %d of %u triangles", ph->phantom_id,
+             (int)ph->dome_triangle_count, ni / 3);
+    return PALP_EINVAL;
+  }
+  if (ph->top_vertex < 0 || (uint32_t)ph->top_vertex >= nv) {
+    snprintf(err, errlen, "phantom %u: top_vertex %d of %u", ph->phantom_id, (int)ph->top_vertex, nv);
+    return PALP_EINVAL;
+  }
+  if (!(ph->radius > 0 && ph->radius < 10)) {
+    snprintf(err, errlen, "phantom %u: radius %g m (want 0 < R < 10 m)", ph->phantom_id, ph->radius);
+    return PALP_EINVAL;
+  }
+  for (uint32_t i = 0; i < nv; i++) {
+    palp_Vec3 p = ph->rest._buffer[i];
+    if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
+      snprintf(err, errlen, "phantom %u: rest vertex %u is not finite", ph->phantom_id, i);
+      return PALP_EINVAL;
+    }
+  }
+  return 0;
+}
+
+int palp_cli_deformation_check(const palp_Phantom *ph, const palp_Deformation *d) {
+  if (d->positions._length != ph->rest._length || !d->positions._buffer) return PALP_EINVAL;
+  for (uint32_t i = 0; i < d->positions._length; i++) {
+    palp_Vec3 p = d->positions._buffer[i];
+    if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) return PALP_EINVAL;
+  }
+  return 0;
+}
 
 static double disp(const palp_Phantom *ph, const palp_Deformation *d, uint32_t i) {
   const palp_Vec3 a = ph->rest._buffer[i], b = d->positions._buffer[i];
@@ -128,6 +180,8 @@ static int cmp_z(const void *a, const void *b) {
 }
 
 int palp_cli_view_svg(const palp_Phantom *ph, const palp_Deformation *d, const char *title, const char *path) {
+  char why[160];
+  if (palp_cli_phantom_check(ph, why, sizeof why) < 0 || palp_cli_deformation_check(ph, d) < 0) return PALP_EINVAL;
   FILE *f = fopen(path, "w");
   if (!f) return PALP_EIO;
   const double R = ph->radius, S = 400.0 / (2.2 * R); /* pixels per metre */

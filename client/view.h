@@ -16,6 +16,14 @@ typedef struct palp_cli_view {
   double scale;                /* displacement at full colour [m]; 0 = automatic */
 } palp_cli_view;
 
+/* Checks a catalogue entry from the network before anything indexes with it:
+ * vertex and triangle counts within bounds, every triangle index a vertex, the
+ * dome triangle count and top vertex in range, radius and rest positions finite.
+ * Returns 0, or PALP_EINVAL with the reason in err. */
+int palp_cli_phantom_check(const palp_Phantom *ph, char *err, size_t errlen);
+/* A deformation frame fits a checked phantom: one finite position per vertex. */
+int palp_cli_deformation_check(const palp_Phantom *ph, const palp_Deformation *d);
+
 int palp_cli_view_init(palp_cli_view *v, const palp_Phantom *ph, int w, int h, double scale);
 void palp_cli_view_free(palp_cli_view *v);
 

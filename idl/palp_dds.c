@@ -4,6 +4,8 @@
 #include "palp_dds.h"
 
 #include <limits.h>
+#include <pthread.h>
+#include <string.h>
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,7 +17,7 @@
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
     "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status",
-    "palp_local_model"};
+    "palp_local_model",   "palp_server_guard"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -32,6 +34,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_DEFORMATION: return &palp_Deformation_desc;
   case PALP_TOPIC_SERVER_STATUS: return &palp_ServerStatus_desc;
   case PALP_TOPIC_LOCAL_MODEL: return &palp_LocalModel_desc;
+  case PALP_TOPIC_SERVER_GUARD: return &palp_ServerGuard_desc;
   default: return NULL;
   }
 }
@@ -70,6 +73,7 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_LOCAL_MODEL:
     /* Only the newest state matters: a lost local model is superseded by the next
      * physics step, and the station's renderer extrapolates across the gap. */
+  case PALP_TOPIC_SERVER_GUARD:
     dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
     dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
@@ -149,4 +153,65 @@ int64_t palp_dds_now_ns(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+/* ---- rate-limited Cyclone log sink ------------------------------------------ */
+
+static void limited_sink(void *arg, const dds_log_data_t *d) {
+  palp_dds_log_limit *l = arg;
+  pthread_mutex_lock(l->lock);
+  int64_t now = palp_dds_now_ns();
+  if (now - l->window_start_ns >= l->window_ns) {
+    if (l->suppressed_in_window)
+      fprintf(l->out, "palp: %llu more DDS warning line(s) suppressed in the last %.0f s\n",
+              (unsigned long long)l->suppressed_in_window, (double)l->window_ns * 1e-9);
+    l->window_start_ns = now;
+    l->printed_in_window = 0;
+    l->suppressed_in_window = 0;
+  }
+  if (l->printed_in_window < l->lines) {
+    /* As Cyclone's default sink: its header in front, the newline at message[size]. */
+    fwrite(d->message - d->hdrsize, 1, d->hdrsize + d->size + 1, l->out);
+    fflush(l->out);
+    l->printed_in_window++;
+    l->printed++;
+  } else {
+    l->suppressed_in_window++;
+    l->suppressed++;
+  }
+  pthread_mutex_unlock(l->lock);
+}
+
+int palp_dds_log_limit_install(palp_dds_log_limit *l, FILE *out, int lines, double window_s) {
+  memset(l, 0, sizeof *l);
+  pthread_mutex_t *m = malloc(sizeof *m);
+  if (!m) return PALP_ENOMEM;
+  pthread_mutex_init(m, NULL);
+  l->lock = m;
+  l->out = out ? out : stderr;
+  l->lines = lines < 0 ? 0 : lines;
+  l->window_ns = (int64_t)(window_s * 1e9);
+  l->window_start_ns = palp_dds_now_ns();
+  dds_set_log_sink(limited_sink, l);
+  return 0;
+}
+
+void palp_dds_log_limit_remove(palp_dds_log_limit *l) {
+  if (!l->lock) return;
+  /* Cyclone swaps the sink under its write lock: no thread uses ours after this. */
+  dds_set_log_sink(NULL, NULL);
+  pthread_mutex_destroy(l->lock);
+  free(l->lock);
+  l->lock = NULL;
+}
+
+void palp_dds_log_limit_counts(palp_dds_log_limit *l, uint64_t *printed, uint64_t *suppressed) {
+  if (!l->lock) {
+    *printed = *suppressed = 0;
+    return;
+  }
+  pthread_mutex_lock(l->lock);
+  *printed = l->printed;
+  *suppressed = l->suppressed;
+  pthread_mutex_unlock(l->lock);
 }

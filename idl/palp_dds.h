@@ -8,6 +8,7 @@
 #define PALP_DDS_H
 
 #include <stddef.h>
+#include <stdio.h>
 #include <stdint.h>
 
 #include <dds/dds.h>
@@ -28,6 +29,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_DEFORMATION,
   PALP_TOPIC_SERVER_STATUS,
   PALP_TOPIC_LOCAL_MODEL, /* added with issue 11: local contact models for the station's haptic loop */
+  PALP_TOPIC_SERVER_GUARD,
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 
@@ -56,6 +58,25 @@ dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, pal
 dds_entity_t palp_dds_session_publisher(dds_entity_t pp, const char *partition);
 dds_entity_t palp_dds_session_subscriber(dds_entity_t pp, const char *partition);
 void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len);
+
+/* Cyclone prints a warning line per malformed sample (e.g. an out-of-range enum
+ * fails deserialisation): a hostile peer could fill a disk with them. This sink
+ * passes at most `lines` per `window_ns` to `out` and counts the rest; it reports
+ * the count suppressed when the next window opens. Cyclone's log sink is
+ * process-wide: install one limiter per process and remove it before freeing. */
+typedef struct palp_dds_log_limit {
+  void *lock;          /* pthread_mutex_t, allocated by install */
+  FILE *out;
+  int lines;
+  int64_t window_ns;
+  int64_t window_start_ns;
+  int printed_in_window;
+  uint64_t suppressed_in_window;
+  uint64_t printed, suppressed; /* totals since install */
+} palp_dds_log_limit;
+int palp_dds_log_limit_install(palp_dds_log_limit *l, FILE *out, int lines, double window_s);
+void palp_dds_log_limit_remove(palp_dds_log_limit *l);
+void palp_dds_log_limit_counts(palp_dds_log_limit *l, uint64_t *printed, uint64_t *suppressed);
 
 /* Points CYCLONEDDS_URI at the loopback config unless the environment already
  * sets it. path NULL uses the build's config/cyclonedds-loopback.xml. Returns 0

@@ -35,6 +35,14 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   cfg->finger_radius_min = 0.002;
   cfg->finger_radius_max = 0.03;
   cfg->log_interval = 1.0;
+  cfg->absurd_force = 1000.0; /* no hand presses 1 kN: beyond it is a unit error or an attack */
+  cfg->max_viewers = 8;
+  cfg->stations_per_writer = 2;
+  cfg->join_rate = 20.0;
+  cfg->join_burst = 40;
+  cfg->closed_retention = 10.0;
+  cfg->dds_log_lines = 10;
+  cfg->dds_log_window = 10.0;
   snprintf(cfg->dds_config, sizeof cfg->dds_config, "cyclonedds-loopback.xml");
 }
 
@@ -99,6 +107,9 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "max_force",      "force_policy",   "finger_radius_min",
                                        "finger_radius_max", "log_interval", "dds_config",
                                        "database",       "phantoms",       "comment",
+                                       "absurd_force",   "max_viewers",    "stations_per_writer",
+                                       "join_rate",      "join_burst",     "closed_retention",
+                                       "dds_log_lines",  "dds_log_window",
                                        NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 
@@ -183,6 +194,29 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
     goto out;
   }
   if ((rc = get_number(root, "log_interval", w, 0, 3600, 0, &cfg->log_interval, err, errlen))) goto out;
+  if ((rc = get_number(root, "absurd_force", w, 0.01, 1e6, 0, &cfg->absurd_force, err, errlen))) goto out;
+  if (cfg->absurd_force < cfg->max_force) {
+    rc = fail(err, errlen, PALP_EINVAL, "absurd_force: %g is below max_force %g", cfg->absurd_force,
+              cfg->max_force);
+    goto out;
+  }
+  i64 = cfg->max_viewers;
+  if ((rc = get_int(root, "max_viewers", w, 0, 64, 0, &i64, err, errlen))) goto out;
+  cfg->max_viewers = (int)i64;
+  i64 = cfg->stations_per_writer;
+  if ((rc = get_int(root, "stations_per_writer", w, 1, 64, 0, &i64, err, errlen))) goto out;
+  cfg->stations_per_writer = (int)i64;
+  if ((rc = get_number(root, "join_rate", w, 0.01, 10000, 0, &cfg->join_rate, err, errlen))) goto out;
+  i64 = cfg->join_burst;
+  if ((rc = get_int(root, "join_burst", w, 1, 100000, 0, &i64, err, errlen))) goto out;
+  cfg->join_burst = (int)i64;
+  if ((rc = get_number(root, "closed_retention", w, 0, 86400, 0, &cfg->closed_retention, err, errlen)))
+    goto out;
+  i64 = cfg->dds_log_lines;
+  if ((rc = get_int(root, "dds_log_lines", w, 0, 100000, 0, &i64, err, errlen))) goto out;
+  cfg->dds_log_lines = (int)i64;
+  if ((rc = get_number(root, "dds_log_window", w, 0.1, 86400, 0, &cfg->dds_log_window, err, errlen)))
+    goto out;
   {
     char policy[16] = "clamp";
     if ((rc = get_string(root, "force_policy", w, 0, policy, sizeof policy, err, errlen))) goto out;

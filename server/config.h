@@ -41,6 +41,16 @@ typedef struct palp_srv_config {
   double finger_radius_min;    /* [m] */
   double finger_radius_max;    /* [m] */
   double log_interval;         /* minimum seconds between two log lines of one reject reason */
+  /* Limits against a misbehaving peer (docs/robustness.md). */
+  double absurd_force;         /* [N] a contact above this is rejected (absurd_force), never clamped */
+  int max_viewers;             /* visual stations + observers per session */
+  int stations_per_writer;     /* station ids one request writer (one station process) may hold */
+  double join_rate;            /* admitted joins per second, all stations (token bucket) */
+  int join_burst;              /* joins admitted at once before join_rate applies */
+  double closed_retention;     /* [s] a closed session's state and a refused station's reply stay
+                                * published this long, then their DDS instances are released */
+  int dds_log_lines;           /* Cyclone warnings printed per dds_log_window, the rest counted */
+  double dds_log_window;       /* [s] */
   char dds_config[PALP_SRV_PATH_MAX]; /* Cyclone XML, resolved against the config's directory */
   char database[PALP_SRV_PATH_MAX];   /* SQLite session log; "" disables logging */
   int phantom_count;

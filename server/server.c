@@ -12,18 +12,31 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "admission.h"
+#include "retire.h"
 #include "session.h"
 #include "ticker.h"
 
-#define MAX_STATIONS 256
+/* Closed sessions kept for the summary table (palp_srv_print_summary); older ones
+ * are counted (sessions_forgotten), so a server that runs for a term stays bounded. */
+#define CLOSED_KEEP 1024
 
+/* A station holds a slot only while it is in an open session: a refused join
+ * takes none, and a session's close frees its members' slots. So the slots
+ * (max_sessions x (1 + max_viewers)) cannot run out before the sessions do, and
+ * no peer can lock real stations out by joining without finishing. */
 typedef struct station {
   int in_use;
   char id[64];
   int role;            /* palp_Role */
-  uint32_t session_id; /* 0: not in a session */
+  uint32_t session_id; /* the session it is in */
+  uint64_t writer;     /* publication handle of its request writer */
   int want_feedback, want_deformation;
 } station;
+
+typedef struct guard_counts {
+  uint64_t joins_refused_rate, joins_refused_writer, joins_refused_viewers, joins_refused_other;
+} guard_counts;
 
 typedef struct closed_session {
   palp_srv_session_summary sum;
@@ -43,7 +56,8 @@ struct palp_srv {
 
   dds_entity_t pp;
   dds_entity_t topic[PALP_TOPIC_COUNT];
-  dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r;
+  dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r, guard_w;
+  dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
 
@@ -54,10 +68,17 @@ struct palp_srv {
   uint64_t sessions_total;
   uint64_t rejected_closed[PALP_SRV_REJ_COUNT]; /* counters of sessions already closed */
 
-  station stations[MAX_STATIONS];
+  station *stations;
+  int station_slots;
+  palp_srv_admission *admission;
+  palp_srv_retire retire;
+  guard_counts guard;
+  palp_dds_log_limit dds_log;
+  int dds_log_installed;
 
-  closed_session *closed;
-  int closed_count, closed_cap;
+  closed_session *closed; /* ring of the last CLOSED_KEEP */
+  int closed_count, closed_head;
+  uint64_t sessions_forgotten;
 
   palp_SessionLoad *loads;
   atomic_int stop;
@@ -191,7 +212,7 @@ static palp_srv_session_stats session_stats(palp_srv *srv, palp_srv_session *s) 
 
 static void member_counts(const palp_srv *srv, uint32_t sid, uint32_t *visual, uint32_t *observer) {
   *visual = *observer = 0;
-  for (int i = 0; i < MAX_STATIONS; i++) {
+  for (int i = 0; i < srv->station_slots; i++) {
     const station *st = &srv->stations[i];
     if (!st->in_use || st->session_id != sid) continue;
     if (st->role == palp_ROLE_VISUAL) ++*visual;
@@ -249,29 +270,84 @@ static palp_srv_session *find_session(palp_srv *srv, uint32_t id) {
   return NULL;
 }
 
-static station *find_station(palp_srv *srv, const char *id, int create) {
-  station *free_slot = NULL;
-  for (int i = 0; i < MAX_STATIONS; i++) {
+static station *find_station(palp_srv *srv, const char *id) {
+  for (int i = 0; i < srv->station_slots; i++) {
     station *st = &srv->stations[i];
     if (st->in_use && strcmp(st->id, id) == 0) return st;
-    if (!st->in_use && !free_slot) free_slot = st;
   }
-  if (!create || !free_slot) return NULL;
-  memset(free_slot, 0, sizeof *free_slot);
-  free_slot->in_use = 1;
-  snprintf(free_slot->id, sizeof free_slot->id, "%s", id);
-  return free_slot;
+  return NULL;
+}
+
+static station *new_station(palp_srv *srv, const char *id, uint64_t writer) {
+  for (int i = 0; i < srv->station_slots; i++) {
+    station *st = &srv->stations[i];
+    if (st->in_use) continue;
+    memset(st, 0, sizeof *st);
+    st->in_use = 1;
+    st->writer = writer;
+    snprintf(st->id, sizeof st->id, "%s", id);
+    return st;
+  }
+  return NULL;
+}
+
+static int stations_in_use(const palp_srv *srv) {
+  int n = 0;
+  for (int i = 0; i < srv->station_slots; i++) n += srv->stations[i].in_use;
+  return n;
+}
+
+static int stations_of_writer(const palp_srv *srv, uint64_t writer) {
+  int n = 0;
+  for (int i = 0; i < srv->station_slots; i++) n += srv->stations[i].in_use && srv->stations[i].writer == writer;
+  return n;
+}
+
+/* ---- releasing instances ------------------------------------------------------- */
+
+static void release_instance(void *ctx, const palp_srv_retire_entry *e) {
+  palp_srv *srv = ctx;
+  if (e->kind == PALP_SRV_RETIRE_STATE) {
+    palp_SessionState k;
+    memset(&k, 0, sizeof k);
+    k.session_id = e->session_id;
+    dds_unregister_instance(srv->state_w, &k);
+    return;
+  }
+  /* The station came back meanwhile: its reply is live again. */
+  if (find_station(srv, e->station_id)) return;
+  palp_SessionReply k;
+  memset(&k, 0, sizeof k);
+  snprintf(k.station_id, sizeof k.station_id, "%s", e->station_id);
+  dds_unregister_instance(srv->reply_w, &k);
+}
+
+static void retire_reply(palp_srv *srv, const char *station_id) {
+  palp_srv_retire_entry e = {.kind = PALP_SRV_RETIRE_REPLY};
+  snprintf(e.station_id, sizeof e.station_id, "%s", station_id);
+  palp_srv_retire_add(&srv->retire, &e, palp_dds_now_ns(), release_instance, srv);
+}
+
+static void retire_state(palp_srv *srv, uint32_t session_id) {
+  palp_srv_retire_entry e = {.kind = PALP_SRV_RETIRE_STATE, .session_id = session_id};
+  palp_srv_retire_add(&srv->retire, &e, palp_dds_now_ns(), release_instance, srv);
+}
+
+static void free_station(palp_srv *srv, station *st) {
+  st->in_use = 0;
+  retire_reply(srv, st->id);
 }
 
 static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, int open) {
-  if (srv->closed_count == srv->closed_cap) {
-    int cap = srv->closed_cap ? 2 * srv->closed_cap : 16;
-    closed_session *n = realloc(srv->closed, (size_t)cap * sizeof *n);
-    if (!n) return;
-    srv->closed = n;
-    srv->closed_cap = cap;
+  if (!srv->closed) return;
+  closed_session *c;
+  if (srv->closed_count < CLOSED_KEEP) {
+    c = &srv->closed[(srv->closed_head + srv->closed_count++) % CLOSED_KEEP];
+  } else {
+    c = &srv->closed[srv->closed_head];
+    srv->closed_head = (srv->closed_head + 1) % CLOSED_KEEP;
+    srv->sessions_forgotten++;
   }
-  closed_session *c = &srv->closed[srv->closed_count++];
   c->sum = *sum;
   c->open = open;
   snprintf(c->phantom_name, sizeof c->phantom_name, "%s", sum->info.phantom_name);
@@ -296,8 +372,11 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
   fprintf(stderr, "palp-server: session %u closed after %.1f s (%s)\n", s->id, sum.duration, reason);
-  for (int i = 0; i < MAX_STATIONS; i++)
-    if (srv->stations[i].in_use && srv->stations[i].session_id == s->id) srv->stations[i].session_id = 0;
+  /* Its members' slots are free again; its state instance is released after
+   * the retention time, once every member has read the CLOSED state. */
+  for (int i = 0; i < srv->station_slots; i++)
+    if (srv->stations[i].in_use && srv->stations[i].session_id == s->id) free_station(srv, &srv->stations[i]);
+  retire_state(srv, s->id);
   for (int i = 0; i < srv->session_count; i++)
     if (srv->sessions[i] == s) {
       srv->sessions[i] = srv->sessions[--srv->session_count];
@@ -314,14 +393,17 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   palp_srv_session *s = st->session_id ? find_session(srv, st->session_id) : NULL;
   uint32_t sid = st->session_id;
   int role = st->role;
-  st->session_id = 0;
-  if (!s) return;
+  if (!s) {
+    free_station(srv, st);
+    return;
+  }
   if (role == palp_ROLE_TRAINEE && strcmp(s->trainee_station, st->id) == 0) {
     char why[160];
     snprintf(why, sizeof why, "trainee station %s", reason);
-    close_session(srv, s, why);
+    close_session(srv, s, why); /* frees st with the session's other members */
     return;
   }
+  free_station(srv, st);
   if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
   if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
@@ -330,32 +412,46 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   publish_state(srv, s, 0, NULL, NULL);
 }
 
-static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
+/* A refused join: answered, counted, and its reply released after the retention
+ * time (the station holds no slot, so nothing else would ever release it). */
+static void refuse(palp_srv *srv, const palp_SessionRequest *rq, uint64_t *counter, const char *why) {
+  (*counter)++;
+  reply(srv, rq, NULL, why);
+  if (!find_station(srv, rq->station_id)) retire_reply(srv, rq->station_id);
+}
+
+static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, uint64_t writer) {
   char why[128];
+  guard_counts *g = &srv->guard;
   if (rq->role > palp_ROLE_OBSERVER) {
-    reply(srv, rq, NULL, "unknown role");
+    refuse(srv, rq, &g->joins_refused_other, "unknown role");
     return;
   }
-  station *st = find_station(srv, rq->station_id, 1);
-  if (!st) {
-    reply(srv, rq, NULL, "too many stations");
+  if (!palp_srv_admission_join_token(srv->admission, palp_dds_now_ns())) {
+    snprintf(why, sizeof why, "server busy: joins are limited to %g per second (join_rate); try again",
+             srv->cfg.join_rate);
+    refuse(srv, rq, &g->joins_refused_rate, why);
     return;
   }
-  if (st->session_id) station_leave(srv, st, "re-joined");
-  st->role = (int)rq->role;
-  st->want_feedback = rq->want_feedback;
-  st->want_deformation = rq->want_deformation;
+  station *st = find_station(srv, rq->station_id);
+  if (st) station_leave(srv, st, "re-joined"); /* frees its slot; taken again below if accepted */
+  if (stations_of_writer(srv, writer) >= srv->cfg.stations_per_writer) {
+    snprintf(why, sizeof why, "too many stations from one writer (stations_per_writer %d)",
+             srv->cfg.stations_per_writer);
+    refuse(srv, rq, &g->joins_refused_writer, why);
+    return;
+  }
   palp_srv_session *s = NULL;
   if (rq->role == palp_ROLE_TRAINEE) {
     palp_srv_phantom *ph = find_phantom(srv, rq->phantom_id);
     if (!ph) {
       snprintf(why, sizeof why, "unknown phantom %u", rq->phantom_id);
-      reply(srv, rq, NULL, why);
+      refuse(srv, rq, &g->joins_refused_other, why);
       return;
     }
     if (srv->session_count >= srv->cfg.max_sessions) {
       snprintf(why, sizeof why, "server full: %d sessions open (max_sessions)", srv->session_count);
-      reply(srv, rq, NULL, why);
+      refuse(srv, rq, &g->joins_refused_other, why);
       return;
     }
     palp_srv_session_def d = {.id = srv->next_session_id,
@@ -373,9 +469,18 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
       snprintf(why, sizeof why, "cannot create the session: %s", palp_strerror(rc));
-      reply(srv, rq, NULL, why);
+      refuse(srv, rq, &g->joins_refused_other, why);
       return;
     }
+    st = new_station(srv, rq->station_id, writer);
+    if (!st) { /* cannot happen while slots = max_sessions x (1 + max_viewers) */
+      palp_srv_session_destroy(s);
+      refuse(srv, rq, &g->joins_refused_other, "too many stations");
+      return;
+    }
+    st->role = (int)rq->role;
+    st->want_feedback = rq->want_feedback;
+    st->want_deformation = rq->want_deformation;
     atomic_store(&s->want_feedback, rq->want_feedback ? 1 : 0);
     atomic_store(&s->deform_members, rq->want_deformation ? 1 : 0);
     /* The log learns of the session before its first tick can report on it. */
@@ -387,7 +492,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
       palp_srv_session_summary_fill(s, "tick pool full", palp_dds_now_ns(), &sum);
       if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
       palp_srv_session_destroy(s);
-      reply(srv, rq, NULL, "tick pool full");
+      st->in_use = 0;
+      refuse(srv, rq, &g->joins_refused_other, "tick pool full");
       return;
     }
     srv->next_session_id++;
@@ -415,9 +521,24 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
       snprintf(why, sizeof why, "no open session %u", rq->session_id);
     else
       snprintf(why, sizeof why, "no open session on phantom %u", rq->phantom_id);
-    reply(srv, rq, NULL, why);
+    refuse(srv, rq, &g->joins_refused_other, why);
     return;
   }
+  uint32_t visual, observer;
+  member_counts(srv, s->id, &visual, &observer);
+  if ((int)(visual + observer) >= srv->cfg.max_viewers) {
+    snprintf(why, sizeof why, "session %u already has %u viewers (max_viewers)", s->id, visual + observer);
+    refuse(srv, rq, &g->joins_refused_viewers, why);
+    return;
+  }
+  st = new_station(srv, rq->station_id, writer);
+  if (!st) {
+    refuse(srv, rq, &g->joins_refused_other, "too many stations");
+    return;
+  }
+  st->role = (int)rq->role;
+  st->want_feedback = rq->want_feedback;
+  st->want_deformation = rq->want_deformation;
   st->session_id = s->id;
   if (st->want_deformation) atomic_fetch_add(&s->deform_members, 1);
   if (st->want_feedback) atomic_fetch_add(&s->want_feedback, 1);
@@ -439,33 +560,47 @@ static void handle_requests(palp_srv *srv) {
   while ((n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
+        /* Strings from the wire are bounded by the IDL, but a forged sample need
+         * not be NUL-terminated where we expect: terminate before use. */
+        buf[i].station_id[sizeof buf[i].station_id - 1] = '\0';
+        buf[i].user_name[sizeof buf[i].user_name - 1] = '\0';
         if (buf[i].op == palp_OP_JOIN)
-          handle_join(srv, &buf[i]);
+          handle_join(srv, &buf[i], info[i].publication_handle);
         else {
-          station *st = find_station(srv, buf[i].station_id, 0);
-          if (st) {
-            station_leave(srv, st, "left");
-            st->in_use = 0;
-          }
+          station *st = find_station(srv, buf[i].station_id);
+          if (st) station_leave(srv, st, "left");
           reply(srv, &buf[i], NULL, "left");
+          retire_reply(srv, buf[i].station_id);
         }
         continue;
       }
       if (info[i].instance_state == DDS_IST_ALIVE) continue;
-      palp_SessionRequest key;
-      memset(&key, 0, sizeof key);
-      if (dds_instance_get_key(srv->request_r, info[i].instance_handle, &key) != 0) continue;
-      station *st = find_station(srv, key.station_id, 0);
+      /* The instance is gone (disposed or no writers): its writer may register
+       * another. Cyclone fills an invalid sample's key fields, so the station id is
+       * read from it: dds_instance_get_key scans every instance ever seen. */
+      palp_srv_admission_release(srv->admission, info[i].instance_handle);
+      buf[i].station_id[sizeof buf[i].station_id - 1] = '\0';
+      station *st = find_station(srv, buf[i].station_id);
       if (!st) continue;
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
        * forgets it), so reaching here means it vanished: its writer's automatic
        * liveliness (0.5 s) or its participant's lease (1 s) expired, and
        * Cyclone unregistered (or, autodispose, disposed) its instance. */
       station_leave(srv, st, "lost (liveliness lease expired)");
-      st->in_use = 0;
     }
     if (n < N) break;
   }
+}
+
+/* [receive thread] The request topic's filter: see admission.h. */
+static bool request_filter(const palp_SessionRequest *rq, const dds_sample_info_t *si, void *arg) {
+  (void)rq;
+  palp_srv *srv = arg;
+  return palp_srv_admission_admit(srv->admission, si->instance_handle, si->publication_handle);
+}
+
+static bool request_filter_fn(const void *sample, const dds_sample_info_t *si, void *arg) {
+  return request_filter(sample, si, arg);
 }
 
 /* ---- status -------------------------------------------------------------------- */
@@ -488,7 +623,7 @@ static void load_one(void *ctx, palp_srv_session *s) {
   l->awake_ticks = s->stats.awake_ticks;
   l->contact_samples = s->stats.contact_samples;
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) {
-    l->rejected[r] = s->stats.rejected[r];
+    if (r < PALP_SRV_REJ_WIRE) l->rejected[r] = s->stats.rejected[r];
     lc->rejected[r] += s->stats.rejected[r];
   }
   l->step_us_max = s->stats.step_us_max;
@@ -532,7 +667,7 @@ static void publish_status(palp_srv *srv) {
   m.tick_us_max = ts.tick_us_max;
   m.ticks = ts.ticks;
   m.overruns = ts.overruns;
-  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) m.rejected[r] = lc.rejected[r] + srv->rejected_closed[r];
+  for (int r = 0; r < PALP_SRV_REJ_WIRE; r++) m.rejected[r] = lc.rejected[r] + srv->rejected_closed[r];
   if (srv->events && srv->events->log_counts) {
     uint64_t w = 0, sh = 0, f = 0;
     srv->events->log_counts(srv->events->ctx, &w, &sh, &f);
@@ -542,6 +677,26 @@ static void publish_status(palp_srv *srv) {
   }
   m.sessions = (dds_sequence_palp_SessionLoad){lc.n, lc.n, srv->loads, false};
   dds_write(srv->status_w, &m);
+  palp_ServerGuard gm;
+  memset(&gm, 0, sizeof gm);
+  snprintf(gm.server_id, sizeof gm.server_id, "%s", srv->server_id);
+  gm.stations = (uint32_t)stations_in_use(srv);
+  gm.station_slots = (uint32_t)srv->station_slots;
+  gm.joins_refused_rate = srv->guard.joins_refused_rate;
+  gm.joins_refused_writer = srv->guard.joins_refused_writer;
+  gm.joins_refused_viewers = srv->guard.joins_refused_viewers;
+  gm.joins_refused_other = srv->guard.joins_refused_other;
+  gm.request_keys_filtered = palp_srv_admission_refused(srv->admission);
+  gm.contacts_filtered = lc.rejected[PALP_SRV_REJ_UNKNOWN_SESSION] + srv->rejected_closed[PALP_SRV_REJ_UNKNOWN_SESSION] +
+                         lc.rejected[PALP_SRV_REJ_BAD_FINGER] + srv->rejected_closed[PALP_SRV_REJ_BAD_FINGER];
+  gm.contacts_absurd_force = lc.rejected[PALP_SRV_REJ_ABSURD_FORCE] + srv->rejected_closed[PALP_SRV_REJ_ABSURD_FORCE];
+  gm.instances_released = srv->retire.released;
+  uint64_t printed = 0, suppressed = 0;
+  palp_dds_log_limit_counts(&srv->dds_log, &printed, &suppressed);
+  gm.dds_log_printed = printed;
+  gm.dds_log_suppressed = suppressed;
+  gm.sessions_forgotten = srv->sessions_forgotten;
+  dds_write(srv->guard_w, &gm);
   for (int i = 0; i < srv->session_count; i++) publish_state(srv, srv->sessions[i], 0, NULL, NULL);
 }
 
@@ -564,7 +719,15 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   snprintf(srv->server_id, sizeof srv->server_id, "palp-server/%s/%ld", host, (long)getpid());
   srv->sessions = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->sessions);
   srv->loads = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->loads);
-  if (!srv->sessions || !srv->loads) {
+  srv->station_slots = srv->cfg.max_sessions * (1 + srv->cfg.max_viewers);
+  srv->stations = calloc((size_t)srv->station_slots, sizeof *srv->stations);
+  srv->closed = calloc(CLOSED_KEEP, sizeof *srv->closed);
+  /* Request instances: each slot's, plus as many again for stations between
+   * a refused join and their retry or exit. */
+  srv->admission = palp_srv_admission_create(srv->cfg.stations_per_writer, 2 * srv->station_slots + 64,
+                                             srv->cfg.join_rate, srv->cfg.join_burst);
+  if (!srv->sessions || !srv->loads || !srv->stations || !srv->closed || !srv->admission ||
+      palp_srv_retire_init(&srv->retire, 4 * srv->station_slots + 256, srv->cfg.closed_retention) < 0) {
     *rc = PALP_ENOMEM;
     fail(err, errlen, "out of memory");
     goto fail;
@@ -574,6 +737,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     srv->phantom_count = i + (srv->phantom[i].template_world != NULL);
     if (*rc < 0) goto fail;
   }
+  if (palp_dds_log_limit_install(&srv->dds_log, stderr, srv->cfg.dds_log_lines, srv->cfg.dds_log_window) == 0)
+    srv->dds_log_installed = 1;
   srv->pp = dds_create_participant((dds_domainid_t)srv->cfg.domain_id, NULL, NULL);
   if (srv->pp < 0) {
     *rc = PALP_EIO;
@@ -591,7 +756,21 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     }
   }
   srv->catalogue_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
-  srv->request_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  /* The request reader sits on a topic entity of its own, which carries the
+   * admission filter (a filter applies to every reader of its topic entity). */
+  srv->request_topic = palp_dds_create_topic(srv->pp, PALP_TOPIC_SESSION_REQUEST);
+  {
+    struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_SAMPLEINFO_ARG,
+                                   .f = {.sample_sampleinfo_arg = request_filter_fn},
+                                   .arg = srv};
+    if (srv->request_topic < 0 || dds_set_topic_filter_extended(srv->request_topic, &flt) < 0) {
+      *rc = PALP_EIO;
+      fail(err, errlen, "cannot create the session request topic");
+      goto fail;
+    }
+  }
+  srv->request_r = palp_dds_create_reader(srv->pp, srv->request_topic, PALP_TOPIC_SESSION_REQUEST);
+  srv->guard_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_GUARD], PALP_TOPIC_SERVER_GUARD);
   srv->reply_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   srv->status_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
@@ -601,7 +780,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->stop_gc = dds_create_guardcondition(srv->pp);
   srv->request_rc = dds_create_readcondition(srv->request_r, DDS_ANY_STATE);
   if (srv->catalogue_w < 0 || srv->request_r < 0 || srv->reply_w < 0 || srv->state_w < 0 || srv->status_w < 0 ||
-      srv->status_r < 0 ||
+      srv->status_r < 0 || srv->guard_w < 0 ||
       srv->waitset < 0 || srv->stop_gc < 0 || srv->request_rc < 0 ||
       dds_waitset_attach(srv->waitset, srv->request_rc, 0) < 0 || dds_waitset_attach(srv->waitset, srv->stop_gc, 0) < 0) {
     *rc = PALP_EIO;
@@ -655,6 +834,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
     if (wake - now > 100000000) wake = now + 100000000;
     dds_waitset_wait(srv->waitset, NULL, 0, wake - now > 0 ? wake - now : 0);
     handle_requests(srv);
+    palp_srv_retire_due(&srv->retire, palp_dds_now_ns(), release_instance, srv);
     for (int i = 0; i < srv->session_count; i++) {
       palp_srv_session *s = srv->sessions[i];
       int f = atomic_load(&s->failed);
@@ -691,7 +871,12 @@ static void print_row(FILE *out, const palp_srv_session_summary *s, const char *
 void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
   fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
           "contacts", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
-  for (int i = 0; i < srv->closed_count; i++) print_row(out, &srv->closed[i].sum, srv->closed[i].reason);
+  if (srv->sessions_forgotten)
+    fprintf(out, "(%llu older closed sessions not kept)\n", (unsigned long long)srv->sessions_forgotten);
+  for (int i = 0; i < srv->closed_count; i++) {
+    const closed_session *c = &srv->closed[(srv->closed_head + i) % CLOSED_KEEP];
+    print_row(out, &c->sum, c->reason);
+  }
   for (int i = 0; i < srv->session_count; i++) {
     palp_srv_session_summary sum;
     palp_srv_session_summary_fill(srv->sessions[i], "(open)", palp_dds_now_ns(), &sum);
@@ -704,6 +889,12 @@ void palp_srv_destroy(palp_srv *srv) {
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
   if (srv->pp > 0) dds_delete(srv->pp);
+  /* After the participant: the request filter (which uses the admission table)
+   * can no longer run. */
+  palp_srv_admission_destroy(srv->admission);
+  palp_srv_retire_free(&srv->retire);
+  if (srv->dds_log_installed) palp_dds_log_limit_remove(&srv->dds_log);
+  free(srv->stations);
   for (int i = 0; i < srv->phantom_count; i++) palp_world_destroy(srv->phantom[i].template_world);
   free(srv->sessions);
   free(srv->loads);

@@ -16,9 +16,33 @@
 /* A force contact whose centre moves by more than this is re-snapped [m]. */
 #define RESNAP_DISTANCE 1e-4
 
+/* The contact reader holds at most this many instances: the 4 fingers of its
+ * session and room for a few disposes of unknown keys (a dispose bypasses the
+ * filter). Cyclone refuses (best-effort: drops) samples of instances beyond it,
+ * so no peer can make the server's memory grow with keys. */
+#define CONTACT_MAX_INSTANCES 32
+
 static double norm3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 static double dist3(palp_vec3 a, palp_vec3 b) {
   return norm3((palp_vec3){a.x - b.x, a.y - b.y, a.z - b.z});
+}
+
+/* Runs on Cyclone's receive thread before a sample enters the reader cache: a
+ * sample of another session, or of a finger past the last, never becomes an
+ * instance, whatever its key. Counted here, folded into the session's rejection
+ * counters by its tick. */
+static bool contact_filter(const void *sample, void *arg) {
+  const palp_Contact *c = sample;
+  palp_srv_session *s = arg;
+  if (c->session_id != s->id) {
+    atomic_fetch_add_explicit(&s->filtered_session, 1, memory_order_relaxed);
+    return false;
+  }
+  if (c->finger >= PALP_SRV_MAX_FINGERS) {
+    atomic_fetch_add_explicit(&s->filtered_finger, 1, memory_order_relaxed);
+    return false;
+  }
+  return true;
 }
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err) {
@@ -45,6 +69,7 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   const palp_mesh *mesh = palp_world_mesh(s->world);
   s->limits = (palp_srv_limits){.session_id = s->id,
                                 .max_force = def->cfg->max_force,
+                                .absurd_force = def->cfg->absurd_force,
                                 .force_policy = def->cfg->force_policy,
                                 .finger_radius_min = def->cfg->finger_radius_min,
                                 .finger_radius_max = def->cfg->finger_radius_max,
@@ -67,7 +92,19 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->sub = palp_dds_session_subscriber(def->participant, s->partition);
   s->pub = palp_dds_session_publisher(def->participant, s->partition);
   if (s->sub < 0 || s->pub < 0) goto dds_fail;
-  s->contact_reader = palp_dds_create_reader(s->sub, def->contact_topic, PALP_TOPIC_CONTACT);
+  /* A topic entity of its own (same name and type as everyone's) so that its
+   * filter applies to this session's reader only. */
+  (void)def->contact_topic;
+  s->contact_topic = palp_dds_create_topic(def->participant, PALP_TOPIC_CONTACT);
+  if (s->contact_topic < 0) goto dds_fail;
+  {
+    struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = contact_filter}, .arg = s};
+    if (dds_set_topic_filter_extended(s->contact_topic, &flt) < 0) goto dds_fail;
+    dds_qos_t *q = palp_dds_qos(PALP_TOPIC_CONTACT);
+    dds_qset_resource_limits(q, CONTACT_MAX_INSTANCES, CONTACT_MAX_INSTANCES, 1);
+    s->contact_reader = dds_create_reader(s->sub, s->contact_topic, q, NULL);
+    dds_delete_qos(q);
+  }
   s->feedback_writer = palp_dds_create_writer(s->pub, def->feedback_topic, PALP_TOPIC_FEEDBACK);
   s->deformation_writer = palp_dds_create_writer(s->pub, def->deformation_topic, PALP_TOPIC_DEFORMATION);
   if (def->local_model_topic > 0)
@@ -90,6 +127,8 @@ void palp_srv_session_destroy(palp_srv_session *s) {
   /* Deleting the publisher/subscriber deletes their readers and writers. */
   if (s->sub > 0) dds_delete(s->sub);
   if (s->pub > 0) dds_delete(s->pub);
+  /* After its reader: nothing calls the filter (whose argument is s) any more. */
+  if (s->contact_topic > 0) dds_delete(s->contact_topic);
   free(s->deformation.positions._buffer);
   palp_world_destroy(s->world);
   free(s);
@@ -201,7 +240,17 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
   return 0;
 }
 
+/* Folds the filter's counts into the rejection counters (and the log). */
+static void fold_filtered(palp_srv_session *s, int64_t now_ns) {
+  uint64_t fs = atomic_load_explicit(&s->filtered_session, memory_order_relaxed);
+  uint64_t ff = atomic_load_explicit(&s->filtered_finger, memory_order_relaxed);
+  for (; s->filtered_seen_session < fs; s->filtered_seen_session++)
+    count_reject(s, PALP_SRV_REJ_UNKNOWN_SESSION, 0, now_ns);
+  for (; s->filtered_seen_finger < ff; s->filtered_seen_finger++) count_reject(s, PALP_SRV_REJ_BAD_FINGER, 0, now_ns);
+}
+
 static void take_contacts(palp_srv_session *s, int64_t now_ns) {
+  fold_filtered(s, now_ns);
   palp_Contact buf[TAKE_BATCH];
   void *ptr[TAKE_BATCH];
   dds_sample_info_t info[TAKE_BATCH];
@@ -213,12 +262,12 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
       if (!info[i].valid_data) {
         /* The finger's writer is gone or disposed it: lift that finger so a
          * vanished station does not keep pressing until its session closes. */
-        if (info[i].instance_state != DDS_IST_ALIVE) {
-          palp_Contact key;
-          if (dds_instance_get_key(s->contact_reader, info[i].instance_handle, &key) == 0 &&
-              key.finger < PALP_SRV_MAX_FINGERS)
-            lift(s, &s->finger[key.finger]);
-        }
+        /* Cyclone fills an invalid sample's key fields, so the finger is read
+         * from it: dds_instance_get_key scans every instance the participant
+         * ever saw (quadratic under a flood of keys). */
+        if (info[i].instance_state != DDS_IST_ALIVE && buf[i].session_id == s->id &&
+            buf[i].finger < PALP_SRV_MAX_FINGERS)
+          lift(s, &s->finger[buf[i].finger]);
         continue;
       }
       palp_srv_contact c;

@@ -73,10 +73,15 @@ typedef struct palp_srv_session {
   char trainee_name[64];
   int64_t opened_ns;
   dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer, local_model_writer;
+  dds_entity_t contact_topic; /* this session's own topic entity: it carries the filter below */
   palp_srv_limits limits;
   const palp_srv_events *events;
   double log_interval;        /* [s] */
   double deformation_period;  /* [s] */
+
+  /* [DDS receive thread] samples the contact filter dropped before they reached
+   * the reader cache: another session's id, or a finger past the last. */
+  atomic_uint_fast64_t filtered_session, filtered_finger;
 
   /* [main] */
   atomic_int want_feedback;   /* haptic trainee present */
@@ -89,6 +94,7 @@ typedef struct palp_srv_session {
   int64_t next_deformation_ns;
   int64_t last_feedback_ns;
   int deformation_sent_asleep; /* the sleeping shape was already sent */
+  uint64_t filtered_seen_session, filtered_seen_finger; /* folded into stats.rejected so far */
   int64_t last_log_ns[PALP_SRV_REJ_COUNT];
   uint64_t log_suppressed[PALP_SRV_REJ_COUNT];
   palp_Feedback fb;

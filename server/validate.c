@@ -5,7 +5,8 @@
 
 static const char *const reject_names[PALP_SRV_REJ_COUNT] = {
     "nonfinite",  "unknown_session", "bad_finger", "bad_mode",  "bad_distribution",
-    "bad_vertex", "out_of_reach",    "force_limit", "bad_radius", "model_refused"};
+    "bad_vertex", "out_of_reach",    "force_limit", "bad_radius", "model_refused",
+    "absurd_force"};
 
 const char *palp_srv_reject_name(palp_srv_reject_reason r) {
   return (unsigned)r < PALP_SRV_REJ_COUNT ? reject_names[r] : "unknown";
@@ -13,6 +14,14 @@ const char *palp_srv_reject_name(palp_srv_reject_reason r) {
 
 static int finite3(palp_Vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 static double norm3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+/* |v| without overflow: 1e300 N must come out as 1e300, not as infinity (whose
+ * clamp factor max/|F| would be 0 and apply a 1e300 N press as 0 N). */
+static double norm3_safe(palp_vec3 v) {
+  double m = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
+  if (!(m > 0) || !isfinite(m)) return m;
+  palp_vec3 u = {v.x / m, v.y / m, v.z / m};
+  return m * norm3(u);
+}
 static palp_vec3 vec(palp_Vec3 v) { return (palp_vec3){v.x, v.y, v.z}; }
 
 /* Patch areas between 0.1 cm^2 and half the dome's surface (pi R^2 of 2 pi R^2). */
@@ -58,7 +67,10 @@ int palp_srv_validate_contact(const palp_Contact *in, const palp_srv_limits *lim
     out->patch_area = in->patch_area;
     out->offset_dir = vec(in->offset_dir);
     out->force = vec(in->force);
-    double f = norm3(out->force);
+    double f = norm3_safe(out->force);
+    /* A force far beyond any hand is a unit error or an attack: scaling it down
+     * would apply a press nobody made, so it is refused with its own reason. */
+    if (!(f <= lim->absurd_force)) REJECT(PALP_SRV_REJ_ABSURD_FORCE);
     if (f > lim->max_force) {
       *reason = PALP_SRV_REJ_FORCE_LIMIT;
       if (lim->force_policy == PALP_SRV_FORCE_REJECT) return PALP_SRV_REJECT;

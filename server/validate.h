@@ -29,14 +29,20 @@ typedef enum palp_srv_reject_reason {
   PALP_SRV_REJ_FORCE_LIMIT,      /* |force| > max_force: clamped or rejected by policy */
   PALP_SRV_REJ_BAD_RADIUS,       /* finger radius outside [finger_radius_min, _max] */
   PALP_SRV_REJ_MODEL,            /* the model refused the contact (e.g. no free slot) */
+  /* Reasons past the wire's rejected[10] arrays; published in palp_server_guard. */
+  PALP_SRV_REJ_ABSURD_FORCE,     /* |force| > absurd_force: no hand presses that hard; never clamped */
   PALP_SRV_REJ_COUNT
 } palp_srv_reject_reason;
+
+/* Reasons carried by the rejected[10] arrays of palp_server_status (wire contract). */
+#define PALP_SRV_REJ_WIRE 10
 
 const char *palp_srv_reject_name(palp_srv_reject_reason r);
 
 typedef struct palp_srv_limits {
   uint32_t session_id;
   double max_force;                  /* [N] */
+  double absurd_force;               /* [N] above this a sample is rejected, whatever the policy */
   palp_srv_force_policy force_policy;
   double finger_radius_min;          /* [m] */
   double finger_radius_max;          /* [m] */

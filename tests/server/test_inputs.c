@@ -124,6 +124,32 @@ int main(void) {
   CHECK(polys == mesh.dome_triangle_count && esc == 1, "%d polygons (want %d dome triangles), title escaped %d", polys,
         mesh.dome_triangle_count, esc);
   remove(svg);
+
+  /* A forged catalogue entry is refused before any index in it is used (the
+   * visual station crashed on bad triangle indices). */
+  char why[256] = "";
+  CHECK(palp_cli_phantom_check(&ph, why, sizeof why) == 0, "the real mesh passes the catalogue check (%s)", why);
+  tri[7] = 1000000;
+  CHECK(palp_cli_phantom_check(&ph, why, sizeof why) == PALP_EINVAL && strstr(why, "triangle 2 has vertex index 1000000"),
+        "triangle index 1000000 refused: \"%s\"", why);
+  CHECK(palp_cli_view_svg(&ph, &def, "forged", svg) == PALP_EINVAL && fopen(svg, "r") == NULL,
+        "no SVG drawn from a forged mesh, and no file created");
+  tri[7] = -1;
+  CHECK(palp_cli_phantom_check(&ph, why, sizeof why) == PALP_EINVAL, "triangle index -1 refused: \"%s\"", why);
+  tri[7] = mesh.tri[2][1];
+  ph.triangles._length = 3 * (uint32_t)mesh.triangle_count - 1;
+  CHECK(palp_cli_phantom_check(&ph, why, sizeof why) == PALP_EINVAL, "index count not a multiple of 3 refused: \"%s\"", why);
+  ph.triangles._length = 3 * (uint32_t)mesh.triangle_count;
+  ph.dome_triangle_count = mesh.triangle_count + 1;
+  CHECK(palp_cli_phantom_check(&ph, why, sizeof why) == PALP_EINVAL, "dome triangle count past the end refused: \"%s\"", why);
+  ph.dome_triangle_count = mesh.dome_triangle_count;
+  rest[3].y = NAN;
+  CHECK(palp_cli_phantom_check(&ph, why, sizeof why) == PALP_EINVAL, "NaN rest vertex refused: \"%s\"", why);
+  rest[3].y = mesh.rest[3].y;
+  def.positions._length = (uint32_t)mesh.vertex_count - 1;
+  CHECK(palp_cli_deformation_check(&ph, &def) == PALP_EINVAL, "a deformation frame one vertex short is refused");
+  def.positions._length = (uint32_t)mesh.vertex_count;
+  CHECK(palp_cli_deformation_check(&ph, &def) == 0, "the matching deformation frame passes");
   palp_mesh_destroy(&mesh);
   fprintf(stderr, "%d failure(s)\n", failures);
   return failures ? 1 : 0;

@@ -93,7 +93,7 @@ int main(void) {
     case 1: c.force.z = -INFINITY; break;            /* nonfinite */
     case 2: c.distribution = 9; break;               /* bad_distribution */
     case 3: c.vertex = 100000; break;                /* bad_vertex */
-    case 4: c.force.z = -1e6; break;                 /* force_limit (clamped to 20 N) */
+    case 4: c.force.z = -100; break;                 /* force_limit (clamped to 20 N; 1e6 N is absurd_force) */
     case 5: c.mode = palp_CONTACT_FINGER; c.radius = 2.0; break; /* bad_radius */
     case 6: c.session_id = 999999; break;            /* unknown_session */
     case 7: c.finger = 17; break;                    /* bad_finger */
@@ -150,7 +150,7 @@ int main(void) {
           (unsigned long long)got, want[i].sent, (unsigned long long)st.rejected[want[i].r]);
   }
   uint64_t good_rej = 0;
-  for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) good_rej += lg->rejected[r];
+  for (int r = 0; r < PALP_SRV_REJ_WIRE; r++) good_rej += lg->rejected[r];
   CHECK(good_rej == 0, "good session's rejected counters are all 0 (sum %llu)", (unsigned long long)good_rej);
   palp_SessionState sb;
   CHECK(session_state(&bad, bad.session_id, 2.5, &sb) && sb.phase == palp_PHASE_OPEN,

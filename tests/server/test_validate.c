@@ -10,7 +10,7 @@ static int failures;
 static palp_vec3 rest[3] = {{0, 0, 0.04}, {0.04, 0, 0}, {0, 0.04, 0}};
 
 static palp_srv_limits limits(palp_srv_force_policy policy) {
-  return (palp_srv_limits){.session_id = 5, .max_force = 10.0, .force_policy = policy, .finger_radius_min = 0.002,
+  return (palp_srv_limits){.session_id = 5, .max_force = 10.0, .absurd_force = 1000.0, .force_policy = policy, .finger_radius_min = 0.002,
                            .finger_radius_max = 0.03, .phantom_radius = 0.04, .vertex_count = 3, .rest = rest};
 }
 
@@ -87,6 +87,23 @@ int main(void) {
   expect("50 N rejected under reject policy", &c, PALP_SRV_FORCE_REJECT, PALP_SRV_REJECT, PALP_SRV_REJ_FORCE_LIMIT, NULL);
   c = force_contact(); c.force = (palp_Vec3){6, 0, -8};
   expect("exactly 10 N is allowed", &c, PALP_SRV_FORCE_REJECT, PALP_SRV_ACCEPT, 0, NULL);
+
+  /* Absurd forces (limit 1000 N here) are refused whatever the policy, never scaled:
+   * 1e300 N used to overflow |F| to infinity and be "clamped" to 0 N. */
+  c = force_contact(); c.force = (palp_Vec3){0, 0, -1e300};
+  expect("1e300 N rejected as absurd (clamp policy)", &c, PALP_SRV_FORCE_CLAMP, PALP_SRV_REJECT, PALP_SRV_REJ_ABSURD_FORCE, NULL);
+  c = force_contact(); c.force = (palp_Vec3){1e300, 1e300, 1e300};
+  expect("(1e300, 1e300, 1e300) N rejected as absurd", &c, PALP_SRV_FORCE_CLAMP, PALP_SRV_REJECT, PALP_SRV_REJ_ABSURD_FORCE, NULL);
+  c = force_contact(); c.force = (palp_Vec3){0, 600, -800}; /* |F| = 1000 N exactly: clamped, not absurd */
+  expect("1000 N is clamped, not absurd", &c, PALP_SRV_FORCE_CLAMP, PALP_SRV_CLAMPED, PALP_SRV_REJ_FORCE_LIMIT, &out);
+  ok = fabs(out.force.y - 6) < 1e-12 && fabs(out.force.z + 8) < 1e-12;
+  fprintf(stderr, "%s 1000 N clamped to (%g, %g, %g) N, want (0, 6, -8) within 1e-12\n", ok ? "ok  " : "FAIL",
+          out.force.x, out.force.y, out.force.z);
+  failures += !ok;
+  c = force_contact(); c.force = (palp_Vec3){0, 600.001, -800};
+  expect("1000.0005 N rejected as absurd", &c, PALP_SRV_FORCE_REJECT, PALP_SRV_REJECT, PALP_SRV_REJ_ABSURD_FORCE, NULL);
+  c = force_contact(); c.force = (palp_Vec3){4e-320, 0, -3e-320}; /* subnormal: no division by zero */
+  expect("subnormal force accepted", &c, PALP_SRV_FORCE_CLAMP, PALP_SRV_ACCEPT, 0, NULL);
 
   palp_Contact f;
   memset(&f, 0, sizeof f);
