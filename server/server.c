@@ -11,7 +11,9 @@
 #include <dds/dds.h>
 
 #include "palp.h"
+#include "identity.h"
 #include "palp_dds.h"
+#include "palp_dds_security.h"
 #include "session.h"
 #include "ticker.h"
 
@@ -23,6 +25,9 @@ typedef struct station {
   int role;            /* palp_Role */
   uint32_t session_id; /* 0: not in a session */
   int want_feedback, want_deformation;
+  /* Secured: the writer whose JOIN was accepted; only its disappearance (not
+   * another identity disposing this station's key) means the station is gone. */
+  dds_instance_handle_t writer;
 } station;
 
 typedef struct closed_session {
@@ -61,7 +66,16 @@ struct palp_srv {
 
   palp_SessionLoad *loads;
   atomic_int stop;
+
+  /* DDS Security (docs/security.md); sec.kind PALP_DDS_ID_NONE: plain DDS */
+  palp_dds_security sec;
+  dds_entity_t request_sub;
+  atomic_ullong refused_requests; /* not from the station's own identity, or not allowed */
+  int64_t refused_log_ns;     /* last log line about them */
+  uint64_t refused_unlogged;
 };
+
+static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
 
 static int fail(char *err, size_t errlen, const char *fmt, ...) {
   va_list ap;
@@ -79,6 +93,26 @@ static void logf_(const palp_srv *srv, const char *fmt, ...) {
   vfprintf(stderr, fmt, ap);
   fputc('\n', stderr);
   va_end(ap);
+}
+
+/* A request refused for its identity: counted, and logged at most once per
+ * log_interval with the number left unlogged (a peer may send thousands). */
+static void refuse(palp_srv *srv, const char *fmt, ...) {
+  srv->refused_requests++;
+  int64_t now = palp_dds_now_ns();
+  if (srv->refused_log_ns && now - srv->refused_log_ns < (int64_t)(srv->cfg.log_interval * 1e9)) {
+    srv->refused_unlogged++;
+    return;
+  }
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "palp-server: refused request: ");
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+  if (srv->refused_unlogged) fprintf(stderr, " (and %llu more since the last line)", (unsigned long long)srv->refused_unlogged);
+  fputc('\n', stderr);
+  srv->refused_unlogged = 0;
+  srv->refused_log_ns = now;
 }
 
 /* ---- phantoms and catalogue ------------------------------------------------ */
@@ -328,10 +362,17 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   publish_state(srv, s, 0, NULL, NULL);
 }
 
-static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
+/* who: the authenticated sender (secured), NULL on plain DDS; writer: its
+ * publication handle. */
+static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp_srv_requester *who,
+                        dds_instance_handle_t writer) {
   char why[128];
   if (rq->role > palp_ROLE_OBSERVER) {
     reply(srv, rq, NULL, "unknown role");
+    return;
+  }
+  if (who && who->kind == PALP_DDS_ID_INSTRUCTOR && rq->role == palp_ROLE_TRAINEE) {
+    reply(srv, rq, NULL, "an instructor identity follows sessions; palpating needs a trainee identity");
     return;
   }
   station *st = find_station(srv, rq->station_id, 1);
@@ -339,6 +380,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     reply(srv, rq, NULL, "too many stations");
     return;
   }
+  st->writer = writer;
   if (st->session_id) station_leave(srv, st, "re-joined");
   st->role = (int)rq->role;
   st->want_feedback = rq->want_feedback;
@@ -356,6 +398,10 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
       reply(srv, rq, NULL, why);
       return;
     }
+    /* Secured, the partition carries the trainee's identity, so that only its
+     * permissions (palp/s/NAME/...) allow writing contacts into it. */
+    char partition[64] = "";
+    if (who) palp_dds_secure_session_partition(who->name, srv->next_session_id, partition, sizeof partition);
     palp_srv_session_def d = {.id = srv->next_session_id,
                               .phantom = ph,
                               .cfg = &srv->cfg,
@@ -365,7 +411,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
                               .contact_topic = srv->topic[PALP_TOPIC_CONTACT],
                               .feedback_topic = srv->topic[PALP_TOPIC_FEEDBACK],
                               .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
-                              .events = srv->events};
+                              .events = srv->events,
+                              .partition = partition};
     int rc = 0;
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
@@ -398,12 +445,21 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
             s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
     return;
   }
-  /* Visual station or observer: a given session, else the newest on the phantom. */
+  /* Visual station or observer: a given session, else the newest on the phantom.
+   * Secured, a trainee identity may follow only its own sessions (its
+   * permissions would not let it read another's anyway); an instructor any. */
+  const char *only = who && who->kind == PALP_DDS_ID_TRAINEE ? who->name : NULL;
   if (rq->session_id) {
     s = find_session(srv, rq->session_id);
+    if (s && only && strcmp(s->trainee_name, only) != 0) {
+      snprintf(why, sizeof why, "session %u belongs to another trainee", rq->session_id);
+      reply(srv, rq, NULL, why);
+      return;
+    }
   } else {
     for (int i = 0; i < srv->session_count; i++) {
       palp_srv_session *c = srv->sessions[i];
+      if (only && strcmp(c->trainee_name, only) != 0) continue;
       if ((rq->phantom_id == 0 || c->phantom->cfg.id == rq->phantom_id) && (!s || c->id > s->id)) s = c;
     }
   }
@@ -436,8 +492,34 @@ static void handle_requests(palp_srv *srv) {
   while ((n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
+        palp_srv_requester who;
+        if (secured(srv)) {
+          /* The sender is the identity whose partition its writer is in (the
+           * access control plugin matched it only because its permissions allow
+           * it); a request for a station id that is not that identity's own is
+           * dropped unanswered, so no reply can land on another's station. */
+          buf[i].station_id[sizeof buf[i].station_id - 1] = 0;
+          buf[i].user_name[sizeof buf[i].user_name - 1] = 0;
+          if (palp_srv_requester_of(srv->request_r, info[i].publication_handle, &who) < 0) {
+            refuse(srv, "station \"%s\": the writer's identity is unknown", buf[i].station_id);
+            continue;
+          }
+          if (!palp_srv_station_owned_by(buf[i].station_id, &who)) {
+            refuse(srv, "%s/%s sent a request for station \"%s\", which is not its own",
+                   palp_dds_id_kind_name(who.kind), who.name, buf[i].station_id);
+            continue;
+          }
+          if (buf[i].op == palp_OP_JOIN && strcmp(buf[i].user_name, who.name) != 0) {
+            char why[160];
+            snprintf(why, sizeof why, "user_name \"%.40s\" is not the authenticated identity %s/%s", buf[i].user_name,
+                     palp_dds_id_kind_name(who.kind), who.name);
+            refuse(srv, "%s", why);
+            reply(srv, &buf[i], NULL, why);
+            continue;
+          }
+        }
         if (buf[i].op == palp_OP_JOIN)
-          handle_join(srv, &buf[i]);
+          handle_join(srv, &buf[i], secured(srv) ? &who : NULL, info[i].publication_handle);
         else {
           station *st = find_station(srv, buf[i].station_id, 0);
           if (st) {
@@ -454,6 +536,12 @@ static void handle_requests(palp_srv *srv) {
       if (dds_instance_get_key(srv->request_r, info[i].instance_handle, &key) != 0) continue;
       station *st = find_station(srv, key.station_id, 0);
       if (!st) continue;
+      /* Secured: a dispose or unregister by any writer but the station's own
+       * (another identity writing this key) says nothing about the station. */
+      if (secured(srv) && info[i].publication_handle != st->writer) {
+        refuse(srv, "station \"%s\": disposed or unregistered by a writer that is not its own", key.station_id);
+        continue;
+      }
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
        * forgets it), so reaching here means it vanished: its writer's automatic
        * liveliness (0.5 s) or its participant's lease (1 s) expired, and
@@ -571,11 +659,24 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     srv->phantom_count = i + (srv->phantom[i].template_world != NULL);
     if (*rc < 0) goto fail;
   }
-  srv->pp = dds_create_participant((dds_domainid_t)srv->cfg.domain_id, NULL, NULL);
+  if (srv->cfg.security_pki[0]) {
+    char msg[400] = "";
+    *rc = palp_dds_security_init(&srv->sec, srv->cfg.security_pki, srv->cfg.security_identity, msg, sizeof msg);
+    if (*rc == 0 && srv->sec.kind != PALP_DDS_ID_SERVER) {
+      snprintf(msg, sizeof msg, "identity \"%s\" is not the server's", srv->cfg.security_identity);
+      *rc = PALP_EINVAL;
+    }
+    if (*rc < 0) {
+      fail(err, errlen, "security: %s", msg);
+      goto fail;
+    }
+  }
+  srv->pp = palp_dds_create_participant((dds_domainid_t)srv->cfg.domain_id, &srv->sec);
   if (srv->pp < 0) {
     *rc = PALP_EIO;
-    fail(err, errlen, "dds_config: cannot create a DDS participant on domain %u: %s (CYCLONEDDS_URI=%s)",
-         srv->cfg.domain_id, dds_strretcode(srv->pp), getenv("CYCLONEDDS_URI") ? getenv("CYCLONEDDS_URI") : "");
+    fail(err, errlen, "dds_config: cannot create a DDS participant on domain %u: %s (CYCLONEDDS_URI=%s)%s",
+         srv->cfg.domain_id, dds_strretcode(srv->pp), getenv("CYCLONEDDS_URI") ? getenv("CYCLONEDDS_URI") : "",
+         secured(srv) ? "; DDS Security refused the identity (see above: revoked, expired, domain > 230?)" : "");
     goto fail;
   }
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
@@ -588,7 +689,17 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     }
   }
   srv->catalogue_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
-  srv->request_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  dds_entity_t request_parent = srv->pp;
+  if (secured(srv)) {
+    /* Requests come from each identity's own partition (palp/KIND/NAME). */
+    dds_qos_t *q = dds_create_qos();
+    dds_qset_partition(q, 2, (const char *[]){"palp/trainee/*", "palp/instructor/*"});
+    srv->request_sub = request_parent = dds_create_subscriber(srv->pp, q, NULL);
+    dds_delete_qos(q);
+  }
+  srv->request_r = request_parent < 0 ? request_parent
+                                      : palp_dds_create_reader(request_parent, srv->topic[PALP_TOPIC_SESSION_REQUEST],
+                                                               PALP_TOPIC_SESSION_REQUEST);
   srv->reply_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   srv->status_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
@@ -667,6 +778,8 @@ int palp_srv_run(palp_srv *srv, double duration) {
 
 int palp_srv_open_sessions(const palp_srv *srv) { return srv->session_count; }
 
+uint64_t palp_srv_refused_requests(palp_srv *srv) { return atomic_load(&srv->refused_requests); }
+
 static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state) {
   uint64_t rej = 0;
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) rej += s->rejected[r];
@@ -677,6 +790,10 @@ static void print_row(FILE *out, const palp_srv_session_summary *s, const char *
 }
 
 void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
+  if (secured(srv))
+    fprintf(out, "DDS Security on (identity %s/%s); requests refused for their identity: %llu\n",
+            palp_dds_id_kind_name(srv->sec.kind), srv->sec.name,
+            (unsigned long long)atomic_load(&((palp_srv *)srv)->refused_requests));
   fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
           "contacts", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
   for (int i = 0; i < srv->closed_count; i++) print_row(out, &srv->closed[i].sum, srv->closed[i].reason);
