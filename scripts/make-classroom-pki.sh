@@ -264,11 +264,13 @@ revoke)
   crl
   # The revoked files are kept aside (for the record), so the name can be issued again.
   mkdir -p "$dir/revoked"
+  set +f
   stamp=$(date -u +%Y%m%dT%H%M%S)
   for f in "$dir/$1".*; do mv "$f" "$dir/revoked/$(echo "$1" | tr / _)-$stamp.${f#"$dir/$1".}"; done
   echo "make-classroom-pki: $1 revoked; distribute $dir/crl.pem to every station and restart the server"
   ;;
 list)
+  set +f
   for c in "$dir"/*/*.cert.pem; do
     [ -f "$c" ] || continue
     echo "$(basename "$(dirname "$c")")/$(basename "$c" .cert.pem)  $(openssl x509 -in "$c" -noout -serial -enddate | tr '\n' ' ')"
