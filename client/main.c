@@ -33,6 +33,7 @@ typedef struct opts {
   double finger_radius_mm, patch_area_cm2;
   double rate, duration, timeout, print_period;
   const char *feedback_csv, *contact_csv, *svg, *trainee;
+  const char *pki, *identity; /* DDS Security (docs/security.md); env PALP_PKI / PALP_IDENTITY */
   double svg_every, map_every;
   double max_force, haptic_rate;
   int rt_priority;
@@ -45,6 +46,8 @@ static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-client --role trainee|visual|observer [options]\n"
           "common:   --domain N  --phantom ID  --session ID  --name NAME  --duration S  --timeout S  --quiet\n"
+          "secured:  --pki DIR --identity trainee/NAME|instructor/NAME (or PALP_PKI, PALP_IDENTITY):\n"
+          "          DDS Security with that identity (scripts/make-classroom-pki.sh); --name defaults to NAME\n"
           "trainee:  --input script|replay:FILE|keyboard|device:LIB.so[:ARG]   (default script)\n"
           "          --profile paper|step|ramp|sine  --distribution 1-4  --magnitude N  --t-on S --t-off S\n"
           "          --frequency HZ --offset N  --polar DEG --azimuth DEG  --patch-area CM2\n"
@@ -115,6 +118,8 @@ static int parse(int argc, char **argv, opts *o) {
     INT("--session", 0, 4294967295.0, o->session)
     STR("--name", o->name)
     STR("--trainee", o->trainee)
+    STR("--pki", o->pki)
+    STR("--identity", o->identity)
     STR("--input", o->input)
     STR("--profile", o->profile)
     INT("--distribution", 1, 4, o->distribution)
@@ -830,10 +835,28 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-client: %s\n", err);
     return 1;
   }
+  palp_dds_security sec;
+  int src = o.pki || o.identity ? palp_dds_security_init(&sec, o.pki, o.identity, err, sizeof err)
+                                : palp_dds_security_from_env(&sec, err, sizeof err);
+  if (src == 0 && (o.pki || o.identity) && sec.kind == PALP_DDS_ID_NONE) {
+    snprintf(err, sizeof err, "--pki and --identity go together");
+    src = -1;
+  }
+  if (src == 0 && sec.kind == PALP_DDS_ID_SERVER) {
+    snprintf(err, sizeof err, "--identity: a station is a trainee or an instructor, not the server");
+    src = -1;
+  }
+  if (src < 0) {
+    fprintf(stderr, "palp-client: %s\n", err);
+    if (in.close) in.close(in.ctx);
+    return 1;
+  }
+  /* A secured station is its identity: the server refuses another name. */
+  if (sec.kind != PALP_DDS_ID_NONE && !o.name[0]) o.name = sec.name;
   char label[64];
   snprintf(label, sizeof label, "%s%s%s", o.role, o.name[0] ? ":" : "", o.name);
   palp_cli_station st;
-  if (palp_cli_station_open(&st, o.domain, label, err, sizeof err) < 0) {
+  if (palp_cli_station_open_secure(&st, o.domain, label, &sec, err, sizeof err) < 0) {
     fprintf(stderr, "palp-client: %s\n", err);
     if (in.close) in.close(in.ctx);
     return 1;

@@ -25,14 +25,29 @@ static void nap(double s) {
 }
 
 int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *label, char *err, size_t errlen) {
+  return palp_cli_station_open_secure(st, domain, label, NULL, err, errlen);
+}
+
+int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const char *label,
+                                 const palp_dds_security *sec, char *err, size_t errlen) {
   memset(st, 0, sizeof *st);
+  if (sec) st->sec = *sec;
+  const int secured = st->sec.kind != PALP_DDS_ID_NONE;
   char host[32] = "host";
   gethostname(host, sizeof host - 1);
-  snprintf(st->station_id, sizeof st->station_id, "%.24s/%ld/%.24s", host, (long)getpid(), label ? label : "station");
-  st->pp = dds_create_participant((dds_domainid_t)domain, NULL, NULL);
+  if (secured) /* identity <= 42 characters, so the prefix always fits the 63 */
+    snprintf(st->station_id, sizeof st->station_id, "%s/%s/%.8s/%ld/%s", palp_dds_id_kind_name(st->sec.kind),
+             st->sec.name, host, (long)getpid(), label ? label : "station");
+  else
+    snprintf(st->station_id, sizeof st->station_id, "%.24s/%ld/%.24s", host, (long)getpid(),
+             label ? label : "station");
+  st->pp = palp_dds_create_participant((dds_domainid_t)domain, &st->sec);
   if (st->pp < 0)
-    return fail(err, errlen, PALP_EIO, "cannot create a DDS participant on domain %u: %s", domain,
-                dds_strretcode(st->pp));
+    return fail(err, errlen, PALP_EIO, "cannot create a DDS participant on domain %u: %s%s", domain,
+                dds_strretcode(st->pp),
+                secured ? " (DDS Security refused the identity: see the messages above; is the certificate revoked"
+                          " or expired, the domain above 230?)"
+                        : "");
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
     st->topic[k] = palp_dds_create_topic(st->pp, (palp_dds_topic_kind)k);
     if (st->topic[k] < 0) {
@@ -41,7 +56,16 @@ int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *lab
     }
   }
   st->catalogue_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
-  st->request_w = palp_dds_create_writer(st->pp, st->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  dds_entity_t request_parent = st->pp;
+  if (secured) {
+    char part[64];
+    palp_dds_request_partition(&st->sec, part, sizeof part);
+    st->request_pub = palp_dds_session_publisher(st->pp, part);
+    request_parent = st->request_pub;
+  }
+  st->request_w = request_parent < 0 ? request_parent
+                                     : palp_dds_create_writer(request_parent, st->topic[PALP_TOPIC_SESSION_REQUEST],
+                                                              PALP_TOPIC_SESSION_REQUEST);
   st->reply_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   st->state_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   if (st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
@@ -130,7 +154,11 @@ static int send_request(palp_cli_station *st, const palp_cli_join *j, int op) {
   rq.role = (palp_Role)j->role;
   rq.phantom_id = j->phantom_id;
   rq.session_id = j->session_id;
-  snprintf(rq.user_name, sizeof rq.user_name, "%s", j->user_name ? j->user_name : "");
+  /* A secured station is its identity: no name given means the identity's name. */
+  const char *user = j->user_name && j->user_name[0] ? j->user_name
+                     : st->sec.kind != PALP_DDS_ID_NONE ? st->sec.name
+                                                         : "";
+  snprintf(rq.user_name, sizeof rq.user_name, "%s", user);
   rq.want_feedback = j->want_feedback != 0;
   rq.want_deformation = j->want_deformation != 0;
   return dds_write(st->request_w, &rq) < 0 ? PALP_EIO : 0;

@@ -15,6 +15,7 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "palp_dds_security.h"
 
 typedef struct palp_cli_station {
   char station_id[64];
@@ -30,6 +31,8 @@ typedef struct palp_cli_station {
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
   uint32_t request_seq;
+  palp_dds_security sec;    /* identity; kind PALP_DDS_ID_NONE: plain DDS */
+  dds_entity_t request_pub; /* secured: the publisher in the identity's request partition */
 } palp_cli_station;
 
 typedef struct palp_cli_join {
@@ -45,6 +48,12 @@ typedef struct palp_cli_join {
 /* Creates the participant on `domain` (CYCLONEDDS_URI must be set) and the
  * global endpoints. label goes into the station id ("host/pid/label"). */
 int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *label, char *err, size_t errlen);
+/* As palp_cli_station_open, secured by sec (NULL or plain: not secured). A
+ * secured station's id starts with its identity ("trainee/alice/host/pid/label")
+ * and its requests go out in the identity's partition ("palp/trainee/alice"),
+ * the only one its permissions allow; the server checks both. */
+int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const char *label,
+                                 const palp_dds_security *sec, char *err, size_t errlen);
 void palp_cli_station_close(palp_cli_station *st);
 
 /* Waits up to timeout [s] for phantom_id in the catalogue (0: any; the first

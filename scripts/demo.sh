@@ -8,6 +8,8 @@
 # selects the build directory (default build/).
 #
 #   bash scripts/demo.sh            # logs and the SVG snapshot go to out/demo/
+#   PALP_SECURE=1 bash scripts/demo.sh   # the same classroom with DDS Security on: a classroom
+#                                        # CA and identities are made into out/pki (docs/security.md)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
@@ -31,6 +33,22 @@ out=${PALP_DEMO_OUT:-out/demo}
 mkdir -p "$out"
 rm -f "$out"/*.log "$out"/*.svg "$out"/*.csv
 
+# DDS Security (PALP_SECURE=1): every process gets an identity from the classroom PKI; the
+# quick local demo (the default) runs plain DDS.
+secure=${PALP_SECURE:-0}
+srv_sec=() alice_sec=(--name alice) bob_sec=(--name bob) visual_sec=(--name screen) observer_sec=(--name instructor)
+if [ "$secure" = 1 ]; then
+  pki=${PALP_PKI_DIR:-out/pki}
+  bash scripts/make-classroom-pki.sh "$pki" classroom --trainees alice,bob --instructors ines >/dev/null
+  echo "demo: DDS Security on: classroom CA and identities in $pki/ (server, trainee/alice, trainee/bob, instructor/ines)"
+  srv_sec=(--pki "$pki")
+  alice_sec=(--pki "$pki" --identity trainee/alice)
+  bob_sec=(--pki "$pki" --identity trainee/bob)
+  # bob's own screen (a trainee may watch only its own sessions); the instructor sees every session
+  visual_sec=(--pki "$pki" --identity trainee/bob)
+  observer_sec=(--pki "$pki" --identity instructor/ines)
+fi
+
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
@@ -40,7 +58,7 @@ trap cleanup EXIT
 # Sessions of this run only, for the review at the end (the log keeps every run).
 since=$(date +%Y-%m-%dT%H:%M:%S)
 echo "demo: palp-server on DDS domain $domain (loopback only), logs in $out/"
-"$server" --config config/server.json --domain "$domain" >"$out/server.log" 2>&1 &
+"$server" --config config/server.json --domain "$domain" "${srv_sec[@]}" >"$out/server.log" 2>&1 &
 server_pid=$!
 pids+=("$server_pid")
 for _ in $(seq 50); do
@@ -55,24 +73,24 @@ done
 
 # Trainee alice: the paper's protocol on phantom 1 - a 3 N step held 2 s with
 # distribution II (5.2 cm^2 uniform patch), then release and recovery.
-"$client" --role trainee --domain "$domain" --phantom 1 --name alice \
+"$client" --role trainee --domain "$domain" --phantom 1 "${alice_sec[@]}" \
   --profile step --magnitude 3 --t-on 0.5 --t-off 2.5 --distribution 2 --polar 30 --azimuth 40 \
   --duration 7 --print-period 1 --plot --feedback-csv "$out/alice-feedback.csv" --contact-csv "$out/alice-contact.csv" \
   >"$out/alice.log" 2>&1 &
 pids+=($!)
 alice=$!
 # Trainee bob: a distal-finger press (distribution IV) oscillating 1.5 +- 1 N at 1 Hz on phantom 2.
-"$client" --role trainee --domain "$domain" --phantom 2 --name bob \
+"$client" --role trainee --domain "$domain" --phantom 2 "${bob_sec[@]}" \
   --profile sine --magnitude 1 --offset 1.5 --frequency 1 --t-on 0.5 --t-off 5.5 --distribution 4 \
   --polar 20 --azimuth 200 --duration 7 --print-period 1 >"$out/bob.log" 2>&1 &
 pids+=($!)
 bob=$!
 # The visual station shows bob's phantom; the instructor follows alice.
-"$client" --role visual --domain "$domain" --phantom 2 --name screen --no-color --map-every 2 \
+"$client" --role visual --domain "$domain" --phantom 2 "${visual_sec[@]}" --no-color --map-every 2 \
   --svg "$out/bob-peak.svg" --duration 8 >"$out/visual.log" 2>&1 &
 pids+=($!)
 visual=$!
-"$client" --role observer --domain "$domain" --trainee alice --name instructor --print-period 1 --duration 8 \
+"$client" --role observer --domain "$domain" --trainee alice "${observer_sec[@]}" --print-period 1 --duration 8 \
   >"$out/observer.log" 2>&1 &
 pids+=($!)
 observer=$!

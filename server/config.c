@@ -44,6 +44,7 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   cfg->dds_log_lines = 10;
   cfg->dds_log_window = 10.0;
   snprintf(cfg->dds_config, sizeof cfg->dds_config, "cyclonedds-loopback.xml");
+  snprintf(cfg->security_identity, sizeof cfg->security_identity, "server");
 }
 
 static int resolve(const char *base_dir, const char *rel, char *out, size_t outlen) {
@@ -109,8 +110,9 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "database",       "phantoms",       "comment",
                                        "absurd_force",   "max_viewers",    "stations_per_writer",
                                        "join_rate",      "join_burst",     "closed_retention",
-                                       "dds_log_lines",  "dds_log_window",
+                                       "dds_log_lines",  "dds_log_window", "security",
                                        NULL};
+static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 
 static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_config *cfg, char *err,
@@ -145,6 +147,25 @@ static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_confi
     if ((rc = get_number(p, "physics_rate_hz", where, 1, 10000, 0, &ph->physics_rate_hz, err, errlen))) return rc;
   }
   cfg->phantom_count = n;
+  return 0;
+}
+
+/* "security": {"pki": DIR, "identity": "server"}: the classroom PKI made by
+ * scripts/make-classroom-pki.sh; the files themselves are checked when the
+ * participant is created (palp_dds_security_init). */
+static int parse_security(const cJSON *sec, const char *base_dir, palp_srv_config *cfg, char *err, size_t errlen) {
+  if (!sec) return 0;
+  if (!cJSON_IsObject(sec)) return fail(err, errlen, PALP_EPARSE, "security: expected an object");
+  int rc = check_keys(sec, "security.", security_keys, err, errlen);
+  if (rc) return rc;
+  char tmp[PALP_SRV_PATH_MAX] = "";
+  if ((rc = get_string(sec, "pki", "security.", 1, tmp, sizeof tmp, err, errlen))) return rc;
+  if (!tmp[0]) return fail(err, errlen, PALP_EINVAL, "security.pki: empty (leave \"security\" out for plain DDS)");
+  if (resolve(base_dir, tmp, cfg->security_pki, sizeof cfg->security_pki))
+    return fail(err, errlen, PALP_EINVAL, "security.pki: path too long");
+  if ((rc = get_string(sec, "identity", "security.", 0, cfg->security_identity, sizeof cfg->security_identity, err,
+                       errlen)))
+    return rc;
   return 0;
 }
 
@@ -245,6 +266,7 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
       goto out;
     }
   }
+  if ((rc = parse_security(cJSON_GetObjectItemCaseSensitive(root, "security"), base_dir, cfg, err, errlen))) goto out;
   rc = parse_phantoms(cJSON_GetObjectItemCaseSensitive(root, "phantoms"), base_dir, cfg, err, errlen);
 out:
   cJSON_Delete(root);

@@ -53,6 +53,10 @@ typedef struct palp_srv_config {
   double dds_log_window;       /* [s] */
   char dds_config[PALP_SRV_PATH_MAX]; /* Cyclone XML, resolved against the config's directory */
   char database[PALP_SRV_PATH_MAX];   /* SQLite session log; "" disables logging */
+  /* DDS Security ("security": {"pki": DIR, "identity": "server"}; docs/security.md):
+   * pki "" runs plain DDS (the quick local demo). */
+  char security_pki[PALP_SRV_PATH_MAX]; /* resolved against the config's directory */
+  char security_identity[64];           /* default "server" */
   int phantom_count;
   palp_srv_phantom_cfg phantom[PALP_SRV_MAX_PHANTOMS];
 } palp_srv_config;

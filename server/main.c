@@ -26,7 +26,9 @@ static void usage(FILE *f) {
           "  --duration S         stop after S seconds (default: until SIGINT/SIGTERM)\n"
           "  --check              validate the configuration and the scenes, then exit\n"
           "  --verbose            log every station join/leave\n"
-          "  --no-db              do not write the session log (config \"database\")\n",
+          "  --no-db              do not write the session log (config \"database\")\n"
+          "  --pki DIR            DDS Security with the classroom PKI in DIR (config \"security\"; docs/security.md)\n"
+          "  --identity ID        the server's identity in the PKI (default server)\n",
           PALP_CONFIG_DIR);
 }
 
@@ -80,6 +82,7 @@ int main(int argc, char **argv) {
   const char *config_path = PALP_CONFIG_DIR "/server.json";
   double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
   int check = 0, verbose = 0, no_db = 0;
+  const char *pki = NULL, *identity = NULL;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     int bad = 0;
@@ -93,6 +96,8 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--check")) check = 1;
     else if (!strcmp(a, "--verbose")) verbose = 1;
     else if (!strcmp(a, "--no-db")) no_db = 1;
+    else if (!strcmp(a, "--pki") && v) pki = argv[++i];
+    else if (!strcmp(a, "--identity") && v) identity = argv[++i];
     else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       usage(stdout);
       return 0;
@@ -118,6 +123,8 @@ int main(int argc, char **argv) {
   if (max_sessions > 0) def.cfg.max_sessions = (int)max_sessions;
   if (prio >= 0) def.cfg.tick_priority = (int)prio;
   def.verbose = verbose;
+  if (pki) snprintf(def.cfg.security_pki, sizeof def.cfg.security_pki, "%s", pki);
+  if (identity) snprintf(def.cfg.security_identity, sizeof def.cfg.security_identity, "%s", identity);
   if (palp_dds_use_config(def.cfg.dds_config) < 0) {
     fprintf(stderr, "palp-server: bad configuration: %s: dds_config: cannot read %s\n", config_path,
             def.cfg.dds_config);

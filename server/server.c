@@ -11,9 +11,11 @@
 #include <dds/dds.h>
 
 #include "palp.h"
+#include "identity.h"
 #include "palp_dds.h"
 #include "admission.h"
 #include "retire.h"
+#include "palp_dds_security.h"
 #include "session.h"
 #include "ticker.h"
 
@@ -30,7 +32,9 @@ typedef struct station {
   char id[64];
   int role;            /* palp_Role */
   uint32_t session_id; /* the session it is in */
-  uint64_t writer;     /* publication handle of its request writer */
+  uint64_t writer;     /* publication handle of its request writer; secured, only its
+                          disappearance (not another identity disposing this station's
+                          key) means the station is gone */
   int want_feedback, want_deformation;
 } station;
 
@@ -82,7 +86,16 @@ struct palp_srv {
 
   palp_SessionLoad *loads;
   atomic_int stop;
+
+  /* DDS Security (docs/security.md); sec.kind PALP_DDS_ID_NONE: plain DDS */
+  palp_dds_security sec;
+  dds_entity_t request_sub;
+  atomic_ullong refused_requests; /* not from the station's own identity, or not allowed */
+  int64_t refused_log_ns;     /* last log line about them */
+  uint64_t refused_unlogged;
 };
+
+static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
 
 static int fail(char *err, size_t errlen, const char *fmt, ...) {
   va_list ap;
@@ -100,6 +113,26 @@ static void logf_(const palp_srv *srv, const char *fmt, ...) {
   vfprintf(stderr, fmt, ap);
   fputc('\n', stderr);
   va_end(ap);
+}
+
+/* A request refused for its identity: counted, and logged at most once per
+ * log_interval with the number left unlogged (a peer may send thousands). */
+static void refuse_identity(palp_srv *srv, const char *fmt, ...) {
+  srv->refused_requests++;
+  int64_t now = palp_dds_now_ns();
+  if (srv->refused_log_ns && now - srv->refused_log_ns < (int64_t)(srv->cfg.log_interval * 1e9)) {
+    srv->refused_unlogged++;
+    return;
+  }
+  va_list ap;
+  va_start(ap, fmt);
+  fprintf(stderr, "palp-server: refused request: ");
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+  if (srv->refused_unlogged) fprintf(stderr, " (and %llu more since the last line)", (unsigned long long)srv->refused_unlogged);
+  fputc('\n', stderr);
+  srv->refused_unlogged = 0;
+  srv->refused_log_ns = now;
 }
 
 /* ---- phantoms and catalogue ------------------------------------------------ */
@@ -420,11 +453,19 @@ static void refuse(palp_srv *srv, const palp_SessionRequest *rq, uint64_t *count
   if (!find_station(srv, rq->station_id)) retire_reply(srv, rq->station_id);
 }
 
-static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, uint64_t writer) {
+/* who: the authenticated sender (secured), NULL on plain DDS; writer: its
+ * publication handle. */
+static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp_srv_requester *who,
+                        uint64_t writer) {
   char why[128];
   guard_counts *g = &srv->guard;
   if (rq->role > palp_ROLE_OBSERVER) {
     refuse(srv, rq, &g->joins_refused_other, "unknown role");
+    return;
+  }
+  if (who && who->kind == PALP_DDS_ID_INSTRUCTOR && rq->role == palp_ROLE_TRAINEE) {
+    refuse(srv, rq, &g->joins_refused_other,
+           "an instructor identity follows sessions; palpating needs a trainee identity");
     return;
   }
   if (!palp_srv_admission_join_token(srv->admission, palp_dds_now_ns())) {
@@ -454,6 +495,10 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, uint64_t w
       refuse(srv, rq, &g->joins_refused_other, why);
       return;
     }
+    /* Secured, the partition carries the trainee's identity, so that only its
+     * permissions (palp/s/NAME/...) allow writing contacts into it. */
+    char partition[64] = "";
+    if (who) palp_dds_secure_session_partition(who->name, srv->next_session_id, partition, sizeof partition);
     palp_srv_session_def d = {.id = srv->next_session_id,
                               .phantom = ph,
                               .cfg = &srv->cfg,
@@ -464,7 +509,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, uint64_t w
                               .feedback_topic = srv->topic[PALP_TOPIC_FEEDBACK],
                               .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
                               .local_model_topic = srv->topic[PALP_TOPIC_LOCAL_MODEL],
-                              .events = srv->events};
+                              .events = srv->events,
+                              .partition = partition};
     int rc = 0;
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
@@ -507,12 +553,21 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, uint64_t w
             s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
     return;
   }
-  /* Visual station or observer: a given session, else the newest on the phantom. */
+  /* Visual station or observer: a given session, else the newest on the phantom.
+   * Secured, a trainee identity may follow only its own sessions (its
+   * permissions would not let it read another's anyway); an instructor any. */
+  const char *only = who && who->kind == PALP_DDS_ID_TRAINEE ? who->name : NULL;
   if (rq->session_id) {
     s = find_session(srv, rq->session_id);
+    if (s && only && strcmp(s->trainee_name, only) != 0) {
+      snprintf(why, sizeof why, "session %u belongs to another trainee", rq->session_id);
+      reply(srv, rq, NULL, why);
+      return;
+    }
   } else {
     for (int i = 0; i < srv->session_count; i++) {
       palp_srv_session *c = srv->sessions[i];
+      if (only && strcmp(c->trainee_name, only) != 0) continue;
       if ((rq->phantom_id == 0 || c->phantom->cfg.id == rq->phantom_id) && (!s || c->id > s->id)) s = c;
     }
   }
@@ -564,8 +619,32 @@ static void handle_requests(palp_srv *srv) {
          * not be NUL-terminated where we expect: terminate before use. */
         buf[i].station_id[sizeof buf[i].station_id - 1] = '\0';
         buf[i].user_name[sizeof buf[i].user_name - 1] = '\0';
+        palp_srv_requester who;
+        if (secured(srv)) {
+          /* The sender is the identity whose partition its writer is in (the
+           * access control plugin matched it only because its permissions allow
+           * it); a request for a station id that is not that identity's own is
+           * dropped unanswered, so no reply can land on another's station. */
+          if (palp_srv_requester_of(srv->request_r, info[i].publication_handle, &who) < 0) {
+            refuse_identity(srv, "station \"%s\": the writer's identity is unknown", buf[i].station_id);
+            continue;
+          }
+          if (!palp_srv_station_owned_by(buf[i].station_id, &who)) {
+            refuse_identity(srv, "%s/%s sent a request for station \"%s\", which is not its own",
+                            palp_dds_id_kind_name(who.kind), who.name, buf[i].station_id);
+            continue;
+          }
+          if (buf[i].op == palp_OP_JOIN && strcmp(buf[i].user_name, who.name) != 0) {
+            char why[160];
+            snprintf(why, sizeof why, "user_name \"%.40s\" is not the authenticated identity %s/%s", buf[i].user_name,
+                     palp_dds_id_kind_name(who.kind), who.name);
+            refuse_identity(srv, "%s", why);
+            reply(srv, &buf[i], NULL, why);
+            continue;
+          }
+        }
         if (buf[i].op == palp_OP_JOIN)
-          handle_join(srv, &buf[i], info[i].publication_handle);
+          handle_join(srv, &buf[i], secured(srv) ? &who : NULL, info[i].publication_handle);
         else {
           station *st = find_station(srv, buf[i].station_id);
           if (st) station_leave(srv, st, "left");
@@ -582,6 +661,13 @@ static void handle_requests(palp_srv *srv) {
       buf[i].station_id[sizeof buf[i].station_id - 1] = '\0';
       station *st = find_station(srv, buf[i].station_id);
       if (!st) continue;
+      /* Secured: a dispose or unregister by any writer but the station's own
+       * (another identity writing this key) says nothing about the station. */
+      if (secured(srv) && info[i].publication_handle != st->writer) {
+        refuse_identity(srv, "station \"%s\": disposed or unregistered by a writer that is not its own",
+                        buf[i].station_id);
+        continue;
+      }
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
        * forgets it), so reaching here means it vanished: its writer's automatic
        * liveliness (0.5 s) or its participant's lease (1 s) expired, and
@@ -739,11 +825,24 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   }
   if (palp_dds_log_limit_install(&srv->dds_log, stderr, srv->cfg.dds_log_lines, srv->cfg.dds_log_window) == 0)
     srv->dds_log_installed = 1;
-  srv->pp = dds_create_participant((dds_domainid_t)srv->cfg.domain_id, NULL, NULL);
+  if (srv->cfg.security_pki[0]) {
+    char msg[400] = "";
+    *rc = palp_dds_security_init(&srv->sec, srv->cfg.security_pki, srv->cfg.security_identity, msg, sizeof msg);
+    if (*rc == 0 && srv->sec.kind != PALP_DDS_ID_SERVER) {
+      snprintf(msg, sizeof msg, "identity \"%s\" is not the server's", srv->cfg.security_identity);
+      *rc = PALP_EINVAL;
+    }
+    if (*rc < 0) {
+      fail(err, errlen, "security: %s", msg);
+      goto fail;
+    }
+  }
+  srv->pp = palp_dds_create_participant((dds_domainid_t)srv->cfg.domain_id, &srv->sec);
   if (srv->pp < 0) {
     *rc = PALP_EIO;
-    fail(err, errlen, "dds_config: cannot create a DDS participant on domain %u: %s (CYCLONEDDS_URI=%s)",
-         srv->cfg.domain_id, dds_strretcode(srv->pp), getenv("CYCLONEDDS_URI") ? getenv("CYCLONEDDS_URI") : "");
+    fail(err, errlen, "dds_config: cannot create a DDS participant on domain %u: %s (CYCLONEDDS_URI=%s)%s",
+         srv->cfg.domain_id, dds_strretcode(srv->pp), getenv("CYCLONEDDS_URI") ? getenv("CYCLONEDDS_URI") : "",
+         secured(srv) ? "; DDS Security refused the identity (see above: revoked, expired, domain > 230?)" : "");
     goto fail;
   }
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
@@ -757,7 +856,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   }
   srv->catalogue_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   /* The request reader sits on a topic entity of its own, which carries the
-   * admission filter (a filter applies to every reader of its topic entity). */
+   * admission filter (a filter applies to every reader of its topic entity);
+   * secured, under a subscriber in each identity's own partition (palp/KIND/NAME). */
   srv->request_topic = palp_dds_create_topic(srv->pp, PALP_TOPIC_SESSION_REQUEST);
   {
     struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_SAMPLEINFO_ARG,
@@ -769,7 +869,15 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
       goto fail;
     }
   }
-  srv->request_r = palp_dds_create_reader(srv->pp, srv->request_topic, PALP_TOPIC_SESSION_REQUEST);
+  dds_entity_t request_parent = srv->pp;
+  if (secured(srv)) {
+    dds_qos_t *q = dds_create_qos();
+    dds_qset_partition(q, 2, (const char *[]){"palp/trainee/*", "palp/instructor/*"});
+    srv->request_sub = request_parent = dds_create_subscriber(srv->pp, q, NULL);
+    dds_delete_qos(q);
+  }
+  srv->request_r = request_parent < 0 ? request_parent
+                                      : palp_dds_create_reader(request_parent, srv->request_topic, PALP_TOPIC_SESSION_REQUEST);
   srv->guard_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_GUARD], PALP_TOPIC_SERVER_GUARD);
   srv->reply_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
@@ -859,6 +967,8 @@ int palp_srv_run(palp_srv *srv, double duration) {
 
 int palp_srv_open_sessions(const palp_srv *srv) { return srv->session_count; }
 
+uint64_t palp_srv_refused_requests(palp_srv *srv) { return atomic_load(&srv->refused_requests); }
+
 static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state) {
   uint64_t rej = 0;
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) rej += s->rejected[r];
@@ -869,6 +979,10 @@ static void print_row(FILE *out, const palp_srv_session_summary *s, const char *
 }
 
 void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
+  if (secured(srv))
+    fprintf(out, "DDS Security on (identity %s/%s); requests refused for their identity: %llu\n",
+            palp_dds_id_kind_name(srv->sec.kind), srv->sec.name,
+            (unsigned long long)atomic_load(&((palp_srv *)srv)->refused_requests));
   fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
           "contacts", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
   if (srv->sessions_forgotten)

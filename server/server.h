@@ -11,6 +11,7 @@
 #ifndef PALP_SRV_SERVER_H
 #define PALP_SRV_SERVER_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 #include "config.h"
@@ -35,6 +36,9 @@ void palp_srv_request_stop(palp_srv *srv);
 /* Per-session table of every session the server ran (open ones too). */
 void palp_srv_print_summary(const palp_srv *srv, FILE *out);
 int palp_srv_open_sessions(const palp_srv *srv);
+/* Secured: session requests refused because they were not the sender's own
+ * (another identity's station id, user name or disposal); any thread. */
+uint64_t palp_srv_refused_requests(palp_srv *srv);
 void palp_srv_destroy(palp_srv *srv);
 
 #endif

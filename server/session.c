@@ -58,7 +58,10 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->deformation_period = 1.0 / def->cfg->deformation_rate_hz;
   snprintf(s->trainee_station, sizeof s->trainee_station, "%s", def->trainee_station);
   snprintf(s->trainee_name, sizeof s->trainee_name, "%s", def->trainee_name);
-  palp_dds_session_partition(s->id, s->partition, sizeof s->partition);
+  if (def->partition && def->partition[0])
+    snprintf(s->partition, sizeof s->partition, "%s", def->partition);
+  else
+    palp_dds_session_partition(s->id, s->partition, sizeof s->partition);
   for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) s->finger[i].world_contact = -1;
 
   /* Built the way a recorder replays it (db/palp_db.h): the scene with its own

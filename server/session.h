@@ -62,6 +62,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t contact_topic, feedback_topic, deformation_topic;
   dds_entity_t local_model_topic; /* 0: no local models (older callers) */
   const palp_srv_events *events; /* may be NULL */
+  const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
 } palp_srv_session_def;
 
 typedef struct palp_srv_session {

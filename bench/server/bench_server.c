@@ -13,8 +13,16 @@
  *    time-varying force so its world never sleeps) until more than 1 % of ticks
  *    overrun over a 2 s window, read from palp_server_status.
  *
+ * 4. --secure: latency and capacity with DDS Security off, then on, in the same run
+ *    (docs/security.md): a classroom PKI is made in /tmp/palp-bench-pki by
+ *    scripts/make-classroom-pki.sh; the server runs with its identity, every bench
+ *    station with the trainee identity "bench" (Cyclone 0.10.2 gives all secured
+ *    participants of one process the permissions of the first, so one identity).
+ *
  * usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N]
- *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE]
+ *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]
+ * --overrun-limit: keep adding sessions until this share of ticks overruns (default 1), e.g. 100
+ * to compare tick time and load at equal session counts on a busy machine.
  * --scene: the phantoms' scene (absolute path; default config/paper_step.json with the
  * shipped calibrated parameters), e.g. one with params/handset.json as a baseline.
  */
@@ -30,6 +38,7 @@
 
 #include "input.h"
 #include "palp_dds.h"
+#include "palp_dds_security.h"
 #include "station.h"
 
 extern char **environ;
@@ -37,6 +46,10 @@ extern char **environ;
 #define DOMAIN_LAT 150
 #define DOMAIN_CAP 151
 #define DOMAIN_RTT 152
+/* secured runs: the security work's own domain range (130-149) */
+#define DOMAIN_LAT_SECURE 142
+#define DOMAIN_CAP_SECURE 143
+#define BENCH_PKI "/tmp/palp-bench-pki"
 
 static double seconds = 5.0;
 static int threads = 2, max_sessions = 48;
@@ -44,6 +57,12 @@ static const char *scene_path = PALP_CONFIG_DIR "/paper_step.json"; /* --scene: 
 static double contact_rate = 100.0;
 static int rt_priority = 0;
 static int no_db = 0;
+static double overrun_limit = 0.01; /* --overrun-limit PCT: stop adding sessions above this */
+static int secure = 0;             /* this pass runs with DDS Security */
+static palp_dds_security bench_sec; /* trainee/bench in BENCH_PKI */
+
+static unsigned lat_domain(void) { return secure ? DOMAIN_LAT_SECURE : DOMAIN_LAT; }
+static unsigned cap_domain(void) { return secure ? DOMAIN_CAP_SECURE : DOMAIN_CAP; }
 
 static void nap(double s) {
   struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
@@ -96,8 +115,15 @@ static pid_t spawn_server(unsigned domain, double rate) {
           "              {\"id\": 2, \"name\": \"bench B\", \"scene\": \"%s\"}]}\n",
           db_path, PALP_DDS_DEFAULT_CONFIG, scene_path, scene_path);
   fclose(cf);
-  char *argv[] = {PALP_SERVER_PATH, "--config", (char *)cfg_path, "--domain", d, "--tick-rate", r,
-                  "--threads", t, "--max-sessions", m, "--rt-priority", pr, no_db ? "--no-db" : NULL, NULL};
+  char *argv[20] = {PALP_SERVER_PATH, "--config", (char *)cfg_path, "--domain", d, "--tick-rate", r,
+                    "--threads", t, "--max-sessions", m, "--rt-priority", pr};
+  int argc = 13;
+  if (secure) {
+    argv[argc++] = "--pki";
+    argv[argc++] = BENCH_PKI;
+  }
+  if (no_db) argv[argc++] = "--no-db";
+  argv[argc] = NULL;
   pid_t pid;
   /* The server's own log goes to a file; the bench prints its figures. */
   posix_spawn_file_actions_t fa;
@@ -120,16 +146,22 @@ static void stop_child(pid_t pid) {
 
 static void join_or_die(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom) {
   char err[512];
-  if (palp_cli_station_open(st, domain, label, err, sizeof err) < 0) {
+  if (palp_cli_station_open_secure(st, domain, label, secure ? &bench_sec : NULL, err, sizeof err) < 0) {
     fprintf(stderr, "bench: %s\n", err);
     exit(1);
   }
-  palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = phantom, .user_name = label, .want_feedback = 1,
+  palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = phantom, .user_name = secure ? NULL : label,
+                     .want_feedback = 1,
                      .timeout = 15};
   if (palp_cli_station_join(st, &j, err, sizeof err) < 0) {
     fprintf(stderr, "bench: %s: %s\n", label, err);
     exit(1);
   }
+  /* Measure only once the server reads this station's contacts: secured
+   * endpoints match after their crypto tokens are exchanged, which takes longer. */
+  int64_t end = palp_dds_now_ns() + 10000000000LL;
+  dds_instance_handle_t h[4];
+  while (dds_get_matched_subscriptions(st->contact_w, h, 4) < 1 && palp_dds_now_ns() < end) nap(0.01);
 }
 
 static void fill_contact(palp_Contact *c, uint32_t session, uint64_t seq, double force) {
@@ -149,9 +181,9 @@ static void fill_contact(palp_Contact *c, uint32_t session, uint64_t seq, double
 /* ---- 1. contact -> feedback latency ------------------------------------------------------ */
 
 static stats latency_run(double rate) {
-  pid_t srv = spawn_server(DOMAIN_LAT, rate);
+  pid_t srv = spawn_server(lat_domain(), rate);
   palp_cli_station st;
-  join_or_die(&st, DOMAIN_LAT, "bench-latency", 1);
+  join_or_die(&st, lat_domain(), "bench-latency", 1);
   dds_entity_t ws = dds_create_waitset(st.pp);
   dds_entity_t rc = dds_create_readcondition(st.feedback_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, rc, 0);
@@ -353,12 +385,15 @@ static void drain_all(palp_cli_station *st, int n) {
 }
 
 static void capacity_run(void) {
-  pid_t srv = spawn_server(DOMAIN_CAP, 1000);
+  pid_t srv = spawn_server(cap_domain(), 1000);
   palp_cli_station *st = calloc((size_t)max_sessions, sizeof *st);
   uint64_t *seq = calloc((size_t)max_sessions, sizeof *seq);
   char err[256];
   palp_cli_station mon;
-  if (palp_cli_station_open(&mon, DOMAIN_CAP, "bench-monitor", err, sizeof err) < 0) exit(1);
+  if (palp_cli_station_open_secure(&mon, cap_domain(), "bench-monitor", secure ? &bench_sec : NULL, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: %s\n", err);
+    exit(1);
+  }
   dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   static const int steps[] = {1, 2, 4, 8, 10, 12, 14, 16, 20, 24, 28, 32, 36, 40, 44, 48, 56, 64};
   int n = 0, held = 0;
@@ -370,7 +405,7 @@ static void capacity_run(void) {
     while (n < steps[k]) {
       char label[32];
       snprintf(label, sizeof label, "bench-%02d", n);
-      join_or_die(&st[n], DOMAIN_CAP, label, (uint32_t)(1 + n % 2));
+      join_or_die(&st[n], cap_domain(), label, (uint32_t)(1 + n % 2));
       n++;
     }
     /* settle 1 s, then a 2 s window between two status samples */
@@ -399,10 +434,11 @@ static void capacity_run(void) {
     double frac = (double)(b.overruns - a.overruns) / (double)(b.ticks - a.ticks);
     printf("  %8d  %7.2f%%  %13.0f  %13.0f  %4.0f%%\n", n, 100 * frac, b.p99, b.max, 100 * b.load);
     fflush(stdout);
-    if (frac > 0.01) break;
+    if (frac > overrun_limit) break;
     held = n;
   }
-  printf("capacity: %d concurrent 1 kHz sessions held with <= 1%% overrun ticks (target 32)\n", held);
+  printf("capacity%s: %d concurrent 1 kHz sessions held with <= %g%% overrun ticks (target 32 at 1%%)\n",
+         secure ? " (DDS Security on)" : "", held, 100 * overrun_limit);
   for (int i = 0; i < n; i++) palp_cli_station_leave(&st[i]);
   nap(0.2);
   for (int i = 0; i < n; i++) palp_cli_station_close(&st[i]);
@@ -414,6 +450,7 @@ static void capacity_run(void) {
 
 int main(int argc, char **argv) {
   const char *what = "all";
+  int compare_secure = 0;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--seconds") && i + 1 < argc) seconds = atof(argv[++i]);
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
@@ -421,11 +458,13 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--contact-rate") && i + 1 < argc) contact_rate = atof(argv[++i]);
     else if (!strcmp(argv[i], "--rt-priority") && i + 1 < argc) rt_priority = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--no-db")) no_db = 1;
+    else if (!strcmp(argv[i], "--secure")) compare_secure = 1;
+    else if (!strcmp(argv[i], "--overrun-limit") && i + 1 < argc) overrun_limit = atof(argv[++i]) / 100.0;
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_path = argv[++i];
     else if (argv[i][0] != '-') what = argv[i];
     else {
       fprintf(stderr, "usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N] "
-                      "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE]\n");
+                      "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]\n");
       return 2;
     }
   }
@@ -434,8 +473,19 @@ int main(int argc, char **argv) {
     return 1;
   }
   if (!strcmp(what, "echo")) return echo_main();
+  if (compare_secure) {
+    char cmd[1024], err[512];
+    snprintf(cmd, sizeof cmd, "bash '%s/../scripts/make-classroom-pki.sh' %s classroom --trainees bench >/dev/null",
+             PALP_CONFIG_DIR, BENCH_PKI);
+    if (system(cmd) != 0 || palp_dds_security_init(&bench_sec, BENCH_PKI, "trainee/bench", err, sizeof err) < 0) {
+      fprintf(stderr, "bench: cannot make the classroom PKI in %s\n", BENCH_PKI);
+      return 1;
+    }
+  }
   int all = !strcmp(what, "all");
-  if (all || !strcmp(what, "latency") || !strcmp(what, "rtt")) {
+  for (secure = 0; secure <= compare_secure; secure++) {
+  if (compare_secure) printf("\n==== DDS Security %s ====\n", secure ? "ON (authenticated, signed RTPS, encrypted data)" : "off");
+  if (all || !strcmp(what, "latency") || (!strcmp(what, "rtt") && !secure)) {
     printf("contact -> feedback latency over DDS (palp-server in its own process), %.0f s per rate\n", seconds);
     printf("  %-34s %9s %9s %9s %9s %7s\n", "", "p50[us]", "p99[us]", "max[us]", "mean[us]", "n");
     for (int k = 0; k < 2; k++) {
@@ -445,6 +495,7 @@ int main(int argc, char **argv) {
         printf("  contact->feedback at %4.0f Hz ticks   %9.0f %9.0f %9.0f %9.0f %7zu\n", rate, s.p50, s.p99, s.max,
                s.mean, s.n);
       }
+      if (secure) continue; /* the round trip's bench topics are in no permissions document */
       stats b = rtt_run(rate, argv[0]);
       printf("  plain DDS round trip, %4.0f Hz sends %9.0f %9.0f %9.0f %9.0f %7zu\n", rate, b.p50, b.p99, b.max, b.mean,
              b.n);
@@ -453,5 +504,6 @@ int main(int argc, char **argv) {
     printf("  (target: p99 < 3000 us at 1 kHz; the tick adds up to one period of waiting, mean half a period)\n");
   }
   if (all || !strcmp(what, "capacity")) capacity_run();
+  }
   return 0;
 }

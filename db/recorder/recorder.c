@@ -25,6 +25,7 @@
 
 #include "palp_db.h"
 #include "palp_dds.h"
+#include "palp_dds_security.h"
 
 #define MAX_PHANTOMS 64
 #define MAX_SESSIONS 1024
@@ -360,13 +361,14 @@ static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dd
 
 static void usage(FILE *f) {
   fputs("usage: palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S]\n"
+        "                     [--pki DIR --identity instructor/NAME]   (DDS Security; or PALP_PKI, PALP_IDENTITY)\n"
         "Records every classroom session seen on DDS into the session log until SIGINT/SIGTERM\n"
         "(or for S seconds). The DDS config defaults to the loopback-only config/cyclonedds-loopback.xml.\n",
         f);
 }
 
 int main(int argc, char **argv) {
-  const char *db = NULL, *config = NULL;
+  const char *db = NULL, *config = NULL, *pki = NULL, *identity = NULL;
   dds_domainid_t domain = DDS_DOMAIN_DEFAULT;
   double duration = 0;
   for (int i = 1; i < argc; i++) {
@@ -381,6 +383,8 @@ int main(int argc, char **argv) {
     }
     if (!strcmp(a, "--db")) db = argv[++i];
     else if (!strcmp(a, "--dds-config")) config = argv[++i];
+    else if (!strcmp(a, "--pki")) pki = argv[++i];
+    else if (!strcmp(a, "--identity")) identity = argv[++i];
     else if (!strcmp(a, "--domain")) {
       char *end;
       long v = strtol(argv[++i], &end, 10);
@@ -409,14 +413,27 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-recorder: DDS config %s not found\n", config ? config : "(default)");
     return 2;
   }
-  recorder *r = calloc(1, sizeof *r);
+  /* Secured, the recorder needs an identity that reads every session: an
+   * instructor's (docs/security.md). */
+  palp_dds_security sec;
   char err[512];
+  int src = pki || identity ? palp_dds_security_init(&sec, pki, identity, err, sizeof err)
+                            : palp_dds_security_from_env(&sec, err, sizeof err);
+  if (src == 0 && (pki || identity) && sec.kind == PALP_DDS_ID_NONE) {
+    snprintf(err, sizeof err, "--pki and --identity go together");
+    src = -1;
+  }
+  if (src < 0) {
+    fprintf(stderr, "palp-recorder: %s\n", err);
+    return 2;
+  }
+  recorder *r = calloc(1, sizeof *r);
   if (!r || palp_db_writer_open(db, NULL, &r->w, err, sizeof err) != 0) {
     fprintf(stderr, "palp-recorder: %s\n", r ? err : "out of memory");
     free(r);
     return 1;
   }
-  dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
+  dds_entity_t pp = palp_dds_create_participant(domain, &sec);
   if (pp < 0) {
     fprintf(stderr, "palp-recorder: cannot create a DDS participant: %s\n", dds_strretcode(pp));
     palp_db_writer_close(r->w);
@@ -429,6 +446,8 @@ int main(int argc, char **argv) {
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
   char *z = strrchr(wildcard, '/');
   if (z) snprintf(z + 1, sizeof wildcard - (size_t)(z + 1 - wildcard), "*");
+  /* secured sessions live in palp/s/TRAINEE/ID */
+  if (sec.kind != PALP_DDS_ID_NONE) snprintf(wildcard, sizeof wildcard, "palp/s/*");
   dds_entity_t sub = palp_dds_session_subscriber(pp, wildcard);
   dds_entity_t rd[5] = {
       reader_deep(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),

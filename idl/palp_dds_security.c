@@ -1,0 +1,192 @@
+/* palp_dds_security.c - DDS Security properties and identity naming for palp processes. */
+/* realpath() is XSI. */
+#define _XOPEN_SOURCE 700
+#include "palp_dds_security.h"
+
+#include <limits.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "palp.h" /* PALP_E* codes only */
+
+/* Where Debian's libddsc0debian keeps the plugins (not on the loader path);
+ * PALP_DDS_SECURITY_LIBDIR in the environment overrides the build's choice. */
+#ifndef PALP_DDS_SECURITY_LIBDIR
+#define PALP_DDS_SECURITY_LIBDIR ""
+#endif
+
+static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
+  if (err && errlen) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+  }
+  return code;
+}
+
+const char *palp_dds_id_kind_name(palp_dds_id_kind kind) {
+  switch (kind) {
+  case PALP_DDS_ID_SERVER: return "server";
+  case PALP_DDS_ID_TRAINEE: return "trainee";
+  case PALP_DDS_ID_INSTRUCTOR: return "instructor";
+  default: return NULL;
+  }
+}
+
+/* Names go into partition names and permission patterns, whose matching
+ * (fnmatch) and subject-name parsing (',', '/', '=') would give other
+ * characters a meaning. */
+static int valid_name(const char *s, size_t n) {
+  if (n == 0 || n >= PALP_DDS_NAME_MAX) return 0;
+  for (size_t i = 0; i < n; i++) {
+    char c = s[i];
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_')) return 0;
+  }
+  return 1;
+}
+
+static palp_dds_id_kind kind_of(const char *s, size_t n) {
+  if (n == 6 && !strncmp(s, "server", n)) return PALP_DDS_ID_SERVER;
+  if (n == 7 && !strncmp(s, "trainee", n)) return PALP_DDS_ID_TRAINEE;
+  if (n == 10 && !strncmp(s, "instructor", n)) return PALP_DDS_ID_INSTRUCTOR;
+  return PALP_DDS_ID_NONE;
+}
+
+int palp_dds_identity_parse(const char *identity, palp_dds_id_kind *kind, char *name, size_t namelen, char *err,
+                            size_t errlen) {
+  if (!identity) return fail(err, errlen, PALP_EINVAL, "no identity");
+  if (!strcmp(identity, "server")) identity = "server/server";
+  const char *slash = strchr(identity, '/');
+  palp_dds_id_kind k = slash ? kind_of(identity, (size_t)(slash - identity)) : PALP_DDS_ID_NONE;
+  if (k == PALP_DDS_ID_NONE || !valid_name(slash + 1, strlen(slash + 1)) || strlen(slash + 1) >= namelen)
+    return fail(err, errlen, PALP_EINVAL,
+                "identity \"%s\": expected trainee/NAME, instructor/NAME or server, NAME 1-%d characters of a-z 0-9 - _",
+                identity, PALP_DDS_NAME_MAX - 1);
+  *kind = k;
+  snprintf(name, namelen, "%s", slash + 1);
+  return 0;
+}
+
+static int file_of(const palp_dds_security *sec, const char *suffix, char *buf, size_t len) {
+  int n;
+  if (suffix[0] == '.')
+    n = snprintf(buf, len, "%s/%s/%s%s", sec->pki, palp_dds_id_kind_name(sec->kind), sec->name, suffix);
+  else
+    n = snprintf(buf, len, "%s/%s", sec->pki, suffix);
+  return n < 0 || (size_t)n >= len ? -1 : 0;
+}
+
+static const char *const identity_files[] = {".cert.pem", ".key.pem", ".permissions.p7s", "ca.cert.pem",
+                                             "governance.p7s"};
+
+int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *identity, char *err, size_t errlen) {
+  memset(sec, 0, sizeof *sec);
+  if (!pki || !identity || !pki[0] || !identity[0]) return 0;
+  palp_dds_security s;
+  memset(&s, 0, sizeof s);
+  int rc = palp_dds_identity_parse(identity, &s.kind, s.name, sizeof s.name, err, errlen);
+  if (rc < 0) return rc;
+  char abs[PATH_MAX];
+  if (!realpath(pki, abs)) return fail(err, errlen, PALP_EIO, "PKI directory %s: not found", pki);
+  size_t n = strlen(abs);
+  if (n >= sizeof s.pki) return fail(err, errlen, PALP_EINVAL, "PKI directory %s: path too long", pki);
+  memcpy(s.pki, abs, n + 1);
+  for (size_t i = 0; i < sizeof identity_files / sizeof identity_files[0]; i++) {
+    char f[PALP_DDS_PKI_PATH_MAX + 96];
+    if (file_of(&s, identity_files[i], f, sizeof f) < 0 || access(f, R_OK) != 0)
+      return fail(err, errlen, PALP_EIO, "identity %s: cannot read %s (make it with scripts/make-classroom-pki.sh)",
+                  identity, f);
+  }
+  *sec = s;
+  return 0;
+}
+
+int palp_dds_security_from_env(palp_dds_security *sec, char *err, size_t errlen) {
+  const char *pki = getenv("PALP_PKI"), *id = getenv("PALP_IDENTITY");
+  int have_pki = pki && *pki, have_id = id && *id;
+  memset(sec, 0, sizeof *sec);
+  if (have_pki != have_id)
+    return fail(err, errlen, PALP_EINVAL, "PALP_PKI and PALP_IDENTITY must be set together (%s is missing)",
+                have_pki ? "PALP_IDENTITY" : "PALP_PKI");
+  return have_pki ? palp_dds_security_init(sec, pki, id, err, errlen) : 0;
+}
+
+static void set_file_prop(dds_qos_t *qos, const char *prop, const palp_dds_security *sec, const char *suffix) {
+  char f[PALP_DDS_PKI_PATH_MAX + 96], uri[PALP_DDS_PKI_PATH_MAX + 128];
+  if (file_of(sec, suffix, f, sizeof f) < 0) return;
+  snprintf(uri, sizeof uri, "file:%s", f);
+  dds_qset_prop(qos, prop, uri);
+}
+
+static void set_plugin(dds_qos_t *qos, const char *what, const char *lib, const char *init, const char *fini) {
+  const char *dir = getenv("PALP_DDS_SECURITY_LIBDIR");
+  if (!dir || !*dir) dir = PALP_DDS_SECURITY_LIBDIR;
+  char path[PATH_MAX], prop[64];
+  /* An empty directory leaves the name to the dynamic loader's search path. */
+  if (dir[0])
+    snprintf(path, sizeof path, "%s/lib%s.so", dir, lib);
+  else
+    snprintf(path, sizeof path, "%s", lib);
+  snprintf(prop, sizeof prop, "dds.sec.%s.library.path", what);
+  dds_qset_prop(qos, prop, path);
+  snprintf(prop, sizeof prop, "dds.sec.%s.library.init", what);
+  dds_qset_prop(qos, prop, init);
+  snprintf(prop, sizeof prop, "dds.sec.%s.library.finalize", what);
+  dds_qset_prop(qos, prop, fini);
+}
+
+void palp_dds_security_qos(const palp_dds_security *sec, dds_qos_t *qos) {
+  if (!sec || sec->kind == PALP_DDS_ID_NONE) return;
+  set_plugin(qos, "auth", "dds_security_auth", "init_authentication", "finalize_authentication");
+  set_plugin(qos, "crypto", "dds_security_crypto", "init_crypto", "finalize_crypto");
+  set_plugin(qos, "access", "dds_security_ac", "init_access_control", "finalize_access_control");
+  set_file_prop(qos, "dds.sec.auth.identity_ca", sec, "ca.cert.pem");
+  set_file_prop(qos, "dds.sec.auth.identity_certificate", sec, ".cert.pem");
+  set_file_prop(qos, "dds.sec.auth.private_key", sec, ".key.pem");
+  set_file_prop(qos, "dds.sec.access.permissions_ca", sec, "ca.cert.pem");
+  set_file_prop(qos, "dds.sec.access.governance", sec, "governance.p7s");
+  set_file_prop(qos, "dds.sec.access.permissions", sec, ".permissions.p7s");
+  /* Revocation: every certificate a participant validates, its own and each
+   * remote one, is checked against the classroom's CRL when there is one. */
+  char crl[PALP_DDS_PKI_PATH_MAX + 16];
+  if (file_of(sec, "crl.pem", crl, sizeof crl) == 0 && access(crl, R_OK) == 0)
+    set_file_prop(qos, "org.eclipse.cyclonedds.sec.auth.crl", sec, "crl.pem");
+}
+
+dds_entity_t palp_dds_create_participant(dds_domainid_t domain, const palp_dds_security *sec) {
+  if (!sec || sec->kind == PALP_DDS_ID_NONE) return dds_create_participant(domain, NULL, NULL);
+  dds_qos_t *qos = dds_create_qos();
+  palp_dds_security_qos(sec, qos);
+  dds_entity_t pp = dds_create_participant(domain, qos, NULL);
+  dds_delete_qos(qos);
+  return pp;
+}
+
+void palp_dds_request_partition(const palp_dds_security *sec, char *buf, size_t len) {
+  if (!sec || sec->kind == PALP_DDS_ID_NONE)
+    snprintf(buf, len, "%s", "");
+  else
+    snprintf(buf, len, "palp/%s/%s", palp_dds_id_kind_name(sec->kind), sec->name);
+}
+
+int palp_dds_identity_from_partition(const char *partition, palp_dds_id_kind *kind, char *name, size_t namelen) {
+  if (!partition || strncmp(partition, "palp/", 5) != 0) return PALP_EINVAL;
+  const char *k = partition + 5, *slash = strchr(k, '/');
+  if (!slash) return PALP_EINVAL;
+  palp_dds_id_kind kd = kind_of(k, (size_t)(slash - k));
+  /* Only stations publish requests; a server identity never does. */
+  if (kd != PALP_DDS_ID_TRAINEE && kd != PALP_DDS_ID_INSTRUCTOR) return PALP_EINVAL;
+  size_t n = strlen(slash + 1);
+  if (!valid_name(slash + 1, n) || n >= namelen) return PALP_EINVAL;
+  *kind = kd;
+  memcpy(name, slash + 1, n + 1);
+  return 0;
+}
+
+void palp_dds_secure_session_partition(const char *name, uint32_t session_id, char *buf, size_t len) {
+  snprintf(buf, len, "palp/s/%s/%u", name, session_id);
+}

@@ -1,0 +1,83 @@
+/*
+ * palp_dds_security.h - DDS Security (Cyclone's built-in authentication, access
+ * control and cryptography plugins) for every palp DDS process, and the naming
+ * rules that let the access control plugin carry palp's own rules.
+ *
+ * A process is secured by an identity out of a directory made by
+ * scripts/make-classroom-pki.sh: "KIND/NAME" with KIND trainee, instructor or
+ * server. The participant is created with the dds.sec.* QoS properties naming
+ * the classroom CA, the identity's certificate, key and signed permissions, the
+ * signed governance and the CRL (docs/security.md).
+ *
+ * Cyclone DDS 0.10 does not expose a remote participant's certificate subject
+ * through its C API (the identity token stays inside DDSI), so who a sample
+ * comes from is read from what the permissions allow instead: each identity may
+ * publish requests only in its own partition "palp/KIND/NAME", and a matched
+ * publication's partition is checked by the access control plugin against the
+ * remote's signed permissions before the reader ever matches it.
+ */
+#ifndef PALP_DDS_SECURITY_H
+#define PALP_DDS_SECURITY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <dds/dds.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PALP_DDS_PKI_PATH_MAX 512
+#define PALP_DDS_NAME_MAX 32 /* identity names: 1..31 of [a-z0-9_-] */
+
+typedef enum palp_dds_id_kind {
+  PALP_DDS_ID_NONE = 0, /* not secured */
+  PALP_DDS_ID_SERVER,
+  PALP_DDS_ID_TRAINEE,
+  PALP_DDS_ID_INSTRUCTOR
+} palp_dds_id_kind;
+
+typedef struct palp_dds_security {
+  palp_dds_id_kind kind;              /* PALP_DDS_ID_NONE: plain DDS */
+  char name[PALP_DDS_NAME_MAX];
+  char pki[PALP_DDS_PKI_PATH_MAX];    /* absolute directory of the classroom PKI */
+} palp_dds_security;
+
+/* "trainee", "instructor", "server" (NULL for NONE). */
+const char *palp_dds_id_kind_name(palp_dds_id_kind kind);
+
+/* Parses "KIND/NAME" ("server" alone means server/server). Returns 0 or
+ * PALP_EINVAL with a message. */
+int palp_dds_identity_parse(const char *identity, palp_dds_id_kind *kind, char *name, size_t namelen, char *err,
+                            size_t errlen);
+
+/* Fills sec for identity in the PKI directory pki and checks that every file the
+ * plugins will read exists. pki NULL or identity NULL: sec is plain (returns 0). */
+int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *identity, char *err, size_t errlen);
+
+/* As palp_dds_security_init from the environment: PALP_PKI and PALP_IDENTITY
+ * (both or neither). Returns 0 (plain when unset) or a negative code. */
+int palp_dds_security_from_env(palp_dds_security *sec, char *err, size_t errlen);
+
+/* Adds the dds.sec.* properties (plugins, CA, identity, permissions, governance,
+ * CRL) to qos. Nothing when sec is NULL or plain. */
+void palp_dds_security_qos(const palp_dds_security *sec, dds_qos_t *qos);
+
+/* dds_create_participant with sec's properties (sec NULL or plain: none). */
+dds_entity_t palp_dds_create_participant(dds_domainid_t domain, const palp_dds_security *sec);
+
+/* The partition an identity publishes its session requests in: "palp/KIND/NAME". */
+void palp_dds_request_partition(const palp_dds_security *sec, char *buf, size_t len);
+
+/* The identity behind a request partition ("palp/trainee/alice"); 0 or PALP_EINVAL. */
+int palp_dds_identity_from_partition(const char *partition, palp_dds_id_kind *kind, char *name, size_t namelen);
+
+/* The session partition of a trainee identity's session: "palp/s/NAME/ID", which
+ * that trainee's permissions allow (palp/s/NAME/ followed by anything) and no other trainee's do. */
+void palp_dds_secure_session_partition(const char *name, uint32_t session_id, char *buf, size_t len);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,283 @@
+#!/usr/bin/env bash
+# make-classroom-pki.sh - the classroom's DDS Security material, made with the OpenSSL CLI:
+# a certificate authority, one identity (EC P-256 key + certificate) per participant, the
+# governance document and a signed permissions document per identity, and a certificate
+# revocation list. docs/security.md explains every rule; Cyclone DDS 0.10 checks them with its
+# built-in plugins (libdds_security_{auth,ac,crypto}).
+#
+#   make-classroom-pki.sh DIR classroom [--trainees a,b] [--instructors c] [--days N]
+#                                            CA + governance + CRL + server + the listed identities
+#   make-classroom-pki.sh DIR init           CA (10 years), governance, empty CRL, identity server
+#   make-classroom-pki.sh DIR add KIND NAME [--days N]   KIND: trainee | instructor | server
+#   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
+#   make-classroom-pki.sh DIR list                       identities, validity and revocation
+#
+# Layout of DIR (what a station needs is public except its own key):
+#   ca.cert.pem                   the classroom CA (identity CA and permissions CA)
+#   governance.xml, .p7s          one domain rule for domains 0-230 (the plugin's limit) (signed by the CA)
+#   crl.pem                       revoked certificates (signed by the CA; valid 365 days)
+#   KIND/NAME.cert.pem, .key.pem  an identity (the key stays on its station, mode 0600)
+#   KIND/NAME.permissions.xml, .p7s   what it may publish and subscribe (signed by the CA)
+#   ca/                           the CA's private key and database: keep it off the stations
+#
+# A NAME is 1-31 characters of a-z, 0-9, '-' and '_' (it goes into DDS partition names and
+# subject names, whose matching treats '*', '?', '[', ',', '/', '=' specially).
+set -euo pipefail
+set -f # topic and partition patterns contain "*": never expand them as file names
+
+die() { echo "make-classroom-pki: $*" >&2; exit 2; }
+[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list ..."
+command -v openssl >/dev/null || die "openssl not found (Debian package openssl)"
+dir=$1
+cmd=$2
+shift 2
+days=365
+# Every palp topic (idl/palp_dds.c). Annotation and findings topics do not exist yet: an
+# instructor's annotations are written by palp-review into the SQLite log, not over DDS.
+T_CATALOGUE=palp_catalogue T_REQUEST=palp_session_request T_REPLY=palp_session_reply
+T_STATE=palp_session_state T_CONTACT=palp_contact T_FEEDBACK=palp_feedback
+T_DEFORMATION=palp_deformation T_STATUS=palp_server_status
+T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard
+
+check_name() {
+  [[ $1 =~ ^[a-z0-9_-]{1,31}$ ]] || die "bad name \"$1\": 1-31 characters of a-z 0-9 - _"
+}
+check_kind() {
+  case $1 in trainee | instructor | server) ;; *) die "bad kind \"$1\": trainee, instructor or server" ;; esac
+}
+
+write_ca_config() {
+  mkdir -p "$dir/ca/newcerts"
+  chmod 700 "$dir/ca"
+  [ -f "$dir/ca/index.txt" ] || : >"$dir/ca/index.txt"
+  [ -f "$dir/ca/serial" ] || echo 1000 >"$dir/ca/serial"
+  [ -f "$dir/ca/crlnumber" ] || echo 1000 >"$dir/ca/crlnumber"
+  cat >"$dir/ca/ca.cnf" <<EOF
+[ ca ]
+default_ca = classroom
+[ classroom ]
+dir = $dir/ca
+database = \$dir/index.txt
+new_certs_dir = \$dir/newcerts
+certificate = $dir/ca.cert.pem
+private_key = \$dir/ca.key.pem
+serial = \$dir/serial
+crlnumber = \$dir/crlnumber
+default_md = sha256
+default_days = 365
+# A CRL past its nextUpdate fails every certificate check (OpenSSL X509_V_FLAG_CRL_CHECK):
+# re-issue it (any revoke does) well within this period.
+default_crl_days = 365
+policy = classroom_policy
+unique_subject = no
+copy_extensions = none
+x509_extensions = identity_ext
+[ classroom_policy ]
+organizationName = supplied
+organizationalUnitName = supplied
+commonName = supplied
+[ identity_ext ]
+basicConstraints = critical, CA:FALSE
+keyUsage = critical, digitalSignature, keyAgreement
+subjectKeyIdentifier = hash
+authorityKeyIdentifier = keyid
+EOF
+}
+
+sign() { # xml -> p7s, S/MIME signed by the CA (what Cyclone's access control plugin reads)
+  openssl smime -sign -in "$1" -text -out "$2" -signer "$dir/ca.cert.pem" -inkey "$dir/ca/ca.key.pem"
+}
+
+utc() { date -u -d "$1" +%Y-%m-%dT%H:%M:%S; }
+
+governance() {
+  # Authenticated discovery and liveliness (encrypted), every RTPS message signed, every
+  # topic's data encrypted (AES-GCM: also authenticated), read and write access control on.
+  cat >"$dir/governance.xml" <<'EOF'
+<?xml version="1.0" encoding="utf-8"?>
+<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
+     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
+  <domain_access_rules>
+    <domain_rule>
+      <domains><id_range><min>0</min><max>230</max></id_range></domains>
+      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>
+      <enable_join_access_control>true</enable_join_access_control>
+      <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
+      <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
+      <rtps_protection_kind>SIGN</rtps_protection_kind>
+      <topic_access_rules>
+        <topic_rule>
+          <topic_expression>*</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>true</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>NONE</metadata_protection_kind>
+          <data_protection_kind>ENCRYPT</data_protection_kind>
+        </topic_rule>
+      </topic_access_rules>
+    </domain_rule>
+  </domain_access_rules>
+</dds>
+EOF
+  sign "$dir/governance.xml" "$dir/governance.p7s"
+}
+
+# rule publish|subscribe "topic ..." "partition ..." ("" = the default partition)
+rule() {
+  local what=$1 topics=$2 parts=$3 t p
+  echo "        <$what>"
+  echo "          <topics>"
+  for t in $topics; do echo "            <topic>$t</topic>"; done
+  echo "          </topics>"
+  echo "          <partitions>"
+  for p in $parts; do
+    if [ "$p" = '""' ]; then echo "            <partition></partition>"; else echo "            <partition>$p</partition>"; fi
+  done
+  echo "          </partitions>"
+  echo "        </$what>"
+}
+
+permissions() { # kind name not_before not_after
+  local kind=$1 name=$2 xml="$dir/$1/$2.permissions.xml"
+  {
+    cat <<EOF
+<?xml version="1.0" encoding="utf-8"?>
+<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
+     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
+  <permissions>
+    <grant name="$kind-$name">
+      <subject_name>CN=$name,OU=$kind,O=palp</subject_name>
+      <validity>
+        <not_before>$3</not_before>
+        <not_after>$4</not_after>
+      </validity>
+      <allow_rule>
+        <domains><id_range><min>0</min><max>230</max></id_range></domains>
+EOF
+    case $kind in
+    server)
+      # Only the server publishes the catalogue, replies, states, status and every session's
+      # feedback and deformation; it reads requests from every identity's own partition.
+      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD" '""'
+      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL" "palp/s/*"
+      rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
+      rule subscribe "$T_CONTACT" "palp/s/*"
+      rule subscribe "$T_STATUS $T_GUARD" '""'
+      ;;
+    trainee)
+      # Requests only in its own partition (the server reads the identity from it), contacts
+      # only into its own sessions ("palp/s/NAME/<id>"); reads the public state and its own
+      # sessions' traffic, nobody else's.
+      rule publish "$T_REQUEST" "palp/trainee/$name"
+      rule publish "$T_CONTACT" "palp/s/$name/*"
+      rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD" '""'
+      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL" "palp/s/$name/*"
+      ;;
+    instructor)
+      # Reads everything; writes only its own requests (joins as observer or visual station).
+      rule publish "$T_REQUEST" "palp/instructor/$name"
+      rule subscribe "*" '"" *'
+      ;;
+    esac
+    cat <<EOF
+      </allow_rule>
+      <default>DENY</default>
+    </grant>
+  </permissions>
+</dds>
+EOF
+  } >"$xml"
+  sign "$xml" "$dir/$kind/$name.permissions.p7s"
+}
+
+add() { # kind name
+  local kind=$1 name=$2
+  check_kind "$kind"
+  check_name "$name"
+  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  mkdir -p "$dir/$kind"
+  local base="$dir/$kind/$name"
+  (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$base.key.pem")
+  openssl req -new -key "$base.key.pem" -subj "/O=palp/OU=$kind/CN=$name" -out "$base.csr" 2>/dev/null
+  openssl ca -batch -config "$dir/ca/ca.cnf" -days "$days" -notext -in "$base.csr" -out "$base.cert.pem" 2>/dev/null ||
+    die "signing $kind/$name failed"
+  rm -f "$base.csr"
+  # The permissions are valid exactly as long as the certificate.
+  local nb na
+  nb=$(openssl x509 -in "$base.cert.pem" -noout -startdate | cut -d= -f2)
+  na=$(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)
+  permissions "$kind" "$name" "$(utc "$nb")" "$(utc "$na")"
+  echo "make-classroom-pki: $kind/$name: $(openssl x509 -in "$base.cert.pem" -noout -serial) until $na"
+}
+
+crl() { openssl ca -config "$dir/ca/ca.cnf" -gencrl -out "$dir/crl.pem" 2>/dev/null; }
+
+init() {
+  mkdir -p "$dir"
+  dir=$(cd "$dir" && pwd)
+  if [ -f "$dir/ca/ca.key.pem" ]; then
+    write_ca_config
+  else
+    write_ca_config
+    (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$dir/ca/ca.key.pem")
+    openssl req -x509 -new -key "$dir/ca/ca.key.pem" -subj "/O=palp/OU=ca/CN=palp classroom CA" -days 3650 \
+      -sha256 -out "$dir/ca.cert.pem"
+    echo "make-classroom-pki: CA $dir/ca.cert.pem (key in $dir/ca/, keep it off the stations)"
+  fi
+  [ -f "$dir/governance.p7s" ] || governance
+  [ -f "$dir/crl.pem" ] || crl
+  [ -f "$dir/server/server.cert.pem" ] || add server server
+}
+
+case $cmd in
+init) init ;;
+classroom)
+  trainees="" instructors=""
+  while [ $# -gt 0 ]; do
+    case $1 in
+    --trainees) trainees=${2:-}; shift 2 ;;
+    --instructors) instructors=${2:-}; shift 2 ;;
+    --days) days=${2:-}; shift 2 ;;
+    *) die "classroom: unknown option $1" ;;
+    esac
+  done
+  init
+  for n in ${trainees//,/ }; do [ -f "$dir/trainee/$n.cert.pem" ] || add trainee "$n"; done
+  for n in ${instructors//,/ }; do [ -f "$dir/instructor/$n.cert.pem" ] || add instructor "$n"; done
+  ;;
+add)
+  [ $# -ge 2 ] || die "usage: $0 DIR add KIND NAME [--days N]"
+  kind=$1 name=$2
+  shift 2
+  [ "${1:-}" = --days ] && days=${2:?--days N}
+  [[ $days =~ ^[0-9]+$ ]] && [ "$days" -ge 1 ] || die "--days: expected a positive integer"
+  dir=$(cd "$dir" && pwd)
+  [ ! -f "$dir/$kind/$name.cert.pem" ] || die "$kind/$name exists; revoke it first to re-issue"
+  add "$kind" "$name"
+  ;;
+revoke)
+  [ $# -eq 1 ] || die "usage: $0 DIR revoke KIND/NAME"
+  dir=$(cd "$dir" && pwd)
+  cert="$dir/$1.cert.pem"
+  [ -f "$cert" ] || die "no identity $1 in $dir"
+  openssl ca -config "$dir/ca/ca.cnf" -revoke "$cert" 2>/dev/null || die "revoking $1 failed"
+  crl
+  # The revoked files are kept aside (for the record), so the name can be issued again.
+  mkdir -p "$dir/revoked"
+  set +f
+  stamp=$(date -u +%Y%m%dT%H%M%S)
+  for f in "$dir/$1".*; do mv "$f" "$dir/revoked/$(echo "$1" | tr / _)-$stamp.${f#"$dir/$1".}"; done
+  echo "make-classroom-pki: $1 revoked; distribute $dir/crl.pem to every station and restart the server"
+  ;;
+list)
+  set +f
+  for c in "$dir"/*/*.cert.pem; do
+    [ -f "$c" ] || continue
+    echo "$(basename "$(dirname "$c")")/$(basename "$c" .cert.pem)  $(openssl x509 -in "$c" -noout -serial -enddate | tr '\n' ' ')"
+  done
+  echo "revoked (crl.pem):"
+  openssl crl -in "$dir/crl.pem" -noout -text | grep -E "Serial Number" || echo "  none"
+  ;;
+*) die "unknown command $cmd" ;;
+esac

@@ -1,0 +1,33 @@
+#!/bin/sh
+# The command-line path of a secured classroom: palp-server --pki and palp-client
+# --pki/--identity (the identity's name becomes the trainee name), a wrong --name
+# refused by the server, a bad identity refused before any network use. Domain 131.
+# usage: cli.sh palp-server palp-client PKI_DIR
+set -u
+server=$1 client=$2 pki=$3
+out=$(mktemp -d)
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+"$server" --domain 131 --no-db --pki "$pki" --duration 12 >"$out/server.log" 2>&1 &
+spid=$!
+sleep 1
+"$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --duration 2 --quiet \
+  >"$out/alice.log" 2>&1
+check "a secured trainee runs a session (exit $?)" "grep -q 'session [0-9]*: .* contact samples sent' '$out/alice.log'"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/bob --name alice --duration 1 \
+  --timeout 4 --quiet >"$out/bob.log" 2>&1
+rc=$?
+check "bob calling himself alice is refused (exit $rc)" "[ $rc -ne 0 ] && grep -q 'not the authenticated identity trainee/bob' '$out/bob.log'"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/Bob --duration 1 >"$out/bad.log" 2>&1
+rc=$?
+check "a malformed identity is refused up front (exit $rc)" "[ $rc -eq 1 ] && grep -q 'identity \"trainee/Bob\"' '$out/bad.log'"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --duration 1 >"$out/half.log" 2>&1
+rc=$?
+check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q 'go together' '$out/half.log'"
+kill -INT $spid
+wait $spid
+check "the server's summary has alice's session and counts the refusal" \
+  "grep -q 'DDS Security on (identity server/server)' '$out/server.log' && grep -Eq '^1 +alice ' '$out/server.log' && grep -q 'refused request: user_name' '$out/server.log'"
+[ $fail -eq 0 ] || cat "$out/server.log"
+rm -rf "$out"
+exit $fail
