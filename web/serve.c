@@ -54,8 +54,10 @@ static palp_web_server *server_of(struct lws *wsi) {
 static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int *from_url) {
   *from_url = 0;
   if (!s->have_token) return 1;
-  char v[PALP_WEB_TOKEN_MAX + 2];
-  if (lws_get_urlarg_by_name(wsi, "token=", v, (int)sizeof v) && palp_web_token_equal(s->token, v, strlen(v))) {
+  char v[PALP_WEB_TOKEN_MAX + 16];
+  /* lws copies "token=VALUE" into v and returns where VALUE starts */
+  const char *arg = lws_get_urlarg_by_name(wsi, "token=", v, (int)sizeof v);
+  if (arg && palp_web_token_equal(s->token, arg, strlen(arg))) {
     *from_url = 1;
     return 1;
   }

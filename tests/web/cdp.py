@@ -199,7 +199,10 @@ class Page:
         """Polls expr until it is truthy; returns its value, or None after timeout [s]."""
         end = time.time() + timeout
         while time.time() < end:
-            v = self.eval(expr)
+            try:
+                v = self.eval(expr)
+            except RuntimeError:  # the page's scripts have not run yet
+                v = None
             if v:
                 return v
             time.sleep(poll)
