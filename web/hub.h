@@ -26,7 +26,7 @@
 typedef struct palp_web_hub_def {
   uint32_t domain;
   int join;              /* 1: join followed sessions as a visual station; 0: read only what is published */
-  int read_feedback;     /* 1: read each session's feedback (the force under a position-driven finger) */
+  int read_feedback;     /* 1: read a session's feedback while a position-driven finger presses (its force) */
   double dashboard_hz;   /* deformation frames per second and session to a dashboard */
   double live_hz;        /* live (force, fingers, coverage) messages per second to a trainee page */
   double scale_mm;       /* the pages' fixed colour scale: 0 .. scale_mm of displacement */

@@ -38,7 +38,7 @@ static void usage(FILE *f) {
           "  --dashboard-hz HZ   frames per second and session to a dashboard (default 10)\n"
           "  --max-clients N     WebSocket connections at once (default 32)\n"
           "  --no-join           never join a session: show only what the server already streams\n"
-          "  --no-feedback       do not read the sessions' feedback (force of position-driven fingers)\n"
+          "  --no-feedback       never read feedback (a position-driven finger's force then shows 0 N)\n"
           "  --www DIR           the pages (default %s)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
           "  --dds-config FILE   Cyclone DDS config (default: the loopback-only config)\n"

@@ -30,7 +30,7 @@ def run(build, source, out):
                            "palpState.phantoms[palpState.trainee.phantom] !== undefined", 15)
         check(ok is True, "the page follows alice's session and has drawn its phantom")
         time.sleep(1.0)  # a few frames of the resting phantom
-        before = page.eval("JSON.stringify(palpState.trainee)")
+        before = page.eval("JSON.stringify(palpState.trainee, (k, v) => k === \"arrivals\" ? undefined : v)")
         shot_before = page.screenshot(os.path.join(out, "trainee-before.png"))
         t_before = time.time() - t_start
         st = page.eval("[palpState.trainee.force, palpState.trainee.maxDispMm]")
@@ -39,10 +39,10 @@ def run(build, source, out):
               % (t_before, T_ON, st[0], st[1]))
         ok = page.wait_for("palpState.trainee.maxDispMm > 15 && palpState.trainee.force > 2.9", T_ON + 10)
         check(ok is True, "during the press the page shows > 15 mm and the 3 N force: %s"
-              % page.eval("JSON.stringify(palpState.trainee)"))
+              % page.eval("JSON.stringify(palpState.trainee, (k, v) => k === \"arrivals\" ? undefined : v)"))
         time.sleep(1.0)  # let the renderer catch up with the newest frame
         shot_during = page.screenshot(os.path.join(out, "trainee-during.png"))
-        during = page.eval("JSON.stringify(palpState.trainee)")
+        during = page.eval("JSON.stringify(palpState.trainee, (k, v) => k === \"arrivals\" ? undefined : v)")
         print("before:", before)
         print("during:", during)
         # Where the press is on screen: the dome point at polar 30, azimuth 40 (the client's own

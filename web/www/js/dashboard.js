@@ -130,9 +130,15 @@
       if (!c) return;
       c.frames++;
       st.dashboard.frames++;
-      draw(c, f.disp);
+      c.latest = f.disp; /* drawn at the next animation frame */
     }
   });
+
+  function loop() {
+    for (const c of cards.values()) if (c.latest) { draw(c, c.latest); c.latest = null; }
+    requestAnimationFrame(loop);
+  }
+  requestAnimationFrame(loop);
 
   setInterval(function () {
     const now = performance.now();
