@@ -1,0 +1,270 @@
+#!/usr/bin/env python3
+"""bench_web: 8 trainee sessions streaming their deformation at 30 Hz through palp-web to 8 trainee
+pages and one dashboard, on this machine's real processes (palp-server, 8 palp-client trainees
+pressing a 1 Hz sine so no phantom sleeps, palp-web, Debian's headless Chromium on SwiftShader).
+
+Phases, in one run (same machine state, so the comparison is fair):
+  A   baseline: server + trainees, no bridge
+  W   + palp-web streaming to 9 plain WebSocket clients (8 following one session, 1 all):
+      the bridge's own cost, without a browser competing for the 2 cores
+  B   + palp-web streaming to headless Chromium: 8 trainee pages (WebGL) + the dashboard
+  A2  baseline again (drift check)
+For each: the server's tick figures (palp_server_status, read by bench_web_status, not the bridge),
+the bridge's CPU share (of one core, from /proc), frames per second each page/client receives and
+the gaps between frames (median, p99). DDS domain 200.
+
+usage: bench_web.py BUILD_DIR [--seconds S] [--sessions N]
+"""
+import json
+import os
+import re
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SOURCE = os.path.abspath(os.path.join(HERE, "..", ".."))
+sys.path.insert(0, os.path.join(SOURCE, "tests", "web"))
+import cdp  # noqa: E402
+import harness  # noqa: E402
+
+DOMAIN = 200
+TCK = os.sysconf("SC_CLK_TCK")
+
+
+def pct(xs, q):
+    xs = sorted(xs)
+    if not xs:
+        return float("nan")
+    k = (len(xs) - 1) * q
+    i = int(k)
+    return xs[i] if i + 1 >= len(xs) else xs[i] + (xs[i + 1] - xs[i]) * (k - i)
+
+
+def cpu_s(pid):
+    with open("/proc/%d/stat" % pid) as f:
+        s = f.read()
+    fields = s[s.rindex(")") + 2:].split()
+    return (int(fields[11]) + int(fields[12])) / TCK
+
+
+class StatusReader:
+    """bench_web_status for the phase's duration: the server's per-second tick figures."""
+
+    def __init__(self, build, env, seconds):
+        self.p = subprocess.Popen([os.path.join(build, "bench", "web", "bench_web_status"), str(DOMAIN), str(seconds)],
+                                  stdout=subprocess.PIPE, text=True, env=env)
+
+    def result(self):
+        out, _ = self.p.communicate()
+        rows = [list(map(float, l.split()[1:])) for l in out.splitlines() if l.startswith("status ")]
+        if len(rows) < 3:
+            return None
+        rows = rows[1:]  # the first period may straddle the phase change
+        ticks = rows[-1][5] - rows[0][5]
+        over = rows[-1][6] - rows[0][6]
+        return {"periods": len(rows), "load_med": pct([r[1] for r in rows], 0.5),
+                "p50_med": pct([r[2] for r in rows], 0.5), "p99_med": pct([r[3] for r in rows], 0.5),
+                "p99_max": max(r[3] for r in rows), "max": max(r[4] for r in rows),
+                "overrun_pct": 100.0 * over / ticks if ticks else float("nan"), "open": rows[-1][7]}
+
+
+class CpuSampler(threading.Thread):
+    """CPU share of one process, sampled every second [% of one core]."""
+
+    def __init__(self, pid):
+        super().__init__(daemon=True)
+        self.pid, self.samples, self.stop_flag = pid, [], False
+        self.t0, self.c0 = time.time(), cpu_s(pid)
+
+    def run(self):
+        t, c = self.t0, self.c0
+        while not self.stop_flag:
+            time.sleep(1.0)
+            try:
+                c2 = cpu_s(self.pid)
+            except OSError:
+                break
+            t2 = time.time()
+            self.samples.append(100.0 * (c2 - c) / (t2 - t))
+            t, c = t2, c2
+
+    def total(self):
+        self.stop_flag = True
+        return 100.0 * (cpu_s(self.pid) - self.c0) / (time.time() - self.t0)
+
+
+class WsClient(threading.Thread):
+    """A plain WebSocket client that follows one session (or all) and timestamps its frames."""
+
+    def __init__(self, port, follow):
+        super().__init__(daemon=True)
+        self.ws = cdp.WebSocket("ws://127.0.0.1:%d/ws" % port, timeout=10)
+        self.ws.send(json.dumps({"follow": follow}))
+        self.arrivals, self.per_session, self.stop_flag = [], {}, False
+
+    def run(self):
+        self.ws.sock.settimeout(0.5)
+        while not self.stop_flag:
+            try:
+                op, data = self.ws.recv()
+            except socket.timeout:
+                continue
+            except (ConnectionError, OSError):
+                break
+            if op == 2:
+                sid = int.from_bytes(data[4:8], "little")
+                self.arrivals.append(time.time())
+                self.per_session[sid] = self.per_session.get(sid, 0) + 1
+
+
+def gaps_ms(arrivals):
+    return [1000.0 * (b - a) for a, b in zip(arrivals, arrivals[1:])]
+
+
+def main():
+    build = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else os.path.join(SOURCE, "build"))
+    seconds = 20.0
+    n = 8
+    for i, a in enumerate(sys.argv):
+        if a == "--seconds":
+            seconds = float(sys.argv[i + 1])
+        if a == "--sessions":
+            n = int(sys.argv[i + 1])
+    out = os.path.join(build, "bench", "web", "out")
+    procs = harness.Procs(build, SOURCE, out, DOMAIN)
+    results = {}
+    browser = None
+    try:
+        server = procs.server()
+        for k in range(n):
+            procs.trainee("t%d" % k, 1 + k % 2, ["--profile", "sine", "--magnitude", "1", "--offset", "1.5",
+                                                  "--frequency", "1", "--t-on", "0.5", "--t-off", "100000",
+                                                  "--duration", "100000", "--polar", str(10 + 5 * k),
+                                                  "--azimuth", str(45 * k)])
+        end = time.time() + 30
+        while time.time() < end and len(re.findall(r"session \d+ opened", procs.log(server))) < n:
+            time.sleep(0.2)
+        time.sleep(3)
+        print("bench_web: %d sessions open, %.0f s per phase, DDS domain %d" % (n, seconds, DOMAIN), flush=True)
+
+        def baseline(name):
+            st = StatusReader(build, procs.env, seconds)
+            results[name] = {"server": st.result()}
+            print("  %s done" % name, flush=True)
+
+        baseline("A")
+
+        # W: the bridge and plain clients
+        web = procs.web(name="web-w")
+        time.sleep(1)
+        clients = [WsClient(web.port, k + 1) for k in range(n)] + [WsClient(web.port, "all")]
+        for c in clients:
+            c.start()
+        time.sleep(3)  # joins, first frames
+        for c in clients:
+            c.arrivals.clear()
+            c.per_session.clear()
+        cpu = CpuSampler(web.pid)
+        cpu.start()
+        st = StatusReader(build, procs.env, seconds)
+        t0 = time.time()
+        srv = st.result()
+        wall = time.time() - t0
+        share = cpu.total()
+        for c in clients:
+            c.stop_flag = True
+        fps = [len(c.arrivals) / wall for c in clients[:n]]
+        dash = [v / wall for v in clients[n].per_session.values()]
+        g = [x for c in clients[:n] for x in gaps_ms(c.arrivals)]
+        results["W"] = {"server": srv, "cpu": share, "cpu_p50": pct(cpu.samples, 0.5), "cpu_p99": pct(cpu.samples, 0.99),
+                        "fps": fps, "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99)}
+        for c in clients:
+            c.ws.close()
+        procs.stop(web)
+        print("  W done", flush=True)
+
+        # B: the bridge and Chromium
+        web = procs.web(name="web-b")
+        browser = cdp.Chromium(width=800, height=600, out_dir=out)
+        pages = [browser.new_window(web.base + "/trainee.html?trainee=t%d" % k, 480, 360) for k in range(n)]
+        dpage = browser.new_window(web.base + "/dashboard.html", 1000, 700)
+        for k, p in enumerate(pages):
+            if not p.wait_for("window.palpState && palpState.trainee && palpState.trainee.frames > 5", 60):
+                raise SystemExit("page %d did not stream" % k)
+        dpage.wait_for("window.palpState && palpState.dashboard && palpState.dashboard.frames > 5", 30)
+        time.sleep(2)
+        f0 = [p.eval("palpState.trainee.frames") for p in pages]
+        r0 = [p.eval("palpState.trainee.rendered") for p in pages]
+        d0 = dpage.eval("palpState.dashboard.frames")
+        cpu = CpuSampler(web.pid)
+        cpu.start()
+        bc0 = browser.cpu_seconds()
+        st = StatusReader(build, procs.env, seconds)
+        t0 = time.time()
+        srv = st.result()
+        f1 = [p.eval("palpState.trainee.frames") for p in pages]
+        r1 = [p.eval("palpState.trainee.rendered") for p in pages]
+        d1 = dpage.eval("palpState.dashboard.frames")
+        wall = time.time() - t0
+        share = cpu.total()
+        bshare = 100.0 * (browser.cpu_seconds() - bc0) / wall
+        g = []
+        for p in pages:
+            arr = p.eval("palpState.trainee.arrivals")
+            arr = [x for x in arr if x >= arr[-1] - 1000 * seconds]
+            g += [b - a for a, b in zip(arr, arr[1:])]
+        results["B"] = {"server": srv, "cpu": share, "cpu_p50": pct(cpu.samples, 0.5), "cpu_p99": pct(cpu.samples, 0.99),
+                        "fps": [(b - a) / wall for a, b in zip(f0, f1)],
+                        "rendered": [(b - a) / wall for a, b in zip(r0, r1)],
+                        "dash": [(d1 - d0) / wall / n], "gap50": pct(g, 0.5), "gap99": pct(g, 0.99), "browser": bshare}
+        dpage.screenshot(os.path.join(out, "bench-dashboard.png"))
+        pages[0].screenshot(os.path.join(out, "bench-trainee.png"))
+        browser.close()
+        browser = None
+        procs.stop(web)
+        print("  B done", flush=True)
+        time.sleep(2)
+        baseline("A2")
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+    print()
+    print("server tick figures (palp_server_status, %d sessions at %s Hz ticks, deformation 30 Hz while watched):" % (
+        n, "100"))
+    print("| phase | periods | tick work p50 (median) | p99 (median / worst) | max | overrun | load (worst thread) |")
+    print("|---|---|---|---|---|---|---|")
+    names = {"A": "A: no bridge", "W": "W: bridge + 9 WebSocket clients", "B": "B: bridge + Chromium (8 pages + dashboard)",
+             "A2": "A2: no bridge, again"}
+    for k in ["A", "W", "B", "A2"]:
+        s = results.get(k, {}).get("server")
+        if not s:
+            print("| %s | no status |" % names[k])
+            continue
+        print("| %s | %d | %.0f us | %.0f / %.0f us | %.0f us | %.2f%% | %.0f%% |" % (
+            names[k], s["periods"], s["p50_med"], s["p99_med"], s["p99_max"], s["max"], s["overrun_pct"],
+            100 * s["load_med"]))
+    print()
+    print("| phase | bridge CPU (mean, of one core) | per second p50 / p99 | frames/s per trainee page (min / median) "
+          "| dashboard frames/s per session | gap between frames p50 / p99 | rendered frames/s (median) | Chromium CPU |")
+    print("|---|---|---|---|---|---|---|---|")
+    for k in ["W", "B"]:
+        r = results.get(k)
+        if not r:
+            continue
+        rend = "%.1f" % pct(r["rendered"], 0.5) if "rendered" in r else "-"
+        br = "%.0f%%" % r["browser"] if "browser" in r else "-"
+        print("| %s | %.1f%% | %.1f / %.1f%% | %.1f / %.1f | %.1f | %.1f / %.1f ms | %s | %s |" % (
+            names[k], r["cpu"], r["cpu_p50"], r["cpu_p99"], min(r["fps"]), pct(r["fps"], 0.5), pct(r["dash"], 0.5),
+            r["gap50"], r["gap99"], rend, br))
+    with open(os.path.join(out, "bench_web.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    print("\nraw figures: %s" % os.path.join(out, "bench_web.json"))
+
+
+if __name__ == "__main__":
+    main()

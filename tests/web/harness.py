@@ -1,0 +1,152 @@
+"""harness.py - real palp-server, palp-client and palp-web processes for the web tests and the
+benchmark, on a DDS domain of the caller's (tests/web uses 191-199, bench/web 200-209), loopback
+only. Standard library only."""
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import cdp  # noqa: E402  (re-exported for the tests)
+
+
+class Fail(Exception):
+    pass
+
+
+def check(cond, msg):
+    """One assertion: prints it and raises Fail when it does not hold."""
+    print(("ok   " if cond else "FAIL ") + msg, flush=True)
+    if not cond:
+        raise Fail(msg)
+
+
+class Procs:
+    """Starts processes with their output in files under out_dir; stops every one at the end."""
+
+    def __init__(self, build, source, out_dir, domain):
+        self.build, self.source, self.out, self.domain = build, source, out_dir, domain
+        os.makedirs(out_dir, exist_ok=True)
+        self.env = dict(os.environ)
+        self.env["CYCLONEDDS_URI"] = "file://" + os.path.join(source, "config", "cyclonedds-loopback.xml")
+        self.procs = []
+
+    def start(self, name, args):
+        log = open(os.path.join(self.out, name + ".log"), "wb")
+        p = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, env=self.env)
+        p.name, p.logpath = name, log.name
+        self.procs.append(p)
+        return p
+
+    def log(self, p):
+        with open(p.logpath, errors="replace") as f:
+            return f.read()
+
+    def wait_log(self, p, pattern, timeout):
+        end = time.time() + timeout
+        while time.time() < end:
+            m = re.search(pattern, self.log(p))
+            if m:
+                return m
+            if p.poll() is not None:
+                break
+            time.sleep(0.05)
+        raise Fail("%s: no %r within %.0f s (exit %s); log:\n%s" % (p.name, pattern, timeout, p.poll(), self.log(p)))
+
+    def server(self, tick_hz=None, extra=()):
+        args = [os.path.join(self.build, "server", "palp-server"), "--config",
+                os.path.join(self.source, "config", "server.json"), "--domain", str(self.domain), "--no-db"]
+        if tick_hz:
+            args += ["--tick-rate", str(tick_hz)]
+        p = self.start("server", args + list(extra))
+        self.wait_log(p, "tick thread", 20)
+        return p
+
+    def web(self, extra=(), name="web"):
+        p = self.start(name, [os.path.join(self.build, "web", "palp-web"), "--domain", str(self.domain),
+                              "--port", "0"] + list(extra))
+        m = self.wait_log(p, r"serving on \S+ port (\d+)", 20)
+        p.port = int(m.group(1))
+        p.base = "http://127.0.0.1:%d" % p.port
+        return p
+
+    def trainee(self, name, phantom=1, extra=()):
+        return self.start("trainee-" + name, [os.path.join(self.build, "client", "palp-client"), "--role", "trainee",
+                                              "--domain", str(self.domain), "--phantom", str(phantom), "--name", name,
+                                              "--quiet"] + list(extra))
+
+    def stop(self, p, sig=signal.SIGINT, timeout=10):
+        if p.poll() is None:
+            p.send_signal(sig)
+            try:
+                p.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+        return p.returncode
+
+    def close(self):
+        for p in reversed(self.procs):
+            self.stop(p, timeout=5)
+
+
+def http_get(url, headers=None):
+    """(status, body) of a GET; errors are statuses, not exceptions."""
+    req = urllib.request.Request(url, headers=headers or {})
+    try:
+        with urllib.request.urlopen(req, timeout=10) as r:
+            return r.status, r.read(), dict(r.headers)
+    except urllib.error.HTTPError as e:
+        return e.code, e.read(), dict(e.headers)
+
+
+def read_png(path):
+    """(width, height, bytes per pixel, rows) of an 8-bit RGB/RGBA PNG (tests/db/check_render.py)."""
+    sys.path.insert(0, os.path.join(HERE, "..", "db"))
+    from check_render import read_png as rp
+    return rp(path)
+
+
+def disc_diff(a, b, cx, cy, r):
+    """Mean absolute RGB difference [0, 255] of two screenshots over a disc (device pixels)."""
+    wa, ha, bpp, ra = a
+    _, _, bpp_b, rb = b
+    total, n = 0, 0
+    for y in range(max(0, int(cy - r)), min(ha, int(cy + r) + 1)):
+        for x in range(max(0, int(cx - r)), min(wa, int(cx + r) + 1)):
+            if (x - cx) ** 2 + (y - cy) ** 2 > r * r:
+                continue
+            pa, pb = ra[y][x * bpp:x * bpp + 3], rb[y][x * bpp_b:x * bpp_b + 3]
+            total += sum(abs(pa[k] - pb[k]) for k in range(3)) / 3
+            n += 1
+    return total / max(n, 1)
+
+
+def disc_mean(img, cx, cy, r):
+    w, h, bpp, rows = img
+    s, n = [0, 0, 0], 0
+    for y in range(max(0, int(cy - r)), min(h, int(cy + r) + 1)):
+        for x in range(max(0, int(cx - r)), min(w, int(cx + r) + 1)):
+            if (x - cx) ** 2 + (y - cy) ** 2 <= r * r:
+                for k in range(3):
+                    s[k] += rows[y][x * bpp + k]
+                n += 1
+    return [v / max(n, 1) for v in s]
+
+
+def main(run):
+    """usage: test.py BUILD_DIR SOURCE_DIR OUT_DIR; run(build, source, out) raises Fail or returns."""
+    build, source, out = sys.argv[1:4]
+    os.makedirs(out, exist_ok=True)
+    t0 = time.time()
+    try:
+        run(build, source, out)
+    except Fail as e:
+        print("FAILED (%.1f s): %s" % (time.time() - t0, e))
+        sys.exit(1)
+    print("passed in %.1f s" % (time.time() - t0))

@@ -1,0 +1,85 @@
+#!/usr/bin/env python3
+"""web_dashboard: the instructor dashboard in headless Chromium lists every open session of a
+running palp-server (the server's own log says which are open), shows the server's status, adds a
+session that opens later without a reload, and drops a closed one within a second. DDS domain 192.
+usage: test_dashboard.py BUILD SOURCE OUT"""
+import os
+import re
+import time
+
+import harness
+from harness import check
+
+CARDS = "JSON.stringify(palpState.dashboard ? palpState.dashboard.cards : null)"
+
+
+def server_open_sessions(procs, server):
+    """Session ids the server reports open, from its own log (independent of palp-web)."""
+    log = procs.log(server)
+    opened = {int(m) for m in re.findall(r"session (\d+) opened", log)}
+    closed = {int(m) for m in re.findall(r"session (\d+) closed", log)}
+    return sorted(opened - closed)
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, 192)
+    browser = None
+    try:
+        server = procs.server()
+        web = procs.web()
+        press = ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1", "--t-on", "0.5",
+                 "--t-off", "60", "--duration", "60"]
+        procs.trainee("alice", 1, press)
+        procs.trainee("bob", 2, press)
+        carol = procs.trainee("carol", 1, press)
+        end = time.time() + 15
+        while time.time() < end and len(server_open_sessions(procs, server)) < 3:
+            time.sleep(0.1)
+        expected = server_open_sessions(procs, server)
+        check(len(expected) == 3, "the server has 3 open sessions: %s" % expected)
+        browser = harness.cdp.Chromium(width=1200, height=800, out_dir=out)
+        page = browser.new_page(web.base + "/dashboard.html")
+        got = page.wait_for("palpState.dashboard && JSON.stringify(palpState.dashboard.cards) === %r && %s"
+                            % (str(expected).replace(" ", ""), CARDS), 20)
+        check(got is not None, "the dashboard lists every open session %s: %s" % (expected, page.eval(CARDS)))
+        names = page.eval("Array.from(document.querySelectorAll('.card h3 span:first-child')).map(e => e.textContent)")
+        check(sorted(n.split(" #")[0] for n in names) == ["alice", "bob", "carol"], "with the trainee names: %s" % names)
+        ok = page.wait_for("palpState.dashboard.frames > 6 && palpState.status && palpState.status.servers.length === 1 "
+                           "&& document.getElementById('server').textContent.includes('tick p50/p99/max')", 15)
+        check(ok is True, "top views receive frames and the server's status shows (load, ticks, log counters)")
+        ok = page.wait_for("Array.from(document.querySelectorAll('.card .band')).some(e => !e.textContent.startsWith('0.00'))", 10)
+        check(ok is True, "a live force shows on the cards")
+        page.screenshot(os.path.join(out, "dashboard-3.png"))
+
+        # A session opening later appears without a reload.
+        procs.trainee("dave", 2, press)
+        ok = page.wait_for("palpState.dashboard.cards.length === 4", 15)
+        check(ok is True, "dave's new session appears without a reload: %s" % page.eval(CARDS))
+        carol_id = [s for s in page.eval("palpState.sessions.map(s => [s.id, s.trainee])") if s[1] == "carol"][0][0]
+
+        # carol leaves: the server closes her session; the card must go within a second.
+        t0 = time.time()
+        procs.stop(carol)
+        t_drop = None
+        while time.time() - t0 < 5:
+            cards = page.eval("palpState.dashboard.cards")
+            if carol_id not in cards:
+                t_drop = time.time() - t0
+                break
+            time.sleep(0.02)
+        closed_logged = "session %d closed" % carol_id in procs.log(server)
+        check(closed_logged, "the server logged carol's session %d closed" % carol_id)
+        check(t_drop is not None and t_drop < 1.0,
+              "carol's closed session left the dashboard %.2f s after her station was stopped (< 1 s)"
+              % (t_drop if t_drop is not None else float("nan")))
+        check(sorted(page.eval("palpState.dashboard.cards")) == server_open_sessions(procs, server),
+              "the remaining cards are the server's open sessions %s" % server_open_sessions(procs, server))
+        page.screenshot(os.path.join(out, "dashboard-after-close.png"))
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)

@@ -1,0 +1,102 @@
+#!/usr/bin/env python3
+"""web_disconnect: palp-web keeps serving when browsers vanish abruptly: headless Chromium with a
+trainee page and a dashboard streaming is killed with SIGKILL, and a raw client resets its
+connection in the middle of a frame; afterwards the bridge is alive, leaves the session it no
+longer needs (the server's member count drops), and a new client gets the stream again.
+DDS domain 194. usage: test_disconnect.py BUILD SOURCE OUT"""
+import json
+import os
+import socket
+import struct
+import time
+
+import harness
+from harness import check
+
+
+def messages(ws, seconds):
+    """Collects (text messages by type, number of deformation frames) for some seconds."""
+    ws.sock.settimeout(0.5)
+    kinds, frames, end = {}, 0, time.time() + seconds
+    while time.time() < end:
+        try:
+            op, data = ws.recv()
+        except socket.timeout:
+            continue
+        if op == 2:
+            frames += 1
+        else:
+            m = json.loads(data)
+            kinds.setdefault(m["type"], []).append(m)
+    return kinds, frames
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, 194)
+    browser = None
+    try:
+        procs.server()
+        web = procs.web()
+        procs.trainee("alice", 1, ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1",
+                                   "--t-on", "0.5", "--t-off", "60", "--duration", "60"])
+        browser = harness.cdp.Chromium(out_dir=out)
+        page = browser.new_page(web.base + "/trainee.html")
+        dash = browser.new_page(web.base + "/dashboard.html")
+        check(page.wait_for("window.palpState && palpState.trainee && palpState.trainee.frames > 10", 25) is True,
+              "the trainee page streams frames")
+        check(dash.wait_for("window.palpState && palpState.dashboard && palpState.dashboard.frames > 3", 15) is True,
+              "the dashboard streams frames")
+        browser.kill()
+        browser = None
+        t_kill = time.time()
+        time.sleep(0.3)
+        check(web.poll() is None, "palp-web is alive after Chromium was killed")
+
+        # A client that resets its connection halfway through a frame it was sending.
+        s = socket.create_connection(("127.0.0.1", web.port), timeout=5)
+        s.sendall(("GET /ws HTTP/1.1\r\nHost: 127.0.0.1:%d\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                   "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n" % web.port).encode())
+        s.recv(4096)
+        s.sendall(bytes([0x81, 0x80 | 126]) + struct.pack("!H", 200) + b"\x00\x00\x00\x00" + b"{\"follow\"")
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        s.close()  # RST
+        time.sleep(0.3)
+        check(web.poll() is None, "palp-web is alive after a connection reset mid-frame")
+
+        # Nobody follows the session now: the bridge leaves it after its linger (2 s).
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=10)
+        left_after = None
+        end = time.time() + 8
+        ws.sock.settimeout(0.5)
+        while time.time() < end and left_after is None:
+            try:
+                op, data = ws.recv()
+            except socket.timeout:
+                continue
+            if op == 1:
+                m = json.loads(data)
+                if m["type"] == "sessions" and m["sessions"] and m["sessions"][0]["visual"] == 0:
+                    left_after = time.time() - t_kill
+        check(left_after is not None and left_after < 5,
+              "the bridge left the session nobody watches: the server counts 0 visual members %.1f s after the kill"
+              % (left_after or float("nan")))
+        ws.send(json.dumps({"follow": "all"}))
+        kinds, frames = messages(ws, 3.0)
+        ws.close()
+        check("sessions" in kinds and frames >= 15,
+              "a new client following every session is served again: the session list and %d frames in 3 s "
+              "(the dashboard rate is 10/s; >= 15)" % frames)
+        status, body, _ = harness.http_get(web.base + "/trainee.html")
+        check(status == 200 and b"trainee" in body, "pages are still served (%d)" % status)
+        rc = procs.stop(web)
+        log = procs.log(web)
+        check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)
+        print(log.strip().splitlines()[-1])
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)

@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""web_token: with an access token required, a request without it gets nothing: every page and
+script answers 401 with no content, the WebSocket handshake is refused, and a page opened in
+headless Chromium without the token shows no palp page and opens no stream. With the token the
+same page works. palp-web refuses to listen beyond loopback without a token. DDS domain 193.
+usage: test_token.py BUILD SOURCE OUT"""
+import os
+import subprocess
+
+import harness
+from harness import check
+
+TOKEN = "t0k3n-for-the-web-test_0123456789"
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, 193)
+    browser = None
+    try:
+        exe = os.path.join(build, "web", "palp-web")
+        # The issue's rule: beyond loopback only with a token (it refuses before binding).
+        for addr in ["0.0.0.0", "::", "192.0.2.1"]:
+            r = subprocess.run([exe, "--listen", addr, "--port", "0", "--domain", "193"], capture_output=True,
+                               text=True, timeout=20, env=procs.env)
+            check(r.returncode == 2 and "without an access token" in r.stderr,
+                  "--listen %s without --token refused (exit %d): %s" % (addr, r.returncode, r.stderr.strip()[:90]))
+        r = subprocess.run([exe, "--token", "short", "--port", "0"], capture_output=True, text=True, timeout=20,
+                           env=procs.env)
+        check(r.returncode == 2 and "token must be" in r.stderr, "a short token is refused: %s" % r.stderr.strip())
+
+        procs.server()
+        procs.trainee("alice", 1, ["--profile", "step", "--magnitude", "2", "--t-on", "0.5", "--t-off", "60",
+                                   "--duration", "60"])
+        web = procs.web(["--token", TOKEN])
+        base = web.base
+        for path in ["/", "/trainee.html", "/dashboard.html", "/js/common.js", "/css/palp.css",
+                     "/lib/three/build/three.min.js", "/trainee.html?token=wrong-token-0123456789"]:
+            status, body, _ = harness.http_get(base + path)
+            check(status == 401 and b"palp" not in body and b"THREE" not in body,
+                  "GET %s without the token: %d, %d bytes, none of the page" % (path, status, len(body)))
+        status, body, _ = harness.http_get(base + "/", {"Cookie": "palp_token=wrong-token-0123456789"})
+        check(status == 401, "a wrong cookie: %d" % status)
+        status, body, headers = harness.http_get(base + "/trainee.html?token=" + TOKEN)
+        check(status == 200 and b"trainee" in body, "with ?token= the page is served (%d)" % status)
+        cookie = headers.get("Set-Cookie", "")
+        check("HttpOnly" in cookie and "SameSite=Strict" in cookie, "and a HttpOnly, SameSite=Strict cookie: %s"
+              % cookie.replace(TOKEN, "<token>"))
+        status, _, _ = harness.http_get(base + "/js/common.js", {"Cookie": "palp_token=" + TOKEN})
+        check(status == 200, "the cookie lets the page load its scripts (%d)" % status)
+
+        ws_url = "ws://127.0.0.1:%d/ws" % web.port
+        for url, hdr, why in [(ws_url, None, "no token"), (ws_url + "?token=nope-nope-nope-nope", None, "wrong token"),
+                              (ws_url, {"Cookie": "palp_token=" + TOKEN}, "cookie only"),
+                              (ws_url + "?token=" + TOKEN, {"Origin": "http://evil.example"}, "foreign origin")]:
+            try:
+                ws = harness.cdp.WebSocket(url, timeout=5, headers=hdr)
+                ws.close()
+                refused = False
+            except (ConnectionError, OSError):
+                refused = True
+            check(refused, "WebSocket with %s: refused" % why)
+        ws = harness.cdp.WebSocket(ws_url + "?token=" + TOKEN, timeout=10)
+        op, data = ws.recv()
+        ws.close()
+        check(op == 1 and data.startswith(b'{"type":"hello"'), "WebSocket with the token: hello")
+
+        browser = harness.cdp.Chromium(out_dir=out)
+        page = browser.new_page(base + "/trainee.html")
+        import time
+        time.sleep(2.0)
+        state = page.eval("JSON.stringify({title: document.title, state: typeof window.palpState, "
+                          "canvas: document.querySelectorAll('canvas').length, text: document.body ? "
+                          "document.body.innerText.slice(0, 80) : ''})")
+        page.screenshot(os.path.join(out, "token-denied.png"))
+        check('"state":"undefined"' in state and '"canvas":0' in state and "trainee view" not in state,
+              "Chromium without the token: no page, no script, no stream: %s" % state)
+        page2 = browser.new_page(base + "/trainee.html?token=" + TOKEN)
+        ok = page2.wait_for("window.palpState && palpState.connected && palpState.trainee.rendered > 0", 20)
+        page2.screenshot(os.path.join(out, "token-granted.png"))
+        check(ok is True, "Chromium with the token: connected and drawing")
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)

@@ -1,0 +1,240 @@
+/* test_web_unit.c - palp-web's pure parts: pressure bands, coverage geometry, the access rules
+ * (loopback, token, cookie, served paths) and the browser control messages (a real hub on DDS
+ * domain 190). Expected values are worked by hand or come from the model's own mesh code. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "access.h"
+#include "coverage.h"
+#include "hub.h"
+#include "palp.h"
+#include "palp_dds.h"
+
+#define PI 3.14159265358979323846
+
+static int failures, checks;
+#define CHECK(cond, ...)                                                                                       \
+  do {                                                                                                         \
+    checks++;                                                                                                  \
+    if (!(cond)) {                                                                                             \
+      failures++;                                                                                              \
+      fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                                     \
+      fprintf(stderr, __VA_ARGS__);                                                                            \
+      fputc('\n', stderr);                                                                                     \
+    }                                                                                                          \
+  } while (0)
+
+static void test_bands(void) {
+  const palp_web_bands b = palp_web_bands_default();
+  CHECK(b.touch_min == 0.2 && b.light_max == 1.0 && b.medium_max == 3.0, "documented defaults 0.2/1/3 N");
+  CHECK(palp_web_bands_check(&b) == 0, "defaults valid");
+  const struct { double f; int band; } cases[] = {{0, 0},    {0.19, 0}, {0.2, 1}, {0.99, 1}, {1.0, 2},
+                                                  {2.5, 2},  {3.0, 2},  {3.01, 3}, {20, 3},  {NAN, 0}};
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
+    CHECK(palp_web_band(&b, cases[i].f) == cases[i].band, "band(%g) = %d, want %d", cases[i].f,
+          palp_web_band(&b, cases[i].f), cases[i].band);
+  palp_web_bands bad = {.touch_min = 0.2, .light_max = 3, .medium_max = 1};
+  CHECK(palp_web_bands_check(&bad) != 0, "light above medium refused");
+  bad = (palp_web_bands){.touch_min = -1, .light_max = 1, .medium_max = 3};
+  CHECK(palp_web_bands_check(&bad) != 0, "negative touch refused");
+  bad = (palp_web_bands){.touch_min = 0.2, .light_max = NAN, .medium_max = 3};
+  CHECK(palp_web_bands_check(&bad) != 0, "NaN refused");
+  CHECK(!strcmp(palp_web_band_name(3), "deep") && !strcmp(palp_web_band_name(0), "none"), "band names");
+}
+
+/* A flat 1 m x 1 m square of 2 x 100 x 100 triangles on z = 0: areas are exact. */
+static void test_coverage_square(void) {
+  enum { N = 100 };
+  const int nv = (N + 1) * (N + 1);
+  double *rest = malloc(sizeof *rest * 3 * nv);
+  int32_t *tri = malloc(sizeof *tri * 6 * N * N);
+  for (int j = 0; j <= N; j++)
+    for (int i = 0; i <= N; i++) {
+      double *p = rest + 3 * (j * (N + 1) + i);
+      p[0] = (double)i / N - 0.5, p[1] = (double)j / N - 0.5, p[2] = 0;
+    }
+  int t = 0;
+  for (int j = 0; j < N; j++)
+    for (int i = 0; i < N; i++) {
+      const int a = j * (N + 1) + i, b = a + 1, c = a + N + 1, d = c + 1;
+      int32_t q[6] = {a, b, d, a, d, c};
+      memcpy(tri + 6 * t++, q, sizeof q);
+    }
+  int rc;
+  palp_web_coverage *c = palp_web_coverage_create(rest, nv, tri, 2 * N * N, 2 * N * N, &rc);
+  CHECK(c && rc == 0, "square mesh accepted");
+  if (!c) return;
+  CHECK(fabs(palp_web_coverage_dome_area(c) - 1.0) < 1e-12, "area of the unit square %.15g", palp_web_coverage_dome_area(c));
+  double f[3];
+  palp_web_coverage_fractions(c, f);
+  CHECK(f[0] == 0 && f[1] == 0 && f[2] == 0, "nothing pressed yet");
+  /* Light press of radius 0.1 m at the centre: pi r^2 = 0.0314 of the square, within the lumped
+   * vertex areas' resolution (one ring of 0.01 m cells: 2 pi r h / A = 0.0063). */
+  const double ctr[3] = {0, 0, 0.02}; /* 2 cm above the surface: measured from the nearest vertex */
+  int raised = palp_web_coverage_press(c, ctr, 0.1, PALP_WEB_BAND_LIGHT);
+  palp_web_coverage_fractions(c, f);
+  CHECK(raised > 0 && fabs(f[0] - PI * 0.01) < 0.0063, "light disc %.5f vs pi r^2 %.5f", f[0], PI * 0.01);
+  CHECK(f[1] == 0 && f[2] == 0, "no medium or deep yet (%g, %g)", f[1], f[2]);
+  const double light = f[0];
+  /* The same place again, lighter or equal: nothing changes. */
+  CHECK(palp_web_coverage_press(c, ctr, 0.1, PALP_WEB_BAND_LIGHT) == 0, "re-press at the same band raises nothing");
+  /* Deep at the same place: all three fractions equal the disc. */
+  palp_web_coverage_press(c, ctr, 0.1, PALP_WEB_BAND_DEEP);
+  palp_web_coverage_fractions(c, f);
+  CHECK(f[0] == light && fabs(f[1] - light) < 1e-15 && fabs(f[2] - light) < 1e-15, "deep covers medium and light");
+  /* Medium elsewhere (disjoint): light and medium grow by a disc, deep does not. */
+  const double ctr2[3] = {0.3, 0.3, 0};
+  palp_web_coverage_press(c, ctr2, 0.1, PALP_WEB_BAND_MEDIUM);
+  palp_web_coverage_fractions(c, f);
+  CHECK(fabs(f[0] - 2 * light) < 0.0063 && fabs(f[1] - f[0]) < 1e-15 && fabs(f[2] - light) < 1e-15,
+        "medium elsewhere: %g %g %g", f[0], f[1], f[2]);
+  /* Bad input changes nothing. */
+  const double nan3[3] = {NAN, 0, 0};
+  CHECK(palp_web_coverage_press(c, nan3, 0.1, 3) == 0 && palp_web_coverage_press(c, ctr, -1, 3) == 0 &&
+            palp_web_coverage_press(c, ctr, 0.1, 7) == 0,
+        "NaN centre, negative radius, unknown band ignored");
+  palp_web_coverage_reset(c);
+  palp_web_coverage_fractions(c, f);
+  CHECK(f[0] == 0, "reset");
+  palp_web_coverage_destroy(c);
+  /* Malformed meshes are refused. */
+  tri[5] = nv;
+  CHECK(!palp_web_coverage_create(rest, nv, tri, 2 * N * N, 2 * N * N, &rc) && rc == PALP_EINVAL, "index out of range");
+  tri[5] = 0;
+  rest[4] = INFINITY;
+  CHECK(!palp_web_coverage_create(rest, nv, tri, 2 * N * N, 2 * N * N, &rc) && rc == PALP_EINVAL, "non-finite vertex");
+  CHECK(!palp_web_coverage_create(rest, nv, tri, 10, 11, &rc), "more dome triangles than triangles");
+  free(rest);
+  free(tri);
+}
+
+/* The server's phantom: the model's own mesh (its triangles as the catalogue sends them). */
+static void test_coverage_dome(void) {
+  palp_mesh m;
+  palp_mesh_def d = palp_mesh_default_def();
+  CHECK(palp_mesh_create(&d, &m) == 0, "model mesh");
+  double *rest = malloc(sizeof *rest * 3 * (size_t)m.vertex_count);
+  int32_t *tri = malloc(sizeof *tri * 3 * (size_t)m.triangle_count);
+  for (int i = 0; i < m.vertex_count; i++) rest[3 * i] = m.rest[i].x, rest[3 * i + 1] = m.rest[i].y, rest[3 * i + 2] = m.rest[i].z;
+  for (int t = 0; t < m.triangle_count; t++)
+    for (int k = 0; k < 3; k++) tri[3 * t + k] = m.tri[t][k];
+  int rc;
+  palp_web_coverage *c = palp_web_coverage_create(rest, m.vertex_count, tri, m.triangle_count, m.dome_triangle_count, &rc);
+  CHECK(c != NULL, "dome accepted");
+  double model_area = 0;
+  for (int i = 0; i < m.vertex_count; i++) model_area += m.vertex_area[i];
+  const double A = palp_web_coverage_dome_area(c), R = d.radius, hemi = 2 * PI * R * R;
+  /* The inscribed polyhedron is a little smaller than the sphere: within 2% at 338 vertices. */
+  CHECK(fabs(A - hemi) / hemi < 0.02, "dome area %.6g m^2 vs 2 pi R^2 %.6g", A, hemi);
+  CHECK(fabs(A - model_area) / model_area < 1e-9, "the model's lumped areas sum to the same %.9g vs %.9g", A, model_area);
+  /* The paper's patch (5.2 cm^2, r = 12.9 mm) at the pole: a spherical cap of that chord radius
+   * has area pi r^2 (Archimedes: 2 pi R h with h from the chord) = 5.2 cm^2 = 5.2e-4 / 1.005e-2 of
+   * the dome; the vertices' lumped areas resolve it to about one ring (~20%). */
+  const double pole[3] = {0, 0, R}, r = sqrt(5.2e-4 / PI);
+  palp_web_coverage_press(c, pole, r, PALP_WEB_BAND_MEDIUM);
+  double f[3];
+  palp_web_coverage_fractions(c, f);
+  CHECK(fabs(f[0] - 5.2e-4 / hemi) < 0.2 * 5.2e-4 / hemi, "patch at the pole: %.4f of the dome vs %.4f", f[0],
+        5.2e-4 / hemi);
+  palp_web_coverage_destroy(c);
+  free(rest);
+  free(tri);
+  palp_mesh_destroy(&m);
+}
+
+static void test_access(void) {
+  const char *loop[] = {"127.0.0.1", "127.1.2.3", "::1", "localhost"};
+  const char *wide[] = {"0.0.0.0", "192.168.1.10", "10.0.0.1", "::", "128.0.0.1", "", "127.0.0.1x", "example.org"};
+  for (size_t i = 0; i < 4; i++) CHECK(palp_web_addr_is_loopback(loop[i]) == 1, "%s is loopback", loop[i]);
+  for (size_t i = 0; i < 8; i++) CHECK(palp_web_addr_is_loopback(wide[i]) == 0, "%s is not loopback", wide[i]);
+  CHECK(palp_web_addr_is_loopback(NULL) == 0, "NULL");
+
+  CHECK(palp_web_token_check("abcdefghijklmnop") == 0, "16 characters accepted");
+  CHECK(palp_web_token_check("abcdefghijklmno") != 0, "15 refused (too short)");
+  CHECK(palp_web_token_check("abcdefghijklmnop&x=1") != 0, "URL syntax refused");
+  CHECK(palp_web_token_check("abcdefgh ijklmnop") != 0, "space refused");
+  char longtok[200];
+  memset(longtok, 'a', sizeof longtok - 1);
+  longtok[sizeof longtok - 1] = 0;
+  CHECK(palp_web_token_check(longtok) != 0, "199 characters refused");
+
+  const char *want = "s3cret-token_0123456789";
+  CHECK(palp_web_token_equal(want, want, strlen(want)), "equal");
+  CHECK(!palp_web_token_equal(want, "s3cret-token_012345678", 22), "prefix is not equal");
+  CHECK(!palp_web_token_equal(want, "s3cret-token_01234567890", 24), "longer is not equal");
+  CHECK(!palp_web_token_equal(want, "S3cret-token_0123456789", 23), "case matters");
+  CHECK(!palp_web_token_equal(want, "", 0), "empty");
+
+  char v[64];
+  CHECK(palp_web_cookie_get("a=1; palp_token=xyz; b=2", "palp_token", v, sizeof v) == 0 && !strcmp(v, "xyz"), "middle");
+  CHECK(palp_web_cookie_get("palp_token=abc", "palp_token", v, sizeof v) == 0 && !strcmp(v, "abc"), "alone");
+  CHECK(palp_web_cookie_get("xpalp_token=abc", "palp_token", v, sizeof v) != 0, "suffix of another name");
+  CHECK(palp_web_cookie_get("palp_token_x=abc", "palp_token", v, sizeof v) != 0, "prefix of another name");
+  CHECK(palp_web_cookie_get("a=1", "palp_token", v, sizeof v) != 0, "absent");
+  CHECK(palp_web_cookie_get("palp_token=0123456789", "palp_token", v, 5) != 0, "too long for the buffer");
+
+  const char *ok[] = {"/index.html", "/js/trainee.js", "/lib/three/build/three.min.js", "/css/palp.css"};
+  const char *bad[] = {"/../etc/passwd", "/js/../../x", "//etc/passwd", "/.git/config", "/js/.hidden.js",
+                       "index.html",     "/a b.html",   "/a%2e%2e/x",   "/x..js/y",      NULL};
+  for (size_t i = 0; i < 4; i++) CHECK(palp_web_path_check(ok[i]) == 0, "%s served", ok[i]);
+  for (size_t i = 0; i < 10; i++) CHECK(palp_web_path_check(bad[i]) != 0, "%s refused", bad[i] ? bad[i] : "NULL");
+  CHECK(!strncmp(palp_web_mime("/a.html"), "text/html", 9) && !strncmp(palp_web_mime("/a.js"), "text/javascript", 15),
+        "mime html, js");
+  CHECK(palp_web_mime("/a.json") == NULL && palp_web_mime("/a") == NULL && palp_web_mime("/a.d/x") == NULL,
+        "no mime for other files");
+}
+
+static void test_control(void) {
+  if (palp_dds_use_config(NULL) != 0) {
+    CHECK(0, "loopback DDS config");
+    return;
+  }
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = 190;
+  char err[256];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain 190: %s", h ? "" : err);
+  if (!h) return;
+  palp_web_cursor c;
+  CHECK(palp_web_hub_attach(h, &c, 1) == 0, "first client");
+  palp_web_cursor c2;
+  CHECK(palp_web_hub_attach(h, &c2, 1) == PALP_EFULL, "max_clients 1: the second is refused");
+#define CTRL(s) palp_web_hub_control(h, &c, s, strlen(s))
+  CHECK(CTRL("{\"follow\": 7}") == 0 && c.mode == PALP_WEB_FOLLOW_SESSION && c.follow == 7, "follow 7");
+  CHECK(CTRL("{\"follow\":\"all\"}") == 0 && c.mode == PALP_WEB_FOLLOW_ALL, "follow all");
+  CHECK(CTRL("{\"follow\":null}") == 0 && c.mode == PALP_WEB_FOLLOW_NONE, "follow none");
+  const char *bad[] = {"", "{", "[]", "{\"follow\": -1}", "{\"follow\": 1.5}", "{\"follow\": 0}",
+                       "{\"follow\": 4294967296}", "{\"follow\": \"some\"}", "{\"follow\": 3, \"write\": 1}",
+                       "{\"contact\": {\"force\": 3}}", "{\"follow\": true}"};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    CHECK(CTRL(bad[i]) == PALP_EINVAL && c.mode == PALP_WEB_FOLLOW_NONE, "refused: %s", bad[i]);
+  }
+  char big[400];
+  memset(big, ' ', sizeof big);
+  memcpy(big, "{\"follow\":2}", 12);
+  CHECK(palp_web_hub_control(h, &c, big, sizeof big) == PALP_EINVAL, "over 256 bytes refused");
+#undef CTRL
+  /* A fresh cursor gets the hello first, whatever else exists. */
+  unsigned char *buf = NULL;
+  size_t len = 0;
+  int binary = 1;
+  CHECK(palp_web_hub_next(h, &c, 16, &buf, &len, &binary) == 1 && !binary && len > 10 &&
+            !memcmp(buf + 16, "{\"type\":\"hello\"", 15),
+        "hello first");
+  free(buf);
+  palp_web_hub_detach(h, &c);
+  CHECK(palp_web_hub_attach(h, &c2, 1) == 0, "a slot is free again after detach");
+  palp_web_hub_destroy(h);
+}
+
+int main(void) {
+  test_bands();
+  test_coverage_square();
+  test_coverage_dome();
+  test_access();
+  test_control();
+  printf("%d checks, %d failures\n", checks, failures);
+  return failures ? 1 : 0;
+}

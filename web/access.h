@@ -1,0 +1,38 @@
+/*
+ * access.h - who may talk to palp-web and which files it serves (palp_web_).
+ *
+ * Pure string checks, kept apart from libwebsockets so that they are unit-tested alone
+ * (tests/web/test_web_unit.c). docs/web.md explains the rules.
+ */
+#ifndef PALP_WEB_ACCESS_H
+#define PALP_WEB_ACCESS_H
+
+#include <stddef.h>
+
+/* Shortest token accepted [characters]: a guessable token is no access control. */
+#define PALP_WEB_TOKEN_MIN 16
+#define PALP_WEB_TOKEN_MAX 128
+
+/* 1 when addr is a loopback address (127.0.0.0/8, ::1, "localhost"), else 0. */
+int palp_web_addr_is_loopback(const char *addr);
+
+/* 0 when the token may be used: PALP_WEB_TOKEN_MIN..MAX characters of [A-Za-z0-9._~-] (it travels
+ * in URLs and a cookie unescaped); else PALP_EINVAL. */
+int palp_web_token_check(const char *token);
+
+/* 1 when `given` (len bytes, not necessarily NUL-terminated) equals the NUL-terminated `want`;
+ * the time taken does not depend on where they differ. */
+int palp_web_token_equal(const char *want, const char *given, size_t len);
+
+/* The value of cookie `name` in a Cookie header ("a=1; palp_token=xyz"), copied into out (NUL-
+ * terminated); 0 when found, -1 when absent or longer than outlen - 1. */
+int palp_web_cookie_get(const char *header, const char *name, char *out, size_t outlen);
+
+/* 0 when an URL path may name a served file: starts with '/', only [A-Za-z0-9._/-], no "..",
+ * no "//", no path component starting with '.', shorter than 200 characters. Else PALP_EINVAL. */
+int palp_web_path_check(const char *path);
+
+/* Content type by file extension; NULL for a type palp-web does not serve. */
+const char *palp_web_mime(const char *path);
+
+#endif

@@ -1,0 +1,126 @@
+/* coverage.c - pressed area of the dome per pressure band. */
+#include "coverage.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "palp.h" /* PALP_E* codes */
+
+struct palp_web_coverage {
+  int n;
+  double *rest;    /* 3n [m] */
+  double *area;    /* per vertex: a third of its dome triangles' area [m^2]; 0 off the dome */
+  uint8_t *band;   /* per vertex: deepest band pressed */
+  double dome_area;
+  double at_least[4]; /* area pressed at band >= k, kept current by press */
+};
+
+palp_web_bands palp_web_bands_default(void) {
+  return (palp_web_bands){.touch_min = 0.2, .light_max = 1.0, .medium_max = 3.0};
+}
+
+int palp_web_bands_check(const palp_web_bands *b) {
+  if (!b || !isfinite(b->touch_min) || !isfinite(b->light_max) || !isfinite(b->medium_max)) return PALP_EINVAL;
+  return b->touch_min >= 0 && b->touch_min < b->light_max && b->light_max < b->medium_max ? 0 : PALP_EINVAL;
+}
+
+int palp_web_band(const palp_web_bands *b, double f) {
+  if (!(f >= b->touch_min)) return PALP_WEB_BAND_NONE; /* NaN too */
+  if (f < b->light_max) return PALP_WEB_BAND_LIGHT;
+  if (f <= b->medium_max) return PALP_WEB_BAND_MEDIUM;
+  return PALP_WEB_BAND_DEEP;
+}
+
+const char *palp_web_band_name(int band) {
+  switch (band) {
+  case PALP_WEB_BAND_LIGHT: return "light";
+  case PALP_WEB_BAND_MEDIUM: return "medium";
+  case PALP_WEB_BAND_DEEP: return "deep";
+  default: return "none";
+  }
+}
+
+palp_web_coverage *palp_web_coverage_create(const double *rest, int n, const int32_t *tri, int tri_count,
+                                            int dome_tris, int *rc) {
+  *rc = PALP_EINVAL;
+  if (!rest || !tri || n <= 0 || tri_count <= 0 || dome_tris <= 0 || dome_tris > tri_count) return NULL;
+  for (int i = 0; i < 3 * tri_count; i++)
+    if (tri[i] < 0 || tri[i] >= n) return NULL;
+  for (int i = 0; i < 3 * n; i++)
+    if (!isfinite(rest[i])) return NULL;
+  *rc = PALP_ENOMEM;
+  palp_web_coverage *c = calloc(1, sizeof *c);
+  if (!c) return NULL;
+  c->n = n;
+  c->rest = malloc(sizeof *c->rest * 3 * (size_t)n);
+  c->area = calloc((size_t)n, sizeof *c->area);
+  c->band = calloc((size_t)n, 1);
+  if (!c->rest || !c->area || !c->band) {
+    palp_web_coverage_destroy(c);
+    return NULL;
+  }
+  memcpy(c->rest, rest, sizeof *c->rest * 3 * (size_t)n);
+  for (int t = 0; t < dome_tris; t++) {
+    const double *a = rest + 3 * tri[3 * t], *b = rest + 3 * tri[3 * t + 1], *d = rest + 3 * tri[3 * t + 2];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    const double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+    const double area = 0.5 * sqrt(x * x + y * y + z * z);
+    for (int k = 0; k < 3; k++) c->area[tri[3 * t + k]] += area / 3.0;
+    c->dome_area += area;
+  }
+  *rc = 0;
+  return c;
+}
+
+void palp_web_coverage_destroy(palp_web_coverage *c) {
+  if (!c) return;
+  free(c->rest);
+  free(c->area);
+  free(c->band);
+  free(c);
+}
+
+void palp_web_coverage_reset(palp_web_coverage *c) {
+  memset(c->band, 0, (size_t)c->n);
+  memset(c->at_least, 0, sizeof c->at_least);
+}
+
+int palp_web_coverage_press(palp_web_coverage *c, const double center[3], double radius, int band) {
+  if (!c || band <= PALP_WEB_BAND_NONE || band > PALP_WEB_BAND_DEEP || !(radius > 0) || !isfinite(radius) ||
+      !isfinite(center[0]) || !isfinite(center[1]) || !isfinite(center[2]))
+    return 0;
+  /* A finger tip's centre lies above or inside the surface, not on it: measure from the dome vertex
+   * nearest to it, so a deep press marks the same skin as a light one at the same place. */
+  int near = -1;
+  double best = INFINITY;
+  for (int i = 0; i < c->n; i++) {
+    if (c->area[i] <= 0) continue;
+    const double *p = c->rest + 3 * i;
+    const double d2 = (p[0] - center[0]) * (p[0] - center[0]) + (p[1] - center[1]) * (p[1] - center[1]) +
+                      (p[2] - center[2]) * (p[2] - center[2]);
+    if (d2 < best) best = d2, near = i;
+  }
+  if (near < 0) return 0;
+  const double *q = c->rest + 3 * near, r2 = radius * radius;
+  int raised = 0;
+  for (int i = 0; i < c->n; i++) {
+    if (c->area[i] <= 0 || c->band[i] >= band) continue;
+    const double *p = c->rest + 3 * i;
+    const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+    if (d2 > r2) continue;
+    for (int k = c->band[i] + 1; k <= band; k++) c->at_least[k] += c->area[i];
+    c->band[i] = (uint8_t)band;
+    raised++;
+  }
+  return raised;
+}
+
+void palp_web_coverage_fractions(const palp_web_coverage *c, double out[3]) {
+  for (int k = 0; k < 3; k++) {
+    double f = c && c->dome_area > 0 ? c->at_least[k + 1] / c->dome_area : 0;
+    out[k] = f < 0 ? 0 : f > 1 ? 1 : f;
+  }
+}
+
+double palp_web_coverage_dome_area(const palp_web_coverage *c) { return c ? c->dome_area : 0; }

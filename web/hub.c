@@ -1,0 +1,1018 @@
+/* hub.c - palp-web's DDS thread and its latest-value store of browser messages. */
+#include "hub.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+#include <dds/dds.h>
+
+#include "palp.h"
+#include "palp_dds.h"
+
+#define FINGERS 4
+#define TAKE 32
+#define MAX_CLIENTS_HARD 256
+#define DEFAULT_PATCH_AREA 5.2e-4 /* [m^2], the server's default when a contact says 0 */
+#define WAKE_PERIOD_NS 100000000LL
+#define JOIN_PERIOD_NS 100000000LL
+#define SESSIONS_PERIOD_NS 200000000LL /* the list's live figures (force, coverage) at 5 Hz */
+#define REJOIN_AFTER_NS 5000000000LL
+/* Streams are polled at this period rather than woken per sample: 8 sessions at 30 Hz would wake
+ * the thread 240 times a second, and on a virtual machine every wake-up costs more than the work
+ * (bench/web). Adds at most 16.7 ms to a frame's way to the page. */
+#define POLL_NS 16666667LL
+
+/* One published message: bytes and the version they were built at (versions are unique across
+ * the hub, so a cursor holding an old version of a reused slot is never mistaken as current). */
+typedef struct item {
+  uint64_t ver;
+  unsigned char *buf;
+  size_t len;
+} item;
+
+typedef struct finger {
+  int mode;         /* palp_ContactMode; RELEASE = not pressing */
+  double center[3]; /* [m] */
+  double force[3];  /* force-driven: on the phantom [N] */
+  double radius;    /* footprint for coverage [m] */
+  double fb[3];     /* feedback: phantom on the finger [N] */
+  int fb_active;
+} finger;
+
+typedef struct phantom {
+  int used;
+  uint32_t id;
+  int n, tri_count, dome_tris;
+  double *rest;     /* 3n [m] */
+  int32_t *tri;
+  double radius;
+  char name[64];
+} phantom;
+
+typedef struct session {
+  int used;
+  uint32_t id;
+  palp_SessionState st;
+  const phantom *ph;
+  palp_web_coverage *cov;
+  finger f[FINGERS];
+  double force;           /* magnitude of the summed finger forces [N] */
+  int band;
+  double max_disp;        /* largest displacement in the newest frame [m] */
+  double sim_time;
+  uint64_t frame;
+  int have_deform;
+  int64_t fps_t0;
+  int fps_count;
+  double fps;
+  int changed;            /* live data changed since the last live message */
+  int64_t next_live_ns;
+  /* feedback of this session's partition, read only while a position-driven finger presses (its
+   * force comes from feedback alone; a force-driven contact carries its own) */
+  dds_entity_t fb_sub, fb_r;
+  /* viewer membership */
+  int joined;
+  int64_t unwanted_since, join_failed_ns;
+  char station[64];
+} session;
+
+typedef struct server_status {
+  int used;
+  palp_ServerStatus s; /* copy without the sessions sequence */
+  uint32_t nsessions;
+  palp_SessionLoad *loads;
+  int64_t at_ns;
+} server_status;
+
+#define MAX_SERVERS 4
+
+struct palp_web_hub {
+  palp_web_hub_def def;
+  char host[32];
+  dds_entity_t pp, topic[PALP_TOPIC_COUNT];
+  dds_entity_t catalogue_r, state_r, status_r, reply_r, request_w, sub, contact_r, deform_r;
+  dds_entity_t ws, stop_gc;
+  pthread_t thread;
+  int running;
+  palp_web_wake_fn wake;
+  void *wake_ctx;
+  uint32_t request_seq;
+
+  /* DDS-thread state */
+  phantom ph[PALP_WEB_MAX_PHANTOMS];
+  session s[PALP_WEB_MAX_SESSIONS];
+  server_status srv[MAX_SERVERS];
+  int sessions_dirty, sessions_structure;
+  int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
+
+  /* shared with the web thread, under mu */
+  pthread_mutex_t mu;
+  uint64_t next_ver;
+  item hello, phantom_msg[PALP_WEB_MAX_PHANTOMS], sessions_msg, status_msg;
+  item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS];
+  uint32_t slot_sid[PALP_WEB_MAX_SESSIONS]; /* 0: free */
+  palp_web_cursor *clients[MAX_CLIENTS_HARD];
+  int nclients;
+  int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
+  palp_web_hub_stats stats;
+};
+
+static int fail(char *err, size_t errlen, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(err, errlen, fmt, ap);
+  va_end(ap);
+  return -1;
+}
+
+palp_web_hub_def palp_web_hub_default_def(void) {
+  return (palp_web_hub_def){.domain = 0, .join = 1, .read_feedback = 1, .dashboard_hz = 10, .live_hz = 30,
+                            .scale_mm = 30, .linger_s = 2, .bands = palp_web_bands_default()};
+}
+
+/* ---- publishing (DDS thread) --------------------------------------------------------------- */
+
+/* Replaces an item's bytes (takes ownership of buf) with a new version. */
+static void publish(palp_web_hub *h, item *it, unsigned char *buf, size_t len) {
+  pthread_mutex_lock(&h->mu);
+  unsigned char *old = it->buf;
+  it->buf = buf;
+  it->len = len;
+  it->ver = buf ? ++h->next_ver : 0;
+  pthread_mutex_unlock(&h->mu);
+  free(old);
+}
+
+static void publish_json(palp_web_hub *h, item *it, cJSON *j) {
+  char *s = j ? cJSON_PrintUnformatted(j) : NULL;
+  cJSON_Delete(j);
+  if (s) publish(h, it, (unsigned char *)s, strlen(s));
+}
+
+static cJSON *vec_json(const double *v, int n, double scale) {
+  cJSON *a = cJSON_CreateArray();
+  for (int i = 0; i < n; i++) cJSON_AddItemToArray(a, cJSON_CreateNumber(v[i] * scale));
+  return a;
+}
+
+static void build_hello(palp_web_hub *h) {
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "hello");
+  cJSON_AddStringToObject(j, "bridge", "palp-web");
+  cJSON_AddNumberToObject(j, "domain", h->def.domain);
+  cJSON_AddNumberToObject(j, "scale_mm", h->def.scale_mm);
+  cJSON *b = cJSON_AddObjectToObject(j, "bands");
+  cJSON_AddNumberToObject(b, "touch_min", h->def.bands.touch_min);
+  cJSON_AddNumberToObject(b, "light_max", h->def.bands.light_max);
+  cJSON_AddNumberToObject(b, "medium_max", h->def.bands.medium_max);
+  cJSON_AddNumberToObject(j, "dashboard_hz", h->def.dashboard_hz);
+  cJSON_AddBoolToObject(j, "joins", h->def.join);
+  /* Features that need topics which do not exist yet: the pages show them once these say so. */
+  cJSON_AddBoolToObject(j, "findings", 0);
+  cJSON_AddBoolToObject(j, "proxy", 0);
+  publish_json(h, &h->hello, j);
+}
+
+static void build_phantom(palp_web_hub *h, int slot) {
+  const phantom *p = &h->ph[slot];
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "phantom");
+  cJSON_AddNumberToObject(j, "id", p->id);
+  cJSON_AddStringToObject(j, "name", p->name);
+  cJSON_AddNumberToObject(j, "radius", p->radius);
+  cJSON_AddNumberToObject(j, "dome_triangles", p->dome_tris);
+  cJSON *rest = cJSON_AddArrayToObject(j, "rest");
+  for (int i = 0; i < 3 * p->n; i++) cJSON_AddItemToArray(rest, cJSON_CreateNumber(round(p->rest[i] * 1e7) * 1e-7));
+  cJSON *tri = cJSON_AddArrayToObject(j, "triangles");
+  for (int i = 0; i < 3 * p->tri_count; i++) cJSON_AddItemToArray(tri, cJSON_CreateNumber(p->tri[i]));
+  publish_json(h, &h->phantom_msg[slot], j);
+}
+
+static void build_sessions(palp_web_hub *h) {
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "sessions");
+  cJSON *arr = cJSON_AddArrayToObject(j, "sessions");
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    const session *s = &h->s[i];
+    if (!s->used) continue;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "id", s->id);
+    cJSON_AddNumberToObject(o, "phantom", s->st.phantom_id);
+    cJSON_AddStringToObject(o, "phantom_name", s->ph ? s->ph->name : "");
+    cJSON_AddStringToObject(o, "trainee", s->st.trainee_name);
+    cJSON_AddStringToObject(o, "station", s->st.trainee_station);
+    cJSON_AddNumberToObject(o, "visual", s->st.visual_count);
+    cJSON_AddNumberToObject(o, "observer", s->st.observer_count);
+    cJSON_AddNumberToObject(o, "tick_hz", s->st.tick_rate_hz);
+    cJSON_AddNumberToObject(o, "duration", s->st.duration);
+    cJSON_AddNumberToObject(o, "ticks", (double)s->st.ticks);
+    cJSON_AddNumberToObject(o, "overruns", (double)s->st.overruns);
+    cJSON_AddNumberToObject(o, "contact_samples", (double)s->st.contact_samples);
+    cJSON_AddNumberToObject(o, "rejected", (double)s->st.rejected_samples);
+    cJSON_AddNumberToObject(o, "peak_force", s->st.peak_force);
+    cJSON_AddNumberToObject(o, "peak_disp_mm", s->st.peak_displacement * 1e3);
+    cJSON_AddNumberToObject(o, "force", s->force);
+    cJSON_AddStringToObject(o, "band", palp_web_band_name(s->band));
+    double cov[3];
+    palp_web_coverage_fractions(s->cov, cov);
+    cJSON_AddItemToObject(o, "coverage", vec_json(cov, 3, 1));
+    cJSON_AddNumberToObject(o, "fps", s->fps);
+    cJSON_AddBoolToObject(o, "joined", s->joined);
+    /* Not on the wire yet (findings, the haptic local model): null, and the pages say "n/a". */
+    cJSON_AddNullToObject(o, "findings");
+    cJSON_AddNullToObject(o, "late_haptic");
+    cJSON_AddItemToArray(arr, o);
+  }
+  publish_json(h, &h->sessions_msg, j);
+}
+
+static void build_status(palp_web_hub *h) {
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "status");
+  cJSON *arr = cJSON_AddArrayToObject(j, "servers");
+  for (int i = 0; i < MAX_SERVERS; i++) {
+    const server_status *ss = &h->srv[i];
+    if (!ss->used) continue;
+    const palp_ServerStatus *s = &ss->s;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "id", s->server_id);
+    cJSON_AddNumberToObject(o, "uptime", s->uptime);
+    cJSON_AddNumberToObject(o, "tick_hz", s->tick_rate_hz);
+    cJSON_AddNumberToObject(o, "tick_threads", s->tick_threads);
+    cJSON_AddNumberToObject(o, "sessions_open", s->sessions_open);
+    cJSON_AddNumberToObject(o, "sessions_total", (double)s->sessions_total);
+    cJSON_AddNumberToObject(o, "load", s->load);
+    const double tick[3] = {s->tick_us_p50, s->tick_us_p99, s->tick_us_max};
+    cJSON_AddItemToObject(o, "tick_us", vec_json(tick, 3, 1));
+    cJSON_AddNumberToObject(o, "ticks", (double)s->ticks);
+    cJSON_AddNumberToObject(o, "overruns", (double)s->overruns);
+    double rej[10];
+    for (int k = 0; k < 10; k++) rej[k] = (double)s->rejected[k];
+    cJSON_AddItemToObject(o, "rejected", vec_json(rej, 10, 1));
+    const double log[3] = {(double)s->log_written, (double)s->log_shed, (double)s->log_failed};
+    cJSON_AddItemToObject(o, "log", vec_json(log, 3, 1));
+    cJSON *ls = cJSON_AddArrayToObject(o, "sessions");
+    for (uint32_t k = 0; k < ss->nsessions; k++) {
+      const palp_SessionLoad *l = &ss->loads[k];
+      cJSON *x = cJSON_CreateObject();
+      cJSON_AddNumberToObject(x, "id", l->session_id);
+      cJSON_AddNumberToObject(x, "ticks", (double)l->ticks);
+      cJSON_AddNumberToObject(x, "overruns", (double)l->overruns);
+      cJSON_AddNumberToObject(x, "awake_ticks", (double)l->awake_ticks);
+      cJSON_AddNumberToObject(x, "step_us_max", l->step_us_max);
+      cJSON_AddItemToArray(ls, x);
+    }
+    cJSON_AddItemToArray(arr, o);
+  }
+  publish_json(h, &h->status_msg, j);
+}
+
+static void build_live(palp_web_hub *h, int slot) {
+  const session *s = &h->s[slot];
+  double cov[3];
+  palp_web_coverage_fractions(s->cov, cov);
+  char buf[2048];
+  size_t n = (size_t)snprintf(buf, sizeof buf,
+                              "{\"type\":\"live\",\"session\":%u,\"frame\":%.0f,\"sim_time\":%.4f,\"force\":%.4f,"
+                              "\"band\":\"%s\",\"max_disp_mm\":%.3f,\"fps\":%.1f,\"coverage\":[%.4f,%.4f,%.4f],"
+                              "\"proxy\":null,\"fingers\":[",
+                              s->id, (double)s->frame, s->sim_time, s->force, palp_web_band_name(s->band),
+                              s->max_disp * 1e3, s->fps, cov[0], cov[1], cov[2]);
+  int first = 1;
+  for (int k = 0; k < FINGERS && n < sizeof buf - 400; k++) {
+    const finger *f = &s->f[k];
+    if (f->mode == palp_CONTACT_RELEASE) continue;
+    const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
+    n += (size_t)snprintf(buf + n, sizeof buf - n,
+                          "%s{\"finger\":%d,\"mode\":\"%s\",\"center\":[%.6f,%.6f,%.6f],\"force\":[%.4f,%.4f,%.4f],"
+                          "\"radius\":%.5f}",
+                          first ? "" : ",", k, f->mode == palp_CONTACT_FORCE ? "force" : "finger", f->center[0],
+                          f->center[1], f->center[2], fv[0], fv[1], fv[2], f->radius);
+    first = 0;
+  }
+  n += (size_t)snprintf(buf + n, sizeof buf - n, "]}");
+  unsigned char *m = malloc(n);
+  if (!m) return;
+  memcpy(m, buf, n);
+  publish(h, &h->live_msg[slot], m, n);
+}
+
+/* ---- DDS samples ---------------------------------------------------------------------------- */
+
+static phantom *find_phantom(palp_web_hub *h, uint32_t id, int create, int *slot) {
+  for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)
+    if (h->ph[i].used && h->ph[i].id == id) return *slot = i, &h->ph[i];
+  if (!create) return NULL;
+  for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)
+    if (!h->ph[i].used) {
+      memset(&h->ph[i], 0, sizeof h->ph[i]);
+      h->ph[i].used = 1;
+      h->ph[i].id = id;
+      return *slot = i, &h->ph[i];
+    }
+  return NULL;
+}
+
+static session *find_session(palp_web_hub *h, uint32_t id, int *slot) {
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].id == id) return *slot = i, &h->s[i];
+  return NULL;
+}
+
+static void attach_coverage(session *s) {
+  if (s->cov || !s->ph) return;
+  int rc;
+  s->cov = palp_web_coverage_create(s->ph->rest, s->ph->n, s->ph->tri, s->ph->tri_count, s->ph->dome_tris, &rc);
+}
+
+static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
+  const uint32_t n = p->rest._length, nt = p->triangles._length;
+  /* Checked before use: a mesh the pages could not draw is dropped, not half-shown. */
+  int ok = n > 0 && n <= 1000000 && nt > 0 && nt % 3 == 0 && nt / 3 <= 4000000 && p->dome_triangle_count > 0 &&
+           (uint32_t)p->dome_triangle_count <= nt / 3 && isfinite(p->radius) && p->radius > 0;
+  for (uint32_t i = 0; ok && i < nt; i++) ok = p->triangles._buffer[i] >= 0 && (uint32_t)p->triangles._buffer[i] < n;
+  for (uint32_t i = 0; ok && i < n; i++)
+    ok = isfinite(p->rest._buffer[i].x) && isfinite(p->rest._buffer[i].y) && isfinite(p->rest._buffer[i].z);
+  int slot;
+  phantom *ph = ok ? find_phantom(h, p->phantom_id, 1, &slot) : NULL;
+  if (!ph) {
+    h->stats.dropped++;
+    return;
+  }
+  const int same = ph->n == (int)n && ph->tri_count == (int)(nt / 3);
+  if (same && ph->dome_tris == p->dome_triangle_count && ph->radius == p->radius && !strcmp(ph->name, p->name) &&
+      !memcmp(ph->tri, p->triangles._buffer, sizeof *ph->tri * nt)) {
+    int moved = 0;
+    for (uint32_t i = 0; i < n && !moved; i++)
+      moved = ph->rest[3 * i] != p->rest._buffer[i].x || ph->rest[3 * i + 1] != p->rest._buffer[i].y ||
+              ph->rest[3 * i + 2] != p->rest._buffer[i].z;
+    /* The server republishes its catalogue whenever a session opens or closes (active_sessions):
+     * the pages need the mesh once, not again with every session. */
+    if (!moved) return;
+  }
+  if (!same) {
+    double *rest = malloc(sizeof *rest * 3 * n);
+    int32_t *tri = malloc(sizeof *tri * nt);
+    if (!rest || !tri) {
+      free(rest);
+      free(tri);
+      h->stats.dropped++;
+      return;
+    }
+    /* Sessions of this phantom lose their coverage map (its vertex count changed). */
+    for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+      if (h->s[i].used && h->s[i].ph == ph) {
+        palp_web_coverage_destroy(h->s[i].cov);
+        h->s[i].cov = NULL;
+      }
+    free(ph->rest);
+    free(ph->tri);
+    ph->rest = rest;
+    ph->tri = tri;
+  }
+  ph->n = (int)n;
+  ph->tri_count = (int)(nt / 3);
+  ph->dome_tris = p->dome_triangle_count;
+  ph->radius = p->radius;
+  snprintf(ph->name, sizeof ph->name, "%s", p->name);
+  for (uint32_t i = 0; i < n; i++) {
+    ph->rest[3 * i] = p->rest._buffer[i].x;
+    ph->rest[3 * i + 1] = p->rest._buffer[i].y;
+    ph->rest[3 * i + 2] = p->rest._buffer[i].z;
+  }
+  memcpy(ph->tri, p->triangles._buffer, sizeof *ph->tri * nt);
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].st.phantom_id == ph->id) {
+      h->s[i].ph = ph;
+      attach_coverage(&h->s[i]);
+    }
+  build_phantom(h, slot);
+  h->sessions_dirty = h->sessions_structure = 1; /* phantom names in the list */
+}
+
+static void send_request(palp_web_hub *h, session *s, int op) {
+  palp_SessionRequest rq;
+  memset(&rq, 0, sizeof rq);
+  snprintf(rq.station_id, sizeof rq.station_id, "%s", s->station);
+  rq.request_seq = ++h->request_seq;
+  rq.op = op;
+  rq.role = palp_ROLE_VISUAL;
+  rq.phantom_id = s->st.phantom_id;
+  rq.session_id = s->id;
+  snprintf(rq.user_name, sizeof rq.user_name, "palp-web");
+  rq.want_feedback = 0; /* the bridge reads feedback only when the trainee's station asks for it */
+  rq.want_deformation = 1;
+  dds_write(h->request_w, &rq);
+}
+
+static void leave(palp_web_hub *h, session *s) {
+  if (!s->joined) return;
+  /* As a station says goodbye: OP_LEAVE so the server tells it from a crash, then the disposal
+   * so that it forgets the station (its station table is finite). */
+  send_request(h, s, palp_OP_LEAVE);
+  palp_SessionRequest key;
+  memset(&key, 0, sizeof key);
+  snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
+  dds_dispose(h->request_w, &key);
+  s->joined = 0;
+  h->stats.leaves++;
+  h->sessions_dirty = 1;
+}
+
+static void free_session(palp_web_hub *h, int slot) {
+  session *s = &h->s[slot];
+  leave(h, s);
+  if (s->fb_sub > 0) dds_delete(s->fb_sub);
+  palp_web_coverage_destroy(s->cov);
+  memset(s, 0, sizeof *s);
+  publish(h, &h->deform_msg[slot], NULL, 0);
+  publish(h, &h->live_msg[slot], NULL, 0);
+  pthread_mutex_lock(&h->mu);
+  h->slot_sid[slot] = 0;
+  pthread_mutex_unlock(&h->mu);
+  h->sessions_dirty = h->sessions_structure = 1;
+}
+
+static void on_state(palp_web_hub *h, const palp_SessionState *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (m->phase != palp_PHASE_OPEN) {
+    if (s) free_session(h, slot);
+    return;
+  }
+  if (!s) {
+    for (int i = 0; i < PALP_WEB_MAX_SESSIONS && !s; i++)
+      if (!h->s[i].used) s = &h->s[i], slot = i;
+    if (!s) {
+      h->stats.dropped++;
+      return;
+    }
+    memset(s, 0, sizeof *s);
+    s->used = 1;
+    s->id = m->session_id;
+    snprintf(s->station, sizeof s->station, "%.24s/%ld/web-s%u", h->host, (long)getpid(), m->session_id);
+    s->fps_t0 = palp_dds_now_ns();
+    pthread_mutex_lock(&h->mu);
+    h->slot_sid[slot] = s->id;
+    pthread_mutex_unlock(&h->mu);
+    h->sessions_structure = 1;
+  }
+  s->st = *m; /* bounded strings: a plain copy */
+  int ps;
+  s->ph = find_phantom(h, m->phantom_id, 0, &ps);
+  attach_coverage(s);
+  h->sessions_dirty = 1;
+}
+
+/* A state instance that turned not-alive: its server is gone, the session with it. */
+static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih) {
+  palp_SessionState key;
+  memset(&key, 0, sizeof key);
+  int slot;
+  if (dds_instance_get_key(h->state_r, ih, &key) == 0 && find_session(h, key.session_id, &slot)) {
+    h->s[slot].joined = 0; /* its server cannot hear a goodbye; the instance is disposed below */
+    palp_SessionRequest rk;
+    memset(&rk, 0, sizeof rk);
+    snprintf(rk.station_id, sizeof rk.station_id, "%s", h->s[slot].station);
+    dds_dispose(h->request_w, &rk);
+    free_session(h, slot);
+  }
+}
+
+static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
+  server_status *ss = NULL;
+  for (int i = 0; i < MAX_SERVERS && !ss; i++)
+    if (h->srv[i].used && !strcmp(h->srv[i].s.server_id, m->server_id)) ss = &h->srv[i];
+  for (int i = 0; i < MAX_SERVERS && !ss; i++)
+    if (!h->srv[i].used) ss = &h->srv[i];
+  if (!ss) { /* a fifth server: replace the stalest */
+    ss = &h->srv[0];
+    for (int i = 1; i < MAX_SERVERS; i++)
+      if (h->srv[i].at_ns < ss->at_ns) ss = &h->srv[i];
+  }
+  uint32_t n = m->sessions._length > 4096 ? 4096 : m->sessions._length;
+  palp_SessionLoad *loads = ss->loads;
+  if (n > ss->nsessions || !loads) {
+    loads = realloc(ss->loads, sizeof *loads * (n ? n : 1));
+    if (!loads) {
+      h->stats.dropped++;
+      return;
+    }
+  }
+  ss->loads = loads;
+  ss->used = 1;
+  ss->s = *m;
+  ss->s.sessions._buffer = NULL;
+  ss->s.sessions._length = ss->s.sessions._maximum = 0;
+  ss->nsessions = n;
+  memcpy(ss->loads, m->sessions._buffer, sizeof *loads * n);
+  ss->at_ns = palp_dds_now_ns();
+  build_status(h);
+}
+
+static void recompute_force(palp_web_hub *h, session *s) {
+  double sum[3] = {0, 0, 0};
+  for (int k = 0; k < FINGERS; k++) {
+    const finger *f = &s->f[k];
+    if (f->mode == palp_CONTACT_FORCE)
+      for (int d = 0; d < 3; d++) sum[d] += f->force[d];
+    else if (f->mode == palp_CONTACT_FINGER && f->fb_active)
+      for (int d = 0; d < 3; d++) sum[d] += f->fb[d];
+  }
+  const double mag = sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+  const int band = palp_web_band(&h->def.bands, mag);
+  if (mag != s->force || band != s->band) s->changed = 1, h->sessions_dirty = 1;
+  s->force = mag;
+  s->band = band;
+}
+
+static void on_contact(palp_web_hub *h, const palp_Contact *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s || m->finger >= FINGERS) {
+    h->stats.dropped++;
+    return;
+  }
+  finger *f = &s->f[m->finger];
+  const int finite = isfinite(m->center.x) && isfinite(m->center.y) && isfinite(m->center.z) &&
+                     isfinite(m->force.x) && isfinite(m->force.y) && isfinite(m->force.z) && isfinite(m->radius) &&
+                     isfinite(m->patch_area);
+  if (m->mode == palp_CONTACT_RELEASE || !finite ||
+      (m->mode != palp_CONTACT_FORCE && m->mode != palp_CONTACT_FINGER)) {
+    /* The server rejects what is not finite or of no known mode; so does the view. */
+    if (!finite || m->mode != palp_CONTACT_RELEASE) h->stats.dropped++;
+    f->mode = palp_CONTACT_RELEASE;
+  } else {
+    f->mode = (int)m->mode;
+    f->center[0] = m->center.x, f->center[1] = m->center.y, f->center[2] = m->center.z;
+    f->force[0] = m->force.x, f->force[1] = m->force.y, f->force[2] = m->force.z;
+    if (m->mode == palp_CONTACT_FORCE) {
+      const double area = m->patch_area > 0 ? m->patch_area : DEFAULT_PATCH_AREA;
+      f->radius = sqrt(area / 3.14159265358979323846);
+    } else {
+      f->radius = m->radius > 0 ? m->radius : 0;
+    }
+  }
+  if (f->mode == palp_CONTACT_FINGER && h->def.read_feedback && s->fb_sub <= 0 && s->st.partition[0]) {
+    s->fb_sub = palp_dds_session_subscriber(h->pp, s->st.partition);
+    s->fb_r = s->fb_sub > 0 ? palp_dds_create_reader(s->fb_sub, h->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK) : -1;
+    if (s->fb_r < 0) h->stats.dropped++;
+  }
+  s->changed = 1;
+  recompute_force(h, s);
+}
+
+static void on_contact_lost(palp_web_hub *h, dds_instance_handle_t ih) {
+  palp_Contact key;
+  memset(&key, 0, sizeof key);
+  int slot;
+  if (dds_instance_get_key(h->contact_r, ih, &key) != 0 || key.finger >= FINGERS) return;
+  session *s = find_session(h, key.session_id, &slot);
+  if (!s) return;
+  s->f[key.finger].mode = palp_CONTACT_RELEASE;
+  s->changed = 1;
+  recompute_force(h, s);
+}
+
+static void on_feedback(palp_web_hub *h, const palp_Feedback *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s) {
+    h->stats.dropped++;
+    return;
+  }
+  for (uint32_t i = 0; i < m->fingers._length && i < FINGERS; i++) {
+    const palp_FingerFeedback *ff = &m->fingers._buffer[i];
+    if (ff->finger >= FINGERS || !isfinite(ff->force.x) || !isfinite(ff->force.y) || !isfinite(ff->force.z)) continue;
+    finger *f = &s->f[ff->finger];
+    f->fb[0] = ff->force.x, f->fb[1] = ff->force.y, f->fb[2] = ff->force.z;
+    f->fb_active = ff->active;
+  }
+  if (m->sim_time > s->sim_time && !s->have_deform) s->sim_time = m->sim_time, s->frame = m->frame;
+  recompute_force(h, s);
+}
+
+static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  const uint32_t n = m->positions._length;
+  if (!s || !s->ph || (int)n != s->ph->n) {
+    h->stats.dropped++;
+    return;
+  }
+  const size_t len = PALP_WEB_DEFORM_HEADER + (size_t)n * 3 * sizeof(float);
+  unsigned char *buf = malloc(len);
+  if (!buf) return;
+  const uint32_t hdr[4] = {PALP_WEB_DEFORM_MAGIC, m->session_id, s->st.phantom_id, n};
+  const double fr = (double)m->frame, t = m->sim_time;
+  /* The pages read little-endian (DataView / Float32Array); x86-64 and arm64 are. */
+  memcpy(buf, hdr, sizeof hdr);
+  memcpy(buf + 16, &fr, 8);
+  memcpy(buf + 24, &t, 8);
+  float *d = (float *)(void *)(buf + PALP_WEB_DEFORM_HEADER);
+  double max2 = 0;
+  for (uint32_t i = 0; i < n; i++) {
+    const palp_Vec3 *p = &m->positions._buffer[i];
+    const double *r = s->ph->rest + 3 * i;
+    double dx = p->x - r[0], dy = p->y - r[1], dz = p->z - r[2];
+    if (!isfinite(dx) || !isfinite(dy) || !isfinite(dz)) dx = dy = dz = 0; /* drawn at rest, never NaN */
+    d[3 * i] = (float)dx, d[3 * i + 1] = (float)dy, d[3 * i + 2] = (float)dz;
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 > max2) max2 = d2;
+  }
+  publish(h, &h->deform_msg[slot], buf, len);
+  s->max_disp = sqrt(max2);
+  s->sim_time = m->sim_time;
+  s->frame = m->frame;
+  s->have_deform = 1;
+  s->fps_count++;
+  s->changed = 1;
+}
+
+/* ---- the thread ------------------------------------------------------------------------------ */
+
+typedef void (*sample_fn)(palp_web_hub *h, const void *sample);
+typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih);
+
+static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
+  if (rd <= 0) return 0;
+  int total = 0, n;
+  void *ptr[TAKE] = {NULL};
+  dds_sample_info_t info[TAKE];
+  while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
+    for (int i = 0; i < n; i++) {
+      if (info[i].valid_data) {
+        on(h, ptr[i]);
+        (*counter)++;
+      } else if (lost && info[i].instance_state != DDS_IST_ALIVE) {
+        lost(h, info[i].instance_handle);
+      }
+    }
+    dds_return_loan(rd, ptr, n);
+    total += n;
+    if (n < TAKE) break;
+  }
+  return total;
+}
+
+static void manage_joins(palp_web_hub *h, int64_t now) {
+  int want[PALP_WEB_MAX_SESSIONS];
+  pthread_mutex_lock(&h->mu);
+  memset(want, 0, sizeof want);
+  for (int c = 0; c < h->nclients; c++) {
+    const palp_web_cursor *cu = h->clients[c];
+    for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+      if (h->slot_sid[i] && (cu->mode == PALP_WEB_FOLLOW_ALL ||
+                             (cu->mode == PALP_WEB_FOLLOW_SESSION && cu->follow == h->slot_sid[i])))
+        want[i] = 1;
+  }
+  memcpy(h->want, want, sizeof want);
+  pthread_mutex_unlock(&h->mu);
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    session *s = &h->s[i];
+    if (!s->used) continue;
+    if (want[i]) {
+      s->unwanted_since = 0;
+      if (!s->joined && h->def.join && (!s->join_failed_ns || now - s->join_failed_ns > REJOIN_AFTER_NS)) {
+        send_request(h, s, palp_OP_JOIN);
+        s->joined = 1;
+        s->join_failed_ns = 0;
+        h->stats.joins++;
+        h->sessions_dirty = 1;
+      }
+    } else if (s->joined) {
+      if (!s->unwanted_since) s->unwanted_since = now;
+      if ((double)(now - s->unwanted_since) * 1e-9 >= h->def.linger_s) leave(h, s);
+    }
+  }
+}
+
+/* The server's answers to the bridge's own requests: a rejected join is retried later. */
+static void check_replies(palp_web_hub *h, int64_t now) {
+  palp_SessionReply buf[8];
+  void *ptr[8];
+  dds_sample_info_t info[8];
+  for (int i = 0; i < 8; i++) ptr[i] = &buf[i];
+  int n;
+  while ((n = dds_take(h->reply_r, ptr, info, 8, 8)) > 0) {
+    for (int i = 0; i < n; i++) {
+      if (!info[i].valid_data || buf[i].status != palp_REPLY_REJECTED) continue;
+      for (int k = 0; k < PALP_WEB_MAX_SESSIONS; k++) {
+        session *s = &h->s[k];
+        if (s->used && s->joined && !strcmp(s->station, buf[i].station_id) && strcmp(buf[i].reason, "left") != 0) {
+          fprintf(stderr, "palp-web: the server refused to stream session %u: %s\n", s->id, buf[i].reason);
+          s->joined = 0;
+          s->join_failed_ns = now;
+          h->stats.join_rejected++;
+          /* forget the request instance too */
+          palp_SessionRequest key;
+          memset(&key, 0, sizeof key);
+          snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
+          dds_dispose(h->request_w, &key);
+        }
+      }
+    }
+    if (n < 8) break;
+  }
+}
+
+static void *hub_main(void *arg) {
+  palp_web_hub *h = arg;
+  const int64_t live_period = (int64_t)(1e9 / h->def.live_hz);
+  while (h->running) {
+    /* Wakes for state changes (catalogue, session states, status, replies) at once, else polls. */
+    int64_t now = palp_dds_now_ns();
+    if (h->next_poll_ns > now) dds_waitset_wait(h->ws, NULL, 0, h->next_poll_ns - now);
+    if (!h->running) break;
+    now = palp_dds_now_ns();
+    const int poll_due = now >= h->next_poll_ns;
+    if (poll_due) h->next_poll_ns = now + POLL_NS;
+    int news = 0;
+    news += drain(h, h->catalogue_r, (sample_fn)on_phantom, NULL, &h->stats.catalogue);
+    news += drain(h, h->state_r, (sample_fn)on_state, on_state_lost, &h->stats.states);
+    news += drain(h, h->status_r, (sample_fn)on_status, NULL, &h->stats.statuses);
+    /* Contacts and feedback arrive at the tick rate (up to 1 kHz): polled here, newest per key,
+     * instead of waking the thread per sample. */
+    if (poll_due) {
+      drain(h, h->contact_r, (sample_fn)on_contact, on_contact_lost, &h->stats.contacts);
+      for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+        if (h->s[i].used && h->s[i].fb_r > 0) drain(h, h->s[i].fb_r, (sample_fn)on_feedback, NULL, &h->stats.feedbacks);
+      news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
+    }
+    check_replies(h, now);
+    for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+      session *s = &h->s[i];
+      if (!s->used) continue;
+      if (now - s->fps_t0 >= 1000000000LL) {
+        const double fps = s->fps_count / ((double)(now - s->fps_t0) * 1e-9);
+        if (fps != s->fps) s->changed = 1;
+        s->fps = fps;
+        s->fps_count = 0;
+        s->fps_t0 = now;
+      }
+      if (now >= s->next_live_ns) {
+        /* Coverage: the footprint of every finger pressing at least lightly, at the live rate. */
+        for (int k = 0; k < FINGERS; k++) {
+          const finger *f = &s->f[k];
+          if (f->mode == palp_CONTACT_RELEASE || !s->cov) continue;
+          const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
+          if (f->mode == palp_CONTACT_FINGER && !f->fb_active) continue;
+          const int band = palp_web_band(&h->def.bands, sqrt(fv[0] * fv[0] + fv[1] * fv[1] + fv[2] * fv[2]));
+          if (band && palp_web_coverage_press(s->cov, f->center, f->radius, band) > 0) s->changed = 1;
+        }
+        if (s->changed) {
+          build_live(h, i);
+          s->changed = 0;
+          news++;
+        }
+        s->next_live_ns = now + live_period;
+      }
+    }
+    if (h->sessions_structure || (h->sessions_dirty && now >= h->next_sessions_ns)) {
+      build_sessions(h);
+      h->sessions_dirty = h->sessions_structure = 0;
+      h->next_sessions_ns = now + SESSIONS_PERIOD_NS;
+      news++;
+    }
+    if (now >= h->next_join_ns) {
+      manage_joins(h, now);
+      h->next_join_ns = now + JOIN_PERIOD_NS;
+    }
+    if ((news || now >= h->next_wake_ns) && h->wake) {
+      h->wake(h->wake_ctx);
+      h->next_wake_ns = now + WAKE_PERIOD_NS;
+    }
+  }
+  return NULL;
+}
+
+/* ---- set-up ---------------------------------------------------------------------------------- */
+
+static dds_entity_t make_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+  return palp_dds_create_reader(parent, topic, kind);
+}
+
+palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t errlen) {
+  if (palp_web_bands_check(&def->bands) != 0) {
+    fail(err, errlen, "bands: need 0 <= touch < light < medium");
+    return NULL;
+  }
+  if (!(def->dashboard_hz > 0 && def->dashboard_hz <= 60) || !(def->live_hz > 0 && def->live_hz <= 120) ||
+      !(def->scale_mm > 0 && def->scale_mm <= 1000) || !(def->linger_s >= 0 && def->linger_s <= 3600)) {
+    fail(err, errlen, "rates, scale or linger out of range");
+    return NULL;
+  }
+  palp_web_hub *h = calloc(1, sizeof *h);
+  if (!h) {
+    fail(err, errlen, "out of memory");
+    return NULL;
+  }
+  h->def = *def;
+  pthread_mutex_init(&h->mu, NULL);
+  gethostname(h->host, sizeof h->host - 1);
+  h->pp = dds_create_participant((dds_domainid_t)def->domain, NULL, NULL);
+  if (h->pp < 0) {
+    fail(err, errlen, "cannot create a DDS participant on domain %u: %s", def->domain, dds_strretcode(h->pp));
+    palp_web_hub_destroy(h);
+    return NULL;
+  }
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
+  h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
+  h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
+  h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  h->reply_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
+  h->request_w = palp_dds_create_writer(h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  /* Every session's partition, as palp-recorder reads them: "palp/session/" + "*". */
+  char wildcard[64];
+  snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
+  char *z = strrchr(wildcard, '/');
+  if (z) snprintf(z + 1, sizeof wildcard - (size_t)(z + 1 - wildcard), "*");
+  h->sub = palp_dds_session_subscriber(h->pp, wildcard);
+  h->contact_r = make_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+  h->deform_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+  h->ws = dds_create_waitset(h->pp);
+  h->stop_gc = dds_create_guardcondition(h->pp);
+  const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r};
+  int bad = h->request_w < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
+    bad |= wake_on[k] < 0;
+    if (wake_on[k] > 0) {
+      dds_set_status_mask(wake_on[k], DDS_DATA_AVAILABLE_STATUS);
+      dds_waitset_attach(h->ws, wake_on[k], (dds_attach_t)k);
+    }
+  }
+  if (!bad) bad = dds_waitset_attach(h->ws, h->stop_gc, -1) < 0;
+  if (bad) {
+    fail(err, errlen, "cannot create the bridge's DDS readers");
+    palp_web_hub_destroy(h);
+    return NULL;
+  }
+  build_hello(h);
+  return h;
+}
+
+int palp_web_hub_start(palp_web_hub *h, palp_web_wake_fn wake, void *ctx) {
+  h->wake = wake;
+  h->wake_ctx = ctx;
+  h->running = 1;
+  if (pthread_create(&h->thread, NULL, hub_main, h) != 0) {
+    h->running = 0;
+    return PALP_ENOMEM;
+  }
+  return 0;
+}
+
+void palp_web_hub_stop(palp_web_hub *h) {
+  if (!h || !h->running) return;
+  h->running = 0;
+  dds_set_guardcondition(h->stop_gc, true);
+  pthread_join(h->thread, NULL);
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used) leave(h, &h->s[i]);
+}
+
+void palp_web_hub_destroy(palp_web_hub *h) {
+  if (!h) return;
+  palp_web_hub_stop(h);
+  if (h->pp > 0) dds_delete(h->pp);
+  for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++) {
+    free(h->ph[i].rest);
+    free(h->ph[i].tri);
+    free(h->phantom_msg[i].buf);
+  }
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    palp_web_coverage_destroy(h->s[i].cov);
+    free(h->deform_msg[i].buf);
+    free(h->live_msg[i].buf);
+  }
+  for (int i = 0; i < MAX_SERVERS; i++) free(h->srv[i].loads);
+  free(h->hello.buf);
+  free(h->sessions_msg.buf);
+  free(h->status_msg.buf);
+  pthread_mutex_destroy(&h->mu);
+  free(h);
+}
+
+void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
+  pthread_mutex_lock(&h->mu);
+  *out = h->stats; /* the counters are written by the DDS thread; a torn read only misreports one */
+  out->clients = h->nclients;
+  out->sessions_open = 0;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) out->sessions_open += h->slot_sid[i] != 0;
+  pthread_mutex_unlock(&h->mu);
+}
+
+/* ---- browser side (web thread) ------------------------------------------------------------------ */
+
+int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients) {
+  memset(c, 0, sizeof *c);
+  if (max_clients > MAX_CLIENTS_HARD) max_clients = MAX_CLIENTS_HARD;
+  pthread_mutex_lock(&h->mu);
+  int rc = PALP_EFULL;
+  if (h->nclients < max_clients) {
+    h->clients[h->nclients++] = c;
+    rc = 0;
+  }
+  pthread_mutex_unlock(&h->mu);
+  return rc;
+}
+
+void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c) {
+  pthread_mutex_lock(&h->mu);
+  for (int i = 0; i < h->nclients; i++)
+    if (h->clients[i] == c) {
+      h->clients[i] = h->clients[--h->nclients];
+      break;
+    }
+  pthread_mutex_unlock(&h->mu);
+}
+
+int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, size_t len) {
+  if (!msg || len == 0 || len > 256) return PALP_EINVAL;
+  cJSON *j = cJSON_ParseWithLength(msg, len);
+  if (!j) return PALP_EINVAL;
+  const cJSON *f = cJSON_GetObjectItemCaseSensitive(j, "follow");
+  int mode = -1;
+  uint32_t id = 0;
+  if (cJSON_IsObject(j) && cJSON_GetArraySize(j) == 1 && f) {
+    if (cJSON_IsNull(f)) mode = PALP_WEB_FOLLOW_NONE;
+    else if (cJSON_IsString(f) && !strcmp(f->valuestring, "all")) mode = PALP_WEB_FOLLOW_ALL;
+    else if (cJSON_IsNumber(f) && f->valuedouble >= 1 && f->valuedouble <= 4294967295.0 &&
+             f->valuedouble == floor(f->valuedouble))
+      mode = PALP_WEB_FOLLOW_SESSION, id = (uint32_t)f->valuedouble;
+  }
+  cJSON_Delete(j);
+  if (mode < 0) return PALP_EINVAL;
+  pthread_mutex_lock(&h->mu);
+  c->mode = mode;
+  c->follow = id;
+  /* A new follow starts from the newest frame, not from whatever was skipped. */
+  memset(c->deform_ver, 0, sizeof c->deform_ver);
+  memset(c->live_ver, 0, sizeof c->live_ver);
+  pthread_mutex_unlock(&h->mu);
+  return 0;
+}
+
+static int take(const item *it, size_t pre, unsigned char **buf, size_t *len) {
+  unsigned char *b = malloc(pre + it->len);
+  if (!b) return PALP_ENOMEM;
+  memcpy(b + pre, it->buf, it->len);
+  *buf = b;
+  *len = it->len;
+  return 1;
+}
+
+int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned char **buf, size_t *len,
+                      int *binary) {
+  int rc = 0;
+  *binary = 0;
+  const int64_t now = palp_dds_now_ns();
+  pthread_mutex_lock(&h->mu);
+  if (!c->hello_sent && h->hello.buf) {
+    rc = take(&h->hello, pre, buf, len);
+    if (rc > 0) c->hello_sent = 1;
+    goto out;
+  }
+  for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)
+    if (h->phantom_msg[i].buf && c->phantom_ver[i] != h->phantom_msg[i].ver) {
+      rc = take(&h->phantom_msg[i], pre, buf, len);
+      if (rc > 0) c->phantom_ver[i] = h->phantom_msg[i].ver;
+      goto out;
+    }
+  if (h->sessions_msg.buf && c->sessions_ver != h->sessions_msg.ver) {
+    rc = take(&h->sessions_msg, pre, buf, len);
+    if (rc > 0) c->sessions_ver = h->sessions_msg.ver;
+    goto out;
+  }
+  if (h->status_msg.buf && c->status_ver != h->status_msg.ver) {
+    rc = take(&h->status_msg, pre, buf, len);
+    if (rc > 0) c->status_ver = h->status_msg.ver;
+    goto out;
+  }
+  if (c->mode == PALP_WEB_FOLLOW_NONE) goto out;
+  const int64_t min_gap = c->mode == PALP_WEB_FOLLOW_ALL ? (int64_t)(1e9 / h->def.dashboard_hz) : 0;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    if (!h->slot_sid[i] || (c->mode == PALP_WEB_FOLLOW_SESSION && h->slot_sid[i] != c->follow)) continue;
+    const item *d = &h->deform_msg[i], *l = &h->live_msg[i];
+    /* 1 ms of slack: frames that arrive at exactly the dashboard rate are not pushed to the next one. */
+    if (d->buf && c->deform_ver[i] != d->ver && now - c->deform_sent_ns[i] >= min_gap - 1000000) {
+      rc = take(d, pre, buf, len);
+      if (rc > 0) c->deform_ver[i] = d->ver, c->deform_sent_ns[i] = now, *binary = 1;
+      goto out;
+    }
+    if (c->mode == PALP_WEB_FOLLOW_SESSION && l->buf && c->live_ver[i] != l->ver) {
+      rc = take(l, pre, buf, len);
+      if (rc > 0) c->live_ver[i] = l->ver;
+      goto out;
+    }
+  }
+out:
+  pthread_mutex_unlock(&h->mu);
+  return rc;
+}

@@ -1,0 +1,94 @@
+/*
+ * hub.h - the DDS side of palp-web (palp_web_hub): one viewer participant that reads the
+ * catalogue, session states, server status and every session partition's contact, feedback and
+ * deformation, and keeps, per item, the newest message for browsers ready to send.
+ *
+ * Latest value, not a queue: each item (a phantom, the session list, the status, a session's
+ * deformation and live data) has a version; a browser's cursor remembers what it was sent, and
+ * palp_web_hub_next returns the next item it has not seen. A slow browser skips frames, memory
+ * stays bounded, and the DDS thread never waits for a socket.
+ *
+ * Writes to DDS: only the bridge's own viewer requests (join a followed session as a visual
+ * station so that the server streams its deformation, leave it when no page follows it). Nothing
+ * a browser sends reaches DDS (docs/web.md).
+ */
+#ifndef PALP_WEB_HUB_H
+#define PALP_WEB_HUB_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "coverage.h"
+
+#define PALP_WEB_MAX_PHANTOMS 16
+#define PALP_WEB_MAX_SESSIONS 64
+
+typedef struct palp_web_hub_def {
+  uint32_t domain;
+  int join;              /* 1: join followed sessions as a visual station; 0: read only what is published */
+  int read_feedback;     /* 1: read a session's feedback while a position-driven finger presses (its force) */
+  double dashboard_hz;   /* deformation frames per second and session to a dashboard */
+  double live_hz;        /* live (force, fingers, coverage) messages per second to a trainee page */
+  double scale_mm;       /* the pages' fixed colour scale: 0 .. scale_mm of displacement */
+  double linger_s;       /* stay joined this long after the last page stopped following */
+  palp_web_bands bands;
+} palp_web_hub_def;
+
+palp_web_hub_def palp_web_hub_default_def(void);
+
+typedef struct palp_web_hub palp_web_hub;
+typedef void (*palp_web_wake_fn)(void *ctx);
+
+enum { PALP_WEB_FOLLOW_NONE = 0, PALP_WEB_FOLLOW_SESSION = 1, PALP_WEB_FOLLOW_ALL = 2 };
+
+/* What one browser connection has been sent. */
+typedef struct palp_web_cursor {
+  int mode;           /* PALP_WEB_FOLLOW_* */
+  uint32_t follow;    /* session id (FOLLOW_SESSION) */
+  int hello_sent;
+  uint64_t phantom_ver[PALP_WEB_MAX_PHANTOMS];
+  uint64_t sessions_ver, status_ver;
+  uint64_t deform_ver[PALP_WEB_MAX_SESSIONS], live_ver[PALP_WEB_MAX_SESSIONS];
+  int64_t deform_sent_ns[PALP_WEB_MAX_SESSIONS];
+} palp_web_cursor;
+
+typedef struct palp_web_hub_stats {
+  uint64_t catalogue, states, statuses, contacts, feedbacks, deformations; /* DDS samples taken */
+  uint64_t dropped;   /* samples for sessions or phantoms the bridge does not know (or malformed) */
+  uint64_t joins, leaves, join_rejected;
+  int sessions_open, clients;
+} palp_web_hub_stats;
+
+/* Creates the participant and endpoints (CYCLONEDDS_URI must be set). NULL and a message in err
+ * on failure. */
+palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t errlen);
+/* Starts the DDS thread; wake(ctx) is called from it whenever something new is ready (and at
+ * least every 100 ms), from that thread. 0 or a negative PALP_E* code. */
+int palp_web_hub_start(palp_web_hub *h, palp_web_wake_fn wake, void *ctx);
+/* Stops the thread and leaves every joined session. */
+void palp_web_hub_stop(palp_web_hub *h);
+void palp_web_hub_destroy(palp_web_hub *h);
+void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out);
+
+/* A browser connection: attach when it opens (PALP_EFULL at max_clients), detach when it closes. */
+int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients);
+void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c);
+
+/* A control message from a browser (at most 256 bytes of JSON): {"follow": ID} follows one
+ * session, {"follow": "all"} every session (the dashboard), {"follow": null} none. It changes only
+ * what this connection is sent. 0, or PALP_EINVAL for anything else (the caller counts it). */
+int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, size_t len);
+
+/* The next message this cursor has not been sent: *buf is malloc'ed with `pre` spare bytes
+ * before the payload (libwebsockets' LWS_PRE), *len the payload length, *binary 1 for a
+ * deformation frame. Returns 1 with a message, 0 when the cursor is up to date, PALP_ENOMEM. */
+int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned char **buf, size_t *len,
+                      int *binary);
+
+/* Binary deformation frame (little-endian), as sent to the pages:
+ *   uint32 magic 'PDEF' (0x46454450), uint32 session_id, uint32 phantom_id, uint32 vertex count n,
+ *   float64 frame, float64 sim_time [s], then n x 3 float32 displacement from rest [m]. */
+#define PALP_WEB_DEFORM_MAGIC 0x46454450u
+#define PALP_WEB_DEFORM_HEADER 32
+
+#endif

@@ -1,0 +1,245 @@
+/* palp-web: the classroom seen live in a browser. Joins the DDS domain as a viewer, serves the
+ * trainee page and the instructor's dashboard, and streams deformation, forces, session states and
+ * server status to them over WebSocket (docs/web.md).
+ *
+ *   palp-web [--domain N] [--listen ADDR] [--port P] [--token T | --token-file F] [options]
+ */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "access.h"
+#include "hub.h"
+#include "palp.h"
+#include "palp_dds.h"
+#include "serve.h"
+
+static volatile sig_atomic_t g_stop;
+static void on_signal(int sig) {
+  (void)sig;
+  g_stop = 1;
+}
+
+static void usage(FILE *f) {
+  fprintf(f,
+          "usage: palp-web [options]\n"
+          "  --domain N          DDS domain of the classroom server (default 0)\n"
+          "  --listen ADDR       address to serve on (default 127.0.0.1; anything but loopback needs a token)\n"
+          "  --port P            TCP port (default 8090; 0 = any free port, printed)\n"
+          "  --token T           access token (%d-%d characters of A-Z a-z 0-9 . _ ~ -); pages need ?token=T\n"
+          "  --token-file F      read the token from F (keeps it out of the process list)\n"
+          "  --scale-mm MM       fixed colour scale of the pages: 0..MM of displacement (default 30)\n"
+          "  --bands L,M         force gauge bands [N]: light < L <= medium <= M < deep (default 1,3)\n"
+          "  --dashboard-hz HZ   frames per second and session to a dashboard (default 10)\n"
+          "  --max-clients N     WebSocket connections at once (default 32)\n"
+          "  --no-join           never join a session: show only what the server already streams\n"
+          "  --no-feedback       never read feedback (a position-driven finger's force then shows 0 N)\n"
+          "  --www DIR           the pages (default %s)\n"
+          "  --three DIR         three.js from libjs-three (default %s)\n"
+          "  --dds-config FILE   Cyclone DDS config (default: the loopback-only config)\n"
+          "  --duration S        stop after S seconds (tests, benchmarks)\n"
+          "  --stats             print the bridge's counters every 5 s\n",
+          PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_WWW_DIR, PALP_WEB_THREE_DIR);
+}
+
+static int number(const char *opt, const char *v, double lo, double hi, double *out) {
+  char *end = NULL;
+  errno = 0;
+  const double x = v ? strtod(v, &end) : 0;
+  if (!v || errno || end == v || *end || !(x >= lo && x <= hi)) {
+    fprintf(stderr, "palp-web: %s: expected a number in [%g, %g], got \"%s\"\n", opt, lo, hi, v ? v : "");
+    return -1;
+  }
+  *out = x;
+  return 0;
+}
+
+static int read_token_file(const char *path, char *out, size_t len) {
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    fprintf(stderr, "palp-web: --token-file: cannot open %s: %s\n", path, strerror(errno));
+    return -1;
+  }
+  if (!fgets(out, (int)len, f)) out[0] = 0;
+  fclose(f);
+  out[strcspn(out, "\r\n")] = 0;
+  return 0;
+}
+
+static double mono_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* --duration and --stats without a thread of their own: a small watcher on the hub's wake-ups. */
+typedef struct watch {
+  palp_web_server *srv;
+  palp_web_hub *hub;
+  double end, next_stats;
+  int stats;
+} watch;
+
+static void print_stats(palp_web_hub *hub, palp_web_server *srv) {
+  palp_web_hub_stats h;
+  palp_web_serve_stats w;
+  palp_web_hub_stats_get(hub, &h);
+  palp_web_serve_stats_get(srv, &w);
+  fprintf(stderr,
+          "palp-web: %d sessions, %d pages; DDS taken: %llu deformations, %llu contacts, %llu feedbacks, %llu states, "
+          "%llu dropped; joins %llu, leaves %llu; sent %llu messages (%.1f MB); http %llu ok, %llu denied; ws %llu "
+          "opened, %llu closed, %llu denied\n",
+          h.sessions_open, h.clients, (unsigned long long)h.deformations, (unsigned long long)h.contacts,
+          (unsigned long long)h.feedbacks, (unsigned long long)h.states, (unsigned long long)h.dropped,
+          (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
+          (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.ws_opened,
+          (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
+}
+
+static void on_wake(void *ctx) {
+  watch *w = ctx;
+  const double now = mono_s();
+  if (w->end > 0 && now >= w->end) g_stop = 1;
+  palp_web_serve_wake(w->srv);
+  if (w->stats && now >= w->next_stats) {
+    w->next_stats = now + 5;
+    print_stats(w->hub, w->srv);
+  }
+}
+
+int main(int argc, char **argv) {
+  palp_web_hub_def hd = palp_web_hub_default_def();
+  palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = PALP_WEB_WWW_DIR,
+                           .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
+  const char *token = NULL, *token_file = NULL, *dds_config = NULL;
+  double duration = 0, x = 0;
+  int stats = 0;
+  for (int i = 1; i < argc; i++) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+      usage(stdout);
+      return 0;
+    }
+    if (!strcmp(a, "--no-join")) { hd.join = 0; continue; }
+    if (!strcmp(a, "--no-feedback")) { hd.read_feedback = 0; continue; }
+    if (!strcmp(a, "--stats")) { stats = 1; continue; }
+    if (!v) {
+      fprintf(stderr, "palp-web: %s: missing value (or unknown option)\n", a);
+      return 2;
+    }
+    i++;
+    if (!strcmp(a, "--domain")) {
+      if (number(a, v, 0, 232, &x) || x != floor(x)) return 2;
+      hd.domain = (uint32_t)x;
+    } else if (!strcmp(a, "--listen")) sd.listen = v;
+    else if (!strcmp(a, "--port")) {
+      if (number(a, v, 0, 65535, &x) || x != floor(x)) return 2;
+      sd.port = (int)x;
+    } else if (!strcmp(a, "--token")) token = v;
+    else if (!strcmp(a, "--token-file")) token_file = v;
+    else if (!strcmp(a, "--www")) sd.www_dir = v;
+    else if (!strcmp(a, "--three")) sd.three_dir = v;
+    else if (!strcmp(a, "--dds-config")) dds_config = v;
+    else if (!strcmp(a, "--scale-mm")) {
+      if (number(a, v, 0.1, 1000, &hd.scale_mm)) return 2;
+    } else if (!strcmp(a, "--dashboard-hz")) {
+      if (number(a, v, 0.5, 60, &hd.dashboard_hz)) return 2;
+    } else if (!strcmp(a, "--max-clients")) {
+      if (number(a, v, 1, 256, &x) || x != floor(x)) return 2;
+      sd.max_clients = (int)x;
+    } else if (!strcmp(a, "--duration")) {
+      if (number(a, v, 0.1, 1e7, &duration)) return 2;
+    } else if (!strcmp(a, "--bands")) {
+      char *end = NULL;
+      errno = 0;
+      hd.bands.light_max = strtod(v, &end);
+      if (errno || end == v || *end != ',') {
+        fprintf(stderr, "palp-web: --bands: expected L,M in newtons, got \"%s\"\n", v);
+        return 2;
+      }
+      const char *m = end + 1;
+      hd.bands.medium_max = strtod(m, &end);
+      if (errno || end == m || *end || palp_web_bands_check(&hd.bands) != 0) {
+        fprintf(stderr, "palp-web: --bands: expected %g < L < M (newtons), got \"%s\"\n", hd.bands.touch_min, v);
+        return 2;
+      }
+    } else {
+      fprintf(stderr, "palp-web: unknown option %s\n", a);
+      usage(stderr);
+      return 2;
+    }
+  }
+  char tokbuf[PALP_WEB_TOKEN_MAX + 2];
+  if (token_file) {
+    if (token) {
+      fprintf(stderr, "palp-web: give --token or --token-file, not both\n");
+      return 2;
+    }
+    if (read_token_file(token_file, tokbuf, sizeof tokbuf)) return 2;
+    token = tokbuf;
+  }
+  if (token && palp_web_token_check(token) != 0) {
+    fprintf(stderr, "palp-web: the token must be %d-%d characters of A-Z a-z 0-9 . _ ~ -\n", PALP_WEB_TOKEN_MIN,
+            PALP_WEB_TOKEN_MAX);
+    return 2;
+  }
+  /* The security rule of issue 14: beyond loopback only with a token. */
+  if (!palp_web_addr_is_loopback(sd.listen) && !token) {
+    fprintf(stderr,
+            "palp-web: refusing to serve on %s without an access token: anyone on that network could watch the "
+            "class. Give --token T (or --token-file F), or listen on 127.0.0.1.\n",
+            sd.listen);
+    return 2;
+  }
+  sd.token = token;
+  if (access(sd.www_dir, R_OK) != 0) {
+    fprintf(stderr, "palp-web: --www %s: not readable\n", sd.www_dir);
+    return 2;
+  }
+  if (palp_dds_use_config(dds_config) != 0) {
+    fprintf(stderr, "palp-web: DDS config %s not found\n", dds_config ? dds_config : "(default)");
+    return 2;
+  }
+  char err[256];
+  palp_web_hub *hub = palp_web_hub_create(&hd, err, sizeof err);
+  if (!hub) {
+    fprintf(stderr, "palp-web: %s\n", err);
+    return 1;
+  }
+  palp_web_server *srv = palp_web_serve_create(&sd, hub, err, sizeof err);
+  if (!srv) {
+    fprintf(stderr, "palp-web: %s\n", err);
+    palp_web_hub_destroy(hub);
+    return 1;
+  }
+  signal(SIGINT, on_signal);
+  signal(SIGTERM, on_signal);
+  signal(SIGPIPE, SIG_IGN);
+  watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats};
+  if (palp_web_hub_start(hub, on_wake, &w) != 0) {
+    fprintf(stderr, "palp-web: cannot start the DDS thread\n");
+    palp_web_serve_destroy(srv);
+    palp_web_hub_destroy(hub);
+    return 1;
+  }
+  const int port = palp_web_serve_port(srv);
+  const char *host = strchr(sd.listen, ':') ? "[::1]" : sd.listen;
+  char q[PALP_WEB_TOKEN_MAX + 16] = "";
+  if (token) snprintf(q, sizeof q, "?token=%s", token);
+  printf("palp-web: DDS domain %u, serving on %s port %d%s\n", hd.domain, sd.listen, port,
+         token ? " (token required)" : "");
+  printf("palp-web: trainee page  http://%s:%d/trainee.html%s\n", host, port, q);
+  printf("palp-web: dashboard     http://%s:%d/dashboard.html%s\n", host, port, q);
+  fflush(stdout);
+  palp_web_serve_run(srv, &g_stop);
+  palp_web_hub_stop(hub);
+  print_stats(hub, srv);
+  palp_web_serve_destroy(srv);
+  palp_web_hub_destroy(hub);
+  return 0;
+}

@@ -1,0 +1,287 @@
+/* serve.c - palp-web's HTTP + WebSocket server on libwebsockets. */
+#include "serve.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <libwebsockets.h>
+
+#include "access.h"
+#include "palp.h"
+
+#define COOKIE "palp_token"
+#define WS_PATH "/ws"
+#define CONTROL_MAX 256
+
+struct palp_web_server {
+  palp_web_serve_def def;
+  char listen[64], token[PALP_WEB_TOKEN_MAX + 1];
+  char www[512], three[512];
+  int have_token;
+  palp_web_hub *hub;
+  struct lws_context *ctx;
+  struct lws_vhost *vh;
+  struct lws_protocols protocols[2];
+  lws_retry_bo_t retry;
+  palp_web_serve_stats stats;
+};
+
+/* Per connection (HTTP or WebSocket): libwebsockets allocates and zeroes it. */
+typedef struct conn {
+  palp_web_cursor cursor;
+  int attached;
+  size_t rx_len;
+  int rx_overflow;
+  char rx[CONTROL_MAX];
+} conn;
+
+static int fail(char *err, size_t errlen, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(err, errlen, fmt, ap);
+  va_end(ap);
+  return -1;
+}
+
+static palp_web_server *server_of(struct lws *wsi) {
+  return (palp_web_server *)lws_context_user(lws_get_context(wsi));
+}
+
+/* 1 when the request carries the token (URL argument or cookie), or none is required. *from_url
+ * says it came in the URL (the answer then sets the cookie for the page's own requests). */
+static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int *from_url) {
+  *from_url = 0;
+  if (!s->have_token) return 1;
+  char v[PALP_WEB_TOKEN_MAX + 16];
+  /* lws copies "token=VALUE" into v and returns where VALUE starts */
+  const char *arg = lws_get_urlarg_by_name(wsi, "token=", v, (int)sizeof v);
+  if (arg && palp_web_token_equal(s->token, arg, strlen(arg))) {
+    *from_url = 1;
+    return 1;
+  }
+  if (!allow_cookie) return 0;
+  const int n = lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_COOKIE);
+  if (n <= 0 || n > 4096) return 0;
+  char *h = malloc((size_t)n + 1);
+  int ok = 0;
+  if (h && lws_hdr_copy(wsi, h, n + 1, WSI_TOKEN_HTTP_COOKIE) > 0 &&
+      palp_web_cookie_get(h, COOKIE, v, sizeof v) == 0)
+    ok = palp_web_token_equal(s->token, v, strlen(v));
+  free(h);
+  return ok;
+}
+
+/* A browser page from another origin must not drive the WebSocket with this page's cookie or
+ * token: the Origin's host:port must be the Host the request was sent to. */
+static int same_origin(struct lws *wsi) {
+  char origin[256], host[256];
+  if (lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN) <= 0) return 1; /* not a browser */
+  if (lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST) <= 0) return 0;
+  const char *o = strstr(origin, "://");
+  return o && !strcmp(o + 3, host);
+}
+
+static int http_status(struct lws *wsi, unsigned code, palp_web_server *s, uint64_t *counter) {
+  (*counter)++;
+  (void)s;
+  if (lws_return_http_status(wsi, code, NULL)) return -1;
+  return lws_http_transaction_completed(wsi) ? -1 : 0;
+}
+
+static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
+  int from_url = 0;
+  if (!authorised(s, wsi, 1, &from_url)) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, s, &s->stats.http_denied);
+  const char *path = !strcmp(uri, "/") ? "/index.html" : uri;
+  const char *mime = palp_web_mime(path);
+  if (palp_web_path_check(path) != 0 || !mime) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
+  char file[1024];
+  static const char lib[] = "/lib/three/";
+  if (!strncmp(path, lib, sizeof lib - 1))
+    snprintf(file, sizeof file, "%s/%s", s->three, path + sizeof lib - 1);
+  else
+    snprintf(file, sizeof file, "%s%s", s->www, path);
+  char headers[512];
+  int n = snprintf(headers, sizeof headers,
+                   "Cache-Control: no-store\x0d\x0a"
+                   "X-Content-Type-Options: nosniff\x0d\x0a"
+                   "Referrer-Policy: no-referrer\x0d\x0a"
+                   "Content-Security-Policy: default-src 'self'; connect-src 'self'; img-src 'self' data:; "
+                   "frame-ancestors 'none'\x0d\x0a");
+  if (from_url && s->have_token)
+    n += snprintf(headers + n, sizeof headers - (size_t)n,
+                  "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict\x0d\x0a", s->token);
+  const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
+  if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
+  s->stats.http_ok++;
+  if (rc > 0 && lws_http_transaction_completed(wsi)) return -1;
+  return 0;
+}
+
+static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len) {
+  palp_web_server *s = server_of(wsi);
+  conn *c = user;
+  switch (reason) {
+  case LWS_CALLBACK_HTTP:
+    return serve_file(wsi, s, (const char *)in);
+
+  case LWS_CALLBACK_HTTP_FILE_COMPLETION:
+    return lws_http_transaction_completed(wsi) ? -1 : 0;
+
+  case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
+    char uri[64];
+    int from_url = 0;
+    /* The WebSocket carries the token in its URL (a page reads it from its own address); the
+     * cookie alone is not enough, so a cross-site page cannot ride on it. */
+    if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) <= 0 || strcmp(uri, WS_PATH) != 0 ||
+        !authorised(s, wsi, 0, &from_url) || !same_origin(wsi)) {
+      s->stats.ws_denied++;
+      return 1;
+    }
+    return 0;
+  }
+
+  case LWS_CALLBACK_ESTABLISHED:
+    if (palp_web_hub_attach(s->hub, &c->cursor, s->def.max_clients) != 0) {
+      s->stats.ws_full++;
+      return -1;
+    }
+    c->attached = 1;
+    s->stats.ws_opened++;
+    lws_callback_on_writable(wsi);
+    return 0;
+
+  case LWS_CALLBACK_CLOSED:
+    if (c && c->attached) {
+      palp_web_hub_detach(s->hub, &c->cursor);
+      c->attached = 0;
+      s->stats.ws_closed++;
+    }
+    return 0;
+
+  case LWS_CALLBACK_RECEIVE: {
+    /* Only control messages ({"follow": ...}); they change what this page is sent and never
+     * reach DDS. Anything longer than CONTROL_MAX is dropped whole. */
+    if (lws_frame_is_binary(wsi)) c->rx_overflow = 1;
+    if (!c->rx_overflow && c->rx_len + len <= CONTROL_MAX) {
+      memcpy(c->rx + c->rx_len, in, len);
+      c->rx_len += len;
+    } else {
+      c->rx_overflow = 1;
+    }
+    if (lws_is_final_fragment(wsi) && !lws_remaining_packet_payload(wsi)) {
+      if (!c->rx_overflow && palp_web_hub_control(s->hub, &c->cursor, c->rx, c->rx_len) == 0) {
+        s->stats.control_ok++;
+        lws_callback_on_writable(wsi);
+      } else {
+        s->stats.control_bad++;
+      }
+      c->rx_len = 0;
+      c->rx_overflow = 0;
+    }
+    return 0;
+  }
+
+  case LWS_CALLBACK_SERVER_WRITEABLE: {
+    if (!c->attached) return 0;
+    unsigned char *buf = NULL;
+    size_t n = 0;
+    int binary = 0;
+    const int got = palp_web_hub_next(s->hub, &c->cursor, LWS_PRE, &buf, &n, &binary);
+    if (got <= 0) return 0;
+    const int w = lws_write(wsi, buf + LWS_PRE, n, binary ? LWS_WRITE_BINARY : LWS_WRITE_TEXT);
+    free(buf);
+    if (w < (int)n) return -1; /* the connection is gone */
+    s->stats.msgs++;
+    s->stats.bytes += n;
+    lws_callback_on_writable(wsi); /* more may be waiting; the next call says */
+    return 0;
+  }
+
+  case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
+    /* palp_web_serve_wake from the hub's thread: offer every page its new messages. */
+    if (lws_get_vhost(wsi) && lws_get_protocol(wsi))
+      lws_callback_on_writable_all_protocol_vhost(lws_get_vhost(wsi), lws_get_protocol(wsi));
+    return 0;
+
+  default:
+    break;
+  }
+  return lws_callback_http_dummy(wsi, reason, user, in, len);
+}
+
+static void lws_log_to_stderr(int level, const char *line) {
+  (void)level;
+  fprintf(stderr, "palp-web: lws: %s", line);
+}
+
+palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_hub *hub, char *err, size_t errlen) {
+  palp_web_server *s = calloc(1, sizeof *s);
+  if (!s) {
+    fail(err, errlen, "out of memory");
+    return NULL;
+  }
+  s->def = *def;
+  s->hub = hub;
+  snprintf(s->listen, sizeof s->listen, "%s", def->listen ? def->listen : "127.0.0.1");
+  snprintf(s->www, sizeof s->www, "%s", def->www_dir);
+  snprintf(s->three, sizeof s->three, "%s", def->three_dir);
+  if (def->token) {
+    snprintf(s->token, sizeof s->token, "%s", def->token);
+    s->have_token = 1;
+  }
+  s->def.listen = s->listen;
+  lws_set_log_level(LLL_ERR | LLL_WARN, lws_log_to_stderr);
+  s->protocols[0] = (struct lws_protocols){.name = "palp", .callback = callback, .per_session_data_size = sizeof(conn),
+                                           .rx_buffer_size = 4096};
+  /* A page whose machine vanished without closing (no FIN) is pinged after 10 s idle and dropped
+   * after 20 s; an abrupt close on a live machine is seen at once. */
+  s->retry = (lws_retry_bo_t){.secs_since_valid_ping = 10, .secs_since_valid_hangup = 20};
+  struct lws_context_creation_info info;
+  memset(&info, 0, sizeof info);
+  info.port = def->port;
+  info.iface = s->listen;
+  info.protocols = s->protocols;
+  info.user = s;
+  info.uid = -1;
+  info.gid = -1;
+  info.retry_and_idle_policy = &s->retry;
+  if (!strchr(s->listen, ':')) info.options |= LWS_SERVER_OPTION_DISABLE_IPV6;
+  s->ctx = lws_create_context(&info);
+  if (!s->ctx) {
+    fail(err, errlen, "cannot listen on %s port %d (in use, or not an address of this machine?)", s->listen,
+         def->port);
+    free(s);
+    return NULL;
+  }
+  s->vh = lws_get_vhost_by_name(s->ctx, "default");
+  if (!s->vh || lws_get_vhost_listen_port(s->vh) <= 0) {
+    fail(err, errlen, "cannot listen on %s port %d", s->listen, def->port);
+    lws_context_destroy(s->ctx);
+    free(s);
+    return NULL;
+  }
+  return s;
+}
+
+int palp_web_serve_port(const palp_web_server *s) { return lws_get_vhost_listen_port(s->vh); }
+
+void palp_web_serve_run(palp_web_server *s, volatile sig_atomic_t *stop) {
+  /* The hub wakes the loop at least every 100 ms, so a stop request is seen that soon. */
+  while (!*stop)
+    if (lws_service(s->ctx, 0) < 0) break;
+}
+
+void palp_web_serve_wake(void *server) {
+  palp_web_server *s = server;
+  if (s && s->ctx) lws_cancel_service(s->ctx);
+}
+
+void palp_web_serve_stats_get(const palp_web_server *s, palp_web_serve_stats *out) { *out = s->stats; }
+
+void palp_web_serve_destroy(palp_web_server *s) {
+  if (!s) return;
+  if (s->ctx) lws_context_destroy(s->ctx);
+  free(s);
+}

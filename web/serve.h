@@ -1,0 +1,44 @@
+/*
+ * serve.h - palp-web's HTTP and WebSocket side on libwebsockets (palp_web_serve_).
+ *
+ * Serves the static pages (web/www) and three.js from Debian's libjs-three under /lib/three/,
+ * and one WebSocket endpoint, /ws, that streams the hub's messages. With a token configured every
+ * request must carry it (?token= or the cookie the first page load sets): without it HTTP answers
+ * 401 and the WebSocket handshake is refused.
+ */
+#ifndef PALP_WEB_SERVE_H
+#define PALP_WEB_SERVE_H
+
+#include <signal.h>
+#include <stdint.h>
+
+#include "hub.h"
+
+typedef struct palp_web_serve_def {
+  const char *listen;    /* address to bind, default 127.0.0.1 */
+  int port;              /* 0: any free port (printed) */
+  const char *token;     /* NULL: no token (loopback only; main refuses otherwise) */
+  const char *www_dir;   /* the pages */
+  const char *three_dir; /* /usr/share/javascript/three */
+  int max_clients;       /* WebSocket connections at once */
+} palp_web_serve_def;
+
+typedef struct palp_web_serve_stats {
+  uint64_t http_ok, http_denied, http_missing;
+  uint64_t ws_opened, ws_closed, ws_denied, ws_full;
+  uint64_t msgs, bytes, control_ok, control_bad;
+} palp_web_serve_stats;
+
+typedef struct palp_web_server palp_web_server;
+
+palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_hub *hub, char *err, size_t errlen);
+/* The port actually bound (useful with port 0). */
+int palp_web_serve_port(const palp_web_server *s);
+/* Serves until *stop becomes non-zero. */
+void palp_web_serve_run(palp_web_server *s, volatile sig_atomic_t *stop);
+/* Thread-safe: makes the service loop push new hub messages to the browsers. */
+void palp_web_serve_wake(void *server);
+void palp_web_serve_stats_get(const palp_web_server *s, palp_web_serve_stats *out);
+void palp_web_serve_destroy(palp_web_server *s);
+
+#endif

@@ -1,0 +1,98 @@
+/* common.js - what both palp-web pages share: the WebSocket to the bridge, the deformation frame
+ * format, and the fixed colour-blind-safe displacement scale (viridis). window.palpState is what
+ * the pages show, readable by tests (tests/web). */
+"use strict";
+const PALP = (function () {
+  /* viridis (matplotlib's perceptually uniform, colour-blind-safe map), 9 stops, linear between. */
+  const VIRIDIS = [[68, 1, 84], [71, 45, 123], [59, 82, 139], [44, 114, 142], [33, 145, 140],
+    [40, 174, 128], [94, 201, 98], [173, 220, 48], [253, 231, 37]];
+  function viridis(t) {
+    t = Math.min(1, Math.max(0, t || 0)) * (VIRIDIS.length - 1);
+    const i = Math.min(VIRIDIS.length - 2, Math.floor(t)), f = t - i, a = VIRIDIS[i], b = VIRIDIS[i + 1];
+    return [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f];
+  }
+  function css(rgb) { return "rgb(" + (rgb[0] | 0) + "," + (rgb[1] | 0) + "," + (rgb[2] | 0) + ")"; }
+
+  function params() { return new URLSearchParams(window.location.search); }
+
+  /* Binary frame, little-endian (web/hub.h): u32 magic 'PDEF', u32 session, u32 phantom, u32 n,
+   * f64 frame, f64 sim_time [s], then n x 3 f32 displacement from rest [m]. */
+  const MAGIC = 0x46454450, HEADER = 32;
+  function decodeDeformation(buf) {
+    if (buf.byteLength < HEADER) return null;
+    const v = new DataView(buf);
+    if (v.getUint32(0, true) !== MAGIC) return null;
+    const n = v.getUint32(12, true);
+    if (buf.byteLength !== HEADER + 12 * n) return null;
+    return { session: v.getUint32(4, true), phantom: v.getUint32(8, true), n: n, frame: v.getFloat64(16, true),
+      sim_time: v.getFloat64(24, true), disp: new Float32Array(buf, HEADER, 3 * n) };
+  }
+
+  const state = { connected: false, hello: null, phantoms: {}, sessions: [], status: null,
+    frames: 0, messages: 0, reconnects: 0 };
+  window.palpState = state;
+
+  /* Opens the WebSocket (the token from this page's own address), calls handlers[type](msg) for
+   * every message and handlers.deformation(frame) for frames; reconnects after a second. */
+  function connect(handlers) {
+    const token = params().get("token");
+    const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" +
+      (token ? "?token=" + encodeURIComponent(token) : "");
+    const conn = document.getElementById("conn");
+    let ws = null;
+    function setConn(ok, text) {
+      state.connected = ok;
+      if (conn) { conn.textContent = text; conn.className = ok ? "conn ok" : "conn"; }
+    }
+    function open() {
+      ws = new WebSocket(url);
+      ws.binaryType = "arraybuffer";
+      ws.onopen = function () { setConn(true, "live"); if (handlers.open) handlers.open(send); };
+      ws.onclose = function () {
+        setConn(false, "disconnected, retrying");
+        state.reconnects++;
+        setTimeout(open, 1000);
+      };
+      ws.onmessage = function (ev) {
+        state.messages++;
+        if (typeof ev.data !== "string") {
+          const f = decodeDeformation(ev.data);
+          if (f) { state.frames++; if (handlers.deformation) handlers.deformation(f); }
+          return;
+        }
+        let m;
+        try { m = JSON.parse(ev.data); } catch (e) { return; }
+        if (m.type === "hello") state.hello = m;
+        else if (m.type === "phantom") state.phantoms[m.id] = m;
+        else if (m.type === "sessions") state.sessions = m.sessions;
+        else if (m.type === "status") state.status = m;
+        if (handlers[m.type]) handlers[m.type](m);
+      };
+    }
+    function send(obj) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(obj)); }
+    open();
+    return send;
+  }
+
+  /* The fixed, labelled displacement scale: 0 .. scale_mm, ticks every 5 or 10 mm. */
+  function drawColourbar(canvas, scaleMm) {
+    const g = canvas.getContext("2d"), w = canvas.width, h = canvas.height, bar = 14, top = 8, bottom = h - 8;
+    g.clearRect(0, 0, w, h);
+    for (let y = top; y <= bottom; y++) {
+      g.fillStyle = css(viridis((bottom - y) / (bottom - top)));
+      g.fillRect(0, y, bar, 1);
+    }
+    g.fillStyle = "#1d2330";
+    g.font = "11px system-ui, sans-serif";
+    g.textBaseline = "middle";
+    const step = scaleMm > 20 ? 10 : scaleMm > 8 ? 5 : scaleMm > 3 ? 1 : 0.5;
+    for (let v = 0; v <= scaleMm + 1e-9; v += step) {
+      const y = bottom - (v / scaleMm) * (bottom - top);
+      g.fillRect(bar, y, 4, 1);
+      g.fillText(v + (v + step > scaleMm + 1e-9 ? "+ mm" : ""), bar + 6, y);
+    }
+  }
+
+  return { viridis: viridis, css: css, params: params, connect: connect, state: state,
+    decodeDeformation: decodeDeformation, drawColourbar: drawColourbar };
+})();

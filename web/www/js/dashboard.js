@@ -1,0 +1,152 @@
+/* dashboard.js - every open session of the class on a grid, each with a live top view, and the
+ * server's load and log counters. Sessions appear and disappear as the bridge's session list
+ * changes (no reload); a click opens the trainee view of that session. */
+"use strict";
+(function () {
+  const st = PALP.state, token = PALP.params().get("token");
+  st.dashboard = { cards: [], frames: 0, fpsPerSession: {} };
+  const grid = document.getElementById("grid"), cards = new Map();
+  let scaleMm = 30;
+  /* server/validate.h palp_srv_reject_reason, in index order (docs/server.md) */
+  const REJECT = ["nonfinite", "unknown_session", "bad_finger", "bad_mode", "bad_distribution", "bad_vertex",
+    "out_of_reach", "force_limit", "bad_radius", "model_refused"];
+  const SIZE = 150;
+
+  function fmt(x, d) { return x === null || x === undefined ? "n/a" : Number(x).toFixed(d); }
+
+  function makeCard(s) {
+    const el = document.createElement("div");
+    el.className = "card";
+    el.dataset.session = s.id;
+    const h = document.createElement("h3");
+    const name = document.createElement("span"), band = document.createElement("span");
+    h.append(name, band);
+    const cv = document.createElement("canvas");
+    cv.width = cv.height = SIZE;
+    const tb = document.createElement("table");
+    el.append(h, cv, tb);
+    el.addEventListener("click", function () {
+      location.href = "trainee.html?session=" + s.id + (token ? "&token=" + encodeURIComponent(token) : "");
+    });
+    grid.appendChild(el);
+    const c = { el: el, name: name, band: band, canvas: cv, table: tb, proj: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0 };
+    cards.set(s.id, c);
+    return c;
+  }
+
+  /* Top view: the dome's triangles seen from above, at rest positions (a press shows as colour). */
+  function projection(ph) {
+    const R = ph.radius, k = (SIZE / 2 - 4) / R, n = ph.dome_triangles, xy = new Float32Array(ph.rest.length / 3 * 2);
+    for (let i = 0; i < xy.length / 2; i++) { xy[2 * i] = SIZE / 2 + k * ph.rest[3 * i]; xy[2 * i + 1] = SIZE / 2 - k * ph.rest[3 * i + 1]; }
+    return { xy: xy, tri: ph.triangles.slice(0, 3 * n), n: ph.rest.length / 3 };
+  }
+
+  function draw(c, disp) {
+    if (!c.proj || (disp && disp.length !== 3 * c.proj.n)) return;
+    const g = c.canvas.getContext("2d"), xy = c.proj.xy, tri = c.proj.tri;
+    g.clearRect(0, 0, SIZE, SIZE);
+    const mag = new Float32Array(c.proj.n);
+    if (disp) for (let i = 0; i < c.proj.n; i++) mag[i] = 1000 * Math.hypot(disp[3 * i], disp[3 * i + 1], disp[3 * i + 2]);
+    for (let t = 0; t < tri.length; t += 3) {
+      const a = tri[t], b = tri[t + 1], d = tri[t + 2];
+      g.fillStyle = g.strokeStyle = PALP.css(PALP.viridis((mag[a] + mag[b] + mag[d]) / 3 / scaleMm));
+      g.beginPath();
+      g.moveTo(xy[2 * a], xy[2 * a + 1]);
+      g.lineTo(xy[2 * b], xy[2 * b + 1]);
+      g.lineTo(xy[2 * d], xy[2 * d + 1]);
+      g.closePath();
+      g.fill();
+      g.stroke();
+    }
+  }
+
+  function fill(c, s) {
+    c.name.textContent = s.trainee + " #" + s.id;
+    c.band.textContent = fmt(s.force, 2) + " N " + s.band;
+    c.band.className = "band " + s.band;
+    const rows = [["phantom", s.phantom_name || s.phantom], ["coverage", fmt(100 * s.coverage[0], 1) + " %"],
+      ["findings", s.findings === null ? "n/a" : s.findings], ["peak force", fmt(s.peak_force, 2) + " N"],
+      ["tick overruns", s.overruns, s.overruns > 0], ["rejected samples", s.rejected, s.rejected > 0],
+      ["late haptic updates", s.late_haptic === null ? "n/a" : s.late_haptic, s.late_haptic > 0],
+      ["frames/s", fmt(c.fps, 1)], ["open", fmt(s.duration, 0) + " s"]];
+    c.table.textContent = "";
+    for (const r of rows) {
+      const tr = c.table.insertRow();
+      tr.insertCell().textContent = r[0];
+      const v = tr.insertCell();
+      v.textContent = String(r[1]);
+      if (r[2]) v.className = "warn";
+    }
+    if (c.phantom !== s.phantom && st.phantoms[s.phantom]) {
+      c.phantom = s.phantom;
+      c.proj = projection(st.phantoms[s.phantom]);
+      draw(c, null);
+    }
+  }
+
+  function serverStatus(m) {
+    const box = document.getElementById("server");
+    box.textContent = "";
+    for (const s of m.servers) {
+      const rej = s.rejected.reduce(function (a, b) { return a + b; }, 0);
+      const why = s.rejected.map(function (n, i) { return n ? REJECT[i] + " " + n : ""; }).filter(Boolean).join(", ");
+      const items = [["server", s.id], ["load", fmt(100 * s.load, 0) + " %", s.load > 0.8],
+        ["tick p50/p99/max", fmt(s.tick_us[0], 0) + " / " + fmt(s.tick_us[1], 0) + " / " + fmt(s.tick_us[2], 0) + " us"],
+        ["sessions", s.sessions_open + " open, " + s.sessions_total + " total"], ["ticks", s.ticks],
+        ["overruns", s.overruns, s.overruns > 0], ["rejected", rej + (why ? " (" + why + ")" : ""), rej > 0],
+        ["log written/shed/failed", s.log[0] + " / " + s.log[1] + " / " + s.log[2], s.log[1] + s.log[2] > 0],
+        ["up", fmt(s.uptime, 0) + " s"]];
+      for (const it of items) {
+        const k = document.createElement("span"), v = document.createElement("span");
+        k.className = "k";
+        k.textContent = it[0];
+        v.className = "v" + (it[2] ? " bad" : "");
+        v.textContent = String(it[1]);
+        box.append(k, v);
+      }
+    }
+  }
+
+  PALP.connect({
+    open: function (send) { send({ follow: "all" }); },
+    hello: function (m) { scaleMm = m.scale_mm; PALP.drawColourbar(document.getElementById("colourbar"), scaleMm); },
+    phantom: function () {
+      for (const s of st.sessions) { const c = cards.get(s.id); if (c) fill(c, s); }
+    },
+    sessions: function (m) {
+      const seen = new Set();
+      for (const s of m.sessions) {
+        seen.add(s.id);
+        fill(cards.get(s.id) || makeCard(s), s);
+      }
+      for (const [id, c] of cards) if (!seen.has(id)) { c.el.remove(); cards.delete(id); }
+      st.dashboard.cards = Array.from(cards.keys()).sort(function (a, b) { return a - b; });
+      document.getElementById("empty").hidden = cards.size > 0;
+      document.getElementById("info").textContent = "class dashboard: " + cards.size + " open session" + (cards.size === 1 ? "" : "s");
+    },
+    status: serverStatus,
+    deformation: function (f) {
+      const c = cards.get(f.session);
+      if (!c) return;
+      c.frames++;
+      st.dashboard.frames++;
+      c.latest = f.disp; /* drawn at the next animation frame */
+    }
+  });
+
+  function loop() {
+    for (const c of cards.values()) if (c.latest) { draw(c, c.latest); c.latest = null; }
+    requestAnimationFrame(loop);
+  }
+  requestAnimationFrame(loop);
+
+  setInterval(function () {
+    const now = performance.now();
+    for (const [id, c] of cards) {
+      c.fps = c.frames * 1000 / (now - c.t0);
+      st.dashboard.fpsPerSession[id] = c.fps;
+      c.frames = 0;
+      c.t0 = now;
+    }
+  }, 1000);
+})();
