@@ -100,6 +100,12 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
   /* Each phantom steps at its own physics rate (issue 11), by default the server's. */
   if (!(ph->cfg.physics_rate_hz > 0)) ph->cfg.physics_rate_hz = srv->cfg.tick_rate_hz;
   ph->scene.world.dt = 1.0 / ph->cfg.physics_rate_hz;
+  /* The recorded scene must stay loadable: its frame period a whole number of steps
+   * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */
+  {
+    const double steps = round(ph->scene.frame_period / ph->scene.world.dt);
+    ph->scene.frame_period = ph->scene.world.dt * (steps >= 1 ? steps : 1);
+  }
   if (!(ph->scene.world.effects & PALP_EFFECT_FORCE_FEEDBACK)) {
     fail(err, errlen, "phantoms (id %u): scene %s: effects must include \"force_feedback\" for stations", pc->id,
          pc->scene_path);
