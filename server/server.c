@@ -653,6 +653,10 @@ int palp_srv_run(palp_srv *srv, double duration) {
   fprintf(stderr, "palp-server: %s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions\n",
           srv->server_id, srv->cfg.domain_id, srv->phantom_count, srv->cfg.tick_rate_hz,
           palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
+  for (int i = 0; i < srv->phantom_count; i++)
+    if (srv->phantom[i].cfg.physics_rate_hz != srv->cfg.tick_rate_hz)
+      fprintf(stderr, "palp-server: phantom %u \"%s\" steps at %.0f Hz (physics_rate_hz)\n", srv->phantom[i].cfg.id,
+              srv->phantom[i].cfg.name, srv->phantom[i].cfg.physics_rate_hz);
   while (!atomic_load(&srv->stop)) {
     int64_t now = palp_dds_now_ns();
     if (now >= end) break;
