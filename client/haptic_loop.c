@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <math.h>
 #include <sched.h>
+#include <semaphore.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -101,19 +102,55 @@ static struct timespec ts_of(int64_t ns) {
   return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
 }
 
+/* The haptic thread never calls DDS: a dds_write takes locks that Cyclone's own
+ * (normal-priority) threads hold, and measured in this loop it made 1% of ticks
+ * late by more than 0.5 ms (worst 6.8 ms) against 0.18% for the same loop without
+ * it. Samples go through a single-producer single-consumer ring to a sender
+ * thread; a full ring drops the newest position sample (the next one supersedes
+ * it), and the ring is large enough that a lift (three samples) always fits. */
 static void send_contact(palp_cli_haptic_loop *l, int on, palp_vec3 x, int64_t now_ns) {
   if (l->def.contact_w <= 0) return;
-  palp_Contact m;
-  memset(&m, 0, sizeof m);
-  m.session_id = l->def.session_id;
-  m.finger = (uint8_t)l->def.finger;
-  m.mode = on ? palp_CONTACT_FINGER : palp_CONTACT_RELEASE;
-  m.vertex = -1;
-  m.center = (palp_Vec3){x.x, x.y, x.z};
-  m.radius = l->def.radius;
-  m.seq = ++l->seq;
-  m.source_time_ns = now_ns;
-  if (dds_write(l->def.contact_w, &m) == 0) l->stats.contacts_sent++;
+  const unsigned h = atomic_load_explicit(&l->out_head, memory_order_relaxed);
+  const unsigned t = atomic_load_explicit(&l->out_tail, memory_order_acquire);
+  if (h - t >= PALP_CLI_OUTBOX) {
+    l->stats.contacts_dropped++;
+    return;
+  }
+  palp_Contact *m = &l->outbox[h % PALP_CLI_OUTBOX];
+  memset(m, 0, sizeof *m);
+  m->session_id = l->def.session_id;
+  m->finger = (uint8_t)l->def.finger;
+  m->mode = on ? palp_CONTACT_FINGER : palp_CONTACT_RELEASE;
+  m->vertex = -1;
+  m->center = (palp_Vec3){x.x, x.y, x.z};
+  m->radius = l->def.radius;
+  m->seq = ++l->seq;
+  m->source_time_ns = now_ns;
+  atomic_store_explicit(&l->out_head, h + 1, memory_order_release);
+  sem_post(&l->out_sem);
+}
+
+static void *sender_main(void *arg) {
+  palp_cli_haptic_loop *l = arg;
+  for (;;) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    ts.tv_nsec += 100000000;
+    if (ts.tv_nsec >= 1000000000) {
+      ts.tv_sec++;
+      ts.tv_nsec -= 1000000000;
+    }
+    sem_timedwait(&l->out_sem, &ts);
+    unsigned t = atomic_load_explicit(&l->out_tail, memory_order_relaxed);
+    const unsigned h = atomic_load_explicit(&l->out_head, memory_order_acquire);
+    for (; t != h; t++) {
+      if (dds_write(l->def.contact_w, &l->outbox[t % PALP_CLI_OUTBOX]) == 0) l->sent++;
+      atomic_store_explicit(&l->out_tail, t + 1, memory_order_release);
+    }
+    /* Stop only once the haptic thread has finished and everything it queued is out. */
+    if (atomic_load(&l->done) && t == atomic_load_explicit(&l->out_head, memory_order_acquire)) break;
+  }
+  return NULL;
 }
 
 static void *haptic_main(void *arg) {
@@ -221,11 +258,14 @@ static void *haptic_main(void *arg) {
       d->trace[st->trace_len++] = (palp_cli_haptic_sample){
           .t = t, .late = (double)late * 1e-9, .x = x, .f = o.force, .requested = o.requested, .flags = o.flags,
           .on = on};
-    pthread_mutex_lock(&l->view_lock);
+    /* Try-lock: a reader preempted while holding the lock must not stall the tick
+     * (priority inversion); the view is then one tick older. */
+    if (pthread_mutex_trylock(&l->view_lock) == 0) {
     l->view = (palp_cli_haptic_view){.t = t, .x = x, .xr = xr, .proxy = v3add(o.proxy, offset), .force = o.force, .requested = o.requested,
                                      .depth = len3((palp_vec3){o.proxy.x - x.x, o.proxy.y - x.y, o.proxy.z - x.z}),
                                      .flags = o.flags, .on = on};
     pthread_mutex_unlock(&l->view_lock);
+    }
   }
   if (was_on)
     for (int r = 0; r < 3; r++) send_contact(l, 0, (palp_vec3){0, 0, 0}, palp_dds_now_ns());
@@ -255,7 +295,8 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
     return rc;
   }
   l->stats.max_force = l->renderer.def.max_force;
-  if (palp_cli_mailbox_init(&l->mailbox) < 0 || pthread_mutex_init(&l->view_lock, NULL) != 0) {
+  if (palp_cli_mailbox_init(&l->mailbox) < 0 || pthread_mutex_init(&l->view_lock, NULL) != 0 ||
+      sem_init(&l->out_sem, 0, 0) != 0) {
     snprintf(err, errlen, "haptic loop: cannot create its locks");
     return PALP_ENOMEM;
   }
@@ -280,6 +321,16 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
     return PALP_ENOMEM;
   }
   l->started = 1;
+  if (def->contact_w > 0) {
+    if (pthread_create(&l->sender, NULL, sender_main, l) != 0) {
+      atomic_store(&l->stop, 1);
+      pthread_join(l->thread, NULL);
+      l->started = 0;
+      snprintf(err, errlen, "haptic loop: cannot start the sender thread");
+      return PALP_ENOMEM;
+    }
+    l->sender_started = 1;
+  }
   return 0;
 }
 
@@ -290,6 +341,13 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
   if (l->started) {
     atomic_store(&l->stop, 1);
     pthread_join(l->thread, NULL);
+    if (l->sender_started) {
+      sem_post(&l->out_sem);
+      pthread_join(l->sender, NULL);
+      l->sender_started = 0;
+    }
+    l->stats.contacts_sent = l->sent;
+    sem_destroy(&l->out_sem);
     l->started = 0;
     palp_cli_mailbox_destroy(&l->mailbox);
     pthread_mutex_destroy(&l->view_lock);

@@ -7,8 +7,9 @@
  * the haptic thread wakes on absolute CLOCK_MONOTONIC deadlines (clock_nanosleep
  * TIMER_ABSTIME, optionally SCHED_FIFO), reads the device position, renders the
  * force with palp_haptic from the newest model, writes it to the device, and
- * every rate/physics_rate ticks sends the device position to the server as a
- * CONTACT_FINGER sample. It never waits for the network: a late or lost model is
+ * every rate/physics_rate ticks queues the device position for the server as a
+ * CONTACT_FINGER sample (a sender thread writes it: the haptic thread never
+ * calls DDS). It never waits for the network: a late or lost model is
  * extrapolated, then held, then faded out by the renderer.
  *
  * The mailbox is a mutex held for one struct copy; the haptic thread only
@@ -19,6 +20,7 @@
 #define PALP_CLI_HAPTIC_LOOP_H
 
 #include <pthread.h>
+#include <semaphore.h>
 #include <stdatomic.h>
 #include <stdint.h>
 
@@ -91,7 +93,7 @@ typedef struct palp_cli_haptic_stats {
   uint64_t ticks, late_ticks;   /* late: woke > late_threshold after the deadline */
   double late_max;              /* [s] */
   uint64_t models;              /* models taken from the mailbox */
-  uint64_t contacts_sent;
+  uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
   uint64_t held_ticks; /* ticks rendered with the force held (model late) */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
@@ -126,6 +128,14 @@ typedef struct palp_cli_haptic_loop {
   palp_cli_haptic_view view;
   palp_cli_haptic_stats stats; /* written by the haptic thread; read after join, or approximately */
   uint64_t seq;                /* contact samples */
+  /* contact samples, haptic thread -> sender thread (single producer, single consumer) */
+#define PALP_CLI_OUTBOX 64
+  palp_Contact outbox[PALP_CLI_OUTBOX];
+  atomic_uint out_head, out_tail;
+  sem_t out_sem;
+  pthread_t sender;
+  int sender_started;
+  uint64_t sent;
 } palp_cli_haptic_loop;
 
 /* Starts the thread. The loop's mailbox takes models from the caller's DDS thread. */
