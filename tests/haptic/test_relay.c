@@ -8,7 +8,8 @@
  * station learns of the phantom; the test prints that floor (the undelayed force
  * against itself shifted by the measured latency). Asserted:
  *  - the haptic loop holds 1 kHz: late ticks (> 0.5 ms after their deadline) and
- *    missing ticks at most max(0.1%, 2 x floor + 1%), where the floor is this
+ *    missing ticks (time without a fresh force: a tick more than a period late is
+ *    not made up) each at most max(0.1%, 2 x floor + 1%), where the floor is this
  *    machine's own: the same haptic loop with the simulated device and no DDS,
  *    no server, no relay, measured for 2 s at the start of the same run. On this
  *    shared 2-core VM the floor alone is 0.2-0.7% (worst wake-up 5-7 ms, with
@@ -108,6 +109,10 @@ int main(void) {
   }
   const double floor_late = (double)fl.late_ticks / (double)(fl.ticks ? fl.ticks : 1);
   const double bound = fmax(0.001, 2 * floor_late + 0.01);
+  /* A tick more than a period late is not made up, so missing ticks measure the
+   * time without a fresh force: its own floor, from the same bare run. */
+  const double floor_missing = fmax(0, 1 - (double)fl.ticks / 2000.0);
+  const double bound_missing = fmax(0.001, 2 * floor_missing + 0.01);
 
   palp_srv_config cfg;
   config(&cfg, 112);
@@ -177,20 +182,30 @@ int main(void) {
          100 * floor_rms / peak);
   double load = -1;
   getloadavg(&load, 1);
-  printf("machine: 1-minute load average %.2f; floor (the haptic loop alone, no DDS, 2 s): %llu ticks, %.3f%% late "
-         "(worst %.2f ms), SCHED_FIFO %s; bound asserted: %.2f%% late or missing (the issue's target: 0.1%%)\n", load,
-         (unsigned long long)fl.ticks, 100 * floor_late, fl.late_max * 1e3, fl.rt_ok ? "granted" : "refused",
-         100 * bound);
+  printf("machine: 1-minute load average %.2f; floor (the haptic loop alone, no DDS, 2 s): %llu ticks (%.2f%% "
+         "missing), %.3f%% late (worst %.2f ms), SCHED_FIFO %s; bounds asserted: %.2f%% late, %.2f%% missing (the "
+         "issue's target: 0.1%%)\n", load, (unsigned long long)fl.ticks, 100 * floor_missing, 100 * floor_late,
+         fl.late_max * 1e3, fl.rt_ok ? "granted" : "refused", 100 * bound, 100 * bound_missing);
   for (int i = 0; i < 2; i++) {
     const station_run *r = i ? &relayed : &direct;
     const char *name = i ? "relayed" : "undelayed";
     CHECK(r->hs.ended && !r->hs.failed, "%s run: trajectory completed", name);
     const double late = (double)r->hs.late_ticks / (double)(r->hs.ticks ? r->hs.ticks : 1);
     /* A tick more than a period late is not made up: ticks missing = time lost. */
-    CHECK((double)r->hs.ticks >= (1 - bound) * dur * 1000, "%s run: the loop held 1 kHz: %llu ticks in %.2f s "
-          "(at most %.2f%% missing)", name, (unsigned long long)r->hs.ticks, dur, 100 * bound);
+    CHECK((double)r->hs.ticks >= (1 - bound_missing) * dur * 1000, "%s run: the loop held 1 kHz: %llu ticks in %.2f s "
+          "(at most %.2f%% missing)", name, (unsigned long long)r->hs.ticks, dur, 100 * bound_missing);
     CHECK(late <= bound, "%s run: %.3f%% of ticks late by > 0.5 ms (bound %.2f%%)", name, 100 * late, 100 * bound);
   }
+  /* The relay did what it was asked: one-way delays within 20 +- 5 ms (a reliable
+   * sample "lost" comes one round trip, 40 ms, later), and about 5% of the samples
+   * lost (best-effort dropped + reliable retransmitted; binomial 3 sigma). */
+  const double n_all = (double)(ns.forwarded + ns.dropped);
+  const double lost = n_all > 0 ? (double)(ns.dropped + ns.retransmitted) / n_all : 0;
+  CHECK(ns.delay_min >= 0.015 - 1e-6 && ns.delay_max <= 0.025 + 0.040 + 1e-3 &&
+            (ns.retransmitted > 0 || ns.delay_max <= 0.025 + 1e-3),
+        "relay delays %.2f..%.2f ms (20 +- 5 ms, + 40 ms for a retransmission)", ns.delay_min * 1e3, ns.delay_max * 1e3);
+  CHECK(fabs(lost - nd.loss) <= 3 * sqrt(nd.loss * (1 - nd.loss) / (n_all > 0 ? n_all : 1)),
+        "relay lost %.2f%% of %.0f samples (5%% +- 3 sigma)", 100 * lost, n_all);
   CHECK(relayed.models_seen > 0.6 * 250 * (dur - traj.start - traj.tail),
         "the relayed station received %llu local models (>= 60%% of the physics steps: 5%% lost, and the server's "
         "ticks overrun on a loaded machine)", (unsigned long long)relayed.models_seen);
