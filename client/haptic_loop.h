@@ -7,8 +7,9 @@
  * the haptic thread wakes on absolute CLOCK_MONOTONIC deadlines (clock_nanosleep
  * TIMER_ABSTIME, optionally SCHED_FIFO), reads the device position, renders the
  * force with palp_haptic from the newest model, writes it to the device, and
- * every rate/physics_rate ticks sends the device position to the server as a
- * CONTACT_FINGER sample. It never waits for the network: a late or lost model is
+ * every rate/physics_rate ticks queues the device position for the server as a
+ * CONTACT_FINGER sample (a sender thread writes it: the haptic thread never
+ * calls DDS). It never waits for the network: a late or lost model is
  * extrapolated, then held, then faded out by the renderer.
  *
  * The mailbox is a mutex held for one struct copy; the haptic thread only
@@ -19,6 +20,7 @@
 #define PALP_CLI_HAPTIC_LOOP_H
 
 #include <pthread.h>
+#include <semaphore.h>
 #include <stdatomic.h>
 #include <stdint.h>
 
@@ -35,16 +37,18 @@ typedef struct palp_cli_mailbox {
   palp_local_model model;
   uint32_t server_flags; /* palp_LM_* of the model */
   double max_force;      /* the phantom's limit, from the model [N] */
+  double age;            /* the model's age on arrival [s]: now - its contact sample's source time; 0 unknown */
   uint64_t seq;          /* models put so far */
 } palp_cli_mailbox;
 
 int palp_cli_mailbox_init(palp_cli_mailbox *mb);
 void palp_cli_mailbox_destroy(palp_cli_mailbox *mb);
-void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint32_t server_flags, double max_force);
+void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint32_t server_flags, double max_force,
+                          double age);
 /* Non-blocking: 1 and a copy when a model newer than *seq is there (updates *seq);
  * 0 when none or the lock is busy. */
 int palp_cli_mailbox_take(palp_cli_mailbox *mb, uint64_t *seq, palp_local_model *m, uint32_t *server_flags,
-                          double *max_force);
+                          double *max_force, double *age);
 
 /* Checks a wire sample before it reaches the renderer: finite fields, a unit
  * normal when in contact, a stiffness of at most 1e6 N/m and a force below 1e4 N
@@ -70,8 +74,11 @@ typedef struct palp_cli_haptic_def {
   int finger;              /* finger index on the wire, default 0 */
   double radius;           /* fingertip [m]; 0 = the input's, else 8 mm */
   palp_haptic_def render;  /* renderer parameters (max_force: the safe force limit) */
-  int latency_compensation; /* advance each model by its drift over its age (default 1) */
+  int latency_compensation; /* re-anchor each model at the device's position on arrival (default 1) */
   double max_latency;       /* ages beyond this [s] are not compensated, default 0.2 */
+  double hold_after;        /* the model's stiffness is used for this horizon [s] from the state it describes
+                               (its age on arrival included), then the force is held until the next model;
+                               0 = max(2 physics periods, 8 ms) */
   palp_cli_input *in;      /* must have read_position */
   dds_entity_t contact_w;  /* palp_contact writer in the session partition; 0: send nothing */
   uint32_t session_id;
@@ -86,8 +93,9 @@ typedef struct palp_cli_haptic_stats {
   uint64_t ticks, late_ticks;   /* late: woke > late_threshold after the deadline */
   double late_max;              /* [s] */
   uint64_t models;              /* models taken from the mailbox */
-  uint64_t contacts_sent;
+  uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
+  uint64_t held_ticks; /* ticks rendered with the force held (model late) */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
   uint64_t out_of_range_models;   /* models with any model-validity flag */
   double peak_force, peak_requested; /* [N] rendered / before the limit */
@@ -103,6 +111,7 @@ typedef struct palp_cli_haptic_stats {
 typedef struct palp_cli_haptic_view {
   double t;
   palp_vec3 x, proxy, force;
+  palp_vec3 xr;  /* the renderer's device point: x minus the motion made while the force was held */
   double requested, depth;
   unsigned flags;
   int on;
@@ -119,6 +128,14 @@ typedef struct palp_cli_haptic_loop {
   palp_cli_haptic_view view;
   palp_cli_haptic_stats stats; /* written by the haptic thread; read after join, or approximately */
   uint64_t seq;                /* contact samples */
+  /* contact samples, haptic thread -> sender thread (single producer, single consumer) */
+#define PALP_CLI_OUTBOX 64
+  palp_Contact outbox[PALP_CLI_OUTBOX];
+  atomic_uint out_head, out_tail;
+  sem_t out_sem;
+  pthread_t sender;
+  int sender_started;
+  uint64_t sent;
 } palp_cli_haptic_loop;
 
 /* Starts the thread. The loop's mailbox takes models from the caller's DDS thread. */

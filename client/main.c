@@ -455,8 +455,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (!limited) episode_peak = 0;
     limited_shown = limited;
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
+      const int touching = v.on && (v.flags & PALP_CLI_FORCE_CONTACT);
       printf("[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s\n", o->name,
-             v.t, !v.on ? "lifted " : (v.flags & PALP_CLI_FORCE_CONTACT) ? "touching" : "free   ", v.depth * 1e3, fm,
+             v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
              limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);

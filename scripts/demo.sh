@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# The classroom demo, on loopback only: a palp-server hosting two phantoms, two
-# trainee stations palpating their own phantom with scripted profiles, a visual
+# The classroom demo, on loopback only: a palp-server hosting three phantoms, two
+# trainee stations palpating their own phantom with scripted force profiles, a
+# third palpating by position with a simulated haptic device (1 kHz haptic loop
+# over 250 Hz physics), a visual
 # station showing one of them and an instructor observer following the other,
 # for about 8 s. Then everything stops cleanly and a summary of every session is
 # printed. Builds first through scripts/setup.sh (idempotent: installs only missing
@@ -85,6 +87,15 @@ alice=$!
   --polar 20 --azimuth 200 --duration 7 --print-period 1 >"$out/bob.log" 2>&1 &
 pids+=($!)
 bob=$!
+# Trainee carol palpates by position on phantom 3 (physics at 250 Hz): a simulated
+# haptic device presses 22 mm at 20 mm/s, holds, slides 15 mm along the surface and
+# lifts; her station's 1 kHz haptic thread renders the phantom's push from the
+# server's local contact models, with a 1.5 N safe force it tells her about.
+"$client" --role trainee --domain "$domain" --phantom 3 --name carol \
+  --input sim:slide,depth_mm=22,speed_mm_s=20,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 1.5 \
+  --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
+pids+=($!)
+carol=$!
 # The visual station shows bob's phantom; the instructor follows alice.
 "$client" --role visual --domain "$domain" --phantom 2 "${visual_sec[@]}" --no-color --map-every 2 \
   --svg "$out/bob-peak.svg" --duration 8 >"$out/visual.log" 2>&1 &
@@ -96,7 +107,7 @@ pids+=($!)
 observer=$!
 
 status=0
-for p in "$alice" "$bob" "$visual" "$observer"; do wait "$p" || status=$?; done
+for p in "$alice" "$bob" "$carol" "$visual" "$observer"; do wait "$p" || status=$?; done
 kill -INT "$server_pid"
 wait "$server_pid" || status=$?
 pids=()
@@ -111,8 +122,12 @@ echo
 echo "== alice's haptic station: the force she felt =="
 sed -n '/^feedback |F|/,$p' "$out/alice.log"
 echo
+echo "== carol's haptic station: palpating by position, what she felt (1 kHz, from 250 Hz physics) =="
+grep -E "haptic thread|LIMITED|under the limit|flagged" "$out/carol.log" || true
+sed -n '/^rendered |F|/,$p' "$out/carol.log"
+echo
 echo "== stations =="
-for f in alice bob visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
+for f in alice bob carol visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
 echo
 echo "== sessions (palp-server) =="
 sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2

@@ -154,6 +154,12 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
   /* Each phantom steps at its own physics rate (issue 11), by default the server's. */
   if (!(ph->cfg.physics_rate_hz > 0)) ph->cfg.physics_rate_hz = srv->cfg.tick_rate_hz;
   ph->scene.world.dt = 1.0 / ph->cfg.physics_rate_hz;
+  /* The recorded scene must stay loadable: its frame period a whole number of steps
+   * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */
+  {
+    const double steps = round(ph->scene.frame_period / ph->scene.world.dt);
+    ph->scene.frame_period = ph->scene.world.dt * (steps >= 1 ? steps : 1);
+  }
   if (!(ph->scene.world.effects & PALP_EFFECT_FORCE_FEEDBACK)) {
     fail(err, errlen, "phantoms (id %u): scene %s: effects must include \"force_feedback\" for stations", pc->id,
          pc->scene_path);
@@ -934,6 +940,10 @@ int palp_srv_run(palp_srv *srv, double duration) {
   fprintf(stderr, "palp-server: %s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions\n",
           srv->server_id, srv->cfg.domain_id, srv->phantom_count, srv->cfg.tick_rate_hz,
           palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
+  for (int i = 0; i < srv->phantom_count; i++)
+    if (srv->phantom[i].cfg.physics_rate_hz != srv->cfg.tick_rate_hz)
+      fprintf(stderr, "palp-server: phantom %u \"%s\" steps at %.0f Hz (physics_rate_hz)\n", srv->phantom[i].cfg.id,
+              srv->phantom[i].cfg.name, srv->phantom[i].cfg.physics_rate_hz);
   while (!atomic_load(&srv->stop)) {
     int64_t now = palp_dds_now_ns();
     if (now >= end) break;

