@@ -1,4 +1,5 @@
 /* input_replay.c - replays a contact CSV written by palp-client --contact-csv. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -71,11 +72,22 @@ int palp_cli_replay_input(const char *path, palp_cli_input *out, char *err, size
     int n = sscanf(buf, "%lf,%d,%d,%d,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &w.t, &w.c.finger, &w.c.mode,
                    &w.c.distribution, &w.c.center.x, &w.c.center.y, &w.c.center.z, &w.c.force.x, &w.c.force.y,
                    &w.c.force.z, &w.c.radius);
-    if (n != 11 || w.c.finger < 0 || w.c.finger >= PALP_CLI_MAX_FINGERS || w.c.mode < 0 || w.c.mode > 2 ||
-        (r->n > 0 && w.t < r->rows[r->n - 1].t)) {
+    /* Every number finite (sscanf takes "nan" and "inf"; a NaN time compares false with
+     * everything, so the order check alone let it through), t within a day. */
+    const double num[] = {w.t, w.c.center.x, w.c.center.y, w.c.center.z, w.c.force.x, w.c.force.y, w.c.force.z,
+                          w.c.radius};
+    int finite = 1;
+    for (size_t k = 0; k < sizeof num / sizeof num[0]; k++) finite &= isfinite(num[k]) != 0;
+    if (n != 11 || !finite || !(w.t >= 0 && w.t <= 86400) || w.c.finger < 0 || w.c.finger >= PALP_CLI_MAX_FINGERS ||
+        w.c.mode < 0 || w.c.mode > 2 || (r->n > 0 && w.t < r->rows[r->n - 1].t)) {
       snprintf(err, errlen, "%s:%d: expected t_s,finger(0-3),mode(0-2),distribution,cx,cy,cz,fx,fy,fz,radius "
-               "with non-decreasing t_s", path, line);
+               "with finite numbers and non-decreasing t_s in [0, 86400]", path, line);
       rc = PALP_EPARSE;
+      break;
+    }
+    if (r->n >= 100000000) {
+      snprintf(err, errlen, "%s:%d: more than 100,000,000 rows", path, line);
+      rc = PALP_EINVAL;
       break;
     }
     if (r->n == cap) {

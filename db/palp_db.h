@@ -237,7 +237,8 @@ typedef struct palp_db palp_db;
 
 /* Opens for reading (and annotating). A file with an older schema is upgraded in a transaction;
  * one with a newer schema is refused (PALP_DB_ENEWER) with a message saying so. create = 0
- * refuses a missing file. */
+ * refuses a missing file, and refuses an empty or foreign file (no palp schema) after
+ * looking at it read-only, so it is left untouched. */
 int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t errlen);
 void palp_db_close(palp_db *db);
 /* The file's schema version (PRAGMA user_version). */
@@ -269,6 +270,32 @@ typedef struct palp_db_filter {
   double since_unix_s;    /* start >= since; 0 = no bound */
   double until_unix_s;    /* start < until; 0 = no bound */
 } palp_db_filter;
+
+/* What a log can be trusted for, from the data itself and not only the writer's counters
+ * (a writer whose disk is full cannot record that it lost records):
+ *  - cut short: no end was logged (the server was killed, or still writes); the data
+ *    ends at last_frame / last_sim_time_s / last_event_unix_s;
+ *  - damaged: records shed or failed by the writer's count, or frames missing from the
+ *    sequence the writer logs (every frame_step-th frame, frame_step the commonest gap);
+ *  - complete: neither. */
+typedef struct palp_db_log_health {
+  int ended;
+  int64_t frames, first_frame, last_frame, frame_step, frames_expected, frames_missing;
+  double last_sim_time_s;
+  double last_event_unix_s; /* 0: no event */
+  int64_t records_shed, records_failed;
+  int cut_short, damaged, complete;
+} palp_db_log_health;
+int palp_db_log_health_get(palp_db *db, const palp_db_session_info *s, palp_db_log_health *out);
+/* One line for people, e.g. "complete: ended normal; 184 of 184 frames, nothing shed or lost". */
+void palp_db_log_health_describe(const palp_db_log_health *h, char *buf, size_t len);
+
+/* Largest mesh a reader accepts from a file (the model's meshes: 338..5,000 vertices). */
+#define PALP_DB_MAX_VERTICES 1000000
+/* Replay refuses a jump of more than this much simulated time between two logged frames
+ * (the writer logs a frame at least every 0.01 s): a frame number of 10^12 is damage,
+ * not a session to step through for years. */
+#define PALP_DB_MAX_FRAME_GAP_S 60.0
 
 /* Lists matching sessions, oldest first; *out is malloc'd (free()). */
 int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count);

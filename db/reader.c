@@ -5,15 +5,61 @@
 #include <string.h>
 
 #include "db_internal.h"
+#include "migrations.h"
 #include "palp_db.h"
 
 struct palp_db {
   sqlite3 *db;
 };
 
+/* Looks at a file read-only: is it a palp session log? 0, or PALP_EINVAL / PALP_EIO with a
+ * message. Nothing is written, so an empty or foreign file stays as it was. */
+static int check_palp_file(const char *path, char *err, size_t errlen) {
+  sqlite3 *db = NULL;
+  if (sqlite3_open_v2(path, &db, SQLITE_OPEN_READONLY, NULL) != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: cannot open: %s", path, db ? sqlite3_errmsg(db) : "out of memory");
+    sqlite3_close(db);
+    return PALP_EIO;
+  }
+  sqlite3_stmt *st;
+  int version = -1, tables = -1, any = -1;
+  if (sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK) {
+    if (sqlite3_step(st) == SQLITE_ROW) version = sqlite3_column_int(st, 0);
+    sqlite3_finalize(st);
+  }
+  if (version >= 0 &&
+      sqlite3_prepare_v2(db, "SELECT count(*), count(CASE WHEN type = 'table' AND name IN ('session', 'meta') THEN 1 END) "
+                             "FROM sqlite_master",
+                         -1, &st, NULL) == SQLITE_OK) {
+    if (sqlite3_step(st) == SQLITE_ROW) any = sqlite3_column_int(st, 0), tables = sqlite3_column_int(st, 1);
+    sqlite3_finalize(st);
+  }
+  int rc = 0;
+  if (version > palp_db_migration_count) {
+    palp_db__fmt(err, errlen, "%s: database schema version %d is newer than this palp (%d); upgrade palp", path,
+                 version, palp_db_migration_count);
+    rc = PALP_DB_ENEWER;
+  } else if (version < 0) {
+    palp_db__fmt(err, errlen, "%s: not a palp session log (not an SQLite database: %s)", path, sqlite3_errmsg(db));
+    rc = PALP_EINVAL;
+  } else if (version == 0 && any == 0) {
+    palp_db__fmt(err, errlen, "%s: not a palp session log (an empty database or file; left untouched)", path);
+    rc = PALP_EINVAL;
+  } else if (tables < 2) {
+    palp_db__fmt(err, errlen, "%s: not a palp session log (no palp schema; left untouched)", path);
+    rc = PALP_EINVAL;
+  }
+  sqlite3_close(db);
+  return rc;
+}
+
 int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t errlen) {
   if (!out) return PALP_EINVAL;
   *out = NULL;
+  if (!create && path && *path) {
+    int rc = check_palp_file(path, err, errlen);
+    if (rc) return rc;
+  }
   palp_db *d = calloc(1, sizeof *d);
   if (!d) return PALP_ENOMEM;
   int rc = palp_db__connect(path, create, NULL, &d->db, err, errlen);
@@ -266,9 +312,12 @@ int palp_db_each_mesh(palp_db *db, int64_t sid, palp_db_mesh_fn fn, void *user) 
   palp_vec3 *pos = NULL;
   int cap = 0;
   while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
-    int n = sqlite3_column_int(st, 1);
+    /* A row is checked before its blob is read: the count in 64 bits (178,956,971 x 24
+     * wraps to 8 in 32) and within what a mesh can be. A malformed row is skipped. */
+    const int64_t n64 = sqlite3_column_int64(st, 1);
     const unsigned char *b = sqlite3_column_blob(st, 2);
-    if (n <= 0 || sqlite3_column_bytes(st, 2) != n * 24 || !b) continue; /* malformed row: skip */
+    if (n64 <= 0 || n64 > PALP_DB_MAX_VERTICES || (int64_t)sqlite3_column_bytes(st, 2) != n64 * 24 || !b) continue;
+    const int n = (int)n64;
     if (n > cap) {
       palp_vec3 *np = realloc(pos, (size_t)n * sizeof *np);
       if (!np) {
@@ -339,4 +388,60 @@ int palp_db_add_note(palp_db *db, int64_t sid, const char *author, const char *t
   int rc = sqlite3_step(st);
   sqlite3_finalize(st);
   return rc == SQLITE_DONE ? 0 : PALP_DB_ESQL;
+}
+
+int palp_db_log_health_get(palp_db *db, const palp_db_session_info *s, palp_db_log_health *h) {
+  memset(h, 0, sizeof *h);
+  h->ended = s->end_reason[0] != '\0';
+  h->records_shed = s->records_shed;
+  h->records_failed = s->records_failed;
+  sqlite3_stmt *st;
+  if (prep(db, "SELECT count(*), min(frame), max(frame), "
+               "(SELECT sim_time_s FROM frame WHERE session_id = ?1 ORDER BY frame DESC LIMIT 1), "
+               "(SELECT max(wall_unix_s) FROM event WHERE session_id = ?1) FROM frame WHERE session_id = ?1",
+           s->id, &st))
+    return PALP_DB_ESQL;
+  if (sqlite3_step(st) == SQLITE_ROW) {
+    h->frames = sqlite3_column_int64(st, 0);
+    h->first_frame = sqlite3_column_int64(st, 1);
+    h->last_frame = sqlite3_column_int64(st, 2);
+    h->last_sim_time_s = sqlite3_column_double(st, 3);
+    h->last_event_unix_s = sqlite3_column_double(st, 4);
+  }
+  sqlite3_finalize(st);
+  /* The writer logs every k-th frame (k = tick rate / 100): k is the commonest gap. */
+  h->frame_step = 1;
+  if (h->frames > 1 &&
+      prep(db, "SELECT g FROM (SELECT frame - lag(frame) OVER (ORDER BY frame) AS g FROM frame WHERE session_id = ?1) "
+               "WHERE g > 0 GROUP BY g ORDER BY count(*) DESC, g LIMIT 1",
+           s->id, &st) == 0) {
+    if (sqlite3_step(st) == SQLITE_ROW) h->frame_step = sqlite3_column_int64(st, 0);
+    sqlite3_finalize(st);
+    if (h->frame_step < 1) h->frame_step = 1;
+  }
+  if (h->frames > 0) {
+    h->frames_expected = (h->last_frame - h->first_frame) / h->frame_step + 1;
+    h->frames_missing = h->frames_expected > h->frames ? h->frames_expected - h->frames : 0;
+  }
+  h->cut_short = !h->ended;
+  h->damaged = h->records_shed > 0 || h->records_failed > 0 || h->frames_missing > 0;
+  h->complete = !h->cut_short && !h->damaged;
+  return 0;
+}
+
+void palp_db_log_health_describe(const palp_db_log_health *h, char *buf, size_t len) {
+  char a[256] = "", b[256] = "";
+  if (h->cut_short)
+    palp_db__fmt(a, sizeof a, "CUT SHORT: no end was logged (the server was killed, or is still writing); the data "
+                 "ends at frame %lld, t = %.3f s", (long long)h->last_frame, h->last_sim_time_s);
+  if (h->damaged)
+    palp_db__fmt(b, sizeof b, "DAMAGED: %lld records shed (queue full), %lld lost to disk errors, %lld of %lld "
+                 "frames missing (%.1f%%)", (long long)h->records_shed, (long long)h->records_failed,
+                 (long long)h->frames_missing, (long long)h->frames_expected,
+                 h->frames_expected ? 100.0 * (double)h->frames_missing / (double)h->frames_expected : 0.0);
+  if (h->complete)
+    palp_db__fmt(buf, len, "complete: an end was logged; %lld of %lld frames present, no records shed or lost",
+                 (long long)h->frames, (long long)h->frames_expected);
+  else
+    palp_db__fmt(buf, len, "%s%s%s", a, a[0] && b[0] ? "; " : "", b);
 }

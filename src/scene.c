@@ -282,12 +282,17 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   if (e) return e;
   if ((e = get_pos(c, t, "time.", "dt_s", 1, &s->world.dt))) return e;
   if (s->world.dt > 0.1) return fail(c, PALP_EPARSE, "time.dt_s: must be <= 0.1 s");
+  /* 1 us is a thousand times finer than the haptic rate; below it a step is no physics,
+   * and 1e-300 made every frame period a "whole multiple" (1e298 rounds to itself). */
+  if (s->world.dt < 1e-6) return fail(c, PALP_EPARSE, "time.dt_s: %g s is below 1e-6 s", s->world.dt);
   if ((e = get_int(c, t, "time.", "frames", 1, 1, 100000000, &s->frames))) return e;
   s->frame_period = s->world.dt;
   if ((e = get_pos(c, t, "time.", "frame_period_s", 0, &s->frame_period))) return e;
   const double ratio = s->frame_period / s->world.dt;
   if (ratio < 1.0 - 1e-9 || fabs(ratio - round(ratio)) > 1e-6)
     return fail(c, PALP_EPARSE, "time.frame_period_s: must be a whole multiple of time.dt_s");
+  if (ratio > 100000.5)
+    return fail(c, PALP_EPARSE, "time.frame_period_s: %.0f steps per frame; at most 100000", ratio);
 
   const cJSON *fx = cJSON_GetObjectItemCaseSensitive(root, "effects");
   if (!fx) return fail(c, PALP_EPARSE, "effects: missing (an array of effect names is required)");

@@ -22,6 +22,8 @@ typedef struct replay_ctx {
   int mismatch;
   int apply_errors;
   int step_error;
+  int damaged;
+  double dt; /* [s] */
 } replay_ctx;
 
 static int bits_eq(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
@@ -86,6 +88,17 @@ static void print_diff(const palp_db_frame *log, const palp_db_frame *got) {
 
 static int frame_cb(void *u, const palp_db_frame *logged) {
   replay_ctx *r = u;
+  /* Checked before stepping to it: a damaged frame number (10^12) would step for years. */
+  const int64_t at = palp_world_frame(r->w);
+  const double g = PALP_DB_MAX_FRAME_GAP_S / r->dt;
+  const int64_t max_gap = g < 1e9 ? (int64_t)g + 1 : 1000000000;
+  if (logged->frame < at || logged->frame - at > max_gap) {
+    printf("replay: DAMAGED LOG: logged frame %" PRId64 " follows frame %" PRId64 " (at most %" PRId64
+           " frames = %.0f s of simulated time may lie between two logged frames); stopping\n",
+           logged->frame, at, max_gap, PALP_DB_MAX_FRAME_GAP_S);
+    r->damaged = 1;
+    return 1;
+  }
   while (palp_world_frame(r->w) < logged->frame) {
     const int64_t f = palp_world_frame(r->w);
     while (r->next < r->in->n && r->in->v[r->next].frame <= f) apply(r, &r->in->v[r->next++]);
@@ -159,11 +172,14 @@ int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
   r->w = w;
   r->in = &in;
   r->verbose = verbose;
+  r->dt = s->dt_s > 0 ? s->dt_s : 1e-3;
   for (int i = 0; i < MAX_SLOTS; i++) r->map[i] = -1;
   int rc = palp_db_each_frame(db, s->id, frame_cb, r);
   int result;
   if (rc < 0) {
     fprintf(stderr, "replay: reading frames: %s\n", palp_db_errmsg(db));
+    result = REVIEW_ERROR;
+  } else if (r->damaged) {
     result = REVIEW_ERROR;
   } else if (r->step_error) {
     result = REVIEW_MISMATCH;

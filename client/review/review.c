@@ -214,9 +214,11 @@ static int cmd_list(palp_db *db, int argc, char **argv) {
   for (int i = 0; i < n; i++) {
     char t[64];
     review_fmt_time(v[i].start_unix_s, t, sizeof t);
-    printf("%-36s %-14s %-12s %-25s %9.3f %-16s %lld%s\n", v[i].uid, v[i].trainee, v[i].phantom_id, t,
-           v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(running)", (long long)v[i].notes,
-           v[i].records_shed + v[i].records_failed ? "  (log incomplete)" : "");
+    palp_db_log_health h;
+    int known = palp_db_log_health_get(db, &v[i], &h) == 0;
+    printf("%-36s %-14s %-12s %-25s %9.3f %-16s %lld%s%s\n", v[i].uid, v[i].trainee, v[i].phantom_id, t,
+           v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
+           known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
   }
   printf("%d session%s\n", n, n == 1 ? "" : "s");
   free(v);
@@ -364,10 +366,19 @@ static int cmd_show(palp_db *db, const palp_db_session_info *s) {
   }
   printf("notes      %lld\n", (long long)s->notes);
   palp_db_each_note(db, s->id, note_cb, NULL);
-  if (s->records_shed || s->records_failed)
-    printf("log        INCOMPLETE: %lld records shed (queue full), %lld lost to disk errors\n",
-           (long long)s->records_shed, (long long)s->records_failed);
-  else printf("log        complete (no records shed or lost)\n");
+  palp_db_log_health h;
+  char line[600];
+  if (palp_db_log_health_get(db, s, &h) == 0) {
+    palp_db_log_health_describe(&h, line, sizeof line);
+    printf("log        %s\n", line);
+    if (h.cut_short && h.last_event_unix_s > 0) {
+      char t[64];
+      review_fmt_time(h.last_event_unix_s, t, sizeof t);
+      printf("           last event logged at %s\n", t);
+    }
+  } else {
+    printf("log        UNKNOWN: %s\n", palp_db_errmsg(db));
+  }
   return REVIEW_OK;
 }
 

@@ -90,7 +90,22 @@ typedef struct reader {
   int nsets;
 } reader;
 
+/* Bounds on what a file may ask for (memory and time stay bounded whatever it says):
+ * ids are whole numbers 1..INP_ID_MAX (Abaqus' own limit is 999,999,999), and nodes,
+ * elements and set members are at most INP_COUNT_MAX each. */
+#define INP_ID_MAX 999999999.0
+#define INP_COUNT_MAX 10000000
+
+/* An id read as a double: a whole number in 1..INP_ID_MAX, else an error. (Casting 1e19
+ * to an integer is undefined behaviour and made distinct ids collide.) */
+static int as_id(double v, long *out) {
+  if (!(v >= 1 && v <= INP_ID_MAX) || v != floor(v)) return PALP_EPARSE;
+  *out = (long)v;
+  return 0;
+}
+
 static int push_id(raw_set *s, long id) {
+  if (s->count >= INP_COUNT_MAX) return PALP_EINVAL;
   if (s->count == s->cap) {
     const int cap = s->cap ? 2 * s->cap : 64;
     long *p = realloc(s->ids, sizeof(long) * (size_t)cap);
@@ -251,6 +266,17 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
         rc = PALP_EPARSE;
         break;
       }
+      long nid;
+      if (as_id(v[0], &nid)) {
+        snprintf(err, errlen, "%s:%d: node id %.17g is not a whole number in 1..%.0f", path, lineno, v[0], INP_ID_MAX);
+        rc = PALP_EPARSE;
+        break;
+      }
+      if (r.nn >= INP_COUNT_MAX) {
+        snprintf(err, errlen, "%s:%d: more than %d nodes", path, lineno, INP_COUNT_MAX);
+        rc = PALP_EINVAL;
+        break;
+      }
       if (r.nn == r.ncap) {
         r.ncap = r.ncap ? 2 * r.ncap : 1024;
         void *a = realloc(r.x, sizeof *r.x * (size_t)r.ncap), *b = realloc(r.node_id, sizeof(long) * (size_t)r.ncap);
@@ -261,7 +287,7 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
           break;
         }
       }
-      r.node_id[r.nn] = (long)v[0];
+      r.node_id[r.nn] = nid;
       r.x[r.nn][0] = v[1], r.x[r.nn][1] = v[2], r.x[r.nn][2] = n == 4 ? v[3] : 0.0;
       r.nn++;
     } else if (mode == ELEMENT) {
@@ -270,6 +296,21 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
       if (npend > 9) {
         snprintf(err, errlen, "%s:%d: a C3D8 element needs an id and 8 nodes", path, lineno);
         rc = PALP_EPARSE;
+        break;
+      }
+      long eid, conn[8];
+      int bad = as_id(pend[0], &eid) ? 0 : -1;
+      for (int a = 0; a < 8 && bad < 0; ++a)
+        if (as_id(pend[a + 1], &conn[a])) bad = a + 1;
+      if (bad >= 0) {
+        snprintf(err, errlen, "%s:%d: element %s %.17g is not a whole number in 1..%.0f", path, lineno,
+                 bad == 0 ? "id" : "node", pend[bad], INP_ID_MAX);
+        rc = PALP_EPARSE;
+        break;
+      }
+      if (r.ne >= INP_COUNT_MAX) {
+        snprintf(err, errlen, "%s:%d: more than %d elements", path, lineno, INP_COUNT_MAX);
+        rc = PALP_EINVAL;
         break;
       }
       if (r.ne == r.ecap) {
@@ -282,22 +323,41 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
           break;
         }
       }
-      r.elem_id[r.ne] = (long)pend[0];
-      for (int a = 0; a < 8; ++a) r.conn[r.ne][a] = (long)pend[a + 1];
-      if (cur) rc = push_id(cur, (long)pend[0]);
+      r.elem_id[r.ne] = eid;
+      for (int a = 0; a < 8; ++a) r.conn[r.ne][a] = conn[a];
+      if (cur && (rc = push_id(cur, eid)) == PALP_EINVAL)
+        snprintf(err, errlen, "%s:%d: a set with more than %d members", path, lineno, INP_COUNT_MAX);
       r.ne++;
       npend = 0;
     } else if (mode == SET) {
+      long a = 0, b = 0, step = 1;
       if (generate) {
-        if (n < 2 || (n == 3 && v[2] <= 0) || n > 3) {
-          snprintf(err, errlen, "%s:%d: GENERATE needs start, end[, step > 0]", path, lineno);
+        /* Whole numbers, step >= 1, at most INP_COUNT_MAX members: a fractional step
+         * (cast to 0) or a 1e12 range used to loop while memory grew without bound. */
+        if (n < 2 || n > 3 || as_id(v[0], &a) || as_id(v[1], &b) || (n == 3 && as_id(v[2], &step)) || a > b) {
+          snprintf(err, errlen, "%s:%d: GENERATE needs whole numbers start <= end in 1..%.0f[, step >= 1]", path,
+                   lineno, INP_ID_MAX);
           rc = PALP_EPARSE;
           break;
         }
-        const long step = n == 3 ? (long)v[2] : 1;
-        for (long id = (long)v[0]; !rc && id <= (long)v[1]; id += step) rc = push_id(cur, id);
+        if ((b - a) / step + 1 > INP_COUNT_MAX - cur->count) {
+          snprintf(err, errlen, "%s:%d: GENERATE %ld..%ld step %ld makes more than %d set members", path, lineno, a,
+                   b, step, INP_COUNT_MAX);
+          rc = PALP_EINVAL;
+          break;
+        }
+        for (long id = a; !rc && id <= b; id += step) rc = push_id(cur, id);
       } else
-        for (int i = 0; !rc && i < n; ++i) rc = push_id(cur, (long)v[i]);
+        for (int i = 0; !rc && i < n; ++i) {
+          if (as_id(v[i], &a)) {
+            snprintf(err, errlen, "%s:%d: set member %.17g is not a whole number in 1..%.0f", path, lineno, v[i],
+                     INP_ID_MAX);
+            rc = PALP_EPARSE;
+            break;
+          }
+          if ((rc = push_id(cur, a)) == PALP_EINVAL)
+            snprintf(err, errlen, "%s:%d: a set with more than %d members", path, lineno, INP_COUNT_MAX);
+        }
     }
   }
   fclose(f);

@@ -76,6 +76,41 @@ static void test_inp(void) {
   CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == PALP_EPARSE && strstr(err, "undefined node"),
         "dangling node refused: %s", err);
   printf("inp: bad files refused (\"%s\")\n", err);
+
+  /* Hostile files found by fuzzing (issue 15): each refused with its line and reason,
+   * quickly and without memory growing (the GENERATE ones used to loop forever). */
+  static const struct {
+    const char *body, *want;
+    int rc;
+  } hostile[] = {
+      {"*Node\n1e19, 0, 0, 0\n", "node id 1e+19 is not a whole number", PALP_EPARSE},
+      {"*Node\n1.5, 0, 0, 0\n", "node id 1.5 is not a whole number", PALP_EPARSE},
+      {"*Node\n1, 0, 0, 0\n*Element, type=C3D8\n1, 1, 2, 3, 4, 5, 6, 7, 1e19\n", ":4: element node 1e+19", PALP_EPARSE},
+      {"*Nset, nset=a, generate\n1, 9223372036854775807, 1\n", "GENERATE needs whole numbers", PALP_EPARSE},
+      {"*Nset, nset=a, generate\n1, 10, 0.5\n", "GENERATE needs whole numbers", PALP_EPARSE},
+      {"*Nset, nset=a, generate\n1, 1e12, 1\n", "GENERATE needs whole numbers", PALP_EPARSE},
+      {"*Nset, nset=a, generate\n1, 999999999, 1\n", "makes more than 10000000 set members", PALP_EINVAL},
+      {"*Nset, nset=a, generate\n10, 1, 1\n", "start <= end", PALP_EPARSE},
+      {"*Nset, nset=a\n1, -3\n", "set member -3 is not a whole number", PALP_EPARSE},
+  };
+  for (size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
+    f = fopen(path, "w");
+    fputs(hostile[i].body, f);
+    fclose(f);
+    err[0] = 0;
+    int rc = palp_fem_inp_read(path, &b, err, sizeof err);
+    CHECK(rc == hostile[i].rc && strstr(err, hostile[i].want) && (strstr(err, ":2:") || strstr(err, ":4:")), "hostile .inp %zu refused: %s", i,
+          err);
+    if (rc == 0) palp_fem_mesh_destroy(&b);
+  }
+  f = fopen(path, "w"); /* ids up to 999,999,999 are fine, and distinct ids stay distinct */
+  fprintf(f, "*Node\n999999999, 0, 0, 0\n999999998, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n"
+             "7, 1, 1, 1\n8, 0, 1, 1\n*Element, type=C3D8\n1, 999999999, 999999998, 3, 4, 5, 6, 7, 8\n");
+  fclose(f);
+  CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == 0 && b.node_count == 8 &&
+            fabs(palp_fem_element_volume(&b, 0) - 1.0) < 1e-12,
+        "ids 999999999 and 999999998 stay distinct: unit cube read (%s)", err);
+  palp_fem_mesh_destroy(&b);
   remove(path);
 }
 

@@ -62,6 +62,9 @@ int main(void) {
   expect_error("\"vertex_count\":120", "\"vertex_count\":12.5", "mesh.vertex_count");
   expect_error("\"law\":\"polytropic\"", "\"law\":\"ideal\"", "gel.law");
   expect_error("\"dt_s\":0.01", "\"dt_s\":-0.01", "time.dt_s");
+  /* Fuzzing (issue 15): 1e-300 made any frame period a "whole multiple" of dt. */
+  expect_error("\"dt_s\":0.01", "\"dt_s\":1e-300,\"frame_period_s\":0.01", "time.dt_s: 1e-300 s is below 1e-6 s");
+  expect_error("\"dt_s\":0.01", "\"dt_s\":1e-6,\"frame_period_s\":1", "time.frame_period_s: 1000000 steps per frame");
   expect_error("\"t_off_s\":0.3", "\"t_of_s\":0.3", "contacts[0].profile.t_off_s");
   expect_error("\"kind\":\"step\"", "\"kind\":5", "contacts[0].profile.kind");
   expect_error("\"distribution\":\"gaussian\"", "\"distribution\":\"round\"", "contacts[0].distribution");

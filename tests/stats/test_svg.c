@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 
@@ -113,6 +114,25 @@ static void test_line_chart(void) {
   check("all-NaN series -> EINVAL", palp_svg_line_chart_file(path, &def, err, sizeof err) == PALP_EINVAL);
   struct stat sb;
   check("no half-written file", stat(path, &sb) != 0);
+
+  /* A failed plot leaves what was at the path untouched (it deleted it, whatever it was:
+   * as root, --svg /dev/null would have removed the device node), and no temporary file. */
+  snprintf(path, sizeof path, "%s/precious.svg", dir);
+  FILE *pf = fopen(path, "w");
+  fputs("keep me\n", pf);
+  fclose(pf);
+  check("failed plot over an existing file -> EINVAL", palp_svg_line_chart_file(path, &def, err, sizeof err) == PALP_EINVAL);
+  char *kept = slurp(path);
+  check("the existing file is untouched", kept && strcmp(kept, "keep me\n") == 0);
+  free(kept);
+  remove(path);
+  check("failed plot to /dev/null -> EINVAL", palp_svg_line_chart_file("/dev/null", &def, err, sizeof err) == PALP_EINVAL);
+  check("/dev/null is still a character device", stat("/dev/null", &sb) == 0 && S_ISCHR(sb.st_mode));
+  DIR *dd = opendir(dir);
+  int leftovers = 0;
+  for (struct dirent *de; dd && (de = readdir(dd));) leftovers += strstr(de->d_name, ".svg.") != NULL;
+  if (dd) closedir(dd);
+  check("no temporary file left in the directory", leftovers == 0);
   def.series_count = 0;
   check("no series -> EINVAL", palp_svg_line_chart(stdout, &def) == PALP_EINVAL);
 }

@@ -4,12 +4,18 @@
  * Layout, in pixels: a plot frame inside fixed margins (title above, x label
  * below, rotated y label left); data map linearly onto the frame, y upwards.
  */
+/* mkstemp, fchmod, fdopen: POSIX. */
+#define _POSIX_C_SOURCE 200809L
 #include "svg_plot.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* Okabe-Ito palette: distinguishable with the common colour-vision deficiencies. */
 static const char *const palette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
@@ -378,16 +384,45 @@ int palp_svg_bland_altman(FILE *out, const palp_svg_bland_altman_def *def) {
 
 /* ---- files ----------------------------------------------------------------------------- */
 
+/* A plot goes to a temporary file next to path and is renamed over it only when whole, so a
+ * failed plot leaves whatever was at path untouched and removes only the file it created.
+ * A path that exists and is not a regular file (a device such as /dev/null, a FIFO) is
+ * written in place: renaming over it would replace the device node. */
 static int to_file(const char *path, int (*fn)(FILE *, const void *), const void *def, char *err,
                    size_t errlen) {
-  FILE *f = fopen(path, "w");
+  struct stat sb;
+  const int special = stat(path, &sb) == 0 && !S_ISREG(sb.st_mode);
+  char tmp[4096];
+  FILE *f = NULL;
+  if (special) {
+    f = fopen(path, "w");
+  } else if (snprintf(tmp, sizeof tmp, "%s.XXXXXX", path) < (int)sizeof tmp) {
+    int fd = mkstemp(tmp);
+    if (fd >= 0) {
+      fchmod(fd, 0644); /* mkstemp makes it 0600; a plot is for reading */
+      f = fdopen(fd, "w");
+      if (!f) {
+        close(fd);
+        remove(tmp);
+      }
+    }
+  } else {
+    errno = ENAMETOOLONG;
+  }
   if (!f) {
     msg(err, errlen, "%s: cannot write the plot: %s", path, strerror(errno));
     return PALP_EIO;
   }
   int rc = fn(f, def);
   if (fclose(f) != 0 && rc == 0) rc = PALP_EIO;
-  if (rc < 0) remove(path); /* no half-written plot left behind */
+  if (!special) {
+    if (rc < 0) remove(tmp); /* ours: no half-written plot left behind */
+    else if (rename(tmp, path) != 0) {
+      msg(err, errlen, "%s: cannot write the plot: %s", path, strerror(errno));
+      remove(tmp);
+      return PALP_EIO;
+    }
+  }
   if (rc == PALP_EINVAL) msg(err, errlen, "%s: nothing to plot (no finite data or invalid plot settings)", path);
   else if (rc < 0) msg(err, errlen, "%s: write error while writing the plot", path);
   return rc;

@@ -1,0 +1,82 @@
+#!/bin/sh
+# palp-review tells the truth about a log, and survives a damaged one (issue 15):
+#  - a whole log: "complete";
+#  - 87% of its frames deleted: "DAMAGED: ... N of M frames missing", N and M counted here with sqlite3;
+#  - no end logged (the server was SIGKILLed): "CUT SHORT ... the data ends at frame F", F = max(frame);
+#  - a mesh row claiming 178,956,971 vertices (x 24 B wraps to 8 in 32 bits): report and show run, exit 0;
+#  - a frame number of 10^12: replay stops at once with "DAMAGED LOG", exit 2, within 10 s;
+#  - an empty file and a foreign SQLite file: list refuses them (exit 2) and leaves them byte-identical.
+# usage: test_hostile_log.sh SIM_SESSION PALP_REVIEW SCENE TMPDIR
+set -eu
+sim=$1 review=$2 scene=$3 tmp=$4
+dir=$tmp/hostile_log
+rm -rf "$dir"
+mkdir -p "$dir"
+fail=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fail=1; }
+uid=hostile-0001
+"$sim" "$dir/base.db" "$uid" "$scene" 1.0 >/dev/null
+sqlite3 "$dir/base.db" "PRAGMA wal_checkpoint(TRUNCATE);" >/dev/null
+copy() { cp "$dir/base.db" "$dir/$1.db"; }
+
+out=$("$review" --db "$dir/base.db" show "$uid")
+echo "$out" | grep -q "^log        complete: an end was logged" && ok "whole log: complete" || { bad "whole log not called complete"; echo "$out" | tail -3; }
+
+copy holes
+total=$(sqlite3 "$dir/holes.db" "SELECT count(*) FROM frame")
+sqlite3 "$dir/holes.db" "DELETE FROM frame WHERE frame IN (SELECT frame FROM frame ORDER BY frame LIMIT (SELECT count(*) * 87 / 100 FROM frame) OFFSET 5)"
+left=$(sqlite3 "$dir/holes.db" "SELECT count(*) FROM frame")
+missing=$((total - left))
+out=$("$review" --db "$dir/holes.db" show "$uid")
+echo "$out" | grep -q "^log        DAMAGED: 0 records shed (queue full), 0 lost to disk errors, $missing of $total frames missing" \
+  && ok "87% of frames deleted ($missing of $total): DAMAGED, counted" || { bad "holes not reported ($missing of $total)"; echo "$out" | tail -3; }
+"$review" --db "$dir/holes.db" list | grep -q "(log damaged)" && ok "list marks the damaged log" || bad "list does not mark the damaged log"
+
+copy killed
+sqlite3 "$dir/killed.db" "UPDATE session SET end_unix_s = NULL, end_reason = NULL, end_detail = NULL"
+last=$(sqlite3 "$dir/killed.db" "SELECT max(frame) FROM frame")
+out=$("$review" --db "$dir/killed.db" show "$uid")
+echo "$out" | grep -q "^log        CUT SHORT: no end was logged .*the data ends at frame $last," \
+  && ok "no end logged: CUT SHORT at frame $last" || { bad "cut short not reported"; echo "$out" | tail -3; }
+
+copy mesh
+sqlite3 "$dir/mesh.db" "UPDATE mesh SET vertex_count = 178956971, positions_m = zeroblob(8) WHERE rowid = (SELECT min(rowid) FROM mesh)"
+if "$review" --db "$dir/mesh.db" report "$uid" --out "$dir/mesh.html" >/dev/null 2>"$dir/mesh.err" && [ -s "$dir/mesh.html" ]; then
+  ok "mesh row of 178,956,971 vertices: report written, no crash"
+else
+  bad "report on a bad mesh row failed: $(cat "$dir/mesh.err")"
+fi
+
+copy frame
+sqlite3 "$dir/frame.db" "UPDATE frame SET frame = 1000000000000 WHERE frame = (SELECT max(frame) FROM frame)"
+set +e
+start=$(date +%s)
+out=$(timeout 20 "$review" --db "$dir/frame.db" replay "$uid" 2>&1)
+rc=$?
+took=$(( $(date +%s) - start ))
+set -e
+if [ $rc -eq 2 ] && [ $took -le 10 ] && echo "$out" | grep -q "DAMAGED LOG: logged frame 1000000000000"; then
+  ok "frame 10^12: replay stops in ${took} s with a clear message, exit 2"
+else
+  bad "frame 10^12: exit $rc after ${took} s: $out"
+fi
+
+: > "$dir/empty.db"
+set +e
+msg=$("$review" --db "$dir/empty.db" list 2>&1); rc=$?
+set -e
+size=$(stat -c %s "$dir/empty.db")
+[ $rc -eq 2 ] && [ "$size" -eq 0 ] && echo "$msg" | grep -q "not a palp session log" \
+  && ok "empty file refused, still 0 bytes: $msg" || bad "empty file: exit $rc, size $size: $msg"
+
+sqlite3 "$dir/foreign.db" "CREATE TABLE recipes(name TEXT); INSERT INTO recipes VALUES('bread')"
+sum0=$(md5sum < "$dir/foreign.db")
+set +e
+msg=$("$review" --db "$dir/foreign.db" list 2>&1); rc=$?
+set -e
+sum1=$(md5sum < "$dir/foreign.db")
+[ $rc -eq 2 ] && [ "$sum0" = "$sum1" ] && [ ! -e "$dir/foreign.db-wal" ] && echo "$msg" | grep -q "not a palp session log" \
+  && ok "foreign SQLite file refused, byte-identical: $msg" || bad "foreign file: exit $rc: $msg"
+
+exit $fail
