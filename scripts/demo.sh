@@ -73,6 +73,16 @@ for _ in $(seq 50); do
   sleep 0.1
 done
 
+# The browser view (palp-web): the class dashboard and a 3D trainee view while the demo runs.
+web=$build/web/palp-web
+if [ -x "$web" ]; then
+  "$web" --domain "$domain" --port "${PALP_DEMO_WEB_PORT:-8090}" >"$out/web.log" 2>&1 &
+  web_pid=$!
+  pids+=("$web_pid")
+  for _ in $(seq 20); do grep -q "dashboard" "$out/web.log" 2>/dev/null && break; sleep 0.1; done
+  sed -n 's/^palp-web: \(trainee page\|dashboard\) */demo: open in a browser while it runs, \1: /p' "$out/web.log"
+fi
+
 # Trainee alice: the paper's protocol on phantom 1 - a 3 N step held 2 s with
 # distribution II (5.2 cm^2 uniform patch), then release and recovery.
 "$client" --role trainee --domain "$domain" --phantom 1 "${alice_sec[@]}" \
@@ -108,6 +118,7 @@ observer=$!
 
 status=0
 for p in "$alice" "$bob" "$carol" "$visual" "$observer"; do wait "$p" || status=$?; done
+[ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
 kill -INT "$server_pid"
 wait "$server_pid" || status=$?
 pids=()

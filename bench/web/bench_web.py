@@ -4,16 +4,17 @@ pages and one dashboard, on this machine's real processes (palp-server, 8 palp-c
 pressing a 1 Hz sine so no phantom sleeps, palp-web, Debian's headless Chromium on SwiftShader).
 
 Phases, in one run (same machine state, so the comparison is fair):
-  A   baseline: server + trainees, no bridge
-  W   + palp-web streaming to 9 plain WebSocket clients (8 following one session, 1 all):
-      the bridge's own cost, without a browser competing for the 2 cores
+  A   baseline: server + trainees, no bridge                       } alternating, R rounds
+  W   + palp-web streaming to 9 plain WebSocket clients (8 following } each, pooled
+      one session, 1 all): the bridge's own cost, no browser competing for the 2 cores
   B   + palp-web streaming to headless Chromium: 8 trainee pages (WebGL) + the dashboard
   A2  baseline again (drift check)
 For each: the server's tick figures (palp_server_status, read by bench_web_status, not the bridge),
 the bridge's CPU share (of one core, from /proc), frames per second each page/client receives and
 the gaps between frames (median, p99). DDS domain 200.
 
-usage: bench_web.py BUILD_DIR [--seconds S] [--sessions N]
+usage: bench_web.py BUILD_DIR [--seconds S] [--rounds R] [--sessions N]
+(default: 3 rounds of A and W, 10 s each, then B and A2 for 10 s: about 2.5 min)
 """
 import json
 import os
@@ -57,18 +58,23 @@ class StatusReader:
         self.p = subprocess.Popen([os.path.join(build, "bench", "web", "bench_web_status"), str(DOMAIN), str(seconds)],
                                   stdout=subprocess.PIPE, text=True, env=env)
 
-    def result(self):
+    def rows(self):
         out, _ = self.p.communicate()
         rows = [list(map(float, l.split()[1:])) for l in out.splitlines() if l.startswith("status ")]
-        if len(rows) < 3:
-            return None
-        rows = rows[1:]  # the first period may straddle the phase change
-        ticks = rows[-1][5] - rows[0][5]
-        over = rows[-1][6] - rows[0][6]
-        return {"periods": len(rows), "load_med": pct([r[1] for r in rows], 0.5),
-                "p50_med": pct([r[2] for r in rows], 0.5), "p99_med": pct([r[3] for r in rows], 0.5),
-                "p99_max": max(r[3] for r in rows), "max": max(r[4] for r in rows),
-                "overrun_pct": 100.0 * over / ticks if ticks else float("nan"), "open": rows[-1][7]}
+        return rows[1:]  # the first period may straddle the phase change
+
+
+def summarise(chunks):
+    """Server figures over one or more phases' status rows (each chunk: consecutive periods)."""
+    rows = [r for c in chunks for r in c]
+    if len(rows) < 2:
+        return None
+    ticks = sum(c[-1][5] - c[0][5] for c in chunks if len(c) > 1)
+    over = sum(c[-1][6] - c[0][6] for c in chunks if len(c) > 1)
+    return {"periods": len(rows), "load_med": pct([r[1] for r in rows], 0.5),
+            "p50_med": pct([r[2] for r in rows], 0.5), "p99_med": pct([r[3] for r in rows], 0.5),
+            "p99_max": max(r[3] for r in rows), "max": max(r[4] for r in rows),
+            "overrun_pct": 100.0 * over / ticks if ticks else float("nan"), "open": rows[-1][7]}
 
 
 class CpuSampler(threading.Thread):
@@ -126,11 +132,14 @@ def gaps_ms(arrivals):
 
 def main():
     build = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else os.path.join(SOURCE, "build"))
-    seconds = 20.0
+    seconds = 10.0
     n = 8
+    rounds = 3
     for i, a in enumerate(sys.argv):
         if a == "--seconds":
             seconds = float(sys.argv[i + 1])
+        if a == "--rounds":
+            rounds = int(sys.argv[i + 1])
         if a == "--sessions":
             n = int(sys.argv[i + 1])
     out = os.path.join(build, "bench", "web", "out")
@@ -150,41 +159,41 @@ def main():
         time.sleep(3)
         print("bench_web: %d sessions open, %.0f s per phase, DDS domain %d" % (n, seconds, DOMAIN), flush=True)
 
-        def baseline(name):
+        # A and W alternate, so that the other work on this shared machine falls on both alike.
+        chunks = {"A": [], "W": []}
+        cpu_all, cpu_samples, fps, dash, g = [], [], [], [], []
+        for rnd in range(rounds):
+            chunks["A"].append(StatusReader(build, procs.env, seconds).rows())
+            web = procs.web(name="web-w%d" % rnd)
+            time.sleep(1)
+            clients = [WsClient(web.port, k + 1) for k in range(n)] + [WsClient(web.port, "all")]
+            for c in clients:
+                c.start()
+            time.sleep(3)  # joins, first frames
+            for c in clients:
+                c.arrivals.clear()
+                c.per_session.clear()
+            cpu = CpuSampler(web.pid)
+            cpu.start()
             st = StatusReader(build, procs.env, seconds)
-            results[name] = {"server": st.result()}
-            print("  %s done" % name, flush=True)
-
-        baseline("A")
-
-        # W: the bridge and plain clients
-        web = procs.web(name="web-w")
-        time.sleep(1)
-        clients = [WsClient(web.port, k + 1) for k in range(n)] + [WsClient(web.port, "all")]
-        for c in clients:
-            c.start()
-        time.sleep(3)  # joins, first frames
-        for c in clients:
-            c.arrivals.clear()
-            c.per_session.clear()
-        cpu = CpuSampler(web.pid)
-        cpu.start()
-        st = StatusReader(build, procs.env, seconds)
-        t0 = time.time()
-        srv = st.result()
-        wall = time.time() - t0
-        share = cpu.total()
-        for c in clients:
-            c.stop_flag = True
-        fps = [len(c.arrivals) / wall for c in clients[:n]]
-        dash = [v / wall for v in clients[n].per_session.values()]
-        g = [x for c in clients[:n] for x in gaps_ms(c.arrivals)]
-        results["W"] = {"server": srv, "cpu": share, "cpu_p50": pct(cpu.samples, 0.5), "cpu_p99": pct(cpu.samples, 0.99),
-                        "fps": fps, "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99)}
-        for c in clients:
-            c.ws.close()
-        procs.stop(web)
-        print("  W done", flush=True)
+            t0 = time.time()
+            chunks["W"].append(st.rows())
+            wall = time.time() - t0
+            cpu_all.append(cpu.total())
+            cpu_samples += cpu.samples
+            for c in clients:
+                c.stop_flag = True
+            fps += [len(c.arrivals) / wall for c in clients[:n]]
+            dash += [v / wall for v in clients[n].per_session.values()]
+            g += [x for c in clients[:n] for x in gaps_ms(c.arrivals)]
+            for c in clients:
+                c.ws.close()
+            procs.stop(web)
+            print("  round %d of A/W done" % (rnd + 1), flush=True)
+        results["A"] = {"server": summarise(chunks["A"])}
+        results["W"] = {"server": summarise(chunks["W"]), "cpu": sum(cpu_all) / len(cpu_all),
+                        "cpu_p50": pct(cpu_samples, 0.5), "cpu_p99": pct(cpu_samples, 0.99), "fps": fps,
+                        "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99)}
 
         # B: the bridge and Chromium
         web = procs.web(name="web-b")
@@ -204,7 +213,7 @@ def main():
         bc0 = browser.cpu_seconds()
         st = StatusReader(build, procs.env, seconds)
         t0 = time.time()
-        srv = st.result()
+        srv = summarise([st.rows()])
         f1 = [p.eval("palpState.trainee.frames") for p in pages]
         r1 = [p.eval("palpState.trainee.rendered") for p in pages]
         d1 = dpage.eval("palpState.dashboard.frames")
@@ -227,7 +236,7 @@ def main():
         procs.stop(web)
         print("  B done", flush=True)
         time.sleep(2)
-        baseline("A2")
+        results["A2"] = {"server": summarise([StatusReader(build, procs.env, seconds).rows()])}
     finally:
         if browser:
             browser.close()
@@ -238,7 +247,8 @@ def main():
         n, "100"))
     print("| phase | periods | tick work p50 (median) | p99 (median / worst) | max | overrun | load (worst thread) |")
     print("|---|---|---|---|---|---|---|")
-    names = {"A": "A: no bridge", "W": "W: bridge + 9 WebSocket clients", "B": "B: bridge + Chromium (8 pages + dashboard)",
+    names = {"A": "A: no bridge (%d x %.0f s)" % (rounds, seconds),
+             "W": "W: bridge + 9 WebSocket clients (%d x %.0f s, alternating with A)" % (rounds, seconds), "B": "B: bridge + Chromium (8 pages + dashboard)",
              "A2": "A2: no bridge, again"}
     for k in ["A", "W", "B", "A2"]:
         s = results.get(k, {}).get("server")
