@@ -497,6 +497,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (hs.limited_ticks)
     printf("[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.1f N, the device got at most %.1f N\n",
            o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
+  if (hs.passivity_ticks)
+    printf("[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
+           "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
     printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range\n",
            o->name, (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models);
