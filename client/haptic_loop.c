@@ -217,7 +217,6 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
   palp_haptic_out o = {.force = {0, 0, 0}, .proxy = x, .requested = 0, .flags = 0};
   if (on) {
     palp_haptic_render(&c->renderer, xr, t, &o);
-    o.proxy = v3add(o.proxy, c->offset);
   }
   /* Passivity observer and controller. A model that arrives a round trip late
    * renders the force of where the hand was, so pressing in feels softer and
@@ -336,7 +335,8 @@ static void *haptic_main(void *arg) {
      * (priority inversion); the view is then one tick older. */
     if (pthread_mutex_trylock(&l->view_lock) == 0) {
     l->view = (palp_cli_haptic_view){.t = t, .x = x, .xr = xr, .proxy = o.proxy, .force = o.force, .requested = o.requested,
-                                     .depth = len3((palp_vec3){o.proxy.x - x.x, o.proxy.y - x.y, o.proxy.z - x.z}),
+                                     /* the server's: device beneath the proxy along the normal */
+                                     .depth = (o.flags & PALP_HAPTIC_CONTACT) ? l->core.renderer.cur.depth : 0,
                                      .flags = o.flags, .on = on};
     pthread_mutex_unlock(&l->view_lock);
     }
