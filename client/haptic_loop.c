@@ -51,6 +51,7 @@ static int fin3(palp_Vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite
 static palp_vec3 vec(palp_Vec3 v) { return (palp_vec3){v.x, v.y, v.z}; }
 static palp_vec3 v3add(palp_vec3 a, palp_vec3 b) { return (palp_vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
 static palp_vec3 v3sub(palp_vec3 a, palp_vec3 b) { return (palp_vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static palp_vec3 v3scale(palp_vec3 a, double s) { return (palp_vec3){a.x * s, a.y * s, a.z * s}; }
 static double len3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 
 int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out) {
@@ -91,11 +92,6 @@ palp_cli_haptic_def palp_cli_haptic_default_def(void) {
                                .latency_compensation = 1,
                                .max_latency = 0.2,
                                .render = palp_haptic_default_def()};
-}
-
-/* How long [s] a model's stiffness and drift are trusted from the state it describes. */
-static double hold_horizon(const palp_cli_haptic_def *d) {
-  return d->hold_after > 0 ? d->hold_after : fmax(2.0 / d->physics_rate_hz, 0.008);
 }
 
 static struct timespec ts_of(int64_t ns) {
@@ -153,6 +149,112 @@ static void *sender_main(void *arg) {
   return NULL;
 }
 
+/* ---- the per-tick logic, pure (haptic_loop.h) -------------------------------------- */
+
+int palp_cli_haptic_core_init(palp_cli_haptic_core *c, const palp_haptic_def *render, double physics_rate_hz,
+                              int latency_compensation, double hold_after, double max_latency) {
+  memset(c, 0, sizeof *c);
+  if (!(physics_rate_hz > 0) || !(max_latency >= 0)) return PALP_EINVAL;
+  const int rc = palp_haptic_init(&c->renderer, render);
+  if (rc < 0) return rc;
+  c->compensate = latency_compensation != 0;
+  c->hold_after = hold_after > 0 ? hold_after : fmax(2.0 / physics_rate_hz, 0.008);
+  c->max_latency = max_latency;
+  c->passivity = 1;
+  c->max_damping = 20.0;
+  return 0;
+}
+
+int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, double t, palp_local_model *m,
+                              double age, palp_haptic_out *out, palp_vec3 *xr_out) {
+  const int age_ok = m && age >= 0 && age <= c->max_latency;
+  if (m) {
+    c->x_arrival_t = t;
+    c->model_age = age_ok ? age : 0;
+  }
+  /* A model is not extrapolated beyond its horizon: its stiffness is the
+   * phantom's response within one physics step, and the device's motion read
+   * through it for tens of milliseconds (a 40 ms round trip, a DDS thread
+   * starved on a loaded machine) renders a force the phantom never makes
+   * (measured: +0.3 N over 30 ms at 20 mm/s, and over a 40 ms round trip a
+   * K v dt sawtooth at every model). Once the model's age (on arrival, plus
+   * since) passes hold_after the renderer's device point stops (the force is
+   * held) and the motion the device makes meanwhile goes into an offset.
+   * Models are anchored at the renderer's device point when they arrive, so
+   * the offset never reaches the hand: the next model continues from the held
+   * force through the renderer's crossfade. The renderer's stale fade-out still
+   * ends the force if the server falls silent. Only with latency compensation
+   * on (anchoring is what makes the offset harmless). */
+  c->holding = on && c->was_on && c->compensate && c->renderer.have &&
+               c->model_age + (t - c->x_arrival_t) > c->hold_after;
+  if (c->holding) c->offset = v3add(c->offset, v3sub(x, c->x_prev));
+  if (!on) c->offset = (palp_vec3){0, 0, 0};
+  c->x_prev = x;
+  const palp_vec3 xr = v3sub(x, c->offset);
+  int taken = 0;
+  if (m) {
+    /* Latency compensation: the model describes the surface when the device was
+     * at m->device, which this station sent `age` ago on its own clock. Its
+     * stiffness K (the phantom's response within one physics step) read over a
+     * 40 ms round trip at 20 mm/s turns 0.8 mm of the hand's motion into force
+     * the phantom never pushes with (measured: +70% at the end of a press). The
+     * model is therefore re-anchored at the renderer's device point now: its
+     * force is rendered as it is (late by the round trip, which no station can
+     * avoid) and K only shapes the motion that follows within the horizon.
+     * Rejected: extrapolating by drift x age (with jittered arrivals the
+     * server's device point moves in bursts, the drift jumps, and drift x 45 ms
+     * made a 0.5 N sawtooth). Ages outside [0, max_latency] are not trusted and
+     * the model is taken as is. */
+    if (c->compensate && age_ok && on) {
+      m->device = xr;
+      /* Past its horizon the model is held, and a held device point with the
+       * surface drifting on would read as the finger coming off (measured:
+       * -0.05 N per 4 ms at 20 mm/s): its drift is not extrapolated either. */
+      if (age > c->hold_after) m->drift = (palp_vec3){0, 0, 0};
+    }
+    taken = palp_haptic_update(&c->renderer, m, t);
+  }
+  palp_haptic_out o = {.force = {0, 0, 0}, .proxy = x, .requested = 0, .flags = 0};
+  if (on) {
+    palp_haptic_render(&c->renderer, xr, t, &o);
+  }
+  /* Passivity observer and controller. A model that arrives a round trip late
+   * renders the force of where the hand was, so pressing in feels softer and
+   * coming out harder than the phantom is: over press-release cycles the device
+   * receives energy the phantom never stored (measured, 40 ms late models, 100
+   * cycles at 50 mm/s: 68.5 mJ given back for 29.5 mJ put in). The observer sums
+   * the work the rendered force did on the device since the finger touched
+   * (E = sum F_{k-1} . (x_k - x_{k-1}), negative while the hand pushes in); while
+   * E > 0 the rendering has generated energy, and the controller adds a damper
+   * -a v that takes exactly that excess out over the next tick (a = E / (|v|^2
+   * dt)), limited to max_damping. Inactive when the rendering is passive (the
+   * undelayed test: E stays < 0 in every cycle). */
+  if (c->passivity) {
+    const double dt = t - c->t_prev;
+    if (c->was_on && on && dt > 0) c->energy += c->f_prev.x * (x.x - c->x_prev_pc.x) + c->f_prev.y * (x.y - c->x_prev_pc.y) +
+                                                 c->f_prev.z * (x.z - c->x_prev_pc.z);
+    if (!(o.flags & PALP_HAPTIC_CONTACT) && !(len3(o.force) > 0)) c->energy = 0; /* free: nothing stored */
+    if (on && c->was_on && dt > 0 && c->energy > 0) {
+      const palp_vec3 v = v3scale(v3sub(x, c->x_prev_pc), 1.0 / dt);
+      const double v2 = v.x * v.x + v.y * v.y + v.z * v.z;
+      if (v2 > 1e-12) {
+        double a = c->energy / (v2 * dt);
+        if (a > c->max_damping) a = c->max_damping;
+        o.force = v3sub(o.force, v3scale(v, a));
+        c->dissipated += a * v2 * dt;
+        c->pc_ticks++;
+      }
+    }
+    c->f_prev = on ? o.force : (palp_vec3){0, 0, 0};
+    c->x_prev_pc = x;
+    c->t_prev = t;
+  }
+  c->was_on = on;
+  *out = o;
+  if (xr_out) *xr_out = xr;
+  return taken;
+}
+
 static void *haptic_main(void *arg) {
   palp_cli_haptic_loop *l = arg;
   const palp_cli_haptic_def *d = &l->def;
@@ -166,9 +268,6 @@ static void *haptic_main(void *arg) {
   int64_t next = t0;
   uint64_t mb_seq = 0;
   int was_on = 0, release_left = 0;
-  double x_arrival_t = 0, model_age = 0;
-  palp_vec3 offset = {0, 0, 0}, x_prev = {0, 0, 0};
-  const double hold_after = hold_horizon(d);
   palp_local_model m;
   for (uint64_t tick = 0; !atomic_load_explicit(&l->stop, memory_order_relaxed); tick++) {
     next += period;
@@ -199,45 +298,19 @@ static void *haptic_main(void *arg) {
       break;
     }
     uint32_t sflags = 0;
-    double smax = 0, age = 0;
-    int got_model = 0;
-    if (palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax, &age)) {
-      if (palp_haptic_update(&l->renderer, &m, t) > 0) {
-        st->models++;
-        got_model = 1;
-      }
+    double smax = 0, age = -1;
+    const int got = palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax, &age);
+    if (got) {
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
       if (sflags & palp_LM_OUT_OF_RANGE) st->out_of_range_models++;
       /* The safe force is the smaller of the station's and the phantom's limits. */
-      if (smax > 0 && smax < l->renderer.def.max_force) l->renderer.def.max_force = smax;
+      if (smax > 0 && smax < l->core.renderer.def.max_force) l->core.renderer.def.max_force = smax;
     }
-    /* A model is not extrapolated beyond its horizon: its stiffness is the
-     * phantom's response within one physics step, and the device's motion read
-     * through it for tens of milliseconds (a 40 ms round trip, a DDS thread
-     * starved on a loaded machine) renders a force the phantom never makes
-     * (measured: +0.3 N over 30 ms at 20 mm/s, and over a 40 ms round trip a
-     * K v dt sawtooth at every model). Once the model's age (on arrival, plus
-     * since) passes hold_after the renderer's device point stops (the force is
-     * held) and the motion the device makes meanwhile goes into an offset. Models are anchored at the
-     * renderer's device point when they arrive (latency compensation, see
-     * palp_cli_haptic_feed), so the offset never reaches the hand: the next
-     * model continues from the held force through the renderer's crossfade.
-     * The renderer's stale fade-out still ends the force if the server falls
-     * silent. Only with latency compensation on (anchoring is what makes the
-     * offset harmless). */
-    if (got_model) {
-      x_arrival_t = t;
-      model_age = age > 0 && age <= d->max_latency ? age : 0;
-    }
-    if (on && was_on && d->latency_compensation && l->renderer.have && model_age + (t - x_arrival_t) > hold_after) {
-      offset = v3add(offset, v3sub(x, x_prev));
-      st->held_ticks++;
-    }
-    if (!on) offset = (palp_vec3){0, 0, 0};
-    x_prev = x;
-    const palp_vec3 xr = v3sub(x, offset);
-    palp_haptic_out o = {.force = {0, 0, 0}, .proxy = x, .requested = 0, .flags = 0};
-    if (on) palp_haptic_render(&l->renderer, xr, t, &o);
+    palp_haptic_out o;
+    palp_vec3 xr;
+    const int taken = palp_cli_haptic_core_tick(&l->core, on, x, t, got ? &m : NULL, age, &o, &xr);
+    if (taken > 0) st->models++;
+    if (l->core.holding) st->held_ticks++;
     d->in->write_force(d->in->ctx, o.force, o.flags);
     const double fm = len3(o.force);
     if (fm > st->peak_force) st->peak_force = fm;
@@ -261,8 +334,9 @@ static void *haptic_main(void *arg) {
     /* Try-lock: a reader preempted while holding the lock must not stall the tick
      * (priority inversion); the view is then one tick older. */
     if (pthread_mutex_trylock(&l->view_lock) == 0) {
-    l->view = (palp_cli_haptic_view){.t = t, .x = x, .xr = xr, .proxy = v3add(o.proxy, offset), .force = o.force, .requested = o.requested,
-                                     .depth = len3((palp_vec3){o.proxy.x - x.x, o.proxy.y - x.y, o.proxy.z - x.z}),
+    l->view = (palp_cli_haptic_view){.t = t, .x = x, .xr = xr, .proxy = o.proxy, .force = o.force, .requested = o.requested,
+                                     /* the server's: device beneath the proxy along the normal */
+                                     .depth = (o.flags & PALP_HAPTIC_CONTACT) ? l->core.renderer.cur.depth : 0,
                                      .flags = o.flags, .on = on};
     pthread_mutex_unlock(&l->view_lock);
     }
@@ -270,7 +344,9 @@ static void *haptic_main(void *arg) {
   if (was_on)
     for (int r = 0; r < 3; r++) send_contact(l, 0, (palp_vec3){0, 0, 0}, palp_dds_now_ns());
   d->in->write_force(d->in->ctx, (palp_vec3){0, 0, 0}, 0); /* leave the hand free */
-  st->max_force = l->renderer.def.max_force;
+  st->max_force = l->core.renderer.def.max_force;
+  st->passivity_ticks = l->core.pc_ticks;
+  st->passivity_dissipated = l->core.dissipated;
   atomic_store(&l->done, 1);
   return NULL;
 }
@@ -289,12 +365,13 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
   }
   l->def = *def;
   if (!(l->def.radius > 0)) l->def.radius = def->in->finger_radius > 0 ? def->in->finger_radius : 0.008;
-  int rc = palp_haptic_init(&l->renderer, &def->render);
+  int rc = palp_cli_haptic_core_init(&l->core, &def->render, def->physics_rate_hz, def->latency_compensation,
+                                     def->hold_after, def->max_latency);
   if (rc < 0) {
     snprintf(err, errlen, "haptic loop: renderer parameters invalid: %s", palp_strerror(rc));
     return rc;
   }
-  l->stats.max_force = l->renderer.def.max_force;
+  l->stats.max_force = l->core.renderer.def.max_force;
   if (palp_cli_mailbox_init(&l->mailbox) < 0 || pthread_mutex_init(&l->view_lock, NULL) != 0 ||
       sem_init(&l->out_sem, 0, 0) != 0) {
     snprintf(err, errlen, "haptic loop: cannot create its locks");
@@ -372,32 +449,12 @@ int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t 
     if (info.valid_data && w->finger == (uint8_t)l->def.finger && w->session_id == l->def.session_id) {
       palp_local_model m;
       if (palp_cli_local_model_from_wire(w, &m) == 0 && isfinite(w->max_force) && w->max_force >= 0) {
-        /* Latency compensation (docs/station.md): the model describes the surface
-         * when the device was at m.device, which this station sent at
-         * contact_source_time_ns on its own clock, so the model is that old, not
-         * just as old as its arrival. Its stiffness K is the phantom's response
-         * within one physics step; over a 40 ms round trip the device moves on
-         * (0.8 mm at 20 mm/s) and K times that read as indentation renders a force
-         * the phantom never pushes with (measured: +70% at the end of a press).
-         * The model is therefore re-anchored at the device's position now: its
-         * force is rendered as it is (late by the round trip, which no station can
-         * avoid) and K only shapes the motion that follows until the next model.
-         * Extrapolating by the drift instead was tried and rejected: with jittered
-         * arrivals the server's device point moves in bursts, the drift jumps, and
-         * drift x 45 ms made a 0.5 N sawtooth. Ages outside [0, max_latency] are
-         * not trusted and the model is taken as is. */
+        /* The model's age: it describes the surface when the device was at
+         * m.device, which this station sent at contact_source_time_ns on its own
+         * clock. The haptic thread re-anchors it with that (core_tick). */
         const int64_t now = palp_dds_now_ns();
         const double age = w->contact_source_time_ns > 0 ? (double)(now - w->contact_source_time_ns) * 1e-9 : -1;
-        if (l->def.latency_compensation && age > 0 && age <= l->def.max_latency) {
-          palp_cli_haptic_view v;
-          palp_cli_haptic_get_view(l, &v);
-          if (v.on) m.device = v.xr; /* the renderer's device point (held motion excluded) */
-          /* Past its horizon the model is held, and a held device point with the
-           * surface drifting on would read as the finger coming off (measured:
-           * -0.05 N per 4 ms at 20 mm/s): its drift is not extrapolated either. */
-          if (age > hold_horizon(&l->def)) m.drift = (palp_vec3){0, 0, 0};
-        }
-        palp_cli_mailbox_put(&l->mailbox, &m, w->flags, w->max_force, age > 0 ? age : 0);
+        palp_cli_mailbox_put(&l->mailbox, &m, w->flags, w->max_force, age);
         if (latency_us && age > 0) *latency_us = age * 1e6;
         taken++;
       } else if (bad) {

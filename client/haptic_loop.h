@@ -37,7 +37,7 @@ typedef struct palp_cli_mailbox {
   palp_local_model model;
   uint32_t server_flags; /* palp_LM_* of the model */
   double max_force;      /* the phantom's limit, from the model [N] */
-  double age;            /* the model's age on arrival [s]: now - its contact sample's source time; 0 unknown */
+  double age;            /* the model's age on arrival [s]: now - its contact sample's source time; < 0 unknown */
   uint64_t seq;          /* models put so far */
 } palp_cli_mailbox;
 
@@ -54,6 +54,38 @@ int palp_cli_mailbox_take(palp_cli_mailbox *mb, uint64_t *seq, palp_local_model 
  * normal when in contact, a stiffness of at most 1e6 N/m and a force below 1e4 N
  * per entry. Returns 0 or PALP_EINVAL (the sample is dropped and counted). */
 int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out);
+
+/* ---- the per-tick logic, pure: the haptic thread runs it, tests drive it --------------- */
+typedef struct palp_cli_haptic_core {
+  palp_haptic renderer;
+  int compensate;         /* latency compensation on */
+  double hold_after;      /* [s] horizon of a model's stiffness and drift */
+  double max_latency;     /* [s] ages beyond are not trusted */
+  double x_arrival_t, model_age;
+  palp_vec3 offset;       /* device motion made while the force was held [m] */
+  palp_vec3 x_prev;
+  int was_on, holding;
+  /* passivity observer/controller (time-domain, Hannaford & Ryu 2002) */
+  int passivity;          /* on by default */
+  double max_damping;     /* the controller's damping limit [N s/m] */
+  double energy;          /* work done on the device in this contact episode [J]; > 0: energy generated */
+  palp_vec3 f_prev;       /* force rendered at the previous tick [N] */
+  palp_vec3 x_prev_pc;    /* device point at the previous tick [m] */
+  double t_prev;
+  double dissipated;      /* by the controller, total [J] */
+  uint64_t pc_ticks;      /* ticks the controller acted */
+} palp_cli_haptic_core;
+
+/* hold_after 0: max(2 physics periods, 8 ms). The passivity controller is on
+ * with a 20 N s/m damping limit; set core.passivity = 0 to switch it off. */
+int palp_cli_haptic_core_init(palp_cli_haptic_core *c, const palp_haptic_def *render, double physics_rate_hz,
+                              int latency_compensation, double hold_after, double max_latency);
+/* One tick at station time t [s] with the device at x (on: finger on). m: a model
+ * that arrived since the last tick (NULL if none; re-anchored in place), age: its
+ * age on arrival [s] (< 0 unknown). Fills the force to render and (xr) the
+ * renderer's device point; returns palp_haptic_update's result for m (1 taken). */
+int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, double t, palp_local_model *m,
+                              double age, palp_haptic_out *out, palp_vec3 *xr);
 
 /* ---- the haptic thread --------------------------------------------------------------- */
 typedef struct palp_cli_haptic_sample {
@@ -96,6 +128,8 @@ typedef struct palp_cli_haptic_stats {
   uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
   uint64_t held_ticks; /* ticks rendered with the force held (model late) */
+  uint64_t passivity_ticks;  /* ticks the passivity controller damped */
+  double passivity_dissipated; /* energy it took out [J] */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
   uint64_t out_of_range_models;   /* models with any model-validity flag */
   double peak_force, peak_requested; /* [N] rendered / before the limit */
@@ -120,7 +154,7 @@ typedef struct palp_cli_haptic_view {
 typedef struct palp_cli_haptic_loop {
   palp_cli_haptic_def def;
   palp_cli_mailbox mailbox;
-  palp_haptic renderer;
+  palp_cli_haptic_core core;
   pthread_t thread;
   int started;
   atomic_int stop, done;

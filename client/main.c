@@ -448,7 +448,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       fflush(stdout);
     }
     if (!limited && limited_shown && !o->quiet) {
-      printf("[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.1f N)\n", o->name, v.t,
+      printf("[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name, v.t,
              episode_peak);
       fflush(stdout);
     }
@@ -500,8 +500,11 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
          d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
          closed ? reason : "");
   if (hs.limited_ticks)
-    printf("[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.1f N, the device got at most %.1f N\n",
+    printf("[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
            o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
+  if (hs.passivity_ticks)
+    printf("[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
+           "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
     printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range\n",
            o->name, (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models);

@@ -100,9 +100,9 @@ bob=$!
 # Trainee carol palpates by position on phantom 3 (physics at 250 Hz): a simulated
 # haptic device presses 22 mm at 20 mm/s, holds, slides 15 mm along the surface and
 # lifts; her station's 1 kHz haptic thread renders the phantom's push from the
-# server's local contact models, with a 1.5 N safe force it tells her about.
+# server's local contact models, with a 1.2 N safe force it tells her about.
 "$client" --role trainee --domain "$domain" --phantom 3 --name carol \
-  --input sim:slide,depth_mm=22,speed_mm_s=20,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 1.5 \
+  --input sim:slide,depth_mm=22,speed_mm_s=20,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 1.2 \
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
 carol=$!
