@@ -11,6 +11,7 @@
 
 #include "input.h"
 #include "palp.h"
+#include "palp_app.h"
 #include "palp_dds.h"
 #include "station.h"
 #include "view.h"
@@ -35,7 +36,10 @@ typedef struct opts {
   double svg_every, map_every;
   int color, quiet, map, no_map, plot;
   int have_magnitude, have_t_off;
+  palp_app_opts app; /* --version, --dds-config */
 } opts;
+
+#define CLIENT_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_DDS)
 
 static void usage(FILE *f) {
   fprintf(f,
@@ -50,6 +54,7 @@ static void usage(FILE *f) {
           "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
           "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
           "          session on --phantom ID\n");
+  palp_app_common_usage(f, CLIENT_OPTS);
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out) {
@@ -67,6 +72,7 @@ static int num(const char *opt, const char *v, double lo, double hi, double *out
 static int parse(int argc, char **argv, opts *o) {
   *o = (opts){.role = NULL, .name = "", .input = "script", .profile = "paper", .distribution = 2, .polar = 30,
               .azimuth = 40, .timeout = 10, .print_period = 0.5, .color = isatty(STDOUT_FILENO), .map_every = 0.5};
+  palp_app_opts_init(&o->app, "palp-client");
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     double x = 0;
@@ -133,12 +139,16 @@ static int parse(int argc, char **argv, opts *o) {
     if (!strcmp(a, "--no-color")) { o->color = 0; continue; }
     if (!strcmp(a, "--quiet")) { o->quiet = 1; continue; }
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); exit(0); }
+    int common = palp_app_common_opt(&o->app, CLIENT_OPTS, argc, argv, &i);
+    if (common < 0) return -1;
+    if (common) continue;
     fprintf(stderr, "palp-client: unknown option: %s\n", a);
     return -1;
 #undef NUM
 #undef INT
 #undef STR
   }
+  if (o->app.version) return 0;
   if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
     fprintf(stderr, "palp-client: --role: expected trainee, visual or observer\n");
     return -1;
@@ -621,17 +631,21 @@ int main(int argc, char **argv) {
     usage(stderr);
     return 2;
   }
+  if (o.app.version) {
+    palp_app_print_version(stdout, "palp-client");
+    return 0;
+  }
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
-  if (palp_dds_use_config(NULL) < 0) {
-    fprintf(stderr, "palp-client: cannot read the DDS config %s (set CYCLONEDDS_URI)\n", PALP_DDS_DEFAULT_CONFIG);
+  char err[512];
+  if (palp_app_use_dds_config(o.app.dds_config, NULL, NULL, 0, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s (give --dds-config FILE or set CYCLONEDDS_URI)\n", err);
     return 1;
   }
   int trainee = !strcmp(o.role, "trainee"), observer = !strcmp(o.role, "observer");
-  char err[512];
   /* The input source is checked before anything goes on the network. */
   palp_cli_input in;
   memset(&in, 0, sizeof in);

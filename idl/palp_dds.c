@@ -131,7 +131,9 @@ void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len) {
 int palp_dds_use_config(const char *path) {
   const char *cur = getenv("CYCLONEDDS_URI");
   if (cur && *cur) return 0;
-  if (!path) path = PALP_DDS_DEFAULT_CONFIG;
+  /* No compiled-in default: an installed program must not name the source tree
+   * (palp_app_use_dds_config finds the installed loopback config). */
+  if (!path) return PALP_EINVAL;
   char abs[PATH_MAX];
   if (access(path, R_OK) != 0 || !realpath(path, abs)) return PALP_EIO;
   char uri[PATH_MAX + 16];

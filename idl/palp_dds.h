@@ -56,9 +56,10 @@ dds_entity_t palp_dds_session_publisher(dds_entity_t pp, const char *partition);
 dds_entity_t palp_dds_session_subscriber(dds_entity_t pp, const char *partition);
 void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len);
 
-/* Points CYCLONEDDS_URI at the loopback config unless the environment already
- * sets it. path NULL uses the build's config/cyclonedds-loopback.xml. Returns 0
- * or a negative PALP_E* code (the file does not exist). */
+/* Points CYCLONEDDS_URI at the config file path unless the environment already
+ * sets it. Programs use palp_app_use_dds_config (app/palp_app.h), which adds
+ * --dds-config and the installed default; tests pass PALP_DDS_DEFAULT_CONFIG.
+ * Returns 0 or a negative PALP_E* code (path NULL, or the file does not exist). */
 int palp_dds_use_config(const char *path);
 
 /* CLOCK_MONOTONIC in ns; shared by every process on the host, so a contact's

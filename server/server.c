@@ -35,6 +35,7 @@ struct palp_srv {
   palp_srv_config cfg;
   const palp_srv_events *events;
   int verbose;
+  palp_log *log;
   char server_id[64];
   int64_t start_ns;
 
@@ -72,13 +73,13 @@ static int fail(char *err, size_t errlen, const char *fmt, ...) {
 }
 
 static void logf_(const palp_srv *srv, const char *fmt, ...) {
-  if (!srv->verbose) return;
+  if (!srv->verbose && !palp_log_enabled(srv->log, PALP_LOG_DEBUG)) return;
+  char msg[1024];
   va_list ap;
   va_start(ap, fmt);
-  fprintf(stderr, "palp-server: ");
-  vfprintf(stderr, fmt, ap);
-  fputc('\n', stderr);
+  vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  palp_logf(srv->log, srv->verbose ? PALP_LOG_INFO : PALP_LOG_DEBUG, "%s", msg);
 }
 
 /* ---- phantoms and catalogue ------------------------------------------------ */
@@ -293,7 +294,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   remember_closed(srv, &sum, 0);
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
-  fprintf(stderr, "palp-server: session %u closed after %.1f s (%s)\n", s->id, sum.duration, reason);
+  palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
   for (int i = 0; i < MAX_STATIONS; i++)
     if (srv->stations[i].in_use && srv->stations[i].session_id == s->id) srv->stations[i].session_id = 0;
   for (int i = 0; i < srv->session_count; i++)
@@ -365,7 +366,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
                               .contact_topic = srv->topic[PALP_TOPIC_CONTACT],
                               .feedback_topic = srv->topic[PALP_TOPIC_FEEDBACK],
                               .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
-                              .events = srv->events};
+                              .events = srv->events,
+                              .log = srv->log};
     int rc = 0;
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
@@ -394,7 +396,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     reply(srv, rq, s, NULL);
     publish_state(srv, s, 0, NULL, NULL);
     publish_catalogue(srv, ph);
-    fprintf(stderr, "palp-server: session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s\n",
+    palp_log_info(srv->log, "session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s",
             s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
     return;
   }
@@ -422,7 +424,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
     srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
-  fprintf(stderr, "palp-server: station %s joined session %u as %s\n", st->id, s->id,
+  palp_log_info(srv->log, "station %s joined session %u as %s", st->id, s->id,
           rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
 }
 
@@ -500,8 +502,8 @@ static void check_other_servers(palp_srv *srv) {
     for (int i = 0; i < n; i++) {
       const palp_ServerStatus *st = ptr[i];
       if (info[i].valid_data && strcmp(st->server_id, srv->server_id) != 0 && !srv->warned_other_server) {
-        fprintf(stderr, "palp-server: WARNING: another server (%s) runs on domain %u; both answer every join. "
-                        "Give each class its own domain_id.\n", st->server_id, srv->cfg.domain_id);
+        palp_log_warn(srv->log, "another server (%s) runs on domain %u; both answer every join. "
+                                "Give each class its own domain_id.", st->server_id, srv->cfg.domain_id);
         srv->warned_other_server = 1;
       }
     }
@@ -554,6 +556,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->cfg = def->cfg;
   srv->events = def->events;
   srv->verbose = def->verbose;
+  srv->log = def->log;
   srv->next_session_id = 1;
   srv->start_ns = palp_dds_now_ns();
   char host[32] = "host";
@@ -613,7 +616,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     goto fail;
   }
   if (srv->cfg.tick_priority > 0 && !rt_ok)
-    fprintf(stderr, "palp-server: tick_priority %d: SCHED_FIFO refused (needs CAP_SYS_NICE or an rtprio limit); "
+    palp_log_warn(srv->log, "tick_priority %d: SCHED_FIFO refused (needs CAP_SYS_NICE or an rtprio limit); "
                     "tick threads run at normal priority\n", srv->cfg.tick_priority);
   for (int i = 0; i < srv->phantom_count; i++) publish_catalogue(srv, &srv->phantom[i]);
   *rc = 0;
@@ -632,7 +635,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
   const int64_t status_period = (int64_t)(1e9 / srv->cfg.status_rate_hz);
   int64_t next_status = palp_dds_now_ns() + status_period;
   int64_t end = duration > 0 ? palp_dds_now_ns() + (int64_t)(duration * 1e9) : INT64_MAX;
-  fprintf(stderr, "palp-server: %s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions\n",
+  palp_log_info(srv->log, "%s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions",
           srv->server_id, srv->cfg.domain_id, srv->phantom_count, srv->cfg.tick_rate_hz,
           palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
   while (!atomic_load(&srv->stop)) {

@@ -18,6 +18,7 @@
 
 #include "config.h"
 #include "events.h"
+#include "palp_log.h"
 #include "palp.h"
 #include "palp_types.h"
 #include "validate.h"
@@ -58,6 +59,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t participant;
   dds_entity_t contact_topic, feedback_topic, deformation_topic;
   const palp_srv_events *events; /* may be NULL */
+  palp_log *log;                 /* may be NULL (stderr) */
 } palp_srv_session_def;
 
 typedef struct palp_srv_session {
@@ -71,6 +73,7 @@ typedef struct palp_srv_session {
   dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer;
   palp_srv_limits limits;
   const palp_srv_events *events;
+  palp_log *log;
   double log_interval;        /* [s] */
   double deformation_period;  /* [s] */
 
