@@ -69,11 +69,10 @@ function(palp_install_rules)
   install(DIRECTORY DESTINATION ${CMAKE_INSTALL_LOCALSTATEDIR}/lib/palp)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/db/migrations/ DESTINATION ${datadir}/db/migrations)
 
-  # Service units (docs/deploy.md): shipped for reference under share/palp and
-  # where systemd looks for a prefix's units.
-  if(EXISTS ${CMAKE_SOURCE_DIR}/config/systemd)
-    install(DIRECTORY ${CMAKE_SOURCE_DIR}/config/systemd/ DESTINATION ${datadir}/systemd)
-  endif()
+  # Service units (docs/deploy.md), under share/palp/systemd and where systemd looks
+  # for a prefix's units (lib/systemd/system), with the installed paths filled in.
+  configure_file(${CMAKE_SOURCE_DIR}/cmake/install_units.cmake.in ${CMAKE_BINARY_DIR}/install/install_units.cmake @ONLY)
+  install(SCRIPT ${CMAKE_BINARY_DIR}/install/install_units.cmake)
 
   install(FILES ${CMAKE_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)

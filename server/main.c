@@ -211,7 +211,7 @@ int main(int argc, char **argv) {
       *slash = 0;
       mkdir(dir, 0777);
     }
-    rc = palp_srv_db_log_open(def.cfg.database, def.cfg.tick_rate_hz, &log, err, sizeof err);
+    rc = palp_srv_db_log_open(def.cfg.database, def.cfg.tick_rate_hz, &plog, &log, err, sizeof err);
     if (rc < 0) {
       fprintf(stderr, "palp-server: bad configuration: %s: database: %s: %s\n", config_path, def.cfg.database, err);
       return 1;
@@ -222,7 +222,7 @@ int main(int argc, char **argv) {
   palp_srv *srv = palp_srv_create(&def, &rc, err, sizeof err);
   if (!srv) {
     palp_log_error(&plog, "%s: %s", config_path, err);
-    palp_srv_db_log_close(log, stderr);
+    palp_srv_db_log_close(log);
     return 1;
   }
   sc.srv = srv;
@@ -248,7 +248,7 @@ int main(int argc, char **argv) {
     pthread_mutex_unlock(&plog.mu);
   }
   palp_srv_destroy(srv);
-  palp_srv_db_log_close(log, plog.f);
+  palp_srv_db_log_close(log);
   palp_log_info(&plog, "stopped (%s)", sc.signo == SIGINT ? "SIGINT" : sc.signo == SIGTERM ? "SIGTERM" : "end of run");
   palp_log_close(&plog);
   return rc < 0 ? 1 : 0;
