@@ -14,7 +14,8 @@
 
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
-    "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status"};
+    "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status",
+    "palp_server_identity"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -30,6 +31,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_FEEDBACK: return &palp_Feedback_desc;
   case PALP_TOPIC_DEFORMATION: return &palp_Deformation_desc;
   case PALP_TOPIC_SERVER_STATUS: return &palp_ServerStatus_desc;
+  case PALP_TOPIC_SERVER_IDENTITY: return &palp_ServerIdentity_desc;
   default: return NULL;
   }
 }
@@ -42,6 +44,13 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_SESSION_REPLY:
   case PALP_TOPIC_SESSION_STATE:
     /* State that a late joiner must see: the last value per key, kept by the writer. */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    break;
+  case PALP_TOPIC_SERVER_IDENTITY:
+    /* A late server or station sees every live server; a dead one's instance
+     * turns not-alive when its participant's lease expires. */
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);

@@ -27,12 +27,21 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_FEEDBACK,
   PALP_TOPIC_DEFORMATION,
   PALP_TOPIC_SERVER_STATUS,
+  PALP_TOPIC_SERVER_IDENTITY, /* added: several servers on one domain */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 
 /* Liveliness lease of every station writer [s]: automatic, so the DDS stack
  * asserts it; a station that vanishes is seen as not alive after ~this long. */
 #define PALP_DDS_STATION_LEASE_S 0.5
+
+/* Phantom and session ids are qualified by the server that hands them out:
+ * server_number * 2^20 + the server's local id (palp_server_identity). */
+#define PALP_DDS_ID_LOCAL_BITS 20
+#define PALP_DDS_MAX_SERVER_NUMBER 4095u
+#define PALP_DDS_ID(server_number, local) (((uint32_t)(server_number) << PALP_DDS_ID_LOCAL_BITS) | (uint32_t)(local))
+#define PALP_DDS_ID_SERVER(id) ((uint32_t)(id) >> PALP_DDS_ID_LOCAL_BITS)
+#define PALP_DDS_ID_LOCAL(id) ((uint32_t)(id) & ((1u << PALP_DDS_ID_LOCAL_BITS) - 1u))
 
 /* Partition of a session's contact/feedback/deformation traffic. */
 #define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"

@@ -99,8 +99,19 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "max_force",      "force_policy",   "finger_radius_min",
                                        "finger_radius_max", "log_interval", "dds_config",
                                        "database",       "phantoms",       "comment",
-                                       NULL};
+                                       "server_name",    "server_number",  NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "comment", NULL};
+
+int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen) {
+  /* A numbered server puts its number in the high bits of every id it hands out
+   * (PALP_DDS_ID): its own ids must leave them free. */
+  if (cfg->server_number == 0) return 0;
+  for (int i = 0; i < cfg->phantom_count; i++)
+    if (cfg->phantom[i].id > PALP_SRV_MAX_LOCAL_ID)
+      return fail(err, errlen, PALP_EINVAL, "phantoms[%d].id: %u is above %u, the largest id a server with a "
+                  "server_number can qualify", i, cfg->phantom[i].id, PALP_SRV_MAX_LOCAL_ID);
+  return 0;
+}
 
 static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_config *cfg, char *err,
                           size_t errlen) {
@@ -209,7 +220,12 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
       goto out;
     }
   }
+  if ((rc = get_string(root, "server_name", w, 0, cfg->server_name, sizeof cfg->server_name, err, errlen))) goto out;
+  i64 = cfg->server_number;
+  if ((rc = get_int(root, "server_number", w, 0, PALP_SRV_MAX_SERVER_NUMBER, 0, &i64, err, errlen))) goto out;
+  cfg->server_number = (uint32_t)i64;
   rc = parse_phantoms(cJSON_GetObjectItemCaseSensitive(root, "phantoms"), base_dir, cfg, err, errlen);
+  if (!rc) rc = palp_srv_config_check_ids(cfg, err, errlen);
 out:
   cJSON_Delete(root);
   return rc;

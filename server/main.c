@@ -23,6 +23,10 @@ static void usage(FILE *f) {
           "  --config PATH        server configuration (default <data>/config/server.json)\n"
           "  --database PATH      override the config's \"database\" (the SQLite session log)\n"
           "  --domain N           override domain_id\n"
+          "  --server-name NAME   override server_name (identity on the domain; default the host name)\n"
+          "  --server-number N    override server_number (0..4095; the high bits of every phantom/session id)\n"
+          "  --identity-wait S    listen S seconds for servers already on the domain before announcing\n"
+          "                       (default 0.5; a lab network may need 2)\n"
           "  --tick-rate HZ       override tick_rate_hz (100 as in the paper, 1000 for haptics)\n"
           "  --threads N          override tick_threads (0 = one per core)\n"
           "  --rt-priority N      override tick_priority (1..99: SCHED_FIFO tick threads; 0: normal)\n"
@@ -97,6 +101,8 @@ int main(int argc, char **argv) {
   char default_config[PALP_SRV_PATH_MAX];
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-server");
+  const char *server_name = NULL;
+  double server_number = -1, identity_wait = 0.5;
   double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
   int check = 0, verbose = 0, no_db = 0;
   char err[768];
@@ -107,6 +113,9 @@ int main(int argc, char **argv) {
     if (common) continue;
     if (!strcmp(a, "--config") && v) config_path = argv[++i];
     else if (!strcmp(a, "--database") && v) database = argv[++i];
+    else if (!strcmp(a, "--server-name") && v && v[0] && strlen(v) < 64) server_name = argv[++i];
+    else if (!strcmp(a, "--server-number")) bad = parse_num(a, v, 0, 4095, &server_number), i++;
+    else if (!strcmp(a, "--identity-wait")) bad = parse_num(a, v, 0, 60, &identity_wait), i++;
     else if (!strcmp(a, "--domain")) bad = parse_num(a, v, 0, 232, &domain), i++;
     else if (!strcmp(a, "--tick-rate")) bad = parse_num(a, v, 1, 10000, &rate), i++;
     else if (!strcmp(a, "--threads")) bad = parse_num(a, v, 0, 64, &threads), i++;
@@ -156,6 +165,13 @@ int main(int argc, char **argv) {
   if (max_sessions > 0) def.cfg.max_sessions = (int)max_sessions;
   if (prio >= 0) def.cfg.tick_priority = (int)prio;
   if (database) snprintf(def.cfg.database, sizeof def.cfg.database, "%s", database);
+  if (server_name) snprintf(def.cfg.server_name, sizeof def.cfg.server_name, "%s", server_name);
+  if (server_number >= 0) def.cfg.server_number = (uint32_t)server_number;
+  def.identity_wait_s = identity_wait;
+  if (palp_srv_config_check_ids(&def.cfg, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-server: bad configuration: %s: %s\n", config_path, err);
+    return 1;
+  }
   def.verbose = verbose;
   def.log = &plog;
   char dds_chosen[PALP_SRV_PATH_MAX + 32];

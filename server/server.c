@@ -1,5 +1,6 @@
 /* server.c - the classroom server's DDS front end and session bookkeeping. */
 #include "server.h"
+#include "identity.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -36,6 +37,7 @@ struct palp_srv {
   const palp_srv_events *events;
   int verbose;
   palp_log *log;
+  palp_srv_identity *identity;
   char server_id[64];
   int64_t start_ns;
 
@@ -329,6 +331,16 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   publish_state(srv, s, 0, NULL, NULL);
 }
 
+/* With other servers on the domain, a request for a phantom or session this server
+ * does not hold is theirs: no reply (two replies to one station would race). Alone,
+ * the server rejects it with a reason, as it always did. */
+static int not_mine(const palp_srv *srv, const palp_SessionRequest *rq) {
+  if (!palp_srv_identity_peers(srv->identity)) return 0;
+  if (rq->role != palp_ROLE_TRAINEE && rq->session_id)
+    return PALP_DDS_ID_SERVER(rq->session_id) != srv->cfg.server_number;
+  return find_phantom((palp_srv *)srv, rq->phantom_id) == NULL;
+}
+
 static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
   char why[128];
   if (rq->role > palp_ROLE_OBSERVER) {
@@ -347,6 +359,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
   palp_srv_session *s = NULL;
   if (rq->role == palp_ROLE_TRAINEE) {
     palp_srv_phantom *ph = find_phantom(srv, rq->phantom_id);
+    if (!ph && not_mine(srv, rq)) return;
     if (!ph) {
       snprintf(why, sizeof why, "unknown phantom %u", rq->phantom_id);
       reply(srv, rq, NULL, why);
@@ -390,6 +403,9 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
       return;
     }
     srv->next_session_id++;
+    /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
+    if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
+      srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
     st->session_id = s->id;
@@ -409,6 +425,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
       if ((rq->phantom_id == 0 || c->phantom->cfg.id == rq->phantom_id) && (!s || c->id > s->id)) s = c;
     }
   }
+  if (!s && not_mine(srv, rq)) return;
   if (!s) {
     if (rq->session_id)
       snprintf(why, sizeof why, "no open session %u", rq->session_id);
@@ -446,7 +463,7 @@ static void handle_requests(palp_srv *srv) {
             station_leave(srv, st, "left");
             st->in_use = 0;
           }
-          reply(srv, &buf[i], NULL, "left");
+          if (st || !palp_srv_identity_peers(srv->identity)) reply(srv, &buf[i], NULL, "left");
         }
         continue;
       }
@@ -502,8 +519,10 @@ static void check_other_servers(palp_srv *srv) {
     for (int i = 0; i < n; i++) {
       const palp_ServerStatus *st = ptr[i];
       if (info[i].valid_data && strcmp(st->server_id, srv->server_id) != 0 && !srv->warned_other_server) {
-        palp_log_warn(srv->log, "another server (%s) runs on domain %u; both answer every join. "
-                                "Give each class its own domain_id.", st->server_id, srv->cfg.domain_id);
+        /* Harmless with distinct server numbers (identity.h), which refuse to start
+         * otherwise; a server without identities (older palp) would answer every join. */
+        palp_log_info(srv->log, "another server (%s) publishes status on domain %u", st->server_id,
+                      srv->cfg.domain_id);
         srv->warned_other_server = 1;
       }
     }
@@ -557,11 +576,19 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->events = def->events;
   srv->verbose = def->verbose;
   srv->log = def->log;
-  srv->next_session_id = 1;
+  srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
   srv->start_ns = palp_dds_now_ns();
   char host[32] = "host";
   gethostname(host, sizeof host - 1);
   snprintf(srv->server_id, sizeof srv->server_id, "palp-server/%s/%ld", host, (long)getpid());
+  if (!srv->cfg.server_name[0]) snprintf(srv->cfg.server_name, sizeof srv->cfg.server_name, "%s", host);
+  if (palp_srv_config_check_ids(&srv->cfg, err, errlen) < 0) {
+    *rc = PALP_EINVAL;
+    goto fail;
+  }
+  /* Every id this server hands out carries its number (idl/palp_dds.h). */
+  for (int i = 0; i < srv->cfg.phantom_count; i++)
+    srv->cfg.phantom[i].id = PALP_DDS_ID(srv->cfg.server_number, srv->cfg.phantom[i].id);
   srv->sessions = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->sessions);
   srv->loads = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->loads);
   if (!srv->sessions || !srv->loads) {
@@ -618,6 +645,28 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   if (srv->cfg.tick_priority > 0 && !rt_ok)
     palp_log_warn(srv->log, "tick_priority %d: SCHED_FIFO refused (needs CAP_SYS_NICE or an rtprio limit); "
                     "tick threads run at normal priority\n", srv->cfg.tick_priority);
+  {
+    uint32_t ids[PALP_SRV_MAX_PHANTOMS];
+    const char *names[PALP_SRV_MAX_PHANTOMS];
+    for (int i = 0; i < srv->phantom_count; i++) {
+      ids[i] = srv->phantom[i].cfg.id;
+      names[i] = srv->phantom[i].cfg.name;
+    }
+    char instance[64];
+    snprintf(instance, sizeof instance, "%.40s/%ld", host, (long)getpid());
+    palp_srv_identity_def idd = {.participant = srv->pp,
+                                 .topic = srv->topic[PALP_TOPIC_SERVER_IDENTITY],
+                                 .name = srv->cfg.server_name,
+                                 .number = srv->cfg.server_number,
+                                 .instance = instance,
+                                 .phantom_count = srv->phantom_count,
+                                 .phantom_id = ids,
+                                 .phantom_name = names,
+                                 .wait_s = def->identity_wait_s,
+                                 .log = srv->log};
+    srv->identity = palp_srv_identity_create(&idd, rc, err, errlen);
+    if (!srv->identity) goto fail;
+  }
   for (int i = 0; i < srv->phantom_count; i++) publish_catalogue(srv, &srv->phantom[i]);
   *rc = 0;
   return srv;
@@ -635,9 +684,10 @@ int palp_srv_run(palp_srv *srv, double duration) {
   const int64_t status_period = (int64_t)(1e9 / srv->cfg.status_rate_hz);
   int64_t next_status = palp_dds_now_ns() + status_period;
   int64_t end = duration > 0 ? palp_dds_now_ns() + (int64_t)(duration * 1e9) : INT64_MAX;
-  palp_log_info(srv->log, "%s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions",
-          srv->server_id, srv->cfg.domain_id, srv->phantom_count, srv->cfg.tick_rate_hz,
-          palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
+  int result = 0;
+  palp_log_info(srv->log, "%s: server \"%s\" number %u, domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d "
+                "sessions", srv->server_id, srv->cfg.server_name, srv->cfg.server_number, srv->cfg.domain_id,
+                srv->phantom_count, srv->cfg.tick_rate_hz, palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
   while (!atomic_load(&srv->stop)) {
     int64_t now = palp_dds_now_ns();
     if (now >= end) break;
@@ -657,15 +707,22 @@ int palp_srv_run(palp_srv *srv, double duration) {
       }
     }
     if (palp_dds_now_ns() >= next_status) {
+      char why[256];
+      if (palp_srv_identity_poll(srv->identity, why, sizeof why) < 0) {
+        palp_log_error(srv->log, "stopping: %s", why);
+        result = PALP_EINVAL;
+        break;
+      }
       publish_status(srv);
       next_status += status_period;
       if (next_status < palp_dds_now_ns()) next_status = palp_dds_now_ns() + status_period;
     }
   }
   dds_set_guardcondition(srv->stop_gc, false);
-  while (srv->session_count > 0) close_session(srv, srv->sessions[srv->session_count - 1], "server shutdown");
+  while (srv->session_count > 0)
+    close_session(srv, srv->sessions[srv->session_count - 1], result ? "server identity conflict" : "server shutdown");
   publish_status(srv);
-  return 0;
+  return result;
 }
 
 int palp_srv_open_sessions(const palp_srv *srv) { return srv->session_count; }
@@ -695,6 +752,7 @@ void palp_srv_destroy(palp_srv *srv) {
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
   if (srv->pp > 0) dds_delete(srv->pp);
+  palp_srv_identity_destroy(srv->identity);
   for (int i = 0; i < srv->phantom_count; i++) palp_world_destroy(srv->phantom[i].template_world);
   free(srv->sessions);
   free(srv->loads);
