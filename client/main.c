@@ -37,6 +37,8 @@ typedef struct opts {
   int color, quiet, map, no_map, plot;
   int have_magnitude, have_t_off;
   palp_app_opts app; /* --version, --dds-config */
+  const char *phantom_name, *server; /* several servers on one domain */
+  int rejoin;
 } opts;
 
 #define CLIENT_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_DDS)
@@ -53,7 +55,10 @@ static void usage(FILE *f) {
           "          --plot (chart of the feedback force at the end)\n"
           "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
           "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
-          "          session on --phantom ID\n");
+          "          session on --phantom ID\n"
+          "servers:  --server NAME (--phantom ID is that server's local id)  --phantom-name NAME (the least\n"
+          "          busy phantom of that name, on --server if given)  --rejoin (trainee: when the server is\n"
+          "          lost, join a phantom of the same name on another server and go on)\n");
   palp_app_common_usage(f, CLIENT_OPTS);
 }
 
@@ -110,6 +115,9 @@ static int parse(int argc, char **argv, opts *o) {
     INT("--session", 0, 4294967295.0, o->session)
     STR("--name", o->name)
     STR("--trainee", o->trainee)
+    STR("--phantom-name", o->phantom_name)
+    STR("--server", o->server)
+    if (!strcmp(a, "--rejoin")) { o->rejoin = 1; continue; }
     STR("--input", o->input)
     STR("--profile", o->profile)
     INT("--distribution", 1, 4, o->distribution)
@@ -153,8 +161,8 @@ static int parse(int argc, char **argv, opts *o) {
     fprintf(stderr, "palp-client: --role: expected trainee, visual or observer\n");
     return -1;
   }
-  if (!strcmp(o->role, "trainee") && o->phantom == 0) {
-    fprintf(stderr, "palp-client: --phantom: a trainee needs the id of the phantom to palpate\n");
+  if (!strcmp(o->role, "trainee") && o->phantom == 0 && !o->phantom_name) {
+    fprintf(stderr, "palp-client: --phantom: a trainee needs the id (or --phantom-name) of the phantom to palpate\n");
     return -1;
   }
   return 0;
@@ -359,7 +367,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, fb_cond, 0);
   char reason[128] = "";
-  int closed = 0, ended = 0;
+  int closed = 0, ended = 0, rejoins = 0;
   while (!g_stop) {
     int64_t now = palp_dds_now_ns();
     double t = (double)(now - t0) * 1e-9;
@@ -430,6 +438,31 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     }
     if (now >= next_state_check) {
       if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
+        if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
+          /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
+          const uint32_t lost_session = st->session_id, lost_server = PALP_DDS_ID_SERVER(st->phantom_id);
+          dds_delete(fb_cond);
+          palp_cli_station_end_session(st);
+          uint32_t id = 0;
+          char err[256];
+          palp_cli_join j = {.role = palp_ROLE_TRAINEE, .user_name = o->name, .want_feedback = 1, .timeout = o->timeout};
+          if (palp_cli_station_find_phantom(st, ph->name, -1, lost_server, o->timeout, &id, err, sizeof err) == 0 &&
+              (j.phantom_id = id, palp_cli_station_join(st, &j, err, sizeof err)) == 0) {
+            rejoins++;
+            printf("[trainee %s] t=%6.2f s  server of session %u lost; rejoined as session %u on phantom %u \"%s\"\n",
+                   o->name, (double)(palp_dds_now_ns() - t0) * 1e-9, lost_session, st->session_id, id, ph->name);
+            fflush(stdout);
+            fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
+            dds_waitset_attach(ws, fb_cond, 0);
+            memset(release_left, 0, sizeof release_left);
+            memset(down, 0, sizeof down);
+            reason[0] = 0;
+            next_state_check = now + 100000000;
+            continue;
+          }
+          fprintf(stderr, "palp-client: server lost and no other server to rejoin: %s\n", err);
+          fb_cond = 0;
+        }
         closed = 1;
         break;
       }
@@ -442,7 +475,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       drain_feedback(&fx);
     }
   }
-  dds_delete(fb_cond);
+  if (fb_cond > 0) dds_delete(fb_cond);
   dds_delete(ws);
   /* Lift every finger (three times: best-effort), then leave. */
   for (int rep = 0; rep < 3 && !closed; rep++)
@@ -459,9 +492,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
   }
   printf("[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
-         "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s\n",
+         "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s\n",
          o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
-         lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "");
+         lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "",
+         rejoins ? "; rejoined after its server was lost" : "");
   if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
   (void)ended;
@@ -660,6 +694,27 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-client: %s\n", err);
     if (in.close) in.close(in.ctx);
     return 1;
+  }
+  int64_t server_number = -1;
+  if (o.server) { /* --phantom/--session are that server's local ids */
+    uint32_t number = 0;
+    if (palp_cli_station_server_number(&st, o.server, o.timeout, &number, err, sizeof err) < 0) {
+      fprintf(stderr, "palp-client: --server: %s\n", err);
+      if (in.close) in.close(in.ctx);
+      palp_cli_station_close(&st);
+      return 1;
+    }
+    server_number = number;
+    if (o.phantom) o.phantom = PALP_DDS_ID(number, o.phantom);
+    if (o.session) o.session = PALP_DDS_ID(number, o.session);
+  }
+  if (o.phantom_name) {
+    if (palp_cli_station_find_phantom(&st, o.phantom_name, server_number, -1, o.timeout, &o.phantom, err, sizeof err) < 0) {
+      fprintf(stderr, "palp-client: --phantom-name: %s\n", err);
+      if (in.close) in.close(in.ctx);
+      palp_cli_station_close(&st);
+      return 1;
+    }
   }
   palp_cli_join j = {.role = trainee ? palp_ROLE_TRAINEE : observer ? palp_ROLE_OBSERVER : palp_ROLE_VISUAL,
                      .phantom_id = o.phantom,

@@ -24,6 +24,7 @@ struct palp_srv_identity {
   palp_HostedPhantom *hosted;
   palp_log *log;
   peer peers[MAX_PEERS];
+  char conflict[256]; /* sticky: once this server must give way, every poll says so */
 };
 
 static int64_t unix_ns(void) {
@@ -164,7 +165,10 @@ fail:
 }
 
 int palp_srv_identity_poll(palp_srv_identity *id, char *err, size_t errlen) {
-  return id ? take_all(id, 1, err, errlen) : 0;
+  if (!id) return 0;
+  if (!id->conflict[0] && take_all(id, 1, id->conflict, sizeof id->conflict) == 0) return 0;
+  snprintf(err, errlen, "%s", id->conflict);
+  return PALP_EINVAL;
 }
 
 int palp_srv_identity_peers(const palp_srv_identity *id) {

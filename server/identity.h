@@ -43,7 +43,7 @@ palp_srv_identity *palp_srv_identity_create(const palp_srv_identity_def *def, in
 /* Reads what changed: returns 0, or PALP_EINVAL with a message in err when a
  * conflicting server that started before this one appeared (this one must stop). */
 int palp_srv_identity_poll(palp_srv_identity *id, char *err, size_t errlen);
-/* Other servers alive on the domain, as last polled. */
+/* Other servers alive on the domain, as last polled (poll first for the newest). */
 int palp_srv_identity_peers(const palp_srv_identity *id);
 void palp_srv_identity_destroy(palp_srv_identity *id);
 

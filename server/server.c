@@ -335,6 +335,8 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
  * does not hold is theirs: no reply (two replies to one station would race). Alone,
  * the server rejects it with a reason, as it always did. */
 static int not_mine(const palp_srv *srv, const palp_SessionRequest *rq) {
+  char ignored[256]; /* a conflict is acted on by palp_srv_run's next poll */
+  palp_srv_identity_poll(srv->identity, ignored, sizeof ignored);
   if (!palp_srv_identity_peers(srv->identity)) return 0;
   if (rq->role != palp_ROLE_TRAINEE && rq->session_id)
     return PALP_DDS_ID_SERVER(rq->session_id) != srv->cfg.server_number;
