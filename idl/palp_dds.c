@@ -15,7 +15,7 @@
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
     "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status",
-    "palp_server_identity"};
+    "palp_server_identity", "palp_station_request"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -32,6 +32,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_DEFORMATION: return &palp_Deformation_desc;
   case PALP_TOPIC_SERVER_STATUS: return &palp_ServerStatus_desc;
   case PALP_TOPIC_SERVER_IDENTITY: return &palp_ServerIdentity_desc;
+  case PALP_TOPIC_STATION_REQUEST: return &palp_StationRequest_desc;
   default: return NULL;
   }
 }
@@ -56,6 +57,7 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
     break;
   case PALP_TOPIC_SESSION_REQUEST:
+  case PALP_TOPIC_STATION_REQUEST:
     /* Transient-local so a request written before the server's reader matched
      * is still delivered; automatic liveliness tells the server when the station
      * is gone. */

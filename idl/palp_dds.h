@@ -28,6 +28,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_DEFORMATION,
   PALP_TOPIC_SERVER_STATUS,
   PALP_TOPIC_SERVER_IDENTITY, /* added: several servers on one domain */
+  PALP_TOPIC_STATION_REQUEST, /* added: a request keyed by 8 bytes, disposable by any vendor */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 

@@ -3,10 +3,12 @@
 #include "identity.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <dds/dds.h>
@@ -24,6 +26,8 @@ typedef struct station {
   int role;            /* palp_Role */
   uint32_t session_id; /* 0: not in a session */
   int want_feedback, want_deformation;
+  int keyed;           /* last request came on palp_station_request */
+  dds_instance_handle_t ih; /* its instance there (keyed by station_key) */
 } station;
 
 typedef struct closed_session {
@@ -46,6 +50,12 @@ struct palp_srv {
 
   dds_entity_t pp;
   dds_entity_t topic[PALP_TOPIC_COUNT];
+  dds_entity_t station_request_r, station_request_rc;
+  /* palp_station_request writers whose liveliness lapsed (Cyclone's listener thread
+   * -> main thread): tells a crash from a dispose, which Cyclone reports alike. */
+  pthread_mutex_t lost_mu;
+  dds_instance_handle_t lost[64];
+  unsigned lost_n;
   dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r;
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
@@ -408,6 +418,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
     /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
     if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
       srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
+  pthread_mutex_init(&srv->lost_mu, NULL);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
     st->session_id = s->id;
@@ -447,6 +458,102 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq) {
           rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
 }
 
+/* A request instance that turned not-alive while its writer is still matched was
+ * disposed on purpose: a goodbye (dispose alone is enough, as for any DDS entity).
+ * A writer that is gone (lease expired) means the station vanished. */
+static void on_station_liveliness(dds_entity_t reader, const dds_liveliness_changed_status_t st, void *arg) {
+  (void)reader;
+  palp_srv *srv = arg;
+  if ((st.not_alive_count_change > 0 || st.alive_count_change < 0) && st.last_publication_handle) {
+    pthread_mutex_lock(&srv->lost_mu);
+    srv->lost[srv->lost_n++ % 64] = st.last_publication_handle;
+    pthread_mutex_unlock(&srv->lost_mu);
+  }
+}
+
+static int station_writer_lost(palp_srv *srv, dds_instance_handle_t w) {
+  int lost = 0;
+  pthread_mutex_lock(&srv->lost_mu);
+  for (unsigned i = 0; i < 64 && i < srv->lost_n; i++) lost |= srv->lost[i] == w;
+  pthread_mutex_unlock(&srv->lost_mu);
+  return lost;
+}
+
+/* Cyclone 0.10 reports a dispose and a writer whose liveliness lapsed (autodispose)
+ * alike, as a disposed instance, and unregisters the lapsed writer's instances just
+ * before it calls the liveliness listener. So a disposed instance is a goodbye only
+ * if its writer is still matched and, a moment later, has not lost its liveliness. */
+static const char *station_not_alive_reason(palp_srv *srv, const dds_sample_info_t *info) {
+  const char *lost = "lost (liveliness lease expired)";
+  if (info->instance_state != DDS_IST_NOT_ALIVE_DISPOSED || !info->publication_handle) return lost;
+  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(srv->station_request_r, info->publication_handle);
+  if (!w) return lost;
+  dds_builtintopic_free_endpoint(w);
+  const struct timespec grace = {0, 50000000}; /* the listener runs right after the unregister */
+  nanosleep(&grace, NULL);
+  return station_writer_lost(srv, info->publication_handle) ? lost : "left (request disposed)";
+}
+
+static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, station **out_st) {
+  if (rq->op == palp_OP_JOIN) {
+    handle_join(srv, rq);
+    if (out_st) *out_st = find_station(srv, rq->station_id, 0);
+    return;
+  }
+  station *st = find_station(srv, rq->station_id, 0);
+  if (st) {
+    station_leave(srv, st, "left");
+    st->in_use = 0;
+  }
+  if (st || !palp_srv_identity_peers(srv->identity)) reply(srv, rq, NULL, "left");
+  if (out_st) *out_st = NULL;
+}
+
+/* palp_station_request: the same requests, keyed by 8 bytes (docs/interop.md). */
+static void handle_station_requests(palp_srv *srv) {
+  enum { N = 16 };
+  palp_StationRequest buf[N];
+  void *ptr[N];
+  dds_sample_info_t info[N];
+  for (int i = 0; i < N; i++) ptr[i] = &buf[i];
+  int n;
+  while ((n = dds_take(srv->station_request_r, ptr, info, N, N)) > 0) {
+    for (int i = 0; i < n; i++) {
+      if (info[i].valid_data) {
+        const palp_StationRequest *s = &buf[i];
+        palp_SessionRequest rq;
+        memset(&rq, 0, sizeof rq);
+        snprintf(rq.station_id, sizeof rq.station_id, "%s", s->station_id);
+        rq.request_seq = s->request_seq;
+        rq.op = s->op;
+        rq.role = s->role;
+        rq.phantom_id = s->phantom_id;
+        rq.session_id = s->session_id;
+        snprintf(rq.user_name, sizeof rq.user_name, "%s", s->user_name);
+        rq.want_feedback = s->want_feedback;
+        rq.want_deformation = s->want_deformation;
+        station *st = NULL;
+        handle_request_sample(srv, &rq, &st);
+        if (st) {
+          st->keyed = 1;
+          st->ih = info[i].instance_handle;
+        }
+        continue;
+      }
+      if (info[i].instance_state == DDS_IST_ALIVE) continue;
+      /* By instance handle: once its last sample is taken, a "no writers" instance
+       * may be gone, and its key with it. */
+      for (int k = 0; k < MAX_STATIONS; k++) {
+        station *st = &srv->stations[k];
+        if (!st->in_use || !st->keyed || st->ih != info[i].instance_handle) continue;
+        station_leave(srv, st, station_not_alive_reason(srv, &info[i]));
+        st->in_use = 0;
+      }
+    }
+    if (n < N) break;
+  }
+}
+
 static void handle_requests(palp_srv *srv) {
   enum { N = 16 };
   palp_SessionRequest buf[N];
@@ -454,6 +561,7 @@ static void handle_requests(palp_srv *srv) {
   dds_sample_info_t info[N];
   for (int i = 0; i < N; i++) ptr[i] = &buf[i];
   int n;
+  handle_station_requests(srv);
   while ((n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
@@ -478,7 +586,9 @@ static void handle_requests(palp_srv *srv) {
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
        * forgets it), so reaching here means it vanished: its writer's automatic
        * liveliness (0.5 s) or its participant's lease (1 s) expired, and
-       * Cyclone unregistered (or, autodispose, disposed) its instance. */
+       * Cyclone unregistered (or, autodispose, disposed) its instance. Cyclone
+       * reports a lapsed writer's instances as disposed, so a dispose alone cannot
+       * be told from a crash on this topic: palp_station_request can. */
       station_leave(srv, st, "lost (liveliness lease expired)");
       st->in_use = 0;
     }
@@ -629,6 +739,21 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->waitset = dds_create_waitset(srv->pp);
   srv->stop_gc = dds_create_guardcondition(srv->pp);
   srv->request_rc = dds_create_readcondition(srv->request_r, DDS_ANY_STATE);
+  srv->station_request_r =
+      palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_STATION_REQUEST], PALP_TOPIC_STATION_REQUEST);
+  srv->station_request_rc = dds_create_readcondition(srv->station_request_r, DDS_ANY_STATE);
+  if (srv->station_request_r > 0) {
+    dds_listener_t *lv = dds_create_listener(NULL);
+    dds_lset_liveliness_changed_arg(lv, on_station_liveliness, srv, true);
+    dds_set_listener(srv->station_request_r, lv);
+    dds_delete_listener(lv);
+  }
+  if (srv->station_request_r < 0 || srv->station_request_rc < 0 ||
+      dds_waitset_attach(srv->waitset, srv->station_request_rc, 1) < 0) {
+    *rc = PALP_EIO;
+    fail(err, errlen, "cannot create the palp_station_request reader");
+    goto fail;
+  }
   if (srv->catalogue_w < 0 || srv->request_r < 0 || srv->reply_w < 0 || srv->state_w < 0 || srv->status_w < 0 ||
       srv->status_r < 0 ||
       srv->waitset < 0 || srv->stop_gc < 0 || srv->request_rc < 0 ||
@@ -759,5 +884,6 @@ void palp_srv_destroy(palp_srv *srv) {
   free(srv->sessions);
   free(srv->loads);
   free(srv->closed);
+  pthread_mutex_destroy(&srv->lost_mu);
   free(srv);
 }
