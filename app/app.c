@@ -136,10 +136,12 @@ int palp_app_common_opt(palp_app_opts *o, unsigned which, int argc, char **argv,
   }
   if ((which & PALP_APP_OPT_VERBOSE) && !strcmp(a, "--verbose")) {
     o->log_level = PALP_LOG_DEBUG;
+    o->log_level_set = 1;
     return 1;
   }
   if ((which & PALP_APP_OPT_VERBOSE) && !strcmp(a, "--quiet")) {
     o->log_level = PALP_LOG_WARN;
+    o->log_level_set = 1;
     return 1;
   }
   const char **dst = NULL;
@@ -150,6 +152,7 @@ int palp_app_common_opt(palp_app_opts *o, unsigned which, int argc, char **argv,
       fprintf(stderr, "%s: --log-level: expected error, warn, info or debug, got \"%s\"\n", o->prog, v ? v : "");
       return -1;
     }
+    o->log_level_set = 1;
     (*i)++;
     return 1;
   }

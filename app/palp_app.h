@@ -58,6 +58,7 @@ typedef struct palp_app_opts {
   const char *log_file;      /* --log-file FILE; NULL = stderr */
   const char *dds_config;    /* --dds-config FILE; NULL = see palp_app_use_dds_config */
   int version;               /* --version seen */
+  int log_level_set;         /* --log-level, --verbose or --quiet given */
 } palp_app_opts;
 
 void palp_app_opts_init(palp_app_opts *o, const char *prog);

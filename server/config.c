@@ -99,7 +99,7 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "max_force",      "force_policy",   "finger_radius_min",
                                        "finger_radius_max", "log_interval", "dds_config",
                                        "database",       "phantoms",       "comment",
-                                       "server_name",    "server_number",  NULL};
+                                       "server_name",    "server_number",  "log_level",      NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "comment", NULL};
 
 int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen) {
@@ -219,6 +219,12 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
       rc = fail(err, errlen, PALP_EINVAL, "database: path too long");
       goto out;
     }
+  }
+  if ((rc = get_string(root, "log_level", w, 0, cfg->log_level, sizeof cfg->log_level, err, errlen))) goto out;
+  if (cfg->log_level[0] && strcmp(cfg->log_level, "error") && strcmp(cfg->log_level, "warn") &&
+      strcmp(cfg->log_level, "warning") && strcmp(cfg->log_level, "info") && strcmp(cfg->log_level, "debug")) {
+    rc = fail(err, errlen, PALP_EINVAL, "log_level: \"%s\" is not error, warn, info or debug", cfg->log_level);
+    goto out;
   }
   if ((rc = get_string(root, "server_name", w, 0, cfg->server_name, sizeof cfg->server_name, err, errlen))) goto out;
   i64 = cfg->server_number;

@@ -43,6 +43,7 @@ typedef struct palp_srv_config {
   double log_interval;         /* minimum seconds between two log lines of one reject reason */
   char dds_config[PALP_SRV_PATH_MAX]; /* Cyclone XML, resolved against the config's directory */
   char database[PALP_SRV_PATH_MAX];   /* SQLite session log; "" disables logging */
+  char log_level[16];          /* "error", "warn", "info", "debug"; "" = not set (info); re-read on SIGHUP */
   char server_name[64];        /* identity on the domain; "" = the host name */
   uint32_t server_number;      /* 0..4095: high bits of every phantom and session id it hands out */
   int phantom_count;

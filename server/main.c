@@ -35,7 +35,7 @@ static void usage(FILE *f) {
           "  --check              validate the configuration and the scenes, then exit\n"
           "  --no-db              do not write the session log (config \"database\")\n"
           "signals: SIGINT/SIGTERM stop cleanly (every session closed and summarised); SIGHUP re-opens\n"
-          "         the --log-file (log rotation) and logs the open sessions; sessions go on\n");
+          "         the --log-file (log rotation) and re-reads the config's log_level; sessions go on\n");
   palp_app_common_usage(f, SERVER_OPTS);
 }
 
@@ -47,8 +47,35 @@ typedef struct sig_ctx {
   int fd[2]; /* [0] read by signal_main, [1] written by the handler and by main */
   palp_srv *srv;
   palp_log *log;
+  const char *config_path;
+  palp_srv_config *file_cfg; /* the config file as last read (before command-line overrides) */
+  int level_fixed;           /* --log-level/--verbose/--quiet given: the file's log_level is ignored */
   int signo;
 } sig_ctx;
+
+/* SIGHUP: what can change without touching a session is re-read (log_level); any
+ * other change is reported and waits for a restart, which closes sessions cleanly. */
+static void reload_config(sig_ctx *c) {
+  static palp_srv_config nc; /* one signal thread; too large for comfort on its stack */
+  char e[512];
+  if (palp_srv_config_load(c->config_path, &nc, e, sizeof e) < 0) {
+    palp_log_error(c->log, "SIGHUP: %s: %s; the running configuration stays", c->config_path, e);
+    return;
+  }
+  palp_log_level lv;
+  if (!c->level_fixed && nc.log_level[0] && palp_log_parse_level(nc.log_level, &lv) == 0 &&
+      lv != palp_log_get_level(c->log)) {
+    /* At WARN, so the change shows whichever way it goes. */
+    palp_log_warn(c->log, "SIGHUP: log level %s -> %s", palp_log_level_name(palp_log_get_level(c->log)),
+                  palp_log_level_name(lv));
+    palp_log_set_level(c->log, lv);
+  }
+  snprintf(c->file_cfg->log_level, sizeof c->file_cfg->log_level, "%s", nc.log_level);
+  if (memcmp(c->file_cfg, &nc, sizeof nc) != 0)
+    palp_log_warn(c->log, "SIGHUP: %s changed beyond log_level; a restart applies it (sessions close cleanly)",
+                  c->config_path);
+  *c->file_cfg = nc;
+}
 
 static int sig_pipe_w = -1; /* the handler's only state: a process-wide fd is unavoidable */
 
@@ -75,6 +102,7 @@ static void *signal_main(void *arg) {
                                  c->log->path);
       else palp_log_info(c->log, "SIGHUP: log re-opened%s%s; sessions continue", c->log->path[0] ? " " : "",
                          c->log->path);
+      reload_config(c);
       continue;
     }
     c->signo = b;
@@ -159,6 +187,12 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-server: bad configuration: %s\n", err);
     return 1;
   }
+  static palp_srv_config file_cfg; /* for SIGHUP's comparison */
+  file_cfg = def.cfg;
+  palp_log_level file_level;
+  if (!ao.log_level_set && def.cfg.log_level[0] && palp_log_parse_level(def.cfg.log_level, &file_level) == 0) {
+    palp_log_set_level(&plog, file_level);
+  }
   if (domain >= 0) def.cfg.domain_id = (uint32_t)domain;
   if (rate > 0) def.cfg.tick_rate_hz = rate;
   if (threads >= 0) def.cfg.tick_threads = (int)threads;
@@ -215,6 +249,9 @@ int main(int argc, char **argv) {
   sigaction(SIGTERM, &sa, NULL);
   sigaction(SIGHUP, &sa, NULL); /* default action would kill us with every session open */
   sc.log = &plog;
+  sc.config_path = config_path;
+  sc.file_cfg = &file_cfg;
+  sc.level_fixed = ao.log_level_set;
   palp_log_info(&plog, "%s starting: config %s, DDS config %s", palp_app_version(), config_path, dds_chosen);
 
   palp_srv_db_log *log = NULL;

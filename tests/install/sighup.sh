@@ -4,7 +4,9 @@
 # a new log file, and the session goes on (the trainee finishes its 3 N press and sees
 # the feedback). A second trainee is still pressing when SIGTERM stops the server: its
 # session is closed ("server shutdown"), summarised in the log, and ended in the
-# database (not left "(running)"). palp-recorder re-opens its log on SIGHUP the same way.
+# database (not left "(running)"). SIGHUP also re-reads the config's log_level: set to "warn",
+# the next session's INFO line is not written; back to "info", lines return. palp-recorder
+# re-opens its log on SIGHUP the same way.
 # usage: sighup.sh PALP_SERVER PALP_CLIENT PALP_REVIEW PALP_RECORDER DDS_CONFIG DOMAIN
 set -u
 server=$1 client=$2 review=$3 recorder=$4 dds=$5 domain=$6
@@ -20,7 +22,15 @@ fail=0
 ok() { echo "ok   $*"; }
 bad() { echo "FAIL $*"; fail=1; }
 unset CYCLONEDDS_URI
-"$server" --dds-config "$dds" --domain "$domain" --database "$work/s.db" --log-file "$work/server.log" \
+cfgdir=$(cd "$(dirname "$dds")" && pwd)
+mkcfg() { # log_level
+  sed -e "s|\"paper_step.json\"|\"$cfgdir/paper_step.json\"|g" \
+      -e "s|\"dds_config\": \"cyclonedds-loopback.xml\"|\"dds_config\": \"$cfgdir/cyclonedds-loopback.xml\", \"log_level\": \"$1\"|" \
+      "$cfgdir/server.json" > "$work/server.json.new" && mv "$work/server.json.new" "$work/server.json"
+}
+mkcfg info
+grep -q '"log_level": "info"' "$work/server.json" || { echo "FAIL cannot make the test config"; exit 1; }
+"$server" --config "$work/server.json" --dds-config "$dds" --domain "$domain" --database "$work/s.db" --log-file "$work/server.log" \
   > "$work/server.out" 2>&1 &
 spid=$!
 "$recorder" --dds-config "$dds" --domain "$domain" --db "$work/rec.db" --log-file "$work/recorder.log" \
@@ -47,7 +57,18 @@ n=$(grep -c "SIGHUP: log re-opened" "$work/server.log" 2>/dev/null || echo 0)
 [ "$(grep -cE "session [0-9]+ opened" "$work/server.log.1")" -eq 2 ] && ! grep -qE "session [0-9]+ opened" "$work/server.log" \
   && ok "the rotated file kept the lines before SIGHUP" || bad "rotation split"
 grep -q "SIGHUP: log re-opened" "$work/recorder.log" 2>/dev/null && ok "recorder wrote to a new log file" || bad "recorder log"
+mkcfg warn
+kill -HUP "$spid"
 wait "$ann"; rc=$?
+sleep 0.3
+grep -q "SIGHUP: log level INFO -> WARN" "$work/server.log" && ok "SIGHUP re-read log_level: INFO -> WARN" || bad "log level not re-read"
+grep -q 'opened: trainee "hup-ann"' "$work/server.log.1" && ! grep -qE "session [0-9]+ closed after .*trainee station left" "$work/server.log" \
+  && ok "at WARN the session's INFO close line was not written" || bad "INFO line written at WARN"
+mkcfg info
+kill -HUP "$spid"
+sleep 0.3
+grep -q "SIGHUP: log level WARN -> INFO" "$work/server.log" && ok "and back: WARN -> INFO" || bad "log level not restored"
+grep -q "changed beyond log_level" "$work/server.log" && bad "a log_level-only change was reported as more" || true
 if [ $rc -eq 0 ] && grep -q "peak feedback 3\.[0-9]* N" "$work/ann.out"; then
   ok "the session across SIGHUP went on to its end: $(grep 'peak feedback' "$work/ann.out")"
 else
