@@ -1,5 +1,5 @@
-/* test_app.c - the shared program support (app/): one DDS-config rule, the data
 #define _DEFAULT_SOURCE /* realpath */
+/* test_app.c - the shared program support (app/): one DDS-config rule, the data
  * directory, and the levelled log's line format, levels and rotation. */
 #include <regex.h>
 #include <stdio.h>
