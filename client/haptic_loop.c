@@ -64,11 +64,11 @@ int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *
     if (!isfinite(in->stiffness[i]) || fabs(in->stiffness[i]) > 1e6) return PALP_EINVAL;
   const palp_vec3 f = vec(in->force), n = vec(in->normal);
   if (len3(f) > 1e4 || len3(vec(in->device)) > 10.0 || len3(vec(in->drift)) > 100.0) return PALP_EINVAL;
-  if (in->contact && fabs(len3(n) - 1.0) > 1e-3) return PALP_EINVAL;
+  if (in->in_contact && fabs(len3(n) - 1.0) > 1e-3) return PALP_EINVAL;
   memset(out, 0, sizeof *out);
   out->time = in->time;
   out->period = in->period;
-  out->contact = in->contact ? 1 : 0;
+  out->contact = in->in_contact ? 1 : 0;
   out->triangles = in->triangles;
   out->device = vec(in->device);
   out->proxy = vec(in->proxy);

@@ -12,6 +12,7 @@
 #include "haptic_loop.h"
 #include "input.h"
 #include "palp.h"
+#include "palp_app.h"
 #include "palp_dds.h"
 #include "station.h"
 #include "view.h"
@@ -40,7 +41,12 @@ typedef struct opts {
   const char *trace_csv;
   int color, quiet, map, no_map, plot;
   int have_magnitude, have_t_off;
+  palp_app_opts app; /* --version, --dds-config */
+  const char *phantom_name, *server; /* several servers on one domain */
+  int rejoin;
 } opts;
+
+#define CLIENT_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_DDS)
 
 static void usage(FILE *f) {
   fprintf(f,
@@ -63,7 +69,11 @@ static void usage(FILE *f) {
           "          polar=0,azimuth=0,radius_mm=8]\n"
           "visual:   --map (observer too)  --no-map  --map-every S  --no-color  --svg FILE  --svg-every S\n"
           "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
-          "          session on --phantom ID\n");
+          "          session on --phantom ID\n"
+          "servers:  --server NAME (--phantom ID is that server's local id)  --phantom-name NAME (the least\n"
+          "          busy phantom of that name, on --server if given)  --rejoin (trainee: when the server is\n"
+          "          lost, join a phantom of the same name on another server and go on)\n");
+  palp_app_common_usage(f, CLIENT_OPTS);
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out) {
@@ -81,6 +91,7 @@ static int num(const char *opt, const char *v, double lo, double hi, double *out
 static int parse(int argc, char **argv, opts *o) {
   *o = (opts){.role = NULL, .name = "", .input = "script", .profile = "paper", .distribution = 2, .polar = 30,
               .azimuth = 40, .timeout = 10, .print_period = 0.5, .color = isatty(STDOUT_FILENO), .map_every = 0.5};
+  palp_app_opts_init(&o->app, "palp-client");
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     double x = 0;
@@ -120,6 +131,9 @@ static int parse(int argc, char **argv, opts *o) {
     STR("--trainee", o->trainee)
     STR("--pki", o->pki)
     STR("--identity", o->identity)
+    STR("--phantom-name", o->phantom_name)
+    STR("--server", o->server)
+    if (!strcmp(a, "--rejoin")) { o->rejoin = 1; continue; }
     STR("--input", o->input)
     STR("--profile", o->profile)
     INT("--distribution", 1, 4, o->distribution)
@@ -153,18 +167,22 @@ static int parse(int argc, char **argv, opts *o) {
     if (!strcmp(a, "--no-color")) { o->color = 0; continue; }
     if (!strcmp(a, "--quiet")) { o->quiet = 1; continue; }
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) { usage(stdout); exit(0); }
+    int common = palp_app_common_opt(&o->app, CLIENT_OPTS, argc, argv, &i);
+    if (common < 0) return -1;
+    if (common) continue;
     fprintf(stderr, "palp-client: unknown option: %s\n", a);
     return -1;
 #undef NUM
 #undef INT
 #undef STR
   }
+  if (o->app.version) return 0;
   if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
     fprintf(stderr, "palp-client: --role: expected trainee, visual or observer\n");
     return -1;
   }
-  if (!strcmp(o->role, "trainee") && o->phantom == 0) {
-    fprintf(stderr, "palp-client: --phantom: a trainee needs the id of the phantom to palpate\n");
+  if (!strcmp(o->role, "trainee") && o->phantom == 0 && !o->phantom_name) {
+    fprintf(stderr, "palp-client: --phantom: a trainee needs the id (or --phantom-name) of the phantom to palpate\n");
     return -1;
   }
   return 0;
@@ -548,7 +566,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, fb_cond, 0);
   char reason[128] = "";
-  int closed = 0, ended = 0;
+  int closed = 0, ended = 0, rejoins = 0;
   while (!g_stop) {
     int64_t now = palp_dds_now_ns();
     double t = (double)(now - t0) * 1e-9;
@@ -619,6 +637,31 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     }
     if (now >= next_state_check) {
       if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
+        if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
+          /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
+          const uint32_t lost_session = st->session_id, lost_server = PALP_DDS_ID_SERVER(st->phantom_id);
+          dds_delete(fb_cond);
+          palp_cli_station_end_session(st);
+          uint32_t id = 0;
+          char err[256];
+          palp_cli_join j = {.role = palp_ROLE_TRAINEE, .user_name = o->name, .want_feedback = 1, .timeout = o->timeout};
+          if (palp_cli_station_find_phantom(st, ph->name, -1, lost_server, o->timeout, &id, err, sizeof err) == 0 &&
+              (j.phantom_id = id, palp_cli_station_join(st, &j, err, sizeof err)) == 0) {
+            rejoins++;
+            printf("[trainee %s] t=%6.2f s  server of session %u lost; rejoined as session %u on phantom %u \"%s\"\n",
+                   o->name, (double)(palp_dds_now_ns() - t0) * 1e-9, lost_session, st->session_id, id, ph->name);
+            fflush(stdout);
+            fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
+            dds_waitset_attach(ws, fb_cond, 0);
+            memset(release_left, 0, sizeof release_left);
+            memset(down, 0, sizeof down);
+            reason[0] = 0;
+            next_state_check = now + 100000000;
+            continue;
+          }
+          fprintf(stderr, "palp-client: server lost and no other server to rejoin: %s\n", err);
+          fb_cond = 0;
+        }
         closed = 1;
         break;
       }
@@ -631,7 +674,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       drain_feedback(&fx);
     }
   }
-  dds_delete(fb_cond);
+  if (fb_cond > 0) dds_delete(fb_cond);
   dds_delete(ws);
   /* Lift every finger (three times: best-effort), then leave. */
   for (int rep = 0; rep < 3 && !closed; rep++)
@@ -648,9 +691,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
   }
   printf("[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
-         "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s\n",
+         "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s\n",
          o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
-         lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "");
+         lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "",
+         rejoins ? "; rejoined after its server was lost" : "");
   if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
   (void)ended;
@@ -821,17 +865,21 @@ int main(int argc, char **argv) {
     usage(stderr);
     return 2;
   }
+  if (o.app.version) {
+    palp_app_print_version(stdout, "palp-client");
+    return 0;
+  }
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
-  if (palp_dds_use_config(NULL) < 0) {
-    fprintf(stderr, "palp-client: cannot read the DDS config %s (set CYCLONEDDS_URI)\n", PALP_DDS_DEFAULT_CONFIG);
+  char err[512];
+  if (palp_app_use_dds_config(o.app.dds_config, NULL, NULL, 0, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-client: %s (give --dds-config FILE or set CYCLONEDDS_URI)\n", err);
     return 1;
   }
   int trainee = !strcmp(o.role, "trainee"), observer = !strcmp(o.role, "observer");
-  char err[512];
   /* The input source is checked before anything goes on the network. */
   palp_cli_input in;
   memset(&in, 0, sizeof in);
@@ -864,6 +912,27 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-client: %s\n", err);
     if (in.close) in.close(in.ctx);
     return 1;
+  }
+  int64_t server_number = -1;
+  if (o.server) { /* --phantom/--session are that server's local ids */
+    uint32_t number = 0;
+    if (palp_cli_station_server_number(&st, o.server, o.timeout, &number, err, sizeof err) < 0) {
+      fprintf(stderr, "palp-client: --server: %s\n", err);
+      if (in.close) in.close(in.ctx);
+      palp_cli_station_close(&st);
+      return 1;
+    }
+    server_number = number;
+    if (o.phantom) o.phantom = PALP_DDS_ID(number, o.phantom);
+    if (o.session) o.session = PALP_DDS_ID(number, o.session);
+  }
+  if (o.phantom_name) {
+    if (palp_cli_station_find_phantom(&st, o.phantom_name, server_number, -1, o.timeout, &o.phantom, err, sizeof err) < 0) {
+      fprintf(stderr, "palp-client: --phantom-name: %s\n", err);
+      if (in.close) in.close(in.ctx);
+      palp_cli_station_close(&st);
+      return 1;
+    }
   }
   palp_cli_join j = {.role = trainee ? palp_ROLE_TRAINEE : observer ? palp_ROLE_OBSERVER : palp_ROLE_VISUAL,
                      .phantom_id = o.phantom,

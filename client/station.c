@@ -95,7 +95,9 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
     int n = dds_read(st->catalogue_r, ptr, info, 8, 8);
     for (int i = 0; i < n && result != 0; i++) {
       const palp_Phantom *p = ptr[i];
-      if (!info[i].valid_data || (phantom_id && p->phantom_id != phantom_id)) continue;
+      /* Not alive: its server is gone (several servers on one domain). */
+      if (!info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE || (phantom_id && p->phantom_id != phantom_id))
+        continue;
       /* From the network: checked before any index in it is used (a forged entry
        * with bad triangle indices crashed the visual station). */
       char why[200];
@@ -265,4 +267,69 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
       }
     }
   return closed;
+}
+
+int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_t server_number,
+                                  int64_t exclude_server, double timeout, uint32_t *out_id, char *err, size_t errlen) {
+  const int64_t start = palp_dds_now_ns(), end = start + (int64_t)(timeout * 1e9);
+  int64_t settle = INT64_MAX; /* after the first match, 0.3 s for the other servers' entries */
+  uint32_t best = 0, best_sessions = UINT32_MAX;
+  while (palp_dds_now_ns() < end && palp_dds_now_ns() < settle) {
+    void *ptr[16] = {NULL};
+    dds_sample_info_t info[16];
+    int n = dds_read(st->catalogue_r, ptr, info, 16, 16);
+    for (int i = 0; i < n; i++) {
+      const palp_Phantom *p = ptr[i];
+      if (!info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE || strcmp(p->name, name) != 0) continue;
+      const uint32_t srvno = PALP_DDS_ID_SERVER(p->phantom_id);
+      if ((server_number >= 0 && srvno != (uint32_t)server_number) || (exclude_server >= 0 && srvno == (uint32_t)exclude_server))
+        continue;
+      /* The least busy phantom of that name: a class spreads over the servers. */
+      if (p->active_sessions < best_sessions || (p->active_sessions == best_sessions && p->phantom_id < best)) {
+        best = p->phantom_id;
+        best_sessions = p->active_sessions;
+      }
+    }
+    if (n > 0) dds_return_loan(st->catalogue_r, ptr, n);
+    if (best && settle == INT64_MAX) settle = palp_dds_now_ns() + DDS_MSECS(300);
+    nap(0.05);
+  }
+  if (!best)
+    return fail(err, errlen, PALP_EIO, "no phantom named \"%s\"%s within %.1f s", name,
+                exclude_server >= 0 ? " on another server" : "", timeout);
+  *out_id = best;
+  return 0;
+}
+
+int palp_cli_station_server_number(palp_cli_station *st, const char *server_name, double timeout, uint32_t *out,
+                                   char *err, size_t errlen) {
+  dds_entity_t r =
+      palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SERVER_IDENTITY], PALP_TOPIC_SERVER_IDENTITY);
+  if (r < 0) return fail(err, errlen, PALP_EIO, "cannot read the server identities");
+  const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
+  int found = 0;
+  while (!found && palp_dds_now_ns() < end) {
+    void *ptr[8] = {NULL};
+    dds_sample_info_t info[8];
+    int n = dds_read(r, ptr, info, 8, 8);
+    for (int i = 0; i < n; i++) {
+      const palp_ServerIdentity *s = ptr[i];
+      if (info[i].valid_data && info[i].instance_state == DDS_IST_ALIVE && strcmp(s->server_name, server_name) == 0) {
+        *out = s->server_number;
+        found = 1;
+      }
+    }
+    if (n > 0) dds_return_loan(r, ptr, n);
+    if (!found) nap(0.05);
+  }
+  dds_delete(r);
+  return found ? 0 : fail(err, errlen, PALP_EIO, "no server named \"%s\" on this domain within %.1f s", server_name, timeout);
+}
+
+void palp_cli_station_end_session(palp_cli_station *st) {
+  /* Deleting the publisher/subscriber deletes the session's readers and writers. */
+  if (st->pub > 0) dds_delete(st->pub);
+  if (st->sub > 0) dds_delete(st->sub);
+  st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
+  st->session_id = 0;
 }

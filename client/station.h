@@ -69,6 +69,18 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
 /* Disposes the request instance: the server closes/leaves the session now. */
 int palp_cli_station_leave(palp_cli_station *st);
 
+/* Several servers on one domain (docs/deploy.md). The alive phantom called name
+ * with the fewest active sessions, on server server_number (-1: any) and not on
+ * exclude_server (-1: none); waits up to timeout [s], then 0.3 s more after the
+ * first match for other servers' entries. */
+int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_t server_number,
+                                  int64_t exclude_server, double timeout, uint32_t *out_id, char *err, size_t errlen);
+/* The number of the live server called server_name (palp_server_identity). */
+int palp_cli_station_server_number(palp_cli_station *st, const char *server_name, double timeout, uint32_t *out,
+                                   char *err, size_t errlen);
+/* Drops the session's endpoints (after its server was lost), ready for another join. */
+void palp_cli_station_end_session(palp_cli_station *st);
+
 /* Non-blocking: 1 and the state when the session's state changed to closed. */
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);
 

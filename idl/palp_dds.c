@@ -17,7 +17,8 @@
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
     "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status",
-    "palp_local_model",   "palp_server_guard"};
+    "palp_local_model",   "palp_server_guard",
+    "palp_server_identity", "palp_station_request"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -35,6 +36,8 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_SERVER_STATUS: return &palp_ServerStatus_desc;
   case PALP_TOPIC_LOCAL_MODEL: return &palp_LocalModel_desc;
   case PALP_TOPIC_SERVER_GUARD: return &palp_ServerGuard_desc;
+  case PALP_TOPIC_SERVER_IDENTITY: return &palp_ServerIdentity_desc;
+  case PALP_TOPIC_STATION_REQUEST: return &palp_StationRequest_desc;
   default: return NULL;
   }
 }
@@ -51,7 +54,15 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
     break;
+  case PALP_TOPIC_SERVER_IDENTITY:
+    /* A late server or station sees every live server; a dead one's instance
+     * turns not-alive when its participant's lease expires. */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+    break;
   case PALP_TOPIC_SESSION_REQUEST:
+  case PALP_TOPIC_STATION_REQUEST:
     /* Transient-local so a request written before the server's reader matched
      * is still delivered; automatic liveliness tells the server when the station
      * is gone. */
@@ -140,7 +151,9 @@ void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len) {
 int palp_dds_use_config(const char *path) {
   const char *cur = getenv("CYCLONEDDS_URI");
   if (cur && *cur) return 0;
-  if (!path) path = PALP_DDS_DEFAULT_CONFIG;
+  /* No compiled-in default: an installed program must not name the source tree
+   * (palp_app_use_dds_config finds the installed loopback config). */
+  if (!path) return PALP_EINVAL;
   char abs[PATH_MAX];
   if (access(path, R_OK) != 0 || !realpath(path, abs)) return PALP_EIO;
   char uri[PATH_MAX + 16];

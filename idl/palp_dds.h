@@ -30,12 +30,22 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_SERVER_STATUS,
   PALP_TOPIC_LOCAL_MODEL, /* added with issue 11: local contact models for the station's haptic loop */
   PALP_TOPIC_SERVER_GUARD,
+  PALP_TOPIC_SERVER_IDENTITY, /* added: several servers on one domain */
+  PALP_TOPIC_STATION_REQUEST, /* added: a request keyed by 8 bytes, disposable by any vendor */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 
 /* Liveliness lease of every station writer [s]: automatic, so the DDS stack
  * asserts it; a station that vanishes is seen as not alive after ~this long. */
 #define PALP_DDS_STATION_LEASE_S 0.5
+
+/* Phantom and session ids are qualified by the server that hands them out:
+ * server_number * 2^20 + the server's local id (palp_server_identity). */
+#define PALP_DDS_ID_LOCAL_BITS 20
+#define PALP_DDS_MAX_SERVER_NUMBER 4095u
+#define PALP_DDS_ID(server_number, local) (((uint32_t)(server_number) << PALP_DDS_ID_LOCAL_BITS) | (uint32_t)(local))
+#define PALP_DDS_ID_SERVER(id) ((uint32_t)(id) >> PALP_DDS_ID_LOCAL_BITS)
+#define PALP_DDS_ID_LOCAL(id) ((uint32_t)(id) & ((1u << PALP_DDS_ID_LOCAL_BITS) - 1u))
 
 /* Partition of a session's contact/feedback/deformation traffic. */
 #define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"
@@ -78,9 +88,10 @@ int palp_dds_log_limit_install(palp_dds_log_limit *l, FILE *out, int lines, doub
 void palp_dds_log_limit_remove(palp_dds_log_limit *l);
 void palp_dds_log_limit_counts(palp_dds_log_limit *l, uint64_t *printed, uint64_t *suppressed);
 
-/* Points CYCLONEDDS_URI at the loopback config unless the environment already
- * sets it. path NULL uses the build's config/cyclonedds-loopback.xml. Returns 0
- * or a negative PALP_E* code (the file does not exist). */
+/* Points CYCLONEDDS_URI at the config file path unless the environment already
+ * sets it. Programs use palp_app_use_dds_config (app/palp_app.h), which adds
+ * --dds-config and the installed default; tests pass PALP_DDS_DEFAULT_CONFIG.
+ * Returns 0 or a negative PALP_E* code (path NULL, or the file does not exist). */
 int palp_dds_use_config(const char *path);
 
 /* CLOCK_MONOTONIC in ns; shared by every process on the host, so a contact's

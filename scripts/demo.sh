@@ -144,13 +144,13 @@ echo "== sessions (palp-server) =="
 sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2
 echo
 echo "demo: peak-displacement snapshot of bob's phantom: $out/bob-peak.svg; alice's feedback: $out/alice-feedback.csv"
-grep -E "logging sessions to|session log:" "$out/server.log" | sed 's/^palp-server: /demo: /' || true
+grep -E "logging sessions to|session log:" "$out/server.log" | sed 's/^.*palp-server: /demo: /' || true
 
 # The instructor's review, read back from the SQLite session log: every session of
 # this run listed, summarised, re-simulated from its logged inputs (bit-identical
 # replay of every frame) and written as a self-contained HTML report.
 review=$build/client/review/palp-review
-db=$(sed -n 's/^palp-server: logging sessions to //p' "$out/server.log" | tail -n 1)
+db=$(sed -n 's/^.*palp-server: logging sessions to //p' "$out/server.log" | tail -n 1)
 if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   echo
   echo "== instructor review (palp-review, from $db) =="

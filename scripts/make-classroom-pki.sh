@@ -37,7 +37,8 @@ days=365
 T_CATALOGUE=palp_catalogue T_REQUEST=palp_session_request T_REPLY=palp_session_reply
 T_STATE=palp_session_state T_CONTACT=palp_contact T_FEEDBACK=palp_feedback
 T_DEFORMATION=palp_deformation T_STATUS=palp_server_status
-T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard
+T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard T_IDENTITY=palp_server_identity
+# palp_station_request (other vendors, docs/interop.md) is not offered by a secured server.
 
 check_name() {
   [[ $1 =~ ^[a-z0-9_-]{1,31}$ ]] || die "bad name \"$1\": 1-31 characters of a-z 0-9 - _"
@@ -159,11 +160,11 @@ EOF
     server)
       # Only the server publishes the catalogue, replies, states, status and every session's
       # feedback and deformation; it reads requests from every identity's own partition.
-      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD" '""'
+      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY" '""'
       rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL" "palp/s/*"
       rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
       rule subscribe "$T_CONTACT" "palp/s/*"
-      rule subscribe "$T_STATUS $T_GUARD" '""'
+      rule subscribe "$T_STATUS $T_GUARD $T_IDENTITY" '""'
       ;;
     trainee)
       # Requests only in its own partition (the server reads the identity from it), contacts
@@ -171,7 +172,7 @@ EOF
       # sessions' traffic, nobody else's.
       rule publish "$T_REQUEST" "palp/trainee/$name"
       rule publish "$T_CONTACT" "palp/s/$name/*"
-      rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD" '""'
+      rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY" '""'
       rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL" "palp/s/$name/*"
       ;;
     instructor)

@@ -111,9 +111,20 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "absurd_force",   "max_viewers",    "stations_per_writer",
                                        "join_rate",      "join_burst",     "closed_retention",
                                        "dds_log_lines",  "dds_log_window", "security",
-                                       NULL};
+                                       "server_name",    "server_number",  "log_level",      NULL};
 static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
+
+int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen) {
+  /* A numbered server puts its number in the high bits of every id it hands out
+   * (PALP_DDS_ID): its own ids must leave them free. */
+  if (cfg->server_number == 0) return 0;
+  for (int i = 0; i < cfg->phantom_count; i++)
+    if (cfg->phantom[i].id > PALP_SRV_MAX_LOCAL_ID)
+      return fail(err, errlen, PALP_EINVAL, "phantoms[%d].id: %u is above %u, the largest id a server with a "
+                  "server_number can qualify", i, cfg->phantom[i].id, PALP_SRV_MAX_LOCAL_ID);
+  return 0;
+}
 
 static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_config *cfg, char *err,
                           size_t errlen) {
@@ -267,7 +278,18 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
     }
   }
   if ((rc = parse_security(cJSON_GetObjectItemCaseSensitive(root, "security"), base_dir, cfg, err, errlen))) goto out;
+  if ((rc = get_string(root, "log_level", w, 0, cfg->log_level, sizeof cfg->log_level, err, errlen))) goto out;
+  if (cfg->log_level[0] && strcmp(cfg->log_level, "error") && strcmp(cfg->log_level, "warn") &&
+      strcmp(cfg->log_level, "warning") && strcmp(cfg->log_level, "info") && strcmp(cfg->log_level, "debug")) {
+    rc = fail(err, errlen, PALP_EINVAL, "log_level: \"%s\" is not error, warn, info or debug", cfg->log_level);
+    goto out;
+  }
+  if ((rc = get_string(root, "server_name", w, 0, cfg->server_name, sizeof cfg->server_name, err, errlen))) goto out;
+  i64 = cfg->server_number;
+  if ((rc = get_int(root, "server_number", w, 0, PALP_SRV_MAX_SERVER_NUMBER, 0, &i64, err, errlen))) goto out;
+  cfg->server_number = (uint32_t)i64;
   rc = parse_phantoms(cJSON_GetObjectItemCaseSensitive(root, "phantoms"), base_dir, cfg, err, errlen);
+  if (!rc) rc = palp_srv_config_check_ids(cfg, err, errlen);
 out:
   cJSON_Delete(root);
   return rc;

@@ -13,6 +13,9 @@
 
 #define PALP_SRV_MAX_PHANTOMS 16
 #define PALP_SRV_PATH_MAX 1024
+/* Several servers on one domain: ids are server_number * 2^20 + local id (idl/palp_dds.h). */
+#define PALP_SRV_MAX_SERVER_NUMBER 4095
+#define PALP_SRV_MAX_LOCAL_ID 1048575u
 
 typedef enum palp_srv_force_policy {
   PALP_SRV_FORCE_CLAMP = 0, /* scale the force down to the limit, apply it, count it */
@@ -57,6 +60,9 @@ typedef struct palp_srv_config {
    * pki "" runs plain DDS (the quick local demo). */
   char security_pki[PALP_SRV_PATH_MAX]; /* resolved against the config's directory */
   char security_identity[64];           /* default "server" */
+  char log_level[16];          /* "error", "warn", "info", "debug"; "" = not set (info); re-read on SIGHUP */
+  char server_name[64];        /* identity on the domain; "" = the host name */
+  uint32_t server_number;      /* 0..4095: high bits of every phantom and session id it hands out */
   int phantom_count;
   palp_srv_phantom_cfg phantom[PALP_SRV_MAX_PHANTOMS];
 } palp_srv_config;
@@ -68,6 +74,9 @@ void palp_srv_config_defaults(palp_srv_config *cfg);
  * Returns 0 or a negative PALP_E* code with a message naming the field in err. */
 int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_config *cfg, char *err,
                           size_t errlen);
+/* With server_number > 0, every phantom id must be at most PALP_SRV_MAX_LOCAL_ID
+ * (also checked after command-line overrides). 0 or PALP_EINVAL. */
+int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen);
 /* Reads and parses a file; relative paths resolve against the file's directory. */
 int palp_srv_config_load(const char *path, palp_srv_config *cfg, char *err, size_t errlen);
 

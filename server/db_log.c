@@ -28,6 +28,7 @@ struct palp_srv_db_log {
   char run_id[48];
   int frame_every, mesh_every;
   slot s[SLOTS];
+  palp_log *log; /* may be NULL (stderr) */
 };
 
 static slot *find(palp_srv_db_log *l, uint32_t id) {
@@ -59,7 +60,7 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   palp_srv_db_log *l = ctx;
   slot *s = &l->s[i->session_id % SLOTS];
   if (s->id) {
-    fprintf(stderr, "palp-server: session log: slot of session %u busy; session %u not logged\n", s->id, i->session_id);
+    palp_log_error(l->log, "session log: slot of session %u busy; session %u not logged", s->id, i->session_id);
     return;
   }
   char uid[96], phantom[16], params[160];
@@ -82,7 +83,7 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   int rc = palp_db_log_session_begin(l->w, &d, &h);
   free(scene);
   if (rc < 0) {
-    fprintf(stderr, "palp-server: session log: session %u not logged: %s\n", i->session_id, palp_db_strerror(rc));
+    palp_log_error(l->log, "session log: session %u not logged: %s", i->session_id, palp_db_strerror(rc));
     return;
   }
   memset(s, 0, sizeof *s);
@@ -185,9 +186,11 @@ static void on_log_counts(void *ctx, uint64_t *written, uint64_t *shed, uint64_t
   *failed = (uint64_t)st.failed;
 }
 
-int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_srv_db_log **out, char *err, size_t errlen) {
+int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_log *log, palp_srv_db_log **out, char *err,
+                         size_t errlen) {
   palp_srv_db_log *l = calloc(1, sizeof *l);
   if (!l) return PALP_ENOMEM;
+  l->log = log;
   palp_db_writer_opts o = palp_db_writer_default_opts();
   int rc = palp_db_writer_open(path, &o, &l->w, err, errlen);
   if (rc < 0) {
@@ -213,13 +216,13 @@ int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_srv_db_log 
 
 const palp_srv_events *palp_srv_db_log_events(palp_srv_db_log *l) { return &l->ev; }
 
-void palp_srv_db_log_close(palp_srv_db_log *l, FILE *f) {
+void palp_srv_db_log_close(palp_srv_db_log *l) {
   if (!l) return;
   palp_db_writer_flush(l->w, 10.0);
   palp_db_writer_stats st;
   palp_db_writer_stats_get(l->w, &st);
-  if (f)
-    fprintf(f, "palp-server: session log: %lld records written, %lld shed (queue full), %lld failed%s%s\n",
+  palp_logf(l->log, st.shed || st.failed ? PALP_LOG_WARN : PALP_LOG_INFO,
+            "session log: %lld records written, %lld shed (queue full), %lld failed%s%s",
             (long long)st.written, (long long)st.shed, (long long)st.failed, st.last_error[0] ? ": " : "",
             st.last_error);
   palp_db_writer_close(l->w);

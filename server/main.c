@@ -11,25 +11,34 @@
 #include "config.h"
 #include "db_log.h"
 #include "palp.h"
+#include "palp_app.h"
 #include "palp_dds.h"
 #include "server.h"
+
+#define SERVER_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
 
 static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-server [options]\n"
-          "  --config PATH        server configuration (default %s/server.json)\n"
+          "  --config PATH        server configuration (default <data>/config/server.json)\n"
+          "  --database PATH      override the config's \"database\" (the SQLite session log)\n"
           "  --domain N           override domain_id\n"
+          "  --server-name NAME   override server_name (identity on the domain; default the host name)\n"
+          "  --server-number N    override server_number (0..4095; the high bits of every phantom/session id)\n"
+          "  --identity-wait S    listen S seconds for servers already on the domain before announcing\n"
+          "                       (default 0.5; a lab network may need 2)\n"
           "  --tick-rate HZ       override tick_rate_hz (100 as in the paper, 1000 for haptics)\n"
           "  --threads N          override tick_threads (0 = one per core)\n"
           "  --rt-priority N      override tick_priority (1..99: SCHED_FIFO tick threads; 0: normal)\n"
           "  --max-sessions N     override max_sessions\n"
           "  --duration S         stop after S seconds (default: until SIGINT/SIGTERM)\n"
           "  --check              validate the configuration and the scenes, then exit\n"
-          "  --verbose            log every station join/leave\n"
           "  --no-db              do not write the session log (config \"database\")\n"
           "  --pki DIR            DDS Security with the classroom PKI in DIR (config \"security\"; docs/security.md)\n"
-          "  --identity ID        the server's identity in the PKI (default server)\n",
-          PALP_CONFIG_DIR);
+          "  --identity ID        the server's identity in the PKI (default server)\n"
+          "signals: SIGINT/SIGTERM stop cleanly (every session closed and summarised); SIGHUP re-opens\n"
+          "         the --log-file (log rotation) and re-reads the config's log_level; sessions go on\n");
+  palp_app_common_usage(f, SERVER_OPTS);
 }
 
 /* A signal may land on any thread, including ones that libraries start before
@@ -39,8 +48,36 @@ static void usage(FILE *f) {
 typedef struct sig_ctx {
   int fd[2]; /* [0] read by signal_main, [1] written by the handler and by main */
   palp_srv *srv;
+  palp_log *log;
+  const char *config_path;
+  palp_srv_config *file_cfg; /* the config file as last read (before command-line overrides) */
+  int level_fixed;           /* --log-level/--verbose/--quiet given: the file's log_level is ignored */
   int signo;
 } sig_ctx;
+
+/* SIGHUP: what can change without touching a session is re-read (log_level); any
+ * other change is reported and waits for a restart, which closes sessions cleanly. */
+static void reload_config(sig_ctx *c) {
+  static palp_srv_config nc; /* one signal thread; too large for comfort on its stack */
+  char e[512];
+  if (palp_srv_config_load(c->config_path, &nc, e, sizeof e) < 0) {
+    palp_log_error(c->log, "SIGHUP: %s: %s; the running configuration stays", c->config_path, e);
+    return;
+  }
+  palp_log_level lv;
+  if (!c->level_fixed && nc.log_level[0] && palp_log_parse_level(nc.log_level, &lv) == 0 &&
+      lv != palp_log_get_level(c->log)) {
+    /* At WARN, so the change shows whichever way it goes. */
+    palp_log_warn(c->log, "SIGHUP: log level %s -> %s", palp_log_level_name(palp_log_get_level(c->log)),
+                  palp_log_level_name(lv));
+    palp_log_set_level(c->log, lv);
+  }
+  snprintf(c->file_cfg->log_level, sizeof c->file_cfg->log_level, "%s", nc.log_level);
+  if (memcmp(c->file_cfg, &nc, sizeof nc) != 0)
+    palp_log_warn(c->log, "SIGHUP: %s changed beyond log_level; a restart applies it (sessions close cleanly)",
+                  c->config_path);
+  *c->file_cfg = nc;
+}
 
 static int sig_pipe_w = -1; /* the handler's only state: a process-wide fd is unavoidable */
 
@@ -54,16 +91,27 @@ static void on_signal(int sig) {
 
 static void *signal_main(void *arg) {
   sig_ctx *c = arg;
-  unsigned char b = 0;
-  ssize_t n;
-  while ((n = read(c->fd[0], &b, 1)) < 0 && errno == EINTR) {
-  }
-  if (n == 1 && b != 0) { /* 0 is main's own wake-up when the run ends by itself */
+  for (;;) {
+    unsigned char b = 0;
+    ssize_t n;
+    while ((n = read(c->fd[0], &b, 1)) < 0 && errno == EINTR) {
+    }
+    if (n != 1 || b == 0) return NULL; /* 0 is main's own wake-up when the run ends by itself */
+    if (b == SIGHUP) {
+      /* Rotation: logrotate moved the file; keep serving, write to a new one. */
+      int rc = palp_log_reopen(c->log);
+      if (rc < 0) palp_log_error(c->log, "SIGHUP: cannot re-open the log file %s; still writing to the old one",
+                                 c->log->path);
+      else palp_log_info(c->log, "SIGHUP: log re-opened%s%s; sessions continue", c->log->path[0] ? " " : "",
+                         c->log->path);
+      reload_config(c);
+      continue;
+    }
     c->signo = b;
-    fprintf(stderr, "palp-server: %s: shutting down\n", b == SIGINT ? "SIGINT" : "SIGTERM");
+    palp_log_info(c->log, "%s: shutting down", b == SIGINT ? "SIGINT" : "SIGTERM");
     palp_srv_request_stop(c->srv);
+    return NULL;
   }
-  return NULL;
 }
 
 static int parse_num(const char *opt, const char *arg, double lo, double hi, double *out) {
@@ -79,14 +127,26 @@ static int parse_num(const char *opt, const char *arg, double lo, double hi, dou
 }
 
 int main(int argc, char **argv) {
-  const char *config_path = PALP_CONFIG_DIR "/server.json";
+  const char *config_path = NULL, *database = NULL;
+  char default_config[PALP_SRV_PATH_MAX];
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-server");
+  const char *server_name = NULL;
+  double server_number = -1, identity_wait = 0.5;
   double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
   int check = 0, verbose = 0, no_db = 0;
   const char *pki = NULL, *identity = NULL;
+  char err[768];
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-    int bad = 0;
+    int bad = 0, common = palp_app_common_opt(&ao, SERVER_OPTS, argc, argv, &i);
+    if (common < 0) return 2;
+    if (common) continue;
     if (!strcmp(a, "--config") && v) config_path = argv[++i];
+    else if (!strcmp(a, "--database") && v) database = argv[++i];
+    else if (!strcmp(a, "--server-name") && v && v[0] && strlen(v) < 64) server_name = argv[++i];
+    else if (!strcmp(a, "--server-number")) bad = parse_num(a, v, 0, 4095, &server_number), i++;
+    else if (!strcmp(a, "--identity-wait")) bad = parse_num(a, v, 0, 60, &identity_wait), i++;
     else if (!strcmp(a, "--domain")) bad = parse_num(a, v, 0, 232, &domain), i++;
     else if (!strcmp(a, "--tick-rate")) bad = parse_num(a, v, 1, 10000, &rate), i++;
     else if (!strcmp(a, "--threads")) bad = parse_num(a, v, 0, 64, &threads), i++;
@@ -94,7 +154,6 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--max-sessions")) bad = parse_num(a, v, 1, 1024, &max_sessions), i++;
     else if (!strcmp(a, "--duration")) bad = parse_num(a, v, 0, 1e7, &duration), i++;
     else if (!strcmp(a, "--check")) check = 1;
-    else if (!strcmp(a, "--verbose")) verbose = 1;
     else if (!strcmp(a, "--no-db")) no_db = 1;
     else if (!strcmp(a, "--pki") && v) pki = argv[++i];
     else if (!strcmp(a, "--identity") && v) identity = argv[++i];
@@ -108,26 +167,58 @@ int main(int argc, char **argv) {
     }
     if (bad) return 2;
   }
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-server");
+    return 0;
+  }
+  verbose = ao.log_level >= PALP_LOG_DEBUG;
+  palp_log plog;
+  if (palp_log_init(&plog, "palp-server", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-server: --log-file %s: %s\n", ao.log_file, strerror(errno));
+    return 1;
+  }
+  if (!config_path) {
+    if (palp_app_data_path("config/server.json", default_config, sizeof default_config, err, sizeof err) < 0) {
+      fprintf(stderr, "palp-server: %s (or give --config)\n", err);
+      return 1;
+    }
+    config_path = default_config;
+  }
 
   palp_srv_def def;
   memset(&def, 0, sizeof def);
-  char err[768];
   int rc = palp_srv_config_load(config_path, &def.cfg, err, sizeof err);
   if (rc < 0) {
     fprintf(stderr, "palp-server: bad configuration: %s\n", err);
     return 1;
+  }
+  static palp_srv_config file_cfg; /* for SIGHUP's comparison */
+  file_cfg = def.cfg;
+  palp_log_level file_level;
+  if (!ao.log_level_set && def.cfg.log_level[0] && palp_log_parse_level(def.cfg.log_level, &file_level) == 0) {
+    palp_log_set_level(&plog, file_level);
   }
   if (domain >= 0) def.cfg.domain_id = (uint32_t)domain;
   if (rate > 0) def.cfg.tick_rate_hz = rate;
   if (threads >= 0) def.cfg.tick_threads = (int)threads;
   if (max_sessions > 0) def.cfg.max_sessions = (int)max_sessions;
   if (prio >= 0) def.cfg.tick_priority = (int)prio;
+  if (database) snprintf(def.cfg.database, sizeof def.cfg.database, "%s", database);
+  if (server_name) snprintf(def.cfg.server_name, sizeof def.cfg.server_name, "%s", server_name);
+  if (server_number >= 0) def.cfg.server_number = (uint32_t)server_number;
+  def.identity_wait_s = identity_wait;
+  if (palp_srv_config_check_ids(&def.cfg, err, sizeof err) < 0) {
+    fprintf(stderr, "palp-server: bad configuration: %s: %s\n", config_path, err);
+    return 1;
+  }
   def.verbose = verbose;
   if (pki) snprintf(def.cfg.security_pki, sizeof def.cfg.security_pki, "%s", pki);
   if (identity) snprintf(def.cfg.security_identity, sizeof def.cfg.security_identity, "%s", identity);
-  if (palp_dds_use_config(def.cfg.dds_config) < 0) {
-    fprintf(stderr, "palp-server: bad configuration: %s: dds_config: cannot read %s\n", config_path,
-            def.cfg.dds_config);
+  def.log = &plog;
+  char dds_chosen[PALP_SRV_PATH_MAX + 32];
+  if (palp_app_use_dds_config(ao.dds_config, def.cfg.dds_config, dds_chosen, sizeof dds_chosen, err, sizeof err) < 0) {
+    if (ao.dds_config) fprintf(stderr, "palp-server: --dds-config: %s\n", err);
+    else fprintf(stderr, "palp-server: bad configuration: %s: dds_config: %s\n", config_path, err);
     return 1;
   }
   if (check) {
@@ -163,6 +254,12 @@ int main(int argc, char **argv) {
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
+  sigaction(SIGHUP, &sa, NULL); /* default action would kill us with every session open */
+  sc.log = &plog;
+  sc.config_path = config_path;
+  sc.file_cfg = &file_cfg;
+  sc.level_fixed = ao.log_level_set;
+  palp_log_info(&plog, "%s starting: config %s, DDS config %s", palp_app_version(), config_path, dds_chosen);
 
   palp_srv_db_log *log = NULL;
   if (def.cfg.database[0] && !no_db) {
@@ -174,18 +271,18 @@ int main(int argc, char **argv) {
       *slash = 0;
       mkdir(dir, 0777);
     }
-    rc = palp_srv_db_log_open(def.cfg.database, def.cfg.tick_rate_hz, &log, err, sizeof err);
+    rc = palp_srv_db_log_open(def.cfg.database, def.cfg.tick_rate_hz, &plog, &log, err, sizeof err);
     if (rc < 0) {
       fprintf(stderr, "palp-server: bad configuration: %s: database: %s: %s\n", config_path, def.cfg.database, err);
       return 1;
     }
     def.events = palp_srv_db_log_events(log);
-    fprintf(stderr, "palp-server: logging sessions to %s\n", def.cfg.database);
+    palp_log_info(&plog, "logging sessions to %s", def.cfg.database);
   }
   palp_srv *srv = palp_srv_create(&def, &rc, err, sizeof err);
   if (!srv) {
-    fprintf(stderr, "palp-server: %s: %s\n", config_path, err);
-    palp_srv_db_log_close(log, stderr);
+    palp_log_error(&plog, "%s: %s", config_path, err);
+    palp_srv_db_log_close(log);
     return 1;
   }
   sc.srv = srv;
@@ -203,7 +300,16 @@ int main(int argc, char **argv) {
   printf("\npalp-server session summary\n");
   palp_srv_print_summary(srv, stdout);
   fflush(stdout);
+  if (plog.path[0]) { /* a service's stdout may go nowhere: the table goes to its log too */
+    palp_log_info(&plog, "stopped; session summary:");
+    pthread_mutex_lock(&plog.mu);
+    palp_srv_print_summary(srv, plog.f);
+    fflush(plog.f);
+    pthread_mutex_unlock(&plog.mu);
+  }
   palp_srv_destroy(srv);
-  palp_srv_db_log_close(log, stderr);
+  palp_srv_db_log_close(log);
+  palp_log_info(&plog, "stopped (%s)", sc.signo == SIGINT ? "SIGINT" : sc.signo == SIGTERM ? "SIGTERM" : "end of run");
+  palp_log_close(&plog);
   return rc < 0 ? 1 : 0;
 }

@@ -1,17 +1,22 @@
 /* server.c - the classroom server's DDS front end and session bookkeeping. */
 #include "server.h"
+#include "identity.h"
+#include "server_identity.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <dds/dds.h>
 
 #include "palp.h"
 #include "identity.h"
+#include "server_identity.h"
 #include "palp_dds.h"
 #include "admission.h"
 #include "retire.h"
@@ -36,6 +41,8 @@ typedef struct station {
                           disappearance (not another identity disposing this station's
                           key) means the station is gone */
   int want_feedback, want_deformation;
+  int keyed;           /* last request came on palp_station_request */
+  dds_instance_handle_t ih; /* its instance there (keyed by station_key) */
 } station;
 
 typedef struct guard_counts {
@@ -52,6 +59,8 @@ struct palp_srv {
   palp_srv_config cfg;
   const palp_srv_events *events;
   int verbose;
+  palp_log *log;
+  palp_srv_identity *identity;
   char server_id[64];
   int64_t start_ns;
 
@@ -60,6 +69,12 @@ struct palp_srv {
 
   dds_entity_t pp;
   dds_entity_t topic[PALP_TOPIC_COUNT];
+  dds_entity_t station_request_r, station_request_rc;
+  /* palp_station_request writers whose liveliness lapsed (Cyclone's listener thread
+   * -> main thread): tells a crash from a dispose, which Cyclone reports alike. */
+  pthread_mutex_t lost_mu;
+  dds_instance_handle_t lost[64];
+  unsigned lost_n;
   dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r, guard_w;
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
   int warned_other_server;
@@ -106,13 +121,13 @@ static int fail(char *err, size_t errlen, const char *fmt, ...) {
 }
 
 static void logf_(const palp_srv *srv, const char *fmt, ...) {
-  if (!srv->verbose) return;
+  if (!srv->verbose && !palp_log_enabled(srv->log, PALP_LOG_DEBUG)) return;
+  char msg[1024];
   va_list ap;
   va_start(ap, fmt);
-  fprintf(stderr, "palp-server: ");
-  vfprintf(stderr, fmt, ap);
-  fputc('\n', stderr);
+  vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  palp_logf(srv->log, srv->verbose ? PALP_LOG_INFO : PALP_LOG_DEBUG, "%s", msg);
 }
 
 /* A request refused for its identity: counted, and logged at most once per
@@ -410,7 +425,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   remember_closed(srv, &sum, 0);
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
-  fprintf(stderr, "palp-server: session %u closed after %.1f s (%s)\n", s->id, sum.duration, reason);
+  palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
   /* Its members' slots are free again; its state instance is released after
    * the retention time, once every member has read the CLOSED state. */
   for (int i = 0; i < srv->station_slots; i++)
@@ -449,6 +464,18 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   logf_(srv, "station %s (%s) left session %u: %s", st->id, role == palp_ROLE_VISUAL ? "visual" : "observer",
         sid, reason);
   publish_state(srv, s, 0, NULL, NULL);
+}
+
+/* With other servers on the domain, a request for a phantom or session this server
+ * does not hold is theirs: no reply (two replies to one station would race). Alone,
+ * the server rejects it with a reason, as it always did. */
+static int not_mine(const palp_srv *srv, const palp_SessionRequest *rq) {
+  char ignored[256]; /* a conflict is acted on by palp_srv_run's next poll */
+  palp_srv_identity_poll(srv->identity, ignored, sizeof ignored);
+  if (!palp_srv_identity_peers(srv->identity)) return 0;
+  if (rq->role != palp_ROLE_TRAINEE && rq->session_id)
+    return PALP_DDS_ID_SERVER(rq->session_id) != srv->cfg.server_number;
+  return find_phantom((palp_srv *)srv, rq->phantom_id) == NULL;
 }
 
 /* A refused join: answered, counted, and its reply released after the retention
@@ -491,6 +518,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   palp_srv_session *s = NULL;
   if (rq->role == palp_ROLE_TRAINEE) {
     palp_srv_phantom *ph = find_phantom(srv, rq->phantom_id);
+    if (!ph && not_mine(srv, rq)) return;
     if (!ph) {
       snprintf(why, sizeof why, "unknown phantom %u", rq->phantom_id);
       refuse(srv, rq, &g->joins_refused_other, why);
@@ -516,7 +544,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
                               .local_model_topic = srv->topic[PALP_TOPIC_LOCAL_MODEL],
                               .events = srv->events,
-                              .partition = partition};
+                              .partition = partition,
+                              .log = srv->log};
     int rc = 0;
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
@@ -549,13 +578,17 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       return;
     }
     srv->next_session_id++;
+    /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
+    if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
+      srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
+  pthread_mutex_init(&srv->lost_mu, NULL);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
     st->session_id = s->id;
     reply(srv, rq, s, NULL);
     publish_state(srv, s, 0, NULL, NULL);
     publish_catalogue(srv, ph);
-    fprintf(stderr, "palp-server: session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s\n",
+    palp_log_info(srv->log, "session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s",
             s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
     return;
   }
@@ -577,6 +610,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       if ((rq->phantom_id == 0 || c->phantom->cfg.id == rq->phantom_id) && (!s || c->id > s->id)) s = c;
     }
   }
+  if (!s && not_mine(srv, rq)) return;
   if (!s) {
     if (rq->session_id)
       snprintf(why, sizeof why, "no open session %u", rq->session_id);
@@ -607,8 +641,100 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
     srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
-  fprintf(stderr, "palp-server: station %s joined session %u as %s\n", st->id, s->id,
+  palp_log_info(srv->log, "station %s joined session %u as %s", st->id, s->id,
           rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
+}
+
+/* A request instance that turned not-alive while its writer is still matched was
+ * disposed on purpose: a goodbye (dispose alone is enough, as for any DDS entity).
+ * A writer that is gone (lease expired) means the station vanished. */
+static void on_station_liveliness(dds_entity_t reader, const dds_liveliness_changed_status_t st, void *arg) {
+  (void)reader;
+  palp_srv *srv = arg;
+  if ((st.not_alive_count_change > 0 || st.alive_count_change < 0) && st.last_publication_handle) {
+    pthread_mutex_lock(&srv->lost_mu);
+    srv->lost[srv->lost_n++ % 64] = st.last_publication_handle;
+    pthread_mutex_unlock(&srv->lost_mu);
+  }
+}
+
+static int station_writer_lost(palp_srv *srv, dds_instance_handle_t w) {
+  int lost = 0;
+  pthread_mutex_lock(&srv->lost_mu);
+  for (unsigned i = 0; i < 64 && i < srv->lost_n; i++) lost |= srv->lost[i] == w;
+  pthread_mutex_unlock(&srv->lost_mu);
+  return lost;
+}
+
+/* Cyclone 0.10 reports a dispose and a writer whose liveliness lapsed (autodispose)
+ * alike, as a disposed instance, and unregisters the lapsed writer's instances just
+ * before it calls the liveliness listener. So a disposed instance is a goodbye only
+ * if its writer is still matched and, a moment later, has not lost its liveliness. */
+static const char *station_not_alive_reason(palp_srv *srv, const dds_sample_info_t *info) {
+  const char *lost = "lost (liveliness lease expired)";
+  if (info->instance_state != DDS_IST_NOT_ALIVE_DISPOSED || !info->publication_handle) return lost;
+  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(srv->station_request_r, info->publication_handle);
+  if (!w) return lost;
+  dds_builtintopic_free_endpoint(w);
+  const struct timespec grace = {0, 50000000}; /* the listener runs right after the unregister */
+  nanosleep(&grace, NULL);
+  return station_writer_lost(srv, info->publication_handle) ? lost : "left (request disposed)";
+}
+
+static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, uint64_t writer, station **out_st) {
+  if (rq->op == palp_OP_JOIN) {
+    handle_join(srv, rq, NULL, writer); /* palp_station_request is not offered when secured */
+    if (out_st) *out_st = find_station(srv, rq->station_id);
+    return;
+  }
+  station *st = find_station(srv, rq->station_id);
+  if (st) station_leave(srv, st, "left"); /* frees its slot */
+  if (st || !palp_srv_identity_peers(srv->identity)) reply(srv, rq, NULL, "left");
+  if (out_st) *out_st = NULL;
+}
+
+/* palp_station_request: the same requests, keyed by 8 bytes (docs/interop.md). */
+static void handle_station_requests(palp_srv *srv) {
+  enum { N = 16 };
+  palp_StationRequest buf[N];
+  void *ptr[N];
+  dds_sample_info_t info[N];
+  for (int i = 0; i < N; i++) ptr[i] = &buf[i];
+  int n;
+  while (srv->station_request_r > 0 && (n = dds_take(srv->station_request_r, ptr, info, N, N)) > 0) {
+    for (int i = 0; i < n; i++) {
+      if (info[i].valid_data) {
+        const palp_StationRequest *s = &buf[i];
+        palp_SessionRequest rq;
+        memset(&rq, 0, sizeof rq);
+        snprintf(rq.station_id, sizeof rq.station_id, "%s", s->station_id);
+        rq.request_seq = s->request_seq;
+        rq.op = s->op;
+        rq.role = s->role;
+        rq.phantom_id = s->phantom_id;
+        rq.session_id = s->session_id;
+        snprintf(rq.user_name, sizeof rq.user_name, "%s", s->user_name);
+        rq.want_feedback = s->want_feedback;
+        rq.want_deformation = s->want_deformation;
+        station *st = NULL;
+        handle_request_sample(srv, &rq, info[i].publication_handle, &st);
+        if (st) {
+          st->keyed = 1;
+          st->ih = info[i].instance_handle;
+        }
+        continue;
+      }
+      if (info[i].instance_state == DDS_IST_ALIVE) continue;
+      /* By instance handle: once its last sample is taken, a "no writers" instance
+       * may be gone, and its key with it. */
+      for (int k = 0; k < srv->station_slots; k++) {
+        station *st = &srv->stations[k];
+        if (!st->in_use || !st->keyed || st->ih != info[i].instance_handle) continue;
+        station_leave(srv, st, station_not_alive_reason(srv, &info[i])); /* frees its slot */
+      }
+    }
+    if (n < N) break;
+  }
 }
 
 static void handle_requests(palp_srv *srv) {
@@ -618,6 +744,7 @@ static void handle_requests(palp_srv *srv) {
   dds_sample_info_t info[N];
   for (int i = 0; i < N; i++) ptr[i] = &buf[i];
   int n;
+  handle_station_requests(srv);
   while ((n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
@@ -654,7 +781,7 @@ static void handle_requests(palp_srv *srv) {
         else {
           station *st = find_station(srv, buf[i].station_id);
           if (st) station_leave(srv, st, "left");
-          reply(srv, &buf[i], NULL, "left");
+          if (st || !palp_srv_identity_peers(srv->identity)) reply(srv, &buf[i], NULL, "left");
           retire_reply(srv, buf[i].station_id);
         }
         continue;
@@ -677,7 +804,9 @@ static void handle_requests(palp_srv *srv) {
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
        * forgets it), so reaching here means it vanished: its writer's automatic
        * liveliness (0.5 s) or its participant's lease (1 s) expired, and
-       * Cyclone unregistered (or, autodispose, disposed) its instance. */
+       * Cyclone unregistered (or, autodispose, disposed) its instance. Cyclone
+       * reports a lapsed writer's instances as disposed, so a dispose alone cannot
+       * be told from a crash on this topic: palp_station_request can. */
       station_leave(srv, st, "lost (liveliness lease expired)");
     }
     if (n < N) break;
@@ -730,8 +859,10 @@ static void check_other_servers(palp_srv *srv) {
     for (int i = 0; i < n; i++) {
       const palp_ServerStatus *st = ptr[i];
       if (info[i].valid_data && strcmp(st->server_id, srv->server_id) != 0 && !srv->warned_other_server) {
-        fprintf(stderr, "palp-server: WARNING: another server (%s) runs on domain %u; both answer every join. "
-                        "Give each class its own domain_id.\n", st->server_id, srv->cfg.domain_id);
+        /* Harmless with distinct server numbers (identity.h), which refuse to start
+         * otherwise; a server without identities (older palp) would answer every join. */
+        palp_log_info(srv->log, "another server (%s) publishes status on domain %u", st->server_id,
+                      srv->cfg.domain_id);
         srv->warned_other_server = 1;
       }
     }
@@ -804,11 +935,20 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->cfg = def->cfg;
   srv->events = def->events;
   srv->verbose = def->verbose;
-  srv->next_session_id = 1;
+  srv->log = def->log;
+  srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
   srv->start_ns = palp_dds_now_ns();
   char host[32] = "host";
   gethostname(host, sizeof host - 1);
   snprintf(srv->server_id, sizeof srv->server_id, "palp-server/%s/%ld", host, (long)getpid());
+  if (!srv->cfg.server_name[0]) snprintf(srv->cfg.server_name, sizeof srv->cfg.server_name, "%s", host);
+  if (palp_srv_config_check_ids(&srv->cfg, err, errlen) < 0) {
+    *rc = PALP_EINVAL;
+    goto fail;
+  }
+  /* Every id this server hands out carries its number (idl/palp_dds.h). */
+  for (int i = 0; i < srv->cfg.phantom_count; i++)
+    srv->cfg.phantom[i].id = PALP_DDS_ID(srv->cfg.server_number, srv->cfg.phantom[i].id);
   srv->sessions = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->sessions);
   srv->loads = calloc((size_t)srv->cfg.max_sessions, sizeof *srv->loads);
   srv->station_slots = srv->cfg.max_sessions * (1 + srv->cfg.max_viewers);
@@ -893,6 +1033,25 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->waitset = dds_create_waitset(srv->pp);
   srv->stop_gc = dds_create_guardcondition(srv->pp);
   srv->request_rc = dds_create_readcondition(srv->request_r, DDS_ANY_STATE);
+  /* palp_station_request (other vendors' stations, docs/interop.md) carries no
+   * identity the server could check, so a secured classroom does not offer it. */
+  if (!secured(srv)) {
+    srv->station_request_r =
+        palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_STATION_REQUEST], PALP_TOPIC_STATION_REQUEST);
+    srv->station_request_rc = dds_create_readcondition(srv->station_request_r, DDS_ANY_STATE);
+    if (srv->station_request_r > 0) {
+      dds_listener_t *lv = dds_create_listener(NULL);
+      dds_lset_liveliness_changed_arg(lv, on_station_liveliness, srv, true);
+      dds_set_listener(srv->station_request_r, lv);
+      dds_delete_listener(lv);
+    }
+    if (srv->station_request_r < 0 || srv->station_request_rc < 0 ||
+        dds_waitset_attach(srv->waitset, srv->station_request_rc, 1) < 0) {
+      *rc = PALP_EIO;
+      fail(err, errlen, "cannot create the palp_station_request reader");
+      goto fail;
+    }
+  }
   if (srv->catalogue_w < 0 || srv->request_r < 0 || srv->reply_w < 0 || srv->state_w < 0 || srv->status_w < 0 ||
       srv->status_r < 0 || srv->guard_w < 0 ||
       srv->waitset < 0 || srv->stop_gc < 0 || srv->request_rc < 0 ||
@@ -918,8 +1077,30 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     goto fail;
   }
   if (srv->cfg.tick_priority > 0 && !rt_ok)
-    fprintf(stderr, "palp-server: tick_priority %d: SCHED_FIFO refused (needs CAP_SYS_NICE or an rtprio limit); "
+    palp_log_warn(srv->log, "tick_priority %d: SCHED_FIFO refused (needs CAP_SYS_NICE or an rtprio limit); "
                     "tick threads run at normal priority\n", srv->cfg.tick_priority);
+  {
+    uint32_t ids[PALP_SRV_MAX_PHANTOMS];
+    const char *names[PALP_SRV_MAX_PHANTOMS];
+    for (int i = 0; i < srv->phantom_count; i++) {
+      ids[i] = srv->phantom[i].cfg.id;
+      names[i] = srv->phantom[i].cfg.name;
+    }
+    char instance[64];
+    snprintf(instance, sizeof instance, "%.40s/%ld", host, (long)getpid());
+    palp_srv_identity_def idd = {.participant = srv->pp,
+                                 .topic = srv->topic[PALP_TOPIC_SERVER_IDENTITY],
+                                 .name = srv->cfg.server_name,
+                                 .number = srv->cfg.server_number,
+                                 .instance = instance,
+                                 .phantom_count = srv->phantom_count,
+                                 .phantom_id = ids,
+                                 .phantom_name = names,
+                                 .wait_s = def->identity_wait_s,
+                                 .log = srv->log};
+    srv->identity = palp_srv_identity_create(&idd, rc, err, errlen);
+    if (!srv->identity) goto fail;
+  }
   for (int i = 0; i < srv->phantom_count; i++) publish_catalogue(srv, &srv->phantom[i]);
   *rc = 0;
   return srv;
@@ -937,13 +1118,14 @@ int palp_srv_run(palp_srv *srv, double duration) {
   const int64_t status_period = (int64_t)(1e9 / srv->cfg.status_rate_hz);
   int64_t next_status = palp_dds_now_ns() + status_period;
   int64_t end = duration > 0 ? palp_dds_now_ns() + (int64_t)(duration * 1e9) : INT64_MAX;
-  fprintf(stderr, "palp-server: %s: domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d sessions\n",
-          srv->server_id, srv->cfg.domain_id, srv->phantom_count, srv->cfg.tick_rate_hz,
-          palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
+  int result = 0;
+  palp_log_info(srv->log, "%s: server \"%s\" number %u, domain %u, %d phantom(s), %.0f Hz on %d tick thread(s), max %d "
+                "sessions", srv->server_id, srv->cfg.server_name, srv->cfg.server_number, srv->cfg.domain_id,
+                srv->phantom_count, srv->cfg.tick_rate_hz, palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
   for (int i = 0; i < srv->phantom_count; i++)
     if (srv->phantom[i].cfg.physics_rate_hz != srv->cfg.tick_rate_hz)
-      fprintf(stderr, "palp-server: phantom %u \"%s\" steps at %.0f Hz (physics_rate_hz)\n", srv->phantom[i].cfg.id,
-              srv->phantom[i].cfg.name, srv->phantom[i].cfg.physics_rate_hz);
+      palp_log_info(srv->log, "phantom %u \"%s\" steps at %.0f Hz (physics_rate_hz)", srv->phantom[i].cfg.id,
+                    srv->phantom[i].cfg.name, srv->phantom[i].cfg.physics_rate_hz);
   while (!atomic_load(&srv->stop)) {
     int64_t now = palp_dds_now_ns();
     if (now >= end) break;
@@ -964,15 +1146,22 @@ int palp_srv_run(palp_srv *srv, double duration) {
       }
     }
     if (palp_dds_now_ns() >= next_status) {
+      char why[256];
+      if (palp_srv_identity_poll(srv->identity, why, sizeof why) < 0) {
+        palp_log_error(srv->log, "stopping: %s", why);
+        result = PALP_EINVAL;
+        break;
+      }
       publish_status(srv);
       next_status += status_period;
       if (next_status < palp_dds_now_ns()) next_status = palp_dds_now_ns() + status_period;
     }
   }
   dds_set_guardcondition(srv->stop_gc, false);
-  while (srv->session_count > 0) close_session(srv, srv->sessions[srv->session_count - 1], "server shutdown");
+  while (srv->session_count > 0)
+    close_session(srv, srv->sessions[srv->session_count - 1], result ? "server identity conflict" : "server shutdown");
   publish_status(srv);
-  return 0;
+  return result;
 }
 
 int palp_srv_open_sessions(const palp_srv *srv) { return srv->session_count; }
@@ -1013,6 +1202,7 @@ void palp_srv_destroy(palp_srv *srv) {
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
   if (srv->pp > 0) dds_delete(srv->pp);
+  palp_srv_identity_destroy(srv->identity);
   /* After the participant: the request filter (which uses the admission table)
    * can no longer run. */
   palp_srv_admission_destroy(srv->admission);
@@ -1023,5 +1213,6 @@ void palp_srv_destroy(palp_srv *srv) {
   free(srv->sessions);
   free(srv->loads);
   free(srv->closed);
+  pthread_mutex_destroy(&srv->lost_mu);
   free(srv);
 }

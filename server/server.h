@@ -16,13 +16,17 @@
 
 #include "config.h"
 #include "events.h"
+#include "palp_log.h"
 
 typedef struct palp_srv palp_srv;
 
 typedef struct palp_srv_def {
   palp_srv_config cfg;
   const palp_srv_events *events; /* may be NULL; must outlive the server */
-  int verbose;                   /* log joins/leaves to stderr */
+  int verbose;                   /* log joins/leaves (also: log level debug) */
+  palp_log *log;                 /* may be NULL (stderr); must outlive the server */
+  double identity_wait_s;        /* listen this long for servers already on the domain before
+                                    announcing (identity.h); 0: announce at once */
 } palp_srv_def;
 
 /* Loads every phantom's scene, creates the DDS participant (CYCLONEDDS_URI must

@@ -54,6 +54,7 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->id = def->id;
   s->phantom = def->phantom;
   s->events = def->events;
+  s->log = def->log;
   s->log_interval = def->cfg->log_interval;
   s->deformation_period = 1.0 / def->cfg->deformation_rate_hz;
   snprintf(s->trainee_station, sizeof s->trainee_station, "%s", def->trainee_station);
@@ -142,7 +143,7 @@ static void count_reject(palp_srv_session *s, palp_srv_reject_reason r, int clam
   if (s->events && s->events->contact_rejected) s->events->contact_rejected(s->events->ctx, s->id, r, clamped);
   /* Rate-limited: a station flooding NaN at 1 kHz yields one line per interval. */
   if (now_ns - s->last_log_ns[r] >= (int64_t)(s->log_interval * 1e9)) {
-    fprintf(stderr, "palp-server: session %u: contact %s: %s (%llu more since last report)\n", s->id,
+    palp_log_warn(s->log, "session %u: contact %s: %s (%llu more since last report)", s->id,
             clamped ? "clamped" : "rejected", palp_srv_reject_name(r),
             (unsigned long long)s->log_suppressed[r]);
     s->last_log_ns[r] = now_ns;
@@ -349,7 +350,7 @@ static void publish_local_models(palp_srv_session *s, int64_t now_ns, uint32_t f
     o->period = m.period > 0 ? m.period : period;
     o->contact_seq = f->cmd.seq;
     o->contact_source_time_ns = f->cmd.source_time_ns;
-    o->contact = m.contact != 0;
+    o->in_contact = m.contact != 0;
     o->triangles = m.triangles;
     o->device = (palp_Vec3){m.device.x, m.device.y, m.device.z};
     o->proxy = (palp_Vec3){m.proxy.x, m.proxy.y, m.proxy.z};
@@ -406,7 +407,7 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   /* Stepped every tick: a sleeping world returns at once but keeps its clock. */
   int rc = palp_world_step(s->world);
   if (rc < 0) {
-      fprintf(stderr, "palp-server: session %u: model step failed: %s; closing the session\n", s->id,
+      palp_log_error(s->log, "session %u: model step failed: %s; closing the session", s->id,
               palp_strerror(rc));
     atomic_store(&s->failed, rc);
     return palp_dds_now_ns() - t0;

@@ -18,6 +18,7 @@
 
 #include "config.h"
 #include "events.h"
+#include "palp_log.h"
 #include "palp.h"
 #include "palp_types.h"
 #include "validate.h"
@@ -63,6 +64,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t local_model_topic; /* 0: no local models (older callers) */
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
+  palp_log *log;                 /* may be NULL (stderr) */
 } palp_srv_session_def;
 
 typedef struct palp_srv_session {
@@ -77,6 +79,7 @@ typedef struct palp_srv_session {
   dds_entity_t contact_topic; /* this session's own topic entity: it carries the filter below */
   palp_srv_limits limits;
   const palp_srv_events *events;
+  palp_log *log;
   double log_interval;        /* [s] */
   double deformation_period;  /* [s] */
 

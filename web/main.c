@@ -14,8 +14,10 @@
 #include <unistd.h>
 
 #include "access.h"
+#include "palp_app.h"
 #include "hub.h"
 #include "palp.h"
+#include "palp_app.h"
 #include "palp_dds.h"
 #include "serve.h"
 
@@ -39,12 +41,12 @@ static void usage(FILE *f) {
           "  --max-clients N     WebSocket connections at once (default 32)\n"
           "  --no-join           never join a session: show only what the server already streams\n"
           "  --no-feedback       never read feedback (a position-driven finger's force then shows 0 N)\n"
-          "  --www DIR           the pages (default %s)\n"
+          "  --www DIR           the pages (default <data>/www: share/palp/www installed, web/www in a build)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
           "  --dds-config FILE   Cyclone DDS config (default: the loopback-only config)\n"
           "  --duration S        stop after S seconds (tests, benchmarks)\n"
           "  --stats             print the bridge's counters every 5 s\n",
-          PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_WWW_DIR, PALP_WEB_THREE_DIR);
+          PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_THREE_DIR);
 }
 
 static int number(const char *opt, const char *v, double lo, double hi, double *out) {
@@ -114,7 +116,7 @@ static void on_wake(void *ctx) {
 
 int main(int argc, char **argv) {
   palp_web_hub_def hd = palp_web_hub_default_def();
-  palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = PALP_WEB_WWW_DIR,
+  palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = NULL,
                            .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
   const char *token = NULL, *token_file = NULL, *dds_config = NULL;
   double duration = 0, x = 0;
@@ -197,12 +199,21 @@ int main(int argc, char **argv) {
     return 2;
   }
   sd.token = token;
+  /* The pages live in the data directory (app/palp_app.h): never a source-tree path. */
+  char www[1024], derr[256];
+  if (!sd.www_dir) {
+    if (palp_app_data_path("www", www, sizeof www, derr, sizeof derr) < 0) {
+      fprintf(stderr, "palp-web: the pages: %s (give --www DIR)\n", derr);
+      return 2;
+    }
+    sd.www_dir = www;
+  }
   if (access(sd.www_dir, R_OK) != 0) {
     fprintf(stderr, "palp-web: --www %s: not readable\n", sd.www_dir);
     return 2;
   }
-  if (palp_dds_use_config(dds_config) != 0) {
-    fprintf(stderr, "palp-web: DDS config %s not found\n", dds_config ? dds_config : "(default)");
+  if (palp_app_use_dds_config(dds_config, NULL, NULL, 0, derr, sizeof derr) != 0) {
+    fprintf(stderr, "palp-web: DDS config: %s\n", derr);
     return 2;
   }
   char err[256];

@@ -178,6 +178,16 @@ static void sync_per_tick(const char *path, int nsess, int ticks, double *p50_us
 }
 
 int main(int argc, char **argv) {
+  /* Options first: "--help" must never become a database path (it was created, 141 MB). */
+  for (int i = 1; i < argc; i++) {
+    if (argv[i][0] != '-') continue;
+    const int help = !strcmp(argv[i], "--help") || !strcmp(argv[i], "-h");
+    fprintf(help ? stdout : stderr,
+            "usage: %s [DB_PATH] [SECONDS>0] [SESSIONS>0] [PRODUCERS 1..SESSIONS]\n"
+            "Writes a synthetic 1 kHz load into DB_PATH (default /tmp/palp-bench-db.db; the file is replaced).\n",
+            argv[0]);
+    return help ? 0 : 2;
+  }
   const char *path = argc > 1 ? argv[1] : "/tmp/palp-bench-db.db";
   const double seconds = argc > 2 ? atof(argv[2]) : 10.0;
   const int nsess = argc > 3 ? atoi(argv[3]) : 32;

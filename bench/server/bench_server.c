@@ -644,7 +644,7 @@ int main(int argc, char **argv) {
       return 2;
     }
   }
-  if (palp_dds_use_config(NULL) < 0) {
+  if (palp_dds_use_config(PALP_DDS_DEFAULT_CONFIG) < 0) {
     fprintf(stderr, "bench: cannot read %s\n", PALP_DDS_DEFAULT_CONFIG);
     return 1;
   }

@@ -21,7 +21,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "bench_web_status: bad domain or duration\n");
     return 2;
   }
-  if (palp_dds_use_config(NULL) != 0) return 2;
+  if (palp_dds_use_config(PALP_DDS_DEFAULT_CONFIG) != 0) return 2;
   dds_entity_t pp = dds_create_participant((dds_domainid_t)domain, NULL, NULL);
   if (pp < 0) return 1;
   dds_entity_t t = palp_dds_create_topic(pp, PALP_TOPIC_SERVER_STATUS);

@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "review.h"
+#include "palp_app.h"
 
 #define PI 3.14159265358979323846
 
@@ -411,6 +412,7 @@ static int cmd_annotate(palp_db *db, const palp_db_session_info *s, int argc, ch
 }
 
 int main(int argc, char **argv) {
+  if (palp_app_handle_version(argc, argv, "palp-review")) return 0;
   const char *path = getenv("PALP_DB");
   if (!path || !*path) path = "palp-sessions.db";
   /* --db may come anywhere: take it out before the command's own options are parsed. */

@@ -23,6 +23,7 @@
 
 #include <dds/dds.h>
 
+#include "palp_app.h"
 #include "palp_db.h"
 #include "palp_dds.h"
 #include "palp_dds_security.h"
@@ -72,12 +73,13 @@ typedef struct recorder {
   phantom ph[MAX_PHANTOMS];
   rsession s[MAX_SESSIONS];
   int64_t unknown_session_samples, refused;
+  palp_log *log;
 } recorder;
 
-static volatile sig_atomic_t stop_flag;
+static volatile sig_atomic_t stop_flag, hup_flag;
 static void on_signal(int sig) {
-  (void)sig;
-  stop_flag = 1;
+  if (sig == SIGHUP) hup_flag = 1; /* log rotation: re-open --log-file in the main loop */
+  else stop_flag = 1;
 }
 
 static double now_unix(void) {
@@ -190,7 +192,7 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     char detail[160];
     snprintf(detail, sizeof detail, "%s joined as trainee from %s", m->trainee_name, m->trainee_station);
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_JOIN, -1, detail, 1));
-    fprintf(stderr, "palp-recorder: recording session %u as %s\n", m->session_id, uid);
+    palp_log_info(r->log, "recording session %u as %s", m->session_id, uid);
   }
 }
 
@@ -238,7 +240,23 @@ static void on_state(recorder *r, const palp_SessionState *m) {
                                (int64_t)m->overruns));
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
   count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
-  fprintf(stderr, "palp-recorder: session %u closed (%s)\n", m->session_id, m->reason);
+  palp_log_info(r->log, "session %u closed (%s)", m->session_id, m->reason);
+  s->open = 0;
+}
+
+/* A session state whose writer is gone: its server died (several servers on one
+ * domain: the others go on). The server can no longer close it, so the recorder
+ * does, rather than leaving it "(running)" for ever. */
+static void on_state_lost(recorder *r, dds_entity_t reader, dds_instance_handle_t ih) {
+  palp_SessionState key;
+  memset(&key, 0, sizeof key);
+  if (dds_instance_get_key(reader, ih, &key) != 0) return;
+  rsession *s = find_session(r, key.session_id, 0);
+  if (!s || !s->open) return;
+  const char *why = "server lost (its session state's writer is gone)";
+  count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
+  count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
+  palp_log_warn(r->log, "session %u: %s", key.session_id, why);
   s->open = 0;
 }
 
@@ -359,30 +377,37 @@ static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dd
   return rd;
 }
 
+#define RECORDER_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
+
 static void usage(FILE *f) {
   fputs("usage: palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S]\n"
         "                     [--pki DIR --identity instructor/NAME]   (DDS Security; or PALP_PKI, PALP_IDENTITY)\n"
         "Records every classroom session seen on DDS into the session log until SIGINT/SIGTERM\n"
-        "(or for S seconds). The DDS config defaults to the loopback-only config/cyclonedds-loopback.xml.\n",
+        "(or for S seconds). SIGHUP re-opens --log-file.\n",
         f);
+  palp_app_common_usage(f, RECORDER_OPTS);
 }
 
 int main(int argc, char **argv) {
-  const char *db = NULL, *config = NULL, *pki = NULL, *identity = NULL;
+  const char *db = NULL, *pki = NULL, *identity = NULL;
   dds_domainid_t domain = DDS_DOMAIN_DEFAULT;
   double duration = 0;
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-recorder");
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
       usage(stdout);
       return 0;
     }
+    int common = palp_app_common_opt(&ao, RECORDER_OPTS, argc, argv, &i);
+    if (common < 0) return 2;
+    if (common) continue;
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-recorder: %s needs a value\n", a);
       return 2;
     }
     if (!strcmp(a, "--db")) db = argv[++i];
-    else if (!strcmp(a, "--dds-config")) config = argv[++i];
     else if (!strcmp(a, "--pki")) pki = argv[++i];
     else if (!strcmp(a, "--identity")) identity = argv[++i];
     else if (!strcmp(a, "--domain")) {
@@ -405,18 +430,27 @@ int main(int argc, char **argv) {
       return 2;
     }
   }
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-recorder");
+    return 0;
+  }
   if (!db) {
     usage(stderr);
     return 2;
   }
-  if (palp_dds_use_config(config) != 0) {
-    fprintf(stderr, "palp-recorder: DDS config %s not found\n", config ? config : "(default)");
+  char err[512], dds_chosen[1100];
+  if (palp_app_use_dds_config(ao.dds_config, NULL, dds_chosen, sizeof dds_chosen, err, sizeof err) != 0) {
+    fprintf(stderr, "palp-recorder: %s\n", err);
+    return 2;
+  }
+  palp_log plog;
+  if (palp_log_init(&plog, "palp-recorder", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-recorder: --log-file %s: cannot open it\n", ao.log_file);
     return 2;
   }
   /* Secured, the recorder needs an identity that reads every session: an
    * instructor's (docs/security.md). */
   palp_dds_security sec;
-  char err[512];
   int src = pki || identity ? palp_dds_security_init(&sec, pki, identity, err, sizeof err)
                             : palp_dds_security_from_env(&sec, err, sizeof err);
   if (src == 0 && (pki || identity) && sec.kind == PALP_DDS_ID_NONE) {
@@ -428,14 +462,15 @@ int main(int argc, char **argv) {
     return 2;
   }
   recorder *r = calloc(1, sizeof *r);
+  if (r) r->log = &plog;
   if (!r || palp_db_writer_open(db, NULL, &r->w, err, sizeof err) != 0) {
-    fprintf(stderr, "palp-recorder: %s\n", r ? err : "out of memory");
+    palp_log_error(&plog, "%s", r ? err : "out of memory");
     free(r);
     return 1;
   }
   dds_entity_t pp = palp_dds_create_participant(domain, &sec);
   if (pp < 0) {
-    fprintf(stderr, "palp-recorder: cannot create a DDS participant: %s\n", dds_strretcode(pp));
+    palp_log_error(&plog, "cannot create a DDS participant: %s\n", dds_strretcode(pp));
     palp_db_writer_close(r->w);
     free(r);
     return 1;
@@ -459,7 +494,7 @@ int main(int argc, char **argv) {
   dds_entity_t ws = dds_create_waitset(pp);
   for (int k = 0; k < 5; k++) {
     if (rd[k] < 0) {
-      fprintf(stderr, "palp-recorder: cannot create a reader: %s\n", dds_strretcode(rd[k]));
+      palp_log_error(&plog, "cannot create a reader: %s\n", dds_strretcode(rd[k]));
       dds_delete(pp);
       palp_db_writer_close(r->w);
       free(r);
@@ -470,10 +505,17 @@ int main(int argc, char **argv) {
   }
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
-  fprintf(stderr, "palp-recorder: recording domain %d into %s (sessions on partition %s)\n", (int)domain, db, wildcard);
+  signal(SIGHUP, on_signal);
+  palp_log_info(&plog, "%s recording domain %d into %s (sessions on partition %s), DDS config %s", palp_app_version(),
+                (int)domain, db, wildcard, dds_chosen);
   const dds_time_t t_end = duration > 0 ? dds_time() + (dds_duration_t)(duration * 1e9) : 0;
   while (!stop_flag && (!t_end || dds_time() < t_end)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(100));
+    if (hup_flag) {
+      hup_flag = 0;
+      if (palp_log_reopen(&plog) < 0) palp_log_error(&plog, "SIGHUP: cannot re-open %s", plog.path);
+      else palp_log_info(&plog, "SIGHUP: log re-opened; recording goes on");
+    }
     /* Catalogue and session state first, so a session's samples find it open. */
     for (int k = 0; k < 5; k++) {
       void *samples[TAKE] = {NULL};
@@ -481,7 +523,10 @@ int main(int argc, char **argv) {
       int n;
       while ((n = dds_take(rd[k], samples, info, TAKE, TAKE)) > 0) {
         for (int i = 0; i < n; i++) {
-          if (!info[i].valid_data) continue;
+          if (!info[i].valid_data) {
+            if (k == 1 && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, rd[1], info[i].instance_handle);
+            continue;
+          }
           switch (k) {
           case 0: on_phantom(r, samples[i]); break;
           case 1: on_state(r, samples[i]); break;
@@ -502,8 +547,8 @@ int main(int argc, char **argv) {
   palp_db_writer_flush(r->w, 10);
   palp_db_writer_stats_get(r->w, &st);
   palp_db_writer_close(r->w);
-  fprintf(stderr,
-          "palp-recorder: stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions%s%s\n",
+  palp_log_info(&plog,
+          "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
           st.last_error[0] ? "; last error: " : "", st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) {
@@ -511,5 +556,6 @@ int main(int argc, char **argv) {
     free(r->ph[i].scene_json);
   }
   free(r);
+  palp_log_close(&plog);
   return st.shed + st.failed ? 1 : 0;
 }

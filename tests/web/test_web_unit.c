@@ -187,7 +187,7 @@ static void test_access(void) {
 }
 
 static void test_control(void) {
-  if (palp_dds_use_config(NULL) != 0) {
+  if (palp_dds_use_config(PALP_DDS_DEFAULT_CONFIG) != 0) {
     CHECK(0, "loopback DDS config");
     return;
   }

@@ -25,10 +25,8 @@
 #include "eval.h"
 #include "eval_fem.h"
 #include "svg_plot.h"
+#include "palp_app.h"
 
-#ifndef PALP_CONFIG_DIR
-#define PALP_CONFIG_DIR "config"
-#endif
 
 typedef struct options {
   const char *cmd;
@@ -263,7 +261,12 @@ static int load_setup(const options *o, setup *s) {
   memset(s, 0, sizeof *s);
   if (o->scene) snprintf(s->scene_path, sizeof s->scene_path, "%s", o->scene);
   else if (file_exists("config/paper_step.json")) snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step.json");
-  else snprintf(s->scene_path, sizeof s->scene_path, "%s/paper_step.json", PALP_CONFIG_DIR);
+  else {
+    /* The installed scene (app/palp_app.h): no source path is compiled in. */
+    char err[256];
+    if (palp_app_data_path("config/paper_step.json", s->scene_path, sizeof s->scene_path, err, sizeof err) < 0)
+      snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step.json");
+  }
   char err[512] = "";
   if (!file_exists(s->scene_path)) {
     fprintf(stderr, "palp-eval: scene file \"%s\" not found\n", s->scene_path);
@@ -669,6 +672,7 @@ static int cmd_calibrate(const options *o) {
 }
 
 int main(int argc, char **argv) {
+  if (palp_app_handle_version(argc, argv, "palp-eval")) return 0;
   gsl_set_error_handler_off();
   options o;
   if (parse_args(argc, argv, &o)) {

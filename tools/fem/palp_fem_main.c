@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "fem_internal.h"
+#include "palp_app.h"
 
 static double now_s(void) {
   struct timespec t;
@@ -339,6 +340,7 @@ static int cmd_info(const opts *o) {
 }
 
 int main(int argc, char **argv) {
+  if (palp_app_handle_version(argc, argv, "palp-fem")) return 0;
   if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
     usage();
     return argc < 2 ? 2 : 0;

@@ -8,6 +8,7 @@
 #include <time.h>
 
 #include "netem.h"
+#include "palp_app.h"
 #include "palp.h"
 #include "palp_dds.h"
 
@@ -57,8 +58,9 @@ int main(int argc, char **argv) {
     if (rc) return 2;
     i++;
   }
-  if (palp_dds_use_config(NULL) < 0) {
-    fprintf(stderr, "palp-netem: cannot read the DDS config (set CYCLONEDDS_URI)\n");
+  char derr[256];
+  if (palp_app_use_dds_config(NULL, NULL, NULL, 0, derr, sizeof derr) < 0) {
+    fprintf(stderr, "palp-netem: DDS config: %s\n", derr);
     return 1;
   }
   struct sigaction sa;

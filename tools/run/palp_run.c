@@ -15,6 +15,7 @@
 #include <time.h>
 
 #include "palp.h"
+#include "palp_app.h"
 
 typedef struct run_summary {
   double peak_top, t_peak, top_at_release, residual_1s, recovery_time, max_vol_err, peak_pressure;
@@ -150,6 +151,7 @@ static void usage(void) {
 }
 
 int main(int argc, char **argv) {
+  if (palp_app_handle_version(argc, argv, "palp-run")) return 0;
   const char *scene_path = NULL, *prefix = NULL, *dist = NULL;
   double dt = 0.0;
   int vertices = 0, frames = 0, quiet = 0;

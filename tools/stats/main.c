@@ -26,6 +26,7 @@
 #include "decimal.h"
 #include "stats.h"
 #include "svg_plot.h"
+#include "palp_app.h"
 
 enum { EXIT_DATA = 1, EXIT_USAGE = 2 };
 
@@ -671,6 +672,7 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
 /* ---- main ------------------------------------------------------------------------------ */
 
 int main(int argc, char **argv) {
+  if (palp_app_handle_version(argc, argv, "palp-stats")) return 0;
   options o = {0};
   o.sep = ',';
   if (argc < 2) {

@@ -33,6 +33,7 @@
 #include "palp.h"
 #include "palp_fem.h"
 #include "stats.h"
+#include "palp_app.h"
 
 #define PROBE_VERTICES 1300
 
@@ -282,13 +283,17 @@ static void write_svg(const char *path, const point *p, int n) {
 #undef SY
 }
 
-static void usage(void) {
-  fprintf(stderr, "usage: palp-sweep [--scene FILE] [--distribution single|uniform|gaussian|gaussian_offset]\n"
-                  "                  [--ref-level N] [--frames N] [--out DIR] [--quick]\n");
+static void usage(FILE *f) {
+  fprintf(f, "usage: palp-sweep [--scene FILE] [--distribution single|uniform|gaussian|gaussian_offset]\n"
+                  "                  [--ref-level N] [--frames N] [--out DIR] [--quick] [--version]\n"
+                  "--scene defaults to config/paper_step.json if that exists here, else the installed one\n"
+                  "(<data>/config/paper_step.json).\n");
 }
 
 int main(int argc, char **argv) {
-  const char *scene_path = "config/paper_step.json", *out = "out/sweep", *dist = "uniform";
+  if (palp_app_handle_version(argc, argv, "palp-sweep")) return 0;
+  static const char default_scene[] = "config/paper_step.json";
+  const char *scene_path = default_scene, *out = "out/sweep", *dist = "uniform";
   int ref_level = 2, frames = 0, quick = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -298,7 +303,16 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--frames") && v) frames = atoi(v), ++i;
     else if (!strcmp(a, "--out") && v) out = v, ++i;
     else if (!strcmp(a, "--quick")) quick = 1;
-    else return usage(), 2;
+    else if (!strcmp(a, "--help") || !strcmp(a, "-h")) return usage(stdout), 0;
+    else return usage(stderr), 2;
+  }
+  char installed_scene[1024], derr[512];
+  if (scene_path == default_scene && access(default_scene, R_OK) != 0) {
+    if (palp_app_data_path(default_scene, installed_scene, sizeof installed_scene, derr, sizeof derr) < 0) {
+      fprintf(stderr, "palp-sweep: no %s here and %s; give --scene FILE\n", default_scene, derr);
+      return 2;
+    }
+    scene_path = installed_scene;
   }
   if (ref_level < 1 || ref_level > 6) {
     fprintf(stderr, "palp-sweep: --ref-level must be 1 to 6\n");

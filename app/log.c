@@ -1,0 +1,123 @@
+/* log.c - levelled, timestamped log lines (palp_log.h). */
+#include "palp_log.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdarg.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "palp.h"
+
+static const char *const level_names[] = {"ERROR", "WARN", "INFO", "DEBUG"};
+
+static FILE *open_append(const char *path) {
+  /* 0640: session logs name trainees; the world need not read them. */
+  int fd = open(path, O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0640);
+  if (fd < 0) return NULL;
+  FILE *f = fdopen(fd, "a");
+  if (!f) close(fd);
+  return f;
+}
+
+int palp_log_init(palp_log *l, const char *prog, palp_log_level level, const char *path) {
+  memset(l, 0, sizeof *l);
+  snprintf(l->prog, sizeof l->prog, "%s", prog ? prog : "palp");
+  atomic_init(&l->level, (int)level);
+  pthread_mutex_init(&l->mu, NULL);
+  l->f = stderr;
+  if (path && path[0]) {
+    if (strlen(path) >= sizeof l->path) return PALP_EINVAL;
+    FILE *f = open_append(path);
+    if (!f) return PALP_EIO;
+    snprintf(l->path, sizeof l->path, "%s", path);
+    l->f = f;
+  }
+  return PALP_OK;
+}
+
+void palp_log_close(palp_log *l) {
+  if (!l) return;
+  pthread_mutex_lock(&l->mu);
+  if (l->f && l->f != stderr) fclose(l->f);
+  l->f = stderr;
+  pthread_mutex_unlock(&l->mu);
+  pthread_mutex_destroy(&l->mu);
+}
+
+int palp_log_reopen(palp_log *l) {
+  if (!l || !l->path[0]) return PALP_OK;
+  FILE *f = open_append(l->path);
+  if (!f) return PALP_EIO;
+  pthread_mutex_lock(&l->mu);
+  FILE *old = l->f;
+  l->f = f;
+  pthread_mutex_unlock(&l->mu);
+  if (old && old != stderr) fclose(old);
+  return PALP_OK;
+}
+
+void palp_log_set_level(palp_log *l, palp_log_level level) {
+  if (l) atomic_store(&l->level, (int)level);
+}
+
+palp_log_level palp_log_get_level(const palp_log *l) {
+  return l ? (palp_log_level)atomic_load(&((palp_log *)l)->level) : PALP_LOG_DEBUG;
+}
+
+int palp_log_enabled(const palp_log *l, palp_log_level level) { return (int)level <= (int)palp_log_get_level(l); }
+
+int palp_log_parse_level(const char *s, palp_log_level *out) {
+  static const struct {
+    const char *name;
+    palp_log_level level;
+  } names[] = {{"error", PALP_LOG_ERROR}, {"warn", PALP_LOG_WARN}, {"warning", PALP_LOG_WARN},
+               {"info", PALP_LOG_INFO},   {"debug", PALP_LOG_DEBUG}};
+  for (size_t i = 0; s && i < sizeof names / sizeof names[0]; i++)
+    if (!strcmp(s, names[i].name)) {
+      *out = names[i].level;
+      return PALP_OK;
+    }
+  return PALP_EINVAL;
+}
+
+const char *palp_log_level_name(palp_log_level level) {
+  return level >= PALP_LOG_ERROR && level <= PALP_LOG_DEBUG ? level_names[level] : "?";
+}
+
+void palp_log_timestamp(char *buf, size_t len) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  struct tm tm;
+  gmtime_r(&ts.tv_sec, &tm);
+  snprintf(buf, len, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+           tm.tm_hour, tm.tm_min, tm.tm_sec, ts.tv_nsec / 1000000);
+}
+
+void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {
+  if (!palp_log_enabled(l, level)) return;
+  /* Format the whole line first: one write per line keeps threads' lines whole. */
+  char line[2048];
+  char ts[40];
+  palp_log_timestamp(ts, sizeof ts);
+  int n = snprintf(line, sizeof line, "%s %-5s %s: ", ts, palp_log_level_name(level), l ? l->prog : "palp");
+  if (n < 0) return;
+  va_list ap;
+  va_start(ap, fmt);
+  int m = vsnprintf(line + n, sizeof line - (size_t)n, fmt, ap);
+  va_end(ap);
+  size_t len = m < 0 ? (size_t)n : (size_t)n + (size_t)m;
+  if (len > sizeof line - 2) len = sizeof line - 2; /* truncated: still one line */
+  while (len > 0 && line[len - 1] == '\n') len--;
+  line[len++] = '\n';
+  if (!l) {
+    fwrite(line, 1, len, stderr);
+    return;
+  }
+  pthread_mutex_lock(&l->mu);
+  fwrite(line, 1, len, l->f);
+  fflush(l->f);
+  pthread_mutex_unlock(&l->mu);
+}

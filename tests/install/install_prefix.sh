@@ -1,0 +1,130 @@
+#!/bin/sh
+# Installs palp into a staging prefix (DESTDIR + --prefix, so the tree is also
+# moved from where it was configured to be: it must be relocatable), then, from a
+# directory outside the source tree and with no CYCLONEDDS_URI:
+#   - no installed file contains the source (or build) tree's path (grep -c);
+#   - the installed palp-server runs on its installed config, loopback DDS config and
+#     database location; an installed palp-client trains on it (scripted, then with a
+#     device driver built against the installed input.h); palp-review lists both
+#     sessions from the installed database;
+#   - a program outside palp builds against the installed library through pkg-config
+#     and through find_package, and runs the installed scene.
+# usage: install_prefix.sh BUILD_DIR SOURCE_DIR DOMAIN
+set -u
+build=$(cd "$1" && pwd)
+src=$(cd "$2" && pwd)
+domain=$3
+here=$(cd "$(dirname "$0")" && pwd)
+work=$(mktemp -d /tmp/palp-install-test.XXXXXX)
+stage=$work/stage
+prefix=/opt/palp-test
+root=$stage$prefix
+server_pid=
+cleanup() {
+  [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+fail=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fail=1; }
+unset CYCLONEDDS_URI PALP_DATA_DIR PALP_DB
+
+# 1. Install.
+if DESTDIR=$stage cmake --install "$build" --prefix "$prefix" > "$work/install.log" 2>&1; then
+  ok "cmake --install into DESTDIR=$stage, prefix $prefix ($(grep -c Installing "$work/install.log") files)"
+else
+  bad "cmake --install"; cat "$work/install.log"; exit 1
+fi
+f0=$fail; fail=0
+for f in bin/palp-server bin/palp-client bin/palp-review bin/palp-recorder bin/palp-run bin/palp-stats bin/palp-fem \
+         bin/palp-eval bin/palp-sweep lib/libpalp.a include/palp/palp.h include/palp/input.h lib/pkgconfig/palp.pc \
+         lib/cmake/palp/palpConfig.cmake lib/cmake/palp/palpConfigVersion.cmake lib/palp/libpalp_device_example.so \
+         share/palp/config/server.json share/palp/config/paper_step.json share/palp/config/params/calibrated.json \
+         share/palp/config/cyclonedds-loopback.xml share/palp/config/cyclonedds-lab.xml.example \
+         share/palp/db/migrations/0001_init.sql share/palp/systemd/palp-server.service \
+         share/palp/systemd/palp-recorder.service lib/systemd/system/palp-server.service \
+         share/doc/palp/README.md share/doc/palp/docs/deploy.md share/doc/palp/examples/device_example.c; do
+  if [ -e "$root/$f" ]; then :; else bad "missing $f"; fi
+done
+[ $fail -eq 0 ] && ok "every expected file is installed"
+fail=$((fail | f0)); f0=$fail; fail=0
+
+# 2. No path into the source or build tree anywhere in the installed tree.
+n=0
+for f in $(find "$root" -type f); do
+  c=$(grep -c -F -e "$src" -e "$build" "$f")
+  if [ "$c" -ne 0 ]; then bad "$f names the source/build tree ($c lines): $(strings "$f" | grep -F -e "$src" -e "$build" | head -3)"; fi
+  n=$((n + 1))
+done
+[ $fail -eq 0 ] && ok "none of the $n installed files contains $src or $build"
+fail=$((fail | f0)); f0=$fail; fail=0
+help=$("$root/bin/palp-server" --help 2>&1)
+if printf '%s' "$help" | grep -qF "$src"; then bad "palp-server --help names the source tree"; else ok "palp-server --help names no source path"; fi
+
+# 3. Run the installed programs from outside the source tree.
+cd "$work" || exit 1
+for p in palp-server palp-client palp-review palp-recorder palp-run palp-stats palp-fem palp-eval palp-sweep; do
+  v=$("$root/bin/$p" --version 2>&1); rc=$?
+  if [ $rc -eq 0 ] && printf '%s' "$v" | grep -q "^$p [0-9]"; then :; else bad "$p --version: exit $rc: $v"; fi
+done
+[ $fail -eq 0 ] && ok "--version in every program ($("$root/bin/palp-server" --version))"
+fail=$((fail | f0))
+out=$("$root/bin/palp-server" --check 2>&1) && printf '%s' "$out" | grep -qF "$root/share/palp/config/server.json: ok" \
+  && ok "installed server finds its installed config: $out" || bad "palp-server --check: $out"
+"$root/bin/palp-server" --domain "$domain" --duration 25 --log-file "$work/server.log" > "$work/server.out" 2>&1 &
+server_pid=$!
+sleep 1.5
+"$root/bin/palp-client" --role trainee --phantom 1 --name installed-ann --domain "$domain" --duration 2 --timeout 10 \
+  > "$work/ann.out" 2>&1 && grep -q "peak feedback" "$work/ann.out" \
+  && ok "installed client (scripted): $(grep 'peak feedback' "$work/ann.out")" || { bad "installed client"; cat "$work/ann.out"; }
+# A device driver built against the installed headers only, loaded by the installed client.
+export PKG_CONFIG_PATH=$root/lib/pkgconfig
+if cc -std=c17 -Wall -Wextra -Wpedantic -shared -fPIC $(pkg-config --cflags palp) \
+     "$root/share/doc/palp/examples/device_example.c" -o "$work/libmydevice.so" -lm 2> "$work/dev.err"; then
+  "$root/bin/palp-client" --role trainee --phantom 2 --name installed-dev --domain "$domain" --duration 2 \
+    --timeout 10 --input "device:$work/libmydevice.so:1" > "$work/dev.out" 2>&1 && grep -q "peak feedback" "$work/dev.out" \
+    && ok "driver built against installed input.h: $(grep 'peak feedback' "$work/dev.out")" \
+    || { bad "installed client with the out-of-tree driver"; cat "$work/dev.out"; }
+else
+  bad "device driver does not build against the installed headers"; cat "$work/dev.err"
+fi
+kill -INT "$server_pid"; wait "$server_pid"; rc=$?; server_pid=
+[ $rc -eq 0 ] && ok "installed server stopped cleanly on SIGINT" || bad "server exit $rc"
+grep -qF "DDS config $root/share/palp/config/cyclonedds-loopback.xml" "$work/server.log" \
+  && ok "server used the installed loopback DDS config" || { bad "server DDS config"; cat "$work/server.log"; }
+if grep -qE '^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}\.[0-9]{3}Z (ERROR|WARN |INFO |DEBUG) palp-server: ' \
+     "$work/server.log" && ! grep -vqE '^[0-9]{4}-[0-9]{2}-[0-9]{2}T|^session |^[0-9]+ ' "$work/server.log"; then
+  ok "every server log line is timestamped and levelled ($(wc -l < "$work/server.log") lines)"
+else
+  bad "server log lines"; cat "$work/server.log"
+fi
+db=$root/var/lib/palp/palp-sessions.db
+list=$("$root/bin/palp-review" --db "$db" list 2>&1)
+if printf '%s' "$list" | grep -q installed-ann && printf '%s' "$list" | grep -q installed-dev; then
+  ok "installed palp-review lists both sessions from the installed database $db"
+else
+  bad "palp-review list: $list"
+fi
+[ -e "$src/out/palp-sessions.db" ] && [ "$src/out/palp-sessions.db" -nt "$work/install.log" ] \
+  && bad "the installed server wrote into the source tree"
+
+# 4. A program outside palp against the installed library: pkg-config, then find_package.
+if cc -std=c17 -Wall -Wextra -Wpedantic $(pkg-config --cflags palp) "$here/consumer.c" -o "$work/consumer-pc" \
+     $(pkg-config --libs palp) 2> "$work/pc.err"; then
+  out=$("$work/consumer-pc" "$root/share/palp/config/paper_step.json" 2>&1) \
+    && ok "pkg-config build: $(printf '%s' "$out" | head -1)" || bad "pkg-config consumer: $out"
+else
+  bad "build through pkg-config"; cat "$work/pc.err"
+fi
+mkdir -p "$work/fp"
+cp "$here/consumer.c" "$work/fp/"
+cp "$here/CMakeLists.txt.consumer" "$work/fp/CMakeLists.txt"
+if cmake -S "$work/fp" -B "$work/fp/build" -DCMAKE_PREFIX_PATH="$root" > "$work/fp.log" 2>&1 \
+   && cmake --build "$work/fp/build" >> "$work/fp.log" 2>&1; then
+  out=$("$work/fp/build/consumer" "$root/share/palp/config/paper_step.json" 2>&1) \
+    && ok "find_package(palp) build: $(printf '%s' "$out" | head -1)" || bad "find_package consumer: $out"
+else
+  bad "build through find_package"; cat "$work/fp.log"
+fi
+exit $fail

@@ -1,0 +1,131 @@
+#define _DEFAULT_SOURCE /* realpath */
+/* test_app.c - the shared program support (app/): one DDS-config rule, the data
+ * directory, and the levelled log's line format, levels and rotation. */
+#include <regex.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "palp.h"
+#include "palp_app.h"
+
+static int failures;
+#define CHECK(cond, ...)                                                                                           \
+  do {                                                                                                             \
+    if (cond) {                                                                                                    \
+      printf("ok   ");                                                                                             \
+    } else {                                                                                                       \
+      printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                                       \
+      failures++;                                                                                                  \
+    }                                                                                                              \
+    printf(__VA_ARGS__);                                                                                           \
+    printf("\n");                                                                                                  \
+  } while (0)
+
+static int count_lines(const char *path, const char *needle) {
+  FILE *f = fopen(path, "r");
+  if (!f) return -1;
+  char line[4096];
+  int n = 0;
+  while (fgets(line, sizeof line, f)) n += needle ? strstr(line, needle) != NULL : 1;
+  fclose(f);
+  return n;
+}
+
+int main(int argc, char **argv) {
+  if (argc != 3) {
+    fprintf(stderr, "usage: test_app LOOPBACK_XML TMPDIR\n");
+    return 2;
+  }
+  const char *loopback = argv[1];
+  char dir[512], other[600], logp[600], rotated[600];
+  snprintf(dir, sizeof dir, "%s/test_app.%ld", argv[2], (long)getpid());
+  mkdir(argv[2], 0777);
+  mkdir(dir, 0777);
+  snprintf(other, sizeof other, "%s/other.xml", dir);
+  FILE *f = fopen(other, "w");
+  fputs("<CycloneDDS/>\n", f);
+  fclose(f);
+  char chosen[1200], err[512];
+  char real_loopback[1024], real_other[1024];
+  realpath(loopback, real_loopback);
+  realpath(other, real_other);
+
+  /* 1. The DDS config rule: flag > CYCLONEDDS_URI > fallback > installed default. */
+  unsetenv("CYCLONEDDS_URI");
+  int rc = palp_app_use_dds_config(NULL, loopback, chosen, sizeof chosen, err, sizeof err);
+  CHECK(rc == 0 && !strcmp(chosen, real_loopback), "no flag, no env: the fallback (%s)", chosen);
+  CHECK(!strncmp(getenv("CYCLONEDDS_URI"), "file://", 7) && !strcmp(getenv("CYCLONEDDS_URI") + 7, real_loopback),
+        "CYCLONEDDS_URI set to file://<absolute fallback>");
+  rc = palp_app_use_dds_config(NULL, other, chosen, sizeof chosen, err, sizeof err);
+  CHECK(rc == 0 && !strncmp(chosen, "CYCLONEDDS_URI=", 15) && strstr(getenv("CYCLONEDDS_URI"), "cyclonedds-loopback"),
+        "CYCLONEDDS_URI set: it wins over the fallback (%s)", chosen);
+  rc = palp_app_use_dds_config(other, loopback, chosen, sizeof chosen, err, sizeof err);
+  CHECK(rc == 0 && !strcmp(chosen, real_other) && strstr(getenv("CYCLONEDDS_URI"), "other.xml"),
+        "--dds-config wins over CYCLONEDDS_URI (%s)", chosen);
+  rc = palp_app_use_dds_config("/nonexistent/x.xml", NULL, chosen, sizeof chosen, err, sizeof err);
+  CHECK(rc < 0 && strstr(err, "/nonexistent/x.xml"), "a missing --dds-config is an error naming it: %s", err);
+  unsetenv("CYCLONEDDS_URI");
+  rc = palp_app_use_dds_config(NULL, NULL, chosen, sizeof chosen, err, sizeof err);
+  CHECK(rc == 0 && strstr(chosen, "/config/cyclonedds-loopback.xml"),
+        "nothing given: the data directory's loopback config (%s)", chosen);
+
+  /* 2. The data directory: PALP_DATA_DIR wins; a bad one is an error, not a fallback. */
+  char data[1024];
+  setenv("PALP_DATA_DIR", dir, 1);
+  rc = palp_app_data_dir(data, sizeof data, err, sizeof err);
+  CHECK(rc == 0 && !strcmp(data, dir), "PALP_DATA_DIR=%s", data);
+  setenv("PALP_DATA_DIR", "/nonexistent/palp-data", 1);
+  rc = palp_app_data_dir(data, sizeof data, err, sizeof err);
+  CHECK(rc < 0 && strstr(err, "/nonexistent/palp-data"), "a PALP_DATA_DIR that is not a directory: %s", err);
+  unsetenv("PALP_DATA_DIR");
+  rc = palp_app_data_path("config/server.json", data, sizeof data, err, sizeof err);
+  CHECK(rc == 0 && access(data, R_OK) == 0, "build tree: <data>/config/server.json is readable (%s)", data);
+
+  /* 3. The log: ISO 8601 UTC line format, levels, rotation by re-open. */
+  snprintf(logp, sizeof logp, "%s/x.log", dir);
+  snprintf(rotated, sizeof rotated, "%s/x.log.1", dir);
+  palp_log lg;
+  CHECK(palp_log_init(&lg, "palp-test", PALP_LOG_INFO, logp) == 0, "log file opened");
+  palp_log_info(&lg, "first %d", 1);
+  palp_log_debug(&lg, "hidden at info");
+  palp_log_warn(&lg, "a warning");
+  palp_log_error(&lg, "an error\n"); /* a trailing newline is not doubled */
+  FILE *lf = fopen(logp, "r");
+  char line[512] = "";
+  if (lf) {
+    if (!fgets(line, sizeof line, lf)) line[0] = 0;
+    fclose(lf);
+  }
+  regex_t re;
+  regcomp(&re, "^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}\\.[0-9]{3}Z INFO  palp-test: first 1\n$",
+          REG_EXTENDED);
+  CHECK(regexec(&re, line, 0, NULL, 0) == 0, "line format: %.*s", (int)strcspn(line, "\n"), line);
+  regfree(&re);
+  CHECK(count_lines(logp, NULL) == 3 && count_lines(logp, "hidden") == 0, "info level: 3 lines, no debug (%d)",
+        count_lines(logp, NULL));
+  palp_log_set_level(&lg, PALP_LOG_DEBUG);
+  palp_log_debug(&lg, "shown at debug");
+  CHECK(count_lines(logp, "DEBUG palp-test: shown at debug") == 1, "debug level shows debug lines");
+  rename(logp, rotated);
+  palp_log_info(&lg, "still to the moved file");
+  CHECK(palp_log_reopen(&lg) == 0, "re-open after rotation");
+  palp_log_info(&lg, "to the new file");
+  CHECK(count_lines(rotated, "still to the moved file") == 1 && count_lines(logp, NULL) == 1 &&
+            count_lines(logp, "to the new file") == 1,
+        "before re-open: the moved file; after: a new file with 1 line");
+  palp_log_close(&lg);
+  palp_log_level lv;
+  CHECK(palp_log_parse_level("warn", &lv) == 0 && lv == PALP_LOG_WARN && palp_log_parse_level("loud", &lv) < 0,
+        "level names parsed, a bad one refused");
+  CHECK(palp_log_init(&lg, "palp-test", PALP_LOG_INFO, "/nonexistent/dir/x.log") < 0,
+        "an unwritable log file is an error");
+  unlink(logp);
+  unlink(rotated);
+  unlink(other);
+  rmdir(dir);
+  printf("%d failure(s)\n", failures);
+  return failures ? 1 : 0;
+}
