@@ -241,7 +241,9 @@ int main(int argc, char **argv) {
   const int port = palp_web_serve_port(srv);
   const char *host = strchr(sd.listen, ':') ? "[::1]" : sd.listen;
   char q[PALP_WEB_TOKEN_MAX + 16] = "";
-  if (token) snprintf(q, sizeof q, "?token=%s", token);
+  /* A token given on the command line is already visible to this user; one read from a file is
+   * not repeated into logs. */
+  if (token) snprintf(q, sizeof q, "?token=%s", token_file ? "<the token>" : token);
   printf("palp-web: DDS domain %u, serving on %s port %d%s\n", hd.domain, sd.listen, port,
          token ? " (token required)" : "");
   printf("palp-web: trainee page  http://%s:%d/trainee.html%s\n", host, port, q);

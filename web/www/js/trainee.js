@@ -99,6 +99,17 @@
     fingerObjs.length = 0;
     for (const f of list) {
       const c = new THREE.Vector3(f.center[0], f.center[1], f.center[2]);
+      if (f.mode === "force" && geom) {
+        /* The wire gives a force-driven contact's centre on the rest surface: draw it where that
+         * skin is now (the nearest vertex's current position), not floating above the dent. */
+        const pos = geom.attributes.position.array;
+        let best = -1, bd = Infinity;
+        for (let i = 0; i < rest.length; i += 3) {
+          const d = (rest[i] - c.x) ** 2 + (rest[i + 1] - c.y) ** 2 + (rest[i + 2] - c.z) ** 2;
+          if (d < bd) { bd = d; best = i; }
+        }
+        if (best >= 0) c.set(pos[best], pos[best + 1], pos[best + 2]);
+      }
       const r = f.mode === "finger" && f.radius > 0 ? f.radius : 0.003;
       const s = new THREE.Mesh(new THREE.SphereBufferGeometry(r, 20, 14), tipMat);
       s.position.copy(c);
@@ -114,9 +125,21 @@
       s.position.set(proxy.center[0], proxy.center[1], proxy.center[2]);
       fingerObjs.push(s);
     }
-    for (const o of fingerObjs) scene.add(o);
+    /* Drawn over the skin: a finger in its own dent would otherwise be hidden by the dent's rim. */
+    for (const o of fingerObjs) {
+      o.traverse(function (x) { if (x.material) x.material.depthTest = false; x.renderOrder = 10; });
+      o.visible = showFingers;
+      scene.add(o);
+    }
     dirty = true;
   }
+  let showFingers = true;
+  /* For tests: hide the fingers so that a screenshot shows the phantom's own change only. */
+  window.palpShowFingers = function (on) {
+    showFingers = !!on;
+    for (const o of fingerObjs) o.visible = showFingers;
+    dirty = true;
+  };
 
   /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded ---- */
   let bands = { touch_min: 0.2, light_max: 1, medium_max: 3 };
