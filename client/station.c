@@ -49,6 +49,8 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
                           " or expired, the domain above 230?)"
                         : "");
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+    /* palp_station_request is for other vendors' stations on plain DDS (docs/interop.md). */
+    if (k == PALP_TOPIC_STATION_REQUEST) continue;
     st->topic[k] = palp_dds_create_topic(st->pp, (palp_dds_topic_kind)k);
     if (st->topic[k] < 0) {
       palp_cli_station_close(st);

@@ -992,6 +992,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     goto fail;
   }
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+    /* Secured, palp_station_request is not offered (no identity to check; see below). */
+    if (secured(srv) && k == PALP_TOPIC_STATION_REQUEST) continue;
     srv->topic[k] = palp_dds_create_topic(srv->pp, (palp_dds_topic_kind)k);
     if (srv->topic[k] < 0) {
       *rc = PALP_EIO;

@@ -83,8 +83,9 @@ export PKG_CONFIG_PATH=$root/lib/pkgconfig
 if cc -std=c17 -Wall -Wextra -Wpedantic -shared -fPIC $(pkg-config --cflags palp) \
      "$root/share/doc/palp/examples/device_example.c" -o "$work/libmydevice.so" -lm 2> "$work/dev.err"; then
   "$root/bin/palp-client" --role trainee --phantom 2 --name installed-dev --domain "$domain" --duration 2 \
-    --timeout 10 --input "device:$work/libmydevice.so:1" > "$work/dev.out" 2>&1 && grep -q "peak feedback" "$work/dev.out" \
-    && ok "driver built against installed input.h: $(grep 'peak feedback' "$work/dev.out")" \
+    --timeout 10 --input "device:$work/libmydevice.so:1" > "$work/dev.out" 2>&1 \
+    && grep -qE "peak (feedback|rendered force) [0-9.]*[1-9]" "$work/dev.out" \
+    && ok "driver (position in, force out) built against installed input.h: $(grep -oE 'peak (feedback|rendered force) [0-9.]+ N' "$work/dev.out")" \
     || { bad "installed client with the out-of-tree driver"; cat "$work/dev.out"; }
 else
   bad "device driver does not build against the installed headers"; cat "$work/dev.err"
