@@ -26,7 +26,7 @@ static void usage(FILE *f) {
           "  --server-name NAME   override server_name (identity on the domain; default the host name)\n"
           "  --server-number N    override server_number (0..4095; the high bits of every phantom/session id)\n"
           "  --identity-wait S    listen S seconds for servers already on the domain before announcing\n"
-          "                       (default 0.5; a lab network may need 2)\n"
+          "                       (default 0.5 with a server name or number, else 0; a lab network may need 2)\n"
           "  --tick-rate HZ       override tick_rate_hz (100 as in the paper, 1000 for haptics)\n"
           "  --threads N          override tick_threads (0 = one per core)\n"
           "  --rt-priority N      override tick_priority (1..99: SCHED_FIFO tick threads; 0: normal)\n"
@@ -132,7 +132,7 @@ int main(int argc, char **argv) {
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-server");
   const char *server_name = NULL;
-  double server_number = -1, identity_wait = 0.5;
+  double server_number = -1, identity_wait = -1;
   double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
   int check = 0, verbose = 0, no_db = 0;
   const char *pki = NULL, *identity = NULL;
@@ -206,7 +206,13 @@ int main(int argc, char **argv) {
   if (database) snprintf(def.cfg.database, sizeof def.cfg.database, "%s", database);
   if (server_name) snprintf(def.cfg.server_name, sizeof def.cfg.server_name, "%s", server_name);
   if (server_number >= 0) def.cfg.server_number = (uint32_t)server_number;
-  def.identity_wait_s = identity_wait;
+  /* A server given an identity is meant to share its domain: it listens before it
+   * serves. A default one (number 0, host name) starts at once, as it always did; a
+   * clash is still found by its first identity poll (<= 1 status period), and the
+   * younger server stops. */
+  def.identity_wait_s = identity_wait >= 0                                   ? identity_wait
+                        : def.cfg.server_number > 0 || def.cfg.server_name[0] ? 0.5
+                                                                              : 0.0;
   if (palp_srv_config_check_ids(&def.cfg, err, sizeof err) < 0) {
     fprintf(stderr, "palp-server: bad configuration: %s: %s\n", config_path, err);
     return 1;
@@ -309,7 +315,11 @@ int main(int argc, char **argv) {
   }
   palp_srv_destroy(srv);
   palp_srv_db_log_close(log);
-  palp_log_info(&plog, "stopped (%s)", sc.signo == SIGINT ? "SIGINT" : sc.signo == SIGTERM ? "SIGTERM" : "end of run");
+  palp_log_info(&plog, "stopped (%s)",
+                sc.signo == SIGINT    ? "SIGINT"
+                : sc.signo == SIGTERM ? "SIGTERM"
+                : rc < 0              ? "server identity conflict"
+                                      : "end of run");
   palp_log_close(&plog);
   return rc < 0 ? 1 : 0;
 }

@@ -82,7 +82,7 @@ fi
 
 srv() { # host name number
   on_bg "$1" "$server" --dds-config "$(dds "$1")" --domain "$domain" --server-name "$2" --server-number "$3" \
-    --database "$work/$2.db" --log-file "$work/$2.log"
+    --threads 1 --database "$work/$2.db" --log-file "$work/$2.log"
 }
 srv h1 room-a 1 > "$work/room-a.out" 2>&1 & pid_a=$!; pids="$pids $pid_a"
 srv h2 room-b 2 > "$work/room-b.out" 2>&1 & pid_b=$!; pids="$pids $pid_b"
@@ -153,6 +153,7 @@ ann 2 normal
 bob 2 normal
 cid 1 error
 cid 2 normal"
+[ "$rows" = "$want" ] || { echo "--- room-a log"; cat "$work/room-a.log"; echo "--- room-b log"; cat "$work/room-b.log"; }
 [ "$rows" = "$want" ] && ok "one recorder gathered all 5 sessions of both servers; the dead server's 2 ended 'error' (server lost)" \
   || bad "recorder database: want
 $want"
