@@ -139,6 +139,91 @@ static inline double palp_stats_sum_value(const palp_stats_sum *acc) { return ac
  * then ssd = sum (x - mean)^2. n >= 1; ssd = 0 for n = 1. */
 void palp_stats_mean_ssd(const double *x, size_t n, double *mean, double *ssd);
 
+/* ---- serially correlated data: effective size, block bootstrap, TOST, ------- */
+/* ---- repeated-measures agreement (src/stats_serial.c) ------------------------ */
+/* The paper's statistics treat every vertex-frame as an independent observation;
+ * the differences of two smooth models over a run are instead strongly
+ * autocorrelated in time (lag-1 r ~ 0.99). These functions give the statistics a
+ * sound unit of analysis (docs/statistics.md, "Sound statistics"). */
+
+/* Lag-1 autocorrelation (Box & Jenkins' estimator):
+ *   r1 = sum_{t<n-1} (x_t - m)(x_{t+1} - m) / sum_t (x_t - m)^2.
+ * n >= 3 and the series not constant (else PALP_EINVAL). */
+int palp_stats_autocorr1(const double *x, size_t n, double *r1);
+
+/* Effective sample size of the mean of an AR(1) series with lag-1 autocorrelation
+ * r1: var(mean) = sigma^2 / n_eff with n_eff = n (1 - r1) / (1 + r1) (Bayley &
+ * Hammersley 1946), clamped to [1, n] (a negative r1 is not credited with more
+ * than n observations; a series holds at least one observation of its mean). */
+double palp_stats_neff_ar1(size_t n, double r1);
+
+/* Block length for the moving-block bootstrap of a mean: Politis & White's (2004)
+ * optimal b = (2 G^2 / D)^(1/3) n^(1/3) with G, D evaluated for an AR(1) process
+ * of lag-1 autocorrelation r1, which gives b = 6^(1/3) (r1 / (1 - r1^2))^(2/3)
+ * n^(1/3), rounded up; 1 for r1 <= 0; at most n. */
+size_t palp_stats_block_length_ar1(size_t n, double r1);
+
+typedef struct palp_stats_boot {
+  double mean;        /* the statistic on the data: mean of x */
+  double se;          /* SD of the resampled means (B - 1 in the denominator) */
+  double ci_lower;    /* percentile interval of the resampled means at `level` */
+  double ci_upper;
+  double level;       /* e.g. 0.90 for TOST at alpha = 0.05 */
+  size_t block;       /* block length b */
+  size_t blocks;      /* blocks per resample, ceil(n / b) */
+  size_t resamples;   /* B */
+} palp_stats_boot;
+
+/* Moving-block bootstrap (Kuensch 1989) of the mean of x[0..n): each resample
+ * joins ceil(n / b) blocks x[s .. s+b) with s uniform on 0..n-b, cut to n values.
+ * Deterministic: the draws come from a SplitMix64 stream started at `seed`.
+ * work holds `resamples` doubles (the resampled means, left sorted). Errors
+ * (PALP_EINVAL): n < 2, block 0 or > n, resamples < 2, level outside (0, 1), a
+ * non-finite value, NULL pointers. */
+int palp_stats_block_bootstrap_mean(const double *x, size_t n, size_t block, size_t resamples,
+                                    unsigned long long seed, double level, double *work,
+                                    palp_stats_boot *out);
+
+typedef struct palp_stats_tost {
+  double estimate;     /* e.g. the bias */
+  double se;           /* its standard error */
+  double df;           /* degrees of freedom of the t reference (may be fractional) */
+  double lower, upper; /* equivalence margins, lower < upper */
+  double alpha;        /* each one-sided test's level, 0.05 */
+  double t_lower;      /* (estimate - lower) / se: tests H0 estimate <= lower */
+  double t_upper;      /* (upper - estimate) / se: tests H0 estimate >= upper */
+  double p;            /* max of the two one-sided p-values Q_t(t; df) */
+  double ci_lower;     /* estimate -+ t_{1-alpha, df} se: the (1 - 2 alpha) interval */
+  double ci_upper;
+  int equivalent;      /* 1 when p < alpha, i.e. the interval lies inside (lower, upper) */
+} palp_stats_tost;
+
+/* Schuirmann's (1987) two one-sided tests. se = 0 gives p = 0 when the estimate
+ * lies strictly inside the margins, else 1. Errors (PALP_EINVAL): se < 0, df <= 0,
+ * lower >= upper, alpha outside (0, 0.5), non-finite input. */
+int palp_stats_tost_t(double estimate, double se, double df, double lower, double upper, double alpha,
+                      palp_stats_tost *out);
+
+typedef struct palp_stats_ba_rm {
+  int subjects;         /* units of analysis (here: runs), >= 2 */
+  size_t n;             /* observations in all */
+  double bias;          /* mean of all differences */
+  double ms_between;    /* one-way ANOVA of the differences by subject */
+  double ms_within;
+  double divisor;       /* m0 = (N^2 - sum m_i^2) / ((k - 1) N) */
+  double var_between;   /* (MS_b - MS_w) / m0, 0 when negative */
+  double var_within;    /* MS_w */
+  double sd_total;      /* sqrt(var_between + var_within) */
+  double loa_lower;     /* bias - 1.96 sd_total */
+  double loa_upper;     /* bias + 1.96 sd_total */
+} palp_stats_ba_rm;
+
+/* Bland & Altman (2007), "true value varies": limits of agreement for several
+ * differences per subject. Subject g holds d[start[g] .. start[g+1]) (at least 2
+ * each; see palp_stats_anova_oneway for the layout and errors). */
+int palp_stats_bland_altman_rm(const double *d, const size_t *start, int subjects,
+                               palp_stats_ba_rm *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -111,6 +111,44 @@ def stats(a, b):
                 meets=int(p > 0.05 and within / n > 0.95))
 
 
+def t_tail(t, df):
+    """P(T_df > t) = I_{df / (df + t^2)}(df / 2, 1 / 2) / 2 for t >= 0."""
+    if math.isinf(t):
+        return 0.0 if t > 0 else 1.0
+    q = 0.5 * betainc(df / 2.0, 0.5, df / (df + t * t))
+    return q if t >= 0 else 1.0 - q
+
+
+def sound(a, b, frames, margin):
+    """The second table from its definitions: per-frame mean difference, lag-1
+    autocorrelation, AR(1) effective size, TOST with SE = SD / sqrt(n_eff)."""
+    per = len(a) // frames
+    dbar = [math.fsum(a[f * per + i] - b[f * per + i] for i in range(per)) / per for f in range(frames)]
+    m = math.fsum(dbar) / frames
+    ss = math.fsum((x - m) ** 2 for x in dbar)
+    r1 = math.fsum((dbar[t] - m) * (dbar[t + 1] - m) for t in range(frames - 1)) / ss if ss > 0 else 0.0
+    neff = min(frames, max(1.0, frames * (1 - r1) / (1 + r1)))
+    out = dict(bias=m, r1=r1, n_eff=neff, frame_sd=math.sqrt(ss / (frames - 1)), dbar=dbar)
+    if neff >= 2:
+        se = out["frame_sd"] / math.sqrt(neff)
+        out["tost_p"] = max(t_tail((m + margin) / se, neff - 1), t_tail((margin - m) / se, neff - 1)) if se > 0 \
+            else (0.0 if -margin < m < margin else 1.0)
+    return out
+
+
+def rm_limits(diffs):
+    """Bland & Altman (2007) limits from a list of per-run difference lists."""
+    n = sum(len(d) for d in diffs)
+    k = len(diffs)
+    means = [math.fsum(d) / len(d) for d in diffs]
+    bias = math.fsum(math.fsum(d) for d in diffs) / n
+    ms_w = math.fsum(math.fsum((x - mu) ** 2 for x in d) for d, mu in zip(diffs, means)) / (n - k)
+    ms_b = math.fsum(len(d) * (mu - bias) ** 2 for d, mu in zip(diffs, means)) / (k - 1)
+    m0 = (n * n - sum(len(d) ** 2 for d in diffs)) / ((k - 1) * n)
+    sd = math.sqrt(max(0.0, (ms_b - ms_w) / m0) + ms_w)
+    return bias, bias - 1.96 * sd, bias + 1.96 * sd
+
+
 PAPER = {  # Widmer & Hu 2011, Tables V (cm) and VI (N): RMSE, F, p, SD, agree %
     "V": {"I": (0.17, 2.37, 0.12, 0.27, 95.2), "II": (0.21, 1.52, 0.36, 0.29, 95.0),
           "III": (0.26, 1.69, 0.32, 0.32, 95.3), "IV": (0.32, 0.96, 0.48, 0.33, 96.5)},
@@ -139,6 +177,7 @@ def test_tables(tool, scene):
     check(len(rows) == 8, "tables.csv has %d rows, 8 expected (2 tables x 4 distributions)" % len(rows))
     js = json.load(open(os.path.join(out, "tables.json")))
     md = open(os.path.join(out, "tables.md")).read()
+    pooled_diffs = {}
     for row in rows:
         t, dist = row["table"], row["distribution"]
         k = ROMAN.index(dist) + 1
@@ -186,6 +225,42 @@ def test_tables(tool, scene):
         check(close(jr["rmse"], s["rmse"], 1e-9) and close(jr["anova"]["p"], s["p"], 1e-7, 1e-12) and
               jr["meets_paper_criteria"] == bool(s["meets"]), "%s: tables.json disagrees" % where)
         check(("| Distr. %s |" % dist) in md, "tables.md lacks the row of Distr. %s" % dist)
+        # the second table, recomputed from the pair file
+        js_s = jr.get("sound")
+        check(js_s is not None, "%s: tables.json lacks the second table" % where)
+        if js_s:
+            peak = max(b)
+            margin = max(0.1, 0.05 * peak) if t == "V" else 0.15 * peak
+            q = sound(a, b, FRAMES, margin)
+            check(close(js_s["margin"], margin, 1e-12), "%s: margin %s, expected %.17g" % (where, js_s["margin"], margin))
+            for key in ("bias", "r1", "n_eff", "frame_sd"):
+                check(close(js_s[key], q[key], 1e-9, 1e-15), "%s: %s = %s, recomputed %.17g" % (where, key, js_s[key], q[key]))
+            check(js_s["tost_valid"] == ("tost_p" in q), "%s: tost_valid %s" % (where, js_s["tost_valid"]))
+            if "tost_p" in q and js_s["tost_valid"]:
+                check(close(js_s["tost_p"], q["tost_p"], 1e-7, 1e-12),
+                      "%s: TOST p = %s, recomputed %.17g" % (where, js_s["tost_p"], q["tost_p"]))
+            # bootstrap: means of frame values lie within their range; seeded, so the rerun repeats it
+            check(min(q["dbar"]) - 1e-12 <= js_s["boot_ci_lower"] <= js_s["boot_ci_upper"] <= max(q["dbar"]) + 1e-12,
+                  "%s: bootstrap interval outside the range of the per-frame means" % where)
+            pooled_diffs.setdefault(t, []).append(([x - y for x, y in zip(a, b)], margin))
+        check("Second table" in md, "tables.md lacks the second table")
+    # pooled over the four runs: repeated-measures limits from the definitions
+    for t, runs in pooled_diffs.items():
+        jp = [x for x in js["tables"] if x["table"] == t][0].get("pooled")
+        check(jp is not None and jp["runs"] == 4, "Table %s: pooled row missing" % t)
+        if not jp:
+            continue
+        bias, lo, hi = rm_limits([d for d, _ in runs])
+        check(close(jp["bias"], bias, 1e-9, 1e-15) and close(jp["rm_loa_lower"], lo, 1e-9, 1e-15) and
+              close(jp["rm_loa_upper"], hi, 1e-9, 1e-15),
+              "Table %s pooled: LoA [%s, %s], recomputed [%.17g, %.17g]" % (t, jp["rm_loa_lower"], jp["rm_loa_upper"], lo, hi))
+        check(close(jp["margin"], min(mg for _, mg in runs), 1e-12), "Table %s pooled: margin not the strictest" % t)
+        rb = [math.fsum(d) / len(d) for d, _ in runs]
+        mb = math.fsum(rb) / 4
+        se = math.sqrt(math.fsum((x - mb) ** 2 for x in rb) / 3) / 2
+        mg = jp["margin"]
+        p = max(t_tail((mb + mg) / se, 3), t_tail((mg - mb) / se, 3))
+        check(close(jp["tost_p"], p, 1e-7, 1e-12), "Table %s pooled: TOST p %s, recomputed %.17g" % (t, jp["tost_p"], p))
     # plots: well-formed SVG for every distribution
     for k in range(1, 5):
         for name in ("top_vertex_d%d.svg", "peak_vertex_d%d.svg", "bland_altman_displacement_d%d.svg",

@@ -197,12 +197,66 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
                            size_t errlen);
 
 
+/* ---- sound statistics beside the paper's (docs/statistics.md) ------------------ */
+/* Equivalence margins, from perception (docs/statistics.md cites the sources):
+ * displacement: the larger of 1 mm and 5% of the reference's peak displacement;
+ * force: 15% of the reference's peak force (compliance discrimination ~15-22%). */
+#define PALP_EVAL_MARGIN_DISP_ABS 0.1   /* [cm] */
+#define PALP_EVAL_MARGIN_DISP_REL 0.05  /* [-] of the reference peak */
+#define PALP_EVAL_MARGIN_FORCE_REL 0.15 /* [-] of the reference peak */
+#define PALP_EVAL_TOST_ALPHA 0.05
+#define PALP_EVAL_BOOT_RESAMPLES 4000
+#define PALP_EVAL_BOOT_SEED 20110817ull
+#define PALP_EVAL_BOOT_MIN_BLOCKS 4 /* fixed: the tables are reproducible */
+
+/* One run's paired data set, with the run as the unit of analysis: its vertex-frames
+ * are repeated measures. The per-frame mean difference dbar_f (frames values) is the
+ * series whose autocorrelation decides how much the run knows about its bias. */
+typedef struct palp_eval_sound {
+  int frames;
+  double bias;          /* mean of all differences = mean of dbar_f [cm or N] */
+  double frame_sd;      /* SD of dbar_f */
+  double r1;            /* lag-1 autocorrelation of dbar_f (0 when dbar_f is constant) */
+  double n_eff;         /* AR(1) effective number of frames, n (1 - r1) / (1 + r1) in [1, n] */
+  double margin;        /* equivalence margin, -+ [cm or N] */
+  int tost_valid;       /* n_eff >= 2: a t reference with n_eff - 1 df exists */
+  palp_stats_tost tost; /* SE = frame_sd / sqrt(n_eff), df = n_eff - 1 */
+  palp_stats_boot boot; /* moving blocks of frames, b from the AR(1) rule */
+  int boot_reliable;    /* at least PALP_EVAL_BOOT_MIN_BLOCKS blocks per resample: with fewer, the
+                           resamples are near copies of the record and the SE is far too small */
+  int boot_equivalent;  /* boot_reliable and the bootstrap's 90% interval inside -+ margin */
+  int equivalent;       /* tost_valid && tost.equivalent && boot_equivalent: both SEs must agree */
+} palp_eval_sound;
+
+/* a, b: n pairs ordered frame-major with n / frames pairs per frame (as
+ * palp_eval_pairs_build makes them); margin > 0; seed for the bootstrap. */
+int palp_eval_sound_compute(const double *a, const double *b, size_t n, int frames, double margin,
+                            unsigned long long seed, palp_eval_sound *out);
+
+/* Several runs pooled: repeated-measures Bland-Altman (runs as subjects, their
+ * vertex-frames as repeated measures) and TOST with the run biases as the
+ * observations (SE = SD of the run biases / sqrt(runs), runs - 1 df). */
+typedef struct palp_eval_sound_pool {
+  int runs;
+  double margin;
+  palp_stats_ba_rm ba;
+  int tost_valid; /* runs >= 2 */
+  palp_stats_tost tost;
+} palp_eval_sound_pool;
+
+/* diff holds the differences a - b of run g in diff[start[g] .. start[g+1]); margin:
+ * the smallest of the runs' margins (the strictest). */
+int palp_eval_sound_pool_compute(const double *diff, const size_t *start, int runs, double margin,
+                                 palp_eval_sound_pool *out);
+
+
 /* ---- the evaluation report ---------------------------------------------------- */
 typedef struct palp_eval_dist {
   int distribution;   /* 1..4 (I..IV) */
   palp_eval_row disp; /* Table V row, data in cm */
   palp_eval_row force; /* Table VI row, data in N; valid when has_force */
   int has_force;
+  palp_eval_sound disp_sound, force_sound; /* the second table (force when has_force) */
   int disp_vertices;  /* free vertices per frame */
   int force_vertices; /* paired contact vertices per frame */
   double rt_seconds, ref_seconds;
@@ -220,6 +274,8 @@ typedef struct palp_eval_report {
   int ref_elements, ref_nodes;
   int dist_count;
   palp_eval_dist dist[4];
+  palp_eval_sound_pool pool[2]; /* displacement, force over the runs (valid when pooled[t]) */
+  int pooled[2];
 } palp_eval_report;
 
 /* "I", "II", "III", "IV" */

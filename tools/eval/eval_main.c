@@ -444,6 +444,31 @@ static int write_plots(const char *dir, int d, const palp_eval_record *rt, const
   return rc;
 }
 
+/* Differences a - b of every run, back to back, for the pooled statistics. */
+typedef struct run_pool {
+  double *diff;
+  size_t n, cap;
+  size_t start[5];
+  int runs;
+  double margin; /* the strictest of the runs' equivalence margins */
+} run_pool;
+
+static int pool_add(run_pool *p, const double *a, const double *b, size_t n, double margin) {
+  if (p->runs >= 4) return PALP_EINVAL;
+  if (p->n + n > p->cap) {
+    size_t cap = 2 * (p->n + n);
+    double *d = realloc(p->diff, sizeof(double) * cap);
+    if (!d) return PALP_ENOMEM;
+    p->diff = d, p->cap = cap;
+  }
+  for (size_t i = 0; i < n; ++i) p->diff[p->n + i] = a[i] - b[i];
+  p->start[p->runs] = p->n;
+  p->n += n;
+  p->start[++p->runs] = p->n;
+  p->margin = p->runs == 1 ? margin : fmin(p->margin, margin);
+  return PALP_OK;
+}
+
 static int cmd_evaluate(const options *o) {
   setup s;
   int rc = load_setup(o, &s);
@@ -467,6 +492,8 @@ static int cmd_evaluate(const options *o) {
   rep.vertex_count = s.scene.world.mesh.vertex_count;
   rep.ref_level = s.fem.mesh.level;
   double t_stats = 0, t_rt = 0, t_ref = 0;
+  run_pool pool[2];
+  memset(pool, 0, sizeof pool);
   for (int k = 0; k < s.dist_count; ++k) {
     const int d = s.dist[k];
     palp_scene sd = s.scene;
@@ -512,6 +539,20 @@ static int cmd_evaluate(const options *o) {
       rc = palp_eval_row_compute(pr.force_rt, pr.force_ref, pr.n_force, &row->force);
       row->has_force = !rc;
     }
+    /* The second table: the run as the unit of analysis (eval_sound.c); it needs
+     * 3 frames for an autocorrelation. */
+    const int sound = rt.frames >= 3;
+    if (!rc && sound)
+      rc = palp_eval_sound_compute(pr.disp_rt, pr.disp_ref, pr.n_disp, rt.frames,
+                                   fmax(PALP_EVAL_MARGIN_DISP_ABS, PALP_EVAL_MARGIN_DISP_REL * row->disp.ref_peak),
+                                   PALP_EVAL_BOOT_SEED + (unsigned long long)d, &row->disp_sound);
+    if (!rc && sound && row->has_force)
+      rc = palp_eval_sound_compute(pr.force_rt, pr.force_ref, pr.n_force, rt.frames,
+                                   PALP_EVAL_MARGIN_FORCE_REL * row->force.ref_peak,
+                                   PALP_EVAL_BOOT_SEED + 16ull + (unsigned long long)d, &row->force_sound);
+    if (!rc && sound) rc = pool_add(&pool[0], pr.disp_rt, pr.disp_ref, pr.n_disp, row->disp_sound.margin);
+    if (!rc && sound && row->has_force)
+      rc = pool_add(&pool[1], pr.force_rt, pr.force_ref, pr.n_force, row->force_sound.margin);
     t_stats += now_s() - t0;
     if (rc) {
       fprintf(stderr, "palp-eval: distribution %s: statistics: %s\n", palp_eval_roman(d), palp_strerror(rc));
@@ -535,6 +576,15 @@ static int cmd_evaluate(const options *o) {
               palp_eval_roman(d), row->rt_seconds, row->ref_from_cache ? "from cache, computed in " : "",
               row->ref_seconds, info.element_count, info.steps, info.newton_iterations, info.cutbacks,
               info.factorizations);
+  }
+  /* Pool the runs: repeated-measures Bland-Altman and TOST over the run biases. */
+  for (int t = 0; t < 2; ++t) {
+    if (pool[t].runs >= 2) {
+      rep.pooled[t] = palp_eval_sound_pool_compute(pool[t].diff, pool[t].start, pool[t].runs, pool[t].margin,
+                                                   &rep.pool[t]) ==
+                      PALP_OK;
+    }
+    free(pool[t].diff);
   }
   palp_eval_report_print(stdout, &rep);
   char err[512] = "";

@@ -35,6 +35,79 @@ static void verdict_text(const palp_eval_row *w, char *buf, size_t len) {
            a_bad ? "agreement <= 95%" : "");
 }
 
+
+/* NULL when not computed (fewer than 3 frames: no autocorrelation). */
+static const palp_eval_sound *sound_of(const palp_eval_dist *d, int t) {
+  const palp_eval_sound *w = t == 0 ? &d->disp_sound : (d->has_force ? &d->force_sound : NULL);
+  return w && w->frames > 0 ? w : NULL;
+}
+
+/* The verdict of the second table, for the reader. */
+static void sound_verdict(const palp_eval_sound *w, char *buf, size_t len) {
+  if (w->equivalent) snprintf(buf, len, "equivalent");
+  else if (!w->tost_valid)
+    snprintf(buf, len, "not testable in one run (n_eff %.2g < 2; %s)", w->n_eff,
+             w->boot_reliable ? "MBB usable" : "MBB unusable: block ~ record");
+  else if (!w->tost.equivalent) snprintf(buf, len, "not shown (90%% CI leaves -+margin)");
+  else if (!w->boot_reliable) snprintf(buf, len, "not shown (MBB unusable: %zu blocks)", w->boot.blocks);
+  else snprintf(buf, len, "not shown (bootstrap CI leaves -+margin)");
+}
+
+/* The caveat written next to the paper's literal tables. */
+static void paper_caveat(FILE *out, const palp_eval_report *r, int t, const char *prefix) {
+  double rmin = 1, rmax = -1;
+  size_t n = 0;
+  for (int i = 0; i < r->dist_count; ++i) {
+    const palp_eval_sound *w = sound_of(&r->dist[i], t);
+    const palp_eval_row *row = row_of(&r->dist[i], t);
+    if (!w || !row) continue;
+    rmin = fmin(rmin, w->r1), rmax = fmax(rmax, w->r1);
+    n = row->n;
+  }
+  if (rmax < rmin) return;
+  fprintf(out,
+          "%scaveat: the ANOVA pools up to %zu %s pairs of one deterministic run per distribution as if independent; "
+          "the per-frame mean difference has a lag-1 autocorrelation of %.3f-%.3f, so its p measures the sample "
+          "size, not agreement. See the second table.\n",
+          prefix, n, t == 0 ? "vertex-frame" : "contact-vertex-frame", rmin, rmax);
+}
+
+static void print_sound(FILE *out, const palp_eval_report *r) {
+  fprintf(out, "Second table: sound statistics (unit of analysis: the run; vertex-frames are repeated measures)\n");
+  fprintf(out, "  TOST on the bias at alpha 0.05 per side; SE from the AR(1) effective number of frames n_eff and a\n"
+               "  moving-block bootstrap of the per-frame mean difference (%d resamples, seeded); margins: displacement\n"
+               "  max(1 mm, 5%% of the FEM peak), force 15%% of the FEM peak\n",
+          PALP_EVAL_BOOT_RESAMPLES);
+  for (int t = 0; t < 2; ++t) {
+    fprintf(out, "%s [%s]\n", quantity[t], unit[t]);
+    fprintf(out, "%-10s %10s %7s %6s %10s %5s %10s %23s %8s %8s  %s\n", "", "bias", "r1", "n_eff", "SE(n_eff)", "b",
+            "SE(MBB)", "90% CI (MBB)", "margin", "TOST p", "verdict");
+    for (int i = 0; i < r->dist_count; ++i) {
+      const palp_eval_dist *d = &r->dist[i];
+      const palp_eval_sound *w = sound_of(d, t);
+      char name[16], v[96], p[32];
+      snprintf(name, sizeof name, "Distr. %s", palp_eval_roman(d->distribution));
+      if (!w) continue;
+      sound_verdict(w, v, sizeof v);
+      if (w->tost_valid) snprintf(p, sizeof p, "%.3g", w->tost.p);
+      else snprintf(p, sizeof p, "-");
+      fprintf(out, "%-10s %10.4g %7.4f %6.2f %10.3g %5zu %10.3g [%10.4g, %10.4g] %8.4g %8s  %s\n", name, w->bias, w->r1,
+              w->n_eff, w->frame_sd / sqrt(w->n_eff), w->boot.block, w->boot.se, w->boot.ci_lower, w->boot.ci_upper,
+              w->margin, p, v);
+    }
+    if (r->pooled[t]) {
+      const palp_eval_sound_pool *q = &r->pool[t];
+      fprintf(out,
+              "%-10s %d runs: bias %.4g, repeated-measures LoA [%.4g, %.4g] (SD %.4g: within runs %.4g, between "
+              "runs %.4g);\n%-10s TOST over run biases: 90%% CI [%.4g, %.4g], margin -+%.4g, p %.3g (%g df): %s\n",
+              "pooled", q->runs, q->ba.bias, q->ba.loa_lower, q->ba.loa_upper, q->ba.sd_total, sqrt(q->ba.var_within),
+              sqrt(q->ba.var_between), "", q->tost.ci_lower, q->tost.ci_upper, q->margin, q->tost.p, q->tost.df,
+              q->tost.equivalent ? "equivalent" : "not shown");
+    }
+    fprintf(out, "\n");
+  }
+}
+
 void palp_eval_report_print(FILE *out, const palp_eval_report *r) {
   fprintf(out, "scene %s (%s): %d frames of %.4g s, %d vertices; parameters %s\n", r->scene_name, r->scene,
            r->frames, r->frame_period, r->vertex_count, r->parameters);
@@ -60,10 +133,12 @@ void palp_eval_report_print(FILE *out, const palp_eval_report *r) {
               w->n, pp->rmse, w->rmse, pp->f, w->anova.f, pp->p, w->anova.p, pp->sd, w->ba.sd, pp->agree_percent,
               100.0 * w->ba.agreement, v);
     }
+    paper_caveat(out, r, t, "");
     fprintf(out, "\n");
   }
   fprintf(out, "criteria (paper, Sec. II-D): one-way ANOVA p > 0.05 and more than 95%% of the differences within "
-               "bias +- 2 SD\n");
+               "bias +- 2 SD\n\n");
+  print_sound(out, r);
 }
 
 static int write_csv(const char *path, const palp_eval_report *r) {
@@ -122,6 +197,34 @@ static cJSON *row_json(const palp_eval_row *w, const palp_eval_paper_row *pp) {
   return o;
 }
 
+static cJSON *sound_json(const palp_eval_sound *w) {
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddNumberToObject(o, "frames", w->frames);
+  cJSON_AddNumberToObject(o, "bias", w->bias);
+  cJSON_AddNumberToObject(o, "frame_sd", w->frame_sd);
+  cJSON_AddNumberToObject(o, "r1", w->r1);
+  cJSON_AddNumberToObject(o, "n_eff", w->n_eff);
+  cJSON_AddNumberToObject(o, "margin", w->margin);
+  cJSON_AddBoolToObject(o, "tost_valid", w->tost_valid);
+  if (w->tost_valid) {
+    cJSON_AddNumberToObject(o, "tost_se", w->tost.se);
+    cJSON_AddNumberToObject(o, "tost_df", w->tost.df);
+    cJSON_AddNumberToObject(o, "tost_p", w->tost.p);
+    cJSON_AddNumberToObject(o, "tost_ci_lower", w->tost.ci_lower);
+    cJSON_AddNumberToObject(o, "tost_ci_upper", w->tost.ci_upper);
+  }
+  cJSON_AddNumberToObject(o, "boot_block", (double)w->boot.block);
+  cJSON_AddNumberToObject(o, "boot_resamples", (double)w->boot.resamples);
+  cJSON_AddNumberToObject(o, "boot_se", w->boot.se);
+  cJSON_AddNumberToObject(o, "boot_ci_lower", w->boot.ci_lower);
+  cJSON_AddNumberToObject(o, "boot_ci_upper", w->boot.ci_upper);
+  cJSON_AddNumberToObject(o, "boot_blocks_per_resample", (double)w->boot.blocks);
+  cJSON_AddBoolToObject(o, "boot_reliable", w->boot_reliable);
+  cJSON_AddBoolToObject(o, "boot_equivalent", w->boot_equivalent);
+  cJSON_AddBoolToObject(o, "equivalent", w->equivalent);
+  return o;
+}
+
 static int write_json(const char *path, const palp_eval_report *r) {
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "scene", r->scene);
@@ -156,7 +259,27 @@ static int write_json(const char *path, const palp_eval_report *r) {
       cJSON_AddNumberToObject(o, "rt_seconds", d->rt_seconds);
       cJSON_AddNumberToObject(o, "ref_seconds", d->ref_seconds);
       cJSON_AddBoolToObject(o, "ref_from_cache", d->ref_from_cache);
+      if (sound_of(d, t)) cJSON_AddItemToObject(o, "sound", sound_json(sound_of(d, t)));
       cJSON_AddItemToArray(rows, o);
+    }
+    if (r->pooled[t]) {
+      const palp_eval_sound_pool *q = &r->pool[t];
+      cJSON *po = cJSON_AddObjectToObject(tab, "pooled");
+      cJSON_AddNumberToObject(po, "runs", q->runs);
+      cJSON_AddNumberToObject(po, "bias", q->ba.bias);
+      cJSON_AddNumberToObject(po, "rm_loa_lower", q->ba.loa_lower);
+      cJSON_AddNumberToObject(po, "rm_loa_upper", q->ba.loa_upper);
+      cJSON_AddNumberToObject(po, "rm_sd_total", q->ba.sd_total);
+      cJSON_AddNumberToObject(po, "rm_sd_within", sqrt(q->ba.var_within));
+      cJSON_AddNumberToObject(po, "rm_sd_between", sqrt(q->ba.var_between));
+      cJSON_AddNumberToObject(po, "margin", q->margin);
+      cJSON_AddNumberToObject(po, "tost_mean_of_run_biases", q->tost.estimate);
+      cJSON_AddNumberToObject(po, "tost_se", q->tost.se);
+      cJSON_AddNumberToObject(po, "tost_df", q->tost.df);
+      cJSON_AddNumberToObject(po, "tost_p", q->tost.p);
+      cJSON_AddNumberToObject(po, "tost_ci_lower", q->tost.ci_lower);
+      cJSON_AddNumberToObject(po, "tost_ci_upper", q->tost.ci_upper);
+      cJSON_AddBoolToObject(po, "equivalent", q->tost.equivalent);
     }
     cJSON_AddItemToArray(tables, tab);
   }
@@ -195,6 +318,37 @@ static int write_md(const char *path, const palp_eval_report *r) {
       fprintf(f, "| Distr. %s | %zu | %.2f / %.4f | %.2f / %.3g | %.2f / %.3g | %.2f / %.4f | %.1f / %.1f | %s |\n",
               palp_eval_roman(d->distribution), w->n, pp->rmse, w->rmse, pp->f, w->anova.f, pp->p, w->anova.p, pp->sd,
               w->ba.sd, pp->agree_percent, 100.0 * w->ba.agreement, v);
+    }
+    fprintf(f, "\n");
+    paper_caveat(f, r, t, "_");
+    fprintf(f, "\n");
+  }
+  fprintf(f, "**Second table: sound statistics** (unit of analysis: the run; TOST at alpha 0.05 per side; margins: "
+             "displacement max(1 mm, 5%% of the FEM peak), force 15%% of the FEM peak)\n\n");
+  for (int t = 0; t < 2; ++t) {
+    fprintf(f, "| %s [%s] | bias | r1 | n_eff | SE (n_eff) | block | SE (MBB) | 90%% CI (MBB) | margin | TOST p | verdict |\n",
+            quantity[t], unit[t]);
+    fprintf(f, "|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (int i = 0; i < r->dist_count; ++i) {
+      const palp_eval_dist *d = &r->dist[i];
+      const palp_eval_sound *w = sound_of(d, t);
+      if (!w) continue;
+      char v[96], p[32];
+      sound_verdict(w, v, sizeof v);
+      if (w->tost_valid) snprintf(p, sizeof p, "%.3g", w->tost.p);
+      else snprintf(p, sizeof p, "-");
+      fprintf(f, "| Distr. %s | %.4g | %.4f | %.2f | %.3g | %zu | %.3g | [%.4g, %.4g] | %.4g | %s | %s |\n",
+              palp_eval_roman(d->distribution), w->bias, w->r1, w->n_eff, w->frame_sd / sqrt(w->n_eff), w->boot.block,
+              w->boot.se, w->boot.ci_lower, w->boot.ci_upper, w->margin, p, v);
+    }
+    if (r->pooled[t]) {
+      const palp_eval_sound_pool *q = &r->pool[t];
+      fprintf(f, "\nPooled over %d runs: bias %.4g %s; repeated-measures limits of agreement [%.4g, %.4g] (SD %.4g: "
+                 "within runs %.4g, between runs %.4g); TOST over the run biases: 90%% CI [%.4g, %.4g] against -+%.4g, "
+                 "p %.3g (%g df): %s.\n",
+              q->runs, q->ba.bias, unit[t], q->ba.loa_lower, q->ba.loa_upper, q->ba.sd_total, sqrt(q->ba.var_within),
+              sqrt(q->ba.var_between), q->tost.ci_lower, q->tost.ci_upper, q->margin, q->tost.p, q->tost.df,
+              q->tost.equivalent ? "equivalent" : "not shown");
     }
     fprintf(f, "\n");
   }
