@@ -24,6 +24,9 @@
 #define PATTERN_MIN_SHARE 0.60
 /* A vertex re-entering the footprint after this long away starts a new visit. */
 #define VISIT_GAP 0.5 /* [s] */
+/* Out of touch for longer than this is a lift; shorter losses of contact (the surface
+ * recovering more slowly than the finger rises) keep the stroke going. */
+#define LIFT_GAP 0.25 /* [s] */
 
 static palp_vec3 on_dome(palp_vec3 p, double R) {
   const double n = v3_len(p);
@@ -107,18 +110,38 @@ static int footprint(const palp_mesh *mesh, const palp_assess_sample *s, double 
 }
 
 /* ---- search pattern ------------------------------------------------------- */
+/* The search path seen from above the pole: the proxy's position on the rest dome,
+ * decimated to points at least STATION apart along the touching path (a new point
+ * once the finger is that far from the last one). Motions smaller than a fingertip
+ * are palpation in place (MammaCare's dime-sized circles, a press), not search. */
+#define STATION 0.008 /* [m] */
 static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_evidence *ev, palp_pattern *out) {
   const double ca = cos(ALIGN_DEG * DEG), sa = sin(ALIGN_DEG * DEG);
   double c2 = 0.0, s2 = 0.0;
+  for (int i = 1; i < n; ++i)
+    if (s[i].contact && s[i - 1].contact)
+      ev->path_length += v3_len(v3_sub(on_dome(s[i].proxy, R), on_dome(s[i - 1].proxy, R)));
   for (int pass = 0; pass < 2; ++pass) {
     const double ax = 0.5 * atan2(s2, c2), ux = cos(ax), uy = sin(ax);
     double along = 0.0, tang = 0.0, rad = 0.0, step_pos = 0.0, step_neg = 0.0;
-    for (int i = 1; i < n; ++i) {
-      if (!s[i].contact || !s[i - 1].contact) continue;
-      const palp_vec3 a = on_dome(s[i - 1].proxy, R), b = on_dome(s[i].proxy, R);
+    int have = 0;
+    double t_last = 0.0;
+    palp_vec3 a = {0, 0, 0};
+    for (int i = 0; i < n; ++i) {
+      if (!s[i].contact) continue;
+      /* the search is the path while touching: a lift ends a stretch */
+      if (have && s[i].t - t_last > LIFT_GAP) have = 0;
+      t_last = s[i].t;
+      const palp_vec3 b = on_dome(s[i].proxy, R);
+      if (!have) {
+        a = b, have = 1;
+        continue;
+      }
+      if (v3_len(v3_sub(b, a)) < STATION) continue;
       const double dx = b.x - a.x, dy = b.y - a.y, w = hypot(dx, dy);
+      const palp_vec3 prev = a;
+      a = b;
       if (pass == 0) {
-        ev->path_length += v3_len(v3_sub(b, a));
         ev->plan_length += w;
         if (w > 0.0) {
           const double phi = atan2(dy, dx);
@@ -134,7 +157,7 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
         if (across > 0) step_pos += w;
         else step_neg += w;
       }
-      const double mx = 0.5 * (a.x + b.x), my = 0.5 * (a.y + b.y), rm = hypot(mx, my);
+      const double mx = 0.5 * (prev.x + b.x), my = 0.5 * (prev.y + b.y), rm = hypot(mx, my);
       if (rm < POLE_EXCLUSION) continue;
       const double cr = fabs(dx * mx + dy * my) / (w * rm);
       if (cr >= ca) rad += w;
@@ -185,6 +208,7 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const 
   for (int v = 0; v < V; ++v) stamp[v] = -1, last[v] = -INFINITY;
 
   int above = 0;
+  double t_touch = -INFINITY;
   for (int i = 0; i < n; ++i) {
     const double F = fnorm(s[i].force);
     if (F > out->peak_force) out->peak_force = F;
@@ -193,7 +217,8 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const 
     if (hi && i > 0) out->out_of_range_time += s[i].t - s[i - 1].t;
     above = hi;
     if (!s[i].contact) continue;
-    if (i == 0 || !s[i - 1].contact) out->evidence.presses++;
+    if (s[i].t - t_touch > LIFT_GAP) out->evidence.presses++;
+    t_touch = s[i].t;
     if (i > 0 && s[i - 1].contact) out->evidence.contact_time += s[i].t - s[i - 1].t;
     const double indent = R + r - v3_len(s[i].proxy);
     const int b = palp_exercise_band(ex, indent, F);

@@ -144,7 +144,8 @@ enum { PALP_FINDING_FALSE = -1, PALP_FINDING_WITHDRAWN = -2, PALP_FINDING_DUPLIC
 /* The search pattern's evidence (docs/assessment.md, "Search pattern"). */
 typedef struct palp_pattern_evidence {
   double path_length;      /* contact point's path while touching [m] */
-  double plan_length;      /* the same seen from above the pole (xy), what the shares weigh [m] */
+  double plan_length;      /* seen from above the pole, between stations 8 mm apart while touching: what
+                              the shares weigh [m] */
   int presses;             /* touch-downs */
   double contact_time;     /* [s] */
   double share_axial;      /* plan path within 20 deg of its dominant axis [-] */
