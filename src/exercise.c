@@ -157,9 +157,6 @@ static int parse_bands(ctx *c, const cJSON *o, palp_exercise *ex) {
         return fail(c, PALP_EPARSE, "%sdepth_mm: must start at or above %s's max", path, band_names[b - 1]);
       if (B->has_force && P->has_force && B->force_min < P->force_max)
         return fail(c, PALP_EPARSE, "%sforce_N: must start at or above %s's max", path, band_names[b - 1]);
-      if (B->has_depth != P->has_depth || B->has_force != P->has_force)
-        return fail(c, PALP_EPARSE, "%s: every band must use the same measures (depth_mm, force_N) as %s", path,
-                    band_names[b - 1]);
     }
   }
   return PALP_OK;
