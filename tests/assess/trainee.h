@@ -323,7 +323,15 @@ static inline void novice_exam(recorder *rc, int presses, double depth, unsigned
     const double polar = (tr_rand(&st) % 1000) / 1000.0 * 60.0 * TR_PI / 180.0;
     const double az = (tr_rand(&st) % 1000) / 1000.0 * 2.0 * TR_PI;
     const palp_vec3 n = {sin(polar) * cos(az), sin(polar) * sin(az), cos(polar)};
-    move_to(rc, device_at(rc, n, -0.005), 0.1); /* hover 5 mm above */
+    /* travel in the air, 5 mm above the dome (not along the chord, which cuts through it) */
+    const palp_vec3 from = rc->device;
+    const double lf = sqrt(from.x * from.x + from.y * from.y + from.z * from.z);
+    for (int i = 1; i <= 20; ++i) {
+      const double u = i / 20.0;
+      palp_vec3 m = {(1 - u) * from.x / lf + u * n.x, (1 - u) * from.y / lf + u * n.y, (1 - u) * from.z / lf + u * n.z};
+      const double lm = sqrt(m.x * m.x + m.y * m.y + m.z * m.z);
+      move_to(rc, device_at(rc, (palp_vec3){m.x / lm, m.y / lm, m.z / lm}, -0.005), 0.1);
+    }
     move_to(rc, device_at(rc, n, depth), 0.03);
     hold(rc, 0.3);
     move_to(rc, device_at(rc, n, -0.005), 0.03);
