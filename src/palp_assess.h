@@ -1,0 +1,200 @@
+/*
+ * palp_assess.h - exercises with hidden lesions and the metrics of a palpation
+ * session (docs/assessment.md).
+ *
+ * An exercise (JSON, config/exercises/) names a phantom scene, hides lesions in it,
+ * defines the three pressure bands (light / medium / deep, MammaCare's three levels
+ * as fingertip indentation and/or force bands), a time limit, the trainee's
+ * instructions and a rubric. palp_assess() turns a session (the fingertip's samples
+ * and the trainee's findings) into the MammaCare competencies: sensitivity, false
+ * positives, thoroughness per pressure band, search pattern, plus time, forces and a
+ * 0-100 score.
+ *
+ * Pure: no DDS, no SQLite; the only I/O is reading exercise and scene files. SI units
+ * inside (m, N, s); the JSON keys carry their unit (depth_mm, ...). Functions return 0
+ * or a negative PALP_E* code.
+ */
+#ifndef PALP_ASSESS_H
+#define PALP_ASSESS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "palp.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- exercises ------------------------------------------------------------ */
+enum { PALP_BAND_LIGHT = 0, PALP_BAND_MEDIUM = 1, PALP_BAND_DEEP = 2, PALP_BAND_COUNT = 3 };
+const char *palp_band_name(int band); /* "light", "medium", "deep" */
+
+/* A pressure band: a sample is in it when every bound given holds, min <= x < max. */
+typedef struct palp_band {
+  int has_depth, has_force;
+  double depth_min, depth_max; /* fingertip indentation [m] */
+  double force_min, force_max; /* |force| [N] */
+} palp_band;
+
+/* A hidden lesion, placed the way an instructor thinks of it: where on the dome, how
+ * deep (its centre below the surface, along the normal), how big, how hard. */
+typedef struct palp_exercise_lesion {
+  double polar;           /* angle from the pole [rad] */
+  double azimuth;         /* [rad] */
+  double depth;           /* centre below the surface [m] */
+  double diameter;        /* [m] */
+  double stiffness_ratio; /* E_lesion / E_gel [-] */
+} palp_exercise_lesion;
+
+typedef enum palp_pattern {
+  PALP_PATTERN_UNSYSTEMATIC = 0,
+  PALP_PATTERN_VERTICAL_STRIP = 1,
+  PALP_PATTERN_CIRCLES = 2,
+  PALP_PATTERN_RADIAL = 3
+} palp_pattern;
+const char *palp_pattern_name(palp_pattern p); /* "unsystematic", "vertical_strip", "circles", "radial" */
+
+/* The score's components, in this order everywhere (rubric weights, passes, results). */
+enum {
+  PALP_METRIC_SENSITIVITY = 0,
+  PALP_METRIC_FALSE_POSITIVES,
+  PALP_METRIC_THOROUGHNESS,
+  PALP_METRIC_PATTERN,
+  PALP_METRIC_TIME,
+  PALP_METRIC_FORCE,
+  PALP_METRIC_COUNT
+};
+const char *palp_metric_name(int metric);
+
+typedef struct palp_rubric {
+  double weight[PALP_METRIC_COUNT]; /* >= 0, at least one > 0; the score is their weighted mean x 100 */
+  double pass_sensitivity;          /* share of lesions found [0, 1] */
+  int pass_max_false_positives;
+  double pass_coverage[PALP_BAND_COUNT]; /* share of the surface palpated per band [0, 1] */
+  palp_pattern pass_pattern;        /* UNSYSTEMATIC = any pattern passes; otherwise this one or (if
+                                       pass_any_systematic) any systematic one */
+  int pass_any_systematic;
+  int pass_max_out_of_range;        /* force episodes above max_force */
+  double pass_score;                /* [0, 100] */
+} palp_rubric;
+
+#define PALP_EXERCISE_TEXT 1024
+typedef struct palp_exercise {
+  char name[64];
+  char title[128];
+  char phantom[512];      /* the scene file as written in the exercise */
+  char phantom_path[1024]; /* resolved against the exercise file's folder */
+  char instructions[PALP_EXERCISE_TEXT];
+  double time_limit;      /* [s] */
+  int lesion_count;
+  palp_exercise_lesion lesion[PALP_MAX_LESIONS];
+  palp_band band[PALP_BAND_COUNT];
+  double max_force;       /* [N]: above it a press is out of range */
+  double match_margin;    /* [m]: a finding within lesion radius + margin of a lesion's surface
+                             projection finds it */
+  palp_rubric rubric;
+} palp_exercise;
+
+/* Loads or parses an exercise. base_dir resolves a relative "phantom" (NULL or "" = as
+ * written). On error returns a negative code and writes a message naming the field,
+ * e.g. "lesions[1].depth_mm: must be > 0", into err. Geometry against the dome is
+ * checked by palp_exercise_lesions (it needs the phantom's radius). */
+int palp_exercise_load(const char *path, palp_exercise *out, char *err, size_t errlen);
+int palp_exercise_parse(const char *json, const char *base_dir, palp_exercise *out, char *err, size_t errlen);
+
+/* The exercise's lesions as model lesions (centres in metres) on a dome of the given
+ * radius: centre = (R - depth) n(polar, azimuth). Fills up to cap and returns the
+ * count, or PALP_EINVAL (message in err) when a lesion does not fit inside the dome
+ * above its base. */
+int palp_exercise_lesions(const palp_exercise *ex, double dome_radius, palp_lesion *out, int cap, char *err,
+                          size_t errlen);
+/* A lesion's surface projection: the point of the rest dome above its centre [m]. */
+palp_vec3 palp_exercise_lesion_surface(const palp_exercise_lesion *l, double dome_radius);
+
+/* Loads the exercise's phantom and hides its lesions in it (added to any the scene
+ * declares; at most PALP_MAX_LESIONS in all). */
+int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, size_t errlen);
+
+/* ---- a session ------------------------------------------------------------- */
+/* One sample of the fingertip, as the server steps it (palp_local_model and
+ * palp_world_finger_contacts). triangles may be NULL: the footprint is then the disc
+ * of `area` around `point`. */
+typedef struct palp_assess_sample {
+  double t;           /* [s] */
+  palp_vec3 device;   /* [m] */
+  palp_vec3 proxy;    /* fingertip centre [m] */
+  palp_vec3 force;    /* of the phantom on the finger [N] */
+  int contact;        /* 1 when touching */
+  palp_vec3 point;    /* contact point [m] */
+  double area;        /* footprint [m^2] */
+  int triangle_count;
+  const int *triangles; /* touched triangles (mesh indices) */
+} palp_assess_sample;
+
+/* A "lump here" mark; a withdrawn mark does not count. */
+typedef struct palp_finding {
+  double t;        /* [s] */
+  palp_vec3 point; /* [m], on or near the surface */
+  int withdrawn;
+} palp_finding;
+
+enum { PALP_FINDING_FALSE = -1, PALP_FINDING_WITHDRAWN = -2, PALP_FINDING_DUPLICATE = -3 };
+
+/* The search pattern's evidence (docs/assessment.md, "Search pattern"). */
+typedef struct palp_pattern_evidence {
+  double path_length;      /* contact point's path while touching [m] */
+  double plan_length;      /* seen from above the pole, between stations 8 mm apart while touching: what
+                              the shares weigh [m] */
+  int presses;             /* touch-downs */
+  double contact_time;     /* [s] */
+  double share_axial;      /* plan path within 20 deg of its dominant axis [-] */
+  double axis_deg;         /* that axis [deg] from +x */
+  double share_tangential; /* within 20 deg of the circle about the pole [-] */
+  double share_radial;     /* within 20 deg of the radius from the pole [-] */
+  double sweep_monotony;   /* strips: share of strip-to-strip steps (across the axis) in one direction */
+  double overlap;          /* covered area's mean number of separate visits [-] */
+  double gap_share;        /* dome area never palpated [-] */
+  double largest_gap;      /* largest connected unpalpated area [m^2] */
+} palp_pattern_evidence;
+
+typedef struct palp_assess_result {
+  /* sensitivity and false positives */
+  int lesion_count, found;
+  int lesion_found[PALP_MAX_LESIONS]; /* index of the finding that found it, or -1 */
+  int findings, withdrawn, false_positives, duplicates;
+  double sensitivity; /* found / lesion_count (1 when there are none) */
+  /* thoroughness */
+  double coverage[PALP_BAND_COUNT]; /* share of the dome's area palpated in each band */
+  double coverage_any;
+  /* search pattern */
+  palp_pattern pattern;
+  palp_pattern_evidence evidence;
+  /* time and force */
+  double duration;       /* first to last sample [s] */
+  double peak_force;     /* [N] */
+  int out_of_range;      /* episodes with |force| > max_force */
+  double out_of_range_time; /* [s] */
+  /* rubric */
+  double component[PALP_METRIC_COUNT]; /* each in [0, 1] */
+  int pass_metric[PALP_METRIC_COUNT];
+  int pass; /* every metric and the score */
+  double score; /* [0, 100] */
+} palp_assess_result;
+
+/* Assesses a session on `mesh` (the phantom's rest mesh). finger_radius [m] turns the
+ * proxy into an indentation: R + r - |proxy|. finding_match (optional, [finding_count])
+ * receives each finding's lesion index or a PALP_FINDING_* code; coverage (optional,
+ * [vertex_count]) receives each vertex's bands as bits 1 << band. Time and memory are
+ * O(samples x footprint + vertices). */
+int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double finger_radius, const palp_assess_sample *samples,
+                int sample_count, const palp_finding *findings, int finding_count, palp_assess_result *out,
+                int *finding_match, uint8_t *coverage);
+
+/* The band of an indentation [m] and force magnitude [N], or -1 outside every band. */
+int palp_exercise_band(const palp_exercise *ex, double indentation, double force);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,111 @@
+/*
+ * test_exercise.c - exercise files (src/exercise.c, docs/assessment.md): the shipped
+ * exercises load and hide their lesions where they say, and bad files are refused with
+ * a message naming the field.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "check.h"
+#include "palp_assess.h"
+
+#define PI 3.14159265358979323846
+
+static const char *good =
+    "{\"name\": \"t\", \"title\": \"T\", \"phantom\": \"p.json\", \"instructions\": \"go\", \"time_limit_s\": 60,"
+    " \"lesions\": [{\"polar_deg\": 90, \"azimuth_deg\": 0, \"depth_mm\": 10, \"diameter_mm\": 4, \"stiffness_ratio\": 3}],"
+    " \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 5]}, \"medium\": {\"depth_mm\": [5, 12]},"
+    " \"deep\": {\"depth_mm\": [12, 25], \"force_N\": [0, 9]}},"
+    " \"max_force_N\": 5, \"rubric\": {\"weights\": {\"sensitivity\": 1},"
+    " \"pass\": {\"sensitivity\": 1, \"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}";
+
+/* Replaces the first occurrence of `from` in good by `to` and expects a parse error
+ * whose message contains `field`. */
+static void expect_error(const char *from, const char *to, const char *field) {
+  char json[4096];
+  const char *at = strstr(good, from);
+  CHECK(at != NULL, "test setup: \"%s\" not in the template", from);
+  if (!at) return;
+  snprintf(json, sizeof json, "%.*s%s%s", (int)(at - good), good, to, at + strlen(from));
+  palp_exercise ex;
+  char err[256] = "";
+  const int e = palp_exercise_parse(json, "", &ex, err, sizeof err);
+  printf("%-40s -> %s\n", to, err);
+  CHECK(e == PALP_EPARSE, "replacing %s by %s: expected PALP_EPARSE, got %d", from, to, e);
+  CHECK(strstr(err, field) != NULL, "message \"%s\" should name %s", err, field);
+}
+
+int main(void) {
+  char err[512] = "";
+  palp_exercise ex;
+  /* 1. The template parses; units converted to SI. */
+  CHECK(palp_exercise_parse(good, "/x", &ex, err, sizeof err) == 0, "template: %s", err);
+  CHECK(strcmp(ex.phantom_path, "/x/p.json") == 0, "phantom resolved against the folder: %s", ex.phantom_path);
+  CHECK_NEAR(ex.lesion[0].depth, 0.010, 1e-15, "depth_mm -> m");
+  CHECK_NEAR(ex.lesion[0].polar, PI / 2, 1e-15, "polar_deg -> rad");
+  CHECK_NEAR(ex.match_margin, 0.010, 1e-15, "default match margin 10 mm");
+  /* bands: depth only for light/medium; deep also needs force in [0, 9) N */
+  CHECK(palp_exercise_band(&ex, 0.003, 0.1) == PALP_BAND_LIGHT, "3 mm is light");
+  CHECK(palp_exercise_band(&ex, 0.005, 0.1) == PALP_BAND_MEDIUM, "5 mm is medium (min inclusive)");
+  CHECK(palp_exercise_band(&ex, 0.0005, 0.1) == -1, "0.5 mm is in no band");
+  CHECK(palp_exercise_band(&ex, 0.020, 9.5) == -1, "20 mm at 9.5 N: outside deep's force band");
+  /* geometry: at polar 90 deg a 4 mm lesion's centre is on the base plane: refused */
+  palp_lesion L[PALP_MAX_LESIONS];
+  CHECK(palp_exercise_lesions(&ex, 0.04, L, PALP_MAX_LESIONS, err, sizeof err) == PALP_EINVAL,
+        "a lesion cut by the base is refused");
+  printf("base: %s\n", err);
+  CHECK(strstr(err, "lesions[0]") != NULL, "names the lesion");
+
+  /* 2. Bad files, each naming its field. */
+  expect_error("\"title\": \"T\", ", "", "title");
+  expect_error("\"depth_mm\": 10", "\"depth_mm\": 1", "lesions[0].depth_mm");
+  expect_error("\"diameter_mm\": 4", "\"diameter_mm\": -4", "lesions[0].diameter_mm");
+  expect_error("\"stiffness_ratio\": 3", "\"stiffness_ratio\": \"hard\"", "lesions[0].stiffness_ratio");
+  expect_error("\"polar_deg\": 90", "\"polar_deg\": 95", "lesions[0].polar_deg");
+  expect_error("\"time_limit_s\": 60", "\"time_limit_s\": 0", "time_limit_s");
+  expect_error("\"medium\": {\"depth_mm\": [5, 12]}", "\"medium\": {\"depth_mm\": [4, 12]}",
+               "pressure_bands.medium.depth_mm");
+  expect_error("\"light\": {\"depth_mm\": [1, 5]}", "\"light\": {}", "pressure_bands.light");
+  expect_error("\"max_force_N\": 5", "\"max_force_N\": 5, \"decoys\": [{}]", "decoys");
+  expect_error("\"max_force_N\": 5", "\"max_force_N\": 5, \"time_limit\": 3", "time_limit: unknown key");
+  expect_error("\"sensitivity\": 1}", "\"sensitivty\": 1}", "rubric.weights.sensitivty");
+  expect_error("\"sensitivity\": 1}", "\"sensitivity\": 0}", "rubric.weights");
+  expect_error("\"score\": 50", "\"score\": 50, \"pattern\": \"spiral\"", "rubric.pass.pattern");
+  expect_error("\"score\": 50", "\"score\": 150", "rubric.pass.score");
+  expect_error("\"name\": \"t\"", "\"name\": \"T t\"", "name");
+  CHECK(palp_exercise_parse("{", "", &ex, err, sizeof err) == PALP_EPARSE, "not JSON");
+  CHECK(palp_exercise_load("/nonexistent/x.json", &ex, err, sizeof err) == PALP_EIO, "missing file");
+
+  /* 3. The shipped exercises: what they promise, and where their lesions end up. */
+  const struct {
+    const char *file;
+    double polar_deg, az_deg, depth_mm, diameter_mm;
+  } shipped[] = {{"easy", 30, 120, 12, 20}, {"medium", 45, 300, 10, 10}, {"hard", 35, 200, 20, 5}};
+  for (int k = 0; k < 3; ++k) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/exercises/%s.json", PALP_CONFIG_DIR, shipped[k].file);
+    CHECK(palp_exercise_load(path, &ex, err, sizeof err) == 0, "%s: %s", path, err);
+    CHECK(ex.lesion_count == 1, "%s: one lesion", shipped[k].file);
+    CHECK_NEAR(ex.lesion[0].diameter, shipped[k].diameter_mm * 1e-3, 1e-12, "diameter");
+    palp_scene sc;
+    CHECK(palp_exercise_scene(&ex, &sc, err, sizeof err) == 0, "%s scene: %s", shipped[k].file, err);
+    CHECK(sc.world.lesion_count == 1, "the scene holds the hidden lesion");
+    /* centre = (R - depth) (sin p cos a, sin p sin a, cos p), R = 40 mm, written out here */
+    const double p = shipped[k].polar_deg * PI / 180, a = shipped[k].az_deg * PI / 180;
+    const double q = 0.040 - shipped[k].depth_mm * 1e-3;
+    const palp_vec3 c = sc.world.lesion[0].center;
+    printf("%s: lesion centre (%.4f, %.4f, %.4f) m, radius %.4f m\n", shipped[k].file, c.x, c.y, c.z,
+           sc.world.lesion[0].radius);
+    CHECK_NEAR(c.x, q * sin(p) * cos(a), 1e-12, "centre x");
+    CHECK_NEAR(c.y, q * sin(p) * sin(a), 1e-12, "centre y");
+    CHECK_NEAR(c.z, q * cos(p), 1e-12, "centre z");
+    CHECK_NEAR(sc.world.lesion[0].radius, shipped[k].diameter_mm * 0.5e-3, 1e-12, "radius");
+    CHECK_NEAR(sc.world.dt, 0.004, 1e-15, "the phantom steps at 250 Hz");
+    int e = 0;
+    palp_world *w = palp_scene_create_world(&sc, &e);
+    CHECK(w != NULL, "%s: the world accepts the lesion (%s)", shipped[k].file, palp_strerror(e));
+    palp_world_destroy(w);
+  }
+  CHECK_DONE();
+}

@@ -1,0 +1,216 @@
+/*
+ * test_metrics.c - the session metrics on synthetic sessions whose answers are known
+ * by construction (src/assess.c, docs/assessment.md): finding matching, coverage per
+ * band, the pattern classifier on strips / circles / spokes / a random walk, force
+ * episodes and the rubric score.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "palp_assess.h"
+
+#define PI 3.14159265358979323846
+static const double R = 0.04, r = 0.008;
+
+static palp_exercise exercise(void) {
+  palp_exercise ex;
+  memset(&ex, 0, sizeof ex);
+  ex.time_limit = 100;
+  ex.lesion_count = 1;
+  ex.lesion[0] = (palp_exercise_lesion){.polar = 30 * PI / 180, .azimuth = 0, .depth = 0.01, .diameter = 0.01,
+                                        .stiffness_ratio = 5};
+  for (int b = 0; b < 3; ++b) ex.band[b].has_depth = 1;
+  ex.band[0].depth_min = 0.001, ex.band[0].depth_max = 0.005;
+  ex.band[1].depth_min = 0.005, ex.band[1].depth_max = 0.012;
+  ex.band[2].depth_min = 0.012, ex.band[2].depth_max = 0.025;
+  ex.max_force = 3.0;
+  ex.match_margin = 0.010;
+  for (int m = 0; m < PALP_METRIC_COUNT; ++m) ex.rubric.weight[m] = 1.0;
+  return ex;
+}
+
+/* A touching sample at unit direction n, indentation d [m], force f [N]. */
+static palp_assess_sample at(double t, palp_vec3 n, double d, double f) {
+  const double q = R + r - d;
+  const palp_vec3 p = {q * n.x, q * n.y, q * n.z};
+  return (palp_assess_sample){.t = t, .device = p, .proxy = p, .force = {0, 0, f}, .contact = 1,
+                              .point = {R * n.x, R * n.y, R * n.z}, .area = 1e-4};
+}
+static palp_vec3 unit(double x, double y) { /* the dome point above plan position (x, y) */
+  const double z = sqrt(fmax(R * R - x * x - y * y, 0.0));
+  return (palp_vec3){x / R, y / R, z / R};
+}
+
+/* Plan-view trajectories, 1 mm per sample at 50 mm/s. */
+typedef struct traj {
+  palp_assess_sample *s;
+  int n, cap;
+} traj;
+static void add(traj *T, double x, double y) {
+  if (T->n == T->cap) T->s = realloc(T->s, sizeof *T->s * (size_t)(T->cap = T->cap ? 2 * T->cap : 1024));
+  T->s[T->n] = at(T->n * 0.02, unit(x, y), 0.008, 0.5);
+  T->n++;
+}
+static void line(traj *T, double x0, double y0, double x1, double y1) {
+  const int k = (int)ceil(hypot(x1 - x0, y1 - y0) / 0.001);
+  for (int i = 0; i <= k; ++i) add(T, x0 + (x1 - x0) * i / k, y0 + (y1 - y0) * i / k);
+}
+
+static palp_pattern classify(const palp_mesh *mesh, traj *T, const char *what, palp_pattern_evidence *ev) {
+  palp_exercise ex = exercise();
+  palp_assess_result res;
+  CHECK(palp_assess(&ex, mesh, r, T->s, T->n, NULL, 0, &res, NULL, NULL) == 0, "%s assessed", what);
+  printf("%-8s plan %.3f m  axial %.2f (axis %.0f deg) tangential %.2f radial %.2f -> %s\n", what,
+         res.evidence.plan_length, res.evidence.share_axial, res.evidence.axis_deg, res.evidence.share_tangential,
+         res.evidence.share_radial, palp_pattern_name(res.pattern));
+  if (ev) *ev = res.evidence;
+  free(T->s);
+  memset(T, 0, sizeof *T);
+  return res.pattern;
+}
+
+int main(void) {
+  palp_mesh mesh;
+  palp_mesh_def md = palp_mesh_default_def();
+  CHECK(palp_mesh_create(&md, &mesh) == 0, "mesh");
+  palp_exercise ex = exercise();
+  palp_assess_result res;
+
+  /* 1. Findings: lesion at polar 30 deg, azimuth 0, radius 5 mm: found within 5 + 10 mm
+   * of its surface projection (R sin 30, 0, R cos 30) = (20, 0, 34.64) mm. */
+  const palp_vec3 s0 = {0.020, 0.0, 0.034641016};
+  palp_finding f[5] = {
+      {1.0, {s0.x + 0.030, s0.y, s0.z}, 0},  /* 30 mm off: false */
+      {2.0, {s0.x, s0.y + 0.012, s0.z}, 0},  /* 12 mm off: finds it */
+      {3.0, {s0.x, s0.y - 0.010, s0.z}, 0},  /* second mark on the same lesion: duplicate */
+      {4.0, {-0.02, 0.0, 0.0346}, 1},        /* withdrawn: ignored */
+      {5.0, {s0.x, s0.y + 0.016, s0.z}, 0},  /* 16 mm off (> 15): false */
+  };
+  palp_assess_sample one = at(0, unit(0, 0), 0.003, 0.1);
+  int match[5];
+  CHECK(palp_assess(&ex, &mesh, r, &one, 1, f, 5, &res, match, NULL) == 0, "assess");
+  CHECK(res.found == 1 && res.lesion_found[0] == 1, "the 12 mm mark finds the lesion (found %d by %d)", res.found,
+        res.lesion_found[0]);
+  CHECK(match[0] == PALP_FINDING_FALSE && match[1] == 0 && match[2] == PALP_FINDING_DUPLICATE &&
+            match[3] == PALP_FINDING_WITHDRAWN && match[4] == PALP_FINDING_FALSE,
+        "matches %d %d %d %d %d", match[0], match[1], match[2], match[3], match[4]);
+  CHECK(res.false_positives == 2 && res.duplicates == 1 && res.withdrawn == 1 && res.findings == 4,
+        "fp %d dup %d withdrawn %d findings %d", res.false_positives, res.duplicates, res.withdrawn, res.findings);
+  CHECK_NEAR(res.sensitivity, 1.0, 0.0, "sensitivity");
+
+  /* 2. Coverage: one sample touching every dome triangle at 8 mm covers the whole
+   * surface in the medium band and nothing in the others. */
+  int *all = malloc(sizeof(int) * (size_t)mesh.dome_triangle_count);
+  for (int t = 0; t < mesh.dome_triangle_count; ++t) all[t] = t;
+  palp_assess_sample full = at(0, unit(0, 0), 0.008, 0.5);
+  full.triangles = all, full.triangle_count = mesh.dome_triangle_count;
+  uint8_t *cov = malloc((size_t)mesh.vertex_count);
+  CHECK(palp_assess(&ex, &mesh, r, &full, 1, NULL, 0, &res, NULL, cov) == 0, "assess");
+  CHECK_NEAR(res.coverage[PALP_BAND_MEDIUM], 1.0, 1e-12, "all triangles: medium coverage");
+  CHECK(res.coverage[PALP_BAND_LIGHT] == 0.0 && res.coverage[PALP_BAND_DEEP] == 0.0, "other bands untouched");
+  CHECK(cov[mesh.top_vertex] == (1u << PALP_BAND_MEDIUM), "pole's map entry is the medium bit (%u)",
+        (unsigned)cov[mesh.top_vertex]);
+  CHECK(res.evidence.gap_share < 1e-12 && res.evidence.largest_gap == 0.0, "no gap");
+  /* one triangle: its three vertices' areas over the dome's */
+  full.triangle_count = 1;
+  CHECK(palp_assess(&ex, &mesh, r, &full, 1, NULL, 0, &res, NULL, NULL) == 0, "assess");
+  double tot = 0.0;
+  for (int v = 0; v < mesh.vertex_count; ++v) tot += mesh.vertex_area[v];
+  const double tri = mesh.vertex_area[mesh.tri[0][0]] + mesh.vertex_area[mesh.tri[0][1]] + mesh.vertex_area[mesh.tri[0][2]];
+  CHECK_NEAR(res.coverage[PALP_BAND_MEDIUM], tri / tot, 1e-12, "one triangle's coverage");
+  /* outside every band (0.5 mm): touched, counted in coverage_any, in no band */
+  full.proxy = (palp_vec3){0, 0, R + r - 0.0005};
+  CHECK(palp_assess(&ex, &mesh, r, &full, 1, NULL, 0, &res, NULL, NULL) == 0, "assess");
+  CHECK(res.coverage[0] == 0 && res.coverage[1] == 0 && res.coverage[2] == 0 && res.coverage_any > 0,
+        "0.5 mm: in no band, yet touched");
+  /* no triangles: the disc of the area around the point; a disc wider than the dome covers it all */
+  palp_assess_sample disc = at(0, unit(0, 0), 0.003, 0.1);
+  disc.area = PI * 0.2 * 0.2;
+  CHECK(palp_assess(&ex, &mesh, r, &disc, 1, NULL, 0, &res, NULL, NULL) == 0, "assess");
+  CHECK_NEAR(res.coverage[PALP_BAND_LIGHT], 1.0, 1e-12, "a 20 cm disc covers the dome");
+  disc.area = 1e-12; /* a point: just the nearest vertex, the pole */
+  CHECK(palp_assess(&ex, &mesh, r, &disc, 1, NULL, 0, &res, NULL, NULL) == 0, "assess");
+  CHECK_NEAR(res.coverage[PALP_BAND_LIGHT], mesh.vertex_area[mesh.top_vertex] / tot, 1e-12, "a point: the pole only");
+
+  /* 3. Forces and time: two excursions above 3 N, peak 4.5 N, 100 samples at 0.01 s. */
+  palp_assess_sample fs[100];
+  for (int i = 0; i < 100; ++i) {
+    const double F = (i >= 10 && i < 20) ? 3.5 : (i >= 50 && i < 55) ? 4.5 : 1.0;
+    fs[i] = at(i * 0.01, unit(0, 0), 0.008, F);
+  }
+  CHECK(palp_assess(&ex, &mesh, r, fs, 100, NULL, 0, &res, NULL, NULL) == 0, "assess");
+  CHECK(res.out_of_range == 2, "two episodes (%d)", res.out_of_range);
+  CHECK_NEAR(res.out_of_range_time, 0.15, 1e-9, "0.10 s + 0.05 s above");
+  CHECK_NEAR(res.peak_force, 4.5, 1e-12, "peak");
+  CHECK_NEAR(res.duration, 0.99, 1e-12, "duration");
+  CHECK(res.evidence.presses == 1, "one press (%d)", res.evidence.presses);
+  /* score: sensitivity 0, fp 0 -> 1, thoroughness (0 + cov + 0)/3, pattern 0, time 1, force 1/3 */
+  const double want = 100.0 * (0 + 1 + res.coverage[1] / 3.0 + 0 + 1 + 1.0 / 3.0) / 6.0;
+  CHECK_NEAR(res.score, want, 1e-9, "equal-weight score");
+  CHECK(!res.pass_metric[PALP_METRIC_SENSITIVITY] || ex.rubric.pass_sensitivity == 0, "pass flags");
+  /* bad input is refused */
+  fs[5].t = NAN;
+  CHECK(palp_assess(&ex, &mesh, r, fs, 100, NULL, 0, &res, NULL, NULL) == PALP_EINVAL, "NaN time refused");
+  fs[5].t = 0.05;
+  fs[6].t = 0.0;
+  CHECK(palp_assess(&ex, &mesh, r, fs, 100, NULL, 0, &res, NULL, NULL) == PALP_EINVAL, "time going back refused");
+
+  /* 4. The classifier. Vertical strips 8 mm apart, boustrophedon, across the dome. */
+  traj T = {0};
+  palp_pattern_evidence ev;
+  for (int k = -4; k <= 4; ++k) {
+    const double x = k * 0.008, h = sqrt(0.037 * 0.037 - x * x), y = (k % 2) ? h : -h;
+    if (T.n) line(&T, T.s[T.n - 1].point.x, T.s[T.n - 1].point.y, x, y);
+    line(&T, x, y, x, -y);
+  }
+  CHECK(classify(&mesh, &T, "strips", &ev) == PALP_PATTERN_VERTICAL_STRIP, "strips");
+  CHECK(fabs(fabs(ev.axis_deg) - 90.0) < 5.0, "strip axis along y (%.1f deg)", ev.axis_deg);
+  /* the same, rotated by 30 deg: any strip direction counts */
+  for (int k = -4; k <= 4; ++k) {
+    const double x = k * 0.008, h = sqrt(0.037 * 0.037 - x * x), y = (k % 2) ? h : -h;
+    const double c = cos(PI / 6), s = sin(PI / 6);
+    double px = x * c - y * s, py = x * s + y * c;
+    if (T.n) line(&T, T.s[T.n - 1].point.x, T.s[T.n - 1].point.y, px, py);
+    line(&T, px, py, x * c + y * s, x * s - y * c);
+  }
+  CHECK(classify(&mesh, &T, "strips30", NULL) == PALP_PATTERN_VERTICAL_STRIP, "rotated strips");
+  /* concentric circles, 8 mm apart */
+  for (int k = 1; k <= 4; ++k) {
+    const double rho = k * 0.008;
+    if (T.n) line(&T, T.s[T.n - 1].point.x, T.s[T.n - 1].point.y, rho, 0);
+    for (int i = 0; i <= (int)(2 * PI * rho / 0.001); ++i) {
+      const double a = i * 0.001 / rho;
+      add(&T, rho * cos(a), rho * sin(a));
+    }
+  }
+  CHECK(classify(&mesh, &T, "circles", NULL) == PALP_PATTERN_CIRCLES, "circles");
+  /* radial spokes (wedges): out and back along 12 directions */
+  for (int k = 0; k < 12; ++k) {
+    const double a = k * PI / 6;
+    line(&T, 0, 0, 0.036 * cos(a), 0.036 * sin(a));
+    line(&T, 0.036 * cos(a), 0.036 * sin(a), 0, 0);
+  }
+  CHECK(classify(&mesh, &T, "spokes", NULL) == PALP_PATTERN_RADIAL, "spokes");
+  /* a random walk: 10 mm legs in random directions, kept on the dome */
+  unsigned st = 12345u;
+  double x = 0, y = 0;
+  for (int k = 0; k < 80; ++k) {
+    st = st * 1664525u + 1013904223u;
+    const double a = (st >> 8) / 16777216.0 * 2 * PI;
+    double nx = x + 0.010 * cos(a), ny = y + 0.010 * sin(a);
+    if (hypot(nx, ny) > 0.034) nx = x - 0.010 * cos(a), ny = y - 0.010 * sin(a);
+    line(&T, x, y, nx, ny);
+    x = nx, y = ny;
+  }
+  CHECK(classify(&mesh, &T, "random", NULL) == PALP_PATTERN_UNSYSTEMATIC, "random walk");
+  /* too little search to have a pattern: one 5 cm stroke */
+  line(&T, -0.025, 0, 0.025, 0);
+  CHECK(classify(&mesh, &T, "stroke", NULL) == PALP_PATTERN_UNSYSTEMATIC, "a single 5 cm stroke");
+
+  free(all), free(cov);
+  palp_mesh_destroy(&mesh);
+  CHECK_DONE();
+}
