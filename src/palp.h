@@ -239,6 +239,11 @@ int palp_world_set_contact_force(palp_world *w, int contact, palp_vec3 force);
 typedef struct palp_finger_def {
   double radius;             /* fingertip sphere [m], default 0.008 */
   double coupling_stiffness; /* k_c, proxy to device [N/m], default 2000 */
+  /* The pad's local compliance at each surface feature it touches [N/m], default
+   * 5000; 0 makes the pad rigid. A finger's pulp conforms to what it presses, so a
+   * facet entering contact takes its load over a fraction of a millimetre instead of
+   * in one tick (docs/haptics.md). */
+  double pad_stiffness;
 } palp_finger_def;
 palp_finger_def palp_finger_default_def(void);
 /* Returns a contact id >= 0 or a negative error; the proxy starts at the device. */

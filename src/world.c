@@ -700,6 +700,9 @@ static void stage_fingers(palp_world *w, double h) {
           s += v3_dot(cj[c][e], v3(yd[3 * a], yd[3 * a + 1], yd[3 * a + 2]));
         }
         fs->W[c * m + dd] = h * h * s + v3_dot(k->cn[c], k->cn[dd]) / kc;
+        /* the pad's own compliance at each touched feature (not the table's) */
+        if (c == dd && c < k->nfinger && k->ctri[c] >= 0 && k->fdef.pad_stiffness > 0.0)
+          fs->W[c * m + dd] += 1.0 / k->fdef.pad_stiffness;
       }
     if (palp_lcp_solve(m, fs->W, fs->b, k->clam, fs->lwork) < 0 &&
         palp_lcp_pgs(m, fs->W, fs->b, k->clam, 500, 1e-8) < 0)
@@ -1398,7 +1401,7 @@ int palp_world_set_contact_force(palp_world *w, int c, palp_vec3 f) {
 }
 
 palp_finger_def palp_finger_default_def(void) {
-  return (palp_finger_def){.radius = 0.008, .coupling_stiffness = 2000.0};
+  return (palp_finger_def){.radius = 0.008, .coupling_stiffness = 2000.0, .pad_stiffness = 5000.0};
 }
 
 static int finger_scratch_create(palp_world *w) {
@@ -1459,7 +1462,8 @@ static int sphere_in_phantom(const palp_world *w, palp_vec3 p, double R) {
 
 int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_vec3 device) {
   if (!w || !def || !v3_isfinite(device) || !(def->radius > 0.0) || !isfinite(def->radius) ||
-      !(def->coupling_stiffness > 0.0) || !isfinite(def->coupling_stiffness))
+      !(def->coupling_stiffness > 0.0) || !isfinite(def->coupling_stiffness) || !(def->pad_stiffness >= 0.0) ||
+      !isfinite(def->pad_stiffness))
     return PALP_EINVAL;
   const int c = free_slot(w);
   if (c < 0) return c;

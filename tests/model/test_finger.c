@@ -134,11 +134,9 @@ static void test_presses(void) {
  * is a step the hand would feel as texture that is not there (a vertex entering
  * contact, a contact switching feature). Measured after the first 50 ticks, where the
  * device's speed itself steps from 0 to 50 mm/s.
- * The issue's target is max(2% of the force, 0.01 N); measured on the shipped
- * phantom: steps of up to ~0.022 N at 0.2-0.35 N, each where the contact moves onto
- * another facet (the faceted surface's normal turns at an edge). This test holds the
- * measured level, max(2%, 0.03 N), against regressions; the target is not met yet
- * (docs/haptics.md). */
+ * The target is max(2% of the force, 0.01 N). With a rigid pad (pad_stiffness 0)
+ * the contact moving onto another facet stepped the force by up to 0.022 N; the
+ * default compliant pad spreads the load over the facets it touches (docs/haptics.md). */
 static void test_slide(void) {
   palp_world *w = make(0.001);
   const double depth = 0.010, v = 0.050; /* [m], [m/s] */
@@ -157,7 +155,7 @@ static void test_slide(void) {
   const double dphi = v * 0.001 / rho; /* [rad per tick] */
   palp_vec3 F1 = {0, 0, 0}, F2 = {0, 0, 0};
   double worst = 0.0, worst_raw = 0.0, fmin_ = INFINITY;
-  int ticks = 0, over = 0, over_guard = 0, lost = 0;
+  int ticks = 0, over = 0, lost = 0;
   for (double phi = a0; phi < -a0; phi += dphi, ++ticks) {
     const palp_vec3 x = {rho * sin(phi), 0, rho * cos(phi)};
     palp_world_set_finger_device(w, f, x);
@@ -170,7 +168,6 @@ static void test_slide(void) {
       const double step = len(add(add(lm.force, sc(F1, -2.0)), F2));
       const double raw = len(add(lm.force, sc(F1, -1.0)));
       if (step > fmax(0.02 * Fm, 0.01)) over++;
-      if (step > fmax(0.02 * Fm, 0.03)) over_guard++;
       if (step / Fm > worst) worst = step / Fm;
       if (raw / Fm > worst_raw) worst_raw = raw / Fm;
       if (Fm < fmin_) fmin_ = Fm;
@@ -184,8 +181,8 @@ static void test_slide(void) {
          ticks, fmin_, 100 * worst, 100 * worst_raw, over);
   CHECK(lost == 0, "slide: contact kept all the way (%d ticks lost)", lost);
   CHECK(fmin_ > 0.1, "slide: the finger presses all the way (%.3f N)", fmin_);
-  CHECK(over_guard == 0, "slide: no tick-to-tick force step beyond max(2%% of the force, 0.03 N) off the motion's "
-                         "trend (%d ticks; %d beyond the issue's 0.01 N target)", over_guard, over);
+  CHECK(over == 0, "slide: no tick-to-tick force step beyond max(2%% of the force, 0.01 N) off the motion's trend "
+                   "(%d ticks)", over);
   palp_world_destroy(w);
 }
 
