@@ -41,12 +41,14 @@ typedef struct opts {
   const char *trace_csv;
   int color, quiet, map, no_map, plot;
   int have_magnitude, have_t_off;
-  palp_app_opts app; /* --version, --dds-config */
+  palp_app_opts app; /* --version, --dds-config, --log-level, --log-file */
   const char *phantom_name, *server; /* several servers on one domain */
   int rejoin;
+  palp_log *log; /* main's, once the options are read: diagnostics, not the station's output */
 } opts;
 
-#define CLIENT_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_DDS)
+/* --quiet already means "less station output" here: no --verbose/--quiet aliases. */
+#define CLIENT_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_DDS | PALP_APP_OPT_LOG)
 
 static void usage(FILE *f) {
   fprintf(f,
@@ -375,12 +377,12 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
     const char *why = in.error ? in.error(in.ctx) : NULL;
-    fprintf(stderr, "palp-client: input %s: cannot open: %s\n", in.name, why ? why : palp_strerror(rc));
+    palp_log_error(o->log, "input %s: cannot open: %s", in.name, why ? why : palp_strerror(rc));
     if (in.close) in.close(in.ctx);
     return 1;
   }
   if (!st->local_model_r) {
-    fprintf(stderr, "palp-client: no palp_local_model reader: the session was joined without feedback\n");
+    palp_log_error(o->log, "no palp_local_model reader: the session was joined without feedback");
     if (in.close) in.close(in.ctx);
     return 1;
   }
@@ -400,7 +402,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     d.trace_cap = (size_t)(d.rate_hz * 120);
     d.trace = trace ? calloc(d.trace_cap, sizeof *d.trace) : NULL;
     if (!trace || !d.trace) {
-      fprintf(stderr, "palp-client: cannot write %s\n", o->trace_csv);
+      palp_log_error(o->log, "cannot write %s", o->trace_csv);
       if (trace) fclose(trace);
       if (in.close) in.close(in.ctx);
       return 1;
@@ -409,7 +411,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   palp_cli_haptic_loop *hl = calloc(1, sizeof *hl);
   char err[256];
   if (!hl || palp_cli_haptic_start(hl, &d, err, sizeof err) < 0) {
-    fprintf(stderr, "palp-client: %s\n", hl ? err : "out of memory");
+    palp_log_error(o->log, "%s", hl ? err : "out of memory");
     free(hl);
     free(d.trace);
     if (trace) fclose(trace);
@@ -417,7 +419,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     return 1;
   }
   if (o->rt_priority > 0 && !hl->stats.rt_ok)
-    fprintf(stderr, "palp-client: --rt-priority %d: SCHED_FIFO refused; the haptic thread runs at normal priority\n",
+    palp_log_warn(o->log, "--rt-priority %d: SCHED_FIFO refused; the haptic thread runs at normal priority",
             o->rt_priority);
   if (!o->quiet)
     printf("[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
@@ -501,7 +503,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     }
     fclose(trace);
   }
-  if (hs.failed) fprintf(stderr, "palp-client: %s\n", hs.error);
+  if (hs.failed) palp_log_error(o->log, "%s", hs.error);
   if (in.close) in.close(in.ctx);
   double p50 = NAN, p99 = NAN;
   if (lat.n) {
@@ -537,14 +539,14 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   if (in.read_position && in.write_force) return run_haptic_trainee(o, st, ph, in);
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
-    fprintf(stderr, "palp-client: input %s: cannot open: %s\n", in.name, palp_strerror(rc));
+    palp_log_error(o->log, "input %s: cannot open: %s", in.name, palp_strerror(rc));
     if (in.close) in.close(in.ctx);
     return 1;
   }
   FILE *fb_csv = o->feedback_csv ? fopen(o->feedback_csv, "w") : NULL;
   FILE *ct_csv = o->contact_csv ? fopen(o->contact_csv, "w") : NULL;
   if ((o->feedback_csv && !fb_csv) || (o->contact_csv && !ct_csv)) {
-    fprintf(stderr, "palp-client: cannot write %s\n", o->feedback_csv && !fb_csv ? o->feedback_csv : o->contact_csv);
+    palp_log_error(o->log, "cannot write %s", o->feedback_csv && !fb_csv ? o->feedback_csv : o->contact_csv);
     if (in.close) in.close(in.ctx);
     if (fb_csv) fclose(fb_csv);
     if (ct_csv) fclose(ct_csv);
@@ -578,7 +580,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       break;
     }
     if (n < 0) {
-      fprintf(stderr, "palp-client: input %s failed: %s\n", in.name, palp_strerror(n));
+      palp_log_error(o->log, "input %s failed: %s", in.name, palp_strerror(n));
       break;
     }
     int want[PALP_CLI_MAX_FINGERS] = {0};
@@ -659,7 +661,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
             next_state_check = now + 100000000;
             continue;
           }
-          fprintf(stderr, "palp-client: server lost and no other server to rejoin: %s\n", err);
+          palp_log_error(o->log, "server lost and no other server to rejoin: %s", err);
           fb_cond = 0;
         }
         closed = 1;
@@ -846,7 +848,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     char title[160];
     snprintf(title, sizeof title, "palp session %u, \"%s\", peak frame", st->session_id, ph->name);
     if (palp_cli_view_svg(ph, &peak.d, title, o->svg) < 0)
-      fprintf(stderr, "palp-client: cannot write %s\n", o->svg);
+      palp_log_error(o->log, "cannot write %s", o->svg);
   }
   printf("[%s] session %u: %llu deformation frames, %llu contact samples seen, %llu feedback samples, peak "
          "displacement %.2f mm%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
@@ -869,6 +871,12 @@ int main(int argc, char **argv) {
     palp_app_print_version(stdout, "palp-client");
     return 0;
   }
+  palp_log log;
+  if (palp_log_init(&log, "palp-client", o.app.log_level, o.app.log_file) < 0) {
+    fprintf(stderr, "palp-client: --log-file %s: cannot open it\n", o.app.log_file);
+    return 2;
+  }
+  o.log = &log; /* every line is flushed as written */
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sa.sa_handler = on_signal;
@@ -876,7 +884,7 @@ int main(int argc, char **argv) {
   sigaction(SIGTERM, &sa, NULL);
   char err[512];
   if (palp_app_use_dds_config(o.app.dds_config, NULL, NULL, 0, err, sizeof err) < 0) {
-    fprintf(stderr, "palp-client: %s (give --dds-config FILE or set CYCLONEDDS_URI)\n", err);
+    palp_log_error(o.log, "%s (give --dds-config FILE or set CYCLONEDDS_URI)", err);
     return 1;
   }
   int trainee = !strcmp(o.role, "trainee"), observer = !strcmp(o.role, "observer");
@@ -884,7 +892,7 @@ int main(int argc, char **argv) {
   palp_cli_input in;
   memset(&in, 0, sizeof in);
   if (trainee && make_input(&o, &in, err, sizeof err) < 0) {
-    fprintf(stderr, "palp-client: %s\n", err);
+    palp_log_error(o.log, "%s", err);
     return 1;
   }
   palp_dds_security sec;
@@ -899,7 +907,7 @@ int main(int argc, char **argv) {
     src = -1;
   }
   if (src < 0) {
-    fprintf(stderr, "palp-client: %s\n", err);
+    palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);
     return 1;
   }
@@ -909,7 +917,7 @@ int main(int argc, char **argv) {
   snprintf(label, sizeof label, "%s%s%s", o.role, o.name[0] ? ":" : "", o.name);
   palp_cli_station st;
   if (palp_cli_station_open_secure(&st, o.domain, label, &sec, err, sizeof err) < 0) {
-    fprintf(stderr, "palp-client: %s\n", err);
+    palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);
     return 1;
   }
@@ -917,7 +925,7 @@ int main(int argc, char **argv) {
   if (o.server) { /* --phantom/--session are that server's local ids */
     uint32_t number = 0;
     if (palp_cli_station_server_number(&st, o.server, o.timeout, &number, err, sizeof err) < 0) {
-      fprintf(stderr, "palp-client: --server: %s\n", err);
+      palp_log_error(o.log, "--server: %s", err);
       if (in.close) in.close(in.ctx);
       palp_cli_station_close(&st);
       return 1;
@@ -928,7 +936,7 @@ int main(int argc, char **argv) {
   }
   if (o.phantom_name) {
     if (palp_cli_station_find_phantom(&st, o.phantom_name, server_number, -1, o.timeout, &o.phantom, err, sizeof err) < 0) {
-      fprintf(stderr, "palp-client: --phantom-name: %s\n", err);
+      palp_log_error(o.log, "--phantom-name: %s", err);
       if (in.close) in.close(in.ctx);
       palp_cli_station_close(&st);
       return 1;
@@ -961,21 +969,21 @@ int main(int argc, char **argv) {
       }
     }
     if (!j.session_id) {
-      fprintf(stderr, "palp-client: --trainee %s: no open session of that trainee within %.0f s\n", o.trainee,
+      palp_log_error(o.log, "--trainee %s: no open session of that trainee within %.0f s", o.trainee,
               o.timeout);
       palp_cli_station_close(&st);
       return 1;
     }
   }
   if (palp_cli_station_join(&st, &j, err, sizeof err) < 0) {
-    fprintf(stderr, "palp-client: %s\n", err);
+    palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);
     palp_cli_station_close(&st);
     return 1;
   }
   palp_Phantom ph;
   if (palp_cli_station_catalogue(&st, st.phantom_id, o.timeout, &ph, err, sizeof err) < 0) {
-    fprintf(stderr, "palp-client: %s\n", err);
+    palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);
     palp_cli_station_leave(&st);
     palp_cli_station_close(&st);

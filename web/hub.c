@@ -706,7 +706,7 @@ static void check_replies(palp_web_hub *h, int64_t now) {
       for (int k = 0; k < PALP_WEB_MAX_SESSIONS; k++) {
         session *s = &h->s[k];
         if (s->used && s->joined && !strcmp(s->station, buf[i].station_id) && strcmp(buf[i].reason, "left") != 0) {
-          fprintf(stderr, "palp-web: the server refused to stream session %u: %s\n", s->id, buf[i].reason);
+          palp_log_warn(h->def.log, "the server refused to stream session %u: %s", s->id, buf[i].reason);
           s->joined = 0;
           s->join_failed_ns = now;
           h->stats.join_rejected++;

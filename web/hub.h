@@ -19,6 +19,7 @@
 #include <stdint.h>
 
 #include "coverage.h"
+#include "palp_log.h"
 
 #define PALP_WEB_MAX_PHANTOMS 16
 #define PALP_WEB_MAX_SESSIONS 64
@@ -32,6 +33,7 @@ typedef struct palp_web_hub_def {
   double scale_mm;       /* the pages' fixed colour scale: 0 .. scale_mm of displacement */
   double linger_s;       /* stay joined this long after the last page stopped following */
   palp_web_bands bands;
+  palp_log *log;         /* main's (app/palp_log.h); NULL = stderr */
 } palp_web_hub_def;
 
 palp_web_hub_def palp_web_hub_default_def(void);

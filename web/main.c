@@ -27,6 +27,8 @@ static void on_signal(int sig) {
   g_stop = 1;
 }
 
+#define WEB_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
+
 static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-web [options]\n"
@@ -43,10 +45,10 @@ static void usage(FILE *f) {
           "  --no-feedback       never read feedback (a position-driven finger's force then shows 0 N)\n"
           "  --www DIR           the pages (default <data>/www: share/palp/www installed, web/www in a build)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
-          "  --dds-config FILE   Cyclone DDS config (default: the loopback-only config)\n"
           "  --duration S        stop after S seconds (tests, benchmarks)\n"
           "  --stats             print the bridge's counters every 5 s\n",
           PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_THREE_DIR);
+  palp_app_common_usage(f, WEB_OPTS);
 }
 
 static int number(const char *opt, const char *v, double lo, double hi, double *out) {
@@ -85,17 +87,18 @@ typedef struct watch {
   palp_web_hub *hub;
   double end, next_stats;
   int stats;
+  palp_log *log;
 } watch;
 
-static void print_stats(palp_web_hub *hub, palp_web_server *srv) {
+static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) {
   palp_web_hub_stats h;
   palp_web_serve_stats w;
   palp_web_hub_stats_get(hub, &h);
   palp_web_serve_stats_get(srv, &w);
-  fprintf(stderr,
-          "palp-web: %d sessions, %d pages; DDS taken: %llu deformations, %llu contacts, %llu feedbacks, %llu states, "
+  palp_log_info(log,
+          "%d sessions, %d pages; DDS taken: %llu deformations, %llu contacts, %llu feedbacks, %llu states, "
           "%llu dropped; joins %llu, leaves %llu; sent %llu messages (%.1f MB); http %llu ok, %llu denied; ws %llu "
-          "opened, %llu closed, %llu denied\n",
+          "opened, %llu closed, %llu denied",
           h.sessions_open, h.clients, (unsigned long long)h.deformations, (unsigned long long)h.contacts,
           (unsigned long long)h.feedbacks, (unsigned long long)h.states, (unsigned long long)h.dropped,
           (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
@@ -110,7 +113,7 @@ static void on_wake(void *ctx) {
   palp_web_serve_wake(w->srv);
   if (w->stats && now >= w->next_stats) {
     w->next_stats = now + 5;
-    print_stats(w->hub, w->srv);
+    print_stats(w->log, w->hub, w->srv);
   }
 }
 
@@ -118,7 +121,9 @@ int main(int argc, char **argv) {
   palp_web_hub_def hd = palp_web_hub_default_def();
   palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = NULL,
                            .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
-  const char *token = NULL, *token_file = NULL, *dds_config = NULL;
+  const char *token = NULL, *token_file = NULL;
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-web");
   double duration = 0, x = 0;
   int stats = 0;
   for (int i = 1; i < argc; i++) {
@@ -127,6 +132,9 @@ int main(int argc, char **argv) {
       usage(stdout);
       return 0;
     }
+    const int common = palp_app_common_opt(&ao, WEB_OPTS, argc, argv, &i);
+    if (common < 0) return 2;
+    if (common) continue;
     if (!strcmp(a, "--no-join")) { hd.join = 0; continue; }
     if (!strcmp(a, "--no-feedback")) { hd.read_feedback = 0; continue; }
     if (!strcmp(a, "--stats")) { stats = 1; continue; }
@@ -146,7 +154,6 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--token-file")) token_file = v;
     else if (!strcmp(a, "--www")) sd.www_dir = v;
     else if (!strcmp(a, "--three")) sd.three_dir = v;
-    else if (!strcmp(a, "--dds-config")) dds_config = v;
     else if (!strcmp(a, "--scale-mm")) {
       if (number(a, v, 0.1, 1000, &hd.scale_mm)) return 2;
     } else if (!strcmp(a, "--dashboard-hz")) {
@@ -176,6 +183,10 @@ int main(int argc, char **argv) {
       return 2;
     }
   }
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-web");
+    return 0;
+  }
   char tokbuf[PALP_WEB_TOKEN_MAX + 2];
   if (token_file) {
     if (token) {
@@ -199,41 +210,47 @@ int main(int argc, char **argv) {
     return 2;
   }
   sd.token = token;
+  palp_log log;
+  if (palp_log_init(&log, "palp-web", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-web: --log-file %s: %s\n", ao.log_file, strerror(errno));
+    return 2;
+  }
+  hd.log = &log;
   /* The pages live in the data directory (app/palp_app.h): never a source-tree path. */
   char www[1024], derr[256];
   if (!sd.www_dir) {
     if (palp_app_data_path("www", www, sizeof www, derr, sizeof derr) < 0) {
-      fprintf(stderr, "palp-web: the pages: %s (give --www DIR)\n", derr);
+      palp_log_error(&log, "the pages: %s (give --www DIR)", derr);
       return 2;
     }
     sd.www_dir = www;
   }
   if (access(sd.www_dir, R_OK) != 0) {
-    fprintf(stderr, "palp-web: --www %s: not readable\n", sd.www_dir);
+    palp_log_error(&log, "--www %s: not readable", sd.www_dir);
     return 2;
   }
-  if (palp_app_use_dds_config(dds_config, NULL, NULL, 0, derr, sizeof derr) != 0) {
-    fprintf(stderr, "palp-web: DDS config: %s\n", derr);
+  if (palp_app_use_dds_config(ao.dds_config, NULL, NULL, 0, derr, sizeof derr) != 0) {
+    palp_log_error(&log, "DDS config: %s", derr);
     return 2;
   }
   char err[256];
   palp_web_hub *hub = palp_web_hub_create(&hd, err, sizeof err);
   if (!hub) {
-    fprintf(stderr, "palp-web: %s\n", err);
+    palp_log_error(&log, "%s", err);
     return 1;
   }
   palp_web_server *srv = palp_web_serve_create(&sd, hub, err, sizeof err);
   if (!srv) {
-    fprintf(stderr, "palp-web: %s\n", err);
+    palp_log_error(&log, "%s", err);
     palp_web_hub_destroy(hub);
     return 1;
   }
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
   signal(SIGPIPE, SIG_IGN);
-  watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats};
+  watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats, .log = &log};
   if (palp_web_hub_start(hub, on_wake, &w) != 0) {
-    fprintf(stderr, "palp-web: cannot start the DDS thread\n");
+    palp_log_error(&log, "cannot start the DDS thread");
     palp_web_serve_destroy(srv);
     palp_web_hub_destroy(hub);
     return 1;
@@ -251,8 +268,9 @@ int main(int argc, char **argv) {
   fflush(stdout);
   palp_web_serve_run(srv, &g_stop);
   palp_web_hub_stop(hub);
-  print_stats(hub, srv);
+  print_stats(&log, hub, srv);
   palp_web_serve_destroy(srv);
   palp_web_hub_destroy(hub);
+  palp_log_close(&log);
   return 0;
 }

@@ -156,7 +156,7 @@ static void json_embed(FILE *f, const char *s) {
   cJSON_Delete(j);
 }
 
-int review_export(palp_db *db, const palp_db_session_info *s, const char *format, const char *table,
+int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *format, const char *table,
                   const char *out_path) {
   if (!format || (strcmp(format, "csv") && strcmp(format, "json"))) {
     fprintf(stderr, "palp-review export: --format csv|json is required\n");
@@ -233,7 +233,7 @@ int review_export(palp_db *db, const palp_db_session_info *s, const char *format
   if (f != stdout) werr |= fclose(f);
   else werr |= fflush(f);
   if (rc || werr) {
-    fprintf(stderr, "palp-review export: %s\n", rc ? palp_db_errmsg(db) : "write error");
+    palp_log_error(log, "export: %s", rc ? palp_db_errmsg(db) : "write error");
     return REVIEW_ERROR;
   }
   return REVIEW_OK;

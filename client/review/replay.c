@@ -18,6 +18,7 @@ typedef struct replay_ctx {
   int next; /* next input to apply */
   int map[MAX_SLOTS]; /* logged slot -> replayed contact id, -1 if none */
   int verbose;
+  palp_log *log;
   int64_t checked;
   int mismatch;
   int apply_errors;
@@ -31,7 +32,7 @@ static int bits_eq(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
 static void apply(replay_ctx *r, const palp_db_contact *c) {
   int rc = 0;
   if (c->slot < 0 || c->slot >= MAX_SLOTS) {
-    fprintf(stderr, "replay: frame %" PRId64 ": contact slot %d out of range\n", c->frame, c->slot);
+    palp_log_error(r->log, "replay: frame %" PRId64 ": contact slot %d out of range", c->frame, c->slot);
     r->apply_errors++;
     return;
   }
@@ -48,7 +49,7 @@ static void apply(replay_ctx *r, const palp_db_contact *c) {
       if (rc >= 0) *id = rc, rc = 0;
     }
   } else if (*id < 0) {
-    fprintf(stderr, "replay: frame %" PRId64 ": %s of slot %d that was never added\n", c->frame,
+    palp_log_error(r->log, "replay: frame %" PRId64 ": %s of slot %d that was never added", c->frame,
             c->op == PALP_DB_OP_UPDATE ? "update" : "removal", c->slot);
     r->apply_errors++;
     return;
@@ -60,7 +61,7 @@ static void apply(replay_ctx *r, const palp_db_contact *c) {
     *id = -1;
   }
   if (rc < 0) {
-    fprintf(stderr, "replay: frame %" PRId64 ": applying input to slot %d: %s\n", c->frame, c->slot,
+    palp_log_error(r->log, "replay: frame %" PRId64 ": applying input to slot %d: %s", c->frame, c->slot,
             palp_strerror(rc));
     r->apply_errors++;
     return;
@@ -128,19 +129,19 @@ static int frame_cb(void *u, const palp_db_frame *logged) {
   return 0;
 }
 
-int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
+int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int verbose) {
   char *scene = NULL, *params = NULL;
   if (palp_db_session_json(db, s->id, &scene, &params)) {
-    fprintf(stderr, "replay: %s\n", palp_db_errmsg(db));
+    palp_log_error(log, "replay: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
   const int recorded = params && strstr(params, "\"recorded_by\"") != NULL;
   free(params);
   if (recorded) {
     /* palp-recorder logs inputs as received over DDS, not as the server applied them. */
-    fprintf(stderr, "replay: session %s was recorded over DDS by palp-recorder: its contact inputs are stamped "
+    palp_log_error(log, "replay: session %s was recorded over DDS by palp-recorder: its contact inputs are stamped "
                     "with the frames the recorder saw, not the frames the server applied them at, and its frames "
-                    "carry no state hash, so it cannot be replayed exactly; replay the server's own log instead\n",
+                    "carry no state hash, so it cannot be replayed exactly; replay the server's own log instead",
             s->uid);
     free(scene);
     return REVIEW_ERROR;
@@ -150,18 +151,18 @@ int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
   palp_world *w = palp_db_world_from_scene(scene, s->dt_s, &err, msg, sizeof msg);
   free(scene);
   if (!w) {
-    fprintf(stderr, "replay: session %s: cannot rebuild the world: %s\n", s->uid, msg);
+    palp_log_error(log, "replay: session %s: cannot rebuild the world: %s", s->uid, msg);
     return REVIEW_ERROR;
   }
   review_contacts in;
   if (review_load_contacts(db, s->id, &in)) {
-    fprintf(stderr, "replay: %s\n", palp_db_errmsg(db));
+    palp_log_error(log, "replay: %s", palp_db_errmsg(db));
     palp_world_destroy(w);
     return REVIEW_ERROR;
   }
   if (s->records_shed || s->records_failed)
-    fprintf(stderr, "replay: warning: the log of %s is incomplete (%lld shed, %lld lost); if contact inputs are "
-                    "among them the replay will diverge\n",
+    palp_log_warn(log, "replay: the log of %s is incomplete (%lld shed, %lld lost); if contact inputs are "
+                       "among them the replay will diverge",
             s->uid, (long long)s->records_shed, (long long)s->records_failed);
   replay_ctx *r = calloc(1, sizeof *r);
   if (!r) {
@@ -172,12 +173,13 @@ int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
   r->w = w;
   r->in = &in;
   r->verbose = verbose;
+  r->log = log;
   r->dt = s->dt_s > 0 ? s->dt_s : 1e-3;
   for (int i = 0; i < MAX_SLOTS; i++) r->map[i] = -1;
   int rc = palp_db_each_frame(db, s->id, frame_cb, r);
   int result;
   if (rc < 0) {
-    fprintf(stderr, "replay: reading frames: %s\n", palp_db_errmsg(db));
+    palp_log_error(log, "replay: reading frames: %s", palp_db_errmsg(db));
     result = REVIEW_ERROR;
   } else if (r->damaged) {
     result = REVIEW_ERROR;
@@ -187,7 +189,7 @@ int review_replay(palp_db *db, const palp_db_session_info *s, int verbose) {
     printf("replay: %s diverges after %" PRId64 " identical frames\n", s->uid, r->checked);
     result = REVIEW_MISMATCH;
   } else if (r->checked == 0) {
-    fprintf(stderr, "replay: %s has no logged frames to compare\n", s->uid);
+    palp_log_error(log, "replay: %s has no logged frames to compare", s->uid);
     result = REVIEW_ERROR;
   } else {
     printf("replay: %s: %" PRId64 " logged frames reproduced bit-identically (state hash and summary), "

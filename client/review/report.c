@@ -2,6 +2,7 @@
  * resource), readable in any browser from a USB stick: force over time, displacement over time,
  * and where the trainee pressed, drawn on a top view of the phantom's rest mesh shaded by the
  * largest deformation logged. */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -234,7 +235,7 @@ static void info_row(FILE *f, const char *k, const char *v) {
   fputs("</td></tr>\n", f);
 }
 
-int review_report(palp_db *db, const palp_db_session_info *s, const char *out_path) {
+int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *out_path) {
   /* The phantom's rest mesh from the logged scene. */
   char *scene_json = NULL;
   palp_db_session_json(db, s->id, &scene_json, NULL);
@@ -244,7 +245,7 @@ int review_report(palp_db *db, const palp_db_session_info *s, const char *out_pa
   int have_mesh = 0;
   if (scene_json && palp_scene_parse(scene_json, &sc, perr, sizeof perr) == 0)
     have_mesh = palp_mesh_create(&sc.world.mesh, &mesh) == 0;
-  else fprintf(stderr, "report: the logged scene does not parse (%s); drawing without the phantom\n", perr);
+  else palp_log_warn(log, "report: the logged scene does not parse (%s); drawing without the phantom", perr);
   free(scene_json);
 
   ts_ctx ts = {0};
@@ -267,7 +268,7 @@ int review_report(palp_db *db, const palp_db_session_info *s, const char *out_pa
   if (!rc) rc = review_presses(db, s->id, &in, &pr, &np);
   FILE *f = NULL;
   if (!rc && !(f = fopen(out_path, "w"))) {
-    perror(out_path);
+    palp_log_error(log, "report: %s: %s", out_path, strerror(errno));
     rc = PALP_EIO;
   }
   if (!rc) {
@@ -340,7 +341,7 @@ int review_report(palp_db *db, const palp_db_session_info *s, const char *out_pa
   free(pr);
   if (have_mesh) palp_mesh_destroy(&mesh);
   if (rc) {
-    fprintf(stderr, "report: %s: %s\n", out_path, rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+    palp_log_error(log, "report: %s: %s", out_path, rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
     return REVIEW_ERROR;
   }
   printf("report: wrote %s\n", out_path);

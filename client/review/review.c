@@ -15,6 +15,9 @@
 
 #define PI 3.14159265358979323846
 
+/* replay --verbose has its own meaning, so only --log-level/--log-file. */
+#define REVIEW_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
+
 static void usage(FILE *f) {
   fputs("usage: palp-review [--db FILE] COMMAND [ARGS]\n"
         "  list     [--trainee NAME] [--phantom ID|NAME] [--since DATE] [--until DATE]\n"
@@ -24,8 +27,10 @@ static void usage(FILE *f) {
         "  replay   SESSION [--verbose]\n"
         "  report   SESSION --out FILE.html\n"
         "SESSION is a session uid or a unique prefix of one. DATE is YYYY-MM-DD[THH:MM[:SS]] local time.\n"
-        "The database is --db, else $PALP_DB, else ./palp-sessions.db.\n",
+        "The database is --db, else $PALP_DB, else ./palp-sessions.db.\n"
+        "Errors are log lines (timestamp, level); tables and reports go to stdout.\n",
         f);
+  palp_app_common_usage(f, REVIEW_OPTS);
 }
 
 void review_fmt_time(double unix_s, char *buf, size_t len) {
@@ -181,7 +186,7 @@ int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_pr
 }
 
 /* ---- list ------------------------------------------------------------------------------ */
-static int cmd_list(palp_db *db, int argc, char **argv) {
+static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   palp_db_filter f = {0};
   for (int i = 0; i < argc; i++) {
     const char *a = argv[i];
@@ -207,7 +212,7 @@ static int cmd_list(palp_db *db, int argc, char **argv) {
   palp_db_session_info *v;
   int n;
   if (palp_db_list_sessions(db, &f, &v, &n)) {
-    fprintf(stderr, "palp-review list: %s\n", palp_db_errmsg(db));
+    palp_log_error(log, "list: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
   printf("%-36s %-14s %-12s %-25s %9s %-16s %s\n", "SESSION", "TRAINEE", "PHANTOM", "STARTED", "SIM [s]",
@@ -293,7 +298,7 @@ static const char *dist_name(palp_distribution d) {
   return "-";
 }
 
-static int cmd_show(palp_db *db, const palp_db_session_info *s) {
+static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   char t0[64], t1[64];
   review_fmt_time(s->start_unix_s, t0, sizeof t0);
   review_fmt_time(s->end_unix_s, t1, sizeof t1);
@@ -322,7 +327,7 @@ static int cmd_show(palp_db *db, const palp_db_session_info *s) {
 
   review_contacts c;
   if (review_load_contacts(db, s->id, &c)) {
-    fprintf(stderr, "palp-review show: %s\n", palp_db_errmsg(db));
+    palp_log_error(log, "show: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
   review_press *pr = NULL;
@@ -384,7 +389,7 @@ static int cmd_show(palp_db *db, const palp_db_session_info *s) {
 }
 
 /* ---- annotate -------------------------------------------------------------------------- */
-static int cmd_annotate(palp_db *db, const palp_db_session_info *s, int argc, char **argv) {
+static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *s, int argc, char **argv) {
   const char *author = NULL, *note = NULL, *grade = NULL;
   for (int i = 0; i < argc; i++) {
     if (i + 1 >= argc) {
@@ -404,7 +409,7 @@ static int cmd_annotate(palp_db *db, const palp_db_session_info *s, int argc, ch
     return REVIEW_ERROR;
   }
   if (palp_db_add_note(db, s->id, author, note, grade)) {
-    fprintf(stderr, "palp-review annotate: %s\n", palp_db_errmsg(db));
+    palp_log_error(log, "annotate: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
   printf("note added to %s by %s%s%s\n", s->uid, author, grade ? ", grade " : "", grade ? grade : "");
@@ -415,8 +420,21 @@ int main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-review")) return 0;
   const char *path = getenv("PALP_DB");
   if (!path || !*path) path = "palp-sessions.db";
-  /* --db may come anywhere: take it out before the command's own options are parsed. */
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-review");
+  /* --db and the log options may come anywhere: take them out before the
+   * command's own options are parsed. */
   for (int k = 1; k < argc; k++) {
+    int c = k;
+    const int common = palp_app_common_opt(&ao, REVIEW_OPTS, argc, argv, &c);
+    if (common < 0) return REVIEW_ERROR;
+    if (common) {
+      const int n = c - k + 1;
+      for (int j = k; j + n <= argc; j++) argv[j] = argv[j + n];
+      argc -= n;
+      k--;
+      continue;
+    }
     if (strcmp(argv[k], "--db")) continue;
     if (k + 1 >= argc) {
       fprintf(stderr, "palp-review: --db needs a file\n");
@@ -451,15 +469,20 @@ int main(int argc, char **argv) {
     usage(stderr);
     return REVIEW_ERROR;
   }
+  palp_log log;
+  if (palp_log_init(&log, "palp-review", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-review: --log-file %s: cannot open it\n", ao.log_file);
+    return REVIEW_ERROR;
+  }
   char err[512] = "";
   palp_db *db;
   if (palp_db_open(path, 0, &db, err, sizeof err)) {
-    fprintf(stderr, "palp-review: %s\n", err);
+    palp_log_error(&log, "%s", err);
     return REVIEW_ERROR;
   }
   int rc;
   if (!strcmp(cmd, "list")) {
-    rc = cmd_list(db, argc - i, argv + i);
+    rc = cmd_list(&log, db, argc - i, argv + i);
     palp_db_close(db);
     return rc;
   }
@@ -472,7 +495,7 @@ int main(int argc, char **argv) {
   const char *uid = argv[i++];
   rc = palp_db_find_session(db, uid, &s);
   if (rc) {
-    fprintf(stderr, "palp-review %s: session '%s': %s\n", cmd, uid,
+    palp_log_error(&log, "%s: session '%s': %s", cmd, uid,
             rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
     palp_db_close(db);
     return REVIEW_ERROR;
@@ -480,7 +503,7 @@ int main(int argc, char **argv) {
   const char *format = NULL, *table = "frames", *out = NULL;
   int verbose = 0;
   if (!strcmp(cmd, "annotate")) {
-    rc = cmd_annotate(db, &s, argc - i, argv + i);
+    rc = cmd_annotate(&log, db, &s, argc - i, argv + i);
     palp_db_close(db);
     return rc;
   }
@@ -504,14 +527,14 @@ int main(int argc, char **argv) {
       return REVIEW_ERROR;
     }
   }
-  if (!strcmp(cmd, "show")) rc = cmd_show(db, &s);
-  else if (!strcmp(cmd, "export")) rc = review_export(db, &s, format, table, out);
-  else if (!strcmp(cmd, "replay")) rc = review_replay(db, &s, verbose);
+  if (!strcmp(cmd, "show")) rc = cmd_show(&log, db, &s);
+  else if (!strcmp(cmd, "export")) rc = review_export(&log, db, &s, format, table, out);
+  else if (!strcmp(cmd, "replay")) rc = review_replay(&log, db, &s, verbose);
   else {
     if (!out) {
       fprintf(stderr, "palp-review report: --out FILE.html is required\n");
       rc = REVIEW_ERROR;
-    } else rc = review_report(db, &s, out);
+    } else rc = review_report(&log, db, &s, out);
   }
   palp_db_close(db);
   return rc;

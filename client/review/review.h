@@ -5,6 +5,7 @@
 #include <stdio.h>
 
 #include "palp_db.h"
+#include "palp_log.h"
 
 /* Exit codes: 0 ok, 1 the check failed (replay mismatch), 2 bad input or an error. */
 enum { REVIEW_OK = 0, REVIEW_MISMATCH = 1, REVIEW_ERROR = 2 };
@@ -35,9 +36,9 @@ void review_fmt_time(double unix_s, char *buf, size_t len); /* local time, with 
 void json_str(FILE *f, const char *s);
 void html_str(FILE *f, const char *s);
 
-int review_export(palp_db *db, const palp_db_session_info *s, const char *format, const char *table,
+int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *format, const char *table,
                   const char *out_path);
-int review_replay(palp_db *db, const palp_db_session_info *s, int verbose);
-int review_report(palp_db *db, const palp_db_session_info *s, const char *out_path);
+int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int verbose);
+int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *out_path);
 
 #endif

@@ -45,7 +45,12 @@ typedef struct options {
   double max_minutes;
   double force_weight, prior_weight, recovery_weight, bias_weight, bound;
   int recovery_auto;
+  palp_app_opts app;
+  palp_log *log; /* main's, once the options are read */
 } options;
+
+/* --quiet already means "no progress lines" here, so only --log-level/--log-file. */
+#define EVAL_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
 
 static void usage(FILE *f) {
   fprintf(f,
@@ -59,6 +64,7 @@ static void usage(FILE *f) {
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
           "defaults: --scene config/paper_step.json, --out out/eval (evaluate) or\n"
           "          config/params/calibrated.json (calibrate), --level from the FEM config (2)\n");
+  palp_app_common_usage(f, EVAL_OPTS);
 }
 
 static int parse_int(const char *opt, const char *v, int lo, int hi, int *out) {
@@ -94,6 +100,7 @@ static int parse_args(int argc, char **argv, options *o) {
   o->bias_weight = 0.0;
   o->bound = 100.0;
   o->recovery_auto = 1;
+  palp_app_opts_init(&o->app, "palp-eval");
   if (argc < 2) return -1;
   o->cmd = argv[1];
   if (!strcmp(o->cmd, "-h") || !strcmp(o->cmd, "--help")) {
@@ -107,6 +114,9 @@ static int parse_args(int argc, char **argv, options *o) {
   for (int i = 2; i < argc; ++i) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     int takes = 1, bad = 0;
+    const int common = palp_app_common_opt(&o->app, EVAL_OPTS, argc, argv, &i);
+    if (common < 0) return -1;
+    if (common) continue;
     if (!strcmp(a, "--scene")) o->scene = v;
     else if (!strcmp(a, "--out")) o->out = v;
     else if (!strcmp(a, "--fem-config")) o->fem_config = v;
@@ -255,10 +265,12 @@ typedef struct setup {
   palp_fem_config fem;
   int dist[4];
   int dist_count;
+  palp_log *log;
 } setup;
 
 static int load_setup(const options *o, setup *s) {
   memset(s, 0, sizeof *s);
+  s->log = o->log;
   if (o->scene) snprintf(s->scene_path, sizeof s->scene_path, "%s", o->scene);
   else if (file_exists("config/paper_step.json")) snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step.json");
   else {
@@ -269,18 +281,18 @@ static int load_setup(const options *o, setup *s) {
   }
   char err[512] = "";
   if (!file_exists(s->scene_path)) {
-    fprintf(stderr, "palp-eval: scene file \"%s\" not found\n", s->scene_path);
+    palp_log_error(o->log, "scene file \"%s\" not found", s->scene_path);
     return 1;
   }
   int rc = o->params ? load_with_params(s->scene_path, o->params, &s->scene, err, sizeof err)
                      : palp_scene_load(s->scene_path, &s->scene, err, sizeof err);
   if (rc) {
-    fprintf(stderr, "palp-eval: %s: %s\n", rc == -100 ? o->params : s->scene_path, err);
+    palp_log_error(o->log, "%s: %s", rc == -100 ? o->params : s->scene_path, err);
     return 1;
   }
   if (s->scene.contact_count < 1) {
-    fprintf(stderr, "palp-eval: %s: the scene has no contact; the evaluation loads contacts[0] under the four "
-                    "distributions\n",
+    palp_log_error(o->log, "%s: the scene has no contact; the evaluation loads contacts[0] under the four "
+                           "distributions",
             s->scene_path);
     return 1;
   }
@@ -288,12 +300,12 @@ static int load_setup(const options *o, setup *s) {
   s->fem = palp_fem_default_config();
   if (o->fem_config) {
     if (!file_exists(o->fem_config)) {
-      fprintf(stderr, "palp-eval: FEM config \"%s\" not found\n", o->fem_config);
+      palp_log_error(o->log, "FEM config \"%s\" not found", o->fem_config);
       return 1;
     }
     rc = palp_fem_config_load(o->fem_config, &s->fem, err, sizeof err);
     if (rc) {
-      fprintf(stderr, "palp-eval: %s: %s\n", o->fem_config, err);
+      palp_log_error(o->log, "%s: %s", o->fem_config, err);
       return 1;
     }
   }
@@ -301,14 +313,14 @@ static int load_setup(const options *o, setup *s) {
   if (o->cache_dir) snprintf(s->fem.cache_dir, sizeof s->fem.cache_dir, "%s", o->cache_dir);
   rc = palp_fem_config_validate(&s->fem, err, sizeof err);
   if (rc) {
-    fprintf(stderr, "palp-eval: FEM configuration: %s\n", err);
+    palp_log_error(o->log, "FEM configuration: %s", err);
     return 1;
   }
   if (o->distributions && strcmp(o->distributions, "all")) {
     for (const char *p = o->distributions; *p; ++p) {
       if (*p == ',') continue;
       if (*p < '1' || *p > '4' || (p[1] && p[1] != ',') || s->dist_count == 4) {
-        fprintf(stderr, "palp-eval: --distributions expects a list of 1..4 (e.g. 1,3) or all, got \"%s\"\n",
+        palp_log_error(o->log, "--distributions expects a list of 1..4 (e.g. 1,3) or all, got \"%s\"",
                 o->distributions);
         return 2;
       }
@@ -323,6 +335,7 @@ typedef struct progress {
   int quiet, distribution;
   double t0;
   int last_pct;
+  palp_log *log;
 } progress;
 
 static int fem_progress(void *ud, int frame, int frames, double sim_time) {
@@ -331,7 +344,7 @@ static int fem_progress(void *ud, int frame, int frames, double sim_time) {
   const int pct = (int)(100.0 * frame / frames);
   if (pct / 10 != p->last_pct / 10 || frame == frames) {
     p->last_pct = pct;
-    fprintf(stderr, "palp-eval: FEM distribution %s: frame %d/%d (t = %.2f s), %.0f s elapsed\n",
+    palp_log_info(p->log, "FEM distribution %s: frame %d/%d (t = %.2f s), %.0f s elapsed",
             palp_eval_roman(p->distribution), frame, frames, sim_time, now_s() - p->t0);
   }
   return 0;
@@ -340,17 +353,18 @@ static int fem_progress(void *ud, int frame, int frames, double sim_time) {
 /* The FEM reference of one distribution as a record (from the cache when unchanged). */
 static int reference(const setup *s, const palp_scene *sd, int quiet, palp_eval_record *out, palp_fem_result *info) {
   char err[512] = "";
-  progress pr = {.quiet = quiet, .distribution = (int)sd->contact[0].def.distribution, .t0 = now_s(), .last_pct = -10};
+  progress pr = {.quiet = quiet, .distribution = (int)sd->contact[0].def.distribution, .t0 = now_s(), .last_pct = -10,
+                 .log = s->log};
   palp_fem_result fr;
   memset(&fr, 0, sizeof fr);
   int rc = palp_fem_run(&s->fem, sd, &fr, fem_progress, &pr, err, sizeof err);
   if (rc) {
-    fprintf(stderr, "palp-eval: FEM reference, distribution %s: %s\n", palp_eval_roman(pr.distribution),
-            err[0] ? err : palp_strerror(rc));
+    palp_log_error(s->log, "FEM reference, distribution %s: %s", palp_eval_roman(pr.distribution),
+                   err[0] ? err : palp_strerror(rc));
     return 1;
   }
   rc = palp_eval_record_from_fem(&fr, sd, out, err, sizeof err);
-  if (rc) fprintf(stderr, "palp-eval: FEM reference, distribution %s: %s\n", palp_eval_roman(pr.distribution), err);
+  if (rc) palp_log_error(s->log, "FEM reference, distribution %s: %s", palp_eval_roman(pr.distribution), err);
   if (info) {
     *info = fr;
     /* keep the statistics only */
@@ -378,7 +392,7 @@ static int write_pairs_csv(const char *path, const palp_eval_pairs *p, const pal
 
 static double vnorm(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 
-static int write_plots(const char *dir, int d, const palp_eval_record *rt, const palp_eval_record *ref,
+static int write_plots(palp_log *log, const char *dir, int d, const palp_eval_record *rt, const palp_eval_record *ref,
                        const palp_eval_pairs *p, const palp_eval_dist *row) {
   char path[1100], title[160], err[256];
   const int nf = rt->frames, nv = rt->vertex_count;
@@ -439,7 +453,7 @@ static int write_plots(const char *dir, int d, const palp_eval_record *rt, const
     snprintf(path, sizeof path, "%s/bland_altman_%s_d%d.svg", dir, k == 0 ? "displacement" : "force", d);
     rc = palp_svg_bland_altman_file(path, &def, err, sizeof err);
   }
-  if (rc) fprintf(stderr, "palp-eval: plot %s: %s\n", path, err);
+  if (rc) palp_log_error(log, "plot %s: %s", path, err);
   free(t), free(ya), free(yb);
   return rc;
 }
@@ -475,7 +489,7 @@ static int cmd_evaluate(const options *o) {
   if (rc) return rc;
   const char *dir = o->out ? o->out : "out/eval";
   if (make_dirs(dir)) {
-    fprintf(stderr, "palp-eval: cannot create the output directory \"%s\": %s\n", dir, strerror(errno));
+    palp_log_error(o->log, "cannot create the output directory \"%s\": %s", dir, strerror(errno));
     return 1;
   }
   palp_eval_report rep;
@@ -504,7 +518,7 @@ static int cmd_evaluate(const options *o) {
     rc = palp_eval_run_rt(&sd, &rt, err, sizeof err);
     t_rt += now_s() - t0;
     if (rc) {
-      fprintf(stderr, "palp-eval: distribution %s: %s\n", palp_eval_roman(d), err);
+      palp_log_error(o->log, "distribution %s: %s", palp_eval_roman(d), err);
       return 1;
     }
     palp_fem_result info;
@@ -521,7 +535,7 @@ static int cmd_evaluate(const options *o) {
     palp_eval_pairs pr;
     rc = palp_eval_pairs_build(&rt, &ref, &pr, err, sizeof err);
     if (rc) {
-      fprintf(stderr, "palp-eval: distribution %s: %s\n", palp_eval_roman(d), err);
+      palp_log_error(o->log, "distribution %s: %s", palp_eval_roman(d), err);
       palp_eval_record_destroy(&rt), palp_eval_record_destroy(&ref);
       return 1;
     }
@@ -555,24 +569,24 @@ static int cmd_evaluate(const options *o) {
       rc = pool_add(&pool[1], pr.force_rt, pr.force_ref, pr.n_force, row->force_sound.margin);
     t_stats += now_s() - t0;
     if (rc) {
-      fprintf(stderr, "palp-eval: distribution %s: statistics: %s\n", palp_eval_roman(d), palp_strerror(rc));
+      palp_log_error(o->log, "distribution %s: statistics: %s", palp_eval_roman(d), palp_strerror(rc));
     } else {
       char path[1100];
       snprintf(path, sizeof path, "%s/displacement_d%d.csv", dir, d);
       if (write_pairs_csv(path, &pr, &rt, 0)) rc = 1;
       snprintf(path, sizeof path, "%s/force_d%d.csv", dir, d);
       if (!rc && write_pairs_csv(path, &pr, &rt, 1)) rc = 1;
-      if (rc) fprintf(stderr, "palp-eval: cannot write %s\n", path);
-      if (!rc && o->plots && write_plots(dir, d, &rt, &ref, &pr, row)) rc = 1;
+      if (rc) palp_log_error(o->log, "cannot write %s", path);
+      if (!rc && o->plots && write_plots(o->log, dir, d, &rt, &ref, &pr, row)) rc = 1;
     }
     palp_eval_pairs_destroy(&pr);
     palp_eval_record_destroy(&rt);
     palp_eval_record_destroy(&ref);
     if (rc) return 1;
     if (!o->quiet)
-      fprintf(stderr,
-              "palp-eval: distribution %s done (real-time %.2f s; FEM %s%.1f s: %d elements, %ld steps, %ld Newton "
-              "iterations, %ld cutbacks, %ld factorisations)\n",
+      palp_log_info(o->log,
+                    "distribution %s done (real-time %.2f s; FEM %s%.1f s: %d elements, %ld steps, %ld Newton "
+                    "iterations, %ld cutbacks, %ld factorisations)",
               palp_eval_roman(d), row->rt_seconds, row->ref_from_cache ? "from cache, computed in " : "",
               row->ref_seconds, info.element_count, info.steps, info.newton_iterations, info.cutbacks,
               info.factorizations);
@@ -589,7 +603,7 @@ static int cmd_evaluate(const options *o) {
   palp_eval_report_print(stdout, &rep);
   char err[512] = "";
   if (palp_eval_report_write(dir, &rep, err, sizeof err)) {
-    fprintf(stderr, "palp-eval: %s\n", err);
+    palp_log_error(o->log, "%s", err);
     return 1;
   }
   printf("\nwritten to %s/: tables.csv, tables.json, tables.md, displacement_dN.csv, force_dN.csv%s\n", dir,
@@ -614,7 +628,7 @@ static int cmd_calibrate(const options *o) {
   char err[512] = "";
   const double band = def.recovery_band;
   if (o->fit && palp_eval_params_parse_mask(o->fit, &def.mask, err, sizeof err)) {
-    fprintf(stderr, "palp-eval: %s\n", err);
+    palp_log_error(o->log, "%s", err);
     return 2;
   }
   def.frame_stride = o->frame_stride;
@@ -644,7 +658,7 @@ static int cmd_calibrate(const options *o) {
   palp_eval_calib_result res, res2;
   rc = palp_eval_calibrate(scenes, refs, s.dist_count, &def, &res, err, sizeof err);
   if (rc) {
-    fprintf(stderr, "palp-eval: %s\n", err);
+    palp_log_error(o->log, "%s", err);
     for (int k = 0; k < s.dist_count; ++k) palp_eval_record_destroy(&refs[k]);
     return 1;
   }
@@ -655,8 +669,8 @@ static int cmd_calibrate(const options *o) {
   int refit = 0;
   if (o->recovery_auto && broke) {
     if (!o->quiet)
-      fprintf(stderr, "palp-eval: the fit moved the recovery to %.3f s (outside %.1f +- %.1f s); refitting with it "
-                      "as a penalty\n",
+      palp_log_warn(o->log, "the fit moved the recovery to %.3f s (outside %.1f +- %.1f s); refitting with it "
+                            "as a penalty",
               res.recovery_after.t_recover, target, band);
     def.recovery_weight = 0.1;
     /* aim inside the checked band, so the hinge's balance point does not land
@@ -665,7 +679,7 @@ static int cmd_calibrate(const options *o) {
     for (int k = 0; k < s.dist_count; ++k) palp_eval_params_set(&scenes[k].world, res.fitted);
     rc = palp_eval_calibrate(scenes, refs, s.dist_count, &def, &res2, err, sizeof err);
     if (rc) {
-      fprintf(stderr, "palp-eval: %s\n", err);
+      palp_log_error(o->log, "%s", err);
       for (int k = 0; k < s.dist_count; ++k) palp_eval_record_destroy(&refs[k]);
       return 1;
     }
@@ -714,7 +728,7 @@ static int cmd_calibrate(const options *o) {
     snprintf(comment + len, sizeof comment - (size_t)len, "; recovery to 5%% %.2f s after release. See docs/evaluation.md.",
              fin->recovery_after.t_recover);
   if (palp_eval_params_write(out, &w, comment, err, sizeof err)) {
-    fprintf(stderr, "palp-eval: %s\n", err);
+    palp_log_error(o->log, "%s", err);
     return 1;
   }
   printf("\nparameters written to %s\n", out);
@@ -729,5 +743,11 @@ int main(int argc, char **argv) {
     usage(stderr);
     return 2;
   }
+  palp_log log;
+  if (palp_log_init(&log, "palp-eval", o.app.log_level, o.app.log_file) < 0) {
+    fprintf(stderr, "palp-eval: --log-file %s: cannot open it\n", o.app.log_file);
+    return 2;
+  }
+  o.log = &log; /* every line is flushed as written */
   return !strcmp(o.cmd, "evaluate") ? cmd_evaluate(&o) : cmd_calibrate(&o);
 }

@@ -29,6 +29,9 @@ static double now_s(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* --quiet already means "no progress bar or summary" here, so only --log-level/--log-file. */
+#define FEM_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
+
 static void usage(void) {
   fprintf(stderr,
           "usage: palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json] [--inp MESH.inp]\n"
@@ -37,6 +40,7 @@ static void usage(void) {
           "                    [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]\n"
           "       palp-fem export-inp [--level N] [--config FEM.json] OUT.inp\n"
           "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n");
+  palp_app_common_usage(stderr, FEM_OPTS);
 }
 
 typedef struct progress {
@@ -152,6 +156,8 @@ typedef struct opts {
   const char *scene, *config, *inp, *out, *cache_dir, *reading, *dist, *positional;
   int level, frames, no_cache, quiet;
   double dt;
+  palp_app_opts app;
+  palp_log *log; /* main's, once the options are read */
 } opts;
 
 static int parse(int argc, char **argv, opts *o) {
@@ -159,9 +165,13 @@ static int parse(int argc, char **argv, opts *o) {
   o->level = -1;
   o->frames = -1;
   o->dt = -1.0;
+  palp_app_opts_init(&o->app, "palp-fem");
   for (int i = 2; i < argc; ++i) {
     const char *a = argv[i];
     const int has = i + 1 < argc;
+    const int common = palp_app_common_opt(&o->app, FEM_OPTS, argc, argv, &i);
+    if (common < 0) return -1;
+    if (common) continue;
 #define ARG(name, dst)                                                                                             \
   if (strcmp(a, name) == 0) {                                                                                      \
     if (!has) {                                                                                                    \
@@ -215,7 +225,7 @@ static int build_config(const opts *o, palp_fem_config *cfg) {
   *cfg = palp_fem_default_config();
   char err[256];
   if (o->config && palp_fem_config_load(o->config, cfg, err, sizeof err) != 0) {
-    fprintf(stderr, "palp-fem: %s\n", err);
+    palp_log_error(o->log, "%s", err);
     return -1;
   }
   if (o->level > 0) cfg->mesh.level = o->level;
@@ -227,12 +237,12 @@ static int build_config(const opts *o, palp_fem_config *cfg) {
     if (strcmp(o->reading, "long_term") == 0) cfg->c10_reading = PALP_FEM_C10_LONG_TERM;
     else if (strcmp(o->reading, "instantaneous") == 0) cfg->c10_reading = PALP_FEM_C10_INSTANTANEOUS;
     else {
-      fprintf(stderr, "palp-fem: --reading: expected long_term or instantaneous\n");
+      palp_log_error(o->log, "--reading: expected long_term or instantaneous");
       return -1;
     }
   }
   if (palp_fem_config_validate(cfg, err, sizeof err) != 0) {
-    fprintf(stderr, "palp-fem: %s\n", err);
+    palp_log_error(o->log, "%s", err);
     return -1;
   }
   return 0;
@@ -249,14 +259,14 @@ static int cmd_run(const opts *o) {
   palp_scene scene;
   char err[512];
   if (palp_scene_load(o->scene, &scene, err, sizeof err) != 0) {
-    fprintf(stderr, "palp-fem: %s: %s\n", o->scene, err);
+    palp_log_error(o->log, "%s: %s", o->scene, err);
     return 2;
   }
   if (o->frames > 0) scene.frames = o->frames;
   if (o->dist) {
     palp_distribution d;
     if (parse_dist(o->dist, &d)) {
-      fprintf(stderr, "palp-fem: --distribution: expected single, uniform, gaussian or gaussian_offset\n");
+      palp_log_error(o->log, "--distribution: expected single, uniform, gaussian or gaussian_offset");
       return 2;
     }
     for (int c = 0; c < scene.contact_count; ++c) scene.contact[c].def.distribution = d;
@@ -267,12 +277,12 @@ static int cmd_run(const opts *o) {
   const int rc = palp_fem_run(&cfg, &scene, &r, on_progress, &p, err, sizeof err);
   if (rc) {
     if (p.tty) fprintf(stderr, "\n");
-    fprintf(stderr, "palp-fem: run failed: %s (%s)\n", err, palp_strerror(rc));
+    palp_log_error(o->log, "run failed: %s (%s)", err, palp_strerror(rc));
     return 1;
   }
-  if (err[0]) fprintf(stderr, "palp-fem: %s\n", err);
+  if (err[0]) palp_log_warn(o->log, "%s", err);
   if (o->out && write_csv(o->out, &r) != 0) {
-    fprintf(stderr, "palp-fem: cannot write %s\n", o->out);
+    palp_log_error(o->log, "cannot write %s", o->out);
     palp_fem_result_destroy(&r);
     return 1;
   }
@@ -281,15 +291,15 @@ static int cmd_run(const opts *o) {
   return 0;
 }
 
-static int load_mesh(const palp_fem_config *cfg, palp_fem_mesh *m) {
+static int load_mesh(palp_log *log, const palp_fem_config *cfg, palp_fem_mesh *m) {
   char err[256];
   if (cfg->inp_path[0]) {
     if (palp_fem_inp_read(cfg->inp_path, m, err, sizeof err) != 0) {
-      fprintf(stderr, "palp-fem: %s\n", err);
+      palp_log_error(log, "%s", err);
       return -1;
     }
   } else if (palp_fem_mesh_create(&cfg->mesh, m) != 0) {
-    fprintf(stderr, "palp-fem: invalid mesh definition (level %d)\n", cfg->mesh.level);
+    palp_log_error(log, "invalid mesh definition (level %d)", cfg->mesh.level);
     return -1;
   }
   return 0;
@@ -304,12 +314,12 @@ static int cmd_export(const opts *o) {
   palp_fem_config cfg;
   if (build_config(o, &cfg)) return 2;
   palp_fem_mesh m;
-  if (load_mesh(&cfg, &m)) return 2;
+  if (load_mesh(o->log, &cfg, &m)) return 2;
   char heading[128];
   snprintf(heading, sizeof heading, "palp hemisphere R = %.4g m, membrane %.4g m, level %d", cfg.mesh.radius,
            cfg.mesh.membrane_thickness, cfg.mesh.level);
   const int rc = palp_fem_inp_write(&m, o->positional, heading);
-  if (rc) fprintf(stderr, "palp-fem: cannot write %s: %s\n", o->positional, palp_strerror(rc));
+  if (rc) palp_log_error(o->log, "cannot write %s: %s", o->positional, palp_strerror(rc));
   else if (!o->quiet) printf("wrote %s: %d nodes, %d C3D8 elements, %d sets\n", o->positional, m.node_count, m.element_count, m.set_count);
   palp_fem_mesh_destroy(&m);
   return rc ? 1 : 0;
@@ -319,7 +329,7 @@ static int cmd_info(const opts *o) {
   palp_fem_config cfg;
   if (build_config(o, &cfg)) return 2;
   palp_fem_mesh m;
-  if (load_mesh(&cfg, &m)) return 2;
+  if (load_mesh(o->log, &cfg, &m)) return 2;
   int nm = 0, nf = 0;
   double vol = 0.0;
   for (int e = 0; e < m.element_count; ++e) {
@@ -350,6 +360,12 @@ int main(int argc, char **argv) {
     usage();
     return 2;
   }
+  palp_log log;
+  if (palp_log_init(&log, "palp-fem", o.app.log_level, o.app.log_file) < 0) {
+    fprintf(stderr, "palp-fem: --log-file %s: cannot open it\n", o.app.log_file);
+    return 2;
+  }
+  o.log = &log; /* every line is flushed as written: returning without a close loses nothing */
   if (strcmp(argv[1], "run") == 0) return cmd_run(&o);
   if (strcmp(argv[1], "export-inp") == 0) return cmd_export(&o);
   if (strcmp(argv[1], "info") == 0) return cmd_info(&o);

@@ -30,7 +30,11 @@ static int num(const char *opt, const char *v, double lo, double hi, double *out
   return 0;
 }
 
+#define NETEM_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
+
 int main(int argc, char **argv) {
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-netem");
   palp_netem_def d = {.domain_a = 0, .domain_b = 1, .delay = 0.020, .jitter = 0.005, .loss = 0.05, .seed = 1};
   double duration = 0, x;
   for (int i = 1; i < argc; i++) {
@@ -41,9 +45,12 @@ int main(int argc, char **argv) {
              "Relays every palp topic between the stations' and the server's DDS domains on loopback,\n"
              "each sample delayed by delay +- jitter (uniform, kept in order per topic), a fraction `loss`\n"
              "lost (best-effort topics: dropped; reliable ones: delivered a round trip later).\n");
+      palp_app_common_usage(stdout, NETEM_OPTS);
       return 0;
     }
-    int rc = 0;
+    int rc = 0, common = palp_app_common_opt(&ao, NETEM_OPTS, argc, argv, &i);
+    if (common < 0) return 2;
+    if (common) continue;
     if (!strcmp(a, "--stations")) rc = num(a, v, 0, 232, &x), d.domain_a = (uint32_t)x;
     else if (!strcmp(a, "--server")) rc = num(a, v, 0, 232, &x), d.domain_b = (uint32_t)x;
     else if (!strcmp(a, "--delay-ms")) rc = num(a, v, 0, 10000, &x), d.delay = x * 1e-3;
@@ -58,9 +65,19 @@ int main(int argc, char **argv) {
     if (rc) return 2;
     i++;
   }
-  char derr[256];
-  if (palp_app_use_dds_config(NULL, NULL, NULL, 0, derr, sizeof derr) < 0) {
-    fprintf(stderr, "palp-netem: DDS config: %s\n", derr);
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-netem");
+    return 0;
+  }
+  palp_log log;
+  if (palp_log_init(&log, "palp-netem", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-netem: --log-file %s: %s\n", ao.log_file, strerror(errno));
+    return 1;
+  }
+  char derr[256], chosen[1100];
+  if (palp_app_use_dds_config(ao.dds_config, NULL, chosen, sizeof chosen, derr, sizeof derr) < 0) {
+    palp_log_error(&log, "DDS config: %s", derr);
+    palp_log_close(&log);
     return 1;
   }
   struct sigaction sa;
@@ -71,11 +88,13 @@ int main(int argc, char **argv) {
   char err[256];
   palp_netem *n = palp_netem_start(&d, err, sizeof err);
   if (!n) {
-    fprintf(stderr, "palp-netem: %s\n", err);
+    palp_log_error(&log, "%s", err);
+    palp_log_close(&log);
     return 1;
   }
-  fprintf(stderr, "palp-netem: stations on domain %u <-> server on domain %u: %.1f +- %.1f ms, %.1f%% loss, seed %llu\n",
-          d.domain_a, d.domain_b, d.delay * 1e3, d.jitter * 1e3, d.loss * 100, (unsigned long long)d.seed);
+  palp_log_info(&log, "%s: stations on domain %u <-> server on domain %u: %.1f +- %.1f ms, %.1f%% loss, seed %llu, "
+                "DDS config %s", palp_app_version(),
+                d.domain_a, d.domain_b, d.delay * 1e3, d.jitter * 1e3, d.loss * 100, (unsigned long long)d.seed, chosen);
   const int64_t end = duration > 0 ? palp_dds_now_ns() + (int64_t)(duration * 1e9) : INT64_MAX;
   while (!g_stop && palp_dds_now_ns() < end) {
     struct timespec ts = {0, 100000000};
@@ -87,5 +106,6 @@ int main(int argc, char **argv) {
   printf("palp-netem: %llu samples forwarded, %llu dropped, %llu retransmitted late, %llu disposals; one-way delay "
          "%.1f..%.1f ms\n", (unsigned long long)st.forwarded, (unsigned long long)st.dropped,
          (unsigned long long)st.retransmitted, (unsigned long long)st.disposals, st.delay_min * 1e3, st.delay_max * 1e3);
+  palp_log_close(&log);
   return 0;
 }

@@ -38,11 +38,11 @@ static double now_s(void) {
 
 static const char *dist_label[] = {"", "I single", "II uniform", "III gaussian", "IV gaussian_offset"};
 
-static int run(const palp_scene *s, const char *prefix, run_summary *sum) {
+static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summary *sum) {
   int err;
   palp_world *w = palp_scene_create_world(s, &err);
   if (!w) {
-    fprintf(stderr, "palp-run: cannot create the world: %s\n", palp_strerror(err));
+    palp_log_error(log, "cannot create the world: %s", palp_strerror(err));
     return 1;
   }
   const palp_mesh *m = palp_world_mesh(w);
@@ -57,7 +57,7 @@ static int run(const palp_scene *s, const char *prefix, run_summary *sum) {
     snprintf(path, sizeof path, "%s_vertices.csv", prefix);
     fv = fopen(path, "w");
     if (!ff || !fv) {
-      fprintf(stderr, "palp-run: cannot write %s_*.csv\n", prefix);
+      palp_log_error(log, "cannot write %s_*.csv", prefix);
       if (ff) fclose(ff);
       if (fv) fclose(fv);
       palp_world_destroy(w);
@@ -86,7 +86,7 @@ static int run(const palp_scene *s, const char *prefix, run_summary *sum) {
       err = palp_world_step(w);
       st[k] = now_s() - t0;
       if (err) {
-        fprintf(stderr, "palp-run: step %ld failed: %s\n", k, palp_strerror(err));
+        palp_log_error(log, "step %ld failed: %s", k, palp_strerror(err));
         free(st);
         palp_world_destroy(w);
         return 1;
@@ -145,19 +145,27 @@ static int run(const palp_scene *s, const char *prefix, run_summary *sum) {
   return 0;
 }
 
+/* --quiet already means "no scene line on stdout" here, so only --log-level/--log-file. */
+#define RUN_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
+
 static void usage(void) {
   fprintf(stderr, "usage: palp-run SCENE.json [--distribution single|uniform|gaussian|gaussian_offset|all]\n"
                   "                [--dt S] [--vertices N] [--frames N] [--out PREFIX] [--quiet]\n");
+  palp_app_common_usage(stderr, RUN_OPTS);
 }
 
 int main(int argc, char **argv) {
-  if (palp_app_handle_version(argc, argv, "palp-run")) return 0;
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-run");
   const char *scene_path = NULL, *prefix = NULL, *dist = NULL;
   double dt = 0.0;
   int vertices = 0, frames = 0, quiet = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i];
     const char *v = (i + 1 < argc) ? argv[i + 1] : NULL;
+    const int common = palp_app_common_opt(&ao, RUN_OPTS, argc, argv, &i);
+    if (common < 0) return 2;
+    if (common) continue;
     if (!strcmp(a, "--distribution") && v) dist = v, ++i;
     else if (!strcmp(a, "--dt") && v) dt = atof(v), ++i;
     else if (!strcmp(a, "--vertices") && v) vertices = atoi(v), ++i;
@@ -168,17 +176,29 @@ int main(int argc, char **argv) {
     else if (a[0] != '-' && !scene_path) scene_path = a;
     else return usage(), 2;
   }
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-run");
+    return 0;
+  }
   if (!scene_path) return usage(), 2;
+  palp_log log;
+  if (palp_log_init(&log, "palp-run", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-run: --log-file %s: cannot open it\n", ao.log_file);
+    return 2;
+  }
+  int rc = 0;
   palp_scene s;
   char err[256];
   if (palp_scene_load(scene_path, &s, err, sizeof err)) {
-    fprintf(stderr, "palp-run: %s: %s\n", scene_path, err);
-    return 2;
+    palp_log_error(&log, "%s: %s", scene_path, err);
+    rc = 2;
+    goto out;
   }
   if (dt > 0.0) {
     if (!(dt <= s.frame_period)) {
-      fprintf(stderr, "palp-run: --dt must be > 0 and <= the frame period %g s\n", s.frame_period);
-      return 2;
+      palp_log_error(&log, "--dt must be > 0 and <= the frame period %g s", s.frame_period);
+      rc = 2;
+      goto out;
     }
     s.world.dt = s.frame_period / lround(s.frame_period / dt);
   }
@@ -193,8 +213,9 @@ int main(int argc, char **argv) {
       for (int i = 0; i < 4; ++i)
         if (!strcmp(dist, names[i])) d = i + 1;
       if (!d) {
-        fprintf(stderr, "palp-run: unknown distribution \"%s\"\n", dist);
-        return 2;
+        palp_log_error(&log, "unknown distribution \"%s\"", dist);
+        rc = 2;
+        goto out;
       }
       first = last = d;
     }
@@ -202,7 +223,6 @@ int main(int argc, char **argv) {
   if (!quiet)
     printf("palp-run: scene \"%s\", %d vertices, dt %.4g s, %d frames of %.4g s\n", s.name,
            s.world.mesh.vertex_count, s.world.dt, s.frames, s.frame_period);
-  int rc = 0;
   for (int d = first; d <= last; ++d) {
     palp_scene sd = s;
     if (dist)
@@ -211,7 +231,7 @@ int main(int argc, char **argv) {
     if (prefix && first != last) snprintf(pre, sizeof pre, "%s_d%d", prefix, d);
     else if (prefix) snprintf(pre, sizeof pre, "%s", prefix);
     run_summary sum;
-    if (run(&sd, prefix ? pre : NULL, &sum)) {
+    if (run(&log, &sd, prefix ? pre : NULL, &sum)) {
       rc = 1;
       continue;
     }
@@ -229,5 +249,7 @@ int main(int argc, char **argv) {
            (long long)sum.health.substeps, (long long)sum.health.refactors, sum.health.max_strain,
            (long long)sum.health.large_strain_steps);
   }
+out:
+  palp_log_close(&log);
   return rc;
 }

@@ -38,7 +38,10 @@ typedef struct options {
   int json;
   int skip_empty;
   char sep;
+  palp_log *log; /* main's: data errors and notes go through it */
 } options;
+
+#define STATS_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE)
 
 static void usage(FILE *to) {
   fputs(
@@ -62,10 +65,12 @@ static void usage(FILE *to) {
       "  --json          print JSON instead of a table\n"
       "  --sep CHAR      field separator: ',' (default), ';' or 'tab'\n"
       "  --skip-empty    skip rows whose used cells are empty instead of failing\n"
-      "  --svg FILE      bland-altman only: also write a Bland-Altman plot (SVG)\n"
-      "exit status: 0 ok, 1 unusable data (the message names file, line and column),\n"
-      "2 wrong command line\n",
+      "  --svg FILE      bland-altman only: also write a Bland-Altman plot (SVG)\n",
       to);
+  palp_app_common_usage(to, STATS_OPTS);
+  fputs("exit status: 0 ok, 1 unusable data (the message names file, line and column),\n"
+        "2 wrong command line\n",
+        to);
 }
 
 static int usage_error(const char *fmt, ...) {
@@ -78,12 +83,26 @@ static int usage_error(const char *fmt, ...) {
   return EXIT_USAGE;
 }
 
-static void data_error(const char *fmt, ...) {
+/* A data error, then hints: each one timestamped ERROR line, so a --log-file
+ * holds the error with its hints and --log-level filters them together. */
+static void vlog_error(palp_log *log, const char *fmt, va_list ap) {
+  char msg[1024];
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  palp_log_error(log, "%s", msg);
+}
+
+__attribute__((format(printf, 2, 3))) static void data_error(palp_log *log, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  fputs("palp-stats: ", stderr);
-  vfprintf(stderr, fmt, ap);
-  fputc('\n', stderr);
+  vlog_error(log, fmt, ap);
+  va_end(ap);
+}
+
+/* A hint after a data error: indented, at the error's level. */
+__attribute__((format(printf, 2, 3))) static void hint(palp_log *log, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vlog_error(log, fmt, ap);
   va_end(ap);
 }
 
@@ -104,11 +123,12 @@ static size_t edit_distance(const char *s, const char *t) {
   return d[n][m];
 }
 
-static void list_columns(const palp_csv *csv) {
-  fputs("  the header has: ", stderr);
-  for (int i = 0; i < csv->ncols; ++i)
-    fprintf(stderr, "%s%d:\"%s\"", i ? ", " : "", i + 1, csv->header[i]);
-  fputc('\n', stderr);
+static void list_columns(palp_log *log, const palp_csv *csv) {
+  char line[1024];
+  size_t n = (size_t)snprintf(line, sizeof line, "  the header has: ");
+  for (int i = 0; i < csv->ncols && n < sizeof line; ++i)
+    n += (size_t)snprintf(line + n, sizeof line - n, "%s%d:\"%s\"", i ? ", " : "", i + 1, csv->header[i]);
+  hint(log, "%s", line);
 }
 
 /* Resolves a column by exact name, then case-insensitive name, then 1-based number. */
@@ -121,10 +141,10 @@ static int find_column(const palp_csv *csv, const options *o, const char *want, 
     for (int i = 0; i < csv->ncols; ++i)
       if (strcasecmp(csv->header[i], want) == 0) hit = i, hits++;
   if (hits > 1) {
-    data_error("%s:%zu: column \"%s\" (%s) appears %d times in the header; rename the "
+    data_error(o->log, "%s:%zu: column \"%s\" (%s) appears %d times in the header; rename the "
                "duplicates or give the column number instead",
                o->file, csv->header_line, want, flag, hits);
-    list_columns(csv);
+    list_columns(o->log, csv);
     return -1;
   }
   if (hits == 1) {
@@ -137,26 +157,24 @@ static int find_column(const palp_csv *csv, const options *o, const char *want, 
     *col = (int)k - 1;
     return 0;
   }
-  data_error("%s:%zu: no column \"%s\" (given as %s) in the header", o->file, csv->header_line,
+  data_error(o->log, "%s:%zu: no column \"%s\" (given as %s) in the header", o->file, csv->header_line,
              want, flag);
-  list_columns(csv);
+  list_columns(o->log, csv);
   int best = -1;
   size_t bd = 99;
   for (int i = 0; i < csv->ncols; ++i) {
     size_t d = edit_distance(want, csv->header[i]);
     if (d < bd) bd = d, best = i;
   }
-  if (best >= 0 && bd <= 3 && bd < strlen(want)) fprintf(stderr, "  did you mean \"%s\"?\n", csv->header[best]);
+  if (best >= 0 && bd <= 3 && bd < strlen(want)) hint(o->log, "  did you mean \"%s\"?", csv->header[best]);
   if (csv->ncols == 1) {
     const char *h = csv->header[0];
     if (strchr(h, ';'))
-      fputs("  the header is a single field containing ';': for a semicolon-separated file "
-            "add --sep ';'\n",
-            stderr);
+      hint(o->log, "  the header is a single field containing ';': for a semicolon-separated file "
+            "add --sep ';'");
     else if (strchr(h, '\t'))
-      fputs("  the header is a single field containing tabs: for a tab-separated file add "
-            "--sep tab\n",
-            stderr);
+      hint(o->log, "  the header is a single field containing tabs: for a tab-separated file add "
+            "--sep tab");
   }
   return -1;
 }
@@ -176,17 +194,17 @@ static int cell_number(const palp_csv *csv, const options *o, size_t row, int co
   const char *name = csv->header[col];
   size_t line = csv->line[row];
   if (text[0] == '\0') {
-    data_error("%s:%zu: column \"%s\" (column %d) is empty; fill in the measurement, delete "
+    data_error(o->log, "%s:%zu: column \"%s\" (column %d) is empty; fill in the measurement, delete "
                "the row, or pass --skip-empty to ignore such rows",
                o->file, line, name, col + 1);
     return -1;
   }
   if (rc == -2) {
-    data_error("%s:%zu: column \"%s\" (column %d): \"%s\" is too large for a double", o->file,
+    data_error(o->log, "%s:%zu: column \"%s\" (column %d): \"%s\" is too large for a double", o->file,
                line, name, col + 1, text);
     return -1;
   }
-  data_error("%s:%zu: column \"%s\" (column %d): \"%s\" is not a number", o->file, line, name,
+  data_error(o->log, "%s:%zu: column \"%s\" (column %d): \"%s\" is not a number", o->file, line, name,
              col + 1, text);
   char low[16] = {0};
   for (int i = 0; i < 15 && text[i]; ++i) low[i] = (char)tolower((unsigned char)text[i]);
@@ -196,20 +214,17 @@ static int cell_number(const palp_csv *csv, const options *o, size_t row, int co
   for (char *c = fixed; *c; ++c)
     if (*c == ',') *c = '.';
   if (strchr(text, ',') && palp_dec_parse(fixed, &tmp) == 0)
-    fputs("  numbers must use a dot as the decimal separator (1.25, not 1,25)\n", stderr);
+    hint(o->log, "  numbers must use a dot as the decimal separator (1.25, not 1,25)");
   else if (strstr(low, "nan") || strstr(low, "inf") || strcmp(low, "na") == 0 ||
            strcmp(low, "n/a") == 0)
-    fputs("  missing or non-finite values are not accepted; remove the row or pass "
-          "--skip-empty with an empty cell\n",
-          stderr);
+    hint(o->log, "  missing or non-finite values are not accepted; remove the row or pass "
+          "--skip-empty with an empty cell");
   else if (strpbrk(text, "0123456789") == NULL)
-    fputs("  this looks like a label, not a measurement: does the option name the column "
-          "holding the numbers (--value, --a, --b)?\n",
-          stderr);
+    hint(o->log, "  this looks like a label, not a measurement: does the option name the column "
+          "holding the numbers (--value, --a, --b)?");
   else if (isdigit((unsigned char)text[0]) || text[0] == '-' || text[0] == '.')
-    fputs("  write plain numbers without units or thousands separators (e.g. 0.0125, "
-          "1.2e-3); put the unit in the column name\n",
-          stderr);
+    hint(o->log, "  write plain numbers without units or thousands separators (e.g. 0.0125, "
+          "1.2e-3); put the unit in the column name");
   return -1;
 }
 
@@ -280,11 +295,11 @@ static int run_anova(const options *o, const palp_csv *csv) {
   if (find_column(csv, o, o->group, "--group", &gc) < 0) return EXIT_DATA;
   if (find_column(csv, o, o->value, "--value", &vc) < 0) return EXIT_DATA;
   if (gc == vc) {
-    data_error("%s: --group and --value name the same column \"%s\"", o->file, csv->header[gc]);
+    data_error(o->log, "%s: --group and --value name the same column \"%s\"", o->file, csv->header[gc]);
     return EXIT_DATA;
   }
   if (csv->nrows == 0) {
-    data_error("%s:%zu: no data rows after the header", o->file, csv->header_line);
+    data_error(o->log, "%s:%zu: no data rows after the header", o->file, csv->header_line);
     return EXIT_DATA;
   }
   size_t nr = csv->nrows;
@@ -297,7 +312,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
   int ng = 0, rc = EXIT_DATA;
   size_t used = 0, skipped = 0;
   if (!gid || !dv || !groups || !values) {
-    data_error("out of memory");
+    data_error(o->log, "out of memory");
     goto done;
   }
   for (size_t r = 0; r < nr; ++r) {
@@ -308,7 +323,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
     }
     const char *label = palp_csv_cell(csv, r, gc);
     if (label[0] == '\0') {
-      data_error("%s:%zu: column \"%s\" (column %d, the group) is empty; every row needs a group "
+      data_error(o->log, "%s:%zu: column \"%s\" (column %d, the group) is empty; every row needs a group "
                  "label (or pass --skip-empty)",
                  o->file, csv->line[r], csv->header[gc], gc + 1);
       goto done;
@@ -327,11 +342,11 @@ static int run_anova(const options *o, const palp_csv *csv) {
     used++;
   }
   if (used == 0) {
-    data_error("%s: every data row was skipped as empty; nothing to analyse", o->file);
+    data_error(o->log, "%s: every data row was skipped as empty; nothing to analyse", o->file);
     goto done;
   }
   if (ng < 2) {
-    data_error("%s: column \"%s\" holds a single group (\"%s\", %zu values); one-way ANOVA "
+    data_error(o->log, "%s: column \"%s\" holds a single group (\"%s\", %zu values); one-way ANOVA "
                "compares at least 2 groups: check that --group names the column that "
                "identifies the groups",
                o->file, csv->header[gc], groups[0].name, groups[0].n);
@@ -339,18 +354,18 @@ static int run_anova(const options *o, const palp_csv *csv) {
   }
   for (int g = 0; g < ng; ++g)
     if (groups[g].n < 2) {
-      data_error("%s:%zu: group \"%s\" has only one value; one-way ANOVA needs at least 2 values "
+      data_error(o->log, "%s:%zu: group \"%s\" has only one value; one-way ANOVA needs at least 2 values "
                  "per group to estimate the spread within it. Check the spelling of the label "
                  "(labels are compared exactly, case included) or add measurements",
                  o->file, groups[g].first_line, groups[g].name);
       for (int h = 0; h < ng; ++h)
         if (h != g && (strcasecmp(groups[h].name, groups[g].name) == 0 ||
                        edit_distance(groups[h].name, groups[g].name) == 1))
-          fprintf(stderr, "  a group \"%s\" exists (first on line %zu): the same group mistyped?\n",
+          hint(o->log, "  a group \"%s\" exists (first on line %zu): the same group mistyped?",
                   groups[h].name, groups[h].first_line);
       if ((size_t)ng * 2 > used)
-        fprintf(stderr, "  %d different labels in %zu rows: does --group name the column that "
-                        "identifies the groups (--group and --value swapped?)\n",
+        hint(o->log, "  %d different labels in %zu rows: does --group name the column that "
+                     "identifies the groups (--group and --value swapped?)",
                 ng, used);
       goto done;
     }
@@ -364,7 +379,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
   fill = malloc((size_t)ng * sizeof *fill);
   offset = malloc((size_t)ng * sizeof *offset);
   if (!start || !fill || !offset) {
-    data_error("out of memory");
+    data_error(o->log, "out of memory");
     goto done;
   }
   start[0] = 0;
@@ -379,11 +394,11 @@ static int run_anova(const options *o, const palp_csv *csv) {
   palp_stats_anova a;
   int err = palp_stats_anova_offset(values, start, ng, offset, &a);
   if (err < 0) {
-    data_error("%s: the ANOVA could not be computed (error %d)", o->file, err);
+    data_error(o->log, "%s: the ANOVA could not be computed (error %d)", o->file, err);
     goto done;
   }
   a.grand_mean += origin->value;
-  if (skipped) fprintf(stderr, "palp-stats: note: %zu rows with empty cells skipped\n", skipped);
+  if (skipped) palp_log_info(o->log, "note: %zu rows with empty cells skipped", skipped);
 
   if (o->json) {
     cJSON *root = cJSON_CreateObject();
@@ -464,7 +479,7 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
   if (find_column(csv, o, o->a, "--a", &p->ca) < 0) return -1;
   if (find_column(csv, o, o->b, "--b", &p->cb) < 0) return -1;
   if (csv->nrows == 0) {
-    data_error("%s:%zu: no data rows after the header", o->file, csv->header_line);
+    data_error(o->log, "%s:%zu: no data rows after the header", o->file, csv->header_line);
     return -1;
   }
   size_t nr = csv->nrows;
@@ -475,7 +490,7 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
   p->ab = malloc(2 * nr * sizeof *p->ab);
   int rc = -1;
   if (!da || !db || !use || !p->d || !p->zero || !p->ab) {
-    data_error("out of memory");
+    data_error(o->log, "out of memory");
     goto done;
   }
   size_t first = nr;
@@ -490,7 +505,7 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
     if (first == nr) first = r;
   }
   if (first == nr) {
-    data_error("%s: every data row was skipped as empty; nothing to analyse", o->file);
+    data_error(o->log, "%s: every data row was skipped as empty; nothing to analyse", o->file);
     goto done;
   }
   size_t used = 0;
@@ -508,11 +523,11 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
   p->off[0] = 0.0;
   p->off[1] = palp_dec_sub(&db[first], &da[first]);
   if (p->n < min_n) {
-    data_error("%s: %zu data row%s; %s needs at least %zu pairs", o->file, p->n,
+    data_error(o->log, "%s: %zu data row%s; %s needs at least %zu pairs", o->file, p->n,
                p->n == 1 ? "" : "s", why, min_n);
     goto done;
   }
-  if (p->skipped) fprintf(stderr, "palp-stats: note: %zu rows with empty cells skipped\n", p->skipped);
+  if (p->skipped) palp_log_info(o->log, "note: %zu rows with empty cells skipped", p->skipped);
   rc = 0;
 done:
   free(da);
@@ -528,7 +543,7 @@ static int run_rmse(const options *o, const palp_csv *csv) {
   double r;
   int err = palp_stats_rmse(p.d, p.zero, p.n, &r);
   if (err < 0) {
-    data_error("%s: RMSE could not be computed (error %d)", o->file, err);
+    data_error(o->log, "%s: RMSE could not be computed (error %d)", o->file, err);
     paired_free(&p);
     return EXIT_DATA;
   }
@@ -563,7 +578,7 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
   if (err == 0) err = palp_stats_anova_offset(p.ab, start, 2, p.off, &an);
   if (err == 0) err = palp_stats_rmse(p.d, p.zero, p.n, &rmse);
   if (err < 0) {
-    data_error("%s: the statistics could not be computed (error %d)", o->file, err);
+    data_error(o->log, "%s: the statistics could not be computed (error %d)", o->file, err);
     paired_free(&p);
     return EXIT_DATA;
   }
@@ -584,7 +599,7 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
     if (!ma || !mb) {
       free(ma);
       free(mb);
-      data_error("out of memory");
+      data_error(o->log, "out of memory");
       paired_free(&p);
       return EXIT_DATA;
     }
@@ -603,7 +618,7 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
     free(ma);
     free(mb);
     if (sr < 0) {
-      data_error("%s", perr);
+      data_error(o->log, "%s", perr);
       paired_free(&p);
       return EXIT_DATA;
     }
@@ -673,6 +688,8 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
 
 int main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-stats")) return 0;
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-stats");
   options o = {0};
   o.sep = ',';
   if (argc < 2) {
@@ -693,6 +710,9 @@ int main(int argc, char **argv) {
   for (int i = 2; i < argc; ++i) {
     const char *s = argv[i];
     const char **slot = NULL;
+    const int common = palp_app_common_opt(&ao, STATS_OPTS, argc, argv, &i);
+    if (common < 0) return EXIT_USAGE;
+    if (common) continue;
     if (strcmp(s, "--json") == 0) {
       o.json = 1;
       continue;
@@ -742,10 +762,14 @@ int main(int argc, char **argv) {
     if (o.svg && !is_ba) return usage_error("--svg is available for bland-altman only");
   }
 
+  palp_log log;
+  if (palp_log_init(&log, "palp-stats", ao.log_level, ao.log_file) < 0)
+    return usage_error("--log-file %s: cannot open it", ao.log_file);
+  o.log = &log; /* every line is flushed as written */
   palp_csv csv;
   char err[1024];
   if (palp_csv_read(o.file, o.sep, &csv, err, sizeof err) < 0) {
-    data_error("%s", err);
+    data_error(o.log, "%s", err);
     return EXIT_DATA;
   }
   int rc = is_anova ? run_anova(&o, &csv) : is_ba ? run_bland_altman(&o, &csv) : run_rmse(&o, &csv);

@@ -142,11 +142,11 @@ static int *nearest_map(const palp_vec3 *rest, int nv, const reference *R) {
   return map;
 }
 
-static int run_rt(const palp_scene *s, const reference *R, point *pt) {
+static int run_rt(palp_log *log, const palp_scene *s, const reference *R, point *pt) {
   int err;
   palp_world *w = palp_scene_create_world(s, &err);
   if (!w) {
-    fprintf(stderr, "palp-sweep: %s: %s\n", pt->name, palp_strerror(err));
+    palp_log_error(log, "%s: %s", pt->name, palp_strerror(err));
     return -1;
   }
   const palp_mesh *m = palp_world_mesh(w);
@@ -283,20 +283,27 @@ static void write_svg(const char *path, const point *p, int n) {
 #undef SY
 }
 
+#define SWEEP_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE)
+
 static void usage(FILE *f) {
   fprintf(f, "usage: palp-sweep [--scene FILE] [--distribution single|uniform|gaussian|gaussian_offset]\n"
                   "                  [--ref-level N] [--frames N] [--out DIR] [--quick] [--version]\n"
                   "--scene defaults to config/paper_step.json if that exists here, else the installed one\n"
                   "(<data>/config/paper_step.json).\n");
+  palp_app_common_usage(f, SWEEP_OPTS);
 }
 
 int main(int argc, char **argv) {
-  if (palp_app_handle_version(argc, argv, "palp-sweep")) return 0;
+  palp_app_opts ao;
+  palp_app_opts_init(&ao, "palp-sweep");
   static const char default_scene[] = "config/paper_step.json";
   const char *scene_path = default_scene, *out = "out/sweep", *dist = "uniform";
   int ref_level = 2, frames = 0, quick = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+    const int common = palp_app_common_opt(&ao, SWEEP_OPTS, argc, argv, &i);
+    if (common < 0) return 2;
+    if (common) continue;
     if (!strcmp(a, "--scene") && v) scene_path = v, ++i;
     else if (!strcmp(a, "--distribution") && v) dist = v, ++i;
     else if (!strcmp(a, "--ref-level") && v) ref_level = atoi(v), ++i;
@@ -306,22 +313,32 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--help") || !strcmp(a, "-h")) return usage(stdout), 0;
     else return usage(stderr), 2;
   }
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-sweep");
+    return 0;
+  }
+  /* Every line is flushed as it is written, so the early returns below lose nothing. */
+  palp_log log;
+  if (palp_log_init(&log, "palp-sweep", ao.log_level, ao.log_file) < 0) {
+    fprintf(stderr, "palp-sweep: --log-file %s: cannot open it\n", ao.log_file);
+    return 2;
+  }
   char installed_scene[1024], derr[512];
   if (scene_path == default_scene && access(default_scene, R_OK) != 0) {
     if (palp_app_data_path(default_scene, installed_scene, sizeof installed_scene, derr, sizeof derr) < 0) {
-      fprintf(stderr, "palp-sweep: no %s here and %s; give --scene FILE\n", default_scene, derr);
+      palp_log_error(&log, "no %s here and %s; give --scene FILE", default_scene, derr);
       return 2;
     }
     scene_path = installed_scene;
   }
   if (ref_level < 1 || ref_level > 6) {
-    fprintf(stderr, "palp-sweep: --ref-level must be 1 to 6\n");
+    palp_log_error(&log, "--ref-level must be 1 to 6");
     return 2;
   }
   palp_scene s;
   char err[512];
   if (palp_scene_load(scene_path, &s, err, sizeof err)) {
-    fprintf(stderr, "palp-sweep: %s: %s\n", scene_path, err);
+    palp_log_error(&log, "%s: %s", scene_path, err);
     return 2;
   }
   const char *names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
@@ -329,13 +346,13 @@ int main(int argc, char **argv) {
   for (int i = 0; i < 4; ++i)
     if (!strcmp(dist, names[i])) d = i + 1;
   if (!d || s.contact_count < 1) {
-    fprintf(stderr, "palp-sweep: unknown distribution \"%s\" or a scene without contacts\n", dist);
+    palp_log_error(&log, "unknown distribution \"%s\" or a scene without contacts", dist);
     return 2;
   }
   s.contact[0].def.distribution = (palp_distribution)d;
   if (frames > 0) s.frames = frames;
   if (mkdir(out, 0755) && errno != EEXIST) {
-    fprintf(stderr, "palp-sweep: cannot create %s: %s\n", out, strerror(errno));
+    palp_log_error(&log, "cannot create %s: %s", out, strerror(errno));
     return 1;
   }
 
@@ -347,7 +364,7 @@ int main(int argc, char **argv) {
          scene_path, dist, s.frames, ref_level, PROBE_VERTICES);
   fflush(stdout);
   if (run_fem(&probe, ref_level, &ref, err, sizeof err)) {
-    fprintf(stderr, "palp-sweep: reference FEM failed: %s\n", err);
+    palp_log_error(&log, "reference FEM failed: %s", err);
     return 1;
   }
   reference R = {.frames = ref.frames, .nv = ref.vertex_count};
@@ -375,7 +392,7 @@ int main(int argc, char **argv) {
       snprintf(p->name, sizeof p->name, "RT %d v %g ms", vcounts[a], 1e3 * q.world.dt);
       p->vertices = vcounts[a], p->dt = q.world.dt;
       p->is_default = vcounts[a] == 338 && fabs(q.world.dt - 0.01) < 1e-12;
-      if (run_rt(&q, &R, p) == 0) n++;
+      if (run_rt(&log, &q, &R, p) == 0) n++;
       printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
              1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
       fflush(stdout);
@@ -400,7 +417,7 @@ int main(int argc, char **argv) {
     memset(p, 0, sizeof *p);
     snprintf(p->name, sizeof p->name, "%s", fx[k].name);
     p->vertices = 338, p->dt = q.world.dt;
-    if (run_rt(&q, &R, p) == 0) n++;
+    if (run_rt(&log, &q, &R, p) == 0) n++;
     printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
            1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
     fflush(stdout);
@@ -409,7 +426,7 @@ int main(int argc, char **argv) {
   for (int level = 1; level < ref_level; ++level) {
     palp_fem_result r;
     if (run_fem(&probe, level, &r, err, sizeof err)) {
-      fprintf(stderr, "palp-sweep: FEM level %d failed: %s\n", level, err);
+      palp_log_error(&log, "FEM level %d failed: %s", level, err);
       continue;
     }
     point *p = &pts[n];
@@ -453,7 +470,7 @@ int main(int argc, char **argv) {
   snprintf(path, sizeof path, "%s/sweep.md", out);
   FILE *md = fopen(path, "w");
   if (!csv || !md) {
-    fprintf(stderr, "palp-sweep: cannot write into %s\n", out);
+    palp_log_error(&log, "cannot write into %s", out);
     return 1;
   }
   fprintf(csv, "name,model,vertices,fem_level,dt_s,step_or_frame_s,cost_s_per_sim_s,disp_rmse_m,force_rmse_N,"
