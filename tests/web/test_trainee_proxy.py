@@ -20,9 +20,13 @@ def run(build, source, out):
         browser = harness.cdp.Chromium(width=1000, height=700, out_dir=out)
         page = browser.new_page(web.base + "/trainee.html?trainee=pat")
         check(page.wait_for("window.palpState && palpState.connected", 20) is True, "page loaded and connected to palp-web")
-        procs.trainee("pat", extra=["--input", "sim:press", "--duration", "30"])
-        ok = page.wait_for("palpState.trainee.proxy !== null && palpState.trainee.proxy.in_contact === true", 20)
-        check(ok is True, "the page drew a proxy of pat's pressing finger within 20 s")
+        procs.trainee("pat", extra=["--input", "sim:press,hold_s=6", "--duration", "30"])
+        # Pressed: sim:press goes 10 mm deep at 20 mm/s and holds 6 s; wait until the dent is 5 mm deep
+        # (the page's own displacement figure) so that the proxy is read mid-press.
+        ok = page.wait_for("palpState.trainee.proxy !== null && palpState.trainee.proxy.in_contact === true && "
+                           "palpState.trainee.maxDispMm > 5", 20)
+        check(ok is True, "the page drew a proxy of pat's finger, dent > 5 mm, within 20 s: %s %s"
+              % (page.eval("JSON.stringify(palpState.trainee.proxy)"), page.eval("palpState.trainee.maxDispMm")))
         p = json.loads(page.eval("JSON.stringify(palpState.trainee.proxy)"))
         R = page.eval("palpState.phantoms[palpState.trainee.phantom].radius")
         rp = math.sqrt(sum(x * x for x in p["proxy"]))
@@ -32,7 +36,11 @@ def run(build, source, out):
         check(all(math.isfinite(x) for x in p["proxy"] + p["device"]), "proxy and device finite")
         # While pressed the device point is inside the surface the proxy rests on: closer to the
         # dome's centre than the proxy, and the proxy within 2 phantom radii of it (a sane metre scale).
-        check(rd < rp, "the device point lies beneath the proxy (|d| %.4f < |p| %.4f m)" % (rd, rp))
+        check(rd < rp, "the device point lies beneath the proxy (|d| %.5f < |p| %.5f m)" % (rd, rp))
+        # The proxy is the fingertip's centre (sim device radius 8 mm): its lowest point sits in the
+        # dent, more than 5 mm beneath the rest surface, as the page's displacement figure says.
+        tip = rp - 0.008
+        check(tip < R - 0.005, "the fingertip rides the dent: its lowest point %.4f m < R - 5 mm = %.4f m" % (tip, R - 0.005))
         check(rp < 2 * R, "the proxy is near the phantom (|p| %.4f < 2 R = %.4f m)" % (rp, 2 * R))
         cx, cy = page.eval("palpProject(%r, %r, %r)" % tuple(p["proxy"]))
         w, h = page.eval("[innerWidth, innerHeight]")
