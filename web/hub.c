@@ -43,6 +43,13 @@ typedef struct finger {
   double radius;    /* footprint for coverage [m] */
   double fb[3];     /* feedback: phantom on the finger [N] */
   int fb_active;
+  /* newest haptic local model (palp_local_model) of a position-driven finger: its proxy is the
+   * fingertip on the surface, device the point the station's device reached beneath it */
+  int lm_valid, lm_contact;
+  uint64_t lm_frame;
+  double proxy[3], device[3]; /* [m] */
+  double lm_force;            /* |force| of the model, not limited [N] */
+  uint32_t lm_flags;          /* LM_* of the newest model */
 } finger;
 
 typedef struct phantom {
@@ -71,6 +78,7 @@ typedef struct session {
   int64_t fps_t0;
   int fps_count;
   double fps;
+  uint32_t lm_flags_seen;  /* LM_* bits seen in this session's local models since it opened */
   int changed;            /* live data changed since the last live message */
   int64_t next_live_ns;
   /* feedback of this session's partition, read only while a position-driven finger presses (its
@@ -96,7 +104,7 @@ struct palp_web_hub {
   palp_web_hub_def def;
   char host[32];
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
-  dds_entity_t catalogue_r, state_r, status_r, reply_r, request_w, sub, contact_r, deform_r;
+  dds_entity_t catalogue_r, state_r, status_r, reply_r, request_w, sub, contact_r, deform_r, lm_r;
   dds_entity_t ws, stop_gc;
   pthread_t thread;
   int running;
@@ -175,7 +183,7 @@ static void build_hello(palp_web_hub *h) {
   cJSON_AddBoolToObject(j, "joins", h->def.join);
   /* Features that need topics which do not exist yet: the pages show them once these say so. */
   cJSON_AddBoolToObject(j, "findings", 0);
-  cJSON_AddBoolToObject(j, "proxy", 0);
+  cJSON_AddBoolToObject(j, "proxy", 1); /* palp_local_model: live fingers carry proxy and device */
   publish_json(h, &h->hello, j);
 }
 
@@ -224,7 +232,17 @@ static void build_sessions(palp_web_hub *h) {
     cJSON_AddItemToObject(o, "coverage", vec_json(cov, 3, 1));
     cJSON_AddNumberToObject(o, "fps", s->fps);
     cJSON_AddBoolToObject(o, "joined", s->joined);
-    /* Not on the wire yet (findings, the haptic local model): null, and the pages say "n/a". */
+    int pos = 0;
+    for (int k = 0; k < FINGERS; k++) pos |= s->f[k].mode == palp_CONTACT_FINGER;
+    cJSON_AddBoolToObject(o, "position_finger", pos);
+    /* Model-validity bits seen since the session opened (LM_*), and the newest models' bits. */
+    uint32_t now_flags = 0;
+    for (int k = 0; k < FINGERS; k++)
+      if (s->f[k].mode == palp_CONTACT_FINGER && s->f[k].lm_valid) now_flags |= s->f[k].lm_flags;
+    cJSON_AddNumberToObject(o, "model_flags", now_flags);
+    cJSON_AddNumberToObject(o, "model_flags_seen", s->lm_flags_seen);
+    /* Not on the wire (findings; late haptic updates are counted by the station alone): null,
+     * and the pages say "n/a" (docs/web.md). */
     cJSON_AddNullToObject(o, "findings");
     cJSON_AddNullToObject(o, "late_haptic");
     cJSON_AddItemToArray(arr, o);
@@ -281,11 +299,11 @@ static void build_live(palp_web_hub *h, int slot) {
   size_t n = (size_t)snprintf(buf, sizeof buf,
                               "{\"type\":\"live\",\"session\":%u,\"frame\":%.0f,\"sim_time\":%.4f,\"force\":%.4f,"
                               "\"band\":\"%s\",\"max_disp_mm\":%.3f,\"fps\":%.1f,\"coverage\":[%.4f,%.4f,%.4f],"
-                              "\"proxy\":null,\"fingers\":[",
+                              "\"fingers\":[",
                               s->id, (double)s->frame, s->sim_time, s->force, palp_web_band_name(s->band),
                               s->max_disp * 1e3, s->fps, cov[0], cov[1], cov[2]);
   int first = 1;
-  for (int k = 0; k < FINGERS && n < sizeof buf - 400; k++) {
+  for (int k = 0; k < FINGERS && n < sizeof buf - 480; k++) {
     const finger *f = &s->f[k];
     if (f->mode == palp_CONTACT_RELEASE) continue;
     const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
@@ -294,6 +312,16 @@ static void build_live(palp_web_hub *h, int slot) {
                           "\"radius\":%.5f}",
                           first ? "" : ",", k, f->mode == palp_CONTACT_FORCE ? "force" : "finger", f->center[0],
                           f->center[1], f->center[2], fv[0], fv[1], fv[2], f->radius);
+    /* A position-driven finger's newest local model: the proxy (fingertip on the surface) and
+     * the device point, so that the page draws the tip where the phantom stops it. */
+    if (f->mode == palp_CONTACT_FINGER && f->lm_valid)
+      n += (size_t)snprintf(buf + n - 1, sizeof buf - n + 1,
+                            ",\"proxy\":[%.6f,%.6f,%.6f],\"device\":[%.6f,%.6f,%.6f],\"in_contact\":%s,"
+                            "\"model_force\":%.4f,\"flags\":%u,\"force_limit\":%s,\"out_of_range\":%s}",
+                            f->proxy[0], f->proxy[1], f->proxy[2], f->device[0], f->device[1], f->device[2],
+                            f->lm_contact ? "true" : "false", f->lm_force, (unsigned)f->lm_flags,
+                            (f->lm_flags & palp_LM_FORCE_LIMIT) ? "true" : "false",
+                            (f->lm_flags & palp_LM_OUT_OF_RANGE) ? "true" : "false") - 1;
     first = 0;
   }
   n += (size_t)snprintf(buf + n, sizeof buf - n, "]}");
@@ -559,6 +587,7 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
       f->radius = m->radius > 0 ? m->radius : 0;
     }
   }
+  if (f->mode != palp_CONTACT_FINGER) f->lm_valid = 0;
   if (f->mode == palp_CONTACT_FINGER && h->def.read_feedback && s->fb_sub <= 0 && s->st.partition[0]) {
     s->fb_sub = palp_dds_session_subscriber(h->pp, s->st.partition);
     s->fb_r = s->fb_sub > 0 ? palp_dds_create_reader(s->fb_sub, h->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK) : -1;
@@ -596,6 +625,32 @@ static void on_feedback(palp_web_hub *h, const palp_Feedback *m) {
   }
   if (m->sim_time > s->sim_time && !s->have_deform) s->sim_time = m->sim_time, s->frame = m->frame;
   recompute_force(h, s);
+}
+
+static int vec_finite(const palp_Vec3 *v) { return isfinite(v->x) && isfinite(v->y) && isfinite(v->z); }
+
+/* The server's local model of one finger (published while the trainee's station asks for
+ * feedback): newest per finger kept, an older frame (reordered or replayed) ignored. */
+static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s || m->finger >= FINGERS || !vec_finite(&m->proxy) || !vec_finite(&m->device) || !vec_finite(&m->force)) {
+    h->stats.dropped++;
+    return;
+  }
+  finger *f = &s->f[m->finger];
+  if (f->lm_valid && m->frame < f->lm_frame) return;
+  f->lm_valid = 1;
+  f->lm_frame = m->frame;
+  f->lm_contact = m->in_contact != 0;
+  f->proxy[0] = m->proxy.x, f->proxy[1] = m->proxy.y, f->proxy[2] = m->proxy.z;
+  f->device[0] = m->device.x, f->device[1] = m->device.y, f->device[2] = m->device.z;
+  f->lm_force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
+  const uint32_t flags = (uint32_t)m->flags & (palp_LM_FORCE_LIMIT | palp_LM_OUT_OF_RANGE);
+  if (flags != f->lm_flags || (flags & ~s->lm_flags_seen)) h->sessions_dirty = 1;
+  f->lm_flags = flags;
+  s->lm_flags_seen |= flags;
+  s->changed = 1;
 }
 
 static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
@@ -743,6 +798,7 @@ static void *hub_main(void *arg) {
       drain(h, h->contact_r, (sample_fn)on_contact, on_contact_lost, &h->stats.contacts);
       for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
         if (h->s[i].used && h->s[i].fb_r > 0) drain(h, h->s[i].fb_r, (sample_fn)on_feedback, NULL, &h->stats.feedbacks);
+      drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
       news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
     }
     check_replies(h, now);
@@ -836,10 +892,11 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
   h->contact_r = make_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   h->deform_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+  h->lm_r = make_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r};
-  int bad = h->request_w < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->request_w < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {

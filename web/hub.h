@@ -55,7 +55,7 @@ typedef struct palp_web_cursor {
 } palp_web_cursor;
 
 typedef struct palp_web_hub_stats {
-  uint64_t catalogue, states, statuses, contacts, feedbacks, deformations; /* DDS samples taken */
+  uint64_t catalogue, states, statuses, contacts, feedbacks, deformations, local_models; /* DDS samples taken */
   uint64_t dropped;   /* samples for sessions or phantoms the bridge does not know (or malformed) */
   uint64_t joins, leaves, join_rejected;
   int sessions_open, clients;

@@ -1,6 +1,8 @@
 /* test_web_unit.c - palp-web's pure parts: pressure bands, coverage geometry, the access rules
  * (loopback, token, cookie, served paths) and the browser control messages (a real hub on DDS
- * domain 190). Expected values are worked by hand or come from the model's own mesh code. */
+ * domain 190; the local-model forwarding on domain 195). Expected values are worked by hand or come from
+ * the model's own mesh code. */
+#include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -229,12 +231,127 @@ static void test_control(void) {
   palp_web_hub_destroy(h);
 }
 
+/* A position-driven finger's local model (palp_local_model, written here as the server would)
+ * reaches a page following its session: proxy and device in metres, contact, |force| and the
+ * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
+static void test_local_model(void) {
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = 195;
+  d.join = 0; /* nothing to join: the test writes what a server would */
+  char err[256];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain 195: %s", h ? "" : err);
+  if (!h) return;
+  CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
+  const dds_entity_t pp = dds_create_participant(195, NULL, NULL);
+  const uint32_t sid = 4711;
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, part);
+  const dds_entity_t t_state = palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t t_contact = palp_dds_create_topic(pp, PALP_TOPIC_CONTACT);
+  const dds_entity_t t_lm = palp_dds_create_topic(pp, PALP_TOPIC_LOCAL_MODEL);
+  const dds_entity_t w_state = palp_dds_create_writer(pp, t_state, PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t w_contact = palp_dds_create_writer(pub, t_contact, PALP_TOPIC_CONTACT);
+  const dds_entity_t w_lm = palp_dds_create_writer(pub, t_lm, PALP_TOPIC_LOCAL_MODEL);
+  CHECK(pp > 0 && pub > 0 && w_state > 0 && w_contact > 0 && w_lm > 0, "test's DDS entities");
+  palp_web_cursor c;
+  CHECK(palp_web_hub_attach(h, &c, 4) == 0, "client");
+  char ctl[64];
+  snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid);
+  CHECK(palp_web_hub_control(h, &c, ctl, strlen(ctl)) == 0, "follow");
+  palp_SessionState st;
+  memset(&st, 0, sizeof st);
+  st.session_id = sid;
+  st.phase = palp_PHASE_OPEN;
+  st.phantom_id = 1;
+  snprintf(st.partition, sizeof st.partition, "%s", part);
+  snprintf(st.trainee_name, sizeof st.trainee_name, "t");
+  dds_write(w_state, &st);
+  dds_sleepfor(DDS_MSECS(300)); /* the hub knows the session before its streams */
+  palp_Contact ct;
+  memset(&ct, 0, sizeof ct);
+  ct.session_id = sid;
+  ct.finger = 1;
+  ct.mode = palp_CONTACT_FINGER;
+  ct.center = (palp_Vec3){0.001, 0.002, 0.020};
+  ct.radius = 0.008;
+  dds_write(w_contact, &ct);
+  palp_LocalModel lm;
+  memset(&lm, 0, sizeof lm);
+  lm.session_id = sid;
+  lm.finger = 1;
+  lm.frame = 50;
+  lm.in_contact = 1;
+  lm.device = (palp_Vec3){0.001, 0.002, 0.0150};
+  lm.proxy = (palp_Vec3){0.001, 0.002, 0.0231};
+  lm.force = (palp_Vec3){0, 3, 4}; /* |F| = 5 N */
+  lm.flags = palp_LM_FORCE_LIMIT | palp_LM_CLAMPED_STEP;
+  dds_write(w_lm, &lm);
+  dds_sleepfor(DDS_MSECS(100));
+  palp_LocalModel old = lm; /* an older frame: ignored */
+  old.frame = 40;
+  old.proxy.z = 0.5;
+  old.flags = 0;
+  dds_write(w_lm, &old);
+  cJSON *got = NULL;
+  int sessions_ok = 0;
+  for (int i = 0; i < 300 && !(got && sessions_ok); i++) {
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, &c, 0, &buf, &len, &binary);
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+      if (type && !strcmp(type, "live")) {
+        cJSON *f = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "fingers"), 0);
+        if (cJSON_GetObjectItem(f, "proxy")) {
+          cJSON_Delete(got);
+          got = cJSON_Duplicate(f, 1);
+        }
+      } else if (type && !strcmp(type, "sessions")) {
+        cJSON *s0 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "sessions"), 0);
+        if (s0 && cJSON_IsTrue(cJSON_GetObjectItem(s0, "position_finger")) &&
+            cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "model_flags_seen")) == 9 &&
+            cJSON_IsNull(cJSON_GetObjectItem(s0, "late_haptic")))
+          sessions_ok = 1;
+      }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  CHECK(got != NULL, "a live message with the finger's proxy within 3 s");
+  CHECK(sessions_ok, "the session list says a position-driven finger is active, model flags 9, late_haptic null");
+  if (got) {
+    const double want_p[3] = {0.001, 0.002, 0.0231}, want_d[3] = {0.001, 0.002, 0.0150};
+    cJSON *p = cJSON_GetObjectItem(got, "proxy"), *dv = cJSON_GetObjectItem(got, "device");
+    for (int k = 0; k < 3; k++) {
+      CHECK(fabs(cJSON_GetNumberValue(cJSON_GetArrayItem(p, k)) - want_p[k]) < 1e-6, "proxy[%d] within 1 um", k);
+      CHECK(fabs(cJSON_GetNumberValue(cJSON_GetArrayItem(dv, k)) - want_d[k]) < 1e-6, "device[%d] within 1 um", k);
+    }
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(got, "finger")) == 1, "finger 1");
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItem(got, "in_contact")), "in contact");
+    CHECK(fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(got, "model_force")) - 5.0) < 1e-3, "|F| = 5 N within 1 mN");
+    CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(got, "flags")) == 9, "flags = FORCE_LIMIT | CLAMPED_STEP = 9");
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItem(got, "force_limit")) && cJSON_IsTrue(cJSON_GetObjectItem(got, "out_of_range")),
+          "force_limit and out_of_range said");
+  }
+  cJSON_Delete(got);
+  palp_web_hub_detach(h, &c);
+  dds_delete(pp);
+  palp_web_hub_stop(h);
+  palp_web_hub_destroy(h);
+}
+
 int main(void) {
   test_bands();
   test_coverage_square();
   test_coverage_dome();
   test_access();
   test_control();
+  test_local_model();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }

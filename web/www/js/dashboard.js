@@ -60,6 +60,15 @@
     }
   }
 
+  /* LM_* bits (idl/palp_types.idl): now / seen since the session opened. */
+  const LM_NAMES = [[1, "force limit"], [2, "large strain"], [4, "base contact"], [8, "clamped step"], [16, "unsolved"]];
+  function modelFlags(s) {
+    if (s.model_flags_seen === undefined) return "n/a";
+    const names = function (v) { return LM_NAMES.filter(function (x) { return v & x[0]; }).map(function (x) { return x[1]; }); };
+    if (!s.model_flags_seen) return s.position_finger ? "ok" : "n/a";
+    const now = names(s.model_flags);
+    return (now.length ? "now " + now.join(", ") : "ok now") + "; seen " + names(s.model_flags_seen).join(", ");
+  }
   function fill(c, s) {
     c.name.textContent = s.trainee + " #" + s.id;
     c.band.textContent = fmt(s.force, 2) + " N " + s.band;
@@ -67,6 +76,9 @@
     const rows = [["phantom", s.phantom_name || s.phantom], ["coverage", fmt(100 * s.coverage[0], 1) + " %"],
       ["findings", s.findings === null ? "n/a" : s.findings], ["peak force", fmt(s.peak_force, 2) + " N"],
       ["tick overruns", s.overruns, s.overruns > 0], ["rejected samples", s.rejected, s.rejected > 0],
+      ["position finger", s.position_finger === undefined ? "n/a" : (s.position_finger ? "active" : "none")],
+      ["model validity", modelFlags(s), (s.model_flags_seen || 0) !== 0],
+      /* counted by the trainee's station, not on the wire (docs/web.md) */
       ["late haptic updates", s.late_haptic === null ? "n/a" : s.late_haptic, s.late_haptic > 0],
       ["frames/s", fmt(c.fps, 1)], ["open", fmt(s.duration, 0) + " s"]];
     c.table.textContent = "";

@@ -90,15 +90,20 @@
   }
 
   /* Fingers: a position-driven finger is its sphere; a force-driven one a marker at the contact
-   * centre and an arrow along the force (10 mm per newton). The proxy (haptic local model) is drawn
-   * as a wire sphere when the wire carries one (live.proxy, null today). */
+   * centre and an arrow along the force (10 mm per newton). A position-driven finger with a haptic
+   * local model (palp_local_model) is drawn at its proxy, the fingertip held on the surface, with
+   * the device point as a small translucent marker beneath it while it presses. */
   const tipMat = new THREE.MeshLambertMaterial({ color: 0xd55e00, transparent: true, opacity: 0.55 });
-  const proxyMat = new THREE.MeshBasicMaterial({ color: 0x0072b2, wireframe: true });
-  function setFingers(list, proxy) {
+  const deviceMat = new THREE.MeshBasicMaterial({ color: 0x0072b2, transparent: true, opacity: 0.45 });
+  T.proxy = null; /* the newest drawn proxy, for tests: {proxy, device, in_contact, force_limit, out_of_range} */
+  function setFingers(list) {
     for (const o of fingerObjs) scene.remove(o);
     fingerObjs.length = 0;
+    let limited = false, outOfRange = false, drawnProxy = null;
     for (const f of list) {
-      const c = new THREE.Vector3(f.center[0], f.center[1], f.center[2]);
+      const hasProxy = f.mode === "finger" && Array.isArray(f.proxy) && Array.isArray(f.device);
+      const at = hasProxy ? f.proxy : f.center;
+      const c = new THREE.Vector3(at[0], at[1], at[2]);
       if (f.mode === "force" && geom) {
         /* The wire gives a force-driven contact's centre on the rest surface: draw it where that
          * skin is now (the nearest vertex's current position), not floating above the dent. */
@@ -114,16 +119,31 @@
       const s = new THREE.Mesh(new THREE.SphereBufferGeometry(r, 20, 14), tipMat);
       s.position.copy(c);
       fingerObjs.push(s);
+      if (hasProxy) {
+        limited = limited || !!f.force_limit;
+        outOfRange = outOfRange || !!f.out_of_range;
+        drawnProxy = { proxy: f.proxy, device: f.device, in_contact: !!f.in_contact,
+          force_limit: !!f.force_limit, out_of_range: !!f.out_of_range };
+        if (f.in_contact) {
+          const m = new THREE.Mesh(new THREE.SphereBufferGeometry(0.0025, 12, 8), deviceMat);
+          m.position.set(f.device[0], f.device[1], f.device[2]);
+          fingerObjs.push(m);
+        }
+      }
       const F = new THREE.Vector3(f.force[0], f.force[1], f.force[2]), mag = F.length();
       if (f.mode === "force" && mag > 1e-3) {
         const len = 0.01 * mag, dir = F.clone().normalize();
         fingerObjs.push(new THREE.ArrowHelper(dir, c.clone().addScaledVector(dir, -len), len, 0xd55e00, 0.006, 0.004));
       }
     }
-    if (proxy && proxy.center) {
-      const s = new THREE.Mesh(new THREE.SphereBufferGeometry(proxy.radius || 0.004, 16, 10), proxyMat);
-      s.position.set(proxy.center[0], proxy.center[1], proxy.center[2]);
-      fingerObjs.push(s);
+    T.proxy = drawnProxy;
+    const note = document.getElementById("model");
+    if (note) {
+      const parts = [];
+      if (limited) parts.push("force limited");
+      if (outOfRange) parts.push("model outside its valid range");
+      note.textContent = parts.join(" \u00b7 ");
+      note.className = parts.length ? "warn" : "muted";
     }
     /* Drawn over the skin: a finger in its own dent would otherwise be hidden by the dent's rim. */
     for (const o of fingerObjs) {
@@ -245,7 +265,7 @@
         document.getElementById("cov" + k).textContent = pc;
         document.getElementById("covbar" + k).style.width = pc + "%";
       }
-      setFingers(m.fingers, m.proxy);
+      setFingers(m.fingers);
     }
   });
 

@@ -1,0 +1,58 @@
+#!/usr/bin/env python3
+"""web_trainee_proxy: a position-driven trainee (palp-client --input sim:press) seen on the trainee
+page in headless Chromium: the page receives the finger's haptic local model from palp-web and
+draws the fingertip at its proxy, the device point beneath it while pressed. DDS domain 196.
+usage: test_trainee_proxy.py BUILD SOURCE OUT"""
+import json
+import math
+import os
+
+import harness
+from harness import check
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, 196)
+    browser = None
+    try:
+        procs.server()
+        web = procs.web()
+        browser = harness.cdp.Chromium(width=1000, height=700, out_dir=out)
+        page = browser.new_page(web.base + "/trainee.html?trainee=pat")
+        check(page.wait_for("window.palpState && palpState.connected", 20) is True, "page loaded and connected to palp-web")
+        procs.trainee("pat", extra=["--input", "sim:press,hold_s=6", "--duration", "30"])
+        # Pressed: sim:press goes 10 mm deep at 20 mm/s and holds 6 s; wait until the dent is 5 mm deep
+        # (the page's own displacement figure) so that the proxy is read mid-press.
+        ok = page.wait_for("palpState.trainee.proxy !== null && palpState.trainee.proxy.in_contact === true && "
+                           "palpState.trainee.maxDispMm > 5", 20)
+        check(ok is True, "the page drew a proxy of pat's finger, dent > 5 mm, within 20 s: %s %s"
+              % (page.eval("JSON.stringify(palpState.trainee.proxy)"), page.eval("palpState.trainee.maxDispMm")))
+        p = json.loads(page.eval("JSON.stringify(palpState.trainee.proxy)"))
+        R = page.eval("palpState.phantoms[palpState.trainee.phantom].radius")
+        rp = math.sqrt(sum(x * x for x in p["proxy"]))
+        rd = math.sqrt(sum(x * x for x in p["device"]))
+        print("proxy %s (|p| %.4f m), device %s (|d| %.4f m), phantom radius %.4f m, flags: limit %s, range %s"
+              % (p["proxy"], rp, p["device"], rd, R, p["force_limit"], p["out_of_range"]))
+        check(all(math.isfinite(x) for x in p["proxy"] + p["device"]), "proxy and device finite")
+        # While pressed the device point is inside the surface the proxy rests on: closer to the
+        # dome's centre than the proxy, and the proxy within 2 phantom radii of it (a sane metre scale).
+        check(rd < rp, "the device point lies beneath the proxy (|d| %.5f < |p| %.5f m)" % (rd, rp))
+        # The proxy is the fingertip's centre (sim device radius 8 mm): its lowest point sits in the
+        # dent, more than 5 mm beneath the rest surface, as the page's displacement figure says.
+        tip = rp - 0.008
+        check(tip < R - 0.005, "the fingertip rides the dent: its lowest point %.4f m < R - 5 mm = %.4f m" % (tip, R - 0.005))
+        check(rp < 2 * R, "the proxy is near the phantom (|p| %.4f < 2 R = %.4f m)" % (rp, 2 * R))
+        cx, cy = page.eval("palpProject(%r, %r, %r)" % tuple(p["proxy"]))
+        w, h = page.eval("[innerWidth, innerHeight]")
+        check(0 <= cx <= w and 0 <= cy <= h, "the proxy projects into the view (%.0f, %.0f)" % (cx, cy))
+        note = page.eval("document.getElementById('model') !== null")
+        check(note is True, "the page has its force-limit / validity note")
+        print("screenshot:", page.screenshot(os.path.join(out, "trainee-proxy.png")))
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)
