@@ -259,7 +259,9 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
   void *ptr[TAKE_BATCH];
   dds_sample_info_t info[TAKE_BATCH];
   for (int i = 0; i < TAKE_BATCH; i++) ptr[i] = &buf[i];
-  for (;;) {
+  /* At most what the reader can hold per tick: a peer writing faster than the tick
+   * drains cannot keep it in this loop; the rest waits for the next tick. */
+  for (int round = 0; round < CONTACT_MAX_INSTANCES / TAKE_BATCH; round++) {
     int n = dds_take(s->contact_reader, ptr, info, TAKE_BATCH, TAKE_BATCH);
     if (n <= 0) break;
     for (int i = 0; i < n; i++) {

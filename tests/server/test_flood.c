@@ -157,6 +157,10 @@ int main(void) {
   palp_srv_config cfg;
   test_config(&cfg, DOMAIN, RATE);
   cfg.tick_threads = 1; /* both sessions on one tick thread: the flood must not delay the other */
+  /* SCHED_FIFO where allowed (root, CAP_SYS_NICE), as a lab server runs (docs/server.md): the
+   * gaps then measure the server's own work, not other processes on a shared machine. When
+   * refused the server says so and the test runs at normal priority. */
+  cfg.tick_priority = 20;
   cfg.dds_log_lines = 5;
   cfg.dds_log_window = 60;
   test_server ts = {0};
