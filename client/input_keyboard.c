@@ -65,8 +65,8 @@ static void key(keyboard *k, int c) {
   }
 }
 
-static int k_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
-  keyboard *k = ctx;
+/* Hands every key waiting on stdin to on_key, without blocking. */
+static void drain_keys(void (*on_key)(void *, unsigned char), void *arg) {
   fd_set fds;
   struct timeval tv = {0, 0};
   FD_ZERO(&fds);
@@ -74,10 +74,17 @@ static int k_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
   while (select(STDIN_FILENO + 1, &fds, NULL, NULL, &tv) > 0) {
     unsigned char c;
     if (read(STDIN_FILENO, &c, 1) != 1) break;
-    key(k, c);
+    on_key(arg, c);
     FD_ZERO(&fds);
     FD_SET(STDIN_FILENO, &fds);
   }
+}
+
+static void key_cb(void *arg, unsigned char c) { key(arg, c); }
+
+static int k_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
+  keyboard *k = ctx;
+  drain_keys(key_cb, k);
   if (k->quit) return PALP_CLI_INPUT_END;
   if (t - k->last_status >= 0.5) {
     fprintf(stderr, "\rkeyboard: %s dist %d at polar %.0f deg azimuth %.0f deg, %.2f N   ",
@@ -154,19 +161,11 @@ static void fkey(kfinger *f, int c) {
   }
 }
 
+static void fkey_cb(void *arg, unsigned char c) { fkey(arg, c); }
+
 static int kf_read(void *ctx, double t, palp_vec3 *x) {
   kfinger *f = ctx;
-  fd_set fds;
-  struct timeval tv = {0, 0};
-  FD_ZERO(&fds);
-  FD_SET(STDIN_FILENO, &fds);
-  while (select(STDIN_FILENO + 1, &fds, NULL, NULL, &tv) > 0) {
-    unsigned char c;
-    if (read(STDIN_FILENO, &c, 1) != 1) break;
-    fkey(f, c);
-    FD_ZERO(&fds);
-    FD_SET(STDIN_FILENO, &fds);
-  }
+  drain_keys(fkey_cb, f);
   if (f->k.quit) return PALP_CLI_INPUT_END;
   f->t = t;
   palp_vec3 n;

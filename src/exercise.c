@@ -13,22 +13,10 @@
 #include <string.h>
 
 #include "palp_assess.h"
+#include "parse_error.h"
 #include "vec3.h"
 
-typedef struct ctx {
-  char *err;
-  size_t errlen;
-} ctx;
-
-static int fail(ctx *c, int code, const char *fmt, ...) {
-  if (c->err && c->errlen) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(c->err, c->errlen, fmt, ap);
-    va_end(ap);
-  }
-  return code;
-}
+typedef palp_parse_ctx ctx;
 
 static const char *const band_names[PALP_BAND_COUNT] = {"light", "medium", "deep"};
 static const char *const metric_names[PALP_METRIC_COUNT] = {"sensitivity", "false_positives", "thoroughness",
@@ -47,7 +35,7 @@ static int only_keys(ctx *c, const cJSON *obj, const char *path, const char *con
     int ok = 0;
     for (int k = 0; keys[k]; ++k)
       if (it->string && strcmp(it->string, keys[k]) == 0) ok = 1;
-    if (!ok) return fail(c, PALP_EPARSE, "%s%s: unknown key", path, it->string ? it->string : "?");
+    if (!ok) return palp_parse_fail(c, PALP_EPARSE, "%s%s: unknown key", path, it->string ? it->string : "?");
   }
   return PALP_OK;
 }
@@ -55,11 +43,11 @@ static int only_keys(ctx *c, const cJSON *obj, const char *path, const char *con
 static int get_num(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double lo, double hi,
                    double *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  if (!it) return required ? fail(c, PALP_EPARSE, "%s%s: missing (a number is required)", path, key) : PALP_OK;
+  if (!it) return required ? palp_parse_fail(c, PALP_EPARSE, "%s%s: missing (a number is required)", path, key) : PALP_OK;
   if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble))
-    return fail(c, PALP_EPARSE, "%s%s: expected a finite number", path, key);
+    return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected a finite number", path, key);
   if (!(it->valuedouble >= lo && it->valuedouble <= hi))
-    return fail(c, PALP_EPARSE, "%s%s: must be within [%g, %g] (got %g)", path, key, lo, hi, it->valuedouble);
+    return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be within [%g, %g] (got %g)", path, key, lo, hi, it->valuedouble);
   *out = it->valuedouble;
   return PALP_OK;
 }
@@ -68,18 +56,18 @@ static int get_int(ctx *c, const cJSON *obj, const char *path, const char *key, 
   double v = *out;
   int e = get_num(c, obj, path, key, 0, lo, hi, &v);
   if (e) return e;
-  if (v != floor(v)) return fail(c, PALP_EPARSE, "%s%s: expected an integer (got %g)", path, key, v);
+  if (v != floor(v)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected an integer (got %g)", path, key, v);
   *out = (int)v;
   return PALP_OK;
 }
 
 static int get_str(ctx *c, const cJSON *obj, const char *path, const char *key, int required, char *out, size_t cap) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  if (!it) return required ? fail(c, PALP_EPARSE, "%s%s: missing (a string is required)", path, key) : PALP_OK;
-  if (!cJSON_IsString(it)) return fail(c, PALP_EPARSE, "%s%s: expected a string", path, key);
+  if (!it) return required ? palp_parse_fail(c, PALP_EPARSE, "%s%s: missing (a string is required)", path, key) : PALP_OK;
+  if (!cJSON_IsString(it)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected a string", path, key);
   if (strlen(it->valuestring) >= cap)
-    return fail(c, PALP_EPARSE, "%s%s: longer than %zu characters", path, key, cap - 1);
-  if (required && !it->valuestring[0]) return fail(c, PALP_EPARSE, "%s%s: must not be empty", path, key);
+    return palp_parse_fail(c, PALP_EPARSE, "%s%s: longer than %zu characters", path, key, cap - 1);
+  if (required && !it->valuestring[0]) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must not be empty", path, key);
   snprintf(out, cap, "%s", it->valuestring);
   return PALP_OK;
 }
@@ -90,15 +78,15 @@ static int get_range(ctx *c, const cJSON *obj, const char *path, const char *key
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
   if (!it) return PALP_OK;
   if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 2)
-    return fail(c, PALP_EPARSE, "%s%s: expected [min, max]", path, key);
+    return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected [min, max]", path, key);
   double v[2];
   for (int i = 0; i < 2; ++i) {
     const cJSON *x = cJSON_GetArrayItem(it, i);
     if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble) || x->valuedouble < 0.0 || x->valuedouble > hi)
-      return fail(c, PALP_EPARSE, "%s%s[%d]: expected a number within [0, %g]", path, key, i, hi);
+      return palp_parse_fail(c, PALP_EPARSE, "%s%s[%d]: expected a number within [0, %g]", path, key, i, hi);
     v[i] = x->valuedouble;
   }
-  if (!(v[1] > v[0])) return fail(c, PALP_EPARSE, "%s%s: max must be > min", path, key);
+  if (!(v[1] > v[0])) return palp_parse_fail(c, PALP_EPARSE, "%s%s: max must be > min", path, key);
   *has = 1;
   *lo_out = v[0] * scale;
   *hi_out = v[1] * scale;
@@ -108,7 +96,7 @@ static int get_range(ctx *c, const cJSON *obj, const char *path, const char *key
 static int parse_lesion(ctx *c, const cJSON *o, int i, palp_exercise_lesion *L) {
   char path[32];
   snprintf(path, sizeof path, "lesions[%d].", i);
-  if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
+  if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
   static const char *const keys[] = {"polar_deg", "azimuth_deg", "depth_mm", "diameter_mm", "stiffness_ratio",
                                      "comment",   NULL};
   int e;
@@ -118,13 +106,13 @@ static int parse_lesion(ctx *c, const cJSON *o, int i, palp_exercise_lesion *L) 
   if ((e = get_num(c, o, path, "azimuth_deg", 1, -360.0, 360.0, &az))) return e;
   if ((e = get_num(c, o, path, "depth_mm", 1, 0.0, 1000.0, &depth))) return e;
   if ((e = get_num(c, o, path, "diameter_mm", 1, 0.0, 1000.0, &dia))) return e;
-  if (!(dia > 0.0)) return fail(c, PALP_EPARSE, "%sdiameter_mm: must be > 0", path);
+  if (!(dia > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "%sdiameter_mm: must be > 0", path);
   if (!(depth > dia / 2.0))
-    return fail(c, PALP_EPARSE, "%sdepth_mm: the centre must lie deeper than the radius (%g mm) so the lesion is "
+    return palp_parse_fail(c, PALP_EPARSE, "%sdepth_mm: the centre must lie deeper than the radius (%g mm) so the lesion is "
                 "below the surface (got %g)", path, dia / 2.0, depth);
   L->stiffness_ratio = 0.0;
   if ((e = get_num(c, o, path, "stiffness_ratio", 1, 0.0, 1e6, &L->stiffness_ratio))) return e;
-  if (!(L->stiffness_ratio > 0.0)) return fail(c, PALP_EPARSE, "%sstiffness_ratio: must be > 0", path);
+  if (!(L->stiffness_ratio > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "%sstiffness_ratio: must be > 0", path);
   L->polar = polar * PALP_PI / 180.0;
   L->azimuth = az * PALP_PI / 180.0;
   L->depth = depth * 1e-3;
@@ -136,27 +124,27 @@ static int parse_bands(ctx *c, const cJSON *o, palp_exercise *ex) {
   static const char *const keys[] = {"light", "medium", "deep", "comment", NULL};
   static const char *const bkeys[] = {"depth_mm", "force_N", NULL};
   int e;
-  if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "pressure_bands: expected an object");
+  if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "pressure_bands: expected an object");
   if ((e = only_keys(c, o, "pressure_bands.", keys))) return e;
   for (int b = 0; b < PALP_BAND_COUNT; ++b) {
     char path[48];
     snprintf(path, sizeof path, "pressure_bands.%s.", band_names[b]);
     const cJSON *bo = cJSON_GetObjectItemCaseSensitive(o, band_names[b]);
-    if (!bo) return fail(c, PALP_EPARSE, "pressure_bands.%s: missing (an object is required)", band_names[b]);
-    if (!cJSON_IsObject(bo)) return fail(c, PALP_EPARSE, "pressure_bands.%s: expected an object", band_names[b]);
+    if (!bo) return palp_parse_fail(c, PALP_EPARSE, "pressure_bands.%s: missing (an object is required)", band_names[b]);
+    if (!cJSON_IsObject(bo)) return palp_parse_fail(c, PALP_EPARSE, "pressure_bands.%s: expected an object", band_names[b]);
     if ((e = only_keys(c, bo, path, bkeys))) return e;
     palp_band *B = &ex->band[b];
     if ((e = get_range(c, bo, path, "depth_mm", 1e-3, 1000.0, &B->has_depth, &B->depth_min, &B->depth_max))) return e;
     if ((e = get_range(c, bo, path, "force_N", 1.0, 1000.0, &B->has_force, &B->force_min, &B->force_max))) return e;
     if (!B->has_depth && !B->has_force)
-      return fail(c, PALP_EPARSE, "pressure_bands.%s: needs depth_mm or force_N (or both)", band_names[b]);
+      return palp_parse_fail(c, PALP_EPARSE, "pressure_bands.%s: needs depth_mm or force_N (or both)", band_names[b]);
     /* Bands go up: light below medium below deep, never overlapping, so a sample is in one band at most. */
     if (b > 0) {
       const palp_band *P = &ex->band[b - 1];
       if (B->has_depth && P->has_depth && B->depth_min < P->depth_max)
-        return fail(c, PALP_EPARSE, "%sdepth_mm: must start at or above %s's max", path, band_names[b - 1]);
+        return palp_parse_fail(c, PALP_EPARSE, "%sdepth_mm: must start at or above %s's max", path, band_names[b - 1]);
       if (B->has_force && P->has_force && B->force_min < P->force_max)
-        return fail(c, PALP_EPARSE, "%sforce_N: must start at or above %s's max", path, band_names[b - 1]);
+        return palp_parse_fail(c, PALP_EPARSE, "%sforce_N: must start at or above %s's max", path, band_names[b - 1]);
     }
   }
   return PALP_OK;
@@ -167,10 +155,10 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
   static const char *const pkeys[] = {"sensitivity", "max_false_positives", "coverage", "pattern",
                                       "max_out_of_range", "score", NULL};
   int e;
-  if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "rubric: expected an object");
+  if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "rubric: expected an object");
   if ((e = only_keys(c, o, "rubric.", keys))) return e;
   const cJSON *w = cJSON_GetObjectItemCaseSensitive(o, "weights");
-  if (!cJSON_IsObject(w)) return fail(c, PALP_EPARSE, "rubric.weights: missing or not an object");
+  if (!cJSON_IsObject(w)) return palp_parse_fail(c, PALP_EPARSE, "rubric.weights: missing or not an object");
   static const char *wkeys[PALP_METRIC_COUNT + 1];
   for (int m = 0; m < PALP_METRIC_COUNT; ++m) wkeys[m] = metric_names[m];
   wkeys[PALP_METRIC_COUNT] = NULL;
@@ -181,10 +169,10 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
     if ((e = get_num(c, w, "rubric.weights.", metric_names[m], 0, 0.0, 1e6, &r->weight[m]))) return e;
     sum += r->weight[m];
   }
-  if (!(sum > 0.0)) return fail(c, PALP_EPARSE, "rubric.weights: at least one weight must be > 0");
+  if (!(sum > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "rubric.weights: at least one weight must be > 0");
 
   const cJSON *p = cJSON_GetObjectItemCaseSensitive(o, "pass");
-  if (!cJSON_IsObject(p)) return fail(c, PALP_EPARSE, "rubric.pass: missing or not an object");
+  if (!cJSON_IsObject(p)) return palp_parse_fail(c, PALP_EPARSE, "rubric.pass: missing or not an object");
   if ((e = only_keys(c, p, "rubric.pass.", pkeys))) return e;
   r->pass_sensitivity = 0.0;
   if ((e = get_num(c, p, "rubric.pass.", "sensitivity", 1, 0.0, 1.0, &r->pass_sensitivity))) return e;
@@ -195,7 +183,7 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
   r->pass_score = 0.0;
   if ((e = get_num(c, p, "rubric.pass.", "score", 1, 0.0, 100.0, &r->pass_score))) return e;
   const cJSON *cov = cJSON_GetObjectItemCaseSensitive(p, "coverage");
-  if (!cJSON_IsObject(cov)) return fail(c, PALP_EPARSE, "rubric.pass.coverage: missing or not an object");
+  if (!cJSON_IsObject(cov)) return palp_parse_fail(c, PALP_EPARSE, "rubric.pass.coverage: missing or not an object");
   static const char *const ckeys[] = {"light", "medium", "deep", NULL};
   if ((e = only_keys(c, cov, "rubric.pass.coverage.", ckeys))) return e;
   for (int b = 0; b < PALP_BAND_COUNT; ++b)
@@ -204,7 +192,7 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
   r->pass_pattern = PALP_PATTERN_UNSYSTEMATIC;
   r->pass_any_systematic = 0;
   if (pat) {
-    if (!cJSON_IsString(pat)) return fail(c, PALP_EPARSE, "rubric.pass.pattern: expected a string");
+    if (!cJSON_IsString(pat)) return palp_parse_fail(c, PALP_EPARSE, "rubric.pass.pattern: expected a string");
     const char *s = pat->valuestring;
     if (strcmp(s, "any") == 0) {
     } else if (strcmp(s, "systematic") == 0) {
@@ -214,7 +202,7 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
       for (int i = 1; i <= PALP_PATTERN_RADIAL; ++i)
         if (strcmp(s, pattern_names[i]) == 0) k = i;
       if (!k)
-        return fail(c, PALP_EPARSE,
+        return palp_parse_fail(c, PALP_EPARSE,
                     "rubric.pass.pattern: unknown \"%s\" (any, systematic, vertical_strip, circles, radial)", s);
       r->pass_pattern = (palp_pattern)k;
     }
@@ -227,27 +215,27 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
                                      "decoys", "pressure_bands", "max_force_N", "match_margin_mm", "rubric",
                                      "comment", NULL};
   memset(ex, 0, sizeof *ex);
-  if (!cJSON_IsObject(root)) return fail(c, PALP_EPARSE, "exercise: expected a JSON object");
+  if (!cJSON_IsObject(root)) return palp_parse_fail(c, PALP_EPARSE, "exercise: expected a JSON object");
   int e;
   if ((e = only_keys(c, root, "", keys))) return e;
   if ((e = get_str(c, root, "", "name", 1, ex->name, sizeof ex->name))) return e;
   for (const char *p = ex->name; *p; ++p)
     if (!((*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_' || *p == '-'))
-      return fail(c, PALP_EPARSE, "name: use lower-case letters, digits, '_' and '-' only (got \"%s\")", ex->name);
+      return palp_parse_fail(c, PALP_EPARSE, "name: use lower-case letters, digits, '_' and '-' only (got \"%s\")", ex->name);
   if ((e = get_str(c, root, "", "title", 1, ex->title, sizeof ex->title))) return e;
   if ((e = get_str(c, root, "", "phantom", 1, ex->phantom, sizeof ex->phantom))) return e;
   if (ex->phantom[0] == '/' || !dir || !dir[0]) snprintf(ex->phantom_path, sizeof ex->phantom_path, "%s", ex->phantom);
   else if ((size_t)snprintf(ex->phantom_path, sizeof ex->phantom_path, "%s/%s", dir, ex->phantom) >=
            sizeof ex->phantom_path)
-    return fail(c, PALP_EPARSE, "phantom: path too long");
+    return palp_parse_fail(c, PALP_EPARSE, "phantom: path too long");
   if ((e = get_str(c, root, "", "instructions", 1, ex->instructions, sizeof ex->instructions))) return e;
   if ((e = get_num(c, root, "", "time_limit_s", 1, 1.0, 86400.0, &ex->time_limit))) return e;
 
   const cJSON *ls = cJSON_GetObjectItemCaseSensitive(root, "lesions");
-  if (!ls) return fail(c, PALP_EPARSE, "lesions: missing (an array, possibly empty, is required)");
-  if (!cJSON_IsArray(ls)) return fail(c, PALP_EPARSE, "lesions: expected an array");
+  if (!ls) return palp_parse_fail(c, PALP_EPARSE, "lesions: missing (an array, possibly empty, is required)");
+  if (!cJSON_IsArray(ls)) return palp_parse_fail(c, PALP_EPARSE, "lesions: expected an array");
   const int nl = cJSON_GetArraySize(ls);
-  if (nl > PALP_MAX_LESIONS) return fail(c, PALP_EPARSE, "lesions: at most %d", PALP_MAX_LESIONS);
+  if (nl > PALP_MAX_LESIONS) return palp_parse_fail(c, PALP_EPARSE, "lesions: at most %d", PALP_MAX_LESIONS);
   for (int i = 0; i < nl; ++i)
     if ((e = parse_lesion(c, cJSON_GetArrayItem(ls, i), i, &ex->lesion[i]))) return e;
   ex->lesion_count = nl;
@@ -255,26 +243,26 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
    * material the model does not have yet: refuse rather than ignore it. */
   const cJSON *dec = cJSON_GetObjectItemCaseSensitive(root, "decoys");
   if (dec && !(cJSON_IsArray(dec) && cJSON_GetArraySize(dec) == 0))
-    return fail(c, PALP_EPARSE, "decoys: normal nodularity is not modelled yet (only an empty array is accepted)");
+    return palp_parse_fail(c, PALP_EPARSE, "decoys: normal nodularity is not modelled yet (only an empty array is accepted)");
 
   const cJSON *bands = cJSON_GetObjectItemCaseSensitive(root, "pressure_bands");
-  if (!bands) return fail(c, PALP_EPARSE, "pressure_bands: missing (an object is required)");
+  if (!bands) return palp_parse_fail(c, PALP_EPARSE, "pressure_bands: missing (an object is required)");
   if ((e = parse_bands(c, bands, ex))) return e;
   if ((e = get_num(c, root, "", "max_force_N", 1, 0.0, 1000.0, &ex->max_force))) return e;
-  if (!(ex->max_force > 0.0)) return fail(c, PALP_EPARSE, "max_force_N: must be > 0");
+  if (!(ex->max_force > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "max_force_N: must be > 0");
   double margin = 10.0;
   if ((e = get_num(c, root, "", "match_margin_mm", 0, 0.0, 100.0, &margin))) return e;
   ex->match_margin = margin * 1e-3;
   const cJSON *rub = cJSON_GetObjectItemCaseSensitive(root, "rubric");
-  if (!rub) return fail(c, PALP_EPARSE, "rubric: missing (an object is required)");
+  if (!rub) return palp_parse_fail(c, PALP_EPARSE, "rubric: missing (an object is required)");
   return parse_rubric(c, rub, &ex->rubric);
 }
 
 int palp_exercise_parse(const char *json, const char *base_dir, palp_exercise *out, char *err, size_t errlen) {
   ctx c = {err, errlen};
-  if (!json || !out) return fail(&c, PALP_EINVAL, "exercise: no input");
+  if (!json || !out) return palp_parse_fail(&c, PALP_EINVAL, "exercise: no input");
   cJSON *root = cJSON_Parse(json);
-  if (!root) return fail(&c, PALP_EPARSE, "exercise: not valid JSON (near \"%.20s\")", cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "");
+  if (!root) return palp_parse_fail(&c, PALP_EPARSE, "exercise: not valid JSON (near \"%.20s\")", cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "");
   const int e = parse_root(&c, root, base_dir, out);
   cJSON_Delete(root);
   return e;
@@ -283,7 +271,7 @@ int palp_exercise_parse(const char *json, const char *base_dir, palp_exercise *o
 int palp_exercise_load(const char *path, palp_exercise *out, char *err, size_t errlen) {
   ctx c = {err, errlen};
   FILE *f = fopen(path, "rb");
-  if (!f) return fail(&c, PALP_EIO, "exercise: cannot read \"%s\"", path);
+  if (!f) return palp_parse_fail(&c, PALP_EIO, "exercise: cannot read \"%s\"", path);
   char *buf = NULL;
   long n = -1;
   if (fseek(f, 0, SEEK_END) == 0) n = ftell(f);
@@ -297,7 +285,7 @@ int palp_exercise_load(const char *path, palp_exercise *out, char *err, size_t e
     if (buf) buf[n] = 0;
   }
   fclose(f);
-  if (!buf) return fail(&c, PALP_EIO, "exercise: cannot read \"%s\" (or larger than 1 MiB)", path);
+  if (!buf) return palp_parse_fail(&c, PALP_EIO, "exercise: cannot read \"%s\" (or larger than 1 MiB)", path);
   char dir[1024];
   snprintf(dir, sizeof dir, "%s", path);
   char *slash = strrchr(dir, '/');
@@ -318,7 +306,7 @@ palp_vec3 palp_exercise_lesion_surface(const palp_exercise_lesion *l, double R) 
 
 int palp_exercise_lesions(const palp_exercise *ex, double R, palp_lesion *out, int cap, char *err, size_t errlen) {
   ctx c = {err, errlen};
-  if (!ex || !(R > 0.0) || (cap > 0 && !out)) return fail(&c, PALP_EINVAL, "exercise lesions: bad arguments");
+  if (!ex || !(R > 0.0) || (cap > 0 && !out)) return palp_parse_fail(&c, PALP_EINVAL, "exercise lesions: bad arguments");
   int n = 0;
   for (int i = 0; i < ex->lesion_count && n < cap; ++i) {
     const palp_exercise_lesion *L = &ex->lesion[i];
@@ -326,7 +314,7 @@ int palp_exercise_lesions(const palp_exercise *ex, double R, palp_lesion *out, i
     const palp_vec3 centre = v3_scale(dir_of(L->polar, L->azimuth), R - L->depth);
     /* The same test the scene applies: inside the dome and clear of its base. */
     if (!(R - L->depth + a < R) || !(L->depth + a < 2.0 * R) || !(centre.z - a > 0.0))
-      return fail(&c, PALP_EINVAL,
+      return palp_parse_fail(&c, PALP_EINVAL,
                   "lesions[%d]: a %g mm lesion %g mm deep at polar %g deg does not fit inside the dome (radius %g "
                   "mm) above its base",
                   i, L->diameter * 1e3, L->depth * 1e3, L->polar * 180.0 / PALP_PI, R * 1e3);
@@ -342,10 +330,10 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
     /* keep the scene's message, say which file */
     char inner[256];
     snprintf(inner, sizeof inner, "%s", err && errlen ? err : "");
-    return fail(&c, e, "phantom \"%s\": %s", ex->phantom_path, inner);
+    return palp_parse_fail(&c, e, "phantom \"%s\": %s", ex->phantom_path, inner);
   }
   if (out->world.lesion_count + ex->lesion_count > PALP_MAX_LESIONS)
-    return fail(&c, PALP_EINVAL, "lesions: the phantom has %d and the exercise %d; at most %d in all",
+    return palp_parse_fail(&c, PALP_EINVAL, "lesions: the phantom has %d and the exercise %d; at most %d in all",
                 out->world.lesion_count, ex->lesion_count, PALP_MAX_LESIONS);
   const int n = palp_exercise_lesions(ex, out->world.mesh.radius, out->world.lesion + out->world.lesion_count,
                                       PALP_MAX_LESIONS - out->world.lesion_count, err, errlen);

@@ -11,29 +11,17 @@
 #include <string.h>
 
 #include "palp.h"
+#include "parse_error.h"
 #include "vec3.h"
 
-typedef struct ctx {
-  char *err;
-  size_t errlen;
-} ctx;
-
-static int fail(ctx *c, int code, const char *fmt, ...) {
-  if (c->err && c->errlen) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(c->err, c->errlen, fmt, ap);
-    va_end(ap);
-  }
-  return code;
-}
+typedef palp_parse_ctx ctx;
 
 /* Reads a required (or optional, keeping *out) finite number. */
 static int get_num(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  if (!it) return required ? fail(c, PALP_EPARSE, "%s%s: missing (a number is required)", path, key) : PALP_OK;
-  if (!cJSON_IsNumber(it)) return fail(c, PALP_EPARSE, "%s%s: expected a number", path, key);
-  if (!isfinite(it->valuedouble)) return fail(c, PALP_EPARSE, "%s%s: must be finite", path, key);
+  if (!it) return required ? palp_parse_fail(c, PALP_EPARSE, "%s%s: missing (a number is required)", path, key) : PALP_OK;
+  if (!cJSON_IsNumber(it)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected a number", path, key);
+  if (!isfinite(it->valuedouble)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be finite", path, key);
   *out = it->valuedouble;
   return PALP_OK;
 }
@@ -42,7 +30,7 @@ static int get_pos(ctx *c, const cJSON *obj, const char *path, const char *key, 
   double v = *out;
   int e = get_num(c, obj, path, key, required, &v);
   if (e) return e;
-  if (!(v > 0.0)) return fail(c, PALP_EPARSE, "%s%s: must be > 0 (got %g)", path, key, v);
+  if (!(v > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be > 0 (got %g)", path, key, v);
   *out = v;
   return PALP_OK;
 }
@@ -53,21 +41,21 @@ static int get_int(ctx *c, const cJSON *obj, const char *path, const char *key, 
   int e = get_num(c, obj, path, key, required, &v);
   if (e) return e;
   if (v != floor(v) || v < lo || v > hi)
-    return fail(c, PALP_EPARSE, "%s%s: expected an integer in [%d, %d] (got %g)", path, key, lo, hi, v);
+    return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected an integer in [%d, %d] (got %g)", path, key, lo, hi, v);
   *out = (int)v;
   return PALP_OK;
 }
 
 static int get_vec(ctx *c, const cJSON *obj, const char *path, const char *key, int required, palp_vec3 *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  if (!it) return required ? fail(c, PALP_EPARSE, "%s%s: missing (an array of 3 numbers is required)", path, key) : 0;
+  if (!it) return required ? palp_parse_fail(c, PALP_EPARSE, "%s%s: missing (an array of 3 numbers is required)", path, key) : 0;
   if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3)
-    return fail(c, PALP_EPARSE, "%s%s: expected an array of 3 numbers", path, key);
+    return palp_parse_fail(c, PALP_EPARSE, "%s%s: expected an array of 3 numbers", path, key);
   double v[3];
   for (int i = 0; i < 3; ++i) {
     const cJSON *x = cJSON_GetArrayItem(it, i);
     if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
-      return fail(c, PALP_EPARSE, "%s%s[%d]: expected a finite number", path, key, i);
+      return palp_parse_fail(c, PALP_EPARSE, "%s%s[%d]: expected a finite number", path, key, i);
     v[i] = x->valuedouble;
   }
   *out = v3(v[0], v[1], v[2]);
@@ -78,11 +66,11 @@ static const cJSON *get_obj(ctx *c, const cJSON *obj, const char *path, const ch
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
   *e = PALP_OK;
   if (!it) {
-    if (required) *e = fail(c, PALP_EPARSE, "%s%s: missing (an object is required)", path, key);
+    if (required) *e = palp_parse_fail(c, PALP_EPARSE, "%s%s: missing (an object is required)", path, key);
     return NULL;
   }
   if (!cJSON_IsObject(it)) {
-    *e = fail(c, PALP_EPARSE, "%s%s: expected an object", path, key);
+    *e = palp_parse_fail(c, PALP_EPARSE, "%s%s: expected an object", path, key);
     return NULL;
   }
   return it;
@@ -104,57 +92,57 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
 static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   int e;
   const cJSON *law = cJSON_GetObjectItemCaseSensitive(g, "law");
-  if (!law) return fail(c, PALP_EPARSE, "gel.law: missing (\"polytropic\" or \"paper_literal\")");
-  if (!cJSON_IsString(law)) return fail(c, PALP_EPARSE, "gel.law: expected a string");
+  if (!law) return palp_parse_fail(c, PALP_EPARSE, "gel.law: missing (\"polytropic\" or \"paper_literal\")");
+  if (!cJSON_IsString(law)) return palp_parse_fail(c, PALP_EPARSE, "gel.law: expected a string");
   if (strcmp(law->valuestring, "polytropic") == 0) p->law = PALP_GEL_POLYTROPIC;
   else if (strcmp(law->valuestring, "paper_literal") == 0) p->law = PALP_GEL_PAPER_LITERAL;
-  else return fail(c, PALP_EPARSE, "gel.law: unknown law \"%s\" (polytropic, paper_literal)", law->valuestring);
+  else return palp_parse_fail(c, PALP_EPARSE, "gel.law: unknown law \"%s\" (polytropic, paper_literal)", law->valuestring);
   if ((e = get_pos(c, g, "gel.", "pressure_Pa", 1, &p->pressure))) return e;
   if ((e = get_pos(c, g, "gel.", "a1", 1, &p->a1))) return e;
   if ((e = get_num(c, g, "gel.", "a2_Pa_s_m3", 1, &p->a2))) return e;
-  if (p->a2 < 0.0) return fail(c, PALP_EPARSE, "gel.a2_Pa_s_m3: must be >= 0");
+  if (p->a2 < 0.0) return palp_parse_fail(c, PALP_EPARSE, "gel.a2_Pa_s_m3: must be >= 0");
   p->a3 = 0.0;
   if ((e = get_num(c, g, "gel.", "a3_s2", 0, &p->a3))) return e;
   if ((e = get_num(c, g, "gel.", "support_modulus_Pa_m", 0, &p->support_modulus))) return e;
-  if (p->support_modulus < 0.0) return fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be >= 0");
+  if (p->support_modulus < 0.0) return palp_parse_fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be >= 0");
   if ((e = get_num(c, g, "gel.", "support_viscosity_Pa_s_m", 0, &p->support_viscosity))) return e;
-  if (p->support_viscosity < 0.0) return fail(c, PALP_EPARSE, "gel.support_viscosity_Pa_s_m: must be >= 0");
+  if (p->support_viscosity < 0.0) return palp_parse_fail(c, PALP_EPARSE, "gel.support_viscosity_Pa_s_m: must be >= 0");
   if ((e = get_num(c, g, "gel.", "support_bulk_fraction", 0, &p->support_bulk_fraction))) return e;
   if (!(p->support_bulk_fraction >= 0.0 && p->support_bulk_fraction <= 1.0))
-    return fail(c, PALP_EPARSE, "gel.support_bulk_fraction: must be in [0, 1] (the share of the gel's bulk shift the support follows)");
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_bulk_fraction: must be in [0, 1] (the share of the gel's bulk shift the support follows)");
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
-  if (!(p->density > 0.0)) return fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
+  if (!(p->density > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
   if (!(p->added_mass_fraction >= 0.0 && p->added_mass_fraction <= 1.0))
-    return fail(c, PALP_EPARSE, "gel.added_mass_fraction: must be in [0, 1] (the share of the gel's mass the surface carries)");
+    return palp_parse_fail(c, PALP_EPARSE, "gel.added_mass_fraction: must be in [0, 1] (the share of the gel's mass the surface carries)");
   return PALP_OK;
 }
 
 static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile *p) {
   memset(p, 0, sizeof *p);
   const cJSON *kind = cJSON_GetObjectItemCaseSensitive(o, "kind");
-  if (!kind || !cJSON_IsString(kind)) return fail(c, PALP_EPARSE, "%skind: missing or not a string", path);
+  if (!kind || !cJSON_IsString(kind)) return palp_parse_fail(c, PALP_EPARSE, "%skind: missing or not a string", path);
   int k = 0;
   for (int i = 0; i < 4; ++i)
     if (strcmp(kind->valuestring, profile_names[i]) == 0) k = i + 1;
-  if (!k) return fail(c, PALP_EPARSE, "%skind: unknown profile \"%s\" (step, ramp, sine, keyframes)", path,
+  if (!k) return palp_parse_fail(c, PALP_EPARSE, "%skind: unknown profile \"%s\" (step, ramp, sine, keyframes)", path,
                       kind->valuestring);
   p->kind = (palp_profile_kind)k;
   int e;
   if (p->kind == PALP_PROFILE_KEYFRAMES) {
     const cJSON *keys = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
-    if (!cJSON_IsArray(keys)) return fail(c, PALP_EPARSE, "%skeyframes: expected an array of [t_s, force_N]", path);
+    if (!cJSON_IsArray(keys)) return palp_parse_fail(c, PALP_EPARSE, "%skeyframes: expected an array of [t_s, force_N]", path);
     const int n = cJSON_GetArraySize(keys);
     if (n < 1 || n > PALP_PROFILE_MAX_KEYS)
-      return fail(c, PALP_EPARSE, "%skeyframes: needs 1 to %d entries", path, PALP_PROFILE_MAX_KEYS);
+      return palp_parse_fail(c, PALP_EPARSE, "%skeyframes: needs 1 to %d entries", path, PALP_PROFILE_MAX_KEYS);
     for (int i = 0; i < n; ++i) {
       const cJSON *kf = cJSON_GetArrayItem(keys, i);
       const cJSON *t = cJSON_GetArrayItem(kf, 0), *f = cJSON_GetArrayItem(kf, 1);
       if (!cJSON_IsArray(kf) || cJSON_GetArraySize(kf) != 2 || !cJSON_IsNumber(t) || !cJSON_IsNumber(f) ||
           !isfinite(t->valuedouble) || !isfinite(f->valuedouble))
-        return fail(c, PALP_EPARSE, "%skeyframes[%d]: expected [t_s, force_N]", path, i);
+        return palp_parse_fail(c, PALP_EPARSE, "%skeyframes[%d]: expected [t_s, force_N]", path, i);
       if (i > 0 && !(t->valuedouble > p->key_t[i - 1]))
-        return fail(c, PALP_EPARSE, "%skeyframes[%d]: times must increase", path, i);
+        return palp_parse_fail(c, PALP_EPARSE, "%skeyframes[%d]: times must increase", path, i);
       p->key_t[i] = t->valuedouble;
       p->key_f[i] = f->valuedouble;
     }
@@ -164,7 +152,7 @@ static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile 
   if ((e = get_num(c, o, path, "magnitude_N", 1, &p->magnitude))) return e;
   if ((e = get_num(c, o, path, "t_on_s", 1, &p->t_on))) return e;
   if ((e = get_num(c, o, path, "t_off_s", 1, &p->t_off))) return e;
-  if (p->t_off < p->t_on) return fail(c, PALP_EPARSE, "%st_off_s: must be >= t_on_s", path);
+  if (p->t_off < p->t_on) return palp_parse_fail(c, PALP_EPARSE, "%st_off_s: must be >= t_on_s", path);
   if (p->kind == PALP_PROFILE_SINE) {
     if ((e = get_pos(c, o, path, "frequency_Hz", 1, &p->frequency))) return e;
     if ((e = get_num(c, o, path, "offset_N", 0, &p->offset))) return e;
@@ -175,7 +163,7 @@ static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile 
 static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_scene_contact *sc) {
   char path[48];
   snprintf(path, sizeof path, "contacts[%d].", idx);
-  if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "contacts[%d]: expected an object", idx);
+  if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "contacts[%d]: expected an object", idx);
   const cJSON *d = cJSON_GetObjectItemCaseSensitive(o, "distribution");
   int dist = 0;
   if (cJSON_IsString(d)) {
@@ -184,23 +172,23 @@ static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_sc
   } else if (cJSON_IsNumber(d) && d->valuedouble >= 1 && d->valuedouble <= 4 && d->valuedouble == floor(d->valuedouble)) {
     dist = (int)d->valuedouble;
   }
-  if (!d) return fail(c, PALP_EPARSE, "%sdistribution: missing", path);
+  if (!d) return palp_parse_fail(c, PALP_EPARSE, "%sdistribution: missing", path);
   if (!dist)
-    return fail(c, PALP_EPARSE, "%sdistribution: expected single, uniform, gaussian, gaussian_offset or 1-4", path);
+    return palp_parse_fail(c, PALP_EPARSE, "%sdistribution: expected single, uniform, gaussian, gaussian_offset or 1-4", path);
   palp_vec3 center = v3(0, 0, radius);
   const cJSON *deg = cJSON_GetObjectItemCaseSensitive(o, "center_deg");
   int e;
   if (deg) {
-    if (!cJSON_IsObject(deg)) return fail(c, PALP_EPARSE, "%scenter_deg: expected {\"polar\": .., \"azimuth\": ..}", path);
+    if (!cJSON_IsObject(deg)) return palp_parse_fail(c, PALP_EPARSE, "%scenter_deg: expected {\"polar\": .., \"azimuth\": ..}", path);
     char p2[64];
     snprintf(p2, sizeof p2, "%scenter_deg.", path);
     double polar = 0, az = 0;
     if ((e = get_num(c, deg, p2, "polar", 1, &polar)) || (e = get_num(c, deg, p2, "azimuth", 1, &az))) return e;
-    if (polar < 0 || polar > 90) return fail(c, PALP_EPARSE, "%spolar: must be within [0, 90] degrees", p2);
+    if (polar < 0 || polar > 90) return palp_parse_fail(c, PALP_EPARSE, "%spolar: must be within [0, 90] degrees", p2);
     const double th = polar * PALP_PI / 180.0, ph = az * PALP_PI / 180.0;
     center = v3(radius * sin(th) * cos(ph), radius * sin(th) * sin(ph), radius * cos(th));
   } else if ((e = get_vec(c, o, path, "center_m", 1, &center))) {
-    return fail(c, PALP_EPARSE, "%scenter_m or center_deg: missing or malformed", path);
+    return palp_parse_fail(c, PALP_EPARSE, "%scenter_m or center_deg: missing or malformed", path);
   }
   sc->def = palp_contact_default_def((palp_distribution)dist, center);
   if ((e = get_pos(c, o, path, "patch_area_m2", 0, &sc->def.patch_area))) return e;
@@ -240,10 +228,10 @@ static int parse_params_file(ctx *c, const char *dir, const char *name, palp_sce
   if (name[0] == '/' || !dir[0]) snprintf(path, sizeof path, "%s", name);
   else snprintf(path, sizeof path, "%s/%s", dir, name);
   char *txt = read_file(path);
-  if (!txt) return fail(c, PALP_EIO, "parameters: cannot read \"%s\"", path);
+  if (!txt) return palp_parse_fail(c, PALP_EIO, "parameters: cannot read \"%s\"", path);
   cJSON *root = cJSON_Parse(txt);
   free(txt);
-  if (!root) return fail(c, PALP_EPARSE, "parameters: \"%s\" is not valid JSON", path);
+  if (!root) return palp_parse_fail(c, PALP_EPARSE, "parameters: \"%s\" is not valid JSON", path);
   int e;
   const cJSON *m = get_obj(c, root, "parameters.", "membrane", 1, &e);
   if (!e) e = parse_membrane(c, m, &s->world.membrane);
@@ -256,10 +244,10 @@ static int parse_params_file(ctx *c, const char *dir, const char *name, palp_sce
 static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s) {
   memset(s, 0, sizeof *s);
   s->world = palp_world_default_def();
-  if (!cJSON_IsObject(root)) return fail(c, PALP_EPARSE, "scene: expected a JSON object");
+  if (!cJSON_IsObject(root)) return palp_parse_fail(c, PALP_EPARSE, "scene: expected a JSON object");
   int e;
   const cJSON *name = cJSON_GetObjectItemCaseSensitive(root, "name");
-  if (!cJSON_IsString(name)) return fail(c, PALP_EPARSE, "name: missing or not a string");
+  if (!cJSON_IsString(name)) return palp_parse_fail(c, PALP_EPARSE, "name: missing or not a string");
   snprintf(s->name, sizeof s->name, "%s", name->valuestring);
 
   const cJSON *mesh = get_obj(c, root, "", "mesh", 1, &e);
@@ -269,7 +257,7 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
 
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
   if (params) {
-    if (!cJSON_IsString(params)) return fail(c, PALP_EPARSE, "parameters: expected a file name");
+    if (!cJSON_IsString(params)) return palp_parse_fail(c, PALP_EPARSE, "parameters: expected a file name");
     if ((e = parse_params_file(c, dir, params->valuestring, s))) return e;
   } else {
     const cJSON *m = get_obj(c, root, "", "membrane", 1, &e);
@@ -281,55 +269,55 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   const cJSON *t = get_obj(c, root, "", "time", 1, &e);
   if (e) return e;
   if ((e = get_pos(c, t, "time.", "dt_s", 1, &s->world.dt))) return e;
-  if (s->world.dt > 0.1) return fail(c, PALP_EPARSE, "time.dt_s: must be <= 0.1 s");
+  if (s->world.dt > 0.1) return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: must be <= 0.1 s");
   /* 1 us is a thousand times finer than the haptic rate; below it a step is no physics,
    * and 1e-300 made every frame period a "whole multiple" (1e298 rounds to itself). */
-  if (s->world.dt < 1e-6) return fail(c, PALP_EPARSE, "time.dt_s: %g s is below 1e-6 s", s->world.dt);
+  if (s->world.dt < 1e-6) return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: %g s is below 1e-6 s", s->world.dt);
   if ((e = get_int(c, t, "time.", "frames", 1, 1, 100000000, &s->frames))) return e;
   s->frame_period = s->world.dt;
   if ((e = get_pos(c, t, "time.", "frame_period_s", 0, &s->frame_period))) return e;
   const double ratio = s->frame_period / s->world.dt;
   if (ratio < 1.0 - 1e-9 || fabs(ratio - round(ratio)) > 1e-6)
-    return fail(c, PALP_EPARSE, "time.frame_period_s: must be a whole multiple of time.dt_s");
+    return palp_parse_fail(c, PALP_EPARSE, "time.frame_period_s: must be a whole multiple of time.dt_s");
   if (ratio > 100000.5)
-    return fail(c, PALP_EPARSE, "time.frame_period_s: %.0f steps per frame; at most 100000", ratio);
+    return palp_parse_fail(c, PALP_EPARSE, "time.frame_period_s: %.0f steps per frame; at most 100000", ratio);
 
   const cJSON *fx = cJSON_GetObjectItemCaseSensitive(root, "effects");
-  if (!fx) return fail(c, PALP_EPARSE, "effects: missing (an array of effect names is required)");
-  if (!cJSON_IsArray(fx)) return fail(c, PALP_EPARSE, "effects: expected an array of effect names");
+  if (!fx) return palp_parse_fail(c, PALP_EPARSE, "effects: missing (an array of effect names is required)");
+  if (!cJSON_IsArray(fx)) return palp_parse_fail(c, PALP_EPARSE, "effects: expected an array of effect names");
   s->world.effects = 0;
   for (int i = 0; i < cJSON_GetArraySize(fx); ++i) {
     const cJSON *it = cJSON_GetArrayItem(fx, i);
     palp_effect ef;
-    if (!cJSON_IsString(it)) return fail(c, PALP_EPARSE, "effects[%d]: expected a string", i);
+    if (!cJSON_IsString(it)) return palp_parse_fail(c, PALP_EPARSE, "effects[%d]: expected a string", i);
     if (palp_effect_from_name(it->valuestring, &ef))
-      return fail(c, PALP_EPARSE,
+      return palp_parse_fail(c, PALP_EPARSE,
                   "effects[%d]: unknown effect \"%s\" (membrane_elasticity, membrane_viscosity, gel_pressure, "
                   "gel_damping, gel_support, gravity, force_feedback)",
                   i, it->valuestring);
     s->world.effects |= (uint32_t)ef;
   }
   if ((s->world.effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(s->world.effects & PALP_EFFECT_MEMBRANE_ELASTICITY))
-    return fail(c, PALP_EPARSE, "effects: membrane_viscosity needs membrane_elasticity");
+    return palp_parse_fail(c, PALP_EPARSE, "effects: membrane_viscosity needs membrane_elasticity");
   if ((s->world.effects & PALP_EFFECT_GEL_DAMPING) &&
       !(s->world.effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
-    return fail(c, PALP_EPARSE, "effects: gel_damping needs gel_pressure or gel_support");
+    return palp_parse_fail(c, PALP_EPARSE, "effects: gel_damping needs gel_pressure or gel_support");
   if ((s->world.effects & PALP_EFFECT_GEL_SUPPORT) && !(s->world.gel.support_modulus > 0.0))
-    return fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be > 0 when the gel_support effect is on");
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be > 0 when the gel_support effect is on");
   if ((e = get_vec(c, root, "", "gravity_m_s2", 0, &s->world.gravity))) return e;
   if ((e = get_int(c, root, "", "max_contacts", 0, 1, 64, &s->world.max_contacts))) return e;
 
   /* Lesions (optional): hidden inclusions; a trainee's station never sees the scene. */
   const cJSON *ls = cJSON_GetObjectItemCaseSensitive(root, "lesions");
   if (ls) {
-    if (!cJSON_IsArray(ls)) return fail(c, PALP_EPARSE, "lesions: expected an array");
+    if (!cJSON_IsArray(ls)) return palp_parse_fail(c, PALP_EPARSE, "lesions: expected an array");
     const int nl = cJSON_GetArraySize(ls);
-    if (nl > PALP_MAX_LESIONS) return fail(c, PALP_EPARSE, "lesions: at most %d", PALP_MAX_LESIONS);
+    if (nl > PALP_MAX_LESIONS) return palp_parse_fail(c, PALP_EPARSE, "lesions: at most %d", PALP_MAX_LESIONS);
     for (int i = 0; i < nl; ++i) {
       const cJSON *o = cJSON_GetArrayItem(ls, i);
       char path[32];
       snprintf(path, sizeof path, "lesions[%d].", i);
-      if (!cJSON_IsObject(o)) return fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
+      if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
       palp_lesion *L = &s->world.lesion[i];
       if ((e = get_vec(c, o, path, "center_m", 1, &L->center))) return e;
       if ((e = get_pos(c, o, path, "radius_m", 1, &L->radius))) return e;
@@ -337,17 +325,17 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
       const double R = s->world.mesh.radius;
       const double cr = sqrt(L->center.x * L->center.x + L->center.y * L->center.y + L->center.z * L->center.z);
       if (!(cr + L->radius < R) || !(L->center.z - L->radius > 0.0))
-        return fail(c, PALP_EPARSE, "lesions[%d]: the sphere must lie inside the dome (radius %g m) and above its base", i, R);
-      if (!(L->stiffness_ratio <= 1e6)) return fail(c, PALP_EPARSE, "lesions[%d].stiffness_ratio: must be <= 1e6", i);
+        return palp_parse_fail(c, PALP_EPARSE, "lesions[%d]: the sphere must lie inside the dome (radius %g m) and above its base", i, R);
+      if (!(L->stiffness_ratio <= 1e6)) return palp_parse_fail(c, PALP_EPARSE, "lesions[%d].stiffness_ratio: must be <= 1e6", i);
     }
     s->world.lesion_count = nl;
   }
 
   const cJSON *cs = cJSON_GetObjectItemCaseSensitive(root, "contacts");
-  if (!cs) return fail(c, PALP_EPARSE, "contacts: missing (an array, possibly empty, is required)");
-  if (!cJSON_IsArray(cs)) return fail(c, PALP_EPARSE, "contacts: expected an array");
+  if (!cs) return palp_parse_fail(c, PALP_EPARSE, "contacts: missing (an array, possibly empty, is required)");
+  if (!cJSON_IsArray(cs)) return palp_parse_fail(c, PALP_EPARSE, "contacts: expected an array");
   const int nc = cJSON_GetArraySize(cs);
-  if (nc > PALP_SCENE_MAX_CONTACTS) return fail(c, PALP_EPARSE, "contacts: at most %d", PALP_SCENE_MAX_CONTACTS);
+  if (nc > PALP_SCENE_MAX_CONTACTS) return palp_parse_fail(c, PALP_EPARSE, "contacts: at most %d", PALP_SCENE_MAX_CONTACTS);
   if (nc > s->world.max_contacts) s->world.max_contacts = nc;
   for (int i = 0; i < nc; ++i)
     if ((e = parse_contact(c, cJSON_GetArrayItem(cs, i), i, s->world.mesh.radius, &s->contact[i]))) return e;
@@ -358,11 +346,11 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
 static int parse_with_dir(const char *json, const char *dir, palp_scene *out, char *err, size_t errlen) {
   ctx c = {err, errlen};
   if (err && errlen) err[0] = 0;
-  if (!json || !out) return fail(&c, PALP_EINVAL, "scene: no input");
+  if (!json || !out) return palp_parse_fail(&c, PALP_EINVAL, "scene: no input");
   cJSON *root = cJSON_Parse(json);
   if (!root) {
     const char *at = cJSON_GetErrorPtr();
-    return fail(&c, PALP_EPARSE, "scene: invalid JSON near \"%.24s\"", at ? at : "");
+    return palp_parse_fail(&c, PALP_EPARSE, "scene: invalid JSON near \"%.24s\"", at ? at : "");
   }
   int e = parse_root(&c, root, dir, out);
   cJSON_Delete(root);

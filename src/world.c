@@ -132,7 +132,7 @@ struct palp_world {
   /* Contacts. */
   contact *contacts;
   finger_scratch *fs;   /* allocated with the first finger */
-  double gu_dot, sm_coef; /* g.u and c / (1 + c g.u) of the last solve (gel's rank-1 term) */
+  double sm_coef; /* c / (1 + c g.u) of the last solve: the gel's rank-1 term for the finger solve */
   int64_t base_contacts, finger_unsolved;
   /* Links at each vertex (only with force feedback): the feedback needs the membrane
    * force at contact vertices only, so it is summed there from the links' stresses
@@ -350,7 +350,6 @@ static void stage_solve(palp_world *w, double h) {
     }
     const double s = w->c_rank1 * gy / (1.0 + w->c_rank1 * gu);
     for (int k = 0; k < 3 * n; ++k) x[k] -= s * w->u[k];
-    w->gu_dot = gu;
     w->sm_coef = w->c_rank1 / (1.0 + w->c_rank1 * gu);
   } else {
     w->sm_coef = 0.0;

@@ -123,3 +123,18 @@ double test_last_feedback(palp_cli_station *st, double seconds, int *samples) {
   if (samples) *samples = n;
   return last;
 }
+
+int test_latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out) {
+  int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  int got = 0;
+  while (palp_dds_now_ns() < end) {
+    palp_ServerGuard g;
+    void *ptr[1] = {&g};
+    dds_sample_info_t info;
+    while (dds_take(r, ptr, &info, 1, 1) > 0)
+      if (info.valid_data) *out = g, got = 1;
+    if (got) return 1;
+    test_sleep(0.05);
+  }
+  return 0;
+}

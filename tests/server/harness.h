@@ -64,6 +64,9 @@ void test_send_raw(palp_cli_station *st, const palp_Contact *c);
 double test_last_feedback(palp_cli_station *st, double seconds, int *samples);
 
 void test_sleep(double seconds);
+
+/* The newest palp_server_guard sample on reader r within wait [s]: 1 if one came. */
+int test_latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out);
 /* Uses the loopback config (CYCLONEDDS_URI) unless set. */
 void test_init(void);
 

@@ -70,26 +70,11 @@ static void collect_replies(dds_entity_t r, const char *prefix, double seconds, 
   }
 }
 
-static int latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out) {
-  int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
-  int got = 0;
-  while (palp_dds_now_ns() < end) {
-    palp_ServerGuard g;
-    void *ptr[1] = {&g};
-    dds_sample_info_t info;
-    while (dds_take(r, ptr, &info, 1, 1) > 0)
-      if (info.valid_data) *out = g, got = 1;
-    if (got) return 1;
-    test_sleep(0.05);
-  }
-  return 0;
-}
-
 static void wait_guard_after(dds_entity_t r, palp_ServerGuard *g) {
   palp_ServerGuard tmp;
-  while (latest_guard(r, 0.01, &tmp)) {
+  while (test_latest_guard(r, 0.01, &tmp)) {
   } /* drop what is queued */
-  REQUIRE(latest_guard(r, 3.0, g), "palp_server_guard received");
+  REQUIRE(test_latest_guard(r, 3.0, g), "palp_server_guard received");
 }
 
 int main(void) {

@@ -126,21 +126,6 @@ static void trace_feedback(palp_cli_station *st, tick_trace *t, double seconds, 
   }
 }
 
-static int latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out) {
-  int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
-  int got = 0;
-  while (palp_dds_now_ns() < end) {
-    palp_ServerGuard g;
-    void *ptr[1] = {&g};
-    dds_sample_info_t info;
-    while (dds_take(r, ptr, &info, 1, 1) > 0)
-      if (info.valid_data) *out = g, got = 1;
-    if (got) return 1;
-    test_sleep(0.05);
-  }
-  return 0;
-}
-
 int main(void) {
   int go[2], done[2];
   if (pipe(go) || pipe(done)) return 1;
@@ -222,7 +207,7 @@ int main(void) {
   palp_ServerGuard g;
   memset(&g, 0, sizeof g);
   test_sleep(1.1);
-  REQUIRE(latest_guard(guard_r, 3.0, &g), "palp_server_guard received");
+  REQUIRE(test_latest_guard(guard_r, 3.0, &g), "palp_server_guard received");
   CHECK(g.contacts_filtered >= KEYS / 2 && g.contacts_filtered <= KEYS,
         "contacts of other sessions dropped by the filter and counted: %llu of %d sent (best-effort: >= half)",
         (unsigned long long)g.contacts_filtered, KEYS);
