@@ -247,16 +247,16 @@ static void on_state(recorder *r, const palp_SessionState *m) {
 /* A session state whose writer is gone: its server died (several servers on one
  * domain: the others go on). The server can no longer close it, so the recorder
  * does, rather than leaving it "(running)" for ever. */
-static void on_state_lost(recorder *r, dds_entity_t reader, dds_instance_handle_t ih) {
-  palp_SessionState key;
-  memset(&key, 0, sizeof key);
-  if (dds_instance_get_key(reader, ih, &key) != 0) return;
-  rsession *s = find_session(r, key.session_id, 0);
+static void on_state_lost(recorder *r, const palp_SessionState *key) {
+  /* The key comes from the invalid sample itself (Cyclone fills its key fields):
+   * once that sample is taken the not-alive instance may be gone, and
+   * dds_instance_get_key with it (a dead server's session then stayed "running"). */
+  rsession *s = find_session(r, key->session_id, 0);
   if (!s || !s->open) return;
   const char *why = "server lost (its session state's writer is gone)";
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
   count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
-  palp_log_warn(r->log, "session %u: %s", key.session_id, why);
+  palp_log_warn(r->log, "session %u: %s", key->session_id, why);
   s->open = 0;
 }
 
@@ -524,7 +524,7 @@ int main(int argc, char **argv) {
       while ((n = dds_take(rd[k], samples, info, TAKE, TAKE)) > 0) {
         for (int i = 0; i < n; i++) {
           if (!info[i].valid_data) {
-            if (k == 1 && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, rd[1], info[i].instance_handle);
+            if (k == 1 && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
             continue;
           }
           switch (k) {
