@@ -174,6 +174,47 @@ int palp_db_log_event(palp_db_writer *w, palp_db_session s, palp_db_event_kind k
 int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_reason reason,
                             const char *detail, double end_unix_s);
 
+/* ---- assessment records (schema 3, docs/assessment.md) ----------------------------- */
+/* The position-driven fingertip after a physics step (palp_local_model and
+ * palp_world_finger_contacts), what palp_assess needs to score a session. */
+#define PALP_DB_MAX_SAMPLE_TRIANGLES 256
+typedef struct palp_db_finger_sample {
+  int64_t frame;       /* world frame after the step */
+  double sim_time_s;   /* [s] */
+  int slot;            /* the finger's contact id */
+  double radius_m;     /* fingertip radius [m] */
+  palp_vec3 device_m;  /* device point the step used [m] */
+  palp_vec3 proxy_m;   /* fingertip centre on the surface [m] */
+  palp_vec3 force_n;   /* of the phantom on the finger [N] */
+  int in_contact;      /* 0 or 1 */
+  palp_vec3 point_m;   /* contact point [m] */
+  double area_m2;      /* contact footprint [m^2] */
+  int triangle_count;  /* 0..PALP_DB_MAX_SAMPLE_TRIANGLES (the writer refuses more) */
+  const int32_t *triangles; /* touched triangles (mesh indices); NULL/0: a disc of area_m2 */
+} palp_db_finger_sample;
+
+typedef enum palp_db_finding_op {
+  PALP_DB_FINDING_MARK = 1,
+  PALP_DB_FINDING_WITHDRAW = 2
+} palp_db_finding_op;
+
+typedef struct palp_db_finding {
+  int64_t mark_id;       /* the station's number for the mark; a withdrawal names it */
+  palp_db_finding_op op;
+  int64_t frame;         /* world frame when the server received it */
+  double sim_time_s;     /* world time then [s] */
+  double wall_unix_s;    /* 0 = now (writer) */
+  palp_vec3 point_m;     /* marks: where the lump is felt [m] */
+} palp_db_finding;
+
+/* The exercise a session runs (its file's text, hidden lesions included): log it right after
+ * palp_db_log_session_begin. */
+int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exercise_name,
+                         const char *exercise_json);
+/* Copies the triangles. PALP_EINVAL for more than PALP_DB_MAX_SAMPLE_TRIANGLES. */
+int palp_db_log_finger_sample(palp_db_writer *w, palp_db_session s, const palp_db_finger_sample *fs);
+int palp_db_log_finding(palp_db_writer *w, palp_db_session s, const palp_db_finding *f);
+
 typedef enum palp_db_record_kind {
   PALP_DB_REC_SESSION_BEGIN = 0,
   PALP_DB_REC_SESSION_END,
@@ -182,6 +223,9 @@ typedef enum palp_db_record_kind {
   PALP_DB_REC_FRAME,
   PALP_DB_REC_MESH,
   PALP_DB_REC_EVENT,
+  PALP_DB_REC_EXERCISE,      /* schema 3 */
+  PALP_DB_REC_FINGER_SAMPLE, /* schema 3 */
+  PALP_DB_REC_FINDING,       /* schema 3 */
   PALP_DB_REC_KIND_COUNT
 } palp_db_record_kind;
 const char *palp_db_record_kind_name(palp_db_record_kind k);
@@ -320,6 +364,17 @@ int palp_db_each_feedback(palp_db *db, int64_t session_id, palp_db_feedback_fn f
 int palp_db_each_mesh(palp_db *db, int64_t session_id, palp_db_mesh_fn fn, void *user);
 int palp_db_each_event(palp_db *db, int64_t session_id, palp_db_event_fn fn, void *user);
 int palp_db_each_note(palp_db *db, int64_t session_id, palp_db_note_fn fn, void *user);
+
+/* Schema 3 (assessment). The session's exercise: name (up to namelen) and its JSON
+ * (malloc'd, free()); PALP_DB_ENOTFOUND when the session ran none. */
+int palp_db_session_exercise(palp_db *db, int64_t session_id, char *name, size_t namelen,
+                             char **exercise_json);
+/* Finger samples in (frame, slot) order; s->triangles is valid during the callback only. */
+typedef int (*palp_db_finger_sample_fn)(void *user, const palp_db_finger_sample *s);
+int palp_db_each_finger_sample(palp_db *db, int64_t session_id, palp_db_finger_sample_fn fn, void *user);
+/* Findings in the order received. */
+typedef int (*palp_db_finding_fn)(void *user, const palp_db_finding *f);
+int palp_db_each_finding(palp_db *db, int64_t session_id, palp_db_finding_fn fn, void *user);
 
 /* Adds an instructor note; grade may be NULL. */
 int palp_db_add_note(palp_db *db, int64_t session_id, const char *author, const char *text,

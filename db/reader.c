@@ -1,6 +1,7 @@
 /* Reading a session log: listing, finding and walking sessions, adding notes.
  * Readers run beside the server's writer: WAL gives them a consistent snapshot per statement
  * without blocking it, and busy_timeout covers the moments a checkpoint holds a lock. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -300,6 +301,88 @@ int palp_db_each_feedback(palp_db *db, int64_t sid, palp_db_feedback_fn fn, void
   int rc = SQLITE_DONE, stop = 0;
   while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW)
     stop = fn(user, sqlite3_column_int64(st, 0), sqlite3_column_int(st, 1), col_vec(st, 2));
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_session_exercise(palp_db *db, int64_t session_id, char *name, size_t namelen, char **exercise_json) {
+  if (exercise_json) *exercise_json = NULL;
+  sqlite3_stmt *st;
+  if (prep(db, "SELECT exercise_name, exercise_json FROM session_exercise WHERE session_id = ?1", session_id, &st))
+    return PALP_DB_ESQL;
+  int rc = sqlite3_step(st);
+  if (rc != SQLITE_ROW) {
+    sqlite3_finalize(st);
+    return rc == SQLITE_DONE ? PALP_DB_ENOTFOUND : PALP_DB_ESQL;
+  }
+  if (name && namelen) {
+    const unsigned char *n = sqlite3_column_text(st, 0);
+    snprintf(name, namelen, "%s", n ? (const char *)n : "");
+  }
+  if (exercise_json && !(*exercise_json = dup_col(st, 1))) {
+    sqlite3_finalize(st);
+    return PALP_ENOMEM;
+  }
+  sqlite3_finalize(st);
+  return 0;
+}
+
+int palp_db_each_finger_sample(palp_db *db, int64_t sid, palp_db_finger_sample_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db,
+           "SELECT frame, slot, sim_time_s, radius_m, device_x_m, device_y_m, device_z_m, proxy_x_m, proxy_y_m, "
+           "proxy_z_m, force_x_n, force_y_n, force_z_n, in_contact, point_x_m, point_y_m, point_z_m, area_m2, "
+           "triangles FROM finger_sample WHERE session_id = ?1 ORDER BY frame, slot",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  int32_t tri[PALP_DB_MAX_SAMPLE_TRIANGLES];
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+    palp_db_finger_sample fs = {0};
+    fs.frame = sqlite3_column_int64(st, 0);
+    fs.slot = sqlite3_column_int(st, 1);
+    fs.sim_time_s = sqlite3_column_double(st, 2);
+    fs.radius_m = sqlite3_column_double(st, 3);
+    fs.device_m = col_vec(st, 4);
+    fs.proxy_m = col_vec(st, 7);
+    fs.force_n = col_vec(st, 10);
+    fs.in_contact = sqlite3_column_int(st, 13) != 0;
+    fs.point_m = col_vec(st, 14);
+    fs.area_m2 = sqlite3_column_double(st, 17);
+    /* A blob is checked before use: a whole number of int32, at most the writer's cap. A
+     * malformed one reads as "no triangles" (the disc footprint), never past the buffer. */
+    const unsigned char *b = sqlite3_column_blob(st, 18);
+    const int bytes = sqlite3_column_bytes(st, 18);
+    if (b && bytes > 0 && bytes % 4 == 0 && bytes / 4 <= PALP_DB_MAX_SAMPLE_TRIANGLES) {
+      fs.triangle_count = bytes / 4;
+      for (int i = 0; i < fs.triangle_count; i++)
+        tri[i] = (int32_t)((uint32_t)b[4 * i] | (uint32_t)b[4 * i + 1] << 8 | (uint32_t)b[4 * i + 2] << 16 |
+                           (uint32_t)b[4 * i + 3] << 24);
+      fs.triangles = tri;
+    }
+    stop = fn(user, &fs);
+  }
+  return finish(st, stop ? SQLITE_DONE : rc, stop);
+}
+
+int palp_db_each_finding(palp_db *db, int64_t sid, palp_db_finding_fn fn, void *user) {
+  sqlite3_stmt *st;
+  if (prep(db,
+           "SELECT mark_id, op, frame, sim_time_s, wall_unix_s, point_x_m, point_y_m, point_z_m FROM finding "
+           "WHERE session_id = ?1 ORDER BY id",
+           sid, &st))
+    return PALP_DB_ESQL;
+  int rc = SQLITE_DONE, stop = 0;
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+    palp_db_finding f = {0};
+    f.mark_id = sqlite3_column_int64(st, 0);
+    const unsigned char *op = sqlite3_column_text(st, 1);
+    f.op = op && !strcmp((const char *)op, "withdraw") ? PALP_DB_FINDING_WITHDRAW : PALP_DB_FINDING_MARK;
+    f.frame = sqlite3_column_int64(st, 2);
+    f.sim_time_s = sqlite3_column_double(st, 3);
+    f.wall_unix_s = sqlite3_column_double(st, 4);
+    if (f.op == PALP_DB_FINDING_MARK) f.point_m = col_vec(st, 5);
+    stop = fn(user, &f);
+  }
   return finish(st, stop ? SQLITE_DONE : rc, stop);
 }
 

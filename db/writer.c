@@ -67,6 +67,15 @@ typedef struct rec {
       double wall;
       char *detail;
     } ev;
+    struct {
+      char *name; /* name and JSON, packed in one allocation */
+      char *json;
+    } ex;
+    struct {
+      palp_db_finger_sample s; /* s.triangles points into tri */
+      int32_t *tri;            /* little-endian int32, NULL when none */
+    } fs;
+    palp_db_finding fd;
   } u;
 } rec;
 
@@ -88,7 +97,7 @@ typedef struct wsess {
 } wsess;
 
 enum { ST_BEGIN, ST_SEL_SESSION, ST_END, ST_CONTACT, ST_FEEDBACK, ST_FRAME, ST_MESH, ST_EVENT,
-       ST_COUNTS, ST_COUNT };
+       ST_COUNTS, ST_EXERCISE, ST_FINGER_SAMPLE, ST_FINDING, ST_COUNT };
 
 static const char *const stmt_sql[ST_COUNT] = {
     [ST_BEGIN] = "INSERT INTO session(uid, trainee, station, phantom_id, phantom_name, scene_json, "
@@ -110,6 +119,13 @@ static const char *const stmt_sql[ST_COUNT] = {
     [ST_EVENT] = "INSERT INTO event(session_id, wall_unix_s, frame, kind, detail, count) "
                  "VALUES(?1,?2,?3,?4,?5,?6)",
     [ST_COUNTS] = "UPDATE session SET records_shed = ?2, records_failed = ?3 WHERE id = ?1",
+    [ST_EXERCISE] = "INSERT INTO session_exercise(session_id, exercise_name, exercise_json) VALUES(?1,?2,?3)",
+    [ST_FINGER_SAMPLE] = "INSERT INTO finger_sample(session_id, frame, slot, sim_time_s, radius_m, device_x_m, "
+                         "device_y_m, device_z_m, proxy_x_m, proxy_y_m, proxy_z_m, force_x_n, force_y_n, "
+                         "force_z_n, in_contact, point_x_m, point_y_m, point_z_m, area_m2, triangles) "
+                         "VALUES(?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20)",
+    [ST_FINDING] = "INSERT INTO finding(session_id, mark_id, op, frame, sim_time_s, wall_unix_s, point_x_m, "
+                   "point_y_m, point_z_m) VALUES(?1,?2,?3,?4,?5,?6,?7,?8,?9)",
 };
 
 struct palp_db_writer {
@@ -161,7 +177,8 @@ palp_db_writer_opts palp_db_writer_default_opts(void) {
 
 const char *palp_db_record_kind_name(palp_db_record_kind k) {
   static const char *const n[PALP_DB_REC_KIND_COUNT] = {"session_begin", "session_end", "contact",
-                                                        "feedback", "frame", "mesh", "event"};
+                                                        "feedback", "frame", "mesh", "event",
+                                                        "exercise", "finger_sample", "finding"};
   return (unsigned)k < PALP_DB_REC_KIND_COUNT ? n[k] : "?";
 }
 
@@ -187,6 +204,8 @@ static void rec_free(rec *r) {
   case PALP_DB_REC_SESSION_END: free(r->u.end.detail); break;
   case PALP_DB_REC_MESH: free(r->u.mesh.xyz); break;
   case PALP_DB_REC_EVENT: free(r->u.ev.detail); break;
+  case PALP_DB_REC_EXERCISE: free(r->u.ex.name); break;
+  case PALP_DB_REC_FINGER_SAMPLE: free(r->u.fs.tri); break;
   default: break;
   }
 }
@@ -215,8 +234,9 @@ static double mono_now(void) {
 /* Claims a slot for a record of `kind` holding `bytes` heap bytes; returns NULL (and counts the
  * shed record) when the queue is full. Called with the mutex held. */
 static rec *claim(palp_db_writer *w, palp_db_record_kind kind, palp_db_session s, size_t bytes) {
+  /* An exercise and a trainee's findings are as rare and as needed as who was in a session. */
   const int control = kind == PALP_DB_REC_SESSION_BEGIN || kind == PALP_DB_REC_SESSION_END ||
-                      kind == PALP_DB_REC_EVENT;
+                      kind == PALP_DB_REC_EVENT || kind == PALP_DB_REC_EXERCISE || kind == PALP_DB_REC_FINDING;
   const int limit = control ? w->cap : w->data_cap;
   if (w->count >= limit || (bytes > 0 && w->queue_bytes + bytes > w->opts.queue_max_bytes)) {
     w->st_.shed++;
@@ -432,6 +452,63 @@ int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_re
   }
   publish(w);
   if (!r) free(d);
+  return r ? 0 : PALP_EFULL;
+}
+
+int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exercise_name,
+                         const char *exercise_json) {
+  if (!w || !exercise_name || !*exercise_name || !exercise_json) return PALP_EINVAL;
+  const size_t nn = strlen(exercise_name) + 1, nj = strlen(exercise_json) + 1;
+  char *blob = malloc(nn + nj);
+  if (!blob) return PALP_ENOMEM;
+  memcpy(blob, exercise_name, nn);
+  memcpy(blob + nn, exercise_json, nj);
+  if (lock_session(w, s, 0, blob)) return PALP_EINVAL;
+  rec *r = claim(w, PALP_DB_REC_EXERCISE, s, nn + nj);
+  if (r) {
+    r->u.ex.name = blob;
+    r->u.ex.json = blob + nn;
+  }
+  publish(w);
+  if (!r) free(blob);
+  return r ? 0 : PALP_EFULL;
+}
+
+int palp_db_log_finger_sample(palp_db_writer *w, palp_db_session s, const palp_db_finger_sample *fs) {
+  if (!w || !fs || fs->triangle_count < 0 || fs->triangle_count > PALP_DB_MAX_SAMPLE_TRIANGLES ||
+      (fs->triangle_count > 0 && !fs->triangles))
+    return PALP_EINVAL;
+  int32_t *tri = NULL;
+  const size_t bytes = (size_t)fs->triangle_count * 4;
+  if (bytes) {
+    if (!(tri = malloc(bytes))) return PALP_ENOMEM;
+    unsigned char *o = (unsigned char *)tri; /* little-endian whatever the host order */
+    for (int i = 0; i < fs->triangle_count; i++) {
+      const uint32_t v = (uint32_t)fs->triangles[i];
+      for (int b = 0; b < 4; b++) *o++ = (unsigned char)(v >> (8 * b));
+    }
+  }
+  if (lock_session(w, s, 0, tri)) return PALP_EINVAL;
+  rec *r = claim(w, PALP_DB_REC_FINGER_SAMPLE, s, bytes);
+  if (r) {
+    r->u.fs.s = *fs;
+    r->u.fs.s.triangles = NULL;
+    r->u.fs.tri = tri;
+  }
+  publish(w);
+  if (!r) free(tri);
+  return r ? 0 : PALP_EFULL;
+}
+
+int palp_db_log_finding(palp_db_writer *w, palp_db_session s, const palp_db_finding *f) {
+  if (!w || !f || (f->op != PALP_DB_FINDING_MARK && f->op != PALP_DB_FINDING_WITHDRAW)) return PALP_EINVAL;
+  if (lock_session(w, s, 0, NULL)) return PALP_EINVAL;
+  rec *r = claim(w, PALP_DB_REC_FINDING, s, 0);
+  if (r) {
+    r->u.fd = *f;
+    if (r->u.fd.wall_unix_s <= 0) r->u.fd.wall_unix_s = palp_db__now();
+  }
+  publish(w);
   return r ? 0 : PALP_EFULL;
 }
 
@@ -669,6 +746,41 @@ static int write_rec(palp_db_writer *w, rec *r) {
     bind_text(st, 5, r->u.ev.detail);
     sqlite3_bind_int64(st, 6, r->u.ev.count);
     return step_reset(st);
+  case PALP_DB_REC_EXERCISE:
+    st = w->st[ST_EXERCISE];
+    sqlite3_bind_int64(st, 1, sid);
+    bind_text(st, 2, r->u.ex.name);
+    bind_text(st, 3, r->u.ex.json);
+    return step_reset(st);
+  case PALP_DB_REC_FINGER_SAMPLE: {
+    const palp_db_finger_sample *fs = &r->u.fs.s;
+    st = w->st[ST_FINGER_SAMPLE];
+    sqlite3_bind_int64(st, 1, sid);
+    sqlite3_bind_int64(st, 2, fs->frame);
+    sqlite3_bind_int(st, 3, fs->slot);
+    sqlite3_bind_double(st, 4, fs->sim_time_s);
+    sqlite3_bind_double(st, 5, fs->radius_m);
+    bind_vec(st, 6, fs->device_m);
+    bind_vec(st, 9, fs->proxy_m);
+    bind_vec(st, 12, fs->force_n);
+    sqlite3_bind_int(st, 15, fs->in_contact ? 1 : 0);
+    bind_vec(st, 16, fs->point_m);
+    sqlite3_bind_double(st, 19, fs->area_m2);
+    if (r->u.fs.tri) sqlite3_bind_blob(st, 20, r->u.fs.tri, fs->triangle_count * 4, SQLITE_STATIC);
+    return step_reset(st);
+  }
+  case PALP_DB_REC_FINDING: {
+    const palp_db_finding *f = &r->u.fd;
+    st = w->st[ST_FINDING];
+    sqlite3_bind_int64(st, 1, sid);
+    sqlite3_bind_int64(st, 2, f->mark_id);
+    bind_text(st, 3, f->op == PALP_DB_FINDING_MARK ? "mark" : "withdraw");
+    sqlite3_bind_int64(st, 4, f->frame);
+    sqlite3_bind_double(st, 5, f->sim_time_s);
+    sqlite3_bind_double(st, 6, f->wall_unix_s);
+    if (f->op == PALP_DB_FINDING_MARK) bind_vec(st, 7, f->point_m);
+    return step_reset(st);
+  }
   default: return SQLITE_MISUSE;
   }
 }

@@ -18,7 +18,8 @@ static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
     "palp_contact",       "palp_feedback",        "palp_deformation",   "palp_server_status",
     "palp_local_model",   "palp_server_guard",
-    "palp_server_identity", "palp_station_request"};
+    "palp_server_identity", "palp_station_request",
+    "palp_exercise",      "palp_finding",         "palp_finding_status"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -38,6 +39,9 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_SERVER_GUARD: return &palp_ServerGuard_desc;
   case PALP_TOPIC_SERVER_IDENTITY: return &palp_ServerIdentity_desc;
   case PALP_TOPIC_STATION_REQUEST: return &palp_StationRequest_desc;
+  case PALP_TOPIC_EXERCISE: return &palp_Exercise_desc;
+  case PALP_TOPIC_FINDING: return &palp_Finding_desc;
+  case PALP_TOPIC_FINDING_STATUS: return &palp_FindingStatus_desc;
   default: return NULL;
   }
 }
@@ -49,6 +53,8 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_CATALOGUE:
   case PALP_TOPIC_SESSION_REPLY:
   case PALP_TOPIC_SESSION_STATE:
+  case PALP_TOPIC_EXERCISE:
+  case PALP_TOPIC_FINDING_STATUS:
     /* State that a late joiner must see: the last value per key, kept by the writer. */
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
@@ -70,6 +76,15 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
     dds_qset_liveliness(q, DDS_LIVELINESS_AUTOMATIC, lease);
+    break;
+  case PALP_TOPIC_FINDING:
+    /* Every mark and withdrawal counts, in order: reliable keep-all on one instance
+     * per session. The reader bounds what it holds (docs/assessment.md): a flood
+     * blocks or drops at the writer, never grows the server. */
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_durability(q, DDS_DURABILITY_VOLATILE);
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    dds_qset_resource_limits(q, 256, 64, 256);
     break;
   case PALP_TOPIC_CONTACT:
     /* Only the newest finger state matters; a lost sample is superseded within

@@ -32,6 +32,9 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_SERVER_GUARD,
   PALP_TOPIC_SERVER_IDENTITY, /* added: several servers on one domain */
   PALP_TOPIC_STATION_REQUEST, /* added: a request keyed by 8 bytes, disposable by any vendor */
+  PALP_TOPIC_EXERCISE,        /* added with issue 13: what a trainee may know of an exercise */
+  PALP_TOPIC_FINDING,         /* added with issue 13: "lump here" marks, trainee -> server */
+  PALP_TOPIC_FINDING_STATUS,  /* added with issue 13: the server's answer to the findings */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 

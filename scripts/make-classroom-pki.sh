@@ -32,12 +32,13 @@ dir=$1
 cmd=$2
 shift 2
 days=365
-# Every palp topic (idl/palp_dds.c). Annotation and findings topics do not exist yet: an
-# instructor's annotations are written by palp-review into the SQLite log, not over DDS.
+# Every palp topic (idl/palp_dds.c). There is no annotation topic: an instructor's
+# annotations are written by palp-review into the SQLite log, not over DDS.
 T_CATALOGUE=palp_catalogue T_REQUEST=palp_session_request T_REPLY=palp_session_reply
 T_STATE=palp_session_state T_CONTACT=palp_contact T_FEEDBACK=palp_feedback
 T_DEFORMATION=palp_deformation T_STATUS=palp_server_status
 T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard T_IDENTITY=palp_server_identity
+T_EXERCISE=palp_exercise T_FINDING=palp_finding T_FINDING_STATUS=palp_finding_status
 # palp_station_request (other vendors, docs/interop.md) is not offered by a secured server.
 
 check_name() {
@@ -160,10 +161,10 @@ EOF
     server)
       # Only the server publishes the catalogue, replies, states, status and every session's
       # feedback and deformation; it reads requests from every identity's own partition.
-      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY" '""'
-      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL" "palp/s/*"
+      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE" '""'
+      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS" "palp/s/*"
       rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
-      rule subscribe "$T_CONTACT" "palp/s/*"
+      rule subscribe "$T_CONTACT $T_FINDING" "palp/s/*"
       rule subscribe "$T_STATUS $T_GUARD $T_IDENTITY" '""'
       ;;
     trainee)
@@ -171,9 +172,9 @@ EOF
       # only into its own sessions ("palp/s/NAME/<id>"); reads the public state and its own
       # sessions' traffic, nobody else's.
       rule publish "$T_REQUEST" "palp/trainee/$name"
-      rule publish "$T_CONTACT" "palp/s/$name/*"
-      rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY" '""'
-      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL" "palp/s/$name/*"
+      rule publish "$T_CONTACT $T_FINDING" "palp/s/$name/*"
+      rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE" '""'
+      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING $T_FINDING_STATUS" "palp/s/$name/*"
       ;;
     instructor)
       # Reads everything; writes only its own requests (joins as observer or visual station).
