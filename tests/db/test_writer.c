@@ -262,8 +262,8 @@ static void test_migration(const char *v1_sql) {
 
   palp_db *db;
   REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open v1: %s", err);
-  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 3,
-        "upgraded to %d (library %d, expected 3)", palp_db_file_version(db), palp_db_schema_version());
+  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 4,
+        "upgraded to %d (library %d, expected 4)", palp_db_file_version(db), palp_db_schema_version());
   palp_db_session_info info;
   CHECK(palp_db_find_session(db, "old-1", &info) == 0 && !strcmp(info.trainee, "carol") && info.frames == 1 &&
             info.records_shed == 0,
