@@ -119,6 +119,10 @@ def main():
         if q == "displacement_cm":  # equal pairs per run: the pooled mean is the mean of the run biases
             check(close(float(d["rm_bias"]), m, 1e-6, 1e-9), tag + ": RM bias = mean of run biases")
             check(int(d["pairs"]) % 24 == 0, tag + ": pairs are vertex-frames of 2 runs x 12 frames")
+        # one force per site: the site means are the run biases, so the site-level test is the same test
+        check(int(d["sites"]) == 2 and close(float(d["site_p"]), float(d["tost_p"]), 1e-9, 1e-12) and
+              close(float(d["site_ci_lower"]), float(d["t_ci_lower"]), 1e-9, 1e-12) and
+              d["site_equivalent"] == d["equivalent"], tag + ": site-level TOST = run-level TOST with one force")
         check(float(d["paper_rmse"]) > 0 and 0 <= float(d["paper_agree_percent"]) <= 100, tag + ": paper columns")
 
     # determinism: same seed, second run from the FEM cache
