@@ -1363,8 +1363,8 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
   if (mode < 0) return PALP_EINVAL;
   pthread_mutex_lock(&h->mu);
   /* A trainee page stays with its session: it may rebind to another one (the session it followed
-   * closed) but not turn into a viewer of other sessions. */
-  if (c->trainee && !bind && !(mode == PALP_WEB_FOLLOW_SESSION && id == c->trainee)) {
+   * closed) or follow nothing, but not turn into a viewer of other sessions. */
+  if (c->trainee && !bind && mode != PALP_WEB_FOLLOW_NONE && !(mode == PALP_WEB_FOLLOW_SESSION && id == c->trainee)) {
     pthread_mutex_unlock(&h->mu);
     return PALP_EINVAL;
   }

@@ -8,7 +8,8 @@
  * Role: a trainee page (the default) binds itself to its session ({"trainee": ID}) and, when the
  * session's phantom runs an exercise, shows its instructions, time left, marks standing and the
  * "lump here" / "withdraw last" controls (buttons, keys L and W). ?role=observer (the dashboard's
- * links) only follows: no controls, and the bridge refuses findings from it. */
+ * links) and a bare page (no ?session= or ?trainee=) only follow: no controls, and the bridge
+ * refuses findings from them. */
 "use strict";
 (function () {
   const p = PALP.params(), wantSession = Number(p.get("session")) || 0, wantTrainee = p.get("trainee");
@@ -16,7 +17,9 @@
   st.trainee = { session: 0, phantom: 0, frames: 0, rendered: 0, maxDispMm: 0, fpsReceived: 0, fpsRendered: 0,
     force: 0, band: "none", coverage: [0, 0, 0], arrivals: [] };
   const T = st.trainee;
-  const observer = p.get("role") === "observer";
+  /* Bound as the trainee's page only when it names its session or trainee: a bare page (the newest
+   * session, whoever's it is) and ?role=observer only watch. */
+  const observer = p.get("role") === "observer" || !(wantSession || wantTrainee);
   T.role = observer ? "observer" : "trainee";
   T.exercise = null;      /* the exercise of the followed session's phantom, or null */
   T.marks = null;         /* marks standing, from the server's finding status */
