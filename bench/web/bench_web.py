@@ -161,7 +161,7 @@ def main():
 
         # A and W alternate, so that the other work on this shared machine falls on both alike.
         chunks = {"A": [], "W": []}
-        cpu_all, cpu_samples, fps, dash, g = [], [], [], [], []
+        cpu_all, cpu_samples, fps, dash, g, clients_cpu = [], [], [], [], [], []
         for rnd in range(rounds):
             chunks["A"].append(StatusReader(build, procs.env, seconds).rows())
             web = procs.web(name="web-w%d" % rnd)
@@ -175,11 +175,13 @@ def main():
                 c.per_session.clear()
             cpu = CpuSampler(web.pid)
             cpu.start()
+            me0 = cpu_s(os.getpid())
             st = StatusReader(build, procs.env, seconds)
             t0 = time.time()
             chunks["W"].append(st.rows())
             wall = time.time() - t0
             cpu_all.append(cpu.total())
+            clients_cpu.append(100.0 * (cpu_s(os.getpid()) - me0) / wall)
             cpu_samples += cpu.samples
             for c in clients:
                 c.stop_flag = True
@@ -193,7 +195,8 @@ def main():
         results["A"] = {"server": summarise(chunks["A"])}
         results["W"] = {"server": summarise(chunks["W"]), "cpu": sum(cpu_all) / len(cpu_all),
                         "cpu_p50": pct(cpu_samples, 0.5), "cpu_p99": pct(cpu_samples, 0.99), "fps": fps,
-                        "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99)}
+                        "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99),
+                        "clients_cpu": sum(clients_cpu) / len(clients_cpu)}
 
         # B: the bridge and Chromium
         web = procs.web(name="web-b")
@@ -271,6 +274,28 @@ def main():
         print("| %s | %.1f%% | %.1f / %.1f%% | %.1f / %.1f | %.1f | %.1f / %.1f ms | %s | %s |" % (
             names[k], r["cpu"], r["cpu_p50"], r["cpu_p99"], min(r["fps"]), pct(r["fps"], 0.5), pct(r["dash"], 0.5),
             r["gap50"], r["gap99"], rend, br))
+    w = results.get("W")
+    if w:
+        print()
+        print("frames/s per light client (%d clients x %d rounds): median %.1f, p1 %.1f, p99 %.1f; the %d clients' own "
+              "CPU (this Python process) %.1f%% of one core" % (n, rounds, pct(w["fps"], 0.5), pct(w["fps"], 0.01),
+                                                               pct(w["fps"], 0.99), n + 1, w["clients_cpu"]))
+    # Ratios against the baseline without the bridge (A, which alternates with W in the same run;
+    # A2 after B for the drift): 1.00 = unchanged.
+    base = results.get("A", {}).get("server")
+    if base:
+        print()
+        print("ratio against A (no bridge, same run): 1.00 = unchanged")
+        print("| phase | tick work p50 (median) | p99 (median) | max | overrun share |")
+        print("|---|---|---|---|---|")
+        for k in ["W", "B", "A2"]:
+            s = results.get(k, {}).get("server")
+            if not s:
+                continue
+            def ratio(key):
+                return s[key] / base[key] if base[key] else float("nan")
+            print("| %s / A | %.2f | %.2f | %.2f | %.2f |" % (k, ratio("p50_med"), ratio("p99_med"), ratio("max"),
+                                                           ratio("overrun_pct")))
     with open(os.path.join(out, "bench_web.json"), "w") as f:
         json.dump(results, f, indent=1)
     print("\nraw figures: %s" % os.path.join(out, "bench_web.json"))
