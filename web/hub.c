@@ -666,10 +666,9 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
 }
 
 /* An exercise withdrawn (disposed) or its server gone: no longer offered. */
-static void on_exercise_lost(palp_web_hub *h, dds_instance_handle_t ih) {
-  palp_Exercise key;
-  memset(&key, 0, sizeof key);
-  if (dds_instance_get_key(h->exercise_r, ih, &key) != 0) return;
+static void on_exercise_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
+  (void)ih;
+  const palp_Exercise key = *(const palp_Exercise *)sample;
   for (int k = 0; k < MAX_EXERCISES; k++)
     if (h->ex[k].used && h->ex[k].phantom_id == key.phantom_id) h->ex[k].used = 0;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
@@ -696,12 +695,18 @@ static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
   copy_str(s->fst.reason, sizeof s->fst.reason, m->reason);
   s->fst.time_left = m->time_left;
   s->fst.at_ns = palp_dds_now_ns();
+  /* A mark the server refused does not stand: "withdraw last" must not name it. */
+  pthread_mutex_lock(&h->mu);
+  finding_slot *fs = &h->fs[slot];
+  if (!m->last_accepted && fs->nstack > 0 && fs->stack[fs->nstack - 1] == m->last_mark_id) fs->nstack--;
+  pthread_mutex_unlock(&h->mu);
   s->changed = 1;
   h->sessions_dirty = 1;
 }
 
 /* A state instance that turned not-alive: its server is gone, the session with it. */
-static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih) {
+static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
+  (void)sample;
   palp_SessionState key;
   memset(&key, 0, sizeof key);
   int slot;
@@ -804,7 +809,8 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
   recompute_force(h, s);
 }
 
-static void on_contact_lost(palp_web_hub *h, dds_instance_handle_t ih) {
+static void on_contact_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
+  (void)sample;
   palp_Contact key;
   memset(&key, 0, sizeof key);
   int slot;
@@ -935,7 +941,9 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
 /* ---- the thread ------------------------------------------------------------------------------ */
 
 typedef void (*sample_fn)(palp_web_hub *h, const void *sample);
-typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih);
+/* An instance that turned not-alive; sample holds its key fields (an invalid sample's key is
+ * filled in), since the instance itself may already be gone once its last sample is taken. */
+typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih, const void *sample);
 
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
   if (rd <= 0) return 0;
@@ -948,7 +956,7 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
         on(h, ptr[i]);
         (*counter)++;
       } else if (lost && info[i].instance_state != DDS_IST_ALIVE) {
-        lost(h, info[i].instance_handle);
+        lost(h, info[i].instance_handle, ptr[i]);
       }
     }
     dds_return_loan(rd, ptr, n);

@@ -13,7 +13,7 @@ For each: the server's tick figures (palp_server_status, read by bench_web_statu
 the bridge's CPU share (of one core, from /proc), frames per second each page/client receives and
 the gaps between frames (median, p99). DDS domain 200.
 
-usage: bench_web.py BUILD_DIR [--seconds S] [--rounds R] [--sessions N]
+usage: bench_web.py BUILD_DIR [--seconds S] [--rounds R] [--sessions N] [--no-browser]
 (default: 3 rounds of A and W, 10 s each, then B and A2 for 10 s: about 2.5 min)
 """
 import json
@@ -142,6 +142,7 @@ def main():
             rounds = int(sys.argv[i + 1])
         if a == "--sessions":
             n = int(sys.argv[i + 1])
+    no_browser = "--no-browser" in sys.argv
     out = os.path.join(build, "bench", "web", "out")
     procs = harness.Procs(build, SOURCE, out, DOMAIN)
     results = {}
@@ -198,46 +199,58 @@ def main():
                         "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99),
                         "clients_cpu": sum(clients_cpu) / len(clients_cpu)}
 
-        # B: the bridge and Chromium
-        web = procs.web(name="web-b")
-        browser = cdp.Chromium(width=800, height=600, out_dir=out)
-        pages = [browser.new_window(web.base + "/trainee.html?trainee=t%d" % k, 480, 360) for k in range(n)]
-        dpage = browser.new_window(web.base + "/dashboard.html", 1000, 700)
-        for k, p in enumerate(pages):
-            if not p.wait_for("window.palpState && palpState.trainee && palpState.trainee.frames > 5", 60):
-                raise SystemExit("page %d did not stream" % k)
-        dpage.wait_for("window.palpState && palpState.dashboard && palpState.dashboard.frames > 5", 30)
-        time.sleep(2)
-        f0 = [p.eval("palpState.trainee.frames") for p in pages]
-        r0 = [p.eval("palpState.trainee.rendered") for p in pages]
-        d0 = dpage.eval("palpState.dashboard.frames")
-        cpu = CpuSampler(web.pid)
-        cpu.start()
-        bc0 = browser.cpu_seconds()
-        st = StatusReader(build, procs.env, seconds)
-        t0 = time.time()
-        srv = summarise([st.rows()])
-        f1 = [p.eval("palpState.trainee.frames") for p in pages]
-        r1 = [p.eval("palpState.trainee.rendered") for p in pages]
-        d1 = dpage.eval("palpState.dashboard.frames")
-        wall = time.time() - t0
-        share = cpu.total()
-        bshare = 100.0 * (browser.cpu_seconds() - bc0) / wall
-        g = []
-        for p in pages:
-            arr = p.eval("palpState.trainee.arrivals")
-            arr = [x for x in arr if x >= arr[-1] - 1000 * seconds]
-            g += [b - a for a, b in zip(arr, arr[1:])]
-        results["B"] = {"server": srv, "cpu": share, "cpu_p50": pct(cpu.samples, 0.5), "cpu_p99": pct(cpu.samples, 0.99),
-                        "fps": [(b - a) / wall for a, b in zip(f0, f1)],
-                        "rendered": [(b - a) / wall for a, b in zip(r0, r1)],
-                        "dash": [(d1 - d0) / wall / n], "gap50": pct(g, 0.5), "gap99": pct(g, 0.99), "browser": bshare}
-        dpage.screenshot(os.path.join(out, "bench-dashboard.png"))
-        pages[0].screenshot(os.path.join(out, "bench-trainee.png"))
-        browser.close()
-        browser = None
-        procs.stop(web)
-        print("  B done", flush=True)
+        # B: the bridge and Chromium (skipped with --no-browser; if it fails, A and W are still reported)
+        try:
+            if no_browser:
+                raise RuntimeError("skipped (--no-browser)")
+            web = procs.web(name="web-b")
+            browser = cdp.Chromium(width=800, height=600, out_dir=out)
+            pages = [browser.new_window(web.base + "/trainee.html?trainee=t%d" % k, 480, 360) for k in range(n)]
+            dpage = browser.new_window(web.base + "/dashboard.html", 1000, 700)
+            for k, p in enumerate(pages):
+                if not p.wait_for("window.palpState && palpState.trainee && palpState.trainee.frames > 5", 60):
+                    raise SystemExit("page %d did not stream" % k)
+            dpage.wait_for("window.palpState && palpState.dashboard && palpState.dashboard.frames > 5", 30)
+            time.sleep(2)
+            f0 = [p.eval("palpState.trainee.frames") for p in pages]
+            r0 = [p.eval("palpState.trainee.rendered") for p in pages]
+            d0 = dpage.eval("palpState.dashboard.frames")
+            cpu = CpuSampler(web.pid)
+            cpu.start()
+            bc0 = browser.cpu_seconds()
+            st = StatusReader(build, procs.env, seconds)
+            t0 = time.time()
+            srv = summarise([st.rows()])
+            f1 = [p.eval("palpState.trainee.frames") for p in pages]
+            r1 = [p.eval("palpState.trainee.rendered") for p in pages]
+            d1 = dpage.eval("palpState.dashboard.frames")
+            wall = time.time() - t0
+            share = cpu.total()
+            bshare = 100.0 * (browser.cpu_seconds() - bc0) / wall
+            g = []
+            for p in pages:
+                arr = p.eval("palpState.trainee.arrivals")
+                arr = [x for x in arr if x >= arr[-1] - 1000 * seconds]
+                g += [b - a for a, b in zip(arr, arr[1:])]
+            results["B"] = {"server": srv, "cpu": share, "cpu_p50": pct(cpu.samples, 0.5), "cpu_p99": pct(cpu.samples, 0.99),
+                            "fps": [(b - a) / wall for a, b in zip(f0, f1)],
+                            "rendered": [(b - a) / wall for a, b in zip(r0, r1)],
+                            "dash": [(d1 - d0) / wall / n], "gap50": pct(g, 0.5), "gap99": pct(g, 0.99), "browser": bshare}
+            dpage.screenshot(os.path.join(out, "bench-dashboard.png"))
+            pages[0].screenshot(os.path.join(out, "bench-trainee.png"))
+            browser.close()
+            browser = None
+            procs.stop(web)
+            print("  B done", flush=True)
+        except (SystemExit, RuntimeError, OSError, harness.Fail) as e:
+            results["B_failed"] = str(e)
+            print("  B: %s" % e, flush=True)
+            if browser:
+                browser.close()
+                browser = None
+            for p in procs.procs:
+                if p.name == "web-b":
+                    procs.stop(p)
         time.sleep(2)
         results["A2"] = {"server": summarise([StatusReader(build, procs.env, seconds).rows()])}
     finally:
@@ -274,6 +287,8 @@ def main():
         print("| %s | %.1f%% | %.1f / %.1f%% | %.1f / %.1f | %.1f | %.1f / %.1f ms | %s | %s |" % (
             names[k], r["cpu"], r["cpu_p50"], r["cpu_p99"], min(r["fps"]), pct(r["fps"], 0.5), pct(r["dash"], 0.5),
             r["gap50"], r["gap99"], rend, br))
+    if "B_failed" in results:
+        print("\nB (Chromium): %s" % results["B_failed"])
     w = results.get("W")
     if w:
         print()
