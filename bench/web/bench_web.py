@@ -103,13 +103,19 @@ class CpuSampler(threading.Thread):
 
 
 class WsClient(threading.Thread):
-    """A plain WebSocket client that follows one session (or all) and timestamps its frames."""
+    """A plain WebSocket client that follows one trainee's open session (or all sessions), as the
+    trainee page does, and timestamps its frames. Following the trainee, not a fixed session id:
+    on a loaded machine the server may drop a station for its liveliness lease, and the trainee
+    comes back in a new session."""
 
-    def __init__(self, port, follow):
+    def __init__(self, port, trainee=None):
         super().__init__(daemon=True)
         self.ws = cdp.WebSocket("ws://127.0.0.1:%d/ws" % port, timeout=10)
-        self.ws.send(json.dumps({"follow": follow}))
+        self.trainee, self.session = trainee, 0
+        if trainee is None:
+            self.ws.send(json.dumps({"follow": "all"}))
         self.arrivals, self.per_session, self.stop_flag = [], {}, False
+        self.resessions = 0
 
     def run(self):
         self.ws.sock.settimeout(0.5)
@@ -120,6 +126,13 @@ class WsClient(threading.Thread):
                 continue
             except (ConnectionError, OSError):
                 break
+            if op == 1 and self.trainee is not None and b'"sessions"' in data[:40]:
+                ids = [s["id"] for s in json.loads(data)["sessions"] if s["trainee"] == self.trainee]
+                sid = max(ids) if ids else 0
+                if sid and sid != self.session:
+                    self.resessions += self.session != 0
+                    self.session = sid
+                    self.ws.send(json.dumps({"follow": sid}))
             if op == 2:
                 sid = int.from_bytes(data[4:8], "little")
                 self.arrivals.append(time.time())
@@ -162,12 +175,12 @@ def main():
 
         # A and W alternate, so that the other work on this shared machine falls on both alike.
         chunks = {"A": [], "W": []}
-        cpu_all, cpu_samples, fps, dash, g, clients_cpu = [], [], [], [], [], []
+        cpu_all, cpu_samples, fps, dash, g, clients_cpu, resessions = [], [], [], [], [], [], 0
         for rnd in range(rounds):
             chunks["A"].append(StatusReader(build, procs.env, seconds).rows())
             web = procs.web(name="web-w%d" % rnd)
             time.sleep(1)
-            clients = [WsClient(web.port, k + 1) for k in range(n)] + [WsClient(web.port, "all")]
+            clients = [WsClient(web.port, "t%d" % k) for k in range(n)] + [WsClient(web.port)]
             for c in clients:
                 c.start()
             time.sleep(3)  # joins, first frames
@@ -187,6 +200,7 @@ def main():
             for c in clients:
                 c.stop_flag = True
             fps += [len(c.arrivals) / wall for c in clients[:n]]
+            resessions += sum(c.resessions for c in clients[:n])
             dash += [v / wall for v in clients[n].per_session.values()]
             g += [x for c in clients[:n] for x in gaps_ms(c.arrivals)]
             for c in clients:
@@ -197,7 +211,7 @@ def main():
         results["W"] = {"server": summarise(chunks["W"]), "cpu": sum(cpu_all) / len(cpu_all),
                         "cpu_p50": pct(cpu_samples, 0.5), "cpu_p99": pct(cpu_samples, 0.99), "fps": fps,
                         "dash": dash, "gap50": pct(g, 0.5), "gap99": pct(g, 0.99),
-                        "clients_cpu": sum(clients_cpu) / len(clients_cpu)}
+                        "clients_cpu": sum(clients_cpu) / len(clients_cpu), "resessions": resessions}
 
         # B: the bridge and Chromium (skipped with --no-browser; if it fails, A and W are still reported)
         try:
@@ -293,8 +307,9 @@ def main():
     if w:
         print()
         print("frames/s per light client (%d clients x %d rounds): median %.1f, p1 %.1f, p99 %.1f; the %d clients' own "
-              "CPU (this Python process) %.1f%% of one core" % (n, rounds, pct(w["fps"], 0.5), pct(w["fps"], 0.01),
-                                                               pct(w["fps"], 0.99), n + 1, w["clients_cpu"]))
+              "CPU (this Python process) %.1f%% of one core; %d times a trainee came back in a new session (the server "
+              "dropped its station)" % (n, rounds, pct(w["fps"], 0.5), pct(w["fps"], 0.01), pct(w["fps"], 0.99), n + 1,
+                                        w["clients_cpu"], w["resessions"]))
     # Ratios against the baseline without the bridge (A, which alternates with W in the same run;
     # A2 after B for the drift): 1.00 = unchanged.
     base = results.get("A", {}).get("server")
