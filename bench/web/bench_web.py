@@ -13,7 +13,7 @@ For each: the server's tick figures (palp_server_status, read by bench_web_statu
 the bridge's CPU share (of one core, from /proc), frames per second each page/client receives and
 the gaps between frames (median, p99). DDS domain 200.
 
-usage: bench_web.py BUILD_DIR [--seconds S] [--rounds R] [--sessions N] [--no-browser]
+usage: bench_web.py BUILD_DIR [--seconds S] [--rounds R] [--sessions N] [--no-browser] [--domain D]
 (default: 3 rounds of A and W, 10 s each, then B and A2 for 10 s: about 2.5 min)
 """
 import json
@@ -156,6 +156,10 @@ def main():
         if a == "--sessions":
             n = int(sys.argv[i + 1])
     no_browser = "--no-browser" in sys.argv
+    global DOMAIN
+    for i, a in enumerate(sys.argv):
+        if a == "--domain":  # another engineer may be running this benchmark on 200 at the same time
+            DOMAIN = int(sys.argv[i + 1])
     out = os.path.join(build, "bench", "web", "out")
     procs = harness.Procs(build, SOURCE, out, DOMAIN)
     results = {}
