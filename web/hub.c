@@ -130,7 +130,9 @@ typedef struct session {
   /* feedback of this session's partition, read only while a position-driven finger presses (its
    * force comes from feedback alone; a force-driven contact carries its own) */
   dds_entity_t fb_sub, fb_r;
-  /* viewer membership */
+  /* viewer membership, through a request writer of this session's own: the server admits at most
+   * stations_per_writer (2) stations per writer (server/admission.c), as a station process has one */
+  dds_entity_t req_w;
   int joined;
   int64_t unwanted_since, join_failed_ns;
   char station[64];
@@ -150,7 +152,7 @@ struct palp_web_hub {
   palp_web_hub_def def;
   char host[32];
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
-  dds_entity_t catalogue_r, state_r, status_r, reply_r, request_w, sub, contact_r, deform_r, lm_r;
+  dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r;
   dds_entity_t ws, stop_gc;
   pthread_t thread;
@@ -539,7 +541,18 @@ static void send_request(palp_web_hub *h, session *s, int op) {
   snprintf(rq.user_name, sizeof rq.user_name, "palp-web");
   rq.want_feedback = 0; /* the bridge reads feedback only when the trainee's station asks for it */
   rq.want_deformation = 1;
-  dds_write(h->request_w, &rq);
+  if (s->req_w <= 0)
+    s->req_w = palp_dds_create_writer(h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  if (s->req_w > 0) dds_write(s->req_w, &rq);
+}
+
+/* Forgets the session's request instance (the server's station table is finite). */
+static void dispose_request(session *s) {
+  if (s->req_w <= 0) return;
+  palp_SessionRequest key;
+  memset(&key, 0, sizeof key);
+  snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
+  dds_dispose(s->req_w, &key);
 }
 
 static void leave(palp_web_hub *h, session *s) {
@@ -547,10 +560,7 @@ static void leave(palp_web_hub *h, session *s) {
   /* As a station says goodbye: OP_LEAVE so the server tells it from a crash, then the disposal
    * so that it forgets the station (its station table is finite). */
   send_request(h, s, palp_OP_LEAVE);
-  palp_SessionRequest key;
-  memset(&key, 0, sizeof key);
-  snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
-  dds_dispose(h->request_w, &key);
+  dispose_request(s);
   s->joined = 0;
   h->stats.leaves++;
   h->sessions_dirty = 1;
@@ -591,6 +601,7 @@ static void update_finding_writer(palp_web_hub *h, int slot) {
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   leave(h, s);
+  if (s->req_w > 0) dds_delete(s->req_w);
   pthread_mutex_lock(&h->mu);
   const dds_entity_t fpub = h->fs[slot].pub;
   memset(&h->fs[slot], 0, sizeof h->fs[slot]);
@@ -706,16 +717,12 @@ static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
 
 /* A state instance that turned not-alive: its server is gone, the session with it. */
 static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
-  (void)sample;
-  palp_SessionState key;
-  memset(&key, 0, sizeof key);
+  (void)ih;
+  const uint32_t sid = ((const palp_SessionState *)sample)->session_id; /* the invalid sample's key */
   int slot;
-  if (dds_instance_get_key(h->state_r, ih, &key) == 0 && find_session(h, key.session_id, &slot)) {
+  if (find_session(h, sid, &slot)) {
     h->s[slot].joined = 0; /* its server cannot hear a goodbye; the instance is disposed below */
-    palp_SessionRequest rk;
-    memset(&rk, 0, sizeof rk);
-    snprintf(rk.station_id, sizeof rk.station_id, "%s", h->s[slot].station);
-    dds_dispose(h->request_w, &rk);
+    dispose_request(&h->s[slot]);
     free_session(h, slot);
   }
 }
@@ -1015,11 +1022,7 @@ static void check_replies(palp_web_hub *h, int64_t now) {
           s->joined = 0;
           s->join_failed_ns = now;
           h->stats.join_rejected++;
-          /* forget the request instance too */
-          palp_SessionRequest key;
-          memset(&key, 0, sizeof key);
-          snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
-          dds_dispose(h->request_w, &key);
+          dispose_request(s); /* forget the request instance too */
         }
       }
     }
@@ -1145,7 +1148,6 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   h->reply_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
-  h->request_w = palp_dds_create_writer(h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
   /* Every session's partition, as palp-recorder reads them: "palp/session/" + "*". */
   char wildcard[64];
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
@@ -1165,7 +1167,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->fstatus_r < 0 || h->request_w < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->fstatus_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
