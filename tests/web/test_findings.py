@@ -58,7 +58,7 @@ def run(build, source, out):
         browser = harness.cdp.Chromium(width=1000, height=760, out_dir=out)
         page = browser.new_page(web.base + "/trainee.html?trainee=pat")
         check(page.wait_for("window.palpState && palpState.connected", 20) is True, "trainee page loaded and connected")
-        procs.trainee("pat", extra=["--input", "sim:press,hold_s=15", "--duration", "60"])
+        procs.trainee("pat", extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
 
         ok = page.wait_for("palpState.trainee.exercise !== null && palpState.trainee.timeLeft !== null && "
                            "!document.getElementById('ex-controls').hidden", 20)
