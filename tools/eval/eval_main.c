@@ -730,8 +730,8 @@ static void sites_print(FILE *f, const options *o, const setup *s, const palp_ev
   for (int i = 0; i < o->sites; ++i) fprintf(f, " (%.1f, %.1f)", site[i].polar_deg, site[i].azimuth_deg);
   fprintf(f, " [polar, azimuth deg]\n\n");
   /* Table 1: the paper's literal criteria, pooled frames */
-  fprintf(f, "%sPaper-literal (Tables V/VI criteria over all pooled vertex-frames; NOT independent observations)\n\n",
-          md ? "**" : "");
+  fprintf(f, "%sPaper-literal (Tables V/VI criteria over all pooled vertex-frames; NOT independent observations)%s\n\n",
+          md ? "**" : "", md ? "**" : "");
   if (md) fprintf(f, "| quantity | distr. | runs | pairs | RMSE | F | p | SD | agree %% | paper's verdict |\n|---|---|---|---|---|---|---|---|---|---|\n");
   else fprintf(f, "  %-12s %-5s %5s %9s %9s %9s %8s %9s %8s  %s\n", "quantity", "distr", "runs", "pairs", "RMSE", "F", "p",
                "SD", "agree%", "verdict");
