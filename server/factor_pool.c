@@ -1,0 +1,105 @@
+/* factor_pool.c - see factor_pool.h. */
+#include "factor_pool.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <time.h>
+
+/* More than any server holds sessions: one job in flight per session. */
+#define PALP_SRV_FACTOR_QUEUE 1024
+
+struct palp_srv_factor_pool {
+  pthread_t thread;
+  pthread_mutex_t lock;
+  pthread_cond_t work, finished;
+  palp_srv_factor_slot *queue[PALP_SRV_FACTOR_QUEUE];
+  int head, count;
+  int stop;
+};
+
+static int64_t now_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+static void *helper_main(void *arg) {
+  palp_srv_factor_pool *p = arg;
+  pthread_mutex_lock(&p->lock);
+  for (;;) {
+    while (!p->count && !p->stop) pthread_cond_wait(&p->work, &p->lock);
+    if (!p->count) break; /* stopping, and the queue is drained */
+    palp_srv_factor_slot *s = p->queue[p->head];
+    p->head = (p->head + 1) % PALP_SRV_FACTOR_QUEUE;
+    p->count--;
+    palp_factor_job *j = s->job;
+    pthread_mutex_unlock(&p->lock);
+    /* The job touches only its own memory: the session's world steps on meanwhile. */
+    palp_factor_job_run(j);
+    pthread_mutex_lock(&p->lock);
+    s->done = 1;
+    pthread_cond_broadcast(&p->finished);
+  }
+  pthread_mutex_unlock(&p->lock);
+  return NULL;
+}
+
+palp_srv_factor_pool *palp_srv_factor_pool_create(int *err) {
+  palp_srv_factor_pool *p = calloc(1, sizeof *p);
+  if (!p) {
+    *err = PALP_ENOMEM;
+    return NULL;
+  }
+  pthread_mutex_init(&p->lock, NULL);
+  pthread_cond_init(&p->work, NULL);
+  pthread_cond_init(&p->finished, NULL);
+  if (pthread_create(&p->thread, NULL, helper_main, p) != 0) {
+    pthread_mutex_destroy(&p->lock);
+    pthread_cond_destroy(&p->work);
+    pthread_cond_destroy(&p->finished);
+    free(p);
+    *err = PALP_ENOMEM;
+    return NULL;
+  }
+  *err = 0;
+  return p;
+}
+
+void palp_srv_factor_pool_destroy(palp_srv_factor_pool *p) {
+  if (!p) return;
+  pthread_mutex_lock(&p->lock);
+  p->stop = 1;
+  pthread_cond_signal(&p->work);
+  pthread_mutex_unlock(&p->lock);
+  pthread_join(p->thread, NULL);
+  pthread_mutex_destroy(&p->lock);
+  pthread_cond_destroy(&p->work);
+  pthread_cond_destroy(&p->finished);
+  free(p);
+}
+
+int palp_srv_factor_submit(palp_srv_factor_pool *p, palp_srv_factor_slot *slot) {
+  pthread_mutex_lock(&p->lock);
+  if (p->count >= PALP_SRV_FACTOR_QUEUE || p->stop) {
+    pthread_mutex_unlock(&p->lock);
+    return PALP_EFULL;
+  }
+  slot->done = 0;
+  p->queue[(p->head + p->count) % PALP_SRV_FACTOR_QUEUE] = slot;
+  p->count++;
+  pthread_cond_signal(&p->work);
+  pthread_mutex_unlock(&p->lock);
+  return 0;
+}
+
+int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot) {
+  int64_t waited = 0;
+  pthread_mutex_lock(&p->lock);
+  if (!slot->done) {
+    const int64_t t0 = now_ns();
+    while (!slot->done) pthread_cond_wait(&p->finished, &p->lock);
+    waited = now_ns() - t0;
+  }
+  pthread_mutex_unlock(&p->lock);
+  return waited;
+}

@@ -1,0 +1,34 @@
+/*
+ * factor_pool.h - the server's refactorisation helper (docs/server.md, "Rebuilds off
+ * the tick path"). A world asks for a lagged-tangent rebuild now and then (a pressing
+ * finger: ~9 per 1,000 steps); computing it on the tick thread costs 2-10 ms and
+ * stalls every session of that tick group. The world defers the install by
+ * def.refactor_lag frames instead, and this helper thread computes the job meanwhile,
+ * at ordinary priority, so that it only uses time the ticks leave.
+ */
+#ifndef PALP_SRV_FACTOR_POOL_H
+#define PALP_SRV_FACTOR_POOL_H
+
+#include <stdint.h>
+
+#include "palp.h"
+
+typedef struct palp_srv_factor_pool palp_srv_factor_pool;
+
+/* One session's job in flight; owned by the session, done under the pool's lock. */
+typedef struct palp_srv_factor_slot {
+  palp_factor_job *job; /* NULL: none in flight */
+  int done;
+} palp_srv_factor_slot;
+
+palp_srv_factor_pool *palp_srv_factor_pool_create(int *err);
+/* Runs every job still queued, then stops the thread. */
+void palp_srv_factor_pool_destroy(palp_srv_factor_pool *p);
+/* Queues slot->job (set by the caller); never blocks on the helper. Returns 0 or
+ * PALP_EFULL (the caller then runs the job itself). */
+int palp_srv_factor_submit(palp_srv_factor_pool *p, palp_srv_factor_slot *slot);
+/* Waits until slot's job has run; returns the time spent waiting [ns] (0 when the
+ * helper had finished it already). */
+int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot);
+
+#endif
