@@ -2,14 +2,20 @@
 #include "factor_pool.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdlib.h>
 #include <time.h>
 
 /* More than any server holds sessions: one job in flight per session. */
 #define PALP_SRV_FACTOR_QUEUE 1024
 
+/* Two helpers: jobs come in bursts (sessions pressing in step), and the machine the
+ * server is sized for has 2 cores. */
+#define PALP_SRV_FACTOR_THREADS 2
+
 struct palp_srv_factor_pool {
-  pthread_t thread;
+  pthread_t thread[PALP_SRV_FACTOR_THREADS];
+  int threads;
   pthread_mutex_t lock;
   pthread_cond_t work, finished;
   palp_srv_factor_slot *queue[PALP_SRV_FACTOR_QUEUE];
@@ -44,7 +50,7 @@ static void *helper_main(void *arg) {
   return NULL;
 }
 
-palp_srv_factor_pool *palp_srv_factor_pool_create(int *err) {
+palp_srv_factor_pool *palp_srv_factor_pool_create(int priority, int *err) {
   palp_srv_factor_pool *p = calloc(1, sizeof *p);
   if (!p) {
     *err = PALP_ENOMEM;
@@ -53,7 +59,22 @@ palp_srv_factor_pool *palp_srv_factor_pool_create(int *err) {
   pthread_mutex_init(&p->lock, NULL);
   pthread_cond_init(&p->work, NULL);
   pthread_cond_init(&p->finished, NULL);
-  if (pthread_create(&p->thread, NULL, helper_main, p) != 0) {
+  for (int i = 0; i < PALP_SRV_FACTOR_THREADS; i++) {
+    int created = 0;
+    if (priority > 0) {
+      pthread_attr_t attr;
+      struct sched_param sp = {.sched_priority = priority};
+      pthread_attr_init(&attr);
+      pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+      pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
+      pthread_attr_setschedparam(&attr, &sp);
+      created = pthread_create(&p->thread[i], &attr, helper_main, p) == 0;
+      pthread_attr_destroy(&attr);
+    }
+    if (!created && pthread_create(&p->thread[i], NULL, helper_main, p) != 0) break;
+    p->threads++;
+  }
+  if (!p->threads) {
     pthread_mutex_destroy(&p->lock);
     pthread_cond_destroy(&p->work);
     pthread_cond_destroy(&p->finished);
@@ -69,9 +90,9 @@ void palp_srv_factor_pool_destroy(palp_srv_factor_pool *p) {
   if (!p) return;
   pthread_mutex_lock(&p->lock);
   p->stop = 1;
-  pthread_cond_signal(&p->work);
+  pthread_cond_broadcast(&p->work);
   pthread_mutex_unlock(&p->lock);
-  pthread_join(p->thread, NULL);
+  for (int i = 0; i < p->threads; i++) pthread_join(p->thread[i], NULL);
   pthread_mutex_destroy(&p->lock);
   pthread_cond_destroy(&p->work);
   pthread_cond_destroy(&p->finished);

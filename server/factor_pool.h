@@ -4,7 +4,7 @@
  * finger: ~9 per 1,000 steps); computing it on the tick thread costs 2-10 ms and
  * stalls every session of that tick group. The world defers the install by
  * def.refactor_lag frames instead, and this helper thread computes the job meanwhile,
- * at ordinary priority, so that it only uses time the ticks leave.
+ * below the ticks' priority, so that it only uses time the ticks leave.
  */
 #ifndef PALP_SRV_FACTOR_POOL_H
 #define PALP_SRV_FACTOR_POOL_H
@@ -21,7 +21,11 @@ typedef struct palp_srv_factor_slot {
   int done;
 } palp_srv_factor_slot;
 
-palp_srv_factor_pool *palp_srv_factor_pool_create(int *err);
+/* priority > 0: SCHED_FIFO at that priority (below the ticks', above ordinary
+ * processes: on a shared machine a helper at ordinary priority waited behind other
+ * programs for up to 14 ms and stalled the ticks that needed its factor); falls
+ * back to ordinary scheduling when the real-time class is not granted. */
+palp_srv_factor_pool *palp_srv_factor_pool_create(int priority, int *err);
 /* Runs every job still queued, then stops the thread. */
 void palp_srv_factor_pool_destroy(palp_srv_factor_pool *p);
 /* Queues slot->job (set by the caller); never blocks on the helper. Returns 0 or

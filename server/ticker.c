@@ -122,7 +122,8 @@ palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_h
     if (!g->sessions || !g->work_us) goto nomem;
   }
   int ferr = 0;
-  t->factor = palp_srv_factor_pool_create(&ferr);
+  /* One below the ticks: it must not delay a tick, but must beat ordinary work. */
+  t->factor = palp_srv_factor_pool_create(priority > 1 ? priority - 1 : priority, &ferr);
   if (!t->factor) goto nomem;
   threads = t->n;
   for (int i = 0; i < threads; i++) {

@@ -240,7 +240,7 @@ palp_factor_job *palp_world_factor_claim(palp_world *w); /* the job just request
 int palp_factor_job_run(palp_factor_job *job);          /* any thread; 0 or a negative error */
 int palp_world_factor_done(palp_world *w, palp_factor_job *job);
 int64_t palp_world_factor_due(const palp_world *w); /* frame a claimed job is due at, -1 none */
-/* The lag the server and replay use at a physics step dt [s]: about 8 ms of frames. */
+/* The lag the server and replay use at a physics step dt [s]: about 16 ms of frames. */
 int palp_world_refactor_lag_for(double dt);
 
 /* Force-driven contact: returns a contact id >= 0 or a negative error. The force

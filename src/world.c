@@ -1416,10 +1416,11 @@ static int job_install(palp_world *w) {
 }
 
 int palp_world_refactor_lag_for(double dt) {
-  /* ~8 ms: room for a helper thread on a loaded 2-core server to factor (~0.5 ms) and
-   * solve the finger's columns (~1 ms) behind the ticks; 1 frame at 100 Hz. */
+  /* ~16 ms: a job costs ~0.5 ms of factorisation and ~1 ms of finger columns, and
+   * jobs come in bursts; at 8 ms, 32 sessions at 250 Hz still waited 1.4-8 ms for
+   * a third of their jobs (docs/server.md). 2 frames at 100 Hz. */
   if (!(dt > 0.0)) return 0;
-  const double k = ceil(0.008 / dt - 1e-9);
+  const double k = ceil(0.016 / dt - 1e-9);
   return k < 1.0 ? 1 : k > 1000.0 ? 1000 : (int)k;
 }
 
