@@ -38,12 +38,14 @@ static void *helper_main(void *arg) {
     palp_srv_factor_slot *s = p->queue[p->head];
     p->head = (p->head + 1) % PALP_SRV_FACTOR_QUEUE;
     p->count--;
+    if (s->state != PALP_SRV_FACTOR_QUEUED) continue; /* defensive: taken entries leave the queue */
+    s->state = PALP_SRV_FACTOR_RUNNING;
     palp_factor_job *j = s->job;
     pthread_mutex_unlock(&p->lock);
     /* The job touches only its own memory: the session's world steps on meanwhile. */
     palp_factor_job_run(j);
     pthread_mutex_lock(&p->lock);
-    s->done = 1;
+    s->state = PALP_SRV_FACTOR_DONE;
     pthread_cond_broadcast(&p->finished);
   }
   pthread_mutex_unlock(&p->lock);
@@ -105,7 +107,7 @@ int palp_srv_factor_submit(palp_srv_factor_pool *p, palp_srv_factor_slot *slot) 
     pthread_mutex_unlock(&p->lock);
     return PALP_EFULL;
   }
-  slot->done = 0;
+  slot->state = PALP_SRV_FACTOR_QUEUED;
   p->queue[(p->head + p->count) % PALP_SRV_FACTOR_QUEUE] = slot;
   p->count++;
   pthread_cond_signal(&p->work);
@@ -116,9 +118,26 @@ int palp_srv_factor_submit(palp_srv_factor_pool *p, palp_srv_factor_slot *slot) 
 int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot) {
   int64_t waited = 0;
   pthread_mutex_lock(&p->lock);
-  if (!slot->done) {
+  if (slot->state == PALP_SRV_FACTOR_QUEUED) {
+    /* Not started: take its entry out of the queue (the session may be freed next)
+     * and run it here. */
+    for (int i = 0; i < p->count; i++)
+      if (p->queue[(p->head + i) % PALP_SRV_FACTOR_QUEUE] == slot) {
+        for (int k = i; k + 1 < p->count; k++)
+          p->queue[(p->head + k) % PALP_SRV_FACTOR_QUEUE] = p->queue[(p->head + k + 1) % PALP_SRV_FACTOR_QUEUE];
+        p->count--;
+        break;
+      }
+    slot->state = PALP_SRV_FACTOR_RUNNING;
+    pthread_mutex_unlock(&p->lock);
     const int64_t t0 = now_ns();
-    while (!slot->done) pthread_cond_wait(&p->finished, &p->lock);
+    palp_factor_job_run(slot->job);
+    waited = now_ns() - t0;
+    pthread_mutex_lock(&p->lock);
+    slot->state = PALP_SRV_FACTOR_DONE;
+  } else if (slot->state != PALP_SRV_FACTOR_DONE) {
+    const int64_t t0 = now_ns();
+    while (slot->state != PALP_SRV_FACTOR_DONE) pthread_cond_wait(&p->finished, &p->lock);
     waited = now_ns() - t0;
   }
   pthread_mutex_unlock(&p->lock);

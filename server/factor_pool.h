@@ -18,8 +18,9 @@ typedef struct palp_srv_factor_pool palp_srv_factor_pool;
 /* One session's job in flight; owned by the session, done under the pool's lock. */
 typedef struct palp_srv_factor_slot {
   palp_factor_job *job; /* NULL: none in flight */
-  int done;
+  int state;            /* PALP_SRV_FACTOR_QUEUED, _RUNNING or _DONE */
 } palp_srv_factor_slot;
+enum { PALP_SRV_FACTOR_QUEUED = 0, PALP_SRV_FACTOR_RUNNING = 1, PALP_SRV_FACTOR_DONE = 2 };
 
 /* priority > 0: SCHED_FIFO at that priority (below the ticks', above ordinary
  * processes: on a shared machine a helper at ordinary priority waited behind other
@@ -31,8 +32,10 @@ void palp_srv_factor_pool_destroy(palp_srv_factor_pool *p);
 /* Queues slot->job (set by the caller); never blocks on the helper. Returns 0 or
  * PALP_EFULL (the caller then runs the job itself). */
 int palp_srv_factor_submit(palp_srv_factor_pool *p, palp_srv_factor_slot *slot);
-/* Waits until slot's job has run; returns the time spent waiting [ns] (0 when the
- * helper had finished it already). */
+/* Makes sure slot's job has run: a job no helper has started yet is taken back and
+ * run on the calling thread (a hand-off to a helper costs a scheduling latency, tens
+ * of ms on an overloaded machine); one a helper is running is waited for. Returns
+ * the time spent [ns] (0 when a helper had finished it already). */
 int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot);
 
 #endif
