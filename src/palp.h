@@ -234,7 +234,8 @@ int palp_world_step_dt(palp_world *w, double dt);
  * nothing: after a step, claim the job; run it anywhere (it touches only its own
  * memory); hand it back on the stepping thread before stepping frame
  * palp_world_factor_due (a due job not handed back makes the step fail with
- * PALP_EBUSY). Unclaimed jobs are computed by the step at their due frame. */
+ * PALP_EBUSY). Unclaimed jobs are computed by the step at their due frame. Only
+ * rebuilds while a finger is down are deferred; force-driven loads rebuild at once. */
 typedef struct palp_factor_job palp_factor_job;
 palp_factor_job *palp_world_factor_claim(palp_world *w); /* the job just requested, or NULL */
 int palp_factor_job_run(palp_factor_job *job);          /* any thread; 0 or a negative error */

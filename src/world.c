@@ -1458,6 +1458,12 @@ static int has_load(const palp_world *w) {
   return 0;
 }
 
+static int has_finger(const palp_world *w) {
+  for (int c = 0; c < w->def.max_contacts; ++c)
+    if (w->contacts[c].kind == CONTACT_FINGER) return 1;
+  return 0;
+}
+
 /* One attempt at a step of h; PALP_EAGAIN-like 1 when the solve was rejected
  * (nothing but the force arrays has changed then). */
 static int try_step(palp_world *w, double h, int last_resort) {
@@ -1465,7 +1471,12 @@ static int try_step(palp_world *w, double h, int last_resort) {
    * then at least (1/1.25)^2 = 64% of what h needs, above the half that stability
    * requires; shorter steps only damp a little more. Beyond, or after a lagged-
    * tangent trigger, rebuild. The Burgers step is always exact for h. */
-  if (h > 1.25 * w->h_factored || h < 0.5 * w->h_factored || (w->stale && w->def.refactor_lag <= 0)) {
+  /* Deferred only with a finger down (the haptic sessions the lag is for): under
+   * heavy force loads rebuilds come every step or two, mostly inside halved steps
+   * that rebuild at once anyway, and a helper computing jobs that are dropped only
+   * competes with the ticks for the cores (measured: server_malformed's flood). */
+  const int defer = w->def.refactor_lag > 0 && has_finger(w);
+  if (h > 1.25 * w->h_factored || h < 0.5 * w->h_factored || (w->stale && !defer)) {
     int e = refactor(w, h);
     if (e) return e;
   } else if (w->stale && w->job_state == JOB_NONE) {
