@@ -126,8 +126,16 @@ fail:
   return NULL;
 }
 
+void palp_srv_session_factor_settle(palp_srv_session *s) {
+  if (!s->factor.job) return;
+  palp_srv_factor_wait(s->factor_pool, &s->factor);
+  palp_world_factor_done(s->world, s->factor.job);
+  s->factor.job = NULL;
+}
+
 void palp_srv_session_destroy(palp_srv_session *s) {
   if (!s) return;
+  palp_srv_session_factor_settle(s); /* the helper may still be writing into the world's job */
   /* Deleting the publisher/subscriber deletes their readers and writers. */
   if (s->sub > 0) dds_delete(s->sub);
   if (s->pub > 0) dds_delete(s->pub);
@@ -406,8 +414,28 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   int awake = palp_world_is_awake(s->world);
   double top_disp = 0;
   const palp_mesh *mesh = palp_world_mesh(s->world);
+  /* A rebuild the helper computes is due: wait for it (rare: ~8 ms of frames). */
+  if (s->factor.job && palp_world_factor_due(s->world) <= palp_world_frame(s->world)) {
+    const int64_t waited = palp_srv_factor_wait(s->factor_pool, &s->factor);
+    s->stats.factor_waits += waited > 0;
+    s->stats.factor_wait_ns += waited;
+    palp_world_factor_done(s->world, s->factor.job);
+    s->factor.job = NULL;
+  }
   /* Stepped every tick: a sleeping world returns at once but keeps its clock. */
   int rc = palp_world_step(s->world);
+  if (rc == 0 && s->factor_pool) {
+    palp_factor_job *j = palp_world_factor_claim(s->world);
+    if (j) {
+      s->factor.job = j;
+      s->stats.factor_jobs++;
+      if (palp_srv_factor_submit(s->factor_pool, &s->factor) != 0) {
+        palp_factor_job_run(j); /* queue full: compute it here, as the world would */
+        palp_world_factor_done(s->world, j);
+        s->factor.job = NULL;
+      }
+    }
+  }
   if (rc < 0) {
       palp_log_error(s->log, "session %u: model step failed: %s; closing the session", s->id,
               palp_strerror(rc));

@@ -18,6 +18,7 @@
 
 #include "config.h"
 #include "events.h"
+#include "factor_pool.h"
 #include "palp_log.h"
 #include "palp.h"
 #include "palp_types.h"
@@ -42,6 +43,9 @@ typedef struct palp_srv_session_stats {
   uint64_t local_models;                    /* palp_local_model samples published */
   uint64_t force_limited_steps;             /* finger-steps whose force exceeded max_force (reported, not clamped) */
   uint64_t out_of_range_steps;              /* steps with a model-validity flag (LM_OUT_OF_RANGE) */
+  uint64_t factor_jobs;                     /* lagged-tangent rebuilds handed to the helper */
+  uint64_t factor_waits;                    /* ... that were due before the helper had finished */
+  int64_t factor_wait_ns;                   /* time ticks spent waiting for them [ns] */
   int64_t last_frame;
   double sim_time;                          /* [s] */
 } palp_srv_session_stats;
@@ -107,7 +111,15 @@ typedef struct palp_srv_session {
   palp_world_health health;   /* after the previous step: per-step flags are deltas */
   palp_LocalModel lm;
   int64_t last_limit_log_ns;
+  /* Set by the ticker that holds the session: rebuilds go to its helper (NULL: the
+   * world computes them itself at their due frame). */
+  palp_srv_factor_pool *factor_pool;
+  palp_srv_factor_slot factor;
 } palp_srv_session;
+
+/* Hands an in-flight rebuild back to the world (waiting for the helper): before the
+ * session leaves its ticker. */
+void palp_srv_session_factor_settle(palp_srv_session *s);
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err);
 void palp_srv_session_destroy(palp_srv_session *s);
