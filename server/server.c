@@ -170,7 +170,7 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
   if (!(ph->cfg.physics_rate_hz > 0)) ph->cfg.physics_rate_hz = srv->cfg.tick_rate_hz;
   ph->scene.world.dt = 1.0 / ph->cfg.physics_rate_hz;
   /* Rebuilds are computed by the ticker's helper behind the ticks (docs/server.md);
-   * palp_db_world_from_scene gives replay the same lag. */
+   * the logged scene carries the lag (time.refactor_lag_steps), so replay defers the same. */
   ph->scene.world.refactor_lag = palp_world_refactor_lag_for(ph->scene.world.dt);
   /* The recorded scene must stay loadable: its frame period a whole number of steps
    * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */

@@ -274,6 +274,9 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
    * and 1e-300 made every frame period a "whole multiple" (1e298 rounds to itself). */
   if (s->world.dt < 1e-6) return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: %g s is below 1e-6 s", s->world.dt);
   if ((e = get_int(c, t, "time.", "frames", 1, 1, 100000000, &s->frames))) return e;
+  /* Deferred tangent rebuilds (docs/haptics.md): part of the physics a log replays, so a
+   * session's scene carries it; absent = 0, how every log before it was stepped. */
+  if ((e = get_int(c, t, "time.", "refactor_lag_steps", 0, 0, 1000, &s->world.refactor_lag))) return e;
   s->frame_period = s->world.dt;
   if ((e = get_pos(c, t, "time.", "frame_period_s", 0, &s->frame_period))) return e;
   const double ratio = s->frame_period / s->world.dt;
@@ -424,6 +427,7 @@ char *palp_scene_to_json(const palp_scene *s) {
   cJSON_AddNumberToObject(t, "dt_s", s->world.dt);
   cJSON_AddNumberToObject(t, "frames", s->frames);
   cJSON_AddNumberToObject(t, "frame_period_s", s->frame_period);
+  if (s->world.refactor_lag > 0) cJSON_AddNumberToObject(t, "refactor_lag_steps", s->world.refactor_lag);
   cJSON *fx = cJSON_AddArrayToObject(r, "effects");
   for (int i = 0; i < 7; ++i)
     if (s->world.effects & (1u << i)) cJSON_AddItemToArray(fx, cJSON_CreateString(palp_effect_name((palp_effect)(1u << i))));
