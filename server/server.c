@@ -498,7 +498,7 @@ static double time_left(const palp_srv_session *s, int64_t now_ns) {
   return left > 0 ? left : 0.0;
 }
 
-static void publish_finding_status(palp_srv *srv, palp_srv_session *s) {
+static void publish_finding_status(palp_srv_session *s) {
   if (s->finding_status_writer <= 0) return;
   const palp_srv_findings *f = &s->findings;
   palp_FindingStatus m;
@@ -523,7 +523,6 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
   void *ptr[16];
   dds_sample_info_t info[16];
   for (int i = 0; i < 16; i++) ptr[i] = &buf[i];
-  int answered = 0;
   for (int done = 0; done < FINDINGS_PER_PASS;) {
     const int n = dds_take(s->finding_reader, ptr, info, 16, 16);
     if (n <= 0) break;
@@ -533,7 +532,6 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
     for (int i = 0; i < n; i++) {
       if (!info[i].valid_data) continue;
       const int ok = palp_srv_findings_offer(&s->findings, &buf[i], palp_dds_now_ns());
-      answered++;
       if (!have_st) { /* the world's frame and time, once per batch: a snapshot under the tick lock */
         st = session_stats(srv, s);
         have_st = 1;
@@ -548,14 +546,15 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
                                            .reason = s->findings.reason};
         srv->events->finding(srv->events->ctx, s->id, &ev);
       }
-      if (!ok)
-        logf_(srv, "session %u: finding %u refused: %s", s->id, buf[i].mark_id, s->findings.reason);
+      /* The first few, then every 100th: a flood must not flood the server's log either. */
+      if (!ok && (s->findings.refused <= 16 || s->findings.refused % 100 == 0))
+        logf_(srv, "session %u: finding %u refused: %s (%llu refused so far)", s->id, buf[i].mark_id,
+              s->findings.reason, (unsigned long long)s->findings.refused);
       /* Every answer goes out (keep-last 1: a station reading slower sees the latest). */
-      publish_finding_status(srv, s);
+      publish_finding_status(s);
     }
     if (n < 16) break;
   }
-  (void)answered;
 }
 
 static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason) {
@@ -730,7 +729,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
     if (s->finding_rc > 0) dds_waitset_attach(srv->waitset, s->finding_rc, 0);
-    publish_finding_status(srv, s);
+    publish_finding_status(s);
     st->session_id = s->id;
     reply(srv, rq, s, NULL);
     publish_state(srv, s, 0, NULL, NULL);
@@ -1306,7 +1305,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
         continue;
       }
       /* The time left and the marks, refreshed at least once a second. */
-      if (t - s->findings_status_ns >= FINDING_STATUS_PERIOD_NS) publish_finding_status(srv, s);
+      if (t - s->findings_status_ns >= FINDING_STATUS_PERIOD_NS) publish_finding_status(s);
     }
     if (palp_dds_now_ns() >= next_status) {
       char why[256];
