@@ -337,7 +337,10 @@ static void *haptic_main(void *arg) {
     l->view = (palp_cli_haptic_view){.t = t, .x = x, .xr = xr, .proxy = o.proxy, .force = o.force, .requested = o.requested,
                                      /* the server's: device beneath the proxy along the normal */
                                      .depth = (o.flags & PALP_HAPTIC_CONTACT) ? l->core.renderer.cur.depth : 0,
-                                     .flags = o.flags, .on = on};
+                                     .flags = o.flags, .on = on,
+                                     .point = l->core.renderer.cur.point,
+                                     .model_contact = l->core.renderer.cur.contact,
+                                     .model_time = l->core.renderer.cur.time};
     pthread_mutex_unlock(&l->view_lock);
     }
   }
