@@ -234,6 +234,13 @@ static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errle
   if (!strncmp(o->input, "replay:", 7)) return palp_cli_replay_input(o->input + 7, in, err, errlen);
   if (!strcmp(o->input, "keyboard")) return palp_cli_keyboard_input(in, err, errlen);
   if (!strcmp(o->input, "keyboard-finger")) return palp_cli_keyboard_finger_input(in, err, errlen);
+  if (!strncmp(o->input, "sim:expert", 10) || !strncmp(o->input, "sim:novice", 10)) {
+    palp_cli_trainee_def d;
+    int rc = palp_cli_trainee_parse(o->input + 4, &d, err, errlen);
+    if (rc < 0) return rc;
+    if (o->finger_radius_mm > 0) d.radius = o->finger_radius_mm * 1e-3;
+    return palp_cli_trainee_input(&d, in);
+  }
   if (!strncmp(o->input, "sim:", 4)) {
     palp_cli_simdevice_def d;
     int rc = palp_cli_simdevice_parse(o->input + 4, &d, err, errlen);
