@@ -301,6 +301,7 @@ static void *haptic_main(void *arg) {
     double smax = 0, age = -1;
     const int got = palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax, &age);
     if (got) {
+      if (d->in->model) d->in->model(d->in->ctx, &m);
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
       if (sflags & palp_LM_OUT_OF_RANGE) st->out_of_range_models++;
       /* The safe force is the smaller of the station's and the phantom's limits. */

@@ -64,6 +64,10 @@ typedef struct palp_cli_input {
    * nothing was pressed since the last call. Called from the station's main thread
    * (not the haptic thread) about 50 times a second; must not block. */
   int (*button)(void *ctx);
+  /* Optional: every new local contact model from the server (its force is the
+   * phantom's after the physics step, before the station limits or extrapolates it).
+   * Called from the haptic thread; must not block. */
+  void (*model)(void *ctx, const palp_local_model *m);
 } palp_cli_input;
 enum { PALP_CLI_BUTTON_MARK = 1, PALP_CLI_BUTTON_WITHDRAW = 2 };
 
