@@ -162,26 +162,6 @@ int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen);
  * surface, +/- change its depth in 1 mm steps, space lifts/lowers; the force the
  * station renders is shown. */
 int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen);
-
-/* ---- scripted trainees as a device (input_trainee.c, issue 13) -------------------
- * --input sim:expert[,spacing_mm=8,hold_s=0.12,threshold=0.12,rate_hz=250] and
- * sim:novice[,presses=5,depth_mm=3,seed=7,rate_hz=250]: client/trainee.c's scripts in
- * real time at the phantom's physics rate, marking lumps with the device's button. */
-#include "trainee.h"
-typedef enum palp_cli_trainee_kind { PALP_CLI_TRAINEE_EXPERT = 1, PALP_CLI_TRAINEE_NOVICE = 2 } palp_cli_trainee_kind;
-typedef struct palp_cli_trainee_def {
-  palp_cli_trainee_kind kind;
-  palp_cli_expert_cfg expert;
-  int presses;            /* novice */
-  double depth;           /* novice press depth [m] */
-  unsigned seed;          /* novice */
-  double radius;          /* fingertip [m] */
-  double physics_rate_hz; /* the script's step rate: the phantom's */
-} palp_cli_trainee_def;
-palp_cli_trainee_def palp_cli_trainee_default_def(palp_cli_trainee_kind kind);
-int palp_cli_trainee_parse(const char *spec, palp_cli_trainee_def *out, char *err, size_t errlen);
-int palp_cli_trainee_input(const palp_cli_trainee_def *def, palp_cli_input *out);
-
 /* ---- device driver (shared object) ----------------------------------------------
  * A driver is a shared object exporting
  *   int palp_cli_device_driver(const char *arg, palp_cli_input *out);

@@ -16,7 +16,7 @@
 #include <time.h>
 
 #include "input.h"
-#include "trainee.h"
+#include "input_trainee.h"
 
 #define MAX_LUMPS 16
 

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "haptic_loop.h"
+#include "input_trainee.h"
 #include "input.h"
 #include "palp.h"
 #include "palp_app.h"
