@@ -728,7 +728,6 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
     if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
       srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
-  pthread_mutex_init(&srv->lost_mu, NULL);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
     if (s->finding_rc > 0) dds_waitset_attach(srv->waitset, s->finding_rc, 0);
@@ -1081,6 +1080,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     fail(err, errlen, "out of memory");
     return NULL;
   }
+  /* Once per server: it guards the lost-station list that DDS listener threads write. */
+  pthread_mutex_init(&srv->lost_mu, NULL);
   srv->cfg = def->cfg;
   srv->events = def->events;
   srv->verbose = def->verbose;
