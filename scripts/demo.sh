@@ -106,18 +106,20 @@ bob=$!
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
 carol=$!
-# An exercise (issue 13): the shipped "medium" one (a 10 mm lesion 10 mm deep, hidden)
-# on phantom 12, taken by two scripted trainees palpating by position: nina, a novice
-# (five light presses at random places, one guessed mark), and - with PALP_DEMO_EXPERT=1,
-# ~3 more minutes in real time - eve, a MammaCare expert (vertical strips at three
-# pressures, marks where the force rises above its surroundings).
-"$client" --role trainee --domain "$domain" --phantom 12 --name nina --input sim:novice --print-period 0 \
+# An exercise (issue 13): "teaching" (two 1 cm lumps 10 mm deep, hidden; a phantom whose
+# lumps are exaggerated so that they can be felt, docs/assessment.md) on phantom 14, taken
+# by two scripted trainees palpating by position: nina, a novice (five light presses at
+# random places, one guessed mark), and eve, a MammaCare expert (vertical strips at three
+# pressures, marks where the force at equal depth rises above its surroundings; ~165 s in
+# real time, the longest part of the demo; PALP_DEMO_EXPERT=0 leaves her out).
+"$client" --role trainee --domain "$domain" --phantom 14 --name nina --input sim:novice --print-period 0 \
   >"$out/nina.log" 2>&1 &
 pids+=($!)
 nina=$!
 eve=
-if [ "${PALP_DEMO_EXPERT:-0}" = 1 ]; then
-  "$client" --role trainee --domain "$domain" --phantom 12 --name eve --input sim:expert --print-period 0 \
+if [ "${PALP_DEMO_EXPERT:-1}" = 1 ]; then
+  echo "demo: eve, the scripted expert, examines the teaching exercise for ~3 minutes (PALP_DEMO_EXPERT=0 skips her)"
+  "$client" --role trainee --domain "$domain" --phantom 14 --name eve --input sim:expert --print-period 0 \
     >"$out/eve.log" 2>&1 &
   pids+=($!)
   eve=$!
@@ -153,7 +155,7 @@ echo "== carol's haptic station: palpating by position, what she felt (1 kHz, fr
 grep -E "haptic thread|LIMITED|under the limit|flagged" "$out/carol.log" || true
 sed -n '/^rendered |F|/,$p' "$out/carol.log"
 echo
-echo "== exercise \"medium\" (phantom 12): what each scripted trainee found =="
+echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found =="
 for t in nina ${eve:+eve}; do
   grep -E "^\[trainee $t\] (exercise|mark|finding|the server refused|[0-9]+ marks? standing)|^\[scripted" "$out/$t.log" || true
 done
