@@ -7,6 +7,8 @@
  * each, for the test to assert on:
  *   FINDING session=ID op=mark|withdraw mark=N point=X,Y,Z time=T
  * usage: web_exercise_peer DOMAIN PHANTOM_ID SECONDS (CYCLONEDDS_URI set by the caller)
+ * PHANTOM_ID 0: listen only (palp-server hosts the exercise and answers): it publishes nothing
+ * and only prints the findings it reads, so a test can assert what reached the domain.
  */
 #include <math.h>
 #include <stdio.h>
@@ -50,7 +52,10 @@ static peer_session *session_get(dds_entity_t pp, dds_entity_t topic, uint32_t i
   return NULL;
 }
 
+static int listen_only;
+
 static void answer(peer_session *s, uint32_t mark_id, int accepted, const char *reason) {
+  if (listen_only) return;
   palp_FindingStatus st;
   memset(&st, 0, sizeof st);
   st.session_id = s->id;
@@ -90,6 +95,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "exercise_peer: cannot create endpoints\n");
     return 1;
   }
+  listen_only = phantom == 0;
   palp_Exercise ex;
   memset(&ex, 0, sizeof ex);
   ex.phantom_id = phantom;
@@ -99,7 +105,7 @@ int main(int argc, char **argv) {
            "Palpate the dome in vertical strips at three pressures. Mark every lump you feel.");
   ex.time_limit = TIME_LIMIT_S;
   ex.max_force = 10;
-  dds_write(w_ex, &ex);
+  if (!listen_only) dds_write(w_ex, &ex);
   printf("READY phantom=%u\n", phantom);
   fflush(stdout);
   const int64_t end = palp_dds_now_ns() + (int64_t)(seconds * 1e9);

@@ -2,8 +2,9 @@
 """web_findings: an exercise session on the trainee page in headless Chromium. The page shows the
 exercise's instructions, time left and marks; a mouse click on "lump here" while the trainee's
 position-driven finger presses reaches the domain as a Finding at the fingertip's contact point
-(read by a DDS reader: web_exercise_peer, which plays the server's part of the findings contract
-until palp-server hosts exercises) and the page then shows 1 mark; key W withdraws it; a dashboard
+(read by a listening DDS reader, web_exercise_peer with phantom 0) and palp-server, hosting the
+shipped exercises (config/server-exercises.json; "easy" is phantom 11), answers: the page then
+shows 1 mark; key W withdraws it; a dashboard
 page's and an observer page's attempts to send a finding are refused and nothing is written.
 DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
 import math
@@ -51,14 +52,14 @@ def run(build, source, out):
     procs = harness.Procs(build, source, out, DOMAIN)
     browser = None
     try:
-        procs.server()
-        peer = procs.start("peer", [os.path.join(build, "tests", "web", "web_exercise_peer"), str(DOMAIN), "1", "110"])
+        procs.server(config="server-exercises.json")
+        peer = procs.start("peer", [os.path.join(build, "tests", "web", "web_exercise_peer"), str(DOMAIN), "0", "110"])
         procs.wait_log(peer, r"READY", 10)
         web = procs.web()
         browser = harness.cdp.Chromium(width=1000, height=760, out_dir=out)
         page = browser.new_page(web.base + "/trainee.html?trainee=pat")
         check(page.wait_for("window.palpState && palpState.connected", 20) is True, "trainee page loaded and connected")
-        procs.trainee("pat", extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
+        procs.trainee("pat", phantom=11, extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
 
         ok = page.wait_for("palpState.trainee.exercise !== null && palpState.trainee.timeLeft !== null && "
                            "!document.getElementById('ex-controls').hidden", 20)
@@ -66,7 +67,7 @@ def run(build, source, out):
         instr = page.eval("document.getElementById('ex-instructions').textContent")
         title = page.eval("document.getElementById('ex-title').textContent")
         left = page.eval("palpState.trainee.timeLeft")
-        check("vertical strips" in instr and title == "Find the lump (web test)",
+        check("vertical strips" in instr and title == "One 2 cm lesion just under the surface",
               "title %r and instructions %r shown" % (title, instr))
         check(0 < left <= 300, "time left %.1f s within the 300 s limit" % left)
         check(page.eval("document.getElementById('ex-marks').textContent") == "0", "0 marks standing at first")
@@ -105,7 +106,7 @@ def run(build, source, out):
         check(page.wait_for("palpState.trainee.marks === 0", 5) is True, "the page shows 0 marks again")
 
         dash = browser.new_page(web.base + "/dashboard.html")
-        ok = dash.wait_for("palpState.sessions.some(function(s){return s.trainee === 'pat' && s.exercise === 'web-test' "
+        ok = dash.wait_for("palpState.sessions.some(function(s){return s.trainee === 'pat' && s.exercise === 'easy' "
                            "&& s.findings === 0 && s.late_haptic !== null})", 15)
         check(ok is True, "the dashboard lists pat's exercise session, 0 findings, a late-haptic figure: %s"
               % dash.eval("JSON.stringify(palpState.sessions)"))
