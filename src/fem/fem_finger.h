@@ -14,13 +14,13 @@ extern "C" {
 #endif
 
 /* Frictionless contact of a rigid sphere with the surface faces, enforced by a
- * penalty on the gap at quad x quad Gauss-Lobatto points of every face (a surface
+ * penalty on the gap at (quad + 1)^2 points of every face (composite Simpson) (a surface
  * integral of the contact pressure p = -penalty * gap, gap < 0), so the force is
  * consistent with the faces' areas rather than lumped at nodes. */
 typedef struct palp_fem_finger {
   double radius;    /* [m], 0.008 */
   double penalty;   /* [N/m^3] pressure per metre of penetration, 1e10 by default */
-  int quad;         /* Gauss-Lobatto points per face direction (2..5), 5 */
+  int quad;         /* Simpson intervals per face direction (even, 2..16), 8 */
   double center[3]; /* [m] sphere centre (set before each solve) */
   int face_count;
   int (*face)[4];   /* outward-oriented quads the sphere may touch */

@@ -139,17 +139,18 @@ static void test_hertz(void) {
 }
 
 static void test_penalty(void) {
-  const double d[1] = {0.3e-3};
-  double F[2][1], gap[1];
+  const double d[2] = {0.1e-3, 0.2e-3};
+  double F[2][2], gap[2];
   const double eps[2] = {1e10, 1e11};
   for (int i = 0; i < 2; ++i) {
     hertz_case hc;
     CHECK(hertz_setup(&hc, 2e4, 0.3, eps[i]) == 0, "block setup");
-    CHECK(hertz_press(&hc, d, 1, F[i], gap) == 0, "press at penalty %g: %s", eps[i], hc.model.err);
-    printf("penalty %.0e N/m^3: %.5f N at 0.3 mm; min gap %.3g m\n", eps[i], F[i][0], gap[0]);
+    CHECK(hertz_press(&hc, d, 2, F[i], gap) == 0, "press at penalty %g: %s", eps[i], hc.model.err);
+    printf("penalty %.0e N/m^3: %.5f N at 0.2 mm; min gap %.3g m; %ld Newton iterations\n", eps[i], F[i][1], gap[1],
+           hc.model.newton_iterations);
     hertz_destroy(&hc);
   }
-  for (int k = 0; k < 1; ++k) {
+  for (int k = 1; k < 2; ++k) {
     printf("  10x penalty changes the force by %+.3f%%\n", 100 * (F[1][k] / F[0][k] - 1));
     CHECK(fabs(F[1][k] / F[0][k] - 1) <= 0.01, "penalty 1e10 vs 1e11 within 1%%: %.5f vs %.5f N", F[0][k], F[1][k]);
   }
@@ -194,11 +195,11 @@ static int dome_press(int level, const palp_lesion *les, int nles, const double 
 }
 
 static void test_gap(void) {
-  const double d[4] = {0.5e-3, 1e-3, 2e-3, 3e-3};
-  double F[4], gap[4], pm[4];
+  const double d[2] = {1e-3, 2e-3};
+  double F[2], gap[2], pm[2];
   const double t0 = now();
-  CHECK(dome_press(2, NULL, 0, d, 4, F, gap, pm) == 0, "dome press");
-  for (int k = 0; k < 4; ++k) {
+  CHECK(dome_press(2, NULL, 0, d, 2, F, gap, pm) == 0, "dome press");
+  for (int k = 0; k < 2; ++k) {
     /* the penalty lets the surface in by p / eps at the Gauss points; the face
      * nodes between them may sit up to that much deeper again (bilinear faces) */
     const double tol = 2.0 * pm[k] / 1e10 + 1e-6;
@@ -211,16 +212,21 @@ static void test_gap(void) {
 }
 
 static void test_lesion(void) {
-  const double d[2] = {1e-3, 2e-3};
-  const palp_lesion L = {.center = {0, 0, 0.04 - 0.006}, .radius = 0.004, .stiffness_ratio = 5.0};
-  double F0[2], F1[2], gap[2];
-  CHECK(dome_press(2, NULL, 0, d, 2, F0, gap, NULL) == 0, "dome press");
-  CHECK(dome_press(2, &L, 1, d, 2, F1, gap, NULL) == 0, "dome press over a lesion");
-  for (int k = 0; k < 2; ++k) {
-    printf("pole %.0f mm: %.4f N plain, %.4f N over an 8 mm lesion (5x) 6 mm deep (%+.1f%%)\n", d[k] * 1e3, F0[k],
-           F1[k], 100 * (F1[k] / F0[k] - 1));
-    CHECK(F1[k] > 1.02 * F0[k], "a stiff lesion raises the force by more than 2%%");
-  }
+  /* the case: a 10 mm lesion, 5x the gel, centre 10 mm deep; and a soft one */
+  const double d[1] = {1e-3};
+  const palp_lesion L = {.center = {0, 0, 0.04 - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
+  palp_lesion cyst = L;
+  cyst.stiffness_ratio = 0.2;
+  double F0[1], F1[1], F2[1], gap[1];
+  CHECK(dome_press(2, NULL, 0, d, 1, F0, gap, NULL) == 0, "dome press");
+  CHECK(dome_press(2, &L, 1, d, 1, F1, gap, NULL) == 0, "dome press over a lesion");
+  CHECK(dome_press(2, &cyst, 1, d, 1, F2, gap, NULL) == 0, "dome press over a cyst");
+  printf("pole 1 mm: %.4f N plain, %.4f N over a 10 mm lesion (5x) 10 mm deep (%+.1f%%), %.4f N over a cyst (0.2x, "
+         "%+.1f%%)\n",
+         F0[0], F1[0], 100 * (F1[0] / F0[0] - 1), F2[0], 100 * (F2[0] / F0[0] - 1));
+  /* level 2 measured +5.1% (docs/fem.md); 2% is well clear of the solver's 1e-4 */
+  CHECK(F1[0] > 1.02 * F0[0], "a stiff lesion raises the force by more than 2%%");
+  CHECK(F2[0] < F0[0], "a soft cyst lowers it");
 }
 
 int main(int argc, char **argv) {
