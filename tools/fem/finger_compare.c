@@ -127,6 +127,7 @@ static int rt_curve(const palp_world_def *wd0, const palp_lesion *les, int nles,
 
 int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
                             char *err, size_t errlen) {
+  setvbuf(stdout, NULL, _IOLBF, 0); /* a long run shows each site as it finishes */
   palp_fem_config cfg = *cfg0;
   cfg.max_newton = cfg.max_newton < 25 ? 25 : cfg.max_newton;
   palp_fem_mesh mesh;
