@@ -212,16 +212,16 @@ static void test_gap(void) {
   printf("%.1f s\n", now() - t0);
 }
 
-static void test_lesion(void) {
+static void test_lesion(int level) {
   /* the case: a 10 mm lesion, 5x the gel, centre 10 mm deep; and a soft one */
   const double d[1] = {1e-3};
   const palp_lesion L = {.center = {0, 0, 0.04 - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
   palp_lesion cyst = L;
   cyst.stiffness_ratio = 0.2;
   double F0[1], F1[1], F2[1], gap[1];
-  CHECK(dome_press(2, NULL, 0, d, 1, F0, gap, NULL) == 0, "dome press");
-  CHECK(dome_press(2, &L, 1, d, 1, F1, gap, NULL) == 0, "dome press over a lesion");
-  CHECK(dome_press(2, &cyst, 1, d, 1, F2, gap, NULL) == 0, "dome press over a cyst");
+  CHECK(dome_press(level, NULL, 0, d, 1, F0, gap, NULL) == 0, "dome press");
+  CHECK(dome_press(level, &L, 1, d, 1, F1, gap, NULL) == 0, "dome press over a lesion");
+  CHECK(dome_press(level, &cyst, 1, d, 1, F2, gap, NULL) == 0, "dome press over a cyst");
   printf("pole 1 mm: %.4f N plain, %.4f N over a 10 mm lesion (5x) 10 mm deep (%+.1f%%), %.4f N over a cyst (0.2x, "
          "%+.1f%%)\n",
          F0[0], F1[0], 100 * (F1[0] / F0[0] - 1), F2[0], 100 * (F2[0] / F0[0] - 1));
@@ -235,7 +235,7 @@ int main(int argc, char **argv) {
   if (!strcmp(c, "hertz")) test_hertz();
   else if (!strcmp(c, "penalty")) test_penalty();
   else if (!strcmp(c, "gap")) test_gap();
-  else if (!strcmp(c, "lesion")) test_lesion();
+  else if (!strcmp(c, "lesion")) test_lesion(argc > 2 ? atoi(argv[2]) : 2); /* CTest: level 2; docs: 3 */
   else {
     fprintf(stderr, "unknown case %s\n", c);
     return 2;

@@ -96,6 +96,11 @@ static int rt_curve(const palp_world_def *wd0, const palp_lesion *les, int nles,
   const double R = wd.mesh.radius, r = 0.008;
   palp_vec3 dev = {(R + r + 0.001) * n.x, (R + r + 0.001) * n.y, (R + r + 0.001) * n.z};
   const int fid = palp_world_add_finger(w, dev, r);
+  if (fid < 0) {
+    snprintf(err, errlen, "real-time finger: %s", palp_strerror(fid));
+    palp_world_destroy(w);
+    return -1;
+  }
   double dd = -0.001; /* device depth */
   for (int k = 0; k < count; ++k) {
     double target = depth[k] + (k ? F[k - 1] / 2000.0 : 0.0); /* proxy ~ F / k_c above the device */
