@@ -7,6 +7,13 @@
  *                [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]
  *   palp-fem export-inp [--level N] [--config FEM.json] OUT.inp
  *   palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]
+ *   palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]
+ *                [--reading long_term|instantaneous] [--out FILE.csv]
+ *                [--site all|pole,45deg,70deg,pole_lesion]
+ *
+ * finger prints fingertip force-depth curves of the real-time model (the scene's
+ * world) against the FE reference (rigid sphere, relaxed) at matched positions:
+ * pole, 45 deg, 70 deg, and over a 10 mm lesion (finger_compare.c).
  *
  * run writes one CSV row per output frame: time, top-vertex displacement, total
  * feedback force, every real-time vertex's displacement and every contact
@@ -21,6 +28,7 @@
 #include <unistd.h>
 
 #include "fem_internal.h"
+#include "finger_compare.h"
 #include "palp_app.h"
 
 static double now_s(void) {
@@ -39,7 +47,10 @@ static void usage(void) {
           "                    [--distribution single|uniform|gaussian|gaussian_offset]\n"
           "                    [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]\n"
           "       palp-fem export-inp [--level N] [--config FEM.json] OUT.inp\n"
-          "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n");
+          "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n"
+          "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
+          "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
+          "                       [--site all|pole,45deg,70deg,pole_lesion]\n");
   palp_app_common_usage(stderr, FEM_OPTS);
 }
 
@@ -153,7 +164,7 @@ static void summary(const palp_scene *s, const palp_fem_result *r, double wall) 
 }
 
 typedef struct opts {
-  const char *scene, *config, *inp, *out, *cache_dir, *reading, *dist, *positional;
+  const char *scene, *config, *inp, *out, *cache_dir, *reading, *dist, *site, *positional;
   int level, frames, no_cache, quiet;
   double dt;
   palp_app_opts app;
@@ -188,6 +199,7 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--cache-dir", o->cache_dir)
     ARG("--reading", o->reading)
     ARG("--distribution", o->dist)
+    ARG("--site", o->site)
 #undef ARG
     if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--dt") == 0) && has) {
       char *end;
@@ -349,6 +361,32 @@ static int cmd_info(const opts *o) {
   return 0;
 }
 
+static int cmd_finger(const opts *o) {
+  if (!o->scene) {
+    fprintf(stderr, "palp-fem finger: --scene is required\n");
+    usage();
+    return 2;
+  }
+  palp_fem_config cfg;
+  if (build_config(o, &cfg)) return 2;
+  if (cfg.inp_path[0]) {
+    palp_log_error(o->log, "finger: --inp is not supported (the lesions need the generated mesh's regions)");
+    return 2;
+  }
+  palp_scene scene;
+  char err[512];
+  if (palp_scene_load(o->scene, &scene, err, sizeof err) != 0) {
+    palp_log_error(o->log, "%s: %s", o->scene, err);
+    return 2;
+  }
+  err[0] = 0;
+  if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, err, sizeof err) != 0) {
+    palp_log_error(o->log, "finger: %s", err[0] ? err : "failed");
+    return 1;
+  }
+  return 0;
+}
+
 int main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-fem")) return 0;
   if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
@@ -369,6 +407,7 @@ int main(int argc, char **argv) {
   if (strcmp(argv[1], "run") == 0) return cmd_run(&o);
   if (strcmp(argv[1], "export-inp") == 0) return cmd_export(&o);
   if (strcmp(argv[1], "info") == 0) return cmd_info(&o);
+  if (strcmp(argv[1], "finger") == 0) return cmd_finger(&o);
   fprintf(stderr, "palp-fem: unknown command %s\n", argv[1]);
   usage();
   return 2;
