@@ -34,6 +34,7 @@ typedef struct options {
   const char *scene;
   const char *out;
   const char *fem_config;
+  const char *material;
   const char *params;
   const char *cache_dir;
   const char *fit;
@@ -62,10 +63,12 @@ typedef struct options {
 static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-eval evaluate  [--scene FILE] [--params FILE] [--level N] [--out DIR] [--fem-config FILE]\n"
+          "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                           [--frames N] [--distributions 1,2,3,4] [--cache-dir DIR] [--no-plots] [--quiet]\n"
           "                           [--sites N [--forces 1,3,5] [--seed S] [--polar-min DEG] [--polar-max DEG]\n"
           "                            [--on-seconds T]]\n"
           "       palp-eval calibrate [--scene FILE] [--params FILE] [--level N] [--out FILE] [--fem-config FILE]\n"
+          "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity,added_mass,support_bulk_fraction]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
           "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM]\n"
@@ -154,6 +157,7 @@ static int parse_args(int argc, char **argv, options *o) {
     if (!strcmp(a, "--scene")) o->scene = v;
     else if (!strcmp(a, "--out")) o->out = v;
     else if (!strcmp(a, "--fem-config")) o->fem_config = v;
+    else if (!strcmp(a, "--material")) o->material = v;
     else if (!strcmp(a, "--params")) o->params = v;
     else if (!strcmp(a, "--cache-dir")) o->cache_dir = v;
     else if (!strcmp(a, "--fit")) o->fit = v;
@@ -361,6 +365,10 @@ static int load_setup(const options *o, setup *s) {
       palp_log_error(o->log, "%s: %s", o->fem_config, err);
       return 1;
     }
+  }
+  if (o->material && palp_fem_config_set_material(&s->fem, o->material, err, sizeof err)) {
+    palp_log_error(o->log, "--material: %s", err);
+    return 1;
   }
   if (o->level) s->fem.mesh.level = o->level;
   if (o->cache_dir) snprintf(s->fem.cache_dir, sizeof s->fem.cache_dir, "%s", o->cache_dir);

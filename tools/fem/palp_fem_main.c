@@ -2,7 +2,7 @@
  * palp-fem - the FE reference ("golden standard") from the command line.
  *
  *   palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json]
- *                [--inp MESH.inp] [--reading long_term|instantaneous] [--frames N]
+ *                [--inp MESH.inp] [--material PROFILE] [--reading long_term|instantaneous] [--frames N]
  *                [--distribution single|uniform|gaussian|gaussian_offset]
  *                [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]
  *   palp-fem export-inp [--level N] [--config FEM.json] OUT.inp
@@ -43,6 +43,7 @@ static double now_s(void) {
 static void usage(void) {
   fprintf(stderr,
           "usage: palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json] [--inp MESH.inp]\n"
+          "                    [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                    [--reading long_term|instantaneous] [--frames N]\n"
           "                    [--distribution single|uniform|gaussian|gaussian_offset]\n"
           "                    [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]\n"
@@ -122,7 +123,9 @@ static int write_csv(const char *path, const palp_fem_result *r) {
   return 0;
 }
 
-static void summary(const palp_scene *s, const palp_fem_result *r, double wall) {
+static void summary(const palp_fem_config *cfg, const palp_scene *s, const palp_fem_result *r, double wall) {
+  printf("material         %s: %s\n", cfg->material[0] ? cfg->material : "custom",
+         cfg->material[0] ? palp_fem_material_label(cfg->material) : "materials set field by field");
   double peak = 0.0, t_peak = 0.0, at_release = NAN, residual = NAN, recovery = NAN, t_release = -1.0;
   palp_vec3 fb_release = {NAN, NAN, NAN};
   for (int c = 0; c < s->contact_count; ++c)
@@ -164,7 +167,7 @@ static void summary(const palp_scene *s, const palp_fem_result *r, double wall) 
 }
 
 typedef struct opts {
-  const char *scene, *config, *inp, *out, *cache_dir, *reading, *dist, *site, *positional;
+  const char *scene, *config, *inp, *out, *cache_dir, *reading, *material, *dist, *site, *positional;
   int level, frames, no_cache, quiet;
   double dt;
   palp_app_opts app;
@@ -198,6 +201,7 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--out", o->out)
     ARG("--cache-dir", o->cache_dir)
     ARG("--reading", o->reading)
+    ARG("--material", o->material)
     ARG("--distribution", o->dist)
     ARG("--site", o->site)
 #undef ARG
@@ -240,6 +244,10 @@ static int build_config(const opts *o, palp_fem_config *cfg) {
     palp_log_error(o->log, "%s", err);
     return -1;
   }
+  if (o->material && palp_fem_config_set_material(cfg, o->material, err, sizeof err) != 0) {
+    palp_log_error(o->log, "--material: %s", err);
+    return -1;
+  }
   if (o->level > 0) cfg->mesh.level = o->level;
   if (o->dt >= 0.0) cfg->dt = o->dt;
   if (o->inp) snprintf(cfg->inp_path, sizeof cfg->inp_path, "%s", o->inp);
@@ -252,6 +260,11 @@ static int build_config(const opts *o, palp_fem_config *cfg) {
       palp_log_error(o->log, "--reading: expected long_term or instantaneous");
       return -1;
     }
+    /* the alias of the two paper profiles */
+    if (strncmp(cfg->material, "paper_", 6) == 0)
+      snprintf(cfg->material, sizeof cfg->material, "%s",
+               cfg->c10_reading == PALP_FEM_C10_LONG_TERM ? "paper_long_term" : "paper_instantaneous");
+    else if (cfg->material[0]) cfg->material[0] = 0;
   }
   if (palp_fem_config_validate(cfg, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s", err);
@@ -298,7 +311,7 @@ static int cmd_run(const opts *o) {
     palp_fem_result_destroy(&r);
     return 1;
   }
-  if (!o->quiet) summary(&scene, &r, now_s() - t0);
+  if (!o->quiet) summary(&cfg, &scene, &r, now_s() - t0);
   palp_fem_result_destroy(&r);
   return 0;
 }
@@ -351,6 +364,8 @@ static int cmd_info(const opts *o) {
   for (int n = 0; n < m.node_count; ++n) nf += m.fixed[n];
   printf("mesh      %d nodes (%d clamped), %d hexahedra (%d membrane, %d gel), volume %.4g m^3\n", m.node_count, nf,
          m.element_count, nm, m.element_count - nm, vol);
+  printf("material  %s (%s)\n", cfg.material[0] ? cfg.material : "custom",
+         cfg.material[0] ? palp_fem_material_label(cfg.material) : "materials set field by field");
   for (int r = 0; r < 2; ++r) {
     const palp_fem_material *mat = r ? &cfg.membrane : &cfg.gel;
     const double ginf = palp_fem_ginf(mat), c0 = palp_fem_c10_instant(mat, cfg.c10_reading);
