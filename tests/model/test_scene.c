@@ -92,6 +92,24 @@ int main(void) {
   palp_scene b;
   CHECK(json && palp_scene_parse(json, &b, err, sizeof err) == PALP_OK, "round trip parses: %s", err);
   free(json);
+  /* Every number round-trips to the same double: cJSON's own printing gave 15 digits for
+   * -0.018825206147913998 (a teaching lesion's x), which read back as ...914001, and the
+   * replayed world diverged from the session's after 66 frames. */
+  {
+    palp_scene x = a;
+    x.world.lesion_count = 1;
+    x.world.lesion[0] = (palp_lesion){.center = {-0.018825206147913998, -0.013181551253121145, 0.01928362829059618},
+                                      .radius = 0.005, .stiffness_ratio = 20};
+    char *xj = palp_scene_to_json(&x);
+    palp_scene xb;
+    CHECK(xj && palp_scene_parse(xj, &xb, err, sizeof err) == PALP_OK && xb.world.lesion_count == 1 &&
+              xb.world.lesion[0].center.x == x.world.lesion[0].center.x &&
+              xb.world.lesion[0].center.y == x.world.lesion[0].center.y &&
+              xb.world.lesion[0].center.z == x.world.lesion[0].center.z,
+          "lesion centre round-trips bit for bit: %.17g -> %.17g (%s)", x.world.lesion[0].center.x,
+          xj ? xb.world.lesion[0].center.x : 0.0, err);
+    free(xj);
+  }
   /* The rebuild lag survives the round trip (a server's logged scene carries it to replay). */
   palp_scene lagged = a;
   lagged.world.refactor_lag = 4;
