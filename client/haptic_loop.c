@@ -301,6 +301,7 @@ static void *haptic_main(void *arg) {
     double smax = 0, age = -1;
     const int got = palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax, &age);
     if (got) {
+      if (d->in->model) d->in->model(d->in->ctx, &m);
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
       if (sflags & palp_LM_OUT_OF_RANGE) st->out_of_range_models++;
       /* The safe force is the smaller of the station's and the phantom's limits. */
@@ -337,7 +338,10 @@ static void *haptic_main(void *arg) {
     l->view = (palp_cli_haptic_view){.t = t, .x = x, .xr = xr, .proxy = o.proxy, .force = o.force, .requested = o.requested,
                                      /* the server's: device beneath the proxy along the normal */
                                      .depth = (o.flags & PALP_HAPTIC_CONTACT) ? l->core.renderer.cur.depth : 0,
-                                     .flags = o.flags, .on = on};
+                                     .flags = o.flags, .on = on,
+                                     .point = l->core.renderer.cur.point,
+                                     .model_contact = l->core.renderer.cur.contact,
+                                     .model_time = l->core.renderer.cur.time};
     pthread_mutex_unlock(&l->view_lock);
     }
   }

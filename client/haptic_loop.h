@@ -146,6 +146,10 @@ typedef struct palp_cli_haptic_view {
   double t;
   palp_vec3 x, proxy, force;
   palp_vec3 xr;  /* the renderer's device point: x minus the motion made while the force was held */
+  /* issue 13: the server's newest local model, for a "lump here" mark at its contact point */
+  palp_vec3 point;      /* LocalModel.point [m] */
+  int model_contact;    /* LocalModel.in_contact */
+  double model_time;    /* LocalModel.time: world time of the step [s] */
   double requested, depth;
   unsigned flags;
   int on;

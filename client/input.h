@@ -58,7 +58,18 @@ typedef struct palp_cli_input {
   /* A clear message for the last error, or NULL. */
   const char *(*error)(void *ctx);
   double finger_radius; /* fingertip sphere [m]; 0 = 8 mm */
+  /* ---- issue 13, optional (added at the end: older drivers leave it zero) --------
+   * The device's "lump here" button: PALP_CLI_BUTTON_MARK (mark a lump where the
+   * fingertip touches), PALP_CLI_BUTTON_WITHDRAW (withdraw the last mark) or 0 when
+   * nothing was pressed since the last call. Called from the station's main thread
+   * (not the haptic thread) about 50 times a second; must not block. */
+  int (*button)(void *ctx);
+  /* Optional: every new local contact model from the server (its force is the
+   * phantom's after the physics step, before the station limits or extrapolates it).
+   * Called from the haptic thread; must not block. */
+  void (*model)(void *ctx, const palp_local_model *m);
 } palp_cli_input;
+enum { PALP_CLI_BUTTON_MARK = 1, PALP_CLI_BUTTON_WITHDRAW = 2 };
 
 /* write_force flags (the values of palp_haptic's PALP_HAPTIC_*). */
 enum {
@@ -130,6 +141,8 @@ typedef struct palp_cli_simdevice_def {
   double radius;         /* fingertip [m], default 0.008 */
   double start;          /* idle time before the trajectory [s], default 0.2 */
   double tail;           /* lifted time after it before the source ends [s], default 0.5 */
+  double mark_at;        /* issue 13: press the "lump here" button at this time [s]; 0: never */
+  double withdraw_at;    /* press "withdraw the last mark" at this time [s]; 0: never */
 } palp_cli_simdevice_def;
 
 palp_cli_simdevice_def palp_cli_simdevice_default_def(palp_cli_sim_pattern pattern);
@@ -149,7 +162,6 @@ int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen);
  * surface, +/- change its depth in 1 mm steps, space lifts/lowers; the force the
  * station renders is shown. */
 int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen);
-
 /* ---- device driver (shared object) ----------------------------------------------
  * A driver is a shared object exporting
  *   int palp_cli_device_driver(const char *arg, palp_cli_input *out);

@@ -4,6 +4,7 @@
  * dome; + and - change the force by 0.25 N; space presses/lifts; 1-4 choose the
  * paper's distribution; q ends. The terminal is restored on close. */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -137,13 +138,15 @@ typedef struct kfinger {
   palp_vec3 force;
   unsigned flags;
   double radius;
+  atomic_int button;     /* issue 13: m / u pressed (haptic thread -> main thread) */
 } kfinger;
 
 static int kf_open(void *ctx, double R) {
   kfinger *f = ctx;
   int rc = k_open(&f->k, R);
   if (rc == 0)
-    fprintf(stderr, "keyboard (finger): arrows move the fingertip, +/- press deeper / come up 1 mm, space lift, q quit\n");
+    fprintf(stderr, "keyboard (finger): arrows move the fingertip, +/- press deeper / come up 1 mm, space lift, "
+                    "m mark a lump here, u withdraw the last mark, q quit\n");
   return rc;
 }
 
@@ -157,6 +160,8 @@ static void fkey(kfinger *f, int c) {
   case '+': case '=': f->depth = f->depth + 0.001 > 0.035 ? 0.035 : f->depth + 0.001; break;
   case '-': case '_': f->depth = f->depth - 0.001 < -0.010 ? -0.010 : f->depth - 0.001; break;
   case ' ': f->lifted = !f->lifted; break;
+  case 'm': case 'M': atomic_store(&f->button, PALP_CLI_BUTTON_MARK); break;
+  case 'u': case 'U': atomic_store(&f->button, PALP_CLI_BUTTON_WITHDRAW); break;
   default: key(k, c); break;
   }
 }
@@ -188,6 +193,11 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
   }
 }
 
+static int kf_button(void *ctx) {
+  kfinger *f = ctx;
+  return atomic_exchange(&f->button, 0);
+}
+
 static void kf_close(void *ctx) {
   kfinger *f = ctx;
   if (f->k.raw) tcsetattr(STDIN_FILENO, TCSANOW, &f->k.saved);
@@ -206,6 +216,7 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
   f->depth = -0.002; /* start 2 mm above the pole */
   f->radius = 0.008;
   *out = (palp_cli_input){.name = "keyboard (finger)", .ctx = f, .open = kf_open, .close = kf_close,
-                          .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius};
+                          .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius,
+                          .button = kf_button};
   return 0;
 }

@@ -8,6 +8,7 @@
  * above the surface point along its normal. Pure function of (def, R, t), so a
  * test can drive a model with exactly the trajectory the station plays. */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -192,6 +193,8 @@ typedef struct simdev {
   palp_vec3 force; /* last force written [N] */
   unsigned flags;
   char err[128];
+  int marked, withdrawn;  /* haptic thread: the scripted button presses done */
+  atomic_int button;      /* haptic thread -> main thread */
 } simdev;
 
 static int sd_open(void *ctx, double R) {
@@ -208,7 +211,20 @@ static int sd_read(void *ctx, double t, palp_vec3 *x) {
     snprintf(s->err, sizeof s->err, "simulated device: read before open");
     return PALP_EINVAL;
   }
+  if (s->def.mark_at > 0 && !s->marked && t >= s->def.mark_at) {
+    s->marked = 1;
+    atomic_store(&s->button, PALP_CLI_BUTTON_MARK);
+  }
+  if (s->def.withdraw_at > 0 && !s->withdrawn && t >= s->def.withdraw_at) {
+    s->withdrawn = 1;
+    atomic_store(&s->button, PALP_CLI_BUTTON_WITHDRAW);
+  }
   return eval(&s->p, &s->def, s->R, t, x);
+}
+
+static int sd_button(void *ctx) {
+  simdev *s = ctx;
+  return atomic_exchange(&s->button, 0);
 }
 
 static void sd_write(void *ctx, palp_vec3 f, unsigned flags) {
@@ -250,7 +266,8 @@ int palp_cli_simdevice_input(const palp_cli_simdevice_def *def, palp_cli_input *
                           .read_position = sd_read,
                           .write_force = sd_write,
                           .error = sd_error,
-                          .finger_radius = def->radius};
+                          .finger_radius = def->radius,
+                          .button = sd_button};
   return 0;
 }
 
@@ -294,9 +311,12 @@ int palp_cli_simdevice_parse(const char *spec, palp_cli_simdevice_def *out, char
     else if (!strcmp(tok, "polar")) d.polar_deg = v;
     else if (!strcmp(tok, "azimuth")) d.azimuth_deg = v;
     else if (!strcmp(tok, "radius_mm")) d.radius = v * 1e-3;
+    else if (!strcmp(tok, "mark_s")) d.mark_at = v;
+    else if (!strcmp(tok, "withdraw_s")) d.withdraw_at = v;
     else {
       snprintf(err, errlen, "simulated device: unknown key \"%s\" (depth_mm, speed_mm_s, hold_s, slide_mm_s, "
-                            "slide_mm, circle_mm, circle_hz, circles, cycles, strips, polar, azimuth, radius_mm)", tok);
+                            "slide_mm, circle_mm, circle_hz, circles, cycles, strips, polar, azimuth, radius_mm, mark_s, "
+                            "withdraw_s)", tok);
       return PALP_EINVAL;
     }
   }

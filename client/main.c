@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "haptic_loop.h"
+#include "input_trainee.h"
 #include "input.h"
 #include "palp.h"
 #include "palp_app.h"
@@ -234,6 +235,13 @@ static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errle
   if (!strncmp(o->input, "replay:", 7)) return palp_cli_replay_input(o->input + 7, in, err, errlen);
   if (!strcmp(o->input, "keyboard")) return palp_cli_keyboard_input(in, err, errlen);
   if (!strcmp(o->input, "keyboard-finger")) return palp_cli_keyboard_finger_input(in, err, errlen);
+  if (!strncmp(o->input, "sim:expert", 10) || !strncmp(o->input, "sim:novice", 10)) {
+    palp_cli_trainee_def d;
+    int rc = palp_cli_trainee_parse(o->input + 4, &d, err, errlen);
+    if (rc < 0) return rc;
+    if (o->finger_radius_mm > 0) d.radius = o->finger_radius_mm * 1e-3;
+    return palp_cli_trainee_input(&d, in);
+  }
   if (!strncmp(o->input, "sim:", 4)) {
     palp_cli_simdevice_def d;
     int rc = palp_cli_simdevice_parse(o->input + 4, &d, err, errlen);
@@ -373,6 +381,91 @@ static void send_release(palp_cli_station *st, int f, uint64_t *seq) {
 
 /* ---- position-driven trainee: the 1 kHz haptic thread (issue 11) ---------------------------- */
 
+/* ---- issue 13: exercises and "lump here" findings on a position-driven station ---------
+ * On join the exercise's title and instructions (if the phantom runs one); the
+ * device's button (or the keyboard's m / u) marks a lump at the fingertip's contact
+ * point, the server's newest LocalModel.point, or withdraws the last mark; the
+ * server's answers (marks standing, refusal reasons, time left) are printed. */
+#define UI_MARKS 64
+typedef struct findings_ui {
+  int exercise;
+  double time_limit;
+  uint32_t sent[UI_MARKS]; /* marks sent and not withdrawn or refused, newest last */
+  int nsent;
+  int64_t next_time_print;
+  uint32_t shown_id;       /* the answer last printed */
+  int shown_ok;
+  uint32_t shown_marks;
+} findings_ui;
+
+static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *st) {
+  memset(u, 0, sizeof *u);
+  palp_Exercise ex;
+  if (palp_cli_station_exercise(st, st->phantom_id, 1.0, &ex) == 1) {
+    u->exercise = 1;
+    u->time_limit = ex.time_limit;
+    if (!o->quiet)
+      printf("[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
+             "device's button (keyboard: m), withdraw the last mark with u\n",
+             o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
+  }
+  u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
+  u->shown_ok = -1;
+  fflush(stdout);
+}
+
+static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st, int button,
+                             const palp_cli_haptic_view *v) {
+  if (button == PALP_CLI_BUTTON_MARK) {
+    /* Refused here, not sent: a mark needs a contact point, which exists only while
+     * the fingertip touches the phantom. */
+    if (!v->on || !v->model_contact)
+      printf("[trainee %s] mark refused here: the fingertip is not touching the phantom\n", o->name);
+    else if (u->nsent >= UI_MARKS)
+      printf("[trainee %s] mark refused here: %d marks standing\n", o->name, u->nsent);
+    else {
+      const int id = palp_cli_station_mark(st, v->point, v->model_time);
+      if (id > 0) {
+        u->sent[u->nsent++] = (uint32_t)id;
+        if (!o->quiet)
+          printf("[trainee %s] mark %d sent at (%.1f, %.1f, %.1f) mm\n", o->name, id, v->point.x * 1e3,
+                 v->point.y * 1e3, v->point.z * 1e3);
+      }
+    }
+  } else if (button == PALP_CLI_BUTTON_WITHDRAW) {
+    if (u->nsent == 0)
+      printf("[trainee %s] no mark to withdraw\n", o->name);
+    else if (palp_cli_station_withdraw(st, u->sent[u->nsent - 1]) == 0) {
+      if (!o->quiet) printf("[trainee %s] withdrawing mark %u\n", o->name, u->sent[u->nsent - 1]);
+      u->nsent--;
+    }
+  }
+  palp_FindingStatus fs;
+  if (palp_cli_station_finding_status(st, &fs) == 1 && fs.last_mark_id) {
+    /* Each answer once (the server refreshes the status every half second). */
+    if (fs.last_mark_id != u->shown_id || (int)fs.last_accepted != u->shown_ok || fs.marks != u->shown_marks) {
+      u->shown_id = fs.last_mark_id, u->shown_ok = fs.last_accepted, u->shown_marks = fs.marks;
+      if (!fs.last_accepted) {
+        printf("[trainee %s] the server refused finding %u: %s\n", o->name, fs.last_mark_id, fs.reason);
+        if (u->nsent && u->sent[u->nsent - 1] == fs.last_mark_id) u->nsent--;
+      } else if (!o->quiet)
+        printf("[trainee %s] finding %u accepted: %u mark%s standing\n", o->name, fs.last_mark_id, fs.marks,
+               fs.marks == 1 ? "" : "s");
+    }
+    if (u->exercise && !o->quiet && palp_dds_now_ns() >= u->next_time_print) {
+      printf("[trainee %s] %.0f s left\n", o->name, fs.time_left);
+      u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
+    }
+  }
+  fflush(stdout);
+}
+
+static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st) {
+  (void)st;
+  if (!o->quiet && (u->exercise || u->nsent))
+    printf("[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
+}
+
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
@@ -426,6 +519,8 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
            "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
            d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
   fflush(stdout);
+  findings_ui fu;
+  findings_ui_start(&fu, o, st);
   feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns()};
   latency lat = {0};
   uint64_t bad = 0, models = 0;
@@ -482,6 +577,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
     }
+    findings_ui_tick(&fu, o, st, in.button ? in.button(in.ctx) : 0, &v);
     if (now >= next_check) {
       if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
         closed = 1;
@@ -490,6 +586,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       next_check = now + 100000000;
     }
   }
+  findings_ui_end(&fu, o, st);
   dds_delete(lm_cond);
   dds_delete(ws);
   palp_cli_haptic_stats hs;

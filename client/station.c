@@ -70,7 +70,8 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
                                                               PALP_TOPIC_SESSION_REQUEST);
   st->reply_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   st->state_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
-  if (st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
+  st->exercise_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
+  if (st->exercise_r < 0 || st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
     palp_cli_station_close(st);
     return fail(err, errlen, PALP_EIO, "cannot create the station's DDS endpoints");
   }
@@ -229,9 +230,75 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     st->local_model_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);
   if (j->want_deformation)
     st->deformation_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
-  if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0 || st->local_model_r < 0)
+  if (j->role == palp_ROLE_TRAINEE) { /* issue 13: findings, any session (free practice too) */
+    st->finding_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+    st->finding_status_r =
+        palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
+    st->next_mark_id = 1;
+  }
+  if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0 || st->local_model_r < 0 ||
+      st->finding_w < 0 || st->finding_status_r < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
   return 0;
+}
+
+int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out) {
+  const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
+  for (;;) {
+    palp_Exercise e;
+    void *ptr[1] = {&e};
+    dds_sample_info_t info;
+    /* read, not take: it stays for the next join (transient-local, one per phantom) */
+    dds_instance_handle_t ih;
+    memset(&e, 0, sizeof e);
+    e.phantom_id = phantom_id;
+    ih = dds_lookup_instance(st->exercise_r, &e);
+    if (ih != DDS_HANDLE_NIL && dds_read_instance(st->exercise_r, ptr, &info, 1, 1, ih) > 0 && info.valid_data) {
+      *out = e;
+      out->name[sizeof out->name - 1] = 0;
+      out->title[sizeof out->title - 1] = 0;
+      out->instructions[sizeof out->instructions - 1] = 0;
+      return 1;
+    }
+    if (palp_dds_now_ns() >= end) return 0;
+    nap(0.02);
+  }
+}
+
+static int send_finding(palp_cli_station *st, palp_FindingOp op, uint32_t mark_id, palp_vec3 p, double t) {
+  if (st->finding_w <= 0) return PALP_EINVAL;
+  palp_Finding f;
+  memset(&f, 0, sizeof f);
+  f.session_id = st->session_id;
+  f.mark_id = mark_id;
+  f.op = op;
+  f.point = (palp_Vec3){p.x, p.y, p.z};
+  f.time = t;
+  return dds_write(st->finding_w, &f) < 0 ? PALP_EIO : 0;
+}
+
+int palp_cli_station_mark(palp_cli_station *st, palp_vec3 point, double t) {
+  const uint32_t id = st->next_mark_id;
+  const int rc = send_finding(st, palp_FINDING_MARK, id, point, t);
+  if (rc < 0) return rc;
+  st->next_mark_id++;
+  return (int)id;
+}
+
+int palp_cli_station_withdraw(palp_cli_station *st, uint32_t mark_id) {
+  return send_finding(st, palp_FINDING_WITHDRAW, mark_id, (palp_vec3){0, 0, 0}, 0);
+}
+
+int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *out) {
+  if (st->finding_status_r <= 0) return 0;
+  int got = 0;
+  palp_FindingStatus s;
+  void *ptr[1] = {&s};
+  dds_sample_info_t info;
+  while (dds_take(st->finding_status_r, ptr, &info, 1, 1) > 0)
+    if (info.valid_data) *out = s, got = 1;
+  if (got) out->reason[sizeof out->reason - 1] = 0;
+  return got;
 }
 
 int palp_cli_station_leave(palp_cli_station *st) {
@@ -333,5 +400,6 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   if (st->pub > 0) dds_delete(st->pub);
   if (st->sub > 0) dds_delete(st->sub);
   st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
+  st->finding_w = st->finding_status_r = 0;
   st->session_id = 0;
 }

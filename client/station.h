@@ -30,6 +30,9 @@ typedef struct palp_cli_station {
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
+  dds_entity_t exercise_r;    /* palp_exercise (issue 13): what the trainee may know of an exercise */
+  dds_entity_t finding_w, finding_status_r; /* trainee: "lump here" marks and the server's answers */
+  uint32_t next_mark_id;      /* the station numbers its marks from 1 */
   uint32_t request_seq;
   palp_dds_security sec;    /* identity; kind PALP_DDS_ID_NONE: plain DDS */
   dds_entity_t request_pub; /* secured: the publisher in the identity's request partition */
@@ -80,6 +83,17 @@ int palp_cli_station_server_number(palp_cli_station *st, const char *server_name
                                    char *err, size_t errlen);
 /* Drops the session's endpoints (after its server was lost), ready for another join. */
 void palp_cli_station_end_session(palp_cli_station *st);
+
+/* issue 13. The exercise the phantom runs (title, instructions, limits): 1 and *out
+ * when there is one within timeout [s], 0 when not (a plain phantom). */
+int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out);
+/* Sends a "lump here" mark at point [m] (the fingertip's contact point, world time t)
+ * and returns its mark id (> 0), or withdraws mark_id (op palp_FINDING_WITHDRAW);
+ * a negative code on failure. */
+int palp_cli_station_mark(palp_cli_station *st, palp_vec3 point, double t);
+int palp_cli_station_withdraw(palp_cli_station *st, uint32_t mark_id);
+/* Non-blocking: 1 and the newest palp_finding_status when one came since the last call. */
+int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *out);
 
 /* Non-blocking: 1 and the state when the session's state changed to closed. */
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);

@@ -49,7 +49,10 @@ palp_world *palp_db_world_from_scene(const char *scene_json, double dt_s, int *e
     if (err) *err = rc;
     return NULL;
   }
-  if (dt_s > 0) sc.world.dt = dt_s; /* the server steps at its tick rate, whatever the scene says */
+  /* The server steps at its tick rate, whatever the scene says. Its rebuild lag is in the
+   * logged scene (time.refactor_lag_steps; absent in logs made before the lag existed, which
+   * were stepped without one), so replay defers exactly as the session did. */
+  if (dt_s > 0) sc.world.dt = dt_s;
   palp_world *w = palp_scene_create_world(&sc, &rc);
   if (!w) {
     if (msg && msglen) snprintf(msg, msglen, "world: %s", palp_strerror(rc));

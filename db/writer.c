@@ -983,6 +983,9 @@ static void *worker(void *arg) {
     if (w->stop && w->count == 0) break;
   }
   pthread_mutex_unlock(&w->mu);
+  /* The last pass may have read stop = 0 and skipped the rate-limited shed event; a closing
+   * writer always accounts for every record it shed. */
+  write_accounting(w, 1);
   free(refused);
   return NULL;
 }

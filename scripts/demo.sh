@@ -60,7 +60,7 @@ trap cleanup EXIT
 # Sessions of this run only, for the review at the end (the log keeps every run).
 since=$(date +%Y-%m-%dT%H:%M:%S)
 echo "demo: palp-server on DDS domain $domain (loopback only), logs in $out/"
-"$server" --config config/server.json --domain "$domain" "${srv_sec[@]}" >"$out/server.log" 2>&1 &
+"$server" --config config/server-exercises.json --domain "$domain" "${srv_sec[@]}" >"$out/server.log" 2>&1 &
 server_pid=$!
 pids+=("$server_pid")
 for _ in $(seq 50); do
@@ -106,6 +106,24 @@ bob=$!
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
 carol=$!
+# An exercise (issue 13): "teaching" (two 1 cm lumps 10 mm deep, hidden; a phantom whose
+# lumps are exaggerated so that they can be felt, docs/assessment.md) on phantom 14, taken
+# by two scripted trainees palpating by position: nina, a novice (five light presses at
+# random places, one guessed mark), and eve, a MammaCare expert (vertical strips at three
+# pressures, marks where the force at equal depth rises above its surroundings; ~165 s in
+# real time, the longest part of the demo; PALP_DEMO_EXPERT=0 leaves her out).
+"$client" --role trainee --domain "$domain" --phantom 14 --name nina --input sim:novice --print-period 0 \
+  >"$out/nina.log" 2>&1 &
+pids+=($!)
+nina=$!
+eve=
+if [ "${PALP_DEMO_EXPERT:-1}" = 1 ]; then
+  echo "demo: eve, the scripted expert, examines the teaching exercise for ~3 minutes (PALP_DEMO_EXPERT=0 skips her)"
+  "$client" --role trainee --domain "$domain" --phantom 14 --name eve --input sim:expert --print-period 0 \
+    >"$out/eve.log" 2>&1 &
+  pids+=($!)
+  eve=$!
+fi
 # The visual station shows bob's phantom; the instructor follows alice.
 "$client" --role visual --domain "$domain" --phantom 2 "${visual_sec[@]}" --no-color --map-every 2 \
   --svg "$out/bob-peak.svg" --duration 8 >"$out/visual.log" 2>&1 &
@@ -117,7 +135,7 @@ pids+=($!)
 observer=$!
 
 status=0
-for p in "$alice" "$bob" "$carol" "$visual" "$observer"; do wait "$p" || status=$?; done
+for p in "$alice" "$bob" "$carol" "$visual" "$observer" "$nina" $eve; do wait "$p" || status=$?; done
 [ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
 kill -INT "$server_pid"
 wait "$server_pid" || status=$?
@@ -137,6 +155,13 @@ echo "== carol's haptic station: palpating by position, what she felt (1 kHz, fr
 grep -E "haptic thread|LIMITED|under the limit|flagged" "$out/carol.log" || true
 sed -n '/^rendered |F|/,$p' "$out/carol.log"
 echo
+echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found =="
+for t in nina ${eve:+eve}; do
+  grep -E "^\[trainee $t\] (exercise|mark|finding|the server refused|[0-9]+ marks? standing)|^\[scripted" "$out/$t.log" || true
+done
+echo "(the lesions are revealed only in the instructor's log; assess a session with"
+echo " build/tests/assess/assess_log DB TRAINEE novice|expert or palp-review)"
+echo
 echo "== stations =="
 for f in alice bob carol visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
 echo
@@ -155,6 +180,10 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   echo
   echo "== instructor review (palp-review, from $db) =="
   "$review" --db "$db" list --since "$since"
+  # The exercise's sessions by trainee (the class report of issue 13 takes these uids).
+  for t in nina ${eve:+eve}; do
+    "$review" --db "$db" list --since "$since" | awk -v t="$t" 'NR > 1 && $2 == t { print "exercise session: " t " " $1 }'
+  done
   for uid in $("$review" --db "$db" list --since "$since" | awk 'NR > 1 && $1 ~ /-/ { print $1 }'); do
     echo
     "$review" --db "$db" show "$uid" | sed -n '1,/^events/p' | sed '$d'

@@ -43,6 +43,7 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   cfg->closed_retention = 10.0;
   cfg->dds_log_lines = 10;
   cfg->dds_log_window = 10.0;
+  cfg->assess_sample_hz = 100.0; /* a 10 ms path resolution: 0.5 mm at a 5 cm/s glide */
   snprintf(cfg->dds_config, sizeof cfg->dds_config, "cyclonedds-loopback.xml");
   snprintf(cfg->security_identity, sizeof cfg->security_identity, "server");
 }
@@ -111,18 +112,22 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "absurd_force",   "max_viewers",    "stations_per_writer",
                                        "join_rate",      "join_burst",     "closed_retention",
                                        "dds_log_lines",  "dds_log_window", "security",
-                                       "server_name",    "server_number",  "log_level",      NULL};
+                                       "server_name",    "server_number",  "log_level",      "exercises",
+                                       "assess_sample_hz", NULL};
 static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
+static const char *const exercise_keys[] = {"id", "file", "physics_rate_hz", "comment", NULL};
 
 int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen) {
   /* A numbered server puts its number in the high bits of every id it hands out
    * (PALP_DDS_ID): its own ids must leave them free. */
   if (cfg->server_number == 0) return 0;
+  const int plain = cfg->phantom_count - cfg->exercise_count;
   for (int i = 0; i < cfg->phantom_count; i++)
     if (cfg->phantom[i].id > PALP_SRV_MAX_LOCAL_ID)
-      return fail(err, errlen, PALP_EINVAL, "phantoms[%d].id: %u is above %u, the largest id a server with a "
-                  "server_number can qualify", i, cfg->phantom[i].id, PALP_SRV_MAX_LOCAL_ID);
+      return fail(err, errlen, PALP_EINVAL, "%s[%d].id: %u is above %u, the largest id a server with a "
+                  "server_number can qualify", i < plain ? "phantoms" : "exercises", i < plain ? i : i - plain,
+                  cfg->phantom[i].id, PALP_SRV_MAX_LOCAL_ID);
   return 0;
 }
 
@@ -158,6 +163,49 @@ static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_confi
     if ((rc = get_number(p, "physics_rate_hz", where, 1, 10000, 0, &ph->physics_rate_hz, err, errlen))) return rc;
   }
   cfg->phantom_count = n;
+  return 0;
+}
+
+/* "exercises": [{"id": N, "file": "exercises/easy.json", "physics_rate_hz": 250}]: each becomes
+ * one more hosted phantom (after the phantoms, sharing their id space and their limit); the
+ * server loads the exercise file itself (its name, phantom and lesions: palp_exercise_load). */
+static int parse_exercises(const cJSON *arr, const char *base_dir, palp_srv_config *cfg, char *err,
+                           size_t errlen) {
+  cfg->exercise_count = 0;
+  if (!arr) return 0;
+  if (!cJSON_IsArray(arr)) return fail(err, errlen, PALP_EPARSE, "exercises: expected an array");
+  const int n = cJSON_GetArraySize(arr);
+  if (cfg->phantom_count + n > PALP_SRV_MAX_PHANTOMS)
+    return fail(err, errlen, PALP_EINVAL, "exercises: %d phantoms and %d exercises, at most %d in all",
+                cfg->phantom_count, n, PALP_SRV_MAX_PHANTOMS);
+  for (int i = 0; i < n; i++) {
+    const cJSON *p = cJSON_GetArrayItem(arr, i);
+    char where[32];
+    snprintf(where, sizeof where, "exercises[%d].", i);
+    if (!cJSON_IsObject(p)) return fail(err, errlen, PALP_EPARSE, "exercises[%d]: expected an object", i);
+    int rc = check_keys(p, where, exercise_keys, err, errlen);
+    if (rc) return rc;
+    palp_srv_phantom_cfg *ph = &cfg->phantom[cfg->phantom_count + i];
+    memset(ph, 0, sizeof *ph);
+    int64_t id = 0;
+    if ((rc = get_int(p, "id", where, 1, 4294967295.0, 1, &id, err, errlen))) return rc;
+    ph->id = (uint32_t)id;
+    for (int j = 0; j < cfg->phantom_count + i; j++)
+      if (cfg->phantom[j].id == ph->id)
+        return fail(err, errlen, PALP_EINVAL, "%sid: %u is already used by %s[%d]", where, ph->id,
+                    j < cfg->phantom_count ? "phantoms" : "exercises",
+                    j < cfg->phantom_count ? j : j - cfg->phantom_count);
+    char file[PALP_SRV_PATH_MAX];
+    if ((rc = get_string(p, "file", where, 1, file, sizeof file, err, errlen))) return rc;
+    if (!file[0]) return fail(err, errlen, PALP_EINVAL, "%sfile: empty", where);
+    if (resolve(base_dir, file, ph->exercise_path, sizeof ph->exercise_path))
+      return fail(err, errlen, PALP_EINVAL, "%sfile: path too long", where);
+    ph->physics_rate_hz = 0;
+    if ((rc = get_number(p, "physics_rate_hz", where, 1, 10000, 0, &ph->physics_rate_hz, err, errlen))) return rc;
+    snprintf(ph->name, sizeof ph->name, "exercise %u", ph->id); /* the title replaces it once loaded */
+  }
+  cfg->phantom_count += n;
+  cfg->exercise_count = n;
   return 0;
 }
 
@@ -277,6 +325,7 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
       goto out;
     }
   }
+  if ((rc = get_number(root, "assess_sample_hz", w, 1, 10000, 0, &cfg->assess_sample_hz, err, errlen))) goto out;
   if ((rc = parse_security(cJSON_GetObjectItemCaseSensitive(root, "security"), base_dir, cfg, err, errlen))) goto out;
   if ((rc = get_string(root, "log_level", w, 0, cfg->log_level, sizeof cfg->log_level, err, errlen))) goto out;
   if (cfg->log_level[0] && strcmp(cfg->log_level, "error") && strcmp(cfg->log_level, "warn") &&
@@ -289,6 +338,7 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   if ((rc = get_int(root, "server_number", w, 0, PALP_SRV_MAX_SERVER_NUMBER, 0, &i64, err, errlen))) goto out;
   cfg->server_number = (uint32_t)i64;
   rc = parse_phantoms(cJSON_GetObjectItemCaseSensitive(root, "phantoms"), base_dir, cfg, err, errlen);
+  if (rc == 0) rc = parse_exercises(cJSON_GetObjectItemCaseSensitive(root, "exercises"), base_dir, cfg, err, errlen);
   if (!rc) rc = palp_srv_config_check_ids(cfg, err, errlen);
 out:
   cJSON_Delete(root);

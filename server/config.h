@@ -29,6 +29,10 @@ typedef struct palp_srv_phantom_cfg {
   double physics_rate_hz;             /* this phantom's sessions step at this rate [Hz];
                                          0 = the server's tick_rate_hz (issue 11: the physics
                                          rate is decoupled from the stations' 1 kHz haptic rate) */
+  char exercise_path[PALP_SRV_PATH_MAX]; /* issue 13: "" for a plain phantom; else the exercise file
+                                            (resolved) whose phantom, with its lesions hidden in it,
+                                            this entry hosts; name and scene_path are then filled by
+                                            the server from the exercise (its title, its phantom) */
 } palp_srv_phantom_cfg;
 
 typedef struct palp_srv_config {
@@ -63,7 +67,10 @@ typedef struct palp_srv_config {
   char log_level[16];          /* "error", "warn", "info", "debug"; "" = not set (info); re-read on SIGHUP */
   char server_name[64];        /* identity on the domain; "" = the host name */
   uint32_t server_number;      /* 0..4095: high bits of every phantom and session id it hands out */
-  int phantom_count;
+  double assess_sample_hz;     /* issue 13: finger samples logged per second per position-driven
+                                  finger, at most every physics step (default 100) */
+  int phantom_count;           /* phantoms and exercises: exercises come after the phantoms */
+  int exercise_count;          /* of phantom[]: the last exercise_count entries */
   palp_srv_phantom_cfg phantom[PALP_SRV_MAX_PHANTOMS];
 } palp_srv_config;
 

@@ -10,6 +10,7 @@
 #include "palp_db.h"
 #include "palp_dds.h"
 
+#define SLOT_FINGERS 16 /* model contact ids whose fingertip radius is tracked */
 #define SLOTS 1024 /* open sessions are far fewer; a slot is found by id % SLOTS */
 #define FLUSH_NS 1000000000 /* reject/clamp/overrun counts are logged once a second per session */
 
@@ -20,6 +21,11 @@ typedef struct slot {
   int64_t last_flush_ns;
   int64_t last_frame;
   uint64_t rejected[PALP_SRV_REJ_COUNT], clamped, overruns;
+  /* issue 13 */
+  int sample_every;            /* log a finger sample every this many frames */
+  int64_t findings_refused;    /* refusals not logged one by one since the last flush */
+  int refusals_logged;         /* logged one by one since the last flush */
+  double finger_radius[SLOT_FINGERS]; /* per model contact id, from the world ops [m] */
 } slot;
 
 struct palp_srv_db_log {
@@ -47,6 +53,12 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_CLAMP, frame, "force_limit", (int64_t)s->clamped);
     s->clamped = 0;
   }
+  if (s->findings_refused) {
+    palp_db_log_event(l->w, s->h, PALP_DB_EVENT_REJECT, frame, "finding refused (more, not logged one by one)",
+                      s->findings_refused);
+    s->findings_refused = 0;
+  }
+  s->refusals_logged = 0;
   if (s->overruns) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_OVERRUN, frame, "tick ended after the next tick's start",
                       (int64_t)s->overruns);
@@ -90,6 +102,14 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   s->id = i->session_id;
   s->h = h;
   s->last_flush_ns = palp_dds_now_ns();
+  /* Every physics step when the physics is slower than assess_sample_hz. */
+  const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : 100.0;
+  s->sample_every = i->tick_rate_hz > hz ? (int)lround(i->tick_rate_hz / hz) : 1;
+  if (i->exercise_name && i->exercise_json) {
+    rc = palp_db_log_exercise(l->w, h, i->exercise_name, i->exercise_json);
+    if (rc < 0)
+      palp_log_error(l->log, "session log: session %u: exercise not logged: %s", i->session_id, palp_db_strerror(rc));
+  }
   palp_db_log_event(l->w, h, PALP_DB_EVENT_JOIN, 0, i->trainee_station, 1);
 }
 
@@ -106,6 +126,33 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
   palp_db_log_event(l->w, s->h, PALP_DB_EVENT_LEAVE, s->last_frame, sum->info.trainee_station, 1);
   palp_db_log_session_end(l->w, s->h, r, why, 0);
   memset(s, 0, sizeof *s);
+}
+
+/* Accepted findings are records; refusals are events, one by one up to a few per
+ * second and then counted (a flooding station cannot flood the log). */
+#define REFUSALS_LOGGED_PER_FLUSH 16
+static void on_finding(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  if (ev->accepted) {
+    const palp_db_finding f = {.mark_id = ev->mark_id,
+                               .op = ev->withdraw ? PALP_DB_FINDING_WITHDRAW : PALP_DB_FINDING_MARK,
+                               .frame = ev->frame,
+                               .sim_time_s = ev->sim_time,
+                               .wall_unix_s = 0,
+                               .point_m = ev->withdraw ? (palp_vec3){0, 0, 0} : ev->point};
+    palp_db_log_finding(l->w, s->h, &f);
+    return;
+  }
+  if (s->refusals_logged >= REFUSALS_LOGGED_PER_FLUSH) {
+    s->findings_refused++;
+    return;
+  }
+  s->refusals_logged++;
+  char detail[200];
+  snprintf(detail, sizeof detail, "finding %u refused: %s", ev->mark_id, ev->reason ? ev->reason : "");
+  palp_db_log_event(l->w, s->h, PALP_DB_EVENT_REJECT, ev->frame, detail, 1);
 }
 
 static void on_member(void *ctx, uint32_t session_id, const char *station, int role, int joined) {
@@ -135,6 +182,8 @@ static void on_world_op(void *ctx, uint32_t session_id, const palp_srv_world_op 
   c.center_m = op->center;
   c.radius_m = op->radius;
   palp_db_log_contact(l->w, s->h, &c);
+  if (op->kind == 2 && op->op != PALP_SRV_OP_REMOVE && op->slot >= 0 && op->slot < SLOT_FINGERS)
+    s->finger_radius[op->slot] = op->radius;
 }
 
 static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r, int clamped) {
@@ -166,6 +215,32 @@ static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const 
     for (int i = 0; i < fingers; i++)
       if (finger_slot[i] >= 0) palp_db_log_feedback(l->w, s->h, frame, finger_slot[i], finger_force[i]);
   }
+  /* issue 13: the position-driven fingertips, what palp_assess scores. A force-driven
+   * contact has no local model (the call refuses it). Cheap: a local model and the
+   * touched triangles, copied into the queue. */
+  if (frame % s->sample_every == 0)
+    for (int i = 0; i < fingers; i++) {
+      if (finger_slot[i] < 0 || finger_slot[i] >= SLOT_FINGERS) continue;
+      palp_local_model m;
+      if (palp_world_finger_local_model(w, finger_slot[i], &m) < 0) continue;
+      int tri[PALP_DB_MAX_SAMPLE_TRIANGLES];
+      double tf[PALP_DB_MAX_SAMPLE_TRIANGLES];
+      int nt = palp_world_finger_contacts(w, finger_slot[i], tri, tf, PALP_DB_MAX_SAMPLE_TRIANGLES);
+      if (nt < 0) nt = 0;
+      const palp_db_finger_sample fs = {.frame = frame,
+                                        .sim_time_s = palp_world_time(w),
+                                        .slot = finger_slot[i],
+                                        .radius_m = s->finger_radius[finger_slot[i]],
+                                        .device_m = m.device,
+                                        .proxy_m = m.proxy,
+                                        .force_n = m.force,
+                                        .in_contact = m.contact != 0,
+                                        .point_m = m.point,
+                                        .area_m2 = m.area,
+                                        .triangle_count = nt,
+                                        .triangles = nt ? (const int32_t *)tri : NULL};
+      palp_db_log_finger_sample(l->w, s->h, &fs);
+    }
   if (palp_world_is_awake(w) && frame >= s->next_mesh_frame) {
     palp_db_log_mesh(l->w, s->h, frame, palp_world_positions(w), palp_world_mesh(w)->vertex_count);
     s->next_mesh_frame = frame + l->mesh_every;
@@ -209,6 +284,7 @@ int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_log *log, p
                             .contact_rejected = on_rejected,
                             .frame = on_frame,
                             .overrun = on_overrun,
+                            .finding = on_finding,
                             .log_counts = on_log_counts};
   *out = l;
   return 0;

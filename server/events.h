@@ -51,7 +51,21 @@ typedef struct palp_srv_session_info {
                                 * palp_scene_to_json gives it self-contained for the log */
   double max_force;            /* [N] */
   int64_t opened_ns;           /* CLOCK_MONOTONIC */
+  const char *exercise_name;   /* issue 13: the exercise the session runs, NULL for none; its */
+  const char *exercise_json;   /* file's text (hidden lesions included: the log is the instructor's) */
+  double assess_sample_hz;     /* finger samples to log per second (config assess_sample_hz) */
 } palp_srv_session_info;
+
+/* issue 13: a "lump here" finding the server received, and its verdict. */
+typedef struct palp_srv_finding_event {
+  int accepted;
+  uint32_t mark_id;
+  int withdraw;                /* 0 mark, 1 withdrawal */
+  palp_vec3 point;             /* [m] (marks) */
+  int64_t frame;               /* the world's frame and time when it was taken */
+  double sim_time;             /* [s] */
+  const char *reason;          /* why it was refused ("" when accepted) */
+} palp_srv_finding_event;
 
 typedef struct palp_srv_session_summary {
   palp_srv_session_info info;
@@ -86,6 +100,8 @@ typedef struct palp_srv_events {
   /* [main thread] the log's counters for palp_server_status: records written,
    * shed (queue full) and failed (disk errors). */
   void (*log_counts)(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed);
+  /* [main thread] a finding was accepted or refused (issue 13). */
+  void (*finding)(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev);
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
 } palp_srv_events;

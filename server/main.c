@@ -13,6 +13,7 @@
 #include "palp.h"
 #include "palp_app.h"
 #include "palp_dds.h"
+#include "palp_assess.h"
 #include "server.h"
 
 #define SERVER_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
@@ -232,6 +233,19 @@ int main(int argc, char **argv) {
     for (int i = 0; i < def.cfg.phantom_count; i++) {
       palp_scene sc;
       char msg[256] = "";
+      const int plain = def.cfg.phantom_count - def.cfg.exercise_count;
+      if (i >= plain) { /* an exercise: its file, its phantom and its lesions in it */
+        palp_exercise *ex = calloc(1, sizeof *ex);
+        rc = ex ? palp_exercise_load(def.cfg.phantom[i].exercise_path, ex, msg, sizeof msg) : PALP_ENOMEM;
+        if (rc == 0) rc = palp_exercise_scene(ex, &sc, msg, sizeof msg);
+        free(ex);
+        if (rc < 0) {
+          fprintf(stderr, "palp-server: bad configuration: exercises[%d].file: %s: %s\n", i - plain,
+                  def.cfg.phantom[i].exercise_path, msg[0] ? msg : palp_strerror(rc));
+          return 1;
+        }
+        continue;
+      }
       rc = palp_scene_load(def.cfg.phantom[i].scene_path, &sc, msg, sizeof msg);
       if (rc < 0) {
         fprintf(stderr, "palp-server: bad configuration: phantoms[%d].scene: %s: %s\n", i,

@@ -76,6 +76,7 @@ struct palp_srv {
   dds_instance_handle_t lost[64];
   unsigned lost_n;
   dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r, guard_w;
+  dds_entity_t exercise_w; /* palp_exercise: what a trainee may know of each exercise */
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
@@ -152,11 +153,81 @@ static void refuse_identity(palp_srv *srv, const char *fmt, ...) {
 
 /* ---- phantoms and catalogue ------------------------------------------------ */
 
+/* The exercise's file text, for the log; bounded (an exercise is a few kB). */
+#define EXERCISE_FILE_MAX (256 * 1024)
+static char *read_text(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  char *buf = malloc(EXERCISE_FILE_MAX + 1);
+  size_t n = buf ? fread(buf, 1, EXERCISE_FILE_MAX + 1, f) : 0;
+  const int bad = ferror(f) || n > EXERCISE_FILE_MAX;
+  fclose(f);
+  if (!buf || bad) {
+    free(buf);
+    return NULL;
+  }
+  buf[n] = 0;
+  return buf;
+}
+
+/* issue 13: an exercise is hosted as a phantom: the exercise's phantom scene with its
+ * lesions hidden in it (palp_exercise_scene), named by the exercise's title. The scene
+ * and the file's text stay on the server and in its log; what goes on the wire is the
+ * catalogue's rest mesh (which lesions do not change) and the palp_exercise sample. */
+static int load_exercise(palp_srv_phantom *ph, char *err, size_t errlen) {
+  char msg[256] = "";
+  const palp_srv_phantom_cfg *pc = &ph->cfg;
+  ph->exercise = calloc(1, sizeof *ph->exercise);
+  if (!ph->exercise) return PALP_ENOMEM;
+  int rc = palp_exercise_load(pc->exercise_path, ph->exercise, msg, sizeof msg);
+  if (rc == 0) rc = palp_exercise_scene(ph->exercise, &ph->scene, msg, sizeof msg);
+  if (rc < 0) {
+    fail(err, errlen, "exercises (id %u): %s: %s", pc->id, pc->exercise_path, msg[0] ? msg : palp_strerror(rc));
+    return rc;
+  }
+  ph->exercise_json = read_text(pc->exercise_path);
+  if (!ph->exercise_json) {
+    fail(err, errlen, "exercises (id %u): %s: cannot read it again for the log", pc->id, pc->exercise_path);
+    return PALP_EIO;
+  }
+  snprintf(ph->cfg.name, sizeof ph->cfg.name, "%.63s", ph->exercise->title);
+  snprintf(ph->cfg.scene_path, sizeof ph->cfg.scene_path, "%s", ph->exercise->phantom_path);
+  return 0;
+}
+
+/* What a trainee may know of an exercise: no lesion, nothing derived from one. */
+static void publish_exercise(palp_srv *srv, const palp_srv_phantom *ph) {
+  if (!ph->exercise || srv->exercise_w <= 0) return;
+  const palp_exercise *ex = ph->exercise;
+  palp_Exercise m;
+  memset(&m, 0, sizeof m);
+  m.phantom_id = ph->cfg.id;
+  snprintf(m.name, sizeof m.name, "%s", ex->name);
+  snprintf(m.title, sizeof m.title, "%s", ex->title);
+  snprintf(m.instructions, sizeof m.instructions, "%s", ex->instructions);
+  m.time_limit = ex->time_limit;
+  m.max_force = ex->max_force;
+  for (int b = 0; b < PALP_BAND_COUNT; b++) {
+    const palp_band *in = &ex->band[b];
+    palp_PressureBand *o = &m.bands[b];
+    o->has_depth = in->has_depth != 0;
+    o->has_force = in->has_force != 0;
+    o->depth_min = in->depth_min, o->depth_max = in->depth_max;
+    o->force_min = in->force_min, o->force_max = in->force_max;
+  }
+  dds_write(srv->exercise_w, &m);
+}
+
 static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_phantom *ph, char *err,
                         size_t errlen) {
   char msg[256] = "";
   ph->cfg = *pc;
-  int rc = palp_scene_load(pc->scene_path, &ph->scene, msg, sizeof msg);
+  int rc;
+  if (pc->exercise_path[0]) {
+    rc = load_exercise(ph, err, errlen);
+    if (rc < 0) return rc;
+  } else
+    rc = palp_scene_load(pc->scene_path, &ph->scene, msg, sizeof msg);
   if (rc < 0) {
     fail(err, errlen, "phantoms (id %u): scene %s: %s", pc->id, pc->scene_path, msg[0] ? msg : palp_strerror(rc));
     return rc;
@@ -169,6 +240,9 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
   /* Each phantom steps at its own physics rate (issue 11), by default the server's. */
   if (!(ph->cfg.physics_rate_hz > 0)) ph->cfg.physics_rate_hz = srv->cfg.tick_rate_hz;
   ph->scene.world.dt = 1.0 / ph->cfg.physics_rate_hz;
+  /* Rebuilds are computed by the ticker's helper behind the ticks (docs/server.md);
+   * the logged scene carries the lag (time.refactor_lag_steps), so replay defers the same. */
+  ph->scene.world.refactor_lag = palp_world_refactor_lag_for(ph->scene.world.dt);
   /* The recorded scene must stay loadable: its frame period a whole number of steps
    * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */
   {
@@ -416,8 +490,79 @@ static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, 
   c->sum.close_reason = c->reason;
 }
 
+/* ---- findings (issue 13) -------------------------------------------------------- */
+
+#define FINDING_STATUS_PERIOD_NS 500000000 /* 2 Hz: a countdown on the station moves every second */
+
+/* Seconds left of the session's exercise time limit, or -1 without one. */
+static double time_left(const palp_srv_session *s, int64_t now_ns) {
+  if (!s->phantom->exercise) return -1.0;
+  const double left = s->phantom->exercise->time_limit - (double)(now_ns - s->opened_ns) * 1e-9;
+  return left > 0 ? left : 0.0;
+}
+
+static void publish_finding_status(palp_srv_session *s) {
+  if (s->finding_status_writer <= 0) return;
+  const palp_srv_findings *f = &s->findings;
+  palp_FindingStatus m;
+  memset(&m, 0, sizeof m);
+  m.session_id = s->id;
+  m.marks = (uint32_t)f->marks;
+  m.last_mark_id = f->last_mark_id;
+  m.last_accepted = f->last_accepted != 0;
+  snprintf(m.reason, sizeof m.reason, "%s", f->reason);
+  const int64_t now = palp_dds_now_ns();
+  m.time_left = time_left(s, now);
+  dds_write(s->finding_status_writer, &m);
+  s->findings_status_ns = now;
+}
+
+/* At most this many findings per session per pass of the main loop: a flooding
+ * station cannot hold the main thread; the rest wait in the (bounded) reader. */
+#define FINDINGS_PER_PASS 64
+static void handle_findings(palp_srv *srv, palp_srv_session *s) {
+  if (s->finding_reader <= 0) return;
+  palp_Finding buf[16];
+  void *ptr[16];
+  dds_sample_info_t info[16];
+  for (int i = 0; i < 16; i++) ptr[i] = &buf[i];
+  for (int done = 0; done < FINDINGS_PER_PASS;) {
+    const int n = dds_take(s->finding_reader, ptr, info, 16, 16);
+    if (n <= 0) break;
+    done += n;
+    palp_srv_session_stats st = {0};
+    int have_st = 0;
+    for (int i = 0; i < n; i++) {
+      if (!info[i].valid_data) continue;
+      const int ok = palp_srv_findings_offer(&s->findings, &buf[i], palp_dds_now_ns());
+      if (!have_st) { /* the world's frame and time, once per batch: a snapshot under the tick lock */
+        st = session_stats(srv, s);
+        have_st = 1;
+      }
+      if (srv->events && srv->events->finding) {
+        const palp_srv_finding_event ev = {.accepted = ok,
+                                           .mark_id = buf[i].mark_id,
+                                           .withdraw = buf[i].op == palp_FINDING_WITHDRAW,
+                                           .point = {buf[i].point.x, buf[i].point.y, buf[i].point.z},
+                                           .frame = st.last_frame,
+                                           .sim_time = st.sim_time,
+                                           .reason = s->findings.reason};
+        srv->events->finding(srv->events->ctx, s->id, &ev);
+      }
+      /* The first few, then every 100th: a flood must not flood the server's log either. */
+      if (!ok && (s->findings.refused <= 16 || s->findings.refused % 100 == 0))
+        logf_(srv, "session %u: finding %u refused: %s (%llu refused so far)", s->id, buf[i].mark_id,
+              s->findings.reason, (unsigned long long)s->findings.refused);
+      /* Every answer goes out (keep-last 1: a station reading slower sees the latest). */
+      publish_finding_status(s);
+    }
+    if (n < 16) break;
+  }
+}
+
 static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason) {
   palp_srv_ticker_remove(srv->ticker, s);
+  if (s->finding_rc > 0) dds_waitset_detach(srv->waitset, s->finding_rc);
   /* Detached: the stats are final and owned by this thread now. */
   palp_srv_session_summary sum;
   palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
@@ -543,6 +688,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .feedback_topic = srv->topic[PALP_TOPIC_FEEDBACK],
                               .deformation_topic = srv->topic[PALP_TOPIC_DEFORMATION],
                               .local_model_topic = srv->topic[PALP_TOPIC_LOCAL_MODEL],
+                              .finding_topic = srv->topic[PALP_TOPIC_FINDING],
+                              .finding_status_topic = srv->topic[PALP_TOPIC_FINDING_STATUS],
                               .events = srv->events,
                               .partition = partition,
                               .log = srv->log};
@@ -581,9 +728,10 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
     if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
       srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
-  pthread_mutex_init(&srv->lost_mu, NULL);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
+    if (s->finding_rc > 0) dds_waitset_attach(srv->waitset, s->finding_rc, 0);
+    publish_finding_status(s);
     st->session_id = s->id;
     reply(srv, rq, s, NULL);
     publish_state(srv, s, 0, NULL, NULL);
@@ -932,6 +1080,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     fail(err, errlen, "out of memory");
     return NULL;
   }
+  /* Once per server: it guards the lost-station list that DDS listener threads write. */
+  pthread_mutex_init(&srv->lost_mu, NULL);
   srv->cfg = def->cfg;
   srv->events = def->events;
   srv->verbose = def->verbose;
@@ -1030,6 +1180,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->reply_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   srv->status_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  srv->exercise_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   /* Only to notice a second server on the domain: both would answer every join. */
   srv->status_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   srv->waitset = dds_create_waitset(srv->pp);
@@ -1055,7 +1206,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     }
   }
   if (srv->catalogue_w < 0 || srv->request_r < 0 || srv->reply_w < 0 || srv->state_w < 0 || srv->status_w < 0 ||
-      srv->status_r < 0 || srv->guard_w < 0 ||
+      srv->status_r < 0 || srv->guard_w < 0 || srv->exercise_w < 0 ||
       srv->waitset < 0 || srv->stop_gc < 0 || srv->request_rc < 0 ||
       dds_waitset_attach(srv->waitset, srv->request_rc, 0) < 0 || dds_waitset_attach(srv->waitset, srv->stop_gc, 0) < 0) {
     *rc = PALP_EIO;
@@ -1103,7 +1254,10 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     srv->identity = palp_srv_identity_create(&idd, rc, err, errlen);
     if (!srv->identity) goto fail;
   }
-  for (int i = 0; i < srv->phantom_count; i++) publish_catalogue(srv, &srv->phantom[i]);
+  for (int i = 0; i < srv->phantom_count; i++) {
+    publish_catalogue(srv, &srv->phantom[i]);
+    publish_exercise(srv, &srv->phantom[i]);
+  }
   *rc = 0;
   return srv;
 fail:
@@ -1145,7 +1299,17 @@ int palp_srv_run(palp_srv *srv, double duration) {
         snprintf(why, sizeof why, "model step failed: %s", palp_strerror(f));
         close_session(srv, s, why);
         i--;
+        continue;
       }
+      handle_findings(srv, s);
+      const int64_t t = palp_dds_now_ns();
+      if (s->phantom->exercise && time_left(s, t) <= 0) {
+        close_session(srv, s, "exercise time limit reached");
+        i--;
+        continue;
+      }
+      /* The time left and the marks, refreshed at least once a second. */
+      if (t - s->findings_status_ns >= FINDING_STATUS_PERIOD_NS) publish_finding_status(s);
     }
     if (palp_dds_now_ns() >= next_status) {
       char why[256];
@@ -1211,7 +1375,11 @@ void palp_srv_destroy(palp_srv *srv) {
   palp_srv_retire_free(&srv->retire);
   if (srv->dds_log_installed) palp_dds_log_limit_remove(&srv->dds_log);
   free(srv->stations);
-  for (int i = 0; i < srv->phantom_count; i++) palp_world_destroy(srv->phantom[i].template_world);
+  for (int i = 0; i < srv->phantom_count; i++) {
+    palp_world_destroy(srv->phantom[i].template_world);
+    free(srv->phantom[i].exercise);
+    free(srv->phantom[i].exercise_json);
+  }
   free(srv->sessions);
   free(srv->loads);
   free(srv->closed);

@@ -57,6 +57,7 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->log = def->log;
   s->log_interval = def->cfg->log_interval;
   s->deformation_period = 1.0 / def->cfg->deformation_rate_hz;
+  s->assess_sample_hz = def->cfg->assess_sample_hz;
   snprintf(s->trainee_station, sizeof s->trainee_station, "%s", def->trainee_station);
   snprintf(s->trainee_name, sizeof s->trainee_name, "%s", def->trainee_name);
   if (def->partition && def->partition[0])
@@ -115,6 +116,24 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     s->local_model_writer = palp_dds_create_writer(s->pub, def->local_model_topic, PALP_TOPIC_LOCAL_MODEL);
   if (s->contact_reader < 0 || s->feedback_writer < 0 || s->deformation_writer < 0 || s->local_model_writer < 0)
     goto dds_fail;
+  /* issue 13: findings (docs/assessment.md). Read and answered by the server's main
+   * thread, not the tick: a mark is a rare event, and its log record needs no step. */
+  if (def->finding_topic > 0 && def->finding_status_topic > 0) {
+    s->finding_reader = palp_dds_create_reader(s->sub, def->finding_topic, PALP_TOPIC_FINDING);
+    s->finding_status_writer = palp_dds_create_writer(s->pub, def->finding_status_topic, PALP_TOPIC_FINDING_STATUS);
+    if (s->finding_reader < 0 || s->finding_status_writer < 0) goto dds_fail;
+    s->finding_rc = dds_create_readcondition(s->finding_reader, DDS_ANY_STATE);
+    if (s->finding_rc < 0) goto dds_fail;
+    /* The dome's bounding box (its base at z = 0) grown by the largest fingertip a
+     * station may use: a contact point cannot lie outside it. */
+    const double R = def->phantom->scene.world.mesh.radius, g = def->cfg->finger_radius_max;
+    const palp_srv_findings_limits fl = {.session_id = s->id,
+                                         .box_min = {-R - g, -R - g, -g},
+                                         .box_max = {R + g, R + g, R + g},
+                                         .rate = PALP_SRV_FINDING_RATE,
+                                         .burst = PALP_SRV_FINDING_BURST};
+    palp_srv_findings_init(&s->findings, &fl);
+  }
   palp_world_get_health(s->world, &s->health);
   s->opened_ns = palp_dds_now_ns();
   *err = 0;
@@ -126,8 +145,16 @@ fail:
   return NULL;
 }
 
+void palp_srv_session_factor_settle(palp_srv_session *s) {
+  if (!s->factor.job) return;
+  palp_srv_factor_wait(s->factor_pool, &s->factor);
+  palp_world_factor_done(s->world, s->factor.job);
+  s->factor.job = NULL;
+}
+
 void palp_srv_session_destroy(palp_srv_session *s) {
   if (!s) return;
+  palp_srv_session_factor_settle(s); /* the helper may still be writing into the world's job */
   /* Deleting the publisher/subscriber deletes their readers and writers. */
   if (s->sub > 0) dds_delete(s->sub);
   if (s->pub > 0) dds_delete(s->pub);
@@ -406,8 +433,28 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   int awake = palp_world_is_awake(s->world);
   double top_disp = 0;
   const palp_mesh *mesh = palp_world_mesh(s->world);
+  /* A rebuild the helper computes is due: wait for it (rare: ~8 ms of frames). */
+  if (s->factor.job && palp_world_factor_due(s->world) <= palp_world_frame(s->world)) {
+    const int64_t waited = palp_srv_factor_wait(s->factor_pool, &s->factor);
+    s->stats.factor_waits += waited > 0;
+    s->stats.factor_wait_ns += waited;
+    palp_world_factor_done(s->world, s->factor.job);
+    s->factor.job = NULL;
+  }
   /* Stepped every tick: a sleeping world returns at once but keeps its clock. */
   int rc = palp_world_step(s->world);
+  if (rc == 0 && s->factor_pool) {
+    palp_factor_job *j = palp_world_factor_claim(s->world);
+    if (j) {
+      s->factor.job = j;
+      s->stats.factor_jobs++;
+      if (palp_srv_factor_submit(s->factor_pool, &s->factor) != 0) {
+        palp_factor_job_run(j); /* queue full: compute it here, as the world would */
+        palp_world_factor_done(s->world, j);
+        s->factor.job = NULL;
+      }
+    }
+  }
   if (rc < 0) {
       palp_log_error(s->log, "session %u: model step failed: %s; closing the session", s->id,
               palp_strerror(rc));
@@ -486,6 +533,9 @@ void palp_srv_session_info_fill(const palp_srv_session *s, palp_srv_session_info
   out->scene = &s->phantom->scene;
   out->max_force = s->limits.max_force;
   out->opened_ns = s->opened_ns;
+  out->exercise_name = s->phantom->exercise ? s->phantom->exercise->name : NULL;
+  out->exercise_json = s->phantom->exercise ? s->phantom->exercise_json : NULL;
+  out->assess_sample_hz = s->assess_sample_hz;
 }
 
 void palp_srv_session_summary_fill(const palp_srv_session *s, const char *reason, int64_t now_ns,

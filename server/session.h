@@ -18,9 +18,12 @@
 
 #include "config.h"
 #include "events.h"
+#include "factor_pool.h"
 #include "palp_log.h"
 #include "palp.h"
+#include "palp_assess.h"
 #include "palp_types.h"
+#include "findings.h"
 #include "validate.h"
 
 /* A hosted phantom: its scene (contacts stripped, dt set to the tick period) and
@@ -30,6 +33,10 @@ typedef struct palp_srv_phantom {
   palp_scene scene;
   palp_world *template_world;
   const palp_mesh *mesh;
+  /* issue 13: an exercise (NULL for a plain phantom). The scene above then has the
+   * exercise's lesions hidden in it: it stays on the server (and in its log). */
+  palp_exercise *exercise;
+  char *exercise_json; /* the exercise file's text, for the log */
 } palp_srv_phantom;
 
 typedef struct palp_srv_session_stats {
@@ -42,6 +49,9 @@ typedef struct palp_srv_session_stats {
   uint64_t local_models;                    /* palp_local_model samples published */
   uint64_t force_limited_steps;             /* finger-steps whose force exceeded max_force (reported, not clamped) */
   uint64_t out_of_range_steps;              /* steps with a model-validity flag (LM_OUT_OF_RANGE) */
+  uint64_t factor_jobs;                     /* lagged-tangent rebuilds handed to the helper */
+  uint64_t factor_waits;                    /* ... that were due before the helper had finished */
+  int64_t factor_wait_ns;                   /* time ticks spent waiting for them [ns] */
   int64_t last_frame;
   double sim_time;                          /* [s] */
 } palp_srv_session_stats;
@@ -62,6 +72,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t participant;
   dds_entity_t contact_topic, feedback_topic, deformation_topic;
   dds_entity_t local_model_topic; /* 0: no local models (older callers) */
+  dds_entity_t finding_topic, finding_status_topic; /* 0: no findings (older callers) */
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
@@ -77,11 +88,16 @@ typedef struct palp_srv_session {
   int64_t opened_ns;
   dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer, local_model_writer;
   dds_entity_t contact_topic; /* this session's own topic entity: it carries the filter below */
+  /* issue 13: "lump here" marks, read and answered by the main thread (findings.h) */
+  dds_entity_t finding_reader, finding_status_writer, finding_rc;
+  palp_srv_findings findings;
   palp_srv_limits limits;
   const palp_srv_events *events;
   palp_log *log;
   double log_interval;        /* [s] */
   double deformation_period;  /* [s] */
+  double assess_sample_hz;    /* finger samples logged per second (issue 13) */
+  int64_t findings_status_ns; /* [main] last palp_finding_status written */
 
   /* [DDS receive thread] samples the contact filter dropped before they reached
    * the reader cache: another session's id, or a finger past the last. */
@@ -107,7 +123,15 @@ typedef struct palp_srv_session {
   palp_world_health health;   /* after the previous step: per-step flags are deltas */
   palp_LocalModel lm;
   int64_t last_limit_log_ns;
+  /* Set by the ticker that holds the session: rebuilds go to its helper (NULL: the
+   * world computes them itself at their due frame). */
+  palp_srv_factor_pool *factor_pool;
+  palp_srv_factor_slot factor;
 } palp_srv_session;
+
+/* Hands an in-flight rebuild back to the world (waiting for the helper): before the
+ * session leaves its ticker. */
+void palp_srv_session_factor_settle(palp_srv_session *s);
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err);
 void palp_srv_session_destroy(palp_srv_session *s);

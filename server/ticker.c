@@ -33,6 +33,7 @@ struct palp_srv_ticker {
   int max_sessions;
   atomic_int stop;
   tick_group *g;
+  palp_srv_factor_pool *factor; /* lagged-tangent rebuilds off the tick path */
   int started;
 };
 
@@ -120,6 +121,10 @@ palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_h
     g->period_start_ns = palp_dds_now_ns();
     if (!g->sessions || !g->work_us) goto nomem;
   }
+  int ferr = 0;
+  /* One below the ticks: it must not delay a tick, but must beat ordinary work. */
+  t->factor = palp_srv_factor_pool_create(priority > 1 ? priority - 1 : priority, &ferr);
+  if (!t->factor) goto nomem;
   threads = t->n;
   for (int i = 0; i < threads; i++) {
     int created = 0;
@@ -158,6 +163,14 @@ void palp_srv_ticker_destroy(palp_srv_ticker *t) {
   if (!t) return;
   atomic_store(&t->stop, 1);
   for (int i = 0; i < t->started; i++) pthread_join(t->g[i].thread, NULL);
+  /* The tick threads are gone: hand every job in flight back before the helper goes. */
+  if (t->g)
+    for (int i = 0; i < t->n; i++)
+      for (int k = 0; k < t->g[i].count; k++) {
+        palp_srv_session_factor_settle(t->g[i].sessions[k]);
+        t->g[i].sessions[k]->factor_pool = NULL;
+      }
+  palp_srv_factor_pool_destroy(t->factor);
   if (t->g)
     for (int i = 0; i < t->n; i++) {
       pthread_mutex_destroy(&t->g[i].lock);
@@ -185,6 +198,7 @@ int palp_srv_ticker_add_rate(palp_srv_ticker *t, palp_srv_session *s, double rat
   pthread_mutex_lock(&g->lock);
   int rc = PALP_EFULL;
   if (g->count < t->max_sessions) {
+    s->factor_pool = t->factor;
     g->sessions[g->count++] = s;
     rc = 0;
   }
@@ -198,6 +212,8 @@ void palp_srv_ticker_remove(palp_srv_ticker *t, palp_srv_session *s) {
     pthread_mutex_lock(&g->lock);
     for (int k = 0; k < g->count; k++)
       if (g->sessions[k] == s) {
+        palp_srv_session_factor_settle(s); /* under the lock: no tick runs it meanwhile */
+        s->factor_pool = NULL;
         g->sessions[k] = g->sessions[--g->count];
         break;
       }

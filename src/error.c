@@ -11,6 +11,7 @@ const char *palp_strerror(int err) {
   case PALP_EUNSTABLE: return "state became non-finite";
   case PALP_EFULL: return "no free slot";
   case PALP_ESOLVER: return "sparse factorisation failed";
+  case PALP_EBUSY: return "a deferred refactorisation is due but its host has not handed it back";
   default: return "unknown error";
   }
 }

@@ -29,7 +29,8 @@ enum {
   PALP_EIO = -5,       /* a file could not be read or written */
   PALP_EUNSTABLE = -6, /* the state became non-finite; the world refuses to step */
   PALP_EFULL = -7,     /* no free contact slot */
-  PALP_ESOLVER = -8    /* the sparse factorisation failed */
+  PALP_ESOLVER = -8,   /* the sparse factorisation failed */
+  PALP_EBUSY = -9      /* a deferred refactorisation a host claimed is due but not handed back */
 };
 const char *palp_strerror(int err);
 
@@ -206,6 +207,8 @@ typedef struct palp_world_def {
   double sleep_time;  /* [s] of quiet before sleeping, default 0.5 */
   double max_speed;   /* a solved vertex speed above this [m/s] (default 20) means the
                          step cannot be trusted: it is retried as two half steps */
+  int refactor_lag;   /* frames a lagged-tangent rebuild waits before it is installed (0,
+                         the default: at once); see palp_world_factor_claim */
   int lesion_count;   /* 0..PALP_MAX_LESIONS; lesions act through the gel support */
   palp_lesion lesion[PALP_MAX_LESIONS];
 } palp_world_def;
@@ -222,6 +225,24 @@ void palp_world_destroy(palp_world *w);
 int palp_world_step(palp_world *w);
 /* Advances by an arbitrary dt [s] (jittery clocks); refactors the solver when dt changes. */
 int palp_world_step_dt(palp_world *w, double dt);
+
+/* Deferred refactorisation (docs/haptics.md). With def.refactor_lag = k > 0 a
+ * lagged-tangent rebuild that the step at frame f asks for is built from that
+ * frame's state and installed at the start of frame f + k, whoever computes it: the
+ * results depend on the inputs only (replay needs the same k). Until then the old
+ * factor serves. A host may compute it on another thread so that it costs the tick
+ * nothing: after a step, claim the job; run it anywhere (it touches only its own
+ * memory); hand it back on the stepping thread before stepping frame
+ * palp_world_factor_due (a due job not handed back makes the step fail with
+ * PALP_EBUSY). Unclaimed jobs are computed by the step at their due frame. Only
+ * rebuilds while a finger is down are deferred; force-driven loads rebuild at once. */
+typedef struct palp_factor_job palp_factor_job;
+palp_factor_job *palp_world_factor_claim(palp_world *w); /* the job just requested, or NULL */
+int palp_factor_job_run(palp_factor_job *job);          /* any thread; 0 or a negative error */
+int palp_world_factor_done(palp_world *w, palp_factor_job *job);
+int64_t palp_world_factor_due(const palp_world *w); /* frame a claimed job is due at, -1 none */
+/* The lag the server and replay use at a physics step dt [s]: about 16 ms of frames. */
+int palp_world_refactor_lag_for(double dt);
 
 /* Force-driven contact: returns a contact id >= 0 or a negative error. The force
  * vector [N] is spread over the distribution's vertices by their weights. */

@@ -274,6 +274,9 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
    * and 1e-300 made every frame period a "whole multiple" (1e298 rounds to itself). */
   if (s->world.dt < 1e-6) return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: %g s is below 1e-6 s", s->world.dt);
   if ((e = get_int(c, t, "time.", "frames", 1, 1, 100000000, &s->frames))) return e;
+  /* Deferred tangent rebuilds (docs/haptics.md): part of the physics a log replays, so a
+   * session's scene carries it; absent = 0, how every log before it was stepped. */
+  if ((e = get_int(c, t, "time.", "refactor_lag_steps", 0, 0, 1000, &s->world.refactor_lag))) return e;
   s->frame_period = s->world.dt;
   if ((e = get_pos(c, t, "time.", "frame_period_s", 0, &s->frame_period))) return e;
   const double ratio = s->frame_period / s->world.dt;
@@ -377,9 +380,31 @@ int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen)
   return e;
 }
 
+/* A number written so that it parses back to the same double. cJSON prints 15
+ * significant digits whenever they read back within a relative DBL_EPSILON, which
+ * is not always the same double (-0.018825206147913998 came back as ...914001), and
+ * a replayed world built from that scene diverged from the session's after 66 frames.
+ * 17 significant digits always round-trip an IEEE double. */
+static cJSON *exact_number(double v) {
+  char buf[40];
+  if (!isfinite(v)) return cJSON_CreateNull();
+  snprintf(buf, sizeof buf, "%.17g", v);
+  return cJSON_CreateRaw(buf);
+}
+
+static cJSON *add_exact(cJSON *obj, const char *key, double v) {
+  cJSON *n = exact_number(v);
+  if (n) cJSON_AddItemToObject(obj, key, n);
+  return n;
+}
+
 static cJSON *vec_json(palp_vec3 v) {
-  const double a[3] = {v.x, v.y, v.z};
-  return cJSON_CreateDoubleArray(a, 3);
+  cJSON *a = cJSON_CreateArray();
+  if (!a) return NULL;
+  cJSON_AddItemToArray(a, exact_number(v.x));
+  cJSON_AddItemToArray(a, exact_number(v.y));
+  cJSON_AddItemToArray(a, exact_number(v.z));
+  return a;
 }
 
 char *palp_scene_to_json(const palp_scene *s) {
@@ -387,57 +412,58 @@ char *palp_scene_to_json(const palp_scene *s) {
   if (!r) return NULL;
   cJSON_AddStringToObject(r, "name", s->name);
   cJSON *m = cJSON_AddObjectToObject(r, "mesh");
-  cJSON_AddNumberToObject(m, "radius_m", s->world.mesh.radius);
-  cJSON_AddNumberToObject(m, "vertex_count", s->world.mesh.vertex_count);
+  add_exact(m, "radius_m", s->world.mesh.radius);
+  add_exact(m, "vertex_count", s->world.mesh.vertex_count);
   const palp_membrane_params *mp = &s->world.membrane;
   cJSON *mb = cJSON_AddObjectToObject(r, "membrane");
-  cJSON_AddNumberToObject(mb, "thickness_m", mp->thickness);
-  cJSON_AddNumberToObject(mb, "density_kg_m3", mp->density);
-  cJSON_AddNumberToObject(mb, "E1_Pa", mp->E1);
-  cJSON_AddNumberToObject(mb, "eta1_Pa_s", mp->eta1);
-  cJSON_AddNumberToObject(mb, "E2_Pa", mp->E2);
-  cJSON_AddNumberToObject(mb, "eta2_Pa_s", mp->eta2);
+  add_exact(mb, "thickness_m", mp->thickness);
+  add_exact(mb, "density_kg_m3", mp->density);
+  add_exact(mb, "E1_Pa", mp->E1);
+  add_exact(mb, "eta1_Pa_s", mp->eta1);
+  add_exact(mb, "E2_Pa", mp->E2);
+  add_exact(mb, "eta2_Pa_s", mp->eta2);
   const palp_gel_params *gp = &s->world.gel;
   cJSON *g = cJSON_AddObjectToObject(r, "gel");
   cJSON_AddStringToObject(g, "law", gp->law == PALP_GEL_POLYTROPIC ? "polytropic" : "paper_literal");
-  cJSON_AddNumberToObject(g, "pressure_Pa", gp->pressure);
-  cJSON_AddNumberToObject(g, "a1", gp->a1);
-  cJSON_AddNumberToObject(g, "a2_Pa_s_m3", gp->a2);
-  cJSON_AddNumberToObject(g, "a3_s2", gp->a3);
-  cJSON_AddNumberToObject(g, "support_modulus_Pa_m", gp->support_modulus);
-  cJSON_AddNumberToObject(g, "support_viscosity_Pa_s_m", gp->support_viscosity);
-  cJSON_AddNumberToObject(g, "support_bulk_fraction", gp->support_bulk_fraction);
-  cJSON_AddNumberToObject(g, "density_kg_m3", gp->density);
-  cJSON_AddNumberToObject(g, "added_mass_fraction", gp->added_mass_fraction);
+  add_exact(g, "pressure_Pa", gp->pressure);
+  add_exact(g, "a1", gp->a1);
+  add_exact(g, "a2_Pa_s_m3", gp->a2);
+  add_exact(g, "a3_s2", gp->a3);
+  add_exact(g, "support_modulus_Pa_m", gp->support_modulus);
+  add_exact(g, "support_viscosity_Pa_s_m", gp->support_viscosity);
+  add_exact(g, "support_bulk_fraction", gp->support_bulk_fraction);
+  add_exact(g, "density_kg_m3", gp->density);
+  add_exact(g, "added_mass_fraction", gp->added_mass_fraction);
   if (s->world.lesion_count > 0) {
     cJSON *ls = cJSON_AddArrayToObject(r, "lesions");
     for (int i = 0; i < s->world.lesion_count; ++i) {
       const palp_lesion *L = &s->world.lesion[i];
       cJSON *o = cJSON_CreateObject();
       cJSON_AddItemToObject(o, "center_m", vec_json(L->center));
-      cJSON_AddNumberToObject(o, "radius_m", L->radius);
-      cJSON_AddNumberToObject(o, "stiffness_ratio", L->stiffness_ratio);
+      add_exact(o, "radius_m", L->radius);
+      add_exact(o, "stiffness_ratio", L->stiffness_ratio);
       cJSON_AddItemToArray(ls, o);
     }
   }
   cJSON *t = cJSON_AddObjectToObject(r, "time");
-  cJSON_AddNumberToObject(t, "dt_s", s->world.dt);
-  cJSON_AddNumberToObject(t, "frames", s->frames);
-  cJSON_AddNumberToObject(t, "frame_period_s", s->frame_period);
+  add_exact(t, "dt_s", s->world.dt);
+  add_exact(t, "frames", s->frames);
+  add_exact(t, "frame_period_s", s->frame_period);
+  if (s->world.refactor_lag > 0) add_exact(t, "refactor_lag_steps", s->world.refactor_lag);
   cJSON *fx = cJSON_AddArrayToObject(r, "effects");
   for (int i = 0; i < 7; ++i)
     if (s->world.effects & (1u << i)) cJSON_AddItemToArray(fx, cJSON_CreateString(palp_effect_name((palp_effect)(1u << i))));
   cJSON_AddItemToObject(r, "gravity_m_s2", vec_json(s->world.gravity));
-  cJSON_AddNumberToObject(r, "max_contacts", s->world.max_contacts);
+  add_exact(r, "max_contacts", s->world.max_contacts);
   cJSON *cs = cJSON_AddArrayToObject(r, "contacts");
   for (int i = 0; i < s->contact_count; ++i) {
     const palp_scene_contact *sc = &s->contact[i];
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "distribution", dist_names[sc->def.distribution - 1]);
     cJSON_AddItemToObject(o, "center_m", vec_json(sc->def.center));
-    cJSON_AddNumberToObject(o, "patch_area_m2", sc->def.patch_area);
-    cJSON_AddNumberToObject(o, "sigma_fraction", sc->def.sigma_fraction);
-    cJSON_AddNumberToObject(o, "offset_fraction", sc->def.offset_fraction);
+    add_exact(o, "patch_area_m2", sc->def.patch_area);
+    add_exact(o, "sigma_fraction", sc->def.sigma_fraction);
+    add_exact(o, "offset_fraction", sc->def.offset_fraction);
     cJSON_AddItemToObject(o, "offset_dir", vec_json(sc->def.offset_dir));
     cJSON_AddItemToObject(o, "direction", vec_json(sc->direction));
     cJSON *p = cJSON_AddObjectToObject(o, "profile");
@@ -450,12 +476,12 @@ char *palp_scene_to_json(const palp_scene *s) {
         cJSON_AddItemToArray(keys, cJSON_CreateDoubleArray(kv, 2));
       }
     } else {
-      cJSON_AddNumberToObject(p, "magnitude_N", pr->magnitude);
-      cJSON_AddNumberToObject(p, "t_on_s", pr->t_on);
-      cJSON_AddNumberToObject(p, "t_off_s", pr->t_off);
+      add_exact(p, "magnitude_N", pr->magnitude);
+      add_exact(p, "t_on_s", pr->t_on);
+      add_exact(p, "t_off_s", pr->t_off);
       if (pr->kind == PALP_PROFILE_SINE) {
-        cJSON_AddNumberToObject(p, "frequency_Hz", pr->frequency);
-        cJSON_AddNumberToObject(p, "offset_N", pr->offset);
+        add_exact(p, "frequency_Hz", pr->frequency);
+        add_exact(p, "offset_N", pr->offset);
       }
     }
     cJSON_AddItemToArray(cs, o);

@@ -202,6 +202,11 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
       for (int r = 0; r < (W); ++r) y[k * (W) + r] = x[f->perm[k] * (W) + r];            \
     for (int J = 0; J < nb; ++J) {                                                       \
       double *yj = y + 3 * J * (W);                                                      \
+      /* A unit right-hand side (a compliance column) is nonzero only on its etree   */ \
+      /* path: skipping zero blocks saves most of the forward pass for it.           */ \
+      int nz = 0;                                                                        \
+      for (int r = 0; r < 3 * (W); ++r) nz |= yj[r] != 0.0;                              \
+      if (!nz) continue;                                                                 \
       const double *d = f->bdiag + 3 * J;                                                \
       for (int r = 0; r < (W); ++r) {                                                    \
         yj[(W) + r] -= d[0] * yj[r];                                                     \

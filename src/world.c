@@ -25,6 +25,9 @@
 #include "vec3.h"
 
 enum { CONTACT_NONE = 0, CONTACT_FORCE = 1, CONTACT_FINGER = 2 };
+/* A deferred refactorisation's state: requested by a step, claimed by a host that
+ * computes it elsewhere, handed back done; installed at its due frame. */
+enum { JOB_NONE = 0, JOB_REQUESTED = 1, JOB_CLAIMED = 2, JOB_DONE = 3 };
 
 typedef struct contact {
   int kind;
@@ -126,6 +129,10 @@ struct palp_world {
   /* Solver. */
   palp_ldl ldl;
   double h_factored;
+  int *gp, *gi; /* free-vertex graph (CSC, both triangles): the blocks' ordering */
+  palp_factor_job *job; /* deferred lagged-tangent rebuild (def.refactor_lag > 0) */
+  int job_state, job_obsolete;
+  int64_t job_due;      /* frame at whose start the job is installed */
   double *rhs;  /* [nfree*6]: 3 columns of M v + h f, 3 of g when u is refreshed */
   double *work; /* [nfree*6] */
 
@@ -298,6 +305,7 @@ static void stage_gel_support(palp_world *w, double h) {
 }
 
 static int refactor(palp_world *w, double h);
+static void job_free(palp_factor_job *j);
 
 static void stage_solve(palp_world *w, double h) {
   const int n = w->nfree;
@@ -882,6 +890,7 @@ static int validate(const palp_world_def *d) {
   const palp_gel_params *g = &d->gel;
   if (!(d->dt > 0.0 && d->dt <= 0.1) || !isfinite(d->dt)) return PALP_EINVAL;
   if (d->max_contacts < 0 || d->max_contacts > 64) return PALP_EINVAL;
+  if (d->refactor_lag < 0 || d->refactor_lag > 1000) return PALP_EINVAL;
   if (!(m->thickness > 0.0 && m->density > 0.0) || !isfinite(m->thickness) || !isfinite(m->density))
     return PALP_EINVAL;
   if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
@@ -1126,6 +1135,8 @@ void palp_world_destroy(palp_world *w) {
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work);
   palp_ldl_free(&w->ldl);
+  job_free(w->job);
+  free(w->gp), free(w->gi);
   palp_mesh_destroy(&w->mesh);
   free(w);
 }
@@ -1149,17 +1160,12 @@ static int set_burgers(palp_world *w, double h) {
   return e;
 }
 
-static int refactor(palp_world *w, double h) {
-  int e0 = set_burgers(w, h);
-  if (e0) return e0;
+/* The lower triangle of A = M + h^2 K~ as triplets (nnz returned), with the link
+ * data the factor will be checked against (fdir, fbeta, fslack) for the current
+ * state. Needs the Burgers coefficients for h (set_burgers). */
+static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double *tx, palp_vec3 *fdir,
+                        double *fbeta, double *fslack) {
   const double E = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) ? w->burgers.tangent : w->E_static; /* [Pa] */
-  const int nnz_max = 3 * w->nfree + 21 * w->nlink; /* 3 masses; 2 x 6 + 9 per link */
-  int *ti = malloc(sizeof(int) * (size_t)nnz_max), *tj = malloc(sizeof(int) * (size_t)nnz_max);
-  double *tx = malloc(sizeof(double) * (size_t)nnz_max);
-  if (!ti || !tj || !tx) {
-    free(ti), free(tj), free(tx);
-    return PALP_ENOMEM;
-  }
   int nnz = 0;
   /* Lower triangle of each 3x3 diagonal block (duplicates are summed). */
   const double ks = has(w, PALP_EFFECT_GEL_SUPPORT) ? w->def.gel.support_modulus : 0.0; /* [Pa/m] */
@@ -1177,13 +1183,13 @@ static int refactor(palp_world *w, double h) {
     const double len = w->rest_len[l] * (1.0 + w->eps[l]);
     const double rho = fmax(0.0, w->sigma[l] * w->xsec[l] / len) / k;
     const double beta = fmax(PALP_BETA_MIN, 2.0 * rho);
-    w->fdir[l] = d;
-    w->fbeta[l] = beta;
+    fdir[l] = d;
+    fbeta[l] = beta;
     /* The mass term stabilises too: the 1-D condition h^2 k <= 4 m + 2 h^2 k~ leaves
      * 4 m / h^2 of transverse stiffness beyond 2 k~; half of it, shared among the
      * links at a vertex, for the longest step this factor serves (1.25 h). At 10 ms it
      * is ~1% of a link's stiffness; at 1 ms it spares most tension-growth rebuilds. */
-    w->fslack[l] = 2.0 * w->link_mass[l] / (1.5625 * h * h);
+    fslack[l] = 2.0 * w->link_mass[l] / (1.5625 * h * h);
     const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j <= i; ++j) {
@@ -1199,41 +1205,239 @@ static int refactor(palp_world *w, double h) {
           tx[nnz++] = -h * h * k * ((1.0 - beta) * dv[i] * dv[j] + (i == j ? beta : 0.0));
     }
   }
-  /* The free-vertex graph (CSC, both triangles) orders the 3x3 blocks; only the
-   * first factorisation analyses the pattern, later ones reuse it. */
+  return nnz;
+}
+
+/* The free-vertex graph (CSC, both triangles) that orders the 3x3 blocks; built
+ * once and kept, because a deferred job's factor analyses it too. */
+static int build_graph(palp_world *w) {
   const int nf = w->nfree;
-  int *gp = NULL, *gi = NULL;
-  int e = PALP_OK;
-  if (!w->ldl.symbolic) {
-    gp = calloc((size_t)nf + 1, sizeof(int));
-    gi = malloc(sizeof(int) * (size_t)(2 * w->nlink + 1));
-    int *fill = malloc(sizeof(int) * (size_t)(nf ? nf : 1));
-    if (!gp || !gi || !fill) {
-      e = PALP_ENOMEM;
-    } else {
-      for (int l = 0; l < w->nlink; ++l) {
-        const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
-        if (ra >= 0 && rb >= 0) gp[ra + 1]++, gp[rb + 1]++;
-      }
-      for (int r = 0; r < nf; ++r) gp[r + 1] += gp[r];
-      memcpy(fill, gp, sizeof(int) * (size_t)nf);
-      for (int l = 0; l < w->nlink; ++l) {
-        const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
-        if (ra >= 0 && rb >= 0) gi[fill[ra]++] = rb, gi[fill[rb]++] = ra;
-      }
-    }
+  w->gp = calloc((size_t)nf + 1, sizeof(int));
+  w->gi = malloc(sizeof(int) * (size_t)(2 * w->nlink + 1));
+  int *fill = malloc(sizeof(int) * (size_t)(nf ? nf : 1));
+  if (!w->gp || !w->gi || !fill) {
     free(fill);
+    return PALP_ENOMEM;
   }
-  if (!e) e = palp_ldl_factor_blocks(&w->ldl, nf, gp, gi, nnz, ti, tj, tx);
-  free(gp), free(gi);
-  free(ti), free(tj), free(tx);
-  if (e) return e;
+  for (int l = 0; l < w->nlink; ++l) {
+    const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
+    if (ra >= 0 && rb >= 0) w->gp[ra + 1]++, w->gp[rb + 1]++;
+  }
+  for (int r = 0; r < nf; ++r) w->gp[r + 1] += w->gp[r];
+  memcpy(fill, w->gp, sizeof(int) * (size_t)nf);
+  for (int l = 0; l < w->nlink; ++l) {
+    const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
+    if (ra >= 0 && rb >= 0) w->gi[fill[ra]++] = rb, w->gi[fill[rb]++] = ra;
+  }
+  free(fill);
+  return PALP_OK;
+}
+
+static void factor_installed(palp_world *w, double h) {
   w->h_factored = h;
   w->u_valid = 0;
-  finger_cols_invalidate(w);
   w->stale = 0;
   w->refactors++;
+}
+
+/* Synchronous rebuild: at creation and when the step size leaves the factor's range.
+ * A deferred job still pending is dropped at its due frame (it describes an older
+ * state than this factor). */
+static int refactor(palp_world *w, double h) {
+  int e = set_burgers(w, h);
+  if (e) return e;
+  if (!w->gp) {
+    e = build_graph(w);
+    if (e) return e;
+  }
+  const int nnz_max = 3 * w->nfree + 21 * w->nlink; /* 3 masses; 2 x 6 + 9 per link */
+  int *ti = malloc(sizeof(int) * (size_t)nnz_max), *tj = malloc(sizeof(int) * (size_t)nnz_max);
+  double *tx = malloc(sizeof(double) * (size_t)nnz_max);
+  if (!ti || !tj || !tx) {
+    free(ti), free(tj), free(tx);
+    return PALP_ENOMEM;
+  }
+  const int nnz = build_matrix(w, h, ti, tj, tx, w->fdir, w->fbeta, w->fslack);
+  e = palp_ldl_factor_blocks(&w->ldl, w->nfree, w->gp, w->gi, nnz, ti, tj, tx);
+  free(ti), free(tj), free(tx);
+  if (e) return e;
+  finger_cols_invalidate(w);
+  factor_installed(w, h);
+  if (w->job_state != JOB_NONE) w->job_obsolete = 1;
   return PALP_OK;
+}
+
+/* ---- deferred refactorisation (docs/haptics.md) -------------------------- */
+
+/* Everything a lagged-tangent rebuild needs, owned by the job while a host holds
+ * it: the matrix built at the requesting frame, a spare factor (with its own
+ * CHOLMOD workspace) and the finger compliance columns the new factor will be
+ * asked for first. The world's graph (gp, gi) is shared read-only: it never changes
+ * after creation. */
+struct palp_factor_job {
+  int nf, nnz, n3;
+  const int *gp, *gi;
+  int *ti, *tj;
+  double *tx;
+  double h;
+  palp_ldl ldl;
+  int ncols, cols_cap; /* columns to precompute; capacity of cols in slots */
+  int *col_row;        /* [cols_cap] free row of each */
+  double *cols;        /* [cols_cap][3][n3], the finger pool's layout */
+  double *solve, *work; /* [3 n3] */
+  palp_vec3 *fdir;     /* [nlink] the new factor's link data (world-only) */
+  double *fbeta, *fslack;
+  int rc;
+};
+
+static void job_free(palp_factor_job *j) {
+  if (!j) return;
+  free(j->ti), free(j->tj), free(j->tx), free(j->col_row), free(j->cols), free(j->solve), free(j->work);
+  free(j->fdir), free(j->fbeta), free(j->fslack);
+  palp_ldl_free(&j->ldl);
+  free(j);
+}
+
+static palp_factor_job *job_alloc(const palp_world *w) {
+  palp_factor_job *j = calloc(1, sizeof *j);
+  if (!j) return NULL;
+  const int nnz_max = 3 * w->nfree + 21 * w->nlink;
+  j->nf = w->nfree;
+  j->n3 = 3 * w->nfree;
+  j->gp = w->gp;
+  j->gi = w->gi;
+  j->ti = malloc(sizeof(int) * (size_t)nnz_max);
+  j->tj = malloc(sizeof(int) * (size_t)nnz_max);
+  j->tx = malloc(sizeof(double) * (size_t)nnz_max);
+  j->solve = malloc(sizeof(double) * 3 * (size_t)(j->n3 ? j->n3 : 1));
+  j->work = malloc(sizeof(double) * 3 * (size_t)(j->n3 ? j->n3 : 1));
+  const size_t nl = (size_t)(w->nlink ? w->nlink : 1);
+  j->fdir = malloc(sizeof(palp_vec3) * nl);
+  j->fbeta = malloc(sizeof(double) * nl);
+  j->fslack = malloc(sizeof(double) * nl);
+  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack) {
+    job_free(j);
+    return NULL;
+  }
+  return j;
+}
+
+int palp_factor_job_run(palp_factor_job *j) {
+  if (!j) return PALP_EINVAL;
+  j->rc = palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, j->nnz, j->ti, j->tj, j->tx);
+  if (j->rc) return j->rc;
+  /* The same operations as finger_slot, so a column is the same bits whoever makes it. */
+  const int n3 = j->n3;
+  for (int q = 0; q < j->ncols; ++q) {
+    const int r = j->col_row[q];
+    memset(j->solve, 0, sizeof(double) * 3 * (size_t)n3);
+    for (int c = 0; c < 3; ++c) j->solve[3 * (3 * r + c) + c] = 1.0;
+    palp_ldl_solve(&j->ldl, j->solve, 3, j->work);
+    double *col = j->cols + (size_t)q * 3 * (size_t)n3;
+    for (int k = 0; k < n3; ++k)
+      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = j->solve[3 * k + c];
+  }
+  return PALP_OK;
+}
+
+/* A rebuild requested by the step at frame f: the matrix of the current state, to be
+ * installed at the start of frame f + refactor_lag. Returns 0 or PALP_ENOMEM (the
+ * caller then rebuilds at once). */
+static int job_request(palp_world *w, double h) {
+  if (!w->job) {
+    w->job = job_alloc(w);
+    if (!w->job) return PALP_ENOMEM;
+  }
+  palp_factor_job *j = w->job;
+  j->h = h;
+  j->nnz = build_matrix(w, h, j->ti, j->tj, j->tx, j->fdir, j->fbeta, j->fslack);
+  j->ncols = 0;
+  const finger_scratch *fs = w->fs;
+  if (fs && fs->slots > 0) {
+    if (j->cols_cap < fs->slots) {
+      double *c = realloc(j->cols, sizeof(double) * 3 * (size_t)j->n3 * (size_t)fs->slots);
+      int *cr = realloc(j->col_row, sizeof(int) * (size_t)fs->slots);
+      if (c) j->cols = c;
+      if (cr) j->col_row = cr;
+      if (c && cr) j->cols_cap = fs->slots;
+    }
+    /* The columns of the latest step's contact vertices: the next steps ask for them. */
+    for (int q = 0; q < fs->slots && j->ncols < j->cols_cap; ++q)
+      if (fs->slot_row[q] >= 0 && fs->slot_used[q] == fs->stamp) j->col_row[j->ncols++] = fs->slot_row[q];
+  }
+  j->rc = 0;
+  w->job_state = JOB_REQUESTED;
+  w->job_obsolete = 0;
+  w->job_due = w->frame + w->def.refactor_lag;
+  return PALP_OK;
+}
+
+/* At the start of the due frame: the job's factor replaces the world's. */
+static int job_install(palp_world *w) {
+  palp_factor_job *j = w->job;
+  const int obsolete = w->job_obsolete;
+  w->job_state = JOB_NONE;
+  w->job_obsolete = 0;
+  if (obsolete) return PALP_OK;
+  if (j->rc) return refactor(w, j->h); /* the same matrix, factored here: still deterministic */
+  const palp_ldl old = w->ldl;
+  w->ldl = j->ldl;
+  j->ldl = old; /* kept as the next job's spare: its analysis is reused */
+  memcpy(w->fdir, j->fdir, sizeof(palp_vec3) * (size_t)w->nlink);
+  memcpy(w->fbeta, j->fbeta, sizeof(double) * (size_t)w->nlink);
+  memcpy(w->fslack, j->fslack, sizeof(double) * (size_t)w->nlink);
+  finger_cols_invalidate(w);
+  finger_scratch *fs = w->fs;
+  if (fs && j->ncols > 0 && j->cols_cap > 0) {
+    /* Swap the pools: the job's buffer has the finger pool's layout. */
+    if (j->cols_cap < fs->slots) {
+      double *c = realloc(j->cols, sizeof(double) * 3 * (size_t)j->n3 * (size_t)fs->slots);
+      int *cr = realloc(j->col_row, sizeof(int) * (size_t)fs->slots);
+      if (c) j->cols = c;
+      if (cr) j->col_row = cr;
+      if (c && cr) j->cols_cap = fs->slots;
+    }
+    if (j->cols_cap >= fs->slots) {
+      double *pool = fs->pool;
+      fs->pool = j->cols;
+      j->cols = pool;
+      /* fs->slots stays: the swapped-in buffer holds at least that many slots; the
+       * old pool (now the job's) had exactly fs->slots. */
+      j->cols_cap = fs->slots;
+      for (int q = 0; q < j->ncols; ++q) {
+        fs->slot_row[q] = j->col_row[q];
+        fs->row_slot[j->col_row[q]] = q;
+        fs->slot_used[q] = fs->stamp;
+      }
+    }
+  }
+  factor_installed(w, j->h);
+  return PALP_OK;
+}
+
+int palp_world_refactor_lag_for(double dt) {
+  /* ~16 ms: a job costs ~0.5 ms of factorisation and ~1 ms of finger columns, and
+   * jobs come in bursts; at 8 ms, 32 sessions at 250 Hz still waited 1.4-8 ms for
+   * a third of their jobs (docs/server.md). 2 frames at 100 Hz. */
+  if (!(dt > 0.0)) return 0;
+  const double k = ceil(0.016 / dt - 1e-9);
+  return k < 1.0 ? 1 : k > 1000.0 ? 1000 : (int)k;
+}
+
+palp_factor_job *palp_world_factor_claim(palp_world *w) {
+  if (!w || w->job_state != JOB_REQUESTED) return NULL;
+  w->job_state = JOB_CLAIMED;
+  return w->job;
+}
+
+int palp_world_factor_done(palp_world *w, palp_factor_job *j) {
+  if (!w || !j || j != w->job || w->job_state != JOB_CLAIMED) return PALP_EINVAL;
+  w->job_state = JOB_DONE;
+  return PALP_OK;
+}
+
+int64_t palp_world_factor_due(const palp_world *w) {
+  return w && w->job_state == JOB_CLAIMED ? w->job_due : -1;
 }
 
 /* ---- stepping ----------------------------------------------------------- */
@@ -1254,6 +1458,12 @@ static int has_load(const palp_world *w) {
   return 0;
 }
 
+static int has_finger(const palp_world *w) {
+  for (int c = 0; c < w->def.max_contacts; ++c)
+    if (w->contacts[c].kind == CONTACT_FINGER) return 1;
+  return 0;
+}
+
 /* One attempt at a step of h; PALP_EAGAIN-like 1 when the solve was rejected
  * (nothing but the force arrays has changed then). */
 static int try_step(palp_world *w, double h, int last_resort) {
@@ -1261,9 +1471,21 @@ static int try_step(palp_world *w, double h, int last_resort) {
    * then at least (1/1.25)^2 = 64% of what h needs, above the half that stability
    * requires; shorter steps only damp a little more. Beyond, or after a lagged-
    * tangent trigger, rebuild. The Burgers step is always exact for h. */
-  if (w->stale || h > 1.25 * w->h_factored || h < 0.5 * w->h_factored) {
+  /* Deferred only with a finger down (the haptic sessions the lag is for): under
+   * heavy force loads rebuilds come every step or two, mostly inside halved steps
+   * that rebuild at once anyway, and a helper computing jobs that are dropped only
+   * competes with the ticks for the cores (measured: server_malformed's flood). */
+  const int defer = w->def.refactor_lag > 0 && has_finger(w);
+  if (h > 1.25 * w->h_factored || h < 0.5 * w->h_factored || (w->stale && !defer)) {
     int e = refactor(w, h);
     if (e) return e;
+  } else if (w->stale && w->job_state == JOB_NONE) {
+    /* Deferred: the old factor serves refactor_lag more frames (a lagged tangent is
+     * already an approximation, and the trigger keeps half the stability margin). */
+    if (job_request(w, h)) {
+      int e = refactor(w, h);
+      if (e) return e;
+    }
   }
   int e = set_burgers(w, h);
   if (e) return e;
@@ -1310,6 +1532,13 @@ int palp_world_step_dt(palp_world *w, double h) {
     }
     w->awake = 1;
     w->quiet = 0.0;
+  }
+  if (w->job_state != JOB_NONE && w->frame >= w->job_due) {
+    /* Installed at its due frame whoever computed it: replay gets the same bits. */
+    if (w->job_state == JOB_CLAIMED) return PALP_EBUSY; /* the host must hand it back first */
+    if (w->job_state == JOB_REQUESTED && !w->job_obsolete) palp_factor_job_run(w->job);
+    const int e = job_install(w);
+    if (e) return e;
   }
   const double t_end = w->t + h;
   int e = step_split(w, h, 0);

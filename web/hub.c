@@ -27,6 +27,15 @@
  * the thread 240 times a second, and on a virtual machine every wake-up costs more than the work
  * (bench/web). Adds at most 16.7 ms to a frame's way to the page. */
 #define POLL_NS 16666667LL
+/* Local models are read in full (not just the newest) so that consecutive frames can be compared
+ * for late haptic updates: 64 per finger covers a 60 Hz poll at up to 3.8 kHz physics. */
+#define LM_DEPTH 64
+#define MAX_EXERCISES PALP_WEB_MAX_PHANTOMS
+/* Finding requests from a trainee page: at most one per FINDING_GAP_NS, FINDING_MARKS_MAX marks
+ * standing per session from the bridge, a contact point at most CONTACT_FRESH_NS old. */
+#define FINDING_GAP_NS 500000000LL
+#define FINDING_MARKS_MAX 64
+#define CONTACT_FRESH_NS 250000000LL
 
 /* One published message: bytes and the version they were built at (versions are unique across
  * the hub, so a cursor holding an old version of a reused slot is never mistaken as current). */
@@ -50,7 +59,41 @@ typedef struct finger {
   double proxy[3], device[3]; /* [m] */
   double lm_force;            /* |force| of the model, not limited [N] */
   uint32_t lm_flags;          /* LM_* of the newest model */
+  int64_t lm_server_ns;       /* its server_time_ns */
+  double point[3], area;      /* its contact point [m] and footprint [m^2] */
 } finger;
+
+/* What a trainee may know of an exercise (palp_exercise), per phantom. */
+typedef struct exercise {
+  int used;
+  uint32_t phantom_id;
+  char name[64], title[128], instructions[1024];
+  double time_limit, max_force;
+} exercise;
+
+/* The server's answer on a session's findings (palp_finding_status). */
+typedef struct finding_status {
+  int valid;
+  uint32_t marks, last_mark_id;
+  int last_accepted;
+  char reason[128];
+  double time_left;
+  int64_t at_ns;
+} finding_status;
+
+/* Per session slot, shared between the DDS thread (which owns the writer and the contact point)
+ * and the web thread (which handles a trainee page's request), under the hub's mutex. */
+typedef struct finding_slot {
+  dds_entity_t pub, w;           /* palp_finding writer in the session's partition (exercise sessions) */
+  int exercise;                  /* the session's phantom runs an exercise */
+  int contact;                   /* a finger's newest local model is in contact */
+  int contact_finger;
+  double point[3], time;         /* its contact point [m] and world time [s] */
+  int64_t at_ns;                 /* when the bridge took it */
+  uint32_t next_mark, stack[FINDING_MARKS_MAX];
+  int nstack;
+  int64_t last_ns;
+} finding_slot;
 
 typedef struct phantom {
   int used;
@@ -79,12 +122,17 @@ typedef struct session {
   int fps_count;
   double fps;
   uint32_t lm_flags_seen;  /* LM_* bits seen in this session's local models since it opened */
+  uint64_t late_haptic;    /* local models published > 2 periods after the previous frame's */
+  uint64_t lost_haptic;    /* frames the bridge never received (while a finger stayed down) */
+  finding_status fst;
   int changed;            /* live data changed since the last live message */
   int64_t next_live_ns;
   /* feedback of this session's partition, read only while a position-driven finger presses (its
    * force comes from feedback alone; a force-driven contact carries its own) */
   dds_entity_t fb_sub, fb_r;
-  /* viewer membership */
+  /* viewer membership, through a request writer of this session's own: the server admits at most
+   * stations_per_writer (2) stations per writer (server/admission.c), as a station process has one */
+  dds_entity_t req_w;
   int joined;
   int64_t unwanted_since, join_failed_ns;
   char station[64];
@@ -104,7 +152,8 @@ struct palp_web_hub {
   palp_web_hub_def def;
   char host[32];
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
-  dds_entity_t catalogue_r, state_r, status_r, reply_r, request_w, sub, contact_r, deform_r, lm_r;
+  dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
+  dds_entity_t exercise_r, fstatus_r;
   dds_entity_t ws, stop_gc;
   pthread_t thread;
   int running;
@@ -116,13 +165,16 @@ struct palp_web_hub {
   phantom ph[PALP_WEB_MAX_PHANTOMS];
   session s[PALP_WEB_MAX_SESSIONS];
   server_status srv[MAX_SERVERS];
+  exercise ex[MAX_EXERCISES];
   int sessions_dirty, sessions_structure;
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
 
   /* shared with the web thread, under mu */
   pthread_mutex_t mu;
   uint64_t next_ver;
-  item hello, phantom_msg[PALP_WEB_MAX_PHANTOMS], sessions_msg, status_msg;
+  item hello, phantom_msg[PALP_WEB_MAX_PHANTOMS], sessions_msg, status_msg, exercises_msg;
+  finding_slot fs[PALP_WEB_MAX_SESSIONS];
+  uint64_t bind_seq;
   item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS];
   uint32_t slot_sid[PALP_WEB_MAX_SESSIONS]; /* 0: free */
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
@@ -181,8 +233,9 @@ static void build_hello(palp_web_hub *h) {
   cJSON_AddNumberToObject(b, "medium_max", h->def.bands.medium_max);
   cJSON_AddNumberToObject(j, "dashboard_hz", h->def.dashboard_hz);
   cJSON_AddBoolToObject(j, "joins", h->def.join);
-  /* Features that need topics which do not exist yet: the pages show them once these say so. */
-  cJSON_AddBoolToObject(j, "findings", 0);
+  /* A trainee page bound to an exercise session may mark findings (palp_finding). */
+  cJSON_AddBoolToObject(j, "findings", 1);
+  cJSON_AddNumberToObject(j, "finding_gap_s", FINDING_GAP_NS * 1e-9);
   cJSON_AddBoolToObject(j, "proxy", 1); /* palp_local_model: live fingers carry proxy and device */
   publish_json(h, &h->hello, j);
 }
@@ -241,13 +294,54 @@ static void build_sessions(palp_web_hub *h) {
       if (s->f[k].mode == palp_CONTACT_FINGER && s->f[k].lm_valid) now_flags |= s->f[k].lm_flags;
     cJSON_AddNumberToObject(o, "model_flags", now_flags);
     cJSON_AddNumberToObject(o, "model_flags_seen", s->lm_flags_seen);
-    /* Not on the wire (findings; late haptic updates are counted by the station alone): null,
-     * and the pages say "n/a" (docs/web.md). */
-    cJSON_AddNullToObject(o, "findings");
-    cJSON_AddNullToObject(o, "late_haptic");
+    /* Findings: the marks standing in the server's newest palp_finding_status (null before
+     * one arrived). Late haptic updates: as the bridge sees the local models (docs/web.md). */
+    const exercise *ex = NULL;
+    for (int k = 0; k < MAX_EXERCISES && !ex; k++)
+      if (h->ex[k].used && h->ex[k].phantom_id == s->st.phantom_id) ex = &h->ex[k];
+    if (ex) cJSON_AddStringToObject(o, "exercise", ex->name);
+    else cJSON_AddNullToObject(o, "exercise");
+    if (s->fst.valid) cJSON_AddNumberToObject(o, "findings", s->fst.marks);
+    else cJSON_AddNullToObject(o, "findings");
+    if (pos) {
+      cJSON_AddNumberToObject(o, "late_haptic", (double)s->late_haptic);
+      cJSON_AddNumberToObject(o, "lost_haptic", (double)s->lost_haptic);
+    } else {
+      cJSON_AddNullToObject(o, "late_haptic"); /* a force-driven session has no local models */
+      cJSON_AddNullToObject(o, "lost_haptic");
+    }
     cJSON_AddItemToArray(arr, o);
   }
   publish_json(h, &h->sessions_msg, j);
+}
+
+static void build_exercises(palp_web_hub *h) {
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "exercises");
+  cJSON *arr = cJSON_AddArrayToObject(j, "exercises");
+  for (int i = 0; i < MAX_EXERCISES; i++) {
+    const exercise *e = &h->ex[i];
+    if (!e->used) continue;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "phantom", e->phantom_id);
+    cJSON_AddStringToObject(o, "name", e->name);
+    cJSON_AddStringToObject(o, "title", e->title);
+    cJSON_AddStringToObject(o, "instructions", e->instructions);
+    cJSON_AddNumberToObject(o, "time_limit", e->time_limit);
+    cJSON_AddNumberToObject(o, "max_force", e->max_force);
+    cJSON_AddItemToArray(arr, o);
+  }
+  publish_json(h, &h->exercises_msg, j);
+}
+
+/* Copies a wire string for a hand-built JSON message: printable ASCII only, no quote or backslash. */
+static void json_safe(char *out, size_t outlen, const char *in) {
+  size_t k = 0;
+  for (; in && *in && k + 1 < outlen; in++) {
+    const unsigned char c = (unsigned char)*in;
+    out[k++] = (c >= 32 && c < 127 && c != '"' && c != '\\') ? (char)c : '?';
+  }
+  out[k] = 0;
 }
 
 static void build_status(palp_web_hub *h) {
@@ -324,7 +418,18 @@ static void build_live(palp_web_hub *h, int slot) {
                             (f->lm_flags & palp_LM_OUT_OF_RANGE) ? "true" : "false") - 1;
     first = 0;
   }
-  n += (size_t)snprintf(buf + n, sizeof buf - n, "]}");
+  n += (size_t)snprintf(buf + n, sizeof buf - n, "]");
+  if (s->fst.valid) {
+    char reason[128];
+    json_safe(reason, sizeof reason, s->fst.reason);
+    n += (size_t)snprintf(buf + n, sizeof buf - n,
+                          ",\"findings\":{\"marks\":%u,\"last_mark_id\":%u,\"last_accepted\":%s,\"reason\":\"%s\","
+                          "\"time_left\":%.3f,\"age\":%.3f}",
+                          s->fst.marks, s->fst.last_mark_id, s->fst.last_accepted ? "true" : "false", reason,
+                          s->fst.time_left, (double)(palp_dds_now_ns() - s->fst.at_ns) * 1e-9);
+  }
+  n += (size_t)snprintf(buf + n, sizeof buf - n, "}");
+  if (n >= sizeof buf) return;
   unsigned char *m = malloc(n);
   if (!m) return;
   memcpy(m, buf, n);
@@ -436,7 +541,18 @@ static void send_request(palp_web_hub *h, session *s, int op) {
   snprintf(rq.user_name, sizeof rq.user_name, "palp-web");
   rq.want_feedback = 0; /* the bridge reads feedback only when the trainee's station asks for it */
   rq.want_deformation = 1;
-  dds_write(h->request_w, &rq);
+  if (s->req_w <= 0)
+    s->req_w = palp_dds_create_writer(h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  if (s->req_w > 0) dds_write(s->req_w, &rq);
+}
+
+/* Forgets the session's request instance (the server's station table is finite). */
+static void dispose_request(session *s) {
+  if (s->req_w <= 0) return;
+  palp_SessionRequest key;
+  memset(&key, 0, sizeof key);
+  snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
+  dds_dispose(s->req_w, &key);
 }
 
 static void leave(palp_web_hub *h, session *s) {
@@ -444,18 +560,53 @@ static void leave(palp_web_hub *h, session *s) {
   /* As a station says goodbye: OP_LEAVE so the server tells it from a crash, then the disposal
    * so that it forgets the station (its station table is finite). */
   send_request(h, s, palp_OP_LEAVE);
-  palp_SessionRequest key;
-  memset(&key, 0, sizeof key);
-  snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
-  dds_dispose(h->request_w, &key);
+  dispose_request(s);
   s->joined = 0;
   h->stats.leaves++;
   h->sessions_dirty = 1;
 }
 
+static const exercise *find_exercise(const palp_web_hub *h, uint32_t phantom_id) {
+  for (int k = 0; k < MAX_EXERCISES; k++)
+    if (h->ex[k].used && h->ex[k].phantom_id == phantom_id) return &h->ex[k];
+  return NULL;
+}
+
+/* An exercise session gets its palp_finding writer as soon as the bridge knows it, so that the
+ * server's reader has matched it long before a trainee page's first mark (a reliable volatile
+ * sample written before the match would be lost). */
+static void update_finding_writer(palp_web_hub *h, int slot) {
+  session *s = &h->s[slot];
+  const int ex = find_exercise(h, s->st.phantom_id) != NULL;
+  dds_entity_t pub = 0, w = 0;
+  pthread_mutex_lock(&h->mu);
+  finding_slot *fs = &h->fs[slot];
+  fs->exercise = ex;
+  const int need = ex && fs->pub <= 0 && s->st.partition[0];
+  pthread_mutex_unlock(&h->mu);
+  if (!need) return;
+  pub = palp_dds_session_publisher(h->pp, s->st.partition);
+  if (pub > 0) w = palp_dds_create_writer(pub, h->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+  if (pub <= 0 || w <= 0) {
+    palp_log_warn(h->def.log, "session %u: cannot create the findings writer", s->id);
+    if (pub > 0) dds_delete(pub);
+    return;
+  }
+  pthread_mutex_lock(&h->mu);
+  fs->pub = pub;
+  fs->w = w;
+  pthread_mutex_unlock(&h->mu);
+}
+
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   leave(h, s);
+  if (s->req_w > 0) dds_delete(s->req_w);
+  pthread_mutex_lock(&h->mu);
+  const dds_entity_t fpub = h->fs[slot].pub;
+  memset(&h->fs[slot], 0, sizeof h->fs[slot]);
+  pthread_mutex_unlock(&h->mu);
+  if (fpub > 0) dds_delete(fpub);
   if (s->fb_sub > 0) dds_delete(s->fb_sub);
   palp_web_coverage_destroy(s->cov);
   memset(s, 0, sizeof *s);
@@ -495,20 +646,83 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
   int ps;
   s->ph = find_phantom(h, m->phantom_id, 0, &ps);
   attach_coverage(s);
+  update_finding_writer(h, slot);
+  h->sessions_dirty = 1;
+}
+
+static void copy_str(char *out, size_t outlen, const char *in) { snprintf(out, outlen, "%s", in ? in : ""); }
+
+static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
+  exercise *e = NULL;
+  for (int k = 0; k < MAX_EXERCISES && !e; k++)
+    if (h->ex[k].used && h->ex[k].phantom_id == m->phantom_id) e = &h->ex[k];
+  for (int k = 0; k < MAX_EXERCISES && !e; k++)
+    if (!h->ex[k].used) e = &h->ex[k];
+  /* The strings are bounded by the type; the numbers must make sense to be shown. */
+  if (!e || !isfinite(m->time_limit) || !isfinite(m->max_force)) {
+    h->stats.dropped++;
+    return;
+  }
+  e->used = 1;
+  e->phantom_id = m->phantom_id;
+  copy_str(e->name, sizeof e->name, m->name);
+  copy_str(e->title, sizeof e->title, m->title);
+  copy_str(e->instructions, sizeof e->instructions, m->instructions);
+  e->time_limit = m->time_limit;
+  e->max_force = m->max_force;
+  build_exercises(h);
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].st.phantom_id == m->phantom_id) update_finding_writer(h, i);
+  h->sessions_dirty = 1;
+}
+
+/* An exercise withdrawn (disposed) or its server gone: no longer offered. */
+static void on_exercise_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
+  (void)ih;
+  const palp_Exercise key = *(const palp_Exercise *)sample;
+  for (int k = 0; k < MAX_EXERCISES; k++)
+    if (h->ex[k].used && h->ex[k].phantom_id == key.phantom_id) h->ex[k].used = 0;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].st.phantom_id == key.phantom_id) {
+      pthread_mutex_lock(&h->mu);
+      h->fs[i].exercise = 0;
+      pthread_mutex_unlock(&h->mu);
+    }
+  build_exercises(h);
+  h->sessions_dirty = 1;
+}
+
+static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s || !isfinite(m->time_left)) {
+    h->stats.dropped++;
+    return;
+  }
+  s->fst.valid = 1;
+  s->fst.marks = m->marks;
+  s->fst.last_mark_id = m->last_mark_id;
+  s->fst.last_accepted = m->last_accepted != 0;
+  copy_str(s->fst.reason, sizeof s->fst.reason, m->reason);
+  s->fst.time_left = m->time_left;
+  s->fst.at_ns = palp_dds_now_ns();
+  /* A mark the server refused does not stand: "withdraw last" must not name it. */
+  pthread_mutex_lock(&h->mu);
+  finding_slot *fs = &h->fs[slot];
+  if (!m->last_accepted && fs->nstack > 0 && fs->stack[fs->nstack - 1] == m->last_mark_id) fs->nstack--;
+  pthread_mutex_unlock(&h->mu);
+  s->changed = 1;
   h->sessions_dirty = 1;
 }
 
 /* A state instance that turned not-alive: its server is gone, the session with it. */
-static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih) {
-  palp_SessionState key;
-  memset(&key, 0, sizeof key);
+static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
+  (void)ih;
+  const uint32_t sid = ((const palp_SessionState *)sample)->session_id; /* the invalid sample's key */
   int slot;
-  if (dds_instance_get_key(h->state_r, ih, &key) == 0 && find_session(h, key.session_id, &slot)) {
+  if (find_session(h, sid, &slot)) {
     h->s[slot].joined = 0; /* its server cannot hear a goodbye; the instance is disposed below */
-    palp_SessionRequest rk;
-    memset(&rk, 0, sizeof rk);
-    snprintf(rk.station_id, sizeof rk.station_id, "%s", h->s[slot].station);
-    dds_dispose(h->request_w, &rk);
+    dispose_request(&h->s[slot]);
     free_session(h, slot);
   }
 }
@@ -587,7 +801,12 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
       f->radius = m->radius > 0 ? m->radius : 0;
     }
   }
-  if (f->mode != palp_CONTACT_FINGER) f->lm_valid = 0;
+  if (f->mode != palp_CONTACT_FINGER) {
+    f->lm_valid = 0;
+    pthread_mutex_lock(&h->mu);
+    if (h->fs[slot].contact_finger == m->finger) h->fs[slot].contact = 0;
+    pthread_mutex_unlock(&h->mu);
+  }
   if (f->mode == palp_CONTACT_FINGER && h->def.read_feedback && s->fb_sub <= 0 && s->st.partition[0]) {
     s->fb_sub = palp_dds_session_subscriber(h->pp, s->st.partition);
     s->fb_r = s->fb_sub > 0 ? palp_dds_create_reader(s->fb_sub, h->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK) : -1;
@@ -597,7 +816,8 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
   recompute_force(h, s);
 }
 
-static void on_contact_lost(palp_web_hub *h, dds_instance_handle_t ih) {
+static void on_contact_lost(palp_web_hub *h, dds_instance_handle_t ih, const void *sample) {
+  (void)sample;
   palp_Contact key;
   memset(&key, 0, sizeof key);
   int slot;
@@ -639,13 +859,48 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
     return;
   }
   finger *f = &s->f[m->finger];
-  if (f->lm_valid && m->frame < f->lm_frame) return;
+  if (f->lm_valid && m->frame <= f->lm_frame) return;
+  /* Late haptic updates, from what the bridge sees: the model of the frame after the previous
+   * one, published (server clock, so no clock between hosts is compared) more than two of its
+   * periods after it: the station's haptic loop had to extrapolate the old model that long.
+   * Frames between the two that the bridge never received are counted apart (lost), not late:
+   * the station may have had them. */
+  if (f->lm_valid && isfinite(m->period) && m->period > 0) {
+    const uint64_t gap = m->frame - f->lm_frame;
+    if (gap == 1 && (double)(m->server_time_ns - f->lm_server_ns) > 2e9 * m->period) {
+      s->late_haptic++;
+      h->stats.late_haptic++;
+      h->sessions_dirty = 1;
+    } else if (gap > 1 && gap < 1000) {
+      s->lost_haptic += gap - 1;
+      h->stats.lost_haptic += gap - 1;
+      h->sessions_dirty = 1;
+    }
+  }
+  f->lm_server_ns = m->server_time_ns;
   f->lm_valid = 1;
   f->lm_frame = m->frame;
   f->lm_contact = m->in_contact != 0;
   f->proxy[0] = m->proxy.x, f->proxy[1] = m->proxy.y, f->proxy[2] = m->proxy.z;
   f->device[0] = m->device.x, f->device[1] = m->device.y, f->device[2] = m->device.z;
   f->lm_force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
+  const int point_ok = vec_finite(&m->point) && isfinite(m->area) && m->area >= 0 && isfinite(m->time);
+  f->point[0] = m->point.x, f->point[1] = m->point.y, f->point[2] = m->point.z;
+  f->area = point_ok ? m->area : 0;
+  /* The contact point a trainee page's "lump here" marks: the newest in-contact model of any
+   * finger; a finger that lifts clears it if it set it. */
+  pthread_mutex_lock(&h->mu);
+  finding_slot *fs = &h->fs[slot];
+  if (m->in_contact && point_ok) {
+    fs->contact = 1;
+    fs->contact_finger = m->finger;
+    memcpy(fs->point, f->point, sizeof fs->point);
+    fs->time = m->time;
+    fs->at_ns = palp_dds_now_ns();
+  } else if (fs->contact && fs->contact_finger == m->finger) {
+    fs->contact = 0;
+  }
+  pthread_mutex_unlock(&h->mu);
   const uint32_t flags = (uint32_t)m->flags & (palp_LM_FORCE_LIMIT | palp_LM_OUT_OF_RANGE);
   if (flags != f->lm_flags || (flags & ~s->lm_flags_seen)) h->sessions_dirty = 1;
   f->lm_flags = flags;
@@ -693,7 +948,9 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
 /* ---- the thread ------------------------------------------------------------------------------ */
 
 typedef void (*sample_fn)(palp_web_hub *h, const void *sample);
-typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih);
+/* An instance that turned not-alive; sample holds its key fields (an invalid sample's key is
+ * filled in), since the instance itself may already be gone once its last sample is taken. */
+typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih, const void *sample);
 
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
   if (rd <= 0) return 0;
@@ -706,7 +963,7 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
         on(h, ptr[i]);
         (*counter)++;
       } else if (lost && info[i].instance_state != DDS_IST_ALIVE) {
-        lost(h, info[i].instance_handle);
+        lost(h, info[i].instance_handle, ptr[i]);
       }
     }
     dds_return_loan(rd, ptr, n);
@@ -765,11 +1022,7 @@ static void check_replies(palp_web_hub *h, int64_t now) {
           s->joined = 0;
           s->join_failed_ns = now;
           h->stats.join_rejected++;
-          /* forget the request instance too */
-          palp_SessionRequest key;
-          memset(&key, 0, sizeof key);
-          snprintf(key.station_id, sizeof key.station_id, "%s", s->station);
-          dds_dispose(h->request_w, &key);
+          dispose_request(s); /* forget the request instance too */
         }
       }
     }
@@ -792,6 +1045,7 @@ static void *hub_main(void *arg) {
     news += drain(h, h->catalogue_r, (sample_fn)on_phantom, NULL, &h->stats.catalogue);
     news += drain(h, h->state_r, (sample_fn)on_state, on_state_lost, &h->stats.states);
     news += drain(h, h->status_r, (sample_fn)on_status, NULL, &h->stats.statuses);
+    news += drain(h, h->exercise_r, (sample_fn)on_exercise, on_exercise_lost, &h->stats.exercises);
     /* Contacts and feedback arrive at the tick rate (up to 1 kHz): polled here, newest per key,
      * instead of waking the thread per sample. */
     if (poll_due) {
@@ -799,6 +1053,7 @@ static void *hub_main(void *arg) {
       for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
         if (h->s[i].used && h->s[i].fb_r > 0) drain(h, h->s[i].fb_r, (sample_fn)on_feedback, NULL, &h->stats.feedbacks);
       drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
+      drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
       news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
     }
     check_replies(h, now);
@@ -817,6 +1072,16 @@ static void *hub_main(void *arg) {
         for (int k = 0; k < FINGERS; k++) {
           const finger *f = &s->f[k];
           if (f->mode == palp_CONTACT_RELEASE || !s->cov) continue;
+          /* A position-driven finger with a local model in contact: the disc of its footprint
+           * area around its contact point, at the band of the model's force. Else the contact's
+           * centre and radius with the force it carries or its feedback (docs/web.md). */
+          if (f->mode == palp_CONTACT_FINGER && f->lm_valid) {
+            if (!f->lm_contact) continue;
+            const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
+            const int band = palp_web_band(&h->def.bands, f->lm_force);
+            if (band && palp_web_coverage_press(s->cov, f->point, r, band) > 0) s->changed = 1;
+            continue;
+          }
           const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
           if (f->mode == palp_CONTACT_FINGER && !f->fb_active) continue;
           const int band = palp_web_band(&h->def.bands, sqrt(fv[0] * fv[0] + fv[1] * fv[1] + fv[2] * fv[2]));
@@ -883,7 +1148,6 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   h->reply_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
-  h->request_w = palp_dds_create_writer(h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
   /* Every session's partition, as palp-recorder reads them: "palp/session/" + "*". */
   char wildcard[64];
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
@@ -892,11 +1156,18 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
   h->contact_r = make_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   h->deform_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
-  h->lm_r = make_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);
+  {
+    dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, LM_DEPTH); /* every frame, for late updates */
+    h->lm_r = dds_create_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL);
+    dds_delete_qos(q);
+  }
+  h->fstatus_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
+  h->exercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
-  const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r};
-  int bad = h->request_w < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
+  int bad = h->fstatus_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -911,6 +1182,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     return NULL;
   }
   build_hello(h);
+  build_exercises(h);
   return h;
 }
 
@@ -952,6 +1224,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   free(h->hello.buf);
   free(h->sessions_msg.buf);
   free(h->status_msg.buf);
+  free(h->exercises_msg.buf);
   pthread_mutex_destroy(&h->mu);
   free(h);
 }
@@ -990,12 +1263,96 @@ void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c) {
   pthread_mutex_unlock(&h->mu);
 }
 
+/* Sets this page's answer to its finding request (under mu); sent before anything else. */
+static void set_reply(palp_web_cursor *c, const char *op, int ok, uint32_t mark_id, const char *reason) {
+  char safe[200];
+  json_safe(safe, sizeof safe, reason);
+  const int n = snprintf(c->reply, sizeof c->reply,
+                         "{\"type\":\"finding_reply\",\"op\":\"%s\",\"ok\":%s,\"mark_id\":%u,\"reason\":\"%s\"}", op,
+                         ok ? "true" : "false", mark_id, safe);
+  c->reply_len = n > 0 && (size_t)n < sizeof c->reply ? (size_t)n : 0;
+}
+
+/* {"finding": "mark" | "withdraw"} from a page (web thread). Every check is made here, under the
+ * mutex, against what the DDS thread holds; the write itself happens outside it. */
+static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
+  const char *op = mark ? "mark" : "withdraw";
+  const char *why = NULL;
+  palp_Finding f;
+  memset(&f, 0, sizeof f);
+  dds_entity_t w = 0;
+  int slot = -1;
+  const int64_t now = palp_dds_now_ns();
+  pthread_mutex_lock(&h->mu);
+  if (!c->trainee) {
+    why = "only the trainee page of a session may mark findings; this page is a viewer";
+  } else {
+    for (int i = 0; i < PALP_WEB_MAX_SESSIONS && slot < 0; i++)
+      if (h->slot_sid[i] == c->trainee) slot = i;
+    for (int k = 0; k < h->nclients && !why; k++)
+      if (h->clients[k] != c && h->clients[k]->trainee == c->trainee && h->clients[k]->bind_seq > c->bind_seq)
+        why = "another trainee page took this session";
+  }
+  finding_slot *fs = slot >= 0 ? &h->fs[slot] : NULL;
+  if (why) {
+  } else if (!fs) {
+    why = "the session is not open";
+  } else if (!fs->exercise) {
+    why = "no exercise is running in this session";
+  } else if (fs->w <= 0) {
+    why = "the bridge cannot write findings for this session";
+  } else if (fs->last_ns && now - fs->last_ns < FINDING_GAP_NS) {
+    why = "too fast: one finding request per 0.5 s";
+  } else if (mark && (!fs->contact || now - fs->at_ns > CONTACT_FRESH_NS)) {
+    why = "not touching the phantom: press where you feel the lump, then mark it";
+  } else if (mark && fs->nstack >= FINDING_MARKS_MAX) {
+    why = "too many marks standing";
+  } else if (!mark && fs->nstack == 0) {
+    why = "no mark of this page to withdraw";
+  } else {
+    dds_publication_matched_status_t ms;
+    if (dds_get_publication_matched_status(fs->w, &ms) != 0 || ms.current_count == 0)
+      why = "no server takes findings for this session";
+  }
+  if (!why) {
+    f.session_id = c->trainee;
+    f.op = mark ? palp_FINDING_MARK : palp_FINDING_WITHDRAW;
+    f.mark_id = mark ? fs->next_mark + 1 : fs->stack[fs->nstack - 1];
+    if (mark) f.point = (palp_Vec3){fs->point[0], fs->point[1], fs->point[2]}, f.time = fs->time;
+    w = fs->w;
+    fs->last_ns = now; /* the rate counts attempts that reach DDS */
+  } else {
+    h->stats.findings_refused++;
+    set_reply(c, op, 0, 0, why);
+  }
+  pthread_mutex_unlock(&h->mu);
+  if (why) return 1;
+  /* Reliable keep-all; at this rate the writer's history never fills, so this does not block. */
+  const dds_return_t rc = dds_write(w, &f);
+  pthread_mutex_lock(&h->mu);
+  if (rc != 0) {
+    h->stats.findings_refused++;
+    set_reply(c, op, 0, 0, "the finding could not be written to the session");
+  } else {
+    if (h->slot_sid[slot] == f.session_id) { /* still the same session */
+      if (mark) fs->stack[fs->nstack++] = ++fs->next_mark;
+      else fs->nstack--;
+    }
+    h->stats.findings_written++;
+    set_reply(c, op, 1, f.mark_id, "");
+  }
+  pthread_mutex_unlock(&h->mu);
+  return rc != 0;
+}
+
 int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, size_t len) {
   if (!msg || len == 0 || len > 256) return PALP_EINVAL;
   cJSON *j = cJSON_ParseWithLength(msg, len);
   if (!j) return PALP_EINVAL;
   const cJSON *f = cJSON_GetObjectItemCaseSensitive(j, "follow");
-  int mode = -1;
+  const cJSON *t = cJSON_GetObjectItemCaseSensitive(j, "trainee");
+  const cJSON *fi = cJSON_GetObjectItemCaseSensitive(j, "finding");
+  int mode = -1, bind = 0, finding = -1;
   uint32_t id = 0;
   if (cJSON_IsObject(j) && cJSON_GetArraySize(j) == 1 && f) {
     if (cJSON_IsNull(f)) mode = PALP_WEB_FOLLOW_NONE;
@@ -1003,10 +1360,28 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
     else if (cJSON_IsNumber(f) && f->valuedouble >= 1 && f->valuedouble <= 4294967295.0 &&
              f->valuedouble == floor(f->valuedouble))
       mode = PALP_WEB_FOLLOW_SESSION, id = (uint32_t)f->valuedouble;
+  } else if (cJSON_IsObject(j) && cJSON_GetArraySize(j) == 1 && t) {
+    if (cJSON_IsNumber(t) && t->valuedouble >= 1 && t->valuedouble <= 4294967295.0 &&
+        t->valuedouble == floor(t->valuedouble))
+      mode = PALP_WEB_FOLLOW_SESSION, id = (uint32_t)t->valuedouble, bind = 1;
+  } else if (cJSON_IsObject(j) && cJSON_GetArraySize(j) == 1 && fi && cJSON_IsString(fi)) {
+    if (!strcmp(fi->valuestring, "mark")) finding = 1;
+    else if (!strcmp(fi->valuestring, "withdraw")) finding = 0;
   }
   cJSON_Delete(j);
+  if (finding >= 0) return finding_request(h, c, finding);
   if (mode < 0) return PALP_EINVAL;
   pthread_mutex_lock(&h->mu);
+  /* A trainee page stays with its session: it may rebind to another one (the session it followed
+   * closed) or follow nothing, but not turn into a viewer of other sessions. */
+  if (c->trainee && !bind && mode != PALP_WEB_FOLLOW_NONE && !(mode == PALP_WEB_FOLLOW_SESSION && id == c->trainee)) {
+    pthread_mutex_unlock(&h->mu);
+    return PALP_EINVAL;
+  }
+  if (bind) {
+    c->trainee = id;
+    c->bind_seq = ++h->bind_seq; /* the newest binding of a session wins */
+  }
   c->mode = mode;
   c->follow = id;
   /* A new follow starts from the newest frame, not from whatever was skipped. */
@@ -1034,6 +1409,17 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   if (!c->hello_sent && h->hello.buf) {
     rc = take(&h->hello, pre, buf, len);
     if (rc > 0) c->hello_sent = 1;
+    goto out;
+  }
+  if (c->reply_len) {
+    const item r = {.ver = 0, .buf = (unsigned char *)c->reply, .len = c->reply_len};
+    rc = take(&r, pre, buf, len);
+    if (rc > 0) c->reply_len = 0;
+    goto out;
+  }
+  if (h->exercises_msg.buf && c->exercises_ver != h->exercises_msg.ver) {
+    rc = take(&h->exercises_msg, pre, buf, len);
+    if (rc > 0) c->exercises_ver = h->exercises_msg.ver;
     goto out;
   }
   for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)

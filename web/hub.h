@@ -8,8 +8,10 @@
  * palp_web_hub_next returns the next item it has not seen. A slow browser skips frames, memory
  * stays bounded, and the DDS thread never waits for a socket.
  *
- * Writes to DDS: only the bridge's own viewer requests (join a followed session as a visual
- * station so that the server streams its deformation, leave it when no page follows it). Nothing
+ * Writes to DDS: the bridge's own viewer requests (join a followed session as a visual station so
+ * that the server streams its deformation, leave it when no page follows it), and one thing a
+ * browser may ask for: a trainee page bound to an exercise session may mark a finding ("lump
+ * here", at the fingertip's contact point the bridge holds) or withdraw its last one. Nothing else
  * a browser sends reaches DDS (docs/web.md).
  */
 #ifndef PALP_WEB_HUB_H
@@ -52,12 +54,23 @@ typedef struct palp_web_cursor {
   uint64_t sessions_ver, status_ver;
   uint64_t deform_ver[PALP_WEB_MAX_SESSIONS], live_ver[PALP_WEB_MAX_SESSIONS];
   int64_t deform_sent_ns[PALP_WEB_MAX_SESSIONS];
+  uint64_t exercises_ver;
+  /* {"trainee": ID}: this page is that session's trainee page (the newest binding wins); only a
+   * bound page may send findings. 0: a viewer (dashboard, observer). */
+  uint32_t trainee;
+  uint64_t bind_seq;
+  /* the answer to this page's last finding request, sent before anything else */
+  char reply[320];
+  size_t reply_len;
 } palp_web_cursor;
 
 typedef struct palp_web_hub_stats {
   uint64_t catalogue, states, statuses, contacts, feedbacks, deformations, local_models; /* DDS samples taken */
   uint64_t dropped;   /* samples for sessions or phantoms the bridge does not know (or malformed) */
   uint64_t joins, leaves, join_rejected;
+  uint64_t exercises, finding_statuses;            /* DDS samples taken */
+  uint64_t findings_written, findings_refused;     /* browser finding requests */
+  uint64_t late_haptic, lost_haptic;               /* local models late / missing, all sessions */
   int sessions_open, clients;
 } palp_web_hub_stats;
 
@@ -76,9 +89,14 @@ void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out);
 int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients);
 void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c);
 
-/* A control message from a browser (at most 256 bytes of JSON): {"follow": ID} follows one
- * session, {"follow": "all"} every session (the dashboard), {"follow": null} none. It changes only
- * what this connection is sent. 0, or PALP_EINVAL for anything else (the caller counts it). */
+/* A control message from a browser (at most 256 bytes of JSON, one key): {"follow": ID} follows one
+ * session, {"follow": "all"} every session (the dashboard), {"follow": null} none; {"trainee": ID}
+ * binds this connection as that session's trainee page (and follows it; a bound page may follow
+ * nothing else); {"finding": "mark"} / {"finding": "withdraw"} asks to mark a finding at the
+ * fingertip's contact point or withdraw this session's last mark: checked (bound trainee page,
+ * exercise running, touching, rate) and answered with a "finding_reply" message to this page
+ * either way. 0; 1 for a finding refused (answered); PALP_EINVAL for anything malformed (the
+ * caller counts it; no answer). */
 int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, size_t len);
 
 /* The next message this cursor has not been sent: *buf is malloc'ed with `pre` spare bytes

@@ -104,6 +104,13 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
           (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.ws_opened,
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
+  if (h.exercises || h.findings_written || h.findings_refused || h.local_models)
+    palp_log_info(log, "exercises %llu, finding statuses %llu; findings written %llu, refused %llu; local models %llu "
+                       "(late %llu, lost %llu)",
+                  (unsigned long long)h.exercises, (unsigned long long)h.finding_statuses,
+                  (unsigned long long)h.findings_written, (unsigned long long)h.findings_refused,
+                  (unsigned long long)h.local_models, (unsigned long long)h.late_haptic,
+                  (unsigned long long)h.lost_haptic);
 }
 
 static void on_wake(void *ctx) {

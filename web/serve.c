@@ -161,8 +161,9 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     return 0;
 
   case LWS_CALLBACK_RECEIVE: {
-    /* Only control messages ({"follow": ...}); they change what this page is sent and never
-     * reach DDS. Anything longer than CONTROL_MAX is dropped whole. */
+    /* Only control messages ({"follow": ...}, {"trainee": ...}, {"finding": ...}): the first two
+     * change what this page is sent; a finding reaches DDS only from a bound trainee page, after
+     * the hub's checks. Anything longer than CONTROL_MAX is dropped whole. */
     if (lws_frame_is_binary(wsi)) c->rx_overflow = 1;
     if (!c->rx_overflow && c->rx_len + len <= CONTROL_MAX) {
       memcpy(c->rx + c->rx_len, in, len);
@@ -171,7 +172,8 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
       c->rx_overflow = 1;
     }
     if (lws_is_final_fragment(wsi) && !lws_remaining_packet_payload(wsi)) {
-      if (!c->rx_overflow && palp_web_hub_control(s->hub, &c->cursor, c->rx, c->rx_len) == 0) {
+      const int rc = c->rx_overflow ? PALP_EINVAL : palp_web_hub_control(s->hub, &c->cursor, c->rx, c->rx_len);
+      if (rc >= 0) { /* done, or a finding refused: either way the page gets an answer */
         s->stats.control_ok++;
         lws_callback_on_writable(wsi);
       } else {

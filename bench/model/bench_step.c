@@ -3,7 +3,8 @@
  * 1,300 and 5,000 vertices, at 10 ms and 1 ms steps, with every effect on and the
  * paper's 3 N uniform load pressing off-centre, against the paper's 10 ms budget.
  * The baseline measured in the same run is the world's own "solve" stage: the sparse
- * triangular solves that bound the step from below.
+ * triangular solves that bound the step from below. Then a pressing finger at 338
+ * vertices: its tangent-rebuild steps on the stepping thread against deferred.
  *
  *   bench_model_step [--steps N] [--quick]
  */
@@ -87,6 +88,53 @@ int main(int argc, char **argv) {
           if (t1.name[s]) printf(" %s %.1f", t1.name[s], 1e6 * (t1.total[s] - t0.total[s]) / steps);
         printf("\n");
       }
+      palp_world_destroy(w);
+    }
+  /* A finger pressing at 338 vertices (the haptic sessions' load): the steps that
+   * rebuild the lagged tangent, on the stepping thread (refactor_lag 0, the library's
+   * default) against deferred with the job computed off the timed path (the
+   * server's helper threads; docs/haptics.md). */
+  printf("finger pressing 2-18 mm at the pole with a 0.7 Hz wobble, 338 vertices (median / p99 / max us):\n");
+  printf("%7s %10s %8s %23s %23s\n", "dt_ms", "lag", "steps", "rebuild/request/install", "other steps");
+  for (int k = 0; k < 2; ++k)
+    for (int deferred = 0; deferred < 2; ++deferred) {
+      const double dt = k ? 0.001 : 0.004;
+      palp_world_def d = palp_world_default_def();
+      d.dt = dt;
+      d.refactor_lag = deferred ? palp_world_refactor_lag_for(dt) : 0;
+      palp_world *w = palp_world_create(&d, NULL);
+      const palp_finger_def fd = palp_finger_default_def();
+      const int id = palp_world_add_finger_def(w, &fd, (palp_vec3){0, 0, 0.06});
+      const int n = quick ? 500 : (k ? 4000 : 2000);
+      double *tr = malloc(sizeof(double) * (size_t)n), *tn = malloc(sizeof(double) * (size_t)n);
+      int nr = 0, nn = 0;
+      for (int i = 0; i < n; ++i) {
+        const double tt = i * dt, pi = 3.14159265358979323846;
+        const double depth = 0.010 + 0.008 * sin(2 * pi * 0.7 * tt);
+        palp_world_set_finger_device(w, id, (palp_vec3){0.01 * sin(2 * pi * 0.3 * tt), 0, 0.056 - depth});
+        palp_stage_timings a, b;
+        palp_world_timings(w, &a);
+        const double s = now_s();
+        palp_world_step(w);
+        const double e = now_s() - s;
+        palp_world_timings(w, &b);
+        palp_factor_job *j = palp_world_factor_claim(w);
+        if (j) { /* requested by this step: the server's helper would run it now */
+          palp_factor_job_run(j);
+          palp_world_factor_done(w, j);
+          tr[nr++] = e;
+        } else if (b.refactors > a.refactors) {
+          tr[nr++] = e;
+        } else {
+          tn[nn++] = e;
+        }
+      }
+      qsort(tr, (size_t)nr, sizeof *tr, cmpd);
+      qsort(tn, (size_t)nn, sizeof *tn, cmpd);
+      printf("%7.1f %10d %8d %7.0f %7.0f %7.0f %7.1f %7.1f %7.0f\n", 1e3 * dt, d.refactor_lag, nr,
+             nr ? 1e6 * tr[nr / 2] : 0.0, nr ? 1e6 * tr[(int)(0.99 * (nr - 1))] : 0.0, nr ? 1e6 * tr[nr - 1] : 0.0,
+             1e6 * tn[nn / 2], 1e6 * tn[(int)(0.99 * (nn - 1))], 1e6 * tn[nn - 1]);
+      free(tr), free(tn);
       palp_world_destroy(w);
     }
   free(t);

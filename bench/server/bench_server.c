@@ -62,7 +62,7 @@ extern char **environ;
 #define DOMAIN_LAT_SECURE 142
 #define DOMAIN_CAP_SECURE 143
 #define BENCH_PKI "/tmp/palp-bench-pki"
-#define DOMAIN_HAPTIC 120
+static unsigned haptic_domain = 120; /* --haptic-domain: parallel runs need their own */
 
 static double seconds = 5.0;
 static int threads = 2, max_sessions = 48;
@@ -562,7 +562,7 @@ static stats step_baseline(double rate) {
 static void haptic_run(double rate) {
   char extra[64];
   snprintf(extra, sizeof extra, ", \"physics_rate_hz\": %g", rate);
-  pid_t srv = spawn_server_cfg(DOMAIN_HAPTIC, 100, extra);
+  pid_t srv = spawn_server_cfg(haptic_domain, 100, extra);
   farm f = {.physics_hz = rate};
   f.st = calloc((size_t)max_sessions, sizeof *f.st);
   f.h = calloc((size_t)max_sessions, sizeof *f.h);
@@ -570,7 +570,7 @@ static void haptic_run(double rate) {
   pthread_mutex_init(&f.lock, NULL);
   char err[256];
   palp_cli_station mon;
-  if (palp_cli_station_open(&mon, DOMAIN_HAPTIC, "bench-monitor", err, sizeof err) < 0) exit(1);
+  if (palp_cli_station_open(&mon, haptic_domain, "bench-monitor", err, sizeof err) < 0) exit(1);
   dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   pthread_t th;
   pthread_create(&th, NULL, farm_main, &f);
@@ -585,7 +585,7 @@ static void haptic_run(double rate) {
     while (n < steps[k]) {
       char label[32];
       snprintf(label, sizeof label, "haptic-%02d", n);
-      join_or_die(&f.st[n], DOMAIN_HAPTIC, label, (uint32_t)(1 + n % 2));
+      join_or_die(&f.st[n], haptic_domain, label, (uint32_t)(1 + n % 2));
       palp_haptic_init(&f.h[n], NULL);
       pthread_mutex_lock(&f.lock);
       f.n = ++n;
@@ -637,10 +637,12 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--secure")) compare_secure = 1;
     else if (!strcmp(argv[i], "--overrun-limit") && i + 1 < argc) overrun_limit = atof(argv[++i]) / 100.0;
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_path = argv[++i];
+    else if (!strcmp(argv[i], "--haptic-domain") && i + 1 < argc) haptic_domain = (unsigned)atoi(argv[++i]);
     else if (argv[i][0] != '-') what = argv[i];
     else {
       fprintf(stderr, "usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N] "
-                      "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]\n");
+                      "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT] "
+                      "[--haptic-domain ID]\n");
       return 2;
     }
   }

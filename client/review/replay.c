@@ -192,9 +192,12 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
     palp_log_error(log, "replay: %s has no logged frames to compare", s->uid);
     result = REVIEW_ERROR;
   } else {
+    palp_stage_timings ts;
+    palp_world_timings(w, &ts);
     printf("replay: %s: %" PRId64 " logged frames reproduced bit-identically (state hash and summary), "
-           "%d contact inputs applied, last frame %" PRId64 "\n",
-           s->uid, r->checked, r->next, palp_world_frame(w));
+           "%d contact inputs applied, last frame %" PRId64 ", %lld factorisations (lagged-tangent rebuilds "
+           "included)\n",
+           s->uid, r->checked, r->next, palp_world_frame(w), (long long)ts.refactors);
     result = REVIEW_OK;
   }
   if (r->apply_errors) printf("replay: %d contact inputs could not be applied\n", r->apply_errors);

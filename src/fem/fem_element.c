@@ -51,6 +51,12 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
                      double (*ke)[24], double *S0t, double *Ht) {
   const palp_fem_mesh *mesh = m->mesh;
   const palp_fem_material *mat = &m->mat[mesh->region[e]];
+  palp_fem_material scaled; /* a lesion's element: the gel with its C10 scaled */
+  if (m->c10_scale && m->c10_scale[e] != 1.0) {
+    scaled = *mat;
+    scaled.c10 *= m->c10_scale[e];
+    mat = &scaled;
+  }
   const int np = m->nprony;
   double x[8][3];
   for (int a = 0; a < 8; ++a)
@@ -165,6 +171,12 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
 int palp_fem_element_cauchy(const palp_fem_model *m, int e, int gp, const double *u, double dt, double sigma[6]) {
   const palp_fem_mesh *mesh = m->mesh;
   const palp_fem_material *mat = &m->mat[mesh->region[e]];
+  palp_fem_material scaled; /* a lesion's element: the gel with its C10 scaled */
+  if (m->c10_scale && m->c10_scale[e] != 1.0) {
+    scaled = *mat;
+    scaled.c10 *= m->c10_scale[e];
+    mat = &scaled;
+  }
   double x[8][3];
   double ve = 0.0, Fg[3][3] = {{0}}, Sg[6] = {0};
   for (int a = 0; a < 8; ++a)

@@ -94,6 +94,12 @@ typedef struct palp_fem_model {
   double h_next;      /* step to try next [s] after cut-backs (0: the full dt) */
   int streak;         /* successful steps since the last cut or growth */
   int threads;        /* assembly workers */
+  /* Hooks (fem_finger.c, fem_lesion.c): a per-element C10 multiplier (NULL: 1),
+   * borrowed; and an extra force/tangent term added after every assembly
+   * (contact), called with the trial displacement. */
+  const double *c10_scale;
+  int (*extra_fn)(void *ud, struct palp_fem_model *m, const double *u, int want_tangent);
+  void *extra_ud;
   double *tbuf;       /* [(threads - 1) * (ndof + nnz)] private force and stiffness of extra workers */
   int nprony;
   /* statistics */

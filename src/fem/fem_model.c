@@ -342,6 +342,7 @@ int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_ta
     if (want_tangent)
       for (long k = 0; k < m->nnz; ++k) m->kval[k] += job[t].kval[k];
   }
+  if (m->extra_fn) return m->extra_fn(m->extra_ud, m, u, want_tangent);
   return PALP_OK;
 }
 

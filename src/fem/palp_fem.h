@@ -102,6 +102,7 @@ typedef struct palp_fem_config {
   palp_fem_material membrane;
   palp_fem_material gel;
   palp_fem_c10_reading c10_reading;
+  char material[32];    /* the profile the materials came from (palp_fem_config_set_material); "" if custom */
   double dt;            /* [s] time step; 0 means one step per output frame */
   double newmark_beta;  /* 0.25 (average acceleration) */
   double newmark_gamma; /* 0.5 */
@@ -115,7 +116,23 @@ typedef struct palp_fem_config {
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
 } palp_fem_config;
 
+/* The default is the "paper_instantaneous" material profile until real-time parameters
+ * calibrated to "paper_long_term" ship (docs/materials.md). */
 palp_fem_config palp_fem_default_config(void);
+
+/* ---- material profiles (docs/materials.md) -------------------------------- */
+/* Named material sets: "paper_long_term" (Tables I-II, C10 the relaxed modulus;
+ * the default), "paper_instantaneous" (the same numbers read as instantaneous
+ * moduli: a reproduction of the paper's literal reading, ~1% of the stiffness
+ * when relaxed) and "breast_tissue" (literature moduli of breast fat and skin).
+ * Sets cfg->membrane, cfg->gel, cfg->c10_reading and cfg->material; returns
+ * PALP_EINVAL with a message listing the names for an unknown one. */
+int palp_fem_config_set_material(palp_fem_config *cfg, const char *name, char *err, size_t errlen);
+/* The label printed beside a profile's results, e.g. "reproduction of the
+ * paper's literal reading" for paper_instantaneous; "" for an unknown name. */
+const char *palp_fem_material_label(const char *name);
+/* The profile names, NULL-terminated. */
+const char *const *palp_fem_material_names(void);
 /* Overrides fields of *cfg from a JSON file; unknown keys are errors. */
 int palp_fem_config_load(const char *path, palp_fem_config *cfg, char *err, size_t errlen);
 int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, size_t errlen);

@@ -20,7 +20,7 @@
 
 #include "check.h"
 #include "palp_assess.h"
-#include "trainee.h"
+#include "recorder.h"
 
 #define RISE_THRESHOLD 0.12 /* the expert's "harder than around it" [-] */
 #define CLUSTER 0.015       /* marks closer than this are one lump [m] */

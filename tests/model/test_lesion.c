@@ -82,6 +82,16 @@ int main(void) {
   /* Measured +4.9% on the shipped phantom, whose support carries under half the force
    * at this depth (docs/haptics.md: the issue's 20% needs the material rework). */
   CHECK(Fh > F0 * 1.03, "a hard lesion raises the force by more than 3%% (%+.2f%%)", 100 * (Fh / F0 - 1));
+  /* The FE reference's figure for the same lesion (src/fem, level 2, long-term paper
+   * material, rigid 8 mm sphere at the pole): +4.7% to +5.3% from 0.25 to 2 mm deep,
+   * +5.0% at 1 mm (regenerate: palp-fem finger --scene config/paper_step.json
+   * --reading long_term --site pole,pole_lesion; docs/fem.md). Not at equal depth:
+   * today's real-time parameters are ~1000x softer than the long-term FEM, so at the
+   * FE's 1 mm the real-time force is 2 mN and its gain is noise; the check says the
+   * two models give the lesion the same weight, within 15% of the FE's gain. */
+  const double fem_gain = 0.050;
+  CHECK(fabs((Fh / F0 - 1) / fem_gain - 1) <= 0.15, "real-time lesion gain %+.2f%% within 15%% of the FE's %+.1f%%",
+        100 * (Fh / F0 - 1), 100 * fem_gain);
   CHECK(Fd > F0 && Fd < Fh, "a deeper lesion is felt less (%.4f N between %.4f and %.4f N)", Fd, F0, Fh);
   CHECK(Fc < F0, "a soft cyst lowers the force (%.4f < %.4f N)", Fc, F0);
 

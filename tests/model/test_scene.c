@@ -65,6 +65,9 @@ int main(void) {
   /* Fuzzing (issue 15): 1e-300 made any frame period a "whole multiple" of dt. */
   expect_error("\"dt_s\":0.01", "\"dt_s\":1e-300,\"frame_period_s\":0.01", "time.dt_s: 1e-300 s is below 1e-6 s");
   expect_error("\"dt_s\":0.01", "\"dt_s\":1e-6,\"frame_period_s\":1", "time.frame_period_s: 1000000 steps per frame");
+  /* The deferred-rebuild lag a session was stepped with (replay needs it): 0..1000 steps. */
+  expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_lag_steps\":-1", "time.refactor_lag_steps");
+  expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_lag_steps\":1001", "time.refactor_lag_steps");
   expect_error("\"t_off_s\":0.3", "\"t_of_s\":0.3", "contacts[0].profile.t_off_s");
   expect_error("\"kind\":\"step\"", "\"kind\":5", "contacts[0].profile.kind");
   expect_error("\"distribution\":\"gaussian\"", "\"distribution\":\"round\"", "contacts[0].distribution");
@@ -89,6 +92,32 @@ int main(void) {
   palp_scene b;
   CHECK(json && palp_scene_parse(json, &b, err, sizeof err) == PALP_OK, "round trip parses: %s", err);
   free(json);
+  /* Every number round-trips to the same double: cJSON's own printing gave 15 digits for
+   * -0.018825206147913998 (a teaching lesion's x), which read back as ...914001, and the
+   * replayed world diverged from the session's after 66 frames. */
+  {
+    palp_scene x = a;
+    x.world.lesion_count = 1;
+    x.world.lesion[0] = (palp_lesion){.center = {-0.018825206147913998, -0.013181551253121145, 0.01928362829059618},
+                                      .radius = 0.005, .stiffness_ratio = 20};
+    char *xj = palp_scene_to_json(&x);
+    palp_scene xb;
+    CHECK(xj && palp_scene_parse(xj, &xb, err, sizeof err) == PALP_OK && xb.world.lesion_count == 1 &&
+              xb.world.lesion[0].center.x == x.world.lesion[0].center.x &&
+              xb.world.lesion[0].center.y == x.world.lesion[0].center.y &&
+              xb.world.lesion[0].center.z == x.world.lesion[0].center.z,
+          "lesion centre round-trips bit for bit: %.17g -> %.17g (%s)", x.world.lesion[0].center.x,
+          xj ? xb.world.lesion[0].center.x : 0.0, err);
+    free(xj);
+  }
+  /* The rebuild lag survives the round trip (a server's logged scene carries it to replay). */
+  palp_scene lagged = a;
+  lagged.world.refactor_lag = 4;
+  char *lj = palp_scene_to_json(&lagged);
+  palp_scene lb;
+  CHECK(lj && palp_scene_parse(lj, &lb, err, sizeof err) == PALP_OK && lb.world.refactor_lag == 4,
+        "refactor_lag_steps round trip: %d (expected 4)", lj ? lb.world.refactor_lag : -1);
+  free(lj);
   int e;
   palp_world *wa = palp_scene_create_world(&a, &e), *wb = palp_scene_create_world(&b, &e);
   for (int f = 0; f < a.frames; ++f) {

@@ -197,6 +197,20 @@ static void child_bob(void) {
   CHECK(r == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && rd == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY,
         "bob's feedback and deformation readers in %s are refused: %s, %s", a.partition, dds_strretcode(r),
         dds_strretcode(rd));
+  /* issue 13: nor mark lumps in alice's session, nor read her findings' answers */
+  dds_entity_t fw = palp_dds_create_writer(pub, bob.topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+  dds_entity_t fr = palp_dds_create_reader(sub, bob.topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
+  CHECK(fw == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && fr == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY,
+        "bob's finding writer and finding-status reader in %s are refused: %s, %s", a.partition, dds_strretcode(fw),
+        dds_strretcode(fr));
+  CHECK(bob.finding_w > 0 && bob.finding_status_r > 0, "bob's own session has his finding writer and status reader");
+  /* nor answer findings as the server, nor publish an exercise */
+  dds_entity_t own_pub = palp_dds_session_publisher(bob.pp, bob.partition);
+  dds_entity_t fsw = palp_dds_create_writer(own_pub, bob.topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
+  dds_entity_t exw = palp_dds_create_writer(bob.pp, bob.topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
+  CHECK(fsw == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && exw == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY,
+        "bob may not write finding status (even in his own session) nor exercises: %s, %s", dds_strretcode(fsw),
+        dds_strretcode(exw));
   /* nor publish as the server */
   const palp_dds_topic_kind server_topics[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_SESSION_REPLY,
                                                 PALP_TOPIC_SESSION_STATE, PALP_TOPIC_SERVER_STATUS};

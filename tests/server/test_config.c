@@ -47,6 +47,32 @@ int main(void) {
   expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"physics_rate_hz\": \"fast\"}]}",
                "phantoms[0].physics_rate_hz: expected a number", PALP_EPARSE);
 
+  /* issue 13: exercises, each one more phantom after the phantoms. */
+  expect_error("{" PH ", \"exercises\": {}}", "exercises: expected an array", PALP_EPARSE);
+  expect_error("{" PH ", \"exercises\": [{\"id\": 2}]}", "exercises[0].file: missing", PALP_EPARSE);
+  expect_error("{" PH ", \"exercises\": [{\"id\": 2, \"file\": \"\"}]}", "exercises[0].file: empty", PALP_EINVAL);
+  expect_error("{" PH ", \"exercises\": [{\"id\": 1, \"file\": \"e.json\"}]}",
+               "exercises[0].id: 1 is already used by phantoms[0]", PALP_EINVAL);
+  expect_error("{" PH ", \"exercises\": [{\"id\": 2, \"file\": \"e.json\"}, {\"id\": 2, \"file\": \"f.json\"}]}",
+               "exercises[1].id: 2 is already used by exercises[0]", PALP_EINVAL);
+  expect_error("{" PH ", \"exercises\": [{\"id\": 2, \"file\": \"e.json\", \"lesions\": []}]}",
+               "exercises[0].lesions: unknown field", PALP_EPARSE);
+  expect_error("{" PH ", \"exercises\": [{\"id\": 2, \"file\": \"e.json\", \"physics_rate_hz\": 0}]}",
+               "exercises[0].physics_rate_hz: 0 is outside", PALP_EINVAL);
+  expect_error("{" PH ", \"assess_sample_hz\": 0}", "assess_sample_hz: 0 is outside", PALP_EINVAL);
+  {
+    palp_srv_config c;
+    char e[512] = "";
+    int r = palp_srv_config_parse("{" PH ", \"exercises\": [{\"id\": 5, \"file\": \"ex/a.json\", "
+                                  "\"physics_rate_hz\": 250}]}", "/base", &c, e, sizeof e);
+    int good = r == 0 && c.phantom_count == 2 && c.exercise_count == 1 && c.phantom[1].id == 5 &&
+               strcmp(c.phantom[1].exercise_path, "/base/ex/a.json") == 0 && c.phantom[1].physics_rate_hz == 250 &&
+               c.phantom[0].exercise_path[0] == 0 && c.assess_sample_hz == 100;
+    fprintf(stderr, "%s exercise hosted as phantom 5 after the phantoms, file %s, assess_sample_hz %g\n",
+            good ? "ok  " : "FAIL", c.phantom[1].exercise_path, c.assess_sample_hz);
+    failures += !good;
+  }
+
   /* Defaults (docs/server.md) and relative paths resolved against the config's directory. */
   palp_srv_config cfg;
   char err[512] = "";
@@ -76,6 +102,11 @@ int main(void) {
           cfg.phantom[0].physics_rate_hz, cfg.phantom[1].physics_rate_hz);
   failures += !ok;
 
+  /* The shipped configurations load (server-exercises.json: issue 13's exercises). */
+  rc = palp_srv_config_load(PALP_CONFIG_DIR "/server-exercises.json", &cfg, err, sizeof err);
+  ok = rc == 0 && cfg.exercise_count == 4 && cfg.phantom_count == 7; /* 3 phantoms + 4 exercises */
+  fprintf(stderr, "%s shipped config/server-exercises.json: rc %d %s\n", ok ? "ok  " : "FAIL", rc, err);
+  failures += !ok;
   /* The shipped configuration loads. */
   rc = palp_srv_config_load(PALP_CONFIG_DIR "/server.json", &cfg, err, sizeof err);
   ok = rc == 0 && cfg.phantom_count >= 1 && cfg.tick_rate_hz == 100;

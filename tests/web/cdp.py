@@ -128,7 +128,10 @@ class Chromium:
         raise RuntimeError("Chromium did not start (no DevToolsActivePort)")
 
     def new_page(self, url):
-        req = urllib.request.Request("http://127.0.0.1:%d/json/new?%s" % (self.port, url), method="PUT")
+        # Chromium takes the whole query as the URL and unescapes it: a '&' of the page's own
+        # query must be escaped, or everything after it is lost.
+        req = urllib.request.Request("http://127.0.0.1:%d/json/new?%s" % (self.port, url.replace("&", "%26")),
+                                     method="PUT")
         info = json.loads(urllib.request.urlopen(req, timeout=30).read())
         return Page(self, info)
 

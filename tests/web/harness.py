@@ -58,9 +58,9 @@ class Procs:
             time.sleep(0.05)
         raise Fail("%s: no %r within %.0f s (exit %s); log:\n%s" % (p.name, pattern, timeout, p.poll(), self.log(p)))
 
-    def server(self, tick_hz=None, extra=()):
+    def server(self, tick_hz=None, extra=(), config="server.json"):
         args = [os.path.join(self.build, "server", "palp-server"), "--config",
-                os.path.join(self.source, "config", "server.json"), "--domain", str(self.domain), "--no-db"]
+                os.path.join(self.source, "config", config), "--domain", str(self.domain), "--no-db"]
         if tick_hz:
             args += ["--tick-rate", str(tick_hz)]
         p = self.start("server", args + list(extra))

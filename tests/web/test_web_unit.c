@@ -234,6 +234,106 @@ static void test_control(void) {
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
+/* The next "finding_reply" this cursor is sent within 2 s: 1 if it came, *ok, *mark_id and reason. */
+static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark_id, char *reason, size_t rlen) {
+  for (int i = 0; i < 200; i++) {
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
+    int found = 0;
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+      if (type && !strcmp(type, "finding_reply")) {
+        *ok = cJSON_IsTrue(cJSON_GetObjectItem(j, "ok"));
+        *mark_id = (int)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "mark_id"));
+        snprintf(reason, rlen, "%s", cJSON_GetStringValue(cJSON_GetObjectItem(j, "reason")));
+        found = 1;
+      }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (found) return 1;
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  return 0;
+}
+
+/* Findings through the hub: a viewer is refused, a bound trainee page without an exercise is
+ * refused, with one it marks at the local model's contact point (read back by a DDS reader in the
+ * session's partition), a second request within 0.5 s is refused, and it withdraws its mark. */
+static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, dds_entity_t pub, uint32_t sid,
+                          dds_entity_t w_lm, const palp_LocalModel *lm0) {
+  int ok = -1, mark = -1;
+  char why[256] = "";
+  const char *m = "{\"finding\":\"mark\"}", *wd = "{\"finding\":\"withdraw\"}";
+  const dds_entity_t t_f = palp_dds_create_topic(pp, PALP_TOPIC_FINDING);
+  const dds_entity_t t_ex = palp_dds_create_topic(pp, PALP_TOPIC_EXERCISE);
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t sub = palp_dds_session_subscriber(pp, part);
+  const dds_entity_t r_f = palp_dds_create_reader(sub, t_f, PALP_TOPIC_FINDING);
+  const dds_entity_t w_ex = palp_dds_create_writer(pp, t_ex, PALP_TOPIC_EXERCISE);
+  CHECK(r_f > 0 && w_ex > 0 && pub > 0, "findings reader and exercise writer");
+  CHECK(palp_web_hub_control(h, c, m, strlen(m)) == 1, "a viewer's finding is refused");
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "viewer"),
+        "... and answered: %s", why);
+  char ctl[64];
+  snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sid);
+  CHECK(palp_web_hub_control(h, c, ctl, strlen(ctl)) == 0, "bind as the session's trainee page");
+  CHECK(palp_web_hub_control(h, c, "{\"follow\":\"all\"}", 16) == PALP_EINVAL, "a bound page cannot follow all");
+  CHECK(palp_web_hub_control(h, c, m, strlen(m)) == 1, "no exercise: refused");
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "no exercise"), "... %s", why);
+  palp_Exercise ex;
+  memset(&ex, 0, sizeof ex);
+  ex.phantom_id = 1;
+  snprintf(ex.name, sizeof ex.name, "easy");
+  snprintf(ex.title, sizeof ex.title, "Find the lump");
+  snprintf(ex.instructions, sizeof ex.instructions, "Palpate in vertical strips.");
+  ex.time_limit = 300;
+  ex.max_force = 10;
+  dds_write(w_ex, &ex);
+  dds_sleepfor(DDS_MSECS(600)); /* the hub makes its writer; the reader matches it */
+  palp_LocalModel nx = *lm0; /* touching now (fresh) */
+  nx.frame = 60;
+  nx.server_time_ns = 2000000000LL;
+  dds_write(w_lm, &nx);
+  dds_sleepfor(DDS_MSECS(60));
+  const int rc = palp_web_hub_control(h, c, m, strlen(m));
+  CHECK(rc == 0, "a bound trainee page marks a finding (rc %d)", rc);
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && ok && mark == 1, "... answered ok, mark 1 (%s)", why);
+  CHECK(palp_web_hub_control(h, c, wd, strlen(wd)) == 1, "a second request within 0.5 s is refused");
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "too fast"), "... %s", why);
+  dds_sleepfor(DDS_MSECS(550));
+  CHECK(palp_web_hub_control(h, c, wd, strlen(wd)) == 0, "withdraw the last mark");
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && ok && mark == 1, "... mark 1 withdrawn");
+  palp_Finding got[4];
+  void *ptr[4] = {&got[0], &got[1], &got[2], &got[3]};
+  dds_sample_info_t info[4];
+  int n = 0;
+  for (int i = 0; i < 100 && n < 2; i++) {
+    const int k = dds_take(r_f, ptr + n, info + n, (size_t)(4 - n), (uint32_t)(4 - n));
+    if (k > 0) n += k;
+    else dds_sleepfor(DDS_MSECS(10));
+  }
+  CHECK(n == 2, "the reader got 2 findings (%d)", n);
+  if (n == 2) {
+    CHECK(got[0].session_id == sid && got[0].op == palp_FINDING_MARK && got[0].mark_id == 1, "a mark, id 1");
+    CHECK(fabs(got[0].point.x - 0.003) < 1e-12 && fabs(got[0].point.y + 0.004) < 1e-12 &&
+              fabs(got[0].point.z - 0.0385) < 1e-12 && fabs(got[0].time - 0.2) < 1e-12,
+          "at the local model's contact point and time");
+    CHECK(got[1].op == palp_FINDING_WITHDRAW && got[1].mark_id == 1, "then its withdrawal");
+  }
+  palp_LocalModel up = *lm0; /* the finger lifts */
+  up.frame = 61;
+  up.in_contact = 0;
+  dds_write(w_lm, &up);
+  dds_sleepfor(DDS_MSECS(600));
+  CHECK(palp_web_hub_control(h, c, m, strlen(m)) == 1, "not touching: refused");
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "not touching"), "... %s", why);
+}
+
 static void test_local_model(void) {
   palp_web_hub_def d = palp_web_hub_default_def();
   d.domain = 195;
@@ -287,13 +387,30 @@ static void test_local_model(void) {
   lm.proxy = (palp_Vec3){0.001, 0.002, 0.0231};
   lm.force = (palp_Vec3){0, 3, 4}; /* |F| = 5 N */
   lm.flags = palp_LM_FORCE_LIMIT | palp_LM_CLAMPED_STEP;
+  lm.period = 0.004;
+  lm.server_time_ns = 1000000000LL;
+  lm.time = 0.2;
+  lm.point = (palp_Vec3){0.003, -0.004, 0.0385};
+  lm.area = 2e-4;
   dds_write(w_lm, &lm);
   dds_sleepfor(DDS_MSECS(100));
   palp_LocalModel old = lm; /* an older frame: ignored */
   old.frame = 40;
   old.proxy.z = 0.5;
   old.flags = 0;
+  old.server_time_ns = 0;
   dds_write(w_lm, &old);
+  /* Late haptic updates: frame 51 one period after 50 (on time), 52 three periods after 51
+   * (late), then 55 (52..55: two frames the bridge never got: lost, not late). */
+  const int64_t next_ns[3] = {1004000000LL, 1016000000LL, 1028000000LL};
+  const uint64_t next_frame[3] = {51, 52, 55};
+  for (int k = 0; k < 3; k++) {
+    palp_LocalModel nx = lm;
+    nx.frame = next_frame[k];
+    nx.server_time_ns = next_ns[k];
+    nx.time = lm.time + 0.004 * (double)(next_frame[k] - lm.frame);
+    dds_write(w_lm, &nx);
+  }
   cJSON *got = NULL;
   int sessions_ok = 0;
   for (int i = 0; i < 300 && !(got && sessions_ok); i++) {
@@ -314,7 +431,8 @@ static void test_local_model(void) {
         cJSON *s0 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "sessions"), 0);
         if (s0 && cJSON_IsTrue(cJSON_GetObjectItem(s0, "position_finger")) &&
             cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "model_flags_seen")) == 9 &&
-            cJSON_IsNull(cJSON_GetObjectItem(s0, "late_haptic")))
+            cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "late_haptic")) == 1 &&
+            cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "lost_haptic")) == 2)
           sessions_ok = 1;
       }
       cJSON_Delete(j);
@@ -323,7 +441,8 @@ static void test_local_model(void) {
     if (r != 1) dds_sleepfor(DDS_MSECS(10));
   }
   CHECK(got != NULL, "a live message with the finger's proxy within 3 s");
-  CHECK(sessions_ok, "the session list says a position-driven finger is active, model flags 9, late_haptic null");
+  CHECK(sessions_ok, "the session list says a position-driven finger is active, model flags 9, late_haptic 1 (frame 52 "
+        "3 periods after 51), lost_haptic 2 (53, 54)");
   if (got) {
     const double want_p[3] = {0.001, 0.002, 0.0231}, want_d[3] = {0.001, 0.002, 0.0150};
     cJSON *p = cJSON_GetObjectItem(got, "proxy"), *dv = cJSON_GetObjectItem(got, "device");
@@ -339,6 +458,7 @@ static void test_local_model(void) {
           "force_limit and out_of_range said");
   }
   cJSON_Delete(got);
+  test_findings(h, &c, pp, pub, sid, w_lm, &lm);
   palp_web_hub_detach(h, &c);
   dds_delete(pp);
   palp_web_hub_stop(h);

@@ -250,6 +250,79 @@ int palp_eval_sound_pool_compute(const double *diff, const size_t *start, int ru
                                  palp_eval_sound_pool *out);
 
 
+/* ---- runs over random contact sites and force levels (docs/statistics.md) ----------- */
+/* The unit of analysis is a run: one load distribution at one contact site and one
+ * force level, FEM vs real-time over the step protocol. A distribution's runs are
+ * the independent observations its equivalence test counts. */
+#define PALP_EVAL_SITES_MAX_RUNS 64 /* per distribution (the pooled statistics' bound) */
+#define PALP_EVAL_RECOVERY_LEVEL 0.05 /* "recovered": back within 5% of the peak */
+
+typedef struct palp_eval_site {
+  double polar_deg, azimuth_deg; /* on the dome, polar 0 = the pole */
+} palp_eval_site;
+
+/* `count` sites uniform over the dome's area between the polar angles polar_min_deg and
+ * polar_max_deg (cos(polar) uniform, azimuth uniform on [0, 360)), from a SplitMix64
+ * stream started at `seed`: the same seed gives the same sites on every platform.
+ * Errors (PALP_EINVAL): count < 1, NULL, 0 <= min < max <= 90 violated. */
+int palp_eval_sites_draw(unsigned long long seed, int count, double polar_min_deg, double polar_max_deg,
+                         palp_eval_site *out);
+
+/* Time after t_off [s] at which |u| of `vertex` falls to PALP_EVAL_RECOVERY_LEVEL of its
+ * peak (over the whole record), interpolated linearly between frames; *reached = 0 and
+ * *t = NAN when it never does inside the record. */
+int palp_eval_record_recovery(const palp_eval_record *r, int vertex, double t_off, double *t, int *reached);
+
+/* One run's figures (displacement in cm, force in N). */
+typedef struct palp_eval_run {
+  int distribution;      /* 1..4 */
+  int site;              /* index into the drawn sites */
+  double polar_deg, azimuth_deg;
+  double force;          /* step magnitude [N] */
+  int ok;                /* 0: a model failed (message in `error`); the figures are unset */
+  char error[160];
+  int frames;
+  double disp_bias, disp_rmse, disp_max_abs; /* over all free vertex-frames */
+  double disp_peak_rt, disp_peak_ref;        /* largest |u| of each model in the run */
+  double peak_error;                         /* (peak_rt - peak_ref) / peak_ref [-] */
+  double disp_margin;                        /* max(1 mm, 5% of peak_ref) */
+  double disp_r1, disp_n_eff;                /* of the per-frame mean difference */
+  int has_force;
+  double force_bias, force_rmse, force_peak_ref, force_margin; /* 15% of force_peak_ref */
+  int peak_vertex;                           /* the FEM's most displaced vertex */
+  double recovery_rt, recovery_ref;          /* [s] after release, at peak_vertex */
+  int recovered_rt, recovered_ref;
+  double rt_seconds, ref_seconds;
+  int ref_from_cache;
+} palp_eval_run;
+
+/* Fills the run's displacement/force figures from its paired data (pairs in cm and N,
+ * frame-major) and records; t_off is the step's release time [s]. */
+int palp_eval_run_compute(const palp_eval_pairs *p, const palp_eval_record *rt, const palp_eval_record *ref,
+                          double t_off, palp_eval_run *out);
+
+/* One quantity (displacement or force) of one distribution over its runs. */
+typedef struct palp_eval_sites_summary {
+  int runs;
+  size_t n;              /* vertex-frame pairs pooled */
+  double margin;         /* the strictest of the runs' margins */
+  palp_eval_row paper;   /* paper-literal: RMSE, ANOVA, Bland-Altman over the pooled pairs */
+  palp_eval_sound_pool pool; /* runs as units: TOST (t over run biases, runs - 1 df) and
+                                repeated-measures Bland-Altman (runs as subjects) */
+  double frames_r1;      /* lag-1 autocorrelation of the runs' per-frame mean differences,
+                            joined run after run */
+  palp_stats_boot boot;  /* moving-block bootstrap of the mean of that joined series */
+  int boot_reliable;     /* at least PALP_EVAL_BOOT_MIN_BLOCKS blocks per resample */
+  int boot_equivalent;   /* boot_reliable and its 90% interval inside -+ margin */
+} palp_eval_sites_summary;
+
+/* a, b: the pooled pairs; run g holds [start[g], start[g+1]) with frames frames each
+ * (frame-major, the same count of pairs in every frame of a run); margin[g] the run's
+ * equivalence margin; runs in 2..PALP_EVAL_SITES_MAX_RUNS. */
+int palp_eval_sites_summarise(const double *a, const double *b, const size_t *start, int runs, int frames,
+                              const double *margin, unsigned long long seed, palp_eval_sites_summary *out);
+
+
 /* ---- the evaluation report ---------------------------------------------------- */
 typedef struct palp_eval_dist {
   int distribution;   /* 1..4 (I..IV) */

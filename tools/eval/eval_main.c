@@ -26,6 +26,7 @@
 #include "eval_fem.h"
 #include "svg_plot.h"
 #include "palp_app.h"
+#include "vec3.h"
 
 
 typedef struct options {
@@ -33,6 +34,7 @@ typedef struct options {
   const char *scene;
   const char *out;
   const char *fem_config;
+  const char *material;
   const char *params;
   const char *cache_dir;
   const char *fit;
@@ -45,6 +47,12 @@ typedef struct options {
   double max_minutes;
   double force_weight, prior_weight, recovery_weight, bias_weight, bound;
   int recovery_auto;
+  /* evaluate --sites: runs over random contact sites and force levels */
+  int sites;
+  double forces[8];
+  int force_count;
+  unsigned long long seed;
+  double polar_min, polar_max, on_seconds;
   palp_app_opts app;
   palp_log *log; /* main's, once the options are read */
 } options;
@@ -55,8 +63,12 @@ typedef struct options {
 static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-eval evaluate  [--scene FILE] [--params FILE] [--level N] [--out DIR] [--fem-config FILE]\n"
+          "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                           [--frames N] [--distributions 1,2,3,4] [--cache-dir DIR] [--no-plots] [--quiet]\n"
+          "                           [--sites N [--forces 1,3,5] [--seed S] [--polar-min DEG] [--polar-max DEG]\n"
+          "                            [--on-seconds T]]\n"
           "       palp-eval calibrate [--scene FILE] [--params FILE] [--level N] [--out FILE] [--fem-config FILE]\n"
+          "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity,added_mass,support_bulk_fraction]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
           "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM]\n"
@@ -90,6 +102,27 @@ static int parse_double(const char *opt, const char *v, double lo, double *out) 
   return 0;
 }
 
+/* "1,3,5": force levels [N], each in (0, 20] (the server's force limit) */
+static int parse_forces(const char *opt, const char *v, options *o) {
+  o->force_count = 0;
+  const char *p = v;
+  while (p && *p) {
+    char *end = NULL;
+    const double x = strtod(p, &end);
+    if (end == p || !isfinite(x) || !(x > 0.0) || x > 20.0 || o->force_count == 8 || (*end && *end != ',')) {
+      fprintf(stderr, "palp-eval: %s expects up to 8 comma-separated forces in (0, 20] N, got \"%s\"\n", opt, v);
+      return -1;
+    }
+    o->forces[o->force_count++] = x;
+    p = *end ? end + 1 : end;
+  }
+  if (!o->force_count) {
+    fprintf(stderr, "palp-eval: %s expects up to 8 comma-separated forces in (0, 20] N, got \"%s\"\n", opt, v ? v : "");
+    return -1;
+  }
+  return 0;
+}
+
 static int parse_args(int argc, char **argv, options *o) {
   memset(o, 0, sizeof *o);
   o->plots = 1;
@@ -100,6 +133,10 @@ static int parse_args(int argc, char **argv, options *o) {
   o->bias_weight = 0.0;
   o->bound = 100.0;
   o->recovery_auto = 1;
+  o->seed = 1;
+  o->polar_min = 0.0;
+  o->polar_max = 60.0;
+  o->on_seconds = 2.0;
   palp_app_opts_init(&o->app, "palp-eval");
   if (argc < 2) return -1;
   o->cmd = argv[1];
@@ -120,6 +157,7 @@ static int parse_args(int argc, char **argv, options *o) {
     if (!strcmp(a, "--scene")) o->scene = v;
     else if (!strcmp(a, "--out")) o->out = v;
     else if (!strcmp(a, "--fem-config")) o->fem_config = v;
+    else if (!strcmp(a, "--material")) o->material = v;
     else if (!strcmp(a, "--params")) o->params = v;
     else if (!strcmp(a, "--cache-dir")) o->cache_dir = v;
     else if (!strcmp(a, "--fit")) o->fit = v;
@@ -134,6 +172,15 @@ static int parse_args(int argc, char **argv, options *o) {
     else if (!strcmp(a, "--bias-weight")) bad = parse_double(a, v, 0.0, &o->bias_weight);
     else if (!strcmp(a, "--max-minutes")) bad = parse_double(a, v, 0.0, &o->max_minutes);
     else if (!strcmp(a, "--prior-weight")) bad = parse_double(a, v, 0.0, &o->prior_weight);
+    else if (!strcmp(a, "--sites")) bad = parse_int(a, v, 1, 64, &o->sites);
+    else if (!strcmp(a, "--forces")) bad = parse_forces(a, v, o);
+    else if (!strcmp(a, "--seed")) {
+      int sd = 0;
+      bad = parse_int(a, v, 0, INT_MAX, &sd);
+      o->seed = (unsigned long long)sd;
+    } else if (!strcmp(a, "--polar-min")) bad = parse_double(a, v, 0.0, &o->polar_min);
+    else if (!strcmp(a, "--polar-max")) bad = parse_double(a, v, 0.0, &o->polar_max);
+    else if (!strcmp(a, "--on-seconds")) bad = parse_double(a, v, 0.0, &o->on_seconds);
     else if (!strcmp(a, "--recovery")) {
       if (v && !strcmp(v, "auto")) o->recovery_auto = 1, o->recovery_weight = 0;
       else if (v && !strcmp(v, "off")) o->recovery_auto = 0, o->recovery_weight = 0;
@@ -159,6 +206,16 @@ static int parse_args(int argc, char **argv, options *o) {
       ++i;
     }
   }
+  if (o->sites && !(o->polar_min < o->polar_max && o->polar_max <= 90.0)) {
+    fprintf(stderr, "palp-eval: --polar-min %g and --polar-max %g must satisfy 0 <= min < max <= 90 degrees\n",
+            o->polar_min, o->polar_max);
+    return -1;
+  }
+  if (o->sites && !(o->on_seconds > 0.0)) {
+    fprintf(stderr, "palp-eval: --on-seconds must be > 0\n");
+    return -1;
+  }
+  if (o->sites && !o->force_count) o->forces[0] = 3.0, o->force_count = 1;
   return 0;
 }
 
@@ -308,6 +365,10 @@ static int load_setup(const options *o, setup *s) {
       palp_log_error(o->log, "%s: %s", o->fem_config, err);
       return 1;
     }
+  }
+  if (o->material && palp_fem_config_set_material(&s->fem, o->material, err, sizeof err)) {
+    palp_log_error(o->log, "--material: %s", err);
+    return 1;
   }
   if (o->level) s->fem.mesh.level = o->level;
   if (o->cache_dir) snprintf(s->fem.cache_dir, sizeof s->fem.cache_dir, "%s", o->cache_dir);
@@ -612,6 +673,360 @@ static int cmd_evaluate(const options *o) {
   return 0;
 }
 
+/* ---- evaluate --sites: runs over random contact sites and force levels -------------------- */
+
+/* Pooled pairs of one quantity of one distribution, run after run. */
+typedef struct sites_pool {
+  double *a, *b;
+  size_t n, cap;
+  size_t start[PALP_EVAL_SITES_MAX_RUNS + 1];
+  double margin[PALP_EVAL_SITES_MAX_RUNS];
+  int runs;
+} sites_pool;
+
+static int sites_pool_add(sites_pool *p, const double *a, const double *b, size_t n, double margin) {
+  if (p->runs >= PALP_EVAL_SITES_MAX_RUNS) return PALP_EINVAL;
+  if (p->n + n > p->cap) {
+    const size_t cap = 2 * (p->n + n);
+    double *na = realloc(p->a, sizeof(double) * cap);
+    if (!na) return PALP_ENOMEM;
+    p->a = na;
+    double *nb = realloc(p->b, sizeof(double) * cap);
+    if (!nb) return PALP_ENOMEM;
+    p->b = nb, p->cap = cap;
+  }
+  memcpy(p->a + p->n, a, sizeof(double) * n);
+  memcpy(p->b + p->n, b, sizeof(double) * n);
+  p->start[p->runs] = p->n;
+  p->margin[p->runs] = margin;
+  p->n += n;
+  p->start[++p->runs] = p->n;
+  return PALP_OK;
+}
+
+static void sites_pool_free(sites_pool *p) {
+  free(p->a), free(p->b);
+  memset(p, 0, sizeof *p);
+}
+
+typedef struct sites_dist {
+  int distribution, runs_ok, runs_failed;
+  int have[2]; /* displacement, force summaries computed */
+  palp_eval_sites_summary sum[2];
+  /* runs at one site share it: the conservative test takes each site's mean bias as
+     one observation (sites - 1 df) */
+  int have_site[2], site_units[2];
+  palp_stats_tost site_tost[2];
+  double rmse_mean, rmse_max, peak_err_max, rec_rt_mean, rec_ref_mean, rec_rt_min, rec_rt_max;
+  int rec_count;
+} sites_dist;
+
+static const char *yes_no(int v) { return v ? "yes" : "no"; }
+
+static void sites_print(FILE *f, const options *o, const setup *s, const palp_eval_site *site, const sites_dist *sd,
+                        int nd, double wall, int md) {
+  const char *bar = md ? "|" : " ";
+  fprintf(f, "%sRuns over random contact sites (seed %llu, %d sites uniform over the dome's area for polar %g-%g deg), "
+             "forces",
+          md ? "" : "\n", o->seed, o->sites, o->polar_min, o->polar_max);
+  for (int j = 0; j < o->force_count; ++j) fprintf(f, "%s %g", j ? "," : "", o->forces[j]);
+  fprintf(f, " N, step on %g s then off, %d frames of %g ms; FEM level %d (%s reading); parameters: %s\n",
+          o->on_seconds, s->scene.frames, 1e3 * s->scene.frame_period, s->fem.mesh.level,
+          s->fem.c10_reading == PALP_FEM_C10_LONG_TERM ? "long-term" : "instantaneous",
+          o->params ? o->params : "the scene's");
+  fprintf(f, "%ssites:", md ? "\n" : "");
+  for (int i = 0; i < o->sites; ++i) fprintf(f, " (%.1f, %.1f)", site[i].polar_deg, site[i].azimuth_deg);
+  fprintf(f, " [polar, azimuth deg]\n\n");
+  /* Table 1: the paper's literal criteria, pooled frames */
+  fprintf(f, "%sPaper-literal (Tables V/VI criteria over all pooled vertex-frames; NOT independent observations)%s\n\n",
+          md ? "**" : "", md ? "**" : "");
+  if (md) fprintf(f, "| quantity | distr. | runs | pairs | RMSE | F | p | SD | agree %% | paper's verdict |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  else fprintf(f, "  %-12s %-5s %5s %9s %9s %9s %8s %9s %8s  %s\n", "quantity", "distr", "runs", "pairs", "RMSE", "F", "p",
+               "SD", "agree%", "verdict");
+  for (int t = 0; t < 2; ++t)
+    for (int k = 0; k < nd; ++k) {
+      if (!sd[k].have[t]) continue;
+      const palp_eval_sites_summary *u = &sd[k].sum[t];
+      const char *q = t ? "force [N]" : "disp. [cm]";
+      if (md)
+        fprintf(f, "| %s | %s | %d | %zu | %.4f | %.4g | %.3g | %.4f | %.1f | %s |\n", q,
+                palp_eval_roman(sd[k].distribution), u->runs, u->n, u->paper.rmse, u->paper.anova.f, u->paper.anova.p,
+                u->paper.ba.sd, 100.0 * u->paper.ba.agreement, u->paper.meets ? "met" : "not met");
+      else
+        fprintf(f, "  %-12s %-5s %5d %9zu %9.4f %9.4g %8.3g %9.4f %8.1f  %s\n", q, palp_eval_roman(sd[k].distribution),
+                u->runs, u->n, u->paper.rmse, u->paper.anova.f, u->paper.anova.p, u->paper.ba.sd,
+                100.0 * u->paper.ba.agreement, u->paper.meets ? "met" : "not met");
+    }
+  fprintf(f, "\n%sCaveat: each run's vertex-frames are repeated measures (lag-1 autocorrelation of the per-frame mean "
+             "difference ~0.99), so the ANOVA's p measures the number of pairs, not agreement; the SD band treats "
+             "them as independent too.%s\n\n",
+          md ? "_" : "  ", md ? "_" : "");
+  /* Table 2: runs as units */
+  fprintf(f, "%sSound (runs as units): TOST on the bias at the perceptual margin, t over run biases (runs - 1 df), "
+             "beside the moving-block bootstrap 90%% CI of the pooled frames; repeated-measures Bland-Altman (runs as "
+             "subjects)%s\n\n",
+          md ? "**" : "", md ? "**" : "");
+  if (md)
+    fprintf(f, "| quantity | distr. | runs | margin -+ | bias (mean of runs) | t 90%% CI | TOST p | equivalent | sites: 90%% CI, p "
+               "| bootstrap 90%% CI (b, blocks) | boot. inside | RM LoA |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  else
+    fprintf(f, "  %-12s %-5s %4s %8s %9s %21s %8s %5s %32s %30s %5s %21s\n", "quantity", "distr", "runs", "margin", "bias",
+            "t 90% CI", "TOST p", "equiv", "sites: 90% CI, p, equiv", "bootstrap 90% CI (b, blocks)", "boot", "RM LoA");
+  for (int t = 0; t < 2; ++t)
+    for (int k = 0; k < nd; ++k) {
+      if (!sd[k].have[t]) continue;
+      const palp_eval_sites_summary *u = &sd[k].sum[t];
+      const char *q = t ? "force [N]" : "disp. [cm]";
+      char boot[96];
+      snprintf(boot, sizeof boot, "[%.4f, %.4f] (%zu, %zu)%s", u->boot.ci_lower, u->boot.ci_upper, u->boot.block,
+               u->boot.blocks, u->boot_reliable ? "" : " unusable");
+      char site[96] = "n/a";
+      if (sd[k].have_site[t])
+        snprintf(site, sizeof site, "[%.4f, %.4f], %.2g, %s", sd[k].site_tost[t].ci_lower, sd[k].site_tost[t].ci_upper,
+                 sd[k].site_tost[t].p, yes_no(sd[k].site_tost[t].equivalent));
+      fprintf(f, md ? "| %s | %s | %d | %.4f | %.4f | [%.4f, %.4f] | %.3g | %s | %s | %s | %s | [%.4f, %.4f] |\n"
+                    : "  %-12s %-5s %4d %8.4f %9.4f   [%8.4f, %8.4f] %8.3g %5s %32s %30s %5s   [%8.4f, %8.4f]\n",
+              q, palp_eval_roman(sd[k].distribution), u->runs, u->margin, u->pool.tost.estimate, u->pool.tost.ci_lower,
+              u->pool.tost.ci_upper, u->pool.tost.p, yes_no(u->pool.tost.equivalent), site, boot,
+              yes_no(u->boot_equivalent), u->pool.ba.loa_lower, u->pool.ba.loa_upper);
+    }
+  (void)bar;
+  fprintf(f, "\n%s\"sites\": the same TOST with each site's mean run bias as one observation (sites - 1 df): runs at one "
+             "site share it, so this is the conservative reading when several forces are run per site.%s\n",
+          md ? "_" : "  ", md ? "_" : "");
+  fprintf(f, "\n%sPer run (displacement): RMSE mean / max over runs [cm], largest |peak error| [%%], recovery to 5%% of "
+             "the peak after release [s] (real-time mean and range; FEM mean)%s\n\n",
+          md ? "**" : "", md ? "**" : "");
+  if (md) fprintf(f, "| distr. | runs ok | failed | RMSE mean | RMSE max | max peak err %% | recovery RT mean [min, max] | recovery FEM mean |\n|---|---|---|---|---|---|---|---|\n");
+  for (int k = 0; k < nd; ++k)
+    fprintf(f, md ? "| %s | %d | %d | %.4f | %.4f | %.1f | %.3f [%.3f, %.3f] | %.3f |\n"
+                  : "  %-5s runs %d (failed %d): RMSE %.4f / %.4f cm, max |peak error| %.1f%%, recovery RT %.3f [%.3f, "
+                    "%.3f] s, FEM %.3f s\n",
+            palp_eval_roman(sd[k].distribution), sd[k].runs_ok, sd[k].runs_failed, sd[k].rmse_mean, sd[k].rmse_max,
+            100.0 * sd[k].peak_err_max, sd[k].rec_rt_mean, sd[k].rec_rt_min, sd[k].rec_rt_max, sd[k].rec_ref_mean);
+  fprintf(f, "\n%swall time %.1f s%s\n", md ? "_" : "  ", wall, md ? "_" : "");
+}
+
+static int cmd_sites(const options *o) {
+  setup s;
+  int rc = load_setup(o, &s);
+  if (rc) return rc;
+  const double t_start = now_s();
+  const char *dir = o->out ? o->out : "out/eval-sites";
+  if (make_dirs(dir)) {
+    palp_log_error(o->log, "cannot create the output directory \"%s\": %s", dir, strerror(errno));
+    return 1;
+  }
+  const int per_d = o->sites * o->force_count;
+  if (per_d > PALP_EVAL_SITES_MAX_RUNS) {
+    palp_log_error(o->log, "--sites x forces = %d runs per distribution; at most %d", per_d, PALP_EVAL_SITES_MAX_RUNS);
+    return 2;
+  }
+  const double t_end = s.scene.frame_period * s.scene.frames;
+  if (o->on_seconds >= t_end) {
+    palp_log_error(o->log, "--on-seconds %g leaves no frame after release (the run is %g s)", o->on_seconds, t_end);
+    return 2;
+  }
+  palp_eval_site site[64];
+  if (palp_eval_sites_draw(o->seed, o->sites, o->polar_min, o->polar_max, site)) return 2;
+  char path[1100];
+  snprintf(path, sizeof path, "%s/runs.csv", dir);
+  FILE *csv = fopen(path, "w");
+  if (!csv) {
+    palp_log_error(o->log, "cannot write %s: %s", path, strerror(errno));
+    return 1;
+  }
+  fprintf(csv, "distribution,site,polar_deg,azimuth_deg,force_N,ok,disp_bias_cm,disp_rmse_cm,disp_max_abs_cm,"
+               "disp_peak_rt_cm,disp_peak_fem_cm,peak_error,disp_margin_cm,disp_r1,disp_n_eff,force_bias_N,"
+               "force_rmse_N,force_margin_N,recovery_rt_s,recovery_fem_s,rt_seconds,fem_seconds,fem_from_cache,error\n");
+  sites_dist sd[4];
+  memset(sd, 0, sizeof sd);
+  int failed_any = 0;
+  for (int k = 0; k < s.dist_count && !rc; ++k) {
+    const int d = s.dist[k];
+    sites_dist *D = &sd[k];
+    D->distribution = d;
+    sites_pool pool[2];
+    memset(pool, 0, sizeof pool);
+    double rmse_sum = 0, rec_rt = 0, rec_ref = 0;
+    double run_bias[2][PALP_EVAL_SITES_MAX_RUNS];
+    int run_site[2][PALP_EVAL_SITES_MAX_RUNS], nb[2] = {0, 0};
+    int rec_ref_n = 0;
+    D->rec_rt_min = INFINITY, D->rec_rt_max = -INFINITY;
+    for (int i = 0; i < o->sites && !rc; ++i)
+      for (int j = 0; j < o->force_count && !rc; ++j) {
+        palp_eval_run run;
+        memset(&run, 0, sizeof run);
+        run.distribution = d, run.site = i, run.force = o->forces[j];
+        run.polar_deg = site[i].polar_deg, run.azimuth_deg = site[i].azimuth_deg;
+        palp_scene sc = s.scene;
+        const double r = sc.world.mesh.radius, th = site[i].polar_deg * PALP_PI / 180.0,
+                     ph = site[i].azimuth_deg * PALP_PI / 180.0;
+        sc.contact_count = 1;
+        sc.contact[0].def.distribution = (palp_distribution)d;
+        sc.contact[0].def.center = (palp_vec3){r * sin(th) * cos(ph), r * sin(th) * sin(ph), r * cos(th)};
+        sc.contact[0].direction = (palp_vec3){0, 0, 0};
+        sc.contact[0].profile = palp_profile_paper_step();
+        sc.contact[0].profile.kind = PALP_PROFILE_STEP;
+        sc.contact[0].profile.magnitude = o->forces[j];
+        sc.contact[0].profile.t_on = 0.0;
+        sc.contact[0].profile.t_off = o->on_seconds;
+        char err[512] = "";
+        palp_eval_record rt, ref;
+        int bad = palp_eval_run_rt(&sc, &rt, err, sizeof err);
+        if (bad) snprintf(run.error, sizeof run.error, "real-time model: %s", err[0] ? err : palp_strerror(bad));
+        palp_fem_result info;
+        memset(&info, 0, sizeof info);
+        if (!bad) {
+          bad = reference(&s, &sc, o->quiet, &ref, &info);
+          if (bad) snprintf(run.error, sizeof run.error, "FEM reference failed (see the log)");
+          else {
+            run.rt_seconds = rt.wall_seconds, run.ref_seconds = info.wall_seconds, run.ref_from_cache = info.from_cache;
+            palp_eval_pairs pr;
+            bad = palp_eval_pairs_build(&rt, &ref, &pr, err, sizeof err);
+            if (bad) snprintf(run.error, sizeof run.error, "pairing: %s", err);
+            else {
+              for (size_t q = 0; q < pr.n_disp; ++q) pr.disp_rt[q] *= 100.0, pr.disp_ref[q] *= 100.0;
+              bad = palp_eval_run_compute(&pr, &rt, &ref, o->on_seconds, &run);
+              if (bad) snprintf(run.error, sizeof run.error, "statistics: %s", palp_strerror(bad));
+              else {
+                run.ok = 1;
+                rc = sites_pool_add(&pool[0], pr.disp_rt, pr.disp_ref, pr.n_disp, run.disp_margin);
+                if (!rc && run.has_force)
+                  rc = sites_pool_add(&pool[1], pr.force_rt, pr.force_ref, pr.n_force, run.force_margin);
+              }
+              palp_eval_pairs_destroy(&pr);
+            }
+            palp_eval_record_destroy(&ref);
+          }
+          palp_eval_record_destroy(&rt);
+        }
+        if (run.ok) {
+          ++D->runs_ok;
+          rmse_sum += run.disp_rmse;
+          D->rmse_max = fmax(D->rmse_max, run.disp_rmse);
+          D->peak_err_max = fmax(D->peak_err_max, fabs(run.peak_error));
+          if (run.recovered_rt) {
+            rec_rt += run.recovery_rt, ++D->rec_count;
+            D->rec_rt_min = fmin(D->rec_rt_min, run.recovery_rt), D->rec_rt_max = fmax(D->rec_rt_max, run.recovery_rt);
+          }
+          if (run.recovered_ref) rec_ref += run.recovery_ref, ++rec_ref_n;
+          run_bias[0][nb[0]] = run.disp_bias, run_site[0][nb[0]++] = i;
+          if (run.has_force) run_bias[1][nb[1]] = run.force_bias, run_site[1][nb[1]++] = i;
+        } else {
+          ++D->runs_failed, failed_any = 1;
+          palp_log_warn(o->log, "distribution %s, site %d (%.1f, %.1f deg), %g N: %s", palp_eval_roman(d), i,
+                        run.polar_deg, run.azimuth_deg, run.force, run.error);
+        }
+        fprintf(csv, "%d,%d,%.4f,%.4f,%g,%d,", d, i, run.polar_deg, run.azimuth_deg, run.force, run.ok);
+        if (run.ok)
+          fprintf(csv, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,", run.disp_bias, run.disp_rmse, run.disp_max_abs,
+                  run.disp_peak_rt, run.disp_peak_ref, run.peak_error, run.disp_margin, run.disp_r1, run.disp_n_eff);
+        else
+          fprintf(csv, ",,,,,,,,,");
+        if (run.ok && run.has_force) fprintf(csv, "%.9g,%.9g,%.9g,", run.force_bias, run.force_rmse, run.force_margin);
+        else fprintf(csv, ",,,");
+        if (run.ok && run.recovered_rt) fprintf(csv, "%.6g,", run.recovery_rt);
+        else fprintf(csv, ",");
+        if (run.ok && run.recovered_ref) fprintf(csv, "%.6g,", run.recovery_ref);
+        else fprintf(csv, ",");
+        fprintf(csv, "%.3f,%.3f,%d,\"%s\"\n", run.rt_seconds, run.ref_seconds, run.ref_from_cache, run.error);
+        fflush(csv);
+        if (!o->quiet && run.ok)
+          palp_log_info(o->log, "distribution %s, site %d (%.1f, %.1f deg), %g N: bias %.4f cm, RMSE %.4f cm, peak "
+                                "error %.1f%%, FEM %s%.1f s",
+                        palp_eval_roman(d), i, run.polar_deg, run.azimuth_deg, run.force, run.disp_bias, run.disp_rmse,
+                        100.0 * run.peak_error, run.ref_from_cache ? "cached, was " : "", run.ref_seconds);
+      }
+    if (D->runs_ok) D->rmse_mean = rmse_sum / D->runs_ok;
+    D->rec_rt_mean = D->rec_count ? rec_rt / D->rec_count : NAN;
+    D->rec_ref_mean = rec_ref_n ? rec_ref / rec_ref_n : NAN;
+    if (!D->rec_count) D->rec_rt_min = D->rec_rt_max = NAN;
+    for (int t = 0; t < 2 && !rc; ++t) {
+      if (pool[t].runs < 2) continue;
+      rc = palp_eval_sites_summarise(pool[t].a, pool[t].b, pool[t].start, pool[t].runs, s.scene.frames, pool[t].margin,
+                                     PALP_EVAL_BOOT_SEED + 16ull * (unsigned long long)t + (unsigned long long)d,
+                                     &D->sum[t]);
+      D->have[t] = !rc;
+      if (rc) palp_log_error(o->log, "distribution %s: statistics: %s", palp_eval_roman(d), palp_strerror(rc));
+      /* site means of the run biases */
+      double sm[64];
+      int sn[64], k = 0;
+      memset(sn, 0, sizeof sn);
+      for (int q = 0; q < 64; ++q) sm[q] = 0.0;
+      for (int q = 0; q < nb[t]; ++q) sm[run_site[t][q]] += run_bias[t][q], ++sn[run_site[t][q]];
+      for (int q = 0; q < o->sites; ++q)
+        if (sn[q]) sm[k++] = sm[q] / sn[q];
+      if (!rc && k >= 2) {
+        double mean, ssd;
+        palp_stats_mean_ssd(sm, (size_t)k, &mean, &ssd);
+        D->site_units[t] = k;
+        D->have_site[t] = palp_stats_tost_t(mean, sqrt(ssd / (k - 1)) / sqrt((double)k), (double)(k - 1),
+                                            -D->sum[t].margin, D->sum[t].margin, PALP_EVAL_TOST_ALPHA,
+                                            &D->site_tost[t]) == PALP_OK;
+      }
+    }
+    sites_pool_free(&pool[0]), sites_pool_free(&pool[1]);
+  }
+  const int csv_bad = ferror(csv) | (fclose(csv) != 0);
+  if (rc) return 1;
+  if (csv_bad) {
+    palp_log_error(o->log, "cannot write %s/runs.csv", dir);
+    return 1;
+  }
+  const double wall = now_s() - t_start;
+  sites_print(stdout, o, &s, site, sd, s.dist_count, wall, 0);
+  snprintf(path, sizeof path, "%s/tables.md", dir);
+  FILE *md = fopen(path, "w");
+  if (!md) {
+    palp_log_error(o->log, "cannot write %s: %s", path, strerror(errno));
+    return 1;
+  }
+  sites_print(md, o, &s, site, sd, s.dist_count, wall, 1);
+  if (ferror(md) | (fclose(md) != 0)) {
+    palp_log_error(o->log, "cannot write %s", path);
+    return 1;
+  }
+  snprintf(path, sizeof path, "%s/distributions.csv", dir);
+  FILE *dc = fopen(path, "w");
+  if (!dc) {
+    palp_log_error(o->log, "cannot write %s: %s", path, strerror(errno));
+    return 1;
+  }
+  /* one row per distribution and quantity: both tables, machine-readable */
+  fprintf(dc, "distribution,quantity,runs,pairs,margin,bias,se,df,t_ci_lower,t_ci_upper,tost_p,equivalent,"
+              "boot_ci_lower,boot_ci_upper,boot_block,boot_blocks,boot_reliable,boot_equivalent,frames_r1,rm_bias,"
+              "rm_sd,rm_loa_lower,rm_loa_upper,paper_rmse,paper_f,paper_p,paper_sd,paper_agree_percent,paper_meets,"
+              "sites,site_se,site_ci_lower,site_ci_upper,site_p,site_equivalent\n");
+  for (int k = 0; k < s.dist_count; ++k)
+    for (int t = 0; t < 2; ++t) {
+      if (!sd[k].have[t]) continue;
+      const palp_eval_sites_summary *u = &sd[k].sum[t];
+      fprintf(dc, "%d,%s,%d,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%zu,%zu,%d,%d,%.9g,%.9g,%.9g,%.9g,%.9g,"
+                  "%.9g,%.9g,%.9g,%.9g,%.9g,%d",
+              sd[k].distribution, t ? "force_N" : "displacement_cm", u->runs, u->n, u->margin, u->pool.tost.estimate,
+              u->pool.tost.se, u->pool.tost.df, u->pool.tost.ci_lower, u->pool.tost.ci_upper, u->pool.tost.p,
+              u->pool.tost.equivalent, u->boot.ci_lower, u->boot.ci_upper, u->boot.block, u->boot.blocks,
+              u->boot_reliable, u->boot_equivalent, u->frames_r1, u->pool.ba.bias, u->pool.ba.sd_total,
+              u->pool.ba.loa_lower, u->pool.ba.loa_upper, u->paper.rmse, u->paper.anova.f, u->paper.anova.p,
+              u->paper.ba.sd, 100.0 * u->paper.ba.agreement, u->paper.meets);
+      if (sd[k].have_site[t])
+        fprintf(dc, ",%d,%.9g,%.9g,%.9g,%.9g,%d\n", sd[k].site_units[t], sd[k].site_tost[t].se,
+                sd[k].site_tost[t].ci_lower, sd[k].site_tost[t].ci_upper, sd[k].site_tost[t].p,
+                sd[k].site_tost[t].equivalent);
+      else
+        fprintf(dc, ",%d,,,,,\n", sd[k].site_units[t]);
+    }
+  if (ferror(dc) | (fclose(dc) != 0)) {
+    palp_log_error(o->log, "cannot write %s", path);
+    return 1;
+  }
+  printf("\nwritten to %s/: runs.csv (one row per run), distributions.csv (both tables), tables.md\n", dir);
+  /* a failed run is a result, but the tables then cover fewer runs than asked for */
+  if (failed_any) printf("note: some runs failed (see runs.csv, column error); the tables cover the others\n");
+  return 0;
+}
+
 /* ---- calibrate ------------------------------------------------------------------------------ */
 
 static void print_recovery(const char *label, const palp_eval_recovery *r) {
@@ -749,5 +1164,6 @@ int main(int argc, char **argv) {
     return 2;
   }
   o.log = &log; /* every line is flushed as written */
-  return !strcmp(o.cmd, "evaluate") ? cmd_evaluate(&o) : cmd_calibrate(&o);
+  if (!strcmp(o.cmd, "evaluate")) return o.sites ? cmd_sites(&o) : cmd_evaluate(&o);
+  return cmd_calibrate(&o);
 }

@@ -2,11 +2,18 @@
  * palp-fem - the FE reference ("golden standard") from the command line.
  *
  *   palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json]
- *                [--inp MESH.inp] [--reading long_term|instantaneous] [--frames N]
+ *                [--inp MESH.inp] [--material PROFILE] [--reading long_term|instantaneous] [--frames N]
  *                [--distribution single|uniform|gaussian|gaussian_offset]
  *                [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]
  *   palp-fem export-inp [--level N] [--config FEM.json] OUT.inp
  *   palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]
+ *   palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]
+ *                [--reading long_term|instantaneous] [--out FILE.csv]
+ *                [--site all|pole,45deg,70deg,pole_lesion]
+ *
+ * finger prints fingertip force-depth curves of the real-time model (the scene's
+ * world) against the FE reference (rigid sphere, relaxed) at matched positions:
+ * pole, 45 deg, 70 deg, and over a 10 mm lesion (finger_compare.c).
  *
  * run writes one CSV row per output frame: time, top-vertex displacement, total
  * feedback force, every real-time vertex's displacement and every contact
@@ -21,6 +28,7 @@
 #include <unistd.h>
 
 #include "fem_internal.h"
+#include "finger_compare.h"
 #include "palp_app.h"
 
 static double now_s(void) {
@@ -35,11 +43,15 @@ static double now_s(void) {
 static void usage(void) {
   fprintf(stderr,
           "usage: palp-fem run --scene SCENE.json [--level N] [--dt S] [--config FEM.json] [--inp MESH.inp]\n"
+          "                    [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                    [--reading long_term|instantaneous] [--frames N]\n"
           "                    [--distribution single|uniform|gaussian|gaussian_offset]\n"
           "                    [--out FILE.csv] [--cache-dir DIR | --no-cache] [--quiet]\n"
           "       palp-fem export-inp [--level N] [--config FEM.json] OUT.inp\n"
-          "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n");
+          "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n"
+          "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
+          "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
+          "                       [--site all|pole,45deg,70deg,pole_lesion]\n");
   palp_app_common_usage(stderr, FEM_OPTS);
 }
 
@@ -111,7 +123,9 @@ static int write_csv(const char *path, const palp_fem_result *r) {
   return 0;
 }
 
-static void summary(const palp_scene *s, const palp_fem_result *r, double wall) {
+static void summary(const palp_fem_config *cfg, const palp_scene *s, const palp_fem_result *r, double wall) {
+  printf("material         %s: %s\n", cfg->material[0] ? cfg->material : "custom",
+         cfg->material[0] ? palp_fem_material_label(cfg->material) : "materials set field by field");
   double peak = 0.0, t_peak = 0.0, at_release = NAN, residual = NAN, recovery = NAN, t_release = -1.0;
   palp_vec3 fb_release = {NAN, NAN, NAN};
   for (int c = 0; c < s->contact_count; ++c)
@@ -153,7 +167,7 @@ static void summary(const palp_scene *s, const palp_fem_result *r, double wall) 
 }
 
 typedef struct opts {
-  const char *scene, *config, *inp, *out, *cache_dir, *reading, *dist, *positional;
+  const char *scene, *config, *inp, *out, *cache_dir, *reading, *material, *dist, *site, *positional;
   int level, frames, no_cache, quiet;
   double dt;
   palp_app_opts app;
@@ -187,7 +201,9 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--out", o->out)
     ARG("--cache-dir", o->cache_dir)
     ARG("--reading", o->reading)
+    ARG("--material", o->material)
     ARG("--distribution", o->dist)
+    ARG("--site", o->site)
 #undef ARG
     if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--dt") == 0) && has) {
       char *end;
@@ -228,6 +244,10 @@ static int build_config(const opts *o, palp_fem_config *cfg) {
     palp_log_error(o->log, "%s", err);
     return -1;
   }
+  if (o->material && palp_fem_config_set_material(cfg, o->material, err, sizeof err) != 0) {
+    palp_log_error(o->log, "--material: %s", err);
+    return -1;
+  }
   if (o->level > 0) cfg->mesh.level = o->level;
   if (o->dt >= 0.0) cfg->dt = o->dt;
   if (o->inp) snprintf(cfg->inp_path, sizeof cfg->inp_path, "%s", o->inp);
@@ -240,6 +260,11 @@ static int build_config(const opts *o, palp_fem_config *cfg) {
       palp_log_error(o->log, "--reading: expected long_term or instantaneous");
       return -1;
     }
+    /* the alias of the two paper profiles */
+    if (strncmp(cfg->material, "paper_", 6) == 0)
+      snprintf(cfg->material, sizeof cfg->material, "%s",
+               cfg->c10_reading == PALP_FEM_C10_LONG_TERM ? "paper_long_term" : "paper_instantaneous");
+    else if (cfg->material[0]) cfg->material[0] = 0;
   }
   if (palp_fem_config_validate(cfg, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s", err);
@@ -286,7 +311,7 @@ static int cmd_run(const opts *o) {
     palp_fem_result_destroy(&r);
     return 1;
   }
-  if (!o->quiet) summary(&scene, &r, now_s() - t0);
+  if (!o->quiet) summary(&cfg, &scene, &r, now_s() - t0);
   palp_fem_result_destroy(&r);
   return 0;
 }
@@ -339,6 +364,8 @@ static int cmd_info(const opts *o) {
   for (int n = 0; n < m.node_count; ++n) nf += m.fixed[n];
   printf("mesh      %d nodes (%d clamped), %d hexahedra (%d membrane, %d gel), volume %.4g m^3\n", m.node_count, nf,
          m.element_count, nm, m.element_count - nm, vol);
+  printf("material  %s (%s)\n", cfg.material[0] ? cfg.material : "custom",
+         cfg.material[0] ? palp_fem_material_label(cfg.material) : "materials set field by field");
   for (int r = 0; r < 2; ++r) {
     const palp_fem_material *mat = r ? &cfg.membrane : &cfg.gel;
     const double ginf = palp_fem_ginf(mat), c0 = palp_fem_c10_instant(mat, cfg.c10_reading);
@@ -346,6 +373,32 @@ static int cmd_info(const opts *o) {
            r ? "membrane" : "gel", mat->c10, c0, c0 * ginf, 2.0 / mat->d1, mat->density);
   }
   palp_fem_mesh_destroy(&m);
+  return 0;
+}
+
+static int cmd_finger(const opts *o) {
+  if (!o->scene) {
+    fprintf(stderr, "palp-fem finger: --scene is required\n");
+    usage();
+    return 2;
+  }
+  palp_fem_config cfg;
+  if (build_config(o, &cfg)) return 2;
+  if (cfg.inp_path[0]) {
+    palp_log_error(o->log, "finger: --inp is not supported (the lesions need the generated mesh's regions)");
+    return 2;
+  }
+  palp_scene scene;
+  char err[512];
+  if (palp_scene_load(o->scene, &scene, err, sizeof err) != 0) {
+    palp_log_error(o->log, "%s: %s", o->scene, err);
+    return 2;
+  }
+  err[0] = 0;
+  if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, err, sizeof err) != 0) {
+    palp_log_error(o->log, "finger: %s", err[0] ? err : "failed");
+    return 1;
+  }
   return 0;
 }
 
@@ -369,6 +422,7 @@ int main(int argc, char **argv) {
   if (strcmp(argv[1], "run") == 0) return cmd_run(&o);
   if (strcmp(argv[1], "export-inp") == 0) return cmd_export(&o);
   if (strcmp(argv[1], "info") == 0) return cmd_info(&o);
+  if (strcmp(argv[1], "finger") == 0) return cmd_finger(&o);
   fprintf(stderr, "palp-fem: unknown command %s\n", argv[1]);
   usage();
   return 2;

@@ -27,19 +27,7 @@
 #include "stats.h"
 #include "svg_plot.h"
 #include "palp_app.h"
-
-enum { EXIT_DATA = 1, EXIT_USAGE = 2 };
-
-typedef struct options {
-  const char *command;
-  const char *file;
-  const char *group, *value, *a, *b;
-  const char *svg;
-  int json;
-  int skip_empty;
-  char sep;
-  palp_log *log; /* main's: data errors and notes go through it */
-} options;
+#include "cli.h"
 
 #define STATS_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE)
 
@@ -49,6 +37,12 @@ static void usage(FILE *to) {
       "  palp-stats anova FILE.csv --group COL --value COL [options]\n"
       "  palp-stats bland-altman FILE.csv --a COL --b COL [options]\n"
       "  palp-stats rmse FILE.csv --a COL --b COL [options]\n"
+      "  palp-stats neff FILE.csv (--value COL | --a COL --b COL) [options]\n"
+      "  palp-stats bootstrap FILE.csv (--value COL | --a COL --b COL) [--block B]\n"
+      "             [--resamples N] [--seed S] [--level L] [options]\n"
+      "  palp-stats tost FILE.csv (--value COL | --a COL --b COL)\n"
+      "             (--margin M | --lower L --upper U) [--alpha A] [--serial | --unit COL]\n"
+      "  palp-stats ba-rm FILE.csv --subject COL (--value COL | --a COL --b COL)\n"
       "\n"
       "anova         one-way ANOVA of the value column across the groups named in\n"
       "              the group column (at least 2 groups, 2 values per group)\n"
@@ -56,6 +50,17 @@ static void usage(FILE *to) {
       "              agreement, share within bias +- 2 SD, RMSE and the ANOVA of a\n"
       "              against b: one row of the paper's Tables V/VI and its verdict\n"
       "rmse          root-mean-square difference of two paired columns\n"
+      "neff          lag-1 autocorrelation of a series (rows in file order), its AR(1)\n"
+      "              effective sample size n (1 - r1)/(1 + r1) and the SE of its mean\n"
+      "bootstrap     moving-block bootstrap of the mean of a series: SE and percentile\n"
+      "              interval (block from the AR(1) rule unless --block; seeded, so\n"
+      "              reproducible; default 10000 resamples, level 0.90, seed 1)\n"
+      "tost          two one-sided tests (Schuirmann): is the mean inside the margins?\n"
+      "              values independent (default), --serial (SE from n_eff), or\n"
+      "              --unit COL (the units' means are the observations, e.g. runs);\n"
+      "              alpha 0.05 per side\n"
+      "ba-rm         Bland-Altman limits with several pairs per subject, the true value\n"
+      "              varying within a subject (Bland & Altman 2007)\n"
       "\n"
       "FILE.csv      header row required; fields separated by commas; fields may be\n"
       "              quoted (\"...\", with \"\" for a quote); numbers use a dot\n"
@@ -91,7 +96,7 @@ static void vlog_error(palp_log *log, const char *fmt, va_list ap) {
   palp_log_error(log, "%s", msg);
 }
 
-__attribute__((format(printf, 2, 3))) static void data_error(palp_log *log, const char *fmt, ...) {
+void data_error(palp_log *log, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   vlog_error(log, fmt, ap);
@@ -132,7 +137,7 @@ static void list_columns(palp_log *log, const palp_csv *csv) {
 }
 
 /* Resolves a column by exact name, then case-insensitive name, then 1-based number. */
-static int find_column(const palp_csv *csv, const options *o, const char *want, const char *flag,
+int find_column(const palp_csv *csv, const options *o, const char *want, const char *flag,
                        int *col) {
   int hit = -1, hits = 0;
   for (int i = 0; i < csv->ncols; ++i)
@@ -181,12 +186,12 @@ static int find_column(const palp_csv *csv, const options *o, const char *want, 
 
 /* ---- cells -------------------------------------------------------------------------- */
 
-static int cell_is_empty(const palp_csv *csv, size_t row, int col) {
+int cell_is_empty(const palp_csv *csv, size_t row, int col) {
   return palp_csv_cell(csv, row, col)[0] == '\0';
 }
 
 /* Parses one numeric cell; on failure prints where and why, with a hint. */
-static int cell_number(const palp_csv *csv, const options *o, size_t row, int col,
+int cell_number(const palp_csv *csv, const options *o, size_t row, int col,
                        palp_dec *out) {
   const char *text = palp_csv_cell(csv, row, col);
   int rc = palp_dec_parse(text, out);
@@ -230,7 +235,7 @@ static int cell_number(const palp_csv *csv, const options *o, size_t row, int co
 
 /* ---- output helpers ------------------------------------------------------------------ */
 
-static void print_json(cJSON *root) {
+void print_json(cJSON *root) {
   char *s = cJSON_Print(root);
   if (s) {
     puts(s);
@@ -684,6 +689,55 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
   return 0;
 }
 
+/* Numeric options of the serial-data commands: 1 taken, 0 not one of them, -1 error. */
+static int number_opt(options *o, int argc, char **argv, int *i) {
+  const char *s = argv[*i];
+  double *dst = NULL;
+  long *ldst = NULL;
+  double lo = -INFINITY, hi = INFINITY;
+  int *flag = NULL;
+  if (!strcmp(s, "--margin")) dst = &o->margin, flag = &o->have_margin, lo = 0;
+  else if (!strcmp(s, "--lower")) dst = &o->lower, flag = &o->have_lower;
+  else if (!strcmp(s, "--upper")) dst = &o->upper, flag = &o->have_upper;
+  else if (!strcmp(s, "--alpha")) dst = &o->alpha, lo = 0, hi = 0.5;
+  else if (!strcmp(s, "--level")) dst = &o->level, lo = 0, hi = 1;
+  else if (!strcmp(s, "--block")) ldst = &o->block, lo = 1, hi = 1e9;
+  else if (!strcmp(s, "--resamples")) ldst = &o->resamples, lo = 2, hi = 1e7;
+  else if (!strcmp(s, "--seed")) lo = 0, hi = 1.8e19;
+  else return 0;
+  if (*i + 1 >= argc) {
+    usage_error("%s needs a number", s);
+    return -1;
+  }
+  const char *v = argv[++*i];
+  char *end = NULL;
+  if (!strcmp(s, "--seed")) {
+    unsigned long long x = strtoull(v, &end, 10);
+    if (!*v || *end || v[0] == '-') {
+      usage_error("--seed expects a non-negative integer, got \"%s\"", v);
+      return -1;
+    }
+    o->seed = x;
+    return 1;
+  }
+  const double x = strtod(v, &end);
+  if (!*v || *end || !isfinite(x) || (ldst && x != floor(x)) || x < lo || x > hi ||
+      ((dst == &o->alpha || dst == &o->level) && (x <= lo || x >= hi)) || (dst == &o->margin && !(x > 0))) {
+    usage_error("%s expects %s, got \"%s\"", s,
+                dst == &o->alpha  ? "a number in (0, 0.5)"
+                : dst == &o->level ? "a number in (0, 1)"
+                : ldst             ? "a positive integer"
+                : dst == &o->margin ? "a number > 0"
+                                    : "a number",
+                v);
+    return -1;
+  }
+  if (dst) *dst = x;
+  else *ldst = (long)x;
+  if (flag) *flag = 1;
+  return 1;
+}
+
 /* ---- main ------------------------------------------------------------------------------ */
 
 int main(int argc, char **argv) {
@@ -704,8 +758,13 @@ int main(int argc, char **argv) {
   int is_anova = strcmp(o.command, "anova") == 0;
   int is_ba = strcmp(o.command, "bland-altman") == 0;
   int is_rmse = strcmp(o.command, "rmse") == 0;
-  if (!is_anova && !is_ba && !is_rmse)
-    return usage_error("unknown command \"%s\"; expected anova, bland-altman or rmse", o.command);
+  int is_neff = strcmp(o.command, "neff") == 0, is_boot = strcmp(o.command, "bootstrap") == 0;
+  int is_tost = strcmp(o.command, "tost") == 0, is_barm = strcmp(o.command, "ba-rm") == 0;
+  int is_serial = is_neff || is_boot || is_tost || is_barm;
+  if (!is_anova && !is_ba && !is_rmse && !is_serial)
+    return usage_error("unknown command \"%s\"; expected anova, bland-altman, rmse, neff, bootstrap, tost or ba-rm",
+                       o.command);
+  o.seed = 1;
 
   for (int i = 2; i < argc; ++i) {
     const char *s = argv[i];
@@ -720,6 +779,15 @@ int main(int argc, char **argv) {
     if (strcmp(s, "--skip-empty") == 0) {
       o.skip_empty = 1;
       continue;
+    }
+    if (strcmp(s, "--serial") == 0) {
+      o.serial = 1;
+      continue;
+    }
+    {
+      const int num = number_opt(&o, argc, argv, &i);
+      if (num < 0) return EXIT_USAGE;
+      if (num) continue;
     }
     if (strcmp(s, "--help") == 0 || strcmp(s, "-h") == 0) {
       usage(stdout);
@@ -738,6 +806,8 @@ int main(int argc, char **argv) {
     else if (strcmp(s, "--a") == 0) slot = &o.a;
     else if (strcmp(s, "--b") == 0) slot = &o.b;
     else if (strcmp(s, "--svg") == 0) slot = &o.svg;
+    else if (strcmp(s, "--unit") == 0) slot = &o.unit;
+    else if (strcmp(s, "--subject") == 0) slot = &o.subject;
     if (slot) {
       if (i + 1 >= argc) return usage_error("%s needs a column name", s);
       *slot = argv[++i];
@@ -749,7 +819,27 @@ int main(int argc, char **argv) {
     o.file = s;
   }
   if (!o.file) return usage_error("%s: no input CSV file given", o.command);
-  if (is_anova) {
+  if (is_serial) {
+    if (o.group || o.svg) return usage_error("%s takes --value or --a/--b, not --group/--svg", o.command);
+    if (o.value && (o.a || o.b)) return usage_error("%s: give --value COL or --a COL --b COL, not both", o.command);
+    if (!o.value && (!o.a || !o.b))
+      return usage_error("%s needs --value COL (a series, e.g. differences) or --a COL --b COL (their difference)",
+                         o.command);
+    if (!is_tost && (o.have_margin || o.have_lower || o.have_upper || o.alpha || o.serial || o.unit))
+      return usage_error("--margin, --lower, --upper, --alpha, --serial and --unit belong to tost");
+    if (!is_boot && (o.block || o.resamples || o.level))
+      return usage_error("--block, --resamples and --level belong to bootstrap");
+    if (!is_barm && o.subject) return usage_error("--subject belongs to ba-rm");
+    if (is_barm && !o.subject) return usage_error("ba-rm needs --subject COL (the column naming each row's subject)");
+    if (is_tost) {
+      if (o.have_margin == (o.have_lower || o.have_upper))
+        return usage_error("tost needs either --margin M (the interval -M..M) or both --lower L and --upper U");
+      if (!o.have_margin && !(o.have_lower && o.have_upper)) return usage_error("tost needs both --lower and --upper");
+      if (o.have_margin && !(o.margin > 0)) return usage_error("--margin must be > 0");
+      if (!o.have_margin && !(o.lower < o.upper)) return usage_error("--lower must be below --upper");
+      if (o.serial && o.unit) return usage_error("--serial and --unit are alternatives; give one");
+    }
+  } else if (is_anova) {
     if (!o.group || !o.value)
       return usage_error("anova needs --group COL (the column naming each row's group) and "
                          "--value COL (the measurement)");
@@ -772,7 +862,13 @@ int main(int argc, char **argv) {
     data_error(o.log, "%s", err);
     return EXIT_DATA;
   }
-  int rc = is_anova ? run_anova(&o, &csv) : is_ba ? run_bland_altman(&o, &csv) : run_rmse(&o, &csv);
+  int rc = is_anova  ? run_anova(&o, &csv)
+           : is_ba   ? run_bland_altman(&o, &csv)
+           : is_rmse ? run_rmse(&o, &csv)
+           : is_neff ? run_neff(&o, &csv)
+           : is_boot ? run_bootstrap(&o, &csv)
+           : is_tost ? run_tost(&o, &csv)
+                     : run_ba_rm(&o, &csv);
   palp_csv_free(&csv);
   return rc;
 }

@@ -29,7 +29,7 @@ const PALP = (function () {
   }
 
   const state = { connected: false, hello: null, phantoms: {}, sessions: [], status: null,
-    frames: 0, messages: 0, reconnects: 0 };
+    frames: 0, messages: 0, reconnects: 0, findingReplies: [] };
   window.palpState = state;
 
   /* Opens the WebSocket (the token from this page's own address), calls handlers[type](msg) for
@@ -66,11 +66,14 @@ const PALP = (function () {
         else if (m.type === "phantom") state.phantoms[m.id] = m;
         else if (m.type === "sessions") state.sessions = m.sessions;
         else if (m.type === "status") state.status = m;
+        else if (m.type === "finding_reply") state.findingReplies.push(m);
         if (handlers[m.type]) handlers[m.type](m);
       };
     }
     function send(obj) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(obj)); }
     open();
+    /* For tests: what a page could send anyway (the bridge, not the page, decides what it may do). */
+    window.palpSend = send;
     return send;
   }
 

@@ -26,7 +26,8 @@
     const tb = document.createElement("table");
     el.append(h, cv, tb);
     el.addEventListener("click", function () {
-      location.href = "trainee.html?session=" + s.id + (token ? "&token=" + encodeURIComponent(token) : "");
+      /* followed as an observer: the instructor's view of a trainee page never marks findings */
+      location.href = "trainee.html?session=" + s.id + "&role=observer" + (token ? "&token=" + encodeURIComponent(token) : "");
     });
     grid.appendChild(el);
     const c = { el: el, name: name, band: band, canvas: cv, table: tb, proj: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0 };
@@ -73,13 +74,22 @@
     c.name.textContent = s.trainee + " #" + s.id;
     c.band.textContent = fmt(s.force, 2) + " N " + s.band;
     c.band.className = "band " + s.band;
-    const rows = [["phantom", s.phantom_name || s.phantom], ["coverage", fmt(100 * s.coverage[0], 1) + " %"],
-      ["findings", s.findings === null ? "n/a" : s.findings], ["peak force", fmt(s.peak_force, 2) + " N"],
+    const rows = [["phantom", s.phantom_name || s.phantom], ["exercise", s.exercise || "none"],
+      ["coverage", fmt(100 * s.coverage[0], 1) + " %", false,
+        "share of the dome's skin pressed at least lightly, since the bridge began following the session: " +
+        "the footprint disc (contact area) around each sampled contact point, marked on the rest mesh, 30 samples/s"],
+      ["findings", s.findings === null ? "n/a" : s.findings, false,
+        s.findings === null ? "no findings status from the server (no exercise, or none marked yet)" : "marks standing (the server's count)"],
+      ["peak force", fmt(s.peak_force, 2) + " N"],
       ["tick overruns", s.overruns, s.overruns > 0], ["rejected samples", s.rejected, s.rejected > 0],
       ["position finger", s.position_finger === undefined ? "n/a" : (s.position_finger ? "active" : "none")],
       ["model validity", modelFlags(s), (s.model_flags_seen || 0) !== 0],
-      /* counted by the trainee's station, not on the wire (docs/web.md) */
-      ["late haptic updates", s.late_haptic === null ? "n/a" : s.late_haptic, s.late_haptic > 0],
+      /* from the local models the bridge receives (docs/web.md) */
+      ["late haptic updates", s.late_haptic === null ? "n/a" : s.late_haptic + (s.lost_haptic ? " (+" + s.lost_haptic + " lost)" : ""),
+        s.late_haptic > 0,
+        s.late_haptic === null ? "n/a: no haptic local models in this session (force-driven input has none)"
+          : "local models published more than 2 physics periods after the previous frame's (server clock); " +
+            "lost: frames the bridge never received"],
       ["frames/s", fmt(c.fps, 1)], ["open", fmt(s.duration, 0) + " s"]];
     c.table.textContent = "";
     for (const r of rows) {
@@ -88,6 +98,7 @@
       const v = tr.insertCell();
       v.textContent = String(r[1]);
       if (r[2]) v.className = "warn";
+      if (r[3]) tr.title = r[3];
     }
     if (c.phantom !== s.phantom && st.phantoms[s.phantom]) {
       c.phantom = s.phantom;

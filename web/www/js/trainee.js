@@ -3,7 +3,13 @@
  * haptic proxy); the force gauge with its light / medium / deep bands; coverage so far.
  *
  * Which session: ?session=ID, else ?trainee=NAME (that trainee's newest open session), else the
- * newest open session. The page follows a new one when the followed session closes. */
+ * newest open session. The page follows a new one when the followed session closes.
+ *
+ * Role: a trainee page (the default) binds itself to its session ({"trainee": ID}) and, when the
+ * session's phantom runs an exercise, shows its instructions, time left, marks standing and the
+ * "lump here" / "withdraw last" controls (buttons, keys L and W). ?role=observer (the dashboard's
+ * links) and a bare page (no ?session= or ?trainee=) only follow: no controls, and the bridge
+ * refuses findings from them. */
 "use strict";
 (function () {
   const p = PALP.params(), wantSession = Number(p.get("session")) || 0, wantTrainee = p.get("trainee");
@@ -11,6 +17,15 @@
   st.trainee = { session: 0, phantom: 0, frames: 0, rendered: 0, maxDispMm: 0, fpsReceived: 0, fpsRendered: 0,
     force: 0, band: "none", coverage: [0, 0, 0], arrivals: [] };
   const T = st.trainee;
+  /* Bound as the trainee's page only when it names its session or trainee: a bare page (the newest
+   * session, whoever's it is) and ?role=observer only watch. */
+  const observer = p.get("role") === "observer" || !(wantSession || wantTrainee);
+  T.role = observer ? "observer" : "trainee";
+  T.exercise = null;      /* the exercise of the followed session's phantom, or null */
+  T.marks = null;         /* marks standing, from the server's finding status */
+  T.replies = [];         /* the bridge's answers to this page's finding requests */
+  T.timeLeft = null;
+  let exercises = [], lastSession = null, findings = null, findingsAt = 0;
   const token = p.get("token");
   if (token) document.getElementById("back").href = "dashboard.html?token=" + encodeURIComponent(token);
 
@@ -211,9 +226,60 @@
       " (session " + s.id + ")";
   }
 
+  /* ---- exercise and findings ---- */
+  function followMsg(id) { return id && !observer ? { trainee: id } : { follow: id || null }; }
+  function showExercise() {
+    const ex = lastSession ? exercises.find(function (e) { return e.phantom === lastSession.phantom; }) : null;
+    T.exercise = ex || null;
+    document.getElementById("exercise").hidden = !!ex;
+    document.getElementById("ex-panel").hidden = !ex;
+    document.getElementById("ex-controls").hidden = !ex || observer;
+    if (!ex) return;
+    document.getElementById("ex-title").textContent = ex.title || ex.name;
+    document.getElementById("ex-instructions").textContent = ex.instructions;
+    tick();
+  }
+  /* Time left: the server's newest figure counted down here; before the first, the limit less
+   * the session's age. */
+  function tick() {
+    if (!T.exercise) return;
+    let left = null;
+    if (findings && findings.time_left >= 0) left = findings.time_left - findings.age - (performance.now() - findingsAt) / 1000;
+    else if (findings && findings.time_left < 0) left = null;
+    else if (lastSession && T.exercise.time_limit > 0) left = T.exercise.time_limit - lastSession.duration;
+    T.timeLeft = left;
+    document.getElementById("ex-time").textContent = left === null ? "no limit" :
+      Math.floor(Math.max(0, left) / 60) + ":" + String(Math.floor(Math.max(0, left) % 60)).padStart(2, "0");
+    T.marks = findings ? findings.marks : (lastSession && lastSession.findings !== null ? lastSession.findings : 0);
+    document.getElementById("ex-marks").textContent = String(T.marks);
+  }
+  setInterval(tick, 250);
+  function message(text, ok) {
+    const el = document.getElementById("ex-msg");
+    el.textContent = text;
+    el.className = ok ? "ok" : "refused";
+  }
+  function finding(op) {
+    if (!send || observer || !T.exercise) return;
+    send({ finding: op });
+  }
+  document.getElementById("lump").addEventListener("click", function () { finding("mark"); });
+  document.getElementById("withdraw").addEventListener("click", function () { finding("withdraw"); });
+  window.addEventListener("keydown", function (ev) {
+    if (ev.repeat || ev.ctrlKey || ev.altKey || ev.metaKey) return;
+    if (ev.key === "l" || ev.key === "L") finding("mark");
+    else if (ev.key === "w" || ev.key === "W") finding("withdraw");
+  });
+
   let fpsT0 = performance.now(), fpsFrames = 0, fpsRendered = 0;
   send = PALP.connect({
-    open: function (snd) { send = snd; if (T.session) send({ follow: T.session }); },
+    open: function (snd) { send = snd; if (T.session) send(followMsg(T.session)); },
+    exercises: function (m) { exercises = m.exercises; showExercise(); },
+    finding_reply: function (m) {
+      T.replies.push(m);
+      if (m.ok) message(m.op === "mark" ? "mark " + m.mark_id + " sent" : "mark " + m.mark_id + " withdrawn", true);
+      else message(m.reason, false);
+    },
     hello: function (m) {
       scaleMm = m.scale_mm;
       bands = m.bands;
@@ -226,11 +292,14 @@
       const id = choose(m.sessions);
       if (id !== T.session) {
         T.session = id;
-        if (send) send({ follow: id || null });
+        if (send) send(followMsg(id));
+        findings = null;
         setFingers([], null);
         if (!id) document.getElementById("info").textContent = "waiting for a session";
       }
       const s = m.sessions.find(function (x) { return x.id === id; });
+      lastSession = s || null;
+      showExercise();
       if (s) {
         showSession(s);
         if (s.phantom !== pendingPhantom) {
@@ -266,6 +335,15 @@
         document.getElementById("covbar" + k).style.width = pc + "%";
       }
       setFingers(m.fingers);
+      if (m.findings) {
+        const prev = findings;
+        findings = m.findings;
+        findingsAt = performance.now();
+        /* the server's answer to a mark it refused (the bridge's own refusals come as replies) */
+        if (!m.findings.last_accepted && m.findings.reason && (!prev || prev.last_mark_id !== m.findings.last_mark_id))
+          message("the server refused mark " + m.findings.last_mark_id + ": " + m.findings.reason, false);
+        tick();
+      }
     }
   });
 

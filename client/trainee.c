@@ -1,0 +1,273 @@
+/* trainee.c - scripted trainees driving a hand (see trainee.h). */
+#include "trainee.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TR_PI 3.14159265358979323846
+#define RISE_R_IN 0.012  /* the surroundings a spot is compared with: 12-28 mm away */
+#define RISE_R_OUT 0.028
+
+void palp_cli_hand_init(palp_cli_hand *h, void *ctx, int (*step)(void *, palp_vec3, palp_vec3 *, double *), double dt,
+                        double R, double r, palp_vec3 start) {
+  memset(h, 0, sizeof *h);
+  h->ctx = ctx, h->step = step, h->dt = dt, h->R = R, h->r = r, h->device = start;
+}
+
+void palp_cli_hand_step(palp_cli_hand *h, palp_vec3 dev) {
+  if (h->failed) return;
+  h->device = dev;
+  if (h->step(h->ctx, dev, &h->force, &h->t) < 0) {
+    h->failed = 1;
+    return;
+  }
+  h->steps++;
+}
+
+static double force_now(const palp_cli_hand *h) {
+  return sqrt(h->force.x * h->force.x + h->force.y * h->force.y + h->force.z * h->force.z);
+}
+
+void palp_cli_hand_move_to(palp_cli_hand *h, palp_vec3 to, double speed) {
+  const palp_vec3 a = h->device;
+  const double L = sqrt((to.x - a.x) * (to.x - a.x) + (to.y - a.y) * (to.y - a.y) + (to.z - a.z) * (to.z - a.z));
+  const int k = (int)ceil(L / (speed * h->dt));
+  for (int i = 1; i <= k && !h->failed; ++i) {
+    const double u = (double)i / k;
+    palp_cli_hand_step(h, (palp_vec3){a.x + u * (to.x - a.x), a.y + u * (to.y - a.y), a.z + u * (to.z - a.z)});
+  }
+}
+
+void palp_cli_hand_hold(palp_cli_hand *h, double seconds) {
+  const int k = (int)lround(seconds / h->dt);
+  for (int i = 0; i < k && !h->failed; ++i) palp_cli_hand_step(h, h->device);
+}
+
+palp_vec3 palp_cli_hand_device_at(const palp_cli_hand *h, palp_vec3 n, double depth) {
+  const double q = h->R + h->r - depth;
+  palp_vec3 d = {q * n.x, q * n.y, q * n.z};
+  if (d.z < h->r) d.z = h->r;
+  return d;
+}
+
+/* ---- the expert ---------------------------------------------------------------------- */
+palp_cli_expert_cfg palp_cli_expert_default(void) {
+  return (palp_cli_expert_cfg){.spacing = 0.008, .d_light = 0.003, .d_medium = 0.009, .d_deep = 0.016,
+                               .press_speed = 0.05, .glide_speed = 0.05, .hold = 0.12, .min_nz = 0.06,
+                               .keep_force = 0.05, .patience = 0.3, .threshold = 0.12, .cluster = 0.015};
+}
+
+/* Moves the hand to depth `d` [m] at spot normal `to`, gliding over the surface at
+ * `speed` and pressing at `vz` [m/s]. Rising is allowed only while the finger still
+ * feels at least `keep` [N]: an examiner keeps a light touch, so the finger follows the
+ * dent as it recovers (the gel recovers in about a second, docs/model.md) instead of
+ * leaving the surface. Gives up rising after `patience` [s]. */
+typedef struct spot_hand {
+  palp_vec3 n; /* current spot normal */
+  double d;    /* current depth [m] */
+} spot_hand;
+
+static void travel(palp_cli_hand *h, spot_hand *sh, palp_vec3 to, double d, double speed, double vz, double keep,
+                   double patience) {
+  const double dt = h->dt;
+  const palp_vec3 from = sh->n;
+  const double arc = h->R * acos(fmax(-1.0, fmin(1.0, from.x * to.x + from.y * to.y + from.z * to.z)));
+  const int k = arc > 0 ? (int)ceil(arc / (speed * dt)) : 0;
+  const int limit = k + (int)ceil((fabs(d - sh->d) / vz + patience) / dt);
+  for (int i = 1; i <= limit && !h->failed; ++i) {
+    if (i <= k) {
+      const double u = (double)i / k;
+      palp_vec3 n = {from.x + u * (to.x - from.x), from.y + u * (to.y - from.y), from.z + u * (to.z - from.z)};
+      const double l = sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+      sh->n = (palp_vec3){n.x / l, n.y / l, n.z / l};
+    }
+    if (sh->d < d) sh->d = fmin(d, sh->d + vz * dt);
+    else if (sh->d > d && (h->steps == 0 || force_now(h) >= keep)) sh->d = fmax(d, sh->d - vz * dt);
+    palp_cli_hand_step(h, palp_cli_hand_device_at(h, sh->n, sh->d));
+    if (i >= k && fabs(sh->d - d) < 1e-12) break;
+  }
+}
+
+/* Holds for `seconds` and returns the median force felt over the hold's last third: what
+ * a settled press feels, robust to a glitch (over DDS on a loaded machine a late haptic
+ * tick makes the device jump and the force spike for a step or two). In-process it moves
+ * the expert's largest rise from +19.0 % (the hold's last sample) to +19.7 %. */
+#define HOLD_TAIL_MAX 256
+static int cmp_double(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+static double held_force(palp_cli_hand *h, double seconds) {
+  const int k = (int)lround(seconds / h->dt);
+  const int tail0 = k - k / 3;
+  double f[HOLD_TAIL_MAX];
+  int n = 0;
+  for (int i = 0; i < k && !h->failed; ++i) {
+    palp_cli_hand_step(h, h->device);
+    if (i >= tail0 && n < HOLD_TAIL_MAX) f[n++] = force_now(h);
+  }
+  if (n == 0) return force_now(h);
+  qsort(f, (size_t)n, sizeof *f, cmp_double);
+  return f[n / 2];
+}
+
+palp_cli_expert_spot *palp_cli_expert_exam(palp_cli_hand *h, const palp_cli_expert_cfg *cfg, int *count) {
+  const double R = h->R;
+  const double da = cfg->spacing / R;
+  const int na = (int)floor((TR_PI / 2.0) / da);
+  palp_cli_expert_spot *sp = NULL;
+  int n = 0, cap = 0, strip = 0;
+  spot_hand sh = {{0, 0, 1}, 0.0};
+  *count = 0;
+  /* MammaCare's vertical strip: parallel strips (planes x = const, straight lines seen
+   * from above), spots 8 mm apart on the surface, boustrophedon; at every spot light ->
+   * medium -> deep and back, gliding to the next spot at the light depth. */
+  for (int ia = -na; ia <= na && !h->failed; ++ia, ++strip) {
+    const double a = ia * da, ca = cos(a);
+    if (ca < cfg->min_nz) continue;
+    const double bmax = acos(fmin(1.0, cfg->min_nz / ca)); /* cos a cos b >= min_nz */
+    const double db = cfg->spacing / (R * ca);
+    const int nb = (int)floor(bmax / db);
+    for (int k = -nb; k <= nb && !h->failed; ++k) {
+      const int kb = (strip % 2) ? -k : k; /* boustrophedon */
+      const double b = kb * db;
+      const palp_vec3 nrm = {sin(a), ca * sin(b), ca * cos(b)};
+      if (n == cap) {
+        cap = cap ? 2 * cap : 256;
+        palp_cli_expert_spot *ns = realloc(sp, sizeof *sp * (size_t)cap);
+        if (!ns) {
+          free(sp);
+          return NULL;
+        }
+        sp = ns;
+      }
+      palp_cli_expert_spot *s = &sp[n++];
+      s->n = nrm;
+      if (n == 1) { /* first spot: come down onto it from where the hand is */
+        palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, nrm, 0.0), cfg->glide_speed);
+        sh.n = nrm, sh.d = 0.0;
+      }
+      travel(h, &sh, nrm, cfg->d_light, cfg->glide_speed, cfg->press_speed, cfg->keep_force, cfg->patience);
+      s->t = h->t;
+      travel(h, &sh, nrm, cfg->d_medium, cfg->glide_speed, cfg->press_speed, cfg->keep_force, 0.0);
+      s->f_medium = held_force(h, cfg->hold);
+      travel(h, &sh, nrm, cfg->d_deep, cfg->glide_speed, cfg->press_speed, cfg->keep_force, 0.0);
+      s->f_deep = held_force(h, cfg->hold);
+      s->free = (R + h->r - cfg->d_deep) * nrm.z >= h->r;
+    }
+  }
+  *count = n;
+  return sp;
+}
+
+/* The rise of a free spot's force at the medium depth over its surroundings at the same
+ * depth: a quadratic surface c0 + g . u + u^T H u (u: tangent-plane offset) fitted by
+ * least squares, so that the dome's own smooth change of stiffness across the surface
+ * (highest at the pole and towards the fixed rim) is not taken for a lump. */
+double palp_cli_expert_rise(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, int i, double r_in,
+                            double r_out) {
+  enum { P = 6 };
+  double A[P][P + 1] = {{0}};
+  int m = 0;
+  const palp_vec3 pi = sp[i].n;
+  palp_vec3 e1 = fabs(pi.z) < 0.9 ? (palp_vec3){-pi.y, pi.x, 0} : (palp_vec3){1, 0, 0};
+  const double ndote = pi.x * e1.x + pi.y * e1.y + pi.z * e1.z;
+  e1 = (palp_vec3){e1.x - ndote * pi.x, e1.y - ndote * pi.y, e1.z - ndote * pi.z};
+  const double l = sqrt(e1.x * e1.x + e1.y * e1.y + e1.z * e1.z);
+  e1 = (palp_vec3){e1.x / l, e1.y / l, e1.z / l};
+  const palp_vec3 e2 = {pi.y * e1.z - pi.z * e1.y, pi.z * e1.x - pi.x * e1.z, pi.x * e1.y - pi.y * e1.x};
+  for (int j = 0; j < n; ++j) {
+    if (j == i || !sp[j].free) continue;
+    const palp_vec3 d = {h->R * (sp[j].n.x - pi.x), h->R * (sp[j].n.y - pi.y), h->R * (sp[j].n.z - pi.z)};
+    const double dist = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (dist < r_in || dist > r_out) continue;
+    const double x = (d.x * e1.x + d.y * e1.y + d.z * e1.z) / r_out, y = (d.x * e2.x + d.y * e2.y + d.z * e2.z) / r_out;
+    const double u[P] = {1.0, x, y, x * x, x * y, y * y};
+    for (int p = 0; p < P; ++p) {
+      A[p][P] += u[p] * sp[j].f_medium;
+      for (int q = 0; q < P; ++q) A[p][q] += u[p] * u[q];
+    }
+    m++;
+  }
+  if (m < 10) return NAN;
+  for (int c = 0; c < P; ++c) { /* Gauss-Jordan with partial pivoting on the normal equations */
+    int piv = c;
+    for (int r = c + 1; r < P; ++r)
+      if (fabs(A[r][c]) > fabs(A[piv][c])) piv = r;
+    if (fabs(A[piv][c]) < 1e-12) return NAN;
+    for (int k = 0; k <= P; ++k) {
+      const double t = A[c][k];
+      A[c][k] = A[piv][k], A[piv][k] = t;
+    }
+    for (int r = 0; r < P; ++r) {
+      if (r == c) continue;
+      const double f = A[r][c] / A[c][c];
+      for (int k = c; k <= P; ++k) A[r][k] -= f * A[c][k];
+    }
+  }
+  const double c0 = A[0][P] / A[0][0];
+  return c0 > 0 ? sp[i].f_medium / c0 - 1.0 : NAN;
+}
+
+int palp_cli_expert_lumps(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
+                          palp_vec3 *points, double *times, int cap, double *max_rise) {
+  double *rise = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+  int *used = calloc((size_t)(n > 0 ? n : 1), sizeof(int));
+  if (!rise || !used) {
+    free(rise), free(used);
+    return PALP_ENOMEM;
+  }
+  int nf = 0;
+  double maxr = -INFINITY;
+  for (int i = 0; i < n; ++i) {
+    rise[i] = sp[i].free ? palp_cli_expert_rise(h, sp, n, i, RISE_R_IN, RISE_R_OUT) : NAN;
+    if (rise[i] > maxr) maxr = rise[i];
+  }
+  if (max_rise) *max_rise = maxr;
+  for (;;) {
+    int best = -1;
+    for (int i = 0; i < n; ++i)
+      if (!used[i] && rise[i] > cfg->threshold && (best < 0 || rise[i] > rise[best])) best = i;
+    if (best < 0 || nf >= cap) break;
+    for (int i = 0; i < n; ++i) {
+      const double dx = sp[i].n.x - sp[best].n.x, dy = sp[i].n.y - sp[best].n.y, dz = sp[i].n.z - sp[best].n.z;
+      if (h->R * sqrt(dx * dx + dy * dy + dz * dz) <= cfg->cluster) used[i] = 1;
+    }
+    points[nf] = (palp_vec3){h->R * sp[best].n.x, h->R * sp[best].n.y, h->R * sp[best].n.z};
+    if (times) times[nf] = sp[best].t;
+    nf++;
+  }
+  free(rise), free(used);
+  return nf;
+}
+
+/* ---- the novice -------------------------------------------------------------------------- */
+static unsigned tr_rand(unsigned *state) {
+  *state = *state * 1664525u + 1013904223u;
+  return *state >> 8;
+}
+
+void palp_cli_novice_exam(palp_cli_hand *h, int presses, double depth, unsigned seed, palp_vec3 *last_press,
+                          void (*on_last_hold)(void *arg), void *arg) {
+  unsigned st = seed;
+  for (int k = 0; k < presses && !h->failed; ++k) {
+    const double polar = (tr_rand(&st) % 1000) / 1000.0 * 60.0 * TR_PI / 180.0;
+    const double az = (tr_rand(&st) % 1000) / 1000.0 * 2.0 * TR_PI;
+    const palp_vec3 n = {sin(polar) * cos(az), sin(polar) * sin(az), cos(polar)};
+    /* travel in the air, 5 mm above the dome (not along the chord, which cuts through it) */
+    const palp_vec3 from = h->device;
+    const double lf = sqrt(from.x * from.x + from.y * from.y + from.z * from.z);
+    for (int i = 1; i <= 20; ++i) {
+      const double u = i / 20.0;
+      palp_vec3 m = {(1 - u) * from.x / lf + u * n.x, (1 - u) * from.y / lf + u * n.y, (1 - u) * from.z / lf + u * n.z};
+      const double lm = sqrt(m.x * m.x + m.y * m.y + m.z * m.z);
+      palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, (palp_vec3){m.x / lm, m.y / lm, m.z / lm}, -0.005), 0.1);
+    }
+    palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, n, depth), 0.03);
+    if (k == presses - 1 && on_last_hold) on_last_hold(arg);
+    palp_cli_hand_hold(h, 0.3);
+    palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, n, -0.005), 0.03);
+    if (last_press) *last_press = (palp_vec3){h->R * n.x, h->R * n.y, h->R * n.z};
+  }
+}

@@ -1,0 +1,66 @@
+/*
+ * fem_finger.h - the fingertip and the lesions in the FE reference (docs/fem.md,
+ * "The finger" and "Lesions"): a rigid sphere pressed by position against the
+ * outer surface with frictionless penalty contact, and stiff inclusions as a
+ * per-element C10 multiplier. Internal to palp_fem (like fem_internal.h).
+ */
+#ifndef PALP_FEM_FINGER_H
+#define PALP_FEM_FINGER_H
+
+#include "fem_internal.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Frictionless contact of a rigid sphere with the surface faces, enforced by an
+ * augmented Lagrangian (penalty plus Uzawa multiplier updates until the
+ * penetration is below gap_tol) on the gap at (quad + 1)^2 points of every face (composite Simpson) (a surface
+ * integral of the contact pressure p = -penalty * gap, gap < 0), so the force is
+ * consistent with the faces' areas rather than lumped at nodes. */
+typedef struct palp_fem_finger {
+  double radius;    /* [m], 0.008 */
+  double penalty;   /* [N/m^3] pressure per metre of penetration, 1e10 by default */
+  int quad;         /* Simpson intervals per face direction (even, 2..16), 8 */
+  double center[3]; /* [m] sphere centre (set before each solve) */
+  double gap_tol;   /* [m] augmented-Lagrangian target: penetration at most this, 1e-6 */
+  int max_augment;  /* augmentations per position, 30 */
+  double *lam;      /* [face_count * (quad + 1)^2] contact pressure multipliers [Pa] */
+  double *last_p;   /* the pressure of the last assembly at each point [Pa] */
+  int face_count;
+  int (*face)[4];   /* outward-oriented quads the sphere may touch */
+  /* from the last assembly */
+  double force[3];  /* force of the phantom on the finger [N] */
+  double min_gap;   /* smallest gap over the Gauss points and face nodes [m] (< 0: penetration) */
+  double max_pressure; /* [Pa] */
+  int active;       /* points in contact */
+  long augmentations; /* multiplier updates so far */
+} palp_fem_finger;
+
+/* faces NULL: every outer surface face of the mesh (palp_fem_surface_faces).
+ * radius <= 0 and penalty <= 0 take the defaults. */
+int palp_fem_finger_init(palp_fem_finger *f, const palp_fem_mesh *mesh, const int (*faces)[4], int face_count,
+                         double radius, double penalty);
+void palp_fem_finger_destroy(palp_fem_finger *f);
+/* Installs the contact as the model's extra assembly term. */
+void palp_fem_finger_attach(palp_fem_finger *f, palp_fem_model *m);
+
+/* Quasi-static press by position: for each centre in turn, the static equilibrium
+ * of the relaxed solid (dt = INFINITY: the long-term modulus) with the sphere there,
+ * augmented (lambda <- max(0, lambda - eps g), re-solved) until no point penetrates
+ * more than gap_tol or max_augment updates were made.
+ * A centre whose solve fails is approached in halved sub-steps (up to 6 levels).
+ * force[k] (may be NULL) gets the force on the finger [N], min_gap[k] the smallest gap. */
+int palp_fem_finger_press(palp_fem_model *m, palp_fem_finger *f, const double (*centers)[3], int count,
+                          double (*force)[3], double *min_gap);
+
+/* Lesions as stiffer gel: scale[e] = 1 + phi_e (s - 1) for gel elements, phi_e the
+ * volume fraction of element e inside the lesion sphere (sampled at 6^3 points of
+ * the reference element); membrane elements stay 1. scale has element_count entries.
+ * Returns the number of elements touched. */
+int palp_fem_lesion_scale(const palp_fem_mesh *mesh, const palp_lesion *lesions, int count, double *scale);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,43 @@
+#!/bin/sh
+# issue 13 over real DDS and a real SQLite file: palp-server hosts the test exercise
+# (tests/assess/exercise_expert.json: two 10 mm lesions 10 mm deep on the stiff TEST
+# phantom) with a session log; palp-client's scripted novice (--input sim:novice: five
+# light presses at random places, one mark at the last) palpates it by position; then
+# assess_log runs palp_assess on the server's log (samples and findings through the
+# readers): medium coverage < 30 %, a lesion missed. Domain 62.
+# The scripted expert (--input sim:expert) plays ~165 s in real time; asserted: every
+# lesion, no false positive, medium coverage >= 95 %, vertical strip. It runs alone
+# (RUN_SERIAL): at load averages of 17-40 from other programs 11-14 % of its station's
+# haptic ticks were late (worst ~350 ms), the device point jumped, and the lump rule read
+# the force spikes as 8-13 false lumps; on a quiet machine it found 2/2 with none false
+# (medium coverage 1.000, vertical strip, score 99.4). PALP_TEST_EXPERT=0 leaves it out
+# when running by hand.
+set -u
+server=$1 client=$2 assess=$3 config_dir=$4 test_dir=$5
+export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
+tmp=$(mktemp -d)
+spid=
+trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
+cat > "$tmp/server.json" <<JSON
+{ "domain_id": 62, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
+  "dds_config": "$config_dir/cyclonedds-loopback.xml",
+  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
+  "exercises": [ { "id": 7, "file": "$test_dir/exercise_expert.json", "physics_rate_hz": 250 } ] }
+JSON
+"$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
+spid=$!
+fail=0
+"$client" --role trainee --domain 62 --phantom 7 --name nina --timeout 10 --print-period 0 --input sim:novice \
+  > "$tmp/nina.log" 2>&1 || { echo "FAIL the novice's station:"; cat "$tmp/nina.log"; fail=1; }
+if [ "${PALP_TEST_EXPERT:-1}" = 1 ]; then
+  "$client" --role trainee --domain 62 --phantom 7 --name eve --timeout 10 --print-period 0 --input sim:expert \
+    > "$tmp/eve.log" 2>&1 || { echo "FAIL the expert's station:"; cat "$tmp/eve.log"; fail=1; }
+fi
+kill $spid; wait $spid; spid=
+grep -E "mark|finding" "$tmp/nina.log"
+"$assess" "$tmp/log.db" nina novice || fail=1
+if [ "${PALP_TEST_EXPERT:-1}" = 1 ]; then
+  grep -E "mark|finding|scripted" "$tmp/eve.log"
+  "$assess" "$tmp/log.db" eve expert || fail=1
+fi
+exit $fail

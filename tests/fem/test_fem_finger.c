@@ -1,0 +1,245 @@
+/*
+ * test_fem_finger.c - the rigid fingertip and the lesions in the FE reference
+ * (src/fem/fem_finger.c, docs/fem.md "The finger"):
+ *   hertz     a sphere pressed into a thick block agrees with Hertz at small depth
+ *   penalty   the force does not depend on the penalty (10x apart) beyond 1%
+ *             (augmented Lagrangian: both converge to the same gap tolerance)
+ *   gap       pressing the dome (level 2), no sample point or node penetrates beyond 1.5 um
+ *   lesion    a stiff inclusion under the pole raises the fingertip force
+ */
+#include <time.h>
+
+#include "fem_finger.h"
+#include "fem_test.h"
+
+static double now(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Graded 1-D coordinates on [0, L]: `nu` cells of h, then cells growing by `g` to L. */
+static int grade(double h, int nu, double g, double L, double *x) {
+  int n = 0;
+  x[n++] = 0.0;
+  for (int i = 0; i < nu; ++i, ++n) x[n] = x[n - 1] + h;
+  double c = h;
+  while (x[n - 1] < L - 1e-12) {
+    c *= g;
+    x[n] = fmin(L, x[n - 1] + c);
+    if (L - x[n] < 0.5 * c * g) x[n] = L;
+    ++n;
+  }
+  return n - 1; /* cells */
+}
+
+/* Quarter block [0, L]^2 x [0, L] (top at z = L), symmetry on x = 0 and y = 0,
+ * clamped bottom; the sphere is pressed at the corner (0, 0, L). */
+typedef struct hertz_case {
+  palp_fem_mesh mesh;
+  palp_fem_model model;
+  palp_fem_finger finger;
+  double L;
+} hertz_case;
+
+static int hertz_setup(hertz_case *hc, double mu, double nu, double penalty) {
+  double xs[64], zs[64];
+  const double L = 0.02;
+  const int n = grade(0.25e-3, 7, 1.7, L, xs);
+  const int nz = grade(0.25e-3, 7, 1.7, L, zs);
+  hc->L = L;
+  block_mesh(&hc->mesh, n, n, nz, 0.0);
+  palp_fem_mesh *m = &hc->mesh;
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        double *x = m->x[(k * (n + 1) + j) * (n + 1) + i];
+        x[0] = xs[i], x[1] = xs[j], x[2] = L - zs[nz - k];
+        m->fixed[(k * (n + 1) + j) * (n + 1) + i] = k == 0;
+      }
+  const double K = 2.0 * mu * (1 + nu) / (3 * (1 - 2 * nu));
+  palp_fem_config cfg = elastic_config(0.5 * mu, 2.0 / K);
+  cfg.threads = 1;
+  if (palp_fem_model_create(&hc->model, m, &cfg)) return -1;
+  for (int v = 0; v < m->node_count; ++v) {
+    if (m->fixed[v]) continue;
+    if (m->x[v][0] == 0.0) palp_fem_model_prescribe(&hc->model, v, 0, 0.0);
+    if (m->x[v][1] == 0.0) palp_fem_model_prescribe(&hc->model, v, 1, 0.0);
+  }
+  if (palp_fem_model_finalize(&hc->model)) return -1;
+  /* the top faces only: the symmetry planes are interior to the whole block */
+  int(*faces)[4] = malloc(sizeof *faces * (size_t)(n * n));
+  int nf = 0;
+  for (int e = 0; e < m->element_count; ++e)
+    if (e >= (nz - 1) * n * n) {
+      const int *h = m->hex[e];
+      faces[nf][0] = h[4], faces[nf][1] = h[5], faces[nf][2] = h[6], faces[nf][3] = h[7];
+      ++nf;
+    }
+  const int rc = palp_fem_finger_init(&hc->finger, m, (const int(*)[4])faces, nf, 0.008, penalty);
+  free(faces);
+  if (rc) return -1;
+  palp_fem_finger_attach(&hc->finger, &hc->model);
+  printf("quarter block %.0f mm, %d x %d x %d hexahedra (%d DOFs), 0.25 mm cells under the sphere\n", L * 1e3, n, n,
+         nz, hc->model.nfree);
+  return 0;
+}
+
+static void hertz_destroy(hertz_case *hc) {
+  palp_fem_finger_destroy(&hc->finger);
+  palp_fem_model_destroy(&hc->model);
+  free(hc->mesh.x), free(hc->mesh.hex), free(hc->mesh.region), free(hc->mesh.fixed);
+}
+
+/* Presses to the depths d[] (from first touch); force[k] the quarter model's force x 4. */
+static int hertz_press(hertz_case *hc, const double *d, int count, double *F, double *gap) {
+  double c[8][3];
+  for (int k = 0; k < count; ++k) c[k][0] = 0, c[k][1] = 0, c[k][2] = hc->L + hc->finger.radius - d[k];
+  hc->finger.center[0] = 0, hc->finger.center[1] = 0, hc->finger.center[2] = hc->L + hc->finger.radius;
+  double f3[8][3];
+  const int rc = palp_fem_finger_press(&hc->model, &hc->finger, (const double(*)[3])c, count, f3, gap);
+  for (int k = 0; k < count; ++k) F[k] = 4.0 * f3[k][2];
+  return rc;
+}
+
+static void test_hertz(void) {
+  const double mu = 2e4, nu = 0.3, R = 0.008;
+  const double Es = 2.0 * mu / (1.0 - nu); /* E / (1 - nu^2) with E = 2 mu (1 + nu) */
+  hertz_case hc;
+  const double t0 = now();
+  CHECK(hertz_setup(&hc, mu, nu, 0.0) == 0, "block setup");
+  const double d[2] = {0.1e-3, 0.3e-3};
+  double F[2], gap[2];
+  const int rc = hertz_press(&hc, d, 2, F, gap);
+  CHECK(rc == 0, "press: %s", hc.model.err);
+  /* Hertz on a layer of thickness h bonded to a rigid base (the block's clamped
+   * bottom): Dimitriadis et al. 2002 (Biophys. J. 82:2798), chi = sqrt(R d) / h,
+   *   F = F_Hertz [1 - 2 a0 / pi chi + 4 a0^2 / pi^2 chi^2 - 8 / pi^3 (a0^3 + 4 pi^2 b0 / 15) chi^3],
+   *   a0 = -(1.2876 - 1.4678 nu + 1.3442 nu^2) / (1 - nu), b0 = (0.6387 - 1.0277 nu + 1.5164 nu^2) / (1 - nu). */
+  const double a0 = -(1.2876 - 1.4678 * nu + 1.3442 * nu * nu) / (1 - nu);
+  const double b0 = (0.6387 - 1.0277 * nu + 1.5164 * nu * nu) / (1 - nu);
+  for (int k = 0; k < 2 && rc == 0; ++k) {
+    const double Fh = 4.0 / 3.0 * Es * sqrt(R) * pow(d[k], 1.5), a = sqrt(R * d[k]), chi = a / hc.L;
+    const double corr = 1 - 2 * a0 / PALP_FEM_PI * chi + 4 * a0 * a0 / (PALP_FEM_PI * PALP_FEM_PI) * chi * chi -
+                        8 / pow(PALP_FEM_PI, 3) * (a0 * a0 * a0 + 4 * PALP_FEM_PI * PALP_FEM_PI * b0 / 15) * chi * chi * chi;
+    printf("depth %.2f mm (contact radius %.2f mm, chi %.3f): FE %.5f N, Hertz %.5f N (%+.2f%%), bonded layer %.5f N "
+           "(%+.2f%%), min gap %.2g m\n",
+           d[k] * 1e3, a * 1e3, chi, F[k], Fh, 100 * (F[k] / Fh - 1), Fh * corr, 100 * (F[k] / (Fh * corr) - 1), gap[k]);
+    /* 4%: linear hexes of 0.25 mm over a contact radius of 0.9-1.5 mm, and the
+     * block's free sides at 20 mm (the layer solution is laterally infinite) */
+    CHECK(fabs(F[k] / (Fh * corr) - 1) <= 0.04, "bonded-layer Hertz within 4%% at %.2f mm: %.5f vs %.5f N",
+          d[k] * 1e3, F[k], Fh * corr);
+  }
+  /* the exponent: F ~ d^1.5 between 0.1 and 0.3 mm */
+  if (rc == 0) {
+    const double ex = log(F[1] / F[0]) / log(3.0);
+    printf("force exponent 0.1-0.3 mm: %.3f (Hertz 1.5); %.1f s\n", ex, now() - t0);
+    CHECK(fabs(ex - 1.5) <= 0.06, "exponent %.3f within 0.05 of 1.5", ex);
+  }
+  hertz_destroy(&hc);
+}
+
+static void test_penalty(void) {
+  const double d[2] = {0.1e-3, 0.2e-3};
+  double F[2][2], gap[2];
+  const double eps[2] = {1e10, 1e11};
+  for (int i = 0; i < 2; ++i) {
+    hertz_case hc;
+    CHECK(hertz_setup(&hc, 2e4, 0.3, eps[i]) == 0, "block setup");
+    CHECK(hertz_press(&hc, d, 2, F[i], gap) == 0, "press at penalty %g: %s", eps[i], hc.model.err);
+    printf("penalty %.0e N/m^3: %.5f N at 0.2 mm; min gap %.3g m; %ld Newton iterations\n", eps[i], F[i][1], gap[1],
+           hc.model.newton_iterations);
+    hertz_destroy(&hc);
+  }
+  for (int k = 1; k < 2; ++k) {
+    printf("  10x penalty changes the force by %+.3f%%\n", 100 * (F[1][k] / F[0][k] - 1));
+    CHECK(fabs(F[1][k] / F[0][k] - 1) <= 0.01, "penalty 1e10 vs 1e11 within 1%%: %.5f vs %.5f N", F[0][k], F[1][k]);
+  }
+}
+
+/* The dome (level 1, long-term paper material), pressed at the pole to `depth`
+ * in `steps` steps, optionally over lesions. */
+static int dome_press(int level, const palp_lesion *les, int nles, const double *depth, int count, double *F,
+                      double *gap, double *pmax) {
+  palp_fem_config cfg = palp_fem_default_config();
+  cfg.c10_reading = PALP_FEM_C10_LONG_TERM;
+  cfg.mesh.level = level;
+  cfg.max_newton = 25;
+  palp_fem_mesh mesh;
+  if (palp_fem_mesh_create(&cfg.mesh, &mesh)) return -1;
+  palp_fem_model m;
+  if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) return -1;
+  double *scale = malloc(sizeof(double) * (size_t)mesh.element_count);
+  palp_fem_lesion_scale(&mesh, les, nles, scale);
+  m.c10_scale = scale;
+  palp_fem_finger f;
+  palp_fem_finger_init(&f, &mesh, NULL, 0, 0.008, 0.0);
+  palp_fem_finger_attach(&f, &m);
+  const double R = cfg.mesh.radius, r = f.radius;
+  f.center[0] = 0, f.center[1] = 0, f.center[2] = R + r;
+  double(*c)[3] = malloc(sizeof *c * (size_t)count), (*f3)[3] = malloc(sizeof *f3 * (size_t)count);
+  for (int k = 0; k < count; ++k) c[k][0] = 0, c[k][1] = 0, c[k][2] = R + r - depth[k];
+  /* record the peak pressure per step for the gap bound */
+  int rc = 0;
+  for (int k = 0; k < count && !rc; ++k) {
+    rc = palp_fem_finger_press(&m, &f, (const double(*)[3])&c[k], 1, &f3[k], &gap[k]);
+    if (pmax) pmax[k] = f.max_pressure;
+    F[k] = f3[k][2];
+  }
+  if (rc) fprintf(stderr, "dome press: %s\n", m.err);
+  printf("level %d: %ld Newton iterations over %ld solves\n", level, m.newton_iterations, m.steps);
+  free(c), free(f3), free(scale);
+  palp_fem_finger_destroy(&f);
+  palp_fem_model_destroy(&m);
+  palp_fem_mesh_destroy(&mesh);
+  return rc;
+}
+
+static void test_gap(void) {
+  const double d[2] = {1e-3, 2e-3};
+  double F[2], gap[2], pm[2];
+  const double t0 = now();
+  CHECK(dome_press(2, NULL, 0, d, 2, F, gap, pm) == 0, "dome press");
+  for (int k = 0; k < 2; ++k) {
+    /* the augmented Lagrangian's target is 1 um at every sample point and node;
+     * 1.5 um leaves room for the last update's round-off */
+    const double tol = 1.5e-6;
+    printf("pole %.1f mm: %.3f N, peak pressure %.0f Pa, min gap %.3g m (tolerance -%.2g m)\n", d[k] * 1e3, F[k],
+           pm[k], gap[k], tol);
+    CHECK(gap[k] >= -tol, "no penetration beyond %.3g m at %.1f mm (min gap %.3g m)", tol, d[k] * 1e3, gap[k]);
+    CHECK(F[k] > 0.0 && (k == 0 || F[k] > F[k - 1]), "force positive and rising with depth");
+  }
+  printf("%.1f s\n", now() - t0);
+}
+
+static void test_lesion(int level) {
+  /* the case: a 10 mm lesion, 5x the gel, centre 10 mm deep; and a soft one */
+  const double d[1] = {1e-3};
+  const palp_lesion L = {.center = {0, 0, 0.04 - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
+  palp_lesion cyst = L;
+  cyst.stiffness_ratio = 0.2;
+  double F0[1], F1[1], F2[1], gap[1];
+  CHECK(dome_press(level, NULL, 0, d, 1, F0, gap, NULL) == 0, "dome press");
+  CHECK(dome_press(level, &L, 1, d, 1, F1, gap, NULL) == 0, "dome press over a lesion");
+  CHECK(dome_press(level, &cyst, 1, d, 1, F2, gap, NULL) == 0, "dome press over a cyst");
+  printf("pole 1 mm: %.4f N plain, %.4f N over a 10 mm lesion (5x) 10 mm deep (%+.1f%%), %.4f N over a cyst (0.2x, "
+         "%+.1f%%)\n",
+         F0[0], F1[0], 100 * (F1[0] / F0[0] - 1), F2[0], 100 * (F2[0] / F0[0] - 1));
+  /* level 2 measured +5.1% (docs/fem.md); 2% is well clear of the solver's 1e-4 */
+  CHECK(F1[0] > 1.02 * F0[0], "a stiff lesion raises the force by more than 2%%");
+  CHECK(F2[0] < F0[0], "a soft cyst lowers it");
+}
+
+int main(int argc, char **argv) {
+  const char *c = argc > 1 ? argv[1] : "hertz";
+  if (!strcmp(c, "hertz")) test_hertz();
+  else if (!strcmp(c, "penalty")) test_penalty();
+  else if (!strcmp(c, "gap")) test_gap();
+  else if (!strcmp(c, "lesion")) test_lesion(argc > 2 ? atoi(argv[2]) : 2); /* CTest: level 2; docs: 3 */
+  else {
+    fprintf(stderr, "unknown case %s\n", c);
+    return 2;
+  }
+  if (fem_failures) fprintf(stderr, "%d failure(s)\n", fem_failures);
+  return fem_failures ? 1 : 0;
+}

@@ -1,0 +1,580 @@
+/*
+ * test_findings.c - issue 13 over real DDS and a real SQLite file (domain 60):
+ *  - a server hosting an exercise (tests/server/exercise_wire.json: two lesions hidden in
+ *    tests/assess/phantom_stiff.json) publishes its title, instructions and limits, and
+ *    nothing a trainee can read carries a lesion: a spy participant subscribed to every
+ *    topic and partition a trainee may read captures every sample's serialized bytes and
+ *    finds no lesion centre coordinate, radius or depth (as the IEEE double at any byte
+ *    offset), no Vec3 within 1e-6 m of a centre and no exercise JSON text, while the
+ *    server's log has the lesions;
+ *  - findings: mark / withdraw accepted and logged with the world's frame and time; a
+ *    forged session id, a NaN point, a point off the phantom, the withdrawal of an
+ *    unknown mark, a flood of 1,000 marks and the 65th mark each refused with a reason
+ *    (logged as events); another session keeps stepping during the flood;
+ *  - finger samples of the position-driven fingertip are logged at assess_sample_hz;
+ *  - an exercise's time limit ends its session ("exercise time limit reached", end
+ *    reason normal in the log, the station told in the state's reason).
+ */
+#define _GNU_SOURCE
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <dds/dds.h>
+/* Cyclone's serdata header (for the serialized bytes: ddsi_serdata_to_ser) uses GNU
+ * `asm` in its inline atomics, which strict C17 does not know by that name. */
+#define asm __asm__
+#include <dds/ddsi/ddsi_serdata.h>
+#undef asm
+
+#include "db_log.h"
+#include "harness.h"
+#include "palp_assess.h"
+#include "palp_db.h"
+
+#define DOMAIN 60
+#define EX_WIRE 7
+#define EX_SHORT 8
+#define PI 3.14159265358979323846
+
+/* ---- the secrets: what must never reach a trainee ------------------------------ */
+static double secret[64];
+static int nsecret;
+static palp_vec3 centre[PALP_MAX_LESIONS];
+static int ncentre;
+
+static void add_secret(double v) {
+  secret[nsecret++] = v;
+}
+
+/* ---- the spy: every topic and partition a trainee may read ---------------------- */
+#define SPY_MAX 32
+typedef struct spy {
+  dds_entity_t pp, sub_default, sub_session;
+  dds_entity_t topic[PALP_TOPIC_COUNT];
+  dds_entity_t r[SPY_MAX];
+  int kind[SPY_MAX];
+  int n;
+  pthread_mutex_t mu;
+  uint64_t samples[PALP_TOPIC_COUNT];
+  uint64_t bytes;
+  int leaks;
+  char leak[256];
+  atomic_int stop;
+  pthread_t thread;
+} spy;
+
+static void spy_reader(spy *s, dds_entity_t sub, palp_dds_topic_kind k) {
+  pthread_mutex_lock(&s->mu);
+  s->r[s->n] = palp_dds_create_reader(sub, s->topic[k], k);
+  REQUIRE(s->r[s->n] > 0, "spy reader on %s", palp_dds_topic_name(k));
+  s->kind[s->n++] = (int)k;
+  pthread_mutex_unlock(&s->mu);
+}
+
+static void scan(spy *s, int kind, const unsigned char *b, size_t n) {
+  s->bytes += n;
+  for (size_t k = 0; k + 8 <= n; k++)
+    for (int j = 0; j < nsecret; j++)
+      if (memcmp(b + k, &secret[j], 8) == 0 && !s->leaks++)
+        snprintf(s->leak, sizeof s->leak, "%s: the double %.17g at byte %zu", palp_dds_topic_name(kind), secret[j], k);
+  /* Vec3 fields: XCDR1 aligns doubles to 8 after the 4-byte encapsulation header; a
+   * stride of 4 covers either alignment. */
+  for (size_t k = 4; k + 24 <= n; k += 4) {
+    double v[3];
+    memcpy(v, b + k, sizeof v);
+    for (int j = 0; j < ncentre; j++)
+      if (fabs(v[0] - centre[j].x) < 1e-6 && fabs(v[1] - centre[j].y) < 1e-6 && fabs(v[2] - centre[j].z) < 1e-6 &&
+          !s->leaks++)
+        snprintf(s->leak, sizeof s->leak, "%s: a Vec3 within 1e-6 m of lesion %d's centre at byte %zu",
+                 palp_dds_topic_name(kind), j, k);
+  }
+  static const char *const text[] = {"lesion", "polar_deg", "stiffness_ratio", "depth_mm"};
+  for (int j = 0; j < 4; j++)
+    if (memmem(b, n, text[j], strlen(text[j])) && !s->leaks++)
+      snprintf(s->leak, sizeof s->leak, "%s: the text \"%s\"", palp_dds_topic_name(kind), text[j]);
+}
+
+static void spy_poll(spy *s) {
+  pthread_mutex_lock(&s->mu);
+  for (int i = 0; i < s->n; i++) {
+    struct ddsi_serdata *sd[16];
+    dds_sample_info_t si[16];
+    int got;
+    while ((got = dds_takecdr(s->r[i], sd, 16, si, DDS_ANY_STATE)) > 0) {
+      for (int k = 0; k < got; k++) {
+        const uint32_t sz = ddsi_serdata_size(sd[k]);
+        unsigned char *buf = malloc(sz ? sz : 1);
+        if (buf) {
+          ddsi_serdata_to_ser(sd[k], 0, sz, buf);
+          scan(s, s->kind[i], buf, sz);
+          free(buf);
+        }
+        if (si[k].valid_data) s->samples[s->kind[i]]++;
+        ddsi_serdata_unref(sd[k]);
+      }
+      if (got < 16) break;
+    }
+  }
+  pthread_mutex_unlock(&s->mu);
+}
+
+static void *spy_main(void *arg) {
+  spy *s = arg;
+  while (!atomic_load(&s->stop)) {
+    spy_poll(s);
+    test_sleep(0.003);
+  }
+  spy_poll(s);
+  return NULL;
+}
+
+static void spy_start(spy *s) {
+  memset(s, 0, sizeof *s);
+  pthread_mutex_init(&s->mu, NULL);
+  s->pp = dds_create_participant(DOMAIN, NULL, NULL);
+  REQUIRE(s->pp > 0, "spy participant");
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) s->topic[k] = palp_dds_create_topic(s->pp, (palp_dds_topic_kind)k);
+  s->sub_default = dds_create_subscriber(s->pp, NULL, NULL);
+  /* What a trainee's permissions let it read in the default partition (make-classroom-pki.sh). */
+  const palp_dds_topic_kind global[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_SESSION_REPLY, PALP_TOPIC_SESSION_STATE,
+                                        PALP_TOPIC_SERVER_STATUS, PALP_TOPIC_SERVER_GUARD,
+                                        PALP_TOPIC_SERVER_IDENTITY, PALP_TOPIC_EXERCISE};
+  for (size_t i = 0; i < sizeof global / sizeof global[0]; i++) spy_reader(s, s->sub_default, global[i]);
+  REQUIRE(pthread_create(&s->thread, NULL, spy_main, s) == 0, "spy thread");
+}
+
+/* ... and in its own session partition. */
+static void spy_session(spy *s, const char *partition) {
+  s->sub_session = palp_dds_session_subscriber(s->pp, partition);
+  const palp_dds_topic_kind sess[] = {PALP_TOPIC_CONTACT,     PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
+                                      PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINDING,  PALP_TOPIC_FINDING_STATUS};
+  for (size_t i = 0; i < sizeof sess / sizeof sess[0]; i++) spy_reader(s, s->sub_session, sess[i]);
+}
+
+/* ---- findings over DDS ------------------------------------------------------------ */
+typedef struct trainee_findings {
+  dds_entity_t w, r;
+  uint32_t session_id;
+} trainee_findings;
+
+static void send_finding(trainee_findings *t, int op, uint32_t mark, uint32_t session, palp_vec3 p) {
+  palp_Finding f;
+  memset(&f, 0, sizeof f);
+  f.session_id = session;
+  f.mark_id = mark;
+  f.op = (palp_FindingOp)op;
+  f.point = (palp_Vec3){p.x, p.y, p.z};
+  f.time = 0;
+  dds_write(t->w, &f);
+}
+
+/* The status answering `mark` (the newest one), within `wait` [s]; 1 when it came. */
+static int wait_status(trainee_findings *t, uint32_t mark, double wait, palp_FindingStatus *out) {
+  const int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  int got = 0;
+  while (palp_dds_now_ns() < end) {
+    palp_FindingStatus st;
+    memset(&st, 0, sizeof st);
+    void *ptr[1] = {&st};
+    dds_sample_info_t info;
+    while (dds_take(t->r, ptr, &info, 1, 1) > 0)
+      if (info.valid_data && st.last_mark_id == mark) *out = st, got = 1;
+    if (got) return 1;
+    test_sleep(0.005);
+  }
+  return 0;
+}
+
+static palp_vec3 dome_point(double R, double polar_deg, double az_deg) {
+  const double p = polar_deg * PI / 180, a = az_deg * PI / 180;
+  return (palp_vec3){R * sin(p) * cos(a), R * sin(p) * sin(a), R * cos(p)};
+}
+
+/* A position-driven fingertip at depth d [m] below the surface along the normal at (polar, az). */
+static void send_finger(palp_cli_station *st, double polar, double az, double depth, uint64_t seq) {
+  const double r = 0.008;
+  const palp_vec3 c = dome_point(0.04 + r - depth, polar, az);
+  palp_Contact m;
+  memset(&m, 0, sizeof m);
+  m.session_id = st->session_id;
+  m.finger = 0;
+  m.seq = seq;
+  m.source_time_ns = palp_dds_now_ns();
+  m.mode = palp_CONTACT_FINGER;
+  m.distribution = 1;
+  m.vertex = -1;
+  m.center = (palp_Vec3){c.x, c.y, c.z};
+  m.radius = r;
+  dds_write(st->contact_w, &m);
+}
+
+/* The newest feedback frame of a station within wait [s], or -1. */
+static int64_t latest_frame(palp_cli_station *st, double wait) {
+  const int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  int64_t frame = -1;
+  while (palp_dds_now_ns() < end) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(st->feedback_r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data) frame = (int64_t)((const palp_Feedback *)ptr[0])->frame;
+      dds_return_loan(st->feedback_r, ptr, 1);
+    }
+    if (frame >= 0) return frame;
+    test_sleep(0.005);
+  }
+  return frame;
+}
+
+/* ---- the log ------------------------------------------------------------------------- */
+typedef struct log_findings {
+  int marks, withdrawals, bad_order;
+  int64_t last_frame;
+  palp_db_finding first;
+} log_findings;
+
+static int on_log_finding(void *user, const palp_db_finding *f) {
+  log_findings *l = user;
+  if (l->marks + l->withdrawals == 0) l->first = *f;
+  if (f->frame < l->last_frame) l->bad_order++;
+  l->last_frame = f->frame;
+  if (f->op == PALP_DB_FINDING_MARK) l->marks++;
+  if (f->op == PALP_DB_FINDING_WITHDRAW) l->withdrawals++;
+  return 0;
+}
+
+typedef struct log_samples {
+  int n, touching, with_triangles, bad_radius;
+  int64_t first_frame, last_frame, min_gap, max_gap, prev;
+} log_samples;
+
+static int on_log_sample(void *user, const palp_db_finger_sample *s) {
+  log_samples *l = user;
+  if (l->n == 0) l->first_frame = s->frame, l->min_gap = INT64_MAX;
+  else {
+    const int64_t g = s->frame - l->prev;
+    if (g < l->min_gap) l->min_gap = g;
+    if (g > l->max_gap) l->max_gap = g;
+  }
+  l->prev = l->last_frame = s->frame;
+  l->n++;
+  l->touching += s->in_contact;
+  l->with_triangles += s->triangle_count > 0;
+  l->bad_radius += fabs(s->radius_m - 0.008) > 1e-12;
+  return 0;
+}
+
+typedef struct log_events {
+  int forged, nan, unknown, off, flood, cap;
+} log_events;
+
+static int on_log_event(void *user, double wall, int64_t frame, const char *kind, const char *detail,
+                        int64_t count) {
+  (void)wall, (void)frame, (void)kind;
+  log_events *l = user;
+  if (!detail || !strstr(detail, "finding")) return 0;
+  if (strstr(detail, "names session")) l->forged++;
+  if (strstr(detail, "not finite")) l->nan++;
+  if (strstr(detail, "not standing")) l->unknown++;
+  if (strstr(detail, "not on the phantom")) l->off++;
+  if (strstr(detail, "too many findings") || strstr(detail, "not logged one by one")) l->flood += (int)count;
+  if (strstr(detail, "at most 64")) l->cap++;
+  return 0;
+}
+
+int main(void) {
+  test_init();
+  const int64_t t_start = palp_dds_now_ns();
+  /* The secrets, as the server computes them from the exercise file. */
+  palp_exercise ex;
+  char err[512];
+  REQUIRE(palp_exercise_load(PALP_TEST_DIR "/exercise_wire.json", &ex, err, sizeof err) == 0, "exercise: %s", err);
+  palp_lesion les[PALP_MAX_LESIONS];
+  ncentre = palp_exercise_lesions(&ex, 0.04, les, PALP_MAX_LESIONS, err, sizeof err);
+  REQUIRE(ncentre == 2, "two lesions (%s)", err);
+  for (int i = 0; i < ncentre; i++) {
+    centre[i] = les[i].center;
+    add_secret(les[i].center.x), add_secret(les[i].center.y), add_secret(les[i].center.z);
+    add_secret(les[i].radius);
+    add_secret(ex.lesion[i].depth), add_secret(ex.lesion[i].diameter);
+    add_secret(ex.lesion[i].polar), add_secret(ex.lesion[i].azimuth);
+  }
+
+  { /* The scan itself finds a leak when there is one: a Vec3 at the centre, and a radius. */
+    spy ctl;
+    memset(&ctl, 0, sizeof ctl);
+    unsigned char buf[64] = {0};
+    const double v[3] = {centre[1].x, centre[1].y, centre[1].z};
+    memcpy(buf + 12, v, sizeof v);
+    scan(&ctl, PALP_TOPIC_LOCAL_MODEL, buf, sizeof buf);
+    const int vec = ctl.leaks;
+    memset(buf, 0, sizeof buf);
+    memcpy(buf + 21, &les[0].radius, 8);
+    ctl.leaks = 0;
+    scan(&ctl, PALP_TOPIC_LOCAL_MODEL, buf, sizeof buf);
+    CHECK(vec > 0 && ctl.leaks > 0, "control: the scan catches a planted centre (%d hits) and radius (%d)", vec,
+          ctl.leaks);
+  }
+  char cwd[512], db_path[700];
+  REQUIRE(getcwd(cwd, sizeof cwd) != NULL, "cwd");
+  snprintf(db_path, sizeof db_path, "%s/server_findings.db", cwd);
+  unlink(db_path);
+  char json[2048];
+  snprintf(json, sizeof json,
+           "{\"domain_id\": %d, \"tick_rate_hz\": 100, \"tick_threads\": 1, \"max_force\": 20,"
+           " \"phantoms\": [{\"id\": 1, \"name\": \"test dome\", \"scene\": \"paper_step.json\"}],"
+           " \"exercises\": [{\"id\": %d, \"file\": \"%s/exercise_wire.json\", \"physics_rate_hz\": 250},"
+           "                 {\"id\": %d, \"file\": \"%s/exercise_short.json\", \"physics_rate_hz\": 250}]}",
+           DOMAIN, EX_WIRE, PALP_TEST_DIR, EX_SHORT, PALP_TEST_DIR);
+  palp_srv_config cfg;
+  REQUIRE(palp_srv_config_parse(json, PALP_CONFIG_DIR, &cfg, err, sizeof err) == 0, "config: %s", err);
+  CHECK(cfg.phantom_count == 3 && cfg.exercise_count == 2, "config: 1 phantom + 2 exercises hosted");
+  palp_srv_db_log *dbl = NULL;
+  REQUIRE(palp_srv_db_log_open(db_path, 100, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
+  palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
+  int rc = 0;
+  test_server ts = {0};
+  ts.srv = palp_srv_create(&def, &rc, err, sizeof err);
+  REQUIRE(ts.srv != NULL, "server: %s", err);
+  extern void *test_findings_server_main(void *);
+  REQUIRE(pthread_create(&ts.thread, NULL, test_findings_server_main, &ts) == 0, "server thread");
+  ts.running = 1;
+
+  spy sp;
+  spy_start(&sp);
+
+  /* ---- the trainee on the exercise ---- */
+  palp_cli_station a;
+  test_station_join(&a, DOMAIN, "alice", palp_ROLE_TRAINEE, EX_WIRE, 0, 1, 1);
+  spy_session(&sp, a.partition);
+  palp_Phantom ph;
+  REQUIRE(palp_cli_station_catalogue(&a, EX_WIRE, 5, &ph, err, sizeof err) == 0, "catalogue: %s", err);
+  CHECK(strcmp(ph.name, ex.title) == 0, "the exercise's catalogue entry is named by its title (\"%s\")", ph.name);
+  CHECK(ph.rest._length == 338, "and carries the phantom's rest mesh (%u vertices)", ph.rest._length);
+  palp_cli_phantom_free(&ph);
+  {
+    dds_entity_t er = palp_dds_create_reader(a.pp, a.topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
+    palp_Exercise e;
+    int got = 0;
+    for (int k = 0; k < 200 && !got; k++) {
+      memset(&e, 0, sizeof e);
+      void *ptr[1] = {&e};
+      dds_sample_info_t info;
+      while (!got && dds_take(er, ptr, &info, 1, 1) > 0) got = info.valid_data && e.phantom_id == EX_WIRE;
+      if (!got) test_sleep(0.02);
+    }
+    CHECK(got, "the trainee reads palp_exercise for phantom %d", EX_WIRE);
+    CHECK(got && strcmp(e.name, "test-wire") == 0 && strcmp(e.title, ex.title) == 0 &&
+              strcmp(e.instructions, ex.instructions) == 0 && e.time_limit == 120 && e.max_force == 20,
+          "  with its name, title, instructions, time limit 120 s and max force 20 N");
+    CHECK(got && e.bands[1].has_depth && fabs(e.bands[1].depth_min - 0.005) < 1e-12 &&
+              fabs(e.bands[1].depth_max - 0.012) < 1e-12,
+          "  and its pressure bands (medium 5-12 mm)");
+    dds_delete(er);
+  }
+
+  /* ---- a second trainee on a plain phantom, pressing all along ---- */
+  palp_cli_station b;
+  test_station_join(&b, DOMAIN, "bob", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  test_send_force(&b, 0, 1, 0, 0, 2.0, 1);
+
+  /* ---- alice palpates over lesion 1 (position-driven fingertip) ---- */
+  uint64_t seq = 1;
+  for (int k = 0; k <= 60; k++) { /* down to 12 mm over 0.6 s, then hold 0.6 s */
+    send_finger(&a, 31, 41, k <= 30 ? 0.012 * k / 30.0 : 0.012, seq++);
+    test_sleep(0.02);
+  }
+
+  trainee_findings tf = {.session_id = a.session_id};
+  tf.w = palp_dds_create_writer(a.pub, a.topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+  tf.r = palp_dds_create_reader(a.sub, a.topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
+  REQUIRE(tf.w > 0 && tf.r > 0, "finding writer and status reader");
+  test_sleep(0.3); /* matched */
+  palp_FindingStatus st;
+  const palp_vec3 p1 = dome_point(0.04, 31, 41);
+  send_finding(&tf, palp_FINDING_MARK, 1, a.session_id, p1);
+  CHECK(wait_status(&tf, 1, 3, &st) && st.last_accepted && st.marks == 1 && st.reason[0] == 0,
+        "mark 1 accepted (marks %u, reason \"%s\")", st.marks, st.reason);
+  CHECK(st.time_left > 100 && st.time_left <= 120, "status: %.1f s left of the 120 s limit", st.time_left);
+  send_finding(&tf, palp_FINDING_MARK, 2, a.session_id, dome_point(0.04, 0, 0));
+  CHECK(wait_status(&tf, 2, 3, &st) && st.last_accepted && st.marks == 2, "mark 2 accepted (marks %u)", st.marks);
+  send_finding(&tf, palp_FINDING_WITHDRAW, 2, a.session_id, (palp_vec3){0, 0, 0});
+  test_sleep(0.05);
+  CHECK(wait_status(&tf, 2, 3, &st) && st.last_accepted && st.marks == 1, "mark 2 withdrawn (marks %u)", st.marks);
+  send_finding(&tf, palp_FINDING_MARK, 3, a.session_id + 1000, p1);
+  CHECK(wait_status(&tf, 3, 3, &st) && !st.last_accepted && strstr(st.reason, "names session"),
+        "forged session id refused: \"%s\"", st.reason);
+  send_finding(&tf, palp_FINDING_MARK, 4, a.session_id, (palp_vec3){NAN, 0, 0.04});
+  CHECK(wait_status(&tf, 4, 3, &st) && !st.last_accepted && strstr(st.reason, "not finite"),
+        "NaN point refused: \"%s\"", st.reason);
+  send_finding(&tf, palp_FINDING_WITHDRAW, 99, a.session_id, (palp_vec3){0, 0, 0});
+  CHECK(wait_status(&tf, 99, 3, &st) && !st.last_accepted && strstr(st.reason, "not standing"),
+        "withdrawal of an unknown mark refused: \"%s\"", st.reason);
+  send_finding(&tf, palp_FINDING_MARK, 5, a.session_id, (palp_vec3){1, 1, 1});
+  CHECK(wait_status(&tf, 5, 3, &st) && !st.last_accepted && strstr(st.reason, "not on the phantom"),
+        "a point 1.7 m away refused: \"%s\"", st.reason);
+  CHECK(st.marks == 1, "refusals leave the marks standing (%u)", st.marks);
+
+  /* ---- a flood of 1,000 marks; bob's session keeps stepping ---- */
+  test_sleep(1.5); /* the bucket refills */
+  const int64_t f0 = latest_frame(&b, 2);
+  const int64_t t0 = palp_dds_now_ns();
+  int written = 0;
+  for (uint32_t id = 1000; id < 2000; id++) {
+    palp_Finding f = {.session_id = a.session_id, .mark_id = id, .op = palp_FINDING_MARK,
+                      .point = {p1.x, p1.y, p1.z}};
+    written += dds_write(tf.w, &f) == DDS_RETCODE_OK;
+  }
+  CHECK(wait_status(&tf, 1999, 10, &st), "the flood's last mark answered");
+  const double flood_s = (double)(palp_dds_now_ns() - t0) * 1e-9;
+  test_sleep(1.0); /* and a second after it: a backlog would show as missing frames */
+  const int64_t f1 = latest_frame(&b, 2);
+  const double frames = (double)(f1 - f0), expect = 100.0 * (double)(palp_dds_now_ns() - t0) * 1e-9;
+  CHECK(written == 1000, "1,000 marks written (%d) in %.2f s", written, flood_s);
+  CHECK(!st.last_accepted && strstr(st.reason, "too many findings"), "the flood refused: \"%s\"", st.reason);
+  const int flood_accepted = (int)st.marks - 1;
+  CHECK(flood_accepted >= 1 && flood_accepted <= 10 + (int)ceil(5 * flood_s) + 1,
+        "flood: %d accepted (burst 10 + 5/s over %.2f s), %d refused", flood_accepted, flood_s,
+        1000 - flood_accepted);
+  /* The findings are handled on the main thread, not the tick: a flood that held the tick
+   * would show as ~0 frames. 50 %, not more: without SCHED_FIFO on this shared 2-core VM
+   * (load average 20-40 during these runs) 77-99 % was measured, the machine at fault. */
+  CHECK(frames >= 0.5 * expect, "bob's session stepped %.0f frames of %.0f (100 Hz) during the flood and 1 s after",
+        frames, expect);
+
+  /* ---- up to the 64th mark, then the 65th ---- */
+  int made = 2 + flood_accepted, paced_ok = 1;
+  test_sleep(1.0);
+  for (uint32_t id = 3000; made < 64; id++) {
+    send_finding(&tf, palp_FINDING_MARK, id, a.session_id, p1);
+    if (!wait_status(&tf, id, 5, &st) || !st.last_accepted) {
+      paced_ok = 0;
+      fprintf(stderr, "mark %u: %s\n", id, st.reason);
+      break;
+    }
+    made++;
+    test_sleep(0.2);
+  }
+  CHECK(paced_ok && made == 64, "marks up to 64 accepted at 5/s (%d made, %u standing)", made, st.marks);
+  test_sleep(0.25);
+  send_finding(&tf, palp_FINDING_MARK, 5000, a.session_id, p1);
+  CHECK(wait_status(&tf, 5000, 3, &st) && !st.last_accepted && strstr(st.reason, "at most 64"),
+        "the 65th mark refused: \"%s\"", st.reason);
+  CHECK(st.marks == 63, "63 standing (64 made, 1 withdrawn): %u", st.marks);
+
+  /* ---- the time limit ---- */
+  palp_cli_station c;
+  test_station_join(&c, DOMAIN, "carol", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
+  const int64_t tj = palp_dds_now_ns(); /* the join answered: the session is open */
+  char reason[160] = "";
+  int closed = 0;
+  while (!closed && palp_dds_now_ns() - tj < (int64_t)6e9) {
+    closed = palp_cli_station_session_closed(&c, reason, sizeof reason) == 1;
+    if (!closed) test_sleep(0.02);
+  }
+  const double limit_s = (double)(palp_dds_now_ns() - tj) * 1e-9;
+  CHECK(closed && strcmp(reason, "exercise time limit reached") == 0,
+        "the 2 s exercise closed %.2f s after the join was answered: \"%s\"", limit_s, reason);
+  /* Up to 1.5 s late: the main loop checks every 100 ms, and a loaded machine (load average
+   * 20-40 seen here) delays the state's delivery. */
+  CHECK(limit_s >= 1.8 && limit_s <= 3.5, "  within [1.8, 3.5] s of the join");
+  const uint32_t carol_session = c.session_id;
+
+  palp_cli_station_leave(&a);
+  palp_cli_station_leave(&b);
+  test_sleep(0.5);
+  atomic_store(&sp.stop, 1);
+  pthread_join(sp.thread, NULL);
+  const palp_dds_topic_kind must_see[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_EXERCISE,    PALP_TOPIC_SESSION_STATE,
+                                          PALP_TOPIC_SESSION_REPLY, PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FEEDBACK,
+                                          PALP_TOPIC_DEFORMATION, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_FINDING};
+  for (size_t i = 0; i < sizeof must_see / sizeof must_see[0]; i++)
+    CHECK(sp.samples[must_see[i]] > 0, "spy captured %llu samples of %s",
+          (unsigned long long)sp.samples[must_see[i]], palp_dds_topic_name(must_see[i]));
+  CHECK(sp.leaks == 0, "no lesion value in %llu serialized bytes a trainee could read (%d leaks%s%s)",
+        (unsigned long long)sp.bytes, sp.leaks, sp.leaks ? ": " : "", sp.leak);
+  dds_delete(sp.pp);
+
+  test_server_stop(&ts);
+  palp_srv_db_log_close(dbl);
+  palp_cli_station_close(&a);
+  palp_cli_station_close(&b);
+  palp_cli_station_close(&c);
+
+  /* ---- the instructor's log ---- */
+  palp_db *db = NULL;
+  REQUIRE(palp_db_open(db_path, 0, &db, err, sizeof err) == 0, "open the log: %s", err);
+  palp_db_session_info *ss = NULL;
+  int ns = 0;
+  REQUIRE(palp_db_list_sessions(db, NULL, &ss, &ns) == 0 && ns == 3, "three sessions logged (%d)", ns);
+  const palp_db_session_info *sa = NULL, *sb = NULL, *sc = NULL;
+  for (int i = 0; i < ns; i++) {
+    if (strcmp(ss[i].trainee, "alice") == 0) sa = &ss[i];
+    if (strcmp(ss[i].trainee, "bob") == 0) sb = &ss[i];
+    if (strcmp(ss[i].trainee, "carol") == 0) sc = &ss[i];
+  }
+  REQUIRE(sa && sb && sc, "alice's, bob's and carol's sessions");
+  char name[64] = "";
+  char *exj = NULL;
+  CHECK(palp_db_session_exercise(db, sa->id, name, sizeof name, &exj) == 0 && strcmp(name, "test-wire") == 0,
+        "alice's session logs its exercise \"%s\"", name);
+  if (exj) {
+    palp_exercise lx;
+    palp_lesion ll[PALP_MAX_LESIONS];
+    int n = palp_exercise_parse(exj, PALP_TEST_DIR, &lx, err, sizeof err) == 0
+                ? palp_exercise_lesions(&lx, 0.04, ll, PALP_MAX_LESIONS, err, sizeof err)
+                : -1;
+    /* Independently: centre = (R - depth) n(polar, azimuth), radius = diameter / 2. */
+    const double want[2][4] = {{31, 41, 10.3e-3, 9.7e-3}, {52, 217, 11.1e-3, 10.6e-3}};
+    int ok = n == 2;
+    for (int i = 0; ok && i < 2; i++) {
+      const palp_vec3 cw = dome_point(0.04 - want[i][2], want[i][0], want[i][1]);
+      ok = fabs(ll[i].center.x - cw.x) < 1e-9 && fabs(ll[i].center.y - cw.y) < 1e-9 &&
+           fabs(ll[i].center.z - cw.z) < 1e-9 && fabs(ll[i].radius - want[i][3] / 2) < 1e-12;
+    }
+    CHECK(ok, "  the log has both lesions (centres within 1e-9 m of (R - depth) n, radii exact)");
+    free(exj);
+  }
+  char *scene = NULL, *params = NULL;
+  CHECK(palp_db_session_json(db, sa->id, &scene, &params) == 0 && scene && strstr(scene, "lesion"),
+        "  its scene_json includes the lesions");
+  free(scene), free(params);
+  CHECK(palp_db_session_exercise(db, sb->id, name, sizeof name, &exj) == PALP_DB_ENOTFOUND,
+        "bob's free practice has no exercise");
+  log_findings lf = {0};
+  palp_db_each_finding(db, sa->id, on_log_finding, &lf);
+  CHECK(lf.marks == 64 && lf.withdrawals == 1, "the log has the 64 accepted marks and 1 withdrawal (%d, %d)",
+        lf.marks, lf.withdrawals);
+  CHECK(lf.first.mark_id == 1 && lf.first.point_m.x == p1.x && lf.first.point_m.y == p1.y &&
+            lf.first.point_m.z == p1.z && lf.first.frame > 0 && lf.first.sim_time_s > 0,
+        "  mark 1 at the point sent, frame %lld, t %.3f s", (long long)lf.first.frame, lf.first.sim_time_s);
+  CHECK(lf.bad_order == 0, "  in frame order");
+  log_events le = {0};
+  palp_db_each_event(db, sa->id, on_log_event, &le);
+  CHECK(le.forged == 1 && le.nan == 1 && le.unknown == 1 && le.off == 1 && le.cap == 1,
+        "refusals logged as events: forged %d, NaN %d, unknown %d, off %d, 65th %d", le.forged, le.nan, le.unknown,
+        le.off, le.cap);
+  CHECK(le.flood >= 1000 - flood_accepted - 1 && le.flood <= 1000 - flood_accepted,
+        "  the flood's %d refusals (one by one, then counted): %d", 1000 - flood_accepted, le.flood);
+  log_samples ls = {0};
+  palp_db_each_finger_sample(db, sa->id, on_log_sample, &ls);
+  /* 250 Hz physics, assess_sample_hz 100: every lround(2.5) = 3rd frame. */
+  CHECK(ls.n > 100 && ls.min_gap == 3 && ls.max_gap == 3, "finger samples: %d, every %lld..%lld frames", ls.n,
+        (long long)ls.min_gap, (long long)ls.max_gap);
+  CHECK(ls.touching > 50 && ls.with_triangles > 50 && ls.bad_radius == 0,
+        "  %d touching, %d with their triangles, fingertip radius 8 mm", ls.touching, ls.with_triangles);
+  CHECK(strcmp(sc->end_reason, "normal") == 0 && strcmp(sc->end_detail, "exercise time limit reached") == 0,
+        "carol's session (%u) ended %s: \"%s\"", carol_session, sc->end_reason, sc->end_detail);
+  free(ss);
+  palp_db_close(db);
+  fprintf(stderr, "server_findings: %.1f s\n", (double)(palp_dds_now_ns() - t_start) * 1e-9);
+  return palp_test_failures ? 1 : 0;
+}
+
+void *test_findings_server_main(void *arg) {
+  test_server *ts = arg;
+  palp_srv_run(ts->srv, 0);
+  return NULL;
+}

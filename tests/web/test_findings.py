@@ -1,0 +1,140 @@
+#!/usr/bin/env python3
+"""web_findings: an exercise session on the trainee page in headless Chromium. The page shows the
+exercise's instructions, time left and marks; a mouse click on "lump here" while the trainee's
+position-driven finger presses reaches the domain as a Finding at the fingertip's contact point
+(read by a listening DDS reader, web_exercise_peer with phantom 0) and palp-server, hosting the
+shipped exercises (config/server-exercises.json; "easy" is phantom 11), answers: the page then
+shows 1 mark; key W withdraws it; a dashboard
+page's and an observer page's attempts to send a finding are refused and nothing is written.
+DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
+import math
+import os
+import re
+import time
+
+import harness
+from harness import check
+
+DOMAIN = 75
+
+
+def findings(procs, peer):
+    return [m.groupdict() for m in re.finditer(
+        r"FINDING session=(?P<session>\d+) op=(?P<op>\w+) mark=(?P<mark>\d+) "
+        r"point=(?P<x>\S+),(?P<y>\S+),(?P<z>\S+) time=(?P<time>\S+)", procs.log(peer))]
+
+
+def wait_findings(procs, peer, n, timeout):
+    end = time.time() + timeout
+    while time.time() < end:
+        f = findings(procs, peer)
+        if len(f) >= n:
+            return f
+        time.sleep(0.05)
+    return findings(procs, peer)
+
+
+def click(page, element_id):
+    """A real mouse click (DevTools Input events) at the element's centre."""
+    x, y = page.eval("(function(){const e=document.getElementById(%r); e.scrollIntoView({block:'center'});"
+                     "const r=e.getBoundingClientRect(); return [r.left+r.width/2, r.top+r.height/2];})()" % element_id)
+    for kind in ("mousePressed", "mouseReleased"):
+        page.call("Input.dispatchMouseEvent", type=kind, x=x, y=y, button="left", clickCount=1)
+
+
+def key(page, k):
+    for kind in ("keyDown", "keyUp"):
+        page.call("Input.dispatchKeyEvent", type=kind, key=k, text=k if kind == "keyDown" else "",
+                  code="Key" + k.upper(), windowsVirtualKeyCode=ord(k.upper()))
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, DOMAIN)
+    browser = None
+    try:
+        procs.server(config="server-exercises.json")
+        peer = procs.start("peer", [os.path.join(build, "tests", "web", "web_exercise_peer"), str(DOMAIN), "0", "110"])
+        procs.wait_log(peer, r"READY", 10)
+        web = procs.web()
+        browser = harness.cdp.Chromium(width=1000, height=760, out_dir=out)
+        page = browser.new_page(web.base + "/trainee.html?trainee=pat")
+        check(page.wait_for("window.palpState && palpState.connected", 20) is True, "trainee page loaded and connected")
+        procs.trainee("pat", phantom=11, extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
+
+        ok = page.wait_for("palpState.trainee.exercise !== null && palpState.trainee.timeLeft !== null && "
+                           "!document.getElementById('ex-controls').hidden", 20)
+        check(ok is True, "the page shows the exercise and its controls")
+        instr = page.eval("document.getElementById('ex-instructions').textContent")
+        title = page.eval("document.getElementById('ex-title').textContent")
+        left = page.eval("palpState.trainee.timeLeft")
+        check("vertical strips" in instr and title == "One 2 cm lesion just under the surface",
+              "title %r and instructions %r shown" % (title, instr))
+        check(0 < left <= 300, "time left %.1f s within the 300 s limit" % left)
+        check(page.eval("document.getElementById('ex-marks').textContent") == "0", "0 marks standing at first")
+
+        ok = page.wait_for("(function(){const f=palpState.trainee.proxy;"
+                           "return !!f && f.in_contact === true && palpState.trainee.maxDispMm > 3;})()", 25)
+        check(ok is True, "pat presses (proxy in contact, dent > 3 mm): %s"
+              % page.eval("JSON.stringify(palpState.trainee.proxy)"))
+        proxy = page.eval("palpState.trainee.proxy.proxy")
+        t_click = time.time()
+        click(page, "lump")
+        got = wait_findings(procs, peer, 1, 5)
+        check(len(got) == 1 and got[0]["op"] == "mark" and got[0]["mark"] == "1",
+              "the click reached the domain as a Finding, mark 1, in %.2f s: %s" % (time.time() - t_click, got))
+        f = got[0]
+        pt = [float(f["x"]), float(f["y"]), float(f["z"])]
+        R = page.eval("palpState.phantoms[palpState.trainee.phantom].radius")
+        rp = math.sqrt(sum(x * x for x in pt))
+        d = math.sqrt(sum((a - b) ** 2 for a, b in zip(pt, proxy)))
+        print("finding at %s (|p| %.4f m, R %.4f m), %.4f m from the proxy seen before the click" % (pt, rp, R, d))
+        # The contact point lies in the dent: inside the rest dome by at most the 10 mm press and a
+        # margin, and about one fingertip radius (8 mm) from the proxy (the finger barely moves while held).
+        check(R - 0.015 < rp < R + 0.001, "the point lies on the pressed skin: R - 15 mm < |p| < R + 1 mm")
+        check(0.004 < d < 0.012, "about a fingertip radius (8 mm) from the proxy: %.1f mm" % (d * 1e3))
+        check(page.wait_for("palpState.trainee.marks === 1 && document.getElementById('ex-marks').textContent === '1'", 5)
+              is True, "the page shows 1 mark (the server's finding status)")
+        reply = page.eval("palpState.findingReplies[palpState.findingReplies.length-1]")
+        check(reply["ok"] is True and reply["mark_id"] == 1, "the bridge answered ok, mark 1: %s" % reply)
+        page.eval("palpShowFingers(true)")
+        print("screenshot:", page.screenshot(os.path.join(out, "trainee-marked.png")))
+
+        time.sleep(0.6)  # the bridge's rate: one request per 0.5 s
+        key(page, "w")
+        got = wait_findings(procs, peer, 2, 5)
+        check(len(got) == 2 and got[1]["op"] == "withdraw" and got[1]["mark"] == "1", "key W withdrew mark 1: %s" % got[1:])
+        check(page.wait_for("palpState.trainee.marks === 0", 5) is True, "the page shows 0 marks again")
+
+        dash = browser.new_page(web.base + "/dashboard.html")
+        ok = dash.wait_for("palpState.sessions.some(function(s){return s.trainee === 'pat' && s.exercise === 'easy' "
+                           "&& s.findings === 0 && s.late_haptic !== null})", 15)
+        check(ok is True, "the dashboard lists pat's exercise session, 0 findings, a late-haptic figure: %s"
+              % dash.eval("JSON.stringify(palpState.sessions)"))
+        late = dash.eval("palpState.sessions.find(function(s){return s.trainee==='pat'})")
+        print("dashboard: late haptic updates %s, lost %s, coverage %s" % (late["late_haptic"], late["lost_haptic"],
+                                                                            late["coverage"]))
+        check(late["coverage"][0] > 0, "coverage from the local model's contact > 0 (%.4f)" % late["coverage"][0])
+        dash.eval("palpSend({finding: 'mark'})")
+        r = dash.wait_for("palpState.findingReplies.length > 0 && palpState.findingReplies[0]", 5)
+        check(r is not None and r["ok"] is False and "viewer" in r["reason"],
+              "the dashboard's finding is refused: %s" % r)
+        print("screenshot:", dash.screenshot(os.path.join(out, "dashboard.png")))
+
+        obs = browser.new_page(web.base + "/trainee.html?trainee=pat&role=observer")
+        check(obs.wait_for("palpState.trainee.exercise !== null", 15) is True, "an observer page shows the exercise")
+        hid = obs.eval("[document.getElementById('ex-controls').hidden, palpState.trainee.role, location.search]")
+        check(hid[0] is True, "... without the controls: %s" % hid)
+        time.sleep(0.6)
+        obs.eval("palpSend({finding: 'mark'})")
+        r = obs.wait_for("palpState.findingReplies.length > 0 && palpState.findingReplies[0]", 5)
+        check(r is not None and r["ok"] is False, "the observer's finding is refused: %s" % r)
+        time.sleep(1.0)
+        check(len(findings(procs, peer)) == 2, "nothing more was written to the domain (2 findings in all)")
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)

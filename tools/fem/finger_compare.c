@@ -1,0 +1,224 @@
+/*
+ * finger_compare.c - `palp-fem finger`: fingertip force-depth curves, real-time
+ * model vs FE reference at matched positions (docs/fem.md, "The finger").
+ *
+ * Sites: the pole, 45 deg off-centre, 70 deg (20 deg above the rim: an 8 mm tip
+ * closer to the rim would meet the table first), and the pole over a 10 mm lesion
+ * (5x the gel) whose centre is 10 mm deep. The tip moves along the inward radial
+ * normal; its depth is d = R + r - |c| for centre c (from the undeformed sphere).
+ *
+ * FE: the rigid sphere at centre c, relaxed static equilibrium (the long-term
+ * response) at depths 0.25 mm ... until the force passes 5 N.
+ * Real-time: the scene's world (its parameters, mesh and material), a finger whose
+ * device point is driven to each depth and held, corrected twice so that the
+ * proxy (the fingertip centre, the FE sphere's counterpart) sits at the FE depth.
+ * Prints, per depth, both forces and their ratio; with --out, a CSV.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "fem_finger.h"
+#include "finger_compare.h"
+
+#define MAXD 24
+
+typedef struct site {
+  const char *name;
+  double polar_deg;
+  int lesion;
+} site;
+
+static double now_s(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* FE force along -n at each depth; returns the depths done (stops past fmax). */
+static int fem_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *les, int nles,
+                     palp_vec3 n, const double *depth, int count, double fmax_n, double *F, double *gap,
+                     long *newton, char *err, size_t errlen) {
+  palp_fem_model m;
+  int rc = palp_fem_model_create(&m, mesh, cfg);
+  if (!rc) rc = palp_fem_model_finalize(&m);
+  if (rc) {
+    snprintf(err, errlen, "model: %s", m.err);
+    return -1;
+  }
+  double *scale = malloc(sizeof(double) * (size_t)mesh->element_count);
+  palp_fem_finger f;
+  if (!scale || palp_fem_finger_init(&f, mesh, NULL, 0, 0.008, 0.0)) {
+    free(scale);
+    palp_fem_model_destroy(&m);
+    snprintf(err, errlen, "out of memory");
+    return -1;
+  }
+  palp_fem_lesion_scale(mesh, les, nles, scale);
+  m.c10_scale = scale;
+  palp_fem_finger_attach(&f, &m);
+  const double R = cfg->mesh.radius, r = f.radius;
+  f.center[0] = (R + r) * n.x, f.center[1] = (R + r) * n.y, f.center[2] = (R + r) * n.z;
+  int done = 0;
+  for (int k = 0; k < count; ++k) {
+    const double c[1][3] = {{(R + r - depth[k]) * n.x, (R + r - depth[k]) * n.y, (R + r - depth[k]) * n.z}};
+    double f3[1][3];
+    if (palp_fem_finger_press(&m, &f, c, 1, f3, &gap[k])) {
+      snprintf(err, errlen, "FE press at %.2f mm: %s", depth[k] * 1e3, m.err);
+      break;
+    }
+    F[k] = f3[0][0] * n.x + f3[0][1] * n.y + f3[0][2] * n.z; /* along the outward normal */
+    done = k + 1;
+    if (F[k] > fmax_n) break;
+  }
+  *newton = m.newton_iterations;
+  palp_fem_finger_destroy(&f);
+  free(scale);
+  palp_fem_model_destroy(&m);
+  return done;
+}
+
+/* Real-time force along the outward normal with the proxy at each depth. */
+static int rt_curve(const palp_world_def *wd0, const palp_lesion *les, int nles, palp_vec3 n, const double *depth,
+                    int count, double *F, double *dreal, char *err, size_t errlen) {
+  palp_world_def wd = *wd0;
+  wd.dt = 0.001;
+  wd.lesion_count = nles;
+  for (int i = 0; i < nles; ++i) wd.lesion[i] = les[i];
+  int e = 0;
+  palp_world *w = palp_world_create(&wd, &e);
+  if (!w) {
+    snprintf(err, errlen, "real-time world: %s", palp_strerror(e));
+    return -1;
+  }
+  const double R = wd.mesh.radius, r = 0.008;
+  palp_vec3 dev = {(R + r + 0.001) * n.x, (R + r + 0.001) * n.y, (R + r + 0.001) * n.z};
+  const int fid = palp_world_add_finger(w, dev, r);
+  if (fid < 0) {
+    snprintf(err, errlen, "real-time finger: %s", palp_strerror(fid));
+    palp_world_destroy(w);
+    return -1;
+  }
+  double dd = -0.001; /* device depth */
+  for (int k = 0; k < count; ++k) {
+    double target = depth[k] + (k ? F[k - 1] / 2000.0 : 0.0); /* proxy ~ F / k_c above the device */
+    palp_local_model lm = {0};
+    for (int pass = 0; pass < 3; ++pass) {
+      /* ramp the device at 5 mm/s, then hold (1 s, 1 s, 0.5 s: the real-time
+       * model's creep settles in about a second, the FE side is fully relaxed) */
+      while (fabs(target - dd) > 5e-6) {
+        dd += target > dd ? 5e-6 : -5e-6;
+        dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
+        palp_world_set_finger_device(w, fid, dev);
+        palp_world_step(w);
+      }
+      dd = target;
+      dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
+      palp_world_set_finger_device(w, fid, dev);
+      const int hold = pass < 2 ? 1000 : 500;
+      for (int s = 0; s < hold; ++s) palp_world_step(w);
+      palp_world_finger_local_model(w, fid, &lm);
+      const double pr = sqrt(lm.proxy.x * lm.proxy.x + lm.proxy.y * lm.proxy.y + lm.proxy.z * lm.proxy.z);
+      dreal[k] = R + r - pr;
+      target += depth[k] - dreal[k];
+    }
+    F[k] = lm.force.x * n.x + lm.force.y * n.y + lm.force.z * n.z;
+  }
+  palp_world_destroy(w);
+  return count;
+}
+
+int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
+                            char *err, size_t errlen) {
+  setvbuf(stdout, NULL, _IOLBF, 0); /* a long run shows each site as it finishes */
+  palp_fem_config cfg = *cfg0;
+  cfg.max_newton = cfg.max_newton < 25 ? 25 : cfg.max_newton;
+  palp_fem_mesh mesh;
+  if (palp_fem_mesh_create(&cfg.mesh, &mesh)) {
+    snprintf(err, errlen, "invalid mesh definition");
+    return -1;
+  }
+  const double R = cfg.mesh.radius;
+  const palp_lesion lump = {.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
+  const site sites[4] = {{"pole", 0, 0}, {"45deg", 45, 0}, {"70deg", 70, 0}, {"pole_lesion", 0, 1}};
+  static const double depths[MAXD] = {0.25e-3, 0.5e-3, 0.75e-3, 1e-3, 1.5e-3, 2e-3, 2.5e-3, 3e-3,
+                                      4e-3,    5e-3,   6e-3,    7e-3, 8e-3,   10e-3, 12e-3, 14e-3,
+                                      16e-3,   18e-3,  20e-3,   22e-3, 24e-3, 26e-3, 28e-3, 30e-3};
+  FILE *out = NULL;
+  if (csv && !(out = fopen(csv, "w"))) {
+    snprintf(err, errlen, "cannot write %s", csv);
+    palp_fem_mesh_destroy(&mesh);
+    return -1;
+  }
+  if (out) fprintf(out, "site,depth_m,fem_N,realtime_N,realtime_depth_m,ratio_rt_over_fem,fem_min_gap_m\n");
+  printf("FE: level %d (%d hexahedra), %s reading, relaxed (long-term) static; real-time: the scene's world (%s)\n",
+         cfg.mesh.level, mesh.element_count, cfg.c10_reading == PALP_FEM_C10_LONG_TERM ? "long_term" : "instantaneous",
+         scene->name);
+  double Fplain[MAXD] = {0}, Rplain[MAXD] = {0};
+  int nplain = 0, rc = 0;
+  for (int s = 0; s < 4 && !rc; ++s) {
+    if (only && strcmp(only, "all") != 0 && !strstr(only, sites[s].name)) continue;
+    const double th = sites[s].polar_deg * PALP_FEM_PI / 180.0;
+    const palp_vec3 n = {sin(th), 0, cos(th)};
+    double F[MAXD], G[MAXD], Fr[MAXD], Dr[MAXD];
+    long newton = 0;
+    const double t0 = now_s();
+    const int nd = fem_curve(&cfg, &mesh, &lump, sites[s].lesion, n, depths, MAXD, 5.0, F, G, &newton, err, errlen);
+    const double t1 = now_s();
+    if (nd <= 0) {
+      rc = -1;
+      break;
+    }
+    if (rt_curve(&scene->world, &lump, sites[s].lesion, n, depths, nd, Fr, Dr, err, errlen) < 0) {
+      rc = -1;
+      break;
+    }
+    printf("\n%s (%.0f deg%s): FE %.1f s, %ld Newton iterations; real-time %.1f s\n", sites[s].name,
+           sites[s].polar_deg, sites[s].lesion ? ", 10 mm lesion 5x 10 mm deep" : "", t1 - t0, newton, now_s() - t1);
+    printf("  depth mm   FE N    RT N   RT depth mm  RT/FE%s\n", sites[s].lesion ? "   FE lesion gain  RT lesion gain" : "");
+    for (int k = 0; k < nd; ++k) {
+      printf("  %7.2f %7.3f %7.4f %9.3f %8.3f", depths[k] * 1e3, F[k], Fr[k], Dr[k] * 1e3, Fr[k] / F[k]);
+      if (sites[s].lesion && k < nplain)
+        printf("   %+8.1f%%        %+8.1f%%", 100 * (F[k] / Fplain[k] - 1), 100 * (Fr[k] / Rplain[k] - 1));
+      printf("\n");
+      if (out)
+        fprintf(out, "%s,%.6e,%.6e,%.6e,%.6e,%.6e,%.3e\n", sites[s].name, depths[k], F[k], Fr[k], Dr[k], Fr[k] / F[k],
+                G[k]);
+    }
+    /* force-matched: the depth each model needs for 0.3, 1, 3, 5 N (the real-time
+     * curve continued to 30 mm; linear interpolation between held depths) */
+    {
+      double Fl[MAXD], Dl[MAXD];
+      const int nl = rt_curve(&scene->world, &lump, sites[s].lesion, n, depths, MAXD, Fl, Dl, err, errlen);
+      static const double targets[4] = {0.3, 1.0, 3.0, 5.0};
+      printf("  force N  FE depth mm  RT depth mm\n");
+      for (int t = 0; t < 4; ++t) {
+        double dfe = NAN, drt = NAN;
+        for (int k = 0; k < nd; ++k)
+          if (F[k] >= targets[t]) {
+            const double F0 = k ? F[k - 1] : 0.0, D0 = k ? depths[k - 1] : 0.0;
+            dfe = D0 + (depths[k] - D0) * (targets[t] - F0) / (F[k] - F0);
+            break;
+          }
+        for (int k = 0; k < nl; ++k)
+          if (Fl[k] >= targets[t]) {
+            const double F0 = k ? Fl[k - 1] : 0.0, D0 = k ? Dl[k - 1] : 0.0;
+            drt = D0 + (Dl[k] - D0) * (targets[t] - F0) / (Fl[k] - F0);
+            break;
+          }
+        printf("  %7.1f  %10.2f  %10.2f%s\n", targets[t], dfe * 1e3, drt * 1e3,
+               isnan(drt) ? "  (not reached by 30 mm)" : "");
+      }
+    }
+    if (s == 0) {
+      nplain = nd;
+      memcpy(Fplain, F, sizeof F);
+      memcpy(Rplain, Fr, sizeof Fr);
+    }
+  }
+  if (out && fclose(out) != 0) rc = -1;
+  palp_fem_mesh_destroy(&mesh);
+  return rc;
+}
