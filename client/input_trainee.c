@@ -28,6 +28,9 @@ typedef struct tsrc {
   pthread_mutex_t mu;
   palp_vec3 x;          /* [mu] the hand's device point */
   palp_vec3 force;      /* [mu] the phantom's force in the server's newest local model */
+  palp_vec3 model_device; /* [mu] the device point that model's step used */
+  double model_time;      /* [mu] its world time [s] */
+  int have_model;         /* [mu] */
   atomic_int done, stop, button;
   struct timespec next; /* script thread: its clock */
   palp_cli_hand hand;
@@ -35,6 +38,8 @@ typedef struct tsrc {
   /* results, for the station's printout */
   int spots, lumps;
   double max_rise;
+  int rechecked;      /* suspected lumps palpated a second time */
+  long late_restarts; /* script steps that restarted its clock (it was held > 2 steps) */
 } tsrc;
 
 static void ts_add(struct timespec *t, double s) {
@@ -51,10 +56,24 @@ static int hand_step(void *ctx, palp_vec3 dev, palp_vec3 *force, double *t) {
   s->x = dev;
   pthread_mutex_unlock(&s->mu);
   ts_add(&s->next, s->hand.dt);
+  /* Late by more than two steps (a loaded machine held this thread): start the
+   * clock again from now rather than catch up. Catching up ran a burst of steps
+   * with no sleep between them, so the point jumped ahead of the server's models
+   * and the force read back was that of a place the hand had already left. */
+  struct timespec now;
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  const double behind = (double)(now.tv_sec - s->next.tv_sec) + 1e-9 * (double)(now.tv_nsec - s->next.tv_nsec);
+  if (behind > 2.0 * s->hand.dt) {
+    s->next = now;
+    s->late_restarts++;
+  }
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &s->next, NULL) != 0) {
   }
   pthread_mutex_lock(&s->mu);
   *force = s->force;
+  s->hand.felt_valid = s->have_model;
+  s->hand.felt_device = s->model_device;
+  s->hand.felt_time = s->model_time;
   pthread_mutex_unlock(&s->mu);
   *t = s->hand.t + s->hand.dt;
   return 0;
@@ -74,8 +93,10 @@ static void *script(void *arg) {
     palp_cli_expert_spot *sp = palp_cli_expert_exam(h, &s->def.expert, &n);
     palp_vec3 lump[MAX_LUMPS];
     s->spots = n;
-    s->lumps = sp && !h->failed ? palp_cli_expert_lumps(h, sp, n, &s->def.expert, lump, NULL, MAX_LUMPS, &s->max_rise)
+    s->lumps = sp && !h->failed ? palp_cli_expert_lumps_confirmed(h, sp, n, &s->def.expert, lump, NULL, MAX_LUMPS,
+                                                                  &s->max_rise, &s->rechecked)
                                 : 0;
+    if (s->lumps < 0) s->lumps = 0;
     free(sp);
     /* Mark each lump: lift 5 mm, go over the spot, touch it lightly, press the button. */
     for (int i = 0; i < s->lumps && !h->failed; i++) {
@@ -136,6 +157,9 @@ static void t_model(void *ctx, const palp_local_model *m) {
   tsrc *s = ctx;
   pthread_mutex_lock(&s->mu);
   s->force = m->force;
+  s->model_device = m->device;
+  s->model_time = m->time;
+  s->have_model = 1;
   pthread_mutex_unlock(&s->mu);
 }
 
@@ -153,11 +177,13 @@ static void t_close(void *ctx) {
   tsrc *s = ctx;
   atomic_store(&s->stop, 1);
   if (s->started) pthread_join(s->thread, NULL);
-  printf("[scripted %s] %ld steps of %.1f ms (%.1f s)%s%s\n", s->def.kind == PALP_CLI_TRAINEE_EXPERT ? "expert" : "novice",
-         s->hand.steps, s->hand.dt * 1e3, (double)s->hand.steps * s->hand.dt, s->err[0] ? ": " : "", s->err);
+  printf("[scripted %s] %ld steps of %.1f ms (%.1f s), clock restarted %ld times after a late step%s%s\n",
+         s->def.kind == PALP_CLI_TRAINEE_EXPERT ? "expert" : "novice", s->hand.steps, s->hand.dt * 1e3,
+         (double)s->hand.steps * s->hand.dt, s->late_restarts, s->err[0] ? ": " : "", s->err);
   if (s->def.kind == PALP_CLI_TRAINEE_EXPERT)
-    printf("[scripted expert] %d spots, %d lump%s marked (largest rise over the surroundings %+.1f%%)\n", s->spots,
-           s->lumps, s->lumps == 1 ? "" : "s", 100 * s->max_rise);
+    printf("[scripted expert] %d spots, %d suspected lump%s re-palpated, %d lump%s marked (largest rise over the "
+           "surroundings at first %+.1f%%)\n", s->spots, s->rechecked, s->rechecked == 1 ? "" : "s", s->lumps,
+           s->lumps == 1 ? "" : "s", 100 * s->max_rise);
   pthread_mutex_destroy(&s->mu);
   free(s);
 }

@@ -8,6 +8,7 @@
 #define TR_PI 3.14159265358979323846
 #define RISE_R_IN 0.012  /* the surroundings a spot is compared with: 12-28 mm away */
 #define RISE_R_OUT 0.028
+#define MAX_RECHECKS 12 /* re-palpations of suspected lumps, at most (~3 s each) */
 
 void palp_cli_hand_init(palp_cli_hand *h, void *ctx, int (*step)(void *, palp_vec3, palp_vec3 *, double *), double dt,
                         double R, double r, palp_vec3 start) {
@@ -103,9 +104,31 @@ static double held_force(palp_cli_hand *h, double seconds) {
   const int tail0 = k - k / 3;
   double f[HOLD_TAIL_MAX];
   int n = 0;
-  for (int i = 0; i < k && !h->failed; ++i) {
-    palp_cli_hand_step(h, h->device);
-    if (i >= tail0 && n < HOLD_TAIL_MAX) f[n++] = force_now(h);
+  if (h->felt_valid) {
+    /* Forces from a server: hold until the server has stepped `seconds` with the
+     * finger at this point, and take the median of that hold's last third. At most
+     * 10x the hold plus 1 s of hand steps (a server that never catches up). */
+    const palp_vec3 x = h->device;
+    const long kmax = 10L * k + (long)lround(1.0 / h->dt);
+    double t0 = NAN, last = NAN;
+    for (long i = 0; i < kmax && !h->failed; ++i) {
+      palp_cli_hand_step(h, x);
+      const double dx = h->felt_device.x - x.x, dy = h->felt_device.y - x.y, dz = h->felt_device.z - x.z;
+      if (dx * dx + dy * dy + dz * dz > 1e-12) { /* the server has not reached the point (1 um) */
+        t0 = NAN, n = 0;
+        continue;
+      }
+      if (isnan(t0)) t0 = h->felt_time;
+      const double held = h->felt_time - t0;
+      if (h->felt_time != last && held >= (double)tail0 * h->dt - 1e-9 && n < HOLD_TAIL_MAX) f[n++] = force_now(h);
+      last = h->felt_time;
+      if (held >= (double)(k - 1) * h->dt - 1e-9) break;
+    }
+  } else {
+    for (int i = 0; i < k && !h->failed; ++i) {
+      palp_cli_hand_step(h, h->device);
+      if (i >= tail0 && n < HOLD_TAIL_MAX) f[n++] = force_now(h);
+    }
   }
   if (n == 0) return force_now(h);
   qsort(f, (size_t)n, sizeof *f, cmp_double);
@@ -210,8 +233,10 @@ double palp_cli_expert_rise(const palp_cli_hand *h, const palp_cli_expert_spot *
   return c0 > 0 ? sp[i].f_medium / c0 - 1.0 : NAN;
 }
 
-int palp_cli_expert_lumps(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
-                          palp_vec3 *points, double *times, int cap, double *max_rise) {
+/* The strongest spot of each cluster rising above the threshold, strongest first:
+ * writes up to cap spot indexes, returns their count (or PALP_ENOMEM). */
+static int lump_spots(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
+                      int *idx, int cap, double *max_rise) {
   double *rise = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
   int *used = calloc((size_t)(n > 0 ? n : 1), sizeof(int));
   if (!rise || !used) {
@@ -234,11 +259,93 @@ int palp_cli_expert_lumps(const palp_cli_hand *h, const palp_cli_expert_spot *sp
       const double dx = sp[i].n.x - sp[best].n.x, dy = sp[i].n.y - sp[best].n.y, dz = sp[i].n.z - sp[best].n.z;
       if (h->R * sqrt(dx * dx + dy * dy + dz * dz) <= cfg->cluster) used[i] = 1;
     }
-    points[nf] = (palp_vec3){h->R * sp[best].n.x, h->R * sp[best].n.y, h->R * sp[best].n.z};
-    if (times) times[nf] = sp[best].t;
-    nf++;
+    idx[nf++] = best;
   }
   free(rise), free(used);
+  return nf;
+}
+
+int palp_cli_expert_lumps(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
+                          palp_vec3 *points, double *times, int cap, double *max_rise) {
+  int idx[64];
+  const int nf = lump_spots(h, sp, n, cfg, idx, cap < 64 ? cap : 64, max_rise);
+  for (int k = 0; k < nf; ++k) {
+    points[k] = (palp_vec3){h->R * sp[idx[k]].n.x, h->R * sp[idx[k]].n.y, h->R * sp[idx[k]].n.z};
+    if (times) times[k] = sp[idx[k]].t;
+  }
+  return nf;
+}
+
+/* Moves the device along the great circle from normal `a` to normal `b` at radius rho
+ * [m] from the dome's centre (clear of the surface when rho > R + r): a straight chord
+ * between two far spots would cut through the dome. */
+static void hover(palp_cli_hand *h, palp_vec3 a, palp_vec3 b, double rho, double speed) {
+  const double c = fmax(-1.0, fmin(1.0, a.x * b.x + a.y * b.y + a.z * b.z));
+  const int segs = 1 + (int)ceil(acos(c) / (TR_PI / 18.0)); /* 10-degree chords dip < 0.4 % of rho */
+  for (int k = 1; k <= segs && !h->failed; ++k) {
+    const double u = (double)k / segs;
+    palp_vec3 n = {a.x + u * (b.x - a.x), a.y + u * (b.y - a.y), a.z + u * (b.z - a.z)};
+    const double l = sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+    if (!(l > 1e-9)) n = (palp_vec3){0, 0, 1};
+    else n = (palp_vec3){n.x / l, n.y / l, n.z / l};
+    palp_cli_hand_move_to(h, (palp_vec3){rho * n.x, rho * n.y, fmax(h->r, rho * n.z)}, speed);
+  }
+}
+
+/* Re-palpates spot i the way the exam first reached it: onto the spot before it in the
+ * exam (light, medium, deep there), a glide at the light depth to spot i, a press to the
+ * medium depth and the same hold. The medium-depth force held is returned; the surface
+ * history the force depends on (the gel recovers over about a second) is the exam's. */
+static double repalpate(palp_cli_hand *h, const palp_cli_expert_spot *sp, int i, const palp_cli_expert_cfg *cfg) {
+  const int j = i > 0 ? i - 1 : i;
+  const double rho = h->R + h->r + 0.005;
+  palp_vec3 up = h->device;
+  const double lu = sqrt(up.x * up.x + up.y * up.y + up.z * up.z);
+  up = lu > 1e-9 ? (palp_vec3){up.x / lu, up.y / lu, up.z / lu} : (palp_vec3){0, 0, 1};
+  palp_cli_hand_move_to(h, (palp_vec3){rho * up.x, rho * up.y, fmax(h->r, rho * up.z)}, cfg->glide_speed);
+  hover(h, up, sp[j].n, rho, 2.0 * cfg->glide_speed);
+  palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, sp[j].n, 0.0), cfg->glide_speed);
+  spot_hand sh = {sp[j].n, 0.0};
+  travel(h, &sh, sp[j].n, cfg->d_light, cfg->glide_speed, cfg->press_speed, cfg->keep_force, cfg->patience);
+  travel(h, &sh, sp[j].n, cfg->d_medium, cfg->glide_speed, cfg->press_speed, cfg->keep_force, 0.0);
+  (void)held_force(h, cfg->hold);
+  travel(h, &sh, sp[j].n, cfg->d_deep, cfg->glide_speed, cfg->press_speed, cfg->keep_force, 0.0);
+  (void)held_force(h, cfg->hold);
+  travel(h, &sh, sp[i].n, cfg->d_light, cfg->glide_speed, cfg->press_speed, cfg->keep_force, cfg->patience);
+  travel(h, &sh, sp[i].n, cfg->d_medium, cfg->glide_speed, cfg->press_speed, cfg->keep_force, 0.0);
+  const double f = held_force(h, cfg->hold);
+  travel(h, &sh, sp[i].n, cfg->d_light, cfg->glide_speed, cfg->press_speed, cfg->keep_force, cfg->patience);
+  return f;
+}
+
+int palp_cli_expert_lumps_confirmed(palp_cli_hand *h, palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
+                                    palp_vec3 *points, double *times, int cap, double *max_rise, int *rechecked) {
+  int idx[64], nf = 0, checks = 0;
+  if (cap > 64) cap = 64;
+  unsigned char *done = calloc((size_t)(n > 0 ? n : 1), 1);
+  if (!done) return PALP_ENOMEM;
+  /* Each round re-palpates the candidates not yet re-checked and keeps, for each, the
+   * smaller of its two forces: a spike from a late tick is not felt twice, a lump is.
+   * Bounded: every round re-checks at least one new spot or ends. */
+  for (int round = 0; round <= 2 * MAX_RECHECKS && !h->failed; ++round) {
+    nf = lump_spots(h, sp, n, cfg, idx, cap, round == 0 ? max_rise : NULL);
+    if (nf < 0) break;
+    int fresh = 0;
+    for (int k = 0; k < nf && checks < MAX_RECHECKS && !h->failed; ++k) {
+      if (done[idx[k]]) continue;
+      const double f = repalpate(h, sp, idx[k], cfg);
+      sp[idx[k]].f_medium = fmin(sp[idx[k]].f_medium, f);
+      done[idx[k]] = 1, fresh = 1, checks++;
+    }
+    if (!fresh) break;
+  }
+  free(done);
+  if (rechecked) *rechecked = checks;
+  if (nf < 0) return nf;
+  for (int k = 0; k < nf; ++k) {
+    points[k] = (palp_vec3){h->R * sp[idx[k]].n.x, h->R * sp[idx[k]].n.y, h->R * sp[idx[k]].n.z};
+    if (times) times[k] = sp[idx[k]].t;
+  }
   return nf;
 }
 

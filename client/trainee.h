@@ -27,6 +27,13 @@ typedef struct palp_cli_hand {
   double t;          /* world time after the last step [s] */
   long steps;
   int failed;
+  /* Set by a step callback whose force comes from elsewhere (a server's local model):
+   * the device point and the server's time that force belongs to. A hold then counts
+   * the server's physics time at the held point, not the hand's own steps, so a press
+   * is read after the same simulated hold however late the models come. */
+  int felt_valid;
+  palp_vec3 felt_device; /* [m] */
+  double felt_time;      /* [s] */
 } palp_cli_hand;
 
 void palp_cli_hand_init(palp_cli_hand *h, void *ctx, int (*step)(void *, palp_vec3, palp_vec3 *, double *), double dt,
@@ -71,6 +78,13 @@ double palp_cli_expert_rise(const palp_cli_hand *h, const palp_cli_expert_spot *
  * surface points [m] and times, returns the count; the largest rise in *max_rise. */
 int palp_cli_expert_lumps(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
                           palp_vec3 *points, double *times, int cap, double *max_rise);
+
+/* As palp_cli_expert_lumps, but a clinician's way: every suspected lump is palpated
+ * once more (from the spot before it, as in the exam) and keeps the smaller of its two
+ * medium-depth forces before the lumps are chosen again; at most 12 re-checks, their
+ * number in *rechecked. Updates sp[].f_medium of the spots re-checked. Moves the hand. */
+int palp_cli_expert_lumps_confirmed(palp_cli_hand *h, palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
+                                    palp_vec3 *points, double *times, int cap, double *max_rise, int *rechecked);
 
 /* ---- the novice ------------------------------------------------------------------ */
 /* `presses` presses to `depth` [m] at random places (polar < 60 deg, seeded), travelling

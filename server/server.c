@@ -907,6 +907,26 @@ static void handle_requests(palp_srv *srv) {
            * it); a request for a station id that is not that identity's own is
            * dropped unanswered, so no reply can land on another's station. */
           if (palp_srv_requester_of(srv->request_r, info[i].publication_handle, &who) < 0) {
+            /* A station's last LEAVE can be taken after its writer is gone (a
+             * loaded server reads it once the process has exited), when Cyclone no
+             * longer has the writer's data to name its identity. The writer that
+             * joined this station was checked at its join: its LEAVE is its own. */
+            if (buf[i].op == palp_OP_LEAVE) {
+              station *own = find_station(srv, buf[i].station_id);
+              if (own && own->writer == info[i].publication_handle) {
+                station_leave(srv, own, "left");
+                retire_reply(srv, buf[i].station_id);
+                continue;
+              }
+              /* Nothing to leave (its session closed first, as an observer's does
+               * when the trainee goes): the request has no effect, so there is no
+               * one to refuse. */
+              if (!own) {
+                logf_(srv, "station \"%s\": LEAVE from a writer already gone, for no open station",
+                       buf[i].station_id);
+                continue;
+              }
+            }
             refuse_identity(srv, "station \"%s\": the writer's identity is unknown", buf[i].station_id);
             continue;
           }
