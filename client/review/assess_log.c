@@ -20,7 +20,8 @@ static const char FREE_PRACTICE[] =
     "\"instructions\":\"Free practice: no hidden lesions.\",\"time_limit_s\":3600,\"lesions\":[],"
     "\"pressure_bands\":{\"light\":{\"depth_mm\":[1,5]},\"medium\":{\"depth_mm\":[5,12]},"
     "\"deep\":{\"depth_mm\":[12,25]}},\"max_force_N\":20,\"match_margin_mm\":10,"
-    "\"rubric\":{\"weights\":{\"thoroughness\":1},\"pass\":{}}}";
+    "\"rubric\":{\"weights\":{\"thoroughness\":1},\"pass\":{\"sensitivity\":0,"
+    "\"coverage\":{\"light\":0,\"medium\":0,\"deep\":0},\"score\":0}}}";
 
 typedef struct sample_acc {
   palp_assess_sample *s;

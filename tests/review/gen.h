@@ -4,7 +4,7 @@
  * palp_db_log_finger_sample per physics step, palp_db_log_finding per mark), and assesses the
  * same samples in process with palp_assess: the reference the review's metrics must equal.
  *
- * The trainees are tests/assess/trainee.h's expert (vertical strips, three pressures, marks
+ * The trainees are tests/assess/recorder.h (client/trainee.c) expert (vertical strips, three pressures, marks
  * where the medium-depth force rises > 12% over its surroundings) and novice (a few light
  * random presses and a guess), on tests/assess/exercise_expert.json.
  */
@@ -17,7 +17,7 @@
 
 #include "palp_assess.h"
 #include "palp_db.h"
-#include "trainee.h"
+#include "recorder.h"
 
 static char *gen_slurp(const char *path) {
   FILE *f = fopen(path, "rb");
