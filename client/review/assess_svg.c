@@ -91,7 +91,7 @@ void review_svg_scores(FILE *f, const double *score, int n, int w, int h, const 
   fputs("\"/>\n", f);
   for (int i = 0; i < n; i++) {
     const double x = n > 1 ? x0 + (x1 - x0) * i / (n - 1) : (x0 + x1) / 2;
-    fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.5\" fill=\"#0072b2\"><title>session %d: %.1f</title></circle>\n", x,
+    fprintf(f, "<circle class=\"point\" cx=\"%.1f\" cy=\"%.1f\" r=\"2.5\" fill=\"#0072b2\"><title>session %d: %.1f</title></circle>\n", x,
             y0 + (y1 - y0) * score[i] / 100.0, i + 1, score[i]);
   }
   fputs("</svg>\n", f);

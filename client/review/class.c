@@ -69,8 +69,37 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     review_latest_grade(db, v[i].id, r->grade, sizeof r->grade);
     nr++;
   }
+  if (nr == 0) {
+    /* Name what there is, so a typo is seen at once. */
+    char known[512] = "";
+    size_t used = 0;
+    for (int i = 0; i < n && used + 70 < sizeof known; i++) {
+      char name[64];
+      if (palp_db_session_exercise(db, v[i].id, name, sizeof name, NULL) || strstr(known, name)) continue;
+      used += (size_t)snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", name);
+    }
+    fprintf(stderr, "palp-review class: no session of exercise '%s'%s in this log (exercises logged: %s)\n", exercise,
+            flt.since_unix_s > 0 ? " since that date" : "", used ? known : "none");
+    free(v), free(rows);
+    return REVIEW_ERROR;
+  }
   free(v);
   int rc = REVIEW_OK;
+  /* The instructor at a terminal: the same table as the report's, as text. */
+  printf("class report: exercise %s, %d session%s\n", exercise, nr, nr == 1 ? "" : "s");
+  printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %7s %6s %-5s %s\n", "TRAINEE", "SESSION", "DATE", "FOUND", "FALSE",
+         "LIGHT", "MEDIUM", "DEEP", "PATTERN", "TIME[s]", "SCORE", "RUBRIC", "GRADE");
+  for (int i = 0; i < nr; i++) {
+    const palp_assess_result *m = &rows[i].a.r;
+    char t[64], found[16];
+    review_fmt_time(rows[i].s.start_unix_s, t, sizeof t);
+    t[10] = '\0'; /* the date */
+    snprintf(found, sizeof found, "%d/%d", m->found, m->lesion_count);
+    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-5s %s\n", rows[i].s.trainee,
+           rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2],
+           palp_pattern_name(m->pattern), m->duration, m->score, m->pass ? "pass" : "fail",
+           rows[i].grade[0] ? rows[i].grade : "-");
+  }
   if (csv) {
     FILE *c = strcmp(csv, "-") ? fopen(csv, "w") : stdout;
     if (!c) {
@@ -144,9 +173,11 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       int k = 0;
       for (int j = i; j < nr; j++)
         if (!done[j] && !strcmp(rows[j].s.trainee, rows[i].s.trainee)) done[j] = 1, sc[k++] = rows[j].a.r.score;
-      fputs("<tr><td class=\"t\">", f);
+      fputs("<tr class=\"progress-row\" data-trainee=\"", f);
       html_str(f, rows[i].s.trainee);
-      fprintf(f, "</td><td>%d</td><td class=\"t\">", k);
+      fputs("\"><td class=\"t\">", f);
+      html_str(f, rows[i].s.trainee);
+      fprintf(f, "</td><td class=\"sessions\">%d</td><td class=\"t\">", k);
       for (int j = 0; j < k; j++) fprintf(f, "%s%.1f", j ? ", " : "", sc[j]);
       fputs("</td><td>", f);
       char id[64];
