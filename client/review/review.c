@@ -152,7 +152,15 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   char t0[64], t1[64];
   review_fmt_time(s->start_unix_s, t0, sizeof t0);
   review_fmt_time(s->end_unix_s, t1, sizeof t1);
-  printf("session    %s\n", s->uid);
+  /* One name for a session (docs/naming.md): the stations print "session N", the number
+   * the server gave it on the wire; the log's uid is "<server run>-N". */
+  const char *dash = strrchr(s->uid, '-');
+  char *endp = NULL;
+  const unsigned long wire = dash ? strtoul(dash + 1, &endp, 10) : 0;
+  if (dash && endp && *endp == '\0' && endp != dash + 1 && dash != s->uid)
+    printf("session    %s  (\"session %lu\" on the stations; server run %.*s)\n", s->uid, wire, (int)(dash - s->uid),
+           s->uid);
+  else printf("session    %s\n", s->uid);
   printf("trainee    %s   station %s\n", s->trainee, s->station);
   printf("phantom    %s (%s)\n", s->phantom_id, s->phantom_name);
   char *params = NULL;
@@ -168,8 +176,9 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   printf("duration   wall %.3f s, simulated %.3f s (%lld frames logged at %.0f Hz, dt %.6g s)\n",
          s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0, s->sim_duration_s, (long long)s->frames,
          s->tick_hz, s->dt_s);
-  printf("peak force           %.4f N at t = %.3f s\n", p.f, p.f_t);
-  printf("peak displacement    top vertex %.3f mm at t = %.3f s; any vertex %.3f mm at t = %.3f s\n",
+  printf("peak force           %.2f N at t = %.2f s (the phantom's force on the load, from the logged frames)\n", p.f,
+         p.f_t);
+  printf("peak displacement    top vertex %.2f mm at t = %.2f s; any vertex %.2f mm at t = %.2f s\n",
          p.top * 1e3, p.top_t, p.max * 1e3, p.max_t);
   if (p.ngel)
     printf("gel                  pressure %.3f .. %.3f Pa, volume %.4f .. %.4f cm^3\n", p.p_min, p.p_max,
@@ -192,7 +201,7 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
          nfinger == 1 ? "" : "s");
   if (np) {
     printf("where pressed (seen from above; 12 o'clock = +y, 3 o'clock = +x; arc from the pole):\n");
-    printf("    %-4s %-6s %-9s %-26s %-8s %-9s %-17s %s\n", "slot", "kind", "dist", "centre x,y,z [mm]", "clock",
+    printf("    %-4s %-6s %-18s %-26s %-8s %-9s %-15s %s\n", "slot", "kind", "distribution", "centre x,y,z [mm]", "clock",
            "arc [mm]", "on .. off [s]", "peak [N]");
     for (int i = 0; i < np; i++) {
       const review_press *q = &pr[i];
@@ -200,11 +209,11 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
       const double r = sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
       const double arc = r > 0 ? r * acos(fmax(-1.0, fmin(1.0, x.z / r))) : 0.0;
       char off[24];
-      if (q->t_off_s >= 0) snprintf(off, sizeof off, "%.3f", q->t_off_s);
+      if (q->t_off_s >= 0) snprintf(off, sizeof off, "%.2f", q->t_off_s);
       else snprintf(off, sizeof off, "end");
       char ctr[40];
       snprintf(ctr, sizeof ctr, "%.1f,%.1f,%.1f", x.x * 1e3, x.y * 1e3, x.z * 1e3);
-      printf("    %-4d %-6s %-9s %-26s %5.1f h  %-9.1f %7.3f .. %-7s %.3f%s\n", q->slot,
+      printf("    %-4d %-6s %-18s %-26s %5.1f h  %-9.1f %6.2f .. %-6s %.2f%s\n", q->slot,
              q->kind == PALP_DB_KIND_FORCE ? "force" : "finger", q->kind == PALP_DB_KIND_FORCE ? review_dist_name(q->distribution) : "-",
              ctr, review_clock_hours(x), arc * 1e3, q->t_on_s, off, q->peak_force_n,
              q->updates ? "" : "");

@@ -173,12 +173,13 @@ int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_pr
   return 0;
 }
 
+/* The paper's numeral and the scene file's keyword, as every tool prints it (docs/naming.md). */
 const char *review_dist_name(palp_distribution d) {
   switch (d) {
-  case PALP_DIST_SINGLE: return "single";
-  case PALP_DIST_UNIFORM: return "uniform";
-  case PALP_DIST_GAUSSIAN: return "gaussian";
-  case PALP_DIST_GAUSSIAN_OFFSET: return "gauss-off";
+  case PALP_DIST_SINGLE: return "I single";
+  case PALP_DIST_UNIFORM: return "II uniform";
+  case PALP_DIST_GAUSSIAN: return "III gaussian";
+  case PALP_DIST_GAUSSIAN_OFFSET: return "IV gaussian_offset";
   }
   return "-";
 }

@@ -181,9 +181,9 @@ static void check_csv_and_show(const char *db, const char *uid, const sim_result
   out = run(&st, "--db '%s' show %s", db, uid);
   REQUIRE(out && st == 0, "show exit %d", st);
   char want[128];
-  snprintf(want, sizeof want, "peak force           %.4f N at t = %.3f s", peak, peak_t);
+  snprintf(want, sizeof want, "peak force           %.2f N at t = %.2f s", peak, peak_t);
   CHECK(strstr(out, want), "show lacks '%s':\n%s", want, out);
-  snprintf(want, sizeof want, "top vertex %.3f mm", peak_top * 1e3);
+  snprintf(want, sizeof want, "top vertex %.2f mm", peak_top * 1e3);
   CHECK(strstr(out, want), "show lacks '%s'", want);
   snprintf(want, sizeof want, "contacts   %d inputs", r->ncontacts);
   CHECK(strstr(out, want), "show lacks '%s'", want);
