@@ -824,7 +824,7 @@ static void deform_store(deform_copy *c, const palp_Deformation *d) {
 }
 
 static const char *dist_name(int d) {
-  static const char *n[] = {"?", "I (single vertex)", "II (uniform)", "III (Gaussian)", "IV (offset Gaussian)"};
+  static const char *n[] = {"?", "I single", "II uniform", "III gaussian", "IV gaussian_offset"};
   return d >= 1 && d <= 4 ? n[d] : n[0];
 }
 
@@ -851,6 +851,9 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
   if (st->contact_r > 0) conds[nc++] = dds_create_readcondition(st->contact_r, DDS_ANY_STATE);
   if (st->feedback_r > 0) conds[nc++] = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
   for (int i = 0; i < nc; i++) dds_waitset_attach(ws, conds[i], 0);
+  /* Times printed are the session's world time (the frames' sim_time, the clock the review
+   * and the log use: docs/naming.md), not this station's own clock since it joined. */
+  double world_t = -1.0;
   while (!g_stop) {
     int64_t now = palp_dds_now_ns();
     double t = (double)(now - t0) * 1e-9;
@@ -863,6 +866,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
       if (info.valid_data && palp_cli_deformation_check(ph, ptr[0]) == 0) {
         const palp_Deformation *d = ptr[0];
         frames++;
+        if (d->sim_time > world_t) world_t = d->sim_time;
         deform_store(&last, d);
         double m = palp_cli_max_displacement(ph, d, NULL);
         if (m >= peak_disp) {
@@ -884,12 +888,12 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
             double az = atan2(c->center.y, c->center.x) * 180 / 3.14159265358979;
             if (c->mode == palp_CONTACT_FORCE)
               printf("[observer] t=%6.2f s  trainee presses: force-driven, distribution %s, at polar %.0f deg "
-                     "azimuth %.0f deg, |F| = %.2f N\n", t, dist_name(c->distribution), polar, az, norm3(c->force));
+                     "azimuth %.0f deg, |F| = %.2f N\n", world_t >= 0 ? world_t : t, dist_name(c->distribution), polar, az, norm3(c->force));
             else
               printf("[observer] t=%6.2f s  trainee presses: finger of radius %.1f mm at polar %.0f deg azimuth "
-                     "%.0f deg\n", t, c->radius * 1e3, polar, az);
+                     "%.0f deg\n", world_t >= 0 ? world_t : t, c->radius * 1e3, polar, az);
           } else {
-            printf("[observer] t=%6.2f s  trainee lifts the finger\n", t);
+            printf("[observer] t=%6.2f s  trainee lifts the finger\n", world_t >= 0 ? world_t : t);
           }
           fflush(stdout);
         }
@@ -903,6 +907,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
       if (info.valid_data) {
         const palp_Feedback *fb = ptr[0];
         feedbacks++;
+        if (fb->sim_time > world_t) world_t = fb->sim_time;
         last_top = fb->top_displacement;
         last_fb = fb->fingers._length ? norm3(fb->fingers._buffer[0].force) : 0;
       }
@@ -911,7 +916,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     now = palp_dds_now_ns();
     if (observer && !o->quiet && o->print_period > 0 && now >= next_print) {
       printf("[observer] t=%6.2f s  session %u: %s  |F| applied %.2f N, feedback %.2f N, pole z %+.2f mm, "
-             "max displacement %.2f mm\n", t, st->session_id, pressing ? "pressing" : "lifted  ",
+             "max displacement %.2f mm\n", world_t >= 0 ? world_t : t, st->session_id, pressing ? "pressing" : "lifted  ",
              have_contact && pressing ? norm3(last_contact.force) : 0.0, last_fb, -last_top * 1e3,
              last.valid ? palp_cli_max_displacement(ph, &last.d, NULL) * 1e3 : 0.0);
       fflush(stdout);

@@ -159,8 +159,7 @@ echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found ==
 for t in nina ${eve:+eve}; do
   grep -E "^\[trainee $t\] (exercise|mark|finding|the server refused|[0-9]+ marks? standing)|^\[scripted" "$out/$t.log" || true
 done
-echo "(the lesions are revealed only in the instructor's log; assess a session with"
-echo " build/tests/assess/assess_log DB TRAINEE novice|expert or palp-review)"
+echo "(the lesions are revealed only in the instructor's log: the review below assesses each session)"
 echo
 echo "== stations =="
 for f in alice bob carol visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
@@ -191,5 +190,12 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
     "$review" --db "$db" report "$uid" --out "$out/report-$uid.html" >/dev/null &&
       echo "report: $out/report-$uid.html (opens in any browser, no server needed)"
   done
+  # The end of the review: the class report of the exercise, every trainee of this run
+  # side by side (metrics, score, coverage maps, progress) and the metrics as CSV.
+  echo
+  echo "== class report: exercise \"teaching\" (palp-review class) =="
+  "$review" --db "$db" class --exercise teaching --since "$since" --out "$out/class-teaching.html" \
+    --csv "$out/class-teaching.csv" || status=1
+  echo "class report: $out/class-teaching.html; metrics per session: $out/class-teaching.csv"
 fi
 exit "$status"

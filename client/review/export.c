@@ -8,6 +8,8 @@
 
 #include <cjson/cJSON.h>
 
+#include "assess_log.h"
+#include "grades.h"
 #include "review.h"
 
 typedef struct exp_ctx {
@@ -79,15 +81,6 @@ static int feedback_cb(void *u, int64_t frame, int slot, palp_vec3 f) {
     fprintf(x->f, "{\"frame\": %" PRId64 ", \"slot\": %d, \"force_n\": [%.17g, %.17g, %.17g]}", frame, slot, f.x,
             f.y, f.z);
   return 0;
-}
-
-static void csv_str(FILE *f, const char *s) {
-  fputc('"', f);
-  for (const char *p = s ? s : ""; *p; p++) {
-    if (*p == '"') fputc('"', f);
-    fputc(*p, f);
-  }
-  fputc('"', f);
 }
 
 static int event_cb(void *u, double wall, int64_t frame, const char *kind, const char *detail, int64_t count) {
@@ -164,8 +157,8 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   }
   const int csv = !strcmp(format, "csv");
   if (csv && strcmp(table, "frames") && strcmp(table, "contacts") && strcmp(table, "feedback") &&
-      strcmp(table, "events") && strcmp(table, "notes")) {
-    fprintf(stderr, "palp-review export: --table must be frames, contacts, feedback, events or notes\n");
+      strcmp(table, "events") && strcmp(table, "notes") && strcmp(table, "metrics")) {
+    fprintf(stderr, "palp-review export: --table must be frames, contacts, feedback, events, notes or metrics\n");
     return REVIEW_ERROR;
   }
   FILE *f = stdout;
@@ -191,9 +184,24 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     } else if (!strcmp(table, "events")) {
       fputs("wall_unix_s,frame,kind,count,detail\n", f);
       rc = palp_db_each_event(db, s->id, event_cb, &x);
-    } else {
+    } else if (!strcmp(table, "notes")) {
       fputs("wall_unix_s,author,text,grade\n", f);
-      rc = palp_db_each_note(db, s->id, note_cb, &x);
+      rc = review_each_note(db, s->id, note_cb, &x);
+    } else {
+      /* One row: the session's metrics (as palp-review show and the class CSV give them). */
+      review_assessment a;
+      char err[512];
+      rc = review_assess(db, s, &a, err, sizeof err);
+      if (rc == PALP_DB_ENOTFOUND && review_stored_metrics(db, s->id, &a) == 0) rc = 0;
+      else if (rc) {
+        palp_log_error(log, "export metrics: %s", err);
+        if (f != stdout) fclose(f);
+        return REVIEW_ERROR;
+      } else rc = 1; /* computed: free it below */
+      review_metrics_csv_header(f);
+      review_metrics_csv_row(f, s, &a);
+      if (rc == 1) review_assessment_free(&a);
+      rc = 0;
     }
   } else {
     char *scene = NULL, *params = NULL;

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "assess_log.h"
+#include "assess_svg.h"
 #include "review.h"
 
 #define PLOT_POINTS 1500 /* time-series points per plot; buckets keep their maxima so peaks survive */
@@ -235,6 +237,145 @@ static void info_row(FILE *f, const char *k, const char *v) {
   fputs("</td></tr>\n", f);
 }
 
+
+/* One metric row: its name, value, the rubric's pass mark and the verdict, with data-
+ * attributes so that a reader (or a test) finds a metric by name, not by position. */
+static void metric_row(FILE *f, const char *key, const char *name, const char *value, const char *mark, int verdict) {
+  fprintf(f, "<tr data-metric=\"%s\"><th>%s</th><td class=\"value\">", key, name);
+  html_str(f, value);
+  fputs("</td><td>", f);
+  html_str(f, mark);
+  fprintf(f, "</td><td class=\"%s\">%s</td></tr>\n", verdict < 0 ? "na" : verdict ? "pass" : "fail",
+          verdict < 0 ? "-" : verdict ? "pass" : "FAIL");
+}
+
+/* The assessment (issue 13): metrics and score against the rubric, the coverage map per
+ * pressure band, the finger's path with the findings against the now revealed lesions. */
+static void assessment_section(palp_log *log, palp_db *db, const palp_db_session_info *s, FILE *f) {
+  review_assessment a;
+  char err[256] = "";
+  fputs("<h2>Assessment</h2>\n", f);
+  const int rc = review_assess(db, s, &a, err, sizeof err);
+  if (rc == PALP_DB_ENOTFOUND) {
+    review_assessment st;
+    if (review_stored_metrics(db, s->id, &st) == 0) {
+      fprintf(f, "<p id=\"assessment-pruned\">The finger samples of this session were pruned; its stored metrics: "
+              "%d of %d lesions found, %d false positives, coverage light/medium/deep %.1f%% / %.1f%% / %.1f%%, "
+              "pattern %s, score %.1f (%s).</p>\n", st.r.found, st.r.lesion_count, st.r.false_positives,
+              100 * st.r.coverage[0], 100 * st.r.coverage[1], 100 * st.r.coverage[2], palp_pattern_name(st.r.pattern),
+              st.r.score, st.r.pass ? "pass" : "fail");
+    } else {
+      fputs("<p id=\"assessment-none\">No finger samples were logged for this session (a force-driven session, or a "
+            "log from before the assessment): nothing to assess.</p>\n", f);
+    }
+    return;
+  }
+  if (rc) {
+    palp_log_warn(log, "report: assessment: %s", err);
+    fputs("<p class=\"warn\" id=\"assessment-error\">The assessment could not be computed: ", f);
+    html_str(f, err);
+    fputs("</p>\n", f);
+    return;
+  }
+  const palp_assess_result *r = &a.r;
+  const palp_rubric *rb = &a.ex.rubric;
+  char v[256], m[128];
+  if (a.has_exercise) {
+    fputs("<p>Exercise <b id=\"exercise-name\">", f);
+    html_str(f, a.exercise_name);
+    fputs("</b>: ", f);
+    html_str(f, a.ex.title);
+    fprintf(f, " (time limit %.0f s). Metrics from %d finger samples; definitions in docs/assessment.md.</p>\n",
+            a.ex.time_limit, a.samples);
+  } else {
+    fprintf(f, "<p id=\"exercise-name\">Free practice: no exercise, no hidden lesions, so no sensitivity and no score. "
+            "Metrics from %d finger samples.</p>\n", a.samples);
+  }
+  fputs("<table id=\"metrics\"><tr><th>metric</th><th>value</th><th>pass mark</th><th>verdict</th></tr>\n", f);
+  const int ex = a.has_exercise;
+  if (ex) {
+    snprintf(v, sizeof v, "%d of %d lesions found (%.0f%%)", r->found, r->lesion_count, 100 * r->sensitivity);
+    snprintf(m, sizeof m, ">= %.0f%%", 100 * rb->pass_sensitivity);
+    metric_row(f, "sensitivity", "Sensitivity", v, m, r->pass_metric[PALP_METRIC_SENSITIVITY]);
+    snprintf(v, sizeof v, "%d (of %d marks, %d withdrawn)", r->false_positives, r->findings, r->withdrawn);
+    snprintf(m, sizeof m, "<= %d", rb->pass_max_false_positives);
+    metric_row(f, "false_positives", "False positives", v, m, r->pass_metric[PALP_METRIC_FALSE_POSITIVES]);
+  }
+  for (int b = 0; b < PALP_BAND_COUNT; b++) {
+    char key[32], name[64];
+    snprintf(key, sizeof key, "coverage_%s", palp_band_name(b));
+    snprintf(name, sizeof name, "Thoroughness, %s pressure", palp_band_name(b));
+    snprintf(v, sizeof v, "%.1f%% of the dome", 100 * r->coverage[b]);
+    snprintf(m, sizeof m, ">= %.0f%%", 100 * rb->pass_coverage[b]);
+    metric_row(f, key, name, v, ex ? m : "-", ex ? r->pass_metric[PALP_METRIC_THOROUGHNESS] : -1);
+  }
+  snprintf(v, sizeof v, "%s (path %.2f m, %d presses, overlap %.2f, never palpated %.1f%%, largest gap %.1f cm2)",
+           palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
+           100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4);
+  metric_row(f, "pattern", "Search pattern", v, ex ? "systematic" : "-", ex ? r->pass_metric[PALP_METRIC_PATTERN] : -1);
+  snprintf(v, sizeof v, "%.2f s", r->duration);
+  snprintf(m, sizeof m, "<= %.0f s", a.ex.time_limit);
+  metric_row(f, "time", "Time", v, ex ? m : "-", ex ? r->pass_metric[PALP_METRIC_TIME] : -1);
+  snprintf(v, sizeof v, "peak %.2f N, %d episode%s above %.2f N (%.2f s)", r->peak_force, r->out_of_range,
+           r->out_of_range == 1 ? "" : "s", a.ex.max_force, r->out_of_range_time);
+  snprintf(m, sizeof m, "<= %d episodes", rb->pass_max_out_of_range);
+  metric_row(f, "force", "Force", v, ex ? m : "-", ex ? r->pass_metric[PALP_METRIC_FORCE] : -1);
+  if (ex) {
+    snprintf(v, sizeof v, "%.1f / 100", r->score);
+    snprintf(m, sizeof m, ">= %.0f and every metric", rb->pass_score);
+    metric_row(f, "score", "Score", v, m, r->pass);
+  }
+  fputs("</table>\n", f);
+
+  fputs("<h3>Coverage per pressure level</h3>\n<p>Seen from above (12 o'clock = +y). A triangle is coloured when the "
+        "finger's contact footprint covered it in that band:", f);
+  for (int b = 0; b < PALP_BAND_COUNT; b++)
+    fprintf(f, " <span style=\"display:inline-block;width:10px;height:10px;background:%s\"></span> %s", review_band_colour[b],
+            palp_band_name(b));
+  fprintf(f, "; <span style=\"display:inline-block;width:10px;height:10px;background:%s\"></span> never.</p>\n<div "
+          "id=\"coverage-maps\" style=\"display:flex;gap:16px;flex-wrap:wrap\">\n", REVIEW_UNCOVERED_COLOUR);
+  for (int b = 0; b < PALP_BAND_COUNT; b++) {
+    char id[32];
+    snprintf(id, sizeof id, "coverage-%s", palp_band_name(b));
+    fprintf(f, "<figure style=\"margin:0\"><figcaption>%s: %.1f%%</figcaption>\n", palp_band_name(b), 100 * r->coverage[b]);
+    review_svg_coverage(f, &a, b, 220, id);
+    fputs("</figure>\n", f);
+  }
+  fputs("</div>\n<h3>Path and findings</h3>\n<p>The finger's contact point while touching (grey line); the lesions, "
+        "revealed (dashed orange circles, their size); the trainee's marks: a blue cross found a lesion, a pink square "
+        "is a false positive, a grey ring was withdrawn.</p>\n", f);
+  review_svg_path(f, &a, 360, "finger-path");
+  fputs("<table id=\"findings\"><tr><th>#</th><th>mark</th><th>time [s]</th><th>x, y, z [mm]</th><th>clock</th>"
+        "<th>verdict</th></tr>\n", f);
+  for (int i = 0; i < a.mark_n; i++) {
+    const review_mark *k = &a.marks[i];
+    const palp_vec3 p = k->f.point;
+    fprintf(f, "<tr class=\"finding %s\"><td>%d</td><td>%lld</td><td>%.2f</td><td>%.1f, %.1f, %.1f</td><td>%.1f h</td><td>",
+            review_finding_class(k->match), i + 1, (long long)k->mark_id, k->f.t, p.x * 1e3, p.y * 1e3, p.z * 1e3,
+            review_clock_hours(p));
+    if (k->match >= 0) fprintf(f, "found lesion %d", k->match + 1);
+    else fputs(review_finding_class(k->match), f);
+    fputs("</td></tr>\n", f);
+  }
+  fputs("</table>\n", f);
+  if (a.ex.lesion_count) {
+    fputs("<table id=\"lesions\"><tr><th>lesion</th><th>diameter [mm]</th><th>depth [mm]</th><th>stiffness x gel</th>"
+          "<th>surface x, y, z [mm]</th><th>found by</th></tr>\n", f);
+    for (int i = 0; i < a.ex.lesion_count; i++) {
+      const palp_exercise_lesion *l = &a.ex.lesion[i];
+      const palp_vec3 c = a.lesion_surface[i];
+      fprintf(f, "<tr class=\"lesion %s\"><td>%d</td><td>%.1f</td><td>%.1f</td><td>%.1f</td><td>%.1f, %.1f, %.1f</td><td>",
+              r->lesion_found[i] >= 0 ? "found" : "missed", i + 1, l->diameter * 1e3, l->depth * 1e3, l->stiffness_ratio,
+              c.x * 1e3, c.y * 1e3, c.z * 1e3);
+      if (r->lesion_found[i] >= 0) fprintf(f, "mark #%d", r->lesion_found[i] + 1);
+      else fputs("missed", f);
+      fputs("</td></tr>\n", f);
+    }
+    fputs("</table>\n", f);
+  }
+  review_assessment_free(&a);
+}
+
 int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *out_path) {
   /* The phantom's rest mesh from the logged scene. */
   char *scene_json = NULL;
@@ -277,7 +418,8 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     fputs("</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222;max-width:1000px}"
           "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 8px;"
           "text-align:left;font-size:13px}th{background:#f4f4f4}.warn{color:#a00;font-weight:bold}"
-          "svg.plot{display:block;margin:8px 0 20px;border:1px solid #ddd}</style>\n</head><body>\n", f);
+          "svg.plot{display:block;margin:8px 0 20px;border:1px solid #ddd}td.fail{color:#a00;font-weight:bold}"
+          "td.pass{color:#060}</style>\n</head><body>\n", f);
     fputs("<h1>Palpation session <span id=\"session-uid\">", f);
     html_str(f, s->uid);
     fputs("</span></h1>\n<table id=\"session-info\">\n", f);
@@ -300,6 +442,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
       fprintf(f, "<p class=\"warn\">This log is incomplete: %lld records were shed and %lld lost to disk errors.</p>\n",
               (long long)s->records_shed, (long long)s->records_failed);
 
+    assessment_section(log, db, s, f);
     fputs("<h2>Force</h2>\n", f);
     series fs = {"contact force", "#c0392b", ts.t, ts.force, ts.n};
     svg_plot(f, "plot-force", "Contact force over time", "simulated time [s]", "force [N]", &fs, 1);

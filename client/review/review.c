@@ -11,9 +11,12 @@
 #include <time.h>
 
 #include "review.h"
+#include "review_util.h"
+#include "assess_log.h"
+#include "grades.h"
+#include "retention.h"
+#include <sqlite3.h>
 #include "palp_app.h"
-
-#define PI 3.14159265358979323846
 
 /* replay --verbose has its own meaning, so only --log-level/--log-file. */
 #define REVIEW_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
@@ -22,167 +25,21 @@ static void usage(FILE *f) {
   fputs("usage: palp-review [--db FILE] COMMAND [ARGS]\n"
         "  list     [--trainee NAME] [--phantom ID|NAME] [--since DATE] [--until DATE]\n"
         "  show     SESSION\n"
-        "  export   SESSION --format csv|json [--table frames|contacts|feedback|events|notes] [--out FILE]\n"
-        "  annotate SESSION --author NAME --note TEXT [--grade GRADE]\n"
+        "  export   SESSION --format csv|json [--table frames|contacts|feedback|events|notes|metrics] [--out FILE]\n"
+        "  annotate SESSION --author NAME --note TEXT [--score 0-100] [--level LEVEL]\n"
+        "           LEVEL is insufficient|developing|competent|proficient; --grade takes either\n"
         "  replay   SESSION [--verbose]\n"
         "  report   SESSION --out FILE.html\n"
+        "  class    --exercise NAME [--since DATE] --out FILE.html [--csv FILE]\n"
+        "  delete   SESSION...                  (the sessions and all their data)\n"
+        "  prune    --older-than DAYS [--keep-graded] [--dry-run]\n"
+        "           (ended sessions: frames, feedback, contacts, meshes, finger samples go; the session,\n"
+        "            exercise, findings, events, notes/grades and a metrics summary stay)\n"
         "SESSION is a session uid or a unique prefix of one. DATE is YYYY-MM-DD[THH:MM[:SS]] local time.\n"
         "The database is --db, else $PALP_DB, else ./palp-sessions.db.\n"
         "Errors are log lines (timestamp, level); tables and reports go to stdout.\n",
         f);
   palp_app_common_usage(f, REVIEW_OPTS);
-}
-
-void review_fmt_time(double unix_s, char *buf, size_t len) {
-  if (!(unix_s > 0)) {
-    snprintf(buf, len, "-");
-    return;
-  }
-  time_t t = (time_t)unix_s;
-  struct tm tm;
-  localtime_r(&t, &tm);
-  strftime(buf, len, "%Y-%m-%d %H:%M:%S %z", &tm);
-}
-
-void json_str(FILE *f, const char *s) {
-  fputc('"', f);
-  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
-    if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
-    else if (*p == '\n') fputs("\\n", f);
-    else if (*p == '\t') fputs("\\t", f);
-    else if (*p < 0x20) fprintf(f, "\\u%04x", *p);
-    else fputc(*p, f);
-  }
-  fputc('"', f);
-}
-
-void html_str(FILE *f, const char *s) {
-  for (const char *p = s ? s : ""; *p; p++) {
-    switch (*p) {
-    case '<': fputs("&lt;", f); break;
-    case '>': fputs("&gt;", f); break;
-    case '&': fputs("&amp;", f); break;
-    case '"': fputs("&quot;", f); break;
-    case '\'': fputs("&#39;", f); break;
-    default: fputc(*p, f);
-    }
-  }
-}
-
-/* Parses YYYY-MM-DD[THH:MM[:SS]] (or a space instead of T) as local time. */
-static int parse_date(const char *s, double *out) {
-  struct tm tm;
-  memset(&tm, 0, sizeof tm);
-  int y, mo, d, h = 0, mi = 0, se = 0;
-  char sep = 0;
-  int n = sscanf(s, "%4d-%2d-%2d%c%2d:%2d:%2d", &y, &mo, &d, &sep, &h, &mi, &se);
-  if (n != 3 && n < 6) return -1;
-  if (n >= 4 && sep != 'T' && sep != ' ') return -1;
-  if (mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 || h > 23 || mi < 0 || mi > 59 || se < 0 || se > 60)
-    return -1;
-  tm.tm_year = y - 1900;
-  tm.tm_mon = mo - 1;
-  tm.tm_mday = d;
-  tm.tm_hour = h;
-  tm.tm_min = mi;
-  tm.tm_sec = se;
-  tm.tm_isdst = -1;
-  time_t t = mktime(&tm);
-  if (t == (time_t)-1) return -1;
-  *out = (double)t;
-  return 0;
-}
-
-static int contact_cb(void *u, const palp_db_contact *c) {
-  review_contacts *v = u;
-  if (v->n == v->cap) {
-    int ncap = v->cap ? 2 * v->cap : 64;
-    palp_db_contact *nv = realloc(v->v, (size_t)ncap * sizeof *nv);
-    if (!nv) return PALP_ENOMEM;
-    v->v = nv;
-    v->cap = ncap;
-  }
-  v->v[v->n++] = *c;
-  return 0;
-}
-
-int review_load_contacts(palp_db *db, int64_t sid, review_contacts *out) {
-  memset(out, 0, sizeof *out);
-  return palp_db_each_contact(db, sid, contact_cb, out);
-}
-
-double review_clock_hours(palp_vec3 p) {
-  /* Angle clockwise from +y seen from above (+z towards the viewer), in hours of a clock face. */
-  double a = atan2(p.x, p.y); /* 0 at +y, +pi/2 at +x */
-  double h = a / (2.0 * PI) * 12.0;
-  if (h <= 0.0) h += 12.0;
-  return h;
-}
-
-typedef struct press_acc {
-  review_press *v;
-  int n;
-} press_acc;
-
-static int fb_peak_cb(void *u, int64_t frame, int slot, palp_vec3 f) {
-  press_acc *a = u;
-  const double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
-  /* Slots are reused after removal: the press on this slot live at that frame owns the sample
-   * (feedback carries the frame after the step, so the live range is (on, off]). */
-  for (int i = a->n - 1; i >= 0; i--)
-    if (a->v[i].slot == slot && frame > a->v[i].frame_on && (a->v[i].frame_off < 0 || frame <= a->v[i].frame_off)) {
-      if (a->v[i].kind == PALP_DB_KIND_FINGER && m > a->v[i].peak_force_n) a->v[i].peak_force_n = m;
-      break;
-    }
-  return 0;
-}
-
-int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n) {
-  review_press *v = calloc((size_t)(c->n > 0 ? c->n : 1), sizeof *v);
-  if (!v) return PALP_ENOMEM;
-  int k = 0;
-  for (int i = 0; i < c->n; i++) {
-    const palp_db_contact *x = &c->v[i];
-    if (x->op == PALP_DB_OP_ADD) {
-      review_press *p = &v[k++];
-      p->slot = x->slot;
-      p->kind = x->kind;
-      p->distribution = x->def.distribution;
-      p->first_center_m = p->last_center_m = x->center_m;
-      p->t_on_s = x->sim_time_s;
-      p->t_off_s = -1;
-      p->frame_on = x->frame;
-      p->frame_off = -1;
-      if (x->kind == PALP_DB_KIND_FORCE)
-        p->peak_force_n = sqrt(x->force_n.x * x->force_n.x + x->force_n.y * x->force_n.y + x->force_n.z * x->force_n.z);
-      continue;
-    }
-    for (int j = k - 1; j >= 0; j--) {
-      review_press *p = &v[j];
-      if (p->slot != x->slot || p->t_off_s >= 0) continue;
-      if (x->op == PALP_DB_OP_REMOVE) {
-        p->t_off_s = x->sim_time_s;
-        p->frame_off = x->frame;
-      } else {
-        p->updates++;
-        if (x->kind == PALP_DB_KIND_FINGER) p->last_center_m = x->center_m;
-        else {
-          double m = sqrt(x->force_n.x * x->force_n.x + x->force_n.y * x->force_n.y + x->force_n.z * x->force_n.z);
-          if (m > p->peak_force_n) p->peak_force_n = m;
-        }
-      }
-      break;
-    }
-  }
-  press_acc a = {v, k};
-  int rc = palp_db_each_feedback(db, sid, fb_peak_cb, &a);
-  if (rc) {
-    free(v);
-    return rc;
-  }
-  *out = v;
-  *n = k;
-  return 0;
 }
 
 /* ---- list ------------------------------------------------------------------------------ */
@@ -198,7 +55,7 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     else if (!strcmp(a, "--phantom")) f.phantom = argv[++i];
     else if (!strcmp(a, "--since") || !strcmp(a, "--until")) {
       double t;
-      if (parse_date(argv[++i], &t)) {
+      if (review_parse_date(argv[++i], &t)) {
         fprintf(stderr, "palp-review list: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", a, argv[i]);
         return REVIEW_ERROR;
       }
@@ -215,16 +72,19 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     palp_log_error(log, "list: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
-  printf("%-36s %-14s %-12s %-25s %9s %-16s %s\n", "SESSION", "TRAINEE", "PHANTOM", "STARTED", "SIM [s]",
-         "ENDED", "NOTES");
+  printf("%-36s %-14s %-20s %-16s %-25s %9s %-16s %-5s %s\n", "SESSION", "TRAINEE", "PHANTOM", "EXERCISE", "STARTED",
+         "SIM [s]", "ENDED", "NOTES", "GRADE");
   for (int i = 0; i < n; i++) {
     char t[64];
     review_fmt_time(v[i].start_unix_s, t, sizeof t);
     palp_db_log_health h;
     int known = palp_db_log_health_get(db, &v[i], &h) == 0;
-    printf("%-36s %-14s %-12s %-25s %9.3f %-16s %lld%s%s\n", v[i].uid, v[i].trainee, v[i].phantom_id, t,
-           v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
-           known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
+    char exname[64] = "-", grade[160];
+    if (palp_db_session_exercise(db, v[i].id, exname, sizeof exname, NULL) != 0) snprintf(exname, sizeof exname, "-");
+    review_latest_grade(db, v[i].id, grade, sizeof grade);
+    printf("%-36s %-14s %-20s %-16s %-25s %9.3f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, v[i].phantom_name, exname,
+           t, v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
+           grade, known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
   }
   printf("%d session%s\n", n, n == 1 ? "" : "s");
   free(v);
@@ -288,21 +148,19 @@ static int note_cb(void *u, double wall, const char *author, const char *text, c
   return 0;
 }
 
-static const char *dist_name(palp_distribution d) {
-  switch (d) {
-  case PALP_DIST_SINGLE: return "single";
-  case PALP_DIST_UNIFORM: return "uniform";
-  case PALP_DIST_GAUSSIAN: return "gaussian";
-  case PALP_DIST_GAUSSIAN_OFFSET: return "gauss-off";
-  }
-  return "-";
-}
-
 static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   char t0[64], t1[64];
   review_fmt_time(s->start_unix_s, t0, sizeof t0);
   review_fmt_time(s->end_unix_s, t1, sizeof t1);
-  printf("session    %s\n", s->uid);
+  /* One name for a session (docs/naming.md): the stations print "session N", the number
+   * the server gave it on the wire; the log's uid is "<server run>-N". */
+  const char *dash = strrchr(s->uid, '-');
+  char *endp = NULL;
+  const unsigned long wire = dash ? strtoul(dash + 1, &endp, 10) : 0;
+  if (dash && endp && *endp == '\0' && endp != dash + 1 && dash != s->uid)
+    printf("session    %s  (\"session %lu\" on the stations; server run %.*s)\n", s->uid, wire, (int)(dash - s->uid),
+           s->uid);
+  else printf("session    %s\n", s->uid);
   printf("trainee    %s   station %s\n", s->trainee, s->station);
   printf("phantom    %s (%s)\n", s->phantom_id, s->phantom_name);
   char *params = NULL;
@@ -318,8 +176,9 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   printf("duration   wall %.3f s, simulated %.3f s (%lld frames logged at %.0f Hz, dt %.6g s)\n",
          s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0, s->sim_duration_s, (long long)s->frames,
          s->tick_hz, s->dt_s);
-  printf("peak force           %.4f N at t = %.3f s\n", p.f, p.f_t);
-  printf("peak displacement    top vertex %.3f mm at t = %.3f s; any vertex %.3f mm at t = %.3f s\n",
+  printf("peak force           %.2f N at t = %.2f s (the phantom's force on the load, from the logged frames)\n", p.f,
+         p.f_t);
+  printf("peak displacement    top vertex %.2f mm at t = %.2f s; any vertex %.2f mm at t = %.2f s\n",
          p.top * 1e3, p.top_t, p.max * 1e3, p.max_t);
   if (p.ngel)
     printf("gel                  pressure %.3f .. %.3f Pa, volume %.4f .. %.4f cm^3\n", p.p_min, p.p_max,
@@ -342,7 +201,7 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
          nfinger == 1 ? "" : "s");
   if (np) {
     printf("where pressed (seen from above; 12 o'clock = +y, 3 o'clock = +x; arc from the pole):\n");
-    printf("    %-4s %-6s %-9s %-26s %-8s %-9s %-17s %s\n", "slot", "kind", "dist", "centre x,y,z [mm]", "clock",
+    printf("    %-4s %-6s %-18s %-26s %-8s %-9s %-15s %s\n", "slot", "kind", "distribution", "centre x,y,z [mm]", "clock",
            "arc [mm]", "on .. off [s]", "peak [N]");
     for (int i = 0; i < np; i++) {
       const review_press *q = &pr[i];
@@ -350,18 +209,29 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
       const double r = sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
       const double arc = r > 0 ? r * acos(fmax(-1.0, fmin(1.0, x.z / r))) : 0.0;
       char off[24];
-      if (q->t_off_s >= 0) snprintf(off, sizeof off, "%.3f", q->t_off_s);
+      if (q->t_off_s >= 0) snprintf(off, sizeof off, "%.2f", q->t_off_s);
       else snprintf(off, sizeof off, "end");
       char ctr[40];
       snprintf(ctr, sizeof ctr, "%.1f,%.1f,%.1f", x.x * 1e3, x.y * 1e3, x.z * 1e3);
-      printf("    %-4d %-6s %-9s %-26s %5.1f h  %-9.1f %7.3f .. %-7s %.3f%s\n", q->slot,
-             q->kind == PALP_DB_KIND_FORCE ? "force" : "finger", q->kind == PALP_DB_KIND_FORCE ? dist_name(q->distribution) : "-",
+      printf("    %-4d %-6s %-18s %-26s %5.1f h  %-9.1f %6.2f .. %-6s %.2f%s\n", q->slot,
+             q->kind == PALP_DB_KIND_FORCE ? "force" : "finger", q->kind == PALP_DB_KIND_FORCE ? review_dist_name(q->distribution) : "-",
              ctr, review_clock_hours(x), arc * 1e3, q->t_on_s, off, q->peak_force_n,
              q->updates ? "" : "");
     }
   }
   free(pr);
   free(c.v);
+  review_assessment a;
+  char aerr[512];
+  const int arc = review_assess(db, s, &a, aerr, sizeof aerr);
+  if (arc == 0) {
+    review_metrics_print(stdout, &a);
+    review_assessment_free(&a);
+  } else if (arc == PALP_DB_ENOTFOUND) {
+    if (review_stored_metrics_print(db, s->id, stdout) != 0) printf("metrics    none: %s\n", aerr);
+  } else {
+    printf("metrics    UNKNOWN: %s\n", aerr);
+  }
   printf("events     %lld\n", (long long)s->events);
   ev_tally t = {0};
   palp_db_each_event(db, s->id, ev_cb, &t);
@@ -371,7 +241,7 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
     printf("\n");
   }
   printf("notes      %lld\n", (long long)s->notes);
-  palp_db_each_note(db, s->id, note_cb, NULL);
+  review_each_note(db, s->id, note_cb, NULL);
   palp_db_log_health h;
   char line[600];
   if (palp_db_log_health_get(db, s, &h) == 0) {
@@ -390,7 +260,7 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
 
 /* ---- annotate -------------------------------------------------------------------------- */
 static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *s, int argc, char **argv) {
-  const char *author = NULL, *note = NULL, *grade = NULL;
+  const char *author = NULL, *note = NULL, *score_s = NULL, *level = NULL, *grade = NULL;
   for (int i = 0; i < argc; i++) {
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review annotate: %s needs a value\n", argv[i]);
@@ -398,6 +268,8 @@ static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *
     }
     if (!strcmp(argv[i], "--author")) author = argv[++i];
     else if (!strcmp(argv[i], "--note")) note = argv[++i];
+    else if (!strcmp(argv[i], "--score")) score_s = argv[++i];
+    else if (!strcmp(argv[i], "--level")) level = argv[++i];
     else if (!strcmp(argv[i], "--grade")) grade = argv[++i];
     else {
       fprintf(stderr, "palp-review annotate: unknown option %s\n", argv[i]);
@@ -408,11 +280,38 @@ static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *
     fprintf(stderr, "palp-review annotate: --author and --note are required\n");
     return REVIEW_ERROR;
   }
-  if (palp_db_add_note(db, s->id, author, note, grade)) {
+  char msg[256];
+  int li;
+  /* The old free-text --grade maps onto the structured grade: a level name, or a score. */
+  if (grade) {
+    if (review_parse_level(grade, &li, msg, sizeof msg) == 0) {
+      if (level) {
+        fprintf(stderr, "palp-review annotate: --grade %s and --level both give a level\n", grade);
+        return REVIEW_ERROR;
+      }
+      level = grade;
+    } else if (!score_s) score_s = grade;
+    else {
+      fprintf(stderr, "palp-review annotate: --grade %s and --score both give a score\n", grade);
+      return REVIEW_ERROR;
+    }
+  }
+  double score = -1;
+  if (score_s && review_parse_score(score_s, &score, msg, sizeof msg)) {
+    fprintf(stderr, "palp-review annotate: %s%s\n", msg, grade ? " (--grade takes a score 0-100 or a level)" : "");
+    return REVIEW_ERROR;
+  }
+  if (level && review_parse_level(level, &li, msg, sizeof msg)) {
+    fprintf(stderr, "palp-review annotate: %s\n", msg);
+    return REVIEW_ERROR;
+  }
+  if (review_add_graded_note(db, s->id, author, note, score, level)) {
     palp_log_error(log, "annotate: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
-  printf("note added to %s by %s%s%s\n", s->uid, author, grade ? ", grade " : "", grade ? grade : "");
+  char g[160];
+  review_grade_text(score >= 0, score, level, NULL, g, sizeof g);
+  printf("note added to %s by %s%s%s\n", s->uid, author, strcmp(g, "-") ? ", grade " : "", strcmp(g, "-") ? g : "");
   return REVIEW_OK;
 }
 
@@ -461,7 +360,7 @@ int main(int argc, char **argv) {
     return REVIEW_ERROR;
   }
   const char *cmd = argv[i++];
-  static const char *const cmds[] = {"list", "show", "export", "annotate", "replay", "report"};
+  static const char *const cmds[] = {"list", "show", "export", "annotate", "replay", "report", "class", "delete", "prune"};
   int known = 0;
   for (size_t k = 0; k < sizeof cmds / sizeof cmds[0]; k++) known |= !strcmp(cmd, cmds[k]);
   if (!known) {
@@ -481,8 +380,11 @@ int main(int argc, char **argv) {
     return REVIEW_ERROR;
   }
   int rc;
-  if (!strcmp(cmd, "list")) {
-    rc = cmd_list(&log, db, argc - i, argv + i);
+  if (!strcmp(cmd, "list") || !strcmp(cmd, "class") || !strcmp(cmd, "delete") || !strcmp(cmd, "prune")) {
+    if (!strcmp(cmd, "list")) rc = cmd_list(&log, db, argc - i, argv + i);
+    else if (!strcmp(cmd, "class")) rc = review_class(&log, db, argc - i, argv + i);
+    else if (!strcmp(cmd, "delete")) rc = review_delete(&log, db, path, argc - i, argv + i);
+    else rc = review_prune(&log, db, path, argc - i, argv + i);
     palp_db_close(db);
     return rc;
   }

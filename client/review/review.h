@@ -6,39 +6,17 @@
 
 #include "palp_db.h"
 #include "palp_log.h"
+#include "review_util.h"
 
 /* Exit codes: 0 ok, 1 the check failed (replay mismatch), 2 bad input or an error. */
 enum { REVIEW_OK = 0, REVIEW_MISMATCH = 1, REVIEW_ERROR = 2 };
-
-/* A whole session's small tables in memory (frames and feedback are streamed instead). */
-typedef struct review_contacts {
-  palp_db_contact *v;
-  int n, cap;
-} review_contacts;
-int review_load_contacts(palp_db *db, int64_t sid, review_contacts *out);
-
-/* Per contact slot use, derived from the inputs and feedback: where and how hard. */
-typedef struct review_press {
-  int slot;
-  palp_db_contact_kind kind;
-  palp_distribution distribution;
-  palp_vec3 first_center_m, last_center_m;
-  double t_on_s, t_off_s; /* t_off_s < 0: never removed */
-  int64_t frame_on, frame_off; /* frame_off < 0: never removed */
-  double peak_force_n;    /* force contacts: max |F| applied; fingers: max |feedback| */
-  int updates;
-} review_press;
-int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n);
-/* "3 o'clock": the clock position of a point seen from above (12 = +y, 3 = +x). */
-double review_clock_hours(palp_vec3 p);
-
-void review_fmt_time(double unix_s, char *buf, size_t len); /* local time, with offset */
-void json_str(FILE *f, const char *s);
-void html_str(FILE *f, const char *s);
 
 int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *format, const char *table,
                   const char *out_path);
 int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int verbose);
 int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *out_path);
+
+/* palp-review class --exercise NAME [--since DATE] --out FILE.html [--csv FILE] (class.c). */
+int review_class(palp_log *log, palp_db *db, int argc, char **argv);
 
 #endif

@@ -11,7 +11,7 @@ rm -rf "$dir"
 mkdir -p "$dir"
 uid=report-run-7c1e-0042
 "$sim" "$dir/r.db" "$uid" "$scene" 1.6 >/dev/null
-"$review" --db "$dir/r.db" annotate "$uid" --author "Dr. <b>Lee</b>" --note "check <script>alert(1)</script> escaping" --grade A >/dev/null
+"$review" --db "$dir/r.db" annotate "$uid" --author "Dr. <b>Lee</b>" --note "check <script>alert(1)</script> escaping" --level competent >/dev/null
 "$review" --db "$dir/r.db" report "$uid" --out "$dir/report.html"
 # Self-contained: nothing fetched from anywhere.
 if grep -Eiq '(src|href)=.(https?:)?//|@import|url\(' "$dir/report.html"; then

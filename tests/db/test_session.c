@@ -181,9 +181,9 @@ static void check_csv_and_show(const char *db, const char *uid, const sim_result
   out = run(&st, "--db '%s' show %s", db, uid);
   REQUIRE(out && st == 0, "show exit %d", st);
   char want[128];
-  snprintf(want, sizeof want, "peak force           %.4f N at t = %.3f s", peak, peak_t);
+  snprintf(want, sizeof want, "peak force           %.2f N at t = %.2f s", peak, peak_t);
   CHECK(strstr(out, want), "show lacks '%s':\n%s", want, out);
-  snprintf(want, sizeof want, "top vertex %.3f mm", peak_top * 1e3);
+  snprintf(want, sizeof want, "top vertex %.2f mm", peak_top * 1e3);
   CHECK(strstr(out, want), "show lacks '%s'", want);
   snprintf(want, sizeof want, "contacts   %d inputs", r->ncontacts);
   CHECK(strstr(out, want), "show lacks '%s'", want);
@@ -192,12 +192,16 @@ static void check_csv_and_show(const char *db, const char *uid, const sim_result
         "show: trainee, '%s', completeness:\n%s", want, out);
   free(out);
 
-  out = run(&st, "--db '%s' annotate %s --author 'Dr. Lee' --note 'Good systematic pattern; press deeper at 8 o'\"'\"'clock.' --grade B+",
+  out = run(&st, "--db '%s' annotate %s --author 'Dr. Lee' --note 'Good systematic pattern; press deeper at 8 o'\"'\"'clock.' --grade B+ 2>/dev/null",
+            db, uid);
+  CHECK(st == 2, "a free-text grade 'B+' is refused with exit 2 (got %d)", st); /* issue 13: grades are structured */
+  free(out);
+  out = run(&st, "--db '%s' annotate %s --author 'Dr. Lee' --note 'Good systematic pattern; press deeper at 8 o'\"'\"'clock.' --score 82 --level competent",
             db, uid);
   CHECK(st == 0, "annotate exit %d", st);
   free(out);
   out = run(&st, "--db '%s' show %s", db, uid);
-  CHECK(strstr(out, "Dr. Lee [grade B+]: Good systematic pattern; press deeper at 8 o'clock."), "note in show:\n%s", out);
+  CHECK(strstr(out, "Dr. Lee [grade 82 competent]: Good systematic pattern; press deeper at 8 o'clock."), "note in show:\n%s", out);
   free(out);
   out = run(&st, "--db '%s' list --trainee trainee-07", db);
   CHECK(st == 0 && strstr(out, uid) && strstr(out, "1 session"), "list --trainee:\n%s", out);

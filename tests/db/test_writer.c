@@ -262,8 +262,8 @@ static void test_migration(const char *v1_sql) {
 
   palp_db *db;
   REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open v1: %s", err);
-  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 3,
-        "upgraded to %d (library %d, expected 3)", palp_db_file_version(db), palp_db_schema_version());
+  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 4,
+        "upgraded to %d (library %d, expected 4)", palp_db_file_version(db), palp_db_schema_version());
   palp_db_session_info info;
   CHECK(palp_db_find_session(db, "old-1", &info) == 0 && !strcmp(info.trainee, "carol") && info.frames == 1 &&
             info.records_shed == 0,
@@ -282,7 +282,7 @@ static void test_migration(const char *v1_sql) {
   path_in(p, sizeof p, "fresh.db");
   REQUIRE(palp_db_open(p, 1, &db, err, sizeof err) == 0, "create: %s", err);
   h = palp_db_handle(db);
-  CHECK(palp_db_file_version(db) == 3, "fresh version");
+  CHECK(palp_db_file_version(db) == 4, "fresh version");
   CHECK(db_scalar(h, "SELECT count(*) FROM meta WHERE key IN ('created_unix_s','app_version','schema_version')") == 3,
         "meta rows");
   CHECK(db_scalar(h, "PRAGMA journal_mode = WAL") >= -1, "wal");
@@ -315,7 +315,7 @@ static void test_newer(void) {
   palp_db *db;
   int rc = palp_db_open(p, 0, &db, err, sizeof err);
   CHECK(rc == PALP_DB_ENEWER, "newer file refused (rc %d)", rc);
-  CHECK(strstr(err, "database schema version 99 is newer than this palp (3); upgrade palp") != NULL,
+  CHECK(strstr(err, "database schema version 99 is newer than this palp (4); upgrade palp") != NULL,
         "clear message, got: %s", err);
   palp_db_writer *w;
   err[0] = '\0';

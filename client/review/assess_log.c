@@ -1,0 +1,320 @@
+/* Metrics from the log: the session's exercise (its logged JSON, hidden lesions included), the
+ * rest mesh (from the session's scene JSON), the finger samples and the findings go through
+ * palp_assess, the same pure call the assessment tests make in process, so the review shows
+ * exactly the definitions of docs/assessment.md. A session without an exercise is free practice:
+ * it is assessed against FREE_PRACTICE below (no lesions, the shipped pressure bands), and the
+ * review shows its coverage, pattern and forces but no sensitivity and no score. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <sqlite3.h>
+
+#include "assess_log.h"
+#include "review_util.h"
+
+/* The shipped exercises' bands and force limit (config/exercises/easy.json). The phantom is not
+ * loaded: the mesh comes from the session's own scene. */
+static const char FREE_PRACTICE[] =
+    "{\"name\":\"free-practice\",\"title\":\"Free practice\",\"phantom\":\"(session scene)\","
+    "\"instructions\":\"Free practice: no hidden lesions.\",\"time_limit_s\":3600,\"lesions\":[],"
+    "\"pressure_bands\":{\"light\":{\"depth_mm\":[1,5]},\"medium\":{\"depth_mm\":[5,12]},"
+    "\"deep\":{\"depth_mm\":[12,25]}},\"max_force_N\":20,\"match_margin_mm\":10,"
+    "\"rubric\":{\"weights\":{\"thoroughness\":1},\"pass\":{\"sensitivity\":0,"
+    "\"coverage\":{\"light\":0,\"medium\":0,\"deep\":0},\"score\":0}}}";
+
+typedef struct sample_acc {
+  palp_assess_sample *s;
+  int32_t *tri;
+  size_t *tri_at;
+  int n, cap;
+  size_t ntri, tricap;
+  double radius;
+  int slot; /* the first finger's slot: one trainee's finger per session */
+  int err;
+} sample_acc;
+
+static int sample_cb(void *u, const palp_db_finger_sample *fs) {
+  sample_acc *a = u;
+  if (a->n == 0 && a->slot < 0) a->slot = fs->slot;
+  if (fs->slot != a->slot) return 0;
+  if (a->n == a->cap) {
+    int ncap = a->cap ? 2 * a->cap : 4096;
+    palp_assess_sample *ns = realloc(a->s, sizeof *ns * (size_t)ncap);
+    if (!ns) return a->err = PALP_ENOMEM;
+    a->s = ns;
+    size_t *nt = realloc(a->tri_at, sizeof *nt * (size_t)ncap);
+    if (!nt) return a->err = PALP_ENOMEM;
+    a->tri_at = nt;
+    a->cap = ncap;
+  }
+  const int nt = fs->triangles ? fs->triangle_count : 0;
+  if (a->ntri + (size_t)nt > a->tricap) {
+    size_t ncap = a->tricap ? 2 * a->tricap + (size_t)nt : 65536;
+    int32_t *ntri = realloc(a->tri, sizeof *ntri * ncap);
+    if (!ntri) return a->err = PALP_ENOMEM;
+    a->tri = ntri;
+    a->tricap = ncap;
+  }
+  if (nt) memcpy(a->tri + a->ntri, fs->triangles, sizeof(int32_t) * (size_t)nt);
+  a->tri_at[a->n] = a->ntri;
+  a->ntri += (size_t)nt;
+  a->radius = fs->radius_m;
+  a->s[a->n++] = (palp_assess_sample){.t = fs->sim_time_s, .device = fs->device_m, .proxy = fs->proxy_m,
+                                      .force = fs->force_n, .contact = fs->in_contact, .point = fs->point_m,
+                                      .area = fs->area_m2, .triangle_count = nt};
+  return 0;
+}
+
+typedef struct mark_acc {
+  review_mark *v;
+  int n, cap, err;
+} mark_acc;
+
+static int finding_cb(void *u, const palp_db_finding *f) {
+  mark_acc *a = u;
+  if (f->op == PALP_DB_FINDING_WITHDRAW) {
+    /* A withdrawal names the station's mark: the latest mark with that id goes. */
+    for (int i = a->n - 1; i >= 0; i--)
+      if (a->v[i].mark_id == f->mark_id) {
+        a->v[i].f.withdrawn = 1;
+        break;
+      }
+    return 0;
+  }
+  if (a->n == a->cap) {
+    int ncap = a->cap ? 2 * a->cap : 16;
+    review_mark *nv = realloc(a->v, sizeof *nv * (size_t)ncap);
+    if (!nv) return a->err = PALP_ENOMEM;
+    a->v = nv;
+    a->cap = ncap;
+  }
+  a->v[a->n++] = (review_mark){.mark_id = f->mark_id,
+                               .f = {.t = f->sim_time_s, .point = f->point_m, .withdrawn = 0},
+                               .match = PALP_FINDING_FALSE};
+  return 0;
+}
+
+void review_assessment_free(review_assessment *a) {
+  if (!a) return;
+  palp_mesh_destroy(&a->mesh);
+  free(a->coverage);
+  free(a->path);
+  free(a->marks);
+  memset(a, 0, sizeof *a);
+}
+
+int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment *out, char *err, size_t errlen) {
+  memset(out, 0, sizeof *out);
+  if (errlen) err[0] = 0;
+  char *exjson = NULL;
+  int rc = palp_db_session_exercise(db, s->id, out->exercise_name, sizeof out->exercise_name, &exjson);
+  if (rc == 0) out->has_exercise = 1;
+  else if (rc != PALP_DB_ENOTFOUND) {
+    snprintf(err, errlen, "exercise: %s", palp_db_errmsg(db));
+    return rc;
+  }
+  char perr[512] = "";
+  rc = palp_exercise_parse(out->has_exercise ? exjson : FREE_PRACTICE, NULL, &out->ex, perr, sizeof perr);
+  free(exjson);
+  if (rc) {
+    snprintf(err, errlen, "the logged exercise '%s' does not parse: %s", out->exercise_name, perr);
+    return rc;
+  }
+  if (!out->has_exercise) snprintf(out->exercise_name, sizeof out->exercise_name, "%s", "");
+
+  char *scene = NULL;
+  if ((rc = palp_db_session_json(db, s->id, &scene, NULL))) {
+    snprintf(err, errlen, "scene: %s", palp_db_errmsg(db));
+    return rc;
+  }
+  palp_scene *sc = malloc(sizeof *sc);
+  if (!sc) {
+    free(scene);
+    return PALP_ENOMEM;
+  }
+  rc = palp_scene_parse(scene ? scene : "", sc, perr, sizeof perr);
+  free(scene);
+  if (rc) {
+    free(sc);
+    snprintf(err, errlen, "the logged scene does not parse: %s", perr);
+    return rc;
+  }
+  out->dome_radius_m = sc->world.mesh.radius;
+  rc = palp_mesh_create(&sc->world.mesh, &out->mesh);
+  free(sc);
+  if (rc) {
+    snprintf(err, errlen, "the logged scene's mesh: %s", palp_strerror(rc));
+    return rc;
+  }
+  for (int i = 0; i < out->ex.lesion_count; i++)
+    out->lesion_surface[i] = palp_exercise_lesion_surface(&out->ex.lesion[i], out->dome_radius_m);
+
+  sample_acc sa = {.slot = -1};
+  rc = palp_db_each_finger_sample(db, s->id, sample_cb, &sa);
+  mark_acc ma = {0};
+  if (!rc) rc = palp_db_each_finding(db, s->id, finding_cb, &ma);
+  if (rc) {
+    snprintf(err, errlen, "%s", sa.err || ma.err ? "out of memory" : palp_db_errmsg(db));
+    goto fail;
+  }
+  out->samples = sa.n;
+  out->finger_radius_m = sa.radius;
+  out->marks = ma.v;
+  out->mark_n = ma.n;
+  ma.v = NULL;
+  if (sa.n == 0) {
+    snprintf(err, errlen, "no finger samples logged (a session of force contacts only, or logged before schema 3)");
+    rc = PALP_DB_ENOTFOUND;
+    goto fail;
+  }
+  /* Withdrawn tail: samples own their triangles only once the pool stops moving. */
+  for (int i = 0; i < sa.n; i++) sa.s[i].triangles = sa.s[i].triangle_count ? (const int *)(sa.tri + sa.tri_at[i]) : NULL;
+  palp_finding *f = calloc((size_t)(out->mark_n ? out->mark_n : 1), sizeof *f);
+  int *match = calloc((size_t)(out->mark_n ? out->mark_n : 1), sizeof *match);
+  out->coverage = calloc((size_t)out->mesh.vertex_count, 1);
+  out->path = malloc(sizeof *out->path * (size_t)sa.n);
+  if (!f || !match || !out->coverage || !out->path) {
+    free(f), free(match);
+    rc = PALP_ENOMEM;
+    snprintf(err, errlen, "out of memory");
+    goto fail;
+  }
+  for (int i = 0; i < out->mark_n; i++) f[i] = out->marks[i].f;
+  rc = palp_assess(&out->ex, &out->mesh, sa.radius, sa.s, sa.n, f, out->mark_n, &out->r, match, out->coverage);
+  for (int i = 0; i < out->mark_n && !rc; i++) out->marks[i].match = match[i];
+  free(f), free(match);
+  if (rc) {
+    snprintf(err, errlen, "palp_assess: %s", palp_strerror(rc));
+    goto fail;
+  }
+  for (int i = 0; i < sa.n; i++)
+    if (sa.s[i].contact) out->path[out->path_n++] = sa.s[i].point;
+  free(sa.s), free(sa.tri), free(sa.tri_at);
+  return 0;
+fail:
+  free(sa.s), free(sa.tri), free(sa.tri_at), free(ma.v);
+  review_assessment_free(out);
+  return rc;
+}
+
+void review_metrics_csv_header(FILE *f) {
+  fputs("session,trainee,started_unix_s,exercise,samples,lesions,found,sensitivity,findings,withdrawn,"
+        "false_positives,coverage_light,coverage_medium,coverage_deep,coverage_any,pattern,path_length_m,"
+        "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass\n",
+        f);
+}
+
+void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a) {
+  const palp_assess_result *r = &a->r;
+  csv_str(f, s->uid);
+  fputc(',', f);
+  csv_str(f, s->trainee);
+  fprintf(f, ",%.3f,", s->start_unix_s);
+  csv_str(f, a->has_exercise ? a->exercise_name : "");
+  /* Free practice has no lesions: its sensitivity and score are empty fields, not 1 or 0. */
+  if (a->has_exercise)
+    fprintf(f, ",%d,%d,%d,%.4f,", a->samples, r->lesion_count, r->found, r->sensitivity);
+  else fprintf(f, ",%d,0,0,,", a->samples);
+  fprintf(f, "%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%s,%.4f,%d,%.3f,%.4f,%.3f,%.2f,%d,", r->findings, r->withdrawn,
+          r->false_positives, r->coverage[0], r->coverage[1], r->coverage[2], r->coverage_any,
+          palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
+          r->evidence.gap_share, r->duration, r->peak_force, r->out_of_range);
+  if (a->has_exercise) fprintf(f, "%.1f,%d\n", r->score, r->pass);
+  else fputs(",\n", f);
+}
+
+void review_metrics_print(FILE *f, const review_assessment *a) {
+  const palp_assess_result *r = &a->r;
+  const palp_rubric *rb = &a->ex.rubric;
+  if (a->has_exercise)
+    fprintf(f, "exercise   %s: %s (time limit %.0f s)\n", a->exercise_name, a->ex.title, a->ex.time_limit);
+  else fprintf(f, "exercise   none: free practice (no hidden lesions; no sensitivity, no score)\n");
+  fprintf(f, "metrics    from %d finger samples (definitions: docs/assessment.md)\n", a->samples);
+  if (a->has_exercise) {
+    fprintf(f, "  sensitivity      %d of %d lesions found (%.0f%%)%s\n", r->found, r->lesion_count,
+            100.0 * r->sensitivity, r->pass_metric[PALP_METRIC_SENSITIVITY] ? "   pass" : "   FAIL");
+    fprintf(f, "  false positives  %d (of %d marks, %d withdrawn)%s\n", r->false_positives, r->findings,
+            r->withdrawn, r->pass_metric[PALP_METRIC_FALSE_POSITIVES] ? "   pass" : "   FAIL");
+  } else {
+    fprintf(f, "  findings         %d marks, %d withdrawn (no lesions to match)\n", r->findings, r->withdrawn);
+  }
+  fprintf(f, "  thoroughness     light %.1f%%, medium %.1f%%, deep %.1f%%, any %.1f%% of the dome", 100 * r->coverage[0],
+          100 * r->coverage[1], 100 * r->coverage[2], 100 * r->coverage_any);
+  if (a->has_exercise)
+    fprintf(f, " (pass at %.0f/%.0f/%.0f%%)%s", 100 * rb->pass_coverage[0], 100 * rb->pass_coverage[1],
+            100 * rb->pass_coverage[2], r->pass_metric[PALP_METRIC_THOROUGHNESS] ? "   pass" : "   FAIL");
+  fputc('\n', f);
+  fprintf(f, "  search pattern   %s (path %.2f m, %d presses, overlap %.2f, never palpated %.1f%%, largest gap %.1f cm^2)%s\n",
+          palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
+          100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4,
+          !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_PATTERN] ? "   pass" : "   FAIL");
+  fprintf(f, "  time             %.2f s%s\n", r->duration,
+          !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_TIME] ? "   pass" : "   FAIL");
+  fprintf(f, "  force            peak %.2f N, %d episode%s above %.2f N (%.2f s)%s\n", r->peak_force, r->out_of_range,
+          r->out_of_range == 1 ? "" : "s", a->ex.max_force, r->out_of_range_time,
+          !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_FORCE] ? "   pass" : "   FAIL");
+  if (a->has_exercise)
+    fprintf(f, "  score            %.1f / 100 (pass at %.0f): %s\n", r->score, rb->pass_score, r->pass ? "PASS" : "FAIL");
+}
+
+int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
+  memset(out, 0, sizeof *out);
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(palp_db_handle(db),
+                         "SELECT exercise_name, samples, lesions, found, findings, withdrawn, false_positives, "
+                         "coverage_light, coverage_medium, coverage_deep, coverage_any, pattern, path_length_m, presses, "
+                         "duration_s, peak_force_n, out_of_range, score, pass FROM session_metrics WHERE session_id = ?1",
+                         -1, &st, NULL) != SQLITE_OK)
+    return PALP_DB_ESQL;
+  sqlite3_bind_int64(st, 1, sid);
+  int rc = PALP_DB_ENOTFOUND;
+  if (sqlite3_step(st) == SQLITE_ROW) {
+    palp_assess_result *r = &out->r;
+    const char *ex = (const char *)sqlite3_column_text(st, 0);
+    out->has_exercise = ex != NULL;
+    snprintf(out->exercise_name, sizeof out->exercise_name, "%s", ex ? ex : "");
+    out->samples = sqlite3_column_int(st, 1);
+    r->lesion_count = sqlite3_column_int(st, 2);
+    r->found = sqlite3_column_int(st, 3);
+    r->sensitivity = r->lesion_count ? (double)r->found / r->lesion_count : 1.0;
+    r->findings = sqlite3_column_int(st, 4);
+    r->withdrawn = sqlite3_column_int(st, 5);
+    r->false_positives = sqlite3_column_int(st, 6);
+    for (int b = 0; b < 3; b++) r->coverage[b] = sqlite3_column_double(st, 7 + b);
+    r->coverage_any = sqlite3_column_double(st, 10);
+    const char *p = (const char *)sqlite3_column_text(st, 11);
+    for (int k = 0; k < 4; k++)
+      if (p && !strcmp(p, palp_pattern_name((palp_pattern)k))) r->pattern = (palp_pattern)k;
+    r->evidence.path_length = sqlite3_column_double(st, 12);
+    r->evidence.presses = sqlite3_column_int(st, 13);
+    r->duration = sqlite3_column_double(st, 14);
+    r->peak_force = sqlite3_column_double(st, 15);
+    r->out_of_range = sqlite3_column_int(st, 16);
+    r->score = sqlite3_column_double(st, 17);
+    r->pass = sqlite3_column_int(st, 18);
+    rc = 0;
+  }
+  sqlite3_finalize(st);
+  return rc;
+}
+
+int review_stored_metrics_print(palp_db *db, int64_t sid, FILE *f) {
+  review_assessment a;
+  int rc = review_stored_metrics(db, sid, &a);
+  if (rc) return rc;
+  const palp_assess_result *r = &a.r;
+  fprintf(f, "metrics    stored when the session was pruned (its samples are gone; no rubric detail)\n");
+  fprintf(f, "  exercise         %s\n", a.has_exercise ? a.exercise_name : "none: free practice");
+  if (a.has_exercise)
+    fprintf(f, "  sensitivity      %d of %d lesions found\n  false positives  %d (of %d marks, %d withdrawn)\n", r->found,
+            r->lesion_count, r->false_positives, r->findings, r->withdrawn);
+  fprintf(f, "  thoroughness     light %.1f%%, medium %.1f%%, deep %.1f%%, any %.1f%% of the dome\n", 100 * r->coverage[0],
+          100 * r->coverage[1], 100 * r->coverage[2], 100 * r->coverage_any);
+  fprintf(f, "  search pattern   %s (path %.2f m, %d presses)\n", palp_pattern_name(r->pattern), r->evidence.path_length,
+          r->evidence.presses);
+  fprintf(f, "  time             %.2f s\n  force            peak %.2f N, %d episodes out of range\n", r->duration,
+          r->peak_force, r->out_of_range);
+  if (a.has_exercise) fprintf(f, "  score            %.1f / 100: %s\n", r->score, r->pass ? "PASS" : "FAIL");
+  return 0;
+}

@@ -1,0 +1,51 @@
+/* Metrics from the log (assess_log.c): a session's exercise, rest mesh, finger samples and
+ * findings turned into palp_assess, the same call the tests make in process. */
+#ifndef PALP_REVIEW_ASSESS_LOG_H
+#define PALP_REVIEW_ASSESS_LOG_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "palp_assess.h"
+#include "palp_db.h"
+
+typedef struct review_mark {
+  int64_t mark_id;
+  palp_finding f;  /* withdrawn set when a later withdrawal names it */
+  int match;       /* lesion index, or PALP_FINDING_FALSE / _WITHDRAWN / _DUPLICATE */
+} review_mark;
+
+typedef struct review_assessment {
+  int has_exercise;          /* 0: free practice (no lesions, default bands, no sensitivity/score) */
+  char exercise_name[64];
+  palp_exercise ex;
+  palp_assess_result r;
+  int samples;               /* finger samples logged */
+  double finger_radius_m;
+  double dome_radius_m;
+  palp_mesh mesh;            /* the rest mesh (owned) */
+  uint8_t *coverage;         /* [mesh.vertex_count] bits 1 << band */
+  palp_vec3 *path;           /* contact points while touching, in order */
+  int path_n;
+  review_mark *marks;
+  int mark_n;
+  palp_vec3 lesion_surface[PALP_MAX_LESIONS]; /* each lesion's surface projection [m] */
+} review_assessment;
+
+/* 0, PALP_DB_ENOTFOUND when the session logged no finger samples (nothing to assess), or
+ * another negative code with a message in err. */
+int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment *out, char *err, size_t errlen);
+void review_assessment_free(review_assessment *a);
+
+/* The metrics as CSV: the header line, then one row per session. */
+void review_metrics_csv_header(FILE *f);
+void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a);
+/* The metrics, score and rubric as text lines (palp-review show). */
+void review_metrics_print(FILE *f, const review_assessment *a);
+
+/* A pruned session's stored metrics (session_metrics, schema 4): printed, or into *out
+ * (only the fields the table holds). 0, or PALP_DB_ENOTFOUND when none are stored. */
+int review_stored_metrics_print(palp_db *db, int64_t sid, FILE *f);
+int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out);
+
+#endif

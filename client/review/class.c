@@ -1,0 +1,197 @@
+/* palp-review class --exercise NAME [--since DATE] --out FILE.html [--csv FILE]: every session of
+ * one exercise side by side (a table of metrics and score, small multiples of the coverage maps)
+ * and each trainee's progress (score per session, oldest first). Pruned sessions appear with
+ * their stored metrics and no maps. */
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "assess_svg.h"
+#include "grades.h"
+#include "review.h"
+
+typedef struct row {
+  palp_db_session_info s;
+  review_assessment a;
+  int computed; /* 1: from the samples (has maps); 0: stored metrics */
+  char grade[160];
+} row;
+
+int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
+  const char *exercise = NULL, *out = NULL, *csv = NULL;
+  palp_db_filter flt = {0};
+  for (int i = 0; i < argc; i++) {
+    if (i + 1 >= argc) {
+      fprintf(stderr, "palp-review class: %s needs a value\n", argv[i]);
+      return REVIEW_ERROR;
+    }
+    if (!strcmp(argv[i], "--exercise")) exercise = argv[++i];
+    else if (!strcmp(argv[i], "--out")) out = argv[++i];
+    else if (!strcmp(argv[i], "--csv")) csv = argv[++i];
+    else if (!strcmp(argv[i], "--since")) {
+      if (review_parse_date(argv[++i], &flt.since_unix_s)) {
+        fprintf(stderr, "palp-review class: --since: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", argv[i]);
+        return REVIEW_ERROR;
+      }
+    } else {
+      fprintf(stderr, "palp-review class: unknown option %s\n", argv[i]);
+      return REVIEW_ERROR;
+    }
+  }
+  if (!exercise || !out) {
+    fprintf(stderr, "palp-review class: --exercise NAME and --out FILE.html are required\n");
+    return REVIEW_ERROR;
+  }
+  palp_db_session_info *v;
+  int n;
+  if (palp_db_list_sessions(db, &flt, &v, &n)) {
+    palp_log_error(log, "class: %s", palp_db_errmsg(db));
+    return REVIEW_ERROR;
+  }
+  row *rows = calloc((size_t)(n ? n : 1), sizeof *rows);
+  if (!rows) {
+    free(v);
+    return REVIEW_ERROR;
+  }
+  int nr = 0;
+  for (int i = 0; i < n; i++) {
+    char name[64];
+    if (palp_db_session_exercise(db, v[i].id, name, sizeof name, NULL) || strcmp(name, exercise)) continue;
+    row *r = &rows[nr];
+    r->s = v[i];
+    char err[512];
+    int rc = review_assess(db, &v[i], &r->a, err, sizeof err);
+    if (rc == 0) r->computed = 1;
+    else if (review_stored_metrics(db, v[i].id, &r->a) != 0) {
+      palp_log_warn(log, "class: %s left out: %s", v[i].uid, err);
+      continue;
+    }
+    review_latest_grade(db, v[i].id, r->grade, sizeof r->grade);
+    nr++;
+  }
+  if (nr == 0) {
+    /* Name what there is, so a typo is seen at once. */
+    char known[512] = "";
+    size_t used = 0;
+    for (int i = 0; i < n && used + 70 < sizeof known; i++) {
+      char name[64];
+      if (palp_db_session_exercise(db, v[i].id, name, sizeof name, NULL) || strstr(known, name)) continue;
+      used += (size_t)snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", name);
+    }
+    fprintf(stderr, "palp-review class: no session of exercise '%s'%s in this log (exercises logged: %s)\n", exercise,
+            flt.since_unix_s > 0 ? " since that date" : "", used ? known : "none");
+    free(v), free(rows);
+    return REVIEW_ERROR;
+  }
+  free(v);
+  int rc = REVIEW_OK;
+  /* The instructor at a terminal: the same table as the report's, as text. */
+  printf("class report: exercise %s, %d session%s\n", exercise, nr, nr == 1 ? "" : "s");
+  printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %7s %6s %-5s %s\n", "TRAINEE", "SESSION", "DATE", "FOUND", "FALSE",
+         "LIGHT", "MEDIUM", "DEEP", "PATTERN", "TIME[s]", "SCORE", "RUBRIC", "GRADE");
+  for (int i = 0; i < nr; i++) {
+    const palp_assess_result *m = &rows[i].a.r;
+    char t[64], found[16];
+    review_fmt_time(rows[i].s.start_unix_s, t, sizeof t);
+    t[10] = '\0'; /* the date */
+    snprintf(found, sizeof found, "%d/%d", m->found, m->lesion_count);
+    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-5s %s\n", rows[i].s.trainee,
+           rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2],
+           palp_pattern_name(m->pattern), m->duration, m->score, m->pass ? "pass" : "fail",
+           rows[i].grade[0] ? rows[i].grade : "-");
+  }
+  if (csv) {
+    FILE *c = strcmp(csv, "-") ? fopen(csv, "w") : stdout;
+    if (!c) {
+      palp_log_error(log, "class: %s: %s", csv, strerror(errno));
+      rc = REVIEW_ERROR;
+    } else {
+      review_metrics_csv_header(c);
+      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, &rows[i].s, &rows[i].a);
+      if (c != stdout && fclose(c)) rc = REVIEW_ERROR;
+    }
+  }
+  FILE *f = fopen(out, "w");
+  if (!f) {
+    palp_log_error(log, "class: %s: %s", out, strerror(errno));
+    rc = REVIEW_ERROR;
+  } else {
+    fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>palp class report: ", f);
+    html_str(f, exercise);
+    fputs("</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222;max-width:1200px}"
+          "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 8px;"
+          "text-align:right;font-size:13px}th{background:#f4f4f4}td.t{text-align:left}.fail{color:#a00}"
+          ".multiples{display:flex;flex-wrap:wrap;gap:14px}.multiples figure{margin:0}"
+          "figcaption{font-size:12px}.key span{display:inline-block;width:12px;height:12px;margin:0 4px 0 12px}"
+          "</style>\n</head><body>\n<h1>Class report: exercise <span id=\"exercise\">", f);
+    html_str(f, exercise);
+    fprintf(f, "</span></h1>\n<p>%d session%s. Definitions: docs/assessment.md; names: docs/naming.md.</p>\n", nr,
+            nr == 1 ? "" : "s");
+    fputs("<h2>Side by side</h2>\n<table id=\"class-table\"><tr><th>trainee</th><th>session</th><th>started</th>"
+          "<th>lesions found</th><th>false positives</th><th>coverage light</th><th>medium</th><th>deep</th>"
+          "<th>search pattern</th><th>time [s]</th><th>peak force [N]</th><th>score</th><th>rubric</th>"
+          "<th>grade</th></tr>\n", f);
+    for (int i = 0; i < nr; i++) {
+      const row *r = &rows[i];
+      const palp_assess_result *m = &r->a.r;
+      char t[64];
+      review_fmt_time(r->s.start_unix_s, t, sizeof t);
+      fputs("<tr class=\"trainee-row\"><td class=\"t trainee\">", f);
+      html_str(f, r->s.trainee);
+      fputs("</td><td class=\"t\">", f);
+      html_str(f, r->s.uid);
+      fprintf(f, "</td><td class=\"t\">%s</td><td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
+              "<td class=\"t\">%s</td><td>%.1f</td><td>%.2f</td><td class=\"score\">%.1f</td><td%s>%s</td><td class=\"t\">",
+              t, m->found, m->lesion_count, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1],
+              100 * m->coverage[2], palp_pattern_name(m->pattern), m->duration, m->peak_force, m->score,
+              m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
+      html_str(f, r->grade);
+      fputs("</td></tr>\n", f);
+    }
+    fputs("</table>\n<h2>Coverage maps</h2>\n<p class=\"key\">Seen from above (12 o'clock = +y). Palpated at "
+          "<span style=\"background:#56b4e9\"></span>light <span style=\"background:#e69f00\"></span>medium "
+          "<span style=\"background:#009e73\"></span>deep pressure; <span style=\"background:#e6e6e6\"></span>never.</p>\n"
+          "<div class=\"multiples\">\n", f);
+    for (int i = 0; i < nr; i++) {
+      if (!rows[i].computed) continue;
+      fputs("<figure class=\"small-multiple\"><figcaption>", f);
+      html_str(f, rows[i].s.trainee);
+      fprintf(f, " - %.1f</figcaption>\n", rows[i].a.r.score);
+      for (int b = 0; b < 3; b++) {
+        char id[64];
+        snprintf(id, sizeof id, "cov-%d-%s", i + 1, palp_band_name(b));
+        review_svg_coverage(f, &rows[i].a, b, 90, id);
+      }
+      fputs("</figure>\n", f);
+    }
+    fputs("</div>\n<h2>Progress</h2>\n<table id=\"progress\"><tr><th>trainee</th><th>sessions</th>"
+          "<th>scores, oldest first</th><th>chart</th></tr>\n", f);
+    int *done = calloc((size_t)(nr ? nr : 1), sizeof *done);
+    double *sc = malloc(sizeof *sc * (size_t)(nr ? nr : 1));
+    for (int i = 0; done && sc && i < nr; i++) {
+      if (done[i]) continue;
+      int k = 0;
+      for (int j = i; j < nr; j++)
+        if (!done[j] && !strcmp(rows[j].s.trainee, rows[i].s.trainee)) done[j] = 1, sc[k++] = rows[j].a.r.score;
+      fputs("<tr class=\"progress-row\" data-trainee=\"", f);
+      html_str(f, rows[i].s.trainee);
+      fputs("\"><td class=\"t\">", f);
+      html_str(f, rows[i].s.trainee);
+      fprintf(f, "</td><td class=\"sessions\">%d</td><td class=\"t\">", k);
+      for (int j = 0; j < k; j++) fprintf(f, "%s%.1f", j ? ", " : "", sc[j]);
+      fputs("</td><td>", f);
+      char id[64];
+      snprintf(id, sizeof id, "progress-%d", i + 1);
+      review_svg_scores(f, sc, k, 160, 40, id);
+      fputs("</td></tr>\n", f);
+    }
+    free(done), free(sc);
+    fputs("</table>\n<p style=\"font-size:11px;color:#777\">Generated by palp-review from the session log.</p>\n"
+          "</body></html>\n", f);
+    if (fclose(f)) rc = REVIEW_ERROR;
+    else printf("class: wrote %s (%d sessions)\n", out, nr);
+  }
+  for (int i = 0; i < nr; i++) review_assessment_free(&rows[i].a);
+  free(rows);
+  return rc;
+}

@@ -1,0 +1,232 @@
+/* Retention: palp-review delete and prune (docs/db.md, "Retention").
+ *
+ *  - delete SESSION...: the session and everything logged for it go.
+ *  - prune --older-than DAYS [--keep-graded] [--dry-run]: for each ENDED session started more
+ *    than DAYS ago, its metrics are computed (assess_log.c) and stored in session_metrics, then
+ *    its bulky data goes: frames, feedback, contact inputs, meshes, finger samples. Kept: the
+ *    session row (scene, trainee, times, end), its exercise, findings, events, notes and grades,
+ *    and the metrics summary. A session with no end logged is never pruned (a server may still
+ *    be writing it). --keep-graded skips sessions with any grade.
+ *
+ * Both run in one transaction per session on the WAL connection with its busy timeout, so a
+ * server writing other sessions at the same time only waits; then the freed pages go back to
+ * the file system with VACUUM (or PRAGMA incremental_vacuum when the file is in that mode),
+ * which also waits on the busy timeout and leaves the file untouched if it cannot get the lock. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include <sqlite3.h>
+
+#include "assess_log.h"
+#include "grades.h"
+#include "retention.h"
+#include "review_util.h"
+
+static const char *const bulky[] = {"frame", "feedback", "contact_input", "mesh", "finger_sample"};
+static const char *const small[] = {"session_exercise", "finding", "event", "note", "session_metrics"};
+
+static long long file_bytes(const char *path) {
+  /* The main file plus its WAL: what the disk holds for this log. */
+  struct stat st;
+  long long n = 0;
+  if (stat(path, &st) == 0) n += st.st_size;
+  char wal[1100];
+  snprintf(wal, sizeof wal, "%s-wal", path);
+  if (stat(wal, &st) == 0) n += st.st_size;
+  return n;
+}
+
+static int exec_sid(sqlite3 *h, const char *fmt, const char *table, int64_t sid) {
+  char sql[256];
+  snprintf(sql, sizeof sql, fmt, table);
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(h, sql, -1, &st, NULL) != SQLITE_OK) return -1;
+  sqlite3_bind_int64(st, 1, sid);
+  int rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  return rc == SQLITE_DONE ? 0 : -1;
+}
+
+static int store_metrics(sqlite3 *h, int64_t sid, const review_assessment *a) {
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(h,
+                         "INSERT OR REPLACE INTO session_metrics VALUES(?1, (julianday('now') - 2440587.5) * 86400.0, "
+                         "?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20)",
+                         -1, &st, NULL) != SQLITE_OK)
+    return -1;
+  const palp_assess_result *r = &a->r;
+  sqlite3_bind_int64(st, 1, sid);
+  if (a->has_exercise) sqlite3_bind_text(st, 2, a->exercise_name, -1, SQLITE_TRANSIENT);
+  sqlite3_bind_int(st, 3, a->samples);
+  sqlite3_bind_int(st, 4, r->lesion_count);
+  sqlite3_bind_int(st, 5, r->found);
+  sqlite3_bind_int(st, 6, r->findings);
+  sqlite3_bind_int(st, 7, r->withdrawn);
+  sqlite3_bind_int(st, 8, r->false_positives);
+  sqlite3_bind_double(st, 9, r->coverage[0]);
+  sqlite3_bind_double(st, 10, r->coverage[1]);
+  sqlite3_bind_double(st, 11, r->coverage[2]);
+  sqlite3_bind_double(st, 12, r->coverage_any);
+  sqlite3_bind_text(st, 13, palp_pattern_name(r->pattern), -1, SQLITE_STATIC);
+  sqlite3_bind_double(st, 14, r->evidence.path_length);
+  sqlite3_bind_int(st, 15, r->evidence.presses);
+  sqlite3_bind_double(st, 16, r->duration);
+  sqlite3_bind_double(st, 17, r->peak_force);
+  sqlite3_bind_int(st, 18, r->out_of_range);
+  if (a->has_exercise) {
+    sqlite3_bind_double(st, 19, r->score);
+    sqlite3_bind_int(st, 20, r->pass);
+  }
+  int rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  return rc == SQLITE_DONE ? 0 : -1;
+}
+
+static int reclaim(palp_log *log, sqlite3 *h) {
+  sqlite3_stmt *st;
+  int mode = 0;
+  if (sqlite3_prepare_v2(h, "PRAGMA auto_vacuum", -1, &st, NULL) == SQLITE_OK) {
+    if (sqlite3_step(st) == SQLITE_ROW) mode = sqlite3_column_int(st, 0);
+    sqlite3_finalize(st);
+  }
+  /* 2 = incremental: give the free pages back without rewriting the file. */
+  const char *sql = mode == 2 ? "PRAGMA incremental_vacuum" : "VACUUM";
+  char *msg = NULL;
+  if (sqlite3_exec(h, sql, NULL, NULL, &msg) != SQLITE_OK) {
+    palp_log_warn(log, "%s: %s (the space stays free inside the file and is reused)", sql, msg ? msg : "?");
+    sqlite3_free(msg);
+    return -1;
+  }
+  /* Truncate the WAL the vacuum wrote through, so the bytes really leave the disk. */
+  sqlite3_exec(h, "PRAGMA wal_checkpoint(TRUNCATE)", NULL, NULL, NULL);
+  return 0;
+}
+
+int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char **argv) {
+  if (argc < 1) {
+    fprintf(stderr, "palp-review delete: which SESSION(s)?\n");
+    return REVIEW_ERROR;
+  }
+  sqlite3 *h = palp_db_handle(db);
+  /* Resolve every name first: a typo deletes nothing. */
+  int64_t *ids = calloc((size_t)argc, sizeof *ids);
+  if (!ids) return REVIEW_ERROR;
+  for (int i = 0; i < argc; i++) {
+    palp_db_session_info s;
+    int rc = palp_db_find_session(db, argv[i], &s);
+    if (rc) {
+      palp_log_error(log, "delete: session '%s': %s; nothing deleted", argv[i],
+                     rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+      free(ids);
+      return REVIEW_ERROR;
+    }
+    ids[i] = s.id;
+  }
+  const long long before = file_bytes(path);
+  for (int i = 0; i < argc; i++) {
+    int bad = sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK;
+    for (size_t k = 0; !bad && k < sizeof bulky / sizeof *bulky; k++)
+      bad = exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], ids[i]);
+    for (size_t k = 0; !bad && k < sizeof small / sizeof *small; k++)
+      bad = exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", small[k], ids[i]);
+    if (!bad) bad = exec_sid(h, "DELETE FROM %s WHERE id = ?1", "session", ids[i]);
+    if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+      palp_log_error(log, "delete %s: %s (rolled back; that session is untouched)", argv[i], sqlite3_errmsg(h));
+      sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
+      free(ids);
+      return REVIEW_ERROR;
+    }
+    printf("deleted %s\n", argv[i]);
+  }
+  free(ids);
+  reclaim(log, h);
+  printf("file %lld -> %lld bytes\n", before, file_bytes(path));
+  return REVIEW_OK;
+}
+
+int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **argv) {
+  double days = -1;
+  int keep_graded = 0, dry = 0;
+  for (int i = 0; i < argc; i++) {
+    if (!strcmp(argv[i], "--keep-graded")) keep_graded = 1;
+    else if (!strcmp(argv[i], "--dry-run")) dry = 1;
+    else if (!strcmp(argv[i], "--older-than") && i + 1 < argc) {
+      char *end;
+      days = strtod(argv[++i], &end);
+      if (*end || !(days >= 0) || days > 1e5) {
+        fprintf(stderr, "palp-review prune: --older-than DAYS: a number of days >= 0 is required, got '%s'\n", argv[i]);
+        return REVIEW_ERROR;
+      }
+    } else {
+      fprintf(stderr, "palp-review prune: unknown option or missing value: %s\n", argv[i]);
+      return REVIEW_ERROR;
+    }
+  }
+  if (days < 0) {
+    fprintf(stderr, "palp-review prune: --older-than DAYS is required\n");
+    return REVIEW_ERROR;
+  }
+  sqlite3 *h = palp_db_handle(db);
+  const double cutoff = (double)time(NULL) - days * 86400.0;
+  palp_db_filter f = {.until_unix_s = cutoff};
+  palp_db_session_info *v;
+  int n;
+  if (palp_db_list_sessions(db, &f, &v, &n)) {
+    palp_log_error(log, "prune: %s", palp_db_errmsg(db));
+    return REVIEW_ERROR;
+  }
+  const long long before = file_bytes(path);
+  int pruned = 0, rc = REVIEW_OK;
+  for (int i = 0; i < n; i++) {
+    const palp_db_session_info *s = &v[i];
+    if (!s->end_reason[0]) {
+      printf("kept   %s: no end logged (may still be running)\n", s->uid);
+      continue;
+    }
+    if (keep_graded) {
+      char g[160];
+      review_latest_grade(db, s->id, g, sizeof g);
+      if (strcmp(g, "-")) {
+        printf("kept   %s: graded (%s)\n", s->uid, g);
+        continue;
+      }
+    }
+    review_assessment a;
+    char err[512];
+    const int arc = review_assess(db, s, &a, err, sizeof err);
+    if (arc && arc != PALP_DB_ENOTFOUND) {
+      /* Do not lose what cannot be summarised. */
+      printf("kept   %s: its metrics could not be computed (%s)\n", s->uid, err);
+      continue;
+    }
+    if (dry) {
+      printf("would prune %s\n", s->uid);
+      if (!arc) review_assessment_free(&a);
+      continue;
+    }
+    int bad = sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK;
+    if (!bad && !arc) bad = store_metrics(h, s->id, &a);
+    for (size_t k = 0; !bad && k < sizeof bulky / sizeof *bulky; k++)
+      bad = exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], s->id);
+    if (!bad)
+      bad = exec_sid(h, "UPDATE %s SET pruned_unix_s = (julianday('now') - 2440587.5) * 86400.0 WHERE id = ?1",
+                     "session", s->id);
+    if (!arc) review_assessment_free(&a);
+    if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+      palp_log_error(log, "prune %s: %s (rolled back; that session is untouched)", s->uid, sqlite3_errmsg(h));
+      sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
+      rc = REVIEW_ERROR;
+      continue;
+    }
+    printf("pruned %s\n", s->uid);
+    pruned++;
+  }
+  free(v);
+  if (pruned) reclaim(log, h);
+  printf("%d session%s pruned; file %lld -> %lld bytes\n", pruned, pruned == 1 ? "" : "s", before, file_bytes(path));
+  return rc;
+}

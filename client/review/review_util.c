@@ -1,0 +1,186 @@
+/* palp-review's shared helpers: escaping for HTML, JSON and CSV, time formatting and parsing,
+ * loading a session's contacts and deriving its presses. The command modules (review.c, export.c,
+ * replay.c, report.c, assess_log.c, class.c) depend on this one and never on each other. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "review_util.h"
+
+#define PI 3.14159265358979323846
+
+void review_fmt_time(double unix_s, char *buf, size_t len) {
+  if (!(unix_s > 0)) {
+    snprintf(buf, len, "-");
+    return;
+  }
+  time_t t = (time_t)unix_s;
+  struct tm tm;
+  localtime_r(&t, &tm);
+  strftime(buf, len, "%Y-%m-%d %H:%M:%S %z", &tm);
+}
+
+void json_str(FILE *f, const char *s) {
+  fputc('"', f);
+  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
+    if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
+    else if (*p == '\n') fputs("\\n", f);
+    else if (*p == '\t') fputs("\\t", f);
+    else if (*p < 0x20) fprintf(f, "\\u%04x", *p);
+    else fputc(*p, f);
+  }
+  fputc('"', f);
+}
+
+void html_str(FILE *f, const char *s) {
+  for (const char *p = s ? s : ""; *p; p++) {
+    switch (*p) {
+    case '<': fputs("&lt;", f); break;
+    case '>': fputs("&gt;", f); break;
+    case '&': fputs("&amp;", f); break;
+    case '"': fputs("&quot;", f); break;
+    case '\'': fputs("&#39;", f); break;
+    default: fputc(*p, f);
+    }
+  }
+}
+
+void csv_str(FILE *f, const char *s) {
+  /* Always quoted (RFC 4180), quotes doubled: a field may hold commas and line breaks. */
+  fputc('"', f);
+  for (const char *p = s ? s : ""; *p; p++) {
+    if (*p == '"') fputc('"', f);
+    fputc(*p, f);
+  }
+  fputc('"', f);
+}
+
+/* Parses YYYY-MM-DD[THH:MM[:SS]] (or a space instead of T) as local time. */
+int review_parse_date(const char *s, double *out) {
+  struct tm tm;
+  memset(&tm, 0, sizeof tm);
+  int y, mo, d, h = 0, mi = 0, se = 0;
+  char sep = 0;
+  int n = sscanf(s, "%4d-%2d-%2d%c%2d:%2d:%2d", &y, &mo, &d, &sep, &h, &mi, &se);
+  if (n != 3 && n < 6) return -1;
+  if (n >= 4 && sep != 'T' && sep != ' ') return -1;
+  if (mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 || h > 23 || mi < 0 || mi > 59 || se < 0 || se > 60)
+    return -1;
+  tm.tm_year = y - 1900;
+  tm.tm_mon = mo - 1;
+  tm.tm_mday = d;
+  tm.tm_hour = h;
+  tm.tm_min = mi;
+  tm.tm_sec = se;
+  tm.tm_isdst = -1;
+  time_t t = mktime(&tm);
+  if (t == (time_t)-1) return -1;
+  *out = (double)t;
+  return 0;
+}
+
+static int contact_cb(void *u, const palp_db_contact *c) {
+  review_contacts *v = u;
+  if (v->n == v->cap) {
+    int ncap = v->cap ? 2 * v->cap : 64;
+    palp_db_contact *nv = realloc(v->v, (size_t)ncap * sizeof *nv);
+    if (!nv) return PALP_ENOMEM;
+    v->v = nv;
+    v->cap = ncap;
+  }
+  v->v[v->n++] = *c;
+  return 0;
+}
+
+int review_load_contacts(palp_db *db, int64_t sid, review_contacts *out) {
+  memset(out, 0, sizeof *out);
+  return palp_db_each_contact(db, sid, contact_cb, out);
+}
+
+double review_clock_hours(palp_vec3 p) {
+  /* Angle clockwise from +y seen from above (+z towards the viewer), in hours of a clock face. */
+  double a = atan2(p.x, p.y); /* 0 at +y, +pi/2 at +x */
+  double h = a / (2.0 * PI) * 12.0;
+  if (h <= 0.0) h += 12.0;
+  return h;
+}
+
+typedef struct press_acc {
+  review_press *v;
+  int n;
+} press_acc;
+
+static int fb_peak_cb(void *u, int64_t frame, int slot, palp_vec3 f) {
+  press_acc *a = u;
+  const double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+  /* Slots are reused after removal: the press on this slot live at that frame owns the sample
+   * (feedback carries the frame after the step, so the live range is (on, off]). */
+  for (int i = a->n - 1; i >= 0; i--)
+    if (a->v[i].slot == slot && frame > a->v[i].frame_on && (a->v[i].frame_off < 0 || frame <= a->v[i].frame_off)) {
+      if (a->v[i].kind == PALP_DB_KIND_FINGER && m > a->v[i].peak_force_n) a->v[i].peak_force_n = m;
+      break;
+    }
+  return 0;
+}
+
+int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n) {
+  review_press *v = calloc((size_t)(c->n > 0 ? c->n : 1), sizeof *v);
+  if (!v) return PALP_ENOMEM;
+  int k = 0;
+  for (int i = 0; i < c->n; i++) {
+    const palp_db_contact *x = &c->v[i];
+    if (x->op == PALP_DB_OP_ADD) {
+      review_press *p = &v[k++];
+      p->slot = x->slot;
+      p->kind = x->kind;
+      p->distribution = x->def.distribution;
+      p->first_center_m = p->last_center_m = x->center_m;
+      p->t_on_s = x->sim_time_s;
+      p->t_off_s = -1;
+      p->frame_on = x->frame;
+      p->frame_off = -1;
+      if (x->kind == PALP_DB_KIND_FORCE)
+        p->peak_force_n = sqrt(x->force_n.x * x->force_n.x + x->force_n.y * x->force_n.y + x->force_n.z * x->force_n.z);
+      continue;
+    }
+    for (int j = k - 1; j >= 0; j--) {
+      review_press *p = &v[j];
+      if (p->slot != x->slot || p->t_off_s >= 0) continue;
+      if (x->op == PALP_DB_OP_REMOVE) {
+        p->t_off_s = x->sim_time_s;
+        p->frame_off = x->frame;
+      } else {
+        p->updates++;
+        if (x->kind == PALP_DB_KIND_FINGER) p->last_center_m = x->center_m;
+        else {
+          double m = sqrt(x->force_n.x * x->force_n.x + x->force_n.y * x->force_n.y + x->force_n.z * x->force_n.z);
+          if (m > p->peak_force_n) p->peak_force_n = m;
+        }
+      }
+      break;
+    }
+  }
+  press_acc a = {v, k};
+  int rc = palp_db_each_feedback(db, sid, fb_peak_cb, &a);
+  if (rc) {
+    free(v);
+    return rc;
+  }
+  *out = v;
+  *n = k;
+  return 0;
+}
+
+/* The paper's numeral and the scene file's keyword, as every tool prints it (docs/naming.md). */
+const char *review_dist_name(palp_distribution d) {
+  switch (d) {
+  case PALP_DIST_SINGLE: return "I single";
+  case PALP_DIST_UNIFORM: return "II uniform";
+  case PALP_DIST_GAUSSIAN: return "III gaussian";
+  case PALP_DIST_GAUSSIAN_OFFSET: return "IV gaussian_offset";
+  }
+  return "-";
+}
+

@@ -1,0 +1,40 @@
+/* palp-review's shared helpers (review_util.c): escaping, time, contacts and presses. */
+#ifndef PALP_REVIEW_UTIL_H
+#define PALP_REVIEW_UTIL_H
+
+#include <stdio.h>
+
+#include "palp_db.h"
+
+/* A whole session's small tables in memory (frames and feedback are streamed instead). */
+typedef struct review_contacts {
+  palp_db_contact *v;
+  int n, cap;
+} review_contacts;
+int review_load_contacts(palp_db *db, int64_t sid, review_contacts *out);
+
+/* Per contact slot use, derived from the inputs and feedback: where and how hard. */
+typedef struct review_press {
+  int slot;
+  palp_db_contact_kind kind;
+  palp_distribution distribution;
+  palp_vec3 first_center_m, last_center_m;
+  double t_on_s, t_off_s; /* t_off_s < 0: never removed */
+  int64_t frame_on, frame_off; /* frame_off < 0: never removed */
+  double peak_force_n;    /* force contacts: max |F| applied; fingers: max |feedback| */
+  int updates;
+} review_press;
+int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n);
+/* "3 o'clock": the clock position of a point seen from above (12 = +y, 3 = +x). */
+double review_clock_hours(palp_vec3 p);
+/* The one name of a force distribution everywhere (docs/naming.md). */
+const char *review_dist_name(palp_distribution d);
+
+void review_fmt_time(double unix_s, char *buf, size_t len); /* local time, with offset */
+/* YYYY-MM-DD[THH:MM[:SS]] (or a space for T) as local time; 0 or -1. */
+int review_parse_date(const char *s, double *out);
+void json_str(FILE *f, const char *s);
+void html_str(FILE *f, const char *s);
+void csv_str(FILE *f, const char *s);
+
+#endif

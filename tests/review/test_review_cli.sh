@@ -1,0 +1,111 @@
+#!/bin/sh
+# palp-review over a logged class (issue 13), real SQLite file, headless Chromium from Debian:
+# show (metrics, free practice), export --table metrics, structured grades (refused forms),
+# list (grade, phantom, exercise), the session report and the class report rendered and their
+# DOM and pixels asserted (check_review.py), delete and prune (what stays, integrity_check).
+# usage: test_review_cli.sh REVIEW_GEN PALP_REVIEW TESTDIR TMPDIR CHECK_REVIEW_PY
+set -u
+gen=$1 review=$2 testdir=$3 tmp=$4 check=$5
+chromium=/usr/bin/chromium
+[ -x "$chromium" ] || { echo "FAIL: $chromium not installed (scripts/debian-packages.txt lists chromium)"; exit 1; }
+dir=$tmp/cli
+rm -rf "$dir"
+mkdir -p "$dir"
+db=$dir/class.db
+fail=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fail=1; }
+expect() { # expect DESCRIPTION PATTERN FILE
+  if grep -Eq -- "$2" "$3"; then ok "$1"; else bad "$1: /$2/ not in $3:"; cat "$3"; fi
+}
+"$gen" "$db" "$testdir" || { echo "FAIL review_gen"; exit 1; }
+R() { "$review" --db "$db" "$@"; }
+
+R show class-alice-1 > "$dir/show-alice.txt" 2>&1 || bad "show alice exit status"
+expect "show: the expert found 2 of 2" "sensitivity +2 of 2 lesions found \(100%\) +pass" "$dir/show-alice.txt"
+expect "show: medium coverage 100%" "thoroughness +light 9[0-9]\.[0-9]%, medium 100\.0%" "$dir/show-alice.txt"
+expect "show: vertical strip" "search pattern +vertical_strip" "$dir/show-alice.txt"
+expect "show: score and PASS" "score +9[0-9]\.[0-9] / 100 \(pass at 70\): PASS" "$dir/show-alice.txt"
+R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
+expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
+if grep -Eq "sensitivity +[0-9]" "$dir/show-carol.txt"; then bad "free practice shows a sensitivity"; else ok "free practice: no sensitivity line"; fi
+
+R export class-alice-1 --format csv --table metrics --out "$dir/alice.csv" || bad "export metrics"
+if python3 - "$dir/alice.csv" <<'PY'
+
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+assert len(rows) == 1, rows
+r = rows[0]
+assert r["session"] == "class-alice-1" and r["trainee"] == "alice" and r["found"] == "2" and r["pass"] == "1", r
+assert float(r["coverage_medium"]) >= 0.95 and r["pattern"] == "vertical_strip", r
+PY
+then ok "export --table metrics: header and one row, found 2, pass 1"; else bad "export --table metrics"; fi
+
+# Structured grades: each refused form exits 2 with a message saying what is allowed.
+for g in "--score 101" "--score -1" "--score 7/10" "--level B+" "--grade B+" "--grade 7/10" "--level excellent"; do
+  # shellcheck disable=SC2086
+  if R annotate class-bob-1 --author Lee --note x $g > "$dir/g.txt" 2>&1; then bad "grade '$g' accepted"
+  elif grep -Eq "0 to 100|0-100|insufficient, developing, competent, proficient" "$dir/g.txt"; then ok "grade '$g' refused: $(tail -1 "$dir/g.txt" | cut -c1-90)"
+  else bad "grade '$g' refused without saying what is allowed: $(cat "$dir/g.txt")"; fi
+done
+if R annotate class-bob-1 --author Lee --note x --grade "" > "$dir/g.txt" 2>&1; then bad "empty grade accepted"; else ok "empty grade refused"; fi
+R annotate class-bob-1 --author Lee --note "missed both lumps" --score 35 > /dev/null || bad "score 35"
+R annotate class-alice-1 --author Lee --note "systematic" --level proficient > /dev/null || bad "level proficient"
+R list > "$dir/list.txt" 2>&1
+expect "list: alice's grade, phantom and exercise" "class-alice-1 +alice +dome_stiff_support +test-two-1cm .* proficient" "$dir/list.txt"
+expect "list: bob's score" "class-bob-1 +bob .* 35" "$dir/list.txt"
+
+# Reports in headless Chromium, no network.
+profile=$(mktemp -d)
+trap 'rm -rf "$profile"' EXIT
+render() { # render HTML PNG DOM
+  timeout 90 "$chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+    --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
+    --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$profile" \
+    --window-size=1100,2400 --screenshot="$2" "file://$1" >"$dir/chromium.log" 2>&1
+  timeout 90 "$chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+    --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
+    --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$profile" \
+    --dump-dom "file://$1" >"$3" 2>>"$dir/chromium.log"
+  [ -s "$2" ] && [ -s "$3" ] || { echo "FAIL: chromium rendered nothing"; cat "$dir/chromium.log"; exit 1; }
+}
+R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"
+R report class-bob-1 --out "$dir/bob.html" > /dev/null || bad "report bob"
+R class --exercise test-two-1cm --out "$dir/class.html" --csv "$dir/class.csv" > "$dir/class.txt" || bad "class report"
+expect "class: the text table has alice's row" "^alice +class-alice-1 +2026-01-06 +2/2 +0 " "$dir/class.txt"
+for f in alice bob class; do
+  if grep -Eiq '(src|href)=.(https?:)?//|@import|url\(' "$dir/$f.html"; then bad "$f.html references an external resource"; fi
+  render "$dir/$f.html" "$dir/$f.png" "$dir/$f.dom.html"
+done
+python3 "$check" session-expert "$dir/alice.dom.html" "$dir/alice.png" || fail=1
+python3 "$check" session-novice "$dir/bob.dom.html" "$dir/bob.png" || fail=1
+python3 "$check" class "$dir/class.dom.html" "$dir/class.png" "$dir/class.csv" || fail=1
+if R class --exercise no-such-exercise --out "$dir/none.html" > "$dir/none.txt" 2>&1; then bad "class for an unknown exercise succeeded"
+else expect "class: unknown exercise named in the error" "no-such-exercise" "$dir/none.txt"; fi
+
+# Retention: prune keeps graded sessions; pruned ones keep their metrics; delete removes one.
+R prune --older-than 1 --keep-graded > "$dir/prune.txt" 2>&1 || bad "prune exit status"
+expect "prune: graded sessions kept" "kept +class-alice-1: graded" "$dir/prune.txt"
+expect "prune: bob's second session pruned" "pruned class-bob-2" "$dir/prune.txt"
+R show class-bob-2 > "$dir/show-pruned.txt" 2>&1
+expect "a pruned session still shows its metrics" "stored when the session was pruned" "$dir/show-pruned.txt"
+R delete class-carol-1 > /dev/null 2>&1 || bad "delete"
+if python3 - "$db" <<'PY'
+
+import sqlite3, sys
+c = sqlite3.connect(sys.argv[1])
+assert c.execute("pragma integrity_check").fetchone()[0] == "ok"
+sid = dict(c.execute("select uid, id from session"))
+assert "class-carol-1" not in sid, sid
+n = lambda q, *a: c.execute(q, a).fetchone()[0]
+assert n("select count(*) from finger_sample where session_id = ?", sid["class-bob-2"]) == 0
+assert n("select count(*) from finger_sample where session_id = ?", sid["class-alice-1"]) > 30000
+assert n("select count(*) from finding where session_id = ?", sid["class-bob-2"]) >= 1
+assert n("select count(*) from session_metrics where session_id = ?", sid["class-bob-2"]) == 1
+assert n("select count(*) from note where session_id = ?", sid["class-bob-1"]) == 1
+PY
+then ok "after prune and delete: integrity ok, samples only for kept sessions, findings/metrics/notes kept"
+else bad "after prune and delete"; fi
+[ $fail -eq 0 ] && echo "passed" || echo "FAILED"
+exit $fail
