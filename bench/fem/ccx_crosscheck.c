@@ -1,0 +1,339 @@
+/*
+ * ccx_crosscheck - the FEM reference against an independent FE code (issue 12): CalculiX
+ * (Debian's calculix-ccx) on the project's own hemisphere mesh made quadratic.
+ *
+ *   ccx_crosscheck [--levels 1,2,3] [--profile paper_long_term] [--force 3] [--dir DIR] [--ccx PATH]
+ *
+ * For each level: the project's relaxed static pole displacement under distribution II (a
+ * uniform vertical traction of total F over the 5.2 cm^2 cap around the pole, as
+ * bench_profiles), then the same problem in CalculiX: every hexahedron becomes a 20-node
+ * C3D20R (CalculiX has no hybrid elements; quadratic reduced-integration bricks are its answer
+ * to near incompressibility) whose edge midpoints lie on the true sphere wherever both ends of
+ * the edge lie on one sphere about the centre (the outer surface and the membrane's inner
+ * face), the relaxed moduli as *HYPERELASTIC, NEO HOOKE (CalculiX has no Prony series for
+ * hyperelasticity: relaxed states are compared), the base clamped, NLGEOM, and the traction
+ * integrated over the curved 8-node faces (6 x 6 Gauss points, the same point-in-cap rule and
+ * quadrature as the project's load here)
+ * into *CLOAD dead loads scaled to exactly F. The pole's uz is read from ccx's .dat file.
+ * Built, not run by CTest (level 3 takes minutes in ccx); the test fem_ccx runs level 1.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "fem_internal.h"
+
+static double now_s(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* ---- the project's FEM: the load of bench_profiles, with finer quadrature ---------------- */
+/* 6-point Gauss-Legendre: the cap's edge cuts faces, and both codes must see the same cap.
+ * With 2 x 2 (palp's bench_profiles) against 3 x 3 points the loaded area jumped between
+ * levels differently in each code (pole uz not monotone in the level); 6 x 6 points on both
+ * integrate the exact cap to <1% of its area on a level-1 face. */
+static const double GP[6] = {-0.93246951420315202781, -0.66120938646626451366, -0.23861918608319690863,
+                             0.23861918608319690863,  0.66120938646626451366,  0.93246951420315202781};
+static const double GW[6] = {0.17132449237917034504, 0.36076157304813860757, 0.46791393457269104739,
+                             0.46791393457269104739, 0.36076157304813860757, 0.17132449237917034504};
+
+static void pole_patch_load(const palp_fem_mesh *mesh, double F, double area, double *f) {
+  int (*faces)[4], nf;
+  palp_fem_surface_faces(mesh, &faces, &nf);
+  memset(f, 0, sizeof(double) * 3 * (size_t)mesh->node_count);
+  const double s2 = area / PALP_FEM_PI;
+  static const double sg[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  double total = 0.0;
+  for (int k = 0; k < nf; ++k)
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) {
+        const double xi = GP[i], eta = GP[j];
+        double N[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
+        for (int a = 0; a < 4; ++a) {
+          N[a] = 0.25 * (1 + sg[a][0] * xi) * (1 + sg[a][1] * eta);
+          const double da = 0.25 * sg[a][0] * (1 + sg[a][1] * eta), db = 0.25 * sg[a][1] * (1 + sg[a][0] * xi);
+          for (int d = 0; d < 3; ++d) {
+            X[d] += N[a] * mesh->x[faces[k][a]][d];
+            Xa[d] += da * mesh->x[faces[k][a]][d];
+            Xb[d] += db * mesh->x[faces[k][a]][d];
+          }
+        }
+        if (X[2] <= 0.0 || X[0] * X[0] + X[1] * X[1] > s2) continue;
+        const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2],
+                             Xa[0] * Xb[1] - Xa[1] * Xb[0]};
+        const double dA = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * GW[i] * GW[j];
+        for (int a = 0; a < 4; ++a) f[3 * faces[k][a] + 2] -= N[a] * dA;
+        total += dA;
+      }
+  for (int i = 0; i < 3 * mesh->node_count; ++i) f[i] *= F / total;
+  free(faces);
+}
+
+/* ---- the quadratic mesh ------------------------------------------------------------------ */
+typedef struct quad_mesh {
+  int n;          /* nodes: the hexahedra's corners first (same indices), then edge midpoints */
+  double (*x)[3];
+  int (*el)[20];  /* C3D20 node order */
+  int ne;
+  /* edge -> midpoint, open addressing on the sorted corner pair */
+  int *ka, *kb, *kv, cap;
+} quad_mesh;
+
+static double norm3d(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+static int midpoint(quad_mesh *q, const palp_fem_mesh *m, int a, int b) {
+  if (a > b) {
+    const int t = a;
+    a = b, b = t;
+  }
+  unsigned h = ((unsigned)a * 2654435761u ^ (unsigned)b * 40503u) & (unsigned)(q->cap - 1);
+  while (q->kv[h] >= 0) {
+    if (q->ka[h] == a && q->kb[h] == b) return q->kv[h];
+    h = (h + 1) & (unsigned)(q->cap - 1);
+  }
+  double *x = q->x[q->n];
+  for (int d = 0; d < 3; ++d) x[d] = 0.5 * (m->x[a][d] + m->x[b][d]);
+  /* Both ends on one sphere about the centre (within 1e-9 relative): the midpoint goes onto it,
+   * so the surface is the true sphere to the quadratic's order, not the hexahedra's facets. */
+  const double ra = norm3d(m->x[a]), rb = norm3d(m->x[b]), r = norm3d(x);
+  if (ra > 0 && fabs(ra - rb) <= 1e-9 * ra && r > 0 && x[2] > 1e-12)
+    for (int d = 0; d < 3; ++d) x[d] *= ra / r;
+  q->ka[h] = a, q->kb[h] = b, q->kv[h] = q->n;
+  return q->n++;
+}
+
+static int quad_create(const palp_fem_mesh *m, quad_mesh *q) {
+  memset(q, 0, sizeof *q);
+  q->cap = 1;
+  while (q->cap < 8 * m->element_count + 64) q->cap <<= 1;
+  const int maxn = m->node_count + 12 * m->element_count;
+  q->x = malloc(sizeof *q->x * (size_t)maxn);
+  q->el = malloc(sizeof *q->el * (size_t)m->element_count);
+  q->ka = malloc(sizeof(int) * (size_t)q->cap), q->kb = malloc(sizeof(int) * (size_t)q->cap);
+  q->kv = malloc(sizeof(int) * (size_t)q->cap);
+  if (!q->x || !q->el || !q->ka || !q->kb || !q->kv) return PALP_ENOMEM;
+  for (int i = 0; i < q->cap; ++i) q->kv[i] = -1;
+  memcpy(q->x, m->x, sizeof *q->x * (size_t)m->node_count);
+  q->n = m->node_count;
+  static const int edge[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                  {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  for (int e = 0; e < m->element_count; ++e) {
+    for (int k = 0; k < 8; ++k) q->el[e][k] = m->hex[e][k];
+    for (int k = 0; k < 12; ++k) q->el[e][8 + k] = midpoint(q, m, m->hex[e][edge[k][0]], m->hex[e][edge[k][1]]);
+  }
+  q->ne = m->element_count;
+  return 0;
+}
+
+static void quad_destroy(quad_mesh *q) {
+  free(q->x), free(q->el), free(q->ka), free(q->kb), free(q->kv);
+}
+
+/* Serendipity 8-node quad: corners (-1,-1),(1,-1),(1,1),(-1,1), then mids of edges 01,12,23,30. */
+static void shape8(double xi, double eta, double N[8], double dxi[8], double deta[8]) {
+  static const double c[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  for (int a = 0; a < 4; ++a) {
+    const double s = c[a][0], t = c[a][1];
+    N[a] = 0.25 * (1 + s * xi) * (1 + t * eta) * (s * xi + t * eta - 1);
+    dxi[a] = 0.25 * s * (1 + t * eta) * (2 * s * xi + t * eta);
+    deta[a] = 0.25 * t * (1 + s * xi) * (s * xi + 2 * t * eta);
+  }
+  N[4] = 0.5 * (1 - xi * xi) * (1 - eta), dxi[4] = -xi * (1 - eta), deta[4] = -0.5 * (1 - xi * xi);
+  N[5] = 0.5 * (1 + xi) * (1 - eta * eta), dxi[5] = 0.5 * (1 - eta * eta), deta[5] = -eta * (1 + xi);
+  N[6] = 0.5 * (1 - xi * xi) * (1 + eta), dxi[6] = -xi * (1 + eta), deta[6] = 0.5 * (1 - xi * xi);
+  N[7] = 0.5 * (1 - xi) * (1 - eta * eta), dxi[7] = -0.5 * (1 - eta * eta), deta[7] = -eta * (1 - xi);
+}
+
+/* The traction on the curved faces: nodal z loads [N] (length q->n), total exactly F. */
+static int quad_load(const palp_fem_mesh *m, quad_mesh *q, double F, double area, double *fz) {
+  int (*faces)[4], nf;
+  if (palp_fem_surface_faces(m, &faces, &nf)) return PALP_ENOMEM;
+  memset(fz, 0, sizeof(double) * (size_t)q->n);
+  const double s2 = area / PALP_FEM_PI;
+  double total = 0.0;
+  for (int k = 0; k < nf; ++k) {
+    int nd[8];
+    for (int a = 0; a < 4; ++a) nd[a] = faces[k][a];
+    for (int a = 0; a < 4; ++a) nd[4 + a] = midpoint(q, m, faces[k][a], faces[k][(a + 1) % 4]); /* existing */
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) {
+        double N[8], dxi[8], deta[8], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
+        shape8(GP[i], GP[j], N, dxi, deta);
+        for (int a = 0; a < 8; ++a)
+          for (int d = 0; d < 3; ++d) {
+            X[d] += N[a] * q->x[nd[a]][d];
+            Xa[d] += dxi[a] * q->x[nd[a]][d];
+            Xb[d] += deta[a] * q->x[nd[a]][d];
+          }
+        if (X[2] <= 0.0 || X[0] * X[0] + X[1] * X[1] > s2) continue;
+        const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2],
+                             Xa[0] * Xb[1] - Xa[1] * Xb[0]};
+        const double dA = norm3d(n) * GW[i] * GW[j];
+        for (int a = 0; a < 8; ++a) fz[nd[a]] -= N[a] * dA;
+        total += dA;
+      }
+  }
+  free(faces);
+  if (!(total > 0)) return PALP_EINVAL;
+  for (int i = 0; i < q->n; ++i) fz[i] *= F / total;
+  return 0;
+}
+
+static double relaxed_c10(const palp_fem_config *cfg, const palp_fem_material *mt) {
+  if (cfg->c10_reading == PALP_FEM_C10_LONG_TERM) return mt->c10;
+  double ginf = 1.0;
+  for (int k = 0; k < mt->prony_count; ++k) ginf -= mt->g[k];
+  return ginf * mt->c10;
+}
+
+static int write_inp(const char *path, const palp_fem_mesh *m, const quad_mesh *q, const double *fz,
+                     const palp_fem_config *cfg, const char *profile, int level) {
+  FILE *f = fopen(path, "w");
+  if (!f) return PALP_EIO;
+  fprintf(f, "*HEADING\npalp ccx cross-check: level %d, profile %s, relaxed moduli, C3D20R\n*NODE, NSET=NALL\n", level,
+          profile);
+  for (int i = 0; i < q->n; ++i) fprintf(f, "%d, %.17g, %.17g, %.17g\n", i + 1, q->x[i][0], q->x[i][1], q->x[i][2]);
+  static const char *const set[2] = {"GEL", "MEMBRANE"};
+  for (int r = 0; r < 2; ++r) {
+    fprintf(f, "*ELEMENT, TYPE=C3D20R, ELSET=%s\n", set[r]);
+    for (int e = 0; e < q->ne; ++e) {
+      if (m->region[e] != (r == 0 ? PALP_FEM_GEL : PALP_FEM_MEMBRANE)) continue;
+      fprintf(f, "%d", e + 1);
+      for (int k = 0; k < 20; ++k) fprintf(f, ",%s%d", k == 15 ? "\n" : " ", q->el[e][k] + 1);
+      fputc('\n', f);
+    }
+  }
+  fputs("*NSET, NSET=BASE\n", f);
+  int c = 0;
+  for (int i = 0; i < q->n; ++i)
+    if (q->x[i][2] <= 1e-9) fprintf(f, "%d,%s", i + 1, ++c % 12 ? "" : "\n");
+  fprintf(f, "\n*NSET, NSET=TOP\n%d\n", m->top_node + 1);
+  const palp_fem_material *mt[2] = {&cfg->gel, &cfg->membrane};
+  for (int r = 0; r < 2; ++r)
+    fprintf(f, "*MATERIAL, NAME=M%s\n*HYPERELASTIC, NEO HOOKE\n%.10g, %.10g\n*SOLID SECTION, ELSET=%s, MATERIAL=M%s\n",
+            set[r], relaxed_c10(cfg, mt[r]), mt[r]->d1, set[r], set[r]);
+  fputs("*BOUNDARY\nBASE, 1, 3\n*STEP, NLGEOM, INC=1000\n*STATIC\n0.25, 1.0, 1e-4, 0.25\n*CLOAD\n", f);
+  for (int i = 0; i < q->n; ++i)
+    if (fz[i] != 0.0) fprintf(f, "%d, 3, %.17g\n", i + 1, fz[i]);
+  fputs("*NODE PRINT, NSET=TOP\nU\n*END STEP\n", f);
+  return fclose(f) ? PALP_EIO : 0;
+}
+
+/* The last "displacements ... for set TOP" block of ccx's .dat: uz of its node. */
+static int read_top_uz(const char *dat, double *uz) {
+  FILE *f = fopen(dat, "r");
+  if (!f) return PALP_EIO;
+  char line[512];
+  int in = 0, got = 0;
+  while (fgets(line, sizeof line, f)) {
+    if (strstr(line, "displacements") && strstr(line, "TOP")) {
+      in = 1;
+      continue;
+    }
+    int node;
+    double a, b, z;
+    if (in && sscanf(line, "%d %lf %lf %lf", &node, &a, &b, &z) == 4) {
+      *uz = z, got = 1, in = 0;
+    }
+  }
+  fclose(f);
+  return got ? 0 : PALP_EPARSE;
+}
+
+int main(int argc, char **argv) {
+  const char *levels = "1,2", *profile = "paper_long_term", *dir = "out/ccx", *ccx = "ccx";
+  double force = 3.0;
+  int no_project = 0;
+  for (int i = 1; i < argc; ++i) {
+    if (i + 1 < argc && !strcmp(argv[i], "--levels")) levels = argv[++i];
+    else if (i + 1 < argc && !strcmp(argv[i], "--profile")) profile = argv[++i];
+    else if (i + 1 < argc && !strcmp(argv[i], "--force")) force = atof(argv[++i]);
+    else if (i + 1 < argc && !strcmp(argv[i], "--dir")) dir = argv[++i];
+    else if (i + 1 < argc && !strcmp(argv[i], "--ccx")) ccx = argv[++i];
+    else if (!strcmp(argv[i], "--ccx-only")) no_project = 1;
+    else {
+      fprintf(stderr, "usage: ccx_crosscheck [--levels 1,2,3] [--profile NAME] [--force N] [--dir DIR] [--ccx PATH] "
+                      "[--ccx-only]\n");
+      return 2;
+    }
+  }
+  if (!(force > 0.0) || force > 100.0) {
+    fprintf(stderr, "ccx_crosscheck: --force must be in (0, 100] N\n");
+    return 2;
+  }
+  char cmd[2048];
+  snprintf(cmd, sizeof cmd, "mkdir -p '%s'", dir);
+  if (system(cmd) != 0) return 1;
+  char err[200];
+  palp_fem_config cfg = palp_fem_default_config();
+  if (palp_fem_config_set_material(&cfg, profile, err, sizeof err)) {
+    fprintf(stderr, "ccx_crosscheck: %s\n", err);
+    return 2;
+  }
+  printf("distribution II at the pole, %.3g N over 5.2 cm^2, relaxed, profile %s (gel C10 %.4g Pa, D1 %.3g 1/Pa; "
+         "membrane C10 %.4g Pa)\n", force, profile, relaxed_c10(&cfg, &cfg.gel), cfg.gel.d1,
+         relaxed_c10(&cfg, &cfg.membrane));
+  printf("%5s %8s %14s %8s %8s %14s %8s %9s\n", "level", "hexa", "palp uz [mm]", "wall s", "nodes20", "ccx uz [mm]",
+         "wall s", "ccx/palp");
+  int fail = 0;
+  for (const char *l = levels; *l;) {
+    const int L = (int)strtol(l, (char **)&l, 10);
+    if (*l == ',') ++l;
+    if (L < 1 || L > 6) {
+      fprintf(stderr, "ccx_crosscheck: level %d out of 1..6\n", L);
+      return 2;
+    }
+    cfg.mesh.level = L;
+    palp_fem_mesh mesh;
+    if (palp_fem_mesh_create(&cfg.mesh, &mesh)) return 1;
+    double uz_p = NAN, tp = 0;
+    if (!no_project) {
+      palp_fem_model m;
+      if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) return 1;
+      m.max_newton = 40;
+      double *f = calloc((size_t)m.ndof, sizeof(double));
+      pole_patch_load(&mesh, force, 5.2e-4, f);
+      const double t0 = now_s();
+      if (palp_fem_solve_static(&m, f, 4, INFINITY) == 0) uz_p = m.u[3 * mesh.top_node + 2];
+      else fprintf(stderr, "ccx_crosscheck: palp level %d: %s\n", L, m.err);
+      tp = now_s() - t0;
+      free(f);
+      palp_fem_model_destroy(&m);
+    }
+    quad_mesh q;
+    if (quad_create(&mesh, &q)) return 1;
+    double *fz = malloc(sizeof(double) * (size_t)(q.n + 64));
+    if (!fz || quad_load(&mesh, &q, force, 5.2e-4, fz)) return 1;
+    char job[1024], path[1100];
+    snprintf(job, sizeof job, "%s/level%d_%s", dir, L, profile);
+    snprintf(path, sizeof path, "%s.inp", job);
+    if (write_inp(path, &mesh, &q, fz, &cfg, profile, L)) {
+      fprintf(stderr, "ccx_crosscheck: cannot write %s\n", path);
+      return 1;
+    }
+    snprintf(cmd, sizeof cmd, "cd '%s' && OMP_NUM_THREADS=2 '%s' -i 'level%d_%s' > 'level%d_%s.log' 2>&1", dir, ccx, L,
+             profile, L, profile);
+    const double t1 = now_s();
+    const int st = system(cmd);
+    const double tc = now_s() - t1;
+    double uz_c = NAN;
+    snprintf(path, sizeof path, "%s.dat", job);
+    if (st != 0 || read_top_uz(path, &uz_c)) {
+      fprintf(stderr, "ccx_crosscheck: ccx failed at level %d (exit %d): see %s.log\n", L, st, job);
+      fail = 1;
+    }
+    printf("%5d %8d %14.4f %8.1f %8d %14.4f %8.1f %9.4f\n", L, mesh.element_count, 1e3 * uz_p, tp, q.n, 1e3 * uz_c, tc,
+           uz_c / uz_p);
+    fflush(stdout);
+    free(fz);
+    quad_destroy(&q);
+    palp_fem_mesh_destroy(&mesh);
+  }
+  return fail;
+}

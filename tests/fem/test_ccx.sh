@@ -1,0 +1,33 @@
+#!/bin/sh
+# fem_ccx (issue 12): the FEM reference against an independent FE code, CalculiX (Debian's
+# calculix-ccx, installed by the set-up script: missing, the test fails, it does not skip), on
+# the project's own hemisphere mesh made quadratic (C3D20R, midside nodes on the true sphere),
+# relaxed moduli of the paper_long_term profile, distribution II at 3 N, levels 1 and 2.
+# Asserted: ccx solves both decks and its pole moves down; the two codes approach each other
+# from opposite sides between levels 1 and 2 (palp's linear Q1/P0 hexahedra on the faceted sphere too stiff, growing with
+# refinement; ccx's coarse quadratic bricks too soft, shrinking); at level 2 they agree within
+# 20% (measured 15.7%: neither is converged at level 2; docs/materials.md has levels 1-4).
+# The converged comparison is bench/fem/ccx_crosscheck.
+# usage: test_ccx.sh CCX_CROSSCHECK TMPDIR
+set -u
+tool=$1 tmp=$2
+command -v ccx >/dev/null 2>&1 || { echo "FAIL ccx (calculix-ccx) is not installed: scripts/debian-packages.txt lists it"; exit 1; }
+dir=$tmp/ccx
+rm -rf "$dir"
+"$tool" --levels 1,2 --profile paper_long_term --force 3 --dir "$dir" > "$dir.txt" 2>&1
+st=$?
+cat "$dir.txt"
+[ $st -eq 0 ] || { echo "FAIL ccx_crosscheck exit $st"; exit 1; }
+awk '
+  $1 == 1 && NF == 8 { p1 = -$3; c1 = -$6 }
+  $1 == 2 && NF == 8 { p2 = -$3; c2 = -$6 }
+  END {
+    fail = 0
+    if (!(c1 > 0 && c2 > 0)) { print "FAIL ccx pole uz not downward: " c1 ", " c2; fail = 1 } else print "ok   ccx pole moves down at levels 1 and 2"
+    if (p2 > p1 && c2 < c1) print "ok   palp grows (" p1 " -> " p2 " mm), ccx shrinks (" c1 " -> " c2 " mm): they converge from opposite sides"
+    else { print "FAIL not converging from opposite sides: palp " p1 " -> " p2 ", ccx " c1 " -> " c2; fail = 1 }
+    d = (c2 - p2) / c2; if (d < 0) d = -d
+    if (d <= 0.20) printf "ok   level 2: palp %.4f mm, ccx %.4f mm, within %.1f%% <= 20%%\n", p2, c2, 100 * d
+    else { printf "FAIL level 2: palp %.4f mm, ccx %.4f mm differ by %.1f%% > 20%%\n", p2, c2, 100 * d; fail = 1 }
+    exit fail
+  }' "$dir.txt"
