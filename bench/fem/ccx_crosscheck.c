@@ -198,7 +198,8 @@ static int write_inp(const char *path, const palp_fem_mesh *m, const quad_mesh *
   if (!f) return PALP_EIO;
   fprintf(f, "*HEADING\npalp ccx cross-check: level %d, profile %s, relaxed moduli, C3D20R\n*NODE, NSET=NALL\n", level,
           profile);
-  for (int i = 0; i < q->n; ++i) fprintf(f, "%d, %.17g, %.17g, %.17g\n", i + 1, q->x[i][0], q->x[i][1], q->x[i][2]);
+  /* 14 digits: CalculiX reads at most ~20 characters per field (a 22-character %.17g failed). */
+  for (int i = 0; i < q->n; ++i) fprintf(f, "%d, %.14g, %.14g, %.14g\n", i + 1, q->x[i][0], q->x[i][1], q->x[i][2]);
   static const char *const set[2] = {"GEL", "MEMBRANE"};
   for (int r = 0; r < 2; ++r) {
     fprintf(f, "*ELEMENT, TYPE=C3D20R, ELSET=%s\n", set[r]);
@@ -220,7 +221,7 @@ static int write_inp(const char *path, const palp_fem_mesh *m, const quad_mesh *
             set[r], relaxed_c10(cfg, mt[r]), mt[r]->d1, set[r], set[r]);
   fputs("*BOUNDARY\nBASE, 1, 3\n*STEP, NLGEOM, INC=1000\n*STATIC\n0.25, 1.0, 1e-4, 0.25\n*CLOAD\n", f);
   for (int i = 0; i < q->n; ++i)
-    if (fz[i] != 0.0) fprintf(f, "%d, 3, %.17g\n", i + 1, fz[i]);
+    if (fz[i] != 0.0) fprintf(f, "%d, 3, %.14g\n", i + 1, fz[i]);
   fputs("*NODE PRINT, NSET=TOP\nU\n*END STEP\n", f);
   return fclose(f) ? PALP_EIO : 0;
 }
