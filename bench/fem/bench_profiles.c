@@ -24,40 +24,6 @@ static double now_s(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* Distribution II of the paper: F spread uniformly (per unit area) over the
- * surface within horizontal radius sqrt(A / pi) of the pole axis, vertical. The
- * faceted surface's area differs from the sphere's by <1%, so the sum is scaled
- * back to exactly F. */
-static void pole_patch_load(const palp_fem_mesh *mesh, double F, double area, double *f) {
-  int (*faces)[4], nf;
-  palp_fem_surface_faces(mesh, &faces, &nf);
-  memset(f, 0, sizeof(double) * 3 * (size_t)mesh->node_count);
-  const double s2 = area / PALP_FEM_PI, g = 0.57735026918962576451;
-  static const double sg[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
-  double total = 0.0;
-  for (int k = 0; k < nf; ++k)
-    for (int q = 0; q < 4; ++q) {
-      const double xi = g * sg[q][0], eta = g * sg[q][1];
-      double N[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
-      for (int a = 0; a < 4; ++a) {
-        N[a] = 0.25 * (1 + sg[a][0] * xi) * (1 + sg[a][1] * eta);
-        const double da = 0.25 * sg[a][0] * (1 + sg[a][1] * eta), db = 0.25 * sg[a][1] * (1 + sg[a][0] * xi);
-        for (int d = 0; d < 3; ++d) {
-          X[d] += N[a] * mesh->x[faces[k][a]][d];
-          Xa[d] += da * mesh->x[faces[k][a]][d];
-          Xb[d] += db * mesh->x[faces[k][a]][d];
-        }
-      }
-      if (X[2] <= 0.0 || X[0] * X[0] + X[1] * X[1] > s2) continue;
-      const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2], Xa[0] * Xb[1] - Xa[1] * Xb[0]};
-      const double dA = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      for (int a = 0; a < 4; ++a) f[3 * faces[k][a] + 2] -= N[a] * dA;
-      total += dA;
-    }
-  for (int i = 0; i < 3 * mesh->node_count; ++i) f[i] *= F / total;
-  free(faces);
-}
-
 int main(int argc, char **argv) {
   const char *levels = "1,2,3", *profiles = "paper_long_term,breast_tissue,paper_instantaneous";
   double force = 3.0;
@@ -101,7 +67,7 @@ int main(int argc, char **argv) {
       if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) return 1;
       m.max_newton = 40;
       double *f = calloc((size_t)m.ndof, sizeof(double));
-      pole_patch_load(&mesh, force, 5.2e-4, f);
+      palp_fem_cap_traction(&mesh, force, 5.2e-4, 2, f); /* 2 x 2 points: the figures in docs/materials.md */
       /* the soft profiles deform far: more load increments keep Newton in reach */
       const int inc = increments > 0 ? increments : (strcmp(ps, "paper_instantaneous") == 0 ? 20 : 4);
       const double t0 = now_s();

@@ -33,47 +33,14 @@ static double now_s(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* ---- the project's FEM: the load of bench_profiles, with finer quadrature ---------------- */
-/* 6-point Gauss-Legendre: the cap's edge cuts faces, and both codes must see the same cap.
- * With 2 x 2 (palp's bench_profiles) against 3 x 3 points the loaded area jumped between
- * levels differently in each code (pole uz not monotone in the level); 6 x 6 points on both
- * integrate the exact cap to <1% of its area on a level-1 face. */
+/* 6-point Gauss-Legendre for the quadratic faces: the cap's edge cuts faces, and both codes
+ * must see the same cap (palp_fem_cap_traction with 6 points on the project's side). With
+ * 2 x 2 against 3 x 3 points the loaded area changed differently with the level in each code
+ * and the pole's displacement was not monotone in the level. */
 static const double GP[6] = {-0.93246951420315202781, -0.66120938646626451366, -0.23861918608319690863,
                              0.23861918608319690863,  0.66120938646626451366,  0.93246951420315202781};
 static const double GW[6] = {0.17132449237917034504, 0.36076157304813860757, 0.46791393457269104739,
                              0.46791393457269104739, 0.36076157304813860757, 0.17132449237917034504};
-
-static void pole_patch_load(const palp_fem_mesh *mesh, double F, double area, double *f) {
-  int (*faces)[4], nf;
-  palp_fem_surface_faces(mesh, &faces, &nf);
-  memset(f, 0, sizeof(double) * 3 * (size_t)mesh->node_count);
-  const double s2 = area / PALP_FEM_PI;
-  static const double sg[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
-  double total = 0.0;
-  for (int k = 0; k < nf; ++k)
-    for (int i = 0; i < 6; ++i)
-      for (int j = 0; j < 6; ++j) {
-        const double xi = GP[i], eta = GP[j];
-        double N[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
-        for (int a = 0; a < 4; ++a) {
-          N[a] = 0.25 * (1 + sg[a][0] * xi) * (1 + sg[a][1] * eta);
-          const double da = 0.25 * sg[a][0] * (1 + sg[a][1] * eta), db = 0.25 * sg[a][1] * (1 + sg[a][0] * xi);
-          for (int d = 0; d < 3; ++d) {
-            X[d] += N[a] * mesh->x[faces[k][a]][d];
-            Xa[d] += da * mesh->x[faces[k][a]][d];
-            Xb[d] += db * mesh->x[faces[k][a]][d];
-          }
-        }
-        if (X[2] <= 0.0 || X[0] * X[0] + X[1] * X[1] > s2) continue;
-        const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2],
-                             Xa[0] * Xb[1] - Xa[1] * Xb[0]};
-        const double dA = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * GW[i] * GW[j];
-        for (int a = 0; a < 4; ++a) f[3 * faces[k][a] + 2] -= N[a] * dA;
-        total += dA;
-      }
-  for (int i = 0; i < 3 * mesh->node_count; ++i) f[i] *= F / total;
-  free(faces);
-}
 
 /* ---- the quadratic mesh ------------------------------------------------------------------ */
 typedef struct quad_mesh {
@@ -299,7 +266,7 @@ int main(int argc, char **argv) {
       if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) return 1;
       m.max_newton = 40;
       double *f = calloc((size_t)m.ndof, sizeof(double));
-      pole_patch_load(&mesh, force, 5.2e-4, f);
+      palp_fem_cap_traction(&mesh, force, 5.2e-4, 6, f);
       const double t0 = now_s();
       if (palp_fem_solve_static(&m, f, 4, INFINITY) == 0) uz_p = m.u[3 * mesh.top_node + 2];
       else fprintf(stderr, "ccx_crosscheck: palp level %d: %s\n", L, m.err);

@@ -164,6 +164,11 @@ typedef struct palp_fem_map {
 /* Outer surface faces (single-owner hex faces not entirely on the clamped base),
  * outward oriented; *faces is malloc'ed. */
 int palp_fem_surface_faces(const palp_fem_mesh *mesh, int (**faces)[4], int *count);
+/* Distribution II of the paper as a dead load: a vertical traction, uniform per unit area,
+ * over the surface within horizontal radius sqrt(area / pi) of the pole axis, integrated
+ * with gauss x gauss points per face (2 or 6; a point in the cap loads its face), scaled so
+ * the nodal z forces sum to exactly -F [N]. f [3 * node_count] is overwritten. */
+int palp_fem_cap_traction(const palp_fem_mesh *mesh, double F, double area, int gauss, double *f);
 int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int count, palp_fem_map *out);
 void palp_fem_map_destroy(palp_fem_map *map);
 

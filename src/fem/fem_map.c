@@ -202,3 +202,47 @@ void palp_fem_map_destroy(palp_fem_map *map) {
   free(map->w);
   memset(map, 0, sizeof *map);
 }
+
+int palp_fem_cap_traction(const palp_fem_mesh *mesh, double F, double area, int gauss, double *f) {
+  /* Gauss-Legendre points and weights on [-1, 1]. 6 points integrate the exact cap (whose
+   * edge cuts faces) to <1% of its area on a level-1 face; 2 keep bench_profiles' figures. */
+  static const double p2[2] = {-0.57735026918962576451, 0.57735026918962576451}, w2[2] = {1.0, 1.0};
+  static const double p6[6] = {-0.93246951420315202781, -0.66120938646626451366, -0.23861918608319690863,
+                               0.23861918608319690863,  0.66120938646626451366,  0.93246951420315202781};
+  static const double w6[6] = {0.17132449237917034504, 0.36076157304813860757, 0.46791393457269104739,
+                               0.46791393457269104739, 0.36076157304813860757, 0.17132449237917034504};
+  if ((gauss != 2 && gauss != 6) || !(F >= 0.0) || !(area > 0.0)) return PALP_EINVAL;
+  const double *gp = gauss == 2 ? p2 : p6, *gw = gauss == 2 ? w2 : w6;
+  int (*faces)[4], nf;
+  const int rc = palp_fem_surface_faces(mesh, &faces, &nf);
+  if (rc) return rc;
+  memset(f, 0, sizeof(double) * 3 * (size_t)mesh->node_count);
+  const double s2 = area / PALP_FEM_PI;
+  static const double sg[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  double total = 0.0;
+  for (int k = 0; k < nf; ++k)
+    for (int i = 0; i < gauss; ++i)
+      for (int j = 0; j < gauss; ++j) {
+        const double xi = gp[i], eta = gp[j];
+        double N[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
+        for (int a = 0; a < 4; ++a) {
+          N[a] = 0.25 * (1 + sg[a][0] * xi) * (1 + sg[a][1] * eta);
+          const double da = 0.25 * sg[a][0] * (1 + sg[a][1] * eta), db = 0.25 * sg[a][1] * (1 + sg[a][0] * xi);
+          for (int d = 0; d < 3; ++d) {
+            X[d] += N[a] * mesh->x[faces[k][a]][d];
+            Xa[d] += da * mesh->x[faces[k][a]][d];
+            Xb[d] += db * mesh->x[faces[k][a]][d];
+          }
+        }
+        if (X[2] <= 0.0 || X[0] * X[0] + X[1] * X[1] > s2) continue;
+        const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2],
+                             Xa[0] * Xb[1] - Xa[1] * Xb[0]};
+        const double dA = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) * gw[i] * gw[j]; /* [m^2] */
+        for (int a = 0; a < 4; ++a) f[3 * faces[k][a] + 2] -= N[a] * dA;
+        total += dA;
+      }
+  free(faces);
+  if (!(total > 0.0)) return PALP_EINVAL;
+  for (int i = 0; i < 3 * mesh->node_count; ++i) f[i] *= F / total;
+  return 0;
+}
