@@ -17,16 +17,7 @@ uid=report-run-7c1e-0042
 if grep -Eiq '(src|href)=.(https?:)?//|@import|url\(' "$dir/report.html"; then
   echo "FAIL: the report references an external resource"; exit 1
 fi
-profile=$(mktemp -d)
-trap 'rm -rf "$profile"' EXIT
-# No network at all: every host name resolves to nothing (file:// needs none).
-timeout 90 "$chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
-  --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
-  --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$profile" \
-  --window-size=1100,2200 --screenshot="$dir/shot.png" "file://$dir/report.html" >"$dir/chromium.log" 2>&1
-timeout 90 "$chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
-  --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
-  --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$profile" \
-  --dump-dom "file://$dir/report.html" >"$dir/dom.html" 2>>"$dir/chromium.log"
+. "$(dirname "$0")/../chromium.sh"
+palp_chromium_render "$dir/report.html" "$dir/shot.png" "$dir/dom.html" "$dir/chromium.log" 1100x2200
 [ -s "$dir/shot.png" ] || { echo "FAIL: no screenshot"; cat "$dir/chromium.log"; exit 1; }
 /usr/bin/python3 "$check" "$dir/shot.png" "$dir/dom.html" "$uid"

@@ -57,17 +57,9 @@ expect "list: alice's grade, phantom and exercise" "class-alice-1 +alice +dome_s
 expect "list: bob's score" "class-bob-1 +bob .* 35" "$dir/list.txt"
 
 # Reports in headless Chromium, no network.
-profile=$(mktemp -d)
-trap 'rm -rf "$profile"' EXIT
+. "$(dirname "$0")/../chromium.sh"
 render() { # render HTML PNG DOM
-  timeout 90 "$chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
-    --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
-    --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$profile" \
-    --window-size=1100,2400 --screenshot="$2" "file://$1" >"$dir/chromium.log" 2>&1
-  timeout 90 "$chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
-    --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
-    --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$profile" \
-    --dump-dom "file://$1" >"$3" 2>>"$dir/chromium.log"
+  palp_chromium_render "$1" "$2" "$3" "$dir/chromium.log" 1100x2400
   [ -s "$2" ] && [ -s "$3" ] || { echo "FAIL: chromium rendered nothing"; cat "$dir/chromium.log"; exit 1; }
 }
 R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"

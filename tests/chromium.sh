@@ -1,0 +1,16 @@
+# tests/chromium.sh - sourced by the report tests (tests/db/test_report.sh,
+# tests/review/test_review_cli.sh): Debian's headless Chromium with no network at all (every
+# host name resolves to nothing; file:// needs none) and a throw-away profile.
+# palp_chromium_render HTML PNG DOM LOG WIDTHxHEIGHT: a screenshot and the DOM after scripts.
+palp_chromium=/usr/bin/chromium
+palp_chromium_profile=$(mktemp -d)
+trap 'rm -rf "$palp_chromium_profile"' EXIT
+palp_chromium_run() {
+  timeout 90 "$palp_chromium" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+    --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
+    --no-proxy-server "--host-resolver-rules=MAP * ~NOTFOUND" --user-data-dir="$palp_chromium_profile" "$@"
+}
+palp_chromium_render() {
+  palp_chromium_run --window-size="$(echo "$5" | tr x ,)" --screenshot="$2" "file://$1" >"$4" 2>&1
+  palp_chromium_run --dump-dom "file://$1" >"$3" 2>>"$4"
+}
