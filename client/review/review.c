@@ -82,7 +82,7 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     char exname[64] = "-", grade[160];
     if (palp_db_session_exercise(db, v[i].id, exname, sizeof exname, NULL) != 0) snprintf(exname, sizeof exname, "-");
     review_latest_grade(db, v[i].id, grade, sizeof grade);
-    printf("%-36s %-14s %-20s %-16s %-25s %9.3f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, v[i].phantom_name, exname,
+    printf("%-36s %-14s %-20.20s %-16.16s %-25s %9.2f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, v[i].phantom_name, exname,
            t, v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
            grade, known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
   }
