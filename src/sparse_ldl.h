@@ -25,6 +25,17 @@ typedef struct palp_ldl {
   int *brow;      /* [nblocks] block row of each off-diagonal block */
   double *bval;   /* [nblocks*9] row-major 3x3 blocks */
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
+  /* The same blocks column-major, and 1/D padded to 4 lanes per vertex, for the
+   * AVX2 single-right-hand-side solve (used when the CPU has AVX2; it performs the
+   * same operations in the same order as the portable path, so both give the same
+   * bits and a log replays identically on machines with and without it). */
+  int *rowp;      /* [nb+1] starts of each block row's off-diagonal blocks */
+  int *rcol;      /* [nblocks] block column of each, ascending within a row */
+  double *bcol;   /* [nblocks*9 + 4] the blocks by row, column-major */
+  double *bbwd;   /* [nblocks*9 + 4] the row-major blocks, columns from last to first */
+  int *rbwd;      /* [nblocks] block row of each */
+  double *dinv4;  /* [nb*4] */
+  int simd;       /* 1: palp_ldl_solve takes the AVX2 path for w == 1 */
 } palp_ldl;
 
 void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
@@ -41,7 +52,7 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
                            const int *tj, const double *tx);
 
 /* Solves A X = B in place for w interleaved right-hand sides (x[i*w + k]);
- * work needs n*w doubles. */
+ * work needs max(n*w, 4*ceil(n/3)) doubles. */
 void palp_ldl_solve(const palp_ldl *f, double *x, int w, double *work);
 
 #endif
