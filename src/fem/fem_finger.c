@@ -282,3 +282,46 @@ int palp_fem_lesion_scale(const palp_fem_mesh *mesh, const palp_lesion *les, int
   }
   return touched;
 }
+
+int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *lesions,
+                          int lesion_count, const double n[3], double radius, const double *depth, int count,
+                          double fmax, double *force, double *min_gap, long *newton, char *err, size_t errlen) {
+  palp_fem_model m;
+  int rc = palp_fem_model_create(&m, mesh, cfg);
+  if (!rc) rc = palp_fem_model_finalize(&m);
+  if (rc) {
+    snprintf(err, errlen, "model: %s", m.err);
+    return -1;
+  }
+  double *scale = malloc(sizeof(double) * (size_t)mesh->element_count);
+  palp_fem_finger f;
+  if (!scale || palp_fem_finger_init(&f, mesh, NULL, 0, radius, 0.0)) {
+    free(scale);
+    palp_fem_model_destroy(&m);
+    snprintf(err, errlen, "out of memory");
+    return -1;
+  }
+  palp_fem_lesion_scale(mesh, lesions, lesion_count, scale);
+  m.c10_scale = scale;
+  palp_fem_finger_attach(&f, &m);
+  const double R = cfg->mesh.radius, r = f.radius;
+  for (int a = 0; a < 3; ++a) f.center[a] = (R + r) * n[a];
+  int done = 0;
+  for (int k = 0; k < count; ++k) {
+    const double c[1][3] = {{(R + r - depth[k]) * n[0], (R + r - depth[k]) * n[1], (R + r - depth[k]) * n[2]}};
+    double f3[1][3], g = 0.0;
+    if (palp_fem_finger_press(&m, &f, c, 1, f3, &g)) {
+      snprintf(err, errlen, "FE press at %.2f mm: %s", depth[k] * 1e3, m.err);
+      break;
+    }
+    force[k] = f3[0][0] * n[0] + f3[0][1] * n[1] + f3[0][2] * n[2]; /* along the outward normal */
+    if (min_gap) min_gap[k] = g;
+    done = k + 1;
+    if (force[k] > fmax) break;
+  }
+  if (newton) *newton = m.newton_iterations;
+  palp_fem_finger_destroy(&f);
+  free(scale);
+  palp_fem_model_destroy(&m);
+  return done;
+}

@@ -60,6 +60,17 @@ int palp_fem_finger_press(palp_fem_model *m, palp_fem_finger *f, const double (*
  * Returns the number of elements touched. */
 int palp_fem_lesion_scale(const palp_fem_mesh *mesh, const palp_lesion *lesions, int count, double *scale);
 
+/* A force-depth curve: the sphere (radius [m]) pressed along -n (n the outward unit
+ * normal at the site) into the relaxed dome of cfg/mesh with its C10 scaled by the
+ * lesions, its centre at (R + radius - depth[k]) n for the dome radius R, each depth in
+ * turn (palp_fem_finger_press). force[k] is the force on the finger along n [N],
+ * min_gap[k] (may be NULL) the smallest gap. Stops after the first depth whose force
+ * passes fmax [N]. Returns the depths done (0..count; fewer when a press failed, with
+ * its reason in err) or -1 when the model cannot be built. */
+int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *lesions,
+                          int lesion_count, const double n[3], double radius, const double *depth, int count,
+                          double fmax, double *force, double *min_gap, long *newton, char *err, size_t errlen);
+
 #ifdef __cplusplus
 }
 #endif

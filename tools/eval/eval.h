@@ -131,6 +131,36 @@ typedef struct palp_eval_recovery {
 } palp_eval_recovery;
 int palp_eval_recovery_measure(const palp_scene *s, palp_eval_recovery *out, char *err, size_t errlen);
 
+/* A fingertip force-depth reference for calibrate (e.g. the FEM's, palp-eval
+ * calibrate --finger): a rigid sphere pressed along -n at the site, the reference
+ * force along n at each depth. */
+#define PALP_EVAL_FINGER_MAX_DEPTHS 8
+typedef struct palp_eval_finger_ref {
+  const char *name;   /* the site, for reports */
+  palp_vec3 n;        /* outward unit normal at the site */
+  double radius;      /* [m] */
+  int lesion_count;
+  palp_lesion lesion[PALP_MAX_LESIONS];
+  int count;          /* depths, 1..PALP_EVAL_FINGER_MAX_DEPTHS */
+  double depth[PALP_EVAL_FINGER_MAX_DEPTHS]; /* [m] of the fingertip centre below the undeformed surface */
+  double force[PALP_EVAL_FINGER_MAX_DEPTHS]; /* [N] reference, > 0 */
+} palp_eval_finger_ref;
+
+/* The real-time model's fingertip force-depth curve (world def wd with the lesions
+ * added, 1 ms steps): a finger of `radius` whose device is ramped at 5 mm/s to each
+ * depth in turn along -n and held (hold_s, hold_s, hold_s / 2 with two corrections)
+ * so that the proxy, the fingertip centre, sits at depth[k]. force[k]: the force
+ * along n [N]; depth_real[k]: where the proxy ended [m]. Returns count or -1. */
+int palp_eval_finger_rt(const palp_world_def *wd, const palp_lesion *lesions, int lesion_count, palp_vec3 n,
+                        double radius, const double *depth, int count, double hold_s, double *force,
+                        double *depth_real, char *err, size_t errlen);
+
+/* RMS over every site and depth of F_rt / F_ref - 1 for the world def wd; NAN when a
+ * run fails (err says why). forces (may be NULL) gets the model's forces, site by
+ * site, PALP_EVAL_FINGER_MAX_DEPTHS apart. */
+double palp_eval_finger_rms(const palp_world_def *wd, const palp_eval_finger_ref *refs, int count, double hold_s,
+                            double *forces, char *err, size_t errlen);
+
 typedef struct palp_eval_calib_def {
   unsigned mask;          /* parameters fitted (1u << PALP_EVAL_P_*); default all but a1 */
   int frame_stride;       /* residual every k-th frame, >= 1 */
@@ -157,6 +187,14 @@ typedef struct palp_eval_calib_def {
                              far is returned when it runs out (status PALP_EVAL_FIT_TIMEOUT) */
   double h_df;            /* finite-difference step in ln p, 3e-3 (0.3%) */
   int verbose;            /* progress to stderr */
+  /* Fingertip force-depth references fitted together with the displacement fields
+   * (issue 12): residual lambda_f (F_rt / F_ref - 1) per site and depth, lambda_f =
+   * finger_weight sqrt(N_data / N_finger), so that a relative force error e at every
+   * point costs as much as an RMS displacement error of finger_weight e [cm]. */
+  const palp_eval_finger_ref *finger;
+  int finger_count;
+  double finger_weight;   /* [cm] per unit relative force error; 0 leaves the finger out */
+  double finger_hold_s;   /* holds of palp_eval_finger_rt, 0.3 s in a fit */
 } palp_eval_calib_def;
 
 palp_eval_calib_def palp_eval_calib_default_def(void);
@@ -178,6 +216,7 @@ typedef struct palp_eval_calib_result {
   double seconds;
   palp_eval_recovery recovery_before, recovery_after;
   int recovery_penalised; /* 1 when the penalty residual was active in the final fit */
+  double finger_rms_before, finger_rms_after; /* palp_eval_finger_rms; NAN without references */
 } palp_eval_calib_result;
 
 /* Fits the real-time parameters of `base` (its world def is the start) so that

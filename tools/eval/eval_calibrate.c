@@ -195,6 +195,8 @@ typedef struct fit_ws {
   int nsel;
 
   size_t n_data;     /* data and force residuals */
+  size_t n_finger;   /* finger residuals (sites x depths) */
+  double lambda_finger;
   size_t n_force_expected;
   double lambda_prior, lambda_rec, lambda_bias;
   int with_recovery;
@@ -304,6 +306,20 @@ static int fit_f(const gsl_vector *x, void *ud, gsl_vector *fvec) {
       r[k++] = out > 0 ? ws->lambda_rec * copysign(out, dev) / ws->def->recovery_tol : 0.0;
     }
   }
+  if (!rc && ws->n_finger) {
+    /* the fingertip at each site and depth, relative force error */
+    palp_world_def wd = ws->scenes[0].world;
+    palp_eval_params_set(&wd, p);
+    for (int i = 0; !rc && i < ws->def->finger_count; ++i) {
+      const palp_eval_finger_ref *f = &ws->def->finger[i];
+      double F[PALP_EVAL_FINGER_MAX_DEPTHS], D[PALP_EVAL_FINGER_MAX_DEPTHS];
+      if (palp_eval_finger_rt(&wd, f->lesion, f->lesion_count, f->n, f->radius, f->depth, f->count,
+                              ws->def->finger_hold_s, F, D, ws->err, sizeof ws->err) < 0)
+        rc = PALP_EUNSTABLE;
+      else
+        for (int d = 0; d < f->count; ++d) r[k++] = ws->lambda_finger * (F[d] / f->force[d] - 1.0);
+    }
+  }
   if (rc == PALP_EUNSTABLE || rc == PALP_ESOLVER || rc == PALP_EINVAL) {
     /* A trial the model cannot run: a residual of 1 m everywhere, worse than any
      * real fit, so the trust region shrinks and tries a shorter step. */
@@ -359,6 +375,8 @@ palp_eval_calib_def palp_eval_calib_default_def(void) {
   d.bound_factor = 100.0;
   d.max_iter = 40;
   d.h_df = 3e-3;
+  d.finger_weight = 0.0;
+  d.finger_hold_s = 0.3;
   return d;
 }
 
@@ -453,7 +471,28 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   ws.lambda_rec = def->recovery_weight * sqrt((double)n_data);
   ws.lambda_bias = def->bias_weight * sqrt((double)n_data);
   ws.with_recovery = def->recovery_weight > 0;
-  const size_t n = n_data + (ws.lambda_bias > 0 ? (size_t)count : 0) + (size_t)ws.with_recovery + (size_t)ws.np,
+  if (def->finger_weight > 0 && def->finger_count > 0) {
+    for (int i = 0; i < def->finger_count; ++i) {
+      const palp_eval_finger_ref *f = &def->finger[i];
+      int ok = f->count >= 1 && f->count <= PALP_EVAL_FINGER_MAX_DEPTHS && f->radius > 0;
+      for (int d = 0; ok && d < f->count; ++d) ok = f->force[d] > 0 && f->depth[d] > 0;
+      if (!ok) {
+        snprintf(err, errlen, "calibrate: finger reference %d (%s) needs 1-%d depths > 0 with forces > 0", i,
+                 f->name ? f->name : "?", PALP_EVAL_FINGER_MAX_DEPTHS);
+        free(ws.sel_vertex);
+        return PALP_EINVAL;
+      }
+      ws.n_finger += (size_t)f->count;
+    }
+    if (!(def->finger_hold_s > 0)) {
+      snprintf(err, errlen, "calibrate: finger_hold_s must be > 0");
+      free(ws.sel_vertex);
+      return PALP_EINVAL;
+    }
+    ws.lambda_finger = def->finger_weight * sqrt((double)n_data / (double)ws.n_finger);
+  }
+  const size_t n = n_data + (ws.lambda_bias > 0 ? (size_t)count : 0) + (size_t)ws.with_recovery + ws.n_finger +
+                   (size_t)ws.np,
                np = (size_t)ws.np;
 
   palp_eval_calib_result res;
@@ -461,6 +500,12 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   memcpy(res.start, ws.start, sizeof ws.start);
   int rc = rmse_all(scenes, refs, count, ws.start, res.rmse_before, err, errlen);
   if (!rc) rc = palp_eval_recovery_measure(&scenes[0], &res.recovery_before, err, errlen);
+  res.finger_rms_before = res.finger_rms_after = NAN;
+  if (!rc && ws.n_finger) {
+    res.finger_rms_before =
+        palp_eval_finger_rms(&scenes[0].world, def->finger, def->finger_count, def->finger_hold_s, NULL, err, errlen);
+    if (isnan(res.finger_rms_before)) rc = PALP_EINVAL;
+  }
   if (rc) {
     free(ws.sel_vertex);
     return rc;
@@ -556,6 +601,11 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
     palp_scene s = scenes[0];
     palp_eval_params_set(&s.world, res.fitted);
     rc = palp_eval_recovery_measure(&s, &res.recovery_after, err, errlen);
+    if (!rc && ws.n_finger) {
+      res.finger_rms_after =
+          palp_eval_finger_rms(&s.world, def->finger, def->finger_count, def->finger_hold_s, NULL, err, errlen);
+      if (isnan(res.finger_rms_after)) rc = PALP_EINVAL;
+    }
   }
   if (rc) return rc;
   res.seconds = now_s() - t0;

@@ -20,6 +20,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "eval.h"
 #include "fem_finger.h"
 #include "finger_compare.h"
 
@@ -35,99 +36,6 @@ static double now_s(void) {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-/* FE force along -n at each depth; returns the depths done (stops past fmax). */
-static int fem_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *les, int nles,
-                     palp_vec3 n, const double *depth, int count, double fmax_n, double *F, double *gap,
-                     long *newton, char *err, size_t errlen) {
-  palp_fem_model m;
-  int rc = palp_fem_model_create(&m, mesh, cfg);
-  if (!rc) rc = palp_fem_model_finalize(&m);
-  if (rc) {
-    snprintf(err, errlen, "model: %s", m.err);
-    return -1;
-  }
-  double *scale = malloc(sizeof(double) * (size_t)mesh->element_count);
-  palp_fem_finger f;
-  if (!scale || palp_fem_finger_init(&f, mesh, NULL, 0, 0.008, 0.0)) {
-    free(scale);
-    palp_fem_model_destroy(&m);
-    snprintf(err, errlen, "out of memory");
-    return -1;
-  }
-  palp_fem_lesion_scale(mesh, les, nles, scale);
-  m.c10_scale = scale;
-  palp_fem_finger_attach(&f, &m);
-  const double R = cfg->mesh.radius, r = f.radius;
-  f.center[0] = (R + r) * n.x, f.center[1] = (R + r) * n.y, f.center[2] = (R + r) * n.z;
-  int done = 0;
-  for (int k = 0; k < count; ++k) {
-    const double c[1][3] = {{(R + r - depth[k]) * n.x, (R + r - depth[k]) * n.y, (R + r - depth[k]) * n.z}};
-    double f3[1][3];
-    if (palp_fem_finger_press(&m, &f, c, 1, f3, &gap[k])) {
-      snprintf(err, errlen, "FE press at %.2f mm: %s", depth[k] * 1e3, m.err);
-      break;
-    }
-    F[k] = f3[0][0] * n.x + f3[0][1] * n.y + f3[0][2] * n.z; /* along the outward normal */
-    done = k + 1;
-    if (F[k] > fmax_n) break;
-  }
-  *newton = m.newton_iterations;
-  palp_fem_finger_destroy(&f);
-  free(scale);
-  palp_fem_model_destroy(&m);
-  return done;
-}
-
-/* Real-time force along the outward normal with the proxy at each depth. */
-static int rt_curve(const palp_world_def *wd0, const palp_lesion *les, int nles, palp_vec3 n, const double *depth,
-                    int count, double *F, double *dreal, char *err, size_t errlen) {
-  palp_world_def wd = *wd0;
-  wd.dt = 0.001;
-  wd.lesion_count = nles;
-  for (int i = 0; i < nles; ++i) wd.lesion[i] = les[i];
-  int e = 0;
-  palp_world *w = palp_world_create(&wd, &e);
-  if (!w) {
-    snprintf(err, errlen, "real-time world: %s", palp_strerror(e));
-    return -1;
-  }
-  const double R = wd.mesh.radius, r = 0.008;
-  palp_vec3 dev = {(R + r + 0.001) * n.x, (R + r + 0.001) * n.y, (R + r + 0.001) * n.z};
-  const int fid = palp_world_add_finger(w, dev, r);
-  if (fid < 0) {
-    snprintf(err, errlen, "real-time finger: %s", palp_strerror(fid));
-    palp_world_destroy(w);
-    return -1;
-  }
-  double dd = -0.001; /* device depth */
-  for (int k = 0; k < count; ++k) {
-    double target = depth[k] + (k ? F[k - 1] / 2000.0 : 0.0); /* proxy ~ F / k_c above the device */
-    palp_local_model lm = {0};
-    for (int pass = 0; pass < 3; ++pass) {
-      /* ramp the device at 5 mm/s, then hold (1 s, 1 s, 0.5 s: the real-time
-       * model's creep settles in about a second, the FE side is fully relaxed) */
-      while (fabs(target - dd) > 5e-6) {
-        dd += target > dd ? 5e-6 : -5e-6;
-        dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
-        palp_world_set_finger_device(w, fid, dev);
-        palp_world_step(w);
-      }
-      dd = target;
-      dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
-      palp_world_set_finger_device(w, fid, dev);
-      const int hold = pass < 2 ? 1000 : 500;
-      for (int s = 0; s < hold; ++s) palp_world_step(w);
-      palp_world_finger_local_model(w, fid, &lm);
-      const double pr = sqrt(lm.proxy.x * lm.proxy.x + lm.proxy.y * lm.proxy.y + lm.proxy.z * lm.proxy.z);
-      dreal[k] = R + r - pr;
-      target += depth[k] - dreal[k];
-    }
-    F[k] = lm.force.x * n.x + lm.force.y * n.y + lm.force.z * n.z;
-  }
-  palp_world_destroy(w);
-  return count;
 }
 
 int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
@@ -165,13 +73,17 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     double F[MAXD], G[MAXD], Fr[MAXD], Dr[MAXD];
     long newton = 0;
     const double t0 = now_s();
-    const int nd = fem_curve(&cfg, &mesh, &lump, sites[s].lesion, n, depths, MAXD, 5.0, F, G, &newton, err, errlen);
+    const double nv[3] = {n.x, n.y, n.z};
+    err[0] = 0;
+    const int nd = palp_fem_finger_curve(&cfg, &mesh, &lump, sites[s].lesion, nv, 0.008, depths, MAXD, 5.0, F, G,
+                                         &newton, err, errlen);
     const double t1 = now_s();
     if (nd <= 0) {
       rc = -1;
       break;
     }
-    if (rt_curve(&scene->world, &lump, sites[s].lesion, n, depths, nd, Fr, Dr, err, errlen) < 0) {
+    if (palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, nd, 1.0, Fr, Dr, err, errlen) <
+        0) {
       rc = -1;
       break;
     }
@@ -191,7 +103,8 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
      * curve continued to 30 mm; linear interpolation between held depths) */
     {
       double Fl[MAXD], Dl[MAXD];
-      const int nl = rt_curve(&scene->world, &lump, sites[s].lesion, n, depths, MAXD, Fl, Dl, err, errlen);
+      const int nl =
+          palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, MAXD, 1.0, Fl, Dl, err, errlen);
       static const double targets[4] = {0.3, 1.0, 3.0, 5.0};
       printf("  force N  FE depth mm  RT depth mm\n");
       for (int t = 0; t < 4; ++t) {

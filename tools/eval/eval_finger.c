@@ -1,0 +1,85 @@
+/*
+ * eval_finger.c - the real-time model's fingertip force-depth curve, the side of
+ * `palp-fem finger` and of calibrate's finger residuals that needs no FEM.
+ */
+#include <math.h>
+#include <stdio.h>
+
+#include "eval.h"
+
+int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int nles, palp_vec3 n, double radius,
+                        const double *depth, int count, double hold_s, double *force, double *depth_real, char *err,
+                        size_t errlen) {
+  palp_world_def wd = *wd0;
+  wd.dt = 0.001;
+  if (nles > PALP_MAX_LESIONS) nles = PALP_MAX_LESIONS;
+  wd.lesion_count = nles;
+  for (int i = 0; i < nles; ++i) wd.lesion[i] = les[i];
+  int e = 0;
+  palp_world *w = palp_world_create(&wd, &e);
+  if (!w) {
+    snprintf(err, errlen, "real-time world: %s", palp_strerror(e));
+    return -1;
+  }
+  const double R = wd.mesh.radius, r = radius;
+  palp_vec3 dev = {(R + r + 0.001) * n.x, (R + r + 0.001) * n.y, (R + r + 0.001) * n.z};
+  const int fid = palp_world_add_finger(w, dev, r);
+  if (fid < 0) {
+    snprintf(err, errlen, "real-time finger: %s", palp_strerror(fid));
+    palp_world_destroy(w);
+    return -1;
+  }
+  double dd = -0.001; /* device depth [m] */
+  for (int k = 0; k < count; ++k) {
+    double target = depth[k] + (k ? force[k - 1] / 2000.0 : 0.0); /* proxy ~ F / k_c above the device */
+    palp_local_model lm = {0};
+    for (int pass = 0; pass < 3; ++pass) {
+      /* ramp the device at 5 mm/s, then hold (hold_s, hold_s, hold_s / 2: the
+       * real-time model's creep settles in about a second at hold_s = 1; the FE
+       * side is fully relaxed), and correct the device so the proxy sits at depth */
+      while (fabs(target - dd) > 5e-6) {
+        dd += target > dd ? 5e-6 : -5e-6;
+        dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
+        palp_world_set_finger_device(w, fid, dev);
+        palp_world_step(w);
+      }
+      dd = target;
+      dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
+      palp_world_set_finger_device(w, fid, dev);
+      const int hold = (int)lround((pass < 2 ? 1000.0 : 500.0) * hold_s);
+      for (int s = 0; s < hold; ++s) palp_world_step(w);
+      palp_world_finger_local_model(w, fid, &lm);
+      const double pr = sqrt(lm.proxy.x * lm.proxy.x + lm.proxy.y * lm.proxy.y + lm.proxy.z * lm.proxy.z);
+      depth_real[k] = R + r - pr;
+      target += depth[k] - depth_real[k];
+    }
+    force[k] = lm.force.x * n.x + lm.force.y * n.y + lm.force.z * n.z;
+    if (!isfinite(force[k])) {
+      snprintf(err, errlen, "real-time finger: no finite force at %.2f mm", depth[k] * 1e3);
+      palp_world_destroy(w);
+      return -1;
+    }
+  }
+  palp_world_destroy(w);
+  return count;
+}
+
+double palp_eval_finger_rms(const palp_world_def *wd, const palp_eval_finger_ref *refs, int count, double hold_s,
+                            double *forces, char *err, size_t errlen) {
+  double ss = 0.0;
+  int m = 0;
+  for (int i = 0; i < count; ++i) {
+    const palp_eval_finger_ref *f = &refs[i];
+    double F[PALP_EVAL_FINGER_MAX_DEPTHS], D[PALP_EVAL_FINGER_MAX_DEPTHS];
+    if (palp_eval_finger_rt(wd, f->lesion, f->lesion_count, f->n, f->radius, f->depth, f->count, hold_s, F, D, err,
+                            errlen) < 0)
+      return NAN;
+    for (int k = 0; k < f->count; ++k) {
+      const double e = F[k] / f->force[k] - 1.0;
+      ss += e * e;
+      ++m;
+      if (forces) forces[i * PALP_EVAL_FINGER_MAX_DEPTHS + k] = F[k];
+    }
+  }
+  return m ? sqrt(ss / m) : NAN;
+}
