@@ -309,6 +309,14 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
  * backward y_j <- y_j - ((R_0 a + R_1 b) + R_2 c)  (R_k its k-th row, a, b, c = y_i),
  * so both give the same bits. 4-lane loads of 3-entry columns and rows read one entry
  * past them into the pad lane (the arrays carry 4 spare entries at their end). */
+/* ((B_0 v_0 + B_1 v_1) + B_2 v_2) for the 3-entry vectors B_k at B, B + 3, B + 6 (each
+ * loaded with one entry past it into the pad lane) and the scalars v_0..2. */
+__attribute__((target("avx2"))) static inline __m256d block_mv(const double *B, const double *v) {
+  __m256d t = _mm256_mul_pd(_mm256_loadu_pd(B), _mm256_broadcast_sd(v));
+  t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(B + 3), _mm256_broadcast_sd(v + 1)));
+  return _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(B + 6), _mm256_broadcast_sd(v + 2)));
+}
+
 __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f, double *x, double *y) {
   const int nb = f->nb, n = f->n;
   y = (double *)(((uintptr_t)y + 31) & ~(uintptr_t)31); /* no 32-byte access split across cache lines */
@@ -317,14 +325,8 @@ __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f,
   for (int I = 0; I < nb; ++I) {
     double *yi = y + 4 * I;
     __m256d acc = _mm256_loadu_pd(yi);
-    for (int q = f->rowp[I]; q < f->rowp[I + 1]; ++q) {
-      const double *yj = y + 4 * f->rcol[q];
-      const double *P = f->bcol + 9 * q;
-      __m256d t = _mm256_mul_pd(_mm256_loadu_pd(P), _mm256_broadcast_sd(yj));
-      t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(P + 3), _mm256_broadcast_sd(yj + 1)));
-      t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(P + 6), _mm256_broadcast_sd(yj + 2)));
-      acc = _mm256_sub_pd(acc, t);
-    }
+    for (int q = f->rowp[I]; q < f->rowp[I + 1]; ++q)
+      acc = _mm256_sub_pd(acc, block_mv(f->bcol + 9 * q, y + 4 * f->rcol[q]));
     _mm256_storeu_pd(yi, acc);
     const double *d = f->bdiag + 3 * I;
     yi[1] -= d[0] * yi[0];
@@ -335,14 +337,8 @@ __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f,
   for (int J = nb - 1, q = 0; J >= 0; --J) {
     double *yj = y + 4 * J;
     __m256d acc = _mm256_loadu_pd(yj);
-    for (const int qend = q + f->bcolp[J + 1] - f->bcolp[J]; q < qend; ++q) {
-      const double *yi = y + 4 * f->rbwd[q];
-      const double *R = f->bbwd + 9 * q;
-      __m256d t = _mm256_mul_pd(_mm256_loadu_pd(R), _mm256_broadcast_sd(yi));
-      t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(R + 3), _mm256_broadcast_sd(yi + 1)));
-      t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(R + 6), _mm256_broadcast_sd(yi + 2)));
-      acc = _mm256_sub_pd(acc, t);
-    }
+    for (const int qend = q + f->bcolp[J + 1] - f->bcolp[J]; q < qend; ++q)
+      acc = _mm256_sub_pd(acc, block_mv(f->bbwd + 9 * q, y + 4 * f->rbwd[q]));
     _mm256_storeu_pd(yj, acc);
     const double *d = f->bdiag + 3 * J;
     yj[1] -= d[2] * yj[2];

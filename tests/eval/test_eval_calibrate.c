@@ -54,23 +54,30 @@ static const char *scene_json =
     "                 \"patch_area_m2\": 5.2e-4,"
     "                 \"profile\": {\"kind\": \"step\", \"magnitude_N\": 3, \"t_on_s\": 0, \"t_off_s\": 2}}] }";
 
-static void test_recovers_parameters(void) {
-  palp_scene base;
+/* The synthetic phantom and its four "reference" runs (one per distribution);
+ * returns 0, or -1 after a failed check. */
+static int synthetic_refs(palp_scene *base, palp_scene scenes[4], palp_eval_record refs[4]) {
   char err[512] = "";
-  int rc = palp_scene_parse(scene_json, &base, err, sizeof err);
+  int rc = palp_scene_parse(scene_json, base, err, sizeof err);
   CHECK(rc == 0, "scene parse: %s", err);
-  if (rc) return;
-  double truth[PALP_EVAL_P_COUNT];
-  palp_eval_params_get(&base.world, truth);
-  palp_scene scenes[4];
-  palp_eval_record refs[4];
-  for (int d = 0; d < 4; ++d) {
-    scenes[d] = base;
+  for (int d = 0; !rc && d < 4; ++d) {
+    scenes[d] = *base;
     scenes[d].contact[0].def.distribution = (palp_distribution)(d + 1);
     rc = palp_eval_run_rt(&scenes[d], &refs[d], err, sizeof err);
     CHECK(rc == 0, "reference run %d: %s", d + 1, err);
-    if (rc) return;
   }
+  return rc ? -1 : 0;
+}
+
+static void test_recovers_parameters(void) {
+  palp_scene base;
+  char err[512] = "";
+  palp_scene scenes[4];
+  palp_eval_record refs[4];
+  if (synthetic_refs(&base, scenes, refs)) return;
+  int rc;
+  double truth[PALP_EVAL_P_COUNT];
+  palp_eval_params_get(&base.world, truth);
   /* Perturbed start; the fitted set is the parameters the displacement data
    * determine (stiffnesses and the recovery's viscosities). eta1 (flow of 1.4%
    * over 2 s), a1 and a2 (the gel is nearly incompressible either way) stay at
@@ -127,19 +134,11 @@ static void test_recovers_parameters(void) {
 static void test_finger_residuals(void) {
   palp_scene base;
   char err[512] = "";
-  int rc = palp_scene_parse(scene_json, &base, err, sizeof err);
-  CHECK(rc == 0, "scene parse: %s", err);
-  if (rc) return;
-  const double k = base.world.gel.support_modulus;
   palp_scene scenes[4];
   palp_eval_record refs[4];
-  for (int d = 0; d < 4; ++d) {
-    scenes[d] = base;
-    scenes[d].contact[0].def.distribution = (palp_distribution)(d + 1);
-    rc = palp_eval_run_rt(&scenes[d], &refs[d], err, sizeof err);
-    CHECK(rc == 0, "reference run %d: %s", d + 1, err);
-    if (rc) return;
-  }
+  if (synthetic_refs(&base, scenes, refs)) return;
+  int rc;
+  const double k = base.world.gel.support_modulus;
   palp_eval_finger_ref f;
   memset(&f, 0, sizeof f);
   f.name = "pole";
