@@ -213,7 +213,8 @@ static int to_blocks(palp_ldl *f, int nb) {
       memcpy(f->bbwd + 9 * q, f->bval + 9 * p, 9 * sizeof(double));
     }
   for (int j = 0; j < n; ++j) f->dinv4[4 * (j / 3) + j % 3] = f->dinv[j];
-  __builtin_cpu_init();
+  /* libgcc reads the CPU in a constructor, before main: no __builtin_cpu_init here,
+   * which the tangent-rebuild threads would otherwise race on. */
   f->simd = __builtin_cpu_supports("avx2") ? 1 : 0;
 #endif
   return PALP_OK;
