@@ -155,7 +155,12 @@ int palp_eval_finger_rt(const palp_world_def *wd, const palp_lesion *lesions, in
                         double radius, const double *depth, int count, double hold_s, double *force,
                         double *depth_real, char *err, size_t errlen);
 
-/* RMS over every site and depth of F_rt / F_ref - 1 for the world def wd; NAN when a
+/* The reference force at depth d [m]: piecewise linear through (0, 0) and the
+ * reference points, the last segment continued beyond them. */
+double palp_eval_finger_ref_at(const palp_eval_finger_ref *f, double d);
+
+/* RMS over every site and depth of F_rt / F_ref(d_rt) - 1 (the reference at the depth
+ * the model's proxy reached, palp_eval_finger_ref_at) for the world def wd; NAN when a
  * run fails (err says why). forces (may be NULL) gets the model's forces, site by
  * site, PALP_EVAL_FINGER_MAX_DEPTHS apart. */
 double palp_eval_finger_rms(const palp_world_def *wd, const palp_eval_finger_ref *refs, int count, double hold_s,
@@ -188,7 +193,8 @@ typedef struct palp_eval_calib_def {
   double h_df;            /* finite-difference step in ln p, 3e-3 (0.3%) */
   int verbose;            /* progress to stderr */
   /* Fingertip force-depth references fitted together with the displacement fields
-   * (issue 12): residual lambda_f (F_rt / F_ref - 1) per site and depth, lambda_f =
+   * (issue 12): residual lambda_f (F_rt / F_ref(d_rt) - 1) per site and depth (the
+ * reference interpolated to where the model's proxy got, palp_eval_finger_ref_at), lambda_f =
    * finger_weight sqrt(N_data / N_finger), so that a relative force error e at every
    * point costs as much as an RMS displacement error of finger_weight e [cm]. */
   const palp_eval_finger_ref *finger;

@@ -317,7 +317,8 @@ static int fit_f(const gsl_vector *x, void *ud, gsl_vector *fvec) {
                               ws->def->finger_hold_s, F, D, ws->err, sizeof ws->err) < 0)
         rc = PALP_EUNSTABLE;
       else
-        for (int d = 0; d < f->count; ++d) r[k++] = ws->lambda_finger * (F[d] / f->force[d] - 1.0);
+        for (int d = 0; d < f->count; ++d)
+          r[k++] = ws->lambda_finger * (F[d] / palp_eval_finger_ref_at(f, D[d]) - 1.0);
     }
   }
   if (rc == PALP_EUNSTABLE || rc == PALP_ESOLVER || rc == PALP_EINVAL) {
