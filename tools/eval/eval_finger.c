@@ -34,14 +34,15 @@ int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int n
     double target = depth[k] + (k ? force[k - 1] / 2000.0 : 0.0); /* proxy ~ F / k_c above the device */
     palp_local_model lm = {0};
     double prev_dev = NAN, prev_real = NAN;
-    for (int pass = 0; pass < 6; ++pass) {
+    for (int pass = 0; pass < 6; ++pass) { /* the last pass measures, it does not move */
       /* ramp the device at 5 mm/s, then hold (hold_s, then hold_s / 2 for each
        * correction: the real-time model's creep settles in about a second at
        * hold_s = 1; the FE side is fully relaxed), and move the device so the proxy
        * sits at depth: by the secant of proxy depth over device depth once two
        * passes are known (a stiff phantom moves the proxy by only k_c / (k_c + k)
        * of the device's move, and plain error feedback then converged by ~20% a
-       * pass), until the proxy is within 5 um */
+       * pass); always six passes, so that the force is a continuous function of the
+       * model's parameters (a calibration differentiates it) */
       while (fabs(target - dd) > 5e-6) {
         dd += target > dd ? 5e-6 : -5e-6;
         dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
@@ -57,7 +58,7 @@ int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int n
       const double pr = sqrt(lm.proxy.x * lm.proxy.x + lm.proxy.y * lm.proxy.y + lm.proxy.z * lm.proxy.z);
       depth_real[k] = R + r - pr;
       const double miss = depth[k] - depth_real[k];
-      if (pass >= 1 && fabs(miss) < 5e-6) break;
+      if (pass == 5) break;
       const double slope = pass ? (depth_real[k] - prev_real) / (dd - prev_dev) : NAN;
       prev_dev = dd, prev_real = depth_real[k];
       target += slope > 0.05 && slope <= 1.0 ? miss / slope : miss;
