@@ -58,6 +58,7 @@ typedef struct palp_eval_row {
   int meets;              /* the paper's verdict: p > 0.05 and agreement > 95% */
   double max_abs_diff;    /* largest |a - b| */
   double ref_peak;        /* largest reference value (scale for the reader) */
+  double rt_peak;         /* largest real-time value */
 } palp_eval_row;
 
 /* The paired data sets of one distribution, in SI units:

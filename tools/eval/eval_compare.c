@@ -127,6 +127,7 @@ int palp_eval_row_compute(const double *a, const double *b, size_t n, palp_eval_
   for (size_t i = 0; i < n; ++i) {
     r.max_abs_diff = fmax(r.max_abs_diff, fabs(a[i] - b[i]));
     r.ref_peak = fmax(r.ref_peak, b[i]);
+    r.rt_peak = fmax(r.rt_peak, a[i]);
   }
   *out = r;
   return PALP_OK;
