@@ -27,7 +27,9 @@ def run(build, source, out):
                            "palpState.trainee.maxDispMm > 5", 20)
         check(ok is True, "the page drew a proxy of pat's finger, dent > 5 mm, within 20 s: %s %s"
               % (page.eval("JSON.stringify(palpState.trainee.proxy)"), page.eval("palpState.trainee.maxDispMm")))
-        p = json.loads(page.eval("JSON.stringify(palpState.trainee.proxy)"))
+        # One sample of both: the proxy and the page's displacement figure move on during the press.
+        snap = json.loads(page.eval("JSON.stringify({proxy: palpState.trainee.proxy, disp: palpState.trainee.maxDispMm})"))
+        p, disp_mm = snap["proxy"], snap["disp"]
         R = page.eval("palpState.phantoms[palpState.trainee.phantom].radius")
         rp = math.sqrt(sum(x * x for x in p["proxy"]))
         rd = math.sqrt(sum(x * x for x in p["device"]))
@@ -38,9 +40,16 @@ def run(build, source, out):
         # dome's centre than the proxy, and the proxy within 2 phantom radii of it (a sane metre scale).
         check(rd < rp, "the device point lies beneath the proxy (|d| %.5f < |p| %.5f m)" % (rd, rp))
         # The proxy is the fingertip's centre (sim device radius 8 mm): its lowest point sits in the
-        # dent, more than 5 mm beneath the rest surface, as the page's displacement figure says.
+        # dent, as deep as the page's displacement figure (the deepest vertex) within 1.5 mm. (The
+        # figure and the tip are different quantities: the surface under the tip's compliant pad
+        # can sink a little deeper than the rigid sphere's lowest point: measured -0.15 to +0.3 mm; an earlier
+        # form of this check, tip below R - 5 mm read once the figure passed 5 mm, raced them.)
         tip = rp - 0.008
-        check(tip < R - 0.005, "the fingertip rides the dent: its lowest point %.4f m < R - 5 mm = %.4f m" % (tip, R - 0.005))
+        depth_mm = 1e3 * (R - tip)
+        check(depth_mm > 3.0, "the fingertip is pressed in: its lowest point %.2f mm beneath the rest surface (> 3 mm)"
+              % depth_mm)
+        check(abs(depth_mm - disp_mm) < 1.5, "the fingertip rides the dent: its lowest point %.2f mm deep, the page's "
+              "displacement figure %.2f mm (tolerance 1.5 mm)" % (depth_mm, disp_mm))
         check(rp < 2 * R, "the proxy is near the phantom (|p| %.4f < 2 R = %.4f m)" % (rp, 2 * R))
         cx, cy = page.eval("palpProject(%r, %r, %r)" % tuple(p["proxy"]))
         w, h = page.eval("[innerWidth, innerHeight]")
