@@ -7,12 +7,18 @@
 
 #include "eval.h"
 
+/* The point s [m] along the unit normal n from the dome's centre. */
+static palp_vec3 along(palp_vec3 n, double s) { return (palp_vec3){s * n.x, s * n.y, s * n.z}; }
+
 int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int nles, palp_vec3 n, double radius,
                         const double *depth, int count, double hold_s, double *force, double *depth_real, char *err,
                         size_t errlen) {
   palp_world_def wd = *wd0;
   wd.dt = 0.001;
-  if (nles > PALP_MAX_LESIONS) nles = PALP_MAX_LESIONS;
+  if (nles < 0 || nles > PALP_MAX_LESIONS) {
+    snprintf(err, errlen, "real-time finger: %d lesions (0 to %d)", nles, PALP_MAX_LESIONS);
+    return -1;
+  }
   wd.lesion_count = nles;
   for (int i = 0; i < nles; ++i) wd.lesion[i] = les[i];
   int e = 0;
@@ -22,8 +28,7 @@ int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int n
     return -1;
   }
   const double R = wd.mesh.radius, r = radius;
-  palp_vec3 dev = {(R + r + 0.001) * n.x, (R + r + 0.001) * n.y, (R + r + 0.001) * n.z};
-  const int fid = palp_world_add_finger(w, dev, r);
+  const int fid = palp_world_add_finger(w, along(n, R + r + 0.001), r);
   if (fid < 0) {
     snprintf(err, errlen, "real-time finger: %s", palp_strerror(fid));
     palp_world_destroy(w);
@@ -45,13 +50,11 @@ int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int n
        * model's parameters (a calibration differentiates it) */
       while (fabs(target - dd) > 5e-6) {
         dd += target > dd ? 5e-6 : -5e-6;
-        dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
-        palp_world_set_finger_device(w, fid, dev);
+        palp_world_set_finger_device(w, fid, along(n, R + r - dd));
         palp_world_step(w);
       }
       dd = target;
-      dev = (palp_vec3){(R + r - dd) * n.x, (R + r - dd) * n.y, (R + r - dd) * n.z};
-      palp_world_set_finger_device(w, fid, dev);
+      palp_world_set_finger_device(w, fid, along(n, R + r - dd));
       const int hold = (int)lround((pass < 2 ? 1000.0 : 500.0) * hold_s);
       for (int s = 0; s < hold; ++s) palp_world_step(w);
       palp_world_finger_local_model(w, fid, &lm);
