@@ -132,6 +132,10 @@ typedef struct palp_membrane_params {
   double eta1;      /* Maxwell dashpot [Pa s] */
   double E2;        /* Kelvin spring [Pa] */
   double eta2;      /* Kelvin dashpot [Pa s] */
+  /* The skin's bending stiffness D = E t^3 / (12 (1 - nu^2)) [N m], as linearised
+   * hinges on the triangles' edges (docs/model.md); 0, the default, is the paper's
+   * membrane, which carries a load only by stretching. */
+  double bending_stiffness;
 } palp_membrane_params;
 
 typedef enum palp_gel_law {
@@ -346,6 +350,10 @@ typedef struct palp_world_health {
   double max_strain;          /* largest |link strain| seen [-] */
   int64_t base_contacts;      /* vertex-steps held at the rigid base plane z = 0 */
   int64_t finger_unsolved;    /* finger contact solves that ended without converging */
+  int64_t large_bend_steps;   /* steps with a hinge turned beyond PALP_HINGE_LINEAR_MAX
+                                 (0.35 rad) from rest, where the linearised bending is a
+                                 poor model (only with membrane.bending_stiffness > 0) */
+  double max_bend;            /* largest hinge rotation from rest seen [rad] */
   int64_t clamped_steps;      /* sub-steps at the last halving (h/16) whose velocities were
                                  capped at max_speed rather than failing the world: a load
                                  far beyond the model (e.g. 30 N on one vertex of a soft

@@ -86,7 +86,12 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
   if ((e = get_pos(c, m, "membrane.", "E1_Pa", 1, &p->E1))) return e;
   if ((e = get_pos(c, m, "membrane.", "eta1_Pa_s", 1, &p->eta1))) return e;
   if ((e = get_pos(c, m, "membrane.", "E2_Pa", 1, &p->E2))) return e;
-  return get_pos(c, m, "membrane.", "eta2_Pa_s", 1, &p->eta2);
+  if ((e = get_pos(c, m, "membrane.", "eta2_Pa_s", 1, &p->eta2))) return e;
+  /* optional: absent is the paper's membrane, without bending */
+  if ((e = get_num(c, m, "membrane.", "bending_stiffness_N_m", 0, &p->bending_stiffness))) return e;
+  if (p->bending_stiffness < 0.0)
+    return palp_parse_fail(c, PALP_EPARSE, "membrane.bending_stiffness_N_m: must be >= 0 (got %g)", p->bending_stiffness);
+  return PALP_OK;
 }
 
 static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
@@ -422,6 +427,8 @@ char *palp_scene_to_json(const palp_scene *s) {
   add_exact(mb, "eta1_Pa_s", mp->eta1);
   add_exact(mb, "E2_Pa", mp->E2);
   add_exact(mb, "eta2_Pa_s", mp->eta2);
+  /* only when set, so that the scenes of earlier logs print as they did */
+  if (mp->bending_stiffness > 0.0) add_exact(mb, "bending_stiffness_N_m", mp->bending_stiffness);
   const palp_gel_params *gp = &s->world.gel;
   cJSON *g = cJSON_AddObjectToObject(r, "gel");
   cJSON_AddStringToObject(g, "law", gp->law == PALP_GEL_POLYTROPIC ? "polytropic" : "paper_literal");

@@ -17,6 +17,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bending.h"
 #include "burgers.h"
 #include "finger.h"
 #include "gel.h"
@@ -117,6 +118,16 @@ struct palp_world {
   palp_burgers burgers; /* coefficients for h_burgers */
   double h_burgers;
   double E_static;  /* elastic-only modulus: E1 E2 / (E1 + E2) [Pa] */
+
+  /* Skin bending (only with membrane.bending_stiffness > 0): linearised hinges,
+   * whose constant stiffness sits in the factor (bending.h). */
+  int nhinge;
+  int (*hinge)[4];       /* edge ends a, b; wings c, d */
+  palp_vec3 (*hgrad)[4]; /* rest gradient of the hinge's angle [1/m] */
+  double *hk;            /* k_e [N m] */
+  palp_vec3 *fbend;      /* [vertex_count] bending force of the current state (feedback) [N] */
+  double step_max_bend, max_bend; /* [rad] */
+  int64_t large_bend_steps;
 
   /* Gel (allocated only with gel pressure). */
   double V0, V, Vdot; /* [m^3], [m^3/s] */
@@ -249,6 +260,30 @@ static void stage_membrane_forces(palp_world *w, double h) {
     w->force[a] = v3_add(w->force[a], f);
     w->force[b] = v3_sub(w->force[b], f);
   }
+}
+
+/* Adds the hinges' forces f_k = -k_e dtheta_e g_k, dtheta_e = sum_k g_k . u_k [N],
+ * to f; returns the largest |dtheta_e| [rad]. */
+static double bending_add(const palp_world *w, palp_vec3 *f) {
+  double thmax = 0.0;
+  for (int e = 0; e < w->nhinge; ++e) {
+    const int *v = w->hinge[e];
+    const palp_vec3 *g = w->hgrad[e];
+    double th = 0.0;
+    for (int k = 0; k < 4; ++k) th += v3_dot(g[k], v3_sub(w->pos[v[k]], w->mesh.rest[v[k]]));
+    const double m = -w->hk[e] * th; /* [N m] */
+    for (int k = 0; k < 4; ++k) f[v[k]] = v3_add(f[v[k]], v3_scale(g[k], m));
+    if (fabs(th) > thmax) thmax = fabs(th);
+  }
+  return thmax;
+}
+
+/* Explicit at x_n; its change over the step enters through h^2 K_b in the factor,
+ * which makes the (linear) bending exactly implicit. */
+static void stage_membrane_bending(palp_world *w, double h) {
+  (void)h;
+  const double th = bending_add(w, w->force);
+  if (th > w->step_max_bend) w->step_max_bend = th;
 }
 
 static void stage_gel_forces(palp_world *w, double h) {
@@ -883,9 +918,15 @@ static void stage_feedback(palp_world *w, double h) {
     support_means(w, &um, &vm);
     bulk = v3_add(v3_scale(um, phi * ks), v3_scale(vm, phi * cs));
   }
+  int bend = 0;
   for (int c = 0; c < w->def.max_contacts; ++c) {
     contact *k = &w->contacts[c];
     if (k->kind != CONTACT_FORCE) continue; /* a finger's force comes from its contact solve */
+    if (w->nhinge && !bend) {
+      memset(w->fbend, 0, sizeof *w->fbend * (size_t)w->mesh.vertex_count);
+      bending_add(w, w->fbend);
+      bend = 1;
+    }
     k->total = v3(0, 0, 0);
     for (int q = 0; q < k->count; ++q) {
       const int i = k->vertex[q];
@@ -898,6 +939,7 @@ static void stage_feedback(palp_world *w, double h) {
         f = w->vlink[e] > 0 ? v3_add(f, fl) : v3_sub(f, fl);
       }
       if (gel) f = v3_add(f, v3_scale(w->grad[i], w->p_gauge));
+      if (bend) f = v3_add(f, w->fbend[i]);
       if (support) {
         const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
         f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->sarea[i]));
@@ -920,6 +962,7 @@ static int validate(const palp_world_def *d) {
   if (!(m->thickness > 0.0 && m->density > 0.0) || !isfinite(m->thickness) || !isfinite(m->density))
     return PALP_EINVAL;
   if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
+  if (!(m->bending_stiffness >= 0.0) || !isfinite(m->bending_stiffness)) return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY))
     return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_GEL_DAMPING) && !(d->effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
@@ -963,6 +1006,7 @@ static void build_pipeline(palp_world *w) {
   int n = 0;
   w->stages[n++] = (stage){"loads", stage_loads};
   if (w->nlink) w->stages[n++] = (stage){"membrane_forces", stage_membrane_forces};
+  if (w->nhinge) w->stages[n++] = (stage){"membrane_bending", stage_membrane_bending};
   if (has(w, PALP_EFFECT_GEL_PRESSURE)) w->stages[n++] = (stage){"gel_forces", stage_gel_forces};
   if (has(w, PALP_EFFECT_GEL_SUPPORT)) w->stages[n++] = (stage){"gel_support", stage_gel_support};
   w->stages[n++] = (stage){"solve", stage_solve};
@@ -981,6 +1025,69 @@ static void *xcalloc(size_t n, size_t size, int *fail) {
   void *p = calloc(n ? n : 1, size);
   if (!p) *fail = 1;
   return p;
+}
+
+/* A half-edge (a -> b) of triangle t, keyed by its unordered ends. */
+typedef struct half_edge {
+  int lo, hi, a, b, opp, t;
+} half_edge;
+static int half_edge_cmp(const void *x, const void *y) {
+  const half_edge *p = x, *q = y;
+  if (p->lo != q->lo) return p->lo < q->lo ? -1 : 1;
+  if (p->hi != q->hi) return p->hi < q->hi ? -1 : 1;
+  return (p->t > q->t) - (p->t < q->t);
+}
+static double tri_area(const palp_vec3 *x, const int *T) {
+  return 0.5 * v3_len(v3_cross(v3_sub(x[T[1]], x[T[0]]), v3_sub(x[T[2]], x[T[0]])));
+}
+
+/* One hinge per edge shared by two triangles with a free vertex among its four. The
+ * base's triangles count: at the rim the dome meets the rigid base at a hinge whose
+ * only free vertex is the dome triangle's wing, which clamps the skin's slope there
+ * (the phantom is bonded to its base); such a hinge takes twice the dome triangle's
+ * area, as if mirrored, since the base's long slivers say nothing of the skin. */
+static int build_hinges(palp_world *w) {
+  const palp_mesh *m = &w->mesh;
+  const int nt = m->triangle_count;
+  half_edge *he = malloc(sizeof *he * (size_t)(3 * nt));
+  if (!he) return PALP_ENOMEM;
+  for (int t = 0; t < nt; ++t)
+    for (int q = 0; q < 3; ++q) {
+      const int a = m->tri[t][q], b = m->tri[t][(q + 1) % 3];
+      he[3 * t + q] = (half_edge){a < b ? a : b, a < b ? b : a, a, b, m->tri[t][(q + 2) % 3], t};
+    }
+  qsort(he, (size_t)(3 * nt), sizeof *he, half_edge_cmp);
+  int cap = 0;
+  for (int i = 0; i + 1 < 3 * nt; ++i)
+    if (he[i].lo == he[i + 1].lo && he[i].hi == he[i + 1].hi) cap++;
+  w->hinge = malloc(sizeof *w->hinge * (size_t)(cap ? cap : 1));
+  w->hgrad = malloc(sizeof *w->hgrad * (size_t)(cap ? cap : 1));
+  w->hk = malloc(sizeof *w->hk * (size_t)(cap ? cap : 1));
+  w->fbend = calloc((size_t)m->vertex_count, sizeof *w->fbend);
+  if (!w->hinge || !w->hgrad || !w->hk || !w->fbend) {
+    free(he);
+    return PALP_ENOMEM;
+  }
+  const double D = w->def.membrane.bending_stiffness; /* [N m] */
+  for (int i = 0; i + 1 < 3 * nt; ++i) {
+    const half_edge *p = &he[i], *q = &he[i + 1];
+    if (p->lo != q->lo || p->hi != q->hi) continue;
+    /* p runs a -> b with wing c; q, the neighbour, b -> a with wing d. */
+    const int v[4] = {p->a, p->b, p->opp, q->opp};
+    if (m->fixed[v[0]] && m->fixed[v[1]] && m->fixed[v[2]] && m->fixed[v[3]]) continue;
+    palp_vec3 g[4];
+    if (palp_hinge_gradient(m->rest[v[0]], m->rest[v[1]], m->rest[v[2]], m->rest[v[3]], g)) continue;
+    const int pd = p->t < m->dome_triangle_count, qd = q->t < m->dome_triangle_count;
+    if (!pd && !qd) continue;
+    const double area = (pd ? tri_area(m->rest, m->tri[p->t]) : 0.0) + (qd ? tri_area(m->rest, m->tri[q->t]) : 0.0);
+    const double e2 = v3_dot(v3_sub(m->rest[v[1]], m->rest[v[0]]), v3_sub(m->rest[v[1]], m->rest[v[0]]));
+    const int e = w->nhinge++;
+    memcpy(w->hinge[e], v, sizeof v);
+    memcpy(w->hgrad[e], g, sizeof g);
+    w->hk[e] = palp_hinge_stiffness(D, e2, pd && qd ? area : 2.0 * area);
+  }
+  free(he);
+  return PALP_OK;
 }
 
 palp_world *palp_world_create(const palp_world_def *def, int *err) {
@@ -1100,6 +1207,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     }
     free(deg);
     w->E_static = def->membrane.E1 * def->membrane.E2 / (def->membrane.E1 + def->membrane.E2);
+    if (def->membrane.bending_stiffness > 0.0 && build_hinges(w)) goto nomem;
   }
 
   if (has(w, PALP_EFFECT_GEL_PRESSURE)) {
@@ -1162,6 +1270,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
+  free(w->hinge), free(w->hgrad), free(w->hk), free(w->fbend);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work);
   palp_ldl_free(&w->ldl);
@@ -1235,31 +1344,84 @@ static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double 
           tx[nnz++] = -h * h * k * ((1.0 - beta) * dv[i] * dv[j] + (i == j ? beta : 0.0));
     }
   }
+  /* Bending: h^2 k_e g_p g_q^T between the hinge's free vertices (constant). */
+  for (int e = 0; e < w->nhinge; ++e) {
+    const double kh = h * h * w->hk[e]; /* [N m s^2] */
+    for (int p = 0; p < 4; ++p) {
+      const int rp = w->row_of[w->hinge[e][p]];
+      if (rp < 0) continue;
+      const double gp[3] = {w->hgrad[e][p].x, w->hgrad[e][p].y, w->hgrad[e][p].z};
+      for (int q = 0; q <= p; ++q) {
+        const int rq = w->row_of[w->hinge[e][q]];
+        if (rq < 0) continue;
+        const double gq[3] = {w->hgrad[e][q].x, w->hgrad[e][q].y, w->hgrad[e][q].z};
+        if (rp == rq) {
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j <= i; ++j) ti[nnz] = 3 * rp + i, tj[nnz] = 3 * rp + j, tx[nnz++] = kh * gp[i] * gp[j];
+        } else {
+          const int hi = rp > rq ? rp : rq, lo = rp > rq ? rq : rp;
+          const double *gh = rp > rq ? gp : gq, *gl = rp > rq ? gq : gp;
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) ti[nnz] = 3 * hi + i, tj[nnz] = 3 * lo + j, tx[nnz++] = kh * gh[i] * gl[j];
+        }
+      }
+    }
+  }
   return nnz;
 }
+
+/* Entries of A's lower triangle as triplets: 3 masses per free vertex, 2 x 6 + 9 per
+ * link, 4 x 6 + 6 x 9 per hinge. */
+static int nnz_bound(const palp_world *w) { return 3 * w->nfree + 21 * w->nlink + 78 * w->nhinge; }
 
 /* The free-vertex graph (CSC, both triangles) that orders the 3x3 blocks; built
  * once and kept, because a deferred job's factor analyses it too. */
 static int build_graph(palp_world *w) {
   const int nf = w->nfree;
+  /* Both directions of every coupled pair of free rows: the links', and each
+   * hinge's six (its wings are coupled only through it); duplicates removed. */
+  const size_t cap = 2 * (size_t)w->nlink + 12 * (size_t)w->nhinge + 1;
+  int(*pr)[2] = malloc(sizeof *pr * cap);
   w->gp = calloc((size_t)nf + 1, sizeof(int));
-  w->gi = malloc(sizeof(int) * (size_t)(2 * w->nlink + 1));
-  int *fill = malloc(sizeof(int) * (size_t)(nf ? nf : 1));
-  if (!w->gp || !w->gi || !fill) {
-    free(fill);
+  w->gi = malloc(sizeof(int) * cap);
+  if (!pr || !w->gp || !w->gi) {
+    free(pr);
     return PALP_ENOMEM;
   }
+  size_t np = 0;
   for (int l = 0; l < w->nlink; ++l) {
     const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
-    if (ra >= 0 && rb >= 0) w->gp[ra + 1]++, w->gp[rb + 1]++;
+    if (ra >= 0 && rb >= 0) pr[np][0] = ra, pr[np++][1] = rb, pr[np][0] = rb, pr[np++][1] = ra;
   }
+  for (int e = 0; e < w->nhinge; ++e)
+    for (int p = 0; p < 4; ++p)
+      for (int q = 0; q < 4; ++q) {
+        const int rp = w->row_of[w->hinge[e][p]], rq = w->row_of[w->hinge[e][q]];
+        if (p != q && rp >= 0 && rq >= 0) pr[np][0] = rp, pr[np++][1] = rq;
+      }
+  /* stable counting sort by row */
+  for (size_t k = 0; k < np; ++k) w->gp[pr[k][0] + 1]++;
   for (int r = 0; r < nf; ++r) w->gp[r + 1] += w->gp[r];
-  memcpy(fill, w->gp, sizeof(int) * (size_t)nf);
-  for (int l = 0; l < w->nlink; ++l) {
-    const int ra = w->row_of[w->mesh.link[l][0]], rb = w->row_of[w->mesh.link[l][1]];
-    if (ra >= 0 && rb >= 0) w->gi[fill[ra]++] = rb, w->gi[fill[rb]++] = ra;
+  int *fill = malloc(sizeof(int) * (size_t)(nf ? nf : 1));
+  if (!fill) {
+    free(pr);
+    return PALP_ENOMEM;
   }
-  free(fill);
+  memcpy(fill, w->gp, sizeof(int) * (size_t)nf);
+  for (size_t k = 0; k < np; ++k) w->gi[fill[pr[k][0]]++] = pr[k][1];
+  /* Duplicates out, first occurrences kept in place: without hinges the graph is
+   * exactly the links' in their order, so the ordering, the factor and the bits of
+   * every earlier session log stay the same. fill[] marks the row last seen. */
+  for (int r = 0; r < nf; ++r) fill[r] = -1;
+  int out = 0;
+  for (int r = 0; r < nf; ++r) {
+    const int s = w->gp[r], t = w->gp[r + 1];
+    w->gp[r] = out;
+    for (int k = s; k < t; ++k)
+      if (fill[w->gi[k]] != r) fill[w->gi[k]] = r, w->gi[out++] = w->gi[k];
+  }
+  w->gp[nf] = out;
+  free(fill), free(pr);
   return PALP_OK;
 }
 
@@ -1280,7 +1442,7 @@ static int refactor(palp_world *w, double h) {
     e = build_graph(w);
     if (e) return e;
   }
-  const int nnz_max = 3 * w->nfree + 21 * w->nlink; /* 3 masses; 2 x 6 + 9 per link */
+  const int nnz_max = nnz_bound(w);
   int *ti = malloc(sizeof(int) * (size_t)nnz_max), *tj = malloc(sizeof(int) * (size_t)nnz_max);
   double *tx = malloc(sizeof(double) * (size_t)nnz_max);
   if (!ti || !tj || !tx) {
@@ -1331,7 +1493,7 @@ static void job_free(palp_factor_job *j) {
 static palp_factor_job *job_alloc(const palp_world *w) {
   palp_factor_job *j = calloc(1, sizeof *j);
   if (!j) return NULL;
-  const int nnz_max = 3 * w->nfree + 21 * w->nlink;
+  const int nnz_max = nnz_bound(w);
   j->nf = w->nfree;
   j->n3 = 3 * w->nfree;
   j->gp = w->gp;
@@ -1522,6 +1684,7 @@ static int try_step(palp_world *w, double h, int last_resort) {
   w->reject = 0;
   w->last_resort = last_resort;
   w->step_max_strain = 0.0;
+  w->step_max_bend = 0.0;
   for (int s = 0; s < w->stage_count; ++s) {
     const double t0 = now_s();
     w->stages[s].fn(w, h);
@@ -1534,6 +1697,8 @@ static int try_step(palp_world *w, double h, int last_resort) {
   w->t += h;
   if (w->step_max_strain > 0.5) w->large_strain_steps++;
   if (w->step_max_strain > w->max_strain) w->max_strain = w->step_max_strain;
+  if (w->step_max_bend > PALP_HINGE_LINEAR_MAX) w->large_bend_steps++;
+  if (w->step_max_bend > w->max_bend) w->max_bend = w->step_max_bend;
   return PALP_OK;
 }
 
@@ -1903,6 +2068,8 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->clamped_steps = w->clamped_steps;
   out->base_contacts = w->base_contacts;
   out->finger_unsolved = w->finger_unsolved;
+  out->large_bend_steps = w->large_bend_steps;
+  out->max_bend = w->max_bend;
 }
 
 void palp_world_timings(const palp_world *w, palp_stage_timings *out) {

@@ -104,6 +104,7 @@ enum {
   PALP_EVAL_P_SUPPORT_C,
   PALP_EVAL_P_ADDED_MASS,
   PALP_EVAL_P_BULK_FRACTION,
+  PALP_EVAL_P_BENDING, /* membrane.bending_stiffness [N m]; fitted only from a start > 0 */
   PALP_EVAL_P_COUNT
 };
 /* "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass",

@@ -52,9 +52,9 @@
 
 const char *const palp_eval_param_name[PALP_EVAL_P_COUNT] = {
     "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass",
-    "support_bulk_fraction"};
+    "support_bulk_fraction", "bending_stiffness"};
 const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT] = {"Pa", "Pa s", "Pa", "Pa s", "-", "Pa s/m^3", "Pa/m",
-                                                              "Pa s/m", "-", "-"};
+                                                              "Pa s/m", "-", "-", "N m"};
 
 void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) {
   p[PALP_EVAL_P_E1] = w->membrane.E1;
@@ -67,6 +67,7 @@ void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) 
   p[PALP_EVAL_P_SUPPORT_C] = w->gel.support_viscosity;
   p[PALP_EVAL_P_ADDED_MASS] = w->gel.added_mass_fraction;
   p[PALP_EVAL_P_BULK_FRACTION] = w->gel.support_bulk_fraction;
+  p[PALP_EVAL_P_BENDING] = w->membrane.bending_stiffness;
 }
 
 void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) {
@@ -80,6 +81,7 @@ void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) 
   w->gel.support_viscosity = p[PALP_EVAL_P_SUPPORT_C];
   w->gel.added_mass_fraction = p[PALP_EVAL_P_ADDED_MASS];
   w->gel.support_bulk_fraction = p[PALP_EVAL_P_BULK_FRACTION];
+  w->membrane.bending_stiffness = p[PALP_EVAL_P_BENDING];
 }
 
 int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, size_t errlen) {
@@ -102,7 +104,7 @@ int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, siz
     if (found < 0) {
       snprintf(err, errlen,
                "--fit: unknown parameter \"%.*s\" (E1, eta1, E2, eta2, a1, a2, support_modulus, "
-               "support_viscosity, added_mass, support_bulk_fraction, or all)",
+               "support_viscosity, added_mass, support_bulk_fraction, bending_stiffness, or all)",
                (int)len, s);
       return PALP_EINVAL;
     }
@@ -211,7 +213,7 @@ typedef struct fit_ws {
  * a physical ceiling (the added gel mass cannot exceed the whole gel, fraction 1).
  *   y(x) = m + r tanh((x + x0) / r),  m = (hi + lo) / 2, r = (hi - lo) / 2,
  *   x0 = r atanh(-m / r), so that y(0) = 0. */
-static const double param_max[PALP_EVAL_P_COUNT] = {0, 0, 0, 0, 0, 0, 0, 0, 1.0, 1.0}; /* 0: none */
+static const double param_max[PALP_EVAL_P_COUNT] = {0, 0, 0, 0, 0, 0, 0, 0, 1.0, 1.0, 0}; /* 0: none */
 
 static double log_ratio(const fit_ws *ws, int j, double x) {
   const double b = ws->def->bound_factor;
@@ -437,14 +439,18 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   if ((def->mask & (1u << PALP_EVAL_P_BULK_FRACTION)) &&
       !(ws.start[PALP_EVAL_P_BULK_FRACTION] > 0.0 && ws.start[PALP_EVAL_P_BULK_FRACTION] < 0.99))
     ws.start[PALP_EVAL_P_BULK_FRACTION] = 0.5;
+  /* A membrane without bending (the paper's) stays without: bending is fitted only
+   * from a start > 0, i.e. when the scene's parameters have it. */
+  unsigned mask = def->mask;
+  if (!(ws.start[PALP_EVAL_P_BENDING] > 0.0)) mask &= ~(1u << PALP_EVAL_P_BENDING);
   for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
-    if (!(def->mask & (1u << j))) continue; /* held parameters may be 0 */
+    if (!(mask & (1u << j))) continue; /* held parameters may be 0 */
     if (!(ws.start[j] > 0) || !isfinite(ws.start[j])) {
       snprintf(err, errlen, "calibrate: start value of %s is %g; parameters must be positive to fit in log space",
                palp_eval_param_name[j], ws.start[j]);
       return PALP_EINVAL;
     }
-    if (def->mask & (1u << j)) ws.idx[ws.np++] = j;
+    ws.idx[ws.np++] = j;
   }
   if (ws.np == 0) {
     snprintf(err, errlen, "calibrate: no parameter to fit");
@@ -643,8 +649,10 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
   fprintf(f, "{\n  \"comment\": %s,\n", cs ? cs : "\"\"");
   fprintf(f,
           "  \"membrane\": { \"thickness_m\": %.9g, \"density_kg_m3\": %.9g,\n"
-          "                \"E1_Pa\": %.9g, \"eta1_Pa_s\": %.9g, \"E2_Pa\": %.9g, \"eta2_Pa_s\": %.9g },\n",
+          "                \"E1_Pa\": %.9g, \"eta1_Pa_s\": %.9g, \"E2_Pa\": %.9g, \"eta2_Pa_s\": %.9g",
           m->thickness, m->density, m->E1, m->eta1, m->E2, m->eta2);
+  if (m->bending_stiffness > 0.0) fprintf(f, ",\n                \"bending_stiffness_N_m\": %.9g", m->bending_stiffness);
+  fprintf(f, " },\n");
   fprintf(f,
           "  \"gel\": { \"law\": \"%s\", \"pressure_Pa\": %.9g, \"a1\": %.9g, \"a2_Pa_s_m3\": %.9g, \"a3_s2\": %.9g,\n"
           "           \"support_modulus_Pa_m\": %.9g, \"support_viscosity_Pa_s_m\": %.9g,\n"

@@ -73,7 +73,7 @@ static void usage(FILE *f) {
           "                            [--on-seconds T]]\n"
           "       palp-eval calibrate [--scene FILE] [--params FILE] [--level N] [--out FILE] [--fem-config FILE]\n"
           "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
-          "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity,added_mass,support_bulk_fraction]\n"
+          "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity,added_mass,support_bulk_fraction,bending_stiffness]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
           "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM]\n"
           "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
@@ -566,10 +566,11 @@ static int cmd_evaluate(const options *o) {
   snprintf(rep.scene, sizeof rep.scene, "%s", s.scene_path);
   snprintf(rep.scene_name, sizeof rep.scene_name, "%s", s.scene.name);
   snprintf(rep.parameters, sizeof rep.parameters, "%s%sE1 %.4g Pa, eta1 %.4g Pa s, E2 %.4g Pa, eta2 %.4g Pa s, a1 %.4g, "
-                                                  "a2 %.4g Pa s/m^3, support %.4g Pa/m, %.4g Pa s/m, bulk fraction %.4g, added gel mass %.4g",
+                                                  "a2 %.4g Pa s/m^3, support %.4g Pa/m, %.4g Pa s/m, bulk fraction %.4g, added gel mass %.4g, bending %.4g N m",
            o->params ? o->params : "", o->params ? ": " : "", s.scene.world.membrane.E1, s.scene.world.membrane.eta1, s.scene.world.membrane.E2,
            s.scene.world.membrane.eta2, s.scene.world.gel.a1, s.scene.world.gel.a2, s.scene.world.gel.support_modulus,
-           s.scene.world.gel.support_viscosity, s.scene.world.gel.support_bulk_fraction, s.scene.world.gel.added_mass_fraction);
+           s.scene.world.gel.support_viscosity, s.scene.world.gel.support_bulk_fraction, s.scene.world.gel.added_mass_fraction,
+           s.scene.world.membrane.bending_stiffness);
   rep.frames = s.scene.frames;
   rep.frame_period = s.scene.frame_period;
   rep.vertex_count = s.scene.world.mesh.vertex_count;

@@ -1,0 +1,39 @@
+/* bending.h - the skin's bending stiffness as linearised hinges (internal; docs/model.md).
+ *
+ * A thin plate of bending stiffness D = E t^3 / (12 (1 - nu^2)) [N m] resists the
+ * change of the dihedral angle at each edge shared by two triangles (a hinge):
+ *   E_b = sum_e k_e dtheta_e^2 / 2,   k_e = D |e|^2 / A_e   [N m],
+ * A_e the two triangles' area. On an equilateral lattice this is the plate's energy
+ * D kappa^2 / 2 per unit area for cylindrical bending in any direction, and
+ * D (1 + nu) kappa^2 with nu = -1/3 for spherical bending (tests/model/test_bending.c):
+ * the plate equation's D laplacian^2 w = p is D's alone, the Poisson ratio only
+ * weighs the Gaussian curvature, which matters at free edges (the dome has none).
+ * The angle is linearised about the rest shape, dtheta_e = sum_k g_k . u_k with the
+ * rest gradients g_k and u the displacement, so the stiffness matrix
+ * K_b = sum_e k_e g g^T is constant: it enters the implicit factor once, and the rest
+ * shape (the dome's own curvature) carries no bending stress. Valid while the hinges
+ * turn by little (PALP_HINGE_LINEAR_MAX); a world counts the steps beyond it. */
+#ifndef PALP_BENDING_H
+#define PALP_BENDING_H
+
+#include "palp.h"
+
+/* Beyond ~0.35 rad (20 deg) of hinge rotation the linearised angle is off by a few
+ * percent and, more to the point, ignores the hinge's own rotation. */
+#define PALP_HINGE_LINEAR_MAX 0.35
+
+/* The dihedral angle [rad] at edge (a, b) between triangle (a, b, c) and triangle
+ * (b, a, d), signed, zero when flat: atan2((n2 x n1) . e^, n1 . n2). */
+double palp_hinge_angle(palp_vec3 a, palp_vec3 b, palp_vec3 c, palp_vec3 d);
+
+/* Its gradient [1/m] with respect to a, b, c, d, in g[0..3] (Bridson et al. 2003:
+ * the wings move along their triangles' normals, the edge ends share the rest). The
+ * four sum to zero (a translation turns no hinge). Returns -1 for a degenerate hinge
+ * (a triangle of zero area or an edge of zero length), 0 otherwise. */
+int palp_hinge_gradient(palp_vec3 a, palp_vec3 b, palp_vec3 c, palp_vec3 d, palp_vec3 g[4]);
+
+/* k_e = D |e|^2 / A_e [N m] for bending stiffness D [N m], the edge's length
+ * squared |e|^2 [m^2] and the two triangles' area A_e [m^2]. */
+double palp_hinge_stiffness(double D, double edge_len2, double area_sum);
+
+#endif
