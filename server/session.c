@@ -349,7 +349,9 @@ static uint32_t step_flags(palp_srv_session *s) {
   palp_world_health h;
   palp_world_get_health(s->world, &h);
   uint32_t fl = 0;
-  if (h.large_strain_steps > s->health.large_strain_steps) fl |= palp_LM_LARGE_STRAIN;
+  /* large deformation, by stretching or by bending (the wire has one bit for both) */
+  if (h.large_strain_steps > s->health.large_strain_steps || h.large_bend_steps > s->health.large_bend_steps)
+    fl |= palp_LM_LARGE_STRAIN;
   if (h.base_contacts > s->health.base_contacts) fl |= palp_LM_BASE_CONTACT;
   if (h.clamped_steps > s->health.clamped_steps) fl |= palp_LM_CLAMPED_STEP;
   if (h.finger_unsolved > s->health.finger_unsolved) fl |= palp_LM_UNSOLVED;
