@@ -125,7 +125,8 @@ struct palp_world {
   int (*hinge)[4];       /* edge ends a, b; wings c, d */
   palp_vec3 (*hgrad)[4]; /* rest gradient of the hinge's angle [1/m] */
   double *hk;            /* k_e [N m] */
-  palp_vec3 *fbend;      /* [vertex_count] bending force of the current state (feedback) [N] */
+  int *vhinge_start;     /* [vertex_count + 1] hinges at each vertex: entries 4 e + k, */
+  int *vhinge;           /* the vertex being hinge e's k-th (feedback) */
   double step_max_bend, max_bend; /* [rad] */
   int64_t large_bend_steps;
 
@@ -262,20 +263,51 @@ static void stage_membrane_forces(palp_world *w, double h) {
   }
 }
 
-/* Adds the hinges' forces f_k = -k_e dtheta_e g_k, dtheta_e = sum_k g_k . u_k [N],
- * to f; returns the largest |dtheta_e| [rad]. */
-static double bending_add(const palp_world *w, palp_vec3 *f) {
+/* dtheta_e = sum_k g_k . u_k [rad] of hinge e at the current positions. */
+static inline double hinge_turn(const int *restrict v, const palp_vec3 *restrict g, const palp_vec3 *restrict pos,
+                                const palp_vec3 *restrict rest) {
+  double th = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const palp_vec3 p = pos[v[k]], r = rest[v[k]];
+    th += g[k].x * (p.x - r.x) + g[k].y * (p.y - r.y) + g[k].z * (p.z - r.z);
+  }
+  return th;
+}
+
+/* Adds the hinges' forces f_k = -k_e dtheta_e g_k [N] to f; returns the largest
+ * |dtheta_e| [rad]. Locals with restrict: f is written while pos is read, and
+ * without them the compiler reloads every coefficient after each store. */
+static double bending_add(const palp_world *w, palp_vec3 *restrict f) {
+  const palp_vec3 *restrict pos = w->pos, *restrict rest = w->mesh.rest;
+  const int(*restrict hinge)[4] = (const int(*)[4])w->hinge;
+  const palp_vec3(*restrict hgrad)[4] = (const palp_vec3(*)[4])w->hgrad;
+  const double *restrict hk = w->hk;
+  const int nh = w->nhinge;
   double thmax = 0.0;
-  for (int e = 0; e < w->nhinge; ++e) {
-    const int *v = w->hinge[e];
-    const palp_vec3 *g = w->hgrad[e];
-    double th = 0.0;
-    for (int k = 0; k < 4; ++k) th += v3_dot(g[k], v3_sub(w->pos[v[k]], w->mesh.rest[v[k]]));
-    const double m = -w->hk[e] * th; /* [N m] */
-    for (int k = 0; k < 4; ++k) f[v[k]] = v3_add(f[v[k]], v3_scale(g[k], m));
-    if (fabs(th) > thmax) thmax = fabs(th);
+  for (int e = 0; e < nh; ++e) {
+    const int *v = hinge[e];
+    const palp_vec3 *g = hgrad[e];
+    const double th = hinge_turn(v, g, pos, rest);
+    const double m = -hk[e] * th; /* [N m] */
+    for (int k = 0; k < 4; ++k) {
+      palp_vec3 *fk = &f[v[k]];
+      fk->x += g[k].x * m, fk->y += g[k].y * m, fk->z += g[k].z * m;
+    }
+    thmax = fmax(thmax, fabs(th));
   }
   return thmax;
+}
+
+/* The hinges' force on vertex i alone [N] (the feedback needs it at a few contact
+ * vertices, not over the mesh). */
+static palp_vec3 bending_at(const palp_world *w, int i) {
+  palp_vec3 f = v3(0, 0, 0);
+  for (int q = w->vhinge_start[i]; q < w->vhinge_start[i + 1]; ++q) {
+    const int e = w->vhinge[q] >> 2, k = w->vhinge[q] & 3;
+    const double m = -w->hk[e] * hinge_turn(w->hinge[e], w->hgrad[e], w->pos, w->mesh.rest);
+    f = v3_add(f, v3_scale(w->hgrad[e][k], m));
+  }
+  return f;
 }
 
 /* Explicit at x_n; its change over the step enters through h^2 K_b in the factor,
@@ -918,15 +950,9 @@ static void stage_feedback(palp_world *w, double h) {
     support_means(w, &um, &vm);
     bulk = v3_add(v3_scale(um, phi * ks), v3_scale(vm, phi * cs));
   }
-  int bend = 0;
   for (int c = 0; c < w->def.max_contacts; ++c) {
     contact *k = &w->contacts[c];
     if (k->kind != CONTACT_FORCE) continue; /* a finger's force comes from its contact solve */
-    if (w->nhinge && !bend) {
-      memset(w->fbend, 0, sizeof *w->fbend * (size_t)w->mesh.vertex_count);
-      bending_add(w, w->fbend);
-      bend = 1;
-    }
     k->total = v3(0, 0, 0);
     for (int q = 0; q < k->count; ++q) {
       const int i = k->vertex[q];
@@ -939,7 +965,7 @@ static void stage_feedback(palp_world *w, double h) {
         f = w->vlink[e] > 0 ? v3_add(f, fl) : v3_sub(f, fl);
       }
       if (gel) f = v3_add(f, v3_scale(w->grad[i], w->p_gauge));
-      if (bend) f = v3_add(f, w->fbend[i]);
+      if (w->nhinge) f = v3_add(f, bending_at(w, i));
       if (support) {
         const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
         f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->sarea[i]));
@@ -1063,8 +1089,9 @@ static int build_hinges(palp_world *w) {
   w->hinge = malloc(sizeof *w->hinge * (size_t)(cap ? cap : 1));
   w->hgrad = malloc(sizeof *w->hgrad * (size_t)(cap ? cap : 1));
   w->hk = malloc(sizeof *w->hk * (size_t)(cap ? cap : 1));
-  w->fbend = calloc((size_t)m->vertex_count, sizeof *w->fbend);
-  if (!w->hinge || !w->hgrad || !w->hk || !w->fbend) {
+  w->vhinge_start = calloc((size_t)m->vertex_count + 1, sizeof(int));
+  w->vhinge = malloc(sizeof(int) * (size_t)(4 * cap + 1));
+  if (!w->hinge || !w->hgrad || !w->hk || !w->vhinge_start || !w->vhinge) {
     free(he);
     return PALP_ENOMEM;
   }
@@ -1087,6 +1114,15 @@ static int build_hinges(palp_world *w) {
     w->hk[e] = palp_hinge_stiffness(D, e2, pd && qd ? area : 2.0 * area);
   }
   free(he);
+  for (int e = 0; e < w->nhinge; ++e)
+    for (int k = 0; k < 4; ++k) w->vhinge_start[w->hinge[e][k] + 1]++;
+  for (int i = 0; i < m->vertex_count; ++i) w->vhinge_start[i + 1] += w->vhinge_start[i];
+  int *fill = malloc(sizeof(int) * (size_t)m->vertex_count);
+  if (!fill) return PALP_ENOMEM;
+  memcpy(fill, w->vhinge_start, sizeof(int) * (size_t)m->vertex_count);
+  for (int e = 0; e < w->nhinge; ++e)
+    for (int k = 0; k < 4; ++k) w->vhinge[fill[w->hinge[e][k]]++] = 4 * e + k;
+  free(fill);
   return PALP_OK;
 }
 
@@ -1270,7 +1306,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
-  free(w->hinge), free(w->hgrad), free(w->hk), free(w->fbend);
+  free(w->hinge), free(w->hgrad), free(w->hk), free(w->vhinge_start), free(w->vhinge);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work);
   palp_ldl_free(&w->ldl);

@@ -6,7 +6,10 @@
  * triangular solves that bound the step from below. Then a pressing finger at 338
  * vertices: its tangent-rebuild steps on the stepping thread against deferred.
  *
- *   bench_model_step [--steps N] [--quick]
+ * With --bending D every world has the skin's bending stiffness D [N m] (hinges in
+ * the factor; docs/model.md): run with and without to see what bending costs.
+ *
+ *   bench_model_step [--steps N] [--quick] [--bending D]
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -30,8 +33,10 @@ static int cmpd(const void *a, const void *b) {
 
 int main(int argc, char **argv) {
   int steps = 3000, quick = 0;
+  double bending = 0.0; /* [N m] */
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--steps") && i + 1 < argc) steps = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--bending") && i + 1 < argc) bending = atof(argv[++i]);
     else if (!strcmp(argv[i], "--quick")) quick = 1;
   }
   if (quick) steps = 300;
@@ -40,8 +45,8 @@ int main(int argc, char **argv) {
   CPU_ZERO(&set);
   CPU_SET(0, &set);
   const int pinned = sched_setaffinity(0, sizeof set, &set) == 0;
-  printf("palp model step benchmark: %d steps per case, all effects on, 3 N uniform load at polar 30 deg%s\n",
-         steps, pinned ? ", pinned to CPU 0" : "");
+  printf("palp model step benchmark: %d steps per case, all effects on, 3 N uniform load at polar 30 deg%s, "
+         "bending stiffness %g N m\n", steps, pinned ? ", pinned to CPU 0" : "", bending);
   printf("%8s %7s %8s %11s %11s %11s %9s %10s %10s\n", "vertices", "dt_ms", "unknowns", "median_us", "p99_us",
          "solve_us", "step/solve", "of_10ms_%", "refactors");
   const int counts[3] = {338, 1300, 5000};
@@ -51,6 +56,7 @@ int main(int argc, char **argv) {
     for (int k = 0; k < 2; ++k) {
       palp_world_def d = palp_world_default_def();
       d.mesh.vertex_count = counts[c];
+      d.membrane.bending_stiffness = bending;
       d.dt = dts[k];
       d.effects = PALP_EFFECT_ALL;
       int e;
@@ -102,6 +108,7 @@ int main(int argc, char **argv) {
       palp_world_def d = palp_world_default_def();
       d.dt = dt;
       d.refactor_lag = deferred ? palp_world_refactor_lag_for(dt) : 0;
+      d.membrane.bending_stiffness = bending;
       palp_world *w = palp_world_create(&d, NULL);
       const palp_finger_def fd = palp_finger_default_def();
       const int id = palp_world_add_finger_def(w, &fd, (palp_vec3){0, 0, 0.06});

@@ -20,10 +20,10 @@ reference of distribution II beat the paper's RMSE; the hand-set ones do not.
 long_term: the candidate parameters for the long-term reading
 (config/params/paper_long_term.json, scene paper_step_long_term.json) against
 the full FEM level-2 long-term reference of distribution II, recomputed here
-from the written pairs: RMSE at most 10% of the FEM's peak displacement
-(measured 8.8%) and the model's peak within a factor 2 of the FEM's (measured
-0.55). The previous candidate (peaks 10x the FEM's, RMSE 125% of the peak)
-fails both.
+from the written pairs: RMSE at most 7% of the FEM's peak displacement
+(measured 5.5%) and the model's peak within 30% of the FEM's (measured 0.774:
+-22.6%). The candidate before bending (RMSE 8.8%, peak 0.55) fails both, and the
+one before it (peaks 10x the FEM's, RMSE 125% of the peak) too.
 
 errors: bad inputs end with a clear message on stderr, nothing on stdout and a
 non-zero exit status (1 for unusable inputs, 2 for command-line errors).
@@ -383,7 +383,7 @@ def test_long_term(tool, scene):
     check(len(sq) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(sq))
     rmse = math.sqrt(math.fsum(sq) / max(len(sq), 1))
     print("long-term candidate, distribution II, FEM level 2: RMSE %.4f mm = %.1f%% of the FEM peak %.3f mm "
-          "(bound 10%%); model peak %.3f mm, ratio %.2f (bound 0.5-2)" %
+          "(bound 7%%); model peak %.3f mm, ratio %.3f (bound 0.7-1.3)" %
           (10 * rmse, 100 * rmse / peak_fem, 10 * peak_fem, 10 * peak_rt, peak_rt / peak_fem))
     check(peak_fem > 0.0, "the FEM reference does not move")
     # the tool's own peaks (tables.json) are the ones recomputed here
@@ -392,8 +392,8 @@ def test_long_term(tool, scene):
     check(close(disp["ref_peak"], peak_fem, 1e-9) and close(disp["rt_peak"], peak_rt, 1e-9),
           "tables.json peaks %r / %r, recomputed %r / %r" % (disp["ref_peak"], disp["rt_peak"], peak_fem, peak_rt))
     check("% of the FEM peak" in r.stdout, "no \"displacement against its scale\" line on stdout")
-    check(rmse <= 0.10 * peak_fem, "RMSE %.4f mm above 10%% of the FEM peak %.3f mm" % (10 * rmse, 10 * peak_fem))
-    check(0.5 <= peak_rt / peak_fem <= 2.0, "model peak %.3f mm vs FEM %.3f mm" % (10 * peak_rt, 10 * peak_fem))
+    check(rmse <= 0.07 * peak_fem, "RMSE %.4f mm above 7%% of the FEM peak %.3f mm" % (10 * rmse, 10 * peak_fem))
+    check(0.7 <= peak_rt / peak_fem <= 1.3, "model peak %.3f mm vs FEM %.3f mm" % (10 * peak_rt, 10 * peak_fem))
 
 
 def main():
