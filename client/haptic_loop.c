@@ -239,7 +239,23 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
       const double v2 = v.x * v.x + v.y * v.y + v.z * v.z;
       if (v2 > 1e-12) {
         double a = c->energy / (v2 * dt);
-        if (a > c->max_damping) a = c->max_damping;
+        /* The limit grows with what a late model can generate: a force lagging the
+         * hand by tau on a surface of normal stiffness K_n acts like a negative
+         * damper -K_n tau, so the controller may need up to that; twice it, with
+         * tau the model's age plus one physics period. max_damping alone (fitted to
+         * the soft default phantom, K_n ~ 20 N/m) let a ~100x stiffer one give back
+         * 2.2x the energy put in with 40 ms late models (test haptic_multirate_stiff). */
+        double amax = c->max_damping;
+        if (c->renderer.have) {
+          const palp_local_model *m = &c->renderer.cur;
+          const palp_vec3 nn = m->normal;
+          const double kn = nn.x * (m->stiffness[0][0] * nn.x + m->stiffness[0][1] * nn.y + m->stiffness[0][2] * nn.z) +
+                            nn.y * (m->stiffness[1][0] * nn.x + m->stiffness[1][1] * nn.y + m->stiffness[1][2] * nn.z) +
+                            nn.z * (m->stiffness[2][0] * nn.x + m->stiffness[2][1] * nn.y + m->stiffness[2][2] * nn.z);
+          const double tau = c->model_age + (t - c->x_arrival_t) + m->period; /* [s] */
+          if (kn > 0 && tau > 0 && 2.0 * kn * tau > amax) amax = 2.0 * kn * tau;
+        }
+        if (a > amax) a = amax;
         o.force = v3sub(o.force, v3scale(v, a));
         c->dissipated += a * v2 * dt;
         c->pc_ticks++;

@@ -28,11 +28,22 @@
 #include "palp.h"
 #include "palp_haptic.h"
 
+/* The phantom (argv[1], default the paper's scene) and the presses' depth scale
+ * (argv[2], default 1: 12 mm and 8 mm; the long-term candidate, ~100x stiffer, is
+ * pressed a quarter as deep, where a hand meets 2-7 N). */
+static const char *scene_path = PALP_CONFIG_DIR "/paper_step.json";
+static double depth_scale = 1.0;
+/* Late models: the rendered RMS error may exceed the held force's by this factor
+ * (argv[4], default 1.05). On a stiff phantom the passivity controller's damper,
+ * which must absorb what a late force generates (~K tau), moves the force further
+ * from the held one: measured 1.09 at 20 ms on the long-term candidate. */
+static double late_rms_factor = 1.05;
+
 static palp_world *make_world(double dt) {
   palp_scene s;
   char err[256];
-  if (palp_scene_load(PALP_CONFIG_DIR "/paper_step.json", &s, err, sizeof err)) {
-    fprintf(stderr, "cannot load the paper scene: %s\n", err);
+  if (palp_scene_load(scene_path, &s, err, sizeof err)) {
+    fprintf(stderr, "cannot load the scene %s: %s\n", scene_path, err);
     exit(2);
   }
   s.world.dt = dt;
@@ -130,7 +141,7 @@ static void test_accuracy(int latency) {
   palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_SLIDE);
   traj.polar_deg = 15;
   traj.azimuth_deg = 30;
-  traj.depth = 0.012;      /* 12 mm */
+  traj.depth = 0.012 * depth_scale; /* 12 mm on the default phantom */
   traj.speed = 0.02;       /* 20 mm/s in and out */
   traj.hold = 0.3;
   traj.slide_speed = 0.05; /* 50 mm/s along the surface */
@@ -193,14 +204,14 @@ static void test_accuracy(int latency) {
   qsort(st_z, (size_t)(n - 1), sizeof(double), cmp_d);
   qsort(st_f, (size_t)(n - 1), sizeof(double), cmp_d);
   const int i99 = (int)((n - 2) * 0.99);
-  printf("accuracy, models %d ms late: %d ticks (press 12 mm at 20 mm/s, hold, slide 20 mm at 50 mm/s, hold, release), peak %.3f N "
+  printf("accuracy, models %d ms late: %d ticks (press %.1f mm at 20 mm/s, hold, slide 20 mm at 50 mm/s, hold, release), peak %.3f N "
          "(1 kHz model)\n"
          "  rendered at 1 kHz from 250 Hz local models: RMS %.4f N (%.2f%% of peak), max %.4f N (%.2f%%, t=%.3f s: "
          "%.3f vs %.3f N)\n"
          "  baseline, 250 Hz force held 4 ticks:        RMS %.4f N (%.2f%%), max %.4f N (%.2f%%)\n"
          "  250 Hz physics at its own steps (floor):    RMS %.4f N (%.2f%%), max %.4f N (%.2f%%)\n"
          "  tick-to-tick force step, p99: rendered %.4f N, held %.4f N, 1 kHz model %.4f N\n",
-         latency, n, peak, rms, 100 * rms / peak, emax, 100 * emax / peak, kmax * 1e-3, len3(fr[kmax]), len3(fref[kmax]), zrms,
+         latency, n, 1e3 * traj.depth, peak, rms, 100 * rms / peak, emax, 100 * emax / peak, kmax * 1e-3, len3(fr[kmax]), len3(fref[kmax]), zrms,
          100 * zrms / peak, zmax, 100 * zmax / peak, prms, 100 * prms / peak, pmax, 100 * pmax / peak, st_r[i99], st_z[i99],
          st_f[i99]);
   CHECK(peak > 0.3, "the press reaches a real force: peak %.3f N > 0.3 N", peak);
@@ -209,7 +220,8 @@ static void test_accuracy(int latency) {
     /* A round trip the server cannot know about: reported against the held
      * force of the same late models (what a station without local models would
      * render); asserted: no worse than it, and no more tick-to-tick texture. */
-    CHECK(rms <= zrms * 1.05, "models %d ms late: rendered RMS %.4f N <= 1.05 x held %.4f N", latency, rms, zrms);
+    CHECK(rms <= zrms * late_rms_factor, "models %d ms late: rendered RMS %.4f N <= %.2f x held %.4f N", latency, rms,
+          late_rms_factor, zrms);
     CHECK(st_r[i99] <= st_z[i99], "models %d ms late: p99 tick step %.4f <= held %.4f N", latency, st_r[i99], st_z[i99]);
     return;
   }
@@ -222,7 +234,7 @@ static void test_accuracy(int latency) {
 static void test_passivity(int latency) {
   palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
   traj.polar_deg = 10;
-  traj.depth = 0.008;   /* 8 mm */
+  traj.depth = 0.008 * depth_scale; /* 8 mm on the default phantom */
   traj.approach = 0.002;
   traj.speed = 0.05;    /* 50 mm/s: a cycle lasts 0.4 s */
   traj.cycle_count = 100;
@@ -256,9 +268,9 @@ static void test_passivity(int latency) {
     if (dw < 0) cin -= dw;
   }
   const double net = out - in;
-  printf("passivity, models %d ms late: %d ticks, %d cycles (8 mm at 50 mm/s), peak %.3f N: energy put in by the "
+  printf("passivity, models %d ms late: %d ticks, %d cycles (%.1f mm at 50 mm/s), peak %.3f N: energy put in by the "
          "device %.4f mJ, given back %.4f mJ, net to the device %.4f mJ (%.2f%% of the input); worst cycle net/in %.4f\n",
-         latency, n, cycles, peak, in * 1e3, out * 1e3, net * 1e3, 100 * net / in, worst_cycle);
+         latency, n, cycles, 1e3 * traj.depth, peak, in * 1e3, out * 1e3, net * 1e3, 100 * net / in, worst_cycle);
   CHECK(peak > 0.2, "the cycles press for real: peak %.3f N", peak);
   CHECK(cycles >= 99, "%d press-release cycles measured", cycles);
   CHECK(net <= 0.01 * in, "over 100 cycles the device gets no more energy than it puts in (net %.4f mJ <= 1%% of "
@@ -266,12 +278,21 @@ static void test_passivity(int latency) {
   CHECK(worst_cycle <= 0.01, "no cycle returns more than 1%% of its input energy beyond it (worst %.4f)", worst_cycle);
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  if (argc > 1) scene_path = argv[1];
+  if (argc > 2) depth_scale = atof(argv[2]);
+  const int late_ms = argc > 3 ? atoi(argv[3]) : 40; /* the round trip of the second pass [ms] */
+  if (argc > 4) late_rms_factor = atof(argv[4]);
+  if (!(depth_scale > 0 && depth_scale <= 2)) {
+    fprintf(stderr, "depth scale %s: expected (0, 2]\n", argv[2]);
+    return 2;
+  }
+  printf("phantom %s, depths x%.2f\n", scene_path, depth_scale);
   test_accuracy(0);
   test_passivity(0);
-  /* The same with every model reaching the station 40 ms after the device
+  /* The same with every model reaching the station late_ms (40) after the device
    * sample its step used (a 40 ms round trip), through the same station logic. */
-  test_accuracy(40);
-  test_passivity(40);
+  test_accuracy(late_ms);
+  test_passivity(late_ms);
   return check_exit();
 }
