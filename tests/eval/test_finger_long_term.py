@@ -20,14 +20,9 @@ import subprocess
 import sys
 import tempfile
 
-failures = 0
+import test_eval_evaluate as common  # its check() and failure count (this folder is on sys.path)
 
-
-def check(cond, msg):
-    global failures
-    if not cond:
-        failures += 1
-        print("FAIL: " + msg, file=sys.stderr)
+check = common.check
 
 
 def main():
@@ -65,7 +60,7 @@ def main():
     s2 = (at(d, rt, 2e-3) - at(d, rt, 1e-3)) / 1e-3
     print("real-time stiffness 0.25-1 mm %.0f N/m, 1-2 mm %.0f N/m (ratio %.2f, bound 1 +- 0.3)" % (s1, s2, s2 / s1))
     check(abs(s2 / s1 - 1.0) < 0.3, "stiffness ratio 1-2 mm / 0.25-1 mm %.2f" % (s2 / s1))
-    return 1 if failures else 0
+    return 1 if common.failures else 0
 
 
 if __name__ == "__main__":
