@@ -25,6 +25,11 @@ from the written pairs: RMSE at most 7% of the FEM's peak displacement
 -22.6%). The candidate before bending (RMSE 8.8%, peak 0.55) fails both, and the
 one before it (peaks 10x the FEM's, RMSE 125% of the peak) too.
 
+breast_tissue: the same for config/params/breast_tissue.json (scene
+paper_step_breast_tissue.json) against the level-2 breast-tissue FEM: RMSE at
+most 9% of the FEM's peak (measured 7.2%) and the peak within 10% (the issue's
+target; measured -6.5%).
+
 errors: bad inputs end with a clear message on stderr, nothing on stdout and a
 non-zero exit status (1 for unusable inputs, 2 for command-line errors).
 """
@@ -363,12 +368,14 @@ def test_shipped(tool, scene):
     check(rmse["handset"] > 0.5, "hand-set: displacement RMSE %.4f cm, expected > 0.5" % rmse["handset"])
 
 
-def test_long_term(tool, scene):
-    """See the module's docstring (long_term)."""
-    lt_scene = os.path.join(os.path.dirname(scene), "paper_step_long_term.json")
-    tmp = tempfile.mkdtemp(prefix="palp_eval_long_term_")
+def check_profile_fit(tool, scene_file, material, rmse_bound, peak_bound, label):
+    """Distribution II of a profile's candidate against its level-2 FEM, recomputed
+    from the written pairs: RMSE at most rmse_bound of the FEM's peak, the model's
+    peak within peak_bound of the FEM's (relative)."""
+    lt_scene = os.path.join(os.path.dirname(scene_file[0]), scene_file[1])
+    tmp = tempfile.mkdtemp(prefix="palp_eval_%s_" % material)
     out = os.path.join(tmp, "out")
-    r = run([tool, "evaluate", "--scene", lt_scene, "--material", "paper_long_term", "--level", "2",
+    r = run([tool, "evaluate", "--scene", lt_scene, "--material", material, "--level", "2",
              "--distributions", "2", "--no-plots", "--out", out, "--cache-dir", os.path.join(tmp, "cache"),
              "--quiet"])
     check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
@@ -382,9 +389,10 @@ def test_long_term(tool, scene):
             peak_fem, peak_rt = max(peak_fem, abs(b)), max(peak_rt, abs(a))
     check(len(sq) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(sq))
     rmse = math.sqrt(math.fsum(sq) / max(len(sq), 1))
-    print("long-term candidate, distribution II, FEM level 2: RMSE %.4f mm = %.1f%% of the FEM peak %.3f mm "
-          "(bound 7%%); model peak %.3f mm, ratio %.3f (bound 0.7-1.3)" %
-          (10 * rmse, 100 * rmse / peak_fem, 10 * peak_fem, 10 * peak_rt, peak_rt / peak_fem))
+    print("%s, distribution II, FEM level 2: RMSE %.4f mm = %.1f%% of the FEM peak %.3f mm "
+          "(bound %.0f%%); model peak %.3f mm, ratio %.3f (bound 1 +- %.2f)" %
+          (label, 10 * rmse, 100 * rmse / peak_fem, 10 * peak_fem, 100 * rmse_bound, 10 * peak_rt,
+           peak_rt / peak_fem, peak_bound))
     check(peak_fem > 0.0, "the FEM reference does not move")
     # the tool's own peaks (tables.json) are the ones recomputed here
     t = json.load(open(os.path.join(out, "tables.json")))["tables"]
@@ -392,14 +400,26 @@ def test_long_term(tool, scene):
     check(close(disp["ref_peak"], peak_fem, 1e-9) and close(disp["rt_peak"], peak_rt, 1e-9),
           "tables.json peaks %r / %r, recomputed %r / %r" % (disp["ref_peak"], disp["rt_peak"], peak_fem, peak_rt))
     check("% of the FEM peak" in r.stdout, "no \"displacement against its scale\" line on stdout")
-    check(rmse <= 0.07 * peak_fem, "RMSE %.4f mm above 7%% of the FEM peak %.3f mm" % (10 * rmse, 10 * peak_fem))
-    check(0.7 <= peak_rt / peak_fem <= 1.3, "model peak %.3f mm vs FEM %.3f mm" % (10 * peak_rt, 10 * peak_fem))
+    check(rmse <= rmse_bound * peak_fem, "RMSE %.4f mm above %.0f%% of the FEM peak %.3f mm" %
+          (10 * rmse, 100 * rmse_bound, 10 * peak_fem))
+    check(abs(peak_rt / peak_fem - 1.0) <= peak_bound, "model peak %.3f mm vs FEM %.3f mm" % (10 * peak_rt, 10 * peak_fem))
+
+
+def test_long_term(tool, scene):
+    """See the module's docstring (long_term)."""
+    check_profile_fit(tool, (scene, "paper_step_long_term.json"), "paper_long_term", 0.07, 0.30, "long-term candidate")
+
+
+def test_breast_tissue(tool, scene):
+    """See the module's docstring (breast_tissue)."""
+    check_profile_fit(tool, (scene, "paper_step_breast_tissue.json"), "breast_tissue", 0.09, 0.10,
+                      "breast-tissue parameters")
 
 
 def main():
     tool, scene, which = sys.argv[1], sys.argv[2], sys.argv[3]
     {"tables": test_tables, "errors": test_errors, "shipped": test_shipped,
-     "long_term": test_long_term}[which](tool, scene)
+     "long_term": test_long_term, "breast_tissue": test_breast_tissue}[which](tool, scene)
     if failures:
         print("%d check(s) failed" % failures, file=sys.stderr)
         return 1
