@@ -123,6 +123,10 @@ int main(int argc, char **argv) {
            p90, mx, first);
     printf("  solver: %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations, %ld cut-backs\n", r.steps,
            r.newton_iterations, r.pcg_iterations, r.factorizations, r.cutbacks);
+    printf("  time: assembly %.2f s (%ld, %ld with tangent), factorisation %.2f s, solves %.2f s (%ld), other Krylov "
+           "%.2f s, rest %.2f s of %.2f s\n",
+           r.sec_assemble, r.assemblies, r.tangent_assemblies, r.sec_factor, r.sec_solve, r.solves, r.sec_krylov,
+           r.wall_seconds - r.sec_assemble - r.sec_factor - r.sec_solve - r.sec_krylov, r.wall_seconds);
     if (n >= 400)
       printf("  400-frame run: %.1f s measured\n", total);
     else

@@ -104,6 +104,11 @@ typedef struct palp_fem_model {
   int nprony;
   /* statistics */
   long steps, newton_iterations, cutbacks, factorizations;
+  /* where the time goes (wall seconds, CLOCK_MONOTONIC): element assembly,
+   * numeric factorisations, preconditioner solves with the factor, and the rest of
+   * the Krylov iterations (products with K, dot products, vector updates) */
+  double sec_assemble, sec_factor, sec_solve, sec_krylov;
+  long assemblies, tangent_assemblies, solves;
   /* Newton trace of the last step (residual norms), for convergence tests */
   int trace_count;
   double trace[64];

@@ -17,8 +17,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fem_internal.h"
+
+/* Wall clock [s] for the model's time breakdown (statistics only). */
+static double now_s(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
 
 void palp_fem_model_destroy(palp_fem_model *m) {
   if (!m) return;
@@ -312,7 +320,18 @@ static void *assemble_range(void *arg) {
 /* Elements are split into `threads` contiguous ranges; each worker scatters into
  * private buffers that are summed afterwards, so no locks and a deterministic
  * result for a given thread count. */
+static int assemble(palp_fem_model *m, const double *u, double dt, int want_tangent);
+
 int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
+  const double t0 = now_s();
+  const int rc = assemble(m, u, dt, want_tangent);
+  m->sec_assemble += now_s() - t0;
+  m->assemblies++;
+  if (want_tangent) m->tangent_assemblies++;
+  return rc;
+}
+
+static int assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
   const int E = m->mesh->element_count, T = m->threads > 1 && m->tbuf ? m->threads : 1;
   assembly_job job[16];
   pthread_t tid[16];
@@ -381,6 +400,23 @@ static double dot(const double *a, const double *b, int n) {
   return s;
 }
 
+/* The factorisation and the solves with it, timed for the statistics. */
+static int factor(palp_fem_model *m) {
+  const double t0 = now_s();
+  const int rc = palp_fem_solver_factor(m->solver, m->kval);
+  m->sec_factor += now_s() - t0;
+  m->factorizations++;
+  return rc;
+}
+
+static int precond(palp_fem_model *m, const double *b, double *x) {
+  const double t0 = now_s();
+  const int rc = palp_fem_solver_solve(m->solver, b, x);
+  m->sec_solve += now_s() - t0;
+  m->solves++;
+  return rc;
+}
+
 /* Right-preconditioned restarted GMRES(k) for K x = b with the (stale) factor as
  * preconditioner, used where CG cannot go: an indefinite tangent or an LDL^T
  * (indefinite) preconditioner. Modified Gram-Schmidt, Givens rotations.
@@ -408,7 +444,7 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
     int j = 0, done = 0;
     for (; j < k && total < max_it; ++j, ++total) {
       double *vj = V + (size_t)j * (size_t)n, *zj = Z + (size_t)j * (size_t)n, *w = V + (size_t)(j + 1) * (size_t)n;
-      *rc = palp_fem_solver_solve(m->solver, vj, zj);
+      *rc = precond(m, vj, zj);
       if (*rc) return -1;
       symv(m, zj, w);
       for (int i = 0; i <= j; ++i) {
@@ -466,7 +502,17 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
  * the change of the viscous factor gamma.
  * CG stops at ||K du - r|| <= eta ||r||, eta = min(0.1, ||r|| / force scale), a
  * forcing term that keeps the Newton iteration quadratic. */
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres);
+
+/* newton_solve_ timed: what is not factorisation or preconditioner solve is Krylov work. */
 static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
+  const double t0 = now_s(), other0 = m->sec_factor + m->sec_solve;
+  const int rc = newton_solve_(m, kscale_c0, eta, allow_gmres);
+  m->sec_krylov += (now_s() - t0) - (m->sec_factor + m->sec_solve - other0);
+  return rc;
+}
+
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
   const int n = m->nfree;
   double *b = m->pcg, *x = b + n, *r = x + n, *z = r + n, *p = z + n, *q = p + n;
   for (int d = 0; d < m->ndof; ++d)
@@ -479,8 +525,7 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
     limit = lnz > 0.0 && fl > 0.0 ? (int)fmin(400.0, fmax(10.0, 0.5 * fl / (4.0 * lnz))) : 20;
   }
   if (!m->factored || m->full_newton || m->last_pcg > limit) {
-    int rc = palp_fem_solver_factor(m->solver, m->kval);
-    m->factorizations++;
+    int rc = factor(m);
     m->factored = rc == 0;
     if (rc) return rc;
     m->factor_c0 = kscale_c0;
@@ -488,13 +533,13 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
   }
   int rc = 0;
   if (fresh) {
-    rc = palp_fem_solver_solve(m->solver, b, x); /* the factor is of this very K */
+    rc = precond(m, b, x); /* the factor is of this very K */
     m->last_pcg = 0;
   } else {
     const double bn = sqrt(dot(b, b, n));
     memcpy(r, b, sizeof(double) * (size_t)n);
     memset(x, 0, sizeof(double) * (size_t)n);
-    rc = palp_fem_solver_solve(m->solver, r, z);
+    rc = precond(m, r, z);
     memcpy(p, z, sizeof(double) * (size_t)n);
     double rz = dot(r, z, n);
     int it = 0, ok = 0, broke = 0;
@@ -515,7 +560,7 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
         ok = 1;
         break;
       }
-      rc = palp_fem_solver_solve(m->solver, r, z);
+      rc = precond(m, r, z);
       const double rz2 = dot(r, z, n);
       const double beta = rz2 / rz;
       rz = rz2;
@@ -536,13 +581,12 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
       }
     }
     if (!rc && !ok) { /* CG/GMRES stalled: renew the factor and solve directly */
-      rc = palp_fem_solver_factor(m->solver, m->kval);
-      m->factorizations++;
+      rc = factor(m);
       m->factored = rc == 0;
       if (rc) return rc;
       m->factor_c0 = kscale_c0;
       m->last_pcg = 0;
-      rc = palp_fem_solver_solve(m->solver, b, x);
+      rc = precond(m, b, x);
     }
   }
   for (int d = 0; d < m->ndof; ++d) m->du[d] = m->eq[d] >= 0 ? x[m->eq[d]] : 0.0;
