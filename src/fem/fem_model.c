@@ -714,45 +714,56 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
 
 int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
   const size_t nd = (size_t)m->ndof;
-  const double hmin = dt / (double)(1L << m->max_cutbacks);
+  /* Sub-steps are counted in integer units of dt / 2^max_cutbacks, so halved,
+   * doubled and clipped steps add up to the frame exactly: with steps kept in
+   * seconds, a step clipped to the remainder carried round-off into the remembered
+   * step, doubling it gave a full step 1e-9 short of dt, and the leftover sliver of
+   * ~1e-11 s was then tried as a step of its own (c0 = 1 / (beta h^2) ~ 1e22), which
+   * failed every cut-back. */
+  const long full = 1L << m->max_cutbacks;
   /* A cut step is remembered across calls and doubles back only after three
    * successes in a row: retrying the full dt at once after every cut wastes a
    * failing Newton sequence each time. */
-  double done = 0.0, h = m->h_next > 0.0 && m->h_next < dt ? m->h_next : dt;
-  while (done < dt * (1.0 - 1e-9)) { /* sums of halved steps carry round-off */
-    if (h > dt - done) h = dt - done;
-    const int rc = try_step(m, fext, h);
+  long h = full;
+  if (m->h_next > 0.0 && m->h_next < dt) h = lround(m->h_next / dt * (double)full);
+  if (h < 1) h = 1;
+  if (h > full) h = full;
+  long done = 0;
+  const double t_start = m->time;
+  while (done < full) {
+    if (h > full - done) h = full - done;
+    const double hs = dt * (double)h / (double)full; /* [s] */
+    const int rc = try_step(m, fext, hs);
     if (rc == PALP_ENOMEM) return rc;
     if (rc) {
-      if (h * 0.5 < hmin * (1.0 - 1e-12)) {
+      if (h < 2) {
         snprintf(m->err, sizeof m->err,
                  "time step at t = %.6g s failed after %d cut-backs (dt = %.3g s): %s", m->time,
-                 m->max_cutbacks, h,
+                 m->max_cutbacks, hs,
                  rc == PALP_EUNSTABLE ? "an element inverted or the residual became non-finite"
                                       : "Newton did not converge or the tangent was singular");
         return rc == PALP_ESOLVER ? PALP_ESOLVER : PALP_EUNSTABLE;
       }
-      h *= 0.5;
+      h /= 2;
       m->cutbacks++;
       m->streak = 0;
       continue;
     }
     const double g = m->newmark_gamma;
     for (size_t d = 0; d < nd; ++d) {
-      m->v[d] += h * ((1.0 - g) * m->a[d] + g * m->atrial[d]);
+      m->v[d] += hs * ((1.0 - g) * m->a[d] + g * m->atrial[d]);
       m->a[d] = m->atrial[d];
       m->u[d] = m->utrial[d];
     }
     commit(m);
-    m->time += h;
     done += h;
-    if (dt - done < 1e-9 * dt) m->time += dt - done; /* land exactly on the frame */
+    m->time = done == full ? t_start + dt : m->time + hs; /* land exactly on the frame */
     m->steps++;
-    if (h < dt && ++m->streak >= 3) {
-      h = fmin(dt, 2.0 * h);
+    if (h < full && ++m->streak >= 3) {
+      h = 2 * h < full ? 2 * h : full;
       m->streak = 0;
     }
   }
-  m->h_next = h;
+  m->h_next = dt * (double)h / (double)full;
   return PALP_OK;
 }
