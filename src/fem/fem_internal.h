@@ -88,6 +88,10 @@ typedef struct palp_fem_model {
   int last_pcg;       /* CG iterations of the last solve */
   int full_newton;    /* refactor every iteration */
   int pcg_refactor;   /* renew the factor when CG needed more than this (0: automatic) */
+  /* automatic renewal (fem_model.c, renew_factor): step attempts and solves so far,
+   * and their counts when the factor was made and when the current attempt began */
+  long attempts, fac_attempt, fac_solves, step_solves0;
+  int renew;          /* renew the factor at the next Newton solve */
   long pcg_iterations; /* CG and GMRES iterations */
   long gmres_solves;  /* solves that needed GMRES (indefinite tangent or preconditioner) */
   double *gmres_ws;   /* GMRES basis, allocated on first need */

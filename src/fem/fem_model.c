@@ -406,6 +406,9 @@ static int factor(palp_fem_model *m) {
   const int rc = palp_fem_solver_factor(m->solver, m->kval);
   m->sec_factor += now_s() - t0;
   m->factorizations++;
+  m->fac_attempt = m->attempts;
+  m->fac_solves = m->solves;
+  m->renew = 0;
   return rc;
 }
 
@@ -495,14 +498,40 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
  * gradients on the current consistent tangent, which it approximates closely while
  * strains stay moderate (Newton's quadratic convergence needs the exact tangent
  * system solved, not the exact tangent factored). The factor is renewed when CG
- * needed more than pcg_refactor iterations last time (0: automatically, when
- * those iterations' solves, ~4 nnz(L) flops each, cost half a factorisation), or
- * when CG fails; full_newton renews it every iteration. A changed dt (cut-back)
+ * needed more than pcg_refactor iterations last time, or when CG fails;
+ * full_newton renews it every iteration. With pcg_refactor = 0 (automatic) the
+ * limit is the cost of a factorisation in solves (factor_cost_solves), and the
+ * factor is also renewed at the start of a time step by the renewal rule of
+ * renew_factor. A changed dt (cut-back)
  * keeps the factor: the mass term is small beside the stiffness and CG absorbs
  * the change of the viscous factor gamma.
- * CG stops at ||K du - r|| <= eta ||r||, eta = min(0.1, ||r|| / force scale), a
- * forcing term that keeps the Newton iteration quadratic. */
+ * CG stops at ||K du - r|| <= eta ||r||, eta from newton_forcing. */
 static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres);
+
+/* The cost of a numeric factorisation in preconditioner solves, from the flop
+ * count fl of the factorisation and the nonzeros lnz of its factor. A solve with L
+ * reads L twice (forward and back, 4 lnz flops, 16 lnz bytes) and is memory-bound;
+ * the factorisation runs dense BLAS-3 on the supernodes. With an optimised BLAS
+ * (OpenBLAS, one core of this machine) the factorisation does ~8 times more flops
+ * per second than the solves (level 4: 22.4 Gflop in 1.05 s against 8e7 flop in
+ * 29 ms, a factorisation = 36 solves), so cost = fl / (8 * 4 lnz) solves. A
+ * constant rather than a measured ratio, so the run's results do not depend on the
+ * timing. (The reference BLAS factorises ~8x slower; set pcg_refactor there.) */
+static double factor_cost_solves(double fl, double lnz) {
+  return lnz > 0.0 && fl > 0.0 ? fmax(1.0, fl / (32.0 * lnz)) : 20.0;
+}
+
+/* Renewal rule for the reused factor (the replacement policy that minimises the
+ * long-run average cost when the running cost grows with age): with the factor
+ * used over `steps` time-step attempts since it was made, at a total of `solves`
+ * preconditioner solves, renew it when the last attempt's solves exceed the
+ * average cost per attempt including the factorisation,
+ *   last > (factor_cost + solves) / steps   [solves per step].
+ * CG needs more iterations as the state drifts from the factorised one; while the
+ * count stays flat the rule never fires. */
+static int renew_factor(double factor_cost, long solves, long steps, long last) {
+  return steps >= 1 && (double)last * (double)steps > factor_cost + (double)solves;
+}
 
 /* newton_solve_ timed: what is not factorisation or preconditioner solve is Krylov work. */
 static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
@@ -520,11 +549,11 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int al
   int fresh = 0;
   (void)kscale_c0;
   int limit = m->pcg_refactor;
-  if (limit <= 0) { /* automatic: when CG's solves cost about half a factorisation */
+  if (limit <= 0) { /* automatic: one solve that cost more than a factorisation */
     const double lnz = palp_fem_solver_factor_nnz(m->solver), fl = palp_fem_solver_factor_flops(m->solver);
-    limit = lnz > 0.0 && fl > 0.0 ? (int)fmin(400.0, fmax(10.0, 0.5 * fl / (4.0 * lnz))) : 20;
+    limit = (int)fmin(400.0, fmax(10.0, factor_cost_solves(fl, lnz)));
   }
-  if (!m->factored || m->full_newton || m->last_pcg > limit) {
+  if (!m->factored || m->full_newton || m->last_pcg > limit || m->renew) {
     int rc = factor(m);
     m->factored = rc == 0;
     if (rc) return rc;
@@ -666,6 +695,26 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
   return PALP_OK;
 }
 
+/* Forcing term of the inexact Newton iteration: the Krylov solve of iteration
+ * `it` stops at ||K du - r|| <= eta ||r||, r [N] the residual, scale [N] the force
+ * scale, tol [N] the step's tolerance.
+ *   eta = min(0.1, r / scale)        keeps the iteration quadratic (r / scale -> 0);
+ *   eta <= 0.5 tol / r  for it >= 1  aims the next iterate at the tolerance.
+ * The first iterate of a step moves the mesh by the whole step's increment and
+ * leaves a nonlinear residual of ~10-60% of the force scale whatever the solve's
+ * accuracy (the 2 GPa volumetric penalty acting on the increment's second-order
+ * volume change, K (grad du)^2), so it is solved loosely; from the second on, the nonlinear remainder
+ * after an exact solve is ~1e-6 of the scale (level 2: 0.63 -> 0.068 -> 1e-8 with
+ * exact solves), so a solve to half the tolerance ends the step one iterate
+ * earlier than eta = r / scale would (0.072 -> 4.4e-3 -> 1.3e-6): 2 instead of 3
+ * Newton iterations per step for about the same number of CG iterations. The
+ * convergence test itself (on the true residual) is unchanged. */
+static double newton_forcing(int it, double r, double scale, double tol) {
+  double eta = fmin(0.1, r / fmax(scale, 1e-300));
+  if (it >= 1 && r > 0.0) eta = fmin(eta, 0.5 * tol / r);
+  return eta;
+}
+
 /* One Newmark step of length dt without cut-back; leaves the trial state in
  * utrial / atrial / S0t / Ht on success. */
 static int try_step(palp_fem_model *m, const double *fext, double dt) {
@@ -680,11 +729,24 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
    * the start point into a residual K (grad du)^2. */
   for (size_t d = 0; d < nd; ++d) u[d] = m->eq[d] < 0 ? m->prescribed[d] : m->u[d];
   m->trace_count = 0;
+  /* automatic renewal of the reused factor, decided once per attempt from counts
+   * (deterministic): see renew_factor */
+  const long last = m->solves - m->step_solves0;
+  m->step_solves0 = m->solves;
+  m->attempts++;
+  if (m->pcg_refactor <= 0 && m->factored && !m->full_newton) {
+    const double cost = factor_cost_solves(palp_fem_solver_factor_flops(m->solver), palp_fem_solver_factor_nnz(m->solver));
+    if (renew_factor(cost, m->solves - m->fac_solves, m->attempts - m->fac_attempt, last)) m->renew = 1;
+  }
   const double fnorm = fext ? norm_free(m, fext) : 0.0;
   double r0 = 0.0;
+  /* The tangent is assembled with the force unless this iterate is expected to
+   * converge (then only the force, ~1/4 of the cost; a wrong guess assembles again
+   * with the tangent, the force and residual being the same) */
+  int tangent = 1;
   for (int it = 0; it <= m->max_newton; ++it) {
     for (size_t d = 0; d < nd; ++d) a[d] = c0 * (u[d] - m->u[d]) - c1 * m->v[d] - c2 * m->a[d];
-    int rc = palp_fem_assemble(m, u, dt, 1);
+    int rc = palp_fem_assemble(m, u, dt, tangent);
     if (rc) return rc;
     double ma2 = 0.0;
     for (size_t d = 0; d < nd; ++d) {
@@ -699,15 +761,20 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     if (it == 0) r0 = r;
     if (r <= m->rtol * scale + m->atol) return PALP_OK;
     if (it == m->max_newton || (it > 2 && r > 1e3 * r0)) break;
+    if (!tangent && (rc = palp_fem_assemble(m, u, dt, 1))) return rc;
     /* K_eff = K_T + M / (beta dt^2): the diagonal is the last entry of each column */
     for (size_t d = 0; d < nd; ++d) {
       const int c = m->eq[d];
       if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
     }
-    rc = newton_solve(m, c0, fmin(0.1, r / fmax(scale, 1e-300)), 1);
+    const double tol = m->rtol * scale + m->atol;
+    const double eta = newton_forcing(it, r, scale, tol);
+    rc = newton_solve(m, c0, eta, 1);
     if (rc) return rc;
     m->newton_iterations++;
     for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
+    /* an iterate whose linear solve aimed at the tolerance is expected to meet it */
+    tangent = !(eta * r <= 0.5 * tol);
   }
   return PALP_ESOLVER;
 }
