@@ -82,7 +82,7 @@ typedef struct palp_fem_model {
   int *emap;        /* [E * 576] value index or -1 */
   double *kval;     /* [nnz] */
   palp_fem_solver *solver;
-  double *pcg;        /* [6 * nfree] CG work vectors */
+  double *pcg;        /* [7 * nfree] CG work vectors */
   int factored;       /* the solver holds a usable factor */
   double factor_c0;   /* mass coefficient 1 / (beta dt^2) the factor was made with */
   int last_pcg;       /* CG iterations of the last solve */

@@ -237,7 +237,7 @@ int palp_fem_model_finalize(palp_fem_model *m) {
   free(m->emap);
   m->kval = calloc((size_t)(nnz ? nnz : 1), sizeof(double));
   free(m->pcg);
-  m->pcg = malloc(sizeof(double) * 6 * (size_t)(nf ? nf : 1));
+  m->pcg = malloc(sizeof(double) * 7 * (size_t)(nf ? nf : 1));
   m->factored = 0;
   if (!m->pcg) return PALP_ENOMEM;
   free(m->tbuf);
@@ -506,7 +506,7 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
  * keeps the factor: the mass term is small beside the stiffness and CG absorbs
  * the change of the viscous factor gamma.
  * CG stops at ||K du - r|| <= eta ||r||, eta from newton_forcing. */
-static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres);
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres, const double *guess);
 
 /* The cost of a numeric factorisation in preconditioner solves, from the flop
  * count fl of the factorisation and the nonzeros lnz of its factor. A solve with L
@@ -533,15 +533,20 @@ static int renew_factor(double factor_cost, long solves, long steps, long last) 
   return steps >= 1 && (double)last * (double)steps > factor_cost + (double)solves;
 }
 
-/* newton_solve_ timed: what is not factorisation or preconditioner solve is Krylov work. */
-static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
+/* newton_solve_ timed: what is not factorisation or preconditioner solve is Krylov work.
+ * guess [ndof] (may be NULL): a direction d for CG's start x0 = alpha d, alpha =
+ * d.b / d.K d, the K-orthogonal projection of the solution on d (so the start's
+ * energy error is never above that of x0 = 0; one product with K). The first
+ * Newton increment of a step continues the motion, and the velocity as d saves
+ * ~15% of the CG iterations at level 4 (182 -> 155 over 20 frames). */
+static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres, const double *guess) {
   const double t0 = now_s(), other0 = m->sec_factor + m->sec_solve;
-  const int rc = newton_solve_(m, kscale_c0, eta, allow_gmres);
+  const int rc = newton_solve_(m, kscale_c0, eta, allow_gmres, guess);
   m->sec_krylov += (now_s() - t0) - (m->sec_factor + m->sec_solve - other0);
   return rc;
 }
 
-static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres, const double *guess) {
   const int n = m->nfree;
   double *b = m->pcg, *x = b + n, *r = x + n, *z = r + n, *p = z + n, *q = p + n;
   for (int d = 0; d < m->ndof; ++d)
@@ -568,6 +573,20 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int al
     const double bn = sqrt(dot(b, b, n));
     memcpy(r, b, sizeof(double) * (size_t)n);
     memset(x, 0, sizeof(double) * (size_t)n);
+    if (guess) { /* x0 = alpha d, d = guess on the free equations (see newton_solve) */
+      double *dv = q + n;
+      for (int d = 0; d < m->ndof; ++d)
+        if (m->eq[d] >= 0) dv[m->eq[d]] = guess[d];
+      symv(m, dv, q);
+      const double dkd = dot(dv, q, n);
+      if (dkd > 0.0) {
+        const double al = dot(dv, b, n) / dkd;
+        for (int i = 0; i < n; ++i) {
+          x[i] = al * dv[i];
+          r[i] = b[i] - al * q[i];
+        }
+      }
+    }
     rc = precond(m, r, z);
     memcpy(p, z, sizeof(double) * (size_t)n);
     double rz = dot(r, z, n);
@@ -678,7 +697,7 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
         break;
       }
       if (it == m->max_newton) break;
-      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0);
+      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0, NULL);
       if (rc) return rc;
       m->newton_iterations++;
       for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
@@ -769,7 +788,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     }
     const double tol = m->rtol * scale + m->atol;
     const double eta = newton_forcing(it, r, scale, tol);
-    rc = newton_solve(m, c0, eta, 1);
+    rc = newton_solve(m, c0, eta, 1, it == 0 ? m->v : NULL);
     if (rc) return rc;
     m->newton_iterations++;
     for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
