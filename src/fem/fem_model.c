@@ -506,7 +506,7 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
  * keeps the factor: the mass term is small beside the stiffness and CG absorbs
  * the change of the viscous factor gamma.
  * CG stops at ||K du - r|| <= eta ||r||, eta from newton_forcing. */
-static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres, const double *guess);
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double eta_gmres, int allow_gmres, const double *guess);
 
 /* The cost of a numeric factorisation in preconditioner solves, from the flop
  * count fl of the factorisation and the nonzeros lnz of its factor. A solve with L
@@ -534,19 +534,25 @@ static int renew_factor(double factor_cost, long solves, long steps, long last) 
 }
 
 /* newton_solve_ timed: what is not factorisation or preconditioner solve is Krylov work.
+ * eta: CG's forcing term (newton_forcing); eta_gmres: GMRES's when CG meets negative
+ * curvature, the plain min(0.1, r / scale) without the aim at the tolerance (capped
+ * at 1e-2 there): an indefinite tangent (instantaneous reading) converges slowly
+ * under GMRES, and a solve aimed at the tolerance stalled and refactored instead
+ * (level 2, instantaneous, 15 frames: 299 factorisations and 46 s against 241 and
+ * 33 s with the plain term; 112 and 38 s before fem-speed).
  * guess [ndof] (may be NULL): a direction d for CG's start x0 = alpha d, alpha =
  * d.b / d.K d, the K-orthogonal projection of the solution on d (so the start's
  * energy error is never above that of x0 = 0; one product with K). The first
  * Newton increment of a step continues the motion, and the velocity as d saves
  * ~15% of the CG iterations at level 4 (182 -> 155 over 20 frames). */
-static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres, const double *guess) {
+static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, double eta_gmres, int allow_gmres, const double *guess) {
   const double t0 = now_s(), other0 = m->sec_factor + m->sec_solve;
-  const int rc = newton_solve_(m, kscale_c0, eta, allow_gmres, guess);
+  const int rc = newton_solve_(m, kscale_c0, eta, eta_gmres, allow_gmres, guess);
   m->sec_krylov += (now_s() - t0) - (m->sec_factor + m->sec_solve - other0);
   return rc;
 }
 
-static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres, const double *guess) {
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double eta_gmres, int allow_gmres, const double *guess) {
   const int n = m->nfree;
   double *b = m->pcg, *x = b + n, *r = x + n, *z = r + n, *p = z + n, *q = p + n;
   for (int d = 0; d < m->ndof; ++d)
@@ -619,7 +625,7 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, int al
     if (!rc && !ok && broke && allow_gmres) { /* indefinite: GMRES with the same preconditioner */
       if (!m->gmres_ws) m->gmres_ws = malloc(sizeof(double) * (size_t)(2 * GMRES_K + 1) * (size_t)n);
       if (m->gmres_ws) {
-        const int git = gmres(m, b, x, fmin(eta, 1e-2), 2 * limit + 20, m->gmres_ws, &rc);
+        const int git = gmres(m, b, x, fmin(eta_gmres, 1e-2), 2 * limit + 20, m->gmres_ws, &rc);
         if (git >= 0) {
           ok = 1;
           m->pcg_iterations += git;
@@ -697,7 +703,7 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
         break;
       }
       if (it == m->max_newton) break;
-      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0, NULL);
+      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0.1, 0, NULL);
       if (rc) return rc;
       m->newton_iterations++;
       for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
@@ -788,7 +794,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     }
     const double tol = m->rtol * scale + m->atol;
     const double eta = newton_forcing(it, r, scale, tol);
-    rc = newton_solve(m, c0, eta, 1, it == 0 ? m->v : NULL);
+    rc = newton_solve(m, c0, eta, newton_forcing(0, r, scale, tol), 1, it == 0 ? m->v : NULL);
     if (rc) return rc;
     m->newton_iterations++;
     for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
