@@ -45,15 +45,17 @@ static int cmp(const void *a, const void *b) {
 
 int main(int argc, char **argv) {
   const char *scene_path = "config/paper_step.json", *levels = "2,4", *reading = NULL, *dist = NULL;
-  int frames = 20;
+  int frames = 20, kernel = 0;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--levels") && i + 1 < argc) levels = argv[++i];
     else if (!strcmp(argv[i], "--frames") && i + 1 < argc) frames = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--reading") && i + 1 < argc) reading = argv[++i];
     else if (!strcmp(argv[i], "--distribution") && i + 1 < argc) dist = argv[++i];
+    else if (!strcmp(argv[i], "--kernel")) kernel = 1;
     else if (argv[i][0] != '-') scene_path = argv[i];
     else {
-      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D]\n");
+      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel]\n"
+                      "  --kernel: time the assembly alone (tangent and residual, 1 and 2 threads) and one solve instead of frames\n");
       return 2;
     }
   }
@@ -97,6 +99,41 @@ int main(int argc, char **argv) {
     const double tfa = now_s();
     palp_fem_solver_factor(m.solver, m.kval);
     const double tf = now_s() - tfa, setup = tfa - ts;
+    if (kernel) { /* assembly alone, at the rest state with the frame's viscous step */
+      for (int th = 1; th <= 2; ++th) {
+        m.threads = th; /* the model keeps private buffers for its configured count (2) */
+        for (int tan = 1; tan >= 0; --tan) {
+          double best = 1e30, sum = 0.0;
+          for (int rep = 0; rep < 7; ++rep) {
+            const double t1 = now_s();
+            palp_fem_assemble(&m, m.u, scene.frame_period, tan);
+            const double d = now_s() - t1;
+            best = d < best ? d : best;
+            sum += d;
+          }
+          printf("level %s: %d threads, %s: best %.1f ms, mean %.1f ms of 7\n", tok, th,
+                 tan ? "force + tangent" : "force only", 1e3 * best, 1e3 * sum / 7);
+        }
+      }
+      { /* one solve with the factor (a CG iteration's preconditioner) */
+        double *b = malloc(sizeof(double) * (size_t)m.nfree), *x = malloc(sizeof(double) * (size_t)m.nfree);
+        for (int i = 0; i < m.nfree; ++i) b[i] = 1.0 + 1e-3 * (i % 17);
+        double best = 1e30, sum = 0.0;
+        for (int rep = 0; rep < 10; ++rep) {
+          const double t1 = now_s();
+          palp_fem_solver_solve(m.solver, b, x);
+          const double d = now_s() - t1;
+          best = d < best ? d : best;
+          sum += d;
+        }
+        printf("level %s: one solve with the factor: best %.1f ms, mean %.1f ms of 10\n", tok, 1e3 * best, 1e3 * sum / 10);
+        free(b);
+        free(x);
+      }
+      palp_fem_model_destroy(&m);
+      palp_fem_mesh_destroy(&mesh);
+      continue;
+    }
     const double lnz = palp_fem_solver_factor_nnz(m.solver), fl = palp_fem_solver_factor_flops(m.solver);
     palp_fem_model_destroy(&m);
     st.t[0] = now_s();
@@ -123,6 +160,10 @@ int main(int argc, char **argv) {
            p90, mx, first);
     printf("  solver: %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations, %ld cut-backs\n", r.steps,
            r.newton_iterations, r.pcg_iterations, r.factorizations, r.cutbacks);
+    printf("  time: assembly %.2f s (%ld, %ld with tangent), factorisation %.2f s, solves %.2f s (%ld), other Krylov "
+           "%.2f s, rest %.2f s of %.2f s\n",
+           r.sec_assemble, r.assemblies, r.tangent_assemblies, r.sec_factor, r.sec_solve, r.solves, r.sec_krylov,
+           r.wall_seconds - r.sec_assemble - r.sec_factor - r.sec_solve - r.sec_krylov, r.wall_seconds);
     if (n >= 400)
       printf("  400-frame run: %.1f s measured\n", total);
     else

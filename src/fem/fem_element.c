@@ -47,6 +47,29 @@ static void deformation(const double *x, const double *dN, double F[3][3]) {
       for (int J = 0; J < 3; ++J) F[i][J] += x[3 * a + i] * dN[3 * a + J];
 }
 
+/* Prony coefficients of one step of length dt [s] (the factors of
+ * palp_fem_prony_update): decay_k = exp(-x_k), beta_k = g_k (1 - exp(-x_k)) / x_k,
+ * x_k = dt / tau_k; returns gamma = g_inf + sum_k beta_k. They depend only on the
+ * material and dt, so an element computes them once instead of at every Gauss point. */
+static double prony_coeffs(const palp_fem_material *m, int np, double dt, double *decay, double *beta) {
+  double gamma = palp_fem_ginf(m);
+  for (int k = 0; k < np; ++k) {
+    if (dt <= 0.0) {
+      decay[k] = 1.0;
+      beta[k] = m->g[k];
+    } else if (isinf(dt)) {
+      decay[k] = 0.0;
+      beta[k] = 0.0;
+    } else {
+      const double x = dt / m->tau[k];
+      decay[k] = exp(-x);
+      beta[k] = x < 1e-8 ? m->g[k] * (1.0 - 0.5 * x) : m->g[k] * (-expm1(-x)) / x;
+    }
+    gamma += beta[k];
+  }
+  return gamma;
+}
+
 int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt, double *fe,
                      double (*ke)[24], double *S0t, double *Ht) {
   const palp_fem_mesh *mesh = m->mesh;
@@ -61,13 +84,18 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
   double x[8][3];
   for (int a = 0; a < 8; ++a)
     for (int i = 0; i < 3; ++i) x[a][i] = mesh->x[mesh->hex[e][a]][i] + ue[3 * a + i];
+  double decay[PALP_FEM_MAX_PRONY], beta[PALP_FEM_MAX_PRONY];
+  const double ginf = palp_fem_ginf(mat), gamma = prony_coeffs(mat, np, dt, decay, beta);
+  const double mu = 2.0 * mat->c10; /* instantaneous shear modulus [Pa] */
   double g[24] = {0}, ve = 0.0;
-  static const double zeroH[PALP_FEM_MAX_PRONY * 6] = {0};
-  double Hv[24][24];
+  /* the geometric volume term p d2v/dx_a dx_b is antisymmetric in (i, k) for each
+   * node pair: accumulate the cross products sum jw (grad_x N_a x grad_x N_b) [m^3 / m^2]
+   * for a < b and expand them once p is known */
+  double X[8][8][3];
   memset(fe, 0, 24 * sizeof(double));
   if (ke) {
     memset(ke, 0, 24 * 24 * sizeof(double));
-    memset(Hv, 0, sizeof Hv);
+    memset(X, 0, sizeof X);
   }
   for (int gp = 0; gp < 8; ++gp) {
     const size_t q = (size_t)e * 8 + (size_t)gp;
@@ -77,20 +105,37 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
     deformation(&x[0][0], &dN[0][0], F);
     const double J = det3(F);
     if (!(J > 0.0)) return PALP_EUNSTABLE;
+    double Fi[3][3];
+    inv3(F, J, Fi);
+    /* isochoric Neo-Hookean S0 = mu J^(-2/3) (I - I1/3 C^-1), C^-1 = F^-1 F^-T
+     * (palp_fem_nh_iso, with the inverse from F) */
+    const double Jm13 = 1.0 / cbrt(J), Jm23 = Jm13 * Jm13;
     const double C[6] = {F[0][0] * F[0][0] + F[1][0] * F[1][0] + F[2][0] * F[2][0],
                          F[0][1] * F[0][1] + F[1][1] * F[1][1] + F[2][1] * F[2][1],
                          F[0][2] * F[0][2] + F[1][2] * F[1][2] + F[2][2] * F[2][2],
                          F[0][0] * F[0][1] + F[1][0] * F[1][1] + F[2][0] * F[2][1],
                          F[0][1] * F[0][2] + F[1][1] * F[1][2] + F[2][1] * F[2][2],
                          F[0][0] * F[0][2] + F[1][0] * F[1][2] + F[2][0] * F[2][2]};
-    double S0[6], S[6];
-    palp_fem_nh_iso(mat->c10, C, S0, NULL);
+    const double Ci[6] = {Fi[0][0] * Fi[0][0] + Fi[0][1] * Fi[0][1] + Fi[0][2] * Fi[0][2],
+                          Fi[1][0] * Fi[1][0] + Fi[1][1] * Fi[1][1] + Fi[1][2] * Fi[1][2],
+                          Fi[2][0] * Fi[2][0] + Fi[2][1] * Fi[2][1] + Fi[2][2] * Fi[2][2],
+                          Fi[0][0] * Fi[1][0] + Fi[0][1] * Fi[1][1] + Fi[0][2] * Fi[1][2],
+                          Fi[1][0] * Fi[2][0] + Fi[1][1] * Fi[2][1] + Fi[1][2] * Fi[2][2],
+                          Fi[0][0] * Fi[2][0] + Fi[0][1] * Fi[2][1] + Fi[0][2] * Fi[2][2]};
+    const double trC = C[0] + C[1] + C[2], f0 = mu * Jm23, f1 = f0 * trC / 3.0;
+    const double S0[6] = {f0 - f1 * Ci[0], f0 - f1 * Ci[1], f0 - f1 * Ci[2], -f1 * Ci[3], -f1 * Ci[4], -f1 * Ci[5]};
+    /* Prony: H_k+ = decay_k H_k + beta_k (S0+ - S0), S = g_inf S0+ + sum_k H_k+ */
     const double *S0old = m->S0 ? m->S0 + q * 6 : S0;
-    const double *Hold = m->H ? m->H + q * (size_t)np * 6 : zeroH;
-    double Hnew[PALP_FEM_MAX_PRONY * 6];
-    const double gamma = palp_fem_prony_update(mat, dt, S0, S0old, Hold, Hnew, S);
+    const double *Hold = m->H ? m->H + q * (size_t)np * 6 : NULL;
+    double S[6];
+    for (int c = 0; c < 6; ++c) S[c] = ginf * S0[c];
+    for (int k = 0; k < np; ++k)
+      for (int c = 0; c < 6; ++c) {
+        const double h = (Hold ? decay[k] * Hold[6 * k + c] : 0.0) + beta[k] * (S0[c] - S0old[c]);
+        if (Ht) Ht[((size_t)gp * (size_t)np + (size_t)k) * 6 + (size_t)c] = h;
+        S[c] += h;
+      }
     if (S0t) memcpy(S0t + gp * 6, S0, sizeof S0);
-    if (Ht) memcpy(Ht + (size_t)gp * np * 6, Hnew, sizeof(double) * (size_t)np * 6);
     /* internal force: f_a = w F S dN_a (the B^T S of the Voigt form, B = sym(F^T grad N)) */
     double FS[3][3];
     for (int i = 0; i < 3; ++i) {
@@ -101,8 +146,6 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
     for (int a = 0; a < 8; ++a)
       for (int i = 0; i < 3; ++i) fe[3 * a + i] += w * (FS[i][0] * dN[a][0] + FS[i][1] * dN[a][1] + FS[i][2] * dN[a][2]);
     /* volumetric: current volume and its gradient */
-    double Fi[3][3];
-    inv3(F, J, Fi);
     const double jw = J * w;
     double nx[8][3]; /* grad_x N_a = F^-T dN_a/dX */
     for (int a = 0; a < 8; ++a)
@@ -118,37 +161,44 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
      * bb = J^(-2/3) F F^T. Contracted with grad_x N_a (A) and grad_x N_b (B):
      *   K_ab,ik = w gamma [ al/2 (A.B) d_ik + al/2 B_i A_k - al/3 A_i B_k
      *                      - 2/3 mu ((dA)_i B_k + A_i (dB)_k) ],  al = 2/3 mu tr(bb),
-     * d = dev(bb). Geometric part in reference form: (dN_a . S dN_b) I. */
-    const double mu = 2.0 * mat->c10, Jm23 = pow(J, -2.0 / 3.0);
+     * d = dev(bb). Geometric part in reference form: (dN_a . S dN_b) I.
+     * Grouped as three outer products per node pair,
+     *   K_ab,ik = B_i P_a,k + U_a,i B_k + A_i V_b,k + d_ik (c_d A.B + G_ab),
+     * P = c1 A, U = c2 A - c3 dA, V = -c3 dA (c1 = wg al/2, c2 = -wg al/3, c3 = wg 2/3 mu). */
     double bb[3][3];
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) bb[i][j] = Jm23 * (F[i][0] * F[j][0] + F[i][1] * F[j][1] + F[i][2] * F[j][2]);
     const double trb = bb[0][0] + bb[1][1] + bb[2][2];
     for (int i = 0; i < 3; ++i) bb[i][i] -= trb / 3.0; /* now dev(bb) */
-    const double wg = w * gamma, al = 2.0 / 3.0 * mu * trb, c23 = 2.0 / 3.0 * mu;
-    double dA[8][3], SdN[8][3];
-    for (int a = 0; a < 8; ++a)
-      for (int i = 0; i < 3; ++i) {
-        dA[a][i] = bb[i][0] * nx[a][0] + bb[i][1] * nx[a][1] + bb[i][2] * nx[a][2];
-        SdN[a][i] = 0.0;
-      }
+    const double wg = w * gamma, al = 2.0 / 3.0 * mu * trb;
+    const double c1 = wg * 0.5 * al, c2 = -wg * al / 3.0, c3 = wg * 2.0 / 3.0 * mu;
+    double P[8][3], U[8][3], V[8][3], SdN[8][3];
     for (int a = 0; a < 8; ++a) {
-      SdN[a][0] = S[0] * dN[a][0] + S[3] * dN[a][1] + S[5] * dN[a][2];
-      SdN[a][1] = S[3] * dN[a][0] + S[1] * dN[a][1] + S[4] * dN[a][2];
-      SdN[a][2] = S[5] * dN[a][0] + S[4] * dN[a][1] + S[2] * dN[a][2];
+      for (int i = 0; i < 3; ++i) {
+        const double dA = bb[i][0] * nx[a][0] + bb[i][1] * nx[a][1] + bb[i][2] * nx[a][2];
+        P[a][i] = c1 * nx[a][i];
+        U[a][i] = c2 * nx[a][i] - c3 * dA;
+        V[a][i] = -c3 * dA;
+      }
+      SdN[a][0] = w * (S[0] * dN[a][0] + S[3] * dN[a][1] + S[5] * dN[a][2]);
+      SdN[a][1] = w * (S[3] * dN[a][0] + S[1] * dN[a][1] + S[4] * dN[a][2]);
+      SdN[a][2] = w * (S[5] * dN[a][0] + S[4] * dN[a][1] + S[2] * dN[a][2]);
     }
     for (int a = 0; a < 8; ++a)
       for (int b = a; b < 8; ++b) {
         const double *A = nx[a], *B = nx[b];
-        const double AB = A[0] * B[0] + A[1] * B[1] + A[2] * B[2];
-        const double G = w * (dN[a][0] * SdN[b][0] + dN[a][1] * SdN[b][1] + dN[a][2] * SdN[b][2]);
-        for (int i = 0; i < 3; ++i)
-          for (int k = 0; k < 3; ++k) {
-            double v = wg * (0.5 * al * B[i] * A[k] - al / 3.0 * A[i] * B[k] - c23 * (dA[a][i] * B[k] + A[i] * dA[b][k]));
-            Hv[3 * a + i][3 * b + k] += jw * (A[i] * B[k] - A[k] * B[i]);
-            if (i == k) v += wg * 0.5 * al * AB + G;
-            ke[3 * a + i][3 * b + k] += v;
-          }
+        const double d = c1 * (A[0] * B[0] + A[1] * B[1] + A[2] * B[2]) +
+                         (dN[a][0] * SdN[b][0] + dN[a][1] * SdN[b][1] + dN[a][2] * SdN[b][2]);
+        for (int i = 0; i < 3; ++i) {
+          double *row = &ke[3 * a + i][3 * b];
+          for (int k = 0; k < 3; ++k) row[k] += B[i] * P[a][k] + U[a][i] * B[k] + A[i] * V[b][k];
+          row[i] += d;
+        }
+        if (b > a) {
+          X[a][b][0] += jw * (A[1] * B[2] - A[2] * B[1]);
+          X[a][b][1] += jw * (A[2] * B[0] - A[0] * B[2]);
+          X[a][b][2] += jw * (A[0] * B[1] - A[1] * B[0]);
+        }
       }
   }
   const double V0 = m->vol0[e];
@@ -158,10 +208,20 @@ int palp_fem_element(const palp_fem_model *m, int e, const double *ue, double dt
   for (int c = 0; c < 24; ++c) fe[c] += p * g[c];
   if (ke) {
     const double kv = 2.0 / mat->d1 / V0;
+    /* p d2v/dx_ai dx_bk = p sum jw (A_i B_k - A_k B_i): the antisymmetric matrix of
+     * X_ab, (0,1) = X_2, (1,2) = X_0, (2,0) = X_1 */
+    for (int a = 0; a < 8; ++a)
+      for (int b = a + 1; b < 8; ++b) {
+        const double x0 = p * X[a][b][0], x1 = p * X[a][b][1], x2 = p * X[a][b][2];
+        double(*K)[24] = ke + 3 * a;
+        const int c = 3 * b;
+        K[0][c + 1] += x2, K[1][c] -= x2;
+        K[1][c + 2] += x0, K[2][c + 1] -= x0;
+        K[2][c] += x1, K[0][c + 2] -= x1;
+      }
     for (int r = 0; r < 24; ++r)
-      for (int c = r; c < 24; ++c) ke[r][c] += kv * g[r] * g[c] + p * Hv[r][c];
-    /* Hv was filled for node pairs a <= b; entries r < c inside a node pair a == b
-     * and all of b > a are set; mirror the upper triangle. */
+      for (int c = r; c < 24; ++c) ke[r][c] += kv * g[r] * g[c];
+    /* node pairs a <= b hold the upper triangle; mirror it */
     for (int r = 0; r < 24; ++r)
       for (int c = 0; c < r; ++c) ke[r][c] = ke[c][r];
   }

@@ -82,12 +82,16 @@ typedef struct palp_fem_model {
   int *emap;        /* [E * 576] value index or -1 */
   double *kval;     /* [nnz] */
   palp_fem_solver *solver;
-  double *pcg;        /* [6 * nfree] CG work vectors */
+  double *pcg;        /* [7 * nfree] CG work vectors */
   int factored;       /* the solver holds a usable factor */
   double factor_c0;   /* mass coefficient 1 / (beta dt^2) the factor was made with */
   int last_pcg;       /* CG iterations of the last solve */
   int full_newton;    /* refactor every iteration */
   int pcg_refactor;   /* renew the factor when CG needed more than this (0: automatic) */
+  /* automatic renewal (fem_model.c, renew_factor): step attempts and solves so far,
+   * and their counts when the factor was made and when the current attempt began */
+  long attempts, fac_attempt, fac_solves, step_solves0;
+  int renew;          /* renew the factor at the next Newton solve */
   long pcg_iterations; /* CG and GMRES iterations */
   long gmres_solves;  /* solves that needed GMRES (indefinite tangent or preconditioner) */
   double *gmres_ws;   /* GMRES basis, allocated on first need */
@@ -104,6 +108,11 @@ typedef struct palp_fem_model {
   int nprony;
   /* statistics */
   long steps, newton_iterations, cutbacks, factorizations;
+  /* where the time goes (wall seconds, CLOCK_MONOTONIC): element assembly,
+   * numeric factorisations, preconditioner solves with the factor, and the rest of
+   * the Krylov iterations (products with K, dot products, vector updates) */
+  double sec_assemble, sec_factor, sec_solve, sec_krylov;
+  long assemblies, tangent_assemblies, solves;
   /* Newton trace of the last step (residual norms), for convergence tests */
   int trace_count;
   double trace[64];

@@ -17,8 +17,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "fem_internal.h"
+
+/* Wall clock [s] for the model's time breakdown (statistics only). */
+static double now_s(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
 
 void palp_fem_model_destroy(palp_fem_model *m) {
   if (!m) return;
@@ -229,7 +237,7 @@ int palp_fem_model_finalize(palp_fem_model *m) {
   free(m->emap);
   m->kval = calloc((size_t)(nnz ? nnz : 1), sizeof(double));
   free(m->pcg);
-  m->pcg = malloc(sizeof(double) * 6 * (size_t)(nf ? nf : 1));
+  m->pcg = malloc(sizeof(double) * 7 * (size_t)(nf ? nf : 1));
   m->factored = 0;
   if (!m->pcg) return PALP_ENOMEM;
   free(m->tbuf);
@@ -312,7 +320,18 @@ static void *assemble_range(void *arg) {
 /* Elements are split into `threads` contiguous ranges; each worker scatters into
  * private buffers that are summed afterwards, so no locks and a deterministic
  * result for a given thread count. */
+static int assemble(palp_fem_model *m, const double *u, double dt, int want_tangent);
+
 int palp_fem_assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
+  const double t0 = now_s();
+  const int rc = assemble(m, u, dt, want_tangent);
+  m->sec_assemble += now_s() - t0;
+  m->assemblies++;
+  if (want_tangent) m->tangent_assemblies++;
+  return rc;
+}
+
+static int assemble(palp_fem_model *m, const double *u, double dt, int want_tangent) {
   const int E = m->mesh->element_count, T = m->threads > 1 && m->tbuf ? m->threads : 1;
   assembly_job job[16];
   pthread_t tid[16];
@@ -381,6 +400,26 @@ static double dot(const double *a, const double *b, int n) {
   return s;
 }
 
+/* The factorisation and the solves with it, timed for the statistics. */
+static int factor(palp_fem_model *m) {
+  const double t0 = now_s();
+  const int rc = palp_fem_solver_factor(m->solver, m->kval);
+  m->sec_factor += now_s() - t0;
+  m->factorizations++;
+  m->fac_attempt = m->attempts;
+  m->fac_solves = m->solves;
+  m->renew = 0;
+  return rc;
+}
+
+static int precond(palp_fem_model *m, const double *b, double *x) {
+  const double t0 = now_s();
+  const int rc = palp_fem_solver_solve(m->solver, b, x);
+  m->sec_solve += now_s() - t0;
+  m->solves++;
+  return rc;
+}
+
 /* Right-preconditioned restarted GMRES(k) for K x = b with the (stale) factor as
  * preconditioner, used where CG cannot go: an indefinite tangent or an LDL^T
  * (indefinite) preconditioner. Modified Gram-Schmidt, Givens rotations.
@@ -408,7 +447,7 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
     int j = 0, done = 0;
     for (; j < k && total < max_it; ++j, ++total) {
       double *vj = V + (size_t)j * (size_t)n, *zj = Z + (size_t)j * (size_t)n, *w = V + (size_t)(j + 1) * (size_t)n;
-      *rc = palp_fem_solver_solve(m->solver, vj, zj);
+      *rc = precond(m, vj, zj);
       if (*rc) return -1;
       symv(m, zj, w);
       for (int i = 0; i <= j; ++i) {
@@ -459,14 +498,61 @@ static int gmres(palp_fem_model *m, const double *b, double *x, double eta, int 
  * gradients on the current consistent tangent, which it approximates closely while
  * strains stay moderate (Newton's quadratic convergence needs the exact tangent
  * system solved, not the exact tangent factored). The factor is renewed when CG
- * needed more than pcg_refactor iterations last time (0: automatically, when
- * those iterations' solves, ~4 nnz(L) flops each, cost half a factorisation), or
- * when CG fails; full_newton renews it every iteration. A changed dt (cut-back)
+ * needed more than pcg_refactor iterations last time, or when CG fails;
+ * full_newton renews it every iteration. With pcg_refactor = 0 (automatic) the
+ * limit is the cost of a factorisation in solves (factor_cost_solves), and the
+ * factor is also renewed at the start of a time step by the renewal rule of
+ * renew_factor. A changed dt (cut-back)
  * keeps the factor: the mass term is small beside the stiffness and CG absorbs
  * the change of the viscous factor gamma.
- * CG stops at ||K du - r|| <= eta ||r||, eta = min(0.1, ||r|| / force scale), a
- * forcing term that keeps the Newton iteration quadratic. */
-static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int allow_gmres) {
+ * CG stops at ||K du - r|| <= eta ||r||, eta from newton_forcing. */
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double eta_gmres, int allow_gmres, const double *guess);
+
+/* The cost of a numeric factorisation in preconditioner solves, from the flop
+ * count fl of the factorisation and the nonzeros lnz of its factor. A solve with L
+ * reads L twice (forward and back, 4 lnz flops, 16 lnz bytes) and is memory-bound;
+ * the factorisation runs dense BLAS-3 on the supernodes. With an optimised BLAS
+ * (OpenBLAS, one core of this machine) the factorisation does ~8 times more flops
+ * per second than the solves (level 4: 22.4 Gflop in 1.05 s against 8e7 flop in
+ * 29 ms, a factorisation = 36 solves), so cost = fl / (8 * 4 lnz) solves. A
+ * constant rather than a measured ratio, so the run's results do not depend on the
+ * timing. (The reference BLAS factorises ~8x slower; set pcg_refactor there.) */
+static double factor_cost_solves(double fl, double lnz) {
+  return lnz > 0.0 && fl > 0.0 ? fmax(1.0, fl / (32.0 * lnz)) : 20.0;
+}
+
+/* Renewal rule for the reused factor (the replacement policy that minimises the
+ * long-run average cost when the running cost grows with age): with the factor
+ * used over `steps` time-step attempts since it was made, at a total of `solves`
+ * preconditioner solves, renew it when the last attempt's solves exceed the
+ * average cost per attempt including the factorisation,
+ *   last > (factor_cost + solves) / steps   [solves per step].
+ * CG needs more iterations as the state drifts from the factorised one; while the
+ * count stays flat the rule never fires. */
+static int renew_factor(double factor_cost, long solves, long steps, long last) {
+  return steps >= 1 && (double)last * (double)steps > factor_cost + (double)solves;
+}
+
+/* newton_solve_ timed: what is not factorisation or preconditioner solve is Krylov work.
+ * eta: CG's forcing term (newton_forcing); eta_gmres: GMRES's when CG meets negative
+ * curvature, the plain min(0.1, r / scale) without the aim at the tolerance (capped
+ * at 1e-2 there): an indefinite tangent (instantaneous reading) converges slowly
+ * under GMRES, and a solve aimed at the tolerance stalled and refactored instead
+ * (level 2, instantaneous, 15 frames: 299 factorisations and 46 s against 241 and
+ * 33 s with the plain term; 112 and 38 s before fem-speed).
+ * guess [ndof] (may be NULL): a direction d for CG's start x0 = alpha d, alpha =
+ * d.b / d.K d, the K-orthogonal projection of the solution on d (so the start's
+ * energy error is never above that of x0 = 0; one product with K). The first
+ * Newton increment of a step continues the motion, and the velocity as d saves
+ * ~15% of the CG iterations at level 4 (182 -> 155 over 20 frames). */
+static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, double eta_gmres, int allow_gmres, const double *guess) {
+  const double t0 = now_s(), other0 = m->sec_factor + m->sec_solve;
+  const int rc = newton_solve_(m, kscale_c0, eta, eta_gmres, allow_gmres, guess);
+  m->sec_krylov += (now_s() - t0) - (m->sec_factor + m->sec_solve - other0);
+  return rc;
+}
+
+static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double eta_gmres, int allow_gmres, const double *guess) {
   const int n = m->nfree;
   double *b = m->pcg, *x = b + n, *r = x + n, *z = r + n, *p = z + n, *q = p + n;
   for (int d = 0; d < m->ndof; ++d)
@@ -474,13 +560,12 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
   int fresh = 0;
   (void)kscale_c0;
   int limit = m->pcg_refactor;
-  if (limit <= 0) { /* automatic: when CG's solves cost about half a factorisation */
+  if (limit <= 0) { /* automatic: one solve that cost more than a factorisation */
     const double lnz = palp_fem_solver_factor_nnz(m->solver), fl = palp_fem_solver_factor_flops(m->solver);
-    limit = lnz > 0.0 && fl > 0.0 ? (int)fmin(400.0, fmax(10.0, 0.5 * fl / (4.0 * lnz))) : 20;
+    limit = (int)fmin(400.0, fmax(10.0, factor_cost_solves(fl, lnz)));
   }
-  if (!m->factored || m->full_newton || m->last_pcg > limit) {
-    int rc = palp_fem_solver_factor(m->solver, m->kval);
-    m->factorizations++;
+  if (!m->factored || m->full_newton || m->last_pcg > limit || m->renew) {
+    int rc = factor(m);
     m->factored = rc == 0;
     if (rc) return rc;
     m->factor_c0 = kscale_c0;
@@ -488,13 +573,27 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
   }
   int rc = 0;
   if (fresh) {
-    rc = palp_fem_solver_solve(m->solver, b, x); /* the factor is of this very K */
+    rc = precond(m, b, x); /* the factor is of this very K */
     m->last_pcg = 0;
   } else {
     const double bn = sqrt(dot(b, b, n));
     memcpy(r, b, sizeof(double) * (size_t)n);
     memset(x, 0, sizeof(double) * (size_t)n);
-    rc = palp_fem_solver_solve(m->solver, r, z);
+    if (guess) { /* x0 = alpha d, d = guess on the free equations (see newton_solve) */
+      double *dv = q + n;
+      for (int d = 0; d < m->ndof; ++d)
+        if (m->eq[d] >= 0) dv[m->eq[d]] = guess[d];
+      symv(m, dv, q);
+      const double dkd = dot(dv, q, n);
+      if (dkd > 0.0) {
+        const double al = dot(dv, b, n) / dkd;
+        for (int i = 0; i < n; ++i) {
+          x[i] = al * dv[i];
+          r[i] = b[i] - al * q[i];
+        }
+      }
+    }
+    rc = precond(m, r, z);
     memcpy(p, z, sizeof(double) * (size_t)n);
     double rz = dot(r, z, n);
     int it = 0, ok = 0, broke = 0;
@@ -515,7 +614,7 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
         ok = 1;
         break;
       }
-      rc = palp_fem_solver_solve(m->solver, r, z);
+      rc = precond(m, r, z);
       const double rz2 = dot(r, z, n);
       const double beta = rz2 / rz;
       rz = rz2;
@@ -526,7 +625,7 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
     if (!rc && !ok && broke && allow_gmres) { /* indefinite: GMRES with the same preconditioner */
       if (!m->gmres_ws) m->gmres_ws = malloc(sizeof(double) * (size_t)(2 * GMRES_K + 1) * (size_t)n);
       if (m->gmres_ws) {
-        const int git = gmres(m, b, x, fmin(eta, 1e-2), 2 * limit + 20, m->gmres_ws, &rc);
+        const int git = gmres(m, b, x, fmin(eta_gmres, 1e-2), 2 * limit + 20, m->gmres_ws, &rc);
         if (git >= 0) {
           ok = 1;
           m->pcg_iterations += git;
@@ -536,13 +635,12 @@ static int newton_solve(palp_fem_model *m, double kscale_c0, double eta, int all
       }
     }
     if (!rc && !ok) { /* CG/GMRES stalled: renew the factor and solve directly */
-      rc = palp_fem_solver_factor(m->solver, m->kval);
-      m->factorizations++;
+      rc = factor(m);
       m->factored = rc == 0;
       if (rc) return rc;
       m->factor_c0 = kscale_c0;
       m->last_pcg = 0;
-      rc = palp_fem_solver_solve(m->solver, b, x);
+      rc = precond(m, b, x);
     }
   }
   for (int d = 0; d < m->ndof; ++d) m->du[d] = m->eq[d] >= 0 ? x[m->eq[d]] : 0.0;
@@ -605,7 +703,7 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
         break;
       }
       if (it == m->max_newton) break;
-      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0);
+      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0.1, 0, NULL);
       if (rc) return rc;
       m->newton_iterations++;
       for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
@@ -622,6 +720,26 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
   return PALP_OK;
 }
 
+/* Forcing term of the inexact Newton iteration: the Krylov solve of iteration
+ * `it` stops at ||K du - r|| <= eta ||r||, r [N] the residual, scale [N] the force
+ * scale, tol [N] the step's tolerance.
+ *   eta = min(0.1, r / scale)        keeps the iteration quadratic (r / scale -> 0);
+ *   eta <= 0.5 tol / r  for it >= 1  aims the next iterate at the tolerance.
+ * The first iterate of a step moves the mesh by the whole step's increment and
+ * leaves a nonlinear residual of ~10-60% of the force scale whatever the solve's
+ * accuracy (the 2 GPa volumetric penalty acting on the increment's second-order
+ * volume change, K (grad du)^2), so it is solved loosely; from the second on, the nonlinear remainder
+ * after an exact solve is ~1e-6 of the scale (level 2: 0.63 -> 0.068 -> 1e-8 with
+ * exact solves), so a solve to half the tolerance ends the step one iterate
+ * earlier than eta = r / scale would (0.072 -> 4.4e-3 -> 1.3e-6): 2 instead of 3
+ * Newton iterations per step for about the same number of CG iterations. The
+ * convergence test itself (on the true residual) is unchanged. */
+static double newton_forcing(int it, double r, double scale, double tol) {
+  double eta = fmin(0.1, r / fmax(scale, 1e-300));
+  if (it >= 1 && r > 0.0) eta = fmin(eta, 0.5 * tol / r);
+  return eta;
+}
+
 /* One Newmark step of length dt without cut-back; leaves the trial state in
  * utrial / atrial / S0t / Ht on success. */
 static int try_step(palp_fem_model *m, const double *fext, double dt) {
@@ -636,11 +754,24 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
    * the start point into a residual K (grad du)^2. */
   for (size_t d = 0; d < nd; ++d) u[d] = m->eq[d] < 0 ? m->prescribed[d] : m->u[d];
   m->trace_count = 0;
+  /* automatic renewal of the reused factor, decided once per attempt from counts
+   * (deterministic): see renew_factor */
+  const long last = m->solves - m->step_solves0;
+  m->step_solves0 = m->solves;
+  m->attempts++;
+  if (m->pcg_refactor <= 0 && m->factored && !m->full_newton) {
+    const double cost = factor_cost_solves(palp_fem_solver_factor_flops(m->solver), palp_fem_solver_factor_nnz(m->solver));
+    if (renew_factor(cost, m->solves - m->fac_solves, m->attempts - m->fac_attempt, last)) m->renew = 1;
+  }
   const double fnorm = fext ? norm_free(m, fext) : 0.0;
   double r0 = 0.0;
+  /* The tangent is assembled with the force unless this iterate is expected to
+   * converge (then only the force, ~1/4 of the cost; a wrong guess assembles again
+   * with the tangent, the force and residual being the same) */
+  int tangent = 1;
   for (int it = 0; it <= m->max_newton; ++it) {
     for (size_t d = 0; d < nd; ++d) a[d] = c0 * (u[d] - m->u[d]) - c1 * m->v[d] - c2 * m->a[d];
-    int rc = palp_fem_assemble(m, u, dt, 1);
+    int rc = palp_fem_assemble(m, u, dt, tangent);
     if (rc) return rc;
     double ma2 = 0.0;
     for (size_t d = 0; d < nd; ++d) {
@@ -655,60 +786,76 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     if (it == 0) r0 = r;
     if (r <= m->rtol * scale + m->atol) return PALP_OK;
     if (it == m->max_newton || (it > 2 && r > 1e3 * r0)) break;
+    if (!tangent && (rc = palp_fem_assemble(m, u, dt, 1))) return rc;
     /* K_eff = K_T + M / (beta dt^2): the diagonal is the last entry of each column */
     for (size_t d = 0; d < nd; ++d) {
       const int c = m->eq[d];
       if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
     }
-    rc = newton_solve(m, c0, fmin(0.1, r / fmax(scale, 1e-300)), 1);
+    const double tol = m->rtol * scale + m->atol;
+    const double eta = newton_forcing(it, r, scale, tol);
+    rc = newton_solve(m, c0, eta, newton_forcing(0, r, scale, tol), 1, it == 0 ? m->v : NULL);
     if (rc) return rc;
     m->newton_iterations++;
     for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
+    /* an iterate whose linear solve aimed at the tolerance is expected to meet it */
+    tangent = !(eta * r <= 0.5 * tol);
   }
   return PALP_ESOLVER;
 }
 
 int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
   const size_t nd = (size_t)m->ndof;
-  const double hmin = dt / (double)(1L << m->max_cutbacks);
+  /* Sub-steps are counted in integer units of dt / 2^max_cutbacks, so halved,
+   * doubled and clipped steps add up to the frame exactly: with steps kept in
+   * seconds, a step clipped to the remainder carried round-off into the remembered
+   * step, doubling it gave a full step 1e-9 short of dt, and the leftover sliver of
+   * ~1e-11 s was then tried as a step of its own (c0 = 1 / (beta h^2) ~ 1e22), which
+   * failed every cut-back. */
+  const long full = 1L << m->max_cutbacks;
   /* A cut step is remembered across calls and doubles back only after three
    * successes in a row: retrying the full dt at once after every cut wastes a
    * failing Newton sequence each time. */
-  double done = 0.0, h = m->h_next > 0.0 && m->h_next < dt ? m->h_next : dt;
-  while (done < dt * (1.0 - 1e-9)) { /* sums of halved steps carry round-off */
-    if (h > dt - done) h = dt - done;
-    const int rc = try_step(m, fext, h);
+  long h = full;
+  if (m->h_next > 0.0 && m->h_next < dt) h = lround(m->h_next / dt * (double)full);
+  if (h < 1) h = 1;
+  if (h > full) h = full;
+  long done = 0;
+  const double t_start = m->time;
+  while (done < full) {
+    if (h > full - done) h = full - done;
+    const double hs = dt * (double)h / (double)full; /* [s] */
+    const int rc = try_step(m, fext, hs);
     if (rc == PALP_ENOMEM) return rc;
     if (rc) {
-      if (h * 0.5 < hmin * (1.0 - 1e-12)) {
+      if (h < 2) {
         snprintf(m->err, sizeof m->err,
                  "time step at t = %.6g s failed after %d cut-backs (dt = %.3g s): %s", m->time,
-                 m->max_cutbacks, h,
+                 m->max_cutbacks, hs,
                  rc == PALP_EUNSTABLE ? "an element inverted or the residual became non-finite"
                                       : "Newton did not converge or the tangent was singular");
         return rc == PALP_ESOLVER ? PALP_ESOLVER : PALP_EUNSTABLE;
       }
-      h *= 0.5;
+      h /= 2;
       m->cutbacks++;
       m->streak = 0;
       continue;
     }
     const double g = m->newmark_gamma;
     for (size_t d = 0; d < nd; ++d) {
-      m->v[d] += h * ((1.0 - g) * m->a[d] + g * m->atrial[d]);
+      m->v[d] += hs * ((1.0 - g) * m->a[d] + g * m->atrial[d]);
       m->a[d] = m->atrial[d];
       m->u[d] = m->utrial[d];
     }
     commit(m);
-    m->time += h;
     done += h;
-    if (dt - done < 1e-9 * dt) m->time += dt - done; /* land exactly on the frame */
+    m->time = done == full ? t_start + dt : m->time + hs; /* land exactly on the frame */
     m->steps++;
-    if (h < dt && ++m->streak >= 3) {
-      h = fmin(dt, 2.0 * h);
+    if (h < full && ++m->streak >= 3) {
+      h = 2 * h < full ? 2 * h : full;
       m->streak = 0;
     }
   }
-  m->h_next = h;
+  m->h_next = dt * (double)h / (double)full;
   return PALP_OK;
 }

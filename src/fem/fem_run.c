@@ -301,6 +301,9 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   out->cutbacks = m->cutbacks;
   out->factorizations = m->factorizations;
   out->pcg_iterations = m->pcg_iterations;
+  out->sec_assemble = m->sec_assemble, out->sec_factor = m->sec_factor;
+  out->sec_solve = m->sec_solve, out->sec_krylov = m->sec_krylov;
+  out->assemblies = m->assemblies, out->tangent_assemblies = m->tangent_assemblies, out->solves = m->solves;
   out->wall_seconds = wall() - t_start;
   out->key = key;
   ws_free(&w);

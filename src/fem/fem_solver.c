@@ -20,6 +20,29 @@
 
 #include "fem_internal.h"
 
+/* OpenBLAS's thread control, when the process runs OpenBLAS (Debian's libblas.so.3
+ * alternative); weak, so NULL under any other BLAS. */
+extern void openblas_set_num_threads(int n) __attribute__((weak));
+extern int openblas_get_num_threads(void) __attribute__((weak));
+
+/* CHOLMOD's calls run with BLAS on one thread: measured at level 4 with OpenBLAS on
+ * the 2-core machine, a solve takes 29-31 ms on one thread against 45 ms (load 3)
+ * to 131 ms (load 7) on two, whose worker spins on sched_yield between the
+ * thousands of small dtrsv/dgemv calls and loses the core to other processes; the
+ * factorisation takes 1.0-1.2 s on one thread against 1.1-2.4 s on two (the two
+ * vCPUs gave no BLAS-3 speed-up even at load 0.8: 1.09 s). Returns the previous
+ * count for blas_restore (0: nothing to restore). */
+static int blas_single(void) {
+  if (!openblas_set_num_threads || !openblas_get_num_threads) return 0;
+  const int t = openblas_get_num_threads();
+  if (t > 1) openblas_set_num_threads(1);
+  return t > 1 ? t : 0;
+}
+
+static void blas_restore(int t) {
+  if (t > 1) openblas_set_num_threads(t);
+}
+
 struct palp_fem_solver {
   cholmod_common cc;
   cholmod_sparse *A;
@@ -70,7 +93,7 @@ void palp_fem_solver_destroy(palp_fem_solver *s) {
   free(s);
 }
 
-int palp_fem_solver_factor(palp_fem_solver *s, const double *val) {
+static int solver_factor(palp_fem_solver *s, const double *val) {
   const int *p = s->A->p;
   memcpy(s->A->x, val, sizeof(double) * (size_t)p[s->n]);
   s->last = s->L;
@@ -93,11 +116,25 @@ int palp_fem_solver_factor(palp_fem_solver *s, const double *val) {
   return PALP_OK;
 }
 
-int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
+static int solver_solve(palp_fem_solver *s, const double *b, double *x) {
   memcpy(s->b->x, b, sizeof(double) * (size_t)s->n);
   if (!cholmod_solve2(CHOLMOD_A, s->last ? s->last : s->L, s->b, NULL, &s->x, NULL, &s->Y, &s->E, &s->cc)) return PALP_ESOLVER;
   memcpy(x, s->x->x, sizeof(double) * (size_t)s->n);
   return PALP_OK;
+}
+
+int palp_fem_solver_factor(palp_fem_solver *s, const double *val) {
+  const int t = blas_single();
+  const int rc = solver_factor(s, val);
+  blas_restore(t);
+  return rc;
+}
+
+int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
+  const int t = blas_single();
+  const int rc = solver_solve(s, b, x);
+  blas_restore(t);
+  return rc;
 }
 
 /* Fill statistics of the factor, for the benchmark and docs. */

@@ -24,7 +24,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a change alters results, so cached references are recomputed. */
-#define PALP_FEM_CODE_VERSION 1
+#define PALP_FEM_CODE_VERSION 2 /* 2: fem-speed (element kernel round-off, Newton path within rtol) */
 
 /* ---- mesh ---------------------------------------------------------------- */
 enum { PALP_FEM_GEL = 0, PALP_FEM_MEMBRANE = 1 };
@@ -155,6 +155,10 @@ typedef struct palp_fem_result {
   int node_count, element_count, dof_count;
   long steps, newton_iterations, cutbacks, factorizations, pcg_iterations;
   double wall_seconds; /* of the original computation (also when read from cache) */
+  /* wall seconds of the computation in element assembly, numeric factorisations,
+   * solves with the factor, and the other Krylov work (0 when read from cache) */
+  double sec_assemble, sec_factor, sec_solve, sec_krylov;
+  long assemblies, tangent_assemblies, solves;
   int from_cache;
   uint64_t key;        /* cache key */
 } palp_fem_result;
