@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The classroom demo, on loopback only: a palp-server hosting three phantoms, two
-# trainee stations palpating their own phantom with scripted force profiles, a
-# third palpating by position with a simulated haptic device (1 kHz haptic loop
-# over 250 Hz physics), a visual
+# The classroom demo, on loopback only: a palp-server hosting four phantoms (and
+# the exercises), two trainee stations palpating their own phantom with scripted
+# force profiles, two palpating by position with a simulated haptic device (1 kHz
+# haptic loop over 250 Hz physics; one on the long-term phantom whose skin bends,
+# docs/materials.md), scripted trainees taking an exercise, a visual
 # station showing one of them and an instructor observer following the other,
 # for about 8 s. Then everything stops cleanly and a summary of every session is
 # printed. Builds first through scripts/setup.sh (idempotent: installs only missing
@@ -106,6 +107,15 @@ bob=$!
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
 carol=$!
+# Trainee dana palpates by position on phantom 4, the long-term reading of the paper's
+# materials with the skin's bending (config/paper_step_long_term.json, docs/materials.md:
+# within 1-3% of the FE fingertip at the pole, ~2.3 N per mm): a simulated device
+# presses 3 mm at 10 mm/s, holds 1 s and lifts, under a 10 N safe force.
+"$client" --role trainee --domain "$domain" --phantom 4 --name dana \
+  --input sim:press,depth_mm=3,speed_mm_s=10,hold_s=1 --max-force 10 \
+  --print-period 1 --plot --trace-csv "$out/dana-haptic.csv" >"$out/dana.log" 2>&1 &
+pids+=($!)
+dana=$!
 # An exercise (issue 13): "teaching" (two 1 cm lumps 10 mm deep, hidden; a phantom whose
 # lumps are exaggerated so that they can be felt, docs/assessment.md) on phantom 14, taken
 # by two scripted trainees palpating by position: nina, a novice (five light presses at
@@ -135,7 +145,7 @@ pids+=($!)
 observer=$!
 
 status=0
-for p in "$alice" "$bob" "$carol" "$visual" "$observer" "$nina" $eve; do wait "$p" || status=$?; done
+for p in "$alice" "$bob" "$carol" "$dana" "$visual" "$observer" "$nina" $eve; do wait "$p" || status=$?; done
 [ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
 kill -INT "$server_pid"
 wait "$server_pid" || status=$?
@@ -155,6 +165,10 @@ echo "== carol's haptic station: palpating by position, what she felt (1 kHz, fr
 grep -E "haptic thread|LIMITED|under the limit|flagged" "$out/carol.log" || true
 sed -n '/^rendered |F|/,$p' "$out/carol.log"
 echo
+echo "== dana's haptic station: the long-term phantom with the skin's bending, by position (1 kHz, from 250 Hz physics) =="
+grep -E "haptic thread|LIMITED|under the limit|flagged|passivity" "$out/dana.log" || true
+sed -n '/^rendered |F|/,$p' "$out/dana.log"
+echo
 echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found =="
 for t in nina ${eve:+eve}; do
   grep -E "^\[trainee $t\] (exercise|mark|finding|the server refused|[0-9]+ marks? standing)|^\[scripted" "$out/$t.log" || true
@@ -162,7 +176,7 @@ done
 echo "(the lesions are revealed only in the instructor's log: the review below assesses each session)"
 echo
 echo "== stations =="
-for f in alice bob carol visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
+for f in alice bob carol dana visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
 echo
 echo "== sessions (palp-server) =="
 sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2
