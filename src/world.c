@@ -1198,8 +1198,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     if (fail) goto nomem;
     for (int t = 0; t < w->mesh.dome_triangle_count; ++t) {
       const int *T = w->mesh.tri[t];
-      const palp_vec3 cr = v3_cross(v3_sub(w->pos[T[1]], w->pos[T[0]]), v3_sub(w->pos[T[2]], w->pos[T[0]]));
-      const double area = 0.5 * v3_len(cr);
+      const double area = tri_area(w->pos, T);
       for (int q = 0; q < 3; ++q) {
         int a = T[q], b = T[(q + 1) % 3];
         if (a > b) {
