@@ -127,6 +127,7 @@ struct palp_world {
   double *hk;            /* k_e [N m] */
   int *vhinge_start;     /* [vertex_count + 1] hinges at each vertex: entries 4 e + k, */
   int *vhinge;           /* the vertex being hinge e's k-th (feedback) */
+  palp_vec3 *ubuf;       /* [vertex_count] displacement from rest, once per step [m] */
   double step_max_bend, max_bend; /* [rad] */
   int64_t large_bend_steps;
 
@@ -275,10 +276,14 @@ static inline double hinge_turn(const int *restrict v, const palp_vec3 *restrict
 }
 
 /* Adds the hinges' forces f_k = -k_e dtheta_e g_k [N] to f; returns the largest
- * |dtheta_e| [rad]. Locals with restrict: f is written while pos is read, and
- * without them the compiler reloads every coefficient after each store. */
+ * |dtheta_e| [rad]. The displacements are taken once per vertex (each vertex is in
+ * ~12 hinges), and read through restrict locals: f is written while they are read,
+ * and without restrict the compiler reloads every coefficient after each store. */
 static double bending_add(const palp_world *w, palp_vec3 *restrict f) {
   const palp_vec3 *restrict pos = w->pos, *restrict rest = w->mesh.rest;
+  palp_vec3 *restrict u = w->ubuf;
+  for (int i = 0; i < w->mesh.vertex_count; ++i)
+    u[i] = (palp_vec3){pos[i].x - rest[i].x, pos[i].y - rest[i].y, pos[i].z - rest[i].z};
   const int(*restrict hinge)[4] = (const int(*)[4])w->hinge;
   const palp_vec3(*restrict hgrad)[4] = (const palp_vec3(*)[4])w->hgrad;
   const double *restrict hk = w->hk;
@@ -287,7 +292,8 @@ static double bending_add(const palp_world *w, palp_vec3 *restrict f) {
   for (int e = 0; e < nh; ++e) {
     const int *v = hinge[e];
     const palp_vec3 *g = hgrad[e];
-    const double th = hinge_turn(v, g, pos, rest);
+    double th = 0.0; /* dtheta_e = sum_k g_k . u_k [rad] */
+    for (int k = 0; k < 4; ++k) th += g[k].x * u[v[k]].x + g[k].y * u[v[k]].y + g[k].z * u[v[k]].z;
     const double m = -hk[e] * th; /* [N m] */
     for (int k = 0; k < 4; ++k) {
       palp_vec3 *fk = &f[v[k]];
@@ -1091,7 +1097,8 @@ static int build_hinges(palp_world *w) {
   w->hk = malloc(sizeof *w->hk * (size_t)(cap ? cap : 1));
   w->vhinge_start = calloc((size_t)m->vertex_count + 1, sizeof(int));
   w->vhinge = malloc(sizeof(int) * (size_t)(4 * cap + 1));
-  if (!w->hinge || !w->hgrad || !w->hk || !w->vhinge_start || !w->vhinge) {
+  w->ubuf = malloc(sizeof *w->ubuf * (size_t)m->vertex_count);
+  if (!w->hinge || !w->hgrad || !w->hk || !w->vhinge_start || !w->vhinge || !w->ubuf) {
     free(he);
     return PALP_ENOMEM;
   }
@@ -1305,7 +1312,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
-  free(w->hinge), free(w->hgrad), free(w->hk), free(w->vhinge_start), free(w->vhinge);
+  free(w->hinge), free(w->hgrad), free(w->hk), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work);
   palp_ldl_free(&w->ldl);
