@@ -248,10 +248,10 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
         double amax = c->max_damping;
         if (c->renderer.have) {
           const palp_local_model *m = &c->renderer.cur;
-          const palp_vec3 nn = m->normal;
-          const double kn = nn.x * (m->stiffness[0][0] * nn.x + m->stiffness[0][1] * nn.y + m->stiffness[0][2] * nn.z) +
-                            nn.y * (m->stiffness[1][0] * nn.x + m->stiffness[1][1] * nn.y + m->stiffness[1][2] * nn.z) +
-                            nn.z * (m->stiffness[2][0] * nn.x + m->stiffness[2][1] * nn.y + m->stiffness[2][2] * nn.z);
+          const double n[3] = {m->normal.x, m->normal.y, m->normal.z};
+          double kn = 0; /* n . K n [N/m] */
+          for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) kn += n[i] * m->stiffness[i][j] * n[j];
           const double tau = c->model_age + (t - c->x_arrival_t) + m->period; /* [s] */
           if (kn > 0 && tau > 0 && 2.0 * kn * tau > amax) amax = 2.0 * kn * tau;
         }
