@@ -124,14 +124,17 @@ int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen) {
 
 /* ---- position-driven keyboard (issue 11) ------------------------------------------------
  * Arrow up/down move the fingertip towards the pole/rim (2 deg), left/right around
- * the dome (5 deg); + and - press deeper / come up by 1 mm (depth of the tip's
- * lowest point below the undeformed surface; negative = above it); space lifts or
+ * the dome (5 deg); + and - press deeper / come up by one depth step (depth of the tip's
+ * lowest point below the undeformed surface; negative = above it); [ and ] halve and
+ * double the step (0.125-4 mm, 1 mm at first: on a long-term dome 1 mm is ~2.3 N,
+ * on breast tissue ~0.45 N, docs/materials.md); space lifts or
  * lowers the finger; q ends. read_position and write_force run on the haptic
  * thread: reading a key is one non-blocking select() per tick, and the status line
  * (the force the station renders) is written twice a second. */
 typedef struct kfinger {
   keyboard k;            /* terminal state, position, quit */
   double depth;          /* [m] */
+  double step;           /* [m] per + or - */
   int lifted;
   double last_status;
   double t;
@@ -145,8 +148,8 @@ static int kf_open(void *ctx, double R) {
   kfinger *f = ctx;
   int rc = k_open(&f->k, R);
   if (rc == 0)
-    fprintf(stderr, "keyboard (finger): arrows move the fingertip, +/- press deeper / come up 1 mm, space lift, "
-                    "m mark a lump here, u withdraw the last mark, q quit\n");
+    fprintf(stderr, "keyboard (finger): arrows move the fingertip, +/- press deeper / come up one step (1 mm), "
+                    "[/] halve / double the step, space lift, m mark a lump here, u withdraw the last mark, q quit\n");
   return rc;
 }
 
@@ -157,8 +160,10 @@ static void fkey(kfinger *f, int c) {
     return;
   }
   switch (c) {
-  case '+': case '=': f->depth = f->depth + 0.001 > 0.035 ? 0.035 : f->depth + 0.001; break;
-  case '-': case '_': f->depth = f->depth - 0.001 < -0.010 ? -0.010 : f->depth - 0.001; break;
+  case '+': case '=': f->depth = f->depth + f->step > 0.035 ? 0.035 : f->depth + f->step; break;
+  case '-': case '_': f->depth = f->depth - f->step < -0.010 ? -0.010 : f->depth - f->step; break;
+  case '[': f->step = f->step / 2.0 < 0.000125 ? 0.000125 : f->step / 2.0; break;
+  case ']': f->step = f->step * 2.0 > 0.004 ? 0.004 : f->step * 2.0; break;
   case ' ': f->lifted = !f->lifted; break;
   case 'm': case 'M': atomic_store(&f->button, PALP_CLI_BUTTON_MARK); break;
   case 'u': case 'U': atomic_store(&f->button, PALP_CLI_BUTTON_WITHDRAW); break;
@@ -186,8 +191,8 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
   f->flags = flags;
   if (f->t - f->last_status >= 0.5) {
     const double m = sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
-    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, depth %+.0f mm: force %.2f N%s   ",
-            f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, m,
+    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, depth %+.3g mm (step %g mm): force %.2f N%s   ",
+            f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, f->step * 1e3, m,
             (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "");
     f->last_status = f->t;
   }
@@ -214,6 +219,7 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
   if (!f) return PALP_ENOMEM;
   f->k.distribution = 3;
   f->depth = -0.002; /* start 2 mm above the pole */
+  f->step = 0.001;
   f->radius = 0.008;
   *out = (palp_cli_input){.name = "keyboard (finger)", .ctx = f, .open = kf_open, .close = kf_close,
                           .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius,

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The classroom demo, on loopback only: a palp-server hosting four phantoms (and
-# the exercises), two trainee stations palpating their own phantom with scripted
-# force profiles, two palpating by position with a simulated haptic device (1 kHz
-# haptic loop over 250 Hz physics; one on the long-term phantom whose skin bends,
-# docs/materials.md), scripted trainees taking an exercise, a visual
+# The classroom demo, on loopback only: a palp-server hosting five phantoms (and
+# the exercises; the domes are the paper's materials read long-term, one is breast
+# tissue, docs/materials.md), two trainee stations palpating their own phantom with
+# scripted force profiles, two palpating by position with a simulated haptic device
+# (1 kHz haptic loop over 250 Hz physics), scripted trainees taking an exercise, a visual
 # station showing one of them and an instructor observer following the other,
 # for about 8 s. Then everything stops cleanly and a summary of every session is
 # printed. Builds first through scripts/setup.sh (idempotent: installs only missing
@@ -98,21 +98,22 @@ alice=$!
   --polar 20 --azimuth 200 --duration 7 --print-period 1 >"$out/bob.log" 2>&1 &
 pids+=($!)
 bob=$!
-# Trainee carol palpates by position on phantom 3 (physics at 250 Hz): a simulated
-# haptic device presses 22 mm at 20 mm/s, holds, slides 15 mm along the surface and
-# lifts; her station's 1 kHz haptic thread renders the phantom's push from the
-# server's local contact models, with a 1.2 N safe force it tells her about.
+# Trainee carol palpates by position on phantom 3, a long-term dome (physics at 250 Hz;
+# ~2.3 N per mm under a fingertip, docs/materials.md): a simulated haptic device presses
+# 2 mm at 10 mm/s, holds, slides 15 mm along the surface and lifts; her station's 1 kHz
+# haptic thread renders the phantom's push from the server's local contact models, with
+# a 4 N safe force it tells her about.
 "$client" --role trainee --domain "$domain" --phantom 3 --name carol \
-  --input sim:slide,depth_mm=22,speed_mm_s=20,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 1.2 \
+  --input sim:slide,depth_mm=2,speed_mm_s=10,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 4 \
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
 carol=$!
-# Trainee dana palpates by position on phantom 4, the long-term reading of the paper's
-# materials with the skin's bending (config/paper_step_long_term.json, docs/materials.md:
-# within 1-3% of the FE fingertip at the pole, ~2.3 N per mm): a simulated device
-# presses 3 mm at 10 mm/s, holds 1 s and lifts, under a 10 N safe force.
+# Trainee dana palpates by position on phantom 4, the breast-tissue dome
+# (config/paper_step_breast_tissue.json, docs/materials.md: within 0.86-1.09x of the FE
+# fingertip at the pole over 0.25-12 mm): a simulated device presses 10 mm at 10 mm/s,
+# holds 1 s and lifts, under a 10 N safe force.
 "$client" --role trainee --domain "$domain" --phantom 4 --name dana \
-  --input sim:press,depth_mm=3,speed_mm_s=10,hold_s=1 --max-force 10 \
+  --input sim:press,depth_mm=10,speed_mm_s=10,hold_s=1 --max-force 10 \
   --print-period 1 --plot --trace-csv "$out/dana-haptic.csv" >"$out/dana.log" 2>&1 &
 pids+=($!)
 dana=$!
@@ -161,11 +162,11 @@ echo
 echo "== alice's haptic station: the force she felt =="
 sed -n '/^feedback |F|/,$p' "$out/alice.log"
 echo
-echo "== carol's haptic station: palpating by position, what she felt (1 kHz, from 250 Hz physics) =="
+echo "== carol's haptic station: a long-term dome by position, what she felt (1 kHz, from 250 Hz physics) =="
 grep -E "haptic thread|LIMITED|under the limit|flagged" "$out/carol.log" || true
 sed -n '/^rendered |F|/,$p' "$out/carol.log"
 echo
-echo "== dana's haptic station: the long-term phantom with the skin's bending, by position (1 kHz, from 250 Hz physics) =="
+echo "== dana's haptic station: the breast-tissue dome by position (1 kHz, from 250 Hz physics) =="
 grep -E "haptic thread|LIMITED|under the limit|flagged|passivity" "$out/dana.log" || true
 sed -n '/^rendered |F|/,$p' "$out/dana.log"
 echo

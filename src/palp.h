@@ -388,6 +388,11 @@ typedef struct palp_scene_contact {
 
 typedef struct palp_scene {
   char name[64];
+  /* The FEM material profile the real-time parameters were calibrated against
+   * ("paper_long_term", "paper_instantaneous", "breast_tissue"; docs/materials.md), from
+   * the scene's "material" or else its parameter file's; "" when neither says. The model
+   * does not use it: it tells the evaluation which reference the scene answers to. */
+  char material[32];
   palp_world_def world;
   int frames;           /* output frames */
   double frame_period;  /* [s] between output frames (>= world.dt, a multiple of it) */

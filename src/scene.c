@@ -228,6 +228,24 @@ static char *read_file(const char *path) {
   return buf;
 }
 
+/* A material profile's name: a short identifier, so that a hostile file cannot smuggle
+ * text into the evaluation's messages; whether it names a known profile is the FEM's
+ * business (palp_fem_config_set_material), not the model's. */
+static int get_material(ctx *c, const cJSON *obj, const char *path, palp_scene *s) {
+  const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, "material");
+  if (!m) return PALP_OK;
+  if (!cJSON_IsString(m)) return palp_parse_fail(c, PALP_EPARSE, "%smaterial: expected a profile name", path);
+  const char *v = m->valuestring;
+  const size_t n = strlen(v);
+  int ok = n > 0 && n < sizeof s->material;
+  for (size_t i = 0; ok && i < n; ++i) ok = (v[i] >= 'a' && v[i] <= 'z') || (v[i] >= '0' && v[i] <= '9') || v[i] == '_';
+  if (!ok)
+    return palp_parse_fail(c, PALP_EPARSE, "%smaterial: \"%.40s\" is not a profile name (lower case, digits, _; < %zu)",
+                           path, v, sizeof s->material);
+  snprintf(s->material, sizeof s->material, "%s", v);
+  return PALP_OK;
+}
+
 static int parse_params_file(ctx *c, const char *dir, const char *name, palp_scene *s) {
   char path[1024];
   if (name[0] == '/' || !dir[0]) snprintf(path, sizeof path, "%s", name);
@@ -242,6 +260,7 @@ static int parse_params_file(ctx *c, const char *dir, const char *name, palp_sce
   if (!e) e = parse_membrane(c, m, &s->world.membrane);
   const cJSON *g = e ? NULL : get_obj(c, root, "parameters.", "gel", 1, &e);
   if (!e) e = parse_gel(c, g, &s->world.gel);
+  if (!e) e = get_material(c, root, "parameters.", s);
   cJSON_Delete(root);
   return e;
 }
@@ -270,6 +289,9 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
     const cJSON *g = get_obj(c, root, "", "gel", 1, &e);
     if (e || (e = parse_gel(c, g, &s->world.gel))) return e;
   }
+
+  /* the scene's own "material" wins over its parameter file's */
+  if ((e = get_material(c, root, "", s))) return e;
 
   const cJSON *t = get_obj(c, root, "", "time", 1, &e);
   if (e) return e;
@@ -416,6 +438,8 @@ char *palp_scene_to_json(const palp_scene *s) {
   cJSON *r = cJSON_CreateObject();
   if (!r) return NULL;
   cJSON_AddStringToObject(r, "name", s->name);
+  /* only when declared, so that the scenes of earlier logs print as they did */
+  if (s->material[0]) cJSON_AddStringToObject(r, "material", s->material);
   cJSON *m = cJSON_AddObjectToObject(r, "mesh");
   add_exact(m, "radius_m", s->world.mesh.radius);
   add_exact(m, "vertex_count", s->world.mesh.vertex_count);

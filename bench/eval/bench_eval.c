@@ -66,6 +66,10 @@ int main(int argc, char **argv) {
   }
   scene.frames = frames;
   palp_fem_config cfg = palp_fem_default_config();
+  if (scene.material[0] && palp_fem_config_set_material(&cfg, scene.material, err, sizeof err)) {
+    fprintf(stderr, "bench_eval: %s: %s\n", scene_path, err);
+    return 1;
+  }
   cfg.mesh.level = level;
   char cache[] = "/tmp/palp_bench_eval_XXXXXX";
   if (!mkdtemp(cache)) {

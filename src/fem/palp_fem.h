@@ -116,8 +116,8 @@ typedef struct palp_fem_config {
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
 } palp_fem_config;
 
-/* The default is the "paper_instantaneous" material profile until real-time parameters
- * calibrated to "paper_long_term" ship (docs/materials.md). */
+/* The default material profile is "paper_long_term" (docs/materials.md); a scene's
+ * "material" names the one its parameters were fitted to, and the tools prefer it. */
 palp_fem_config palp_fem_default_config(void);
 
 /* ---- material profiles (docs/materials.md) -------------------------------- */

@@ -203,7 +203,7 @@ static void test_param_file_roundtrip(void) {
   char ppath[256], spath[256];
   snprintf(ppath, sizeof ppath, "%s/fitted.json", dir);
   snprintf(spath, sizeof spath, "%s/scene.json", dir);
-  rc = palp_eval_params_write(ppath, &s.world, "test \"quoted\" comment", err, sizeof err);
+  rc = palp_eval_params_write(ppath, &s.world, "breast_tissue", "test \"quoted\" comment", err, sizeof err);
   CHECK(rc == 0, "params write: %s", err);
   FILE *f = fopen(spath, "w");
   CHECK(f != NULL, "cannot write %s", spath);
@@ -220,6 +220,7 @@ static void test_param_file_roundtrip(void) {
     palp_eval_params_get(&back.world, q);
     for (int j = 0; j < PALP_EVAL_P_COUNT; ++j)
       CHECK(fabs(q[j] / p[j] - 1.0) < 1e-9, "%s: wrote %.9g, read %.9g", palp_eval_param_name[j], p[j], q[j]);
+    CHECK(strcmp(back.material, "breast_tissue") == 0, "material: wrote breast_tissue, read \"%s\"", back.material);
     CHECK(back.world.membrane.thickness == 0.002 && back.world.membrane.density == 950.0 &&
               back.world.gel.pressure == 101325.0 && back.world.gel.law == PALP_GEL_POLYTROPIC,
           "fixed parameters not carried over");

@@ -79,6 +79,11 @@ def main():
         p, az = float(r["polar_deg"]), float(r["azimuth_deg"])
         check(0.0 <= p <= 60.0 and 0.0 <= az < 360.0, "site (%g, %g) inside polar 0-60 deg" % (p, az))
         check(float(r["force_N"]) == 3.0, "force 3 N")
+        # the displacement margin from the run's FEM peak: max(5%, min(1 mm, 15%)) (docs/statistics.md)
+        pk = float(r["disp_peak_fem_cm"])
+        check(close(float(r["disp_margin_cm"]), max(0.05 * pk, min(0.1, 0.15 * pk)), 1e-7),
+              "run %s/%s: displacement margin %s for a %.4g cm peak" % (r["distribution"], r["site"],
+                                                                       r["disp_margin_cm"], pk))
         sites.setdefault(r["site"], (p, az))
         check(sites[r["site"]] == (p, az), "site %s is the same in every distribution" % r["site"])
     check(sites["0"] != sites["1"], "two different sites")

@@ -1,7 +1,9 @@
 #!/bin/sh
 # The position-driven keyboard in a real terminal (a pty from script(1)): the
-# fingertip starts 2 mm above the pole of a 250 Hz phantom; "+" x7 presses it to
-# 5 mm, then "+" x5 to 10 mm, then q. The station's status line shows the force
+# fingertip starts 2 mm above the pole of the 250 Hz breast-tissue dome (phantom 4 of
+# config/server.json: ~2 N at 5 mm, under the station's 10 N safe force; on the long-term
+# domes 1 mm is ~2.3 N, so 5 mm would already be limited); "+" x7 presses it to
+# 5 mm, then "+" x5 to 10 mm, then "[[" (0.25 mm steps) and "-" x4 back to 9 mm, then q. The station's status line shows the force
 # its 1 kHz haptic thread renders: in contact at both depths and larger at 10 mm
 # than at 5 mm (force monotone in depth), and the session summary counts local
 # models. Domain 114.
@@ -13,19 +15,21 @@ tmp=$(mktemp -d)
 trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 "$server" --config "$config_dir/server.json" --domain 114 --no-db > "$tmp/server.log" 2>&1 &
 spid=$!
-(sleep 2; printf '+++++++'; sleep 2; printf '+++++'; sleep 2; printf 'q') |
-  script -qec "$client --role trainee --domain 114 --phantom 3 --name keys --input keyboard-finger --print-period 0" \
+(sleep 2; printf '+++++++'; sleep 2; printf '+++++'; sleep 2; printf '[[----'; sleep 2; printf 'q') |
+  script -qec "$client --role trainee --domain 114 --phantom 4 --name keys --input keyboard-finger --print-period 0" \
     /dev/null > "$tmp/client.log" 2>&1
 crc=$?
 tr '\r' '\n' < "$tmp/client.log" > "$tmp/lines"
-f5=$(sed -n 's/.*depth +5 mm: force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
-f10=$(sed -n 's/.*depth +10 mm: force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
+f5=$(sed -n 's/.*depth +5 mm (step 1 mm): force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
+f10=$(sed -n 's/.*depth +10 mm (step 1 mm): force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
+# "[[" quarters the step and "----" comes up 4 x 0.25 mm: 9 mm, between the two
+f9=$(sed -n 's/.*depth +9 mm (step 0.25 mm): force \([0-9.]*\) N.*/\1/p' "$tmp/lines" | tail -n 1)
 models=$(sed -n 's/.* \([0-9]*\) local models.*/\1/p' "$tmp/lines" | tail -n 1)
-if [ $crc -eq 0 ] && [ -n "$f5" ] && [ -n "$f10" ] && [ -n "$models" ] &&
-   awk -v a="$f5" -v b="$f10" -v m="$models" 'BEGIN { exit !(a > 0.01 && b > a && m > 100) }'; then
-  echo "ok   keyboard finger: exit 0, force $f5 N at 5 mm < $f10 N at 10 mm, $models local models"
+if [ $crc -eq 0 ] && [ -n "$f5" ] && [ -n "$f10" ] && [ -n "$f9" ] && [ -n "$models" ] &&
+   awk -v a="$f5" -v b="$f10" -v c="$f9" -v m="$models" 'BEGIN { exit !(a > 0.01 && b > a && c > a && c < b && m > 100) }'; then
+  echo "ok   keyboard finger: exit 0, force $f5 N at 5 mm < $f9 N at 9 mm (0.25 mm steps) < $f10 N at 10 mm, $models local models"
   exit 0
 fi
-echo "FAIL exit $crc, force at 5 mm '$f5' N, at 10 mm '$f10' N, models '$models':"
+echo "FAIL exit $crc, force at 5 mm '$f5' N, at 9 mm '$f9' N, at 10 mm '$f10' N, models '$models':"
 cat "$tmp/lines"
 exit 1

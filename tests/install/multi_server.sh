@@ -104,7 +104,7 @@ trainee() { # name args...
   on_bg h4 "$client" --dds-config "$(dds h4)" --domain "$domain" --role trainee --name "$n" --profile step --t-on 0.2 \
     --t-off 60 --magnitude 2 --duration 9 --timeout 10 --print-period 0 "$@"
 }
-trainee ann --server room-a --phantom-name "dome A (calibrated)" --rejoin > "$work/ann.out" 2>&1 & pid_ann=$!
+trainee ann --server room-a --phantom-name "dome A (long-term)" --rejoin > "$work/ann.out" 2>&1 & pid_ann=$!
 trainee cid --server room-a --phantom 2 --rejoin > "$work/cid.out" 2>&1 & pid_cid=$!
 trainee bob --server room-b --phantom 1 > "$work/bob.out" 2>&1 & pid_bob=$!
 pids="$pids $pid_ann $pid_cid $pid_bob"

@@ -24,7 +24,7 @@ bad() { echo "FAIL $*"; fail=1; }
 unset CYCLONEDDS_URI
 cfgdir=$(cd "$(dirname "$dds")" && pwd)
 mkcfg() { # log_level
-  sed -e "s|\"paper_step.json\"|\"$cfgdir/paper_step.json\"|g" \
+  sed -e "s|\"scene\": \"\([^\"/]*\)\"|\"scene\": \"$cfgdir/\1\"|g" \
       -e "s|\"dds_config\": \"cyclonedds-loopback.xml\"|\"dds_config\": \"$cfgdir/cyclonedds-loopback.xml\", \"log_level\": \"$1\"|" \
       "$cfgdir/server.json" > "$work/server.json.new" && mv "$work/server.json.new" "$work/server.json"
 }

@@ -80,9 +80,43 @@ int main(void) {
   expect_error("{\"name\":\"t\",", "{\"name\":\"t\",,", "invalid JSON");
   expect_error("\"mesh\":{", "\"parameters\":\"/nonexistent/p.json\",\"mesh\":{", "parameters");
 
-  /* The shipped scene, through its parameter file. */
+  /* The FEM profile the parameters answer to ("material", docs/materials.md): an identifier,
+   * from the scene or else its parameter file; none in the base scene. */
+  CHECK(s.material[0] == 0, "no material declared: \"%s\"", s.material);
+  expect_error("\"mesh\":{", "\"material\":7,\"mesh\":{", "material");
+  expect_error("\"mesh\":{", "\"material\":\"\",\"mesh\":{", "material");
+  expect_error("\"mesh\":{", "\"material\":\"Long term\",\"mesh\":{", "material");
+  expect_error("\"mesh\":{", "\"material\":\"a_very_long_profile_name_of_32_ch\",\"mesh\":{", "material");
+
+  /* The shipped scenes, through their parameter files: each names the profile it was fitted to. */
   palp_scene paper = paper_scene();
   CHECK(paper.world.membrane.E1 > 0 && paper.world.gel.support_modulus > 0, "parameters file applied");
+  CHECK(strcmp(paper.material, "paper_instantaneous") == 0, "paper_step.json: material \"%s\"", paper.material);
+  {
+    static const char *const scene_material[][2] = {{"paper_step_long_term.json", "paper_long_term"},
+                                                     {"paper_step_breast_tissue.json", "breast_tissue"}};
+    for (int i = 0; i < 2; ++i) {
+      char path[512];
+      snprintf(path, sizeof path, "%s/%s", PALP_CONFIG_DIR, scene_material[i][0]);
+      palp_scene sm;
+      CHECK(palp_scene_load(path, &sm, err, sizeof err) == PALP_OK, "%s: %s", path, err);
+      CHECK(strcmp(sm.material, scene_material[i][1]) == 0, "%s: material \"%s\", want %s", path, sm.material,
+            scene_material[i][1]);
+      /* the scene's own "material" wins over its parameter file's, and survives the log's JSON */
+      char *mj = palp_scene_to_json(&sm);
+      CHECK(mj && strstr(mj, scene_material[i][1]) != NULL, "%s: serialised scene keeps its material", path);
+      palp_scene back;
+      CHECK(mj && palp_scene_parse(mj, &back, err, sizeof err) == PALP_OK && strcmp(back.material, sm.material) == 0,
+            "%s: material round trip: %s", path, err);
+      free(mj);
+    }
+    char buf[4096];
+    snprintf(buf, sizeof buf, "{\"material\":\"breast_tissue\",\"parameters\":\"%s/params/paper_long_term.json\",%s",
+             PALP_CONFIG_DIR, base + 1);
+    palp_scene ov;
+    CHECK(palp_scene_parse(buf, &ov, err, sizeof err) == PALP_OK && strcmp(ov.material, "breast_tissue") == 0,
+          "the scene's material overrides its parameter file's: \"%s\" %s", ov.material, err);
+  }
   CHECK(palp_scene_load("/nonexistent/scene.json", &s, err, sizeof err) == PALP_EIO, "missing file: %s", err);
 
   /* Serialise, parse back, and run both: identical hashes after 50 frames. */

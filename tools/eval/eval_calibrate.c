@@ -632,8 +632,8 @@ const char *palp_eval_fit_status_text(int status) {
 
 /* ---- parameter file ---------------------------------------------------------------- */
 
-int palp_eval_params_write(const char *path, const palp_world_def *w, const char *comment, char *err,
-                           size_t errlen) {
+int palp_eval_params_write(const char *path, const palp_world_def *w, const char *material, const char *comment,
+                           char *err, size_t errlen) {
   char tmp[1100];
   snprintf(tmp, sizeof tmp, "%s.tmp", path);
   FILE *f = fopen(tmp, "w");
@@ -647,6 +647,8 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
   const palp_membrane_params *m = &w->membrane;
   const palp_gel_params *g = &w->gel;
   fprintf(f, "{\n  \"comment\": %s,\n", cs ? cs : "\"\"");
+  /* names come from palp_fem_material_names(): identifiers, no escaping needed */
+  if (material && material[0]) fprintf(f, "  \"material\": \"%s\",\n", material);
   fprintf(f,
           "  \"membrane\": { \"thickness_m\": %.9g, \"density_kg_m3\": %.9g,\n"
           "                \"E1_Pa\": %.9g, \"eta1_Pa_s\": %.9g, \"E2_Pa\": %.9g, \"eta2_Pa_s\": %.9g",

@@ -79,8 +79,9 @@ static void usage(FILE *f) {
           "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
           "                           [--finger pole,45deg,70deg,pole_lesion [--finger-weight CM]]\n"
-          "defaults: --scene config/paper_step.json, --out out/eval (evaluate) or\n"
-          "          config/params/calibrated.json (calibrate), --level from the FEM config (2)\n");
+          "defaults: --scene config/paper_step_long_term.json (the default material profile; config/paper_step.json\n"
+          "          is the paper's literal reading, a reproduction), --out out/eval (evaluate) or out/eval/params.json\n"
+          "          (calibrate), --level from the FEM config (2); the FEM uses the profile the scene's parameters name\n");
   palp_app_common_usage(f, EVAL_OPTS);
 }
 
@@ -337,12 +338,15 @@ static int load_setup(const options *o, setup *s) {
   memset(s, 0, sizeof *s);
   s->log = o->log;
   if (o->scene) snprintf(s->scene_path, sizeof s->scene_path, "%s", o->scene);
-  else if (file_exists("config/paper_step.json")) snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step.json");
+  /* the default profile's scene (docs/materials.md); config/paper_step.json is the paper's
+   * literal reading, a reproduction */
+  else if (file_exists("config/paper_step_long_term.json"))
+    snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step_long_term.json");
   else {
     /* The installed scene (app/palp_app.h): no source path is compiled in. */
     char err[256];
-    if (palp_app_data_path("config/paper_step.json", s->scene_path, sizeof s->scene_path, err, sizeof err) < 0)
-      snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step.json");
+    if (palp_app_data_path("config/paper_step_long_term.json", s->scene_path, sizeof s->scene_path, err, sizeof err) < 0)
+      snprintf(s->scene_path, sizeof s->scene_path, "config/paper_step_long_term.json");
   }
   char err[512] = "";
   if (!file_exists(s->scene_path)) {
@@ -355,6 +359,13 @@ static int load_setup(const options *o, setup *s) {
     palp_log_error(o->log, "%s: %s", rc == -100 ? o->params : s->scene_path, err);
     return 1;
   }
+  /* --params FILE that names no material (a hand-set start) is compared with the scene's own
+   * reference: the one its parameter file names */
+  if (o->params && !s->scene.material[0]) {
+    palp_scene own;
+    if (palp_scene_load(s->scene_path, &own, err, sizeof err) == 0)
+      snprintf(s->scene.material, sizeof s->scene.material, "%s", own.material);
+  }
   if (s->scene.contact_count < 1) {
     palp_log_error(o->log, "%s: the scene has no contact; the evaluation loads contacts[0] under the four "
                            "distributions",
@@ -363,6 +374,12 @@ static int load_setup(const options *o, setup *s) {
   }
   if (o->frames) s->scene.frames = o->frames;
   s->fem = palp_fem_default_config();
+  /* the reference the scene's parameters were calibrated against, unless the FEM config
+   * or --material says otherwise (docs/materials.md) */
+  if (s->scene.material[0] && palp_fem_config_set_material(&s->fem, s->scene.material, err, sizeof err)) {
+    palp_log_error(o->log, "%s: material: %s", s->scene_path, err);
+    return 1;
+  }
   if (o->fem_config) {
     if (!file_exists(o->fem_config)) {
       palp_log_error(o->log, "FEM config \"%s\" not found", o->fem_config);
@@ -628,7 +645,7 @@ static int cmd_evaluate(const options *o) {
     const int sound = rt.frames >= 3;
     if (!rc && sound)
       rc = palp_eval_sound_compute(pr.disp_rt, pr.disp_ref, pr.n_disp, rt.frames,
-                                   fmax(PALP_EVAL_MARGIN_DISP_ABS, PALP_EVAL_MARGIN_DISP_REL * row->disp.ref_peak),
+                                   palp_eval_disp_margin(row->disp.ref_peak),
                                    PALP_EVAL_BOOT_SEED + (unsigned long long)d, &row->disp_sound);
     if (!rc && sound && row->has_force)
       rc = palp_eval_sound_compute(pr.force_rt, pr.force_ref, pr.n_force, rt.frames,
@@ -1047,7 +1064,12 @@ static int cmd_calibrate(const options *o) {
   setup s;
   int rc = load_setup(o, &s);
   if (rc) return rc;
-  const char *out = o->out ? o->out : "config/params/calibrated.json";
+  /* never a shipped file by default: a fit is reviewed before it replaces one */
+  const char *out = o->out ? o->out : "out/eval/params.json";
+  if (!o->out && make_dirs("out/eval")) {
+    palp_log_error(o->log, "cannot create out/eval for the fitted parameters (--out FILE chooses another place)");
+    return 1;
+  }
   palp_eval_calib_def def = palp_eval_calib_default_def();
   char err[512] = "";
   const double band = def.recovery_band;
@@ -1240,7 +1262,7 @@ static int cmd_calibrate(const options *o) {
                     "; fingertip force at %d site(s) fitted too (weight %.3g cm), RMS relative error %.3f -> %.3f",
                     nfref, def.finger_weight, fin->finger_rms_before, fin->finger_rms_after);
   if (len < (int)sizeof comment) snprintf(comment + len, sizeof comment - (size_t)len, ". See docs/evaluation.md.");
-  if (palp_eval_params_write(out, &w, comment, err, sizeof err)) {
+  if (palp_eval_params_write(out, &w, s.fem.material, comment, err, sizeof err)) {
     palp_log_error(o->log, "%s", err);
     return 1;
   }

@@ -98,7 +98,7 @@ int palp_eval_run_compute(const palp_eval_pairs *p, const palp_eval_record *rt, 
   o->disp_max_abs = mx;
   o->disp_peak_rt = prt, o->disp_peak_ref = pref;
   o->peak_error = pref > 0.0 ? (prt - pref) / pref : NAN;
-  o->disp_margin = fmax(PALP_EVAL_MARGIN_DISP_ABS, PALP_EVAL_MARGIN_DISP_REL * pref);
+  o->disp_margin = palp_eval_disp_margin(pref);
   /* n_eff of the per-frame mean difference: how much one run knows about its bias */
   const size_t nf = (size_t)rt->frames, per = p->n_disp / nf;
   double *dbar = malloc(sizeof(double) * nf);

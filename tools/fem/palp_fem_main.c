@@ -237,9 +237,17 @@ static int parse(int argc, char **argv, opts *o) {
   return 0;
 }
 
-static int build_config(const opts *o, palp_fem_config *cfg) {
+/* The FEM's material: the default profile (paper_long_term), then the one the scene's
+ * real-time parameters were calibrated against (scene_material, may be NULL or ""), then
+ * the FEM config file, then --material: a scene is compared with its own reference
+ * unless the user says otherwise. */
+static int build_config(const opts *o, const char *scene_material, palp_fem_config *cfg) {
   *cfg = palp_fem_default_config();
   char err[256];
+  if (scene_material && scene_material[0] && palp_fem_config_set_material(cfg, scene_material, err, sizeof err) != 0) {
+    palp_log_error(o->log, "%s: material: %s", o->scene ? o->scene : "scene", err);
+    return -1;
+  }
   if (o->config && palp_fem_config_load(o->config, cfg, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s", err);
     return -1;
@@ -279,14 +287,14 @@ static int cmd_run(const opts *o) {
     usage();
     return 2;
   }
-  palp_fem_config cfg;
-  if (build_config(o, &cfg)) return 2;
   palp_scene scene;
   char err[512];
   if (palp_scene_load(o->scene, &scene, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s: %s", o->scene, err);
     return 2;
   }
+  palp_fem_config cfg;
+  if (build_config(o, scene.material, &cfg)) return 2;
   if (o->frames > 0) scene.frames = o->frames;
   if (o->dist) {
     palp_distribution d;
@@ -337,7 +345,7 @@ static int cmd_export(const opts *o) {
     return 2;
   }
   palp_fem_config cfg;
-  if (build_config(o, &cfg)) return 2;
+  if (build_config(o, NULL, &cfg)) return 2;
   palp_fem_mesh m;
   if (load_mesh(o->log, &cfg, &m)) return 2;
   char heading[128];
@@ -352,7 +360,7 @@ static int cmd_export(const opts *o) {
 
 static int cmd_info(const opts *o) {
   palp_fem_config cfg;
-  if (build_config(o, &cfg)) return 2;
+  if (build_config(o, NULL, &cfg)) return 2;
   palp_fem_mesh m;
   if (load_mesh(o->log, &cfg, &m)) return 2;
   int nm = 0, nf = 0;
@@ -382,16 +390,16 @@ static int cmd_finger(const opts *o) {
     usage();
     return 2;
   }
-  palp_fem_config cfg;
-  if (build_config(o, &cfg)) return 2;
-  if (cfg.inp_path[0]) {
-    palp_log_error(o->log, "finger: --inp is not supported (the lesions need the generated mesh's regions)");
-    return 2;
-  }
   palp_scene scene;
   char err[512];
   if (palp_scene_load(o->scene, &scene, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s: %s", o->scene, err);
+    return 2;
+  }
+  palp_fem_config cfg;
+  if (build_config(o, scene.material, &cfg)) return 2;
+  if (cfg.inp_path[0]) {
+    palp_log_error(o->log, "finger: --inp is not supported (the lesions need the generated mesh's regions)");
     return 2;
   }
   err[0] = 0;
