@@ -83,6 +83,11 @@ void palp_cli_station_close(palp_cli_station *st) {
   st->pp = 0;
 }
 
+/* Catalogue entries read at once: every phantom of every server on the domain must fit, or
+ * a phantom past the first reads is never seen (8 hid the ninth phantom of
+ * config/server-exercises.json). 16 per server (PALP_SRV_MAX_PHANTOMS) x 16 servers. */
+#define CATALOGUE_READ_MAX 256
+
 int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Phantom *out,
                                char *err, size_t errlen) {
   int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
@@ -92,10 +97,10 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
   int result = PALP_EIO;
   char bad[256] = "";
   for (;;) {
-    void *ptr[8] = {NULL};
-    dds_sample_info_t info[8];
+    void *ptr[CATALOGUE_READ_MAX] = {NULL};
+    dds_sample_info_t info[CATALOGUE_READ_MAX];
     /* read, not take: the catalogue stays available to later calls. */
-    int n = dds_read(st->catalogue_r, ptr, info, 8, 8);
+    int n = dds_read(st->catalogue_r, ptr, info, CATALOGUE_READ_MAX, CATALOGUE_READ_MAX);
     for (int i = 0; i < n && result != 0; i++) {
       const palp_Phantom *p = ptr[i];
       /* Not alive: its server is gone (several servers on one domain). */
@@ -344,9 +349,9 @@ int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_
   int64_t settle = INT64_MAX; /* after the first match, 0.3 s for the other servers' entries */
   uint32_t best = 0, best_sessions = UINT32_MAX;
   while (palp_dds_now_ns() < end && palp_dds_now_ns() < settle) {
-    void *ptr[16] = {NULL};
-    dds_sample_info_t info[16];
-    int n = dds_read(st->catalogue_r, ptr, info, 16, 16);
+    void *ptr[CATALOGUE_READ_MAX] = {NULL};
+    dds_sample_info_t info[CATALOGUE_READ_MAX];
+    int n = dds_read(st->catalogue_r, ptr, info, CATALOGUE_READ_MAX, CATALOGUE_READ_MAX);
     for (int i = 0; i < n; i++) {
       const palp_Phantom *p = ptr[i];
       if (!info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE || strcmp(p->name, name) != 0) continue;

@@ -11,6 +11,14 @@ int main(void) {
   test_init();
   palp_srv_config cfg;
   test_config(&cfg, DOMAIN, 100);
+  /* Twelve phantoms, more than one read of 8 held: the station must see every one (it read 8
+   * at a time and never found the ninth phantom of config/server-exercises.json). */
+  for (int k = 2; k < 12; ++k) {
+    cfg.phantom[k] = cfg.phantom[1];
+    cfg.phantom[k].id = (uint32_t)k + 1;
+    snprintf(cfg.phantom[k].name, sizeof cfg.phantom[k].name, "test dome %c", 'A' + k);
+  }
+  cfg.phantom_count = 12;
   test_server ts = {0};
   test_server_start(&ts, &cfg);
   /* The server has published (and its writer holds) the catalogue well before
@@ -49,6 +57,13 @@ int main(void) {
       range &= ph.triangles._buffer[i] >= 0 && ph.triangles._buffer[i] < (int32_t)ph.rest._length;
     CHECK(range, "every triangle index is a vertex");
     palp_cli_phantom_free(&ph);
+  }
+  for (uint32_t id = 9; id <= 12; id++) {
+    palp_Phantom ph;
+    int rc = palp_cli_station_catalogue(&st, id, 5.0, &ph, err, sizeof err);
+    CHECK(rc == 0 && ph.phantom_id == id && ph.name[10] == (char)('A' + id - 1),
+          "phantom %u of 12 in the catalogue: %s", id, rc ? err : ph.name);
+    if (rc == 0) palp_cli_phantom_free(&ph);
   }
   palp_Phantom none;
   CHECK(palp_cli_station_catalogue(&st, 99, 0.5, &none, err, sizeof err) < 0, "phantom 99 is not hosted: %s", err);
