@@ -120,7 +120,9 @@ static const char ramp_chars[] = ".:-=+*#%@";
 void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FILE *out, int color) {
   const palp_Phantom *ph = v->phantom;
   double maxd = palp_cli_max_displacement(ph, d, NULL);
-  double scale = v->scale > 0 ? v->scale : (maxd > 0.005 ? maxd : 0.005); /* at least 5 mm full scale */
+  /* at least 0.25 mm full scale, so that a dome at rest does not show its round-off as dents;
+   * 5 mm hid the long-term domes' whole signal (0.4-0.8 mm under the paper's 3 N) */
+  double scale = v->scale > 0 ? v->scale : (maxd > 0.00025 ? maxd : 0.00025);
   const int nr = (int)(sizeof ramp256 / sizeof ramp256[0]), nc = (int)(sizeof ramp_chars - 1);
   for (int r = 0; r < v->h; r++) {
     for (int c = 0; c < v->w; c++) {
@@ -138,7 +140,7 @@ void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FIL
     }
     fputs(color ? "\033[0m\n" : "\n", out);
   }
-  fprintf(out, "frame %llu  t = %.3f s  max displacement %.2f mm (full scale %.1f mm)  volume %.1f%% of rest  "
+  fprintf(out, "frame %llu  t = %.3f s  max displacement %.2f mm (full scale %.2f mm)  volume %.1f%% of rest  "
                "pressure %+.0f Pa\n",
           (unsigned long long)d->frame, d->sim_time, maxd * 1e3, scale * 1e3,
           d->rest_volume > 0 ? 100.0 * d->volume / d->rest_volume : 0.0, d->pressure);

@@ -156,8 +156,11 @@ echo
 echo "== instructor observer (following alice) =="
 grep -E "presses|lifts|pressing" "$out/observer.log" | head -12 || true
 echo
-echo "== visual station (bob's phantom), last terminal map =="
-awk '/^session [0-9]+, phantom/{buf=""} {buf=buf $0 "\n"} END{printf "%s", buf}' "$out/visual.log" | head -24
+echo "== visual station (bob's phantom), its terminal map at the deepest press =="
+awk '/^session [0-9]+, phantom/{buf=""} {buf=buf $0 "\n"}
+     /^frame [0-9]+ .*max displacement/{ for (i = 1; i < NF; i++) if ($i == "displacement") d = $(i + 1) + 0;
+                                          if (best == "" || d > bestd) { best = buf; bestd = d } }
+     END{printf "%s", best}' "$out/visual.log" | head -24
 echo
 echo "== alice's haptic station: the force she felt =="
 sed -n '/^feedback |F|/,$p' "$out/alice.log"
