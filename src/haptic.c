@@ -67,9 +67,15 @@ static double clamp01(double s) { return s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s); }
 static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now) {
   const double age = fmin(now - h->cur_at, h->def.max_extrapolation);
   palp_vec3 f = palp_local_model_force(&h->cur, x, age);
-  const double blend = h->def.blend_time > 0.0 ? h->def.blend_time : h->cur.period;
-  const double s = blend > 0.0 ? clamp01((now - h->cur_at) / blend) : 1.0;
+  const double s = h->blend_len > 0.0 ? clamp01((now - h->cur_at) / h->blend_len) : 1.0;
   return v3_add(f, v3_scale(h->prev.force, 1.0 - s)); /* prev.force holds the offset delta */
+}
+
+/* The share of the model force a silent server still leaves on the hand: 1 while models
+ * are fresh, down to 0 over fade_time once the newest is older than stale_time. */
+static double stale_scale(const palp_haptic *h, double now) {
+  const double age = now - h->cur_at;
+  return age > h->def.stale_time ? clamp01(1.0 - (age - h->def.stale_time) / h->def.fade_time) : 1.0;
 }
 
 int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
@@ -77,16 +83,24 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
   if (!model_ok(m)) return PALP_EINVAL;
   if (h->have && !(m->time > h->cur.time)) return 0; /* late or repeated: the newer one stands */
   palp_vec3 delta = v3(0, 0, 0);
-  if (h->have && h->rendered) {
-    /* What the hand feels now (before damping and limit) minus the new model's answer. */
-    const palp_vec3 was = model_part(h, h->last_x, now);
+  double blend = h->def.blend_time > 0.0 ? h->def.blend_time : m->period;
+  if (h->rendered) {
+    /* What the hand feels now (before damping and limit) minus the new model's answer.
+     * Before the first model the hand felt nothing, and a faded-out stale model left only
+     * its faded share: a device already pressed in when the models (re)start must not
+     * get the whole force in one tick (it did: 0 -> 2.1 N when the demo's first model
+     * came 0.8 s after the press), so those onsets blend over fade_time, not a period. */
+    const double keep = h->have ? stale_scale(h, now) : 0.0;
+    const palp_vec3 was = h->have ? v3_scale(model_part(h, h->last_x, now), keep) : v3(0, 0, 0);
     delta = v3_sub(was, palp_local_model_force(m, h->last_x, 0.0));
+    if (keep < 1.0) blend = fmax(blend, h->def.fade_time);
   }
   h->prev = h->cur;
   h->prev.force = delta;
   h->prev_at = h->cur_at;
   h->cur = *m;
   h->cur_at = now;
+  h->blend_len = blend;
   h->have = h->have ? 2 : 1;
   h->models++;
   return 1;
@@ -96,6 +110,8 @@ void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out
   palp_haptic_out o = {.force = v3(0, 0, 0), .proxy = x, .requested = 0.0, .flags = 0};
   if (!h->have || !v3_isfinite(x) || !isfinite(now)) {
     o.flags |= PALP_HAPTIC_NO_MODEL;
+    /* the hand felt 0 N here: the first model blends in from it (palp_haptic_update) */
+    if (!h->have && v3_isfinite(x) && isfinite(now)) h->last_x = x, h->last_t = now, h->rendered = 1;
     *out = o;
     return;
   }
@@ -116,10 +132,9 @@ void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out
     }
   }
   /* A silent server must not leave a force on the hand. */
-  const double age = now - h->cur_at;
-  if (age > h->def.stale_time) {
+  if (now - h->cur_at > h->def.stale_time) {
     o.flags |= PALP_HAPTIC_STALE;
-    f = v3_scale(f, clamp01(1.0 - (age - h->def.stale_time) / h->def.fade_time));
+    f = v3_scale(f, stale_scale(h, now));
   }
   const double mag = v3_len(f);
   o.requested = mag;

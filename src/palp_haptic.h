@@ -6,7 +6,8 @@
  * a palp_local_model (palp.h). Between models the station evaluates the newest one
  * at the device's current position every haptic tick; when a new model arrives the
  * force crossfades from the old model's prediction to the new one's over one
- * physics period, so a correction never reaches the hand as a step. A model that
+ * physics period, so a correction never reaches the hand as a step; the first model, and
+ * the first after a stale fade-out, blend in from what the hand felt over fade_time. A model that
  * is late is extrapolated for at most max_extrapolation, then held; a model older
  * than stale_time fades the force out over fade_time (a vanished server must not
  * leave a force on the hand). The force is limited to max_force, and the caller is
@@ -55,6 +56,8 @@ typedef struct palp_haptic {
   palp_haptic_def def;
   palp_local_model cur, prev;
   double cur_at, prev_at; /* station time each model arrived [s] */
+  double blend_len;       /* the current arrival's crossfade [s]: the model's period, or
+                             fade_time when models (re)start under a pressed device */
   int have;               /* models received: 0, 1 or 2 (= both valid) */
   palp_vec3 last_x;       /* device point of the last render [m] */
   double last_t;          /* [s] */

@@ -237,9 +237,27 @@ static void test_renderer(void) {
                         .normal = {0, 0, 1}, .force = {0, 0, 1.0}};
   m.stiffness[2][2] = 500.0;
   palp_haptic_out o;
-  palp_haptic_render(&h, m.device, 0.0, &o);
-  CHECK(o.flags & PALP_HAPTIC_NO_MODEL, "no model: flagged");
-  CHECK(len(o.force) == 0.0, "no model: no force");
+  {
+    /* A loop already rendering when its first model comes (the device pressed in before the
+     * server answered: 0.8 s in the demo) gets the force over fade_time, not in one tick. */
+    palp_haptic h0;
+    CHECK(palp_haptic_init(&h0, &def) == 0, "init");
+    palp_haptic_render(&h0, m.device, -0.010, &o);
+    CHECK(o.flags & PALP_HAPTIC_NO_MODEL, "no model: flagged");
+    CHECK(len(o.force) == 0.0, "no model: no force");
+    palp_haptic_update(&h0, &m, 0.0);
+    double prev = 0.0, worst = 0.0, at_half = 0.0;
+    for (int k = 0; k <= 150; ++k) {
+      palp_haptic_render(&h0, m.device, 0.001 * k, &o);
+      worst = fmax(worst, fabs(o.force.z - prev));
+      prev = o.force.z;
+      if (k == 50) at_half = o.force.z;
+    }
+    /* linear over fade_time (0.1 s): 1 N in 100 ticks, 0.01 N a tick */
+    CHECK(worst <= 0.0101, "onset: largest tick-to-tick step %.4f N (bound 0.0101 N: 1 N over 100 ticks)", worst);
+    CHECK(fabs(at_half - 0.5) < 1e-9, "onset: half the force half way (%.4f N)", at_half);
+    CHECK(fabs(prev - 1.0) < 1e-12, "onset: the model's force once faded in (%.6f N)", prev);
+  }
   palp_haptic_update(&h, &m, 0.0);
   palp_haptic_render(&h, m.device, 0.0, &o);
   CHECK(fabs(o.force.z - 1.0) < 1e-12, "at the model's device point: its force (%.6f N)", o.force.z);
@@ -279,6 +297,22 @@ static void test_renderer(void) {
   bad.time = 2.0;
   bad.force.x = NAN;
   CHECK(palp_haptic_update(&h, &bad, 0.41) < 0, "a non-finite model is refused");
+  /* The server comes back: its model's 1.3 N blends in from the faded-out 0 N over fade_time. */
+  palp_local_model m3 = m2;
+  m3.time = 1.5;
+  m3.force = (palp_vec3){0, 0, 1.3};
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.409, &o);
+  const double faded = o.force.z;
+  CHECK(palp_haptic_update(&h, &m3, 0.41) == 1, "a newer model after the silence is taken");
+  double prev = faded, worst = 0.0;
+  for (int k = 0; k <= 120; ++k) {
+    palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.41 + 0.001 * k, &o);
+    worst = fmax(worst, fabs(o.force.z - prev));
+    prev = o.force.z;
+  }
+  CHECK(faded == 0.0 && worst <= 0.0131, "resumed: from %.4f N, largest tick step %.4f N (bound 0.0131: 1.3 N over 100 ticks)",
+        faded, worst);
+  CHECK(fabs(prev - 1.3) < 1e-9, "resumed: the new model's force after fade_time (%.4f N)", prev);
 }
 
 int main(void) {
