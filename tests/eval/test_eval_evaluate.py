@@ -299,6 +299,11 @@ def test_errors(tool, scene):
     tmp = tempfile.mkdtemp(prefix="palp_eval_err_")
     bad_json = os.path.join(tmp, "bad.json")
     open(bad_json, "w").write("{ \"name\": \"x\", \"mesh\": { \"radius_m\": 0.04, ")
+    bad_material_scene = os.path.join(tmp, "badmaterial.json")
+    sc = json.load(open(scene))
+    sc["material"] = "no_such_profile"
+    sc["parameters"] = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
+    json.dump(sc, open(bad_material_scene, "w"))
     no_contact = os.path.join(tmp, "nocontact.json")
     open(no_contact, "w").write(
         '{"name": "n", "mesh": {"radius_m": 0.04, "vertex_count": 100},'
@@ -326,6 +331,9 @@ def test_errors(tool, scene):
         (["judge"], 2, ["judge"]),
         (["calibrate", "--scene", scene, "--fit", "E1,E9"], 2, ["E9"]),
         (["calibrate", "--scene", os.path.join(tmp, "missing.json")], 1, ["not found"]),
+        (["calibrate", "--scene", scene, "--recovery-target", "0"], 2, ["--recovery-target", ">= 0.01"]),
+        # a scene whose parameter file names a profile the FEM does not know: refused, named
+        (["evaluate", "--scene", bad_material_scene], 1, ["material", "no_such_profile"]),
     ]
     for args, status, words in cases:
         r = run([tool] + args + ["--out", out] if args[0] in ("evaluate", "calibrate") and "--out" not in args

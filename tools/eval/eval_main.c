@@ -47,6 +47,7 @@ typedef struct options {
   int frame_stride, vertex_stride, max_iter;
   double max_minutes;
   double force_weight, prior_weight, recovery_weight, bias_weight, bound;
+  double recovery_target; /* [s]; 0 = the default (1.0 s, the paper) */
   int recovery_auto;
   /* evaluate --sites: runs over random contact sites and force levels */
   int sites;
@@ -75,7 +76,7 @@ static void usage(FILE *f) {
           "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity,added_mass,support_bulk_fraction,bending_stiffness]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
-          "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM]\n"
+          "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM] [--recovery-target S]\n"
           "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
           "                           [--finger pole,45deg,70deg,pole_lesion [--finger-weight CM]]\n"
@@ -197,6 +198,10 @@ static int parse_args(int argc, char **argv, options *o) {
         o->recovery_auto = 0;
         bad = parse_double(a, v, 0.0, &o->recovery_weight);
       }
+    } else if (!strcmp(a, "--recovery-target")) {
+      /* the FEM's own recovery is the sound target for a profile whose FEM does not recover
+       * in the paper's ~1 s (long-term: 0.69 s, docs/materials.md) */
+      bad = parse_double(a, v, 0.01, &o->recovery_target);
     } else if (!strcmp(a, "--quiet")) o->quiet = 1, takes = 0;
     else if (!strcmp(a, "--no-plots")) o->plots = 0, takes = 0;
     else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -377,7 +382,7 @@ static int load_setup(const options *o, setup *s) {
   /* the reference the scene's parameters were calibrated against, unless the FEM config
    * or --material says otherwise (docs/materials.md) */
   if (s->scene.material[0] && palp_fem_config_set_material(&s->fem, s->scene.material, err, sizeof err)) {
-    palp_log_error(o->log, "%s: material: %s", s->scene_path, err);
+    palp_log_error(o->log, "%s: %s", s->scene_path, err);
     return 1;
   }
   if (o->fem_config) {
@@ -1084,6 +1089,7 @@ static int cmd_calibrate(const options *o) {
   def.bias_weight = o->bias_weight;
   def.bound_factor = o->bound;
   def.recovery_weight = o->recovery_weight;
+  if (o->recovery_target > 0) def.recovery_target = o->recovery_target;
   def.max_iter = o->max_iter;
   def.max_seconds = 60.0 * o->max_minutes;
   def.verbose = !o->quiet;

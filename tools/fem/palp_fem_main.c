@@ -245,7 +245,7 @@ static int build_config(const opts *o, const char *scene_material, palp_fem_conf
   *cfg = palp_fem_default_config();
   char err[256];
   if (scene_material && scene_material[0] && palp_fem_config_set_material(cfg, scene_material, err, sizeof err) != 0) {
-    palp_log_error(o->log, "%s: material: %s", o->scene ? o->scene : "scene", err);
+    palp_log_error(o->log, "%s: %s", o->scene ? o->scene : "scene", err);
     return -1;
   }
   if (o->config && palp_fem_config_load(o->config, cfg, err, sizeof err) != 0) {
