@@ -71,9 +71,15 @@ palp_cli_expert_cfg palp_cli_expert_default(void);
 /* Runs the exam; returns the spots (malloc'd, free()) and their count in *count. */
 palp_cli_expert_spot *palp_cli_expert_exam(palp_cli_hand *h, const palp_cli_expert_cfg *cfg, int *count);
 /* A free spot's medium-depth force over a quadratic fitted to the free spots between
- * r_in and r_out away: F / c0 - 1, or NAN with fewer than 10 neighbours. */
+ * r_in and r_out away: F / c0 - 1, or NAN with fewer than 10 neighbours or fewer than 2
+ * beyond r_out / 2 on any side (+-x, +-y of the tangent plane: the spot is not surrounded). */
 double palp_cli_expert_rise(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, int i, double r_in,
                             double r_out);
+/* Every spot's rise as the lump rule sees it: palp_cli_expert_rise (12-28 mm), then again
+ * with the spots that rose above half the threshold left out of the others' surroundings.
+ * NAN for a spot not free or without enough surroundings. Returns 0 or PALP_ENOMEM. */
+int palp_cli_expert_rises(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,
+                          double *rise);
 /* The strongest spot of each cluster rising above cfg->threshold: writes up to cap
  * surface points [m] and times, returns the count; the largest rise in *max_rise. */
 int palp_cli_expert_lumps(const palp_cli_hand *h, const palp_cli_expert_spot *sp, int n, const palp_cli_expert_cfg *cfg,

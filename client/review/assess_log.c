@@ -18,8 +18,8 @@
 static const char FREE_PRACTICE[] =
     "{\"name\":\"free-practice\",\"title\":\"Free practice\",\"phantom\":\"(session scene)\","
     "\"instructions\":\"Free practice: no hidden lesions.\",\"time_limit_s\":3600,\"lesions\":[],"
-    "\"pressure_bands\":{\"light\":{\"depth_mm\":[1,5]},\"medium\":{\"depth_mm\":[5,12]},"
-    "\"deep\":{\"depth_mm\":[12,25]}},\"max_force_N\":20,\"match_margin_mm\":10,"
+    "\"pressure_bands\":{\"light\":{\"depth_mm\":[1,4]},\"medium\":{\"depth_mm\":[4,9]},"
+    "\"deep\":{\"depth_mm\":[9,18]}},\"max_force_N\":15,\"match_margin_mm\":10,"
     "\"rubric\":{\"weights\":{\"thoroughness\":1},\"pass\":{\"sensitivity\":0,"
     "\"coverage\":{\"light\":0,\"medium\":0,\"deep\":0},\"score\":0}}}";
 

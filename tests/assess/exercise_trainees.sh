@@ -1,7 +1,7 @@
 #!/bin/sh
 # issue 13 over real DDS and a real SQLite file: palp-server hosts the test exercise
-# (tests/assess/exercise_expert.json: two 10 mm lesions 10 mm deep on the stiff TEST
-# phantom) with a session log; palp-client's scripted novice (--input sim:novice: five
+# (tests/assess/exercise_expert.json: two 15 mm lumps 10 mm deep, 5x, on the breast-tissue
+# TEST phantom, the shipped teaching exercise's) with a session log; palp-client's scripted novice (--input sim:novice: five
 # light presses at random places, one mark at the last) palpates it by position; then
 # assess_log runs palp_assess on the server's log (samples and findings through the
 # readers): medium coverage < 30 %, a lesion missed. Domain 62.

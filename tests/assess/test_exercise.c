@@ -81,7 +81,7 @@ int main(void) {
   const struct {
     const char *file;
     double polar_deg, az_deg, depth_mm, diameter_mm;
-  } shipped[] = {{"easy", 30, 120, 12, 20}, {"medium", 45, 300, 10, 10}, {"hard", 35, 200, 20, 5}};
+  } shipped[] = {{"easy", 30, 120, 12, 20}, {"medium", 45, 300, 12, 15}, {"hard", 35, 200, 10, 10}};
   for (int k = 0; k < 3; ++k) {
     char path[1024];
     snprintf(path, sizeof path, "%s/exercises/%s.json", PALP_CONFIG_DIR, shipped[k].file);

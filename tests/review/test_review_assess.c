@@ -66,7 +66,7 @@ int main(int argc, char **argv) {
          e->false_positives, e->coverage[0], e->coverage[1], e->coverage[2], palp_pattern_name(e->pattern), e->score);
   printf("novice: found %d/%d, false %d, coverage %.3f/%.3f/%.3f, %s, score %.1f\n", n->found, n->lesion_count,
          n->false_positives, n->coverage[0], n->coverage[1], n->coverage[2], palp_pattern_name(n->pattern), n->score);
-  CHECK(a[0].has_exercise && !strcmp(a[0].exercise_name, "test-two-1cm"), "expert's exercise named (%s)", a[0].exercise_name);
+  CHECK(a[0].has_exercise && !strcmp(a[0].exercise_name, "test-two-lumps"), "expert's exercise named (%s)", a[0].exercise_name);
   CHECK(e->lesion_count == 2 && e->found == 2, "the logged expert finds every 10 mm lesion (%d of %d)", e->found,
         e->lesion_count);
   CHECK(e->false_positives == 0, "no false positive (%d)", e->false_positives);
