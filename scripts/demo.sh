@@ -117,19 +117,20 @@ carol=$!
   --print-period 1 --plot --trace-csv "$out/dana-haptic.csv" >"$out/dana.log" 2>&1 &
 pids+=($!)
 dana=$!
-# An exercise (issue 13): "teaching" (two 1 cm lumps 10 mm deep, hidden; a phantom whose
-# lumps are exaggerated so that they can be felt, docs/assessment.md) on phantom 14, taken
-# by two scripted trainees palpating by position: nina, a novice (five light presses at
-# random places, one guessed mark), and eve, a MammaCare expert (vertical strips at three
-# pressures, marks where the force at equal depth rises above its surroundings; ~165 s in
-# real time, the longest part of the demo; PALP_DEMO_EXPERT=0 leaves her out).
+# An exercise (issue 13): "teaching" (two 1.5 cm lumps, 5x the fat, 10 mm deep, hidden in
+# the breast-tissue dome; realistic, not exaggerated: +18-26% of fingertip force over them,
+# docs/assessment.md) on phantom 14, taken by two scripted trainees palpating by position:
+# nina, a novice (five light presses at random places, one guessed mark), and eve, a
+# MammaCare expert (vertical strips at three pressures, marks where the force at equal depth
+# rises above its surroundings; ~2 min in real time, the longest part of the demo;
+# PALP_DEMO_EXPERT=0 leaves her out).
 "$client" --role trainee --domain "$domain" --phantom 14 --name nina --input sim:novice --print-period 0 \
   >"$out/nina.log" 2>&1 &
 pids+=($!)
 nina=$!
 eve=
 if [ "${PALP_DEMO_EXPERT:-1}" = 1 ]; then
-  echo "demo: eve, the scripted expert, examines the teaching exercise for ~3 minutes (PALP_DEMO_EXPERT=0 skips her)"
+  echo "demo: eve, the scripted expert, examines the teaching exercise for ~2 minutes (PALP_DEMO_EXPERT=0 skips her)"
   "$client" --role trainee --domain "$domain" --phantom 14 --name eve --input sim:expert --print-period 0 \
     >"$out/eve.log" 2>&1 &
   pids+=($!)
