@@ -50,7 +50,9 @@ fb=$(r station feedback_last_N)
 num_in "$fb" 2.85 3.15 && num_ge "$(r station feedback_samples)" 50 \
   && ok "feedback: $(r station feedback_samples) samples, last |F| $fb N (3 N press, want within 5%)" \
   || bad "feedback: $(r station feedback_samples) samples, last |F| $fb N"
-[ "$(r station deformation_vertices)" = 338 ] && num_ge "$(r station deformation_samples)" 10 && num_ge "$(r station deformation_max_mm)" 5 \
+# the press shows in the meshes: the default long-term dome dents 0.37 mm under the 3 N patch
+# (the FEM 0.5 mm, docs/materials.md; a dome at rest stays under 0.01 mm), so at least 0.2 mm
+[ "$(r station deformation_vertices)" = 338 ] && num_ge "$(r station deformation_samples)" 10 && num_ge "$(r station deformation_max_mm)" 0.2 \
   && ok "deformation: $(r station deformation_samples) meshes of 338 vertices, max displacement $(r station deformation_max_mm) mm" \
   || bad "deformation: $(r station deformation_samples) samples, $(r station deformation_vertices) vertices, $(r station deformation_max_mm) mm"
 num_ge "$(r station rejected_samples)" 1 && ok "NaN sample rejected by the server ($(r station rejected_samples) in the session state)" \
