@@ -315,10 +315,61 @@ static void test_renderer(void) {
   CHECK(fabs(prev - 1.3) < 1e-9, "resumed: the new model's force after fade_time (%.4f N)", prev);
 }
 
+/* The stiff default dome (config/paper_step_long_term.json, ~2.3 N/mm under the tip):
+ * pressed slowly by position (1 mm/s of device travel, 1 kHz) to 6 mm at polar 30, 45 and
+ * 60 deg, no tick-to-tick force step beyond the motion's linear trend larger than
+ * max(2% of the force, 0.01 N). With a pad spring per feature, a vertex's neighbours
+ * joined the contact at 45 deg already ~1 mm into the pad and the force stepped by
+ * 0.82 N (15%) in one tick, 1.27 N (24%) in three (docs/haptics.md). */
+static void test_stiff_press(void) {
+  palp_scene sc_;
+  char err[256];
+  if (palp_scene_load(PALP_CONFIG_DIR "/paper_step_long_term.json", &sc_, err, sizeof err)) {
+    CHECK(0, "long-term scene: %s", err);
+    return;
+  }
+  sc_.world.dt = 0.001;
+  const double polar[3] = {30, 45, 60};
+  for (int ia = 0; ia < 3; ++ia) {
+    int e = 0;
+    palp_world *w = palp_world_create(&sc_.world, &e);
+    if (!w) {
+      CHECK(0, "world: %d", e);
+      return;
+    }
+    const double a = polar[ia] * PALP_TEST_PI / 180.0;
+    const palp_vec3 n = {sin(a), 0, cos(a)};
+    const int f = palp_world_add_finger(w, sc(n, R + r + 0.001), r);
+    double worst = 0.0, fmax_ = 0.0, F1 = 0.0, F2 = 0.0;
+    int over = 0, k = 0;
+    for (double dd = -0.001; dd <= 0.006; dd += 1e-6, ++k) {
+      palp_world_set_finger_device(w, f, sc(n, R + r - dd));
+      palp_world_step(w);
+      palp_local_model lm;
+      palp_world_finger_local_model(w, f, &lm);
+      const double F = dot(lm.force, n);
+      if (k >= 2 && F > 0.0) {
+        const double step = fabs(F - 2.0 * F1 + F2);
+        if (step > fmax(0.02 * F, 0.01)) over++;
+        if (step > worst) worst = step;
+      }
+      if (F > fmax_) fmax_ = F;
+      F2 = F1, F1 = F;
+    }
+    printf("stiff dome, %g deg: pressed to 6 mm at 1 mm/s, force up to %.2f N, largest tick step off the trend %.4f N\n",
+           polar[ia], fmax_, worst);
+    CHECK(fmax_ > 5.0, "%g deg: the press reaches 5 N (%.2f N)", polar[ia], fmax_);
+    CHECK(over == 0, "%g deg: no tick step off the trend beyond max(2%%, 0.01 N) (%d ticks; largest %.4f N)", polar[ia],
+          over, worst);
+    palp_world_destroy(w);
+  }
+}
+
 int main(void) {
   test_renderer();
   test_presses();
   test_slide();
+  test_stiff_press();
   test_local_model();
   CHECK_DONE();
 }
