@@ -225,7 +225,7 @@ static int write_inp(const char *path, const palp_fem_mesh *m, const quad_mesh *
     }
   }
   /* the clamp, and with a quarter the symmetry planes: 1e-12 m against R = 0.04 m (the planes'
-   * nodes are exactly 0, the nearest others ~1e-4 m away) */
+   * nodes are exactly 0, the nearest others >= ~0.5 mm away even at level 7) */
   static const char *const nset[3] = {"BASE", "XSYM", "YSYM"};
   for (int s = 0; s < (quarter ? 3 : 1); ++s) {
     fprintf(f, "*NSET, NSET=%s\n", nset[s]);
