@@ -324,7 +324,7 @@ int main(int argc, char **argv) {
          relaxed_c10(&cfg, &cfg.membrane));
   /* the first eight columns are what tests/fem/test_ccx.sh reads */
   printf("%5s %8s %14s %8s %8s %14s %8s %9s %8s %8s %7s\n", "level", "hexa", "palp uz [mm]", "wall s", "nodes20",
-         "ccx uz [mm]", "wall s", "ccx/palp", "palp MB", "ccx MB", "newton");
+         "ccx uz [mm]", "wall s", "ccx/palp", "palp MiB", "ccx MiB", "newton");
   int fail = 0;
   for (const char *l = levels; *l;) {
     const int L = (int)strtol(l, (char **)&l, 10);
