@@ -3,6 +3,8 @@
  * (Debian's calculix-ccx) on the project's own hemisphere mesh made quadratic.
  *
  *   ccx_crosscheck [--levels 1,2,3] [--profile paper_long_term] [--force 3] [--dir DIR] [--ccx PATH]
+ *                  [--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter]
+ *                  [--palp-inc K]
  *
  * For each level: the project's relaxed static pole displacement under distribution II (a
  * uniform vertical traction of total F over the 5.2 cm^2 cap around the pole, as
@@ -15,12 +17,28 @@
  * integrated over the curved 8-node faces (6 x 6 Gauss points, the same point-in-cap rule and
  * quadrature as the project's load here)
  * into *CLOAD dead loads scaled to exactly F. The pole's uz is read from ccx's .dat file.
- * Built, not run by CTest (level 3 takes minutes in ccx); the test fem_ccx runs level 1.
+ * Built, not run by CTest (level 3 takes minutes in ccx); the test fem_ccx runs levels 1 and 2.
+ *
+ * --palp-only skips CalculiX (the project's side alone reaches levels 5-7, where a quadratic ccx
+ * deck would be 3-7 times larger than the largest it has solved). --ccx-inc sets ccx's initial
+ * and largest load increment (default 0.25): at level 4 its Newton diverged in the third of
+ * four increments. --ccx-timeout stops ccx after that many seconds (coreutils timeout), so a
+ * run that diverges and keeps cutting back cannot hold the shared machine. --ccx-quarter gives
+ * ccx only the quarter x >= 0, y >= 0 with symmetry conditions (ux = 0 on x = 0, uy = 0 on
+ * y = 0): the O-grid, the clamp and the cap load are symmetric about both planes (the planes
+ * are mesh planes, x = 0 and y = 0 exactly), so the solution is the full model's, at a quarter of
+ * the unknowns and ~1/16 of SPOOLES's factorisation (its only direct solver in Debian's build);
+ * the full level 4 deck took >26 min without finishing. Peak resident memory
+ * is printed per side: palp's is this process's peak so far (run one level per process for a
+ * per-level figure), ccx's the largest child's. --palp-inc sets palp's load increments (default
+ * 4): breast_tissue's 4.5 mm response inverts an element within the third of four from level 3 on.
  */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -118,7 +136,7 @@ static void shape8(double xi, double eta, double N[8], double dxi[8], double det
 }
 
 /* The traction on the curved faces: nodal z loads [N] (length q->n), total exactly F. */
-static int quad_load(const palp_fem_mesh *m, quad_mesh *q, double F, double area, double *fz) {
+static int quad_load(const palp_fem_mesh *m, quad_mesh *q, double F, double area, int quarter, double *fz) {
   int (*faces)[4], nf;
   if (palp_fem_surface_faces(m, &faces, &nf)) return PALP_ENOMEM;
   memset(fz, 0, sizeof(double) * (size_t)q->n);
@@ -128,6 +146,12 @@ static int quad_load(const palp_fem_mesh *m, quad_mesh *q, double F, double area
     int nd[8];
     for (int a = 0; a < 4; ++a) nd[a] = faces[k][a];
     for (int a = 0; a < 4; ++a) nd[4 + a] = midpoint(q, m, faces[k][a], faces[k][(a + 1) % 4]); /* existing */
+    /* quarter model: only faces in x > 0, y > 0 load nodes (so nodes on a symmetry plane get
+     * their half, the pole its quarter), but every face counts in the area, so the loads are
+     * the full model's restricted to the quarter (total F / 4) */
+    double cx = 0.0, cy = 0.0;
+    for (int a = 0; a < 4; ++a) cx += m->x[nd[a]][0], cy += m->x[nd[a]][1];
+    const int loads = !quarter || (cx > 0.0 && cy > 0.0);
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) {
         double N[8], dxi[8], deta[8], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
@@ -142,7 +166,8 @@ static int quad_load(const palp_fem_mesh *m, quad_mesh *q, double F, double area
         const double n[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2],
                              Xa[0] * Xb[1] - Xa[1] * Xb[0]};
         const double dA = norm3d(n) * GW[i] * GW[j];
-        for (int a = 0; a < 8; ++a) fz[nd[a]] -= N[a] * dA;
+        if (loads)
+          for (int a = 0; a < 8; ++a) fz[nd[a]] -= N[a] * dA;
         total += dA;
       }
   }
@@ -159,55 +184,92 @@ static double relaxed_c10(const palp_fem_config *cfg, const palp_fem_material *m
   return ginf * mt->c10;
 }
 
+/* Element e belongs to the quarter x > 0, y > 0 (no element straddles x = 0 or y = 0: they
+ * are lattice planes of the O-grid). */
+static int in_quarter(const palp_fem_mesh *m, int e) {
+  double cx = 0.0, cy = 0.0;
+  for (int k = 0; k < 8; ++k) cx += m->x[m->hex[e][k]][0], cy += m->x[m->hex[e][k]][1];
+  return cx > 0.0 && cy > 0.0;
+}
+
+/* Writes the deck; *written = nodes in it. */
 static int write_inp(const char *path, const palp_fem_mesh *m, const quad_mesh *q, const double *fz,
-                     const palp_fem_config *cfg, const char *profile, int level) {
-  FILE *f = fopen(path, "w");
-  if (!f) return PALP_EIO;
-  fprintf(f, "*HEADING\npalp ccx cross-check: level %d, profile %s, relaxed moduli, C3D20R\n*NODE, NSET=NALL\n", level,
-          profile);
+                     const palp_fem_config *cfg, const char *profile, int level, double inc, int quarter,
+                     int *written) {
+  uint8_t *used = calloc((size_t)q->n, 1);
+  FILE *f = used ? fopen(path, "w") : NULL;
+  if (!f) {
+    free(used);
+    return PALP_EIO;
+  }
+  for (int e = 0; e < q->ne; ++e)
+    if (!quarter || in_quarter(m, e))
+      for (int k = 0; k < 20; ++k) used[q->el[e][k]] = 1;
+  fprintf(f, "*HEADING\npalp ccx cross-check: level %d, profile %s, relaxed moduli, C3D20R%s\n*NODE, NSET=NALL\n",
+          level, profile, quarter ? ", quarter x >= 0, y >= 0 with symmetry planes" : "");
   /* 14 digits: CalculiX reads at most ~20 characters per field (a 22-character %.17g failed). */
-  for (int i = 0; i < q->n; ++i) fprintf(f, "%d, %.14g, %.14g, %.14g\n", i + 1, q->x[i][0], q->x[i][1], q->x[i][2]);
+  *written = 0;
+  for (int i = 0; i < q->n; ++i)
+    if (used[i]) {
+      fprintf(f, "%d, %.14g, %.14g, %.14g\n", i + 1, q->x[i][0], q->x[i][1], q->x[i][2]);
+      ++*written;
+    }
   static const char *const set[2] = {"GEL", "MEMBRANE"};
   for (int r = 0; r < 2; ++r) {
     fprintf(f, "*ELEMENT, TYPE=C3D20R, ELSET=%s\n", set[r]);
     for (int e = 0; e < q->ne; ++e) {
-      if (m->region[e] != (r == 0 ? PALP_FEM_GEL : PALP_FEM_MEMBRANE)) continue;
+      if (m->region[e] != (r == 0 ? PALP_FEM_GEL : PALP_FEM_MEMBRANE) || (quarter && !in_quarter(m, e))) continue;
       fprintf(f, "%d", e + 1);
       for (int k = 0; k < 20; ++k) fprintf(f, ",%s%d", k == 15 ? "\n" : " ", q->el[e][k] + 1);
       fputc('\n', f);
     }
   }
-  fputs("*NSET, NSET=BASE\n", f);
-  int c = 0;
-  for (int i = 0; i < q->n; ++i)
-    if (q->x[i][2] <= 1e-9) fprintf(f, "%d,%s", i + 1, ++c % 12 ? "" : "\n");
-  fprintf(f, "\n*NSET, NSET=TOP\n%d\n", m->top_node + 1);
+  /* the clamp, and with a quarter the symmetry planes: 1e-12 m against R = 0.04 m (the planes'
+   * nodes are exactly 0, the nearest others >= ~0.5 mm away even at level 7) */
+  static const char *const nset[3] = {"BASE", "XSYM", "YSYM"};
+  for (int s = 0; s < (quarter ? 3 : 1); ++s) {
+    fprintf(f, "*NSET, NSET=%s\n", nset[s]);
+    int c = 0;
+    for (int i = 0; i < q->n; ++i) {
+      const int on = s == 0 ? q->x[i][2] <= 1e-9 : fabs(q->x[i][s - 1]) <= 1e-12;
+      if (used[i] && on) fprintf(f, "%d,%s", i + 1, ++c % 12 ? "" : "\n");
+    }
+    fputc('\n', f);
+  }
+  fprintf(f, "*NSET, NSET=TOP\n%d\n", m->top_node + 1);
   const palp_fem_material *mt[2] = {&cfg->gel, &cfg->membrane};
   for (int r = 0; r < 2; ++r)
     fprintf(f, "*MATERIAL, NAME=M%s\n*HYPERELASTIC, NEO HOOKE\n%.10g, %.10g\n*SOLID SECTION, ELSET=%s, MATERIAL=M%s\n",
             set[r], relaxed_c10(cfg, mt[r]), mt[r]->d1, set[r], set[r]);
-  fputs("*BOUNDARY\nBASE, 1, 3\n*STEP, NLGEOM, INC=1000\n*STATIC\n0.25, 1.0, 1e-4, 0.25\n*CLOAD\n", f);
+  fputs(quarter ? "*BOUNDARY\nBASE, 1, 3\nXSYM, 1, 1\nYSYM, 2, 2\n" : "*BOUNDARY\nBASE, 1, 3\n", f);
+  /* initial = largest increment: ccx may cut back below it, never grow past it */
+  fprintf(f, "*STEP, NLGEOM, INC=1000\n*STATIC\n%.6g, 1.0, 1e-5, %.6g\n*CLOAD\n", inc, inc);
   for (int i = 0; i < q->n; ++i)
-    if (fz[i] != 0.0) fprintf(f, "%d, 3, %.14g\n", i + 1, fz[i]);
+    if (fz[i] != 0.0 && used[i]) fprintf(f, "%d, 3, %.14g\n", i + 1, fz[i]);
   fputs("*NODE PRINT, NSET=TOP\nU\n*END STEP\n", f);
+  free(used);
   return fclose(f) ? PALP_EIO : 0;
 }
 
-/* The last "displacements ... for set TOP" block of ccx's .dat: uz of its node. */
-static int read_top_uz(const char *dat, double *uz) {
+/* The last "displacements ... for set TOP and time T" block of ccx's .dat: uz of its node, and T.
+ * NODE PRINT writes every converged increment, so T < 1 means ccx stopped before the full load. */
+static int read_top_uz(const char *dat, double *uz, double *time) {
   FILE *f = fopen(dat, "r");
   if (!f) return PALP_EIO;
   char line[512];
   int in = 0, got = 0;
+  double t = NAN;
   while (fgets(line, sizeof line, f)) {
     if (strstr(line, "displacements") && strstr(line, "TOP")) {
+      const char *tt = strstr(line, "time");
+      t = tt ? atof(tt + 4) : NAN;
       in = 1;
       continue;
     }
     int node;
     double a, b, z;
     if (in && sscanf(line, "%d %lf %lf %lf", &node, &a, &b, &z) == 4) {
-      *uz = z, got = 1, in = 0;
+      *uz = z, *time = t, got = 1, in = 0;
     }
   }
   fclose(f);
@@ -216,20 +278,33 @@ static int read_top_uz(const char *dat, double *uz) {
 
 int main(int argc, char **argv) {
   const char *levels = "1,2", *profile = "paper_long_term", *dir = "out/ccx", *ccx = "ccx";
-  double force = 3.0;
-  int no_project = 0;
+  double force = 3.0, inc = 0.25, timeout = 0.0;
+  int no_project = 0, no_ccx = 0, quarter = 0, palp_inc = 4;
   for (int i = 1; i < argc; ++i) {
     if (i + 1 < argc && !strcmp(argv[i], "--levels")) levels = argv[++i];
     else if (i + 1 < argc && !strcmp(argv[i], "--profile")) profile = argv[++i];
     else if (i + 1 < argc && !strcmp(argv[i], "--force")) force = atof(argv[++i]);
     else if (i + 1 < argc && !strcmp(argv[i], "--dir")) dir = argv[++i];
     else if (i + 1 < argc && !strcmp(argv[i], "--ccx")) ccx = argv[++i];
+    else if (i + 1 < argc && !strcmp(argv[i], "--ccx-inc")) inc = atof(argv[++i]);
+    else if (i + 1 < argc && !strcmp(argv[i], "--ccx-timeout")) timeout = atof(argv[++i]);
     else if (!strcmp(argv[i], "--ccx-only")) no_project = 1;
+    else if (!strcmp(argv[i], "--palp-only")) no_ccx = 1;
+    else if (!strcmp(argv[i], "--ccx-quarter")) quarter = 1;
+    else if (i + 1 < argc && !strcmp(argv[i], "--palp-inc")) palp_inc = atoi(argv[++i]);
     else {
       fprintf(stderr, "usage: ccx_crosscheck [--levels 1,2,3] [--profile NAME] [--force N] [--dir DIR] [--ccx PATH] "
-                      "[--ccx-only]\n");
+                      "[--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter] [--palp-inc K]\n");
       return 2;
     }
+  }
+  if (no_project && no_ccx) {
+    fprintf(stderr, "ccx_crosscheck: --ccx-only and --palp-only exclude each other\n");
+    return 2;
+  }
+  if (!(inc > 0.0) || inc > 1.0 || timeout < 0.0 || timeout != timeout || palp_inc < 1 || palp_inc > 1000) {
+    fprintf(stderr, "ccx_crosscheck: --ccx-inc must be in (0, 1], --ccx-timeout >= 0 s, --palp-inc in 1..1000\n");
+    return 2;
   }
   if (!(force > 0.0) || force > 100.0) {
     fprintf(stderr, "ccx_crosscheck: --force must be in (0, 100] N\n");
@@ -247,20 +322,24 @@ int main(int argc, char **argv) {
   printf("distribution II at the pole, %.3g N over 5.2 cm^2, relaxed, profile %s (gel C10 %.4g Pa, D1 %.3g 1/Pa; "
          "membrane C10 %.4g Pa)\n", force, profile, relaxed_c10(&cfg, &cfg.gel), cfg.gel.d1,
          relaxed_c10(&cfg, &cfg.membrane));
-  printf("%5s %8s %14s %8s %8s %14s %8s %9s\n", "level", "hexa", "palp uz [mm]", "wall s", "nodes20", "ccx uz [mm]",
-         "wall s", "ccx/palp");
+  /* the first eight columns are what tests/fem/test_ccx.sh reads */
+  printf("%5s %8s %14s %8s %8s %14s %8s %9s %8s %8s %7s\n", "level", "hexa", "palp uz [mm]", "wall s", "nodes20",
+         "ccx uz [mm]", "wall s", "ccx/palp", "palp MiB", "ccx MiB", "newton");
   int fail = 0;
   for (const char *l = levels; *l;) {
     const int L = (int)strtol(l, (char **)&l, 10);
     if (*l == ',') ++l;
-    if (L < 1 || L > 6) {
-      fprintf(stderr, "ccx_crosscheck: level %d out of 1..6\n", L);
+    /* palp's level 8 (87,040 hexahedra) peaks at 5 GB; level 9 would take ~8-9 GB of a shared
+     * 23 GB machine. ccx's quadratic deck is far larger still (its level 5 quarter: 1.5 GB). */
+    if (L < 1 || L > 8) {
+      fprintf(stderr, "ccx_crosscheck: level %d out of 1..8\n", L);
       return 2;
     }
     cfg.mesh.level = L;
     palp_fem_mesh mesh;
     if (palp_fem_mesh_create(&cfg.mesh, &mesh)) return 1;
-    double uz_p = NAN, tp = 0;
+    double uz_p = NAN, tp = 0, mb_p = NAN, mb_c = NAN;
+    int newton = 0;
     if (!no_project) {
       palp_fem_model m;
       if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) return 1;
@@ -268,39 +347,54 @@ int main(int argc, char **argv) {
       double *f = calloc((size_t)m.ndof, sizeof(double));
       palp_fem_cap_traction(&mesh, force, 5.2e-4, 6, f);
       const double t0 = now_s();
-      if (palp_fem_solve_static(&m, f, 4, INFINITY) == 0) uz_p = m.u[3 * mesh.top_node + 2];
+      if (palp_fem_solve_static(&m, f, palp_inc, INFINITY) == 0) uz_p = m.u[3 * mesh.top_node + 2];
       else fprintf(stderr, "ccx_crosscheck: palp level %d: %s\n", L, m.err);
       tp = now_s() - t0;
+      newton = m.newton_iterations;
+      struct rusage ru;
+      if (getrusage(RUSAGE_SELF, &ru) == 0) mb_p = (double)ru.ru_maxrss / 1024.0; /* Linux: kB */
       free(f);
       palp_fem_model_destroy(&m);
     }
-    quad_mesh q;
-    if (quad_create(&mesh, &q)) return 1;
-    double *fz = malloc(sizeof(double) * (size_t)(q.n + 64));
-    if (!fz || quad_load(&mesh, &q, force, 5.2e-4, fz)) return 1;
-    char job[1024], path[1100];
-    snprintf(job, sizeof job, "%s/level%d_%s", dir, L, profile);
-    snprintf(path, sizeof path, "%s.inp", job);
-    if (write_inp(path, &mesh, &q, fz, &cfg, profile, L)) {
-      fprintf(stderr, "ccx_crosscheck: cannot write %s\n", path);
-      return 1;
+    double uz_c = NAN, tc = 0;
+    int nq = 0;
+    if (!no_ccx) {
+      quad_mesh q;
+      if (quad_create(&mesh, &q)) return 1;
+      double *fz = malloc(sizeof(double) * (size_t)(q.n + 64));
+      if (!fz || quad_load(&mesh, &q, force, 5.2e-4, quarter, fz)) return 1;
+      char job[1024], path[1100], lim[64] = "";
+      snprintf(job, sizeof job, "%s/level%d_%s", dir, L, profile);
+      snprintf(path, sizeof path, "%s.inp", job);
+      if (write_inp(path, &mesh, &q, fz, &cfg, profile, L, inc, quarter, &nq)) {
+        fprintf(stderr, "ccx_crosscheck: cannot write %s\n", path);
+        return 1;
+      }
+      if (timeout > 0.0) snprintf(lim, sizeof lim, "timeout %.0f ", timeout);
+      /* SPOOLES is the only direct solver in Debian's build; CCX_NPROC_EQUATION_SOLVER lets it use
+       * both cores (OMP_NUM_THREADS alone leaves it on one) */
+      snprintf(cmd, sizeof cmd,
+               "cd '%s' && OMP_NUM_THREADS=2 CCX_NPROC_EQUATION_SOLVER=2 %s'%s' -i 'level%d_%s' > 'level%d_%s.log' 2>&1",
+               dir, lim, ccx, L, profile, L, profile);
+      const double t1 = now_s();
+      const int st = system(cmd);
+      tc = now_s() - t1;
+      struct rusage ru;
+      if (getrusage(RUSAGE_CHILDREN, &ru) == 0) mb_c = (double)ru.ru_maxrss / 1024.0;
+      snprintf(path, sizeof path, "%s.dat", job);
+      double tdone = NAN;
+      if (st != 0 || read_top_uz(path, &uz_c, &tdone) || !(fabs(tdone - 1.0) <= 1e-6)) {
+        fprintf(stderr, "ccx_crosscheck: ccx failed at level %d (exit %d%s): see %s.log\n", L, st,
+                WIFEXITED(st) && WEXITSTATUS(st) == 124 ? ", timed out" : "", job);
+        uz_c = NAN; /* a .dat from an unfinished run holds an intermediate increment, not the answer */
+        fail = 1;
+      }
+      free(fz);
+      quad_destroy(&q);
     }
-    snprintf(cmd, sizeof cmd, "cd '%s' && OMP_NUM_THREADS=2 '%s' -i 'level%d_%s' > 'level%d_%s.log' 2>&1", dir, ccx, L,
-             profile, L, profile);
-    const double t1 = now_s();
-    const int st = system(cmd);
-    const double tc = now_s() - t1;
-    double uz_c = NAN;
-    snprintf(path, sizeof path, "%s.dat", job);
-    if (st != 0 || read_top_uz(path, &uz_c)) {
-      fprintf(stderr, "ccx_crosscheck: ccx failed at level %d (exit %d): see %s.log\n", L, st, job);
-      fail = 1;
-    }
-    printf("%5d %8d %14.4f %8.1f %8d %14.4f %8.1f %9.4f\n", L, mesh.element_count, 1e3 * uz_p, tp, q.n, 1e3 * uz_c, tc,
-           uz_c / uz_p);
+    printf("%5d %8d %14.4f %8.1f %8d %14.4f %8.1f %9.4f %8.0f %8.0f %7d\n", L, mesh.element_count, 1e3 * uz_p, tp, nq,
+           1e3 * uz_c, tc, uz_c / uz_p, mb_p, mb_c, newton);
     fflush(stdout);
-    free(fz);
-    quad_destroy(&q);
     palp_fem_mesh_destroy(&mesh);
   }
   return fail;
