@@ -102,9 +102,10 @@ bob=$!
 # ~2.3 N per mm under a fingertip, docs/materials.md): a simulated haptic device presses
 # 2 mm at 10 mm/s, holds, slides 15 mm along the surface and lifts; her station's 1 kHz
 # haptic thread renders the phantom's push from the server's local contact models, with
-# a 4 N safe force it tells her about.
+# a 2 N safe force it tells her about (the device renders ~2.4 N at 2 mm: the coupling and
+# the pad sit in series with the stiff tissue, docs/haptics.md).
 "$client" --role trainee --domain "$domain" --phantom 3 --name carol \
-  --input sim:slide,depth_mm=2,speed_mm_s=10,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 4 \
+  --input sim:slide,depth_mm=2,speed_mm_s=10,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 2 \
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
 carol=$!
