@@ -65,8 +65,8 @@ int main(int argc, char **argv) {
     return 1;
   }
   scene.frames = frames;
-  palp_fem_config cfg = palp_fem_default_config();
-  if (scene.material[0] && palp_fem_config_set_material(&cfg, scene.material, err, sizeof err)) {
+  palp_fem_config cfg;
+  if (palp_fem_config_for_scene(&scene, &cfg, err, sizeof err)) {
     fprintf(stderr, "bench_eval: %s: %s\n", scene_path, err);
     return 1;
   }

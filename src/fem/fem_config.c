@@ -128,6 +128,11 @@ palp_fem_config palp_fem_default_config(void) {
   return c;
 }
 
+int palp_fem_config_for_scene(const palp_scene *scene, palp_fem_config *out, char *err, size_t errlen) {
+  *out = palp_fem_default_config();
+  return scene && scene->material[0] ? palp_fem_config_set_material(out, scene->material, err, errlen) : PALP_OK;
+}
+
 static int number(const cJSON *o, const char *key, const char *ctx, double *out, char *err, size_t errlen) {
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
   if (!v) return 0;

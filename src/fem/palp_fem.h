@@ -119,6 +119,11 @@ typedef struct palp_fem_config {
 /* The default material profile is "paper_long_term" (docs/materials.md); a scene's
  * "material" names the one its parameters were fitted to, and the tools prefer it. */
 palp_fem_config palp_fem_default_config(void);
+/* The FEM a scene answers to: the default config with the material profile the scene's
+ * parameters were fitted to, when it names one (palp_scene.material). A FEM config file
+ * or --material applied after it still win. PALP_EINVAL with a message for a profile
+ * the FEM does not know. */
+int palp_fem_config_for_scene(const palp_scene *scene, palp_fem_config *out, char *err, size_t errlen);
 
 /* ---- material profiles (docs/materials.md) -------------------------------- */
 /* Named material sets: "paper_long_term" (Tables I-II, C10 the relaxed modulus;

@@ -378,10 +378,9 @@ static int load_setup(const options *o, setup *s) {
     return 1;
   }
   if (o->frames) s->scene.frames = o->frames;
-  s->fem = palp_fem_default_config();
   /* the reference the scene's parameters were calibrated against, unless the FEM config
    * or --material says otherwise (docs/materials.md) */
-  if (s->scene.material[0] && palp_fem_config_set_material(&s->fem, s->scene.material, err, sizeof err)) {
+  if (palp_fem_config_for_scene(&s->scene, &s->fem, err, sizeof err)) {
     palp_log_error(o->log, "%s: %s", s->scene_path, err);
     return 1;
   }

@@ -238,13 +238,12 @@ static int parse(int argc, char **argv, opts *o) {
 }
 
 /* The FEM's material: the default profile (paper_long_term), then the one the scene's
- * real-time parameters were calibrated against (scene_material, may be NULL or ""), then
- * the FEM config file, then --material: a scene is compared with its own reference
- * unless the user says otherwise. */
-static int build_config(const opts *o, const char *scene_material, palp_fem_config *cfg) {
-  *cfg = palp_fem_default_config();
+ * real-time parameters were calibrated against (scene may be NULL), then the FEM config
+ * file, then --material: a scene is compared with its own reference unless the user
+ * says otherwise. */
+static int build_config(const opts *o, const palp_scene *scene, palp_fem_config *cfg) {
   char err[256];
-  if (scene_material && scene_material[0] && palp_fem_config_set_material(cfg, scene_material, err, sizeof err) != 0) {
+  if (palp_fem_config_for_scene(scene, cfg, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s: %s", o->scene ? o->scene : "scene", err);
     return -1;
   }
@@ -294,7 +293,7 @@ static int cmd_run(const opts *o) {
     return 2;
   }
   palp_fem_config cfg;
-  if (build_config(o, scene.material, &cfg)) return 2;
+  if (build_config(o, &scene, &cfg)) return 2;
   if (o->frames > 0) scene.frames = o->frames;
   if (o->dist) {
     palp_distribution d;
@@ -397,7 +396,7 @@ static int cmd_finger(const opts *o) {
     return 2;
   }
   palp_fem_config cfg;
-  if (build_config(o, scene.material, &cfg)) return 2;
+  if (build_config(o, &scene, &cfg)) return 2;
   if (cfg.inp_path[0]) {
     palp_log_error(o->log, "finger: --inp is not supported (the lesions need the generated mesh's regions)");
     return 2;

@@ -79,9 +79,9 @@ static int progress(void *ud, int frame, int frames, double t) {
 
 /* Reference or FEM point: the FE run mapped to the probe mesh. */
 static int run_fem(const palp_scene *probe_scene, int level, palp_fem_result *r, char *err, size_t errlen) {
-  palp_fem_config cfg = palp_fem_default_config();
+  palp_fem_config cfg;
   /* the profile the scene's parameters answer to (docs/materials.md) */
-  if (probe_scene->material[0] && palp_fem_config_set_material(&cfg, probe_scene->material, err, errlen)) return -1;
+  if (palp_fem_config_for_scene(probe_scene, &cfg, err, errlen)) return -1;
   cfg.mesh.level = level;
   char label[32];
   snprintf(label, sizeof label, "FEM level %d", level);
