@@ -97,7 +97,6 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
   }
   h->prev = h->cur;
   h->prev.force = delta;
-  h->prev_at = h->cur_at;
   h->cur = *m;
   h->cur_at = now;
   h->blend_len = blend;

@@ -55,7 +55,7 @@ typedef struct palp_haptic_out {
 typedef struct palp_haptic {
   palp_haptic_def def;
   palp_local_model cur, prev;
-  double cur_at, prev_at; /* station time each model arrived [s] */
+  double cur_at;          /* station time the current model arrived [s] */
   double blend_len;       /* the current arrival's crossfade [s]: the model's period, or
                              fade_time when models (re)start under a pressed device */
   int have;               /* models received: 0, 1 or 2 (= both valid) */
