@@ -193,7 +193,7 @@ static int fail(char *err, size_t errlen, const char *fmt, ...) {
 
 palp_web_hub_def palp_web_hub_default_def(void) {
   return (palp_web_hub_def){.domain = 0, .join = 1, .read_feedback = 1, .dashboard_hz = 10, .live_hz = 30,
-                            .scale_mm = 30, .linger_s = 2, .bands = palp_web_bands_default()};
+                            .scale_mm = 30, .scale_min_mm = 0.5, .linger_s = 2, .bands = palp_web_bands_default()};
 }
 
 /* ---- publishing (DDS thread) --------------------------------------------------------------- */
@@ -227,6 +227,7 @@ static void build_hello(palp_web_hub *h) {
   cJSON_AddStringToObject(j, "bridge", "palp-web");
   cJSON_AddNumberToObject(j, "domain", h->def.domain);
   cJSON_AddNumberToObject(j, "scale_mm", h->def.scale_mm);
+  cJSON_AddNumberToObject(j, "scale_min_mm", h->def.scale_min_mm);
   cJSON *b = cJSON_AddObjectToObject(j, "bands");
   cJSON_AddNumberToObject(b, "touch_min", h->def.bands.touch_min);
   cJSON_AddNumberToObject(b, "light_max", h->def.bands.light_max);
@@ -1125,7 +1126,8 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     return NULL;
   }
   if (!(def->dashboard_hz > 0 && def->dashboard_hz <= 60) || !(def->live_hz > 0 && def->live_hz <= 120) ||
-      !(def->scale_mm > 0 && def->scale_mm <= 1000) || !(def->linger_s >= 0 && def->linger_s <= 3600)) {
+      !(def->scale_mm > 0 && def->scale_mm <= 1000) ||
+      !(def->scale_min_mm > 0 && def->scale_min_mm <= def->scale_mm) || !(def->linger_s >= 0 && def->linger_s <= 3600)) {
     fail(err, errlen, "rates, scale or linger out of range");
     return NULL;
   }

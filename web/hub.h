@@ -32,7 +32,9 @@ typedef struct palp_web_hub_def {
   int read_feedback;     /* 1: read a session's feedback while a position-driven finger presses (its force) */
   double dashboard_hz;   /* deformation frames per second and session to a dashboard */
   double live_hz;        /* live (force, fingers, coverage) messages per second to a trainee page */
-  double scale_mm;       /* the pages' fixed colour scale: 0 .. scale_mm of displacement */
+  double scale_mm;       /* the pages' largest colour scale: 0 .. scale_mm of displacement */
+  double scale_min_mm;   /* their smallest: a page's scale starts here and grows with the session's
+                          * deepest displacement (equal to scale_mm: one fixed scale) */
   double linger_s;       /* stay joined this long after the last page stopped following */
   palp_web_bands bands;
   palp_log *log;         /* main's (app/palp_log.h); NULL = stderr */

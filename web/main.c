@@ -37,7 +37,9 @@ static void usage(FILE *f) {
           "  --port P            TCP port (default 8090; 0 = any free port, printed)\n"
           "  --token T           access token (%d-%d characters of A-Z a-z 0-9 . _ ~ -); pages need ?token=T\n"
           "  --token-file F      read the token from F (keeps it out of the process list)\n"
-          "  --scale-mm MM       fixed colour scale of the pages: 0..MM of displacement (default 30)\n"
+          "  --scale-mm MM       largest colour scale of the pages: 0..MM of displacement (default 30)\n"
+          "  --scale-min-mm MM   smallest (default 0.5): a page's scale grows from it, in steps of 1-2-5,\n"
+          "                      with its session's deepest displacement; equal to --scale-mm: fixed\n"
           "  --bands L,M         force gauge bands [N]: light < L <= medium <= M < deep (default 1,3)\n"
           "  --dashboard-hz HZ   frames per second and session to a dashboard (default 10)\n"
           "  --max-clients N     WebSocket connections at once (default 32)\n"
@@ -126,6 +128,7 @@ static void on_wake(void *ctx) {
 
 int main(int argc, char **argv) {
   palp_web_hub_def hd = palp_web_hub_default_def();
+  int scale_min_given = 0;
   palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = NULL,
                            .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
   const char *token = NULL, *token_file = NULL;
@@ -163,6 +166,9 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--three")) sd.three_dir = v;
     else if (!strcmp(a, "--scale-mm")) {
       if (number(a, v, 0.1, 1000, &hd.scale_mm)) return 2;
+    } else if (!strcmp(a, "--scale-min-mm")) {
+      if (number(a, v, 0.01, 1000, &hd.scale_min_mm)) return 2;
+      scale_min_given = 1;
     } else if (!strcmp(a, "--dashboard-hz")) {
       if (number(a, v, 0.5, 60, &hd.dashboard_hz)) return 2;
     } else if (!strcmp(a, "--max-clients")) {
@@ -238,6 +244,12 @@ int main(int argc, char **argv) {
   }
   if (palp_app_use_dds_config(ao.dds_config, NULL, NULL, 0, derr, sizeof derr) != 0) {
     palp_log_error(&log, "DDS config: %s", derr);
+    return 2;
+  }
+  /* --scale-mm alone below the default smallest scale: that one scale, fixed. */
+  if (!scale_min_given && hd.scale_min_mm > hd.scale_mm) hd.scale_min_mm = hd.scale_mm;
+  if (hd.scale_min_mm > hd.scale_mm) {
+    palp_log_error(&log, "--scale-min-mm %g is above --scale-mm %g", hd.scale_min_mm, hd.scale_mm);
     return 2;
   }
   char err[256];

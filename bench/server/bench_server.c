@@ -32,9 +32,10 @@
  *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]
  * --overrun-limit: keep adding sessions until this share of ticks overruns (default 1), e.g. 100
  * to compare tick time and load at equal session counts on a busy machine.
- * --scene: the phantoms' scene (absolute path; default config/paper_step.json with the
+ * --scene: the phantoms' scene (any path; default config/paper_step.json with the
  * shipped calibrated parameters), e.g. one with params/handset.json as a baseline.
  */
+#define _DEFAULT_SOURCE /* realpath */
 #include <fcntl.h>
 #include <math.h>
 #include <signal.h>
@@ -636,7 +637,12 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--no-db")) no_db = 1;
     else if (!strcmp(argv[i], "--secure")) compare_secure = 1;
     else if (!strcmp(argv[i], "--overrun-limit") && i + 1 < argc) overrun_limit = atof(argv[++i]) / 100.0;
-    else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene_path = argv[++i];
+    else if (!strcmp(argv[i], "--scene") && i + 1 < argc) {
+      /* The server resolves a relative scene against its config file's folder (/tmp
+       * here), so hand it the absolute path of the file the user named. */
+      static char abs_scene[4096];
+      scene_path = realpath(argv[++i], abs_scene) ? abs_scene : argv[i];
+    }
     else if (!strcmp(argv[i], "--haptic-domain") && i + 1 < argc) haptic_domain = (unsigned)atoi(argv[++i]);
     else if (argv[i][0] != '-') what = argv[i];
     else {

@@ -58,7 +58,7 @@ class Procs:
             time.sleep(0.05)
         raise Fail("%s: no %r within %.0f s (exit %s); log:\n%s" % (p.name, pattern, timeout, p.poll(), self.log(p)))
 
-    # The web tests look for a dent on the bridge's fixed 30 mm colour scale, so by default they
+    # Most web tests look for a deep dent (20-30 mm, the top of the pages' colour scale), so by default they
     # host the paper's literal reading (config/server-paper.json: 3 N dents ~20 mm); the shipped
     # long-term domes dent ~0.5 mm under 3 N (docs/materials.md).
     def server(self, tick_hz=None, extra=(), config="server-paper.json"):

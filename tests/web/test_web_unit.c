@@ -225,10 +225,25 @@ static void test_control(void) {
   CHECK(palp_web_hub_next(h, &c, 16, &buf, &len, &binary) == 1 && !binary && len > 10 &&
             !memcmp(buf + 16, "{\"type\":\"hello\"", 15),
         "hello first");
+  /* The colour scale's bounds: the pages grow their scale from the smallest (docs/web.md). */
+  cJSON *hello = buf ? cJSON_ParseWithLength((const char *)buf + 16, len) : NULL;
+  const cJSON *smax = cJSON_GetObjectItem(hello, "scale_mm"), *smin = cJSON_GetObjectItem(hello, "scale_min_mm");
+  CHECK(cJSON_IsNumber(smax) && smax->valuedouble == 30 && cJSON_IsNumber(smin) && smin->valuedouble == 0.5,
+        "hello carries the colour scale's bounds, 0.5 .. 30 mm by default (got %g .. %g)",
+        cJSON_IsNumber(smin) ? smin->valuedouble : -1, cJSON_IsNumber(smax) ? smax->valuedouble : -1);
+  cJSON_Delete(hello);
   free(buf);
   palp_web_hub_detach(h, &c);
   CHECK(palp_web_hub_attach(h, &c2, 1) == 0, "a slot is free again after detach");
   palp_web_hub_destroy(h);
+  /* A smallest scale above the largest is refused, with a message. */
+  palp_web_hub_def bad_scale = palp_web_hub_default_def();
+  bad_scale.domain = 190;
+  bad_scale.scale_min_mm = 40;
+  err[0] = 0;
+  palp_web_hub *hb = palp_web_hub_create(&bad_scale, err, sizeof err);
+  CHECK(hb == NULL && strstr(err, "scale") != NULL, "scale_min_mm 40 > scale_mm 30 refused: \"%s\"", err);
+  if (hb) palp_web_hub_destroy(hb);
 }
 
 /* A position-driven finger's local model (palp_local_model, written here as the server would)

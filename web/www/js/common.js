@@ -1,5 +1,5 @@
 /* common.js - what both palp-web pages share: the WebSocket to the bridge, the deformation frame
- * format, and the fixed colour-blind-safe displacement scale (viridis). window.palpState is what
+ * format, and the colour-blind-safe displacement scale (viridis) and how it grows. window.palpState is what
  * the pages show, readable by tests (tests/web). */
 "use strict";
 const PALP = (function () {
@@ -77,8 +77,22 @@ const PALP = (function () {
     return send;
   }
 
-  /* The fixed, labelled displacement scale: 0 .. scale_mm, ticks every 5 or 10 mm. */
-  function drawColourbar(canvas, scaleMm) {
+  /* The displacement scale of one session: the smallest of 0.5, 1, 2, 5, 10, 20, 30, 50, 100 ...
+   * mm that holds the deepest displacement seen so far (peakMm), never below the scale it had
+   * (prevMm), kept within the bridge's minMm .. maxMm. It only grows while a page follows one
+   * session, so within that session a colour always means the same depth; it starts small so
+   * that a stiff phantom's millimetre dent shows (a fixed 30 mm scale left it purple). */
+  const LADDER = [0.1, 0.2, 0.25, 0.5, 1, 2, 5, 10, 20, 30, 50, 100, 200, 500, 1000];
+  function scaleFor(prevMm, peakMm, minMm, maxMm) {
+    let s = maxMm;
+    for (const v of LADDER) if (v >= minMm && v >= peakMm) { s = v; break; }
+    return Math.min(maxMm, Math.max(minMm, prevMm || 0, s));
+  }
+
+  /* The labelled displacement scale: 0 .. scaleMm, about 3-6 ticks; unit " mm" unless given
+   * (the dashboard's legend is in fractions of each card's own scale). */
+  function drawColourbar(canvas, scaleMm, unit) {
+    unit = unit === undefined ? " mm" : unit;
     const g = canvas.getContext("2d"), w = canvas.width, h = canvas.height, bar = 14, top = 8, bottom = h - 8;
     g.clearRect(0, 0, w, h);
     for (let y = top; y <= bottom; y++) {
@@ -88,14 +102,15 @@ const PALP = (function () {
     g.fillStyle = "#1d2330";
     g.font = "11px system-ui, sans-serif";
     g.textBaseline = "middle";
-    const step = scaleMm > 20 ? 10 : scaleMm > 8 ? 5 : scaleMm > 3 ? 1 : 0.5;
-    for (let v = 0; v <= scaleMm + 1e-9; v += step) {
+    const step = scaleMm > 20 ? 10 : scaleMm > 8 ? 5 : scaleMm > 3 ? 1 : scaleMm > 1.5 ? 0.5 : scaleMm > 0.6 ? 0.25 : 0.1;
+    for (let k = 0; k * step <= scaleMm + 1e-9; k++) {
+      const v = Number((k * step).toFixed(2));
       const y = bottom - (v / scaleMm) * (bottom - top);
       g.fillRect(bar, y, 4, 1);
-      g.fillText(v + (v + step > scaleMm + 1e-9 ? "+ mm" : ""), bar + 6, y);
+      g.fillText(v + ((k + 1) * step > scaleMm + 1e-9 ? "+" + unit : ""), bar + 6, y);
     }
   }
 
   return { viridis: viridis, css: css, params: params, connect: connect, state: state,
-    decodeDeformation: decodeDeformation, drawColourbar: drawColourbar };
+    decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor };
 })();

@@ -6,7 +6,7 @@
   const st = PALP.state, token = PALP.params().get("token");
   st.dashboard = { cards: [], frames: 0, fpsPerSession: {} };
   const grid = document.getElementById("grid"), cards = new Map();
-  let scaleMm = 30;
+  let scaleMin = 30, scaleMax = 30; /* the bridge's bounds of each card's own scale (PALP.scaleFor) */
   /* server/validate.h palp_srv_reject_reason, in index order (docs/server.md) */
   const REJECT = ["nonfinite", "unknown_session", "bad_finger", "bad_mode", "bad_distribution", "bad_vertex",
     "out_of_reach", "force_limit", "bad_radius", "model_refused"];
@@ -30,7 +30,8 @@
       location.href = "trainee.html?session=" + s.id + "&role=observer" + (token ? "&token=" + encodeURIComponent(token) : "");
     });
     grid.appendChild(el);
-    const c = { el: el, name: name, band: band, canvas: cv, table: tb, proj: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0 };
+    const c = { el: el, name: name, band: band, canvas: cv, table: tb, proj: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0,
+      scaleMm: scaleMin };
     cards.set(s.id, c);
     return c;
   }
@@ -47,7 +48,10 @@
     const g = c.canvas.getContext("2d"), xy = c.proj.xy, tri = c.proj.tri;
     g.clearRect(0, 0, SIZE, SIZE);
     const mag = new Float32Array(c.proj.n);
-    if (disp) for (let i = 0; i < c.proj.n; i++) mag[i] = 1000 * Math.hypot(disp[3 * i], disp[3 * i + 1], disp[3 * i + 2]);
+    let peak = 0;
+    if (disp) for (let i = 0; i < c.proj.n; i++) peak = Math.max(peak, mag[i] = 1000 * Math.hypot(disp[3 * i], disp[3 * i + 1], disp[3 * i + 2]));
+    c.scaleMm = PALP.scaleFor(c.scaleMm, peak, scaleMin, scaleMax);
+    const scaleMm = c.scaleMm;
     for (let t = 0; t < tri.length; t += 3) {
       const a = tri[t], b = tri[t + 1], d = tri[t + 2];
       g.fillStyle = g.strokeStyle = PALP.css(PALP.viridis((mag[a] + mag[b] + mag[d]) / 3 / scaleMm));
@@ -90,6 +94,7 @@
         s.late_haptic === null ? "n/a: no haptic local models in this session (force-driven input has none)"
           : "local models published more than 2 physics periods after the previous frame's (server clock); " +
             "lost: frames the bridge never received"],
+      ["colour scale", "0-" + c.scaleMm + " mm", false, "the top view's full colour scale: grows with the session's deepest displacement, never shrinks"],
       ["frames/s", fmt(c.fps, 1)], ["open", fmt(s.duration, 0) + " s"]];
     c.table.textContent = "";
     for (const r of rows) {
@@ -132,7 +137,12 @@
 
   PALP.connect({
     open: function (send) { send({ follow: "all" }); },
-    hello: function (m) { scaleMm = m.scale_mm; PALP.drawColourbar(document.getElementById("colourbar"), scaleMm); },
+    hello: function (m) {
+      scaleMax = m.scale_mm;
+      scaleMin = m.scale_min_mm !== undefined ? m.scale_min_mm : m.scale_mm;
+      for (const c of cards.values()) c.scaleMm = scaleMin;
+      PALP.drawColourbar(document.getElementById("colourbar"), 1, " x");
+    },
     phantom: function () {
       for (const s of st.sessions) { const c = cards.get(s.id); if (c) fill(c, s); }
     },

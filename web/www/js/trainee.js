@@ -1,5 +1,5 @@
 /* trainee.js - one session's phantom in 3D (three.js from Debian's libjs-three), deforming live,
- * shaded by displacement on a fixed viridis scale; the fingers (and, once the wire carries it, the
+ * shaded by displacement on a viridis scale that grows with the session's deepest dent (PALP.scaleFor); the fingers (and, once the wire carries it, the
  * haptic proxy); the force gauge with its light / medium / deep bands; coverage so far.
  *
  * Which session: ?session=ID, else ?trainee=NAME (that trainee's newest open session), else the
@@ -14,7 +14,7 @@
 (function () {
   const p = PALP.params(), wantSession = Number(p.get("session")) || 0, wantTrainee = p.get("trainee");
   const st = PALP.state;
-  st.trainee = { session: 0, phantom: 0, frames: 0, rendered: 0, maxDispMm: 0, fpsReceived: 0, fpsRendered: 0,
+  st.trainee = { session: 0, phantom: 0, frames: 0, rendered: 0, maxDispMm: 0, scaleMm: 0, fpsReceived: 0, fpsRendered: 0,
     force: 0, band: "none", coverage: [0, 0, 0], arrivals: [] };
   const T = st.trainee;
   /* Bound as the trainee's page only when it names its session or trainee: a bare page (the newest
@@ -48,7 +48,14 @@
   controls.enableDamping = false;
   controls.addEventListener("change", function () { dirty = true; });
 
-  let mesh = null, geom = null, rest = null, phantom = null, scaleMm = 30, dirty = true, latest = null;
+  let mesh = null, geom = null, rest = null, phantom = null, dirty = true, latest = null;
+  let scaleMm = 30, scaleMin = 30, scaleMax = 30; /* this session's scale; the bridge's bounds (hello) */
+  function setScale(mm) {
+    if (mm === scaleMm) return;
+    scaleMm = mm;
+    T.scaleMm = mm;
+    PALP.drawColourbar(document.getElementById("colourbar"), scaleMm);
+  }
   const fingerObjs = [];
 
   function resize() {
@@ -83,15 +90,17 @@
     dirty = true;
   }
 
-  /* Positions = rest + displacement; colour = |displacement| on the fixed scale. */
+  /* Positions = rest + displacement; colour = |displacement| on the session's scale, grown
+   * first to hold this frame's deepest point. */
   function setDisplacement(disp) {
     const pos = geom.attributes.position.array, col = geom.attributes.color.array;
     let max = 0;
+    for (let i = 0; disp && i < rest.length; i += 3) max = Math.max(max, 1000 * Math.hypot(disp[i], disp[i + 1], disp[i + 2]));
+    setScale(PALP.scaleFor(scaleMm, max, scaleMin, scaleMax));
     for (let i = 0; i < rest.length; i += 3) {
       const dx = disp ? disp[i] : 0, dy = disp ? disp[i + 1] : 0, dz = disp ? disp[i + 2] : 0;
       pos[i] = rest[i] + dx; pos[i + 1] = rest[i + 1] + dy; pos[i + 2] = rest[i + 2] + dz;
       const mm = 1000 * Math.sqrt(dx * dx + dy * dy + dz * dz);
-      if (mm > max) max = mm;
       const c = PALP.viridis(mm / scaleMm);
       col[i] = c[0] / 255; col[i + 1] = c[1] / 255; col[i + 2] = c[2] / 255;
     }
@@ -100,7 +109,7 @@
     geom.computeVertexNormals();
     geom.computeBoundingSphere();
     T.maxDispMm = max;
-    document.getElementById("maxdisp").textContent = max.toFixed(1);
+    document.getElementById("maxdisp").textContent = max.toFixed(max < 10 ? 2 : 1);
     dirty = true;
   }
 
@@ -281,10 +290,12 @@
       else message(m.reason, false);
     },
     hello: function (m) {
-      scaleMm = m.scale_mm;
+      scaleMax = m.scale_mm;
+      scaleMin = m.scale_min_mm !== undefined ? m.scale_min_mm : m.scale_mm; /* an older bridge: fixed */
+      scaleMm = -1;
+      setScale(scaleMin);
       bands = m.bands;
       bandLegend();
-      PALP.drawColourbar(document.getElementById("colourbar"), scaleMm);
       drawGauge(0);
     },
     phantom: function (m) { if (m.id === pendingPhantom) buildMesh(m); },
@@ -292,6 +303,7 @@
       const id = choose(m.sessions);
       if (id !== T.session) {
         T.session = id;
+        setScale(scaleMin); /* a new session starts on the smallest scale */
         if (send) send(followMsg(id));
         findings = null;
         setFingers([], null);
