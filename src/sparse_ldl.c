@@ -15,8 +15,6 @@
 
 static void free_numeric(palp_ldl *f) {
   free(f->bcolp);
-  free(f->brow);
-  free(f->bval);
   free(f->bdiag);
   free(f->bcol);
   free(f->dinv4);
@@ -24,10 +22,9 @@ static void free_numeric(palp_ldl *f) {
   free(f->rcol);
   free(f->bbwd);
   free(f->rbwd);
-  f->rowp = f->rcol = f->rbwd = NULL;
-  f->bbwd = NULL;
-  f->bcolp = f->brow = NULL;
-  f->bval = f->bdiag = f->bcol = f->dinv4 = NULL;
+  f->bcolp = f->rowp = f->rcol = f->rbwd = NULL;
+  f->bcol = f->bbwd = NULL;
+  f->bdiag = f->dinv4 = NULL;
   f->nb = 0;
   f->simd = 0;
   free(f->colp);
@@ -121,7 +118,7 @@ static int factor(palp_ldl *f, int n, int nnz, const int *ti, const int *tj, con
     f->dinv[j] = 1.0 / d;
     for (int p = Lp[j] + 1; p < Lp[j + 1]; ++p) {
       f->row[q] = Li[p];
-      f->val[q] = Lx[p];
+      f->val[q] = (double)(float)Lx[p]; /* single precision: sparse_ldl.h */
       ++q;
     }
     f->perm[j] = Perm ? Perm[j] : j;
@@ -136,23 +133,25 @@ done:
   return rc;
 }
 
-/* Regroups the scalar factor into 3x3 blocks; returns 0, or -1 when the ordering did
- * not keep each vertex's unknowns together (the scalar form then stays in use). */
+/* Regroups the scalar factor into 3x3 blocks, stored twice in single precision: by
+ * block row, each block column-major, for the forward pass, and by block column from
+ * the last to the first, each block row-major, for the backward pass, so that both
+ * passes stream through memory forwards and accumulate in registers. Returns 0,
+ * PALP_ENOMEM, or -1 when the ordering did not keep each vertex's unknowns together
+ * (the scalar form then stays in use). */
 static int to_blocks(palp_ldl *f, int nb) {
   const int n = f->n;
   for (int k = 0; k < n; ++k)
     if (f->perm[k] / 3 != f->perm[k - k % 3] / 3 || f->perm[k] % 3 != k % 3) return -1;
-  int *mark = malloc(sizeof(int) * (size_t)nb);
-  f->bcolp = malloc(sizeof(int) * ((size_t)nb + 1));
-  f->bdiag = calloc((size_t)nb * 3, sizeof(double));
   /* Off-diagonal blocks never outnumber the scalar entries. */
   const int cap = f->colp[n] > 0 ? f->colp[n] : 1;
-  f->brow = malloc(sizeof(int) * (size_t)cap);
-  f->bval = calloc((size_t)cap * 9 + 4, sizeof(double)); /* + 4: the AVX2 path loads 4 lanes from the last 3 */
-  if (!mark || !f->bcolp || !f->bdiag || !f->brow || !f->bval) {
-    free(mark);
-    return PALP_ENOMEM;
-  }
+  int *mark = malloc(sizeof(int) * (size_t)nb);
+  int *brow = malloc(sizeof(int) * (size_t)cap);
+  float *bval = calloc((size_t)cap * 9, sizeof(float)); /* row-major, by column: scratch */
+  f->bcolp = malloc(sizeof(int) * ((size_t)nb + 1));
+  f->bdiag = calloc((size_t)nb * 3, sizeof(double));
+  int rc = PALP_ENOMEM;
+  if (!mark || !brow || !bval || !f->bcolp || !f->bdiag) goto out;
   for (int i = 0; i < nb; ++i) mark[i] = -1;
   int nblk = 0;
   for (int J = 0; J < nb; ++J) {
@@ -167,57 +166,56 @@ static int to_blocks(palp_ldl *f, int nb) {
         }
         if (mark[I] < f->bcolp[J]) {
           mark[I] = nblk;
-          f->brow[nblk++] = I;
+          brow[nblk++] = I;
         }
-        f->bval[9 * mark[I] + 3 * r + c] = f->val[p];
+        bval[9 * mark[I] + 3 * r + c] = (float)f->val[p]; /* exact: val is already rounded */
       }
     }
   }
   f->bcolp[nb] = nblk;
-  f->nb = nb;
-  free(mark);
-#ifdef PALP_LDL_X86
-  /* The blocks again by block row, each column-major, for the forward pass of the
-   * AVX2 solve (row-oriented: it accumulates in a register instead of scattering
-   * into y); the backward pass reads the row-major blocks by column as they are.
-   * Within a row the columns ascend, the order the portable path adds them in. */
+  /* + 4: 4-lane loads of a block's last 3 entries read one past it. */
   f->rowp = calloc((size_t)nb + 1, sizeof(int));
   f->rcol = malloc(sizeof(int) * (size_t)(nblk > 0 ? nblk : 1));
-  f->bcol = calloc((size_t)nblk * 9 + 4, sizeof(double));
+  f->bcol = calloc((size_t)nblk * 9 + 4, sizeof(float));
+  f->rbwd = malloc(sizeof(int) * (size_t)(nblk > 0 ? nblk : 1));
+  f->bbwd = calloc((size_t)nblk * 9 + 4, sizeof(float));
   f->dinv4 = calloc((size_t)nb * 4, sizeof(double));
   int *fill = malloc(sizeof(int) * (size_t)(nb > 0 ? nb : 1));
-  if (!f->rowp || !f->rcol || !f->bcol || !f->dinv4 || !fill) {
+  if (!f->rowp || !f->rcol || !f->bcol || !f->rbwd || !f->bbwd || !f->dinv4 || !fill) {
     free(fill);
-    return PALP_ENOMEM;
+    goto out;
   }
-  for (int p = 0; p < nblk; ++p) f->rowp[f->brow[p] + 1]++;
+  /* Forward: by block row, columns ascending within a row. */
+  for (int p = 0; p < nblk; ++p) f->rowp[brow[p] + 1]++;
   for (int I = 0; I < nb; ++I) f->rowp[I + 1] += f->rowp[I];
   memcpy(fill, f->rowp, sizeof(int) * (size_t)nb);
   for (int J = 0; J < nb; ++J)
     for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {
-      const int q = fill[f->brow[p]]++;
+      const int q = fill[brow[p]]++;
       f->rcol[q] = J;
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) f->bcol[9 * q + 3 * c + r] = f->bval[9 * p + 3 * r + c];
+        for (int c = 0; c < 3; ++c) f->bcol[9 * q + 3 * c + r] = bval[9 * p + 3 * r + c];
     }
   free(fill);
-  /* The backward pass walks the columns from last to first: its blocks are stored
-   * in that order, so that it streams through memory forwards. */
-  f->bbwd = malloc(sizeof(double) * ((size_t)nblk * 9 + 4));
-  f->rbwd = malloc(sizeof(int) * (size_t)(nblk > 0 ? nblk : 1));
-  if (!f->bbwd || !f->rbwd) return PALP_ENOMEM;
-  memset(f->bbwd + (size_t)nblk * 9, 0, 4 * sizeof(double));
+  /* Backward: by block column from the last to the first. */
   for (int J = nb - 1, q = 0; J >= 0; --J)
     for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p, ++q) {
-      f->rbwd[q] = f->brow[p];
-      memcpy(f->bbwd + 9 * q, f->bval + 9 * p, 9 * sizeof(double));
+      f->rbwd[q] = brow[p];
+      memcpy(f->bbwd + 9 * q, bval + 9 * p, 9 * sizeof(float));
     }
   for (int j = 0; j < n; ++j) f->dinv4[4 * (j / 3) + j % 3] = f->dinv[j];
+  f->nb = nb;
+#ifdef PALP_LDL_X86
   /* libgcc reads the CPU in a constructor, before main: no __builtin_cpu_init here,
    * which the tangent-rebuild threads would otherwise race on. */
   f->simd = __builtin_cpu_supports("avx2") ? 1 : 0;
 #endif
-  return PALP_OK;
+  rc = PALP_OK;
+out:
+  free(mark);
+  free(brow);
+  free(bval);
+  return rc;
 }
 
 int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, int nnz, const int *ti,
@@ -249,49 +247,79 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
   return e > 0 ? PALP_OK : e == PALP_ENOMEM ? e : PALP_OK;
 }
 
-/* Block solve for W interleaved right-hand sides: 3x3 blocks times 3-vectors. A
- * macro so that each width is compiled with W constant (unrolled inner loops). */
+/* Block solve for W interleaved right-hand sides: 3x3 blocks times 3-vectors, row-
+ * oriented in both passes (forward: y_I -= sum over the row's blocks, columns
+ * ascending; backward: y_J -= sum over column J's blocks transposed, rows descending),
+ * each block's product summed as ((B_0 a + B_1 b) + B_2 c), B_k its k-th column
+ * (forward) or row (backward). The AVX2 path for one right-hand side does the same
+ * operations in the same order, lane by lane and without fused multiply-adds, so every
+ * path and width gives the same bits (test model_sparse_ldl). With several right-hand
+ * sides (compliance columns: unit vectors, nonzero only on their etree path) the
+ * forward pass skips blocks whose source is all zero; one right-hand side (the step's,
+ * dense) never skips, on either path, so that they agree even in the sign of a zero.
+ * A macro so that each width is compiled with W constant. */
+/* y_I <- L_II^{-1} y_I for the unit lower diagonal block (l10, l20, l21), W wide. */
+static inline void palp_ldl_diag_fwd(const double *d, double *yi, int w) {
+  for (int r = 0; r < w; ++r) {
+    yi[w + r] -= d[0] * yi[r];
+    yi[2 * w + r] -= d[1] * yi[r] + d[2] * yi[w + r];
+  }
+}
+
 #define PALP_LDL_BLOCK_SOLVE_BODY(W)                                                     \
   do {                                                                                   \
+    double acc[3 * (W)];                                                                 \
     for (int k = 0; k < n; ++k)                                                          \
       for (int r = 0; r < (W); ++r) y[k * (W) + r] = x[f->perm[k] * (W) + r];            \
-    for (int J = 0; J < nb; ++J) {                                                       \
-      double *yj = y + 3 * J * (W);                                                      \
-      /* A unit right-hand side (a compliance column) is nonzero only on its etree   */ \
-      /* path: skipping zero blocks saves most of the forward pass for it.           */ \
-      int nz = 0;                                                                        \
-      for (int r = 0; r < 3 * (W); ++r) nz |= yj[r] != 0.0;                              \
-      if (!nz) continue;                                                                 \
-      const double *d = f->bdiag + 3 * J;                                                \
-      for (int r = 0; r < (W); ++r) {                                                    \
-        yj[(W) + r] -= d[0] * yj[r];                                                     \
-        yj[2 * (W) + r] -= d[1] * yj[r] + d[2] * yj[(W) + r];                            \
+    if ((W) == 1) {                                                                      \
+      for (int I = 0; I < nb; ++I) {                                                     \
+        double *yi = y + 3 * I * (W);                                                    \
+        for (int e = 0; e < 3 * (W); ++e) acc[e] = yi[e];                                \
+        for (int q = f->rowp[I]; q < f->rowp[I + 1]; ++q) {                              \
+          const double *v = y + 3 * f->rcol[q] * (W);                                    \
+          const float *B = f->bcol + 9 * q;                                              \
+          for (int i = 0; i < 3; ++i)                                                    \
+            for (int r = 0; r < (W); ++r)                                                \
+              acc[i * (W) + r] -= ((double)B[i] * v[r] + (double)B[3 + i] * v[(W) + r]) + \
+                                  (double)B[6 + i] * v[2 * (W) + r];                     \
+        }                                                                                \
+        for (int e = 0; e < 3 * (W); ++e) yi[e] = acc[e];                                \
+        palp_ldl_diag_fwd(f->bdiag + 3 * I, yi, (W));                                    \
       }                                                                                  \
-      for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {                              \
-        double *yi = y + 3 * f->brow[p] * (W);                                           \
-        const double *B = f->bval + 9 * p;                                               \
-        for (int r = 0; r < (W); ++r) {                                                  \
-          const double a = yj[r], b = yj[(W) + r], c = yj[2 * (W) + r];                  \
-          yi[r] -= B[0] * a + B[1] * b + B[2] * c;                                       \
-          yi[(W) + r] -= B[3] * a + B[4] * b + B[5] * c;                                 \
-          yi[2 * (W) + r] -= B[6] * a + B[7] * b + B[8] * c;                             \
+    } else {                                                                             \
+      /* By column, scattering into the rows below: the same subtractions in the same  */ \
+      /* order per row, and a zero source column is skipped whole. */                    \
+      const int nblk = f->bcolp[nb];                                                     \
+      for (int J = 0; J < nb; ++J) {                                                     \
+        double *yj = y + 3 * J * (W);                                                    \
+        palp_ldl_diag_fwd(f->bdiag + 3 * J, yj, (W));                                    \
+        int nz = 0;                                                                      \
+        for (int e = 0; e < 3 * (W); ++e) nz |= yj[e] != 0.0;                            \
+        if (!nz) continue;                                                               \
+        for (int q = nblk - f->bcolp[J + 1], qend = nblk - f->bcolp[J]; q < qend; ++q) { \
+          double *yi = y + 3 * f->rbwd[q] * (W);                                         \
+          const float *B = f->bbwd + 9 * q;                                              \
+          for (int i = 0; i < 3; ++i)                                                    \
+            for (int r = 0; r < (W); ++r)                                                \
+              yi[i * (W) + r] -= ((double)B[3 * i] * yj[r] + (double)B[3 * i + 1] * yj[(W) + r]) + \
+                                 (double)B[3 * i + 2] * yj[2 * (W) + r];                 \
         }                                                                                \
       }                                                                                  \
     }                                                                                    \
     for (int j = 0; j < n; ++j)                                                          \
       for (int r = 0; r < (W); ++r) y[j * (W) + r] *= f->dinv[j];                        \
-    for (int J = nb - 1; J >= 0; --J) {                                                  \
+    for (int J = nb - 1, q = 0; J >= 0; --J) {                                           \
       double *yj = y + 3 * J * (W);                                                      \
-      for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {                              \
-        const double *yi = y + 3 * f->brow[p] * (W);                                     \
-        const double *B = f->bval + 9 * p;                                               \
-        for (int r = 0; r < (W); ++r) {                                                  \
-          const double a = yi[r], b = yi[(W) + r], c = yi[2 * (W) + r];                  \
-          yj[r] -= B[0] * a + B[3] * b + B[6] * c;                                       \
-          yj[(W) + r] -= B[1] * a + B[4] * b + B[7] * c;                                 \
-          yj[2 * (W) + r] -= B[2] * a + B[5] * b + B[8] * c;                             \
-        }                                                                                \
+      for (int e = 0; e < 3 * (W); ++e) acc[e] = yj[e];                                  \
+      for (const int qend = q + f->bcolp[J + 1] - f->bcolp[J]; q < qend; ++q) {          \
+        const double *v = y + 3 * f->rbwd[q] * (W);                                      \
+        const float *B = f->bbwd + 9 * q;                                                \
+        for (int i = 0; i < 3; ++i)                                                      \
+          for (int r = 0; r < (W); ++r)                                                  \
+            acc[i * (W) + r] -= ((double)B[i] * v[r] + (double)B[3 + i] * v[(W) + r]) +  \
+                                (double)B[6 + i] * v[2 * (W) + r];                       \
       }                                                                                  \
+      for (int e = 0; e < 3 * (W); ++e) yj[e] = acc[e];                                  \
       const double *d = f->bdiag + 3 * J;                                                \
       for (int r = 0; r < (W); ++r) {                                                    \
         yj[(W) + r] -= d[2] * yj[2 * (W) + r];                                           \
@@ -304,18 +332,14 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
 
 #ifdef PALP_LDL_X86
 /* The block solve for one right-hand side in AVX2, 4 lanes per vertex (the fourth a
- * pad whose contents are never read back). Each lane does exactly what the portable
- * path does for its row, in the same order and without fused multiply-adds:
- * forward  y_i <- y_i - ((B_0 a + B_1 b) + B_2 c)  (B_k the block's k-th column),
- * backward y_j <- y_j - ((R_0 a + R_1 b) + R_2 c)  (R_k its k-th row, a, b, c = y_i),
- * so both give the same bits. 4-lane loads of 3-entry columns and rows read one entry
- * past them into the pad lane (the arrays carry 4 spare entries at their end). */
-/* ((B_0 v_0 + B_1 v_1) + B_2 v_2) for the 3-entry vectors B_k at B, B + 3, B + 6 (each
- * loaded with one entry past it into the pad lane) and the scalars v_0..2. */
-__attribute__((target("avx2"))) static inline __m256d block_mv(const double *B, const double *v) {
-  __m256d t = _mm256_mul_pd(_mm256_loadu_pd(B), _mm256_broadcast_sd(v));
-  t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(B + 3), _mm256_broadcast_sd(v + 1)));
-  return _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(B + 6), _mm256_broadcast_sd(v + 2)));
+ * pad whose contents are never read back): lane i does what the portable path does
+ * for component i. ((B_0 v_0 + B_1 v_1) + B_2 v_2) for the 3-entry single-precision
+ * vectors B_k at B, B + 3, B + 6, each widened exactly to double (4-lane loads read
+ * one entry past it into the pad lane; the arrays carry 4 spare entries). */
+__attribute__((target("avx2"))) static inline __m256d block_mv(const float *B, const double *v) {
+  __m256d t = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(B)), _mm256_broadcast_sd(v));
+  t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(B + 3)), _mm256_broadcast_sd(v + 1)));
+  return _mm256_add_pd(t, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(B + 6)), _mm256_broadcast_sd(v + 2)));
 }
 
 __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f, double *x, double *y) {
@@ -325,22 +349,22 @@ __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f,
   for (int k = 0; k < n; ++k) y[4 * (k / 3) + k % 3] = x[f->perm[k]];
   for (int I = 0; I < nb; ++I) {
     double *yi = y + 4 * I;
-    __m256d acc = _mm256_loadu_pd(yi);
+    __m256d acc = _mm256_load_pd(yi);
     for (int q = f->rowp[I]; q < f->rowp[I + 1]; ++q)
       acc = _mm256_sub_pd(acc, block_mv(f->bcol + 9 * q, y + 4 * f->rcol[q]));
-    _mm256_storeu_pd(yi, acc);
+    _mm256_store_pd(yi, acc);
     const double *d = f->bdiag + 3 * I;
     yi[1] -= d[0] * yi[0];
     yi[2] -= d[1] * yi[0] + d[2] * yi[1];
   }
   for (int k = 0; k < nb; ++k)
-    _mm256_storeu_pd(y + 4 * k, _mm256_mul_pd(_mm256_loadu_pd(y + 4 * k), _mm256_loadu_pd(f->dinv4 + 4 * k)));
+    _mm256_store_pd(y + 4 * k, _mm256_mul_pd(_mm256_load_pd(y + 4 * k), _mm256_loadu_pd(f->dinv4 + 4 * k)));
   for (int J = nb - 1, q = 0; J >= 0; --J) {
     double *yj = y + 4 * J;
-    __m256d acc = _mm256_loadu_pd(yj);
+    __m256d acc = _mm256_load_pd(yj);
     for (const int qend = q + f->bcolp[J + 1] - f->bcolp[J]; q < qend; ++q)
       acc = _mm256_sub_pd(acc, block_mv(f->bbwd + 9 * q, y + 4 * f->rbwd[q]));
-    _mm256_storeu_pd(yj, acc);
+    _mm256_store_pd(yj, acc);
     const double *d = f->bdiag + 3 * J;
     yj[1] -= d[2] * yj[2];
     yj[0] -= d[0] * yj[1] + d[1] * yj[2];
@@ -360,6 +384,7 @@ static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
   switch (w) {
   case 1: PALP_LDL_BLOCK_SOLVE_BODY(1); break;
   case 2: PALP_LDL_BLOCK_SOLVE_BODY(2); break;
+  case 3: PALP_LDL_BLOCK_SOLVE_BODY(3); break;
   default: PALP_LDL_BLOCK_SOLVE_BODY(w); break;
   }
 }

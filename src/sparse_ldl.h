@@ -6,6 +6,15 @@
  * allocates its dense operands on every call, which costs more than the solve itself
  * at the model's size (a few hundred unknowns). Right-hand sides are interleaved,
  * w values per unknown, so each factor entry is loaded once for all of them.
+ *
+ * L's entries are rounded to single precision (D and the arithmetic stay double):
+ * the solve is then exact, to double rounding, for A~ = L~ D L~^T with |L~ - L| <=
+ * 2^-24 |L|, still symmetric positive definite, and the factor is half the bytes. A
+ * server core steps many sessions in turn, so each step finds its factor out of the
+ * caches, and the solve's time is the time to stream the factor in (docs/model.md:
+ * 68 -> 51 us per cold solve at 300 vertices). The model's own tangent is lagged by
+ * far more than 2^-24 (a rebuild waits for a 2% change), so the rounding is not seen
+ * in its results beyond the bits (test model_sparse_ldl bounds the residual).
  */
 #ifndef PALP_SPARSE_LDL_H
 #define PALP_SPARSE_LDL_H
@@ -16,26 +25,22 @@ typedef struct palp_ldl {
   int n;
   int *colp;   /* [n+1] column starts of the strictly lower part of L (unit diagonal) */
   int *row;    /* [nnz] row indices (in permuted order) */
-  double *val; /* [nnz] */
+  double *val; /* [nnz] (rounded to single precision, below) */
   double *dinv; /* [n] 1 / D */
   int *perm;   /* [n] permuted index -> original index */
-  /* Block form (palp_ldl_factor_blocks): L in 3x3 vertex blocks, one index per block. */
+  /* Block form (palp_ldl_factor_blocks): L in 3x3 vertex blocks, one index per block,
+   * its off-diagonal blocks in single precision (below), stored twice: by block row
+   * for the forward pass and by block column, last to first, for the backward one. */
   int nb;         /* block columns (vertices); 0 when the scalar form is used */
   int *bcolp;     /* [nb+1] starts of each block column's off-diagonal blocks */
-  int *brow;      /* [nblocks] block row of each off-diagonal block */
-  double *bval;   /* [nblocks*9] row-major 3x3 blocks */
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
-  /* The same blocks column-major, and 1/D padded to 4 lanes per vertex, for the
-   * AVX2 single-right-hand-side solve (used when the CPU has AVX2; it performs the
-   * same operations in the same order as the portable path, so both give the same
-   * bits and a log replays identically on machines with and without it). */
   int *rowp;      /* [nb+1] starts of each block row's off-diagonal blocks */
   int *rcol;      /* [nblocks] block column of each, ascending within a row */
-  double *bcol;   /* [nblocks*9 + 4] the blocks by row, column-major */
-  double *bbwd;   /* [nblocks*9 + 4] the row-major blocks, columns from last to first */
-  int *rbwd;      /* [nblocks] block row of each */
-  double *dinv4;  /* [nb*4] */
-  int simd;       /* 1: palp_ldl_solve takes the AVX2 path for w == 1 */
+  float *bcol;    /* [nblocks*9 + 4] the blocks by row, column-major */
+  int *rbwd;      /* [nblocks] block row of each block of the backward order */
+  float *bbwd;    /* [nblocks*9 + 4] the blocks by column from last to first, row-major */
+  double *dinv4;  /* [nb*4] 1/D padded to 4 lanes per vertex */
+  int simd;       /* 1: palp_ldl_solve takes the AVX2 path for w == 1 (same bits as the portable one) */
 } palp_ldl;
 
 void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */

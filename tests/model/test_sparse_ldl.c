@@ -1,8 +1,11 @@
 /* The block LDL^T solve (src/sparse_ldl.c) on a symmetric positive definite matrix of
  * 3x3 blocks over a triangulated grid (the model's kind of pattern: each vertex
  * coupled to 6 neighbours), with dense full blocks:
- * - it solves: relative residual ||A x - b|| / ||b|| <= 1e-12 (the matrix is
- *   diagonally dominant, condition ~10, so double precision leaves ~1e-15);
+ * - it solves: relative residual ||A x - b|| / ||b|| <= 1e-7. L's entries are stored
+ *   in single precision (src/sparse_ldl.h: unit roundoff 2^-24 = 6e-8 per entry), so
+ *   the solve is exact for a matrix within ~1e-7 of A; the matrix is diagonally
+ *   dominant, condition ~10, so the residual stays at that level (measured 7e-9; a
+ *   double factor left ~1e-15);
  * - the AVX2 path (taken for one right-hand side when the CPU has AVX2) gives the
  *   same bits as the portable path, so a session log replays identically on any
  *   x86-64 machine (tolerance 0, compared with memcmp);
@@ -103,9 +106,9 @@ int main(void) {
     }
     const double rel = sqrt(rr / bb);
     if (rel > worst) worst = rel;
-    CHECK(rel <= 1e-12, "right-hand side %d: relative residual %.3g (tolerance 1e-12)", k, rel);
+    CHECK(rel <= 1e-7, "right-hand side %d: relative residual %.3g (tolerance 1e-7)", k, rel);
   }
-  printf("%d unknowns, %d off-diagonal factor blocks: worst relative residual %.3g (tolerance 1e-12)\n", N,
+  printf("%d unknowns, %d off-diagonal factor blocks: worst relative residual %.3g (tolerance 1e-7)\n", N,
          f.bcolp ? f.bcolp[NB] : -1, worst);
   for (int r = 0; r < N; ++r) {
     for (int k = 0; k < 3; ++k) x3[3 * r + k] = b[k][r];
