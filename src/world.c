@@ -59,7 +59,7 @@ typedef struct contact {
 #define PALP_FINGER_MAX_CON 96 /* constraints per finger and step */
 typedef struct finger_scratch {
   int slots, n3;        /* pool size, 3 nfree */
-  double *pool;         /* [slots][3][n3] */
+  float *pool;          /* [slots][3][n3], single precision (below) */
   int *slot_row;        /* [slots] free row held, -1 */
   int64_t *slot_used;   /* [slots] last step the slot served */
   int *row_slot;        /* [nfree] slot of a row, -1 */
@@ -520,7 +520,7 @@ static int finger_slot(palp_world *w, int r) {
     if (best < 0) {
       const int grown = fs->slots * 2 < w->nfree ? fs->slots * 2 : w->nfree;
       if (grown <= fs->slots) return -1;
-      double *pool = realloc(fs->pool, sizeof(double) * 3 * (size_t)n3 * (size_t)grown);
+      float *pool = realloc(fs->pool, sizeof(float) * 3 * (size_t)n3 * (size_t)grown);
       int *sr = realloc(fs->slot_row, sizeof(int) * (size_t)grown);
       int64_t *su = realloc(fs->slot_used, sizeof(int64_t) * (size_t)grown);
       if (pool) fs->pool = pool;
@@ -536,9 +536,9 @@ static int finger_slot(palp_world *w, int r) {
     memset(fs->solve, 0, sizeof(double) * 3 * (size_t)n3);
     for (int c = 0; c < 3; ++c) fs->solve[3 * (3 * r + c) + c] = 1.0;
     palp_ldl_solve(&w->ldl, fs->solve, 3, fs->work);
-    double *col = fs->pool + (size_t)s * 3 * (size_t)n3;
+    float *col = fs->pool + (size_t)s * 3 * (size_t)n3;
     for (int k = 0; k < n3; ++k)
-      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = fs->solve[3 * k + c];
+      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = (float)fs->solve[3 * k + c];
     fs->slot_row[s] = r;
     fs->row_slot[r] = s;
   }
@@ -557,13 +557,16 @@ static void finger_cols_invalidate(palp_world *w) {
 
 /* x += c col over n entries: a finger's contact impulse spread by one compliance
  * column (up to ~60 columns of every unknown per finger per step, the finger
- * stage's largest cost). The AVX2 clone does the same multiply and add per entry
+ * stage's largest cost). The columns are kept in single precision, like the factor
+ * they come from (src/sparse_ldl.h): a server core steps many sessions in turn, so
+ * they are read from beyond the caches, and half the bytes is most of the time
+ * (docs/model.md). The AVX2 clone does the same widening, multiply and add per entry
  * (no fused multiply-add), so both clones give the same bits. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-static void axpy(int n, double c, const double *restrict col, double *restrict x) {
-  for (int q = 0; q < n; ++q) x[q] += c * col[q];
+static void axpy(int n, double c, const float *restrict col, double *restrict x) {
+  for (int q = 0; q < n; ++q) x[q] += c * (double)col[q];
 }
 
 /* Free position of vertex i after the solve, before contacts: x + h v_free [m]. */
@@ -771,7 +774,7 @@ static void stage_fingers(palp_world *w, double h) {
       k->ncon = 0;
       continue;
     }
-    const double *colv[3 * PALP_FINGER_MAX_CON];
+    const float *colv[3 * PALP_FINGER_MAX_CON];
     for (int a = 0; a < nl; ++a) colv[a] = fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
     /* y_c = A_full^{-1} J_c at the local dofs, with the gel's rank-1 term by
      * Sherman-Morrison: A_full^{-1} e_j = A^{-1} e_j - sm u u_j (A symmetric). */
@@ -782,15 +785,15 @@ static void stage_fingers(palp_world *w, double h) {
       double uj = 0.0; /* u . J_c */
       for (int e = 0; e < cn_[c]; ++e) {
         const int r = w->row_of[cv[c][e]];
-        const double *cb = colv[fs->vloc[cv[c][e]]];
+        const float *cb = colv[fs->vloc[cv[c][e]]];
         const double jv[3] = {cj[c][e].x, cj[c][e].y, cj[c][e].z};
         for (int j = 0; j < 3; ++j) {
           if (jv[j] == 0.0) continue;
-          const double *col = cb + (size_t)j * (size_t)n3;
+          const float *col = cb + (size_t)j * (size_t)n3;
           for (int a = 0; a < nl; ++a) {
             const int ra = w->row_of[fs->lvert[a]];
-            yc[3 * a] += jv[j] * col[3 * ra], yc[3 * a + 1] += jv[j] * col[3 * ra + 1];
-            yc[3 * a + 2] += jv[j] * col[3 * ra + 2];
+            yc[3 * a] += jv[j] * (double)col[3 * ra], yc[3 * a + 1] += jv[j] * (double)col[3 * ra + 1];
+            yc[3 * a + 2] += jv[j] * (double)col[3 * ra + 2];
           }
           if (w->sm_coef != 0.0) uj += jv[j] * w->u[3 * r + j];
         }
@@ -1540,7 +1543,7 @@ struct palp_factor_job {
   palp_ldl ldl;
   int ncols, cols_cap; /* columns to precompute; capacity of cols in slots */
   int *col_row;        /* [cols_cap] free row of each */
-  double *cols;        /* [cols_cap][3][n3], the finger pool's layout */
+  float *cols;         /* [cols_cap][3][n3], the finger pool's layout */
   double *solve, *work; /* [3 n3] */
   palp_vec3 *fdir;     /* [nlink] the new factor's link data (world-only) */
   double *fbeta, *fslack;
@@ -1590,9 +1593,9 @@ int palp_factor_job_run(palp_factor_job *j) {
     memset(j->solve, 0, sizeof(double) * 3 * (size_t)n3);
     for (int c = 0; c < 3; ++c) j->solve[3 * (3 * r + c) + c] = 1.0;
     palp_ldl_solve(&j->ldl, j->solve, 3, j->work);
-    double *col = j->cols + (size_t)q * 3 * (size_t)n3;
+    float *col = j->cols + (size_t)q * 3 * (size_t)n3;
     for (int k = 0; k < n3; ++k)
-      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = j->solve[3 * k + c];
+      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = (float)j->solve[3 * k + c];
   }
   return PALP_OK;
 }
@@ -1612,7 +1615,7 @@ static int job_request(palp_world *w, double h) {
   const finger_scratch *fs = w->fs;
   if (fs && fs->slots > 0) {
     if (j->cols_cap < fs->slots) {
-      double *c = realloc(j->cols, sizeof(double) * 3 * (size_t)j->n3 * (size_t)fs->slots);
+      float *c = realloc(j->cols, sizeof(float) * 3 * (size_t)j->n3 * (size_t)fs->slots);
       int *cr = realloc(j->col_row, sizeof(int) * (size_t)fs->slots);
       if (c) j->cols = c;
       if (cr) j->col_row = cr;
@@ -1648,14 +1651,14 @@ static int job_install(palp_world *w) {
   if (fs && j->ncols > 0 && j->cols_cap > 0) {
     /* Swap the pools: the job's buffer has the finger pool's layout. */
     if (j->cols_cap < fs->slots) {
-      double *c = realloc(j->cols, sizeof(double) * 3 * (size_t)j->n3 * (size_t)fs->slots);
+      float *c = realloc(j->cols, sizeof(float) * 3 * (size_t)j->n3 * (size_t)fs->slots);
       int *cr = realloc(j->col_row, sizeof(int) * (size_t)fs->slots);
       if (c) j->cols = c;
       if (cr) j->col_row = cr;
       if (c && cr) j->cols_cap = fs->slots;
     }
     if (j->cols_cap >= fs->slots) {
-      double *pool = fs->pool;
+      float *pool = fs->pool;
       fs->pool = j->cols;
       j->cols = pool;
       /* fs->slots stays: the swapped-in buffer holds at least that many slots; the
@@ -1901,7 +1904,7 @@ static int finger_scratch_create(palp_world *w) {
   fs->n3 = 3 * w->nfree;
   fs->slots = w->nfree < 32 ? w->nfree : 32;
   int fail = 0;
-  fs->pool = xcalloc((size_t)fs->slots * 3 * (size_t)fs->n3, sizeof(double), &fail);
+  fs->pool = xcalloc((size_t)fs->slots * 3 * (size_t)fs->n3, sizeof(float), &fail);
   fs->slot_row = xcalloc((size_t)fs->slots, sizeof(int), &fail);
   fs->slot_used = xcalloc((size_t)fs->slots, sizeof(int64_t), &fail);
   fs->row_slot = xcalloc((size_t)w->nfree, sizeof(int), &fail);
