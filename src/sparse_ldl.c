@@ -16,14 +16,11 @@
 static void free_numeric(palp_ldl *f) {
   free(f->bcolp);
   free(f->bdiag);
-  free(f->bcol);
+  free(f->brow);
+  free(f->blk);
   free(f->dinv4);
-  free(f->rowp);
-  free(f->rcol);
-  free(f->bbwd);
-  free(f->rbwd);
-  f->bcolp = f->rowp = f->rcol = f->rbwd = NULL;
-  f->bcol = f->bbwd = NULL;
+  f->bcolp = f->brow = NULL;
+  f->blk = NULL;
   f->bdiag = f->dinv4 = NULL;
   f->nb = 0;
   f->simd = 0;
@@ -133,12 +130,11 @@ done:
   return rc;
 }
 
-/* Regroups the scalar factor into 3x3 blocks, stored twice in single precision: by
- * block row, each block column-major, for the forward pass, and by block column from
- * the last to the first, each block row-major, for the backward pass, so that both
- * passes stream through memory forwards and accumulate in registers. Returns 0,
- * PALP_ENOMEM, or -1 when the ordering did not keep each vertex's unknowns together
- * (the scalar form then stays in use). */
+/* Regroups the scalar factor into 3x3 blocks in single precision, by block column
+ * (rows ascending within a column), each block column-major: both passes read this
+ * one copy, the forward one from the first column to the last, the backward one from
+ * the last to the first. Returns 0, PALP_ENOMEM, or -1 when the ordering did not keep
+ * each vertex's unknowns together (the scalar form then stays in use). */
 static int to_blocks(palp_ldl *f, int nb) {
   const int n = f->n;
   for (int k = 0; k < n; ++k)
@@ -146,12 +142,15 @@ static int to_blocks(palp_ldl *f, int nb) {
   /* Off-diagonal blocks never outnumber the scalar entries. */
   const int cap = f->colp[n] > 0 ? f->colp[n] : 1;
   int *mark = malloc(sizeof(int) * (size_t)nb);
-  int *brow = malloc(sizeof(int) * (size_t)cap);
-  float *bval = calloc((size_t)cap * 9, sizeof(float)); /* row-major, by column: scratch */
   f->bcolp = malloc(sizeof(int) * ((size_t)nb + 1));
   f->bdiag = calloc((size_t)nb * 3, sizeof(double));
-  int rc = PALP_ENOMEM;
-  if (!mark || !brow || !bval || !f->bcolp || !f->bdiag) goto out;
+  f->brow = malloc(sizeof(int) * (size_t)cap);
+  f->blk = calloc((size_t)cap * 9 + 4, sizeof(float)); /* + 4: 4-lane loads of a block's last 3 entries read one past it */
+  f->dinv4 = calloc((size_t)nb * 4, sizeof(double));
+  if (!mark || !f->bcolp || !f->bdiag || !f->brow || !f->blk || !f->dinv4) {
+    free(mark);
+    return PALP_ENOMEM;
+  }
   for (int i = 0; i < nb; ++i) mark[i] = -1;
   int nblk = 0;
   for (int J = 0; J < nb; ++J) {
@@ -166,43 +165,14 @@ static int to_blocks(palp_ldl *f, int nb) {
         }
         if (mark[I] < f->bcolp[J]) {
           mark[I] = nblk;
-          brow[nblk++] = I;
+          f->brow[nblk++] = I;
         }
-        bval[9 * mark[I] + 3 * r + c] = (float)f->val[p]; /* exact: val is already rounded */
+        f->blk[9 * mark[I] + 3 * c + r] = (float)f->val[p]; /* exact: val is already rounded */
       }
     }
   }
   f->bcolp[nb] = nblk;
-  /* + 4: 4-lane loads of a block's last 3 entries read one past it. */
-  f->rowp = calloc((size_t)nb + 1, sizeof(int));
-  f->rcol = malloc(sizeof(int) * (size_t)(nblk > 0 ? nblk : 1));
-  f->bcol = calloc((size_t)nblk * 9 + 4, sizeof(float));
-  f->rbwd = malloc(sizeof(int) * (size_t)(nblk > 0 ? nblk : 1));
-  f->bbwd = calloc((size_t)nblk * 9 + 4, sizeof(float));
-  f->dinv4 = calloc((size_t)nb * 4, sizeof(double));
-  int *fill = malloc(sizeof(int) * (size_t)(nb > 0 ? nb : 1));
-  if (!f->rowp || !f->rcol || !f->bcol || !f->rbwd || !f->bbwd || !f->dinv4 || !fill) {
-    free(fill);
-    goto out;
-  }
-  /* Forward: by block row, columns ascending within a row. */
-  for (int p = 0; p < nblk; ++p) f->rowp[brow[p] + 1]++;
-  for (int I = 0; I < nb; ++I) f->rowp[I + 1] += f->rowp[I];
-  memcpy(fill, f->rowp, sizeof(int) * (size_t)nb);
-  for (int J = 0; J < nb; ++J)
-    for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p) {
-      const int q = fill[brow[p]]++;
-      f->rcol[q] = J;
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) f->bcol[9 * q + 3 * c + r] = bval[9 * p + 3 * r + c];
-    }
-  free(fill);
-  /* Backward: by block column from the last to the first. */
-  for (int J = nb - 1, q = 0; J >= 0; --J)
-    for (int p = f->bcolp[J]; p < f->bcolp[J + 1]; ++p, ++q) {
-      f->rbwd[q] = brow[p];
-      memcpy(f->bbwd + 9 * q, bval + 9 * p, 9 * sizeof(float));
-    }
+  free(mark);
   for (int j = 0; j < n; ++j) f->dinv4[4 * (j / 3) + j % 3] = f->dinv[j];
   f->nb = nb;
 #ifdef PALP_LDL_X86
@@ -210,12 +180,7 @@ static int to_blocks(palp_ldl *f, int nb) {
    * which the tangent-rebuild threads would otherwise race on. */
   f->simd = __builtin_cpu_supports("avx2") ? 1 : 0;
 #endif
-  rc = PALP_OK;
-out:
-  free(mark);
-  free(brow);
-  free(bval);
-  return rc;
+  return PALP_OK;
 }
 
 int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, int nnz, const int *ti,
@@ -247,79 +212,66 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
   return e > 0 ? PALP_OK : e == PALP_ENOMEM ? e : PALP_OK;
 }
 
-/* Block solve for W interleaved right-hand sides: 3x3 blocks times 3-vectors, row-
- * oriented in both passes (forward: y_I -= sum over the row's blocks, columns
- * ascending; backward: y_J -= sum over column J's blocks transposed, rows descending),
- * each block's product summed as ((B_0 a + B_1 b) + B_2 c), B_k its k-th column
- * (forward) or row (backward). The AVX2 path for one right-hand side does the same
- * operations in the same order, lane by lane and without fused multiply-adds, so every
- * path and width gives the same bits (test model_sparse_ldl). With several right-hand
- * sides (compliance columns: unit vectors, nonzero only on their etree path) the
- * forward pass skips blocks whose source is all zero; one right-hand side (the step's,
- * dense) never skips, on either path, so that they agree even in the sign of a zero.
- * A macro so that each width is compiled with W constant. */
-/* y_I <- L_II^{-1} y_I for the unit lower diagonal block (l10, l20, l21), W wide. */
-static inline void palp_ldl_diag_fwd(const double *d, double *yi, int w) {
+/* y_J <- L_JJ^{-1} y_J for the unit lower diagonal block (l10, l20, l21), w wide. */
+static inline void palp_ldl_diag_fwd(const double *d, double *yj, int w) {
   for (int r = 0; r < w; ++r) {
-    yi[w + r] -= d[0] * yi[r];
-    yi[2 * w + r] -= d[1] * yi[r] + d[2] * yi[w + r];
+    yj[w + r] -= d[0] * yj[r];
+    yj[2 * w + r] -= d[1] * yj[r] + d[2] * yj[w + r];
   }
 }
 
+/* Block solve for W interleaved right-hand sides, by block column in both passes:
+ *   forward,  column J ascending:  y_J <- L_JJ^{-1} y_J, then for each block B below
+ *             it (row I)  y_I <- y_I - ((B_0 a + B_1 b) + B_2 c),  B_k its k-th column,
+ *             (a, b, c) = y_J;
+ *   backward, column J descending: s_c = sum over the column's blocks, in order, of
+ *             B_c (*) y_I (elementwise, one partial sum per row r), then
+ *             y_J[c] <- y_J[c] - ((s_c[0] + s_c[1]) + s_c[2]), then L_JJ^{-T}.
+ * One copy of the blocks serves both passes (a server core's step finds it out of the
+ * caches: bytes are time). The AVX2 path for one right-hand side does the same
+ * operations in the same order, lane by lane and without fused multiply-adds, so every
+ * path and width gives the same bits (test model_sparse_ldl). With several right-hand
+ * sides (compliance columns: unit vectors, nonzero only on their etree path) the
+ * forward pass skips a column whose values are all zero; one right-hand side (the
+ * step's, dense) never skips, on either path, so that they agree even in the sign of a
+ * zero. A macro so that each width is compiled with W constant. */
 #define PALP_LDL_BLOCK_SOLVE_BODY(W)                                                     \
   do {                                                                                   \
-    double acc[3 * (W)];                                                                 \
     for (int k = 0; k < n; ++k)                                                          \
       for (int r = 0; r < (W); ++r) y[k * (W) + r] = x[f->perm[k] * (W) + r];            \
-    if ((W) == 1) {                                                                      \
-      for (int I = 0; I < nb; ++I) {                                                     \
-        double *yi = y + 3 * I * (W);                                                    \
-        for (int e = 0; e < 3 * (W); ++e) acc[e] = yi[e];                                \
-        for (int q = f->rowp[I]; q < f->rowp[I + 1]; ++q) {                              \
-          const double *v = y + 3 * f->rcol[q] * (W);                                    \
-          const float *B = f->bcol + 9 * q;                                              \
-          for (int i = 0; i < 3; ++i)                                                    \
-            for (int r = 0; r < (W); ++r)                                                \
-              acc[i * (W) + r] -= ((double)B[i] * v[r] + (double)B[3 + i] * v[(W) + r]) + \
-                                  (double)B[6 + i] * v[2 * (W) + r];                     \
-        }                                                                                \
-        for (int e = 0; e < 3 * (W); ++e) yi[e] = acc[e];                                \
-        palp_ldl_diag_fwd(f->bdiag + 3 * I, yi, (W));                                    \
-      }                                                                                  \
-    } else {                                                                             \
-      /* By column, scattering into the rows below: the same subtractions in the same  */ \
-      /* order per row, and a zero source column is skipped whole. */                    \
-      const int nblk = f->bcolp[nb];                                                     \
-      for (int J = 0; J < nb; ++J) {                                                     \
-        double *yj = y + 3 * J * (W);                                                    \
-        palp_ldl_diag_fwd(f->bdiag + 3 * J, yj, (W));                                    \
+    for (int J = 0; J < nb; ++J) {                                                       \
+      double *yj = y + 3 * J * (W);                                                      \
+      palp_ldl_diag_fwd(f->bdiag + 3 * J, yj, (W));                                      \
+      if ((W) > 1) {                                                                     \
         int nz = 0;                                                                      \
         for (int e = 0; e < 3 * (W); ++e) nz |= yj[e] != 0.0;                            \
         if (!nz) continue;                                                               \
-        for (int q = nblk - f->bcolp[J + 1], qend = nblk - f->bcolp[J]; q < qend; ++q) { \
-          double *yi = y + 3 * f->rbwd[q] * (W);                                         \
-          const float *B = f->bbwd + 9 * q;                                              \
-          for (int i = 0; i < 3; ++i)                                                    \
-            for (int r = 0; r < (W); ++r)                                                \
-              yi[i * (W) + r] -= ((double)B[3 * i] * yj[r] + (double)B[3 * i + 1] * yj[(W) + r]) + \
-                                 (double)B[3 * i + 2] * yj[2 * (W) + r];                 \
-        }                                                                                \
+      }                                                                                  \
+      for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {                              \
+        double *yi = y + 3 * f->brow[q] * (W);                                           \
+        const float *B = f->blk + 9 * q;                                                 \
+        for (int i = 0; i < 3; ++i)                                                      \
+          for (int r = 0; r < (W); ++r)                                                  \
+            yi[i * (W) + r] -= ((double)B[i] * yj[r] + (double)B[3 + i] * yj[(W) + r]) + \
+                               (double)B[6 + i] * yj[2 * (W) + r];                       \
       }                                                                                  \
     }                                                                                    \
     for (int j = 0; j < n; ++j)                                                          \
       for (int r = 0; r < (W); ++r) y[j * (W) + r] *= f->dinv[j];                        \
-    for (int J = nb - 1, q = 0; J >= 0; --J) {                                           \
+    for (int J = nb - 1; J >= 0; --J) {                                                  \
       double *yj = y + 3 * J * (W);                                                      \
-      for (int e = 0; e < 3 * (W); ++e) acc[e] = yj[e];                                  \
-      for (const int qend = q + f->bcolp[J + 1] - f->bcolp[J]; q < qend; ++q) {          \
-        const double *v = y + 3 * f->rbwd[q] * (W);                                      \
-        const float *B = f->bbwd + 9 * q;                                                \
-        for (int i = 0; i < 3; ++i)                                                      \
-          for (int r = 0; r < (W); ++r)                                                  \
-            acc[i * (W) + r] -= ((double)B[i] * v[r] + (double)B[3 + i] * v[(W) + r]) +  \
-                                (double)B[6 + i] * v[2 * (W) + r];                       \
+      double sum[3][3][(W)];                                                             \
+      memset(sum, 0, sizeof sum);                                                        \
+      for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {                              \
+        const double *v = y + 3 * f->brow[q] * (W);                                      \
+        const float *B = f->blk + 9 * q;                                                 \
+        for (int c = 0; c < 3; ++c)                                                      \
+          for (int i = 0; i < 3; ++i)                                                    \
+            for (int r = 0; r < (W); ++r) sum[c][i][r] += (double)B[3 * c + i] * v[i * (W) + r]; \
       }                                                                                  \
-      for (int e = 0; e < 3 * (W); ++e) yj[e] = acc[e];                                  \
+      for (int c = 0; c < 3; ++c)                                                        \
+        for (int r = 0; r < (W); ++r)                                                    \
+          yj[c * (W) + r] -= (sum[c][0][r] + sum[c][1][r]) + sum[c][2][r];               \
       const double *d = f->bdiag + 3 * J;                                                \
       for (int r = 0; r < (W); ++r) {                                                    \
         yj[(W) + r] -= d[2] * yj[2 * (W) + r];                                           \
@@ -332,39 +284,47 @@ static inline void palp_ldl_diag_fwd(const double *d, double *yi, int w) {
 
 #ifdef PALP_LDL_X86
 /* The block solve for one right-hand side in AVX2, 4 lanes per vertex (the fourth a
- * pad whose contents are never read back): lane i does what the portable path does
- * for component i. ((B_0 v_0 + B_1 v_1) + B_2 v_2) for the 3-entry single-precision
- * vectors B_k at B, B + 3, B + 6, each widened exactly to double (4-lane loads read
- * one entry past it into the pad lane; the arrays carry 4 spare entries). */
-__attribute__((target("avx2"))) static inline __m256d block_mv(const float *B, const double *v) {
-  __m256d t = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(B)), _mm256_broadcast_sd(v));
-  t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(B + 3)), _mm256_broadcast_sd(v + 1)));
-  return _mm256_add_pd(t, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(B + 6)), _mm256_broadcast_sd(v + 2)));
-}
+ * pad, never read back into the others): lane i does what the portable path does for
+ * component i (forward) or row i's partial sum (backward). A block's columns are
+ * loaded as 4 single-precision lanes, the fourth one past the column (the array
+ * carries 4 spare entries), and widened exactly to double. */
+__attribute__((target("avx2"))) static inline __m256d col4(const float *B) { return _mm256_cvtps_pd(_mm_loadu_ps(B)); }
 
 __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f, double *x, double *y) {
   const int nb = f->nb, n = f->n;
   y = (double *)(((uintptr_t)y + 31) & ~(uintptr_t)31); /* no 32-byte access split across cache lines */
   for (int k = 0; k < nb; ++k) y[4 * k + 3] = 0.0;
   for (int k = 0; k < n; ++k) y[4 * (k / 3) + k % 3] = x[f->perm[k]];
-  for (int I = 0; I < nb; ++I) {
-    double *yi = y + 4 * I;
-    __m256d acc = _mm256_load_pd(yi);
-    for (int q = f->rowp[I]; q < f->rowp[I + 1]; ++q)
-      acc = _mm256_sub_pd(acc, block_mv(f->bcol + 9 * q, y + 4 * f->rcol[q]));
-    _mm256_store_pd(yi, acc);
-    const double *d = f->bdiag + 3 * I;
-    yi[1] -= d[0] * yi[0];
-    yi[2] -= d[1] * yi[0] + d[2] * yi[1];
+  for (int J = 0; J < nb; ++J) {
+    double *yj = y + 4 * J;
+    palp_ldl_diag_fwd(f->bdiag + 3 * J, yj, 1);
+    const __m256d a = _mm256_broadcast_sd(yj), b = _mm256_broadcast_sd(yj + 1), c = _mm256_broadcast_sd(yj + 2);
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      double *yi = y + 4 * f->brow[q];
+      const float *B = f->blk + 9 * q;
+      __m256d t = _mm256_mul_pd(col4(B), a);
+      t = _mm256_add_pd(t, _mm256_mul_pd(col4(B + 3), b));
+      t = _mm256_add_pd(t, _mm256_mul_pd(col4(B + 6), c));
+      _mm256_store_pd(yi, _mm256_sub_pd(_mm256_load_pd(yi), t));
+    }
   }
   for (int k = 0; k < nb; ++k)
     _mm256_store_pd(y + 4 * k, _mm256_mul_pd(_mm256_load_pd(y + 4 * k), _mm256_loadu_pd(f->dinv4 + 4 * k)));
-  for (int J = nb - 1, q = 0; J >= 0; --J) {
+  for (int J = nb - 1; J >= 0; --J) {
     double *yj = y + 4 * J;
-    __m256d acc = _mm256_load_pd(yj);
-    for (const int qend = q + f->bcolp[J + 1] - f->bcolp[J]; q < qend; ++q)
-      acc = _mm256_sub_pd(acc, block_mv(f->bbwd + 9 * q, y + 4 * f->rbwd[q]));
-    _mm256_store_pd(yj, acc);
+    __m256d s0 = _mm256_setzero_pd(), s1 = s0, s2 = s0;
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      const __m256d v = _mm256_load_pd(y + 4 * f->brow[q]);
+      const float *B = f->blk + 9 * q;
+      s0 = _mm256_add_pd(s0, _mm256_mul_pd(col4(B), v));
+      s1 = _mm256_add_pd(s1, _mm256_mul_pd(col4(B + 3), v));
+      s2 = _mm256_add_pd(s2, _mm256_mul_pd(col4(B + 6), v));
+    }
+    double l0[4], l1[4], l2[4];
+    _mm256_storeu_pd(l0, s0), _mm256_storeu_pd(l1, s1), _mm256_storeu_pd(l2, s2);
+    yj[0] -= (l0[0] + l0[1]) + l0[2];
+    yj[1] -= (l1[0] + l1[1]) + l1[2];
+    yj[2] -= (l2[0] + l2[1]) + l2[2];
     const double *d = f->bdiag + 3 * J;
     yj[1] -= d[2] * yj[2];
     yj[0] -= d[0] * yj[1] + d[1] * yj[2];

@@ -29,16 +29,12 @@ typedef struct palp_ldl {
   double *dinv; /* [n] 1 / D */
   int *perm;   /* [n] permuted index -> original index */
   /* Block form (palp_ldl_factor_blocks): L in 3x3 vertex blocks, one index per block,
-   * its off-diagonal blocks in single precision (below), stored twice: by block row
-   * for the forward pass and by block column, last to first, for the backward one. */
+   * its off-diagonal blocks in single precision (below), by block column. */
   int nb;         /* block columns (vertices); 0 when the scalar form is used */
   int *bcolp;     /* [nb+1] starts of each block column's off-diagonal blocks */
+  int *brow;      /* [nblocks] block row of each, ascending within a column */
+  float *blk;     /* [nblocks*9 + 4] the blocks, each column-major */
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
-  int *rowp;      /* [nb+1] starts of each block row's off-diagonal blocks */
-  int *rcol;      /* [nblocks] block column of each, ascending within a row */
-  float *bcol;    /* [nblocks*9 + 4] the blocks by row, column-major */
-  int *rbwd;      /* [nblocks] block row of each block of the backward order */
-  float *bbwd;    /* [nblocks*9 + 4] the blocks by column from last to first, row-major */
   double *dinv4;  /* [nb*4] 1/D padded to 4 lanes per vertex */
   int simd;       /* 1: palp_ldl_solve takes the AVX2 path for w == 1 (same bits as the portable one) */
 } palp_ldl;
