@@ -70,6 +70,8 @@ typedef struct finger_scratch {
   double *lf;           /* [3 * 3 PALP_FINGER_MAX_CON] local forces [N] */
   double *y;            /* [PALP_FINGER_MAX_CON][9 PALP_FINGER_MAX_CON] A^{-1} H_s^T n_s at local dofs */
   double *W, *b, *lwork; /* [m^2], [m], [m^2 + 3m] */
+  double *G;            /* [3 nl][3 nl] this step's compliance among the local dofs */
+  size_t G_cap;         /* doubles G holds */
   uint8_t *cand;        /* [vertex_count] */
   double max_link;      /* [m] longest rest link */
   int64_t stamp;
@@ -776,25 +778,45 @@ static void stage_fingers(palp_world *w, double h) {
     }
     const float *colv[3 * PALP_FINGER_MAX_CON];
     for (int a = 0; a < nl; ++a) colv[a] = fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
+    /* The compliance among the local dofs, gathered once: G[3b + j][3a + i] = A^{-1}
+     * at (local dof 3a + i, 3b + j). Read from the columns per constraint, each
+     * vertex's entries were gathered once for every constraint it is in (~4x), from
+     * columns that a server core's step finds out of the caches (docs/model.md). */
+    const int L3 = 3 * nl;
+    if (fs->G_cap < (size_t)L3 * (size_t)L3) {
+      double *G = realloc(fs->G, sizeof(double) * (size_t)L3 * (size_t)L3);
+      if (!G) {
+        w->finger_unsolved++;
+        for (int a = 0; a < nl; ++a) fs->vloc[fs->lvert[a]] = -1;
+        k->ncon = 0;
+        continue;
+      }
+      fs->G = G;
+      fs->G_cap = (size_t)L3 * (size_t)L3;
+    }
+    for (int b = 0; b < nl; ++b)
+      for (int j = 0; j < 3; ++j) {
+        const float *col = colv[b] + (size_t)j * (size_t)n3;
+        double *g = fs->G + (size_t)(3 * b + j) * (size_t)L3;
+        for (int a = 0; a < nl; ++a) {
+          const int ra = w->row_of[fs->lvert[a]];
+          g[3 * a] = (double)col[3 * ra], g[3 * a + 1] = (double)col[3 * ra + 1], g[3 * a + 2] = (double)col[3 * ra + 2];
+        }
+      }
     /* y_c = A_full^{-1} J_c at the local dofs, with the gel's rank-1 term by
      * Sherman-Morrison: A_full^{-1} e_j = A^{-1} e_j - sm u u_j (A symmetric). */
-    const int L3 = 3 * nl;
     for (int c = 0; c < m; ++c) {
       double *yc = fs->y + (size_t)c * (size_t)(9 * PALP_FINGER_MAX_CON);
       memset(yc, 0, sizeof(double) * (size_t)L3);
       double uj = 0.0; /* u . J_c */
       for (int e = 0; e < cn_[c]; ++e) {
         const int r = w->row_of[cv[c][e]];
-        const float *cb = colv[fs->vloc[cv[c][e]]];
+        const int b = fs->vloc[cv[c][e]];
         const double jv[3] = {cj[c][e].x, cj[c][e].y, cj[c][e].z};
         for (int j = 0; j < 3; ++j) {
           if (jv[j] == 0.0) continue;
-          const float *col = cb + (size_t)j * (size_t)n3;
-          for (int a = 0; a < nl; ++a) {
-            const int ra = w->row_of[fs->lvert[a]];
-            yc[3 * a] += jv[j] * (double)col[3 * ra], yc[3 * a + 1] += jv[j] * (double)col[3 * ra + 1];
-            yc[3 * a + 2] += jv[j] * (double)col[3 * ra + 2];
-          }
+          const double *g = fs->G + (size_t)(3 * b + j) * (size_t)L3;
+          for (int q = 0; q < L3; ++q) yc[q] += jv[j] * g[q];
           if (w->sm_coef != 0.0) uj += jv[j] * w->u[3 * r + j];
         }
       }
@@ -1331,6 +1353,7 @@ void palp_world_destroy(palp_world *w) {
   if (w->fs) {
     finger_scratch *fs = w->fs;
     free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
+    free(fs->G);
     free(fs->vloc), free(fs->lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
     free(fs->cand), free(fs);
   }
