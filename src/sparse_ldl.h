@@ -12,9 +12,11 @@
  * 2^-24 |L|, still symmetric positive definite, and the factor is half the bytes. A
  * server core steps many sessions in turn, so each step finds its factor out of the
  * caches, and the solve's time is the time to stream the factor in (docs/model.md:
- * 68 -> 51 us per cold solve at 300 vertices). The model's own tangent is lagged by
- * far more than 2^-24 (a rebuild waits for a 2% change), so the rounding is not seen
- * in its results beyond the bits (test model_sparse_ldl bounds the residual).
+ * one copy of the blocks, a cold solve takes 0.53-0.57x the time it did). The model's
+ * own tangent is lagged by far more than 2^-24 (it is rebuilt only when a link has
+ * turned by 30 degrees or its tension stiffness has left a margin, world.c), so the
+ * rounding is not seen in its results beyond the bits (test model_sparse_ldl bounds
+ * the residual).
  */
 #ifndef PALP_SPARSE_LDL_H
 #define PALP_SPARSE_LDL_H
