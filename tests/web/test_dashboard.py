@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """web_dashboard: the instructor dashboard in headless Chromium lists every open session of a
-running palp-server (the server's own log says which are open), shows the server's status, adds a
-session that opens later without a reload, and drops a closed one within a second. DDS domain 192.
+running palp-server (the server's own log says which are open), shows the server's status and each
+card's own colour scale, adds a session that opens later without a reload, and drops a closed one
+within a second. DDS domain 192.
 usage: test_dashboard.py BUILD SOURCE OUT"""
 import os
 import re
@@ -49,6 +50,13 @@ def run(build, source, out):
         check(ok is True, "top views receive frames and the server's status shows (load, ticks, log counters)")
         ok = page.wait_for("Array.from(document.querySelectorAll('.card .band')).some(e => !e.textContent.startsWith('0.00'))", 10)
         check(ok is True, "a live force shows on the cards")
+        # Each card's own colour scale grows with its session's deepest dent: 1-2.5 N on the paper's
+        # literal dome dents it 10-25 mm, so every card settles on the 20 or 30 mm step of the ladder.
+        scales_js = ("Array.from(document.querySelectorAll('.card tr')).filter(r => r.cells[0].textContent === "
+                     "'colour scale').map(r => r.cells[1].textContent)")
+        ok = page.wait_for("(function (v) { return v.length === 3 && v.every(x => x === '0-20 mm' || x === '0-30 mm'); })"
+                           "(%s)" % scales_js, 10)
+        check(ok is True, "each card shows its own colour scale, grown to 20 or 30 mm: %s" % page.eval(scales_js))
         page.screenshot(os.path.join(out, "dashboard-3.png"))
 
         # A session opening later appears without a reload.
