@@ -80,8 +80,18 @@ def run(build, source, out):
         t_click = time.time()
         click(page, "lump")
         got = wait_findings(procs, peer, 1, 5)
+        replies = page.eval("palpState.trainee.replies")
+        if not got and replies and not replies[0]["ok"] and "no server takes findings" in replies[0]["reason"]:
+            # The bridge's findings writer had not yet matched the server's reader (DDS discovery on a
+            # loaded machine): the page said so; the trainee clicks again, as this test does.
+            print("note: first click refused (%s); clicking again" % replies[0]["reason"])
+            time.sleep(1.0)
+            t_click = time.time()
+            click(page, "lump")
+            got = wait_findings(procs, peer, 1, 5)
         check(len(got) == 1 and got[0]["op"] == "mark" and got[0]["mark"] == "1",
-              "the click reached the domain as a Finding, mark 1, in %.2f s: %s" % (time.time() - t_click, got))
+              "the click reached the domain as a Finding, mark 1, in %.2f s: %s; the bridge's replies: %s"
+              % (time.time() - t_click, got, page.eval("JSON.stringify(palpState.trainee.replies)")))
         f = got[0]
         pt = [float(f["x"]), float(f["y"]), float(f["z"])]
         R = page.eval("palpState.phantoms[palpState.trainee.phantom].radius")
