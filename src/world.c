@@ -548,6 +548,16 @@ static int finger_slot(palp_world *w, int r) {
   return s;
 }
 
+/* Room for n doubles of the local compliance block (grown, never shrunk). 0 or -1. */
+static int local_block_reserve(finger_scratch *fs, size_t n) {
+  if (fs->G_cap >= n) return 0;
+  double *G = realloc(fs->G, sizeof(double) * n);
+  if (!G) return -1;
+  fs->G = G;
+  fs->G_cap = n;
+  return 0;
+}
+
 static void finger_cols_invalidate(palp_world *w) {
   finger_scratch *fs = w->fs;
   if (!fs) return;
@@ -770,6 +780,8 @@ static void stage_fingers(palp_world *w, double h) {
     int slot[3 * PALP_FINGER_MAX_CON];
     int oom = 0;
     for (int a = 0; a < nl; ++a) oom |= (slot[a] = finger_slot(w, w->row_of[fs->lvert[a]])) < 0;
+    const int L3 = 3 * nl;
+    oom |= local_block_reserve(fs, (size_t)L3 * (size_t)L3) < 0;
     if (oom) { /* keep the step going without this finger's contact; counted */
       w->finger_unsolved++;
       for (int a = 0; a < nl; ++a) fs->vloc[fs->lvert[a]] = -1;
@@ -782,18 +794,6 @@ static void stage_fingers(palp_world *w, double h) {
      * at (local dof 3a + i, 3b + j). Read from the columns per constraint, each
      * vertex's entries were gathered once for every constraint it is in (~4x), from
      * columns that a server core's step finds out of the caches (docs/model.md). */
-    const int L3 = 3 * nl;
-    if (fs->G_cap < (size_t)L3 * (size_t)L3) {
-      double *G = realloc(fs->G, sizeof(double) * (size_t)L3 * (size_t)L3);
-      if (!G) {
-        w->finger_unsolved++;
-        for (int a = 0; a < nl; ++a) fs->vloc[fs->lvert[a]] = -1;
-        k->ncon = 0;
-        continue;
-      }
-      fs->G = G;
-      fs->G_cap = (size_t)L3 * (size_t)L3;
-    }
     for (int b = 0; b < nl; ++b)
       for (int j = 0; j < 3; ++j) {
         const float *col = colv[b] + (size_t)j * (size_t)n3;
