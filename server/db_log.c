@@ -23,6 +23,7 @@ typedef struct slot {
   uint64_t rejected[PALP_SRV_REJ_COUNT], clamped, overruns;
   /* issue 13 */
   int sample_every;            /* log a finger sample every this many frames */
+  int frame_every, mesh_every; /* frames at ~100 Hz, meshes at ~2 Hz of this session's physics rate */
   int64_t findings_refused;    /* refusals not logged one by one since the last flush */
   int refusals_logged;         /* logged one by one since the last flush */
   double finger_radius[SLOT_FINGERS]; /* per model contact id, from the world ops [m] */
@@ -32,7 +33,6 @@ struct palp_srv_db_log {
   palp_db_writer *w;
   palp_srv_events ev;
   char run_id[48];
-  int frame_every, mesh_every;
   slot s[SLOTS];
   palp_log *log; /* may be NULL (stderr) */
 };
@@ -67,6 +67,12 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
 }
 
 /* ---- main-thread hooks ----------------------------------------------------------- */
+
+/* Frames between two logged records for a record rate of hz at a physics rate of rate_hz. */
+static int log_every(double rate_hz, double hz) {
+  const long k = rate_hz > hz ? lround(rate_hz / hz) : 1;
+  return k > 0 && k < 1000000 ? (int)k : 1;
+}
 
 static void on_opened(void *ctx, const palp_srv_session_info *i) {
   palp_srv_db_log *l = ctx;
@@ -105,6 +111,11 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   /* Every physics step when the physics is slower than assess_sample_hz. */
   const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : 100.0;
   s->sample_every = i->tick_rate_hz > hz ? (int)lround(i->tick_rate_hz / hz) : 1;
+  /* From the session's own physics rate, not the server's tick rate: a 1 kHz phantom on a
+   * 100 Hz server logged every frame and a mesh 20 times a second (10x and 10x the intent),
+   * and summarising and hashing each frame cost its tick ~10 us (issue 11). */
+  s->frame_every = log_every(i->tick_rate_hz, 100.0);
+  s->mesh_every = log_every(i->tick_rate_hz, 2.0);
   if (i->exercise_name && i->exercise_json) {
     rc = palp_db_log_exercise(l->w, h, i->exercise_name, i->exercise_json);
     if (rc < 0)
@@ -208,7 +219,7 @@ static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const 
   if (!s) return;
   int64_t frame = palp_world_frame(w);
   s->last_frame = frame;
-  if (frame % l->frame_every == 0) {
+  if (frame % s->frame_every == 0) {
     palp_db_frame f;
     palp_db_frame_summarize(w, &f);
     palp_db_log_frame(l->w, s->h, &f);
@@ -243,7 +254,7 @@ static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const 
     }
   if (palp_world_is_awake(w) && frame >= s->next_mesh_frame) {
     palp_db_log_mesh(l->w, s->h, frame, palp_world_positions(w), palp_world_mesh(w)->vertex_count);
-    s->next_mesh_frame = frame + l->mesh_every;
+    s->next_mesh_frame = frame + s->mesh_every;
   }
   int64_t now = palp_dds_now_ns();
   if (now - s->last_flush_ns >= FLUSH_NS) {
@@ -261,7 +272,7 @@ static void on_log_counts(void *ctx, uint64_t *written, uint64_t *shed, uint64_t
   *failed = (uint64_t)st.failed;
 }
 
-int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_log *log, palp_srv_db_log **out, char *err,
+int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out, char *err,
                          size_t errlen) {
   palp_srv_db_log *l = calloc(1, sizeof *l);
   if (!l) return PALP_ENOMEM;
@@ -274,8 +285,6 @@ int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_log *log, p
   }
   /* uid = <start time>-<pid>-<session>: unique across server runs on one host. */
   snprintf(l->run_id, sizeof l->run_id, "%lld-%ld", (long long)time(NULL), (long)getpid());
-  l->frame_every = tick_rate_hz > 100 ? (int)lround(tick_rate_hz / 100) : 1;
-  l->mesh_every = (int)lround(tick_rate_hz / 2) > 0 ? (int)lround(tick_rate_hz / 2) : 1;
   l->ev = (palp_srv_events){.ctx = l,
                             .session_opened = on_opened,
                             .session_closed = on_closed,

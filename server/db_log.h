@@ -16,10 +16,10 @@
 
 typedef struct palp_srv_db_log palp_srv_db_log;
 
-/* Opens (creating or upgrading) the database at path. tick_rate_hz sets the
- * logging cadence: frame summaries and feedback at <= 100 per second per
- * session, meshes twice a second while the phantom moves. */
-int palp_srv_db_log_open(const char *path, double tick_rate_hz, palp_log *log, palp_srv_db_log **out, char *err,
+/* Opens (creating or upgrading) the database at path. Each session's own physics
+ * rate sets its logging cadence: frame summaries and feedback at <= ~100 per second,
+ * meshes ~twice a second while the phantom moves. */
+int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out, char *err,
                          size_t errlen);
 const palp_srv_events *palp_srv_db_log_events(palp_srv_db_log *l);
 /* Flushes and closes; logs the writer's counts (written, shed, failed). */

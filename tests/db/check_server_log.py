@@ -33,10 +33,14 @@ for suffix in ("", "-wal", "-shm"):
         os.unlink(db + suffix)
 
 cfg = json.load(open(os.path.join(config_dir, "server.json")))
-cfg.update({"domain_id": int(domain), "tick_rate_hz": 1000, "database": db,
+# The main run: a 100 Hz server whose phantoms step at 1 kHz (issue 11's per-phantom physics
+# rate); the log's cadence must follow the session's 1 kHz, not the server's 100 Hz.
+cfg.update({"domain_id": int(domain), "tick_rate_hz": 1000 if sleep_mode else 100, "database": db,
             "dds_config": os.path.join(config_dir, "cyclonedds-loopback.xml")})
 for ph in cfg["phantoms"]:
     ph["scene"] = os.path.join(config_dir, ph["scene"])
+    if not sleep_mode:
+        ph["physics_rate_hz"] = 1000
 cfg_path = os.path.join(work, "server.json")
 json.dump(cfg, open(cfg_path, "w"))
 
@@ -77,6 +81,21 @@ frames, contacts, feedback = doc["frames"], doc["contacts"], doc["feedback"]
 print("logged: %d frames, %d contact inputs, %d feedback samples" % (len(frames), len(contacts), len(feedback)))
 if len(frames) < 100 or len(contacts) < 100:
     fails.append("too little logged: %d frames, %d contacts (want >= 100 each)" % (len(frames), len(contacts)))
+
+# Cadence (db/README: frames at ~100 Hz, meshes at ~2 Hz of the session's physics rate): at 1 kHz
+# every logged frame is a multiple of 10, and 2.5 s of pressing leaves at most 2 Hz x 7 s + 1
+# meshes. Logging every 1 kHz frame (the server's 100 Hz rate used by mistake) fails both.
+off = [f["frame"] for f in frames if f["frame"] % 10 != 0]
+if off:
+    fails.append("%d logged frames are not multiples of 10 (first %r): the log follows the wrong rate"
+                 % (len(off), off[:3]))
+import sqlite3
+con = sqlite3.connect("file:%s?mode=ro" % db, uri=True)
+meshes = con.execute("SELECT COUNT(*) FROM mesh").fetchone()[0]
+con.close()
+print("cadence: %d frames off the 10-frame grid, %d meshes" % (len(off), meshes))
+if not 1 <= meshes <= 15:
+    fails.append("%d meshes logged (want 1..15: ~2 per second of a <= 7 s session)" % meshes)
 
 
 def close(a, b, rel, floor):

@@ -332,7 +332,7 @@ int main(void) {
   REQUIRE(palp_srv_config_parse(json, PALP_CONFIG_DIR, &cfg, err, sizeof err) == 0, "config: %s", err);
   CHECK(cfg.phantom_count == 3 && cfg.exercise_count == 2, "config: 1 phantom + 2 exercises hosted");
   palp_srv_db_log *dbl = NULL;
-  REQUIRE(palp_srv_db_log_open(db_path, 100, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
+  REQUIRE(palp_srv_db_log_open(db_path, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
   palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
   int rc = 0;
   test_server ts = {0};
