@@ -177,6 +177,10 @@ typedef struct palp_eval_calib_def {
   double bias_weight;     /* [-] per reference, lambda_b (mean |u_rt| - mean |u_ref|) [cm] with
                              lambda_b = bias_weight sqrt(N_data): the mean displacement the
                              paper's ANOVA compares; 0 leaves it to the data residuals */
+  double peak_weight;     /* [-] per reference, lambda_k 100 (peak_rt - peak_ref) [cm] with
+                             lambda_k = peak_weight sqrt(N_data), peak the largest |u| over every
+                             vertex and frame: a peak error of x cm costs as much as an RMS error
+                             of peak_weight x cm over all data residuals; 0 leaves it out */
   double prior_weight;    /* [cm] Tikhonov weight on ln(p / p_start): a factor e costs
                              as much as this RMS displacement error over all residuals */
   double recovery_weight; /* [cm] penalty: (|t_recover - target| - band)+ / recovery_tol costs
@@ -215,6 +219,7 @@ typedef struct palp_eval_calib_result {
   double start[PALP_EVAL_P_COUNT];
   double fitted[PALP_EVAL_P_COUNT];
   double rmse_before[4], rmse_after[4]; /* displacement magnitude RMSE per reference [m] */
+  double peak_ref[4], peak_before[4], peak_after[4]; /* largest |u| over vertices and frames [m] */
   double cost_before, cost_after;       /* 0.5 sum r^2 of the fit residuals */
   int iterations;
   int evaluations;

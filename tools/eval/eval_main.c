@@ -46,7 +46,7 @@ typedef struct options {
   int plots;
   int frame_stride, vertex_stride, max_iter;
   double max_minutes;
-  double force_weight, prior_weight, recovery_weight, bias_weight, bound;
+  double force_weight, prior_weight, recovery_weight, bias_weight, peak_weight, bound;
   double recovery_target; /* [s]; 0 = the default (1.0 s, the paper) */
   int recovery_auto;
   /* evaluate --sites: runs over random contact sites and force levels */
@@ -76,7 +76,8 @@ static void usage(FILE *f) {
           "                           [--material paper_long_term|paper_instantaneous|breast_tissue]\n"
           "                           [--fit all|E1,eta1,E2,eta2,a1,a2,support_modulus,support_viscosity,added_mass,support_bulk_fraction,bending_stiffness]\n"
           "                           [--frame-stride K] [--vertex-stride K] [--force-weight W]\n"
-          "                           [--prior-weight CM] [--bias-weight W] [--recovery auto|off|CM] [--recovery-target S]\n"
+          "                           [--prior-weight CM] [--bias-weight W] [--peak-weight W] [--recovery auto|off|CM]\n"
+          "                           [--recovery-target S]\n"
           "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
           "                           [--finger pole,45deg,70deg,pole_lesion [--finger-weight CM]]\n"
@@ -138,6 +139,7 @@ static int parse_args(int argc, char **argv, options *o) {
   o->max_iter = 40;
   o->prior_weight = 1e-3;
   o->bias_weight = 0.0;
+  o->peak_weight = 0.0;
   o->bound = 100.0;
   o->recovery_auto = 1;
   o->finger_weight = 0.1;
@@ -180,6 +182,7 @@ static int parse_args(int argc, char **argv, options *o) {
     else if (!strcmp(a, "--force-weight")) bad = parse_double(a, v, 0.0, &o->force_weight);
     else if (!strcmp(a, "--bound")) bad = parse_double(a, v, 0.0, &o->bound);
     else if (!strcmp(a, "--bias-weight")) bad = parse_double(a, v, 0.0, &o->bias_weight);
+    else if (!strcmp(a, "--peak-weight")) bad = parse_double(a, v, 0.0, &o->peak_weight);
     else if (!strcmp(a, "--max-minutes")) bad = parse_double(a, v, 0.0, &o->max_minutes);
     else if (!strcmp(a, "--prior-weight")) bad = parse_double(a, v, 0.0, &o->prior_weight);
     else if (!strcmp(a, "--sites")) bad = parse_int(a, v, 1, 64, &o->sites);
@@ -1086,6 +1089,7 @@ static int cmd_calibrate(const options *o) {
   def.force_weight = o->force_weight;
   def.prior_weight = o->prior_weight;
   def.bias_weight = o->bias_weight;
+  def.peak_weight = o->peak_weight;
   def.bound_factor = o->bound;
   def.recovery_weight = o->recovery_weight;
   if (o->recovery_target > 0) def.recovery_target = o->recovery_target;
@@ -1219,6 +1223,12 @@ static int cmd_calibrate(const options *o) {
   for (int k = 0; k < s.dist_count; ++k)
     printf("  Distr. %-3s %10.4f %10.4f %10.2f\n", palp_eval_roman(s.dist[k]), 100.0 * res.rmse_before[k],
            100.0 * fin->rmse_after[k], palp_eval_paper[0][s.dist[k] - 1].rmse);
+  printf("\n  peak displacement [mm] (largest |u| over every vertex and frame; --peak-weight %g)\n", def.peak_weight);
+  printf("  %-10s %10s %10s %10s %10s\n", "", "FEM", "before", "after", "after/FEM");
+  for (int k = 0; k < s.dist_count; ++k)
+    printf("  Distr. %-3s %10.4f %10.4f %10.4f %10.3f\n", palp_eval_roman(s.dist[k]), 1e3 * res.peak_ref[k],
+           1e3 * res.peak_before[k], 1e3 * fin->peak_after[k],
+           res.peak_ref[k] > 0 ? fin->peak_after[k] / res.peak_ref[k] : NAN);
   printf("\n  recovery (top contact, uniform patch, the scene's step)\n");
   print_recovery("before", &res.recovery_before);
   if (refit) print_recovery("free", &res.recovery_after);
@@ -1259,6 +1269,12 @@ static int cmd_calibrate(const options *o) {
   for (int k = 0; k < s.dist_count && len < (int)sizeof comment; ++k)
     len += snprintf(comment + len, sizeof comment - (size_t)len, " %s %.4f -> %.4f", palp_eval_roman(s.dist[k]),
                     100.0 * res.rmse_before[k], 100.0 * fin->rmse_after[k]);
+  if (len < (int)sizeof comment) len += snprintf(comment + len, sizeof comment - (size_t)len, "; peak / FEM");
+  for (int k = 0; k < s.dist_count && len < (int)sizeof comment; ++k)
+    len += snprintf(comment + len, sizeof comment - (size_t)len, " %s %.3f", palp_eval_roman(s.dist[k]),
+                    res.peak_ref[k] > 0 ? fin->peak_after[k] / res.peak_ref[k] : NAN);
+  if (def.peak_weight > 0 && len < (int)sizeof comment)
+    len += snprintf(comment + len, sizeof comment - (size_t)len, " (peak weight %.3g)", def.peak_weight);
   if (len < (int)sizeof comment)
     len += snprintf(comment + len, sizeof comment - (size_t)len, "; recovery to 5%% %.2f s after release",
                     fin->recovery_after.t_recover);
