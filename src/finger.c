@@ -191,3 +191,113 @@ int palp_lcp_solve(int m, const double *W, const double *b, double *lambda, doub
   }
   return -1;
 }
+
+/* ---- the smooth contact surface (finger.h) ---- */
+
+void palp_rest_normals(const palp_mesh *mesh, palp_vec3 *normals) {
+  const int nv = mesh->vertex_count;
+  double rmin = INFINITY, rmax = 0.0;
+  for (int i = 0; i < nv; ++i) {
+    const double l = v3_len(mesh->rest[i]);
+    rmin = fmin(rmin, l), rmax = fmax(rmax, l);
+  }
+  if (nv > 0 && rmax - rmin <= 1e-9 * rmax && rmin > 0.0) {
+    /* a sphere about the base centre (the rim's normals are horizontal, as the sphere's) */
+    for (int i = 0; i < nv; ++i) normals[i] = v3_scale(mesh->rest[i], 1.0 / v3_len(mesh->rest[i]));
+    return;
+  }
+  for (int i = 0; i < nv; ++i) normals[i] = v3(0, 0, 0);
+  for (int t = 0; t < mesh->dome_triangle_count; ++t) {
+    const int *T = mesh->tri[t];
+    const palp_vec3 nf = v3_cross(v3_sub(mesh->rest[T[1]], mesh->rest[T[0]]), v3_sub(mesh->rest[T[2]], mesh->rest[T[0]]));
+    const double fl = v3_len(nf);
+    if (!(fl > 0.0)) continue;
+    for (int e = 0; e < 3; ++e) {
+      /* the triangle's angle at the vertex weighs its normal */
+      const palp_vec3 u = v3_sub(mesh->rest[T[(e + 1) % 3]], mesh->rest[T[e]]);
+      const palp_vec3 v = v3_sub(mesh->rest[T[(e + 2) % 3]], mesh->rest[T[e]]);
+      const double ang = atan2(v3_len(v3_cross(u, v)), v3_dot(u, v));
+      normals[T[e]] = v3_add(normals[T[e]], v3_scale(nf, ang / fl));
+    }
+  }
+  for (int i = 0; i < nv; ++i) {
+    const double l = v3_len(normals[i]);
+    normals[i] = l > 0.0 ? v3_scale(normals[i], 1.0 / l) : v3(0, 0, 1);
+  }
+}
+
+int palp_smooth_patch_init(palp_smooth_patch *sp, const palp_vec3 X[3], const palp_vec3 N[3]) {
+  memset(sp, 0, sizeof *sp);
+  const palp_vec3 f = v3_cross(v3_sub(X[1], X[0]), v3_sub(X[2], X[0]));
+  if (!(v3_len(f) > 0.0)) return -1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) sp->d[i][j] = i == j ? 0.0 : v3_dot(v3_sub(X[j], X[i]), N[i]);
+  return 0;
+}
+
+palp_vec3 palp_normal_carry(palp_vec3 n_rest, palp_vec3 m_rest, palp_vec3 m_now) {
+  /* R v = v + w x v + w x (w x v) / (1 + c), w = m_rest x m_now, c = m_rest . m_now: the
+   * rotation by the angle between them about w (Rodrigues, written without the angle) */
+  const palp_vec3 w = v3_cross(m_rest, m_now);
+  const double c = v3_dot(m_rest, m_now);
+  if (!(c > -0.5)) return m_now; /* the ring turned over: its own normal is all that is left */
+  const palp_vec3 wv = v3_cross(w, n_rest);
+  return v3_add(n_rest, v3_add(wv, v3_scale(v3_cross(w, wv), 1.0 / (1.0 + c))));
+}
+
+palp_vec3 palp_smooth_point(const palp_smooth_patch *sp, palp_vec3 a, palp_vec3 b, palp_vec3 c, const palp_vec3 N[3],
+                            const double bary[3], palp_vec3 *t1, palp_vec3 *t2) {
+  const double al = PALP_PHONG_ALPHA;
+  /* o = sum_i c_i N_i, c_i = -alpha b_i s_i, s_i = sum_j b_j d_ij [m]; along b_k with
+   * b_0 = 1 - b_1 - b_2 its derivative is d/db_k - d/db_0 of the homogeneous form,
+   * d c_i / d b_k = -alpha (delta_ik s_i + b_i d_ik) */
+  double s[3];
+  for (int i = 0; i < 3; ++i) s[i] = bary[0] * sp->d[i][0] + bary[1] * sp->d[i][1] + bary[2] * sp->d[i][2];
+  palp_vec3 o = v3(0, 0, 0), o1 = v3(0, 0, 0), o2 = v3(0, 0, 0);
+  for (int i = 0; i < 3; ++i) {
+    const double ci = -al * bary[i] * s[i];
+    const double d0 = -al * ((i == 0 ? s[i] : 0.0) + bary[i] * sp->d[i][0]);
+    const double d1 = -al * ((i == 1 ? s[i] : 0.0) + bary[i] * sp->d[i][1]);
+    const double d2 = -al * ((i == 2 ? s[i] : 0.0) + bary[i] * sp->d[i][2]);
+    o = v3_add(o, v3_scale(N[i], ci));
+    o1 = v3_add(o1, v3_scale(N[i], d1 - d0));
+    o2 = v3_add(o2, v3_scale(N[i], d2 - d0));
+  }
+  const palp_vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
+  *t1 = v3_add(e1, o1);
+  *t2 = v3_add(e2, o2);
+  return v3_add(v3_add(a, v3_add(v3_scale(e1, bary[1]), v3_scale(e2, bary[2]))), o);
+}
+
+double palp_smooth_patch_max_offset(const palp_smooth_patch *sp, const palp_vec3 X[3], const palp_vec3 N[3]) {
+  /* |o| <= alpha sum_i b_i |s_i| (unit normals), a quadratic in b: sampled on a 1/8 grid,
+   * plus 10%, it bounds the offset for any unit normals */
+  double best = 0.0;
+  (void)X, (void)N;
+  for (int i = 0; i <= 8; ++i)
+    for (int j = 0; i + j <= 8; ++j) {
+      const double bb[3] = {(8 - i - j) / 8.0, i / 8.0, j / 8.0};
+      double o = 0.0;
+      for (int k = 0; k < 3; ++k) o += bb[k] * fabs(bb[0] * sp->d[k][0] + bb[1] * sp->d[k][1] + bb[2] * sp->d[k][2]);
+      best = fmax(best, PALP_PHONG_ALPHA * o);
+    }
+  return 1.1 * best;
+}
+
+palp_vec3 palp_smooth_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c, const palp_vec3 N[3],
+                              const palp_smooth_patch *sp, double bary[3], palp_vec3 *normal) {
+  palp_tri_closest(p, a, b, c, bary);
+  palp_vec3 S, t1, t2;
+  for (int it = 0; it < 2; ++it) {
+    S = palp_smooth_point(sp, a, b, c, N, bary, &t1, &t2);
+    /* the patch linearised at bary: S + t1 (b_1' - b_1) + t2 (b_2' - b_2) over the
+     * triangle, whose closest point is the constrained Gauss-Newton step */
+    const palp_vec3 v0 = v3_sub(S, v3_add(v3_scale(t1, bary[1]), v3_scale(t2, bary[2])));
+    palp_tri_closest(p, v0, v3_add(v0, t1), v3_add(v0, t2), bary);
+  }
+  S = palp_smooth_point(sp, a, b, c, N, bary, &t1, &t2);
+  const palp_vec3 n = v3_cross(t1, t2);
+  const double nl = v3_len(n);
+  *normal = nl > 0.0 ? v3_scale(n, 1.0 / nl) : v3(0, 0, 0);
+  return S;
+}

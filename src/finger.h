@@ -31,4 +31,59 @@ int palp_lcp_solve(int m, const double *W, const double *b, double *lambda, doub
 int palp_contact_stiffness(int m, const double *W, const palp_vec3 *n, const double *lambda, double K[3][3],
                            double *work);
 
+/* ---- the smooth contact surface (docs/haptics.md, "The smooth contact surface") ----
+ * The dome's triangles are chords of the tissue's surface: between vertices a flat facet
+ * lies up to 0.13-0.27 mm inside its sphere (338 vertices). The fingertip may instead
+ * meet a Phong tessellation of each triangle (Boubekeur & Alexa 2008) built from per-
+ * vertex normals N_i:
+ *   S(b) = sum_i b_i x_i + o(b),   o(b) = -alpha sum_i b_i ((P(b) - X_i) . N_i) N_i
+ *        = -alpha sum_ij b_i b_j d_ij N_i,   d_ij = (X_j - X_i) . N_i [m],
+ * x the current and X the rest positions, P(b) = sum_j b_j X_j, b the barycentric
+ * weights. On a sphere of radius R with its own normals, sum_i b_i ((P - X_i) . N_i) N_i
+ * ~ -(R^2 - |P|^2) / R N ~ -2 s N to leading order (s the chord's sag), so alpha = 1/2
+ * puts the patch on the sphere (the paper's visual 3/4 would bulge by half the sag): at
+ * 338 vertices within 2.7 um of it, its normal within 0.12 deg of the sphere's
+ * (tests/model/test_finger_surface.c). The offset is exact at rest and carried with the
+ * deformation: the d_ij are the rest ones, and each vertex's normal turns with its ring
+ * of triangles (palp_normal_carry), one normal per vertex, so along an edge S depends on
+ * that edge's two vertices only and neighbouring patches meet, deformed or not; their
+ * tangent planes agree to the normals' error, not to the facets' tilt (~5 deg). */
+#define PALP_PHONG_ALPHA 0.5
+
+typedef struct palp_smooth_patch {
+  double d[3][3]; /* d_ij = (X_j - X_i) . N_i at rest [m], d_ii = 0 */
+} palp_smooth_patch;
+
+/* Rest normals of a mesh's vertices (unit): the sphere's own, X / |X|, when every rest
+ * vertex lies on one sphere about the base centre (the hemispheres palp_mesh_create
+ * builds); otherwise the angle-weighted normals of the dome triangles (Thuermer &
+ * Wuethrich 1998). */
+void palp_rest_normals(const palp_mesh *mesh, palp_vec3 *normals);
+
+/* The patch of triangle (X0, X1, X2) with rest normals N0..N2. 0, or -1 if degenerate. */
+int palp_smooth_patch_init(palp_smooth_patch *sp, const palp_vec3 X[3], const palp_vec3 N[3]);
+
+/* A bound on |o(b)| over the patch for any unit normals [m] (pruning). */
+double palp_smooth_patch_max_offset(const palp_smooth_patch *sp, const palp_vec3 X[3], const palp_vec3 N[3]);
+
+/* A vertex's rest normal n_rest turned by the rotation that takes its ring's rest normal
+ * m_rest to its current one m_now (both unit): the least rotation, about m_rest x m_now. */
+palp_vec3 palp_normal_carry(palp_vec3 n_rest, palp_vec3 m_rest, palp_vec3 m_now);
+
+/* The patch point S(b) over the current triangle (a, b, c) with the vertices' current
+ * normals N, and its tangents dS/db_1, dS/db_2 (b_0 = 1 - b_1 - b_2) [m]. */
+palp_vec3 palp_smooth_point(const palp_smooth_patch *sp, palp_vec3 a, palp_vec3 b, palp_vec3 c, const palp_vec3 N[3],
+                            const double bary[3], palp_vec3 *t1, palp_vec3 *t2);
+
+/* Closest point to p of the patch over the current triangle (a, b, c), with its
+ * barycentric weights (exact zeros on an edge or at a vertex, as palp_tri_closest) and
+ * the patch's outward unit normal there. Two Gauss-Newton steps from the flat facet's
+ * closest point, each the closest point of the patch's tangent-plane triangle at the
+ * current weights (so the weights stay in the triangle); each step cuts the error of
+ * the point by about |p - S| / (radius of curvature), ~0.2 for an 8 mm tip on a 40 mm
+ * dome, and the distance's error is second order in it: from <= 0.7 mm on the facet,
+ * 0.03 mm of point after two steps, ~1e-7 m of distance. */
+palp_vec3 palp_smooth_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c, const palp_vec3 N[3],
+                              const palp_smooth_patch *sp, double bary[3], palp_vec3 *normal);
+
 #endif

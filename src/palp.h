@@ -215,7 +215,21 @@ typedef struct palp_world_def {
                          the default: at once); see palp_world_factor_claim */
   int lesion_count;   /* 0..PALP_MAX_LESIONS; lesions act through the gel support */
   palp_lesion lesion[PALP_MAX_LESIONS];
+  /* The surface a finger meets (docs/haptics.md, "The smooth contact surface"): the
+   * flat triangles, whose facets lie up to ~0.19 mm inside the tissue's sphere between
+   * vertices (338 vertices), or a smooth (Phong) patch over each triangle from the rest
+   * normals, exact at rest and carried with the deformation. Forces still act on the
+   * triangles' vertices by barycentric weights. */
+  int finger_surface; /* palp_finger_surface */
 } palp_world_def;
+
+typedef enum palp_finger_surface {
+  PALP_FINGER_SURFACE_FACETS = 0, /* the flat triangles (how every session before 2026-11-27 was stepped) */
+  PALP_FINGER_SURFACE_SMOOTH = 1  /* Phong patches over the triangles */
+} palp_finger_surface;
+/* Names as used in scene files ("facets", "smooth"); NULL if unknown. */
+const char *palp_finger_surface_name(int surface);
+int palp_finger_surface_from_name(const char *name, int *out);
 
 palp_world_def palp_world_default_def(void);
 

@@ -336,6 +336,13 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be > 0 when the gel_support effect is on");
   if ((e = get_vec(c, root, "", "gravity_m_s2", 0, &s->world.gravity))) return e;
   if ((e = get_int(c, root, "", "max_contacts", 0, 1, 64, &s->world.max_contacts))) return e;
+  /* The surface a finger meets (docs/haptics.md): part of the physics a log replays, so
+   * a session's scene carries it; absent = "facets", how every scene and log before
+   * 2026-11-27 was stepped (the shipped scenes say "smooth"). */
+  s->world.finger_surface = PALP_FINGER_SURFACE_FACETS;
+  const cJSON *fsu = cJSON_GetObjectItemCaseSensitive(root, "finger_surface");
+  if (fsu && (!cJSON_IsString(fsu) || palp_finger_surface_from_name(fsu->valuestring, &s->world.finger_surface)))
+    return palp_parse_fail(c, PALP_EPARSE, "finger_surface: expected \"smooth\" or \"facets\"");
 
   /* Lesions (optional): hidden inclusions; a trainee's station never sees the scene. */
   const cJSON *ls = cJSON_GetObjectItemCaseSensitive(root, "lesions");
@@ -486,6 +493,9 @@ char *palp_scene_to_json(const palp_scene *s) {
     if (s->world.effects & (1u << i)) cJSON_AddItemToArray(fx, cJSON_CreateString(palp_effect_name((palp_effect)(1u << i))));
   cJSON_AddItemToObject(r, "gravity_m_s2", vec_json(s->world.gravity));
   add_exact(r, "max_contacts", s->world.max_contacts);
+  /* only when smooth, so that the scenes of earlier logs print as they did */
+  if (s->world.finger_surface != PALP_FINGER_SURFACE_FACETS)
+    cJSON_AddStringToObject(r, "finger_surface", palp_finger_surface_name(s->world.finger_surface));
   cJSON *cs = cJSON_AddArrayToObject(r, "contacts");
   for (int i = 0; i < s->contact_count; ++i) {
     const palp_scene_contact *sc = &s->contact[i];

@@ -74,6 +74,17 @@ typedef struct finger_scratch {
   size_t G_cap;         /* doubles G holds */
   uint8_t *cand;        /* [vertex_count] */
   double max_link;      /* [m] longest rest link */
+  /* The smooth contact surface (def.finger_surface, finger.h), NULL with the facets:
+   * one patch per dome triangle and a bound on its offset from the facet [m]; per
+   * vertex the rest normal, its ring's rest normal, and the current normal (computed
+   * once per finger collection, when nstamp says so); the dome triangles at each
+   * vertex (CSR). */
+  palp_smooth_patch *patch;
+  double *patch_max;
+  palp_vec3 *nrest, *mrest, *ncur;
+  palp_vec3 *tcross;      /* [dome triangles] a triangle's cross product at the free positions [m^2] */
+  int64_t *nstamp, *tstamp, ncount;
+  int *vtri_start, *vtri;
   int64_t stamp;
 } finger_scratch;
 
@@ -205,8 +216,22 @@ palp_world_def palp_world_default_def(void) {
       .sleep_speed = 1e-5,
       .sleep_time = 0.5,
       .max_speed = 20.0,
+      .finger_surface = PALP_FINGER_SURFACE_SMOOTH,
   };
   return d;
+}
+
+const char *palp_finger_surface_name(int surface) {
+  return surface == PALP_FINGER_SURFACE_FACETS ? "facets" : surface == PALP_FINGER_SURFACE_SMOOTH ? "smooth" : NULL;
+}
+
+int palp_finger_surface_from_name(const char *name, int *out) {
+  for (int s = PALP_FINGER_SURFACE_FACETS; s <= PALP_FINGER_SURFACE_SMOOTH; ++s)
+    if (name && strcmp(name, palp_finger_surface_name(s)) == 0) {
+      *out = s;
+      return PALP_OK;
+    }
+  return PALP_EINVAL;
 }
 
 static const char *const effect_names[] = {"membrane_elasticity", "membrane_viscosity", "gel_pressure",
@@ -581,6 +606,18 @@ static void axpy(int n, double c, const float *restrict col, double *restrict x)
   for (int q = 0; q < n; ++q) x[q] += c * (double)col[q];
 }
 
+/* x += c0 col0 + c1 col1 + c2 col2, added in that order per entry, as three axpy
+ * calls would (the same bits), reading and writing x once: a contact inside a triangle
+ * of the smooth surface loads three vertices, nine columns, where one at a vertex of the
+ * facets loaded three. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static void axpy3(int n, const double c[3], const float *restrict col, size_t stride, double *restrict x) {
+  const float *restrict c0 = col, *restrict c1 = col + stride, *restrict c2 = col + 2 * stride;
+  for (int q = 0; q < n; ++q) x[q] = ((x[q] + c[0] * (double)c0[q]) + c[1] * (double)c1[q]) + c[2] * (double)c2[q];
+}
+
 /* Free position of vertex i after the solve, before contacts: x + h v_free [m]. */
 static palp_vec3 free_pos(const palp_world *w, int i, double h) {
   const int r = w->row_of[i];
@@ -596,6 +633,40 @@ static double seg_dist2(palp_vec3 p, palp_vec3 a, palp_vec3 b) {
   t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
   const palp_vec3 d = v3_sub(p, v3_add(a, v3_scale(ab, t)));
   return v3_dot(d, d);
+}
+
+/* The unit area-weighted normal of vertex i's ring of dome triangles at positions x
+ * (sum of the triangles' cross products, i.e. twice their vector areas). */
+static palp_vec3 ring_normal(const palp_world *w, const finger_scratch *fs, int i, const palp_vec3 *x) {
+  palp_vec3 s = v3(0, 0, 0);
+  for (int q = fs->vtri_start[i]; q < fs->vtri_start[i + 1]; ++q) {
+    const int *T = w->mesh.tri[fs->vtri[q]];
+    s = v3_add(s, v3_cross(v3_sub(x[T[1]], x[T[0]]), v3_sub(x[T[2]], x[T[0]])));
+  }
+  const double l = v3_len(s);
+  return l > 0.0 ? v3_scale(s, 1.0 / l) : v3(0, 0, 1);
+}
+
+/* Vertex i's normal for the smooth surface at the free positions: its rest normal
+ * turned as its ring turned (finger.h), once per finger collection. */
+static palp_vec3 smooth_normal(const palp_world *w, finger_scratch *fs, int i, double h) {
+  if (fs->nstamp[i] == fs->ncount) return fs->ncur[i];
+  palp_vec3 s = v3(0, 0, 0);
+  for (int q = fs->vtri_start[i]; q < fs->vtri_start[i + 1]; ++q) {
+    const int t = fs->vtri[q];
+    if (fs->tstamp[t] != fs->ncount) { /* each triangle once per collection */
+      const int *T = w->mesh.tri[t];
+      const palp_vec3 a = free_pos(w, T[0], h);
+      fs->tcross[t] = v3_cross(v3_sub(free_pos(w, T[1], h), a), v3_sub(free_pos(w, T[2], h), a));
+      fs->tstamp[t] = fs->ncount;
+    }
+    s = v3_add(s, fs->tcross[t]);
+  }
+  const double l = v3_len(s);
+  const palp_vec3 m = l > 0.0 ? v3_scale(s, 1.0 / l) : fs->mrest[i];
+  fs->ncur[i] = palp_normal_carry(fs->nrest[i], fs->mrest[i], m);
+  fs->nstamp[i] = fs->ncount;
+  return fs->ncur[i];
 }
 
 /* Collects the constraints of one finger (docs/haptics.md). Finger rows: dome
@@ -614,6 +685,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   const double R = k->fdef.radius;
   const palp_vec3 p0 = k->proxy, d = k->device;
   const double reach = R + fs->max_link + 1e-3; /* [m] */
+  fs->ncount++; /* the free positions changed (the last finger's solve moved them) */
   for (int i = 0; i < nv; ++i) fs->cand[i] = (uint8_t)(seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
   int64_t key[PALP_FINGER_MAX_CON];
   int nc = 0;
@@ -623,11 +695,19 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
     const palp_vec3 a = free_pos(w, T[0], h), b = free_pos(w, T[1], h), c = free_pos(w, T[2], h);
     double bary[3];
-    const palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
+    palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
     const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
     const double fl = v3_len(face);
     if (!(fl > 0.0)) continue;
-    const palp_vec3 nf = v3_scale(face, 1.0 / fl);
+    palp_vec3 nf = v3_scale(face, 1.0 / fl);
+    if (fs->patch) {
+      /* The patch lies within patch_max of the facet, so its gap g0 >= |p0 - q| - R -
+       * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
+       * bounds by the 1 mm below makes no row, and its patch is not searched. */
+      if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
+      const palp_vec3 N[3] = {smooth_normal(w, fs, T[0], h), smooth_normal(w, fs, T[1], h), smooth_normal(w, fs, T[2], h)};
+      q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
+    }
     const palp_vec3 pq = v3_sub(p0, q);
     const double dist = v3_len(pq);
     const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
@@ -722,7 +802,8 @@ static int constraint_j(const palp_world *w, const contact *k, int c, int *v, pa
 
 /* The pad's influence between two contact points q1, q2 on a fingertip of radius r [-]:
  *   P = 1 at one and the same feature, (1 - a) exp(-|q1 - q2|^2 / l^2) between two,
- *   l = r / 16 (0.5 mm on an 8 mm tip), a = 0.1.
+ *   l = r / 16 (0.5 mm on an 8 mm tip) on the facets, r / 4 on the smooth surface (below),
+ *   a = 0.03.
  * Features pressing the pad at one place share its compression; features a millimetre
  * apart press it almost independently, as the spring per feature did (a wider kernel,
  * l = r / 4, also coupled the facets a sliding finger meets, and its force steps grew
@@ -730,10 +811,18 @@ static int constraint_j(const palp_world *w, const contact *k, int c, int *v, pa
  * Gaussian, a positive definite kernel, so the pad matrix is positive definite even when
  * features coincide (a vertex and the edge point next to it): the LCP and the
  * stiffness's Cholesky stay well posed, and coincident features act as one pad to
- * within a / 2 .. 3a / 4 of its compliance, where a spring each put them in parallel. */
-static double pad_share(palp_vec3 q1, palp_vec3 q2, double r, int same) {
+ * within a / 2 .. 3a / 4 of its compliance, where a spring each put them in parallel.
+ * On the smooth surface the rows near a contact are one continuous surface seen from
+ * neighbouring patches (a patch whose closest point is clamped to its edge, next to the
+ * patch that holds the minimum): they sample one contact region of the pad, of radius
+ * sqrt(2 R_eff delta) ~ 1.6 mm at 0.2 mm of pad compression (1 N; R_eff = 6.7 mm for an
+ * 8 mm tip on the 40 mm dome), so they share its compression over l = r / 4 (2 mm). At
+ * r / 16 the count of such rows within 0.5 mm, which depends on where the contact sits
+ * on its triangle, set the pad's stiffness: sliding at 1 mm below the sphere the force
+ * varied by 13.9% (3.7% at r / 4, the slide of model_finger 2.8%). */
+static double pad_share(palp_vec3 q1, palp_vec3 q2, double l, int same) {
   if (same) return 1.0;
-  const double a = 0.03, l = r / 16.0;
+  const double a = 0.03;
   const palp_vec3 d = v3_sub(q1, q2);
   return (1.0 - a) * exp(-v3_dot(d, d) / (l * l));
 }
@@ -748,6 +837,7 @@ static void stage_fingers(palp_world *w, double h) {
     contact *k = &w->contacts[ci];
     if (k->kind != CONTACT_FINGER) continue;
     const double kc = k->fdef.coupling_stiffness; /* [N/m] */
+    const double pad_l = k->fdef.radius / (fs->patch ? 6.0 : 16.0); /* the pad's sharing length (pad_share) [m] */
     double prev[PALP_FINGER_MAX_CON][2];
     int nprev = 0;
     for (int q = 0; q < k->ncon; ++q)
@@ -843,7 +933,7 @@ static void stage_fingers(palp_world *w, double h) {
          * it became a constraint of its own already ~1 mm into the pad, and the force
          * stepped by +24% in 3 ms (long-term dome, 45 deg, 2.5 mm; docs/haptics.md). */
         if (c < k->nfinger && dd < k->nfinger && k->ctri[c] >= 0 && k->ctri[dd] >= 0 && k->fdef.pad_stiffness > 0.0)
-          fs->W[c * m + dd] += pad_share(k->cq[c], k->cq[dd], k->fdef.radius, c == dd) / k->fdef.pad_stiffness;
+          fs->W[c * m + dd] += pad_share(k->cq[c], k->cq[dd], pad_l, c == dd) / k->fdef.pad_stiffness;
       }
     if (palp_lcp_solve(m, fs->W, fs->b, k->clam, fs->lwork) < 0 &&
         palp_lcp_pgs(m, fs->W, fs->b, k->clam, 500, 1e-8) < 0)
@@ -871,10 +961,13 @@ static void stage_fingers(palp_world *w, double h) {
     double uf = 0.0;
     for (int a = 0; a < nl; ++a) {
       const int ra = w->row_of[fs->lvert[a]];
+      const double c3[3] = {h * fs->lf[3 * a], h * fs->lf[3 * a + 1], h * fs->lf[3 * a + 2]};
+      const int fused = c3[0] != 0.0 && c3[1] != 0.0 && c3[2] != 0.0;
+      if (fused) axpy3(n3, c3, colv[a], (size_t)n3, x);
       for (int j = 0; j < 3; ++j) {
-        const double c = h * fs->lf[3 * a + j];
+        const double c = c3[j];
         if (c == 0.0) continue;
-        axpy(n3, c, colv[a] + (size_t)j * (size_t)n3, x);
+        if (!fused) axpy(n3, c, colv[a] + (size_t)j * (size_t)n3, x);
         uf += c * (w->sm_coef != 0.0 ? w->u[3 * ra + j] : 0.0);
       }
     }
@@ -1071,6 +1164,7 @@ static int validate(const palp_world_def *d) {
     return PALP_EINVAL;
   if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;
   if (!(d->max_speed > 0.0)) return PALP_EINVAL;
+  if (!palp_finger_surface_name(d->finger_surface)) return PALP_EINVAL;
   if (d->lesion_count < 0 || d->lesion_count > PALP_MAX_LESIONS) return PALP_EINVAL;
   for (int l = 0; l < d->lesion_count; ++l) {
     const palp_lesion *L = &d->lesion[l];
@@ -1355,7 +1449,8 @@ void palp_world_destroy(palp_world *w) {
     free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
     free(fs->G);
     free(fs->vloc), free(fs->lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
-    free(fs->cand), free(fs);
+    free(fs->cand), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
+    free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->tcross), free(fs->tstamp), free(fs);
   }
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
@@ -1948,6 +2043,39 @@ static int finger_scratch_create(palp_world *w) {
   for (int l = 0; l < w->mesh.link_count; ++l) {
     const palp_vec3 d = v3_sub(w->mesh.rest[w->mesh.link[l][1]], w->mesh.rest[w->mesh.link[l][0]]);
     fs->max_link = fmax(fs->max_link, v3_len(d));
+  }
+  if (w->def.finger_surface == PALP_FINGER_SURFACE_SMOOTH) {
+    const int nt = w->mesh.dome_triangle_count;
+    fs->patch = xcalloc((size_t)nt, sizeof *fs->patch, &fail);
+    fs->patch_max = xcalloc((size_t)nt, sizeof(double), &fail);
+    fs->nrest = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
+    fs->mrest = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
+    fs->ncur = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
+    fs->nstamp = xcalloc((size_t)nv, sizeof(int64_t), &fail);
+    fs->vtri_start = xcalloc((size_t)nv + 1, sizeof(int), &fail);
+    fs->vtri = xcalloc(3 * (size_t)nt, sizeof(int), &fail);
+    fs->tcross = xcalloc((size_t)nt, sizeof(palp_vec3), &fail);
+    fs->tstamp = xcalloc((size_t)nt, sizeof(int64_t), &fail);
+    if (fail) return PALP_ENOMEM;
+    for (int t = 0; t < nt; ++t) fs->tstamp[t] = -1;
+    palp_rest_normals(&w->mesh, fs->nrest);
+    for (int t = 0; t < nt; ++t)
+      for (int e = 0; e < 3; ++e) fs->vtri_start[w->mesh.tri[t][e] + 1]++;
+    for (int i = 0; i < nv; ++i) fs->vtri_start[i + 1] += fs->vtri_start[i];
+    for (int t = 0; t < nt; ++t)
+      for (int e = 0; e < 3; ++e) fs->vtri[fs->vtri_start[w->mesh.tri[t][e]] + fs->nstamp[w->mesh.tri[t][e]]++] = t;
+    for (int i = 0; i < nv; ++i) {
+      fs->nstamp[i] = -1;
+      fs->mrest[i] = ring_normal(w, fs, i, w->mesh.rest);
+    }
+    for (int t = 0; t < nt; ++t) {
+      const int *T = w->mesh.tri[t];
+      const palp_vec3 X[3] = {w->mesh.rest[T[0]], w->mesh.rest[T[1]], w->mesh.rest[T[2]]};
+      const palp_vec3 Nt[3] = {fs->nrest[T[0]], fs->nrest[T[1]], fs->nrest[T[2]]};
+      /* a degenerate triangle keeps a zero patch: its facet */
+      palp_smooth_patch_init(&fs->patch[t], X, Nt);
+      fs->patch_max[t] = palp_smooth_patch_max_offset(&fs->patch[t], X, Nt);
+    }
   }
   return PALP_OK;
 }
