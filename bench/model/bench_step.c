@@ -15,7 +15,12 @@
  * alone in the same run: in turn, each step finds its factor and compliance columns
  * out of the caches, which is what the server's capacity pays (docs/model.md).
  *
+ * --surface smooth|facets sets the fingertip's contact surface of the finger cases (else
+ * the library's default, and the scene's in the server core's view): run both in the same
+ * hour to see what the smooth surface costs (docs/haptics.md).
+ *
  *   bench_model_step [--steps N] [--quick] [--bending D] [--worlds K] [--core-only] [--cpu C]
+ *                    [--surface smooth|facets]
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -53,7 +58,7 @@ static palp_vec3 press_device(int i, double t) {
 
 /* K worlds stepped in turn (rounds of one step each) against one world alone, the same
  * trajectory per world; median / p99 of single steps, and the stages' means. */
-static int server_core(int K, int rounds) {
+static int server_core(int K, int rounds, int surface) {
   const char *path = PALP_CONFIG_DIR "/paper_step_long_term.json";
   palp_scene sc;
   char err[256];
@@ -63,9 +68,10 @@ static int server_core(int K, int rounds) {
   }
   sc.world.dt = 1.0 / 250.0;
   sc.world.refactor_lag = 0; /* rebuilds on the stepping thread here: the server defers them */
+  if (surface >= 0) sc.world.finger_surface = surface;
   if (K < 1) K = 1;
-  printf("a server core's view: the shipped default dome (%s), a fingertip pressing 0-10 mm at 0.7 Hz, 250 Hz\n",
-         sc.name);
+  printf("a server core's view: the shipped default dome (%s), a fingertip pressing 0-10 mm at 0.7 Hz, 250 Hz, "
+         "finger surface %s\n", sc.name, palp_finger_surface_name(sc.world.finger_surface));
   printf("%8s %8s %11s %11s   stage means (us)\n", "worlds", "steps", "median_us", "p99_us");
   const int cases[2] = {1, K};
   double med[2] = {0, 0};
@@ -117,7 +123,7 @@ static int server_core(int K, int rounds) {
 }
 
 int main(int argc, char **argv) {
-  int steps = 3000, quick = 0, worlds = 12, core_only = 0, cpu = 0;
+  int steps = 3000, quick = 0, worlds = 12, core_only = 0, cpu = 0, surface = -1;
   double bending = 0.0; /* [N m] */
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--steps") && i + 1 < argc) steps = atoi(argv[++i]);
@@ -126,6 +132,12 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--worlds") && i + 1 < argc) worlds = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--core-only")) core_only = 1;
     else if (!strcmp(argv[i], "--cpu") && i + 1 < argc) cpu = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--surface") && i + 1 < argc) {
+      if (palp_finger_surface_from_name(argv[++i], &surface)) {
+        fprintf(stderr, "--surface: smooth or facets\n");
+        return 2;
+      }
+    }
   }
   if (quick) steps = 300;
   /* One core, as the target says: pin to CPU 0 (--cpu) when allowed. */
@@ -133,7 +145,7 @@ int main(int argc, char **argv) {
   CPU_ZERO(&set);
   CPU_SET(cpu, &set);
   const int pinned = sched_setaffinity(0, sizeof set, &set) == 0;
-  if (core_only) return server_core(worlds, quick ? 200 : 1000);
+  if (core_only) return server_core(worlds, quick ? 200 : 1000, surface);
   printf("palp model step benchmark: %d steps per case, all effects on, 3 N uniform load at polar 30 deg%s, "
          "bending stiffness %g N m\n", steps, pinned ? ", pinned to one CPU" : "", bending);
   printf("%8s %7s %8s %11s %11s %11s %9s %10s %10s\n", "vertices", "dt_ms", "unknowns", "median_us", "p99_us",
@@ -189,7 +201,8 @@ int main(int argc, char **argv) {
    * rebuild the lagged tangent, on the stepping thread (refactor_lag 0, the library's
    * default) against deferred with the job computed off the timed path (the
    * server's helper threads; docs/haptics.md). */
-  printf("finger pressing 2-18 mm at the pole with a 0.7 Hz wobble, 338 vertices (median / p99 / max us):\n");
+  printf("finger pressing 2-18 mm at the pole with a 0.7 Hz wobble, 338 vertices, finger surface %s (median / p99 / "
+         "max us):\n", palp_finger_surface_name(surface >= 0 ? surface : palp_world_default_def().finger_surface));
   printf("%7s %10s %8s %23s %23s\n", "dt_ms", "lag", "steps", "rebuild/request/install", "other steps");
   for (int k = 0; k < 2; ++k)
     for (int deferred = 0; deferred < 2; ++deferred) {
@@ -197,6 +210,7 @@ int main(int argc, char **argv) {
       palp_world_def d = palp_world_default_def();
       d.dt = dt;
       d.refactor_lag = deferred ? palp_world_refactor_lag_for(dt) : 0;
+      if (surface >= 0) d.finger_surface = surface;
       d.membrane.bending_stiffness = bending;
       palp_world *w = palp_world_create(&d, NULL);
       const palp_finger_def fd = palp_finger_default_def();
@@ -234,5 +248,5 @@ int main(int argc, char **argv) {
       palp_world_destroy(w);
     }
   free(t);
-  return server_core(worlds, quick ? 200 : 1000);
+  return server_core(worlds, quick ? 200 : 1000, surface);
 }

@@ -68,6 +68,9 @@ int main(void) {
   /* The deferred-rebuild lag a session was stepped with (replay needs it): 0..1000 steps. */
   expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_lag_steps\":-1", "time.refactor_lag_steps");
   expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_lag_steps\":1001", "time.refactor_lag_steps");
+  /* The fingertip's contact surface (docs/haptics.md): "smooth" or "facets", nothing else. */
+  expect_error("\"effects\":[", "\"finger_surface\":\"round\",\"effects\":[", "finger_surface");
+  expect_error("\"effects\":[", "\"finger_surface\":1,\"effects\":[", "finger_surface");
   expect_error("\"t_off_s\":0.3", "\"t_of_s\":0.3", "contacts[0].profile.t_off_s");
   expect_error("\"kind\":\"step\"", "\"kind\":5", "contacts[0].profile.kind");
   expect_error("\"distribution\":\"gaussian\"", "\"distribution\":\"round\"", "contacts[0].distribution");
@@ -143,6 +146,25 @@ int main(void) {
           "lesion centre round-trips bit for bit: %.17g -> %.17g (%s)", x.world.lesion[0].center.x,
           xj ? xb.world.lesion[0].center.x : 0.0, err);
     free(xj);
+  }
+  /* The finger surface: absent is the facets (how every scene and log before it was stepped),
+   * and it survives the round trip; the facets print as earlier logs did (no key). */
+  {
+    CHECK(a.world.finger_surface == PALP_FINGER_SURFACE_FACETS, "no \"finger_surface\": the facets (%d)",
+          a.world.finger_surface);
+    char *fj = palp_scene_to_json(&a);
+    CHECK(fj && !strstr(fj, "finger_surface"), "the facets are written as no key");
+    free(fj);
+    palp_scene sm = a;
+    sm.world.finger_surface = PALP_FINGER_SURFACE_SMOOTH;
+    char *sj = palp_scene_to_json(&sm);
+    palp_scene sb;
+    CHECK(sj && palp_scene_parse(sj, &sb, err, sizeof err) == PALP_OK &&
+              sb.world.finger_surface == PALP_FINGER_SURFACE_SMOOTH,
+          "finger_surface \"smooth\" round trip (%s)", err);
+    free(sj);
+    const palp_scene shipped = paper_scene();
+    CHECK(shipped.world.finger_surface == PALP_FINGER_SURFACE_SMOOTH, "the shipped scene asks for the smooth surface");
   }
   /* The rebuild lag survives the round trip (a server's logged scene carries it to replay). */
   palp_scene lagged = a;
