@@ -802,7 +802,7 @@ static int constraint_j(const palp_world *w, const contact *k, int c, int *v, pa
 
 /* The pad's influence between two contact points q1, q2 on a fingertip of radius r [-]:
  *   P = 1 at one and the same feature, (1 - a) exp(-|q1 - q2|^2 / l^2) between two,
- *   l = r / 16 (0.5 mm on an 8 mm tip) on the facets, r / 4 on the smooth surface (below),
+ *   l = r / 16 (0.5 mm on an 8 mm tip) on the facets, r / 6 on the smooth surface (below),
  *   a = 0.03.
  * Features pressing the pad at one place share its compression; features a millimetre
  * apart press it almost independently, as the spring per feature did (a wider kernel,
@@ -816,10 +816,11 @@ static int constraint_j(const palp_world *w, const contact *k, int c, int *v, pa
  * neighbouring patches (a patch whose closest point is clamped to its edge, next to the
  * patch that holds the minimum): they sample one contact region of the pad, of radius
  * sqrt(2 R_eff delta) ~ 1.6 mm at 0.2 mm of pad compression (1 N; R_eff = 6.7 mm for an
- * 8 mm tip on the 40 mm dome), so they share its compression over l = r / 4 (2 mm). At
- * r / 16 the count of such rows within 0.5 mm, which depends on where the contact sits
- * on its triangle, set the pad's stiffness: sliding at 1 mm below the sphere the force
- * varied by 13.9% (3.7% at r / 4, the slide of model_finger 2.8%). */
+ * 8 mm tip on the 40 mm dome), so they share its compression over l = r / 6 (1.3 mm).
+ * At r / 16 the count of such rows within 0.5 mm, which depends on where the contact
+ * sits on its triangle, set the pad's stiffness: sliding 1 mm below the sphere (long-term
+ * dome, 5 mm/s) the force varied by 13.9%; r / 6 gives 4.6%, r / 4 3.7% but the worst
+ * tick of model_finger's deep slide then came within 0.0002 N of its bound (r / 6: 0.0012 N). */
 static double pad_share(palp_vec3 q1, palp_vec3 q2, double l, int same) {
   if (same) return 1.0;
   const double a = 0.03;
@@ -2062,7 +2063,7 @@ static int finger_scratch_create(palp_world *w) {
     for (int t = 0; t < nt; ++t)
       for (int e = 0; e < 3; ++e) fs->vtri_start[w->mesh.tri[t][e] + 1]++;
     for (int i = 0; i < nv; ++i) fs->vtri_start[i + 1] += fs->vtri_start[i];
-    for (int t = 0; t < nt; ++t)
+    for (int t = 0; t < nt; ++t) /* nstamp counts each vertex's entries while they are filled */
       for (int e = 0; e < 3; ++e) fs->vtri[fs->vtri_start[w->mesh.tri[t][e]] + fs->nstamp[w->mesh.tri[t][e]]++] = t;
     for (int i = 0; i < nv; ++i) {
       fs->nstamp[i] = -1;
