@@ -6,11 +6,12 @@
  *             [--distribution single|uniform|gaussian|gaussian_offset]
  *
  * Each level runs the scene's first N frames (default 20: the transient after
- * the 3 N step, the hardest part of the run) with the cache off. Setup (mesh,
- * map, symbolic analysis) is timed apart; per-frame times are the gaps between
- * progress callbacks. The 400-frame figure is measured when N >= 400, otherwise
- * extrapolated as the first frame (which holds the first factorisation) plus
- * 399 x the mean of the others, and says so.
+ * the 3 N step, the hardest part of the run) with the cache off. The run's setup
+ * (mesh, map, model, symbolic analysis and, since fem-frames, the first numeric
+ * factorisation) ends with the progress callback for frame 0 and is printed
+ * apart; per-frame times are the gaps between progress callbacks. The 400-frame
+ * figure is measured when N >= 400, otherwise extrapolated as the setup plus the
+ * first frame plus 399 x the mean of the others, and says so.
  */
 #include <math.h>
 #include <stdio.h>
@@ -85,6 +86,7 @@ int main(int argc, char **argv) {
     palp_fem_result r;
     const double t0 = now_s();
     st.t[0] = t0;
+    st.n = -1;
     /* setup = everything before the first step: time it with a zero-frame trick */
     palp_fem_mesh mesh;
     if (palp_fem_mesh_create(&cfg.mesh, &mesh)) {
@@ -136,7 +138,8 @@ int main(int argc, char **argv) {
     }
     const double lnz = palp_fem_solver_factor_nnz(m.solver), fl = palp_fem_solver_factor_flops(m.solver);
     palp_fem_model_destroy(&m);
-    st.t[0] = now_s();
+    const double run0 = now_s();
+    st.t[0] = run0; /* overwritten by the callback for frame 0 (setup done) */
     const int rc = palp_fem_run(&cfg, &scene, &r, on_frame, &st, err, sizeof err);
     if (rc) {
       fprintf(stderr, "bench_fem: level %s: %s\n", tok, err);
@@ -152,10 +155,12 @@ int main(int argc, char **argv) {
     const double first = dt[0];
     qsort(dt, (size_t)n, sizeof *dt, cmp);
     const double med = dt[n / 2], p90 = dt[(int)(0.9 * (n - 1))], mx = dt[n - 1];
-    const double total = st.t[n] - st.t[0];
+    const double total = st.t[n] - run0, run_setup = st.t[0] - run0;
     printf("\nlevel %s: %d nodes, %d hexahedra, %d free DOFs; nnz(L) %.3g, %.3g Gflop per factorisation\n", tok,
            mesh.node_count, mesh.element_count, r.dof_count, lnz, 1e-9 * fl);
     printf("  setup (model, sparsity, symbolic, 1 assembly) %.2f s; one numeric factorisation %.2f s\n", setup, tf);
+    printf("  the run's setup before frame 1 (mesh, map, model, symbolic analysis, first numeric factorisation): "
+           "%.2f s (not in the frame times below)\n", run_setup);
     printf("  per 10 ms frame: mean %.3f s, median %.3f s, p90 %.3f s, max %.3f s (first frame %.3f s)\n", mean, med,
            p90, mx, first);
     printf("  solver: %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations, %ld cut-backs\n", r.steps,
@@ -167,12 +172,14 @@ int main(int argc, char **argv) {
     if (n >= 400)
       printf("  400-frame run: %.1f s measured\n", total);
     else
-      printf("  400-frame run: ~%.0f s extrapolated (first frame, which holds the first factorisation, + 399 x the mean "
+      printf("  400-frame run: ~%.0f s extrapolated (setup + first frame + 399 x the mean "
              "of the other %d; the transient frames after the step are the costliest)\n",
-             dt[0] > 0 ? first + 399.0 * rest : 400.0 * mean, n - 1);
+             run_setup + first + 399.0 * rest, n - 1);
     printf("  vs the paper's 22.5 s per step: %.0fx faster per frame (median); target <= 0.5 s/frame at >= 10k "
            "elements: %s\n",
-           22.5 / med, mesh.element_count >= 10000 ? (med <= 0.5 ? "met" : "NOT met") : "n/a (smaller mesh)");
+           22.5 / med,
+           mesh.element_count >= 10000 ? (mx <= 0.5 ? "met by every frame" : med <= 0.5 ? "met by the median, NOT by every frame" : "NOT met")
+                                       : "n/a (smaller mesh)");
     free(dt);
     free(st.t);
     palp_fem_result_destroy(&r);

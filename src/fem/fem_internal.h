@@ -92,6 +92,11 @@ typedef struct palp_fem_model {
    * and their counts when the factor was made and when the current attempt began */
   long attempts, fac_attempt, fac_solves, step_solves0;
   int renew;          /* renew the factor at the next Newton solve */
+  /* palp_fem_model_prefactor: the factor was made in setup from kfac [nnz] (K_eff
+   * at the first step's start point); the first Newton solve uses it as a fresh
+   * factor when its K_eff is bit for bit the same, so results do not change */
+  int prefactored;
+  double *kfac;
   long pcg_iterations; /* CG and GMRES iterations */
   long gmres_solves;  /* solves that needed GMRES (indefinite tangent or preconditioner) */
   double *gmres_ws;   /* GMRES basis, allocated on first need */
@@ -146,6 +151,14 @@ int palp_fem_element_cauchy(const palp_fem_model *m, int e, int g, const double 
 /* Static equilibrium f_int(u) = fext with prescribed DOFs ramped over `increments`
  * (viscous step dt per increment; INFINITY for the relaxed solid). Commits. */
 int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments, double dt);
+/* The first numeric factorisation ahead of the first step (setup rather than the
+ * first frame): K_eff = K_T + M / (beta dt^2) at the committed state and the
+ * prescribed values, with the step length dt the first palp_fem_step will try. The
+ * first Newton solve then uses it as palp_fem_step would have made it (the same
+ * bits) if its matrix is bit-identical, and as a mere preconditioner otherwise.
+ * No-op with full_newton or an existing factor; only for models without extra_fn
+ * state that a call could change. */
+int palp_fem_model_prefactor(palp_fem_model *m, double dt);
 /* One implicit Newmark step of length dt with external force fext [ndof] at its end,
  * cut back by halving up to max_cutbacks times. Commits on success. */
 int palp_fem_step(palp_fem_model *m, const double *fext, double dt);

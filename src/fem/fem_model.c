@@ -56,6 +56,7 @@ void palp_fem_model_destroy(palp_fem_model *m) {
   free(m->pcg);
   free(m->gmres_ws);
   free(m->tbuf);
+  free(m->kfac);
   palp_fem_solver_destroy(m->solver);
   memset(m, 0, sizeof *m);
 }
@@ -239,6 +240,9 @@ int palp_fem_model_finalize(palp_fem_model *m) {
   free(m->pcg);
   m->pcg = malloc(sizeof(double) * 7 * (size_t)(nf ? nf : 1));
   m->factored = 0;
+  m->prefactored = 0;
+  free(m->kfac);
+  m->kfac = NULL;
   if (!m->pcg) return PALP_ENOMEM;
   free(m->tbuf);
   m->tbuf = NULL;
@@ -400,15 +404,20 @@ static double dot(const double *a, const double *b, int n) {
   return s;
 }
 
+/* The bookkeeping of a new factor: the renewal rule counts from here. */
+static void factor_made(palp_fem_model *m) {
+  m->factorizations++;
+  m->fac_attempt = m->attempts;
+  m->fac_solves = m->solves;
+  m->renew = 0;
+}
+
 /* The factorisation and the solves with it, timed for the statistics. */
 static int factor(palp_fem_model *m) {
   const double t0 = now_s();
   const int rc = palp_fem_solver_factor(m->solver, m->kval);
   m->sec_factor += now_s() - t0;
-  m->factorizations++;
-  m->fac_attempt = m->attempts;
-  m->fac_solves = m->solves;
-  m->renew = 0;
+  factor_made(m);
   return rc;
 }
 
@@ -564,7 +573,15 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
     const double lnz = palp_fem_solver_factor_nnz(m->solver), fl = palp_fem_solver_factor_flops(m->solver);
     limit = (int)fmin(400.0, fmax(10.0, factor_cost_solves(fl, lnz)));
   }
-  if (!m->factored || m->full_newton || m->last_pcg > limit || m->renew) {
+  if (m->prefactored) { /* the factor made in setup (palp_fem_model_prefactor), if of this very K */
+    m->prefactored = 0;
+    if (m->factored && m->kfac && !memcmp(m->kfac, m->kval, sizeof(double) * (size_t)m->nnz)) {
+      factor_made(m);
+      m->factor_c0 = kscale_c0;
+      fresh = 1;
+    }
+  }
+  if (!fresh && (!m->factored || m->full_newton || m->last_pcg > limit || m->renew)) {
     int rc = factor(m);
     m->factored = rc == 0;
     if (rc) return rc;
@@ -802,6 +819,30 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     tangent = !(eta * r <= 0.5 * tol);
   }
   return PALP_ESOLVER;
+}
+
+int palp_fem_model_prefactor(palp_fem_model *m, double dt) {
+  if (m->full_newton || m->factored || !(dt > 0.0)) return PALP_OK; /* nothing to gain */
+  const size_t nd = (size_t)m->ndof;
+  const double c0 = 1.0 / (m->newmark_beta * dt * dt); /* [1/s^2], as try_step's first attempt */
+  double *u = m->utrial;
+  for (size_t d = 0; d < nd; ++d) u[d] = m->eq[d] < 0 ? m->prescribed[d] : m->u[d];
+  int rc = palp_fem_assemble(m, u, dt, 1);
+  if (rc) return rc;
+  for (size_t d = 0; d < nd; ++d) {
+    const int c = m->eq[d];
+    if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
+  }
+  if (!m->kfac) m->kfac = malloc(sizeof(double) * (size_t)(m->nnz ? m->nnz : 1));
+  if (!m->kfac) return PALP_ENOMEM;
+  memcpy(m->kfac, m->kval, sizeof(double) * (size_t)m->nnz);
+  const double t0 = now_s();
+  rc = palp_fem_solver_factor(m->solver, m->kval);
+  m->sec_factor += now_s() - t0;
+  m->factored = rc == 0;
+  m->prefactored = m->factored;
+  /* a singular K_eff is the first step's business (it cuts the step back) */
+  return rc == PALP_ESOLVER ? PALP_OK : rc;
 }
 
 int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {

@@ -233,6 +233,15 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
     ws_free(&w);
     return rc;
   }
+  /* the first numeric factorisation belongs to the setup, not to the first frame
+   * (same bits: palp_fem_model_prefactor) */
+  rc = palp_fem_model_prefactor(&w.model, dt);
+  if (rc) {
+    snprintf(err, errlen, "model: first factorisation: %s", w.model.err[0] ? w.model.err : palp_strerror(rc));
+    ws_free(&w);
+    return rc;
+  }
+  const double sec_setup = wall() - t_start;
   const int F = scene->frames;
   out->frames = F;
   out->vertex_count = V;
@@ -254,6 +263,10 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   memcpy(out->contact_of, w.cof, sizeof(int) * (size_t)total);
   palp_fem_model *m = &w.model;
   const size_t nd = (size_t)m->ndof;
+  if (cb && cb(ud, 0, F, 0.0)) { /* setup done */
+    snprintf(err, errlen, "cancelled before frame 1");
+    rc = PALP_EINVAL;
+  }
   for (int f = 0; f < F && !rc; ++f) {
     for (int s = 0; s < sub && !rc; ++s) {
       const double t = f * period + s * dt; /* the profile at the start of the step */
@@ -305,6 +318,7 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   out->sec_solve = m->sec_solve, out->sec_krylov = m->sec_krylov;
   out->assemblies = m->assemblies, out->tangent_assemblies = m->tangent_assemblies, out->solves = m->solves;
   out->wall_seconds = wall() - t_start;
+  out->sec_setup = sec_setup;
   out->key = key;
   ws_free(&w);
   if (rc) {

@@ -164,13 +164,18 @@ typedef struct palp_fem_result {
    * solves with the factor, and the other Krylov work (0 when read from cache) */
   double sec_assemble, sec_factor, sec_solve, sec_krylov;
   long assemblies, tangent_assemblies, solves;
+  /* wall seconds before the first step (mesh, surface map, model, symbolic analysis,
+   * the first numeric factorisation; part of wall_seconds; 0 when read from cache) */
+  double sec_setup;
   int from_cache;
   uint64_t key;        /* cache key */
 } palp_fem_result;
 
 void palp_fem_result_destroy(palp_fem_result *r);
 
-/* Return non-zero to cancel the run (palp_fem_run then returns PALP_EINVAL). */
+/* Called once with frame 0 when the setup is done (before the first step), then
+ * after every frame. Return non-zero to cancel the run (palp_fem_run then returns
+ * PALP_EINVAL). */
 typedef int (*palp_fem_progress_fn)(void *ud, int frame, int frames, double sim_time);
 
 /* Runs a scene (its contacts, profiles, frames and frame period; the real-time
