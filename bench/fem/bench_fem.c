@@ -46,17 +46,19 @@ static int cmp(const void *a, const void *b) {
 
 int main(int argc, char **argv) {
   const char *scene_path = "config/paper_step.json", *levels = "2,4", *reading = NULL, *dist = NULL;
-  int frames = 20, kernel = 0;
+  int frames = 20, kernel = 0, lag = -1;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--levels") && i + 1 < argc) levels = argv[++i];
     else if (!strcmp(argv[i], "--frames") && i + 1 < argc) frames = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--reading") && i + 1 < argc) reading = argv[++i];
     else if (!strcmp(argv[i], "--distribution") && i + 1 < argc) dist = argv[++i];
     else if (!strcmp(argv[i], "--kernel")) kernel = 1;
+    else if (!strcmp(argv[i], "--factor-lag") && i + 1 < argc) lag = atoi(argv[++i]);
     else if (argv[i][0] != '-') scene_path = argv[i];
     else {
-      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel]\n"
-                      "  --kernel: time the assembly alone (tangent and residual, 1 and 2 threads) and one solve instead of frames\n");
+      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel] [--factor-lag N]\n"
+                      "  --kernel: time the assembly alone (tangent and residual, 1 and 2 threads) and one solve instead of frames\n"
+                      "  --factor-lag N: the config's factor_lag (0: renew the factor in the foreground)\n");
       return 2;
     }
   }
@@ -81,6 +83,7 @@ int main(int argc, char **argv) {
     palp_fem_config cfg = palp_fem_default_config();
     cfg.mesh.level = atoi(tok);
     cfg.cache_dir[0] = 0;
+    if (lag >= 0) cfg.factor_lag = lag;
     if (reading) cfg.c10_reading = strcmp(reading, "long_term") ? PALP_FEM_C10_INSTANTANEOUS : PALP_FEM_C10_LONG_TERM;
     stamps st = {.t = calloc((size_t)scene.frames + 1, sizeof(double)), .cap = scene.frames};
     palp_fem_result r;
@@ -153,18 +156,25 @@ int main(int argc, char **argv) {
       if (i > 0) rest += dt[i] / (n - 1);
     }
     const double first = dt[0];
+    printf("\nlevel %s: frames over 0.5 s:", tok);
+    int over = 0;
+    for (int i = 0; i < n; ++i)
+      if (dt[i] > 0.5) printf(" %d (%.2f s)", i + 1, dt[i]), ++over;
+    printf("%s\n", over ? "" : " none");
     qsort(dt, (size_t)n, sizeof *dt, cmp);
     const double med = dt[n / 2], p90 = dt[(int)(0.9 * (n - 1))], mx = dt[n - 1];
     const double total = st.t[n] - run0, run_setup = st.t[0] - run0;
-    printf("\nlevel %s: %d nodes, %d hexahedra, %d free DOFs; nnz(L) %.3g, %.3g Gflop per factorisation\n", tok,
+    printf("level %s: %d nodes, %d hexahedra, %d free DOFs; nnz(L) %.3g, %.3g Gflop per factorisation\n", tok,
            mesh.node_count, mesh.element_count, r.dof_count, lnz, 1e-9 * fl);
     printf("  setup (model, sparsity, symbolic, 1 assembly) %.2f s; one numeric factorisation %.2f s\n", setup, tf);
     printf("  the run's setup before frame 1 (mesh, map, model, symbolic analysis, first numeric factorisation): "
            "%.2f s (not in the frame times below)\n", run_setup);
     printf("  per 10 ms frame: mean %.3f s, median %.3f s, p90 %.3f s, max %.3f s (first frame %.3f s)\n", mean, med,
            p90, mx, first);
-    printf("  solver: %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations, %ld cut-backs\n", r.steps,
-           r.newton_iterations, r.pcg_iterations, r.factorizations, r.cutbacks);
+    printf("  solver: %ld steps, %ld Newton iterations, %ld CG iterations, %ld factorisations (%ld of them on the "
+           "background thread, factor_lag %d, %.2f s waited for them), %ld cut-backs\n",
+           r.steps, r.newton_iterations, r.pcg_iterations, r.factorizations, r.background_factorizations,
+           cfg.factor_lag, r.sec_factor_wait, r.cutbacks);
     printf("  time: assembly %.2f s (%ld, %ld with tangent), factorisation %.2f s, solves %.2f s (%ld), other Krylov "
            "%.2f s, rest %.2f s of %.2f s\n",
            r.sec_assemble, r.assemblies, r.tangent_assemblies, r.sec_factor, r.sec_solve, r.solves, r.sec_krylov,

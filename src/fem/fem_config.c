@@ -17,7 +17,7 @@
  *   "gel": {...}, "c10_reading": "long_term" | "instantaneous",
  *   "dt": 0.01, "newmark_beta": 0.25, "newmark_gamma": 0.5, "max_newton": 12,
  *   "newton_rtol": 1e-4, "newton_atol": 1e-9, "max_cutbacks": 8, "cache_dir": "cache/fem",
- *   "full_newton": 0, "pcg_refactor": 0, "threads": 2 }
+ *   "full_newton": 0, "pcg_refactor": 0, "threads": 2, "factor_lag": 3 }
  * Units: SI (m, kg/m^3, Pa, 1/Pa, s).
  *
  * "material" is applied first, so "membrane", "gel" and "c10_reading" given beside
@@ -124,6 +124,7 @@ palp_fem_config palp_fem_default_config(void) {
   c.max_cutbacks = 8;
   c.full_newton = 0;
   c.pcg_refactor = 0;
+  c.factor_lag = 3;
   snprintf(c.cache_dir, sizeof c.cache_dir, "cache/fem");
   return c;
 }
@@ -234,7 +235,7 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   }
   static const char *const keys[] = {"mesh",         "inp",        "material",   "membrane",    "gel",          "c10_reading",
                                      "dt",           "newmark_beta", "newmark_gamma", "max_newton", "newton_rtol",
-                                     "newton_atol",  "max_cutbacks", "cache_dir",   "full_newton", "pcg_refactor", "threads", NULL};
+                                     "newton_atol",  "max_cutbacks", "cache_dir",   "full_newton", "pcg_refactor", "threads", "factor_lag", NULL};
   int rc = only_keys(root, keys, "", err, errlen);
   const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
   if (!rc && mesh) {
@@ -289,6 +290,7 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   if (!rc) rc = integer(root, "full_newton", "", &cfg->full_newton, err, errlen);
   if (!rc) rc = integer(root, "pcg_refactor", "", &cfg->pcg_refactor, err, errlen);
   if (!rc) rc = integer(root, "threads", "", &cfg->threads, err, errlen);
+  if (!rc) rc = integer(root, "factor_lag", "", &cfg->factor_lag, err, errlen);
   cJSON_Delete(root);
   if (!rc) rc = palp_fem_config_validate(cfg, err, errlen);
   return rc;
@@ -365,8 +367,9 @@ int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen)
     return PALP_EINVAL;
   }
   if (c->max_newton < 1 || c->max_newton > 60 || c->max_cutbacks < 0 || c->max_cutbacks > 20 || c->pcg_refactor < 0 || c->threads < 1 || c->threads > 16 ||
+      c->factor_lag < 0 || c->factor_lag > 64 ||
       !(c->newton_rtol > 0.0) || !(c->newton_atol >= 0.0)) {
-    snprintf(err, errlen, "newton: max_newton 1..60, max_cutbacks 0..20, rtol > 0, atol >= 0, pcg_refactor >= 0, threads 1..16");
+    snprintf(err, errlen, "newton: max_newton 1..60, max_cutbacks 0..20, rtol > 0, atol >= 0, pcg_refactor >= 0, threads 1..16, factor_lag 0..64");
     return PALP_EINVAL;
   }
   return 0;

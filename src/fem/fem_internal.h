@@ -97,6 +97,15 @@ typedef struct palp_fem_model {
    * factor when its K_eff is bit for bit the same, so results do not change */
   int prefactored;
   double *kfac;
+  /* background renewal (palp_fem_config.factor_lag): the attempt that started the
+   * thread; renew_fg: the background factor failed (not positive definite), renew
+   * in the foreground; statistics: factors installed from the thread, seconds
+   * waited for them */
+  int factor_lag;
+  long bg_attempt;
+  int renew_fg;
+  long bg_factorizations;
+  double sec_wait;
   long pcg_iterations; /* CG and GMRES iterations */
   long gmres_solves;  /* solves that needed GMRES (indefinite tangent or preconditioner) */
   double *gmres_ws;   /* GMRES basis, allocated on first need */
@@ -170,6 +179,18 @@ void palp_fem_solver_destroy(palp_fem_solver *s);
  * PALP_ESOLVER if singular. */
 int palp_fem_solver_factor(palp_fem_solver *s, const double *val);
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x);
+/* Background numeric LL^T of val (the same pattern) on a thread of its own while
+ * solves go on with the current factor; at most one at a time. _finish joins it
+ * (waiting if need be) and, if install and it succeeded, makes it the factor the
+ * solves use; it returns PALP_ESOLVER when the matrix was not positive definite
+ * (nothing installed: factorise it with palp_fem_solver_factor, which has the
+ * LDL^T fallback). _running: started and not yet finished. */
+int palp_fem_solver_factor_start(palp_fem_solver *s, const double *val);
+int palp_fem_solver_factor_finish(palp_fem_solver *s, int install);
+int palp_fem_solver_factor_running(const palp_fem_solver *s);
+/* For tests of the timing independence: 0 a thread (default), 1 factorise at
+ * _start in the caller's thread (the fastest thread), 2 at _finish (the slowest). */
+void palp_fem_solver_set_background_mode(palp_fem_solver *s, int mode);
 /* Nonzeros of L and flops of the last factorisation. */
 double palp_fem_solver_factor_nnz(const palp_fem_solver *s);
 double palp_fem_solver_factor_flops(const palp_fem_solver *s);

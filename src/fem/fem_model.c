@@ -83,6 +83,7 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   m->max_cutbacks = cfg->max_cutbacks;
   m->full_newton = cfg->full_newton;
   m->pcg_refactor = cfg->pcg_refactor;
+  m->factor_lag = cfg->factor_lag;
   m->threads = cfg->threads < 1 ? 1 : cfg->threads > 16 ? 16 : cfg->threads;
   const int N = mesh->node_count, E = mesh->element_count, np = m->nprony;
   m->ndof = 3 * N;
@@ -410,10 +411,18 @@ static void factor_made(palp_fem_model *m) {
   m->fac_attempt = m->attempts;
   m->fac_solves = m->solves;
   m->renew = 0;
+  m->renew_fg = 0;
 }
 
 /* The factorisation and the solves with it, timed for the statistics. */
 static int factor(palp_fem_model *m) {
+  if (palp_fem_solver_factor_running(m->solver)) {
+    /* a foreground factor (CG stalled, static solve) is newer than the background
+     * one, which is dropped (after the join: it uses the solver's second factor) */
+    const double tw = now_s();
+    palp_fem_solver_factor_finish(m->solver, 0);
+    m->sec_wait += now_s() - tw;
+  }
   const double t0 = now_s();
   const int rc = palp_fem_solver_factor(m->solver, m->kval);
   m->sec_factor += now_s() - t0;
@@ -580,6 +589,15 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
       m->factor_c0 = kscale_c0;
       fresh = 1;
     }
+  }
+  if (!fresh && m->renew && !m->renew_fg && m->factor_lag > 0 && m->factored && !m->full_newton &&
+      !palp_fem_solver_factor_running(m->solver)) {
+    /* renewal on the background thread from this K_eff; this step goes on with
+     * the old factor as CG's preconditioner (install_background) */
+    const int rc = palp_fem_solver_factor_start(m->solver, m->kval);
+    if (rc) return rc;
+    m->bg_attempt = m->attempts;
+    m->renew = 0;
   }
   if (!fresh && (!m->factored || m->full_newton || m->last_pcg > limit || m->renew)) {
     int rc = factor(m);
@@ -757,6 +775,23 @@ static double newton_forcing(int it, double r, double scale, double tol) {
   return eta;
 }
 
+/* Installs the factor of the background thread (waiting for it if need be); if
+ * that matrix was not positive definite, the next solve renews in the foreground. */
+static void install_background(palp_fem_model *m) {
+  const double t0 = now_s();
+  const int rc = palp_fem_solver_factor_finish(m->solver, 1);
+  m->sec_wait += now_s() - t0;
+  if (rc) {
+    m->renew = 1;
+    m->renew_fg = 1;
+    return;
+  }
+  factor_made(m);
+  m->bg_factorizations++;
+  m->factored = 1;
+  m->last_pcg = 0; /* CG's count belonged to the old factor */
+}
+
 /* One Newmark step of length dt without cut-back; leaves the trial state in
  * utrial / atrial / S0t / Ht on success. */
 static int try_step(palp_fem_model *m, const double *fext, double dt) {
@@ -776,7 +811,12 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
   const long last = m->solves - m->step_solves0;
   m->step_solves0 = m->solves;
   m->attempts++;
-  if (m->pcg_refactor <= 0 && m->factored && !m->full_newton) {
+  /* a background factor is installed at a fixed attempt count, factor_lag after
+   * the attempt that started it, never when the thread happens to finish: the
+   * results do not depend on the timing */
+  const int running = palp_fem_solver_factor_running(m->solver);
+  if (running && m->attempts >= m->bg_attempt + m->factor_lag) install_background(m);
+  else if (m->pcg_refactor <= 0 && m->factored && !m->full_newton && !running) {
     const double cost = factor_cost_solves(palp_fem_solver_factor_flops(m->solver), palp_fem_solver_factor_nnz(m->solver));
     if (renew_factor(cost, m->solves - m->fac_solves, m->attempts - m->fac_attempt, last)) m->renew = 1;
   }

@@ -67,6 +67,7 @@ uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
   H(cfg->full_newton);
   H(cfg->pcg_refactor);
   H(cfg->threads);
+  H(cfg->factor_lag);
   /* the scene: real-time mesh, timing, contacts */
   H(s->world.mesh.radius);
   H(s->world.mesh.vertex_count);
@@ -319,6 +320,8 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   out->assemblies = m->assemblies, out->tangent_assemblies = m->tangent_assemblies, out->solves = m->solves;
   out->wall_seconds = wall() - t_start;
   out->sec_setup = sec_setup;
+  out->background_factorizations = m->bg_factorizations;
+  out->sec_factor_wait = m->sec_wait;
   out->key = key;
   ws_free(&w);
   if (rc) {

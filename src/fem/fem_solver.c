@@ -12,7 +12,17 @@
  * point load) is legitimately indefinite on a few mesh-scale modes, and Newton
  * still converges quadratically with an indefinite but non-singular tangent. Only
  * a singular matrix is reported (the caller then cuts the time step).
+ *
+ * Background factorisation (palp_fem_solver_factor_start / _finish): a second
+ * factor object of the same symbolic analysis is factorised numerically on a
+ * thread of its own, with its own cholmod_common (CHOLMOD keeps its workspace in
+ * the common, so two concurrent calls need two) and its own copy of the values,
+ * while the caller keeps solving with the current factor; _finish joins the
+ * thread and swaps the two factors. The caller decides when to call _finish
+ * (fem_model.c: at a fixed step count), so the results never depend on how long
+ * the thread took.
  */
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -53,6 +63,16 @@ struct palp_fem_solver {
   cholmod_dense *x, *Y, *E; /* reusable workspaces of cholmod_solve2 */
   int n;
   long ldl_count; /* factorisations that needed the LDL^T fallback */
+  /* background factorisation: own common, values and factor (allocated on first use) */
+  cholmod_common bcc;
+  int have_bcc;
+  cholmod_sparse *A2;
+  cholmod_factor *L2;
+  pthread_t thread;
+  int running;    /* a thread was started and not yet joined */
+  int bg_rc;      /* its outcome: PALP_OK or PALP_ESOLVER (not positive definite) */
+  int bg_blas;    /* the OpenBLAS thread count to restore when it is joined */
+  int bg_mode;    /* palp_fem_solver_set_background_mode */
 };
 
 palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi, long nnz) {
@@ -82,6 +102,10 @@ palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi,
 
 void palp_fem_solver_destroy(palp_fem_solver *s) {
   if (!s) return;
+  if (s->running) palp_fem_solver_factor_finish(s, 0);
+  if (s->L2) cholmod_free_factor(&s->L2, &s->bcc);
+  if (s->A2) cholmod_free_sparse(&s->A2, &s->bcc);
+  if (s->have_bcc) cholmod_finish(&s->bcc);
   if (s->L) cholmod_free_factor(&s->L, &s->cc);
   if (s->Lldl) cholmod_free_factor(&s->Lldl, &s->cc);
   if (s->A) cholmod_free_sparse(&s->A, &s->cc);
@@ -141,3 +165,62 @@ int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
 double palp_fem_solver_factor_nnz(const palp_fem_solver *s) { return s->cc.lnz; }
 double palp_fem_solver_factor_flops(const palp_fem_solver *s) { return s->cc.fl; }
 long palp_fem_solver_ldl_count(const palp_fem_solver *s) { return s->ldl_count; }
+
+/* The background thread: a supernodal LL^T of A2 into L2 with the second common.
+ * No LDL^T fallback here: a matrix that is not positive definite is reported and
+ * the caller factorises it in the foreground, where the fallback lives. */
+static void *factor_thread(void *arg) {
+  palp_fem_solver *s = arg;
+  const int ok = cholmod_factorize(s->A2, s->L2, &s->bcc);
+  s->bg_rc = ok && s->bcc.status == CHOLMOD_OK && s->L2->minor >= (size_t)s->n ? PALP_OK : PALP_ESOLVER;
+  return NULL;
+}
+
+int palp_fem_solver_factor_start(palp_fem_solver *s, const double *val) {
+  if (s->running) return PALP_EINVAL;
+  if (!s->have_bcc) {
+    cholmod_start(&s->bcc);
+    s->bcc.print = 0;
+    s->have_bcc = 1;
+  }
+  if (!s->A2) s->A2 = cholmod_copy_sparse(s->A, &s->bcc);
+  /* the same ordering and supernodes as L (a copy of its symbolic part and, once
+   * numeric, its values, which the factorisation overwrites) */
+  if (!s->L2) s->L2 = cholmod_copy_factor(s->L, &s->bcc);
+  if (!s->A2 || !s->L2) return PALP_ENOMEM;
+  memcpy(s->A2->x, val, sizeof(double) * (size_t)((const int *)s->A->p)[s->n]);
+  /* BLAS on one thread for both factorisations while the thread runs (see
+   * blas_single); only this (the caller's) thread changes the count */
+  s->bg_blas = blas_single();
+  s->bg_rc = PALP_ESOLVER;
+  if (s->bg_mode == 2) { /* made at _finish: the slowest possible thread */
+    s->running = -2;
+    return PALP_OK;
+  }
+  if (s->bg_mode == 1 || pthread_create(&s->thread, NULL, factor_thread, s)) {
+    factor_thread(s); /* here and now (no thread available: the same result) */
+    s->running = -1;  /* done, nothing to join */
+    return PALP_OK;
+  }
+  s->running = 1;
+  return PALP_OK;
+}
+
+void palp_fem_solver_set_background_mode(palp_fem_solver *s, int mode) { s->bg_mode = mode; }
+
+int palp_fem_solver_factor_finish(palp_fem_solver *s, int install) {
+  if (!s->running) return PALP_EINVAL;
+  if (s->running > 0) pthread_join(s->thread, NULL);
+  else if (s->running == -2) factor_thread(s);
+  s->running = 0;
+  blas_restore(s->bg_blas);
+  s->bg_blas = 0;
+  if (!install || s->bg_rc) return s->bg_rc;
+  cholmod_factor *t = s->L;
+  s->L = s->L2;
+  s->L2 = t;
+  s->last = s->L;
+  return PALP_OK;
+}
+
+int palp_fem_solver_factor_running(const palp_fem_solver *s) { return s->running != 0; }

@@ -113,6 +113,12 @@ typedef struct palp_fem_config {
   int full_newton;      /* 1: factor the tangent every iteration; 0: reuse the factor as CG preconditioner */
   int pcg_refactor;     /* renew the factor when CG took more iterations than this; 0 = automatic */
   int threads;          /* assembly threads, 2 (results do not depend on it beyond round-off) */
+  /* automatic mode (pcg_refactor 0, full_newton 0): a factor renewed by the renewal
+   * rule is made on a background thread from the K_eff of the step attempt that
+   * decided it and replaces the old one at the start of the factor_lag-th attempt
+   * after (waiting for it if it is not ready), so the results depend on factor_lag,
+   * never on the thread's timing; 0 renews in the foreground (before fem-frames) */
+  int factor_lag;
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
 } palp_fem_config;
 
@@ -167,6 +173,10 @@ typedef struct palp_fem_result {
   /* wall seconds before the first step (mesh, surface map, model, symbolic analysis,
    * the first numeric factorisation; part of wall_seconds; 0 when read from cache) */
   double sec_setup;
+  /* factorisations made on the background thread (factor_lag), and the wall seconds
+   * the run waited for them at their step (0 when read from cache) */
+  long background_factorizations;
+  double sec_factor_wait;
   int from_cache;
   uint64_t key;        /* cache key */
 } palp_fem_result;

@@ -337,6 +337,81 @@ static void test_reuse(void) {
   palp_fem_mesh_destroy(&mesh);
 }
 
+/* Background renewal of the factor (factor_lag) and the factor made in setup
+ * (palp_fem_model_prefactor), level 2 under the 3 N cap load for 40 steps:
+ * - the results do not depend on the thread's timing: a run whose background
+ *   factorisations are made at once (the fastest thread), one where they are made
+ *   only when installed (the slowest) and one with a real thread agree bit for bit;
+ * - the background factor is installed (at least one renewal in 40 steps) and the
+ *   run agrees with the foreground renewal (factor_lag 0) within 1e-4 of the
+ *   largest displacement, the Newton tolerance (rtol 1e-4 of the force scale);
+ * - a run whose first factorisation was made in setup is bit-identical to one
+ *   that made it in its first step. */
+typedef struct bg_run {
+  double *u; /* [steps * ndof] [m] */
+  long factorizations, background;
+} bg_run;
+
+static int run_bg(const palp_fem_mesh *mesh, const double *f, int lag, int mode, int prefactor, int steps, bg_run *out) {
+  palp_fem_config cfg = palp_fem_default_config();
+  cfg.c10_reading = PALP_FEM_C10_LONG_TERM;
+  cfg.factor_lag = lag;
+  palp_fem_model m;
+  if (palp_fem_model_create(&m, mesh, &cfg) || palp_fem_model_finalize(&m)) return -1;
+  palp_fem_solver_set_background_mode(m.solver, mode);
+  int rc = prefactor ? palp_fem_model_prefactor(&m, 0.01) : 0;
+  out->u = malloc(sizeof(double) * (size_t)steps * (size_t)m.ndof);
+  for (int k = 0; k < steps && !rc; ++k) {
+    rc = palp_fem_step(&m, f, 0.01);
+    memcpy(out->u + (size_t)k * (size_t)m.ndof, m.u, sizeof(double) * (size_t)m.ndof);
+  }
+  out->factorizations = m.factorizations, out->background = m.bg_factorizations;
+  printf("background: factor_lag %d, mode %d, prefactor %d: %ld Newton iterations, %ld CG iterations, %ld "
+         "factorisations (%ld in the background)%s%s\n",
+         lag, mode, prefactor, m.newton_iterations, m.pcg_iterations, m.factorizations, m.bg_factorizations,
+         rc ? ": " : "", rc ? m.err : "");
+  palp_fem_model_destroy(&m);
+  return rc;
+}
+
+static void test_background(void) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = 2;
+  palp_fem_mesh mesh;
+  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  const int steps = 40, nd = 3 * mesh.node_count;
+  const size_t bytes = sizeof(double) * (size_t)steps * (size_t)nd;
+  double *f = calloc((size_t)nd, sizeof(double));
+  cap_load(&mesh, 3.0, 0.01, f);
+  bg_run fg = {0}, fast = {0}, slow = {0}, thr = {0}, pre = {0};
+  CHECK(run_bg(&mesh, f, 0, 0, 0, steps, &fg) == 0, "foreground run");
+  CHECK(run_bg(&mesh, f, 0, 0, 1, steps, &pre) == 0, "foreground run, factor made in setup");
+  CHECK(run_bg(&mesh, f, 3, 1, 1, steps, &fast) == 0, "background run, at once");
+  CHECK(run_bg(&mesh, f, 3, 2, 1, steps, &slow) == 0, "background run, when installed");
+  CHECK(run_bg(&mesh, f, 3, 0, 1, steps, &thr) == 0, "background run, thread");
+  if (fg.u && pre.u && fast.u && slow.u && thr.u) {
+    CHECK(!memcmp(fg.u, pre.u, bytes), "the factor made in setup changed the results (tolerance: bit-identical)");
+    CHECK(!memcmp(fast.u, slow.u, bytes) && !memcmp(fast.u, thr.u, bytes),
+          "background renewal: the results depend on when the factorisation finished (tolerance: bit-identical)");
+    double umax = 0.0, diff = 0.0;
+    for (size_t k = 0; k < (size_t)steps * (size_t)nd; ++k) {
+      umax = fmax(umax, fabs(fg.u[k]));
+      diff = fmax(diff, fabs(thr.u[k] - fg.u[k]));
+    }
+    printf("background: largest displacement %.4f mm; background vs foreground renewal %.2e of it\n", 1e3 * umax,
+           diff / umax);
+    CHECK(umax > 0.0 && diff <= 1e-4 * umax, "background vs foreground renewal: %.3g of the largest displacement "
+          "(tolerance 1e-4)", diff / umax);
+  }
+  CHECK(thr.background >= 1 && thr.background == fast.background && thr.background == slow.background,
+        "background factorisations installed: %ld, %ld, %ld (need >= 1, the same in every mode)", thr.background,
+        fast.background, slow.background);
+  CHECK(fg.background == 0, "factor_lag 0 made %ld background factorisations", fg.background);
+  free(fg.u), free(pre.u), free(fast.u), free(slow.u), free(thr.u);
+  free(f);
+  palp_fem_mesh_destroy(&mesh);
+}
+
 int main(int argc, char **argv) {
   const char *c = argc > 1 ? argv[1] : "all";
   const int all = strcmp(c, "all") == 0;
@@ -346,6 +421,7 @@ int main(int argc, char **argv) {
   if (all || !strcmp(c, "dt")) test_dt();
   if (all || !strcmp(c, "refine")) test_refine();
   if (all || !strcmp(c, "reuse")) test_reuse();
+  if (all || !strcmp(c, "background")) test_background();
   if (fem_failures) fprintf(stderr, "%d check(s) failed\n", fem_failures);
   return fem_failures ? 1 : 0;
 }
