@@ -539,6 +539,12 @@ static double factor_cost_solves(double fl, double lnz) {
   return lnz > 0.0 && fl > 0.0 ? fmax(1.0, fl / (32.0 * lnz)) : 20.0;
 }
 
+/* The foreground cost of a factorisation made on the background thread
+ * (factor_lag > 0), as a fraction of factor_cost_solves: the frames it overlaps
+ * run slower (the thread takes one of the two cores), nothing else. See
+ * docs/fem.md, "fem-frames": measured ... */
+#define BACKGROUND_COST 0.25
+
 /* Renewal rule for the reused factor (the replacement policy that minimises the
  * long-run average cost when the running cost grows with age): with the factor
  * used over `steps` time-step attempts since it was made, at a total of `solves`
@@ -817,7 +823,8 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
   const int running = palp_fem_solver_factor_running(m->solver);
   if (running && m->attempts >= m->bg_attempt + m->factor_lag) install_background(m);
   else if (m->pcg_refactor <= 0 && m->factored && !m->full_newton && !running) {
-    const double cost = factor_cost_solves(palp_fem_solver_factor_flops(m->solver), palp_fem_solver_factor_nnz(m->solver));
+    double cost = factor_cost_solves(palp_fem_solver_factor_flops(m->solver), palp_fem_solver_factor_nnz(m->solver));
+    if (m->factor_lag > 0) cost *= BACKGROUND_COST;
     if (renew_factor(cost, m->solves - m->fac_solves, m->attempts - m->fac_attempt, last)) m->renew = 1;
   }
   const double fnorm = fext ? norm_free(m, fext) : 0.0;

@@ -97,6 +97,17 @@ palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi,
     palp_fem_solver_destroy(s);
     return NULL;
   }
+  /* the background factor's symbolic part, copied while L is still symbolic (a copy
+   * of the numeric L would copy its values too: 160 MB at level 4); its values are
+   * allocated by its first factorisation, on the background thread */
+  cholmod_start(&s->bcc);
+  s->bcc.print = 0;
+  s->have_bcc = 1;
+  s->L2 = cholmod_copy_factor(s->L, &s->bcc);
+  if (!s->L2) {
+    palp_fem_solver_destroy(s);
+    return NULL;
+  }
   return s;
 }
 
@@ -178,15 +189,7 @@ static void *factor_thread(void *arg) {
 
 int palp_fem_solver_factor_start(palp_fem_solver *s, const double *val) {
   if (s->running) return PALP_EINVAL;
-  if (!s->have_bcc) {
-    cholmod_start(&s->bcc);
-    s->bcc.print = 0;
-    s->have_bcc = 1;
-  }
   if (!s->A2) s->A2 = cholmod_copy_sparse(s->A, &s->bcc);
-  /* the same ordering and supernodes as L (a copy of its symbolic part and, once
-   * numeric, its values, which the factorisation overwrites) */
-  if (!s->L2) s->L2 = cholmod_copy_factor(s->L, &s->bcc);
   if (!s->A2 || !s->L2) return PALP_ENOMEM;
   memcpy(s->A2->x, val, sizeof(double) * (size_t)((const int *)s->A->p)[s->n]);
   /* BLAS on one thread for both factorisations while the thread runs (see

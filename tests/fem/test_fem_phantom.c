@@ -338,11 +338,11 @@ static void test_reuse(void) {
 }
 
 /* Background renewal of the factor (factor_lag) and the factor made in setup
- * (palp_fem_model_prefactor), level 2 under the 3 N cap load for 40 steps:
+ * (palp_fem_model_prefactor), level 2 under the 3 N cap load for 24 steps:
  * - the results do not depend on the thread's timing: a run whose background
  *   factorisations are made at once (the fastest thread), one where they are made
  *   only when installed (the slowest) and one with a real thread agree bit for bit;
- * - the background factor is installed (at least one renewal in 40 steps) and the
+ * - the background factor is installed (at least one renewal in 24 steps) and the
  *   run agrees with the foreground renewal (factor_lag 0) within 1e-4 of the
  *   largest displacement, the Newton tolerance (rtol 1e-4 of the force scale);
  * - a run whose first factorisation was made in setup is bit-identical to one
@@ -379,7 +379,7 @@ static void test_background(void) {
   d.level = 2;
   palp_fem_mesh mesh;
   CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
-  const int steps = 40, nd = 3 * mesh.node_count;
+  const int steps = 24, nd = 3 * mesh.node_count;
   const size_t bytes = sizeof(double) * (size_t)steps * (size_t)nd;
   double *f = calloc((size_t)nd, sizeof(double));
   cap_load(&mesh, 3.0, 0.01, f);
