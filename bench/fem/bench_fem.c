@@ -71,7 +71,7 @@ static void frame_stats(const double *x, int n, double *med, double *p90, double
 
 int main(int argc, char **argv) {
   const char *scene_path = "config/paper_step.json", *levels = "2,4", *reading = NULL, *dist = NULL;
-  int frames = 20, kernel = 0, lag = -1, threads = 0;
+  int frames = 20, kernel = 0, lag = -1, threads = 0, per_frame = 0;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--levels") && i + 1 < argc) levels = argv[++i];
     else if (!strcmp(argv[i], "--frames") && i + 1 < argc) frames = atoi(argv[++i]);
@@ -80,12 +80,14 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--kernel")) kernel = 1;
     else if (!strcmp(argv[i], "--factor-lag") && i + 1 < argc) lag = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--per-frame")) per_frame = 1;
     else if (argv[i][0] != '-') scene_path = argv[i];
     else {
-      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel] [--factor-lag N] [--threads N]\n"
+      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel] [--factor-lag N] [--threads N] [--per-frame]\n"
                       "  --kernel: time the assembly alone (tangent and residual, 1 and 2 threads) and one solve instead of frames\n"
                       "  --factor-lag N: the config's factor_lag (0: renew the factor in the foreground)\n"
-                      "  --threads N: the config's assembly threads\n");
+                      "  --threads N: the config's assembly threads\n"
+                      "  --per-frame: print every frame's wall and CPU seconds\n");
       return 2;
     }
   }
@@ -217,6 +219,9 @@ int main(int argc, char **argv) {
       if (i > 0) rest += dt[i] / (n - 1);
     }
     const double first = dt[0];
+    for (int i = 0; per_frame && i < n; ++i)
+      printf("  frame %3d: wall %.3f s, CPU this thread %.3f s, process %.3f s\n", i + 1, dt[i], st.ct[i + 1] - st.ct[i],
+             st.cp[i + 1] - st.cp[i]);
     printf("\nlevel %s: frames over 0.5 s:", tok);
     int over = 0;
     for (int i = 0; i < n; ++i)

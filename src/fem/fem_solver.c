@@ -63,13 +63,14 @@ struct palp_fem_solver {
   cholmod_dense *x, *Y, *E; /* reusable workspaces of cholmod_solve2 */
   int n;
   long ldl_count; /* factorisations that needed the LDL^T fallback */
-  /* background factorisation: own common, values and factor (allocated on first use) */
+  /* background factorisation: its own common, values (allocated on first use) and
+   * factor (symbolic copy of L made at create, numeric from its first use) */
   cholmod_common bcc;
   int have_bcc;
   cholmod_sparse *A2;
   cholmod_factor *L2;
   pthread_t thread;
-  int running;    /* a thread was started and not yet joined */
+  int running;    /* 0 idle; 1 a thread to join; -1 made at _start; -2 to make at _finish (bg_mode 2) */
   int bg_rc;      /* its outcome: PALP_OK or PALP_ESOLVER (not positive definite) */
   int bg_blas;    /* the OpenBLAS thread count to restore when it is joined */
   int bg_mode;    /* palp_fem_solver_set_background_mode */
