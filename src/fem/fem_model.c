@@ -551,6 +551,19 @@ static double factor_cost_solves(double fl, double lnz) {
  * 14) for 4 factorisations in 40 frames instead of 2 (docs/fem.md, fem-frames). */
 #define BACKGROUND_COST 0.25
 
+/* Background renewal only for a run that has been benign so far: no step cut
+ * back, no indefinite tangent (GMRES) and no LDL^T factor. In the hard runs (the
+ * instantaneous reading's transient) most factorisations are forced anyway (CG
+ * stalled), and a step left on the old factor through the lag failed more often
+ * and was cut back: level 1, paper scene, 400 frames: 896 steps and 6 cut-backs
+ * against 472 and 23, a different sub-step sequence (a different time
+ * discretisation: top vertex 1.5% of its peak, feedback 11%). Counted over the
+ * whole run (sticky), so such a run renews in the foreground from its first
+ * difficulty on, as before fem-frames; deterministic, as all counts. */
+static int background_ok(const palp_fem_model *m) {
+  return m->factor_lag > 0 && m->cutbacks == 0 && m->gmres_solves == 0 && palp_fem_solver_ldl_count(m->solver) == 0;
+}
+
 /* Renewal rule for the reused factor (the replacement policy that minimises the
  * long-run average cost when the running cost grows with age): with the factor
  * used over `steps` time-step attempts since it was made, at a total of `solves`
@@ -602,7 +615,7 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
       fresh = 1;
     }
   }
-  if (!fresh && m->renew && !m->renew_fg && m->factor_lag > 0 && m->factored && !m->full_newton &&
+  if (!fresh && m->renew && !m->renew_fg && background_ok(m) && m->factored && !m->full_newton &&
       !palp_fem_solver_factor_running(m->solver)) {
     /* renewal on the background thread from this K_eff; this step goes on with
      * the old factor as CG's preconditioner (install_background) */
@@ -830,7 +843,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
   if (running && m->attempts >= m->bg_attempt + m->factor_lag) install_background(m);
   else if (m->pcg_refactor <= 0 && m->factored && !m->full_newton && !running) {
     double cost = factor_cost_solves(palp_fem_solver_factor_flops(m->solver), palp_fem_solver_factor_nnz(m->solver));
-    if (m->factor_lag > 0) cost *= BACKGROUND_COST;
+    if (background_ok(m)) cost *= BACKGROUND_COST;
     if (renew_factor(cost, m->solves - m->fac_solves, m->attempts - m->fac_attempt, last)) m->renew = 1;
   }
   const double fnorm = fext ? norm_free(m, fext) : 0.0;

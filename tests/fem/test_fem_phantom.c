@@ -346,15 +346,18 @@ static void test_reuse(void) {
  *   run agrees with the foreground renewal (factor_lag 0) within 1e-4 of the
  *   largest displacement, the Newton tolerance (rtol 1e-4 of the force scale);
  * - a run whose first factorisation was made in setup is bit-identical to one
- *   that made it in its first step. */
+ *   that made it in its first step;
+ * - a hard run (level 1, instantaneous reading, 5 steps: cut-backs) renews in the
+ *   foreground: bit-identical with factor_lag 3 and 0. */
 typedef struct bg_run {
   double *u; /* [steps * ndof] [m] */
-  long factorizations, background;
+  long factorizations, background, cutbacks;
 } bg_run;
 
-static int run_bg(const palp_fem_mesh *mesh, const double *f, int lag, int mode, int prefactor, int steps, bg_run *out) {
+static int run_bg_reading(const palp_fem_mesh *mesh, const double *f, int lag, int mode, int prefactor, int steps,
+                          palp_fem_c10_reading reading, bg_run *out) {
   palp_fem_config cfg = palp_fem_default_config();
-  cfg.c10_reading = PALP_FEM_C10_LONG_TERM;
+  cfg.c10_reading = reading;
   cfg.factor_lag = lag;
   palp_fem_model m;
   if (palp_fem_model_create(&m, mesh, &cfg) || palp_fem_model_finalize(&m)) return -1;
@@ -365,13 +368,17 @@ static int run_bg(const palp_fem_mesh *mesh, const double *f, int lag, int mode,
     rc = palp_fem_step(&m, f, 0.01);
     memcpy(out->u + (size_t)k * (size_t)m.ndof, m.u, sizeof(double) * (size_t)m.ndof);
   }
-  out->factorizations = m.factorizations, out->background = m.bg_factorizations;
-  printf("background: factor_lag %d, mode %d, prefactor %d: %ld Newton iterations, %ld CG iterations, %ld "
-         "factorisations (%ld in the background)%s%s\n",
-         lag, mode, prefactor, m.newton_iterations, m.pcg_iterations, m.factorizations, m.bg_factorizations,
-         rc ? ": " : "", rc ? m.err : "");
+  out->factorizations = m.factorizations, out->background = m.bg_factorizations, out->cutbacks = m.cutbacks;
+  printf("background: factor_lag %d, mode %d, prefactor %d, %s: %ld Newton iterations, %ld CG iterations, %ld "
+         "factorisations (%ld in the background), %ld cut-backs%s%s\n",
+         lag, mode, prefactor, reading == PALP_FEM_C10_LONG_TERM ? "long-term" : "instantaneous", m.newton_iterations,
+         m.pcg_iterations, m.factorizations, m.bg_factorizations, m.cutbacks, rc ? ": " : "", rc ? m.err : "");
   palp_fem_model_destroy(&m);
   return rc;
+}
+
+static int run_bg(const palp_fem_mesh *mesh, const double *f, int lag, int mode, int prefactor, int steps, bg_run *out) {
+  return run_bg_reading(mesh, f, lag, mode, prefactor, steps, PALP_FEM_C10_LONG_TERM, out);
 }
 
 static void test_background(void) {
@@ -408,6 +415,24 @@ static void test_background(void) {
         fast.background, slow.background);
   CHECK(fg.background == 0, "factor_lag 0 made %ld background factorisations", fg.background);
   free(fg.u), free(pre.u), free(fast.u), free(slow.u), free(thr.u);
+  free(f);
+  palp_fem_mesh_destroy(&mesh);
+
+  /* a hard run (instantaneous reading, level 1: cut-backs, indefinite tangents)
+   * renews in the foreground as before fem-frames: the same bits with factor_lag 3
+   * as with 0 */
+  d.level = 1;
+  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  const int hs = 5, hn = 3 * mesh.node_count;
+  f = calloc((size_t)hn, sizeof(double));
+  cap_load(&mesh, 3.0, 0.01, f);
+  bg_run h0 = {0}, h3 = {0};
+  CHECK(run_bg_reading(&mesh, f, 0, 0, 1, hs, PALP_FEM_C10_INSTANTANEOUS, &h0) == 0, "instantaneous, factor_lag 0");
+  CHECK(run_bg_reading(&mesh, f, 3, 0, 1, hs, PALP_FEM_C10_INSTANTANEOUS, &h3) == 0, "instantaneous, factor_lag 3");
+  CHECK(h3.cutbacks > 0, "the instantaneous run was not hard (no cut-back): it tests nothing");
+  CHECK(h0.u && h3.u && !memcmp(h0.u, h3.u, sizeof(double) * (size_t)hs * (size_t)hn) && h3.background == 0,
+        "a run with cut-backs used background renewals (%ld) or changed (tolerance: bit-identical)", h3.background);
+  free(h0.u), free(h3.u);
   free(f);
   palp_fem_mesh_destroy(&mesh);
 }
