@@ -110,7 +110,7 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   s->last_flush_ns = palp_dds_now_ns();
   /* Every physics step when the physics is slower than assess_sample_hz. */
   const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : 100.0;
-  s->sample_every = i->tick_rate_hz > hz ? (int)lround(i->tick_rate_hz / hz) : 1;
+  s->sample_every = log_every(i->tick_rate_hz, hz);
   /* From the session's own physics rate, not the server's tick rate: a 1 kHz phantom on a
    * 100 Hz server logged every frame and a mesh 20 times a second (10x and 10x the intent),
    * and summarising and hashing each frame cost its tick ~10 us (issue 11). */
