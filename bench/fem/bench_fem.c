@@ -43,6 +43,16 @@ static double cpu_s(clockid_t id) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* One solve with the factor, timed: wall best and sum, and this thread's CPU sum [s]. */
+static void timed_solve(palp_fem_solver *solver, const double *b, double *x, double *best, double *sum, double *cpu) {
+  const double t1 = now_s(), c1 = cpu_s(CLOCK_THREAD_CPUTIME_ID);
+  palp_fem_solver_solve(solver, b, x);
+  const double d = now_s() - t1;
+  *cpu += cpu_s(CLOCK_THREAD_CPUTIME_ID) - c1;
+  *best = d < *best ? d : *best;
+  *sum += d;
+}
+
 typedef struct stamps {
   double *t, *ct, *cp; /* wall, thread CPU, process CPU [s] at each callback */
   int n, cap;
@@ -157,14 +167,7 @@ int main(int argc, char **argv) {
         double *b = malloc(sizeof(double) * (size_t)m.nfree), *x = malloc(sizeof(double) * (size_t)m.nfree);
         for (int i = 0; i < m.nfree; ++i) b[i] = 1.0 + 1e-3 * (i % 17);
         double best = 1e30, sum = 0.0, csum0 = 0.0;
-        for (int rep = 0; rep < 10; ++rep) {
-          const double t1 = now_s(), c1 = cpu_s(CLOCK_THREAD_CPUTIME_ID);
-          palp_fem_solver_solve(m.solver, b, x);
-          const double d = now_s() - t1;
-          csum0 += cpu_s(CLOCK_THREAD_CPUTIME_ID) - c1;
-          best = d < best ? d : best;
-          sum += d;
-        }
+        for (int rep = 0; rep < 10; ++rep) timed_solve(m.solver, b, x, &best, &sum, &csum0);
         printf("level %s: one solve with the factor: best %.1f ms, mean %.1f ms (CPU %.1f ms) of 10\n", tok, 1e3 * best,
                1e3 * sum / 10, 1e3 * csum0 / 10);
         /* the same while a factorisation runs on the background thread (factor_lag):
@@ -179,12 +182,7 @@ int main(int argc, char **argv) {
         double abest = 1e30, asum = 0.0;
         int areps = 0;
         for (; reps < 12; ++reps) { /* ~0.5 s of work, within the ~1.1 s factorisation */
-          const double t1 = now_s(), c1 = cpu_s(CLOCK_THREAD_CPUTIME_ID);
-          palp_fem_solver_solve(m.solver, b, x);
-          const double d = now_s() - t1;
-          csum += cpu_s(CLOCK_THREAD_CPUTIME_ID) - c1;
-          best = d < best ? d : best;
-          sum += d;
+          timed_solve(m.solver, b, x, &best, &sum, &csum);
           if (reps % 4 == 3) { /* and an assembly with tangent every 4 solves */
             const double t2 = now_s();
             palp_fem_assemble(&m, m.u, scene.frame_period, 1);
