@@ -207,6 +207,7 @@ typedef struct fit_ws {
   double lambda_finger;
   size_t n_force_expected;
   double lambda_prior, lambda_rec, lambda_bias, lambda_peak;
+  double ref_peak[4]; /* record_peak of each reference, once [m] */
   int with_recovery;
   int evaluations;
   int verbose;
@@ -286,7 +287,7 @@ static int residuals_one(fit_ws *ws, int i, const double p[PALP_EVAL_P_COUNT], d
   if (ws->lambda_bias > 0)
     r[(*k)++] = ws->lambda_bias * 100.0 *
                 (palp_stats_sum_value(&sum_a) - palp_stats_sum_value(&sum_b)) / (double)(count ? count : 1);
-  if (ws->lambda_peak > 0) r[(*k)++] = ws->lambda_peak * 100.0 * (record_peak(&rt) - record_peak(ref));
+  if (ws->lambda_peak > 0) r[(*k)++] = ws->lambda_peak * 100.0 * (record_peak(&rt) - ws->ref_peak[i]);
   if (ws->def->force_weight > 0) {
     const double wgt = ws->def->force_weight;
     for (int f = stride - 1; f < rt.frames; f += stride)
@@ -529,7 +530,7 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
   palp_eval_calib_result res;
   memset(&res, 0, sizeof res);
   memcpy(res.start, ws.start, sizeof ws.start);
-  for (int i = 0; i < count; ++i) res.peak_ref[i] = record_peak(&refs[i]);
+  for (int i = 0; i < count; ++i) res.peak_ref[i] = ws.ref_peak[i] = record_peak(&refs[i]);
   int rc = rmse_all(scenes, refs, count, ws.start, res.rmse_before, res.peak_before, err, errlen);
   if (!rc) rc = palp_eval_recovery_measure(&scenes[0], &res.recovery_before, err, errlen);
   res.finger_rms_before = res.finger_rms_after = NAN;
