@@ -4,7 +4,7 @@
  *
  * Sites: the pole, 45 deg off-centre, 70 deg (20 deg above the rim: an 8 mm tip
  * closer to the rim would meet the table first), and the pole over a 10 mm lesion
- * (5x the gel) whose centre is 10 mm deep. The tip moves along the inward radial
+ * (5x the gel) whose centre is 10 mm deep (--lesion-depth, --lesion-ratio change it). The tip moves along the inward radial
  * normal; its depth is d = R + r - |c| for centre c (from the undeformed sphere).
  *
  * FE: the rigid sphere at centre c, relaxed static equilibrium (the long-term
@@ -39,7 +39,7 @@ static double now_s(void) {
 }
 
 int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
-                            char *err, size_t errlen) {
+                            double lesion_depth, double lesion_ratio, char *err, size_t errlen) {
   setvbuf(stdout, NULL, _IOLBF, 0); /* a long run shows each site as it finishes */
   palp_fem_config cfg = *cfg0;
   cfg.max_newton = cfg.max_newton < 25 ? 25 : cfg.max_newton;
@@ -49,7 +49,14 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     return -1;
   }
   const double R = cfg.mesh.radius;
-  const palp_lesion lump = {.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
+  const palp_lesion lump = {.center = {0, 0, R - lesion_depth}, .radius = 0.005, .stiffness_ratio = lesion_ratio};
+  /* inside the dome, clear of the surface and of the base (the scene's rule) */
+  if (!(lesion_depth > lump.radius && lesion_depth < R - lump.radius) || !(lesion_ratio > 0.0 && lesion_ratio <= 1e6)) {
+    snprintf(err, errlen, "lesion %.4g m deep, ratio %.4g: the centre must lie %.0f-%.0f mm deep, 0 < ratio <= 1e6",
+             lesion_depth, lesion_ratio, 1e3 * lump.radius, 1e3 * (R - lump.radius));
+    palp_fem_mesh_destroy(&mesh);
+    return -1;
+  }
   const site sites[4] = {{"pole", 0, 0}, {"45deg", 45, 0}, {"70deg", 70, 0}, {"pole_lesion", 0, 1}};
   static const double depths[MAXD] = {0.25e-3, 0.5e-3, 0.75e-3, 1e-3, 1.5e-3, 2e-3, 2.5e-3, 3e-3,
                                       4e-3,    5e-3,   6e-3,    7e-3, 8e-3,   10e-3, 12e-3, 14e-3,
@@ -87,8 +94,11 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
       rc = -1;
       break;
     }
+    char what[96] = "";
+    if (sites[s].lesion)
+      snprintf(what, sizeof what, ", 10 mm lesion %gx %g mm deep", lesion_ratio, 1e3 * lesion_depth);
     printf("\n%s (%.0f deg%s): FE %.1f s, %ld Newton iterations; real-time %.1f s\n", sites[s].name,
-           sites[s].polar_deg, sites[s].lesion ? ", 10 mm lesion 5x 10 mm deep" : "", t1 - t0, newton, now_s() - t1);
+           sites[s].polar_deg, what, t1 - t0, newton, now_s() - t1);
     printf("  depth mm   FE N    RT N   RT depth mm  RT/FE%s\n", sites[s].lesion ? "   FE lesion gain  RT lesion gain" : "");
     for (int k = 0; k < nd; ++k) {
       printf("  %7.2f %7.3f %7.4f %9.3f %8.3f", depths[k] * 1e3, F[k], Fr[k], Dr[k] * 1e3, Fr[k] / F[k]);

@@ -2,6 +2,8 @@
 #ifndef PALP_FEM_FINGER_COMPARE_H
 #define PALP_FEM_FINGER_COMPARE_H
 #include "palp_fem.h"
-int palp_fem_finger_compare(const palp_fem_config *cfg, const palp_scene *scene, const char *csv, const char *only, char *err,
-                            size_t errlen);
+/* The pole_lesion site's lesion: 10 mm across, its centre lesion_depth [m] under the
+ * pole (0.010 in the issue's case), lesion_ratio times the gel's stiffness (5). */
+int palp_fem_finger_compare(const palp_fem_config *cfg, const palp_scene *scene, const char *csv, const char *only,
+                            double lesion_depth, double lesion_ratio, char *err, size_t errlen);
 #endif

@@ -9,11 +9,12 @@
  *   palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]
  *   palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]
  *                [--reading long_term|instantaneous] [--out FILE.csv]
- *                [--site all|pole,45deg,70deg,pole_lesion]
+ *                [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]
  *
  * finger prints fingertip force-depth curves of the real-time model (the scene's
  * world) against the FE reference (rigid sphere, relaxed) at matched positions:
- * pole, 45 deg, 70 deg, and over a 10 mm lesion (finger_compare.c).
+ * pole, 45 deg, 70 deg, and over a 10 mm lesion (finger_compare.c), by default 5x the
+ * gel with its centre 10 mm deep (--lesion-depth in mm, --lesion-ratio: 0.2 is a cyst).
  *
  * run writes one CSV row per output frame: time, top-vertex displacement, total
  * feedback force, every real-time vertex's displacement and every contact
@@ -51,7 +52,7 @@ static void usage(void) {
           "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n"
           "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
           "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
-          "                       [--site all|pole,45deg,70deg,pole_lesion]\n");
+          "                       [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n");
   palp_app_common_usage(stderr, FEM_OPTS);
 }
 
@@ -177,6 +178,7 @@ typedef struct opts {
   const char *scene, *config, *inp, *out, *cache_dir, *reading, *material, *dist, *site, *positional;
   int level, frames, no_cache, quiet;
   double dt;
+  double lesion_depth_mm, lesion_ratio; /* finger: the pole_lesion site's lesion */
   palp_app_opts app;
   palp_log *log; /* main's, once the options are read */
 } opts;
@@ -186,6 +188,8 @@ static int parse(int argc, char **argv, opts *o) {
   o->level = -1;
   o->frames = -1;
   o->dt = -1.0;
+  o->lesion_depth_mm = 10.0;
+  o->lesion_ratio = 5.0;
   palp_app_opts_init(&o->app, "palp-fem");
   for (int i = 2; i < argc; ++i) {
     const char *a = argv[i];
@@ -212,6 +216,17 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--distribution", o->dist)
     ARG("--site", o->site)
 #undef ARG
+    if ((strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0) && has) {
+      char *end;
+      const double v = strtod(argv[++i], &end);
+      if (*end || !isfinite(v) || !(v > 0.0)) {
+        fprintf(stderr, "palp-fem: %s: expected a positive number: %s\n", a, argv[i]);
+        return -1;
+      }
+      if (strcmp(a, "--lesion-depth") == 0) o->lesion_depth_mm = v;
+      else o->lesion_ratio = v;
+      continue;
+    }
     if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--dt") == 0) && has) {
       char *end;
       const double v = strtod(argv[++i], &end);
@@ -409,7 +424,8 @@ static int cmd_finger(const opts *o) {
     return 2;
   }
   err[0] = 0;
-  if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, err, sizeof err) != 0) {
+  if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, 1e-3 * o->lesion_depth_mm, o->lesion_ratio, err,
+                              sizeof err) != 0) {
     palp_log_error(o->log, "finger: %s", err[0] ? err : "failed");
     return 1;
   }
