@@ -44,6 +44,19 @@ static double now_s(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* Whether name is one of the comma-separated tokens of list: a substring test took
+ * "pole_lesion" for "pole" too and computed the plain pole first. */
+static int listed(const char *list, const char *name) {
+  const size_t n = strlen(name);
+  for (const char *p = list; p && *p;) {
+    const char *end = strchr(p, ',');
+    const size_t len = end ? (size_t)(end - p) : strlen(p);
+    if (len == n && strncmp(p, name, n) == 0) return 1;
+    p = end ? end + 1 : NULL;
+  }
+  return 0;
+}
+
 /* The FE curve of one site from a CSV written by this command (palp_eval_finger_csv_read),
  * checked to follow this command's depth sequence. */
 static int read_fe_curve(const char *path, const char *name, const double *depths, int max, double *F, double *G,
@@ -89,7 +102,7 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
   double Fplain[MAXD] = {0}, Rplain[MAXD] = {0};
   int nplain = 0, rc = 0;
   for (int s = 0; s < 4 && !rc; ++s) {
-    if (only && strcmp(only, "all") != 0 && !strstr(only, sites[s].name)) continue;
+    if (only && strcmp(only, "all") != 0 && !listed(only, sites[s].name)) continue;
     const double th = sites[s].polar_deg * PALP_FEM_PI / 180.0;
     const palp_vec3 n = {sin(th), 0, cos(th)};
     double F[MAXD], G[MAXD], Fr[MAXD], Dr[MAXD];
