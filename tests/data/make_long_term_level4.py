@@ -4,7 +4,7 @@ eval_evaluate_long_term, eval_level4_guard, eval_finger_long_term and
 eval_finger_level4_guard compare with (docs/materials.md, "Refitted against the
 level-4 FEM"):
 
-    tests/data/make_long_term_level4.py BUILD_DIR [FINGER_CSV]
+    tests/data/make_long_term_level4.py BUILD_DIR [FINGER_CSV | compute]
 
 - fem_level4_long_term_d2.csv: the FEM column (fem_cm, |u| of every real-time
   vertex) of displacement_d2.csv written by
@@ -16,11 +16,12 @@ level-4 FEM"):
   FEM still gives it).
 - fem_level4_long_term_finger.csv: `palp-fem finger --scene
   config/paper_step_long_term.json --level 4 --site all`, ~1 h of CPU (each site's
-  FE curve 10-20 min on this 2-core machine). FINGER_CSV: an existing output of that
-  command to reuse (its FE columns); the real-time columns are then recomputed with
-  the current parameters (`--fe-from`).
+  FE curve 10-20 min on this 2-core machine), with `compute`; FINGER_CSV: an existing
+  output of that command (or the sites' outputs joined) to reuse for its FE
+  columns, the real-time columns then recomputed with the current parameters
+  (`--fe-from`). Without either, only the displacement file is written.
 
-The FEM part takes ~3 min for the displacement and ~1 h for the fingertip.
+PALP_REF_CACHE=DIR reuses a FEM cache (palp-eval --cache-dir) for the displacement runs.
 """
 import csv
 import os
@@ -79,7 +80,9 @@ def main():
     print("wrote %s (level-4 peak %.6g cm, level-2 peak %.6g cm)" % (path, peak, peaks[2]))
 
     finger = os.path.join(tmp, "finger.csv")
-    if len(sys.argv) > 2:
+    if len(sys.argv) < 3:
+        return
+    if sys.argv[2] != "compute":
         sh([fem, "finger", "--scene", SCENE, "--level", "4", "--site", "all", "--fe-from", os.path.abspath(sys.argv[2]),
             "--out", finger])
         how = ("palp-fem finger --scene %s --level 4 --site all (FE columns), real-time columns recomputed with the "
