@@ -21,7 +21,8 @@ level-4 FEM"):
   columns, the real-time columns then recomputed with the current parameters
   (`--fe-from`). Without either, only the displacement file is written.
 
-PALP_REF_CACHE=DIR reuses a FEM cache (palp-eval --cache-dir) for the displacement runs.
+PALP_REF_CACHE=DIR reuses a FEM cache (palp-eval --cache-dir) for the displacement runs;
+PALP_REF_NOTE=TEXT adds a line to the fingertip file's header (how a reused FINGER_CSV was made).
 """
 import csv
 import os
@@ -86,7 +87,9 @@ def main():
         sh([fem, "finger", "--scene", SCENE, "--level", "4", "--site", "all", "--fe-from", os.path.abspath(sys.argv[2]),
             "--out", finger])
         how = ("palp-fem finger --scene %s --level 4 --site all (FE columns), real-time columns recomputed with the "
-               "parameters of this commit by --fe-from" % SCENE)
+               "parameters of this commit by --fe-from %s" % (SCENE, os.path.basename(sys.argv[2])))
+        if os.environ.get("PALP_REF_NOTE"):  # how the reused FE curves were made, if not by one --site all run
+            how += "\n# " + os.environ["PALP_REF_NOTE"]
     else:
         sh([fem, "finger", "--scene", SCENE, "--level", "4", "--site", "all", "--out", finger])
         how = "palp-fem finger --scene %s --level 4 --site all" % SCENE
