@@ -25,6 +25,7 @@ PALP_REF_CACHE=DIR reuses a FEM cache (palp-eval --cache-dir) for the displaceme
 PALP_REF_NOTE=TEXT adds a line to the fingertip file's header (how a reused FINGER_CSV was made).
 """
 import csv
+import hashlib
 import os
 import subprocess
 import sys
@@ -45,8 +46,12 @@ def provenance(cmd):
     dirty = subprocess.run(["git", "status", "--porcelain", "src/fem"], cwd=ROOT, capture_output=True,
                            text=True).stdout.strip()
     ver = [l for l in open(os.path.join(ROOT, "src/fem/palp_fem.h")) if "define PALP_FEM_CODE_VERSION" in l][0]
-    return ("# written by tests/data/make_long_term_level4.py at commit %s%s, PALP_FEM_CODE_VERSION %s\n# %s\n" %
-            (commit, " (src/fem modified)" if dirty else "", ver.split()[2], cmd))
+    # the fingertip's FE code, hashed: eval_finger_level4_guard compares it (recomputing a level-4
+    # fingertip depth takes 60-75 s, over the test budget)
+    sha = hashlib.sha256(open(os.path.join(ROOT, "src/fem/fem_finger.c"), "rb").read()).hexdigest()
+    return ("# written by tests/data/make_long_term_level4.py at commit %s%s, PALP_FEM_CODE_VERSION %s\n"
+            "# sha256 of src/fem/fem_finger.c %s\n# %s\n" %
+            (commit, " (src/fem modified)" if dirty else "", ver.split()[2], sha, cmd))
 
 
 def main():

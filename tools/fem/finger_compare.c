@@ -98,7 +98,7 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
   printf("FE: level %d (%d hexahedra), %s reading, relaxed (long-term) static%s%s; real-time: the scene's world (%s)\n",
          cfg.mesh.level, mesh.element_count, cfg.c10_reading == PALP_FEM_C10_LONG_TERM ? "long_term" : "instantaneous",
          fe_from ? ", taken from " : "", fe_from ? fe_from : "", scene->name);
-  const int maxd = max_depths > 0 && max_depths < MAXD ? max_depths : MAXD;
+  const int maxd = max_depths > 0 && max_depths < MAXD ? max_depths : MAXD; /* < 0: all, no force table */
   double Fplain[MAXD] = {0}, Rplain[MAXD] = {0};
   int nplain = 0, rc = 0;
   for (int s = 0; s < 4 && !rc; ++s) {
@@ -137,8 +137,9 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
                 G[k]);
     }
     /* force-matched: the depth each model needs for 0.3, 1, 3, 5 N (the real-time
-     * curve continued to 30 mm; linear interpolation between held depths) */
-    {
+     * curve continued to 30 mm, ~3/4 of the real-time cost: skipped with max_depths < 0;
+     * linear interpolation between held depths) */
+    if (max_depths >= 0) {
       double Fl[MAXD], Dl[MAXD];
       const int nl =
           palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, MAXD, 1.0, Fl, Dl, err, errlen);

@@ -52,9 +52,10 @@ static void usage(void) {
           "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
           "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
           "                       [--site all|pole,45deg,70deg,pole_lesion]\n"
-          "                       [--fe-from FINGER.csv] [--depths N]\n"
+          "                       [--fe-from FINGER.csv] [--depths N | --no-force-table]\n"
           "  finger --fe-from: the FE curves from a CSV an earlier finger run wrote (only the real-time side\n"
-          "  is computed); --depths N: each curve's first N depths only\n");
+          "  is computed); --depths N: each curve's first N depths only; --no-force-table: no depth-for-force\n"
+          "  table (its real-time curve to 30 mm is most of the real-time cost)\n");
   palp_app_common_usage(stderr, FEM_OPTS);
 }
 
@@ -231,6 +232,10 @@ static int parse(int argc, char **argv, opts *o) {
       } else if (strcmp(a, "--level") == 0) o->level = (int)v;
       else if (strcmp(a, "--depths") == 0) o->depths = (int)v;
       else o->frames = (int)v;
+      continue;
+    }
+    if (strcmp(a, "--no-force-table") == 0) {
+      o->depths = -1;
       continue;
     }
     if (strcmp(a, "--no-cache") == 0) {
