@@ -99,7 +99,7 @@ alice=$!
 pids+=($!)
 bob=$!
 # Trainee carol palpates by position on phantom 3, a long-term dome (physics at 250 Hz;
-# ~1.6 N per mm under a fingertip since the level-4 refit, docs/materials.md): a simulated haptic device presses
+# ~1.7 N per mm under a fingertip since the level-4 refit, docs/materials.md): a simulated haptic device presses
 # 2 mm at 10 mm/s, holds, slides 15 mm along the surface and lifts; her station's 1 kHz
 # haptic thread renders the phantom's push from the server's local contact models, with
 # a 2 N safe force it tells her about (the phantom asks up to ~2.2 N at 2 mm: the coupling and
