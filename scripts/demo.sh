@@ -99,10 +99,10 @@ alice=$!
 pids+=($!)
 bob=$!
 # Trainee carol palpates by position on phantom 3, a long-term dome (physics at 250 Hz;
-# ~2.3 N per mm under a fingertip, docs/materials.md): a simulated haptic device presses
+# ~1.7 N per mm under a fingertip since the level-4 refit, docs/materials.md): a simulated haptic device presses
 # 2 mm at 10 mm/s, holds, slides 15 mm along the surface and lifts; her station's 1 kHz
 # haptic thread renders the phantom's push from the server's local contact models, with
-# a 2 N safe force it tells her about (the device renders ~2.4 N at 2 mm: the coupling and
+# a 2 N safe force it tells her about (the phantom asks up to ~2.2 N at 2 mm: the coupling and
 # the pad sit in series with the stiff tissue, docs/haptics.md).
 "$client" --role trainee --domain "$domain" --phantom 3 --name carol \
   --input sim:slide,depth_mm=2,speed_mm_s=10,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 2 \

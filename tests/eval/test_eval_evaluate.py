@@ -19,13 +19,22 @@ reference of distribution II beat the paper's RMSE; the hand-set ones do not.
 
 long_term: the default parameters, for the long-term reading
 (config/params/paper_long_term.json, scene paper_step_long_term.json) against
-the full FEM level-2 long-term reference of distribution II, recomputed here
-from the written pairs: RMSE at most 3% of the FEM's peak displacement
-(measured 2.8% since the peak refit of 2026-11-27, 2.0% before it) and the model's
-peak within 10% of the FEM's, the issue's target (measured 0.985: -1.5%; -7.5% before).
-The fit before the recovery refit (RMSE 5.5%, peak
--22.6%) fails both, the one before bending (RMSE 8.8%, peak 0.55) too, and the
-one before it (peaks 10x the FEM's, RMSE 125% of the peak) too.
+the level-4 long-term FEM of distribution II stored in
+tests/data/fem_level4_long_term_d2.csv (written by tests/data/make_long_term_level4.py;
+every vertex at 32 of the 400 frames, the FEM's most displaced vertex at all 400),
+the model's side from a level-2 evaluate run here: RMSE over the stored frames at
+most 3% of the level-4 FEM's peak and the model's peak within 10% of it (the
+issue's target; measured 2.35% over the stored frames, 2.7% over all 400 in evaluate, and
+1.060); figures in docs/materials.md, "Refitted against the level-4 FEM".
+The same run's level-2 FEM peak must equal the one recorded in the data file
+(relative 1e-6): the stored level-4 field was written by the FEM the tests build
+(eval_level4_guard recomputes its first 12 frames). The level-2-fitted set
+(config/params/paper_long_term_level2.json) fails the peak bound (-16.9%).
+
+level4_guard: `evaluate --level 4 --frames 12 --distributions 2` (~8 s): the
+FEM's first 12 frames equal the stored ones within 1e-4 of the stored peak (the
+Newton tolerance; measured 0: bit-identical on this machine), so that the stored
+reference cannot go stale silently when the FEM changes.
 
 breast_tissue: the same for config/params/breast_tissue.json (scene
 paper_step_breast_tissue.json) against the level-2 breast-tissue FEM: RMSE at
@@ -416,9 +425,87 @@ def check_profile_fit(tool, scene_file, material, rmse_bound, peak_bound, label)
     check(abs(peak_rt / peak_fem - 1.0) <= peak_bound, "model peak %.3f mm vs FEM %.3f mm" % (10 * peak_rt, 10 * peak_fem))
 
 
+DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
+LEVEL4_D2 = os.path.join(DATA_DIR, "fem_level4_long_term_d2.csv")
+
+
+def read_level4_d2():
+    """The stored level-4 field: {(frame, vertex): cm} and the '#' header's numbers."""
+    head, ref = {}, {}
+    with open(LEVEL4_D2) as f:
+        lines = [l for l in f]
+    for l in lines:
+        if l.startswith("# level-2 FEM peak "):
+            head["peak2"] = float(l.split()[4])
+    for row in csv.DictReader(l for l in lines if not l.startswith("#")):
+        ref[(int(row["frame"]), int(row["vertex"]))] = float(row["fem_cm"])
+    return head, ref
+
+
 def test_long_term(tool, scene):
     """See the module's docstring (long_term)."""
-    check_profile_fit(tool, (scene, "paper_step_long_term.json"), "paper_long_term", 0.03, 0.10, "long-term default")
+    lt_scene = os.path.join(os.path.dirname(scene), "paper_step_long_term.json")
+    tmp = tempfile.mkdtemp(prefix="palp_eval_long_term_")
+    out = os.path.join(tmp, "out")
+    r = run([tool, "evaluate", "--scene", lt_scene, "--level", "2", "--distributions", "2", "--no-plots", "--out", out,
+             "--cache-dir", os.path.join(tmp, "cache"), "--quiet"])
+    check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
+    if r.returncode:
+        return
+    rt, fem2 = {}, {}
+    with open(os.path.join(out, "displacement_d2.csv")) as f:
+        for row in csv.DictReader(f):
+            key = (int(row["frame"]), int(row["vertex"]))
+            rt[key], fem2[key] = float(row["rt_cm"]), float(row["fem_cm"])
+    check(len(rt) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(rt))
+    head, ref = read_level4_d2()
+    frames = {}
+    for fr, _ in ref:
+        frames[fr] = frames.get(fr, 0) + 1
+    full = sorted(fr for fr, n in frames.items() if n == 296)
+    check(len(full) == 32 and len(frames) == 400, "stored reference: %d full frames of %d" % (len(full), len(frames)))
+    check(all(k in rt for k in ref), "stored reference names vertex-frames the model does not have")
+    sq = [(rt[(fr, v)] - ref[(fr, v)]) ** 2 for fr, v in ref if fr in full]
+    rmse = math.sqrt(math.fsum(sq) / len(sq))
+    peak4, peak_rt, peak2 = max(ref.values()), max(rt.values()), max(fem2.values())
+    sq2 = [(rt[k] - fem2[k]) ** 2 for k in rt]
+    rmse2 = math.sqrt(math.fsum(sq2) / len(sq2))
+    print("long-term default, distribution II, FEM level 4 (stored): RMSE %.4f mm = %.2f%% of the FEM peak %.4f mm "
+          "(bound 3%%); model peak %.4f mm, ratio %.3f (bound 1 +- 0.10)" %
+          (10 * rmse, 100 * rmse / peak4, 10 * peak4, 10 * peak_rt, peak_rt / peak4))
+    print("  level 2 (for reference): FEM peak %.4f mm (stored %.4f mm), model / level 2 %.3f, RMSE %.2f%% of it" %
+          (10 * peak2, 10 * head.get("peak2", float("nan")), peak_rt / peak2, 100 * rmse2 / peak2))
+    check(close(peak2, head.get("peak2", float("nan")), 1e-6),
+          "the level-2 FEM peak %.9g cm is not the %r cm recorded with the stored level-4 field: the FEM changed, "
+          "rerun tests/data/make_long_term_level4.py" % (peak2, head.get("peak2")))
+    check(rmse <= 0.03 * peak4, "RMSE %.4f mm above 3%% of the level-4 FEM peak %.4f mm" % (10 * rmse, 10 * peak4))
+    check(abs(peak_rt / peak4 - 1.0) <= 0.10, "model peak %.4f mm vs level-4 FEM %.4f mm" % (10 * peak_rt, 10 * peak4))
+
+
+def test_level4_guard(tool, scene):
+    """See the module's docstring (level4_guard)."""
+    lt_scene = os.path.join(os.path.dirname(scene), "paper_step_long_term.json")
+    tmp = tempfile.mkdtemp(prefix="palp_eval_level4_")
+    out = os.path.join(tmp, "out")
+    r = run([tool, "evaluate", "--scene", lt_scene, "--level", "4", "--frames", "12", "--distributions", "2",
+             "--no-plots", "--out", out, "--cache-dir", os.path.join(tmp, "cache"), "--quiet"])
+    check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
+    if r.returncode:
+        return
+    _, ref = read_level4_d2()
+    peak = max(ref.values())
+    worst, n = 0.0, 0
+    with open(os.path.join(out, "displacement_d2.csv")) as f:
+        for row in csv.DictReader(f):
+            key = (int(row["frame"]), int(row["vertex"]))
+            check(key in ref, "frame %d vertex %d is not in the stored reference" % key)
+            if key in ref:
+                worst, n = max(worst, abs(float(row["fem_cm"]) - ref[key])), n + 1
+    print("level-4 FEM, frames 0-11 of distribution II: %d values, largest difference from the stored reference "
+          "%.3g cm = %.2g of its peak (bound 1e-4)" % (n, worst, worst / peak))
+    check(n == 12 * 296, "%d recomputed values, expected 12 frames x 296 vertices" % n)
+    check(worst <= 1e-4 * peak, "the level-4 FEM no longer gives the stored reference (%.3g cm off): rerun "
+          "tests/data/make_long_term_level4.py" % worst)
 
 
 def test_breast_tissue(tool, scene):
@@ -430,7 +517,7 @@ def test_breast_tissue(tool, scene):
 def main():
     tool, scene, which = sys.argv[1], sys.argv[2], sys.argv[3]
     {"tables": test_tables, "errors": test_errors, "shipped": test_shipped,
-     "long_term": test_long_term, "breast_tissue": test_breast_tissue}[which](tool, scene)
+     "long_term": test_long_term, "level4_guard": test_level4_guard, "breast_tissue": test_breast_tissue}[which](tool, scene)
     if failures:
         print("%d check(s) failed" % failures, file=sys.stderr)
         return 1

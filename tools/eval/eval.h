@@ -157,6 +157,14 @@ int palp_eval_finger_rt(const palp_world_def *wd, const palp_lesion *lesions, in
                         double radius, const double *depth, int count, double hold_s, double *force,
                         double *depth_real, char *err, size_t errlen);
 
+/* The FE curve of one site (pole, 45deg, 70deg, pole_lesion) from a CSV written by
+ * `palp-fem finger` (header site,depth_m,fem_N,..., fem_min_gap_m; '#' provenance lines
+ * before it): its rows in file order, at most max, into depth [m], force [N] and gap [m]
+ * (gap may be NULL). Returns the count, 0 when the site has no rows, -1 on an
+ * unreadable file (err says why). Lets a fine FE level's fingertip be computed once. */
+int palp_eval_finger_csv_read(const char *path, const char *site, int max, double *depth, double *force, double *gap,
+                              char *err, size_t errlen);
+
 /* The reference force at depth d [m]: piecewise linear through (0, 0) and the
  * reference points, the last segment continued beyond them. */
 double palp_eval_finger_ref_at(const palp_eval_finger_ref *f, double d);

@@ -4,6 +4,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "eval.h"
 
@@ -107,4 +108,38 @@ double palp_eval_finger_rms(const palp_world_def *wd, const palp_eval_finger_ref
     }
   }
   return m ? sqrt(ss / m) : NAN;
+}
+
+int palp_eval_finger_csv_read(const char *path, const char *site, int max, double *depth, double *force, double *gap,
+                              char *err, size_t errlen) {
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    snprintf(err, errlen, "cannot read %s", path);
+    return -1;
+  }
+  char line[4096], name[64];
+  int n = 0, row = 0;
+  do { /* '#' lines before the header: provenance (tests/data keeps the generating command there) */
+    if (!fgets(line, sizeof line, f)) line[0] = 0;
+  } while (line[0] == '#');
+  if (strncmp(line, "site,depth_m,fem_N,", 19) != 0) {
+    snprintf(err, errlen, "%s: not a CSV of palp-fem finger (header site,depth_m,fem_N,...)", path);
+    fclose(f);
+    return -1;
+  }
+  while (fgets(line, sizeof line, f)) {
+    ++row;
+    double d, fe, rt, rd, ratio, g;
+    if (sscanf(line, "%63[^,],%lf,%lf,%lf,%lf,%lf,%lf", name, &d, &fe, &rt, &rd, &ratio, &g) != 7) {
+      snprintf(err, errlen, "%s: row %d is not a site and six numbers", path, row);
+      fclose(f);
+      return -1;
+    }
+    if (strcmp(name, site) != 0 || n == max) continue;
+    depth[n] = d, force[n] = fe;
+    if (gap) gap[n] = g;
+    ++n;
+  }
+  fclose(f);
+  return n;
 }

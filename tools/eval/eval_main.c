@@ -57,6 +57,7 @@ typedef struct options {
   double polar_min, polar_max, on_seconds;
   /* calibrate --finger: fingertip force-depth sites fitted with the fields */
   const char *finger;
+  const char *finger_from; /* the FE curves from a `palp-fem finger` CSV instead of solving */
   double finger_weight;
   palp_app_opts app;
   palp_log *log; /* main's, once the options are read */
@@ -80,7 +81,8 @@ static void usage(FILE *f) {
           "                           [--recovery-target S]\n"
           "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
-          "                           [--finger pole,45deg,70deg,pole_lesion [--finger-weight CM]]\n"
+          "                           [--finger pole,45deg,70deg,pole_lesion [--finger-weight CM]\n"
+          "                            [--finger-from FINGER.csv]]\n"
           "defaults: --scene config/paper_step_long_term.json (the default material profile; config/paper_step.json\n"
           "          is the paper's literal reading, a reproduction), --out out/eval (evaluate) or out/eval/params.json\n"
           "          (calibrate), --level from the FEM config (2); the FEM uses the profile the scene's parameters name\n");
@@ -173,6 +175,7 @@ static int parse_args(int argc, char **argv, options *o) {
     else if (!strcmp(a, "--fit")) o->fit = v;
     else if (!strcmp(a, "--distributions")) o->distributions = v;
     else if (!strcmp(a, "--finger")) o->finger = v;
+    else if (!strcmp(a, "--finger-from")) o->finger_from = v;
     else if (!strcmp(a, "--finger-weight")) bad = parse_double(a, v, 0.0, &o->finger_weight);
     else if (!strcmp(a, "--level")) bad = parse_int(a, v, 1, 64, &o->level);
     else if (!strcmp(a, "--frames")) bad = parse_int(a, v, 2, 1000000, &o->frames);
@@ -1154,8 +1157,21 @@ static int cmd_calibrate(const options *o) {
       const double nv[3] = {f->n.x, f->n.y, f->n.z};
       const double tf = now_s();
       long newton = 0;
-      const int done = palp_fem_finger_curve(&s.fem, &mesh, f->lesion, f->lesion_count, nv, f->radius, f->depth,
-                                             f->count, INFINITY, f->force, NULL, &newton, err, sizeof err);
+      int done = 0;
+      if (o->finger_from) {
+        /* the same relaxed static FE presses, computed once by `palp-fem finger` (its
+         * depths include 0.5, 1 and 2 mm): a fine level's curves cost minutes a site */
+        double cd[PALP_EVAL_FINGER_MAX_DEPTHS * 3], cf[PALP_EVAL_FINGER_MAX_DEPTHS * 3];
+        const int nc = palp_eval_finger_csv_read(o->finger_from, f->name, PALP_EVAL_FINGER_MAX_DEPTHS * 3, cd, cf,
+                                                 NULL, err, sizeof err);
+        for (int k = 0; k < f->count; ++k)
+          for (int j = 0; j < nc; ++j)
+            if (fabs(cd[j] - f->depth[k]) < 1e-9) f->force[k] = cf[j], done += 1;
+        if (nc >= 0 && done != f->count)
+          snprintf(err, sizeof err, "%s has no rows of site %s at 0.5, 1 and 2 mm", o->finger_from, f->name);
+      } else
+        done = palp_fem_finger_curve(&s.fem, &mesh, f->lesion, f->lesion_count, nv, f->radius, f->depth, f->count,
+                                     INFINITY, f->force, NULL, &newton, err, sizeof err);
       if (done != f->count) {
         palp_log_error(o->log, "--finger %s: the FEM finger failed: %s", f->name, err);
         bad = 1;

@@ -13,6 +13,13 @@
  * device point is driven to each depth and held, corrected twice so that the
  * proxy (the fingertip centre, the FE sphere's counterpart) sits at the FE depth.
  * Prints, per depth, both forces and their ratio; with --out, a CSV.
+ *
+ * --fe-from CSV takes the FE side from a CSV this command wrote before (same
+ * columns), so that the real-time side of a fine FE level can be compared again
+ * in seconds, e.g. for a parameter search or a test against stored references;
+ * --depths N stops each FE curve after its first N depths (a cheap check that a
+ * stored curve is still what the FEM computes); --no-force-table leaves out the
+ * depth-for-force table, whose real-time curve to 30 mm is ~90% of the real-time cost.
  */
 #include <math.h>
 #include <stdio.h>
@@ -38,8 +45,37 @@ static double now_s(void) {
   return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* Whether name is one of the comma-separated tokens of list: a substring test took
+ * "pole_lesion" for "pole" too and computed the plain pole first. */
+static int listed(const char *list, const char *name) {
+  const size_t n = strlen(name);
+  for (const char *p = list; p && *p;) {
+    const char *end = strchr(p, ',');
+    const size_t len = end ? (size_t)(end - p) : strlen(p);
+    if (len == n && strncmp(p, name, n) == 0) return 1;
+    p = end ? end + 1 : NULL;
+  }
+  return 0;
+}
+
+/* The FE curve of one site from a CSV written by this command (palp_eval_finger_csv_read),
+ * checked to follow this command's depth sequence. */
+static int read_fe_curve(const char *path, const char *name, const double *depths, int max, double *F, double *G,
+                         char *err, size_t errlen) {
+  double d[MAXD];
+  const int n = palp_eval_finger_csv_read(path, name, max, d, F, G, err, errlen);
+  for (int k = 0; k < n; ++k)
+    if (fabs(d[k] - depths[k]) > 1e-9) {
+      snprintf(err, errlen, "%s: %s row %d at depth %.6g m, expected %.6g m (this command's sequence)", path, name,
+               k + 1, d[k], depths[k]);
+      return -1;
+    }
+  return n;
+}
+
 int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
-                            double lesion_depth, double lesion_ratio, char *err, size_t errlen) {
+                            double lesion_depth, double lesion_ratio, const char *fe_from, int max_depths, char *err,
+                            size_t errlen) {
   setvbuf(stdout, NULL, _IOLBF, 0); /* a long run shows each site as it finishes */
   palp_fem_config cfg = *cfg0;
   cfg.max_newton = cfg.max_newton < 25 ? 25 : cfg.max_newton;
@@ -68,13 +104,14 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     return -1;
   }
   if (out) fprintf(out, "site,depth_m,fem_N,realtime_N,realtime_depth_m,ratio_rt_over_fem,fem_min_gap_m\n");
-  printf("FE: level %d (%d hexahedra), %s reading, relaxed (long-term) static; real-time: the scene's world (%s)\n",
+  printf("FE: level %d (%d hexahedra), %s reading, relaxed (long-term) static%s%s; real-time: the scene's world (%s)\n",
          cfg.mesh.level, mesh.element_count, cfg.c10_reading == PALP_FEM_C10_LONG_TERM ? "long_term" : "instantaneous",
-         scene->name);
+         fe_from ? ", taken from " : "", fe_from ? fe_from : "", scene->name);
+  const int maxd = max_depths > 0 && max_depths < MAXD ? max_depths : MAXD; /* < 0: all, no force table */
   double Fplain[MAXD] = {0}, Rplain[MAXD] = {0};
   int nplain = 0, rc = 0;
   for (int s = 0; s < 4 && !rc; ++s) {
-    if (only && strcmp(only, "all") != 0 && !strstr(only, sites[s].name)) continue;
+    if (only && strcmp(only, "all") != 0 && !listed(only, sites[s].name)) continue;
     const double th = sites[s].polar_deg * PALP_FEM_PI / 180.0;
     const palp_vec3 n = {sin(th), 0, cos(th)};
     double F[MAXD], G[MAXD], Fr[MAXD], Dr[MAXD];
@@ -82,10 +119,12 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     const double t0 = now_s();
     const double nv[3] = {n.x, n.y, n.z};
     err[0] = 0;
-    const int nd = palp_fem_finger_curve(&cfg, &mesh, &lump, sites[s].lesion, nv, 0.008, depths, MAXD, 5.0, F, G,
-                                         &newton, err, errlen);
+    const int nd = fe_from ? read_fe_curve(fe_from, sites[s].name, depths, maxd, F, G, err, errlen)
+                           : palp_fem_finger_curve(&cfg, &mesh, &lump, sites[s].lesion, nv, 0.008, depths, maxd, 5.0, F,
+                                                   G, &newton, err, errlen);
     const double t1 = now_s();
     if (nd <= 0) {
+      if (fe_from && nd == 0) snprintf(err, errlen, "%s has no rows of site %s", fe_from, sites[s].name);
       rc = -1;
       break;
     }
@@ -110,8 +149,9 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
                 G[k]);
     }
     /* force-matched: the depth each model needs for 0.3, 1, 3, 5 N (the real-time
-     * curve continued to 30 mm; linear interpolation between held depths) */
-    {
+     * curve continued to 30 mm, ~90% of the real-time cost: skipped with max_depths < 0;
+     * linear interpolation between held depths) */
+    if (max_depths >= 0) {
       double Fl[MAXD], Dl[MAXD];
       const int nl =
           palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, MAXD, 1.0, Fl, Dl, err, errlen);

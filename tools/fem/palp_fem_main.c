@@ -52,7 +52,11 @@ static void usage(void) {
           "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n"
           "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
           "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
-          "                       [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n");
+          "                       [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n"
+          "                       [--fe-from FINGER.csv] [--depths N | --no-force-table]\n"
+          "  finger --fe-from: the FE curves from a CSV an earlier finger run wrote (only the real-time side\n"
+          "  is computed); --depths N: each curve's first N depths only; --no-force-table: no depth-for-force\n"
+          "  table (its real-time curve to 30 mm is most of the real-time cost)\n");
   palp_app_common_usage(stderr, FEM_OPTS);
 }
 
@@ -175,8 +179,8 @@ static void summary(const palp_fem_config *cfg, const palp_scene *s, const palp_
 }
 
 typedef struct opts {
-  const char *scene, *config, *inp, *out, *cache_dir, *reading, *material, *dist, *site, *positional;
-  int level, frames, no_cache, quiet;
+  const char *scene, *config, *inp, *out, *cache_dir, *reading, *material, *dist, *site, *fe_from, *positional;
+  int level, frames, depths, no_cache, quiet;
   double dt;
   double lesion_depth_mm, lesion_ratio; /* finger: the pole_lesion site's lesion */
   palp_app_opts app;
@@ -215,6 +219,7 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--material", o->material)
     ARG("--distribution", o->dist)
     ARG("--site", o->site)
+    ARG("--fe-from", o->fe_from)
 #undef ARG
     if ((strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0) && has) {
       char *end;
@@ -227,7 +232,8 @@ static int parse(int argc, char **argv, opts *o) {
       else o->lesion_ratio = v;
       continue;
     }
-    if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--dt") == 0) && has) {
+    if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--depths") == 0 ||
+         strcmp(a, "--dt") == 0) && has) {
       char *end;
       const double v = strtod(argv[++i], &end);
       if (*end || !isfinite(v)) {
@@ -239,7 +245,12 @@ static int parse(int argc, char **argv, opts *o) {
         fprintf(stderr, "palp-fem: %s: expected a positive integer\n", a);
         return -1;
       } else if (strcmp(a, "--level") == 0) o->level = (int)v;
+      else if (strcmp(a, "--depths") == 0) o->depths = (int)v;
       else o->frames = (int)v;
+      continue;
+    }
+    if (strcmp(a, "--no-force-table") == 0) {
+      o->depths = -1;
       continue;
     }
     if (strcmp(a, "--no-cache") == 0) {
@@ -424,8 +435,8 @@ static int cmd_finger(const opts *o) {
     return 2;
   }
   err[0] = 0;
-  if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, 1e-3 * o->lesion_depth_mm, o->lesion_ratio, err,
-                              sizeof err) != 0) {
+  if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, 1e-3 * o->lesion_depth_mm, o->lesion_ratio, o->fe_from,
+                              o->depths, err, sizeof err) != 0) {
     palp_log_error(o->log, "finger: %s", err[0] ? err : "failed");
     return 1;
   }
