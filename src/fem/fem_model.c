@@ -793,19 +793,11 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
  * exact solves), so a solve to half the tolerance ends the step one iterate
  * earlier than eta = r / scale would (0.072 -> 4.4e-3 -> 1.3e-6): 2 instead of 3
  * Newton iterations per step for about the same number of CG iterations. The
- * convergence test itself (on the true residual) is unchanged.
- * From the second iterate on, eta is 0.5 tol / r (at most 0.1), NOT also capped by
- * r / scale: near the tolerance r / scale is the smaller one (r / scale < 0.5 tol / r
- * when r < sqrt(0.5 rtol) scale, ~70 tol), and solving to it over-solves - the
- * safeguard of Eisenstat & Walker (1996) as Kelley (1995, Sec. 6.3) states it: never
- * ask the linear solve for less than 0.5 tol / r. A level-4 step whose second iterate
- * ended at 2 tol asked its third solve for eta = 2e-4 (6 CG iterations of ~27 ms)
- * where 0.1 suffices (the nonlinear remainder there is ~1e-8 of the scale). Steps
- * that converge in two iterates are unchanged bit for bit: at the second, r / scale
- * ~0.3 is far above 0.5 tol / r ~1e-4. */
+ * convergence test itself (on the true residual) is unchanged. */
 static double newton_forcing(int it, double r, double scale, double tol) {
-  if (it >= 1 && r > 0.0) return fmin(0.1, 0.5 * tol / r);
-  return fmin(0.1, r / fmax(scale, 1e-300));
+  double eta = fmin(0.1, r / fmax(scale, 1e-300));
+  if (it >= 1 && r > 0.0) eta = fmin(eta, 0.5 * tol / r);
+  return eta;
 }
 
 /* Installs the factor of the background thread (waiting for it if need be); if
@@ -877,20 +869,13 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     if (it == 0) r0 = r;
     if (r <= m->rtol * scale + m->atol) return PALP_OK;
     if (it == m->max_newton || (it > 2 && r > 1e3 * r0)) break;
-    const double tol = m->rtol * scale + m->atol;
-    /* An iterate expected to converge that ended within 10 tol keeps the K_eff of the
-     * iterate before (force-only assembly leaves kval alone; the mass term is in it):
-     * the mesh moved by a correction ~1e-4 of the step's, so that tangent is as good
-     * for a solve asked for eta = 0.1, and a tangent assembly (~50 ms at level 4, a
-     * quarter of such a step) is saved. */
-    const int keep_k = !tangent && r <= 10.0 * tol;
-    if (!tangent && !keep_k && (rc = palp_fem_assemble(m, u, dt, 1))) return rc;
+    if (!tangent && (rc = palp_fem_assemble(m, u, dt, 1))) return rc;
     /* K_eff = K_T + M / (beta dt^2): the diagonal is the last entry of each column */
-    if (!keep_k)
-      for (size_t d = 0; d < nd; ++d) {
-        const int c = m->eq[d];
-        if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
-      }
+    for (size_t d = 0; d < nd; ++d) {
+      const int c = m->eq[d];
+      if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
+    }
+    const double tol = m->rtol * scale + m->atol;
     const double eta = newton_forcing(it, r, scale, tol);
     rc = newton_solve(m, c0, eta, newton_forcing(0, r, scale, tol), 1, it == 0 ? m->v : NULL);
     if (rc) return rc;

@@ -24,10 +24,8 @@ extern "C" {
 #endif
 
 /* Bumped whenever a change alters results, so cached references are recomputed. */
-#define PALP_FEM_CODE_VERSION 4 /* 2: fem-speed (element kernel round-off, Newton path within rtol);
-                                  3: fem-frames (background renewal of the factor, within rtol);
-                                  4: a Newton iterate past the second solved to 0.5 tol / r and on
-                                     the last tangent when within 10 tol (within rtol) */
+#define PALP_FEM_CODE_VERSION 3 /* 2: fem-speed (element kernel round-off, Newton path within rtol);
+                                  3: fem-frames (background renewal of the factor, within rtol) */
 
 /* ---- mesh ---------------------------------------------------------------- */
 enum { PALP_FEM_GEL = 0, PALP_FEM_MEMBRANE = 1 };
