@@ -221,19 +221,9 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--site", o->site)
     ARG("--fe-from", o->fe_from)
 #undef ARG
-    if ((strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0) && has) {
-      char *end;
-      const double v = strtod(argv[++i], &end);
-      if (*end || !isfinite(v) || !(v > 0.0)) {
-        fprintf(stderr, "palp-fem: %s: expected a positive number: %s\n", a, argv[i]);
-        return -1;
-      }
-      if (strcmp(a, "--lesion-depth") == 0) o->lesion_depth_mm = v;
-      else o->lesion_ratio = v;
-      continue;
-    }
+    const int lesion_opt = strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0;
     if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--depths") == 0 ||
-         strcmp(a, "--dt") == 0) && has) {
+         strcmp(a, "--dt") == 0 || lesion_opt) && has) {
       char *end;
       const double v = strtod(argv[++i], &end);
       if (*end || !isfinite(v)) {
@@ -241,6 +231,11 @@ static int parse(int argc, char **argv, opts *o) {
         return -1;
       }
       if (strcmp(a, "--dt") == 0) o->dt = v;
+      else if (lesion_opt && !(v > 0.0)) {
+        fprintf(stderr, "palp-fem: %s: expected a positive number: %s\n", a, argv[i]);
+        return -1;
+      } else if (strcmp(a, "--lesion-depth") == 0) o->lesion_depth_mm = v;
+      else if (lesion_opt) o->lesion_ratio = v;
       else if (v != floor(v) || v < 1 || v > 1e7) {
         fprintf(stderr, "palp-fem: %s: expected a positive integer\n", a);
         return -1;
