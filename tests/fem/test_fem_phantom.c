@@ -37,6 +37,18 @@ static void cap_load(const palp_fem_mesh *mesh, double F, double s, double *f) {
   free(faces);
 }
 
+/* The level-L mesh and the 3 N cap load (s = 1 cm) on it, the setup of the factor
+ * reuse and background cases; the caller frees the load and destroys the mesh. */
+static double *capped_mesh(int level, palp_fem_mesh *mesh) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = level;
+  CHECK(palp_fem_mesh_create(&d, mesh) == 0, "mesh, level %d", level);
+  double *f = calloc(3 * (size_t)mesh->node_count, sizeof(double));
+  CHECK(f != NULL, "load vector");
+  cap_load(mesh, 3.0, 0.01, f);
+  return f;
+}
+
 static double now(void) {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
@@ -303,13 +315,9 @@ static int run_reuse(const palp_fem_mesh *mesh, const double *f, int full_newton
 }
 
 static void test_reuse(void) {
-  palp_fem_mesh_def d = palp_fem_mesh_default_def();
-  d.level = 2;
   palp_fem_mesh mesh;
-  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  double *f = capped_mesh(2, &mesh);
   const int steps = 40, nd = 3 * mesh.node_count;
-  double *f = calloc((size_t)nd, sizeof(double));
-  cap_load(&mesh, 3.0, 0.01, f);
   reuse_run a = {0}, b = {0}, c = {0};
   CHECK(run_reuse(&mesh, f, 0, 0, steps, &a) == 0, "automatic reuse run");
   CHECK(run_reuse(&mesh, f, 1, 0, steps, &b) == 0, "full Newton run");
@@ -382,14 +390,10 @@ static int run_bg(const palp_fem_mesh *mesh, const double *f, int lag, int mode,
 }
 
 static void test_background(void) {
-  palp_fem_mesh_def d = palp_fem_mesh_default_def();
-  d.level = 2;
   palp_fem_mesh mesh;
-  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  double *f = capped_mesh(2, &mesh);
   const int steps = 24, nd = 3 * mesh.node_count;
   const size_t bytes = sizeof(double) * (size_t)steps * (size_t)nd;
-  double *f = calloc((size_t)nd, sizeof(double));
-  cap_load(&mesh, 3.0, 0.01, f);
   bg_run fg = {0}, fast = {0}, slow = {0}, thr = {0}, pre = {0};
   CHECK(run_bg(&mesh, f, 0, 0, 0, steps, &fg) == 0, "foreground run");
   CHECK(run_bg(&mesh, f, 0, 0, 1, steps, &pre) == 0, "foreground run, factor made in setup");
@@ -421,11 +425,8 @@ static void test_background(void) {
   /* a hard run (instantaneous reading, level 1: cut-backs, indefinite tangents)
    * renews in the foreground as before fem-frames: the same bits with factor_lag 3
    * as with 0 */
-  d.level = 1;
-  CHECK(palp_fem_mesh_create(&d, &mesh) == 0, "mesh");
+  f = capped_mesh(1, &mesh);
   const int hs = 5, hn = 3 * mesh.node_count;
-  f = calloc((size_t)hn, sizeof(double));
-  cap_load(&mesh, 3.0, 0.01, f);
   bg_run h0 = {0}, h3 = {0};
   CHECK(run_bg_reading(&mesh, f, 0, 0, 1, hs, PALP_FEM_C10_INSTANTANEOUS, &h0) == 0, "instantaneous, factor_lag 0");
   CHECK(run_bg_reading(&mesh, f, 3, 0, 1, hs, PALP_FEM_C10_INSTANTANEOUS, &h3) == 0, "instantaneous, factor_lag 3");
