@@ -197,12 +197,15 @@ double palp_fem_solver_factor_flops(const palp_fem_solver *s);
 long palp_fem_solver_ldl_count(const palp_fem_solver *s);
 
 /* ---- surface map (fem_map.c) ------------------------------------------------- */
-/* Each real-time vertex maps to 4 FE nodes with bilinear weights on the FE outer
- * surface face hit by the ray from the base centre through the vertex. */
+/* Each real-time vertex v maps to FE nodes node[start[v] .. start[v+1]) with weights
+ * w summing to 1: the four bilinear weights of one face (PALP_FEM_LOAD_POINT) or its
+ * hat function integrated over the FE surface (PALP_FEM_LOAD_PATCH). A load F_v puts
+ * w_va F_v on node a; the vertex's displacement is sum_a w_va u_a. */
 typedef struct palp_fem_map {
   int count;
-  int (*node)[4];
-  double (*w)[4];
+  int *start; /* [count + 1] */
+  int *node;
+  double *w;
 } palp_fem_map;
 /* Outer surface faces (single-owner hex faces not entirely on the clamped base),
  * outward oriented; *faces is malloc'ed. */
@@ -213,6 +216,8 @@ int palp_fem_surface_faces(const palp_fem_mesh *mesh, int (**faces)[4], int *cou
  * the nodal z forces sum to exactly -F [N]. f [3 * node_count] is overwritten. */
 int palp_fem_cap_traction(const palp_fem_mesh *mesh, double F, double area, int gauss, double *f);
 int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int count, palp_fem_map *out);
+/* PALP_FEM_LOAD_PATCH: rt's dome triangles carry its vertices' hat functions. */
+int palp_fem_map_create_patch(const palp_fem_mesh *mesh, const palp_mesh *rt, palp_fem_map *out);
 void palp_fem_map_destroy(palp_fem_map *map);
 
 /* ---- hashing -------------------------------------------------------------- */

@@ -11,6 +11,15 @@
  * the face's four bilinear weights N_a(xi, eta). Loads are spread and
  * displacements gathered with the same weights, so both models talk about the
  * same material points.
+ *
+ * The patch map (palp_fem_map_create_patch) spreads a vertex over its hat function
+ * instead: every FE surface quadrature point is carried radially onto the
+ * real-time dome, and the triangle it lands in shares its area among its three
+ * vertices by barycentric weight. A vertex's weights are
+ *   w_va = int N_a phi_v dA / int phi_v dA,
+ * so a force F_v becomes the traction F_v phi_v / int phi_v dA (resultant F_v) and
+ * the gathered displacement is phi_v's weighted average of the FE surface. Rim
+ * (clamped) vertices map to no node.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -133,9 +142,10 @@ int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int 
   if (rc) return rc;
   /* angular extent of each face around its centre direction, for a quick cull */
   double (*cdir)[4] = malloc(sizeof *cdir * (size_t)(nf ? nf : 1));
-  out->node = malloc(sizeof *out->node * (size_t)(count ? count : 1));
-  out->w = malloc(sizeof *out->w * (size_t)(count ? count : 1));
-  if (!cdir || !out->node || !out->w) {
+  out->start = malloc(sizeof *out->start * (size_t)(count + 1));
+  out->node = malloc(sizeof *out->node * (size_t)(4 * count + 1));
+  out->w = malloc(sizeof *out->w * (size_t)(4 * count + 1));
+  if (!cdir || !out->start || !out->node || !out->w) {
     free(faces), free(cdir);
     palp_fem_map_destroy(out);
     return PALP_ENOMEM;
@@ -184,11 +194,13 @@ int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int 
     }
     double N[4], dx[4], de[4];
     bilinear(fmax(-1.0, fmin(1.0, bxi)), fmax(-1.0, fmin(1.0, beta_)), N, dx, de);
+    out->start[v] = 4 * v;
     for (int k = 0; k < 4; ++k) {
-      out->node[v][k] = faces[best][k];
-      out->w[v][k] = N[k];
+      out->node[4 * v + k] = faces[best][k];
+      out->w[4 * v + k] = N[k];
     }
   }
+  out->start[count] = 4 * count;
   out->count = count;
   free(faces);
   free(cdir);
@@ -196,8 +208,154 @@ int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int 
   return rc;
 }
 
+/* Ray from the base centre along unit u against triangle (a, b, c): 1 and the
+ * barycentric weights of the hit when the ray passes within tol (barycentric) of it
+ * (Moller-Trumbore with the origin at 0). */
+static int ray_triangle(const double u[3], const palp_vec3 *a, const palp_vec3 *b, const palp_vec3 *c, double tol,
+                        double bary[3]) {
+  const double e1[3] = {b->x - a->x, b->y - a->y, b->z - a->z}, e2[3] = {c->x - a->x, c->y - a->y, c->z - a->z};
+  const double p[3] = {u[1] * e2[2] - u[2] * e2[1], u[2] * e2[0] - u[0] * e2[2], u[0] * e2[1] - u[1] * e2[0]};
+  const double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+  if (fabs(det) < 1e-300) return 0;
+  const double s[3] = {-a->x, -a->y, -a->z};
+  const double b1 = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) / det;
+  const double q[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2], s[0] * e1[1] - s[1] * e1[0]};
+  const double b2 = (u[0] * q[0] + u[1] * q[1] + u[2] * q[2]) / det;
+  const double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
+  if (!(t > 0.0) || b1 < -tol || b2 < -tol || b1 + b2 > 1.0 + tol) return 0;
+  bary[1] = fmax(0.0, b1), bary[2] = fmax(0.0, b2);
+  bary[0] = fmax(0.0, 1.0 - bary[1] - bary[2]);
+  const double sum = bary[0] + bary[1] + bary[2];
+  for (int k = 0; k < 3; ++k) bary[k] /= sum;
+  return 1;
+}
+
+typedef struct map_entry {
+  int v, node;
+  double w;
+} map_entry;
+
+static int cmp_entry(const void *a, const void *b) {
+  const map_entry *x = a, *y = b;
+  if (x->v != y->v) return x->v < y->v ? -1 : 1;
+  return (x->node > y->node) - (x->node < y->node);
+}
+
+int palp_fem_map_create_patch(const palp_fem_mesh *mesh, const palp_mesh *rt, palp_fem_map *out) {
+  memset(out, 0, sizeof *out);
+  /* 4 x 4 Gauss points a face: the hat functions are linear inside a real-time
+   * triangle and kink along its edges, which cut the FE faces; at level 2 a face is
+   * ~1/3 of a real-time edge, and the weights move by < 1e-3 from 3 x 3 to 4 x 4. */
+  enum { G = 4 };
+  static const double gp[G] = {-0.86113631159405257522, -0.33998104358485626480, 0.33998104358485626480,
+                                0.86113631159405257522};
+  static const double gw[G] = {0.34785484513745385737, 0.65214515486254614263, 0.65214515486254614263,
+                               0.34785484513745385737};
+  const int V = rt->vertex_count, T = rt->dome_triangle_count;
+  int (*faces)[4] = NULL, nf = 0;
+  int rc = palp_fem_surface_faces(mesh, &faces, &nf);
+  if (rc) return rc;
+  /* each real-time triangle's centre direction and angular radius, for a quick cull */
+  double (*tdir)[4] = malloc(sizeof *tdir * (size_t)(T ? T : 1));
+  double *norm = calloc((size_t)V + 1, sizeof *norm);
+  const size_t cap = (size_t)nf * G * G * 12 + 1;
+  map_entry *e = malloc(sizeof *e * cap);
+  out->start = calloc((size_t)V + 1, sizeof *out->start);
+  if (!tdir || !norm || !e || !out->start) {
+    rc = PALP_ENOMEM;
+    goto done;
+  }
+  for (int t = 0; t < T; ++t) {
+    double c[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k) {
+      const palp_vec3 *x = &rt->rest[rt->tri[t][k]];
+      c[0] += x->x, c[1] += x->y, c[2] += x->z;
+    }
+    const double l = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double mincos = 1.0;
+    for (int k = 0; k < 3; ++k) {
+      const palp_vec3 *x = &rt->rest[rt->tri[t][k]];
+      const double lx = sqrt(x->x * x->x + x->y * x->y + x->z * x->z);
+      mincos = fmin(mincos, lx > 0 && l > 0 ? (x->x * c[0] + x->y * c[1] + x->z * c[2]) / (lx * l) : -1.0);
+    }
+    for (int d = 0; d < 3; ++d) tdir[t][d] = l > 0 ? c[d] / l : 0.0;
+    tdir[t][3] = mincos; /* cos of the angular radius */
+  }
+  size_t n = 0;
+  for (int f = 0; f < nf && !rc; ++f)
+    for (int i = 0; i < G; ++i)
+      for (int j = 0; j < G; ++j) {
+        double N[4], dx[4], de[4], X[3] = {0}, Xa[3] = {0}, Xb[3] = {0};
+        bilinear(gp[i], gp[j], N, dx, de);
+        for (int k = 0; k < 4; ++k)
+          for (int d = 0; d < 3; ++d) {
+            X[d] += N[k] * mesh->x[faces[f][k]][d];
+            Xa[d] += dx[k] * mesh->x[faces[f][k]][d];
+            Xb[d] += de[k] * mesh->x[faces[f][k]][d];
+          }
+        const double cr[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2], Xa[0] * Xb[1] - Xa[1] * Xb[0]};
+        const double dA = gw[i] * gw[j] * sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]); /* [m^2] */
+        const double lX = sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]);
+        if (!(lX > 0.0)) continue;
+        const double u[3] = {X[0] / lX, X[1] / lX, X[2] / lX};
+        int hit = -1;
+        double bary[3] = {0, 0, 0};
+        for (int t = 0; t < T && hit < 0; ++t) {
+          const double cs = u[0] * tdir[t][0] + u[1] * tdir[t][1] + u[2] * tdir[t][2];
+          if (cs < tdir[t][3] - 1e-9) continue;
+          if (ray_triangle(u, &rt->rest[rt->tri[t][0]], &rt->rest[rt->tri[t][1]], &rt->rest[rt->tri[t][2]], 1e-9, bary))
+            hit = t;
+        }
+        if (hit < 0) {
+          rc = PALP_ERANGE; /* the dome is star-shaped from the base centre: every ray up hits it */
+          break;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const int v = rt->tri[hit][k];
+          /* a rim vertex is clamped in the real-time model: it maps to nothing, so
+           * its displacement is 0 there too, and its share of the ring stays unused */
+          if (!(bary[k] > 0.0) || rt->fixed[v]) continue;
+          norm[v] += bary[k] * dA;
+          for (int a = 0; a < 4; ++a) e[n++] = (map_entry){v, faces[f][a], bary[k] * N[a] * dA};
+        }
+      }
+  if (rc) goto done;
+  qsort(e, n, sizeof *e, cmp_entry);
+  size_t m = 0; /* merge equal (v, node) */
+  for (size_t k = 0; k < n; ++k) {
+    if (m > 0 && e[m - 1].v == e[k].v && e[m - 1].node == e[k].node)
+      e[m - 1].w += e[k].w;
+    else
+      e[m++] = e[k];
+  }
+  out->node = malloc(sizeof *out->node * (m + 1));
+  out->w = malloc(sizeof *out->w * (m + 1));
+  if (!out->node || !out->w) {
+    rc = PALP_ENOMEM;
+    goto done;
+  }
+  for (size_t k = 0; k < m; ++k) {
+    out->node[k] = e[k].node;
+    out->w[k] = e[k].w / norm[e[k].v]; /* the hat-weighted average: weights sum to 1 */
+    out->start[e[k].v + 1]++;
+  }
+  for (int v = 0; v < V; ++v) {
+    if (!(norm[v] > 0.0) && !rt->fixed[v]) rc = PALP_ERANGE; /* a free vertex with no patch */
+    out->start[v + 1] += out->start[v];
+  }
+  out->count = V;
+done:
+  free(faces);
+  free(tdir);
+  free(norm);
+  free(e);
+  if (rc) palp_fem_map_destroy(out);
+  return rc;
+}
+
 void palp_fem_map_destroy(palp_fem_map *map) {
   if (!map) return;
+  free(map->start);
   free(map->node);
   free(map->w);
   memset(map, 0, sizeof *map);

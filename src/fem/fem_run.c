@@ -68,6 +68,7 @@ uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
   H(cfg->pcg_refactor);
   H(cfg->threads);
   H(cfg->factor_lag);
+  if (cfg->load_map != PALP_FEM_LOAD_POINT) H(cfg->load_map); /* point runs keep their keys */
   /* the scene: real-time mesh, timing, contacts */
   H(s->world.mesh.radius);
   H(s->world.mesh.vertex_count);
@@ -170,7 +171,8 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
     return rc;
   }
   w.have_rt = 1;
-  rc = palp_fem_map_create(&w.mesh, w.rt.rest, w.rt.vertex_count, &w.map);
+  rc = cfg->load_map == PALP_FEM_LOAD_PATCH ? palp_fem_map_create_patch(&w.mesh, &w.rt, &w.map)
+                                             : palp_fem_map_create(&w.mesh, w.rt.rest, w.rt.vertex_count, &w.map);
   if (rc) {
     snprintf(err, errlen, "surface map: a real-time vertex misses the FE surface (%s); do the geometries match?",
              palp_strerror(rc));
@@ -214,7 +216,7 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
       w.cv[total] = tmpv[i];
       w.cof[total] = c;
       w.lambda[total] = tmpw[i];
-      for (int a = 0; a < 4; ++a) w.den[w.map.node[tmpv[i]][a]] += w.map.w[tmpv[i]][a] * tmpw[i];
+      for (int a = w.map.start[tmpv[i]]; a < w.map.start[tmpv[i] + 1]; ++a) w.den[w.map.node[a]] += w.map.w[a] * tmpw[i];
     }
   }
   free(tmpv);
@@ -276,8 +278,8 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
         const int c = w.cof[k], v = w.cv[k];
         const double mag = palp_profile_eval(&scene->contact[c].profile, t) * w.lambda[k];
         const double fv[3] = {mag * w.dir[c].x, mag * w.dir[c].y, mag * w.dir[c].z};
-        for (int a = 0; a < 4; ++a)
-          for (int d = 0; d < 3; ++d) w.fext[3 * w.map.node[v][a] + d] += w.map.w[v][a] * fv[d];
+        for (int a = w.map.start[v]; a < w.map.start[v + 1]; ++a)
+          for (int d = 0; d < 3; ++d) w.fext[3 * w.map.node[a] + d] += w.map.w[a] * fv[d];
       }
       rc = palp_fem_step(m, w.fext, dt);
       if (rc) snprintf(err, errlen, "frame %d: %s", f, m->err[0] ? m->err : palp_strerror(rc));
@@ -286,18 +288,18 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
     out->time[f] = (f + 1) * period;
     for (int v = 0; v < V; ++v) {
       double u[3] = {0, 0, 0};
-      for (int a = 0; a < 4; ++a)
-        for (int d = 0; d < 3; ++d) u[d] += w.map.w[v][a] * m->u[3 * w.map.node[v][a] + d];
+      for (int a = w.map.start[v]; a < w.map.start[v + 1]; ++a)
+        for (int d = 0; d < 3; ++d) u[d] += w.map.w[a] * m->u[3 * w.map.node[a] + d];
       out->disp[(size_t)f * (size_t)V + (size_t)v] = (palp_vec3){u[0], u[1], u[2]};
     }
     out->top_disp[f] = out->disp[(size_t)f * (size_t)V + (size_t)w.rt.top_vertex];
     for (int k = 0; k < total; ++k) {
       const int v = w.cv[k];
       double fb[3] = {0, 0, 0};
-      for (int a = 0; a < 4; ++a) {
-        const int node = w.map.node[v][a];
+      for (int a = w.map.start[v]; a < w.map.start[v + 1]; ++a) {
+        const int node = w.map.node[a];
         if (!(w.den[node] > 0.0)) continue;
-        const double share = w.map.w[v][a] * w.lambda[k] / w.den[node];
+        const double share = w.map.w[a] * w.lambda[k] / w.den[node];
         for (int d = 0; d < 3; ++d) fb[d] -= share * m->fint[3 * node + d];
       }
       out->feedback[(size_t)f * (size_t)total + (size_t)k] = (palp_vec3){fb[0], fb[1], fb[2]};

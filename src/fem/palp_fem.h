@@ -96,6 +96,21 @@ typedef enum palp_fem_c10_reading {
   PALP_FEM_C10_INSTANTANEOUS = 1 /* C10 is the instantaneous modulus; relaxed = g_inf C10 */
 } palp_fem_c10_reading;
 
+/* How a real-time vertex's load reaches the FE surface, and its displacement comes
+ * back (docs/fem.md, "Surface map"). POINT: the four nodes of the one FE face the
+ * vertex's ray hits, bilinear weights: a point force on the continuum, whose peak
+ * displacement grows without bound as the FE mesh is refined (the paper's literal
+ * nodal load). PATCH: the vertex's hat function on the real-time surface (1 at the
+ * vertex, 0 at its neighbours), carried over to the FE surface radially and
+ * integrated: the load is a traction over the vertex's one-ring with the vertex's
+ * own force as resultant, and the displacement is the same hat-weighted average,
+ * so the two models compare at the real-time mesh's resolution and the FE side
+ * converges with refinement. */
+typedef enum palp_fem_load_map {
+  PALP_FEM_LOAD_POINT = 0,
+  PALP_FEM_LOAD_PATCH = 1
+} palp_fem_load_map;
+
 /* ---- configuration ------------------------------------------------------- */
 typedef struct palp_fem_config {
   palp_fem_mesh_def mesh;
@@ -121,6 +136,7 @@ typedef struct palp_fem_config {
    * never on the thread's timing; 0 renews in the foreground (before fem-frames) */
   int factor_lag;
   char cache_dir[512];  /* "" disables the cache; default "cache/fem" */
+  palp_fem_load_map load_map; /* see palp_fem_load_map */
 } palp_fem_config;
 
 /* The default material profile is "paper_long_term" (docs/materials.md); a scene's

@@ -115,9 +115,9 @@ static void test_map(void) {
   for (int i = 0; i < NP && map.count == NP; ++i) {
     double X[3] = {0}, ws = 0.0;
     for (int k = 0; k < 4; ++k) {
-      ws += map.w[i][k];
-      for (int dd = 0; dd < 3; ++dd) X[dd] += map.w[i][k] * m.x[map.node[i][k]][dd];
-      CHECK(map.w[i][k] >= -1e-12, "negative weight");
+      ws += map.w[map.start[i] + k];
+      for (int dd = 0; dd < 3; ++dd) X[dd] += map.w[map.start[i] + k] * m.x[map.node[map.start[i] + k]][dd];
+      CHECK(map.w[map.start[i] + k] >= -1e-12, "negative weight");
     }
     const double u[3] = {p[i].x / 0.04, p[i].y / 0.04, p[i].z / 0.04};
     const double c[3] = {X[1] * u[2] - X[2] * u[1], X[2] * u[0] - X[0] * u[2], X[0] * u[1] - X[1] * u[0]};
@@ -130,6 +130,93 @@ static void test_map(void) {
   CHECK(worst_rad <= 5e-4, "map: mapped points %.3g m inside the sphere (tolerance 0.5 mm)", worst_rad);
   printf("map: %d points, off-ray %.2g m, sagitta %.3g mm\n", NP, worst_ray, 1e3 * worst_rad);
   palp_fem_map_destroy(&map);
+  palp_fem_mesh_destroy(&m);
+}
+
+/* The patch map (the default load map): every free vertex of the shipped 338-vertex
+ * dome spreads over FE nodes with non-negative weights summing to 1 (1e-12), so a
+ * vertex load keeps its resultant; rim vertices, clamped in the real-time model, map
+ * to nothing; the weights' centroid sits on the vertex (its hat function is centred
+ * there, up to the FE faces' size): within 0.3 of the vertex's shortest edge
+ * (measured 0.21 at level 2, whose faces are about a real-time edge across); and the
+ * patch stays in the vertex's one-ring widened by one FE face: no weighted node
+ * farther from the vertex than its longest edge plus the largest surface face
+ * diagonal (measured up to 2.4 longest edges). */
+static void test_map_patch(void) {
+  palp_fem_mesh_def d = palp_fem_mesh_default_def();
+  d.level = 2;
+  palp_fem_mesh m;
+  CHECK(palp_fem_mesh_create(&d, &m) == 0, "mesh");
+  palp_mesh_def rd = palp_mesh_default_def();
+  palp_mesh rt;
+  CHECK(palp_mesh_create(&rd, &rt) == 0, "real-time mesh");
+  palp_fem_map map;
+  CHECK(palp_fem_map_create_patch(&m, &rt, &map) == 0, "patch map");
+  double *emin = malloc(sizeof(double) * (size_t)rt.vertex_count), *emax = malloc(sizeof(double) * (size_t)rt.vertex_count);
+  for (int v = 0; v < rt.vertex_count; ++v) emin[v] = INFINITY, emax[v] = 0.0;
+  for (int l = 0; l < rt.link_count; ++l) {
+    const palp_vec3 a = rt.rest[rt.link[l][0]], b = rt.rest[rt.link[l][1]];
+    const double len = sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+    for (int k = 0; k < 2; ++k) {
+      emin[rt.link[l][k]] = fmin(emin[rt.link[l][k]], len);
+      emax[rt.link[l][k]] = fmax(emax[rt.link[l][k]], len);
+    }
+  }
+  int (*faces)[4] = NULL, nf = 0;
+  CHECK(palp_fem_surface_faces(&m, &faces, &nf) == 0, "surface faces");
+  double diag = 0.0; /* the largest surface face diagonal [m] */
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 2; ++k) {
+      const double *a = m.x[faces[f][k]], *b = m.x[faces[f][k + 2]];
+      diag = fmax(diag, sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])));
+    }
+  free(faces);
+  double worst_w = 0.0, worst_c = 0.0, worst_r = 0.0, worst_reach = 0.0, min_w = 0.0;
+  int rim_mapped = 0, free_empty = 0, nodes = 0;
+  for (int v = 0; v < rt.vertex_count && map.count == rt.vertex_count; ++v) {
+    const int n = map.start[v + 1] - map.start[v];
+    if (rt.fixed[v]) {
+      rim_mapped += n > 0;
+      continue;
+    }
+    free_empty += n == 0;
+    nodes = n > nodes ? n : nodes;
+    double ws = 0.0, c[3] = {0, 0, 0};
+    const double p[3] = {rt.rest[v].x, rt.rest[v].y, rt.rest[v].z};
+    for (int k = map.start[v]; k < map.start[v + 1]; ++k) {
+      ws += map.w[k];
+      min_w = fmin(min_w, map.w[k]);
+      const double *x = m.x[map.node[k]];
+      for (int dd = 0; dd < 3; ++dd) c[dd] += map.w[k] * x[dd];
+      if (map.w[k] > 0.0) {
+        const double r = sqrt((x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) + (x[2] - p[2]) * (x[2] - p[2]));
+        worst_r = fmax(worst_r, r / emax[v]);
+        worst_reach = fmax(worst_reach, r / (emax[v] + diag));
+      }
+    }
+    worst_w = fmax(worst_w, fabs(ws - 1.0));
+    /* the centroid's offset across the ray through the vertex (it lies inside the
+     * sphere by the patch's sagitta, which is not an offset) */
+    const double lp = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    const double u[3] = {p[0] / lp, p[1] / lp, p[2] / lp};
+    const double cu = c[0] * u[0] + c[1] * u[1] + c[2] * u[2];
+    const double off[3] = {c[0] - cu * u[0], c[1] - cu * u[1], c[2] - cu * u[2]};
+    worst_c = fmax(worst_c, sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) / emin[v]);
+  }
+  CHECK(map.count == rt.vertex_count, "patch map: %d vertices mapped of %d", map.count, rt.vertex_count);
+  CHECK(rim_mapped == 0, "patch map: %d rim vertices map to FE nodes (expected none)", rim_mapped);
+  CHECK(free_empty == 0, "patch map: %d free vertices without a patch", free_empty);
+  CHECK(worst_w <= 1e-12, "patch map: weights sum off 1 by %.3g", worst_w);
+  CHECK(min_w >= 0.0, "patch map: negative weight %.3g", min_w);
+  CHECK(worst_c <= 0.3, "patch map: a patch's centroid %.3f of the shortest edge off its vertex (bound 0.3)", worst_c);
+  CHECK(worst_reach <= 1.0, "patch map: a weighted node %.2f x (longest edge + face diagonal %.1f mm) from its vertex",
+        worst_reach, 1e3 * diag);
+  printf("patch map: up to %d nodes a vertex, centroid offset <= %.3f shortest edge, reach <= %.2f longest edge "
+         "(%.2f of the bound)\n", nodes, worst_c, worst_r, worst_reach);
+  free(emin);
+  free(emax);
+  palp_fem_map_destroy(&map);
+  palp_mesh_destroy(&rt);
   palp_fem_mesh_destroy(&m);
 }
 
@@ -443,6 +530,7 @@ int main(int argc, char **argv) {
   const int all = strcmp(c, "all") == 0;
   if (all || !strcmp(c, "mesh")) test_mesh();
   if (all || !strcmp(c, "map")) test_map();
+  if (all || !strcmp(c, "map_patch")) test_map_patch();
   if (all || !strcmp(c, "newton")) test_newton();
   if (all || !strcmp(c, "dt")) test_dt();
   if (all || !strcmp(c, "refine")) test_refine();

@@ -66,6 +66,9 @@ static palp_fem_config fast_config(int level) {
   c.c10_reading = PALP_FEM_C10_LONG_TERM;
   c.mesh.level = level;
   c.cache_dir[0] = 0; /* compute, never read a cached answer */
+  /* the volume checks need material points of the FE surface: the point map samples
+   * them, the patch map (the default) averages each vertex's one-ring */
+  c.load_map = PALP_FEM_LOAD_POINT;
   return c;
 }
 
