@@ -75,7 +75,8 @@ def main():
         f.write(provenance("palp-eval evaluate --scene %s --level 4 --distributions 2 (the fem_cm column of "
                            "displacement_d2.csv; the FEM does not depend on the real-time parameters)" % SCENE))
         f.write("# paper_long_term, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 frames "
-                "of 10 ms; |u| [cm] of the real-time vertices (FE surface map)\n")
+                "of 10 ms; |u| [cm] of the real-time vertices (FE patch map: each vertex's hat-weighted average, "
+                "docs/fem.md \"Surface map\")\n")
         f.write("# level-2 FEM peak %.9g cm (the same command with --level 2)\n" % peaks[2])
         f.write("# level-4 FEM peak %.9g cm at vertex %d, frame %d; every vertex at frames 0-11 and 19, 39, ..., %d; "
                 "vertex %d at every frame\n" % (peak, pv, pf, last, pv))

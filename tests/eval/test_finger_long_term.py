@@ -39,10 +39,10 @@ check = common.check
 run = common.run  # subprocess.run, output captured, 600 s timeout
 
 # site -> (lowest, highest) real-time / FE ratio allowed at every stored depth: the 15%,
-# except 70 deg (20 deg above the rim), where the shipped set is 1.07-1.19 (1.19, 1.17, 1.16 at
-# 0.25, 1.5, 2 mm): the 15% target is missed there by up to 3.6 points (docs/materials.md,
-# "Refitted against the level-4 FEM"); the bound 1.20 keeps it from getting worse unnoticed.
-# Measured 2026-11-27: pole 0.980-1.098, 45 deg 1.022-1.107, lesion 0.911-1.042.
+# except 70 deg (20 deg above the rim), where the shipped set is 1.08-1.20 (1.199, 1.189, 1.185 at
+# 0.25, 1.5, 2 mm): the 15% target is missed there by up to 4.9 points (docs/materials.md,
+# "The patch map and the support"); the bound 1.20 keeps it from getting worse unnoticed.
+# Measured 2026-11-27 (support x1.3): pole 1.003-1.115, 45 deg 1.039-1.124, lesion 0.931-1.061.
 BOUNDS = {"pole": (0.85, 1.15), "45deg": (0.85, 1.15), "70deg": (0.85, 1.20), "pole_lesion": (0.85, 1.15)}
 # site -> the FE force [N] the stored curve reaches: 5 N (the range) at the pole; the
 # curves at 45 deg (to 1 mm, 1.63 N), 70 deg and over the lesion (to 2 mm, 4.23 and 3.83 N) were
