@@ -136,6 +136,13 @@ typedef struct palp_membrane_params {
    * hinges on the triangles' edges (docs/model.md); 0, the default, is the paper's
    * membrane, which carries a load only by stretching. */
   double bending_stiffness;
+  /* How far the rim lets the skin rotate: the hinges on the rim's edges (a dome
+   * triangle against the clamped base) keep (1 - rim_hinge_release) of their
+   * stiffness. 0, the default, clamps the skin's slope at the base; 1 pins it. The
+   * hinges carry an effective D several times the skin's own (they stand in for the
+   * gel's shear coupling too), and clamping that D at the rim stiffens the dome near
+   * it beyond the FE's (docs/materials.md, "The rim"). */
+  double rim_hinge_release;
 } palp_membrane_params;
 
 typedef enum palp_gel_law {

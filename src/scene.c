@@ -91,6 +91,10 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
   if ((e = get_num(c, m, "membrane.", "bending_stiffness_N_m", 0, &p->bending_stiffness))) return e;
   if (p->bending_stiffness < 0.0)
     return palp_parse_fail(c, PALP_EPARSE, "membrane.bending_stiffness_N_m: must be >= 0 (got %g)", p->bending_stiffness);
+  if ((e = get_num(c, m, "membrane.", "rim_hinge_release", 0, &p->rim_hinge_release))) return e;
+  if (!(p->rim_hinge_release >= 0.0 && p->rim_hinge_release <= 1.0))
+    return palp_parse_fail(c, PALP_EPARSE, "membrane.rim_hinge_release: must be in [0, 1] (0 clamps the rim, 1 pins it; got %g)",
+                           p->rim_hinge_release);
   return PALP_OK;
 }
 
@@ -460,6 +464,7 @@ char *palp_scene_to_json(const palp_scene *s) {
   add_exact(mb, "eta2_Pa_s", mp->eta2);
   /* only when set, so that the scenes of earlier logs print as they did */
   if (mp->bending_stiffness > 0.0) add_exact(mb, "bending_stiffness_N_m", mp->bending_stiffness);
+  if (mp->rim_hinge_release > 0.0) add_exact(mb, "rim_hinge_release", mp->rim_hinge_release);
   const palp_gel_params *gp = &s->world.gel;
   cJSON *g = cJSON_AddObjectToObject(r, "gel");
   cJSON_AddStringToObject(g, "law", gp->law == PALP_GEL_POLYTROPIC ? "polytropic" : "paper_literal");

@@ -1137,6 +1137,7 @@ static int validate(const palp_world_def *d) {
     return PALP_EINVAL;
   if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
   if (!(m->bending_stiffness >= 0.0) || !isfinite(m->bending_stiffness)) return PALP_EINVAL;
+  if (!(m->rim_hinge_release >= 0.0 && m->rim_hinge_release <= 1.0)) return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY))
     return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_GEL_DAMPING) && !(d->effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
@@ -1262,6 +1263,7 @@ static int build_hinges(palp_world *w) {
     memcpy(w->hinge[e], v, sizeof v);
     memcpy(w->hgrad[e], g, sizeof g);
     w->hk[e] = palp_hinge_stiffness(D, e2, pd && qd ? area : 2.0 * area);
+    if (!(pd && qd)) w->hk[e] *= 1.0 - w->def.membrane.rim_hinge_release; /* a rim edge: see palp.h */
   }
   free(he);
   for (int e = 0; e < w->nhinge; ++e)

@@ -38,12 +38,12 @@ import test_eval_evaluate as common  # its check() and failure count (this folde
 check = common.check
 run = common.run  # subprocess.run, output captured, 600 s timeout
 
-# site -> (lowest, highest) real-time / FE ratio allowed at every stored depth: the 15%,
-# except 70 deg (20 deg above the rim), where the shipped set is 1.08-1.20 (1.199, 1.189, 1.185 at
-# 0.25, 1.5, 2 mm): the 15% target is missed there by up to 4.9 points (docs/materials.md,
-# "The patch map and the support"); the bound 1.20 keeps it from getting worse unnoticed.
-# Measured 2026-11-27 (support x1.3): pole 1.003-1.115, 45 deg 1.039-1.124, lesion 0.931-1.061.
-BOUNDS = {"pole": (0.85, 1.15), "45deg": (0.85, 1.15), "70deg": (0.85, 1.20), "pole_lesion": (0.85, 1.15)}
+# site -> (lowest, highest) real-time / FE ratio allowed at every stored depth: the 15% at
+# every site. 70 deg (20 deg above the rim) was held at 1.20 while the rim was clamped (1.07-1.20
+# there); with the rim pinned (membrane.rim_hinge_release 1) it is inside 15% (docs/materials.md,
+# "The patch map, the support and the rim").
+# Measured 2026-11-27: pole 1.012-1.122, 45 deg 1.046-1.131, 70 deg 1.008-1.134, lesion 0.939-1.068.
+BOUNDS = {"pole": (0.85, 1.15), "45deg": (0.85, 1.15), "70deg": (0.85, 1.15), "pole_lesion": (0.85, 1.15)}
 # site -> the FE force [N] the stored curve reaches: 5 N (the range) at the pole; the
 # curves at 45 deg (to 1 mm, 1.63 N), 70 deg and over the lesion (to 2 mm, 4.23 and 3.83 N) were
 # stopped for time (2-15 min a depth at level 4 on the shared machine; the data file's header)

@@ -166,6 +166,10 @@ static void check_replay(void) {
                                                          sizeof(double)) == 0,
         "bending stiffness %.17g written and read back as %.17g", a.world.membrane.bending_stiffness,
         b.world.membrane.bending_stiffness);
+  CHECK(a.world.membrane.rim_hinge_release > 0 &&
+            memcmp(&a.world.membrane.rim_hinge_release, &b.world.membrane.rim_hinge_release, sizeof(double)) == 0,
+        "rim hinge release %.17g written and read back as %.17g", a.world.membrane.rim_hinge_release,
+        b.world.membrane.rim_hinge_release);
   palp_world *wa = palp_scene_create_world(&a, NULL), *wb = palp_scene_create_world(&b, NULL);
   CHECK(wa && wb, "worlds from both scenes");
   if (!wa || !wb) return;

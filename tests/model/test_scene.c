@@ -59,6 +59,8 @@ int main(void) {
   expect_error("\"mesh\":{", "\"meshes\":{", "mesh");
   expect_error("\"E1_Pa\":4.2e6", "\"E1_Pa\":\"stiff\"", "membrane.E1_Pa");
   expect_error("\"E1_Pa\":4.2e6,", "", "membrane.E1_Pa");
+  expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"rim_hinge_release\":1.5", "membrane.rim_hinge_release: must be in [0, 1]");
+  expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"rim_hinge_release\":\"pinned\"", "membrane.rim_hinge_release");
   expect_error("\"vertex_count\":120", "\"vertex_count\":12.5", "mesh.vertex_count");
   expect_error("\"law\":\"polytropic\"", "\"law\":\"ideal\"", "gel.law");
   expect_error("\"dt_s\":0.01", "\"dt_s\":-0.01", "time.dt_s");
