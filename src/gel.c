@@ -6,11 +6,15 @@
 
 #include "vec3.h"
 
-double palp_gel_volume_gradient(const palp_mesh *m, const palp_vec3 *p, palp_vec3 *g) {
+/* restrict: g is written while p is read, and without it the compiler reloads the
+ * positions after every store to g (the same operations, the same bits). */
+double palp_gel_volume_gradient(const palp_mesh *m, const palp_vec3 *restrict p, palp_vec3 *restrict g) {
   memset(g, 0, sizeof *g * (size_t)m->vertex_count);
+  const int(*restrict tri)[3] = (const int(*)[3])m->tri; /* m too would be reloaded after each store */
+  const int nt = m->dome_triangle_count;
   double v6 = 0.0;
-  for (int t = 0; t < m->dome_triangle_count; ++t) {
-    const int a = m->tri[t][0], b = m->tri[t][1], c = m->tri[t][2];
+  for (int t = 0; t < nt; ++t) {
+    const int a = tri[t][0], b = tri[t][1], c = tri[t][2];
     const palp_vec3 bc = v3_cross(p[b], p[c]);
     v6 += v3_dot(p[a], bc);
     /* d/dx_a [x_a . (x_b x x_c)] = x_b x x_c, and cyclically. */
