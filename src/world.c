@@ -326,7 +326,8 @@ static double bending_add(const palp_world *w, palp_vec3 *restrict f) {
       palp_vec3 *fk = &f[v[k]];
       fk->x += g[k].x * m, fk->y += g[k].y * m, fk->z += g[k].z * m;
     }
-    thmax = fmax(thmax, fabs(th));
+    /* as fmax(thmax, |th|) (a NaN is passed over), without its libm call per hinge */
+    if (fabs(th) > thmax) thmax = fabs(th);
   }
   return thmax;
 }
