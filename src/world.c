@@ -918,6 +918,16 @@ static void stage_fingers(palp_world *w, double h) {
           for (int i = 0; i < 3; ++i) yc[3 * a + i] -= w->sm_coef * uj * w->u[3 * ra + i];
         }
     }
+    /* The pad's compliance between touched features (below) [m/N], each pair once: it is
+     * symmetric bit for bit (q1 - q2 and q2 - q1 have the same squared length), and its
+     * exp per pair was a tenth of the stage. fs->lwork is free until the LCP. */
+    double *pad = fs->lwork;
+    const int pad_on = k->fdef.pad_stiffness > 0.0;
+    if (pad_on)
+      for (int c = 0; c < k->nfinger; ++c)
+        for (int dd = 0; dd <= c; ++dd)
+          if (k->ctri[c] >= 0 && k->ctri[dd] >= 0)
+            pad[c * m + dd] = pad[dd * m + c] = pad_share(k->cq[c], k->cq[dd], pad_l, c == dd) / k->fdef.pad_stiffness;
     /* W_cd = h^2 J_c . y_d (+ n_c . n_d / k_c between finger rows, the coupling) [m/N] */
     for (int c = 0; c < m; ++c)
       for (int dd = 0; dd < m; ++dd) {
@@ -934,8 +944,8 @@ static void stage_fingers(palp_world *w, double h) {
          * when a neighbour's closest point left a shared vertex for the edge next to it,
          * it became a constraint of its own already ~1 mm into the pad, and the force
          * stepped by +24% in 3 ms (long-term dome, 45 deg, 2.5 mm; docs/haptics.md). */
-        if (c < k->nfinger && dd < k->nfinger && k->ctri[c] >= 0 && k->ctri[dd] >= 0 && k->fdef.pad_stiffness > 0.0)
-          fs->W[c * m + dd] += pad_share(k->cq[c], k->cq[dd], pad_l, c == dd) / k->fdef.pad_stiffness;
+        if (c < k->nfinger && dd < k->nfinger && k->ctri[c] >= 0 && k->ctri[dd] >= 0 && pad_on)
+          fs->W[c * m + dd] += pad[c * m + dd];
       }
     if (palp_lcp_solve(m, fs->W, fs->b, k->clam, fs->lwork) < 0 &&
         palp_lcp_pgs(m, fs->W, fs->b, k->clam, 500, 1e-8) < 0)
