@@ -280,14 +280,25 @@ static void stage_loads(palp_world *w, double h) {
 static void stage_membrane_forces(palp_world *w, double h) {
   (void)h;
   const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
-  for (int l = 0; l < w->nlink; ++l) {
+  /* Locals and restrict, as in stage_membrane_state: the force stores (doubles) may
+   * alias the Burgers coefficients in *w and the link arrays, which the compiler then
+   * reloaded every link. The same operations in the same order: the same bits. */
+  const palp_burgers bg = w->burgers;
+  const double E_static = w->E_static;
+  const int(*restrict link)[2] = (const int(*)[2])w->mesh.link;
+  const double *restrict eps = w->eps, *restrict xsec = w->xsec;
+  const double(*restrict xs)[2] = (const double(*)[2])w->xs;
+  const palp_vec3 *restrict dir = w->dir;
+  palp_vec3 *restrict force = w->force;
+  const int nl = w->nlink;
+  for (int l = 0; l < nl; ++l) {
     /* Stress at the end of the step if the strain stayed put [Pa]; the change of
      * strain over the step enters through the implicit matrix. */
-    const double sigma = visc ? palp_burgers_predict(&w->burgers, w->xs[l], w->eps[l]) : w->E_static * w->eps[l];
-    const palp_vec3 f = v3_scale(w->dir[l], sigma * w->xsec[l]); /* [N], tension pulls the ends together */
-    const int a = w->mesh.link[l][0], b = w->mesh.link[l][1];
-    w->force[a] = v3_add(w->force[a], f);
-    w->force[b] = v3_sub(w->force[b], f);
+    const double sigma = visc ? palp_burgers_predict(&bg, xs[l], eps[l]) : E_static * eps[l];
+    const palp_vec3 f = v3_scale(dir[l], sigma * xsec[l]); /* [N], tension pulls the ends together */
+    const int a = link[l][0], b = link[l][1];
+    force[a] = v3_add(force[a], f);
+    force[b] = v3_sub(force[b], f);
   }
 }
 
