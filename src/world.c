@@ -73,6 +73,7 @@ typedef struct finger_scratch {
   double *G;            /* [3 nl][3 nl] this step's compliance among the local dofs */
   size_t G_cap;         /* doubles G holds */
   uint8_t *cand;        /* [vertex_count] */
+  palp_vec3 *fpos;      /* [vertex_count] free positions x + h v_free of this collection [m] (free_pos) */
   double max_link;      /* [m] longest rest link */
   /* The smooth contact surface (def.finger_surface, finger.h), NULL with the facets:
    * one patch per dome triangle and a bound on its offset from the facet [m]; per
@@ -661,15 +662,15 @@ static palp_vec3 ring_normal(const palp_world *w, const finger_scratch *fs, int 
 
 /* Vertex i's normal for the smooth surface at the free positions: its rest normal
  * turned as its ring turned (finger.h), once per finger collection. */
-static palp_vec3 smooth_normal(const palp_world *w, finger_scratch *fs, int i, double h) {
+static palp_vec3 smooth_normal(const palp_world *w, finger_scratch *fs, int i) {
   if (fs->nstamp[i] == fs->ncount) return fs->ncur[i];
   palp_vec3 s = v3(0, 0, 0);
   for (int q = fs->vtri_start[i]; q < fs->vtri_start[i + 1]; ++q) {
     const int t = fs->vtri[q];
     if (fs->tstamp[t] != fs->ncount) { /* each triangle once per collection */
       const int *T = w->mesh.tri[t];
-      const palp_vec3 a = free_pos(w, T[0], h);
-      fs->tcross[t] = v3_cross(v3_sub(free_pos(w, T[1], h), a), v3_sub(free_pos(w, T[2], h), a));
+      const palp_vec3 *x = fs->fpos, a = x[T[0]];
+      fs->tcross[t] = v3_cross(v3_sub(x[T[1]], a), v3_sub(x[T[2]], a));
       fs->tstamp[t] = fs->ncount;
     }
     s = v3_add(s, fs->tcross[t]);
@@ -698,14 +699,18 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   const palp_vec3 p0 = k->proxy, d = k->device;
   const double reach = R + fs->max_link + 1e-3; /* [m] */
   fs->ncount++; /* the free positions changed (the last finger's solve moved them) */
-  for (int i = 0; i < nv; ++i) fs->cand[i] = (uint8_t)(seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
+  /* Each vertex's free position once per collection: the candidates, the triangles and
+   * the normals below read it ~3 times per vertex near the finger. */
+  palp_vec3 *restrict fp = fs->fpos;
+  for (int i = 0; i < nv; ++i) fp[i] = free_pos(w, i, h);
+  for (int i = 0; i < nv; ++i) fs->cand[i] = (uint8_t)(seg_dist2(fp[i], p0, d) < reach * reach);
   int64_t key[PALP_FINGER_MAX_CON];
   int nc = 0;
   for (int t = 0; t < m->dome_triangle_count; ++t) {
     const int *T = m->tri[t];
     if (!fs->cand[T[0]] && !fs->cand[T[1]] && !fs->cand[T[2]]) continue;
     if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
-    const palp_vec3 a = free_pos(w, T[0], h), b = free_pos(w, T[1], h), c = free_pos(w, T[2], h);
+    const palp_vec3 a = fp[T[0]], b = fp[T[1]], c = fp[T[2]];
     double bary[3];
     palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
     const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
@@ -717,7 +722,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
        * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
        * bounds by the 1 mm below makes no row, and its patch is not searched. */
       if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
-      const palp_vec3 N[3] = {smooth_normal(w, fs, T[0], h), smooth_normal(w, fs, T[1], h), smooth_normal(w, fs, T[2], h)};
+      const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
       q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
     }
     const palp_vec3 pq = v3_sub(p0, q);
@@ -778,12 +783,12 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     for (int e = 0; e < 3 && nc < PALP_FINGER_MAX_CON && k->ctri[q2] >= 0; ++e) {
       const int v = m->tri[k->ctri[q2]][e];
       if (w->row_of[v] < 0 || fs->cand[v] == 2) continue;
-      const double z = free_pos(w, v, h).z;
+      const double z = fp[v].z;
       if (z > 1e-3) continue;
       fs->cand[v] = 2; /* once */
       k->ctri[nc] = -1 - v;
       k->cn[nc] = v3(0, 0, 0); /* no share in the finger's force */
-      k->cq[nc] = free_pos(w, v, h);
+      k->cq[nc] = fp[v];
       fs->b[nc] = z;
       k->ckey[nc] = -(int64_t)1e12 - v;
       k->clam[nc] = 0.0;
@@ -1472,7 +1477,7 @@ void palp_world_destroy(palp_world *w) {
     free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
     free(fs->G);
     free(fs->vloc), free(fs->lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
-    free(fs->cand), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
+    free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
     free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->tcross), free(fs->tstamp), free(fs);
   }
   free(w->contacts);
@@ -2059,6 +2064,7 @@ static int finger_scratch_create(palp_world *w) {
   fs->b = xcalloc((size_t)M, sizeof(double), &fail);
   fs->lwork = xcalloc((size_t)M * (size_t)M + 3 * (size_t)M, sizeof(double), &fail);
   fs->cand = xcalloc((size_t)nv, 1, &fail);
+  fs->fpos = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
   if (fail) return PALP_ENOMEM; /* freed with the world */
   for (int q = 0; q < fs->slots; ++q) fs->slot_row[q] = -1;
   for (int r = 0; r < w->nfree; ++r) fs->row_slot[r] = -1;
