@@ -111,6 +111,7 @@ struct palp_world {
   int nlink;
   double *rest_len; /* [m] */
   double *inv_rest; /* [1/m] 1 / rest_len: the per-step strain multiplies (a division per link cost 10% of a step) */
+  double *ld;       /* [3 nlink] scratch of stage_membrane_state: the links' vectors by component [m] */
   double *kx;       /* [m] xsec / rest_len: a link's axial stiffness per unit modulus */
   double *xsec;     /* effective cross-section t (A_left + A_right) / L0 [m^2] */
   double *eps;      /* current strain [-] */
@@ -1076,39 +1077,75 @@ static void stage_base(palp_world *w, double h) {
   }
 }
 
-static void stage_membrane_state(palp_world *w, double h) {
-  (void)h;
-  const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
-  const double tangent = visc ? w->burgers.tangent : w->E_static; /* [Pa] */
-  /* Locals, so that the stores below (plain doubles, which may alias anything in
-   * *w) do not make the compiler reload the coefficients every link. */
-  const palp_burgers bg = w->burgers;
-  const double E_static = w->E_static;
-  const palp_vec3 *restrict pos = w->pos;
-  const palp_vec3 *restrict fdir = w->fdir;
-  int(*link)[2] = w->mesh.link;
-  const double *restrict rest_len = w->rest_len, *restrict inv_rest = w->inv_rest, *restrict xsec = w->xsec;
-  const double *restrict kx = w->kx, *restrict fbeta = w->fbeta, *restrict fslack = w->fslack;
-  palp_vec3 *restrict dir = w->dir;
-  double *restrict eps_l = w->eps, *restrict sigma_l = w->sigma, (*restrict xs)[2] = w->xs;
-  double max_strain = w->step_max_strain;
-  int stale = 0;
-  for (int l = 0; l < w->nlink; ++l) {
-    const int a = link[l][0], b = link[l][1];
-    const palp_vec3 d = v3_sub(pos[b], pos[a]);
-    const double len = v3_len(d), inv_len = 1.0 / len;
-    const palp_vec3 u = v3_scale(d, inv_len);
+/* The link states from the links' vectors, components in dx, dy, dz [m]: directions,
+ * strains, stresses (Burgers when visc) and the factor's stability test (see
+ * stage_membrane_state). Split from the gather of the vectors so that it runs on whole
+ * vectors of links: the square root and division per link, in the gathering loop, left
+ * it scalar (-fno-math-errno lets the square root vectorise, src/CMakeLists.txt). Per
+ * link the same operations in the same order as before, and the AVX2 clone does no
+ * fused multiply-add, so every path gives the same bits. Returns 1 when a link left the
+ * factor's stability region. */
+/* The loop of link_states for visc 0 or 1 (a constant there: a branch inside the
+ * loop would keep it from vectorising). */
+static inline __attribute__((always_inline)) int link_states_loop(
+    int nl, const double *restrict dx, const double *restrict dy, const double *restrict dz,
+    const double *restrict rest_len, const double *restrict inv_rest, const double *restrict xsec,
+    const double *restrict kx, const double *restrict fbeta, const double *restrict fslack,
+    const palp_vec3 *restrict fdir, palp_vec3 *restrict dir, double *restrict eps_l, double *restrict sigma_l,
+    double (*restrict xs)[2], const int visc, const palp_burgers *bgp, double E_static, double tangent) {
+  const palp_burgers bg = *bgp;
+  long long stale = 0; /* as wide as a double: GCC vectorises the OR of double comparisons only so */
+  for (int l = 0; l < nl; ++l) {
+    const double len = sqrt(dx[l] * dx[l] + dy[l] * dy[l] + dz[l] * dz[l]), inv_len = 1.0 / len;
+    const palp_vec3 u = {dx[l] * inv_len, dy[l] * inv_len, dz[l] * inv_len};
     dir[l] = u;
     const double eps = (len - rest_len[l]) * inv_rest[l];
     const double sigma = visc ? palp_burgers_advance(&bg, xs[l], eps_l[l], eps) : E_static * eps;
     eps_l[l] = eps;
     sigma_l[l] = sigma;
-    if (fabs(eps) > max_strain) max_strain = fabs(eps);
     /* Leaving the factor's stability region (see refactor): turned by > 30 degrees,
      * or tension stiffness across the link above beta k (half the margin). */
     const double c = v3_dot(u, fdir[l]);
-    stale |= c * c < 0.75 || sigma * xsec[l] * inv_len > fbeta[l] * tangent * kx[l] + fslack[l];
+    stale |= (c * c < 0.75) | (sigma * xsec[l] * inv_len > fbeta[l] * tangent * kx[l] + fslack[l]);
   }
+  return stale != 0;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static int link_states(int nl, const double *restrict dx, const double *restrict dy, const double *restrict dz,
+                       const double *restrict rest_len, const double *restrict inv_rest, const double *restrict xsec,
+                       const double *restrict kx, const double *restrict fbeta, const double *restrict fslack,
+                       const palp_vec3 *restrict fdir, palp_vec3 *restrict dir, double *restrict eps_l,
+                       double *restrict sigma_l, double (*restrict xs)[2], int visc, const palp_burgers *bgp,
+                       double E_static, double tangent) {
+  if (visc)
+    return link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs,
+                            1, bgp, E_static, tangent);
+  return link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs, 0,
+                          bgp, E_static, tangent);
+}
+
+static void stage_membrane_state(palp_world *w, double h) {
+  (void)h;
+  const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
+  const double tangent = visc ? w->burgers.tangent : w->E_static; /* [Pa] */
+  const palp_vec3 *restrict pos = w->pos;
+  const int(*restrict link)[2] = (const int(*)[2])w->mesh.link;
+  const int nl = w->nlink;
+  double *restrict dx = w->ld, *restrict dy = w->ld + nl, *restrict dz = w->ld + 2 * (size_t)nl;
+  for (int l = 0; l < nl; ++l) {
+    const palp_vec3 a = pos[link[l][0]], b = pos[link[l][1]];
+    dx[l] = b.x - a.x, dy[l] = b.y - a.y, dz[l] = b.z - a.z;
+  }
+  const int stale = link_states(nl, dx, dy, dz, w->rest_len, w->inv_rest, w->xsec, w->kx, w->fbeta, w->fslack, w->fdir,
+                                w->dir, w->eps, w->sigma, w->xs, visc, &w->burgers, w->E_static, tangent);
+  /* the largest strain, compared in link order as before (a max reduction would not vectorise anyway) */
+  const double *restrict eps_l = w->eps;
+  double max_strain = w->step_max_strain;
+  for (int l = 0; l < nl; ++l)
+    if (fabs(eps_l[l]) > max_strain) max_strain = fabs(eps_l[l]);
   w->step_max_strain = max_strain;
   if (stale) w->stale = 1;
 }
@@ -1375,6 +1412,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     w->nlink = nl;
     w->rest_len = xcalloc((size_t)nl, sizeof(double), &fail);
     w->inv_rest = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->ld = xcalloc(3 * (size_t)nl, sizeof(double), &fail);
     w->vfast = xcalloc((size_t)nv, 1, &fail);
     w->kx = xcalloc((size_t)nl, sizeof(double), &fail);
     w->xsec = xcalloc((size_t)nl, sizeof(double), &fail);
@@ -1501,7 +1539,7 @@ void palp_world_destroy(palp_world *w) {
   }
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
-  free(w->rest_len), free(w->inv_rest), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
+  free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
   free(w->hinge), free(w->hgrad), free(w->hk), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
