@@ -931,9 +931,13 @@ static void stage_fingers(palp_world *w, double h) {
         }
       }
     /* y_c = A_full^{-1} J_c at the local dofs, with the gel's rank-1 term by
-     * Sherman-Morrison: A_full^{-1} e_j = A^{-1} e_j - sm u u_j (A symmetric). */
+     * Sherman-Morrison: A_full^{-1} e_j = A^{-1} e_j - sm u u_j (A symmetric). The
+     * coefficient and u in restrict locals: the stores to y may alias w->sm_coef, which
+     * was reloaded for every entry and kept the loops scalar (same operations). */
+    const double smc = w->sm_coef;
+    const double *restrict uvec = w->u;
     for (int c = 0; c < m; ++c) {
-      double *yc = fs->y + (size_t)c * (size_t)(9 * PALP_FINGER_MAX_CON);
+      double *restrict yc = fs->y + (size_t)c * (size_t)(9 * PALP_FINGER_MAX_CON);
       memset(yc, 0, sizeof(double) * (size_t)L3);
       double uj = 0.0; /* u . J_c */
       for (int e = 0; e < cn_[c]; ++e) {
@@ -942,16 +946,18 @@ static void stage_fingers(palp_world *w, double h) {
         const double jv[3] = {cj[c][e].x, cj[c][e].y, cj[c][e].z};
         for (int j = 0; j < 3; ++j) {
           if (jv[j] == 0.0) continue;
-          const double *g = fs->G + (size_t)(3 * b + j) * (size_t)L3;
+          const double *restrict g = fs->G + (size_t)(3 * b + j) * (size_t)L3;
           for (int q = 0; q < L3; ++q) yc[q] += jv[j] * g[q];
-          if (w->sm_coef != 0.0) uj += jv[j] * w->u[3 * r + j];
+          if (smc != 0.0) uj += jv[j] * uvec[3 * r + j];
         }
       }
-      if (w->sm_coef != 0.0)
+      if (smc != 0.0) {
+        const double su = smc * uj; /* as sm_coef * uj * u, left to right */
         for (int a = 0; a < nl; ++a) {
           const int ra = w->row_of[fs->lvert[a]];
-          for (int i = 0; i < 3; ++i) yc[3 * a + i] -= w->sm_coef * uj * w->u[3 * ra + i];
+          for (int i = 0; i < 3; ++i) yc[3 * a + i] -= su * uvec[3 * ra + i];
         }
+      }
     }
     /* The pad's compliance between touched features (below) [m/N], each pair once: it is
      * symmetric bit for bit (q1 - q2 and q2 - q1 have the same squared length), and its
@@ -964,7 +970,9 @@ static void stage_fingers(palp_world *w, double h) {
           if (k->ctri[c] >= 0 && k->ctri[dd] >= 0)
             pad[c * m + dd] = pad[dd * m + c] = pad_share(k->cq[c], k->cq[dd], pad_l, c == dd) / k->fdef.pad_stiffness;
     /* W_cd = h^2 J_c . y_d (+ n_c . n_d / k_c between finger rows, the coupling) [m/N] */
-    for (int c = 0; c < m; ++c)
+    for (int c = 0; c < m; ++c) {
+      const palp_vec3 ncc = k->cn[c];
+      const int padc = pad_on && c < k->nfinger && k->ctri[c] >= 0; /* row c takes the pad's share */
       for (int dd = 0; dd < m; ++dd) {
         const double *yd = fs->y + (size_t)dd * (size_t)(9 * PALP_FINGER_MAX_CON);
         double s = 0.0;
@@ -972,16 +980,17 @@ static void stage_fingers(palp_world *w, double h) {
           const int a = fs->vloc[cv[c][e]];
           s += v3_dot(cj[c][e], v3(yd[3 * a], yd[3 * a + 1], yd[3 * a + 2]));
         }
-        fs->W[c * m + dd] = h * h * s + v3_dot(k->cn[c], k->cn[dd]) / kc;
+        double wcd = h * h * s + v3_dot(ncc, k->cn[dd]) / kc;
         /* The pad's compliance between touched features (not the table's): one layer on
          * the fingertip, so features pressing it at one place share its compression.
          * A spring per feature put the pads of features meeting at a point in parallel:
          * when a neighbour's closest point left a shared vertex for the edge next to it,
          * it became a constraint of its own already ~1 mm into the pad, and the force
          * stepped by +24% in 3 ms (long-term dome, 45 deg, 2.5 mm; docs/haptics.md). */
-        if (c < k->nfinger && dd < k->nfinger && k->ctri[c] >= 0 && k->ctri[dd] >= 0 && pad_on)
-          fs->W[c * m + dd] += pad[c * m + dd];
+        if (padc && dd < k->nfinger && k->ctri[dd] >= 0) wcd += pad[c * m + dd];
+        fs->W[c * m + dd] = wcd;
       }
+    }
     if (palp_lcp_solve(m, fs->W, fs->b, k->clam, fs->lwork) < 0 &&
         palp_lcp_pgs(m, fs->W, fs->b, k->clam, 500, 1e-8) < 0)
       w->finger_unsolved++;
@@ -1015,11 +1024,14 @@ static void stage_fingers(palp_world *w, double h) {
         const double c = c3[j];
         if (c == 0.0) continue;
         if (!fused) axpy(n3, c, colv[a] + (size_t)j * (size_t)n3, x);
-        uf += c * (w->sm_coef != 0.0 ? w->u[3 * ra + j] : 0.0);
+        uf += c * (smc != 0.0 ? uvec[3 * ra + j] : 0.0);
       }
     }
-    if (w->sm_coef != 0.0)
-      for (int q = 0; q < n3; ++q) x[q] -= w->sm_coef * uf * w->u[q];
+    if (smc != 0.0) {
+      const double su = smc * uf; /* as sm_coef * uf * u, left to right */
+      double *restrict xr = x;
+      for (int q = 0; q < n3; ++q) xr[q] -= su * uvec[q];
+    }
     /* Per-vertex feedback: what the finger rows push on each vertex, reversed. */
     for (int c = 0; c < k->nfinger; ++c) {
       if (!(k->clam[c] > 0.0)) continue;
