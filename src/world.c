@@ -85,7 +85,9 @@ typedef struct finger_scratch {
   palp_vec3 *nrest, *mrest, *ncur;
   palp_vec3 *tcross;      /* [dome triangles] a triangle's cross product at the free positions [m^2] */
   int64_t *nstamp, *tstamp, ncount;
-  int *vtri_start, *vtri;
+  int *vtri_start, *vtri; /* both surfaces: the collection marks the triangles at its candidates */
+  int *clist;             /* [vertex_count] this collection's candidate vertices */
+  uint64_t *tbits;        /* [ceil(dome triangles / 64)] triangles at a candidate, cleared as read */
   int64_t stamp;
 } finger_scratch;
 
@@ -722,65 +724,86 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
    * the normals below read it ~3 times per vertex near the finger. */
   palp_vec3 *restrict fp = fs->fpos;
   for (int i = 0; i < nv; ++i) fp[i] = free_pos(w, i, h);
-  for (int i = 0; i < nv; ++i) fs->cand[i] = (uint8_t)(seg_dist2(fp[i], p0, d) < reach * reach);
+  /* Candidates: vertices near the proxy's path; then the triangles at them, marked in a
+   * bitmap and visited in ascending order, as the scan of every dome triangle for one
+   * with a candidate vertex visited them (~75 of 632 at 338 vertices). */
+  uint8_t *restrict cand = fs->cand; /* byte stores alias anything: a restrict local */
+  int *restrict clist = fs->clist;
+  int ncand = 0;
+  for (int i = 0; i < nv; ++i) {
+    const int is = seg_dist2(fp[i], p0, d) < reach * reach;
+    cand[i] = (uint8_t)is;
+    clist[ncand] = i;
+    ncand += is;
+  }
+  uint64_t *restrict tbits = fs->tbits;
+  for (int q = 0; q < ncand; ++q)
+    for (int z = fs->vtri_start[clist[q]]; z < fs->vtri_start[clist[q] + 1]; ++z)
+      tbits[fs->vtri[z] >> 6] |= (uint64_t)1 << (fs->vtri[z] & 63);
   int64_t key[PALP_FINGER_MAX_CON];
   int nc = 0;
-  for (int t = 0; t < m->dome_triangle_count; ++t) {
-    const int *T = m->tri[t];
-    if (!fs->cand[T[0]] && !fs->cand[T[1]] && !fs->cand[T[2]]) continue;
-    if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
-    const palp_vec3 a = fp[T[0]], b = fp[T[1]], c = fp[T[2]];
-    double bary[3];
-    palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
-    const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
-    const double fl = v3_len(face);
-    if (!(fl > 0.0)) continue;
-    palp_vec3 nf = v3_scale(face, 1.0 / fl);
-    if (fs->patch) {
-      /* The patch lies within patch_max of the facet, so its gap g0 >= |p0 - q| - R -
-       * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
-       * bounds by the 1 mm below makes no row, and its patch is not searched. */
-      if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
-      const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
-      q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
+  const int nwords = m->dome_triangle_count / 64 + 1;
+  for (int wd = 0; wd < nwords; ++wd) {
+    uint64_t bits = tbits[wd];
+    tbits[wd] = 0; /* cleared for the next collection */
+    for (; bits; bits &= bits - 1) {
+      const int t = 64 * wd + __builtin_ctzll(bits); /* the lowest marked triangle left */
+      const int *T = m->tri[t];
+      if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
+      const palp_vec3 a = fp[T[0]], b = fp[T[1]], c = fp[T[2]];
+      double bary[3];
+      palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
+      const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
+      const double fl = v3_len(face);
+      if (!(fl > 0.0)) continue;
+      palp_vec3 nf = v3_scale(face, 1.0 / fl);
+      if (fs->patch) {
+        /* The patch lies within patch_max of the facet, so its gap g0 >= |p0 - q| - R -
+         * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
+         * bounds by the 1 mm below makes no row, and its patch is not searched. */
+        if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
+        const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
+        q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
+      }
+      const palp_vec3 pq = v3_sub(p0, q);
+      const double dist = v3_len(pq);
+      const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
+      if (v3_dot(n, nf) <= 0.0) continue; /* the proxy is behind this triangle: it cannot touch it */
+      const double g0 = dist - R;
+      const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
+      if (bt > 1e-3 && g0 > 1e-3) continue;
+      /* closest feature: a vertex (two zero weights), an edge (one) or the face */
+      int zeros = 0, nz[3], nn = 0;
+      for (int e = 0; e < 3; ++e)
+        if (bary[e] == 0.0) zeros++;
+        else nz[nn++] = T[e];
+      int64_t kf = zeros == 2   ? nz[0]
+                   : zeros == 1 ? (int64_t)nv + (int64_t)(nz[0] < nz[1] ? nz[0] : nz[1]) * nv +
+                                      (nz[0] < nz[1] ? nz[1] : nz[0])
+                                : -1 - (int64_t)t;
+      int dup = 0;
+      for (int q2 = 0; q2 < nc && !dup; ++q2) dup = key[q2] == kf;
+      if (dup) continue;
+      int slot = nc;
+      if (nc == PALP_FINGER_MAX_CON / 2) {
+        /* Full (half the rows stay for the base): replace the farthest from contact. */
+        slot = 0;
+        for (int q2 = 1; q2 < nc; ++q2)
+          if (fs->b[q2] > fs->b[slot]) slot = q2;
+        if (!(bt < fs->b[slot])) continue;
+      } else {
+        nc++;
+      }
+      key[slot] = kf;
+      k->ctri[slot] = t;
+      memcpy(k->cbary[slot], bary, sizeof bary);
+      k->cn[slot] = n;
+      k->cq[slot] = q;
+      fs->b[slot] = bt;
+      k->clam[slot] = 0.0;
+      for (int q2 = 0; q2 < nprev; ++q2)
+        if ((int64_t)prev_tri_lam[q2][0] == kf) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
     }
-    const palp_vec3 pq = v3_sub(p0, q);
-    const double dist = v3_len(pq);
-    const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
-    if (v3_dot(n, nf) <= 0.0) continue; /* the proxy is behind this triangle: it cannot touch it */
-    const double g0 = dist - R;
-    const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
-    if (bt > 1e-3 && g0 > 1e-3) continue;
-    /* closest feature: a vertex (two zero weights), an edge (one) or the face */
-    int zeros = 0, nz[3], nn = 0;
-    for (int e = 0; e < 3; ++e)
-      if (bary[e] == 0.0) zeros++;
-      else nz[nn++] = T[e];
-    int64_t kf = zeros == 2 ? nz[0]
-                 : zeros == 1 ? (int64_t)nv + (int64_t)(nz[0] < nz[1] ? nz[0] : nz[1]) * nv + (nz[0] < nz[1] ? nz[1] : nz[0])
-                              : -1 - (int64_t)t;
-    int dup = 0;
-    for (int q2 = 0; q2 < nc && !dup; ++q2) dup = key[q2] == kf;
-    if (dup) continue;
-    int slot = nc;
-    if (nc == PALP_FINGER_MAX_CON / 2) {
-      /* Full (half the rows stay for the base): replace the farthest from contact. */
-      slot = 0;
-      for (int q2 = 1; q2 < nc; ++q2)
-        if (fs->b[q2] > fs->b[slot]) slot = q2;
-      if (!(bt < fs->b[slot])) continue;
-    } else {
-      nc++;
-    }
-    key[slot] = kf;
-    k->ctri[slot] = t;
-    memcpy(k->cbary[slot], bary, sizeof bary);
-    k->cn[slot] = n;
-    k->cq[slot] = q;
-    fs->b[slot] = bt;
-    k->clam[slot] = 0.0;
-    for (int q2 = 0; q2 < nprev; ++q2)
-      if ((int64_t)prev_tri_lam[q2][0] == kf) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
   }
   /* The table the phantom stands on stops the fingertip too: p_z >= R, a finger row
    * with no surface share (the device feels the table through the coupling). */
@@ -880,7 +903,7 @@ static void stage_fingers(palp_world *w, double h) {
     for (int q = 0; q < k->ncon; ++q)
       if (k->clam[q] > 0.0) prev[nprev][0] = (double)k->ckey[q], prev[nprev++][1] = k->clam[q];
     const int m = finger_collect(w, k, h, prev, nprev);
-    for (int i = 0; i < w->mesh.vertex_count; ++i) fs->cand[i] = 0;
+    memset(fs->cand, 0, (size_t)w->mesh.vertex_count);
     k->ncon = m;
     k->count = 0;
     k->total = v3(0, 0, 0);
@@ -1547,7 +1570,7 @@ void palp_world_destroy(palp_world *w) {
     free(fs->G);
     free(fs->vloc), free(fs->lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
     free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
-    free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->tcross), free(fs->tstamp), free(fs);
+    free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tcross), free(fs->tstamp), free(fs);
   }
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
@@ -2142,6 +2165,24 @@ static int finger_scratch_create(palp_world *w) {
     const palp_vec3 d = v3_sub(w->mesh.rest[w->mesh.link[l][1]], w->mesh.rest[w->mesh.link[l][0]]);
     fs->max_link = fmax(fs->max_link, v3_len(d));
   }
+  {
+    const int nt = w->mesh.dome_triangle_count;
+    fs->vtri_start = xcalloc((size_t)nv + 1, sizeof(int), &fail);
+    fs->vtri = xcalloc(3 * (size_t)nt + 1, sizeof(int), &fail);
+    fs->clist = xcalloc((size_t)nv, sizeof(int), &fail);
+    fs->tbits = xcalloc((size_t)nt / 64 + 1, sizeof(uint64_t), &fail);
+    int *fill = xcalloc((size_t)nv + 1, sizeof(int), &fail);
+    if (fail) {
+      free(fill);
+      return PALP_ENOMEM;
+    }
+    for (int t = 0; t < nt; ++t)
+      for (int e = 0; e < 3; ++e) fs->vtri_start[w->mesh.tri[t][e] + 1]++;
+    for (int i = 0; i < nv; ++i) fs->vtri_start[i + 1] += fs->vtri_start[i];
+    for (int t = 0; t < nt; ++t) /* each vertex's triangles in ascending order */
+      for (int e = 0; e < 3; ++e) fs->vtri[fs->vtri_start[w->mesh.tri[t][e]] + fill[w->mesh.tri[t][e]]++] = t;
+    free(fill);
+  }
   if (w->def.finger_surface == PALP_FINGER_SURFACE_SMOOTH) {
     const int nt = w->mesh.dome_triangle_count;
     fs->patch = xcalloc((size_t)nt, sizeof *fs->patch, &fail);
@@ -2150,18 +2191,11 @@ static int finger_scratch_create(palp_world *w) {
     fs->mrest = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
     fs->ncur = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
     fs->nstamp = xcalloc((size_t)nv, sizeof(int64_t), &fail);
-    fs->vtri_start = xcalloc((size_t)nv + 1, sizeof(int), &fail);
-    fs->vtri = xcalloc(3 * (size_t)nt, sizeof(int), &fail);
     fs->tcross = xcalloc((size_t)nt, sizeof(palp_vec3), &fail);
     fs->tstamp = xcalloc((size_t)nt, sizeof(int64_t), &fail);
     if (fail) return PALP_ENOMEM;
     for (int t = 0; t < nt; ++t) fs->tstamp[t] = -1;
     palp_rest_normals(&w->mesh, fs->nrest);
-    for (int t = 0; t < nt; ++t)
-      for (int e = 0; e < 3; ++e) fs->vtri_start[w->mesh.tri[t][e] + 1]++;
-    for (int i = 0; i < nv; ++i) fs->vtri_start[i + 1] += fs->vtri_start[i];
-    for (int t = 0; t < nt; ++t) /* nstamp counts each vertex's entries while they are filled */
-      for (int e = 0; e < 3; ++e) fs->vtri[fs->vtri_start[w->mesh.tri[t][e]] + fs->nstamp[w->mesh.tri[t][e]]++] = t;
     for (int i = 0; i < nv; ++i) {
       fs->nstamp[i] = -1;
       fs->mrest[i] = ring_normal(w, fs, i, w->mesh.rest);
