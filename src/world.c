@@ -404,23 +404,38 @@ static void stage_gel_support(palp_world *w, double h) {
   /* Elastic part explicit at x_n; the h^2 A k and h A c terms sit on the factor's
    * diagonal, which makes the whole support implicit. */
   const double k = w->def.gel.support_modulus; /* [Pa/m] */
-  for (int r = 0; r < w->nfree; ++r) {
-    const int i = w->vertex_of[r];
-    const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
-    w->force[i] = v3_sub(w->force[i], v3_scale(u, k * w->sarea[i]));
-  }
   const double phi = w->def.gel.support_bulk_fraction;
+  const int n = w->nfree;
+  const int *restrict vertex_of = w->vertex_of;
+  const palp_vec3 *restrict pos = w->pos, *restrict rest = w->mesh.rest, *restrict vel = w->vel;
+  const double *restrict sarea = w->sarea, *restrict area = w->mesh.vertex_area;
+  palp_vec3 *restrict force = w->force;
+  /* With the bulk shift, the area-weighted sums of support_means in the same pass (the
+   * same terms in the same order as support_means adds them). */
+  palp_vec3 su = v3(0, 0, 0), sv = v3(0, 0, 0);
+  double sa = 0.0;
+  for (int r = 0; r < n; ++r) {
+    const int i = vertex_of[r];
+    const palp_vec3 u = v3_sub(pos[i], rest[i]);
+    force[i] = v3_sub(force[i], v3_scale(u, k * sarea[i]));
+    if (phi > 0.0) {
+      const double a = area[i];
+      su = v3_add(su, v3_scale(u, a));
+      sv = v3_add(sv, v3_scale(vel[i], a));
+      sa += a;
+    }
+  }
   if (phi > 0.0) {
     /* Bulk shift: the support resists u_i - phi u_mean (and v_i - phi v_mean), with
      * the means taken at the start of the step, explicitly; the implicit diagonal
      * h^2 A k + h A c stays (over-stiff, so it only damps). */
     const double c = has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.support_viscosity : 0.0; /* [Pa s/m] */
-    palp_vec3 um, vm;
-    support_means(w, &um, &vm);
+    const palp_vec3 um = sa > 0.0 ? v3_scale(su, 1.0 / sa) : v3(0, 0, 0); /* as support_means */
+    const palp_vec3 vm = sa > 0.0 ? v3_scale(sv, 1.0 / sa) : v3(0, 0, 0);
     const palp_vec3 b = v3_add(v3_scale(um, phi * k), v3_scale(vm, phi * c)); /* [Pa] */
-    for (int r = 0; r < w->nfree; ++r) {
-      const int i = w->vertex_of[r];
-      w->force[i] = v3_add(w->force[i], v3_scale(b, w->sarea[i]));
+    for (int r = 0; r < n; ++r) {
+      const int i = vertex_of[r];
+      force[i] = v3_add(force[i], v3_scale(b, sarea[i]));
     }
   }
 }
