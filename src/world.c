@@ -330,9 +330,9 @@ static inline double hinge_turn(const int *restrict v, const palp_vec3 *restrict
 /* Adds the hinges' forces f_k = -k_e dtheta_e g_k [N] to f; returns the largest
  * |dtheta_e| [rad]. The displacements are taken once per vertex (each vertex is in
  * ~12 hinges), and read through restrict locals: f is written while they are read,
- * and without restrict the compiler reloads every coefficient after each store. */
-/* AVX2 clone: three-operand instructions, ~14% fewer per hinge; no fused multiply-add,
- * so the same bits. */
+ * and without restrict the compiler reloads every coefficient after each store. An
+ * AVX2 clone (three-operand instructions, ~14% fewer per hinge; no fused multiply-add,
+ * so the same bits). */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
@@ -455,10 +455,10 @@ static void stage_gel_support(palp_world *w, double h) {
 static int refactor(palp_world *w, double h);
 static void job_free(palp_factor_job *j);
 
-/* The fold v = x_k^2 > v or !(x_k^2 <= v) ? x_k^2 : v over k from v = 0 (a NaN x_k^2
- * takes v's place, and a later x_k^2 replaces it). Without a NaN that is the largest
- * square, in any order, and the SSE2 path (every x86-64) takes it two at a time; with
- * one, the fold itself runs, so the result is the same either way. */
+/* The solve's largest squared speed: the fold v = !(x_k^2 <= v) ? x_k^2 : v over k from
+ * v = 0 (a NaN square takes v's place, and a later square replaces it again). Without
+ * a NaN that is the largest square, in any order, and the SSE2 path (every x86-64)
+ * takes it two at a time; with one, the fold itself runs: the same result either way. */
 static double max_square(const double *restrict x, int n) {
   double v = 0.0;
   int k = 0;
