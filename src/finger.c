@@ -286,8 +286,7 @@ double palp_smooth_patch_max_offset(const palp_smooth_patch *sp, const palp_vec3
 
 palp_vec3 palp_smooth_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c, const palp_vec3 N[3],
                               const palp_smooth_patch *sp, double bary[3], palp_vec3 *normal) {
-  palp_tri_closest(p, a, b, c, bary);
-  palp_vec3 S, t1, t2;
+  palp_vec3 S, t1, t2; /* from the facet's closest point, bary on entry */
   for (int it = 0; it < 2; ++it) {
     S = palp_smooth_point(sp, a, b, c, N, bary, &t1, &t2);
     /* the patch linearised at bary: S + t1 (b_1' - b_1) + t2 (b_2' - b_2) over the

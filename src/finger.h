@@ -77,8 +77,10 @@ palp_vec3 palp_smooth_point(const palp_smooth_patch *sp, palp_vec3 a, palp_vec3 
 
 /* Closest point to p of the patch over the current triangle (a, b, c), with its
  * barycentric weights (exact zeros on an edge or at a vertex, as palp_tri_closest) and
- * the patch's outward unit normal there. Two Gauss-Newton steps from the flat facet's
- * closest point, each the closest point of the patch's tangent-plane triangle at the
+ * the patch's outward unit normal there. On entry bary holds the flat facet's closest
+ * point's weights, as palp_tri_closest(p, a, b, c, bary) gives them (the caller has
+ * them already: its pruning needs the facet's point). Two Gauss-Newton steps from that
+ * point, each the closest point of the patch's tangent-plane triangle at the
  * current weights (so the weights stay in the triangle); each step cuts the error of
  * the point by about |p - S| / (radius of curvature), ~0.2 for an 8 mm tip on a 40 mm
  * dome, and the distance's error is second order in it: from <= 0.7 mm on the facet,

@@ -6,11 +6,19 @@
 
 #include "vec3.h"
 
-double palp_gel_volume_gradient(const palp_mesh *m, const palp_vec3 *p, palp_vec3 *g) {
-  memset(g, 0, sizeof *g * (size_t)m->vertex_count);
+/* restrict: g is written while p is read, and without it the compiler reloads the
+ * positions after every store to g (the same operations, the same bits). An AVX2 clone
+ * (its three-operand instructions: ~15% fewer per triangle), static so that the public
+ * function stays a plain symbol; no fused multiply-add, so both give the same bits. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static double volume_gradient(int nv, int nt, const int (*restrict tri)[3], const palp_vec3 *restrict p,
+                              palp_vec3 *restrict g) {
+  memset(g, 0, sizeof *g * (size_t)nv);
   double v6 = 0.0;
-  for (int t = 0; t < m->dome_triangle_count; ++t) {
-    const int a = m->tri[t][0], b = m->tri[t][1], c = m->tri[t][2];
+  for (int t = 0; t < nt; ++t) {
+    const int a = tri[t][0], b = tri[t][1], c = tri[t][2];
     const palp_vec3 bc = v3_cross(p[b], p[c]);
     v6 += v3_dot(p[a], bc);
     /* d/dx_a [x_a . (x_b x x_c)] = x_b x x_c, and cyclically. */
@@ -18,8 +26,12 @@ double palp_gel_volume_gradient(const palp_mesh *m, const palp_vec3 *p, palp_vec
     g[b] = v3_add(g[b], v3_cross(p[c], p[a]));
     g[c] = v3_add(g[c], v3_cross(p[a], p[b]));
   }
-  for (int i = 0; i < m->vertex_count; ++i) g[i] = v3_scale(g[i], 1.0 / 6.0);
+  for (int i = 0; i < nv; ++i) g[i] = v3_scale(g[i], 1.0 / 6.0);
   return v6 / 6.0;
+}
+
+double palp_gel_volume_gradient(const palp_mesh *m, const palp_vec3 *p, palp_vec3 *g) {
+  return volume_gradient(m->vertex_count, m->dome_triangle_count, (const int(*)[3])m->tri, p, g);
 }
 
 double palp_gel_polytropic(const palp_gel_params *g, double V0, double V, double *dp_dV) {

@@ -19,12 +19,17 @@
  * the library's default, and the scene's in the server core's view): run both in the same
  * hour to see what the smooth surface costs (docs/haptics.md).
  *
+ * --hash also prints, per case of the server core's view, an FNV-1a fold of
+ * palp_world_hash after every step (outside the timed calls): equal before and after a
+ * change that claims to keep the bits (docs/model.md, "The stages around the solve").
+ *
  *   bench_model_step [--steps N] [--quick] [--bending D] [--worlds K] [--core-only] [--cpu C]
- *                    [--surface smooth|facets]
+ *                    [--surface smooth|facets] [--hash]
  */
 #define _GNU_SOURCE
 #include <math.h>
 #include <sched.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -58,7 +63,7 @@ static palp_vec3 press_device(int i, double t) {
 
 /* K worlds stepped in turn (rounds of one step each) against one world alone, the same
  * trajectory per world; median / p99 of single steps, and the stages' means. */
-static int server_core(int K, int rounds, int surface) {
+static int server_core(int K, int rounds, int surface, int hash) {
   const char *path = PALP_CONFIG_DIR "/paper_step_long_term.json";
   palp_scene sc;
   char err[256];
@@ -93,12 +98,14 @@ static int server_core(int K, int rounds, int surface) {
       f[i] = palp_world_add_finger(w[i], press_device(i, 0), 0.008);
     }
     int m = 0;
+    uint64_t H = 14695981039346656037ull; /* FNV-1a over the worlds' state hashes, step by step */
     for (int k = 0; k < rounds; ++k)
       for (int i = 0; i < n; ++i) {
         palp_world_set_finger(w[i], f[i], press_device(i, k / 250.0), 0.008);
         const double s = now_s();
         palp_world_step(w[i]);
         t[m++] = now_s() - s;
+        if (hash) H = (H ^ palp_world_hash(w[i])) * 1099511628211ull;
       }
     double stage[PALP_STAGE_COUNT] = {0};
     int64_t nsteps = 0;
@@ -115,6 +122,7 @@ static int server_core(int K, int rounds, int surface) {
     for (int s = 0; s < PALP_STAGE_COUNT; ++s)
       if (tm.name[s]) printf(" %s %.1f", tm.name[s], 1e6 * stage[s] / (double)(nsteps ? nsteps : 1));
     printf("\n");
+    if (hash) printf("    state hash over every step of the %d world%s: %016llx\n", n, n > 1 ? "s" : "", (unsigned long long)H);
     for (int i = 0; i < n; ++i) palp_world_destroy(w[i]);
     free(w), free(f), free(t);
   }
@@ -123,7 +131,7 @@ static int server_core(int K, int rounds, int surface) {
 }
 
 int main(int argc, char **argv) {
-  int steps = 3000, quick = 0, worlds = 12, core_only = 0, cpu = 0, surface = -1;
+  int steps = 3000, quick = 0, worlds = 12, core_only = 0, cpu = 0, surface = -1, hash = 0;
   double bending = 0.0; /* [N m] */
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--steps") && i + 1 < argc) steps = atoi(argv[++i]);
@@ -131,6 +139,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--quick")) quick = 1;
     else if (!strcmp(argv[i], "--worlds") && i + 1 < argc) worlds = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--core-only")) core_only = 1;
+    else if (!strcmp(argv[i], "--hash")) hash = 1;
     else if (!strcmp(argv[i], "--cpu") && i + 1 < argc) cpu = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--surface") && i + 1 < argc) {
       if (palp_finger_surface_from_name(argv[++i], &surface)) {
@@ -145,7 +154,7 @@ int main(int argc, char **argv) {
   CPU_ZERO(&set);
   CPU_SET(cpu, &set);
   const int pinned = sched_setaffinity(0, sizeof set, &set) == 0;
-  if (core_only) return server_core(worlds, quick ? 200 : 1000, surface);
+  if (core_only) return server_core(worlds, quick ? 200 : 1000, surface, hash);
   printf("palp model step benchmark: %d steps per case, all effects on, 3 N uniform load at polar 30 deg%s, "
          "bending stiffness %g N m\n", steps, pinned ? ", pinned to one CPU" : "", bending);
   printf("%8s %7s %8s %11s %11s %11s %9s %10s %10s\n", "vertices", "dt_ms", "unknowns", "median_us", "p99_us",
@@ -248,5 +257,5 @@ int main(int argc, char **argv) {
       palp_world_destroy(w);
     }
   free(t);
-  return server_core(worlds, quick ? 200 : 1000, surface);
+  return server_core(worlds, quick ? 200 : 1000, surface, hash);
 }
