@@ -141,7 +141,9 @@ static void test_map(void) {
  * (measured 0.21 at level 2, whose faces are about a real-time edge across); and the
  * patch stays in the vertex's one-ring widened by one FE face: no weighted node
  * farther from the vertex than its longest edge plus the largest surface face
- * diagonal (measured up to 2.4 longest edges). */
+ * diagonal (measured up to 2.4 longest edges). And the configurations: the patch by
+ * default and for paper_long_term / breast_tissue, the point for paper_instantaneous and
+ * its c10_reading alias, an explicit "load_map" over both, a bad value an error. */
 static void test_map_patch(void) {
   palp_fem_mesh_def d = palp_fem_mesh_default_def();
   d.level = 2;
@@ -218,6 +220,30 @@ static void test_map_patch(void) {
   palp_fem_map_destroy(&map);
   palp_mesh_destroy(&rt);
   palp_fem_mesh_destroy(&m);
+  /* which map a configuration reads: the patch by default and for the sound profiles,
+   * the point for the paper's literal reproduction, an explicit key over either */
+  static const struct {
+    const char *json;
+    int want; /* palp_fem_load_map, or -1 for a parse error naming load_map */
+  } cases[] = {{"{}", PALP_FEM_LOAD_PATCH},
+               {"{\"material\":\"paper_instantaneous\"}", PALP_FEM_LOAD_POINT},
+               {"{\"c10_reading\":\"instantaneous\"}", PALP_FEM_LOAD_POINT},
+               {"{\"material\":\"breast_tissue\"}", PALP_FEM_LOAD_PATCH},
+               {"{\"material\":\"paper_instantaneous\",\"load_map\":\"patch\"}", PALP_FEM_LOAD_PATCH},
+               {"{\"load_map\":\"point\"}", PALP_FEM_LOAD_POINT},
+               {"{\"load_map\":\"nodes\"}", -1},
+               {"{\"load_map\":1}", -1}};
+  for (size_t i = 0; i < sizeof cases / sizeof *cases; ++i) {
+    palp_fem_config cfg = palp_fem_default_config();
+    char err[256] = "";
+    const int rc = palp_fem_config_parse(cases[i].json, &cfg, err, sizeof err);
+    if (cases[i].want < 0)
+      CHECK(rc != 0 && strstr(err, "load_map"), "config %s: expected an error naming load_map, got %d '%s'", cases[i].json,
+            rc, err);
+    else
+      CHECK(rc == 0 && (int)cfg.load_map == cases[i].want, "config %s: load_map %d, expected %d (%s)", cases[i].json,
+            (int)cfg.load_map, cases[i].want, err);
+  }
 }
 
 /* Newton's convergence order q = log(r_k+1 / r_k) / log(r_k / r_k-1), away from the
