@@ -3,7 +3,7 @@
  * the time of one 400-frame distribution run, against the paper's 22.5 s per step.
  *
  *   bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading long_term|instantaneous]
- *             [--distribution single|uniform|gaussian|gaussian_offset]
+ *             [--distribution single|uniform|gaussian|gaussian_offset] [--load-map point|patch]
  *
  * Each level runs the scene's first N frames (default 20: the transient after
  * the 3 N step, the hardest part of the run) with the cache off. The run's setup
@@ -80,12 +80,13 @@ static void frame_stats(const double *x, int n, double *med, double *p90, double
 
 
 int main(int argc, char **argv) {
-  const char *scene_path = "config/paper_step.json", *levels = "2,4", *reading = NULL, *dist = NULL;
+  const char *scene_path = "config/paper_step.json", *levels = "2,4", *reading = NULL, *dist = NULL, *load_map = NULL;
   int frames = 20, kernel = 0, lag = -1, threads = 0, per_frame = 0;
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--levels") && i + 1 < argc) levels = argv[++i];
     else if (!strcmp(argv[i], "--frames") && i + 1 < argc) frames = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--reading") && i + 1 < argc) reading = argv[++i];
+    else if (!strcmp(argv[i], "--load-map") && i + 1 < argc) load_map = argv[++i];
     else if (!strcmp(argv[i], "--distribution") && i + 1 < argc) dist = argv[++i];
     else if (!strcmp(argv[i], "--kernel")) kernel = 1;
     else if (!strcmp(argv[i], "--factor-lag") && i + 1 < argc) lag = atoi(argv[++i]);
@@ -93,7 +94,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--per-frame")) per_frame = 1;
     else if (argv[i][0] != '-') scene_path = argv[i];
     else {
-      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel] [--factor-lag N] [--threads N] [--per-frame]\n"
+      fprintf(stderr, "usage: bench_fem [SCENE.json] [--levels 2,4] [--frames N] [--reading R] [--distribution D] [--kernel] [--factor-lag N] [--threads N] [--load-map point|patch] [--per-frame]\n"
                       "  --kernel: time the assembly alone (tangent and residual, 1 and 2 threads) and one solve instead of frames\n"
                       "  --factor-lag N: the config's factor_lag (0: renew the factor in the foreground)\n"
                       "  --threads N: the config's assembly threads\n"
@@ -125,6 +126,8 @@ int main(int argc, char **argv) {
     if (lag >= 0) cfg.factor_lag = lag;
     if (threads > 0) cfg.threads = threads;
     if (reading) cfg.c10_reading = strcmp(reading, "long_term") ? PALP_FEM_C10_INSTANTANEOUS : PALP_FEM_C10_LONG_TERM;
+    /* the default config's map (patch) unless asked: the point map is the paper's literal nodal load */
+    if (load_map) cfg.load_map = strcmp(load_map, "point") ? PALP_FEM_LOAD_PATCH : PALP_FEM_LOAD_POINT;
     stamps st = {.t = calloc((size_t)scene.frames + 1, sizeof(double)),
                  .ct = calloc((size_t)scene.frames + 1, sizeof(double)),
                  .cp = calloc((size_t)scene.frames + 1, sizeof(double)),
