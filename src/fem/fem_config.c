@@ -94,7 +94,10 @@ int palp_fem_config_set_material(palp_fem_config *cfg, const char *name, char *e
     cfg->membrane = tissue_material(334e3, 0.499); /* breast skin, Sutradhar & Miller 2013 */
     cfg->gel = tissue_material(15e3, 0.499);       /* fat secant modulus, Samani 2007 / Krouskop 1998 / Wellman 1999 */
     cfg->c10_reading = PALP_FEM_C10_LONG_TERM;
-    cfg->load_map = PALP_FEM_LOAD_PATCH;
+    /* the point map for now: with the patch map the level-2 FEM of distribution IV fails
+     * in the free recovery (an element inverts at t = 3.13 s, after 8 cut-backs), not
+     * yet diagnosed; the point map runs all four (docs/fem.md, "Surface map") */
+    cfg->load_map = PALP_FEM_LOAD_POINT;
   } else {
     snprintf(err, errlen, "material: unknown profile \"%.40s\" (expected paper_long_term, paper_instantaneous or "
              "breast_tissue)", name ? name : "");

@@ -40,8 +40,9 @@ reference cannot go stale silently when the FEM changes.
 
 breast_tissue: the same for config/params/breast_tissue.json (scene
 paper_step_breast_tissue.json) against the level-2 breast-tissue FEM: RMSE at
-most 9% of the FEM's peak (measured 7.5% with the patch load map, 7.2% with the point
-map) and the peak within 10% (the issue's target; measured -2.5%, point map -6.5%).
+most 9% of the FEM's peak (measured 7.2%; the profile's FEM uses the point load map, and
+with the patch map it would be 7.5%) and the peak within 10% (the issue's target; measured
+-6.5%; -2.5% with the patch map).
 
 errors: bad inputs end with a clear message on stderr, nothing on stdout and a
 non-zero exit status (1 for unusable inputs, 2 for command-line errors).
