@@ -93,6 +93,7 @@ typedef struct finger_scratch {
   int *vtri_start, *vtri; /* both surfaces: the collection marks the triangles at its candidates */
   int *clist;             /* [vertex_count] this collection's candidate vertices */
   uint64_t *tbits;        /* [ceil(dome triangles / 64)] triangles at a candidate, cleared as read */
+  int *tlist;             /* [dome triangles] those triangles, ascending */
   int64_t stamp;
 } finger_scratch;
 
@@ -797,68 +798,70 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
       tbits[fs->vtri[z] >> 6] |= (uint64_t)1 << (fs->vtri[z] & 63);
   int64_t key[PALP_FINGER_MAX_CON];
   int nc = 0;
+  /* the marked triangles in ascending order, the bitmap cleared for the next collection */
+  int *restrict tlist = fs->tlist, ntri = 0;
   const int nwords = m->dome_triangle_count / 64 + 1;
   for (int wd = 0; wd < nwords; ++wd) {
-    uint64_t bits = tbits[wd];
-    tbits[wd] = 0; /* cleared for the next collection */
-    for (; bits; bits &= bits - 1) {
-      const int t = 64 * wd + __builtin_ctzll(bits); /* the lowest marked triangle left */
-      const int *T = m->tri[t];
-      if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
-      const palp_vec3 a = fp[T[0]], b = fp[T[1]], c = fp[T[2]];
-      double bary[3];
-      palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
-      const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
-      const double fl = v3_len(face);
-      if (!(fl > 0.0)) continue;
-      palp_vec3 nf = v3_scale(face, 1.0 / fl);
-      if (fs->patch) {
-        /* The patch lies within patch_max of the facet, so its gap g0 >= |p0 - q| - R -
-         * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
-         * bounds by the 1 mm below makes no row, and its patch is not searched. */
-        if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
-        const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
-        q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
-      }
-      const palp_vec3 pq = v3_sub(p0, q);
-      const double dist = v3_len(pq);
-      const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
-      if (v3_dot(n, nf) <= 0.0) continue; /* the proxy is behind this triangle: it cannot touch it */
-      const double g0 = dist - R;
-      const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
-      if (bt > 1e-3 && g0 > 1e-3) continue;
-      /* closest feature: a vertex (two zero weights), an edge (one) or the face */
-      int zeros = 0, nz[3], nn = 0;
-      for (int e = 0; e < 3; ++e)
-        if (bary[e] == 0.0) zeros++;
-        else nz[nn++] = T[e];
-      int64_t kf = zeros == 2   ? nz[0]
-                   : zeros == 1 ? (int64_t)nv + (int64_t)(nz[0] < nz[1] ? nz[0] : nz[1]) * nv +
-                                      (nz[0] < nz[1] ? nz[1] : nz[0])
-                                : -1 - (int64_t)t;
-      int dup = 0;
-      for (int q2 = 0; q2 < nc && !dup; ++q2) dup = key[q2] == kf;
-      if (dup) continue;
-      int slot = nc;
-      if (nc == PALP_FINGER_MAX_CON / 2) {
-        /* Full (half the rows stay for the base): replace the farthest from contact. */
-        slot = 0;
-        for (int q2 = 1; q2 < nc; ++q2)
-          if (fs->b[q2] > fs->b[slot]) slot = q2;
-        if (!(bt < fs->b[slot])) continue;
-      } else {
-        nc++;
-      }
-      key[slot] = kf;
-      k->ctri[slot] = t;
-      memcpy(k->cbary[slot], bary, sizeof bary);
-      k->cn[slot] = n;
-      k->cq[slot] = q;
-      fs->b[slot] = bt;
-      k->clam[slot] = 0.0;
-      for (int q2 = 0; q2 < nprev; ++q2)
-        if ((int64_t)prev_tri_lam[q2][0] == kf) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
+    for (uint64_t bits = tbits[wd]; bits; bits &= bits - 1) tlist[ntri++] = 64 * wd + __builtin_ctzll(bits);
+    tbits[wd] = 0;
+  }
+  for (int z = 0; z < ntri; ++z) {
+    const int t = tlist[z];
+    const int *T = m->tri[t];
+    if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
+    const palp_vec3 a = fp[T[0]], b = fp[T[1]], c = fp[T[2]];
+    double bary[3];
+    palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
+    const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
+    const double fl = v3_len(face);
+    if (!(fl > 0.0)) continue;
+    palp_vec3 nf = v3_scale(face, 1.0 / fl);
+    if (fs->patch) {
+      /* The patch lies within patch_max of the facet, so its gap g0 >= |p0 - q| - R -
+       * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
+       * bounds by the 1 mm below makes no row, and its patch is not searched. */
+      if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
+      const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
+      q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
     }
+    const palp_vec3 pq = v3_sub(p0, q);
+    const double dist = v3_len(pq);
+    const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
+    if (v3_dot(n, nf) <= 0.0) continue; /* the proxy is behind this triangle: it cannot touch it */
+    const double g0 = dist - R;
+    const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
+    if (bt > 1e-3 && g0 > 1e-3) continue;
+    /* closest feature: a vertex (two zero weights), an edge (one) or the face */
+    int zeros = 0, nz[3], nn = 0;
+    for (int e = 0; e < 3; ++e)
+      if (bary[e] == 0.0) zeros++;
+      else nz[nn++] = T[e];
+    int64_t kf = zeros == 2   ? nz[0]
+                 : zeros == 1 ? (int64_t)nv + (int64_t)(nz[0] < nz[1] ? nz[0] : nz[1]) * nv +
+                                    (nz[0] < nz[1] ? nz[1] : nz[0])
+                              : -1 - (int64_t)t;
+    int dup = 0;
+    for (int q2 = 0; q2 < nc && !dup; ++q2) dup = key[q2] == kf;
+    if (dup) continue;
+    int slot = nc;
+    if (nc == PALP_FINGER_MAX_CON / 2) {
+      /* Full (half the rows stay for the base): replace the farthest from contact. */
+      slot = 0;
+      for (int q2 = 1; q2 < nc; ++q2)
+        if (fs->b[q2] > fs->b[slot]) slot = q2;
+      if (!(bt < fs->b[slot])) continue;
+    } else {
+      nc++;
+    }
+    key[slot] = kf;
+    k->ctri[slot] = t;
+    memcpy(k->cbary[slot], bary, sizeof bary);
+    k->cn[slot] = n;
+    k->cq[slot] = q;
+    fs->b[slot] = bt;
+    k->clam[slot] = 0.0;
+    for (int q2 = 0; q2 < nprev; ++q2)
+      if ((int64_t)prev_tri_lam[q2][0] == kf) k->clam[slot] = prev_tri_lam[q2][1]; /* warm start */
   }
   /* The table the phantom stands on stops the fingertip too: p_z >= R, a finger row
    * with no surface share (the device feels the table through the coupling). */
@@ -1635,7 +1638,7 @@ void palp_world_destroy(palp_world *w) {
     free(fs->G);
     free(fs->vloc), free(fs->lvert), free(fs->G_lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
     free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
-    free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tcross), free(fs->tstamp), free(fs);
+    free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
   }
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
@@ -2238,6 +2241,7 @@ static int finger_scratch_create(palp_world *w) {
     fs->vtri = xcalloc(3 * (size_t)nt + 1, sizeof(int), &fail);
     fs->clist = xcalloc((size_t)nv, sizeof(int), &fail);
     fs->tbits = xcalloc((size_t)nt / 64 + 1, sizeof(uint64_t), &fail);
+    fs->tlist = xcalloc((size_t)nt + 1, sizeof(int), &fail);
     int *fill = xcalloc((size_t)nv + 1, sizeof(int), &fail);
     if (fail) {
       free(fill);
