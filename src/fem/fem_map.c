@@ -293,8 +293,8 @@ int palp_fem_map_create_patch(const palp_fem_mesh *mesh, const palp_mesh *rt, pa
   }
   size_t n = 0;
   for (int f = 0; f < nf && !rc; ++f)
-    for (int i = 0; i < G; ++i)
-      for (int j = 0; j < G; ++j) {
+    for (int i = 0; i < G && !rc; ++i)
+      for (int j = 0; j < G && !rc; ++j) {
         double N[4], X[3], Xa[3], Xb[3];
         face_point(mesh, faces[f], gp[i], gp[j], N, X, Xa, Xb);
         const double cr[3] = {Xa[1] * Xb[2] - Xa[2] * Xb[1], Xa[2] * Xb[0] - Xa[0] * Xb[2], Xa[0] * Xb[1] - Xa[1] * Xb[0]};
@@ -312,7 +312,7 @@ int palp_fem_map_create_patch(const palp_fem_mesh *mesh, const palp_mesh *rt, pa
         }
         if (hit < 0) {
           rc = PALP_ERANGE; /* the dome is star-shaped from the base centre: every ray up hits it */
-          break;
+          continue;
         }
         for (int k = 0; k < 3; ++k) {
           const int v = rt->tri[hit][k];
