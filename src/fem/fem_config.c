@@ -18,7 +18,9 @@
  *   "dt": 0.01, "newmark_beta": 0.25, "newmark_gamma": 0.5, "max_newton": 12,
  *   "newton_rtol": 1e-4, "newton_atol": 1e-9, "max_cutbacks": 8, "cache_dir": "cache/fem",
  *   "full_newton": 0, "pcg_refactor": 0, "threads": 2, "factor_lag": 3,
- *   "load_map": "point" | "patch" }
+ *   "load_map": "point" | "patch", "hht_alpha": 0 }
+ * "hht_alpha" (in [-1/3, 0]) also sets newmark_beta = (1 - alpha)^2 / 4 and
+ * newmark_gamma = 1/2 - alpha; giving either beside a nonzero alpha is an error.
  * Units: SI (m, kg/m^3, Pa, 1/Pa, s).
  *
  * "material" is applied first, so "membrane", "gel" and "c10_reading" given beside
@@ -79,25 +81,37 @@ const char *palp_fem_material_label(const char *name) {
   return "";
 }
 
+void palp_fem_config_set_hht(palp_fem_config *cfg, double alpha) {
+  cfg->hht_alpha = alpha;
+  cfg->newmark_beta = 0.25 * (1.0 - alpha) * (1.0 - alpha);
+  cfg->newmark_gamma = 0.5 - alpha;
+}
+
 int palp_fem_config_set_material(palp_fem_config *cfg, const char *name, char *err, size_t errlen) {
   if (name && strcmp(name, "paper_long_term") == 0) {
     cfg->membrane = paper_material(700.3e3);
     cfg->gel = paper_material(10.3e3);
     cfg->c10_reading = PALP_FEM_C10_LONG_TERM;
     cfg->load_map = PALP_FEM_LOAD_PATCH;
+    if (cfg->hht_alpha != 0.0) palp_fem_config_set_hht(cfg, 0.0); /* the trapezoidal rule; its Prony terms damp */
   } else if (name && strcmp(name, "paper_instantaneous") == 0) {
     cfg->membrane = paper_material(700.3e3);
     cfg->gel = paper_material(10.3e3);
     cfg->c10_reading = PALP_FEM_C10_INSTANTANEOUS;
     cfg->load_map = PALP_FEM_LOAD_POINT; /* the reproduction reads the loads literally too */
+    if (cfg->hht_alpha != 0.0) palp_fem_config_set_hht(cfg, 0.0);
   } else if (name && strcmp(name, "breast_tissue") == 0) {
     cfg->membrane = tissue_material(334e3, 0.499); /* breast skin, Sutradhar & Miller 2013 */
     cfg->gel = tissue_material(15e3, 0.499);       /* fat secant modulus, Samani 2007 / Krouskop 1998 / Wellman 1999 */
     cfg->c10_reading = PALP_FEM_C10_LONG_TERM;
-    /* the point map for now: with the patch map the level-2 FEM of distribution IV fails
-     * in the free recovery (an element inverts at t = 3.13 s, after 8 cut-backs), not
-     * yet diagnosed; the point map runs all four (docs/fem.md, "Surface map") */
-    cfg->load_map = PALP_FEM_LOAD_POINT;
+    cfg->load_map = PALP_FEM_LOAD_PATCH;
+    /* HHT-alpha at Abaqus's default -0.05: this profile's one Prony term (tau 0.5 s)
+     * leaves the modes a 10 ms step cannot resolve undamped, and under the trapezoidal
+     * rule they rang without decay (the peak vertex jumping 3.6-5.6 mm from frame to
+     * frame under a constant 3 N, 0.2-0.6 m/s of velocity in the mesh) until, with the
+     * patch map, distribution IV's recovery blew up at t = 3.13 s (docs/fem.md,
+     * "Time integration") */
+    palp_fem_config_set_hht(cfg, -0.05);
   } else {
     snprintf(err, errlen, "material: unknown profile \"%.40s\" (expected paper_long_term, paper_instantaneous or "
              "breast_tissue)", name ? name : "");
@@ -248,7 +262,7 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   }
   static const char *const keys[] = {"mesh",         "inp",        "material",   "membrane",    "gel",          "c10_reading",
                                      "dt",           "newmark_beta", "newmark_gamma", "max_newton", "newton_rtol",
-                                     "newton_atol",  "max_cutbacks", "cache_dir",   "full_newton", "pcg_refactor", "threads", "factor_lag", "load_map", NULL};
+                                     "newton_atol",  "max_cutbacks", "cache_dir",   "full_newton", "pcg_refactor", "threads", "factor_lag", "load_map", "hht_alpha", NULL};
   int rc = only_keys(root, keys, "", err, errlen);
   const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
   if (!rc && mesh) {
@@ -313,6 +327,15 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
       snprintf(err, errlen, "load_map: expected \"point\" or \"patch\"");
       rc = PALP_EPARSE;
     }
+  }
+  if (!rc && cJSON_GetObjectItemCaseSensitive(root, "hht_alpha")) {
+    rc = number(root, "hht_alpha", "", &cfg->hht_alpha, err, errlen);
+    if (!rc && cfg->hht_alpha != 0.0 && (cJSON_GetObjectItemCaseSensitive(root, "newmark_beta") ||
+                                         cJSON_GetObjectItemCaseSensitive(root, "newmark_gamma"))) {
+      snprintf(err, errlen, "hht_alpha sets newmark_beta and newmark_gamma; give one or the other");
+      rc = PALP_EINVAL;
+    }
+    if (!rc) palp_fem_config_set_hht(cfg, cfg->hht_alpha);
   }
   cJSON_Delete(root);
   if (!rc) rc = palp_fem_config_validate(cfg, err, errlen);
@@ -387,6 +410,12 @@ int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen)
   if (!(c->newmark_beta > 0.0) || !(c->newmark_gamma >= 0.5) ||
       c->newmark_beta < 0.25 * (c->newmark_gamma + 0.5) * (c->newmark_gamma + 0.5) - 1e-12) {
     snprintf(err, errlen, "newmark: need gamma >= 1/2 and beta >= (gamma + 1/2)^2 / 4 (unconditional stability)");
+    return PALP_EINVAL;
+  }
+  if (!(c->hht_alpha >= -1.0 / 3.0 - 1e-12 && c->hht_alpha <= 0.0) ||
+      (c->hht_alpha != 0.0 && (fabs(c->newmark_beta - 0.25 * (1.0 - c->hht_alpha) * (1.0 - c->hht_alpha)) > 1e-12 ||
+                               fabs(c->newmark_gamma - (0.5 - c->hht_alpha)) > 1e-12))) {
+    snprintf(err, errlen, "hht_alpha: expected -1/3..0, with newmark_beta = (1 - alpha)^2 / 4 and newmark_gamma = 1/2 - alpha");
     return PALP_EINVAL;
   }
   if (c->max_newton < 1 || c->max_newton > 60 || c->max_cutbacks < 0 || c->max_cutbacks > 20 || c->pcg_refactor < 0 || c->threads < 1 || c->threads > 16 ||

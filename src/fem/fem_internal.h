@@ -131,6 +131,9 @@ typedef struct palp_fem_model {
   int trace_count;
   double trace[64];
   double newmark_beta, newmark_gamma;
+  double hht_alpha;   /* 0: Newmark; else HHT-alpha (palp_fem_config) */
+  double *fint_prev;  /* [ndof] internal force at the last committed state (HHT only) [N] */
+  double *fext_prev;  /* [ndof] external force of the last committed step (HHT only) [N] */
   double rtol, atol;
   int max_newton, max_cutbacks;
   char err[256];

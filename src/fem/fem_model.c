@@ -6,6 +6,12 @@
  *   a+ = (u+ - u - dt v) / (beta dt^2) - (1 / (2 beta) - 1) a
  *   v+ = v + dt ((1 - gamma) a + gamma a+)
  *   r(u+) = f_ext+ - M a+ - f_int(u+) = 0,   K_eff = K_T + M / (beta dt^2)
+ * HHT-alpha (hht_alpha != 0; Hilber, Hughes & Taylor 1977), with beta = (1 - alpha)^2 / 4
+ * and gamma = 1/2 - alpha:
+ *   r(u+) = (1 + alpha) f_ext+ - alpha f_ext - M a+ - (1 + alpha) f_int(u+) + alpha f_int(u),
+ *   K_eff = (1 + alpha) K_T + M / (beta dt^2)
+ * (f_ext the force of the previous step, f_int(u) the internal force the previous
+ * step converged to, viscoelastic history included).
  * Newton stops when ||r|| <= rtol * max(||f_ext||, ||f_int||, ||M a||) + atol, r over
  * the free equations, ||f_int|| over all (reactions included). A step that does not converge within max_newton
  * iterations, inverts an element, or meets an indefinite K_eff is retried with
@@ -44,6 +50,8 @@ void palp_fem_model_destroy(palp_fem_model *m) {
   free(m->S0t);
   free(m->Ht);
   free(m->fint);
+  free(m->fint_prev);
+  free(m->fext_prev);
   free(m->fext);
   free(m->res);
   free(m->du);
@@ -77,6 +85,7 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   for (int r = 0; r < 2; ++r) m->mat[r].prony_count = m->nprony;
   m->newmark_beta = cfg->newmark_beta;
   m->newmark_gamma = cfg->newmark_gamma;
+  m->hht_alpha = cfg->hht_alpha;
   m->rtol = cfg->newton_rtol;
   m->atol = cfg->newton_atol;
   m->max_newton = cfg->max_newton;
@@ -107,6 +116,14 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   m->du = calloc(nd, sizeof(double));
   m->utrial = calloc(nd, sizeof(double));
   m->atrial = calloc(nd, sizeof(double));
+  if (m->hht_alpha != 0.0) {
+    m->fint_prev = calloc(nd, sizeof(double));
+    m->fext_prev = calloc(nd, sizeof(double));
+    if (!m->fint_prev || !m->fext_prev) {
+      palp_fem_model_destroy(m);
+      return PALP_ENOMEM;
+    }
+  }
   if (!m->eq || !m->prescribed || !m->mass || !m->gp_dNdX || !m->gp_w || !m->vol0 || !m->u || !m->v || !m->a ||
       !m->S0 || !m->H || !m->S0t || !m->Ht || !m->fint || !m->fext || !m->res || !m->du || !m->utrial ||
       !m->atrial) {
@@ -823,6 +840,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
   const size_t nd = (size_t)m->ndof;
   const double beta = m->newmark_beta;
   const double c0 = 1.0 / (beta * dt * dt), c1 = 1.0 / (beta * dt), c2 = 1.0 / (2.0 * beta) - 1.0;
+  const double alpha = m->hht_alpha;
   double *u = m->utrial, *a = m->atrial;
   /* Newton starts from the last converged state: extrapolating with the velocity
    * (u + dt v, or + dt^2/2 a) was tried and costs more iterations and cut-backs,
@@ -857,10 +875,18 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     int rc = palp_fem_assemble(m, u, dt, tangent);
     if (rc) return rc;
     double ma2 = 0.0;
-    for (size_t d = 0; d < nd; ++d) {
-      const double ma = m->mass[d / 3] * a[d];
-      m->res[d] = (fext ? fext[d] : 0.0) - ma - m->fint[d];
-      if (m->eq[d] >= 0) ma2 += ma * ma;
+    if (alpha == 0.0) {
+      for (size_t d = 0; d < nd; ++d) {
+        const double ma = m->mass[d / 3] * a[d];
+        m->res[d] = (fext ? fext[d] : 0.0) - ma - m->fint[d];
+        if (m->eq[d] >= 0) ma2 += ma * ma;
+      }
+    } else {
+      for (size_t d = 0; d < nd; ++d) {
+        const double ma = m->mass[d / 3] * a[d];
+        m->res[d] = (1.0 + alpha) * ((fext ? fext[d] : 0.0) - m->fint[d]) - alpha * (m->fext_prev[d] - m->fint_prev[d]) - ma;
+        if (m->eq[d] >= 0) ma2 += ma * ma;
+      }
     }
     const double r = norm_free(m, m->res);
     const double scale = fmax(fmax(fnorm, sqrt(ma2)), norm_all(m, m->fint));
@@ -870,6 +896,8 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     if (r <= m->rtol * scale + m->atol) return PALP_OK;
     if (it == m->max_newton || (it > 2 && r > 1e3 * r0)) break;
     if (!tangent && (rc = palp_fem_assemble(m, u, dt, 1))) return rc;
+    if (alpha != 0.0)
+      for (long k = 0; k < m->nnz; ++k) m->kval[k] *= 1.0 + alpha;
     /* K_eff = K_T + M / (beta dt^2): the diagonal is the last entry of each column */
     for (size_t d = 0; d < nd; ++d) {
       const int c = m->eq[d];
@@ -895,6 +923,8 @@ int palp_fem_model_prefactor(palp_fem_model *m, double dt) {
   for (size_t d = 0; d < nd; ++d) u[d] = m->eq[d] < 0 ? m->prescribed[d] : m->u[d];
   int rc = palp_fem_assemble(m, u, dt, 1);
   if (rc) return rc;
+  if (m->hht_alpha != 0.0)
+    for (long k = 0; k < m->nnz; ++k) m->kval[k] *= 1.0 + m->hht_alpha;
   for (size_t d = 0; d < nd; ++d) {
     const int c = m->eq[d];
     if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
@@ -953,6 +983,10 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
       m->v[d] += hs * ((1.0 - g) * m->a[d] + g * m->atrial[d]);
       m->a[d] = m->atrial[d];
       m->u[d] = m->utrial[d];
+    }
+    if (m->hht_alpha != 0.0) { /* the forces the next step's alpha-weighting starts from */
+      memcpy(m->fint_prev, m->fint, sizeof(double) * nd);
+      for (size_t d = 0; d < nd; ++d) m->fext_prev[d] = fext ? fext[d] : 0.0;
     }
     commit(m);
     done += h;

@@ -69,6 +69,7 @@ uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
   H(cfg->threads);
   H(cfg->factor_lag);
   if (cfg->load_map != PALP_FEM_LOAD_POINT) H(cfg->load_map); /* point runs keep their keys */
+  if (cfg->hht_alpha != 0.0) H(cfg->hht_alpha);                 /* so do Newmark runs */
   /* the scene: real-time mesh, timing, contacts */
   H(s->world.mesh.radius);
   H(s->world.mesh.vertex_count);

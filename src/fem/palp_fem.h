@@ -122,6 +122,13 @@ typedef struct palp_fem_config {
   double dt;            /* [s] time step; 0 means one step per output frame */
   double newmark_beta;  /* 0.25 (average acceleration) */
   double newmark_gamma; /* 0.5 */
+  /* Hilber-Hughes-Taylor alpha in [-1/3, 0]; 0 is plain Newmark (the trapezoidal
+   * rule, no numerical dissipation). Nonzero: the internal and external forces of
+   * the equation of motion are taken at 1 + alpha of the step, with beta = (1 -
+   * alpha)^2 / 4 and gamma = 1/2 - alpha, so modes the step cannot resolve decay
+   * and the ones it can keep second-order accuracy. Abaqus/Standard's *DYNAMIC
+   * default is -0.05 ("slight numerical damping"). */
+  double hht_alpha;
   int max_newton;       /* iterations per step before the step is cut back, 12 */
   double newton_rtol;   /* residual tolerance relative to the force scale, 1e-4 */
   double newton_atol;   /* absolute residual floor [N], 1e-9 */
@@ -142,6 +149,9 @@ typedef struct palp_fem_config {
 /* The default material profile is "paper_long_term" (docs/materials.md); a scene's
  * "material" names the one its parameters were fitted to, and the tools prefer it. */
 palp_fem_config palp_fem_default_config(void);
+/* Sets hht_alpha and the Newmark beta and gamma that go with it (alpha 0: plain
+ * Newmark, beta 1/4, gamma 1/2). */
+void palp_fem_config_set_hht(palp_fem_config *cfg, double alpha);
 /* The FEM a scene answers to: the default config with the material profile the scene's
  * parameters were fitted to, when it names one (palp_scene.material). A FEM config file
  * or --material applied after it still win. PALP_EINVAL with a message for a profile

@@ -142,9 +142,9 @@ static void test_map(void) {
  * patch stays in the vertex's one-ring widened by one FE face: no weighted node
  * farther from the vertex than its longest edge plus the largest surface face
  * diagonal (measured up to 2.4 longest edges). And the configurations: the patch by
- * default and for paper_long_term, the point for paper_instantaneous and its c10_reading
- * alias and (for now) breast_tissue, an explicit "load_map" over both, a bad value an
- * error. */
+ * default and for paper_long_term and breast_tissue (since it integrates with HHT), the
+ * point for paper_instantaneous and its c10_reading alias, an explicit "load_map" over
+ * both, a bad value an error. */
 static void test_map_patch(void) {
   palp_fem_mesh_def d = palp_fem_mesh_default_def();
   d.level = 2;
@@ -229,7 +229,7 @@ static void test_map_patch(void) {
   } cases[] = {{"{}", PALP_FEM_LOAD_PATCH},
                {"{\"material\":\"paper_instantaneous\"}", PALP_FEM_LOAD_POINT},
                {"{\"c10_reading\":\"instantaneous\"}", PALP_FEM_LOAD_POINT},
-               {"{\"material\":\"breast_tissue\"}", PALP_FEM_LOAD_POINT},
+               {"{\"material\":\"breast_tissue\"}", PALP_FEM_LOAD_PATCH},
                {"{\"material\":\"paper_instantaneous\",\"load_map\":\"patch\"}", PALP_FEM_LOAD_PATCH},
                {"{\"load_map\":\"point\"}", PALP_FEM_LOAD_POINT},
                {"{\"load_map\":\"nodes\"}", -1},

@@ -359,6 +359,115 @@ static void test_material_modulus(void) {
   printf("material modulus: max |D - D_fd| = %.3g of %.3g\n", err, dmax);
 }
 
+/* One block's axial mode, dynamically: a unit cube with its base fixed and every
+ * node held in x and y, so the four top nodes move together in z (uniaxial strain)
+ * and the cube is one mass on one spring, linear at a 1 um stroke:
+ *   k = (K + 4/3 mu) A / L = 2 / D1 + 8/3 C10 [N/m],  m = rho V / 2 (the top half of
+ * the lumped mass) [kg],  omega = sqrt(k / m) [rad/s].
+ * A step force F (k u_s with u_s = 1 um) is applied from t = 0. The same scheme is
+ * run here on the scalar equation m a + k u = F (HHT-alpha: m a+ + (1 + alpha)(k u+ -
+ * F+) - alpha (k u - F) = 0, Newmark's update with beta = (1 - alpha)^2 / 4 and gamma
+ * = 1/2 - alpha), and the FE's top displacement must follow it within 2e-5 u_s
+ * (measured 0.6-2.8e-6: the Neo-Hookean's quadratic terms at 1e-6 strain, K / M ~ 0.65
+ * of them volumetric). Properties of the scheme, on the scalar trace the FE follows:
+ *  - alpha = 0 (the trapezoidal rule) keeps the amplitude about u_s at Omega =
+ *    omega dt = 10: within 1e-6 after 200 steps (no numerical dissipation);
+ *  - alpha = -0.05 at Omega = 10 (a mode the step cannot resolve): after 50 steps the
+ *    amplitude is below 2 (0.95 / 1.05)^50 = 1.4% of the start (HHT's spectral radius
+ *    at infinite Omega is (1 + alpha) / (1 - alpha) = 0.905);
+ *  - alpha = -0.05 at Omega = 0.1 (resolved, 63 steps a period): after one period the
+ *    amplitude is above 0.999 of the start (second-order accurate: resolved modes keep
+ *    their energy). */
+static void hht_run(double alpha, double Omega, int steps, double *amp0, double *amp_end, double *worst) {
+  const double c10 = C10, d1 = D1, rho = 950.0;
+  const double k = 2.0 / d1 + 8.0 / 3.0 * c10, mass = 0.5 * rho, omega = sqrt(k / mass), dt = Omega / omega;
+  const double us = 1e-6, F = k * us;
+  palp_fem_mesh mesh;
+  block_mesh(&mesh, 1, 1, 1, 0.0);
+  palp_fem_config cfg = elastic_config(c10, d1);
+  cfg.gel.density = cfg.membrane.density = rho;
+  palp_fem_config_set_hht(&cfg, alpha);
+  palp_fem_model m;
+  CHECK(palp_fem_model_create(&m, &mesh, &cfg) == 0, "model");
+  double fext[24] = {0};
+  for (int n = 0; n < 8; ++n) {
+    palp_fem_model_prescribe(&m, n, 0, 0.0);
+    palp_fem_model_prescribe(&m, n, 1, 0.0);
+    if (mesh.x[n][2] < 0.5) palp_fem_model_prescribe(&m, n, 2, 0.0);
+    else fext[3 * n + 2] = 0.25 * F;
+  }
+  CHECK(palp_fem_model_finalize(&m) == 0, "finalize");
+  m.rtol = 1e-8; /* J - 1 ~ 1e-6 loses ~1e-10 to cancellation: the residual's floor */
+  m.atol = 1e-15;
+  m.full_newton = 1; /* exact Newton steps */
+  m.max_cutbacks = 0; /* a step that fails must fail the test, not be halved */
+  const double beta = 0.25 * (1.0 - alpha) * (1.0 - alpha), gamma = 0.5 - alpha;
+  const double c0 = 1.0 / (beta * dt * dt), c1 = 1.0 / (beta * dt), c2 = 1.0 / (2.0 * beta) - 1.0;
+  double u = 0.0, v = 0.0, a = 0.0, Fprev = 0.0;
+  *worst = 0.0;
+  *amp0 = *amp_end = 0.0;
+  for (int i = 0; i < steps; ++i) {
+    /* m (c0 (u+ - u) - c1 v - c2 a) + (1 + alpha)(k u+ - F) - alpha (k u - Fprev) = 0 */
+    const double u1 = (mass * (c0 * u + c1 * v + c2 * a) + (1.0 + alpha) * F - alpha * (Fprev - k * u)) /
+                      (mass * c0 + (1.0 + alpha) * k);
+    const double a1 = c0 * (u1 - u) - c1 * v - c2 * a;
+    v += dt * ((1.0 - gamma) * a + gamma * a1);
+    u = u1, a = a1, Fprev = F;
+    const int rc = palp_fem_step(&m, fext, dt);
+    CHECK(rc == 0, "HHT alpha %g Omega %g step %d: %s", alpha, Omega, i, m.err);
+    if (rc) break;
+    for (int n = 4; n < 8; ++n) *worst = fmax(*worst, fabs(m.u[3 * n + 2] - u) / us);
+    /* the amplitude about the static displacement, from the scalar trace's energy */
+    const double amp = sqrt((u - us) * (u - us) + v * v / (omega * omega)) / us;
+    if (i == 0) *amp0 = amp;
+    *amp_end = amp;
+  }
+  palp_fem_model_destroy(&m);
+  free_block(&mesh);
+}
+
+static void test_hht(void) {
+  double a0, a1, w;
+  hht_run(0.0, 10.0, 200, &a0, &a1, &w);
+  printf("hht: alpha 0, Omega 10: amplitude %.9f -> %.9f after 200 steps; FE off the scalar scheme by %.3g u_s\n",
+         a0, a1, w);
+  CHECK(fabs(a1 / a0 - 1.0) <= 1e-6, "trapezoidal rule lost amplitude: %.9f -> %.9f (tolerance 1e-6)", a0, a1);
+  CHECK(w <= 2e-5, "FE off the scalar trapezoidal scheme by %.3g u_s (tolerance 2e-5)", w);
+  hht_run(-0.05, 10.0, 50, &a0, &a1, &w);
+  const double bound = 2.0 * pow(0.95 / 1.05, 50);
+  printf("hht: alpha -0.05, Omega 10: amplitude %.6f -> %.6f after 50 steps (bound %.4f of the start); FE off by %.3g u_s\n",
+         a0, a1, bound, w);
+  CHECK(a1 <= bound * a0, "HHT did not damp the unresolved mode: %.6f -> %.6f (bound %.4f of the start)", a0, a1, bound);
+  CHECK(w <= 2e-5, "FE off the scalar HHT scheme by %.3g u_s (tolerance 2e-5)", w);
+  hht_run(-0.05, 0.1, 63, &a0, &a1, &w);
+  printf("hht: alpha -0.05, Omega 0.1: amplitude %.6f -> %.6f after one period; FE off by %.3g u_s\n", a0, a1, w);
+  CHECK(a1 >= 0.999 * a0, "HHT damped a resolved mode: %.6f -> %.6f (tolerance 0.1%% per period)", a0, a1);
+  CHECK(w <= 2e-5, "FE off the scalar HHT scheme by %.3g u_s (tolerance 2e-5)", w);
+  /* the configuration: hht_alpha sets beta and gamma; the breast-tissue profile
+   * takes Abaqus's default, the paper's profiles the trapezoidal rule */
+  palp_fem_config c = palp_fem_default_config();
+  char err[256];
+  CHECK(c.hht_alpha == 0.0 && c.newmark_beta == 0.25 && c.newmark_gamma == 0.5, "default is the trapezoidal rule");
+  CHECK(palp_fem_config_parse("{\"hht_alpha\": -0.1}", &c, err, sizeof err) == 0, "hht_alpha -0.1: %s", err);
+  CHECK_NEAR(c.newmark_beta, 0.3025, 1e-15, "beta = (1.1)^2 / 4");
+  CHECK_NEAR(c.newmark_gamma, 0.6, 1e-15, "gamma = 0.6");
+  c = palp_fem_default_config();
+  CHECK(palp_fem_config_parse("{\"hht_alpha\": -0.1, \"newmark_gamma\": 0.6}", &c, err, sizeof err) != 0 &&
+            strstr(err, "hht_alpha"), "hht_alpha beside newmark_gamma must be refused (got \"%s\")", err);
+  c = palp_fem_default_config();
+  CHECK(palp_fem_config_parse("{\"hht_alpha\": -0.5}", &c, err, sizeof err) != 0 && strstr(err, "hht_alpha"),
+        "hht_alpha -0.5 (below -1/3) must be refused (got \"%s\")", err);
+  c = palp_fem_default_config();
+  CHECK(palp_fem_config_parse("{\"hht_alpha\": 0.1}", &c, err, sizeof err) != 0, "hht_alpha 0.1 must be refused");
+  c = palp_fem_default_config();
+  CHECK(palp_fem_config_parse("{\"material\": \"breast_tissue\"}", &c, err, sizeof err) == 0 &&
+            c.hht_alpha == -0.05 && c.load_map == PALP_FEM_LOAD_PATCH,
+        "breast_tissue: HHT -0.05 and the patch map (got %g, map %d)", c.hht_alpha, (int)c.load_map);
+  CHECK(palp_fem_config_set_material(&c, "paper_long_term", err, sizeof err) == 0 && c.hht_alpha == 0.0 &&
+            c.newmark_beta == 0.25 && c.newmark_gamma == 0.5,
+        "paper_long_term after breast_tissue: back to the trapezoidal rule");
+}
+
 int main(int argc, char **argv) {
   const char *c = argc > 1 ? argv[1] : "all";
   const int all = strcmp(c, "all") == 0;
@@ -371,6 +480,7 @@ int main(int argc, char **argv) {
   }
   if (all || !strcmp(c, "rotation")) test_rotation();
   if (all || !strcmp(c, "prony")) test_prony();
+  if (all || !strcmp(c, "hht")) test_hht();
   if (all || !strcmp(c, "tangent")) {
     test_material_modulus();
     test_tangent(4e-6, "compressible gel");
