@@ -169,6 +169,14 @@ typedef struct palp_gel_params {
    * shift), -k A_i (u_i - phi u_mean) - c A_i (v_i - phi v_mean); 0 anchors every
    * vertex to its rest position (docs/model.md, "The gel body may shift"). */
   double support_bulk_fraction; /* [-] */
+  /* The support's relaxing share (a Maxwell branch beside the spring; 0: none): a
+   * displacement held still is resisted by k + k_r at first and by k after a few
+   * relax times, as a gel with a Prony term relaxes (the breast-tissue profile's
+   * FEM creeps over its tau = 0.5 s term under a held load). Each free vertex
+   * carries the branch's dashpot position q: force -k_r A (u - q), dq/dt = (u - q) /
+   * tau_r, implicit (docs/model.md, "The support relaxes"). */
+  double support_relax_modulus; /* k_r [Pa/m] */
+  double support_relax_time;    /* tau_r [s], > 0 when k_r > 0 */
   /* The gel moves with the membrane, so its inertia belongs to the surface
    * vertices: each free vertex carries added_mass_fraction of the gel's mass
    * density V0, shared by lumped area (docs/model.md, "Vertex weights"). */
@@ -387,7 +395,7 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out);
 uint64_t palp_world_hash(const palp_world *w);
 
 /* Per-stage timings of the last step and accumulated totals [s]. */
-#define PALP_STAGE_COUNT 12
+#define PALP_STAGE_COUNT 13
 typedef struct palp_stage_timings {
   const char *name[PALP_STAGE_COUNT];
   double last[PALP_STAGE_COUNT];

@@ -119,6 +119,13 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   if ((e = get_num(c, g, "gel.", "support_bulk_fraction", 0, &p->support_bulk_fraction))) return e;
   if (!(p->support_bulk_fraction >= 0.0 && p->support_bulk_fraction <= 1.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_bulk_fraction: must be in [0, 1] (the share of the gel's bulk shift the support follows)");
+  if ((e = get_num(c, g, "gel.", "support_relax_modulus_Pa_m", 0, &p->support_relax_modulus))) return e;
+  if (!(p->support_relax_modulus >= 0.0))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_modulus_Pa_m: must be >= 0 (0: the support does not relax)");
+  if ((e = get_num(c, g, "gel.", "support_relax_time_s", 0, &p->support_relax_time))) return e;
+  if (p->support_relax_modulus > 0.0 && !(p->support_relax_time > 0.0))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_time_s: must be > 0 with a relaxing support (got %g s)",
+                           p->support_relax_time);
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
   if (!(p->density > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
@@ -475,6 +482,10 @@ char *palp_scene_to_json(const palp_scene *s) {
   add_exact(g, "support_modulus_Pa_m", gp->support_modulus);
   add_exact(g, "support_viscosity_Pa_s_m", gp->support_viscosity);
   add_exact(g, "support_bulk_fraction", gp->support_bulk_fraction);
+  if (gp->support_relax_modulus > 0.0) {
+    add_exact(g, "support_relax_modulus_Pa_m", gp->support_relax_modulus);
+    add_exact(g, "support_relax_time_s", gp->support_relax_time);
+  }
   add_exact(g, "density_kg_m3", gp->density);
   add_exact(g, "added_mass_fraction", gp->added_mass_fraction);
   if (s->world.lesion_count > 0) {

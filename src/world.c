@@ -111,6 +111,7 @@ struct palp_world {
   palp_vec3 *pos, *vel, *force;
   double *mass;  /* [kg] lumped from membrane thickness x density x area */
   double *sarea; /* [m^2] vertex area x the lesions' support scale: the support's weight */
+  palp_vec3 *sq; /* [m] the relaxing support's dashpot positions (NULL without it) */
   int *row_of;   /* vertex -> free row, -1 if fixed */
   int *vertex_of; /* free row -> vertex */
   int nfree;
@@ -412,8 +413,16 @@ static void support_means(const palp_world *w, palp_vec3 *um, palp_vec3 *vm) {
   *vm = sa > 0.0 ? v3_scale(sv, 1.0 / sa) : v3(0, 0, 0);
 }
 
+/* The relaxing support's stiffness over a step of h [Pa/m]: backward Euler on the
+ * dashpot, q+ = (q + h/tau u+) / (1 + h/tau), makes its force at the step's end
+ * -k_r A (u+ - q+) = -k_r tau / (tau + h) A (u+ - q): a spring of that stiffness
+ * anchored at q, on the factor's diagonal like the support's own. */
+static double relax_stiffness(const palp_world *w, double h) {
+  const double kr = w->def.gel.support_relax_modulus, tr = w->def.gel.support_relax_time;
+  return w->sq && kr > 0.0 ? kr * tr / (tr + h) : 0.0;
+}
+
 static void stage_gel_support(palp_world *w, double h) {
-  (void)h;
   /* Elastic part explicit at x_n; the h^2 A k and h A c terms sit on the factor's
    * diagonal, which makes the whole support implicit. */
   const double k = w->def.gel.support_modulus; /* [Pa/m] */
@@ -436,6 +445,13 @@ static void stage_gel_support(palp_world *w, double h) {
       su = v3_add(su, v3_scale(u, a));
       sv = v3_add(sv, v3_scale(vel[i], a));
       sa += a;
+    }
+  }
+  if (w->sq) {
+    const double kr = relax_stiffness(w, h);
+    for (int r = 0; r < n; ++r) {
+      const int i = vertex_of[r];
+      force[i] = v3_sub(force[i], v3_scale(v3_sub(v3_sub(pos[i], rest[i]), w->sq[i]), kr * sarea[i]));
     }
   }
   if (phi > 0.0) {
@@ -1267,6 +1283,16 @@ static void stage_gel_state(palp_world *w, double h) {
   }
 }
 
+/* The relaxing support's dashpots follow the step's displacements (see
+ * relax_stiffness): q+ = (q + h/tau u+) / (1 + h/tau). */
+static void stage_support_state(palp_world *w, double h) {
+  const double a = h / w->def.gel.support_relax_time, b = 1.0 / (1.0 + a);
+  for (int r = 0; r < w->nfree; ++r) {
+    const int i = w->vertex_of[r];
+    w->sq[i] = v3_scale(v3_add(w->sq[i], v3_scale(v3_sub(w->pos[i], w->mesh.rest[i]), a)), b);
+  }
+}
+
 static void stage_feedback(palp_world *w, double h) {
   (void)h;
   const int gel = has(w, PALP_EFFECT_GEL_PRESSURE), support = has(w, PALP_EFFECT_GEL_SUPPORT);
@@ -1301,6 +1327,7 @@ static void stage_feedback(palp_world *w, double h) {
         const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]);
         f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->sarea[i]));
         if (phi > 0.0) f = v3_add(f, v3_scale(bulk, w->sarea[i]));
+        if (w->sq) f = v3_sub(f, v3_scale(v3_sub(u, w->sq[i]), w->def.gel.support_relax_modulus * w->sarea[i]));
       }
       k->feedback[q] = f;
       k->total = v3_add(k->total, f);
@@ -1329,6 +1356,9 @@ static int validate(const palp_world_def *d) {
     if (!(g->support_modulus > 0.0) || !isfinite(g->support_modulus)) return PALP_EINVAL;
     if (!(g->support_viscosity >= 0.0) || !isfinite(g->support_viscosity)) return PALP_EINVAL;
     if (!(g->support_bulk_fraction >= 0.0 && g->support_bulk_fraction <= 1.0)) return PALP_EINVAL;
+    if (!(g->support_relax_modulus >= 0.0) || !isfinite(g->support_relax_modulus)) return PALP_EINVAL;
+    if (g->support_relax_modulus > 0.0 && (!(g->support_relax_time > 0.0) || !isfinite(g->support_relax_time)))
+      return PALP_EINVAL;
   }
   if (d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY) {
     if (!(m->E1 > 0.0 && m->E2 > 0.0) || !isfinite(m->E1) || !isfinite(m->E2)) return PALP_EINVAL;
@@ -1374,6 +1404,7 @@ static void build_pipeline(palp_world *w) {
   w->stages[n++] = (stage){"base", stage_base};
   if (w->nlink) w->stages[n++] = (stage){"membrane_state", stage_membrane_state};
   if (has(w, PALP_EFFECT_GEL_PRESSURE)) w->stages[n++] = (stage){"gel_state", stage_gel_state};
+  if (w->sq) w->stages[n++] = (stage){"support_state", stage_support_state};
   if (has(w, PALP_EFFECT_FORCE_FEEDBACK)) w->stages[n++] = (stage){"feedback", stage_feedback};
   w->stage_count = n;
   memset(&w->timings, 0, sizeof w->timings);
@@ -1486,6 +1517,8 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
   w->force = xcalloc((size_t)nv, sizeof *w->force, &fail);
   w->mass = xcalloc((size_t)nv, sizeof *w->mass, &fail);
   w->sarea = xcalloc((size_t)nv, sizeof *w->sarea, &fail);
+  if ((def->effects & PALP_EFFECT_GEL_SUPPORT) && def->gel.support_relax_modulus > 0.0)
+    w->sq = xcalloc((size_t)nv, sizeof *w->sq, &fail);
   w->row_of = xcalloc((size_t)nv, sizeof *w->row_of, &fail);
   w->vertex_of = xcalloc((size_t)nv, sizeof *w->vertex_of, &fail);
   w->contacts = xcalloc((size_t)def->max_contacts, sizeof *w->contacts, &fail);
@@ -1641,7 +1674,7 @@ void palp_world_destroy(palp_world *w) {
     free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
   }
   free(w->contacts);
-  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->row_of), free(w->vertex_of);
+  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
   free(w->hinge), free(w->hgrad), free(w->hk), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
@@ -1683,11 +1716,12 @@ static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double 
   /* Lower triangle of each 3x3 diagonal block (duplicates are summed). */
   const double ks = has(w, PALP_EFFECT_GEL_SUPPORT) ? w->def.gel.support_modulus : 0.0; /* [Pa/m] */
   const double cs = has(w, PALP_EFFECT_GEL_SUPPORT) && has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.support_viscosity : 0.0;
+  const double kr = relax_stiffness(w, h); /* [Pa/m]; 0 without the relaxing support */
   for (int r = 0; r < w->nfree; ++r)
     for (int i = 0; i < 3; ++i) {
       const int v = w->vertex_of[r];
       ti[nnz] = tj[nnz] = 3 * r + i;
-      tx[nnz++] = w->mass[v] + (h * h * ks + h * cs) * w->sarea[v];
+      tx[nnz++] = w->mass[v] + (kr > 0.0 ? (h * h * (ks + kr) + h * cs) : (h * h * ks + h * cs)) * w->sarea[v];
     }
   for (int l = 0; l < w->nlink; ++l) {
     const double k = E * w->xsec[l] / w->rest_len[l]; /* [N/m] */
@@ -2475,6 +2509,7 @@ uint64_t palp_world_hash(const palp_world *w) {
   h = fnv1a64(h, w->vel, sizeof *w->vel * nv);
   if (w->nlink) h = fnv1a64(h, w->eps, sizeof(double) * (size_t)w->nlink);
   if (w->xs) h = fnv1a64(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
+  if (w->sq) h = fnv1a64(h, w->sq, sizeof *w->sq * nv);
   h = fnv1a64(h, &w->V, sizeof w->V);
   h = fnv1a64(h, &w->p_abs, sizeof w->p_abs);
   h = fnv1a64(h, &w->t, sizeof w->t);

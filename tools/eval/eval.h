@@ -105,6 +105,8 @@ enum {
   PALP_EVAL_P_ADDED_MASS,
   PALP_EVAL_P_BULK_FRACTION,
   PALP_EVAL_P_BENDING, /* membrane.bending_stiffness [N m]; fitted only from a start > 0 */
+  PALP_EVAL_P_RELAX_K, /* gel.support_relax_modulus [Pa/m]; fitted only from a start > 0 */
+  PALP_EVAL_P_RELAX_TAU, /* gel.support_relax_time [s]; fitted only with the modulus */
   PALP_EVAL_P_COUNT
 };
 /* "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass",

@@ -58,9 +58,9 @@
 
 const char *const palp_eval_param_name[PALP_EVAL_P_COUNT] = {
     "E1", "eta1", "E2", "eta2", "a1", "a2", "support_modulus", "support_viscosity", "added_mass",
-    "support_bulk_fraction", "bending_stiffness"};
+    "support_bulk_fraction", "bending_stiffness", "support_relax_modulus", "support_relax_time"};
 const char *const palp_eval_param_unit[PALP_EVAL_P_COUNT] = {"Pa", "Pa s", "Pa", "Pa s", "-", "Pa s/m^3", "Pa/m",
-                                                              "Pa s/m", "-", "-", "N m"};
+                                                              "Pa s/m", "-", "-", "N m", "Pa/m", "s"};
 
 void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) {
   p[PALP_EVAL_P_E1] = w->membrane.E1;
@@ -74,6 +74,8 @@ void palp_eval_params_get(const palp_world_def *w, double p[PALP_EVAL_P_COUNT]) 
   p[PALP_EVAL_P_ADDED_MASS] = w->gel.added_mass_fraction;
   p[PALP_EVAL_P_BULK_FRACTION] = w->gel.support_bulk_fraction;
   p[PALP_EVAL_P_BENDING] = w->membrane.bending_stiffness;
+  p[PALP_EVAL_P_RELAX_K] = w->gel.support_relax_modulus;
+  p[PALP_EVAL_P_RELAX_TAU] = w->gel.support_relax_time;
 }
 
 void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) {
@@ -88,6 +90,8 @@ void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) 
   w->gel.added_mass_fraction = p[PALP_EVAL_P_ADDED_MASS];
   w->gel.support_bulk_fraction = p[PALP_EVAL_P_BULK_FRACTION];
   w->membrane.bending_stiffness = p[PALP_EVAL_P_BENDING];
+  w->gel.support_relax_modulus = p[PALP_EVAL_P_RELAX_K];
+  w->gel.support_relax_time = p[PALP_EVAL_P_RELAX_TAU];
 }
 
 int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, size_t errlen) {
@@ -110,7 +114,8 @@ int palp_eval_params_parse_mask(const char *list, unsigned *mask, char *err, siz
     if (found < 0) {
       snprintf(err, errlen,
                "--fit: unknown parameter \"%.*s\" (E1, eta1, E2, eta2, a1, a2, support_modulus, "
-               "support_viscosity, added_mass, support_bulk_fraction, bending_stiffness, or all)",
+               "support_viscosity, added_mass, support_bulk_fraction, bending_stiffness, support_relax_modulus, "
+               "support_relax_time, or all)",
                (int)len, s);
       return PALP_EINVAL;
     }
@@ -466,6 +471,7 @@ int palp_eval_calibrate(const palp_scene *scenes, const palp_eval_record *refs, 
    * from a start > 0, i.e. when the scene's parameters have it. */
   unsigned mask = def->mask;
   if (!(ws.start[PALP_EVAL_P_BENDING] > 0.0)) mask &= ~(1u << PALP_EVAL_P_BENDING);
+  if (!(ws.start[PALP_EVAL_P_RELAX_K] > 0.0)) mask &= ~((1u << PALP_EVAL_P_RELAX_K) | (1u << PALP_EVAL_P_RELAX_TAU));
   for (int j = 0; j < PALP_EVAL_P_COUNT; ++j) {
     if (!(mask & (1u << j))) continue; /* held parameters may be 0 */
     if (!(ws.start[j] > 0) || !isfinite(ws.start[j])) {
@@ -685,10 +691,14 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
   fprintf(f,
           "  \"gel\": { \"law\": \"%s\", \"pressure_Pa\": %.9g, \"a1\": %.9g, \"a2_Pa_s_m3\": %.9g, \"a3_s2\": %.9g,\n"
           "           \"support_modulus_Pa_m\": %.9g, \"support_viscosity_Pa_s_m\": %.9g,\n"
-          "           \"support_bulk_fraction\": %.9g,\n"
-          "           \"density_kg_m3\": %.9g, \"added_mass_fraction\": %.9g }\n}\n",
+          "           \"support_bulk_fraction\": %.9g,\n",
           g->law == PALP_GEL_PAPER_LITERAL ? "paper_literal" : "polytropic", g->pressure, g->a1, g->a2, g->a3,
-          g->support_modulus, g->support_viscosity, g->support_bulk_fraction, g->density, g->added_mass_fraction);
+          g->support_modulus, g->support_viscosity, g->support_bulk_fraction);
+  if (g->support_relax_modulus > 0.0)
+    fprintf(f, "           \"support_relax_modulus_Pa_m\": %.9g, \"support_relax_time_s\": %.9g,\n",
+            g->support_relax_modulus, g->support_relax_time);
+  fprintf(f, "           \"density_kg_m3\": %.9g, \"added_mass_fraction\": %.9g }\n}\n", g->density,
+          g->added_mass_fraction);
   free(cs);
   cJSON_Delete(c);
   int bad = ferror(f);
