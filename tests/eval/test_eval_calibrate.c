@@ -250,7 +250,7 @@ static void test_param_file_roundtrip(void) {
   /* Values with 9 significant digits that no default has. */
   const double p[PALP_EVAL_P_COUNT] = {3.14159265e6, 1.23456789e8, 7.65432101e6, 9.87654321e5,
                                        11.1111111,   4.44444444e6, 1.71828183e6, 5.55555556e5, 0.314159265,
-                                       0.271828183,  2.71828183e-3};
+                                       0.271828183,  2.71828183e-3, 8.31446262e5, 0.577215665};
   palp_eval_params_set(&s.world, p);
   char dir[] = "/tmp/palp_eval_paramsXXXXXX";
   CHECK(mkdtemp(dir) != NULL, "mkdtemp");
