@@ -134,6 +134,7 @@ typedef struct palp_fem_model {
   double hht_alpha;   /* 0: Newmark; else HHT-alpha (palp_fem_config) */
   double *fint_prev;  /* [ndof] internal force at the last committed state (HHT only) [N] */
   double *fext_prev;  /* [ndof] external force of the last committed step (HHT only) [N] */
+  double fext_max;    /* largest external force norm a step has seen [N] (HHT's tolerance floor) */
   double rtol, atol;
   int max_newton, max_cutbacks;
   char err[256];

@@ -865,6 +865,13 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     if (renew_factor(cost, m->solves - m->fac_solves, m->attempts - m->fac_attempt, last)) m->renew = 1;
   }
   const double fnorm = fext ? norm_free(m, fext) : 0.0;
+  /* HHT only: the residual's round-off floor, 1e-8 of the largest load of the run. It
+   * sits near 1e-9 of the load (4e-9 N at 3 N, level 2: the 2 GPa volumetric terms),
+   * and once HHT has damped the ringing a relaxed dome's force scale, hence rtol x
+   * scale, falls below it (the long-term profile's recovery stalled there at t =
+   * 2.82 s). The trapezoidal rule keeps its tolerance as it was, bit for bit. */
+  if (fnorm > m->fext_max) m->fext_max = fnorm;
+  const double floor_hht = m->hht_alpha != 0.0 ? 1e-8 * m->fext_max : 0.0;
   double r0 = 0.0;
   /* The tangent is assembled with the force unless this iterate is expected to
    * converge (then only the force, ~1/4 of the cost; a wrong guess assembles again
@@ -893,7 +900,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
     if (m->trace_count < 64) m->trace[m->trace_count++] = r;
     if (!isfinite(r)) return PALP_EUNSTABLE;
     if (it == 0) r0 = r;
-    if (r <= m->rtol * scale + m->atol) return PALP_OK;
+    if (r <= m->rtol * scale + m->atol + floor_hht) return PALP_OK;
     if (it == m->max_newton || (it > 2 && r > 1e3 * r0)) break;
     if (!tangent && (rc = palp_fem_assemble(m, u, dt, 1))) return rc;
     if (alpha != 0.0)
@@ -903,7 +910,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
       const int c = m->eq[d];
       if (c >= 0) m->kval[m->colp[c + 1] - 1] += c0 * m->mass[d / 3];
     }
-    const double tol = m->rtol * scale + m->atol;
+    const double tol = m->rtol * scale + m->atol + floor_hht;
     const double eta = newton_forcing(it, r, scale, tol);
     rc = newton_solve(m, c0, eta, newton_forcing(0, r, scale, tol), 1, it == 0 ? m->v : NULL);
     if (rc) return rc;
