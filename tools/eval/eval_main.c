@@ -58,6 +58,8 @@ typedef struct options {
   /* calibrate --finger: fingertip force-depth sites fitted with the fields */
   const char *finger;
   const char *finger_from; /* the FE curves from a `palp-fem finger` CSV instead of solving */
+  double finger_depths[PALP_EVAL_FINGER_MAX_DEPTHS]; /* [m] the depths the fingertip is fitted at */
+  int finger_depth_count;                            /* 0: 0.5, 1 and 2 mm */
   double finger_weight;
   palp_app_opts app;
   palp_log *log; /* main's, once the options are read */
@@ -83,7 +85,7 @@ static void usage(FILE *f) {
           "                           [--bound B] [--max-iter N] [--max-minutes M]\n"
           "                           [--frames N] [--cache-dir DIR] [--quiet]\n"
           "                           [--finger pole,45deg,70deg,pole_lesion [--finger-weight CM]\n"
-          "                            [--finger-from FINGER.csv]]\n"
+          "                            [--finger-from FINGER.csv] [--finger-depths MM,MM,...]]\n"
           "defaults: --scene config/paper_step_long_term.json (the default material profile; config/paper_step.json\n"
           "          is the paper's literal reading, a reproduction), --out out/eval (evaluate) or out/eval/params.json\n"
           "          (calibrate), --level from the FEM config (2); the FEM uses the profile the scene's parameters name\n");
@@ -177,6 +179,27 @@ static int parse_args(int argc, char **argv, options *o) {
     else if (!strcmp(a, "--distributions")) o->distributions = v;
     else if (!strcmp(a, "--finger")) o->finger = v;
     else if (!strcmp(a, "--finger-from")) o->finger_from = v;
+    else if (!strcmp(a, "--finger-depths")) {
+      /* "0.5,1,2,5,10" [mm]: a soft profile's fingertip reaches 5 N only ~10 mm deep */
+      int n = 0;
+      const char *q = v;
+      while (!bad && *q) {
+        char *end;
+        const double mm = strtod(q, &end);
+        if (end == q || !(mm > 0.0 && mm <= 30.0) || n == PALP_EVAL_FINGER_MAX_DEPTHS ||
+            (n > 0 && !(mm * 1e-3 > o->finger_depths[n - 1])))
+          bad = 1;
+        else o->finger_depths[n++] = mm * 1e-3;
+        q = *end == ',' ? end + 1 : end;
+        if (!bad && *end && *end != ',') bad = 1;
+      }
+      if (bad || n == 0) {
+        fprintf(stderr, "--finger-depths: expected up to %d increasing depths in (0, 30] mm, e.g. 0.5,1,2,5,10\n",
+                PALP_EVAL_FINGER_MAX_DEPTHS);
+        bad = 1;
+      }
+      o->finger_depth_count = n;
+    }
     else if (!strcmp(a, "--finger-weight")) bad = parse_double(a, v, 0.0, &o->finger_weight);
     else if (!strcmp(a, "--level")) bad = parse_int(a, v, 1, 64, &o->level);
     else if (!strcmp(a, "--frames")) bad = parse_int(a, v, 2, 1000000, &o->frames);
@@ -1155,6 +1178,10 @@ static int cmd_calibrate(const options *o) {
       }
       f->count = 3;
       f->depth[0] = 0.5e-3, f->depth[1] = 1e-3, f->depth[2] = 2e-3;
+      if (o->finger_depth_count > 0) {
+        f->count = o->finger_depth_count;
+        for (int k = 0; k < f->count; ++k) f->depth[k] = o->finger_depths[k];
+      }
       const double nv[3] = {f->n.x, f->n.y, f->n.z};
       const double tf = now_s();
       long newton = 0;
@@ -1169,7 +1196,8 @@ static int cmd_calibrate(const options *o) {
           for (int j = 0; j < nc; ++j)
             if (fabs(cd[j] - f->depth[k]) < 1e-9) f->force[k] = cf[j], done += 1;
         if (nc >= 0 && done != f->count)
-          snprintf(err, sizeof err, "%s has no rows of site %s at 0.5, 1 and 2 mm", o->finger_from, f->name);
+          snprintf(err, sizeof err, "%s has no rows of site %s at every fitted depth (--finger-depths; default 0.5, 1 and 2 mm)",
+                   o->finger_from, f->name);
       } else
         done = palp_fem_finger_curve(&s.fem, &mesh, f->lesion, f->lesion_count, nv, f->radius, f->depth, f->count,
                                      INFINITY, f->force, NULL, &newton, err, sizeof err);
