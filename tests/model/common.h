@@ -40,4 +40,12 @@ static inline double vdist(palp_vec3 a, palp_vec3 b) {
   return sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
 }
 static inline palp_vec3 v3_scaled(palp_vec3 a, double s) { return (palp_vec3){a.x * s, a.y * s, a.z * s}; }
+/* 1 when the world's pipeline runs the stage of that name (palp_world_timings). */
+static inline int has_stage(const palp_world *w, const char *name) {
+  palp_stage_timings t;
+  palp_world_timings(w, &t);
+  for (int i = 0; i < PALP_STAGE_COUNT; ++i)
+    if (t.name[i] && strcmp(t.name[i], name) == 0) return 1;
+  return 0;
+}
 #endif

@@ -28,14 +28,6 @@ static void press(uint32_t effects, double hold, double *d_early, double *d_end,
   palp_world_destroy(w);
 }
 
-static int has_stage(const palp_world *w, const char *name) {
-  palp_stage_timings t;
-  palp_world_timings(w, &t);
-  for (int i = 0; i < PALP_STAGE_COUNT; ++i)
-    if (t.name[i] && strcmp(t.name[i], name) == 0) return 1;
-  return 0;
-}
-
 int main(void) {
   const uint32_t all = PALP_EFFECT_ALL & ~(uint32_t)PALP_EFFECT_GRAVITY;
   int e;

@@ -15,14 +15,6 @@
 #include "common.h"
 #include "vec3.h"
 
-static int has_stage(const palp_world *w, const char *name) {
-  palp_stage_timings t;
-  palp_world_timings(w, &t);
-  for (int i = 0; i < PALP_STAGE_COUNT; ++i)
-    if (t.name[i] && strcmp(t.name[i], name) == 0) return 1;
-  return 0;
-}
-
 int main(void) {
   const double k = 2.0e6, kr = 3.0e6, tau = 0.2, F = 0.05, h = 1e-3; /* Pa/m, Pa/m, s, N, s */
   palp_world_def d = handset_def();
