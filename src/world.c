@@ -436,22 +436,18 @@ static void stage_gel_support(palp_world *w, double h) {
    * same terms in the same order as support_means adds them). */
   palp_vec3 su = v3(0, 0, 0), sv = v3(0, 0, 0);
   double sa = 0.0;
+  const palp_vec3 *sq = w->sq; /* the relaxing branch, anchored at its dashpots */
+  const double kr = relax_stiffness(w, h);
   for (int r = 0; r < n; ++r) {
     const int i = vertex_of[r];
     const palp_vec3 u = v3_sub(pos[i], rest[i]);
     force[i] = v3_sub(force[i], v3_scale(u, k * sarea[i]));
+    if (sq) force[i] = v3_sub(force[i], v3_scale(v3_sub(u, sq[i]), kr * sarea[i]));
     if (phi > 0.0) {
       const double a = area[i];
       su = v3_add(su, v3_scale(u, a));
       sv = v3_add(sv, v3_scale(vel[i], a));
       sa += a;
-    }
-  }
-  if (w->sq) {
-    const double kr = relax_stiffness(w, h);
-    for (int r = 0; r < n; ++r) {
-      const int i = vertex_of[r];
-      force[i] = v3_sub(force[i], v3_scale(v3_sub(v3_sub(pos[i], rest[i]), w->sq[i]), kr * sarea[i]));
     }
   }
   if (phi > 0.0) {
