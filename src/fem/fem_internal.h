@@ -55,6 +55,10 @@ extern const double palp_fem_gauss[8][3];
 /* ---- model (fem_model.c) --------------------------------------------------- */
 typedef struct palp_fem_solver palp_fem_solver;
 
+/* HHT's Newton tolerance floor, as a fraction of the largest load of the run (fem_model.c,
+ * try_step; part of the cache key of HHT runs, fem_run.c) */
+#define PALP_FEM_HHT_FLOOR 1e-8
+
 typedef struct palp_fem_model {
   const palp_fem_mesh *mesh; /* borrowed */
   palp_fem_material mat[2];  /* [PALP_FEM_GEL], [PALP_FEM_MEMBRANE], C10 already instantaneous */

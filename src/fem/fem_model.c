@@ -871,7 +871,7 @@ static int try_step(palp_fem_model *m, const double *fext, double dt) {
    * scale, falls below it (the long-term profile's recovery stalled there at t =
    * 2.82 s). The trapezoidal rule keeps its tolerance as it was, bit for bit. */
   if (fnorm > m->fext_max) m->fext_max = fnorm;
-  const double floor_hht = m->hht_alpha != 0.0 ? 1e-8 * m->fext_max : 0.0;
+  const double floor_hht = m->hht_alpha != 0.0 ? PALP_FEM_HHT_FLOOR * m->fext_max : 0.0;
   double r0 = 0.0;
   /* The tangent is assembled with the force unless this iterate is expected to
    * converge (then only the force, ~1/4 of the cost; a wrong guess assembles again

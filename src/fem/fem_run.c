@@ -70,7 +70,7 @@ uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
   H(cfg->factor_lag);
   if (cfg->load_map != PALP_FEM_LOAD_POINT) H(cfg->load_map); /* point runs keep their keys */
   if (cfg->hht_alpha != 0.0) { /* so do Newmark runs; HHT's keys carry its tolerance floor */
-    const double hht_floor = 1e-8;
+    const double hht_floor = PALP_FEM_HHT_FLOOR;
     H(cfg->hht_alpha);
     H(hht_floor);
   }
