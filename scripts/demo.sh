@@ -110,8 +110,8 @@ bob=$!
 pids+=($!)
 carol=$!
 # Trainee dana palpates by position on phantom 4, the breast-tissue dome
-# (config/paper_step_breast_tissue.json, docs/materials.md: within 0.87-1.12x of the FE
-# fingertip at the pole over 0.25-7 mm, 0.77x at 10 mm): a simulated device presses 10 mm at 10 mm/s,
+# (config/paper_step_breast_tissue.json, docs/materials.md: within 0.88-1.15x of the FE
+# fingertip at the pole over 0.25-12 mm): a simulated device presses 10 mm at 10 mm/s,
 # holds 1 s and lifts, under a 10 N safe force.
 "$client" --role trainee --domain "$domain" --phantom 4 --name dana \
   --input sim:press,depth_mm=10,speed_mm_s=10,hold_s=1 --max-force 10 \
