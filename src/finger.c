@@ -300,3 +300,61 @@ palp_vec3 palp_smooth_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c
   *normal = nl > 0.0 ? v3_scale(n, 1.0 / nl) : v3(0, 0, 0);
   return S;
 }
+
+palp_vec3 palp_sym3_pinv_apply(const double K[3][3], palp_vec3 r, double rel_tol) {
+  double a[3][3], v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  memcpy(a, K, sizeof a);
+  /* a <- J^T a J until off-diagonal round-off: 3x3 converges in a few sweeps */
+  for (int sweep = 0; sweep < 16; ++sweep) {
+    const double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
+    const double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+    if (!(off > 1e-15 * diag)) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (a[p][q] == 0.0) continue;
+        const double th = 0.5 * atan2(2.0 * a[p][q], a[q][q] - a[p][p]);
+        const double c = cos(th), s = sin(th);
+        for (int k = 0; k < 3; ++k) {
+          const double x = a[k][p], y = a[k][q];
+          a[k][p] = c * x - s * y, a[k][q] = s * x + c * y;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double x = a[p][k], y = a[q][k];
+          a[p][k] = c * x - s * y, a[q][k] = s * x + c * y;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double x = v[k][p], y = v[k][q];
+          v[k][p] = c * x - s * y, v[k][q] = s * x + c * y;
+        }
+      }
+  }
+  const double lmax = fmax(fmax(a[0][0], a[1][1]), a[2][2]);
+  const double rv[3] = {r.x, r.y, r.z};
+  double out[3] = {0, 0, 0};
+  for (int e = 0; e < 3; ++e) {
+    if (!(a[e][e] > rel_tol * lmax)) continue; /* also NaN */
+    const double pr = (v[0][e] * rv[0] + v[1][e] * rv[1] + v[2][e] * rv[2]) / a[e][e];
+    for (int i = 0; i < 3; ++i) out[i] += v[i][e] * pr;
+  }
+  return v3(out[0], out[1], out[2]);
+}
+
+static palp_vec3 mat3_apply(const double K[3][3], palp_vec3 x) {
+  return v3(K[0][0] * x.x + K[0][1] * x.y + K[0][2] * x.z, K[1][0] * x.x + K[1][1] * x.y + K[1][2] * x.z,
+            K[2][0] * x.x + K[2][1] * x.y + K[2][2] * x.z);
+}
+
+palp_vec3 palp_drift_observe(const palp_local_model *last, const palp_local_model *now, palp_vec3 v, double h,
+                             palp_vec3 *c) {
+  if (!last->contact || !now->contact || !(h > 0.0)) {
+    *c = v3(0, 0, 0);
+    return v;
+  }
+  /* the last model's force at this step's device point, h later [N] */
+  const palp_vec3 d = v3_sub(v3_sub(now->device, last->device), v3_scale(last->drift, h));
+  const palp_vec3 e = v3_sub(now->force, v3_sub(last->force, mat3_apply(last->stiffness, d)));
+  const palp_vec3 dc = v3_scale(palp_sym3_pinv_apply(now->stiffness, e, 1e-6), PALP_DRIFT_GAIN / h);
+  /* a non-finite step (it cannot come from a solved step) leaves the correction as it was */
+  if (isfinite(dc.x) && isfinite(dc.y) && isfinite(dc.z)) *c = v3_add(*c, dc);
+  return v3_add(v, *c);
+}

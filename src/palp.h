@@ -316,7 +316,8 @@ int palp_world_set_finger(palp_world *w, int contact, palp_vec3 center, double r
  * K = stiffness (= -dF/dx, symmetric, positive semi-definite, at most k_c), while
  * the normal component stays pushing (F . normal > 0); otherwise the finger is free
  * (F = 0). drift is the surface's own motion at the contact: a device that follows
- * it feels an unchanged force. */
+ * it feels an unchanged force (the step's surface velocity there, corrected by an
+ * observer of the last model's prediction error: palp_drift_observe, finger.h). */
 typedef struct palp_local_model {
   double time;            /* world time at the end of the step it describes [s] */
   double period;          /* the step [s]: the next model is due this much later */

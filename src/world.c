@@ -54,6 +54,7 @@ typedef struct contact {
   int64_t *ckey;           /* closest feature (warm start across steps) */
   int nfinger;             /* rows [0, nfinger) are the finger's, the rest the base's */
   palp_local_model lm;
+  palp_vec3 drift_corr;    /* the drift observer's correction [m/s] (palp_drift_observe) */
 } contact;
 
 /* Compliance columns for finger contacts: the 3 columns of the factor's inverse
@@ -978,6 +979,7 @@ static void stage_fingers(palp_world *w, double h) {
     k->count = 0;
     k->total = v3(0, 0, 0);
     palp_local_model *lm = &k->lm;
+    const palp_local_model lm_last = *lm; /* the last step's model: how well it predicted sets the drift */
     memset(lm, 0, sizeof *lm);
     lm->period = h;
     lm->device = k->device;
@@ -1167,7 +1169,7 @@ static void stage_fingers(palp_world *w, double h) {
           vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[c] * k->cbary[c][e]));
         }
       }
-      lm->drift = v3_scale(vc, 1.0 / lsum);
+      lm->drift = palp_drift_observe(&lm_last, lm, v3_scale(vc, 1.0 / lsum), h, &k->drift_corr);
       /* footprint: the lumped (one-third) areas of the vertices the finger touches [m^2] */
       for (int q = 0; q < k->count; ++q) lm->area += w->mesh.vertex_area[k->vertex[q]];
     } else {
@@ -2374,6 +2376,7 @@ int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_ve
   }
   k->total = v3(0, 0, 0);
   memset(&k->lm, 0, sizeof k->lm);
+  k->drift_corr = v3(0, 0, 0);
   k->lm.device = device, k->lm.proxy = k->proxy, k->lm.normal = v3(0, 0, 1), k->lm.period = w->def.dt;
   palp_world_wake(w);
   return c;

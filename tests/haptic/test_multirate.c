@@ -229,6 +229,12 @@ static void test_accuracy(int latency) {
                             "%.4f N <= %.4f N", rms, 0.05 * peak);
   CHECK(st_r[i99] < st_z[i99], "the rendered force moves in smaller tick-to-tick steps than the held 250 Hz force "
                                 "(p99 %.4f < %.4f N)", st_r[i99], st_z[i99]);
+  /* The local model's extrapolation is no worse than holding each step's force: with
+   * the surface's own velocity as its drift it was (RMS 1.31-1.67x the held force's on
+   * the paper's, the long-term and the breast-tissue phantoms); with the drift
+   * observer 1.02-1.08x (palp_drift_observe, docs/haptics.md). Bound 1.10x. */
+  CHECK(rms <= 1.10 * zrms, "the local model is as accurate as the held force within 10%% (RMS %.4f N <= 1.10 x "
+                            "%.4f N)", rms, zrms);
 }
 
 static void test_passivity(int latency) {

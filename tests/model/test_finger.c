@@ -242,8 +242,33 @@ static void test_slide(int surface) {
 
 /* The local model at 250 Hz predicts the force of the next physics step within 5%
  * of the force, while pressing and holding. */
+static void test_local_model_in(const char *what, palp_world *w);
+
+/* The local model predicts the next 250 Hz step's force: pressed to 20 mm at 5 mm/s
+ * with a 2 mm, 0.7 Hz wobble, each step's force against the last model evaluated at
+ * this step's device point and time, within 5% wherever the force exceeds 0.1 N. On
+ * the library's default phantom (the paper's literal reading) and on the breast-tissue
+ * dome of the exercises, where the surface's own velocity as the drift missed by up to
+ * 10.4% (a finger touching down: the dent the device's motion makes, which the
+ * stiffness already counts) and the drift observer misses by 3.7% (default phantom:
+ * 2.9% before, 4.9% now: its gel flows, the surface's velocity is its drift). */
 static void test_local_model(void) {
   palp_world *w = make(0.004);
+  test_local_model_in("default phantom", w);
+  palp_scene sc_;
+  char err[256];
+  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc_, err, sizeof err)) {
+    CHECK(0, "breast-tissue dome: %s", err);
+    return;
+  }
+  sc_.world.dt = 0.004;
+  int e = 0;
+  w = palp_world_create(&sc_.world, &e);
+  CHECK(w != NULL, "breast-tissue world: %d", e);
+  if (w) test_local_model_in("breast-tissue dome", w);
+}
+
+static void test_local_model_in(const char *what, palp_world *w) {
   palp_vec3 start = {0.0, 0.0, R + r + 0.001};
   const int f = palp_world_add_finger(w, start, r);
   palp_local_model prev;
@@ -272,10 +297,10 @@ static void test_local_model(void) {
     }
     prev = lm;
   }
-  printf("local model at 250 Hz: next-step force predicted within %.2f%% (worst of %d steps)\n", 100 * worst,
-         compared);
-  CHECK(compared > 500, "compared %d steps in contact", compared);
-  CHECK(worst < 0.05, "next-step force predicted within 5%% (worst %.2f%%)", 100 * worst);
+  printf("local model at 250 Hz, %s: next-step force predicted within %.2f%% (worst of %d steps)\n", what,
+         100 * worst, compared);
+  CHECK(compared > 500, "%s: compared %d steps in contact", what, compared);
+  CHECK(worst < 0.05, "%s: next-step force predicted within 5%% (worst %.2f%%)", what, 100 * worst);
   palp_world_destroy(w);
 }
 
@@ -422,6 +447,33 @@ static void test_stiff_press(int surface) {
   }
 }
 
+/* palp_sym3_pinv_apply against a pseudo-inverse built by hand: K = Q diag(4, 1, 0) Q^T
+ * with Q a rotation by 30 deg about z then 50 deg about x, so K^+ r = Q diag(1/4, 1, 0)
+ * Q^T r; within 1e-12 m/N per N. */
+static void test_pinv(void) {
+  const double a = 30.0 * PALP_TEST_PI / 180.0, b = 50.0 * PALP_TEST_PI / 180.0;
+  const double Rz[3][3] = {{cos(a), -sin(a), 0}, {sin(a), cos(a), 0}, {0, 0, 1}};
+  const double Rx[3][3] = {{1, 0, 0}, {0, cos(b), -sin(b)}, {0, sin(b), cos(b)}};
+  double Q[3][3] = {{0}}, K[3][3] = {{0}}, P[3][3] = {{0}};
+  const double ev[3] = {4.0, 1.0, 0.0}, iv[3] = {0.25, 1.0, 0.0};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) Q[i][j] += Rx[i][k] * Rz[k][j];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) K[i][j] += Q[i][k] * ev[k] * Q[j][k], P[i][j] += Q[i][k] * iv[k] * Q[j][k];
+  const palp_vec3 r = {0.3, -1.2, 0.7};
+  const palp_vec3 got = palp_sym3_pinv_apply((const double(*)[3])K, r, 1e-6);
+  const double want[3] = {P[0][0] * r.x + P[0][1] * r.y + P[0][2] * r.z, P[1][0] * r.x + P[1][1] * r.y + P[1][2] * r.z,
+                          P[2][0] * r.x + P[2][1] * r.y + P[2][2] * r.z};
+  const double err = fmax(fmax(fabs(got.x - want[0]), fabs(got.y - want[1])), fabs(got.z - want[2]));
+  printf("pseudo-inverse of a rank-2 3x3 stiffness: largest error %.2e\n", err);
+  CHECK(err < 1e-12, "K^+ r within 1e-12 (%.2e)", err);
+  const double Z[3][3] = {{0}};
+  const palp_vec3 z = palp_sym3_pinv_apply(Z, r, 1e-6);
+  CHECK(z.x == 0.0 && z.y == 0.0 && z.z == 0.0, "a zero stiffness turns nothing into force: K^+ r = 0");
+}
+
 int main(int argc, char **argv) {
   /* test_model_finger SCENE: only the deep presses, on another breast-tissue scene
    * (e.g. a parameter set under trial). */
@@ -429,6 +481,7 @@ int main(int argc, char **argv) {
     test_deep_press(argv[1]);
     CHECK_DONE();
   }
+  test_pinv();
   test_renderer();
   test_presses();
   test_slide(PALP_FINGER_SURFACE_SMOOTH);
