@@ -187,9 +187,41 @@ static void test_deep_press(const char *scene) {
  * the contact moving onto another facet stepped the force by up to 0.022 N; the
  * default compliant pad spreads the load over the facets it touches (docs/haptics.md).
  * Both contact surfaces are held to it: the smooth one (the default) and the facets. */
+static void test_slide_in(const char *sn, palp_world *w, int max_over);
+
 static void test_slide(int surface) {
-  palp_world *w = make_surface(0.001, surface);
-  const char *sn = palp_finger_surface_name(surface);
+  test_slide_in(palp_finger_surface_name(surface), make_surface(0.001, surface), 0);
+}
+
+/* The same slide on the shipped domes, at 1 kHz physics: the long-term default
+ * (9.7-10.4 N there) to the same bound; the breast-tissue dome of the exercises misses
+ * it at its tangent rebuilds (12 of 1,062 ticks over, max 4.2% of the force, 0.149 N;
+ * docs/haptics.md, "Not met on the breast-tissue dome"): that shortfall is held at 12
+ * ticks here so that it cannot grow unnoticed; it is not the target. */
+static void test_slide_shipped(void) {
+  const char *scene[2] = {PALP_CONFIG_DIR "/paper_step_long_term.json", PALP_CONFIG_DIR "/phantoms/dome.json"};
+  const char *name[2] = {"long-term dome", "breast-tissue dome"};
+  const int max_over[2] = {0, 12};
+  for (int i = 0; i < 2; ++i) {
+    palp_scene sc_;
+    char err[256];
+    if (palp_scene_load(scene[i], &sc_, err, sizeof err)) {
+      CHECK(0, "%s: %s", scene[i], err);
+      continue;
+    }
+    sc_.world.dt = 0.001;
+    int e = 0;
+    palp_world *w = palp_world_create(&sc_.world, &e);
+    if (!w) {
+      CHECK(0, "%s: world: %s", name[i], palp_strerror(e));
+      continue;
+    }
+    for (int c = 0; c < sc_.contact_count; ++c) palp_world_remove_contact(w, c);
+    test_slide_in(name[i], w, max_over[i]);
+  }
+}
+
+static void test_slide_in(const char *sn, palp_world *w, int max_over) {
   const double depth = 0.010, v = 0.050; /* [m], [m/s] */
   /* The device path: a circle of radius R + r - depth in the x-z plane, from polar
    * -40 to +40 degrees, entered by a 10 mm/s press at -40 degrees. */
@@ -235,8 +267,8 @@ static void test_slide(int surface) {
          sn, ticks, fmin_, 100 * worst, 100 * worst_raw, worst_n, margin, over);
   CHECK(lost == 0, "slide (%s): contact kept all the way (%d ticks lost)", sn, lost);
   CHECK(fmin_ > 0.1, "slide (%s): the finger presses all the way (%.3f N)", sn, fmin_);
-  CHECK(over == 0, "slide (%s): no tick-to-tick force step beyond max(2%% of the force, 0.01 N) off the motion's "
-                   "trend (%d ticks)", sn, over);
+  CHECK(over <= max_over, "slide (%s): at most %d tick-to-tick force steps beyond max(2%% of the force, 0.01 N) "
+                          "off the motion's trend (%d ticks)", sn, max_over, over);
   palp_world_destroy(w);
 }
 
@@ -486,6 +518,7 @@ int main(int argc, char **argv) {
   test_presses();
   test_slide(PALP_FINGER_SURFACE_SMOOTH);
   test_slide(PALP_FINGER_SURFACE_FACETS);
+  test_slide_shipped();
   test_stiff_press(PALP_FINGER_SURFACE_SMOOTH);
   test_stiff_press(PALP_FINGER_SURFACE_FACETS);
   test_local_model();
