@@ -40,6 +40,27 @@ static palp_world *make_surface(double dt, int surface) {
 /* The library's default surface (smooth since 2026-11-27). */
 static palp_world *make(double dt) { return make_surface(dt, palp_world_default_def().finger_surface); }
 
+/* A shipped scene's world for a finger alone (palp_world_create adds none of the
+ * scene's scripted contacts), stepped at dt (the scene's own when dt is 0), on the
+ * given contact surface (the scene's when surface < 0). NULL, with a failed check, if
+ * the scene does not load. */
+static palp_world *scene_world(const char *path, double dt, int surface, double *dt_out) {
+  palp_scene sc_;
+  char err[256];
+  if (palp_scene_load(path, &sc_, err, sizeof err)) {
+    CHECK(0, "%s: %s", path, err);
+    return NULL;
+  }
+  if (dt > 0.0) sc_.world.dt = dt;
+  if (surface >= 0) sc_.world.finger_surface = surface;
+  int e = 0;
+  palp_world *w = palp_world_create(&sc_.world, &e);
+  CHECK(w != NULL, "%s: world: %s", path, palp_strerror(e));
+  if (!w) return NULL;
+  if (dt_out) *dt_out = sc_.world.dt;
+  return w;
+}
+
 /* Deepest penetration of the proxy sphere into any dome triangle [m] (0 if none),
  * and whether the proxy centre lies on the inner side of the triangle it is closest
  * to (a slip-through). */
@@ -147,29 +168,19 @@ static void test_presses(void) {
  * the default one: measured 0.83-1.48 mm, bound 2 mm; deepest levels 15.9 / 14.7 /
  * 13.3 N. */
 static void test_deep_press(const char *scene) {
-  palp_scene sc_;
-  char err[256];
-  if (palp_scene_load(scene, &sc_, err, sizeof err)) {
-    CHECK(0, "%s: %s", scene, err);
-    return;
-  }
   const double polar[3] = {0, 45, 70};
   const int nlevel[3] = {17, 17, 15};
   for (int i = 0; i < 3; ++i) {
-    int e = 0;
-    palp_world *w = palp_world_create(&sc_.world, &e);
-    if (!w) {
-      CHECK(0, "%s: world: %s", scene, palp_strerror(e));
-      return;
-    }
-    for (int c = 0; c < sc_.contact_count; ++c) palp_world_remove_contact(w, c);
+    double dt = 0.0;
+    palp_world *w = scene_world(scene, 0.0, -1, &dt);
+    if (!w) return;
     const double a = polar[i] * PALP_TEST_PI / 180.0;
     const palp_vec3 n = {sin(a), 0, cos(a)};
     char what[96];
     snprintf(what, sizeof what, "breast tissue, %g deg", polar[i]);
     double F[20];
     int m = 0;
-    press_world(what, w, sc_.world.dt, nlevel[i], 2.0e-3, sc(n, R + r + 0.001), sc(n, -1.0), F, &m);
+    press_world(what, w, dt, nlevel[i], 2.0e-3, sc(n, R + r + 0.001), sc(n, -1.0), F, &m);
     CHECK(m == nlevel[i] && F[m - 1] > 8.0, "%s: the deepest level holds more than 8 N (%.3f N)", what,
           m ? F[m - 1] : 0.0);
   }
@@ -203,21 +214,8 @@ static void test_slide_shipped(void) {
   const char *name[2] = {"long-term dome", "breast-tissue dome"};
   const int max_over[2] = {0, 12};
   for (int i = 0; i < 2; ++i) {
-    palp_scene sc_;
-    char err[256];
-    if (palp_scene_load(scene[i], &sc_, err, sizeof err)) {
-      CHECK(0, "%s: %s", scene[i], err);
-      continue;
-    }
-    sc_.world.dt = 0.001;
-    int e = 0;
-    palp_world *w = palp_world_create(&sc_.world, &e);
-    if (!w) {
-      CHECK(0, "%s: world: %s", name[i], palp_strerror(e));
-      continue;
-    }
-    for (int c = 0; c < sc_.contact_count; ++c) palp_world_remove_contact(w, c);
-    test_slide_in(name[i], w, max_over[i]);
+    palp_world *w = scene_world(scene[i], 0.001, -1, NULL);
+    if (w) test_slide_in(name[i], w, max_over[i]);
   }
 }
 
@@ -287,16 +285,7 @@ static void test_local_model_in(const char *what, palp_world *w);
 static void test_local_model(void) {
   palp_world *w = make(0.004);
   test_local_model_in("default phantom", w);
-  palp_scene sc_;
-  char err[256];
-  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc_, err, sizeof err)) {
-    CHECK(0, "breast-tissue dome: %s", err);
-    return;
-  }
-  sc_.world.dt = 0.004;
-  int e = 0;
-  w = palp_world_create(&sc_.world, &e);
-  CHECK(w != NULL, "breast-tissue world: %d", e);
+  w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.004, -1, NULL);
   if (w) test_local_model_in("breast-tissue dome", w);
 }
 
@@ -434,23 +423,11 @@ static void test_renderer(void) {
  * 0.82 N (15%) in one tick, 1.27 N (24%) in three (docs/haptics.md). Both contact
  * surfaces, whatever the scene says. */
 static void test_stiff_press(int surface) {
-  palp_scene sc_;
-  char err[256];
-  if (palp_scene_load(PALP_CONFIG_DIR "/paper_step_long_term.json", &sc_, err, sizeof err)) {
-    CHECK(0, "long-term scene: %s", err);
-    return;
-  }
-  sc_.world.dt = 0.001;
-  sc_.world.finger_surface = surface;
   const char *sn = palp_finger_surface_name(surface);
   const double polar[3] = {30, 45, 60};
   for (int ia = 0; ia < 3; ++ia) {
-    int e = 0;
-    palp_world *w = palp_world_create(&sc_.world, &e);
-    if (!w) {
-      CHECK(0, "world: %d", e);
-      return;
-    }
+    palp_world *w = scene_world(PALP_CONFIG_DIR "/paper_step_long_term.json", 0.001, surface, NULL);
+    if (!w) return;
     const double a = polar[ia] * PALP_TEST_PI / 180.0;
     const palp_vec3 n = {sin(a), 0, cos(a)};
     const int f = palp_world_add_finger(w, sc(n, R + r + 0.001), r);
