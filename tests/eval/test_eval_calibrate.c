@@ -26,6 +26,13 @@
  * weight 3 the peak error falls to a third of that or less and below 2%, while the
  * RMSE rises but stays within 3x (the peak is bought with the rest of the record;
  * measured: peak -17.4% -> -0.03%, RMSE 0.14 -> 0.27 mm).
+ *
+ * deep_press: the check calibrate runs on what it fitted (palp_eval_deep_press). The
+ * shipped breast-tissue set keeps the fingertip pressed to 34 mm at the pole (~16 N);
+ * the refit of 2026-11-27 that was withdrawn (its values below: a Kelvin spring at 0.08%
+ * of E1, 0.4% added mass) loses it on the way (at 28 mm), its links strained to 3.2 (the
+ * shipped set: to 1.15 at 34 mm, already beyond the linear Burgers law's range, which the
+ * station is told). Bounds: kept, above 8 N (15.9), strain below 1.5; lost, strain above 2.
  */
 #include <math.h>
 #include <stdio.h>
@@ -294,6 +301,33 @@ static void test_bad_mask(void) {
         "mask of E1,support_viscosity is %#x", m);
 }
 
+static void test_deep_press(void) {
+  palp_scene sc;
+  char err[512];
+  if (palp_scene_load(PALP_CONFIG_DIR "/paper_step_breast_tissue.json", &sc, err, sizeof err)) {
+    CHECK(0, "breast-tissue scene: %s", err);
+    return;
+  }
+  const palp_vec3 pole = {0, 0, 1};
+  double F = 0, strain = 0;
+  const double kept = palp_eval_deep_press(&sc.world, pole, 0.034, &F, &strain, err, sizeof err);
+  printf("deep press, shipped breast tissue: lost at %.0f mm (0: kept), %.2f N at the end, largest strain %.2f\n",
+         1e3 * kept, F, strain);
+  CHECK(kept == 0.0, "the shipped breast-tissue set keeps the fingertip to 34 mm (lost at %.0f mm)", 1e3 * kept);
+  CHECK(F > 8.0, "it pushes back with more than 8 N at 34 mm (%.2f N)", F);
+  CHECK(strain < 1.5, "its links strain by less than 150%% (%.2f)", strain);
+  palp_world_def wd = sc.world; /* the withdrawn refit of 2026-11-27 */
+  wd.membrane.E1 = 509346.028, wd.membrane.eta1 = 1.4012004e9, wd.membrane.E2 = 424.049785;
+  wd.membrane.eta2 = 112231.22, wd.membrane.bending_stiffness = 0.00124996902;
+  wd.gel.a2 = 7041700.6, wd.gel.support_modulus = 1452136.32, wd.gel.support_viscosity = 48.5276642;
+  wd.gel.support_bulk_fraction = 0.86592857, wd.gel.support_relax_modulus = 187834.369;
+  wd.gel.support_relax_time = 1.09727561, wd.gel.added_mass_fraction = 0.00401460967;
+  const double lost = palp_eval_deep_press(&wd, pole, 0.034, &F, &strain, err, sizeof err);
+  printf("deep press, withdrawn refit: lost at %.0f mm, largest strain %.2f\n", 1e3 * lost, strain);
+  CHECK(lost > 0.0, "the withdrawn refit loses the fingertip in the press (%.0f mm)", 1e3 * lost);
+  CHECK(strain > 2.0, "and strains its links beyond 200%% (%.2f)", strain);
+}
+
 int main(int argc, char **argv) {
   gsl_set_error_handler_off();
   const char *only = argc > 1 ? argv[1] : "all";
@@ -302,6 +336,7 @@ int main(int argc, char **argv) {
   if (!strcmp(only, "all") || !strcmp(only, "mask")) test_bad_mask();
   if (!strcmp(only, "all") || !strcmp(only, "finger")) test_finger_residuals();
   if (!strcmp(only, "all") || !strcmp(only, "peak")) test_peak_residual();
+  if (!strcmp(only, "all") || !strcmp(only, "deep_press")) test_deep_press();
   if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
   else printf("ok\n");
   return failures ? 1 : 0;

@@ -159,6 +159,17 @@ int palp_eval_finger_rt(const palp_world_def *wd, const palp_lesion *lesions, in
                         double radius, const double *depth, int count, double hold_s, double *force,
                         double *depth_real, char *err, size_t errlen);
 
+/* A deep press, the check a fitted set must pass before it ships (docs/evaluation.md,
+ * docs/materials.md "The refit withdrawn"): the default fingertip (8 mm, 2000 N/m) on the
+ * world def wd at 250 Hz (the rate position-driven phantoms run at), its device pressed
+ * along -n from 1 mm above the surface in 2 mm levels of travel (10 mm/s, 0.5 s a level)
+ * to max_depth [m]. Returns the device depth [m] of the level where the fingertip lost
+ * the surface (out of contact after touching it), 0 when it kept it all the way, or -1
+ * (err says why). *force: the force along n at the end [N]; *strain: the largest link
+ * strain the world saw [-]; either may be NULL. */
+double palp_eval_deep_press(const palp_world_def *wd, palp_vec3 n, double max_depth, double *force, double *strain,
+                            char *err, size_t errlen);
+
 /* The FE curve of one site (pole, 45deg, 70deg, pole_lesion) from a CSV written by
  * `palp-fem finger` (header site,depth_m,fem_N,..., fem_min_gap_m; '#' provenance lines
  * before it): its rows in file order, at most max, into depth [m], force [N] and gap [m]

@@ -11,6 +11,48 @@
 /* The point s [m] along the unit normal n from the dome's centre. */
 static palp_vec3 along(palp_vec3 n, double s) { return (palp_vec3){s * n.x, s * n.y, s * n.z}; }
 
+/* p moved by d [m] along -n. */
+static palp_vec3 v3_sub_along(palp_vec3 p, palp_vec3 n, double d) {
+  return (palp_vec3){p.x - d * n.x, p.y - d * n.y, p.z - d * n.z};
+}
+
+double palp_eval_deep_press(const palp_world_def *wd0, palp_vec3 n, double max_depth, double *force, double *strain,
+                            char *err, size_t errlen) {
+  palp_world_def wd = *wd0;
+  wd.dt = 0.004;
+  int e = 0;
+  palp_world *w = palp_world_create(&wd, &e);
+  if (!w) {
+    snprintf(err, errlen, "deep press: world: %s", palp_strerror(e));
+    return -1;
+  }
+  const double R = wd.mesh.radius, r = 0.008;
+  const palp_vec3 start = along(n, R + r + 0.001);
+  const int fid = palp_world_add_finger(w, start, r);
+  double lost = 0.0, depth = 0.0;
+  palp_local_model lm = {0};
+  int touched = 0;
+  for (double level = 0.002; level <= max_depth + 1e-9 && lost == 0.0; level += 0.002)
+    for (int k = 0; k < 125; ++k) { /* 0.5 s a level: the travel at 10 mm/s, then the hold */
+      depth = fmin(level, depth + 4e-5);
+      palp_world_set_finger_device(w, fid, v3_sub_along(start, n, depth));
+      if (palp_world_step(w) < 0) {
+        snprintf(err, errlen, "deep press: the step failed at %.1f mm", 1e3 * depth);
+        palp_world_destroy(w);
+        return -1;
+      }
+      palp_world_finger_local_model(w, fid, &lm);
+      touched |= lm.contact;
+      if (touched && !lm.contact && lost == 0.0) lost = level;
+    }
+  palp_world_health h;
+  palp_world_get_health(w, &h);
+  if (force) *force = lm.force.x * n.x + lm.force.y * n.y + lm.force.z * n.z;
+  if (strain) *strain = h.max_strain;
+  palp_world_destroy(w);
+  return lost;
+}
+
 int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int nles, palp_vec3 n, double radius,
                         const double *depth, int count, double hold_s, double *force, double *depth_real, char *err,
                         size_t errlen) {

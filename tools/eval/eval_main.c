@@ -1333,6 +1333,32 @@ static int cmd_calibrate(const options *o) {
     return 1;
   }
   printf("\nparameters written to %s\n", out);
+  /* The 3 N fields cannot see a skin that creeps like a fluid or a near-massless surface;
+   * a deep press can (docs/materials.md, "The refit withdrawn"): the fitted set pressed
+   * at the pole, 45 and 70 deg to 34 / 34 / 30 mm must keep the fingertip on the surface. */
+  const double site_deg[3] = {0, 45, 70}, site_max[3] = {0.034, 0.034, 0.030};
+  int lost_any = 0;
+  printf("\n  deep press (8 mm fingertip, 250 Hz, 2 mm levels of device travel, 0.5 s each)\n");
+  for (int i = 0; i < 3; ++i) {
+    const double a = site_deg[i] * PALP_PI / 180.0;
+    double F = NAN, strain = NAN;
+    const double lost = palp_eval_deep_press(&w, (palp_vec3){sin(a), 0, cos(a)}, site_max[i], &F, &strain, err, sizeof err);
+    if (lost < 0) {
+      palp_log_error(o->log, "%s", err);
+      return 1;
+    }
+    if (lost > 0) lost_any = 1;
+    if (lost > 0)
+      printf("  %2.0f deg: LOST the fingertip at %.0f mm of device travel (largest link strain %.2f)\n", site_deg[i],
+             1e3 * lost, strain);
+    else
+      printf("  %2.0f deg: kept to %.0f mm, %.2f N (largest link strain %.2f)\n", site_deg[i], 1e3 * site_max[i], F,
+             strain);
+  }
+  if (lost_any) {
+    palp_log_error(o->log, "the fitted parameters lose the fingertip in a deep press: do not ship them (%s)", out);
+    return 3;
+  }
   return 0;
 }
 
