@@ -331,6 +331,71 @@ __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f,
   }
   for (int k = 0; k < n; ++k) x[f->perm[k]] = y[4 * (k / 3) + k % 3];
 }
+
+/* The block solve for 2-4 right-hand sides in AVX2, one lane per right-hand side (the
+ * lanes past w a pad of zeros, which every operation keeps +0): each unknown's w values
+ * sit in 4 lanes, each block entry is broadcast, and every lane does what the portable
+ * macro does for its right-hand side, in its order and without fused multiply-adds,
+ * including the forward pass's skip of a block column whose values are all zero (NaN
+ * counts as nonzero, as there). y needs 4 n + 4 doubles. */
+__attribute__((target("avx2"))) static void solve_blocks_avx2_lanes(const palp_ldl *f, double *x, int w, double *y) {
+  const int nb = f->nb, n = f->n;
+  y = (double *)(((uintptr_t)y + 31) & ~(uintptr_t)31);
+  for (int k = 0; k < n; ++k) {
+    double *yk = y + 4 * k;
+    yk[0] = yk[1] = yk[2] = yk[3] = 0.0;
+    for (int r = 0; r < w; ++r) yk[r] = x[f->perm[k] * w + r];
+  }
+  const __m256d zero = _mm256_setzero_pd();
+  for (int J = 0; J < nb; ++J) {
+    double *yj = y + 12 * J;
+    const double *d = f->bdiag + 3 * J;
+    __m256d a = _mm256_load_pd(yj), b = _mm256_load_pd(yj + 4), c = _mm256_load_pd(yj + 8);
+    b = _mm256_sub_pd(b, _mm256_mul_pd(_mm256_set1_pd(d[0]), a));
+    c = _mm256_sub_pd(c, _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(d[1]), a), _mm256_mul_pd(_mm256_set1_pd(d[2]), b)));
+    _mm256_store_pd(yj + 4, b), _mm256_store_pd(yj + 8, c);
+    const __m256d nz = _mm256_or_pd(_mm256_or_pd(_mm256_cmp_pd(a, zero, _CMP_NEQ_UQ), _mm256_cmp_pd(b, zero, _CMP_NEQ_UQ)),
+                                    _mm256_cmp_pd(c, zero, _CMP_NEQ_UQ));
+    if (!_mm256_movemask_pd(nz)) continue;
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      double *yi = y + 12 * f->brow[q];
+      const float *B = f->blk + 9 * q;
+      for (int i = 0; i < 3; ++i) {
+        const __m256d t = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd((double)B[i]), a),
+                                                      _mm256_mul_pd(_mm256_set1_pd((double)B[3 + i]), b)),
+                                        _mm256_mul_pd(_mm256_set1_pd((double)B[6 + i]), c));
+        _mm256_store_pd(yi + 4 * i, _mm256_sub_pd(_mm256_load_pd(yi + 4 * i), t));
+      }
+    }
+  }
+  for (int j = 0; j < n; ++j) _mm256_store_pd(y + 4 * j, _mm256_mul_pd(_mm256_load_pd(y + 4 * j), _mm256_set1_pd(f->dinv[j])));
+  for (int J = nb - 1; J >= 0; --J) {
+    double *yj = y + 12 * J;
+    __m256d s[3][3];
+    for (int cc = 0; cc < 3; ++cc)
+      for (int i = 0; i < 3; ++i) s[cc][i] = zero;
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      const double *v = y + 12 * f->brow[q];
+      const float *B = f->blk + 9 * q;
+      const __m256d v0 = _mm256_load_pd(v), v1 = _mm256_load_pd(v + 4), v2 = _mm256_load_pd(v + 8);
+      for (int cc = 0; cc < 3; ++cc) {
+        s[cc][0] = _mm256_add_pd(s[cc][0], _mm256_mul_pd(_mm256_set1_pd((double)B[3 * cc]), v0));
+        s[cc][1] = _mm256_add_pd(s[cc][1], _mm256_mul_pd(_mm256_set1_pd((double)B[3 * cc + 1]), v1));
+        s[cc][2] = _mm256_add_pd(s[cc][2], _mm256_mul_pd(_mm256_set1_pd((double)B[3 * cc + 2]), v2));
+      }
+    }
+    __m256d y3[3];
+    for (int cc = 0; cc < 3; ++cc)
+      y3[cc] = _mm256_sub_pd(_mm256_load_pd(yj + 4 * cc), _mm256_add_pd(_mm256_add_pd(s[cc][0], s[cc][1]), s[cc][2]));
+    const double *d = f->bdiag + 3 * J;
+    y3[1] = _mm256_sub_pd(y3[1], _mm256_mul_pd(_mm256_set1_pd(d[2]), y3[2]));
+    y3[0] = _mm256_sub_pd(y3[0], _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(d[0]), y3[1]),
+                                               _mm256_mul_pd(_mm256_set1_pd(d[1]), y3[2])));
+    for (int cc = 0; cc < 3; ++cc) _mm256_store_pd(yj + 4 * cc, y3[cc]);
+  }
+  for (int k = 0; k < n; ++k)
+    for (int r = 0; r < w; ++r) x[f->perm[k] * w + r] = y[4 * k + r];
+}
 #endif
 
 static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
@@ -338,6 +403,10 @@ static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
 #ifdef PALP_LDL_X86
   if (w == 1 && f->simd) {
     solve_blocks_avx2(f, x, y);
+    return;
+  }
+  if (w >= 2 && w <= 4 && f->simd) {
+    solve_blocks_avx2_lanes(f, x, w, y);
     return;
   }
 #endif
@@ -375,6 +444,14 @@ static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
     for (int k = 0; k < n; ++k)                                                                 \
       for (int r = 0; r < (W); ++r) x[f->perm[k] * (W) + r] = y[k * (W) + r];                   \
   } while (0)
+
+size_t palp_ldl_work_size(int n, int w) {
+  size_t m = (size_t)n * (size_t)(w > 0 ? w : 1);
+  const size_t v = 4 * (((size_t)n + 2) / 3);
+  if (v > m) m = v;
+  if (w >= 2 && w <= 4 && 4 * (size_t)n > m) m = 4 * (size_t)n;
+  return m + 4;
+}
 
 void palp_ldl_solve(const palp_ldl *f, double *x, int w, double *y) {
   const int n = f->n;

@@ -21,6 +21,8 @@
 #ifndef PALP_SPARSE_LDL_H
 #define PALP_SPARSE_LDL_H
 
+#include <stddef.h>
+
 typedef struct palp_ldl {
   void *symbolic; /* CHOLMOD's analysis (ordering, pattern), kept across refactorisations */
   void *common;   /* the cholmod_common it belongs to */
@@ -55,7 +57,12 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
                            const int *tj, const double *tx);
 
 /* Solves A X = B in place for w interleaved right-hand sides (x[i*w + k]);
- * work needs max(n*w, 4*ceil(n/3)) doubles. */
+ * work needs palp_ldl_work_size(n, w) doubles. */
 void palp_ldl_solve(const palp_ldl *f, double *x, int w, double *work);
+
+/* The doubles palp_ldl_solve's work needs for n unknowns and w right-hand sides:
+ * max(n w, 4 ceil(n / 3), 4 n for 2 <= w <= 4 (the AVX2 paths' lanes)) + 4 (their
+ * 32-byte alignment). */
+size_t palp_ldl_work_size(int n, int w);
 
 #endif

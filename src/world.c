@@ -1538,7 +1538,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     for (int r = 0; r < w->nfree; ++r) w->mass[w->vertex_of[r]] += per_area * w->mesh.vertex_area[w->vertex_of[r]];
   }
   w->rhs = xcalloc((size_t)w->nfree * 6, sizeof(double), &fail);
-  w->work = xcalloc((size_t)w->nfree * 6, sizeof(double), &fail);
+  w->work = xcalloc(palp_ldl_work_size(3 * w->nfree, 2), sizeof(double), &fail); /* the step's solve: 1 or 2 wide */
   if (fail) goto nomem;
 
   if (has(w, PALP_EFFECT_MEMBRANE_ELASTICITY)) {
@@ -1908,7 +1908,7 @@ static palp_factor_job *job_alloc(const palp_world *w) {
   j->tj = malloc(sizeof(int) * (size_t)nnz_max);
   j->tx = malloc(sizeof(double) * (size_t)nnz_max);
   j->solve = malloc(sizeof(double) * 3 * (size_t)(j->n3 ? j->n3 : 1));
-  j->work = malloc(sizeof(double) * 3 * (size_t)(j->n3 ? j->n3 : 1));
+  j->work = malloc(sizeof(double) * palp_ldl_work_size(j->n3, 3));
   const size_t nl = (size_t)(w->nlink ? w->nlink : 1);
   j->fdir = malloc(sizeof(palp_vec3) * nl);
   j->fbeta = malloc(sizeof(double) * nl);
@@ -2247,7 +2247,7 @@ static int finger_scratch_create(palp_world *w) {
   fs->slot_used = xcalloc((size_t)fs->slots, sizeof(int64_t), &fail);
   fs->row_slot = xcalloc((size_t)w->nfree, sizeof(int), &fail);
   fs->solve = xcalloc(3 * (size_t)fs->n3, sizeof(double), &fail);
-  fs->work = xcalloc(3 * (size_t)fs->n3, sizeof(double), &fail);
+  fs->work = xcalloc(palp_ldl_work_size(fs->n3, 3), sizeof(double), &fail);
   fs->vloc = xcalloc((size_t)nv, sizeof(int), &fail);
   fs->lvert = xcalloc(3 * (size_t)M, sizeof(int), &fail);
   fs->G_lvert = xcalloc(3 * (size_t)M, sizeof(int), &fail);

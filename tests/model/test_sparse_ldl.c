@@ -10,7 +10,13 @@
  *   same bits as the portable path, so a session log replays identically on any
  *   x86-64 machine (tolerance 0, compared with memcmp);
  * - two and three interleaved right-hand sides give, column by column, the same bits
- *   as one at a time (tolerance 0). */
+ *   as one at a time (tolerance 0);
+ * - for two, three and four interleaved right-hand sides the AVX2 path (one lane per
+ *   right-hand side) gives the same bits as the portable one: dense ones, the unit
+ *   columns of one vertex the fingertip's compliance columns solve for (where the
+ *   forward pass skips the block columns that are still all zero, which decides the
+ *   sign of some zeros), ones holding -0.0, and all -0.0 (which tells a path that does not
+ *   skip from one that does) (memcmp, tolerance 0). */
 #include <stdint.h>
 #include <string.h>
 
@@ -84,7 +90,9 @@ int main(void) {
   printf("CPU has AVX2: %s\n", avx2 ? "yes (both paths compared)" : "no (portable path only)");
 #endif
 
-  static double b[3][N], x1[3][N], xp[3][N], x3[3 * N], x2[2 * N], work[4 * N];
+  static double b[3][N], x1[3][N], xp[3][N], x3[3 * N], x2[2 * N], work[4 * N + 4];
+  CHECK(palp_ldl_work_size(N, 4) <= sizeof work / sizeof *work, "work holds %zu doubles",
+        palp_ldl_work_size(N, 4));
   for (int k = 0; k < 3; ++k)
     for (int r = 0; r < N; ++r) b[k][r] = urand();
   const int simd = f.simd;
@@ -123,6 +131,35 @@ int main(void) {
   }
   CHECK(diff3 == 0, "3 interleaved right-hand sides: %d entries differ from one at a time", diff3);
   CHECK(diff2 == 0, "2 interleaved right-hand sides: %d entries differ from one at a time", diff2);
+  /* The AVX2 lanes path against the portable one, bit for bit, widths 2-4. */
+  static double xa[4 * N], xq[4 * N];
+  int cases = 0, differ = 0;
+  for (int w = 2; w <= 4; ++w)
+    for (int kind = 0; kind < 4; ++kind) {
+      for (int q = 0; q < w * N; ++q) xa[q] = 0.0;
+      if (kind == 0) { /* dense */
+        for (int q = 0; q < w * N; ++q) xa[q] = urand();
+      } else if (kind == 1) { /* unit columns of vertex 7 (and one more for w = 4) */
+        for (int c = 0; c < w; ++c) xa[(3 * 7 + c % 3 + (c / 3) * 3) * w + c] = 1.0;
+      } else if (kind == 2) { /* sparse, with negative zeros beside the nonzeros */
+        for (int q = 0; q < w * N; ++q) xa[q] = (q % 5 == 0) ? urand() : (q % 5 == 1 ? -0.0 : 0.0);
+      } else { /* all -0.0: every block column is skipped, and where one is not, a row whose
+                * three entries are positive turns -0 into +0 (-0 - -0 = +0) */
+        for (int q = 0; q < w * N; ++q) xa[q] = -0.0;
+      }
+      memcpy(xq, xa, sizeof(double) * (size_t)(w * N));
+      palp_ldl_solve(&f, xa, w, work);
+      f.simd = 0;
+      palp_ldl_solve(&f, xq, w, work);
+      f.simd = simd;
+      cases++;
+      if (memcmp(xa, xq, sizeof(double) * (size_t)(w * N)) != 0) {
+        differ++;
+        CHECK(0, "width %d, case %d: the default path differs from the portable one", w, kind);
+      }
+    }
+  printf("widths 2-4, dense / unit-column / signed-zero / all -0 right-hand sides: %d of %d cases bit-identical between the "
+         "default (%s) and portable paths\n", cases - differ, cases, simd ? "AVX2" : "portable");
   palp_ldl_free(&f);
   CHECK_DONE();
 }
