@@ -228,9 +228,10 @@ static inline void palp_ldl_diag_fwd(const double *d, double *yj, int w) {
  *             B_c (*) y_I (elementwise, one partial sum per row r), then
  *             y_J[c] <- y_J[c] - ((s_c[0] + s_c[1]) + s_c[2]), then L_JJ^{-T}.
  * One copy of the blocks serves both passes (a server core's step finds it out of the
- * caches: bytes are time). The AVX2 path for one right-hand side does the same
- * operations in the same order, lane by lane and without fused multiply-adds, so every
- * path and width gives the same bits (test model_sparse_ldl). With several right-hand
+ * caches: bytes are time). The AVX2 paths (for one right-hand side, lanes over a
+ * vertex's components; for 2-4, a lane per right-hand side) do the same operations in
+ * the same order, lane by lane and without fused multiply-adds, so every path and width
+ * gives the same bits (test model_sparse_ldl). With several right-hand
  * sides (compliance columns: unit vectors, nonzero only on their etree path) the
  * forward pass skips a column whose values are all zero; one right-hand side (the
  * step's, dense) never skips, on either path, so that they agree even in the sign of a

@@ -40,7 +40,7 @@ typedef struct palp_ldl {
   float *blk;     /* [nblocks*9 + 4] the blocks, each column-major */
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
   double *dinv4;  /* [nb*4] 1/D padded to 4 lanes per vertex */
-  int simd;       /* 1: palp_ldl_solve takes the AVX2 path for w == 1 (same bits as the portable one) */
+  int simd;       /* 1: palp_ldl_solve takes the AVX2 paths for w <= 4 (same bits as the portable one) */
 } palp_ldl;
 
 void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
