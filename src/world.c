@@ -2375,8 +2375,7 @@ int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_ve
     k->proxy = v3_scale(dir, rmax + def->radius + 1e-3);
   }
   k->total = v3(0, 0, 0);
-  memset(&k->lm, 0, sizeof k->lm);
-  k->drift_corr = v3(0, 0, 0);
+  memset(&k->lm, 0, sizeof k->lm); /* no contact: the drift observer starts afresh (palp_drift_observe) */
   k->lm.device = device, k->lm.proxy = k->proxy, k->lm.normal = v3(0, 0, 1), k->lm.period = w->def.dt;
   palp_world_wake(w);
   return c;

@@ -157,8 +157,8 @@ static void test_presses(void) {
   press("5 deg above the rim", (palp_vec3){x0, 0, zc}, (palp_vec3){-1, 0, 0}, F, &n);
 }
 
-/* The breast-tissue phantom the exercises and the demo's dome D use (scene below, its
- * own 250 Hz), pressed deep in 2 mm levels: at the pole and 45 deg to 34 mm of device
+/* A shipped dome pressed deep in 2 mm levels at its scene's own step. The breast-tissue
+ * phantom the exercises and the demo's dome D use (250 Hz): at the pole and 45 deg to 34 mm of device
  * travel (~25 mm of indentation, ~17 N), at 70 deg to 30 mm (the tip meets the table).
  * A parameter set whose skin creeps without bound (a Burgers membrane with its Kelvin
  * spring at 0.08% of E1 and 0.4% added mass: the breast-tissue refit of 2026-11-27,
@@ -272,8 +272,6 @@ static void test_slide_in(const char *sn, palp_world *w, int max_over) {
   palp_world_destroy(w);
 }
 
-/* The local model at 250 Hz predicts the force of the next physics step within 5%
- * of the force, while pressing and holding. */
 static void test_local_model_in(const char *what, palp_world *w);
 
 /* The local model predicts the next 250 Hz step's force: pressed to 20 mm at 5 mm/s

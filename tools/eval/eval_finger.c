@@ -11,11 +11,6 @@
 /* The point s [m] along the unit normal n from the dome's centre. */
 static palp_vec3 along(palp_vec3 n, double s) { return (palp_vec3){s * n.x, s * n.y, s * n.z}; }
 
-/* p moved by d [m] along -n. */
-static palp_vec3 v3_sub_along(palp_vec3 p, palp_vec3 n, double d) {
-  return (palp_vec3){p.x - d * n.x, p.y - d * n.y, p.z - d * n.z};
-}
-
 double palp_eval_deep_press(const palp_world_def *wd0, palp_vec3 n, double max_depth, double *force, double *strain,
                             char *err, size_t errlen) {
   palp_world_def wd = *wd0;
@@ -27,15 +22,14 @@ double palp_eval_deep_press(const palp_world_def *wd0, palp_vec3 n, double max_d
     return -1;
   }
   const double R = wd.mesh.radius, r = 0.008;
-  const palp_vec3 start = along(n, R + r + 0.001);
-  const int fid = palp_world_add_finger(w, start, r);
+  const int fid = palp_world_add_finger(w, along(n, R + r + 0.001), r);
   double lost = 0.0, depth = 0.0;
   palp_local_model lm = {0};
   int touched = 0;
   for (double level = 0.002; level <= max_depth + 1e-9 && lost == 0.0; level += 0.002)
     for (int k = 0; k < 125; ++k) { /* 0.5 s a level: the travel at 10 mm/s, then the hold */
       depth = fmin(level, depth + 4e-5);
-      palp_world_set_finger_device(w, fid, v3_sub_along(start, n, depth));
+      palp_world_set_finger_device(w, fid, along(n, R + r + 0.001 - depth));
       if (palp_world_step(w) < 0) {
         snprintf(err, errlen, "deep press: the step failed at %.1f mm", 1e3 * depth);
         palp_world_destroy(w);

@@ -1347,7 +1347,7 @@ static int cmd_calibrate(const options *o) {
       palp_log_error(o->log, "%s", err);
       return 1;
     }
-    if (lost > 0) lost_any = 1;
+    lost_any |= lost > 0;
     if (lost > 0)
       printf("  %2.0f deg: LOST the fingertip at %.0f mm of device travel (largest link strain %.2f)\n", site_deg[i],
              1e3 * lost, strain);
