@@ -51,7 +51,8 @@ palp_world *palp_db_world_from_scene(const char *scene_json, double dt_s, int *e
   }
   /* The server steps at its tick rate, whatever the scene says. Its rebuild lag is in the
    * logged scene (time.refactor_lag_steps; absent in logs made before the lag existed, which
-   * were stepped without one), so replay defers exactly as the session did. */
+   * were stepped without one), so replay defers exactly as the session did; likewise its
+   * blend of rebuilt tangents (time.refactor_blend_steps). */
   if (dt_s > 0) sc.world.dt = dt_s;
   palp_world *w = palp_scene_create_world(&sc, &rc);
   if (!w) {

@@ -243,6 +243,9 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
   /* Rebuilds are computed by the ticker's helper behind the ticks (docs/server.md);
    * the logged scene carries the lag (time.refactor_lag_steps), so replay defers the same. */
   ph->scene.world.refactor_lag = palp_world_refactor_lag_for(ph->scene.world.dt);
+  /* A rebuilt tangent takes over across ~8 ms (time.refactor_blend_steps in the logged
+   * scene, replayed the same): in one step, it stepped the finger's force (docs/haptics.md). */
+  ph->scene.world.refactor_blend = palp_world_refactor_blend_for(ph->scene.world.dt);
   /* The recorded scene must stay loadable: its frame period a whole number of steps
    * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */
   {

@@ -228,6 +228,8 @@ typedef struct palp_world_def {
                          step cannot be trusted: it is retried as two half steps */
   int refactor_lag;   /* frames a lagged-tangent rebuild waits before it is installed (0,
                          the default: at once); see palp_world_factor_claim */
+  int refactor_blend; /* frames over which a rebuilt tangent takes over from the one it
+                         replaces (0, the default: at once); palp_world_refactor_blend_for */
   int lesion_count;   /* 0..PALP_MAX_LESIONS; lesions act through the gel support */
   palp_lesion lesion[PALP_MAX_LESIONS];
   /* The surface a finger meets (docs/haptics.md, "The smooth contact surface"): the
@@ -276,6 +278,10 @@ int palp_world_factor_done(palp_world *w, palp_factor_job *job);
 int64_t palp_world_factor_due(const palp_world *w); /* frame a claimed job is due at, -1 none */
 /* The lag the server and replay use at a physics step dt [s]: about 16 ms of frames. */
 int palp_world_refactor_lag_for(double dt);
+/* The blend a server sets for steps of dt [s] (def.refactor_blend, docs/haptics.md,
+ * "Rebuilds blended in"): ~8 ms of frames, at least 1 (8 at 1 kHz, 2 at 250 Hz, 1 at
+ * 100 Hz), 0 for a dt that is not positive. */
+int palp_world_refactor_blend_for(double dt);
 
 /* Force-driven contact: returns a contact id >= 0 or a negative error. The force
  * vector [N] is spread over the distribution's vertices by their weights. */
@@ -388,6 +394,8 @@ typedef struct palp_world_health {
                                  capped at max_speed rather than failing the world: a load
                                  far beyond the model (e.g. 30 N on one vertex of a soft
                                  phantom) */
+  int64_t margin_rebuilds;    /* deferred rebuilds (def.refactor_lag) made at once because the
+                                 factor reached its stability margin before its due frame */
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 

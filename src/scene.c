@@ -315,6 +315,8 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   /* Deferred tangent rebuilds (docs/haptics.md): part of the physics a log replays, so a
    * session's scene carries it; absent = 0, how every log before it was stepped. */
   if ((e = get_int(c, t, "time.", "refactor_lag_steps", 0, 0, 1000, &s->world.refactor_lag))) return e;
+  /* and the blend of a rebuilt tangent (absent = 0: at once, as every log before it) */
+  if ((e = get_int(c, t, "time.", "refactor_blend_steps", 0, 0, 1000, &s->world.refactor_blend))) return e;
   s->frame_period = s->world.dt;
   if ((e = get_pos(c, t, "time.", "frame_period_s", 0, &s->frame_period))) return e;
   const double ratio = s->frame_period / s->world.dt;
@@ -504,6 +506,7 @@ char *palp_scene_to_json(const palp_scene *s) {
   add_exact(t, "frames", s->frames);
   add_exact(t, "frame_period_s", s->frame_period);
   if (s->world.refactor_lag > 0) add_exact(t, "refactor_lag_steps", s->world.refactor_lag);
+  if (s->world.refactor_blend > 0) add_exact(t, "refactor_blend_steps", s->world.refactor_blend);
   cJSON *fx = cJSON_AddArrayToObject(r, "effects");
   for (int i = 0; i < 7; ++i)
     if (s->world.effects & (1u << i)) cJSON_AddItemToArray(fx, cJSON_CreateString(palp_effect_name((palp_effect)(1u << i))));

@@ -212,13 +212,15 @@ int main(int argc, char **argv) {
    * server's helper threads; docs/haptics.md). */
   printf("finger pressing 2-18 mm at the pole with a 0.7 Hz wobble, 338 vertices, finger surface %s (median / p99 / "
          "max us):\n", palp_finger_surface_name(surface >= 0 ? surface : palp_world_default_def().finger_surface));
-  printf("%7s %10s %8s %23s %23s\n", "dt_ms", "lag", "steps", "rebuild/request/install", "other steps");
+  printf("%7s %10s %8s %23s %23s %8s\n", "dt_ms", "lag/blend", "steps", "rebuild/request/install", "other steps",
+         "at_once");
   for (int k = 0; k < 2; ++k)
     for (int deferred = 0; deferred < 2; ++deferred) {
       const double dt = k ? 0.001 : 0.004;
       palp_world_def d = palp_world_default_def();
       d.dt = dt;
       d.refactor_lag = deferred ? palp_world_refactor_lag_for(dt) : 0;
+      d.refactor_blend = deferred ? palp_world_refactor_blend_for(dt) : 0; /* as the server */
       if (surface >= 0) d.finger_surface = surface;
       d.membrane.bending_stiffness = bending;
       palp_world *w = palp_world_create(&d, NULL);
@@ -250,9 +252,12 @@ int main(int argc, char **argv) {
       }
       qsort(tr, (size_t)nr, sizeof *tr, cmpd);
       qsort(tn, (size_t)nn, sizeof *tn, cmpd);
-      printf("%7.1f %10d %8d %7.0f %7.0f %7.0f %7.1f %7.1f %7.0f\n", 1e3 * dt, d.refactor_lag, nr,
+      palp_world_health hl;
+      palp_world_get_health(w, &hl);
+      printf("%7.1f %7d/%-2d %8d %7.0f %7.0f %7.0f %7.1f %7.1f %7.0f %8lld\n", 1e3 * dt, d.refactor_lag,
+             d.refactor_blend, nr,
              nr ? 1e6 * tr[nr / 2] : 0.0, nr ? 1e6 * tr[(int)(0.99 * (nr - 1))] : 0.0, nr ? 1e6 * tr[nr - 1] : 0.0,
-             1e6 * tn[nn / 2], 1e6 * tn[(int)(0.99 * (nn - 1))], 1e6 * tn[nn - 1]);
+             1e6 * tn[nn / 2], 1e6 * tn[(int)(0.99 * (nn - 1))], 1e6 * tn[nn - 1], (long long)hl.margin_rebuilds);
       free(tr), free(tn);
       palp_world_destroy(w);
     }

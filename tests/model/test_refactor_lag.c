@@ -1,5 +1,6 @@
 /* Deferred refactorisation (def.refactor_lag, docs/haptics.md): a lagged-tangent
- * rebuild requested at frame f is installed at frame f + k whoever computes it.
+ * rebuild requested at frame f is installed at frame f + k whoever computes it, and
+ * blended in over def.refactor_blend frames as the server steps it.
  * Checked on the shipped phantom at 1 kHz with a finger pressing and wobbling:
  * - a world whose jobs are claimed and factored on another thread has the same state
  *   hash after every frame as one that factors them itself at the due frame;
@@ -35,6 +36,11 @@ int main(void) {
   CHECK(dk.refactor_lag == 16, "16 frames at 1 kHz, got %d", dk.refactor_lag);
   CHECK(palp_world_refactor_lag_for(0.004) == 4 && palp_world_refactor_lag_for(0.01) == 2,
         "4 frames at 250 Hz, 2 at 100 Hz");
+  /* ... and blended in over half the lag, as the server steps (docs/haptics.md). */
+  dk.refactor_blend = palp_world_refactor_blend_for(d0.dt);
+  CHECK(dk.refactor_blend == 8 && palp_world_refactor_blend_for(0.004) == 2 &&
+            palp_world_refactor_blend_for(0.01) == 1 && palp_world_refactor_blend_for(0.0) == 0,
+        "blend 8 frames at 1 kHz, 2 at 250 Hz, 1 at 100 Hz, none at dt 0 (got %d)", dk.refactor_blend);
   int e;
   palp_world *w0 = palp_world_create(&d0, &e), *wa = palp_world_create(&dk, &e), *wb = palp_world_create(&dk, &e);
   CHECK(w0 && wa && wb, "worlds created");

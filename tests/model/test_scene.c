@@ -70,6 +70,8 @@ int main(void) {
   /* The deferred-rebuild lag a session was stepped with (replay needs it): 0..1000 steps. */
   expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_lag_steps\":-1", "time.refactor_lag_steps");
   expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_lag_steps\":1001", "time.refactor_lag_steps");
+  expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_blend_steps\":-1", "time.refactor_blend_steps");
+  expect_error("\"dt_s\":0.01", "\"dt_s\":0.01,\"refactor_blend_steps\":1001", "time.refactor_blend_steps");
   /* The fingertip's contact surface (docs/haptics.md): "smooth" or "facets", nothing else. */
   expect_error("\"effects\":[", "\"finger_surface\":\"round\",\"effects\":[", "finger_surface");
   expect_error("\"effects\":[", "\"finger_surface\":1,\"effects\":[", "finger_surface");
@@ -168,14 +170,19 @@ int main(void) {
     const palp_scene shipped = paper_scene();
     CHECK(shipped.world.finger_surface == PALP_FINGER_SURFACE_SMOOTH, "the shipped scene asks for the smooth surface");
   }
-  /* The rebuild lag survives the round trip (a server's logged scene carries it to replay). */
+  /* The rebuild lag and blend survive the round trip (a server's logged scene carries them
+   * to replay); a scene without them (every log before them) reads 0. */
   palp_scene lagged = a;
   lagged.world.refactor_lag = 4;
+  lagged.world.refactor_blend = 2;
   char *lj = palp_scene_to_json(&lagged);
   palp_scene lb;
-  CHECK(lj && palp_scene_parse(lj, &lb, err, sizeof err) == PALP_OK && lb.world.refactor_lag == 4,
-        "refactor_lag_steps round trip: %d (expected 4)", lj ? lb.world.refactor_lag : -1);
+  CHECK(lj && palp_scene_parse(lj, &lb, err, sizeof err) == PALP_OK && lb.world.refactor_lag == 4 &&
+            lb.world.refactor_blend == 2,
+        "refactor_lag_steps / refactor_blend_steps round trip: %d / %d (expected 4 / 2)", lj ? lb.world.refactor_lag : -1,
+        lj ? lb.world.refactor_blend : -1);
   free(lj);
+  CHECK(a.world.refactor_blend == 0, "a scene without time.refactor_blend_steps blends nothing (%d)", a.world.refactor_blend);
   int e;
   palp_world *wa = palp_scene_create_world(&a, &e), *wb = palp_scene_create_world(&b, &e);
   for (int f = 0; f < a.frames; ++f) {
