@@ -47,6 +47,9 @@ static palp_world *make_world(double dt) {
     exit(2);
   }
   s.world.dt = dt;
+  /* Rebuilds deferred and blended in as the server steps a phantom at this rate. */
+  s.world.refactor_lag = palp_world_refactor_lag_for(dt);
+  s.world.refactor_blend = palp_world_refactor_blend_for(dt);
   int rc = 0;
   palp_world *w = palp_scene_create_world(&s, &rc);
   if (!w) {
