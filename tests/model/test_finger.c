@@ -24,10 +24,12 @@ static palp_vec3 sc(palp_vec3 a, double s) { return (palp_vec3){a.x * s, a.y * s
 static double dot(palp_vec3 a, palp_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 static double len(palp_vec3 a) { return sqrt(dot(a, a)); }
 
-static palp_world *make_surface(double dt, int surface) {
+static palp_world *make_surface_lag(double dt, int surface, int lag, int blend) {
   palp_world_def d = palp_world_default_def();
   d.dt = dt;
   d.finger_surface = surface;
+  d.refactor_lag = lag;
+  d.refactor_blend = blend;
   int err = 0;
   palp_world *w = palp_world_create(&d, &err);
   if (!w) {
@@ -36,6 +38,8 @@ static palp_world *make_surface(double dt, int surface) {
   }
   return w;
 }
+
+static palp_world *make_surface(double dt, int surface) { return make_surface_lag(dt, surface, 0, 0); }
 
 /* The library's default surface (smooth since 2026-11-27). */
 static palp_world *make(double dt) { return make_surface(dt, palp_world_default_def().finger_surface); }
@@ -291,7 +295,7 @@ static long long test_slide_in(const char *sn, palp_world *w, int max_over) {
   return (long long)(h1.margin_rebuilds - h0.margin_rebuilds);
 }
 
-static void test_local_model_in(const char *what, palp_world *w);
+static void test_local_model_in(const char *what, palp_world *w, double bound);
 
 /* The local model predicts the next 250 Hz step's force: pressed to 20 mm at 5 mm/s
  * with a 2 mm, 0.7 Hz wobble, each step's force against the last model evaluated at
@@ -303,12 +307,23 @@ static void test_local_model_in(const char *what, palp_world *w);
  * 2.9% before, 4.9% now: its gel flows, the surface's velocity is its drift). */
 static void test_local_model(void) {
   palp_world *w = make(0.004);
-  test_local_model_in("default phantom", w);
+  test_local_model_in("default phantom", w, 0.05);
   w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.004, -1, NULL, 0, 0);
-  if (w) test_local_model_in("breast-tissue dome", w);
+  if (w) test_local_model_in("breast-tissue dome", w, 0.05);
+  /* As the server steps them (rebuilds deferred 4 frames, blended over 2). The default
+   * phantom's worst step there is a rebuild made at once at the factor's margin, which is
+   * not blended: 5.86% (21.3% before the margin test, when the factor waited beyond its
+   * margin; docs/haptics.md, "Rebuilds blended in"), held here at 6%; the breast-tissue
+   * dome keeps 5%. */
+  w = make_surface_lag(0.004, palp_world_default_def().finger_surface, palp_world_refactor_lag_for(0.004),
+                       palp_world_refactor_blend_for(0.004));
+  test_local_model_in("default phantom, as served", w, 0.06);
+  w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.004, -1, NULL, palp_world_refactor_lag_for(0.004),
+                  palp_world_refactor_blend_for(0.004));
+  if (w) test_local_model_in("breast-tissue dome, as served", w, 0.05);
 }
 
-static void test_local_model_in(const char *what, palp_world *w) {
+static void test_local_model_in(const char *what, palp_world *w, double bound) {
   palp_vec3 start = {0.0, 0.0, R + r + 0.001};
   const int f = palp_world_add_finger(w, start, r);
   palp_local_model prev;
@@ -340,7 +355,7 @@ static void test_local_model_in(const char *what, palp_world *w) {
   printf("local model at 250 Hz, %s: next-step force predicted within %.2f%% (worst of %d steps)\n", what,
          100 * worst, compared);
   CHECK(compared > 500, "%s: compared %d steps in contact", what, compared);
-  CHECK(worst < 0.05, "%s: next-step force predicted within 5%% (worst %.2f%%)", what, 100 * worst);
+  CHECK(worst < bound, "%s: next-step force predicted within %.0f%% (worst %.2f%%)", what, 100 * bound, 100 * worst);
   palp_world_destroy(w);
 }
 
