@@ -279,8 +279,9 @@ int64_t palp_world_factor_due(const palp_world *w); /* frame a claimed job is du
 /* The lag the server and replay use at a physics step dt [s]: about 16 ms of frames. */
 int palp_world_refactor_lag_for(double dt);
 /* The blend a server sets for steps of dt [s] (def.refactor_blend, docs/haptics.md,
- * "Rebuilds blended in"): ~8 ms of frames, at least 1 (8 at 1 kHz, 2 at 250 Hz, 1 at
- * 100 Hz), 0 for a dt that is not positive. */
+ * "Rebuilds blended in"): ~8 ms of frames at physics rates of 500 Hz or more (8 at
+ * 1 kHz, 4 at 500 Hz); 0 at slower rates, whose models the station blends over its
+ * haptic ticks, and for a dt that is not positive. */
 int palp_world_refactor_blend_for(double dt);
 
 /* Force-driven contact: returns a contact id >= 0 or a negative error. The force

@@ -310,7 +310,7 @@ static void test_local_model(void) {
   test_local_model_in("default phantom", w, 0.05);
   w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.004, -1, NULL, 0, 0);
   if (w) test_local_model_in("breast-tissue dome", w, 0.05);
-  /* As the server steps them (rebuilds deferred 4 frames, blended over 2). The default
+  /* As the server steps them (rebuilds deferred 4 frames; no blend at 250 Hz). The default
    * phantom's worst step there is a rebuild made at once at the factor's margin, which is
    * not blended: 5.86% (21.3% before the margin test, when the factor waited beyond its
    * margin; docs/haptics.md, "Rebuilds blended in"), held here at 6%; the breast-tissue

@@ -38,9 +38,9 @@ int main(void) {
         "4 frames at 250 Hz, 2 at 100 Hz");
   /* ... and blended in over half the lag, as the server steps (docs/haptics.md). */
   dk.refactor_blend = palp_world_refactor_blend_for(d0.dt);
-  CHECK(dk.refactor_blend == 8 && palp_world_refactor_blend_for(0.004) == 2 &&
-            palp_world_refactor_blend_for(0.01) == 1 && palp_world_refactor_blend_for(0.0) == 0,
-        "blend 8 frames at 1 kHz, 2 at 250 Hz, 1 at 100 Hz, none at dt 0 (got %d)", dk.refactor_blend);
+  CHECK(dk.refactor_blend == 8 && palp_world_refactor_blend_for(0.002) == 4 &&
+            palp_world_refactor_blend_for(0.004) == 0 && palp_world_refactor_blend_for(0.0) == 0,
+        "blend 8 frames at 1 kHz, 4 at 500 Hz, none at 250 Hz or at dt 0 (got %d)", dk.refactor_blend);
   int e;
   palp_world *w0 = palp_world_create(&d0, &e), *wa = palp_world_create(&dk, &e), *wb = palp_world_create(&dk, &e);
   CHECK(w0 && wa && wb, "worlds created");
