@@ -2198,7 +2198,7 @@ int palp_world_refactor_blend_for(double dt) {
    * 1 kHz the breast-tissue slide's 4.2% step becomes eight of ~0.5% (docs/haptics.md).
    * Only for physics at 500 Hz or faster: at slower rates the station blends each new
    * model over its period of several haptic ticks already, and a blend of 2 frames at
-   * 250 Hz cost the capacity benchmark a step of 8 sessions (48 -> 40 in 4 of 5 runs). */
+   * 250 Hz showed no gain in the 4 ms slide for its cost (a second solve per frame). */
   if (!(dt > 0.0) || dt > 0.002) return 0;
   const double k = ceil(0.008 / dt - 1e-9);
   return k < 1.0 ? 1 : k > 1000.0 ? 1000 : (int)k;
