@@ -576,11 +576,17 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
   /* Why ticks ran late, when they did: a tick that reached a rebuild's due frame before
    * the helper had finished it waited for it (docs/haptics.md). */
-  if (s->stats.overruns > 0 || s->stats.factor_waits > 0)
+  if (s->stats.overruns > 0 || s->stats.factor_waits > 0) {
+    /* and how many were made on the tick because the factor reached its stability margin
+     * before its rebuild was due (palp_world_health.margin_rebuilds, ~1 ms each) */
+    palp_world_health h;
+    palp_world_get_health(s->world, &h);
     palp_log_info(srv->log, "session %u: %llu of %llu ticks overran; %llu tangent rebuilds off the tick, %llu waited "
-                            "for (%.1f ms in all)", s->id, (unsigned long long)s->stats.overruns,
-                  (unsigned long long)s->stats.ticks, (unsigned long long)s->stats.factor_jobs,
-                  (unsigned long long)s->stats.factor_waits, (double)s->stats.factor_wait_ns * 1e-6);
+                            "for (%.1f ms in all), %lld made on the tick at the stability margin", s->id,
+                  (unsigned long long)s->stats.overruns, (unsigned long long)s->stats.ticks,
+                  (unsigned long long)s->stats.factor_jobs, (unsigned long long)s->stats.factor_waits,
+                  (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
+  }
   /* Its members' slots are free again; its state instance is released after
    * the retention time, once every member has read the CLOSED state. */
   for (int i = 0; i < srv->station_slots; i++)
