@@ -666,6 +666,18 @@ static void stage_integrate(palp_world *w, double h) {
 
 /* ---- fingers ------------------------------------------------------------ */
 
+/* The 3 columns of f^{-1} at free row r into col, [3][n3] in single precision, through
+ * solve [3 n3] and work (palp_ldl_work_size(n3, 3)). One function for the finger's pool,
+ * a deferred job's columns and a blend's old ones: a column is the same bits whoever
+ * makes it. */
+static void factor_cols(const palp_ldl *f, int r, int n3, double *solve, double *work, float *col) {
+  memset(solve, 0, sizeof(double) * 3 * (size_t)n3);
+  for (int c = 0; c < 3; ++c) solve[3 * (3 * r + c) + c] = 1.0;
+  palp_ldl_solve(f, solve, 3, work);
+  for (int k = 0; k < n3; ++k)
+    for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = (float)solve[3 * k + c];
+}
+
 /* The pool slot holding the 3 columns of A^{-1} (the factor, without the gel's
  * rank-1 term) at free row r, [3][n3] contiguous, computed on first use after a
  * refactorisation; the pool grows (up to every free row) only when every slot
@@ -699,12 +711,7 @@ static int finger_slot(palp_world *w, int r) {
     }
     s = best;
     if (fs->slot_row[s] >= 0) fs->row_slot[fs->slot_row[s]] = -1;
-    memset(fs->solve, 0, sizeof(double) * 3 * (size_t)n3);
-    for (int c = 0; c < 3; ++c) fs->solve[3 * (3 * r + c) + c] = 1.0;
-    palp_ldl_solve(&w->ldl, fs->solve, 3, fs->work);
-    float *col = fs->pool + (size_t)s * 3 * (size_t)n3;
-    for (int k = 0; k < n3; ++k)
-      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = (float)fs->solve[3 * k + c];
+    factor_cols(&w->ldl, r, n3, fs->solve, fs->work, fs->pool + (size_t)s * 3 * (size_t)n3);
     fs->slot_row[s] = r;
     fs->row_slot[r] = s;
   }
@@ -777,12 +784,7 @@ static const float *prev_cols(palp_world *w, int r) {
   if (s < 0) {
     s = prev_slot_take(w, r);
     if (s < 0) return NULL;
-    memset(fs->solve, 0, sizeof(double) * 3 * (size_t)n3);
-    for (int c = 0; c < 3; ++c) fs->solve[3 * (3 * r + c) + c] = 1.0;
-    palp_ldl_solve(&w->ldl_prev, fs->solve, 3, fs->work);
-    float *col = fs->prev_pool + (size_t)s * 3 * (size_t)n3;
-    for (int k = 0; k < n3; ++k)
-      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = (float)fs->solve[3 * k + c];
+    factor_cols(&w->ldl_prev, r, n3, fs->solve, fs->work, fs->prev_pool + (size_t)s * 3 * (size_t)n3);
   }
   return fs->prev_pool + (size_t)s * 3 * (size_t)n3;
 }
@@ -2095,17 +2097,9 @@ int palp_factor_job_run(palp_factor_job *j) {
   if (!j) return PALP_EINVAL;
   j->rc = palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, j->nnz, j->ti, j->tj, j->tx);
   if (j->rc) return j->rc;
-  /* The same operations as finger_slot, so a column is the same bits whoever makes it. */
-  const int n3 = j->n3;
-  for (int q = 0; q < j->ncols; ++q) {
-    const int r = j->col_row[q];
-    memset(j->solve, 0, sizeof(double) * 3 * (size_t)n3);
-    for (int c = 0; c < 3; ++c) j->solve[3 * (3 * r + c) + c] = 1.0;
-    palp_ldl_solve(&j->ldl, j->solve, 3, j->work);
-    float *col = j->cols + (size_t)q * 3 * (size_t)n3;
-    for (int k = 0; k < n3; ++k)
-      for (int c = 0; c < 3; ++c) col[(size_t)c * (size_t)n3 + (size_t)k] = (float)j->solve[3 * k + c];
-  }
+  /* The same function as finger_slot's, so a column is the same bits whoever makes it. */
+  for (int q = 0; q < j->ncols; ++q)
+    factor_cols(&j->ldl, j->col_row[q], j->n3, j->solve, j->work, j->cols + (size_t)q * 3 * (size_t)j->n3);
   return PALP_OK;
 }
 
