@@ -310,14 +310,16 @@ static void test_local_model(void) {
   test_local_model_in("default phantom", w, 0.05);
   w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.004, -1, NULL, 0, 0);
   if (w) test_local_model_in("breast-tissue dome", w, 0.05);
-  /* As the server steps them (rebuilds deferred 4 frames; no blend at 250 Hz). The default
-   * phantom's worst step there is a rebuild made at once at the factor's margin, which is
-   * not blended: 5.86% (21.3% before the margin test, when the factor waited beyond its
-   * margin; docs/haptics.md, "Rebuilds blended in"), held here at 6%; the breast-tissue
-   * dome keeps 5%. */
+  /* As the server steps them (rebuilds deferred 4 frames; at 250 Hz neither the blend nor
+   * the margin test, docs/haptics.md, "Rebuilds blended in"). The default phantom (the
+   * paper's flowing reading) then misses its next step by up to 21.3% in a 4-step burst at
+   * 0.15-0.18 N while a factor past its margin waits for its due frame (5.9% with the
+   * margin test, which cost the demo's exercise sessions late ticks): a known shortfall,
+   * held at 25% so that it cannot grow unnoticed, not the target. The breast-tissue dome of
+   * the exercises keeps 5%. */
   w = make_surface_lag(0.004, palp_world_default_def().finger_surface, palp_world_refactor_lag_for(0.004),
                        palp_world_refactor_blend_for(0.004));
-  test_local_model_in("default phantom, as served", w, 0.06);
+  test_local_model_in("default phantom, as served", w, 0.25);
   w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.004, -1, NULL, palp_world_refactor_lag_for(0.004),
                   palp_world_refactor_blend_for(0.004));
   if (w) test_local_model_in("breast-tissue dome, as served", w, 0.05);
