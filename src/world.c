@@ -185,11 +185,9 @@ struct palp_world {
   double *rhs;  /* [nfree*6]: 3 columns of M v + h f, 3 of g when u is refreshed */
   double *work; /* [nfree*6] */
   /* A rebuilt tangent blended in over def.refactor_blend frames (factor_solve): the
-   * factor it replaced, the frames of the blend so far (0: none) and this frame's
-   * weight of the new one (1 outside a blend). */
+   * factor it replaced and the frames of the blend so far (0: none; blend_weight). */
   palp_ldl ldl_prev;
   int blend_k;
-  double blend_alpha;
   double *bx; /* [nfree*6] the replaced factor's solve; allocated with def.refactor_blend > 0 */
 
   /* Contacts. */
@@ -511,6 +509,12 @@ static double max_square(const double *restrict x, int n) {
   return v;
 }
 
+/* The new factor's weight a in this frame's blend, k / (N + 1) at its k-th frame; 1
+ * outside a blend. */
+static double blend_weight(const palp_world *w) {
+  return w->blend_k > 0 ? w->blend_k / (w->def.refactor_blend + 1.0) : 1.0;
+}
+
 /* x <- A^{-1} x for width interleaved right-hand sides. During a blend (def.refactor_blend)
  * the inverse is B = a A_new^{-1} + (1 - a) A_old^{-1}, a rising from 1/(N + 1) to N/(N + 1)
  * over the N frames after a rebuild: a rebuild realigns the lagged tangent's axial
@@ -521,7 +525,8 @@ static double max_square(const double *restrict x, int n) {
  * any S that both factors are above (A >= S gives A^{-1} <= S^{-1}, so B <= S^{-1}),
  * hence as stable as the weaker of the two. */
 static void factor_solve(palp_world *w, double *x, int width) {
-  if (!(w->blend_alpha < 1.0)) {
+  const double a = blend_weight(w), b = 1.0 - a;
+  if (!(a < 1.0)) {
     palp_ldl_solve(&w->ldl, x, width, w->work);
     return;
   }
@@ -529,7 +534,6 @@ static void factor_solve(palp_world *w, double *x, int width) {
   memcpy(w->bx, x, sizeof(double) * n);
   palp_ldl_solve(&w->ldl_prev, w->bx, width, w->work);
   palp_ldl_solve(&w->ldl, x, width, w->work);
-  const double a = w->blend_alpha, b = 1.0 - a;
   for (size_t k = 0; k < n; ++k) x[k] = a * x[k] + b * w->bx[k];
 }
 
@@ -1108,8 +1112,8 @@ static void stage_fingers(palp_world *w, double h) {
     for (int a = 0; a < nl; ++a) colv[a] = fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
     /* During a blend, the replaced factor's columns too (factor_solve): the compliance
      * is a colv + (1 - a) colp. */
-    const int blend = w->blend_alpha < 1.0;
-    const double ba = w->blend_alpha, bb = 1.0 - ba;
+    const double ba = blend_weight(w), bb = 1.0 - ba;
+    const int blend = ba < 1.0;
     const float *colp[3 * PALP_FINGER_MAX_CON];
     if (blend)
       for (int a = 0; a < nl; ++a) {
@@ -1669,7 +1673,6 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
   w->rhs = xcalloc((size_t)w->nfree * 6, sizeof(double), &fail);
   w->work = xcalloc(palp_ldl_work_size(3 * w->nfree, 2), sizeof(double), &fail); /* the step's solve: 1 or 2 wide */
   if (def->refactor_blend > 0) w->bx = xcalloc((size_t)w->nfree * 6, sizeof(double), &fail);
-  w->blend_alpha = 1.0;
   if (fail) goto nomem;
 
   if (has(w, PALP_EFFECT_MEMBRANE_ELASTICITY)) {
@@ -1972,22 +1975,14 @@ static void factor_installed(palp_world *w, double h) {
 }
 
 /* A blend (factor_solve) from the factor now in ldl_prev to the one just made. */
-static void blend_start(palp_world *w) {
-  w->blend_k = 1;
-  w->blend_alpha = 1.0 / (w->def.refactor_blend + 1.0);
-}
+static void blend_start(palp_world *w) { w->blend_k = 1; }
 
-static void blend_stop(palp_world *w) {
-  w->blend_k = 0;
-  w->blend_alpha = 1.0;
-}
+static void blend_stop(palp_world *w) { w->blend_k = 0; }
 
 /* At the start of each frame of a blend: the next weight, u and the finger's gathered
  * compliance made anew from the blended inverse (and once more after its end). */
 static void blend_advance(palp_world *w) {
-  const int n = w->def.refactor_blend;
-  if (++w->blend_k > n) blend_stop(w);
-  else w->blend_alpha = w->blend_k / (n + 1.0);
+  if (++w->blend_k > w->def.refactor_blend) blend_stop(w);
   w->u_valid = 0;
   if (w->fs) w->fs->G_owner = -1;
 }
