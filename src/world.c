@@ -32,6 +32,11 @@ enum { CONTACT_NONE = 0, CONTACT_FORCE = 1, CONTACT_FINGER = 2 };
 /* A deferred refactorisation's state: requested by a step, claimed by a host that
  * computes it elsewhere, handed back done; installed at its due frame. */
 enum { JOB_NONE = 0, JOB_REQUESTED = 1, JOB_CLAIMED = 2, JOB_DONE = 3 };
+/* The longest step of the haptic physics rates (500 Hz and up), where a rebuilt tangent is
+ * blended in (palp_world_refactor_blend_for) and a factor past its stability margin is
+ * rebuilt at once (try_step); at slower rates the station blends each model over several
+ * haptic ticks, and rebuilds on the tick cost more than they gave (docs/haptics.md). */
+#define PALP_HAPTIC_MAX_DT 0.002 /* [s] */
 
 typedef struct contact {
   int kind;
@@ -1979,12 +1984,12 @@ static void blend_start(palp_world *w) { w->blend_k = 1; }
 
 static void blend_stop(palp_world *w) { w->blend_k = 0; }
 
-/* At the start of each frame of a blend: the next weight, u and the finger's gathered
- * compliance made anew from the blended inverse (and once more after its end). */
+/* At the start of each frame of a blend: the next weight, and u made anew from the blended
+ * inverse (and once more after its end). The finger's gathered compliance needs nothing
+ * here: stage_fingers gathers it anew in every frame of a blend and keeps none of it. */
 static void blend_advance(palp_world *w) {
   if (++w->blend_k > w->def.refactor_blend) blend_stop(w);
   w->u_valid = 0;
-  if (w->fs) w->fs->G_owner = -1;
 }
 
 /* Synchronous rebuild: at creation, when the step size leaves the factor's range, and
@@ -2188,7 +2193,7 @@ int palp_world_refactor_blend_for(double dt) {
    * Only for physics at 500 Hz or faster: at slower rates the station blends each new
    * model over its period of several haptic ticks already, and a blend of 2 frames at
    * 250 Hz showed no gain in the 4 ms slide for its cost (a second solve per frame). */
-  if (!(dt > 0.0) || dt > 0.002) return 0;
+  if (!(dt > 0.0) || dt > PALP_HAPTIC_MAX_DT) return 0;
   const double k = ceil(0.008 / dt - 1e-9);
   return k < 1.0 ? 1 : k > 1000.0 ? 1000 : (int)k;
 }
@@ -2242,8 +2247,6 @@ static int has_finger(const palp_world *w) {
   return 0;
 }
 
-#define PALP_MARGIN_MAX_DT 0.002 /* [s] */
-
 /* One attempt at a step of h; PALP_EAGAIN-like 1 when the solve was rejected
  * (nothing but the force arrays has changed then). */
 static int try_step(palp_world *w, double h, int last_resort) {
@@ -2258,12 +2261,12 @@ static int try_step(palp_world *w, double h, int last_resort) {
   const int defer = w->def.refactor_lag > 0 && has_finger(w);
   const int resize = h > 1.25 * w->h_factored || h < 0.5 * w->h_factored;
   /* A factor beyond its margin is not kept for the lag at haptic physics rates (def.dt of
-   * PALP_MARGIN_MAX_DT or less): waiting let the long-term dome ring at 1 kHz, 30% of the
+   * PALP_HAPTIC_MAX_DT or less): waiting let the long-term dome ring at 1 kHz, 30% of the
    * force (docs/haptics.md). At 250 Hz the margin is reached a frame or two after most
    * requests, and rebuilding then on the tick cost the demo's strip search (breast-tissue
    * dome) 1,289 such rebuilds and 1,118 late ticks in 123 s, against 5 late without, for a
    * gain seen only in the next-step prediction of the paper's flowing phantom. */
-  const int margin = defer && w->unsafe && w->def.dt <= PALP_MARGIN_MAX_DT; /* the rate's, not a halved step's */
+  const int margin = defer && w->unsafe && w->def.dt <= PALP_HAPTIC_MAX_DT; /* the rate's, not a halved step's */
   if (resize || (w->stale && (!defer || margin))) {
     /* Blended in unless the old factor is beyond its margin (or built for another h).
      * Keeping an unsafe factor for its last 2 frames made no difference at 1 kHz. */
