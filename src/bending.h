@@ -11,16 +11,32 @@
  * The angle is linearised about the rest shape, dtheta_e = sum_k g_k . u_k with the
  * rest gradients g_k and u the displacement, so the stiffness matrix
  * K_b = sum_e k_e g g^T is constant: it enters the implicit factor once, and the rest
- * shape (the dome's own curvature) carries no bending stress. Valid while the hinges
- * turn by little (PALP_HINGE_LINEAR_MAX); a world counts the steps beyond it. */
+ * shape (the dome's own curvature) carries no bending stress. Valid while the
+ * linear angle stays close to the true one (PALP_HINGE_LINEAR_ERR_MAX); a world
+ * counts the steps beyond it. */
 #ifndef PALP_BENDING_H
 #define PALP_BENDING_H
 
 #include "palp.h"
 
-/* Beyond ~0.35 rad (20 deg) of hinge rotation the linearised angle is off by a few
- * percent and, more to the point, ignores the hinge's own rotation. */
-#define PALP_HINGE_LINEAR_MAX 0.35
+/* The linearised angle's valid range, by its own error: a step counts as beyond it
+ * when a hinge's linear turn sum_k g_k . u_k misses the true turn (palp_hinge_angle
+ * now minus at rest) by more than this [rad]. The hinge's turn alone is no guide:
+ * the error comes mostly from the hinge's rigid rotation (the flanks of a dent tilt),
+ * so it is 0.05 rad at a 0.52 rad turn 70 deg from the pole but 0.11 rad at a 0.55
+ * rad turn at the pole; and hinges turned by under 0.2 rad were seen off by 0.5 rad
+ * near the rim (docs/model.md, "Valid range"). At 0.1 rad on the shipped domes the
+ * bending energy is 10-13% below the true angle's, and the fingertip force moves by
+ * 0.18-0.27% per % of D, so the force is off by about 3%: a fifth of the 15-22%
+ * compliance a hand can discriminate. */
+#define PALP_HINGE_LINEAR_ERR_MAX 0.1
+
+/* The true angles cost an atan2 each, ~1,000 hinges at 338 vertices, so each step
+ * checks its share of the hinges in turn, all of them once per this much simulated
+ * time [s]: ~5,000 angles per simulated second whatever the physics rate (+0.6 us on
+ * a 250 Hz step of ~46 us), and a step counts beyond the range while the last or the
+ * current sweep found a hinge so: flagged within 0.2 s, cleared within 0.4 s. */
+#define PALP_HINGE_CHECK_PERIOD 0.2
 
 /* The dihedral angle [rad] at edge (a, b) between triangle (a, b, c) and triangle
  * (b, a, d), signed, zero when flat: atan2((n2 x n1) . e^, n1 . n2). */

@@ -387,14 +387,17 @@ typedef struct palp_world_health {
   double max_strain;          /* largest |link strain| seen [-] */
   int64_t base_contacts;      /* vertex-steps held at the rigid base plane z = 0 */
   int64_t finger_unsolved;    /* finger contact solves that ended without converging */
-  int64_t large_bend_steps;   /* steps with a hinge turned beyond PALP_HINGE_LINEAR_MAX
-                                 (0.35 rad) from rest, where the linearised bending is a
-                                 poor model (only with membrane.bending_stiffness > 0) */
-  double max_bend;            /* largest hinge rotation from rest seen [rad] */
+  int64_t large_bend_steps;   /* steps while a hinge's linearised turn missed its true
+                                 turn by more than 0.1 rad (src/bending.h), where the
+                                 linearised bending is a poor model (only with
+                                 membrane.bending_stiffness > 0; each hinge checked
+                                 once per 0.2 s of simulated time) */
+  double max_bend;            /* largest linearised hinge turn from rest seen [rad] */
   int64_t clamped_steps;      /* sub-steps at the last halving (h/16) whose velocities were
                                  capped at max_speed rather than failing the world: a load
                                  far beyond the model (e.g. 30 N on one vertex of a soft
                                  phantom) */
+  double max_bend_error;      /* largest |true - linearised| hinge turn seen [rad] */
   int64_t margin_rebuilds;    /* deferred rebuilds (def.refactor_lag) made at once because the
                                  factor reached its stability margin before its due frame */
 } palp_world_health;

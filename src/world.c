@@ -169,6 +169,10 @@ struct palp_world {
   palp_vec3 *ubuf;       /* [vertex_count] displacement from rest, once per step [m] */
   double step_max_bend, max_bend; /* [rad] */
   int64_t large_bend_steps;
+  double *hrest;         /* [nhinge] rest angle (palp_hinge_angle) [rad] */
+  int hcheck_next;       /* the next hinge whose true angle is checked */
+  double hsweep_cur, hsweep_prev; /* largest |true - linear| turn of this and the last sweep [rad] */
+  double max_bend_err;   /* [rad] */
 
   /* Gel (allocated only with gel pressure). */
   double V0, V, Vdot; /* [m^3], [m^3/s] */
@@ -395,12 +399,38 @@ static palp_vec3 bending_at(const palp_world *w, int i) {
   return f;
 }
 
+/* The linearisation's own error at this step's share of the hinges (bending.h,
+ * PALP_HINGE_CHECK_PERIOD), in a fixed turn so that replay counts the same steps:
+ * |(theta(x) - theta(rest)) - sum_k g_k . u_k| [rad], the difference taken on the
+ * circle. Hinges without stiffness (a released rim) carry no force and are skipped. */
+static void bending_check(palp_world *w, double h) {
+  const int nh = w->nhinge;
+  int n = (int)ceil((double)nh * h / PALP_HINGE_CHECK_PERIOD);
+  if (n > nh) n = nh;
+  const palp_vec3 *x = w->pos;
+  for (int q = 0; q < n; ++q) {
+    const int e = w->hcheck_next;
+    if (w->hk[e] > 0.0) {
+      const int *v = w->hinge[e];
+      const double lin = hinge_turn(v, w->hgrad[e], x, w->mesh.rest);
+      const double tr = remainder(palp_hinge_angle(x[v[0]], x[v[1]], x[v[2]], x[v[3]]) - w->hrest[e], 6.283185307179586);
+      const double err = fabs(tr - lin);
+      if (!(err <= w->hsweep_cur)) w->hsweep_cur = err == err ? err : INFINITY; /* a NaN counts */
+    }
+    if (++w->hcheck_next == nh) {
+      w->hcheck_next = 0;
+      w->hsweep_prev = w->hsweep_cur;
+      w->hsweep_cur = 0.0;
+    }
+  }
+}
+
 /* Explicit at x_n; its change over the step enters through h^2 K_b in the factor,
  * which makes the (linear) bending exactly implicit. */
 static void stage_membrane_bending(palp_world *w, double h) {
-  (void)h;
   const double th = bending_add(w, w->force);
   if (th > w->step_max_bend) w->step_max_bend = th;
+  bending_check(w, h);
 }
 
 static void stage_gel_forces(palp_world *w, double h) {
@@ -1589,10 +1619,11 @@ static int build_hinges(palp_world *w) {
   w->hinge = malloc(sizeof *w->hinge * (size_t)(cap ? cap : 1));
   w->hgrad = malloc(sizeof *w->hgrad * (size_t)(cap ? cap : 1));
   w->hk = malloc(sizeof *w->hk * (size_t)(cap ? cap : 1));
+  w->hrest = malloc(sizeof *w->hrest * (size_t)(cap ? cap : 1));
   w->vhinge_start = calloc((size_t)m->vertex_count + 1, sizeof(int));
   w->vhinge = malloc(sizeof(int) * (size_t)(4 * cap + 1));
   w->ubuf = malloc(sizeof *w->ubuf * (size_t)m->vertex_count);
-  if (!w->hinge || !w->hgrad || !w->hk || !w->vhinge_start || !w->vhinge || !w->ubuf) {
+  if (!w->hinge || !w->hgrad || !w->hk || !w->hrest || !w->vhinge_start || !w->vhinge || !w->ubuf) {
     free(he);
     return PALP_ENOMEM;
   }
@@ -1612,6 +1643,7 @@ static int build_hinges(palp_world *w) {
     const int e = w->nhinge++;
     memcpy(w->hinge[e], v, sizeof v);
     memcpy(w->hgrad[e], g, sizeof g);
+    w->hrest[e] = palp_hinge_angle(m->rest[v[0]], m->rest[v[1]], m->rest[v[2]], m->rest[v[3]]);
     w->hk[e] = palp_hinge_stiffness(D, e2, pd && qd ? area : 2.0 * area);
     if (!(pd && qd)) w->hk[e] *= 1.0 - w->def.membrane.rim_hinge_release; /* a rim edge: see palp.h */
   }
@@ -1814,7 +1846,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
-  free(w->hinge), free(w->hgrad), free(w->hk), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
+  free(w->hinge), free(w->hgrad), free(w->hk), free(w->hrest), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work), free(w->bx);
   palp_ldl_free(&w->ldl);
@@ -2299,7 +2331,11 @@ static int try_step(palp_world *w, double h, int last_resort) {
   w->t += h;
   if (w->step_max_strain > 0.5) w->large_strain_steps++;
   if (w->step_max_strain > w->max_strain) w->max_strain = w->step_max_strain;
-  if (w->step_max_bend > PALP_HINGE_LINEAR_MAX) w->large_bend_steps++;
+  {
+    const double berr = fmax(w->hsweep_cur, w->hsweep_prev);
+    if (berr > PALP_HINGE_LINEAR_ERR_MAX) w->large_bend_steps++;
+    if (berr > w->max_bend_err) w->max_bend_err = berr;
+  }
   if (w->step_max_bend > w->max_bend) w->max_bend = w->step_max_bend;
   return PALP_OK;
 }
@@ -2724,6 +2760,7 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->finger_unsolved = w->finger_unsolved;
   out->large_bend_steps = w->large_bend_steps;
   out->max_bend = w->max_bend;
+  out->max_bend_error = w->max_bend_err;
 }
 
 void palp_world_timings(const palp_world *w, palp_stage_timings *out) {

@@ -23,7 +23,17 @@
  *   real parameter set, resists that mode, here made negligible on purpose;
  * - without bending the same load sinks the pole vertex through its own support
  *   (over 10x deeper): what the paper's membrane does under a fingertip;
- * - the rotation is reported against the linear range (health.max_bend);
+ * - the rotation is reported (health.max_bend); with stretching negligible the net
+ *   slides in its plane under the point load and its hinges leave the linear range
+ *   (below), which the world counts;
+ * - the valid range is the linearisation's own error, |true - linear| turn <= 0.1 rad
+ *   (PALP_HINGE_LINEAR_ERR_MAX), checked against the test's own hinges (every edge
+ *   of two triangles, enumerated here, true angles by palp_hinge_angle) at every step
+ *   of a fingertip pressed at the pole of the breast-tissue dome (the exercises')
+ *   from 2 to 16 mm: the world never counts a step before the test sees an error
+ *   beyond 0.1 rad, counts within one sweep (0.2 s) of it, and at 8 mm, where the
+ *   hinges turn past 0.35 rad (the former limit by the turn alone) with errors of
+ *   ~0.05 rad, counts none;
  * - the shipped long-term scene, written by palp_scene_to_json (what a session log
  *   stores) and parsed back, keeps its bending stiffness bit for bit, and two worlds
  *   built from the two scenes step to the same state hash over 300 frames of a
@@ -123,7 +133,58 @@ static double lattice_ratio(double phi, int spherical) {
   return energy / area / plate;
 }
 
-static double pole_static(double D, palp_world_health *health) {
+/* The test's own hinges: every edge shared by two triangles with a dome triangle
+ * among them and a free vertex among the four (the rim's against the base only when
+ * they carry a moment, release < 1), with their rest angles and gradients. */
+typedef struct {
+  int v[4];
+  palp_vec3 g[4];
+  double th0; /* [rad] */
+} test_hinge;
+
+static int test_hinges(const palp_mesh *m, double release, test_hinge *out, int cap) {
+  int n = 0;
+  for (int a = 0; a < m->triangle_count; ++a)
+    for (int ea = 0; ea < 3; ++ea) {
+      const int i = m->tri[a][ea], j = m->tri[a][(ea + 1) % 3], c = m->tri[a][(ea + 2) % 3];
+      for (int b = a + 1; b < m->triangle_count; ++b)
+        for (int eb = 0; eb < 3; ++eb) {
+          const int p = m->tri[b][eb], q = m->tri[b][(eb + 1) % 3], d = m->tri[b][(eb + 2) % 3];
+          if (p != j || q != i) continue;
+          const int dome_a = a < m->dome_triangle_count, dome_b = b < m->dome_triangle_count;
+          if (!dome_a && !dome_b) continue;
+          if (!(dome_a && dome_b) && release >= 1.0) continue;
+          if (m->fixed[i] && m->fixed[j] && m->fixed[c] && m->fixed[d]) continue;
+          if (n == cap) return -1;
+          test_hinge *h = &out[n++];
+          h->v[0] = i, h->v[1] = j, h->v[2] = c, h->v[3] = d;
+          palp_hinge_gradient(m->rest[i], m->rest[j], m->rest[c], m->rest[d], h->g);
+          h->th0 = palp_hinge_angle(m->rest[i], m->rest[j], m->rest[c], m->rest[d]);
+        }
+    }
+  return n;
+}
+
+/* Largest |true - linear| turn over the hinges at positions x [rad], and the largest
+ * linear turn in *lin_max. */
+static double hinge_error(const test_hinge *hs, int n, const palp_mesh *m, const palp_vec3 *x, double *lin_max) {
+  double worst = 0.0;
+  *lin_max = 0.0;
+  for (int e = 0; e < n; ++e) {
+    const test_hinge *h = &hs[e];
+    double lin = 0.0;
+    for (int k = 0; k < 4; ++k) lin += v3_dot(h->g[k], v3_sub(x[h->v[k]], m->rest[h->v[k]]));
+    const double tr = palp_hinge_angle(x[h->v[0]], x[h->v[1]], x[h->v[2]], x[h->v[3]]) - h->th0;
+    worst = fmax(worst, fabs(tr - lin));
+    *lin_max = fmax(*lin_max, fabs(lin));
+  }
+  return worst;
+}
+
+/* The pole's settled depth [m] under 0.5 N on its vertex, on a skin of bending
+ * stiffness D whose stretching is negligible; the world's health, and the test's own
+ * largest |true - linear| hinge turn at the end [rad] in *err. */
+static double pole_static(double D, palp_world_health *health, double *err) {
   palp_world_def d = palp_world_default_def();
   d.mesh.vertex_count = 5000;
   d.effects = PALP_EFFECT_MEMBRANE_ELASTICITY | PALP_EFFECT_GEL_SUPPORT | PALP_EFFECT_GEL_DAMPING;
@@ -146,6 +207,12 @@ static double pole_static(double D, palp_world_health *health) {
     z = d.mesh.radius - palp_world_positions(w)[palp_world_mesh(w)->top_vertex].z;
   }
   palp_world_get_health(w, health);
+  *err = NAN;
+  test_hinge *hs = malloc(sizeof *hs * 20000);
+  const int nh = hs ? test_hinges(palp_world_mesh(w), 0.0, hs, 20000) : -1;
+  double lin;
+  if (nh > 0) *err = hinge_error(hs, nh, palp_world_mesh(w), palp_world_positions(w), &lin);
+  free(hs);
   palp_world_destroy(w);
   return z;
 }
@@ -191,13 +258,76 @@ static void check_replay(void) {
   palp_world_destroy(wa), palp_world_destroy(wb);
 }
 
+static void check_valid_range(void) {
+  palp_scene sc;
+  char err[256];
+  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc, err, sizeof err)) {
+    CHECK(0, "breast-tissue dome: %s", err);
+    return;
+  }
+  sc.contact_count = 0;
+  palp_world *w = palp_scene_create_world(&sc, NULL);
+  CHECK(w != NULL, "breast-tissue dome's world");
+  if (!w) return;
+  const palp_mesh *m = palp_world_mesh(w);
+  enum { CAP = 4096 };
+  test_hinge *hs = malloc(sizeof *hs * CAP);
+  const int nh = hs ? test_hinges(m, sc.world.membrane.rim_hinge_release, hs, CAP) : -1;
+  CHECK(nh > 900, "the test's hinges (%d)", nh);
+  if (nh <= 900) {
+    free(hs), palp_world_destroy(w);
+    return;
+  }
+  const double R = sc.world.mesh.radius, r = 0.008, dt = sc.world.dt;
+  const palp_vec3 start = v3(0, 0, R + r);
+  const int f = palp_world_add_finger(w, start, r);
+  const int per_level = (int)lround(0.5 / dt), sweep = (int)ceil(PALP_HINGE_CHECK_PERIOD / dt);
+  double depth = 0.0, worst = 0.0;
+  long first_seen = -1, first_counted = -1, k = 0;
+  palp_world_health h8 = {0};
+  double err8 = 0.0, lin8 = 0.0, lin = 0.0;
+  for (int level = 1; level <= 8; ++level)
+    for (int t = 0; t < per_level; ++t, ++k) {
+      if (depth < 0.002 * level) depth = fmin(0.002 * level, depth + 0.01 * dt); /* 10 mm/s */
+      palp_world_set_finger_device(w, f, v3(0, 0, start.z - depth));
+      palp_world_step(w);
+      const double e = hinge_error(hs, nh, m, palp_world_positions(w), &lin);
+      worst = fmax(worst, e);
+      if (first_seen < 0 && e > PALP_HINGE_LINEAR_ERR_MAX) first_seen = k;
+      palp_world_health h;
+      palp_world_get_health(w, &h);
+      if (first_counted < 0 && h.large_bend_steps > 0) first_counted = k;
+      if (level == 4 && t == per_level - 1) h8 = h, err8 = e, lin8 = lin;
+    }
+  palp_world_health h;
+  palp_world_get_health(w, &h);
+  printf("breast-tissue dome, fingertip at the pole: at 8 mm the largest linear turn %.3f rad, its error %.3f rad "
+         "(world %.3f), %lld steps counted; to 16 mm the error reached %.3f rad (world %.3f), first beyond 0.1 rad "
+         "at step %ld, counted from step %ld (a sweep is %d steps), %lld steps counted\n",
+         lin8, err8, h8.max_bend_error, (long long)h8.large_bend_steps, worst, h.max_bend_error, first_seen,
+         first_counted, sweep, (long long)h.large_bend_steps);
+  CHECK(lin8 > 0.35 && err8 < PALP_HINGE_LINEAR_ERR_MAX && h8.large_bend_steps == 0,
+        "8 mm: turned %.3f rad (past the former 0.35), off by %.3f rad, no step counted (%lld)", lin8, err8,
+        (long long)h8.large_bend_steps);
+  CHECK(first_seen >= 0 && first_counted >= first_seen && first_counted <= first_seen + sweep,
+        "counted from step %ld, not before the error passed 0.1 rad (step %ld) and within a sweep (%d steps)",
+        first_counted, first_seen, sweep);
+  CHECK(h.max_bend_error <= worst + 1e-12 && h.max_bend_error >= 0.9 * worst,
+        "the world's largest error %.4f rad within 10%% below the test's %.4f rad (it checks a share per step)",
+        h.max_bend_error, worst);
+  free(hs);
+  palp_world_destroy(w);
+}
+
 int main(void) {
   check_gradient();
   check_replay();
+  check_valid_range();
   {
     const double k = 1e6, F = 0.5, D = k * pow(0.005, 4); /* [Pa/m], [N], [N m]: l = 5 mm */
     palp_world_health hb, h4, h0;
-    const double wb = pole_static(D, &hb), w4 = pole_static(4.0 * D, &h4), w0 = pole_static(0.0, &h0);
+    double eb, e4, e0;
+    const double wb = pole_static(D, &hb, &eb), w4 = pole_static(4.0 * D, &h4, &e4), w0 = pole_static(0.0, &h0, &e0);
     const double plate = F / (8.0 * sqrt(D * k)); /* [m] */
     printf("point load %.1f N at the pole: %.4f mm with bending (plate on foundation %.4f mm, ratio %.3f), "
            "%.4f mm with 4 D (ratio to D %.3f, plate 0.5), %.3f mm without; largest hinge rotation %.3f rad\n",
@@ -206,8 +336,16 @@ int main(void) {
           1e3 * wb, 1e3 * plate);
     CHECK(fabs(w4 / wb - 0.5) <= 0.05, "4 D gives %.3f of the depth (plate 0.5, tolerance 0.05)", w4 / wb);
     CHECK(w0 > 10.0 * wb, "without bending the pole sinks %.3f mm (> 10x %.4f mm)", 1e3 * w0, 1e3 * wb);
-    CHECK(hb.max_bend > 0.0 && hb.max_bend < PALP_HINGE_LINEAR_MAX && hb.large_bend_steps == 0,
-          "hinge rotation %.4f rad reported and inside the linear range", hb.max_bend);
+    /* With stretching negligible nothing holds the net in its plane: the triangles
+     * around the loaded vertex slide by up to an edge (1.4 mm), and their true angles
+     * leave the linear ones (0.83 rad off at a 0.04 rad linear turn). The turn alone
+     * (0.19 rad) said the hinges were in range; the range check says they are not. */
+    printf("  its linearisation: off by %.3f rad at the end (the test's hinges), %.3f rad (world), %lld steps counted\n",
+           eb, hb.max_bend_error, (long long)hb.large_bend_steps);
+    CHECK(hb.max_bend > 0.0, "hinge rotation %.4f rad reported", hb.max_bend);
+    CHECK(eb > PALP_HINGE_LINEAR_ERR_MAX && hb.max_bend_error >= 0.9 * eb && hb.large_bend_steps > 0,
+          "the distorted net counted beyond the range: test %.3f rad, world %.3f rad (at least 90%% of it)", eb,
+          hb.max_bend_error);
   }
   for (int k = 0; k < 4; ++k) {
     const double phi = 0.37 * k;
