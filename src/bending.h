@@ -34,8 +34,8 @@
 /* The true angles cost an atan2 each, ~1,000 hinges at 338 vertices, so each step
  * checks its share of the hinges in turn, all of them once per this much simulated
  * time [s]: ~5,000 angles per simulated second whatever the physics rate (+0.6 us on
- * a 250 Hz step of ~46 us), and a step counts beyond the range while the last or the
- * current sweep found a hinge so: flagged within 0.2 s, cleared within 0.4 s. */
+ * a 250 Hz step of ~46 us), and a step counts beyond the range while any hinge's
+ * latest check found it so: flagged and cleared within 0.2 s. */
 #define PALP_HINGE_CHECK_PERIOD 0.2
 
 /* The dihedral angle [rad] at edge (a, b) between triangle (a, b, c) and triangle

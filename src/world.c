@@ -171,8 +171,9 @@ struct palp_world {
   int64_t large_bend_steps;
   double *hrest;         /* [nhinge] rest angle (palp_hinge_angle) [rad] */
   int hcheck_next;       /* the next hinge whose true angle is checked */
-  double hsweep_cur, hsweep_prev; /* largest |true - linear| turn of this and the last sweep [rad] */
-  double max_bend_err;   /* [rad] */
+  uint8_t *hbeyond;      /* [nhinge] 1 if its last check found it beyond the linear range */
+  int hbeyond_count;     /* hinges so found */
+  double max_bend_err;   /* largest |true - linear| turn checked [rad] */
 
   /* Gel (allocated only with gel pressure). */
   double V0, V, Vdot; /* [m^3], [m^3/s] */
@@ -415,13 +416,12 @@ static void bending_check(palp_world *w, double h) {
       const double lin = hinge_turn(v, w->hgrad[e], x, w->mesh.rest);
       const double tr = remainder(palp_hinge_angle(x[v[0]], x[v[1]], x[v[2]], x[v[3]]) - w->hrest[e], 6.283185307179586);
       const double err = fabs(tr - lin);
-      if (!(err <= w->hsweep_cur)) w->hsweep_cur = err == err ? err : INFINITY; /* a NaN counts */
+      const uint8_t beyond = !(err <= PALP_HINGE_LINEAR_ERR_MAX); /* a NaN counts */
+      w->hbeyond_count += (int)beyond - (int)w->hbeyond[e];
+      w->hbeyond[e] = beyond;
+      if (!(err <= w->max_bend_err)) w->max_bend_err = err == err ? err : INFINITY;
     }
-    if (++w->hcheck_next == nh) {
-      w->hcheck_next = 0;
-      w->hsweep_prev = w->hsweep_cur;
-      w->hsweep_cur = 0.0;
-    }
+    if (++w->hcheck_next == nh) w->hcheck_next = 0;
   }
 }
 
@@ -1620,10 +1620,11 @@ static int build_hinges(palp_world *w) {
   w->hgrad = malloc(sizeof *w->hgrad * (size_t)(cap ? cap : 1));
   w->hk = malloc(sizeof *w->hk * (size_t)(cap ? cap : 1));
   w->hrest = malloc(sizeof *w->hrest * (size_t)(cap ? cap : 1));
+  w->hbeyond = calloc((size_t)(cap ? cap : 1), 1);
   w->vhinge_start = calloc((size_t)m->vertex_count + 1, sizeof(int));
   w->vhinge = malloc(sizeof(int) * (size_t)(4 * cap + 1));
   w->ubuf = malloc(sizeof *w->ubuf * (size_t)m->vertex_count);
-  if (!w->hinge || !w->hgrad || !w->hk || !w->hrest || !w->vhinge_start || !w->vhinge || !w->ubuf) {
+  if (!w->hinge || !w->hgrad || !w->hk || !w->hrest || !w->hbeyond || !w->vhinge_start || !w->vhinge || !w->ubuf) {
     free(he);
     return PALP_ENOMEM;
   }
@@ -1846,7 +1847,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
-  free(w->hinge), free(w->hgrad), free(w->hk), free(w->hrest), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
+  free(w->hinge), free(w->hgrad), free(w->hk), free(w->hrest), free(w->hbeyond), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work), free(w->bx);
   palp_ldl_free(&w->ldl);
@@ -2331,11 +2332,7 @@ static int try_step(palp_world *w, double h, int last_resort) {
   w->t += h;
   if (w->step_max_strain > 0.5) w->large_strain_steps++;
   if (w->step_max_strain > w->max_strain) w->max_strain = w->step_max_strain;
-  {
-    const double berr = fmax(w->hsweep_cur, w->hsweep_prev);
-    if (berr > PALP_HINGE_LINEAR_ERR_MAX) w->large_bend_steps++;
-    if (berr > w->max_bend_err) w->max_bend_err = berr;
-  }
+  if (w->hbeyond_count > 0) w->large_bend_steps++;
   if (w->step_max_bend > w->max_bend) w->max_bend = w->step_max_bend;
   return PALP_OK;
 }

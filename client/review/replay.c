@@ -198,6 +198,14 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
            "%d contact inputs applied, last frame %" PRId64 ", %lld factorisations (lagged-tangent rebuilds "
            "included)\n",
            s->uid, r->checked, r->next, palp_world_frame(w), (long long)ts.refactors);
+    /* What the station was told frame by frame (LM_LARGE_STRAIN), summed for the
+     * instructor: where the model's answer is an extrapolation (docs/model.md). */
+    palp_world_health h;
+    palp_world_get_health(w, &h);
+    printf("replay: %s: beyond the model's valid range: %lld steps stretched a link past 50%% (largest strain "
+           "%.2f), %lld bent a hinge past its linear range (largest miss %.3f rad, largest turn %.3f rad)\n",
+           s->uid, (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error,
+           h.max_bend);
     result = REVIEW_OK;
   }
   if (r->apply_errors) printf("replay: %d contact inputs could not be applied\n", r->apply_errors);

@@ -31,7 +31,8 @@
  *   of two triangles, enumerated here, true angles by palp_hinge_angle) at every step
  *   of a fingertip pressed at the pole of the breast-tissue dome (the exercises')
  *   from 2 to 16 mm: the world never counts a step before the test sees an error
- *   beyond 0.1 rad, counts within one sweep (0.2 s) of it, and at 8 mm, where the
+ *   beyond 0.1 rad, counts within one sweep (0.2 s) of it, stops counting within a
+ *   sweep of the error falling back as the finger lifts, and at 8 mm, where the
  *   hinges turn past 0.35 rad (the former limit by the turn alone) with errors of
  *   ~0.05 rad, counts none;
  * - the shipped long-term scene, written by palp_scene_to_json (what a session log
@@ -299,13 +300,35 @@ static void check_valid_range(void) {
       if (first_counted < 0 && h.large_bend_steps > 0) first_counted = k;
       if (level == 4 && t == per_level - 1) h8 = h, err8 = e, lin8 = lin;
     }
+  /* and back up at 10 mm/s, then 0.5 s off the surface */
   palp_world_health h;
   palp_world_get_health(w, &h);
+  const long pressed = k;
+  const int64_t counted_pressed = h.large_bend_steps;
+  long last_seen = -1, last_counted = -1;
+  int64_t prev = h.large_bend_steps;
+  for (int t = 0; t < (int)lround(2.1 / dt); ++t, ++k) {
+    depth = fmax(0.0, depth - 0.01 * dt);
+    palp_world_set_finger_device(w, f, v3(0, 0, start.z - depth));
+    palp_world_step(w);
+    const double e = hinge_error(hs, nh, m, palp_world_positions(w), &lin);
+    worst = fmax(worst, e);
+    if (e > PALP_HINGE_LINEAR_ERR_MAX) last_seen = k;
+    palp_world_get_health(w, &h);
+    if (h.large_bend_steps > prev) last_counted = k;
+    prev = h.large_bend_steps;
+  }
   printf("breast-tissue dome, fingertip at the pole: at 8 mm the largest linear turn %.3f rad, its error %.3f rad "
-         "(world %.3f), %lld steps counted; to 16 mm the error reached %.3f rad (world %.3f), first beyond 0.1 rad "
+         "(world %.3f), %lld steps counted; to 16 mm and back the error reached %.3f rad (world %.3f), first beyond 0.1 rad "
          "at step %ld, counted from step %ld (a sweep is %d steps), %lld steps counted\n",
          lin8, err8, h8.max_bend_error, (long long)h8.large_bend_steps, worst, h.max_bend_error, first_seen,
-         first_counted, sweep, (long long)h.large_bend_steps);
+         first_counted, sweep, (long long)counted_pressed);
+  printf("  lifted: the error last beyond 0.1 rad at step %ld, last counted at step %ld (the press ended at step %ld); "
+         "%lld steps counted pressing, %lld lifting\n",
+         last_seen, last_counted, pressed, (long long)counted_pressed, (long long)(h.large_bend_steps - counted_pressed));
+  CHECK(last_counted <= last_seen + sweep && last_seen < k - sweep,
+        "lifting: counting stops within a sweep (%d steps) of the error falling back (step %ld; last counted %ld)",
+        sweep, last_seen, last_counted);
   CHECK(lin8 > 0.35 && err8 < PALP_HINGE_LINEAR_ERR_MAX && h8.large_bend_steps == 0,
         "8 mm: turned %.3f rad (past the former 0.35), off by %.3f rad, no step counted (%lld)", lin8, err8,
         (long long)h8.large_bend_steps);
