@@ -587,6 +587,16 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
                   (unsigned long long)s->stats.factor_jobs, (unsigned long long)s->stats.factor_waits,
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
   }
+  {
+    /* Where the model's answers were extrapolations (the stations were told each step,
+     * LM_LARGE_STRAIN; docs/model.md, "Valid range"). */
+    palp_world_health h;
+    palp_world_get_health(s->world, &h);
+    if (h.large_strain_steps > 0 || h.large_bend_steps > 0)
+      palp_log_info(srv->log, "session %u: beyond the model's valid range at %lld steps by a link's strain (largest "
+                              "%.2f) and %lld by the skin's bending (largest hinge miss %.3f rad)", s->id,
+                    (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error);
+  }
   /* Its members' slots are free again; its state instance is released after
    * the retention time, once every member has read the CLOSED state. */
   for (int i = 0; i < srv->station_slots; i++)
