@@ -33,8 +33,16 @@ static void free_numeric(palp_ldl *f) {
   f->val = f->dinv = NULL;
 }
 
+static void free_block_numeric(palp_ldl *f) {
+  free(f->num), free(f->dest), free(f->tij), free(f->iwork);
+  f->num = NULL;
+  f->dest = f->tij = f->iwork = NULL;
+  f->ndest = 0;
+}
+
 void palp_ldl_free(palp_ldl *f) {
   free_numeric(f);
+  free_block_numeric(f);
   if (f->common) {
     cholmod_factor *L = f->symbolic;
     cholmod_free_factor(&L, f->common);
@@ -183,8 +191,145 @@ static int to_blocks(palp_ldl *f, int nb) {
   return PALP_OK;
 }
 
+/* Where each triplet (ti, tj) lands in f->num: L's pattern (bcolp, brow) in the
+ * permuted order, an entry above the diagonal taken as its transpose. Kept with a copy
+ * of the triplets' rows and columns, which a later matrix must match to reuse it.
+ * Returns 0, PALP_ENOMEM, or 1 when an entry falls outside L's pattern. */
+static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
+  const int nb = f->nb, n = f->n, nblk = f->bcolp[nb];
+  free_block_numeric(f);
+  f->num = malloc(sizeof(double) * ((size_t)nblk * 9 + (size_t)nb * 9));
+  f->dest = malloc(sizeof(int) * (size_t)(nnz > 0 ? nnz : 1));
+  f->tij = malloc(sizeof(int) * 2 * (size_t)(nnz > 0 ? nnz : 1));
+  f->iwork = malloc(sizeof(int) * 4 * (size_t)(nb > 0 ? nb : 1));
+  int *iperm = malloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
+  if (!f->num || !f->dest || !f->tij || !f->iwork || !iperm) {
+    free(iperm);
+    free_block_numeric(f);
+    return PALP_ENOMEM;
+  }
+  for (int k = 0; k < n; ++k) iperm[f->perm[k]] = k;
+  for (int k = 0; k < nnz; ++k) {
+    int pi = iperm[ti[k]], pj = iperm[tj[k]];
+    if (pi < pj || (pi / 3 == pj / 3 && pi % 3 < pj % 3)) {
+      const int t = pi;
+      pi = pj, pj = t;
+    }
+    const int I = pi / 3, r = pi % 3, J = pj / 3, c = pj % 3;
+    int at = -1;
+    if (I == J) {
+      at = nblk * 9 + 9 * J + 3 * c + r;
+    } else { /* rows ascend within a block column */
+      int lo = f->bcolp[J], hi = f->bcolp[J + 1] - 1;
+      while (lo <= hi) {
+        const int mid = (lo + hi) / 2;
+        if (f->brow[mid] == I) {
+          at = 9 * mid + 3 * c + r;
+          break;
+        }
+        if (f->brow[mid] < I) lo = mid + 1;
+        else hi = mid - 1;
+      }
+    }
+    if (at < 0) {
+      free(iperm);
+      free_block_numeric(f);
+      return 1;
+    }
+    f->dest[k] = at;
+    f->tij[2 * k] = ti[k], f->tij[2 * k + 1] = tj[k];
+  }
+  free(iperm);
+  f->ndest = nnz;
+  return PALP_OK;
+}
+
+/* The numeric factorisation in 3x3 blocks over L's pattern, left-looking, from the
+ * triplet values tx (block_map's pattern). Block column J gathers, for each column K
+ * to its left with a block in row J, A_IJ -= L_IK D_K L_JK^T for the rows I >= J of
+ * column K (the columns waiting on row J are linked in a list, each moved on to its
+ * next row once used: Gilbert & Peierls' left-looking scheme, here by blocks), then
+ * factors its diagonal block A_JJ = L_JJ D_J L_JJ^T and scales L_IJ = A_IJ L_JJ^-T D_J^-1.
+ * Every operation in a fixed order, no fused multiply-add: the same bits on any
+ * x86-64 machine. L's blocks are then rounded to single precision (sparse_ldl.h).
+ * Returns 0 or PALP_ESOLVER (a pivot not positive: not positive definite). */
+static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
+  const int nb = f->nb, nblk = f->bcolp[nb];
+  const int *restrict bcolp = f->bcolp, *restrict brow = f->brow;
+  double *restrict X = f->num, *restrict Dg = f->num + (size_t)nblk * 9;
+  int *restrict slot = f->iwork, *restrict head = f->iwork + nb, *restrict link = f->iwork + 2 * nb,
+                *restrict next = f->iwork + 3 * nb;
+  memset(X, 0, sizeof(double) * ((size_t)nblk * 9 + (size_t)nb * 9));
+  for (int k = 0; k < nnz; ++k) X[f->dest[k]] += tx[k];
+  for (int J = 0; J < nb; ++J) slot[J] = -1, head[J] = -1;
+  for (int J = 0; J < nb; ++J) {
+    for (int q = bcolp[J]; q < bcolp[J + 1]; ++q) slot[brow[q]] = q;
+    double *restrict a = Dg + 9 * J; /* column-major 3x3: (r, c) at 3 c + r, lower part used */
+    for (int K = head[J]; K >= 0;) {
+      const int K_next = link[K], p = next[K];
+      const double *restrict L = X + 9 * (size_t)p, *restrict d = Dg + 9 * K;
+      /* Y = L_JK D_K, Y[s][c] at 3 c + s */
+      const double y[9] = {L[0] * d[0], L[1] * d[0], L[2] * d[0], L[3] * d[4], L[4] * d[4],
+                           L[5] * d[4], L[6] * d[8], L[7] * d[8], L[8] * d[8]};
+      /* A_JJ -= L_JK Y^T, lower part: (r, s) -= sum_c L[r][c] Y[s][c] */
+      for (int sc = 0; sc < 3; ++sc)
+        for (int r = sc; r < 3; ++r) a[3 * sc + r] -= (L[r] * y[sc] + L[3 + r] * y[3 + sc]) + L[6 + r] * y[6 + sc];
+      for (int q = p + 1; q < bcolp[K + 1]; ++q) {
+        const double *restrict B = X + 9 * (size_t)q;
+        double *restrict T = X + 9 * (size_t)slot[brow[q]];
+        for (int sc = 0; sc < 3; ++sc)
+          for (int r = 0; r < 3; ++r) T[3 * sc + r] -= (B[r] * y[sc] + B[3 + r] * y[3 + sc]) + B[6 + r] * y[6 + sc];
+      }
+      next[K] = p + 1;
+      if (p + 1 < bcolp[K + 1]) {
+        const int I = brow[p + 1];
+        link[K] = head[I], head[I] = K;
+      }
+      K = K_next;
+    }
+    /* A_JJ = L_JJ D_J L_JJ^T: d0 at 0, l10 at 1, l20 at 2, d1 at 4, l21 at 5, d2 at 8 */
+    const double d0 = a[0];
+    if (!(d0 > 0.0)) return PALP_ESOLVER;
+    const double l10 = a[1] / d0, l20 = a[2] / d0;
+    const double d1 = a[4] - l10 * a[1];
+    if (!(d1 > 0.0)) return PALP_ESOLVER;
+    const double l21 = (a[5] - l20 * a[1]) / d1;
+    const double d2 = (a[8] - l20 * a[2]) - l21 * l21 * d1;
+    if (!(d2 > 0.0)) return PALP_ESOLVER;
+    a[1] = l10, a[2] = l20, a[4] = d1, a[5] = l21, a[8] = d2;
+    /* L_IJ = A_IJ L_JJ^-T D_J^-1, row by row: z L_JJ^T = a_r, then z / d */
+    for (int q = bcolp[J]; q < bcolp[J + 1]; ++q) {
+      double *restrict B = X + 9 * (size_t)q;
+      for (int r = 0; r < 3; ++r) {
+        const double z0 = B[r], z1 = B[3 + r] - l10 * z0, z2 = (B[6 + r] - l20 * z0) - l21 * z1;
+        B[r] = z0 / d0, B[3 + r] = z1 / d1, B[6 + r] = z2 / d2;
+      }
+      slot[brow[q]] = -1;
+    }
+    if (bcolp[J] < bcolp[J + 1]) {
+      next[J] = bcolp[J];
+      const int I = brow[bcolp[J]];
+      link[J] = head[I], head[I] = J;
+    }
+  }
+  for (size_t k = 0; k < (size_t)nblk * 9; ++k) f->blk[k] = (float)X[k];
+  for (int J = 0; J < nb; ++J) {
+    const double *a = Dg + 9 * J;
+    f->bdiag[3 * J] = a[1], f->bdiag[3 * J + 1] = a[2], f->bdiag[3 * J + 2] = a[5];
+    for (int c = 0; c < 3; ++c) f->dinv[3 * J + c] = f->dinv4[4 * J + c] = 1.0 / a[4 * c]; /* both solve paths' copies */
+    f->dinv4[4 * J + 3] = 0.0;
+  }
+  return PALP_OK;
+}
+
 int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, int nnz, const int *ti,
                            const int *tj, const double *tx) {
+  /* The same pattern as the factor already held: the numeric part by blocks alone. */
+  if (f->symbolic && f->nb == nb && nb > 0 && f->num && f->ndest == nnz) {
+    int same = 1;
+    for (int k = 0; k < nnz && same; ++k) same = f->tij[2 * k] == ti[k] && f->tij[2 * k + 1] == tj[k];
+    if (same) return block_numeric(f, nnz, tx);
+  }
   int *perm = NULL;
   if (!f->symbolic) {
     /* AMD on the vertex graph, expanded to unknowns 3v, 3v+1, 3v+2. */
@@ -209,7 +354,14 @@ int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, in
   free(perm);
   if (e) return e;
   e = to_blocks(f, nb);
-  return e > 0 ? PALP_OK : e == PALP_ENOMEM ? e : PALP_OK;
+  if (e == PALP_ENOMEM) return e;
+  if (e) return PALP_OK; /* the ordering split a vertex: CHOLMOD's scalar factor serves */
+  /* L's block pattern is known: the map of the triplets into it, and this factor redone
+   * by blocks, as every later one will be. */
+  e = block_map(f, nnz, ti, tj);
+  if (e < 0) return e;
+  if (e > 0) return PALP_OK; /* an entry outside the pattern: keep CHOLMOD's factor */
+  return block_numeric(f, nnz, tx);
 }
 
 /* y_J <- L_JJ^{-1} y_J for the unit lower diagonal block (l10, l20, l21), w wide. */

@@ -27,9 +27,13 @@
  *    then at 1 kHz. Held: more sessions until more than 1 % of physics steps are
  *    late (overrun), read from palp_server_status. Same-run baseline: the
  *    model's own step with a pressed finger, timed in this process.
+ *    --motion strip: the devices search in vertical strips at three depths, as the
+ *    exercises' scripted expert does (strip_device), instead of press cycles; --rate HZ:
+ *    that physics rate only. With --scene config/phantoms/dome.json, the exercises' dome.
  *
  * usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N]
  *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]
+ *        [--haptic-domain ID] [--motion press|strip] [--rate HZ]
  * --overrun-limit: keep adding sessions until this share of ticks overruns (default 1), e.g. 100
  * to compare tick time and load at equal session counts on a busy machine.
  * --scene: the phantoms' scene (any path; default config/paper_step.json with the
@@ -78,6 +82,8 @@ static palp_dds_security bench_sec; /* trainee/bench in BENCH_PKI */
 static unsigned lat_domain(void) { return secure ? DOMAIN_LAT_SECURE : DOMAIN_LAT; }
 static unsigned cap_domain(void) { return secure ? DOMAIN_CAP_SECURE : DOMAIN_CAP; }
 static int max_given = 0;
+static int strip_motion = 0;     /* --motion strip: the exercises' search instead of press cycles */
+static double only_rate = 0.0;   /* --rate HZ: one physics rate instead of 250 Hz then 1 kHz */
 
 static void nap(double s) {
   struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
@@ -479,8 +485,41 @@ typedef struct farm {
   uint64_t *seq;
 } farm;
 
-/* Device of session i at t: press cycles 0..10 mm at the pole region, phase-shifted. */
+/* Smooth step from 0 to 1 over [0, 1] (C1: the device never jumps). */
+static double ease(double x) { return x <= 0 ? 0 : x >= 1 ? 1 : 0.5 - 0.5 * cos(3.14159265358979 * x); }
+
+/* Device of session i at t for --motion strip: a MammaCare vertical-strip search as the
+ * exercises' scripted expert does it (client/trainee.c: spots 8 mm apart, each felt at
+ * 3 / 9 / 16 mm with small circles): along the meridian at azimuth 0.3 i through the
+ * pole, 50 deg either side; per 1.5 s spot ~0.3 s at each depth (0.15 s ramps), a lift to
+ * 3 mm (0.2 s) and a glide to the next spot (0.3 s); circles of 2.5 mm radius at 2 Hz
+ * throughout; sessions phase-shifted. Device speeds up to ~100 mm/s. */
+static palp_vec3 strip_device(int i, double t) {
+  const double R = 0.04, r = 0.008, spot = 1.5, spacing = 0.008, half = 50.0 * 3.14159265358979 / 180.0 * R;
+  const double ts = t + 0.37 * i;
+  const double k = floor(ts / spot), x = ts - k * spot; /* spot index, time within it [s] */
+  const double d1 = 0.003, d2 = 0.009, d3 = 0.016;     /* [m] */
+  const double depth = d1 + (d2 - d1) * ease((x - 0.3) / 0.15) + (d3 - d2) * ease((x - 0.65) / 0.15) -
+                       (d3 - d1) * ease((x - 1.0) / 0.2);
+  /* arc coordinate: a triangle wave over [-half, half], one spacing per spot, glided in
+   * the spot's last 0.3 s */
+  const double u_steps = k + ease((x - 1.2) / 0.3);
+  const double span = 2 * half, pos = fmod(u_steps * spacing, 2 * span);
+  const double u = (pos < span ? pos : 2 * span - pos) - half;
+  const double th = u / R, ph = 0.3 * i;
+  const palp_vec3 n = {sin(th) * cos(ph), sin(th) * sin(ph), cos(th)};
+  const palp_vec3 eu = {cos(th) * cos(ph), cos(th) * sin(ph), -sin(th)}, ev = {-sin(ph), cos(ph), 0};
+  const double w = 2 * 3.14159265358979 * 2.0 * ts, rho = 0.0025;
+  const double hgt = R + r - depth; /* depth: device travel past first touch at rest [m] */
+  return (palp_vec3){n.x * hgt + rho * (cos(w) * eu.x + sin(w) * ev.x),
+                     n.y * hgt + rho * (cos(w) * eu.y + sin(w) * ev.y),
+                     n.z * hgt + rho * (cos(w) * eu.z + sin(w) * ev.z)};
+}
+
+/* Device of session i at t: press cycles 0..10 mm at the pole region, phase-shifted
+ * (--motion strip: strip_device). */
 static palp_vec3 farm_device(int i, double t) {
+  if (strip_motion) return strip_device(i, t);
   const double R = 0.04, r = 0.008;
   const double depth = 0.005 * (1 - cos(2 * 3.14159265 * 0.7 * t + i)); /* 0..10 mm */
   const double a = 0.3 * i;
@@ -539,6 +578,7 @@ static void *farm_main(void *arg) {
 }
 
 /* The model's own step with a pressed finger at dt, timed here (same-run baseline). */
+static double baseline_rebuilds_per_s; /* the baseline world's tangent rebuilds per simulated second */
 static stats step_baseline(double rate) {
   palp_scene sc;
   char err[256];
@@ -556,6 +596,9 @@ static stats step_baseline(double rate) {
     palp_world_step(w);
     us[k] = (double)(palp_dds_now_ns() - a) * 1e-3;
   }
+  palp_stage_timings tm;
+  palp_world_timings(w, &tm);
+  baseline_rebuilds_per_s = (double)tm.refactors * rate / N;
   palp_world_destroy(w);
   return summarize(us, N);
 }
@@ -578,8 +621,11 @@ static void haptic_run(double rate) {
   static const int steps[] = {1, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 96};
   const stats base = step_baseline(rate);
   printf("haptic capacity: physics at %.0f Hz on %d tick thread(s), stations rendering at 1 kHz (one haptic thread "
-         "here serves them all); window 2 s per step\n", rate, threads);
-  printf("  baseline, same run: the model's step with a pressed finger: p50 %.0f us, p99 %.0f us\n", base.p50, base.p99);
+         "here serves them all); devices %s; window 2 s per step\n", rate, threads,
+         strip_motion ? "searching in vertical strips at 3 / 9 / 16 mm (--motion strip)" : "pressing 0-10 mm at 0.7 Hz");
+  printf("  baseline, same run: the model's step with a pressed finger: p50 %.0f us, p99 %.0f us (its tangent rebuilt "
+         "%.1f times a simulated second, at once: the server defers them to helpers)\n", base.p50, base.p99,
+         baseline_rebuilds_per_s);
   printf("  sessions  late steps  tick p99 [us]  tick max [us]  load  station late ticks  models/s\n");
   int n = 0, held = 0;
   for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions; k++) {
@@ -644,11 +690,14 @@ int main(int argc, char **argv) {
       scene_path = realpath(argv[++i], abs_scene) ? abs_scene : argv[i];
     }
     else if (!strcmp(argv[i], "--haptic-domain") && i + 1 < argc) haptic_domain = (unsigned)atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--motion") && i + 1 < argc && (!strcmp(argv[i + 1], "strip") || !strcmp(argv[i + 1], "press")))
+      strip_motion = !strcmp(argv[++i], "strip");
+    else if (!strcmp(argv[i], "--rate") && i + 1 < argc && atof(argv[i + 1]) > 0) only_rate = atof(argv[++i]);
     else if (argv[i][0] != '-') what = argv[i];
     else {
       fprintf(stderr, "usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N] "
                       "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT] "
-                      "[--haptic-domain ID]\n");
+                      "[--haptic-domain ID] [--motion press|strip] [--rate HZ]\n");
       return 2;
     }
   }
@@ -690,8 +739,11 @@ int main(int argc, char **argv) {
   if (all || !strcmp(what, "capacity")) capacity_run();
   if (!secure && (all || !strcmp(what, "haptic"))) {
     if (!max_given) max_sessions = 96;
-    haptic_run(250);
-    haptic_run(1000);
+    if (only_rate > 0) haptic_run(only_rate);
+    else {
+      haptic_run(250);
+      haptic_run(1000);
+    }
   }
   }
   return 0;
