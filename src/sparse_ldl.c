@@ -34,9 +34,8 @@ static void free_numeric(palp_ldl *f) {
 }
 
 static void free_block_numeric(palp_ldl *f) {
-  free(f->num), free(f->dest), free(f->tij), free(f->iwork);
-  f->num = NULL;
-  f->dest = f->tij = f->iwork = NULL;
+  free(f->dest), free(f->iwork);
+  f->dest = f->iwork = NULL;
   f->ndest = 0;
 }
 
@@ -191,19 +190,17 @@ static int to_blocks(palp_ldl *f, int nb) {
   return PALP_OK;
 }
 
-/* Where each triplet (ti, tj) lands in f->num: L's pattern (bcolp, brow) in the
- * permuted order, an entry above the diagonal taken as its transpose. Kept with a copy
- * of the triplets' rows and columns, which a later matrix must match to reuse it.
- * Returns 0, PALP_ENOMEM, or 1 when an entry falls outside L's pattern. */
+/* Where each triplet (ti, tj) lands among L's blocks (pattern bcolp, brow, in the
+ * permuted order; an entry above the diagonal taken as its transpose), then the
+ * diagonal blocks: 9 doubles each, column-major. Returns 0, PALP_ENOMEM, or 1 when an
+ * entry falls outside L's pattern. */
 static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
   const int nb = f->nb, n = f->n, nblk = f->bcolp[nb];
   free_block_numeric(f);
-  f->num = malloc(sizeof(double) * ((size_t)nblk * 9 + (size_t)nb * 9));
   f->dest = malloc(sizeof(int) * (size_t)(nnz > 0 ? nnz : 1));
-  f->tij = malloc(sizeof(int) * 2 * (size_t)(nnz > 0 ? nnz : 1));
   f->iwork = malloc(sizeof(int) * 4 * (size_t)(nb > 0 ? nb : 1));
   int *iperm = malloc(sizeof(int) * (size_t)(n > 0 ? n : 1));
-  if (!f->num || !f->dest || !f->tij || !f->iwork || !iperm) {
+  if (!f->dest || !f->iwork || !iperm) {
     free(iperm);
     free_block_numeric(f);
     return PALP_ENOMEM;
@@ -237,7 +234,6 @@ static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
       return 1;
     }
     f->dest[k] = at;
-    f->tij[2 * k] = ti[k], f->tij[2 * k + 1] = tj[k];
   }
   free(iperm);
   f->ndest = nnz;
@@ -252,11 +248,16 @@ static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
  * factors its diagonal block A_JJ = L_JJ D_J L_JJ^T and scales L_IJ = A_IJ L_JJ^-T D_J^-1.
  * Every operation in a fixed order, no fused multiply-add: the same bits on any
  * x86-64 machine. L's blocks are then rounded to single precision (sparse_ldl.h).
- * Returns 0 or PALP_ESOLVER (a pivot not positive: not positive definite). */
+ * Returns 0, PALP_ENOMEM or PALP_ESOLVER (a pivot not positive: not positive definite);
+ * on failure the factor held before is left as it was. */
 static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
   const int nb = f->nb, nblk = f->bcolp[nb];
   const int *restrict bcolp = f->bcolp, *restrict brow = f->brow;
-  double *restrict X = f->num, *restrict Dg = f->num + (size_t)nblk * 9;
+  /* L in double while it is made: ~0.5 MB at 338 vertices, held only here, since a
+   * world keeps three factors (its own, the one a blend replaces, a job's spare) */
+  double *num = malloc(sizeof(double) * ((size_t)nblk * 9 + (size_t)nb * 9));
+  if (!num) return PALP_ENOMEM;
+  double *restrict X = num, *restrict Dg = num + (size_t)nblk * 9;
   int *restrict slot = f->iwork, *restrict head = f->iwork + nb, *restrict link = f->iwork + 2 * nb,
                 *restrict next = f->iwork + 3 * nb;
   memset(X, 0, sizeof(double) * ((size_t)nblk * 9 + (size_t)nb * 9));
@@ -289,13 +290,13 @@ static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
     }
     /* A_JJ = L_JJ D_J L_JJ^T: d0 at 0, l10 at 1, l20 at 2, d1 at 4, l21 at 5, d2 at 8 */
     const double d0 = a[0];
-    if (!(d0 > 0.0)) return PALP_ESOLVER;
+    if (!(d0 > 0.0)) goto not_spd;
     const double l10 = a[1] / d0, l20 = a[2] / d0;
     const double d1 = a[4] - l10 * a[1];
-    if (!(d1 > 0.0)) return PALP_ESOLVER;
+    if (!(d1 > 0.0)) goto not_spd;
     const double l21 = (a[5] - l20 * a[1]) / d1;
     const double d2 = (a[8] - l20 * a[2]) - l21 * l21 * d1;
-    if (!(d2 > 0.0)) return PALP_ESOLVER;
+    if (!(d2 > 0.0)) goto not_spd;
     a[1] = l10, a[2] = l20, a[4] = d1, a[5] = l21, a[8] = d2;
     /* L_IJ = A_IJ L_JJ^-T D_J^-1, row by row: z L_JJ^T = a_r, then z / d */
     for (int q = bcolp[J]; q < bcolp[J + 1]; ++q) {
@@ -319,17 +320,17 @@ static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
     for (int c = 0; c < 3; ++c) f->dinv[3 * J + c] = f->dinv4[4 * J + c] = 1.0 / a[4 * c]; /* both solve paths' copies */
     f->dinv4[4 * J + 3] = 0.0;
   }
+  free(num);
   return PALP_OK;
+not_spd:
+  free(num);
+  return PALP_ESOLVER;
 }
 
 int palp_ldl_factor_blocks(palp_ldl *f, int nb, const int *gp, const int *gi, int nnz, const int *ti,
                            const int *tj, const double *tx) {
   /* The same pattern as the factor already held: the numeric part by blocks alone. */
-  if (f->symbolic && f->nb == nb && nb > 0 && f->num && f->ndest == nnz) {
-    int same = 1;
-    for (int k = 0; k < nnz && same; ++k) same = f->tij[2 * k] == ti[k] && f->tij[2 * k + 1] == tj[k];
-    if (same) return block_numeric(f, nnz, tx);
-  }
+  if (f->symbolic && f->nb == nb && nb > 0 && f->dest && f->ndest == nnz) return block_numeric(f, nnz, tx);
   int *perm = NULL;
   if (!f->symbolic) {
     /* AMD on the vertex graph, expanded to unknowns 3v, 3v+1, 3v+2. */

@@ -41,10 +41,8 @@ typedef struct palp_ldl {
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
   double *dinv4;  /* [nb*4] 1/D padded to 4 lanes per vertex */
   int simd;       /* 1: palp_ldl_solve takes the AVX2 paths for w <= 4 (same bits as the portable one) */
-  /* The block numeric factorisation (palp_ldl_factor_blocks after the first): */
-  double *num;    /* [nblocks*9 + nb*9] L's blocks, then the diagonal blocks, in double while factoring */
-  int *dest;      /* [ndest] where each triplet of the last matrix lands in num */
-  int *tij;       /* [2*ndest] that matrix's triplet rows and columns, to tell the same pattern */
+  /* The block numeric factorisation (palp_ldl_factor_blocks): */
+  int *dest;      /* [ndest] where each triplet lands among L's blocks, then the diagonal blocks */
   int ndest;
   int *iwork;     /* [4*nb] row -> block of the current column, list heads, links, next rows */
 } palp_ldl;
@@ -56,7 +54,8 @@ void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
  * The first call orders the vertices with AMD on the vertex graph (CSC, both
  * triangles, nb vertices), keeping each vertex's 3 unknowns together, and has CHOLMOD
  * analyse the pattern and factor once, which gives L's block pattern; later calls with
- * the same triplet pattern (gp, gi may then be NULL) redo only the numeric
+ * the same triplets' rows and columns in the same order (the caller's promise, as for
+ * CHOLMOD's analysis; gp, gi may then be NULL) redo only the numeric
  * factorisation, here, by 3x3 blocks (left-looking: each block column gathers the
  * updates of the columns to its left, then is scaled by its diagonal block's
  * L D L^T). The first call's factor is redone the same way, so every factor of a

@@ -171,7 +171,7 @@ int main(void) {
    * (CHOLMOD's analysis, then the same block path); a matrix that is not positive
    * definite is refused with PALP_ESOLVER and leaves the factor it had. */
   {
-    CHECK(f.num != NULL, "the factor keeps the block numeric path's map");
+    CHECK(f.dest != NULL, "the factor keeps the block numeric path's map");
     static double tx2[N * 30], tx3[N * 30];
     for (int k = 0; k < nnz; ++k) tx2[k] = ti[k] / 3 != tj[k] / 3 ? 0.5 * tx[k] : tx[k];
     for (int r = 0; r < N; ++r)
