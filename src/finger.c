@@ -345,7 +345,7 @@ static palp_vec3 mat3_apply(const double K[3][3], palp_vec3 x) {
 }
 
 palp_vec3 palp_drift_observe(const palp_local_model *last, const palp_local_model *now, palp_vec3 v, double h,
-                             palp_vec3 *c) {
+                             double max_speed, palp_vec3 *c) {
   if (!last->contact || !now->contact || !(h > 0.0)) {
     *c = v3(0, 0, 0);
     return v;
@@ -356,5 +356,11 @@ palp_vec3 palp_drift_observe(const palp_local_model *last, const palp_local_mode
   const palp_vec3 dc = v3_scale(palp_sym3_pinv_apply(now->stiffness, e, 1e-6), PALP_DRIFT_GAIN / h);
   /* a non-finite step (it cannot come from a solved step) leaves the correction as it was */
   if (isfinite(dc.x) && isfinite(dc.y) && isfinite(dc.z)) *c = v3_add(*c, dc);
-  return v3_add(v, *c);
+  palp_vec3 drift = v3_add(v, *c);
+  const double dl = v3_len(drift);
+  if (dl > max_speed && max_speed > 0.0) { /* no surface moves faster: the correction is held there */
+    drift = v3_scale(drift, max_speed / dl);
+    *c = v3_sub(drift, v);
+  }
+  return drift;
 }

@@ -46,9 +46,17 @@ palp_vec3 palp_sym3_pinv_apply(const double K[3][3], palp_vec3 r, double rel_tol
  * predicted this step's force F at this step's device point x:
  *   e = F - (F' - K' (x - x' - d' h)),   c <- c + g K^+ e / h   [m/s],
  * primes for the last model, h the step [s], g = PALP_DRIFT_GAIN. c starts at 0 at
- * first touch, when there is no last model. Returns d and updates *c. */
+ * first touch, when there is no last model. K^+ inverts every direction above 1e-6 of
+ * K's largest stiffness, so an error along a direction K barely resists (a fingertip
+ * deep in the exercise dome: ~0.002 N/m against ~1,000 N/m) could drive c to ~100 m/s,
+ * which is no surface's motion (the world caps its vertices at def.max_speed) and which
+ * the station refuses as a corrupt model (|d| > 100 m/s; 12-74 of a 123 s strip
+ * search's 30,700 models were). So |d| is capped at max_speed [m/s]: along that
+ * direction K is so soft that the cap moves the model's force by < 1e-3 N. Returns d
+ * and updates *c. */
 #define PALP_DRIFT_GAIN 0.2
 palp_vec3 palp_drift_observe(const palp_local_model *last, const palp_local_model *now, palp_vec3 v, double h,
+                             double max_speed,
                              palp_vec3 *c);
 
 /* ---- the smooth contact surface (docs/haptics.md, "The smooth contact surface") ----

@@ -1328,7 +1328,7 @@ static void stage_fingers(palp_world *w, double h) {
           vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[c] * k->cbary[c][e]));
         }
       }
-      lm->drift = palp_drift_observe(&lm_last, lm, v3_scale(vc, 1.0 / lsum), h, &k->drift_corr);
+      lm->drift = palp_drift_observe(&lm_last, lm, v3_scale(vc, 1.0 / lsum), h, w->def.max_speed, &k->drift_corr);
       /* footprint: the lumped (one-third) areas of the vertices the finger touches [m^2] */
       for (int q = 0; q < k->count; ++q) lm->area += w->mesh.vertex_area[k->vertex[q]];
     } else {
