@@ -574,29 +574,24 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
   palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
+  palp_world_health h;
+  palp_world_get_health(s->world, &h);
   /* Why ticks ran late, when they did: a tick that reached a rebuild's due frame before
-   * the helper had finished it waited for it (docs/haptics.md). */
-  if (s->stats.overruns > 0 || s->stats.factor_waits > 0) {
-    /* and how many were made on the tick because the factor reached its stability margin
-     * before its rebuild was due (palp_world_health.margin_rebuilds, ~1 ms each) */
-    palp_world_health h;
-    palp_world_get_health(s->world, &h);
+   * the helper had finished it waited for it (docs/haptics.md), and how many rebuilds
+   * were made on the tick because the factor reached its stability margin before its
+   * due frame (palp_world_health.margin_rebuilds, ~0.5 ms each). */
+  if (s->stats.overruns > 0 || s->stats.factor_waits > 0)
     palp_log_info(srv->log, "session %u: %llu of %llu ticks overran; %llu tangent rebuilds off the tick, %llu waited "
                             "for (%.1f ms in all), %lld made on the tick at the stability margin", s->id,
                   (unsigned long long)s->stats.overruns, (unsigned long long)s->stats.ticks,
                   (unsigned long long)s->stats.factor_jobs, (unsigned long long)s->stats.factor_waits,
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
-  }
-  {
-    /* Where the model's answers were extrapolations (the stations were told each step,
-     * LM_LARGE_STRAIN; docs/model.md, "Valid range"). */
-    palp_world_health h;
-    palp_world_get_health(s->world, &h);
-    if (h.large_strain_steps > 0 || h.large_bend_steps > 0)
-      palp_log_info(srv->log, "session %u: beyond the model's valid range at %lld steps by a link's strain (largest "
-                              "%.2f) and %lld by the skin's bending (largest hinge miss %.3f rad)", s->id,
-                    (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error);
-  }
+  /* Where the model's answers were extrapolations (the stations were told each step,
+   * LM_LARGE_STRAIN; docs/model.md, "Valid range"). */
+  if (h.large_strain_steps > 0 || h.large_bend_steps > 0)
+    palp_log_info(srv->log, "session %u: beyond the model's valid range at %lld steps by a link's strain (largest "
+                            "%.2f) and %lld by the skin's bending (largest hinge miss %.3f rad)", s->id,
+                  (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error);
   /* Its members' slots are free again; its state instance is released after
    * the retention time, once every member has read the CLOSED state. */
   for (int i = 0; i < srv->station_slots; i++)
