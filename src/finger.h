@@ -56,8 +56,7 @@ palp_vec3 palp_sym3_pinv_apply(const double K[3][3], palp_vec3 r, double rel_tol
  * and updates *c. */
 #define PALP_DRIFT_GAIN 0.2
 palp_vec3 palp_drift_observe(const palp_local_model *last, const palp_local_model *now, palp_vec3 v, double h,
-                             double max_speed,
-                             palp_vec3 *c);
+                             double max_speed, palp_vec3 *c);
 
 /* ---- the smooth contact surface (docs/haptics.md, "The smooth contact surface") ----
  * The dome's triangles are chords of the tissue's surface: between vertices a flat facet

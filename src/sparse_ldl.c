@@ -208,7 +208,7 @@ static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
   for (int k = 0; k < n; ++k) iperm[f->perm[k]] = k;
   for (int k = 0; k < nnz; ++k) {
     int pi = iperm[ti[k]], pj = iperm[tj[k]];
-    if (pi < pj || (pi / 3 == pj / 3 && pi % 3 < pj % 3)) {
+    if (pi < pj) { /* within one block too: there pi < pj is r < c */
       const int t = pi;
       pi = pj, pj = t;
     }

@@ -542,11 +542,15 @@ static palp_vec3 strip_point(double t) {
 }
 
 static void test_drift_bounded(void) {
-  double dt = 0.0; /* the scene's step, which the server's lag depends on: a first world to read it */
-  palp_world *w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.0, -1, &dt, 0, 0);
-  if (!w) return;
-  palp_world_destroy(w);
-  w = scene_world(PALP_CONFIG_DIR "/phantoms/dome.json", 0.0, -1, &dt, palp_world_refactor_lag_for(dt), 0);
+  const char *path = PALP_CONFIG_DIR "/phantoms/dome.json";
+  palp_scene sc_;
+  char err[256];
+  if (palp_scene_load(path, &sc_, err, sizeof err)) {
+    CHECK(0, "%s: %s", path, err);
+    return;
+  }
+  double dt = sc_.world.dt; /* the scene's step, which the server's lag depends on */
+  palp_world *w = scene_world(path, 0.0, -1, &dt, palp_world_refactor_lag_for(dt), 0);
   if (!w) return;
   const double vmax = palp_world_get_def(w)->max_speed;
   const int f = palp_world_add_finger(w, strip_point(0.0), r);
