@@ -53,8 +53,9 @@ static int p_read(void *ctx, double t, palp_vec3 *x) {
   probe *p = ctx;
   p->t = t;
   if (t - p->last_report >= 1.0) {
-    fprintf(stderr, "device: t=%.1f s  rendering (%.2f, %.2f, %.2f) N%s\n", t, p->force.x, p->force.y, p->force.z,
-            (p->flags & PALP_CLI_FORCE_LIMITED) ? " (limited)" : "");
+    fprintf(stderr, "device: t=%.1f s  rendering (%.2f, %.2f, %.2f) N%s%s\n", t, p->force.x, p->force.y, p->force.z,
+            (p->flags & PALP_CLI_FORCE_LIMITED) ? " (limited)" : "",
+            (p->flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? " (outside the model's valid range)" : "");
     p->last_report = t;
   }
   const double d = depth_at(p, t);

@@ -284,6 +284,7 @@ static void *haptic_main(void *arg) {
   int64_t next = t0;
   uint64_t mb_seq = 0;
   int was_on = 0, release_left = 0;
+  uint32_t model_flags = 0; /* LocalModel.flags of the model being rendered */
   palp_local_model m;
   for (uint64_t tick = 0; !atomic_load_explicit(&l->stop, memory_order_relaxed); tick++) {
     next += period;
@@ -317,6 +318,7 @@ static void *haptic_main(void *arg) {
     double smax = 0, age = -1;
     const int got = palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax, &age);
     if (got) {
+      model_flags = sflags;
       if (d->in->model) d->in->model(d->in->ctx, &m);
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
       if (sflags & palp_LM_OUT_OF_RANGE) st->out_of_range_models++;
@@ -326,6 +328,11 @@ static void *haptic_main(void *arg) {
     palp_haptic_out o;
     palp_vec3 xr;
     const int taken = palp_cli_haptic_core_tick(&l->core, on, x, t, got ? &m : NULL, age, &o, &xr);
+    /* The server's word on the model's validity travels with the force it gave, and
+     * only while it is rendered: a lifted finger or a fading model says nothing. */
+    if (on && (model_flags & palp_LM_OUT_OF_RANGE) && !(o.flags & (PALP_HAPTIC_STALE | PALP_HAPTIC_NO_MODEL)))
+      o.flags |= PALP_CLI_FORCE_OUT_OF_RANGE;
+    if (o.flags & PALP_CLI_FORCE_OUT_OF_RANGE) st->out_of_range_ticks++;
     if (taken > 0) st->models++;
     if (l->core.holding) st->held_ticks++;
     d->in->write_force(d->in->ctx, o.force, o.flags);
@@ -357,7 +364,8 @@ static void *haptic_main(void *arg) {
                                      .flags = o.flags, .on = on,
                                      .point = l->core.renderer.cur.point,
                                      .model_contact = l->core.renderer.cur.contact,
-                                     .model_time = l->core.renderer.cur.time};
+                                     .model_time = l->core.renderer.cur.time,
+                                     .out_of_range_ticks = st->out_of_range_ticks};
     pthread_mutex_unlock(&l->view_lock);
     }
   }

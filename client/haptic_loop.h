@@ -132,6 +132,7 @@ typedef struct palp_cli_haptic_stats {
   double passivity_dissipated; /* energy it took out [J] */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
   uint64_t out_of_range_models;   /* models with any model-validity flag */
+  uint64_t out_of_range_ticks;    /* ticks rendered from such a model (PALP_CLI_FORCE_OUT_OF_RANGE) */
   double peak_force, peak_requested; /* [N] rendered / before the limit */
   double max_force;             /* the limit in force [N] */
   size_t trace_len;
@@ -153,6 +154,7 @@ typedef struct palp_cli_haptic_view {
   double requested, depth;
   unsigned flags;
   int on;
+  uint64_t out_of_range_ticks; /* the stats' count so far: a reader sampling the view misses no episode */
 } palp_cli_haptic_view;
 
 typedef struct palp_cli_haptic_loop {

@@ -71,12 +71,17 @@ typedef struct palp_cli_input {
 } palp_cli_input;
 enum { PALP_CLI_BUTTON_MARK = 1, PALP_CLI_BUTTON_WITHDRAW = 2 };
 
-/* write_force flags (the values of palp_haptic's PALP_HAPTIC_*). */
+/* write_force flags (bits 0-3: the values of palp_haptic's PALP_HAPTIC_*). */
 enum {
   PALP_CLI_FORCE_LIMITED = 1u << 0,  /* limited to the safe force: show the trainee */
   PALP_CLI_FORCE_STALE = 1u << 1,    /* no recent model from the server: fading out */
   PALP_CLI_FORCE_CONTACT = 1u << 2,  /* the fingertip touches the surface */
-  PALP_CLI_FORCE_NO_MODEL = 1u << 3  /* no model yet */
+  PALP_CLI_FORCE_NO_MODEL = 1u << 3, /* no model yet */
+  /* The model being rendered was flagged by the server outside the phantom model's valid
+   * range (LocalModel.flags & LM_OUT_OF_RANGE: a link strained beyond +-50%, the skin's
+   * linearised bending off by more than 0.1 rad, ...): the force is less certain than
+   * the model's validation says (docs/model.md, "Valid range"). Show the trainee. */
+  PALP_CLI_FORCE_OUT_OF_RANGE = 1u << 4
 };
 
 /* Point on the dome of radius R at polar angle from the pole and azimuth [deg],

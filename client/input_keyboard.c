@@ -191,9 +191,10 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
   f->flags = flags;
   if (f->t - f->last_status >= 0.5) {
     const double m = sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
-    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, depth %+.3g mm (step %g mm): force %.2f N%s   ",
+    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, depth %+.3g mm (step %g mm): force %.2f N%s%s   ",
             f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, f->step * 1e3, m,
-            (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "");
+            (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "",
+            (flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? " OUTSIDE VALID RANGE" : "");
     f->last_status = f->t;
   }
 }

@@ -529,8 +529,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_waitset_attach(ws, lm_cond, 0);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_print = t0, next_check = t0;
-  int closed = 0, limited_shown = 0;
-  double episode_peak = 0;
+  int closed = 0, limited_shown = 0, oor_shown = 0;
+  double episode_peak = 0, oor_since = 0, oor_last = 0;
+  uint64_t oor_ticks = 0;
   char reason[128] = "";
   while (!g_stop && !palp_cli_haptic_done(hl)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
@@ -569,11 +570,34 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     }
     if (!limited) episode_peak = 0;
     limited_shown = limited;
+    /* And when the phantom is pressed beyond the model's valid range (the server's flag on
+     * the models rendered since the last look), and when it is back: after 0.5 s clear, so
+     * that the skin's check, which revisits each hinge every 0.2 s, does not make it flicker. */
+    const int oor = v.out_of_range_ticks != oor_ticks;
+    oor_ticks = v.out_of_range_ticks;
+    if (oor) {
+      oor_last = v.t;
+      if (!oor_shown && !o->quiet) {
+        printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: the phantom is deformed beyond where its "
+               "forces were validated; what you feel here is less certain\n", o->name, v.t);
+        fflush(stdout);
+      }
+      if (!oor_shown) oor_since = v.t;
+      oor_shown = 1;
+    } else if (oor_shown && v.t - oor_last >= 0.5) {
+      if (!o->quiet) {
+        printf("[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s)\n", o->name, v.t,
+               oor_last - oor_since);
+        fflush(stdout);
+      }
+      oor_shown = 0;
+    }
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
       const int touching = v.on && (v.flags & PALP_CLI_FORCE_CONTACT);
-      printf("[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s\n", o->name,
-             v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
-             limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
+      printf("[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s%s\n",
+             o->name, v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
+             limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? "  OUTSIDE VALID RANGE" : "",
+             (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
     }
@@ -623,8 +647,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     printf("[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
            "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
-    printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range\n",
-           o->name, (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models);
+    printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
+           "(rendered from for %.2f s)\n", o->name, (unsigned long long)hs.server_limited_models,
+           (unsigned long long)hs.out_of_range_models, (double)hs.out_of_range_ticks / d.rate_hz);
   if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
   free(lat.us);
   free(d.trace);

@@ -8,7 +8,7 @@
  * normal; its depth is d = R + r - |c| for centre c (from the undeformed sphere).
  *
  * FE: the rigid sphere at centre c, relaxed static equilibrium (the long-term
- * response) at depths 0.25 mm ... until the force passes 5 N.
+ * response) at depths 0.25 mm ... until the force passes 5 N (--max-force).
  * Real-time: the scene's world (its parameters, mesh and material), a finger whose
  * device point is driven to each depth and held, corrected twice so that the
  * proxy (the fingertip centre, the FE sphere's counterpart) sits at the FE depth.
@@ -74,8 +74,8 @@ static int read_fe_curve(const char *path, const char *name, const double *depth
 }
 
 int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
-                            double lesion_depth, double lesion_ratio, const char *fe_from, int max_depths, char *err,
-                            size_t errlen) {
+                            double lesion_depth, double lesion_ratio, const char *fe_from, int max_depths,
+                            double max_force, char *err, size_t errlen) {
   setvbuf(stdout, NULL, _IOLBF, 0); /* a long run shows each site as it finishes */
   palp_fem_config cfg = *cfg0;
   cfg.max_newton = cfg.max_newton < 25 ? 25 : cfg.max_newton;
@@ -120,7 +120,7 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     const double nv[3] = {n.x, n.y, n.z};
     err[0] = 0;
     const int nd = fe_from ? read_fe_curve(fe_from, sites[s].name, depths, maxd, F, G, err, errlen)
-                           : palp_fem_finger_curve(&cfg, &mesh, &lump, sites[s].lesion, nv, 0.008, depths, maxd, 5.0, F,
+                           : palp_fem_finger_curve(&cfg, &mesh, &lump, sites[s].lesion, nv, 0.008, depths, maxd, max_force, F,
                                                    G, &newton, err, errlen);
     const double t1 = now_s();
     if (nd <= 0) {

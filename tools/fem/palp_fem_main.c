@@ -10,6 +10,7 @@
  *   palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]
  *                [--reading long_term|instantaneous] [--out FILE.csv]
  *                [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]
+ *                [--fe-from FINGER.csv] [--depths N | --no-force-table] [--max-force N]
  *
  * finger prints fingertip force-depth curves of the real-time model (the scene's
  * world) against the FE reference (rigid sphere, relaxed) at matched positions:
@@ -53,10 +54,11 @@ static void usage(void) {
           "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
           "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
           "                       [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n"
-          "                       [--fe-from FINGER.csv] [--depths N | --no-force-table]\n"
+          "                       [--fe-from FINGER.csv] [--depths N | --no-force-table] [--max-force N]\n"
           "  finger --fe-from: the FE curves from a CSV an earlier finger run wrote (only the real-time side\n"
           "  is computed); --depths N: each curve's first N depths only; --no-force-table: no depth-for-force\n"
-          "  table (its real-time curve to 30 mm is most of the real-time cost)\n");
+          "  table (its real-time curve to 30 mm is most of the real-time cost); --max-force N: each FE curve\n"
+          "  ends at the first depth whose force passes N newtons (default 5)\n");
   palp_app_common_usage(stderr, FEM_OPTS);
 }
 
@@ -183,6 +185,7 @@ typedef struct opts {
   int level, frames, depths, no_cache, quiet;
   double dt;
   double lesion_depth_mm, lesion_ratio; /* finger: the pole_lesion site's lesion */
+  double max_force; /* finger: [N] each FE curve ends at the first depth past it */
   palp_app_opts app;
   palp_log *log; /* main's, once the options are read */
 } opts;
@@ -194,6 +197,7 @@ static int parse(int argc, char **argv, opts *o) {
   o->dt = -1.0;
   o->lesion_depth_mm = 10.0;
   o->lesion_ratio = 5.0;
+  o->max_force = 5.0;
   palp_app_opts_init(&o->app, "palp-fem");
   for (int i = 2; i < argc; ++i) {
     const char *a = argv[i];
@@ -221,7 +225,8 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--site", o->site)
     ARG("--fe-from", o->fe_from)
 #undef ARG
-    const int lesion_opt = strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0;
+    const int lesion_opt = strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0 ||
+                           strcmp(a, "--max-force") == 0;
     if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--depths") == 0 ||
          strcmp(a, "--dt") == 0 || lesion_opt) && has) {
       char *end;
@@ -235,6 +240,7 @@ static int parse(int argc, char **argv, opts *o) {
         fprintf(stderr, "palp-fem: %s: expected a positive number: %s\n", a, argv[i]);
         return -1;
       } else if (strcmp(a, "--lesion-depth") == 0) o->lesion_depth_mm = v;
+      else if (strcmp(a, "--max-force") == 0) o->max_force = v;
       else if (lesion_opt) o->lesion_ratio = v;
       else if (v != floor(v) || v < 1 || v > 1e7) {
         fprintf(stderr, "palp-fem: %s: expected a positive integer\n", a);
@@ -431,7 +437,7 @@ static int cmd_finger(const opts *o) {
   }
   err[0] = 0;
   if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, 1e-3 * o->lesion_depth_mm, o->lesion_ratio, o->fe_from,
-                              o->depths, err, sizeof err) != 0) {
+                              o->depths, o->max_force, err, sizeof err) != 0) {
     palp_log_error(o->log, "finger: %s", err[0] ? err : "failed");
     return 1;
   }
