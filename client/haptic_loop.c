@@ -321,7 +321,7 @@ static void *haptic_main(void *arg) {
       model_flags = sflags;
       if (d->in->model) d->in->model(d->in->ctx, &m);
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
-      if (sflags & palp_LM_OUT_OF_RANGE) st->out_of_range_models++;
+      if (sflags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) st->out_of_range_models++;
       /* The safe force is the smaller of the station's and the phantom's limits. */
       if (smax > 0 && smax < l->core.renderer.def.max_force) l->core.renderer.def.max_force = smax;
     }
@@ -330,7 +330,8 @@ static void *haptic_main(void *arg) {
     const int taken = palp_cli_haptic_core_tick(&l->core, on, x, t, got ? &m : NULL, age, &o, &xr);
     /* The server's word on the model's validity travels with the force it gave, and
      * only while it is rendered: a lifted finger or a fading model says nothing. */
-    if (on && (model_flags & palp_LM_OUT_OF_RANGE) && !(o.flags & (PALP_HAPTIC_STALE | PALP_HAPTIC_NO_MODEL)))
+    if (on && (model_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) &&
+        !(o.flags & (PALP_HAPTIC_STALE | PALP_HAPTIC_NO_MODEL)))
       o.flags |= PALP_CLI_FORCE_OUT_OF_RANGE;
     if (o.flags & PALP_CLI_FORCE_OUT_OF_RANGE) st->out_of_range_ticks++;
     if (taken > 0) st->models++;

@@ -592,6 +592,12 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
     palp_log_info(srv->log, "session %u: beyond the model's valid range at %lld steps by a link's strain (largest "
                             "%.2f) and %lld by the skin's bending (largest hinge miss %.3f rad)", s->id,
                   (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error);
+  /* and where a fingertip pressed deeper than the parameters were validated against the FE
+   * (LM_BEYOND_VALIDATED) */
+  if (h.beyond_validated_steps > 0)
+    palp_log_info(srv->log, "session %u: a fingertip deeper than the phantom's parameters were validated against the FE "
+                            "at %lld steps (by up to %.1f mm)", s->id, (long long)h.beyond_validated_steps,
+                  1e3 * h.max_beyond_validated);
   /* Its members' slots are free again; its state instance is released after
    * the retention time, once every member has read the CLOSED state. */
   for (int i = 0; i < srv->station_slots; i++)

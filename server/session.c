@@ -356,6 +356,7 @@ static uint32_t step_flags(palp_srv_session *s) {
   if (h.clamped_steps > s->health.clamped_steps) fl |= palp_LM_CLAMPED_STEP;
   if (h.finger_unsolved > s->health.finger_unsolved) fl |= palp_LM_UNSOLVED;
   if (h.substeps > s->health.substeps) fl |= palp_LM_SUBSTEPPED;
+  if (h.beyond_validated_steps > s->health.beyond_validated_steps) fl |= palp_LM_BEYOND_VALIDATED;
   s->health = h;
   return fl;
 }
@@ -406,7 +407,7 @@ static void publish_local_models(palp_srv_session *s, int64_t now_ns, uint32_t f
         s->last_limit_log_ns = now_ns;
       }
     }
-    if (flags & palp_LM_OUT_OF_RANGE) s->stats.out_of_range_steps++;
+    if (flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) s->stats.out_of_range_steps++;
     o->server_time_ns = palp_dds_now_ns();
     if (dds_write(s->local_model_writer, o) == 0) s->stats.local_models++;
   }

@@ -207,6 +207,7 @@ int palp_effect_from_name(const char *name, palp_effect *out);
  * compliance over its chord by 1/ratio of it, so the vertex's support stiffens by
  *   k_i / k = C0 / (C0 - (1 - 1/ratio) C_chord),  C = integral of sigma_z / p dz. */
 #define PALP_MAX_LESIONS 8
+#define PALP_MAX_VALIDATED 8 /* entries of palp_world_def.validated_* */
 #define PALP_LESION_CONTACT_SCALE 0.008 /* c [m]: the fingertip the training is for */
 typedef struct palp_lesion {
   palp_vec3 center;       /* [m], inside the dome, clear of the base */
@@ -238,7 +239,21 @@ typedef struct palp_world_def {
    * normals, exact at rest and carried with the deformation. Forces still act on the
    * triangles' vertices by barycentric weights. */
   int finger_surface; /* palp_finger_surface */
+  /* Where the parameters were validated against the FE reference with a fingertip
+   * (docs/model.md, "Valid range"): up to which indentation [m] of the fingertip (its
+   * centre's depth below the undeformed sphere, R + r - |c|) its force stayed within 15%
+   * of the FE's, at the polar angle [rad] of the fingertip's centre; polar angles
+   * ascending, linear in between, the end values beyond (palp_world_validated_depth). A
+   * step whose fingertip presses deeper counts in health.beyond_validated_steps. 0
+   * entries: the parameters make no such statement, and nothing is counted. */
+  int validated_count; /* 0..PALP_MAX_VALIDATED */
+  double validated_polar[PALP_MAX_VALIDATED]; /* [rad] */
+  double validated_depth[PALP_MAX_VALIDATED]; /* [m] */
 } palp_world_def;
+
+/* The indentation [m] up to which def's parameters were validated at polar angle
+ * polar [rad] (def.validated_*), or +inf when they state none. */
+double palp_world_validated_depth(const palp_world_def *def, double polar);
 
 typedef enum palp_finger_surface {
   PALP_FINGER_SURFACE_FACETS = 0, /* the flat triangles (how every session before 2026-11-27 was stepped) */
@@ -400,6 +415,10 @@ typedef struct palp_world_health {
   double max_bend_error;      /* largest |true - linearised| hinge turn seen [rad] */
   int64_t margin_rebuilds;    /* deferred rebuilds (def.refactor_lag) made at once because the
                                  factor reached its stability margin before its due frame */
+  int64_t beyond_validated_steps; /* steps with a fingertip in contact pressed deeper than
+                                 the parameters were validated against the FE there
+                                 (def.validated_*) */
+  double max_beyond_validated; /* largest such excess of indentation [m] */
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 

@@ -257,6 +257,45 @@ static int get_material(ctx *c, const cJSON *obj, const char *path, palp_scene *
   return PALP_OK;
 }
 
+/* Where the parameters were validated against the FE with a fingertip (palp_world_def.
+ * validated_*; docs/model.md, "Valid range"): {"finger": [{"polar_deg": a, "depth_m": d},
+ * ...]}, polar angles ascending within [0, 90] deg (or "polar_rad", exact, as a logged
+ * scene writes them), depths > 0 m. Optional; absent keeps what was there. */
+static int get_validated(ctx *c, const cJSON *obj, const char *path, palp_world_def *w) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, "validated");
+  if (!v) return PALP_OK;
+  if (!cJSON_IsObject(v)) return palp_parse_fail(c, PALP_EPARSE, "%svalidated: expected an object {\"finger\": [...]}", path);
+  const cJSON *f = cJSON_GetObjectItemCaseSensitive(v, "finger");
+  const int n = cJSON_IsArray(f) ? cJSON_GetArraySize(f) : -1;
+  if (n < 1 || n > PALP_MAX_VALIDATED)
+    return palp_parse_fail(c, PALP_EPARSE, "%svalidated.finger: expected an array of 1 to %d {\"polar_deg\", \"depth_m\"}",
+                           path, PALP_MAX_VALIDATED);
+  for (int i = 0; i < n; ++i) {
+    const cJSON *o = cJSON_GetArrayItem(f, i);
+    char p2[64];
+    snprintf(p2, sizeof p2, "%svalidated.finger[%d].", path, i);
+    if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "%.*s: expected an object", (int)strlen(p2) - 1, p2);
+    int e;
+    double a = NAN, d = 0.0;
+    if (cJSON_GetObjectItemCaseSensitive(o, "polar_rad")) {
+      if ((e = get_num(c, o, p2, "polar_rad", 1, &a))) return e;
+    } else {
+      if ((e = get_num(c, o, p2, "polar_deg", 1, &a))) return e;
+      a *= PALP_PI / 180.0;
+    }
+    if ((e = get_pos(c, o, p2, "depth_m", 1, &d))) return e;
+    if (!(a >= 0.0 && a <= 0.5 * PALP_PI + 1e-12))
+      return palp_parse_fail(c, PALP_EPARSE, "%spolar_deg: must be within [0, 90] degrees", p2);
+    if (i > 0 && !(a > w->validated_polar[i - 1]))
+      return palp_parse_fail(c, PALP_EPARSE, "%spolar_deg: the polar angles must increase", p2);
+    if (!(d < 1.0)) return palp_parse_fail(c, PALP_EPARSE, "%sdepth_m: %g m is not an indentation (< 1 m)", p2, d);
+    w->validated_polar[i] = a;
+    w->validated_depth[i] = d;
+  }
+  w->validated_count = n;
+  return PALP_OK;
+}
+
 static int parse_params_file(ctx *c, const char *dir, const char *name, palp_scene *s) {
   char path[1024];
   if (name[0] == '/' || !dir[0]) snprintf(path, sizeof path, "%s", name);
@@ -272,6 +311,7 @@ static int parse_params_file(ctx *c, const char *dir, const char *name, palp_sce
   const cJSON *g = e ? NULL : get_obj(c, root, "parameters.", "gel", 1, &e);
   if (!e) e = parse_gel(c, g, &s->world.gel);
   if (!e) e = get_material(c, root, "parameters.", s);
+  if (!e) e = get_validated(c, root, "parameters.", &s->world);
   cJSON_Delete(root);
   return e;
 }
@@ -301,8 +341,9 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
     if (e || (e = parse_gel(c, g, &s->world.gel))) return e;
   }
 
-  /* the scene's own "material" wins over its parameter file's */
+  /* the scene's own "material" wins over its parameter file's, and so does its "validated" */
   if ((e = get_material(c, root, "", s))) return e;
+  if ((e = get_validated(c, root, "", &s->world))) return e;
 
   const cJSON *t = get_obj(c, root, "", "time", 1, &e);
   if (e) return e;
@@ -499,6 +540,17 @@ char *palp_scene_to_json(const palp_scene *s) {
       add_exact(o, "radius_m", L->radius);
       add_exact(o, "stiffness_ratio", L->stiffness_ratio);
       cJSON_AddItemToArray(ls, o);
+    }
+  }
+  /* only when stated, so that the scenes of earlier logs print as they did */
+  if (s->world.validated_count > 0) {
+    cJSON *va = cJSON_AddObjectToObject(r, "validated");
+    cJSON *vf = va ? cJSON_AddArrayToObject(va, "finger") : NULL;
+    for (int i = 0; vf && i < s->world.validated_count; ++i) {
+      cJSON *o = cJSON_CreateObject();
+      add_exact(o, "polar_rad", s->world.validated_polar[i]);
+      add_exact(o, "depth_m", s->world.validated_depth[i]);
+      cJSON_AddItemToArray(vf, o);
     }
   }
   cJSON *t = cJSON_AddObjectToObject(r, "time");

@@ -169,6 +169,8 @@ struct palp_world {
   palp_vec3 *ubuf;       /* [vertex_count] displacement from rest, once per step [m] */
   double step_max_bend, max_bend; /* [rad] */
   int64_t large_bend_steps;
+  double max_beyond_validated; /* [m] (def.validated_*) */
+  int64_t beyond_validated_steps;
   double *hrest;         /* [nhinge] rest angle (palp_hinge_angle) [rad] */
   int hcheck_next;       /* the next hinge whose true angle is checked */
   uint8_t *hbeyond;      /* [nhinge] 1 if its last check found it beyond the linear range */
@@ -1547,6 +1549,12 @@ static int validate(const palp_world_def *d) {
   if (!(d->max_speed > 0.0)) return PALP_EINVAL;
   if (!palp_finger_surface_name(d->finger_surface)) return PALP_EINVAL;
   if (d->lesion_count < 0 || d->lesion_count > PALP_MAX_LESIONS) return PALP_EINVAL;
+  if (d->validated_count < 0 || d->validated_count > PALP_MAX_VALIDATED) return PALP_EINVAL;
+  for (int k = 0; k < d->validated_count; ++k) /* polar angles ascending in [0, pi/2], depths > 0 */
+    if (!(d->validated_polar[k] >= 0.0 && d->validated_polar[k] <= 0.5 * PALP_PI + 1e-12) ||
+        (k > 0 && !(d->validated_polar[k] > d->validated_polar[k - 1])) || !(d->validated_depth[k] > 0.0) ||
+        !isfinite(d->validated_depth[k]))
+      return PALP_EINVAL;
   for (int l = 0; l < d->lesion_count; ++l) {
     const palp_lesion *L = &d->lesion[l];
     /* inside the dome and clear of its base; a finite, positive stiffness ratio */
@@ -2337,6 +2345,23 @@ static int try_step(palp_world *w, double h, int last_resort) {
   return PALP_OK;
 }
 
+/* After a whole step (not its halves): a fingertip in contact pressed deeper than the
+ * parameters were validated against the FE there (def.validated_*), its centre's depth
+ * below the undeformed sphere at its polar angle, as palp-fem finger measures it. */
+static void validated_check(palp_world *w) {
+  double worst = 0.0; /* [m] */
+  for (int ci = 0; ci < w->def.max_contacts; ++ci) {
+    const contact *k = &w->contacts[ci];
+    if (k->kind != CONTACT_FINGER || !k->lm.contact) continue;
+    const palp_vec3 p = k->proxy;
+    const double depth = w->def.mesh.radius + k->fdef.radius - v3_len(p);
+    const double over = depth - palp_world_validated_depth(&w->def, atan2(sqrt(p.x * p.x + p.y * p.y), p.z));
+    if (over > worst) worst = over;
+  }
+  if (worst > 0.0) w->beyond_validated_steps++;
+  if (worst > w->max_beyond_validated) w->max_beyond_validated = worst;
+}
+
 /* Retries a rejected step as two halves, down to h/16, where only a non-finite
  * solution fails (stage_solve caps speeds and accepts inaccuracy there). */
 #define PALP_MAX_HALVINGS 4
@@ -2379,6 +2404,7 @@ int palp_world_step_dt(palp_world *w, double h) {
   }
   w->t = t_end; /* halves sum to h exactly in binary, but keep the clock exact anyway */
   w->frame++;
+  if (w->def.validated_count > 0) validated_check(w);
 
   /* Finite check and sleep: one pass over the free velocities. */
   double vmax2 = 0.0, vsum = 0.0;
@@ -2758,6 +2784,18 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->large_bend_steps = w->large_bend_steps;
   out->max_bend = w->max_bend;
   out->max_bend_error = w->max_bend_err;
+  out->beyond_validated_steps = w->beyond_validated_steps;
+  out->max_beyond_validated = w->max_beyond_validated;
+}
+
+double palp_world_validated_depth(const palp_world_def *def, double polar) {
+  const int n = def->validated_count;
+  if (n <= 0) return INFINITY;
+  const double *a = def->validated_polar, *d = def->validated_depth;
+  if (!(polar > a[0])) return d[0];
+  for (int k = 1; k < n; ++k)
+    if (polar <= a[k]) return d[k - 1] + (d[k] - d[k - 1]) * (polar - a[k - 1]) / (a[k] - a[k - 1]);
+  return d[n - 1];
 }
 
 void palp_world_timings(const palp_world *w, palp_stage_timings *out) {

@@ -416,7 +416,7 @@ static void build_live(palp_web_hub *h, int slot) {
                             f->proxy[0], f->proxy[1], f->proxy[2], f->device[0], f->device[1], f->device[2],
                             f->lm_contact ? "true" : "false", f->lm_force, (unsigned)f->lm_flags,
                             (f->lm_flags & palp_LM_FORCE_LIMIT) ? "true" : "false",
-                            (f->lm_flags & palp_LM_OUT_OF_RANGE) ? "true" : "false") - 1;
+                            (f->lm_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) ? "true" : "false") - 1;
     first = 0;
   }
   n += (size_t)snprintf(buf + n, sizeof buf - n, "]");
@@ -902,7 +902,7 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
     fs->contact = 0;
   }
   pthread_mutex_unlock(&h->mu);
-  const uint32_t flags = (uint32_t)m->flags & (palp_LM_FORCE_LIMIT | palp_LM_OUT_OF_RANGE);
+  const uint32_t flags = (uint32_t)m->flags & (palp_LM_FORCE_LIMIT | palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED);
   if (flags != f->lm_flags || (flags & ~s->lm_flags_seen)) h->sessions_dirty = 1;
   f->lm_flags = flags;
   s->lm_flags_seen |= flags;

@@ -206,6 +206,11 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
            "%.2f), %lld bent a hinge past its linear range (largest miss %.3f rad, largest turn %.3f rad)\n",
            s->uid, (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error,
            h.max_bend);
+    /* and where a fingertip pressed deeper than the parameters were validated against the FE
+     * (LM_BEYOND_VALIDATED; only for parameters that state it) */
+    if (palp_world_get_def(w)->validated_count > 0)
+      printf("replay: %s: a fingertip deeper than the parameters were validated against the FE: %lld steps (by up to "
+             "%.1f mm)\n", s->uid, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
     result = REVIEW_OK;
   }
   if (r->apply_errors) printf("replay: %d contact inputs could not be applied\n", r->apply_errors);

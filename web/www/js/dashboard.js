@@ -66,7 +66,8 @@
   }
 
   /* LM_* bits (idl/palp_types.idl): now / seen since the session opened. */
-  const LM_NAMES = [[1, "force limit"], [2, "large strain"], [4, "base contact"], [8, "clamped step"], [16, "unsolved"]];
+  const LM_NAMES = [[1, "force limit"], [2, "large strain"], [4, "base contact"], [8, "clamped step"], [16, "unsolved"],
+                    [64, "deeper than validated"]];
   function modelFlags(s) {
     if (s.model_flags_seen === undefined) return "n/a";
     const names = function (v) { return LM_NAMES.filter(function (x) { return v & x[0]; }).map(function (x) { return x[1]; }); };

@@ -1,0 +1,188 @@
+/*
+ * test_validated.c - where a parameter set was validated against the FE with a fingertip
+ * (palp_world_def.validated_*, docs/model.md "Valid range"), and the world's count of
+ * steps that press deeper (health.beyond_validated_steps, LM_BEYOND_VALIDATED on the wire).
+ *
+ * - palp_world_validated_depth: the table's values at its angles, linear in between, the
+ *   end values beyond, +inf without a table (expected values by hand from the table).
+ * - The shipped breast-tissue set (config/phantoms/dome.json) carries its table (pole
+ *   14.3 mm, 45 deg 9.1 mm, 70 deg 2.1 mm: the FE comparison of 2026-11-28), and a
+ *   logged scene (palp_scene_to_json) gives it back bit for bit.
+ * - Bad tables are refused with a message naming the field.
+ * - A fingertip pressed at the pole to 12 mm is never counted; pressed on to ~17 mm it is,
+ *   and the largest excess equals the test's own largest R + r - |proxy| less the table's
+ *   depth at the proxy's polar angle (1e-12 m; after each step, in contact); at 45
+ *   deg, 12 mm is counted (9.1 mm there); a set without a table counts nothing.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "palp.h"
+
+#ifndef PALP_CONFIG_DIR
+#define PALP_CONFIG_DIR "config"
+#endif
+
+static const double PI = 3.14159265358979323846;
+
+static void test_interpolation(void) {
+  palp_world_def d = palp_world_default_def();
+  CHECK(isinf(palp_world_validated_depth(&d, 0.3)), "no table: no limit");
+  d.validated_count = 3;
+  d.validated_polar[0] = 0.0, d.validated_depth[0] = 0.0143;
+  d.validated_polar[1] = 45.0 * PI / 180.0, d.validated_depth[1] = 0.0091;
+  d.validated_polar[2] = 70.0 * PI / 180.0, d.validated_depth[2] = 0.0021;
+  CHECK_NEAR(palp_world_validated_depth(&d, 0.0), 0.0143, 1e-15, "at the pole");
+  CHECK_NEAR(palp_world_validated_depth(&d, 22.5 * PI / 180.0), 0.0117, 1e-12, "half way to 45 deg: (14.3 + 9.1) / 2 mm");
+  CHECK_NEAR(palp_world_validated_depth(&d, 60.0 * PI / 180.0), 0.0049, 1e-12, "60 deg: 9.1 - 7.0 * 15 / 25 mm");
+  CHECK_NEAR(palp_world_validated_depth(&d, 85.0 * PI / 180.0), 0.0021, 1e-15, "beyond the last angle: its depth");
+  int e = 0;
+  palp_world *w = palp_world_create(&d, &e);
+  CHECK(w != NULL, "a valid table is accepted (%s)", palp_strerror(e));
+  palp_world_destroy(w);
+  d.validated_polar[2] = d.validated_polar[1];
+  w = palp_world_create(&d, &e);
+  CHECK(w == NULL && e == PALP_EINVAL, "polar angles not increasing: refused");
+  palp_world_destroy(w);
+}
+
+static void test_scene(void) {
+  palp_scene sc, back;
+  char err[256];
+  const char *path = PALP_CONFIG_DIR "/phantoms/dome.json";
+  if (palp_scene_load(path, &sc, err, sizeof err)) {
+    CHECK(0, "%s: %s", path, err);
+    return;
+  }
+  CHECK(sc.world.validated_count == 3, "the breast-tissue set states 3 sites (%d)", sc.world.validated_count);
+  CHECK_NEAR(sc.world.validated_depth[0], 0.0143, 1e-15, "pole 14.3 mm");
+  CHECK_NEAR(sc.world.validated_polar[1], 45.0 * PI / 180.0, 1e-15, "second site at 45 deg");
+  CHECK_NEAR(sc.world.validated_depth[2], 0.0021, 1e-15, "70 deg 2.1 mm");
+  char *js = palp_scene_to_json(&sc);
+  CHECK(js && palp_scene_parse(js, &back, err, sizeof err) == 0, "the logged scene parses again: %s", err);
+  if (js) {
+    CHECK(back.world.validated_count == sc.world.validated_count &&
+              !memcmp(back.world.validated_polar, sc.world.validated_polar, sizeof sc.world.validated_polar) &&
+              !memcmp(back.world.validated_depth, sc.world.validated_depth, sizeof sc.world.validated_depth),
+          "the logged scene keeps the table bit for bit");
+    free(js);
+  }
+  /* Bad tables: each refused, naming the field. */
+  const char *base = "{\"name\":\"v\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":338},"
+                     "\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,\"E1_Pa\":1e6,\"eta1_Pa_s\":1e9,"
+                     "\"E2_Pa\":1e5,\"eta2_Pa_s\":1e5},\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,"
+                     "\"a2_Pa_s_m3\":1e6},\"time\":{\"dt_s\":0.004,\"frames\":1},\"effects\":[],\"contacts\":[],";
+  const struct {
+    const char *v, *want;
+  } bad[] = {
+      {"\"validated\":{\"finger\":[{\"polar_deg\":45,\"depth_m\":0.01},{\"polar_deg\":10,\"depth_m\":0.01}]}}",
+       "validated.finger[1].polar_deg: the polar angles must increase"},
+      {"\"validated\":{\"finger\":[{\"polar_deg\":0,\"depth_m\":-0.01}]}}", "validated.finger[0].depth_m"},
+      {"\"validated\":{\"finger\":[{\"polar_deg\":95,\"depth_m\":0.01}]}}", "within [0, 90] degrees"},
+      {"\"validated\":{\"finger\":[]}}", "validated.finger: expected an array of 1 to 8"},
+      {"\"validated\":[1,2]}", "validated: expected an object"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+    char js2[2048];
+    snprintf(js2, sizeof js2, "%s%s", base, bad[i].v);
+    err[0] = 0;
+    const int rc = palp_scene_parse(js2, &back, err, sizeof err);
+    CHECK(rc != 0 && strstr(err, bad[i].want), "bad table %zu refused with \"%s\" (got %d: %s)", i, bad[i].want, rc, err);
+  }
+  char ok[2048];
+  snprintf(ok, sizeof ok, "%s%s", base, "\"validated\":{\"finger\":[{\"polar_deg\":0,\"depth_m\":0.01}]}}");
+  CHECK(palp_scene_parse(ok, &back, err, sizeof err) == 0 && back.world.validated_count == 1, "a one-site table: %s", err);
+}
+
+/* Presses a fingertip along the inward normal at polar angle th to the device depth
+ * dev_mm over 1 s and holds 0.5 s; returns the proxy's indentation R + r - |proxy| [m]
+ * at the end, and in *dmax the largest excess over the validated depth at the proxy's
+ * own polar angle (it strays from the press's axis by a little), after any step in contact. */
+static double proxy_depth(const palp_world *w, int f, double R, double r, int *contact, double *polar) {
+  palp_local_model lm;
+  palp_world_finger_local_model(w, f, &lm);
+  const palp_vec3 p = lm.proxy;
+  *contact = lm.contact;
+  *polar = atan2(sqrt(p.x * p.x + p.y * p.y), p.z);
+  return R + r - sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+}
+
+static double press(palp_world *w, int f, double th, double R, double r, double from_mm, double dev_mm, double *dmax) {
+  const palp_vec3 n = {sin(th), 0.0, cos(th)};
+  const double dt = palp_world_get_def(w)->dt;
+  const int ramp = (int)lround(1.0 / dt), hold = (int)lround(0.5 / dt);
+  for (int k = 1; k <= ramp + hold; ++k) {
+    const double d = 1e-3 * (from_mm + (dev_mm - from_mm) * fmin(1.0, (double)k / ramp));
+    const double c = R + r - d;
+    palp_world_set_finger_device(w, f, (palp_vec3){c * n.x, c * n.y, c * n.z});
+    palp_world_step(w);
+    int on = 0;
+    double polar = 0.0;
+    const double dp = proxy_depth(w, f, R, r, &on, &polar);
+    const double over = dp - palp_world_validated_depth(palp_world_get_def(w), polar);
+    if (on && over > *dmax) *dmax = over;
+  }
+  int on = 0;
+  double polar = 0.0;
+  return proxy_depth(w, f, R, r, &on, &polar);
+}
+
+static void test_counted(void) {
+  palp_scene sc;
+  char err[256];
+  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc, err, sizeof err)) {
+    CHECK(0, "%s", err);
+    return;
+  }
+  const double R = sc.world.mesh.radius, r = 0.008;
+  for (int site = 0; site < 3; ++site) {
+    palp_world_def d = sc.world;
+    if (site == 2) d.validated_count = 0; /* the same press, a set without a table */
+    const double th = site == 1 ? 45.0 * PI / 180.0 : 0.0;
+    int e = 0;
+    palp_world *w = palp_world_create(&d, &e);
+    CHECK(w != NULL, "world: %s", palp_strerror(e));
+    if (!w) return;
+    const int f = palp_world_add_finger(w, (palp_vec3){(R + r + 0.001) * sin(th), 0, (R + r + 0.001) * cos(th)}, r);
+    palp_world_health h;
+    /* the coupling spring stretches by F / k, so device 15 mm is ~12 mm of indentation */
+    double dmax = -INFINITY;
+    const double d12 = press(w, f, th, R, r, -1.0, 15.0, &dmax);
+    palp_world_get_health(w, &h);
+    const double lim = palp_world_validated_depth(&d, th);
+    if (site == 0) {
+      CHECK(d12 > 0.011 && d12 < 0.0143, "pole: the press reaches 11-14.3 mm (%.2f mm)", 1e3 * d12);
+      CHECK(h.beyond_validated_steps == 0, "pole, %.2f mm (validated to 14.3): no step counted (%lld)", 1e3 * d12,
+            (long long)h.beyond_validated_steps);
+      CHECK(dmax < 0.0, "pole: never deeper than validated on the way (%.2f mm short at the closest)", -1e3 * dmax);
+      const double d17 = press(w, f, th, R, r, 15.0, 22.0, &dmax);
+      palp_world_get_health(w, &h);
+      CHECK(d17 > 0.0155, "pole: pressed on to beyond 15.5 mm (%.2f mm)", 1e3 * d17);
+      CHECK(h.beyond_validated_steps > 0, "pole, %.2f mm: steps counted (%lld)", 1e3 * d17,
+            (long long)h.beyond_validated_steps);
+      CHECK_NEAR(h.max_beyond_validated, dmax, 1e-12, "pole: largest excess over the validated depth [m]");
+      printf("pole: %.2f mm of indentation: 0 steps beyond the validated 14.3 mm; %.2f mm: %lld steps, by up to %.2f mm\n",
+             1e3 * d12, 1e3 * d17, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
+    } else if (site == 1) {
+      CHECK(d12 > lim + 0.001, "45 deg: the press passes the validated %.1f mm by 1 mm (%.2f mm)", 1e3 * lim, 1e3 * d12);
+      CHECK(h.beyond_validated_steps > 0, "45 deg, %.2f mm (validated to %.1f): steps counted (%lld)", 1e3 * d12,
+            1e3 * lim, (long long)h.beyond_validated_steps);
+      printf("45 deg: %.2f mm of indentation, validated to %.1f mm: %lld steps counted, by up to %.2f mm\n", 1e3 * d12,
+             1e3 * lim, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
+    } else {
+      CHECK(h.beyond_validated_steps == 0 && h.max_beyond_validated == 0.0,
+            "no table: nothing counted at %.2f mm (%lld)", 1e3 * d12, (long long)h.beyond_validated_steps);
+    }
+    palp_world_destroy(w);
+  }
+}
+
+int main(void) {
+  test_interpolation();
+  test_scene();
+  test_counted();
+  CHECK_DONE();
+}
