@@ -588,14 +588,15 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     const int oor = v.out_of_range_ticks != oor_ticks;
     oor_ticks = v.out_of_range_ticks;
     if (oor) {
-      oor_last = v.t;
-      if (!oor_shown && !o->quiet) {
-        printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: the phantom is deformed beyond where its "
-               "forces were validated; what you feel here is less certain\n", o->name, v.t);
-        fflush(stdout);
+      if (!oor_shown) {
+        oor_since = v.t;
+        if (!o->quiet) {
+          printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: the phantom is deformed beyond where its "
+                 "forces were validated; what you feel here is less certain\n", o->name, v.t);
+          fflush(stdout);
+        }
       }
-      if (!oor_shown) oor_since = v.t;
-      oor_shown = 1;
+      oor_shown = 1, oor_last = v.t;
     } else if (oor_shown && v.t - oor_last >= 0.5) {
       if (!o->quiet) {
         printf("[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s)\n", o->name, v.t,

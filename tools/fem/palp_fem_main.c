@@ -225,10 +225,11 @@ static int parse(int argc, char **argv, opts *o) {
     ARG("--site", o->site)
     ARG("--fe-from", o->fe_from)
 #undef ARG
-    const int lesion_opt = strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0 ||
-                           strcmp(a, "--max-force") == 0;
+    /* the options that take a positive real */
+    const int positive_opt = strcmp(a, "--lesion-depth") == 0 || strcmp(a, "--lesion-ratio") == 0 ||
+                             strcmp(a, "--max-force") == 0;
     if ((strcmp(a, "--level") == 0 || strcmp(a, "--frames") == 0 || strcmp(a, "--depths") == 0 ||
-         strcmp(a, "--dt") == 0 || lesion_opt) && has) {
+         strcmp(a, "--dt") == 0 || positive_opt) && has) {
       char *end;
       const double v = strtod(argv[++i], &end);
       if (*end || !isfinite(v)) {
@@ -236,12 +237,12 @@ static int parse(int argc, char **argv, opts *o) {
         return -1;
       }
       if (strcmp(a, "--dt") == 0) o->dt = v;
-      else if (lesion_opt && !(v > 0.0)) {
+      else if (positive_opt && !(v > 0.0)) {
         fprintf(stderr, "palp-fem: %s: expected a positive number: %s\n", a, argv[i]);
         return -1;
       } else if (strcmp(a, "--lesion-depth") == 0) o->lesion_depth_mm = v;
       else if (strcmp(a, "--max-force") == 0) o->max_force = v;
-      else if (lesion_opt) o->lesion_ratio = v;
+      else if (strcmp(a, "--lesion-ratio") == 0) o->lesion_ratio = v;
       else if (v != floor(v) || v < 1 || v > 1e7) {
         fprintf(stderr, "palp-fem: %s: expected a positive integer\n", a);
         return -1;
