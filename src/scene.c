@@ -126,6 +126,16 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   if (p->support_relax_modulus > 0.0 && !(p->support_relax_time > 0.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_time_s: must be > 0 with a relaxing support (got %g s)",
                            p->support_relax_time);
+  p->support_stiffening = 0.0;
+  p->support_stiffening_power = 2.0;
+  if ((e = get_num(c, g, "gel.", "support_stiffening", 0, &p->support_stiffening))) return e;
+  if (!(p->support_stiffening >= 0.0 && p->support_stiffening <= 1e3))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_stiffening: must be in [0, 1000] (0: a linear support; got %g)",
+                           p->support_stiffening);
+  if ((e = get_num(c, g, "gel.", "support_stiffening_power", 0, &p->support_stiffening_power))) return e;
+  if (!(p->support_stiffening_power >= 1.0 && p->support_stiffening_power <= 8.0))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_stiffening_power: must be in [1, 8] (got %g)",
+                           p->support_stiffening_power);
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
   if (!(p->density > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
@@ -528,6 +538,10 @@ char *palp_scene_to_json(const palp_scene *s) {
   if (gp->support_relax_modulus > 0.0) {
     add_exact(g, "support_relax_modulus_Pa_m", gp->support_relax_modulus);
     add_exact(g, "support_relax_time_s", gp->support_relax_time);
+  }
+  if (gp->support_stiffening > 0.0) {
+    add_exact(g, "support_stiffening", gp->support_stiffening);
+    add_exact(g, "support_stiffening_power", gp->support_stiffening_power);
   }
   add_exact(g, "density_kg_m3", gp->density);
   add_exact(g, "added_mass_fraction", gp->added_mass_fraction);

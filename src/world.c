@@ -124,6 +124,8 @@ struct palp_world {
   double *mass;  /* [kg] lumped from membrane thickness x density x area */
   double *sarea; /* [m^2] vertex area x the lesions' support scale: the support's weight */
   palp_vec3 *sq; /* [m] the relaxing support's dashpot positions (NULL without it) */
+  double *sheight; /* [m] the gel's height above the base under each vertex at rest (NULL: a linear support) */
+  palp_vec3 *fsu;  /* [m] each vertex's displacement the factor was built with (with sheight) */
   int *row_of;   /* vertex -> free row, -1 if fixed */
   int *vertex_of; /* free row -> vertex */
   int nfree;
@@ -473,6 +475,52 @@ static double relax_stiffness(const palp_world *w, double h) {
   return w->sq && kr > 0.0 ? kr * tr / (tr + h) : 0.0;
 }
 
+/* The stiffening support (docs/model.md, "The support stiffens near the base"). The
+ * gel column between a free vertex and the base plane z = 0 is H [m] high at rest; a
+ * vertex displaced by u [m] strains it by about e = |u| / H, in shear for a sideways
+ * move and in compression for a downward one. The gel, bonded and incompressible, grows
+ * stiffer as that strain grows, and the linear support cannot see it: beside its force
+ * -k A u the vertex meets
+ *   -k A s u,  s = beta e^p   [N],
+ * the gradient of the energy k A beta |u|^(p+2) / ((p + 2) H^p) (so none is made), with
+ * tangent k A s (I + p u^ u^^T). Its share vanishes with |u| (p >= 1), so the small-
+ * strain fit is kept; near the rim, where H is small, it comes soonest. Whole-dome leans
+ * (the support's bulk shift) are resisted too: near the base the gel cannot lean. */
+static double stiffening_share(double beta, double p, double ulen, double H) {
+  const double e = ulen / H;
+  return p == 2.0 ? beta * e * e : beta * pow(e, p);
+}
+
+/* Explicit here; the factor holds the tangent of its own state (build_matrix), and a
+ * vertex whose tangent has moved from it by more than the mass term absorbs at the
+ * factor's step, or by half the support's own stiffness there, asks for a rebuild as a
+ * turned link does (by twice the mass margin: at once, see try_step). */
+static void support_stiffening(palp_world *w, double h) {
+  const double k = w->def.gel.support_modulus; /* [Pa/m] */
+  const double beta = w->def.gel.support_stiffening, p = w->def.gel.support_stiffening_power;
+  const double hf = w->h_factored > 0.0 ? w->h_factored : h;
+  const double mslack = 1.0 / (1.5625 * hf * hf); /* [1/s^2]: x mass, the factor's quarter margin */
+  int stale = 0, unsafe = 0;
+  for (int r = 0; r < w->nfree; ++r) {
+    const int i = w->vertex_of[r];
+    const palp_vec3 u = v3_sub(w->pos[i], w->mesh.rest[i]), uf = w->fsu[i];
+    const double ul = v3_len(u), ufl = v3_len(uf), H = w->sheight[i];
+    const double sa = stiffening_share(beta, p, ul, H), sf = stiffening_share(beta, p, ufl, H);
+    const double ka = k * w->sarea[i]; /* [N/m] */
+    w->force[i] = v3_sub(w->force[i], v3_scale(u, ka * sa));
+    /* |T(u) - T(u_f)|_F for T = s I + p s u^ u^^T (per k A): 3 ds^2 + 2 ds (b - b_f) + b^2 +
+     * b_f^2 - 2 b b_f (u^ . u^_f)^2, ds = s - s_f, b = p s. */
+    const double ds = sa - sf, b = p * sa, bf = p * sf;
+    const double c = ul > 0.0 && ufl > 0.0 ? v3_dot(u, uf) / (ul * ufl) : 0.0;
+    const double dT = ka * sqrt(fmax(0.0, 3.0 * ds * ds + 2.0 * ds * (b - bf) + b * b + bf * bf - 2.0 * b * bf * c * c));
+    const double ms = w->mass[i] * mslack; /* [N/m] */
+    stale |= dT > fmin(ms, 0.5 * ka * (1.0 + sf + bf));
+    unsafe |= dT > 2.0 * ms;
+  }
+  if (stale) w->stale = 1;
+  if (unsafe) w->unsafe = 1;
+}
+
 static void stage_gel_support(palp_world *w, double h) {
   /* Elastic part explicit at x_n; the h^2 A k and h A c terms sit on the factor's
    * diagonal, which makes the whole support implicit. */
@@ -514,6 +562,7 @@ static void stage_gel_support(palp_world *w, double h) {
       force[i] = v3_add(force[i], v3_scale(b, sarea[i]));
     }
   }
+  if (w->sheight) support_stiffening(w, h);
 }
 
 static int refactor(palp_world *w, double h, int blend);
@@ -1495,6 +1544,11 @@ static void stage_feedback(palp_world *w, double h) {
         f = v3_sub(f, v3_scale(v3_add(v3_scale(u, ks), v3_scale(w->vel[i], cs)), w->sarea[i]));
         if (phi > 0.0) f = v3_add(f, v3_scale(bulk, w->sarea[i]));
         if (w->sq) f = v3_sub(f, v3_scale(v3_sub(u, w->sq[i]), w->def.gel.support_relax_modulus * w->sarea[i]));
+        if (w->sheight) {
+          const double s = stiffening_share(w->def.gel.support_stiffening, w->def.gel.support_stiffening_power,
+                                            v3_len(u), w->sheight[i]);
+          f = v3_sub(f, v3_scale(u, ks * s * w->sarea[i]));
+        }
       }
       k->feedback[q] = f;
       k->total = v3_add(k->total, f);
@@ -1526,6 +1580,9 @@ static int validate(const palp_world_def *d) {
     if (!(g->support_bulk_fraction >= 0.0 && g->support_bulk_fraction <= 1.0)) return PALP_EINVAL;
     if (!(g->support_relax_modulus >= 0.0) || !isfinite(g->support_relax_modulus)) return PALP_EINVAL;
     if (g->support_relax_modulus > 0.0 && (!(g->support_relax_time > 0.0) || !isfinite(g->support_relax_time)))
+      return PALP_EINVAL;
+    if (!(g->support_stiffening >= 0.0 && g->support_stiffening <= 1e3)) return PALP_EINVAL;
+    if (g->support_stiffening > 0.0 && !(g->support_stiffening_power >= 1.0 && g->support_stiffening_power <= 8.0))
       return PALP_EINVAL;
   }
   if (d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY) {
@@ -1696,6 +1753,10 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
   w->sarea = xcalloc((size_t)nv, sizeof *w->sarea, &fail);
   if ((def->effects & PALP_EFFECT_GEL_SUPPORT) && def->gel.support_relax_modulus > 0.0)
     w->sq = xcalloc((size_t)nv, sizeof *w->sq, &fail);
+  if ((def->effects & PALP_EFFECT_GEL_SUPPORT) && def->gel.support_stiffening > 0.0) {
+    w->sheight = xcalloc((size_t)nv, sizeof *w->sheight, &fail);
+    w->fsu = xcalloc((size_t)nv, sizeof *w->fsu, &fail);
+  }
   w->row_of = xcalloc((size_t)nv, sizeof *w->row_of, &fail);
   w->vertex_of = xcalloc((size_t)nv, sizeof *w->vertex_of, &fail);
   w->contacts = xcalloc((size_t)def->max_contacts, sizeof *w->contacts, &fail);
@@ -1707,6 +1768,9 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     const double rl = v3_len(w->mesh.rest[i]);
     const palp_vec3 nrm = rl > 0.0 ? v3_scale(w->mesh.rest[i], 1.0 / rl) : v3(0, 0, 1);
     w->sarea[i] = w->mesh.vertex_area[i] * palp_lesion_support_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, rl);
+    /* The gel under a vertex is squeezed against the base plane z = 0; floored at 1 mm
+     * (the rim's ring lies on it and is fixed; the next ring is ~2.6 mm up). */
+    if (w->sheight) w->sheight[i] = fmax(w->mesh.rest[i].z, 1e-3);
     w->mass[i] = def->membrane.density * def->membrane.thickness * w->mesh.vertex_area[i]; /* [kg] */
     w->row_of[i] = w->mesh.fixed[i] ? -1 : w->nfree;
     if (!w->mesh.fixed[i]) w->vertex_of[w->nfree++] = i, free_area += w->mesh.vertex_area[i];
@@ -1852,7 +1916,7 @@ void palp_world_destroy(palp_world *w) {
     free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
   }
   free(w->contacts);
-  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->row_of), free(w->vertex_of);
+  free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->sheight), free(w->fsu), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
   free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
   free(w->hinge), free(w->hgrad), free(w->hk), free(w->hrest), free(w->hbeyond), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
@@ -1889,7 +1953,7 @@ static int set_burgers(palp_world *w, double h) {
  * data the factor will be checked against (fdir, fbeta, fslack) for the current
  * state. Needs the Burgers coefficients for h (set_burgers). */
 static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double *tx, palp_vec3 *fdir,
-                        double *fbeta, double *fslack) {
+                        double *fbeta, double *fslack, palp_vec3 *fsu) {
   const double E = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) ? w->burgers.tangent : w->E_static; /* [Pa] */
   int nnz = 0;
   /* Lower triangle of each 3x3 diagonal block (duplicates are summed). */
@@ -1902,6 +1966,21 @@ static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double 
       ti[nnz] = tj[nnz] = 3 * r + i;
       tx[nnz++] = w->mass[v] + (kr > 0.0 ? (h * h * (ks + kr) + h * cs) : (h * h * ks + h * cs)) * w->sarea[v];
     }
+  if (w->sheight && ks > 0.0) {
+    /* The stiffening support's tangent h^2 k A s (I + p u^ u^^T) at this state (see
+     * support_stiffening), and the u it was built with. */
+    const double beta = w->def.gel.support_stiffening, p = w->def.gel.support_stiffening_power;
+    for (int r = 0; r < w->nfree; ++r) {
+      const int v = w->vertex_of[r];
+      const palp_vec3 u = v3_sub(w->pos[v], w->mesh.rest[v]);
+      const double ul = v3_len(u), g = h * h * ks * w->sarea[v] * stiffening_share(beta, p, ul, w->sheight[v]); /* [kg] */
+      const double uv[3] = {ul > 0.0 ? u.x / ul : 0.0, ul > 0.0 ? u.y / ul : 0.0, ul > 0.0 ? u.z / ul : 0.0};
+      fsu[v] = u;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j <= i; ++j)
+          ti[nnz] = 3 * r + i, tj[nnz] = 3 * r + j, tx[nnz++] = g * ((i == j ? 1.0 : 0.0) + p * uv[i] * uv[j]);
+    }
+  }
   for (int l = 0; l < w->nlink; ++l) {
     const double k = E * w->xsec[l] / w->rest_len[l]; /* [N/m] */
     const palp_vec3 d = w->dir[l];
@@ -1959,7 +2038,9 @@ static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double 
 
 /* Entries of A's lower triangle as triplets: 3 masses per free vertex, 2 x 6 + 9 per
  * link, 4 x 6 + 6 x 9 per hinge. */
-static int nnz_bound(const palp_world *w) { return 3 * w->nfree + 21 * w->nlink + 78 * w->nhinge; }
+static int nnz_bound(const palp_world *w) {
+  return (w->sheight ? 9 : 3) * w->nfree + 21 * w->nlink + 78 * w->nhinge;
+}
 
 /* The free-vertex graph (CSC, both triangles) that orders the 3x3 blocks; built
  * once and kept, because a deferred job's factor analyses it too. */
@@ -2051,7 +2132,7 @@ static int refactor(palp_world *w, double h, int blend) {
     free(ti), free(tj), free(tx);
     return PALP_ENOMEM;
   }
-  const int nnz = build_matrix(w, h, ti, tj, tx, w->fdir, w->fbeta, w->fslack);
+  const int nnz = build_matrix(w, h, ti, tj, tx, w->fdir, w->fbeta, w->fslack, w->fsu);
   blend = blend && w->bx && w->ldl.n > 0 && h == w->h_factored;
   if (blend) {
     /* the factor being replaced to ldl_prev; the new one into the storage ldl_prev had
@@ -2099,13 +2180,14 @@ struct palp_factor_job {
   double *solve, *work; /* [3 n3] */
   palp_vec3 *fdir;     /* [nlink] the new factor's link data (world-only) */
   double *fbeta, *fslack;
+  palp_vec3 *fsu; /* [nvertex] the stiffening support's u (NULL without it) */
   int rc;
 };
 
 static void job_free(palp_factor_job *j) {
   if (!j) return;
   free(j->ti), free(j->tj), free(j->tx), free(j->col_row), free(j->cols), free(j->solve), free(j->work);
-  free(j->fdir), free(j->fbeta), free(j->fslack);
+  free(j->fdir), free(j->fbeta), free(j->fslack), free(j->fsu);
   palp_ldl_free(&j->ldl);
   free(j);
 }
@@ -2127,7 +2209,9 @@ static palp_factor_job *job_alloc(const palp_world *w) {
   j->fdir = malloc(sizeof(palp_vec3) * nl);
   j->fbeta = malloc(sizeof(double) * nl);
   j->fslack = malloc(sizeof(double) * nl);
-  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack) {
+  if (w->sheight) j->fsu = calloc((size_t)w->mesh.vertex_count, sizeof(palp_vec3));
+  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack ||
+      (w->sheight && !j->fsu)) {
     job_free(j);
     return NULL;
   }
@@ -2154,7 +2238,7 @@ static int job_request(palp_world *w, double h) {
   }
   palp_factor_job *j = w->job;
   j->h = h;
-  j->nnz = build_matrix(w, h, j->ti, j->tj, j->tx, j->fdir, j->fbeta, j->fslack);
+  j->nnz = build_matrix(w, h, j->ti, j->tj, j->tx, j->fdir, j->fbeta, j->fslack, j->fsu);
   j->ncols = 0;
   const finger_scratch *fs = w->fs;
   if (fs && fs->slots > 0) {
@@ -2197,6 +2281,7 @@ static int job_install(palp_world *w) {
   memcpy(w->fdir, j->fdir, sizeof(palp_vec3) * (size_t)w->nlink);
   memcpy(w->fbeta, j->fbeta, sizeof(double) * (size_t)w->nlink);
   memcpy(w->fslack, j->fslack, sizeof(double) * (size_t)w->nlink);
+  if (w->fsu) memcpy(w->fsu, j->fsu, sizeof(palp_vec3) * (size_t)w->mesh.vertex_count);
   finger_cols_invalidate(w);
   finger_scratch *fs = w->fs;
   if (fs && j->ncols > 0 && j->cols_cap > 0) {
