@@ -488,7 +488,9 @@ static double relax_stiffness(const palp_world *w, double h) {
  * (the support's bulk shift) are resisted too: near the base the gel cannot lean. */
 static double stiffening_share(double beta, double p, double ulen, double H) {
   const double e = ulen / H;
-  return p == 2.0 ? beta * e * e : beta * pow(e, p);
+  if (p == 2.0) return beta * e * e;
+  if (p == 3.0) return beta * e * e * e; /* the shipped breast-tissue set's: pow costs ~20 ns a vertex */
+  return beta * pow(e, p);
 }
 
 /* Explicit here; the factor holds the tangent of its own state (build_matrix), and a

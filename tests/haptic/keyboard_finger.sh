@@ -6,11 +6,11 @@
 # 5 mm, then "+" x5 to 10 mm, then "[[" (0.25 mm steps) and "-" x4 back to 9 mm, then q. The station's status line shows the force
 # its 1 kHz haptic thread renders: in contact at both depths and larger at 10 mm
 # than at 5 mm (force monotone in depth), and the session summary counts local
-# models. Then "]]]" (2 mm steps) and "+" x7 to 23 mm: the tip passes the depth the
-# breast-tissue set was validated to against the FE (14.3 mm of indentation at the pole)
-# and the skin's linearised bending leaves its range (~12 mm; docs/model.md, "Valid
-# range"), and the station says so, on the status line and once in the log, where at 5-10
-# mm it never does. Domain 114.
+# models. Then "]]]" (2 mm steps) and "+" x7 to 23 mm: the skin's linearised bending
+# leaves its range (from ~12 mm of indentation; docs/model.md, "Valid range"; the
+# breast-tissue set is validated against the FE to 20 mm at the pole), and the station
+# says so, on the status line and once in the log, where at 5-10 mm it never does.
+# Domain 114.
 set -u
 server=$1 client=$2 config_dir=$3
 command -v script >/dev/null || { echo "FAIL script(1) not installed (util-linux)"; exit 1; }
