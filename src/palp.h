@@ -177,14 +177,14 @@ typedef struct palp_gel_params {
    * tau_r, implicit (docs/model.md, "The support relaxes"). */
   double support_relax_modulus; /* k_r [Pa/m] */
   double support_relax_time;    /* tau_r [s], > 0 when k_r > 0 */
-  /* The support stiffens as the gel under a vertex is squeezed towards the base (0:
-   * linear, bit for bit as before). Each free vertex's displacement d = u - phi
-   * u_mean, against the gel's height H above the base at its rest position, meets
-   * -k A (1 + beta (|d| / H)^p) d: the bonded, incompressible gel's confinement,
-   * which a linear foundation cannot see (docs/model.md, "The support stiffens near
-   * the base"). p >= 2 keeps the tangent smooth at d = 0. */
-  double support_stiffening;       /* beta [-] */
-  double support_stiffening_power; /* p [-], in [2, 8]; 2 when 0 is given */
+  /* The support stiffens as the gel column under a vertex is strained (0: linear, bit
+   * for bit as before). A free vertex displaced by u, over the gel's height H above the
+   * base at its rest position, meets -k A (1 + beta (|u| / H)^p) u: the bonded,
+   * incompressible gel's confinement near the base, which a linear foundation cannot
+   * see (docs/model.md, "The support stiffens near the base"). p >= 1 keeps the
+   * tangent continuous at u = 0. */
+  double support_stiffening;       /* beta [-], in [0, 1000] */
+  double support_stiffening_power; /* p [-], in [1, 8] when beta > 0 (scene files: 2 by default) */
   /* The gel moves with the membrane, so its inertia belongs to the surface
    * vertices: each free vertex carries added_mass_fraction of the gel's mass
    * density V0, shared by lumped area (docs/model.md, "Vertex weights"). */

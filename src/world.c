@@ -489,7 +489,7 @@ static double relax_stiffness(const palp_world *w, double h) {
 static double stiffening_share(double beta, double p, double ulen, double H) {
   const double e = ulen / H;
   if (p == 2.0) return beta * e * e;
-  if (p == 3.0) return beta * e * e * e; /* the shipped breast-tissue set's: pow costs ~20 ns a vertex */
+  if (p == 3.0) return beta * e * e * e; /* the two tried for the breast-tissue set: pow costs ~20 ns a vertex */
   return beta * pow(e, p);
 }
 
@@ -2038,8 +2038,8 @@ static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double 
   return nnz;
 }
 
-/* Entries of A's lower triangle as triplets: 3 masses per free vertex, 2 x 6 + 9 per
- * link, 4 x 6 + 6 x 9 per hinge. */
+/* Entries of A's lower triangle as triplets: 3 masses per free vertex (and 6 for the
+ * stiffening support's block), 2 x 6 + 9 per link, 4 x 6 + 6 x 9 per hinge. */
 static int nnz_bound(const palp_world *w) {
   return (w->sheight ? 9 : 3) * w->nfree + 21 * w->nlink + 78 * w->nhinge;
 }
