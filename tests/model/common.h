@@ -36,6 +36,16 @@ static inline palp_world_def handset_def(void) {
   return d;
 }
 
+/* A small scene whose gel line ends in %s, for the support's optional fields (printf
+ * format: the caller adds ",\"field\":value" pairs, or ""). */
+#define SUPPORT_SCENE_FMT                                                                                           \
+  "{\"name\":\"r\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},"                                          \
+  "\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,\"E1_Pa\":4.2e6,\"eta1_Pa_s\":2e8,"                     \
+  "\"E2_Pa\":8e6,\"eta2_Pa_s\":8e5},"                                                                                 \
+  "\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,\"a2_Pa_s_m3\":5e6,"                           \
+  "\"support_modulus_Pa_m\":1.5e6,\"support_viscosity_Pa_s_m\":6e5%s},"                                             \
+  "\"time\":{\"dt_s\":0.01,\"frames\":5},\"effects\":[\"gel_support\"],\"contacts\":[]}"
+
 static inline double vdist(palp_vec3 a, palp_vec3 b) {
   return sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
 }

@@ -84,12 +84,7 @@ int main(void) {
   CHECK(palp_world_create(&bad, &e) == NULL && e == PALP_EINVAL, "relax modulus without a time refused");
 
   /* Scene files: the two fields parse, serialise back, and are checked. */
-  const char *json = "{\"name\":\"r\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},"
-                     "\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,\"E1_Pa\":4.2e6,\"eta1_Pa_s\":2e8,"
-                     "\"E2_Pa\":8e6,\"eta2_Pa_s\":8e5},"
-                     "\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,\"a2_Pa_s_m3\":5e6,"
-                     "\"support_modulus_Pa_m\":1.5e6,\"support_viscosity_Pa_s_m\":6e5%s},"
-                     "\"time\":{\"dt_s\":0.01,\"frames\":5},\"effects\":[\"gel_support\"],\"contacts\":[]}";
+  const char *json = SUPPORT_SCENE_FMT;
   char buf[2048], err[256] = "";
   palp_scene s;
   snprintf(buf, sizeof buf, json, ",\"support_relax_modulus_Pa_m\":7e5,\"support_relax_time_s\":0.4");

@@ -211,12 +211,7 @@ static void test_dome(void) {
 }
 
 static void test_parse(void) {
-  const char *json = "{\"name\":\"r\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},"
-                     "\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,\"E1_Pa\":4.2e6,\"eta1_Pa_s\":2e8,"
-                     "\"E2_Pa\":8e6,\"eta2_Pa_s\":8e5},"
-                     "\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,\"a2_Pa_s_m3\":5e6,"
-                     "\"support_modulus_Pa_m\":1.5e6,\"support_viscosity_Pa_s_m\":6e5%s},"
-                     "\"time\":{\"dt_s\":0.01,\"frames\":5},\"effects\":[\"gel_support\"],\"contacts\":[]}";
+  const char *json = SUPPORT_SCENE_FMT;
   char buf[2048], err[256] = "";
   palp_scene s, back;
   snprintf(buf, sizeof buf, json, ",\"support_stiffening\":10,\"support_stiffening_power\":3");
