@@ -259,6 +259,7 @@ static void test_param_file_roundtrip(void) {
                                        11.1111111,   4.44444444e6, 1.71828183e6, 5.55555556e5, 0.314159265,
                                        0.271828183,  2.71828183e-3, 8.31446262e5, 0.577215665};
   palp_eval_params_set(&s.world, p);
+  s.world.gel.support_stiffening = 4.25, s.world.gel.support_stiffening_power = 2.5; /* carried over, not fitted */
   char dir[] = "/tmp/palp_eval_paramsXXXXXX";
   CHECK(mkdtemp(dir) != NULL, "mkdtemp");
   char ppath[256], spath[256];
@@ -285,6 +286,9 @@ static void test_param_file_roundtrip(void) {
     CHECK(back.world.membrane.thickness == 0.002 && back.world.membrane.density == 950.0 &&
               back.world.gel.pressure == 101325.0 && back.world.gel.law == PALP_GEL_POLYTROPIC,
           "fixed parameters not carried over");
+    CHECK(back.world.gel.support_stiffening == 4.25 && back.world.gel.support_stiffening_power == 2.5,
+          "the stiffening support not carried over: %g, %g", back.world.gel.support_stiffening,
+          back.world.gel.support_stiffening_power);
   }
   remove(ppath);
   remove(spath);

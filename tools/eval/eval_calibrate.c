@@ -697,6 +697,11 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
   if (g->support_relax_modulus > 0.0)
     fprintf(f, "           \"support_relax_modulus_Pa_m\": %.9g, \"support_relax_time_s\": %.9g,\n",
             g->support_relax_modulus, g->support_relax_time);
+  /* Not fitted, carried over: the stiffening support is the model's form (a set without it
+   * is another model). The "validated" table is not: a new fit has not been validated. */
+  if (g->support_stiffening > 0.0)
+    fprintf(f, "           \"support_stiffening\": %.9g, \"support_stiffening_power\": %.9g,\n",
+            g->support_stiffening, g->support_stiffening_power);
   fprintf(f, "           \"density_kg_m3\": %.9g, \"added_mass_fraction\": %.9g }\n}\n", g->density,
           g->added_mass_fraction);
   free(cs);
