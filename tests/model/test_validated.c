@@ -6,7 +6,7 @@
  * - palp_world_validated_depth: the table's values at its angles, linear in between, the
  *   end values beyond, +inf without a table (expected values by hand from the table).
  * - The shipped breast-tissue set (config/phantoms/dome.json) carries its table (pole
- *   20 mm, 45 deg 16 mm, 70 deg 2.2 mm: the FE comparison of 2026-11-28 with the stiffening
+ *   20 mm, 45 deg 16 mm, 60 deg 0.9 mm, 70 deg 2.2 mm: the FE comparison of 2026-11-28 with the stiffening
  *   support), and a logged scene (palp_scene_to_json) gives it back bit for bit.
  * - Bad tables are refused with a message naming the field.
  * - A fingertip pressed at the pole to 12 mm is never counted; pressed on to ~22 mm it is,
@@ -57,11 +57,12 @@ static void test_scene(void) {
     CHECK(0, "%s: %s", path, err);
     return;
   }
-  CHECK(sc.world.validated_count == 3, "the breast-tissue set states 3 sites (%d)", sc.world.validated_count);
+  CHECK(sc.world.validated_count == 4, "the breast-tissue set states 4 sites (%d)", sc.world.validated_count);
   CHECK_NEAR(sc.world.validated_depth[0], 0.020, 1e-15, "pole 20 mm");
   CHECK_NEAR(sc.world.validated_polar[1], 45.0 * PI / 180.0, 1e-15, "second site at 45 deg");
   CHECK_NEAR(sc.world.validated_depth[1], 0.016, 1e-15, "45 deg 16 mm");
-  CHECK_NEAR(sc.world.validated_depth[2], 0.0022, 1e-15, "70 deg 2.2 mm");
+  CHECK_NEAR(sc.world.validated_depth[2], 0.0009, 1e-15, "60 deg 0.9 mm");
+  CHECK_NEAR(sc.world.validated_depth[3], 0.0022, 1e-15, "70 deg 2.2 mm");
   char *js = palp_scene_to_json(&sc);
   CHECK(js && palp_scene_parse(js, &back, err, sizeof err) == 0, "the logged scene parses again: %s", err);
   if (js) {

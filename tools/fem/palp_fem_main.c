@@ -9,7 +9,7 @@
  *   palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]
  *   palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]
  *                [--reading long_term|instantaneous] [--out FILE.csv]
- *                [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]
+ *                [--site all|pole,45deg,60deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]
  *                [--fe-from FINGER.csv] [--depths N | --no-force-table] [--max-force N]
  *
  * finger prints fingertip force-depth curves of the real-time model (the scene's
@@ -53,7 +53,7 @@ static void usage(void) {
           "       palp-fem info [--level N] [--config FEM.json] [--inp MESH.inp]\n"
           "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
           "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
-          "                       [--site all|pole,45deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n"
+          "                       [--site all|pole,45deg,60deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n"
           "                       [--fe-from FINGER.csv] [--depths N | --no-force-table] [--max-force N]\n"
           "  finger --fe-from: the FE curves from a CSV an earlier finger run wrote (only the real-time side\n"
           "  is computed); --depths N: each curve's first N depths only; --no-force-table: no depth-for-force\n"
