@@ -6,9 +6,10 @@
  * fat, on the breast-tissue dome (phantom_stiff.json; the shipped teaching exercise). There
  * each lump raises the fingertip force at equal depth by +18-26% over the same spot without
  * it (tests/assess/phantom_figures, 2-15 mm); in the expert's exam the two lumps' largest
- * rises over the fitted surroundings were +21.8% and +20.0% and the worst spot away from
- * them +5.6% (measured when this test was written, 2026-11-27); the expert marks above 12%.
- * Asserted with margins: each lump rises >= 16%, no spot away from them above 9%.
+ * rises over the fitted surroundings are +16.5% and +18.2% and the worst spot away from
+ * them +2.9% (since 2026-11-28, when the rule's fit gained its term for the rise towards
+ * the base; +21.8 / +20.0% and +5.6% with the quadratic alone); the expert marks above
+ * 12%. Asserted with margins: each lump rises >= 15%, no spot away from them above 7%.
  *
  * The novice runs on the test exercise and on the shipped hard one (1 cm, 10 mm deep).
  */
@@ -117,10 +118,10 @@ int main(void) {
         palp_pattern_name(er.pattern));
   CHECK(er.pass && er.score >= 90.0, "the expert passes with >= 90 (%.1f)", er.score);
   CHECK(er.duration <= ex.time_limit, "within the time limit (%.1f s)", er.duration);
-  /* The lump rule's margins (measured +21.8 / +20.0 % and +5.6 %, threshold 12 %). */
-  CHECK(at[0] >= 0.16 && at[1] >= 0.16, "each lump rises >= 16%% over its surroundings (%+.3f, %+.3f; measured "
-        "+0.218, +0.200)", at[0], at[1]);
-  CHECK(away <= 0.09, "no spot away from the lumps rises above 9%% (%+.3f; measured +0.056)", away);
+  /* The lump rule's margins (measured +16.5 / +18.2 % and +2.9 %, threshold 12 %). */
+  CHECK(at[0] >= 0.15 && at[1] >= 0.15, "each lump rises >= 15%% over its surroundings (%+.3f, %+.3f; measured "
+        "+0.165, +0.182)", at[0], at[1]);
+  CHECK(away <= 0.07, "no spot away from the lumps rises above 7%% (%+.3f; measured +0.029)", away);
   CHECK(judged >= 60, "the rule judges >= 60 spots (%d; measured 71)", judged);
 
   /* 2. The novice on the same exercise: five light presses at random places. */
@@ -162,22 +163,21 @@ int main(void) {
   rec_free(&rc);
 
   /* 4. The expert on the shipped teaching exercise, as the demo runs it: the shipped
-   * breast-tissue phantom with its stiffening support (docs/model.md), which raised the
-   * lesion-free rises (+8.6% without the lumps, +9.8% with them; +5.6% on the linear
-   * support) and with the cubic law first tried made the demo's expert mark a false lump
-   * (+11.6-12.8%). Asserted: both lumps found, no false mark, each lump >= 16% (measured
-   * +25.2%, +21.1%), and every spot away from them at least 1 point under the 12%
-   * threshold (deterministic, in process). */
+   * breast-tissue phantom with its stiffening support (docs/model.md). Its force rises
+   * towards the base; with a quadratic fit alone the lesion-free spots rose to +9.8% here
+   * (+12.8% and a false lump in the demo with the cubic law first tried), with the rule's
+   * term for it +3.2%. Asserted: both lumps found, no false mark, each lump >= 15%
+   * (measured +18.6%, +18.3%), every spot away from them at most 7% (deterministic, in
+   * process). */
   snprintf(path, sizeof path, "%s/exercises/teaching.json", PALP_CONFIG_DIR);
   w = expert_run(path, r, &ex, &sc, &rc, &er, at, &away, &judged);
   if (w) {
     CHECK(sc.world.gel.support_stiffening > 0.0, "the shipped phantom stiffens (beta %g)", sc.world.gel.support_stiffening);
     CHECK(er.found == 2 && er.false_positives == 0, "shipped teaching: 2 of 2 found (%d), no false mark (%d)", er.found,
           er.false_positives);
-    CHECK(at[0] >= 0.16 && at[1] >= 0.16, "shipped teaching: each lump rises >= 16%% (%+.3f, %+.3f; measured +0.252, "
-          "+0.211)", at[0], at[1]);
-    CHECK(away <= RISE_THRESHOLD - 0.01, "shipped teaching: no spot away from the lumps within 1 point of the threshold "
-          "(%+.3f; measured +0.098)", away);
+    CHECK(at[0] >= 0.15 && at[1] >= 0.15, "shipped teaching: each lump rises >= 15%% (%+.3f, %+.3f; measured +0.186, "
+          "+0.183)", at[0], at[1]);
+    CHECK(away <= 0.07, "shipped teaching: no spot away from the lumps above 7%% (%+.3f; measured +0.032)", away);
     rec_free(&rc);
     palp_world_destroy(w);
   }
