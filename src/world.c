@@ -1968,7 +1968,7 @@ static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double 
       ti[nnz] = tj[nnz] = 3 * r + i;
       tx[nnz++] = w->mass[v] + (kr > 0.0 ? (h * h * (ks + kr) + h * cs) : (h * h * ks + h * cs)) * w->sarea[v];
     }
-  if (w->sheight && ks > 0.0) {
+  if (w->sheight) { /* only with the support on, whose modulus is > 0 (validate) */
     /* The stiffening support's tangent h^2 k A s (I + p u^ u^^T) at this state (see
      * support_stiffening), and the u it was built with. */
     const double beta = w->def.gel.support_stiffening, p = w->def.gel.support_stiffening_power;
