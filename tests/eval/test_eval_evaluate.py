@@ -39,12 +39,16 @@ Newton tolerance; measured 0: bit-identical on this machine), so that the stored
 reference cannot go stale silently when the FEM changes.
 
 breast_tissue: the same for config/params/breast_tissue.json (scene
-paper_step_breast_tissue.json) against the level-2 breast-tissue FEM (HHT-alpha -0.05, patch
-load map): RMSE at most 6% of the FEM's peak (measured 4.3%, 0.17 mm) and the peak within 16%
-(measured +13.9%: this set was fitted before the FEM integrated with HHT-alpha; the refit
-that brought it to -8.2% was withdrawn because its skin crept without bound and a deep press
-went through it, docs/materials.md; the issue's 10% is asked of the default profile, which
-meets it).
+paper_step_breast_tissue.json) against the level-4 breast-tissue FEM of distribution II
+(HHT-alpha -0.05, patch load map) stored in tests/data/fem_level4_breast_tissue_d2.csv
+(written by tests/data/make_breast_tissue_refs.py): RMSE over the stored frames at most 6% of
+the level-4 peak and the model's peak within 10% of it (measured 2026-11-28 on the set refitted
+to the level-3 fingertip: 5.18% over the stored frames, 0.24 mm, and +8.0%; the issue's 5% (or
+1 mm) is met over the whole field, 4.0% in evaluate's 400 frames: the stored frames weigh the
+first 120 ms, 12 of their 32, where the field moves fastest). Until
+then this compared with the level-2 FEM (6% / 16%), whose peak is 15% below level 4's: the
+set's +13.9% there was mostly the reference's (docs/materials.md, "The fingertip references
+at level 3").
 
 errors: bad inputs end with a clear message on stderr, nothing on stdout and a
 non-zero exit status (1 for unusable inputs, 2 for command-line errors).
@@ -393,51 +397,14 @@ def test_shipped(tool, scene):
     check(rmse["handset"] > 0.5, "hand-set: displacement RMSE %.4f cm, expected > 0.5" % rmse["handset"])
 
 
-def check_profile_fit(tool, scene_file, material, rmse_bound, peak_bound, label):
-    """Distribution II of a profile's candidate against its level-2 FEM, recomputed
-    from the written pairs: RMSE at most rmse_bound of the FEM's peak, the model's
-    peak within peak_bound of the FEM's (relative)."""
-    lt_scene = os.path.join(os.path.dirname(scene_file[0]), scene_file[1])
-    tmp = tempfile.mkdtemp(prefix="palp_eval_%s_" % material)
-    out = os.path.join(tmp, "out")
-    r = run([tool, "evaluate", "--scene", lt_scene, "--material", material, "--level", "2",
-             "--distributions", "2", "--no-plots", "--out", out, "--cache-dir", os.path.join(tmp, "cache"),
-             "--quiet"])
-    check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
-    if r.returncode:
-        return
-    sq, n, peak_fem, peak_rt = [], 0, 0.0, 0.0
-    with open(os.path.join(out, "displacement_d2.csv")) as f:
-        for row in csv.DictReader(f):
-            a, b = float(row["rt_cm"]), float(row["fem_cm"])
-            sq.append((a - b) ** 2)
-            peak_fem, peak_rt = max(peak_fem, abs(b)), max(peak_rt, abs(a))
-    check(len(sq) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(sq))
-    rmse = math.sqrt(math.fsum(sq) / max(len(sq), 1))
-    print("%s, distribution II, FEM level 2: RMSE %.4f mm = %.1f%% of the FEM peak %.3f mm "
-          "(bound %.0f%%); model peak %.3f mm, ratio %.3f (bound 1 +- %.2f)" %
-          (label, 10 * rmse, 100 * rmse / peak_fem, 10 * peak_fem, 100 * rmse_bound, 10 * peak_rt,
-           peak_rt / peak_fem, peak_bound))
-    check(peak_fem > 0.0, "the FEM reference does not move")
-    # the tool's own peaks (tables.json) are the ones recomputed here
-    t = json.load(open(os.path.join(out, "tables.json")))["tables"]
-    disp = [row for row in t[0]["rows"] if row["distribution"] == "II"][0]
-    check(close(disp["ref_peak"], peak_fem, 1e-9) and close(disp["rt_peak"], peak_rt, 1e-9),
-          "tables.json peaks %r / %r, recomputed %r / %r" % (disp["ref_peak"], disp["rt_peak"], peak_fem, peak_rt))
-    check("% of the FEM peak" in r.stdout, "no \"displacement against its scale\" line on stdout")
-    check(rmse <= rmse_bound * peak_fem, "RMSE %.4f mm above %.0f%% of the FEM peak %.3f mm" %
-          (10 * rmse, 100 * rmse_bound, 10 * peak_fem))
-    check(abs(peak_rt / peak_fem - 1.0) <= peak_bound, "model peak %.3f mm vs FEM %.3f mm" % (10 * peak_rt, 10 * peak_fem))
-
-
 DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
 LEVEL4_D2 = os.path.join(DATA_DIR, "fem_level4_long_term_d2.csv")
 
 
-def read_level4_d2():
+def read_level4_d2(path=None):
     """The stored level-4 field: {(frame, vertex): cm} and the '#' header's numbers."""
     head, ref = {}, {}
-    with open(LEVEL4_D2) as f:
+    with open(path or LEVEL4_D2) as f:
         lines = [l for l in f]
     for l in lines:
         if l.startswith("# level-2 FEM peak "):
@@ -449,8 +416,17 @@ def read_level4_d2():
 
 def test_long_term(tool, scene):
     """See the module's docstring (long_term)."""
-    lt_scene = os.path.join(os.path.dirname(scene), "paper_step_long_term.json")
-    tmp = tempfile.mkdtemp(prefix="palp_eval_long_term_")
+    check_stored_level4(tool, scene, "paper_step_long_term.json", LEVEL4_D2, 0.03, 0.10, "long-term default",
+                        "make_long_term_level4.py")
+
+
+def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, label, maker):
+    """Distribution II of a set (its model side from a level-2 evaluate run here) against the
+    level-4 FEM field stored in data: RMSE over the stored full frames at most rmse_bound of the
+    level-4 peak, the model's peak within peak_bound of it; the run's level-2 FEM peak equal to
+    the one recorded with the stored field (the FEM did not change since)."""
+    lt_scene = os.path.join(os.path.dirname(scene), scene_name)
+    tmp = tempfile.mkdtemp(prefix="palp_eval_level4_ref_")
     out = os.path.join(tmp, "out")
     r = run([tool, "evaluate", "--scene", lt_scene, "--level", "2", "--distributions", "2", "--no-plots", "--out", out,
              "--cache-dir", os.path.join(tmp, "cache"), "--quiet"])
@@ -463,7 +439,7 @@ def test_long_term(tool, scene):
             key = (int(row["frame"]), int(row["vertex"]))
             rt[key], fem2[key] = float(row["rt_cm"]), float(row["fem_cm"])
     check(len(rt) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(rt))
-    head, ref = read_level4_d2()
+    head, ref = read_level4_d2(data)
     frames = {}
     for fr, _ in ref:
         frames[fr] = frames.get(fr, 0) + 1
@@ -475,16 +451,19 @@ def test_long_term(tool, scene):
     peak4, peak_rt, peak2 = max(ref.values()), max(rt.values()), max(fem2.values())
     sq2 = [(rt[k] - fem2[k]) ** 2 for k in rt]
     rmse2 = math.sqrt(math.fsum(sq2) / len(sq2))
-    print("long-term default, distribution II, FEM level 4 (stored): RMSE %.4f mm = %.2f%% of the FEM peak %.4f mm "
-          "(bound 3%%); model peak %.4f mm, ratio %.3f (bound 1 +- 0.10)" %
-          (10 * rmse, 100 * rmse / peak4, 10 * peak4, 10 * peak_rt, peak_rt / peak4))
+    print("%s, distribution II, FEM level 4 (stored): RMSE %.4f mm = %.2f%% of the FEM peak %.4f mm "
+          "(bound %.0f%%); model peak %.4f mm, ratio %.3f (bound 1 +- %.2f)" %
+          (label, 10 * rmse, 100 * rmse / peak4, 10 * peak4, 100 * rmse_bound, 10 * peak_rt, peak_rt / peak4,
+           peak_bound))
     print("  level 2 (for reference): FEM peak %.4f mm (stored %.4f mm), model / level 2 %.3f, RMSE %.2f%% of it" %
           (10 * peak2, 10 * head.get("peak2", float("nan")), peak_rt / peak2, 100 * rmse2 / peak2))
     check(close(peak2, head.get("peak2", float("nan")), 1e-6),
           "the level-2 FEM peak %.9g cm is not the %r cm recorded with the stored level-4 field: the FEM changed, "
-          "rerun tests/data/make_long_term_level4.py" % (peak2, head.get("peak2")))
-    check(rmse <= 0.03 * peak4, "RMSE %.4f mm above 3%% of the level-4 FEM peak %.4f mm" % (10 * rmse, 10 * peak4))
-    check(abs(peak_rt / peak4 - 1.0) <= 0.10, "model peak %.4f mm vs level-4 FEM %.4f mm" % (10 * peak_rt, 10 * peak4))
+          "rerun tests/data/%s" % (peak2, head.get("peak2"), maker))
+    check(rmse <= rmse_bound * peak4, "RMSE %.4f mm above %.0f%% of the level-4 FEM peak %.4f mm" %
+          (10 * rmse, 100 * rmse_bound, 10 * peak4))
+    check(abs(peak_rt / peak4 - 1.0) <= peak_bound, "model peak %.4f mm vs level-4 FEM %.4f mm" %
+          (10 * peak_rt, 10 * peak4))
 
 
 def test_level4_guard(tool, scene):
@@ -515,8 +494,8 @@ def test_level4_guard(tool, scene):
 
 def test_breast_tissue(tool, scene):
     """See the module's docstring (breast_tissue)."""
-    check_profile_fit(tool, (scene, "paper_step_breast_tissue.json"), "breast_tissue", 0.06, 0.16,
-                      "breast-tissue parameters")
+    check_stored_level4(tool, scene, "paper_step_breast_tissue.json", os.path.join(DATA_DIR, "fem_level4_breast_tissue_d2.csv"),
+                        0.06, 0.10, "breast-tissue set", "make_breast_tissue_refs.py")
 
 
 def main():

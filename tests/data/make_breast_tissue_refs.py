@@ -1,0 +1,114 @@
+#!/usr/bin/env python3
+"""Writes the converged FE references of the breast-tissue set (the exercise phantom) that
+eval_evaluate_breast_tissue, eval_finger_breast_tissue and eval_finger_breast_tissue_guard compare
+with (docs/materials.md, "The fingertip references at level 3"):
+
+    tests/data/make_breast_tissue_refs.py BUILD_DIR [FINGER_CSV... | compute]
+
+fem_level4_breast_tissue_d2.csv: the FEM column of `palp-eval evaluate --scene
+config/paper_step_breast_tissue.json --level 4 --distributions 2` (17 min of FEM), compacted as
+tests/data/make_long_term_level4.py compacts the long-term one (every vertex at frames 0-11 and
+every 20th, the FEM's most displaced vertex at every frame), with the level-2 FEM peak of the
+same distribution in its header. PALP_REF_CACHE=DIR reuses a FEM cache (palp-eval --cache-dir).
+
+fem_level3_breast_tissue_finger.csv: `palp-fem finger --scene config/phantoms/dome.json --level 3
+--site pole,45deg,60deg,70deg,pole_lesion --max-force 13 --no-force-table` (the FE: 13-45 min a site
+on this 2-core machine) with `compute`; FINGER_CSV...: outputs of that command (one or several runs,
+e.g. one per site; each site taken from the first file that has it) to reuse for the FE columns, the
+real-time columns then recomputed with the current parameters (`--fe-from`).
+PALP_REF_NOTE=TEXT adds a line to the header (how the reused curves were made).
+"""
+import csv
+import hashlib
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCENE = "config/phantoms/dome.json"
+D2_SCENE = "config/paper_step_breast_tissue.json"
+SITES = "pole,45deg,60deg,70deg"
+CMD = ["finger", "--scene", SCENE, "--level", "3", "--site", SITES, "--max-force", "13", "--no-force-table"]
+
+
+def provenance(how):
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "src/fem"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    ver = [l for l in open(os.path.join(ROOT, "src/fem/palp_fem.h")) if "define PALP_FEM_CODE_VERSION" in l][0]
+    sha = hashlib.sha256(open(os.path.join(ROOT, "src/fem/fem_finger.c"), "rb").read()).hexdigest()
+    return ("# written by tests/data/make_breast_tissue_refs.py at commit %s%s, PALP_FEM_CODE_VERSION %s\n"
+            "# sha256 of src/fem/fem_finger.c %s\n# %s\n" % (commit, " (src/fem modified)" if dirty else "",
+                                                            ver.split()[2], sha, how))
+
+
+def write_d2(build, tmp):
+    ev = os.path.join(build, "tools/eval/palp-eval")
+    cache = os.environ.get("PALP_REF_CACHE", os.path.join(tmp, "cache"))
+    peaks = {}
+    for level in (2, 4):
+        out = os.path.join(tmp, "l%d" % level)
+        subprocess.run([ev, "evaluate", "--scene", D2_SCENE, "--level", str(level), "--distributions", "2", "--no-plots",
+                        "--quiet", "--cache-dir", cache, "--out", out], check=True, cwd=ROOT)
+        rows = list(csv.DictReader(open(os.path.join(out, "displacement_d2.csv"))))
+        fem_cm = {(int(r["frame"]), int(r["vertex"])): float(r["fem_cm"]) for r in rows}
+        peaks[level] = max(fem_cm.values())
+    (pf, pv), peak = max(fem_cm.items(), key=lambda kv: kv[1])
+    last = max(f for f, _ in fem_cm)
+    full = set(range(12)) | set(range(19, last + 1, 20))
+    path = os.path.join(ROOT, "tests/data/fem_level4_breast_tissue_d2.csv")
+    with open(path, "w") as f:
+        f.write(provenance("palp-eval evaluate --scene %s --level 4 --distributions 2 (the fem_cm column of "
+                           "displacement_d2.csv; the FEM does not depend on the real-time parameters)" % D2_SCENE))
+        f.write("# breast_tissue, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 frames of "
+                "10 ms; |u| [cm] of the real-time vertices (FE patch map, HHT-alpha)\n")
+        f.write("# level-2 FEM peak %.9g cm (the same command with --level 2)\n" % peaks[2])
+        f.write("# level-4 FEM peak %.9g cm at vertex %d, frame %d; every vertex at frames 0-11 and 19, 39, ..., %d; "
+                "vertex %d at every frame\n" % (peak, pv, pf, last, pv))
+        f.write("frame,vertex,fem_cm\n")
+        for (fr, v), u in sorted(fem_cm.items()):
+            if fr in full or v == pv:
+                f.write("%d,%d,%.9g\n" % (fr, v, u))
+    print("wrote %s (level-4 peak %.6g cm, level-2 peak %.6g cm)" % (path, peak, peaks[2]))
+
+
+def main():
+    build = os.path.abspath(sys.argv[1])
+    fem = os.path.join(build, "tools/fem/palp-fem")
+    tmp = tempfile.mkdtemp(prefix="palp_bt_refs_")
+    write_d2(build, tmp)
+    out = os.path.join(tmp, "finger.csv")
+    if len(sys.argv) > 2 and sys.argv[2] != "compute":
+        joined, seen, header = os.path.join(tmp, "joined.csv"), set(), None
+        rows = []
+        for path in sys.argv[2:]:
+            with open(path) as f:
+                rs = list(csv.DictReader(l for l in f if not l.startswith("#")))
+            for site in dict.fromkeys(r["site"] for r in rs):
+                if site not in seen:
+                    seen.add(site)
+                    rows += [r for r in rs if r["site"] == site]
+            header = header or list(rs[0].keys())
+        with open(joined, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=header)
+            w.writeheader()
+            w.writerows(rows)
+        subprocess.run([fem] + CMD + ["--fe-from", joined, "--out", out], check=True, cwd=ROOT)
+        how = ("palp-fem %s (FE columns), real-time columns recomputed with the parameters of this commit by --fe-from"
+               % " ".join(CMD))
+        if os.environ.get("PALP_REF_NOTE"):
+            how += "\n# " + os.environ["PALP_REF_NOTE"]
+    else:
+        subprocess.run([fem] + CMD + ["--out", out], check=True, cwd=ROOT)
+        how = "palp-fem " + " ".join(CMD)
+    path = os.path.join(ROOT, "tests/data/fem_level3_breast_tissue_finger.csv")
+    with open(path, "w") as f:
+        f.write(provenance(how))
+        f.write("# FE: rigid 8 mm sphere, relaxed static, breast_tissue profile, level 3 (4,320 hexahedra); the tests "
+                "read the FE columns only (depth_m, fem_N, fem_min_gap_m)\n")
+        f.write(open(out).read())
+    print("wrote " + path)
+
+
+if __name__ == "__main__":
+    main()
