@@ -5,6 +5,8 @@ with (docs/materials.md, "The fingertip references at level 3"):
 
     tests/data/make_breast_tissue_refs.py BUILD_DIR [FINGER_CSV... | compute]
 
+(with neither, only the displacement file is written)
+
 fem_level4_breast_tissue_d2.csv: the FEM column of `palp-eval evaluate --scene
 config/paper_step_breast_tissue.json --level 4 --distributions 2` (17 min of FEM), compacted as
 tests/data/make_long_term_level4.py compacts the long-term one (every vertex at frames 0-11 and
@@ -77,6 +79,8 @@ def main():
     fem = os.path.join(build, "tools/fem/palp-fem")
     tmp = tempfile.mkdtemp(prefix="palp_bt_refs_")
     write_d2(build, tmp)
+    if len(sys.argv) < 3:  # neither stored curves nor `compute`: the displacement file only
+        return
     out = os.path.join(tmp, "finger.csv")
     if len(sys.argv) > 2 and sys.argv[2] != "compute":
         joined, seen, header = os.path.join(tmp, "joined.csv"), set(), None
