@@ -21,11 +21,12 @@ real-time columns then recomputed with the current parameters (`--fe-from`).
 PALP_REF_NOTE=TEXT adds a line to the header (how the reused curves were made).
 """
 import csv
-import hashlib
 import os
 import subprocess
 import sys
 import tempfile
+
+import make_long_term_level4 as lt  # provenance() and the compacted level-4 field (this folder is on sys.path)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENE = "config/phantoms/dome.json"
@@ -35,43 +36,16 @@ CMD = ["finger", "--scene", SCENE, "--level", "3", "--site", SITES, "--max-force
 
 
 def provenance(how):
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain", "src/fem"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    ver = [l for l in open(os.path.join(ROOT, "src/fem/palp_fem.h")) if "define PALP_FEM_CODE_VERSION" in l][0]
-    sha = hashlib.sha256(open(os.path.join(ROOT, "src/fem/fem_finger.c"), "rb").read()).hexdigest()
-    return ("# written by tests/data/make_breast_tissue_refs.py at commit %s%s, PALP_FEM_CODE_VERSION %s\n"
-            "# sha256 of src/fem/fem_finger.c %s\n# %s\n" % (commit, " (src/fem modified)" if dirty else "",
-                                                            ver.split()[2], sha, how))
+    return lt.provenance(how, "make_breast_tissue_refs.py")
 
 
 def write_d2(build, tmp):
-    ev = os.path.join(build, "tools/eval/palp-eval")
-    cache = os.environ.get("PALP_REF_CACHE", os.path.join(tmp, "cache"))
-    peaks = {}
-    for level in (2, 4):
-        out = os.path.join(tmp, "l%d" % level)
-        subprocess.run([ev, "evaluate", "--scene", D2_SCENE, "--level", str(level), "--distributions", "2", "--no-plots",
-                        "--quiet", "--cache-dir", cache, "--out", out], check=True, cwd=ROOT)
-        rows = list(csv.DictReader(open(os.path.join(out, "displacement_d2.csv"))))
-        fem_cm = {(int(r["frame"]), int(r["vertex"])): float(r["fem_cm"]) for r in rows}
-        peaks[level] = max(fem_cm.values())
-    (pf, pv), peak = max(fem_cm.items(), key=lambda kv: kv[1])
-    last = max(f for f, _ in fem_cm)
-    full = set(range(12)) | set(range(19, last + 1, 20))
-    path = os.path.join(ROOT, "tests/data/fem_level4_breast_tissue_d2.csv")
-    with open(path, "w") as f:
-        f.write(provenance("palp-eval evaluate --scene %s --level 4 --distributions 2 (the fem_cm column of "
-                           "displacement_d2.csv; the FEM does not depend on the real-time parameters)" % D2_SCENE))
-        f.write("# breast_tissue, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 frames of "
-                "10 ms; |u| [cm] of the real-time vertices (FE patch map, HHT-alpha)\n")
-        f.write("# level-2 FEM peak %.9g cm (the same command with --level 2)\n" % peaks[2])
-        f.write("# level-4 FEM peak %.9g cm at vertex %d, frame %d; every vertex at frames 0-11 and 19, 39, ..., %d; "
-                "vertex %d at every frame\n" % (peak, pv, pf, last, pv))
-        f.write("frame,vertex,fem_cm\n")
-        for (fr, v), u in sorted(fem_cm.items()):
-            if fr in full or v == pv:
-                f.write("%d,%d,%.9g\n" % (fr, v, u))
-    print("wrote %s (level-4 peak %.6g cm, level-2 peak %.6g cm)" % (path, peak, peaks[2]))
+    lt.write_level4_d2(os.path.join(build, "tools/eval/palp-eval"), D2_SCENE,
+                       os.environ.get("PALP_REF_CACHE", os.path.join(tmp, "cache")), tmp,
+                       os.path.join(ROOT, "tests/data/fem_level4_breast_tissue_d2.csv"),
+                       "breast_tissue, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 "
+                       "frames of 10 ms; |u| [cm] of the real-time vertices (FE patch map, HHT-alpha)",
+                       "make_breast_tissue_refs.py")
 
 
 def main():

@@ -40,7 +40,7 @@ def sh(args):
     subprocess.run(args, check=True, cwd=ROOT)
 
 
-def provenance(cmd):
+def provenance(cmd, script="make_long_term_level4.py"):
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
     dirty = subprocess.run(["git", "status", "--porcelain", "src/fem"], cwd=ROOT, capture_output=True,
@@ -49,20 +49,19 @@ def provenance(cmd):
     # the fingertip's FE code, hashed: eval_finger_level4_guard compares it (recomputing a level-4
     # fingertip depth takes 60-75 s, over the test budget)
     sha = hashlib.sha256(open(os.path.join(ROOT, "src/fem/fem_finger.c"), "rb").read()).hexdigest()
-    return ("# written by tests/data/make_long_term_level4.py at commit %s%s, PALP_FEM_CODE_VERSION %s\n"
+    return ("# written by tests/data/%s at commit %s%s, PALP_FEM_CODE_VERSION %s\n"
             "# sha256 of src/fem/fem_finger.c %s\n# %s\n" %
-            (commit, " (src/fem modified)" if dirty else "", ver.split()[2], sha, cmd))
+            (script, commit, " (src/fem modified)" if dirty else "", ver.split()[2], sha, cmd))
 
 
-def main():
-    build = os.path.abspath(sys.argv[1])
-    ev, fem = os.path.join(build, "tools/eval/palp-eval"), os.path.join(build, "tools/fem/palp-fem")
-    tmp = tempfile.mkdtemp(prefix="palp_level4_ref_")
-    cache = os.environ.get("PALP_REF_CACHE", os.path.join(tmp, "cache"))  # an existing FEM cache may be reused
+def write_level4_d2(ev, scene, cache, tmp, path, about, script="make_long_term_level4.py"):
+    """Distribution II's level-4 FEM field of scene (and the level-2 peak, in the header), compacted:
+    every vertex at frames 0-11 and every 20th, the FEM's most displaced vertex at every frame.
+    about: the header line saying what the field is."""
     peaks = {}
     for level in (2, 4):
         out = os.path.join(tmp, "l%d" % level)
-        sh([ev, "evaluate", "--scene", SCENE, "--level", str(level), "--distributions", "2", "--no-plots", "--quiet",
+        sh([ev, "evaluate", "--scene", scene, "--level", str(level), "--distributions", "2", "--no-plots", "--quiet",
             "--cache-dir", cache, "--out", out])
         rows = list(csv.DictReader(open(os.path.join(out, "displacement_d2.csv"))))
         fem_cm = {(int(r["frame"]), int(r["vertex"])): float(r["fem_cm"]) for r in rows}
@@ -70,13 +69,10 @@ def main():
     (pf, pv), peak = max(fem_cm.items(), key=lambda kv: kv[1])
     last = max(f for f, _ in fem_cm)
     full = set(range(12)) | set(range(19, last + 1, 20))
-    path = os.path.join(ROOT, "tests/data/fem_level4_long_term_d2.csv")
     with open(path, "w") as f:
         f.write(provenance("palp-eval evaluate --scene %s --level 4 --distributions 2 (the fem_cm column of "
-                           "displacement_d2.csv; the FEM does not depend on the real-time parameters)" % SCENE))
-        f.write("# paper_long_term, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 frames "
-                "of 10 ms; |u| [cm] of the real-time vertices (FE patch map: each vertex's hat-weighted average, "
-                "docs/fem.md \"Surface map\")\n")
+                           "displacement_d2.csv; the FEM does not depend on the real-time parameters)" % scene, script))
+        f.write("# " + about + "\n")
         f.write("# level-2 FEM peak %.9g cm (the same command with --level 2)\n" % peaks[2])
         f.write("# level-4 FEM peak %.9g cm at vertex %d, frame %d; every vertex at frames 0-11 and 19, 39, ..., %d; "
                 "vertex %d at every frame\n" % (peak, pv, pf, last, pv))
@@ -85,6 +81,17 @@ def main():
             if fr in full or v == pv:
                 f.write("%d,%d,%.9g\n" % (fr, v, u))
     print("wrote %s (level-4 peak %.6g cm, level-2 peak %.6g cm)" % (path, peak, peaks[2]))
+
+
+def main():
+    build = os.path.abspath(sys.argv[1])
+    ev, fem = os.path.join(build, "tools/eval/palp-eval"), os.path.join(build, "tools/fem/palp-fem")
+    tmp = tempfile.mkdtemp(prefix="palp_level4_ref_")
+    cache = os.environ.get("PALP_REF_CACHE", os.path.join(tmp, "cache"))  # an existing FEM cache may be reused
+    write_level4_d2(ev, SCENE, cache, tmp, os.path.join(ROOT, "tests/data/fem_level4_long_term_d2.csv"),
+                    "paper_long_term, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 "
+                    "frames of 10 ms; |u| [cm] of the real-time vertices (FE patch map: each vertex's hat-weighted "
+                    "average, docs/fem.md \"Surface map\")")
 
     finger = os.path.join(tmp, "finger.csv")
     if len(sys.argv) < 3:

@@ -31,7 +31,7 @@ import sys
 import tempfile
 
 import test_eval_evaluate as common  # check() and the failure count (this folder is on sys.path)
-import test_finger_long_term as lt  # read()
+import test_finger_long_term as lt  # read() and columns()
 
 check = common.check
 run = common.run
@@ -55,15 +55,11 @@ def stored(tool, scene, data):
     rows = lt.read(out)
     table = validated(scene)
     for site in SITES:
-        rs = [x for x in rows if x["site"] == site]
-        check(len(rs) >= 8, "%s: only %d depths" % (site, len(rs)))
-        d = [float(x["depth_m"]) for x in rs]
-        fe = [float(x["fem_N"]) for x in rs]
-        rt = [float(x["realtime_N"]) for x in rs]
-        dr = [float(x["realtime_depth_m"]) for x in rs]
+        d, fe, rt, dr = lt.columns(rows, site)
+        check(len(d) >= 8, "%s: only %d depths" % (site, len(d)))
         check(all(fe[k + 1] > fe[k] for k in range(len(fe) - 1)), "%s: FE force not increasing: %r" % (site, fe))
         check(all(rt[k + 1] > rt[k] for k in range(len(rt) - 1)), "%s: real-time force not increasing: %r" % (site, rt))
-        for k in range(len(rs)):
+        for k in range(len(d)):
             # matched positions: 5 um, or 0.5% of the depth where a deep press on the stiffening support
             # leaves the six secant corrections up to ~30 um short (measured 29 um at 70 deg and 10 mm;
             # at F ~ d^1.8 that is at most ~1% of the force, against the 15% compared)
@@ -72,7 +68,7 @@ def stored(tool, scene, data):
         check(round(SITES[site], 6) in table, "the parameter file's validated table has no %g deg entry" % SITES[site])
         limit = table.get(round(SITES[site], 6), 0.0)
         first_out = None
-        for k in range(len(rs)):
+        for k in range(len(d)):
             if fe[k] < 0.3:
                 continue
             q = rt[k] / fe[k]

@@ -51,6 +51,14 @@ BOUNDS = {"pole": (0.85, 1.15), "45deg": (0.85, 1.15), "70deg": (0.85, 1.15), "p
 REACH = {"pole": 5.0, "45deg": 5.0, "70deg": 5.0, "pole_lesion": 5.0}
 
 
+def columns(rows, site):
+    """One site's rows of a `palp-fem finger` CSV: depth [m], FE force [N], real-time force [N],
+    real-time depth reached [m]."""
+    rs = [x for x in rows if x["site"] == site]
+    return ([float(x["depth_m"]) for x in rs], [float(x["fem_N"]) for x in rs], [float(x["realtime_N"]) for x in rs],
+            [float(x["realtime_depth_m"]) for x in rs])
+
+
 def read(path):
     with open(path) as f:
         return list(csv.DictReader(l for l in f if not l.startswith("#")))
@@ -65,13 +73,9 @@ def stored(tool, scene, data):
         return
     rows = read(out)
     for site, (lo, hi) in BOUNDS.items():
-        rs = [x for x in rows if x["site"] == site]
-        check(len(rs) >= 4, "%s: only %d depths" % (site, len(rs)))
-        d = [float(x["depth_m"]) for x in rs]
-        fe = [float(x["fem_N"]) for x in rs]
-        rt = [float(x["realtime_N"]) for x in rs]
-        dr = [float(x["realtime_depth_m"]) for x in rs]
-        for k in range(len(rs)):
+        d, fe, rt, dr = columns(rows, site)
+        check(len(d) >= 4, "%s: only %d depths" % (site, len(d)))
+        for k in range(len(d)):
             ratio = rt[k] / fe[k]
             print("%s %.2f mm: FE %.3f N, real-time %.3f N at %.4f mm, ratio %.3f (bound %.2f-%.2f)"
                   % (site, 1e3 * d[k], fe[k], rt[k], 1e3 * dr[k], ratio, lo, hi))

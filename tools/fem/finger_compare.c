@@ -114,7 +114,7 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
   double Fplain[MAXD] = {0}, Rplain[MAXD] = {0};
   int nplain = 0, rc = 0;
   const int all = !only || strcmp(only, "all") == 0; /* no --site: all */
-  for (int s = 0; s < 5 && !rc; ++s) {
+  for (int s = 0; s < (int)(sizeof sites / sizeof sites[0]) && !rc; ++s) {
     if (all ? !sites[s].in_all : !listed(only, sites[s].name)) continue;
     const double th = sites[s].polar_deg * PALP_FEM_PI / 180.0;
     const palp_vec3 n = {sin(th), 0, cos(th)};
