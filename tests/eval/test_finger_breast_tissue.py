@@ -31,7 +31,7 @@ import sys
 import tempfile
 
 import test_eval_evaluate as common  # check() and the failure count (this folder is on sys.path)
-import test_finger_long_term as lt  # read() and columns()
+import test_finger_long_term as lt  # read(), columns() and guard()
 
 check = common.check
 run = common.run
@@ -89,19 +89,9 @@ def stored(tool, scene, data):
 
 
 def guard(tool, scene, data):
-    """Cheap: the stored curves were made by this FEM's fingertip code (recomputing one level-3 site
+    """Cheap: the stored curves were made by today's fingertip FE code (recomputing one level-3 site
     takes 13-45 min)."""
-    import hashlib
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    head = [l for l in open(data) if l.startswith("#")]
-    sha = hashlib.sha256(open(os.path.join(root, "src/fem/fem_finger.c"), "rb").read()).hexdigest()
-    ver = [l for l in open(os.path.join(root, "src/fem/palp_fem.h")) if "define PALP_FEM_CODE_VERSION" in l][0].split()[2]
-    print("stored fingertip curves: %s" % "".join(head[:2]).strip())
-    print("today: PALP_FEM_CODE_VERSION %s, sha256 of src/fem/fem_finger.c %s" % (ver, sha))
-    for what, ok in (("PALP_FEM_CODE_VERSION is %s now" % ver, any(("PALP_FEM_CODE_VERSION %s" % ver) in l for l in head)),
-                     ("src/fem/fem_finger.c changed", any(sha in l for l in head))):
-        check(ok, "%s: the stored level-3 breast-tissue fingertip curves may be stale; rerun "
-              "tests/data/make_breast_tissue_refs.py BUILD compute" % what)
+    lt.guard(tool, scene, data, "level-3 breast-tissue fingertip curves", "tests/data/make_breast_tissue_refs.py BUILD compute")
 
 
 def main():

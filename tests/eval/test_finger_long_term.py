@@ -100,7 +100,8 @@ def stored(tool, scene, data):
         check(abs(s2 / s1 - 1.0) < 0.3, "stiffness ratio 1-2 mm / 0.25-1 mm %.2f" % (s2 / s1))
 
 
-def guard(tool, scene, data):
+def guard(tool, scene, data, curves="level-4 fingertip curves",
+          rerun="tests/data/make_long_term_level4.py BUILD compute (or this test's `recompute` mode to compare)"):
     """Cheap: the stored curves were made by this FEM's fingertip code (PALP_FEM_CODE_VERSION and
     the sha256 of src/fem/fem_finger.c recorded in the data file's header equal today's)."""
     import hashlib
@@ -111,11 +112,9 @@ def guard(tool, scene, data):
     print("stored fingertip curves: %s" % "".join(head[:2]).strip())
     print("today: PALP_FEM_CODE_VERSION %s, sha256 of src/fem/fem_finger.c %s" % (ver, sha))
     check(any(("PALP_FEM_CODE_VERSION %s" % ver) in l for l in head),
-          "PALP_FEM_CODE_VERSION is %s now: the stored level-4 fingertip curves may be stale; rerun "
-          "tests/data/make_long_term_level4.py BUILD compute (or `recompute` this test to compare)" % ver)
+          "PALP_FEM_CODE_VERSION is %s now: the stored %s may be stale; rerun %s" % (ver, curves, rerun))
     check(any(sha in l for l in head),
-          "src/fem/fem_finger.c changed since the stored level-4 fingertip curves were written; rerun "
-          "tests/data/make_long_term_level4.py BUILD compute, or check with this test's `recompute` mode")
+          "src/fem/fem_finger.c changed since the stored %s were written; rerun %s" % (curves, rerun))
 
 
 def recompute(tool, scene, data):
