@@ -24,8 +24,10 @@ tests/data/fem_level4_long_term_d2.csv (written by tests/data/make_long_term_lev
 every vertex at 32 of the 400 frames, the FEM's most displaced vertex at all 400),
 the model's side from a level-2 evaluate run here: RMSE over the stored frames at
 most 3% of the level-4 FEM's peak and the model's peak within 10% of it (the
-issue's target; measured 2.25% over the stored frames, 2.4% over all 400 in evaluate, and
-1.080); figures in docs/materials.md, "The patch map and the support". The FEM side is the
+issue's target; measured 2.18% over the stored frames, 2.4% over all 400 in evaluate, and
+1.064); figures in docs/materials.md, "The patch map and the support". Recovery to 5% of
+the peak after the release, at the FEM's most displaced vertex (vertex 35, stored at every
+frame): within 0.15 s of the level-4 FEM's (measured 0.744 s against 0.687 s). The FEM side is the
 patch load map (docs/fem.md, "Surface map"), the default.
 The same run's level-2 FEM peak must equal the one recorded in the data file
 (relative 1e-6): the stored level-4 field was written by the FEM the tests build
@@ -42,10 +44,14 @@ breast_tissue: the same for config/params/breast_tissue.json (scene
 paper_step_breast_tissue.json) against the level-4 breast-tissue FEM of distribution II
 (HHT-alpha -0.05, patch load map) stored in tests/data/fem_level4_breast_tissue_d2.csv
 (written by tests/data/make_breast_tissue_refs.py): RMSE over the stored frames at most 6% of
-the level-4 peak and the model's peak within 10% of it (measured 2026-11-28 on the set refitted
-to the level-3 fingertip: 5.18% over the stored frames, 0.24 mm, and +8.0%; the issue's 5% (or
-1 mm) is met over the whole field, 4.0% in evaluate's 400 frames: the stored frames weigh the
-first 120 ms, 12 of their 32, where the field moves fastest). Until
+the level-4 peak and the model's peak within 10% of it (measured 2026-11-28 with the support's
+relaxing branch: 5.50% over the stored frames, 0.26 mm, and +7.3%; the issue's 5% (or
+1 mm) is met over the whole field, 3.8% in evaluate's 400 frames: the stored frames weigh the
+first 120 ms, 12 of their 32, where the field moves fastest). Recovery at vertex 35: within
+0.25 s of the level-4 FEM's and inside the issue's 1.0 +- 0.2 s (measured 1.114 s against the
+FEM's 0.929 s; the set before the relaxing branch recovered in 0.758 s and fails the band; under
+III and IV, not stored, the model is 0.19-0.22 s quicker than the FEM instead: docs/materials.md,
+"The recovery"). Until
 then this compared with the level-2 FEM (6% / 16%), whose peak is 15% below level 4's: the
 set's +13.9% there was mostly the reference's (docs/materials.md, "The fingertip references
 at level 3").
@@ -409,6 +415,8 @@ def read_level4_d2(path=None):
     for l in lines:
         if l.startswith("# level-2 FEM peak "):
             head["peak2"] = float(l.split()[4])
+        if l.startswith("# level-4 FEM peak ") and " at vertex " in l:
+            head["peak_vertex"] = int(l.split(" at vertex ")[1].split(",")[0])
     for row in csv.DictReader(l for l in lines if not l.startswith("#")):
         ref[(int(row["frame"]), int(row["vertex"]))] = float(row["fem_cm"])
     return head, ref
@@ -417,14 +425,29 @@ def read_level4_d2(path=None):
 def test_long_term(tool, scene):
     """See the module's docstring (long_term)."""
     check_stored_level4(tool, scene, "paper_step_long_term.json", LEVEL4_D2, 0.03, 0.10, "long-term default",
-                        "make_long_term_level4.py")
+                        "make_long_term_level4.py", 0.15)
 
 
-def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, label, maker):
+def recovery_s(trace, t_release=2.0):
+    """Seconds after t_release until |u| first falls to 5% of its peak while loaded (linear
+    between frames); None if it does not within the trace. trace: [(t [s], |u|)], in order."""
+    peak = max(u for t, u in trace if t <= t_release + 1e-9)
+    level, prev = 0.05 * peak, None
+    for t, u in trace:
+        if t > t_release + 1e-9 and prev is not None and prev[1] > level >= u:
+            return prev[0] + (t - prev[0]) * (prev[1] - level) / (prev[1] - u) - t_release
+        prev = (t, u)
+    return None
+
+
+def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, label, maker, rec_tol, rec_band=None):
     """Distribution II of a set (its model side from a level-2 evaluate run here) against the
     level-4 FEM field stored in data: RMSE over the stored full frames at most rmse_bound of the
     level-4 peak, the model's peak within peak_bound of it; the run's level-2 FEM peak equal to
-    the one recorded with the stored field (the FEM did not change since)."""
+    the one recorded with the stored field (the FEM did not change since). Recovery: at the
+    FEM's most displaced vertex (stored at every frame), the model's time to 5% of its peak
+    after the 2 s release within rec_tol seconds of the FEM's, and inside rec_band (lo, hi)
+    when one is given."""
     lt_scene = os.path.join(os.path.dirname(scene), scene_name)
     tmp = tempfile.mkdtemp(prefix="palp_eval_level4_ref_")
     out = os.path.join(tmp, "out")
@@ -433,11 +456,12 @@ def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, l
     check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
     if r.returncode:
         return
-    rt, fem2 = {}, {}
+    rt, fem2, time_of = {}, {}, {}
     with open(os.path.join(out, "displacement_d2.csv")) as f:
         for row in csv.DictReader(f):
             key = (int(row["frame"]), int(row["vertex"]))
             rt[key], fem2[key] = float(row["rt_cm"]), float(row["fem_cm"])
+            time_of[key[0]] = float(row["time_s"])
     check(len(rt) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(rt))
     head, ref = read_level4_d2(data)
     frames = {}
@@ -464,6 +488,22 @@ def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, l
           (10 * rmse, 100 * rmse_bound, 10 * peak4))
     check(abs(peak_rt / peak4 - 1.0) <= peak_bound, "model peak %.4f mm vs level-4 FEM %.4f mm" %
           (10 * peak_rt, 10 * peak4))
+    v = head.get("peak_vertex")
+    check(v is not None and all((fr, v) in ref for fr in range(400)),
+          "stored reference: no vertex stored at every frame (its '# level-4 FEM peak ... at vertex N' line)")
+    if v is None or not all((fr, v) in ref for fr in range(400)):
+        return
+    rec_rt = recovery_s([(time_of[fr], rt[(fr, v)]) for fr in range(400)])
+    rec_fem = recovery_s([(time_of[fr], ref[(fr, v)]) for fr in range(400)])
+    print("  recovery to 5%% at vertex %d (the level-4 FEM's most displaced): model %s s, level-4 FEM %s s "
+          "(bound: within %.2f s of it%s)" %
+          (v, "%.3f" % rec_rt if rec_rt is not None else "not within 2 s", "%.3f" % rec_fem if rec_fem is not None
+           else "not within 2 s", rec_tol, ", and in %.2f-%.2f s" % rec_band if rec_band else ""))
+    check(rec_rt is not None and rec_fem is not None and abs(rec_rt - rec_fem) <= rec_tol,
+          "recovery: model %s s against the level-4 FEM's %s s (tolerance %.2f s)" % (rec_rt, rec_fem, rec_tol))
+    if rec_band:
+        check(rec_rt is not None and rec_band[0] <= rec_rt <= rec_band[1],
+              "recovery: model %s s outside %.2f-%.2f s" % (rec_rt, rec_band[0], rec_band[1]))
 
 
 def test_level4_guard(tool, scene):
@@ -495,7 +535,7 @@ def test_level4_guard(tool, scene):
 def test_breast_tissue(tool, scene):
     """See the module's docstring (breast_tissue)."""
     check_stored_level4(tool, scene, "paper_step_breast_tissue.json", os.path.join(DATA_DIR, "fem_level4_breast_tissue_d2.csv"),
-                        0.06, 0.10, "breast-tissue set", "make_breast_tissue_refs.py")
+                        0.06, 0.10, "breast-tissue set", "make_breast_tissue_refs.py", 0.25, (0.8, 1.2))
 
 
 def main():
