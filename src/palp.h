@@ -143,6 +143,14 @@ typedef struct palp_membrane_params {
    * gel's shear coupling too), and clamping that D at the rim stiffens the dome near
    * it beyond the FE's (docs/materials.md, "The rim"). */
   double rim_hinge_release;
+  /* The skin's own share of bending_stiffness [N m], 0 <= D_skin <= D; 0, the
+   * default, leaves every hinge at D. The fitted D is several times the skin's plate
+   * stiffness E t^3 / (12 (1 - nu^2)): the rest stands in for the gel under the
+   * coarse net, so that part sees a lesion as the support does. With D_skin > 0 a
+   * hinge over a lesion carries D_skin + (D - D_skin) s, s the mean of its edge's two
+   * vertices' lesion support scales (palp_lesion_support_scale); without lesions
+   * s = 1 and the hinge is exactly D (docs/haptics.md, "The hinges see the lesion"). */
+  double skin_bending_stiffness;
 } palp_membrane_params;
 
 typedef enum palp_gel_law {

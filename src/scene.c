@@ -95,6 +95,12 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
   if (!(p->rim_hinge_release >= 0.0 && p->rim_hinge_release <= 1.0))
     return palp_parse_fail(c, PALP_EPARSE, "membrane.rim_hinge_release: must be in [0, 1] (0 clamps the rim, 1 pins it; got %g)",
                            p->rim_hinge_release);
+  if ((e = get_num(c, m, "membrane.", "skin_bending_stiffness_N_m", 0, &p->skin_bending_stiffness))) return e;
+  if (!(p->skin_bending_stiffness >= 0.0 && p->skin_bending_stiffness <= p->bending_stiffness))
+    return palp_parse_fail(c, PALP_EPARSE,
+                           "membrane.skin_bending_stiffness_N_m: must be in [0, bending_stiffness_N_m] (the skin's own share "
+                           "of the hinges' %g N m; got %g)",
+                           p->bending_stiffness, p->skin_bending_stiffness);
   return PALP_OK;
 }
 
@@ -525,6 +531,7 @@ char *palp_scene_to_json(const palp_scene *s) {
   /* only when set, so that the scenes of earlier logs print as they did */
   if (mp->bending_stiffness > 0.0) add_exact(mb, "bending_stiffness_N_m", mp->bending_stiffness);
   if (mp->rim_hinge_release > 0.0) add_exact(mb, "rim_hinge_release", mp->rim_hinge_release);
+  if (mp->skin_bending_stiffness > 0.0) add_exact(mb, "skin_bending_stiffness_N_m", mp->skin_bending_stiffness);
   const palp_gel_params *gp = &s->world.gel;
   cJSON *g = cJSON_AddObjectToObject(r, "gel");
   cJSON_AddStringToObject(g, "law", gp->law == PALP_GEL_POLYTROPIC ? "polytropic" : "paper_literal");

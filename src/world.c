@@ -1572,6 +1572,7 @@ static int validate(const palp_world_def *d) {
   if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
   if (!(m->bending_stiffness >= 0.0) || !isfinite(m->bending_stiffness)) return PALP_EINVAL;
   if (!(m->rim_hinge_release >= 0.0 && m->rim_hinge_release <= 1.0)) return PALP_EINVAL;
+  if (!(m->skin_bending_stiffness >= 0.0 && m->skin_bending_stiffness <= m->bending_stiffness)) return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY))
     return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_GEL_DAMPING) && !(d->effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
@@ -1669,6 +1670,12 @@ static double tri_area(const palp_vec3 *x, const int *T) {
  * only free vertex is the dome triangle's wing, which clamps the skin's slope there
  * (the phantom is bonded to its base); such a hinge takes twice the dome triangle's
  * area, as if mirrored, since the base's long slivers say nothing of the skin. */
+/* The lesion support scale set for vertex i (1 without lesions, exactly). */
+static double lesion_scale(const palp_world *w, int i) {
+  const double a = w->mesh.vertex_area[i];
+  return a > 0.0 ? w->sarea[i] / a : 1.0;
+}
+
 static int build_hinges(palp_world *w) {
   const palp_mesh *m = &w->mesh;
   const int nt = m->triangle_count;
@@ -1695,7 +1702,8 @@ static int build_hinges(palp_world *w) {
     free(he);
     return PALP_ENOMEM;
   }
-  const double D = w->def.membrane.bending_stiffness; /* [N m] */
+  const double D = w->def.membrane.bending_stiffness;          /* [N m] */
+  const double Ds = w->def.membrane.skin_bending_stiffness;   /* [N m], the skin's own share of D */
   for (int i = 0; i + 1 < 3 * nt; ++i) {
     const half_edge *p = &he[i], *q = &he[i + 1];
     if (p->lo != q->lo || p->hi != q->hi) continue;
@@ -1712,7 +1720,14 @@ static int build_hinges(palp_world *w) {
     memcpy(w->hinge[e], v, sizeof v);
     memcpy(w->hgrad[e], g, sizeof g);
     w->hrest[e] = palp_hinge_angle(m->rest[v[0]], m->rest[v[1]], m->rest[v[2]], m->rest[v[3]]);
-    w->hk[e] = palp_hinge_stiffness(D, e2, pd && qd ? area : 2.0 * area);
+    /* The gel's part of D sees a stiff lesion as the support under the edge's ends does
+     * (their scales were set before the hinges: sarea / vertex_area). Not a soft one: load
+     * goes round a soft inclusion (the FE's 0.2x cyst changes the fingertip's compliance
+     * by only 0.28-0.30 of what the 5x lesion does), and the column already overstates it.
+     * Without lesions s is 1 and D is kept exactly, so lesion-free worlds keep their bits. */
+    const double s = fmax(1.0, 0.5 * (lesion_scale(w, v[0]) + lesion_scale(w, v[1])));
+    const double De = Ds > 0.0 && s != 1.0 ? Ds + (D - Ds) * s : D;
+    w->hk[e] = palp_hinge_stiffness(De, e2, pd && qd ? area : 2.0 * area);
     if (!(pd && qd)) w->hk[e] *= 1.0 - w->def.membrane.rim_hinge_release; /* a rim edge: see palp.h */
   }
   free(he);

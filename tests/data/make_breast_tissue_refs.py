@@ -31,7 +31,7 @@ import make_long_term_level4 as lt  # provenance() and the compacted level-4 fie
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENE = "config/phantoms/dome.json"
 D2_SCENE = "config/paper_step_breast_tissue.json"
-SITES = "pole,45deg,60deg,70deg"
+SITES = "pole,45deg,60deg,70deg,pole_lesion"
 CMD = ["finger", "--scene", SCENE, "--level", "3", "--site", SITES, "--max-force", "13", "--no-force-table"]
 
 

@@ -238,6 +238,10 @@ static void check_replay(void) {
             memcmp(&a.world.membrane.rim_hinge_release, &b.world.membrane.rim_hinge_release, sizeof(double)) == 0,
         "rim hinge release %.17g written and read back as %.17g", a.world.membrane.rim_hinge_release,
         b.world.membrane.rim_hinge_release);
+  CHECK(a.world.membrane.skin_bending_stiffness > 0 &&
+            memcmp(&a.world.membrane.skin_bending_stiffness, &b.world.membrane.skin_bending_stiffness, sizeof(double)) == 0,
+        "skin bending stiffness %.17g written and read back as %.17g", a.world.membrane.skin_bending_stiffness,
+        b.world.membrane.skin_bending_stiffness);
   palp_world *wa = palp_scene_create_world(&a, NULL), *wb = palp_scene_create_world(&b, NULL);
   CHECK(wa && wb, "worlds from both scenes");
   if (!wa || !wb) return;

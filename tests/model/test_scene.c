@@ -61,6 +61,11 @@ int main(void) {
   expect_error("\"E1_Pa\":4.2e6,", "", "membrane.E1_Pa");
   expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"rim_hinge_release\":1.5", "membrane.rim_hinge_release: must be in [0, 1]");
   expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"rim_hinge_release\":\"pinned\"", "membrane.rim_hinge_release");
+  /* the skin's share of the hinges' D: none without bending, never more than D */
+  expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"skin_bending_stiffness_N_m\":1e-4",
+               "membrane.skin_bending_stiffness_N_m: must be in [0, bending_stiffness_N_m]");
+  expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"bending_stiffness_N_m\":1e-3,\"skin_bending_stiffness_N_m\":2e-3",
+               "membrane.skin_bending_stiffness_N_m: must be in [0, bending_stiffness_N_m]");
   expect_error("\"vertex_count\":120", "\"vertex_count\":12.5", "mesh.vertex_count");
   expect_error("\"law\":\"polytropic\"", "\"law\":\"ideal\"", "gel.law");
   expect_error("\"dt_s\":0.01", "\"dt_s\":-0.01", "time.dt_s");
