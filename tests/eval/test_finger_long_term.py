@@ -19,7 +19,12 @@ from the written CSV:
   whose level-4 curves were stopped earlier for time reach less);
 - at the pole the real-time force is nearly linear, as the FE's is (the skin bends
   like a plate on the gel): the stiffness over 0.25-1 mm and over 1-2 mm differ by
-  less than 30%.
+  less than 30%;
+- the lesion's gain (F_lesion / F_pole - 1 at equal depth, each model against itself) is at
+  least 0.45 of the FE's at every stored depth: a floor, not the issue's agreement, which this
+  set misses (measured 2026-11-28 with the hinges' gel part seeing the lesion: real-time
+  +5.1..+5.5% against the FE's +6.2..+10.6%, 0.48-0.88 of it; with the support alone +1.1..+2.4%,
+  0.17-0.24, which fails; docs/haptics.md, "The hinges see the lesion").
 
 guard: the stored curves were made by today's fingertip FE code: the data file records
 PALP_FEM_CODE_VERSION and the sha256 of src/fem/fem_finger.c, which must equal today's
@@ -98,6 +103,21 @@ def stored(tool, scene, data):
         print("pole: real-time stiffness 0.25-1 mm %.0f N/m, 1-2 mm %.0f N/m (ratio %.2f, bound 1 +- 0.3)" %
               (s1, s2, s2 / s1))
         check(abs(s2 / s1 - 1.0) < 0.3, "stiffness ratio 1-2 mm / 0.25-1 mm %.2f" % (s2 / s1))
+    d0, fe0, rt0, _ = columns(rows, "pole")
+    d, fe, rt, _ = columns(rows, "pole_lesion")
+    plain = {round(x, 9): k for k, x in enumerate(d0)}
+    n = 0
+    for k in range(len(d)):
+        j = plain.get(round(d[k], 9))
+        if j is None:
+            continue
+        n += 1
+        gf, gr = fe[k] / fe0[j] - 1.0, rt[k] / rt0[j] - 1.0
+        print("lesion gain %.2f mm: FE %+.1f%%, real-time %+.1f%% (%.2f of it, floor 0.45)" %
+              (1e3 * d[k], 100 * gf, 100 * gr, gr / gf))
+        check(gr >= 0.45 * gf, "lesion gain at %.2f mm: real-time %+.1f%% below 0.45 of the FE's %+.1f%%" %
+              (1e3 * d[k], 100 * gr, 100 * gf))
+    check(n >= 4, "lesion gain compared at %d depths" % n)
 
 
 def guard(tool, scene, data, curves="level-4 fingertip curves",
