@@ -260,6 +260,7 @@ static void test_param_file_roundtrip(void) {
                                        0.271828183,  2.71828183e-3, 8.31446262e5, 0.577215665};
   palp_eval_params_set(&s.world, p);
   s.world.gel.support_stiffening = 4.25, s.world.gel.support_stiffening_power = 2.5; /* carried over, not fitted */
+  s.world.membrane.skin_bending_stiffness = 1.25e-3; /* carried over too (below the fitted D 2.72e-3) */
   char dir[] = "/tmp/palp_eval_paramsXXXXXX";
   CHECK(mkdtemp(dir) != NULL, "mkdtemp");
   char ppath[256], spath[256];
@@ -289,6 +290,8 @@ static void test_param_file_roundtrip(void) {
     CHECK(back.world.gel.support_stiffening == 4.25 && back.world.gel.support_stiffening_power == 2.5,
           "the stiffening support not carried over: %g, %g", back.world.gel.support_stiffening,
           back.world.gel.support_stiffening_power);
+    CHECK(back.world.membrane.skin_bending_stiffness == 1.25e-3, "the skin's share of D not carried over: %g",
+          back.world.membrane.skin_bending_stiffness);
   }
   remove(ppath);
   remove(spath);
