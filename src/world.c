@@ -1661,6 +1661,13 @@ static int half_edge_cmp(const void *x, const void *y) {
   if (p->hi != q->hi) return p->hi < q->hi ? -1 : 1;
   return (p->t > q->t) - (p->t < q->t);
 }
+
+/* The lesion support scale set for vertex i (1 without lesions, exactly). */
+static double lesion_scale(const palp_world *w, int i) {
+  const double a = w->mesh.vertex_area[i];
+  return a > 0.0 ? w->sarea[i] / a : 1.0;
+}
+
 static double tri_area(const palp_vec3 *x, const int *T) {
   return 0.5 * v3_len(v3_cross(v3_sub(x[T[1]], x[T[0]]), v3_sub(x[T[2]], x[T[0]])));
 }
@@ -1670,12 +1677,6 @@ static double tri_area(const palp_vec3 *x, const int *T) {
  * only free vertex is the dome triangle's wing, which clamps the skin's slope there
  * (the phantom is bonded to its base); such a hinge takes twice the dome triangle's
  * area, as if mirrored, since the base's long slivers say nothing of the skin. */
-/* The lesion support scale set for vertex i (1 without lesions, exactly). */
-static double lesion_scale(const palp_world *w, int i) {
-  const double a = w->mesh.vertex_area[i];
-  return a > 0.0 ? w->sarea[i] / a : 1.0;
-}
-
 static int build_hinges(palp_world *w) {
   const palp_mesh *m = &w->mesh;
   const int nt = m->triangle_count;

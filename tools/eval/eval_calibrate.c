@@ -90,6 +90,8 @@ void palp_eval_params_set(palp_world_def *w, const double p[PALP_EVAL_P_COUNT]) 
   w->gel.added_mass_fraction = p[PALP_EVAL_P_ADDED_MASS];
   w->gel.support_bulk_fraction = p[PALP_EVAL_P_BULK_FRACTION];
   w->membrane.bending_stiffness = p[PALP_EVAL_P_BENDING];
+  /* the skin's share of D is not fitted, but never above D (a world refuses it) */
+  w->membrane.skin_bending_stiffness = fmin(w->membrane.skin_bending_stiffness, w->membrane.bending_stiffness);
   w->gel.support_relax_modulus = p[PALP_EVAL_P_RELAX_K];
   w->gel.support_relax_time = p[PALP_EVAL_P_RELAX_TAU];
 }
@@ -687,10 +689,10 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
           m->thickness, m->density, m->E1, m->eta1, m->E2, m->eta2);
   if (m->bending_stiffness > 0.0) fprintf(f, ",\n                \"bending_stiffness_N_m\": %.9g", m->bending_stiffness);
   if (m->rim_hinge_release > 0.0) fprintf(f, ",\n                \"rim_hinge_release\": %.9g", m->rim_hinge_release);
-  /* Carried over, not fitted: the skin's own plate stiffness comes from its material. A
-   * fit that took D below it leaves D_skin = D (every hinge the skin's, none seeing a lesion). */
-  if (m->skin_bending_stiffness > 0.0 && m->bending_stiffness > 0.0)
-    fprintf(f, ",\n                \"skin_bending_stiffness_N_m\": %.9g", fmin(m->skin_bending_stiffness, m->bending_stiffness));
+  /* Carried over, not fitted: the skin's own plate stiffness comes from its material (a
+   * fit that took D below it has D_skin = D: every hinge the skin's, none seeing a lesion). */
+  if (m->skin_bending_stiffness > 0.0)
+    fprintf(f, ",\n                \"skin_bending_stiffness_N_m\": %.9g", m->skin_bending_stiffness);
   fprintf(f, " },\n");
   fprintf(f,
           "  \"gel\": { \"law\": \"%s\", \"pressure_Pa\": %.9g, \"a1\": %.9g, \"a2_Pa_s_m3\": %.9g, \"a3_s2\": %.9g,\n"
