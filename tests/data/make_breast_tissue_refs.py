@@ -26,17 +26,13 @@ import subprocess
 import sys
 import tempfile
 
-import make_long_term_level4 as lt  # provenance() and the compacted level-4 field (this folder is on sys.path)
+import make_long_term_level4 as lt  # the compacted level-4 field and write_finger() (this folder is on sys.path)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENE = "config/phantoms/dome.json"
 D2_SCENE = "config/paper_step_breast_tissue.json"
 SITES = "pole,45deg,60deg,70deg,pole_lesion"
 CMD = ["finger", "--scene", SCENE, "--level", "3", "--site", SITES, "--max-force", "13", "--no-force-table"]
-
-
-def provenance(how):
-    return lt.provenance(how, "make_breast_tissue_refs.py")
 
 
 def write_d2(build, tmp):
@@ -79,13 +75,8 @@ def main():
     else:
         subprocess.run([fem] + CMD + ["--out", out], check=True, cwd=ROOT)
         how = "palp-fem " + " ".join(CMD)
-    path = os.path.join(ROOT, "tests/data/fem_level3_breast_tissue_finger.csv")
-    with open(path, "w") as f:
-        f.write(provenance(how))
-        f.write("# FE: rigid 8 mm sphere, relaxed static, breast_tissue profile, level 3 (4,320 hexahedra); the tests "
-                "read the FE columns only (depth_m, fem_N, fem_min_gap_m)\n")
-        f.write(open(out).read())
-    print("wrote " + path)
+    lt.write_finger(os.path.join(ROOT, "tests/data/fem_level3_breast_tissue_finger.csv"), how,
+                    "breast_tissue profile, level 3 (4,320 hexahedra)", out, "make_breast_tissue_refs.py")
 
 
 if __name__ == "__main__":

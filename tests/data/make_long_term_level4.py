@@ -54,6 +54,17 @@ def provenance(cmd, script="make_long_term_level4.py"):
             (script, commit, " (src/fem modified)" if dirty else "", ver.split()[2], sha, cmd))
 
 
+def write_finger(path, how, fe, finger, script="make_long_term_level4.py"):
+    """A `palp-fem finger` CSV (finger) as a stored reference: the provenance header, a line saying
+    which FE (fe) the curves come from, then the CSV itself."""
+    with open(path, "w") as f:
+        f.write(provenance(how, script))
+        f.write("# FE: rigid 8 mm sphere, relaxed static, %s; the tests read the FE columns only (depth_m, fem_N, "
+                "fem_min_gap_m)\n" % fe)
+        f.write(open(finger).read())
+    print("wrote " + path)
+
+
 def write_level4_d2(ev, scene, cache, tmp, path, about, script="make_long_term_level4.py"):
     """Distribution II's level-4 FEM field of scene (and the level-2 peak, in the header), compacted:
     every vertex at frames 0-11 and every 20th, the FEM's most displaced vertex at every frame.
@@ -106,13 +117,8 @@ def main():
     else:
         sh([fem, "finger", "--scene", SCENE, "--level", "4", "--site", "all", "--out", finger])
         how = "palp-fem finger --scene %s --level 4 --site all" % SCENE
-    path = os.path.join(ROOT, "tests/data/fem_level4_long_term_finger.csv")
-    with open(path, "w") as f:
-        f.write(provenance(how))
-        f.write("# FE: rigid 8 mm sphere, relaxed static, level 4 (10,496 hexahedra); the tests read the FE columns "
-                "only (depth_m, fem_N, fem_min_gap_m)\n")
-        f.write(open(finger).read())
-    print("wrote " + path)
+    write_finger(os.path.join(ROOT, "tests/data/fem_level4_long_term_finger.csv"), how, "level 4 (10,496 hexahedra)",
+                 finger)
 
 
 if __name__ == "__main__":
