@@ -489,9 +489,9 @@ def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, l
     check(abs(peak_rt / peak4 - 1.0) <= peak_bound, "model peak %.4f mm vs level-4 FEM %.4f mm" %
           (10 * peak_rt, 10 * peak4))
     v = head.get("peak_vertex")
-    check(v is not None and all((fr, v) in ref for fr in range(400)),
-          "stored reference: no vertex stored at every frame (its '# level-4 FEM peak ... at vertex N' line)")
-    if v is None or not all((fr, v) in ref for fr in range(400)):
+    traced = v is not None and all((fr, v) in ref for fr in range(400))
+    check(traced, "stored reference: no vertex stored at every frame (its '# level-4 FEM peak ... at vertex N' line)")
+    if not traced:
         return
     rec_rt = recovery_s([(time_of[fr], rt[(fr, v)]) for fr in range(400)])
     rec_fem = recovery_s([(time_of[fr], ref[(fr, v)]) for fr in range(400)])
