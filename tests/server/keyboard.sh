@@ -3,9 +3,8 @@
 # the default 1 N, "++" raises it to 1.5 N, space lifts, q quits. The station's
 # peak feedback is the force the phantom pushes back with at quasi-static
 # equilibrium: 1.5 N (Newton's third law), within 0.15 N. Domain 109.
-# The first key waits 3 s (was 1.5): the test failed once in the suite at -j2 beside FEM runs
-# (load 4-6; its log was not kept) and passed alone 4 of 4 times; a slow station start is the
-# likely cause.
+# Each key waits for the station to show the last one's effect (fixed sleeps of 1.5 s, then 3 s,
+# failed in the suite at -j2 beside FEM runs: a station that starts late gets its keys as one burst).
 set -u
 server=$1 client=$2 config_dir=$3
 command -v script >/dev/null || { echo "FAIL script(1) not installed (util-linux)"; exit 1; }
@@ -14,7 +13,16 @@ tmp=$(mktemp -d)
 trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 "$server" --config "$config_dir/server.json" --domain 109 --no-db > "$tmp/server.log" 2>&1 &
 spid=$!
-(sleep 3; printf ' '; sleep 0.8; printf '++'; sleep 1.5; printf ' '; sleep 0.5; printf 'q') |
+wait_for() {  # PATTERN: until the station's output shows it, at most 30 s
+  n=0
+  until tr '\r' '\n' < "$tmp/client.log" | grep -qF -- "$1"; do
+    n=$((n + 1)); [ $n -gt 300 ] && return 1; sleep 0.1
+  done
+}
+(wait_for "keyboard: arrows move"; sleep 0.5; printf ' '
+ wait_for "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.00 N"; sleep 0.8; printf '++'
+ wait_for "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 1.5; printf ' '
+ wait_for "lift  dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 0.5; printf 'q') |
   script -qec "$client --role trainee --domain 109 --phantom 1 --name keys --input keyboard --print-period 0" \
     /dev/null > "$tmp/client.log" 2>&1
 crc=$?
