@@ -9,7 +9,14 @@
  * so a layer at depth z contributes compliance in proportion to sigma_z(z) / E(z).
  * Integrating along the column from the surface towards the centre, a lesion of
  * stiffness ratio s cutting the column over [z1, z2] scales the support stiffness by
- *   k_i / k = C0 / (C0 - (1 - 1/s) C(z1, z2)).
+ *   k_i / k = C0 / (C0 - (1 - q) C(z1, z2)),
+ * q the chord's compliance relative to the gel's. A stiff lesion under the fingertip is
+ * pushed into by the column above it: in series, q = 1/s (against the level-3 FE, with
+ * the hinges' share, within 2.4 points of its gain; docs/haptics.md). A soft cyst is not:
+ * the gel around it carries the load, and it strains as Eshelby's sphere in an
+ * incompressible matrix does, q = 1 / (1 + beta (s - 1)), beta = 0.4 (not fitted). The
+ * series sum (q = 5 for a 0.2x cyst) softened the breast-tissue fingertip over a cyst
+ * 14-21% where the FE softens it 2.3-3.2%; Eshelby's q (1.47) gives 3.0-4.5%.
  * The primitive is closed form: S(z) = int_0^z sigma_z / p dz
  *   = z - sqrt(c^2 + z^2) - c^2 / sqrt(c^2 + z^2) + 2 c   [m],  S(inf) = 2 c.
  */
@@ -38,8 +45,10 @@ double palp_lesion_support_scale(const palp_lesion *les, int count, palp_vec3 x,
     double z1 = -b - sqrt(disc), z2 = -b + sqrt(disc);
     z1 = fmax(z1, 0.0), z2 = fmin(z2, length);
     if (!(z2 > z1)) continue;
-    C -= (1.0 - 1.0 / les[l].stiffness_ratio) * (S(z2, c) - S(z1, c));
+    const double s = les[l].stiffness_ratio;
+    const double q = s >= 1.0 ? 1.0 / s : 1.0 / (1.0 + PALP_LESION_SOFT_BETA * (s - 1.0));
+    C -= (1.0 - q) * (S(z2, c) - S(z1, c));
   }
-  /* A column entirely of a soft cyst can be at most 1/ratio as stiff; keep C > 0. */
+  /* q < 1 / (1 - beta) = 1.67 for any cyst, so C stays above 0.33 C0; kept > 0 anyway. */
   return C0 / fmax(C, 1e-3 * C0);
 }

@@ -221,11 +221,16 @@ int palp_effect_from_name(const char *name, palp_effect *out);
  * dome's centre whose compliance is weighted by the stress a fingertip-sized load
  * puts at each depth (Boussinesq, a uniformly loaded circle of radius c: sigma_z(z) /
  * p = 1 - z^3 / (c^2 + z^2)^{3/2}); a lesion cut by the column replaces the gel's
- * compliance over its chord by 1/ratio of it, so the vertex's support stiffens by
- *   k_i / k = C0 / (C0 - (1 - 1/ratio) C_chord),  C = integral of sigma_z / p dz. */
+ * compliance over its chord by q of it, so the vertex's support stiffens by
+ *   k_i / k = C0 / (C0 - (1 - q) C_chord),  C = integral of sigma_z / p dz.
+ * A stiff lesion (ratio >= 1) is loaded in series by the column above it: q = 1/ratio.
+ * Load goes round a soft one (ratio < 1), and q is the strain it takes in a matrix that
+ * strains by 1 (Eshelby's sphere in an incompressible matrix): q = 1 / (1 + beta (ratio - 1)),
+ * beta = 2 (4 - 5 nu) / (15 (1 - nu)) = 0.4 at nu = 0.5. */
 #define PALP_MAX_LESIONS 8
 #define PALP_MAX_VALIDATED 8 /* entries of palp_world_def.validated_* */
 #define PALP_LESION_CONTACT_SCALE 0.008 /* c [m]: the fingertip the training is for */
+#define PALP_LESION_SOFT_BETA 0.4       /* beta: Eshelby's shear factor at nu = 0.5 */
 typedef struct palp_lesion {
   palp_vec3 center;       /* [m], inside the dome, clear of the base */
   double radius;          /* [m] */

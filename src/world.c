@@ -1724,7 +1724,8 @@ static int build_hinges(palp_world *w) {
     /* The gel's part of D sees a stiff lesion as the support under the edge's ends does
      * (their scales were set before the hinges: sarea / vertex_area). Not a soft one: load
      * goes round a soft inclusion (the FE's 0.2x cyst changes the fingertip's compliance
-     * by only 0.28-0.30 of what the 5x lesion does), and the column already overstates it.
+     * by only 0.28-0.30 of what the 5x lesion does), which the support's Eshelby strain
+     * ratio already carries (src/lesion.c; splitting D too doubled the cyst's softening).
      * Without lesions s is 1 and D is kept exactly, so lesion-free worlds keep their bits. */
     const double s = fmax(1.0, 0.5 * (lesion_scale(w, v[0]) + lesion_scale(w, v[1])));
     const double De = Ds > 0.0 && s != 1.0 ? Ds + (D - Ds) * s : D;

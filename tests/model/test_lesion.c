@@ -14,8 +14,8 @@
 static const double R = 0.04, r = 0.008;
 
 /* Trapezoid integration of the Boussinesq weight along the column (independent of
- * the closed form in src/lesion.c). */
-static double column_scale_numeric(const palp_lesion *L, palp_vec3 x, palp_vec3 n, double length) {
+ * the closed form in src/lesion.c), the chord's compliance q times the gel's. */
+static double column_scale_numeric_q(const palp_lesion *L, palp_vec3 x, palp_vec3 n, double length, double q) {
   const double c = PALP_LESION_CONTACT_SCALE;
   const int N = 200000;
   double C0 = 0.0, C = 0.0;
@@ -25,9 +25,14 @@ static double column_scale_numeric(const palp_lesion *L, palp_vec3 x, palp_vec3 
     const palp_vec3 p = {x.x - z * n.x - L->center.x, x.y - z * n.y - L->center.y, x.z - z * n.z - L->center.z};
     const int in = p.x * p.x + p.y * p.y + p.z * p.z <= L->radius * L->radius;
     C0 += s;
-    C += in ? s / L->stiffness_ratio : s;
+    C += in ? s * q : s;
   }
   return C0 / C;
+}
+
+/* A stiff lesion in series with the column: q = 1 / ratio. */
+static double column_scale_numeric(const palp_lesion *L, palp_vec3 x, palp_vec3 n, double length) {
+  return column_scale_numeric_q(L, x, n, length, 1.0 / L->stiffness_ratio);
 }
 
 /* The fingertip pressed at the pole to depth and held; the force's magnitude [N], and
@@ -110,6 +115,23 @@ int main(void) {
   CHECK(palp_lesion_support_scale(&L, 0, pole, up, R) == 1.0, "no lesion: exactly 1");
   const palp_lesion cyst = {.center = L.center, .radius = L.radius, .stiffness_ratio = 0.2};
   CHECK(palp_lesion_support_scale(&cyst, 1, pole, up, R) < 1.0, "a soft cyst softens the support");
+  /* A soft cyst strains as Eshelby's sphere in an incompressible matrix, not as a chord in
+   * series: its strain over the matrix's is 1 / (1 + beta (ratio - 1)), beta = 2 (4 - 5 nu) /
+   * (15 (1 - nu)) at nu = 0.5 (Eshelby 1957; Mura, "Micromechanics of Defects in Solids",
+   * Sec. 22), i.e. 1 / 0.68 = 1.47 for 0.2x, not 5. */
+  const double nu = 0.5, beta = 2.0 * (4.0 - 5.0 * nu) / (15.0 * (1.0 - nu));
+  const double q_cyst = 1.0 / (1.0 + beta * (0.2 - 1.0));
+  CHECK_NEAR(q_cyst, 1.0 / 0.68, 1e-12, "Eshelby's strain ratio of a 0.2x sphere");
+  for (int k = 0; k < 4; ++k) {
+    const double th = k * 4.0 * PI / 180.0;
+    const palp_vec3 n = {sin(th), 0, cos(th)}, x = {R * n.x, 0, R * n.z};
+    const double a = palp_lesion_support_scale(&cyst, 1, x, n, R), b = column_scale_numeric_q(&cyst, x, n, R, q_cyst);
+    const double series = column_scale_numeric(&cyst, x, n, R);
+    printf("cyst (0.2x) support scale %2d deg from its axis: %.6f (numerical %.6f; in series it would be %.6f)\n", 4 * k,
+           a, b, series);
+    CHECK_NEAR(a, b, 1e-4 * b, "cyst: closed form vs numerical integration with Eshelby's strain ratio");
+    if (k == 0) CHECK(a > 0.8 && series < 0.4, "load goes round a cyst: support x%.3f (in series x%.3f)", a, series);
+  }
 
   /* 2. What a fingertip feels 10 mm deep at the pole over a 10 mm lesion. */
   const double F0 = press_force(NULL, 0, 0.010);
