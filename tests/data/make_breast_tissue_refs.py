@@ -19,6 +19,17 @@ on this 2-core machine) with `compute`; FINGER_CSV...: outputs of that command (
 e.g. one per site; each site taken from the first file that has it) to reuse for the FE columns, the
 real-time columns then recomputed with the current parameters (`--fe-from`).
 PALP_REF_NOTE=TEXT adds a line to the header (how the reused curves were made).
+
+    tests/data/make_breast_tissue_refs.py BUILD --level4 [FINGER_CSV... | compute]
+
+fem_level4_breast_tissue_finger.csv: the same at level 4 (`--level 4 --site pole,45deg --max-force 3`;
+~1.5 h of FE a site here), where level 3 is 6-11% stiff for a fingertip.
+
+    tests/data/make_breast_tissue_refs.py BUILD --cyst [FINGER_CSV... | compute]
+
+fem_level3_breast_tissue_cyst.csv: level 3 at the pole and over a 0.2x cyst where the 5x lesion is
+(`--site pole,pole_lesion --lesion-ratio 0.2 --max-force 6`); FINGER_CSV: the cyst's run first, then
+fem_level3_breast_tissue_finger.csv for the plain pole (each site from the first file that has it).
 """
 import csv
 import os
@@ -44,39 +55,64 @@ def write_d2(build, tmp):
                        "make_breast_tissue_refs.py")
 
 
+# What each reference is: its `palp-fem` command, the file it goes to, and what the header says of its FE.
+REFS = {
+    "level3": (CMD, "tests/data/fem_level3_breast_tissue_finger.csv", "breast_tissue profile, level 3 (4,320 hexahedra)"),
+    # level 4 (10,496 hexahedra, ~1.5 h of FE a site here): where level 3 is not converged for a fingertip
+    "level4": (["finger", "--scene", SCENE, "--level", "4", "--site", "pole,45deg", "--max-force", "3",
+                "--no-force-table"],
+               "tests/data/fem_level4_breast_tissue_finger.csv", "breast_tissue profile, level 4 (10,496 hexahedra)"),
+    # a soft cyst (0.2x the gel) where the 5x lesion is; its pole_lesion rows are the cyst's
+    "cyst": (["finger", "--scene", SCENE, "--level", "3", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
+              "--max-force", "6", "--no-force-table"],
+             "tests/data/fem_level3_breast_tissue_cyst.csv",
+             "breast_tissue profile, level 3 (4,320 hexahedra), pole_lesion = a 0.2x cyst (10 mm, centre 10 mm deep)"),
+}
+
+
+def join(paths, tmp):
+    """One CSV of the sites of paths, each site from the first file that has it."""
+    joined, seen, header, rows = os.path.join(tmp, "joined.csv"), set(), None, []
+    for path in paths:
+        with open(path) as f:
+            rs = list(csv.DictReader(l for l in f if not l.startswith("#")))
+        for site in dict.fromkeys(r["site"] for r in rs):
+            if site not in seen:
+                seen.add(site)
+                rows += [r for r in rs if r["site"] == site]
+        header = header or list(rs[0].keys())
+    with open(joined, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=header)
+        w.writeheader()
+        w.writerows(rows)
+    return joined
+
+
 def main():
     build = os.path.abspath(sys.argv[1])
     fem = os.path.join(build, "tools/fem/palp-fem")
     tmp = tempfile.mkdtemp(prefix="palp_bt_refs_")
-    write_d2(build, tmp)
-    if len(sys.argv) < 3:  # neither stored curves nor `compute`: the displacement file only
+    args = sys.argv[2:]
+    which = "level3"
+    if args and args[0] in ("--level4", "--cyst"):
+        which, args = args[0][2:], args[1:]
+    elif not args:  # neither stored curves nor `compute`: the displacement file only
+        write_d2(build, tmp)
         return
+    else:
+        write_d2(build, tmp)
+    cmd, path, fe = REFS[which]
     out = os.path.join(tmp, "finger.csv")
-    if len(sys.argv) > 2 and sys.argv[2] != "compute":
-        joined, seen, header = os.path.join(tmp, "joined.csv"), set(), None
-        rows = []
-        for path in sys.argv[2:]:
-            with open(path) as f:
-                rs = list(csv.DictReader(l for l in f if not l.startswith("#")))
-            for site in dict.fromkeys(r["site"] for r in rs):
-                if site not in seen:
-                    seen.add(site)
-                    rows += [r for r in rs if r["site"] == site]
-            header = header or list(rs[0].keys())
-        with open(joined, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=header)
-            w.writeheader()
-            w.writerows(rows)
-        subprocess.run([fem] + CMD + ["--fe-from", joined, "--out", out], check=True, cwd=ROOT)
+    if args and args[0] != "compute":
+        subprocess.run([fem] + cmd + ["--fe-from", join(args, tmp), "--out", out], check=True, cwd=ROOT)
         how = ("palp-fem %s (FE columns), real-time columns recomputed with the parameters of this commit by --fe-from"
-               % " ".join(CMD))
+               % " ".join(cmd))
         if os.environ.get("PALP_REF_NOTE"):
             how += "\n# " + os.environ["PALP_REF_NOTE"]
     else:
-        subprocess.run([fem] + CMD + ["--out", out], check=True, cwd=ROOT)
-        how = "palp-fem " + " ".join(CMD)
-    lt.write_finger(os.path.join(ROOT, "tests/data/fem_level3_breast_tissue_finger.csv"), how,
-                    "breast_tissue profile, level 3 (4,320 hexahedra)", out, "make_breast_tissue_refs.py")
+        subprocess.run([fem] + cmd + ["--out", out], check=True, cwd=ROOT)
+        how = "palp-fem " + " ".join(cmd)
+    lt.write_finger(os.path.join(ROOT, path), how, fe, out, "make_breast_tissue_refs.py")
 
 
 if __name__ == "__main__":
