@@ -147,9 +147,9 @@ typedef struct palp_membrane_params {
    * default, leaves every hinge at D. The fitted D is several times the skin's plate
    * stiffness E t^3 / (12 (1 - nu^2)): the rest stands in for the gel under the
    * coarse net, so that part sees a lesion as the support does. With D_skin > 0 a
-   * hinge over a stiff lesion carries D_skin + (D - D_skin) s, s the mean of its edge's
-   * two vertices' lesion support scales (palp_lesion_support_scale), not below 1 (a soft
-   * cyst leaves D); without lesions s = 1 and the hinge is exactly D (docs/haptics.md,
+   * hinge over a lesion carries D_skin + (D - D_skin) s, s the mean of its edge's
+   * two vertices' lesion support scales (palp_lesion_support_scale; below 1 over a soft
+   * cyst); without lesions s = 1 and the hinge is exactly D (docs/haptics.md,
    * "The hinges see the lesion"). */
   double skin_bending_stiffness;
 } palp_membrane_params;

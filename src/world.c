@@ -1721,13 +1721,14 @@ static int build_hinges(palp_world *w) {
     memcpy(w->hinge[e], v, sizeof v);
     memcpy(w->hgrad[e], g, sizeof g);
     w->hrest[e] = palp_hinge_angle(m->rest[v[0]], m->rest[v[1]], m->rest[v[2]], m->rest[v[3]]);
-    /* The gel's part of D sees a stiff lesion as the support under the edge's ends does
-     * (their scales were set before the hinges: sarea / vertex_area). Not a soft one: load
-     * goes round a soft inclusion (the FE's 0.2x cyst changes the fingertip's compliance
-     * by only 0.28-0.30 of what the 5x lesion does), which the support's Eshelby strain
-     * ratio already carries (src/lesion.c; splitting D too doubled the cyst's softening).
-     * Without lesions s is 1 and D is kept exactly, so lesion-free worlds keep their bits. */
-    const double s = fmax(1.0, 0.5 * (lesion_scale(w, v[0]) + lesion_scale(w, v[1])));
+    /* The gel's part of D sees a lesion as the support under the edge's ends does (their
+     * scales were set before the hinges: sarea / vertex_area), a stiff one and a soft one
+     * alike. Until the support's cyst strained as Eshelby's sphere (src/lesion.c) the series
+     * scale made a 0.2x cyst 0.38x and the split doubled its softening, so a cyst kept D;
+     * with Eshelby's 0.84 the split brings the long-term cyst from 0.2 of the level-4 FE's
+     * loss to 0.6-1.0 of it (docs/haptics.md). Without lesions s is 1 and D is kept exactly,
+     * so lesion-free worlds keep their bits. */
+    const double s = 0.5 * (lesion_scale(w, v[0]) + lesion_scale(w, v[1]));
     const double De = Ds > 0.0 && s != 1.0 ? Ds + (D - Ds) * s : D;
     w->hk[e] = palp_hinge_stiffness(De, e2, pd && qd ? area : 2.0 * area);
     if (!(pd && qd)) w->hk[e] *= 1.0 - w->def.membrane.rim_hinge_release; /* a rim edge: see palp.h */

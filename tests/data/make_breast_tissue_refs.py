@@ -31,13 +31,12 @@ fem_level3_breast_tissue_cyst.csv: level 3 at the pole and over a 0.2x cyst wher
 (`--site pole,pole_lesion --lesion-ratio 0.2 --max-force 6`); FINGER_CSV: the cyst's run first, then
 fem_level3_breast_tissue_finger.csv for the plain pole (each site from the first file that has it).
 """
-import csv
 import os
 import subprocess
 import sys
 import tempfile
 
-import make_long_term_level4 as lt  # the compacted level-4 field and write_finger() (this folder is on sys.path)
+import make_long_term_level4 as lt  # the compacted level-4 field, join() and write_finger() (this folder is on sys.path)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENE = "config/phantoms/dome.json"
@@ -70,24 +69,6 @@ REFS = {
 }
 
 
-def join(paths, tmp):
-    """One CSV of the sites of paths, each site from the first file that has it."""
-    joined, seen, header, rows = os.path.join(tmp, "joined.csv"), set(), None, []
-    for path in paths:
-        with open(path) as f:
-            rs = list(csv.DictReader(l for l in f if not l.startswith("#")))
-        for site in dict.fromkeys(r["site"] for r in rs):
-            if site not in seen:
-                seen.add(site)
-                rows += [r for r in rs if r["site"] == site]
-        header = header or list(rs[0].keys())
-    with open(joined, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=header)
-        w.writeheader()
-        w.writerows(rows)
-    return joined
-
-
 def main():
     build = os.path.abspath(sys.argv[1])
     fem = os.path.join(build, "tools/fem/palp-fem")
@@ -104,7 +85,7 @@ def main():
     cmd, path, fe = REFS[which]
     out = os.path.join(tmp, "finger.csv")
     if args and args[0] != "compute":
-        subprocess.run([fem] + cmd + ["--fe-from", join(args, tmp), "--out", out], check=True, cwd=ROOT)
+        subprocess.run([fem] + cmd + ["--fe-from", lt.join(args, tmp), "--out", out], check=True, cwd=ROOT)
         how = ("palp-fem %s (FE columns), real-time columns recomputed with the parameters of this commit by --fe-from"
                % " ".join(cmd))
         if os.environ.get("PALP_REF_NOTE"):

@@ -5,6 +5,7 @@ eval_finger_level4_guard compare with (docs/materials.md, "Refitted against the
 level-4 FEM"):
 
     tests/data/make_long_term_level4.py BUILD_DIR [FINGER_CSV | compute]
+    tests/data/make_long_term_level4.py BUILD_DIR --cyst [FINGER_CSV... | compute]
 
 - fem_level4_long_term_d2.csv: the FEM column (fem_cm, |u| of every real-time
   vertex) of displacement_d2.csv written by
@@ -20,6 +21,11 @@ level-4 FEM"):
   output of that command (or the sites' outputs joined) to reuse for its FE
   columns, the real-time columns then recomputed with the current parameters
   (`--fe-from`). Without either, only the displacement file is written.
+
+- fem_level4_long_term_cyst.csv (`--cyst`): the pole and a 0.2x cyst where the lesion is
+  (`--site pole,pole_lesion --lesion-ratio 0.2 --max-force 5`, ~30 min of FE); FINGER_CSV...: the
+  cyst's run first, then fem_level4_long_term_finger.csv for the plain pole (each site from the
+  first file that has it).
 
 PALP_REF_CACHE=DIR reuses a FEM cache (palp-eval --cache-dir) for the displacement runs;
 PALP_REF_NOTE=TEXT adds a line to the fingertip file's header (how a reused FINGER_CSV was made).
@@ -94,10 +100,49 @@ def write_level4_d2(ev, scene, cache, tmp, path, about, script="make_long_term_l
     print("wrote %s (level-4 peak %.6g cm, level-2 peak %.6g cm)" % (path, peak, peaks[2]))
 
 
+def join(paths, tmp):
+    """One CSV of the sites of paths, each site from the first file that has it."""
+    joined, seen, header, rows = os.path.join(tmp, "joined.csv"), set(), None, []
+    for path in paths:
+        with open(path) as f:
+            rs = list(csv.DictReader(l for l in f if not l.startswith("#")))
+        for site in dict.fromkeys(r["site"] for r in rs):
+            if site not in seen:
+                seen.add(site)
+                rows += [r for r in rs if r["site"] == site]
+        header = header or list(rs[0].keys())
+    with open(joined, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=header)
+        w.writeheader()
+        w.writerows(rows)
+    return joined
+
+
+def cyst(fem, tmp, args):
+    """fem_level4_long_term_cyst.csv: the pole and a 0.2x cyst where the 5x lesion is."""
+    cmd = ["finger", "--scene", SCENE, "--level", "4", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
+           "--max-force", "5", "--no-force-table"]
+    out = os.path.join(tmp, "finger.csv")
+    if args and args[0] != "compute":
+        sh([fem] + cmd + ["--fe-from", join(args, tmp), "--out", out])
+        how = ("palp-fem %s (FE columns), real-time columns recomputed with the parameters of this commit by --fe-from"
+               % " ".join(cmd))
+        if os.environ.get("PALP_REF_NOTE"):
+            how += "\n# " + os.environ["PALP_REF_NOTE"]
+    else:
+        sh([fem] + cmd + ["--out", out])
+        how = "palp-fem " + " ".join(cmd)
+    write_finger(os.path.join(ROOT, "tests/data/fem_level4_long_term_cyst.csv"), how,
+                 "level 4 (10,496 hexahedra), pole_lesion = a 0.2x cyst (10 mm, centre 10 mm deep)", out)
+
+
 def main():
     build = os.path.abspath(sys.argv[1])
     ev, fem = os.path.join(build, "tools/eval/palp-eval"), os.path.join(build, "tools/fem/palp-fem")
     tmp = tempfile.mkdtemp(prefix="palp_level4_ref_")
+    if len(sys.argv) > 2 and sys.argv[2] == "--cyst":
+        cyst(os.path.join(build, "tools/fem/palp-fem"), tmp, sys.argv[3:])
+        return
     cache = os.environ.get("PALP_REF_CACHE", os.path.join(tmp, "cache"))  # an existing FEM cache may be reused
     write_level4_d2(ev, SCENE, cache, tmp, os.path.join(ROOT, "tests/data/fem_level4_long_term_d2.csv"),
                     "paper_long_term, distribution II (3 N uniform over the 5.2 cm^2 polar cap, step 0-2 s), 400 "

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The long-term default's fingertip against the level-4 FE fingertip (issue 12).
 
-    test_finger_long_term.py PALP_FEM SCENE FINGER_CSV [stored|guard|recompute]
+    test_finger_long_term.py PALP_FEM SCENE FINGER_CSV [stored|guard|recompute [--cyst CYST_CSV]]
 
 The FE curves (a rigid 8 mm sphere pressed by position into the FE dome, level 4,
 relaxed long-term reading, 0.25 mm steps until the FE force passes 5 N) are stored
@@ -25,6 +25,9 @@ from the written CSV:
   set misses (measured 2026-11-28 with the hinges' gel part seeing the lesion: real-time
   +5.1..+5.5% against the FE's +6.2..+10.6%, 0.48-0.88 of it; with the support alone +1.1..+2.4%,
   0.17-0.24, which fails; docs/haptics.md, "The hinges see the lesion").
+
+With --cyst CYST_CSV (tests/data/fem_level4_long_term_cyst.csv): over a 0.2x cyst where the lesion
+is, the force within 15% of the FE's and the cyst's loss within 2 points of the FE's (soft() below).
 
 guard: the stored curves were made by today's fingertip FE code: the data file records
 PALP_FEM_CODE_VERSION and the sha256 of src/fem/fem_finger.c, which must equal today's
@@ -158,10 +161,51 @@ def recompute(tool, scene, data):
           "tests/data/make_long_term_level4.py")
 
 
+def soft(tool, scene, data):
+    """A 0.2x cyst where the lesion is (CYST_CSV, level 4): both models lose force over it, the real-time
+    force within 15% of the FE's and its loss (F_cyst / F_pole - 1, each model against itself) within 2
+    points of the FE's at every stored depth (measured 2026-11-29: FE -2.3..-3.7%, real-time -2.2..-2.4%,
+    within 1.5 points, with the hinges' gel part seeing the cyst; without that -0.4..-0.9%, up to 2.8
+    points short, which fails; docs/haptics.md, "A soft cyst strains as Eshelby's sphere")."""
+    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_l4_cyst_"), "finger.csv")
+    r = run([tool, "finger", "--scene", scene, "--level", "4", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
+             "--fe-from", data, "--no-force-table", "--max-force", "5", "--out", out])
+    check(r.returncode == 0, "palp-fem finger (cyst) exited %d: %s" % (r.returncode, r.stderr[-500:]))
+    if r.returncode:
+        return
+    rows = read(out)
+    d0, fe0, rt0, _ = columns(rows, "pole")
+    d, fe, rt, dr = columns(rows, "pole_lesion")
+    plain = {round(x, 9): k for k, x in enumerate(d0)}
+    n, worst = 0, 0.0
+    for k in range(len(d)):
+        j = plain.get(round(d[k], 9))
+        if j is None:
+            continue
+        n += 1
+        q, gf, gr = rt[k] / fe[k], fe[k] / fe0[j] - 1.0, rt[k] / rt0[j] - 1.0
+        worst = max(worst, abs(gr - gf))
+        print("cyst %.2f mm: FE %.3f N (%+.1f%%), real-time %.3f N (%+.1f%%), ratio %.3f" %
+              (1e3 * d[k], fe[k], 100 * gf, rt[k], 100 * gr, q))
+        check(abs(dr[k] - d[k]) <= 5e-6, "cyst: proxy at %.4f mm for the FE's %.4f mm" % (1e3 * dr[k], 1e3 * d[k]))
+        check(gf < 0 and gr < 0, "cyst at %.2f mm: both models softer over it (FE %+.1f%%, real-time %+.1f%%)" %
+              (1e3 * d[k], 100 * gf, 100 * gr))
+        check(0.85 <= q <= 1.15, "cyst at %.2f mm: real-time / FE %.3f (15%%)" % (1e3 * d[k], q))
+        check(abs(gr - gf) <= 0.02, "cyst at %.2f mm: loss %+.1f%% against the FE's %+.1f%% (2 points)" %
+              (1e3 * d[k], 100 * gr, 100 * gf))
+    check(n >= 6, "cyst: compared at %d depths" % n)
+    print("cyst: %d depths, loss within %.1f points of the FE's" % (n, 100 * worst))
+
+
 def main():
     tool, scene, data = sys.argv[1], sys.argv[2], sys.argv[3]
     mode = sys.argv[4] if len(sys.argv) > 4 else "stored"
+    cyst = sys.argv[6] if len(sys.argv) > 6 and sys.argv[5] == "--cyst" else None
     {"stored": stored, "guard": guard, "recompute": recompute}[mode](tool, scene, data)
+    if cyst and mode == "stored":
+        soft(tool, scene, cyst)
+    elif cyst and mode == "guard":
+        guard(tool, scene, cyst, "level-4 cyst curves", "tests/data/make_long_term_level4.py BUILD --cyst compute")
     return 1 if common.failures else 0
 
 

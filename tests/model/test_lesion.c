@@ -67,11 +67,13 @@ static double press_force(const palp_lesion *les, int count, double depth) {
 
 /* 4. The hinges' gel part sees a stiff lesion (membrane.skin_bending_stiffness_N_m,
  * docs/haptics.md "The hinges see the lesion"), on the shipped breast-tissue set. Exact
- * properties: without lesions, and over a soft cyst, the world is bit for bit the one
- * without the split (the same state hash after the press); over the 10 mm 5x lesion
- * 10 mm deep the gain with the device 5 mm in grows by more than 2 points (measured
- * 2026-11-28: +8.4% -> +11.6%; at the FE's matched 5 mm, +10.4% -> +13.6% against the
- * level-3 FE's +14.9%, which eval_finger_breast_tissue checks). */
+ * properties: without lesions the world is bit for bit the one without the split (the
+ * same state hash after the press); over the 10 mm 5x lesion 10 mm deep the gain with the
+ * device 5 mm in grows by more than 2 points (measured 2026-11-28: +8.4% -> +11.6%; at the
+ * FE's matched 5 mm, +10.4% -> +13.6% against the level-3 FE's +14.9%, which
+ * eval_finger_breast_tissue checks); over a 0.2x cyst there the hinges see it too (since
+ * 2026-11-29): the loss grows by more than 1 point (measured -3.4% -> -4.8%; the level-3
+ * FE's at the matched 5 mm -5.5%, which eval_finger_breast_tissue checks). */
 static void test_hinges_see_lesion(void) {
   palp_scene sc;
   char err[256];
@@ -90,9 +92,12 @@ static void test_hinges_see_lesion(void) {
   const double F0s = press_def(split, NULL, 0, 0.005, &ha), F0p = press_def(plain, NULL, 0, 0.005, &hb);
   CHECK(ha == hb && F0s == F0p, "no lesion: the same world with and without the split (hash %016llx / %016llx)",
         (unsigned long long)ha, (unsigned long long)hb);
-  const double Fcs = press_def(split, &cyst, 1, 0.005, &ha), Fcp = press_def(plain, &cyst, 1, 0.005, &hb);
-  CHECK(ha == hb && Fcs == Fcp, "a soft cyst: the hinges keep D (hash %016llx / %016llx)", (unsigned long long)ha,
-        (unsigned long long)hb);
+  const double Fcs = press_def(split, &cyst, 1, 0.005, NULL), Fcp = press_def(plain, &cyst, 1, 0.005, NULL);
+  const double cs = Fcs / F0s - 1.0, cp = Fcp / F0p - 1.0;
+  printf("breast-tissue dome, 5 mm at the pole over a 0.2x cyst there: loss %+.2f%% with the split, %+.2f%% support "
+         "only\n", 100 * cs, 100 * cp);
+  CHECK(cp < 0.0 && cs < cp - 0.01, "a soft cyst: the split deepens its loss by more than 1 point (%+.2f%% against %+.2f%%)",
+        100 * cs, 100 * cp);
   const double Fls = press_def(split, &lump, 1, 0.005, NULL), Flp = press_def(plain, &lump, 1, 0.005, NULL);
   const double gs = Fls / F0s - 1.0, gp = Flp / F0p - 1.0;
   printf("breast-tissue dome, 5 mm at the pole over the 10 mm 5x lesion 10 mm deep: gain %+.2f%% with the split, "
