@@ -16,7 +16,8 @@
  * the gel around it carries the load, and it strains as Eshelby's sphere in an
  * incompressible matrix does, q = 1 / (1 + beta (s - 1)), beta = 0.4 (not fitted). The
  * series sum (q = 5 for a 0.2x cyst) softened the breast-tissue fingertip over a cyst
- * 14-21% where the FE softens it 2.3-3.2%; Eshelby's q (1.47) gives 3.0-4.5%.
+ * 15-21% where the level-3 FE softens it 4.0-5.5%; Eshelby's q (1.47), with the hinges'
+ * gel part seeing the cyst too (world.c build_hinges), gives 4.5-5.9%.
  * The primitive is closed form: S(z) = int_0^z sigma_z / p dz
  *   = z - sqrt(c^2 + z^2) - c^2 / sqrt(c^2 + z^2) + 2 c   [m],  S(inf) = 2 c.
  */
