@@ -156,34 +156,13 @@ def finer(tool, scene, data, rows3, table):
 
 def soft(tool, scene, data, table):
     """A 0.2x cyst where the lesion is: the loss of force over it, both models against their plain pole."""
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_cyst_"), "finger.csv")
-    r = run([tool, "finger", "--scene", scene, "--level", "3", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
-             "--fe-from", data, "--no-force-table", "--max-force", "6", "--out", out])
-    check(r.returncode == 0, "palp-fem finger (cyst) exited %d: %s" % (r.returncode, r.stderr[-500:]))
-    if r.returncode:
+    rows = lt.cyst_rows(tool, scene, data, "3", "6")
+    if not rows:
         return
-    rows = lt.read(out)
-    d, fe, rt, dr = lt.columns(rows, "pole_lesion")
-    d0, fe0, rt0, _ = lt.columns(rows, "pole")
-    plain = {round(x, 9): k for k, x in enumerate(d0)}
-    limit, n, worst = table.get(0.0, 0.0), 0, 0.0
-    for k in range(len(d)):
-        j = plain.get(round(d[k], 9))
-        if j is None or fe0[j] < 0.3 or d[k] > limit + 1e-9:
-            continue
-        check(abs(dr[k] - d[k]) <= max(5e-6, 0.005 * d[k]),
-              "cyst: proxy at %.4f mm for the FE's %.4f mm" % (1e3 * dr[k], 1e3 * d[k]))
-        q, gf, gr = rt[k] / fe[k], fe[k] / fe0[j] - 1.0, rt[k] / rt0[j] - 1.0
-        n, worst = n + 1, max(worst, abs(gr - gf))
-        print("cyst %.2f mm: FE %.3f N (%+.1f%%), real-time %.3f N (%+.1f%%), ratio %.3f" %
-              (1e3 * d[k], fe[k], 100 * gf, rt[k], 100 * gr, q))
-        check(gf < 0 and gr < 0, "cyst at %.2f mm: both models softer over it (FE %+.1f%%, real-time %+.1f%%)" %
-              (1e3 * d[k], 100 * gf, 100 * gr))
-        check(0.85 <= q <= 1.15, "cyst at %.2f mm: real-time / FE %.3f (15%%)" % (1e3 * d[k], q))
-        check(abs(gr - gf) <= 0.02, "cyst at %.2f mm: loss %+.1f%% against the FE's %+.1f%% (2 points)" %
-              (1e3 * d[k], 100 * gr, 100 * gf))
-    check(n >= 8, "cyst: %d depths compared from the pole's 0.3 N to its validated depth" % n)
-    print("cyst: %d depths, loss within %.1f points of the FE's" % (n, 100 * worst))
+    # from the plain pole's 0.3 N to its validated depth; the proxy as in stored()
+    limit = table.get(0.0, 0.0)
+    lt.cyst_losses(rows, lambda depth, f_plain: f_plain >= 0.3 and depth <= limit + 1e-9,
+                   lambda depth: max(5e-6, 0.005 * depth), 8)
 
 
 def lesion(rows, table):

@@ -22,17 +22,12 @@ spid=$!
 # Each burst of keys waits for the station to show what the last one did (not a fixed sleep:
 # on a loaded machine the station may join seconds late, and keys typed before it reads them
 # would arrive as one burst, skipping the depths checked below), then lets the force settle.
-wait_for() {  # PATTERN: until the station's output shows it, at most 30 s
-  n=0
-  until tr '\r' '\n' < "$tmp/client.log" | grep -qF -- "$1"; do
-    n=$((n + 1)); [ $n -gt 300 ] && return 1; sleep 0.1
-  done
-}
-(wait_for "haptic thread at"; sleep 0.5; printf '+++++++'
- wait_for "depth +5 mm (step 1 mm): force"; sleep 1.5; printf '+++++'
- wait_for "depth +10 mm (step 1 mm): force"; sleep 1.5; printf '[[----'
- wait_for "depth +9 mm (step 0.25 mm): force"; sleep 1.5; printf ']]]+++++++'
- wait_for "depth +23 mm (step 2 mm): force"; sleep 2; printf 'q') |
+. "$(dirname "$0")/../wait_for.sh"
+(wait_for "$tmp/client.log" "haptic thread at"; sleep 0.5; printf '+++++++'
+ wait_for "$tmp/client.log" "depth +5 mm (step 1 mm): force"; sleep 1.5; printf '+++++'
+ wait_for "$tmp/client.log" "depth +10 mm (step 1 mm): force"; sleep 1.5; printf '[[----'
+ wait_for "$tmp/client.log" "depth +9 mm (step 0.25 mm): force"; sleep 1.5; printf ']]]+++++++'
+ wait_for "$tmp/client.log" "depth +23 mm (step 2 mm): force"; sleep 2; printf 'q') |
   script -qec "$client --role trainee --domain 114 --phantom 4 --name keys --input keyboard-finger --print-period 0" \
     /dev/null > "$tmp/client.log" 2>&1
 crc=$?

@@ -13,16 +13,11 @@ tmp=$(mktemp -d)
 trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 "$server" --config "$config_dir/server.json" --domain 109 --no-db > "$tmp/server.log" 2>&1 &
 spid=$!
-wait_for() {  # PATTERN: until the station's output shows it, at most 30 s
-  n=0
-  until tr '\r' '\n' < "$tmp/client.log" | grep -qF -- "$1"; do
-    n=$((n + 1)); [ $n -gt 300 ] && return 1; sleep 0.1
-  done
-}
-(wait_for "keyboard: arrows move"; sleep 0.5; printf ' '
- wait_for "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.00 N"; sleep 0.8; printf '++'
- wait_for "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 1.5; printf ' '
- wait_for "lift  dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 0.5; printf 'q') |
+. "$(dirname "$0")/../wait_for.sh"
+(wait_for "$tmp/client.log" "keyboard: arrows move"; sleep 0.5; printf ' '
+ wait_for "$tmp/client.log" "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.00 N"; sleep 0.8; printf '++'
+ wait_for "$tmp/client.log" "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 1.5; printf ' '
+ wait_for "$tmp/client.log" "lift  dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 0.5; printf 'q') |
   script -qec "$client --role trainee --domain 109 --phantom 1 --name keys --input keyboard --print-period 0" \
     /dev/null > "$tmp/client.log" 2>&1
 crc=$?
