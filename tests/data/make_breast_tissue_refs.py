@@ -32,11 +32,10 @@ fem_level3_breast_tissue_cyst.csv: level 3 at the pole and over a 0.2x cyst wher
 fem_level3_breast_tissue_finger.csv for the plain pole (each site from the first file that has it).
 """
 import os
-import subprocess
 import sys
 import tempfile
 
-import make_long_term_level4 as lt  # the compacted level-4 field, join() and write_finger() (this folder is on sys.path)
+import make_long_term_level4 as lt  # the compacted level-4 field and finger_ref() (this folder is on sys.path)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENE = "config/phantoms/dome.json"
@@ -71,29 +70,17 @@ REFS = {
 
 def main():
     build = os.path.abspath(sys.argv[1])
-    fem = os.path.join(build, "tools/fem/palp-fem")
     tmp = tempfile.mkdtemp(prefix="palp_bt_refs_")
     args = sys.argv[2:]
     which = "level3"
     if args and args[0] in ("--level4", "--cyst"):
         which, args = args[0][2:], args[1:]
-    elif not args:  # neither stored curves nor `compute`: the displacement file only
-        write_d2(build, tmp)
-        return
     else:
         write_d2(build, tmp)
+        if not args:  # neither stored curves nor `compute`: the displacement file only
+            return
     cmd, path, fe = REFS[which]
-    out = os.path.join(tmp, "finger.csv")
-    if args and args[0] != "compute":
-        subprocess.run([fem] + cmd + ["--fe-from", lt.join(args, tmp), "--out", out], check=True, cwd=ROOT)
-        how = ("palp-fem %s (FE columns), real-time columns recomputed with the parameters of this commit by --fe-from"
-               % " ".join(cmd))
-        if os.environ.get("PALP_REF_NOTE"):
-            how += "\n# " + os.environ["PALP_REF_NOTE"]
-    else:
-        subprocess.run([fem] + cmd + ["--out", out], check=True, cwd=ROOT)
-        how = "palp-fem " + " ".join(cmd)
-    lt.write_finger(os.path.join(ROOT, path), how, fe, out, "make_breast_tissue_refs.py")
+    lt.finger_ref(os.path.join(build, "tools/fem/palp-fem"), cmd, args, tmp, path, fe, "make_breast_tissue_refs.py")
 
 
 if __name__ == "__main__":

@@ -118,10 +118,9 @@ def join(paths, tmp):
     return joined
 
 
-def cyst(fem, tmp, args):
-    """fem_level4_long_term_cyst.csv: the pole and a 0.2x cyst where the 5x lesion is."""
-    cmd = ["finger", "--scene", SCENE, "--level", "4", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
-           "--max-force", "5", "--no-force-table"]
+def finger_ref(fem, cmd, args, tmp, path, fe, script="make_long_term_level4.py"):
+    """A stored fingertip reference at path: `palp-fem` cmd run afresh (args: ["compute"]), or its FE
+    columns taken from the curves args names (joined) and the real-time ones recomputed (--fe-from)."""
     out = os.path.join(tmp, "finger.csv")
     if args and args[0] != "compute":
         sh([fem] + cmd + ["--fe-from", join(args, tmp), "--out", out])
@@ -132,8 +131,14 @@ def cyst(fem, tmp, args):
     else:
         sh([fem] + cmd + ["--out", out])
         how = "palp-fem " + " ".join(cmd)
-    write_finger(os.path.join(ROOT, "tests/data/fem_level4_long_term_cyst.csv"), how,
-                 "level 4 (10,496 hexahedra), pole_lesion = a 0.2x cyst (10 mm, centre 10 mm deep)", out)
+    write_finger(os.path.join(ROOT, path), how, fe, out, script)
+
+
+def cyst(fem, tmp, args):
+    """fem_level4_long_term_cyst.csv: the pole and a 0.2x cyst where the 5x lesion is."""
+    finger_ref(fem, ["finger", "--scene", SCENE, "--level", "4", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
+                     "--max-force", "5", "--no-force-table"], args, tmp, "tests/data/fem_level4_long_term_cyst.csv",
+               "level 4 (10,496 hexahedra), pole_lesion = a 0.2x cyst (10 mm, centre 10 mm deep)")
 
 
 def main():
