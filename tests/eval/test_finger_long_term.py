@@ -214,7 +214,7 @@ def cyst_losses(rows, keep, proxy_tol, least):
 def main():
     tool, scene, data = sys.argv[1], sys.argv[2], sys.argv[3]
     mode = sys.argv[4] if len(sys.argv) > 4 else "stored"
-    cyst = sys.argv[6] if len(sys.argv) > 6 and sys.argv[5] == "--cyst" else None
+    cyst = dict(zip(sys.argv[5::2], sys.argv[6::2])).get("--cyst")  # --cyst FILE, as test_finger_breast_tissue.py
     {"stored": stored, "guard": guard, "recompute": recompute}[mode](tool, scene, data)
     if cyst and mode == "stored":
         soft(tool, scene, cyst)
