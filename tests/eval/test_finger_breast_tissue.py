@@ -26,14 +26,21 @@ set was first validated against, level 3 is 7-19% softer at the pole and 14-36% 
   FE +12.4% / real-time +14.8%; with the support alone up to 6.2 points, at 2.5 mm: +15.2% / +9.0%,
   which fails; docs/haptics.md, "The hinges see the lesion").
 
-With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496 hexahedra, the pole
-and 45 deg to ~3 N, ~1.5 h of FE a site), where level 3 is not converged for a fingertip:
-- the level-4 FE is no stiffer than level 3 at equal depth (1% for the contact's discretisation: a
-  finer mesh of these elements converges from the stiff side; measured 0.87-1.004 at the pole,
-  0.875-0.999 at 45 deg; 0.89-0.94 at the pole and 0.90-0.96 at 45 deg from 2.5 mm);
+With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496 hexahedra, the pole,
+45, 60 and 70 deg to ~3 N, 1-1.5 h of FE a site), where level 3 is not converged for a fingertip:
+- from 2 mm, the level-4 FE is no stiffer than level 3 at equal depth (1%: a finer mesh of these
+  elements converges from the stiff side; measured from 2 mm 0.89-0.99 at the pole, 0.90-0.97 at 45
+  deg, 0.88-0.97 at 60 deg, 0.83-0.91 at 70 deg). Shallower, the faceted FE surface's offset from the
+  sphere is a fair part of the depth and refining it can stiffen the contact: at 60 deg level 4 is
+  1.04-1.11 of level 3 at 0.5-1.5 mm (70 deg 1.02 at 0.25 mm), so those depths are not checked;
 - from the FE's 0.3 N to the validated depth, or the level-4 curve's end if shallower, real-time /
-  level-4 FE within 15% (measured 2026-11-29: pole 1.042-1.135 and 45 deg 1.048-1.134 from 1.5 to
-  10 mm, the curves' end at 3.5 / 3.7 N; 7-10 mm within 2 points of the bound at 45 deg).
+  level-4 FE within 15% (measured 2026-11-29, the rim's hinges releasing the gel's share of D:
+  pole 1.039-1.133, 45 deg 1.043-1.127, 60 deg 0.933-1.140, 70 deg 1.007-1.098, to the curves' end
+  at 10 / 10 / 10 / 7 mm, 3.5 / 3.7 / 4.2 / 3.0 N; 60 deg at 10 mm within 1 point of the bound;
+  with the rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
+- the table claims no site deeper than its level-4 curve reaches (since 2026-11-29 it rests on
+  level 4: 10 / 10 / 10 / 7 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
+  claimed before, and at the level-4 curves' ends the set already stands at 1.12-1.14 of them).
 
 With CYST_CSV (tests/data/fem_level3_breast_tissue_cyst.csv: level 3, the pole and a 0.2x cyst where
 the lesion is): over the cyst both models press softer than at the plain pole, real-time / FE within
@@ -59,6 +66,10 @@ check = common.check
 run = common.run
 
 SITES = {"pole": 0.0, "45deg": 45.0, "60deg": 60.0, "70deg": 70.0}
+# [m] From here the level-4 curve is checked no stiffer than level 3 (module docstring): shallower,
+# the faceted FE surface's offset from the sphere is a fair part of the depth, and refining it
+# can stiffen the first millimetre (60 deg: level 4 / level 3 1.04-1.11 at 0.5-1.5 mm).
+STIFF_SIDE_FROM = 2e-3
 
 
 def proxy_tol(depth):
@@ -138,11 +149,14 @@ def finer(tool, scene, data, rows3, table):
         worst = 0.0
         for k in range(len(d)):
             f3 = at3.get(round(d[k], 9))
-            if f3 is not None:
+            if f3 is not None and d[k] >= STIFF_SIDE_FROM - 1e-12:
                 worst = max(worst, fe[k] / f3)
                 check(fe[k] <= 1.01 * f3, "%s at %.2f mm: level 4 %.4f N stiffer than level 3 %.4f N" %
                       (site, 1e3 * d[k], fe[k], f3))
-        limit = min(table.get(round(SITES[site], 6), 0.0), d[-1])
+        claimed = table.get(round(SITES[site], 6), 0.0)
+        check(claimed <= d[-1] + 1e-9, "%s: the table claims %.1f mm, deeper than the level-4 curve reaches (%.1f mm)" %
+              (site, 1e3 * claimed, 1e3 * d[-1]))
+        limit = min(claimed, d[-1])
         n, lo, hi = 0, 9.0, 0.0
         for k in range(len(d)):
             if fe[k] < 0.3 or d[k] > limit + 1e-9:
