@@ -40,7 +40,7 @@ With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496
   with the rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
 - the table claims no site deeper than its level-4 curve reaches (since 2026-11-29 it rests on
   level 4: 10 / 10 / 10 / 7 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
-  claimed before, and at the level-4 curves' ends the set already stands at 1.12-1.14 of them).
+  claimed before, and at the level-4 curves' ends the set already stands at 1.11-1.14 of them).
 
 With CYST_CSV (tests/data/fem_level3_breast_tissue_cyst.csv: level 3, the pole and a 0.2x cyst where
 the lesion is): over the cyst both models press softer than at the plain pole, real-time / FE within
