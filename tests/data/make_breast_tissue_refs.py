@@ -23,7 +23,7 @@ PALP_REF_NOTE=TEXT adds a line to the header (how the reused curves were made).
     tests/data/make_breast_tissue_refs.py BUILD --level4 [FINGER_CSV... | compute]
 
 fem_level4_breast_tissue_finger.csv: the same at level 4 (`--level 4 --site pole,45deg,60deg,70deg
---max-force 3`; ~1.5 h of FE a site here), where level 3 is 6-11% stiff for a fingertip.
+--max-force 3`; 1-1.5 h of FE a site here), where level 3 is up to 17% stiff for a fingertip from 2 mm.
 
     tests/data/make_breast_tissue_refs.py BUILD --cyst [FINGER_CSV... | compute]
 
