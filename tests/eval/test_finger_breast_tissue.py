@@ -131,7 +131,8 @@ def stored(tool, scene, data, level4=None, cyst=None):
 
 
 def finer(tool, scene, data, rows3, table):
-    """The level-4 curves: no stiffer than level 3, and the real-time set within 15% of them."""
+    """The level-4 curves: no stiffer than level 3 from 2 mm, the table no deeper than they reach, and the
+    real-time set within 15% of them up to the table's depth."""
     out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_bt4_"), "finger.csv")
     sites = sorted({x["site"] for x in lt.read(data)}, key=list(SITES).index)
     check(sites[:1] == ["pole"] and len(sites) >= 2, "level-4 sites: %r (want the pole and another)" % sites)
