@@ -867,18 +867,22 @@ static void prev_cols_keep(palp_world *w) {
   }
 }
 
-/* The replaced factor's 3 columns at free row r during a blend, [3][n3], as finger_slot
- * makes them; NULL when out of memory (the caller then uses the new factor's). */
-static const float *prev_cols(palp_world *w, int r) {
+/* The slot of the replaced factor's 3 columns at free row r during a blend ([3][n3]
+ * at prev_pool + slot 3 n3, as finger_slot makes them); -1 when out of memory (the
+ * caller then uses the new factor's). A slot, not a pointer: taking one may move the
+ * whole store (realloc), so pointers into it are formed only once every row of the
+ * step has its slot. Pointers kept across such calls read freed memory, and the 1 kHz
+ * slide then went differently from run to run (lost contact, thousands of rebuilds). */
+static int prev_cols(palp_world *w, int r) {
   finger_scratch *fs = w->fs;
   const int n3 = fs->n3;
   int s = fs->prev_row_slot[r];
   if (s < 0) {
     s = prev_slot_take(w, r);
-    if (s < 0) return NULL;
+    if (s < 0) return -1;
     factor_cols(&w->ldl_prev, r, n3, fs->solve, fs->work, fs->prev_pool + (size_t)s * 3 * (size_t)n3);
   }
-  return fs->prev_pool + (size_t)s * 3 * (size_t)n3;
+  return s;
 }
 
 /* x += c col over n entries: a finger's contact impulse spread by one compliance
@@ -1203,11 +1207,12 @@ static void stage_fingers(palp_world *w, double h) {
     const double ba = blend_weight(w), bb = 1.0 - ba;
     const int blend = ba < 1.0;
     const float *colp[3 * PALP_FINGER_MAX_CON];
-    if (blend)
-      for (int a = 0; a < nl; ++a) {
-        colp[a] = prev_cols(w, w->row_of[fs->lvert[a]]);
-        if (!colp[a]) colp[a] = colv[a];
-      }
+    if (blend) {
+      int pslot[3 * PALP_FINGER_MAX_CON];
+      for (int a = 0; a < nl; ++a) pslot[a] = prev_cols(w, w->row_of[fs->lvert[a]]);
+      for (int a = 0; a < nl; ++a) /* every slot taken: the store no longer moves */
+        colp[a] = pslot[a] < 0 ? colv[a] : fs->prev_pool + (size_t)pslot[a] * 3 * (size_t)n3;
+    }
     /* The compliance among the local dofs, gathered once: G[3b + j][3a + i] = A^{-1}
      * at (local dof 3a + i, 3b + j). Read from the columns per constraint, each
      * vertex's entries were gathered once for every constraint it is in (~4x), from
