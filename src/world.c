@@ -38,6 +38,28 @@ enum { JOB_NONE = 0, JOB_REQUESTED = 1, JOB_CLAIMED = 2, JOB_DONE = 3 };
  * haptic ticks, and rebuilds on the tick cost more than they gave (docs/haptics.md). */
 #define PALP_HAPTIC_MAX_DT 0.002 /* [s] */
 
+/* Why a factor must be rebuilt at once (palp_world.unsafe, bits): it is beyond its
+ * margin (a link's tension stiffness above twice what it holds, or the stiffening
+ * support's tangent past the mass term's), so a blend with it would not be stable; or
+ * its turned links near the margin (turn_quotient above PALP_TURN_UNSAFE), where it is
+ * still stable and the new factor is blended in. */
+#define PALP_UNSAFE_MARGIN 1
+#define PALP_UNSAFE_TURN 2
+/* A link turned by theta from the direction the factor holds its axial stiffness k_l
+ * along has k_l sin^2(theta) of it across that direction, where the factor holds only
+ * what the vertex has there. At a free vertex, with S the smallest stiffness of the
+ * factor's diagonal block there (mass / h^2 included), the quotient
+ *   q = sum over the vertex's links of k_l sin^2(theta_l) / S
+ * estimates what the linearly implicit step sees beyond the factor in a mode of that
+ * vertex: the step's amplification there is about q, neutral at 1 (turn_quotient takes
+ * it per link, the larger sum of its ends over the softer end). The long-term dome slid
+ * at 1 kHz rang at the Nyquist rate from q ~ 1.06 (its skin's viscous tangent is 13x its
+ * static modulus) while every link's turn was under 23 deg and its tension under 0.8 of
+ * what the factor holds (docs/haptics.md, "A turned stiff link rings"). Stale at 0.5 (a
+ * deferred rebuild then starts where the amplification is at most 0.5), at once at 0.9. */
+#define PALP_TURN_STALE 0.5
+#define PALP_TURN_UNSAFE 0.9
+
 typedef struct contact {
   int kind;
   int count;       /* vertices loaded (force) or touched last step (finger) */
@@ -144,8 +166,14 @@ struct palp_world {
   double *fbeta;    /* transverse stiffness fraction the factor was built with */
   double *link_mass; /* [kg] min over the free ends of vertex mass / links at the vertex */
   double *fslack;   /* [N/m] transverse stiffness the mass term absorbs at the factor's step */
+  double *fsoft;    /* [nfree + 1] [N/m] the factor's softest stiffness at each free vertex (turn_quotient),
+                     * and their least at [nfree] */
+  double *soft_blk; /* [6 nfree] scratch of soft_stiffness; NULL without the turn rule */
+  int link_degree;  /* the most links at any vertex */
+  double *lturn;    /* [nlink] scratch: k_l sin^2 of each link's turn from its factor direction [N/m] */
+  double *vturn;    /* [vertex_count] scratch: their sum at each vertex [N/m] */
   int stale;        /* the factor left its stability region: rebuild before the next step */
-  int unsafe;       /* ... and its margin too: rebuild now even when rebuilds are deferred */
+  int unsafe;       /* PALP_UNSAFE_*: rebuild now even when rebuilds are deferred */
   int64_t refactors;
   int reject;       /* the solve cannot be used: 1 not finite or too fast, 2 left its linearisation */
   int last_resort;  /* at the last halving: cap speeds instead of rejecting, accept inaccuracy */
@@ -520,7 +548,7 @@ static void support_stiffening(palp_world *w, double h) {
     unsafe |= dT > 2.0 * ms;
   }
   if (stale) w->stale = 1;
-  if (unsafe) w->unsafe = 1;
+  if (unsafe) w->unsafe |= PALP_UNSAFE_MARGIN;
 }
 
 static void stage_gel_support(palp_world *w, double h) {
@@ -1424,7 +1452,8 @@ static inline __attribute__((always_inline)) int link_states_loop(
     const double *restrict rest_len, const double *restrict inv_rest, const double *restrict xsec,
     const double *restrict kx, const double *restrict fbeta, const double *restrict fslack,
     const palp_vec3 *restrict fdir, palp_vec3 *restrict dir, double *restrict eps_l, double *restrict sigma_l,
-    double (*restrict xs)[2], const int visc, const palp_burgers *bgp, double E_static, double tangent) {
+    double (*restrict xs)[2], const int visc, const palp_burgers *bgp, double E_static, double tangent,
+    double *restrict lturn) {
   const palp_burgers bg = *bgp;
   long long stale = 0, unsafe = 0; /* as wide as a double: GCC vectorises the OR of double comparisons only so */
   for (int l = 0; l < nl; ++l) {
@@ -1440,12 +1469,14 @@ static inline __attribute__((always_inline)) int link_states_loop(
     const double c = v3_dot(u, fdir[l]);
     const double ts = sigma * xsec[l] * inv_len, held = fbeta[l] * tangent * kx[l] + fslack[l];
     stale |= (c * c < 0.75) | (ts > held);
-    /* Beyond the margin itself: turned by > 45 degrees (the factor's axial stiffness
-     * then holds less than half of the link's along its direction) or tension stiffness
-     * above twice what the factor holds. A deferred rebuild cannot wait for its due
-     * frame there: at 1 kHz the long-term dome, slid at 50 mm/s, rang at the Nyquist
-     * rate during the 16 frames of the lag (force steps of 30%; docs/haptics.md). */
-    unsafe |= (c * c < 0.5) | (ts > 2.0 * held);
+    /* Beyond the margin itself: tension stiffness above twice what the factor holds. A
+     * deferred rebuild cannot wait for its due frame there: at 1 kHz the long-term dome,
+     * slid at 50 mm/s, rang at the Nyquist rate during the 16 frames of the lag (force
+     * steps of 30%; docs/haptics.md). A turn is judged at its vertices (turn_quotient):
+     * the 45 deg limit it had here fired where the vertex held the turned stiffness
+     * easily, and missed the stiff links that rang at 23 deg. */
+    unsafe |= ts > 2.0 * held;
+    lturn[l] = tangent * kx[l] * (1.0 - c * c);
   }
   return (stale != 0) | ((unsafe != 0) << 1);
 }
@@ -1458,12 +1489,56 @@ static int link_states(int nl, const double *restrict dx, const double *restrict
                        const double *restrict kx, const double *restrict fbeta, const double *restrict fslack,
                        const palp_vec3 *restrict fdir, palp_vec3 *restrict dir, double *restrict eps_l,
                        double *restrict sigma_l, double (*restrict xs)[2], int visc, const palp_burgers *bgp,
-                       double E_static, double tangent) {
+                       double E_static, double tangent, double *restrict lturn) {
   if (visc)
     return link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs,
-                            1, bgp, E_static, tangent);
+                            1, bgp, E_static, tangent, lturn);
   return link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs, 0,
-                          bgp, E_static, tangent);
+                          bgp, E_static, tangent, lturn);
+}
+
+/* Whether the turn rule applies (PALP_TURN_STALE): at haptic rates in worlds stepped as the
+ * server steps them, a lag or a blend (see stage_membrane_state). */
+static int turn_rule(const palp_world *w) { return w->soft_blk != NULL; }
+
+/* After a factorisation: each free vertex's fsoft becomes the least over it and the
+ * vertices it links to. A diagonal block holds a vertex moving alone, and neighbours
+ * moving with it hold less (the long-term dome rang at 2.2% with each vertex's sum over
+ * its own block kept under 0.9; docs/haptics.md). vturn is the scratch. */
+static void soft_neighbourhood(palp_world *w) {
+  double *restrict m = w->vturn;
+  const int(*restrict link)[2] = (const int(*)[2])w->mesh.link;
+  for (int i = 0; i < w->mesh.vertex_count; ++i) m[i] = INFINITY;
+  for (int r = 0; r < w->nfree; ++r) m[w->vertex_of[r]] = w->fsoft[r];
+  for (int l = 0; l < w->nlink; ++l) {
+    const int ra = w->row_of[link[l][0]], rb = w->row_of[link[l][1]];
+    if (ra >= 0 && rb >= 0) {
+      m[link[l][0]] = fmin(m[link[l][0]], w->fsoft[rb]);
+      m[link[l][1]] = fmin(m[link[l][1]], w->fsoft[ra]);
+    }
+  }
+  for (int r = 0; r < w->nfree; ++r) w->fsoft[r] = m[w->vertex_of[r]];
+}
+
+/* The largest turn quotient q (PALP_TURN_STALE): the links' turned stiffness k_l sin^2
+ * summed at each free vertex, over the factor's softest stiffness there or at a vertex
+ * it links to (soft_neighbourhood). */
+static double turn_quotient(const palp_world *w) {
+  /* No vertex sums more than link_degree times the largest turned stiffness: while that
+   * is under the stale level at the softest vertex, nothing is summed. */
+  double lmax = 0.0;
+  for (int l = 0; l < w->nlink; ++l) lmax = w->lturn[l] > lmax ? w->lturn[l] : lmax;
+  if (w->link_degree * lmax <= PALP_TURN_STALE * w->fsoft[w->nfree]) return 0.0;
+  double *restrict acc = w->vturn;
+  const int(*restrict link)[2] = (const int(*)[2])w->mesh.link;
+  memset(acc, 0, sizeof(double) * (size_t)w->mesh.vertex_count);
+  for (int l = 0; l < w->nlink; ++l) acc[link[l][0]] += w->lturn[l], acc[link[l][1]] += w->lturn[l];
+  double q = 0.0;
+  for (int r = 0; r < w->nfree; ++r) {
+    const double qr = acc[w->vertex_of[r]] / w->fsoft[r];
+    if (!(qr <= q)) q = qr; /* NaN is kept: it fails every test below */
+  }
+  return q;
 }
 
 static void stage_membrane_state(palp_world *w, double h) {
@@ -1479,7 +1554,7 @@ static void stage_membrane_state(palp_world *w, double h) {
     dx[l] = b.x - a.x, dy[l] = b.y - a.y, dz[l] = b.z - a.z;
   }
   const int leave = link_states(nl, dx, dy, dz, w->rest_len, w->inv_rest, w->xsec, w->kx, w->fbeta, w->fslack, w->fdir,
-                                w->dir, w->eps, w->sigma, w->xs, visc, &w->burgers, w->E_static, tangent);
+                                w->dir, w->eps, w->sigma, w->xs, visc, &w->burgers, w->E_static, tangent, w->lturn);
   /* the largest strain, compared in link order as before (a max reduction would not vectorise anyway) */
   const double *restrict eps_l = w->eps;
   double max_strain = w->step_max_strain;
@@ -1487,7 +1562,17 @@ static void stage_membrane_state(palp_world *w, double h) {
     if (fabs(eps_l[l]) > max_strain) max_strain = fabs(eps_l[l]);
   w->step_max_strain = max_strain;
   if (leave & 1) w->stale = 1;
-  if (leave & 2) w->unsafe = 1;
+  if (leave & 2) w->unsafe |= PALP_UNSAFE_MARGIN;
+  /* The turn rule at haptic rates in worlds stepped as the server steps them (a lag or
+   * a blend): the library's default (rebuilt at once, no blend), which the evaluation,
+   * the calibrations and the stored references use, keeps its rebuilds and its bits.
+   * There an earlier rebuild moved a held press onto another of the model's equilibria
+   * (0.2x cyst at 5 mm: 1.409 N against 1.365 N; docs/haptics.md). */
+  if (turn_rule(w)) {
+    const double q = turn_quotient(w);
+    if (!(q <= PALP_TURN_STALE)) w->stale = 1;
+    if (!(q <= PALP_TURN_UNSAFE)) w->unsafe |= PALP_UNSAFE_TURN;
+  }
 }
 
 static void stage_gel_state(palp_world *w, double h) {
@@ -1826,6 +1911,13 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     w->fbeta = xcalloc((size_t)nl, sizeof(double), &fail);
     w->link_mass = xcalloc((size_t)nl, sizeof(double), &fail);
     w->fslack = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->fsoft = xcalloc((size_t)nv + 1, sizeof(double), &fail);
+    w->lturn = xcalloc((size_t)nl, sizeof(double), &fail);
+    w->vturn = xcalloc((size_t)nv, sizeof(double), &fail);
+    /* The turn rule's scratch, only where it applies (turn_rule): its sums of the
+     * factor's diagonal blocks then run with each factorisation. */
+    if ((def->refactor_lag > 0 || def->refactor_blend > 0) && def->dt <= PALP_HAPTIC_MAX_DT)
+      w->soft_blk = xcalloc(6 * (size_t)nv, sizeof(double), &fail);
     if (has(w, PALP_EFFECT_MEMBRANE_VISCOSITY)) w->xs = xcalloc((size_t)nl, sizeof *w->xs, &fail);
     if (fail) goto nomem;
     /* Each link carries the membrane over the area of its two triangles: a spring
@@ -1869,6 +1961,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     int *deg = xcalloc((size_t)nv, sizeof(int), &fail);
     if (fail) goto nomem;
     for (int l = 0; l < nl; ++l) deg[w->mesh.link[l][0]]++, deg[w->mesh.link[l][1]]++;
+    for (int i = 0; i < nv; ++i) w->link_degree = deg[i] > w->link_degree ? deg[i] : w->link_degree;
     for (int l = 0; l < nl; ++l) {
       double m = INFINITY; /* [kg] a fixed end adds nothing to the free end's margin */
       for (int q = 0; q < 2; ++q) {
@@ -1943,7 +2036,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->sheight), free(w->fsu), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
-  free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
+  free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack), free(w->fsoft), free(w->lturn), free(w->vturn), free(w->soft_blk);
   free(w->hinge), free(w->hgrad), free(w->hk), free(w->hrest), free(w->hbeyond), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work), free(w->bx);
@@ -1977,6 +2070,39 @@ static int set_burgers(palp_world *w, double h) {
 /* The lower triangle of A = M + h^2 K~ as triplets (nnz returned), with the link
  * data the factor will be checked against (fdir, fbeta, fslack) for the current
  * state. Needs the Burgers coefficients for h (set_burgers). */
+/* The smallest eigenvalue of the symmetric 3x3 [a0 a1 a2; a1 a3 a4; a2 a4 a5]
+ * (the trigonometric form: the three are q + 2 p cos(phi + 2 pi k / 3)). */
+static double sym3_min_eig(const double a[6]) {
+  const double p1 = a[1] * a[1] + a[2] * a[2] + a[4] * a[4];
+  const double q = (a[0] + a[3] + a[5]) / 3.0;
+  if (p1 == 0.0) return fmin(a[0], fmin(a[3], a[5]));
+  const double b0 = a[0] - q, b3 = a[3] - q, b5 = a[5] - q;
+  const double p = sqrt((b0 * b0 + b3 * b3 + b5 * b5 + 2.0 * p1) / 6.0);
+  const double c0 = b0 / p, c1 = a[1] / p, c2 = a[2] / p, c3 = b3 / p, c4 = a[4] / p, c5 = b5 / p;
+  const double det = c0 * (c3 * c5 - c4 * c4) - c1 * (c1 * c5 - c4 * c2) + c2 * (c1 * c4 - c3 * c2);
+  const double phi = acos(fmax(-1.0, fmin(1.0, det / 2.0))) / 3.0;
+  return q + 2.0 * p * cos(phi + 2.0 * 3.14159265358979323846 / 3.0);
+}
+
+/* fsoft[r] = the smallest eigenvalue of A's diagonal block at free row r, over h^2
+ * [N/m]: what the factor holds at that vertex in its softest direction, mass term
+ * included (turn_quotient); fsoft[nf] their least. Summed from the triplets (the
+ * duplicates as the factor sums them; each block's lower triangle is all it has) into
+ * blk [6 nf]. Run with the factorisation (palp_factor_job_run, refactor): ~30 us at 338
+ * vertices, which a rebuild request on the tick need not pay. */
+static void soft_stiffness(int nf, double h, int nnz, const int *ti, const int *tj, const double *tx, double *blk,
+                           double *fsoft) {
+  static const int idx[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  memset(blk, 0, sizeof(double) * 6 * (size_t)nf);
+  for (int k = 0; k < nnz; ++k)
+    if (ti[k] / 3 == tj[k] / 3) blk[6 * (ti[k] / 3) + idx[ti[k] % 3][tj[k] % 3]] += tx[k];
+  fsoft[nf] = INFINITY;
+  for (int r = 0; r < nf; ++r) {
+    fsoft[r] = sym3_min_eig(blk + 6 * r) / (h * h);
+    if (!(fsoft[r] >= fsoft[nf])) fsoft[nf] = fsoft[r]; /* NaN too: then every step sums */
+  }
+}
+
 static int build_matrix(const palp_world *w, double h, int *ti, int *tj, double *tx, palp_vec3 *fdir,
                         double *fbeta, double *fslack, palp_vec3 *fsu) {
   const double E = has(w, PALP_EFFECT_MEMBRANE_VISCOSITY) ? w->burgers.tangent : w->E_static; /* [Pa] */
@@ -2158,6 +2284,10 @@ static int refactor(palp_world *w, double h, int blend) {
     return PALP_ENOMEM;
   }
   const int nnz = build_matrix(w, h, ti, tj, tx, w->fdir, w->fbeta, w->fslack, w->fsu);
+  if (w->soft_blk) {
+    soft_stiffness(w->nfree, h, nnz, ti, tj, tx, w->soft_blk, w->fsoft);
+    soft_neighbourhood(w);
+  }
   blend = blend && w->bx && w->ldl.n > 0 && h == w->h_factored;
   if (blend) {
     /* the factor being replaced to ldl_prev; the new one into the storage ldl_prev had
@@ -2205,6 +2335,7 @@ struct palp_factor_job {
   double *solve, *work; /* [3 n3] */
   palp_vec3 *fdir;     /* [nlink] the new factor's link data (world-only) */
   double *fbeta, *fslack;
+  double *fsoft, *soft_blk; /* [nf + 1], [6 nf] with the turn rule (turn_rule), else NULL */
   palp_vec3 *fsu; /* [nvertex] the stiffening support's u (NULL without it) */
   int rc;
 };
@@ -2212,7 +2343,7 @@ struct palp_factor_job {
 static void job_free(palp_factor_job *j) {
   if (!j) return;
   free(j->ti), free(j->tj), free(j->tx), free(j->col_row), free(j->cols), free(j->solve), free(j->work);
-  free(j->fdir), free(j->fbeta), free(j->fslack), free(j->fsu);
+  free(j->fdir), free(j->fbeta), free(j->fslack), free(j->fsu), free(j->fsoft), free(j->soft_blk);
   palp_ldl_free(&j->ldl);
   free(j);
 }
@@ -2234,8 +2365,12 @@ static palp_factor_job *job_alloc(const palp_world *w) {
   j->fdir = malloc(sizeof(palp_vec3) * nl);
   j->fbeta = malloc(sizeof(double) * nl);
   j->fslack = malloc(sizeof(double) * nl);
+  if (w->soft_blk) {
+    j->fsoft = malloc(sizeof(double) * ((size_t)w->nfree + 1));
+    j->soft_blk = malloc(sizeof(double) * 6 * (size_t)(w->nfree ? w->nfree : 1));
+  }
   if (w->sheight) j->fsu = calloc((size_t)w->mesh.vertex_count, sizeof(palp_vec3));
-  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack ||
+  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack || (w->soft_blk && (!j->fsoft || !j->soft_blk)) ||
       (w->sheight && !j->fsu)) {
     job_free(j);
     return NULL;
@@ -2245,6 +2380,7 @@ static palp_factor_job *job_alloc(const palp_world *w) {
 
 int palp_factor_job_run(palp_factor_job *j) {
   if (!j) return PALP_EINVAL;
+  if (j->soft_blk) soft_stiffness(j->nf, j->h, j->nnz, j->ti, j->tj, j->tx, j->soft_blk, j->fsoft); /* before: the factor may reorder them */
   j->rc = palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, j->nnz, j->ti, j->tj, j->tx);
   if (j->rc) return j->rc;
   /* The same function as finger_slot's, so a column is the same bits whoever makes it. */
@@ -2306,6 +2442,10 @@ static int job_install(palp_world *w) {
   memcpy(w->fdir, j->fdir, sizeof(palp_vec3) * (size_t)w->nlink);
   memcpy(w->fbeta, j->fbeta, sizeof(double) * (size_t)w->nlink);
   memcpy(w->fslack, j->fslack, sizeof(double) * (size_t)w->nlink);
+  if (w->soft_blk) {
+    memcpy(w->fsoft, j->fsoft, sizeof(double) * ((size_t)w->nfree + 1));
+    soft_neighbourhood(w);
+  }
   if (w->fsu) memcpy(w->fsu, j->fsu, sizeof(palp_vec3) * (size_t)w->mesh.vertex_count);
   finger_cols_invalidate(w);
   finger_scratch *fs = w->fs;
@@ -2419,10 +2559,12 @@ static int try_step(palp_world *w, double h, int last_resort) {
    * gain seen only in the next-step prediction of the paper's flowing phantom. */
   const int margin = defer && w->unsafe && w->def.dt <= PALP_HAPTIC_MAX_DT; /* the rate's, not a halved step's */
   if (resize || (w->stale && (!defer || margin))) {
-    /* Blended in unless the old factor is beyond its margin (or built for another h).
+    /* Blended in unless the old factor is beyond its margin (or built for another h):
+     * one near it for turned links (PALP_UNSAFE_TURN) is still stable, and a rebuild at
+     * once unblended stepped the breast-tissue dome's force by up to 6.8% in a tick.
      * Keeping an unsafe factor for its last 2 frames made no difference at 1 kHz. */
     if (!resize && margin) w->margin_rebuilds++;
-    int e = refactor(w, h, !resize && !w->unsafe);
+    int e = refactor(w, h, !resize && !(w->unsafe & PALP_UNSAFE_MARGIN));
     if (e) return e;
   } else if (w->stale && w->job_state == JOB_NONE) {
     /* Deferred: the old factor serves refactor_lag more frames (a lagged tangent is
