@@ -1503,8 +1503,8 @@ static int turn_rule(const palp_world *w) { return w->soft_blk != NULL; }
 
 /* After a factorisation: each free vertex's fsoft becomes the least over it and the
  * vertices it links to. A diagonal block holds a vertex moving alone, and neighbours
- * moving with it hold less (the long-term dome rang at 2.2% with each vertex's sum over
- * its own block kept under 0.9; docs/haptics.md). vturn is the scratch. */
+ * moving with it hold less (the long-term dome rang, up to 2.31%, with each vertex's sum
+ * over its own block kept under 0.9; docs/haptics.md). vturn is the scratch. */
 static void soft_neighbourhood(palp_world *w) {
   double *restrict m = w->vturn;
   const int(*restrict link)[2] = (const int(*)[2])w->mesh.link;
@@ -2036,7 +2036,8 @@ void palp_world_destroy(palp_world *w) {
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->sheight), free(w->fsu), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
-  free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack), free(w->fsoft), free(w->lturn), free(w->vturn), free(w->soft_blk);
+  free(w->sigma), free(w->fdir), free(w->fbeta), free(w->link_mass), free(w->fslack);
+  free(w->fsoft), free(w->lturn), free(w->vturn), free(w->soft_blk);
   free(w->hinge), free(w->hgrad), free(w->hk), free(w->hrest), free(w->hbeyond), free(w->vhinge_start), free(w->vhinge), free(w->ubuf);
   free(w->grad), free(w->u), free(w->g_u), free(w->vlink_start), free(w->vlink);
   free(w->rhs), free(w->work), free(w->bx);
@@ -2370,7 +2371,8 @@ static palp_factor_job *job_alloc(const palp_world *w) {
     j->soft_blk = malloc(sizeof(double) * 6 * (size_t)(w->nfree ? w->nfree : 1));
   }
   if (w->sheight) j->fsu = calloc((size_t)w->mesh.vertex_count, sizeof(palp_vec3));
-  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack || (w->soft_blk && (!j->fsoft || !j->soft_blk)) ||
+  if (!j->ti || !j->tj || !j->tx || !j->solve || !j->work || !j->fdir || !j->fbeta || !j->fslack ||
+      (w->soft_blk && (!j->fsoft || !j->soft_blk)) ||
       (w->sheight && !j->fsu)) {
     job_free(j);
     return NULL;
@@ -2380,7 +2382,8 @@ static palp_factor_job *job_alloc(const palp_world *w) {
 
 int palp_factor_job_run(palp_factor_job *j) {
   if (!j) return PALP_EINVAL;
-  if (j->soft_blk) soft_stiffness(j->nf, j->h, j->nnz, j->ti, j->tj, j->tx, j->soft_blk, j->fsoft); /* before: the factor may reorder them */
+  /* before the factorisation, which may reorder the triplets */
+  if (j->soft_blk) soft_stiffness(j->nf, j->h, j->nnz, j->ti, j->tj, j->tx, j->soft_blk, j->fsoft);
   j->rc = palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, j->nnz, j->ti, j->tj, j->tx);
   if (j->rc) return j->rc;
   /* The same function as finger_slot's, so a column is the same bits whoever makes it. */
