@@ -208,10 +208,10 @@ static void test_deep_press(const char *scene, const char *name) {
  * the contact moving onto another facet stepped the force by up to 0.022 N; the
  * default compliant pad spreads the load over the facets it touches (docs/haptics.md).
  * Both contact surfaces are held to it: the smooth one (the default) and the facets. */
-static long long test_slide_in(const char *sn, palp_world *w, int max_over);
+static void test_slide_in(const char *sn, palp_world *w, int max_over);
 
 static void test_slide(int surface) {
-  (void)test_slide_in(palp_finger_surface_name(surface), make_surface(0.001, surface), 0);
+  test_slide_in(palp_finger_surface_name(surface), make_surface(0.001, surface), 0);
 }
 
 /* The same slide on the shipped domes, at 1 kHz physics, stepped as the server steps
@@ -233,14 +233,24 @@ static void test_slide_shipped(void) {
     for (int i = 0; i < 2; ++i) {
       palp_world *w = scene_world(scene[i], 0.001, -1, NULL, lag ? palp_world_refactor_lag_for(0.001) : 0,
                                   palp_world_refactor_blend_for(0.001));
-      if (w) (void)test_slide_in(name[!lag][i], w, max_over[!lag][i]);
+      if (w) test_slide_in(name[!lag][i], w, max_over[!lag][i]);
     }
 }
 
-/* One slide as test_slide_in makes it, at any depth, speed and azimuth (the plane of the
- * arc through the pole): the ticks over max(2%, 0.01 N) beyond the trend, the worst
- * such step (share of the force), the ticks out of contact and the rebuilds made at once. */
-static int slide_over(palp_world *w, double depth, double v, double az, double *worst, int *lost, long long *at_once) {
+/* What a slide measured (slide). */
+typedef struct slide_stats {
+  int ticks, over, lost;     /* ticks slid; over max(2%, 0.01 N) beyond the trend; out of contact */
+  double worst, worst_raw;   /* largest step beyond the trend, and tick-to-tick change, / force */
+  double worst_n, margin;    /* the largest such step [N]; the least margin to max(2%, 0.01 N) [N] */
+  double fmin;               /* the least force [N] */
+  long long rebuilds, at_once; /* tangent rebuilds, and those made at once (health.margin_rebuilds) */
+} slide_stats;
+
+/* The device's path: a circle of radius R + r - depth in the plane through the pole at
+ * azimuth az, from polar -40 to +40 degrees at speed v, entered by a 10 mm/s press at
+ * -40 degrees and 0.3 s of settling. Measured after the first 50 ticks, where the
+ * device's speed itself steps from 0 to v. */
+static slide_stats slide(palp_world *w, double depth, double v, double az) {
   const double rho = R + r - depth, a0 = -40.0 * PALP_TEST_PI / 180.0, ca = cos(az), sa = sin(az);
 #define SLIDE_AT(rad, ph) ((palp_vec3){(rad) * sin(ph) * ca, (rad) * sin(ph) * sa, (rad) * cos(ph)})
   const int f = palp_world_add_finger(w, SLIDE_AT(R + r + 0.001, a0), r);
@@ -249,30 +259,36 @@ static int slide_over(palp_world *w, double depth, double v, double az, double *
     palp_world_set_finger_device(w, f, SLIDE_AT(rr, a0));
     palp_world_step(w);
   }
-  for (int k = 0; k < 300; ++k) palp_world_step(w);
+  for (int k = 0; k < 300; ++k) palp_world_step(w); /* settle */
+  slide_stats st = {.margin = INFINITY, .fmin = INFINITY};
   palp_world_health h0, h1;
   palp_world_get_health(w, &h0);
   palp_vec3 F1 = {0, 0, 0}, F2 = {0, 0, 0};
-  int ticks = 0, over = 0;
-  *worst = 0.0, *lost = 0;
-  for (double phi = a0; phi < -a0; phi += v * 0.001 / rho, ++ticks) {
+  for (double phi = a0; phi < -a0; phi += v * 0.001 / rho, ++st.ticks) {
     palp_world_set_finger_device(w, f, SLIDE_AT(rho, phi));
     palp_world_step(w);
     palp_local_model lm;
     palp_world_finger_local_model(w, f, &lm);
-    *lost += !lm.contact;
+    st.lost += !lm.contact;
     const double Fm = len(lm.force);
-    if (ticks >= 50 && Fm > 0.0) {
-      const double step = len(add(add(lm.force, sc(F1, -2.0)), F2));
-      over += step > fmax(0.02 * Fm, 0.01);
-      *worst = fmax(*worst, step / Fm);
+    if (st.ticks >= 50) {
+      const double step = len(add(add(lm.force, sc(F1, -2.0)), F2)), raw = len(add(lm.force, sc(F1, -1.0)));
+      st.over += step > fmax(0.02 * Fm, 0.01);
+      st.worst_n = fmax(st.worst_n, step);
+      st.margin = fmin(st.margin, fmax(0.02 * Fm, 0.01) - step);
+      if (step / Fm > st.worst) st.worst = step / Fm;
+      if (raw / Fm > st.worst_raw) st.worst_raw = raw / Fm;
+      st.fmin = fmin(st.fmin, Fm);
     }
+    if (getenv("SLIDE_TRACE"))
+      printf("T %d %.5f %.5f %.5f %.5f %d\n", st.ticks, lm.force.x, lm.force.y, lm.force.z, Fm, lm.triangles);
     F2 = F1, F1 = lm.force;
   }
 #undef SLIDE_AT
   palp_world_get_health(w, &h1);
-  *at_once = (long long)(h1.margin_rebuilds - h0.margin_rebuilds);
-  return over;
+  st.rebuilds = (long long)(h1.refactors - h0.refactors);
+  st.at_once = (long long)(h1.margin_rebuilds - h0.margin_rebuilds);
+  return st;
 }
 
 /* The slide of test_slide_shipped at two depths, two speeds and in two planes on both
@@ -294,18 +310,15 @@ static void test_slide_grid(void) {
           palp_world *w = scene_world(scene[i], 0.001, -1, NULL, palp_world_refactor_lag_for(0.001),
                                       palp_world_refactor_blend_for(0.001));
           if (!w) return;
-          double worst;
-          int lost;
-          long long at_once;
-          const int over = slide_over(w, depth, v, az, &worst, &lost, &at_once);
+          const slide_stats st = slide(w, depth, v, az);
           printf("slide grid (%s dome, as served): %.0f mm deep, %.0f mm/s, azimuth %.0f deg: %d ticks over max(2%%, "
                  "0.01 N), worst %.2f%% of the force, %d ticks out of contact, %lld rebuilds at once\n",
-                 dome[i], 1e3 * depth, 1e3 * v, az * 180 / PALP_TEST_PI, over, 100 * worst, lost, at_once);
-          CHECK(over == 0, "slide grid (%s dome), %.0f mm, %.0f mm/s, %.0f deg: no tick-to-tick step beyond max(2%% of "
-                           "the force, 0.01 N) off the trend (%d ticks)", dome[i], 1e3 * depth, 1e3 * v,
-                az * 180 / PALP_TEST_PI, over);
-          CHECK(lost == 0, "slide grid (%s dome): contact kept all the way (%d ticks lost)", dome[i], lost);
-          at_once_all += at_once, slides++;
+                 dome[i], 1e3 * depth, 1e3 * v, az * 180 / PALP_TEST_PI, st.over, 100 * st.worst, st.lost, st.at_once);
+          CHECK(st.over == 0, "slide grid (%s dome), %.0f mm, %.0f mm/s, %.0f deg: no tick-to-tick step beyond max(2%% "
+                              "of the force, 0.01 N) off the trend (%d ticks)", dome[i], 1e3 * depth, 1e3 * v,
+                az * 180 / PALP_TEST_PI, st.over);
+          CHECK(st.lost == 0, "slide grid (%s dome): contact kept all the way (%d ticks lost)", dome[i], st.lost);
+          at_once_all += st.at_once, slides++;
           palp_world_destroy(w);
         }
   /* the rebuilds made at once (the turn rule's, blended) are exercised */
@@ -323,98 +336,38 @@ static void test_slide_grid(void) {
  * the test model_finger_memcheck also runs it once under valgrind, which reports any
  * read of freed memory whatever the heap does. */
 static void test_slide_repeatable(int runs) {
-  const double depth = 0.010, v = 0.100, rho = R + r - depth, a0 = -40.0 * PALP_TEST_PI / 180.0;
   uint64_t first = 0;
   for (int run = 0; run < runs; ++run) {
     palp_world *w = scene_world(PALP_CONFIG_DIR "/paper_step_long_term.json", 0.001, -1, NULL,
                                 palp_world_refactor_lag_for(0.001), palp_world_refactor_blend_for(0.001));
     if (!w) return;
-    palp_vec3 start = {(R + r + 0.001) * sin(a0), 0, (R + r + 0.001) * cos(a0)};
-    const int f = palp_world_add_finger(w, start, r);
-    for (int k = 0; k <= 1100; ++k) {
-      const double s = fmin(1.0, k / 1100.0), rr = (R + r + 0.001) * (1 - s) + rho * s;
-      palp_world_set_finger_device(w, f, (palp_vec3){rr * sin(a0), 0, rr * cos(a0)});
-      palp_world_step(w);
-    }
-    for (int k = 0; k < 300; ++k) palp_world_step(w);
-    int ticks = 0, lost = 0;
-    double fmin_ = INFINITY;
-    for (double phi = a0; phi < -a0; phi += v * 0.001 / rho, ++ticks) {
-      palp_world_set_finger_device(w, f, (palp_vec3){rho * sin(phi), 0, rho * cos(phi)});
-      palp_world_step(w);
-      palp_local_model lm;
-      palp_world_finger_local_model(w, f, &lm);
-      lost += !lm.contact;
-      fmin_ = fmin(fmin_, len(lm.force));
-    }
+    const slide_stats st = slide(w, 0.010, 0.100, 0.0);
     const uint64_t hsh = palp_world_hash(w);
     if (run == 0) first = hsh;
     printf("slide repeated (long-term dome, as served, 100 mm/s, 10 mm deep), run %d: %d ticks, %d out of contact, "
-           "force >= %.3f N, state hash %016llx\n", run + 1, ticks, lost, fmin_, (unsigned long long)hsh);
-    CHECK(lost == 0, "slide repeated, run %d: contact kept all the way (%d ticks lost)", run + 1, lost);
-    CHECK(fmin_ > 1.0, "slide repeated, run %d: the finger presses all the way (%.3f N)", run + 1, fmin_);
+           "force >= %.3f N, state hash %016llx\n", run + 1, st.ticks, st.lost, st.fmin, (unsigned long long)hsh);
+    CHECK(st.lost == 0, "slide repeated, run %d: contact kept all the way (%d ticks lost)", run + 1, st.lost);
+    CHECK(st.fmin > 1.0, "slide repeated, run %d: the finger presses all the way (%.3f N)", run + 1, st.fmin);
     CHECK(hsh == first, "slide repeated, run %d: the same world as run 1, bit for bit (%016llx against %016llx)", run + 1,
           (unsigned long long)hsh, (unsigned long long)first);
     palp_world_destroy(w);
   }
 }
 
-/* Returns the rebuilds made at once at the factor's margin during the slide. */
-static long long test_slide_in(const char *sn, palp_world *w, int max_over) {
-  const double depth = 0.010, v = 0.050; /* [m], [m/s] */
-  /* The device path: a circle of radius R + r - depth in the x-z plane, from polar
-   * -40 to +40 degrees, entered by a 10 mm/s press at -40 degrees. */
-  const double rho = R + r - depth, a0 = -40.0 * PALP_TEST_PI / 180.0;
-  palp_vec3 start = {(R + r + 0.001) * sin(a0), 0, (R + r + 0.001) * cos(a0)};
-  const int f = palp_world_add_finger(w, start, r);
-  for (int k = 0; k <= 1100; ++k) {
-    const double s = fmin(1.0, k / 1100.0);
-    const double rr = (R + r + 0.001) * (1 - s) + rho * s;
-    palp_world_set_finger_device(w, f, (palp_vec3){rr * sin(a0), 0, rr * cos(a0)});
-    palp_world_step(w);
-  }
-  for (int k = 0; k < 300; ++k) palp_world_step(w); /* settle */
-  const double dphi = v * 0.001 / rho; /* [rad per tick] */
-  palp_vec3 F1 = {0, 0, 0}, F2 = {0, 0, 0};
-  double worst = 0.0, worst_raw = 0.0, fmin_ = INFINITY, worst_n = 0.0, margin = INFINITY;
-  palp_world_health h0, h1;
-  palp_world_get_health(w, &h0);
-  int ticks = 0, over = 0, lost = 0;
-  for (double phi = a0; phi < -a0; phi += dphi, ++ticks) {
-    const palp_vec3 x = {rho * sin(phi), 0, rho * cos(phi)};
-    palp_world_set_finger_device(w, f, x);
-    palp_world_step(w);
-    palp_local_model lm;
-    palp_world_finger_local_model(w, f, &lm);
-    if (!lm.contact) lost++;
-    const double Fm = len(lm.force);
-    if (ticks >= 50) {
-      const double step = len(add(add(lm.force, sc(F1, -2.0)), F2));
-      const double raw = len(add(lm.force, sc(F1, -1.0)));
-      if (step > fmax(0.02 * Fm, 0.01)) over++;
-      worst_n = fmax(worst_n, step);
-      margin = fmin(margin, fmax(0.02 * Fm, 0.01) - step);
-      if (step / Fm > worst) worst = step / Fm;
-      if (raw / Fm > worst_raw) worst_raw = raw / Fm;
-      if (Fm < fmin_) fmin_ = Fm;
-    }
-    if (getenv("SLIDE_TRACE"))
-      printf("T %d %.5f %.5f %.5f %.5f %d\n", ticks, lm.force.x, lm.force.y, lm.force.z, Fm, lm.triangles);
-    F2 = F1, F1 = lm.force;
-  }
-  palp_world_get_health(w, &h1);
+/* The issue's slide (50 mm/s, 10 mm deep, in the x-z plane), checked: contact all the
+ * way, the finger pressing, at most max_over ticks over. */
+static void test_slide_in(const char *sn, palp_world *w, int max_over) {
+  const slide_stats st = slide(w, 0.010, 0.050, 0.0);
   printf("slide (%s): %d ticks at 50 mm/s, 10 mm deep, force >= %.3f N: tick-to-tick step beyond the linear trend at "
          "most %.2f%% of the force (raw tick-to-tick change at most %.2f%%), at most %.4f N, smallest margin to "
          "max(2%%, 0.01 N) %.4f N; %d ticks over it; %lld rebuilds, %lld of them at once at the margin\n",
-         sn, ticks, fmin_, 100 * worst, 100 * worst_raw, worst_n, margin, over,
-         (long long)(h1.refactors - h0.refactors),
-         (long long)(h1.margin_rebuilds - h0.margin_rebuilds));
-  CHECK(lost == 0, "slide (%s): contact kept all the way (%d ticks lost)", sn, lost);
-  CHECK(fmin_ > 0.1, "slide (%s): the finger presses all the way (%.3f N)", sn, fmin_);
-  CHECK(over <= max_over, "slide (%s): at most %d tick-to-tick force steps beyond max(2%% of the force, 0.01 N) "
-                          "off the motion's trend (%d ticks)", sn, max_over, over);
+         sn, st.ticks, st.fmin, 100 * st.worst, 100 * st.worst_raw, st.worst_n, st.margin, st.over, st.rebuilds,
+         st.at_once);
+  CHECK(st.lost == 0, "slide (%s): contact kept all the way (%d ticks lost)", sn, st.lost);
+  CHECK(st.fmin > 0.1, "slide (%s): the finger presses all the way (%.3f N)", sn, st.fmin);
+  CHECK(st.over <= max_over, "slide (%s): at most %d tick-to-tick force steps beyond max(2%% of the force, 0.01 N) "
+                             "off the motion's trend (%d ticks)", sn, max_over, st.over);
   palp_world_destroy(w);
-  return (long long)(h1.margin_rebuilds - h0.margin_rebuilds);
 }
 
 static void test_local_model_in(const char *what, palp_world *w, double bound);
