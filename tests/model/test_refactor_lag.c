@@ -8,7 +8,7 @@
  *   due job not handed back makes the step fail with PALP_EBUSY without advancing;
  * - the finger's force with the deferral stays near the force with rebuilds made at
  *   once (blended in as the deferred ones are): RMS within 2% and every frame within
- *   10% (+ 1 mN) on the shipped palpation domes (bounds of the paper's puddle at main).
+ *   10% (+ 1 mN) on the shipped palpation domes (the paper's puddle has its own: main).
  *   Both are lagged-tangent approximations built at different frames (measured at 16
  *   frames on the puddle before the turn rule: RMS 1.3%, worst 6.7% = 7 mN on 0.11 N
  *   while sliding; a 1-frame lag already differs by 1.8%). */
@@ -137,8 +137,9 @@ static palp_world_def scene_def(const char *path) {
  * 0.18% / 1.44% and 0.12% / 0.69% with the turn rule, 2026-11-29). The paper's
  * instantaneous dome, a puddle kept as the paper's reproduction (docs/materials.md), is
  * pressed at 0.05-0.11 N, and its wobble's contact re-entries fall on different frames
- * when the rebuilds do: with the turn rule 2.59% RMS and up to 8 mN (18.5% of 0.05 N),
- * before it 1.47% and 7 mN on 0.11 N. Its bounds: 3% RMS and 10% + 10 mN. */
+ * when the rebuilds do: with the turn rule 2.59% RMS, 18.5% (7-8 mN) at 0.05 N and
+ * 12.7 mN at most; before it 1.47%, 6.9% (7.8 mN on 0.11 N). Its bounds: 3% RMS and
+ * 10% + 10 mN. */
 int main(void) {
   run("breast-tissue dome", scene_def(PALP_CONFIG_DIR "/phantoms/dome.json"), 0.02, 0.10, 0.001);
   run("long-term dome", scene_def(PALP_CONFIG_DIR "/paper_step_long_term.json"), 0.02, 0.10, 0.001);
