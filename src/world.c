@@ -54,7 +54,7 @@ enum { JOB_NONE = 0, JOB_REQUESTED = 1, JOB_CLAIMED = 2, JOB_DONE = 3 };
  * vertex: the step's amplification there is about q, neutral at 1 (turn_quotient takes
  * it per link, the larger sum of its ends over the softer end). The long-term dome slid
  * at 1 kHz rang at the Nyquist rate from q ~ 1.06 (its skin's viscous tangent is 13x its
- * static modulus) while every link's turn was under 23 deg and its tension under 0.8 of
+ * static modulus) while every link's turn was under 17 deg and its tension under 0.8 of
  * what the factor holds (docs/haptics.md, "A turned stiff link rings"). Stale at 0.5 (a
  * deferred rebuild then starts where the amplification is at most 0.5), at once at 0.9. */
 #define PALP_TURN_STALE 0.5
@@ -1474,7 +1474,7 @@ static inline __attribute__((always_inline)) int link_states_loop(
      * slid at 50 mm/s, rang at the Nyquist rate during the 16 frames of the lag (force
      * steps of 30%; docs/haptics.md). A turn is judged at its vertices (turn_quotient):
      * the 45 deg limit it had here fired where the vertex held the turned stiffness
-     * easily, and missed the stiff links that rang at 23 deg. */
+     * easily, and missed the stiff links that rang at 17 deg. */
     unsafe |= ts > 2.0 * held;
     lturn[l] = tangent * kx[l] * (1.0 - c * c);
   }
