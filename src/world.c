@@ -166,9 +166,10 @@ struct palp_world {
   double *fbeta;    /* transverse stiffness fraction the factor was built with */
   double *link_mass; /* [kg] min over the free ends of vertex mass / links at the vertex */
   double *fslack;   /* [N/m] transverse stiffness the mass term absorbs at the factor's step */
+  /* The turn rule's (turn_rule; all NULL without it): */
   double *fsoft;    /* [nfree + 1] [N/m] the factor's softest stiffness at each free vertex (turn_quotient),
                      * and their least at [nfree] */
-  double *soft_blk; /* [6 nfree] scratch of soft_stiffness; NULL without the turn rule */
+  double *soft_blk; /* [6 nfree] scratch of soft_stiffness */
   int link_degree;  /* the most links at any vertex */
   double *lturn;    /* [nlink] scratch: k_l sin^2 of each link's turn from its factor direction [N/m] */
   double *vturn;    /* [vertex_count] scratch: their sum at each vertex [N/m] */
@@ -1453,7 +1454,7 @@ static inline __attribute__((always_inline)) int link_states_loop(
     const double *restrict kx, const double *restrict fbeta, const double *restrict fslack,
     const palp_vec3 *restrict fdir, palp_vec3 *restrict dir, double *restrict eps_l, double *restrict sigma_l,
     double (*restrict xs)[2], const int visc, const palp_burgers *bgp, double E_static, double tangent,
-    double *restrict lturn) {
+    const int turn, double *restrict lturn) {
   const palp_burgers bg = *bgp;
   long long stale = 0, unsafe = 0; /* as wide as a double: GCC vectorises the OR of double comparisons only so */
   for (int l = 0; l < nl; ++l) {
@@ -1476,7 +1477,7 @@ static inline __attribute__((always_inline)) int link_states_loop(
      * the 45 deg limit it had here fired where the vertex held the turned stiffness
      * easily, and missed the stiff links that rang at 17 deg. */
     unsafe |= ts > 2.0 * held;
-    lturn[l] = tangent * kx[l] * (1.0 - c * c);
+    if (turn) lturn[l] = tangent * kx[l] * (1.0 - c * c); /* a constant: the turn rule's worlds only */
   }
   return (stale != 0) | ((unsafe != 0) << 1);
 }
@@ -1490,11 +1491,13 @@ static int link_states(int nl, const double *restrict dx, const double *restrict
                        const palp_vec3 *restrict fdir, palp_vec3 *restrict dir, double *restrict eps_l,
                        double *restrict sigma_l, double (*restrict xs)[2], int visc, const palp_burgers *bgp,
                        double E_static, double tangent, double *restrict lturn) {
-  if (visc)
-    return link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs,
-                            1, bgp, E_static, tangent, lturn);
-  return link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs, 0,
-                          bgp, E_static, tangent, lturn);
+  /* lturn NULL: no turn rule, and the loop stores nothing for it */
+#define LINK_STATES(v, t)                                                                                        \
+  link_states_loop(nl, dx, dy, dz, rest_len, inv_rest, xsec, kx, fbeta, fslack, fdir, dir, eps_l, sigma_l, xs, v, \
+                   bgp, E_static, tangent, t, lturn)
+  if (visc) return lturn ? LINK_STATES(1, 1) : LINK_STATES(1, 0);
+  return lturn ? LINK_STATES(0, 1) : LINK_STATES(0, 0);
+#undef LINK_STATES
 }
 
 /* Whether the turn rule applies (PALP_TURN_STALE): at haptic rates in worlds stepped as the
@@ -1554,7 +1557,8 @@ static void stage_membrane_state(palp_world *w, double h) {
     dx[l] = b.x - a.x, dy[l] = b.y - a.y, dz[l] = b.z - a.z;
   }
   const int leave = link_states(nl, dx, dy, dz, w->rest_len, w->inv_rest, w->xsec, w->kx, w->fbeta, w->fslack, w->fdir,
-                                w->dir, w->eps, w->sigma, w->xs, visc, &w->burgers, w->E_static, tangent, w->lturn);
+                                w->dir, w->eps, w->sigma, w->xs, visc, &w->burgers, w->E_static, tangent,
+                                turn_rule(w) ? w->lturn : NULL);
   /* the largest strain, compared in link order as before (a max reduction would not vectorise anyway) */
   const double *restrict eps_l = w->eps;
   double max_strain = w->step_max_strain;
@@ -1911,13 +1915,14 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     w->fbeta = xcalloc((size_t)nl, sizeof(double), &fail);
     w->link_mass = xcalloc((size_t)nl, sizeof(double), &fail);
     w->fslack = xcalloc((size_t)nl, sizeof(double), &fail);
-    w->fsoft = xcalloc((size_t)nv + 1, sizeof(double), &fail);
-    w->lturn = xcalloc((size_t)nl, sizeof(double), &fail);
-    w->vturn = xcalloc((size_t)nv, sizeof(double), &fail);
-    /* The turn rule's scratch, only where it applies (turn_rule): its sums of the
-     * factor's diagonal blocks then run with each factorisation. */
-    if ((def->refactor_lag > 0 || def->refactor_blend > 0) && def->dt <= PALP_HAPTIC_MAX_DT)
+    /* The turn rule's data, only where it applies (turn_rule): its sums of the factor's
+     * diagonal blocks then run with each factorisation. */
+    if ((def->refactor_lag > 0 || def->refactor_blend > 0) && def->dt <= PALP_HAPTIC_MAX_DT) {
       w->soft_blk = xcalloc(6 * (size_t)nv, sizeof(double), &fail);
+      w->fsoft = xcalloc((size_t)nv + 1, sizeof(double), &fail);
+      w->lturn = xcalloc((size_t)nl, sizeof(double), &fail);
+      w->vturn = xcalloc((size_t)nv, sizeof(double), &fail);
+    }
     if (has(w, PALP_EFFECT_MEMBRANE_VISCOSITY)) w->xs = xcalloc((size_t)nl, sizeof *w->xs, &fail);
     if (fail) goto nomem;
     /* Each link carries the membrane over the area of its two triangles: a spring
