@@ -586,6 +586,13 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
                   (unsigned long long)s->stats.overruns, (unsigned long long)s->stats.ticks,
                   (unsigned long long)s->stats.factor_jobs, (unsigned long long)s->stats.factor_waits,
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
+  /* What the network's jitter cost: the delay the device samples were played out at
+   * (server/playout.h; none on a steady link). */
+  if (s->stats.playout_delay_max > 0)
+    palp_log_info(srv->log, "session %u: the station's device points came with jitter and were played out up to "
+                            "%.1f ms late; %llu of %llu came after their turn and were bridged", s->id,
+                  s->stats.playout_delay_max * 1e3, (unsigned long long)s->stats.playout_late,
+                  (unsigned long long)s->stats.playout_samples);
   /* Where the model's answers were extrapolations (the stations were told each step,
    * LM_LARGE_STRAIN; docs/model.md, "Valid range"). */
   if (h.large_strain_steps > 0 || h.large_bend_steps > 0)

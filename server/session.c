@@ -42,7 +42,24 @@ static bool contact_filter(const void *sample, void *arg) {
     atomic_fetch_add_explicit(&s->filtered_finger, 1, memory_order_relaxed);
     return false;
   }
+  if (c->mode == palp_CONTACT_FINGER) {
+    palp_srv_arrival *a = &s->arrival[c->finger][c->seq % 16];
+    atomic_store_explicit(&a->seq, 0, memory_order_relaxed); /* no match while it is rewritten */
+    atomic_thread_fence(memory_order_release);
+    atomic_store_explicit(&a->recv_ns, palp_dds_now_ns(), memory_order_relaxed);
+    atomic_store_explicit(&a->seq, c->seq, memory_order_release);
+  }
   return true;
+}
+
+/* When sample seq of finger arrived, if the filter stamped it (else the take's time). */
+static int64_t arrival_ns(palp_srv_session *s, int finger, uint64_t seq, int64_t taken_ns) {
+  palp_srv_arrival *a = &s->arrival[finger][seq % 16];
+  if (seq == 0 || atomic_load_explicit(&a->seq, memory_order_acquire) != seq) return taken_ns;
+  const int64_t t = atomic_load_explicit(&a->recv_ns, memory_order_relaxed);
+  atomic_thread_fence(memory_order_acquire);
+  if (atomic_load_explicit(&a->seq, memory_order_relaxed) != seq || t > taken_ns) return taken_ns;
+  return t;
 }
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err) {
@@ -71,6 +88,7 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->world = palp_scene_create_world(&def->phantom->scene, err);
   if (!s->world) goto fail;
   for (int i = 0; i < def->phantom->scene.contact_count; i++) palp_world_remove_contact(s->world, i);
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) palp_srv_playout_init(&s->finger[i].playout);
   const palp_mesh *mesh = palp_world_mesh(s->world);
   s->limits = (palp_srv_limits){.session_id = s->id,
                                 .max_force = def->cfg->max_force,
@@ -213,6 +231,7 @@ static void lift(palp_srv_session *s, palp_srv_finger_state *f) {
   f->world_contact = -1;
   f->mode = palp_CONTACT_RELEASE;
   f->feedback = (palp_vec3){0, 0, 0};
+  palp_srv_playout_clear(&f->playout);
 }
 
 /* Applies a validated command; returns 0 or a negative model error. */
@@ -280,8 +299,37 @@ static void fold_filtered(palp_srv_session *s, int64_t now_ns) {
   for (; s->filtered_seen_finger < ff; s->filtered_seen_finger++) count_reject(s, PALP_SRV_REJ_BAD_FINGER, 0, now_ns);
 }
 
+/* Moves each placed finger's device to its played-out point (playout.h): once per
+ * tick, whatever number of samples came, and only when it is new (a new point, or a
+ * newer station time for the same point, which the local model echoes for the
+ * station's latency compensation), so a still device lets the world sleep. */
+static void play_out(palp_srv_session *s, int64_t recv_ns, int64_t now_ns) {
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+    palp_srv_finger_state *f = &s->finger[i];
+    if (f->mode != palp_CONTACT_FINGER || f->world_contact < 0) continue;
+    palp_srv_contact c = f->cmd;
+    if (!palp_srv_playout_at(&f->playout, recv_ns, &c.center, &c.source_time_ns, &c.seq)) continue;
+    if (c.source_time_ns == f->cmd.source_time_ns && c.center.x == f->cmd.center.x &&
+        c.center.y == f->cmd.center.y && c.center.z == f->cmd.center.z)
+      continue;
+    if (apply(s, &c) < 0) count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
+  }
+  uint64_t n = 0, late = 0;
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+    const palp_srv_playout *p = &s->finger[i].playout;
+    n += p->samples;
+    late += p->late;
+    if (p->delay_max > s->stats.playout_delay_max) s->stats.playout_delay_max = p->delay_max;
+  }
+  s->stats.playout_samples = n;
+  s->stats.playout_late = late;
+}
+
 static void take_contacts(palp_srv_session *s, int64_t now_ns) {
   fold_filtered(s, now_ns);
+  /* Now: when the samples of this take had all arrived. Each one's own arrival is
+   * the filter's stamp (arrival_ns); this is the playout's clock and the fallback. */
+  const int64_t recv_ns = palp_dds_now_ns();
   palp_Contact buf[TAKE_BATCH];
   void *ptr[TAKE_BATCH];
   dds_sample_info_t info[TAKE_BATCH];
@@ -311,9 +359,30 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
         continue;
       }
       if (v == PALP_SRV_CLAMPED) count_reject(s, why, 1, now_ns);
-      if (apply(s, &c) < 0) {
-        count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
-        continue;
+      palp_srv_finger_state *f = &s->finger[c.finger];
+      if (c.mode == palp_CONTACT_FINGER && f->mode == palp_CONTACT_FINGER && f->world_contact >= 0 &&
+          c.radius == f->cmd.radius) {
+        /* A placed finger's next device point: played out after the batch (play_out). */
+        const int pushed = palp_srv_playout_push(&f->playout, c.source_time_ns,
+                                                 arrival_ns(s, c.finger, c.seq, recv_ns), c.center, c.seq);
+        if (pushed == 0) continue;
+        if (pushed < 0) { /* a stamp that is no clock reading: applied as it comes */
+          palp_srv_playout_clear(&f->playout);
+          if (apply(s, &c) < 0) {
+            count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
+            continue;
+          }
+        }
+      } else {
+        if (apply(s, &c) < 0) {
+          count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
+          continue;
+        }
+        /* A finger placed (or re-placed): its playout starts from this point. */
+        palp_srv_playout_clear(&f->playout);
+        if (c.mode == palp_CONTACT_FINGER)
+          palp_srv_playout_push(&f->playout, c.source_time_ns, arrival_ns(s, c.finger, c.seq, recv_ns), c.center,
+                                c.seq);
       }
       s->stats.contact_samples++;
       if (s->events && s->events->contact_applied)
@@ -321,6 +390,7 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
     }
     if (n < TAKE_BATCH) break;
   }
+  play_out(s, recv_ns, now_ns);
 }
 
 static void publish_feedback(palp_srv_session *s, int64_t now_ns, double top_disp) {

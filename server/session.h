@@ -23,6 +23,7 @@
 #include "palp.h"
 #include "palp_assess.h"
 #include "palp_types.h"
+#include "playout.h"
 #include "findings.h"
 #include "validate.h"
 
@@ -52,15 +53,26 @@ typedef struct palp_srv_session_stats {
   uint64_t factor_jobs;                     /* lagged-tangent rebuilds handed to the helper */
   uint64_t factor_waits;                    /* ... that were due before the helper had finished */
   int64_t factor_wait_ns;                   /* time ticks spent waiting for them [ns] */
+  uint64_t playout_samples, playout_late;   /* device samples played out; of them, after their turn */
+  double playout_delay_max;                 /* the largest delay the playout added [s] (playout.h) */
   int64_t last_frame;
   double sim_time;                          /* [s] */
 } palp_srv_session_stats;
+
+/* When a device sample arrived, stamped on the receive thread (palp_srv_session). */
+typedef struct palp_srv_arrival {
+  atomic_uint_fast64_t seq;
+  atomic_int_fast64_t recv_ns;
+} palp_srv_arrival;
 
 typedef struct palp_srv_finger_state {
   int world_contact;      /* model contact id, -1 when lifted */
   int mode;               /* palp_ContactMode of the applied command */
   palp_srv_contact cmd;   /* last applied command */
   palp_vec3 feedback;     /* [N] after the last step */
+  /* A position-driven finger's device samples, played out at a steady delay so a
+   * jittery network does not push the phantom in bunches (playout.h). */
+  palp_srv_playout playout;
 } palp_srv_finger_state;
 
 typedef struct palp_srv_session_def {
@@ -102,6 +114,11 @@ typedef struct palp_srv_session {
   /* [DDS receive thread] samples the contact filter dropped before they reached
    * the reader cache: another session's id, or a finger past the last. */
   atomic_uint_fast64_t filtered_session, filtered_finger;
+  /* When each finger's recent samples arrived (server clock), stamped by the filter
+   * on the receive thread: the tick takes them up to a period later, and the
+   * playout's jitter estimate must see the network, not the tick (playout.h).
+   * A slot is (seq, time), written time first; read back if its seq still matches. */
+  palp_srv_arrival arrival[PALP_SRV_MAX_FINGERS][16];
 
   /* [main] */
   atomic_int want_feedback;   /* haptic trainee present */

@@ -1,0 +1,183 @@
+/*
+ * test_playout.c - the server's jitter buffer for a finger's device samples
+ * (server/playout.h), against a station and a network simulated here: the station
+ * samples a press at 10 mm/s every 4 ms, the network delays each sample by 20 ms
+ * plus a seeded jitter and keeps their order (as palp-netem's relay does), and the
+ * server takes at most the newest sample per 4 ms tick (the contact reader keeps
+ * the last sample of each finger). Expected values are the simulated trajectory
+ * itself, not the buffer's output.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "playout.h"
+
+static int failures;
+#define CHECK(cond, ...)                                  \
+  do {                                                    \
+    const int ok_ = (cond);                               \
+    fprintf(stderr, "%s ", ok_ ? "ok  " : "FAIL");        \
+    fprintf(stderr, __VA_ARGS__);                         \
+    fprintf(stderr, "\n");                                \
+    if (!ok_) failures++;                                 \
+  } while (0)
+
+#define MS 1000000LL
+#define N 1000             /* samples: 4 s */
+#define PERIOD (4 * MS)    /* the station's send period and the server's tick */
+#define SPEED 0.010        /* [m/s] along -z */
+
+static uint64_t rng_state;
+static double urand(void) { /* xorshift64*, uniform in [0, 1) */
+  rng_state ^= rng_state >> 12;
+  rng_state ^= rng_state << 25;
+  rng_state ^= rng_state >> 27;
+  return (double)((rng_state * 2685821657736338717ULL) >> 11) * 0x1.0p-53;
+}
+
+typedef struct run {
+  double z[N], z_newest[N]; /* per tick: played out, and the newest sample (no buffer) */
+  double delay[N];          /* the buffer's D after each tick [s] */
+  int64_t tick[N];          /* server clock */
+  int ticks;
+} run;
+
+/* One press. jitter_ms: uniform +- around 20 ms; loss: fraction dropped;
+ * clock: the station's clock minus the server's [ns]; stop_at: the station sends
+ * nothing from this sample on (N: never stops). */
+static void simulate(double jitter_ms, double loss, int64_t clock, int stop_at, uint64_t seed, run *r) {
+  rng_state = seed;
+  static int64_t arrive[N];
+  int64_t prev = INT64_MIN;
+  for (int k = 0; k < N; k++) {
+    const int64_t sent = k * PERIOD; /* server clock */
+    int64_t a = sent + 20 * MS + (int64_t)((2 * urand() - 1) * jitter_ms * MS);
+    if (a < prev) a = prev; /* kept in order */
+    const int lost = urand() < loss;
+    arrive[k] = lost || k >= stop_at ? -1 : a;
+    if (!lost) prev = a;
+  }
+  palp_srv_playout p;
+  palp_srv_playout_init(&p);
+  memset(r, 0, sizeof *r);
+  int next = 0;
+  double newest = NAN;
+  for (int t = 0; t < N; t++) {
+    const int64_t now = 21 * MS + t * PERIOD + 1300000; /* ticks out of phase with the sends */
+    int take = -1;                                     /* the reader keeps the newest */
+    for (; next < N && (arrive[next] < 0 || arrive[next] <= now); next++)
+      if (arrive[next] >= 0) take = next;
+    if (take >= 0) {
+      const palp_vec3 x = {0, 0, 0.04 - SPEED * take * PERIOD * 1e-9};
+      palp_srv_playout_push(&p, take * PERIOD + clock, arrive[take], x, (uint64_t)take + 1);
+      newest = x.z;
+    }
+    palp_vec3 x;
+    int64_t src;
+    uint64_t seq;
+    if (!palp_srv_playout_at(&p, now, &x, &src, &seq)) continue;
+    r->z[r->ticks] = x.z;
+    r->z_newest[r->ticks] = newest;
+    r->delay[r->ticks] = p.delay;
+    r->tick[r->ticks] = now;
+    r->ticks++;
+  }
+}
+
+/* RMS of the per-tick motion's deviation from the press's own 0.04 mm per tick,
+ * as a fraction of it, over ticks [from, to). */
+static double unevenness(const double *z, int from, int to) {
+  const double step = SPEED * PERIOD * 1e-9;
+  double s = 0;
+  for (int k = from + 1; k < to; k++) s += pow((z[k - 1] - z[k]) - step, 2);
+  return sqrt(s / (to - from - 1)) / step;
+}
+
+int main(void) {
+  static run steady, jit, shifted, wide, stopped;
+
+  /* A steady link: no buffer, and the world sees exactly the newest sample. */
+  simulate(0, 0, 0, N, 1, &steady);
+  int same = 1;
+  double dmax = 0;
+  for (int k = 0; k < steady.ticks; k++) {
+    same &= steady.z[k] == steady.z_newest[k];
+    dmax = fmax(dmax, steady.delay[k]);
+  }
+  CHECK(same && dmax == 0.0, "steady 20 ms link: D = %.3f ms, every one of %d ticks at the newest sample (bitwise)",
+        dmax * 1e3, steady.ticks);
+
+  /* 20 +- 5 ms and 5% loss: the device moves as evenly as the station moved it. */
+  simulate(5, 0.05, 0, N, 7, &jit);
+  const int from = 250, to = jit.ticks - 10; /* after the first second (D settled) */
+  const double u_play = unevenness(jit.z, from, to), u_new = unevenness(jit.z_newest, from, to);
+  double dlo = 1, dhi = 0, lag_max = 0;
+  for (int k = from; k < to; k++) {
+    dlo = fmin(dlo, jit.delay[k]);
+    dhi = fmax(dhi, jit.delay[k]);
+    /* how far behind the station's device the world's is, in time [s] */
+    const double true_z = 0.04 - SPEED * (jit.tick[k] * 1e-9);
+    lag_max = fmax(lag_max, (jit.z[k] - true_z) / SPEED);
+  }
+  CHECK(u_new >= 0.5, "the scenario bunches samples: without the buffer the per-step motion is off by %.0f%% RMS "
+        "(>= 50%%)", 100 * u_new);
+  CHECK(u_play <= 0.10, "with the buffer it is off by %.1f%% RMS (<= 10%%)", 100 * u_play);
+  /* D is the 90th percentile of the lateness: the jitter spans 10 ms (uniform), so
+   * up to 9 ms; the reader keeping the newest of a bunch (the earlier ones, later by
+   * their order, are overwritten) takes the less late ones more often. */
+  CHECK(dlo >= 0.005 && dhi <= 0.012, "D %.2f..%.2f ms (5..12 ms for +-5 ms of jitter)", dlo * 1e3, dhi * 1e3);
+  int back = 0;
+  for (int k = 1; k < jit.ticks; k++) back += jit.z[k] > jit.z[k - 1];
+  CHECK(back == 0, "a press stays a press: the world's device never steps back (%d of %d ticks)", back, jit.ticks);
+  CHECK(lag_max <= 0.025 + 0.012 + 0.002, "the world's device lags the station's by at most %.1f ms (the 25 ms "
+        "slowest path + D + 2 ms)", lag_max * 1e3);
+
+  /* The two clocks need not agree: a station clock 11.6 days ahead gives the same motion. */
+  simulate(5, 0.05, 1000000 * 1000000000LL, N, 7, &shifted);
+  double dz = 0;
+  for (int k = 0; k < jit.ticks && k < shifted.ticks; k++) dz = fmax(dz, fabs(shifted.z[k] - jit.z[k]));
+  CHECK(shifted.ticks == jit.ticks && dz <= 1e-12, "station clock 1e15 ns ahead: the same motion (max diff %.1e m)",
+        dz);
+
+  /* Jitter beyond reason: the buffer adds at most its cap. */
+  simulate(100, 0, 0, N, 3, &wide);
+  double wmax = 0;
+  for (int k = 0; k < wide.ticks; k++) wmax = fmax(wmax, wide.delay[k]);
+  CHECK(wmax <= PALP_SRV_PLAYOUT_MAX_DELAY && wmax >= PALP_SRV_PLAYOUT_MAX_DELAY - 1e-12,
+        "+-100 ms of jitter: D %.1f ms, the cap %.0f ms", wmax * 1e3, PALP_SRV_PLAYOUT_MAX_DELAY * 1e3);
+
+  /* The station stops sending at 2 s: the device is carried on for 10 ms at most. */
+  simulate(5, 0, 0, 500, 5, &stopped);
+  const double last = 0.04 - SPEED * 499 * PERIOD * 1e-9;
+  double beyond = 0;
+  for (int k = 0; k < stopped.ticks; k++) beyond = fmax(beyond, last - stopped.z[k]);
+  CHECK(beyond <= SPEED * 0.010 + 1e-12 && fabs(stopped.z[stopped.ticks - 1] - stopped.z[stopped.ticks - 2]) == 0,
+        "a station that stops: carried %.3f mm past its last sample (<= %.2f mm, 10 ms), then held",
+        beyond * 1e3, SPEED * 0.010 * 1e3);
+
+  /* What a station may send that is not a newer sample. */
+  palp_srv_playout p;
+  palp_srv_playout_init(&p);
+  const palp_vec3 a = {0, 0, 0.03}, b = {0, 0, 0.02}, c = {0, 0, 0.01};
+  palp_vec3 x;
+  int64_t src;
+  uint64_t seq;
+  CHECK(palp_srv_playout_push(&p, 5 * MS, 25 * MS, a, 1) == 1, "a first sample is taken");
+  CHECK(palp_srv_playout_push(&p, 5 * MS, 26 * MS, b, 2) == 0 && palp_srv_playout_push(&p, 4 * MS, 26 * MS, b, 3) == 0,
+        "a repeated and an overtaken stamp are not");
+  palp_srv_playout_at(&p, 30 * MS, &x, &src, &seq);
+  CHECK(x.z == a.z && seq == 1, "... and the newer sample stands (z %.3f, seq %llu)", x.z, (unsigned long long)seq);
+  CHECK(palp_srv_playout_push(&p, INT64_MIN, 30 * MS, c, 4) == PALP_EINVAL &&
+            palp_srv_playout_push(&p, 5 * MS, INT64_MAX, c, 4) == PALP_EINVAL,
+        "a stamp that is no clock reading is refused (PALP_EINVAL)");
+  CHECK(palp_srv_playout_push(&p, 5 * MS - 2000 * MS, 31 * MS, c, 5) == 1, "a stamp 2 s older: the station's clock "
+        "went back, taken");
+  palp_srv_playout_at(&p, 32 * MS, &x, &src, &seq);
+  CHECK(x.z == c.z && seq == 5, "... and the buffer starts over from it (z %.3f, seq %llu)", x.z,
+        (unsigned long long)seq);
+
+  fprintf(stderr, failures ? "%d check(s) FAILED\n" : "all checks passed\n", failures);
+  return failures ? 1 : 0;
+}
