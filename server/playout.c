@@ -15,8 +15,12 @@
 #define DEADBAND 0.0005        /* jitter under 0.5 ms: no buffer [s] */
 #define EXTRAPOLATE_NS 10000000LL /* a late sample's turn is bridged this long at most */
 #define MAX_GAP_NS 20000000LL     /* ... from two samples at most this far apart */
+#define MIN_GAP_NS 1000000LL      /* ... and at least this far */
 
-void palp_srv_playout_init(palp_srv_playout *p) { memset(p, 0, sizeof *p); }
+void palp_srv_playout_init(palp_srv_playout *p, double reach) {
+  memset(p, 0, sizeof *p);
+  p->reach = reach > 0 ? reach : 0;
+}
 
 void palp_srv_playout_clear(palp_srv_playout *p) {
   p->head = p->n = 0;
@@ -33,7 +37,7 @@ int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, 
   if (src_ns > CLOCK_LIMIT || src_ns < -CLOCK_LIMIT || recv_ns > CLOCK_LIMIT || recv_ns < -CLOCK_LIMIT) return PALP_EINVAL;
   if (p->n > 0 && src_ns <= at(p, p->n - 1)->src_ns) {
     if (at(p, p->n - 1)->src_ns - src_ns < RESTART_NS) return 0; /* repeated or overtaken: the newer stands */
-    palp_srv_playout_init(p); /* the station's clock went back (a restart): start over */
+    palp_srv_playout_init(p, p->reach); /* the station's clock went back (a restart): start over */
   }
   const int64_t off = recv_ns - src_ns;
   /* Windowed minimum in two 1 s buckets: the fastest path lately, without a
@@ -126,11 +130,19 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
     if (p->n >= 2 && ahead > 0 && d > 0) {
       const palp_srv_playout_sample *a = at(p, p->n - 2);
       const int64_t gap = newest->src_ns - a->src_ns;
-      if (gap > 0 && gap <= MAX_GAP_NS) {
-        const double w = (double)(ahead < EXTRAPOLATE_NS ? ahead : EXTRAPOLATE_NS) / (double)gap;
-        *x = (palp_vec3){newest->x.x + w * (newest->x.x - a->x.x), newest->x.y + w * (newest->x.y - a->x.y),
-                         newest->x.z + w * (newest->x.z - a->x.z)};
-        *src_ns = newest->src_ns + (ahead < EXTRAPOLATE_NS ? ahead : EXTRAPOLATE_NS);
+      /* Not from two stamps closer than a millisecond (no station samples that fast; a
+       * forged pair 1 ns apart would make any speed), nor out of the reach the
+       * validator allows (its ball is convex, so interpolated points stay in it;
+       * continued ones might not). */
+      if (gap >= MIN_GAP_NS && gap <= MAX_GAP_NS) {
+        const int64_t by = ahead < EXTRAPOLATE_NS ? ahead : EXTRAPOLATE_NS;
+        const double w = (double)by / (double)gap;
+        const palp_vec3 y = {newest->x.x + w * (newest->x.x - a->x.x), newest->x.y + w * (newest->x.y - a->x.y),
+                             newest->x.z + w * (newest->x.z - a->x.z)};
+        if (!(p->reach > 0) || y.x * y.x + y.y * y.y + y.z * y.z <= p->reach * p->reach) {
+          *x = y;
+          *src_ns = newest->src_ns + by;
+        }
       }
     }
     return 1;

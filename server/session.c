@@ -88,7 +88,6 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->world = palp_scene_create_world(&def->phantom->scene, err);
   if (!s->world) goto fail;
   for (int i = 0; i < def->phantom->scene.contact_count; i++) palp_world_remove_contact(s->world, i);
-  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) palp_srv_playout_init(&s->finger[i].playout);
   const palp_mesh *mesh = palp_world_mesh(s->world);
   s->limits = (palp_srv_limits){.session_id = s->id,
                                 .max_force = def->cfg->max_force,
@@ -99,6 +98,8 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
                                 .phantom_radius = def->phantom->scene.world.mesh.radius,
                                 .vertex_count = mesh->vertex_count,
                                 .rest = mesh->rest};
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) /* within the validator's reach */
+    palp_srv_playout_init(&s->finger[i].playout, PALP_SRV_FINGER_REACH_RADII * s->limits.phantom_radius);
 
   s->deformation.session_id = s->id;
   s->deformation.positions._buffer = calloc((size_t)mesh->vertex_count, sizeof(palp_Vec3));

@@ -87,7 +87,7 @@ int palp_srv_validate_contact(const palp_Contact *in, const palp_srv_limits *lim
     out->center = vec(in->center);
     /* A hovering finger is legitimate, but one ten radii away is a unit error
      * (mm sent as m) that must not reach the model. */
-    if (norm3(out->center) > 10.0 * R) REJECT(PALP_SRV_REJ_OUT_OF_REACH);
+    if (norm3(out->center) > PALP_SRV_FINGER_REACH_RADII * R) REJECT(PALP_SRV_REJ_OUT_OF_REACH);
     out->radius = in->radius;
     return PALP_SRV_ACCEPT;
   }

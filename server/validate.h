@@ -53,6 +53,10 @@ typedef struct palp_srv_limits {
 
 
 /* A validated contact, in model terms. */
+/* A fingertip's device point farther than this many phantom radii from the centre is
+ * a unit error (mm sent as m), refused (PALP_SRV_REJ_OUT_OF_REACH). */
+#define PALP_SRV_FINGER_REACH_RADII 10.0
+
 typedef struct palp_srv_contact {
   int finger;
   int mode;                 /* palp_CONTACT_RELEASE / _FORCE / _FINGER */

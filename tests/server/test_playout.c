@@ -60,7 +60,7 @@ static void simulate(double jitter_ms, double loss, int64_t clock, int stop_at, 
     if (!lost) prev = a;
   }
   palp_srv_playout p;
-  palp_srv_playout_init(&p);
+  palp_srv_playout_init(&p, 0.4);
   memset(r, 0, sizeof *r);
   int next = 0;
   double newest = NAN;
@@ -157,9 +157,30 @@ int main(void) {
         "a station that stops: carried %.3f mm past its last sample (<= %.2f mm, 10 ms), then held",
         beyond * 1e3, SPEED * 0.010 * 1e3);
 
+  /* A late turn is bridged only from a plausible pair and within the reach: a jittery
+   * link (arrivals 20 or 30 ms after sending: D = 10 ms), then the last two samples. */
+  for (int forged = 0; forged < 2; forged++) {
+    palp_srv_playout q;
+    palp_srv_playout_init(&q, 0.4);
+    for (int k = 0; k < 20; k++)
+      palp_srv_playout_push(&q, k * PERIOD, k * PERIOD + (k % 2 ? 30 : 20) * MS, (palp_vec3){0, 0, 0.3}, k + 1);
+    /* forged: two stamps 1 ns apart 0.05 m apart (a made-up 5e7 m/s); else a fast
+     * but real outward move that a bridge would carry past the 0.4 m reach */
+    const int64_t t1 = 20 * PERIOD, t2 = forged ? t1 + 1 : t1 + PERIOD;
+    palp_srv_playout_push(&q, t1, t1 + 20 * MS, (palp_vec3){0, 0, forged ? 0.30 : 0.39}, 21);
+    palp_srv_playout_push(&q, t2, t2 + 20 * MS, (palp_vec3){0, 0, forged ? 0.35 : 0.399}, 22);
+    palp_vec3 y;
+    int64_t ys;
+    uint64_t yq;
+    palp_srv_playout_at(&q, t2 + 45 * MS, &y, &ys, &yq); /* T ~15 ms past the newest: a turn to bridge */
+    CHECK(q.delay > 0.005 && y.z == (forged ? 0.35 : 0.399) && ys == t2,
+          "%s: not bridged, held at the newest (z %.4f m, D %.1f ms)",
+          forged ? "a forged pair 1 ns apart" : "a bridge past the validator's reach", y.z, q.delay * 1e3);
+  }
+
   /* What a station may send that is not a newer sample. */
   palp_srv_playout p;
-  palp_srv_playout_init(&p);
+  palp_srv_playout_init(&p, 0.4);
   const palp_vec3 a = {0, 0, 0.03}, b = {0, 0, 0.02}, c = {0, 0, 0.01};
   palp_vec3 x;
   int64_t src;
