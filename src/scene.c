@@ -413,6 +413,12 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   const cJSON *fsu = cJSON_GetObjectItemCaseSensitive(root, "finger_surface");
   if (fsu && (!cJSON_IsString(fsu) || palp_finger_surface_from_name(fsu->valuestring, &s->world.finger_surface)))
     return palp_parse_fail(c, PALP_EPARSE, "finger_surface: expected \"smooth\" or \"facets\"");
+  /* Where the fingertip's contact is linearised (palp.h): absent = "free", how every
+   * scene and log before 2026-11-29 was stepped. */
+  s->world.finger_linearise = PALP_FINGER_LINEARISE_FREE;
+  const cJSON *fli = cJSON_GetObjectItemCaseSensitive(root, "finger_linearise");
+  if (fli && (!cJSON_IsString(fli) || palp_finger_linearise_from_name(fli->valuestring, &s->world.finger_linearise)))
+    return palp_parse_fail(c, PALP_EPARSE, "finger_linearise: expected \"free\" or \"current\"");
 
   /* Lesions (optional): hidden inclusions; a trainee's station never sees the scene. */
   const cJSON *ls = cJSON_GetObjectItemCaseSensitive(root, "lesions");
@@ -588,6 +594,8 @@ char *palp_scene_to_json(const palp_scene *s) {
   /* only when smooth, so that the scenes of earlier logs print as they did */
   if (s->world.finger_surface != PALP_FINGER_SURFACE_FACETS)
     cJSON_AddStringToObject(r, "finger_surface", palp_finger_surface_name(s->world.finger_surface));
+  if (s->world.finger_linearise != PALP_FINGER_LINEARISE_FREE)
+    cJSON_AddStringToObject(r, "finger_linearise", palp_finger_linearise_name(s->world.finger_linearise));
   cJSON *cs = cJSON_AddArrayToObject(r, "contacts");
   for (int i = 0; i < s->contact_count; ++i) {
     const palp_scene_contact *sc = &s->contact[i];

@@ -290,6 +290,19 @@ palp_world_def palp_world_default_def(void) {
   return d;
 }
 
+const char *palp_finger_linearise_name(int where) {
+  return where == PALP_FINGER_LINEARISE_FREE ? "free" : where == PALP_FINGER_LINEARISE_CURRENT ? "current" : NULL;
+}
+
+int palp_finger_linearise_from_name(const char *name, int *out) {
+  for (int s = PALP_FINGER_LINEARISE_FREE; s <= PALP_FINGER_LINEARISE_CURRENT; ++s)
+    if (name && strcmp(name, palp_finger_linearise_name(s)) == 0) {
+      *out = s;
+      return PALP_OK;
+    }
+  return PALP_EINVAL;
+}
+
 const char *palp_finger_surface_name(int surface) {
   return surface == PALP_FINGER_SURFACE_FACETS ? "facets" : surface == PALP_FINGER_SURFACE_SMOOTH ? "smooth" : NULL;
 }
@@ -1011,7 +1024,12 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   /* Each vertex's free position once per collection: the candidates, the triangles and
    * the normals below read it ~3 times per vertex near the finger. */
   palp_vec3 *restrict fp = fs->fpos;
-  for (int i = 0; i < nv; ++i) fp[i] = free_pos(w, i, h);
+  /* The geometry (candidates, closest points, normals, rows) at the free positions, or
+   * at the current ones with the free motion added to each gap below (def.finger_linearise):
+   * at rest under a finger the free step is the surface springing back without it, most
+   * of the dent at 4 ms, and a gap linearised across that moves the equilibrium. */
+  const int at_x = w->def.finger_linearise == PALP_FINGER_LINEARISE_CURRENT;
+  for (int i = 0; i < nv; ++i) fp[i] = at_x ? w->pos[i] : free_pos(w, i, h);
   /* Candidates: vertices near the proxy's path; then the triangles at them, marked in a
    * bitmap and visited in ascending order, as the scan of every dome triangle for one
    * with a candidate vertex visited them (~75 of 632 at 338 vertices). */
@@ -1060,7 +1078,13 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     const double dist = v3_len(pq);
     const palp_vec3 n = dist > 1e-9 ? v3_scale(pq, 1.0 / dist) : nf;
     if (v3_dot(n, nf) <= 0.0) continue; /* the proxy is behind this triangle: it cannot touch it */
-    const double g0 = dist - R;
+    double g0 = dist - R;
+    if (at_x) { /* the free step's motion at the closest point, through the row's weights */
+      palp_vec3 dl = v3(0, 0, 0);
+      for (int e = 0; e < 3; ++e)
+        if (bary[e] != 0.0) dl = v3_add(dl, v3_scale(v3_sub(free_pos(w, T[e], h), w->pos[T[e]]), bary[e]));
+      g0 -= v3_dot(n, dl);
+    }
     const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
     if (bt > 1e-3 && g0 > 1e-3) continue;
     /* closest feature: a vertex (two zero weights), an edge (one) or the face */
@@ -1115,7 +1139,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     for (int e = 0; e < 3 && nc < PALP_FINGER_MAX_CON && k->ctri[q2] >= 0; ++e) {
       const int v = m->tri[k->ctri[q2]][e];
       if (w->row_of[v] < 0 || fs->cand[v] == 2) continue;
-      const double z = fp[v].z;
+      const double z = at_x ? free_pos(w, v, h).z : fp[v].z; /* the base's gap: free either way */
       if (z > 1e-3) continue;
       fs->cand[v] = 2; /* once */
       k->ctri[nc] = -1 - v;
@@ -1702,6 +1726,7 @@ static int validate(const palp_world_def *d) {
   if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;
   if (!(d->max_speed > 0.0)) return PALP_EINVAL;
   if (!palp_finger_surface_name(d->finger_surface)) return PALP_EINVAL;
+  if (!palp_finger_linearise_name(d->finger_linearise)) return PALP_EINVAL;
   if (d->lesion_count < 0 || d->lesion_count > PALP_MAX_LESIONS) return PALP_EINVAL;
   if (d->validated_count < 0 || d->validated_count > PALP_MAX_VALIDATED) return PALP_EINVAL;
   for (int k = 0; k < d->validated_count; ++k) /* polar angles ascending in [0, pi/2], depths > 0 */
