@@ -1037,7 +1037,9 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   int *restrict clist = fs->clist;
   int ncand = 0;
   for (int i = 0; i < nv; ++i) {
-    const int is = seg_dist2(fp[i], p0, d) < reach * reach;
+    /* (at the current positions, a vertex whose free step brings it near counts too) */
+    const int is = seg_dist2(fp[i], p0, d) < reach * reach ||
+                   (at_x && seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
     cand[i] = (uint8_t)is;
     clist[ncand] = i;
     ncand += is;
@@ -1070,7 +1072,9 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
       /* The patch lies within patch_max of the facet, so its gap g0 >= |p0 - q| - R -
        * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
        * bounds by the 1 mm below makes no row, and its patch is not searched. */
-      if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > 1e-3) continue;
+      double slack = 1e-3; /* at the current positions, plus the free step's largest motion here */
+      for (int e = 0; at_x && e < 3; ++e) slack += v3_len(v3_sub(free_pos(w, T[e], h), w->pos[T[e]]));
+      if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > slack) continue;
       const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
       q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
     }
