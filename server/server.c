@@ -588,11 +588,17 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
   /* What the network's jitter cost: the delay the device samples were played out at
    * (server/playout.h; none on a steady link). */
-  if (s->stats.playout_delay_max > 0)
+  uint64_t played = 0, late = 0;
+  double delay_max = 0;
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
+    const palp_srv_playout *p = &s->finger[i].playout;
+    played += p->samples, late += p->late;
+    if (p->delay_max > delay_max) delay_max = p->delay_max;
+  }
+  if (delay_max > 0)
     palp_log_info(srv->log, "session %u: the station's device points came with jitter and were played out up to "
                             "%.1f ms late; %llu of %llu came after their turn and were bridged", s->id,
-                  s->stats.playout_delay_max * 1e3, (unsigned long long)s->stats.playout_late,
-                  (unsigned long long)s->stats.playout_samples);
+                  delay_max * 1e3, (unsigned long long)late, (unsigned long long)played);
   /* Where the model's answers were extrapolations (the stations were told each step,
    * LM_LARGE_STRAIN; docs/model.md, "Valid range"). */
   if (h.large_strain_steps > 0 || h.large_bend_steps > 0)

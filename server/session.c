@@ -315,15 +315,6 @@ static void play_out(palp_srv_session *s, int64_t recv_ns, int64_t now_ns) {
       continue;
     if (apply(s, &c) < 0) count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
   }
-  uint64_t n = 0, late = 0;
-  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
-    const palp_srv_playout *p = &s->finger[i].playout;
-    n += p->samples;
-    late += p->late;
-    if (p->delay_max > s->stats.playout_delay_max) s->stats.playout_delay_max = p->delay_max;
-  }
-  s->stats.playout_samples = n;
-  s->stats.playout_late = late;
 }
 
 static void take_contacts(palp_srv_session *s, int64_t now_ns) {

@@ -53,8 +53,6 @@ typedef struct palp_srv_session_stats {
   uint64_t factor_jobs;                     /* lagged-tangent rebuilds handed to the helper */
   uint64_t factor_waits;                    /* ... that were due before the helper had finished */
   int64_t factor_wait_ns;                   /* time ticks spent waiting for them [ns] */
-  uint64_t playout_samples, playout_late;   /* device samples played out; of them, after their turn */
-  double playout_delay_max;                 /* the largest delay the playout added [s] (playout.h) */
   int64_t last_frame;
   double sim_time;                          /* [s] */
 } palp_srv_session_stats;
