@@ -1,6 +1,6 @@
 /*
  * playout.c - a position-driven finger's device samples played out at a steady
- * delay (playout.h, docs/haptics.md "Jitter on the way in").
+ * delay (playout.h; docs/station.md, latency item 5, "Jitter on the way in").
  */
 #include "playout.h"
 

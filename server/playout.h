@@ -1,6 +1,6 @@
 /*
  * playout.h - a position-driven finger's device samples played out at a steady
- * delay (a jitter buffer; docs/haptics.md, "Jitter on the way in").
+ * delay (a jitter buffer; docs/station.md, latency item 5, "Jitter on the way in").
  *
  * A station sends its device point at the physics rate, stamped with its own clock
  * (palp_Contact.source_time_ns). Over a jittery network the samples reach the
