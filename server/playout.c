@@ -12,7 +12,10 @@
 #define SNAP_NS 50000000LL     /* further than 50 ms off (a pause, a new path): jump */
 #define CLOCK_LIMIT (1LL << 62)
 #define RESTART_NS 1000000000LL /* a stamp this much older than the newest: a new clock */
-#define DEADBAND 0.0005        /* jitter under 0.5 ms: no buffer [s] */
+/* Jitter under 2.5 ms: no buffer [s]. A loaded loopback's own scheduling spread (the
+ * demo beside an FE run: 0.8-2.3 ms) stays as the server was without it; a network's
+ * (20 +- 5 ms: 6.6-9.4 ms) is played out. */
+#define DEADBAND 0.0025
 #define EXTRAPOLATE_NS 10000000LL /* a late sample's turn is bridged this long at most */
 #define MAX_GAP_NS 20000000LL     /* ... from two samples at most this far apart */
 #define MIN_GAP_NS 1000000LL      /* ... and at least this far */
@@ -75,7 +78,7 @@ static int cmp64(const void *a, const void *b) {
 }
 
 /* D [s]: the 90th percentile of how much later than the fastest path the recent
- * samples came; under DEADBAND none (a loopback's scheduling), at most
+ * samples came; under DEADBAND none (a loopback's scheduling, a quiet LAN), at most
  * PALP_SRV_PLAYOUT_MAX_DELAY. Re-estimated every 8th sample: it moves slowly, and
  * a sort of 64 at every 1 kHz step of 32 sessions would cost 3% of a core. */
 static double target_delay(palp_srv_playout *p, int64_t base) {

@@ -18,7 +18,7 @@
  * arrivals are stamped on Cyclone's receive thread by the session's filter, not
  * when the tick takes them), takes the jitter D as the 90th percentile of how much
  * later than that the last 64 samples came, and plays the samples out at
- *   T = now - min offset - D     (D < 0.5 ms: none; at most PALP_SRV_PLAYOUT_MAX_DELAY)
+ *   T = now - min offset - D     (D < 2.5 ms: none; at most PALP_SRV_PLAYOUT_MAX_DELAY)
  * interpolating linearly between the two samples around T. A sample late for its
  * turn (1 in 10 by construction, or lost) is bridged by continuing the last motion
  * for at most 10 ms (from two samples 1-20 ms apart, within the validator's reach),
@@ -31,7 +31,8 @@
  * the server as even as the undelayed station's; the force's content above ~25 Hz
  * while pressed (median of 100 ms windows) 0.0007-0.0010 N, against 0.0055-0.0058 N
  * without the buffer. On a loaded machine a loopback's own arrivals spread too: in
- * the demo, beside an FE run, D reached 0.8-2.3 ms.
+ * the demo, beside an FE run, D would have been 0.8-2.3 ms with a 0.5 ms dead band,
+ * and the 2.5 ms one leaves loopback as it was.
  *
  * Pure: no DDS, no clock of its own; the session hands it times in ns.
  */
