@@ -36,10 +36,10 @@ With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496
 - from the FE's 0.3 N to the validated depth, or the level-4 curve's end if shallower, real-time /
   level-4 FE within 15% (measured 2026-11-29, the rim's hinges releasing the gel's share of D:
   pole 1.039-1.133, 45 deg 1.043-1.127, 60 deg 0.933-1.140, 70 deg 1.007-1.098, to the curves' end
-  at 10 / 10 / 10 / 7 mm, 3.5 / 3.7 / 4.2 / 3.0 N; 60 deg at 10 mm within 1 point of the bound;
+  at 14 / 10 / 10 / 7 mm, 6.231 / 3.7 / 4.2 / 3.0 N (the pole's curve extended to 14 mm on 2026-11-29); 60 deg at 10 mm within 1 point of the bound;
   with the rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
 - the table claims no site deeper than its level-4 curve reaches (since 2026-11-29 it rests on
-  level 4: 10 / 10 / 10 / 7 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
+  level 4: 14 / 10 / 10 / 7 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
   claimed before, and at the level-4 curves' ends the set already stands at 1.11-1.14 of them).
 
 With CYST_CSV (tests/data/fem_level3_breast_tissue_cyst.csv: level 3, the pole and a 0.2x cyst where

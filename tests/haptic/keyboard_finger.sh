@@ -8,7 +8,7 @@
 # than at 5 mm (force monotone in depth), and the session summary counts local
 # models. Then "]]]" (2 mm steps) and "+" x7 to 23 mm: the skin's linearised bending
 # leaves its range (from ~12 mm of indentation; docs/model.md, "Valid range"; the
-# breast-tissue set is validated against the level-4 FE to 10 mm at the pole), and the station
+# breast-tissue set is validated against the level-4 FE to 14 mm at the pole), and the station
 # says so, on the status line and once in the log, where at 5-10 mm it never does.
 # Domain 114.
 set -u

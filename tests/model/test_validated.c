@@ -6,7 +6,7 @@
  * - palp_world_validated_depth: the table's values at its angles, linear in between, the
  *   end values beyond, +inf without a table (expected values by hand from the table).
  * - The shipped breast-tissue set (config/phantoms/dome.json) carries its table (pole,
- *   45 and 60 deg 10 mm, 70 deg 7 mm: the level-4 FE comparison of 2026-11-29, which
+ *   14 mm, 45 and 60 deg 10 mm, 70 deg 7 mm: the level-4 FE comparison of 2026-11-29, which
  *   eval_finger_breast_tissue checks against the stored curves), and a logged scene
  *   (palp_scene_to_json) gives it back bit for bit.
  * - Bad tables are refused with a message naming the field.
@@ -59,7 +59,7 @@ static void test_scene(void) {
     return;
   }
   CHECK(sc.world.validated_count == 4, "the breast-tissue set states 4 sites (%d)", sc.world.validated_count);
-  CHECK_NEAR(sc.world.validated_depth[0], 0.010, 1e-15, "pole 10 mm");
+  CHECK_NEAR(sc.world.validated_depth[0], 0.014, 1e-15, "pole 14 mm");
   CHECK_NEAR(sc.world.validated_polar[1], 45.0 * PI / 180.0, 1e-15, "second site at 45 deg");
   CHECK_NEAR(sc.world.validated_depth[1], 0.010, 1e-15, "45 deg 10 mm");
   CHECK_NEAR(sc.world.validated_depth[2], 0.010, 1e-15, "60 deg 10 mm");
@@ -158,7 +158,7 @@ static void test_counted(void) {
     const double lim = palp_world_validated_depth(&d, th);
     if (site == 0) {
       CHECK(d12 > 0.008 && d12 < 0.010, "pole: the press reaches 8-10 mm (%.2f mm)", 1e3 * d12);
-      CHECK(h.beyond_validated_steps == 0, "pole, %.2f mm (validated to 10): no step counted (%lld)", 1e3 * d12,
+      CHECK(h.beyond_validated_steps == 0, "pole, %.2f mm (validated to 14): no step counted (%lld)", 1e3 * d12,
             (long long)h.beyond_validated_steps);
       CHECK(dmax < 0.0, "pole: never deeper than validated on the way (%.2f mm short at the closest)", -1e3 * dmax);
       const double d17 = press(w, f, th, R, r, 11.0, 30.0, &dmax);
@@ -167,7 +167,7 @@ static void test_counted(void) {
       CHECK(h.beyond_validated_steps > 0, "pole, %.2f mm: steps counted (%lld)", 1e3 * d17,
             (long long)h.beyond_validated_steps);
       CHECK_NEAR(h.max_beyond_validated, dmax, 1e-12, "pole: largest excess over the validated depth [m]");
-      printf("pole: %.2f mm of indentation: 0 steps beyond the validated 10 mm; %.2f mm: %lld steps, by up to %.2f mm\n",
+      printf("pole: %.2f mm of indentation: 0 steps beyond the validated 14 mm; %.2f mm: %lld steps, by up to %.2f mm\n",
              1e3 * d12, 1e3 * d17, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
     } else if (site == 1) {
       CHECK(d12 > lim + 0.001, "70 deg: the press passes the validated %.1f mm by 1 mm (%.2f mm)", 1e3 * lim, 1e3 * d12);
