@@ -94,14 +94,24 @@ def stored(tool, scene, data, level4=None, cyst=None):
         return
     rows = lt.read(out)
     table = validated(scene)
+    # Sites with a level-4 curve have their table checked against it (finer(), below): level 3 is
+    # up to 17% stiff there (level 4 / level 3 0.83-0.91 at 70 deg from 2 mm), so a set within 15% of
+    # the converged reference can stand outside 15% of level 3 (since the step-independent fingertip
+    # of 2026-11-29: 70 deg 0.77-0.83 of level 3 at 2.5-7 mm, 0.91-0.96 of level 4). Level 3 is
+    # then printed, not asserted.
+    finer_sites = {x["site"] for x in lt.read(level4)} if level4 else set()
     for site in SITES:
         d, fe, rt, dr = lt.columns(rows, site)
         check(len(d) >= 8, "%s: only %d depths" % (site, len(d)))
         check(all(fe[k + 1] > fe[k] for k in range(len(fe) - 1)), "%s: FE force not increasing: %r" % (site, fe))
         check(all(rt[k + 1] > rt[k] for k in range(len(rt) - 1)), "%s: real-time force not increasing: %r" % (site, rt))
+        # matched positions where a ratio is asserted (to the table's depth); deeper, the
+        # step-independent fingertip (2026-11-29) left the secant 0.09-0.13 mm short at 60 deg and
+        # 16-18 mm (13-14 N on the virtual coupling), where nothing is claimed
         for k in range(len(d)):
-            check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
-                  "%s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
+            if d[k] <= table.get(round(SITES[site], 6), 0.0) + 1e-9:
+                check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
+                      "%s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
         check(round(SITES[site], 6) in table, "the parameter file's validated table has no %g deg entry" % SITES[site])
         limit = table.get(round(SITES[site], 6), 0.0)
         first_out = None
@@ -112,11 +122,16 @@ def stored(tool, scene, data, level4=None, cyst=None):
             inside = 0.85 <= q <= 1.15
             print("%s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f%s" %
                   (site, 1e3 * d[k], fe[k], rt[k], q, "" if d[k] <= limit + 1e-9 else " (beyond the table)"))
+            if site in finer_sites:
+                continue
             if d[k] <= limit + 1e-9:
                 check(inside, "%s at %.2f mm, within the validated %.1f mm: real-time / FE %.3f (15%%)" %
                       (site, 1e3 * d[k], 1e3 * limit, q))
             if not inside and first_out is None:
                 first_out = d[k]
+        if site in finer_sites:
+            print("%s: level 3 printed only; the table is checked against the level-4 curve" % site)
+            continue
         if first_out is not None:
             check(limit < first_out, "%s: the table claims %.1f mm, the ratio leaves 15%% at %.1f mm" %
                   (site, 1e3 * limit, 1e3 * first_out))
@@ -159,6 +174,9 @@ def finer(tool, scene, data, rows3, table):
               (site, 1e3 * claimed, 1e3 * d[-1]))
         limit = min(claimed, d[-1])
         n, lo, hi = 0, 9.0, 0.0
+        first_out = next((d[k] for k in range(len(d)) if fe[k] >= 0.3 and not 0.85 <= rt[k] / fe[k] <= 1.15), None)
+        check(first_out is None or claimed < first_out, "level 4, %s: the table claims %.1f mm, the ratio leaves 15%% at "
+              "%.1f mm" % (site, 1e3 * claimed, 1e3 * (first_out or 0.0)))
         for k in range(len(d)):
             if fe[k] < 0.3 or d[k] > limit + 1e-9:
                 continue
