@@ -12,9 +12,10 @@ level 3 (4,320 hexahedra), at the pole, 45, 60 and 70 deg and at the pole over t
 set was first validated against, level 3 is 7-19% softer at the pole and 14-36% at 70 deg
 (docs/materials.md, "The fingertip references at level 3"). Asserted:
 
-- the real-time proxy reached each FE depth within 5 um or 0.5% of it (matched positions);
+- the real-time proxy reached each FE depth up to the table's within 5 um or 0.5% of it (matched
+  positions);
 - the set's `"validated"` table (the parameter file) is what the curves say: at every site
-  it names, every depth from the FE's 0.3 N (the issue's range starts there) up to the
+  it names that has no level-4 curve (below), every depth from the FE's 0.3 N (the issue's range starts there) up to the
   table's depth has real-time / FE within 15% (the compliance discrimination threshold),
   and the table's depth is no deeper than the first depth past 0.3 N where the ratio leaves
   15% (a table that claimed more, or a set that drifted, fails);
@@ -22,9 +23,14 @@ set was first validated against, level 3 is 7-19% softer at the pole and 14-36% 
 - over the lesion (issue 12: the FEM and the real-time model agree on it): from the plain pole's
   0.3 N up to the pole's validated depth, real-time / FE within 15% and the lesion's gain
   (F_lesion / F_pole - 1 at equal depth, each model against itself) within 3 points of the FE's
-  (measured 2026-11-28 with the hinges' gel part seeing the lesion: at most 2.4 points, at 1.5 mm,
-  FE +12.4% / real-time +14.8%; with the support alone up to 6.2 points, at 2.5 mm: +15.2% / +9.0%,
-  which fails; docs/haptics.md, "The hinges see the lesion").
+  (measured 2026-11-29, the refitted set: at most 2.9 points, at 1.5 mm, FE +12.4% / real-time
+  +15.3%, ratio 0.99-1.12; 2026-11-28 with the hinges' gel part seeing the lesion: at most 2.4 points;
+  with the support alone up to 6.2 points, at 2.5 mm: +15.2% / +9.0%, which fails; docs/haptics.md,
+  "The hinges see the lesion").
+
+At the sites with a level-4 curve (all four since 2026-11-29) the level-3 ratios are printed, not
+asserted: level 3 is up to 17% stiff there, and the refitted set stands at 0.81-0.94 of it at 70 deg
+(2.5-7 mm) while within 0.96-1.06 of level 4. The proxy's reach is checked to the table's depth.
 
 With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496 hexahedra, the pole,
 45, 60 and 70 deg to ~3 N, 1-1.5 h of FE a site), where level 3 is not converged for a fingertip:
@@ -34,10 +40,13 @@ With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496
   sphere is a fair part of the depth and refining it can stiffen the contact: at 60 deg level 4 is
   1.04-1.11 of level 3 at 0.5-1.5 mm (70 deg 1.02 at 0.25 mm), so those depths are not checked;
 - from the FE's 0.3 N to the validated depth, or the level-4 curve's end if shallower, real-time /
-  level-4 FE within 15% (measured 2026-11-29, the rim's hinges releasing the gel's share of D:
-  pole 1.039-1.133, 45 deg 1.043-1.127, 60 deg 0.933-1.140, 70 deg 1.007-1.098, to the curves' end
-  at 14 / 10 / 10 / 7 mm, 6.231 / 3.7 / 4.2 / 3.0 N (the pole's curve extended to 14 mm on 2026-11-29); 60 deg at 10 mm within 1 point of the bound;
-  with the rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
+  level-4 FE within 15%, and the table no deeper than the first depth past 0.3 N where it leaves 15%
+  (measured 2026-11-29, the set refitted with the fingertip's contact at the current positions:
+  pole 1.096-1.144, 45 deg 1.073-1.146, 60 deg 0.934-1.086, 70 deg 0.959-1.058, to the curves' end
+  at 14 / 10 / 10 / 7 mm, 6.231 / 3.7 / 4.2 / 3.0 N; 45 deg at 6 mm within 0.4 point of the bound.
+  The set before, read with the contact at the free positions: pole 1.039-1.133, 45 deg 1.043-1.127,
+  60 deg 0.933-1.140, 70 deg 1.007-1.098; read soundly, up to 1.198 at the pole, which fails; with the
+  rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
 - the table claims no site deeper than its level-4 curve reaches (since 2026-11-29 it rests on
   level 4: 14 / 10 / 10 / 7 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
   claimed before, and at the level-4 curves' ends the set already stands at 1.11-1.14 of them).
@@ -46,7 +55,7 @@ With CYST_CSV (tests/data/fem_level3_breast_tissue_cyst.csv: level 3, the pole a
 the lesion is): over the cyst both models press softer than at the plain pole, real-time / FE within
 15% and the cyst's loss (F_cyst / F_pole - 1) within 2 points of the FE's, from the plain pole's 0.3 N
 to its validated depth (measured 2026-11-29: FE -4.0..-5.5%, real-time -4.5..-5.9%, within 1.4
-points, ratio 0.94-1.07; src/lesion.c: the cyst strains as Eshelby's sphere, and the hinges see it.
+points, ratio 0.94-1.07; the refitted set -4.5..-6.1%, within 1.6 points, ratio 0.99-1.10; src/lesion.c: the cyst strains as Eshelby's sphere, and the hinges see it.
 The series sum before it lost 15-21%, ratio 0.81-0.95, which fails both).
 
 guard: the stored curves were made by today's fingertip FE code (PALP_FEM_CODE_VERSION and the
