@@ -261,12 +261,13 @@ typedef struct palp_world_def {
    * normals, exact at rest and carried with the deformation. Forces still act on the
    * triangles' vertices by barycentric weights. */
   int finger_surface; /* palp_finger_surface */
-  /* Where a fingertip's contact is linearised each step (docs/haptics.md, "Open: the
-   * held force depends on the physics step"): at the step's free positions x + h v_free
-   * (the default, which every shipped parameter set was fitted and validated with; the
-   * held force then depends on the step: breast tissue, 3 mm, 12% lower at 4 ms than
-   * the step-independent value), or at the current positions with the free motion
-   * carried into the gap (the held force the same at every step). */
+  /* Where a fingertip's contact is linearised each step (docs/haptics.md, "The held
+   * force depends on the physics step"): at the step's free positions x + h v_free
+   * (the default, and a scene's without the key: the long-term set was fitted and
+   * validated with it; the held force then depends on the step: breast tissue, 3 mm,
+   * 12% lower at 4 ms than the step-independent value), or at the current positions
+   * with the free motion carried into the gap (the held force the same at every step;
+   * the breast-tissue scenes and their set since 2026-11-29). */
   int finger_linearise; /* palp_finger_linearise */
   /* Where the parameters were validated against the FE reference with a fingertip
    * (docs/model.md, "Valid range"): up to which indentation [m] of the fingertip (its

@@ -1,6 +1,6 @@
 /*
  * test_finger_step.c - a held fingertip's force against the physics step
- * (palp_world_def.finger_linearise; docs/haptics.md, "Open: the held force depends on
+ * (palp_world_def.finger_linearise; docs/haptics.md, "The held force depends on
  * the physics step").
  *
  * The 8 mm fingertip's device is lowered at 50 mm/s to 3 mm below the pole's surface
