@@ -107,6 +107,7 @@ typedef struct finger_scratch {
   int G_owner;          /* the contact it was gathered for, -1 none (also after a refactorisation) */
   uint8_t *cand;        /* [vertex_count] */
   palp_vec3 *fpos;      /* [vertex_count] free positions x + h v_free of this collection [m] (free_pos) */
+  const palp_vec3 *gpos; /* where this collection takes the geometry: fpos, or w->pos (def.finger_linearise) */
   double max_link;      /* [m] longest rest link */
   /* The smooth contact surface (def.finger_surface, finger.h), NULL with the facets:
    * one patch per dome triangle and a bound on its offset from the facet [m]; per
@@ -991,7 +992,7 @@ static palp_vec3 smooth_normal(const palp_world *w, finger_scratch *fs, int i) {
     const int t = fs->vtri[q];
     if (fs->tstamp[t] != fs->ncount) { /* each triangle once per collection */
       const int *T = w->mesh.tri[t];
-      const palp_vec3 *x = fs->fpos, a = x[T[0]];
+      const palp_vec3 *x = fs->gpos, a = x[T[0]];
       fs->tcross[t] = v3_cross(v3_sub(x[T[1]], a), v3_sub(x[T[2]], a));
       fs->tstamp[t] = fs->ncount;
     }
@@ -1024,12 +1025,15 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   /* Each vertex's free position once per collection: the candidates, the triangles and
    * the normals below read it ~3 times per vertex near the finger. */
   palp_vec3 *restrict fp = fs->fpos;
+  for (int i = 0; i < nv; ++i) fp[i] = free_pos(w, i, h);
   /* The geometry (candidates, closest points, normals, rows) at the free positions, or
-   * at the current ones with the free motion added to each gap below (def.finger_linearise):
-   * at rest under a finger the free step is the surface springing back without it, most
-   * of the dent at 4 ms, and a gap linearised across that moves the equilibrium. */
+   * at the current ones with the free motion fp - gp added to each gap below
+   * (def.finger_linearise): at rest under a finger the free step is the surface
+   * springing back without it, most of the dent at 4 ms, and a gap linearised across
+   * that moves the equilibrium. */
   const int at_x = w->def.finger_linearise == PALP_FINGER_LINEARISE_CURRENT;
-  for (int i = 0; i < nv; ++i) fp[i] = at_x ? w->pos[i] : free_pos(w, i, h);
+  const palp_vec3 *gp = at_x ? w->pos : fp;
+  fs->gpos = gp;
   /* Candidates: vertices near the proxy's path; then the triangles at them, marked in a
    * bitmap and visited in ascending order, as the scan of every dome triangle for one
    * with a candidate vertex visited them (~75 of 632 at 338 vertices). */
@@ -1038,8 +1042,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   int ncand = 0;
   for (int i = 0; i < nv; ++i) {
     /* (at the current positions, a vertex whose free step brings it near counts too) */
-    const int is = seg_dist2(fp[i], p0, d) < reach * reach ||
-                   (at_x && seg_dist2(free_pos(w, i, h), p0, d) < reach * reach);
+    const int is = seg_dist2(gp[i], p0, d) < reach * reach || (at_x && seg_dist2(fp[i], p0, d) < reach * reach);
     cand[i] = (uint8_t)is;
     clist[ncand] = i;
     ncand += is;
@@ -1061,7 +1064,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     const int t = tlist[z];
     const int *T = m->tri[t];
     if (w->row_of[T[0]] < 0 && w->row_of[T[1]] < 0 && w->row_of[T[2]] < 0) continue;
-    const palp_vec3 a = fp[T[0]], b = fp[T[1]], c = fp[T[2]];
+    const palp_vec3 a = gp[T[0]], b = gp[T[1]], c = gp[T[2]];
     double bary[3];
     palp_vec3 q = palp_tri_closest(p0, a, b, c, bary);
     const palp_vec3 face = v3_cross(v3_sub(b, a), v3_sub(c, a)); /* outward (CCW seen from outside) */
@@ -1073,7 +1076,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
        * patch_max, and bt = g0 + n . (d - p0) >= g0 - |d - p0|: a triangle past both
        * bounds by the 1 mm below makes no row, and its patch is not searched. */
       double slack = 1e-3; /* at the current positions, plus the free step's largest motion here */
-      for (int e = 0; at_x && e < 3; ++e) slack += v3_len(v3_sub(free_pos(w, T[e], h), w->pos[T[e]]));
+      for (int e = 0; at_x && e < 3; ++e) slack += v3_len(v3_sub(fp[T[e]], gp[T[e]]));
       if (v3_len(v3_sub(p0, q)) - R - fs->patch_max[t] - v3_len(v3_sub(d, p0)) > slack) continue;
       const palp_vec3 N[3] = {smooth_normal(w, fs, T[0]), smooth_normal(w, fs, T[1]), smooth_normal(w, fs, T[2])};
       q = palp_smooth_closest(p0, a, b, c, N, &fs->patch[t], bary, &nf);
@@ -1086,7 +1089,7 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     if (at_x) { /* the free step's motion at the closest point, through the row's weights */
       palp_vec3 dl = v3(0, 0, 0);
       for (int e = 0; e < 3; ++e)
-        if (bary[e] != 0.0) dl = v3_add(dl, v3_scale(v3_sub(free_pos(w, T[e], h), w->pos[T[e]]), bary[e]));
+        if (bary[e] != 0.0) dl = v3_add(dl, v3_scale(v3_sub(fp[T[e]], gp[T[e]]), bary[e]));
       g0 -= v3_dot(n, dl);
     }
     const double bt = g0 + v3_dot(n, v3_sub(d, p0)); /* gap with the proxy at the device, surface free [m] */
@@ -1143,12 +1146,12 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
     for (int e = 0; e < 3 && nc < PALP_FINGER_MAX_CON && k->ctri[q2] >= 0; ++e) {
       const int v = m->tri[k->ctri[q2]][e];
       if (w->row_of[v] < 0 || fs->cand[v] == 2) continue;
-      const double z = at_x ? free_pos(w, v, h).z : fp[v].z; /* the base's gap: free either way */
+      const double z = fp[v].z; /* the base's gap: at the free positions either way */
       if (z > 1e-3) continue;
       fs->cand[v] = 2; /* once */
       k->ctri[nc] = -1 - v;
       k->cn[nc] = v3(0, 0, 0); /* no share in the finger's force */
-      k->cq[nc] = fp[v];
+      k->cq[nc] = gp[v];
       fs->b[nc] = z;
       k->ckey[nc] = -(int64_t)1e12 - v;
       k->clam[nc] = 0.0;
