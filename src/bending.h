@@ -28,7 +28,10 @@
  * near the rim (docs/model.md, "Valid range"). At 0.1 rad on the shipped domes the
  * bending energy is 10-13% below the true angle's, and the fingertip force moves by
  * 0.18-0.27% per % of D, so the force is off by about 3%: a fifth of the 15-22%
- * compliance a hand can discriminate. */
+ * compliance a hand can discriminate. A parameter set whose fingertip was validated
+ * against the FE deeper may state the larger miss those presses reached
+ * (palp_world_def.validated_hinge_error, breast tissue 0.183 rad); the world then counts
+ * from that. */
 #define PALP_HINGE_LINEAR_ERR_MAX 0.1
 
 /* The true angles cost an atan2 each, ~1,000 hinges at 338 vertices, so each step

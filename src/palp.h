@@ -279,6 +279,14 @@ typedef struct palp_world_def {
   int validated_count; /* 0..PALP_MAX_VALIDATED */
   double validated_polar[PALP_MAX_VALIDATED]; /* [rad] */
   double validated_depth[PALP_MAX_VALIDATED]; /* [m] */
+  /* The largest miss of a linearised hinge turn from its true turn [rad] that the
+   * fingertip presses of that validation reached within their validated depths, their
+   * force still within 15% of the FE's there (docs/model.md, "Valid range"). A hinge
+   * counts as beyond its linear range (health.large_bend_steps) from
+   * max(PALP_HINGE_LINEAR_ERR_MAX = 0.1 rad, this): a miss the validation covered is not
+   * reported as leaving it. 0 (the default, and a set or logged scene without the key):
+   * 0.1 rad. */
+  double validated_hinge_error;
 } palp_world_def;
 
 /* The indentation [m] up to which def's parameters were validated at polar angle
@@ -440,8 +448,9 @@ typedef struct palp_world_health {
   int64_t base_contacts;      /* vertex-steps held at the rigid base plane z = 0 */
   int64_t finger_unsolved;    /* finger contact solves that ended without converging */
   int64_t large_bend_steps;   /* steps while a hinge's linearised turn missed its true
-                                 turn by more than 0.1 rad (src/bending.h), where the
-                                 linearised bending is a poor model (only with
+                                 turn by more than 0.1 rad (src/bending.h), or by more
+                                 than def.validated_hinge_error where that is larger,
+                                 where the linearised bending is a poor model (only with
                                  membrane.bending_stiffness > 0; each hinge checked
                                  once per 0.2 s of simulated time) */
   double max_bend;            /* largest linearised hinge turn from rest seen [rad] */

@@ -275,8 +275,10 @@ static int get_material(ctx *c, const cJSON *obj, const char *path, palp_scene *
 
 /* Where the parameters were validated against the FE with a fingertip (palp_world_def.
  * validated_*; docs/model.md, "Valid range"): {"finger": [{"polar_deg": a, "depth_m": d},
- * ...]}, polar angles ascending within [0, 90] deg (or "polar_rad", exact, as a logged
- * scene writes them), depths > 0 m. Optional; absent keeps what was there. */
+ * ...], "hinge_error_rad": e}, polar angles ascending within [0, 90] deg (or "polar_rad",
+ * exact, as a logged scene writes them), depths > 0 m; e, optional, the largest miss of a
+ * linearised hinge those presses reached, in (0, 1] rad (absent: 0, none stated). The
+ * object is optional; absent keeps what was there, present replaces all of it. */
 static int get_validated(ctx *c, const cJSON *obj, const char *path, palp_world_def *w) {
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, "validated");
   if (!v) return PALP_OK;
@@ -309,6 +311,16 @@ static int get_validated(ctx *c, const cJSON *obj, const char *path, palp_world_
     w->validated_depth[i] = d;
   }
   w->validated_count = n;
+  double e = 0.0;
+  if (cJSON_GetObjectItemCaseSensitive(v, "hinge_error_rad")) {
+    int rc;
+    char p2[64];
+    snprintf(p2, sizeof p2, "%svalidated.", path);
+    if ((rc = get_pos(c, v, p2, "hinge_error_rad", 1, &e))) return rc;
+    if (!(e <= 1.0))
+      return palp_parse_fail(c, PALP_EPARSE, "%shinge_error_rad: %g rad is not a hinge's miss (at most 1 rad)", p2, e);
+  }
+  w->validated_hinge_error = e;
   return PALP_OK;
 }
 
@@ -579,6 +591,7 @@ char *palp_scene_to_json(const palp_scene *s) {
       add_exact(o, "depth_m", s->world.validated_depth[i]);
       cJSON_AddItemToArray(vf, o);
     }
+    if (va && s->world.validated_hinge_error > 0.0) add_exact(va, "hinge_error_rad", s->world.validated_hinge_error);
   }
   cJSON *t = cJSON_AddObjectToObject(r, "time");
   add_exact(t, "dt_s", s->world.dt);

@@ -456,6 +456,8 @@ static void bending_check(palp_world *w, double h) {
   int n = (int)ceil((double)nh * h / PALP_HINGE_CHECK_PERIOD);
   if (n > nh) n = nh;
   const palp_vec3 *x = w->pos;
+  /* a miss the parameters' fingertip validation covered is not beyond it (palp.h) */
+  const double limit = fmax(PALP_HINGE_LINEAR_ERR_MAX, w->def.validated_hinge_error);
   for (int q = 0; q < n; ++q) {
     const int e = w->hcheck_next;
     if (w->hk[e] > 0.0) {
@@ -463,7 +465,7 @@ static void bending_check(palp_world *w, double h) {
       const double lin = hinge_turn(v, w->hgrad[e], x, w->mesh.rest);
       const double tr = remainder(palp_hinge_angle(x[v[0]], x[v[1]], x[v[2]], x[v[3]]) - w->hrest[e], 6.283185307179586);
       const double err = fabs(tr - lin);
-      const uint8_t beyond = !(err <= PALP_HINGE_LINEAR_ERR_MAX); /* a NaN counts */
+      const uint8_t beyond = !(err <= limit); /* a NaN counts */
       w->hbeyond_count += (int)beyond - (int)w->hbeyond[e];
       w->hbeyond[e] = beyond;
       if (!(err <= w->max_bend_err)) w->max_bend_err = err == err ? err : INFINITY;
@@ -1741,6 +1743,10 @@ static int validate(const palp_world_def *d) {
         (k > 0 && !(d->validated_polar[k] > d->validated_polar[k - 1])) || !(d->validated_depth[k] > 0.0) ||
         !isfinite(d->validated_depth[k]))
       return PALP_EINVAL;
+  /* [rad]; stated only with the validation it belongs to (a logged scene writes it there) */
+  if (!(d->validated_hinge_error >= 0.0 && d->validated_hinge_error <= 1.0) ||
+      (d->validated_hinge_error > 0.0 && d->validated_count == 0))
+    return PALP_EINVAL;
   for (int l = 0; l < d->lesion_count; ++l) {
     const palp_lesion *L = &d->lesion[l];
     /* inside the dome and clear of its base; a finite, positive stiffness ratio */

@@ -87,6 +87,10 @@ static void test_scene(void) {
       {"\"validated\":{\"finger\":[{\"polar_deg\":95,\"depth_m\":0.01}]}}", "within [0, 90] degrees"},
       {"\"validated\":{\"finger\":[]}}", "validated.finger: expected an array of 1 to 8"},
       {"\"validated\":[1,2]}", "validated: expected an object"},
+      {"\"validated\":{\"finger\":[{\"polar_deg\":0,\"depth_m\":0.01}],\"hinge_error_rad\":1.5}}",
+       "validated.hinge_error_rad: 1.5 rad is not a hinge's miss"},
+      {"\"validated\":{\"finger\":[{\"polar_deg\":0,\"depth_m\":0.01}],\"hinge_error_rad\":0}}",
+       "validated.hinge_error_rad: must be > 0"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
     char js2[2048];
@@ -143,7 +147,7 @@ static void test_counted(void) {
   const double R = sc.world.mesh.radius, r = 0.008;
   for (int site = 0; site < 3; ++site) {
     palp_world_def d = sc.world;
-    if (site == 2) d.validated_count = 0; /* the same press, a set without a table */
+    if (site == 2) d.validated_count = 0, d.validated_hinge_error = 0.0; /* the same press, a set without a table */
     const double th = site == 1 ? 70.0 * PI / 180.0 : 0.0;
     int e = 0;
     palp_world *w = palp_world_create(&d, &e);
@@ -183,9 +187,103 @@ static void test_counted(void) {
   }
 }
 
+/* Presses at each site of the set's table to its validated depth, as the FE comparison
+ * does (1 ms steps, the device at 5 mm/s until the proxy is there, then held 1 s with the
+ * device moved so that the proxy stays there); returns the largest hinge miss the world
+ * saw (health.max_bend_error) and, in *counted, the steps it counted beyond the hinges'
+ * range over the four presses. */
+static double validated_presses(palp_world_def d, int64_t *counted, double *depth_max) {
+  d.dt = 0.001;
+  const double R = d.mesh.radius, r = 0.008;
+  double worst = 0.0;
+  *counted = 0, *depth_max = 0.0;
+  for (int s = 0; s < d.validated_count; ++s) {
+    int e = 0;
+    palp_world *w = palp_world_create(&d, &e);
+    CHECK(w != NULL, "world: %s", palp_strerror(e));
+    if (!w) return NAN;
+    const double th = d.validated_polar[s], target = d.validated_depth[s];
+    const palp_vec3 n = {sin(th), 0.0, cos(th)};
+    const int f = palp_world_add_finger(w, (palp_vec3){(R + r + 0.001) * n.x, 0, (R + r + 0.001) * n.z}, r);
+    double dev = -0.001, dp = -1.0, polar = 0.0;
+    int on = 0, k = 0;
+    for (; dp < target && k < 20000; ++k) {
+      dev += 0.005 * d.dt;
+      const double c = R + r - dev;
+      palp_world_set_finger_device(w, f, (palp_vec3){c * n.x, c * n.y, c * n.z});
+      palp_world_step(w);
+      dp = proxy_depth(w, f, R, r, &on, &polar);
+    }
+    for (int t = 0; t < 1000; ++t) {
+      dev += 0.3 * (target - dp); /* the coupling moves the proxy by ~0.5-0.9 of the device's move */
+      const double c = R + r - dev;
+      palp_world_set_finger_device(w, f, (palp_vec3){c * n.x, c * n.y, c * n.z});
+      palp_world_step(w);
+      dp = proxy_depth(w, f, R, r, &on, &polar);
+    }
+    palp_world_health h;
+    palp_world_get_health(w, &h);
+    printf("  %4.1f deg, held at %.3f mm (validated %.1f mm, %d steps to get there): largest hinge miss %.4f rad, "
+           "%lld steps counted beyond the hinges' range\n",
+           th * 180.0 / PI, 1e3 * dp, 1e3 * target, k, h.max_bend_error, (long long)h.large_bend_steps);
+    CHECK(on && fabs(dp - target) < 2e-5, "%.0f deg: held in contact within 0.02 mm of %.1f mm (%.4f mm)",
+          th * 180.0 / PI, 1e3 * target, 1e3 * dp);
+    worst = fmax(worst, h.max_bend_error);
+    *counted += h.large_bend_steps;
+    *depth_max = fmax(*depth_max, dp);
+    palp_world_destroy(w);
+  }
+  return worst;
+}
+
+/* The hinges' valid range of a set validated with a fingertip (palp_world_def.
+ * validated_hinge_error): the breast-tissue set states the largest miss its validated
+ * presses reach, and those presses count no step beyond the hinges' range; with the
+ * former fixed 0.1 rad they did, inside the depths where the force agrees with the FE. */
+static void test_hinge_range(void) {
+  palp_scene sc;
+  char err[256];
+  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc, err, sizeof err)) {
+    CHECK(0, "%s", err);
+    return;
+  }
+  const double stated = sc.world.validated_hinge_error;
+  printf("breast-tissue set, stated hinge miss %.3f rad; its validated presses at 1 ms:\n", stated);
+  int64_t counted = 0;
+  double deepest = 0.0;
+  const double worst = validated_presses(sc.world, &counted, &deepest);
+  CHECK(counted == 0, "inside the validated depths no step is counted beyond the hinges' range (%lld)",
+        (long long)counted);
+  CHECK(stated >= worst && stated <= worst + 0.01,
+        "the stated miss %.3f rad rests on the validation: at least its presses' largest %.4f rad, at most 0.01 rad above",
+        stated, worst);
+  palp_world_def d = sc.world;
+  d.validated_hinge_error = 0.0; /* the fixed 0.1 rad */
+  int64_t counted0 = 0;
+  const double worst0 = validated_presses(d, &counted0, &deepest);
+  printf("with the fixed 0.1 rad: %lld steps counted in the same presses (largest miss %.4f rad)\n", (long long)counted0,
+         worst0);
+  CHECK(worst0 == worst && counted0 > 0, "the fixed 0.1 rad counts steps inside the validated depths (%lld)",
+        (long long)counted0);
+  /* a scene states it only beside its table: refused alone, and kept bit for bit in a log */
+  d = sc.world;
+  d.validated_count = 0;
+  int e = 0;
+  palp_world *w = palp_world_create(&d, &e);
+  CHECK(!w && e == PALP_EINVAL, "a hinge miss without a validation table is refused (%d)", e);
+  palp_world_destroy(w);
+  palp_scene back;
+  char *js = palp_scene_to_json(&sc);
+  CHECK(js && palp_scene_parse(js, &back, err, sizeof err) == 0 &&
+            !memcmp(&back.world.validated_hinge_error, &stated, sizeof stated),
+        "the logged scene keeps the stated miss bit for bit: %s", err);
+  free(js);
+}
+
 int main(void) {
   test_interpolation();
   test_scene();
   test_counted();
+  test_hinge_range();
   CHECK_DONE();
 }
