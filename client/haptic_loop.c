@@ -333,7 +333,11 @@ static void *haptic_main(void *arg) {
     if (on && (model_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) &&
         !(o.flags & (PALP_HAPTIC_STALE | PALP_HAPTIC_NO_MODEL)))
       o.flags |= PALP_CLI_FORCE_OUT_OF_RANGE;
-    if (o.flags & PALP_CLI_FORCE_OUT_OF_RANGE) st->out_of_range_ticks++;
+    if (o.flags & PALP_CLI_FORCE_OUT_OF_RANGE) {
+      st->out_of_range_ticks++;
+      if (model_flags & palp_LM_BEYOND_VALIDATED) st->beyond_validated_ticks++;
+      if (model_flags & palp_LM_OUT_OF_RANGE) st->deformed_ticks++;
+    }
     if (taken > 0) st->models++;
     if (l->core.holding) st->held_ticks++;
     d->in->write_force(d->in->ctx, o.force, o.flags);
@@ -366,7 +370,9 @@ static void *haptic_main(void *arg) {
                                      .point = l->core.renderer.cur.point,
                                      .model_contact = l->core.renderer.cur.contact,
                                      .model_time = l->core.renderer.cur.time,
-                                     .out_of_range_ticks = st->out_of_range_ticks};
+                                     .out_of_range_ticks = st->out_of_range_ticks,
+                                     .beyond_validated_ticks = st->beyond_validated_ticks,
+                                     .deformed_ticks = st->deformed_ticks};
     pthread_mutex_unlock(&l->view_lock);
     }
   }

@@ -472,6 +472,19 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
     printf("[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
 }
 
+/* What the server's validity flags said, in the trainee's words (why: 1 the fingertip
+ * deeper than the phantom's forces were checked against the FE there, LM_BEYOND_VALIDATED;
+ * 2 the skin stretched or bent beyond the model's own linear range, LM_OUT_OF_RANGE). */
+static const char *valid_range_why(int why) {
+  switch (why) {
+  case 1: return "pressed deeper than this place of the phantom was checked against the reference model";
+  case 2: return "the skin is stretched or bent beyond what the model describes well";
+  case 3: return "pressed deeper than this place was checked against the reference model, the skin bent beyond the "
+                 "model's range";
+  default: return "the phantom is deformed beyond where its forces were validated";
+  }
+}
+
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
@@ -543,7 +556,8 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   int64_t next_print = t0, next_check = t0;
   int closed = 0, limited_shown = 0, oor_shown = 0;
   double episode_peak = 0, oor_since = 0, oor_last = 0;
-  uint64_t oor_ticks = 0;
+  uint64_t oor_ticks = 0, bv_ticks = 0, def_ticks = 0;
+  int oor_why = 0; /* 1: deeper than validated, 2: deformed beyond the model's range, in this episode */
   char reason[128] = "";
   while (!g_stop && !palp_cli_haptic_done(hl)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
@@ -586,21 +600,23 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
      * the models rendered since the last look), and when it is back: after 0.5 s clear, so
      * that the skin's check, which revisits each hinge every 0.2 s, does not make it flicker. */
     const int oor = v.out_of_range_ticks != oor_ticks;
-    oor_ticks = v.out_of_range_ticks;
+    /* which limit: the trainee can act on "too deep here", not on "out of range" */
+    const int why = (v.beyond_validated_ticks != bv_ticks ? 1 : 0) | (v.deformed_ticks != def_ticks ? 2 : 0);
+    oor_ticks = v.out_of_range_ticks, bv_ticks = v.beyond_validated_ticks, def_ticks = v.deformed_ticks;
     if (oor) {
       if (!oor_shown) {
-        oor_since = v.t;
+        oor_since = v.t, oor_why = 0;
         if (!o->quiet) {
-          printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: the phantom is deformed beyond where its "
-                 "forces were validated; what you feel here is less certain\n", o->name, v.t);
+          printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
+                 o->name, v.t, valid_range_why(why));
           fflush(stdout);
         }
       }
-      oor_shown = 1, oor_last = v.t;
+      oor_shown = 1, oor_last = v.t, oor_why |= why;
     } else if (oor_shown && v.t - oor_last >= 0.5) {
       if (!o->quiet) {
-        printf("[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s)\n", o->name, v.t,
-               oor_last - oor_since);
+        printf("[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
+               oor_last - oor_since, valid_range_why(oor_why));
         fflush(stdout);
       }
       oor_shown = 0;

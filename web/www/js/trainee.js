@@ -124,6 +124,7 @@
     for (const o of fingerObjs) scene.remove(o);
     fingerObjs.length = 0;
     let limited = false, outOfRange = false, drawnProxy = null;
+    let tooDeep = false, deformed = false; /* which validity flag: LM_BEYOND_VALIDATED (64), LM_OUT_OF_RANGE (30) */
     for (const f of list) {
       const hasProxy = f.mode === "finger" && Array.isArray(f.proxy) && Array.isArray(f.device);
       const at = hasProxy ? f.proxy : f.center;
@@ -146,6 +147,8 @@
       if (hasProxy) {
         limited = limited || !!f.force_limit;
         outOfRange = outOfRange || !!f.out_of_range;
+        tooDeep = tooDeep || ((f.flags | 0) & 64) !== 0;
+        deformed = deformed || ((f.flags | 0) & 30) !== 0;
         drawnProxy = { proxy: f.proxy, device: f.device, in_contact: !!f.in_contact,
           force_limit: !!f.force_limit, out_of_range: !!f.out_of_range };
         if (f.in_contact) {
@@ -165,7 +168,12 @@
     if (note) {
       const parts = [];
       if (limited) parts.push("force limited");
-      if (outOfRange) parts.push("model outside its valid range");
+      if (outOfRange) {
+        const why = [];
+        if (tooDeep) why.push("deeper than this place was checked against the reference model");
+        if (deformed) why.push("skin stretched or bent beyond the model's range");
+        parts.push("model outside its valid range" + (why.length ? ": " + why.join(", ") : ""));
+      }
       note.textContent = parts.join(" \u00b7 ");
       note.className = parts.length ? "warn" : "muted";
     }
