@@ -56,6 +56,18 @@ def run(build, source, out):
         check(0 <= cx <= w and 0 <= cy <= h, "the proxy projects into the view (%.0f, %.0f)" % (cx, cy))
         note = page.eval("document.getElementById('model') !== null")
         check(note is True, "the page has its force-limit / validity note")
+        # The note names the validity limit from the model's flags (LM_BEYOND_VALIDATED 64,
+        # LM_LARGE_STRAIN 2 within LM_OUT_OF_RANGE 30, LM_FORCE_LIMIT 1), as the terminal station does.
+        notes = {fl: page.eval("palpModelNote(%d)" % fl) for fl in (0, 1, 2, 64, 66, 65)}
+        print("notes by flags:", notes)
+        check(notes[0] == "", "no flag, no note (%r)" % notes[0])
+        check(notes[1] == "force limited", "LM_FORCE_LIMIT: 'force limited' (%r)" % notes[1])
+        check(notes[64] == "model outside its valid range: deeper than this place was checked against the reference "
+              "model", "LM_BEYOND_VALIDATED names the depth (%r)" % notes[64])
+        check(notes[2] == "model outside its valid range: skin stretched or bent beyond the model's range",
+              "LM_LARGE_STRAIN names the deformation (%r)" % notes[2])
+        check("deeper than" in notes[66] and "skin stretched" in notes[66], "both named (%r)" % notes[66])
+        check(notes[65].startswith("force limited") and "deeper than" in notes[65], "limit and depth (%r)" % notes[65])
         print("screenshot:", page.screenshot(os.path.join(out, "trainee-proxy.png")))
     finally:
         if browser:

@@ -166,14 +166,7 @@
     T.proxy = drawnProxy;
     const note = document.getElementById("model");
     if (note) {
-      const parts = [];
-      if (limited) parts.push("force limited");
-      if (outOfRange) {
-        const why = [];
-        if (tooDeep) why.push("deeper than this place was checked against the reference model");
-        if (deformed) why.push("skin stretched or bent beyond the model's range");
-        parts.push("model outside its valid range" + (why.length ? ": " + why.join(", ") : ""));
-      }
+      const parts = modelNote(limited, outOfRange, tooDeep, deformed);
       note.textContent = parts.join(" \u00b7 ");
       note.className = parts.length ? "warn" : "muted";
     }
@@ -390,6 +383,25 @@
   requestAnimationFrame(loop);
 
   /* For tests: where a point of the phantom [m] appears on the page, in CSS pixels. */
+  /* The note under the view: what the server's flags on the rendered finger's model say,
+   * naming the validity limit (LM_BEYOND_VALIDATED: deeper than the FE validation there;
+   * LM_OUT_OF_RANGE: the model's own range), as the terminal station does. */
+  function modelNote(limited, outOfRange, tooDeep, deformed) {
+    const parts = [];
+    if (limited) parts.push("force limited");
+    if (outOfRange) {
+      const why = [];
+      if (tooDeep) why.push("deeper than this place was checked against the reference model");
+      if (deformed) why.push("skin stretched or bent beyond the model's range");
+      parts.push("model outside its valid range" + (why.length ? ": " + why.join(", ") : ""));
+    }
+    return parts;
+  }
+  /* for tests: the note for a finger's local-model flags (LocalModel.flags) */
+  window.palpModelNote = function (flags) {
+    const f = flags | 0;
+    return modelNote((f & 1) !== 0, (f & 94) !== 0, (f & 64) !== 0, (f & 30) !== 0).join(" \u00b7 ");
+  };
   window.palpProject = function (x, y, z) {
     const v = new THREE.Vector3(x, y, z).project(camera), r = renderer.domElement.getBoundingClientRect();
     return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
