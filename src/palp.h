@@ -293,6 +293,10 @@ typedef struct palp_world_def {
  * polar [rad] (def.validated_*), or +inf when they state none. */
 double palp_world_validated_depth(const palp_world_def *def, double polar);
 
+/* The miss of a linearised hinge turn from its true turn [rad] beyond which a step counts
+ * in health.large_bend_steps: max(0.1 rad, def.validated_hinge_error). */
+double palp_world_hinge_range(const palp_world_def *def);
+
 typedef enum palp_finger_surface {
   PALP_FINGER_SURFACE_FACETS = 0, /* the flat triangles (how every session before 2026-11-27 was stepped) */
   PALP_FINGER_SURFACE_SMOOTH = 1  /* Phong patches over the triangles */

@@ -457,7 +457,7 @@ static void bending_check(palp_world *w, double h) {
   if (n > nh) n = nh;
   const palp_vec3 *x = w->pos;
   /* a miss the parameters' fingertip validation covered is not beyond it (palp.h) */
-  const double limit = fmax(PALP_HINGE_LINEAR_ERR_MAX, w->def.validated_hinge_error);
+  const double limit = palp_world_hinge_range(&w->def);
   for (int q = 0; q < n; ++q) {
     const int e = w->hcheck_next;
     if (w->hk[e] > 0.0) {
@@ -3084,6 +3084,10 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->max_bend_error = w->max_bend_err;
   out->beyond_validated_steps = w->beyond_validated_steps;
   out->max_beyond_validated = w->max_beyond_validated;
+}
+
+double palp_world_hinge_range(const palp_world_def *def) {
+  return fmax(PALP_HINGE_LINEAR_ERR_MAX, def->validated_hinge_error);
 }
 
 double palp_world_validated_depth(const palp_world_def *def, double polar) {

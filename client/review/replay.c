@@ -202,10 +202,12 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
      * instructor: where the model's answer is an extrapolation (docs/model.md). */
     palp_world_health h;
     palp_world_get_health(w, &h);
+    const double hinge_range = palp_world_hinge_range(palp_world_get_def(w));
     printf("replay: %s: beyond the model's valid range: %lld steps stretched a link past 50%% (largest strain "
-           "%.2f), %lld bent a hinge past its linear range (largest miss %.3f rad, largest turn %.3f rad)\n",
-           s->uid, (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, h.max_bend_error,
-           h.max_bend);
+           "%.2f), %lld bent a hinge past its linear range (a miss over %.3f rad; largest miss %.3f rad, largest turn "
+           "%.3f rad)\n",
+           s->uid, (long long)h.large_strain_steps, h.max_strain, (long long)h.large_bend_steps, hinge_range,
+           h.max_bend_error, h.max_bend);
     /* and where a fingertip pressed deeper than the parameters were validated against the FE
      * (LM_BEYOND_VALIDATED; only for parameters that state it) */
     if (palp_world_get_def(w)->validated_count > 0)

@@ -287,7 +287,8 @@ static void check_valid_range(void) {
   }
   const double R = sc.world.mesh.radius, r = 0.008, dt = sc.world.dt;
   /* the set's range: 0.1 rad, or the miss its validated presses reached where larger */
-  const double limit = fmax(PALP_HINGE_LINEAR_ERR_MAX, sc.world.validated_hinge_error);
+  const double limit = palp_world_hinge_range(&sc.world);
+  CHECK_NEAR(limit, fmax(PALP_HINGE_LINEAR_ERR_MAX, sc.world.validated_hinge_error), 0.0, "the world's hinge range");
   const palp_vec3 start = v3(0, 0, R + r);
   const int f = palp_world_add_finger(w, start, r);
   const int per_level = (int)lround(0.5 / dt), sweep = (int)ceil(PALP_HINGE_CHECK_PERIOD / dt);
