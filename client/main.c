@@ -677,8 +677,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
            "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
     printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
-           "(the device rendered those for %.2f s)\n", o->name, (unsigned long long)hs.server_limited_models,
-           (unsigned long long)hs.out_of_range_models, (double)hs.out_of_range_ticks / d.rate_hz);
+           "(the device rendered those for %.2f s: %.2f s deeper than validated there, %.2f s with the skin beyond the "
+           "model's range)\n", o->name, (unsigned long long)hs.server_limited_models,
+           (unsigned long long)hs.out_of_range_models, (double)hs.out_of_range_ticks / d.rate_hz,
+           (double)hs.beyond_validated_ticks / d.rate_hz, (double)hs.deformed_ticks / d.rate_hz);
   if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
   free(lat.us);
   free(d.trace);
