@@ -479,8 +479,8 @@ static const char *valid_range_why(int why) {
   switch (why) {
   case 1: return "pressed deeper than this place of the phantom was checked against the reference model";
   case 2: return "the skin is stretched or bent beyond what the model describes well";
-  case 3: return "pressed deeper than this place was checked against the reference model, the skin bent beyond the "
-                 "model's range";
+  case 3: return "pressed deeper than this place of the phantom was checked against the reference model, and the "
+                 "skin is stretched or bent beyond what the model describes well";
   default: return "the phantom is deformed beyond where its forces were validated";
   }
 }
