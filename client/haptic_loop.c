@@ -336,7 +336,8 @@ static void *haptic_main(void *arg) {
     if (o.flags & PALP_CLI_FORCE_OUT_OF_RANGE) {
       st->out_of_range_ticks++;
       if (model_flags & palp_LM_BEYOND_VALIDATED) st->beyond_validated_ticks++;
-      if (model_flags & palp_LM_OUT_OF_RANGE) st->deformed_ticks++;
+      if (model_flags & palp_LM_LARGE_STRAIN) st->strained_ticks++;
+      if (model_flags & (palp_LM_OUT_OF_RANGE & ~palp_LM_LARGE_STRAIN)) st->limit_ticks++;
     }
     if (taken > 0) st->models++;
     if (l->core.holding) st->held_ticks++;
@@ -372,7 +373,8 @@ static void *haptic_main(void *arg) {
                                      .model_time = l->core.renderer.cur.time,
                                      .out_of_range_ticks = st->out_of_range_ticks,
                                      .beyond_validated_ticks = st->beyond_validated_ticks,
-                                     .deformed_ticks = st->deformed_ticks};
+                                     .strained_ticks = st->strained_ticks,
+                                     .limit_ticks = st->limit_ticks};
     pthread_mutex_unlock(&l->view_lock);
     }
   }

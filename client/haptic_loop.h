@@ -135,8 +135,10 @@ typedef struct palp_cli_haptic_stats {
   uint64_t out_of_range_ticks;    /* ticks rendered from such a model (PALP_CLI_FORCE_OUT_OF_RANGE) */
   uint64_t beyond_validated_ticks; /* of those, from a model flagged LM_BEYOND_VALIDATED: the fingertip
                                       deeper than the phantom's forces were checked against the FE there */
-  uint64_t deformed_ticks;         /* of those, from a model flagged LM_OUT_OF_RANGE: a link or the skin's
-                                      bending beyond the model's own linear range (a tick may be both) */
+  uint64_t strained_ticks;         /* of those, from a model flagged LM_LARGE_STRAIN: a link or the skin's
+                                      bending beyond the model's own linear range */
+  uint64_t limit_ticks;            /* of those, flagged LM_BASE_CONTACT, LM_CLAMPED_STEP or LM_UNSOLVED: pressed
+                                      onto the base or beyond what the step can follow (a tick may be in several) */
   double peak_force, peak_requested; /* [N] rendered / before the limit */
   double max_force;             /* the limit in force [N] */
   size_t trace_len;
@@ -159,7 +161,7 @@ typedef struct palp_cli_haptic_view {
   unsigned flags;
   int on;
   uint64_t out_of_range_ticks; /* the stats' count so far: a reader sampling the view misses no episode */
-  uint64_t beyond_validated_ticks, deformed_ticks; /* the stats' counts by flag: which limit it was */
+  uint64_t beyond_validated_ticks, strained_ticks, limit_ticks; /* the stats' counts by flag: which limit it was */
 } palp_cli_haptic_view;
 
 typedef struct palp_cli_haptic_loop {

@@ -472,17 +472,22 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
     printf("[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
 }
 
-/* What the server's validity flags said, in the trainee's words (why: 1 the fingertip
- * deeper than the phantom's forces were checked against the FE there, LM_BEYOND_VALIDATED;
- * 2 the skin stretched or bent beyond the model's own linear range, LM_OUT_OF_RANGE). */
-static const char *valid_range_why(int why) {
-  switch (why) {
-  case 1: return "pressed deeper than this place of the phantom was checked against the reference model";
-  case 2: return "the skin is stretched or bent beyond what the model describes well";
-  case 3: return "pressed deeper than this place of the phantom was checked against the reference model, and the "
-                 "skin is stretched or bent beyond what the model describes well";
-  default: return "the phantom is deformed beyond where its forces were validated";
-  }
+/* What the server's validity flags said, in the trainee's words, into buf (why: bit 1 the
+ * fingertip deeper than the phantom's forces were checked against the FE there,
+ * LM_BEYOND_VALIDATED; bit 2 a link or the skin's bending beyond the model's own linear
+ * range, LM_LARGE_STRAIN; bit 4 pressed onto the base, or a step the model could not follow,
+ * LM_BASE_CONTACT / LM_CLAMPED_STEP / LM_UNSOLVED). */
+static const char *valid_range_why(int why, char *buf, size_t len) {
+  static const char *const text[3] = {"pressed deeper than this place of the phantom was checked against the "
+                                      "reference model",
+                                      "the skin is stretched or bent beyond what the model describes well",
+                                      "the phantom is pressed onto its base or harder than the model can follow"};
+  size_t n = 0;
+  buf[0] = 0;
+  for (int b = 0; b < 3; b++)
+    if (why & (1 << b)) n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%s", n ? "; " : "", text[b]);
+  if (!buf[0]) snprintf(buf, len, "the phantom is deformed beyond where its forces were validated");
+  return buf;
 }
 
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
@@ -556,8 +561,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   int64_t next_print = t0, next_check = t0;
   int closed = 0, limited_shown = 0, oor_shown = 0;
   double episode_peak = 0, oor_since = 0, oor_last = 0;
-  uint64_t oor_ticks = 0, bv_ticks = 0, def_ticks = 0;
-  int oor_why = 0; /* 1: deeper than validated, 2: deformed beyond the model's range, in this episode */
+  uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0;
+  int oor_why = 0; /* the limits met in this episode (valid_range_why) */
+  char why_text[320];
   char reason[128] = "";
   while (!g_stop && !palp_cli_haptic_done(hl)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
@@ -601,14 +607,16 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
      * that the skin's check, which revisits each hinge every 0.2 s, does not make it flicker. */
     const int oor = v.out_of_range_ticks != oor_ticks;
     /* which limit: the trainee can act on "too deep here", not on "out of range" */
-    const int why = (v.beyond_validated_ticks != bv_ticks ? 1 : 0) | (v.deformed_ticks != def_ticks ? 2 : 0);
-    oor_ticks = v.out_of_range_ticks, bv_ticks = v.beyond_validated_ticks, def_ticks = v.deformed_ticks;
+    const int why = (v.beyond_validated_ticks != bv_ticks ? 1 : 0) | (v.strained_ticks != strain_ticks ? 2 : 0) |
+                    (v.limit_ticks != lim_ticks ? 4 : 0);
+    oor_ticks = v.out_of_range_ticks, bv_ticks = v.beyond_validated_ticks;
+    strain_ticks = v.strained_ticks, lim_ticks = v.limit_ticks;
     if (oor) {
       if (!oor_shown) {
         oor_since = v.t, oor_why = 0;
         if (!o->quiet) {
           printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
-                 o->name, v.t, valid_range_why(why));
+                 o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
           fflush(stdout);
         }
       }
@@ -616,7 +624,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     } else if (oor_shown && v.t - oor_last >= 0.5) {
       if (!o->quiet) {
         printf("[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
-               oor_last - oor_since, valid_range_why(oor_why));
+               oor_last - oor_since, valid_range_why(oor_why, why_text, sizeof why_text));
         fflush(stdout);
       }
       oor_shown = 0;
@@ -678,9 +686,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (hs.server_limited_models || hs.out_of_range_models)
     printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
            "(the device rendered those for %.2f s: %.2f s deeper than validated there, %.2f s with the skin beyond the "
-           "model's range)\n", o->name, (unsigned long long)hs.server_limited_models,
-           (unsigned long long)hs.out_of_range_models, (double)hs.out_of_range_ticks / d.rate_hz,
-           (double)hs.beyond_validated_ticks / d.rate_hz, (double)hs.deformed_ticks / d.rate_hz);
+           "model's range, %.2f s on the base or past what the step follows)\n", o->name,
+           (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models,
+           (double)hs.out_of_range_ticks / d.rate_hz, (double)hs.beyond_validated_ticks / d.rate_hz,
+           (double)hs.strained_ticks / d.rate_hz, (double)hs.limit_ticks / d.rate_hz);
   if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
   free(lat.us);
   free(d.trace);

@@ -58,7 +58,7 @@ def run(build, source, out):
         check(note is True, "the page has its force-limit / validity note")
         # The note names the validity limit from the model's flags (LM_BEYOND_VALIDATED 64,
         # LM_LARGE_STRAIN 2 within LM_OUT_OF_RANGE 30, LM_FORCE_LIMIT 1), as the terminal station does.
-        notes = {fl: page.eval("palpModelNote(%d)" % fl) for fl in (0, 1, 2, 64, 66, 65)}
+        notes = {fl: page.eval("palpModelNote(%d)" % fl) for fl in (0, 1, 2, 4, 64, 66, 65)}
         print("notes by flags:", notes)
         check(notes[0] == "", "no flag, no note (%r)" % notes[0])
         check(notes[1] == "force limited", "LM_FORCE_LIMIT: 'force limited' (%r)" % notes[1])
@@ -68,6 +68,8 @@ def run(build, source, out):
               "LM_LARGE_STRAIN names the deformation (%r)" % notes[2])
         check("deeper than" in notes[66] and "skin stretched" in notes[66], "both named (%r)" % notes[66])
         check(notes[65].startswith("force limited") and "deeper than" in notes[65], "limit and depth (%r)" % notes[65])
+        check(notes[4] == "model outside its valid range: pressed onto the base or harder than the model can follow",
+              "LM_BASE_CONTACT names the base (%r)" % notes[4])
         print("screenshot:", page.screenshot(os.path.join(out, "trainee-proxy.png")))
     finally:
         if browser:

@@ -124,7 +124,8 @@
     for (const o of fingerObjs) scene.remove(o);
     fingerObjs.length = 0;
     let limited = false, outOfRange = false, drawnProxy = null;
-    let tooDeep = false, deformed = false; /* which validity flag: LM_BEYOND_VALIDATED (64), LM_OUT_OF_RANGE (30) */
+    /* which validity flag: LM_BEYOND_VALIDATED (64), LM_LARGE_STRAIN (2), LM_BASE_CONTACT / CLAMPED / UNSOLVED (28) */
+    let tooDeep = false, strained = false, atLimit = false;
     for (const f of list) {
       const hasProxy = f.mode === "finger" && Array.isArray(f.proxy) && Array.isArray(f.device);
       const at = hasProxy ? f.proxy : f.center;
@@ -148,7 +149,8 @@
         limited = limited || !!f.force_limit;
         outOfRange = outOfRange || !!f.out_of_range;
         tooDeep = tooDeep || ((f.flags | 0) & 64) !== 0;
-        deformed = deformed || ((f.flags | 0) & 30) !== 0;
+        strained = strained || ((f.flags | 0) & 2) !== 0;
+        atLimit = atLimit || ((f.flags | 0) & 28) !== 0;
         drawnProxy = { proxy: f.proxy, device: f.device, in_contact: !!f.in_contact,
           force_limit: !!f.force_limit, out_of_range: !!f.out_of_range };
         if (f.in_contact) {
@@ -166,7 +168,7 @@
     T.proxy = drawnProxy;
     const note = document.getElementById("model");
     if (note) {
-      const parts = modelNote(limited, outOfRange, tooDeep, deformed);
+      const parts = modelNote(limited, outOfRange, tooDeep, strained, atLimit);
       note.textContent = parts.join(" \u00b7 ");
       note.className = parts.length ? "warn" : "muted";
     }
@@ -386,13 +388,14 @@
   /* The note under the view: what the server's flags on the rendered finger's model say,
    * naming the validity limit (LM_BEYOND_VALIDATED: deeper than the FE validation there;
    * LM_OUT_OF_RANGE: the model's own range), as the terminal station does. */
-  function modelNote(limited, outOfRange, tooDeep, deformed) {
+  function modelNote(limited, outOfRange, tooDeep, strained, atLimit) {
     const parts = [];
     if (limited) parts.push("force limited");
     if (outOfRange) {
       const why = [];
       if (tooDeep) why.push("deeper than this place was checked against the reference model");
-      if (deformed) why.push("skin stretched or bent beyond the model's range");
+      if (strained) why.push("skin stretched or bent beyond the model's range");
+      if (atLimit) why.push("pressed onto the base or harder than the model can follow");
       parts.push("model outside its valid range" + (why.length ? ": " + why.join(", ") : ""));
     }
     return parts;
@@ -400,7 +403,7 @@
   /* for tests: the note for a finger's local-model flags (LocalModel.flags) */
   window.palpModelNote = function (flags) {
     const f = flags | 0;
-    return modelNote((f & 1) !== 0, (f & 94) !== 0, (f & 64) !== 0, (f & 30) !== 0).join(" \u00b7 ");
+    return modelNote((f & 1) !== 0, (f & 94) !== 0, (f & 64) !== 0, (f & 2) !== 0, (f & 28) !== 0).join(" \u00b7 ");
   };
   window.palpProject = function (x, y, z) {
     const v = new THREE.Vector3(x, y, z).project(camera), r = renderer.domElement.getBoundingClientRect();
