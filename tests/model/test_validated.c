@@ -137,13 +137,17 @@ static double press(palp_world *w, int f, double th, double R, double r, double 
   return proxy_depth(w, f, R, r, &on, &polar);
 }
 
+/* The exercises' breast-tissue dome; nonzero (a failed check) when it does not load. */
+static int load_dome(palp_scene *sc) {
+  char err[256] = "";
+  const int rc = palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", sc, err, sizeof err);
+  CHECK(rc == 0, "%s", err);
+  return rc;
+}
+
 static void test_counted(void) {
   palp_scene sc;
-  char err[256];
-  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc, err, sizeof err)) {
-    CHECK(0, "%s", err);
-    return;
-  }
+  if (load_dome(&sc)) return;
   const double R = sc.world.mesh.radius, r = 0.008;
   for (int site = 0; site < 3; ++site) {
     palp_world_def d = sc.world;
@@ -243,10 +247,7 @@ static double validated_presses(palp_world_def d, int64_t *counted, double *dept
 static void test_hinge_range(void) {
   palp_scene sc;
   char err[256];
-  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc, err, sizeof err)) {
-    CHECK(0, "%s", err);
-    return;
-  }
+  if (load_dome(&sc)) return;
   const double stated = sc.world.validated_hinge_error;
   printf("breast-tissue set, stated hinge miss %.3f rad; its validated presses at 1 ms:\n", stated);
   int64_t counted = 0;
