@@ -2,6 +2,10 @@
 # palp-server with a bad configuration: a non-zero exit and a message naming the
 # field; the shipped configuration passes --check.
 set -u
+# The configuration file's dds_config is one of the fields checked here; an exported
+# CYCLONEDDS_URI takes precedence over it (docs/deploy.md: flag > environment > file) and
+# would leave it unread, so a developer's shell must not decide this test.
+unset CYCLONEDDS_URI
 server=$1
 config_dir=$2
 tmp=$(mktemp -d)
