@@ -43,12 +43,12 @@ With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496
   level-4 FE within 15%, and the table no deeper than the first depth past 0.3 N where it leaves 15%
   (measured 2026-11-29, the set refitted with the fingertip's contact at the current positions:
   pole 1.096-1.144, 45 deg 1.073-1.146, 60 deg 0.934-1.086, 70 deg 0.959-1.058, to the curves' end
-  at 14 / 10 / 10 / 7 mm, 6.231 / 3.7 / 4.2 / 3.0 N; 45 deg at 6 mm within 0.4 point of the bound.
+  at 14 / 10 / 10 / 12 mm, 6.231 / 3.7 / 4.2 / 8.8 N (70 deg to 7 mm, 3.0 N, until 2026-11-29, later); 45 deg at 6 mm within 0.4 point of the bound.
   The set before, read with the contact at the free positions: pole 1.039-1.133, 45 deg 1.043-1.127,
   60 deg 0.933-1.140, 70 deg 1.007-1.098; read soundly, up to 1.198 at the pole, which fails; with the
   rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
 - the table claims no site deeper than its level-4 curve reaches (since 2026-11-29 it rests on
-  level 4: 14 / 10 / 10 / 7 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
+  level 4: 14 / 10 / 10 / 12 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
   claimed before, and at the level-4 curves' ends the set already stands at 1.11-1.14 of them).
 
 With CYST_CSV (tests/data/fem_level3_breast_tissue_cyst.csv: level 3, the pole and a 0.2x cyst where

@@ -9,7 +9,7 @@
 # models. Then "]]]" (2 mm steps) and "+" x7 to 23 mm: the fingertip passes the depth the
 # breast-tissue set is validated to against the level-4 FE at the pole (14 mm of
 # indentation) and the skin's linearised bending leaves the range those presses covered
-# (0.183 rad; docs/model.md, "Valid range"), and the station says so, on the status line and
+# (0.227 rad; docs/model.md, "Valid range"), and the station says so, on the status line and
 # once in the log, naming which limit, where at 5-10 mm it never does.
 # Domain 114.
 set -u
