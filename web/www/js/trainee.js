@@ -123,9 +123,7 @@
   function setFingers(list) {
     for (const o of fingerObjs) scene.remove(o);
     fingerObjs.length = 0;
-    let limited = false, outOfRange = false, drawnProxy = null;
-    /* which validity flag: LM_BEYOND_VALIDATED (64), LM_LARGE_STRAIN (2), LM_BASE_CONTACT / CLAMPED / UNSOLVED (28) */
-    let tooDeep = false, strained = false, atLimit = false;
+    let flagsSeen = 0, drawnProxy = null; /* the drawn fingers' local-model flags, together */
     for (const f of list) {
       const hasProxy = f.mode === "finger" && Array.isArray(f.proxy) && Array.isArray(f.device);
       const at = hasProxy ? f.proxy : f.center;
@@ -146,11 +144,7 @@
       s.position.copy(c);
       fingerObjs.push(s);
       if (hasProxy) {
-        limited = limited || !!f.force_limit;
-        outOfRange = outOfRange || !!f.out_of_range;
-        tooDeep = tooDeep || ((f.flags | 0) & 64) !== 0;
-        strained = strained || ((f.flags | 0) & 2) !== 0;
-        atLimit = atLimit || ((f.flags | 0) & 28) !== 0;
+        flagsSeen |= f.flags | 0;
         drawnProxy = { proxy: f.proxy, device: f.device, in_contact: !!f.in_contact,
           force_limit: !!f.force_limit, out_of_range: !!f.out_of_range };
         if (f.in_contact) {
@@ -168,9 +162,8 @@
     T.proxy = drawnProxy;
     const note = document.getElementById("model");
     if (note) {
-      const parts = modelNote(limited, outOfRange, tooDeep, strained, atLimit);
-      note.textContent = parts.join(" \u00b7 ");
-      note.className = parts.length ? "warn" : "muted";
+      note.textContent = modelNote(flagsSeen);
+      note.className = note.textContent ? "warn" : "muted";
     }
     /* Drawn over the skin: a finger in its own dent would otherwise be hidden by the dent's rim. */
     for (const o of fingerObjs) {
@@ -384,27 +377,24 @@
   resize();
   requestAnimationFrame(loop);
 
-  /* For tests: where a point of the phantom [m] appears on the page, in CSS pixels. */
-  /* The note under the view: what the server's flags on the rendered finger's model say,
-   * naming the validity limit (LM_BEYOND_VALIDATED: deeper than the FE validation there;
-   * LM_OUT_OF_RANGE: the model's own range), as the terminal station does. */
-  function modelNote(limited, outOfRange, tooDeep, strained, atLimit) {
-    const parts = [];
-    if (limited) parts.push("force limited");
-    if (outOfRange) {
+  /* The note under the view from the local models' flags (LocalModel.flags, as palp-web
+   * passes them: LM_FORCE_LIMIT 1, LM_OUT_OF_RANGE 30, LM_BEYOND_VALIDATED 64), naming the
+   * validity limit as the terminal station does: 64 deeper than the FE validation there,
+   * LM_LARGE_STRAIN 2 the skin, 28 the base or the step's own limits. Exported for tests. */
+  function modelNote(flags) {
+    const f = flags | 0, parts = [];
+    if (f & 1) parts.push("force limited");
+    if (f & 94) {
       const why = [];
-      if (tooDeep) why.push("deeper than this place was checked against the reference model");
-      if (strained) why.push("skin stretched or bent beyond the model's range");
-      if (atLimit) why.push("pressed onto the base or harder than the model can follow");
+      if (f & 64) why.push("deeper than this place was checked against the reference model");
+      if (f & 2) why.push("skin stretched or bent beyond the model's range");
+      if (f & 28) why.push("pressed onto the base or harder than the model can follow");
       parts.push("model outside its valid range" + (why.length ? ": " + why.join(", ") : ""));
     }
-    return parts;
+    return parts.join(" \u00b7 ");
   }
-  /* for tests: the note for a finger's local-model flags (LocalModel.flags) */
-  window.palpModelNote = function (flags) {
-    const f = flags | 0;
-    return modelNote((f & 1) !== 0, (f & 94) !== 0, (f & 64) !== 0, (f & 2) !== 0, (f & 28) !== 0).join(" \u00b7 ");
-  };
+  window.palpModelNote = modelNote;
+  /* For tests: where a point of the phantom [m] appears on the page, in CSS pixels. */
   window.palpProject = function (x, y, z) {
     const v = new THREE.Vector3(x, y, z).project(camera), r = renderer.domElement.getBoundingClientRect();
     return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
