@@ -91,9 +91,13 @@ typedef enum palp_db_event_kind {
   PALP_DB_EVENT_OVERRUN = 5,   /* a tick overran its period */
   PALP_DB_EVENT_SHED = 6,      /* the log queue shed records (written by the writer itself) */
   PALP_DB_EVENT_DISK_ERROR = 7, /* the log lost records to a disk error (written by the writer) */
-  PALP_DB_EVENT_INFO = 8
+  PALP_DB_EVENT_INFO = 8,
+  /* the model left its valid range (docs/model.md, "Valid range"): count = the physics steps
+   * flagged since the last such event; detail (server/db_log.c, read back by palp_db_valid_range_parse):
+   * "outside at N steps: depth N, skin N, limit N; deepest X mm beyond the validated depth so far" */
+  PALP_DB_EVENT_VALID_RANGE = 9
 } palp_db_event_kind;
-#define PALP_DB_EVENT_KIND_COUNT 9
+#define PALP_DB_EVENT_KIND_COUNT 10
 const char *palp_db_event_kind_name(palp_db_event_kind k); /* "join", ... */
 
 typedef struct palp_db_session_def {
@@ -364,6 +368,31 @@ int palp_db_each_feedback(palp_db *db, int64_t session_id, palp_db_feedback_fn f
 int palp_db_each_mesh(palp_db *db, int64_t session_id, palp_db_mesh_fn fn, void *user);
 int palp_db_each_event(palp_db *db, int64_t session_id, palp_db_event_fn fn, void *user);
 int palp_db_each_note(palp_db *db, int64_t session_id, palp_db_note_fn fn, void *user);
+
+/* ---- the model's valid range (PALP_DB_EVENT_VALID_RANGE, db/valid_range.c) -------------- */
+/* What the phantom's model met outside its valid range over some physics steps (docs/model.md,
+ * "Valid range"), split the three ways the station splits the time it rendered from flagged
+ * local models (client/haptic_loop.c), so the station, the log and the review name the same
+ * things. A step may count in several of the three; steps counts it once. */
+typedef struct palp_db_valid_range {
+  int64_t steps;       /* steps with any of the three */
+  int64_t depth_steps; /* a fingertip deeper than the parameters were validated against the FE there
+                          (LM_BEYOND_VALIDATED) */
+  int64_t skin_steps;  /* a link strained past 50%, or a hinge beyond its linear range (LM_LARGE_STRAIN) */
+  int64_t limit_steps; /* pressed onto the base, speeds capped, or the finger's solve unconverged
+                          (LM_BASE_CONTACT, LM_CLAMPED_STEP, LM_UNSOLVED) */
+  double deepest_m;    /* the largest excess of a fingertip's indentation over its validated depth,
+                          over the session so far [m] */
+} palp_db_valid_range;
+/* The event's detail; returns what snprintf returns. */
+int palp_db_valid_range_format(const palp_db_valid_range *r, char *buf, size_t len);
+/* Reads a detail back; count is the event's count, which must equal its steps. PALP_EINVAL
+ * for a detail this format did not write or whose numbers contradict each other. */
+int palp_db_valid_range_parse(const char *detail, int64_t count, palp_db_valid_range *out);
+/* The session's valid_range events summed (deepest: the largest); *events = how many, and
+ * *unreadable = how many did not parse (their count is still added to steps). */
+int palp_db_session_valid_range(palp_db *db, int64_t session_id, palp_db_valid_range *sum, int64_t *events,
+                                int64_t *unreadable);
 
 /* Schema 3 (assessment). The session's exercise: name (up to namelen) and its JSON
  * (malloc'd, free()); PALP_DB_ENOTFOUND when the session ran none. */

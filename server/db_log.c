@@ -27,6 +27,7 @@ typedef struct slot {
   int64_t findings_refused;    /* refusals not logged one by one since the last flush */
   int refusals_logged;         /* logged one by one since the last flush */
   double finger_radius[SLOT_FINGERS]; /* per model contact id, from the world ops [m] */
+  palp_db_valid_range range;          /* steps outside the model's valid range since the last flush */
 } slot;
 
 struct palp_srv_db_log {
@@ -59,6 +60,12 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
     s->findings_refused = 0;
   }
   s->refusals_logged = 0;
+  if (s->range.steps) {
+    char detail[200];
+    palp_db_valid_range_format(&s->range, detail, sizeof detail);
+    palp_db_log_event(l->w, s->h, PALP_DB_EVENT_VALID_RANGE, frame, detail, s->range.steps);
+    s->range.steps = s->range.depth_steps = s->range.skin_steps = s->range.limit_steps = 0; /* deepest: so far */
+  }
   if (s->overruns) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_OVERRUN, frame, "tick ended after the next tick's start",
                       (int64_t)s->overruns);
@@ -81,10 +88,13 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
     palp_log_error(l->log, "session log: slot of session %u busy; session %u not logged", s->id, i->session_id);
     return;
   }
-  char uid[96], phantom[16], params[160];
+  char uid[96], phantom[16], params[384];
   snprintf(uid, sizeof uid, "%s-%u", l->run_id, i->session_id);
   snprintf(phantom, sizeof phantom, "%u", i->phantom_id);
-  snprintf(params, sizeof params, "{\"max_force_n\": %.17g, \"tick_rate_hz\": %.17g, \"partition\": \"%s\"}",
+  /* valid_range_events: this server logs the steps outside the model's valid range as events
+   * (none then means none happened; a log without the key does not say) */
+  snprintf(params, sizeof params,
+           "{\"max_force_n\": %.17g, \"tick_rate_hz\": %.17g, \"partition\": \"%s\", \"valid_range_events\": true}",
            i->max_force, i->tick_rate_hz, i->partition);
   /* Self-contained (parameters inlined), so the log alone rebuilds the world. */
   char *scene = palp_scene_to_json(i->scene);
@@ -212,6 +222,18 @@ static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {
   if (s) s->overruns++;
 }
 
+/* The three parts are the station's (client/haptic_loop.c): depth, skin, the model's limits. */
+static void on_valid_range(void *ctx, uint32_t session_id, uint32_t flags, double deepest_m) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  s->range.steps++;
+  if (flags & palp_LM_BEYOND_VALIDATED) s->range.depth_steps++;
+  if (flags & palp_LM_LARGE_STRAIN) s->range.skin_steps++;
+  if (flags & (palp_LM_OUT_OF_RANGE & ~palp_LM_LARGE_STRAIN)) s->range.limit_steps++;
+  if (deepest_m > s->range.deepest_m) s->range.deepest_m = deepest_m;
+}
+
 static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const int *finger_slot,
                      const palp_vec3 *finger_force, int fingers) {
   palp_srv_db_log *l = ctx;
@@ -293,6 +315,7 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
                             .contact_rejected = on_rejected,
                             .frame = on_frame,
                             .overrun = on_overrun,
+                            .valid_range = on_valid_range,
                             .finding = on_finding,
                             .log_counts = on_log_counts};
   *out = l;

@@ -104,6 +104,11 @@ typedef struct palp_srv_events {
   void (*finding)(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev);
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
+  /* [tick thread] after a step that left the model's valid range (issue 12; docs/model.md,
+   * "Valid range"): the step's model-validity bits (palp_LM_OUT_OF_RANGE and
+   * palp_LM_BEYOND_VALIDATED, as the stations get them) and the largest excess of a fingertip
+   * over its validated depth so far [m]. */
+  void (*valid_range)(void *ctx, uint32_t session_id, uint32_t flags, double deepest_m);
 } palp_srv_events;
 
 #endif

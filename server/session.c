@@ -563,6 +563,9 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   }
 
   const uint32_t flags = step_flags(s);
+  /* the session log keeps what the stations were told, for the instructor's review */
+  if ((flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) && s->events && s->events->valid_range)
+    s->events->valid_range(s->events->ctx, s->id, flags, s->health.max_beyond_validated);
   const int want_feedback = atomic_load_explicit(&s->want_feedback, memory_order_relaxed) != 0;
   if (want_feedback && s->local_model_writer > 0) publish_local_models(s, now_ns, flags);
   if (want_feedback && (awake || any_down || now_ns - s->last_feedback_ns >= IDLE_FEEDBACK_PERIOD_NS))

@@ -251,6 +251,20 @@ static void metric_row(FILE *f, const char *key, const char *name, const char *v
 
 /* The assessment (issue 13): metrics and score against the rubric, the coverage map per
  * pressure band, the finger's path with the findings against the now revealed lesions. */
+/* Where the phantom's model answered outside its valid range (docs/model.md, "Valid range"),
+ * next to the assessment whose pressure levels rest on its forces. */
+static void valid_range_section(palp_db *db, const palp_db_session_info *s, FILE *f) {
+  char range[640];
+  const int in_range = review_valid_range_text(db, s, range, sizeof range);
+  fprintf(f, "<h2>The model's valid range</h2>\n<p id=\"valid-range\"%s>",
+          in_range == REVIEW_RANGE_OUTSIDE ? " class=\"warn\"" : "");
+  html_str(f, range);
+  if (in_range == REVIEW_RANGE_OUTSIDE)
+    fputs(". The forces there are the model's extrapolation, not what it was validated to give: weigh the "
+          "pressure levels the assessment credits there accordingly.", f);
+  fputs("</p>\n", f);
+}
+
 static void assessment_section(palp_log *log, palp_db *db, const palp_db_session_info *s, FILE *f) {
   review_assessment a;
   char err[256] = "";
@@ -443,6 +457,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
               (long long)s->records_shed, (long long)s->records_failed);
 
     assessment_section(log, db, s, f);
+    valid_range_section(db, s, f);
     fputs("<h2>Force</h2>\n", f);
     series fs = {"contact force", "#c0392b", ts.t, ts.force, ts.n};
     svg_plot(f, "plot-force", "Contact force over time", "simulated time [s]", "force [N]", &fs, 1);

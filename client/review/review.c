@@ -130,8 +130,10 @@ static int ev_cb(void *u, double wall, int64_t frame, const char *kind, const ch
   while (i < t->n && strcmp(t->kind[i], kind)) i++;
   if (i == t->n && t->n < 16) snprintf(t->kind[t->n++], sizeof t->kind[0], "%s", kind);
   if (i < 16) t->count[i] += count;
-  /* The unusual ones are worth reading in full; joins and leaves are in the summary line. */
-  if (strcmp(kind, "join") && strcmp(kind, "leave") && t->listed < 20) {
+  /* The unusual ones are worth reading in full; joins and leaves are in the summary line, and
+   * the valid-range events (one a second while outside) in the "valid range" line above. */
+  if (strcmp(kind, "join") && strcmp(kind, "leave") && strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_VALID_RANGE)) &&
+      t->listed < 20) {
     char ts[64];
     review_fmt_time(wall, ts, sizeof ts);
     printf("    %s  frame %-8lld %-10s x%-4lld %s\n", ts, (long long)frame, kind, (long long)count, detail);
@@ -232,6 +234,11 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   } else {
     printf("metrics    UNKNOWN: %s\n", aerr);
   }
+  /* Where the phantom's model answered outside its valid range: the forces (and so the pressure
+   * bands the metrics above count) there are extrapolations (docs/model.md, "Valid range"). */
+  char range[640];
+  review_valid_range_text(db, s, range, sizeof range);
+  printf("valid range %s\n", range);
   printf("events     %lld\n", (long long)s->events);
   ev_tally t = {0};
   palp_db_each_event(db, s->id, ev_cb, &t);

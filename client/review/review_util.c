@@ -7,6 +7,8 @@
 #include <string.h>
 #include <time.h>
 
+#include <cjson/cJSON.h>
+
 #include "review_util.h"
 
 #define PI 3.14159265358979323846
@@ -184,3 +186,56 @@ const char *review_dist_name(palp_distribution d) {
   return "-";
 }
 
+
+/* The model's valid range over a session, from the server's valid_range events (db/valid_range.c),
+ * in the station's words for the same three limits (client/main.c), so the trainee's screen, the
+ * log and the instructor's review name them alike. */
+int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *buf, size_t len) {
+  palp_db_valid_range r;
+  int64_t events = 0, unreadable = 0;
+  const int rc = palp_db_session_valid_range(db, s->id, &r, &events, &unreadable);
+  if (rc < 0) {
+    snprintf(buf, len, "UNKNOWN: %s", palp_db_errmsg(db));
+    return rc;
+  }
+  if (events == 0) {
+    /* none logged: inside at every step only if this server logged such events at all */
+    char *params = NULL;
+    int said = 0;
+    if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params) {
+      cJSON *j = cJSON_Parse(params);
+      said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "valid_range_events"));
+      cJSON_Delete(j);
+    }
+    free(params);
+    if (said) snprintf(buf, len, "inside at every step (the server logged no step outside it)");
+    else snprintf(buf, len, "not in this log (an earlier server, or recorded over DDS); `palp-review replay %s` "
+                            "recomputes it", s->uid);
+    return said ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
+  }
+  const double dt = s->dt_s > 0 ? s->dt_s : 0;
+  char of[48] = ""; /* the simulated time, where frames were logged */
+  if (s->sim_duration_s > 0) snprintf(of, sizeof of, " of %.2f s simulated", s->sim_duration_s);
+  size_t n = (size_t)snprintf(buf, len, "OUTSIDE for %.2f s%s (%lld steps of %.3g ms): ", (double)r.steps * dt, of,
+                              (long long)r.steps, dt * 1e3);
+  const char *sep = "";
+  if (r.depth_steps) {
+    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%.2f s pressed deeper than this place of the phantom "
+                          "was checked against the reference model (by up to %.1f mm)",
+                          (double)r.depth_steps * dt, r.deepest_m * 1e3);
+    sep = "; ";
+  }
+  if (r.skin_steps) {
+    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s with the skin stretched or bent beyond what "
+                          "the model describes well", sep, (double)r.skin_steps * dt);
+    sep = "; ";
+  }
+  if (r.limit_steps) {
+    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s pressed onto the base or harder than the "
+                          "model can follow", sep, (double)r.limit_steps * dt);
+  }
+  if (unreadable)
+    snprintf(buf + n, n < len ? len - n : 0, " (%lld of %lld events unreadable: counted in the total only)",
+             (long long)unreadable, (long long)events);
+  return REVIEW_RANGE_OUTSIDE;
+}

@@ -1,6 +1,7 @@
 /* Writer and schema tests on real SQLite files (no model library needed).
  * usage: test_db_writer TMPDIR MIGRATION_0001_SQL
  * Values are compared exactly (tolerance 0): SQLite stores IEEE doubles and int64 bit for bit. */
+#include <math.h>
 #include <sqlite3.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -367,6 +368,45 @@ static void test_full_disk(void) {
   sqlite3_close(h);
 }
 
+/* The valid_range event's detail (db/valid_range.c): written and read back, and what a
+ * damaged or forged row says refused rather than summed. */
+static void test_valid_range_detail(void) {
+  const palp_db_valid_range r = {.steps = 1234, .depth_steps = 1200, .skin_steps = 40, .limit_steps = 3,
+                                 .deepest_m = 0.00241};
+  char d[200];
+  palp_db_valid_range_format(&r, d, sizeof d);
+  CHECK(!strcmp(d, "outside at 1234 steps: depth 1200, skin 40, limit 3; deepest 2.41 mm beyond the validated "
+                   "depth so far"),
+        "the detail reads '%s'", d);
+  palp_db_valid_range b;
+  CHECK(palp_db_valid_range_parse(d, 1234, &b) == 0 && b.steps == 1234 && b.depth_steps == 1200 &&
+            b.skin_steps == 40 && b.limit_steps == 3 && fabs(b.deepest_m - 0.00241) < 1e-12,
+        "read back: %lld %lld %lld %lld %g", (long long)b.steps, (long long)b.depth_steps, (long long)b.skin_steps,
+        (long long)b.limit_steps, b.deepest_m);
+  static const struct { const char *detail; int64_t count; const char *why; } bad[] = {
+      {"outside at 1234 steps: depth 1200, skin 40, limit 3; deepest 2.41 mm beyond the validated depth so far", 1233,
+       "the row's count differs from its steps"},
+      {"outside at 10 steps: depth 11, skin 0, limit 0; deepest 1.00 mm beyond the validated depth so far", 10,
+       "more depth steps than steps"},
+      {"outside at 10 steps: depth 2, skin 3, limit 4; deepest 1.00 mm beyond the validated depth so far", 10,
+       "parts that do not cover the steps"},
+      {"outside at 10 steps: depth -1, skin 10, limit 0; deepest 1.00 mm beyond the validated depth so far", 10,
+       "a negative part"},
+      {"outside at 10 steps: depth 10, skin 0, limit 0; deepest nan mm beyond the validated depth so far", 10,
+       "a depth that is not a number"},
+      {"outside at 10 steps: depth 10, skin 0, limit 0; deepest 5000 mm beyond the validated depth so far", 10,
+       "an excess of 5 m on a 40 mm dome"},
+      {"outside at 10 steps: depth 10, skin 0, limit 0; deepest 1.00 mm beyond the validated depth so far; DROP", 10,
+       "trailing text"},
+      {"outside at 0 steps: depth 0, skin 0, limit 0; deepest 0.00 mm beyond the validated depth so far", 0,
+       "no steps"},
+      {"outside at many steps", 5, "not this format"},
+      {"", 1, "empty"}};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+    CHECK(palp_db_valid_range_parse(bad[i].detail, bad[i].count, &b) == PALP_EINVAL, "refused: %s", bad[i].why);
+  CHECK(palp_db_valid_range_parse(NULL, 1, &b) == PALP_EINVAL, "refused: no detail");
+}
+
 int main(int argc, char **argv) {
   if (argc < 3) {
     fprintf(stderr, "usage: %s TMPDIR MIGRATION_0001_SQL\n", argv[0]);
@@ -379,5 +419,6 @@ int main(int argc, char **argv) {
   test_migration(argv[2]);
   test_newer();
   test_full_disk();
+  test_valid_range_detail();
   CHECK_DONE();
 }

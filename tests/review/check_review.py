@@ -120,6 +120,19 @@ def session(kind, dom_path, shot):
               "withdrawn one)" % classes)
     marks = [e for e in dom.els if "finding" in (e["a"].get("class") or "").split() and e["tag"] in ("path", "rect", "circle")]
     check(len(marks) == len(rows), "%s: %d marks drawn for %d findings" % (kind, len(marks), len(rows)))
+    # the model's valid range, next to the assessment (review_gen logs alice's valid_range events;
+    # bob's log is from a server that did not log them)
+    found = dom.by("id", "valid-range")
+    vr = found[0] if found else None
+    text = " ".join(vr["text"].split()) if vr else ""
+    if expert:
+        check(vr is not None and "warn" in (vr["a"].get("class") or "").split() and
+              text.startswith("OUTSIDE for 1.42 s (355 steps of 4 ms): ") and "1.24 s pressed deeper than this place" in text and
+              "by up to 2.4 mm" in text and "weigh the pressure levels" in text,
+              "expert: the valid-range paragraph warns, summed by limit: %r" % text[:160])
+    else:
+        check(vr is not None and "warn" not in (vr["a"].get("class") or "") and text.startswith("not in this log"),
+              "novice: the valid-range paragraph says the log does not say: %r" % text[:120])
     px = pixels(shot)
     if expert:
         for b in BAND:

@@ -80,7 +80,9 @@ static int gen_session(palp_db_writer *w, const char *test_dir, const char *uid,
   }
   palp_db_session_def d = {.uid = uid, .trainee = trainee, .station = "gen", .phantom_id = "stiff",
                            .phantom_name = sc->name[0] ? sc->name : "phantom_stiff", .scene_json = sc_json,
-                           .params_json = "{}", .tick_hz = 1.0 / sc->world.dt, .dt_s = sc->world.dt,
+                           /* a server that logs valid-range events says so (server/db_log.c); the
+                            * novice's log is as an earlier server wrote it, without the key */
+                           .params_json = kind == GEN_NOVICE ? "{}" : "{\"valid_range_events\": true}", .tick_hz = 1.0 / sc->world.dt, .dt_s = sc->world.dt,
                            .start_unix_s = start_unix_s};
   palp_db_session s;
   int rc_ = palp_db_log_session_begin(w, &d, &s);
@@ -104,6 +106,19 @@ static int gen_session(palp_db_writer *w, const char *test_dir, const char *uid,
       m.sim_time_s += 0.1;
       rc_ = palp_db_log_finding(w, s, &m);
     }
+  }
+  if (kind == GEN_EXPERT && !rc_) {
+    /* Valid-range events as the server writes them (test_review_cli.sh expects their sums:
+     * 355 steps, 310 deeper than validated by up to 2.4 mm, 50 skin, none at the limits, one
+     * event unreadable), after the samples: the assessment does not read them. */
+    const palp_db_valid_range e[2] = {{.steps = 250, .depth_steps = 250, .deepest_m = 0.0012},
+                                      {.steps = 100, .depth_steps = 60, .skin_steps = 50, .deepest_m = 0.0024}};
+    char detail[200];
+    for (int k = 0; k < 2 && !rc_; k++) {
+      palp_db_valid_range_format(&e[k], detail, sizeof detail);
+      rc_ = palp_db_log_event(w, s, PALP_DB_EVENT_VALID_RANGE, 1000 * (k + 1), detail, e[k].steps);
+    }
+    if (!rc_) rc_ = palp_db_log_event(w, s, PALP_DB_EVENT_VALID_RANGE, 3000, "outside at many steps", 5);
   }
   if (!rc_) rc_ = palp_db_log_session_end(w, s, PALP_DB_END_NORMAL, NULL, start_unix_s + palp_world_time(world));
   if (!rc_) rc_ = palp_db_writer_flush(w, 60.0);

@@ -28,6 +28,18 @@ expect "show: vertical strip" "search pattern +vertical_strip" "$dir/show-alice.
 expect "show: score and PASS" "score +9[0-9]\.[0-9] / 100 \(pass at 70\): PASS" "$dir/show-alice.txt"
 R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
 expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
+# The model's valid range, from the server's valid_range events (review_gen logs alice's: 355 steps
+# of 4 ms, 310 deeper than validated by up to 2.4 mm, 50 with the skin beyond its range, one
+# event unreadable); carol's server logged none, bob's log is from a server that did not log them.
+expect "show: outside the valid range, summed by limit" \
+  "^valid range OUTSIDE for 1\.42 s \(355 steps of 4 ms\): 1\.24 s pressed deeper than this place of the phantom was checked against the reference model \(by up to 2\.4 mm\); 0\.20 s with the skin stretched or bent beyond what the model describes well \(1 of 3 events unreadable: counted in the total only\)$" \
+  "$dir/show-alice.txt"
+if grep -E "^ +[0-9-]+ [0-9:]+ .* valid_range " "$dir/show-alice.txt" > /dev/null; then bad "show lists the valid_range events one by one"
+else ok "show: valid_range events in the summary line and the totals, not listed one by one"; fi
+expect "show: the totals count the flagged steps" "totals:.* valid_range 355" "$dir/show-alice.txt"
+expect "show: a server that logged none: inside" "^valid range inside at every step" "$dir/show-carol.txt"
+R show class-bob-1 > "$dir/show-bob.txt" 2>&1 || bad "show bob exit status"
+expect "show: a log without the key does not say, and names replay" "^valid range not in this log .*palp-review replay class-bob-1" "$dir/show-bob.txt"
 if grep -Eq "sensitivity +[0-9]" "$dir/show-carol.txt"; then bad "free practice shows a sensitivity"; else ok "free practice: no sensitivity line"; fi
 
 R export class-alice-1 --format csv --table metrics --out "$dir/alice.csv" || bad "export metrics"
