@@ -15,6 +15,7 @@ typedef struct row {
   review_assessment a;
   int computed; /* 1: from the samples (has maps); 0: stored metrics */
   char grade[160];
+  char outside[24]; /* seconds outside the model's valid range, "-" where the log does not say */
 } row;
 
 int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
@@ -67,6 +68,11 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       continue;
     }
     review_latest_grade(db, v[i].id, r->grade, sizeof r->grade);
+    palp_db_valid_range vr;
+    int64_t events = 0, unreadable = 0;
+    const int in = review_valid_range(db, &v[i], &vr, &events, &unreadable);
+    if (in == REVIEW_RANGE_OUTSIDE) snprintf(r->outside, sizeof r->outside, "%.2f", (double)vr.steps * v[i].dt_s);
+    else snprintf(r->outside, sizeof r->outside, in == REVIEW_RANGE_INSIDE ? "0.00" : "-");
     nr++;
   }
   if (nr == 0) {
@@ -87,17 +93,19 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   int rc = REVIEW_OK;
   /* The instructor at a terminal: the same table as the report's, as text. */
   printf("class report: exercise %s, %d session%s\n", exercise, nr, nr == 1 ? "" : "s");
-  printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %7s %6s %-5s %s\n", "TRAINEE", "SESSION", "DATE", "FOUND", "FALSE",
-         "LIGHT", "MEDIUM", "DEEP", "PATTERN", "TIME[s]", "SCORE", "RUBRIC", "GRADE");
+  /* OUTSIDE[s]: how long the phantom's model was outside its valid range (review_valid_range;
+   * "-" where the log does not say), beside the pressure levels that rest on its forces */
+  printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %7s %6s %-6s %10s %s\n", "TRAINEE", "SESSION", "DATE", "FOUND",
+         "FALSE", "LIGHT", "MEDIUM", "DEEP", "PATTERN", "TIME[s]", "SCORE", "RUBRIC", "OUTSIDE[s]", "GRADE");
   for (int i = 0; i < nr; i++) {
     const palp_assess_result *m = &rows[i].a.r;
     char t[64], found[16];
     review_fmt_time(rows[i].s.start_unix_s, t, sizeof t);
     t[10] = '\0'; /* the date */
     snprintf(found, sizeof found, "%d/%d", m->found, m->lesion_count);
-    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-5s %s\n", rows[i].s.trainee,
+    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-6s %10s %s\n", rows[i].s.trainee,
            rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2],
-           palp_pattern_name(m->pattern), m->duration, m->score, m->pass ? "pass" : "fail",
+           palp_pattern_name(m->pattern), m->duration, m->score, m->pass ? "pass" : "fail", rows[i].outside,
            rows[i].grade[0] ? rows[i].grade : "-");
   }
   if (csv) {
@@ -130,7 +138,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     fputs("<h2>Side by side</h2>\n<table id=\"class-table\"><tr><th>trainee</th><th>session</th><th>started</th>"
           "<th>lesions found</th><th>false positives</th><th>coverage light</th><th>medium</th><th>deep</th>"
           "<th>search pattern</th><th>time [s]</th><th>peak force [N]</th><th>score</th><th>rubric</th>"
-          "<th>grade</th></tr>\n", f);
+          "<th>outside the model's valid range [s]</th><th>grade</th></tr>\n", f);
     for (int i = 0; i < nr; i++) {
       const row *r = &rows[i];
       const palp_assess_result *m = &r->a.r;
@@ -141,10 +149,11 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       fputs("</td><td class=\"t\">", f);
       html_str(f, r->s.uid);
       fprintf(f, "</td><td class=\"t\">%s</td><td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
-              "<td class=\"t\">%s</td><td>%.1f</td><td>%.2f</td><td class=\"score\">%.1f</td><td%s>%s</td><td class=\"t\">",
+              "<td class=\"t\">%s</td><td>%.1f</td><td>%.2f</td><td class=\"score\">%.1f</td><td%s>%s",
               t, m->found, m->lesion_count, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1],
               100 * m->coverage[2], palp_pattern_name(m->pattern), m->duration, m->peak_force, m->score,
               m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
+      fprintf(f, "</td><td class=\"outside\">%s</td><td class=\"t\">", r->outside);
       html_str(f, r->grade);
       fputs("</td></tr>\n", f);
     }

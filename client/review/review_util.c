@@ -190,28 +190,39 @@ const char *review_dist_name(palp_distribution d) {
 /* The model's valid range over a session, from the server's valid_range events (db/valid_range.c),
  * in the station's words for the same three limits (client/main.c), so the trainee's screen, the
  * log and the instructor's review name them alike. */
+int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,
+                       int64_t *unreadable) {
+  const int rc = palp_db_session_valid_range(db, s->id, r, events, unreadable);
+  if (rc < 0) return rc;
+  if (*events) return REVIEW_RANGE_OUTSIDE;
+  /* none logged: inside at every step only if this server logged such events at all */
+  char *params = NULL;
+  int said = 0;
+  if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params) {
+    cJSON *j = cJSON_Parse(params);
+    said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "valid_range_events"));
+    cJSON_Delete(j);
+  }
+  free(params);
+  return said ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
+}
+
 int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *buf, size_t len) {
   palp_db_valid_range r;
   int64_t events = 0, unreadable = 0;
-  const int rc = palp_db_session_valid_range(db, s->id, &r, &events, &unreadable);
+  const int rc = review_valid_range(db, s, &r, &events, &unreadable);
   if (rc < 0) {
     snprintf(buf, len, "UNKNOWN: %s", palp_db_errmsg(db));
     return rc;
   }
-  if (events == 0) {
-    /* none logged: inside at every step only if this server logged such events at all */
-    char *params = NULL;
-    int said = 0;
-    if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params) {
-      cJSON *j = cJSON_Parse(params);
-      said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "valid_range_events"));
-      cJSON_Delete(j);
-    }
-    free(params);
-    if (said) snprintf(buf, len, "inside at every step (the server logged no step outside it)");
-    else snprintf(buf, len, "not in this log (an earlier server, or recorded over DDS); `palp-review replay %s` "
-                            "recomputes it", s->uid);
-    return said ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
+  if (rc == REVIEW_RANGE_INSIDE) {
+    snprintf(buf, len, "inside at every step (the server logged no step outside it)");
+    return rc;
+  }
+  if (rc == REVIEW_RANGE_UNKNOWN) {
+    snprintf(buf, len, "not in this log (an earlier server, or recorded over DDS); `palp-review replay %s` "
+                       "recomputes it", s->uid);
+    return rc;
   }
   const double dt = s->dt_s > 0 ? s->dt_s : 0;
   char of[48] = ""; /* the simulated time, where frames were logged */

@@ -41,5 +41,8 @@ void csv_str(FILE *f, const char *s);
  * REVIEW_RANGE_INSIDE, _OUTSIDE, _UNKNOWN (the log does not say), or < 0 on a database error. */
 enum { REVIEW_RANGE_UNKNOWN = 0, REVIEW_RANGE_INSIDE = 1, REVIEW_RANGE_OUTSIDE = 2 };
 int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *buf, size_t len);
+/* The same, as numbers: the events summed (palp_db_session_valid_range) and the same code. */
+int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,
+                       int64_t *unreadable);
 
 #endif
