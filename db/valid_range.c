@@ -2,6 +2,7 @@
  * server (server/db_log.c) once a second while a session's model is outside its valid range,
  * read back by palp-review. One format, written and parsed here, so the two cannot drift. */
 #include <inttypes.h>
+#include <stdint.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -11,6 +12,10 @@
 /* "outside at N steps: depth N, skin N, limit N; deepest X mm beyond the validated depth so far" */
 #define VR_FMT_HEAD "outside at %" PRId64 " steps: depth %" PRId64 ", skin %" PRId64 ", limit %" PRId64
 #define VR_FMT_TAIL "; deepest %.2f mm beyond the validated depth so far"
+/* A bound no real row reaches: 10^12 steps is 31 years at 1 kHz. A forged row cannot then make the
+ * sums overflow before ~10^7 such rows, and the sums saturate beyond. */
+#define VR_MAX_STEPS 1000000000000LL
+#define VR_SUM_MAX (INT64_MAX / 2)
 
 int palp_db_valid_range_format(const palp_db_valid_range *r, char *buf, size_t len) {
   return snprintf(buf, len, VR_FMT_HEAD VR_FMT_TAIL, r->steps, r->depth_steps, r->skin_steps, r->limit_steps,
@@ -29,7 +34,7 @@ int palp_db_valid_range_parse(const char *detail, int64_t count, palp_db_valid_r
     return PALP_EINVAL;
   /* a step counts once in steps and at most once in each part; the depth excess is a few
    * millimetres, never a metre (the dome is 40 mm high) */
-  if (r.steps < 1 || r.steps != count || r.depth_steps < 0 || r.skin_steps < 0 || r.limit_steps < 0 ||
+  if (r.steps < 1 || r.steps > VR_MAX_STEPS || r.steps != count || r.depth_steps < 0 || r.skin_steps < 0 || r.limit_steps < 0 ||
       r.depth_steps > r.steps || r.skin_steps > r.steps || r.limit_steps > r.steps ||
       r.depth_steps + r.skin_steps + r.limit_steps < r.steps || !isfinite(mm) || mm < 0 || mm > 1000)
     return PALP_EINVAL;
@@ -43,6 +48,8 @@ typedef struct sum_ctx {
   int64_t events, unreadable;
 } sum_ctx;
 
+static int64_t sat_add(int64_t a, int64_t b) { return a > VR_SUM_MAX - b ? VR_SUM_MAX : a + b; }
+
 static int add_event(void *user, double wall, int64_t frame, const char *kind, const char *detail, int64_t count) {
   (void)wall, (void)frame;
   sum_ctx *c = user;
@@ -51,13 +58,13 @@ static int add_event(void *user, double wall, int64_t frame, const char *kind, c
   palp_db_valid_range r;
   if (palp_db_valid_range_parse(detail, count, &r) < 0) {
     c->unreadable++;
-    if (count > 0) c->sum.steps += count;
+    if (count > 0 && count <= VR_MAX_STEPS) c->sum.steps = sat_add(c->sum.steps, count);
     return 0;
   }
-  c->sum.steps += r.steps;
-  c->sum.depth_steps += r.depth_steps;
-  c->sum.skin_steps += r.skin_steps;
-  c->sum.limit_steps += r.limit_steps;
+  c->sum.steps = sat_add(c->sum.steps, r.steps);
+  c->sum.depth_steps = sat_add(c->sum.depth_steps, r.depth_steps);
+  c->sum.skin_steps = sat_add(c->sum.skin_steps, r.skin_steps);
+  c->sum.limit_steps = sat_add(c->sum.limit_steps, r.limit_steps);
   if (r.deepest_m > c->sum.deepest_m) c->sum.deepest_m = r.deepest_m;
   return 0;
 }

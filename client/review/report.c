@@ -249,8 +249,6 @@ static void metric_row(FILE *f, const char *key, const char *name, const char *v
           verdict < 0 ? "-" : verdict ? "pass" : "FAIL");
 }
 
-/* The assessment (issue 13): metrics and score against the rubric, the coverage map per
- * pressure band, the finger's path with the findings against the now revealed lesions. */
 /* Where the phantom's model answered outside its valid range (docs/model.md, "Valid range"),
  * next to the assessment whose pressure levels rest on its forces. */
 static void valid_range_section(palp_db *db, const palp_db_session_info *s, FILE *f) {
@@ -265,6 +263,8 @@ static void valid_range_section(palp_db *db, const palp_db_session_info *s, FILE
   fputs("</p>\n", f);
 }
 
+/* The assessment (issue 13): metrics and score against the rubric, the coverage map per
+ * pressure band, the finger's path with the findings against the now revealed lesions. */
 static void assessment_section(palp_log *log, palp_db *db, const palp_db_session_info *s, FILE *f) {
   review_assessment a;
   char err[256] = "";

@@ -186,7 +186,6 @@ const char *review_dist_name(palp_distribution d) {
   return "-";
 }
 
-
 /* The model's valid range over a session, from the server's valid_range events (db/valid_range.c),
  * in the station's words for the same three limits (client/main.c), so the trainee's screen, the
  * log and the instructor's review name them alike. */

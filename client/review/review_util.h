@@ -37,7 +37,7 @@ void json_str(FILE *f, const char *s);
 void html_str(FILE *f, const char *s);
 void csv_str(FILE *f, const char *s);
 
-/* The model's valid range over a session, as a sentence for show and report (docs/review.md):
+/* The model's valid range over a session, as a sentence for show and report (docs/db.md):
  * REVIEW_RANGE_INSIDE, _OUTSIDE, _UNKNOWN (the log does not say), or < 0 on a database error. */
 enum { REVIEW_RANGE_UNKNOWN = 0, REVIEW_RANGE_INSIDE = 1, REVIEW_RANGE_OUTSIDE = 2 };
 int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *buf, size_t len);

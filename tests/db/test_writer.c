@@ -400,6 +400,10 @@ static void test_valid_range_detail(void) {
        "trailing text"},
       {"outside at 0 steps: depth 0, skin 0, limit 0; deepest 0.00 mm beyond the validated depth so far", 0,
        "no steps"},
+      {"outside at 2000000000000 steps: depth 2000000000000, skin 0, limit 0; deepest 1.00 mm beyond the validated "
+       "depth so far", 2000000000000LL, "more steps than 31 years at 1 kHz"},
+      {"outside at 99999999999999999999 steps: depth 1, skin 0, limit 0; deepest 1.00 mm beyond the validated "
+       "depth so far", 1, "a number past int64"},
       {"outside at many steps", 5, "not this format"},
       {"", 1, "empty"}};
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
