@@ -122,6 +122,10 @@ typedef struct session {
   int fps_count;
   double fps;
   uint32_t lm_flags_seen;  /* LM_* bits seen in this session's local models since it opened */
+  double outside_s;        /* time the received local models were outside the model's valid range
+                              (LM_OUT_OF_RANGE, LM_BEYOND_VALIDATED): a period per frame [s] */
+  uint64_t outside_frame;  /* the last frame counted there (fingers of one frame count once) */
+  int outside_counted;
   uint64_t late_haptic;    /* local models published > 2 periods after the previous frame's */
   uint64_t lost_haptic;    /* frames the bridge never received (while a finger stayed down) */
   finding_status fst;
@@ -295,6 +299,7 @@ static void build_sessions(palp_web_hub *h) {
       if (s->f[k].mode == palp_CONTACT_FINGER && s->f[k].lm_valid) now_flags |= s->f[k].lm_flags;
     cJSON_AddNumberToObject(o, "model_flags", now_flags);
     cJSON_AddNumberToObject(o, "model_flags_seen", s->lm_flags_seen);
+    cJSON_AddNumberToObject(o, "outside_s", s->outside_s);
     /* Findings: the marks standing in the server's newest palp_finding_status (null before
      * one arrived). Late haptic updates: as the bridge sees the local models (docs/web.md). */
     const exercise *ex = NULL;
@@ -906,6 +911,15 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   if (flags != f->lm_flags || (flags & ~s->lm_flags_seen)) h->sessions_dirty = 1;
   f->lm_flags = flags;
   s->lm_flags_seen |= flags;
+  /* The time outside the valid range, as the station and the review count it (one physics period
+   * per flagged frame; docs/db.md): frames the bridge never received are not counted. */
+  if ((flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) && isfinite(m->period) && m->period > 0 &&
+      m->period < 1 && !(s->outside_counted && s->outside_frame == m->frame)) {
+    s->outside_s += m->period;
+    s->outside_frame = m->frame;
+    s->outside_counted = 1;
+    h->sessions_dirty = 1;
+  }
   s->changed = 1;
 }
 

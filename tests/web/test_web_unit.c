@@ -447,7 +447,10 @@ static void test_local_model(void) {
         if (s0 && cJSON_IsTrue(cJSON_GetObjectItem(s0, "position_finger")) &&
             cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "model_flags_seen")) == 9 &&
             cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "late_haptic")) == 1 &&
-            cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "lost_haptic")) == 2)
+            cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "lost_haptic")) == 2 &&
+            /* outside the valid range (flags 9: CLAMPED_STEP is in LM_OUT_OF_RANGE): the four
+             * frames received, 50, 51, 52 and 55, a 4 ms period each; not the old frame 40 */
+            fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(s0, "outside_s")) - 0.016) < 1e-9)
           sessions_ok = 1;
       }
       cJSON_Delete(j);
@@ -457,7 +460,7 @@ static void test_local_model(void) {
   }
   CHECK(got != NULL, "a live message with the finger's proxy within 3 s");
   CHECK(sessions_ok, "the session list says a position-driven finger is active, model flags 9, late_haptic 1 (frame 52 "
-        "3 periods after 51), lost_haptic 2 (53, 54)");
+        "3 periods after 51), lost_haptic 2 (53, 54), outside the valid range 0.016 s (4 frames of 4 ms)");
   if (got) {
     const double want_p[3] = {0.001, 0.002, 0.0231}, want_d[3] = {0.001, 0.002, 0.0150};
     cJSON *p = cJSON_GetObjectItem(got, "proxy"), *dv = cJSON_GetObjectItem(got, "device");

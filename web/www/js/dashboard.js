@@ -65,15 +65,18 @@
     }
   }
 
-  /* LM_* bits (idl/palp_types.idl): now / seen since the session opened. */
-  const LM_NAMES = [[1, "force limit"], [2, "large strain"], [4, "base contact"], [8, "clamped step"], [16, "unsolved"],
-                    [64, "deeper than validated"]];
+  /* LM_* bits (idl/palp_types.idl): now / seen since the session opened, in the station's and the
+   * review's words for the valid range's limits (docs/naming.md), and the time outside it. */
+  const LM_NAMES = [[1, "force limit"], [2, "skin stretched or bent beyond the model"], [4, "on the base"],
+                    [8, "harder than the model can follow"], [16, "contact unsolved"],
+                    [64, "deeper than checked against the reference model"]];
   function modelFlags(s) {
     if (s.model_flags_seen === undefined) return "n/a";
     const names = function (v) { return LM_NAMES.filter(function (x) { return v & x[0]; }).map(function (x) { return x[1]; }); };
     if (!s.model_flags_seen) return s.position_finger ? "ok" : "n/a";
     const now = names(s.model_flags);
-    return (now.length ? "now " + now.join(", ") : "ok now") + "; seen " + names(s.model_flags_seen).join(", ");
+    const outside = s.outside_s > 0 ? "; outside the valid range " + fmt(s.outside_s, 2) + " s" : "";
+    return (now.length ? "now " + now.join(", ") : "ok now") + "; seen " + names(s.model_flags_seen).join(", ") + outside;
   }
   function fill(c, s) {
     c.name.textContent = s.trainee + " #" + s.id;
