@@ -477,15 +477,19 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
  * LM_BEYOND_VALIDATED; bit 2 a link or the skin's bending beyond the model's own linear
  * range, LM_LARGE_STRAIN; bit 4 pressed onto the base, or a step the model could not follow,
  * LM_BASE_CONTACT / LM_CLAMPED_STEP / LM_UNSOLVED). */
+/* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
+ * the summary, and the instructor's review of the session's log (client/review/review_util.c). */
+static const char *const valid_range_text[3] = {
+    "pressed deeper than this place of the phantom was checked against the reference model",
+    "the skin is stretched or bent beyond what the model describes well",
+    "the phantom is pressed onto its base or harder than the model can follow"};
+
 static const char *valid_range_why(int why, char *buf, size_t len) {
-  static const char *const text[3] = {"pressed deeper than this place of the phantom was checked against the "
-                                      "reference model",
-                                      "the skin is stretched or bent beyond what the model describes well",
-                                      "the phantom is pressed onto its base or harder than the model can follow"};
   size_t n = 0;
   buf[0] = 0;
   for (int b = 0; b < 3; b++)
-    if (why & (1 << b)) n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%s", n ? "; " : "", text[b]);
+    if (why & (1 << b))
+      n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%s", n ? "; " : "", valid_range_text[b]);
   if (!buf[0]) snprintf(buf, len, "the phantom is deformed beyond where its forces were validated");
   return buf;
 }
@@ -685,11 +689,11 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
            "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
     printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
-           "(the device rendered those for %.2f s: %.2f s deeper than validated there, %.2f s with the skin beyond the "
-           "model's range, %.2f s on the base or past what the step follows)\n", o->name,
+           "(the device rendered those for %.2f s: %.2f s %s; %.2f s %s; %.2f s %s)\n", o->name,
            (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models,
            (double)hs.out_of_range_ticks / d.rate_hz, (double)hs.beyond_validated_ticks / d.rate_hz,
-           (double)hs.strained_ticks / d.rate_hz, (double)hs.limit_ticks / d.rate_hz);
+           valid_range_text[0], (double)hs.strained_ticks / d.rate_hz, valid_range_text[1],
+           (double)hs.limit_ticks / d.rate_hz, valid_range_text[2]);
   if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
   free(lat.us);
   free(d.trace);

@@ -187,8 +187,8 @@ const char *review_dist_name(palp_distribution d) {
 }
 
 /* The model's valid range over a session, from the server's valid_range events (db/valid_range.c),
- * in the station's words for the same three limits (client/main.c), so the trainee's screen, the
- * log and the instructor's review name them alike. */
+ * in the station's words for the same three limits (client/main.c, valid_range_text), so the
+ * trainee's screen, the log and the instructor's review name them alike (docs/naming.md). */
 int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,
                        int64_t *unreadable) {
   const int rc = palp_db_session_valid_range(db, s->id, r, events, unreadable);
@@ -236,13 +236,13 @@ int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *bu
     sep = "; ";
   }
   if (r.skin_steps) {
-    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s with the skin stretched or bent beyond what "
+    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s the skin is stretched or bent beyond what "
                           "the model describes well", sep, (double)r.skin_steps * dt);
     sep = "; ";
   }
   if (r.limit_steps) {
-    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s pressed onto the base or harder than the "
-                          "model can follow", sep, (double)r.limit_steps * dt);
+    n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s the phantom is pressed onto its base or harder "
+                          "than the model can follow", sep, (double)r.limit_steps * dt);
   }
   if (unreadable)
     snprintf(buf + n, n < len ? len - n : 0, " (%lld of %lld events unreadable: counted in the total only)",

@@ -46,7 +46,7 @@ deep=$(grep -c "depth +23 mm (step 2 mm): force [0-9.]* N.*OUTSIDE VALID RANGE" 
 shallow=$(grep -c "depth +\(5\|9\|10\) mm.*OUTSIDE VALID RANGE" "$tmp/lines")
 models=$(sed -n 's/.* \([0-9]*\) local models.*/\1/p' "$tmp/lines" | tail -n 1)
 # the session's summary splits the flagged time by limit: some of it deeper than validated
-deep_s=$(sed -n "s/.*the device rendered those for [0-9.]* s: \([0-9.]*\) s deeper than validated there.*/\1/p" "$tmp/lines" | tail -n 1)
+deep_s=$(sed -n "s/.*the device rendered those for [0-9.]* s: \([0-9.]*\) s pressed deeper than this place of the phantom was checked against the reference model;.*/\1/p" "$tmp/lines" | tail -n 1)
 announced=$(grep -c "OUTSIDE THE MODEL'S VALID RANGE: \(pressed deeper than this place\|the skin is stretched or bent\)" "$tmp/lines")
 # the server writes the session's end when the station has left; stop it so the log is closed
 kill -INT $spid 2>/dev/null; wait $spid 2>/dev/null

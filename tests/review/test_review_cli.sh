@@ -32,7 +32,7 @@ expect "show: free practice named, no sensitivity" "exercise +none: free practic
 # of 4 ms, 310 deeper than validated by up to 2.4 mm, 50 with the skin beyond its range, one
 # event unreadable); carol's server logged none, bob's log is from a server that did not log them.
 expect "show: outside the valid range, summed by limit" \
-  "^valid range OUTSIDE for 1\.42 s \(355 steps of 4 ms\): 1\.24 s pressed deeper than this place of the phantom was checked against the reference model \(by up to 2\.4 mm\); 0\.20 s with the skin stretched or bent beyond what the model describes well \(1 of 3 events unreadable: counted in the total only\)$" \
+  "^valid range OUTSIDE for 1\.42 s \(355 steps of 4 ms\): 1\.24 s pressed deeper than this place of the phantom was checked against the reference model \(by up to 2\.4 mm\); 0\.20 s the skin is stretched or bent beyond what the model describes well \(1 of 3 events unreadable: counted in the total only\)$" \
   "$dir/show-alice.txt"
 if grep -E "^ +[0-9-]+ [0-9:]+ .* valid_range " "$dir/show-alice.txt" > /dev/null; then bad "show lists the valid_range events one by one"
 else ok "show: valid_range events in the summary line and the totals, not listed one by one"; fi
