@@ -472,11 +472,6 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
     printf("[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
 }
 
-/* What the server's validity flags said, in the trainee's words, into buf (why: bit 1 the
- * fingertip deeper than the phantom's forces were checked against the FE there,
- * LM_BEYOND_VALIDATED; bit 2 a link or the skin's bending beyond the model's own linear
- * range, LM_LARGE_STRAIN; bit 4 pressed onto the base, or a step the model could not follow,
- * LM_BASE_CONTACT / LM_CLAMPED_STEP / LM_UNSOLVED). */
 /* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
  * the summary, and the instructor's review of the session's log (client/review/review_util.c). */
 static const char *const valid_range_text[3] = {
@@ -484,6 +479,11 @@ static const char *const valid_range_text[3] = {
     "the skin is stretched or bent beyond what the model describes well",
     "the phantom is pressed onto its base or harder than the model can follow"};
 
+/* What the server's validity flags said, in the trainee's words, into buf (why: bit 1 the
+ * fingertip deeper than the phantom's forces were checked against the FE there,
+ * LM_BEYOND_VALIDATED; bit 2 a link or the skin's bending beyond the model's own linear
+ * range, LM_LARGE_STRAIN; bit 4 pressed onto the base, or a step the model could not follow,
+ * LM_BASE_CONTACT / LM_CLAMPED_STEP / LM_UNSOLVED). */
 static const char *valid_range_why(int why, char *buf, size_t len) {
   size_t n = 0;
   buf[0] = 0;

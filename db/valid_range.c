@@ -2,8 +2,8 @@
  * server (server/db_log.c) once a second while a session's model is outside its valid range,
  * read back by palp-review. One format, written and parsed here, so the two cannot drift. */
 #include <inttypes.h>
-#include <stdint.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -34,8 +34,8 @@ int palp_db_valid_range_parse(const char *detail, int64_t count, palp_db_valid_r
     return PALP_EINVAL;
   /* a step counts once in steps and at most once in each part; the depth excess is a few
    * millimetres, never a metre (the dome is 40 mm high) */
-  if (r.steps < 1 || r.steps > VR_MAX_STEPS || r.steps != count || r.depth_steps < 0 || r.skin_steps < 0 || r.limit_steps < 0 ||
-      r.depth_steps > r.steps || r.skin_steps > r.steps || r.limit_steps > r.steps ||
+  if (r.steps < 1 || r.steps > VR_MAX_STEPS || r.steps != count || r.depth_steps < 0 || r.skin_steps < 0 ||
+      r.limit_steps < 0 || r.depth_steps > r.steps || r.skin_steps > r.steps || r.limit_steps > r.steps ||
       r.depth_steps + r.skin_steps + r.limit_steps < r.steps || !isfinite(mm) || mm < 0 || mm > 1000)
     return PALP_EINVAL;
   r.deepest_m = mm * 1e-3;

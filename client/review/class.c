@@ -103,9 +103,10 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     review_fmt_time(rows[i].s.start_unix_s, t, sizeof t);
     t[10] = '\0'; /* the date */
     snprintf(found, sizeof found, "%d/%d", m->found, m->lesion_count);
-    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-6s %10s %s\n", rows[i].s.trainee,
-           rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2],
-           palp_pattern_name(m->pattern), m->duration, m->score, m->pass ? "pass" : "fail", rows[i].outside,
+    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-6s %10s %s\n",
+           rows[i].s.trainee, rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0],
+           100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), m->duration, m->score,
+           m->pass ? "pass" : "fail", rows[i].outside,
            rows[i].grade[0] ? rows[i].grade : "-");
   }
   if (csv) {
