@@ -201,11 +201,11 @@ fail:
 void review_metrics_csv_header(FILE *f) {
   fputs("session,trainee,started_unix_s,exercise,samples,lesions,found,sensitivity,findings,withdrawn,"
         "false_positives,coverage_light,coverage_medium,coverage_deep,coverage_any,pattern,path_length_m,"
-        "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass\n",
+        "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass,outside_valid_range_s\n",
         f);
 }
 
-void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a) {
+void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a, double outside_s) {
   const palp_assess_result *r = &a->r;
   csv_str(f, s->uid);
   fputc(',', f);
@@ -220,8 +220,11 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
           r->false_positives, r->coverage[0], r->coverage[1], r->coverage[2], r->coverage_any,
           palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
           r->evidence.gap_share, r->duration, r->peak_force, r->out_of_range);
-  if (a->has_exercise) fprintf(f, "%.1f,%d\n", r->score, r->pass);
-  else fputs(",\n", f);
+  if (a->has_exercise) fprintf(f, "%.1f,%d,", r->score, r->pass);
+  else fputs(",,", f);
+  /* out_of_range above is the force's (episodes above the exercise's limit); this is the model's */
+  if (outside_s >= 0) fprintf(f, "%.2f\n", outside_s);
+  else fputs("\n", f);
 }
 
 void review_metrics_print(FILE *f, const review_assessment *a) {

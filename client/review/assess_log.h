@@ -39,7 +39,9 @@ void review_assessment_free(review_assessment *a);
 
 /* The metrics as CSV: the header line, then one row per session. */
 void review_metrics_csv_header(FILE *f);
-void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a);
+/* outside_s: seconds outside the model's valid range (review_valid_range_seconds; < 0: the log does
+ * not say, an empty field) */
+void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a, double outside_s);
 /* The metrics, score and rubric as text lines (palp-review show). */
 void review_metrics_print(FILE *f, const review_assessment *a);
 

@@ -15,7 +15,8 @@ typedef struct row {
   review_assessment a;
   int computed; /* 1: from the samples (has maps); 0: stored metrics */
   char grade[160];
-  char outside[24]; /* seconds outside the model's valid range, "-" where the log does not say */
+  double outside_s;  /* seconds outside the model's valid range, -1 where the log does not say */
+  char outside[24];  /* the same as text, "-" where the log does not say */
 } row;
 
 int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
@@ -68,11 +69,9 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       continue;
     }
     review_latest_grade(db, v[i].id, r->grade, sizeof r->grade);
-    palp_db_valid_range vr;
-    int64_t events = 0, unreadable = 0;
-    const int in = review_valid_range(db, &v[i], &vr, &events, &unreadable);
-    if (in == REVIEW_RANGE_OUTSIDE) snprintf(r->outside, sizeof r->outside, "%.2f", (double)vr.steps * v[i].dt_s);
-    else snprintf(r->outside, sizeof r->outside, in == REVIEW_RANGE_INSIDE ? "0.00" : "-");
+    r->outside_s = review_valid_range_seconds(db, &v[i]);
+    if (r->outside_s >= 0) snprintf(r->outside, sizeof r->outside, "%.2f", r->outside_s);
+    else snprintf(r->outside, sizeof r->outside, "-");
     nr++;
   }
   if (nr == 0) {
@@ -116,7 +115,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       rc = REVIEW_ERROR;
     } else {
       review_metrics_csv_header(c);
-      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, &rows[i].s, &rows[i].a);
+      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, &rows[i].s, &rows[i].a, rows[i].outside_s);
       if (c != stdout && fclose(c)) rc = REVIEW_ERROR;
     }
   }

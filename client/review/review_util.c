@@ -249,3 +249,11 @@ int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *bu
              (long long)unreadable, (long long)events);
   return REVIEW_RANGE_OUTSIDE;
 }
+
+double review_valid_range_seconds(palp_db *db, const palp_db_session_info *s) {
+  palp_db_valid_range r;
+  int64_t events = 0, unreadable = 0;
+  const int rc = review_valid_range(db, s, &r, &events, &unreadable);
+  if (rc == REVIEW_RANGE_OUTSIDE) return (double)r.steps * (s->dt_s > 0 ? s->dt_s : 0);
+  return rc == REVIEW_RANGE_INSIDE ? 0.0 : -1.0;
+}

@@ -44,5 +44,7 @@ int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *bu
 /* The same, as numbers: the events summed (palp_db_session_valid_range) and the same code. */
 int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,
                        int64_t *unreadable);
+/* Seconds outside it (steps x dt), 0 inside, -1 where the log does not say or cannot be read. */
+double review_valid_range_seconds(palp_db *db, const palp_db_session_info *s);
 
 #endif

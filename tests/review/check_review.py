@@ -164,6 +164,8 @@ def klass(dom_path, shot, csv_path):
     # seconds outside the model's valid range: alice's 355 logged steps of 4 ms; bob's logs do not say
     check(alice[13] == "1.42" and all(t[13] == "-" for t in tds if t[0] == "bob"),
           "class: outside the valid range, alice %r, bob %r" % (alice[13], [t[13] for t in tds if t[0] == "bob"]))
+    csv_out = {d["trainee"]: d["outside_valid_range_s"] for d in data}
+    check(csv_out == {"alice": "1.42", "bob": ""}, "class CSV: outside_valid_range_s %r (bob's logs do not say)" % csv_out)
     maps = [e for e in dom.els if e["tag"] == "svg" and "coverage" in (e["a"].get("class") or "").split()]
     check(len(maps) == 9, "class: small multiples, 3 bands x 3 sessions (%d maps)" % len(maps))
     prog = {e["a"].get("data-trainee"): e for e in dom.els if e["tag"] == "tr" and e["a"].get("data-trainee")}

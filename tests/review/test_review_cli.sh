@@ -51,8 +51,9 @@ assert len(rows) == 1, rows
 r = rows[0]
 assert r["session"] == "class-alice-1" and r["trainee"] == "alice" and r["found"] == "2" and r["pass"] == "1", r
 assert float(r["coverage_medium"]) >= 0.95 and r["pattern"] == "vertical_strip", r
+assert r["outside_valid_range_s"] == "1.42", r  # review_gen's 355 flagged steps of 4 ms
 PY
-then ok "export --table metrics: header and one row, found 2, pass 1"; else bad "export --table metrics"; fi
+then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range"; else bad "export --table metrics"; fi
 
 # Structured grades: each refused form exits 2 with a message saying what is allowed.
 for g in "--score 101" "--score -1" "--score 7/10" "--level B+" "--grade B+" "--grade 7/10" "--level excellent"; do
