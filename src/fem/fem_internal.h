@@ -91,6 +91,12 @@ typedef struct palp_fem_model {
   double factor_c0;   /* mass coefficient 1 / (beta dt^2) the factor was made with */
   int last_pcg;       /* CG iterations of the last solve */
   int full_newton;    /* refactor every iteration */
+  /* palp_fem_solve_static: 0 factors the tangent at every Newton iteration (exact
+   * steps); 1 solves each Newton step by preconditioned Krylov on the consistent
+   * tangent with the last factor, renewed as in time stepping (fem_model.c, solve_static) */
+  int static_reuse;
+  int in_static;      /* solve_static under static_reuse is running: shifted factors allowed */
+  int factor_shifted; /* the current factor is of K with a raised diagonal (a preconditioner only) */
   int pcg_refactor;   /* renew the factor when CG needed more than this (0: automatic) */
   /* automatic renewal (fem_model.c, renew_factor): step attempts and solves so far,
    * and their counts when the factor was made and when the current attempt began */
@@ -186,6 +192,11 @@ void palp_fem_solver_destroy(palp_fem_solver *s);
 /* Numeric Cholesky of the upper-triangle values, LDL^T if indefinite;
  * PALP_ESOLVER if singular. */
 int palp_fem_solver_factor(palp_fem_solver *s, const double *val);
+/* A positive definite factor for use as a preconditioner: of val if it is positive
+ * definite, else of val with its diagonal raised (*shifted = 1; solve with a
+ * Krylov method), else the exact LDL^T (fem_solver.c) */
+int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shifted);
+long palp_fem_solver_shifted_count(const palp_fem_solver *s);
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x);
 /* Background numeric LL^T of val (the same pattern) on a thread of its own while
  * solves go on with the current factor; at most one at a time. _finish joins it

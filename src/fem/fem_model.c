@@ -441,9 +441,21 @@ static int factor(palp_fem_model *m) {
     m->sec_wait += now_s() - tw;
   }
   const double t0 = now_s();
-  const int rc = palp_fem_solver_factor(m->solver, m->kval);
+  int shifted = 0;
+  const int rc = m->in_static ? palp_fem_solver_factor_spd(m->solver, m->kval, &shifted)
+                              : palp_fem_solver_factor(m->solver, m->kval);
+  m->factor_shifted = shifted;
   m->sec_factor += now_s() - t0;
   factor_made(m);
+  return rc;
+}
+
+/* A factor of this very K (LDL^T where indefinite), whatever the mode. */
+static int factor_exact(palp_fem_model *m) {
+  const int in_static = m->in_static;
+  m->in_static = 0;
+  const int rc = factor(m);
+  m->in_static = in_static;
   return rc;
 }
 
@@ -641,18 +653,21 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
     m->bg_attempt = m->attempts;
     m->renew = 0;
   }
+  int renewed = 0; /* static_reuse: a factor of this K (maybe shifted) was made for this solve */
   if (!fresh && (!m->factored || m->full_newton || m->last_pcg > limit || m->renew)) {
     int rc = factor(m);
     m->factored = rc == 0;
     if (rc) return rc;
     m->factor_c0 = kscale_c0;
-    fresh = 1;
+    fresh = !m->factor_shifted; /* a shifted factor is only a preconditioner */
+    renewed = 1;
   }
   int rc = 0;
   if (fresh) {
     rc = precond(m, b, x); /* the factor is of this very K */
     m->last_pcg = 0;
   } else {
+  krylov:;
     const double bn = sqrt(dot(b, b, n));
     memcpy(r, b, sizeof(double) * (size_t)n);
     memset(x, 0, sizeof(double) * (size_t)n);
@@ -711,8 +726,19 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
         }
       }
     }
-    if (!rc && !ok) { /* CG/GMRES stalled: renew the factor and solve directly */
+    if (!rc && !ok && m->in_static && !renewed) {
+      /* static_reuse, the old factor stalled: a factor of this K, shifted if it is
+       * indefinite (then the Krylov solve again), before the exact LDL^T */
       rc = factor(m);
+      m->factored = rc == 0;
+      if (rc) return rc;
+      m->factor_c0 = kscale_c0;
+      renewed = 1;
+      if (m->factor_shifted) goto krylov;
+      m->last_pcg = 0;
+      rc = precond(m, b, x);
+    } else if (!rc && !ok) { /* CG/GMRES stalled: renew the factor and solve directly */
+      rc = factor_exact(m);
       m->factored = rc == 0;
       if (rc) return rc;
       m->factor_c0 = kscale_c0;
@@ -725,6 +751,7 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
 }
 
 static int solve_static(palp_fem_model *m, const double *fext, int increments, double dt);
+static double newton_forcing(int it, double r, double scale, double tol);
 
 static void commit(palp_fem_model *m) {
   const size_t E = (size_t)m->mesh->element_count;
@@ -735,10 +762,13 @@ static void commit(palp_fem_model *m) {
 int palp_fem_solve_static(palp_fem_model *m, const double *fext, int increments, double dt) {
   if (increments < 1) increments = 1;
   /* Static solves serve verification: full Newton (a fresh factor every
-   * iteration, LDL^T where indefinite) for exact Newton steps. */
+   * iteration, LDL^T where indefinite) for exact Newton steps, unless static_reuse
+   * asks for the inexact steps of solve_static. */
   const int full = m->full_newton;
-  m->full_newton = 1;
+  m->full_newton = !m->static_reuse;
+  m->in_static = m->static_reuse;
   const int rc = solve_static(m, fext, increments, dt);
+  m->in_static = 0;
   m->full_newton = full;
   return rc;
 }
@@ -780,7 +810,20 @@ static int solve_static(palp_fem_model *m, const double *fext, int increments, d
         break;
       }
       if (it == m->max_newton) break;
-      rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0.1, 0, NULL);
+      if (m->static_reuse) {
+        /* Inexact Newton on the consistent tangent: CG (GMRES where the tangent or
+         * the factor is indefinite) preconditioned by the last factor, renewed when a
+         * solve costs more than a factorisation (newton_solve_). A run of nearby
+         * equilibria (a finger pressed depth by depth, its augmented-Lagrangian
+         * updates) changes the tangent little between solves, so most Newton steps
+         * cost tens of preconditioner solves (~30 ms each at level 4) instead of a
+         * factorisation (1 s, several as a simplicial LDL^T where indefinite). The
+         * converged state meets the same residual test. */
+        const double tol = m->rtol * scale + m->atol;
+        const double eta = newton_forcing(it, r, scale, tol);
+        rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, eta, newton_forcing(0, r, scale, tol), 1, NULL);
+      } else
+        rc = newton_solve(m, isinf(dt) ? -1.0 : -2.0 - dt, fmin(0.1, r / fmax(scale, 1e-300)), 0.1, 0, NULL);
       if (rc) return rc;
       m->newton_iterations++;
       for (size_t d = 0; d < nd; ++d) u[d] += m->du[d];
