@@ -285,7 +285,8 @@ int palp_fem_lesion_scale(const palp_fem_mesh *mesh, const palp_lesion *les, int
 
 int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *lesions,
                           int lesion_count, const double n[3], double radius, const double *depth, int count,
-                          double fmax, double *force, double *min_gap, long *newton, char *err, size_t errlen) {
+                          double fmax, double *force, double *min_gap, long *newton, palp_fem_finger_progress_fn progress,
+                          void *ud, char *err, size_t errlen) {
   palp_fem_model m;
   int rc = palp_fem_model_create(&m, mesh, cfg);
   if (!rc) rc = palp_fem_model_finalize(&m);
@@ -321,6 +322,7 @@ int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
     force[k] = f3[0][0] * n[0] + f3[0][1] * n[1] + f3[0][2] * n[2]; /* along the outward normal */
     if (min_gap) min_gap[k] = g;
     done = k + 1;
+    if (progress) progress(ud, k, depth[k], force[k], g, m.newton_iterations);
     if (force[k] > fmax) break;
   }
   if (newton) *newton = m.newton_iterations;

@@ -65,11 +65,16 @@ int palp_fem_lesion_scale(const palp_fem_mesh *mesh, const palp_lesion *lesions,
  * lesions, its centre at (R + radius - depth[k]) n for the dome radius R, each depth in
  * turn (palp_fem_finger_press). force[k] is the force on the finger along n [N],
  * min_gap[k] (may be NULL) the smallest gap. Stops after the first depth whose force
- * passes fmax [N]. Returns the depths done (0..count; fewer when a press failed, with
- * its reason in err) or -1 when the model cannot be built. */
+ * passes fmax [N]. progress (may be NULL) is called with ud after each depth: a fine
+ * level takes minutes a depth, and a run cut short keeps what it printed. Returns the
+ * depths done (0..count; fewer when a press failed, with its reason in err) or -1
+ * when the model cannot be built. */
+typedef void (*palp_fem_finger_progress_fn)(void *ud, int k, double depth, double force, double min_gap,
+                                             long newton);
 int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *lesions,
                           int lesion_count, const double n[3], double radius, const double *depth, int count,
-                          double fmax, double *force, double *min_gap, long *newton, char *err, size_t errlen);
+                          double fmax, double *force, double *min_gap, long *newton, palp_fem_finger_progress_fn progress,
+                          void *ud, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

@@ -1200,7 +1200,7 @@ static int cmd_calibrate(const options *o) {
                    o->finger_from, f->name);
       } else
         done = palp_fem_finger_curve(&s.fem, &mesh, f->lesion, f->lesion_count, nv, f->radius, f->depth, f->count,
-                                     INFINITY, f->force, NULL, &newton, err, sizeof err);
+                                     INFINITY, f->force, NULL, &newton, NULL, NULL, err, sizeof err);
       if (done != f->count) {
         palp_log_error(o->log, "--finger %s: the FEM finger failed: %s", f->name, err);
         bad = 1;

@@ -59,6 +59,20 @@ static int listed(const char *list, const char *name) {
   return 0;
 }
 
+/* Each FE depth as it is computed, to stderr, in the CSV's columns (the real-time
+ * ones empty): a level-4 curve takes hours, and a run stopped before its end (the
+ * CSV is written per site) keeps its depths in the log. */
+typedef struct fe_progress {
+  const char *site;
+  double t0;
+} fe_progress;
+
+static void fe_row(void *ud, int k, double depth, double force, double gap, long newton) {
+  const fe_progress *p = ud;
+  fprintf(stderr, "FE row %d: %s,%.6e,%.6e,,,,%.3e (%.0f s, %ld Newton iterations)\n", k + 1, p->site, depth, force,
+          gap, now_s() - p->t0, newton);
+}
+
 /* The FE curve of one site from a CSV written by this command (palp_eval_finger_csv_read),
  * checked to follow this command's depth sequence. */
 static int read_fe_curve(const char *path, const char *name, const double *depths, int max, double *F, double *G,
@@ -122,10 +136,11 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     long newton = 0;
     const double t0 = now_s();
     const double nv[3] = {n.x, n.y, n.z};
+    fe_progress prog = {sites[s].name, t0};
     err[0] = 0;
     const int nd = fe_from ? read_fe_curve(fe_from, sites[s].name, depths, maxd, F, G, err, errlen)
                            : palp_fem_finger_curve(&cfg, &mesh, &lump, sites[s].lesion, nv, 0.008, depths, maxd, max_force, F,
-                                                   G, &newton, err, errlen);
+                                                   G, &newton, fe_row, &prog, err, errlen);
     const double t1 = now_s();
     if (nd <= 0) {
       if (fe_from && nd == 0) snprintf(err, errlen, "%s has no rows of site %s", fe_from, sites[s].name);
