@@ -19,7 +19,9 @@
  * in seconds, e.g. for a parameter search or a test against stored references;
  * --depths N stops each FE curve after its first N depths (a cheap check that a
  * stored curve is still what the FEM computes); --no-force-table leaves out the
- * depth-for-force table, whose real-time curve to 30 mm is ~90% of the real-time cost.
+ * depth-for-force table, whose real-time curve to 30 mm is ~90% of the real-time cost
+ * (the two are independent: --no-force-table once meant "all depths" too, and a run
+ * asked for 14 depths went on to 18 mm).
  */
 #include <math.h>
 #include <stdio.h>
@@ -90,7 +92,7 @@ static int read_fe_curve(const char *path, const char *name, const double *depth
 
 int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene, const char *csv, const char *only,
                             double lesion_depth, double lesion_ratio, const char *fe_from, int max_depths,
-                            double max_force, char *err, size_t errlen) {
+                            int force_table, double max_force, char *err, size_t errlen) {
   setvbuf(stdout, NULL, _IOLBF, 0); /* a long run shows each site as it finishes */
   palp_fem_config cfg = *cfg0;
   cfg.max_newton = cfg.max_newton < 25 ? 25 : cfg.max_newton;
@@ -124,7 +126,7 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
   printf("FE: level %d (%d hexahedra), %s reading, relaxed (long-term) static%s%s; real-time: the scene's world (%s)\n",
          cfg.mesh.level, mesh.element_count, cfg.c10_reading == PALP_FEM_C10_LONG_TERM ? "long_term" : "instantaneous",
          fe_from ? ", taken from " : "", fe_from ? fe_from : "", scene->name);
-  const int maxd = max_depths > 0 && max_depths < MAXD ? max_depths : MAXD; /* < 0: all, no force table */
+  const int maxd = max_depths > 0 && max_depths < MAXD ? max_depths : MAXD; /* <= 0: all */
   double Fplain[MAXD] = {0}, Rplain[MAXD] = {0};
   int nplain = 0, rc = 0;
   const int all = !only || strcmp(only, "all") == 0; /* no --site: all */
@@ -168,9 +170,9 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
                 G[k]);
     }
     /* force-matched: the depth each model needs for 0.3, 1, 3, 5 N (the real-time
-     * curve continued to 30 mm, ~90% of the real-time cost: skipped with max_depths < 0;
+     * curve continued to 30 mm, ~90% of the real-time cost: skipped without force_table;
      * linear interpolation between held depths) */
-    if (max_depths >= 0) {
+    if (force_table) {
       double Fl[MAXD], Dl[MAXD];
       const int nl =
           palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, MAXD, 1.0, Fl, Dl, err, errlen);

@@ -11,5 +11,5 @@
  * issue's range; more to check a deep press, e.g. the exercises' deep band). */
 int palp_fem_finger_compare(const palp_fem_config *cfg, const palp_scene *scene, const char *csv, const char *only,
                             double lesion_depth, double lesion_ratio, const char *fe_from, int max_depths,
-                            double max_force, char *err, size_t errlen);
+                            int force_table, double max_force, char *err, size_t errlen);
 #endif

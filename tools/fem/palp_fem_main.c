@@ -54,7 +54,7 @@ static void usage(void) {
           "       palp-fem finger --scene SCENE.json [--level N] [--config FEM.json]\n"
           "                       [--reading long_term|instantaneous] [--out FILE.csv]\n"
           "                       [--site all|pole,45deg,60deg,70deg,pole_lesion] [--lesion-depth MM] [--lesion-ratio S]\n"
-          "                       [--fe-from FINGER.csv] [--depths N | --no-force-table] [--max-force N]\n"
+          "                       [--fe-from FINGER.csv] [--depths N] [--no-force-table] [--max-force N]\n"
           "  finger --fe-from: the FE curves from a CSV an earlier finger run wrote (only the real-time side\n"
           "  is computed); --depths N: each curve's first N depths only; --no-force-table: no depth-for-force\n"
           "  table (its real-time curve to 30 mm is most of the real-time cost); --max-force N: each FE curve\n"
@@ -182,7 +182,7 @@ static void summary(const palp_fem_config *cfg, const palp_scene *s, const palp_
 
 typedef struct opts {
   const char *scene, *config, *inp, *out, *cache_dir, *reading, *material, *dist, *site, *fe_from, *positional;
-  int level, frames, depths, no_cache, quiet;
+  int level, frames, depths, no_cache, quiet, no_force_table;
   double dt;
   double lesion_depth_mm, lesion_ratio; /* finger: the pole_lesion site's lesion */
   double max_force; /* finger: [N] each FE curve ends at the first depth past it */
@@ -251,8 +251,8 @@ static int parse(int argc, char **argv, opts *o) {
       else o->frames = (int)v;
       continue;
     }
-    if (strcmp(a, "--no-force-table") == 0) {
-      o->depths = -1;
+    if (strcmp(a, "--no-force-table") == 0) { /* independent of --depths (it once overrode it) */
+      o->no_force_table = 1;
       continue;
     }
     if (strcmp(a, "--no-cache") == 0) {
@@ -438,7 +438,7 @@ static int cmd_finger(const opts *o) {
   }
   err[0] = 0;
   if (palp_fem_finger_compare(&cfg, &scene, o->out, o->site, 1e-3 * o->lesion_depth_mm, o->lesion_ratio, o->fe_from,
-                              o->depths, o->max_force, err, sizeof err) != 0) {
+                              o->depths, !o->no_force_table, o->max_force, err, sizeof err) != 0) {
     palp_log_error(o->log, "finger: %s", err[0] ? err : "failed");
     return 1;
   }
