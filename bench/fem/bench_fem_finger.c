@@ -1,8 +1,10 @@
 /*
  * bench_fem_finger - the FE fingertip curve (palp_fem_finger_curve) by inexact
- * Newton on reused, shifted-where-indefinite factors (static_reuse, the default)
- * against full Newton (a factorisation per iteration; the baseline), alternated in
- * one process (docs/fem.md, "Inexact static Newton with shifted factors").
+ * Newton on reused, shifted-where-indefinite factors, each depth started from the
+ * secant prediction (static_reuse and predict, the default) against full Newton (a
+ * factorisation per iteration, each depth from the last state; the baseline),
+ * alternated in one process (docs/fem.md, "Inexact static Newton with shifted
+ * factors" and "The secant start").
  *
  *   bench_fem_finger [--level 2] [--runs 3] [--site-deg 45] [--depth-mm 6] [--material breast_tissue]
  *

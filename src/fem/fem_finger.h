@@ -35,6 +35,17 @@ typedef struct palp_fem_finger {
   double max_pressure; /* [Pa] */
   int active;       /* points in contact */
   long augmentations; /* multiplier updates so far */
+  /* predict 1: each new centre's Newton starts from the secant extrapolation of the
+   * last two converged states (u_k + a (u_k - u_k-1), a the ratio of the centre's
+   * moves; from u = 0 at the first contact), not from u_k, whose surface the moved
+   * sphere then overlaps by the whole step (fem_finger.c) */
+  int predict;
+  double *u_prev;   /* [ndof] the converged state before the last one (predict) */
+  double *u_save;   /* [ndof] scratch: the last converged state while a prediction is tried */
+  double c_prev[3]; /* [m] the centre u_prev was converged at */
+  int have_prev;
+  int saved;        /* u_save holds the last converged state (this press) */
+  long predictions, predictions_failed;
 } palp_fem_finger;
 
 /* faces NULL: every outer surface face of the mesh (palp_fem_surface_faces).
