@@ -23,7 +23,7 @@ PALP_REF_NOTE=TEXT adds a line to the header (how the reused curves were made).
     tests/data/make_breast_tissue_refs.py BUILD --level4 [FINGER_CSV... | compute]
 
 fem_level4_breast_tissue_finger.csv: the same at level 4 (`--level 4 --site pole,45deg,60deg,70deg,pole_lesion
---max-force 3`; 1-1.5 h of FE a site here), where level 3 is up to 17% stiff for a fingertip from 2 mm.
+--max-force 3`; 1-1.5 h of FE a site here until 2026-11-29, ~6 min to 12 mm since the FE finger's faster Newton), where level 3 is up to 17% stiff for a fingertip from 2 mm.
 
     tests/data/make_breast_tissue_refs.py BUILD --cyst [FINGER_CSV... | compute]
 
@@ -56,7 +56,7 @@ def write_d2(build, tmp):
 # What each reference is: its `palp-fem` command, the file it goes to, and what the header says of its FE.
 REFS = {
     "level3": (CMD, "tests/data/fem_level3_breast_tissue_finger.csv", "breast_tissue profile, level 3 (4,320 hexahedra)"),
-    # level 4 (10,496 hexahedra, ~1.5 h of FE a site here): where level 3 is not converged for a fingertip
+    # level 4 (10,496 hexahedra, ~1.5 h of FE a site here before 2026-11-29 (latest), ~6 min since): where level 3 is not converged for a fingertip
     # and, since 2026-11-29 (latest), the pole over the 10 mm 5x lesion (level 3 had been its only reference)
     "level4": (["finger", "--scene", SCENE, "--level", "4", "--site", "pole,45deg,60deg,70deg,pole_lesion", "--max-force", "3",
                 "--no-force-table"],
