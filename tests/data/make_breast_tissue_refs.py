@@ -30,6 +30,11 @@ fem_level4_breast_tissue_finger.csv: the same at level 4 (`--level 4 --site pole
 fem_level3_breast_tissue_cyst.csv: level 3 at the pole and over a 0.2x cyst where the 5x lesion is
 (`--site pole,pole_lesion --lesion-ratio 0.2 --max-force 6`); FINGER_CSV: the cyst's run first, then
 fem_level3_breast_tissue_finger.csv for the plain pole (each site from the first file that has it).
+
+    tests/data/make_breast_tissue_refs.py BUILD --cyst4 [FINGER_CSV... | compute]
+
+fem_level4_breast_tissue_cyst.csv: the same at level 4 (`--max-force 4.5`, to 12 mm); FINGER_CSV: the
+cyst's run first, then fem_level4_breast_tissue_finger.csv for the plain pole.
 """
 import os
 import sys
@@ -66,6 +71,12 @@ REFS = {
               "--max-force", "6", "--no-force-table"],
              "tests/data/fem_level3_breast_tissue_cyst.csv",
              "breast_tissue profile, level 3 (4,320 hexahedra), pole_lesion = a 0.2x cyst (10 mm, centre 10 mm deep)"),
+    # the same at level 4 (since 2026-11-29, latest: ~6 min of FE to 12 mm); FINGER_CSV: the cyst's run
+    # first, then fem_level4_breast_tissue_finger.csv for the plain pole
+    "cyst4": (["finger", "--scene", SCENE, "--level", "4", "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
+               "--max-force", "4.5", "--no-force-table"],
+              "tests/data/fem_level4_breast_tissue_cyst.csv",
+              "breast_tissue profile, level 4 (10,496 hexahedra), pole_lesion = a 0.2x cyst (10 mm, centre 10 mm deep)"),
 }
 
 
@@ -74,7 +85,7 @@ def main():
     tmp = tempfile.mkdtemp(prefix="palp_bt_refs_")
     args = sys.argv[2:]
     which = "level3"
-    if args and args[0] in ("--level4", "--cyst"):
+    if args and args[0] in ("--level4", "--cyst", "--cyst4"):
         which, args = args[0][2:], args[1:]
     else:
         write_d2(build, tmp)

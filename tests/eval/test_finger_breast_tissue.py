@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The exercise phantom's fingertip against the level-3 FE fingertip (issue 12).
 
-    test_finger_breast_tissue.py PALP_FEM SCENE FINGER_CSV [stored|guard [--level4 LEVEL4_CSV] [--cyst CYST_CSV]]
+    test_finger_breast_tissue.py PALP_FEM SCENE FINGER_CSV [stored|guard [--level4 LEVEL4_CSV] [--cyst CYST_CSV]
+                                                                 [--cyst4 CYST4_CSV]]
 
 SCENE is config/phantoms/dome.json (the breast-tissue set, config/params/breast_tissue.json);
 FINGER_CSV (tests/data/fem_level3_breast_tissue_finger.csv, written by
@@ -63,6 +64,10 @@ to its validated depth (measured 2026-11-29: FE -4.0..-5.5%, real-time -4.5..-5.
 points, ratio 0.94-1.07; the refitted set -4.5..-6.1%, within 1.6 points, ratio 0.99-1.10; src/lesion.c: the cyst strains as Eshelby's sphere, and the hinges see it.
 The series sum before it lost 15-21%, ratio 0.81-0.95, which fails both).
 
+With CYST4_CSV (tests/data/fem_level4_breast_tissue_cyst.csv, since 2026-11-29, latest: the same at
+level 4, its plain pole the level-4 one): the same checks (measured: FE -4.2..-6.5%, real-time
+-4.7..-6.1% from 1.5 mm to 12 mm, within 0.6 points, ratio 1.090-1.139).
+
 guard: the stored curves were made by today's fingertip FE code (PALP_FEM_CODE_VERSION and the
 sha256 of src/fem/fem_finger.c in the file's header equal today's), as eval_finger_level4_guard
 checks the long-term ones.
@@ -99,7 +104,7 @@ def validated(scene):
     return {round(e["polar_deg"], 6): e["depth_m"] for e in json.load(open(params))["validated"]["finger"]}
 
 
-def stored(tool, scene, data, level4=None, cyst=None):
+def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
     out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_bt_"), "finger.csv")
     r = run([tool, "finger", "--scene", scene, "--level", "3", "--site", "pole,45deg,60deg,70deg,pole_lesion",
              "--fe-from", data, "--no-force-table", "--max-force", "13", "--out", out])
@@ -157,6 +162,8 @@ def stored(tool, scene, data, level4=None, cyst=None):
         finer(tool, scene, level4, rows, table)
     if cyst:
         soft(tool, scene, cyst, table)
+    if cyst4:
+        soft(tool, scene, cyst4, table, "4")
 
 
 def finer(tool, scene, data, rows3, table):
@@ -217,9 +224,9 @@ def finer(tool, scene, data, rows3, table):
         lesion(rows, table, "level 4, ", gain_tol=0.04)
 
 
-def soft(tool, scene, data, table):
+def soft(tool, scene, data, table, level="3"):
     """A 0.2x cyst where the lesion is: the loss of force over it, both models against their plain pole."""
-    rows = lt.cyst_rows(tool, scene, data, "3", "6")
+    rows = lt.cyst_rows(tool, scene, data, level, "6")
     if not rows:
         return
     # from the plain pole's 0.3 N to its validated depth
@@ -252,7 +259,7 @@ def lesion(rows, table, label="", gain_tol=0.03):
     print(label + "pole_lesion: %d depths, lesion gain within %.1f points of the FE's" % (n, 100 * worst))
 
 
-def guard(tool, scene, data, level4=None, cyst=None):
+def guard(tool, scene, data, level4=None, cyst=None, cyst4=None):
     """Cheap: the stored curves were made by today's fingertip FE code (recomputing one level-3 site
     takes 13-45 min, a level-4 one ~1.5 h)."""
     lt.guard(tool, scene, data, "level-3 breast-tissue fingertip curves", "tests/data/make_breast_tissue_refs.py BUILD compute")
@@ -261,13 +268,17 @@ def guard(tool, scene, data, level4=None, cyst=None):
                  "tests/data/make_breast_tissue_refs.py BUILD --level4 compute")
     if cyst:
         lt.guard(tool, scene, cyst, "level-3 breast-tissue cyst curves", "tests/data/make_breast_tissue_refs.py BUILD --cyst compute")
+    if cyst4:
+        lt.guard(tool, scene, cyst4, "level-4 breast-tissue cyst curves",
+                 "tests/data/make_breast_tissue_refs.py BUILD --cyst4 compute")
 
 
 def main():
     tool, scene, data = sys.argv[1], sys.argv[2], sys.argv[3]
     mode = sys.argv[4] if len(sys.argv) > 4 else "stored"
     extra = dict(zip(sys.argv[5::2], sys.argv[6::2]))  # --level4 FILE, --cyst FILE
-    {"stored": stored, "guard": guard}[mode](tool, scene, data, extra.get("--level4"), extra.get("--cyst"))
+    {"stored": stored, "guard": guard}[mode](tool, scene, data, extra.get("--level4"), extra.get("--cyst"),
+                                             extra.get("--cyst4"))
     return 1 if common.failures else 0
 
 
