@@ -30,7 +30,7 @@
  * 0.18-0.27% per % of D, so the force is off by about 3%: a fifth of the 15-22%
  * compliance a hand can discriminate. A parameter set whose fingertip was validated
  * against the FE deeper may state the larger miss those presses reached
- * (palp_world_def.validated_hinge_error, breast tissue 0.227 rad); the world then counts
+ * (palp_world_def.validated_hinge_error, breast tissue 0.344 rad); the world then counts
  * from that. */
 #define PALP_HINGE_LINEAR_ERR_MAX 0.1
 

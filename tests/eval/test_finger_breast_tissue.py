@@ -43,14 +43,15 @@ With LEVEL4_CSV (tests/data/fem_level4_breast_tissue_finger.csv: level 4, 10,496
 - from the FE's 0.3 N to the validated depth, or the level-4 curve's end if shallower, real-time /
   level-4 FE within 15%, and the table no deeper than the first depth past 0.3 N where it leaves 15%
   (measured 2026-11-29, the set refitted with the fingertip's contact at the current positions:
-  pole 1.096-1.144, 45 deg 1.073-1.146, 60 deg 0.934-1.090, 70 deg 0.959-1.058, to the curves' end
-  at 14 / 12 / 12 / 12 mm, 6.231 / 5.01 / 5.98 / 8.8 N (70 deg to 7 mm, 3.0 N, until 2026-11-29, later;
-  45 and 60 deg to 10 mm, 3.7 / 4.2 N, until 2026-11-29, latest); 45 deg at 6 mm within 0.4 point of the bound.
+  pole 1.096-1.144, 45 deg 1.073-1.146, 60 deg 0.934-1.095, 70 deg 0.870-1.058, to the curves' end
+  at 14 mm at every site, 6.231 / 6.57 / 7.98 / 12.14 N (70 deg to 7 mm, 3.0 N, until 2026-11-29, later;
+  45 and 60 deg to 10 mm and 70 deg to 12 mm until 2026-11-29, latest); 45 deg at 6 mm within 0.4 point
+  of the bound, 70 deg at 14 mm within 2 points (0.870).
   The set before, read with the contact at the free positions: pole 1.039-1.133, 45 deg 1.043-1.127,
   60 deg 0.933-1.140, 70 deg 1.007-1.098; read soundly, up to 1.198 at the pole, which fails; with the
   rim clamped 70 deg was 1.155 at 1.5 mm, which fails);
 - the table claims no site deeper than its level-4 curve reaches (since 2026-11-29 it rests on
-  level 4: 14 / 12 / 12 / 12 mm; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
+  level 4: 14 mm at every site; the level-3 range above, to 14 / 15.6 / 18 / 10 mm, is what it
   claimed before, and at the level-4 curves' ends the set already stands at 1.11-1.14 of them);
 - over the lesion at level 4 (since 2026-11-29, latest; level 3 had been its only reference): as over
   it at level 3 (below), the forces within 15% (measured 1.071-1.143 from 1.5 mm), the gain within 4

@@ -6,7 +6,7 @@
  * - palp_world_validated_depth: the table's values at its angles, linear in between, the
  *   end values beyond, +inf without a table (expected values by hand from the table).
  * - The shipped breast-tissue set (config/phantoms/dome.json) carries its table (pole,
- *   14 mm, 45 and 60 deg 12 mm (10 mm until their level-4 curves were extended), 70 deg 12 mm: the level-4 FE comparison of 2026-11-29, which
+ *   14 mm, 45, 60 and 70 deg 14 mm (10, 10 and 7 mm until their level-4 curves were extended): the level-4 FE comparison of 2026-11-29, which
  *   eval_finger_breast_tissue checks against the stored curves), and a logged scene
  *   (palp_scene_to_json) gives it back bit for bit.
  * - Bad tables are refused with a message naming the field.
@@ -61,9 +61,9 @@ static void test_scene(void) {
   CHECK(sc.world.validated_count == 4, "the breast-tissue set states 4 sites (%d)", sc.world.validated_count);
   CHECK_NEAR(sc.world.validated_depth[0], 0.014, 1e-15, "pole 14 mm");
   CHECK_NEAR(sc.world.validated_polar[1], 45.0 * PI / 180.0, 1e-15, "second site at 45 deg");
-  CHECK_NEAR(sc.world.validated_depth[1], 0.012, 1e-15, "45 deg 12 mm");
-  CHECK_NEAR(sc.world.validated_depth[2], 0.012, 1e-15, "60 deg 12 mm");
-  CHECK_NEAR(sc.world.validated_depth[3], 0.012, 1e-15, "70 deg 12 mm");
+  CHECK_NEAR(sc.world.validated_depth[1], 0.014, 1e-15, "45 deg 14 mm");
+  CHECK_NEAR(sc.world.validated_depth[2], 0.014, 1e-15, "60 deg 14 mm");
+  CHECK_NEAR(sc.world.validated_depth[3], 0.014, 1e-15, "70 deg 14 mm");
   char *js = palp_scene_to_json(&sc);
   CHECK(js && palp_scene_parse(js, &back, err, sizeof err) == 0, "the logged scene parses again: %s", err);
   if (js) {
