@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "../bench_util.h"
 #include "eval.h"
 #include "eval_fem.h"
 
@@ -25,21 +26,7 @@
 #define PALP_CONFIG_DIR "config"
 #endif
 
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static double median(double *v, int n) {
-  qsort(v, (size_t)n, sizeof *v, cmp);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+static double now_s(void) { return palp_bench_clock_s(CLOCK_MONOTONIC); }
 
 int main(int argc, char **argv) {
   const char *scene_path = PALP_CONFIG_DIR "/paper_step.json";
@@ -128,7 +115,7 @@ int main(int argc, char **argv) {
       palp_eval_record_destroy(&rt);
       palp_eval_record_destroy(&ref);
     }
-    const double m_rt = median(t_rt, repeats), m_w = median(t_warm, repeats), m_s = median(t_stats, repeats);
+    const double m_rt = palp_bench_median(t_rt, repeats), m_w = palp_bench_median(t_warm, repeats), m_s = palp_bench_median(t_stats, repeats);
     printf("%-8s %8.2f [%5.2f,%6.2f] %12.2f %8.3f [%5.3f,%6.3f] %8.3f [%5.3f,%6.3f] %12.2e\n", palp_eval_roman(d),
            1e3 * m_rt, 1e3 * t_rt[0], 1e3 * t_rt[repeats - 1], t_cold, 1e3 * m_w, 1e3 * t_warm[0],
            1e3 * t_warm[repeats - 1], 1e3 * m_s, 1e3 * t_stats[0], 1e3 * t_stats[repeats - 1], m_w / t_cold);

@@ -17,23 +17,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "../bench_util.h"
 #include "fem_finger.h"
-
-static double clock_s(clockid_t id) {
-  struct timespec t;
-  clock_gettime(id, &t);
-  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static int cmp(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static double median(double *v, int n) {
-  qsort(v, (size_t)n, sizeof *v, cmp);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 int main(int argc, char **argv) {
   int level = 2, runs = 3;
@@ -84,11 +69,11 @@ int main(int argc, char **argv) {
     for (int mode = 0; mode < 2 && !rc; ++mode) { /* 0: full Newton (baseline), 1: static_reuse */
       palp_fem_config c = cfg;
       c.full_newton = mode == 0;
-      const double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
+      const double w0 = palp_bench_clock_s(CLOCK_MONOTONIC), c0 = palp_bench_clock_s(CLOCK_PROCESS_CPUTIME_ID);
       const int done = palp_fem_finger_curve(&c, &mesh, NULL, 0, n, 0.008, depth, nd, INFINITY, F[mode], NULL,
                                              &newton[mode], NULL, NULL, err, sizeof err);
-      wall[mode][r] = clock_s(CLOCK_MONOTONIC) - w0;
-      cpu[mode][r] = clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
+      wall[mode][r] = palp_bench_clock_s(CLOCK_MONOTONIC) - w0;
+      cpu[mode][r] = palp_bench_clock_s(CLOCK_PROCESS_CPUTIME_ID) - c0;
       if (done != nd) {
         fprintf(stderr, "bench_fem_finger: %s: %s\n", mode ? "static_reuse" : "full Newton", err);
         rc = 1;
@@ -101,8 +86,8 @@ int main(int argc, char **argv) {
         for (int k = 0; k < nd; ++k) maxdiff = fmax(maxdiff, fabs(F[1][k] / F[0][k] - 1.0));
     }
   if (!rc) {
-    const double wf = median(wall[0], runs), wr = median(wall[1], runs);
-    const double cf = median(cpu[0], runs), cr = median(cpu[1], runs);
+    const double wf = palp_bench_median(wall[0], runs), wr = palp_bench_median(wall[1], runs);
+    const double cf = palp_bench_median(cpu[0], runs), cr = palp_bench_median(cpu[1], runs);
     printf("median wall: full Newton %.2f s, static_reuse %.2f s: ratio %.2f (x%.2f faster)\n", wf, wr, wr / wf, wf / wr);
     printf("median CPU:  full Newton %.2f s, static_reuse %.2f s: ratio %.2f\n", cf, cr, cr / cf);
     printf("largest force difference between the modes: %.2e (relative)\n", maxdiff);
