@@ -206,11 +206,11 @@ static int predict(palp_fem_model *m, palp_fem_finger *f, const double c_k[3], c
   if (!f->predict) return 0;
   if (!f->u_prev && !(f->u_prev = calloc(nd, sizeof(double)))) return 0;
   if (!f->u_save && !(f->u_save = malloc(nd * sizeof(double)))) return 0;
-  if (!f->have_prev) { /* the first press: from the untouched state at the first contact */
-    memset(f->u_prev, 0, nd * sizeof(double));
+  if (!f->have_prev) { /* the first press: nothing to extrapolate from yet */
+    memcpy(f->u_prev, m->u, nd * sizeof(double)); /* the state at c_k (0 for a curve's first contact) */
     f->have_prev = 1;
     for (int i = 0; i < 3; ++i) f->c_prev[i] = c_k[i];
-    return 0; /* u_k = u_prev = 0: nothing to extrapolate */
+    return 0;
   }
   double s0 = 0.0, s1 = 0.0;
   for (int i = 0; i < 3; ++i) {
@@ -261,7 +261,7 @@ int palp_fem_finger_press(palp_fem_model *m, palp_fem_finger *f, const double (*
       return rc;
     }
     if (f->predict && f->have_prev && f->u_prev) { /* the secant's older end moves up to u_k */
-      if (f->saved) memcpy(f->u_prev, f->u_save, nd * sizeof(double)); /* else u_k = u_prev = 0 */
+      if (f->saved) memcpy(f->u_prev, f->u_save, nd * sizeof(double)); /* else u_prev is u_k already */
       for (int i = 0; i < 3; ++i) f->c_prev[i] = c_k[i];
     }
     /* Uzawa: the multipliers take the converged pressure until the penetration
@@ -373,7 +373,7 @@ int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh,
     /* With the secant start, a step of the depth longer than 1 mm is pressed through
      * intermediate depths (not reported): past ~8 mm a 2 mm step's prediction missed
      * and its solve from the last state ran into the indefinite tangents the start
-     * avoids (45 deg, level 4, 8 -> 10 mm: over 10 min of simplicial LDL^T). The
+     * avoids (45 deg, level 4, 8 -> 10 mm: over 18 min of simplicial LDL^T). The
      * reported depth's equilibrium does not depend on the path (relaxed, frictionless). */
     const int parts = f.predict && depth[k] - d_last > 1e-3 ? (int)ceil((depth[k] - d_last) / 1e-3 - 1e-9) : 1;
     double f3[1][3], g = 0.0;

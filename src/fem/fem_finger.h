@@ -37,7 +37,7 @@ typedef struct palp_fem_finger {
   long augmentations; /* multiplier updates so far */
   /* predict 1: each new centre's Newton starts from the secant extrapolation of the
    * last two converged states (u_k + a (u_k - u_k-1), a the ratio of the centre's
-   * moves; from u = 0 at the first contact), not from u_k, whose surface the moved
+   * moves; the first press starts from its own state), not from u_k, whose surface the moved
    * sphere then overlaps by the whole step (fem_finger.c) */
   int predict;
   double *u_prev;   /* [ndof] the converged state before the last one (predict) */
