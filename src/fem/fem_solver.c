@@ -189,9 +189,10 @@ static int factor_shifted_once(palp_fem_solver *s, const double *val, double sig
  * run of indefinite tangents does not pay for the failed attempts every time).
  * Why not the exact LDL^T: CHOLMOD's LDL^T of this pattern is simplicial (no dense
  * kernels), 8x slower than the supernodal LL^T at level 3 (2.2 s against 0.26 s)
- * and more at level 4, and the finger's tangent is indefinite at most depths (the
- * rotation of the contact normal, -p/r (I - n n^T), beside the soft gel's
- * tangential stiffness). The shifted factor is not of A, so the caller solves with
+ * and more at level 4, and a finger pressed from the last depth's state meets
+ * indefinite tangents in most of its first iterates (the surface overlapped by the
+ * whole depth step; dropping the contact normal's rotation term did not make them
+ * definite; the secant start, fem_finger.c, avoids most). The shifted factor is not of A, so the caller solves with
  * a Krylov method (*shifted = 1). Only if no shift up to 1 gives a positive
  * definite matrix does it fall back to palp_fem_solver_factor (*shifted = 0). */
 int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shifted) {

@@ -62,7 +62,7 @@ static int listed(const char *list, const char *name) {
 }
 
 /* Each FE depth as it is computed, to stderr, in the CSV's columns (the real-time
- * ones empty): a level-4 curve takes hours, and a run stopped before its end (the
+ * ones empty): a level-4 curve takes minutes (hours with "full_newton"), and a run stopped before its end (the
  * CSV is written per site) keeps its depths in the log. */
 typedef struct fe_progress {
   const char *site;
