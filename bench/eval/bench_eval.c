@@ -115,7 +115,8 @@ int main(int argc, char **argv) {
       palp_eval_record_destroy(&rt);
       palp_eval_record_destroy(&ref);
     }
-    const double m_rt = palp_bench_median(t_rt, repeats), m_w = palp_bench_median(t_warm, repeats), m_s = palp_bench_median(t_stats, repeats);
+    const double m_rt = palp_bench_median(t_rt, repeats), m_w = palp_bench_median(t_warm, repeats);
+    const double m_s = palp_bench_median(t_stats, repeats);
     printf("%-8s %8.2f [%5.2f,%6.2f] %12.2f %8.3f [%5.3f,%6.3f] %8.3f [%5.3f,%6.3f] %12.2e\n", palp_eval_roman(d),
            1e3 * m_rt, 1e3 * t_rt[0], 1e3 * t_rt[repeats - 1], t_cold, 1e3 * m_w, 1e3 * t_warm[0],
            1e3 * t_warm[repeats - 1], 1e3 * m_s, 1e3 * t_stats[0], 1e3 * t_stats[repeats - 1], m_w / t_cold);

@@ -55,7 +55,8 @@ int main(int argc, char **argv) {
     return 1;
   }
   /* palp-fem finger's depth sequence, up to depth_mm */
-  static const double seq[] = {0.25, 0.5, 0.75, 1, 1.5, 2, 2.5, 3, 4, 5, 6, 7, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30};
+  static const double seq[] = {0.25, 0.5, 0.75, 1,  1.5, 2,  2.5, 3,  4,  5,  6,  7,
+                               8,    10,  12,   14, 16,  18, 20,  22, 24, 26, 28, 30};
   double depth[24];
   int nd = 0;
   for (int k = 0; k < 24 && seq[k] <= depth_mm + 1e-9; ++k) depth[nd++] = 1e-3 * seq[k];
@@ -88,7 +89,8 @@ int main(int argc, char **argv) {
   if (!rc) {
     const double wf = palp_bench_median(wall[0], runs), wr = palp_bench_median(wall[1], runs);
     const double cf = palp_bench_median(cpu[0], runs), cr = palp_bench_median(cpu[1], runs);
-    printf("median wall: full Newton %.2f s, static_reuse %.2f s: ratio %.2f (x%.2f faster)\n", wf, wr, wr / wf, wf / wr);
+    printf("median wall: full Newton %.2f s, static_reuse %.2f s: ratio %.2f (x%.2f faster)\n", wf, wr, wr / wf,
+           wf / wr);
     printf("median CPU:  full Newton %.2f s, static_reuse %.2f s: ratio %.2f\n", cf, cr, cr / cf);
     printf("largest force difference between the modes: %.2e (relative)\n", maxdiff);
   }

@@ -338,8 +338,8 @@ int palp_fem_lesion_scale(const palp_fem_mesh *mesh, const palp_lesion *les, int
 
 int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *lesions,
                           int lesion_count, const double n[3], double radius, const double *depth, int count,
-                          double fmax, double *force, double *min_gap, long *newton, palp_fem_finger_progress_fn progress,
-                          void *ud, char *err, size_t errlen) {
+                          double fmax, double *force, double *min_gap, long *newton,
+                          palp_fem_finger_progress_fn progress, void *ud, char *err, size_t errlen) {
   palp_fem_model m;
   int rc = palp_fem_model_create(&m, mesh, cfg);
   if (!rc) rc = palp_fem_model_finalize(&m);

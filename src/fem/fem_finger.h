@@ -84,8 +84,8 @@ typedef void (*palp_fem_finger_progress_fn)(void *ud, int k, double depth, doubl
                                              long newton);
 int palp_fem_finger_curve(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_lesion *lesions,
                           int lesion_count, const double n[3], double radius, const double *depth, int count,
-                          double fmax, double *force, double *min_gap, long *newton, palp_fem_finger_progress_fn progress,
-                          void *ud, char *err, size_t errlen);
+                          double fmax, double *force, double *min_gap, long *newton,
+                          palp_fem_finger_progress_fn progress, void *ud, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }
