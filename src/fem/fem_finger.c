@@ -200,15 +200,16 @@ void palp_fem_finger_attach(palp_fem_finger *f, palp_fem_model *m) {
  * 10 MPa), and the solve spends its first iterations, and most of its indefinite
  * tangents, pulling the surface back out; the extrapolated state is near the new
  * equilibrium (the relaxed solid's path is smooth). The converged state does not
- * depend on the start (the same residual test). Returns 1 if a prediction was made. */
-static int predict(palp_fem_model *m, palp_fem_finger *f, const double c_k[3], const double c_next[3]) {
+ * depend on the start (the same residual test). Returns 1 if m->u was extrapolated;
+ * *saved tells whether u_save holds u_k (every press but the first). */
+static int predict(palp_fem_model *m, palp_fem_finger *f, const double c_k[3], const double c_next[3], int *saved) {
   const size_t nd = (size_t)m->ndof;
+  *saved = 0;
   if (!f->predict) return 0;
-  if (!f->u_prev && !(f->u_prev = calloc(nd, sizeof(double)))) return 0;
   if (!f->u_save && !(f->u_save = malloc(nd * sizeof(double)))) return 0;
-  if (!f->have_prev) { /* the first press: nothing to extrapolate from yet */
+  if (!f->u_prev) { /* the first press: nothing to extrapolate from yet */
+    if (!(f->u_prev = malloc(nd * sizeof(double)))) return 0;
     memcpy(f->u_prev, m->u, nd * sizeof(double)); /* the state at c_k (0 for a curve's first contact) */
-    f->have_prev = 1;
     for (int i = 0; i < 3; ++i) f->c_prev[i] = c_k[i];
     return 0;
   }
@@ -218,7 +219,7 @@ static int predict(palp_fem_model *m, palp_fem_finger *f, const double c_k[3], c
     s1 += (c_next[i] - c_k[i]) * (c_next[i] - c_k[i]);
   }
   memcpy(f->u_save, m->u, nd * sizeof(double)); /* u_k, the secant's next older end */
-  f->saved = 1;
+  *saved = 1;
   if (!(s0 > 0.0)) return 0;
   const double a = fmin(4.0, sqrt(s1 / s0));
   for (size_t d = 0; d < nd; ++d)
@@ -233,15 +234,14 @@ int palp_fem_finger_press(palp_fem_model *m, palp_fem_finger *f, const double (*
   const size_t nd = (size_t)m->ndof;
   for (int k = 0; k < count; ++k) {
     const double c_k[3] = {prev[0], prev[1], prev[2]};
-    f->saved = 0;
-    int predicted = predict(m, f, c_k, centers[k]);
+    int saved;
+    int predicted = predict(m, f, c_k, centers[k], &saved);
     /* sub-steps from prev to centers[k]: 1, then 2, 4, ... on failure */
     int rc = PALP_OK;
     for (int level = 0; level <= 6; ++level) {
       if (level == 1 && predicted) { /* the prediction did not converge: from u_k, as without one */
         memcpy(m->u, f->u_save, nd * sizeof(double));
         predicted = 0;
-        f->predictions_failed++;
         level = 0;
       }
       const int parts = 1 << level;
@@ -260,8 +260,8 @@ int palp_fem_finger_press(palp_fem_model *m, palp_fem_finger *f, const double (*
       if (predicted) memcpy(m->u, f->u_save, nd * sizeof(double));
       return rc;
     }
-    if (f->predict && f->have_prev && f->u_prev) { /* the secant's older end moves up to u_k */
-      if (f->saved) memcpy(f->u_prev, f->u_save, nd * sizeof(double)); /* else u_prev is u_k already */
+    if (saved) { /* the secant's older end moves up to u_k (after the first press u_prev is u_k already) */
+      memcpy(f->u_prev, f->u_save, nd * sizeof(double));
       for (int i = 0; i < 3; ++i) f->c_prev[i] = c_k[i];
     }
     /* Uzawa: the multipliers take the converged pressure until the penetration

@@ -40,12 +40,10 @@ typedef struct palp_fem_finger {
    * moves; the first press starts from its own state), not from u_k, whose surface the moved
    * sphere then overlaps by the whole step (fem_finger.c) */
   int predict;
-  double *u_prev;   /* [ndof] the converged state before the last one (predict) */
+  double *u_prev;   /* [ndof] the converged state before the last one (predict; NULL before the first press) */
   double *u_save;   /* [ndof] scratch: the last converged state while a prediction is tried */
   double c_prev[3]; /* [m] the centre u_prev was converged at */
-  int have_prev;
-  int saved;        /* u_save holds the last converged state (this press) */
-  long predictions, predictions_failed;
+  long predictions; /* starts extrapolated so far */
 } palp_fem_finger;
 
 /* faces NULL: every outer surface face of the mesh (palp_fem_surface_faces).
