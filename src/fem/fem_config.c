@@ -9,7 +9,8 @@
  *
  * JSON form (every key optional; unknown keys are errors):
  * { "mesh": {"level": 2, "radius": 0.04, "membrane_thickness": 0.002,
- *            "core_fraction": 0.5, "membrane_layers": 0},
+ *            "core_fraction": 0.5, "membrane_layers": 0,
+ *            "grading": 1, "grading_polar_deg": 0},
  *   "inp": "phantom.inp",
  *   "membrane": {"density": 950, "c10": 700.3e3, "d1": 1e-9,
  *                "prony": [{"g": 0.9, "tau": 0.002}, {"g": 0.09, "tau": 0.005}]},
@@ -266,7 +267,7 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   int rc = only_keys(root, keys, "", err, errlen);
   const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
   if (!rc && mesh) {
-    static const char *const mk[] = {"level", "radius", "membrane_thickness", "core_fraction", "membrane_layers", NULL};
+    static const char *const mk[] = {"level", "radius", "membrane_thickness", "core_fraction", "membrane_layers", "grading", "grading_polar_deg", NULL};
     if (!cJSON_IsObject(mesh)) {
       snprintf(err, errlen, "mesh: expected an object");
       rc = PALP_EPARSE;
@@ -277,6 +278,8 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
     if (!rc) rc = number(mesh, "membrane_thickness", "mesh.", &cfg->mesh.membrane_thickness, err, errlen);
     if (!rc) rc = number(mesh, "core_fraction", "mesh.", &cfg->mesh.core_fraction, err, errlen);
     if (!rc) rc = integer(mesh, "membrane_layers", "mesh.", &cfg->mesh.membrane_layers, err, errlen);
+    if (!rc) rc = number(mesh, "grading", "mesh.", &cfg->mesh.grading, err, errlen);
+    if (!rc) rc = number(mesh, "grading_polar_deg", "mesh.", &cfg->mesh.grading_polar_deg, err, errlen);
   }
   if (!rc) rc = string(root, "inp", "", cfg->inp_path, sizeof cfg->inp_path, err, errlen);
   const cJSON *o;

@@ -102,12 +102,23 @@ int palp_fem_mesh_standard_sets(palp_fem_mesh *m) {
   return PALP_OK;
 }
 
+/* The lattice coordinate s in [lo, hi] mapped about s0 (palp_fem_mesh_def.grading):
+ * g(s) = s0 + (s - s0) (alpha + (1 - alpha) u^2), u = |s - s0| / |end - s0|; g(lo) = lo,
+ * g(s0) = s0, g(hi) = hi, g' = alpha + 3 (1 - alpha) u^2 > 0. */
+static double grade(double s, double s0, double lo, double hi, double alpha) {
+  const double span = s >= s0 ? hi - s0 : s0 - lo;
+  if (!(span > 0.0)) return s;
+  const double u = fabs(s - s0) / span;
+  return s0 + (s - s0) * (alpha + (1.0 - alpha) * u * u);
+}
+
 int palp_fem_mesh_create(const palp_fem_mesh_def *def, palp_fem_mesh *out) {
   memset(out, 0, sizeof *out);
   const int L = def->level;
   if (L < 1 || L > 16 || !(def->radius > 0.0) || !(def->membrane_thickness > 0.0) ||
       !(def->membrane_thickness < 0.5 * def->radius) || !(def->core_fraction > 0.05) ||
-      !(def->core_fraction < 0.9) || def->membrane_layers < 0 || def->membrane_layers > 32)
+      !(def->core_fraction < 0.9) || def->membrane_layers < 0 || def->membrane_layers > 32 ||
+      !(def->grading >= 0.0 && def->grading <= 1.0) || !(def->grading_polar_deg >= 0.0 && def->grading_polar_deg <= 90.0))
     return PALP_EINVAL;
   const int n = 2 * L, Lg = 2 * L;
   const int Lm = def->membrane_layers ? def->membrane_layers : (L - 1 > 2 ? L - 1 : 2);
@@ -138,11 +149,21 @@ int palp_fem_mesh_create(const palp_fem_mesh_def *def, palp_fem_mesh *out) {
     palp_fem_mesh_destroy(out);
     return PALP_ENOMEM;
   }
+  const double alpha = def->grading, th = def->grading_polar_deg / 45.0; /* th in [0, 2] */
+  const int graded = alpha > 0.0 && alpha < 1.0, side = th >= 1.0;
+  /* the spot's lattice coordinates: on the top face dir = (tan(pi/4 s), 0, 1), polar
+   * angle pi/4 s; on the x side dir = (1, 0, tan(pi/4 s)), polar angle pi/2 - pi/4 s */
+  const double c0[3] = {side ? 1.0 : th, 0.0, side ? 2.0 - th : 1.0};
   int node = 0;
   for (int i = -n; i <= n; ++i)
     for (int j = -n; j <= n; ++j)
       for (int k = 0; k <= n; ++k) {
-        const double c[3] = {(double)i / n, (double)j / n, (double)k / n};
+        double c[3] = {(double)i / n, (double)j / n, (double)k / n};
+        if (graded) {
+          c[0] = grade(c[0], c0[0], -1.0, 1.0, alpha);
+          c[1] = grade(c[1], 0.0, -1.0, 1.0, alpha);
+          if (side) c[2] = grade(c[2], c0[2], 0.0, 1.0, alpha);
+        }
         id[LAT(i, j, k) * (size_t)(Ls + 1)] = node;
         for (int d = 0; d < 3; ++d) out->x[node][d] = a * c[d];
         ++node;

@@ -61,6 +61,18 @@ typedef struct palp_fem_mesh_def {
   double core_fraction;      /* [-], 0.5 */
   int level;                 /* >= 1, default 2 */
   int membrane_layers;       /* >= 2; 0 picks max(2, level - 1) */
+  /* Local refinement for the fingertip (docs/fem.md, "The fingertip's mesh"): the
+   * element size at one spot of the surface against the uniform lattice's, in (0, 1];
+   * 0 or 1: the uniform lattice, bit for bit. The spot is at grading_polar_deg in the
+   * x-z plane (0 the pole; the fingertip sites' 45, 60, 70 deg). Each lattice coordinate
+   * s is mapped about the spot's s0 by g(s) = s0 + (s - s0) (alpha + (1 - alpha) u^2),
+   * u = |s - s0| / (the interval's end - s0): g keeps the ends and s0, g' = alpha at s0
+   * and 3 - 2 alpha at the ends, so cells at the spot shrink by alpha and the farthest
+   * grow by up to 3 - 2 alpha. x and y are graded (y about 0); z too when the spot is on
+   * the cube's side (>= 45 deg). Why: the skin's bending length under a fingertip
+   * (~3 mm) is below a uniform level-4 cell (3.9 mm). */
+  double grading;
+  double grading_polar_deg;
 } palp_fem_mesh_def;
 
 palp_fem_mesh_def palp_fem_mesh_default_def(void);
