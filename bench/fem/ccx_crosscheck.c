@@ -19,6 +19,10 @@
  * into *CLOAD dead loads scaled to exactly F. The pole's uz is read from ccx's .dat file.
  * Built, not run by CTest (level 3 takes minutes in ccx); the test fem_ccx runs levels 1 and 2.
  *
+ * --cap-area loads a smaller cap (a fingertip's contact: 0.5 cm^2 is a 4 mm radius) and --grading
+ * refines the mesh of both codes at the pole (palp_fem_mesh_def.grading): how far a fingertip's
+ * response is from converged on each code's elements (docs/fem.md, "The fingertip's mesh").
+ *
  * --palp-only skips CalculiX (the project's side alone reaches levels 5-7, where a quadratic ccx
  * deck would be 3-7 times larger than the largest it has solved). --ccx-inc sets ccx's initial
  * and largest load increment (default 0.25): at level 4 its Newton diverged in the third of
@@ -278,7 +282,7 @@ static int read_top_uz(const char *dat, double *uz, double *time) {
 
 int main(int argc, char **argv) {
   const char *levels = "1,2", *profile = "paper_long_term", *dir = "out/ccx", *ccx = "ccx";
-  double force = 3.0, inc = 0.25, timeout = 0.0;
+  double force = 3.0, inc = 0.25, timeout = 0.0, area = 5.2e-4, grading = 1.0;
   int no_project = 0, no_ccx = 0, quarter = 0, palp_inc = 4;
   for (int i = 1; i < argc; ++i) {
     if (i + 1 < argc && !strcmp(argv[i], "--levels")) levels = argv[++i];
@@ -292,9 +296,11 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--palp-only")) no_ccx = 1;
     else if (!strcmp(argv[i], "--ccx-quarter")) quarter = 1;
     else if (i + 1 < argc && !strcmp(argv[i], "--palp-inc")) palp_inc = atoi(argv[++i]);
+    else if (i + 1 < argc && !strcmp(argv[i], "--cap-area")) area = atof(argv[++i]);
+    else if (i + 1 < argc && !strcmp(argv[i], "--grading")) grading = atof(argv[++i]);
     else {
       fprintf(stderr, "usage: ccx_crosscheck [--levels 1,2,3] [--profile NAME] [--force N] [--dir DIR] [--ccx PATH] "
-                      "[--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter] [--palp-inc K]\n");
+                      "[--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter] [--palp-inc K] [--cap-area M2] [--grading ALPHA]\n");
       return 2;
     }
   }
@@ -304,6 +310,10 @@ int main(int argc, char **argv) {
   }
   if (!(inc > 0.0) || inc > 1.0 || timeout < 0.0 || timeout != timeout || palp_inc < 1 || palp_inc > 1000) {
     fprintf(stderr, "ccx_crosscheck: --ccx-inc must be in (0, 1], --ccx-timeout >= 0 s, --palp-inc in 1..1000\n");
+    return 2;
+  }
+  if (!(area >= 1e-6 && area <= 5.2e-4) || !(grading > 0.0 && grading <= 1.0)) {
+    fprintf(stderr, "ccx_crosscheck: --cap-area must be in [1e-6, 5.2e-4] m^2, --grading in (0, 1]\n");
     return 2;
   }
   if (!(force > 0.0) || force > 100.0) {
@@ -319,8 +329,8 @@ int main(int argc, char **argv) {
     fprintf(stderr, "ccx_crosscheck: %s\n", err);
     return 2;
   }
-  printf("distribution II at the pole, %.3g N over 5.2 cm^2, relaxed, profile %s (gel C10 %.4g Pa, D1 %.3g 1/Pa; "
-         "membrane C10 %.4g Pa)\n", force, profile, relaxed_c10(&cfg, &cfg.gel), cfg.gel.d1,
+  printf("a cap at the pole (5.2 cm^2: distribution II), %.3g N over %.3g cm^2, mesh grading %.2g at the pole, relaxed, "
+         "profile %s (gel C10 %.4g Pa, D1 %.3g 1/Pa; membrane C10 %.4g Pa)\n", force, 1e4 * area, grading, profile, relaxed_c10(&cfg, &cfg.gel), cfg.gel.d1,
          relaxed_c10(&cfg, &cfg.membrane));
   /* the first eight columns are what tests/fem/test_ccx.sh reads */
   printf("%5s %8s %14s %8s %8s %14s %8s %9s %8s %8s %7s\n", "level", "hexa", "palp uz [mm]", "wall s", "nodes20",
@@ -336,6 +346,7 @@ int main(int argc, char **argv) {
       return 2;
     }
     cfg.mesh.level = L;
+    cfg.mesh.grading = grading;
     palp_fem_mesh mesh;
     if (palp_fem_mesh_create(&cfg.mesh, &mesh)) return 1;
     double uz_p = NAN, tp = 0, mb_p = NAN, mb_c = NAN;
@@ -345,7 +356,7 @@ int main(int argc, char **argv) {
       if (palp_fem_model_create(&m, &mesh, &cfg) || palp_fem_model_finalize(&m)) return 1;
       m.max_newton = 40;
       double *f = calloc((size_t)m.ndof, sizeof(double));
-      palp_fem_cap_traction(&mesh, force, 5.2e-4, 6, f);
+      palp_fem_cap_traction(&mesh, force, area, 6, f);
       const double t0 = now_s();
       if (palp_fem_solve_static(&m, f, palp_inc, INFINITY) == 0) uz_p = m.u[3 * mesh.top_node + 2];
       else fprintf(stderr, "ccx_crosscheck: palp level %d: %s\n", L, m.err);
@@ -362,7 +373,7 @@ int main(int argc, char **argv) {
       quad_mesh q;
       if (quad_create(&mesh, &q)) return 1;
       double *fz = malloc(sizeof(double) * (size_t)(q.n + 64));
-      if (!fz || quad_load(&mesh, &q, force, 5.2e-4, quarter, fz)) return 1;
+      if (!fz || quad_load(&mesh, &q, force, area, quarter, fz)) return 1;
       char job[1024], path[1100], lim[64] = "";
       snprintf(job, sizeof job, "%s/level%d_%s", dir, L, profile);
       snprintf(path, sizeof path, "%s.inp", job);

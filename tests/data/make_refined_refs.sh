@@ -1,0 +1,40 @@
+#!/bin/sh
+# The breast-tissue fingertip FE curves on meshes refined where the finger presses (issue 12;
+# docs/fem.md, "The fingertip's mesh"): level 5 with the mesh graded at each site (grading 0.5,
+# cells ~1.6 mm there), and the pole again with grading 0.3. ~15-25 min of one core a site.
+#   tests/data/make_refined_refs.sh BUILD_DIR [OUT_DIR]
+# writes OUT_DIR/fem_refined_breast_tissue_finger.csv and fem_refined_breast_tissue_pole_a03.csv
+# (OUT_DIR defaults to tests/data), each headed by the commit, the code's sha256 lines that
+# test_finger_refined.py's guard checks, and the commands.
+set -eu
+build=$1
+root=$(cd "$(dirname "$0")/../.." && pwd)
+out=${2:-$root/tests/data}
+tmp=$(mktemp -d)
+fem=$build/tools/fem/palp-fem
+scene=$root/config/phantoms/dome.json
+run() { # site grading polar max_force out
+  printf '{"mesh": {"level": 5, "grading": %s, "grading_polar_deg": %s}}\n' "$2" "$3" > "$tmp/$1_$2.json"
+  "$fem" finger --scene "$scene" --config "$tmp/$1_$2.json" --site "$1" --max-force "$4" --no-force-table --out "$5"
+}
+header() { # file what
+  {
+    echo "# written by tests/data/make_refined_refs.sh at commit $(git -C "$root" rev-parse --short HEAD); $2"
+    echo "# sha256 of src/fem/fem_finger.c $(sha256sum "$root/src/fem/fem_finger.c" | cut -d' ' -f1)"
+    echo "# sha256 of src/fem/fem_mesh.c $(sha256sum "$root/src/fem/fem_mesh.c" | cut -d' ' -f1)"
+  } > "$1"
+}
+run pole 0.5 0 1.3 "$tmp/pole.csv"
+run 45deg 0.5 45 3 "$tmp/45.csv"
+run 70deg 0.5 70 3 "$tmp/70.csv"
+run 60deg 0.5 60 3 "$tmp/60.csv"
+run pole_lesion 0.5 0 2 "$tmp/lesion.csv"
+run pole 0.3 0 1.0 "$tmp/pole03.csv"
+f=$out/fem_refined_breast_tissue_finger.csv
+header "$f" "level 5, grading 0.5 at each site: palp-fem finger --scene config/phantoms/dome.json --config {\"mesh\": {\"level\": 5, \"grading\": 0.5, \"grading_polar_deg\": SITE_DEG}} --site SITE --max-force F (pole 1.3, 45/60/70 deg 3, pole_lesion 2) --no-force-table"
+sed -n 1p "$tmp/pole.csv" >> "$f"
+for c in pole 45 60 70 lesion; do sed 1d "$tmp/$c.csv" >> "$f"; done
+f=$out/fem_refined_breast_tissue_pole_a03.csv
+header "$f" "level 5, grading 0.3 at the pole: the same with {\"grading\": 0.3} --site pole --max-force 1.0"
+cat "$tmp/pole03.csv" >> "$f"
+rm -rf "$tmp"

@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""The exercise phantom's fingertip against FE curves on a mesh refined where the finger presses
+(issue 12; docs/fem.md, "The fingertip's mesh").
+
+    test_finger_refined.py PALP_FEM SCENE REFINED_CSV ALPHA03_CSV LEVEL4_CSV LEVEL3_CSV [stored|guard]
+
+REFINED_CSV (tests/data/fem_refined_breast_tissue_finger.csv) holds the FE curves of the
+breast-tissue dome at level 5 with the mesh graded at each site (`"mesh": {"level": 5,
+"grading": 0.5, "grading_polar_deg": SITE}`: cells at the site half the uniform size, ~1.6 mm
+on the surface, against 3.9 mm at uniform level 4, which the set is validated against).
+ALPHA03_CSV is the pole again with grading 0.3 (~0.9 mm cells). Asserted:
+
+- hand calculation: the refined pole's secant stiffness at 0.25 mm (where the contact's radius,
+  sqrt(R d) = 1.4 mm, is under the skin's bending length) is within 10% of a Kirchhoff plate on an
+  elastic half-space under a point load, k = 3 sqrt(3) D / l^2, l = (2 D / E*)^(1/3) [N/m], with the
+  profile's skin (E 334 kPa, 2 mm, nu 0.499: D = E t^3 / (12 (1 - nu^2))) and fat (E 15 kPa, E* =
+  E / (1 - nu^2)): 160.6 N/m. (Measured: 156.5 N/m, -2.5%; uniform level 4 185 N/m, +15.5%, level 3
+  +32%: they fail it.) The estimate leaves out the dome's curvature and the sphere's finite contact
+  (both stiffen) and the skin's shear (softens), hence 10%;
+- convergence at the pole: grading 0.3 against 0.5, within 3% from 2 mm (measured at most 1.7%,
+  at 3 mm; shallower the contact spans few cells and they differ more: 5.6% at 1 mm, 3.9% at 1.5); CalculiX's quadratic bricks on the same graded mesh, a cap of 0.5 cm^2 at 0.3 N
+  (bench/fem/ccx_crosscheck --cap-area 0.5e-4 --grading 0.5), put this mesh ~4% stiff (docs/fem.md);
+- the refined curves are no stiffer than uniform level 4 at equal depth from 1 mm (1%: these
+  elements converge from the stiff side; measured 0.82-0.92 at the pole);
+- the real-time set against the refined curves, from the FE's 0.3 N: printed, and held inside
+  0.85-1.45, a REGRESSION BOUND, not the issue's 15%, which the set misses at every refined site
+  (docs/materials.md, "Level 4 is stiff under a fingertip"); over the lesion, the FE's gain on the
+  refined mesh within 2 points of level 4's from 1.5 mm (the gain converged; measured below).
+
+guard: the stored curves were made by today's fingertip FE code and mesher (the sha256 of
+src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header equal today's).
+"""
+import hashlib
+import math
+import os
+import sys
+import tempfile
+
+import test_eval_evaluate as common  # check() and the failure count (this folder is on sys.path)
+import test_finger_long_term as lt  # read(), columns(), guard()
+
+check = common.check
+run = common.run
+
+SITES = ["pole", "45deg", "60deg", "70deg"]
+FROM = 1e-3  # [m] the stiff-side check starts here: shallower, the faceted surface's offset is a fair part of the depth
+CONVERGED_FROM = 2e-3  # [m] gradings 0.3 and 0.5 compared from here: the contact's radius sqrt(R d) = 4 mm spans 2-4 cells
+
+
+def plate_on_half_space():
+    """[N/m] A Kirchhoff plate (the skin) bonded to an elastic half-space (the fat) under a point
+    load: the surface's Fourier stiffness is (E*/2) |xi|, so w(0) = P / (2 pi) int_0^inf dxi /
+    (D xi^3 + E*/2) = P l^2 / (3 sqrt(3) D), l = (2 D / E*)^(1/3) (Hetenyi 1946)."""
+    e_skin, t, nu = 334e3, 2e-3, 0.499  # breast skin (src/fem/fem_config.c, breast_tissue; Sutradhar & Miller 2013)
+    e_fat = 15e3  # fat's secant modulus (ibid.; Samani 2007)
+    d = e_skin * t ** 3 / (12.0 * (1.0 - nu * nu))  # [N m]
+    e_star = e_fat / (1.0 - nu * nu)  # [Pa]
+    l = (2.0 * d / e_star) ** (1.0 / 3.0)  # [m]
+    return 3.0 * math.sqrt(3.0) * d / (l * l)
+
+
+def by_depth(rows, site):
+    d, fe, _, _ = lt.columns(rows, site)
+    return {round(x, 9): f for x, f in zip(d, fe)}
+
+
+def stored(tool, scene, data, alpha03, level4, level3):
+    ref, fine, l4, l3 = lt.read(data), lt.read(alpha03), lt.read(level4), lt.read(level3)
+    sites = [s for s in SITES if any(x["site"] == s for x in ref)]
+    check(sites[:1] == ["pole"], "refined sites: %r (want the pole first)" % sites)
+
+    # the hand calculation at the pole's first depth
+    k_hand = plate_on_half_space()
+    for name, rows in (("refined", ref), ("uniform level 4", l4), ("uniform level 3", l3)):
+        p = by_depth(rows, "pole").get(2.5e-4)
+        if p is None:
+            continue
+        k = p / 2.5e-4
+        print("pole 0.25 mm, %s: %.1f N/m against the plate on a half-space's %.1f N/m (%+.1f%%)" %
+              (name, k, k_hand, 100 * (k / k_hand - 1)))
+        if name == "refined":
+            check(abs(k / k_hand - 1) <= 0.10, "refined pole at 0.25 mm: %.1f N/m, hand %.1f N/m (10%%)" % (k, k_hand))
+    check(2.5e-4 in by_depth(ref, "pole"), "the refined pole has no 0.25 mm row")
+
+    # grading 0.3 against 0.5 at the pole
+    a5, a3 = by_depth(ref, "pole"), by_depth(fine, "pole")
+    n, worst = 0, 0.0
+    for x in sorted(a3):
+        if x >= CONVERGED_FROM - 1e-12 and x in a5:
+            n, worst = n + 1, max(worst, abs(a3[x] / a5[x] - 1))
+            print("pole %.2f mm: grading 0.3 %.4f N, 0.5 %.4f N (%+.2f%%)" % (1e3 * x, a3[x], a5[x], 100 * (a3[x] / a5[x] - 1)))
+    check(n >= 3, "grading 0.3 and 0.5 share %d depths from 2 mm (want 3)" % n)
+    check(worst <= 0.03, "grading 0.3 against 0.5 at the pole: %.1f%% apart (3%%)" % (100 * worst))
+
+    # no stiffer than uniform level 4
+    for site in sites + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else []):
+        r, u = by_depth(ref, site), by_depth(l4, site)
+        common_d = [x for x in sorted(r) if x in u and x >= FROM - 1e-12]
+        check(len(common_d) >= 4, "%s: %d depths shared with level 4 from 1 mm" % (site, len(common_d)))
+        q = [r[x] / u[x] for x in common_d]
+        for x, v in zip(common_d, q):
+            check(v <= 1.01, "%s at %.2f mm: refined %.4f N stiffer than uniform level 4 %.4f N" % (site, 1e3 * x, r[x], u[x]))
+        if q:
+            print("%s: refined / uniform level 4 %.3f-%.3f over %d depths from 1 mm" % (site, min(q), max(q), len(q)))
+
+    # the real-time set against the refined curves
+    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_ref_"), "finger.csv")
+    asked = sites + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else [])
+    r = run([tool, "finger", "--scene", scene, "--level", "4", "--site", ",".join(asked), "--fe-from", data,
+             "--no-force-table", "--max-force", "13", "--out", out])
+    check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
+    if r.returncode:
+        return
+    rows = lt.read(out)
+    for site in sites:
+        d, fe, rt, dr = lt.columns(rows, site)
+        lo, hi, n = 9.0, 0.0, 0
+        for k in range(len(d)):
+            if fe[k] < 0.3:
+                continue
+            check(abs(dr[k] - d[k]) <= max(5e-6, 0.005 * d[k]), "%s: proxy at %.4f mm for %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
+            q = rt[k] / fe[k]
+            lo, hi, n = min(lo, q), max(hi, q), n + 1
+            print("refined, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f" % (site, 1e3 * d[k], fe[k], rt[k], q))
+            check(0.85 <= q <= 1.45, "refined, %s at %.2f mm: real-time / FE %.3f outside the regression bound 0.85-1.45" %
+                  (site, 1e3 * d[k], q))
+        check(n >= 3, "refined, %s: %d depths from 0.3 N" % (site, n))
+        print("refined, %s: real-time / FE %.3f-%.3f over %d depths from 0.3 N (the issue's 15%%: %s)" %
+              (site, lo, hi, n, "met" if 0.85 <= lo and hi <= 1.15 else "missed"))
+    if "pole_lesion" in asked:
+        u4 = lt.read(level4)
+        g4 = {x: f / by_depth(u4, "pole")[x] - 1 for x, f in by_depth(u4, "pole_lesion").items() if x in by_depth(u4, "pole")}
+        d, fe, rt, _ = lt.columns(rows, "pole_lesion")
+        d0, fe0, rt0, _ = lt.columns(rows, "pole")
+        plain = {round(x, 9): k for k, x in enumerate(d0)}
+        n = 0
+        for k in range(len(d)):
+            j = plain.get(round(d[k], 9))
+            x = round(d[k], 9)
+            if j is None or d[k] < 1.5e-3 - 1e-12:
+                continue
+            gf, gr = fe[k] / fe0[j] - 1, rt[k] / rt0[j] - 1
+            print("refined, pole_lesion %.2f mm: FE gain %+.1f%% (level 4 %s), real-time %+.1f%%" %
+                  (1e3 * d[k], 100 * gf, "%+.1f%%" % (100 * g4[x]) if x in g4 else "-", 100 * gr))
+            if x in g4:
+                n += 1
+                check(abs(gf - g4[x]) <= 0.02, "pole_lesion at %.2f mm: the refined FE's gain %+.1f%% against level 4's %+.1f%% "
+                      "(2 points)" % (1e3 * d[k], 100 * gf, 100 * g4[x]))
+        check(n >= 3, "pole_lesion: %d depths from 1.5 mm shared with level 4" % n)
+
+
+def guard(data, alpha03):
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    for path in (data, alpha03):
+        head = [l for l in open(path) if l.startswith("#")]
+        for src in ("src/fem/fem_finger.c", "src/fem/fem_mesh.c"):
+            sha = hashlib.sha256(open(os.path.join(root, src), "rb").read()).hexdigest()
+            check(any(sha in l for l in head), "%s changed since %s was written: recompute it (its header says how)" %
+                  (src, os.path.basename(path)))
+        print("%s: %s" % (os.path.basename(path), "".join(head[:2]).strip()))
+
+
+def main():
+    tool, scene, data, alpha03, level4, level3 = sys.argv[1:7]
+    mode = sys.argv[7] if len(sys.argv) > 7 else "stored"
+    if mode == "guard":
+        guard(data, alpha03)
+    else:
+        stored(tool, scene, data, alpha03, level4, level3)
+    return 1 if common.failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
