@@ -1,7 +1,7 @@
 #!/bin/sh
 # The breast-tissue fingertip FE curves on meshes refined where the finger presses (issue 12;
 # docs/fem.md, "The fingertip's mesh"): level 5 with the mesh graded at each site (grading 0.5,
-# cells ~1.6 mm there), and the pole again with grading 0.3. ~15-25 min of one core a site.
+# cells ~1.6 mm there), and the pole and the lesion again with grading 0.3. ~15-25 min of one core a site.
 #   tests/data/make_refined_refs.sh BUILD_DIR [OUT_DIR]
 # writes OUT_DIR/fem_refined_breast_tissue_finger.csv and fem_refined_breast_tissue_pole_a03.csv
 # (OUT_DIR defaults to tests/data), each headed by the commit, the code's sha256 lines that
@@ -30,11 +30,13 @@ run 70deg 0.5 70 3 "$tmp/70.csv"
 run 60deg 0.5 60 3 "$tmp/60.csv"
 run pole_lesion 0.5 0 2 "$tmp/lesion.csv"
 run pole 0.3 0 1.0 "$tmp/pole03.csv"
+run pole_lesion 0.3 0 1.0 "$tmp/lesion03.csv"
 f=$out/fem_refined_breast_tissue_finger.csv
 header "$f" "level 5, grading 0.5 at each site: palp-fem finger --scene config/phantoms/dome.json --config {\"mesh\": {\"level\": 5, \"grading\": 0.5, \"grading_polar_deg\": SITE_DEG}} --site SITE --max-force F (pole 1.3, 45/60/70 deg 3, pole_lesion 2) --no-force-table"
 sed -n 1p "$tmp/pole.csv" >> "$f"
 for c in pole 45 60 70 lesion; do sed 1d "$tmp/$c.csv" >> "$f"; done
 f=$out/fem_refined_breast_tissue_pole_a03.csv
-header "$f" "level 5, grading 0.3 at the pole: the same with {\"grading\": 0.3} --site pole --max-force 1.0"
+header "$f" "level 5, grading 0.3 at the pole: the same with {\"grading\": 0.3} --site pole (and pole_lesion) --max-force 1.0"
 cat "$tmp/pole03.csv" >> "$f"
+sed 1d "$tmp/lesion03.csv" >> "$f"
 rm -rf "$tmp"

@@ -116,7 +116,7 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
     table = validated(scene)
     # Sites with a level-4 curve have their table checked against it (finer(), below): level 3 is
     # up to 17% stiff there (level 4 / level 3 0.83-0.91 at 70 deg from 2 mm), so a set within 15% of
-    # the converged reference can stand outside 15% of level 3 (since the step-independent fingertip
+    # the finer reference can stand outside 15% of level 3 (since the step-independent fingertip
     # of 2026-11-29: 70 deg 0.81-0.94 of level 3 at 1.5-7 mm, 0.96-1.06 of level 4). Level 3 is
     # then printed, not asserted.
     finer_sites = {x["site"] for x in lt.read(level4)} if level4 else set()
@@ -215,7 +215,7 @@ def finer(tool, scene, data, rows3, table):
         print("level 4, %s: level 4 / level 3 at most %.3f; real-time / level 4 %.3f-%.3f over %d depths to %.1f mm" %
               (site, worst, lo, hi, n, 1e3 * limit))
     if over_lesion:
-        # the lesion against the converged FE, as against level 3 (lesion(), below): the level-4
+        # the lesion against the finer (level-4) FE, as against level 3 (lesion(), below): the level-4
         # curve supersedes level 3's there, which is up to 17% stiff for a fingertip. The gain's
         # bound is 4 points here, a regression bound, not the issue's target: level 4 raises the
         # FE's gain to +15.4..+18.0% from 1.5 to 6 mm (level 3 +12.4..+15.2%), and the set, fitted

@@ -24,8 +24,14 @@ ALPHA03_CSV is the pole again with grading 0.3 (~0.9 mm cells). Asserted:
   elements converge from the stiff side; measured 0.82-0.92 at the pole);
 - the real-time set against the refined curves, from the FE's 0.3 N: printed, and held inside
   0.85-1.45, a REGRESSION BOUND, not the issue's 15%, which the set misses at every refined site
-  (docs/materials.md, "Level 4 is stiff under a fingertip"); over the lesion, the FE's gain on the
-  refined mesh within 2 points of level 4's from 1.5 mm (the gain converged; measured below).
+  (measured 2026-11-29, night: pole 1.237-1.363 at 2-6 mm, 45 deg 1.248-1.285 at 2-5 mm, 60 deg
+  1.159-1.172 at 1.5-4 mm, 70 deg 1.019-1.343 at 1.5-5 mm; docs/materials.md, "Level 4 is stiff under
+  a fingertip");
+- over the 10 mm lesion (5x, centre 10 mm deep): the refined FE's gain (F_lesion / F_pole - 1 at
+  equal depth) is at least the issue's 20% from 2.5 to 4 mm (measured +20.2..+20.8%; uniform level 4
+  +17.8..+18.0%, level 3 +14.2..+15.2%: the gain rises as the mesh under the finger is refined),
+  gradings 0.3 and 0.5 within 1.5 points from 1.5 mm, and the real-time gain at least 0.65 of the
+  FE's there, a REGRESSION BOUND (measured 0.72-0.73; the issue's 15% is missed).
 
 guard: the stored curves were made by today's fingertip FE code and mesher (the sha256 of
 src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header equal today's).
@@ -128,25 +134,38 @@ def stored(tool, scene, data, alpha03, level4, level3):
         print("refined, %s: real-time / FE %.3f-%.3f over %d depths from 0.3 N (the issue's 15%%: %s)" %
               (site, lo, hi, n, "met" if 0.85 <= lo and hi <= 1.15 else "missed"))
     if "pole_lesion" in asked:
-        u4 = lt.read(level4)
-        g4 = {x: f / by_depth(u4, "pole")[x] - 1 for x, f in by_depth(u4, "pole_lesion").items() if x in by_depth(u4, "pole")}
+        # the lesion's gain, F_lesion / F_pole - 1 at equal depth, each curve against its own plain pole
+        def gains(rs):
+            p, l = by_depth(rs, "pole"), by_depth(rs, "pole_lesion")
+            return {x: l[x] / p[x] - 1 for x in l if x in p}
+        g5, g3, g4 = gains(ref), gains(fine), gains(l4)
         d, fe, rt, _ = lt.columns(rows, "pole_lesion")
         d0, fe0, rt0, _ = lt.columns(rows, "pole")
         plain = {round(x, 9): k for k, x in enumerate(d0)}
-        n = 0
+        n3, worst3, target, rt_lo = 0, 0.0, 0, 9.0
         for k in range(len(d)):
             j = plain.get(round(d[k], 9))
             x = round(d[k], 9)
             if j is None or d[k] < 1.5e-3 - 1e-12:
                 continue
             gf, gr = fe[k] / fe0[j] - 1, rt[k] / rt0[j] - 1
-            print("refined, pole_lesion %.2f mm: FE gain %+.1f%% (level 4 %s), real-time %+.1f%%" %
-                  (1e3 * d[k], 100 * gf, "%+.1f%%" % (100 * g4[x]) if x in g4 else "-", 100 * gr))
-            if x in g4:
-                n += 1
-                check(abs(gf - g4[x]) <= 0.02, "pole_lesion at %.2f mm: the refined FE's gain %+.1f%% against level 4's %+.1f%% "
-                      "(2 points)" % (1e3 * d[k], 100 * gf, 100 * g4[x]))
-        check(n >= 3, "pole_lesion: %d depths from 1.5 mm shared with level 4" % n)
+            print("refined, pole_lesion %.2f mm: FE gain %+.1f%% (grading 0.3: %s; uniform level 4: %s), real-time %+.1f%% "
+                  "(%.2f of the FE's)" % (1e3 * d[k], 100 * gf, "%+.1f%%" % (100 * g3[x]) if x in g3 else "-",
+                                         "%+.1f%%" % (100 * g4[x]) if x in g4 else "-", 100 * gr, gr / gf))
+            if x in g3:
+                n3, worst3 = n3 + 1, max(worst3, abs(g3[x] - gf))
+            if 2.5e-3 - 1e-12 <= d[k] <= 4e-3 + 1e-12:
+                target += 1
+                check(gf >= 0.20, "pole_lesion at %.2f mm: the refined FE's gain %+.1f%%, below the issue's 20%%" % (1e3 * d[k], 100 * gf))
+                rt_lo = min(rt_lo, gr / gf)
+                check(gr / gf >= 0.65, "pole_lesion at %.2f mm: real-time gain %.2f of the refined FE's, outside the regression "
+                      "bound 0.65" % (1e3 * d[k], gr / gf))
+        check(target >= 3, "pole_lesion: %d refined depths in 2.5-4 mm" % target)
+        check(n3 >= 3 and worst3 <= 0.015, "pole_lesion: gradings 0.3 and 0.5 give gains %.1f points apart over %d depths "
+              "from 1.5 mm (1.5 points)" % (100 * worst3, n3))
+        print("pole_lesion: the refined FE's gain at 20%% or more from 2.5 to 4 mm (%d depths), gradings 0.3 / 0.5 within %.1f "
+              "points; real-time gain at least %.2f of it there (the issue's 15%%: %s)" %
+              (target, 100 * worst3, rt_lo, "met" if rt_lo >= 0.85 else "missed"))
 
 
 def guard(data, alpha03):
