@@ -170,18 +170,13 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
 def finer(tool, scene, data, rows3, table):
     """The level-4 curves: no stiffer than level 3 from 2 mm, the table no deeper than they reach, and the
     real-time set within 15% of them up to the table's depth."""
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_bt4_"), "finger.csv")
     stored_sites = {x["site"] for x in lt.read(data)}
     sites = sorted(stored_sites & set(SITES), key=list(SITES).index)
     check(sites[:1] == ["pole"] and len(sites) >= 2, "level-4 sites: %r (want the pole and another)" % sites)
     over_lesion = "pole_lesion" in stored_sites  # the lesion at level 4 (since 2026-11-29, latest)
-    r = run([tool, "finger", "--scene", scene, "--level", "4", "--site",
-             ",".join(sites + (["pole_lesion"] if over_lesion else [])), "--fe-from", data,
-             "--no-force-table", "--max-force", "3", "--out", out])
-    check(r.returncode == 0, "palp-fem finger (level 4) exited %d: %s" % (r.returncode, r.stderr[-500:]))
-    if r.returncode:
+    rows = lt.realtime_rows(tool, scene, data, sites + (["pole_lesion"] if over_lesion else []), label=" (level 4)")
+    if rows is None:
         return
-    rows = lt.read(out)
     for site in sites:
         d, fe, rt, dr = lt.columns(rows, site)
         d3, fe3, _, _ = lt.columns(rows3, site)

@@ -67,6 +67,16 @@ def columns(rows, site):
             [float(x["realtime_depth_m"]) for x in rs])
 
 
+def realtime_rows(tool, scene, data, sites, level="4", max_force="3", label=""):
+    """`palp-fem finger --fe-from DATA`: the stored FE curves of SITES with the real-time side computed
+    now, as rows; None (and a failed check) if the command fails."""
+    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_rt_"), "finger.csv")
+    r = run([tool, "finger", "--scene", scene, "--level", level, "--site", ",".join(sites), "--fe-from", data,
+             "--no-force-table", "--max-force", max_force, "--out", out])
+    check(r.returncode == 0, "palp-fem finger%s exited %d: %s" % (label, r.returncode, r.stderr[-500:]))
+    return read(out) if r.returncode == 0 else None
+
+
 def read(path):
     with open(path) as f:
         return list(csv.DictReader(l for l in f if not l.startswith("#")))

@@ -40,13 +40,11 @@ import hashlib
 import math
 import os
 import sys
-import tempfile
 
 import test_eval_evaluate as common  # check() and the failure count (this folder is on sys.path)
 import test_finger_long_term as lt  # read(), columns(), guard()
 
 check = common.check
-run = common.run
 
 SITES = ["pole", "45deg", "60deg", "70deg"]
 FROM = 1e-3  # [m] the stiff-side check starts here: shallower, the faceted surface's offset is a fair part of the depth
@@ -110,14 +108,10 @@ def stored(tool, scene, data, alpha03, level4, level3):
             print("%s: refined / uniform level 4 %.3f-%.3f over %d depths from 1 mm" % (site, min(q), max(q), len(q)))
 
     # the real-time set against the refined curves
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_ref_"), "finger.csv")
     asked = sites + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else [])
-    r = run([tool, "finger", "--scene", scene, "--level", "4", "--site", ",".join(asked), "--fe-from", data,
-             "--no-force-table", "--max-force", "13", "--out", out])
-    check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
-    if r.returncode:
+    rows = lt.realtime_rows(tool, scene, data, asked)
+    if rows is None:
         return
-    rows = lt.read(out)
     for site in sites:
         d, fe, rt, dr = lt.columns(rows, site)
         lo, hi, n = 9.0, 0.0, 0
