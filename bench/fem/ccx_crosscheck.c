@@ -300,7 +300,8 @@ int main(int argc, char **argv) {
     else if (i + 1 < argc && !strcmp(argv[i], "--grading")) grading = atof(argv[++i]);
     else {
       fprintf(stderr, "usage: ccx_crosscheck [--levels 1,2,3] [--profile NAME] [--force N] [--dir DIR] [--ccx PATH] "
-                      "[--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter] [--palp-inc K] [--cap-area M2] [--grading ALPHA]\n");
+                      "[--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter] [--palp-inc K] "
+                      "[--cap-area M2] [--grading ALPHA]\n");
       return 2;
     }
   }
@@ -329,9 +330,9 @@ int main(int argc, char **argv) {
     fprintf(stderr, "ccx_crosscheck: %s\n", err);
     return 2;
   }
-  printf("a cap at the pole (5.2 cm^2: distribution II), %.3g N over %.3g cm^2, mesh grading %.2g at the pole, relaxed, "
-         "profile %s (gel C10 %.4g Pa, D1 %.3g 1/Pa; membrane C10 %.4g Pa)\n", force, 1e4 * area, grading, profile, relaxed_c10(&cfg, &cfg.gel), cfg.gel.d1,
-         relaxed_c10(&cfg, &cfg.membrane));
+  printf("a cap at the pole (5.2 cm^2: distribution II), %.3g N over %.3g cm^2, mesh grading %.2g at the pole, "
+         "relaxed, profile %s (gel C10 %.4g Pa, D1 %.3g 1/Pa; membrane C10 %.4g Pa)\n",
+         force, 1e4 * area, grading, profile, relaxed_c10(&cfg, &cfg.gel), cfg.gel.d1, relaxed_c10(&cfg, &cfg.membrane));
   /* the first eight columns are what tests/fem/test_ccx.sh reads */
   printf("%5s %8s %14s %8s %8s %14s %8s %9s %8s %8s %7s\n", "level", "hexa", "palp uz [mm]", "wall s", "nodes20",
          "ccx uz [mm]", "wall s", "ccx/palp", "palp MiB", "ccx MiB", "newton");

@@ -267,7 +267,8 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
   int rc = only_keys(root, keys, "", err, errlen);
   const cJSON *mesh = cJSON_GetObjectItemCaseSensitive(root, "mesh");
   if (!rc && mesh) {
-    static const char *const mk[] = {"level", "radius", "membrane_thickness", "core_fraction", "membrane_layers", "grading", "grading_polar_deg", NULL};
+    static const char *const mk[] = {"level",           "radius",  "membrane_thickness", "core_fraction",
+                                     "membrane_layers", "grading", "grading_polar_deg",  NULL};
     if (!cJSON_IsObject(mesh)) {
       snprintf(err, errlen, "mesh: expected an object");
       rc = PALP_EPARSE;

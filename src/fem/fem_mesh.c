@@ -118,7 +118,8 @@ int palp_fem_mesh_create(const palp_fem_mesh_def *def, palp_fem_mesh *out) {
   if (L < 1 || L > 16 || !(def->radius > 0.0) || !(def->membrane_thickness > 0.0) ||
       !(def->membrane_thickness < 0.5 * def->radius) || !(def->core_fraction > 0.05) ||
       !(def->core_fraction < 0.9) || def->membrane_layers < 0 || def->membrane_layers > 32 ||
-      !(def->grading >= 0.0 && def->grading <= 1.0) || !(def->grading_polar_deg >= 0.0 && def->grading_polar_deg <= 90.0))
+      !(def->grading >= 0.0 && def->grading <= 1.0) ||
+      !(def->grading_polar_deg >= 0.0 && def->grading_polar_deg <= 90.0))
     return PALP_EINVAL;
   const int n = 2 * L, Lg = 2 * L;
   const int Lm = def->membrane_layers ? def->membrane_layers : (L - 1 > 2 ? L - 1 : 2);
