@@ -162,7 +162,7 @@ int palp_fem_mesh_create(const palp_fem_mesh_def *def, palp_fem_mesh *out) {
         double c[3] = {(double)i / n, (double)j / n, (double)k / n};
         if (graded) {
           c[0] = grade(c[0], c0[0], -1.0, 1.0, alpha);
-          c[1] = grade(c[1], 0.0, -1.0, 1.0, alpha);
+          c[1] = grade(c[1], c0[1], -1.0, 1.0, alpha);
           if (side) c[2] = grade(c[2], c0[2], 0.0, 1.0, alpha);
         }
         id[LAT(i, j, k) * (size_t)(Ls + 1)] = node;

@@ -113,12 +113,11 @@ static void test_mesh(void) {
   CHECK(palp_fem_mesh_create(&d, &bad) == PALP_EINVAL, "grading 1.5 accepted");
   const int n = 8;
   const double s1 = 1.0 / n, want = 0.25 * PALP_FEM_PI * s1 * (0.5 + 0.5 * s1 * s1);
-  double best = INFINITY, got = 0.0, vol = 0.0, vmin = INFINITY;
+  double got = INFINITY, vol = 0.0, vmin = INFINITY;
   for (int k = 0; k < g.node_count; ++k) { /* the surface node nearest the top in the y = 0 plane, x > 0 */
     const double *x = g.x[k], r = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
     if (fabs(x[1]) > 1e-12 || x[0] <= 1e-9 || fabs(r - d.radius) > 1e-9) continue;
-    const double th = atan2(x[0], x[2]);
-    if (th < best) best = th, got = th;
+    got = fmin(got, atan2(x[0], x[2]));
   }
   for (int e = 0; e < g.element_count; ++e) {
     const double v = palp_fem_element_volume(&g, e);
