@@ -72,6 +72,7 @@ def stored(tool, scene, data, alpha03, level4, level3):
     ref, fine, l4, l3 = lt.read(data), lt.read(alpha03), lt.read(level4), lt.read(level3)
     sites = [s for s in SITES if any(x["site"] == s for x in ref)]
     check(sites[:1] == ["pole"], "refined sites: %r (want the pole first)" % sites)
+    asked = sites + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else [])
 
     # the hand calculation at the pole's first depth
     k_hand = plate_on_half_space()
@@ -97,7 +98,7 @@ def stored(tool, scene, data, alpha03, level4, level3):
     check(worst <= 0.03, "grading 0.3 against 0.5 at the pole: %.1f%% apart (3%%)" % (100 * worst))
 
     # no stiffer than uniform level 4
-    for site in sites + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else []):
+    for site in asked:
         r, u = by_depth(ref, site), by_depth(l4, site)
         common_d = [x for x in sorted(r) if x in u and x >= FROM - 1e-12]
         check(len(common_d) >= 4, "%s: %d depths shared with level 4 from 1 mm" % (site, len(common_d)))
@@ -108,7 +109,6 @@ def stored(tool, scene, data, alpha03, level4, level3):
             print("%s: refined / uniform level 4 %.3f-%.3f over %d depths from 1 mm" % (site, min(q), max(q), len(q)))
 
     # the real-time set against the refined curves
-    asked = sites + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else [])
     rows = lt.realtime_rows(tool, scene, data, asked)
     if rows is None:
         return
