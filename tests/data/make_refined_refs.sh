@@ -5,7 +5,9 @@
 #   tests/data/make_refined_refs.sh BUILD_DIR [OUT_DIR]
 # writes OUT_DIR/fem_refined_breast_tissue_finger.csv and fem_refined_breast_tissue_pole_a03.csv
 # (OUT_DIR defaults to tests/data), each headed by the commit, the code's sha256 lines that
-# test_finger_refined.py's guard checks, and the commands.
+# test_finger_refined.py's guard checks, and the commands; and fem_graded4_breast_tissue_finger.csv:
+# the same sites to 14 mm on level 4 graded 0.5 at each site (~15-40 min of one core a site), which
+# carries the validated table beyond where the level-5 curves end.
 set -eu
 build=$1
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -13,8 +15,8 @@ out=${2:-$root/tests/data}
 tmp=$(mktemp -d)
 fem=$build/tools/fem/palp-fem
 scene=$root/config/phantoms/dome.json
-run() { # site grading polar max_force out
-  printf '{"mesh": {"level": 5, "grading": %s, "grading_polar_deg": %s}}\n' "$2" "$3" > "$tmp/$1_$2.json"
+run() { # site grading polar max_force out [level]
+  printf '{"mesh": {"level": %s, "grading": %s, "grading_polar_deg": %s}}\n' "${6:-5}" "$2" "$3" > "$tmp/$1_$2.json"
   "$fem" finger --scene "$scene" --config "$tmp/$1_$2.json" --site "$1" --max-force "$4" --no-force-table --out "$5"
 }
 header() { # file what
@@ -39,4 +41,14 @@ f=$out/fem_refined_breast_tissue_pole_a03.csv
 header "$f" "level 5, grading 0.3 at the pole: the same with {\"grading\": 0.3} --site pole (and pole_lesion) --max-force 1.0"
 cat "$tmp/pole03.csv" >> "$f"
 sed 1d "$tmp/lesion03.csv" >> "$f"
+# level 4 graded 0.5, to 14 mm: each curve ends at the first depth past its force (the level-4 graded
+# forces at 12 mm are 4.64 / 4.91 N at the pole / 45 deg)
+run pole 0.5 0 5.3 "$tmp/g4pole.csv" 4
+run 45deg 0.5 45 5.5 "$tmp/g445.csv" 4
+run 60deg 0.5 60 5.8 "$tmp/g460.csv" 4
+run 70deg 0.5 70 8.5 "$tmp/g470.csv" 4
+f=$out/fem_graded4_breast_tissue_finger.csv
+header "$f" "level 4, grading 0.5 at each site, to 14 mm: the same with {\"level\": 4} --max-force F (pole 5.3, 45deg 5.5, 60deg 5.8, 70deg 8.5)"
+sed -n 1p "$tmp/g4pole.csv" >> "$f"
+for c in g4pole g445 g460 g470; do sed 1d "$tmp/$c.csv" >> "$f"; done
 rm -rf "$tmp"

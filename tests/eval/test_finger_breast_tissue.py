@@ -1,5 +1,14 @@
 #!/usr/bin/env python3
-"""The exercise phantom's fingertip against the level-3 FE fingertip (issue 12).
+"""The exercise phantom's fingertip against the level-3 and level-4 FE fingertip (issue 12).
+
+SINCE 2026-11-30 the set's validated table and its lesion's gain rest on the FE refined where the
+finger presses (test_finger_refined.py; docs/materials.md, "Refitted against the refined
+fingertip"): uniform levels 3 and 4 are 9-27% stiff under a fingertip, and the refitted set stands
+at 0.90-1.11 of uniform level 4 at the pole from 1.5 mm (TABLE_ON_REFINED). Here the set's ratios against them,
+the lesion's gain and the level-3 cyst's loss are PRINTED; what stays asserted is the references'
+own convergence (level 4 no stiffer than level 3 from 2 mm), both curves' rise, the proxy's reach
+and, against the level-4 cyst, the cyst's loss within 2 points (measured within 1.1). The bounds
+below are what held while the table rested on these curves.
 
     test_finger_breast_tissue.py PALP_FEM SCENE FINGER_CSV [stored|guard [--level4 LEVEL4_CSV] [--cyst CYST_CSV]
                                                                  [--cyst4 CYST4_CSV]]
@@ -90,6 +99,11 @@ SITES = {"pole": 0.0, "45deg": 45.0, "60deg": 60.0, "70deg": 70.0}
 # the faceted FE surface's offset from the sphere is a fair part of the depth, and refining it
 # can stiffen the first millimetre (60 deg: level 4 / level 3 1.04-1.11 at 0.5-1.5 mm).
 STIFF_SIDE_FROM = 2e-3
+# Since 2026-11-30 the set's validated table and its lesion's gain rest on the FE refined where the finger
+# presses (test_finger_refined.py): the uniform level-3 and level-4 curves here are 9-27% stiff under a
+# fingertip, so the set's ratios against them are printed, and what is asserted is the references' own
+# convergence (level 4 no stiffer than level 3), the curves' rise, the proxy's reach and the cyst's loss.
+TABLE_ON_REFINED = True
 
 
 def proxy_tol(depth):
@@ -142,15 +156,15 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
             inside = 0.85 <= q <= 1.15
             print("%s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f%s" %
                   (site, 1e3 * d[k], fe[k], rt[k], q, "" if d[k] <= limit + 1e-9 else " (beyond the table)"))
-            if site in finer_sites:
+            if site in finer_sites or TABLE_ON_REFINED:
                 continue
             if d[k] <= limit + 1e-9:
                 check(inside, "%s at %.2f mm, within the validated %.1f mm: real-time / FE %.3f (15%%)" %
                       (site, 1e3 * d[k], 1e3 * limit, q))
             if not inside and first_out is None:
                 first_out = d[k]
-        if site in finer_sites:
-            print("%s: level 3 printed only; the table is checked against the level-4 curve" % site)
+        if site in finer_sites or TABLE_ON_REFINED:
+            print("%s: level 3 printed only; the table is checked against the refined curves (test_finger_refined.py)" % site)
             continue
         if first_out is not None:
             check(limit < first_out, "%s: the table claims %.1f mm, the ratio leaves 15%% at %.1f mm" %
@@ -158,11 +172,14 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
         print("%s: validated to %.1f mm, first depth outside 15%%: %s" %
               (site, 1e3 * limit, "none (the curve's end, %.1f mm)" % (1e3 * d[-1]) if first_out is None
                else "%.1f mm" % (1e3 * first_out)))
-    lesion(rows, table)
+    lesion(rows, table, gain_tol=None if TABLE_ON_REFINED else 0.03)
     if level4:
         finer(tool, scene, level4, rows, table)
     if cyst:
-        soft(tool, scene, cyst, table)
+        # the level-3 cyst printed where the level-4 one is checked (level 3 is up to 17% stiff under a
+        # fingertip; since the refit of 2026-11-30 the loss stands 2.1 points from level 3's at 1.5-2 mm,
+        # within 1.1 of level 4's)
+        soft(tool, scene, cyst, table, loss_tol=None if cyst4 else 0.02)
     if cyst4:
         soft(tool, scene, cyst4, table, "4")
 
@@ -190,6 +207,13 @@ def finer(tool, scene, data, rows3, table):
                 check(fe[k] <= 1.01 * f3, "%s at %.2f mm: level 4 %.4f N stiffer than level 3 %.4f N" %
                       (site, 1e3 * d[k], fe[k], f3))
         claimed = table.get(round(SITES[site], 6), 0.0)
+        if TABLE_ON_REFINED:
+            for k in range(len(d)):
+                if fe[k] >= 0.3:
+                    print("level 4, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f (printed: level 4 is stiff under a "
+                          "fingertip)" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k]))
+            print("level 4, %s: level 4 / level 3 at most %.3f" % (site, worst))
+            continue
         check(claimed <= d[-1] + 1e-9, "%s: the table claims %.1f mm, deeper than the level-4 curve reaches (%.1f mm)" %
               (site, 1e3 * claimed, 1e3 * d[-1]))
         limit = min(claimed, d[-1])
@@ -217,17 +241,18 @@ def finer(tool, scene, data, rows3, table):
         # within 3 points of level 3, stays at +14.2..+15.3%: 3.5 points below at 6 mm (measured
         # 2026-11-29; the issue's "agree within 15%" of the gain is missed at 2.5-8 mm, 0.81-0.87 of
         # the FE's; docs/materials.md, "Level 4 over the lesion"). The forces over it hold 15%.
-        lesion(rows, table, "level 4, ", gain_tol=0.04)
+        lesion(rows, table, "level 4, ", gain_tol=None if TABLE_ON_REFINED else 0.04)
 
 
-def soft(tool, scene, data, table, level="3"):
+def soft(tool, scene, data, table, level="3", loss_tol=0.02):
     """A 0.2x cyst where the lesion is: the loss of force over it, both models against their plain pole."""
     rows = lt.cyst_rows(tool, scene, data, level, "6")
     if not rows:
         return
     # from the plain pole's 0.3 N to its validated depth
     limit = table.get(0.0, 0.0)
-    lt.cyst_losses(rows, lambda depth, f_plain: f_plain >= 0.3 and depth <= limit + 1e-9, proxy_tol, 8)
+    lt.cyst_losses(rows, lambda depth, f_plain: f_plain >= 0.3 and depth <= limit + 1e-9, proxy_tol, 8,
+                   force_ratio=not TABLE_ON_REFINED, loss_tol=loss_tol)
 
 
 def lesion(rows, table, label="", gain_tol=0.03):
@@ -248,11 +273,14 @@ def lesion(rows, table, label="", gain_tol=0.03):
         n, worst = n + 1, max(worst, abs(gr - gf))
         print(label + "pole_lesion %.2f mm: FE %.3f N (gain %+.1f%%), real-time %.3f N (gain %+.1f%%), ratio %.3f" %
               (1e3 * d[k], fe[k], 100 * gf, rt[k], 100 * gr, q))
+        if gain_tol is None:
+            continue
         check(0.85 <= q <= 1.15, label + "pole_lesion at %.2f mm: real-time / FE %.3f (15%%)" % (1e3 * d[k], q))
         check(abs(gr - gf) <= gain_tol, label + "pole_lesion at %.2f mm: lesion gain %+.1f%% against the FE's %+.1f%% "
               "(%.0f points)" % (1e3 * d[k], 100 * gr, 100 * gf, 100 * gain_tol))
     check(n >= 8, label + "pole_lesion: %d depths compared from the pole's 0.3 N to its validated depth" % n)
-    print(label + "pole_lesion: %d depths, lesion gain within %.1f points of the FE's" % (n, 100 * worst))
+    print(label + "pole_lesion: %d depths, lesion gain within %.1f points of the FE's%s" %
+          (n, 100 * worst, " (printed only: checked against the refined FE in test_finger_refined.py)" if gain_tol is None else ""))
 
 
 def guard(tool, scene, data, level4=None, cyst=None, cyst4=None):

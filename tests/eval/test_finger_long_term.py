@@ -192,11 +192,13 @@ def cyst_rows(tool, scene, data, level, max_force):
     return None if r.returncode else read(out)
 
 
-def cyst_losses(rows, keep, proxy_tol, least):
+def cyst_losses(rows, keep, proxy_tol, least, force_ratio=True, loss_tol=0.02):
     """The pole over a 0.2x cyst (site pole_lesion) against the plain pole, both models at the depths
     keep(depth [m], plain FE force [N]) admits: both lose force over it, the real-time force within 15%
-    of the FE's, its loss within 2 points of the FE's; at least `least` depths; the proxy within
-    proxy_tol(depth) [m] of each FE depth (matched positions)."""
+    of the FE's (unless force_ratio is False: a reference known to be stiff, whose ratio is printed),
+    its loss within loss_tol (2 points; None: printed, where a finer reference is checked); at least
+    `least` depths; the proxy within proxy_tol(depth) [m]
+    of each FE depth (matched positions)."""
     d0, fe0, rt0, _ = columns(rows, "pole")
     d, fe, rt, dr = columns(rows, "pole_lesion")
     plain = {round(x, 9): k for k, x in enumerate(d0)}
@@ -214,9 +216,9 @@ def cyst_losses(rows, keep, proxy_tol, least):
               (1e3 * dr[k], 1e3 * d[k]))
         check(gf < 0 and gr < 0, "cyst at %.2f mm: both models softer over it (FE %+.1f%%, real-time %+.1f%%)" %
               (1e3 * d[k], 100 * gf, 100 * gr))
-        check(0.85 <= q <= 1.15, "cyst at %.2f mm: real-time / FE %.3f (15%%)" % (1e3 * d[k], q))
-        check(abs(gr - gf) <= 0.02, "cyst at %.2f mm: loss %+.1f%% against the FE's %+.1f%% (2 points)" %
-              (1e3 * d[k], 100 * gr, 100 * gf))
+        check(not force_ratio or 0.85 <= q <= 1.15, "cyst at %.2f mm: real-time / FE %.3f (15%%)" % (1e3 * d[k], q))
+        check(loss_tol is None or abs(gr - gf) <= loss_tol, "cyst at %.2f mm: loss %+.1f%% against the FE's %+.1f%% "
+              "(%.0f points)" % (1e3 * d[k], 100 * gr, 100 * gf, 100 * (loss_tol or 0.0)))
     check(n >= least, "cyst: compared at %d depths (want %d)" % (n, least))
     print("cyst: %d depths, loss within %.1f points of the FE's" % (n, 100 * worst))
 

@@ -2,12 +2,13 @@
 """The exercise phantom's fingertip against FE curves on a mesh refined where the finger presses
 (issue 12; docs/fem.md, "The fingertip's mesh").
 
-    test_finger_refined.py PALP_FEM SCENE REFINED_CSV ALPHA03_CSV LEVEL4_CSV LEVEL3_CSV [stored|guard]
+    test_finger_refined.py PALP_FEM SCENE REFINED_CSV ALPHA03_CSV LEVEL4_CSV LEVEL3_CSV DEEP_CSV [stored|guard]
 
 REFINED_CSV (tests/data/fem_refined_breast_tissue_finger.csv) holds the FE curves of the
 breast-tissue dome at level 5 with the mesh graded at each site (`"mesh": {"level": 5,
 "grading": 0.5, "grading_polar_deg": SITE}`: cells at the site half the uniform size, ~1.6 mm
-on the surface, against 3.9 mm at uniform level 4, which the set is validated against).
+on the surface, against 3.9 mm at uniform level 4, which the set was validated against until
+2026-11-30).
 ALPHA03_CSV is the pole again with grading 0.3 (~0.9 mm cells). Asserted:
 
 - hand calculation: the refined pole's secant stiffness at 0.25 mm (where the contact's radius,
@@ -22,24 +23,41 @@ ALPHA03_CSV is the pole again with grading 0.3 (~0.9 mm cells). Asserted:
   (bench/fem/ccx_crosscheck --cap-area 0.5e-4 --grading 0.5), put this mesh ~4% stiff (docs/fem.md);
 - the refined curves are no stiffer than uniform level 4 at equal depth from 1 mm (1%: these
   elements converge from the stiff side; measured 0.82-0.92 at the pole);
-- the real-time set against the refined curves, from the FE's 0.3 N: printed, and held inside
-  0.85-1.45, a REGRESSION BOUND, not the issue's 15%, which the set misses at every refined site
-  (measured 2026-11-29, night: pole 1.237-1.363 at 2-6 mm, 45 deg 1.248-1.285 at 2-5 mm, 60 deg
-  1.159-1.172 at 1.5-4 mm, 70 deg 1.019-1.343 at 1.5-5 mm; docs/materials.md, "Level 4 is stiff under
-  a fingertip");
+- the real-time set against the refined curves, from the FE's 0.3 N: within the issue's 15%
+  (since the set was refitted against them, 2026-11-30: pole 1.084-1.132 at 2-6 mm, 45 deg
+  1.024-1.123 at 2-5 mm, 60 deg 0.932-1.033 at 1.5-4 mm, 70 deg 0.896-1.117 at 1.5-5 mm; the set
+  before stood at 1.24-1.36, 1.25-1.29, 1.16-1.17 and 1.02-1.34; docs/materials.md, "Refitted
+  against the refined fingertip");
 - over the 10 mm lesion (5x, centre 10 mm deep): the refined FE's gain (F_lesion / F_pole - 1 at
   equal depth) is at least the issue's 20% from 2.5 to 4 mm (measured +20.2..+20.8%; uniform level 4
   +17.8..+18.0%, level 3 +14.2..+15.2%: the gain rises as the mesh under the finger is refined),
-  gradings 0.3 and 0.5 within 1.5 points from 1.5 mm, and the real-time gain at least 0.65 of the
-  FE's there, a REGRESSION BOUND (measured 0.72-0.73; the issue's 15% is missed).
+  gradings 0.3 and 0.5 within 1.5 points from 1.5 mm, and the real-time gain at least 0.80 of the
+  FE's there, a REGRESSION BOUND (measured 0.83-0.84 since the refit, +16.9..+17.2%; 0.72-0.73
+  before; the issue's 15% is missed by 1-2 points).
+
+With DEEP_CSV (tests/data/fem_graded4_breast_tissue_finger.csv: level 4 graded 0.5 at each site, to
+12-14 mm, ~15-40 min of one core a site), the set's validated table (config/params/breast_tissue.json)
+rests on the refined curves: at each depth the least force of level 5 graded, level 4 graded and
+uniform level 4 (these elements converge from the stiff side), which is level 5 graded to its end
+(4-6 mm), then level 4 graded, and uniform level 4 at 70 deg from 6 mm and at 60 deg at 14 mm.
+Asserted: level 4 graded within 0.97-1.09 of level 5 graded from 2 mm (measured 1.00-1.06 at the pole,
+1.02-1.03 at 45 deg, 1.01-1.04 at 60 deg, 1.04-1.08 at 70 deg); for each site, from the FE's 0.3 N to the
+table's depth, real-time / FE within 15%, at least 8 depths, the proxy at the FE's depth, the table no
+deeper than the curves reach nor than the first depth where the ratio leaves 15% (measured 2026-11-30:
+pole to 12 mm 1.084-1.139, 14 mm 1.155 out; 45 deg to 12 mm 1.024-1.127, 14 mm 1.156 out; 60 deg to
+14 mm 0.932-1.072; 70 deg to 12 mm 0.868-1.117, 14 mm 0.844 out). Printed: level 4 graded against
+uniform level 4 from 8 mm (0.96-0.98 at the pole and 45 deg, 0.99-1.00 at 60 deg, 1.09-1.15 at 70 deg,
+where the graded mesh's cells near the base, grown up to 2x, stiffen it).
 
 guard: the stored curves were made by today's fingertip FE code and mesher (the sha256 of
 src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header equal today's).
 """
 import hashlib
+import json
 import math
 import os
 import sys
+import tempfile
 
 import test_eval_evaluate as common  # check() and the failure count (this folder is on sys.path)
 import test_finger_long_term as lt  # read(), columns(), guard()
@@ -47,6 +65,8 @@ import test_finger_long_term as lt  # read(), columns(), guard()
 check = common.check
 
 SITES = ["pole", "45deg", "60deg", "70deg"]
+SITE_DEG = {"pole": 0.0, "45deg": 45.0, "60deg": 60.0, "70deg": 70.0}
+DEEP_VS_L5 = 1.09  # the level-4 graded curve at most this much stiffer than level 5 graded from 2 mm (measured 1.00-1.06 at the pole, 1.04-1.08 at 70 deg)
 FROM = 1e-3  # [m] the stiff-side check starts here: shallower, the faceted surface's offset is a fair part of the depth
 CONVERGED_FROM = 2e-3  # [m] gradings 0.3 and 0.5 compared from here: the contact's radius sqrt(R d) = 4 mm spans 2-4 cells
 
@@ -122,8 +142,7 @@ def stored(tool, scene, data, alpha03, level4, level3):
             q = rt[k] / fe[k]
             lo, hi, n = min(lo, q), max(hi, q), n + 1
             print("refined, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f" % (site, 1e3 * d[k], fe[k], rt[k], q))
-            check(0.85 <= q <= 1.45, "refined, %s at %.2f mm: real-time / FE %.3f outside the regression bound 0.85-1.45" %
-                  (site, 1e3 * d[k], q))
+            check(0.85 <= q <= 1.15, "refined, %s at %.2f mm: real-time / FE %.3f outside 15%%" % (site, 1e3 * d[k], q))
         check(n >= 3, "refined, %s: %d depths from 0.3 N" % (site, n))
         print("refined, %s: real-time / FE %.3f-%.3f over %d depths from 0.3 N (the issue's 15%%: %s)" %
               (site, lo, hi, n, "met" if 0.85 <= lo and hi <= 1.15 else "missed"))
@@ -152,8 +171,8 @@ def stored(tool, scene, data, alpha03, level4, level3):
                 target += 1
                 check(gf >= 0.20, "pole_lesion at %.2f mm: the refined FE's gain %+.1f%%, below the issue's 20%%" % (1e3 * d[k], 100 * gf))
                 rt_lo = min(rt_lo, gr / gf)
-                check(gr / gf >= 0.65, "pole_lesion at %.2f mm: real-time gain %.2f of the refined FE's, outside the regression "
-                      "bound 0.65" % (1e3 * d[k], gr / gf))
+                check(gr / gf >= 0.80, "pole_lesion at %.2f mm: real-time gain %.2f of the refined FE's, outside the regression "
+                      "bound 0.80" % (1e3 * d[k], gr / gf))
         check(target >= 3, "pole_lesion: %d refined depths in 2.5-4 mm" % target)
         check(n3 >= 3 and worst3 <= 0.015, "pole_lesion: gradings 0.3 and 0.5 give gains %.1f points apart over %d depths "
               "from 1.5 mm (1.5 points)" % (100 * worst3, n3))
@@ -162,9 +181,91 @@ def stored(tool, scene, data, alpha03, level4, level3):
               (target, 100 * worst3, rt_lo, "met" if rt_lo >= 0.85 else "missed"))
 
 
-def guard(data, alpha03):
+def composite(ref, deep, l4, path):
+    """The curves the validated table rests on, written to path: at each depth of each site's uniform
+    level-4 curve, the least force of the meshes that reach it (level 5 graded, level 4 graded, uniform
+    level 4). These bricks converge from the stiff side (a displacement-based FE's force at a
+    prescribed depth is too high; every check above and the level sequence agree), so the least is
+    the tightest of them: level 5 graded where it reaches (to 4-6 mm), then level 4 graded, and
+    uniform level 4 at 70 deg from 6 mm, where the graded mesh's cells near the base, grown by
+    up to 2x, make it the stiffer. Returns {site: [mesh of each row]}."""
+    names = (("level 5 graded", ref), ("level 4 graded", deep), ("uniform level 4", l4))
+    by = {name: {site: by_depth(rows, site) for site in SITES} for name, rows in names}
+    keys = list(l4[0].keys())
+    which = {}
+    with open(path, "w") as f:
+        f.write(",".join(keys) + "\n")
+        for site in SITES:
+            which[site] = []
+            for x in l4:
+                if x["site"] != site:
+                    continue
+                depth = round(float(x["depth_m"]), 9)
+                force, name = min((by[n][site][depth], n) for n, _ in names if depth in by[n][site])
+                row = dict(x, fem_N="%.9e" % force)
+                f.write(",".join(row[k] or "" for k in keys) + "\n")
+                which[site].append(name)
+    return which
+
+
+def table(tool, scene, data, deep, level4):
+    """The set's validated table against the refined curves (REFINED_CSV, extended by DEEP_CSV)."""
+    ref, dp, l4 = lt.read(data), lt.read(deep), lt.read(level4)
+    # the deep extension's own convergence: the level-4 graded mesh against level 5 graded where both
+    # reach (from 2 mm), and against uniform level 4 from 8 mm, where the contact spans many cells
+    for site in SITES:
+        g4, g5, u4 = by_depth(dp, site), by_depth(ref, site), by_depth(l4, site)
+        both = [x for x in sorted(g4) if x in g5 and x >= CONVERGED_FROM - 1e-12]
+        q = [g4[x] / g5[x] for x in both]
+        if not g4:
+            print("%s: no level-4 graded curve; the table rests on level 5 graded and uniform level 4 there" % site)
+            continue
+        check(len(both) >= 3, "%s: the level-4 graded curve shares %d depths with level 5 from 2 mm" % (site, len(both)))
+        check(all(0.97 <= v <= DEEP_VS_L5 for v in q), "%s: level-4 graded / level-5 graded %s outside 0.97-%.2f" %
+              (site, " ".join("%.3f" % v for v in q), DEEP_VS_L5))
+        deep_d = [x for x in sorted(g4) if x in u4 and x >= 8e-3 - 1e-12]
+        qu = [g4[x] / u4[x] for x in deep_d]
+        print("%s: level-4 graded / level-5 graded %s from 2 mm; / uniform level 4 %s from 8 mm" %
+              (site, "%.3f-%.3f" % (min(q), max(q)) if q else "-", "%.3f-%.3f" % (min(qu), max(qu)) if qu else "-"))
+    tmp = tempfile.mkdtemp(prefix="palp_finger_refined_")
+    joined = os.path.join(tmp, "refined_joined.csv")
+    which = composite(ref, dp, l4, joined)
+    rows = lt.realtime_rows(tool, scene, joined, SITES, max_force="20", label=" (refined, joined)")
+    if rows is None:
+        return
+    sc = json.load(open(scene))
+    params = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
+    claimed = {round(e["polar_deg"], 6): e["depth_m"] for e in json.load(open(params))["validated"]["finger"]}
+    for site in SITES:
+        d, fe, rt, dr = lt.columns(rows, site)
+        limit = claimed.get(SITE_DEG[site])
+        check(limit is not None, "the validated table has no %s entry" % site)
+        if limit is None:
+            continue
+        check(limit <= d[-1] + 1e-9, "%s: the table claims %.1f mm, deeper than the refined curves reach (%.1f mm)" %
+              (site, 1e3 * limit, 1e3 * d[-1]))
+        first_out = next((d[k] for k in range(len(d)) if fe[k] >= 0.3 and not 0.85 <= rt[k] / fe[k] <= 1.15), None)
+        check(first_out is None or limit < first_out, "%s: the table claims %.1f mm, the ratio leaves 15%% at %.1f mm" %
+              (site, 1e3 * limit, 1e3 * (first_out or 0.0)))
+        n, lo, hi = 0, 9.0, 0.0
+        for k in range(len(d)):
+            if fe[k] < 0.3 or d[k] > limit + 1e-9:
+                continue
+            check(abs(dr[k] - d[k]) <= max(5e-6, 0.005 * d[k]), "%s: proxy at %.4f mm for %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
+            q = rt[k] / fe[k]
+            n, lo, hi = n + 1, min(lo, q), max(hi, q)
+            src = which[site][k]
+            print("table, %s %.2f mm (%s): FE %.3f N, real-time %.3f N, ratio %.3f" % (site, 1e3 * d[k], src, fe[k], rt[k], q))
+            check(0.85 <= q <= 1.15, "table, %s at %.2f mm: real-time / refined FE %.3f (15%%)" % (site, 1e3 * d[k], q))
+        check(n >= 8, "table, %s: %d depths from 0.3 N to %.1f mm (want 8)" % (site, n, 1e3 * limit))
+        print("table, %s: validated to %.1f mm, real-time / refined FE %.3f-%.3f over %d depths; first depth outside 15%%: %s" %
+              (site, 1e3 * limit, lo, hi, n, "none (the curve's end, %.1f mm)" % (1e3 * d[-1]) if first_out is None
+               else "%.1f mm" % (1e3 * first_out)))
+
+
+def guard(data, alpha03, deep):
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    for path in (data, alpha03):
+    for path in (data, alpha03, deep):
         head = [l for l in open(path) if l.startswith("#")]
         for src in ("src/fem/fem_finger.c", "src/fem/fem_mesh.c"):
             sha = hashlib.sha256(open(os.path.join(root, src), "rb").read()).hexdigest()
@@ -174,12 +275,13 @@ def guard(data, alpha03):
 
 
 def main():
-    tool, scene, data, alpha03, level4, level3 = sys.argv[1:7]
-    mode = sys.argv[7] if len(sys.argv) > 7 else "stored"
+    tool, scene, data, alpha03, level4, level3, deep = sys.argv[1:8]
+    mode = sys.argv[8] if len(sys.argv) > 8 else "stored"
     if mode == "guard":
-        guard(data, alpha03)
+        guard(data, alpha03, deep)
     else:
         stored(tool, scene, data, alpha03, level4, level3)
+        table(tool, scene, data, deep, level4)
     return 1 if common.failures else 0
 
 

@@ -69,11 +69,13 @@ static double press_force(const palp_lesion *les, int count, double depth) {
  * docs/haptics.md "The hinges see the lesion"), on the shipped breast-tissue set. Exact
  * properties: without lesions the world is bit for bit the one without the split (the
  * same state hash after the press); over the 10 mm 5x lesion 10 mm deep the gain with the
- * device 5 mm in grows by more than 2 points (measured 2026-11-28: +8.4% -> +11.6%; at the
- * FE's matched 5 mm, +10.4% -> +13.6% against the level-3 FE's +14.9%, which
- * eval_finger_breast_tissue checks); over a 0.2x cyst there the hinges see it too (since
- * 2026-11-29): the loss grows by more than 1 point (measured -3.4% -> -4.8%; the level-3
- * FE's at the matched 5 mm -5.5%, which eval_finger_breast_tissue checks). */
+ * device 5 mm in grows, and over a 0.2x cyst there the loss deepens (since 2026-11-29), by
+ * more than 0.5 and 0.2 points. The split's share is the gel's part of D, D - D_skin: since
+ * the refit against the refined fingertip FE (2026-11-30) D is 1.75x the skin's own, not
+ * 3.6x, and the split moves the gain +12.99% -> +14.02% and the loss -5.34% -> -5.76%
+ * (before: +8.4% -> +11.6% and -3.4% -> -4.8%, asserted as 2 and 1 points). The gain
+ * against the refined FE and the loss against the level-4 FE are checked by
+ * eval_finger_refined and eval_finger_breast_tissue. */
 static void test_hinges_see_lesion(void) {
   palp_scene sc;
   char err[256];
@@ -96,13 +98,13 @@ static void test_hinges_see_lesion(void) {
   const double cs = Fcs / F0s - 1.0, cp = Fcp / F0p - 1.0;
   printf("breast-tissue dome, 5 mm at the pole over a 0.2x cyst there: loss %+.2f%% with the split, %+.2f%% support "
          "only\n", 100 * cs, 100 * cp);
-  CHECK(cp < 0.0 && cs < cp - 0.01, "a soft cyst: the split deepens its loss by more than 1 point (%+.2f%% against %+.2f%%)",
-        100 * cs, 100 * cp);
+  CHECK(cp < 0.0 && cs < cp - 0.002, "a soft cyst: the split deepens its loss by more than 0.2 points (%+.2f%% against "
+        "%+.2f%%)", 100 * cs, 100 * cp);
   const double Fls = press_def(split, &lump, 1, 0.005, NULL), Flp = press_def(plain, &lump, 1, 0.005, NULL);
   const double gs = Fls / F0s - 1.0, gp = Flp / F0p - 1.0;
   printf("breast-tissue dome, 5 mm at the pole over the 10 mm 5x lesion 10 mm deep: gain %+.2f%% with the split, "
          "%+.2f%% support only\n", 100 * gs, 100 * gp);
-  CHECK(gs > gp + 0.02, "the split raises the lesion's gain by more than 2 points (%+.2f%% against %+.2f%%)", 100 * gs,
+  CHECK(gs > gp + 0.005, "the split raises the lesion's gain by more than 0.5 points (%+.2f%% against %+.2f%%)", 100 * gs,
         100 * gp);
 }
 

@@ -5,9 +5,10 @@
  *
  * - palp_world_validated_depth: the table's values at its angles, linear in between, the
  *   end values beyond, +inf without a table (expected values by hand from the table).
- * - The shipped breast-tissue set (config/phantoms/dome.json) carries its table (pole,
- *   14 mm, 45, 60 and 70 deg 14 mm (10, 10 and 7 mm until their level-4 curves were extended): the level-4 FE comparison of 2026-11-29, which
- *   eval_finger_breast_tissue checks against the stored curves), and a logged scene
+ * - The shipped breast-tissue set (config/phantoms/dome.json) carries its table (pole 12 mm,
+ *   45 deg 12, 60 deg 14, 70 deg 12 mm: the comparison with the FE refined where the finger
+ *   presses, 2026-11-30, which eval_finger_refined checks against the stored curves; 14 mm at
+ *   every site against uniform level 4 before), and a logged scene
  *   (palp_scene_to_json) gives it back bit for bit.
  * - Bad tables are refused with a message naming the field.
  * - A fingertip pressed at the pole to ~9 mm is never counted; pressed on to ~22 mm it is,
@@ -59,11 +60,11 @@ static void test_scene(void) {
     return;
   }
   CHECK(sc.world.validated_count == 4, "the breast-tissue set states 4 sites (%d)", sc.world.validated_count);
-  CHECK_NEAR(sc.world.validated_depth[0], 0.014, 1e-15, "pole 14 mm");
+  CHECK_NEAR(sc.world.validated_depth[0], 0.012, 1e-15, "pole 12 mm");
   CHECK_NEAR(sc.world.validated_polar[1], 45.0 * PI / 180.0, 1e-15, "second site at 45 deg");
-  CHECK_NEAR(sc.world.validated_depth[1], 0.014, 1e-15, "45 deg 14 mm");
+  CHECK_NEAR(sc.world.validated_depth[1], 0.012, 1e-15, "45 deg 12 mm");
   CHECK_NEAR(sc.world.validated_depth[2], 0.014, 1e-15, "60 deg 14 mm");
-  CHECK_NEAR(sc.world.validated_depth[3], 0.014, 1e-15, "70 deg 14 mm");
+  CHECK_NEAR(sc.world.validated_depth[3], 0.012, 1e-15, "70 deg 12 mm");
   char *js = palp_scene_to_json(&sc);
   CHECK(js && palp_scene_parse(js, &back, err, sizeof err) == 0, "the logged scene parses again: %s", err);
   if (js) {
