@@ -11,7 +11,8 @@
  *    the breast-tissue dome, 2.8934 N on the long-term dome), which is what a static
  *    equilibrium must be;
  *    (the breast-tissue figure is the set as it was before its refit with "current" on
- *    2026-11-29; the refitted set holds 0.7319 N there);
+ *    2026-11-29; the refitted set holds 0.7319 N there, and 0.6197 N since its refit against
+ *    the refined fingertip FE, 2026-11-30);
  *  - the other reading ("free", the step's free positions, with which the long-term set
  *    was fitted and the breast-tissue set was until 2026-11-29) tends to it as the step
  *    shrinks: within 2% at 0.25 ms (measured 1.2% on breast tissue). Its value at 4 ms is
