@@ -4,7 +4,7 @@
 SINCE 2026-11-30 the set's validated table and its lesion's gain rest on the FE refined where the
 finger presses (test_finger_refined.py; docs/materials.md, "Refitted against the refined
 fingertip"): uniform levels 3 and 4 are 9-27% stiff under a fingertip, and the refitted set stands
-at 0.90-1.11 of uniform level 4 at the pole from 1.5 mm (TABLE_ON_REFINED). Here the set's ratios against them,
+at 0.90-1.11 of uniform level 4 at the pole from 1.5 mm. Here the set's ratios against them,
 the lesion's gain and the level-3 cyst's loss are PRINTED; what stays asserted is the references'
 own convergence (level 4 no stiffer than level 3 from 2 mm), both curves' rise, the proxy's reach
 and, against the level-4 cyst, the cyst's loss within 2 points (measured within 1.1). The bounds
@@ -99,11 +99,6 @@ SITES = {"pole": 0.0, "45deg": 45.0, "60deg": 60.0, "70deg": 70.0}
 # the faceted FE surface's offset from the sphere is a fair part of the depth, and refining it
 # can stiffen the first millimetre (60 deg: level 4 / level 3 1.04-1.11 at 0.5-1.5 mm).
 STIFF_SIDE_FROM = 2e-3
-# Since 2026-11-30 the set's validated table and its lesion's gain rest on the FE refined where the finger
-# presses (test_finger_refined.py): the uniform level-3 and level-4 curves here are 9-27% stiff under a
-# fingertip, so the set's ratios against them are printed, and what is asserted is the references' own
-# convergence (level 4 no stiffer than level 3), the curves' rise, the proxy's reach and the cyst's loss.
-TABLE_ON_REFINED = True
 
 
 def proxy_tol(depth):
@@ -128,12 +123,8 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
         return
     rows = lt.read(out)
     table = validated(scene)
-    # Sites with a level-4 curve have their table checked against it (finer(), below): level 3 is
-    # up to 17% stiff there (level 4 / level 3 0.83-0.91 at 70 deg from 2 mm), so a set within 15% of
-    # the finer reference can stand outside 15% of level 3 (since the step-independent fingertip
-    # of 2026-11-29: 70 deg 0.81-0.94 of level 3 at 1.5-7 mm, 0.96-1.06 of level 4). Level 3 is
-    # then printed, not asserted.
-    finer_sites = {x["site"] for x in lt.read(level4)} if level4 else set()
+    # The table is checked against the refined curves (test_finger_refined.py); level 3, up to 17%
+    # stiff under a fingertip (level 4 / level 3 0.83-0.91 at 70 deg from 2 mm), is printed.
     for site in SITES:
         d, fe, rt, dr = lt.columns(rows, site)
         check(len(d) >= 8, "%s: only %d depths" % (site, len(d)))
@@ -148,31 +139,12 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
                       "%s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
         check(round(SITES[site], 6) in table, "the parameter file's validated table has no %g deg entry" % SITES[site])
         limit = table.get(round(SITES[site], 6), 0.0)
-        first_out = None
         for k in range(len(d)):
-            if fe[k] < 0.3:
-                continue
-            q = rt[k] / fe[k]
-            inside = 0.85 <= q <= 1.15
-            print("%s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f%s" %
-                  (site, 1e3 * d[k], fe[k], rt[k], q, "" if d[k] <= limit + 1e-9 else " (beyond the table)"))
-            if site in finer_sites or TABLE_ON_REFINED:
-                continue
-            if d[k] <= limit + 1e-9:
-                check(inside, "%s at %.2f mm, within the validated %.1f mm: real-time / FE %.3f (15%%)" %
-                      (site, 1e3 * d[k], 1e3 * limit, q))
-            if not inside and first_out is None:
-                first_out = d[k]
-        if site in finer_sites or TABLE_ON_REFINED:
-            print("%s: level 3 printed only; the table is checked against the refined curves (test_finger_refined.py)" % site)
-            continue
-        if first_out is not None:
-            check(limit < first_out, "%s: the table claims %.1f mm, the ratio leaves 15%% at %.1f mm" %
-                  (site, 1e3 * limit, 1e3 * first_out))
-        print("%s: validated to %.1f mm, first depth outside 15%%: %s" %
-              (site, 1e3 * limit, "none (the curve's end, %.1f mm)" % (1e3 * d[-1]) if first_out is None
-               else "%.1f mm" % (1e3 * first_out)))
-    lesion(rows, table, gain_tol=None if TABLE_ON_REFINED else 0.03)
+            if fe[k] >= 0.3:
+                print("%s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f%s" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k],
+                      "" if d[k] <= limit + 1e-9 else " (beyond the table)"))
+        print("%s: level 3 printed only; the table is checked against the refined curves (test_finger_refined.py)" % site)
+    lesion(rows, table)
     if level4:
         finer(tool, scene, level4, rows, table)
     if cyst:
@@ -185,8 +157,9 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
 
 
 def finer(tool, scene, data, rows3, table):
-    """The level-4 curves: no stiffer than level 3 from 2 mm, the table no deeper than they reach, and the
-    real-time set within 15% of them up to the table's depth."""
+    """The level-4 curves: no stiffer than level 3 from 2 mm; the real-time set's ratios against them and
+    its lesion's gain printed (the table rests on the refined curves since 2026-11-30; until then it was
+    checked here: within 15% from the FE's 0.3 N to its depth, measured 1.096-1.144 at the pole)."""
     stored_sites = {x["site"] for x in lt.read(data)}
     sites = sorted(stored_sites & set(SITES), key=list(SITES).index)
     check(sites[:1] == ["pole"] and len(sites) >= 2, "level-4 sites: %r (want the pole and another)" % sites)
@@ -206,42 +179,15 @@ def finer(tool, scene, data, rows3, table):
                 worst = max(worst, fe[k] / f3)
                 check(fe[k] <= 1.01 * f3, "%s at %.2f mm: level 4 %.4f N stiffer than level 3 %.4f N" %
                       (site, 1e3 * d[k], fe[k], f3))
-        claimed = table.get(round(SITES[site], 6), 0.0)
-        if TABLE_ON_REFINED:
-            for k in range(len(d)):
-                if fe[k] >= 0.3:
-                    print("level 4, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f (printed: level 4 is stiff under a "
-                          "fingertip)" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k]))
-            print("level 4, %s: level 4 / level 3 at most %.3f" % (site, worst))
-            continue
-        check(claimed <= d[-1] + 1e-9, "%s: the table claims %.1f mm, deeper than the level-4 curve reaches (%.1f mm)" %
-              (site, 1e3 * claimed, 1e3 * d[-1]))
-        limit = min(claimed, d[-1])
-        n, lo, hi = 0, 9.0, 0.0
-        first_out = next((d[k] for k in range(len(d)) if fe[k] >= 0.3 and not 0.85 <= rt[k] / fe[k] <= 1.15), None)
-        check(first_out is None or claimed < first_out, "level 4, %s: the table claims %.1f mm, the ratio leaves 15%% at "
-              "%.1f mm" % (site, 1e3 * claimed, 1e3 * (first_out or 0.0)))
         for k in range(len(d)):
-            if fe[k] < 0.3 or d[k] > limit + 1e-9:
-                continue
-            check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
-                  "level 4, %s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
-            q = rt[k] / fe[k]
-            n, lo, hi = n + 1, min(lo, q), max(hi, q)
-            print("level 4, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f" % (site, 1e3 * d[k], fe[k], rt[k], q))
-            check(0.85 <= q <= 1.15, "level 4, %s at %.2f mm: real-time / FE %.3f (15%%)" % (site, 1e3 * d[k], q))
-        check(n >= 5, "level 4, %s: %d depths from 0.3 N to %.1f mm" % (site, n, 1e3 * limit))
-        print("level 4, %s: level 4 / level 3 at most %.3f; real-time / level 4 %.3f-%.3f over %d depths to %.1f mm" %
-              (site, worst, lo, hi, n, 1e3 * limit))
+            if fe[k] >= 0.3:
+                print("level 4, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f (printed: level 4 is stiff under a "
+                      "fingertip)" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k]))
+        print("level 4, %s: level 4 / level 3 at most %.3f" % (site, worst))
     if over_lesion:
-        # the lesion against the finer (level-4) FE, as against level 3 (lesion(), below): the level-4
-        # curve supersedes level 3's there, which is up to 17% stiff for a fingertip. The gain's
-        # bound is 4 points here, a regression bound, not the issue's target: level 4 raises the
-        # FE's gain to +15.4..+18.0% from 1.5 to 6 mm (level 3 +12.4..+15.2%), and the set, fitted
-        # within 3 points of level 3, stays at +14.2..+15.3%: 3.5 points below at 6 mm (measured
-        # 2026-11-29; the issue's "agree within 15%" of the gain is missed at 2.5-8 mm, 0.81-0.87 of
-        # the FE's; docs/materials.md, "Level 4 over the lesion"). The forces over it hold 15%.
-        lesion(rows, table, "level 4, ", gain_tol=None if TABLE_ON_REFINED else 0.04)
+        # the lesion at level 4, printed (level 4 raises the FE's gain to +15.4..+18.0% from 1.5 to 6 mm,
+        # level 3 +12.4..+15.2%; the refined FE +18.1..+20.8%, which test_finger_refined.py checks)
+        lesion(rows, table, "level 4, ")
 
 
 def soft(tool, scene, data, table, level="3", loss_tol=0.02):
@@ -252,12 +198,12 @@ def soft(tool, scene, data, table, level="3", loss_tol=0.02):
     # from the plain pole's 0.3 N to its validated depth
     limit = table.get(0.0, 0.0)
     lt.cyst_losses(rows, lambda depth, f_plain: f_plain >= 0.3 and depth <= limit + 1e-9, proxy_tol, 8,
-                   force_ratio=not TABLE_ON_REFINED, loss_tol=loss_tol)
+                   force_ratio=False, loss_tol=loss_tol)
 
 
-def lesion(rows, table, label="", gain_tol=0.03):
-    """The pole over the lesion against the plain pole, both models at the same depths; the lesion's
-    gain within gain_tol (absolute) of the FE's."""
+def lesion(rows, table, label=""):
+    """The pole over the lesion against the plain pole, both models at the same depths, printed (the
+    gain is checked against the refined FE by test_finger_refined.py); the proxy at each FE depth."""
     d, fe, rt, dr = lt.columns(rows, "pole_lesion")
     d0, fe0, rt0, _ = lt.columns(rows, "pole")
     check(len(d) >= 8, label + "pole_lesion: only %d depths" % len(d))
@@ -273,14 +219,9 @@ def lesion(rows, table, label="", gain_tol=0.03):
         n, worst = n + 1, max(worst, abs(gr - gf))
         print(label + "pole_lesion %.2f mm: FE %.3f N (gain %+.1f%%), real-time %.3f N (gain %+.1f%%), ratio %.3f" %
               (1e3 * d[k], fe[k], 100 * gf, rt[k], 100 * gr, q))
-        if gain_tol is None:
-            continue
-        check(0.85 <= q <= 1.15, label + "pole_lesion at %.2f mm: real-time / FE %.3f (15%%)" % (1e3 * d[k], q))
-        check(abs(gr - gf) <= gain_tol, label + "pole_lesion at %.2f mm: lesion gain %+.1f%% against the FE's %+.1f%% "
-              "(%.0f points)" % (1e3 * d[k], 100 * gr, 100 * gf, 100 * gain_tol))
     check(n >= 8, label + "pole_lesion: %d depths compared from the pole's 0.3 N to its validated depth" % n)
-    print(label + "pole_lesion: %d depths, lesion gain within %.1f points of the FE's%s" %
-          (n, 100 * worst, " (printed only: checked against the refined FE in test_finger_refined.py)" if gain_tol is None else ""))
+    print(label + "pole_lesion: %d depths, lesion gain within %.1f points of the FE's (printed: checked against the "
+          "refined FE in test_finger_refined.py)" % (n, 100 * worst))
 
 
 def guard(tool, scene, data, level4=None, cyst=None, cyst4=None):
