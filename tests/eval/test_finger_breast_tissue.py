@@ -130,16 +130,15 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
         check(len(d) >= 8, "%s: only %d depths" % (site, len(d)))
         check(all(fe[k + 1] > fe[k] for k in range(len(fe) - 1)), "%s: FE force not increasing: %r" % (site, fe))
         check(all(rt[k + 1] > rt[k] for k in range(len(rt) - 1)), "%s: real-time force not increasing: %r" % (site, rt))
-        # matched positions where a ratio is asserted (to the table's depth); deeper, the
-        # step-independent fingertip (2026-11-29) left the secant 0.09-0.13 mm short at 60 deg and
-        # 16-18 mm (13-14 N on the virtual coupling), where nothing is claimed
-        for k in range(len(d)):
-            if d[k] <= table.get(round(SITES[site], 6), 0.0) + 1e-9:
-                check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
-                      "%s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
         check(round(SITES[site], 6) in table, "the parameter file's validated table has no %g deg entry" % SITES[site])
         limit = table.get(round(SITES[site], 6), 0.0)
         for k in range(len(d)):
+            # matched positions to the table's depth; deeper, the step-independent fingertip
+            # (2026-11-29) left the secant 0.09-0.13 mm short at 60 deg and 16-18 mm (13-14 N on the
+            # virtual coupling), where nothing is claimed
+            if d[k] <= limit + 1e-9:
+                check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
+                      "%s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
             if fe[k] >= 0.3:
                 print("%s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f%s" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k],
                       "" if d[k] <= limit + 1e-9 else " (beyond the table)"))
@@ -168,7 +167,7 @@ def finer(tool, scene, data, rows3, table):
     if rows is None:
         return
     for site in sites:
-        d, fe, rt, dr = lt.columns(rows, site)
+        d, fe, rt, _ = lt.columns(rows, site)
         d3, fe3, _, _ = lt.columns(rows3, site)
         at3 = {round(x, 9): f for x, f in zip(d3, fe3)}
         check(len(d) >= 8, "level 4, %s: only %d depths" % (site, len(d)))
@@ -179,7 +178,6 @@ def finer(tool, scene, data, rows3, table):
                 worst = max(worst, fe[k] / f3)
                 check(fe[k] <= 1.01 * f3, "%s at %.2f mm: level 4 %.4f N stiffer than level 3 %.4f N" %
                       (site, 1e3 * d[k], fe[k], f3))
-        for k in range(len(d)):
             if fe[k] >= 0.3:
                 print("level 4, %s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f (printed: level 4 is stiff under a "
                       "fingertip)" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k]))
