@@ -8,10 +8,16 @@
 # test_finger_refined.py's guard checks, and the commands; and fem_graded4_breast_tissue_finger.csv:
 # the same sites to 14 mm on level 4 graded 0.5 at each site (~15-40 min of one core a site), which
 # carries the validated table beyond where the level-5 curves end.
+# With a third argument, long_term (or all): fem_graded4_long_term_finger.csv, the default long-term
+# dome (config/paper_step_long_term.json) on level 4 graded 0.5 at the pole, 45 deg, 70 deg and the pole
+# over the lesion, until the FE force passes 5 N (70 deg: 11 N), ~3-15 min of one core a site
+# (docs/materials.md, "The long-term set refitted against the graded fingertip").
+#   tests/data/make_refined_refs.sh BUILD_DIR [OUT_DIR [breast_tissue|long_term|all]]
 set -eu
 build=$1
 root=$(cd "$(dirname "$0")/../.." && pwd)
 out=${2:-$root/tests/data}
+which=${3:-breast_tissue}
 tmp=$(mktemp -d)
 fem=$build/tools/fem/palp-fem
 scene=$root/config/phantoms/dome.json
@@ -26,6 +32,7 @@ header() { # file what
     echo "# sha256 of src/fem/fem_mesh.c $(sha256sum "$root/src/fem/fem_mesh.c" | cut -d' ' -f1)"
   } > "$1"
 }
+if [ "$which" != long_term ]; then
 run pole 0.5 0 1.3 "$tmp/pole.csv"
 run 45deg 0.5 45 3 "$tmp/45.csv"
 run 70deg 0.5 70 3 "$tmp/70.csv"
@@ -51,4 +58,16 @@ f=$out/fem_graded4_breast_tissue_finger.csv
 header "$f" "level 4, grading 0.5 at each site, to 14 mm: the same with {\"level\": 4} --max-force F (pole 5.3, 45deg 5.5, 60deg 5.8, 70deg 8.5)"
 sed -n 1p "$tmp/g4pole.csv" >> "$f"
 for c in g4pole g445 g460 g470; do sed 1d "$tmp/$c.csv" >> "$f"; done
+fi
+if [ "$which" != breast_tissue ]; then
+scene=$root/config/paper_step_long_term.json
+run pole 0.5 0 5.6 "$tmp/lpole.csv" 4
+run 45deg 0.5 45 5.6 "$tmp/l45.csv" 4
+run 70deg 0.5 70 11 "$tmp/l70.csv" 4
+run pole_lesion 0.5 0 6.2 "$tmp/llesion.csv" 4
+f=$out/fem_graded4_long_term_finger.csv
+header "$f" "the long-term dome on level 4, grading 0.5 at each site: palp-fem finger --scene config/paper_step_long_term.json --config {\"mesh\": {\"level\": 4, \"grading\": 0.5, \"grading_polar_deg\": SITE_DEG}} --site SITE --max-force F (pole 5.6, 45deg 5.6, 70deg 11, pole_lesion 6.2) --no-force-table"
+sed -n 1p "$tmp/lpole.csv" >> "$f"
+for c in lpole l45 l70 llesion; do sed 1d "$tmp/$c.csv" >> "$f"; done
+fi
 rm -rf "$tmp"
