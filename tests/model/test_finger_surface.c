@@ -128,10 +128,10 @@ static void test_geometry(void) {
 /* A fingertip slid at constant depth below the dome's sphere along a latitude (the
  * long-term dome, 1 kHz, 5 mm/s over 20 mm after a press at 1 mm/s and 0.3 s of hold):
  * (max - min) / mean of the force over the slide after its first 2 mm [-]. */
-static double slide(int surface, double polar_deg, double depth, double *worst_step) {
+static double slide_on(const char *scene, int surface, double polar_deg, double depth, double *worst_step) {
   palp_scene sc;
   char err[256];
-  if (palp_scene_load(PALP_CONFIG_DIR "/paper_step_long_term.json", &sc, err, sizeof err)) {
+  if (palp_scene_load(scene, &sc, err, sizeof err)) {
     fprintf(stderr, "%s\n", err);
     exit(2);
   }
@@ -173,6 +173,10 @@ static double slide(int surface, double polar_deg, double depth, double *worst_s
   return (fmax_ - fmin_) / (sum / n);
 }
 
+static double slide(int surface, double polar_deg, double depth, double *worst_step) {
+  return slide_on(PALP_CONFIG_DIR "/paper_step_long_term.json", surface, polar_deg, depth, worst_step);
+}
+
 /* At 0.5 mm below the sphere the flat facets' sag (0.13-0.19 mm under the path) is a
  * third of the depth, so on the facets the force swings by ~25% as the tip passes
  * vertices and facet centres ~7 mm apart: ridges the tissue does not have. With the
@@ -195,8 +199,32 @@ static void test_slide(void) {
   CHECK(f70 > 0.07, "facets, 70 deg: the facets are felt (%.1f%%, over 7%%)", 100 * f70);
 }
 
+/* The exercise phantom (the breast-tissue dome, config/phantoms/dome.json) slid the same way. Its
+ * support is stiff against its bending (D 1.75x its skin's own since the refit of 2026-11-30), so the
+ * net's stiffness under a fingertip differs between a vertex and a face more than on the long-term
+ * dome: measured 2026-12-02, 5 mm deep (~1.7 N at the pole, the exercises' medium pressure) 5.4% at
+ * 30 deg and 2.7% at 70 deg, under the hand's 7%: asserted. 2 mm deep (~0.5 N, light pressure) 18.9%
+ * and 8.5% (16.0% and 7.5% with the set before that refit): over it, so a light touch feels the net as
+ * much as the hard exercise's 1 cm lump (+9-16%); held here in a REGRESSION BOUND (22%), not a pass
+ * (docs/haptics.md, "The net under a light touch"). */
+static void test_slide_breast_tissue(void) {
+  double st = 0.0, r[2][2];
+  static const double deps[2] = {5e-3, 2e-3};
+  for (int k = 0; k < 2; ++k)
+    for (int a = 0; a < 2; ++a) {
+      r[k][a] = slide_on(PALP_CONFIG_DIR "/phantoms/dome.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0, deps[k], &st);
+      printf("breast tissue, smooth, polar %d deg, %.0f mm below the sphere: (max - min) / mean %.1f%% (worst tick "
+             "step %.5f N)\n", a ? 70 : 30, 1e3 * deps[k], 100 * r[k][a], st);
+    }
+  CHECK(r[0][0] < 0.07 && r[0][1] < 0.07, "breast tissue 5 mm deep: the force varies by %.1f%% / %.1f%% at 30 / 70 deg "
+        "(bound 7%%)", 100 * r[0][0], 100 * r[0][1]);
+  CHECK(r[1][0] < 0.22 && r[1][1] < 0.22, "breast tissue 2 mm deep: %.1f%% / %.1f%% at 30 / 70 deg (regression bound "
+        "22%%)", 100 * r[1][0], 100 * r[1][1]);
+}
+
 int main(void) {
   test_geometry();
   test_slide();
+  test_slide_breast_tissue();
   CHECK_DONE();
 }
