@@ -239,6 +239,13 @@ SITE_DEG = {"pole": 0.0, "45deg": 45.0, "70deg": 70.0}
 GRADED_BOUNDS = {"pole": (1.10, 1.42), "45deg": (1.05, 1.33), "70deg": (1.05, 1.31)}
 
 
+def validated_table(scene):
+    """The scene's parameter file's validated fingertip table: {polar_deg: depth_m}."""
+    sc = json.load(open(scene))
+    params = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
+    return {round(e["polar_deg"], 6): e["depth_m"] for e in json.load(open(params))["validated"]["finger"]}
+
+
 def by_depth(rows, site):
     return {round(float(x["depth_m"]), 9): float(x["fem_N"]) for x in rows if x["site"] == site}
 
@@ -283,9 +290,7 @@ def graded(tool, scene, data, graded_csv, graded5_csv=None):
     rows = realtime_rows(tool, scene, joined, sites, max_force="20", label=" (graded, joined)")
     if rows is None:
         return
-    sc = json.load(open(scene))
-    params = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
-    claimed = {round(e["polar_deg"], 6): e["depth_m"] for e in json.load(open(params))["validated"]["finger"]}
+    claimed = validated_table(scene)
     for site in GRADED_SITES:
         d, fe, rt, dr = columns(rows, site)
         lo_b, hi_b = GRADED_BOUNDS[site]

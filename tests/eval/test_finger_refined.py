@@ -53,7 +53,6 @@ guard: the stored curves were made by today's fingertip FE code and mesher (the 
 src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header equal today's).
 """
 import hashlib
-import json
 import math
 import os
 import sys
@@ -233,9 +232,7 @@ def table(tool, scene, data, deep, level4):
     rows = lt.realtime_rows(tool, scene, joined, SITES, max_force="20", label=" (refined, joined)")
     if rows is None:
         return
-    sc = json.load(open(scene))
-    params = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
-    claimed = {round(e["polar_deg"], 6): e["depth_m"] for e in json.load(open(params))["validated"]["finger"]}
+    claimed = lt.validated_table(scene)
     for site in SITES:
         d, fe, rt, dr = lt.columns(rows, site)
         limit = claimed.get(SITE_DEG[site])
