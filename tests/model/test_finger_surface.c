@@ -125,9 +125,9 @@ static void test_geometry(void) {
   palp_mesh_destroy(&m);
 }
 
-/* A fingertip slid at constant depth below the dome's sphere along a latitude (the
- * long-term dome, 1 kHz, 5 mm/s over 20 mm after a press at 1 mm/s and 0.3 s of hold):
- * (max - min) / mean of the force over the slide after its first 2 mm [-]. */
+/* A fingertip slid at constant depth below the dome's sphere along a latitude (scene's dome,
+ * its own contacts removed; 1 kHz, 5 mm/s over 20 mm after a press at 1 mm/s and 0.3 s of
+ * hold): (max - min) / mean of the force over the slide after its first 2 mm [-]. */
 static double slide_on(const char *scene, int surface, double polar_deg, double depth, double *worst_step) {
   palp_scene sc;
   char err[256];
@@ -173,6 +173,7 @@ static double slide_on(const char *scene, int surface, double polar_deg, double 
   return (fmax_ - fmin_) / (sum / n);
 }
 
+/* the same on the long-term dome */
 static double slide(int surface, double polar_deg, double depth, double *worst_step) {
   return slide_on(PALP_CONFIG_DIR "/paper_step_long_term.json", surface, polar_deg, depth, worst_step);
 }
@@ -212,7 +213,8 @@ static void test_slide_breast_tissue(void) {
   static const double deps[2] = {5e-3, 2e-3};
   for (int k = 0; k < 2; ++k)
     for (int a = 0; a < 2; ++a) {
-      r[k][a] = slide_on(PALP_CONFIG_DIR "/phantoms/dome.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0, deps[k], &st);
+      r[k][a] = slide_on(PALP_CONFIG_DIR "/phantoms/dome.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0, deps[k],
+                         &st);
       printf("breast tissue, smooth, polar %d deg, %.0f mm below the sphere: (max - min) / mean %.1f%% (worst tick "
              "step %.5f N)\n", a ? 70 : 30, 1e3 * deps[k], 100 * r[k][a], st);
     }
