@@ -11,7 +11,7 @@
 # With a third argument, long_term (or all): fem_graded4_long_term_finger.csv, the default long-term
 # dome (config/paper_step_long_term.json) on level 4 graded 0.5 at the pole, 45 deg, 70 deg and the pole
 # over the lesion, until the FE force passes 5 N (70 deg: 11 N), ~3-15 min of one core a site, and
-# fem_graded5_long_term_finger.csv, level 5 graded at the pole to 4 mm (~20 min) (docs/materials.md,
+# fem_graded5_long_term_finger.csv, level 5 graded at the pole and at 45 deg to 4 mm (~20-35 min each) (docs/materials.md,
 # "The long-term set against the graded fingertip").
 #   tests/data/make_refined_refs.sh BUILD_DIR [OUT_DIR [breast_tissue|long_term|all]]
 set -eu
@@ -71,8 +71,10 @@ header "$f" "the long-term dome on level 4, grading 0.5 at each site: palp-fem f
 sed -n 1p "$tmp/lpole.csv" >> "$f"
 for c in lpole l45 l70 llesion; do sed 1d "$tmp/$c.csv" >> "$f"; done
 run pole 0.5 0 5.6 "$tmp/l5pole.csv" 5
+run 45deg 0.5 45 5.6 "$tmp/l545.csv" 5
 f=$out/fem_graded5_long_term_finger.csv
-header "$f" "the long-term dome on level 5, grading 0.5 at the pole: the same with {\"level\": 5} --site pole --max-force 5.6"
+header "$f" "the long-term dome on level 5, grading 0.5 at the pole and at 45 deg: the same with {\"level\": 5} --site pole / 45deg --max-force 5.6"
 cat "$tmp/l5pole.csv" >> "$f"
+sed 1d "$tmp/l545.csv" >> "$f"
 fi
 rm -rf "$tmp"
