@@ -84,14 +84,26 @@ def read(path):
         return list(csv.DictReader(l for l in f if not l.startswith("#")))
 
 
-def stored(tool, scene, data):
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_l4_"), "finger.csv")
-    # no --site: the default, every site of "all" (60deg, which the stored curves predate, is asked by name)
-    r = run([tool, "finger", "--scene", scene, "--level", "4", "--fe-from", data, "--no-force-table", "--out", out])
-    check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
-    if r.returncode:
-        return
-    rows = read(out)
+def stored(tool, scene, data, rt_rows=None):
+    """rt_rows: the real-time side already computed at a superset of the stored depths (graded()'s run:
+    the driver walks each site's depths in order from the undeformed dome, so a depth's force does not
+    depend on the depths after it), read at the stored depths instead of driving the finger again."""
+    if rt_rows is not None:
+        rt_at = {(x["site"], round(float(x["depth_m"]), 9)): x for x in rt_rows}
+        rows = []
+        for x in read(data):
+            y = rt_at.get((x["site"], round(float(x["depth_m"]), 9)))
+            check(y is not None, "%s %s m: no real-time row at a stored depth" % (x["site"], x["depth_m"]))
+            if y is not None:
+                rows.append(dict(x, realtime_N=y["realtime_N"], realtime_depth_m=y["realtime_depth_m"]))
+    else:
+        out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_l4_"), "finger.csv")
+        # no --site: the default, every site of "all" (60deg, which the stored curves predate, is asked by name)
+        r = run([tool, "finger", "--scene", scene, "--level", "4", "--fe-from", data, "--no-force-table", "--out", out])
+        check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
+        if r.returncode:
+            return
+        rows = read(out)
     for site, (lo, hi) in BOUNDS.items():
         d, fe, rt, dr = columns(rows, site)
         check(len(d) >= 4, "%s: only %d depths" % (site, len(d)))
@@ -289,7 +301,7 @@ def graded(tool, scene, data, graded_csv, graded5_csv=None):
                 f.write(",".join(row[k] or "" for k in keys) + "\n")
     rows = realtime_rows(tool, scene, joined, sites, max_force="20", label=" (graded, joined)")
     if rows is None:
-        return
+        return None
     claimed = validated_table(scene)
     for site in GRADED_SITES:
         d, fe, rt, dr = columns(rows, site)
@@ -326,19 +338,19 @@ def graded(tool, scene, data, graded_csv, graded5_csv=None):
         check(gf >= 0.08 and not gf < gu - 0.01, "lesion gain at %.2f mm: graded FE %+.1f%%, uniform level 4 %+.1f%%"
               % (1e3 * d[k], 100 * gf, 100 * gu))
     check(n >= 4, "graded lesion gain compared at %d depths" % n)
+    return rows
 
 
-def graded_guard(path):
-    """The graded curves were made by today's fingertip FE code and mesher (the sha256 of
-    src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header)."""
+def mesh_guard(path, rerun):
+    """The curves in path were made by today's fingertip FE code and mesher: the sha256 of
+    src/fem/fem_finger.c and src/fem/fem_mesh.c in its header equal today's (else: rerun, how)."""
     import hashlib
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     head = [l for l in open(path) if l.startswith("#")]
     for src in ("src/fem/fem_finger.c", "src/fem/fem_mesh.c"):
         sha = hashlib.sha256(open(os.path.join(root, src), "rb").read()).hexdigest()
-        check(any(sha in l for l in head), "%s changed since %s was written: rerun tests/data/make_refined_refs.sh "
-              "BUILD tests/data long_term" % (src, os.path.basename(path)))
-    print("%s: %s" % (os.path.basename(path), head[0].strip()[:160] if head else "(no header)"))
+        check(any(sha in l for l in head), "%s changed since %s was written: %s" % (src, os.path.basename(path), rerun))
+    print("%s: %s" % (os.path.basename(path), "".join(head[:2]).strip()))
 
 
 def main():
@@ -346,13 +358,15 @@ def main():
     mode = sys.argv[4] if len(sys.argv) > 4 else "stored"
     opts = dict(zip(sys.argv[5::2], sys.argv[6::2]))  # --cyst FILE, as test_finger_breast_tissue.py
     cyst, graded_csv, graded5_csv = opts.get("--cyst"), opts.get("--graded"), opts.get("--graded5")
-    {"stored": stored, "guard": guard, "recompute": recompute}[mode](tool, scene, data)
-    if graded_csv and mode == "stored":
-        graded(tool, scene, data, graded_csv, graded5_csv)
-    elif graded_csv and mode == "guard":
+    if mode == "stored":
+        # the graded curves' depths include the stored ones: one real-time run serves both
+        stored(tool, scene, data, graded(tool, scene, data, graded_csv, graded5_csv) if graded_csv else None)
+    else:
+        {"guard": guard, "recompute": recompute}[mode](tool, scene, data)
+    if graded_csv and mode == "guard":
         for path in (graded_csv, graded5_csv):
             if path:
-                graded_guard(path)
+                mesh_guard(path, "rerun tests/data/make_refined_refs.sh BUILD tests/data long_term")
     if cyst and mode == "stored":
         soft(tool, scene, cyst)
     elif cyst and mode == "guard":

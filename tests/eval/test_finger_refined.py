@@ -52,7 +52,6 @@ where the graded mesh's cells near the base, grown up to 2x, stiffen it).
 guard: the stored curves were made by today's fingertip FE code and mesher (the sha256 of
 src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header equal today's).
 """
-import hashlib
 import math
 import os
 import sys
@@ -261,14 +260,8 @@ def table(tool, scene, data, deep, level4):
 
 
 def guard(data, alpha03, deep):
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     for path in (data, alpha03, deep):
-        head = [l for l in open(path) if l.startswith("#")]
-        for src in ("src/fem/fem_finger.c", "src/fem/fem_mesh.c"):
-            sha = hashlib.sha256(open(os.path.join(root, src), "rb").read()).hexdigest()
-            check(any(sha in l for l in head), "%s changed since %s was written: recompute it (its header says how)" %
-                  (src, os.path.basename(path)))
-        print("%s: %s" % (os.path.basename(path), "".join(head[:2]).strip()))
+        lt.mesh_guard(path, "recompute it (its header says how)")
 
 
 def main():
