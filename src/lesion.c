@@ -32,8 +32,13 @@ static double S(double z, double c) {
 }
 
 double palp_lesion_support_scale(const palp_lesion *les, int count, palp_vec3 x, palp_vec3 n, double length) {
+  return palp_support_column_scale(les, count, x, n, length, length);
+}
+
+double palp_support_column_scale(const palp_lesion *les, int count, palp_vec3 x, palp_vec3 n, double length,
+                                 double full) {
   const double c = PALP_LESION_CONTACT_SCALE;
-  if (!(length > 0.0)) return 1.0;
+  if (!(length > 0.0) || !(full > 0.0)) return 1.0;
   const double C0 = S(length, c);
   double C = C0;
   for (int l = 0; l < count; ++l) {
@@ -50,6 +55,9 @@ double palp_lesion_support_scale(const palp_lesion *les, int count, palp_vec3 x,
     const double q = s >= 1.0 ? 1.0 / s : 1.0 / (1.0 + PALP_LESION_SOFT_BETA * (s - 1.0));
     C -= (1.0 - q) * (S(z2, c) - S(z1, c));
   }
-  /* q < 1 / (1 - beta) = 1.67 for any cyst, so C stays above 0.33 C0; kept > 0 anyway. */
-  return C0 / fmax(C, 1e-3 * C0);
+  /* q < 1 / (1 - beta) = 1.67 for any cyst, so C stays above 0.33 C0; kept > 0 anyway.
+   * A shorter column than the full one (the base cuts it, world.c) is stiffer by
+   * S(full) / S(length); with equal lengths that factor is exactly 1, as before. */
+  const double base = full == length ? 1.0 : S(full, c) / C0;
+  return base * (C0 / fmax(C, 1e-3 * C0));
 }

@@ -194,6 +194,15 @@ typedef struct palp_gel_params {
    * tangent continuous at u = 0. */
   double support_stiffening;       /* beta [-], in [0, 1000] */
   double support_stiffening_power; /* p [-], in [1, 8] when beta > 0 (scene files: 2 by default) */
+  /* How far the bonded base cuts the support's column, f in [0, 1] (0: not at all, bit for
+   * bit as before). The support under a vertex is a column along its inward normal whose
+   * compliance is weighted by a fingertip's Boussinesq stress (palp_support_column_scale);
+   * the column runs to the dome's centre, length R, but the gel is bonded to the base
+   * z = 0, which lies z_i under vertex i: near the rim the base is inside the stress bulb
+   * and stiffens the gel (the FE fingertip at 70 deg). The column's length is
+   * R - f (R - z_i) (floored at 1 mm) and its compliance is set against the pole's:
+   * k_i / k = S(R) / S(length) (docs/model.md, "The base cuts the support's column"). */
+  double support_base_reach; /* f [-] */
   /* The gel moves with the membrane, so its inertia belongs to the surface
    * vertices: each free vertex carries added_mass_fraction of the gel's mass
    * density V0, shared by lumped area (docs/model.md, "Vertex weights"). */
@@ -416,6 +425,12 @@ double palp_world_support_scale(const palp_world *w, int vertex);
 /* The same factor for a point on the surface with outward unit normal (no world needed). */
 double palp_lesion_support_scale(const palp_lesion *lesions, int count, palp_vec3 surface_point, palp_vec3 normal,
                                  double column_length);
+/* The support's stiffness scale of a column of column_length [m] against a full column of
+ * full_length [m] (the pole's, the dome's radius), lesions included: S(full) / C(column),
+ * C the column's Boussinesq-weighted compliance with the lesions' chords (lesion.c); equal to
+ * palp_lesion_support_scale when the two lengths are equal. */
+double palp_support_column_scale(const palp_lesion *lesions, int count, palp_vec3 surface_point, palp_vec3 normal,
+                                 double column_length, double full_length);
 
 int palp_world_finger_contacts(const palp_world *w, int contact, int *triangles, double *force, int cap);
 int palp_world_remove_contact(palp_world *w, int contact);

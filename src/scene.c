@@ -142,6 +142,11 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   if (!(p->support_stiffening_power >= 1.0 && p->support_stiffening_power <= 8.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_stiffening_power: must be in [1, 8] (got %g)",
                            p->support_stiffening_power);
+  p->support_base_reach = 0.0;
+  if ((e = get_num(c, g, "gel.", "support_base_reach", 0, &p->support_base_reach))) return e;
+  if (!(p->support_base_reach >= 0.0 && p->support_base_reach <= 1.0))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_base_reach: must be in [0, 1] (0: the base does not cut the "
+                           "support's column; got %g)", p->support_base_reach);
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
   if (!(p->density > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
@@ -568,6 +573,7 @@ char *palp_scene_to_json(const palp_scene *s) {
     add_exact(g, "support_stiffening", gp->support_stiffening);
     add_exact(g, "support_stiffening_power", gp->support_stiffening_power);
   }
+  if (gp->support_base_reach > 0.0) add_exact(g, "support_base_reach", gp->support_base_reach);
   add_exact(g, "density_kg_m3", gp->density);
   add_exact(g, "added_mass_fraction", gp->added_mass_fraction);
   if (s->world.lesion_count > 0) {

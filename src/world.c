@@ -1714,6 +1714,7 @@ static int validate(const palp_world_def *d) {
     if (!(g->support_stiffening >= 0.0 && g->support_stiffening <= 1e3)) return PALP_EINVAL;
     if (g->support_stiffening > 0.0 && !(g->support_stiffening_power >= 1.0 && g->support_stiffening_power <= 8.0))
       return PALP_EINVAL;
+    if (!(g->support_base_reach >= 0.0 && g->support_base_reach <= 1.0)) return PALP_EINVAL;
   }
   if (d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY) {
     if (!(m->E1 > 0.0 && m->E2 > 0.0) || !isfinite(m->E1) || !isfinite(m->E2)) return PALP_EINVAL;
@@ -1916,10 +1917,18 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
   memcpy(w->pos, w->mesh.rest, sizeof *w->pos * (size_t)nv);
   double free_area = 0.0; /* [m^2] */
   for (int i = 0; i < nv; ++i) {
-    /* The support's column runs from the surface to the dome's centre. */
+    /* The support's column runs from the surface to the dome's centre, cut short by the
+     * base by support_base_reach (palp.h): R - f (R - z_i), floored at 1 mm. */
     const double rl = v3_len(w->mesh.rest[i]);
     const palp_vec3 nrm = rl > 0.0 ? v3_scale(w->mesh.rest[i], 1.0 / rl) : v3(0, 0, 1);
-    w->sarea[i] = w->mesh.vertex_area[i] * palp_lesion_support_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, rl);
+    const double fb = (def->effects & PALP_EFFECT_GEL_SUPPORT) ? def->gel.support_base_reach : 0.0;
+    if (fb > 0.0) {
+      const double cl = fmax(rl - fb * (rl - w->mesh.rest[i].z), 1e-3); /* [m] */
+      w->sarea[i] = w->mesh.vertex_area[i] *
+                    palp_support_column_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, cl, rl);
+    } else {
+      w->sarea[i] = w->mesh.vertex_area[i] * palp_lesion_support_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, rl);
+    }
     /* The gel under a vertex is squeezed against the base plane z = 0; floored at 1 mm
      * (the rim's ring lies on it and is fixed; the next ring is ~2.6 mm up). */
     if (w->sheight) w->sheight[i] = fmax(w->mesh.rest[i].z, 1e-3);

@@ -13,7 +13,8 @@
  * (config/paper_step_long_term.json) with a fingertip pressing 0-10 mm each, stepped in
  * turn at 250 Hz as one tick thread steps its sessions, against one such world stepped
  * alone in the same run: in turn, each step finds its factor and compliance columns
- * out of the caches, which is what the server's capacity pays (docs/model.md).
+ * out of the caches, which is what the server's capacity pays (docs/model.md). --scene FILE
+ * steps another dome there (e.g. config/paper_step_long_term_fine.json, 1,300 vertices).
  *
  * --surface smooth|facets sets the fingertip's contact surface of the finger cases (else
  * the library's default, and the scene's in the server core's view): run both in the same
@@ -24,7 +25,7 @@
  * change that claims to keep the bits (docs/model.md, "The stages around the solve").
  *
  *   bench_model_step [--steps N] [--quick] [--bending D] [--worlds K] [--core-only] [--cpu C]
- *                    [--surface smooth|facets] [--hash]
+ *                    [--surface smooth|facets] [--hash] [--scene FILE]
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -63,8 +64,7 @@ static palp_vec3 press_device(int i, double t) {
 
 /* K worlds stepped in turn (rounds of one step each) against one world alone, the same
  * trajectory per world; median / p99 of single steps, and the stages' means. */
-static int server_core(int K, int rounds, int surface, int hash) {
-  const char *path = PALP_CONFIG_DIR "/paper_step_long_term.json";
+static int server_core(int K, int rounds, int surface, int hash, const char *path) {
   palp_scene sc;
   char err[256];
   if (palp_scene_load(path, &sc, err, sizeof err) < 0) {
@@ -75,8 +75,9 @@ static int server_core(int K, int rounds, int surface, int hash) {
   sc.world.refactor_lag = 0; /* rebuilds on the stepping thread here: the server defers them */
   if (surface >= 0) sc.world.finger_surface = surface;
   if (K < 1) K = 1;
-  printf("a server core's view: the shipped default dome (%s), a fingertip pressing 0-10 mm at 0.7 Hz, 250 Hz, "
-         "finger surface %s\n", sc.name, palp_finger_surface_name(sc.world.finger_surface));
+  printf("a server core's view: %s (%s, %d vertices), a fingertip pressing 0-10 mm at 0.7 Hz, 250 Hz, "
+         "finger surface %s\n", strcmp(path, PALP_CONFIG_DIR "/paper_step_long_term.json") ? "the dome of --scene" : "the shipped default dome",
+         sc.name, sc.world.mesh.vertex_count, palp_finger_surface_name(sc.world.finger_surface));
   printf("%8s %8s %11s %11s   stage means (us)\n", "worlds", "steps", "median_us", "p99_us");
   const int cases[2] = {1, K};
   double med[2] = {0, 0};
@@ -132,6 +133,7 @@ static int server_core(int K, int rounds, int surface, int hash) {
 
 int main(int argc, char **argv) {
   int steps = 3000, quick = 0, worlds = 12, core_only = 0, cpu = 0, surface = -1, hash = 0;
+  const char *scene = PALP_CONFIG_DIR "/paper_step_long_term.json"; /* --core-only's dome */
   double bending = 0.0; /* [N m] */
   for (int i = 1; i < argc; ++i) {
     if (!strcmp(argv[i], "--steps") && i + 1 < argc) steps = atoi(argv[++i]);
@@ -139,6 +141,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--quick")) quick = 1;
     else if (!strcmp(argv[i], "--worlds") && i + 1 < argc) worlds = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--core-only")) core_only = 1;
+    else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene = argv[++i];
     else if (!strcmp(argv[i], "--hash")) hash = 1;
     else if (!strcmp(argv[i], "--cpu") && i + 1 < argc) cpu = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--surface") && i + 1 < argc) {
@@ -154,7 +157,7 @@ int main(int argc, char **argv) {
   CPU_ZERO(&set);
   CPU_SET(cpu, &set);
   const int pinned = sched_setaffinity(0, sizeof set, &set) == 0;
-  if (core_only) return server_core(worlds, quick ? 200 : 1000, surface, hash);
+  if (core_only) return server_core(worlds, quick ? 200 : 1000, surface, hash, scene);
   printf("palp model step benchmark: %d steps per case, all effects on, 3 N uniform load at polar 30 deg%s, "
          "bending stiffness %g N m\n", steps, pinned ? ", pinned to one CPU" : "", bending);
   printf("%8s %7s %8s %11s %11s %11s %9s %10s %10s\n", "vertices", "dt_ms", "unknowns", "median_us", "p99_us",
@@ -262,5 +265,5 @@ int main(int argc, char **argv) {
       palp_world_destroy(w);
     }
   free(t);
-  return server_core(worlds, quick ? 200 : 1000, surface, hash);
+  return server_core(worlds, quick ? 200 : 1000, surface, hash, scene);
 }

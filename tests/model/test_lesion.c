@@ -108,6 +108,75 @@ static void test_hinges_see_lesion(void) {
         100 * gp);
 }
 
+/* The base cuts the support's column (gel.support_base_reach, palp.h): the scale of a column
+ * of length l against the full one, S(R) / S(l), against trapezoid integration of the weight
+ * over both (independent of the closed form); 1 at the pole; the world's per-vertex scale follows
+ * R - f (R - z); the parameter round-trips through a scene. (f = 0 takes the code path of before,
+ * whose bits bench_model_step --hash showed unchanged.) */
+static double column_numeric(double length) {
+  const double c = PALP_LESION_CONTACT_SCALE;
+  const int N = 200000;
+  double C = 0.0;
+  for (int k = 0; k < N; ++k) {
+    const double z = (k + 0.5) * length / N;
+    C += (1.0 - z * z * z / pow(c * c + z * z, 1.5)) * length / N;
+  }
+  return C;
+}
+
+static void test_base_column(void) {
+  const palp_vec3 pole = {0, 0, R}, up = {0, 0, 1};
+  CHECK(palp_support_column_scale(NULL, 0, pole, up, R, R) == 1.0, "a full column: exactly 1");
+  /* 70 deg: the base lies R cos 70 = 13.7 mm under the surface */
+  const double th = 70.0 * PI / 180.0, z = R * cos(th);
+  const palp_vec3 n = {sin(th), 0, cos(th)}, x = {R * n.x, 0, R * n.z};
+  const double a = palp_support_column_scale(NULL, 0, x, n, z, R), b = column_numeric(R) / column_numeric(z);
+  printf("base column at 70 deg (%.1f mm): support x%.4f (numerical %.4f)\n", 1e3 * z, a, b);
+  CHECK_NEAR(a, b, 1e-4 * b, "base column: closed form vs numerical integration");
+  CHECK(a > 1.3 && a < 1.5, "the base stiffens the support at 70 deg by 30-50%% (x%.3f)", a);
+  /* with a lesion the chord is cut by the shorter column too: equal to the lesion scale of the
+   * short column times S(R) / S(l) */
+  const palp_lesion L = {.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
+  const double l = 0.012, cut = palp_support_column_scale(&L, 1, pole, up, l, R);
+  const double cutn = column_scale_numeric(&L, pole, up, l) * column_numeric(R) / column_numeric(l);
+  CHECK_NEAR(cut, cutn, 1e-4 * cutn, "lesion in a cut column: closed form vs numerical");
+  /* the world: vertex scales against the formula at each vertex's height, f = 0.6 */
+  palp_scene sc;
+  char err[256];
+  CHECK(palp_scene_load(PALP_CONFIG_DIR "/paper_step_long_term.json", &sc, err, sizeof err) == 0, "scene: %s", err);
+  palp_world_def d = sc.world;
+  CHECK(d.gel.support_base_reach == 0.0, "absent from a parameter file: 0");
+  const double F0 = press_def(d, NULL, 0, 2e-3, NULL);
+  d.gel.support_base_reach = 0.6;
+  int e = 0;
+  palp_world *w = palp_world_create(&d, &e);
+  CHECK(w != NULL, "world with support_base_reach 0.6: %s", palp_strerror(e));
+  if (w) {
+    const palp_mesh *m = palp_world_mesh(w);
+    double worst = 0.0, top = 0.0;
+    for (int i = 0; i < m->vertex_count; ++i) {
+      if (m->fixed[i]) continue;
+      const palp_vec3 p = m->rest[i];
+      const double rl = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+      const double want = column_numeric(rl) / column_numeric(fmax(rl - 0.6 * (rl - p.z), 1e-3));
+      worst = fmax(worst, fabs(palp_world_support_scale(w, i) / want - 1.0));
+      top = fmax(top, palp_world_support_scale(w, i));
+    }
+    printf("support_base_reach 0.6: per-vertex scales up to x%.3f, worst against the numerical %.2e\n", top, worst);
+    CHECK(worst < 1e-4, "per-vertex scale vs numerical integration (worst %.2e, bound 1e-4)", worst);
+    palp_world_destroy(w);
+  }
+  const double F6 = press_def(d, NULL, 0, 2e-3, NULL);
+  CHECK(F6 >= F0 && F6 < 1.05 * F0, "at the pole the cut barely matters: %.4f N against %.4f N (within 0-5%%)", F6, F0);
+  /* the scene format round-trips it and refuses it out of range */
+  sc.world.gel.support_base_reach = 0.6;
+  char *out = palp_scene_to_json(&sc);
+  palp_scene s2;
+  CHECK(out && palp_scene_parse(out, &s2, err, sizeof err) == 0 && s2.world.gel.support_base_reach == 0.6,
+        "support_base_reach round-trips: %s", err);
+  free(out);
+}
+
 int main(void) {
   /* 1. The closed form against numerical integration, on and off the lesion's axis. */
   const palp_lesion L = {.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
@@ -190,5 +259,6 @@ int main(void) {
   CHECK(palp_scene_parse(bad, &s, err, sizeof err) != 0 && strstr(err, "lesions[0]"),
         "a lesion through the surface is refused, naming lesions[0] (%s)", err);
   test_hinges_see_lesion();
+  test_base_column();
   CHECK_DONE();
 }

@@ -708,6 +708,8 @@ int palp_eval_params_write(const char *path, const palp_world_def *w, const char
   if (g->support_stiffening > 0.0)
     fprintf(f, "           \"support_stiffening\": %.9g, \"support_stiffening_power\": %.9g,\n",
             g->support_stiffening, g->support_stiffening_power);
+  if (g->support_base_reach > 0.0) /* the same: the base's cut of the column is the model's form */
+    fprintf(f, "           \"support_base_reach\": %.9g,\n", g->support_base_reach);
   fprintf(f, "           \"density_kg_m3\": %.9g, \"added_mass_fraction\": %.9g }\n}\n", g->density,
           g->added_mass_fraction);
   free(cs);
