@@ -224,9 +224,28 @@ static void test_slide_breast_tissue(void) {
         "22%%)", 100 * r[1][0], 100 * r[1][1]);
 }
 
+/* The long-term dome on a 1,300-vertex net (config/paper_step_long_term_fine.json, its own
+ * parameters fitted against the fingertip FE graded where the finger presses): the net's vertices
+ * are half as far apart, so a light touch spans more of them. Slid as test_slide: under the
+ * hand's 7% at 30 and 70 deg (measured 2026-12-02: 4.6% and 3.9%). The same set on the 338-vertex
+ * net varies by 13.9% and 6.4%: its bending is 0.32x the shipped 338-vertex set's (docs/haptics.md,
+ * "The net under a light touch"). */
+static void test_slide_fine(void) {
+  double st = 0.0, r[2];
+  for (int a = 0; a < 2; ++a) {
+    r[a] = slide_on(PALP_CONFIG_DIR "/paper_step_long_term_fine.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0,
+                    0.5e-3, &st);
+    printf("long-term, 1,300 vertices, smooth, polar %d deg, 0.5 mm below the sphere: (max - min) / mean %.1f%% "
+           "(worst tick step %.5f N)\n", a ? 70 : 30, 100 * r[a], st);
+  }
+  CHECK(r[0] < 0.07 && r[1] < 0.07, "long-term, 1,300 vertices: the force varies by %.1f%% / %.1f%% at 30 / 70 deg "
+        "(bound 7%%)", 100 * r[0], 100 * r[1]);
+}
+
 int main(void) {
   test_geometry();
   test_slide();
   test_slide_breast_tissue();
+  test_slide_fine();
   CHECK_DONE();
 }
