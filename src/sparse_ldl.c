@@ -34,9 +34,11 @@ static void free_numeric(palp_ldl *f) {
 }
 
 static void free_block_numeric(palp_ldl *f) {
-  free(f->dest), free(f->iwork);
+  free(f->dest), free(f->iwork), free(f->num);
   f->dest = f->iwork = NULL;
+  f->num = NULL;
   f->ndest = 0;
+  f->num_len = 0;
 }
 
 void palp_ldl_free(palp_ldl *f) {
@@ -253,10 +255,19 @@ static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
 static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
   const int nb = f->nb, nblk = f->bcolp[nb];
   const int *restrict bcolp = f->bcolp, *restrict brow = f->brow;
-  /* L in double while it is made: ~0.5 MB at 338 vertices, held only here, since a
-   * world keeps three factors (its own, the one a blend replaces, a job's spare) */
-  double *num = malloc(sizeof(double) * ((size_t)nblk * 9 + (size_t)nb * 9));
-  if (!num) return PALP_ENOMEM;
+  /* L in double while it is made: ~0.5 MB at 338 vertices. A world keeps three factors
+   * (its own, the one a blend replaces, a job's spare), so it is kept between rebuilds
+   * only up to PALP_LDL_KEEP_NUM bytes (sparse_ldl.h); larger, made and freed here. */
+  const size_t len = (size_t)nblk * 9 + (size_t)nb * 9;
+  const int keep = sizeof(double) * len <= PALP_LDL_KEEP_NUM;
+  double *num = keep && f->num && f->num_len == len ? f->num : NULL;
+  if (!num) {
+    free(f->num);
+    f->num = NULL, f->num_len = 0;
+    num = malloc(sizeof(double) * len);
+    if (!num) return PALP_ENOMEM;
+    if (keep) f->num = num, f->num_len = len;
+  }
   double *restrict X = num, *restrict Dg = num + (size_t)nblk * 9;
   int *restrict slot = f->iwork, *restrict head = f->iwork + nb, *restrict link = f->iwork + 2 * nb,
                 *restrict next = f->iwork + 3 * nb;
@@ -320,10 +331,10 @@ static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
     for (int c = 0; c < 3; ++c) f->dinv[3 * J + c] = f->dinv4[4 * J + c] = 1.0 / a[4 * c]; /* both solve paths' copies */
     f->dinv4[4 * J + 3] = 0.0;
   }
-  free(num);
+  if (num != f->num) free(num);
   return PALP_OK;
 not_spd:
-  free(num);
+  if (num != f->num) free(num);
   return PALP_ESOLVER;
 }
 

@@ -47,7 +47,14 @@ typedef struct palp_ldl {
   int *dest;      /* [ndest] where each triplet lands among L's blocks, then the diagonal blocks */
   int ndest;
   int *iwork;     /* [4*nb] row -> block of the current column, list heads, links, next rows */
+  /* L in double while it is made, kept between rebuilds when it is at most
+   * PALP_LDL_KEEP_NUM bytes: a fresh one each time page-faulted in anew (a rebuild's
+   * page faults were ~20% of its time on 1,300 vertices; docs/model.md). */
+  double *num;
+  size_t num_len; /* doubles num holds */
 } palp_ldl;
+
+#define PALP_LDL_KEEP_NUM ((size_t)16 << 20)
 
 void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
 

@@ -231,6 +231,10 @@ struct palp_world {
   /* A rebuilt tangent blended in over def.refactor_blend frames (factor_solve): the
    * factor it replaced and the frames of the blend so far (0: none; blend_weight). */
   palp_ldl ldl_prev;
+  /* The synchronous rebuild's triplets (refactor), [nnz_bound] each, kept between rebuilds:
+   * made afresh each time they page-faulted in anew (docs/model.md). */
+  int *rti, *rtj;
+  double *rtx;
   int blend_k;
   double *bx; /* [nfree*6] the replaced factor's solve; allocated with def.refactor_blend > 0 */
 
@@ -2095,6 +2099,7 @@ void palp_world_destroy(palp_world *w) {
   free(w->rhs), free(w->work), free(w->bx);
   palp_ldl_free(&w->ldl);
   palp_ldl_free(&w->ldl_prev);
+  free(w->rti), free(w->rtj), free(w->rtx);
   job_free(w->job);
   free(w->gp), free(w->gi);
   palp_mesh_destroy(&w->mesh);
@@ -2329,13 +2334,18 @@ static int refactor(palp_world *w, double h, int blend) {
     e = build_graph(w);
     if (e) return e;
   }
-  const int nnz_max = nnz_bound(w);
-  int *ti = malloc(sizeof(int) * (size_t)nnz_max), *tj = malloc(sizeof(int) * (size_t)nnz_max);
-  double *tx = malloc(sizeof(double) * (size_t)nnz_max);
-  if (!ti || !tj || !tx) {
-    free(ti), free(tj), free(tx);
-    return PALP_ENOMEM;
+  if (!w->rti) { /* the pattern's bound does not change after creation */
+    const size_t nnz_max = (size_t)nnz_bound(w);
+    w->rti = malloc(sizeof(int) * nnz_max), w->rtj = malloc(sizeof(int) * nnz_max);
+    w->rtx = malloc(sizeof(double) * nnz_max);
+    if (!w->rti || !w->rtj || !w->rtx) {
+      free(w->rti), free(w->rtj), free(w->rtx);
+      w->rti = w->rtj = NULL, w->rtx = NULL;
+      return PALP_ENOMEM;
+    }
   }
+  int *ti = w->rti, *tj = w->rtj;
+  double *tx = w->rtx;
   const int nnz = build_matrix(w, h, ti, tj, tx, w->fdir, w->fbeta, w->fslack, w->fsu);
   if (w->soft_blk) {
     soft_stiffness(w->nfree, h, nnz, ti, tj, tx, w->soft_blk, w->fsoft);
@@ -2351,7 +2361,6 @@ static int refactor(palp_world *w, double h, int blend) {
     w->ldl_prev = t;
   }
   e = palp_ldl_factor_blocks(&w->ldl, w->nfree, w->gp, w->gi, nnz, ti, tj, tx);
-  free(ti), free(tj), free(tx);
   if (e) {
     if (blend) {
       const palp_ldl t = w->ldl;
