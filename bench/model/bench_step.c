@@ -75,9 +75,10 @@ static int server_core(int K, int rounds, int surface, int hash, const char *pat
   sc.world.refactor_lag = 0; /* rebuilds on the stepping thread here: the server defers them */
   if (surface >= 0) sc.world.finger_surface = surface;
   if (K < 1) K = 1;
+  const int shipped = strcmp(path, PALP_CONFIG_DIR "/paper_step_long_term.json") == 0;
   printf("a server core's view: %s (%s, %d vertices), a fingertip pressing 0-10 mm at 0.7 Hz, 250 Hz, "
-         "finger surface %s\n", strcmp(path, PALP_CONFIG_DIR "/paper_step_long_term.json") ? "the dome of --scene" : "the shipped default dome",
-         sc.name, sc.world.mesh.vertex_count, palp_finger_surface_name(sc.world.finger_surface));
+         "finger surface %s\n", shipped ? "the shipped default dome" : "the dome of --scene", sc.name,
+         sc.world.mesh.vertex_count, palp_finger_surface_name(sc.world.finger_surface));
   printf("%8s %8s %11s %11s   stage means (us)\n", "worlds", "steps", "median_us", "p99_us");
   const int cases[2] = {1, K};
   double med[2] = {0, 0};

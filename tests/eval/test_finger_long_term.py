@@ -255,7 +255,8 @@ SITE_DEG = {"pole": 0.0, "45deg": 45.0, "70deg": 70.0}
 GRADED_BOUNDS = {"pole": (1.10, 1.42), "45deg": (1.05, 1.33), "70deg": (1.05, 1.31)}
 # The same set fitted for a 1,300-vertex net (config/paper_step_long_term_fine.json): the 15%.
 FINE_BOUNDS = {"pole": (0.85, 1.15), "45deg": (0.85, 1.15), "70deg": (0.85, 1.15)}
-# ... and its lesion gain at least this share of the graded FE's from 1 mm (a floor: FINE_GAIN below)
+# Its lesion gain from 1 mm is at least this share of the graded FE's: a floor, not the agreement
+# within 15%, which it misses (measured 2026-12-02: 0.57-0.72, +6.3..+9.3% against +11.0..+13.7%).
 FINE_GAIN = 0.50
 
 
