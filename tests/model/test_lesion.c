@@ -174,6 +174,17 @@ static void test_base_column(void) {
   palp_scene s2;
   CHECK(out && palp_scene_parse(out, &s2, err, sizeof err) == 0 && s2.world.gel.support_base_reach == 0.6,
         "support_base_reach round-trips: %s", err);
+  /* out of range: refused, naming the field */
+  char *at = out ? strstr(out, "\"support_base_reach\"") : NULL;
+  if (at) {
+    at = strchr(at, '0'); /* the value's leading digit: 0.6 -> 2.6 */
+    if (at) *at = '2';
+  }
+  if (at) {
+    CHECK(palp_scene_parse(out, &s2, err, sizeof err) != 0 && strstr(err, "support_base_reach"),
+          "support_base_reach 2.6 is refused, naming the field (%s)", err);
+  }
+  CHECK(at != NULL, "the printed scene holds support_base_reach");
   free(out);
 }
 
