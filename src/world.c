@@ -1926,13 +1926,9 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     const double rl = v3_len(w->mesh.rest[i]);
     const palp_vec3 nrm = rl > 0.0 ? v3_scale(w->mesh.rest[i], 1.0 / rl) : v3(0, 0, 1);
     const double fb = (def->effects & PALP_EFFECT_GEL_SUPPORT) ? def->gel.support_base_reach : 0.0;
-    if (fb > 0.0) {
-      const double cl = fmax(rl - fb * (rl - w->mesh.rest[i].z), 1e-3); /* [m] */
-      w->sarea[i] = w->mesh.vertex_area[i] *
-                    palp_support_column_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, cl, rl);
-    } else {
-      w->sarea[i] = w->mesh.vertex_area[i] * palp_lesion_support_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, rl);
-    }
+    const double cl = fb > 0.0 ? fmax(rl - fb * (rl - w->mesh.rest[i].z), 1e-3) : rl; /* [m]; rl: the scale is 1 */
+    w->sarea[i] = w->mesh.vertex_area[i] *
+                  palp_support_column_scale(def->lesion, def->lesion_count, w->mesh.rest[i], nrm, cl, rl);
     /* The gel under a vertex is squeezed against the base plane z = 0; floored at 1 mm
      * (the rim's ring lies on it and is fixed; the next ring is ~2.6 mm up). */
     if (w->sheight) w->sheight[i] = fmax(w->mesh.rest[i].z, 1e-3);
