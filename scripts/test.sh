@@ -6,4 +6,5 @@ cd "$here"
 bash scripts/setup.sh
 build=${PALP_BUILD_DIR:-build}
 cd "$build"
-ctest --output-on-failure -j"$(nproc)" --timeout 300
+# two slots per core: the CPU-bound tests take two each (tests/CMakeLists.txt, "Slots")
+ctest --output-on-failure -j"$((2 * $(nproc)))" --timeout 300

@@ -86,7 +86,7 @@ def by_depth(rows, site):
     return {round(x, 9): f for x, f in zip(d, fe)}
 
 
-def stored(tool, scene, data, alpha03, level4, level3):
+def stored(data, alpha03, level4, level3, rt):
     ref, fine, l4, l3 = lt.read(data), lt.read(alpha03), lt.read(level4), lt.read(level3)
     sites = [s for s in SITES if any(x["site"] == s for x in ref)]
     check(sites[:1] == ["pole"], "refined sites: %r (want the pole first)" % sites)
@@ -127,9 +127,7 @@ def stored(tool, scene, data, alpha03, level4, level3):
             print("%s: refined / uniform level 4 %.3f-%.3f over %d depths from 1 mm" % (site, min(q), max(q), len(q)))
 
     # the real-time set against the refined curves
-    rows = lt.realtime_rows(tool, scene, data, asked)
-    if rows is None:
-        return
+    rows = with_realtime(ref, rt, asked, "refined")
     for site in sites:
         d, fe, rt, dr = lt.columns(rows, site)
         lo, hi, n = 9.0, 0.0, 0
@@ -206,7 +204,7 @@ def composite(ref, deep, l4, path):
     return which
 
 
-def table(tool, scene, data, deep, level4):
+def table(data, deep, level4, rt, claimed, joined):
     """The set's validated table against the refined curves (REFINED_CSV, extended by DEEP_CSV)."""
     ref, dp, l4 = lt.read(data), lt.read(deep), lt.read(level4)
     # the deep extension's own convergence: the level-4 graded mesh against level 5 graded where both
@@ -225,13 +223,8 @@ def table(tool, scene, data, deep, level4):
         qu = [g4[x] / u4[x] for x in deep_d]
         print("%s: level-4 graded / level-5 graded %s from 2 mm; / uniform level 4 %s from 8 mm" %
               (site, "%.3f-%.3f" % (min(q), max(q)) if q else "-", "%.3f-%.3f" % (min(qu), max(qu)) if qu else "-"))
-    tmp = tempfile.mkdtemp(prefix="palp_finger_refined_")
-    joined = os.path.join(tmp, "refined_joined.csv")
     which = composite(ref, dp, l4, joined)
-    rows = lt.realtime_rows(tool, scene, joined, SITES, max_force="20", label=" (refined, joined)")
-    if rows is None:
-        return
-    claimed = lt.validated_table(scene)
+    rows = with_realtime(lt.read(joined), rt, SITES, "the table's curves")
     for site in SITES:
         d, fe, rt, dr = lt.columns(rows, site)
         limit = claimed.get(SITE_DEG[site])
@@ -259,6 +252,46 @@ def table(tool, scene, data, deep, level4):
                else "%.1f mm" % (1e3 * first_out)))
 
 
+def with_realtime(fe_rows, rt, sites, what):
+    """fe_rows (site, depth_m, fem_N) of sites joined with the real-time run's columns at the same depths
+    (rt: {(site, depth): row of the one real-time run}); a depth the run did not reach fails."""
+    rows = []
+    for x in fe_rows:
+        if x["site"] not in sites:
+            continue
+        y = rt.get((x["site"], round(float(x["depth_m"]), 9)))
+        check(y is not None, "%s: %s at %s m has no real-time row" % (what, x["site"], x["depth_m"]))
+        if y is not None:
+            rows.append(dict(x, realtime_N=y["realtime_N"], realtime_depth_m=y["realtime_depth_m"]))
+    return rows
+
+
+def realtime_once(tool, scene, data, deep, level4):
+    """One real-time run serves both checks: `palp-fem finger --fe-from` presses each site through the
+    command's fixed depth sequence, its real-time side at a depth depending only on the depths before
+    it, so each site is run to the deepest curve that asks for it (the table's joined curves, or the
+    refined one; the lesion from the refined one) and the other is read from the same rows (two runs
+    took 15 + 20 s). Returns ({(site, depth): row}, the joined curves' path) or (None, path)."""
+    ref, dp, l4 = lt.read(data), lt.read(deep), lt.read(level4)
+    tmp = tempfile.mkdtemp(prefix="palp_finger_refined_")
+    joined = os.path.join(tmp, "refined_joined.csv")
+    composite(ref, dp, l4, joined)
+    jr = lt.read(joined)
+    asked = SITES + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else [])
+    union = os.path.join(tmp, "realtime_depths.csv")
+    keys = list(jr[0].keys())
+    with open(union, "w") as f:
+        f.write(",".join(keys) + "\n")
+        for site in asked:
+            a, b = [x for x in jr if x["site"] == site], [x for x in ref if x["site"] == site]
+            for x in a if len(a) >= len(b) else b:
+                f.write(",".join(x.get(k) or "" for k in keys) + "\n")
+    rows = lt.realtime_rows(tool, scene, union, asked, max_force="20", label=" (refined and joined)")
+    if rows is None:
+        return None, joined
+    return {(x["site"], round(float(x["depth_m"]), 9)): x for x in rows}, joined
+
+
 def guard(data, alpha03, deep):
     for path in (data, alpha03, deep):
         lt.mesh_guard(path, "recompute it (its header says how)")
@@ -270,8 +303,10 @@ def main():
     if mode == "guard":
         guard(data, alpha03, deep)
     else:
-        stored(tool, scene, data, alpha03, level4, level3)
-        table(tool, scene, data, deep, level4)
+        rt, joined = realtime_once(tool, scene, data, deep, level4)
+        if rt is not None:
+            stored(data, alpha03, level4, level3, rt)
+            table(data, deep, level4, rt, lt.validated_table(scene), joined)
     return 1 if common.failures else 0
 
 
