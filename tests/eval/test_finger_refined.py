@@ -33,7 +33,9 @@ ALPHA03_CSV is the pole again with grading 0.3 (~0.9 mm cells). Asserted:
   +17.8..+18.0%, level 3 +14.2..+15.2%: the gain rises as the mesh under the finger is refined),
   gradings 0.3 and 0.5 within 1.5 points from 1.5 mm, and the real-time gain at least 0.80 of the
   FE's there, a REGRESSION BOUND (measured 0.83-0.84 since the refit, +16.9..+17.2%; 0.72-0.73
-  before; the issue's 15% is missed by 1-2 points).
+  before; the issue's 15% is missed by 1-2 points). --gain-floor G sets that bound: 0.78 for the
+  1,300-vertex exercise set (config/phantoms/dome_fine.json; measured 0.79-0.80, +16.1..+16.4%; run
+  by hand, tests/eval/CMakeLists.txt says why).
 
 With DEEP_CSV (tests/data/fem_graded4_breast_tissue_finger.csv: level 4 graded 0.5 at each site, to
 12-14 mm, ~15-40 min of one core a site), the set's validated table (config/params/breast_tissue.json)
@@ -86,7 +88,7 @@ def by_depth(rows, site):
     return {round(x, 9): f for x, f in zip(d, fe)}
 
 
-def stored(data, alpha03, level4, level3, rt):
+def stored(data, alpha03, level4, level3, rt, gain_floor=0.80):
     ref, fine, l4, l3 = lt.read(data), lt.read(alpha03), lt.read(level4), lt.read(level3)
     sites = [s for s in SITES if any(x["site"] == s for x in ref)]
     check(sites[:1] == ["pole"], "refined sites: %r (want the pole first)" % sites)
@@ -167,8 +169,8 @@ def stored(data, alpha03, level4, level3, rt):
                 target += 1
                 check(gf >= 0.20, "pole_lesion at %.2f mm: the refined FE's gain %+.1f%%, below the issue's 20%%" % (1e3 * d[k], 100 * gf))
                 rt_lo = min(rt_lo, gr / gf)
-                check(gr / gf >= 0.80, "pole_lesion at %.2f mm: real-time gain %.2f of the refined FE's, outside the regression "
-                      "bound 0.80" % (1e3 * d[k], gr / gf))
+                check(gr / gf >= gain_floor, "pole_lesion at %.2f mm: real-time gain %.2f of the refined FE's, outside the "
+                      "regression bound %.2f" % (1e3 * d[k], gr / gf, gain_floor))
         check(target >= 3, "pole_lesion: %d refined depths in 2.5-4 mm" % target)
         check(n3 >= 3 and worst3 <= 0.015, "pole_lesion: gradings 0.3 and 0.5 give gains %.1f points apart over %d depths "
               "from 1.5 mm (1.5 points)" % (100 * worst3, n3))
@@ -300,12 +302,15 @@ def guard(data, alpha03, deep):
 def main():
     tool, scene, data, alpha03, level4, level3, deep = sys.argv[1:8]
     mode = sys.argv[8] if len(sys.argv) > 8 else "stored"
+    # --gain-floor G: the lesion gain's regression bound (0.80; the 1,300-vertex exercise set's 0.78)
+    opts = dict(zip(sys.argv[9::2], sys.argv[10::2]))
+    gain_floor = float(opts.get("--gain-floor", 0.80))
     if mode == "guard":
         guard(data, alpha03, deep)
     else:
         rt, joined = realtime_once(tool, scene, data, deep, level4)
         if rt is not None:
-            stored(data, alpha03, level4, level3, rt)
+            stored(data, alpha03, level4, level3, rt, gain_floor)
             table(data, deep, level4, rt, lt.validated_table(scene), joined)
     return 1 if common.failures else 0
 

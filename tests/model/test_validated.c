@@ -282,10 +282,32 @@ static void test_hinge_range(void) {
   free(js);
 }
 
+/* The same set on a 1,300-vertex net (config/phantoms/dome_fine.json, its own table and stated
+ * miss): its validated presses count no step beyond the hinges' range, and the stated miss rests
+ * on them (at least their largest, at most 0.01 rad above). */
+static void test_hinge_range_fine(void) {
+  palp_scene sc;
+  char err[256] = "";
+  const int rc = palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome_fine.json", &sc, err, sizeof err);
+  CHECK(rc == 0, "%s", err);
+  if (rc) return;
+  const double stated = sc.world.validated_hinge_error;
+  printf("breast-tissue set on 1,300 vertices, stated hinge miss %.3f rad; its validated presses at 1 ms:\n", stated);
+  int64_t counted = 0;
+  double deepest = 0.0;
+  const double worst = validated_presses(sc.world, &counted, &deepest);
+  CHECK(counted == 0, "1,300 vertices: inside the validated depths no step is counted beyond the hinges' range (%lld)",
+        (long long)counted);
+  CHECK(stated >= worst && stated <= worst + 0.01,
+        "1,300 vertices: the stated miss %.3f rad rests on the validation: at least its presses' largest %.4f rad, at most "
+        "0.01 rad above", stated, worst);
+}
+
 int main(void) {
   test_interpolation();
   test_scene();
   test_counted();
   test_hinge_range();
+  test_hinge_range_fine();
   CHECK_DONE();
 }
