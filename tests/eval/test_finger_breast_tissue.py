@@ -4,12 +4,14 @@
 SINCE 2026-11-30 the set's validated table and its lesion's gain rest on the FE refined where the
 finger presses (test_finger_refined.py; docs/materials.md, "Refitted against the refined
 fingertip"): uniform levels 3 and 4 are 9-27% stiff under a fingertip, and the refitted set stands
-at 0.90-1.11 of uniform level 4 at the pole from 1.5 mm. Here the set's ratios against level 3 and
-the lesion's gain are PRINTED; what stays asserted is the references' own convergence (level 4 no
-stiffer than level 3 from 2 mm; both FE meshes softer over the cyst), both level-3 curves' rise, the
-proxy's reach and, against the level-4 cyst, the real-time cyst's loss within 2 points (measured within
-1.1). The level-4 curves are not run with the real-time set (below). The bounds below are what held
-while the table rested on these curves.
+at 0.90-1.11 of uniform level 4 at the pole from 1.5 mm. SINCE 2026-12-02 this test runs the
+real-time set only over the level-4 cyst: what it asserts is the references' own convergence (level 4
+no stiffer than level 3 from 2 mm), the level-3 FE's rise with depth and its gain over the lesion,
+both FE meshes softer over the cyst, and, against the level-4 cyst, the real-time cyst's loss within 2
+points (measured within 1.1). The real-time set's ratios against level 3 (printed, not asserted, since
+2026-11-30), its rise and its proxy's reach came from a run at the level-3 depths; test_finger_refined.py
+runs the same depth sequence against the refined curves and asserts the rise and the reach there.
+The list below is what held while the table rested on these curves, kept as the record.
 
     test_finger_breast_tissue.py PALP_FEM SCENE FINGER_CSV [stored|guard [--level4 LEVEL4_CSV] [--cyst CYST_CSV]
                                                                  [--cyst4 CYST4_CSV]]
@@ -102,36 +104,25 @@ def validated(scene):
     return {round(e["polar_deg"], 6): e["depth_m"] for e in json.load(open(params))["validated"]["finger"]}
 
 
+def fe_rows(path):
+    """A stored curve's FE side as rows for lt.columns: the real-time columns it was written with (an
+    older set's) blanked to NaN, so nothing here can read them."""
+    return [dict(x, realtime_N="nan", realtime_depth_m="nan") for x in lt.read(path)]
+
+
 def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_bt_"), "finger.csv")
-    r = run([tool, "finger", "--scene", scene, "--level", "3", "--site", "pole,45deg,60deg,70deg,pole_lesion",
-             "--fe-from", data, "--no-force-table", "--max-force", "13", "--out", out])
-    check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
-    if r.returncode:
-        return
-    rows = lt.read(out)
+    """The FE side of the level-3 curves (their rise; the set's real-time side runs against the refined
+    curves in test_finger_refined.py, which since 2026-12-02 also asserts its rise: a run here at the
+    level-3 depths, the same depth sequence, only repeated it), the level-4 ones against them, and
+    the cysts."""
+    rows = fe_rows(data)
     table = validated(scene)
-    # The table is checked against the refined curves (test_finger_refined.py); level 3, up to 17%
-    # stiff under a fingertip (level 4 / level 3 0.83-0.91 at 70 deg from 2 mm), is printed.
     for site in SITES:
-        d, fe, rt, dr = lt.columns(rows, site)
+        d, fe, _, _ = lt.columns(rows, site)
         check(len(d) >= 8, "%s: only %d depths" % (site, len(d)))
         check(all(fe[k + 1] > fe[k] for k in range(len(fe) - 1)), "%s: FE force not increasing: %r" % (site, fe))
-        check(all(rt[k + 1] > rt[k] for k in range(len(rt) - 1)), "%s: real-time force not increasing: %r" % (site, rt))
         check(round(SITES[site], 6) in table, "the parameter file's validated table has no %g deg entry" % SITES[site])
-        limit = table.get(round(SITES[site], 6), 0.0)
-        for k in range(len(d)):
-            # matched positions to the table's depth; deeper, the step-independent fingertip
-            # (2026-11-29) left the secant 0.09-0.13 mm short at 60 deg and 16-18 mm (13-14 N on the
-            # virtual coupling), where nothing is claimed
-            if d[k] <= limit + 1e-9:
-                check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
-                      "%s: proxy at %.4f mm for the FE's %.4f mm" % (site, 1e3 * dr[k], 1e3 * d[k]))
-            if fe[k] >= 0.3:
-                print("%s %.2f mm: FE %.3f N, real-time %.3f N, ratio %.3f%s" % (site, 1e3 * d[k], fe[k], rt[k], rt[k] / fe[k],
-                      "" if d[k] <= limit + 1e-9 else " (beyond the table)"))
-        print("%s: level 3 printed only; the table is checked against the refined curves (test_finger_refined.py)" % site)
-    lesion(rows, table)
+    lesion_fe(rows, table)
     if level4:
         finer(tool, scene, level4, rows, table)
     if cyst and cyst4:
@@ -143,6 +134,26 @@ def stored(tool, scene, data, level4=None, cyst=None, cyst4=None):
         soft(tool, scene, cyst, table)
     if cyst4:
         soft(tool, scene, cyst4, table, "4")
+
+
+def lesion_fe(rows, table):
+    """The level-3 FE over the lesion against its plain pole: stiffer at every depth from the plain
+    pole's 0.3 N to its validated depth, at least 8 of them (measured +12.4..+15.2%; the real-time
+    gain is checked against the refined FE's in test_finger_refined.py)."""
+    d, fe, _, _ = lt.columns(rows, "pole_lesion")
+    d0, fe0, _, _ = lt.columns(rows, "pole")
+    plain = {round(x, 9): k for k, x in enumerate(d0)}
+    limit, n = table.get(0.0, 0.0), 0
+    for k in range(len(d)):
+        j = plain.get(round(d[k], 9))
+        if j is None or fe0[j] < 0.3 or d[k] > limit + 1e-9:
+            continue
+        n += 1
+        gain = fe[k] / fe0[j] - 1.0
+        print("level 3, pole_lesion %.2f mm: FE gain %+.1f%%" % (1e3 * d[k], 100 * gain))
+        check(gain > 0.0, "level 3, pole_lesion at %.2f mm: the FE not stiffer over the lesion (%+.1f%%)" %
+              (1e3 * d[k], 100 * gain))
+    check(n >= 8, "level 3, pole_lesion: %d depths from the pole's 0.3 N to its validated depth (want 8)" % n)
 
 
 def finer(tool, scene, data, rows3, table):
@@ -208,29 +219,6 @@ def soft(tool, scene, data, table, level="3", loss_tol=0.02):
     limit = table.get(0.0, 0.0)
     lt.cyst_losses(rows, lambda depth, f_plain: f_plain >= 0.3 and depth <= limit + 1e-9, proxy_tol, 8,
                    force_ratio=False, loss_tol=loss_tol)
-
-
-def lesion(rows, table, label=""):
-    """The pole over the lesion against the plain pole, both models at the same depths, printed (the
-    gain is checked against the refined FE by test_finger_refined.py); the proxy at each FE depth."""
-    d, fe, rt, dr = lt.columns(rows, "pole_lesion")
-    d0, fe0, rt0, _ = lt.columns(rows, "pole")
-    check(len(d) >= 8, label + "pole_lesion: only %d depths" % len(d))
-    plain = {round(x, 9): k for k, x in enumerate(d0)}
-    limit, n, worst = table.get(0.0, 0.0), 0, 0.0
-    for k in range(len(d)):
-        check(abs(dr[k] - d[k]) <= proxy_tol(d[k]),
-              label + "pole_lesion: proxy at %.4f mm for the FE's %.4f mm" % (1e3 * dr[k], 1e3 * d[k]))
-        j = plain.get(round(d[k], 9))
-        if j is None or fe0[j] < 0.3 or d[k] > limit + 1e-9:
-            continue
-        q, gf, gr = rt[k] / fe[k], fe[k] / fe0[j] - 1.0, rt[k] / rt0[j] - 1.0
-        n, worst = n + 1, max(worst, abs(gr - gf))
-        print(label + "pole_lesion %.2f mm: FE %.3f N (gain %+.1f%%), real-time %.3f N (gain %+.1f%%), ratio %.3f" %
-              (1e3 * d[k], fe[k], 100 * gf, rt[k], 100 * gr, q))
-    check(n >= 8, label + "pole_lesion: %d depths compared from the pole's 0.3 N to its validated depth" % n)
-    print(label + "pole_lesion: %d depths, lesion gain within %.1f points of the FE's (printed: checked against the "
-          "refined FE in test_finger_refined.py)" % (n, 100 * worst))
 
 
 def guard(tool, scene, data, level4=None, cyst=None, cyst4=None):

@@ -291,6 +291,12 @@ def realtime_once(tool, scene, data, deep, level4):
     rows = lt.realtime_rows(tool, scene, union, asked, max_force="20", label=" (refined and joined)")
     if rows is None:
         return None, joined
+    # the real-time force rises with depth along each site's whole run (to 14 mm; over the lesion to the
+    # refined curve's end), as the level-3 run of test_finger_breast_tissue.py asserted before 2026-12-02
+    for site in asked:
+        _, _, rt, _ = lt.columns(rows, site)
+        check(len(rt) >= 8 and all(rt[k + 1] > rt[k] for k in range(len(rt) - 1)),
+              "%s: the real-time force does not rise with depth over %d depths: %r" % (site, len(rt), rt))
     return {(x["site"], round(float(x["depth_m"]), 9)): x for x in rows}, joined
 
 
