@@ -241,6 +241,22 @@ static double validated_presses(palp_world_def d, int64_t *counted, double *dept
   return worst;
 }
 
+/* A set's validated presses count no step beyond the hinges' range, and its stated miss rests on
+ * them: at least their largest, at most 0.01 rad above. Returns that largest miss [rad]. */
+static double stated_miss_rests_on_presses(const palp_scene *sc, const char *label) {
+  const double stated = sc->world.validated_hinge_error;
+  printf("%s, stated hinge miss %.3f rad; its validated presses at 1 ms:\n", label, stated);
+  int64_t counted = 0;
+  double deepest = 0.0;
+  const double worst = validated_presses(sc->world, &counted, &deepest);
+  CHECK(counted == 0, "%s: inside the validated depths no step is counted beyond the hinges' range (%lld)", label,
+        (long long)counted);
+  CHECK(stated >= worst && stated <= worst + 0.01,
+        "%s: the stated miss %.3f rad rests on the validation: at least its presses' largest %.4f rad, at most 0.01 rad "
+        "above", label, stated, worst);
+  return worst;
+}
+
 /* The hinges' valid range of a set validated with a fingertip (palp_world_def.
  * validated_hinge_error): the breast-tissue set states the largest miss its validated
  * presses reach, and those presses count no step beyond the hinges' range; with the
@@ -250,18 +266,11 @@ static void test_hinge_range(void) {
   char err[256];
   if (load_dome(&sc)) return;
   const double stated = sc.world.validated_hinge_error;
-  printf("breast-tissue set, stated hinge miss %.3f rad; its validated presses at 1 ms:\n", stated);
-  int64_t counted = 0;
-  double deepest = 0.0;
-  const double worst = validated_presses(sc.world, &counted, &deepest);
-  CHECK(counted == 0, "inside the validated depths no step is counted beyond the hinges' range (%lld)",
-        (long long)counted);
-  CHECK(stated >= worst && stated <= worst + 0.01,
-        "the stated miss %.3f rad rests on the validation: at least its presses' largest %.4f rad, at most 0.01 rad above",
-        stated, worst);
+  const double worst = stated_miss_rests_on_presses(&sc, "breast-tissue set");
   palp_world_def d = sc.world;
   d.validated_hinge_error = 0.0; /* the fixed 0.1 rad */
   int64_t counted0 = 0;
+  double deepest = 0.0;
   const double worst0 = validated_presses(d, &counted0, &deepest);
   printf("with the fixed 0.1 rad: %lld steps counted in the same presses (largest miss %.4f rad)\n", (long long)counted0,
          worst0);
@@ -291,16 +300,7 @@ static void test_hinge_range_fine(void) {
   const int rc = palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome_fine.json", &sc, err, sizeof err);
   CHECK(rc == 0, "%s", err);
   if (rc) return;
-  const double stated = sc.world.validated_hinge_error;
-  printf("breast-tissue set on 1,300 vertices, stated hinge miss %.3f rad; its validated presses at 1 ms:\n", stated);
-  int64_t counted = 0;
-  double deepest = 0.0;
-  const double worst = validated_presses(sc.world, &counted, &deepest);
-  CHECK(counted == 0, "1,300 vertices: inside the validated depths no step is counted beyond the hinges' range (%lld)",
-        (long long)counted);
-  CHECK(stated >= worst && stated <= worst + 0.01,
-        "1,300 vertices: the stated miss %.3f rad rests on the validation: at least its presses' largest %.4f rad, at most "
-        "0.01 rad above", stated, worst);
+  stated_miss_rests_on_presses(&sc, "breast-tissue set on 1,300 vertices");
 }
 
 int main(void) {
