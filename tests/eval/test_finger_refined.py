@@ -206,8 +206,9 @@ def composite(ref, deep, l4, path):
     return which
 
 
-def table(data, deep, level4, rt, claimed, joined):
-    """The set's validated table against the refined curves (REFINED_CSV, extended by DEEP_CSV)."""
+def table(data, deep, level4, rt, claimed, joined, which):
+    """The set's validated table against the refined curves (REFINED_CSV, extended by DEEP_CSV): joined,
+    the composite's path, and which, its mesh at each row (realtime_once wrote them)."""
     ref, dp, l4 = lt.read(data), lt.read(deep), lt.read(level4)
     # the deep extension's own convergence: the level-4 graded mesh against level 5 graded where both
     # reach (from 2 mm), and against uniform level 4 from 8 mm, where the contact spans many cells
@@ -225,7 +226,6 @@ def table(data, deep, level4, rt, claimed, joined):
         qu = [g4[x] / u4[x] for x in deep_d]
         print("%s: level-4 graded / level-5 graded %s from 2 mm; / uniform level 4 %s from 8 mm" %
               (site, "%.3f-%.3f" % (min(q), max(q)) if q else "-", "%.3f-%.3f" % (min(qu), max(qu)) if qu else "-"))
-    which = composite(ref, dp, l4, joined)
     rows = with_realtime(lt.read(joined), rt, SITES, "the table's curves")
     for site in SITES:
         d, fe, rt, dr = lt.columns(rows, site)
@@ -273,11 +273,12 @@ def realtime_once(tool, scene, data, deep, level4):
     command's fixed depth sequence, its real-time side at a depth depending only on the depths before
     it, so each site is run to the deepest curve that asks for it (the table's joined curves, or the
     refined one; the lesion from the refined one) and the other is read from the same rows (two runs
-    took 15 + 20 s). Returns ({(site, depth): row}, the joined curves' path) or (None, path)."""
+    took 15 + 20 s). Returns ({(site, depth): row}, the joined curves' path, composite()'s mesh of each of
+    their rows); the first None if the run failed."""
     ref, dp, l4 = lt.read(data), lt.read(deep), lt.read(level4)
     tmp = tempfile.mkdtemp(prefix="palp_finger_refined_")
     joined = os.path.join(tmp, "refined_joined.csv")
-    composite(ref, dp, l4, joined)
+    which = composite(ref, dp, l4, joined)
     jr = lt.read(joined)
     asked = SITES + (["pole_lesion"] if any(x["site"] == "pole_lesion" for x in ref) else [])
     union = os.path.join(tmp, "realtime_depths.csv")
@@ -290,14 +291,14 @@ def realtime_once(tool, scene, data, deep, level4):
                 f.write(",".join(x.get(k) or "" for k in keys) + "\n")
     rows = lt.realtime_rows(tool, scene, union, asked, max_force="20", label=" (refined and joined)")
     if rows is None:
-        return None, joined
+        return None, joined, which
     # the real-time force rises with depth along each site's whole run (to 14 mm; over the lesion to the
     # refined curve's end), as the level-3 run of test_finger_breast_tissue.py asserted before 2026-12-02
     for site in asked:
         _, _, rt, _ = lt.columns(rows, site)
         check(len(rt) >= 8 and all(rt[k + 1] > rt[k] for k in range(len(rt) - 1)),
               "%s: the real-time force does not rise with depth over %d depths: %r" % (site, len(rt), rt))
-    return {(x["site"], round(float(x["depth_m"]), 9)): x for x in rows}, joined
+    return {(x["site"], round(float(x["depth_m"]), 9)): x for x in rows}, joined, which
 
 
 def guard(data, alpha03, deep):
@@ -314,10 +315,10 @@ def main():
     if mode == "guard":
         guard(data, alpha03, deep)
     else:
-        rt, joined = realtime_once(tool, scene, data, deep, level4)
+        rt, joined, which = realtime_once(tool, scene, data, deep, level4)
         if rt is not None:
             stored(data, alpha03, level4, level3, rt, gain_floor)
-            table(data, deep, level4, rt, lt.validated_table(scene), joined)
+            table(data, deep, level4, rt, lt.validated_table(scene), joined, which)
     return 1 if common.failures else 0
 
 

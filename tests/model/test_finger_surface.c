@@ -200,6 +200,21 @@ static void test_slide(void) {
   CHECK(f70 > 0.07, "facets, 70 deg: the facets are felt (%.1f%%, over 7%%)", 100 * f70);
 }
 
+/* A smooth-surface fingertip slid along the latitudes 30 and 70 deg of a scene's dome at each of n
+ * depths below the sphere (slide_on), each slide's (max - min) / mean asserted under bound[k]
+ * (labelled "bound" when it is the hand's 7%, else "regression bound"). */
+static void slide_table(const char *scene, const char *label, int n, const double *depth, const double *bound) {
+  for (int k = 0; k < n; ++k)
+    for (int a = 0; a < 2; ++a) {
+      double st = 0.0;
+      const double r = slide_on(scene, PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0, depth[k], &st);
+      printf("%s, smooth, polar %d deg, %.1f mm below the sphere: (max - min) / mean %.1f%% (worst tick step %.5f N)\n",
+             label, a ? 70 : 30, 1e3 * depth[k], 100 * r, st);
+      CHECK(r < bound[k], "%s, %.1f mm deep at %d deg: the force varies by %.1f%% (%s %.0f%%)", label, 1e3 * depth[k],
+            a ? 70 : 30, 100 * r, bound[k] == 0.07 ? "bound" : "regression bound", 100 * bound[k]);
+    }
+}
+
 /* The exercise phantom (the breast-tissue dome, config/phantoms/dome.json) slid the same way. Its
  * support is stiff against its bending (D 1.75x its skin's own since the refit of 2026-11-30), so the
  * net's stiffness under a fingertip differs between a vertex and a face more than on the long-term
@@ -209,19 +224,8 @@ static void test_slide(void) {
  * much as the hard exercise's 1 cm lump (+9-16%); held here in a REGRESSION BOUND (22%), not a pass
  * (docs/haptics.md, "The net under a light touch"). */
 static void test_slide_breast_tissue(void) {
-  double st = 0.0, r[2][2];
-  static const double deps[2] = {5e-3, 2e-3};
-  for (int k = 0; k < 2; ++k)
-    for (int a = 0; a < 2; ++a) {
-      r[k][a] = slide_on(PALP_CONFIG_DIR "/phantoms/dome.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0, deps[k],
-                         &st);
-      printf("breast tissue, smooth, polar %d deg, %.0f mm below the sphere: (max - min) / mean %.1f%% (worst tick "
-             "step %.5f N)\n", a ? 70 : 30, 1e3 * deps[k], 100 * r[k][a], st);
-    }
-  CHECK(r[0][0] < 0.07 && r[0][1] < 0.07, "breast tissue 5 mm deep: the force varies by %.1f%% / %.1f%% at 30 / 70 deg "
-        "(bound 7%%)", 100 * r[0][0], 100 * r[0][1]);
-  CHECK(r[1][0] < 0.22 && r[1][1] < 0.22, "breast tissue 2 mm deep: %.1f%% / %.1f%% at 30 / 70 deg (regression bound "
-        "22%%)", 100 * r[1][0], 100 * r[1][1]);
+  static const double depth[2] = {5e-3, 2e-3}, bound[2] = {0.07, 0.22};
+  slide_table(PALP_CONFIG_DIR "/phantoms/dome.json", "breast tissue", 2, depth, bound);
 }
 
 /* The long-term dome on a 1,300-vertex net (config/paper_step_long_term_fine.json, its own
@@ -231,15 +235,8 @@ static void test_slide_breast_tissue(void) {
  * net varies by 13.9% and 6.4%: its bending is 0.32x the shipped 338-vertex set's (docs/haptics.md,
  * "The net under a light touch"). */
 static void test_slide_fine(void) {
-  double st = 0.0, r[2];
-  for (int a = 0; a < 2; ++a) {
-    r[a] = slide_on(PALP_CONFIG_DIR "/paper_step_long_term_fine.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0,
-                    0.5e-3, &st);
-    printf("long-term, 1,300 vertices, smooth, polar %d deg, 0.5 mm below the sphere: (max - min) / mean %.1f%% "
-           "(worst tick step %.5f N)\n", a ? 70 : 30, 100 * r[a], st);
-  }
-  CHECK(r[0] < 0.07 && r[1] < 0.07, "long-term, 1,300 vertices: the force varies by %.1f%% / %.1f%% at 30 / 70 deg "
-        "(bound 7%%)", 100 * r[0], 100 * r[1]);
+  static const double depth[1] = {0.5e-3}, bound[1] = {0.07};
+  slide_table(PALP_CONFIG_DIR "/paper_step_long_term_fine.json", "long-term, 1,300 vertices", 1, depth, bound);
 }
 
 /* The exercise phantom's set on a 1,300-vertex net (config/phantoms/dome_fine.json: the breast-tissue
@@ -250,18 +247,8 @@ static void test_slide_fine(void) {
  * third of the 338-vertex dome's 28.1 / 15.1%: a REGRESSION BOUND (10%) there (docs/haptics.md, "The
  * net under a light touch"). */
 static void test_slide_breast_tissue_fine(void) {
-  double st = 0.0, r[2][2];
-  static const double deps[2] = {1e-3, 2e-3};
-  for (int k = 0; k < 2; ++k)
-    for (int a = 0; a < 2; ++a) {
-      r[k][a] = slide_on(PALP_CONFIG_DIR "/phantoms/dome_fine.json", PALP_FINGER_SURFACE_SMOOTH, a ? 70.0 : 30.0,
-                         deps[k], &st);
-      printf("breast tissue, 1,300 vertices, polar %d deg, %.0f mm below the sphere: (max - min) / mean %.1f%% (worst "
-             "tick step %.5f N)\n", a ? 70 : 30, 1e3 * deps[k], 100 * r[k][a], st);
-      const double bound = k ? 0.07 : 0.10;
-      CHECK(r[k][a] < bound, "breast tissue, 1,300 vertices, %.0f mm deep at %d deg: the force varies by %.1f%% (%s %.0f%%)",
-            1e3 * deps[k], a ? 70 : 30, 100 * r[k][a], k ? "bound" : "regression bound", 100 * bound);
-    }
+  static const double depth[2] = {1e-3, 2e-3}, bound[2] = {0.10, 0.07};
+  slide_table(PALP_CONFIG_DIR "/phantoms/dome_fine.json", "breast tissue, 1,300 vertices", 2, depth, bound);
 }
 
 int main(void) {
