@@ -242,6 +242,67 @@ static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
   return PALP_OK;
 }
 
+/* Column J's updates from column K, whose block p is in row J: with Y = L_JK D_K
+ * (Y[s][c] at 3 c + s),
+ *   A_JJ -= L_JK Y^T (lower part: (r, s) -= sum_c L[r][c] Y[s][c]) and
+ *   A_IJ -= L_IK Y^T for K's blocks q below p (I = brow[q], at slot[I] among J's),
+ * each entry (L[r] Y[s] + L[3 + r] Y[3 + s]) + L[6 + r] Y[6 + s], subtracted: the
+ * order every path keeps (block_numeric). X holds L's blocks, d = D_K's block. */
+static inline void column_update(double *restrict X, const double *restrict d, double *restrict a,
+                                 const int *restrict brow, const int *restrict slot, int p, int end) {
+  const double *restrict L = X + 9 * (size_t)p;
+  const double y[9] = {L[0] * d[0], L[1] * d[0], L[2] * d[0], L[3] * d[4], L[4] * d[4],
+                       L[5] * d[4], L[6] * d[8], L[7] * d[8], L[8] * d[8]};
+  for (int sc = 0; sc < 3; ++sc)
+    for (int r = sc; r < 3; ++r) a[3 * sc + r] -= (L[r] * y[sc] + L[3 + r] * y[3 + sc]) + L[6 + r] * y[6 + sc];
+  for (int q = p + 1; q < end; ++q) {
+    const double *restrict B = X + 9 * (size_t)q;
+    double *restrict T = X + 9 * (size_t)slot[brow[q]];
+    for (int sc = 0; sc < 3; ++sc)
+      for (int r = 0; r < 3; ++r) T[3 * sc + r] -= (B[r] * y[sc] + B[3 + r] * y[3 + sc]) + B[6 + r] * y[6 + sc];
+  }
+}
+
+#ifdef PALP_LDL_X86
+/* column_update in AVX2: a target block's 9 entries (column-major, k = 3 s + r) as
+ * lanes k = 0-3 and 4-7 and a scalar for k = 8, each lane given its B[r + 3c] and
+ * Y[s + 3c] (the block's columns permuted into the lanes' rows; Y's once per call),
+ * so that each lane does the portable path's operations for its entry, in its order,
+ * without fused multiply-adds: the same bits. The stores cover the block exactly (a
+ * store overlapping the next load in part would stall store forwarding). The three
+ * column loads read one value past the block's last column: the next block's first,
+ * or after the last block the first diagonal block's, inside the array, never used. */
+__attribute__((target("avx2"))) static void column_update_avx2(double *X, const double *d, double *a,
+                                                               const int *restrict brow, const int *restrict slot,
+                                                               int p, int end) {
+  const double *L = X + 9 * (size_t)p;
+  const double y[9] = {L[0] * d[0], L[1] * d[0], L[2] * d[0], L[3] * d[4], L[4] * d[4],
+                       L[5] * d[4], L[6] * d[8], L[7] * d[8], L[8] * d[8]};
+  for (int sc = 0; sc < 3; ++sc)
+    for (int r = sc; r < 3; ++r) a[3 * sc + r] -= (L[r] * y[sc] + L[3 + r] * y[3 + sc]) + L[6 + r] * y[6 + sc];
+  /* lanes k = 0-3: (s, r) = (0,0) (0,1) (0,2) (1,0); k = 4-7: (1,1) (1,2) (2,0) (2,1) */
+  const __m256d ya0 = _mm256_setr_pd(y[0], y[0], y[0], y[1]), ya1 = _mm256_setr_pd(y[3], y[3], y[3], y[4]),
+                ya2 = _mm256_setr_pd(y[6], y[6], y[6], y[7]);
+  const __m256d yb0 = _mm256_setr_pd(y[1], y[1], y[2], y[2]), yb1 = _mm256_setr_pd(y[4], y[4], y[5], y[5]),
+                yb2 = _mm256_setr_pd(y[7], y[7], y[8], y[8]);
+  for (int q = p + 1; q < end; ++q) {
+    const double *B = X + 9 * (size_t)q;
+    double *T = X + 9 * (size_t)slot[brow[q]];
+    const __m256d c0 = _mm256_loadu_pd(B), c1 = _mm256_loadu_pd(B + 3), c2 = _mm256_loadu_pd(B + 6);
+    /* rows (0, 1, 2, 0) and (1, 2, 0, 1) of each column */
+    const __m256d a0 = _mm256_permute4x64_pd(c0, 0x24), a1 = _mm256_permute4x64_pd(c1, 0x24),
+                  a2 = _mm256_permute4x64_pd(c2, 0x24);
+    const __m256d b0 = _mm256_permute4x64_pd(c0, 0x49), b1 = _mm256_permute4x64_pd(c1, 0x49),
+                  b2 = _mm256_permute4x64_pd(c2, 0x49);
+    const __m256d ua = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a0, ya0), _mm256_mul_pd(a1, ya1)), _mm256_mul_pd(a2, ya2));
+    const __m256d ub = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(b0, yb0), _mm256_mul_pd(b1, yb1)), _mm256_mul_pd(b2, yb2));
+    _mm256_storeu_pd(T, _mm256_sub_pd(_mm256_loadu_pd(T), ua));
+    _mm256_storeu_pd(T + 4, _mm256_sub_pd(_mm256_loadu_pd(T + 4), ub));
+    T[8] -= (B[2] * y[2] + B[5] * y[5]) + B[8] * y[8];
+  }
+}
+#endif
+
 /* The numeric factorisation in 3x3 blocks over L's pattern, left-looking, from the
  * triplet values tx (block_map's pattern). Block column J gathers, for each column K
  * to its left with a block in row J, A_IJ -= L_IK D_K L_JK^T for the rows I >= J of
@@ -279,19 +340,11 @@ static int block_numeric(palp_ldl *f, int nnz, const double *tx) {
     double *restrict a = Dg + 9 * J; /* column-major 3x3: (r, c) at 3 c + r, lower part used */
     for (int K = head[J]; K >= 0;) {
       const int K_next = link[K], p = next[K];
-      const double *restrict L = X + 9 * (size_t)p, *restrict d = Dg + 9 * K;
-      /* Y = L_JK D_K, Y[s][c] at 3 c + s */
-      const double y[9] = {L[0] * d[0], L[1] * d[0], L[2] * d[0], L[3] * d[4], L[4] * d[4],
-                           L[5] * d[4], L[6] * d[8], L[7] * d[8], L[8] * d[8]};
-      /* A_JJ -= L_JK Y^T, lower part: (r, s) -= sum_c L[r][c] Y[s][c] */
-      for (int sc = 0; sc < 3; ++sc)
-        for (int r = sc; r < 3; ++r) a[3 * sc + r] -= (L[r] * y[sc] + L[3 + r] * y[3 + sc]) + L[6 + r] * y[6 + sc];
-      for (int q = p + 1; q < bcolp[K + 1]; ++q) {
-        const double *restrict B = X + 9 * (size_t)q;
-        double *restrict T = X + 9 * (size_t)slot[brow[q]];
-        for (int sc = 0; sc < 3; ++sc)
-          for (int r = 0; r < 3; ++r) T[3 * sc + r] -= (B[r] * y[sc] + B[3 + r] * y[3 + sc]) + B[6 + r] * y[6 + sc];
-      }
+#ifdef PALP_LDL_X86
+      if (f->simd) column_update_avx2(X, Dg + 9 * K, a, brow, slot, p, bcolp[K + 1]);
+      else
+#endif
+        column_update(X, Dg + 9 * K, a, brow, slot, p, bcolp[K + 1]);
       next[K] = p + 1;
       if (p + 1 < bcolp[K + 1]) {
         const int I = brow[p + 1];
@@ -563,6 +616,87 @@ __attribute__((target("avx2"))) static void solve_blocks_avx2_lanes(const palp_l
 }
 #endif
 
+#ifdef PALP_LDL_X86
+/* The block solve for 2 or 3 right-hand sides in AVX2, lanes over a vertex's components
+ * as for one (solve_blocks_avx2), a vertex's w right-hand sides side by side: each
+ * block column is widened once for all w (the lanes path widened and broadcast its 9
+ * entries one by one, twice the instructions in the backward pass, which a compliance
+ * column's solve is mostly: the forward one skips its zeros). For each right-hand side
+ * lane i does what the lanes path does in its lane for component i (forward) or row
+ * i's partial sum (backward), in its order and without fused multiply-adds, the
+ * forward skip included: the same bits. y needs 4 w n / 3 + 4 doubles. */
+__attribute__((target("avx2"))) static void solve_blocks_avx2_vlanes(const palp_ldl *f, double *x, int w, double *y) {
+  const int nb = f->nb, n = f->n;
+  y = (double *)(((uintptr_t)y + 31) & ~(uintptr_t)31);
+  for (int k = 0; k < nb * w; ++k) y[4 * k + 3] = 0.0;
+  for (int k = 0; k < n; ++k)
+    for (int r = 0; r < w; ++r) y[4 * ((k / 3) * w + r) + k % 3] = x[f->perm[k] * w + r];
+  for (int J = 0; J < nb; ++J) {
+    double *yj = y + 4 * (size_t)J * w;
+    const double *d = f->bdiag + 3 * J;
+    int nz = 0;
+    for (int r = 0; r < w; ++r) {
+      double *v = yj + 4 * r;
+      v[1] -= d[0] * v[0];
+      v[2] -= d[1] * v[0] + d[2] * v[1];
+      nz |= (v[0] != 0.0) | (v[1] != 0.0) | (v[2] != 0.0);
+    }
+    if (!nz) continue;
+    __m256d a[3], b[3], c[3];
+    for (int r = 0; r < w; ++r)
+      a[r] = _mm256_broadcast_sd(yj + 4 * r), b[r] = _mm256_broadcast_sd(yj + 4 * r + 1),
+      c[r] = _mm256_broadcast_sd(yj + 4 * r + 2);
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      double *yi = y + 4 * (size_t)f->brow[q] * w;
+      const float *B = f->blk + 9 * q;
+      const __m256d c0 = col4(B), c1 = col4(B + 3), c2 = col4(B + 6);
+      for (int r = 0; r < w; ++r) {
+        __m256d t = _mm256_mul_pd(c0, a[r]);
+        t = _mm256_add_pd(t, _mm256_mul_pd(c1, b[r]));
+        t = _mm256_add_pd(t, _mm256_mul_pd(c2, c[r]));
+        _mm256_store_pd(yi + 4 * r, _mm256_sub_pd(_mm256_load_pd(yi + 4 * r), t));
+      }
+    }
+  }
+  for (int k = 0; k < nb; ++k) {
+    const __m256d s = _mm256_loadu_pd(f->dinv4 + 4 * k);
+    for (int r = 0; r < w; ++r) {
+      double *v = y + 4 * ((size_t)k * w + r);
+      _mm256_store_pd(v, _mm256_mul_pd(_mm256_load_pd(v), s));
+    }
+  }
+  const __m256d zero = _mm256_setzero_pd();
+  for (int J = nb - 1; J >= 0; --J) {
+    double *yj = y + 4 * (size_t)J * w;
+    __m256d s[3][3];
+    for (int r = 0; r < w; ++r) s[r][0] = s[r][1] = s[r][2] = zero;
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      const double *v = y + 4 * (size_t)f->brow[q] * w;
+      const float *B = f->blk + 9 * q;
+      const __m256d c0 = col4(B), c1 = col4(B + 3), c2 = col4(B + 6);
+      for (int r = 0; r < w; ++r) {
+        const __m256d vr = _mm256_load_pd(v + 4 * r);
+        s[r][0] = _mm256_add_pd(s[r][0], _mm256_mul_pd(c0, vr));
+        s[r][1] = _mm256_add_pd(s[r][1], _mm256_mul_pd(c1, vr));
+        s[r][2] = _mm256_add_pd(s[r][2], _mm256_mul_pd(c2, vr));
+      }
+    }
+    const double *d = f->bdiag + 3 * J;
+    for (int r = 0; r < w; ++r) {
+      double l0[4], l1[4], l2[4], *v = yj + 4 * r;
+      _mm256_storeu_pd(l0, s[r][0]), _mm256_storeu_pd(l1, s[r][1]), _mm256_storeu_pd(l2, s[r][2]);
+      v[0] -= (l0[0] + l0[1]) + l0[2];
+      v[1] -= (l1[0] + l1[1]) + l1[2];
+      v[2] -= (l2[0] + l2[1]) + l2[2];
+      v[1] -= d[2] * v[2];
+      v[0] -= d[0] * v[1] + d[1] * v[2];
+    }
+  }
+  for (int k = 0; k < n; ++k)
+    for (int r = 0; r < w; ++r) x[f->perm[k] * w + r] = y[4 * ((k / 3) * w + r) + k % 3];
+}
+#endif
+
 static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
   const int nb = f->nb, n = f->n;
 #ifdef PALP_LDL_X86
@@ -570,7 +704,11 @@ static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
     solve_blocks_avx2(f, x, y);
     return;
   }
-  if (w >= 2 && w <= 4 && f->simd) {
+  if (w >= 2 && w <= 3 && f->simd) {
+    solve_blocks_avx2_vlanes(f, x, w, y);
+    return;
+  }
+  if (w == 4 && f->simd) {
     solve_blocks_avx2_lanes(f, x, w, y);
     return;
   }

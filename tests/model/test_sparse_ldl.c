@@ -11,15 +11,17 @@
  *   x86-64 machine (tolerance 0, compared with memcmp);
  * - two and three interleaved right-hand sides give, column by column, the same bits
  *   as one at a time (tolerance 0);
- * - for two, three and four interleaved right-hand sides the AVX2 path (one lane per
- *   right-hand side) gives the same bits as the portable one: dense ones, the unit
+ * - for two, three and four interleaved right-hand sides the AVX2 paths (for 2-3 lanes
+ *   over a vertex's components, for 4 a lane per right-hand side) give the same bits as
+ *   the portable one: dense ones, the unit
  *   columns of one vertex the fingertip's compliance columns solve for (where the
  *   forward pass skips the block columns that are still all zero, which decides the
  *   sign of some zeros), ones holding -0.0, and all -0.0 (which tells a path that does not
  *   skip from one that does) (memcmp, tolerance 0);
  * - a refactorisation of the same pattern (the block numeric path alone, no CHOLMOD)
  *   solves a second matrix to the same residual bound, gives the same bits as a first
- *   factorisation of that matrix in a new factor (memcmp, tolerance 0), and refuses a
+ *   factorisation of that matrix in a new factor and as the portable block update
+ *   where the default one is AVX2 (memcmp, tolerance 0), and refuses a
  *   matrix with a negative pivot (PALP_ESOLVER), keeping the factor it had (its
  *   residual unchanged). */
 #include <stdint.h>
@@ -188,6 +190,16 @@ int main(void) {
                      memcmp(g.bdiag, f.bdiag, sizeof(double) * NB * 3) == 0 &&
                      memcmp(g.dinv4, f.dinv4, sizeof(double) * NB * 4) == 0;
     CHECK(same, "a refactorisation and a first factorisation of one matrix give the same bits (tolerance 0)");
+    /* the portable block update against the default (AVX2 where the CPU has it) */
+    f.simd = 0;
+    const int ep = palp_ldl_factor_blocks(&f, NB, NULL, NULL, nnz, ti, tj, tx2);
+    f.simd = simd;
+    const int same_p = ep == 0 && memcmp(g.blk, f.blk, sizeof(float) * nblk * 9) == 0 &&
+                       memcmp(g.bdiag, f.bdiag, sizeof(double) * NB * 3) == 0 &&
+                       memcmp(g.dinv4, f.dinv4, sizeof(double) * NB * 4) == 0;
+    CHECK(same_p, "the portable numeric factorisation gives the default path's bits (tolerance 0)");
+    printf("refactorisation: the default (%s) and portable block updates give the same factor, bit for bit: %s\n",
+           simd ? "AVX2" : "portable", same_p ? "yes" : "no");
     palp_ldl_free(&g);
     /* residual against the second matrix, after it and after a refused third */
     for (int pass = 0; pass < 2; ++pass) {
