@@ -618,7 +618,7 @@ static void haptic_run(double rate) {
   dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   pthread_t th;
   pthread_create(&th, NULL, farm_main, &f);
-  static const int steps[] = {1, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 96};
+  static const int steps[] = {1, 2, 4, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 96};
   const stats base = step_baseline(rate);
   printf("haptic capacity: physics at %.0f Hz on %d tick thread(s), stations rendering at 1 kHz (one haptic thread "
          "here serves them all); devices %s; window 2 s per step\n", rate, threads,
