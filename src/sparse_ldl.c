@@ -445,8 +445,8 @@ static inline void palp_ldl_diag_fwd(const double *d, double *yj, int w) {
  *             B_c (*) y_I (elementwise, one partial sum per row r), then
  *             y_J[c] <- y_J[c] - ((s_c[0] + s_c[1]) + s_c[2]), then L_JJ^{-T}.
  * One copy of the blocks serves both passes (a server core's step finds it out of the
- * caches: bytes are time). The AVX2 paths (for one right-hand side, lanes over a
- * vertex's components; for 2-4, a lane per right-hand side) do the same operations in
+ * caches: bytes are time). The AVX2 paths (for 1-3 right-hand sides, lanes over a
+ * vertex's components; for 4, a lane per right-hand side) do the same operations in
  * the same order, lane by lane and without fused multiply-adds, so every path and width
  * gives the same bits (test model_sparse_ldl). With several right-hand
  * sides (compliance columns: unit vectors, nonzero only on their etree path) the
@@ -550,7 +550,8 @@ __attribute__((target("avx2"))) static void solve_blocks_avx2(const palp_ldl *f,
   for (int k = 0; k < n; ++k) x[f->perm[k]] = y[4 * (k / 3) + k % 3];
 }
 
-/* The block solve for 2-4 right-hand sides in AVX2, one lane per right-hand side (the
+/* The block solve for 2-4 right-hand sides in AVX2 (taken for 4; 2 and 3 take
+ * solve_blocks_avx2_vlanes, below, which it is the reference for), one lane per right-hand side (the
  * lanes past w a pad of zeros, which every operation keeps +0): each unknown's w values
  * sit in 4 lanes, each block entry is broadcast, and every lane does what the portable
  * macro does for its right-hand side, in its order and without fused multiply-adds,

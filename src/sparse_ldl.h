@@ -42,7 +42,7 @@ typedef struct palp_ldl {
   float *blk;     /* [nblocks*9 + 4] the blocks, each column-major */
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
   double *dinv4;  /* [nb*4] 1/D padded to 4 lanes per vertex */
-  int simd;       /* 1: palp_ldl_solve takes the AVX2 paths for w <= 4 (same bits as the portable one) */
+  int simd;       /* 1: palp_ldl_solve (w <= 4) and the block factorisation take their AVX2 paths (same bits as the portable ones) */
   /* The block numeric factorisation (palp_ldl_factor_blocks): */
   int *dest;      /* [ndest] where each triplet lands among L's blocks, then the diagonal blocks */
   int ndest;
