@@ -13,7 +13,11 @@
  *     along the device path, sum F_k . (x_{k+1} - x_k), is <= 0 within 1% of
  *     the energy the device put in (and per cycle, no cycle returns more than
  *     1% of its input beyond what it took).
- * Both run through the station's own per-tick logic (palp_cli_haptic_core), and
+ * (c) the force limit: the same cycles with the limit at 60% of the peak, models on
+ *     time and late: no tick renders more than the limit (tolerance 1e-12 relative),
+ *     the passivity controller's damper included; (d) that damper alone, pressing in
+ *     with energy held from earlier, stays under a 0.15 N limit.
+ * All run through the station's own per-tick logic (palp_cli_haptic_core), and
  * again with every model reaching the station 40 ms after the device sample its
  * step used: accuracy then no worse than holding the late force, and passivity
  * kept by the station's passivity controller (without it: 68.5 mJ given back
@@ -240,7 +244,7 @@ static void test_accuracy(int latency) {
                             "%.4f N)", rms, zrms);
 }
 
-static void test_passivity(int latency) {
+static double test_passivity(int latency) {
   palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
   traj.polar_deg = 10;
   traj.depth = 0.008 * depth_scale; /* 8 mm on the default phantom */
@@ -285,6 +289,78 @@ static void test_passivity(int latency) {
   CHECK(net <= 0.01 * in, "over 100 cycles the device gets no more energy than it puts in (net %.4f mJ <= 1%% of "
                           "%.4f mJ)", net * 1e3, in * 1e3);
   CHECK(worst_cycle <= 0.01, "no cycle returns more than 1%% of its input energy beyond it (worst %.4f)", worst_cycle);
+  return peak;
+}
+
+/* (c) the safe force holds whatever adds to the force: the same cycles (20 of them),
+ * the limit at 60% of the peak the unlimited rendering reached. With late models the
+ * passivity controller's damper acts on top of the renderer's (limited) force; once it
+ * took the force 3.5x past a 0.15 N limit (test haptic_session, a loaded machine). */
+static void test_limit(int latency, double peak) {
+  palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
+  traj.polar_deg = 10;
+  traj.depth = 0.008 * depth_scale;
+  traj.approach = 0.002;
+  traj.speed = 0.05;
+  traj.cycle_count = 20;
+  traj.start = 0.05;
+  traj.tail = 0.05;
+  enum { CAP = 10000 };
+  static palp_vec3 x[CAP], fr[CAP];
+  palp_haptic_def hd = palp_haptic_default_def();
+  hd.max_force = 0.6 * peak;
+  unsigned fl = 0;
+  const int n = run_multirate(&traj, &hd, latency, x, fr, NULL, CAP, &fl);
+  double top = 0;
+  int at_limit = 0;
+  for (int k = 0; k < n; k++) {
+    const double m = len3(fr[k]);
+    if (m > top) top = m;
+    at_limit += m >= hd.max_force * (1 - 1e-9);
+  }
+  printf("force limit %.4f N (0.6 x the peak), models %d ms late: %d ticks, %d at the limit, largest rendered %.6f N\n",
+         hd.max_force, latency, n, at_limit, top);
+  CHECK(fl & PALP_HAPTIC_LIMITED, "models %d ms late: some ticks were limited", latency);
+  CHECK(top <= hd.max_force * (1 + 1e-12), "models %d ms late: no tick rendered more than the limit (%.6f N <= %.6f N)",
+        latency, top, hd.max_force);
+}
+
+/* (d) the passivity controller's damper under the limit: a finger pressing in at
+ * 0.1 m/s onto a model of 0.1 N while the observer holds energy from earlier (as late
+ * or jittered models leave it; set here). Pressing in, the damper -a v adds to the
+ * force (up to the 20 N s/m limit: 2 N); the device must still get at most the safe
+ * force, 0.15 N (tolerance 1e-12 relative), and the tick is flagged limited. */
+static void test_limit_controller(void) {
+  palp_haptic_def hd = palp_haptic_default_def();
+  hd.max_force = 0.15;
+  hd.damping = 0; /* the renderer's own damper off: the controller's alone */
+  palp_cli_haptic_core c;
+  CHECK(palp_cli_haptic_core_init(&c, &hd, 250, 1, 0, 0.2) == 0, "core initialised");
+  palp_local_model m;
+  memset(&m, 0, sizeof m);
+  m.period = 0.004, m.contact = 1, m.triangles = 1;
+  m.normal = (palp_vec3){0, 0, 1}, m.force = (palp_vec3){0, 0, 0.1};
+  double top = 0;
+  unsigned fl = 0;
+  int acted = 0;
+  for (int k = 0; k < 20; k++) {
+    const double t = 1e-3 * k;
+    const palp_vec3 x = {0, 0, -1e-4 * k}; /* in at 0.1 m/s */
+    m.device = x, m.proxy = (palp_vec3){0, 0, 0}, m.time = t;
+    palp_local_model mk = m;
+    if (k >= 2) c.energy = 1e-3; /* [J] held from earlier */
+    const uint64_t before = c.pc_ticks;
+    palp_haptic_out o;
+    palp_cli_haptic_core_tick(&c, 1, x, t, k % 4 == 0 ? &mk : NULL, 0.0, &o, NULL);
+    acted += c.pc_ticks > before;
+    if (k >= 2) fl |= o.flags;
+    if (len3(o.force) > top) top = len3(o.force);
+  }
+  printf("passivity controller under a 0.15 N limit: acted on %d ticks, largest rendered %.6f N, limited: %s\n", acted,
+         top, fl & PALP_HAPTIC_LIMITED ? "yes" : "no");
+  CHECK(acted > 10, "the controller acted (%d ticks)", acted);
+  CHECK(top <= 0.15 * (1 + 1e-12), "the damper never took the force past the limit: %.6f N <= 0.15 N", top);
+  CHECK(fl & PALP_HAPTIC_LIMITED, "the limited ticks are flagged (shown to the trainee)");
 }
 
 int main(int argc, char **argv) {
@@ -302,6 +378,9 @@ int main(int argc, char **argv) {
   /* The same with every model reaching the station late_ms (40) after the device
    * sample its step used (a 40 ms round trip), through the same station logic. */
   test_accuracy(late_ms);
-  test_passivity(late_ms);
+  const double peak = test_passivity(late_ms);
+  test_limit_controller();
+  test_limit(0, peak);
+  test_limit(late_ms, peak);
   return check_exit();
 }
