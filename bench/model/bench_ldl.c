@@ -24,18 +24,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "../bench_util.h"
 #include "palp.h"
 #include "sparse_ldl.h"
 
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-static int cmpd(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
+static double now_s(void) { return palp_bench_clock_s(CLOCK_MONOTONIC); }
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
 static double urand(void) { /* [-1, 1) */
   rng ^= rng << 13, rng ^= rng >> 7, rng ^= rng << 17;
@@ -131,7 +124,7 @@ static void pattern_free(pattern *p) {
 static void report(const char *what, double *t[2], int reps) {
   double med[2], p99[2];
   for (int s = 0; s < 2; ++s) {
-    qsort(t[s], (size_t)reps, sizeof(double), cmpd);
+    qsort(t[s], (size_t)reps, sizeof(double), palp_bench_cmp);
     med[s] = t[s][reps / 2], p99[s] = t[s][(int)(0.99 * (reps - 1))];
   }
   printf("  %-34s %9.1f %9.1f %11.1f %9.1f %8.2f\n", what, 1e6 * med[0], 1e6 * p99[0], 1e6 * med[1], 1e6 * p99[1],

@@ -5,7 +5,8 @@
  * job claimed after the step that asks for it and run at once in this thread (the
  * server's helper), installed at its due frame. One fingertip moves as the exercises'
  * scripted expert does (vertical strips at 3 / 9 / 16 mm with small circles, as
- * bench_server --motion strip) or presses 0-10 mm at 0.7 Hz (--motion press).
+ * bench_server --motion strip: bench/bench_motion.h, for a dome of radius 4 cm) or
+ * presses 0-10 mm at 0.7 Hz (--motion press).
  *
  * Printed per scene: rebuild jobs per simulated second, a job's median / p99, the
  * step's median / p99 / mean (the compliance columns of vertices the fingertip reaches
@@ -23,41 +24,15 @@
 #include <string.h>
 #include <time.h>
 
+#include "../bench_motion.h"
+#include "../bench_util.h"
 #include "palp.h"
 
 #ifndef PALP_CONFIG_DIR
 #define PALP_CONFIG_DIR "config"
 #endif
 
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-static int cmpd(const void *a, const void *b) {
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-static double ease(double x) { return x <= 0 ? 0 : x >= 1 ? 1 : 0.5 - 0.5 * cos(3.14159265358979 * x); }
-
-/* bench_server's strip_device for session 0: spots 8 mm apart along a meridian, each
- * felt at 3 / 9 / 16 mm with 2.5 mm circles at 2 Hz, a lift and a glide between them. */
-static palp_vec3 strip_device(double t, double R) {
-  const double r = 0.008, spot = 1.5, spacing = 0.008, half = 50.0 * 3.14159265358979 / 180.0 * R;
-  const double k = floor(t / spot), x = t - k * spot;
-  const double d1 = 0.003, d2 = 0.009, d3 = 0.016; /* [m] */
-  const double depth = d1 + (d2 - d1) * ease((x - 0.3) / 0.15) + (d3 - d2) * ease((x - 0.65) / 0.15) -
-                       (d3 - d1) * ease((x - 1.0) / 0.2);
-  const double u_steps = k + ease((x - 1.2) / 0.3);
-  const double span = 2 * half, pos = fmod(u_steps * spacing, 2 * span);
-  const double u = (pos < span ? pos : 2 * span - pos) - half;
-  const double th = u / R;
-  const palp_vec3 n = {sin(th), 0, cos(th)}, eu = {cos(th), 0, -sin(th)}, ev = {0, 1, 0};
-  const double w = 2 * 3.14159265358979 * 2.0 * t, rho = 0.0025, hgt = R + r - depth;
-  return (palp_vec3){n.x * hgt + rho * (cos(w) * eu.x + sin(w) * ev.x), n.y * hgt + rho * (cos(w) * eu.y + sin(w) * ev.y),
-                     n.z * hgt + rho * (cos(w) * eu.z + sin(w) * ev.z)};
-}
-
+static double now_s(void) { return palp_bench_clock_s(CLOCK_MONOTONIC); }
 /* 0-10 mm at 0.7 Hz near the pole */
 static palp_vec3 press_device(double t, double R) {
   const double r = 0.008, depth = 0.005 * (1 - cos(2 * 3.14159265358979 * 0.7 * t));
@@ -83,7 +58,7 @@ static int run(const char *path, double rate, double seconds, int strip, double 
   }
   for (int k = 0; k < sc.contact_count; ++k) palp_world_remove_contact(w, k);
   const double R = sc.world.mesh.radius;
-  const int f = palp_world_add_finger(w, strip ? strip_device(0, R) : press_device(0, R), 0.008);
+  const int f = palp_world_add_finger(w, strip ? palp_bench_strip_device(0, 0) : press_device(0, R), 0.008);
   const int steps = (int)(seconds * rate + 0.5);
   double *ts = malloc(sizeof(double) * (size_t)steps), *tj = malloc(sizeof(double) * (size_t)steps);
   if (!ts || !tj) return 1;
@@ -92,7 +67,7 @@ static int run(const char *path, double rate, double seconds, int strip, double 
   palp_factor_job *pending = NULL;
   for (int k = 0; k < steps; ++k) {
     const double t = k / rate;
-    palp_world_set_finger(w, f, strip ? strip_device(t, R) : press_device(t, R), 0.008);
+    palp_world_set_finger(w, f, strip ? palp_bench_strip_device(0, t) : press_device(t, R), 0.008);
     if (pending && palp_world_factor_due(w) <= palp_world_frame(w)) {
       palp_world_factor_done(w, pending);
       pending = NULL;
@@ -116,8 +91,8 @@ static int run(const char *path, double rate, double seconds, int strip, double 
   }
   palp_world_health hl;
   palp_world_get_health(w, &hl);
-  qsort(ts, (size_t)steps, sizeof *ts, cmpd);
-  qsort(tj, (size_t)(jobs ? jobs : 1), sizeof *tj, cmpd);
+  qsort(ts, (size_t)steps, sizeof *ts, palp_bench_cmp);
+  qsort(tj, (size_t)(jobs ? jobs : 1), sizeof *tj, palp_bench_cmp);
   const double sim = steps / rate;
   printf("%-34s %5d %8.1f %9.2f %9.2f %8.1f %8.1f %8.1f %7.1f%%\n", sc.name, sc.world.mesh.vertex_count, jobs / sim,
          jobs ? 1e3 * tj[jobs / 2] : 0.0, jobs ? 1e3 * tj[(int)(0.99 * (jobs - 1))] : 0.0, 1e6 * ts[steps / 2],
