@@ -263,9 +263,9 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
          * it took a 0.15 N limit to 0.52 N (test haptic_session on a loaded machine;
          * 2.1 N in haptic_multirate's case). What the limit leaves of the damper is
          * what it dissipated; the observer reads the force as rendered next tick. */
-        const double mag = len3(o.force), fmax_ = c->renderer.def.max_force;
-        if (mag > fmax_) {
-          o.force = v3scale(o.force, fmax_ / mag);
+        const double mag = len3(o.force), limit = c->renderer.def.max_force;
+        if (mag > limit) {
+          o.force = v3scale(o.force, limit / mag);
           o.flags |= PALP_HAPTIC_LIMITED;
           o.requested = fmax(o.requested, mag);
         }

@@ -247,14 +247,20 @@ static int block_map(palp_ldl *f, int nnz, const int *ti, const int *tj) {
  *   A_JJ -= L_JK Y^T (lower part: (r, s) -= sum_c L[r][c] Y[s][c]) and
  *   A_IJ -= L_IK Y^T for K's blocks q below p (I = brow[q], at slot[I] among J's),
  * each entry (L[r] Y[s] + L[3 + r] Y[3 + s]) + L[6 + r] Y[6 + s], subtracted: the
- * order every path keeps (block_numeric). X holds L's blocks, d = D_K's block. */
-static inline void column_update(double *restrict X, const double *restrict d, double *restrict a,
-                                 const int *restrict brow, const int *restrict slot, int p, int end) {
-  const double *restrict L = X + 9 * (size_t)p;
-  const double y[9] = {L[0] * d[0], L[1] * d[0], L[2] * d[0], L[3] * d[4], L[4] * d[4],
-                       L[5] * d[4], L[6] * d[8], L[7] * d[8], L[8] * d[8]};
+ * order every path keeps (block_numeric). X holds L's blocks, d = D_K's block;
+ * column_update_diag makes Y and the diagonal block's part for both paths. */
+static inline void column_update_diag(const double *restrict L, const double *restrict d, double *restrict a,
+                                      double y[9]) {
+  y[0] = L[0] * d[0], y[1] = L[1] * d[0], y[2] = L[2] * d[0], y[3] = L[3] * d[4], y[4] = L[4] * d[4];
+  y[5] = L[5] * d[4], y[6] = L[6] * d[8], y[7] = L[7] * d[8], y[8] = L[8] * d[8];
   for (int sc = 0; sc < 3; ++sc)
     for (int r = sc; r < 3; ++r) a[3 * sc + r] -= (L[r] * y[sc] + L[3 + r] * y[3 + sc]) + L[6 + r] * y[6 + sc];
+}
+
+static inline void column_update(double *restrict X, const double *restrict d, double *restrict a,
+                                 const int *restrict brow, const int *restrict slot, int p, int end) {
+  double y[9];
+  column_update_diag(X + 9 * (size_t)p, d, a, y);
   for (int q = p + 1; q < end; ++q) {
     const double *restrict B = X + 9 * (size_t)q;
     double *restrict T = X + 9 * (size_t)slot[brow[q]];
@@ -275,11 +281,8 @@ static inline void column_update(double *restrict X, const double *restrict d, d
 __attribute__((target("avx2"))) static void column_update_avx2(double *X, const double *d, double *a,
                                                                const int *restrict brow, const int *restrict slot,
                                                                int p, int end) {
-  const double *L = X + 9 * (size_t)p;
-  const double y[9] = {L[0] * d[0], L[1] * d[0], L[2] * d[0], L[3] * d[4], L[4] * d[4],
-                       L[5] * d[4], L[6] * d[8], L[7] * d[8], L[8] * d[8]};
-  for (int sc = 0; sc < 3; ++sc)
-    for (int r = sc; r < 3; ++r) a[3 * sc + r] -= (L[r] * y[sc] + L[3 + r] * y[3 + sc]) + L[6 + r] * y[6 + sc];
+  double y[9];
+  column_update_diag(X + 9 * (size_t)p, d, a, y);
   /* lanes k = 0-3: (s, r) = (0,0) (0,1) (0,2) (1,0); k = 4-7: (1,1) (1,2) (2,0) (2,1) */
   const __m256d ya0 = _mm256_setr_pd(y[0], y[0], y[0], y[1]), ya1 = _mm256_setr_pd(y[3], y[3], y[3], y[4]),
                 ya2 = _mm256_setr_pd(y[6], y[6], y[6], y[7]);
