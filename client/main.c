@@ -1118,6 +1118,8 @@ int main(int argc, char **argv) {
                      .session_id = o.session,
                      .user_name = o.name,
                      .want_feedback = 1,
+                     /* a position-driven trainee renders from the local models (run_haptic_trainee) */
+                     .local_models_only = trainee && in.read_position && in.write_force,
                      .want_deformation = !trainee,
                      .timeout = o.timeout};
   int rc = 1;

@@ -229,7 +229,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     st->contact_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   else
     st->contact_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
-  if (j->want_feedback)
+  if (j->want_feedback && !(j->local_models_only && j->role == palp_ROLE_TRAINEE))
     st->feedback_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
   if (j->want_feedback && j->role == palp_ROLE_TRAINEE)
     st->local_model_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);

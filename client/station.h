@@ -44,6 +44,10 @@ typedef struct palp_cli_join {
   uint32_t session_id;      /* viewers: 0 = newest session on the phantom */
   const char *user_name;
   int want_feedback;
+  /* A position-driven trainee renders from the local models alone: no reader of the
+   * Feedback summary is created, so the server's per-step summary is not sent to
+   * this station (at 1 kHz physics, a second sample per step it only threw away). */
+  int local_models_only;
   int want_deformation;
   double timeout;           /* [s] to wait for the reply (and, for viewers, for a session) */
 } palp_cli_join;

@@ -169,14 +169,15 @@ static void stop_child(pid_t pid) {
   waitpid(pid, &st, 0);
 }
 
-static void join_or_die(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom) {
+static void join_or_die_as(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom,
+                           int local_models_only) {
   char err[512];
   if (palp_cli_station_open_secure(st, domain, label, secure ? &bench_sec : NULL, err, sizeof err) < 0) {
     fprintf(stderr, "bench: %s\n", err);
     exit(1);
   }
   palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = phantom, .user_name = secure ? NULL : label,
-                     .want_feedback = 1,
+                     .want_feedback = 1, .local_models_only = local_models_only,
                      .timeout = 15};
   if (palp_cli_station_join(st, &j, err, sizeof err) < 0) {
     fprintf(stderr, "bench: %s: %s\n", label, err);
@@ -187,6 +188,10 @@ static void join_or_die(palp_cli_station *st, unsigned domain, const char *label
   int64_t end = palp_dds_now_ns() + 10000000000LL;
   dds_instance_handle_t h[4];
   while (dds_get_matched_subscriptions(st->contact_w, h, 4) < 1 && palp_dds_now_ns() < end) nap(0.01);
+}
+
+static void join_or_die(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom) {
+  join_or_die_as(st, domain, label, phantom, 0);
 }
 
 static void fill_contact(palp_Contact *c, uint32_t session, uint64_t seq, double force) {
@@ -525,7 +530,8 @@ static void *farm_main(void *arg) {
           f->models++;
         dds_return_loan(f->st[i].local_model_r, ptr, 1);
       }
-      while (dds_take(f->st[i].feedback_r, ptr, &info, 1, 1) > 0) dds_return_loan(f->st[i].feedback_r, ptr, 1);
+      while (f->st[i].feedback_r > 0 && dds_take(f->st[i].feedback_r, ptr, &info, 1, 1) > 0)
+        dds_return_loan(f->st[i].feedback_r, ptr, 1);
       const palp_vec3 x = farm_device(i, t);
       palp_haptic_out o;
       palp_haptic_render(&f->h[i], x, t, &o);
@@ -602,7 +608,8 @@ static void haptic_run(double rate) {
     while (n < steps[k]) {
       char label[32];
       snprintf(label, sizeof label, "haptic-%02d", n);
-      join_or_die(&f.st[n], haptic_domain, label, (uint32_t)(1 + n % 2));
+      /* as palp-client's position-driven trainee joins: local models, no Feedback reader */
+      join_or_die_as(&f.st[n], haptic_domain, label, (uint32_t)(1 + n % 2), 1);
       palp_haptic_init(&f.h[n], NULL);
       pthread_mutex_lock(&f.lock);
       f.n = ++n;
