@@ -34,14 +34,10 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
                              double station_max_force, int rt_priority, size_t trace_cap, station_run *out) {
   memset(out, 0, sizeof *out);
   palp_cli_station st;
-  char err[512];
   /* joined as palp-client joins a position-driven trainee: local models, no Feedback reader */
   const palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = phantom, .user_name = label, .want_feedback = 1,
                            .local_models_only = 1, .timeout = 10};
-  if (palp_cli_station_open(&st, domain, label, err, sizeof err) < 0 || palp_cli_station_join(&st, &j, err, sizeof err) < 0) {
-    fprintf(stderr, "station %s: %s\n", label, err);
-    exit(1);
-  }
+  test_station_join_as(&st, domain, label, &j);
   CHECK(st.local_model_r > 0 && st.feedback_r == 0, "%s: a local-model reader and no Feedback reader", label);
   out->reply_rate_hz = st.tick_rate_hz;
   palp_cli_input in;
@@ -59,6 +55,7 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   d.trace = calloc(trace_cap, sizeof *d.trace);
   d.trace_cap = trace_cap;
   palp_cli_haptic_loop *hl = calloc(1, sizeof *hl);
+  char err[256];
   if (!d.trace || !hl || palp_cli_haptic_start(hl, &d, err, sizeof err) < 0) {
     fprintf(stderr, "haptic loop: %s\n", err);
     exit(1);

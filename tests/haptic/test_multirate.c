@@ -244,15 +244,21 @@ static void test_accuracy(int latency) {
                             "%.4f N)", rms, zrms);
 }
 
-static double test_passivity(int latency) {
+/* count press-release cycles 10 deg off the pole */
+static palp_cli_simdevice_def cycles_traj(int count) {
   palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
   traj.polar_deg = 10;
   traj.depth = 0.008 * depth_scale; /* 8 mm on the default phantom */
   traj.approach = 0.002;
   traj.speed = 0.05;    /* 50 mm/s: a cycle lasts 0.4 s */
-  traj.cycle_count = 100;
+  traj.cycle_count = count;
   traj.start = 0.05;
   traj.tail = 0.05;
+  return traj;
+}
+
+static double test_passivity(int latency) {
+  const palp_cli_simdevice_def traj = cycles_traj(100);
   enum { CAP = 45000 };
   static palp_vec3 x[CAP], fr[CAP];
   palp_haptic_def hd = palp_haptic_default_def(); /* as the station renders: damper on, 10 N limit */
@@ -297,14 +303,7 @@ static double test_passivity(int latency) {
  * passivity controller's damper acts on top of the renderer's (limited) force; once it
  * took the force 3.5x past a 0.15 N limit (test haptic_session, a loaded machine). */
 static void test_limit(int latency, double peak) {
-  palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_CYCLES);
-  traj.polar_deg = 10;
-  traj.depth = 0.008 * depth_scale;
-  traj.approach = 0.002;
-  traj.speed = 0.05;
-  traj.cycle_count = 20;
-  traj.start = 0.05;
-  traj.tail = 0.05;
+  const palp_cli_simdevice_def traj = cycles_traj(20);
   enum { CAP = 10000 };
   static palp_vec3 x[CAP], fr[CAP];
   palp_haptic_def hd = palp_haptic_default_def();

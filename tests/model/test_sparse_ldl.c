@@ -42,6 +42,12 @@ static double urand(void) { /* [-1, 1) */
   return (double)(rng >> 11) / 4503599627370496.0 - 1.0;
 }
 
+/* Two block factors of one pattern hold the same bits (blocks, diagonal blocks, 1/D). */
+static int same_factor(const palp_ldl *a, const palp_ldl *b, size_t nblk) {
+  return memcmp(a->blk, b->blk, sizeof(float) * nblk * 9) == 0 && memcmp(a->bdiag, b->bdiag, sizeof(double) * NB * 3) == 0 &&
+         memcmp(a->dinv4, b->dinv4, sizeof(double) * NB * 4) == 0;
+}
+
 /* Dense copy of A for the residual, and its lower-triangle triplets. */
 static double A[N][N];
 
@@ -186,17 +192,13 @@ int main(void) {
     const int eg = palp_ldl_factor_blocks(&g, NB, gp, gi, nnz, ti, tj, tx2);
     CHECK(eg == 0 && g.nb == NB, "first factorisation of the second matrix: %s", palp_strerror(eg));
     const size_t nblk = (size_t)f.bcolp[NB];
-    const int same = eg == 0 && g.bcolp[NB] == f.bcolp[NB] && memcmp(g.blk, f.blk, sizeof(float) * nblk * 9) == 0 &&
-                     memcmp(g.bdiag, f.bdiag, sizeof(double) * NB * 3) == 0 &&
-                     memcmp(g.dinv4, f.dinv4, sizeof(double) * NB * 4) == 0;
+    const int same = eg == 0 && g.bcolp[NB] == f.bcolp[NB] && same_factor(&g, &f, nblk);
     CHECK(same, "a refactorisation and a first factorisation of one matrix give the same bits (tolerance 0)");
     /* the portable block update against the default (AVX2 where the CPU has it) */
     f.simd = 0;
     const int ep = palp_ldl_factor_blocks(&f, NB, NULL, NULL, nnz, ti, tj, tx2);
     f.simd = simd;
-    const int same_p = ep == 0 && memcmp(g.blk, f.blk, sizeof(float) * nblk * 9) == 0 &&
-                       memcmp(g.bdiag, f.bdiag, sizeof(double) * NB * 3) == 0 &&
-                       memcmp(g.dinv4, f.dinv4, sizeof(double) * NB * 4) == 0;
+    const int same_p = ep == 0 && same_factor(&g, &f, nblk);
     CHECK(same_p, "the portable numeric factorisation gives the default path's bits (tolerance 0)");
     printf("refactorisation: the default (%s) and portable block updates give the same factor, bit for bit: %s\n",
            simd ? "AVX2" : "portable", same_p ? "yes" : "no");

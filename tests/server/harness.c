@@ -64,19 +64,19 @@ void test_server_stop(test_server *ts) {
   ts->running = 0;
 }
 
+void test_station_join_as(palp_cli_station *st, unsigned domain, const char *label, const palp_cli_join *j) {
+  char err[512];
+  if (palp_cli_station_open(st, domain, label, err, sizeof err) < 0 || palp_cli_station_join(st, j, err, sizeof err) < 0) {
+    fprintf(stderr, "station %s: %s\n", label, err);
+    exit(1);
+  }
+}
+
 void test_station_join(palp_cli_station *st, unsigned domain, const char *label, int role, uint32_t phantom,
                        uint32_t session, int want_feedback, int want_deformation) {
-  char err[512];
-  if (palp_cli_station_open(st, domain, label, err, sizeof err) < 0) {
-    fprintf(stderr, "station %s: %s\n", label, err);
-    exit(1);
-  }
-  palp_cli_join j = {.role = role, .phantom_id = phantom, .session_id = session, .user_name = label,
-                     .want_feedback = want_feedback, .want_deformation = want_deformation, .timeout = 10};
-  if (palp_cli_station_join(st, &j, err, sizeof err) < 0) {
-    fprintf(stderr, "station %s: %s\n", label, err);
-    exit(1);
-  }
+  const palp_cli_join j = {.role = role, .phantom_id = phantom, .session_id = session, .user_name = label,
+                           .want_feedback = want_feedback, .want_deformation = want_deformation, .timeout = 10};
+  test_station_join_as(st, domain, label, &j);
 }
 
 void test_send_raw(palp_cli_station *st, const palp_Contact *c) { dds_write(st->contact_w, c); }

@@ -54,6 +54,8 @@ void test_server_stop(test_server *ts);
 /* Opens a station and joins; exits the test on failure. */
 void test_station_join(palp_cli_station *st, unsigned domain, const char *label, int role, uint32_t phantom,
                        uint32_t session, int want_feedback, int want_deformation);
+/* The same with a join of the caller's (role, ids, wants, flags such as local_models_only). */
+void test_station_join_as(palp_cli_station *st, unsigned domain, const char *label, const palp_cli_join *j);
 
 /* Sends one force-driven contact (distribution d, at polar/azimuth [deg], |F| [N] along -normal). */
 void test_send_force(palp_cli_station *st, int finger, int d, double polar, double azimuth, double force,
