@@ -293,7 +293,7 @@ static void *haptic_main(void *arg) {
   const int every = d->physics_rate_hz > 0 && d->physics_rate_hz < d->rate_hz
                         ? (int)lround(d->rate_hz / d->physics_rate_hz) : 1;
   const int64_t late_ns = (int64_t)(d->late_threshold * 1e9);
-  const int64_t t0 = palp_dds_now_ns();
+  const int64_t t0 = l->t0_ns;
   int64_t next = t0;
   uint64_t mb_seq = 0;
   int was_on = 0, release_left = 0;
@@ -401,6 +401,52 @@ static void *haptic_main(void *arg) {
   return NULL;
 }
 
+/* The timer floor (palp_cli_haptic_stats.floor_*): the haptic thread's deadlines
+ * shifted by half a period, so that the two never wake together, and the same rules
+ * (late past late_threshold; more than a period late, not made up, its phase kept). It
+ * runs until the haptic thread is done. On the 2-core VM of session 34, idle, a bare
+ * 1 kHz timer loop at SCHED_FIFO 20 woke > 0.5 ms late on 0.42-0.86% of its ticks (worst
+ * 3.3-3.9 ms; docs/station.md "Timing"): the VM's own stalls, which no station software
+ * goes below. On two cores the floor thread and the haptic thread may each get its own,
+ * so the floor is the machine's noise over the same seconds, not a bound on the loop. */
+static void *floor_main(void *arg) {
+  palp_cli_haptic_loop *l = arg;
+  palp_cli_haptic_stats *st = &l->stats;
+  const int64_t period = (int64_t)(1e9 / l->def.rate_hz + 0.5);
+  const int64_t late_ns = (int64_t)(l->def.late_threshold * 1e9);
+  int64_t next = l->t0_ns + period / 2;
+  while (!atomic_load_explicit(&l->stop, memory_order_relaxed) && !atomic_load_explicit(&l->done, memory_order_relaxed)) {
+    next += period;
+    struct timespec ts = ts_of(next);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+    const int64_t late = palp_dds_now_ns() - next;
+    st->floor_ticks++;
+    if (late > late_ns) st->floor_late_ticks++;
+    if ((double)late * 1e-9 > st->floor_late_max) st->floor_late_max = (double)late * 1e-9;
+    if (late > period) next += (late / period) * period;
+  }
+  return NULL;
+}
+
+/* A thread at the haptic thread's scheduling (SCHED_FIFO at rt_priority when granted). */
+static int start_thread(pthread_t *th, int rt_priority, void *(*fn)(void *), void *arg, int *rt_ok) {
+  int created = 0;
+  if (rt_priority > 0) {
+    pthread_attr_t attr;
+    struct sched_param sp = {.sched_priority = rt_priority};
+    pthread_attr_init(&attr);
+    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
+    pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
+    pthread_attr_setschedparam(&attr, &sp);
+    created = pthread_create(th, &attr, fn, arg) == 0;
+    pthread_attr_destroy(&attr);
+  }
+  if (rt_ok) *rt_ok = created;
+  if (!created && pthread_create(th, NULL, fn, arg) != 0) return -1;
+  return 0;
+}
+
 int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *def, char *err, size_t errlen) {
   memset(l, 0, sizeof *l);
   if (!def || !def->in || !def->in->read_position || !def->in->write_force) {
@@ -427,31 +473,25 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
     snprintf(err, errlen, "haptic loop: cannot create its locks");
     return PALP_ENOMEM;
   }
-  int created = 0;
-  if (def->rt_priority > 0) {
-    /* A tick preempted by a compiler is a force the hand feels late: a real-time
-     * class keeps the haptic thread ahead of ordinary work when allowed. */
-    pthread_attr_t attr;
-    struct sched_param sp = {.sched_priority = def->rt_priority};
-    pthread_attr_init(&attr);
-    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
-    pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
-    pthread_attr_setschedparam(&attr, &sp);
-    created = pthread_create(&l->thread, &attr, haptic_main, l) == 0;
-    pthread_attr_destroy(&attr);
-    l->stats.rt_ok = created;
-  }
-  if (!created && pthread_create(&l->thread, NULL, haptic_main, l) != 0) {
+  /* A tick preempted by a compiler is a force the hand feels late: a real-time class
+   * keeps the haptic thread ahead of ordinary work when allowed. */
+  l->t0_ns = palp_dds_now_ns();
+  if (start_thread(&l->thread, def->rt_priority, haptic_main, l, &l->stats.rt_ok) < 0) {
     snprintf(err, errlen, "haptic loop: cannot start the thread");
     palp_cli_mailbox_destroy(&l->mailbox);
     pthread_mutex_destroy(&l->view_lock);
     return PALP_ENOMEM;
   }
   l->started = 1;
+  /* The floor is a measurement: without it the loop runs the same, so a floor thread
+   * that cannot start leaves floor_ticks at 0 and the station says nothing of it. */
+  if (def->timer_floor && start_thread(&l->floor_thread, l->stats.rt_ok ? def->rt_priority : 0, floor_main, l, NULL) == 0)
+    l->floor_started = 1;
   if (def->contact_w > 0) {
     if (pthread_create(&l->sender, NULL, sender_main, l) != 0) {
       atomic_store(&l->stop, 1);
       pthread_join(l->thread, NULL);
+      if (l->floor_started) pthread_join(l->floor_thread, NULL), l->floor_started = 0;
       l->started = 0;
       snprintf(err, errlen, "haptic loop: cannot start the sender thread");
       return PALP_ENOMEM;
@@ -468,6 +508,10 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
   if (l->started) {
     atomic_store(&l->stop, 1);
     pthread_join(l->thread, NULL);
+    if (l->floor_started) {
+      pthread_join(l->floor_thread, NULL);
+      l->floor_started = 0;
+    }
     if (l->sender_started) {
       sem_post(&l->out_sem);
       pthread_join(l->sender, NULL);

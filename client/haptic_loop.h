@@ -117,6 +117,7 @@ typedef struct palp_cli_haptic_def {
   double duration;         /* [s]; 0 = until the input ends or stop is requested */
   palp_cli_haptic_sample *trace; /* optional: every tick recorded here */
   size_t trace_cap;
+  int timer_floor;         /* 1: measure this machine's timer floor beside the loop (stats.floor_*) */
 } palp_cli_haptic_def;
 
 palp_cli_haptic_def palp_cli_haptic_default_def(void);
@@ -142,6 +143,12 @@ typedef struct palp_cli_haptic_stats {
   double peak_force, peak_requested; /* [N] rendered / before the limit */
   double max_force;             /* the limit in force [N] */
   size_t trace_len;
+  /* The timer floor (def.timer_floor): a thread with the haptic thread's scheduling that
+   * sleeps to the same deadlines, half a period later, and does nothing else. Its late
+   * wake-ups are what the VM, the kernel and the other processes cost a thread that does
+   * no work, over the same seconds: the loop's own late_ticks are read against them. */
+  uint64_t floor_ticks, floor_late_ticks;
+  double floor_late_max;        /* [s] */
   int rt_ok;                    /* SCHED_FIFO granted */
   int ended;                    /* the input finished */
   int failed;                   /* the input reported an error (message in error) */
@@ -183,6 +190,9 @@ typedef struct palp_cli_haptic_loop {
   pthread_t sender;
   int sender_started;
   uint64_t sent;
+  pthread_t floor_thread; /* def.timer_floor */
+  int floor_started;
+  int64_t t0_ns;          /* the haptic thread's first deadline [ns], set before either thread starts */
 } palp_cli_haptic_loop;
 
 /* Starts the thread. The loop's mailbox takes models from the caller's DDS thread. */

@@ -516,6 +516,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   d.contact_w = st->contact_w;
   d.session_id = st->session_id;
   d.duration = o->duration;
+  d.timer_floor = 1; /* the late ticks are printed beside this machine's own floor */
   FILE *trace = NULL;
   if (o->trace_csv) {
     trace = fopen(o->trace_csv, "w");
@@ -681,6 +682,12 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
          (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
          d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
          closed ? reason : "");
+  if (hs.floor_ticks)
+    printf("[trainee %s] this machine's timer floor over the same %.1f s: a thread doing nothing at the haptic "
+           "thread's priority woke > %.1f ms late on %llu of %llu ticks (%.3f%%, worst %.2f ms)\n", o->name,
+           (double)hs.floor_ticks / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
+           (unsigned long long)hs.floor_ticks, 100.0 * (double)hs.floor_late_ticks / (double)hs.floor_ticks,
+           hs.floor_late_max * 1e3);
   if (hs.limited_ticks)
     printf("[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
            o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);

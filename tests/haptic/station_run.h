@@ -54,6 +54,7 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   d.session_id = st.session_id;
   d.trace = calloc(trace_cap, sizeof *d.trace);
   d.trace_cap = trace_cap;
+  d.timer_floor = 1; /* as palp-client runs it */
   palp_cli_haptic_loop *hl = calloc(1, sizeof *hl);
   char err[256];
   if (!d.trace || !hl || palp_cli_haptic_start(hl, &d, err, sizeof err) < 0) {
@@ -74,6 +75,19 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   }
   palp_cli_haptic_join(hl, &out->hs);
   out->trace = d.trace;
+  /* The timer floor ran beside the loop, at its rate, over the same seconds: both skip
+   * the ticks of a stall longer than a period, so their counts differ by a few stalls
+   * at most (tolerance 3% + 5 ticks). */
+  const palp_cli_haptic_stats *h = &out->hs;
+  printf("%s: timer floor beside the loop: %llu of %llu ticks late by > 0.5 ms (%.3f%%, worst %.2f ms); the loop "
+         "%llu of %llu (%.3f%%, worst %.2f ms)\n", label, (unsigned long long)h->floor_late_ticks,
+         (unsigned long long)h->floor_ticks, h->floor_ticks ? 100.0 * (double)h->floor_late_ticks / (double)h->floor_ticks : 0.0,
+         h->floor_late_max * 1e3, (unsigned long long)h->late_ticks, (unsigned long long)h->ticks,
+         h->ticks ? 100.0 * (double)h->late_ticks / (double)h->ticks : 0.0, h->late_max * 1e3);
+  CHECK(fabs((double)h->floor_ticks - (double)h->ticks) <= 0.03 * (double)h->ticks + 5 &&
+            h->floor_late_ticks <= h->floor_ticks && isfinite(h->floor_late_max) && h->floor_late_max >= 0,
+        "%s: the timer floor ran beside the loop: %llu ticks against the loop's %llu (tolerance 3%% + 5)", label,
+        (unsigned long long)h->floor_ticks, (unsigned long long)h->ticks);
   if (nl) {
     qsort(lat, nl, sizeof *lat, sr_cmp);
     out->lat_p50_us = lat[(nl - 1) / 2];
