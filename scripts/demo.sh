@@ -182,7 +182,11 @@ done
 echo "(the lesions are revealed only in the instructor's log: the review below assesses each session)"
 echo
 echo "== stations =="
-for f in alice bob carol dana visual observer; do grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1; done
+for f in alice bob carol dana visual observer; do
+  grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1
+  # a haptic station's late ticks, and beside them this machine's own (client/haptic_loop.c)
+  grep -E "^\[[a-z]+[^]]*\] this machine's timer floor" "$out/$f.log" | tail -n 1 || true
+done
 echo
 echo "== sessions (palp-server) =="
 sed -n '/palp-server session summary/,$p' "$out/server.log" | tail -n +2
