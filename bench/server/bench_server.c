@@ -597,8 +597,9 @@ static void haptic_run(double rate) {
   static const int steps[] = {1, 2, 4, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 96};
   const stats base = step_baseline(rate);
   printf("haptic capacity: physics at %.0f Hz on %d tick thread(s), stations rendering at 1 kHz (one haptic thread "
-         "here serves them all); devices %s; window 2 s per step\n", rate, threads,
-         strip_motion ? "searching in vertical strips at 3 / 9 / 16 mm (--motion strip)" : "pressing 0-10 mm at 0.7 Hz");
+         "here serves them all); devices %s; scene %s; window 2 s per step\n", rate, threads,
+         strip_motion ? "searching in vertical strips at 3 / 9 / 16 mm (--motion strip)" : "pressing 0-10 mm at 0.7 Hz",
+         scene_path);
   printf("  baseline, same run: the model's step with a pressed finger: p50 %.0f us, p99 %.0f us (its tangent rebuilt "
          "%.1f times a simulated second, at once: the server defers them to helpers)\n", base.p50, base.p99,
          baseline_rebuilds_per_s);
