@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "palp_dds.h"
+#include "palp_rt_thread.h"
 
 /* ---- mailbox ------------------------------------------------------------------------- */
 
@@ -429,24 +430,6 @@ static void *floor_main(void *arg) {
   return NULL;
 }
 
-/* A thread at the haptic thread's scheduling (SCHED_FIFO at rt_priority when granted). */
-static int start_thread(pthread_t *th, int rt_priority, void *(*fn)(void *), void *arg, int *rt_ok) {
-  int created = 0;
-  if (rt_priority > 0) {
-    pthread_attr_t attr;
-    struct sched_param sp = {.sched_priority = rt_priority};
-    pthread_attr_init(&attr);
-    pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
-    pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
-    pthread_attr_setschedparam(&attr, &sp);
-    created = pthread_create(th, &attr, fn, arg) == 0;
-    pthread_attr_destroy(&attr);
-  }
-  if (rt_ok) *rt_ok = created;
-  if (!created && pthread_create(th, NULL, fn, arg) != 0) return -1;
-  return 0;
-}
-
 int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *def, char *err, size_t errlen) {
   memset(l, 0, sizeof *l);
   if (!def || !def->in || !def->in->read_position || !def->in->write_force) {
@@ -476,7 +459,7 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
   /* A tick preempted by a compiler is a force the hand feels late: a real-time class
    * keeps the haptic thread ahead of ordinary work when allowed. */
   l->t0_ns = palp_dds_now_ns();
-  if (start_thread(&l->thread, def->rt_priority, haptic_main, l, &l->stats.rt_ok) < 0) {
+  if (palp_rt_thread_start(&l->thread, def->rt_priority, haptic_main, l, &l->stats.rt_ok) < 0) {
     snprintf(err, errlen, "haptic loop: cannot start the thread");
     palp_cli_mailbox_destroy(&l->mailbox);
     pthread_mutex_destroy(&l->view_lock);
@@ -485,7 +468,8 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
   l->started = 1;
   /* The floor is a measurement: without it the loop runs the same, so a floor thread
    * that cannot start leaves floor_ticks at 0 and the station says nothing of it. */
-  if (def->timer_floor && start_thread(&l->floor_thread, l->stats.rt_ok ? def->rt_priority : 0, floor_main, l, NULL) == 0)
+  if (def->timer_floor &&
+      palp_rt_thread_start(&l->floor_thread, l->stats.rt_ok ? def->rt_priority : 0, floor_main, l, NULL) == 0)
     l->floor_started = 1;
   if (def->contact_w > 0) {
     if (pthread_create(&l->sender, NULL, sender_main, l) != 0) {

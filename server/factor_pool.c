@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "palp_rt_thread.h"
+
 /* More than any server holds sessions: one job in flight per session. */
 #define PALP_SRV_FACTOR_QUEUE 1024
 
@@ -62,18 +64,7 @@ palp_srv_factor_pool *palp_srv_factor_pool_create(int priority, int *err) {
   pthread_cond_init(&p->work, NULL);
   pthread_cond_init(&p->finished, NULL);
   for (int i = 0; i < PALP_SRV_FACTOR_THREADS; i++) {
-    int created = 0;
-    if (priority > 0) {
-      pthread_attr_t attr;
-      struct sched_param sp = {.sched_priority = priority};
-      pthread_attr_init(&attr);
-      pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
-      pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
-      pthread_attr_setschedparam(&attr, &sp);
-      created = pthread_create(&p->thread[i], &attr, helper_main, p) == 0;
-      pthread_attr_destroy(&attr);
-    }
-    if (!created && pthread_create(&p->thread[i], NULL, helper_main, p) != 0) break;
+    if (palp_rt_thread_start(&p->thread[i], priority, helper_main, p, NULL) < 0) break;
     p->threads++;
   }
   if (!p->threads) {

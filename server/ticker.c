@@ -12,6 +12,7 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "palp_rt_thread.h"
 
 typedef struct tick_group {
   palp_srv_ticker *owner;
@@ -127,21 +128,12 @@ palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_h
   if (!t->factor) goto nomem;
   threads = t->n;
   for (int i = 0; i < threads; i++) {
-    int created = 0;
-    if (priority > 0) {
-      /* A tick preempted by a compiler or a browser is a missed haptic deadline:
-       * a real-time class keeps the tick threads ahead of ordinary work. */
-      pthread_attr_t attr;
-      struct sched_param sp = {.sched_priority = priority};
-      pthread_attr_init(&attr);
-      pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
-      pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
-      pthread_attr_setschedparam(&attr, &sp);
-      created = pthread_create(&t->g[i].thread, &attr, group_main, &t->g[i]) == 0;
-      pthread_attr_destroy(&attr);
-      if (created && i == 0) *rt_ok = 1;
-    }
-    if (!created && pthread_create(&t->g[i].thread, NULL, group_main, &t->g[i]) != 0) {
+    /* A tick preempted by a compiler or a browser is a missed haptic deadline: a
+     * real-time class keeps the tick threads ahead of ordinary work. */
+    int rt = 0;
+    const int rc = palp_rt_thread_start(&t->g[i].thread, priority, group_main, &t->g[i], &rt);
+    if (rc == 0 && rt && i == 0) *rt_ok = 1;
+    if (rc < 0) {
       atomic_store(&t->stop, 1);
       for (int j = 0; j < i; j++) pthread_join(t->g[j].thread, NULL);
       t->started = 0;
