@@ -412,21 +412,24 @@ static void *haptic_main(void *arg) {
  * so the floor is the machine's noise over the same seconds, not a bound on the loop. */
 static void *floor_main(void *arg) {
   palp_cli_haptic_loop *l = arg;
-  palp_cli_haptic_stats *st = &l->stats;
   const int64_t period = (int64_t)(1e9 / l->def.rate_hz + 0.5);
   const int64_t late_ns = (int64_t)(l->def.late_threshold * 1e9);
   int64_t next = l->t0_ns + period / 2;
+  /* its own counters (the haptic thread writes l->stats), copied into the stats at join */
+  uint64_t ticks = 0, late_ticks = 0;
+  double late_max = 0;
   while (!atomic_load_explicit(&l->stop, memory_order_relaxed) && !atomic_load_explicit(&l->done, memory_order_relaxed)) {
     next += period;
     struct timespec ts = ts_of(next);
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
     }
     const int64_t late = palp_dds_now_ns() - next;
-    st->floor_ticks++;
-    if (late > late_ns) st->floor_late_ticks++;
-    if ((double)late * 1e-9 > st->floor_late_max) st->floor_late_max = (double)late * 1e-9;
+    ticks++;
+    if (late > late_ns) late_ticks++;
+    if ((double)late * 1e-9 > late_max) late_max = (double)late * 1e-9;
     if (late > period) next += (late / period) * period;
   }
+  l->floor_ticks = ticks, l->floor_late_ticks = late_ticks, l->floor_late_max = late_max;
   return NULL;
 }
 
@@ -495,6 +498,8 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
     if (l->floor_started) {
       pthread_join(l->floor_thread, NULL);
       l->floor_started = 0;
+      l->stats.floor_ticks = l->floor_ticks, l->stats.floor_late_ticks = l->floor_late_ticks;
+      l->stats.floor_late_max = l->floor_late_max;
     }
     if (l->sender_started) {
       sem_post(&l->out_sem);

@@ -146,7 +146,8 @@ typedef struct palp_cli_haptic_stats {
   /* The timer floor (def.timer_floor): a thread with the haptic thread's scheduling that
    * sleeps to the same deadlines, half a period later, and does nothing else. Its late
    * wake-ups are what the VM, the kernel and the other processes cost a thread that does
-   * no work, over the same seconds: the loop's own late_ticks are read against them. */
+   * no work, over the same seconds: the loop's own late_ticks are read against them.
+   * Filled at join. */
   uint64_t floor_ticks, floor_late_ticks;
   double floor_late_max;        /* [s] */
   int rt_ok;                    /* SCHED_FIFO granted */
@@ -192,6 +193,8 @@ typedef struct palp_cli_haptic_loop {
   uint64_t sent;
   pthread_t floor_thread; /* def.timer_floor */
   int floor_started;
+  uint64_t floor_ticks, floor_late_ticks; /* the floor thread's, copied into stats at join */
+  double floor_late_max;
   int64_t t0_ns;          /* the haptic thread's first deadline [ns], set before either thread starts */
 } palp_cli_haptic_loop;
 

@@ -639,7 +639,7 @@ static void haptic_run(double rate) {
          baseline_rebuilds_per_s);
   printf("  (timer floor: a thread at the ticks' priority%s that only sleeps to the physics rate's deadlines; its wake-ups "
          "more than a period late are what the machine alone makes of the late-step criterion)\n",
-         fl_rt ? " (SCHED_FIFO)" : " (SCHED_FIFO refused: normal)");
+         rt_priority <= 0 ? " (normal scheduling)" : fl_rt ? " (SCHED_FIFO)" : " (SCHED_FIFO refused: normal)");
   printf("  sessions  late steps  tick p99 [us]  tick max [us]  load  station late ticks  models/s  timer floor\n");
   int n = 0, held = 0;
   for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions; k++) {
