@@ -142,6 +142,23 @@ def disc_mean(img, cx, cy, r):
     return [v / max(n, 1) for v in s]
 
 
+def print_log_tails(out, lines=40):
+    """The last lines of every process log of the run, into the test's own output: CTest keeps that
+    (LastTest.log, CI), where a rerun overwrites the files (a failure seen once, in a fresh clone's
+    first run, could not be read afterwards)."""
+    for name in sorted(os.listdir(out)):
+        if not name.endswith(".log"):
+            continue
+        try:
+            with open(os.path.join(out, name), errors="replace") as f:
+                tail = f.read().splitlines()[-lines:]
+        except OSError:
+            continue
+        print("---- %s (last %d lines) ----" % (name, len(tail)))
+        for line in tail:
+            print("   " + line)
+
+
 def main(run):
     """usage: test.py BUILD_DIR SOURCE_DIR OUT_DIR; run(build, source, out) raises Fail or returns."""
     build, source, out = sys.argv[1:4]
@@ -151,5 +168,6 @@ def main(run):
         run(build, source, out)
     except Fail as e:
         print("FAILED (%.1f s): %s" % (time.time() - t0, e))
+        print_log_tails(out)
         sys.exit(1)
     print("passed in %.1f s" % (time.time() - t0))
