@@ -398,38 +398,8 @@ static void *haptic_main(void *arg) {
   st->max_force = l->core.renderer.def.max_force;
   st->passivity_ticks = l->core.pc_ticks;
   st->passivity_dissipated = l->core.dissipated;
+  palp_timer_floor_request_stop(&l->floor); /* it measures beside the loop, not after it */
   atomic_store(&l->done, 1);
-  return NULL;
-}
-
-/* The timer floor (palp_cli_haptic_stats.floor_*): the haptic thread's deadlines
- * shifted by half a period, so that the two never wake together, and the same rules
- * (late past late_threshold; more than a period late, not made up, its phase kept). It
- * runs until the haptic thread is done. On the 2-core VM of session 34, idle, a bare
- * 1 kHz timer loop at SCHED_FIFO 20 woke > 0.5 ms late on 0.42-0.86% of its ticks (worst
- * 3.3-3.9 ms; docs/station.md "Timing"): the VM's own stalls, which no station software
- * goes below. On two cores the floor thread and the haptic thread may each get its own,
- * so the floor is the machine's noise over the same seconds, not a bound on the loop. */
-static void *floor_main(void *arg) {
-  palp_cli_haptic_loop *l = arg;
-  const int64_t period = (int64_t)(1e9 / l->def.rate_hz + 0.5);
-  const int64_t late_ns = (int64_t)(l->def.late_threshold * 1e9);
-  int64_t next = l->t0_ns + period / 2;
-  /* its own counters (the haptic thread writes l->stats), copied into the stats at join */
-  uint64_t ticks = 0, late_ticks = 0;
-  double late_max = 0;
-  while (!atomic_load_explicit(&l->stop, memory_order_relaxed) && !atomic_load_explicit(&l->done, memory_order_relaxed)) {
-    next += period;
-    struct timespec ts = ts_of(next);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
-    }
-    const int64_t late = palp_dds_now_ns() - next;
-    ticks++;
-    if (late > late_ns) late_ticks++;
-    if ((double)late * 1e-9 > late_max) late_max = (double)late * 1e-9;
-    if (late > period) next += (late / period) * period;
-  }
-  l->floor_ticks = ticks, l->floor_late_ticks = late_ticks, l->floor_late_max = late_max;
   return NULL;
 }
 
@@ -471,14 +441,16 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
   l->started = 1;
   /* The floor is a measurement: without it the loop runs the same, so a floor thread
    * that cannot start leaves floor_ticks at 0 and the station says nothing of it. */
-  if (def->timer_floor &&
-      palp_rt_thread_start(&l->floor_thread, l->stats.rt_ok ? def->rt_priority : 0, floor_main, l, NULL) == 0)
-    l->floor_started = 1;
+  if (def->timer_floor) { /* the haptic thread's deadlines half a period later: the two never wake together */
+    const int64_t period = (int64_t)(1e9 / def->rate_hz + 0.5);
+    palp_timer_floor_start(&l->floor, period, (int64_t)(def->late_threshold * 1e9), l->t0_ns + period / 2,
+                           l->stats.rt_ok ? def->rt_priority : 0);
+  }
   if (def->contact_w > 0) {
     if (pthread_create(&l->sender, NULL, sender_main, l) != 0) {
       atomic_store(&l->stop, 1);
       pthread_join(l->thread, NULL);
-      if (l->floor_started) pthread_join(l->floor_thread, NULL), l->floor_started = 0;
+      palp_timer_floor_stop(&l->floor);
       l->started = 0;
       snprintf(err, errlen, "haptic loop: cannot start the sender thread");
       return PALP_ENOMEM;
@@ -495,12 +467,9 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
   if (l->started) {
     atomic_store(&l->stop, 1);
     pthread_join(l->thread, NULL);
-    if (l->floor_started) {
-      pthread_join(l->floor_thread, NULL);
-      l->floor_started = 0;
-      l->stats.floor_ticks = l->floor_ticks, l->stats.floor_late_ticks = l->floor_late_ticks;
-      l->stats.floor_late_max = l->floor_late_max;
-    }
+    palp_timer_floor_stop(&l->floor);
+    l->stats.floor_ticks = l->floor.ticks, l->stats.floor_late_ticks = l->floor.late_ticks;
+    l->stats.floor_late_max = l->floor.late_max;
     if (l->sender_started) {
       sem_post(&l->out_sem);
       pthread_join(l->sender, NULL);

@@ -29,6 +29,7 @@
 #include "input.h"
 #include "palp.h"
 #include "palp_haptic.h"
+#include "palp_timer_floor.h"
 #include "palp_types.h"
 
 /* ---- mailbox: DDS thread -> haptic thread ----------------------------------------- */
@@ -143,11 +144,10 @@ typedef struct palp_cli_haptic_stats {
   double peak_force, peak_requested; /* [N] rendered / before the limit */
   double max_force;             /* the limit in force [N] */
   size_t trace_len;
-  /* The timer floor (def.timer_floor): a thread with the haptic thread's scheduling that
-   * sleeps to the same deadlines, half a period later, and does nothing else. Its late
-   * wake-ups are what the VM, the kernel and the other processes cost a thread that does
-   * no work, over the same seconds: the loop's own late_ticks are read against them.
-   * Filled at join. */
+  /* The timer floor (def.timer_floor, app/palp_timer_floor.h): a thread with the haptic
+   * thread's scheduling that sleeps to the same deadlines, half a period later, and does
+   * nothing else; late past late_threshold. The loop's own late_ticks are read against
+   * it. Filled at join. */
   uint64_t floor_ticks, floor_late_ticks;
   double floor_late_max;        /* [s] */
   int rt_ok;                    /* SCHED_FIFO granted */
@@ -191,10 +191,7 @@ typedef struct palp_cli_haptic_loop {
   pthread_t sender;
   int sender_started;
   uint64_t sent;
-  pthread_t floor_thread; /* def.timer_floor */
-  int floor_started;
-  uint64_t floor_ticks, floor_late_ticks; /* the floor thread's, copied into stats at join */
-  double floor_late_max;
+  palp_timer_floor floor; /* def.timer_floor; copied into stats at join */
   int64_t t0_ns;          /* the haptic thread's first deadline [ns], set before either thread starts */
 } palp_cli_haptic_loop;
 

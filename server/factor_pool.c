@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "palp_dds.h"
 #include "palp_rt_thread.h"
 
 /* More than any server holds sessions: one job in flight per session. */
@@ -24,12 +25,6 @@ struct palp_srv_factor_pool {
   int head, count;
   int stop;
 };
-
-static int64_t now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
 
 static void *helper_main(void *arg) {
   palp_srv_factor_pool *p = arg;
@@ -121,15 +116,15 @@ int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot
       }
     slot->state = PALP_SRV_FACTOR_RUNNING;
     pthread_mutex_unlock(&p->lock);
-    const int64_t t0 = now_ns();
+    const int64_t t0 = palp_dds_now_ns();
     palp_factor_job_run(slot->job);
-    waited = now_ns() - t0;
+    waited = palp_dds_now_ns() - t0;
     pthread_mutex_lock(&p->lock);
     slot->state = PALP_SRV_FACTOR_DONE;
   } else if (slot->state != PALP_SRV_FACTOR_DONE) {
-    const int64_t t0 = now_ns();
+    const int64_t t0 = palp_dds_now_ns();
     while (slot->state != PALP_SRV_FACTOR_DONE) pthread_cond_wait(&p->finished, &p->lock);
-    waited = now_ns() - t0;
+    waited = palp_dds_now_ns() - t0;
   }
   pthread_mutex_unlock(&p->lock);
   return waited;

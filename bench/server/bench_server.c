@@ -57,7 +57,7 @@
 #include "input.h"
 #include "palp_dds.h"
 #include "palp_dds_security.h"
-#include "palp_rt_thread.h"
+#include "palp_timer_floor.h"
 #include "station.h"
 
 extern char **environ;
@@ -492,35 +492,6 @@ typedef struct farm {
   uint64_t *seq;
 } farm;
 
-/* The machine's own floor for the late-step criterion: a thread at the server's tick
- * priority that sleeps to the physics rate's deadlines and does nothing else. The server
- * counts a step late when its tick's work ends after the next tick should start; for a
- * thread with no work that is a wake-up more than a period late, which only the machine
- * (the VM's stalls, the kernel, the other threads) can cause. */
-typedef struct timer_floor {
-  int64_t period_ns;
-  volatile int stop;
-  uint64_t ticks, late;
-} timer_floor;
-
-static void *floor_main(void *arg) {
-  timer_floor *t = arg;
-  int64_t next = palp_dds_now_ns();
-  while (!t->stop) {
-    next += t->period_ns;
-    struct timespec ts = {.tv_sec = (time_t)(next / 1000000000), .tv_nsec = (long)(next % 1000000000)};
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) != 0) {
-    }
-    const int64_t late = palp_dds_now_ns() - next;
-    t->ticks++;
-    if (late > t->period_ns) {
-      t->late++;
-      next += (late / t->period_ns) * t->period_ns; /* the lost slots dropped, as the ticker does */
-    }
-  }
-  return NULL;
-}
-
 /* Device of session i at t: press cycles 0..10 mm at the pole region, phase-shifted
  * (--motion strip: palp_bench_strip_device). */
 static palp_vec3 farm_device(int i, double t) {
@@ -624,10 +595,14 @@ static void haptic_run(double rate) {
   dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   pthread_t th;
   pthread_create(&th, NULL, farm_main, &f);
-  timer_floor fl = {.period_ns = (int64_t)(1e9 / rate + 0.5)};
-  pthread_t fth;
-  int fl_rt = 0;
-  const int fl_ok = palp_rt_thread_start(&fth, rt_priority, floor_main, &fl, &fl_rt) == 0;
+  /* The machine's own floor for the late-step criterion (app/palp_timer_floor.h): a thread
+   * at the ticks' priority sleeping to the physics deadlines. The server counts a step late
+   * when its tick's work ends after the next tick should start; for a thread with no work
+   * that is a wake-up more than a period late, which only the machine can cause. */
+  const int64_t period_ns = (int64_t)(1e9 / rate + 0.5);
+  palp_timer_floor fl;
+  palp_timer_floor_start(&fl, period_ns, period_ns, palp_dds_now_ns(), rt_priority);
+  const int fl_rt = fl.rt_ok;
   static const int steps[] = {1, 2, 4, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 96};
   const stats base = step_baseline(rate);
   printf("haptic capacity: physics at %.0f Hz on %d tick thread(s), stations rendering at 1 kHz (one haptic thread "
@@ -655,7 +630,7 @@ static void haptic_run(double rate) {
     }
     nap(1.0);
     status_window a = read_status(status_r, 1.5);
-    const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models, ft_a = fl.ticks, fl_a = fl.late;
+    const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models, ft_a = atomic_load(&fl.ticks), fl_a = atomic_load(&fl.late_ticks);
     const int64_t w0 = palp_dds_now_ns();
     nap(2.0);
     status_window b = a;
@@ -666,7 +641,8 @@ static void haptic_run(double rate) {
     const double span = (double)(palp_dds_now_ns() - w0) * 1e-9;
     const double frac = b.ticks > a.ticks ? (double)(b.overruns - a.overruns) / (double)(b.ticks - a.ticks) : 1;
     const double late = f.ticks > t_a ? (double)(f.late - l_a) / (double)(f.ticks - t_a) : 1;
-    const double floor_late = fl.ticks > ft_a ? (double)(fl.late - fl_a) / (double)(fl.ticks - ft_a) : 0;
+    const uint64_t ft_b = atomic_load(&fl.ticks), fl_b = atomic_load(&fl.late_ticks);
+    const double floor_late = ft_b > ft_a ? (double)(fl_b - fl_a) / (double)(ft_b - ft_a) : 0;
     printf("  %8d  %9.2f%%  %13.0f  %13.0f  %3.0f%%  %16.2f%%  %8.0f  %10.2f%%\n", n, 100 * frac, b.p99, b.max,
            100 * b.load, 100 * late, (double)(f.models - m_a) / span, 100 * floor_late);
     fflush(stdout);
@@ -677,8 +653,7 @@ static void haptic_run(double rate) {
          rate <= 250 ? 64 : 32);
   f.stop = 1;
   pthread_join(th, NULL);
-  fl.stop = 1;
-  if (fl_ok) pthread_join(fth, NULL);
+  palp_timer_floor_stop(&fl);
   for (int i = 0; i < n; i++) palp_cli_station_leave(&f.st[i]);
   nap(0.2);
   for (int i = 0; i < n; i++) palp_cli_station_close(&f.st[i]);
