@@ -26,6 +26,7 @@ typedef struct palp_timer_floor {
   int started, rt_ok;
   /* written by its thread; read after palp_timer_floor_stop (or approximately before) */
   atomic_uint_fast64_t ticks, late_ticks; /* late: woke more than late_ns after the deadline */
+  atomic_uint_fast64_t missed;            /* deadlines dropped while a wake-up was over a period late */
   double late_max;                        /* [s]; final after stop */
 } palp_timer_floor;
 

@@ -29,7 +29,10 @@ static void *floor_main(void *arg) {
     atomic_fetch_add_explicit(&f->ticks, 1, memory_order_relaxed);
     if (late > f->late_ns) atomic_fetch_add_explicit(&f->late_ticks, 1, memory_order_relaxed);
     if ((double)late * 1e-9 > late_max) late_max = (double)late * 1e-9;
-    if (late > f->period_ns) next += (late / f->period_ns) * f->period_ns;
+    if (late > f->period_ns) {
+      next += (late / f->period_ns) * f->period_ns;
+      atomic_fetch_add_explicit(&f->missed, (uint_fast64_t)(late / f->period_ns), memory_order_relaxed);
+    }
   }
   f->late_max = late_max;
   return NULL;

@@ -129,3 +129,10 @@ int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot
   pthread_mutex_unlock(&p->lock);
   return waited;
 }
+
+int palp_srv_factor_done(palp_srv_factor_pool *p, const palp_srv_factor_slot *slot) {
+  pthread_mutex_lock(&p->lock);
+  const int done = slot->state == PALP_SRV_FACTOR_DONE;
+  pthread_mutex_unlock(&p->lock);
+  return done;
+}

@@ -37,5 +37,8 @@ int palp_srv_factor_submit(palp_srv_factor_pool *p, palp_srv_factor_slot *slot);
  * of ms on an overloaded machine); one a helper is running is waited for. Returns
  * the time spent [ns] (0 when a helper had finished it already). */
 int64_t palp_srv_factor_wait(palp_srv_factor_pool *p, palp_srv_factor_slot *slot);
+/* 1 when slot's job has run (a helper finished it), 0 when it is queued or running.
+ * Never blocks on the helper. */
+int palp_srv_factor_done(palp_srv_factor_pool *p, const palp_srv_factor_slot *slot);
 
 #endif

@@ -1425,6 +1425,17 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
 
 void palp_srv_destroy(palp_srv *srv) {
   if (!srv) return;
+  if (srv->ticker) {
+    palp_srv_tick_stats ts;
+    palp_srv_ticker_stats(srv->ticker, &ts);
+    if (ts.steps > 0)
+      palp_log_info(srv->log, "ticks: %llu session steps, %llu late (%.3f%%), %llu put last to wait for a rebuild; "
+                    "%llu of %llu tick passes overran, %llu tick slots dropped behind schedule",
+                    (unsigned long long)ts.steps,
+                    (unsigned long long)ts.late_steps, 100.0 * (double)ts.late_steps / (double)ts.steps,
+                    (unsigned long long)ts.deferred, (unsigned long long)ts.overruns, (unsigned long long)ts.ticks,
+                    (unsigned long long)ts.lost_slots);
+  }
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
   if (srv->pp > 0) dds_delete(srv->pp);

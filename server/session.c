@@ -487,6 +487,12 @@ static void publish_deformation(palp_srv_session *s) {
   dds_write(s->deformation_writer, &s->deformation);
 }
 
+int palp_srv_session_tick_ready(palp_srv_session *s) {
+  if (!s->factor.job || !s->factor_pool) return 1;
+  if (palp_world_factor_due(s->world) > palp_world_frame(s->world)) return 1;
+  return palp_srv_factor_done(s->factor_pool, &s->factor);
+}
+
 int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   int64_t t0 = palp_dds_now_ns();
   s->stats.ticks++;

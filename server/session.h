@@ -151,6 +151,12 @@ void palp_srv_session_factor_settle(palp_srv_session *s);
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err);
 void palp_srv_session_destroy(palp_srv_session *s);
 
+/* 0 when this session's next tick would wait for a tangent rebuild a helper has not
+ * finished (it is due at the world's frame); 1 otherwise. The ticker steps such a
+ * session after the rest of its group, so that one session's wait delays no other
+ * and the helper gets the group's work time to finish. */
+int palp_srv_session_tick_ready(palp_srv_session *s);
+
 /* One tick at CLOCK_MONOTONIC time now_ns. Returns the time spent [ns]. */
 int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns);
 

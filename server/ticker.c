@@ -26,6 +26,10 @@ typedef struct tick_group {
   int work_n, work_cap;
   int64_t busy_ns, period_start_ns;
   uint64_t ticks, overruns, period_ticks, period_overruns;
+  uint64_t steps, late_steps; /* session steps taken, and those that ended late */
+  uint64_t lost_slots;        /* tick slots dropped behind schedule (no session stepped) */
+  uint64_t deferred_total;    /* session steps put last to wait for a rebuild */
+  palp_srv_session **deferred; /* [max_sessions] this tick's sessions waiting for a rebuild */
 } tick_group;
 
 struct palp_srv_ticker {
@@ -42,6 +46,18 @@ static struct timespec ts_of(int64_t ns) {
   return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
 }
 
+/* One session's tick. Late when its own work ends after the next tick should have
+ * started: counted for that session (its log and SessionLoad say so), not for the
+ * group's others, whose steps may have ended in time. Returns 1 when late. */
+static int tick_one(palp_srv_session *s, int64_t next, int64_t deadline) {
+  palp_srv_session_tick(s, next);
+  const int64_t end = palp_dds_now_ns();
+  if (end <= deadline) return 0;
+  s->stats.overruns++;
+  if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, end - deadline);
+  return 1;
+}
+
 static void *group_main(void *arg) {
   tick_group *g = arg;
   palp_srv_ticker *t = g->owner;
@@ -52,30 +68,46 @@ static void *group_main(void *arg) {
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
     }
     int64_t t0 = palp_dds_now_ns();
+    const int64_t deadline = next + period_ns;
     pthread_mutex_lock(&g->lock);
-    for (int i = 0; i < g->count; i++) palp_srv_session_tick(g->sessions[i], next);
+    /* A session whose due rebuild a helper has not finished would wait for it on
+     * this thread (2-10 ms): it goes last, so that its wait delays no other session
+     * of the group and the helper has the group's work time to finish. Sessions are
+     * independent worlds: the order changes no session's result. */
+    int waiting = 0, late = 0;
+    for (int i = 0; i < g->count; i++) {
+      palp_srv_session *s = g->sessions[i];
+      if (!palp_srv_session_tick_ready(s)) {
+        g->deferred[waiting++] = s;
+        continue;
+      }
+      late += tick_one(s, next, deadline);
+    }
+    for (int k = 0; k < waiting; k++) late += tick_one(g->deferred[k], next, deadline);
     int64_t t1 = palp_dds_now_ns();
     /* Overrun: this tick's work ended after the next tick should have started. */
-    int overrun = t1 > next + period_ns;
-    if (overrun)
-      for (int i = 0; i < g->count; i++) {
-        palp_srv_session *s = g->sessions[i];
-        s->stats.overruns++;
-        if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, t1 - (next + period_ns));
-      }
+    int overrun = t1 > deadline;
     g->ticks++;
     g->period_ticks++;
     g->overruns += (uint64_t)overrun;
     g->period_overruns += (uint64_t)overrun;
+    g->deferred_total += (uint64_t)waiting;
+    g->late_steps += (uint64_t)late;
+    g->steps += (uint64_t)g->count;
     g->busy_ns += t1 - t0;
     if (g->work_n < g->work_cap) g->work_us[g->work_n++] = (double)(t1 - t0) * 1e-3;
-    pthread_mutex_unlock(&g->lock);
     next += period_ns;
     if (next <= t1) {
       /* Behind schedule: drop the lost slots rather than burst. */
       int64_t lost = (t1 - next) / period_ns + 1;
       next += lost * period_ns;
+      g->lost_slots += (uint64_t)lost;
+      /* Every session of the group missed them: counted as late steps, so that a
+       * session's overruns per tick never flatter a group that fell behind. */
+      for (int i = 0; i < g->count; i++) g->sessions[i]->stats.overruns += (uint64_t)lost;
+      g->late_steps += (uint64_t)lost * (uint64_t)g->count;
     }
+    pthread_mutex_unlock(&g->lock);
   }
   return NULL;
 }
@@ -117,10 +149,11 @@ palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_h
     g->period_ns = (int64_t)(1e9 / rate_hz + 0.5);
     pthread_mutex_init(&g->lock, NULL);
     g->sessions = calloc((size_t)max_sessions, sizeof *g->sessions);
+    g->deferred = calloc((size_t)max_sessions, sizeof *g->deferred);
     g->work_us = calloc((size_t)cap, sizeof *g->work_us);
     g->work_cap = cap;
     g->period_start_ns = palp_dds_now_ns();
-    if (!g->sessions || !g->work_us) goto nomem;
+    if (!g->sessions || !g->deferred || !g->work_us) goto nomem;
   }
   int ferr = 0;
   /* One below the ticks: it must not delay a tick, but must beat ordinary work. */
@@ -167,6 +200,7 @@ void palp_srv_ticker_destroy(palp_srv_ticker *t) {
     for (int i = 0; i < t->n; i++) {
       pthread_mutex_destroy(&t->g[i].lock);
       free(t->g[i].sessions);
+      free(t->g[i].deferred);
       free(t->g[i].work_us);
     }
   free(t->g);
@@ -246,6 +280,10 @@ void palp_srv_ticker_stats(palp_srv_ticker *t, palp_srv_tick_stats *out) {
     out->overruns += g->overruns;
     out->period_ticks += g->period_ticks;
     out->period_overruns += g->period_overruns;
+    out->steps += g->steps;
+    out->late_steps += g->late_steps;
+    out->lost_slots += g->lost_slots;
+    out->deferred += g->deferred_total;
     g->work_n = 0;
     g->busy_ns = 0;
     g->period_ticks = g->period_overruns = 0;

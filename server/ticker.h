@@ -22,6 +22,10 @@ typedef struct palp_srv_tick_stats {
   double load;                                  /* worst thread's busy fraction over the period */
   uint64_t ticks, overruns;                     /* since start, all threads */
   uint64_t period_ticks, period_overruns;       /* since the previous call */
+  /* since start, all threads: session steps taken and those that ended late (each
+   * session's own deadline, the next tick's start); tick slots dropped behind
+   * schedule; steps put last in their group to wait for a rebuild */
+  uint64_t steps, late_steps, lost_slots, deferred;
 } palp_srv_tick_stats;
 
 /* threads <= 0: one per online core. max_sessions bounds every group.

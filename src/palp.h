@@ -484,6 +484,12 @@ typedef struct palp_world_health {
                                  the parameters were validated against the FE there
                                  (def.validated_*) */
   double max_beyond_validated; /* largest such excess of indentation [m] */
+  int64_t factor_analyses;    /* factor storages ordered and analysed at their first use
+                                 (AMD, CHOLMOD's symbolic pass, the block map: several
+                                 refactorisations' cost). A lagged world (def.refactor_lag)
+                                 analyses its spares at creation, so that no rebuild made
+                                 off the tick meets one: 2 at creation (3 with
+                                 def.refactor_blend), none later */
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 

@@ -181,6 +181,7 @@ struct palp_world {
   int last_resort;  /* at the last halving: cap speeds instead of rejecting, accept inaccuracy */
   int64_t clamped_steps;
   int64_t margin_rebuilds;
+  int64_t factor_analyses; /* first uses of a factor's storage: ordering and analysis (health) */
   double min_rest_len; /* [m] shortest link */
   uint8_t *vfast;      /* [vertex_count] scratch of the solve's linearisation check: moves by > 0.05 min_rest_len */
   int64_t substeps, large_strain_steps;
@@ -617,6 +618,7 @@ static void stage_gel_support(palp_world *w, double h) {
 }
 
 static int refactor(palp_world *w, double h, int blend);
+static void spares_prepare(palp_world *w, double h);
 static void job_free(palp_factor_job *j);
 
 /* The solve's largest squared speed: the fold v = !(x_k^2 <= v) ? x_k^2 : v over k from
@@ -2058,6 +2060,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     if (err) *err = e;
     return NULL;
   }
+  spares_prepare(w, def->dt);
   build_pipeline(w);
   w->awake = 1;
   if (err) *err = PALP_OK;
@@ -2356,6 +2359,7 @@ static int refactor(palp_world *w, double h, int blend) {
     w->ldl = w->ldl_prev;
     w->ldl_prev = t;
   }
+  w->factor_analyses += !w->ldl.symbolic;
   e = palp_ldl_factor_blocks(&w->ldl, w->nfree, w->gp, w->gi, nnz, ti, tj, tx);
   if (e) {
     if (blend) {
@@ -2396,6 +2400,7 @@ struct palp_factor_job {
   double *fsoft, *soft_blk; /* [nf + 1], [6 nf] with the turn rule (turn_rule), else NULL */
   palp_vec3 *fsu; /* [nvertex] the stiffening support's u (NULL without it) */
   int rc;
+  int analysed; /* the last run met its factor's storage unanalysed (counted at install) */
 };
 
 static void job_free(palp_factor_job *j) {
@@ -2441,6 +2446,7 @@ int palp_factor_job_run(palp_factor_job *j) {
   if (!j) return PALP_EINVAL;
   /* before the factorisation, which may reorder the triplets */
   if (j->soft_blk) soft_stiffness(j->nf, j->h, j->nnz, j->ti, j->tj, j->tx, j->soft_blk, j->fsoft);
+  j->analysed = !j->ldl.symbolic;
   j->rc = palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, j->nnz, j->ti, j->tj, j->tx);
   if (j->rc) return j->rc;
   /* The same function as finger_slot's, so a column is the same bits whoever makes it. */
@@ -2487,6 +2493,8 @@ static int job_install(palp_world *w) {
   const int obsolete = w->job_obsolete;
   w->job_state = JOB_NONE;
   w->job_obsolete = 0;
+  w->factor_analyses += j->analysed;
+  j->analysed = 0;
   if (obsolete) return PALP_OK;
   if (j->rc) return refactor(w, j->h, 0); /* the same matrix, factored here: still deterministic */
   const int blend = w->def.refactor_blend > 0 && w->bx && j->h == w->h_factored;
@@ -2536,6 +2544,31 @@ static int job_install(palp_world *w) {
   if (blend) blend_start(w);
   else blend_stop(w);
   return PALP_OK;
+}
+
+/* The spare factors a lagged world swaps in (the job's, and ldl_prev with a blend),
+ * analysed at creation. A factor's first use orders and analyses the matrix (AMD,
+ * CHOLMOD's symbolic and numeric passes, the block map, then the block pass: several
+ * times a refactorisation's cost), and a server helper that met it at a session's
+ * first rebuild missed the lag: every session waited once, for up to 20 ms, and so did
+ * every other session of its tick group (docs/server.md, "Rebuilds off the tick path").
+ * The results do not change: each factorisation ends in the block pass over the same
+ * pattern and ordering (palp_ldl_factor_blocks), whatever the spare held before.
+ * Failing here is not an error: the spare is then analysed at its first use. */
+static void spares_prepare(palp_world *w, double h) {
+  if (w->def.refactor_lag <= 0) return;
+  if (!w->job) w->job = job_alloc(w);
+  palp_factor_job *j = w->job;
+  if (!j) return;
+  /* the matrix of the current state, made as job_request and palp_factor_job_run make it */
+  const int nnz = build_matrix(w, h, j->ti, j->tj, j->tx, j->fdir, j->fbeta, j->fslack, j->fsu);
+  if (j->soft_blk) soft_stiffness(j->nf, h, nnz, j->ti, j->tj, j->tx, j->soft_blk, j->fsoft);
+  w->factor_analyses += !j->ldl.symbolic;
+  (void)palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, nnz, j->ti, j->tj, j->tx);
+  if (w->def.refactor_blend > 0 && w->bx) {
+    w->factor_analyses += !w->ldl_prev.symbolic;
+    (void)palp_ldl_factor_blocks(&w->ldl_prev, j->nf, j->gp, j->gi, nnz, j->ti, j->tj, j->tx);
+  }
 }
 
 int palp_world_refactor_blend_for(double dt) {
@@ -3091,6 +3124,7 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->max_strain = w->max_strain;
   out->clamped_steps = w->clamped_steps;
   out->margin_rebuilds = w->margin_rebuilds;
+  out->factor_analyses = w->factor_analyses;
   out->base_contacts = w->base_contacts;
   out->finger_unsolved = w->finger_unsolved;
   out->large_bend_steps = w->large_bend_steps;

@@ -51,6 +51,16 @@ static void run(const char *name, palp_world_def d0, double rms_bound, double wo
   palp_world *w0 = palp_world_create(&d1, &e), *wa = palp_world_create(&dk, &e), *wb = palp_world_create(&dk, &e);
   CHECK(w0 && wa && wb, "worlds created");
   if (!w0 || !wa || !wb) return;
+  /* A lagged world analyses its spare factors at creation (the job's, and the blend's
+   * ldl_prev), so that no rebuild off the tick meets an unanalysed one (docs/server.md):
+   * its own, the job's and the blend's; the reference, not lagged, analyses its blend's
+   * spare at its first blend. */
+  palp_world_health ha, h0;
+  palp_world_get_health(wa, &ha);
+  palp_world_get_health(w0, &h0);
+  CHECK(ha.factor_analyses == 3 && h0.factor_analyses == 1,
+        "%s: factors analysed at creation: %lld lagged (3 expected), %lld not (1)", name,
+        (long long)ha.factor_analyses, (long long)h0.factor_analyses);
   const palp_finger_def fd = palp_finger_default_def();
   const int f0 = palp_world_add_finger_def(w0, &fd, device_at(0));
   const int fa = palp_world_add_finger_def(wa, &fd, device_at(0));
@@ -116,6 +126,15 @@ static void run(const char *name, palp_world_def d0, double rms_bound, double wo
          name, (long long)t0.refactors, (long long)tb.refactors, jobs, worst_abs, 100.0 * worst_rel,
          100.0 * sqrt(sum2 / (sumF2 > 0 ? sumF2 : 1)));
   CHECK(sum2 <= rms_bound * rms_bound * sumF2, "%s: RMS force difference within %.0f%%", name, 100 * rms_bound);
+  palp_world_health hb;
+  palp_world_get_health(wa, &ha);
+  palp_world_get_health(wb, &hb);
+  palp_world_get_health(w0, &h0);
+  printf("%s: final state hash %016llx (deferred)\n", name, (unsigned long long)palp_world_hash(wb));
+  CHECK(ha.factor_analyses == 3 && hb.factor_analyses == 3 && h0.factor_analyses == 2,
+        "%s: after %d rebuilds no factor met unanalysed by a lagged world: %lld / %lld analyses (3 expected); "
+        "the reference analysed its blend's spare once: %lld (2)", name, jobs, (long long)ha.factor_analyses,
+        (long long)hb.factor_analyses, (long long)h0.factor_analyses);
   CHECK(same, "claimed-and-threaded vs inline: identical hashes after each of %d frames", frames);
   CHECK(jobs >= 3, "the press triggers rebuilds (%d jobs)", jobs);
   CHECK(due_ok, "each job is due refactor_lag frames after the step that requested it");
@@ -140,7 +159,25 @@ static palp_world_def scene_def(const char *path) {
  * when the rebuilds do: with the turn rule 2.59% RMS, 18.5% (7-8 mN) at 0.05 N and
  * 12.7 mN at most; before it 1.47%, 6.9% (7.8 mN on 0.11 N). Its bounds: 3% RMS and
  * 10% + 10 mN. */
+/* At 250 Hz (no blend) a lagged world analyses its own factor and the job's. */
+static void spares_250hz(void) {
+  palp_world_def d = scene_def(PALP_CONFIG_DIR "/paper_step_long_term.json");
+  d.dt = 0.004;
+  d.refactor_lag = palp_world_refactor_lag_for(d.dt);
+  d.refactor_blend = palp_world_refactor_blend_for(d.dt);
+  int e;
+  palp_world *w = palp_world_create(&d, &e);
+  CHECK(w != NULL, "250 Hz world created");
+  if (!w) return;
+  palp_world_health h;
+  palp_world_get_health(w, &h);
+  CHECK(h.factor_analyses == 2, "250 Hz, lag %d, no blend: %lld factors analysed at creation (2 expected)",
+        d.refactor_lag, (long long)h.factor_analyses);
+  palp_world_destroy(w);
+}
+
 int main(void) {
+  spares_250hz();
   run("breast-tissue dome", scene_def(PALP_CONFIG_DIR "/phantoms/dome.json"), 0.02, 0.10, 0.001);
   run("long-term dome", scene_def(PALP_CONFIG_DIR "/paper_step_long_term.json"), 0.02, 0.10, 0.001);
   run("paper's instantaneous dome (library default)", palp_world_default_def(), 0.03, 0.10, 0.010);
