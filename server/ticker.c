@@ -104,7 +104,12 @@ static void *group_main(void *arg) {
       g->lost_slots += (uint64_t)lost;
       /* Every session of the group missed them: counted as late steps, so that a
        * session's overruns per tick never flatter a group that fell behind. */
-      for (int i = 0; i < g->count; i++) g->sessions[i]->stats.overruns += (uint64_t)lost;
+      for (int i = 0; i < g->count; i++) {
+        palp_srv_session *s = g->sessions[i];
+        s->stats.overruns += (uint64_t)lost;
+        if (s->events && s->events->overrun)
+          for (int64_t k = 0; k < lost; k++) s->events->overrun(s->events->ctx, s->id, t1 - deadline);
+      }
       g->late_steps += (uint64_t)lost * (uint64_t)g->count;
     }
     pthread_mutex_unlock(&g->lock);
