@@ -89,7 +89,8 @@
       ["findings", s.findings === null ? "n/a" : s.findings, false,
         s.findings === null ? "no findings status from the server (no exercise, or none marked yet)" : "marks standing (the server's count)"],
       ["peak force", fmt(s.peak_force, 2) + " N"],
-      ["tick overruns", s.overruns, s.overruns > 0], ["rejected samples", s.rejected, s.rejected > 0],
+      ["late physics steps", s.overruns, s.overruns > 0,
+        "its physics steps that ended after the next tick's start, or that its tick thread skipped behind schedule (the server's count)"], ["rejected samples", s.rejected, s.rejected > 0],
       ["position finger", s.position_finger === undefined ? "n/a" : (s.position_finger ? "active" : "none")],
       ["model validity", modelFlags(s), (s.model_flags_seen || 0) !== 0],
       /* from the local models the bridge receives (docs/web.md) */
@@ -125,7 +126,7 @@
       const items = [["server", s.id], ["load", fmt(100 * s.load, 0) + " %", s.load > 0.8],
         ["tick p50/p99/max", fmt(s.tick_us[0], 0) + " / " + fmt(s.tick_us[1], 0) + " / " + fmt(s.tick_us[2], 0) + " us"],
         ["sessions", s.sessions_open + " open, " + s.sessions_total + " total"], ["ticks", s.ticks],
-        ["overruns", s.overruns, s.overruns > 0], ["rejected", rej + (why ? " (" + why + ")" : ""), rej > 0],
+        ["tick passes overrun", s.overruns, s.overruns > 0], ["rejected", rej + (why ? " (" + why + ")" : ""), rej > 0],
         ["log written/shed/failed", s.log[0] + " / " + s.log[1] + " / " + s.log[2], s.log[1] + s.log[2] > 0],
         ["up", fmt(s.uptime, 0) + " s"]];
       for (const it of items) {

@@ -218,7 +218,7 @@
   }
   function showSession(s) {
     const rows = [["session", s.id], ["trainee", s.trainee], ["phantom", s.phantom_name || s.phantom],
-      ["tick rate", s.tick_hz + " Hz"], ["overruns", s.overruns], ["rejected samples", s.rejected],
+      ["tick rate", s.tick_hz + " Hz"], ["late physics steps", s.overruns], ["rejected samples", s.rejected],
       ["findings", s.findings === null ? "n/a" : s.findings]];
     const tb = document.getElementById("session");
     tb.textContent = "";
