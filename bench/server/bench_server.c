@@ -668,7 +668,8 @@ static void haptic_run(double rate) {
   printf("haptic capacity: %d sessions held at %.0f Hz physics with <= %g%% late physics steps (target %d)\n", held, rate,
          100 * overrun_limit, rate <= 250 ? 64 : 32);
   printf("  (by the tick passes' share alone, this benchmark's criterion until 2026-12-02, which neither counts the slots "
-         "a pass that fell behind dropped nor tells one session's late step from its group's: %d)\n", held_passes);
+         "a pass that fell behind dropped nor tells one session's late step from its group's: %d, up to where this run "
+         "stopped)\n", held_passes);
   f.stop = 1;
   pthread_join(th, NULL);
   palp_timer_floor_stop(&fl);
