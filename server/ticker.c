@@ -46,6 +46,13 @@ static struct timespec ts_of(int64_t ns) {
   return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
 }
 
+/* n late steps of session s, late_ns past their deadline: its counters and its log. */
+static void session_late(palp_srv_session *s, uint64_t n, int64_t late_ns) {
+  s->stats.overruns += n;
+  if (s->events && s->events->overrun)
+    for (uint64_t k = 0; k < n; k++) s->events->overrun(s->events->ctx, s->id, late_ns);
+}
+
 /* One session's tick. Late when its own work ends after the next tick should have
  * started: counted for that session (its log and SessionLoad say so), not for the
  * group's others, whose steps may have ended in time. Returns 1 when late. */
@@ -53,8 +60,7 @@ static int tick_one(palp_srv_session *s, int64_t next, int64_t deadline) {
   palp_srv_session_tick(s, next);
   const int64_t end = palp_dds_now_ns();
   if (end <= deadline) return 0;
-  s->stats.overruns++;
-  if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, end - deadline);
+  session_late(s, 1, end - deadline);
   return 1;
 }
 
@@ -104,12 +110,7 @@ static void *group_main(void *arg) {
       g->lost_slots += (uint64_t)lost;
       /* Every session of the group missed them: counted as late steps, so that a
        * session's overruns per tick never flatter a group that fell behind. */
-      for (int i = 0; i < g->count; i++) {
-        palp_srv_session *s = g->sessions[i];
-        s->stats.overruns += (uint64_t)lost;
-        if (s->events && s->events->overrun)
-          for (int64_t k = 0; k < lost; k++) s->events->overrun(s->events->ctx, s->id, t1 - deadline);
-      }
+      for (int i = 0; i < g->count; i++) session_late(g->sessions[i], (uint64_t)lost, t1 - deadline);
       g->late_steps += (uint64_t)lost * (uint64_t)g->count;
     }
     pthread_mutex_unlock(&g->lock);

@@ -2560,14 +2560,17 @@ static void spares_prepare(palp_world *w, double h) {
   if (!w->job) w->job = job_alloc(w);
   palp_factor_job *j = w->job;
   if (!j) return;
-  /* the matrix of the current state, made as job_request and palp_factor_job_run make it */
-  const int nnz = build_matrix(w, h, j->ti, j->tj, j->tx, j->fdir, j->fbeta, j->fslack, j->fsu);
-  if (j->soft_blk) soft_stiffness(j->nf, h, nnz, j->ti, j->tj, j->tx, j->soft_blk, j->fsoft);
-  w->factor_analyses += !j->ldl.symbolic;
-  (void)palp_ldl_factor_blocks(&j->ldl, j->nf, j->gp, j->gi, nnz, j->ti, j->tj, j->tx);
+  /* the current state's matrix, as job_request makes it, run as a helper runs a job
+   * (no columns); nothing is requested, so the world never installs it */
+  j->h = h;
+  j->nnz = build_matrix(w, h, j->ti, j->tj, j->tx, j->fdir, j->fbeta, j->fslack, j->fsu);
+  j->ncols = 0;
+  (void)palp_factor_job_run(j);
+  w->factor_analyses += j->analysed;
+  j->analysed = 0;
   if (w->def.refactor_blend > 0 && w->bx) {
     w->factor_analyses += !w->ldl_prev.symbolic;
-    (void)palp_ldl_factor_blocks(&w->ldl_prev, j->nf, j->gp, j->gi, nnz, j->ti, j->tj, j->tx);
+    (void)palp_ldl_factor_blocks(&w->ldl_prev, j->nf, j->gp, j->gi, j->nnz, j->ti, j->tj, j->tx);
   }
 }
 
