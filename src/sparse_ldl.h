@@ -42,6 +42,7 @@ typedef struct palp_ldl {
   float *blk;     /* [nblocks*9 + 4] the blocks, each column-major */
   double *bdiag;  /* [nb*3] strictly lower part of each diagonal block: l10, l20, l21 */
   double *dinv4;  /* [nb*4] 1/D padded to 4 lanes per vertex */
+  int nested;     /* 1: the vertices were ordered by nested dissection (vertex_order), 0: by AMD */
   int simd;       /* 1: palp_ldl_solve (w <= 4) and the block factorisation take their AVX2 paths (same bits as the portable ones) */
   /* The block numeric factorisation (palp_ldl_factor_blocks): */
   int *dest;      /* [ndest] where each triplet lands among L's blocks, then the diagonal blocks */
@@ -55,6 +56,10 @@ typedef struct palp_ldl {
 } palp_ldl;
 
 #define PALP_LDL_KEEP_NUM ((size_t)16 << 20)
+/* Nested dissection is tried for nets of this many vertices and more, and taken when it
+ * needs at most this share of AMD's factorisation flops (sparse_ldl.c vertex_order). */
+#define PALP_LDL_ND_MIN 600
+#define PALP_LDL_ND_GAIN 0.9
 
 void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
 

@@ -162,8 +162,9 @@ int main(int argc, char **argv) {
       return 1;
     }
     const int simd = f.simd, n = f.n;
-    printf("%d vertices (%d free, %d unknowns), %d off-diagonal blocks in L; default path %s\n", m.vertex_count, p.nb, n,
-           f.bcolp[f.nb], simd ? "AVX2" : "portable (no AVX2: both columns the same code)");
+    printf("%d vertices (%d free, %d unknowns), %d off-diagonal blocks in L (%s order); default path %s\n", m.vertex_count,
+           p.nb, n, f.bcolp[f.nb], f.nested ? "nested dissection" : "AMD",
+           simd ? "AVX2" : "portable (no AVX2: both columns the same code)");
     printf("  %-34s %9s %9s %11s %9s %8s\n", "kernel [us]", "default", "p99", "portable", "p99", "ratio");
     double *t[2] = {malloc(sizeof(double) * (size_t)reps), malloc(sizeof(double) * (size_t)reps)};
     const size_t nblk9 = (size_t)f.bcolp[f.nb] * 9;
