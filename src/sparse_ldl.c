@@ -418,7 +418,7 @@ static double order_flops(int nb, const int *gp, const int *gi, int *vp, cholmod
  * surface net AMD's fill grows faster than a separator order's; at 1,300 vertices
  * nested dissection needs ~26% fewer flops to factor (a rebuild's main cost there) and
  * ~10% fewer blocks in L (every solve), at 338 ~4% fewer blocks, which is not worth the
- * bits of every shipped phantom's sessions (docs/model.md, "The factor's ordering").
+ * bits of every shipped phantom's sessions (docs/model.md, "The factor's order on a finer net").
  * Both orders are deterministic (METIS with its fixed seed). Returns 1 for nested
  * dissection, 0 for AMD, or an error. */
 static int vertex_order(int nb, const int *gp, const int *gi, int *vp) {

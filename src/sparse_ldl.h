@@ -65,8 +65,10 @@ void palp_ldl_free(palp_ldl *f); /* frees everything, the analysis included */
 
 /* Factors the symmetric positive definite matrix of 3x3 blocks (unknown 3v + c
  * belongs to vertex v) given by lower-triangle triplets (i >= j; duplicates summed).
- * The first call orders the vertices with AMD on the vertex graph (CSC, both
- * triangles, nb vertices), keeping each vertex's 3 unknowns together, and has CHOLMOD
+ * The first call orders the vertices on the vertex graph (CSC, both triangles, nb
+ * vertices) by AMD, or by nested dissection on a net of PALP_LDL_ND_MIN vertices and
+ * more where that factors with fewer flops (palp_ldl.nested), keeping each vertex's 3
+ * unknowns together, and has CHOLMOD
  * analyse the pattern and factor once, which gives L's block pattern; later calls with
  * the same triplets' rows and columns in the same order (the caller's promise, as for
  * CHOLMOD's analysis; gp, gi may then be NULL) redo only the numeric
