@@ -394,14 +394,22 @@ not_spd:
   return PALP_ESOLVER;
 }
 
-/* The factorisation's flops [-] of the vertex graph (CSC, both triangles) eliminated in
- * the order vp, from CHOLMOD's symbolic analysis (no postordering, as factor() keeps the
- * given order); -1 when it fails. */
-static double order_flops(int nb, const int *gp, const int *gi, int *vp, cholmod_common *c) {
+/* The vertex graph (CSC, both triangles) as CHOLMOD's symmetric pattern (its upper
+ * triangle read), or NULL. */
+static cholmod_sparse *vertex_graph(int nb, const int *gp, const int *gi, cholmod_common *c) {
   cholmod_sparse *G = cholmod_allocate_sparse((size_t)nb, (size_t)nb, (size_t)gp[nb], 0, 1, 1, CHOLMOD_PATTERN, c);
-  if (!G) return -1.0;
+  if (!G) return NULL;
   memcpy(G->p, gp, sizeof(int) * ((size_t)nb + 1));
   memcpy(G->i, gi, sizeof(int) * (size_t)gp[nb]);
+  return G;
+}
+
+/* The factorisation's flops [-] of the vertex graph eliminated in the order vp, from
+ * CHOLMOD's symbolic analysis (no postordering, as factor() keeps the given order); -1
+ * when it fails. */
+static double order_flops(int nb, const int *gp, const int *gi, int *vp, cholmod_common *c) {
+  cholmod_sparse *G = vertex_graph(nb, gp, gi, c);
+  if (!G) return -1.0;
   c->nmethods = 1;
   c->method[0].ordering = CHOLMOD_GIVEN;
   c->postorder = 0;
@@ -433,10 +441,8 @@ static int vertex_order(int nb, const int *gp, const int *gi, int *vp) {
   cholmod_start(&c);
   c.print = 0;
   int use = 0;
-  cholmod_sparse *G = cholmod_allocate_sparse((size_t)nb, (size_t)nb, (size_t)gp[nb], 0, 1, 1, CHOLMOD_PATTERN, &c);
+  cholmod_sparse *G = vertex_graph(nb, gp, gi, &c);
   if (G) {
-    memcpy(G->p, gp, sizeof(int) * ((size_t)nb + 1));
-    memcpy(G->i, gi, sizeof(int) * (size_t)gp[nb]);
     const long nc = cholmod_nested_dissection(G, NULL, 0, nd, nd + nb, nd + 2 * nb, &c);
     cholmod_free_sparse(&G, &c);
     if (nc > 0 && c.status == CHOLMOD_OK) {
