@@ -30,6 +30,10 @@
  *    --motion strip: the devices search in vertical strips at three depths, as the
  *    exercises' scripted expert does (palp_bench_strip_device, bench/bench_motion.h),
  *    instead of press cycles; --rate HZ: that physics rate only. With --scene config/phantoms/dome.json, the exercises' dome.
+ *    Each window also prints the server process's own CPU (cores busy, from /proc): the
+ *    stations share this machine's two cores here, a lab's would not, so the server's
+ *    cores per session at the largest count held give a projection (not a hold) of what
+ *    two cores of its own would take.
  *
  * usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N]
  *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]
@@ -49,6 +53,7 @@
 #include <string.h>
 #include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <pthread.h>
 
@@ -487,6 +492,23 @@ static void capacity_run(void) {
 
 /* ---- 4. haptic capacity ------------------------------------------------------------------------- */
 
+/* CPU seconds the process pid has used (user + system, its threads together), from
+ * /proc/PID/stat; -1 when unreadable. The server's own share of the two cores, apart
+ * from this process's stations, which share them here and would not on a lab's server. */
+static double proc_cpu_s(pid_t pid) {
+  char path[64], buf[1024];
+  snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
+  FILE *fp = fopen(path, "r");
+  if (!fp) return -1;
+  const size_t n = fread(buf, 1, sizeof buf - 1, fp);
+  fclose(fp);
+  buf[n] = 0;
+  const char *p = strrchr(buf, ')'); /* the command name may hold spaces */
+  unsigned long long ut = 0, st = 0;
+  if (!p || sscanf(p + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &ut, &st) != 2) return -1;
+  return (double)(ut + st) / (double)sysconf(_SC_CLK_TCK);
+}
+
 typedef struct farm {
   palp_cli_station *st;
   palp_haptic *h;
@@ -624,7 +646,11 @@ static void haptic_run(double rate) {
          rt_priority <= 0 ? " (normal scheduling)" : fl_rt ? " (SCHED_FIFO)" : " (SCHED_FIFO refused: normal)");
   printf("  (late steps: the sessions' physics steps that ended after the next tick's start, or were missed behind "
          "schedule, over their steps; group ticks: the tick threads' passes whose work ended late)\n");
-  printf("  sessions  late steps  group ticks  tick p99 [us]  tick max [us]  load  station late ticks  models/s  timer floor\n");
+  printf("  (server cores: the server process's CPU seconds per second over the window, all its threads: ticks, "
+         "helpers, DDS, the session log)\n");
+  printf("  sessions  late steps  group ticks  tick p99 [us]  tick max [us]  load  station late ticks  models/s  timer floor"
+         "  server cores\n");
+  double cores_per_session = 0; /* at the largest count of 4 or more sessions held */
   int n = 0, held = 0, held_passes = 0, n_prev = 0;
   for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions; k++) {
     while (n < steps[k]) {
@@ -642,6 +668,7 @@ static void haptic_run(double rate) {
     const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models, ft_a = atomic_load(&fl.ticks), fl_a = atomic_load(&fl.late_ticks),
                    fm_a = atomic_load(&fl.missed);
     const int64_t w0 = palp_dds_now_ns();
+    const double cpu0 = proc_cpu_s(srv);
     nap(2.0);
     status_window b = a;
     for (int tries = 0; tries < 10; tries++) {
@@ -649,6 +676,7 @@ static void haptic_run(double rate) {
       if (b.ok && b.ticks > a.ticks) break;
     }
     const double span = (double)(palp_dds_now_ns() - w0) * 1e-9;
+    const double cpu1 = proc_cpu_s(srv), srv_cores = cpu0 >= 0 && cpu1 >= 0 ? (cpu1 - cpu0) / span : NAN;
     const double gfrac = b.ticks > a.ticks ? (double)(b.overruns - a.overruns) / (double)(b.ticks - a.ticks) : 1;
     const double frac = b.steps > a.steps ? (double)(b.late - a.late) / (double)(b.steps - a.steps) : 1;
     const double late = f.ticks > t_a ? (double)(f.late - l_a) / (double)(f.ticks - t_a) : 1;
@@ -656,9 +684,10 @@ static void haptic_run(double rate) {
     /* counted as the sessions' late steps are: a dropped deadline is a late one */
     const double floor_late =
         ft_b > ft_a ? (double)(fl_b - fl_a + fm_b - fm_a) / (double)(ft_b - ft_a + fm_b - fm_a) : 0;
-    printf("  %8d  %9.2f%%  %10.2f%%  %13.0f  %13.0f  %3.0f%%  %16.2f%%  %8.0f  %10.2f%%\n", n, 100 * frac, 100 * gfrac,
-           b.p99, b.max,
-           100 * b.load, 100 * late, (double)(f.models - m_a) / span, 100 * floor_late);
+    printf("  %8d  %9.2f%%  %10.2f%%  %13.0f  %13.0f  %3.0f%%  %16.2f%%  %8.0f  %10.2f%%  %10.2f\n", n, 100 * frac,
+           100 * gfrac, b.p99, b.max, 100 * b.load, 100 * late, (double)(f.models - m_a) / span, 100 * floor_late,
+           srv_cores);
+    if (n >= 4 && srv_cores > 0 && frac <= overrun_limit) cores_per_session = srv_cores / n;
     fflush(stdout);
     if (gfrac <= overrun_limit && held_passes == n_prev) held_passes = n;
     n_prev = n;
@@ -667,6 +696,10 @@ static void haptic_run(double rate) {
   }
   printf("haptic capacity: %d sessions held at %.0f Hz physics with <= %g%% late physics steps (target %d)\n", held, rate,
          100 * overrun_limit, rate <= 250 ? 64 : 32);
+  if (cores_per_session > 0)
+    printf("  (the server alone used %.3f of a core per session at the largest count held: two cores of its own, "
+           "stations elsewhere, would give it room for ~%.0f sessions at 100%% of both, a projection, not a hold)\n",
+           cores_per_session, 2.0 / cores_per_session);
   printf("  (by the tick passes' share alone, this benchmark's criterion until 2026-12-02, which neither counts the slots "
          "a pass that fell behind dropped nor tells one session's late step from its group's: %d, up to where this run "
          "stopped)\n", held_passes);
