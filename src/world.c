@@ -130,6 +130,20 @@ typedef struct finger_scratch {
   int prev_slots, prev_count;
   int *prev_row_slot; /* [nfree] -1 */
   int *prev_slot_row; /* [prev_slots] */
+  /* The compliance by etree paths (a nested-dissection factor, not blending; finger_zslot):
+   * per slot a vertex's z = L^{-1} P e for its 3 unit right-hand sides on its path from
+   * its block column to the root, [zcap][zh] block columns and [zcap][zh][9] values
+   * (component i, right-hand side c at 3i + c), and the 3x3 blocks of A^{-1} between
+   * slots, [zcap][zcap][9], valid when zpair_ok says so. Dropped with the factor. */
+  int zh, zcap, zused;    /* path length bound (etree height + 1), slots, slots taken */
+  int *zrow_slot;         /* [nfree] -1 */
+  int *zslot_row;         /* [zcap] */
+  int *zlen, *zpath;      /* [zcap], [zcap][zh] */
+  double *zval;           /* [zcap][zh][9] */
+  double *zpair;          /* [zcap][zcap][9] */
+  uint8_t *zpair_ok;      /* [zcap][zcap] */
+  int *zblk, *zparent;    /* [nfree] permuted block column of a free row; [nfree] its etree parent, -1 */
+  double *zw;             /* [9 nfree] dense forward-pass scratch, zero between uses */
 } finger_scratch;
 
 typedef void (*stage_fn)(palp_world *w, double h);
@@ -875,6 +889,8 @@ static int local_block_reserve(finger_scratch *fs, size_t n) {
 static void finger_cols_invalidate(palp_world *w) {
   finger_scratch *fs = w->fs;
   if (!fs) return;
+  for (int q = 0; q < fs->zused; ++q) fs->zrow_slot[fs->zslot_row[q]] = -1;
+  fs->zused = 0; /* the paths' values and their pairs came from the old factor */
   fs->G_owner = -1; /* gathered from the old factor's columns */
   for (int q = 0; q < fs->slots; ++q) {
     if (fs->slot_row[q] >= 0) fs->row_slot[fs->slot_row[q]] = -1;
@@ -934,6 +950,130 @@ static int prev_cols(palp_world *w, int r) {
     factor_cols(&w->ldl_prev, r, n3, fs->solve, fs->work, fs->prev_pool + (size_t)s * 3 * (size_t)n3);
   }
   return s;
+}
+
+/* The etree of the factor's block columns and each free row's block column, once per
+ * world (every factor of a world has the same ordering and pattern), and the path
+ * store. 0 or -1 when out of memory. */
+static int zpaths_setup(palp_world *w) {
+  finger_scratch *fs = w->fs;
+  const palp_ldl *f = &w->ldl;
+  const int nb = f->nb;
+  if (fs->zparent) return 0;
+  int *blk = malloc(sizeof(int) * (size_t)nb), *par = malloc(sizeof(int) * (size_t)nb), *depth = calloc((size_t)nb, sizeof(int));
+  double *zw = calloc(9 * (size_t)nb, sizeof(double));
+  int *rs = malloc(sizeof(int) * (size_t)nb);
+  if (!blk || !par || !depth || !zw || !rs) {
+    free(blk), free(par), free(depth), free(zw), free(rs);
+    return -1;
+  }
+  for (int K = 0; K < nb; ++K) blk[f->perm[3 * K] / 3] = K;
+  for (int J = 0; J < nb; ++J) par[J] = f->bcolp[J] < f->bcolp[J + 1] ? f->brow[f->bcolp[J]] : -1;
+  int h = 1; /* the longest path: depth from each root down (parents come after their children) */
+  for (int J = nb - 1; J >= 0; --J) {
+    depth[J] = par[J] >= 0 ? depth[par[J]] + 1 : 1;
+    if (depth[J] > h) h = depth[J];
+  }
+  for (int r = 0; r < nb; ++r) rs[r] = -1;
+  free(depth);
+  fs->zblk = blk, fs->zparent = par, fs->zw = zw, fs->zh = h, fs->zrow_slot = rs;
+  return 0;
+}
+
+/* The slot holding free row r's path values z = L^{-1} P e_{3r+c} (c = 0..2) under the
+ * current factor, made on first use: the forward pass walks only the row's etree path,
+ * where all of z is (a unit right-hand side's reach). -1 when out of memory. */
+static int finger_zslot(palp_world *w, int r) {
+  finger_scratch *fs = w->fs;
+  const palp_ldl *f = &w->ldl;
+  if (fs->zrow_slot[r] >= 0) return fs->zrow_slot[r];
+  if (fs->zused == fs->zcap) {
+    const int cap = fs->zcap ? 2 * fs->zcap : 32, h = fs->zh;
+    int *sr = realloc(fs->zslot_row, sizeof(int) * (size_t)cap), *len = realloc(fs->zlen, sizeof(int) * (size_t)cap);
+    if (sr) fs->zslot_row = sr;
+    if (len) fs->zlen = len;
+    int *path = realloc(fs->zpath, sizeof(int) * (size_t)cap * (size_t)h);
+    if (path) fs->zpath = path;
+    double *val = realloc(fs->zval, sizeof(double) * 9 * (size_t)cap * (size_t)h);
+    if (val) fs->zval = val;
+    double *pair = malloc(sizeof(double) * 9 * (size_t)cap * (size_t)cap);
+    uint8_t *ok = calloc((size_t)cap * (size_t)cap, 1);
+    if (!sr || !len || !path || !val || !pair || !ok) {
+      free(pair), free(ok);
+      return -1;
+    }
+    /* the pairs move to the wider table */
+    for (int a = 0; a < fs->zcap; ++a)
+      for (int b = 0; b < fs->zcap; ++b)
+        if (fs->zpair_ok[a * fs->zcap + b]) {
+          ok[a * cap + b] = 1;
+          memcpy(pair + 9 * ((size_t)a * cap + b), fs->zpair + 9 * ((size_t)a * fs->zcap + b), sizeof(double) * 9);
+        }
+    free(fs->zpair), free(fs->zpair_ok);
+    fs->zpair = pair, fs->zpair_ok = ok, fs->zcap = cap;
+  }
+  const int s = fs->zused++;
+  fs->zslot_row[s] = r;
+  fs->zrow_slot[r] = s;
+  for (int b = 0; b < fs->zused; ++b) fs->zpair_ok[s * fs->zcap + b] = fs->zpair_ok[b * fs->zcap + s] = 0;
+  double *zw = fs->zw;
+  int *path = fs->zpath + (size_t)s * (size_t)fs->zh;
+  double *val = fs->zval + 9 * (size_t)s * (size_t)fs->zh;
+  int n = 0;
+  const int J0 = fs->zblk[r];
+  for (int c = 0; c < 3; ++c) zw[9 * J0 + 3 * c + c] = 1.0;
+  /* forward, column J ascending along the path (every row of L's column J is an
+   * ancestor of J, so the updates stay on it): y_J <- L_JJ^{-1} y_J, then y_I -= B y_J */
+  for (int J = J0; J >= 0; J = fs->zparent[J]) {
+    double *yj = zw + 9 * J;
+    const double *d = f->bdiag + 3 * J;
+    for (int c = 0; c < 3; ++c) {
+      yj[3 + c] -= d[0] * yj[c];
+      yj[6 + c] -= d[1] * yj[c] + d[2] * yj[3 + c];
+    }
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      double *yi = zw + 9 * f->brow[q];
+      const float *B = f->blk + 9 * q;
+      for (int i = 0; i < 3; ++i)
+        for (int c = 0; c < 3; ++c)
+          yi[3 * i + c] -= ((double)B[i] * yj[c] + (double)B[3 + i] * yj[3 + c]) + (double)B[6 + i] * yj[6 + c];
+    }
+    path[n] = J;
+    memcpy(val + 9 * (size_t)n, yj, sizeof(double) * 9);
+    memset(yj, 0, sizeof(double) * 9);
+    n++;
+  }
+  fs->zlen[s] = n;
+  return s;
+}
+
+/* The 3x3 block of A^{-1} between the vertices of slots a and b, out[3i + j] = A^{-1} at
+ * (3 r_a + i, 3 r_b + j) = sum over their common path of z_a D^{-1} z_b (A = P^T L D L^T P),
+ * cached per pair until the factor changes. */
+static const double *zpair(finger_scratch *fs, const palp_ldl *f, int a, int b) {
+  double *out = fs->zpair + 9 * ((size_t)a * fs->zcap + b);
+  if (fs->zpair_ok[a * fs->zcap + b]) return out;
+  const int *pa = fs->zpath + (size_t)a * fs->zh, *pb = fs->zpath + (size_t)b * fs->zh;
+  const double *va = fs->zval + 9 * (size_t)a * fs->zh, *vb = fs->zval + 9 * (size_t)b * fs->zh;
+  double acc[9] = {0};
+  for (int x = 0, y = 0; x < fs->zlen[a] && y < fs->zlen[b];) {
+    if (pa[x] < pb[y]) x++;
+    else if (pb[y] < pa[x]) y++;
+    else {
+      const double *za = va + 9 * x, *zb = vb + 9 * y, *dinv = f->dinv + 3 * pa[x];
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) acc[3 * i + j] += za[3 * k + i] * dinv[k] * zb[3 * k + j];
+      x++, y++;
+    }
+  }
+  memcpy(out, acc, sizeof acc);
+  fs->zpair_ok[a * fs->zcap + b] = 1;
+  double *sym = fs->zpair + 9 * ((size_t)b * fs->zcap + a); /* A^{-1} symmetric: the transpose, same bits */
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) sym[3 * j + i] = acc[3 * i + j];
+  fs->zpair_ok[b * fs->zcap + a] = 1;
+  return out;
 }
 
 /* x += c col over n entries: a finger's contact impulse spread by one compliance
@@ -1259,7 +1399,21 @@ static void stage_fingers(palp_world *w, double h) {
     }
     int slot[3 * PALP_FINGER_MAX_CON];
     int oom = 0;
-    for (int a = 0; a < nl; ++a) oom |= (slot[a] = finger_slot(w, w->row_of[fs->lvert[a]])) < 0;
+    /* During a blend, the replaced factor's columns too (factor_solve): the compliance
+     * is a colv + (1 - a) colp. */
+    const double ba = blend_weight(w), bb = 1.0 - ba;
+    const int blend = ba < 1.0;
+    /* A nested-dissection factor (a net of 600 vertices and more, sparse_ldl.h), not
+     * blending: the local compliance from the vertices' etree paths (finger_zslot,
+     * zpair) and the correction by one more solve, instead of full columns
+     * (docs/haptics.md, "The compliance by etree paths"). */
+    const int zmode = w->ldl.nested && w->ldl.nb > 0 && !blend;
+    if (zmode) {
+      oom |= zpaths_setup(w) < 0;
+      for (int a = 0; a < nl && !oom; ++a) oom |= (slot[a] = finger_zslot(w, w->row_of[fs->lvert[a]])) < 0;
+    } else {
+      for (int a = 0; a < nl; ++a) oom |= (slot[a] = finger_slot(w, w->row_of[fs->lvert[a]])) < 0;
+    }
     const int L3 = 3 * nl;
     oom |= local_block_reserve(fs, (size_t)L3 * (size_t)L3) < 0;
     if (oom) { /* keep the step going without this finger's contact; counted */
@@ -1269,11 +1423,7 @@ static void stage_fingers(palp_world *w, double h) {
       continue;
     }
     const float *colv[3 * PALP_FINGER_MAX_CON];
-    for (int a = 0; a < nl; ++a) colv[a] = fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
-    /* During a blend, the replaced factor's columns too (factor_solve): the compliance
-     * is a colv + (1 - a) colp. */
-    const double ba = blend_weight(w), bb = 1.0 - ba;
-    const int blend = ba < 1.0;
+    for (int a = 0; a < nl; ++a) colv[a] = zmode ? NULL : fs->pool + (size_t)slot[a] * 3 * (size_t)n3;
     const float *colp[3 * PALP_FINGER_MAX_CON];
     if (blend) {
       int pslot[3 * PALP_FINGER_MAX_CON];
@@ -1288,7 +1438,16 @@ static void stage_fingers(palp_world *w, double h) {
      * while the same finger has the same local vertices in the same order and the
      * factor has not changed (finger_cols_invalidate): a pressing fingertip keeps them
      * for most steps, and the gather is ~200 scattered cache lines of the columns. */
-    if (blend || !(fs->G_owner == ci && fs->G_nl == nl && !memcmp(fs->G_lvert, fs->lvert, sizeof(int) * (size_t)nl))) {
+    if (zmode) {
+      /* G from the pairs' blocks: G[3b + j][3a + i] = A^{-1} at (3 r_a + i, 3 r_b + j) */
+      for (int b = 0; b < nl; ++b)
+        for (int a = 0; a < nl; ++a) {
+          const double *blk = zpair(fs, &w->ldl, slot[a], slot[b]);
+          for (int j = 0; j < 3; ++j)
+            for (int i = 0; i < 3; ++i) fs->G[(size_t)(3 * b + j) * (size_t)L3 + 3 * a + i] = blk[3 * i + j];
+        }
+      fs->G_owner = -1; /* not a gather from the pool's columns */
+    } else if (blend || !(fs->G_owner == ci && fs->G_nl == nl && !memcmp(fs->G_lvert, fs->lvert, sizeof(int) * (size_t)nl))) {
       for (int b = 0; b < nl; ++b)
         for (int j = 0; j < 3; ++j) {
           const float *col = colv[b] + (size_t)j * (size_t)n3;
@@ -1394,10 +1553,19 @@ static void stage_fingers(palp_world *w, double h) {
       if (k->ctri[c] < 0) w->base_contacts++;
     }
     double uf = 0.0;
+    double *zr = fs->solve; /* zmode: the correction's right-hand side, then A^{-1} of it */
+    if (zmode) memset(zr, 0, sizeof(double) * (size_t)n3);
     for (int a = 0; a < nl; ++a) {
       const int ra = w->row_of[fs->lvert[a]];
       const double c3[3] = {h * fs->lf[3 * a], h * fs->lf[3 * a + 1], h * fs->lf[3 * a + 2]};
       const int fused = c3[0] != 0.0 && c3[1] != 0.0 && c3[2] != 0.0;
+      if (zmode) {
+        for (int j = 0; j < 3; ++j) {
+          zr[3 * ra + j] = c3[j];
+          uf += c3[j] * (smc != 0.0 ? uvec[3 * ra + j] : 0.0);
+        }
+        continue;
+      }
       if (blend) {
         const double ca[3] = {ba * c3[0], ba * c3[1], ba * c3[2]}, cb[3] = {bb * c3[0], bb * c3[1], bb * c3[2]};
         for (int j = 0; j < 3; ++j)
@@ -1414,6 +1582,10 @@ static void stage_fingers(palp_world *w, double h) {
         if (!fused && !blend) axpy(n3, c, colv[a] + (size_t)j * (size_t)n3, x);
         uf += c * (smc != 0.0 ? uvec[3 * ra + j] : 0.0);
       }
+    }
+    if (zmode) {
+      palp_ldl_solve(&w->ldl, zr, 1, fs->work);
+      for (int q = 0; q < n3; ++q) x[q] += zr[q];
     }
     if (smc != 0.0) {
       const double su = smc * uf; /* as sm_coef * uf * u, left to right */
@@ -2084,6 +2256,8 @@ void palp_world_destroy(palp_world *w) {
     finger_scratch *fs = w->fs;
     free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
     free(fs->G), free(fs->prev_pool), free(fs->prev_row_slot), free(fs->prev_slot_row);
+    free(fs->zrow_slot), free(fs->zslot_row), free(fs->zlen), free(fs->zpath), free(fs->zval), free(fs->zpair);
+    free(fs->zpair_ok), free(fs->zblk), free(fs->zparent), free(fs->zw);
     free(fs->vloc), free(fs->lvert), free(fs->G_lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
     free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
     free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
