@@ -278,6 +278,11 @@ typedef struct palp_world_def {
    * with the free motion carried into the gap (the held force the same at every step;
    * the breast-tissue scenes and their set since 2026-11-29). */
   int finger_linearise; /* palp_finger_linearise */
+  /* 1: a finger's compliance from full columns of A^{-1} even on a nested-dissection
+   * factor, where by default (0) it is made from the vertices' etree paths and the
+   * correction by one more solve (docs/haptics.md, "The compliance by etree paths"): the
+   * same quantities to rounding; kept as the reference the paths are tested against. */
+  int finger_columns;
   /* Where the parameters were validated against the FE reference with a fingertip
    * (docs/model.md, "Valid range"): up to which indentation [m] of the fingertip (its
    * centre's depth below the undeformed sphere, R + r - |c|) its force stayed within 15%
@@ -490,6 +495,10 @@ typedef struct palp_world_health {
                                  analyses its spares at creation, so that no rebuild made
                                  off the tick meets one: 2 at creation (3 with
                                  def.refactor_blend), none later */
+  int64_t finger_paths;       /* vertices whose finger compliance was made by their etree
+                                 paths (a nested-dissection factor: nets of 600 vertices
+                                 and more, sparse_ldl.h), on the tick or by a deferred job;
+                                 0 where full compliance columns serve */
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 

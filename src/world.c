@@ -88,6 +88,25 @@ typedef struct contact {
  * A^{-1} at a free vertex, computed on demand and kept until the next
  * refactorisation, in a bounded pool reused least-recently first. */
 #define PALP_FINGER_MAX_CON 96 /* constraints per finger and step */
+/* A vertex's compliance by its etree path (a nested-dissection factor; finger_zslot):
+ * per slot z = L^{-1} P e for the vertex's 3 unit right-hand sides on its path from its
+ * block column to the root, [cap][h] block columns and [cap][h][9] values (component i,
+ * right-hand side c at 3i + c), and the 3x3 blocks of A^{-1} between slots, [cap][cap][9],
+ * valid where pair_ok says so; all of one factor. The finger's store is the tick's; a
+ * deferred job fills its own for the new factor, swapped in at install. */
+typedef struct zstore {
+  int h, cap, used;    /* path length bound (etree height + 1), slots, slots taken */
+  int *row_slot;       /* [nfree] -1 */
+  int *slot_row;       /* [cap] */
+  int64_t *stamp;      /* [cap] the finger step that last used the slot */
+  int *len, *path;     /* [cap], [cap][h] */
+  double *val;         /* [cap][h][9] */
+  double *pair;        /* [cap][cap][9] */
+  uint8_t *pair_ok;    /* [cap][cap] */
+  double *zw;          /* [9 nfree] dense forward-pass scratch, zero between uses */
+  const int *blk, *parent; /* the world's (read only; zpaths_setup) */
+} zstore;
+
 typedef struct finger_scratch {
   int slots, n3;        /* pool size, 3 nfree */
   float *pool;          /* [slots][3][n3], single precision (below) */
@@ -130,20 +149,9 @@ typedef struct finger_scratch {
   int prev_slots, prev_count;
   int *prev_row_slot; /* [nfree] -1 */
   int *prev_slot_row; /* [prev_slots] */
-  /* The compliance by etree paths (a nested-dissection factor, not blending; finger_zslot):
-   * per slot a vertex's z = L^{-1} P e for its 3 unit right-hand sides on its path from
-   * its block column to the root, [zcap][zh] block columns and [zcap][zh][9] values
-   * (component i, right-hand side c at 3i + c), and the 3x3 blocks of A^{-1} between
-   * slots, [zcap][zcap][9], valid when zpair_ok says so. Dropped with the factor. */
-  int zh, zcap, zused;    /* path length bound (etree height + 1), slots, slots taken */
-  int *zrow_slot;         /* [nfree] -1 */
-  int *zslot_row;         /* [zcap] */
-  int *zlen, *zpath;      /* [zcap], [zcap][zh] */
-  double *zval;           /* [zcap][zh][9] */
-  double *zpair;          /* [zcap][zcap][9] */
-  uint8_t *zpair_ok;      /* [zcap][zcap] */
-  int *zblk, *zparent;    /* [nfree] permuted block column of a free row; [nfree] its etree parent, -1 */
-  double *zw;             /* [9 nfree] dense forward-pass scratch, zero between uses */
+  /* The compliance by etree paths (a nested-dissection factor, not blending; zstore). */
+  zstore z;
+  int *zblk, *zparent; /* [nfree] each free row's permuted block column; each block column's etree parent, -1 */
 } finger_scratch;
 
 typedef void (*stage_fn)(palp_world *w, double h);
@@ -196,6 +204,7 @@ struct palp_world {
   int64_t clamped_steps;
   int64_t margin_rebuilds;
   int64_t factor_analyses; /* first uses of a factor's storage: ordering and analysis (health) */
+  int64_t finger_paths;    /* finger compliance by etree paths, vertices (health) */
   double min_rest_len; /* [m] shortest link */
   uint8_t *vfast;      /* [vertex_count] scratch of the solve's linearisation check: moves by > 0.05 min_rest_len */
   int64_t substeps, large_strain_steps;
@@ -886,11 +895,12 @@ static int local_block_reserve(finger_scratch *fs, size_t n) {
   return 0;
 }
 
+static void zstore_clear(zstore *z);
+
 static void finger_cols_invalidate(palp_world *w) {
   finger_scratch *fs = w->fs;
   if (!fs) return;
-  for (int q = 0; q < fs->zused; ++q) fs->zrow_slot[fs->zslot_row[q]] = -1;
-  fs->zused = 0; /* the paths' values and their pairs came from the old factor */
+  zstore_clear(&fs->z); /* the paths' values and their pairs came from the old factor */
   fs->G_owner = -1; /* gathered from the old factor's columns */
   for (int q = 0; q < fs->slots; ++q) {
     if (fs->slot_row[q] >= 0) fs->row_slot[fs->slot_row[q]] = -1;
@@ -952,79 +962,106 @@ static int prev_cols(palp_world *w, int r) {
   return s;
 }
 
+/* The store's slots dropped (a new factor). */
+static void zstore_clear(zstore *z) {
+  for (int q = 0; q < z->used; ++q) z->row_slot[z->slot_row[q]] = -1;
+  z->used = 0;
+}
+
+static void zstore_free(zstore *z) {
+  free(z->row_slot), free(z->slot_row), free(z->stamp), free(z->len), free(z->path), free(z->val), free(z->pair);
+  free(z->pair_ok), free(z->zw);
+  memset(z, 0, sizeof *z);
+}
+
+/* An empty store for nb block columns, paths up to h long, over the world's etree. 0 or -1. */
+static int zstore_init(zstore *z, int nb, int h, const int *blk, const int *parent) {
+  if (z->row_slot) return 0;
+  z->row_slot = malloc(sizeof(int) * (size_t)nb);
+  z->zw = calloc(9 * (size_t)nb, sizeof(double));
+  if (!z->row_slot || !z->zw) {
+    zstore_free(z);
+    return -1;
+  }
+  for (int r = 0; r < nb; ++r) z->row_slot[r] = -1;
+  z->h = h, z->blk = blk, z->parent = parent;
+  return 0;
+}
+
 /* The etree of the factor's block columns and each free row's block column, once per
- * world (every factor of a world has the same ordering and pattern), and the path
+ * world (every factor of a world has the same ordering and pattern), and the finger's
  * store. 0 or -1 when out of memory. */
 static int zpaths_setup(palp_world *w) {
   finger_scratch *fs = w->fs;
   const palp_ldl *f = &w->ldl;
   const int nb = f->nb;
   if (fs->zparent) return 0;
-  int *blk = malloc(sizeof(int) * (size_t)nb), *par = malloc(sizeof(int) * (size_t)nb), *depth = calloc((size_t)nb, sizeof(int));
-  double *zw = calloc(9 * (size_t)nb, sizeof(double));
-  int *rs = malloc(sizeof(int) * (size_t)nb);
-  if (!blk || !par || !depth || !zw || !rs) {
-    free(blk), free(par), free(depth), free(zw), free(rs);
+  int *blk = malloc(sizeof(int) * (size_t)nb), *par = malloc(sizeof(int) * (size_t)nb), *depth = malloc(sizeof(int) * (size_t)nb);
+  if (!blk || !par || !depth) {
+    free(blk), free(par), free(depth);
     return -1;
   }
   for (int K = 0; K < nb; ++K) blk[f->perm[3 * K] / 3] = K;
   for (int J = 0; J < nb; ++J) par[J] = f->bcolp[J] < f->bcolp[J + 1] ? f->brow[f->bcolp[J]] : -1;
-  int h = 1; /* the longest path: depth from each root down (parents come after their children) */
+  int h = 1; /* the longest path: depths from the roots down (a parent comes after its children) */
   for (int J = nb - 1; J >= 0; --J) {
     depth[J] = par[J] >= 0 ? depth[par[J]] + 1 : 1;
     if (depth[J] > h) h = depth[J];
   }
-  for (int r = 0; r < nb; ++r) rs[r] = -1;
   free(depth);
-  fs->zblk = blk, fs->zparent = par, fs->zw = zw, fs->zh = h, fs->zrow_slot = rs;
+  if (zstore_init(&fs->z, nb, h, blk, par) < 0) {
+    free(blk), free(par);
+    return -1;
+  }
+  fs->zblk = blk, fs->zparent = par;
   return 0;
 }
 
 /* The slot holding free row r's path values z = L^{-1} P e_{3r+c} (c = 0..2) under the
- * current factor, made on first use: the forward pass walks only the row's etree path,
- * where all of z is (a unit right-hand side's reach). -1 when out of memory. */
-static int finger_zslot(palp_world *w, int r) {
-  finger_scratch *fs = w->fs;
-  const palp_ldl *f = &w->ldl;
-  if (fs->zrow_slot[r] >= 0) return fs->zrow_slot[r];
-  if (fs->zused == fs->zcap) {
-    const int cap = fs->zcap ? 2 * fs->zcap : 32, h = fs->zh;
-    int *sr = realloc(fs->zslot_row, sizeof(int) * (size_t)cap), *len = realloc(fs->zlen, sizeof(int) * (size_t)cap);
-    if (sr) fs->zslot_row = sr;
-    if (len) fs->zlen = len;
-    int *path = realloc(fs->zpath, sizeof(int) * (size_t)cap * (size_t)h);
-    if (path) fs->zpath = path;
-    double *val = realloc(fs->zval, sizeof(double) * 9 * (size_t)cap * (size_t)h);
-    if (val) fs->zval = val;
+ * factor f, made on first use: the forward pass walks only the row's etree path, where
+ * all of z is (every row of L's column J is an ancestor of J, so a unit right-hand
+ * side's updates stay on its path). -1 when out of memory. */
+static int finger_zslot(zstore *z, const palp_ldl *f, int r) {
+  if (z->row_slot[r] >= 0) return z->row_slot[r];
+  if (z->used == z->cap) {
+    const int cap = z->cap ? 2 * z->cap : 32, h = z->h;
+    int *sr = realloc(z->slot_row, sizeof(int) * (size_t)cap), *len = realloc(z->len, sizeof(int) * (size_t)cap);
+    if (sr) z->slot_row = sr;
+    if (len) z->len = len;
+    int64_t *st = realloc(z->stamp, sizeof(int64_t) * (size_t)cap);
+    if (st) z->stamp = st;
+    int *path = realloc(z->path, sizeof(int) * (size_t)cap * (size_t)h);
+    if (path) z->path = path;
+    double *val = realloc(z->val, sizeof(double) * 9 * (size_t)cap * (size_t)h);
+    if (val) z->val = val;
     double *pair = malloc(sizeof(double) * 9 * (size_t)cap * (size_t)cap);
     uint8_t *ok = calloc((size_t)cap * (size_t)cap, 1);
-    if (!sr || !len || !path || !val || !pair || !ok) {
+    if (!sr || !len || !st || !path || !val || !pair || !ok) {
       free(pair), free(ok);
       return -1;
     }
-    /* the pairs move to the wider table */
-    for (int a = 0; a < fs->zcap; ++a)
-      for (int b = 0; b < fs->zcap; ++b)
-        if (fs->zpair_ok[a * fs->zcap + b]) {
+    for (int a = 0; a < z->used; ++a) /* the pairs move to the wider table */
+      for (int b = 0; b < z->used; ++b)
+        if (z->pair_ok[a * z->cap + b]) {
           ok[a * cap + b] = 1;
-          memcpy(pair + 9 * ((size_t)a * cap + b), fs->zpair + 9 * ((size_t)a * fs->zcap + b), sizeof(double) * 9);
+          memcpy(pair + 9 * ((size_t)a * cap + b), z->pair + 9 * ((size_t)a * z->cap + b), sizeof(double) * 9);
         }
-    free(fs->zpair), free(fs->zpair_ok);
-    fs->zpair = pair, fs->zpair_ok = ok, fs->zcap = cap;
+    free(z->pair), free(z->pair_ok);
+    z->pair = pair, z->pair_ok = ok, z->cap = cap;
   }
-  const int s = fs->zused++;
-  fs->zslot_row[s] = r;
-  fs->zrow_slot[r] = s;
-  for (int b = 0; b < fs->zused; ++b) fs->zpair_ok[s * fs->zcap + b] = fs->zpair_ok[b * fs->zcap + s] = 0;
-  double *zw = fs->zw;
-  int *path = fs->zpath + (size_t)s * (size_t)fs->zh;
-  double *val = fs->zval + 9 * (size_t)s * (size_t)fs->zh;
+  const int s = z->used++;
+  z->slot_row[s] = r;
+  z->row_slot[r] = s;
+  z->stamp[s] = 0;
+  for (int b = 0; b < z->used; ++b) z->pair_ok[s * z->cap + b] = z->pair_ok[b * z->cap + s] = 0;
+  double *zw = z->zw;
+  int *path = z->path + (size_t)s * (size_t)z->h;
+  double *val = z->val + 9 * (size_t)s * (size_t)z->h;
   int n = 0;
-  const int J0 = fs->zblk[r];
+  const int J0 = z->blk[r];
   for (int c = 0; c < 3; ++c) zw[9 * J0 + 3 * c + c] = 1.0;
-  /* forward, column J ascending along the path (every row of L's column J is an
-   * ancestor of J, so the updates stay on it): y_J <- L_JJ^{-1} y_J, then y_I -= B y_J */
-  for (int J = J0; J >= 0; J = fs->zparent[J]) {
+  /* forward, column J ascending along the path: y_J <- L_JJ^{-1} y_J, then y_I -= B y_J */
+  for (int J = J0; J >= 0; J = z->parent[J]) {
     double *yj = zw + 9 * J;
     const double *d = f->bdiag + 3 * J;
     for (int c = 0; c < 3; ++c) {
@@ -1043,20 +1080,20 @@ static int finger_zslot(palp_world *w, int r) {
     memset(yj, 0, sizeof(double) * 9);
     n++;
   }
-  fs->zlen[s] = n;
+  z->len[s] = n;
   return s;
 }
 
 /* The 3x3 block of A^{-1} between the vertices of slots a and b, out[3i + j] = A^{-1} at
- * (3 r_a + i, 3 r_b + j) = sum over their common path of z_a D^{-1} z_b (A = P^T L D L^T P),
- * cached per pair until the factor changes. */
-static const double *zpair(finger_scratch *fs, const palp_ldl *f, int a, int b) {
-  double *out = fs->zpair + 9 * ((size_t)a * fs->zcap + b);
-  if (fs->zpair_ok[a * fs->zcap + b]) return out;
-  const int *pa = fs->zpath + (size_t)a * fs->zh, *pb = fs->zpath + (size_t)b * fs->zh;
-  const double *va = fs->zval + 9 * (size_t)a * fs->zh, *vb = fs->zval + 9 * (size_t)b * fs->zh;
+ * (3 r_a + i, 3 r_b + j) = the sum over their common path of z_a D^{-1} z_b
+ * (A = P^T L D L^T P), cached per pair (and its transpose for b, a) until the factor changes. */
+static const double *zpair(zstore *z, const palp_ldl *f, int a, int b) {
+  double *out = z->pair + 9 * ((size_t)a * z->cap + b);
+  if (z->pair_ok[a * z->cap + b]) return out;
+  const int *pa = z->path + (size_t)a * z->h, *pb = z->path + (size_t)b * z->h;
+  const double *va = z->val + 9 * (size_t)a * z->h, *vb = z->val + 9 * (size_t)b * z->h;
   double acc[9] = {0};
-  for (int x = 0, y = 0; x < fs->zlen[a] && y < fs->zlen[b];) {
+  for (int x = 0, y = 0; x < z->len[a] && y < z->len[b];) {
     if (pa[x] < pb[y]) x++;
     else if (pb[y] < pa[x]) y++;
     else {
@@ -1067,12 +1104,10 @@ static const double *zpair(finger_scratch *fs, const palp_ldl *f, int a, int b) 
       x++, y++;
     }
   }
-  memcpy(out, acc, sizeof acc);
-  fs->zpair_ok[a * fs->zcap + b] = 1;
-  double *sym = fs->zpair + 9 * ((size_t)b * fs->zcap + a); /* A^{-1} symmetric: the transpose, same bits */
+  double *sym = z->pair + 9 * ((size_t)b * z->cap + a);
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) sym[3 * j + i] = acc[3 * i + j];
-  fs->zpair_ok[b * fs->zcap + a] = 1;
+    for (int j = 0; j < 3; ++j) out[3 * i + j] = acc[3 * i + j], sym[3 * j + i] = acc[3 * i + j];
+  z->pair_ok[a * z->cap + b] = z->pair_ok[b * z->cap + a] = 1;
   return out;
 }
 
@@ -1407,10 +1442,15 @@ static void stage_fingers(palp_world *w, double h) {
      * blending: the local compliance from the vertices' etree paths (finger_zslot,
      * zpair) and the correction by one more solve, instead of full columns
      * (docs/haptics.md, "The compliance by etree paths"). */
-    const int zmode = w->ldl.nested && w->ldl.nb > 0 && !blend;
+    const int zmode = w->ldl.nested && w->ldl.nb > 0 && !blend && !w->def.finger_columns;
     if (zmode) {
       oom |= zpaths_setup(w) < 0;
-      for (int a = 0; a < nl && !oom; ++a) oom |= (slot[a] = finger_zslot(w, w->row_of[fs->lvert[a]])) < 0;
+      const int made = fs->z.used;
+      for (int a = 0; a < nl && !oom; ++a) {
+        oom |= (slot[a] = finger_zslot(&fs->z, &w->ldl, w->row_of[fs->lvert[a]])) < 0;
+        if (slot[a] >= 0) fs->z.stamp[slot[a]] = fs->stamp;
+      }
+      w->finger_paths += fs->z.used - made;
     } else {
       for (int a = 0; a < nl; ++a) oom |= (slot[a] = finger_slot(w, w->row_of[fs->lvert[a]])) < 0;
     }
@@ -1442,7 +1482,7 @@ static void stage_fingers(palp_world *w, double h) {
       /* G from the pairs' blocks: G[3b + j][3a + i] = A^{-1} at (3 r_a + i, 3 r_b + j) */
       for (int b = 0; b < nl; ++b)
         for (int a = 0; a < nl; ++a) {
-          const double *blk = zpair(fs, &w->ldl, slot[a], slot[b]);
+          const double *blk = zpair(&fs->z, &w->ldl, slot[a], slot[b]);
           for (int j = 0; j < 3; ++j)
             for (int i = 0; i < 3; ++i) fs->G[(size_t)(3 * b + j) * (size_t)L3 + 3 * a + i] = blk[3 * i + j];
         }
@@ -2256,8 +2296,8 @@ void palp_world_destroy(palp_world *w) {
     finger_scratch *fs = w->fs;
     free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
     free(fs->G), free(fs->prev_pool), free(fs->prev_row_slot), free(fs->prev_slot_row);
-    free(fs->zrow_slot), free(fs->zslot_row), free(fs->zlen), free(fs->zpath), free(fs->zval), free(fs->zpair);
-    free(fs->zpair_ok), free(fs->zblk), free(fs->zparent), free(fs->zw);
+    zstore_free(&fs->z);
+    free(fs->zblk), free(fs->zparent);
     free(fs->vloc), free(fs->lvert), free(fs->G_lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
     free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
     free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
@@ -2575,12 +2615,19 @@ struct palp_factor_job {
   palp_vec3 *fsu; /* [nvertex] the stiffening support's u (NULL without it) */
   int rc;
   int analysed; /* the last run met its factor's storage unanalysed (counted at install) */
+  /* With a nested-dissection factor: the paths (and their pairs) of the latest finger
+   * step's vertices under the new factor, swapped into the finger's store at install. */
+  zstore z;
+  int nz, nz_cap;
+  int *zrows; /* [nz_cap] */
 };
 
 static void job_free(palp_factor_job *j) {
   if (!j) return;
   free(j->ti), free(j->tj), free(j->tx), free(j->col_row), free(j->cols), free(j->solve), free(j->work);
   free(j->fdir), free(j->fbeta), free(j->fslack), free(j->fsu), free(j->fsoft), free(j->soft_blk);
+  zstore_free(&j->z);
+  free(j->zrows);
   palp_ldl_free(&j->ldl);
   free(j);
 }
@@ -2626,6 +2673,13 @@ int palp_factor_job_run(palp_factor_job *j) {
   /* The same function as finger_slot's, so a column is the same bits whoever makes it. */
   for (int q = 0; q < j->ncols; ++q)
     factor_cols(&j->ldl, j->col_row[q], j->n3, j->solve, j->work, j->cols + (size_t)q * 3 * (size_t)j->n3);
+  /* The same functions as the finger's, so a path and a pair are the same bits whoever makes them. */
+  zstore_clear(&j->z);
+  int ok = 1;
+  for (int q = 0; q < j->nz && ok; ++q) ok = finger_zslot(&j->z, &j->ldl, j->zrows[q]) >= 0;
+  for (int a = 0; a < j->z.used && ok; ++a)
+    for (int b = a; b < j->z.used; ++b) zpair(&j->z, &j->ldl, a, b);
+  if (!ok) zstore_clear(&j->z); /* out of memory: the tick makes them */
   return PALP_OK;
 }
 
@@ -2653,6 +2707,16 @@ static int job_request(palp_world *w, double h) {
     /* The columns of the latest step's contact vertices: the next steps ask for them. */
     for (int q = 0; q < fs->slots && j->ncols < j->cols_cap; ++q)
       if (fs->slot_row[q] >= 0 && fs->slot_used[q] == fs->stamp) j->col_row[j->ncols++] = fs->slot_row[q];
+  }
+  j->nz = 0;
+  if (fs && fs->zparent && fs->z.used > 0 && zstore_init(&j->z, w->nfree, fs->z.h, fs->zblk, fs->zparent) == 0) {
+    /* the same for the paths, on a nested-dissection factor (stage_fingers) */
+    if (j->nz_cap < fs->z.used) {
+      int *zr = realloc(j->zrows, sizeof(int) * (size_t)fs->z.used);
+      if (zr) j->zrows = zr, j->nz_cap = fs->z.used;
+    }
+    for (int q = 0; q < fs->z.used && j->nz < j->nz_cap; ++q)
+      if (fs->z.stamp[q] == fs->stamp) j->zrows[j->nz++] = fs->z.slot_row[q];
   }
   j->rc = 0;
   w->job_state = JOB_REQUESTED;
@@ -2691,6 +2755,13 @@ static int job_install(palp_world *w) {
   if (w->fsu) memcpy(w->fsu, j->fsu, sizeof(palp_vec3) * (size_t)w->mesh.vertex_count);
   finger_cols_invalidate(w);
   finger_scratch *fs = w->fs;
+  if (fs && j->nz > 0 && j->z.used > 0) { /* the job's paths and pairs, of the factor just installed */
+    const zstore t = fs->z;
+    fs->z = j->z;
+    j->z = t;
+    for (int q = 0; q < fs->z.used; ++q) fs->z.stamp[q] = fs->stamp;
+    w->finger_paths += fs->z.used;
+  }
   if (fs && j->ncols > 0 && j->cols_cap > 0) {
     /* Swap the pools: the job's buffer has the finger pool's layout. */
     if (j->cols_cap < fs->slots) {
@@ -3302,6 +3373,7 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->clamped_steps = w->clamped_steps;
   out->margin_rebuilds = w->margin_rebuilds;
   out->factor_analyses = w->factor_analyses;
+  out->finger_paths = w->finger_paths;
   out->base_contacts = w->base_contacts;
   out->finger_unsolved = w->finger_unsolved;
   out->large_bend_steps = w->large_bend_steps;
