@@ -94,6 +94,7 @@ typedef struct contact {
  * right-hand side c at 3i + c), and the 3x3 blocks of A^{-1} between slots, [cap][cap][9],
  * valid where pair_ok says so; all of one factor. The finger's store is the tick's; a
  * deferred job fills its own for the new factor, swapped in at install. */
+#define PALP_ZSTORE_KEEP 96 /* slots a finger's path store keeps across steps (stage_fingers) */
 typedef struct zstore {
   int h, cap, used;    /* path length bound (etree height + 1), slots, slots taken */
   int *row_slot;       /* [nfree] -1 */
@@ -1445,6 +1446,10 @@ static void stage_fingers(palp_world *w, double h) {
     const int zmode = w->ldl.nested && w->ldl.nb > 0 && !blend && !w->def.finger_columns;
     if (zmode) {
       oom |= zpaths_setup(w) < 0;
+      /* Bounded: a finger that roams without a rebuild would fill the store (and its
+       * pair table, cap^2 blocks) with every vertex it passed; past PALP_ZSTORE_KEEP
+       * slots the store starts anew before this step takes its own. */
+      if (!oom && fs->z.used + nl > PALP_ZSTORE_KEEP) zstore_clear(&fs->z);
       const int made = fs->z.used;
       for (int a = 0; a < nl && !oom; ++a) {
         oom |= (slot[a] = finger_zslot(&fs->z, &w->ldl, w->row_of[fs->lvert[a]])) < 0;
