@@ -814,6 +814,56 @@ static void solve_blocks(const palp_ldl *f, double *x, int w, double *y) {
       for (int r = 0; r < (W); ++r) x[f->perm[k] * (W) + r] = y[k * (W) + r];                   \
   } while (0)
 
+int palp_ldl_etree(const palp_ldl *f, int *blk, int *parent) {
+  const int nb = f->nb;
+  for (int K = 0; K < nb; ++K) blk[f->perm[3 * K] / 3] = K;
+  for (int J = 0; J < nb; ++J) parent[J] = f->bcolp[J] < f->bcolp[J + 1] ? f->brow[f->bcolp[J]] : -1;
+  int h = 0; /* each column's path walked once: O(nb h), once per world */
+  for (int J = 0; J < nb; ++J) {
+    int d = 1;
+    for (int I = parent[J]; I >= 0; I = parent[I]) d++;
+    if (d > h) h = d;
+  }
+  return h;
+}
+
+int palp_ldl_unit_path(const palp_ldl *f, int J0, const int *parent, double *zw, int *path, double *val) {
+  int n = 0;
+  for (int c = 0; c < 3; ++c) zw[9 * J0 + 3 * c + c] = 1.0;
+  for (int J = J0; J >= 0; J = parent[J]) {
+    double *yj = zw + 9 * J;
+    palp_ldl_diag_fwd(f->bdiag + 3 * J, yj, 3);
+    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
+      double *yi = zw + 9 * f->brow[q];
+      const float *B = f->blk + 9 * q;
+      for (int i = 0; i < 3; ++i)
+        for (int c = 0; c < 3; ++c)
+          yi[3 * i + c] -= ((double)B[i] * yj[c] + (double)B[3 + i] * yj[3 + c]) + (double)B[6 + i] * yj[6 + c];
+    }
+    path[n] = J;
+    memcpy(val + 9 * (size_t)n, yj, sizeof(double) * 9);
+    memset(yj, 0, sizeof(double) * 9);
+    n++;
+  }
+  return n;
+}
+
+void palp_ldl_path_block(const palp_ldl *f, const int *pa, const double *va, int na, const int *pb, const double *vb,
+                         int nb, double out[9]) {
+  for (int e = 0; e < 9; ++e) out[e] = 0.0;
+  for (int x = 0, y = 0; x < na && y < nb;) {
+    if (pa[x] < pb[y]) x++;
+    else if (pb[y] < pa[x]) y++;
+    else {
+      const double *za = va + 9 * x, *zb = vb + 9 * y, *dinv = f->dinv + 3 * pa[x];
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) out[3 * i + j] += za[3 * k + i] * dinv[k] * zb[3 * k + j];
+      x++, y++;
+    }
+  }
+}
+
 size_t palp_ldl_work_size(int n, int w) {
   size_t m = (size_t)n * (size_t)(w > 0 ? w : 1);
   const size_t v = 4 * (((size_t)n + 2) / 3);

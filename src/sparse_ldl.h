@@ -90,4 +90,20 @@ void palp_ldl_solve(const palp_ldl *f, double *x, int w, double *work);
  * 32-byte alignment). */
 size_t palp_ldl_work_size(int n, int w);
 
+/* The factor's etree by blocks and unit right-hand sides along it (a block factor, nb > 0):
+ * blk[v] the block column of vertex v, parent[J] block column J's etree parent (-1 at a
+ * root; every row of L's column J is an ancestor of J). Returns the longest path's length. */
+int palp_ldl_etree(const palp_ldl *f, int *blk, int *parent);
+/* z = L^{-1} P e for vertex v's 3 unit right-hand sides (3v + c), which lies on the path from
+ * its block column J0 = blk[v] to the root: the forward pass walked along it alone, the same
+ * operations in the same order as palp_ldl_solve's forward pass. Writes the path's block
+ * columns to path and z there to val ([n][9], component i of right-hand side c at 3i + c);
+ * zw is 9 nb doubles, zero before and after. Returns the path's length n. */
+int palp_ldl_unit_path(const palp_ldl *f, int J0, const int *parent, double *zw, int *path, double *val);
+/* The 3x3 block of A^{-1} between two vertices from their paths (palp_ldl_unit_path), out[3i + j]
+ * = A^{-1} at (3 v_a + i, 3 v_b + j) = the sum over the common ancestors J of z_a D^{-1} z_b
+ * (A = P^T L D L^T P). */
+void palp_ldl_path_block(const palp_ldl *f, const int *pa, const double *va, int na, const int *pb, const double *vb,
+                         int nb, double out[9]);
+
 #endif

@@ -994,23 +994,10 @@ static int zstore_init(zstore *z, int nb, int h, const int *blk, const int *pare
  * store. 0 or -1 when out of memory. */
 static int zpaths_setup(palp_world *w) {
   finger_scratch *fs = w->fs;
-  const palp_ldl *f = &w->ldl;
-  const int nb = f->nb;
+  const int nb = w->ldl.nb;
   if (fs->zparent) return 0;
-  int *blk = malloc(sizeof(int) * (size_t)nb), *par = malloc(sizeof(int) * (size_t)nb), *depth = malloc(sizeof(int) * (size_t)nb);
-  if (!blk || !par || !depth) {
-    free(blk), free(par), free(depth);
-    return -1;
-  }
-  for (int K = 0; K < nb; ++K) blk[f->perm[3 * K] / 3] = K;
-  for (int J = 0; J < nb; ++J) par[J] = f->bcolp[J] < f->bcolp[J + 1] ? f->brow[f->bcolp[J]] : -1;
-  int h = 1; /* the longest path: depths from the roots down (a parent comes after its children) */
-  for (int J = nb - 1; J >= 0; --J) {
-    depth[J] = par[J] >= 0 ? depth[par[J]] + 1 : 1;
-    if (depth[J] > h) h = depth[J];
-  }
-  free(depth);
-  if (zstore_init(&fs->z, nb, h, blk, par) < 0) {
+  int *blk = malloc(sizeof(int) * (size_t)nb), *par = malloc(sizeof(int) * (size_t)nb);
+  if (!blk || !par || zstore_init(&fs->z, nb, blk && par ? palp_ldl_etree(&w->ldl, blk, par) : 0, blk, par) < 0) {
     free(blk), free(par);
     return -1;
   }
@@ -1055,33 +1042,8 @@ static int finger_zslot(zstore *z, const palp_ldl *f, int r) {
   z->row_slot[r] = s;
   z->stamp[s] = 0;
   for (int b = 0; b < z->used; ++b) z->pair_ok[s * z->cap + b] = z->pair_ok[b * z->cap + s] = 0;
-  double *zw = z->zw;
-  int *path = z->path + (size_t)s * (size_t)z->h;
-  double *val = z->val + 9 * (size_t)s * (size_t)z->h;
-  int n = 0;
-  const int J0 = z->blk[r];
-  for (int c = 0; c < 3; ++c) zw[9 * J0 + 3 * c + c] = 1.0;
-  /* forward, column J ascending along the path: y_J <- L_JJ^{-1} y_J, then y_I -= B y_J */
-  for (int J = J0; J >= 0; J = z->parent[J]) {
-    double *yj = zw + 9 * J;
-    const double *d = f->bdiag + 3 * J;
-    for (int c = 0; c < 3; ++c) {
-      yj[3 + c] -= d[0] * yj[c];
-      yj[6 + c] -= d[1] * yj[c] + d[2] * yj[3 + c];
-    }
-    for (int q = f->bcolp[J]; q < f->bcolp[J + 1]; ++q) {
-      double *yi = zw + 9 * f->brow[q];
-      const float *B = f->blk + 9 * q;
-      for (int i = 0; i < 3; ++i)
-        for (int c = 0; c < 3; ++c)
-          yi[3 * i + c] -= ((double)B[i] * yj[c] + (double)B[3 + i] * yj[3 + c]) + (double)B[6 + i] * yj[6 + c];
-    }
-    path[n] = J;
-    memcpy(val + 9 * (size_t)n, yj, sizeof(double) * 9);
-    memset(yj, 0, sizeof(double) * 9);
-    n++;
-  }
-  z->len[s] = n;
+  z->len[s] = palp_ldl_unit_path(f, z->blk[r], z->parent, z->zw, z->path + (size_t)s * (size_t)z->h,
+                                 z->val + 9 * (size_t)s * (size_t)z->h);
   return s;
 }
 
@@ -1091,20 +1053,9 @@ static int finger_zslot(zstore *z, const palp_ldl *f, int r) {
 static const double *zpair(zstore *z, const palp_ldl *f, int a, int b) {
   double *out = z->pair + 9 * ((size_t)a * z->cap + b);
   if (z->pair_ok[a * z->cap + b]) return out;
-  const int *pa = z->path + (size_t)a * z->h, *pb = z->path + (size_t)b * z->h;
-  const double *va = z->val + 9 * (size_t)a * z->h, *vb = z->val + 9 * (size_t)b * z->h;
-  double acc[9] = {0};
-  for (int x = 0, y = 0; x < z->len[a] && y < z->len[b];) {
-    if (pa[x] < pb[y]) x++;
-    else if (pb[y] < pa[x]) y++;
-    else {
-      const double *za = va + 9 * x, *zb = vb + 9 * y, *dinv = f->dinv + 3 * pa[x];
-      for (int k = 0; k < 3; ++k)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) acc[3 * i + j] += za[3 * k + i] * dinv[k] * zb[3 * k + j];
-      x++, y++;
-    }
-  }
+  double acc[9];
+  palp_ldl_path_block(f, z->path + (size_t)a * z->h, z->val + 9 * (size_t)a * z->h, z->len[a],
+                      z->path + (size_t)b * z->h, z->val + 9 * (size_t)b * z->h, z->len[b], acc);
   double *sym = z->pair + 9 * ((size_t)b * z->cap + a);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) out[3 * i + j] = acc[3 * i + j], sym[3 * j + i] = acc[3 * i + j];
@@ -1483,17 +1434,15 @@ static void stage_fingers(palp_world *w, double h) {
      * while the same finger has the same local vertices in the same order and the
      * factor has not changed (finger_cols_invalidate): a pressing fingertip keeps them
      * for most steps, and the gather is ~200 scattered cache lines of the columns. */
-    if (zmode) {
-      /* G from the pairs' blocks: G[3b + j][3a + i] = A^{-1} at (3 r_a + i, 3 r_b + j) */
-      for (int b = 0; b < nl; ++b)
+    if (blend || !(fs->G_owner == ci && fs->G_nl == nl && !memcmp(fs->G_lvert, fs->lvert, sizeof(int) * (size_t)nl))) {
+      /* zmode: from the pairs' blocks, G[3b + j][3a + i] = A^{-1} at (3 r_a + i, 3 r_b + j) */
+      for (int b = 0; b < nl && zmode; ++b)
         for (int a = 0; a < nl; ++a) {
           const double *blk = zpair(&fs->z, &w->ldl, slot[a], slot[b]);
           for (int j = 0; j < 3; ++j)
             for (int i = 0; i < 3; ++i) fs->G[(size_t)(3 * b + j) * (size_t)L3 + 3 * a + i] = blk[3 * i + j];
         }
-      fs->G_owner = -1; /* not a gather from the pool's columns */
-    } else if (blend || !(fs->G_owner == ci && fs->G_nl == nl && !memcmp(fs->G_lvert, fs->lvert, sizeof(int) * (size_t)nl))) {
-      for (int b = 0; b < nl; ++b)
+      for (int b = 0; b < nl && !zmode; ++b)
         for (int j = 0; j < 3; ++j) {
           const float *col = colv[b] + (size_t)j * (size_t)n3;
           double *g = fs->G + (size_t)(3 * b + j) * (size_t)L3;
