@@ -234,7 +234,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   if (j->want_feedback && j->role == palp_ROLE_TRAINEE)
     st->local_model_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);
   if (j->want_deformation)
-    st->deformation_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+    st->deformation_r = palp_dds_create_display_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION]);
   if (j->role == palp_ROLE_TRAINEE) { /* issue 13: findings, any session (free practice too) */
     st->finding_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
     st->finding_status_r =

@@ -132,6 +132,15 @@ dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, pal
   return r;
 }
 
+dds_entity_t palp_dds_create_display_reader(dds_entity_t parent, dds_entity_t topic) {
+  dds_qos_t *q = palp_dds_qos(PALP_TOPIC_DEFORMATION);
+  /* best-effort requested from a reliable writer: matched, and never waits for a retransmit */
+  dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_entity_t r = dds_create_reader(parent, topic, q, NULL);
+  dds_delete_qos(q);
+  return r;
+}
+
 dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
   dds_qos_t *q = palp_dds_qos(kind);
   dds_entity_t w = dds_create_writer(parent, topic, q, NULL);

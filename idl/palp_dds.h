@@ -67,6 +67,15 @@ dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind);
 dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 
+/* A display's palp_deformation reader: best-effort, newest sample only. The writer stays reliable
+ * (the wire contract, and the recorder, which must see every frame, are unchanged); a display wants
+ * the newest shape, and a reliable reader holds newer frames back behind a missing one until it is
+ * repaired. In CI a page once received no frame through a whole 14 s press while the best-effort
+ * contacts of the same session kept arriving (web_trainee_stiff; docs/interop.md). A lost resting
+ * frame is repaired by the server, which sends a sleeping world's shape again every second while a
+ * display watches (server/session.c). */
+dds_entity_t palp_dds_create_display_reader(dds_entity_t parent, dds_entity_t topic);
+
 /* Publisher / subscriber confined to one session's partition. */
 dds_entity_t palp_dds_session_publisher(dds_entity_t pp, const char *partition);
 dds_entity_t palp_dds_session_subscriber(dds_entity_t pp, const char *partition);

@@ -574,6 +574,9 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
   palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
+  if (s->deformations_sent > 0)
+    palp_log_info(srv->log, "session %u: %llu deformation frames sent to its displays", s->id,
+                  (unsigned long long)s->deformations_sent);
   palp_world_health h;
   palp_world_get_health(s->world, &h);
   /* Why ticks ran late, when they did: a tick that reached a rebuild's due frame before

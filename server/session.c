@@ -13,6 +13,10 @@
  * repeated at 10 Hz instead of every tick: a station still sees the server alive,
  * and 32 idle sessions do not cost 32 000 writes per second. */
 #define IDLE_FEEDBACK_PERIOD_NS 100000000
+/* A sleeping world's shape is sent again once a second while a display watches. The displays read
+ * palp_deformation best-effort (palp_dds_create_display_reader), so a lost last frame is repaired
+ * within this period instead of leaving a page on a stale dent until the next touch (docs/interop.md). */
+#define PALP_SRV_REST_REFRESH_NS 1000000000
 /* A force contact whose centre moves by more than this is re-snapped [m]. */
 #define RESNAP_DISTANCE 1e-4
 
@@ -577,10 +581,18 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   if (want_feedback && (awake || any_down || now_ns - s->last_feedback_ns >= IDLE_FEEDBACK_PERIOD_NS))
     publish_feedback(s, now_ns, top_disp);
 
-  if (atomic_load_explicit(&s->deform_members, memory_order_relaxed) > 0 && now_ns >= s->next_deformation_ns &&
-      (awake || !s->deformation_sent_asleep)) {
+  /* A display that joined since the last tick gets the shape now: the topic is volatile, so it has
+   * seen nothing, and a sleeping world (held still, dented) would otherwise send nothing more. */
+  const int members = atomic_load_explicit(&s->deform_members, memory_order_relaxed);
+  const int joined = members > s->deform_members_seen;
+  s->deform_members_seen = members;
+  if (members > 0 &&
+      (joined || (now_ns >= s->next_deformation_ns &&
+                  (awake || !s->deformation_sent_asleep || now_ns >= s->rest_refresh_ns)))) {
     publish_deformation(s);
+    s->deformations_sent++;
     s->deformation_sent_asleep = !awake;
+    if (!awake) s->rest_refresh_ns = now_ns + PALP_SRV_REST_REFRESH_NS;
     /* Advance by the period, not from now: at 100 Hz ticks a 30 Hz display then
      * gets 3- and 4-tick gaps averaging 30 Hz, not a steady 4 (25 Hz). After a
      * pause (sleep, no viewer) the schedule restarts from now. */

@@ -129,6 +129,9 @@ typedef struct palp_srv_session {
   int64_t next_deformation_ns;
   int64_t last_feedback_ns;
   int deformation_sent_asleep; /* the sleeping shape was already sent */
+  int64_t rest_refresh_ns;     /* when the sleeping shape is sent again (PALP_SRV_REST_REFRESH_NS) */
+  int deform_members_seen;     /* deform_members at the last tick: a rise is a display that just joined */
+  uint64_t deformations_sent;  /* palp_deformation samples written */
   uint64_t filtered_seen_session, filtered_seen_finger; /* folded into stats.rejected so far */
   int64_t last_log_ns[PALP_SRV_REJ_COUNT];
   uint64_t log_suppressed[PALP_SRV_REJ_COUNT];

@@ -1171,7 +1171,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   if (z) snprintf(z + 1, sizeof wildcard - (size_t)(z + 1 - wildcard), "*");
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
   h->contact_r = make_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
-  h->deform_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
+  h->deform_r = palp_dds_create_display_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION]);
   {
     dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, LM_DEPTH); /* every frame, for late updates */

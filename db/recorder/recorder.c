@@ -56,6 +56,7 @@ typedef struct rsession {
   palp_vec3 force[FINGERS];
   uint8_t active[FINGERS];
   double volume, pressure, max_disp; /* from the newest deformation sample, 0 until one arrives */
+  uint64_t mesh_hash; /* FNV-1a of the newest logged mesh's positions (0: none yet) */
 } rsession;
 
 /* A session that opened before its phantom's catalogue entry arrived (the two topics race). */
@@ -337,6 +338,14 @@ static void on_feedback(recorder *r, const palp_Feedback *m) {
   count(r, palp_db_log_frame(r->w, s->h, &f));
 }
 
+/* FNV-1a over the positions' bytes, never 0 (0 means no mesh logged yet). */
+static uint64_t mesh_fnv1a(const palp_vec3 *pos, int n) {
+  const unsigned char *b = (const unsigned char *)pos;
+  uint64_t h = 1469598103934665603ULL;
+  for (size_t i = 0; i < sizeof *pos * (size_t)n; i++) h = (h ^ b[i]) * 1099511628211ULL;
+  return h ? h : 1;
+}
+
 static void on_deformation(recorder *r, const palp_Deformation *m) {
   resolve_pending(r, m->session_id, 1);
   rsession *s = find_session(r, m->session_id, 0);
@@ -362,7 +371,14 @@ static void on_deformation(recorder *r, const palp_Deformation *m) {
     }
     s->max_disp = sqrt(max2);
   }
-  if (n > 0) count(r, palp_db_log_mesh(r->w, s->h, (int64_t)m->frame, pos, n));
+  /* A sleeping world's shape is repeated once a second for the displays (server/session.c): a
+   * sample marked asleep whose positions are those of the newest logged mesh adds no row. Compared,
+   * not trusted: a writer that leaves `awake` unset still has every changed shape logged. */
+  const uint64_t hash = n > 0 ? mesh_fnv1a(pos, n) : 0;
+  if (n > 0 && !(!m->awake && hash == s->mesh_hash)) {
+    count(r, palp_db_log_mesh(r->w, s->h, (int64_t)m->frame, pos, n));
+    s->mesh_hash = hash;
+  }
   free(pos);
 }
 

@@ -7,7 +7,8 @@
  * the station was lost (3 rejected samples, 1 overrun). Then it stops the recorder with SIGTERM
  * and checks the file:
  *  - one session: trainee, station, phantom name, start, end reason station_vanished;
- *  - the 10 deformations (reliable) are 10 meshes of 338 vertices; every feedback sample is a
+ *  - the 10 deformations (reliable) are 10 meshes of 338 vertices, three asleep repeats of the last
+ *    shape add none and an asleep changed shape adds one; every feedback sample is a
  *    frame row with the displacement and force that were sent (tolerance 1e-12);
  *  - contact inputs: one add, one remove, and at least 54 of the 59 updates (best-effort topic on
  *    loopback: tolerance 10 %), feedback samples likewise at least 54 of 60;
@@ -152,6 +153,23 @@ int main(int argc, char **argv) {
     }
     sleep_ms(4);
   }
+  /* A sleeping world's shape, repeated once a second for the displays (server/session.c): three
+   * repeats of the newest shape marked asleep add no mesh row; an asleep sample with another shape
+   * (a writer that never sets `awake`, as the ten above) does. */
+  for (int k = 0; k < 4; k++) {
+    if (k == 3) pos[mesh.top_vertex].z -= 1e-5;
+    palp_Deformation d;
+    memset(&d, 0, sizeof d);
+    d.session_id = SESSION;
+    d.frame = (uint64_t)61 + (uint64_t)k;
+    d.sim_time = 0.001 * (61 + k);
+    d.awake = false;
+    d.positions._length = d.positions._maximum = (uint32_t)mesh.vertex_count;
+    d.positions._buffer = pos;
+    dds_write(w_def, &d);
+    sleep_ms(20);
+  }
+  const int meshes_expected = deformations + 1;
   palp_Contact rel;
   memset(&rel, 0, sizeof rel);
   rel.session_id = SESSION;
@@ -177,9 +195,10 @@ int main(int argc, char **argv) {
   CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'dana' AND station = 'host/4242/haptic-1' AND "
                "phantom_id = '3' AND phantom_name = 'left dome' AND end_reason = 'station_vanished'") == 1,
         "one session with trainee, station, phantom and end reason");
-  CHECK(db_scalar(h, "SELECT count(*) FROM mesh") == deformations, "%d deformations -> %lld meshes", deformations,
-        (long long)db_scalar(h, "SELECT count(*) FROM mesh"));
-  CHECK(db_scalar(h, "SELECT count(*) FROM mesh WHERE vertex_count = 338 AND length(positions_m) = 338 * 24") == deformations,
+  CHECK(db_scalar(h, "SELECT count(*) FROM mesh") == meshes_expected,
+        "%d deformations, 3 resting repeats and 1 changed resting shape -> %lld meshes (want %d)", deformations,
+        (long long)db_scalar(h, "SELECT count(*) FROM mesh"), meshes_expected);
+  CHECK(db_scalar(h, "SELECT count(*) FROM mesh WHERE vertex_count = 338 AND length(positions_m) = 338 * 24") == meshes_expected,
         "meshes hold 338 x 3 doubles");
   /* One frame row per feedback sample: pole displacement 1e-5 m x (frame - 1) and force 0.05 N x
    * (frame - 1) as sent (tolerance 1e-12); max_disp never below the pole's. */

@@ -31,6 +31,24 @@ static int latest_deformation(palp_cli_station *st, const palp_Phantom *ph, doub
   return got;
 }
 
+/* Frames a display takes over `wait` seconds: all of them, and those of a sleeping world. */
+static void count_frames(palp_cli_station *st, double wait, int *all, int *asleep) {
+  *all = *asleep = 0;
+  const int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  while (palp_dds_now_ns() < end) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data) {
+        (*all)++;
+        *asleep += !((const palp_Deformation *)ptr[0])->awake;
+      }
+      dds_return_loan(st->deformation_r, ptr, 1);
+    }
+    test_sleep(0.01);
+  }
+}
+
 int main(void) {
   test_init();
   palp_srv_config cfg;
@@ -122,6 +140,41 @@ int main(void) {
   double d2 = 1;
   latest_deformation(&vis, &ph, 0.3, &d2, &at1);
   CHECK(d2 < 0.3 * d1, "2 s after lifting the displacement fell from %.2f to %.2f mm (want < 30 %%)", d1 * 1e3, d2 * 1e3);
+
+  /* The displays read palp_deformation best-effort (a reliable reader holds newer frames behind a
+   * lost one), so a sleeping world's shape is sent again once a second: a lost last frame is
+   * repaired within a second, and a display that joins a sleeping session sees its shape at once. */
+  dds_qos_t *rq = dds_create_qos();
+  dds_reliability_kind_t rk = DDS_RELIABILITY_RELIABLE;
+  REQUIRE(dds_get_qos(vis.deformation_r, rq) == 0 && dds_qget_reliability(rq, &rk, NULL), "the display reader's QoS");
+  dds_delete_qos(rq);
+  CHECK(rk == DDS_RELIABILITY_BEST_EFFORT, "the station's deformation reader is best-effort (got reliability kind %d)",
+        (int)rk);
+  int all = 0, asleep = 0;
+  for (int i = 0; i < 20 && asleep == 0; i++) count_frames(&vis, 0.5, &all, &asleep); /* until it sleeps */
+  REQUIRE(asleep > 0, "the released dome falls asleep within 10 s");
+  count_frames(&vis, 3.5, &all, &asleep);
+  /* 1 Hz over 3.5 s: 3 or 4 frames; 2 and 5 for the window's edges on a loaded machine. */
+  CHECK(all >= 2 && all <= 5 && asleep == all,
+        "a sleeping world's shape is sent again once a second: %d frames in 3.5 s, %d asleep (want 2-5, all asleep)",
+        all, asleep);
+  palp_cli_station late;
+  const int64_t t_join = palp_dds_now_ns();
+  test_station_join(&late, DOMAIN, "late visual", palp_ROLE_VISUAL, 1, tr.session_id, 0, 1);
+  int late_frames = 0;
+  double late_s = -1;
+  while (palp_dds_now_ns() - t_join < 3000000000LL && late_frames == 0) {
+    int a = 0, z = 0;
+    count_frames(&late, 0.02, &a, &z);
+    late_frames += a;
+    if (a) late_s = (double)(palp_dds_now_ns() - t_join) * 1e-9;
+  }
+  /* Before: nothing until the trainee touched again. The join's round trip is well under 0.5 s
+   * here; the second of slack is the refresh period, so a regression to "next refresh" fails. */
+  CHECK(late_frames > 0 && late_s < 0.9,
+        "a display joining the sleeping session sees its shape %.2f s after it asked (want < 0.9 s)", late_s);
+  palp_cli_station_leave(&late);
+  palp_cli_station_close(&late);
 
   palp_cli_phantom_free(&ph);
   palp_cli_station_leave(&vis);

@@ -142,16 +142,21 @@ def disc_mean(img, cx, cy, r):
     return [v / max(n, 1) for v in s]
 
 
+# Chromium's lines that say nothing about palp (no D-Bus in a container, SwiftShader's read-backs)
+NOISE = re.compile(r"dbus/|GL Driver Message|Fontconfig")
+
+
 def print_log_tails(out, lines=40):
     """The last lines of every process log of the run, into the test's own output: CTest keeps that
     (LastTest.log, CI), where a rerun overwrites the files (a failure seen once, in a fresh clone's
-    first run, could not be read afterwards)."""
-    for name in sorted(os.listdir(out)):
-        if not name.endswith(".log"):
-            continue
+    first run, could not be read afterwards). palp's own processes first and the browser last, its
+    known noise left out: CI shows only the head of a long output."""
+    names = sorted(n for n in os.listdir(out) if n.endswith(".log"))
+    names.sort(key=lambda n: n.startswith("chromium"))
+    for name in names:
         try:
             with open(os.path.join(out, name), errors="replace") as f:
-                tail = f.read().splitlines()[-lines:]
+                tail = [ln for ln in f.read().splitlines() if not NOISE.search(ln)][-lines:]
         except OSError:
             continue
         print("---- %s (last %d lines) ----" % (name, len(tail)))
