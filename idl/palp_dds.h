@@ -71,7 +71,7 @@ dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, pal
  * (the wire contract, and the recorder, which must see every frame, are unchanged); a display wants
  * the newest shape, and a reliable reader holds newer frames back behind a missing one until it is
  * repaired. In CI a page once received no frame through a whole 14 s press while the best-effort
- * contacts of the same session kept arriving (web_trainee_stiff; docs/interop.md). A lost resting
+ * contacts of the same session kept arriving (web_trainee_stiff; docs/server.md, docs/web.md). A lost resting
  * frame is repaired by the server, which sends a sleeping world's shape again every second while a
  * display watches (server/session.c). */
 dds_entity_t palp_dds_create_display_reader(dds_entity_t parent, dds_entity_t topic);

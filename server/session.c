@@ -15,7 +15,7 @@
 #define IDLE_FEEDBACK_PERIOD_NS 100000000
 /* A sleeping world's shape is sent again once a second while a display watches. The displays read
  * palp_deformation best-effort (palp_dds_create_display_reader), so a lost last frame is repaired
- * within this period instead of leaving a page on a stale dent until the next touch (docs/interop.md). */
+ * within this period instead of leaving a page on a stale dent until the next touch (docs/server.md). */
 #define PALP_SRV_REST_REFRESH_NS 1000000000
 /* A force contact whose centre moves by more than this is re-snapped [m]. */
 #define RESNAP_DISTANCE 1e-4
@@ -538,7 +538,7 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   }
   if (awake) {
     s->stats.awake_ticks++;
-    s->deformation_sent_asleep = 0;
+    s->rest_refresh_ns = 0; /* the shape it sleeps in next is sent when it falls asleep */
     /* Peak displacement over the dome: O(vertices), only while the world moves. */
     const palp_vec3 *pos = palp_world_positions(s->world);
     double peak2 = 0;
@@ -586,12 +586,9 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   const int members = atomic_load_explicit(&s->deform_members, memory_order_relaxed);
   const int joined = members > s->deform_members_seen;
   s->deform_members_seen = members;
-  if (members > 0 &&
-      (joined || (now_ns >= s->next_deformation_ns &&
-                  (awake || !s->deformation_sent_asleep || now_ns >= s->rest_refresh_ns)))) {
+  if (members > 0 && (joined || (now_ns >= s->next_deformation_ns && (awake || now_ns >= s->rest_refresh_ns)))) {
     publish_deformation(s);
     s->deformations_sent++;
-    s->deformation_sent_asleep = !awake;
     if (!awake) s->rest_refresh_ns = now_ns + PALP_SRV_REST_REFRESH_NS;
     /* Advance by the period, not from now: at 100 Hz ticks a 30 Hz display then
      * gets 3- and 4-tick gaps averaging 30 Hz, not a steady 4 (25 Hz). After a

@@ -128,8 +128,7 @@ typedef struct palp_srv_session {
   palp_srv_session_stats stats;
   int64_t next_deformation_ns;
   int64_t last_feedback_ns;
-  int deformation_sent_asleep; /* the sleeping shape was already sent */
-  int64_t rest_refresh_ns;     /* when the sleeping shape is sent again (PALP_SRV_REST_REFRESH_NS) */
+  int64_t rest_refresh_ns;     /* when a sleeping world's shape is sent (again); 0 while awake */
   int deform_members_seen;     /* deform_members at the last tick: a rise is a display that just joined */
   uint64_t deformations_sent;  /* palp_deformation samples written */
   uint64_t filtered_seen_session, filtered_seen_finger; /* folded into stats.rejected so far */

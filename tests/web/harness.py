@@ -150,7 +150,7 @@ def print_log_tails(out, lines=40):
     """The last lines of every process log of the run, into the test's own output: CTest keeps that
     (LastTest.log, CI), where a rerun overwrites the files (a failure seen once, in a fresh clone's
     first run, could not be read afterwards). palp's own processes first and the browser last, its
-    known noise left out: CI shows only the head of a long output."""
+    known noise left out: CI shows only part of a long output."""
     names = sorted(n for n in os.listdir(out) if n.endswith(".log"))
     names.sort(key=lambda n: n.startswith("chromium"))
     for name in names:
