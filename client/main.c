@@ -494,6 +494,17 @@ static const char *valid_range_why(int why, char *buf, size_t len) {
   return buf;
 }
 
+/* A stall of this process (palp_cli_station_session_closed saw one): the trainee is told,
+ * since the hand felt nothing for that long and the server may have held the session. */
+static void report_stall(const opts *o, const palp_cli_station *st, unsigned *seen, const char *role, int named) {
+  if (st->stalls == *seen) return;
+  *seen = st->stalls;
+  if (o->quiet) return;
+  printf("[%s%s%s] this station did not run for %.2f s (its machine was busy); asked the server to go on with "
+         "session %u\n", role, named && o->name ? " " : "", named && o->name ? o->name : "", st->stall_s, st->session_id);
+  fflush(stdout);
+}
+
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
@@ -564,6 +575,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_waitset_attach(ws, lm_cond, 0);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_print = t0, next_check = t0;
+  unsigned stalls_seen = 0;
   int closed = 0, limited_shown = 0, oor_shown = 0;
   double episode_peak = 0, oor_since = 0, oor_last = 0;
   uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0;
@@ -649,6 +661,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
         closed = 1;
         break;
       }
+      report_stall(o, st, &stalls_seen, "trainee", 1);
       next_check = now + 100000000;
     }
   }
@@ -732,6 +745,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   const int64_t period = (int64_t)(1e9 / rate);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next = t0, next_print = t0, next_state_check = t0;
+  unsigned stalls_seen = 0;
   uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
   int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
   uint64_t sent = 0;
@@ -811,7 +825,9 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       next_print += (int64_t)(o->print_period * 1e9);
     }
     if (now >= next_state_check) {
-      if (palp_cli_station_session_closed(st, reason, sizeof reason)) {
+      const int was_closed = palp_cli_station_session_closed(st, reason, sizeof reason);
+      report_stall(o, st, &stalls_seen, "trainee", 1);
+      if (was_closed) {
         if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
           /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
           const uint32_t lost_session = st->session_id, lost_server = PALP_DDS_ID_SERVER(st->phantom_id);
@@ -912,6 +928,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
   double peak_disp = 0;
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_map = t0, next_svg = t0 + (int64_t)(o->svg_every * 1e9), next_print = t0, next_check = t0;
+  unsigned stalls_seen = 0;
   int svg_no = 0;
   uint64_t frames = 0, contacts = 0, feedbacks = 0;
   palp_Contact last_contact;
@@ -1017,6 +1034,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
         closed = 1;
         break;
       }
+      report_stall(o, st, &stalls_seen, observer ? "observer" : "visual", 0);
       next_check = now + 100000000;
     }
   }

@@ -171,6 +171,7 @@ static int send_request(palp_cli_station *st, const palp_cli_join *j, int op) {
   snprintf(rq.user_name, sizeof rq.user_name, "%s", user);
   rq.want_feedback = j->want_feedback != 0;
   rq.want_deformation = j->want_deformation != 0;
+  if (op == palp_OP_JOIN) st->last_join = rq, st->has_last_join = 0; /* kept once accepted */
   return dds_write(st->request_w, &rq) < 0 ? PALP_EIO : 0;
 }
 
@@ -221,6 +222,9 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->session_id = r.session_id;
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;
+  st->has_last_join = 1;
+  st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
+  st->resends_left = 0;
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
   st->pub = palp_dds_session_publisher(st->pp, st->partition);
   st->sub = palp_dds_session_subscriber(st->pp, st->partition);
@@ -318,6 +322,23 @@ int palp_cli_station_leave(palp_cli_station *st) {
 }
 
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
+  const int64_t now = palp_dds_now_ns();
+  if (st->last_check_ns && now - st->last_check_ns > (int64_t)(PALP_CLI_STALL_S * 1e9)) {
+    /* This process did not run: the server may have lost it and be holding its session
+     * for the same request. Sent three times a second apart: the server may learn of
+     * the lapse only after the first (a stall just over the lease). */
+    st->stall_s = (double)(now - st->last_check_ns) * 1e-9;
+    st->stall_end_ns = now;
+    st->stalls++;
+    st->resends_left = st->has_last_join ? 3 : 0;
+    st->next_resend_ns = now;
+  }
+  st->last_check_ns = now;
+  if (st->resends_left > 0 && now >= st->next_resend_ns) {
+    dds_write(st->request_w, &st->last_join);
+    st->resends_left--;
+    st->next_resend_ns = now + 1000000000;
+  }
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];
@@ -325,21 +346,35 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
   while ((n = dds_take(st->state_r, ptr, info, 4, 4)) > 0)
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
-        if (buf[i].session_id == st->session_id && buf[i].phase == palp_PHASE_CLOSED) {
+        if (buf[i].session_id != st->session_id) continue;
+        if (buf[i].phase == palp_PHASE_CLOSED) {
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);
+        } else {
+          st->doubt_until_ns = 0; /* its server is there */
         }
       } else if (info[i].instance_state != DDS_IST_ALIVE) {
         /* The server never disposes a state; a not-alive one means its writer
          * is gone (crash: its participant lease expired and Cyclone unregistered,
-         * and with autodispose disposed, the instance). The session cannot go on. */
+         * and with autodispose disposed, the instance). The session cannot go on,
+         * unless this station has just been stalled itself: then the lapse may be its
+         * own view of a lease it could not renew, and the server is found again. */
         /* The key is in the invalid sample (no dds_instance_get_key scan). */
-        if (buf[i].session_id == st->session_id) {
+        if (buf[i].session_id != st->session_id) continue;
+        if (st->stall_end_ns && now - st->stall_end_ns < 2000000000) {
+          if (!st->doubt_until_ns) st->doubt_until_ns = now + (int64_t)(PALP_CLI_SERVER_WAIT_S * 1e9);
+        } else {
           closed = 1;
           if (reason) snprintf(reason, len, "server lost (liveliness lease expired)");
         }
       }
     }
+  if (!closed && st->doubt_until_ns && now >= st->doubt_until_ns) {
+    closed = 1;
+    if (reason)
+      snprintf(reason, len, "server lost (liveliness lease expired; not back within %.0f s of this station's %.1f s stall)",
+               PALP_CLI_SERVER_WAIT_S, st->stall_s);
+  }
   return closed;
 }
 

@@ -36,7 +36,29 @@ typedef struct palp_cli_station {
   uint32_t request_seq;
   palp_dds_security sec;    /* identity; kind PALP_DDS_ID_NONE: plain DDS */
   dds_entity_t request_pub; /* secured: the publisher in the identity's request partition */
+  /* A station its machine stalled (swap, a core taken) for longer than its lease: the
+   * server holds its session (station_grace) for the same request again, and the
+   * station's own view of the server's lease may have lapsed too (docs/station.md,
+   * "A stalled station"). Kept by palp_cli_station_session_closed. */
+  palp_SessionRequest last_join; /* the accepted JOIN, sent again after a stall */
+  int has_last_join;
+  int64_t last_check_ns;  /* the previous palp_cli_station_session_closed */
+  int64_t stall_end_ns;   /* when the last stall ended; 0: none */
+  double stall_s;         /* [s] its length */
+  unsigned stalls;        /* stalls seen */
+  int resends_left;
+  int64_t next_resend_ns;
+  int64_t doubt_until_ns; /* the server's lease lapsed right after a stall: its state may come back until then */
 } palp_cli_station;
+
+/* A gap between two palp_cli_station_session_closed calls longer than this was a stall
+ * that may have outlasted the station's lease (PALP_DDS_STATION_LEASE_S, 0.5 s); the
+ * callers check every 100 ms. */
+#define PALP_CLI_STALL_S 0.4
+/* After a stall, how long the server's state may stay lapsed before the server is
+ * taken for lost: its participant must be found again (SPDP every ~0.1 s on the
+ * loopback config) and its state re-delivered. */
+#define PALP_CLI_SERVER_WAIT_S 5.0
 
 typedef struct palp_cli_join {
   int role;                 /* palp_Role */
@@ -99,7 +121,12 @@ int palp_cli_station_withdraw(palp_cli_station *st, uint32_t mark_id);
 /* Non-blocking: 1 and the newest palp_finding_status when one came since the last call. */
 int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *out);
 
-/* Non-blocking: 1 and the state when the session's state changed to closed. */
+/* Non-blocking: 1 and the state when the session's state changed to closed. Call it
+ * about every 100 ms: a longer gap is taken for a stall of this process, after which
+ * the station's JOIN is sent again (the server resumes a session it held for it; to a
+ * station it never lost it only answers again) and a lapse of the server's lease seen
+ * within 2 s of it waits up to PALP_CLI_SERVER_WAIT_S for the server to be found again
+ * before it closes the session as "server lost". st->stalls counts the stalls. */
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);
 
 #endif

@@ -41,6 +41,7 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   cfg->join_rate = 20.0;
   cfg->join_burst = 40;
   cfg->closed_retention = 10.0;
+  cfg->station_grace = 5.0; /* a station stalled by its machine (swap, a busy core) keeps its session */
   cfg->dds_log_lines = 10;
   cfg->dds_log_window = 10.0;
   cfg->assess_sample_hz = 100.0; /* a 10 ms path resolution: 0.5 mm at a 5 cm/s glide */
@@ -113,7 +114,7 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "join_rate",      "join_burst",     "closed_retention",
                                        "dds_log_lines",  "dds_log_window", "security",
                                        "server_name",    "server_number",  "log_level",      "exercises",
-                                       "assess_sample_hz", NULL};
+                                       "assess_sample_hz", "station_grace", NULL};
 static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 static const char *const exercise_keys[] = {"id", "file", "physics_rate_hz", "comment", NULL};
@@ -292,6 +293,7 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   cfg->join_burst = (int)i64;
   if ((rc = get_number(root, "closed_retention", w, 0, 86400, 0, &cfg->closed_retention, err, errlen)))
     goto out;
+  if ((rc = get_number(root, "station_grace", w, 0, 600, 0, &cfg->station_grace, err, errlen))) goto out;
   i64 = cfg->dds_log_lines;
   if ((rc = get_int(root, "dds_log_lines", w, 0, 100000, 0, &i64, err, errlen))) goto out;
   cfg->dds_log_lines = (int)i64;

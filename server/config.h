@@ -54,6 +54,8 @@ typedef struct palp_srv_config {
   int stations_per_writer;     /* station ids one request writer (one station process) may hold */
   double join_rate;            /* admitted joins per second, all stations (token bucket) */
   int join_burst;              /* joins admitted at once before join_rate applies */
+  double station_grace;        /* [s] a lost trainee station's session waits this long for it
+                                * to come back from a stall (0: closed at once) */
   double closed_retention;     /* [s] a closed session's state and a refused station's reply stay
                                 * published this long, then their DDS instances are released */
   int dds_log_lines;           /* Cyclone warnings printed per dds_log_window, the rest counted */

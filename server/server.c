@@ -41,6 +41,7 @@ typedef struct station {
                           disappearance (not another identity disposing this station's
                           key) means the station is gone */
   int want_feedback, want_deformation;
+  uint32_t request_seq; /* of the JOIN it was accepted with: the same request again is answered, not redone */
   int keyed;           /* last request came on palp_station_request */
   dds_instance_handle_t ih; /* its instance there (keyed by station_key) */
 } station;
@@ -53,6 +54,7 @@ typedef struct closed_session {
   palp_srv_session_summary sum;
   char phantom_name[64], station[64], name[64], partition[64], reason[128];
   int open; /* still open at print time (filled from a live session) */
+  uint32_t request_seq; /* of the JOIN that opened it (trainee_request_seq) */
 } closed_session;
 
 struct palp_srv {
@@ -373,7 +375,10 @@ static void publish_state(palp_srv *srv, palp_srv_session *s, int closed, const 
       m.rejected_samples += st.rejected[r];
   m.peak_force = st.peak_force;
   m.peak_displacement = st.peak_displacement;
-  snprintf(m.reason, sizeof m.reason, "%s", reason ? reason : "");
+  if (reason)
+    snprintf(m.reason, sizeof m.reason, "%s", reason);
+  else if (s->held_until_ns) /* open, waiting for its trainee station: the viewers are told why nothing moves */
+    snprintf(m.reason, sizeof m.reason, "%.96s; held %.0f s for it to come back", s->held_reason, srv->cfg.station_grace);
   dds_write(srv->state_w, &m);
 }
 
@@ -469,7 +474,7 @@ static void free_station(palp_srv *srv, station *st) {
   retire_reply(srv, st->id);
 }
 
-static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, int open) {
+static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, int open, uint32_t request_seq) {
   if (!srv->closed) return;
   closed_session *c;
   if (srv->closed_count < CLOSED_KEEP) {
@@ -481,6 +486,7 @@ static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, 
   }
   c->sum = *sum;
   c->open = open;
+  c->request_seq = request_seq;
   snprintf(c->phantom_name, sizeof c->phantom_name, "%s", sum->info.phantom_name);
   snprintf(c->station, sizeof c->station, "%s", sum->info.trainee_station);
   snprintf(c->name, sizeof c->name, "%s", sum->info.trainee_name);
@@ -491,6 +497,18 @@ static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, 
   c->sum.info.trainee_name = c->name;
   c->sum.info.partition = c->partition;
   c->sum.close_reason = c->reason;
+}
+
+/* The newest closed session this trainee station opened, if it was opened by request
+ * request_seq: a JOIN that comes again after its session closed (DDS re-delivers it when
+ * the station's participant is found again; a station back from a stall sends it once
+ * more) must not open another. */
+static const closed_session *closed_by_request(const palp_srv *srv, const char *station_id, uint32_t request_seq) {
+  for (int i = srv->closed ? srv->closed_count - 1 : -1; i >= 0; i--) {
+    const closed_session *c = &srv->closed[(srv->closed_head + i) % CLOSED_KEEP];
+    if (strcmp(c->station, station_id) == 0) return c->request_seq == request_seq ? c : NULL;
+  }
+  return NULL;
 }
 
 /* ---- findings (issue 13) -------------------------------------------------------- */
@@ -570,7 +588,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   palp_srv_session_summary sum;
   palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
   publish_state(srv, s, 1, reason, &s->stats);
-  remember_closed(srv, &sum, 0);
+  remember_closed(srv, &sum, 0, s->trainee_request_seq);
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
   palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
@@ -629,8 +647,60 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   publish_catalogue(srv, ph);
 }
 
-/* The station leaves whatever it is in: a trainee's session closes, a viewer
- * only stops being counted. */
+/* Its trainee station's lease lapsed: the station is forgotten (its slot freed), the
+ * session kept open until station_grace has passed. Its fingers are lifted by the tick
+ * thread, which sees their writer gone too (session.c, take_contacts). */
+static void hold_session(palp_srv *srv, palp_srv_session *s, station *st, const char *why) {
+  const int64_t now = palp_dds_now_ns();
+  s->held_since_ns = now;
+  s->held_until_ns = now + (int64_t)(srv->cfg.station_grace * 1e9);
+  snprintf(s->held_reason, sizeof s->held_reason, "%s", why);
+  if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
+  if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
+  if (srv->events && srv->events->member_changed)
+    srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 0);
+  palp_log_info(srv->log, "session %u: %s; held %.0f s for it to come back with its request", s->id, why,
+                srv->cfg.station_grace);
+  free_station(srv, st);
+  publish_state(srv, s, 0, NULL, NULL);
+}
+
+/* A held session's trainee station asked again with the request that opened it: it was
+ * stalled, not gone, and the session goes on where it was. */
+static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_SessionRequest *rq, uint64_t writer) {
+  station *st = new_station(srv, rq->station_id, writer);
+  if (!st) { /* cannot happen: its slot was freed when it was held */
+    close_session(srv, s, s->held_reason);
+    return;
+  }
+  st->role = palp_ROLE_TRAINEE;
+  st->session_id = s->id;
+  st->request_seq = rq->request_seq;
+  st->want_feedback = rq->want_feedback;
+  st->want_deformation = rq->want_deformation;
+  if (st->want_deformation) atomic_fetch_add(&s->deform_members, 1);
+  if (st->want_feedback) atomic_fetch_add(&s->want_feedback, 1);
+  const double away = (double)(palp_dds_now_ns() - s->held_since_ns) * 1e-9;
+  s->held_since_ns = s->held_until_ns = 0;
+  s->held_reason[0] = 0;
+  reply(srv, rq, s, NULL);
+  publish_state(srv, s, 0, NULL, NULL);
+  if (srv->events && srv->events->member_changed)
+    srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 1);
+  palp_log_info(srv->log, "session %u: trainee station %s came back after %.1f s; the session goes on", s->id, st->id,
+                away);
+}
+
+/* The open session held for this trainee station, or NULL. */
+static palp_srv_session *held_session_of(palp_srv *srv, const char *station_id) {
+  for (int i = 0; i < srv->session_count; i++)
+    if (srv->sessions[i]->held_until_ns && strcmp(srv->sessions[i]->trainee_station, station_id) == 0)
+      return srv->sessions[i];
+  return NULL;
+}
+
+/* The station leaves whatever it is in: a trainee's session closes (or, lost, is held),
+ * a viewer only stops being counted. */
 static void station_leave(palp_srv *srv, station *st, const char *reason) {
   palp_srv_session *s = st->session_id ? find_session(srv, st->session_id) : NULL;
   uint32_t sid = st->session_id;
@@ -642,6 +712,12 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   if (role == palp_ROLE_TRAINEE && strcmp(s->trainee_station, st->id) == 0) {
     char why[160];
     snprintf(why, sizeof why, "trainee station %s", reason);
+    /* A lapsed lease cannot tell a crash from a stall (a machine swapping, a core taken
+     * for a second): the session waits station_grace for the same request again. */
+    if (srv->cfg.station_grace > 0 && strncmp(reason, "lost", 4) == 0) {
+      hold_session(srv, s, st, why);
+      return;
+    }
     close_session(srv, s, why); /* frees st with the session's other members */
     return;
   }
@@ -687,6 +763,33 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   if (who && who->kind == PALP_DDS_ID_INSTRUCTOR && rq->role == palp_ROLE_TRAINEE) {
     refuse(srv, rq, &g->joins_refused_other,
            "an instructor identity follows sessions; palpating needs a trainee identity");
+    return;
+  }
+  /* The same request again (a station back from a stall sends it once more, and DDS
+   * re-delivers it when the station's participant is found again): answered again, not
+   * redone, so it neither opens a second session nor takes a join token. */
+  station *again = find_station(srv, rq->station_id);
+  palp_srv_session *cur = again && again->request_seq == rq->request_seq && again->role == (int)rq->role
+                              ? find_session(srv, again->session_id)
+                              : NULL;
+  if (cur) {
+    reply(srv, rq, cur, NULL);
+    return;
+  }
+  palp_srv_session *held = rq->role == palp_ROLE_TRAINEE && !again ? held_session_of(srv, rq->station_id) : NULL;
+  if (held && held->trainee_request_seq == rq->request_seq && held->phantom->cfg.id == rq->phantom_id) {
+    resume_session(srv, held, rq, writer);
+    return;
+  }
+  if (held) /* back with another request: the held session ends as it would have */
+    close_session(srv, held, held->held_reason);
+  const closed_session *done = rq->role == palp_ROLE_TRAINEE && !again && !held
+                                   ? closed_by_request(srv, rq->station_id, rq->request_seq)
+                                   : NULL;
+  if (done) {
+    snprintf(why, sizeof why, "session %u closed: %.80s", done->sum.info.session_id, done->reason);
+    reply(srv, rq, NULL, why);
+    retire_reply(srv, rq->station_id);
     return;
   }
   if (!palp_srv_admission_join_token(srv->admission, palp_dds_now_ns())) {
@@ -750,6 +853,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       return;
     }
     st->role = (int)rq->role;
+    st->request_seq = rq->request_seq;
+    s->trainee_request_seq = rq->request_seq;
     st->want_feedback = rq->want_feedback;
     st->want_deformation = rq->want_deformation;
     atomic_store(&s->want_feedback, rq->want_feedback ? 1 : 0);
@@ -823,6 +928,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     return;
   }
   st->role = (int)rq->role;
+  st->request_seq = rq->request_seq;
   st->want_feedback = rq->want_feedback;
   st->want_deformation = rq->want_deformation;
   st->session_id = s->id;
@@ -1366,6 +1472,13 @@ int palp_srv_run(palp_srv *srv, double duration) {
       }
       handle_findings(srv, s);
       const int64_t t = palp_dds_now_ns();
+      if (s->held_until_ns && t >= s->held_until_ns) {
+        char why[224];
+        snprintf(why, sizeof why, "%s; not back within %.0f s", s->held_reason, srv->cfg.station_grace);
+        close_session(srv, s, why);
+        i--;
+        continue;
+      }
       if (s->phantom->exercise && time_left(s, t) <= 0) {
         close_session(srv, s, "exercise time limit reached");
         i--;

@@ -119,6 +119,12 @@ typedef struct palp_srv_session {
   palp_srv_arrival arrival[PALP_SRV_MAX_FINGERS][16];
 
   /* [main] */
+  uint32_t trainee_request_seq; /* the JOIN that opened it: the same request again resumes it */
+  /* Its trainee station lost (a lease expired): the session stays open, its fingers lifted
+   * (their writer is gone too), until held_until_ns, for the station to come back from a
+   * stall with the same request (station_grace, docs/server.md). 0: not held. */
+  int64_t held_since_ns, held_until_ns;
+  char held_reason[160];
   atomic_int want_feedback;   /* haptic trainee present */
   atomic_int deform_members;  /* members that asked for palp_deformation */
   atomic_int failed;          /* set by the tick thread: the model refused to step */
