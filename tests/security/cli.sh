@@ -1,14 +1,16 @@
 #!/bin/sh
 # The command-line path of a secured classroom: palp-server --pki and palp-client
 # --pki/--identity (the identity's name becomes the trainee name), a wrong --name
-# refused by the server, a bad identity refused before any network use. Domain 131.
+# refused by the server, a bad identity refused before any network use, and a secured
+# trainee whose process is stopped 1.5 s going on in its session (the server holds it;
+# the station, authenticated again, asks with the same request). Domain 131.
 # usage: cli.sh palp-server palp-client PKI_DIR
 set -u
 server=$1 client=$2 pki=$3
 out=$(mktemp -d)
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
-"$server" --domain 131 --no-db --pki "$pki" --duration 12 >"$out/server.log" 2>&1 &
+"$server" --domain 131 --no-db --pki "$pki" --duration 30 >"$out/server.log" 2>&1 &
 spid=$!
 sleep 1
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --duration 2 --quiet \
@@ -24,6 +26,20 @@ check "a malformed identity is refused up front (exit $rc)" "[ $rc -eq 1 ] && gr
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --duration 1 >"$out/half.log" 2>&1
 rc=$?
 check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q 'go together' '$out/half.log'"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
+  --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
+cpid=$!
+i=0
+until grep -q "joined session" "$out/stall.log" || [ $i -ge 100 ]; do sleep 0.1; i=$((i+1)); done
+sleep 1
+kill -STOP $cpid
+sleep 1.5
+kill -CONT $cpid
+wait $cpid
+rc=$?
+sid=$(sed -n 's/.*joined session \([0-9]*\).*/\1/p' "$out/stall.log" | head -1)
+check "a secured trainee stopped 1.5 s goes on in its session $sid and exits 0 (exit $rc)" \
+  "[ $rc -eq 0 ] && [ -n '$sid' ] && grep -q 'did not run for' '$out/stall.log' && grep -q 'session $sid: trainee station trainee/alice/.* came back after' '$out/server.log' && grep -q 'session $sid closed after .* (trainee station left)' '$out/server.log'"
 kill -INT $spid
 wait $spid
 check "the server's summary has alice's session and counts the refusal" \
