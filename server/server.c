@@ -647,6 +647,18 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   publish_catalogue(srv, ph);
 }
 
+/* A station accepted by request rq into s: what it asked for is counted in the session
+ * (a viewer's join, a held trainee's return). */
+static void attach_station(palp_srv_session *s, station *st, const palp_SessionRequest *rq) {
+  st->role = (int)rq->role;
+  st->session_id = s->id;
+  st->request_seq = rq->request_seq;
+  st->want_feedback = rq->want_feedback;
+  st->want_deformation = rq->want_deformation;
+  if (st->want_deformation) atomic_fetch_add(&s->deform_members, 1);
+  if (st->want_feedback) atomic_fetch_add(&s->want_feedback, 1);
+}
+
 /* Its trainee station's lease lapsed: the station is forgotten (its slot freed), the
  * session kept open until station_grace has passed. Its fingers are lifted by the tick
  * thread, which sees their writer gone too (session.c, take_contacts). */
@@ -673,13 +685,7 @@ static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_Sessio
     close_session(srv, s, s->held_reason);
     return;
   }
-  st->role = palp_ROLE_TRAINEE;
-  st->session_id = s->id;
-  st->request_seq = rq->request_seq;
-  st->want_feedback = rq->want_feedback;
-  st->want_deformation = rq->want_deformation;
-  if (st->want_deformation) atomic_fetch_add(&s->deform_members, 1);
-  if (st->want_feedback) atomic_fetch_add(&s->want_feedback, 1);
+  attach_station(s, st, rq);
   const double away = (double)(palp_dds_now_ns() - s->held_since_ns) * 1e-9;
   s->held_since_ns = s->held_until_ns = 0;
   s->held_reason[0] = 0;
@@ -927,13 +933,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     refuse(srv, rq, &g->joins_refused_other, "too many stations");
     return;
   }
-  st->role = (int)rq->role;
-  st->request_seq = rq->request_seq;
-  st->want_feedback = rq->want_feedback;
-  st->want_deformation = rq->want_deformation;
-  st->session_id = s->id;
-  if (st->want_deformation) atomic_fetch_add(&s->deform_members, 1);
-  if (st->want_feedback) atomic_fetch_add(&s->want_feedback, 1);
+  attach_station(s, st, rq);
   reply(srv, rq, s, NULL);
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
