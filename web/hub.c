@@ -273,6 +273,9 @@ static void build_sessions(palp_web_hub *h) {
     cJSON_AddStringToObject(o, "phantom_name", s->ph ? s->ph->name : "");
     cJSON_AddStringToObject(o, "trainee", s->st.trainee_name);
     cJSON_AddStringToObject(o, "station", s->st.trainee_station);
+    /* An open session's state says why it waits, when it does: its trainee station lost and
+     * the session held for it to come back (station_grace, docs/server.md); "" otherwise. */
+    cJSON_AddStringToObject(o, "status", s->st.reason);
     cJSON_AddNumberToObject(o, "visual", s->st.visual_count);
     cJSON_AddNumberToObject(o, "observer", s->st.observer_count);
     cJSON_AddNumberToObject(o, "tick_hz", s->st.tick_rate_hz);

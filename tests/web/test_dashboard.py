@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """web_dashboard: the instructor dashboard in headless Chromium lists every open session of a
 running palp-server (the server's own log says which are open), shows the server's status and each
-card's own colour scale, adds a session that opens later without a reload, and drops a closed one
-within a second. DDS domain 192.
+card's own colour scale, adds a session that opens later without a reload, drops a closed one
+within a second, and shows a trainee station the server lost to a 1.5 s stall (SIGSTOP) as such
+on its card until it comes back to the same session. DDS domain 192.
 usage: test_dashboard.py BUILD SOURCE OUT"""
 import os
 import re
+import signal
 import time
 
 import harness
@@ -83,6 +85,37 @@ def run(build, source, out):
         check(sorted(page.eval("palpState.dashboard.cards")) == server_open_sessions(procs, server),
               "the remaining cards are the server's open sessions %s" % server_open_sessions(procs, server))
         page.screenshot(os.path.join(out, "dashboard-after-close.png"))
+
+        # bob's station stalls 1.5 s: the server holds his session and his card says so; then it goes on.
+        station_js = ("(function () { const c = Array.from(document.querySelectorAll('.card')).find(e => "
+                      "e.querySelector('h3 span').textContent.startsWith('bob #')); if (!c) return null; "
+                      "const r = Array.from(c.querySelectorAll('tr')).find(r => r.cells[0].textContent === "
+                      "'trainee station'); return r ? [r.cells[1].textContent, r.cells[1].className] : null; })()")
+        check(page.eval(station_js) == ["connected", ""], "bob's card shows his station connected: %s"
+              % page.eval(station_js))
+        bob_id = [s for s in page.eval("palpState.sessions.map(s => [s.id, s.trainee])") if s[1] == "bob"][0][0]
+        bob = [p for p in procs.procs if p.name == "trainee-bob"][0]
+        bob.send_signal(signal.SIGSTOP)
+        t_stop = time.time()
+        held = page.wait_for("(function (v) { return v && v[0].includes('held') && v[1] === 'warn'; })(%s)"
+                             % station_js, 3)
+        seen = page.eval(station_js)
+        band_held = page.eval("Array.from(document.querySelectorAll('.card')).filter(e => e.querySelector('h3 span')"
+                              ".textContent.startsWith('bob #')).map(e => e.querySelector('.band').textContent)[0]")
+        page.screenshot(os.path.join(out, "dashboard-station-held.png"))
+        time.sleep(max(0.0, t_stop + 1.5 - time.time()))
+        bob.send_signal(signal.SIGCONT)
+        check(held is True, "while bob's station was stopped (%.1f s) his card said so, in warning colour: %s"
+              % (time.time() - t_stop, seen))
+        check(band_held == "station lost", "and its force badge showed no stale force: %r" % band_held)
+        back = page.wait_for("(function (v) { return v && v[0] === 'connected'; })(%s)" % station_js, 5)
+        check(back is True and bob_id in page.eval("palpState.dashboard.cards"),
+              "after SIGCONT bob's session %d went on and his card reads connected again: %s"
+              % (bob_id, page.eval(station_js)))
+        log = procs.log(server)
+        check(re.search(r"session %d: trainee station \S+ came back after" % bob_id, log) is not None
+              and "session %d closed" % bob_id not in log,
+              "the server held bob's session %d and resumed it (its log)" % bob_id)
     finally:
         if browser:
             browser.close()

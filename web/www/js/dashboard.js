@@ -80,9 +80,14 @@
   }
   function fill(c, s) {
     c.name.textContent = s.trainee + " #" + s.id;
-    c.band.textContent = fmt(s.force, 2) + " N " + s.band;
-    c.band.className = "band " + s.band;
-    const rows = [["phantom", s.phantom_name || s.phantom], ["exercise", s.exercise || "none"],
+    /* Held for a lost station, the last force the bridge saw is stale: the server lifted the finger. */
+    c.band.textContent = s.status ? "station lost" : fmt(s.force, 2) + " N " + s.band;
+    c.band.className = s.status ? "band" : "band " + s.band;
+    const rows = [["phantom", s.phantom_name || s.phantom],
+      ["trainee station", s.status ? s.status : "connected", !!s.status,
+        "the server's word on the trainee's station: a station it lost (a crash, or a machine stalled past its lease) " +
+        "keeps its session a few seconds to come back (docs/server.md, station_grace)"],
+      ["exercise", s.exercise || "none"],
       ["coverage", fmt(100 * s.coverage[0], 1) + " %", false,
         "share of the dome's skin pressed at least lightly, since the bridge began following the session: " +
         "the footprint disc (contact area) around each sampled contact point, marked on the rest mesh, 30 samples/s"],
