@@ -131,8 +131,12 @@ static int ev_cb(void *u, double wall, int64_t frame, const char *kind, const ch
   if (i == t->n && t->n < 16) snprintf(t->kind[t->n++], sizeof t->kind[0], "%s", kind);
   if (i < 16) t->count[i] += count;
   /* The unusual ones are worth reading in full; joins and leaves are in the summary line, and
-   * the valid-range events (one a second while outside) in the "valid range" line above. */
-  if (strcmp(kind, "join") && strcmp(kind, "leave") && strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_VALID_RANGE)) &&
+   * the valid-range events (one a second while outside) in the "valid range" line above. A
+   * trainee's own leave and join are unusual: its station was lost and its session held
+   * (docs/server.md, station_grace), which the instructor should see. */
+  const int member = !strcmp(kind, "join") || !strcmp(kind, "leave");
+  if ((member ? strstr(detail ? detail : "", "(trainee") != NULL
+              : strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_VALID_RANGE)) != 0) &&
       t->listed < 20) {
     char ts[64];
     review_fmt_time(wall, ts, sizeof ts);

@@ -3,7 +3,9 @@
 # driver (a position-driven finger) and a flood-free session are logged, the
 # session ends "normal" after the station leaves, and `palp-review replay`
 # reproduces every logged frame bit for bit (exit 0) - the replay contract of
-# db/palp_db.h. Also: SIGINT stops the server with exit 0. Domain 106.
+# db/palp_db.h. A second trainee, erin, stopped 1.5 s (SIGSTOP) mid-press, keeps her one
+# session, the review lists her station's loss and return, and her session replays too.
+# Also: SIGINT stops the server with exit 0. Domain 106.
 set -u
 server=$1 client=$2 review=$3 driver=$4 config_dir=$5
 tmp=$(mktemp -d)
@@ -20,6 +22,18 @@ spid=$!
 "$client" --role trainee --domain 106 --phantom 1 --name dana --quiet --duration 2 \
   --input "device:$driver:1" > "$tmp/client.log" 2>&1
 crc=$?
+# erin's station is stopped 1.5 s mid-press: the server holds her session and she comes back to it.
+"$client" --role trainee --domain 106 --phantom 1 --name erin --duration 6 --profile sine --t-on 0 --t-off 60 \
+  --print-period 0 > "$tmp/erin.log" 2>&1 &
+epid=$!
+i=0
+until grep -q "joined session" "$tmp/erin.log" || [ $i -ge 100 ]; do sleep 0.1; i=$((i+1)); done
+sleep 1.5
+kill -STOP $epid
+sleep 1.5
+kill -CONT $epid
+wait $epid
+erc=$?
 sleep 0.3
 kill -INT $spid
 wait $spid
@@ -38,6 +52,15 @@ if printf '%s' "$show" | grep -Eq "contacts +[1-9][0-9]* inputs"; then echo "ok 
 else echo "FAIL no contact inputs: $show"; fail=1; fi
 out=$("$review" --db "$db" replay "$uid" 2>&1); rrc=$?
 if [ $rrc -eq 0 ]; then echo "ok   replay exit 0: $out"; else echo "FAIL replay exit $rrc: $out"; fail=1; fi
+list=$("$review" --db "$db" list 2>&1)
+euid=$(printf '%s\n' "$list" | awk '/ erin /{print $1}')
+eshow=$("$review" --db "$db" show "$euid" 2>&1)
+if [ $erc -eq 0 ] && [ "$(printf '%s\n' "$list" | grep -c " erin ")" -eq 1 ] && printf '%s' "$list" | grep " erin " | grep -q normal \
+  && printf '%s' "$eshow" | grep -q "leave .*(trainee, lost; session held)" && printf '%s' "$eshow" | grep -q "join .*(trainee, back from a stall)"; then
+  echo "ok   erin, stopped 1.5 s, kept her one session (ended normal); review shows: $(printf '%s' "$eshow" | grep '(trainee' | sed 's/^ *//' | tr '\n' ';')"
+else echo "FAIL erin (exit $erc): $list"; printf '%s\n' "$eshow"; cat "$tmp/erin.log"; fail=1; fi
+out=$("$review" --db "$db" replay "$euid" 2>&1); rrc=$?
+if [ $rrc -eq 0 ]; then echo "ok   erin's held and resumed session replays, exit 0: $out"; else echo "FAIL erin's replay exit $rrc: $out"; fail=1; fi
 grep -q "session log: .* 0 shed" "$tmp/server.log" && echo "ok   nothing shed: $(grep 'session log:' "$tmp/server.log")" \
   || { echo "FAIL writer counts: $(grep 'session log' "$tmp/server.log")"; fail=1; }
 exit $fail
