@@ -57,6 +57,7 @@ typedef struct rsession {
   uint8_t active[FINGERS];
   double volume, pressure, max_disp; /* from the newest deformation sample, 0 until one arrives */
   uint64_t mesh_hash; /* FNV-1a of the newest logged mesh's positions (0: none yet) */
+  int held;           /* its open state says why it waits: its trainee station lost, the session held */
 } rsession;
 
 /* A session that opened before its phantom's catalogue entry arrived (the two topics race). */
@@ -212,9 +213,26 @@ static void resolve_pending(recorder *r, uint32_t session_id, int force) {
   }
 }
 
+/* An open session's state carries a reason only while the server holds it for its lost
+ * trainee station (station_grace, docs/server.md): logged as that station's leave, and
+ * its return as a join, as the server's own log has them. */
+static void note_held(recorder *r, rsession *s, const palp_SessionState *m) {
+  const int held = m->reason[0] != 0;
+  if (!s->open || held == s->held) return;
+  s->held = held;
+  char detail[192];
+  snprintf(detail, sizeof detail, "%.80s (trainee, %s)", m->trainee_station,
+           held ? "lost; session held" : "back from a stall");
+  count(r, palp_db_log_event(r->w, s->h, held ? PALP_DB_EVENT_LEAVE : PALP_DB_EVENT_JOIN, s->frame, detail, 1));
+}
+
 static void on_state(recorder *r, const palp_SessionState *m) {
   if (m->phase == palp_PHASE_OPEN) {
-    if (find_session(r, m->session_id, 0)) return;
+    rsession *known = find_session(r, m->session_id, 0);
+    if (known) {
+      note_held(r, known, m);
+      return;
+    }
     if (!find_phantom(r, m->phantom_id, 0)) { /* wait (briefly) for its catalogue entry */
       for (int i = 0; i < MAX_PENDING; i++) {
         if (r->pending[i].used && r->pending[i].state.session_id == m->session_id) return;

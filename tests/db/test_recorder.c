@@ -12,7 +12,8 @@
  *    frame row with the displacement and force that were sent (tolerance 1e-12);
  *  - contact inputs: one add, one remove, and at least 54 of the 59 updates (best-effort topic on
  *    loopback: tolerance 10 %), feedback samples likewise at least 54 of 60;
- *  - join, reject x3, overrun x1, leave events; `show` works and `replay` refuses (exit 2). */
+ *  - join, reject x3, overrun x1, leave events, and a held trainee station's leave and return
+ *    (an open state with a reason, then without); `show` works and `replay` refuses (exit 2). */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -177,6 +178,15 @@ int main(int argc, char **argv) {
   rel.seq = 61;
   dds_write(w_con, &rel);
   sleep_ms(100);
+  /* The server held the session for its lost station, which came back (docs/server.md). */
+  snprintf(ss.reason, sizeof ss.reason, "trainee station lost (liveliness lease expired); held 5 s for it to come back");
+  REQUIRE(dds_write(w_state, &ss) == 0, "state open, held");
+  sleep_ms(100);
+  REQUIRE(dds_write(w_state, &ss) == 0, "state open, held, again (the 1 Hz refresh)");
+  sleep_ms(100);
+  ss.reason[0] = 0;
+  REQUIRE(dds_write(w_state, &ss) == 0, "state open, its station back");
+  sleep_ms(100);
   ss.phase = palp_PHASE_CLOSED;
   ss.rejected_samples = 3;
   ss.overruns = 1;
@@ -219,8 +229,13 @@ int main(int argc, char **argv) {
         "finger radius and centre recorded");
   CHECK(db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'reject'") == 3 &&
             db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'overrun'") == 1 &&
-            db_scalar(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave')") == 2,
-        "join, reject x3, overrun x1, leave");
+            db_scalar(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave')") == 4,
+        "join, reject x3, overrun x1, leave, and the held station's leave and return");
+  CHECK(db_scalar(h, "SELECT count(*) FROM event WHERE kind = 'leave' AND detail = "
+                     "'host/4242/haptic-1 (trainee, lost; session held)'") == 1 &&
+            db_scalar(h, "SELECT count(*) FROM event WHERE kind = 'join' AND detail = "
+                         "'host/4242/haptic-1 (trainee, back from a stall)'") == 1,
+        "the held station's leave once (its state repeated) and its return once, named as palp-server names them");
   char uid[128] = "";
   sqlite3_stmt *q;
   sqlite3_prepare_v2(h, "SELECT uid FROM session", -1, &q, NULL);
