@@ -705,6 +705,15 @@ static palp_srv_session *held_session_of(palp_srv *srv, const char *station_id) 
   return NULL;
 }
 
+/* A LEAVE from a station with no slot, whose session is held for it: it came back only to
+ * say goodbye (stopped by its user right after a stall). 1 when there was one. */
+static int leave_held(palp_srv *srv, const char *station_id) {
+  palp_srv_session *h = held_session_of(srv, station_id);
+  if (!h) return 0;
+  close_session(srv, h, "trainee station left");
+  return 1;
+}
+
 /* The station leaves whatever it is in: a trainee's session closes (or, lost, is held),
  * a viewer only stops being counted. */
 static void station_leave(palp_srv *srv, station *st, const char *reason) {
@@ -985,8 +994,10 @@ static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, uint64
     return;
   }
   station *st = find_station(srv, rq->station_id);
+  int left = st != NULL;
   if (st) station_leave(srv, st, "left"); /* frees its slot */
-  if (st || !palp_srv_identity_peers(srv->identity)) reply(srv, rq, NULL, "left");
+  else left = leave_held(srv, rq->station_id);
+  if (left || !palp_srv_identity_peers(srv->identity)) reply(srv, rq, NULL, "left");
   if (out_st) *out_st = NULL;
 }
 
@@ -1097,8 +1108,10 @@ static void handle_requests(palp_srv *srv) {
           handle_join(srv, &buf[i], secured(srv) ? &who : NULL, info[i].publication_handle);
         else {
           station *st = find_station(srv, buf[i].station_id);
+          int left = st != NULL;
           if (st) station_leave(srv, st, "left");
-          if (st || !palp_srv_identity_peers(srv->identity)) reply(srv, &buf[i], NULL, "left");
+          else left = leave_held(srv, buf[i].station_id);
+          if (left || !palp_srv_identity_peers(srv->identity)) reply(srv, &buf[i], NULL, "left");
           retire_reply(srv, buf[i].station_id);
         }
         continue;

@@ -6,7 +6,10 @@
  * at once: "sam" stalls 1.5 s (past the writer's 0.5 s lease and the participant's
  * 1 s: DDS re-delivers its JOIN when it is found again), "uma" 0.8 s (past the
  * writer's lease only: nothing is re-delivered, the station must send its JOIN again),
- * "tess" 7.5 s. */
+ * "tess" 7.5 s, and "vic" 0.8 s, interrupted by its user as it runs again (its LEAVE
+ * closes the held session at once; after 1.5 s its participant is lost, and a station
+ * that exits at once is gone before the server has found it again: that one waits out
+ * the grace). */
 #include <signal.h>
 #include <spawn.h>
 #include <string.h>
@@ -90,32 +93,35 @@ int main(void) {
   char err[256];
   REQUIRE(palp_cli_station_open(&watch, DOMAIN, "watch", err, sizeof err) == 0, "watcher %s", err);
 
-  enum { NW = 3 };
-  watched w[NW] = {{.name = "sam"}, {.name = "tess"}, {.name = "uma"}};
-  const double stall[NW] = {1.5, grace + 2.5, 0.8};
-  int64_t t_stop[NW] = {0, 0, 0}, t_cont[NW] = {INT64_MAX, INT64_MAX, INT64_MAX};
-  pid_t pid[NW] = {spawn_client("sam", "12"), spawn_client("tess", "30"), spawn_client("uma", "12")};
-  REQUIRE(pid[0] > 0 && pid[1] > 0 && pid[2] > 0, "spawned three clients");
+  enum { NW = 4 };
+  watched w[NW] = {{.name = "sam"}, {.name = "tess"}, {.name = "uma"}, {.name = "vic"}};
+  const double stall[NW] = {1.5, grace + 2.5, 0.8, 0.8};
+  int64_t t_stop[NW] = {0, 0, 0, 0}, t_cont[NW] = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
+  pid_t pid[NW] = {spawn_client("sam", "12"), spawn_client("tess", "30"), spawn_client("uma", "12"),
+                   spawn_client("vic", "30")};
+  REQUIRE(pid[0] > 0 && pid[1] > 0 && pid[2] > 0 && pid[3] > 0, "spawned four clients");
   int64_t end = palp_dds_now_ns() + 10000000000LL;
-  while (!(w[0].open && w[1].open && w[2].open) && palp_dds_now_ns() < end) {
+  while (!(w[0].open && w[1].open && w[2].open && w[3].open) && palp_dds_now_ns() < end) {
     poll_states(&watch, w, NW, t_stop, t_cont);
     test_sleep(0.02);
   }
-  if (!(w[0].open && w[1].open && w[2].open))
+  if (!(w[0].open && w[1].open && w[2].open && w[3].open))
     for (int k = 0; k < NW; k++) kill(pid[k], SIGKILL);
-  REQUIRE(w[0].open && w[1].open && w[2].open, "three sessions opened (%u, %u, %u)", w[0].sid, w[1].sid, w[2].sid);
+  REQUIRE(w[0].open && w[1].open && w[2].open && w[3].open, "four sessions opened (%u, %u, %u, %u)", w[0].sid,
+          w[1].sid, w[2].sid, w[3].sid);
   test_sleep(1.0); /* pressing */
 
   /* All stopped at once; each continued after its own stall. */
-  t_stop[0] = t_stop[1] = t_stop[2] = palp_dds_now_ns();
+  t_stop[0] = t_stop[1] = t_stop[2] = t_stop[3] = palp_dds_now_ns();
   for (int k = 0; k < NW; k++) kill(pid[k], SIGSTOP);
-  int stopped[NW] = {1, 1, 1};
-  int status[NW] = {0, 0, 0}, exited[NW] = {0, 0, 0};
+  int stopped[NW] = {1, 1, 1, 1};
+  int status[NW] = {0, 0, 0, 0}, exited[NW] = {0, 0, 0, 0};
   end = t_stop[0] + (int64_t)((stall[1] + 15.0) * 1e9);
-  while (palp_dds_now_ns() < end && !(exited[0] && exited[1] && exited[2])) {
+  while (palp_dds_now_ns() < end && !(exited[0] && exited[1] && exited[2] && exited[3])) {
     const int64_t now = palp_dds_now_ns();
     for (int k = 0; k < NW; k++) {
       if (stopped[k] && now - t_stop[k] >= (int64_t)(stall[k] * 1e9)) {
+        if (k == 3) kill(pid[k], SIGINT); /* vic's user stops it: handled once it runs again */
         kill(pid[k], SIGCONT);
         t_cont[k] = palp_dds_now_ns();
         stopped[k] = 0;
@@ -146,6 +152,15 @@ int main(void) {
           "\"%s\"", x->name, x->sid, x->last.reason);
     CHECK(x->other_sessions == 0, "%s has no other session (%d states of others)", x->name, x->other_sessions);
   }
+
+  /* vic: 0.8 s, and its user stopped it (SIGINT) as it ran again: its goodbye closes the
+   * held session at once, not at the grace's end. */
+  CHECK(w[3].held && w[3].closed && strcmp(w[3].last.reason, "trainee station left") == 0 &&
+            w[3].t_closed <= stall[3] + 2.0,
+        "vic's held session %u closed as it left, %.2f s after SIGSTOP (want <= %.1f s, before the grace's %.1f): "
+        "\"%s\"", w[3].sid, w[3].t_closed, stall[3] + 2.0, grace + 0.5, w[3].last.reason);
+  CHECK(exited[3] && WIFEXITED(status[3]), "vic's client exited (status %d)", status[3]);
+  CHECK(w[3].other_sessions == 0, "vic has no other session (%d)", w[3].other_sessions);
 
   /* tess: 7.5 s, past the grace. */
   CHECK(w[1].held && w[1].t_held <= 1.5, "tess's session %u held %.2f s into its stall", w[1].sid, w[1].t_held);
