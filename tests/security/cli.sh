@@ -6,6 +6,7 @@
 # the station, authenticated again, asks with the same request). Domain 131.
 # usage: cli.sh palp-server palp-client PKI_DIR
 set -u
+. "$(dirname "$0")/../stall.sh"
 server=$1 client=$2 pki=$3
 out=$(mktemp -d)
 fail=0
@@ -29,12 +30,7 @@ check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
   --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
 cpid=$!
-i=0
-until grep -q "joined session" "$out/stall.log" || [ $i -ge 100 ]; do sleep 0.1; i=$((i+1)); done
-sleep 1
-kill -STOP $cpid
-sleep 1.5
-kill -CONT $cpid
+stall_station $cpid "$out/stall.log" 1 1.5
 wait $cpid
 rc=$?
 sid=$(sed -n 's/.*joined session \([0-9]*\).*/\1/p' "$out/stall.log" | head -1)

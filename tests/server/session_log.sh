@@ -7,6 +7,7 @@
 # session, the review lists her station's loss and return, and her session replays too.
 # Also: SIGINT stops the server with exit 0. Domain 106.
 set -u
+. "$(dirname "$0")/../stall.sh"
 server=$1 client=$2 review=$3 driver=$4 config_dir=$5
 tmp=$(mktemp -d)
 trap 'kill $spid 2>/dev/null; [ -n "${KEEP_TMP:-}" ] || rm -rf "$tmp"' EXIT
@@ -26,12 +27,7 @@ crc=$?
 "$client" --role trainee --domain 106 --phantom 1 --name erin --duration 6 --profile sine --t-on 0 --t-off 60 \
   --print-period 0 > "$tmp/erin.log" 2>&1 &
 epid=$!
-i=0
-until grep -q "joined session" "$tmp/erin.log" || [ $i -ge 100 ]; do sleep 0.1; i=$((i+1)); done
-sleep 1.5
-kill -STOP $epid
-sleep 1.5
-kill -CONT $epid
+stall_station $epid "$tmp/erin.log" 1.5 1.5
 wait $epid
 erc=$?
 sleep 0.3
