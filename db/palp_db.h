@@ -97,6 +97,13 @@ typedef enum palp_db_event_kind {
    * "outside at N steps: depth N, skin N, limit N; deepest X mm beyond the validated depth so far" */
   PALP_DB_EVENT_VALID_RANGE = 9
 } palp_db_event_kind;
+
+/* A trainee's own leave and join in its session: its station lost and the session held
+ * for it (palp-server's station_grace), then its return. The event detail is the station
+ * id followed by one of these, written alike by palp-server and palp-recorder. */
+#define PALP_DB_DETAIL_TRAINEE_HELD " (trainee, lost; session held)"
+#define PALP_DB_DETAIL_TRAINEE_BACK " (trainee, back from a stall)"
+
 #define PALP_DB_EVENT_KIND_COUNT 10
 const char *palp_db_event_kind_name(palp_db_event_kind k); /* "join", ... */
 

@@ -183,10 +183,10 @@ static void on_member(void *ctx, uint32_t session_id, const char *station, int r
   char detail[128];
   /* A trainee leaves and joins its own session only when its station was lost and held
    * (station_grace) and, the second time, came back. */
-  snprintf(detail, sizeof detail, "%s (%s)", station,
-           role == palp_ROLE_TRAINEE  ? (joined ? "trainee, back from a stall" : "trainee, lost; session held")
-           : role == palp_ROLE_VISUAL ? "visual"
-                                      : "observer");
+  if (role == palp_ROLE_TRAINEE)
+    snprintf(detail, sizeof detail, "%.80s%s", station, joined ? PALP_DB_DETAIL_TRAINEE_BACK : PALP_DB_DETAIL_TRAINEE_HELD);
+  else
+    snprintf(detail, sizeof detail, "%s (%s)", station, role == palp_ROLE_VISUAL ? "visual" : "observer");
   palp_db_log_event(l->w, s->h, joined ? PALP_DB_EVENT_JOIN : PALP_DB_EVENT_LEAVE, -1, detail, 1);
 }
 

@@ -377,7 +377,7 @@ static void publish_state(palp_srv *srv, palp_srv_session *s, int closed, const 
   m.peak_displacement = st.peak_displacement;
   if (reason)
     snprintf(m.reason, sizeof m.reason, "%s", reason);
-  else if (s->held_until_ns) /* open, waiting for its trainee station: the viewers are told why nothing moves */
+  else if (s->held_since_ns) /* open, waiting for its trainee station: the viewers are told why nothing moves */
     snprintf(m.reason, sizeof m.reason, "%.96s; held %.0f s for it to come back", s->held_reason, srv->cfg.station_grace);
   dds_write(srv->state_w, &m);
 }
@@ -665,7 +665,6 @@ static void attach_station(palp_srv_session *s, station *st, const palp_SessionR
 static void hold_session(palp_srv *srv, palp_srv_session *s, station *st, const char *why) {
   const int64_t now = palp_dds_now_ns();
   s->held_since_ns = now;
-  s->held_until_ns = now + (int64_t)(srv->cfg.station_grace * 1e9);
   snprintf(s->held_reason, sizeof s->held_reason, "%s", why);
   if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
@@ -687,7 +686,7 @@ static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_Sessio
   }
   attach_station(s, st, rq);
   const double away = (double)(palp_dds_now_ns() - s->held_since_ns) * 1e-9;
-  s->held_since_ns = s->held_until_ns = 0;
+  s->held_since_ns = 0;
   s->held_reason[0] = 0;
   reply(srv, rq, s, NULL);
   publish_state(srv, s, 0, NULL, NULL);
@@ -700,7 +699,7 @@ static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_Sessio
 /* The open session held for this trainee station, or NULL. */
 static palp_srv_session *held_session_of(palp_srv *srv, const char *station_id) {
   for (int i = 0; i < srv->session_count; i++)
-    if (srv->sessions[i]->held_until_ns && strcmp(srv->sessions[i]->trainee_station, station_id) == 0)
+    if (srv->sessions[i]->held_since_ns && strcmp(srv->sessions[i]->trainee_station, station_id) == 0)
       return srv->sessions[i];
   return NULL;
 }
@@ -1485,7 +1484,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
       }
       handle_findings(srv, s);
       const int64_t t = palp_dds_now_ns();
-      if (s->held_until_ns && t >= s->held_until_ns) {
+      if (s->held_since_ns && t - s->held_since_ns >= (int64_t)(srv->cfg.station_grace * 1e9)) {
         char why[224];
         snprintf(why, sizeof why, "%s; not back within %.0f s", s->held_reason, srv->cfg.station_grace);
         close_session(srv, s, why);

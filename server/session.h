@@ -121,9 +121,9 @@ typedef struct palp_srv_session {
   /* [main] */
   uint32_t trainee_request_seq; /* the JOIN that opened it: the same request again resumes it */
   /* Its trainee station lost (a lease expired): the session stays open, its fingers lifted
-   * (their writer is gone too), until held_until_ns, for the station to come back from a
-   * stall with the same request (station_grace, docs/server.md). 0: not held. */
-  int64_t held_since_ns, held_until_ns;
+   * (their writer is gone too), for station_grace after held_since_ns, for the station to
+   * come back from a stall with the same request (docs/server.md). 0: not held. */
+  int64_t held_since_ns;
   char held_reason[160];
   atomic_int want_feedback;   /* haptic trainee present */
   atomic_int deform_members;  /* members that asked for palp_deformation */

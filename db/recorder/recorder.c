@@ -221,8 +221,8 @@ static void note_held(recorder *r, rsession *s, const palp_SessionState *m) {
   if (!s->open || held == s->held) return;
   s->held = held;
   char detail[192];
-  snprintf(detail, sizeof detail, "%.80s (trainee, %s)", m->trainee_station,
-           held ? "lost; session held" : "back from a stall");
+  snprintf(detail, sizeof detail, "%.80s%s", m->trainee_station,
+           held ? PALP_DB_DETAIL_TRAINEE_HELD : PALP_DB_DETAIL_TRAINEE_BACK);
   count(r, palp_db_log_event(r->w, s->h, held ? PALP_DB_EVENT_LEAVE : PALP_DB_EVENT_JOIN, s->frame, detail, 1));
 }
 
