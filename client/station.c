@@ -175,8 +175,8 @@ static int send_request(palp_cli_station *st, const palp_cli_join *j, int op) {
   return dds_write(st->request_w, &rq) < 0 ? PALP_EIO : 0;
 }
 
-/* Waits for the reply to request_seq until end_ns: 1 accepted, 0 rejected, -1 timeout. */
-static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *out) {
+/* Waits for the reply to request seq until end_ns: 1 accepted, 0 rejected, -1 timeout. */
+static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, palp_SessionReply *out) {
   dds_entity_t ws = dds_create_waitset(st->pp);
   dds_entity_t rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, rc, 0);
@@ -189,7 +189,7 @@ static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *
     while (result < 0 && (n = dds_take(st->reply_r, ptr, info, 4, 4)) > 0)
       for (int i = 0; i < n; i++)
         if (info[i].valid_data && strcmp(buf[i].station_id, st->station_id) == 0 &&
-            buf[i].request_seq == st->request_seq) {
+            buf[i].request_seq == seq) {
           *out = buf[i];
           result = buf[i].status == palp_REPLY_ACCEPTED;
         }
@@ -200,6 +200,10 @@ static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *
   dds_delete(rc);
   dds_delete(ws);
   return result;
+}
+
+static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *out) {
+  return await_reply_to(st, st->request_seq, end_ns, out);
 }
 
 int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen) {
@@ -225,6 +229,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->has_last_join = 1;
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->resends_left = 0;
+  st->closed_seen = 0;
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
   st->pub = palp_dds_session_publisher(st->pp, st->partition);
   st->sub = palp_dds_session_subscriber(st->pp, st->partition);
@@ -311,6 +316,23 @@ int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *ou
 }
 
 int palp_cli_station_leave(palp_cli_station *st) {
+  /* Right out of a stall (the user's interrupt is often what ends it) or soon after one:
+   * the server may have lost this participant with its lease and not found it again yet,
+   * and a LEAVE sent now would go with the participant. The accepted JOIN once more, and
+   * its answer awaited: the server then knows the station again (it resumed the held
+   * session, or it never lost it and answered again), and the goodbye reaches it. */
+  const int64_t now = palp_dds_now_ns();
+  const int out_of_stall = st->last_check_ns && now - st->last_check_ns > (int64_t)(PALP_CLI_STALL_S * 1e9);
+  const int after_stall = st->stall_end_ns && now - st->stall_end_ns < (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9);
+  if (st->has_last_join && !st->closed_seen && st->last_join.role == palp_ROLE_TRAINEE && (out_of_stall || after_stall)) {
+    palp_SessionReply r, old;
+    void *ptr[1] = {&old};
+    dds_sample_info_t info;
+    while (dds_take(st->reply_r, ptr, &info, 1, 1) > 0) { /* answers from before: not evidence */
+    }
+    if (dds_write(st->request_w, &st->last_join) >= 0)
+      (void)await_reply_to(st, st->last_join.request_seq, now + (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9), &r);
+  }
   /* An explicit leave first, so the server can tell a goodbye from a crash;
    * then the disposal, which also ends the request's transient-local history. */
   palp_cli_join none = {.role = palp_ROLE_TRAINEE};
@@ -375,6 +397,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
       snprintf(reason, len, "server lost (liveliness lease expired; not back within %.0f s of this station's %.1f s stall)",
                PALP_CLI_SERVER_WAIT_S, st->stall_s);
   }
+  st->closed_seen |= closed;
   return closed;
 }
 

@@ -49,6 +49,7 @@ typedef struct palp_cli_station {
   int resends_left;
   int64_t next_resend_ns;
   int64_t doubt_until_ns; /* the server's lease lapsed right after a stall: its state may come back until then */
+  int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
 } palp_cli_station;
 
 /* A gap between two palp_cli_station_session_closed calls longer than this was a stall
@@ -59,6 +60,13 @@ typedef struct palp_cli_station {
  * taken for lost: its participant must be found again (SPDP every ~0.1 s on the
  * loopback config) and its state re-delivered. */
 #define PALP_CLI_SERVER_WAIT_S 5.0
+/* A trainee that leaves within this long of a stall (or right out of one) first asks the
+ * server to find it again: its accepted JOIN once more, waiting up to this long for the
+ * answer. A stall past the participant's 1 s lease makes the server forget the station's
+ * participant, and a LEAVE sent before it is found again is lost with the participant;
+ * the session would then wait out station_grace and close as "not back" (docs/station.md,
+ * "A stalled station"). */
+#define PALP_CLI_LEAVE_WAIT_S 3.0
 
 typedef struct palp_cli_join {
   int role;                 /* palp_Role */
@@ -95,7 +103,9 @@ void palp_cli_phantom_free(palp_Phantom *p);
 /* Sends a join and waits for the reply; on acceptance creates the session's
  * publisher/subscriber in its partition and the role's readers/writers. */
 int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen);
-/* Disposes the request instance: the server closes/leaves the session now. */
+/* Disposes the request instance: the server closes/leaves the session now. Right after a
+ * stall of this process a trainee first waits (up to PALP_CLI_LEAVE_WAIT_S) until the
+ * server answers its JOIN again, so that the goodbye reaches a server that knows it. */
 int palp_cli_station_leave(palp_cli_station *st);
 
 /* Several servers on one domain (docs/deploy.md). The alive phantom called name

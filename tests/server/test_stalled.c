@@ -2,14 +2,15 @@
  * longer than its liveliness lease keeps its session: the server holds the session
  * for station_grace (5 s), the station sends its JOIN again, and the same session goes
  * on; a stall longer than the grace ends the session, saying why, and the station's
- * JOIN coming again then opens no second session. Three real palp-client processes
+ * JOIN coming again then opens no second session. Five real palp-client processes
  * at once: "sam" stalls 1.5 s (past the writer's 0.5 s lease and the participant's
  * 1 s: DDS re-delivers its JOIN when it is found again), "uma" 0.8 s (past the
  * writer's lease only: nothing is re-delivered, the station must send its JOIN again),
  * "tess" 7.5 s, and "vic" 0.8 s, interrupted by its user as it runs again (its LEAVE
- * closes the held session at once; after 1.5 s its participant is lost, and a station
- * that exits at once is gone before the server has found it again: that one waits out
- * the grace). */
+ * closes the held session at once), and "wes" 1.5 s, interrupted likewise: past the
+ * participant's lease the server has forgotten its participant, so the station first asks
+ * to be found again (its JOIN, answered) and then says goodbye; before, it exited before
+ * the server found it and the session waited out the grace as "not back"). */
 #include <signal.h>
 #include <spawn.h>
 #include <string.h>
@@ -93,40 +94,50 @@ int main(void) {
   char err[256];
   REQUIRE(palp_cli_station_open(&watch, DOMAIN, "watch", err, sizeof err) == 0, "watcher %s", err);
 
-  enum { NW = 4 };
-  watched w[NW] = {{.name = "sam"}, {.name = "tess"}, {.name = "uma"}, {.name = "vic"}};
-  const double stall[NW] = {1.5, grace + 2.5, 0.8, 0.8};
-  int64_t t_stop[NW] = {0, 0, 0, 0}, t_cont[NW] = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
-  pid_t pid[NW] = {spawn_client("sam", "12"), spawn_client("tess", "30"), spawn_client("uma", "12"),
-                   spawn_client("vic", "30")};
-  REQUIRE(pid[0] > 0 && pid[1] > 0 && pid[2] > 0 && pid[3] > 0, "spawned four clients");
-  int64_t end = palp_dds_now_ns() + 10000000000LL;
-  while (!(w[0].open && w[1].open && w[2].open && w[3].open) && palp_dds_now_ns() < end) {
-    poll_states(&watch, w, NW, t_stop, t_cont);
-    test_sleep(0.02);
+  enum { NW = 5 };
+  watched w[NW] = {{.name = "sam"}, {.name = "tess"}, {.name = "uma"}, {.name = "vic"}, {.name = "wes"}};
+  const double stall[NW] = {1.5, grace + 2.5, 0.8, 0.8, 1.5};
+  const int interrupted[NW] = {0, 0, 0, 1, 1}; /* its user stops it (SIGINT), handled once it runs again */
+  int64_t t_stop[NW], t_cont[NW];
+  pid_t pid[NW];
+  int all_open = 1, spawned = 1;
+  for (int k = 0; k < NW; k++) {
+    t_stop[k] = 0, t_cont[k] = INT64_MAX;
+    pid[k] = spawn_client(w[k].name, k == 0 || k == 2 ? "12" : "30");
+    spawned &= pid[k] > 0;
   }
-  if (!(w[0].open && w[1].open && w[2].open && w[3].open))
+  REQUIRE(spawned, "spawned five clients");
+  int64_t end = palp_dds_now_ns() + 10000000000LL;
+  do {
+    poll_states(&watch, w, NW, t_stop, t_cont);
+    all_open = 1;
+    for (int k = 0; k < NW; k++) all_open &= w[k].open;
+    if (!all_open) test_sleep(0.02);
+  } while (!all_open && palp_dds_now_ns() < end);
+  if (!all_open)
     for (int k = 0; k < NW; k++) kill(pid[k], SIGKILL);
-  REQUIRE(w[0].open && w[1].open && w[2].open && w[3].open, "four sessions opened (%u, %u, %u, %u)", w[0].sid,
-          w[1].sid, w[2].sid, w[3].sid);
+  REQUIRE(all_open, "five sessions opened (%u, %u, %u, %u, %u)", w[0].sid, w[1].sid, w[2].sid, w[3].sid, w[4].sid);
   test_sleep(1.0); /* pressing */
 
   /* All stopped at once; each continued after its own stall. */
-  t_stop[0] = t_stop[1] = t_stop[2] = t_stop[3] = palp_dds_now_ns();
+  const int64_t t0 = palp_dds_now_ns();
+  int stopped[NW], status[NW], exited[NW];
+  for (int k = 0; k < NW; k++) t_stop[k] = t0, stopped[k] = 1, status[k] = 0, exited[k] = 0;
   for (int k = 0; k < NW; k++) kill(pid[k], SIGSTOP);
-  int stopped[NW] = {1, 1, 1, 1};
-  int status[NW] = {0, 0, 0, 0}, exited[NW] = {0, 0, 0, 0};
   end = t_stop[0] + (int64_t)((stall[1] + 15.0) * 1e9);
-  while (palp_dds_now_ns() < end && !(exited[0] && exited[1] && exited[2] && exited[3])) {
+  int all_exited = 0;
+  while (palp_dds_now_ns() < end && !all_exited) {
     const int64_t now = palp_dds_now_ns();
+    all_exited = 1;
     for (int k = 0; k < NW; k++) {
       if (stopped[k] && now - t_stop[k] >= (int64_t)(stall[k] * 1e9)) {
-        if (k == 3) kill(pid[k], SIGINT); /* vic's user stops it: handled once it runs again */
+        if (interrupted[k]) kill(pid[k], SIGINT); /* its user stops it: handled once it runs again */
         kill(pid[k], SIGCONT);
         t_cont[k] = palp_dds_now_ns();
         stopped[k] = 0;
       }
       if (!exited[k] && waitpid(pid[k], &status[k], WNOHANG) == pid[k]) exited[k] = 1;
+      all_exited &= exited[k];
     }
     poll_states(&watch, w, NW, t_stop, t_cont);
     test_sleep(0.01);
@@ -137,7 +148,7 @@ int main(void) {
   poll_states(&watch, w, NW, t_stop, t_cont);
 
   /* sam (1.5 s) and uma (0.8 s): within the grace. */
-  for (int k = 0; k < NW; k += 2) {
+  for (int k = 0; k <= 2; k += 2) {
     const watched *x = &w[k];
     CHECK(x->held && x->t_held <= 1.5, "%s's session %u held %.2f s into its %.1f s stall (want <= 1.5 s: the 0.5 s "
           "lease, then the server's loop)", x->name, x->sid, x->t_held, stall[k]);
@@ -161,6 +172,16 @@ int main(void) {
         "\"%s\"", w[3].sid, w[3].t_closed, stall[3] + 2.0, grace + 0.5, w[3].last.reason);
   CHECK(exited[3] && WIFEXITED(status[3]), "vic's client exited (status %d)", status[3]);
   CHECK(w[3].other_sessions == 0, "vic has no other session (%d)", w[3].other_sessions);
+
+  /* wes: 1.5 s, past the participant's lease, and interrupted as it ran again: it asks to
+   * be found again before its goodbye, which then closes the session at once, not at the
+   * grace's end (5.5 s after SIGSTOP, as "not back within 5 s"). */
+  CHECK(w[4].held && w[4].closed && strcmp(w[4].last.reason, "trainee station left") == 0 &&
+            w[4].t_closed <= stall[4] + 2.5,
+        "wes's held session %u closed as it left, %.2f s after SIGSTOP (want <= %.1f s, before the grace's %.1f): "
+        "\"%s\"", w[4].sid, w[4].t_closed, stall[4] + 2.5, grace + 0.5, w[4].last.reason);
+  CHECK(exited[4] && WIFEXITED(status[4]), "wes's client exited (status %d)", status[4]);
+  CHECK(w[4].other_sessions == 0, "wes has no other session (%d)", w[4].other_sessions);
 
   /* tess: 7.5 s, past the grace. */
   CHECK(w[1].held && w[1].t_held <= 1.5, "tess's session %u held %.2f s into its stall", w[1].sid, w[1].t_held);
