@@ -27,8 +27,16 @@ typedef struct palp_timer_floor {
   /* written by its thread; read after palp_timer_floor_stop (or approximately before) */
   atomic_uint_fast64_t ticks, late_ticks; /* late: woke more than late_ns after the deadline */
   atomic_uint_fast64_t missed;            /* deadlines dropped while a wake-up was over a period late */
-  double late_max;                        /* [s]; final after stop */
+  double late_max;                        /* [s]; final after stop; stalls excluded */
+  /* A wake-up more than PALP_TIMER_FLOOR_STALL_NS late is the whole process not run (a
+   * stopped or swapped-out station: docs/station.md, "A stalled station"), not the timer:
+   * counted here, not in late_ticks or late_max. */
+  atomic_uint_fast64_t stalls;
+  double stall_max; /* [s]; final after stop */
 } palp_timer_floor;
+
+/* [ns] as PALP_CLI_STALL_S (client/station.h): a gap the station takes for a stall */
+#define PALP_TIMER_FLOOR_STALL_NS 400000000
 
 /* Starts the thread: deadlines first_ns + k period_ns [CLOCK_MONOTONIC ns], k = 1, 2, ...;
  * late past late_ns. priority > 0 asks for SCHED_FIFO (refused: normal, rt_ok 0).

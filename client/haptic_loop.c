@@ -308,8 +308,14 @@ static void *haptic_main(void *arg) {
     const int64_t now = palp_dds_now_ns();
     const int64_t late = now - next;
     st->ticks++;
-    if (late > late_ns) st->late_ticks++;
-    if ((double)late * 1e-9 > st->late_max) st->late_max = (double)late * 1e-9;
+    if (late > PALP_TIMER_FLOOR_STALL_NS) { /* the process was not run: a stall, told apart */
+      st->stalls++;
+      st->stall_total += (double)late * 1e-9;
+      if ((double)late * 1e-9 > st->stall_max) st->stall_max = (double)late * 1e-9;
+    } else {
+      if (late > late_ns) st->late_ticks++;
+      if ((double)late * 1e-9 > st->late_max) st->late_max = (double)late * 1e-9;
+    }
     /* A tick more than a period late is not made up in a burst: the device wants
      * the newest force, not a queue of old ones. */
     if (late > period) next = now;
@@ -469,6 +475,7 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
     pthread_join(l->thread, NULL);
     palp_timer_floor_stop(&l->floor);
     l->stats.floor_ticks = l->floor.ticks, l->stats.floor_late_ticks = l->floor.late_ticks;
+    l->stats.floor_stalls = l->floor.stalls;
     l->stats.floor_late_max = l->floor.late_max;
     if (l->sender_started) {
       sem_post(&l->out_sem);

@@ -124,8 +124,13 @@ typedef struct palp_cli_haptic_def {
 palp_cli_haptic_def palp_cli_haptic_default_def(void);
 
 typedef struct palp_cli_haptic_stats {
-  uint64_t ticks, late_ticks;   /* late: woke > late_threshold after the deadline */
-  double late_max;              /* [s] */
+  uint64_t ticks, late_ticks;   /* late: woke > late_threshold after the deadline; stalls excluded */
+  double late_max;              /* [s]; stalls excluded */
+  /* Ticks that woke more than PALP_TIMER_FLOOR_STALL_NS (0.4 s) late: the station's whole
+   * process was not run (stopped, swapped out), which its timing does not describe; one
+   * such tick per stall (the missed deadlines are not made up). */
+  uint64_t stalls;
+  double stall_max, stall_total; /* [s] */
   uint64_t models;              /* models taken from the mailbox */
   uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
@@ -148,7 +153,7 @@ typedef struct palp_cli_haptic_stats {
    * thread's scheduling that sleeps to the same deadlines, half a period later, and does
    * nothing else; late past late_threshold. The loop's own late_ticks are read against
    * it. Filled at join. */
-  uint64_t floor_ticks, floor_late_ticks;
+  uint64_t floor_ticks, floor_late_ticks, floor_stalls;
   double floor_late_max;        /* [s] */
   int rt_ok;                    /* SCHED_FIFO granted */
   int ended;                    /* the input finished */

@@ -695,6 +695,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
          (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
          d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
          closed ? reason : "");
+  if (hs.stalls)
+    printf("[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
+           "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "
+           "above\n", o->name, (unsigned long long)hs.stalls, hs.stall_total, hs.stall_max);
   if (hs.floor_ticks)
     printf("[trainee %s] this machine's timer floor over the same %.1f s: a thread doing nothing at the haptic "
            "thread's priority woke > %.1f ms late on %llu of %llu ticks (%.3f%%, worst %.2f ms)\n", o->name,
