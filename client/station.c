@@ -206,6 +206,32 @@ static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *
   return await_reply_to(st, st->request_seq, end_ns, out);
 }
 
+/* The session's endpoints matched by the server's before the join returns. Contacts are
+ * best-effort and volatile (idl/palp_dds.c): a press written before the server's reader
+ * has matched the station's writer is lost without a trace, and feedback sent before the
+ * station's reader matched never arrives. On a machine busy enough to slow discovery
+ * (seen in the test suite: a keyboard trainee's whole 3 s press lost, its feedback 0 N)
+ * the trainee would press into nothing. Waits until every endpoint the station made has
+ * a match, or end_ns (the join's timeout); then it goes on either way, the endpoints
+ * matching when discovery catches up. */
+static void await_matched(palp_cli_station *st, int64_t end_ns) {
+  for (;;) {
+    int ready = 1;
+    if (st->contact_w > 0) {
+      dds_publication_matched_status_t m;
+      ready &= dds_get_publication_matched_status(st->contact_w, &m) == 0 && m.current_count > 0;
+    }
+    const dds_entity_t rd[3] = {st->feedback_r, st->local_model_r, st->deformation_r};
+    for (int k = 0; k < 3; k++)
+      if (rd[k] > 0) {
+        dds_subscription_matched_status_t m;
+        ready &= dds_get_subscription_matched_status(rd[k], &m) == 0 && m.current_count > 0;
+      }
+    if (ready || palp_dds_now_ns() >= end_ns) return;
+    nap(0.005);
+  }
+}
+
 int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen) {
   int64_t end = palp_dds_now_ns() + (int64_t)(j->timeout * 1e9);
   palp_SessionReply r;
@@ -253,6 +279,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0 || st->local_model_r < 0 ||
       st->finding_w < 0 || st->finding_status_r < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
+  await_matched(st, end);
   return 0;
 }
 
