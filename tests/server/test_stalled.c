@@ -164,24 +164,20 @@ int main(void) {
     CHECK(x->other_sessions == 0, "%s has no other session (%d states of others)", x->name, x->other_sessions);
   }
 
-  /* vic: 0.8 s, and its user stopped it (SIGINT) as it ran again: its goodbye closes the
-   * held session at once, not at the grace's end. */
-  CHECK(w[3].held && w[3].closed && strcmp(w[3].last.reason, "trainee station left") == 0 &&
-            w[3].t_closed <= stall[3] + 2.0,
-        "vic's held session %u closed as it left, %.2f s after SIGSTOP (want <= %.1f s, before the grace's %.1f): "
-        "\"%s\"", w[3].sid, w[3].t_closed, stall[3] + 2.0, grace + 0.5, w[3].last.reason);
-  CHECK(exited[3] && WIFEXITED(status[3]), "vic's client exited (status %d)", status[3]);
-  CHECK(w[3].other_sessions == 0, "vic has no other session (%d)", w[3].other_sessions);
-
-  /* wes: 1.5 s, past the participant's lease, and interrupted as it ran again: it asks to
-   * be found again before its goodbye, which then closes the session at once, not at the
-   * grace's end (5.5 s after SIGSTOP, as "not back within 5 s"). */
-  CHECK(w[4].held && w[4].closed && strcmp(w[4].last.reason, "trainee station left") == 0 &&
-            w[4].t_closed <= stall[4] + 2.5,
-        "wes's held session %u closed as it left, %.2f s after SIGSTOP (want <= %.1f s, before the grace's %.1f): "
-        "\"%s\"", w[4].sid, w[4].t_closed, stall[4] + 2.5, grace + 0.5, w[4].last.reason);
-  CHECK(exited[4] && WIFEXITED(status[4]), "wes's client exited (status %d)", status[4]);
-  CHECK(w[4].other_sessions == 0, "wes has no other session (%d)", w[4].other_sessions);
+  /* vic (0.8 s) and wes (1.5 s, past the participant's lease), each interrupted by its
+   * user (SIGINT) as it ran again: the goodbye closes the held session at once, not at the
+   * grace's end (5.5 s after SIGSTOP, as "not back within 5 s"). wes's server has forgotten
+   * its participant, so wes first asks to be found again (its JOIN, answered), which takes
+   * up to half a second more. */
+  for (int k = 3; k <= 4; k++) {
+    const watched *x = &w[k];
+    const double within = stall[k] + (k == 3 ? 2.0 : 2.5);
+    CHECK(x->held && x->closed && strcmp(x->last.reason, "trainee station left") == 0 && x->t_closed <= within,
+          "%s's held session %u closed as it left, %.2f s after SIGSTOP (want <= %.1f s, before the grace's %.1f): "
+          "\"%s\"", x->name, x->sid, x->t_closed, within, grace + 0.5, x->last.reason);
+    CHECK(exited[k] && WIFEXITED(status[k]), "%s's client exited (status %d)", x->name, status[k]);
+    CHECK(x->other_sessions == 0, "%s has no other session (%d)", x->name, x->other_sessions);
+  }
 
   /* tess: 7.5 s, past the grace. */
   CHECK(w[1].held && w[1].t_held <= 1.5, "tess's session %u held %.2f s into its stall", w[1].sid, w[1].t_held);
