@@ -32,7 +32,6 @@ typedef struct palp_timer_floor {
    * stopped or swapped-out station: docs/station.md, "A stalled station"), not the timer:
    * counted here, not in late_ticks or late_max. */
   atomic_uint_fast64_t stalls;
-  double stall_max; /* [s]; final after stop */
 } palp_timer_floor;
 
 /* [ns] as PALP_CLI_STALL_S (client/station.h): a gap the station takes for a stall */

@@ -19,7 +19,7 @@ static int64_t now_ns(void) {
 static void *floor_main(void *arg) {
   palp_timer_floor *f = arg;
   int64_t next = f->first_ns;
-  double late_max = 0, stall_max = 0;
+  double late_max = 0;
   while (!atomic_load_explicit(&f->stop, memory_order_relaxed)) {
     next += f->period_ns;
     const struct timespec ts = {.tv_sec = (time_t)(next / 1000000000), .tv_nsec = (long)(next % 1000000000)};
@@ -29,7 +29,6 @@ static void *floor_main(void *arg) {
     atomic_fetch_add_explicit(&f->ticks, 1, memory_order_relaxed);
     if (late > PALP_TIMER_FLOOR_STALL_NS) { /* the process was not run at all: not the timer */
       atomic_fetch_add_explicit(&f->stalls, 1, memory_order_relaxed);
-      if ((double)late * 1e-9 > stall_max) stall_max = (double)late * 1e-9;
     } else {
       if (late > f->late_ns) atomic_fetch_add_explicit(&f->late_ticks, 1, memory_order_relaxed);
       if ((double)late * 1e-9 > late_max) late_max = (double)late * 1e-9;
@@ -40,7 +39,6 @@ static void *floor_main(void *arg) {
     }
   }
   f->late_max = late_max;
-  f->stall_max = stall_max;
   return NULL;
 }
 

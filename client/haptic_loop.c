@@ -475,7 +475,6 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
     pthread_join(l->thread, NULL);
     palp_timer_floor_stop(&l->floor);
     l->stats.floor_ticks = l->floor.ticks, l->stats.floor_late_ticks = l->floor.late_ticks;
-    l->stats.floor_stalls = l->floor.stalls;
     l->stats.floor_late_max = l->floor.late_max;
     if (l->sender_started) {
       sem_post(&l->out_sem);

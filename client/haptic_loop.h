@@ -153,7 +153,7 @@ typedef struct palp_cli_haptic_stats {
    * thread's scheduling that sleeps to the same deadlines, half a period later, and does
    * nothing else; late past late_threshold. The loop's own late_ticks are read against
    * it. Filled at join. */
-  uint64_t floor_ticks, floor_late_ticks, floor_stalls;
+  uint64_t floor_ticks, floor_late_ticks;
   double floor_late_max;        /* [s] */
   int rt_ok;                    /* SCHED_FIFO granted */
   int ended;                    /* the input finished */
