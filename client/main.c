@@ -496,12 +496,16 @@ static const char *valid_range_why(int why, char *buf, size_t len) {
 
 /* A stall of this process (palp_cli_station_session_closed saw one): the trainee is told,
  * since the hand felt nothing for that long and the server may have held the session. */
-static void report_stall(const opts *o, const palp_cli_station *st, unsigned *seen, const char *role, int named) {
-  if (st->stalls == *seen) return;
-  *seen = st->stalls;
-  if (o->quiet) return;
-  printf("[%s%s%s] this station did not run for %.2f s (its machine was busy); asked the server to go on with "
-         "session %u\n", role, named && o->name ? " " : "", named && o->name ? o->name : "", st->stall_s, st->session_id);
+static void report_stall(const opts *o, const palp_cli_station *st, unsigned seen[2], const char *role, int named) {
+  const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
+  if (st->stalls != seen[0] && !o->quiet)
+    printf("[%s%s%s] this station did not run for %.2f s (its machine was busy); asked the server to go on with "
+           "session %u\n", role, sep, name, st->stall_s, st->session_id);
+  /* the server's lease lapsed and it came back (it did not run for a while) */
+  if (st->server_returns != seen[1] && !o->quiet)
+    printf("[%s%s%s] the server was silent past its lease (its machine was busy) and is back; session %u goes on\n",
+           role, sep, name, st->session_id);
+  seen[0] = st->stalls, seen[1] = st->server_returns;
   fflush(stdout);
 }
 
@@ -575,7 +579,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_waitset_attach(ws, lm_cond, 0);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_print = t0, next_check = t0;
-  unsigned stalls_seen = 0;
+  unsigned stalls_seen[2] = {0, 0};
   int closed = 0, limited_shown = 0, oor_shown = 0;
   double episode_peak = 0, oor_since = 0, oor_last = 0;
   uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0;
@@ -661,7 +665,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
         closed = 1;
         break;
       }
-      report_stall(o, st, &stalls_seen, "trainee", 1);
+      report_stall(o, st, stalls_seen, "trainee", 1);
       next_check = now + 100000000;
     }
   }
@@ -749,7 +753,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   const int64_t period = (int64_t)(1e9 / rate);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next = t0, next_print = t0, next_state_check = t0;
-  unsigned stalls_seen = 0;
+  unsigned stalls_seen[2] = {0, 0};
   uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
   int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
   uint64_t sent = 0;
@@ -830,7 +834,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     }
     if (now >= next_state_check) {
       const int was_closed = palp_cli_station_session_closed(st, reason, sizeof reason);
-      report_stall(o, st, &stalls_seen, "trainee", 1);
+      report_stall(o, st, stalls_seen, "trainee", 1);
       if (was_closed) {
         if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
           /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
@@ -932,7 +936,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
   double peak_disp = 0;
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_map = t0, next_svg = t0 + (int64_t)(o->svg_every * 1e9), next_print = t0, next_check = t0;
-  unsigned stalls_seen = 0;
+  unsigned stalls_seen[2] = {0, 0};
   int svg_no = 0;
   uint64_t frames = 0, contacts = 0, feedbacks = 0;
   palp_Contact last_contact;
@@ -1038,7 +1042,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
         closed = 1;
         break;
       }
-      report_stall(o, st, &stalls_seen, observer ? "observer" : "visual", 0);
+      report_stall(o, st, stalls_seen, observer ? "observer" : "visual", 0);
       next_check = now + 100000000;
     }
   }

@@ -256,6 +256,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->resends_left = 0;
   st->closed_seen = 0;
+  st->next_held_ask_ns = 0;
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
   st->pub = palp_dds_session_publisher(st->pp, st->partition);
   st->sub = palp_dds_session_subscriber(st->pp, st->partition);
@@ -400,29 +401,43 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);
         } else {
+          if (st->doubt_until_ns) st->server_returns++;
           st->doubt_until_ns = 0; /* its server is there */
+          /* Open with a reason: the server waits for its trainee station, i.e. it lost this
+           * one (its view of our leases lapsed while we, or it, did not run) and holds the
+           * session for the same request. Ask again, once a second while it says so:
+           * neither side may have seen a stall of its own (a server stopped 0.8 s lapses
+           * only our writers' 0.5 s lease, and we see nothing of it). */
+          if (buf[i].reason[0] && st->has_last_join && st->last_join.role == palp_ROLE_TRAINEE &&
+              now >= st->next_held_ask_ns) {
+            dds_write(st->request_w, &st->last_join);
+            st->next_held_ask_ns = now + 1000000000;
+          }
         }
       } else if (info[i].instance_state != DDS_IST_ALIVE) {
-        /* The server never disposes a state; a not-alive one means its writer
-         * is gone (crash: its participant lease expired and Cyclone unregistered,
-         * and with autodispose disposed, the instance). The session cannot go on,
-         * unless this station has just been stalled itself: then the lapse may be its
-         * own view of a lease it could not renew, and the server is found again. */
+        /* The server never disposes a state; a not-alive one means its writer's
+         * lease lapsed (its participant's expired and Cyclone unregistered, and with
+         * autodispose disposed, the instance). A crash, or a server its machine did not
+         * run for a while, or this station's own view of a lease it could not renew
+         * while stalled itself: the server's state may come back (found again, its
+         * transient-local state re-delivered), for PALP_CLI_SERVER_WAIT_S after a stall
+         * of ours, PALP_CLI_SERVER_GRACE_S otherwise; then it is lost. */
         /* The key is in the invalid sample (no dds_instance_get_key scan). */
         if (buf[i].session_id != st->session_id) continue;
-        if (st->stall_end_ns && now - st->stall_end_ns < 2000000000) {
-          if (!st->doubt_until_ns) st->doubt_until_ns = now + (int64_t)(PALP_CLI_SERVER_WAIT_S * 1e9);
-        } else {
-          closed = 1;
-          if (reason) snprintf(reason, len, "server lost (liveliness lease expired)");
+        const int after_stall = st->stall_end_ns && now - st->stall_end_ns < 2000000000;
+        if (!st->doubt_until_ns) {
+          st->doubt_until_ns = now + (int64_t)((after_stall ? PALP_CLI_SERVER_WAIT_S : PALP_CLI_SERVER_GRACE_S) * 1e9);
+          st->doubt_after_stall = after_stall;
         }
       }
     }
   if (!closed && st->doubt_until_ns && now >= st->doubt_until_ns) {
     closed = 1;
-    if (reason)
+    if (reason && st->doubt_after_stall)
       snprintf(reason, len, "server lost (liveliness lease expired; not back within %.0f s of this station's %.1f s stall)",
                PALP_CLI_SERVER_WAIT_S, st->stall_s);
+    else if (reason)
+      snprintf(reason, len, "server lost (liveliness lease expired; not back within %.1f s)", PALP_CLI_SERVER_GRACE_S);
   }
   st->closed_seen |= closed;
   return closed;

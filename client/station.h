@@ -48,7 +48,10 @@ typedef struct palp_cli_station {
   unsigned stalls;        /* stalls seen */
   int resends_left;
   int64_t next_resend_ns;
-  int64_t doubt_until_ns; /* the server's lease lapsed right after a stall: its state may come back until then */
+  int64_t doubt_until_ns; /* the server's lease lapsed: its state may come back until then */
+  int doubt_after_stall;  /* ... and it lapsed right after a stall of this station's own */
+  unsigned server_returns; /* lapses of the server's lease it came back from */
+  int64_t next_held_ask_ns;  /* the server holds our session for us: the JOIN again, not before this */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
 } palp_cli_station;
 
@@ -60,6 +63,12 @@ typedef struct palp_cli_station {
  * taken for lost: its participant must be found again (SPDP every ~0.1 s on the
  * loopback config) and its state re-delivered. */
 #define PALP_CLI_SERVER_WAIT_S 5.0
+/* A lapse of the server's lease with no stall of this station's before it: the server
+ * crashed, or its machine did not run it for a while (a starved or stopped process lets
+ * its lease lapse just as a dead one does). Its session state may come back until then:
+ * the server, running again, is found again and republishes its states every status
+ * period (1 s by default). Past it the server is taken for lost. */
+#define PALP_CLI_SERVER_GRACE_S 1.0
 /* A trainee that leaves within this long of a stall (or right out of one) first asks the
  * server to find it again: its accepted JOIN once more, waiting up to this long for the
  * answer. A stall past the participant's 1 s lease makes the server forget the station's

@@ -1,0 +1,51 @@
+#!/bin/sh
+# A server its machine stops for a while (SIGSTOP, then SIGCONT, as a swapping or starved
+# host would) keeps its trainee's session: stopped 0.8 s (past the station writers' 0.5 s
+# lease: the server holds the session, the station sees nothing of it and asks again when
+# the server's state says it holds it) and then 1.6 s (past the participants' 1 s lease too:
+# the station waits PALP_CLI_SERVER_GRACE_S, 1 s, for the server's state to come back
+# before taking it for lost). Both times the session goes on ("came back" in the server's
+# log), the trainee's presses are applied after it (feedback keeps coming), and the station
+# ends normally (exit 0, "trainee station left"). Before, the 1.6 s stop ended the station
+# with "server lost" (exit 3) and the 0.8 s stop left the session held until it closed as
+# "not back within 5 s". Domain 117 (docs/station.md, "A stalled server").
+set -u
+server=$1 client=$2 config_dir=$3
+export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
+tmp=$(mktemp -d)
+spid= cpid=
+trap '[ -n "$spid" ] && kill -CONT $spid 2>/dev/null; kill $spid $cpid 2>/dev/null; rm -rf "$tmp"' EXIT
+"$server" --config "$config_dir/server.json" --domain 117 --no-db > "$tmp/server.log" 2>&1 &
+spid=$!
+"$client" --role trainee --domain 117 --phantom 1 --name sid --profile sine --magnitude 1 --t-on 0 --t-off 60 \
+  --duration 9 --print-period 0 > "$tmp/client.log" 2>&1 &
+cpid=$!
+i=0
+until grep -q "session 1 opened" "$tmp/server.log" || [ $i -ge 100 ]; do sleep 0.1; i=$((i+1)); done
+sleep 1.5
+kill -STOP $spid; sleep 0.8; kill -CONT $spid
+sleep 2.0
+kill -STOP $spid; sleep 1.6; kill -CONT $spid
+wait $cpid
+crc=$?
+cpid=
+sleep 0.3
+kill $spid; wait $spid; spid=
+fail=0
+ok() { echo "ok   $1"; }
+bad() { echo "FAIL $1"; fail=1; }
+[ $crc -eq 0 ] && ok "the trainee station ran its 9 s and exited 0" || bad "the trainee station exited $crc"
+n=$(grep -c "came back after" "$tmp/server.log")
+[ "$n" -eq 2 ] && ok "the session went on after each stop (\"came back\" twice)" || bad "\"came back\" $n times (want 2)"
+grep -q "session 1 closed after .* (trainee station left)" "$tmp/server.log" && ok "session 1 ended as its station left" \
+  || bad "session 1 did not end as its station left"
+if grep -q "session 2 opened" "$tmp/server.log"; then bad "a second session opened"; else ok "no second session"; fi
+grep -q "the server was silent past its lease (its machine was busy) and is back; session 1 goes on" "$tmp/client.log" \
+  && ok "the trainee was told the server came back" || bad "the trainee was not told the server came back"
+# The feedback kept coming after the stops: 100 Hz over 9 s is ~900 samples, of which ~2.4 s
+# fall in the stops and the lapses; before the change the 0.8 s stop alone cut it to ~200.
+fb=$(sed -n 's/.* \([0-9]*\) feedback samples.*/\1/p' "$tmp/client.log" | tail -n 1)
+if [ -n "$fb" ] && [ "$fb" -ge 500 ]; then ok "$fb feedback samples (want >= 500: the presses went on being applied)"
+else bad "$fb feedback samples (want >= 500)"; fi
+[ $fail -eq 0 ] || { cat "$tmp/client.log"; grep -v "^20.*DEBUG" "$tmp/server.log" | tail -20; }
+exit $fail
