@@ -401,7 +401,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);
         } else {
-          if (st->doubt_until_ns) st->server_returns++;
+          if (st->doubt_until_ns && !st->doubt_after_stall) st->server_returns++; /* it, not we, was silent */
           st->doubt_until_ns = 0; /* its server is there */
           /* Open with a reason: the server waits for its trainee station, i.e. it lost this
            * one (its view of our leases lapsed while we, or it, did not run) and holds the
