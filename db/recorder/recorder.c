@@ -58,7 +58,15 @@ typedef struct rsession {
   double volume, pressure, max_disp; /* from the newest deformation sample, 0 until one arrives */
   uint64_t mesh_hash; /* FNV-1a of the newest logged mesh's positions (0: none yet) */
   int held;           /* its open state says why it waits: its trainee station lost, the session held */
+  dds_time_t lost_since; /* its state's writer lapsed then (0: alive); ended as lost RECORDER_SERVER_GRACE later */
 } rsession;
+
+/* How long a session whose state's writer lapsed is kept open for its server to come back
+ * [ns]: a server its machine stopped for a second or two lapses as a dead one does and
+ * goes on with its sessions (docs/station.md, "A stalled server"); ended earlier, the
+ * session was logged as ended `error` and its continuation as a second session. Longer
+ * than the stations' 1 s wait: a recorder has no hand to answer. */
+#define RECORDER_SERVER_GRACE DDS_SECS(5)
 
 /* A session that opened before its phantom's catalogue entry arrived (the two topics race). */
 typedef struct pending_open {
@@ -230,6 +238,10 @@ static void on_state(recorder *r, const palp_SessionState *m) {
   if (m->phase == palp_PHASE_OPEN) {
     rsession *known = find_session(r, m->session_id, 0);
     if (known) {
+      if (known->lost_since) {
+        known->lost_since = 0;
+        palp_log_info(r->log, "session %u: its server is back; recording goes on", m->session_id);
+      }
       note_held(r, known, m);
       return;
     }
@@ -271,12 +283,24 @@ static void on_state_lost(recorder *r, const palp_SessionState *key) {
    * once that sample is taken the not-alive instance may be gone, and
    * dds_instance_get_key with it (a dead server's session then stayed "running"). */
   rsession *s = find_session(r, key->session_id, 0);
-  if (!s || !s->open) return;
-  const char *why = "server lost (its session state's writer is gone)";
-  count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
-  count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
-  palp_log_warn(r->log, "session %u: %s", key->session_id, why);
-  s->open = 0;
+  if (!s || !s->open || s->lost_since) return;
+  s->lost_since = dds_time();
+  palp_log_warn(r->log, "session %u: its server's state lapsed; kept open %.0f s for the server to come back",
+                key->session_id, (double)RECORDER_SERVER_GRACE * 1e-9);
+}
+
+/* Sessions whose server did not come back within RECORDER_SERVER_GRACE: ended as lost. */
+static void end_lost_sessions(recorder *r, dds_time_t now) {
+  for (int i = 0; i < MAX_SESSIONS; i++) {
+    rsession *s = &r->s[i];
+    if (!s->open || !s->lost_since || now - s->lost_since < RECORDER_SERVER_GRACE) continue;
+    const char *why = "server lost (its session state's writer is gone)";
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
+    count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
+    palp_log_warn(r->log, "session %u: %s", s->id, why);
+    s->open = 0;
+    s->lost_since = 0;
+  }
 }
 
 static void on_contact(recorder *r, const palp_Contact *m) {
@@ -575,6 +599,7 @@ int main(int argc, char **argv) {
       if (k == 0) resolve_pending(r, 0, 0);
     }
     resolve_pending(r, 0, 0);
+    end_lost_sessions(r, dds_time());
   }
   dds_delete(pp);
   palp_db_writer_stats st;

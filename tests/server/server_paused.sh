@@ -8,13 +8,17 @@
 # log), the trainee's presses are applied after it (feedback keeps coming), and the station
 # ends normally (exit 0, "trainee station left"). Before, the 1.6 s stop ended the station
 # with "server lost" (exit 3) and the 0.8 s stop left the session held until it closed as
-# "not back within 5 s". Domain 117 (docs/station.md, "A stalled server").
+# "not back within 5 s". A palp-recorder on the same domain logs it as one session that ended
+# normally (before, it ended it `error` at the lapse and logged the rest as a second session).
+# Domain 117 (docs/station.md, "A stalled server").
 set -u
-server=$1 client=$2 config_dir=$3
+server=$1 client=$2 config_dir=$3 recorder=$4
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 tmp=$(mktemp -d)
-spid= cpid=
-trap '[ -n "$spid" ] && kill -CONT $spid 2>/dev/null; kill $spid $cpid 2>/dev/null; rm -rf "$tmp"' EXIT
+spid= cpid= rpid=
+trap '[ -n "$spid" ] && kill -CONT $spid 2>/dev/null; kill $spid $cpid $rpid 2>/dev/null; rm -rf "$tmp"' EXIT
+"$recorder" --domain 117 --db "$tmp/recorder.db" > "$tmp/recorder.log" 2>&1 &
+rpid=$!
 "$server" --config "$config_dir/server.json" --domain 117 --no-db > "$tmp/server.log" 2>&1 &
 spid=$!
 "$client" --role trainee --domain 117 --phantom 1 --name sid --profile sine --magnitude 1 --t-on 0 --t-off 60 \
@@ -31,6 +35,7 @@ crc=$?
 cpid=
 sleep 0.3
 kill $spid; wait $spid; spid=
+kill $rpid; wait $rpid; rpid=
 fail=0
 ok() { echo "ok   $1"; }
 bad() { echo "FAIL $1"; fail=1; }
@@ -47,5 +52,8 @@ grep -q "the server was silent past its lease (its machine was busy) and is back
 fb=$(sed -n 's/.* \([0-9]*\) feedback samples.*/\1/p' "$tmp/client.log" | tail -n 1)
 if [ -n "$fb" ] && [ "$fb" -ge 500 ]; then ok "$fb feedback samples (want >= 500: the presses went on being applied)"
 else bad "$fb feedback samples (want >= 500)"; fi
+rows=$(sqlite3 "$tmp/recorder.db" "SELECT trainee || ' ' || IFNULL(end_reason, 'running') FROM session")
+[ "$rows" = "sid normal" ] && ok "the recorder logged one session, ended normal" \
+  || { bad "the recorder logged: $(printf '%s' "$rows" | tr '\n' ';') (want: sid normal)"; cat "$tmp/recorder.log"; }
 [ $fail -eq 0 ] || { cat "$tmp/client.log"; grep -v "^20.*DEBUG" "$tmp/server.log" | tail -20; }
 exit $fail
