@@ -371,18 +371,23 @@ int palp_cli_station_leave(palp_cli_station *st) {
   return dds_dispose(st->request_w, &key) < 0 ? PALP_EIO : 0;
 }
 
+/* A gap over PALP_CLI_STALL_S between since and now [ns] was a stall of this process: the
+ * server may have lost it and be holding its session for the same request. The JOIN is
+ * sent three times a second apart: the server may learn of the lapse only after the first
+ * (a stall just over the lease). 1 when it was one. */
+static int note_stall(palp_cli_station *st, int64_t since, int64_t now) {
+  if (!since || now - since <= (int64_t)(PALP_CLI_STALL_S * 1e9)) return 0;
+  st->stall_s = (double)(now - since) * 1e-9;
+  st->stall_end_ns = now;
+  st->stalls++;
+  st->resends_left = st->has_last_join ? 3 : 0;
+  st->next_resend_ns = now;
+  return 1;
+}
+
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
-  if (st->last_check_ns && now - st->last_check_ns > (int64_t)(PALP_CLI_STALL_S * 1e9)) {
-    /* This process did not run: the server may have lost it and be holding its session
-     * for the same request. Sent three times a second apart: the server may learn of
-     * the lapse only after the first (a stall just over the lease). */
-    st->stall_s = (double)(now - st->last_check_ns) * 1e-9;
-    st->stall_end_ns = now;
-    st->stalls++;
-    st->resends_left = st->has_last_join ? 3 : 0;
-    st->next_resend_ns = now;
-  }
+  note_stall(st, st->last_check_ns, now);
   st->last_check_ns = now;
   if (st->resends_left > 0 && now >= st->next_resend_ns) {
     dds_write(st->request_w, &st->last_join);
@@ -424,6 +429,9 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
          * of ours, PALP_CLI_SERVER_GRACE_S otherwise; then it is lost. */
         /* The key is in the invalid sample (no dds_instance_get_key scan). */
         if (buf[i].session_id != st->session_id) continue;
+        /* Stopped within this call, after its start: the lapse is likely our own stall's
+         * (seen in the suite: a station stopped 1 s blamed the server). */
+        note_stall(st, now, palp_dds_now_ns());
         const int after_stall = st->stall_end_ns && now - st->stall_end_ns < 2000000000;
         if (!st->doubt_until_ns) {
           st->doubt_until_ns = now + (int64_t)((after_stall ? PALP_CLI_SERVER_WAIT_S : PALP_CLI_SERVER_GRACE_S) * 1e9);

@@ -5,7 +5,7 @@
 # the server's state says it holds it) and then 1.6 s (past the participants' 1 s lease too:
 # the station waits PALP_CLI_SERVER_GRACE_S, 1 s, for the server's state to come back
 # before taking it for lost). Both times the session goes on ("came back" in the server's
-# log), the trainee's presses are applied after it (feedback keeps coming), and the station
+# log, once or twice), the trainee's presses are applied after it (feedback keeps coming), and the station
 # ends normally (exit 0, "trainee station left"). Before, the 1.6 s stop ended the station
 # with "server lost" (exit 3) and the 0.8 s stop left the session held until it closed as
 # "not back within 5 s". A palp-recorder on the same domain logs it as one session that ended
@@ -40,8 +40,12 @@ fail=0
 ok() { echo "ok   $1"; }
 bad() { echo "FAIL $1"; fail=1; }
 [ $crc -eq 0 ] && ok "the trainee station ran its 9 s and exited 0" || bad "the trainee station exited $crc"
+# The 1.6 s stop always makes the server lose the station (its participant's lease too); the
+# 0.8 s stop does in most runs (not when the server's receive thread reads the station's
+# buffered samples before its lease check runs), so once or twice.
 n=$(grep -c "came back after" "$tmp/server.log")
-[ "$n" -eq 2 ] && ok "the session went on after each stop (\"came back\" twice)" || bad "\"came back\" $n times (want 2)"
+{ [ "$n" -ge 1 ] && [ "$n" -le 2 ]; } && ok "the session went on after the server lost its station (\"came back\" $n times)" \
+  || bad "\"came back\" $n times (want 1 or 2)"
 grep -q "session 1 closed after .* (trainee station left)" "$tmp/server.log" && ok "session 1 ended as its station left" \
   || bad "session 1 did not end as its station left"
 if grep -q "session 2 opened" "$tmp/server.log"; then bad "a second session opened"; else ok "no second session"; fi
