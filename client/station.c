@@ -254,7 +254,6 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->tick_rate_hz = r.tick_rate_hz;
   st->has_last_join = 1;
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
-  st->resends_left = 0;
   st->closed_seen = 0;
   st->next_held_ask_ns = 0;
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
@@ -371,29 +370,23 @@ int palp_cli_station_leave(palp_cli_station *st) {
   return dds_dispose(st->request_w, &key) < 0 ? PALP_EIO : 0;
 }
 
-/* A gap over PALP_CLI_STALL_S between since and now [ns] was a stall of this process: the
- * server may have lost it and be holding its session for the same request. The JOIN is
- * sent three times a second apart: the server may learn of the lapse only after the first
- * (a stall just over the lease). 1 when it was one. */
-static int note_stall(palp_cli_station *st, int64_t since, int64_t now) {
-  if (!since || now - since <= (int64_t)(PALP_CLI_STALL_S * 1e9)) return 0;
+/* A gap over PALP_CLI_STALL_S between since and now [ns] was a stall of this process:
+ * counted and told (report_stall), and a lapse of the server's lease seen right after it
+ * is waited for longer (below). The server may have lost this station meanwhile and hold
+ * its session: its state then says so, and the JOIN goes again from there (the one
+ * mechanism for a station's stall and a server's). */
+static void note_stall(palp_cli_station *st, int64_t since, int64_t now) {
+  if (!since || now - since <= (int64_t)(PALP_CLI_STALL_S * 1e9)) return;
   st->stall_s = (double)(now - since) * 1e-9;
   st->stall_end_ns = now;
   st->stalls++;
-  st->resends_left = st->has_last_join ? 3 : 0;
-  st->next_resend_ns = now;
-  return 1;
+  st->next_held_ask_ns = 0; /* a held state read now is answered now */
 }
 
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
   note_stall(st, st->last_check_ns, now);
   st->last_check_ns = now;
-  if (st->resends_left > 0 && now >= st->next_resend_ns) {
-    dds_write(st->request_w, &st->last_join);
-    st->resends_left--;
-    st->next_resend_ns = now + 1000000000;
-  }
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];

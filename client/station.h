@@ -40,14 +40,12 @@ typedef struct palp_cli_station {
    * server holds its session (station_grace) for the same request again, and the
    * station's own view of the server's lease may have lapsed too (docs/station.md,
    * "A stalled station"). Kept by palp_cli_station_session_closed. */
-  palp_SessionRequest last_join; /* the accepted JOIN, sent again after a stall */
+  palp_SessionRequest last_join; /* the accepted JOIN, sent again while the server holds its session */
   int has_last_join;
   int64_t last_check_ns;  /* the previous palp_cli_station_session_closed */
   int64_t stall_end_ns;   /* when the last stall ended; 0: none */
   double stall_s;         /* [s] its length */
   unsigned stalls;        /* stalls seen */
-  int resends_left;
-  int64_t next_resend_ns;
   int64_t doubt_until_ns; /* the server's lease lapsed: its state may come back until then */
   int doubt_after_stall;  /* ... and it lapsed right after a stall of this station's own */
   unsigned server_returns; /* lapses of the server's lease it came back from */
