@@ -584,8 +584,18 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   /* A display that joined since the last tick gets the shape now: the topic is volatile, so it has
    * seen nothing, and a sleeping world (held still, dented) would otherwise send nothing more. */
   const int members = atomic_load_explicit(&s->deform_members, memory_order_relaxed);
-  const int joined = members > s->deform_members_seen;
+  int joined = members > s->deform_members_seen;
   s->deform_members_seen = members;
+  /* The join is accepted before the display's reader exists, and a volatile frame sent
+   * before the writer has matched that reader is lost: the display then waited for the
+   * next once-a-second repeat of a sleeping shape (server_contact, under load). A new
+   * match is the moment it can receive one; looked at only while a display is a member. */
+  dds_publication_matched_status_t pm;
+  if (members > 0 && dds_get_publication_matched_status(s->deformation_writer, &pm) == 0 &&
+      pm.total_count != s->deform_matched_seen) {
+    s->deform_matched_seen = pm.total_count;
+    joined = 1;
+  }
   if (members > 0 && (joined || (now_ns >= s->next_deformation_ns && (awake || now_ns >= s->rest_refresh_ns)))) {
     publish_deformation(s);
     s->deformations_sent++;

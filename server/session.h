@@ -136,6 +136,7 @@ typedef struct palp_srv_session {
   int64_t last_feedback_ns;
   int64_t rest_refresh_ns;     /* when a sleeping world's shape is sent (again); 0 while awake */
   int deform_members_seen;     /* deform_members at the last tick: a rise is a display that just joined */
+  uint32_t deform_matched_seen; /* the deformation writer's total matched readers at the last look */
   uint64_t deformations_sent;  /* palp_deformation samples written */
   uint64_t filtered_seen_session, filtered_seen_finger; /* folded into stats.rejected so far */
   int64_t last_log_ns[PALP_SRV_REJ_COUNT];
