@@ -6,5 +6,6 @@ cd "$here"
 bash scripts/setup.sh
 build=${PALP_BUILD_DIR:-build}
 cd "$build"
-# two slots per core: the CPU-bound tests take two each (tests/CMakeLists.txt, "Slots")
-ctest --output-on-failure -j"$((2 * $(nproc)))" --timeout 300
+# two slots per core: the CPU-bound tests take two each, and the cores are a resource that keeps
+# the timing-sensitive tests apart from them (tests/CMakeLists.txt, "Slots")
+ctest --output-on-failure -j"$((2 * $(nproc)))" --timeout 300 --resource-spec-file "$here/tests/resources.json"

@@ -6,6 +6,7 @@ usage: check_render.py SHOT.png DOM.html SESSION_UID"""
 import struct
 import sys
 import zlib
+from itertools import accumulate
 
 
 def read_png(path):
@@ -24,25 +25,34 @@ def read_png(path):
         pos += 12 + n
     raw = zlib.decompress(idat)
     stride = w * bpp
-    rows, prev = [], bytearray(stride)
+    rows, prev = [], bytes(stride)
+    lo, hi = int.from_bytes(b"\x7f" * stride, "big"), int.from_bytes(b"\x80" * stride, "big")
     for y in range(h):
         f = raw[y * (stride + 1)]
-        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for i in range(stride):
-            a = line[i - bpp] if i >= bpp else 0
-            b = prev[i]
-            c = prev[i - bpp] if i >= bpp else 0
-            if f == 1:
-                line[i] = (line[i] + a) & 255
-            elif f == 2:
-                line[i] = (line[i] + b) & 255
-            elif f == 3:
-                line[i] = (line[i] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        rows.append(bytes(line))
+        line = raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)]
+        if f == 2:  # Up, the commonest: bytewise (x + b) mod 256 on whole rows as integers (no carry
+            # crosses a byte: the low 7 bits are added apart and the top bit is an exclusive or)
+            x, b = int.from_bytes(line, "big"), int.from_bytes(prev, "big")
+            line = (((x & lo) + (b & lo)) ^ ((x ^ b) & hi)).to_bytes(stride, "big")
+        elif f == 1:  # Sub: a running sum per channel
+            out = bytearray(stride)
+            for c in range(bpp):
+                out[c::bpp] = bytes(map((255).__and__, accumulate(line[c::bpp])))
+            line = bytes(out)
+        elif f in (3, 4):  # Average, Paeth: byte by byte
+            line = bytearray(line)
+            for i in range(stride):
+                a = line[i - bpp] if i >= bpp else 0
+                b = prev[i]
+                if f == 3:
+                    line[i] = (line[i] + (a + b) // 2) & 255
+                else:
+                    c = prev[i - bpp] if i >= bpp else 0
+                    p = a + b - c
+                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                    line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+            line = bytes(line)
+        rows.append(line)
         prev = line
     return w, h, bpp, rows
 
