@@ -1201,6 +1201,13 @@ int main(int argc, char **argv) {
   fflush(stdout);
   rc = trainee ? run_trainee(&o, &st, &ph, in) : run_viewer(&o, &st, &ph, observer);
   palp_cli_station_leave(&st);
+  if (st.goodbye_unanswered) {
+    /* Said even with --quiet: the instructor may otherwise read "not back" in the log as a crash. */
+    printf("[%s %s] the server did not answer within %.0f s after this station's stall, so its goodbye may be lost: "
+           "session %u may be logged as closed \"not back\" (after the server's station_grace) rather than as left\n",
+           o.role, o.name, PALP_CLI_LEAVE_WAIT_S, st.session_id);
+    fflush(stdout);
+  }
   /* Give the disposal a moment to reach the server before the participant goes. */
   struct timespec ts = {0, 100000000};
   nanosleep(&ts, NULL);

@@ -155,7 +155,8 @@ void palp_cli_phantom_free(palp_Phantom *p) {
   p->triangles._buffer = NULL;
 }
 
-static int send_request(palp_cli_station *st, const palp_cli_join *j, int op) {
+/* Writes a new request (the next request_seq); *sent (may be NULL) keeps a copy. */
+static int send_request(palp_cli_station *st, const palp_cli_join *j, int op, palp_SessionRequest *sent) {
   palp_SessionRequest rq;
   memset(&rq, 0, sizeof rq);
   snprintf(rq.station_id, sizeof rq.station_id, "%s", st->station_id);
@@ -172,6 +173,7 @@ static int send_request(palp_cli_station *st, const palp_cli_join *j, int op) {
   rq.want_feedback = j->want_feedback != 0;
   rq.want_deformation = j->want_deformation != 0;
   if (op == palp_OP_JOIN) st->last_join = rq, st->has_last_join = 0; /* kept once accepted */
+  if (sent) *sent = rq;
   return dds_write(st->request_w, &rq) < 0 ? PALP_EIO : 0;
 }
 
@@ -237,7 +239,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   palp_SessionReply r;
   memset(&r, 0, sizeof r);
   for (;;) {
-    if (send_request(st, j, palp_OP_JOIN) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
+    if (send_request(st, j, palp_OP_JOIN, NULL) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
     int got = await_reply(st, end, &r);
     if (got == 1) break;
     if (got < 0)
@@ -347,33 +349,56 @@ int palp_cli_station_leave(palp_cli_station *st) {
    * the server may have lost this participant with its lease and not found it again yet,
    * and a LEAVE sent now would go with the participant. The accepted JOIN once more, and
    * its answer awaited: the server then knows the station again (it resumed the held
-   * session, or it never lost it and answered again), and the goodbye reaches it. */
+   * session, or it never lost it and answered again); then the LEAVE, until answered. */
   const int64_t now = palp_dds_now_ns();
   const int out_of_stall = st->last_check_ns && now - st->last_check_ns > (int64_t)(PALP_CLI_STALL_S * 1e9);
   const int after_stall = st->stall_end_ns && now - st->stall_end_ns < (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9);
-  if (st->has_last_join && !st->closed_seen && st->last_join.role == palp_ROLE_TRAINEE && (out_of_stall || after_stall)) {
-    palp_SessionReply r, old;
+  const int careful =
+      st->has_last_join && !st->closed_seen && st->last_join.role == palp_ROLE_TRAINEE && (out_of_stall || after_stall);
+  int answered = 0;
+  int64_t end = now + (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9);
+  palp_SessionReply r;
+  if (careful) {
+    palp_SessionReply old;
     void *ptr[1] = {&old};
     dds_sample_info_t info;
     while (dds_take(st->reply_r, ptr, &info, 1, 1) > 0) { /* answers from before: not evidence */
     }
     /* Sent again every 0.3 s until answered, as a held session's JOIN is (session_closed):
      * a JOIN written while the server's reader is being matched to this writer again
-     * can be lost for good (a volatile reader starts after what the writer had sent), and
-     * one JOIN sent once could leave the goodbye to a server that did not know the station
-     * (the session then closed as "not back": server_stalled's wes, twice in the full test
-     * runs of 2026-12-03, never alone; the cause is read from the code, not traced). */
-    const int64_t end = now + (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9);
-    for (int64_t t = now; t < end; t = palp_dds_now_ns()) {
+     * can be lost for good (a volatile reader starts after what the writer had sent). */
+    for (int64_t t = now; t < end && !answered; t = palp_dds_now_ns()) {
       if (dds_write(st->request_w, &st->last_join) < 0) break;
       const int64_t slice = t + 300000000;
-      if (await_reply_to(st, st->last_join.request_seq, slice < end ? slice : end, &r) >= 0) break;
+      answered = await_reply_to(st, st->last_join.request_seq, slice < end ? slice : end, &r) >= 0;
     }
   }
   /* An explicit leave first, so the server can tell a goodbye from a crash;
    * then the disposal, which also ends the request's transient-local history. */
   palp_cli_join none = {.role = palp_ROLE_TRAINEE};
-  send_request(st, &none, palp_OP_LEAVE);
+  palp_SessionRequest lv;
+  send_request(st, &none, palp_OP_LEAVE, &lv);
+  if (careful && answered) {
+    /* The JOIN's answer is not proof that a LEAVE sent now arrives: answers are
+     * transient-local, so one the server wrote a while ago can be delivered now (one was
+     * taken 0.19 s after it was written), and a LEAVE the server has not fetched yet is
+     * replaced by the disposal below (keep-last 1): the session then closed as "not back"
+     * (server_stalled's wes, 2 runs in 16 under load, 2026-12-03; a LEAVE answered only
+     * 0.19 s after it was sent in 1 run of 25 since). The LEAVE's own answer (to its new
+     * request_seq, which no earlier reply carries) is proof, so the LEAVE goes again every
+     * 0.3 s until answered, for at least 1 s, before the disposal. */
+    const int64_t t0 = palp_dds_now_ns();
+    if (end < t0 + 1000000000) end = t0 + 1000000000;
+    answered = 0;
+    for (int64_t t = t0; t < end && !answered; t = palp_dds_now_ns()) {
+      if (t > t0 && dds_write(st->request_w, &lv) < 0) break;
+      const int64_t slice = t + 300000000;
+      answered = await_reply_to(st, lv.request_seq, slice < end ? slice : end, &r) >= 0;
+    }
+  }
+  /* Unanswered (the server is stopped, starved or gone): the goodbye still goes, but the
+   * user is told it may not arrive, so a session logged as "not back" is no surprise. */
+  st->goodbye_unanswered = careful && !answered;
   palp_SessionRequest key;
   memset(&key, 0, sizeof key);
   snprintf(key.station_id, sizeof key.station_id, "%s", st->station_id);

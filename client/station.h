@@ -51,6 +51,8 @@ typedef struct palp_cli_station {
   unsigned server_returns; /* lapses of the server's lease it came back from */
   int64_t next_held_ask_ns;  /* the server holds our session for us: the JOIN again, not before this */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
+  int goodbye_unanswered; /* palp_cli_station_leave asked to be found again after a stall and the server
+                           * did not answer within PALP_CLI_LEAVE_WAIT_S: the goodbye may be lost */
 } palp_cli_station;
 
 /* A gap between two palp_cli_station_session_closed calls longer than this was a stall
@@ -112,7 +114,10 @@ void palp_cli_phantom_free(palp_Phantom *p);
 int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen);
 /* Disposes the request instance: the server closes/leaves the session now. Right after a
  * stall of this process a trainee first waits (up to PALP_CLI_LEAVE_WAIT_S) until the
- * server answers its JOIN again, so that the goodbye reaches a server that knows it. */
+ * server answers its JOIN again, so that the goodbye reaches a server that knows it, and
+ * then until it answers the LEAVE (at least 1 s), before the disposal; when it does not
+ * answer, st->goodbye_unanswered is set (the caller tells the user: the server may log the
+ * session as "not back" after its station_grace) and the goodbye goes anyway. */
 int palp_cli_station_leave(palp_cli_station *st);
 
 /* Several servers on one domain (docs/deploy.md). The alive phantom called name
