@@ -51,8 +51,8 @@ typedef struct palp_cli_station {
   unsigned server_returns; /* lapses of the server's lease it came back from */
   int64_t next_held_ask_ns;  /* the server holds our session for us: the JOIN again, not before this */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
-  int goodbye_unanswered; /* palp_cli_station_leave, after a stall: the server answered neither its JOIN
-                           * (within PALP_CLI_LEAVE_WAIT_S) nor its LEAVE: the goodbye may be lost */
+  int goodbye_unanswered; /* palp_cli_station_leave, after a stall: the server did not answer its JOIN
+                           * (within PALP_CLI_LEAVE_WAIT_S) or then its LEAVE: the goodbye may be lost */
 } palp_cli_station;
 
 /* A gap between two palp_cli_station_session_closed calls longer than this was a stall
