@@ -322,7 +322,10 @@ static void *haptic_main(void *arg) {
      * within a period, the loop keeps its half-period offset from the floor's wake-ups,
      * and both count the same ticks (re-phasing to now lost ~half a tick per late
      * wake-up against the floor: 19-21 of ~2,050 ticks in a loaded test run). */
-    if (late > period) next += (late / period) * period;
+    if (late > period) {
+      next += (late / period) * period;
+      st->missed += (uint64_t)(late / period);
+    }
     const double t = (double)(now - t0) * 1e-9;
     if (d->duration > 0 && t >= d->duration) break;
     palp_vec3 x = {0, 0, 0};
@@ -479,6 +482,7 @@ void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out) {
     pthread_join(l->thread, NULL);
     palp_timer_floor_stop(&l->floor);
     l->stats.floor_ticks = l->floor.ticks, l->stats.floor_late_ticks = l->floor.late_ticks;
+    l->stats.floor_missed = l->floor.missed;
     l->stats.floor_late_max = l->floor.late_max;
     if (l->sender_started) {
       sem_post(&l->out_sem);

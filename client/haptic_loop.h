@@ -131,6 +131,9 @@ typedef struct palp_cli_haptic_stats {
    * such tick per stall (the missed deadlines are not made up). */
   uint64_t stalls;
   double stall_max, stall_total; /* [s] */
+  /* Deadlines skipped after a wake-up more than a period late (stalls included): ticks +
+   * missed is the span the loop ran, in periods, however loaded the machine was. */
+  uint64_t missed;
   uint64_t models;              /* models taken from the mailbox */
   uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
@@ -154,6 +157,7 @@ typedef struct palp_cli_haptic_stats {
    * nothing else; late past late_threshold. The loop's own late_ticks are read against
    * it. Filled at join. */
   uint64_t floor_ticks, floor_late_ticks;
+  uint64_t floor_missed;        /* its deadlines skipped, as missed: floor_ticks + floor_missed is its span */
   double floor_late_max;        /* [s] */
   int rt_ok;                    /* SCHED_FIFO granted */
   int ended;                    /* the input finished */

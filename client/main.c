@@ -706,7 +706,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (hs.floor_ticks)
     printf("[trainee %s] this machine's timer floor over the same %.1f s: a thread doing nothing at the haptic "
            "thread's priority woke > %.1f ms late on %llu of %llu ticks (%.3f%%, worst %.2f ms)\n", o->name,
-           (double)hs.floor_ticks / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
+           (double)(hs.floor_ticks + hs.floor_missed) / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
            (unsigned long long)hs.floor_ticks, 100.0 * (double)hs.floor_late_ticks / (double)hs.floor_ticks,
            hs.floor_late_max * 1e3);
   if (hs.limited_ticks)

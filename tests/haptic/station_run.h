@@ -75,19 +75,24 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   }
   palp_cli_haptic_join(hl, &out->hs);
   out->trace = d.trace;
-  /* The timer floor ran beside the loop, at its rate, over the same seconds: both skip
-   * the ticks of a stall longer than a period, so their counts differ by a few stalls
-   * at most (tolerance 3% + 5 ticks). */
+  /* The timer floor ran beside the loop, at its rate, over the same seconds: its span in
+   * periods (the wake-ups plus the deadlines skipped after a wake-up more than a period
+   * late) is the loop's, within 1% + 5 (the floor starts half a period after the loop and
+   * stops just after it). The wake-ups alone are not: on an oversubscribed machine the
+   * loop, preempted in its work, skips deadlines the idle floor does not (a fresh clone's
+   * test run, 2026-12-03: 1974 against 2040 over 2.1 s, 7.6% of the loop's ticks late). */
   const palp_cli_haptic_stats *h = &out->hs;
   printf("%s: timer floor beside the loop: %llu of %llu ticks late by > 0.5 ms (%.3f%%, worst %.2f ms); the loop "
          "%llu of %llu (%.3f%%, worst %.2f ms)\n", label, (unsigned long long)h->floor_late_ticks,
          (unsigned long long)h->floor_ticks, h->floor_ticks ? 100.0 * (double)h->floor_late_ticks / (double)h->floor_ticks : 0.0,
          h->floor_late_max * 1e3, (unsigned long long)h->late_ticks, (unsigned long long)h->ticks,
          h->ticks ? 100.0 * (double)h->late_ticks / (double)h->ticks : 0.0, h->late_max * 1e3);
-  CHECK(fabs((double)h->floor_ticks - (double)h->ticks) <= 0.03 * (double)h->ticks + 5 &&
+  const double loop_span = (double)(h->ticks + h->missed), floor_span = (double)(h->floor_ticks + h->floor_missed);
+  CHECK(h->floor_ticks > 0 && fabs(floor_span - loop_span) <= 0.01 * loop_span + 5 &&
             h->floor_late_ticks <= h->floor_ticks && isfinite(h->floor_late_max) && h->floor_late_max >= 0,
-        "%s: the timer floor ran beside the loop: %llu ticks against the loop's %llu (tolerance 3%% + 5)", label,
-        (unsigned long long)h->floor_ticks, (unsigned long long)h->ticks);
+        "%s: the timer floor ran beside the loop: %llu + %llu skipped periods against the loop's %llu + %llu "
+        "(tolerance 1%% + 5)", label, (unsigned long long)h->floor_ticks, (unsigned long long)h->floor_missed,
+        (unsigned long long)h->ticks, (unsigned long long)h->missed);
   if (nl) {
     qsort(lat, nl, sizeof *lat, sr_cmp);
     out->lat_p50_us = lat[(nl - 1) / 2];
