@@ -320,8 +320,10 @@ static void *haptic_main(void *arg) {
      * the newest force, not a queue of old ones. The missed deadlines are skipped on
      * their grid, as the timer floor skips them (app/timer_floor.c): the next one comes
      * within a period, the loop keeps its half-period offset from the floor's wake-ups,
-     * and both count the same ticks (re-phasing to now lost ~half a tick per late
-     * wake-up against the floor: 19-21 of ~2,050 ticks in a loaded test run). */
+     * and both cover the same periods, ticks + missed (re-phasing to now lost ~half a
+     * tick per late wake-up against the floor: 19-21 of ~2,050 ticks in a loaded test
+     * run). Their wake-ups alone differ under load: the loop, preempted in its work,
+     * skips deadlines the idle floor does not. */
     if (late > period) {
       next += (late / period) * period;
       st->missed += (uint64_t)(late / period);
