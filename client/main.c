@@ -691,11 +691,18 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     p50 = lat.us[(lat.n - 1) / 2];
     p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
   }
-  printf("[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms); "
+  /* Deadlines a late wake-up skipped got no force update at all (the device held its last
+   * force): said beside the late ticks, which count wake-ups, not the time they lost. */
+  char skipped[96] = "";
+  if (hs.missed)
+    snprintf(skipped, sizeof skipped, ", %llu deadline(s) skipped (the device held its last force)",
+             (unsigned long long)hs.missed);
+  printf("[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms)%s; "
          "%llu local models (%llu dropped as invalid), %llu contact samples sent at %.0f Hz; contact->model latency "
          "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s\n",
          o->name, st->session_id, (unsigned long long)hs.ticks, d.rate_hz, (unsigned long long)hs.late_ticks,
          d.late_threshold * 1e3, hs.ticks ? 100.0 * (double)hs.late_ticks / (double)hs.ticks : 0.0, hs.late_max * 1e3,
+         skipped,
          (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
          d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
          closed ? reason : "");

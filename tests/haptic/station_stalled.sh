@@ -35,6 +35,12 @@ stall=$(sed -n 's/.*was not run 1 time(s) for \([0-9.]*\) s in all.*/\1/p' "$tmp
 if [ -n "$stall" ] && awk -v s="$stall" 'BEGIN { exit !(s >= 0.9 && s <= 3.0) }'; then
   echo "ok   one stall of $stall s told apart (want 0.9-3 s)"
 else echo "FAIL no single stall of 0.9-3 s reported ('$stall')"; fail=1; fi
+# The deadlines the stop skipped are said beside the late ticks: ~1000 for 1 s at 1 kHz (the
+# stop's own length, 1 s, up to the 3 s the stall check allows).
+skipped=$(sed -n 's/.*haptic loop .*, \([0-9]*\) deadline(s) skipped (the device held its last force).*/\1/p' "$tmp/fay.log")
+if [ -n "$skipped" ] && [ "$skipped" -ge 900 ] && [ "$skipped" -le 3000 ]; then
+  echo "ok   $skipped deadlines skipped, the stop's (want 900-3000)"
+else echo "FAIL deadlines skipped: '$skipped' (want 900-3000)"; fail=1; fi
 worst=$(sed -n 's/.*haptic loop .* late by > 0.5 ms ([0-9.]*%, worst \([0-9.]*\) ms).*/\1/p' "$tmp/fay.log")
 if [ -n "$worst" ] && awk -v w="$worst" 'BEGIN { exit !(w < 400) }'; then
   echo "ok   the late ticks' worst is $worst ms, the stall not among them (want < 400 ms)"
