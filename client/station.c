@@ -344,6 +344,19 @@ int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *ou
   return got;
 }
 
+/* Writes rq (again, unless already_sent) every 0.3 s until the server answers its
+ * request_seq or end_ns passes: 1 answered, 0 not (a write that fails ends the wait). */
+static int ask_until_answered(palp_cli_station *st, const palp_SessionRequest *rq, int already_sent, int64_t end_ns) {
+  palp_SessionReply r;
+  for (int64_t t = palp_dds_now_ns(); t < end_ns; t = palp_dds_now_ns()) {
+    if (!already_sent && dds_write(st->request_w, rq) < 0) return 0;
+    already_sent = 0;
+    const int64_t slice = t + 300000000;
+    if (await_reply_to(st, rq->request_seq, slice < end_ns ? slice : end_ns, &r) >= 0) return 1;
+  }
+  return 0;
+}
+
 int palp_cli_station_leave(palp_cli_station *st) {
   /* Right out of a stall (the user's interrupt is often what ends it) or soon after one:
    * the server may have lost this participant with its lease and not found it again yet,
@@ -356,8 +369,7 @@ int palp_cli_station_leave(palp_cli_station *st) {
   const int careful =
       st->has_last_join && !st->closed_seen && st->last_join.role == palp_ROLE_TRAINEE && (out_of_stall || after_stall);
   int answered = 0;
-  int64_t end = now + (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9);
-  palp_SessionReply r;
+  const int64_t end = now + (int64_t)(PALP_CLI_LEAVE_WAIT_S * 1e9);
   if (careful) {
     palp_SessionReply old;
     void *ptr[1] = {&old};
@@ -367,11 +379,7 @@ int palp_cli_station_leave(palp_cli_station *st) {
     /* Sent again every 0.3 s until answered, as a held session's JOIN is (session_closed):
      * a JOIN written while the server's reader is being matched to this writer again
      * can be lost for good (a volatile reader starts after what the writer had sent). */
-    for (int64_t t = now; t < end && !answered; t = palp_dds_now_ns()) {
-      if (dds_write(st->request_w, &st->last_join) < 0) break;
-      const int64_t slice = t + 300000000;
-      answered = await_reply_to(st, st->last_join.request_seq, slice < end ? slice : end, &r) >= 0;
-    }
+    answered = ask_until_answered(st, &st->last_join, 0, end);
   }
   /* An explicit leave first, so the server can tell a goodbye from a crash;
    * then the disposal, which also ends the request's transient-local history. */
@@ -388,13 +396,7 @@ int palp_cli_station_leave(palp_cli_station *st) {
      * request_seq, which no earlier reply carries) is proof, so the LEAVE goes again every
      * 0.3 s until answered, for at least 1 s, before the disposal. */
     const int64_t t0 = palp_dds_now_ns();
-    if (end < t0 + 1000000000) end = t0 + 1000000000;
-    answered = 0;
-    for (int64_t t = t0; t < end && !answered; t = palp_dds_now_ns()) {
-      if (t > t0 && dds_write(st->request_w, &lv) < 0) break;
-      const int64_t slice = t + 300000000;
-      answered = await_reply_to(st, lv.request_seq, slice < end ? slice : end, &r) >= 0;
-    }
+    answered = ask_until_answered(st, &lv, 1, end > t0 + 1000000000 ? end : t0 + 1000000000);
   }
   /* Unanswered (the server is stopped, starved or gone): the goodbye still goes, but the
    * user is told it may not arrive, so a session logged as "not back" is no surprise. */
