@@ -762,7 +762,7 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
   ss->s.sessions._buffer = NULL;
   ss->s.sessions._length = ss->s.sessions._maximum = 0;
   ss->nsessions = n;
-  memcpy(ss->loads, m->sessions._buffer, sizeof *loads * n);
+  if (n) memcpy(ss->loads, m->sessions._buffer, sizeof *loads * n); /* an empty sequence's buffer is NULL */
   ss->at_ns = palp_dds_now_ns();
   build_status(h);
 }

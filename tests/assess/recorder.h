@@ -74,7 +74,7 @@ static inline void rec_step(recorder *rc, palp_vec3 dev) {
       return;
     }
   }
-  memcpy(rc->tri + rc->ntri, tri, sizeof(int) * (size_t)nt);
+  if (nt > 0) memcpy(rc->tri + rc->ntri, tri, sizeof(int) * (size_t)nt); /* rc->tri is NULL until a contact */
   palp_assess_sample *s = &rc->s[rc->n];
   *s = (palp_assess_sample){.t = palp_world_time(rc->w), .device = dev, .proxy = lm.proxy, .force = lm.force,
                             .contact = lm.contact, .point = lm.point, .area = lm.area, .triangle_count = nt};
