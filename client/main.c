@@ -18,7 +18,10 @@
 #include "station.h"
 #include "view.h"
 
-static volatile sig_atomic_t g_stop; /* set by SIGINT/SIGTERM; polled by the loops */
+/* Set by SIGINT/SIGTERM, polled by the loops. Atomic, not volatile sig_atomic_t: the signal may land
+ * on any thread of the process (Cyclone's, OpenBLAS's), and only a lock-free atomic may be shared
+ * between a handler and other threads (C17 7.14.1.1; ThreadSanitizer saw the race). */
+static atomic_int g_stop;
 static void on_signal(int sig) {
   (void)sig;
   g_stop = 1;

@@ -39,6 +39,7 @@ int palp_srv_run(palp_srv *srv, double duration);
 void palp_srv_request_stop(palp_srv *srv);
 /* Per-session table of every session the server ran (open ones too). */
 void palp_srv_print_summary(const palp_srv *srv, FILE *out);
+/* Sessions open now; any thread. */
 int palp_srv_open_sessions(const palp_srv *srv);
 /* Secured: session requests refused because they were not the sender's own
  * (another identity's station id, user name or disposal); any thread. */

@@ -10,7 +10,7 @@
  * positions after every store to g (the same operations, the same bits). An AVX2 clone
  * (its three-operand instructions: ~15% fewer per triangle), static so that the public
  * function stays a plain symbol; no fused multiply-add, so both give the same bits. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static double volume_gradient(int nv, int nt, const int (*restrict tri)[3], const palp_vec3 *restrict p,

@@ -389,8 +389,10 @@ static void stage_loads(palp_world *w, double h) {
   }
 }
 
-/* An AVX2 clone (three-operand instructions: ~18% fewer; no fused multiply-add, so the same bits). */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+/* An AVX2 clone (three-operand instructions: ~18% fewer; no fused multiply-add, so the same bits).
+ * Not under ThreadSanitizer: its instrumented ifunc resolvers run before its runtime is up and
+ * crash at load (scripts/sanitize.sh), so a TSan build takes the portable code, the same bits. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static void stage_membrane_forces(palp_world *w, double h) {
@@ -435,7 +437,7 @@ static inline double hinge_turn(const int *restrict v, const palp_vec3 *restrict
  * and without restrict the compiler reloads every coefficient after each store. An
  * AVX2 clone (three-operand instructions, ~14% fewer per hinge; no fused multiply-add,
  * so the same bits). */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static double bending_add(const palp_world *w, palp_vec3 *restrict f) {
@@ -1070,7 +1072,7 @@ static const double *zpair(zstore *z, const palp_ldl *f, int a, int b) {
  * they are read from beyond the caches, and half the bytes is most of the time
  * (docs/model.md). The AVX2 clone does the same widening, multiply and add per entry
  * (no fused multiply-add), so both clones give the same bits. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static void axpy(int n, double c, const float *restrict col, double *restrict x) {
@@ -1081,7 +1083,7 @@ static void axpy(int n, double c, const float *restrict col, double *restrict x)
  * calls would (the same bits), reading and writing x once: a contact inside a triangle
  * of the smooth surface loads three vertices, nine columns, where one at a vertex of the
  * facets loaded three. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static void axpy3(int n, const double c[3], const float *restrict col, size_t stride, double *restrict x) {
@@ -1687,7 +1689,7 @@ static inline __attribute__((always_inline)) int link_states_loop(
   return (stale != 0) | ((unsafe != 0) << 1);
 }
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static int link_states(int nl, const double *restrict dx, const double *restrict dy, const double *restrict dz,

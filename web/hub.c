@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -160,7 +161,7 @@ struct palp_web_hub {
   dds_entity_t exercise_r, fstatus_r;
   dds_entity_t ws, stop_gc;
   pthread_t thread;
-  int running;
+  atomic_int running; /* written by palp_web_hub_stop, read by the hub's thread */
   palp_web_wake_fn wake;
   void *wake_ctx;
   uint32_t request_seq;

@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,7 +22,7 @@
 #include "palp_dds.h"
 #include "serve.h"
 
-static volatile sig_atomic_t g_stop;
+static atomic_int g_stop; /* atomic: a signal may land on any thread (client/main.c) */
 static void on_signal(int sig) {
   (void)sig;
   g_stop = 1;

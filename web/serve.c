@@ -2,6 +2,7 @@
 #include "serve.h"
 
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -269,7 +270,7 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
 
 int palp_web_serve_port(const palp_web_server *s) { return lws_get_vhost_listen_port(s->vh); }
 
-void palp_web_serve_run(palp_web_server *s, volatile sig_atomic_t *stop) {
+void palp_web_serve_run(palp_web_server *s, atomic_int *stop) {
   /* The hub wakes the loop at least every 100 ms, so a stop request is seen that soon. */
   while (!*stop)
     if (lws_service(s->ctx, 0) < 0) break;

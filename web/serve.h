@@ -10,6 +10,7 @@
 #define PALP_WEB_SERVE_H
 
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdint.h>
 
 #include "hub.h"
@@ -35,7 +36,7 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
 /* The port actually bound (useful with port 0). */
 int palp_web_serve_port(const palp_web_server *s);
 /* Serves until *stop becomes non-zero. */
-void palp_web_serve_run(palp_web_server *s, volatile sig_atomic_t *stop);
+void palp_web_serve_run(palp_web_server *s, atomic_int *stop);
 /* Thread-safe: makes the service loop push new hub messages to the browsers. */
 void palp_web_serve_wake(void *server);
 void palp_web_serve_stats_get(const palp_web_server *s, palp_web_serve_stats *out);

@@ -16,6 +16,7 @@
  * so a busy recorder does not overwrite them itself. */
 #include <math.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -86,7 +87,7 @@ typedef struct recorder {
   palp_log *log;
 } recorder;
 
-static volatile sig_atomic_t stop_flag, hup_flag;
+static atomic_int stop_flag, hup_flag; /* atomic: a signal may land on any thread (client/main.c) */
 static void on_signal(int sig) {
   if (sig == SIGHUP) hup_flag = 1; /* log rotation: re-open --log-file in the main loop */
   else stop_flag = 1;

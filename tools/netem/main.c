@@ -2,6 +2,7 @@
  * with delay, jitter and loss (netem.h; docs/station.md). */
 #include <errno.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,7 +13,7 @@
 #include "palp.h"
 #include "palp_dds.h"
 
-static volatile sig_atomic_t g_stop;
+static atomic_int g_stop; /* atomic: a signal may land on any thread (client/main.c) */
 static void on_signal(int sig) {
   (void)sig;
   g_stop = 1;

@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# Builds palp with a sanitizer into a build directory of its own and runs the tests under it.
+#
+#   scripts/sanitize.sh address [CTEST_REGEX]  AddressSanitizer + UndefinedBehaviorSanitizer
+#                                              (every test but the few listed below; ~35 min)
+#   scripts/sanitize.sh thread  [CTEST_REGEX]  ThreadSanitizer over the threaded programs' tests
+#                                              (servers, stations, recorder, web; ~20 min)
+#
+# Not part of the test command (scripts/test.sh must stay under 10 minutes); run it after a
+# change to threads, buffers or parsers, as scripts/fuzz.sh after a change to a parser.
+# Every report goes to out/sanitize/<kind>/ (log_path), whichever process wrote it: the tests
+# start servers, stations and recorders as child processes, and their stderr is not always kept.
+# Exit status 0 only if no report names palp's code and (address) every test passed.
+#
+# What the sanitizers change, and so what is left out or set (docs/robustness.md, "Sanitizers"):
+# - model_effects counts the world's heap with mallinfo2, which ASan's allocator does not fill;
+#   model_finger_memcheck runs valgrind, which cannot run an ASan binary; install_prefix checks
+#   that no binary names the source tree, which UBSan's messages do, and links a plain program
+#   against the installed (here instrumented) library. These three are left out.
+# - server_flood bounds the server's memory growth over a flood to 4 MB: ASan's quarantine of
+#   freed blocks (256 MB) is growth by design, so that test runs with the quarantine off.
+# - eval_finger_long_term_fine and model_finger_surface exceed their CTest timeouts 3-10x slower;
+#   left out by default (run by hand under ASan on 2026-12-03: both passed, no report).
+# - Debian's Fast DDS 2.9 (interop_fastdds's peer) deletes one of its own objects through the
+#   wrong type (new-delete-type-mismatch inside libfastrtps): its bug, not palp's, so that check
+#   is off.
+# - ThreadSanitizer cannot see inside Cyclone DDS (Debian's libddsc is not instrumented: its
+#   atomics are invisible), so its internal hand-offs are reported as races; tsan_reports.py
+#   counts those apart and fails on any report with palp's code in one of its stacks. Its
+#   runtime wants at most 28 bits of mmap randomisation (vm.mmap_rnd_bits).
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+cd "$here"
+kind=${1:-}
+regex=${2:-}
+case "$kind" in
+  address)
+    flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+    link="-fsanitize=address,undefined"
+    build=${PALP_BUILD_DIR:-build-asan}
+    exclude='^(model_effects|model_finger_memcheck|install_prefix|eval_finger_long_term_fine|model_finger_surface|server_flood)$'
+    ;;
+  thread)
+    flags="-fsanitize=thread -fno-omit-frame-pointer"
+    link="-fsanitize=thread"
+    build=${PALP_BUILD_DIR:-build-tsan}
+    exclude='^(model_finger_memcheck|install_prefix)$'
+    regex=${regex:-'^(model_refactor_lag|fem_phantom_background|server_|security_classroom|db_|haptic_|web_|assess_trainees_dds|review_cli|interop_fastdds)'}
+    bits=$(cat /proc/sys/vm/mmap_rnd_bits 2>/dev/null || echo 28)
+    if [ "$bits" -gt 28 ]; then
+      echo "sanitize: ThreadSanitizer needs vm.mmap_rnd_bits <= 28 (it is $bits): sysctl -w vm.mmap_rnd_bits=28" >&2
+      exit 2
+    fi
+    ;;
+  *)
+    echo "usage: scripts/sanitize.sh address|thread [CTEST_REGEX]" >&2
+    exit 2
+    ;;
+esac
+
+PALP_BUILD_DIR=build bash scripts/setup.sh >/dev/null # the Debian packages and the plain build, as the test command
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_FLAGS="$flags" \
+  -DCMAKE_EXE_LINKER_FLAGS="$link" -DCMAKE_SHARED_LINKER_FLAGS="$link" >/dev/null
+cmake --build "$build" -j"$(nproc)" >/dev/null
+
+logs="$here/out/sanitize/$kind"
+rm -rf "$logs" && mkdir -p "$logs"
+export ASAN_OPTIONS="detect_leaks=1:new_delete_type_mismatch=0:log_path=$logs/asan"
+export UBSAN_OPTIONS="print_stacktrace=1:log_path=$logs/ubsan"
+export TSAN_OPTIONS="halt_on_error=0:second_deadlock_stack=1:log_path=$logs/tsan"
+select=(-E "$exclude") # address: server_flood runs on its own below, its quarantine off
+[ -n "$regex" ] && select+=(-R "$regex")
+status=0
+(cd "$build" && ctest -j"$(nproc)" --resource-spec-file ../tests/resources.json "${select[@]}" --output-on-failure) >"$logs/ctest.log" 2>&1 || status=1
+if [ "$kind" = address ] && { [ -z "$regex" ] || [[ server_flood =~ $regex ]]; }; then
+  (cd "$build" && ASAN_OPTIONS="$ASAN_OPTIONS:quarantine_size_mb=0" ctest -R '^server_flood$' --output-on-failure) \
+    >>"$logs/ctest.log" 2>&1 || status=1
+fi
+grep -E "tests passed|\*\*\*" "$logs/ctest.log" || true
+
+reports=$(find "$logs" -name 'asan.*' -o -name 'ubsan.*' | sort)
+if [ "$kind" = address ]; then
+  for f in $reports; do
+    echo "sanitize: report $f:" && head -20 "$f"
+    status=1
+  done
+  echo "sanitize: $(echo "$reports" | grep -c . || true) AddressSanitizer/UndefinedBehaviorSanitizer report(s)"
+else
+  # Under ThreadSanitizer the verdict is the reports: a test that times out 5-15x slower is
+  # listed above but is not a finding.
+  status=0
+  tsan=$(find "$logs" -name 'tsan.*' | sort)
+  if [ -n "$tsan" ]; then
+    python3 tests/sanitize/tsan_reports.py $tsan || status=1
+  else
+    echo "sanitize: no ThreadSanitizer report"
+  fi
+fi
+echo "sanitize: $kind: $([ $status = 0 ] && echo clean || echo FINDINGS) (logs in $logs)"
+exit $status
