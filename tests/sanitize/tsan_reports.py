@@ -22,16 +22,20 @@ RUNTIME = ("libtsan", "sanitizer_common", "libc.so", "libstdc++")
 def palp_frame(module):
     """A frame in palp's own code: its programs and tests, or its shared libraries (libpalp*)."""
     name = module.split("+")[0]
-    if not name:
+    if not name or name.startswith("("):
         return False  # no stack kept (TSan's history ran out): nothing to blame
     return not re.match(r"lib.*\.so", name) or name.startswith("libpalp")
 
 
 def first_own(frames):
-    """The first frame outside the sanitizer and the C library: (function, place, module)."""
+    """The frame that made the access: the first outside the sanitizer and the C library, as
+    (function, place, module). A library's header function inlined into palp's binary (its place
+    under /usr/, as Cyclone's ddsi_serdata_to_ser) is the library's access, not palp's."""
     for fn, where, module in frames:
         if any(r in (where or "") + (module or "") for r in RUNTIME):
             continue
+        if (where or "").startswith("/usr/"):
+            return fn, where, "(inlined library header)"
         return fn, where, module or ""
     return ("?", "?", "")
 
@@ -49,7 +53,10 @@ def main(paths):
             kind = re.search(r"WARNING: ThreadSanitizer: ([^(\n]+)", rep).group(1).strip()
             stacks, cur = [], None
             for line in rep.splitlines():
-                if ACCESS.match(line):
+                if "WARNING: ThreadSanitizer" in line:
+                    cur = []  # the stack right under the warning (an unlock, a signal handler)
+                    stacks.append((kind, cur))
+                elif ACCESS.match(line):
                     cur = []
                     stacks.append((line.strip(), cur))
                 elif cur is not None:
