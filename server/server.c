@@ -85,8 +85,7 @@ struct palp_srv {
 
   palp_srv_ticker *ticker;
   palp_srv_session **sessions; /* open sessions, [cfg.max_sessions] */
-  int session_count;
-  atomic_int open_sessions; /* session_count for other threads (palp_srv_open_sessions) */
+  atomic_int session_count; /* changed by the server's thread; read by any (palp_srv_open_sessions) */
   uint32_t next_session_id;
   uint64_t sessions_total;
   uint64_t rejected_closed[PALP_SRV_REJ_COUNT]; /* counters of sessions already closed */
@@ -641,7 +640,6 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   for (int i = 0; i < srv->session_count; i++)
     if (srv->sessions[i] == s) {
       srv->sessions[i] = srv->sessions[--srv->session_count];
-      atomic_store(&srv->open_sessions, srv->session_count);
       break;
     }
   palp_srv_phantom *ph = s->phantom;
@@ -894,7 +892,6 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
-    atomic_store(&srv->open_sessions, srv->session_count);
     if (s->finding_rc > 0) dds_waitset_attach(srv->waitset, s->finding_rc, 0);
     publish_finding_status(s);
     st->session_id = s->id;
@@ -1521,7 +1518,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
   return result;
 }
 
-int palp_srv_open_sessions(const palp_srv *srv) { return atomic_load(&srv->open_sessions); }
+int palp_srv_open_sessions(const palp_srv *srv) { return atomic_load(&srv->session_count); }
 
 uint64_t palp_srv_refused_requests(palp_srv *srv) { return atomic_load(&srv->refused_requests); }
 
