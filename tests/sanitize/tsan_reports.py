@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Summarise ThreadSanitizer log files (scripts/sanitize.sh thread).
 
-Each report is reduced to its kind and, for each stack it names (the two racing accesses, a
-mutex's acquisitions, ...), the first frame outside the sanitizer's runtime and the C library. A
-report in which no such frame is palp's own (a program or test of this tree, or a libpalp* shared
-library) is counted as a library's and not printed: Debian's Cyclone DDS, CHOLMOD, its OpenMP
+Each report is reduced to its kind and, for each stack it names (the warning's own, the two racing
+accesses, a mutex's acquisitions, ...), the frame that made the access: the first outside the
+sanitizer's runtime and the C library. A report in which no such frame is palp's own (a program or
+test of this tree, or a libpalp* shared library; a library's header function inlined into palp's
+binary is the library's) is counted as a library's and not printed: Debian's Cyclone DDS, CHOLMOD, its OpenMP
 runtime and OpenBLAS are not instrumented, so TSan cannot see their atomics and takes their
 internal hand-offs for races. Every other report is printed, and the exit status is 1 if there is
 any.
@@ -19,25 +20,19 @@ FRAME = re.compile(r"^\s*#\d+ (\S+) (\S+)(?: \((\S+)\))?")
 RUNTIME = ("libtsan", "sanitizer_common", "libc.so", "libstdc++")
 
 
-def palp_frame(module):
-    """A frame in palp's own code: its programs and tests, or its shared libraries (libpalp*)."""
-    name = module.split("+")[0]
-    if not name or name.startswith("("):
-        return False  # no stack kept (TSan's history ran out): nothing to blame
-    return not re.match(r"lib.*\.so", name) or name.startswith("libpalp")
-
-
-def first_own(frames):
-    """The frame that made the access: the first outside the sanitizer and the C library, as
-    (function, place, module). A library's header function inlined into palp's binary (its place
-    under /usr/, as Cyclone's ddsi_serdata_to_ser) is the library's access, not palp's."""
+def accessor(frames):
+    """The frame that made the access, (function, place, module, palp's?): the first outside the
+    sanitizer and the C library. A library's header function inlined into palp's binary (its place
+    under /usr/, as Cyclone's ddsi_serdata_to_ser) is the library's access; a stack TSan did not
+    keep (its history ran out) blames no one."""
     for fn, where, module in frames:
-        if any(r in (where or "") + (module or "") for r in RUNTIME):
+        where, module = where or "", module or ""
+        if any(r in where + module for r in RUNTIME):
             continue
-        if (where or "").startswith("/usr/"):
-            return fn, where, "(inlined library header)"
-        return fn, where, module or ""
-    return ("?", "?", "")
+        name = module.split("+")[0]
+        ours = not where.startswith("/usr/") and (not re.match(r"lib.*\.so", name) or name.startswith("libpalp"))
+        return fn, where, module, ours
+    return ("?", "?", "", False)
 
 
 def reports(text):
@@ -65,14 +60,14 @@ def main(paths):
                         cur.append(m.groups())
                     elif not line.strip():
                         cur = None
-            tops = [(head, first_own(fr)) for head, fr in stacks]
-            if tops and not any(palp_frame(module) for _, (_, _, module) in tops):
+            tops = [(head, accessor(fr)) for head, fr in stacks]
+            if tops and not any(ours for _, (_, _, _, ours) in tops):
                 lib += 1
                 continue
             own.append((p, kind, tops))
     for p, kind, tops in own:
         print(f"{p}: {kind}")
-        for head, (fn, where, module) in tops:
+        for head, (fn, where, module, _) in tops:
             print(f"    {head[:60]:60s} {fn} {where} {module}")
     print(f"tsan_reports: {len(own)} report(s) in palp's code, {lib} inside uninstrumented libraries only (not shown)")
     return 1 if own else 0
