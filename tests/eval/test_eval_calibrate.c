@@ -340,6 +340,48 @@ static void test_deep_press(void) {
   CHECK(strain > 2.0, "and strains its links beyond 200%% (%.2f)", strain);
 }
 
+/* The fingertip curve's step (palp_eval_finger_rt_step): a scene whose contact is linearised
+ * at the current positions is driven at 4 ms, and its curve there is the one at 1 ms within
+ * 0.1% (the held force's step independence, model_finger_step's 0.1% at one depth, here over
+ * the curve's ramps, holds and corrections); a "free" scene stays at 1 ms, where its sets were
+ * fitted (its held force 45 deg off the pole at 3 mm falls 3.4% from 1 to 4 ms). */
+static void test_finger_step(void) {
+  palp_scene sc;
+  char err[512] = "";
+  if (palp_scene_load(PALP_CONFIG_DIR "/phantoms/dome.json", &sc, err, sizeof err)) {
+    CHECK(0, "exercise dome: %s", err);
+    return;
+  }
+  CHECK(sc.world.finger_linearise == PALP_FINGER_LINEARISE_CURRENT, "the exercise dome's contact is not \"current\"");
+  CHECK(palp_eval_finger_rt_step(&sc.world) == 0.004, "its fingertip step %g s, not 4 ms",
+        palp_eval_finger_rt_step(&sc.world));
+  palp_world_def fr = sc.world;
+  fr.finger_linearise = PALP_FINGER_LINEARISE_FREE;
+  CHECK(palp_eval_finger_rt_step(&fr) == 0.001, "a free scene's fingertip step %g s, not 1 ms",
+        palp_eval_finger_rt_step(&fr));
+  const double th = 45.0 * 3.14159265358979323846 / 180.0;
+  const palp_vec3 n = {sin(th), 0, cos(th)};
+  const double depth[3] = {1e-3, 3e-3, 6e-3};
+  double F4[3], F1[3], D4[3], D1[3];
+  const int r4 = palp_eval_finger_rt(&sc.world, NULL, 0, n, 0.008, depth, 3, 1.0, F4, D4, err, sizeof err);
+  CHECK(r4 == 3, "the curve at 4 ms: %s", err);
+  const int r1 = palp_eval_finger_rt_at(&sc.world, 0.001, NULL, 0, n, 0.008, depth, 3, 1.0, F1, D1, err, sizeof err);
+  CHECK(r1 == 3, "the curve at 1 ms: %s", err);
+  if (r4 != 3 || r1 != 3) return;
+  for (int k = 0; k < 3; ++k) {
+    printf("exercise dome, 45 deg, %.0f mm: %.4f N at 4 ms, %.4f N at 1 ms (%+.3f%%)\n", 1e3 * depth[k], F4[k], F1[k],
+           100.0 * (F4[k] / F1[k] - 1.0));
+    CHECK(F1[k] > 0.0 && fabs(F4[k] / F1[k] - 1.0) < 1e-3, "%.0f mm: %.4f N at 4 ms against %.4f N at 1 ms (want 0.1%%)",
+          1e3 * depth[k], F4[k], F1[k]);
+    CHECK(fabs(D4[k] - depth[k]) < 5e-6 && fabs(D1[k] - depth[k]) < 5e-6, "%.0f mm: the proxy at %.4f / %.4f mm",
+          1e3 * depth[k], 1e3 * D4[k], 1e3 * D1[k]);
+  }
+  err[0] = 0;
+  CHECK(palp_eval_finger_rt_at(&sc.world, 0.0, NULL, 0, n, 0.008, depth, 1, 1.0, F4, D4, err, sizeof err) == -1 &&
+            strstr(err, "step"),
+        "a zero step is refused with a reason (\"%s\")", err);
+}
+
 int main(int argc, char **argv) {
   gsl_set_error_handler_off();
   const char *only = argc > 1 ? argv[1] : "all";
@@ -349,6 +391,7 @@ int main(int argc, char **argv) {
   if (!strcmp(only, "all") || !strcmp(only, "finger")) test_finger_residuals();
   if (!strcmp(only, "all") || !strcmp(only, "peak")) test_peak_residual();
   if (!strcmp(only, "all") || !strcmp(only, "deep_press")) test_deep_press();
+  if (!strcmp(only, "all") || !strcmp(only, "finger_step")) test_finger_step();
   if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
   else printf("ok\n");
   return failures ? 1 : 0;

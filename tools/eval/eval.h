@@ -151,13 +151,28 @@ typedef struct palp_eval_finger_ref {
 } palp_eval_finger_ref;
 
 /* The real-time model's fingertip force-depth curve (world def wd with the lesions
- * added, 1 ms steps): a finger of `radius` whose device is ramped at 5 mm/s to each
- * depth in turn along -n and held (hold_s, hold_s, hold_s / 2 with two corrections)
- * so that the proxy, the fingertip centre, sits at depth[k]. force[k]: the force
- * along n [N]; depth_real[k]: where the proxy ended [m]. Returns count or -1. */
+ * added, stepped at palp_eval_finger_rt_step(wd)): a finger of `radius` whose device is
+ * ramped at 5 mm/s to each depth in turn along -n and held (hold_s, hold_s, hold_s / 2
+ * with two corrections) so that the proxy, the fingertip centre, sits at depth[k].
+ * force[k]: the force along n [N]; depth_real[k]: where the proxy ended [m]. Returns
+ * count or -1. palp_eval_finger_rt_at: the same at a step dt [s] of the caller's. */
 int palp_eval_finger_rt(const palp_world_def *wd, const palp_lesion *lesions, int lesion_count, palp_vec3 n,
                         double radius, const double *depth, int count, double hold_s, double *force,
                         double *depth_real, char *err, size_t errlen);
+int palp_eval_finger_rt_at(const palp_world_def *wd, double dt, const palp_lesion *lesions, int lesion_count,
+                           palp_vec3 n, double radius, const double *depth, int count, double hold_s, double *force,
+                           double *depth_real, char *err, size_t errlen);
+
+/* The step [s] the fingertip curve drives wd at. 4 ms, the exercises' 250 Hz, where the
+ * fingertip's contact is linearised at the current positions (finger_linearise "current"):
+ * its held force does not depend on the step (test model_finger_step: within 0.1% at 4, 1
+ * and 0.25 ms; the 1,300-vertex long-term set's curve to 4 mm within 0.01% at 4 and 1 ms),
+ * and a quarter of the steps makes the fingertip tests ~3.5x faster. 1 ms otherwise: the
+ * "free" linearisation's held force falls with a longer step (the long-term dome 45 deg
+ * off the pole at 3 mm: 5.45 / 5.30 / 5.19 / 5.12 N at 0.5 / 1 / 2 / 4 ms) and its sets
+ * were fitted and validated at 1 ms (docs/haptics.md, "The held force depends on the physics
+ * step"). */
+double palp_eval_finger_rt_step(const palp_world_def *wd);
 
 /* A deep press, the check a fitted set must pass before it ships (docs/evaluation.md,
  * docs/materials.md "The refit withdrawn"): the default fingertip (8 mm, 2000 N/m) on the

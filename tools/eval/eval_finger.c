@@ -47,11 +47,26 @@ double palp_eval_deep_press(const palp_world_def *wd0, palp_vec3 n, double max_d
   return lost;
 }
 
-int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int nles, palp_vec3 n, double radius,
+double palp_eval_finger_rt_step(const palp_world_def *wd) {
+  return wd->finger_linearise == PALP_FINGER_LINEARISE_CURRENT ? 0.004 : 0.001;
+}
+
+int palp_eval_finger_rt(const palp_world_def *wd, const palp_lesion *les, int nles, palp_vec3 n, double radius,
                         const double *depth, int count, double hold_s, double *force, double *depth_real, char *err,
                         size_t errlen) {
+  return palp_eval_finger_rt_at(wd, palp_eval_finger_rt_step(wd), les, nles, n, radius, depth, count, hold_s, force,
+                                depth_real, err, errlen);
+}
+
+int palp_eval_finger_rt_at(const palp_world_def *wd0, double dt, const palp_lesion *les, int nles, palp_vec3 n,
+                           double radius, const double *depth, int count, double hold_s, double *force,
+                           double *depth_real, char *err, size_t errlen) {
   palp_world_def wd = *wd0;
-  wd.dt = 0.001;
+  if (!(dt > 0.0 && dt <= 0.01)) {
+    snprintf(err, errlen, "real-time finger: step %g s (want 0 < dt <= 10 ms)", dt);
+    return -1;
+  }
+  wd.dt = dt;
   if (nles < 0 || nles > PALP_MAX_LESIONS) {
     snprintf(err, errlen, "real-time finger: %d lesions (0 to %d)", nles, PALP_MAX_LESIONS);
     return -1;
@@ -85,14 +100,15 @@ int palp_eval_finger_rt(const palp_world_def *wd0, const palp_lesion *les, int n
        * of the device's move, and plain error feedback then converged by ~20% a
        * pass); always six passes, so that the force is a continuous function of the
        * model's parameters (a calibration differentiates it) */
-      while (fabs(target - dd) > 5e-6) {
-        dd += target > dd ? 5e-6 : -5e-6;
+      const double travel = 5e-3 * dt; /* [m] a step at 5 mm/s */
+      while (fabs(target - dd) > travel) {
+        dd += target > dd ? travel : -travel;
         palp_world_set_finger_device(w, fid, along(n, R + r - dd));
         palp_world_step(w);
       }
       dd = target;
       palp_world_set_finger_device(w, fid, along(n, R + r - dd));
-      const int hold = (int)lround((pass < 2 ? 1000.0 : 500.0) * hold_s);
+      const int hold = (int)lround((pass < 2 ? 1.0 : 0.5) * hold_s / dt);
       for (int s = 0; s < hold; ++s) palp_world_step(w);
       palp_world_finger_local_model(w, fid, &lm);
       const double pr = sqrt(lm.proxy.x * lm.proxy.x + lm.proxy.y * lm.proxy.y + lm.proxy.z * lm.proxy.z);
