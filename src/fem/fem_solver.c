@@ -54,6 +54,34 @@ static void blas_restore(int t) {
   if (t > 1) openblas_set_num_threads(t);
 }
 
+/* OpenMP's nesting control, present when CHOLMOD runs with an OpenMP runtime (Debian's
+ * links libgomp); weak, so NULL without one. */
+extern void omp_set_max_active_levels(int levels) __attribute__((weak));
+extern int omp_get_max_active_levels(void) __attribute__((weak));
+
+/* CHOLMOD's factorisations on one thread. Debian's CHOLMOD 5.12 runs loops inside
+ * cholmod_super_numeric as OpenMP regions of a fixed num_threads(4) (CHOLMOD_OMP_NUM_THREADS,
+ * cholmod_core.h), which OMP_NUM_THREADS and omp_set_num_threads do not lower: four threads
+ * on the 2-core machine, meeting at barriers (26.9k futex calls in a 3-depth level-2
+ * fingertip run, 3.7-5.6 s of system time in test fem_finger_lesion). With max-active-levels
+ * 0 every parallel region is inactive, run by the thread that meets it (measured 2026-12-03
+ * with OMP_THREAD_LIMIT=1, the same effect: fem_finger_lesion alone 19.5-21.2 s against
+ * 28.6-32.1 s, beside fem_finger_reuse 24.9-27.5 s against 37.0-41.2 s for the pair, the
+ * forces the same). Set and restored around each factorisation on the thread that makes
+ * it: the OpenMP runtime may keep the setting per thread. Returns the previous setting for
+ * omp_restore (-1: no OpenMP runtime). */
+static int omp_serial(void) {
+  if (!omp_set_max_active_levels || !omp_get_max_active_levels) return -1;
+  const int levels = omp_get_max_active_levels();
+  omp_set_max_active_levels(0);
+  return levels;
+}
+
+/* Restores what omp_serial returned (-1: nothing to restore). */
+static void omp_restore(int levels) {
+  if (levels >= 0) omp_set_max_active_levels(levels);
+}
+
 struct palp_fem_solver {
   cholmod_common cc;
   cholmod_sparse *A;
@@ -163,8 +191,9 @@ static int solver_solve(palp_fem_solver *s, const double *b, double *x) {
 }
 
 int palp_fem_solver_factor(palp_fem_solver *s, const double *val) {
-  const int t = blas_single();
+  const int t = blas_single(), levels = omp_serial();
   const int rc = solver_factor(s, val);
+  omp_restore(levels);
   blas_restore(t);
   return rc;
 }
@@ -198,7 +227,7 @@ static int factor_shifted_once(palp_fem_solver *s, const double *val, double sig
 int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shifted) {
   static const double sigmas[] = {1e-4, 1e-3, 1e-2, 1e-1, 1.0};
   const int ns = (int)(sizeof sigmas / sizeof sigmas[0]);
-  const int t = blas_single();
+  const int t = blas_single(), levels = omp_serial();
   *shifted = 0;
   int ok = factor_shifted_once(s, val, 0.0);
   for (int k = s->shift_index; !ok && k < ns; ++k)
@@ -211,6 +240,7 @@ int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shift
   if (!ok) rc = solver_factor(s, val); /* the exact LDL^T */
   else if (!*shifted && s->shift_index > 0)
     s->shift_index--; /* positive definite again: try a smaller shift next time */
+  omp_restore(levels);
   blas_restore(t);
   return rc;
 }
@@ -234,7 +264,9 @@ long palp_fem_solver_ldl_count(const palp_fem_solver *s) { return s->ldl_count; 
  * the caller factorises it in the foreground, where the fallback lives. */
 static void *factor_thread(void *arg) {
   palp_fem_solver *s = arg;
+  const int levels = omp_serial();
   const int ok = cholmod_factorize(s->A2, s->L2, &s->bcc);
+  omp_restore(levels);
   s->bg_rc = ok && s->bcc.status == CHOLMOD_OK && s->L2->minor >= (size_t)s->n ? PALP_OK : PALP_ESOLVER;
   return NULL;
 }
