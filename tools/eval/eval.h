@@ -167,7 +167,7 @@ int palp_eval_finger_rt_at(const palp_world_def *wd, double dt, const palp_lesio
  * fingertip's contact is linearised at the current positions (finger_linearise "current"):
  * its held force does not depend on the step (test model_finger_step: within 0.1% at 4, 1
  * and 0.25 ms; the 1,300-vertex long-term set's curve to 4 mm within 0.01% at 4 and 1 ms),
- * and a quarter of the steps makes the fingertip tests ~3.5x faster. 1 ms otherwise: the
+ * and a quarter of the steps makes the fingertip tests 4.5-5x faster. 1 ms otherwise: the
  * "free" linearisation's held force falls with a longer step (the long-term dome 45 deg
  * off the pole at 3 mm: 5.45 / 5.30 / 5.19 / 5.12 N at 0.5 / 1 / 2 / 4 ms) and its sets
  * were fitted and validated at 1 ms (docs/haptics.md, "The held force depends on the physics
