@@ -285,9 +285,20 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   return 0;
 }
 
+static void note_stall(palp_cli_station *st, int64_t since, int64_t now);
+
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out) {
-  const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
+  int64_t last = palp_dds_now_ns();
+  const int64_t end = last + (int64_t)(timeout * 1e9);
   for (;;) {
+    /* A trainee station spends its first second after a join here when the phantom has no
+     * exercise, before its loop's first palp_cli_station_session_closed: a stop meanwhile is a
+     * stall like one in the loop (counted, and the server's lapsed lease after it waited for),
+     * and the loop's clock goes on from here (test haptic_station_stalled, which once stopped
+     * the station 1.0 s after its join, inside this wait: it blamed the server). */
+    const int64_t now = palp_dds_now_ns();
+    note_stall(st, last, now);
+    st->last_check_ns = last = now;
     palp_Exercise e;
     void *ptr[1] = {&e};
     dds_sample_info_t info;
@@ -303,7 +314,7 @@ int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double 
       out->instructions[sizeof out->instructions - 1] = 0;
       return 1;
     }
-    if (palp_dds_now_ns() >= end) return 0;
+    if (now >= end) return 0;
     nap(0.02);
   }
 }
