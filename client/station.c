@@ -285,11 +285,27 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   return 0;
 }
 
-static void note_stall(palp_cli_station *st, int64_t since, int64_t now);
+/* A gap over PALP_CLI_STALL_S between since and now [ns] was a stall of this process:
+ * counted and told (report_stall), and a lapse of the server's lease seen right after it
+ * is waited for longer (below). The server may have lost this station meanwhile and hold
+ * its session: its state then says so, and the JOIN goes again from there (the one
+ * mechanism for a station's stall and a server's). */
+static void note_stall(palp_cli_station *st, int64_t since, int64_t now) {
+  if (!since || now - since <= (int64_t)(PALP_CLI_STALL_S * 1e9)) return;
+  st->stall_s = (double)(now - since) * 1e-9;
+  st->stall_end_ns = now;
+  st->stalls++;
+  st->next_held_ask_ns = 0; /* a held state read now is answered now */
+}
+
+/* This station ran at now [ns]: a gap since its last sign of life is a stall (note_stall). */
+static void station_alive(palp_cli_station *st, int64_t now) {
+  note_stall(st, st->last_check_ns, now);
+  st->last_check_ns = now;
+}
 
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out) {
-  int64_t last = palp_dds_now_ns();
-  const int64_t end = last + (int64_t)(timeout * 1e9);
+  const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
   for (;;) {
     /* A trainee station spends its first second after a join here when the phantom has no
      * exercise, before its loop's first palp_cli_station_session_closed: a stop meanwhile is a
@@ -297,8 +313,7 @@ int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double 
      * and the loop's clock goes on from here (test haptic_station_stalled, which once stopped
      * the station 1.0 s after its join, inside this wait: it blamed the server). */
     const int64_t now = palp_dds_now_ns();
-    note_stall(st, last, now);
-    st->last_check_ns = last = now;
+    station_alive(st, now);
     palp_Exercise e;
     void *ptr[1] = {&e};
     dds_sample_info_t info;
@@ -418,23 +433,9 @@ int palp_cli_station_leave(palp_cli_station *st) {
   return dds_dispose(st->request_w, &key) < 0 ? PALP_EIO : 0;
 }
 
-/* A gap over PALP_CLI_STALL_S between since and now [ns] was a stall of this process:
- * counted and told (report_stall), and a lapse of the server's lease seen right after it
- * is waited for longer (below). The server may have lost this station meanwhile and hold
- * its session: its state then says so, and the JOIN goes again from there (the one
- * mechanism for a station's stall and a server's). */
-static void note_stall(palp_cli_station *st, int64_t since, int64_t now) {
-  if (!since || now - since <= (int64_t)(PALP_CLI_STALL_S * 1e9)) return;
-  st->stall_s = (double)(now - since) * 1e-9;
-  st->stall_end_ns = now;
-  st->stalls++;
-  st->next_held_ask_ns = 0; /* a held state read now is answered now */
-}
-
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
-  note_stall(st, st->last_check_ns, now);
-  st->last_check_ns = now;
+  station_alive(st, now);
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];
