@@ -18,7 +18,7 @@
  *   "gel": {...}, "c10_reading": "long_term" | "instantaneous",
  *   "dt": 0.01, "newmark_beta": 0.25, "newmark_gamma": 0.5, "max_newton": 12,
  *   "newton_rtol": 1e-4, "newton_atol": 1e-9, "max_cutbacks": 8, "cache_dir": "cache/fem",
- *   "full_newton": 0, "pcg_refactor": 0, "threads": 2, "factor_lag": 4,
+ *   "full_newton": 0, "pcg_refactor": 0, "threads": 2, "factor_lag": 5,
  *   "load_map": "point" | "patch", "hht_alpha": 0 }
  * "hht_alpha" (in [-1/3, 0]) also sets newmark_beta = (1 - alpha)^2 / 4 and
  * newmark_gamma = 1/2 - alpha; giving either beside a nonzero alpha is an error.
@@ -146,12 +146,13 @@ palp_fem_config palp_fem_default_config(void) {
   c.max_cutbacks = 8;
   c.full_newton = 0;
   c.pcg_refactor = 0;
-  /* 4 attempts (2026-12-03, docs/fem.md "The lag again"): the shortest lag whose
-   * renewals never kept a frame waiting at level 4 since the factorisation runs
+  /* 5 attempts (2026-12-03, docs/fem.md "The lag again"): the factorisation runs
    * CHOLMOD's loops on one thread (fem_solver.c omp_serial: 0.87-0.99 s against
-   * 1.56-1.80 s); a younger factor costs fewer CG iterations (332 against 8's 415).
-   * 8 from 2026-12-02, when a renewal took ~1.4 s and 3 waited 0.8-1.7 s a run. */
-  c.factor_lag = 4;
+   * 1.56-1.80 s), so a renewal no longer needs 8 attempts, and a younger factor costs
+   * fewer CG iterations (354 against 8's 415). 4 never waited until the preconditioner's
+   * single-precision solve made the attempts ~20% shorter; then it waited 0-0.33 s a run
+   * and 5 did not. 8 from 2026-12-02, when a renewal took ~1.4 s; 3 before. */
+  c.factor_lag = 5;
   /* A real-time vertex's load as its hat-function traction, not a point force: a point
    * force on a solid has no converged displacement (distribution I's peak grew 0.83 ->
    * 1.19 -> 1.54 mm from level 2 to 4), the patch converges like a distributed load

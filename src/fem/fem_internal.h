@@ -198,6 +198,12 @@ int palp_fem_solver_factor(palp_fem_solver *s, const double *val);
 int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shifted);
 long palp_fem_solver_shifted_count(const palp_fem_solver *s);
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x);
+/* z = M~^-1 r with the factor rounded to single precision (a Krylov preconditioner:
+ * half the memory traffic of palp_fem_solver_solve); the double solve where the factor
+ * is not a supernodal LL^T (the LDL^T fallback) */
+int palp_fem_solver_precond(palp_fem_solver *s, const double *b, double *x);
+/* 0: the portable kernels even where the CPU has AVX2 (the same bits; for the tests) */
+void palp_fem_solver_set_precond_simd(palp_fem_solver *s, int on);
 /* Background numeric LL^T of val (the same pattern) on a thread of its own while
  * solves go on with the current factor; at most one at a time. _finish joins it
  * (waiting if need be) and, if install and it succeeded, makes it the factor the

@@ -459,13 +459,19 @@ static int factor_exact(palp_fem_model *m) {
   return rc;
 }
 
-static int precond(palp_fem_model *m, const double *b, double *x) {
+/* x = K~^-1 b with the factor: exact (a Newton step with a factor of this very K, the
+ * direct solve after a stall) or, for the Krylov iterations, with the factor rounded to
+ * single precision (krylov = 1: half the bytes to stream, fem_solver.c). */
+static int precond_(palp_fem_model *m, const double *b, double *x, int krylov) {
   const double t0 = now_s();
-  const int rc = palp_fem_solver_solve(m->solver, b, x);
+  const int rc = krylov ? palp_fem_solver_precond(m->solver, b, x) : palp_fem_solver_solve(m->solver, b, x);
   m->sec_solve += now_s() - t0;
   m->solves++;
   return rc;
 }
+
+static int precond(palp_fem_model *m, const double *b, double *x) { return precond_(m, b, x, 1); }
+static int solve_exact(palp_fem_model *m, const double *b, double *x) { return precond_(m, b, x, 0); }
 
 /* Right-preconditioned restarted GMRES(k) for K x = b with the (stale) factor as
  * preconditioner, used where CG cannot go: an indefinite tangent or an LDL^T
@@ -664,7 +670,7 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
   }
   int rc = 0;
   if (fresh) {
-    rc = precond(m, b, x); /* the factor is of this very K */
+    rc = solve_exact(m, b, x); /* the factor is of this very K */
     m->last_pcg = 0;
   } else {
   krylov:;
@@ -736,14 +742,14 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
       renewed = 1;
       if (m->factor_shifted) goto krylov;
       m->last_pcg = 0;
-      rc = precond(m, b, x);
+      rc = solve_exact(m, b, x);
     } else if (!rc && !ok) { /* CG/GMRES stalled: renew the factor and solve directly */
       rc = factor_exact(m);
       m->factored = rc == 0;
       if (rc) return rc;
       m->factor_c0 = kscale_c0;
       m->last_pcg = 0;
-      rc = precond(m, b, x);
+      rc = solve_exact(m, b, x);
     }
   }
   for (int d = 0; d < m->ndof; ++d) m->du[d] = m->eq[d] >= 0 ? x[m->eq[d]] : 0.0;

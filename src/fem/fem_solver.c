@@ -28,6 +28,7 @@
 #include <string.h>
 
 #include <cholmod.h>
+#include <immintrin.h>
 
 #include "fem_internal.h"
 
@@ -105,6 +106,17 @@ struct palp_fem_solver {
   int bg_rc;      /* its outcome: PALP_OK or PALP_ESOLVER (not positive definite) */
   int bg_blas;    /* the OpenBLAS thread count to restore when it is joined */
   int bg_mode;    /* palp_fem_solver_set_background_mode */
+  /* L rounded to single precision for the Krylov solver's preconditioner
+   * (palp_fem_solver_precond), made at its first use after each factorisation (on
+   * the background thread it delayed the renewals: at factor_lag 4 the frames waited
+   * 0.17-0.68 s a run for them, none with the copy made here, ~2e7 entries at level 4);
+   * lf_valid: made from L's current values. pv: [largest supernode's rows], py: [n]. */
+  float *lf;
+  size_t lf_len;
+  int lf_valid;
+  double *pv, *py;
+  size_t pv_len;
+  int simd; /* the AVX2 kernels: -1 where the CPU has them (the default), 0 never (the tests) */
 };
 
 palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi, long nnz) {
@@ -113,6 +125,7 @@ palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi,
   cholmod_start(&s->cc);
   s->cc.print = 0;
   s->n = n;
+  s->simd = -1;
   s->A = cholmod_allocate_sparse((size_t)n, (size_t)n, (size_t)(nnz ? nnz : 1), 1, 1, 1, CHOLMOD_REAL, &s->cc);
   s->b = cholmod_zeros((size_t)n, 1, CHOLMOD_REAL, &s->cc);
   if (!s->A || !s->b) {
@@ -157,11 +170,13 @@ void palp_fem_solver_destroy(palp_fem_solver *s) {
   if (s->Y) cholmod_free_dense(&s->Y, &s->cc);
   if (s->E) cholmod_free_dense(&s->E, &s->cc);
   cholmod_finish(&s->cc);
+  free(s->lf), free(s->pv), free(s->py);
   free(s);
 }
 
 static int solver_factor(palp_fem_solver *s, const double *val) {
   const int *p = s->A->p;
+  s->lf_valid = 0;
   memcpy(s->A->x, val, sizeof(double) * (size_t)p[s->n]);
   s->last = s->L;
   if (cholmod_factorize(s->A, s->L, &s->cc) && s->cc.status == CHOLMOD_OK && s->L->minor >= (size_t)s->n)
@@ -209,6 +224,7 @@ static int factor_shifted_once(palp_fem_solver *s, const double *val, double sig
     if (d >= p[c] && ri[d] == c) x[d] += sigma * fabs(x[d]);
   }
   s->last = s->L;
+  s->lf_valid = 0;
   return cholmod_factorize(s->A, s->L, &s->cc) && s->cc.status == CHOLMOD_OK && s->L->minor >= (size_t)s->n;
 }
 
@@ -246,6 +262,183 @@ int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shift
 }
 
 long palp_fem_solver_shifted_count(const palp_fem_solver *s) { return s->shifted_count; }
+
+/* ---- the preconditioner's single-precision solve -------------------------- *
+ * A Krylov iteration (fem_model.c) asks the factor for z = M^-1 r dozens of times per
+ * frame, and at level 4 each solve reads the supernodal L (nnz(L) 2e7, 160 MB in
+ * double) twice: 25 ms of memory traffic, more than half a frame's time. The same L
+ * rounded to single precision is half the bytes. M~ = L~ L~^T with |L~ - L| <= 2^-24 |L|
+ * is still symmetric positive definite (a perturbation of L, not of A), so it is as
+ * valid a CG preconditioner as M; the iteration's own residuals stay in double, and
+ * its answer is held to the same tolerance. The solves that stand for A^-1 itself (a
+ * Newton step with a fresh factor, the direct solve after a stall) keep the double L
+ * (palp_fem_solver_solve). */
+
+/* f <- L's values in single precision, same layout (supernodal LL^T only).
+ * Returns 0, or -1 (not supernodal, or out of memory: the caller solves in double). */
+static int factor_to_float(const cholmod_factor *L, float **f, size_t *len) {
+  if (!L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL) return -1;
+  const size_t nx = ((const int *)L->px)[L->nsuper];
+  if (*len < nx) {
+    float *g = realloc(*f, sizeof(float) * (nx ? nx : 1));
+    if (!g) return -1;
+    *f = g, *len = nx;
+  }
+  const double *x = L->x;
+  float *restrict o = *f;
+  for (size_t k = 0; k < nx; ++k) o[k] = (float)x[k];
+  return 0;
+}
+
+/* The single-precision solve's kernels, the factor's entries widened to double. Four
+ * columns at a time, so v (the supernode's rows, in the cache) is read once for four
+ * columns of the factor (streamed from memory): one column at a time, v's traffic was
+ * twice the factor's and the solve no faster than CHOLMOD's double one. Fixed orders of
+ * operations (no fused multiply-add), so the AVX2 versions give the portable ones' bits.
+ * fwd4: v[i] -= (c0 v0 + c1 v1) + (c2 v2 + c3 v3), i0 <= i < n.
+ * dot4: d[q] = sum_i cq[i] v[i] as four lanes of stride 4, summed (l0 + l2) + (l1 + l3). */
+static void fwd4(const float *const c[4], double *restrict v, const double w[4], int i0, int n) {
+  for (int i = i0; i < n; ++i)
+    v[i] -= ((double)c[0][i] * w[0] + (double)c[1][i] * w[1]) + ((double)c[2][i] * w[2] + (double)c[3][i] * w[3]);
+}
+
+static void dot4(const float *const c[4], const double *restrict v, int i0, int n, double d[4]) {
+  for (int q = 0; q < 4; ++q) {
+    double a[4] = {0};
+    int i = i0;
+    for (; i + 3 < n; i += 4)
+      for (int l = 0; l < 4; ++l) a[l] += (double)c[q][i + l] * v[i + l];
+    double t = (a[0] + a[2]) + (a[1] + a[3]);
+    for (; i < n; ++i) t += (double)c[q][i] * v[i];
+    d[q] = t;
+  }
+}
+
+__attribute__((target("avx2"))) static inline __m256d wide(const float *c) { return _mm256_cvtps_pd(_mm_loadu_ps(c)); }
+
+__attribute__((target("avx2"))) static void fwd4_avx2(const float *const c[4], double *restrict v, const double w[4],
+                                                       int i0, int n) {
+  const __m256d w0 = _mm256_set1_pd(w[0]), w1 = _mm256_set1_pd(w[1]), w2 = _mm256_set1_pd(w[2]),
+                w3 = _mm256_set1_pd(w[3]);
+  int i = i0;
+  for (; i + 3 < n; i += 4) {
+    const __m256d t01 = _mm256_add_pd(_mm256_mul_pd(wide(c[0] + i), w0), _mm256_mul_pd(wide(c[1] + i), w1));
+    const __m256d t23 = _mm256_add_pd(_mm256_mul_pd(wide(c[2] + i), w2), _mm256_mul_pd(wide(c[3] + i), w3));
+    _mm256_storeu_pd(v + i, _mm256_sub_pd(_mm256_loadu_pd(v + i), _mm256_add_pd(t01, t23)));
+  }
+  for (; i < n; ++i)
+    v[i] -= ((double)c[0][i] * w[0] + (double)c[1][i] * w[1]) + ((double)c[2][i] * w[2] + (double)c[3][i] * w[3]);
+}
+
+__attribute__((target("avx2"))) static void dot4_avx2(const float *const c[4], const double *restrict v, int i0,
+                                                       int n, double d[4]) {
+  __m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0;
+  int i = i0;
+  for (; i + 3 < n; i += 4) {
+    const __m256d vi = _mm256_loadu_pd(v + i);
+    a0 = _mm256_add_pd(a0, _mm256_mul_pd(wide(c[0] + i), vi));
+    a1 = _mm256_add_pd(a1, _mm256_mul_pd(wide(c[1] + i), vi));
+    a2 = _mm256_add_pd(a2, _mm256_mul_pd(wide(c[2] + i), vi));
+    a3 = _mm256_add_pd(a3, _mm256_mul_pd(wide(c[3] + i), vi));
+  }
+  double a[4][4];
+  _mm256_storeu_pd(a[0], a0), _mm256_storeu_pd(a[1], a1), _mm256_storeu_pd(a[2], a2), _mm256_storeu_pd(a[3], a3);
+  for (int q = 0; q < 4; ++q) {
+    double t = (a[q][0] + a[q][2]) + (a[q][1] + a[q][3]);
+    for (int k = i; k < n; ++k) t += (double)c[q][k] * v[k];
+    d[q] = t;
+  }
+}
+
+/* x = (L~ L~^T)^-1 P b P^T: y = P b; L~ y' = y by supernodes, forward; L~^T x' = y'
+ * backward; x = P^T x'. Each supernode (columns k1..k2-1, nsrow rows listed in Ls, the
+ * first nscol of them k1..k2-1) is one column-major nsrow x nscol block; v [nsrow]
+ * holds its rows in double while the block is streamed once, four columns at a time
+ * (the last nscol mod 4 one at a time, as blocks with zero weights would read past it). */
+static void solve_float(const cholmod_factor *L, const float *lf, const double *b, double *x, double *y, double *v,
+                        int simd) {
+  const int n = (int)L->n, ns = (int)L->nsuper;
+  const int *super = L->super, *pi = L->pi, *px = L->px, *Ls = L->s, *perm = L->Perm;
+  for (int k = 0; k < n; ++k) y[k] = b[perm[k]];
+  for (int s = 0; s < ns; ++s) { /* L y' = y */
+    const int k1 = super[s], nscol = super[s + 1] - k1, nsrow = pi[s + 1] - pi[s];
+    const int *rows = Ls + pi[s];
+    const float *blk = lf + px[s];
+    for (int i = 0; i < nscol; ++i) v[i] = y[k1 + i];
+    for (int i = nscol; i < nsrow; ++i) v[i] = 0.0;
+    int j = 0;
+    for (; j + 3 < nscol; j += 4) {
+      const float *c[4];
+      double w[4];
+      for (int q = 0; q < 4; ++q) c[q] = blk + (size_t)(j + q) * (size_t)nsrow;
+      for (int q = 0; q < 4; ++q) { /* the 4x4 diagonal block */
+        w[q] = v[j + q] / c[q][j + q];
+        v[j + q] = w[q];
+        for (int r = q + 1; r < 4; ++r) v[j + r] -= (double)c[q][j + r] * w[q];
+      }
+      if (simd) fwd4_avx2(c, v, w, j + 4, nsrow);
+      else fwd4(c, v, w, j + 4, nsrow);
+    }
+    for (; j < nscol; ++j) {
+      const float *c = blk + (size_t)j * (size_t)nsrow;
+      const double vj = v[j] / c[j];
+      v[j] = vj;
+      for (int i = j + 1; i < nsrow; ++i) v[i] -= (double)c[i] * vj;
+    }
+    for (int i = 0; i < nscol; ++i) y[k1 + i] = v[i];
+    for (int i = nscol; i < nsrow; ++i) y[rows[i]] += v[i];
+  }
+  for (int s = ns - 1; s >= 0; --s) { /* L^T x' = y' */
+    const int k1 = super[s], nscol = super[s + 1] - k1, nsrow = pi[s + 1] - pi[s];
+    const int *rows = Ls + pi[s];
+    const float *blk = lf + px[s];
+    for (int i = 0; i < nscol; ++i) v[i] = y[k1 + i];
+    for (int i = nscol; i < nsrow; ++i) v[i] = y[rows[i]];
+    int j = nscol - 1;
+    for (; j >= 0 && (j + 1) % 4 != 0; --j) { /* the last nscol mod 4 columns, one at a time */
+      const float *c = blk + (size_t)j * (size_t)nsrow;
+      double t = 0.0;
+      for (int i = j + 1; i < nsrow; ++i) t += (double)c[i] * v[i];
+      v[j] = (v[j] - t) / c[j];
+    }
+    for (; j >= 3; j -= 4) { /* columns j-3..j: their dots over the rows below j at once */
+      const int j0 = j - 3;
+      const float *c[4];
+      double d[4];
+      for (int q = 0; q < 4; ++q) c[q] = blk + (size_t)(j0 + q) * (size_t)nsrow;
+      if (simd) dot4_avx2(c, v, j + 1, nsrow, d);
+      else dot4(c, v, j + 1, nsrow, d);
+      for (int q = 3; q >= 0; --q) { /* the 4x4 diagonal block, from its last row */
+        double t = v[j0 + q] - d[q];
+        for (int r = q + 1; r < 4; ++r) t -= (double)c[q][j0 + r] * v[j0 + r];
+        v[j0 + q] = t / c[q][j0 + q];
+      }
+    }
+    for (int i = 0; i < nscol; ++i) y[k1 + i] = v[i];
+  }
+  for (int k = 0; k < n; ++k) x[perm[k]] = y[k];
+}
+
+int palp_fem_solver_precond(palp_fem_solver *s, const double *b, double *x) {
+  const cholmod_factor *L = s->L;
+  if (s->last != s->L || !L->is_super) return palp_fem_solver_solve(s, b, x);
+  if (!s->lf_valid) s->lf_valid = factor_to_float(L, &s->lf, &s->lf_len) == 0;
+  if (!s->py) s->py = malloc(sizeof(double) * (size_t)(s->n ? s->n : 1));
+  size_t rows = 1; /* the largest supernode's row count (the pattern never changes) */
+  for (size_t q = 0; q < L->nsuper; ++q) {
+    const size_t r = (size_t)(((const int *)L->pi)[q + 1] - ((const int *)L->pi)[q]);
+    if (r > rows) rows = r;
+  }
+  if (s->pv_len < rows) {
+    double *g = realloc(s->pv, sizeof(double) * rows);
+    if (g) s->pv = g, s->pv_len = rows;
+  }
+  if (!s->lf_valid || !s->py || s->pv_len < rows) return palp_fem_solver_solve(s, b, x);
+  solve_float(L, s->lf, b, x, s->py, s->pv, s->simd != 0 && __builtin_cpu_supports("avx2"));
+  return PALP_OK;
+}
+
+void palp_fem_solver_set_precond_simd(palp_fem_solver *s, int on) { s->simd = on ? -1 : 0; }
 
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
   const int t = blas_single();
@@ -307,6 +500,7 @@ int palp_fem_solver_factor_finish(palp_fem_solver *s, int install) {
   s->L = s->L2;
   s->L2 = t;
   s->last = s->L;
+  s->lf_valid = 0;
   return PALP_OK;
 }
 
