@@ -115,7 +115,6 @@ struct palp_fem_solver {
   size_t lf_len;
   int lf_valid;
   double *pv, *py;
-  size_t pv_len;
   int simd; /* the AVX2 kernels: -1 where the CPU has them (the default), 0 never (the tests) */
 };
 
@@ -424,16 +423,15 @@ int palp_fem_solver_precond(palp_fem_solver *s, const double *b, double *x) {
   if (s->last != s->L || !L->is_super) return palp_fem_solver_solve(s, b, x);
   if (!s->lf_valid) s->lf_valid = factor_to_float(L, &s->lf, &s->lf_len) == 0;
   if (!s->py) s->py = malloc(sizeof(double) * (size_t)(s->n ? s->n : 1));
-  size_t rows = 1; /* the largest supernode's row count (the pattern never changes) */
-  for (size_t q = 0; q < L->nsuper; ++q) {
-    const size_t r = (size_t)(((const int *)L->pi)[q + 1] - ((const int *)L->pi)[q]);
-    if (r > rows) rows = r;
+  if (!s->pv) { /* sized once for the largest supernode's rows: the pattern never changes */
+    size_t rows = 1;
+    for (size_t q = 0; q < L->nsuper; ++q) {
+      const size_t r = (size_t)(((const int *)L->pi)[q + 1] - ((const int *)L->pi)[q]);
+      if (r > rows) rows = r;
+    }
+    s->pv = malloc(sizeof(double) * rows);
   }
-  if (s->pv_len < rows) {
-    double *g = realloc(s->pv, sizeof(double) * rows);
-    if (g) s->pv = g, s->pv_len = rows;
-  }
-  if (!s->lf_valid || !s->py || s->pv_len < rows) return palp_fem_solver_solve(s, b, x);
+  if (!s->lf_valid || !s->py || !s->pv) return palp_fem_solver_solve(s, b, x);
   solve_float(L, s->lf, b, x, s->py, s->pv, s->simd != 0 && __builtin_cpu_supports("avx2"));
   return PALP_OK;
 }
