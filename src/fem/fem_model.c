@@ -563,15 +563,19 @@ static int newton_solve_(palp_fem_model *m, double kscale_c0, double eta, double
 
 /* The cost of a numeric factorisation in preconditioner solves, from the flop
  * count fl of the factorisation and the nonzeros lnz of its factor. A solve with L
- * reads L twice (forward and back, 4 lnz flops, 16 lnz bytes) and is memory-bound;
- * the factorisation runs dense BLAS-3 on the supernodes. With an optimised BLAS
- * (OpenBLAS, one core of this machine) the factorisation does ~8 times more flops
- * per second than the solves (level 4: 22.4 Gflop in 1.05 s against 8e7 flop in
- * 29 ms, a factorisation = 36 solves), so cost = fl / (8 * 4 lnz) solves. A
+ * reads L twice (forward and back, 4 lnz flops, 8 lnz bytes in single precision,
+ * fem_solver.c) and is memory-bound; the factorisation runs dense BLAS-3 on the
+ * supernodes. Measured at level 4 (OpenBLAS, one core, CHOLMOD's loops on one thread,
+ * 2026-12-03): 22.4 Gflop in 0.87-0.99 s against 8e7 flop in 14-18 ms, a
+ * factorisation = ~58 solves, so cost = fl / (5 * 4 lnz) = 56 solves. It was
+ * fl / (8 * 4 lnz) = 35 with the double solve and the four-thread factorisation
+ * (1.05 s against 29 ms): priced at 35, renewals came early, 4 factorisations and 354
+ * CG iterations in a 40-frame run against 3 and 376 now, whose mean frame was lower
+ * in 4 of 5 alternated pairs (-6..-19%; +4% in one; docs/fem.md "The lag again"). A
  * constant rather than a measured ratio, so the run's results do not depend on the
  * timing. (The reference BLAS factorises ~8x slower; set pcg_refactor there.) */
 static double factor_cost_solves(double fl, double lnz) {
-  return lnz > 0.0 && fl > 0.0 ? fmax(1.0, fl / (32.0 * lnz)) : 20.0;
+  return lnz > 0.0 && fl > 0.0 ? fmax(1.0, fl / (20.0 * lnz)) : 20.0;
 }
 
 /* The cost of a factorisation made on the background thread (factor_lag > 0) in
