@@ -83,6 +83,22 @@ static void omp_restore(int levels) {
   if (levels >= 0) omp_set_max_active_levels(levels);
 }
 
+/* A foreground factorisation's settings (both above), saved by serial_enter and put back
+ * by serial_leave. */
+typedef struct serial_state {
+  int blas, levels;
+} serial_state;
+
+static serial_state serial_enter(void) {
+  const serial_state st = {blas_single(), omp_serial()};
+  return st;
+}
+
+static void serial_leave(serial_state st) {
+  omp_restore(st.levels);
+  blas_restore(st.blas);
+}
+
 struct palp_fem_solver {
   cholmod_common cc;
   cholmod_sparse *A;
@@ -115,7 +131,7 @@ struct palp_fem_solver {
   size_t lf_len;
   int lf_valid;
   double *pv, *py;
-  int simd; /* the AVX2 kernels: -1 where the CPU has them (the default), 0 never (the tests) */
+  int simd; /* 1: the AVX2 kernels (the CPU has them, and the tests did not ask for the portable ones) */
 };
 
 palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi, long nnz) {
@@ -124,7 +140,7 @@ palp_fem_solver *palp_fem_solver_create(int n, const int *colp, const int *rowi,
   cholmod_start(&s->cc);
   s->cc.print = 0;
   s->n = n;
-  s->simd = -1;
+  s->simd = __builtin_cpu_supports("avx2") != 0;
   s->A = cholmod_allocate_sparse((size_t)n, (size_t)n, (size_t)(nnz ? nnz : 1), 1, 1, 1, CHOLMOD_REAL, &s->cc);
   s->b = cholmod_zeros((size_t)n, 1, CHOLMOD_REAL, &s->cc);
   if (!s->A || !s->b) {
@@ -205,10 +221,9 @@ static int solver_solve(palp_fem_solver *s, const double *b, double *x) {
 }
 
 int palp_fem_solver_factor(palp_fem_solver *s, const double *val) {
-  const int t = blas_single(), levels = omp_serial();
+  const serial_state st = serial_enter();
   const int rc = solver_factor(s, val);
-  omp_restore(levels);
-  blas_restore(t);
+  serial_leave(st);
   return rc;
 }
 
@@ -242,7 +257,7 @@ static int factor_shifted_once(palp_fem_solver *s, const double *val, double sig
 int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shifted) {
   static const double sigmas[] = {1e-4, 1e-3, 1e-2, 1e-1, 1.0};
   const int ns = (int)(sizeof sigmas / sizeof sigmas[0]);
-  const int t = blas_single(), levels = omp_serial();
+  const serial_state st = serial_enter();
   *shifted = 0;
   int ok = factor_shifted_once(s, val, 0.0);
   for (int k = s->shift_index; !ok && k < ns; ++k)
@@ -255,8 +270,7 @@ int palp_fem_solver_factor_spd(palp_fem_solver *s, const double *val, int *shift
   if (!ok) rc = solver_factor(s, val); /* the exact LDL^T */
   else if (!*shifted && s->shift_index > 0)
     s->shift_index--; /* positive definite again: try a smaller shift next time */
-  omp_restore(levels);
-  blas_restore(t);
+  serial_leave(st);
   return rc;
 }
 
@@ -432,11 +446,13 @@ int palp_fem_solver_precond(palp_fem_solver *s, const double *b, double *x) {
     s->pv = malloc(sizeof(double) * rows);
   }
   if (!s->lf_valid || !s->py || !s->pv) return palp_fem_solver_solve(s, b, x);
-  solve_float(L, s->lf, b, x, s->py, s->pv, s->simd != 0 && __builtin_cpu_supports("avx2"));
+  solve_float(L, s->lf, b, x, s->py, s->pv, s->simd);
   return PALP_OK;
 }
 
-void palp_fem_solver_set_precond_simd(palp_fem_solver *s, int on) { s->simd = on ? -1 : 0; }
+void palp_fem_solver_set_precond_simd(palp_fem_solver *s, int on) {
+  s->simd = on && __builtin_cpu_supports("avx2");
+}
 
 int palp_fem_solver_solve(palp_fem_solver *s, const double *b, double *x) {
   const int t = blas_single();
