@@ -92,8 +92,11 @@ void palp_log_timestamp(char *buf, size_t len) {
   clock_gettime(CLOCK_REALTIME, &ts);
   struct tm tm;
   gmtime_r(&ts.tv_sec, &tm);
-  snprintf(buf, len, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
-           tm.tm_hour, tm.tm_min, tm.tm_sec, ts.tv_nsec / 1000000);
+  /* strftime for the fields (an int year could be 11 digits to snprintf's analysis, which then
+   * warns of truncation); the milliseconds appended */
+  char day[32];
+  if (!strftime(day, sizeof day, "%Y-%m-%dT%H:%M:%S", &tm)) day[0] = '\0';
+  snprintf(buf, len, "%s.%03dZ", day, (int)(ts.tv_nsec / 1000000));
 }
 
 void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {

@@ -10,9 +10,11 @@
 # packages, rebuilds only what changed) unless PALP_SKIP_SETUP=1; PALP_BUILD_DIR
 # selects the build directory (default build/).
 #
-#   bash scripts/demo.sh            # logs and the SVG snapshot go to out/demo/
-#   PALP_SECURE=1 bash scripts/demo.sh   # the same classroom with DDS Security on: a classroom
-#                                        # CA and identities are made into out/pki (docs/security.md)
+#   bash scripts/demo.sh            # logs and the SVG snapshot go to out/demo/; DDS Security on:
+#                                   # a classroom CA and an identity per process in out/pki
+#                                   # (docs/security.md), as a classroom runs
+#   PALP_SECURE=0 bash scripts/demo.sh   # the same classroom on plain DDS (anyone on the domain
+#                                        # is trusted: for a quick look, never for a class)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
@@ -36,20 +38,32 @@ out=${PALP_DEMO_OUT:-out/demo}
 mkdir -p "$out"
 rm -f "$out"/*.log "$out"/*.svg "$out"/*.csv
 
-# DDS Security (PALP_SECURE=1): every process gets an identity from the classroom PKI; the
-# quick local demo (the default) runs plain DDS.
-secure=${PALP_SECURE:-0}
-srv_sec=() alice_sec=(--name alice) bob_sec=(--name bob) visual_sec=(--name screen) observer_sec=(--name instructor)
+# DDS Security (the default; PALP_SECURE=0 for plain DDS): every process gets an identity
+# from the classroom PKI (scripts/make-classroom-pki.sh, idempotent: a PKI made by an earlier
+# run is kept, identities it lacks are added). A trainee's permissions let it publish only in its
+# own sessions and read only them; instructors read every session; the server alone publishes
+# the phantoms, replies and feedback. Nothing unauthenticated is heard (docs/security.md).
+secure=${PALP_SECURE:-1}
+trainees=(alice bob carol dana nina eve)
+declare -A sec
+for t in "${trainees[@]}"; do sec[$t]="--name $t"; done
+srv_sec=() visual_sec=(--name screen) observer_sec=(--name instructor) web_sec=()
 if [ "$secure" = 1 ]; then
+  command -v openssl >/dev/null || { echo "demo: openssl is needed for the classroom PKI (PALP_SECURE=0 runs plain DDS)" >&2; exit 1; }
   pki=${PALP_PKI_DIR:-out/pki}
-  bash scripts/make-classroom-pki.sh "$pki" classroom --trainees alice,bob --instructors ines >/dev/null
-  echo "demo: DDS Security on: classroom CA and identities in $pki/ (server, trainee/alice, trainee/bob, instructor/ines)"
+  # the trainees' identity arguments below are split on spaces
+  case $pki in *[[:space:]]*) echo "demo: PALP_PKI_DIR must not contain spaces: \"$pki\"" >&2; exit 1 ;; esac
+  bash scripts/make-classroom-pki.sh "$pki" classroom --trainees "$(IFS=,; echo "${trainees[*]}")" \
+    --instructors ines,bridge >/dev/null
+  echo "demo: DDS Security on: classroom CA and identities in $pki/ (server; trainee/$(IFS=,; echo "${trainees[*]}" | sed 's|,|, trainee/|g'); instructor/ines, instructor/bridge for palp-web)"
   srv_sec=(--pki "$pki")
-  alice_sec=(--pki "$pki" --identity trainee/alice)
-  bob_sec=(--pki "$pki" --identity trainee/bob)
+  for t in "${trainees[@]}"; do sec[$t]="--pki $pki --identity trainee/$t"; done
   # bob's own screen (a trainee may watch only its own sessions); the instructor sees every session
   visual_sec=(--pki "$pki" --identity trainee/bob)
   observer_sec=(--pki "$pki" --identity instructor/ines)
+  web_sec=(--pki "$pki" --identity instructor/bridge)
+else
+  echo "demo: DDS Security OFF (PALP_SECURE=0): any process on domain $domain is trusted"
 fi
 
 pids=()
@@ -77,7 +91,7 @@ done
 # The browser view (palp-web): the class dashboard and a 3D trainee view while the demo runs.
 web=$build/web/palp-web
 if [ -x "$web" ]; then
-  "$web" --domain "$domain" --port "${PALP_DEMO_WEB_PORT:-8090}" >"$out/web.log" 2>&1 &
+  "$web" --domain "$domain" "${web_sec[@]}" --port "${PALP_DEMO_WEB_PORT:-8090}" >"$out/web.log" 2>&1 &
   web_pid=$!
   pids+=("$web_pid")
   for _ in $(seq 20); do grep -q "dashboard" "$out/web.log" 2>/dev/null && break; sleep 0.1; done
@@ -86,14 +100,14 @@ fi
 
 # Trainee alice: the paper's protocol on phantom 1 - a 3 N step held 2 s with
 # distribution II (5.2 cm^2 uniform patch), then release and recovery.
-"$client" --role trainee --domain "$domain" --phantom 1 "${alice_sec[@]}" \
+"$client" --role trainee --domain "$domain" --phantom 1 ${sec[alice]} \
   --profile step --magnitude 3 --t-on 0.5 --t-off 2.5 --distribution 2 --polar 30 --azimuth 40 \
   --duration 7 --print-period 1 --plot --feedback-csv "$out/alice-feedback.csv" --contact-csv "$out/alice-contact.csv" \
   >"$out/alice.log" 2>&1 &
 pids+=($!)
 alice=$!
 # Trainee bob: a distal-finger press (distribution IV) oscillating 1.5 +- 1 N at 1 Hz on phantom 2.
-"$client" --role trainee --domain "$domain" --phantom 2 "${bob_sec[@]}" \
+"$client" --role trainee --domain "$domain" --phantom 2 ${sec[bob]} \
   --profile sine --magnitude 1 --offset 1.5 --frequency 1 --t-on 0.5 --t-off 5.5 --distribution 4 \
   --polar 20 --azimuth 200 --duration 7 --print-period 1 >"$out/bob.log" 2>&1 &
 pids+=($!)
@@ -104,7 +118,7 @@ bob=$!
 # haptic thread renders the phantom's push from the server's local contact models, with
 # a 2 N safe force it tells her about (the phantom asks up to ~2.2 N at 2 mm: the coupling and
 # the pad sit in series with the stiff tissue, docs/haptics.md).
-"$client" --role trainee --domain "$domain" --phantom 3 --name carol \
+"$client" --role trainee --domain "$domain" --phantom 3 ${sec[carol]} \
   --input sim:slide,depth_mm=2,speed_mm_s=10,hold_s=0.5,slide_mm_s=20,slide_mm=15 --max-force 2 \
   --print-period 1 --plot --trace-csv "$out/carol-haptic.csv" >"$out/carol.log" 2>&1 &
 pids+=($!)
@@ -113,7 +127,7 @@ carol=$!
 # (config/paper_step_breast_tissue.json, docs/materials.md: within 0.88-1.15x of the FE
 # fingertip at the pole over 0.25-12 mm): a simulated device presses 10 mm at 10 mm/s,
 # holds 1 s and lifts, under a 10 N safe force.
-"$client" --role trainee --domain "$domain" --phantom 4 --name dana \
+"$client" --role trainee --domain "$domain" --phantom 4 ${sec[dana]} \
   --input sim:press,depth_mm=10,speed_mm_s=10,hold_s=1 --max-force 10 \
   --print-period 1 --plot --trace-csv "$out/dana-haptic.csv" >"$out/dana.log" 2>&1 &
 pids+=($!)
@@ -125,14 +139,14 @@ dana=$!
 # MammaCare expert (vertical strips at three pressures, marks where the force at equal depth
 # rises above its surroundings; ~2 min in real time, the longest part of the demo;
 # PALP_DEMO_EXPERT=0 leaves her out).
-"$client" --role trainee --domain "$domain" --phantom 14 --name nina --input sim:novice --print-period 0 \
+"$client" --role trainee --domain "$domain" --phantom 14 ${sec[nina]} --input sim:novice --print-period 0 \
   >"$out/nina.log" 2>&1 &
 pids+=($!)
 nina=$!
 eve=
 if [ "${PALP_DEMO_EXPERT:-1}" = 1 ]; then
   echo "demo: eve, the scripted expert, examines the teaching exercise for ~2 minutes (PALP_DEMO_EXPERT=0 skips her)"
-  "$client" --role trainee --domain "$domain" --phantom 14 --name eve --input sim:expert --print-period 0 \
+  "$client" --role trainee --domain "$domain" --phantom 14 ${sec[eve]} --input sim:expert --print-period 0 \
     >"$out/eve.log" 2>&1 &
   pids+=($!)
   eve=$!

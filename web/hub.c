@@ -159,6 +159,7 @@ struct palp_web_hub {
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r;
+  dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
   dds_entity_t ws, stop_gc;
   pthread_t thread;
   atomic_int running; /* written by palp_web_hub_stop, read by the hub's thread */
@@ -240,7 +241,7 @@ static void build_hello(palp_web_hub *h) {
   cJSON_AddNumberToObject(j, "dashboard_hz", h->def.dashboard_hz);
   cJSON_AddBoolToObject(j, "joins", h->def.join);
   /* A trainee page bound to an exercise session may mark findings (palp_finding). */
-  cJSON_AddBoolToObject(j, "findings", 1);
+  cJSON_AddBoolToObject(j, "findings", h->def.sec.kind == PALP_DDS_ID_NONE);
   cJSON_AddNumberToObject(j, "finding_gap_s", FINDING_GAP_NS * 1e-9);
   cJSON_AddBoolToObject(j, "proxy", 1); /* palp_local_model: live fingers carry proxy and device */
   publish_json(h, &h->hello, j);
@@ -548,11 +549,13 @@ static void send_request(palp_web_hub *h, session *s, int op) {
   rq.role = palp_ROLE_VISUAL;
   rq.phantom_id = s->st.phantom_id;
   rq.session_id = s->id;
-  snprintf(rq.user_name, sizeof rq.user_name, "palp-web");
+  /* secured, the server accepts a join only under the authenticated identity's own name */
+  snprintf(rq.user_name, sizeof rq.user_name, "%s", h->def.sec.kind != PALP_DDS_ID_NONE ? h->def.sec.name : "palp-web");
   rq.want_feedback = 0; /* the bridge reads feedback only when the trainee's station asks for it */
   rq.want_deformation = 1;
-  if (s->req_w <= 0)
-    s->req_w = palp_dds_create_writer(h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST], PALP_TOPIC_SESSION_REQUEST);
+  if (s->req_w <= 0) /* secured: in the identity's own partition, which tells the server who asks */
+    s->req_w = palp_dds_create_writer(h->req_pub > 0 ? h->req_pub : h->pp, h->topic[PALP_TOPIC_SESSION_REQUEST],
+                                      PALP_TOPIC_SESSION_REQUEST);
   if (s->req_w > 0) dds_write(s->req_w, &rq);
 }
 
@@ -592,7 +595,9 @@ static void update_finding_writer(palp_web_hub *h, int slot) {
   pthread_mutex_lock(&h->mu);
   finding_slot *fs = &h->fs[slot];
   fs->exercise = ex;
-  const int need = ex && fs->pub <= 0 && s->st.partition[0];
+  /* Secured, the bridge is an instructor, whose permissions do not write into a trainee's
+   * session (docs/security.md): the trainee marks findings from the station, not the page. */
+  const int need = ex && fs->pub <= 0 && s->st.partition[0] && h->def.sec.kind == PALP_DDS_ID_NONE;
   pthread_mutex_unlock(&h->mu);
   if (!need) return;
   pub = palp_dds_session_publisher(h->pp, s->st.partition);
@@ -645,7 +650,12 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     memset(s, 0, sizeof *s);
     s->used = 1;
     s->id = m->session_id;
-    snprintf(s->station, sizeof s->station, "%.24s/%ld/web-s%u", h->host, (long)getpid(), m->session_id);
+    if (h->def.sec.kind != PALP_DDS_ID_NONE) /* secured: the server takes only "KIND/NAME/..." from KIND/NAME;
+                                              * 11 + 31 + 7 + 11 characters fit the 63 */
+      snprintf(s->station, sizeof s->station, "%s/%s/%ld/w%u", palp_dds_id_kind_name(h->def.sec.kind),
+               h->def.sec.name, (long)getpid(), m->session_id);
+    else
+      snprintf(s->station, sizeof s->station, "%.24s/%ld/web-s%u", h->host, (long)getpid(), m->session_id);
     s->fps_t0 = palp_dds_now_ns();
     pthread_mutex_lock(&h->mu);
     h->slot_sid[slot] = s->id;
@@ -1157,9 +1167,20 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->def = *def;
   pthread_mutex_init(&h->mu, NULL);
   gethostname(h->host, sizeof h->host - 1);
-  h->pp = dds_create_participant((dds_domainid_t)def->domain, NULL, NULL);
+  const int secured = def->sec.kind != PALP_DDS_ID_NONE;
+  if (secured && def->sec.kind != PALP_DDS_ID_INSTRUCTOR) {
+    /* a trainee's permissions read only its own sessions and the server's are the server's */
+    fail(err, errlen, "the bridge needs an instructor identity (instructor/NAME), not %s/%s: it shows every session",
+         palp_dds_id_kind_name(def->sec.kind), def->sec.name);
+    palp_web_hub_destroy(h);
+    return NULL;
+  }
+  h->pp = palp_dds_create_participant((dds_domainid_t)def->domain, &def->sec);
   if (h->pp < 0) {
-    fail(err, errlen, "cannot create a DDS participant on domain %u: %s", def->domain, dds_strretcode(h->pp));
+    fail(err, errlen, "cannot create a DDS participant on domain %u: %s%s", def->domain, dds_strretcode(h->pp),
+         secured ? " (DDS Security refused the identity: see the messages above; is the certificate revoked or "
+                   "expired, the domain above 230?)"
+                 : "");
     palp_web_hub_destroy(h);
     return NULL;
   }
@@ -1173,6 +1194,12 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
   char *z = strrchr(wildcard, '/');
   if (z) snprintf(z + 1, sizeof wildcard - (size_t)(z + 1 - wildcard), "*");
+  if (secured) { /* secured sessions live in palp/s/TRAINEE/ID (as palp-recorder reads them) */
+    snprintf(wildcard, sizeof wildcard, "palp/s/*");
+    char part[64];
+    palp_dds_request_partition(&def->sec, part, sizeof part);
+    h->req_pub = palp_dds_session_publisher(h->pp, part);
+  }
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
   h->contact_r = make_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   h->deform_r = palp_dds_create_display_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION]);
@@ -1187,7 +1214,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->fstatus_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->req_pub < 0 || h->fstatus_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -1320,7 +1347,9 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
   } else if (!fs->exercise) {
     why = "no exercise is running in this session";
   } else if (fs->w <= 0) {
-    why = "the bridge cannot write findings for this session";
+    why = h->def.sec.kind != PALP_DDS_ID_NONE
+              ? "in a secured classroom findings are marked from the trainee's own station, not from this page"
+              : "the bridge cannot write findings for this session";
   } else if (fs->last_ns && now - fs->last_ns < FINDING_GAP_NS) {
     why = "too fast: one finding request per 0.5 s";
   } else if (mark && (!fs->contact || now - fs->at_ns > CONTACT_FRESH_NS)) {

@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "coverage.h"
+#include "palp_dds_security.h"
 #include "palp_log.h"
 
 #define PALP_WEB_MAX_PHANTOMS 16
@@ -38,6 +39,10 @@ typedef struct palp_web_hub_def {
   double linger_s;       /* stay joined this long after the last page stopped following */
   palp_web_bands bands;
   palp_log *log;         /* main's (app/palp_log.h); NULL = stderr */
+  /* DDS Security (docs/security.md, docs/web.md): kind PALP_DDS_ID_NONE (zeroed) joins plain DDS;
+   * secured, the bridge needs an instructor identity, the one kind whose permissions read every
+   * session (palp/s/TRAINEE/ID); it then joins sessions as that instructor's visual station. */
+  palp_dds_security sec;
 } palp_web_hub_def;
 
 palp_web_hub_def palp_web_hub_default_def(void);

@@ -49,7 +49,9 @@ static void usage(FILE *f) {
           "  --www DIR           the pages (default <data>/www: share/palp/www installed, web/www in a build)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
           "  --duration S        stop after S seconds (tests, benchmarks)\n"
-          "  --stats             print the bridge's counters every 5 s\n",
+          "  --stats             print the bridge's counters every 5 s\n"
+          "  --pki DIR --identity instructor/NAME   DDS Security in a secured classroom (or PALP_PKI,\n"
+          "                      PALP_IDENTITY; scripts/make-classroom-pki.sh): the bridge is that instructor\n",
           PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_THREE_DIR);
   palp_app_common_usage(f, WEB_OPTS);
 }
@@ -132,7 +134,7 @@ int main(int argc, char **argv) {
   int scale_min_given = 0;
   palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = NULL,
                            .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
-  const char *token = NULL, *token_file = NULL;
+  const char *token = NULL, *token_file = NULL, *pki = NULL, *identity = NULL;
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-web");
   double duration = 0, x = 0;
@@ -163,6 +165,8 @@ int main(int argc, char **argv) {
       sd.port = (int)x;
     } else if (!strcmp(a, "--token")) token = v;
     else if (!strcmp(a, "--token-file")) token_file = v;
+    else if (!strcmp(a, "--pki")) pki = v;
+    else if (!strcmp(a, "--identity")) identity = v;
     else if (!strcmp(a, "--www")) sd.www_dir = v;
     else if (!strcmp(a, "--three")) sd.three_dir = v;
     else if (!strcmp(a, "--scale-mm")) {
@@ -200,6 +204,26 @@ int main(int argc, char **argv) {
   if (ao.version) {
     palp_app_print_version(stdout, "palp-web");
     return 0;
+  }
+  /* DDS Security before anything touches the network: a bad identity is refused up front. */
+  {
+    char serr[256];
+    const int src = pki || identity ? palp_dds_security_init(&hd.sec, pki, identity, serr, sizeof serr)
+                                    : palp_dds_security_from_env(&hd.sec, serr, sizeof serr);
+    if (src < 0) {
+      fprintf(stderr, "palp-web: %s\n", serr);
+      return 2;
+    }
+    if ((pki || identity) && hd.sec.kind == PALP_DDS_ID_NONE) {
+      fprintf(stderr, "palp-web: --pki and --identity go together\n");
+      return 2;
+    }
+    if (hd.sec.kind != PALP_DDS_ID_NONE && hd.sec.kind != PALP_DDS_ID_INSTRUCTOR) {
+      fprintf(stderr, "palp-web: --identity %s/%s: the bridge shows every session, which only an instructor "
+                      "identity may read (instructor/NAME)\n",
+              palp_dds_id_kind_name(hd.sec.kind), hd.sec.name);
+      return 2;
+    }
   }
   char tokbuf[PALP_WEB_TOKEN_MAX + 2];
   if (token_file) {
@@ -281,8 +305,10 @@ int main(int argc, char **argv) {
   /* A token given on the command line is already visible to this user; one read from a file is
    * not repeated into logs. */
   if (token) snprintf(q, sizeof q, "?token=%s", token_file ? "<the token>" : token);
-  printf("palp-web: DDS domain %u, serving on %s port %d%s\n", hd.domain, sd.listen, port,
-         token ? " (token required)" : "");
+  printf("palp-web: DDS domain %u%s%s%s, serving on %s port %d%s\n", hd.domain,
+         hd.sec.kind != PALP_DDS_ID_NONE ? ", DDS Security on (identity instructor/" : "",
+         hd.sec.kind != PALP_DDS_ID_NONE ? hd.sec.name : "", hd.sec.kind != PALP_DDS_ID_NONE ? ")" : "", sd.listen,
+         port, token ? " (token required)" : "");
   printf("palp-web: trainee page  http://%s:%d/trainee.html%s\n", host, port, q);
   printf("palp-web: dashboard     http://%s:%d/dashboard.html%s\n", host, port, q);
   fflush(stdout);

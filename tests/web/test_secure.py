@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""web_secure: palp-web in a classroom secured with DDS Security (docs/web.md, docs/security.md).
+
+A secured palp-server, a secured trainee (trainee/alice) pressing a sine on phantom 1, and three
+bridges on the same domain:
+- `--pki PKI --identity instructor/ines`: a client following every session gets alice's session and
+  its deformation frames, the bridge is counted as a visual member of it (its join, under the
+  instructor's own name and partition, was accepted: the server refuses any other), and its hello
+  says that findings are not marked through the page in a secured classroom;
+- no identity: it sees no session and no frame (authenticated discovery and encrypted data keep a
+  plain participant out);
+- `--identity trainee/bob`: refused before it touches the network (exit 2), since a trainee's
+  permissions read only the trainee's own sessions.
+No browser: a raw WebSocket client (cdp.WebSocket). DDS domain 125.
+usage: test_secure.py BUILD SOURCE OUT (the PKI directory in PALP_TEST_PKI: fixture security_pki)"""
+import json
+import os
+import socket
+import time
+
+import harness
+from harness import check
+
+
+def collect(ws, seconds):
+    """(text messages by type, deformation frames) received in some seconds."""
+    ws.sock.settimeout(0.5)
+    kinds, frames, end = {}, 0, time.time() + seconds
+    while time.time() < end:
+        try:
+            op, data = ws.recv()
+        except socket.timeout:
+            continue
+        if op == 2:
+            frames += 1
+        elif op == 1:
+            m = json.loads(data)
+            kinds.setdefault(m["type"], []).append(m)
+    return kinds, frames
+
+
+def run(build, source, out):
+    pki = os.environ["PALP_TEST_PKI"]
+    procs = harness.Procs(build, source, out, 125)
+    try:
+        procs.server(extra=["--pki", pki])
+        secure = procs.web(extra=["--pki", pki, "--identity", "instructor/ines"], name="web-ines")
+        plain = procs.web(name="web-plain")
+        check("DDS Security on (identity instructor/ines)" in procs.log(secure),
+              "the secured bridge says it runs as instructor/ines")
+        procs.start("trainee-alice", [os.path.join(build, "client", "palp-client"), "--role", "trainee", "--domain",
+                                      "125", "--phantom", "1", "--pki", pki, "--identity", "trainee/alice", "--quiet",
+                                      "--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1",
+                                      "--t-on", "0.5", "--t-off", "60", "--duration", "60"])
+
+        # The secured bridge: alice's session, joined, and its frames.
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % secure.port, timeout=10)
+        ws.send(json.dumps({"follow": "all"}))
+        joined_after, t0, end = None, time.time(), time.time() + 25
+        hello = None
+        ws.sock.settimeout(0.5)
+        while time.time() < end and joined_after is None:
+            try:
+                op, data = ws.recv()
+            except socket.timeout:
+                continue
+            if op != 1:
+                continue
+            m = json.loads(data)
+            if m["type"] == "hello":
+                hello = m
+            if m["type"] == "sessions":
+                mine = [s for s in m["sessions"] if s["trainee"] == "alice"]
+                if mine and mine[0]["visual"] >= 1 and mine[0]["joined"]:
+                    joined_after = time.time() - t0
+        check(joined_after is not None,
+              "the secured bridge lists alice's session and the server counts it as a visual member (%.1f s)"
+              % (joined_after if joined_after is not None else float("nan")))
+        check(hello is not None and hello["findings"] is False,
+              "its hello says findings are not marked through the page in a secured classroom (%s)"
+              % (hello and hello.get("findings")))
+        kinds, frames = collect(ws, 3.0)
+        ws.close()
+        check(frames >= 15, "it streams alice's deformation: %d frames in 3 s (dashboard rate 10/s; >= 15)" % frames)
+
+        # The plain bridge on the same domain: nothing.
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % plain.port, timeout=10)
+        ws.send(json.dumps({"follow": "all"}))
+        kinds, frames = collect(ws, 4.0)
+        ws.close()
+        seen = [s for m in kinds.get("sessions", []) for s in m["sessions"]]
+        check(not seen and frames == 0 and "phantom" not in kinds,
+              "a bridge without an identity sees no phantom, no session and no frame (%d sessions, %d frames, "
+              "%d phantoms)" % (len(seen), frames, len(kinds.get("phantom", []))))
+
+        # A trainee identity is refused up front.
+        bad = procs.start("web-bob", [os.path.join(build, "web", "palp-web"), "--domain", "125", "--port", "0",
+                                      "--pki", pki, "--identity", "trainee/bob"])
+        try:
+            rc = bad.wait(timeout=10)
+        except Exception:
+            rc = None
+        check(rc == 2 and "only an instructor identity may read" in procs.log(bad),
+              "a bridge with a trainee identity is refused before it joins (exit %s)" % rc)
+
+        server = procs.procs[0]
+        rc = procs.stop(secure)
+        check(rc == 0, "the secured bridge stops cleanly on SIGINT (exit %s)" % rc)
+        log = procs.log(server)
+        check("refused request" not in log and "not its own" not in log,
+              "the server refused none of the bridge's requests")
+    finally:
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)
