@@ -70,6 +70,9 @@ function(palp_install_rules)
   install(DIRECTORY DESTINATION ${CMAKE_INSTALL_LOCALSTATEDIR}/lib/palp)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/db/migrations/ DESTINATION ${datadir}/db/migrations)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/web/www/ DESTINATION ${datadir}/www)
+  # The classroom PKI (docs/security.md): a secured classroom needs it where palp is installed,
+  # not only in a source tree.
+  install(PROGRAMS ${CMAKE_SOURCE_DIR}/scripts/make-classroom-pki.sh DESTINATION ${datadir}/scripts)
 
   # Service units (docs/deploy.md), under share/palp/systemd and where systemd looks
   # for a prefix's units (lib/systemd/system), with the installed paths filled in.

@@ -75,7 +75,12 @@ trap cleanup EXIT
 # Sessions of this run only, for the review at the end (the log keeps every run).
 since=$(date +%Y-%m-%dT%H:%M:%S)
 echo "demo: palp-server on DDS domain $domain (loopback only), logs in $out/"
-"$server" --config config/server-exercises.json --domain "$domain" "${srv_sec[@]}" >"$out/server.log" 2>&1 &
+# The session log: the config's out/palp-sessions.db, or PALP_DEMO_DB (the demo's test keeps its
+# own in the build tree).
+db_arg=()
+[ -n "${PALP_DEMO_DB:-}" ] && db_arg=(--database "$PALP_DEMO_DB")
+"$server" --config config/server-exercises.json --domain "$domain" "${srv_sec[@]}" "${db_arg[@]}" \
+  >"$out/server.log" 2>&1 &
 server_pid=$!
 pids+=("$server_pid")
 for _ in $(seq 50); do

@@ -38,7 +38,8 @@ else
 fi
 f0=$fail; fail=0
 for f in bin/palp-server bin/palp-client bin/palp-review bin/palp-recorder bin/palp-run bin/palp-stats bin/palp-fem \
-         bin/palp-eval bin/palp-sweep lib/libpalp.a include/palp/palp.h include/palp/input.h lib/pkgconfig/palp.pc \
+         bin/palp-eval bin/palp-sweep bin/palp-web share/palp/www/dashboard.html share/palp/scripts/make-classroom-pki.sh \
+         lib/libpalp.a include/palp/palp.h include/palp/input.h lib/pkgconfig/palp.pc \
          lib/cmake/palp/palpConfig.cmake lib/cmake/palp/palpConfigVersion.cmake lib/palp/libpalp_device_example.so \
          share/palp/config/server.json share/palp/config/paper_step.json share/palp/config/params/calibrated.json \
          share/palp/config/cyclonedds-loopback.xml share/palp/config/cyclonedds-lab.xml.example \
@@ -64,7 +65,7 @@ if printf '%s' "$help" | grep -qF "$src"; then bad "palp-server --help names the
 
 # 3. Run the installed programs from outside the source tree.
 cd "$work" || exit 1
-for p in palp-server palp-client palp-review palp-recorder palp-run palp-stats palp-fem palp-eval palp-sweep; do
+for p in palp-server palp-client palp-review palp-recorder palp-run palp-stats palp-fem palp-eval palp-sweep palp-web; do
   v=$("$root/bin/$p" --version 2>&1); rc=$?
   if [ $rc -eq 0 ] && printf '%s' "$v" | grep -q "^$p [0-9]"; then :; else bad "$p --version: exit $rc: $v"; fi
 done
@@ -109,6 +110,22 @@ else
 fi
 [ -e "$src/out/palp-sessions.db" ] && [ "$src/out/palp-sessions.db" -nt "$work/install.log" ] \
   && bad "the installed server wrote into the source tree"
+
+# 3b. A secured classroom from the installed tree alone: the installed PKI script makes the
+# certificates, the installed server and client find Debian's DDS Security plugins.
+if bash "$root/share/palp/scripts/make-classroom-pki.sh" "$work/pki" classroom --trainees installed-sec \
+     > "$work/pki.log" 2>&1; then
+  "$root/bin/palp-server" --domain "$domain" --duration 20 --pki "$work/pki" --no-db > "$work/sserver.log" 2>&1 &
+  server_pid=$!
+  sleep 1.5
+  "$root/bin/palp-client" --role trainee --phantom 1 --pki "$work/pki" --identity trainee/installed-sec \
+    --domain "$domain" --duration 2 --timeout 10 > "$work/sec.out" 2>&1 && grep -q "peak feedback" "$work/sec.out" \
+    && ok "installed make-classroom-pki.sh, server --pki and client --identity: $(grep 'peak feedback' "$work/sec.out")" \
+    || { bad "installed secured session"; cat "$work/sec.out" "$work/sserver.log"; }
+  kill -INT "$server_pid"; wait "$server_pid"; server_pid=
+else
+  bad "installed make-classroom-pki.sh"; cat "$work/pki.log"
+fi
 
 # 4. A program outside palp against the installed library: pkg-config, then find_package.
 if cc -std=c17 -Wall -Wextra -Wpedantic $(pkg-config --cflags palp) "$here/consumer.c" -o "$work/consumer-pc" \

@@ -1,0 +1,46 @@
+#!/bin/sh
+# The main job: scripts/demo.sh as the README's first command runs it (after its set-up), secured
+# by default, without the 2-minute scripted expert (PALP_DEMO_EXPERT=0), its output, PKI and
+# session log in the build tree. Checks that every process ran with its identity and did its part,
+# and that the instructor's review at the end replays every session bit for bit. Until 2026-12-03
+# nothing ran the demo: its secured variant had four stations that never joined, unnoticed.
+# usage: demo.sh SOURCE_DIR BUILD_DIR OUT_DIR DOMAIN
+set -u
+src=$1 build=$2 out=$3 domain=$4
+rm -rf "$out"
+mkdir -p "$out"
+t0=$(date +%s)
+PALP_SKIP_SETUP=1 PALP_BUILD_DIR="$build" PALP_DEMO_EXPERT=0 PALP_DEMO_OUT="$out/demo" PALP_DEMO_DOMAIN="$domain" \
+  PALP_DEMO_WEB_PORT=0 PALP_PKI_DIR="$out/pki" PALP_DEMO_DB="$out/sessions.db" bash "$src/scripts/demo.sh" \
+  >"$out/demo.txt" 2>&1
+rc=$?
+echo "demo: exit $rc after $(($(date +%s) - t0)) s; its output in $out/demo.txt"
+txt=$out/demo.txt
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+check "the demo exits 0" "[ $rc -eq 0 ]"
+check "it says DDS Security is on, with an identity per process" \
+  "grep -q 'demo: DDS Security on: classroom CA and identities in' '$txt'"
+check "the server ran secured and refused no request for its identity" \
+  "grep -q 'DDS Security on (identity server/server); requests refused for their identity: 0' '$txt'"
+check "palp-web ran as instructor/bridge" "grep -q 'DDS Security on (identity instructor/bridge)' '$out/demo/web.log'"
+for t in alice bob carol dana; do
+  check "trainee $t ran a session" "grep -Eq '^\[trainee $t\] session [0-9]+: ' '$txt'"
+done
+check "the visual station (bob's own) and the observer (instructor ines) followed their sessions" \
+  "grep -Eq '^\[visual\] session [0-9]+: [1-9][0-9]* deformation frames' '$txt' && grep -Eq '^\[observer\] session [0-9]+: [1-9][0-9]* deformation frames' '$txt'"
+check "nina took the exercise and her mark was accepted" \
+  "grep -q '^\[trainee nina\] finding 1 accepted' '$txt' && grep -Eq '^\[scripted novice\] [1-9][0-9]* steps' '$txt'"
+check "carol is told when her 2 N safe force limits what she feels (the phantom asks ~2.2 N at 2 mm)" \
+  "grep -q 'FORCE LIMITED for' '$txt'"
+# dana presses 10 mm into the breast-tissue dome under a 10 N safe force: she feels 1-10 N
+peak=$(sed -n 's/^\[trainee dana\] session.*peak rendered force \([0-9.]*\) N.*/\1/p' "$txt" | head -1)
+check "dana felt the breast-tissue dome push back: peak rendered force ${peak:-none} N in [1, 10]" \
+  "[ -n '$peak' ] && awk 'BEGIN{exit !($peak >= 1 && $peak <= 10)}'"
+n=$(grep -c 'logged frames reproduced bit-identically' "$txt")
+check "the review lists 5 sessions and replays each bit-identically ($n of 5)" \
+  "grep -q '^5 sessions' '$txt' && [ $n -eq 5 ]"
+check "it ends with the class report of the exercise" \
+  "grep -q '== class report: exercise \"teaching\"' '$txt' && [ -s '$out/demo/class-teaching.html' ]"
+[ $fail -eq 0 ] || tail -n 60 "$txt"
+exit $fail
