@@ -142,9 +142,12 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
   if (result != 0 && bad[0])
     return fail(err, errlen, PALP_EINVAL, "no valid catalogue entry for phantom %u within %.1f s: %s", phantom_id,
                 timeout, bad);
-  if (result != 0)
-    return fail(err, errlen, PALP_EIO, "no catalogue entry for phantom %u within %.1f s (is palp-server running on this domain?)",
-                phantom_id, timeout);
+  if (result != 0) {
+    char hint[320];
+    palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
+    return fail(err, errlen, PALP_EIO, "no catalogue entry for phantom %u within %.1f s (is palp-server running on this domain?)%s",
+                phantom_id, timeout, hint);
+  }
   return 0;
 }
 
@@ -242,9 +245,12 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     if (send_request(st, j, palp_OP_JOIN, NULL) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
     int got = await_reply(st, end, &r);
     if (got == 1) break;
-    if (got < 0)
-      return fail(err, errlen, PALP_EIO, "no answer from palp-server within %.1f s (is it running on this domain?)",
-                  j->timeout);
+    if (got < 0) {
+      char hint[320];
+      palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
+      return fail(err, errlen, PALP_EIO, "no answer from palp-server within %.1f s (is it running on this domain?)%s",
+                  j->timeout, hint);
+    }
     /* A viewer may start before the trainee it follows: ask again until the timeout. */
     int retry = j->role != palp_ROLE_TRAINEE && strncmp(r.reason, "no open session", 15) == 0;
     if (!retry || palp_dds_now_ns() + DDS_MSECS(250) >= end)
@@ -518,9 +524,12 @@ int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_
     if (best && settle == INT64_MAX) settle = palp_dds_now_ns() + DDS_MSECS(300);
     nap(0.05);
   }
-  if (!best)
-    return fail(err, errlen, PALP_EIO, "no phantom named \"%s\"%s within %.1f s", name,
-                exclude_server >= 0 ? " on another server" : "", timeout);
+  if (!best) {
+    char hint[320];
+    palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
+    return fail(err, errlen, PALP_EIO, "no phantom named \"%s\"%s within %.1f s%s", name,
+                exclude_server >= 0 ? " on another server" : "", timeout, hint);
+  }
   *out_id = best;
   return 0;
 }

@@ -190,3 +190,43 @@ int palp_dds_identity_from_partition(const char *partition, palp_dds_id_kind *ki
 void palp_dds_secure_session_partition(const char *name, uint32_t session_id, char *buf, size_t len) {
   snprintf(buf, len, "palp/s/%s/%u", name, session_id);
 }
+
+/* Participant announcements (SPDP) are not protected by DDS Security, so a plain and a secured
+ * participant see each other's on the built-in topic even when nothing else of theirs matches;
+ * Cyclone's built-in reader, created late, still holds every participant already discovered. */
+int palp_dds_peer_participants(dds_entity_t pp) {
+  dds_guid_t me;
+  if (dds_get_guid(pp, &me) < 0) return PALP_EIO;
+  const dds_entity_t rd = dds_create_reader(pp, DDS_BUILTIN_TOPIC_DCPSPARTICIPANT, NULL, NULL);
+  if (rd < 0) return PALP_EIO;
+  enum { MAXP = 64 };
+  void *ptr[MAXP] = {NULL};
+  dds_sample_info_t info[MAXP];
+  int peers = 0;
+  const int n = dds_read(rd, ptr, info, MAXP, MAXP);
+  for (int i = 0; i < n; i++) {
+    const dds_builtintopic_participant_t *p = ptr[i];
+    if (info[i].valid_data && info[i].instance_state == DDS_IST_ALIVE && memcmp(&p->key, &me, sizeof me) != 0)
+      peers++;
+  }
+  if (n > 0) dds_return_loan(rd, ptr, n);
+  dds_delete(rd);
+  return n < 0 ? PALP_EIO : peers;
+}
+
+void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, char *buf, size_t len) {
+  if (len) buf[0] = '\0';
+  const int peers = palp_dds_peer_participants(pp);
+  if (peers <= 0) return;
+  if (!sec || sec->kind == PALP_DDS_ID_NONE)
+    snprintf(buf, len,
+             "; %d other DDS participant%s on this domain, none of which answered: if the classroom runs with DDS "
+             "Security, give --pki DIR --identity KIND/NAME (or PALP_PKI and PALP_IDENTITY)",
+             peers, peers == 1 ? " is" : "s are");
+  else
+    snprintf(buf, len,
+             "; %d other DDS participant%s on this domain, none of which answered %s/%s: is the server secured with "
+             "the same classroom PKI (a plain server, or one of another CA, cannot talk to this identity), and is "
+             "this certificate valid and not revoked?",
+             peers, peers == 1 ? " is" : "s are", palp_dds_id_kind_name(sec->kind), sec->name);
+}

@@ -77,6 +77,16 @@ int palp_dds_identity_from_partition(const char *partition, palp_dds_id_kind *ki
  * that trainee's permissions allow (palp/s/NAME/ followed by anything) and no other trainee's do. */
 void palp_dds_secure_session_partition(const char *name, uint32_t session_id, char *buf, size_t len);
 
+/* Other DDS participants pp has discovered on its domain (alive, not pp itself), or a negative
+ * code. Plain and secured participants see each other's announcements, nothing more. */
+int palp_dds_peer_participants(dds_entity_t pp);
+
+/* When nothing answered pp: "" if no other participant is on the domain (nothing is running);
+ * else "; N other DDS participants ..." with what to check, for a plain participant (the
+ * classroom may be secured: --pki/--identity) or a secured one (the same PKI, a valid
+ * certificate). For the end of a "no answer" message. */
+void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, char *buf, size_t len);
+
 #ifdef __cplusplus
 }
 #endif

@@ -385,7 +385,8 @@ static void publish_state(palp_srv *srv, palp_srv_session *s, int closed, const 
 static void reply(palp_srv *srv, const palp_SessionRequest *rq, palp_srv_session *s, const char *why) {
   palp_SessionReply r;
   memset(&r, 0, sizeof r);
-  snprintf(r.station_id, sizeof r.station_id, "%s", rq->station_id);
+  /* bounded copies: both fields hold IDL-bounded strings, terminated on receipt */
+  snprintf(r.station_id, sizeof r.station_id, "%.*s", (int)sizeof r.station_id - 1, rq->station_id);
   r.request_seq = rq->request_seq;
   r.status = s ? palp_REPLY_ACCEPTED : palp_REPLY_REJECTED;
   r.tick_rate_hz = s ? s->phantom->cfg.physics_rate_hz : srv->cfg.tick_rate_hz;
@@ -395,7 +396,7 @@ static void reply(palp_srv *srv, const palp_SessionRequest *rq, palp_srv_session
     snprintf(r.partition, sizeof r.partition, "%s", s->partition);
   } else {
     r.phantom_id = rq->phantom_id;
-    snprintf(r.reason, sizeof r.reason, "%s", why ? why : "rejected");
+    snprintf(r.reason, sizeof r.reason, "%.*s", (int)sizeof r.reason - 1, why ? why : "rejected");
   }
   dds_write(srv->reply_w, &r);
 }
@@ -460,7 +461,7 @@ static void release_instance(void *ctx, const palp_srv_retire_entry *e) {
 
 static void retire_reply(palp_srv *srv, const char *station_id) {
   palp_srv_retire_entry e = {.kind = PALP_SRV_RETIRE_REPLY};
-  snprintf(e.station_id, sizeof e.station_id, "%s", station_id);
+  snprintf(e.station_id, sizeof e.station_id, "%.*s", (int)sizeof e.station_id - 1, station_id);
   palp_srv_retire_add(&srv->retire, &e, palp_dds_now_ns(), release_instance, srv);
 }
 

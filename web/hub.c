@@ -160,6 +160,7 @@ struct palp_web_hub {
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r;
   dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
+  int hinted;           /* hint_if_unanswered has looked */
   dds_entity_t ws, stop_gc;
   pthread_t thread;
   atomic_int running; /* written by palp_web_hub_stop, read by the hub's thread */
@@ -1059,9 +1060,24 @@ static void check_replies(palp_web_hub *h, int64_t now) {
   }
 }
 
+/* No phantom heard 10 s after the start, with other participants on the domain: say once what
+ * may be wrong (most often a secured classroom and a bridge without an identity). */
+#define QUIET_HINT_AFTER_NS (10 * 1000000000LL)
+
+static void hint_if_unanswered(palp_web_hub *h, int64_t now, int64_t start) {
+  if (h->hinted || now - start < QUIET_HINT_AFTER_NS) return;
+  h->hinted = 1;
+  for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)
+    if (h->ph[i].used) return;
+  char hint[320];
+  palp_dds_unanswered_hint(h->pp, &h->def.sec, hint, sizeof hint);
+  if (hint[0]) palp_log_warn(h->def.log, "no phantom from any palp-server in 10 s%s", hint);
+}
+
 static void *hub_main(void *arg) {
   palp_web_hub *h = arg;
   const int64_t live_period = (int64_t)(1e9 / h->def.live_hz);
+  const int64_t start = palp_dds_now_ns();
   while (h->running) {
     /* Wakes for state changes (catalogue, session states, status, replies) at once, else polls. */
     int64_t now = palp_dds_now_ns();
@@ -1133,6 +1149,7 @@ static void *hub_main(void *arg) {
     if (now >= h->next_join_ns) {
       manage_joins(h, now);
       h->next_join_ns = now + JOIN_PERIOD_NS;
+      hint_if_unanswered(h, now, start);
     }
     if ((news || now >= h->next_wake_ns) && h->wake) {
       h->wake(h->wake_ctx);

@@ -1,7 +1,8 @@
 #!/bin/sh
 # The command-line path of a secured classroom: palp-server --pki and palp-client
 # --pki/--identity (the identity's name becomes the trainee name), a wrong --name
-# refused by the server, a bad identity refused before any network use, and a secured
+# refused by the server, a bad identity refused before any network use, a station without an
+# identity told that the classroom may be secured (not only "is the server running?"), and a secured
 # trainee whose process is stopped 1.5 s going on in its session (the server holds it;
 # the station, authenticated again, asks with the same request). Domain 131.
 # usage: cli.sh palp-server palp-client PKI_DIR
@@ -27,6 +28,10 @@ check "a malformed identity is refused up front (exit $rc)" "[ $rc -eq 1 ] && gr
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --duration 1 >"$out/half.log" 2>&1
 rc=$?
 check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q 'go together' '$out/half.log'"
+"$client" --role trainee --domain 131 --phantom 1 --name zed --duration 1 --timeout 3 >"$out/plain.log" 2>&1
+rc=$?
+check "a station without an identity is told the classroom may be secured (exit $rc)" \
+  "[ $rc -ne 0 ] && grep -q 'none of which answered: if the classroom runs with DDS Security, give --pki DIR --identity' '$out/plain.log'"
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
   --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
 cpid=$!

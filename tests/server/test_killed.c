@@ -21,7 +21,7 @@ static int poll_state(palp_cli_station *st, const char *trainee, uint32_t id, pa
   int n, found = 0;
   while ((n = dds_take(st->state_r, ptr, info, 8, 8)) > 0)
     for (int i = 0; i < n; i++)
-      if (info[i].valid_data && (id ? buf[i].session_id == id : strcmp(buf[i].trainee_name, trainee) == 0)) {
+      if (info[i].valid_data && (id ? buf[i].session_id == id : trainee && strcmp(buf[i].trainee_name, trainee) == 0)) {
         *out = buf[i];
         found = 1;
       }

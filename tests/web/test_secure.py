@@ -8,7 +8,7 @@ bridges on the same domain:
   instructor's own name and partition, was accepted: the server refuses any other), and its hello
   says that findings are not marked through the page in a secured classroom;
 - no identity: it sees no session and no frame (authenticated discovery and encrypted data keep a
-  plain participant out);
+  plain participant out), and after 10 s it says that the classroom may be secured;
 - `--identity trainee/bob`: refused before it touches the network (exit 2), since a trainee's
   permissions read only the trainee's own sessions.
 No browser: a raw WebSocket client (cdp.WebSocket). DDS domain 125.
@@ -92,6 +92,12 @@ def run(build, source, out):
         check(not seen and frames == 0 and "phantom" not in kinds,
               "a bridge without an identity sees no phantom, no session and no frame (%d sessions, %d frames, "
               "%d phantoms)" % (len(seen), frames, len(kinds.get("phantom", []))))
+
+        # ... and says once why it may hear nothing (10 s after its start).
+        m = procs.wait_log(plain, r"no phantom from any palp-server in 10 s; (\d+) other DDS participants? (is|are) on "
+                           r"this domain, none of which answered: if the classroom runs with DDS Security", 20)
+        check(int(m.group(1)) >= 1, "the plain bridge says the classroom may be secured (%s other participants)"
+              % m.group(1))
 
         # A trainee identity is refused up front.
         bad = procs.start("web-bob", [os.path.join(build, "web", "palp-web"), "--domain", "125", "--port", "0",
