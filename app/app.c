@@ -2,8 +2,10 @@
 #define _DEFAULT_SOURCE /* realpath */
 #include "palp_app.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -178,4 +180,123 @@ void palp_app_common_usage(FILE *f, unsigned which) {
   if (which & PALP_APP_OPT_VERBOSE) fputs("  --verbose, --quiet   aliases of --log-level debug / warn\n", f);
   if (which & PALP_APP_OPT_VERSION) fputs("  --version            print the version and exit\n", f);
   fputs("  data directory: $PALP_DATA_DIR, else <program dir>/../share/palp\n", f);
+}
+
+/* ---- is a DDS configuration loopback-only? ------------------------------------------------ */
+
+static int loopback_value(const char *v, size_t n) {
+  if (n == 9 && !strncmp(v, "localhost", 9)) return 1;
+  if (n == 2 && !strncmp(v, "lo", 2)) return 1;
+  if (n == 3 && !strncmp(v, "::1", 3)) return 1;
+  if (n > 4 && !strncmp(v, "127.", 4)) {
+    for (size_t k = 4; k < n; k++)
+      if (!isdigit((unsigned char)v[k]) && v[k] != '.') return 0;
+    return 1;
+  }
+  return 0;
+}
+
+/* The value of attribute name="..." (or '...') inside the tag [t, end); NULL if absent. */
+static const char *attr(const char *t, const char *end, const char *name, size_t *n) {
+  const size_t ln = strlen(name);
+  for (const char *p = t; p + ln + 2 < end; p++) {
+    if (strncmp(p, name, ln) != 0 || !isspace((unsigned char)p[-1])) continue;
+    const char *q = p + ln;
+    while (q < end && isspace((unsigned char)*q)) q++;
+    if (q >= end || *q != '=') continue;
+    q++;
+    while (q < end && isspace((unsigned char)*q)) q++;
+    if (q >= end || (*q != '"' && *q != '\'')) continue;
+    const char quote = *q++;
+    const char *e = memchr(q, quote, (size_t)(end - q));
+    if (!e) return NULL;
+    *n = (size_t)(e - q);
+    return q;
+  }
+  return NULL;
+}
+
+static int scope_why(char *why, size_t len, int rc, const char *fmt, const char *v, size_t n) {
+  if (why && len) snprintf(why, len, fmt, (int)(n > 80 ? 80 : n), v);
+  return rc;
+}
+
+int palp_app_dds_xml_loopback_only(const char *xml, char *why, size_t whylen) {
+  if (why && whylen) why[0] = '\0';
+  if (!xml) return 0;
+  /* comments out: a commented-out interface must not count either way */
+  char *x = strdup(xml);
+  if (!x) return 0;
+  for (char *c; (c = strstr(x, "<!--"));) {
+    char *e = strstr(c + 4, "-->");
+    if (!e) {
+      *c = '\0';
+      break;
+    }
+    memmove(c, e + 3, strlen(e + 3) + 1);
+  }
+  int named = 0, rc = 1;
+  for (const char *p = x; rc && (p = strstr(p, "<NetworkInterface")); p++) {
+    const char *tag = p + 17, *end = strchr(tag, '>');
+    if (!end) break;
+    size_t n = 0;
+    const char *v;
+    if (!strncmp(tag, "Address", 7)) { /* <NetworkInterfaceAddress>VALUE</...>, the older form */
+      v = end + 1;
+      const char *e = strchr(v, '<');
+      n = e ? (size_t)(e - v) : 0;
+      while (n && isspace((unsigned char)*v)) v++, n--;
+      while (n && isspace((unsigned char)v[n - 1])) n--;
+      named = 1;
+      if (!loopback_value(v, n)) rc = scope_why(why, whylen, 0, "<NetworkInterfaceAddress>%.*s", v, n);
+      continue;
+    }
+    if (!isspace((unsigned char)*tag) && *tag != '/' && *tag != '>') continue; /* NetworkInterfaces? not a tag of ours */
+    named = 1;
+    if ((v = attr(tag, end, "autodetermine", &n)) && n == 4 && !strncmp(v, "true", 4)) {
+      rc = scope_why(why, whylen, 0, "<NetworkInterface autodetermine=\"%.*s\">", v, n);
+    } else if ((v = attr(tag, end, "address", &n)) || (v = attr(tag, end, "name", &n))) {
+      if (!loopback_value(v, n)) rc = scope_why(why, whylen, 0, "<NetworkInterface %.*s> is not loopback", v, n);
+    } else {
+      rc = scope_why(why, whylen, 0, "a <NetworkInterface>%.*s without address or name", "", 0);
+    }
+  }
+  free(x);
+  if (rc && !named) return scope_why(why, whylen, 0, "no <NetworkInterface>: Cyclone DDS picks one%.*s", "", 0);
+  if (rc) scope_why(why, whylen, 1, "every <NetworkInterface> is loopback%.*s", "", 0);
+  return rc;
+}
+
+int palp_app_dds_loopback_only(char *why, size_t whylen) {
+  const char *uri = getenv("CYCLONEDDS_URI");
+  if (why && whylen) why[0] = '\0';
+  if (!uri || !uri[0]) return scope_why(why, whylen, 0, "CYCLONEDDS_URI is not set: Cyclone DDS's defaults%.*s", "", 0);
+  while (isspace((unsigned char)*uri)) uri++;
+  if (uri[0] == '<') return palp_app_dds_xml_loopback_only(uri, why, whylen);
+  if (strncmp(uri, "file://", 7) != 0 || strchr(uri, ','))
+    return scope_why(why, whylen, 0, "CYCLONEDDS_URI=%.*s is not one file", uri, strlen(uri));
+  FILE *f = fopen(uri + 7, "r");
+  if (!f) return scope_why(why, whylen, 0, "%.*s cannot be read", uri + 7, strlen(uri + 7));
+  char *buf = NULL;
+  size_t cap = 0, len = 0;
+  for (;;) {
+    if (len + 4097 > cap) {
+      char *nb = realloc(buf, cap + 65536);
+      if (!nb || cap > (1u << 22)) { /* a 4 MB DDS config is not one */
+        free(nb ? nb : buf);
+        fclose(f);
+        return scope_why(why, whylen, 0, "%.*s is too large to read", uri + 7, strlen(uri + 7));
+      }
+      buf = nb;
+      cap += 65536;
+    }
+    const size_t got = fread(buf + len, 1, 4096, f);
+    len += got;
+    if (got < 4096) break;
+  }
+  fclose(f);
+  buf[len] = '\0';
+  const int rc = palp_app_dds_xml_loopback_only(buf, why, whylen);
+  free(buf);
+  return rc;
 }

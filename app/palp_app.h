@@ -51,6 +51,18 @@ int palp_app_data_path(const char *rel, char *buf, size_t len, char *err, size_t
 int palp_app_use_dds_config(const char *flag, const char *fallback, char *chosen, size_t chosen_len, char *err,
                             size_t errlen);
 
+/* Whether a Cyclone DDS configuration keeps a participant on loopback: 1 when every network
+ * interface it names (<NetworkInterface address=|name=>, <NetworkInterfaceAddress>) is
+ * loopback (127.0.0.0/8, ::1, "lo", "localhost") and it names at least one; 0 otherwise,
+ * including whatever cannot be told for sure (no interface: Cyclone picks one; autodetermine;
+ * a ${VARIABLE}). XML comments are ignored. why (may be NULL) says which element decided.
+ * Fail-safe by design: "0" may be loopback after all, "1" never reaches the network. */
+int palp_app_dds_xml_loopback_only(const char *xml, char *why, size_t whylen);
+
+/* The same for the configuration CYCLONEDDS_URI holds now (after palp_app_use_dds_config): one
+ * file:// URI or inline XML; anything else (several items, another scheme) is 0. */
+int palp_app_dds_loopback_only(char *why, size_t whylen);
+
 /* The options every program takes. */
 typedef struct palp_app_opts {
   const char *prog;

@@ -37,6 +37,8 @@ static void usage(FILE *f) {
           "  --no-db              do not write the session log (config \"database\")\n"
           "  --pki DIR            DDS Security with the classroom PKI in DIR (config \"security\"; docs/security.md)\n"
           "  --identity ID        the server's identity in the PKI (default server)\n"
+          "  --insecure           serve a DDS network beyond loopback without DDS Security (refused\n"
+          "                       otherwise: anyone on that network could join, press and close sessions)\n"
           "signals: SIGINT/SIGTERM stop cleanly (every session closed and summarised); SIGHUP re-opens\n"
           "         the --log-file (log rotation) and re-reads the config's log_level; sessions go on\n");
   palp_app_common_usage(f, SERVER_OPTS);
@@ -137,6 +139,7 @@ int main(int argc, char **argv) {
   double domain = -1, rate = -1, threads = -1, max_sessions = -1, duration = 0, prio = -1;
   int check = 0, verbose = 0, no_db = 0;
   const char *pki = NULL, *identity = NULL;
+  int insecure = 0;
   char err[768];
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -156,6 +159,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--duration")) bad = parse_num(a, v, 0, 1e7, &duration), i++;
     else if (!strcmp(a, "--check")) check = 1;
     else if (!strcmp(a, "--no-db")) no_db = 1;
+    else if (!strcmp(a, "--insecure")) insecure = 1;
     else if (!strcmp(a, "--pki") && v) pki = argv[++i];
     else if (!strcmp(a, "--identity") && v) identity = argv[++i];
     else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -228,6 +232,21 @@ int main(int argc, char **argv) {
     else fprintf(stderr, "palp-server: bad configuration: %s: dds_config: %s\n", config_path, err);
     return 1;
   }
+  /* Nobody is trusted by default: beyond loopback a classroom runs secured, unless whoever
+   * starts the server says, with --insecure, that the network is the class's alone. Decided
+   * from the DDS config before any participant exists, so a refused server sends nothing. */
+  char scope[200];
+  const int loopback = palp_app_dds_loopback_only(scope, sizeof scope);
+  const int secured = def.cfg.security_pki[0] != '\0';
+  if (!loopback && !secured && !insecure) {
+    fprintf(stderr,
+            "palp-server: refusing to serve beyond loopback without DDS Security: the DDS config %s may reach a "
+            "network (%s), where anyone could join, press on a trainee's phantom or close sessions. Give --pki DIR "
+            "(config \"security\"; docs/security.md), a loopback DDS config, or --insecure if this network is the "
+            "class's alone.\n",
+            dds_chosen, scope);
+    return 2;
+  }
   if (check) {
     /* Build every phantom's world once, without DDS. */
     for (int i = 0; i < def.cfg.phantom_count; i++) {
@@ -280,6 +299,10 @@ int main(int argc, char **argv) {
   sc.file_cfg = &file_cfg;
   sc.level_fixed = ao.log_level_set;
   palp_log_info(&plog, "%s starting: config %s, DDS config %s", palp_app_version(), config_path, dds_chosen);
+  if (!loopback && !secured)
+    palp_log_warn(&plog, "--insecure: serving a DDS network beyond loopback (%s) WITHOUT DDS Security: anyone on it "
+                         "is trusted",
+                  scope);
 
   palp_srv_db_log *log = NULL;
   if (def.cfg.database[0] && !no_db) {

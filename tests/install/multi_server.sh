@@ -66,6 +66,8 @@ XML
 }
 
 if out=$(make_netns 2>&1); then
+  netns=1 # make_netns ran in the $( ) subshell: its netns=1 did not reach this shell, so until
+          # 2026-12-03 the cleanup never deleted the namespaces (105 were left on this machine)
   ok "four hosts in network namespaces ${tag}h1-4 on a bridge in ${tag}sw (10.77.0.1-4, inside them only)"
   on() { h=$1; shift; ip netns exec "$tag$h" "$@"; }
   on_bg() { h=$1; shift; exec ip netns exec "$tag$h" "$@"; } # run with &: the pid is the program's
@@ -80,9 +82,22 @@ else
   dds() { echo "$loopback"; }
 fi
 
+# The namespaces' network is the test's alone: the servers run plain DDS on it only because they
+# are told so (--insecure); without it a server refuses to serve beyond loopback unsecured.
+if [ $netns -eq 1 ]; then
+  on h3 "$server" --dds-config "$(dds h3)" --domain "$domain" --server-name room-c --no-db --duration 1 \
+    > "$work/plain.out" 2>&1
+  rc=$?
+  if [ $rc -eq 2 ] && grep -q 'refusing to serve beyond loopback without DDS Security' "$work/plain.out" \
+     && grep -q 'NetworkInterface 10.77.0.3> is not loopback' "$work/plain.out"; then
+    ok "a plain server on the namespaces' network without --insecure is refused before it joins (exit 2)"
+  else
+    bad "a plain server beyond loopback: exit $rc"; cat "$work/plain.out"
+  fi
+fi
 srv() { # host name number
   on_bg "$1" "$server" --dds-config "$(dds "$1")" --domain "$domain" --server-name "$2" --server-number "$3" \
-    --threads 1 --database "$work/$2.db" --log-file "$work/$2.log"
+    --threads 1 --database "$work/$2.db" --log-file "$work/$2.log" --insecure
 }
 srv h1 room-a 1 > "$work/room-a.out" 2>&1 & pid_a=$!; pids="$pids $pid_a"
 srv h2 room-b 2 > "$work/room-b.out" 2>&1 & pid_b=$!; pids="$pids $pid_b"
@@ -92,7 +107,7 @@ pid_r=$!; pids="$pids $pid_r"
 sleep 2
 # The same identity again, from another host: refused.
 on h3 "$server" --dds-config "$(dds h3)" --domain "$domain" --server-name room-a --server-number 7 --no-db \
-  --identity-wait 1.5 > "$work/dup.out" 2>&1
+  --identity-wait 1.5 --insecure > "$work/dup.out" 2>&1
 rc=$?
 if [ $rc -eq 1 ] && grep -q 'server name "room-a" (number 1) is already running on this domain' "$work/dup.out"; then
   ok "a second \"room-a\" refuses to start: $(grep 'already running' "$work/dup.out" | sed 's/^.*palp-server: //')"

@@ -122,6 +122,58 @@ int main(int argc, char **argv) {
         "level names parsed, a bad one refused");
   CHECK(palp_log_init(&lg, "palp-test", PALP_LOG_INFO, "/nonexistent/dir/x.log") < 0,
         "an unwritable log file is an error");
+
+  /* 3. Loopback-only DDS configs, or not (palp-server refuses the second kind unsecured). */
+  struct {
+    const char *xml;
+    int want;
+    const char *what;
+  } scope[] = {
+      {"<CycloneDDS><Domain><General><Interfaces><NetworkInterface address=\"127.0.0.1\" multicast=\"false\"/>"
+       "</Interfaces></General></Domain></CycloneDDS>", 1, "127.0.0.1"},
+      {"<Interfaces><NetworkInterface name='lo'/></Interfaces>", 1, "name lo"},
+      {"<Interfaces><NetworkInterface address=\"::1\"/></Interfaces>", 1, "::1"},
+      {"<General><NetworkInterfaceAddress> 127.0.0.1 </NetworkInterfaceAddress></General>", 1, "the older element"},
+      {"<Interfaces><NetworkInterface address=\"10.77.0.3\"/></Interfaces>", 0, "10.77.0.3"},
+      {"<Interfaces><NetworkInterface name=\"eth0\"/></Interfaces>", 0, "eth0"},
+      {"<Interfaces><NetworkInterface name=\"${PALP_DDS_INTERFACE}\"/></Interfaces>", 0, "a variable"},
+      {"<Interfaces><NetworkInterface autodetermine=\"true\"/></Interfaces>", 0, "autodetermine"},
+      {"<CycloneDDS><Domain><General><AllowMulticast>false</AllowMulticast></General></Domain></CycloneDDS>", 0,
+       "no interface"},
+      {"<Interfaces><NetworkInterface address=\"127.0.0.1\"/><NetworkInterface address=\"192.0.2.7\"/></Interfaces>",
+       0, "loopback and another"},
+      {"<Interfaces><!-- <NetworkInterface address=\"192.0.2.7\"/> --><NetworkInterface address=\"127.0.0.1\"/>"
+       "</Interfaces>", 1, "a commented-out interface"},
+      {"<Interfaces><!-- <NetworkInterface address=\"127.0.0.1\"/> --></Interfaces>", 0, "only a commented-out one"},
+      {"<Interfaces><NetworkInterface address=\"127.0.0.1x\"/></Interfaces>", 0, "127.0.0.1x"},
+      {"<Interfaces><NetworkInterface/></Interfaces>", 0, "neither address nor name"},
+      {"", 0, "empty"},
+  };
+  for (size_t k = 0; k < sizeof scope / sizeof scope[0]; k++) {
+    char why[200];
+    const int got = palp_app_dds_xml_loopback_only(scope[k].xml, why, sizeof why);
+    CHECK(got == scope[k].want && why[0], "DDS config with %s: %s (%s)", scope[k].what,
+          got ? "loopback only" : "may reach a network", why);
+  }
+  {
+    char uri[2200], why[200];
+    snprintf(uri, sizeof uri, "file://%s", real_loopback);
+    setenv("CYCLONEDDS_URI", uri, 1);
+    CHECK(palp_app_dds_loopback_only(why, sizeof why) == 1, "the shipped loopback config is loopback only (%s)", why);
+    setenv("CYCLONEDDS_URI", "<CycloneDDS><Domain><General><Interfaces><NetworkInterface name=\"lo\"/>"
+                             "</Interfaces></General></Domain></CycloneDDS>", 1);
+    CHECK(palp_app_dds_loopback_only(why, sizeof why) == 1, "inline XML on lo (%s)", why);
+    snprintf(uri, sizeof uri, "file://%s,file://%s", real_loopback, real_other);
+    setenv("CYCLONEDDS_URI", uri, 1);
+    CHECK(palp_app_dds_loopback_only(why, sizeof why) == 0, "two files: not told (%s)", why);
+    snprintf(uri, sizeof uri, "file://%s", real_other);
+    setenv("CYCLONEDDS_URI", uri, 1);
+    CHECK(palp_app_dds_loopback_only(why, sizeof why) == 0, "<CycloneDDS/>: Cyclone's defaults (%s)", why);
+    setenv("CYCLONEDDS_URI", "file:///nonexistent/dds.xml", 1);
+    CHECK(palp_app_dds_loopback_only(why, sizeof why) == 0, "an unreadable file (%s)", why);
+    unsetenv("CYCLONEDDS_URI");
+  }
+
   unlink(logp);
   unlink(rotated);
   unlink(other);

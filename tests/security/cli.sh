@@ -2,7 +2,8 @@
 # The command-line path of a secured classroom: palp-server --pki and palp-client
 # --pki/--identity (the identity's name becomes the trainee name), a wrong --name
 # refused by the server, a bad identity refused before any network use, a station without an
-# identity told that the classroom may be secured (not only "is the server running?"), and a secured
+# identity told that the classroom may be secured (not only "is the server running?"), a plain
+# server refused a DDS config beyond loopback unless --insecure, and a secured
 # trainee whose process is stopped 1.5 s going on in its session (the server holds it;
 # the station, authenticated again, asks with the same request). Domain 131.
 # usage: cli.sh palp-server palp-client PKI_DIR
@@ -28,6 +29,16 @@ check "a malformed identity is refused up front (exit $rc)" "[ $rc -eq 1 ] && gr
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --duration 1 >"$out/half.log" 2>&1
 rc=$?
 check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q 'go together' '$out/half.log'"
+# A DDS config that may reach a network (the lab example): refused unsecured, before any participant
+# exists (--check stops there too), accepted with --insecure or --pki. Nothing here creates one.
+lab=$(dirname "$0")/../../config/cyclonedds-lab.xml.example
+"$server" --dds-config "$lab" --check >"$out/lab.log" 2>&1
+rc=$?
+check "a plain server with a DDS config beyond loopback is refused (exit $rc)" \
+  "[ $rc -eq 2 ] && grep -q 'refusing to serve beyond loopback without DDS Security' '$out/lab.log' && grep -q 'PALP_DDS_INTERFACE' '$out/lab.log'"
+"$server" --dds-config "$lab" --check --insecure >"$out/lab2.log" 2>&1 && "$server" --dds-config "$lab" --check --pki "$pki" >>"$out/lab2.log" 2>&1
+rc=$?
+check "the same with --insecure, or secured with --pki, passes its check (exit $rc)" "[ $rc -eq 0 ]"
 "$client" --role trainee --domain 131 --phantom 1 --name zed --duration 1 --timeout 3 >"$out/plain.log" 2>&1
 rc=$?
 check "a station without an identity is told the classroom may be secured (exit $rc)" \
