@@ -568,7 +568,19 @@ int main(int argc, char **argv) {
   palp_log_info(&plog, "%s recording domain %d into %s (sessions on partition %s), DDS config %s", palp_app_version(),
                 (int)domain, db, wildcard, dds_chosen);
   const dds_time_t t_end = duration > 0 ? dds_time() + (dds_duration_t)(duration * 1e9) : 0;
+  /* No phantom 10 s after the start while other participants are on the domain: say once what may
+   * be wrong (a secured classroom and a recorder without an identity records nothing). */
+  const dds_time_t t_hint = dds_time() + DDS_SECS(10);
+  int hinted = 0;
   while (!stop_flag && (!t_end || dds_time() < t_end)) {
+    if (!hinted && dds_time() >= t_hint) {
+      hinted = 1;
+      int any = 0;
+      for (int i = 0; i < MAX_PHANTOMS && !any; i++) any = r->ph[i].used;
+      char hint[320];
+      if (!any) palp_dds_unanswered_hint(pp, &sec, hint, sizeof hint);
+      if (!any && hint[0]) palp_log_warn(&plog, "no phantom from any palp-server in 10 s%s", hint);
+    }
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(100));
     if (hup_flag) {
       hup_flag = 0;

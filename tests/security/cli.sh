@@ -6,15 +6,18 @@
 # server refused a DDS config beyond loopback unless --insecure, and a secured
 # trainee whose process is stopped 1.5 s going on in its session (the server holds it;
 # the station, authenticated again, asks with the same request). Domain 131.
-# usage: cli.sh palp-server palp-client PKI_DIR
+# A palp-recorder without an identity says, 10 s in, that the classroom may be secured.
+# usage: cli.sh palp-server palp-client PKI_DIR PALP_RECORDER
 set -u
 . "$(dirname "$0")/../stall.sh"
-server=$1 client=$2 pki=$3
+server=$1 client=$2 pki=$3 recorder=$4
 out=$(mktemp -d)
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
 "$server" --domain 131 --no-db --pki "$pki" --duration 30 >"$out/server.log" 2>&1 &
 spid=$!
+"$recorder" --domain 131 --db "$out/rec.db" --duration 11.5 >"$out/recorder.log" 2>&1 &
+rpid=$!
 sleep 1
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --duration 2 --quiet \
   >"$out/alice.log" 2>&1
@@ -52,6 +55,9 @@ rc=$?
 sid=$(sed -n 's/.*joined session \([0-9]*\).*/\1/p' "$out/stall.log" | head -1)
 check "a secured trainee stopped 1.5 s goes on in its session $sid and exits 0 (exit $rc)" \
   "[ $rc -eq 0 ] && [ -n '$sid' ] && grep -q 'did not run for' '$out/stall.log' && grep -q 'session $sid: trainee station trainee/alice/.* came back after' '$out/server.log' && grep -q 'session $sid closed after .* (trainee station left)' '$out/server.log'"
+wait $rpid
+check "a recorder without an identity says the classroom may be secured, and records nothing" \
+  "grep -q 'no phantom from any palp-server in 10 s; .* none of which answered: if the classroom runs with DDS Security' '$out/recorder.log' && grep -q 'stopped; 0 records written' '$out/recorder.log'"
 kill -INT $spid
 wait $spid
 check "the server's summary has alice's session and counts the refusal" \
