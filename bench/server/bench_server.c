@@ -13,7 +13,8 @@
  *    time-varying force so its world never sleeps) until more than 1 % of ticks
  *    overrun over a 2 s window, read from palp_server_status.
  *
- * 4. --secure: latency and capacity with DDS Security off, then on, in the same run
+ * 4. --secure: latency and capacity (or, with `haptic`, the haptic capacity) with DDS Security
+ *    off, then on, in the same run
  *    (docs/security.md): a classroom PKI is made in /tmp/palp-bench-pki by
  *    scripts/make-classroom-pki.sh; the server runs with its identity, every bench
  *    station with the trainee identity "bench" (Cyclone 0.10.2 gives all secured
@@ -73,6 +74,7 @@ extern char **environ;
 /* secured runs: the security work's own domain range (130-149) */
 #define DOMAIN_LAT_SECURE 142
 #define DOMAIN_CAP_SECURE 143
+#define DOMAIN_HAPTIC_SECURE 144
 #define BENCH_PKI "/tmp/palp-bench-pki"
 static unsigned haptic_domain = 120; /* --haptic-domain: parallel runs need their own */
 
@@ -88,6 +90,7 @@ static palp_dds_security bench_sec; /* trainee/bench in BENCH_PKI */
 
 static unsigned lat_domain(void) { return secure ? DOMAIN_LAT_SECURE : DOMAIN_LAT; }
 static unsigned cap_domain(void) { return secure ? DOMAIN_CAP_SECURE : DOMAIN_CAP; }
+static unsigned hap_domain(void) { return secure ? DOMAIN_HAPTIC_SECURE : haptic_domain; }
 static int max_given = 0;
 static int strip_motion = 0;     /* --motion strip: the exercises' search instead of press cycles */
 static double only_rate = 0.0;   /* --rate HZ: one physics rate instead of 250 Hz then 1 kHz */
@@ -175,25 +178,32 @@ static void stop_child(pid_t pid) {
   waitpid(pid, &st, 0);
 }
 
-static void join_or_die_as(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom,
-                           int local_models_only) {
-  char err[512];
-  if (palp_cli_station_open_secure(st, domain, label, secure ? &bench_sec : NULL, err, sizeof err) < 0) {
-    fprintf(stderr, "bench: %s\n", err);
-    exit(1);
-  }
+/* 0, or -1 with the reason in err (the station closed). */
+static int join_as(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom, int local_models_only,
+                   char *err, size_t errlen) {
+  if (palp_cli_station_open_secure(st, domain, label, secure ? &bench_sec : NULL, err, errlen) < 0) return -1;
   palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = phantom, .user_name = secure ? NULL : label,
                      .want_feedback = 1, .local_models_only = local_models_only,
                      .timeout = 15};
-  if (palp_cli_station_join(st, &j, err, sizeof err) < 0) {
-    fprintf(stderr, "bench: %s: %s\n", label, err);
-    exit(1);
+  if (palp_cli_station_join(st, &j, err, errlen) < 0) {
+    palp_cli_station_close(st);
+    return -1;
   }
   /* Measure only once the server reads this station's contacts: secured
    * endpoints match after their crypto tokens are exchanged, which takes longer. */
   int64_t end = palp_dds_now_ns() + 10000000000LL;
   dds_instance_handle_t h[4];
   while (dds_get_matched_subscriptions(st->contact_w, h, 4) < 1 && palp_dds_now_ns() < end) nap(0.01);
+  return 0;
+}
+
+static void join_or_die_as(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom,
+                           int local_models_only) {
+  char err[512];
+  if (join_as(st, domain, label, phantom, local_models_only, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: %s: %s\n", label, err);
+    exit(1);
+  }
 }
 
 static void join_or_die(palp_cli_station *st, unsigned domain, const char *label, uint32_t phantom) {
@@ -611,7 +621,7 @@ static stats step_baseline(double rate) {
 static void haptic_run(double rate) {
   char extra[64];
   snprintf(extra, sizeof extra, ", \"physics_rate_hz\": %g", rate);
-  pid_t srv = spawn_server_cfg(haptic_domain, 100, extra);
+  pid_t srv = spawn_server_cfg(hap_domain(), 100, extra);
   farm f = {.physics_hz = rate};
   f.st = calloc((size_t)max_sessions, sizeof *f.st);
   f.h = calloc((size_t)max_sessions, sizeof *f.h);
@@ -619,7 +629,8 @@ static void haptic_run(double rate) {
   pthread_mutex_init(&f.lock, NULL);
   char err[256];
   palp_cli_station mon;
-  if (palp_cli_station_open(&mon, haptic_domain, "bench-monitor", err, sizeof err) < 0) exit(1);
+  if (palp_cli_station_open_secure(&mon, hap_domain(), "bench-monitor", secure ? &bench_sec : NULL, err, sizeof err) < 0)
+    exit(1);
   dds_entity_t status_r = palp_dds_create_reader(mon.pp, mon.topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   pthread_t th;
   pthread_create(&th, NULL, farm_main, &f);
@@ -651,18 +662,25 @@ static void haptic_run(double rate) {
   printf("  sessions  late steps  group ticks  tick p99 [us]  tick max [us]  load  station late ticks  models/s  timer floor"
          "  server cores\n");
   double cores_per_session = 0; /* at the largest count of 4 or more sessions held */
-  int n = 0, held = 0, held_passes = 0, n_prev = 0;
-  for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions; k++) {
+  int n = 0, held = 0, held_passes = 0, n_prev = 0, join_failed = 0;
+  for (size_t k = 0; k < sizeof steps / sizeof steps[0] && steps[k] <= max_sessions && !join_failed; k++) {
     while (n < steps[k]) {
-      char label[32];
+      char label[32], jerr[512];
       snprintf(label, sizeof label, "haptic-%02d", n);
-      /* as palp-client's position-driven trainee joins: local models, no Feedback reader */
-      join_or_die_as(&f.st[n], haptic_domain, label, (uint32_t)(1 + n % 2), 1);
+      /* as palp-client's position-driven trainee joins: local models, no Feedback reader. A join that
+       * fails ends the run where it stands (with every station closed in order: exiting with DDS
+       * Security's threads still encrypting crashed in OpenSSL). */
+      if (join_as(&f.st[n], hap_domain(), label, (uint32_t)(1 + n % 2), 1, jerr, sizeof jerr) < 0) {
+        printf("  (session %d could not join: %s; the run stops at %d)\n", n + 1, jerr, n);
+        join_failed = 1;
+        break;
+      }
       palp_haptic_init(&f.h[n], NULL);
       pthread_mutex_lock(&f.lock);
       f.n = ++n;
       pthread_mutex_unlock(&f.lock);
     }
+    if (join_failed) break;
     nap(1.0);
     status_window a = read_status(status_r, 1.5);
     const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models, ft_a = atomic_load(&fl.ticks), fl_a = atomic_load(&fl.late_ticks),
@@ -782,7 +800,7 @@ int main(int argc, char **argv) {
     printf("  (target: p99 < 3000 us at 1 kHz; the tick adds up to one period of waiting, mean half a period)\n");
   }
   if (all || !strcmp(what, "capacity")) capacity_run();
-  if (!secure && (all || !strcmp(what, "haptic"))) {
+  if ((!secure || !all) && (all || !strcmp(what, "haptic"))) { /* haptic --secure: off, then on */
     if (!max_given) max_sessions = 96;
     if (only_rate > 0) haptic_run(only_rate);
     else {
