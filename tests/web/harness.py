@@ -1,9 +1,11 @@
 """harness.py - real palp-server, palp-client and palp-web processes for the web tests and the
 benchmark, on a DDS domain of the caller's (tests/web uses 191-199, bench/web 200-209), loopback
 only. Standard library only."""
+import json
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -106,6 +108,23 @@ def http_get(url, headers=None):
             return r.status, r.read(), dict(r.headers)
     except urllib.error.HTTPError as e:
         return e.code, e.read(), dict(e.headers)
+
+
+def ws_messages(ws, seconds):
+    """(text messages by type, number of deformation frames) a WebSocket received in some seconds."""
+    ws.sock.settimeout(0.5)
+    kinds, frames, end = {}, 0, time.time() + seconds
+    while time.time() < end:
+        try:
+            op, data = ws.recv()
+        except socket.timeout:
+            continue
+        if op == 2:
+            frames += 1
+        elif op == 1:
+            m = json.loads(data)
+            kinds.setdefault(m["type"], []).append(m)
+    return kinds, frames
 
 
 def read_png(path):

@@ -14,23 +14,6 @@ import harness
 from harness import check
 
 
-def messages(ws, seconds):
-    """Collects (text messages by type, number of deformation frames) for some seconds."""
-    ws.sock.settimeout(0.5)
-    kinds, frames, end = {}, 0, time.time() + seconds
-    while time.time() < end:
-        try:
-            op, data = ws.recv()
-        except socket.timeout:
-            continue
-        if op == 2:
-            frames += 1
-        else:
-            m = json.loads(data)
-            kinds.setdefault(m["type"], []).append(m)
-    return kinds, frames
-
-
 def run(build, source, out):
     procs = harness.Procs(build, source, out, 194)
     browser = None
@@ -81,7 +64,7 @@ def run(build, source, out):
               "the bridge left the session nobody watches: the server counts 0 visual members %.1f s after the kill"
               % (left_after or float("nan")))
         ws.send(json.dumps({"follow": "all"}))
-        kinds, frames = messages(ws, 3.0)
+        kinds, frames = harness.ws_messages(ws, 3.0)
         ws.close()
         check("sessions" in kinds and frames >= 15,
               "a new client following every session is served again: the session list and %d frames in 3 s "

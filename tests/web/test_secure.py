@@ -22,23 +22,6 @@ import harness
 from harness import check
 
 
-def collect(ws, seconds):
-    """(text messages by type, deformation frames) received in some seconds."""
-    ws.sock.settimeout(0.5)
-    kinds, frames, end = {}, 0, time.time() + seconds
-    while time.time() < end:
-        try:
-            op, data = ws.recv()
-        except socket.timeout:
-            continue
-        if op == 2:
-            frames += 1
-        elif op == 1:
-            m = json.loads(data)
-            kinds.setdefault(m["type"], []).append(m)
-    return kinds, frames
-
-
 def run(build, source, out):
     pki = os.environ["PALP_TEST_PKI"]
     procs = harness.Procs(build, source, out, 125)
@@ -79,14 +62,14 @@ def run(build, source, out):
         check(hello is not None and hello["findings"] is False,
               "its hello says findings are not marked through the page in a secured classroom (%s)"
               % (hello and hello.get("findings")))
-        kinds, frames = collect(ws, 3.0)
+        kinds, frames = harness.ws_messages(ws, 3.0)
         ws.close()
         check(frames >= 15, "it streams alice's deformation: %d frames in 3 s (dashboard rate 10/s; >= 15)" % frames)
 
         # The plain bridge on the same domain: nothing.
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % plain.port, timeout=10)
         ws.send(json.dumps({"follow": "all"}))
-        kinds, frames = collect(ws, 4.0)
+        kinds, frames = harness.ws_messages(ws, 4.0)
         ws.close()
         seen = [s for m in kinds.get("sessions", []) for s in m["sessions"]]
         check(not seen and frames == 0 and "phantom" not in kinds,
