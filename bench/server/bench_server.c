@@ -48,10 +48,10 @@
 #include <fcntl.h>
 #include <math.h>
 #include <signal.h>
-#include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -125,6 +125,24 @@ static stats summarize(double *v, size_t n) {
 }
 
 static pid_t spawn_server(unsigned domain, double rate);
+/* Starts path with argv, its output to log (NULL: the bench's own), tied to the bench: the child
+ * gets SIGINT (a clean stop) when the bench dies, so a bench that crashes leaves no server
+ * running (one did, and the next run's server met its session database: "disk I/O error").
+ * Only async-signal-safe calls between fork and exec. */
+static pid_t spawn_tied(const char *path, char *const argv[], const char *log) {
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid != 0) return pid; /* the child's pid, or -1 */
+  if (prctl(PR_SET_PDEATHSIG, SIGINT) != 0 || getppid() != parent) _exit(126);
+  if (log) {
+    const int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0 || dup2(fd, 1) < 0 || dup2(fd, 2) < 0) _exit(126);
+    close(fd);
+  }
+  execve(path, argv, environ);
+  _exit(127);
+}
+
 static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_phantom_keys);
 static pid_t spawn_server(unsigned domain, double rate) { return spawn_server_cfg(domain, rate, ""); }
 static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_phantom_keys) {
@@ -158,17 +176,12 @@ static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_ph
   }
   if (no_db) argv[argc++] = "--no-db";
   argv[argc] = NULL;
-  pid_t pid;
   /* The server's own log goes to a file; the bench prints its figures. */
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, "/tmp/palp-bench-server.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  if (posix_spawn(&pid, PALP_SERVER_PATH, &fa, NULL, argv, environ) != 0) {
+  const pid_t pid = spawn_tied(PALP_SERVER_PATH, argv, "/tmp/palp-bench-server.log");
+  if (pid < 0) {
     fprintf(stderr, "bench: cannot start %s\n", PALP_SERVER_PATH);
     exit(1);
   }
-  posix_spawn_file_actions_destroy(&fa);
   return pid;
 }
 
@@ -327,8 +340,8 @@ static int echo_main(void) {
 
 static stats rtt_run(double rate, const char *self) {
   char *argv[] = {(char *)self, "echo", NULL};
-  pid_t pid;
-  if (posix_spawn(&pid, self, NULL, NULL, argv, environ) != 0) exit(1);
+  const pid_t pid = spawn_tied(self, argv, NULL);
+  if (pid < 0) exit(1);
   dds_entity_t pp = dds_create_participant(DOMAIN_RTT, NULL, NULL);
   dds_qos_t *qc = palp_dds_qos(PALP_TOPIC_CONTACT), *qf = palp_dds_qos(PALP_TOPIC_FEEDBACK);
   dds_entity_t tping = dds_create_topic(pp, &palp_Contact_desc, "palp_bench_ping", qc, NULL);
