@@ -2,6 +2,7 @@
 #include "access.h"
 
 #include <arpa/inet.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "palp.h" /* PALP_E* codes */
@@ -84,4 +85,70 @@ const char *palp_web_mime(const char *path) {
   if (!strcmp(dot, ".svg")) return "image/svg+xml";
   if (!strcmp(dot, ".png")) return "image/png";
   return NULL;
+}
+
+static int name_ok(const char *n, size_t len) {
+  if (len < 1 || len > 31) return 0;
+  for (size_t i = 0; i < len; i++)
+    if (!((n[i] >= 'a' && n[i] <= 'z') || (n[i] >= '0' && n[i] <= '9') || n[i] == '_' || n[i] == '-')) return 0;
+  return 1;
+}
+
+int palp_web_trainee_tokens_parse(const char *text, const char *instructor, palp_web_trainee_token *out, int max,
+                                  char *err, size_t errlen) {
+  int n = 0, line = 0;
+  for (const char *p = text; p && *p;) {
+    const char *eol = strchr(p, '\n');
+    const size_t ll = eol ? (size_t)(eol - p) : strlen(p);
+    ++line;
+    char buf[256];
+    if (ll >= sizeof buf) {
+      snprintf(err, errlen, "line %d: longer than %zu characters", line, sizeof buf - 1);
+      return PALP_EINVAL;
+    }
+    memcpy(buf, p, ll);
+    buf[ll] = '\0';
+    p = eol ? eol + 1 : NULL;
+    if (ll && buf[ll - 1] == '\r') buf[ll - 1] = '\0';
+    const char *a = buf + strspn(buf, " \t");
+    if (!*a || *a == '#') continue;
+    const size_t an = strcspn(a, " \t");
+    const char *b = a + an + strspn(a + an, " \t");
+    const size_t bn = strcspn(b, " \t");
+    if (!name_ok(a, an) || !bn || b[bn + strspn(b + bn, " \t")] != '\0') {
+      snprintf(err, errlen, "line %d: expected NAME TOKEN, NAME 1-31 of a-z 0-9 _ -", line);
+      return PALP_EINVAL;
+    }
+    if (n >= max) {
+      snprintf(err, errlen, "line %d: more than %d trainees", line, max);
+      return PALP_EINVAL;
+    }
+    palp_web_trainee_token *t = &out[n];
+    memcpy(t->name, a, an);
+    t->name[an] = '\0';
+    if (bn > PALP_WEB_TOKEN_MAX) {
+      snprintf(err, errlen, "line %d (%s): the token must be %d-%d characters of A-Z a-z 0-9 . _ ~ -", line, t->name,
+               PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX);
+      return PALP_EINVAL;
+    }
+    memcpy(t->token, b, bn);
+    t->token[bn] = '\0';
+    if (palp_web_token_check(t->token) != 0) {
+      snprintf(err, errlen, "line %d (%s): the token must be %d-%d characters of A-Z a-z 0-9 . _ ~ -", line, t->name,
+               PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX);
+      return PALP_EINVAL;
+    }
+    if (instructor && !strcmp(instructor, t->token)) {
+      snprintf(err, errlen, "line %d (%s): the same token as the bridge's own (--token)", line, t->name);
+      return PALP_EINVAL;
+    }
+    for (int k = 0; k < n; k++)
+      if (!strcmp(out[k].name, t->name) || !strcmp(out[k].token, t->token)) {
+        snprintf(err, errlen, "line %d (%s): %s given twice", line, t->name,
+                 !strcmp(out[k].name, t->name) ? "the name" : "the token");
+        return PALP_EINVAL;
+      }
+    n++;
+  }
+  return n;
 }

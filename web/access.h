@@ -32,6 +32,21 @@ int palp_web_cookie_get(const char *header, const char *name, char *out, size_t 
  * no "//", no path component starting with '.', shorter than 200 characters. Else PALP_EINVAL. */
 int palp_web_path_check(const char *path);
 
+/* A trainee's own access token (--trainee-tokens FILE): a page that gives it is that trainee's and
+ * is sent that trainee's sessions only, as the trainee's DDS permissions would read them. */
+#define PALP_WEB_TRAINEES_MAX 256
+typedef struct palp_web_trainee_token {
+  char name[32];                       /* the trainee name of the sessions (an identity's NAME) */
+  char token[PALP_WEB_TOKEN_MAX + 1];
+} palp_web_trainee_token;
+
+/* Parses "NAME TOKEN" lines (blank lines and lines starting with '#' skipped): NAME 1-31 of
+ * [a-z0-9_-], TOKEN as palp_web_token_check; no NAME or TOKEN twice, none equal to `instructor`
+ * (the bridge's own token, may be NULL). Returns the count (0..max) or PALP_EINVAL with the line
+ * and reason in err. */
+int palp_web_trainee_tokens_parse(const char *text, const char *instructor, palp_web_trainee_token *out, int max,
+                                  char *err, size_t errlen);
+
 /* Content type by file extension; NULL for a type palp-web does not serve. */
 const char *palp_web_mime(const char *path);
 

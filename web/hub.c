@@ -184,6 +184,7 @@ struct palp_web_hub {
   uint64_t bind_seq;
   item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS];
   uint32_t slot_sid[PALP_WEB_MAX_SESSIONS]; /* 0: free */
+  char slot_trainee[PALP_WEB_MAX_SESSIONS][64]; /* its trainee's name, for scoped pages */
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
@@ -664,6 +665,10 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     h->sessions_structure = 1;
   }
   s->st = *m; /* bounded strings: a plain copy */
+  pthread_mutex_lock(&h->mu);
+  snprintf(h->slot_trainee[slot], sizeof h->slot_trainee[slot], "%.*s", (int)sizeof h->slot_trainee[slot] - 1,
+           s->st.trainee_name);
+  pthread_mutex_unlock(&h->mu);
   int ps;
   s->ph = find_phantom(h, m->phantom_id, 0, &ps);
   attach_coverage(s);
@@ -1317,6 +1322,12 @@ int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients) {
   return rc;
 }
 
+void palp_web_hub_scope(palp_web_hub *h, palp_web_cursor *c, const char *trainee) {
+  pthread_mutex_lock(&h->mu);
+  snprintf(c->scope, sizeof c->scope, "%s", trainee);
+  pthread_mutex_unlock(&h->mu);
+}
+
 void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c) {
   pthread_mutex_lock(&h->mu);
   for (int i = 0; i < h->nclients; i++)
@@ -1411,6 +1422,39 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
   return rc != 0;
 }
 
+/* Under h->mu: session id is open and its trainee is the cursor's scope. */
+static int scope_allows(const palp_web_hub *h, const palp_web_cursor *c, uint32_t id) {
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->slot_sid[i] == id) return strcmp(h->slot_trainee[i], c->scope) == 0;
+  return 0;
+}
+
+/* The session list as a scoped page may see it: the shared message with the other trainees'
+ * sessions taken out (built at most at the list's 5 Hz, per scoped page). */
+static int take_scoped_sessions(const item *it, const char *scope, size_t pre, unsigned char **buf, size_t *len) {
+  cJSON *j = cJSON_ParseWithLength((const char *)it->buf, it->len);
+  cJSON *arr = j ? cJSON_GetObjectItemCaseSensitive(j, "sessions") : NULL;
+  if (!cJSON_IsArray(arr)) {
+    cJSON_Delete(j);
+    return PALP_ENOMEM; /* our own message: only memory can have failed */
+  }
+  for (int k = cJSON_GetArraySize(arr) - 1; k >= 0; k--) {
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(arr, k), "trainee");
+    if (!cJSON_IsString(t) || strcmp(t->valuestring, scope) != 0) cJSON_DeleteItemFromArray(arr, k);
+  }
+  char *text = cJSON_PrintUnformatted(j);
+  cJSON_Delete(j);
+  if (!text) return PALP_ENOMEM;
+  const size_t n = strlen(text);
+  unsigned char *b = malloc(pre + n);
+  if (b) memcpy(b + pre, text, n);
+  free(text);
+  if (!b) return PALP_ENOMEM;
+  *buf = b;
+  *len = n;
+  return 1;
+}
+
 int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, size_t len) {
   if (!msg || len == 0 || len > 256) return PALP_EINVAL;
   cJSON *j = cJSON_ParseWithLength(msg, len);
@@ -1438,6 +1482,12 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
   if (finding >= 0) return finding_request(h, c, finding);
   if (mode < 0) return PALP_EINVAL;
   pthread_mutex_lock(&h->mu);
+  /* A scoped page (a trainee's token) sees that trainee's sessions only: no dashboard, and a session
+   * it follows must be known to be that trainee's. */
+  if (c->scope[0] && (mode == PALP_WEB_FOLLOW_ALL || (mode == PALP_WEB_FOLLOW_SESSION && !scope_allows(h, c, id)))) {
+    pthread_mutex_unlock(&h->mu);
+    return PALP_EINVAL;
+  }
   /* A trainee page stays with its session: it may rebind to another one (the session it followed
    * closed) or follow nothing, but not turn into a viewer of other sessions. */
   if (c->trainee && !bind && mode != PALP_WEB_FOLLOW_NONE && !(mode == PALP_WEB_FOLLOW_SESSION && id == c->trainee)) {
@@ -1495,10 +1545,12 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       goto out;
     }
   if (h->sessions_msg.buf && c->sessions_ver != h->sessions_msg.ver) {
-    rc = take(&h->sessions_msg, pre, buf, len);
+    rc = c->scope[0] ? take_scoped_sessions(&h->sessions_msg, c->scope, pre, buf, len)
+                     : take(&h->sessions_msg, pre, buf, len);
     if (rc > 0) c->sessions_ver = h->sessions_msg.ver;
     goto out;
   }
+  if (c->scope[0]) c->status_ver = h->status_msg.ver; /* the server status names every session: not for a scoped page */
   if (h->status_msg.buf && c->status_ver != h->status_msg.ver) {
     rc = take(&h->status_msg, pre, buf, len);
     if (rc > 0) c->status_ver = h->status_msg.ver;

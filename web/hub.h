@@ -66,6 +66,10 @@ typedef struct palp_web_cursor {
    * bound page may send findings. 0: a viewer (dashboard, observer). */
   uint32_t trainee;
   uint64_t bind_seq;
+  /* "" (an instructor's page, or no tokens): every session. A trainee's name (the page gave that
+   * trainee's token, serve.c): only that trainee's sessions are listed and may be followed, no
+   * dashboard, no server status; set after palp_web_hub_attach. */
+  char scope[32];
   /* the answer to this page's last finding request, sent before anything else */
   char reply[320];
   size_t reply_len;
@@ -95,6 +99,8 @@ void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out);
 /* A browser connection: attach when it opens (PALP_EFULL at max_clients), detach when it closes. */
 int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients);
 void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c);
+/* Scopes an attached cursor to one trainee's sessions (cursor.scope), under the hub's lock. */
+void palp_web_hub_scope(palp_web_hub *h, palp_web_cursor *c, const char *trainee);
 
 /* A control message from a browser (at most 256 bytes of JSON, one key): {"follow": ID} follows one
  * session, {"follow": "all"} every session (the dashboard), {"follow": null} none; {"trainee": ID}
@@ -102,8 +108,9 @@ void palp_web_hub_detach(palp_web_hub *h, palp_web_cursor *c);
  * nothing else); {"finding": "mark"} / {"finding": "withdraw"} asks to mark a finding at the
  * fingertip's contact point or withdraw this session's last mark: checked (bound trainee page,
  * exercise running, touching, rate) and answered with a "finding_reply" message to this page
- * either way. 0; 1 for a finding refused (answered); PALP_EINVAL for anything malformed (the
- * caller counts it; no answer). */
+ * either way. 0; 1 for a finding refused (answered); PALP_EINVAL for anything malformed, and for a
+ * scoped page (cursor.scope) asking for every session or another trainee's (the caller counts it;
+ * no answer). */
 int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, size_t len);
 
 /* The next message this cursor has not been sent: *buf is malloc'ed with `pre` spare bytes

@@ -38,6 +38,8 @@ static void usage(FILE *f) {
           "  --port P            TCP port (default 8090; 0 = any free port, printed)\n"
           "  --token T           access token (%d-%d characters of A-Z a-z 0-9 . _ ~ -); pages need ?token=T\n"
           "  --token-file F      read the token from F (keeps it out of the process list)\n"
+          "  --trainee-tokens F  trainees' own tokens, \"NAME TOKEN\" per line: a page given one sees only\n"
+          "                      that trainee's sessions (no dashboard); needs --token (the instructors')\n"
           "  --scale-mm MM       largest colour scale of the pages: 0..MM of displacement (default 30)\n"
           "  --scale-min-mm MM   smallest (default 0.5): a page's scale grows from it, in steps of 1-2-5,\n"
           "                      with its session's deepest displacement; equal to --scale-mm: fixed\n"
@@ -77,6 +79,27 @@ static int read_token_file(const char *path, char *out, size_t len) {
   if (!fgets(out, (int)len, f)) out[0] = 0;
   fclose(f);
   out[strcspn(out, "\r\n")] = 0;
+  return 0;
+}
+
+/* The whole of a small text file (<= 64 kB) into *out (malloc'ed, NUL-terminated); 0 or -1 said. */
+static int read_small_file(const char *path, char **out) {
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    fprintf(stderr, "palp-web: cannot open %s: %s\n", path, strerror(errno));
+    return -1;
+  }
+  enum { MAXB = 65536 };
+  char *b = malloc(MAXB + 1);
+  const size_t n = b ? fread(b, 1, MAXB + 1, f) : 0;
+  fclose(f);
+  if (!b || n > MAXB) {
+    fprintf(stderr, "palp-web: %s: %s\n", path, b ? "larger than 64 kB" : "out of memory");
+    free(b);
+    return -1;
+  }
+  b[n] = '\0';
+  *out = b;
   return 0;
 }
 
@@ -134,7 +157,7 @@ int main(int argc, char **argv) {
   int scale_min_given = 0;
   palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = NULL,
                            .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
-  const char *token = NULL, *token_file = NULL, *pki = NULL, *identity = NULL;
+  const char *token = NULL, *token_file = NULL, *pki = NULL, *identity = NULL, *trainee_file = NULL;
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-web");
   double duration = 0, x = 0;
@@ -165,6 +188,7 @@ int main(int argc, char **argv) {
       sd.port = (int)x;
     } else if (!strcmp(a, "--token")) token = v;
     else if (!strcmp(a, "--token-file")) token_file = v;
+    else if (!strcmp(a, "--trainee-tokens")) trainee_file = v;
     else if (!strcmp(a, "--pki")) pki = v;
     else if (!strcmp(a, "--identity")) identity = v;
     else if (!strcmp(a, "--www")) sd.www_dir = v;
@@ -248,6 +272,24 @@ int main(int argc, char **argv) {
     return 2;
   }
   sd.token = token;
+  /* Trainees' own tokens: each page scoped to its trainee, as the trainee's DDS permissions are. */
+  static palp_web_trainee_token trainees[PALP_WEB_TRAINEES_MAX];
+  if (trainee_file) {
+    if (!token) {
+      fprintf(stderr, "palp-web: --trainee-tokens needs --token (or --token-file): the instructors' own token\n");
+      return 2;
+    }
+    char *text = NULL, terr[256];
+    if (read_small_file(trainee_file, &text) != 0) return 2;
+    const int n = palp_web_trainee_tokens_parse(text, token, trainees, PALP_WEB_TRAINEES_MAX, terr, sizeof terr);
+    free(text);
+    if (n < 0) {
+      fprintf(stderr, "palp-web: --trainee-tokens %s: %s\n", trainee_file, terr);
+      return 2;
+    }
+    sd.trainees = trainees;
+    sd.trainee_count = n;
+  }
   palp_log log;
   if (palp_log_init(&log, "palp-web", ao.log_level, ao.log_file) < 0) {
     fprintf(stderr, "palp-web: --log-file %s: %s\n", ao.log_file, strerror(errno));
@@ -305,10 +347,12 @@ int main(int argc, char **argv) {
   /* A token given on the command line is already visible to this user; one read from a file is
    * not repeated into logs. */
   if (token) snprintf(q, sizeof q, "?token=%s", token_file ? "<the token>" : token);
-  printf("palp-web: DDS domain %u%s%s%s, serving on %s port %d%s\n", hd.domain,
+  char scoped[64] = "";
+  if (sd.trainee_count) snprintf(scoped, sizeof scoped, "; %d trainee token(s), each page scoped", sd.trainee_count);
+  printf("palp-web: DDS domain %u%s%s%s, serving on %s port %d%s%s%s\n", hd.domain,
          hd.sec.kind != PALP_DDS_ID_NONE ? ", DDS Security on (identity instructor/" : "",
          hd.sec.kind != PALP_DDS_ID_NONE ? hd.sec.name : "", hd.sec.kind != PALP_DDS_ID_NONE ? ")" : "", sd.listen,
-         port, token ? " (token required)" : "");
+         port, token ? " (token required" : "", scoped, token ? ")" : "");
   printf("palp-web: trainee page  http://%s:%d/trainee.html%s\n", host, port, q);
   printf("palp-web: dashboard     http://%s:%d/dashboard.html%s\n", host, port, q);
   fflush(stdout);

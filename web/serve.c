@@ -32,6 +32,7 @@ struct palp_web_server {
 /* Per connection (HTTP or WebSocket): libwebsockets allocates and zeroes it. */
 typedef struct conn {
   palp_web_cursor cursor;
+  int who; /* authorised()'s answer at the handshake: 0 an instructor's page, k + 1 trainee k's */
   int attached;
   size_t rx_len;
   int rx_overflow;
@@ -50,28 +51,40 @@ static palp_web_server *server_of(struct lws *wsi) {
   return (palp_web_server *)lws_context_user(lws_get_context(wsi));
 }
 
-/* 1 when the request carries the token (URL argument or cookie), or none is required. *from_url
- * says it came in the URL (the answer then sets the cookie for the page's own requests). */
+/* Whose token a value is: 0 the instructors' (--token), k + 1 trainee k's, -1 nobody's. Every token
+ * is compared, each in constant time, so the time does not tell which one nearly matched. */
+static int token_owner(const palp_web_server *s, const char *v) {
+  const size_t n = strlen(v);
+  int who = palp_web_token_equal(s->token, v, n) ? 0 : -1;
+  for (int k = 0; k < s->def.trainee_count; k++)
+    if (palp_web_token_equal(s->def.trainees[k].token, v, n) && who < 0) who = k + 1;
+  return who;
+}
+
+/* Who the request is (token_owner: 0 an instructor, k + 1 trainee k, -1 refused) by the token in
+ * its URL or its cookie; 0 when no token is required. *from_url says it came in the URL (the answer
+ * then sets the cookie for the page's own requests). */
 static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int *from_url) {
   *from_url = 0;
-  if (!s->have_token) return 1;
+  if (!s->have_token) return 0;
   char v[PALP_WEB_TOKEN_MAX + 16];
   /* lws copies "token=VALUE" into v and returns where VALUE starts */
   const char *arg = lws_get_urlarg_by_name(wsi, "token=", v, (int)sizeof v);
-  if (arg && palp_web_token_equal(s->token, arg, strlen(arg))) {
+  const int by_url = arg ? token_owner(s, arg) : -1;
+  if (by_url >= 0) {
     *from_url = 1;
-    return 1;
+    return by_url;
   }
-  if (!allow_cookie) return 0;
+  if (!allow_cookie) return -1;
   const int n = lws_hdr_total_length(wsi, WSI_TOKEN_HTTP_COOKIE);
-  if (n <= 0 || n > 4096) return 0;
+  if (n <= 0 || n > 4096) return -1;
   char *h = malloc((size_t)n + 1);
-  int ok = 0;
+  int who = -1;
   if (h && lws_hdr_copy(wsi, h, n + 1, WSI_TOKEN_HTTP_COOKIE) > 0 &&
       palp_web_cookie_get(h, COOKIE, v, sizeof v) == 0)
-    ok = palp_web_token_equal(s->token, v, strlen(v));
+    who = token_owner(s, v);
   free(h);
-  return ok;
+  return who;
 }
 
 /* A browser page from another origin must not drive the WebSocket with this page's cookie or
@@ -93,7 +106,8 @@ static int http_status(struct lws *wsi, unsigned code, palp_web_server *s, uint6
 
 static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
   int from_url = 0;
-  if (!authorised(s, wsi, 1, &from_url)) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, s, &s->stats.http_denied);
+  const int who = authorised(s, wsi, 1, &from_url);
+  if (who < 0) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, s, &s->stats.http_denied);
   const char *path = !strcmp(uri, "/") ? "/index.html" : uri;
   const char *mime = palp_web_mime(path);
   if (palp_web_path_check(path) != 0 || !mime) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
@@ -112,7 +126,8 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
                    "frame-ancestors 'none'\x0d\x0a");
   if (from_url && s->have_token)
     n += snprintf(headers + n, sizeof headers - (size_t)n,
-                  "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict\x0d\x0a", s->token);
+                  "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict\x0d\x0a",
+                  who ? s->def.trainees[who - 1].token : s->token);
   const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
   if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
   s->stats.http_ok++;
@@ -135,23 +150,30 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     int from_url = 0;
     /* The WebSocket carries the token in its URL (a page reads it from its own address); the
      * cookie alone is not enough, so a cross-site page cannot ride on it. */
-    if (lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) <= 0 || strcmp(uri, WS_PATH) != 0 ||
-        !authorised(s, wsi, 0, &from_url) || !same_origin(wsi)) {
+    const int who = lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) > 0 && !strcmp(uri, WS_PATH)
+                        ? authorised(s, wsi, 0, &from_url)
+                        : -1;
+    if (who < 0 || !same_origin(wsi) || !c) {
       s->stats.ws_denied++;
       return 1;
     }
+    c->who = who; /* the connection's data exists from here on, zeroed */
     return 0;
   }
 
-  case LWS_CALLBACK_ESTABLISHED:
+  case LWS_CALLBACK_ESTABLISHED: {
+    const int who = c->who;
     if (palp_web_hub_attach(s->hub, &c->cursor, s->def.max_clients) != 0) {
       s->stats.ws_full++;
       return -1;
     }
+    if (who > 0) /* a trainee's page: that trainee's sessions only (palp_web_hub_attach zeroed the cursor) */
+      palp_web_hub_scope(s->hub, &c->cursor, s->def.trainees[who - 1].name);
     c->attached = 1;
     s->stats.ws_opened++;
     lws_callback_on_writable(wsi);
     return 0;
+  }
 
   case LWS_CALLBACK_CLOSED:
     if (c && c->attached) {

@@ -4,7 +4,8 @@
  * Serves the static pages (web/www) and three.js from Debian's libjs-three under /lib/three/,
  * and one WebSocket endpoint, /ws, that streams the hub's messages. With a token configured every
  * request must carry it (?token= or the cookie the first page load sets): without it HTTP answers
- * 401 and the WebSocket handshake is refused.
+ * 401 and the WebSocket handshake is refused. A trainee's own token (if given any) serves the same
+ * pages, but its WebSocket is scoped to that trainee's sessions.
  */
 #ifndef PALP_WEB_SERVE_H
 #define PALP_WEB_SERVE_H
@@ -13,6 +14,7 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "access.h"
 #include "hub.h"
 
 typedef struct palp_web_serve_def {
@@ -22,6 +24,10 @@ typedef struct palp_web_serve_def {
   const char *www_dir;   /* the pages */
   const char *three_dir; /* /usr/share/javascript/three */
   int max_clients;       /* WebSocket connections at once */
+  /* Trainees' own tokens (--trainee-tokens FILE; needs token): a page that gives one is scoped to
+   * that trainee's sessions (palp_web_cursor.scope). token stays the instructors'. */
+  const palp_web_trainee_token *trainees;
+  int trainee_count;
 } palp_web_serve_def;
 
 typedef struct palp_web_serve_stats {

@@ -169,6 +169,28 @@ static void test_access(void) {
   CHECK(!palp_web_token_equal(want, "S3cret-token_0123456789", 23), "case matters");
   CHECK(!palp_web_token_equal(want, "", 0), "empty");
 
+  /* trainees' own tokens (--trainee-tokens) */
+  static palp_web_trainee_token tt[4];
+  char terr[200];
+  int tn = palp_web_trainee_tokens_parse("# class 3B\n\nalice  alice-0123456789abcdef\r\nbob\tbob-0123456789abcdefgh\n",
+                                         "instructor-0123456789", tt, 4, terr, sizeof terr);
+  CHECK(tn == 2 && !strcmp(tt[0].name, "alice") && !strcmp(tt[0].token, "alice-0123456789abcdef") &&
+            !strcmp(tt[1].name, "bob") && !strcmp(tt[1].token, "bob-0123456789abcdefgh"),
+        "trainee tokens: 2 parsed, comments, blank lines, tabs and CRLF skipped (%d)", tn);
+  const char *bad_tt[] = {"Alice alice-0123456789abcdef\n", "alice short\n", "alice alice-0123456789abcdef extra\n",
+                          "alice\n", "alice alice-0123456789abcdef\nbob alice-0123456789abcdef\n",
+                          "alice alice-0123456789abcdef\nalice bob-0123456789abcdefgh\n",
+                          "carol instructor-0123456789\n", "al/ce alice-0123456789abcdef\n"};
+  const char *bad_why[] = {"upper case", "short token", "a third field", "no token", "a token twice", "a name twice",
+                           "the instructors' token", "a slash in the name"};
+  for (size_t k = 0; k < sizeof bad_tt / sizeof bad_tt[0]; k++) {
+    terr[0] = 0;
+    tn = palp_web_trainee_tokens_parse(bad_tt[k], "instructor-0123456789", tt, 4, terr, sizeof terr);
+    CHECK(tn < 0 && strstr(terr, "line "), "trainee tokens: %s refused (%s)", bad_why[k], terr);
+  }
+  CHECK(palp_web_trainee_tokens_parse("a aaaaaaaaaaaaaaaa1\nb aaaaaaaaaaaaaaaa2\n", NULL, tt, 1, terr, sizeof terr) < 0,
+        "trainee tokens: more than the room refused (%s)", terr);
+
   char v[64];
   CHECK(palp_web_cookie_get("a=1; palp_token=xyz; b=2", "palp_token", v, sizeof v) == 0 && !strcmp(v, "xyz"), "middle");
   CHECK(palp_web_cookie_get("palp_token=abc", "palp_token", v, sizeof v) == 0 && !strcmp(v, "abc"), "alone");

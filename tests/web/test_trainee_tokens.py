@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""web_trainee_tokens: trainees' own tokens scope a page to that trainee's sessions (docs/web.md).
+
+palp-web with --token (the instructors') and --trainee-tokens (alice's and bob's); trainees alice and
+bob each press a sine on their own phantom. With alice's token:
+- the pages are served (200) and the cookie set is alice's token, not the instructors';
+- the session list names alice's session only, no server status is sent;
+- following bob's session, or every session (the dashboard), gets nothing: no frame in 3 s;
+- following her own session streams it.
+With the instructors' token the list has both sessions and the dashboard streams. A token nobody was
+given is refused (401). No browser: raw HTTP and WebSocket clients. DDS domain 126.
+usage: test_trainee_tokens.py BUILD SOURCE OUT"""
+import json
+import os
+import socket
+import time
+
+import harness
+from harness import check
+
+INSTR = "instructor-token-0123456789"
+ALICE = "alice-own-token-0123456789"
+BOB = "bob-own-token-0123456789ab"
+
+
+def sessions_seen(ws, want, seconds):
+    """Session lists received until one holds `want` trainees (or time runs out): (last list, kinds seen)."""
+    ws.sock.settimeout(0.5)
+    last, kinds, end = None, set(), time.time() + seconds
+    while time.time() < end:
+        try:
+            op, data = ws.recv()
+        except socket.timeout:
+            continue
+        if op != 1:
+            continue
+        m = json.loads(data)
+        kinds.add(m["type"])
+        if m["type"] == "sessions":
+            last = m["sessions"]
+            if sorted(s["trainee"] for s in last) == sorted(want):
+                break
+    return last, kinds
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, 126)
+    tokfile = os.path.join(out, "trainee-tokens.txt")
+    with open(tokfile, "w") as f:
+        f.write("# the class's own tokens\nalice %s\nbob %s\n" % (ALICE, BOB))
+    try:
+        procs.server()
+        web = procs.web(extra=["--token", INSTR, "--trainee-tokens", tokfile])
+        check("2 trainee token(s), each page scoped" in procs.log(web), "palp-web says it has 2 scoped trainee tokens")
+        sine = ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1", "--t-on", "0.5",
+                "--t-off", "60", "--duration", "60"]
+        procs.trainee("alice", 1, sine)
+        procs.trainee("bob", 2, sine)
+
+        status, body, headers = harness.http_get(web.base + "/trainee.html?token=" + ALICE)
+        cookie = headers.get("Set-Cookie", "")
+        check(status == 200 and ALICE in cookie and INSTR not in cookie,
+              "alice's token serves the trainee page and sets her own token as the cookie (%d)" % status)
+        status, _, _ = harness.http_get(web.base + "/trainee.html?token=nobodys-token-0123456789")
+        check(status == 401, "a token nobody was given is refused (%d)" % status)
+
+        # The instructors' view: both sessions, and the dashboard streams.
+        inst = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, INSTR), timeout=10)
+        both, _ = sessions_seen(inst, ["alice", "bob"], 25)
+        check(both is not None and sorted(s["trainee"] for s in both) == ["alice", "bob"],
+              "the instructors' page lists both sessions (%s)" % [s["trainee"] for s in (both or [])])
+        ids = {s["trainee"]: s["id"] for s in both}
+        inst.send(json.dumps({"follow": "all"}))
+        kinds, frames = harness.ws_messages(inst, 3.0)
+        inst.close()
+        check(frames >= 15, "the instructors' dashboard streams: %d frames in 3 s (>= 15)" % frames)
+
+        # Alice's view.
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=10)
+        mine, kinds = sessions_seen(ws, ["alice"], 10)
+        check(mine is not None and [s["trainee"] for s in mine] == ["alice"],
+              "alice's page lists her session only (%s)" % [s["trainee"] for s in (mine or [])])
+        ws.send(json.dumps({"follow": ids["bob"]}))
+        k1, f_bob = harness.ws_messages(ws, 3.0)
+        ws.send(json.dumps({"follow": "all"}))
+        k2, f_all = harness.ws_messages(ws, 3.0)
+        check(f_bob == 0 and f_all == 0, "following bob's session or every session gets alice's page nothing "
+              "(%d and %d frames in 3 s)" % (f_bob, f_all))
+        ws.send(json.dumps({"follow": ids["alice"]}))
+        k3, f_mine = harness.ws_messages(ws, 3.0)
+        check(f_mine >= 15, "following her own session streams it: %d frames in 3 s (>= 15)" % f_mine)
+        seen = kinds | set(k1) | set(k2) | set(k3)
+        lists = [s["trainee"] for m in k1.get("sessions", []) + k2.get("sessions", []) + k3.get("sessions", [])
+                 for s in m["sessions"]]
+        check("status" not in seen and set(lists) <= {"alice"},
+              "no server status and no other trainee in any list alice's page got (%s; %s)"
+              % (sorted(seen), sorted(set(lists))))
+        ws.close()
+
+        rc = procs.stop(web)
+        check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)
+    finally:
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)
