@@ -110,21 +110,38 @@ def http_get(url, headers=None):
         return e.code, e.read(), dict(e.headers)
 
 
-def ws_messages(ws, seconds):
-    """(text messages by type, number of deformation frames) a WebSocket received in some seconds."""
+def ws_read(ws, seconds):
+    """Yields (opcode, payload) of what a WebSocket receives for some seconds."""
     ws.sock.settimeout(0.5)
-    kinds, frames, end = {}, 0, time.time() + seconds
+    end = time.time() + seconds
     while time.time() < end:
         try:
-            op, data = ws.recv()
+            yield ws.recv()
         except socket.timeout:
             continue
+
+
+def ws_messages(ws, seconds):
+    """(text messages by type, number of deformation frames) a WebSocket received in some seconds."""
+    kinds, frames = {}, 0
+    for op, data in ws_read(ws, seconds):
         if op == 2:
             frames += 1
         elif op == 1:
             m = json.loads(data)
             kinds.setdefault(m["type"], []).append(m)
     return kinds, frames
+
+
+def ws_until(ws, seconds, done):
+    """Reads a WebSocket's text messages (parsed) until done(message) is true or `seconds` pass;
+    returns that message, or None."""
+    for op, data in ws_read(ws, seconds):
+        if op == 1:
+            m = json.loads(data)
+            if done(m):
+                return m
+    return None
 
 
 def read_png(path):

@@ -48,18 +48,9 @@ def run(build, source, out):
 
         # Nobody follows the session now: the bridge leaves it after its linger (2 s).
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=10)
-        left_after = None
-        end = time.time() + 8
-        ws.sock.settimeout(0.5)
-        while time.time() < end and left_after is None:
-            try:
-                op, data = ws.recv()
-            except socket.timeout:
-                continue
-            if op == 1:
-                m = json.loads(data)
-                if m["type"] == "sessions" and m["sessions"] and m["sessions"][0]["visual"] == 0:
-                    left_after = time.time() - t_kill
+        left = harness.ws_until(ws, 8, lambda m: m["type"] == "sessions" and bool(m["sessions"])
+                                and m["sessions"][0]["visual"] == 0)
+        left_after = time.time() - t_kill if left else None
         check(left_after is not None and left_after < 5,
               "the bridge left the session nobody watches: the server counts 0 visual members %.1f s after the kill"
               % (left_after or float("nan")))

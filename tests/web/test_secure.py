@@ -15,7 +15,6 @@ No browser: a raw WebSocket client (cdp.WebSocket). DDS domain 125.
 usage: test_secure.py BUILD SOURCE OUT (the PKI directory in PALP_TEST_PKI: fixture security_pki)"""
 import json
 import os
-import socket
 import time
 
 import harness
@@ -39,23 +38,16 @@ def run(build, source, out):
         # The secured bridge: alice's session, joined, and its frames.
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % secure.port, timeout=10)
         ws.send(json.dumps({"follow": "all"}))
-        joined_after, t0, end = None, time.time(), time.time() + 25
-        hello = None
-        ws.sock.settimeout(0.5)
-        while time.time() < end and joined_after is None:
-            try:
-                op, data = ws.recv()
-            except socket.timeout:
-                continue
-            if op != 1:
-                continue
-            m = json.loads(data)
+        t0, hello = time.time(), []
+
+        def joined(m):  # the list with alice's session joined by the bridge, keeping the hello
             if m["type"] == "hello":
-                hello = m
-            if m["type"] == "sessions":
-                mine = [s for s in m["sessions"] if s["trainee"] == "alice"]
-                if mine and mine[0]["visual"] >= 1 and mine[0]["joined"]:
-                    joined_after = time.time() - t0
+                hello.append(m)
+            mine = [s for s in m.get("sessions", []) if s["trainee"] == "alice"] if m["type"] == "sessions" else []
+            return bool(mine) and mine[0]["visual"] >= 1 and mine[0]["joined"]
+
+        joined_after = time.time() - t0 if harness.ws_until(ws, 25, joined) else None
+        hello = hello[0] if hello else None
         check(joined_after is not None,
               "the secured bridge lists alice's session and the server counts it as a visual member (%.1f s)"
               % (joined_after if joined_after is not None else float("nan")))

@@ -12,8 +12,6 @@ given is refused (401). No browser: raw HTTP and WebSocket clients. DDS domain 1
 usage: test_trainee_tokens.py BUILD SOURCE OUT"""
 import json
 import os
-import socket
-import time
 
 import harness
 from harness import check
@@ -25,22 +23,17 @@ BOB = "bob-own-token-0123456789ab"
 
 def sessions_seen(ws, want, seconds):
     """Session lists received until one holds `want` trainees (or time runs out): (last list, kinds seen)."""
-    ws.sock.settimeout(0.5)
-    last, kinds, end = None, set(), time.time() + seconds
-    while time.time() < end:
-        try:
-            op, data = ws.recv()
-        except socket.timeout:
-            continue
-        if op != 1:
-            continue
-        m = json.loads(data)
+    last, kinds = [None], set()
+
+    def seen(m):
         kinds.add(m["type"])
         if m["type"] == "sessions":
-            last = m["sessions"]
-            if sorted(s["trainee"] for s in last) == sorted(want):
-                break
-    return last, kinds
+            last[0] = m["sessions"]
+            return sorted(s["trainee"] for s in last[0]) == sorted(want)
+        return False
+
+    harness.ws_until(ws, seconds, seen)
+    return last[0], kinds
 
 
 def run(build, source, out):
