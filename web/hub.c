@@ -722,7 +722,8 @@ static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   if (!s || !isfinite(m->time_left)) {
-    h->stats.dropped++;
+    if (s) h->stats.dropped++;
+    else h->stats.no_session++;
     return;
   }
   s->fst.valid = 1;
@@ -804,7 +805,8 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   if (!s || m->finger >= FINGERS) {
-    h->stats.dropped++;
+    if (s) h->stats.dropped++;
+    else h->stats.no_session++;
     return;
   }
   finger *f = &s->f[m->finger];
@@ -859,7 +861,7 @@ static void on_feedback(palp_web_hub *h, const palp_Feedback *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   if (!s) {
-    h->stats.dropped++;
+    h->stats.no_session++;
     return;
   }
   for (uint32_t i = 0; i < m->fingers._length && i < FINGERS; i++) {
@@ -881,7 +883,8 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   if (!s || m->finger >= FINGERS || !vec_finite(&m->proxy) || !vec_finite(&m->device) || !vec_finite(&m->force)) {
-    h->stats.dropped++;
+    if (s) h->stats.dropped++;
+    else h->stats.no_session++;
     return;
   }
   finger *f = &s->f[m->finger];
@@ -948,7 +951,8 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
   session *s = find_session(h, m->session_id, &slot);
   const uint32_t n = m->positions._length;
   if (!s || !s->ph || (int)n != s->ph->n) {
-    h->stats.dropped++;
+    if (s) h->stats.dropped++;
+    else h->stats.no_session++;
     return;
   }
   const size_t len = PALP_WEB_DEFORM_HEADER + (size_t)n * 3 * sizeof(float);

@@ -77,7 +77,9 @@ typedef struct palp_web_cursor {
 
 typedef struct palp_web_hub_stats {
   uint64_t catalogue, states, statuses, contacts, feedbacks, deformations, local_models; /* DDS samples taken */
-  uint64_t dropped;   /* samples for sessions or phantoms the bridge does not know (or malformed) */
+  uint64_t dropped;   /* samples refused: malformed, or no room (sessions, exercises, memory) */
+  uint64_t no_session; /* samples of a session the bridge has no state for: benign when it has just
+                        * opened (its first contacts can overtake its state) or just closed */
   uint64_t joins, leaves, join_rejected;
   uint64_t exercises, finding_statuses;            /* DDS samples taken */
   uint64_t findings_written, findings_refused;     /* browser finding requests */

@@ -430,6 +430,15 @@ static void test_local_model(void) {
   lm.point = (palp_Vec3){0.003, -0.004, 0.0385};
   lm.area = 2e-4;
   dds_write(w_lm, &lm);
+  /* What the counters tell apart: a contact of a session the bridge has no state for (as when a
+   * session's first contacts overtake its state) is not a malformed sample; a local model of a
+   * known session with finger 7 (of 0-3) is. */
+  palp_Contact stray = ct;
+  stray.session_id = sid + 1;
+  dds_write(w_contact, &stray);
+  palp_LocalModel bad = lm;
+  bad.finger = 7;
+  dds_write(w_lm, &bad);
   dds_sleepfor(DDS_MSECS(100));
   palp_LocalModel old = lm; /* an older frame: ignored */
   old.frame = 40;
@@ -498,6 +507,11 @@ static void test_local_model(void) {
           "force_limit and out_of_range said");
   }
   cJSON_Delete(got);
+  palp_web_hub_stats hs;
+  palp_web_hub_stats_get(h, &hs);
+  CHECK(hs.no_session == 1 && hs.dropped == 1,
+        "counted apart: 1 sample of no known session (got %llu), 1 malformed dropped (got %llu)",
+        (unsigned long long)hs.no_session, (unsigned long long)hs.dropped);
   test_findings(h, &c, pp, pub, sid, w_lm, &lm);
   palp_web_hub_detach(h, &c);
   dds_delete(pp);
