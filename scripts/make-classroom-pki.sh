@@ -11,6 +11,8 @@
 #   make-classroom-pki.sh DIR add KIND NAME [--days N]   KIND: trainee | instructor | server
 #   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
 #   make-classroom-pki.sh DIR list                       identities, validity and revocation
+#   make-classroom-pki.sh DIR governance                 re-issue the governance (init and classroom
+#                                                        do when it is older than this script's)
 #
 # Layout of DIR (what a station needs is public except its own key):
 #   ca.cert.pem                   the classroom CA (identity CA and permissions CA)
@@ -26,7 +28,7 @@ set -euo pipefail
 set -f # topic and partition patterns contain "*": never expand them as file names
 
 die() { echo "make-classroom-pki: $*" >&2; exit 2; }
-[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list ..."
+[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list|governance ..."
 command -v openssl >/dev/null || die "openssl not found (Debian package openssl)"
 dir=$1
 cmd=$2
@@ -92,11 +94,40 @@ sign() { # xml -> p7s, S/MIME signed by the CA (what Cyclone's access control pl
 
 utc() { date -u -d "$1" +%Y-%m-%dT%H:%M:%S; }
 
+# The governance's version: init and classroom re-issue an older one (docs/security.md,
+# "Stations of another vendor"). 2: the topics stations write carry a submessage MAC (SIGN).
+GOVERNANCE_VERSION=2
+
+topic_rule() { # topic expression, metadata protection kind
+  cat <<EOF
+        <topic_rule>
+          <topic_expression>$1</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>true</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>$2</metadata_protection_kind>
+          <data_protection_kind>ENCRYPT</data_protection_kind>
+        </topic_rule>
+EOF
+}
+
 governance() {
   # Authenticated discovery and liveliness (encrypted), every RTPS message signed, every
   # topic's data encrypted (AES-GCM: also authenticated), read and write access control on.
-  cat >"$dir/governance.xml" <<'EOF'
+  # Submessages: the topics a station or an instructor writes (requests, contacts, findings)
+  # carry a MAC of their own (SIGN). The RTPS message's signature already authenticates them
+  # for palp's own stations, but Fast DDS 2.x (ROS 2's default DDS) matches its writer with a
+  # reader only once it holds the reader's crypto tokens, and Cyclone DDS 0.10 sends none for a
+  # reader without submessage protection: with NONE here a Fast DDS station reads everything
+  # and none of its requests or contacts reach the server (test interop_fastdds_secure). The
+  # topics the server writes at up to 1 kHz (feedback, local models) keep NONE: one MAC fewer
+  # per sample on the hot path, and a Fast DDS reader needs only the writer's tokens, which
+  # the encrypted payload brings. The first matching rule applies.
+  {
+    cat <<'EOF'
 <?xml version="1.0" encoding="utf-8"?>
+<!-- palp classroom governance, version 2 (scripts/make-classroom-pki.sh) -->
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
   <domain_access_rules>
@@ -108,22 +139,23 @@ governance() {
       <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
       <rtps_protection_kind>SIGN</rtps_protection_kind>
       <topic_access_rules>
-        <topic_rule>
-          <topic_expression>*</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>true</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>NONE</metadata_protection_kind>
-          <data_protection_kind>ENCRYPT</data_protection_kind>
-        </topic_rule>
+EOF
+    topic_rule "$T_REQUEST" SIGN
+    topic_rule "$T_CONTACT" SIGN
+    topic_rule "$T_FINDING" SIGN
+    topic_rule "*" NONE
+    cat <<'EOF'
       </topic_access_rules>
     </domain_rule>
   </domain_access_rules>
 </dds>
 EOF
+  } >"$dir/governance.xml"
   sign "$dir/governance.xml" "$dir/governance.p7s"
 }
+
+governance_current() { grep -q "palp classroom governance, version $GOVERNANCE_VERSION " "$dir/governance.xml" 2>/dev/null; }
+
 
 # rule publish|subscribe "topic ..." "partition ..." ("" = the default partition)
 rule() {
@@ -227,13 +259,24 @@ init() {
       -sha256 -out "$dir/ca.cert.pem"
     echo "make-classroom-pki: CA $dir/ca.cert.pem (key in $dir/ca/, keep it off the stations)"
   fi
-  [ -f "$dir/governance.p7s" ] || governance
+  if [ ! -f "$dir/governance.p7s" ]; then
+    governance
+  elif ! governance_current; then
+    governance
+    echo "make-classroom-pki: governance re-issued (version $GOVERNANCE_VERSION): copy $dir/governance.p7s to every station and restart them and the server"
+  fi
   [ -f "$dir/crl.pem" ] || crl
   [ -f "$dir/server/server.cert.pem" ] || add server server
 }
 
 case $cmd in
 init) init ;;
+governance)
+  dir=$(cd "$dir" && pwd)
+  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  governance
+  echo "make-classroom-pki: governance version $GOVERNANCE_VERSION in $dir/governance.p7s: copy it to every station and restart them and the server"
+  ;;
 classroom)
   trainees="" instructors=""
   while [ $# -gt 0 ]; do

@@ -19,7 +19,15 @@
 //     that long: Cyclone tracks a remote writer's automatic liveliness by its participant;
 //   - the QoS of docs/server.md, liveliness lease <= 0.5 s on the request and contact writers.
 //
-// usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash PEER_INDICES
+// Secured (a PKI directory made by scripts/make-classroom-pki.sh and an identity trainee/NAME):
+// Fast DDS's own builtin plugins (PKI-DH, Access-Permissions, AES-GCM-GMAC) with the classroom's
+// files, which is what docs/interop.md tells another vendor's station to do. The station then does
+// what a secured palp-client does (docs/security.md): its requests in its own partition
+// palp/trainee/NAME, a station id beginning trainee/NAME/, user name NAME, palp_session_request
+// (the permissions do not grant palp_station_request), and leaves with OP_LEAVE. CLAIM (optional)
+// is the user name it claims instead of NAME: a forged identity the server must refuse.
+//
+// usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash PEER_INDICES [PKI trainee/NAME [CLAIM]]
 // (station-crash: press, then wait to be killed, for the crash-versus-goodbye check)
 #include <cmath>
 #include <chrono>
@@ -33,6 +41,7 @@
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -52,9 +61,12 @@ using Clock = std::chrono::steady_clock;
 
 static double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 static void nap(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+// A failure leaves the participant running: exit at once, without the exit handlers (OpenSSL's
+// atexit cleanup would pull the crypto library from under Fast DDS's still-running threads).
 static int fail(const char *what) {
   std::printf("FAIL %s\n", what);
-  return 1;
+  std::fflush(stdout);
+  std::_Exit(1);
 }
 
 template <class PST> static TypeSupport make_type() {
@@ -73,15 +85,29 @@ static void state_qos(DataReaderQos &q) {
 }
 
 int main(int argc, char **argv) {
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash PEER_INDICES\n");
+  if (argc != 5 && argc != 7 && argc != 8) {
+    std::fprintf(stderr, "usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash PEER_INDICES "
+                         "[PKI trainee/NAME [CLAIM]]\n");
     return 2;
   }
+  std::setvbuf(stdout, nullptr, _IOLBF, 0); // results survive whatever happens next
+  if (std::getenv("PALP_FASTDDS_WARNINGS")) eprosima::fastdds::dds::Log::SetVerbosity(eprosima::fastdds::dds::Log::Kind::Warning);
   const int domain = std::atoi(argv[1]);
   const uint32_t phantom_id = (uint32_t)std::strtoul(argv[2], nullptr, 10);
   const bool station_topic = std::strncmp(argv[3], "station", 7) == 0;
   const bool crash = std::strstr(argv[3], "-crash") != nullptr;
   const int peers = std::atoi(argv[4]);
+  const bool secure = argc >= 7;
+  std::string pki, name, claim;
+  if (secure) {
+    char abs[4096];
+    if (!realpath(argv[5], abs)) return fail("PKI directory not found");
+    pki = abs;
+    if (std::strncmp(argv[6], "trainee/", 8) != 0 || !argv[6][8]) return fail("identity must be trainee/NAME");
+    name = argv[6] + 8;
+    claim = argc == 8 ? argv[7] : name;
+    if (station_topic) return fail("a secured station has no palp_station_request (docs/security.md): use session");
+  }
 
   DomainParticipantQos pq;
   pq.name("palp fastdds station");
@@ -104,6 +130,21 @@ int main(int argc, char **argv) {
   pq.wire_protocol().builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(1.0);
   pq.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(0.25);
   pq.wire_protocol().default_unicast_locator_list.push_back(user);
+  if (secure) { // Fast DDS's builtin security plugins, the classroom's files (OMG DDS Security 1.1, 9.3.1);
+    // Fast DDS takes only "file://" URIs ("file:" + path, which Cyclone accepts, is refused)
+    auto &props = pq.properties().properties();
+    const std::string id = "file://" + pki + "/trainee/" + name;
+    props.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_ca", "file://" + pki + "/ca.cert.pem");
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate", id + ".cert.pem");
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.private_key", id + ".key.pem");
+    props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_crl", "file://" + pki + "/crl.pem");
+    props.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
+    props.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions_ca", "file://" + pki + "/ca.cert.pem");
+    props.emplace_back("dds.sec.access.builtin.Access-Permissions.governance", "file://" + pki + "/governance.p7s");
+    props.emplace_back("dds.sec.access.builtin.Access-Permissions.permissions", id + ".permissions.p7s");
+    props.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+  }
   DomainParticipant *pp = DomainParticipantFactory::get_instance()->create_participant(domain, pq);
   if (!pp) return fail("cannot create the Fast DDS participant");
 
@@ -123,7 +164,9 @@ int main(int argc, char **argv) {
   if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df) return fail("cannot create the topics");
 
   Subscriber *sub = pp->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
-  Publisher *pub = pp->create_publisher(PUBLISHER_QOS_DEFAULT);
+  PublisherQos req_pubq = PUBLISHER_QOS_DEFAULT;
+  if (secure) req_pubq.partition().push_back(("palp/trainee/" + name).c_str()); // the sender's identity (docs/security.md)
+  Publisher *pub = pp->create_publisher(req_pubq);
   DataReaderQos rq_state = DATAREADER_QOS_DEFAULT;
   state_qos(rq_state);
   DataReader *r_ph = sub->create_datareader(tp_ph, rq_state);
@@ -159,7 +202,9 @@ int main(int argc, char **argv) {
 
   // 2. Join.
   char sid[64];
-  std::snprintf(sid, sizeof sid, "fastdds/%ld/trainee:fd", (long)getpid());
+  if (secure) std::snprintf(sid, sizeof sid, "trainee/%s/fastdds/%ld/fd", name.c_str(), (long)getpid());
+  else std::snprintf(sid, sizeof sid, "fastdds/%ld/trainee:fd", (long)getpid());
+  const std::string user_name = secure ? claim : std::string("fastdds");
   const uint64_t station_key = ((uint64_t)getpid() << 20) ^ 0x5a5a;
   palp::SessionRequest rq;
   rq.station_id(sid);
@@ -168,7 +213,7 @@ int main(int argc, char **argv) {
   rq.role(palp::ROLE_TRAINEE);
   rq.phantom_id(phantom_id);
   rq.session_id(0);
-  rq.user_name("fastdds");
+  rq.user_name(user_name);
   rq.want_feedback(true);
   rq.want_deformation(true);
   palp::StationRequest srq;
@@ -179,7 +224,7 @@ int main(int argc, char **argv) {
   srq.role(palp::ROLE_TRAINEE);
   srq.phantom_id(phantom_id);
   srq.session_id(0);
-  srq.user_name("fastdds");
+  srq.user_name(user_name);
   srq.want_feedback(true);
   srq.want_deformation(true);
   const auto tj = Clock::now();
@@ -200,9 +245,21 @@ int main(int argc, char **argv) {
       }
     if (!have_rp) nap(0.02);
   }
-  if (!have_rp) return fail("no reply to the join within 10 s");
+  if (!have_rp) {
+    PublicationMatchedStatus pm;
+    SubscriptionMatchedStatus sm;
+    w_rq->get_publication_matched_status(pm);
+    r_rp->get_subscription_matched_status(sm);
+    std::printf("result request_readers_matched %d\nresult reply_writers_matched %d\n", pm.current_count, sm.current_count);
+    return fail("no reply to the join within 10 s");
+  }
   if (rp.status() != palp::REPLY_ACCEPTED) {
     std::printf("result join_reason %s\n", rp.reason().c_str());
+    if (claim != name) { // the forged claim was refused, as it must be
+      pp->delete_contained_entities();
+      DomainParticipantFactory::get_instance()->delete_participant(pp);
+      return 0;
+    }
     return fail("join rejected");
   }
   const uint32_t session = rp.session_id();
@@ -322,9 +379,18 @@ int main(int argc, char **argv) {
   std::printf("result rejected_samples %llu\n", (unsigned long long)rejected);
 
   // 6. Leave by disposing the request instance alone (no OP_LEAVE), then watch the session state.
+  // Secured: with OP_LEAVE, as a secured palp-client does (palp_session_request's dispose carries
+  // only an MD5 key hash, which Cyclone cannot map back to the instance).
   const auto tl = Clock::now();
-  ReturnCode_t drc = station_topic ? w_rq->dispose(&srq, HANDLE_NIL) : w_rq->dispose(&rq, HANDLE_NIL);
-  std::printf("result dispose_rc %d\n", (int)drc());
+  if (secure) {
+    rq.request_seq(2);
+    rq.op(palp::OP_LEAVE);
+    rq.session_id(session);
+    std::printf("result leave_written %d\n", w_rq->write(&rq) ? 1 : 0);
+  } else {
+    ReturnCode_t drc = station_topic ? w_rq->dispose(&srq, HANDLE_NIL) : w_rq->dispose(&rq, HANDLE_NIL);
+    std::printf("result dispose_rc %d\n", (int)drc());
+  }
   std::string reason = "(still open)";
   double closed_s = -1;
   while (closed_s < 0 && since(tl) < 4) {

@@ -1,0 +1,104 @@
+#!/bin/sh
+# Fast DDS (eProsima, Debian's 2.9) in a SECURED classroom against palp-server (Cyclone DDS 0.10):
+# the station authenticates with Fast DDS's own builtin plugins (PKI-DH, Access-Permissions,
+# AES-GCM-GMAC) and the files scripts/make-classroom-pki.sh makes, as docs/interop.md tells
+# another vendor's station to do, and then does what a secured palp-client does:
+#   1. trainee/fd: catalogue, join (its session partition palp/s/fd/N), a 3 N press with
+#      feedback and deformation, a NaN sample rejected, OP_LEAVE;
+#   2. trainee/fd claiming to be alice: refused ("not the authenticated identity"), counted;
+#   3. the governance before 2026-12-04 (metadata_protection_kind NONE on every topic): the
+#      handshake completes and the station reads the catalogue, but Fast DDS never matches its
+#      request writer with the server's reader (Cyclone sends no crypto tokens for a reader
+#      without submessage protection, and Fast DDS waits for them), so no join is answered.
+#      This is why the classroom governance signs the submessages of the topics stations write.
+# In a private network namespace with only "lo" (unshare -n) when permitted, as fastdds.sh.
+# usage: fastdds_secure.sh PALP_SERVER FASTDDS_STATION LOOPBACK_DDS_CONFIG DOMAIN MAKE_CLASSROOM_PKI
+set -u
+if [ "${PALP_IN_NETNS:-}" != 1 ]; then
+  if unshare -n true 2> /dev/null; then
+    echo "ok   private network namespace (unshare -n): only lo"
+    exec env PALP_IN_NETNS=1 unshare -n sh "$0" "$@"
+  fi
+  echo "NOTE unshare -n is not permitted here: running on the host's loopback"
+else
+  ip link set lo up 2> /dev/null || { echo "FAIL cannot bring lo up in the namespace"; exit 1; }
+fi
+server=$1 station=$2 dds=$3 domain=$4 mkpki=$5
+work=$(mktemp -d /tmp/palp-fastdds-secure.XXXXXX)
+spid=
+trap '[ -n "$spid" ] && kill "$spid" 2>/dev/null; rm -rf "$work"' EXIT
+fail=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fail=1; }
+r() { sed -n "s/^result $2 //p" "$work/$1.out" | head -1; }
+num_ge() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 >= b + 0) }'; }
+num_in() { awk -v a="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(a + 0 >= lo + 0 && a + 0 <= hi + 0) }'; }
+unset CYCLONEDDS_URI
+bash "$mkpki" "$work/pki" classroom --trainees fd,alice > "$work/pki.out" 2>&1 || { cat "$work/pki.out"; echo "FAIL make-classroom-pki"; exit 1; }
+grep -q "<metadata_protection_kind>SIGN</metadata_protection_kind>" "$work/pki/governance.xml" \
+  && ok "classroom PKI made by make-classroom-pki.sh (governance: the stations' topics SIGN their submessages)" \
+  || bad "the governance signs no submessage"
+
+start_server() { # PKI log
+  "$server" --dds-config "$dds" --domain "$domain" --no-db --pki "$1" --log-file "$work/$2.log" > "$work/$2.out" 2>&1 &
+  spid=$!
+  sleep 1
+}
+stop_server() { # log
+  kill -INT "$spid"; wait "$spid"; src=$?; spid=
+  [ $src -eq 0 ] && ok "palp-server ($1) stopped cleanly" || bad "palp-server ($1) exit $src"
+}
+
+# 1 and 2: the classroom's governance.
+start_server "$work/pki" server
+timeout 60 "$station" "$domain" 1 session 4 "$work/pki" trainee/fd > "$work/fd.out" 2>&1; rc=$?
+[ $rc -eq 0 ] || { bad "fastdds_station (trainee/fd) exit $rc"; grep -v "^.\[" "$work/fd.out"; }
+[ "$(r fd vertices)" = 338 ] && ok "authenticated (PKI-DH, Fast DDS against Cyclone): catalogue after $(r fd catalogue_s) s, \"$(r fd phantom_name)\", 338 vertices" \
+  || bad "catalogue: $(r fd vertices) vertices"
+part=$(r fd partition)
+case $part in
+  palp/s/fd/*) ok "joined session $(r fd session) after $(r fd join_s) s, in the trainee's own partition $part" ;;
+  *) bad "join: partition \"$part\" (want palp/s/fd/N)" ;;
+esac
+# as in fastdds.sh: the 3 N press reads 3 N within 5% once settled; the long-term dome dents
+# 0.37-0.6 mm under it, so at least 0.2 mm
+num_in "$(r fd feedback_last_N)" 2.85 3.15 && num_ge "$(r fd feedback_samples)" 50 \
+  && ok "encrypted contacts in, feedback out: $(r fd feedback_samples) samples, last |F| $(r fd feedback_last_N) N (3 N press, want within 5%)" \
+  || bad "feedback: $(r fd feedback_samples) samples, last |F| $(r fd feedback_last_N) N"
+[ "$(r fd deformation_vertices)" = 338 ] && num_ge "$(r fd deformation_samples)" 10 && num_ge "$(r fd deformation_max_mm)" 0.2 \
+  && ok "deformation: $(r fd deformation_samples) meshes, max displacement $(r fd deformation_max_mm) mm" \
+  || bad "deformation: $(r fd deformation_samples) samples, $(r fd deformation_vertices) vertices, $(r fd deformation_max_mm) mm"
+num_ge "$(r fd rejected_samples)" 1 && ok "NaN sample rejected ($(r fd rejected_samples) in the session state)" \
+  || bad "NaN sample not rejected: $(r fd rejected_samples)"
+[ "$(r fd leave_reason)" = "trainee station left" ] && ok "OP_LEAVE closed the session in $(r fd leave_closed_s) s" \
+  || bad "leave: \"$(r fd leave_reason)\""
+
+timeout 60 "$station" "$domain" 1 session 4 "$work/pki" trainee/fd alice > "$work/claim.out" 2>&1; rc=$?
+reason=$(r claim join_reason)
+if [ $rc -eq 0 ] && printf '%s' "$reason" | grep -q 'user_name "alice" is not the authenticated identity trainee/fd'; then
+  ok "trainee/fd claiming to be alice: refused: \"$reason\""
+else
+  bad "forged claim: exit $rc, reason \"$reason\""
+fi
+stop_server "classroom governance"
+refused=$(sed -n 's/^.*requests refused for their identity: \([0-9]*\).*$/\1/p' "$work/server.log" | tail -1)
+[ "$refused" = 1 ] && ok "the server counted 1 request refused for its identity" || bad "refused requests: \"$refused\" (want 1)"
+grep -q "fd  *dome A.*trainee station left" "$work/server.log" \
+  && ok "server summary: $(grep "fd  *dome A" "$work/server.log" | tr -s ' ' | cut -c1-120)" || bad "no session of fd in the server's summary"
+
+# 3. The earlier governance: no submessage protection anywhere.
+cp -r "$work/pki" "$work/pki-none"
+sed -i 's|<metadata_protection_kind>SIGN</metadata_protection_kind>|<metadata_protection_kind>NONE</metadata_protection_kind>|' "$work/pki-none/governance.xml"
+openssl smime -sign -in "$work/pki-none/governance.xml" -text -out "$work/pki-none/governance.p7s" \
+  -signer "$work/pki-none/ca.cert.pem" -inkey "$work/pki-none/ca/ca.key.pem" || bad "cannot re-sign the NONE governance"
+start_server "$work/pki-none" server-none
+timeout 60 "$station" "$domain" 1 session 4 "$work/pki-none" trainee/fd > "$work/none.out" 2>&1; rc=$?
+if [ $rc -ne 0 ] && [ "$(r none vertices)" = 338 ] && [ "$(r none request_readers_matched)" = 0 ] && grep -q "FAIL no reply to the join" "$work/none.out"; then
+  ok "governance without submessage protection: catalogue read ($(r none catalogue_s) s) but the request writer matched $(r none request_readers_matched) readers and the join went unanswered (why the classroom governance signs the stations' topics)"
+else
+  bad "NONE governance: exit $rc, $(r none vertices) vertices, request readers matched \"$(r none request_readers_matched)\" (if Fast DDS or Cyclone changed, update docs/interop.md and the governance)"
+  grep "^result\|^FAIL" "$work/none.out"
+fi
+stop_server "governance without submessage protection"
+[ $fail -ne 0 ] && { echo "--- server log"; cat "$work/server.log"; }
+exit $fail
