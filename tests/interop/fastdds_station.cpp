@@ -27,8 +27,9 @@
 // (the permissions do not grant palp_station_request), and leaves with OP_LEAVE. CLAIM (optional)
 // is the user name it claims instead of NAME: a forged identity the server must refuse.
 //
-// usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash PEER_INDICES [PKI trainee/NAME [CLAIM]]
-// (station-crash: press, then wait to be killed, for the crash-versus-goodbye check)
+// usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES [PKI trainee/NAME [CLAIM]]
+// (station-crash: press, then wait to be killed, for the crash-versus-goodbye check; +finger: then
+// press by position and read the server's local contact models)
 #include <cmath>
 #include <chrono>
 #include <cstdio>
@@ -86,7 +87,7 @@ static void state_qos(DataReaderQos &q) {
 
 int main(int argc, char **argv) {
   if (argc != 5 && argc != 7 && argc != 8) {
-    std::fprintf(stderr, "usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash PEER_INDICES "
+    std::fprintf(stderr, "usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES "
                          "[PKI trainee/NAME [CLAIM]]\n");
     return 2;
   }
@@ -96,6 +97,7 @@ int main(int argc, char **argv) {
   const uint32_t phantom_id = (uint32_t)std::strtoul(argv[2], nullptr, 10);
   const bool station_topic = std::strncmp(argv[3], "station", 7) == 0;
   const bool crash = std::strstr(argv[3], "-crash") != nullptr;
+  const bool finger = std::strstr(argv[3], "+finger") != nullptr; // also press by position
   const int peers = std::atoi(argv[4]);
   const bool secure = argc >= 7;
   std::string pki, name, claim;
@@ -151,8 +153,9 @@ int main(int argc, char **argv) {
   TypeSupport t_ph = make_type<palp::PhantomPubSubType>(), t_rq = make_type<palp::SessionRequestPubSubType>(),
               t_srq = make_type<palp::StationRequestPubSubType>(), t_rp = make_type<palp::SessionReplyPubSubType>(),
               t_st = make_type<palp::SessionStatePubSubType>(), t_ct = make_type<palp::ContactPubSubType>(),
-              t_fb = make_type<palp::FeedbackPubSubType>(), t_df = make_type<palp::DeformationPubSubType>();
-  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df}) t->register_type(pp);
+              t_fb = make_type<palp::FeedbackPubSubType>(), t_df = make_type<palp::DeformationPubSubType>(),
+              t_lm = make_type<palp::LocalModelPubSubType>();
+  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm}) t->register_type(pp);
   Topic *tp_ph = pp->create_topic("palp_catalogue", t_ph.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_rq = station_topic ? pp->create_topic("palp_station_request", t_srq.get_type_name(), TOPIC_QOS_DEFAULT)
                                : pp->create_topic("palp_session_request", t_rq.get_type_name(), TOPIC_QOS_DEFAULT);
@@ -377,6 +380,77 @@ int main(int argc, char **argv) {
     nap(0.05);
   }
   std::printf("result rejected_samples %llu\n", (unsigned long long)rejected);
+
+  // 5b. Position in, force out (issue 11), optional ("+finger"): the fingertip (8 mm sphere) is
+  // driven by position at the pole, from 2 mm above the surface to 3 mm deep at 5 mm/s at 100 Hz,
+  // then held 0.6 s; the server answers each physics step with a local contact model
+  // (palp_local_model: proxy, normal, force, 3x3 stiffness), which a station's 1 kHz loop would
+  // render. The device point is the sphere's centre: R + r - depth above the base at the pole.
+  if (finger) {
+    nap(1.0); // the dome recovers from the 3 N press (to 5% of its peak in ~0.75 s)
+    Topic *tp_lm = pp->create_topic("palp_local_model", t_lm.get_type_name(), TOPIC_QOS_DEFAULT);
+    DataReaderQos rq_lm = DATAREADER_QOS_DEFAULT;
+    rq_lm.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+    rq_lm.history().depth = 1;
+    DataReader *r_lm = tp_lm ? ssub->create_datareader(tp_lm, rq_lm) : nullptr;
+    if (!r_lm) return fail("cannot create the local model reader");
+    nap(0.5); // discovery of the new reader
+    const double r_tip = 0.008, top = ph.radius() + r_tip;
+    palp::Contact fc;
+    fc.session_id(session);
+    fc.finger(1);
+    fc.mode(palp::CONTACT_FINGER);
+    fc.vertex(-1);
+    fc.radius(r_tip);
+    fc.patch_area(0);
+    palp::Vec3 zero, dev;
+    zero.x(0);
+    zero.y(0);
+    zero.z(0);
+    fc.force(zero);
+    dev.x(0);
+    dev.y(0);
+    uint64_t lm_n = 0, lm_contact = 0, lm_drops = 0, hold_n = 0;
+    double last_f = -1, hold_f = 0, hold_kzz = 0, hold_depth = 0, hold_dev_mm = 0, peak_f = 0;
+    const auto tf = Clock::now();
+    for (double t = 0; t < 1.6; t = since(tf)) {
+      const double depth = std::fmin(-0.002 + 0.005 * t, 0.003); // [m], 5 mm/s, then held at 3 mm
+      dev.z(top - depth);
+      fc.center(dev);
+      fc.seq(++seq);
+      fc.source_time_ns((int64_t)std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count());
+      w_ct->write(&fc);
+      palp::LocalModel lm;
+      SampleInfo info;
+      while (r_lm->take_next_sample(&lm, &info) == ReturnCode_t::RETCODE_OK) {
+        if (!info.valid_data || lm.session_id() != session || lm.finger() != 1) continue;
+        lm_n++;
+        const double fm = std::sqrt(lm.force().x() * lm.force().x() + lm.force().y() * lm.force().y() +
+                                    lm.force().z() * lm.force().z());
+        if (lm.in_contact()) lm_contact++;
+        // deeper every step until the hold: the force must not fall (2% or 0.01 N of slack)
+        if (last_f >= 0 && fm < last_f - std::fmax(0.02 * last_f, 0.01)) lm_drops++;
+        last_f = fm;
+        peak_f = std::fmax(peak_f, fm);
+        if (t > 1.3) { // the last 0.3 s of the hold
+          hold_n++;
+          hold_f += fm;
+          hold_kzz += lm.stiffness()[8];
+          hold_depth += lm.depth();
+          hold_dev_mm += (top - lm.device().z()) * 1e3;
+        }
+      }
+      nap(0.01);
+    }
+    if (hold_n) hold_f /= (double)hold_n, hold_kzz /= (double)hold_n, hold_depth /= (double)hold_n, hold_dev_mm /= (double)hold_n;
+    std::printf("result lm_samples %llu\nresult lm_in_contact %llu\nresult lm_force_drops %llu\nresult lm_hold_samples %llu\n"
+                "result lm_hold_force_N %.4f\nresult lm_peak_force_N %.4f\nresult lm_hold_kzz_N_per_mm %.4f\n"
+                "result lm_hold_device_depth_mm %.3f\nresult lm_hold_coupling_mm %.4f\n",
+                (unsigned long long)lm_n, (unsigned long long)lm_contact, (unsigned long long)lm_drops,
+                (unsigned long long)hold_n, hold_f, peak_f, hold_kzz * 1e-3, hold_dev_mm, hold_depth * 1e3);
+    fc.mode(palp::CONTACT_RELEASE);
+    for (int k = 0; k < 3; k++) fc.seq(++seq), w_ct->write(&fc), nap(0.02);
+  }
 
   // 6. Leave by disposing the request instance alone (no OP_LEAVE), then watch the session state.
   // Secured: with OP_LEAVE, as a secured palp-client does (palp_session_request's dispose carries
