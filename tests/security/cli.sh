@@ -46,6 +46,18 @@ check "the same with --insecure, or secured with --pki, passes its check (exit $
 rc=$?
 check "a station without an identity is told the classroom may be secured (exit $rc)" \
   "[ $rc -ne 0 ] && grep -q 'none of which answered: if the classroom runs with DDS Security, give --pki DIR --identity' '$out/plain.log'"
+# A station still on the governance before 2026-12-04 (no submessage protection anywhere, signed by the
+# same CA): the server's request reader and its writer protect the topic differently and never match.
+cp -r "$pki" "$out/oldgov"
+sed -i 's|<metadata_protection_kind>SIGN</metadata_protection_kind>|<metadata_protection_kind>NONE</metadata_protection_kind>|' \
+  "$out/oldgov/governance.xml"
+openssl smime -sign -in "$out/oldgov/governance.xml" -text -out "$out/oldgov/governance.p7s" \
+  -signer "$out/oldgov/ca.cert.pem" -inkey "$out/oldgov/ca/ca.key.pem"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/oldgov" --identity trainee/alice --duration 1 --timeout 4 \
+  >"$out/oldgov.log" 2>&1
+rc=$?
+check "a station on an old governance is not answered and is told to check it (exit $rc)" \
+  "[ $rc -ne 0 ] && grep -q 'none of which answered trainee/alice: .*governance.p7s differs from this station' '$out/oldgov.log'"
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
   --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
 cpid=$!
