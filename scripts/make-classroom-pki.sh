@@ -11,6 +11,7 @@
 #   make-classroom-pki.sh DIR add KIND NAME [--days N]   KIND: trainee | instructor | server
 #   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
 #   make-classroom-pki.sh DIR list                       identities, validity and revocation
+#   make-classroom-pki.sh DIR web HOST[,HOST...] [--days N]   a TLS certificate for palp-web (HTTPS)
 #   make-classroom-pki.sh DIR governance                 re-issue the governance (init and classroom
 #                                                        do when it is older than this script's)
 #
@@ -20,6 +21,7 @@
 #   crl.pem                       revoked certificates (signed by the CA; valid 365 days)
 #   KIND/NAME.cert.pem, .key.pem  an identity (the key stays on its station, mode 0600)
 #   KIND/NAME.permissions.xml, .p7s   what it may publish and subscribe (signed by the CA)
+#   web/HOST.cert.pem, .key.pem   palp-web's TLS certificate (no DDS permissions)
 #   ca/                           the CA's private key and database: keep it off the stations
 #
 # A NAME is 1-31 characters of a-z, 0-9, '-' and '_' (it goes into DDS partition names and
@@ -28,7 +30,7 @@ set -euo pipefail
 set -f # topic and partition patterns contain "*": never expand them as file names
 
 die() { echo "make-classroom-pki: $*" >&2; exit 2; }
-[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list|governance ..."
+[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list|governance|web ..."
 command -v openssl >/dev/null || die "openssl not found (Debian package openssl)"
 dir=$1
 cmd=$2
@@ -245,6 +247,45 @@ add() { # kind name
   echo "make-classroom-pki: $kind/$name: $(openssl x509 -in "$base.cert.pem" -noout -serial) until $na"
 }
 
+# A TLS server certificate for palp-web (docs/web.md, "HTTPS"), signed by the classroom CA, so that a
+# browser which trusts ca.cert.pem reaches the dashboard over HTTPS. HOSTS: the names and addresses
+# the pages are opened by (subjectAltName; browsers ignore the CN). Its key stays on palp-web's
+# machine; it has no DDS permissions, so it cannot join the classroom's domain.
+web_cert() {
+  local hosts=$1 first san="" h base
+  [[ $hosts =~ ^[A-Za-z0-9.:,-]+$ ]] || die "web: bad hosts \"$hosts\": DNS names or IP addresses, separated by commas"
+  first=${hosts%%,*}
+  for h in ${hosts//,/ }; do
+    if [[ $h =~ ^[0-9]{1,3}(\.[0-9]{1,3}){3}$ || $h =~ ^[0-9a-fA-F:]+$ && $h == *:* ]]; then
+      san+="${san:+,}IP:$h"
+    elif [[ $h =~ ^[A-Za-z0-9]([A-Za-z0-9.-]{0,251}[A-Za-z0-9])?$ ]]; then
+      san+="${san:+,}DNS:$h"
+    else
+      die "web: bad host \"$h\": a DNS name or an IP address"
+    fi
+  done
+  [ -n "$san" ] || die "usage: $0 DIR web HOST[,HOST...] [--days N]"
+  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  mkdir -p "$dir/web"
+  base="$dir/web/$(echo "$first" | tr ':' '_')"
+  (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$base.key.pem")
+  openssl req -new -key "$base.key.pem" -subj "/O=palp/OU=web/CN=$first" -out "$base.csr" 2>/dev/null
+  cat >"$base.ext" <<EOF
+[ web_ext ]
+basicConstraints = critical, CA:FALSE
+keyUsage = critical, digitalSignature
+extendedKeyUsage = serverAuth
+subjectAltName = $san
+subjectKeyIdentifier = hash
+authorityKeyIdentifier = keyid
+EOF
+  openssl ca -batch -config "$dir/ca/ca.cnf" -days "$days" -notext -extfile "$base.ext" -extensions web_ext \
+    -in "$base.csr" -out "$base.cert.pem" 2>/dev/null || die "signing the web certificate for $first failed"
+  rm -f "$base.csr" "$base.ext"
+  echo "make-classroom-pki: web/$(basename "$base"): $san until $(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)"
+  echo "make-classroom-pki: palp-web --tls-cert $base.cert.pem --tls-key $base.key.pem; browsers must trust $dir/ca.cert.pem"
+}
+
 crl() { openssl ca -config "$dir/ca/ca.cnf" -gencrl -out "$dir/crl.pem" 2>/dev/null; }
 
 init() {
@@ -314,6 +355,15 @@ revoke)
   stamp=$(date -u +%Y%m%dT%H%M%S)
   for f in "$dir/$1".*; do mv "$f" "$dir/revoked/$(echo "$1" | tr / _)-$stamp.${f#"$dir/$1".}"; done
   echo "make-classroom-pki: $1 revoked; distribute $dir/crl.pem to every station and restart the server"
+  ;;
+web)
+  [ $# -ge 1 ] || die "usage: $0 DIR web HOST[,HOST...] [--days N]"
+  hosts=$1
+  shift
+  [ "${1:-}" = --days ] && days=${2:?--days N}
+  [[ $days =~ ^[0-9]+$ ]] && [ "$days" -ge 1 ] || die "--days: expected a positive integer"
+  dir=$(cd "$dir" && pwd)
+  web_cert "$hosts"
   ;;
 list)
   set +f

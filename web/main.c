@@ -2,7 +2,8 @@
  * trainee page and the instructor's dashboard, and streams deformation, forces, session states and
  * server status to them over WebSocket (docs/web.md).
  *
- *   palp-web [--domain N] [--listen ADDR] [--port P] [--token T | --token-file F] [options]
+ *   palp-web [--domain N] [--listen ADDR] [--port P] [--token T | --token-file F]
+ *            [--tls-cert F --tls-key F] [options]
  */
 #include <errno.h>
 #include <math.h>
@@ -34,10 +35,14 @@ static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-web [options]\n"
           "  --domain N          DDS domain of the classroom server (default 0)\n"
-          "  --listen ADDR       address to serve on (default 127.0.0.1; anything but loopback needs a token)\n"
+          "  --listen ADDR       address to serve on (default 127.0.0.1; anything but loopback needs a token\n"
+          "                      and TLS, or --insecure-http)\n"
           "  --port P            TCP port (default 8090; 0 = any free port, printed)\n"
           "  --token T           access token (%d-%d characters of A-Z a-z 0-9 . _ ~ -); pages need ?token=T\n"
           "  --token-file F      read the token from F (keeps it out of the process list)\n"
+          "  --tls-cert F --tls-key F   serve HTTPS and WSS with this PEM certificate and key (made from the\n"
+          "                      classroom CA by scripts/make-classroom-pki.sh DIR web HOST)\n"
+          "  --insecure-http     serve plain HTTP beyond loopback: the token crosses the network in clear\n"
           "  --trainee-tokens F  trainees' own tokens, \"NAME TOKEN\" per line: a page given one sees only\n"
           "                      that trainee's sessions (no dashboard); needs --token (the instructors')\n"
           "  --scale-mm MM       largest colour scale of the pages: 0..MM of displacement (default 30)\n"
@@ -159,6 +164,7 @@ int main(int argc, char **argv) {
   palp_web_serve_def sd = {.listen = "127.0.0.1", .port = 8090, .www_dir = NULL,
                            .three_dir = PALP_WEB_THREE_DIR, .max_clients = 32};
   const char *token = NULL, *token_file = NULL, *pki = NULL, *identity = NULL, *trainee_file = NULL;
+  int insecure_http = 0;
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-web");
   double duration = 0, x = 0;
@@ -175,6 +181,7 @@ int main(int argc, char **argv) {
     if (!strcmp(a, "--no-join")) { hd.join = 0; continue; }
     if (!strcmp(a, "--no-feedback")) { hd.read_feedback = 0; continue; }
     if (!strcmp(a, "--stats")) { stats = 1; continue; }
+    if (!strcmp(a, "--insecure-http")) { insecure_http = 1; continue; }
     if (!v) {
       fprintf(stderr, "palp-web: %s: missing value (or unknown option)\n", a);
       return 2;
@@ -190,6 +197,8 @@ int main(int argc, char **argv) {
     } else if (!strcmp(a, "--token")) token = v;
     else if (!strcmp(a, "--token-file")) token_file = v;
     else if (!strcmp(a, "--trainee-tokens")) trainee_file = v;
+    else if (!strcmp(a, "--tls-cert")) sd.tls_cert = v;
+    else if (!strcmp(a, "--tls-key")) sd.tls_key = v;
     else if (!strcmp(a, "--pki")) pki = v;
     else if (!strcmp(a, "--identity")) identity = v;
     else if (!strcmp(a, "--www")) sd.www_dir = v;
@@ -272,6 +281,26 @@ int main(int argc, char **argv) {
             sd.listen);
     return 2;
   }
+  /* And with TLS (2026-12-04): a token sent in clear over the class network is anyone's who listens. */
+  if (!sd.tls_cert != !sd.tls_key) {
+    fprintf(stderr, "palp-web: --tls-cert and --tls-key go together\n");
+    return 2;
+  }
+  for (int k = 0; k < 2; k++) {
+    const char *f = k ? sd.tls_key : sd.tls_cert;
+    if (f && access(f, R_OK) != 0) {
+      fprintf(stderr, "palp-web: %s %s: %s\n", k ? "--tls-key" : "--tls-cert", f, strerror(errno));
+      return 2;
+    }
+  }
+  if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert && !insecure_http) {
+    fprintf(stderr,
+            "palp-web: refusing to serve on %s without TLS: the access token and the class's sessions would cross "
+            "the network in clear. Give --tls-cert F --tls-key F (scripts/make-classroom-pki.sh DIR web HOST makes "
+            "them from the classroom CA), or --insecure-http on a network only the class can reach.\n",
+            sd.listen);
+    return 2;
+  }
   sd.token = token;
   /* Trainees' own tokens: each page scoped to its trainee, as the trainee's DDS permissions are. */
   static palp_web_trainee_token trainees[PALP_WEB_TRAINEES_MAX];
@@ -350,12 +379,17 @@ int main(int argc, char **argv) {
   if (token) snprintf(q, sizeof q, "?token=%s", token_file ? "<the token>" : token);
   char scoped[64] = "";
   if (sd.trainee_count) snprintf(scoped, sizeof scoped, "; %d trainee token(s), each page scoped", sd.trainee_count);
-  printf("palp-web: DDS domain %u%s%s%s, serving on %s port %d%s%s%s\n", hd.domain,
+  printf("palp-web: DDS domain %u%s%s%s, serving%s on %s port %d%s%s%s\n", hd.domain,
          hd.sec.kind != PALP_DDS_ID_NONE ? ", DDS Security on (identity instructor/" : "",
-         hd.sec.kind != PALP_DDS_ID_NONE ? hd.sec.name : "", hd.sec.kind != PALP_DDS_ID_NONE ? ")" : "", sd.listen,
+         hd.sec.kind != PALP_DDS_ID_NONE ? hd.sec.name : "", hd.sec.kind != PALP_DDS_ID_NONE ? ")" : "",
+         sd.tls_cert ? " HTTPS" : "", sd.listen,
          port, token ? " (token required" : "", scoped, token ? ")" : "");
-  printf("palp-web: trainee page  http://%s:%d/trainee.html%s\n", host, port, q);
-  printf("palp-web: dashboard     http://%s:%d/dashboard.html%s\n", host, port, q);
+  const char *scheme = sd.tls_cert ? "https" : "http";
+  if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert)
+    palp_log_warn(&log, "serving plain HTTP on %s (--insecure-http): the token crosses the network in clear",
+                  sd.listen);
+  printf("palp-web: trainee page  %s://%s:%d/trainee.html%s\n", scheme, host, port, q);
+  printf("palp-web: dashboard     %s://%s:%d/dashboard.html%s\n", scheme, host, port, q);
   fflush(stdout);
   palp_web_serve_run(srv, &g_stop);
   palp_web_hub_stop(hub);

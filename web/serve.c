@@ -126,8 +126,8 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
                    "frame-ancestors 'none'\x0d\x0a");
   if (from_url && s->have_token)
     n += snprintf(headers + n, sizeof headers - (size_t)n,
-                  "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict\x0d\x0a",
-                  who ? s->def.trainees[who - 1].token : s->token);
+                  "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict%s\x0d\x0a",
+                  who ? s->def.trainees[who - 1].token : s->token, s->def.tls_cert ? "; Secure" : "");
   const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
   if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
   s->stats.http_ok++;
@@ -273,10 +273,25 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
   info.gid = -1;
   info.retry_and_idle_policy = &s->retry;
   if (!strchr(s->listen, ':')) info.options |= LWS_SERVER_OPTION_DISABLE_IPV6;
+  if (def->tls_cert) {
+    info.options |= LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
+    info.ssl_cert_filepath = def->tls_cert;
+    info.ssl_private_key_filepath = def->tls_key;
+    /* HTTP/1.1 only: the pages are a handful of files, and the WebSocket (RFC 6455) upgrades from
+     * HTTP/1.1. Offered h2, browsers took it and the file serving here, written for HTTP/1.1
+     * transactions, answered nothing ("empty reply", curl 7.88). */
+    info.alpn = "http/1.1";
+  }
   s->ctx = lws_create_context(&info);
   if (!s->ctx) {
-    fail(err, errlen, "cannot listen on %s port %d (in use, or not an address of this machine?)", s->listen,
-         def->port);
+    if (def->tls_cert)
+      fail(err, errlen,
+           "cannot serve HTTPS on %s port %d: the certificate %s and key %s must be PEM and belong together "
+           "(the port may also be in use, or not an address of this machine)",
+           s->listen, def->port, def->tls_cert, def->tls_key);
+    else
+      fail(err, errlen, "cannot listen on %s port %d (in use, or not an address of this machine?)", s->listen,
+           def->port);
     free(s);
     return NULL;
   }

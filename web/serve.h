@@ -5,7 +5,8 @@
  * and one WebSocket endpoint, /ws, that streams the hub's messages. With a token configured every
  * request must carry it (?token= or the cookie the first page load sets): without it HTTP answers
  * 401 and the WebSocket handshake is refused. A trainee's own token (if given any) serves the same
- * pages, but its WebSocket is scoped to that trainee's sessions.
+ * pages, but its WebSocket is scoped to that trainee's sessions. With a certificate and key it
+ * serves HTTPS and WSS instead (libwebsockets on OpenSSL).
  */
 #ifndef PALP_WEB_SERVE_H
 #define PALP_WEB_SERVE_H
@@ -28,6 +29,10 @@ typedef struct palp_web_serve_def {
    * that trainee's sessions (palp_web_cursor.scope). token stays the instructors'. */
   const palp_web_trainee_token *trainees;
   int trainee_count;
+  /* HTTPS and WSS on the same port (both or neither; PEM files): the token and the pages then
+   * cross the network encrypted, and the cookie is marked Secure. main refuses to serve beyond
+   * loopback without them unless told --insecure-http. */
+  const char *tls_cert, *tls_key;
 } palp_web_serve_def;
 
 typedef struct palp_web_serve_stats {

@@ -20,14 +20,17 @@ CHROMIUM = "/usr/bin/chromium"
 
 
 class WebSocket:
-    """Client side of one WebSocket connection (ws:// only)."""
+    """Client side of one WebSocket connection (ws://, or wss:// with an ssl.SSLContext)."""
 
-    def __init__(self, url, timeout=30.0, headers=None):
-        assert url.startswith("ws://"), url
-        rest = url[5:]
+    def __init__(self, url, timeout=30.0, headers=None, ssl_context=None):
+        tls = url.startswith("wss://")
+        assert url.startswith("ws://") or (tls and ssl_context is not None), url
+        rest = url[6:] if tls else url[5:]
         hostport, _, path = rest.partition("/")
         host, _, port = hostport.partition(":")
-        self.sock = socket.create_connection((host, int(port or 80)), timeout=timeout)
+        self.sock = socket.create_connection((host, int(port or (443 if tls else 80))), timeout=timeout)
+        if tls:
+            self.sock = ssl_context.wrap_socket(self.sock, server_hostname=host)
         key = base64.b64encode(os.urandom(16)).decode()
         extra = "".join("%s: %s\r\n" % kv for kv in (headers or {}).items())
         req = ("GET /%s HTTP/1.1\r\nHost: %s\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
@@ -101,7 +104,7 @@ class WebSocket:
 class Chromium:
     """One headless Chromium; pages are DevTools targets."""
 
-    def __init__(self, width=1000, height=700, out_dir=None):
+    def __init__(self, width=1000, height=700, out_dir=None, extra_args=()):
         self.dir = tempfile.mkdtemp(prefix="palp-chromium-")
         self.log = open(os.path.join(out_dir or self.dir, "chromium.log"), "ab")
         args = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -111,7 +114,7 @@ class Chromium:
                 "--disable-renderer-backgrounding", "--disable-backgrounding-occluded-windows",
                 "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",
                 "--window-size=%d,%d" % (width, height), "--user-data-dir=" + self.dir,
-                "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=0", "about:blank"]
+                "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=0"] + list(extra_args) + ["about:blank"]
         self.proc = subprocess.Popen(args, stdout=self.log, stderr=self.log, start_new_session=True)
         port_file = os.path.join(self.dir, "DevToolsActivePort")
         end = time.time() + 30

@@ -100,11 +100,12 @@ class Procs:
             self.stop(p, timeout=5)
 
 
-def http_get(url, headers=None):
-    """(status, body) of a GET; errors are statuses, not exceptions."""
+def http_get(url, headers=None, context=None):
+    """(status, body) of a GET; errors are statuses, not exceptions (an https URL takes an
+    ssl.SSLContext; its TLS errors are raised)."""
     req = urllib.request.Request(url, headers=headers or {})
     try:
-        with urllib.request.urlopen(req, timeout=10) as r:
+        with urllib.request.urlopen(req, timeout=10, context=context) as r:
             return r.status, r.read(), dict(r.headers)
     except urllib.error.HTTPError as e:
         return e.code, e.read(), dict(e.headers)
