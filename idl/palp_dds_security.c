@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "palp.h" /* PALP_E* codes only */
@@ -101,6 +102,15 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
       return fail(err, errlen, PALP_EIO, "identity %s: cannot read %s (make it with scripts/make-classroom-pki.sh)",
                   identity, f);
   }
+  /* A private key every user of the machine can read is anyone's identity on a shared lab
+   * machine: refused, as ssh refuses such keys (group-readable stays allowed, for a service group). */
+  char key[PALP_DDS_PKI_PATH_MAX + 96];
+  struct stat st;
+  if (file_of(&s, ".key.pem", key, sizeof key) == 0 && stat(key, &st) == 0 && (st.st_mode & (S_IROTH | S_IWOTH)))
+    return fail(err, errlen, PALP_EINVAL,
+                "identity %s: its private key %s is readable by every user of this machine (mode %04o): "
+                "chmod o-rwx it (make-classroom-pki.sh makes keys 0600)",
+                identity, key, (unsigned)(st.st_mode & 07777));
   *sec = s;
   return 0;
 }

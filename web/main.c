@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -75,7 +76,17 @@ static int number(const char *opt, const char *v, double lo, double hi, double *
   return 0;
 }
 
+/* A secret (token, key) every user of the machine can read is no secret on a shared lab machine. */
+static int secret_private(const char *what, const char *path) {
+  struct stat st;
+  if (stat(path, &st) != 0 || !(st.st_mode & (S_IROTH | S_IWOTH))) return 0;
+  fprintf(stderr, "palp-web: %s %s is readable by every user of this machine (mode %04o): chmod o-rwx it\n", what,
+          path, (unsigned)(st.st_mode & 07777));
+  return -1;
+}
+
 static int read_token_file(const char *path, char *out, size_t len) {
+  if (secret_private("--token-file", path)) return -1;
   FILE *f = fopen(path, "r");
   if (!f) {
     fprintf(stderr, "palp-web: --token-file: cannot open %s: %s\n", path, strerror(errno));
@@ -292,6 +303,7 @@ int main(int argc, char **argv) {
       fprintf(stderr, "palp-web: %s %s: %s\n", k ? "--tls-key" : "--tls-cert", f, strerror(errno));
       return 2;
     }
+    if (k && f && secret_private("--tls-key", f)) return 2;
   }
   if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert && !insecure_http) {
     fprintf(stderr,
@@ -310,7 +322,7 @@ int main(int argc, char **argv) {
       return 2;
     }
     char *text = NULL, terr[256];
-    if (read_small_file(trainee_file, &text) != 0) return 2;
+    if (secret_private("--trainee-tokens", trainee_file) || read_small_file(trainee_file, &text) != 0) return 2;
     const int n = palp_web_trainee_tokens_parse(text, token, trainees, PALP_WEB_TRAINEES_MAX, terr, sizeof terr);
     free(text);
     if (n < 0) {

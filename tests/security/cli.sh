@@ -46,6 +46,14 @@ check "the same with --insecure, or secured with --pki, passes its check (exit $
 rc=$?
 check "a station without an identity is told the classroom may be secured (exit $rc)" \
   "[ $rc -ne 0 ] && grep -q 'none of which answered: if the classroom runs with DDS Security, give --pki DIR --identity' '$out/plain.log'"
+# A private key every user of the machine can read is refused before any network use.
+cp -r "$pki" "$out/openkey"
+chmod 644 "$out/openkey/trainee/alice.key.pem"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/openkey" --identity trainee/alice --duration 1 \
+  >"$out/openkey.log" 2>&1
+rc=$?
+check "a world-readable private key is refused (exit $rc)" \
+  "[ $rc -eq 1 ] && grep -q 'alice.key.pem is readable by every user of this machine (mode 0644): chmod o-rwx' '$out/openkey.log'"
 # A station still on the governance before 2026-12-04 (no submessage protection anywhere, signed by the
 # same CA): the server's request reader and its writer protect the topic differently and never match.
 cp -r "$pki" "$out/oldgov"

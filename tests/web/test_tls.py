@@ -3,7 +3,8 @@
 
 The token is palp-web's whole authentication; on a class network it must not cross the wire in clear.
 - palp-web refuses to serve beyond loopback without TLS (exit 2, before binding), a certificate without
-  its key, an unreadable file, and a key that is not the certificate's;
+  its key, an unreadable file, a key that is not the certificate's, and a key or token file every user
+  of the machine can read;
 - scripts/make-classroom-pki.sh DIR web 127.0.0.1,localhost issues the certificate;
 - a client that trusts the classroom CA gets the pages over HTTPS (200; the cookie is Secure), nothing
   without the token (401), and the WebSocket over WSS ("hello"); one that trusts only the system's CAs
@@ -65,6 +66,16 @@ def run(build, source, out):
                 "an unreadable key")
         refused(["--tls-cert", cert, "--tls-key", os.path.join(pki, "server", "server.key.pem")],
                 "belong together", "another key than the certificate's", code=1)
+
+        open_key = os.path.join(pki, "open.key.pem")
+        subprocess.run(["cp", key, open_key], check=True)
+        os.chmod(open_key, 0o644)
+        refused(["--tls-cert", cert, "--tls-key", open_key], "readable by every user", "a world-readable key")
+        tokf = os.path.join(pki, "token.txt")
+        with open(tokf, "w") as f:
+            f.write(TOKEN + "\n")
+        os.chmod(tokf, 0o604)
+        refused(["--token-file", tokf], "readable by every user", "a world-readable --token-file")
 
         procs.server()
         procs.trainee("alice", 1, ["--profile", "step", "--magnitude", "2", "--t-on", "0.5", "--t-off", "60",

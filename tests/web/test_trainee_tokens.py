@@ -12,6 +12,7 @@ given is refused (401). No browser: raw HTTP and WebSocket clients. DDS domain 1
 usage: test_trainee_tokens.py BUILD SOURCE OUT"""
 import json
 import os
+import subprocess
 
 import harness
 from harness import check
@@ -42,6 +43,13 @@ def run(build, source, out):
     with open(tokfile, "w") as f:
         f.write("# the class's own tokens\nalice %s\nbob %s\n" % (ALICE, BOB))
     try:
+        # Secrets readable by every user of the machine are refused (docs/web.md), then accepted at 0600.
+        os.chmod(tokfile, 0o644)
+        r = subprocess.run([os.path.join(build, "web", "palp-web"), "--port", "0", "--domain", "126", "--token", INSTR,
+                            "--trainee-tokens", tokfile], capture_output=True, text=True, timeout=20, env=procs.env)
+        check(r.returncode == 2 and "readable by every user" in r.stderr,
+              "a world-readable --trainee-tokens file is refused (exit %d): %s" % (r.returncode, r.stderr.strip()[:100]))
+        os.chmod(tokfile, 0o600)
         procs.server()
         web = procs.web(extra=["--token", INSTR, "--trainee-tokens", tokfile])
         check("2 trainee token(s), each page scoped" in procs.log(web), "palp-web says it has 2 scoped trainee tokens")
