@@ -141,8 +141,8 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
   palp_web_serve_stats_get(srv, &w);
   palp_log_info(log,
           "%d sessions, %d pages; DDS taken: %llu deformations, %llu contacts, %llu feedbacks, %llu states, "
-          "%llu dropped, %llu of no known session; joins %llu, leaves %llu; sent %llu messages (%.1f MB); http %llu ok, %llu denied; ws %llu "
-          "opened, %llu closed, %llu denied",
+          "%llu dropped, %llu of no known session; joins %llu, leaves %llu; sent %llu messages (%.1f MB); "
+          "http %llu ok, %llu denied; ws %llu opened, %llu closed, %llu denied",
           h.sessions_open, h.clients, (unsigned long long)h.deformations, (unsigned long long)h.contacts,
           (unsigned long long)h.feedbacks, (unsigned long long)h.states, (unsigned long long)h.dropped,
           (unsigned long long)h.no_session,

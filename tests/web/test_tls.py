@@ -77,6 +77,17 @@ def run(build, source, out):
         os.chmod(tokf, 0o604)
         refused(["--token-file", tokf], "readable by every user", "a world-readable --token-file")
 
+        # --insecure-http overrides the rule, with a warning: run in a network namespace of its own with only
+        # "lo" (unshare -n), so that 0.0.0.0 reaches nothing but loopback.
+        r = subprocess.run(["unshare", "-n", "sh", "-c", "ip link set lo up && exec \"$@\"", "sh", exe, "--listen",
+                            "0.0.0.0", "--port", "0", "--domain", "127", "--no-join", "--token", TOKEN,
+                            "--insecure-http", "--duration", "1"], capture_output=True, text=True, timeout=30,
+                           env=procs.env)
+        check(r.returncode == 0 and "serving plain HTTP on 0.0.0.0 (--insecure-http)" in r.stdout + r.stderr
+              and "http://0.0.0.0:" in r.stdout,
+              "--insecure-http serves plain HTTP beyond loopback and warns (in a namespace with only lo; exit %d)"
+              % r.returncode)
+
         procs.server()
         procs.trainee("alice", 1, ["--profile", "step", "--magnitude", "2", "--t-on", "0.5", "--t-off", "60",
                                    "--duration", "60"])
