@@ -4,10 +4,12 @@
  * table) and, for people reading the file with sqlite3, in the meta table along with the palp
  * version that created or last upgraded it. Migrations run in one IMMEDIATE transaction, so a
  * crash or a concurrent opener sees either the old schema or the new one, never a mix. */
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "db_internal.h"
 #include "migrations.h"
@@ -159,6 +161,14 @@ int palp_db__connect(const char *path, int create, const char *app_version, sqli
     return PALP_EINVAL;
   }
   if (!app_version) app_version = PALP_VERSION_STRING;
+  /* A new session log is made readable by its owner only (0600): it holds trainees' names, what
+   * they did and their grades. SQLite would make it 0644 (less the umask), and its -wal and -shm
+   * files take the database's own mode, so making the empty file first is enough (an empty file is
+   * an empty database to SQLite). O_EXCL: an existing file is never touched here. */
+  if (create) {
+    const int fd = open(path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd >= 0) close(fd);
+  }
   sqlite3 *db = NULL;
   int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX | (create ? SQLITE_OPEN_CREATE : 0);
   int rc = sqlite3_open_v2(path, &db, flags, NULL);

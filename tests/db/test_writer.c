@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -76,6 +77,15 @@ static void test_round_trip(void) {
   palp_db_writer *w;
   int rc = palp_db_writer_open(p, NULL, &w, err, sizeof err);
   REQUIRE(rc == 0, "writer_open: %s", err);
+  /* A new session log (trainees' names, what they did, their grades) is its owner's alone, and
+   * so is its write-ahead log, whatever the umask (this test's is the shell's, usually 022). */
+  struct stat fst;
+  char wal[640];
+  snprintf(wal, sizeof wal, "%s-wal", p);
+  CHECK(stat(p, &fst) == 0 && (fst.st_mode & 077) == 0, "a new session log is mode 0600 (got %04o)",
+        (unsigned)(fst.st_mode & 07777));
+  CHECK(stat(wal, &fst) == 0 && (fst.st_mode & 077) == 0, "its -wal file too (got %04o)",
+        (unsigned)(fst.st_mode & 07777));
   palp_db_session_def d = {.uid = "run-abc-1", .trainee = "alice", .station = "haptic-1",
                            .phantom_id = "p1", .phantom_name = "soft dome",
                            .scene_json = "{\"name\":\"x\"}", .params_json = "{\"force_limit_n\":20}",
