@@ -15,25 +15,10 @@
 # In a private network namespace with only "lo" (unshare -n) when permitted, as fastdds.sh.
 # usage: fastdds_secure.sh PALP_SERVER FASTDDS_STATION LOOPBACK_DDS_CONFIG DOMAIN MAKE_CLASSROOM_PKI
 set -u
-if [ "${PALP_IN_NETNS:-}" != 1 ]; then
-  if unshare -n true 2> /dev/null; then
-    echo "ok   private network namespace (unshare -n): only lo"
-    exec env PALP_IN_NETNS=1 unshare -n sh "$0" "$@"
-  fi
-  echo "NOTE unshare -n is not permitted here: running on the host's loopback"
-else
-  ip link set lo up 2> /dev/null || { echo "FAIL cannot bring lo up in the namespace"; exit 1; }
-fi
+. "$(dirname "$0")/common.sh"
+in_private_netns "$0" "$@"
 server=$1 station=$2 dds=$3 domain=$4 mkpki=$5
-work=$(mktemp -d /tmp/palp-fastdds-secure.XXXXXX)
-spid=
-trap '[ -n "$spid" ] && kill "$spid" 2>/dev/null; rm -rf "$work"' EXIT
-fail=0
-ok() { echo "ok   $*"; }
-bad() { echo "FAIL $*"; fail=1; }
-r() { sed -n "s/^result $2 //p" "$work/$1.out" | head -1; }
-num_ge() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 >= b + 0) }'; }
-num_in() { awk -v a="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(a + 0 >= lo + 0 && a + 0 <= hi + 0) }'; }
+work_dir palp-fastdds-secure
 unset CYCLONEDDS_URI
 bash "$mkpki" "$work/pki" classroom --trainees fd,alice > "$work/pki.out" 2>&1 || { cat "$work/pki.out"; echo "FAIL make-classroom-pki"; exit 1; }
 grep -q "<metadata_protection_kind>SIGN</metadata_protection_kind>" "$work/pki/governance.xml" \
@@ -61,16 +46,7 @@ case $part in
   palp/s/fd/*) ok "joined session $(r fd session) after $(r fd join_s) s, in the trainee's own partition $part" ;;
   *) bad "join: partition \"$part\" (want palp/s/fd/N)" ;;
 esac
-# as in fastdds.sh: the 3 N press reads 3 N within 5% once settled; the long-term dome dents
-# 0.37-0.6 mm under it, so at least 0.2 mm
-num_in "$(r fd feedback_last_N)" 2.85 3.15 && num_ge "$(r fd feedback_samples)" 50 \
-  && ok "encrypted contacts in, feedback out: $(r fd feedback_samples) samples, last |F| $(r fd feedback_last_N) N (3 N press, want within 5%)" \
-  || bad "feedback: $(r fd feedback_samples) samples, last |F| $(r fd feedback_last_N) N"
-[ "$(r fd deformation_vertices)" = 338 ] && num_ge "$(r fd deformation_samples)" 10 && num_ge "$(r fd deformation_max_mm)" 0.2 \
-  && ok "deformation: $(r fd deformation_samples) meshes, max displacement $(r fd deformation_max_mm) mm" \
-  || bad "deformation: $(r fd deformation_samples) samples, $(r fd deformation_vertices) vertices, $(r fd deformation_max_mm) mm"
-num_ge "$(r fd rejected_samples)" 1 && ok "NaN sample rejected ($(r fd rejected_samples) in the session state)" \
-  || bad "NaN sample not rejected: $(r fd rejected_samples)"
+check_press fd
 # Position in, force out: 1.6 s of 100 Hz physics on dome A, so 160 local models; a best-effort
 # stream, so at least 100. The force must not fall while the device only goes deeper (2% or 0.01 N
 # of slack). Held 3 mm deep, the proxy sits (device depth - coupling) deep in the surface, and the
