@@ -127,9 +127,9 @@ governance() {
   # per sample on the hot path, and a Fast DDS reader needs only the writer's tokens, which
   # the encrypted payload brings. The first matching rule applies.
   {
-    cat <<'EOF'
+    cat <<EOF
 <?xml version="1.0" encoding="utf-8"?>
-<!-- palp classroom governance, version 2 (scripts/make-classroom-pki.sh) -->
+<!-- palp classroom governance, version $GOVERNANCE_VERSION (scripts/make-classroom-pki.sh) -->
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
   <domain_access_rules>
@@ -157,7 +157,6 @@ EOF
 }
 
 governance_current() { grep -q "palp classroom governance, version $GOVERNANCE_VERSION " "$dir/governance.xml" 2>/dev/null; }
-
 
 # rule publish|subscribe "topic ..." "partition ..." ("" = the default partition)
 rule() {
