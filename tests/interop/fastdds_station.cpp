@@ -28,6 +28,7 @@
 // is the user name it claims instead of NAME: a forged identity the server must refuse.
 //
 // usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES [PKI trainee/NAME [CLAIM]]
+// PALP_FASTDDS_WARNINGS=1 in the environment prints Fast DDS's own warnings (for debugging a peer).
 // (station-crash: press, then wait to be killed, for the crash-versus-goodbye check; +finger: then
 // press by position and read the server's local contact models)
 #include <cmath>
