@@ -13,6 +13,7 @@
 #include "palp.h"
 #include "palp_app.h"
 #include "palp_dds.h"
+#include "palp_dds_security.h"
 #include "palp_assess.h"
 #include "server.h"
 
@@ -272,8 +273,18 @@ int main(int argc, char **argv) {
         return 1;
       }
     }
-    printf("palp-server: %s: ok (%d phantoms, %.0f Hz, domain %u)\n", config_path, def.cfg.phantom_count,
-           def.cfg.tick_rate_hz, def.cfg.domain_id);
+    /* Secured: the identity's files are there and its key is private (what the start would
+     * refuse, said before it). */
+    if (def.cfg.security_pki[0]) {
+      palp_dds_security sec;
+      char msg[400] = "";
+      if (palp_dds_security_init(&sec, def.cfg.security_pki, def.cfg.security_identity, msg, sizeof msg) < 0) {
+        fprintf(stderr, "palp-server: bad configuration: security: %s\n", msg);
+        return 1;
+      }
+    }
+    printf("palp-server: %s: ok (%d phantoms, %.0f Hz, domain %u%s)\n", config_path, def.cfg.phantom_count,
+           def.cfg.tick_rate_hz, def.cfg.domain_id, def.cfg.security_pki[0] ? ", DDS Security identity readable" : "");
     return 0;
   }
 

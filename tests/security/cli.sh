@@ -54,6 +54,15 @@ chmod 644 "$out/openkey/trainee/alice.key.pem"
 rc=$?
 check "a world-readable private key is refused (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'alice.key.pem is readable by every user of this machine (mode 0644): chmod o-rwx' '$out/openkey.log'"
+# The rule's edge, seen by the server's --check: group-readable (a service's group, docs/deploy.md) passes.
+chmod 640 "$out/openkey/server/server.key.pem"
+"$server" --check --pki "$out/openkey" >"$out/check640.log" 2>&1
+rc640=$?
+chmod 644 "$out/openkey/server/server.key.pem"
+"$server" --check --pki "$out/openkey" >"$out/check644.log" 2>&1
+rc=$?
+check "palp-server --check: a key of mode 0640 passes (exit $rc640), 0644 is refused (exit $rc)" \
+  "[ $rc640 -eq 0 ] && grep -q 'DDS Security identity readable' '$out/check640.log' && [ $rc -eq 1 ] && grep -q 'server.key.pem is readable by every user' '$out/check644.log'"
 # A station still on the governance before 2026-12-04 (no submessage protection anywhere, signed by the
 # same CA): the server's request reader and its writer protect the topic differently and never match.
 cp -r "$pki" "$out/oldgov"
