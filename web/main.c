@@ -25,9 +25,10 @@
 #include "serve.h"
 
 static atomic_int g_stop; /* atomic: a signal may land on any thread (client/main.c) */
+static atomic_int g_hup;  /* SIGHUP: re-open --log-file (log rotation), done on the hub thread */
 static void on_signal(int sig) {
-  (void)sig;
-  g_stop = 1;
+  if (sig == SIGHUP) g_hup = 1;
+  else g_stop = 1;
 }
 
 #define WEB_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
@@ -57,7 +58,7 @@ static void usage(FILE *f) {
           "  --www DIR           the pages (default <data>/www: share/palp/www installed, web/www in a build)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
           "  --duration S        stop after S seconds (tests, benchmarks)\n"
-          "  --stats             print the bridge's counters every 5 s\n"
+          "  --stats             print the bridge's counters every 5 s (SIGHUP re-opens --log-file)\n"
           "  --pki DIR --identity instructor/NAME   DDS Security in a secured classroom (or PALP_PKI,\n"
           "                      PALP_IDENTITY; scripts/make-classroom-pki.sh): the bridge is that instructor\n",
           PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_THREE_DIR);
@@ -162,6 +163,10 @@ static void on_wake(void *ctx) {
   watch *w = ctx;
   const double now = mono_s();
   if (w->end > 0 && now >= w->end) g_stop = 1;
+  if (atomic_exchange(&g_hup, 0)) {
+    if (palp_log_reopen(w->log) < 0) palp_log_error(w->log, "SIGHUP: cannot re-open %s", w->log->path);
+    else palp_log_info(w->log, "SIGHUP: log re-opened; serving goes on");
+  }
   palp_web_serve_wake(w->srv);
   if (w->stats && now >= w->next_stats) {
     w->next_stats = now + 5;
@@ -375,6 +380,7 @@ int main(int argc, char **argv) {
   }
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
+  signal(SIGHUP, on_signal);
   signal(SIGPIPE, SIG_IGN);
   watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats, .log = &log};
   if (palp_web_hub_start(hub, on_wake, &w) != 0) {

@@ -44,7 +44,7 @@ for f in bin/palp-server bin/palp-client bin/palp-review bin/palp-recorder bin/p
          share/palp/config/server.json share/palp/config/paper_step.json share/palp/config/params/calibrated.json \
          share/palp/config/cyclonedds-loopback.xml share/palp/config/cyclonedds-lab.xml.example \
          share/palp/db/migrations/0001_init.sql share/palp/systemd/palp-server.service \
-         share/palp/systemd/palp-recorder.service lib/systemd/system/palp-server.service \
+         share/palp/systemd/palp-recorder.service share/palp/systemd/palp-web.service lib/systemd/system/palp-server.service \
          share/doc/palp/README.md share/doc/palp/docs/deploy.md share/doc/palp/examples/device_example.c; do
   if [ -e "$root/$f" ]; then :; else bad "missing $f"; fi
 done

@@ -29,7 +29,7 @@ fi
 prefix=$work/prefix
 cmake --install "$build" --prefix "$prefix" > "$work/install.log" 2>&1 || { bad "cmake --install"; cat "$work/install.log"; exit 1; }
 units=$prefix/lib/systemd/system
-for u in palp-server palp-recorder; do
+for u in palp-server palp-recorder palp-web; do
   f=$units/$u.service
   [ -f "$f" ] || { bad "$u.service not installed"; continue; }
   out=$(cd "$work" && systemd-analyze verify "$f" 2>&1); rc=$?
@@ -61,5 +61,25 @@ if grep -qE '^[0-9T:.-]+Z INFO  palp-server: SIGTERM: shutting down' "$work/log/
   ok "log at the unit's --log-file ($(wc -l < "$work/log/server.log") lines), database at its --database"
 else
   bad "unit paths: $(ls -R "$work/state" "$work/log")"; cat "$work/log/server.log"
+fi
+
+# palp-web's unit (2026-12-04): its command line as systemd runs it, the site arguments of a test
+# (a free port on loopback, no join), SIGHUP re-opening its log as logrotate's postrotate asks,
+# SIGTERM stopping it with exit 0.
+exec_line=$(sed -n 's/^ExecStart=//p' "$units/palp-web.service")
+cmd=$(printf '%s' "$exec_line" | sed "s|/var/log/palp|$work/log|g")
+PALP_WEB_ARGS="--domain $domain --port 0 --no-join --duration 30"
+# shellcheck disable=SC2086
+eval "set -- $cmd"
+"$@" > "$work/web.stdout" 2>&1 &
+pid=$!
+for k in $(seq 1 100); do grep -q "serving on 127.0.0.1 port" "$work/web.stdout" && break; sleep 0.1; done
+mv "$work/log/web.log" "$work/log/web.log.1" 2>/dev/null
+kill -HUP "$pid"; sleep 0.5
+kill -TERM "$pid"; wait "$pid"; rc=$?; pid=
+if [ $rc -eq 0 ] && grep -q "serving on 127.0.0.1 port" "$work/web.stdout" && grep -q "SIGHUP: log re-opened" "$work/log/web.log"; then
+  ok "palp-web's unit command line served on loopback, re-opened $work/log/web.log on SIGHUP and stopped on SIGTERM (exit 0)"
+else
+  bad "palp-web unit: exit $rc"; cat "$work/web.stdout" "$work/log/web.log" 2>/dev/null
 fi
 exit $fail
