@@ -4,6 +4,7 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -299,4 +300,16 @@ int palp_app_dds_loopback_only(char *why, size_t whylen) {
   const int rc = palp_app_dds_xml_loopback_only(buf, why, whylen);
   free(buf);
   return rc;
+}
+
+FILE *palp_app_fopen_private(const char *path) {
+  const int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) return NULL;
+  FILE *f = fdopen(fd, "w");
+  if (!f) {
+    const int e = errno;
+    close(fd);
+    errno = e;
+  }
+  return f;
 }

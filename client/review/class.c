@@ -8,6 +8,7 @@
 
 #include "assess_svg.h"
 #include "grades.h"
+#include "palp_app.h"
 #include "review.h"
 
 typedef struct row {
@@ -109,7 +110,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
            rows[i].grade[0] ? rows[i].grade : "-");
   }
   if (csv) {
-    FILE *c = strcmp(csv, "-") ? fopen(csv, "w") : stdout;
+    FILE *c = strcmp(csv, "-") ? palp_app_fopen_private(csv) : stdout;
     if (!c) {
       palp_log_error(log, "class: %s: %s", csv, strerror(errno));
       rc = REVIEW_ERROR;
@@ -119,7 +120,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       if (c != stdout && fclose(c)) rc = REVIEW_ERROR;
     }
   }
-  FILE *f = fopen(out, "w");
+  FILE *f = palp_app_fopen_private(out);
   if (!f) {
     palp_log_error(log, "class: %s: %s", out, strerror(errno));
     rc = REVIEW_ERROR;

@@ -10,6 +10,7 @@
 
 #include "assess_log.h"
 #include "grades.h"
+#include "palp_app.h"
 #include "review.h"
 
 typedef struct exp_ctx {
@@ -162,7 +163,7 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     return REVIEW_ERROR;
   }
   FILE *f = stdout;
-  if (out_path && strcmp(out_path, "-") && !(f = fopen(out_path, "w"))) {
+  if (out_path && strcmp(out_path, "-") && !(f = palp_app_fopen_private(out_path))) {
     perror(out_path);
     return REVIEW_ERROR;
   }

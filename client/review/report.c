@@ -9,6 +9,7 @@
 
 #include "assess_log.h"
 #include "assess_svg.h"
+#include "palp_app.h"
 #include "review.h"
 
 #define PLOT_POINTS 1500 /* time-series points per plot; buckets keep their maxima so peaks survive */
@@ -422,7 +423,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   if (!rc) rc = review_load_contacts(db, s->id, &in);
   if (!rc) rc = review_presses(db, s->id, &in, &pr, &np);
   FILE *f = NULL;
-  if (!rc && !(f = fopen(out_path, "w"))) {
+  if (!rc && !(f = palp_app_fopen_private(out_path))) {
     palp_log_error(log, "report: %s: %s", out_path, strerror(errno));
     rc = PALP_EIO;
   }

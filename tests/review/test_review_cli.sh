@@ -86,6 +86,13 @@ done
 python3 "$check" session-expert "$dir/alice.dom.html" "$dir/alice.png" || fail=1
 python3 "$check" session-novice "$dir/bob.dom.html" "$dir/bob.png" || fail=1
 python3 "$check" class "$dir/class.dom.html" "$dir/class.png" "$dir/class.csv" || fail=1
+# Reports and exports carry trainees' names and grades: a file palp-review creates is its owner's alone.
+modes=$(cd "$dir" && stat -c '%n %a' alice.csv alice.html bob.html class.html class.csv | tr '\n' ' ')
+if [ "$(cd "$dir" && stat -c '%a' alice.csv alice.html bob.html class.html class.csv | sort -u)" = 600 ]; then
+  ok "the export, reports and class files are created mode 0600: $modes"
+else
+  bad "created files' modes (want 600): $modes"
+fi
 if R class --exercise no-such-exercise --out "$dir/none.html" > "$dir/none.txt" 2>&1; then bad "class for an unknown exercise succeeded"
 else expect "class: unknown exercise named in the error" "no-such-exercise" "$dir/none.txt"; fi
 
