@@ -1120,6 +1120,7 @@ int main(int argc, char **argv) {
     snprintf(err, sizeof err, "--identity: a station is a trainee or an instructor, not the server");
     src = -1;
   }
+  if (src == 0 && sec.warning[0]) palp_log_warn(o.log, "DDS Security: %s", sec.warning);
   if (src < 0) {
     palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);

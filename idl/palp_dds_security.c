@@ -4,12 +4,17 @@
 #include "palp_dds_security.h"
 
 #include <limits.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
+
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 
 #include "palp.h" /* PALP_E* codes only */
 
@@ -84,6 +89,65 @@ static int file_of(const palp_dds_security *sec, const char *suffix, char *buf, 
 static const char *const identity_files[] = {".cert.pem", ".key.pem", ".permissions.p7s", "ca.cert.pem",
                                              "governance.p7s"};
 
+/* Days from now until t [d] (negative once past); 0 or -1 if t cannot be read. */
+static int days_until(const ASN1_TIME *t, double *days) {
+  int d = 0, sec = 0;
+  if (!t || !ASN1_TIME_diff(&d, &sec, NULL, t)) return -1;
+  *days = d + sec / 86400.0;
+  return 0;
+}
+
+/* The identity's certificate notAfter and the CRL's nextUpdate, in days from now (NAN when a file
+ * or its date cannot be read: the plugins then say so themselves, at participant creation). */
+static void expiries(const palp_dds_security *s, double *cert_days, double *crl_days) {
+  char f[PALP_DDS_PKI_PATH_MAX + 96];
+  *cert_days = *crl_days = NAN;
+  FILE *fp = file_of(s, ".cert.pem", f, sizeof f) == 0 ? fopen(f, "r") : NULL;
+  if (fp) {
+    X509 *x = PEM_read_X509(fp, NULL, NULL, NULL);
+    if (x && days_until(X509_get0_notAfter(x), cert_days) < 0) *cert_days = NAN;
+    X509_free(x);
+    fclose(fp);
+  }
+  fp = file_of(s, "crl.pem", f, sizeof f) == 0 ? fopen(f, "r") : NULL;
+  if (fp) {
+    X509_CRL *c = PEM_read_X509_CRL(fp, NULL, NULL, NULL);
+    if (c && days_until(X509_CRL_get0_nextUpdate(c), crl_days) < 0) *crl_days = NAN;
+    X509_CRL_free(c);
+    fclose(fp);
+  }
+}
+
+static void expiry_phrase(char *buf, size_t len, const char *what, double days) {
+  char date[16];
+  const time_t when = time(NULL) + (time_t)(days * 86400.0);
+  struct tm tm;
+  strftime(date, sizeof date, "%Y-%m-%d", gmtime_r(&when, &tm));
+  if (days < 0)
+    snprintf(buf, len, "%s EXPIRED %.1f day(s) ago (%s)", what, -days, date);
+  else
+    snprintf(buf, len, "%s expires in %.1f day(s) (%s)", what, days, date);
+}
+
+static void expiry_warning(palp_dds_security *s) {
+  double cert_days, crl_days;
+  expiries(s, &cert_days, &crl_days);
+  char a[200] = "", b[200] = "";
+  const char *kind = palp_dds_id_kind_name(s->kind);
+  if (cert_days < PALP_DDS_EXPIRY_WARN_DAYS) {
+    char what[96];
+    snprintf(what, sizeof what, "the certificate of %s/%s", kind, s->name);
+    expiry_phrase(a, sizeof a, what, cert_days);
+  }
+  if (crl_days < PALP_DDS_EXPIRY_WARN_DAYS) expiry_phrase(b, sizeof b, "the classroom CRL (crl.pem)", crl_days);
+  if (!a[0] && !b[0]) return;
+  snprintf(s->warning, sizeof s->warning, "%s%s%s%s%s", a,
+           a[0] ? ": issue a new one (make-classroom-pki.sh DIR revoke, then add)" : "", a[0] && b[0] ? "; " : "", b,
+           b[0] ? ": re-issue it (make-classroom-pki.sh DIR crl) and copy it to every participant, since an expired "
+                  "CRL fails every handshake"
+                : "");
+}
+
 int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *identity, char *err, size_t errlen) {
   memset(sec, 0, sizeof *sec);
   if (!pki || !identity || !pki[0] || !identity[0]) return 0;
@@ -111,6 +175,7 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
                 "identity %s: its private key %s is readable by every user of this machine (mode %04o): "
                 "chmod o-rwx it (make-classroom-pki.sh makes keys 0600)",
                 identity, key, (unsigned)(st.st_mode & 07777));
+  expiry_warning(&s);
   *sec = s;
   return 0;
 }

@@ -12,6 +12,7 @@
 #   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
 #   make-classroom-pki.sh DIR list                       identities, validity and revocation
 #   make-classroom-pki.sh DIR web HOST[,HOST...] [--days N]   a TLS certificate for palp-web (HTTPS)
+#   make-classroom-pki.sh DIR crl                        re-issue the CRL (valid 365 days; palp warns 30 ahead)
 #   make-classroom-pki.sh DIR governance                 re-issue the governance (init and classroom
 #                                                        do when it is older than this script's)
 #
@@ -30,7 +31,7 @@ set -euo pipefail
 set -f # topic and partition patterns contain "*": never expand them as file names
 
 die() { echo "make-classroom-pki: $*" >&2; exit 2; }
-[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list|governance|web ..."
+[ $# -ge 2 ] || die "usage: $0 DIR classroom|init|add|revoke|list|governance|web|crl ..."
 command -v openssl >/dev/null || die "openssl not found (Debian package openssl)"
 dir=$1
 cmd=$2
@@ -354,6 +355,14 @@ revoke)
   stamp=$(date -u +%Y%m%dT%H%M%S)
   for f in "$dir/$1".*; do mv "$f" "$dir/revoked/$(echo "$1" | tr / _)-$stamp.${f#"$dir/$1".}"; done
   echo "make-classroom-pki: $1 revoked; distribute $dir/crl.pem to every station and restart the server"
+  ;;
+crl)
+  # Re-issued whenever a certificate is revoked; also by hand before it expires (default_crl_days,
+  # 365): an expired CRL fails every handshake. palp warns 30 days ahead.
+  dir=$(cd "$dir" && pwd)
+  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  crl
+  echo "make-classroom-pki: $dir/crl.pem re-issued, next update $(openssl crl -in "$dir/crl.pem" -noout -nextupdate | cut -d= -f2); copy it to every participant"
   ;;
 web)
   [ $# -ge 1 ] || die "usage: $0 DIR web HOST[,HOST...] [--days N]"

@@ -282,6 +282,7 @@ int main(int argc, char **argv) {
         fprintf(stderr, "palp-server: bad configuration: security: %s\n", msg);
         return 1;
       }
+      if (sec.warning[0]) fprintf(stderr, "palp-server: warning: DDS Security: %s\n", sec.warning);
     }
     printf("palp-server: %s: ok (%d phantoms, %.0f Hz, domain %u%s)\n", config_path, def.cfg.phantom_count,
            def.cfg.tick_rate_hz, def.cfg.domain_id, def.cfg.security_pki[0] ? ", DDS Security identity readable" : "");

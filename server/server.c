@@ -1315,6 +1315,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
       goto fail;
     }
   }
+  if (srv->sec.warning[0]) palp_log_warn(srv->log, "DDS Security: %s", srv->sec.warning);
   srv->pp = palp_dds_create_participant((dds_domainid_t)srv->cfg.domain_id, &srv->sec);
   if (srv->pp < 0) {
     *rc = PALP_EIO;

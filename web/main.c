@@ -268,6 +268,7 @@ int main(int argc, char **argv) {
       fprintf(stderr, "palp-web: --pki and --identity go together\n");
       return 2;
     }
+    if (hd.sec.warning[0]) fprintf(stderr, "palp-web: warning: DDS Security: %s\n", hd.sec.warning);
     if (hd.sec.kind != PALP_DDS_ID_NONE && hd.sec.kind != PALP_DDS_ID_INSTRUCTOR) {
       fprintf(stderr, "palp-web: --identity %s/%s: the bridge shows every session, which only an instructor "
                       "identity may read (instructor/NAME)\n",

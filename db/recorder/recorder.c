@@ -520,6 +520,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-recorder: %s\n", err);
     return 2;
   }
+  if (sec.warning[0]) palp_log_warn(&plog, "DDS Security: %s", sec.warning);
   recorder *r = calloc(1, sizeof *r);
   if (r) r->log = &plog;
   if (!r || palp_db_writer_open(db, NULL, &r->w, err, sizeof err) != 0) {

@@ -63,6 +63,17 @@ chmod 644 "$out/openkey/server/server.key.pem"
 rc=$?
 check "palp-server --check: a key of mode 0640 passes (exit $rc640), 0644 is refused (exit $rc)" \
   "[ $rc640 -eq 0 ] && grep -q 'DDS Security identity readable' '$out/check640.log' && [ $rc -eq 1 ] && grep -q 'server.key.pem is readable by every user' '$out/check644.log'"
+# Expiry ahead (2026-12-04): an identity issued for 5 days and a CRL re-issued for 3 (same CA) are
+# warned of at start, 30 days ahead: an expired CRL fails every handshake.
+cp -r "$pki" "$out/soon"
+bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/soon" add trainee shorty --days 5 >/dev/null
+(cd "$out/soon" && openssl ca -config ca/ca.cnf -gencrl -crldays 3 -out crl.pem 2>/dev/null)
+"$server" --check --pki "$out/soon" >"$out/soon-check.log" 2>&1
+rc=$?
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/soon" --identity trainee/shorty --duration 1 --timeout 4 \
+  --quiet >"$out/soon-client.log" 2>&1
+check "a certificate and a CRL about to expire are warned of (server --check exit $rc)" \
+  "[ $rc -eq 0 ] && grep -q 'warning: DDS Security: the classroom CRL (crl.pem) expires in [23]\.[0-9] day(s)' '$out/soon-check.log' && grep -q 'WARN .*the certificate of trainee/shorty expires in [45]\.[0-9] day(s)' '$out/soon-client.log'"
 # A station still on the governance before 2026-12-04 (no submessage protection anywhere, signed by the
 # same CA): the server's request reader and its writer protect the topic differently and never match.
 cp -r "$pki" "$out/oldgov"
