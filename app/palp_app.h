@@ -36,14 +36,14 @@ int palp_app_handle_version(int argc, char **argv, const char *prog);
 
 /* The data directory (see above) into buf. Returns 0 or a negative PALP_E*
  * code with a message naming what was tried in err. */
+int palp_app_data_dir(char *buf, size_t len, char *err, size_t errlen);
+/* <data dir>/rel into buf (rel e.g. "config/server.json"). */
+int palp_app_data_path(const char *rel, char *buf, size_t len, char *err, size_t errlen);
+
 /* Opens PATH for writing (created or truncated) as fopen(path, "w") does, but a file it creates
  * is its owner's alone (mode 0600): reports and exports carry trainees' names and grades. An
  * existing file keeps its mode. NULL and errno on failure. */
 FILE *palp_app_fopen_private(const char *path);
-
-int palp_app_data_dir(char *buf, size_t len, char *err, size_t errlen);
-/* <data dir>/rel into buf (rel e.g. "config/server.json"). */
-int palp_app_data_path(const char *rel, char *buf, size_t len, char *err, size_t errlen);
 
 /* The one way every program chooses its DDS config, first that applies:
  *   flag      (--dds-config FILE): used even if CYCLONEDDS_URI is set;

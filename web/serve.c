@@ -278,8 +278,8 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
     info.ssl_cert_filepath = def->tls_cert;
     info.ssl_private_key_filepath = def->tls_key;
     /* HTTP/1.1 only: the pages are a handful of files, and the WebSocket (RFC 6455) upgrades from
-     * HTTP/1.1. Offered h2, browsers took it and the file serving here, written for HTTP/1.1
-     * transactions, answered nothing ("empty reply", curl 7.88). */
+     * HTTP/1.1. Offered h2, curl 7.88 took it and the file serving here, written for HTTP/1.1
+     * transactions, answered nothing ("empty reply"). */
     info.alpn = "http/1.1";
   }
   s->ctx = lws_create_context(&info);
