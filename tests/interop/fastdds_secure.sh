@@ -12,6 +12,8 @@
 #      request writer with the server's reader (Cyclone sends no crypto tokens for a reader
 #      without submessage protection, and Fast DDS waits for them), so no join is answered.
 #      This is why the classroom governance signs the submessages of the topics stations write.
+#   4. trainee/fd revoked (the classroom's CRL; its own copy of the files still has the old CRL):
+#      refused at the handshake (no catalogue); alice's Fast DDS station is served beside it.
 # In a private network namespace with only "lo" (unshare -n) when permitted, as fastdds.sh.
 # usage: fastdds_secure.sh PALP_SERVER FASTDDS_STATION LOOPBACK_DDS_CONFIG DOMAIN MAKE_CLASSROOM_PKI
 set -u
@@ -91,5 +93,29 @@ else
   grep "^result\|^FAIL" "$work/none.out"
 fi
 stop_server "governance without submessage protection"
+
+# 4. trainee/fd revoked. Its station keeps its own copy of the files from before the revocation
+#    (a revoked station does not volunteer its revocation: its CRL is the old one); the server
+#    reads the classroom's new CRL at start. Cyclone refuses the Fast DDS participant at the
+#    handshake: no server writer matches it, no catalogue; alice, on the same server, is served.
+cp -r "$work/pki" "$work/pki-fd"
+bash "$mkpki" "$work/pki" revoke trainee/fd > "$work/revoke.out" 2>&1 || { bad "revoke trainee/fd"; cat "$work/revoke.out"; }
+start_server "$work/pki" server-revoked
+timeout 60 "$station" "$domain" 1 session 4 "$work/pki-fd" trainee/fd > "$work/revoked.out" 2>&1; rc=$?
+if [ $rc -ne 0 ] && [ -z "$(r revoked vertices)" ] && [ "$(r revoked catalogue_writers_matched)" = 0 ] \
+   && grep -q "FAIL no catalogue entry" "$work/revoked.out"; then
+  ok "trainee/fd revoked (in the classroom CRL; the station's own copy holds the old one): refused at the handshake, matched $(r revoked catalogue_writers_matched) server writers, no catalogue in 15 s"
+else
+  bad "revoked trainee/fd: exit $rc, $(r revoked vertices) vertices, catalogue writers matched \"$(r revoked catalogue_writers_matched)\""
+  grep "^result\|^FAIL" "$work/revoked.out"
+fi
+timeout 60 "$station" "$domain" 1 session 4 "$work/pki" trainee/alice > "$work/alice.out" 2>&1; rc=$?
+case $(r alice partition) in
+  palp/s/alice/*) [ $rc -eq 0 ] && [ "$(r alice leave_reason)" = "trainee station left" ] \
+    && ok "alice (Fast DDS) is served beside the refused station: session $(r alice session) in $(r alice partition), left cleanly" \
+    || bad "alice: exit $rc, leave \"$(r alice leave_reason)\"" ;;
+  *) bad "alice: exit $rc, partition \"$(r alice partition)\""; grep "^result\|^FAIL" "$work/alice.out" ;;
+esac
+stop_server "revoked station"
 [ $fail -ne 0 ] && { echo "--- server log"; cat "$work/server.log"; }
 exit $fail

@@ -200,7 +200,12 @@ int main(int argc, char **argv) {
       }
     if (!have_ph) nap(0.05);
   }
-  if (!have_ph) return fail("no catalogue entry from palp-server (Cyclone) within 15 s");
+  if (!have_ph) { // how far it got: a participant refused at the handshake matches no server writer
+    SubscriptionMatchedStatus cm;
+    r_ph->get_subscription_matched_status(cm);
+    std::printf("result catalogue_writers_matched %d\n", cm.current_count);
+    return fail("no catalogue entry from palp-server (Cyclone) within 15 s");
+  }
   std::printf("result catalogue_s %.3f\nresult vertices %zu\nresult radius_m %.6g\nresult phantom_name %s\n", since(t0),
               ph.rest().size(), ph.radius(), ph.name().c_str());
 
