@@ -192,10 +192,118 @@ int64_t palp_dds_now_ns(void) {
   return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
+/* ---- refusals by DDS Security, read off Cyclone's warnings ------------------- */
+
+/* Copies src[0..n) into dst (size cap), each unprintable byte as '?': the text
+ * came from a peer's certificate, and a log line must stay one line. */
+static void copy_printable(char *dst, size_t cap, const char *src, size_t n) {
+  size_t j = 0;
+  for (size_t i = 0; i < n && j + 1 < cap; i++) {
+    const unsigned char c = (unsigned char)src[i];
+    dst[j++] = (c >= 0x20 && c < 0x7f) ? (char)c : '?';
+  }
+  dst[j] = '\0';
+}
+
+static const char *find_n(const char *s, size_t n, const char *needle) {
+  const size_t k = strlen(needle);
+  for (size_t i = 0; i + k <= n; i++)
+    if (!memcmp(s + i, needle, k)) return s + i;
+  return NULL;
+}
+
+/* palp's subject /O=palp/OU=KIND/CN=NAME (make-classroom-pki.sh) as "KIND/NAME";
+ * any other subject as written. */
+static void subject_who(char *who, size_t cap, const char *s, size_t n) {
+  const char *o = find_n(s, n, "/O=palp/OU="), *cn = find_n(s, n, "/CN=");
+  if (o == s && cn && cn > o + 11) {
+    const char *kind = o + 11, *name = cn + 4;
+    const size_t kn = (size_t)(cn - kind), nn = (size_t)(s + n - name);
+    const int ours = (kn == 7 && !memcmp(kind, "trainee", 7)) || (kn == 10 && !memcmp(kind, "instructor", 10)) ||
+                     (kn == 6 && !memcmp(kind, "server", 6));
+    if (ours && nn > 0 && !memchr(name, '/', nn) && kn + nn + 2 <= cap) {
+      char tmp[PALP_DDS_REFUSAL_WHO * 2];
+      snprintf(tmp, sizeof tmp, "%.*s/%.*s", (int)kn, kind, (int)nn, name);
+      copy_printable(who, cap, tmp, strlen(tmp));
+      return;
+    }
+  }
+  copy_printable(who, cap, s, n);
+}
+
+int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
+  static const char *const handshake[] = {"Validate remote identity failed: ", "Begin handshake request failed: ",
+                                          "Begin handshake reply failed: ", "Process handshake failed: "};
+  static const char perm_head[] = "Could not get remote participant ", perm_tail[] = " permissions from plugin: ";
+  if (!msg || !out) return 0;
+  while (len && (*msg == ' ' || *msg == '\t')) msg++, len--;
+  const char *body = NULL, *guid = NULL;
+  size_t guid_n = 0;
+  palp_dds_refusal_kind kind = PALP_DDS_REFUSED_HANDSHAKE;
+  for (size_t i = 0; i < sizeof handshake / sizeof handshake[0] && !body; i++) {
+    const size_t k = strlen(handshake[i]);
+    if (len >= k && !memcmp(msg, handshake[i], k)) body = msg + k;
+  }
+  if (!body && len > sizeof perm_head && !memcmp(msg, perm_head, sizeof perm_head - 1)) {
+    const char *t = find_n(msg, len, perm_tail);
+    if (!t) return 0;
+    guid = msg + sizeof perm_head - 1;
+    guid_n = (size_t)(t - guid);
+    body = t + sizeof perm_tail - 1;
+    kind = PALP_DDS_REFUSED_PERMISSIONS;
+  }
+  if (!body) return 0;
+  /* The exception's own text, without Cyclone's "(code: N)" and the trailing
+   * newline OpenSSL's error string may carry. */
+  size_t bn = (size_t)(msg + len - body);
+  const char *code = NULL;
+  for (const char *c = body; (c = find_n(c, (size_t)(msg + len - c), "(code: ")); c++) code = c;
+  if (code) bn = (size_t)(code - body);
+  while (bn && (body[bn - 1] == '\n' || body[bn - 1] == ' ')) bn--;
+
+  memset(out, 0, sizeof *out);
+  out->kind = kind;
+  const char *err = find_n(body, bn, "Certificate not valid: error: "), *subj = find_n(body, bn, "; subject: ");
+  const char *verify = find_n(body, bn, "Verify error: ");
+  if (err && subj && subj > err) {
+    const char *why = err + 30, *who = subj + 11;
+    copy_printable(out->why, sizeof out->why, why, (size_t)(subj - why));
+    subject_who(out->who, sizeof out->who, who, (size_t)(body + bn - who));
+  } else if (kind == PALP_DDS_REFUSED_PERMISSIONS && verify) {
+    char tmp[PALP_DDS_REFUSAL_WHY];
+    const char *v = verify + 14;
+    snprintf(tmp, sizeof tmp, "permissions not signed by the classroom (%.*s)", (int)(body + bn - v), v);
+    copy_printable(out->why, sizeof out->why, tmp, strlen(tmp));
+  } else {
+    copy_printable(out->why, sizeof out->why, body, bn);
+  }
+  if (kind == PALP_DDS_REFUSED_PERMISSIONS) {
+    char tmp[PALP_DDS_REFUSAL_WHO];
+    snprintf(tmp, sizeof tmp, "participant %.*s", (int)guid_n, guid);
+    copy_printable(out->who, sizeof out->who, tmp, strlen(tmp));
+  } else if (!out->who[0]) {
+    snprintf(out->who, sizeof out->who, "a participant");
+  }
+  return 1;
+}
+
 /* ---- rate-limited Cyclone log sink ------------------------------------------ */
 
 static void limited_sink(void *arg, const dds_log_data_t *d) {
   palp_dds_log_limit *l = arg;
+  palp_dds_refusal r;
+  /* Read the hook under the lock; call it outside, so its own lock never nests in ours. */
+  pthread_mutex_lock(l->lock);
+  void (*fn)(void *, const palp_dds_refusal *) = l->on_refusal;
+  void *fn_arg = l->refusal_arg;
+  pthread_mutex_unlock(l->lock);
+  if (fn && palp_dds_refusal_parse(d->message, d->size, &r)) {
+    pthread_mutex_lock(l->lock);
+    l->refusals++;
+    pthread_mutex_unlock(l->lock);
+    fn(fn_arg, &r);
+    return;
+  }
   pthread_mutex_lock(l->lock);
   int64_t now = palp_dds_now_ns();
   if (now - l->window_start_ns >= l->window_ns) {
@@ -231,6 +339,15 @@ int palp_dds_log_limit_install(palp_dds_log_limit *l, FILE *out, int lines, doub
   l->window_start_ns = palp_dds_now_ns();
   dds_set_log_sink(limited_sink, l);
   return 0;
+}
+
+void palp_dds_log_limit_on_refusal(palp_dds_log_limit *l,
+                                   void (*fn)(void *arg, const palp_dds_refusal *r), void *arg) {
+  if (!l->lock) return;
+  pthread_mutex_lock(l->lock);
+  l->on_refusal = fn;
+  l->refusal_arg = arg;
+  pthread_mutex_unlock(l->lock);
 }
 
 void palp_dds_log_limit_remove(palp_dds_log_limit *l) {

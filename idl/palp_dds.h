@@ -81,6 +81,34 @@ dds_entity_t palp_dds_session_publisher(dds_entity_t pp, const char *partition);
 dds_entity_t palp_dds_session_subscriber(dds_entity_t pp, const char *partition);
 void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len);
 
+/* A peer refused by DDS Security, read off the warning Cyclone 0.10 logs for it
+ * (its only trace: the refused peer gets no answer, the server no event). Measured
+ * forms (docs/security.md, "Why a station was refused"):
+ *   Process handshake failed: Certificate not valid: error: certificate revoked;
+ *     subject: /O=palp/OU=trainee/CN=fd(code: 200)
+ *   (also "Validate remote identity", "Begin handshake request" / "reply failed")
+ *   Could not get remote participant GUID permissions from plugin: ... Verify error:
+ *     self-signed certificate\n(code: 127)
+ * The subject and the reason come from the peer's certificate, so from the network:
+ * they are cut to size and anything unprintable becomes '?'. */
+typedef enum palp_dds_refusal_kind {
+  PALP_DDS_REFUSED_HANDSHAKE = 1,   /* authentication: its identity certificate */
+  PALP_DDS_REFUSED_PERMISSIONS = 2, /* access control: its permissions document */
+} palp_dds_refusal_kind;
+#define PALP_DDS_REFUSAL_WHO 96
+#define PALP_DDS_REFUSAL_WHY 160
+typedef struct palp_dds_refusal {
+  palp_dds_refusal_kind kind;
+  /* "trainee/dave" for palp's subject /O=palp/OU=trainee/CN=dave (the name
+   * palp_dds_security uses), another subject as written, or "participant GUID". */
+  char who[PALP_DDS_REFUSAL_WHO];
+  /* "certificate revoked", "certificate has expired", "permissions not signed by
+   * the classroom (self-signed certificate)", or Cyclone's text, shortened. */
+  char why[PALP_DDS_REFUSAL_WHY];
+} palp_dds_refusal;
+/* 1 and *out filled when msg[0..len) is such a line; 0 for any other line. */
+int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out);
+
 /* Cyclone prints a warning line per malformed sample (e.g. an out-of-range enum
  * fails deserialisation): a hostile peer could fill a disk with them. This sink
  * passes at most `lines` per `window_ns` to `out` and counts the rest; it reports
@@ -95,8 +123,17 @@ typedef struct palp_dds_log_limit {
   int printed_in_window;
   uint64_t suppressed_in_window;
   uint64_t printed, suppressed; /* totals since install */
+  /* Refusals by DDS Security (below) go here instead of `out` once set. */
+  void (*on_refusal)(void *arg, const struct palp_dds_refusal *r);
+  void *refusal_arg;
+  uint64_t refusals; /* lines handed to on_refusal */
 } palp_dds_log_limit;
 int palp_dds_log_limit_install(palp_dds_log_limit *l, FILE *out, int lines, double window_s);
+/* After install: hands each refusal line (palp_dds_refusal_parse) to fn instead of
+ * printing it. Cyclone logs one a second for as long as a refused peer retries, so
+ * the owner throttles them per peer and reason (server/refusals.c). */
+void palp_dds_log_limit_on_refusal(palp_dds_log_limit *l,
+                                   void (*fn)(void *arg, const struct palp_dds_refusal *r), void *arg);
 void palp_dds_log_limit_remove(palp_dds_log_limit *l);
 void palp_dds_log_limit_counts(palp_dds_log_limit *l, uint64_t *printed, uint64_t *suppressed);
 

@@ -44,6 +44,11 @@ int palp_srv_open_sessions(const palp_srv *srv);
 /* Secured: session requests refused because they were not the sender's own
  * (another identity's station id, user name or disposal); any thread. */
 uint64_t palp_srv_refused_requests(palp_srv *srv);
+/* Secured: participants DDS Security refused (revoked, expired or foreign
+ * certificate; permissions not the classroom's), counted from Cyclone's warnings
+ * (server/refusals.h); `who` gets "trainee/dave: certificate revoked (31x); ..."
+ * when not NULL. Any thread. */
+uint64_t palp_srv_security_refusals(palp_srv *srv, char *who, size_t len);
 void palp_srv_destroy(palp_srv *srv);
 
 #endif

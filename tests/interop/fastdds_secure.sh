@@ -13,7 +13,8 @@
 #      without submessage protection, and Fast DDS waits for them), so no join is answered.
 #      This is why the classroom governance signs the submessages of the topics stations write.
 #   4. trainee/fd revoked (the classroom's CRL; its own copy of the files still has the old CRL):
-#      refused at the handshake (no catalogue); alice's Fast DDS station is served beside it.
+#      refused at the handshake (no catalogue), and named with the reason in the server's log;
+#      alice's Fast DDS station is served beside it.
 # In a private network namespace with only "lo" (unshare -n) when permitted, as fastdds.sh.
 # usage: fastdds_secure.sh PALP_SERVER FASTDDS_STATION LOOPBACK_DDS_CONFIG DOMAIN MAKE_CLASSROOM_PKI
 set -u
@@ -117,5 +118,15 @@ case $(r alice partition) in
   *) bad "alice: exit $rc, partition \"$(r alice partition)\""; grep "^result\|^FAIL" "$work/alice.out" ;;
 esac
 stop_server "revoked station"
+# The server names the refused station in its own log (server/refusals.c): once at
+# the first refusal, then the repeats summed (the station retried ~1/s for 15 s).
+first=$(grep -c "WARN  palp-server: DDS Security refused trainee/fd at the handshake: certificate revoked; it gets no answer" "$work/server-revoked.log")
+total=$(sed -n 's/^DDS Security refused participants \([0-9]*\) time(s): trainee\/fd: certificate revoked ([0-9]*x)$/\1/p' "$work/server-revoked.log")
+if [ "$first" = 1 ] && [ "${total:-0}" -ge 5 ] && ! grep -q "certificate revoked.*alice\|alice.*certificate revoked" "$work/server-revoked.log"; then
+  ok "the server's log names trainee/fd and why (certificate revoked): one warning, $total refusals counted in its summary"
+else
+  bad "the server's log: $first first warning(s) naming trainee/fd, summary total \"$total\""
+  grep "refused" "$work/server-revoked.log"
+fi
 [ $fail -ne 0 ] && { echo "--- server log"; cat "$work/server.log"; }
 exit $fail

@@ -436,6 +436,19 @@ int main(int argc, char **argv) {
   /* bob's LEAVE, JOIN and disposal of alice's station, and his JOIN as "alice" */
   CHECK(refused == 4, "the server refused exactly bob's 4 requests that were not his own: %llu",
         (unsigned long long)refused);
+  /* A refused participant gets no answer and makes no event: the server names it
+   * from Cyclone's warning (server/refusals.c). dave retried for ~3 s, so at least
+   * one refusal each; the forged participant's identity is the classroom's, its
+   * permissions are signed by its own CA. The anonymous one leaves no trace (no
+   * handshake is attempted with it). */
+  char who[600];
+  const uint64_t nref = palp_srv_security_refusals(ts.srv, who, sizeof who);
+  CHECK(nref >= 1 && strstr(who, "trainee/dave: certificate revoked ("),
+        "the server names the revoked trainee dave and why: %llu refusal(s): %s", (unsigned long long)nref, who);
+  CHECK(strstr(who, "participant ") && strstr(who, ": permissions not signed by the classroom ("),
+        "and the forged participant, refused for its permissions: %s", who);
+  CHECK(!strstr(who, "alice") && !strstr(who, "bob") && !strstr(who, "ines"),
+        "nobody of the classroom is among them: %s", who);
   test_server_stop(&ts);
   fprintf(stderr, "%s (%.1f s)\n", palp_test_failures ? "FAILED" : "passed", (double)(palp_dds_now_ns() - t0) * 1e-9);
   return palp_test_failures ? 1 : 0;
