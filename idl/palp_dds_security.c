@@ -3,6 +3,7 @@
 #define _XOPEN_SOURCE 700
 #include "palp_dds_security.h"
 
+#include <dirent.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -89,6 +90,34 @@ static int file_of(const palp_dds_security *sec, const char *suffix, char *buf, 
 static const char *const identity_files[] = {".cert.pem", ".key.pem", ".permissions.p7s", "ca.cert.pem",
                                              "governance.p7s"};
 
+/* The newest DIR/revoked/KIND_NAME-STAMP of a revoked identity (make-classroom-pki.sh
+ * revoke moves its files there, STAMP a UTC time that sorts): 1 and its path prefix
+ * in buf, or 0 when the identity was never revoked here. */
+static int revoked_copy(const palp_dds_security *sec, char *buf, size_t len) {
+  char dir[PALP_DDS_PKI_PATH_MAX + 16], head[96];
+  snprintf(dir, sizeof dir, "%s/revoked", sec->pki);
+  const int hn = snprintf(head, sizeof head, "%s_%s-", palp_dds_id_kind_name(sec->kind), sec->name);
+  DIR *d = opendir(dir);
+  if (!d || hn < 0 || (size_t)hn >= sizeof head) {
+    if (d) closedir(d);
+    return 0;
+  }
+  char best[256] = "";
+  for (struct dirent *e; (e = readdir(d));) {
+    const char *dot = strstr(e->d_name, ".cert.pem");
+    if (strncmp(e->d_name, head, (size_t)hn) || !dot || dot[9] != '\0') continue;
+    const size_t stem = (size_t)(dot - e->d_name);
+    if (stem < sizeof best && strncmp(e->d_name, best, sizeof best) > 0) {
+      memcpy(best, e->d_name, stem);
+      best[stem] = '\0';
+    }
+  }
+  closedir(d);
+  if (!best[0]) return 0;
+  const int n = snprintf(buf, len, "%s/%s", dir, best);
+  return n > 0 && (size_t)n < len;
+}
+
 /* Days from now until t [d] (negative once past); 0 or -1 if t cannot be read. */
 static int days_until(const ASN1_TIME *t, double *days) {
   int d = 0, sec = 0;
@@ -162,9 +191,16 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
   memcpy(s.pki, abs, n + 1);
   for (size_t i = 0; i < sizeof identity_files / sizeof identity_files[0]; i++) {
     char f[PALP_DDS_PKI_PATH_MAX + 96];
-    if (file_of(&s, identity_files[i], f, sizeof f) < 0 || access(f, R_OK) != 0)
+    if (file_of(&s, identity_files[i], f, sizeof f) < 0 || access(f, R_OK) != 0) {
+      char revoked[PALP_DDS_PKI_PATH_MAX + 96];
+      if (i == 0 && revoked_copy(&s, revoked, sizeof revoked))
+        return fail(err, errlen, PALP_EIO,
+                    "identity %s was revoked in this classroom (its files were moved to %s.*): ask the instructor "
+                    "for a new one (make-classroom-pki.sh DIR add %s %s)",
+                    identity, revoked, palp_dds_id_kind_name(s.kind), s.name);
       return fail(err, errlen, PALP_EIO, "identity %s: cannot read %s (make it with scripts/make-classroom-pki.sh)",
                   identity, f);
+    }
   }
   /* A private key every user of the machine can read is anyone's identity on a shared lab
    * machine: refused, as ssh refuses such keys (group-readable stays allowed, for a service group). */

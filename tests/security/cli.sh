@@ -32,6 +32,11 @@ check "a malformed identity is refused up front (exit $rc)" "[ $rc -eq 1 ] && gr
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --duration 1 >"$out/half.log" 2>&1
 rc=$?
 check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q 'go together' '$out/half.log'"
+# dave was revoked (make_pki.sh): his files moved to DIR/revoked; the classroom's copy says so
+# rather than "cannot read" (idl/palp_dds_security.c), before any network use.
+"$client" --pki "$pki" --identity trainee/dave --role trainee --phantom 1 --duration 1 >"$out/dave.log" 2>&1; rc=$?
+check "a revoked identity is told it was revoked, and how to get a new one (exit $rc)" \
+  "[ $rc -eq 1 ] && grep -q 'identity trainee/dave was revoked in this classroom (its files were moved to .*/revoked/trainee_dave-[0-9T]*\\.\\*): ask the instructor for a new one (make-classroom-pki.sh DIR add trainee dave)' '$out/dave.log'"
 # A DDS config that may reach a network (the lab example): refused unsecured, before any participant
 # exists (--check stops there too), accepted with --insecure or --pki. Nothing here creates one.
 lab=$(dirname "$0")/../../config/cyclonedds-lab.xml.example
