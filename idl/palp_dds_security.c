@@ -339,6 +339,7 @@ void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, cha
              "; %d other DDS participant%s on this domain, none of which answered %s/%s: is the server secured with "
              "the same classroom PKI (a plain server, one of another CA, or one whose governance.p7s differs from "
              "this station's cannot talk to this identity: make-classroom-pki.sh re-issues an old governance, which "
-             "every station then needs), and is this certificate valid and not revoked?",
+             "every station then needs), and is this certificate valid and not revoked? (the server's log names each "
+             "identity it refuses, and why)",
              peers, peers == 1 ? " is" : "s are", palp_dds_id_kind_name(sec->kind), sec->name);
 }

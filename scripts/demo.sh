@@ -62,6 +62,18 @@ if [ "$secure" = 1 ]; then
   visual_sec=(--pki "$pki" --identity trainee/bob)
   observer_sec=(--pki "$pki" --identity instructor/ines)
   web_sec=(--pki "$pki" --identity instructor/bridge)
+  # A lost laptop (docs/security.md, "Revoke an identity"): trainee/mallory's files as copied
+  # onto it before the classroom revoked her. Made once per classroom CA and kept, like the PKI.
+  lost=$out/lost-laptop
+  if ! cmp -s "$lost/ca.cert.pem" "$pki/ca.cert.pem" 2>/dev/null; then
+    rm -rf "$lost"
+    [ -f "$pki/trainee/mallory.cert.pem" ] || bash scripts/make-classroom-pki.sh "$pki" add trainee mallory >/dev/null
+    mkdir -p "$lost/trainee"
+    cp "$pki/ca.cert.pem" "$pki/governance.p7s" "$pki/crl.pem" "$lost/"
+    cp "$pki"/trainee/mallory.* "$lost/trainee/"
+    bash scripts/make-classroom-pki.sh "$pki" revoke trainee/mallory >/dev/null
+  fi
+  echo "demo: trainee/mallory is revoked (crl.pem); her lost laptop ($lost/) will try to join"
 else
   echo "demo: DDS Security OFF (PALP_SECURE=0): any process on domain $domain is trusted"
 fi
@@ -156,6 +168,15 @@ if [ "${PALP_DEMO_EXPERT:-1}" = 1 ]; then
   pids+=($!)
   eve=$!
 fi
+# The lost laptop tries to join with mallory's revoked identity: the server refuses her at the
+# DDS Security handshake and names her in its log; her station hears no answer and gives up.
+mallory=
+if [ "$secure" = 1 ]; then
+  "$client" --role trainee --domain "$domain" --phantom 1 --pki "$lost" --identity trainee/mallory \
+    --timeout 5 --duration 2 --print-period 0 >"$out/mallory.log" 2>&1 &
+  pids+=($!)
+  mallory=$!
+fi
 # The visual station shows bob's phantom; the instructor follows alice.
 "$client" --role visual --domain "$domain" --phantom 2 "${visual_sec[@]}" --no-color --map-every 2 \
   --svg "$out/bob-peak.svg" --duration 8 >"$out/visual.log" 2>&1 &
@@ -168,6 +189,8 @@ observer=$!
 
 status=0
 for p in "$alice" "$bob" "$carol" "$dana" "$visual" "$observer" "$nina" $eve; do wait "$p" || status=$?; done
+# mallory's station must fail: it is no part of the status
+[ -n "$mallory" ] && { wait "$mallory" && { echo "demo: the revoked trainee/mallory was let in" >&2; status=1; }; }
 [ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
 kill -INT "$server_pid"
 wait "$server_pid" || status=$?
@@ -200,6 +223,12 @@ for t in nina ${eve:+eve}; do
 done
 echo "(the lesions are revealed only in the instructor's log: the review below assesses each session)"
 echo
+if [ -n "$mallory" ]; then
+  echo "== a revoked identity: mallory's lost laptop =="
+  grep -E "DDS Security refused trainee/mallory" "$out/server.log" | head -n 1 | sed 's/^.*palp-server: /palp-server: /'
+  grep -E "ERROR|no answer" "$out/mallory.log" | tail -n 1 | sed 's/^.*palp-client: /her station: /'
+  echo
+fi
 echo "== stations =="
 for f in alice bob carol dana visual observer; do
   grep -E "^\[[a-z]+[^]]*\] session [0-9]+:" "$out/$f.log" | tail -n 1

@@ -23,6 +23,8 @@ check "it says DDS Security is on, with an identity per process" \
   "grep -q 'demo: DDS Security on: classroom CA and identities in' '$txt'"
 check "the server ran secured and refused no request for its identity" \
   "grep -q 'DDS Security on (identity server/server); requests refused for their identity: 0' '$txt'"
+check "mallory's lost laptop (a revoked identity) is refused, and the server's log names her and why" \
+  "grep -q '^palp-server: DDS Security refused trainee/mallory at the handshake: certificate revoked' '$txt' && grep -q '^her station: no answer from palp-server' '$txt' && grep -Eq '^DDS Security refused participants [1-9][0-9]* time\\(s\\): trainee/mallory: certificate revoked' '$txt'"
 check "palp-web ran as instructor/bridge" "grep -q 'DDS Security on (identity instructor/bridge)' '$out/demo/web.log'"
 for t in alice bob carol dana; do
   check "trainee $t ran a session" "grep -Eq '^\[trainee $t\] session [0-9]+: ' '$txt'"
