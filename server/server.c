@@ -748,8 +748,9 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
   if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
-  logf_(srv, "station %s (%s) left session %u: %s", st->id, role == palp_ROLE_VISUAL ? "visual" : "observer",
-        sid, reason);
+  /* At the level of its join (who followed a session, and until when, is the instructor's to read). */
+  palp_log_info(srv->log, "station %s (%s) left session %u: %s", st->id,
+                role == palp_ROLE_VISUAL ? "visual" : "observer", sid, reason);
   free_station(srv, st); /* after its last read */
   publish_state(srv, s, 0, NULL, NULL);
 }

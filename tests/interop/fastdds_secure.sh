@@ -16,14 +16,17 @@
 #      refused at the handshake (no catalogue), and named with the reason in the server's log;
 #      alice's Fast DDS station is served beside it.
 # In a private network namespace with only "lo" (unshare -n) when permitted, as fastdds.sh.
-# usage: fastdds_secure.sh PALP_SERVER FASTDDS_STATION LOOPBACK_DDS_CONFIG DOMAIN MAKE_CLASSROOM_PKI
+#   5. An instructor's station of another vendor: instructor/ines on Fast DDS follows alice's
+#      session (alice on palp-client, Cyclone): joins as observer, reads her contacts and
+#      deformation, is refused a contact writer by its own permissions, leaves.
+# usage: fastdds_secure.sh PALP_SERVER FASTDDS_STATION LOOPBACK_DDS_CONFIG DOMAIN MAKE_CLASSROOM_PKI PALP_CLIENT
 set -u
 . "$(dirname "$0")/common.sh"
 in_private_netns "$0" "$@"
-server=$1 station=$2 dds=$3 domain=$4 mkpki=$5
+server=$1 station=$2 dds=$3 domain=$4 mkpki=$5 client=$6
 work_dir palp-fastdds-secure
 unset CYCLONEDDS_URI
-bash "$mkpki" "$work/pki" classroom --trainees fd,alice > "$work/pki.out" 2>&1 || { cat "$work/pki.out"; echo "FAIL make-classroom-pki"; exit 1; }
+bash "$mkpki" "$work/pki" classroom --trainees fd,alice --instructors ines > "$work/pki.out" 2>&1 || { cat "$work/pki.out"; echo "FAIL make-classroom-pki"; exit 1; }
 grep -q "<metadata_protection_kind>SIGN</metadata_protection_kind>" "$work/pki/governance.xml" \
   && ok "classroom PKI made by make-classroom-pki.sh (governance: the stations' topics SIGN their submessages)" \
   || bad "the governance signs no submessage"
@@ -117,6 +120,32 @@ case $(r alice partition) in
     || bad "alice: exit $rc, leave \"$(r alice leave_reason)\"" ;;
   *) bad "alice: exit $rc, partition \"$(r alice partition)\""; grep "^result\|^FAIL" "$work/alice.out" ;;
 esac
+# 5. instructor/ines on Fast DDS follows alice, who palpates on palp-client (Cyclone): 3 N held
+#    from 0.5 s to 9 s, so the observer's 1.5 s of reading falls inside the press.
+CYCLONEDDS_URI="file://$dds" "$client" --role trainee --domain "$domain" --phantom 1 --pki "$work/pki" \
+  --identity trainee/alice --profile step --magnitude 3 --t-on 0.5 --t-off 9 --duration 10 --print-period 0 \
+  >"$work/alice-cyclone.out" 2>&1 &
+apid=$!
+timeout 60 "$station" "$domain" 1 observe 4 "$work/pki" instructor/ines alice >"$work/ines.out" 2>&1; rc=$?
+case $(r ines partition) in
+  palp/s/alice/*) ;;
+  *) bad "ines (Fast DDS) did not join alice's session: exit $rc, partition \"$(r ines partition)\""; grep "^result\|^FAIL" "$work/ines.out" ;;
+esac
+frames=$(r ines observed_frames) contacts=$(r ines observed_contacts) peak=$(r ines observed_contact_peak_N)
+# 1.5 s of a 100 Hz contact stream and of the deformation at 30 frames/s for a follower (server.md)
+if [ $rc -eq 0 ] && [ "${contacts:-0}" -ge 50 ] && [ "${frames:-0}" -ge 10 ] \
+   && awk "BEGIN{exit !(${peak:-0} >= 2.9 && ${peak:-0} <= 3.1)}"; then
+  ok "instructor/ines on Fast DDS follows alice's Cyclone session $(r ines session) ($(r ines partition)): $contacts contacts (peak $peak N) and $frames deformation frames in 1.5 s"
+else
+  bad "ines observed: exit $rc, $contacts contacts (peak $peak N), $frames frames"
+fi
+[ "$(r ines contact_writer_refused)" = 1 ] && ok "its own permissions refuse it a contact writer in alice's session (an instructor follows, it does not palpate)" \
+  || bad "the instructor got a contact writer in alice's session"
+wait $apid; arc=$?
+grep -q "station instructor/ines/fastdds/[0-9]*/obs joined session [0-9]* as observer" "$work/server-revoked.log" \
+  && grep -q "station instructor/ines/fastdds/[0-9]*/obs (observer) left session" "$work/server-revoked.log" && [ $arc -eq 0 ] \
+  && ok "the server logged the observer's join and leave; alice's station exited 0" \
+  || { bad "server log / alice (exit $arc): observer join and leave not both logged"; grep "instructor/ines" "$work/server-revoked.log"; }
 stop_server "revoked station"
 # The server names the refused station in its own log (server/refusals.c): once at
 # the first refusal, then the repeats summed (the station retried ~1/s for 15 s).

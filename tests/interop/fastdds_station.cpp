@@ -28,6 +28,10 @@
 // is the user name it claims instead of NAME: a forged identity the server must refuse.
 //
 // usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES [PKI trainee/NAME [CLAIM]]
+//        fastdds_station DOMAIN PHANTOM_ID observe PEER_INDICES PKI instructor/NAME TRAINEE
+// (observe: an instructor's station, secured only: finds TRAINEE's open session in the session
+// states, joins it as observer, reads its contacts and deformation for 1.5 s, is refused a
+// contact writer there by its own permissions, and leaves with OP_LEAVE)
 // PALP_FASTDDS_WARNINGS=1 in the environment prints Fast DDS's own warnings (for debugging a peer).
 // (station-crash: press, then wait to be killed, for the crash-versus-goodbye check; +finger: then
 // press by position and read the server's local contact models)
@@ -86,10 +90,121 @@ static void state_qos(DataReaderQos &q) {
   q.history().depth = 1;
 }
 
+// An instructor's station (observe): finds the trainee's open session, joins it as observer,
+// reads its contacts and deformation for 1.5 s, tries a contact writer there (its permissions
+// must refuse it), and leaves with OP_LEAVE.
+static int follow_session(DomainParticipant *pp, DataReader *r_st, DataReader *r_rp, DataWriter *w_rq, Topic *tp_ct,
+                          Topic *tp_df, const std::string &name, const std::string &follow) {
+  const auto t0 = Clock::now();
+  uint32_t session = 0;
+  while (!session && since(t0) < 10) {
+    palp::SessionState s;
+    SampleInfo info;
+    while (r_st->read_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data && s.trainee_name() == follow && s.phase() == palp::PHASE_OPEN) session = s.session_id();
+    if (!session) nap(0.05);
+  }
+  if (!session) return fail("no open session of the trainee to follow within 10 s");
+  std::printf("result followed_session %u\nresult found_s %.3f\n", session, since(t0));
+
+  char sid[64];
+  std::snprintf(sid, sizeof sid, "instructor/%s/fastdds/%ld/obs", name.c_str(), (long)getpid());
+  palp::SessionRequest rq;
+  rq.station_id(sid);
+  rq.request_seq(1);
+  rq.op(palp::OP_JOIN);
+  rq.role(palp::ROLE_OBSERVER);
+  rq.phantom_id(0);
+  rq.session_id(session);
+  rq.user_name(name);
+  rq.want_feedback(false);
+  rq.want_deformation(true);
+  const auto tj = Clock::now();
+  palp::SessionReply rp;
+  bool have_rp = false;
+  for (double next_send = 0; !have_rp && since(tj) < 10;) {
+    if (since(tj) >= next_send) w_rq->write(&rq), next_send += 2.0;
+    SampleInfo info;
+    while (r_rp->take_next_sample(&rp, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data && rp.station_id() == sid && rp.request_seq() == 1) have_rp = true;
+    if (!have_rp) nap(0.02);
+  }
+  if (!have_rp) return fail("no reply to the observer's join within 10 s");
+  if (rp.status() != palp::REPLY_ACCEPTED) {
+    std::printf("result join_reason %s\n", rp.reason().c_str());
+    return fail("observer join rejected");
+  }
+  std::printf("result join_s %.3f\nresult session %u\nresult partition %s\n", since(tj), rp.session_id(),
+              rp.partition().c_str());
+
+  SubscriberQos subq = SUBSCRIBER_QOS_DEFAULT;
+  subq.partition().push_back(rp.partition().c_str());
+  Subscriber *ssub = pp->create_subscriber(subq);
+  DataReaderQos rq_ct = DATAREADER_QOS_DEFAULT;
+  rq_ct.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  rq_ct.history().depth = 1;
+  DataReader *r_ct = ssub ? ssub->create_datareader(tp_ct, rq_ct) : nullptr;
+  DataReaderQos rq_df = DATAREADER_QOS_DEFAULT;
+  rq_df.reliability().kind = RELIABLE_RELIABILITY_QOS;
+  rq_df.history().depth = 1;
+  DataReader *r_df = ssub ? ssub->create_datareader(tp_df, rq_df) : nullptr;
+  if (!r_ct || !r_df) return fail("cannot create the observer's readers in the session");
+  // An instructor follows; it does not palpate: its permissions grant no contact writer.
+  PublisherQos pubq = PUBLISHER_QOS_DEFAULT;
+  pubq.partition().push_back(rp.partition().c_str());
+  Publisher *spub = pp->create_publisher(pubq);
+  DataWriterQos wq_ct = DATAWRITER_QOS_DEFAULT; // a trainee's contact writer, QoS and all (below, in main)
+  wq_ct.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  wq_ct.durability().kind = VOLATILE_DURABILITY_QOS;
+  wq_ct.history().depth = 1;
+  wq_ct.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
+  wq_ct.liveliness().lease_duration = eprosima::fastrtps::Duration_t(0.5);
+  wq_ct.liveliness().announcement_period = eprosima::fastrtps::Duration_t(0.2);
+  DataWriter *w_ct = spub ? spub->create_datawriter(tp_ct, wq_ct) : nullptr;
+  std::printf("result contact_writer_refused %d\n", w_ct == nullptr ? 1 : 0);
+
+  // Secured endpoints match once their crypto tokens are exchanged: up to 5 s, then read 1.5 s.
+  const auto tm = Clock::now();
+  SubscriptionMatchedStatus mc, md;
+  do {
+    r_ct->get_subscription_matched_status(mc);
+    r_df->get_subscription_matched_status(md);
+    if (mc.current_count > 0 && md.current_count > 0) break;
+    nap(0.05);
+  } while (since(tm) < 5);
+  uint64_t ct_n = 0, df_n = 0;
+  double ct_peak = 0;
+  const auto tr = Clock::now();
+  while (since(tr) < 1.5) {
+    palp::Contact c;
+    palp::Deformation d;
+    SampleInfo info;
+    while (r_ct->take_next_sample(&c, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data && c.session_id() == session) {
+        ct_n++;
+        const palp::Vec3 &f = c.force();
+        ct_peak = std::fmax(ct_peak, std::sqrt(f.x() * f.x() + f.y() * f.y() + f.z() * f.z()));
+      }
+    while (r_df->take_next_sample(&d, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data && d.session_id() == session) df_n++;
+    nap(0.01);
+  }
+  std::printf("result observed_contacts %llu\nresult observed_contact_peak_N %.3f\nresult observed_frames %llu\n",
+              (unsigned long long)ct_n, ct_peak, (unsigned long long)df_n);
+  rq.request_seq(2);
+  rq.op(palp::OP_LEAVE);
+  std::printf("result leave_written %d\n", w_rq->write(&rq) ? 1 : 0);
+  nap(0.3); // the leave reaches the server before the participant goes
+  pp->delete_contained_entities();
+  DomainParticipantFactory::get_instance()->delete_participant(pp);
+  return 0;
+}
+
 int main(int argc, char **argv) {
   if (argc != 5 && argc != 7 && argc != 8) {
     std::fprintf(stderr, "usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES "
-                         "[PKI trainee/NAME [CLAIM]]\n");
+                         "[PKI trainee/NAME [CLAIM]]\n"
+                         "       fastdds_station DOMAIN PHANTOM_ID observe PEER_INDICES PKI instructor/NAME TRAINEE\n");
     return 2;
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0); // results survive whatever happens next
@@ -99,16 +214,21 @@ int main(int argc, char **argv) {
   const bool station_topic = std::strncmp(argv[3], "station", 7) == 0;
   const bool crash = std::strstr(argv[3], "-crash") != nullptr;
   const bool finger = std::strstr(argv[3], "+finger") != nullptr; // also press by position
+  const bool observe = std::strcmp(argv[3], "observe") == 0;       // an instructor follows a trainee
   const int peers = std::atoi(argv[4]);
   const bool secure = argc >= 7;
-  std::string pki, name, claim;
+  std::string pki, name, claim, kind = observe ? "instructor" : "trainee", follow;
+  if (observe && argc != 8) return fail("observe needs PKI instructor/NAME TRAINEE");
   if (secure) {
     char abs[4096];
     if (!realpath(argv[5], abs)) return fail("PKI directory not found");
     pki = abs;
-    if (std::strncmp(argv[6], "trainee/", 8) != 0 || !argv[6][8]) return fail("identity must be trainee/NAME");
-    name = argv[6] + 8;
-    claim = argc == 8 ? argv[7] : name;
+    const std::string want = kind + "/";
+    if (std::strncmp(argv[6], want.c_str(), want.size()) != 0 || !argv[6][want.size()])
+      return fail(observe ? "identity must be instructor/NAME" : "identity must be trainee/NAME");
+    name = argv[6] + want.size();
+    claim = argc == 8 && !observe ? argv[7] : name;
+    if (observe) follow = argv[7];
     if (station_topic) return fail("a secured station has no palp_station_request (docs/security.md): use session");
   }
 
@@ -136,7 +256,7 @@ int main(int argc, char **argv) {
   if (secure) { // Fast DDS's builtin security plugins, the classroom's files (OMG DDS Security 1.1, 9.3.1);
     // Fast DDS takes only "file://" URIs ("file:" + path, which Cyclone accepts, is refused)
     auto &props = pq.properties().properties();
-    const std::string id = "file://" + pki + "/trainee/" + name;
+    const std::string id = "file://" + pki + "/" + kind + "/" + name;
     props.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
     props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_ca", "file://" + pki + "/ca.cert.pem");
     props.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate", id + ".cert.pem");
@@ -169,7 +289,7 @@ int main(int argc, char **argv) {
 
   Subscriber *sub = pp->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
   PublisherQos req_pubq = PUBLISHER_QOS_DEFAULT;
-  if (secure) req_pubq.partition().push_back(("palp/trainee/" + name).c_str()); // the sender's identity (docs/security.md)
+  if (secure) req_pubq.partition().push_back(("palp/" + kind + "/" + name).c_str()); // the sender's identity (docs/security.md)
   Publisher *pub = pp->create_publisher(req_pubq);
   DataReaderQos rq_state = DATAREADER_QOS_DEFAULT;
   state_qos(rq_state);
@@ -208,6 +328,8 @@ int main(int argc, char **argv) {
   }
   std::printf("result catalogue_s %.3f\nresult vertices %zu\nresult radius_m %.6g\nresult phantom_name %s\n", since(t0),
               ph.rest().size(), ph.radius(), ph.name().c_str());
+
+  if (observe) return follow_session(pp, r_st, r_rp, w_rq, tp_ct, tp_df, name, follow);
 
   // 2. Join.
   char sid[64];
