@@ -124,3 +124,5 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {
   fflush(l->f);
   pthread_mutex_unlock(&l->mu);
 }
+
+void palp_log_warn_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_WARN, "%s", line); }

@@ -60,6 +60,10 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...)
 #define palp_log_info(l, ...) palp_logf((l), PALP_LOG_INFO, __VA_ARGS__)
 #define palp_log_debug(l, ...) palp_logf((l), PALP_LOG_DEBUG, __VA_ARGS__)
 
+/* A callback for code that reports lines without knowing palp_log (ctx is the
+ * palp_log *, NULL for stderr): one warning line, e.g. palp_dds_refusals' emit. */
+void palp_log_warn_line(void *ctx, const char *line);
+
 /* Formats the current UTC time as 2024-05-01T10:00:00.123Z into buf (>= 25 bytes). */
 void palp_log_timestamp(char *buf, size_t len);
 

@@ -15,6 +15,7 @@
 #include "palp.h"
 #include "palp_app.h"
 #include "palp_dds.h"
+#include "palp_dds_refusals.h"
 #include "station.h"
 #include "view.h"
 
@@ -1085,7 +1086,7 @@ int main(int argc, char **argv) {
     palp_app_print_version(stdout, "palp-client");
     return 0;
   }
-  palp_log log;
+  static palp_log log; /* static: Cyclone's threads may log through it until the process ends */
   if (palp_log_init(&log, "palp-client", o.app.log_level, o.app.log_file) < 0) {
     fprintf(stderr, "palp-client: --log-file %s: cannot open it\n", o.app.log_file);
     return 2;
@@ -1130,6 +1131,13 @@ int main(int argc, char **argv) {
   if (sec.kind != PALP_DDS_ID_NONE && !o.name[0]) o.name = sec.name;
   char label[64];
   snprintf(label, sizeof label, "%s%s%s", o.role, o.name[0] ? ":" : "", o.name);
+  /* Cyclone's warnings: at most 10 per 10 s, and a peer DDS Security refuses (a revoked
+   * laptop retries every second, for hours) said once, its repeats once a minute. Kept
+   * until the process ends (static), as Cyclone's threads may log until then. */
+  static palp_dds_log_limit dds_sink;
+  static palp_dds_refusals refusals;
+  palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
+  palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
   palp_cli_station st;
   if (palp_cli_station_open_secure(&st, o.domain, label, &sec, err, sizeof err) < 0) {
     palp_log_error(o.log, "%s", err);

@@ -20,7 +20,7 @@
 #include "palp_dds.h"
 #include "admission.h"
 #include "retire.h"
-#include "refusals.h"
+#include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "session.h"
 #include "ticker.h"
@@ -98,7 +98,7 @@ struct palp_srv {
   guard_counts guard;
   palp_dds_log_limit dds_log;
   int dds_log_installed;
-  palp_srv_refusals refusals; /* peers DDS Security refused (refusals.h) */
+  palp_dds_refusals refusals; /* peers DDS Security refused (refusals.h) */
   int refusals_ready;
 
   closed_session *closed; /* ring of the last CLOSED_KEEP */
@@ -118,11 +118,6 @@ struct palp_srv {
 
 static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
 
-/* Cyclone's threads: a peer refused by DDS Security (palp_dds_refusal_parse). */
-static void note_refusal(void *arg, const palp_dds_refusal *r) {
-  palp_srv *srv = arg;
-  palp_srv_refusals_note(&srv->refusals, r, palp_dds_now_ns());
-}
 
 static int fail(char *err, size_t errlen, const char *fmt, ...) {
   va_list ap;
@@ -1311,12 +1306,10 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     srv->phantom_count = i + (srv->phantom[i].template_world != NULL);
     if (*rc < 0) goto fail;
   }
-  palp_srv_refusals_init(&srv->refusals, srv->log, PALP_SRV_REFUSAL_WINDOW_S);
+  palp_dds_refusals_init(&srv->refusals, palp_log_warn_line, srv->log, PALP_DDS_REFUSAL_WINDOW_S);
   srv->refusals_ready = 1;
-  if (palp_dds_log_limit_install(&srv->dds_log, stderr, srv->cfg.dds_log_lines, srv->cfg.dds_log_window) == 0) {
+  if (palp_dds_refusals_install(&srv->dds_log, &srv->refusals, srv->cfg.dds_log_lines, srv->cfg.dds_log_window) == 0)
     srv->dds_log_installed = 1;
-    palp_dds_log_limit_on_refusal(&srv->dds_log, note_refusal, srv);
-  }
   if (srv->cfg.security_pki[0]) {
     char msg[400] = "";
     *rc = palp_dds_security_init(&srv->sec, srv->cfg.security_pki, srv->cfg.security_identity, msg, sizeof msg);
@@ -1531,7 +1524,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
   while (srv->session_count > 0)
     close_session(srv, srv->sessions[srv->session_count - 1], result ? "server identity conflict" : "server shutdown");
   publish_status(srv);
-  if (srv->refusals_ready) palp_srv_refusals_flush(&srv->refusals); /* the repeats not yet logged, before the summary */
+  if (srv->refusals_ready) palp_dds_refusals_flush(&srv->refusals); /* the repeats not yet logged, before the summary */
   return result;
 }
 
@@ -1541,8 +1534,8 @@ uint64_t palp_srv_security_refusals(palp_srv *srv, char *who, size_t len) {
     return 0;
   }
   uint64_t total = 0;
-  palp_srv_refusals_counts(&srv->refusals, &total, NULL);
-  if (who && len) palp_srv_refusals_describe(&srv->refusals, who, len);
+  palp_dds_refusals_counts(&srv->refusals, &total, NULL);
+  if (who && len) palp_dds_refusals_describe(&srv->refusals, who, len);
   return total;
 }
 
@@ -1566,9 +1559,9 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
             (unsigned long long)atomic_load(&((palp_srv *)srv)->refused_requests));
     uint64_t total = 0;
     char who[600];
-    palp_srv_refusals_counts(&((palp_srv *)srv)->refusals, &total, NULL);
+    palp_dds_refusals_counts(&((palp_srv *)srv)->refusals, &total, NULL);
     if (total) {
-      palp_srv_refusals_describe(&((palp_srv *)srv)->refusals, who, sizeof who);
+      palp_dds_refusals_describe(&((palp_srv *)srv)->refusals, who, sizeof who);
       fprintf(out, "DDS Security refused participants %llu time(s): %s\n", (unsigned long long)total, who);
     }
   }
@@ -1610,8 +1603,8 @@ void palp_srv_destroy(palp_srv *srv) {
   palp_srv_retire_free(&srv->retire);
   if (srv->dds_log_installed) palp_dds_log_limit_remove(&srv->dds_log);
   if (srv->refusals_ready) { /* after the sink is gone: nothing notes a refusal any more */
-    palp_srv_refusals_flush(&srv->refusals);
-    palp_srv_refusals_destroy(&srv->refusals);
+    palp_dds_refusals_flush(&srv->refusals);
+    palp_dds_refusals_destroy(&srv->refusals);
   }
   free(srv->stations);
   for (int i = 0; i < srv->phantom_count; i++) {

@@ -46,7 +46,7 @@ int palp_srv_open_sessions(const palp_srv *srv);
 uint64_t palp_srv_refused_requests(palp_srv *srv);
 /* Secured: participants DDS Security refused (revoked, expired or foreign
  * certificate; permissions not the classroom's), counted from Cyclone's warnings
- * (server/refusals.h); `who` gets "trainee/dave: certificate revoked (31x); ..."
+ * (idl/palp_dds_refusals.h); `who` gets "trainee/dave: certificate revoked (31x); ..."
  * when not NULL. Any thread. */
 uint64_t palp_srv_security_refusals(palp_srv *srv, char *who, size_t len);
 void palp_srv_destroy(palp_srv *srv);

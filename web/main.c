@@ -22,6 +22,7 @@
 #include "palp.h"
 #include "palp_app.h"
 #include "palp_dds.h"
+#include "palp_dds_refusals.h"
 #include "serve.h"
 
 static atomic_int g_stop; /* atomic: a signal may land on any thread (client/main.c) */
@@ -338,7 +339,7 @@ int main(int argc, char **argv) {
     sd.trainees = trainees;
     sd.trainee_count = n;
   }
-  palp_log log;
+  static palp_log log; /* static: Cyclone's threads may log through it until the process ends */
   if (palp_log_init(&log, "palp-web", ao.log_level, ao.log_file) < 0) {
     fprintf(stderr, "palp-web: --log-file %s: %s\n", ao.log_file, strerror(errno));
     return 2;
@@ -367,6 +368,11 @@ int main(int argc, char **argv) {
     palp_log_error(&log, "--scale-min-mm %g is above --scale-mm %g", hd.scale_min_mm, hd.scale_mm);
     return 2;
   }
+  /* Cyclone's warnings bounded, a refused peer said once (client/main.c does the same). */
+  static palp_dds_log_limit dds_sink;
+  static palp_dds_refusals refusals;
+  palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
+  palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
   char err[256];
   palp_web_hub *hub = palp_web_hub_create(&hd, err, sizeof err);
   if (!hub) {

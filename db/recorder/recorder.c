@@ -27,6 +27,7 @@
 #include "palp_app.h"
 #include "palp_db.h"
 #include "palp_dds.h"
+#include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 
 #define MAX_PHANTOMS 64
@@ -502,7 +503,7 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-recorder: %s\n", err);
     return 2;
   }
-  palp_log plog;
+  static palp_log plog; /* static: Cyclone's threads may log through it until the process ends */
   if (palp_log_init(&plog, "palp-recorder", ao.log_level, ao.log_file) < 0) {
     fprintf(stderr, "palp-recorder: --log-file %s: cannot open it\n", ao.log_file);
     return 2;
@@ -528,6 +529,11 @@ int main(int argc, char **argv) {
     free(r);
     return 1;
   }
+  /* Cyclone's warnings bounded, a refused peer said once (client/main.c does the same). */
+  static palp_dds_log_limit dds_sink;
+  static palp_dds_refusals refusals;
+  palp_dds_refusals_init(&refusals, palp_log_warn_line, &plog, PALP_DDS_REFUSAL_WINDOW_S);
+  palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
   dds_entity_t pp = palp_dds_create_participant(domain, &sec);
   if (pp < 0) {
     palp_log_error(&plog, "cannot create a DDS participant: %s\n", dds_strretcode(pp));

@@ -25,6 +25,11 @@ check "the server ran secured and refused no request for its identity" \
   "grep -q 'DDS Security on (identity server/server); requests refused for their identity: 0' '$txt'"
 check "mallory's lost laptop (a revoked identity) is refused, and the server's log names her and why" \
   "grep -q '^palp-server: DDS Security refused trainee/mallory at the handshake: certificate revoked' '$txt' && grep -q '^her station: no answer from palp-server' '$txt' && grep -Eq '^DDS Security refused participants [1-9][0-9]* time\\(s\\): trainee/mallory: certificate revoked' '$txt'"
+# Every participant mallory's laptop reaches refuses her too; Cyclone logs that about twice a
+# second in each, for as long as she retries: each program says it once in palp's words instead.
+raw=$(cat "$out"/demo/*.log | grep -c "handshake failed")
+check "no program's log carries Cyclone's raw refusal lines ($raw), palp-web says it in its own words" \
+  "[ $raw -eq 0 ] && grep -q 'WARN  palp-web: DDS Security refused trainee/mallory at the handshake: certificate revoked' '$out/demo/web.log'"
 check "palp-web ran as instructor/bridge" "grep -q 'DDS Security on (identity instructor/bridge)' '$out/demo/web.log'"
 for t in alice bob carol dana; do
   check "trainee $t ran a session" "grep -Eq '^\[trainee $t\] session [0-9]+: ' '$txt'"

@@ -147,7 +147,7 @@ grep -q "station instructor/ines/fastdds/[0-9]*/obs joined session [0-9]* as obs
   && ok "the server logged the observer's join and leave; alice's station exited 0" \
   || { bad "server log / alice (exit $arc): observer join and leave not both logged"; grep "instructor/ines" "$work/server-revoked.log"; }
 stop_server "revoked station"
-# The server names the refused station in its own log (server/refusals.c): once at
+# The server names the refused station in its own log (idl/palp_dds_refusals.c): once at
 # the first refusal, then the repeats summed (the station retried ~1/s for 15 s).
 first=$(grep -c "WARN  palp-server: DDS Security refused trainee/fd at the handshake: certificate revoked; it gets no answer" "$work/server-revoked.log")
 total=$(sed -n 's/^DDS Security refused participants \([0-9]*\) time(s): trainee\/fd: certificate revoked ([0-9]*x)$/\1/p' "$work/server-revoked.log")

@@ -437,7 +437,7 @@ int main(int argc, char **argv) {
   CHECK(refused == 4, "the server refused exactly bob's 4 requests that were not his own: %llu",
         (unsigned long long)refused);
   /* A refused participant gets no answer and makes no event: the server names it
-   * from Cyclone's warning (server/refusals.c). dave retried for ~3 s, so at least
+   * from Cyclone's warning (idl/palp_dds_refusals.c). dave retried for ~3 s, so at least
    * one refusal each; the forged participant's identity is the classroom's, its
    * permissions are signed by its own CA. The anonymous one leaves no trace (no
    * handshake is attempted with it). */

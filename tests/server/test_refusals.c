@@ -1,7 +1,7 @@
 /*
  * test_refusals.c - the peers DDS Security refused: Cyclone's warning lines read
  * (palp_dds_refusal_parse, idl/palp_dds.c) and counted into the server's log
- * (server/refusals.c). The input lines are the ones Cyclone 0.10.2 printed on
+ * (idl/palp_dds_refusals.c). The input lines are the ones Cyclone 0.10.2 printed on
  * 2026-12-04 (tests security_classroom and interop_fastdds_secure), copied here
  * verbatim; the expected names and reasons are read off them by hand. Hostile
  * subjects (control characters, an injected '/', 4 kB) and random bytes check that
@@ -15,7 +15,7 @@
 
 #include "palp_dds.h"
 #include "palp_log.h"
-#include "refusals.h"
+#include "palp_dds_refusals.h"
 
 static int failures;
 #define CHECK(cond, ...)                           \
@@ -164,20 +164,20 @@ static void test_throttle(void) {
   close(fd);
   palp_log log;
   CHECK(palp_log_init(&log, "palp-server", PALP_LOG_INFO, path) == 0, "log file %s", path);
-  palp_srv_refusals t;
-  palp_srv_refusals_init(&t, &log, 60.0);
+  palp_dds_refusals t;
+  palp_dds_refusals_init(&t, palp_log_warn_line, &log, 60.0);
   palp_dds_refusal fd_r = {.kind = PALP_DDS_REFUSED_HANDSHAKE};
   snprintf(fd_r.who, sizeof fd_r.who, "trainee/fd");
   snprintf(fd_r.why, sizeof fd_r.why, "certificate revoked");
   const int64_t S = 1000000000LL;
   /* A revoked station retrying once a second for 100 s. */
-  for (int i = 0; i < 100; i++) palp_srv_refusals_note(&t, &fd_r, (int64_t)i * S);
+  for (int i = 0; i < 100; i++) palp_dds_refusals_note(&t, &fd_r, (int64_t)i * S);
   uint64_t total = 0, lines = 0;
-  palp_srv_refusals_counts(&t, &total, &lines);
+  palp_dds_refusals_counts(&t, &total, &lines);
   CHECK(total == 100 && lines == 2, "100 refusals of one station in 100 s: %llu counted, %llu lines (the first, then "
         "one after 60 s)", (unsigned long long)total, (unsigned long long)lines);
-  palp_srv_refusals_flush(&t);
-  palp_srv_refusals_counts(&t, NULL, &lines);
+  palp_dds_refusals_flush(&t);
+  palp_dds_refusals_counts(&t, NULL, &lines);
   palp_log_close(&log);
   unsigned long long sum = logged_refusals(path, "trainee/fd");
   CHECK(lines == 3 && count_lines(path, "trainee/fd") == 3 && sum == 100,
@@ -189,16 +189,16 @@ static void test_throttle(void) {
 
   /* 40 peers, each refused 3 times, 1 s apart: the table keeps 16, nothing is lost. */
   palp_log_init(&log, "palp-server", PALP_LOG_INFO, path);
-  palp_srv_refusals_init(&t, &log, 60.0);
+  palp_dds_refusals_init(&t, palp_log_warn_line, &log, 60.0);
   for (int round = 0; round < 3; round++)
     for (int p = 0; p < 40; p++) {
       palp_dds_refusal r = {.kind = PALP_DDS_REFUSED_HANDSHAKE};
       snprintf(r.who, sizeof r.who, "trainee/t%02d", p);
       snprintf(r.why, sizeof r.why, "certificate revoked");
-      palp_srv_refusals_note(&t, &r, (int64_t)(round * 40 + p) * S);
+      palp_dds_refusals_note(&t, &r, (int64_t)(round * 40 + p) * S);
     }
-  palp_srv_refusals_flush(&t);
-  palp_srv_refusals_counts(&t, &total, &lines);
+  palp_dds_refusals_flush(&t);
+  palp_dds_refusals_counts(&t, &total, &lines);
   palp_log_close(&log);
   unsigned long long all = 0;
   for (int p = 0; p < 40; p++) {
@@ -207,15 +207,15 @@ static void test_throttle(void) {
     all += logged_refusals(path, who);
   }
   char desc[2000];
-  const int listed = palp_srv_refusals_describe(&t, desc, sizeof desc);
-  CHECK(total == 120 && all == 120 && listed == PALP_SRV_REFUSAL_SLOTS,
+  const int listed = palp_dds_refusals_describe(&t, desc, sizeof desc);
+  CHECK(total == 120 && all == 120 && listed == PALP_DDS_REFUSAL_SLOTS,
         "40 peers, 120 refusals: %llu counted, %llu in the log's lines, %d kept in a table of %d",
-        (unsigned long long)total, all, listed, PALP_SRV_REFUSAL_SLOTS);
+        (unsigned long long)total, all, listed, PALP_DDS_REFUSAL_SLOTS);
   char small[64];
-  const int cut = palp_srv_refusals_describe(&t, small, sizeof small);
+  const int cut = palp_dds_refusals_describe(&t, small, sizeof small);
   CHECK(cut == 1 && !strcmp(small, "trainee/t32: certificate revoked (1x)"),
         "a short buffer holds whole entries only: %d, \"%s\"", cut, small);
-  palp_srv_refusals_destroy(&t);
+  palp_dds_refusals_destroy(&t);
   unlink(path);
 }
 

@@ -1,0 +1,131 @@
+/* palp_dds_refusals.c - the peers DDS Security refused, counted and said once (palp_dds_refusals.h). */
+#include "palp_dds_refusals.h"
+
+#include <stdarg.h>
+#include <string.h>
+
+static const char *kind_words(palp_dds_refusal_kind k) {
+  return k == PALP_DDS_REFUSED_PERMISSIONS ? "for its permissions" : "at the handshake";
+}
+
+/* t->mu held. */
+static void say(palp_dds_refusals *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void say(palp_dds_refusals *t, const char *fmt, ...) {
+  char line[512];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(line, sizeof line, fmt, ap);
+  va_end(ap);
+  if (t->emit) t->emit(t->emit_ctx, line);
+  else fprintf(stderr, "%s\n", line);
+  t->lines++;
+}
+
+void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, void *ctx, double window_s) {
+  memset(t, 0, sizeof *t);
+  pthread_mutex_init(&t->mu, NULL);
+  t->emit = emit;
+  t->emit_ctx = ctx;
+  t->window_ns = (int64_t)((window_s > 0 ? window_s : 60.0) * 1e9);
+}
+
+void palp_dds_refusals_destroy(palp_dds_refusals *t) { pthread_mutex_destroy(&t->mu); }
+
+/* The repeats of one slot since its last line; t->mu held. */
+static void report_repeats(palp_dds_refusals *t, palp_dds_refusal_slot *s, int64_t now_ns) {
+  if (!s->unreported) return;
+  say(t, "DDS Security refused %s %s %llu more time(s) over %.0f s: %s (%llu in all)", s->r.who,
+      kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9, s->r.why,
+      (unsigned long long)s->count);
+  s->unreported = 0;
+  s->reported_ns = now_ns;
+}
+
+void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns) {
+  pthread_mutex_lock(&t->mu);
+  t->total++;
+  palp_dds_refusal_slot *s = NULL, *oldest = NULL, *free_slot = NULL;
+  for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) {
+    palp_dds_refusal_slot *c = &t->slot[i];
+    if (!c->used) {
+      if (!free_slot) free_slot = c;
+      continue;
+    }
+    if (c->r.kind == r->kind && !strcmp(c->r.who, r->who) && !strcmp(c->r.why, r->why)) {
+      s = c;
+      break;
+    }
+    if (!oldest || c->seen_ns < oldest->seen_ns) oldest = c;
+  }
+  if (s) {
+    s->count++;
+    s->unreported++;
+    s->seen_ns = now_ns;
+    if (now_ns - s->reported_ns >= t->window_ns) report_repeats(t, s, now_ns);
+    pthread_mutex_unlock(&t->mu);
+    return;
+  }
+  if (!free_slot) { /* full: the peer seen longest ago makes room */
+    report_repeats(t, oldest, now_ns);
+    free_slot = oldest;
+  }
+  s = free_slot;
+  memset(s, 0, sizeof *s);
+  s->r = *r;
+  s->used = 1;
+  s->count = 1;
+  s->seen_ns = s->reported_ns = now_ns;
+  /* A station retries once a second for as long as it runs: say it once, plainly. */
+  say(t, "DDS Security refused %s %s: %s; it gets no answer (repeats counted, logged at most every %.0f s)", r->who,
+      kind_words(r->kind), r->why, (double)t->window_ns * 1e-9);
+  pthread_mutex_unlock(&t->mu);
+}
+
+void palp_dds_refusals_flush(palp_dds_refusals *t) {
+  pthread_mutex_lock(&t->mu);
+  for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++)
+    if (t->slot[i].used) report_repeats(t, &t->slot[i], t->slot[i].seen_ns);
+  pthread_mutex_unlock(&t->mu);
+}
+
+void palp_dds_refusals_counts(palp_dds_refusals *t, uint64_t *total, uint64_t *lines) {
+  pthread_mutex_lock(&t->mu);
+  if (total) *total = t->total;
+  if (lines) *lines = t->lines;
+  pthread_mutex_unlock(&t->mu);
+}
+
+int palp_dds_refusals_describe(palp_dds_refusals *t, char *buf, size_t len) {
+  if (!buf || !len) return 0;
+  buf[0] = '\0';
+  pthread_mutex_lock(&t->mu);
+  int order[PALP_DDS_REFUSAL_SLOTS], n = 0;
+  for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) /* insertion sort, most refused first */
+    if (t->slot[i].used) {
+      int j = n++;
+      while (j > 0 && t->slot[order[j - 1]].count < t->slot[i].count) order[j] = order[j - 1], j--;
+      order[j] = i;
+    }
+  size_t at = 0;
+  for (int k = 0; k < n; k++) {
+    const palp_dds_refusal_slot *s = &t->slot[order[k]];
+    const int w = snprintf(buf + at, len - at, "%s%s: %s (%llux)", k ? "; " : "", s->r.who, s->r.why,
+                           (unsigned long long)s->count);
+    if (w < 0 || (size_t)w >= len - at) { /* cut at the last whole entry */
+      buf[at] = '\0';
+      n = k;
+      break;
+    }
+    at += (size_t)w;
+  }
+  pthread_mutex_unlock(&t->mu);
+  return n;
+}
+
+static void hook(void *arg, const palp_dds_refusal *r) { palp_dds_refusals_note(arg, r, palp_dds_now_ns()); }
+
+int palp_dds_refusals_install(palp_dds_log_limit *sink, palp_dds_refusals *t, int lines, double window_s) {
+  const int rc = palp_dds_log_limit_install(sink, stderr, lines, window_s);
+  if (rc == 0) palp_dds_log_limit_on_refusal(sink, hook, t);
+  return rc;
+}

@@ -1,0 +1,69 @@
+/*
+ * palp_dds_refusals.h - the peers DDS Security refused, counted and said once.
+ *
+ * A station refused at the handshake (revoked, expired, signed by another CA) or
+ * for its permissions gets no answer, and nobody gets an event for it: the only
+ * trace is a Cyclone warning, repeated about once a second by every participant
+ * it tries, for as long as it runs (palp_dds_refusal_parse). Raw, a revoked laptop
+ * left on filled every station's terminal and palp-web's log at ~2 lines a second.
+ * Here each refusal is counted per peer and reason; the first is said at once,
+ * naming the peer as palp names it (trainee/dave), and the repeats are summed into
+ * one line per peer and reason per `window` (one a minute by default). The table
+ * is bounded: past PALP_DDS_REFUSAL_SLOTS peers, the one seen longest ago gives up
+ * its slot (its unsaid repeats are said first). Lines go to the owner's `emit`
+ * (the program's log, as a warning). Thread-safe: Cyclone's threads call in.
+ *
+ * Every palp DDS program installs it (palp_dds_refusals_install): the server, the
+ * stations, the recorder and palp-web.
+ */
+#ifndef PALP_DDS_REFUSALS_H
+#define PALP_DDS_REFUSALS_H
+
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "palp_dds.h"
+
+#define PALP_DDS_REFUSAL_SLOTS 16
+#define PALP_DDS_REFUSAL_WINDOW_S 60.0 /* [s] between two lines about one peer and reason */
+
+typedef struct palp_dds_refusal_slot {
+  palp_dds_refusal r;
+  uint64_t count;      /* since first seen */
+  uint64_t unreported; /* since the last line about it */
+  int64_t reported_ns, seen_ns;
+  int used;
+} palp_dds_refusal_slot;
+
+/* One line, without a newline, for the owner's log (a warning). */
+typedef void (*palp_dds_refusals_emit)(void *ctx, const char *line);
+
+typedef struct palp_dds_refusals {
+  pthread_mutex_t mu;
+  palp_dds_refusals_emit emit; /* NULL: stderr */
+  void *emit_ctx;
+  int64_t window_ns;
+  uint64_t total, lines;
+  palp_dds_refusal_slot slot[PALP_DDS_REFUSAL_SLOTS];
+} palp_dds_refusals;
+
+void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, void *ctx, double window_s);
+void palp_dds_refusals_destroy(palp_dds_refusals *t);
+/* One refusal seen at now_ns (monotonic): logs the first of its peer and reason,
+ * or the repeats once `window` has passed since the last line about them. */
+void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns);
+/* Logs every repeat not yet reported (at shutdown). */
+void palp_dds_refusals_flush(palp_dds_refusals *t);
+/* Totals: refusals seen, log lines written. */
+void palp_dds_refusals_counts(palp_dds_refusals *t, uint64_t *total, uint64_t *lines);
+/* "trainee/dave: certificate revoked (31x); ..." for the peers still in the table,
+ * most refused first; returns the number listed. */
+int palp_dds_refusals_describe(palp_dds_refusals *t, char *buf, size_t len);
+
+/* The process's DDS log sink (palp_dds_log_limit_install: other Cyclone warnings,
+ * `lines` per `window_s` to stderr) with t noting its refusals; t must be
+ * initialised and outlive the sink (palp_dds_log_limit_remove first). 0 or PALP_E*. */
+int palp_dds_refusals_install(palp_dds_log_limit *sink, palp_dds_refusals *t, int lines, double window_s);
+
+#endif
