@@ -90,6 +90,18 @@ static void state_qos(DataReaderQos &q) {
   q.history().depth = 1;
 }
 
+// A trainee's contact writer (docs/server.md): best-effort, keep-last 1, liveliness 0.5 s.
+static DataWriterQos contact_writer_qos() {
+  DataWriterQos q = DATAWRITER_QOS_DEFAULT;
+  q.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  q.durability().kind = VOLATILE_DURABILITY_QOS;
+  q.history().depth = 1;
+  q.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
+  q.liveliness().lease_duration = eprosima::fastrtps::Duration_t(0.5);
+  q.liveliness().announcement_period = eprosima::fastrtps::Duration_t(0.2);
+  return q;
+}
+
 // An instructor's station (observe): finds the trainee's open session, joins it as observer,
 // reads its contacts and deformation for 1.5 s, tries a contact writer there (its permissions
 // must refuse it), and leaves with OP_LEAVE.
@@ -153,14 +165,7 @@ static int follow_session(DomainParticipant *pp, DataReader *r_st, DataReader *r
   PublisherQos pubq = PUBLISHER_QOS_DEFAULT;
   pubq.partition().push_back(rp.partition().c_str());
   Publisher *spub = pp->create_publisher(pubq);
-  DataWriterQos wq_ct = DATAWRITER_QOS_DEFAULT; // a trainee's contact writer, QoS and all (below, in main)
-  wq_ct.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-  wq_ct.durability().kind = VOLATILE_DURABILITY_QOS;
-  wq_ct.history().depth = 1;
-  wq_ct.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
-  wq_ct.liveliness().lease_duration = eprosima::fastrtps::Duration_t(0.5);
-  wq_ct.liveliness().announcement_period = eprosima::fastrtps::Duration_t(0.2);
-  DataWriter *w_ct = spub ? spub->create_datawriter(tp_ct, wq_ct) : nullptr;
+  DataWriter *w_ct = spub ? spub->create_datawriter(tp_ct, contact_writer_qos()) : nullptr; // a trainee's, QoS and all
   std::printf("result contact_writer_refused %d\n", w_ct == nullptr ? 1 : 0);
 
   // Secured endpoints match once their crypto tokens are exchanged: up to 5 s, then read 1.5 s.
@@ -404,14 +409,7 @@ int main(int argc, char **argv) {
   subq.partition().push_back(rp.partition().c_str());
   Publisher *spub = pp->create_publisher(pubq);
   Subscriber *ssub = pp->create_subscriber(subq);
-  DataWriterQos wq_ct = DATAWRITER_QOS_DEFAULT;
-  wq_ct.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-  wq_ct.durability().kind = VOLATILE_DURABILITY_QOS;
-  wq_ct.history().depth = 1;
-  wq_ct.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
-  wq_ct.liveliness().lease_duration = eprosima::fastrtps::Duration_t(0.5);
-  wq_ct.liveliness().announcement_period = eprosima::fastrtps::Duration_t(0.2);
-  DataWriter *w_ct = spub->create_datawriter(tp_ct, wq_ct);
+  DataWriter *w_ct = spub->create_datawriter(tp_ct, contact_writer_qos());
   DataReaderQos rq_fb = DATAREADER_QOS_DEFAULT;
   rq_fb.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
   rq_fb.history().depth = 1;
