@@ -95,30 +95,38 @@ void palp_dds_refusals_counts(palp_dds_refusals *t, uint64_t *total, uint64_t *l
   pthread_mutex_unlock(&t->mu);
 }
 
+int palp_dds_refusals_list(palp_dds_refusals *t, palp_dds_refusal_entry *out, int max) {
+  int n = 0;
+  pthread_mutex_lock(&t->mu);
+  for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) { /* insertion, most refused first */
+    const palp_dds_refusal_slot *s = &t->slot[i];
+    if (!s->used) continue;
+    int j = n < max ? n++ : max;
+    while (j > 0 && out[j - 1].count < s->count) {
+      if (j < max) out[j] = out[j - 1];
+      j--;
+    }
+    if (j < max) out[j] = (palp_dds_refusal_entry){.r = s->r, .count = s->count};
+  }
+  pthread_mutex_unlock(&t->mu);
+  return n;
+}
+
 int palp_dds_refusals_describe(palp_dds_refusals *t, char *buf, size_t len) {
   if (!buf || !len) return 0;
   buf[0] = '\0';
-  pthread_mutex_lock(&t->mu);
-  int order[PALP_DDS_REFUSAL_SLOTS], n = 0;
-  for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) /* insertion sort, most refused first */
-    if (t->slot[i].used) {
-      int j = n++;
-      while (j > 0 && t->slot[order[j - 1]].count < t->slot[i].count) order[j] = order[j - 1], j--;
-      order[j] = i;
-    }
+  palp_dds_refusal_entry e[PALP_DDS_REFUSAL_SLOTS];
+  const int n = palp_dds_refusals_list(t, e, PALP_DDS_REFUSAL_SLOTS);
   size_t at = 0;
   for (int k = 0; k < n; k++) {
-    const palp_dds_refusal_slot *s = &t->slot[order[k]];
-    const int w = snprintf(buf + at, len - at, "%s%s: %s (%llux)", k ? "; " : "", s->r.who, s->r.why,
-                           (unsigned long long)s->count);
+    const int w = snprintf(buf + at, len - at, "%s%s: %s (%llux)", k ? "; " : "", e[k].r.who, e[k].r.why,
+                           (unsigned long long)e[k].count);
     if (w < 0 || (size_t)w >= len - at) { /* cut at the last whole entry */
       buf[at] = '\0';
-      n = k;
-      break;
+      return k;
     }
     at += (size_t)w;
   }
-  pthread_mutex_unlock(&t->mu);
   return n;
 }
 

@@ -57,6 +57,13 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int
 void palp_dds_refusals_flush(palp_dds_refusals *t);
 /* Totals: refusals seen, log lines written. */
 void palp_dds_refusals_counts(palp_dds_refusals *t, uint64_t *total, uint64_t *lines);
+/* A peer in the table and how often it was refused. */
+typedef struct palp_dds_refusal_entry {
+  palp_dds_refusal r;
+  uint64_t count;
+} palp_dds_refusal_entry;
+/* The peers still in the table, most refused first (at most max); returns how many. */
+int palp_dds_refusals_list(palp_dds_refusals *t, palp_dds_refusal_entry *out, int max);
 /* "trainee/dave: certificate revoked (31x); ..." for the peers still in the table,
  * most refused first; returns the number listed. */
 int palp_dds_refusals_describe(palp_dds_refusals *t, char *buf, size_t len);

@@ -395,6 +395,20 @@ static void build_status(palp_web_hub *h) {
     }
     cJSON_AddItemToArray(arr, o);
   }
+  /* Who DDS Security refused (a revoked or expired certificate, another CA's): this bridge
+   * refuses them as the server does. The names come from certificates: made printable by
+   * palp_dds_refusal_parse, escaped by cJSON, and the page sets them as text. */
+  cJSON *ref = cJSON_AddArrayToObject(j, "refused");
+  palp_dds_refusal_entry e[PALP_DDS_REFUSAL_SLOTS];
+  const int ne = h->def.refusals ? palp_dds_refusals_list(h->def.refusals, e, PALP_DDS_REFUSAL_SLOTS) : 0;
+  for (int k = 0; k < ne; k++) {
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "who", e[k].r.who);
+    cJSON_AddStringToObject(o, "why", e[k].r.why);
+    cJSON_AddStringToObject(o, "at", e[k].r.kind == PALP_DDS_REFUSED_PERMISSIONS ? "permissions" : "handshake");
+    cJSON_AddNumberToObject(o, "count", (double)e[k].count);
+    cJSON_AddItemToArray(ref, o);
+  }
   publish_json(h, &h->status_msg, j);
 }
 

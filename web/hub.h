@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "coverage.h"
+#include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "palp_log.h"
 
@@ -43,6 +44,9 @@ typedef struct palp_web_hub_def {
    * secured, the bridge needs an instructor identity, the one kind whose permissions read every
    * session (palp/s/TRAINEE/ID); it then joins sessions as that instructor's visual station. */
   palp_dds_security sec;
+  /* The peers DDS Security refused (main's table, idl/palp_dds_refusals.h; NULL: none): listed
+   * in the dashboard's status, so the instructor sees who cannot join and why. */
+  palp_dds_refusals *refusals;
 } palp_web_hub_def;
 
 palp_web_hub_def palp_web_hub_default_def(void);

@@ -373,6 +373,7 @@ int main(int argc, char **argv) {
   static palp_dds_refusals refusals;
   palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
   palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
+  hd.refusals = &refusals; /* the dashboard lists them */
   char err[256];
   palp_web_hub *hub = palp_web_hub_create(&hd, err, sizeof err);
   if (!hub) {

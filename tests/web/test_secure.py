@@ -10,8 +10,11 @@ bridges on the same domain:
 - no identity: it sees no session and no frame (authenticated discovery and encrypted data keep a
   plain participant out), and after 10 s it says that the classroom may be secured;
 - `--identity trainee/bob`: refused before it touches the network (exit 2), since a trainee's
-  permissions read only the trainee's own sessions.
-No browser: a raw WebSocket client (cdp.WebSocket). DDS domain 125.
+  permissions read only the trainee's own sessions;
+- and dave's laptop, revoked but holding his files from before, tries to join: the instructor's
+  bridge lists him in the dashboard's status ("refused": trainee/dave, certificate revoked), the
+  dashboard page shows it, and the bridge says it once in its log.
+A raw WebSocket client (cdp.WebSocket), and headless Chromium for the dashboard's refusal line. DDS domain 125.
 usage: test_secure.py BUILD SOURCE OUT (the PKI directory in PALP_TEST_PKI: fixture security_pki)"""
 import json
 import os
@@ -73,6 +76,44 @@ def run(build, source, out):
                            r"this domain, none of which answered: if the classroom runs with DDS Security", 20)
         check(int(m.group(1)) >= 1, "the plain bridge says the classroom may be secured (%s other participants)"
               % m.group(1))
+
+        # dave's laptop, revoked in the classroom's CRL but holding his files from before: the
+        # bridge refuses him as the server does, and its dashboard status names him and why.
+        procs.start("trainee-dave", [os.path.join(build, "client", "palp-client"), "--role", "trainee", "--domain",
+                                     "125", "--phantom", "1", "--pki", pki + "-dave", "--identity", "trainee/dave",
+                                     "--quiet", "--timeout", "8", "--duration", "1"])
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % secure.port, timeout=10)
+        ws.send(json.dumps({"follow": "all"}))
+
+        def dave_refused(m):
+            return m["type"] == "status" and any(r["who"] == "trainee/dave" for r in m.get("refused", []))
+
+        st = harness.ws_until(ws, 20, dave_refused)
+        ws.close()
+        dave = [r for r in st["refused"] if r["who"] == "trainee/dave"][0] if st else {}
+        check(dave.get("why") == "certificate revoked" and dave.get("at") == "handshake" and dave.get("count", 0) >= 1,
+              "the dashboard's status names the revoked trainee/dave and why: %s" % dave)
+        check(len(st["refused"]) == 1 if st else False,
+              "and nobody else (%s)" % ([r["who"] for r in st["refused"]] if st else None))
+        # The instructor's dashboard in headless Chromium shows it beside the server's status.
+        browser = harness.cdp.Chromium(width=1200, height=800, out_dir=out)
+        try:
+            page = browser.new_page(secure.base + "/dashboard.html")
+            ok = page.wait_for("(document.getElementById('refused') || {}).textContent && "
+                               "document.getElementById('refused').textContent.startsWith('trainee/dave: certificate "
+                               "revoked (')", 20)
+            shown = page.eval("(document.getElementById('refused') || {}).textContent || null")
+            label = page.eval("(function (e) { return e && e.previousSibling ? e.previousSibling.textContent : null; })"
+                              "(document.getElementById('refused'))")
+            check(ok is True and label == "refused by DDS Security",
+                  "the dashboard shows it: \"%s: %s\"" % (label, shown))
+            page.screenshot(os.path.join(out, "dashboard-refused.png"))
+        finally:
+            browser.close()
+        wlog = procs.log(secure)
+        check(wlog.count("DDS Security refused trainee/dave at the handshake: certificate revoked") == 1
+              and "handshake failed" not in wlog,
+              "the bridge's log says it once, in palp's words, and holds none of Cyclone's raw lines")
 
         # A trainee identity is refused up front.
         bad = procs.start("web-bob", [os.path.join(build, "web", "palp-web"), "--domain", "125", "--port", "0",

@@ -143,6 +143,16 @@
         box.append(k, v);
       }
     }
+    /* Stations DDS Security refused: they cannot join, and nobody else tells them why. */
+    if (m.refused && m.refused.length) {
+      const k = document.createElement("span"), v = document.createElement("span");
+      k.className = "k";
+      k.textContent = "refused by DDS Security";
+      v.className = "v bad";
+      v.id = "refused";
+      v.textContent = m.refused.map(function (r) { return r.who + ": " + r.why + " (" + r.count + "x)"; }).join("; ");
+      box.append(k, v);
+    }
   }
 
   PALP.connect({
