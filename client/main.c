@@ -1232,5 +1232,7 @@ int main(int argc, char **argv) {
   nanosleep(&ts, NULL);
   palp_cli_phantom_free(&ph);
   palp_cli_station_close(&st);
+  palp_dds_log_limit_remove(&dds_sink); /* the participant is gone: then the repeats not yet said */
+  palp_dds_refusals_flush(&refusals);
   return rc;
 }

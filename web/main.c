@@ -422,6 +422,8 @@ int main(int argc, char **argv) {
   print_stats(&log, hub, srv);
   palp_web_serve_destroy(srv);
   palp_web_hub_destroy(hub);
+  palp_dds_log_limit_remove(&dds_sink); /* before the log closes; then the repeats not yet said */
+  palp_dds_refusals_flush(&refusals);
   palp_log_close(&log);
   return 0;
 }

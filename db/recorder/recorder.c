@@ -635,6 +635,8 @@ int main(int argc, char **argv) {
     free(r->ph[i].scene_json);
   }
   free(r);
+  palp_dds_log_limit_remove(&dds_sink); /* before the log closes; then the repeats not yet said */
+  palp_dds_refusals_flush(&refusals);
   palp_log_close(&plog);
   return st.shed + st.failed ? 1 : 0;
 }
