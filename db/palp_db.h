@@ -95,7 +95,11 @@ typedef enum palp_db_event_kind {
   /* the model left its valid range (docs/model.md, "Valid range"): count = the physics steps
    * flagged since the last such event; detail (server/db_log.c, read back by palp_db_valid_range_parse):
    * "outside at N steps: depth N, skin N, limit N; deepest X mm beyond the validated depth so far" */
-  PALP_DB_EVENT_VALID_RANGE = 9
+  PALP_DB_EVENT_VALID_RANGE = 9,
+  /* server-wide (no session): a peer DDS Security refused (idl/palp_dds_refusals.h); detail
+   * "WHO: WHY (handshake|permissions)", count = the refusals this row stands for (the first,
+   * then the repeats summed once a minute, as the server's log says them) */
+  PALP_DB_EVENT_SECURITY_REFUSED = 10
 } palp_db_event_kind;
 
 /* A trainee's own leave and join in its session: its station lost and the session held
@@ -104,7 +108,7 @@ typedef enum palp_db_event_kind {
 #define PALP_DB_DETAIL_TRAINEE_HELD " (trainee, lost; session held)"
 #define PALP_DB_DETAIL_TRAINEE_BACK " (trainee, back from a stall)"
 
-#define PALP_DB_EVENT_KIND_COUNT 10
+#define PALP_DB_EVENT_KIND_COUNT 11
 const char *palp_db_event_kind_name(palp_db_event_kind k); /* "join", ... */
 
 typedef struct palp_db_session_def {
@@ -354,6 +358,16 @@ void palp_db_log_health_describe(const palp_db_log_health *h, char *buf, size_t 
 
 /* Lists matching sessions, oldest first; *out is malloc'd (free()). */
 int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count);
+
+/* The peers DDS Security refused between f->since_unix_s and f->until_unix_s (0: open),
+ * from the server-wide security_refused events: one row per detail, refusals summed, most
+ * first. Freed by the caller (free). */
+typedef struct palp_db_refused {
+  char detail[256];            /* "trainee/mallory: certificate revoked (handshake)" */
+  int64_t count;
+  double first_unix_s, last_unix_s;
+} palp_db_refused;
+int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused **out, int *count);
 /* Finds a session by its uid or a unique prefix of it. */
 int palp_db_find_session(palp_db *db, const char *uid_or_prefix, palp_db_session_info *out);
 /* Session's scene and params JSON; malloc'd strings (free()). */

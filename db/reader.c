@@ -168,6 +168,48 @@ int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_
   return 0;
 }
 
+int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused **out, int *count) {
+  *out = NULL;
+  *count = 0;
+  sqlite3_stmt *st;
+  const char *sql = "SELECT detail, SUM(count), MIN(wall_unix_s), MAX(wall_unix_s) FROM event "
+                    "WHERE session_id IS NULL AND kind = ?1 AND "
+                    "(?2 IS NULL OR wall_unix_s >= ?2) AND (?3 IS NULL OR wall_unix_s < ?3) "
+                    "GROUP BY detail ORDER BY SUM(count) DESC, detail";
+  if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
+  sqlite3_bind_text(st, 1, palp_db_event_kind_name(PALP_DB_EVENT_SECURITY_REFUSED), -1, SQLITE_STATIC);
+  if (f && f->since_unix_s > 0) sqlite3_bind_double(st, 2, f->since_unix_s);
+  if (f && f->until_unix_s > 0) sqlite3_bind_double(st, 3, f->until_unix_s);
+  int cap = 0, n = 0, rc;
+  palp_db_refused *v = NULL;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
+    if (n == cap) {
+      cap = cap ? 2 * cap : 8;
+      palp_db_refused *nv = realloc(v, (size_t)cap * sizeof *nv);
+      if (!nv) {
+        free(v);
+        sqlite3_finalize(st);
+        return PALP_ENOMEM;
+      }
+      v = nv;
+    }
+    const unsigned char *d = sqlite3_column_text(st, 0);
+    snprintf(v[n].detail, sizeof v[n].detail, "%s", d ? (const char *)d : "");
+    v[n].count = sqlite3_column_int64(st, 1);
+    v[n].first_unix_s = sqlite3_column_double(st, 2);
+    v[n].last_unix_s = sqlite3_column_double(st, 3);
+    n++;
+  }
+  sqlite3_finalize(st);
+  if (rc != SQLITE_DONE) {
+    free(v);
+    return PALP_DB_ESQL;
+  }
+  *out = v;
+  *count = n;
+  return 0;
+}
+
 int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out) {
   if (!uid || !*uid) return PALP_EINVAL;
   sqlite3_stmt *st;

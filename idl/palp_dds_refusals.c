@@ -31,12 +31,18 @@ void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, v
 
 void palp_dds_refusals_destroy(palp_dds_refusals *t) { pthread_mutex_destroy(&t->mu); }
 
+void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record fn, void *ctx) {
+  t->record = fn;
+  t->record_ctx = ctx;
+}
+
 /* The repeats of one slot since its last line; t->mu held. */
 static void report_repeats(palp_dds_refusals *t, palp_dds_refusal_slot *s, int64_t now_ns) {
   if (!s->unreported) return;
   say(t, "DDS Security refused %s %s %llu more time(s) over %.0f s: %s (%llu in all)", s->r.who,
       kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9, s->r.why,
       (unsigned long long)s->count);
+  if (t->record) t->record(t->record_ctx, &s->r, s->unreported);
   s->unreported = 0;
   s->reported_ns = now_ns;
 }
@@ -78,6 +84,7 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int
   /* A station retries once a second for as long as it runs: say it once, plainly. */
   say(t, "DDS Security refused %s %s: %s; it gets no answer (repeats counted, logged at most every %.0f s)", r->who,
       kind_words(r->kind), r->why, (double)t->window_ns * 1e-9);
+  if (t->record) t->record(t->record_ctx, r, 1);
   pthread_mutex_unlock(&t->mu);
 }
 

@@ -39,10 +39,16 @@ typedef struct palp_dds_refusal_slot {
 /* One line, without a newline, for the owner's log (a warning). */
 typedef void (*palp_dds_refusals_emit)(void *ctx, const char *line);
 
+/* With each line: the peer and how many refusals the line stands for (the first: 1; a
+ * repeats line: its repeats), e.g. to keep them in the session log. */
+typedef void (*palp_dds_refusals_record)(void *ctx, const palp_dds_refusal *r, uint64_t count);
+
 typedef struct palp_dds_refusals {
   pthread_mutex_t mu;
   palp_dds_refusals_emit emit; /* NULL: stderr */
   void *emit_ctx;
+  palp_dds_refusals_record record; /* NULL: none */
+  void *record_ctx;
   int64_t window_ns;
   uint64_t total, lines;
   palp_dds_refusal_slot slot[PALP_DDS_REFUSAL_SLOTS];
@@ -50,6 +56,8 @@ typedef struct palp_dds_refusals {
 
 void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, void *ctx, double window_s);
 void palp_dds_refusals_destroy(palp_dds_refusals *t);
+/* Before the sink is installed (not thread-safe against it). */
+void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record fn, void *ctx);
 /* One refusal seen at now_ns (monotonic): logs the first of its peer and reason,
  * or the repeats once `window` has passed since the last line about them. */
 void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns);

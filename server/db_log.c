@@ -290,6 +290,12 @@ static void on_frame(void *ctx, uint32_t session_id, const palp_world *w, const 
   }
 }
 
+/* Server-wide: the instructor's review lists who could not join, and why (palp-review list). */
+static void on_security_refused(void *ctx, const char *detail, uint64_t count) {
+  palp_srv_db_log *l = ctx;
+  palp_db_log_event(l->w, 0, PALP_DB_EVENT_SECURITY_REFUSED, -1, detail, (int64_t)count);
+}
+
 static void on_log_counts(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed) {
   palp_srv_db_log *l = ctx;
   palp_db_writer_stats st;
@@ -322,6 +328,7 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
                             .overrun = on_overrun,
                             .valid_range = on_valid_range,
                             .finding = on_finding,
+                            .security_refused = on_security_refused,
                             .log_counts = on_log_counts};
   *out = l;
   return 0;

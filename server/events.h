@@ -109,6 +109,10 @@ typedef struct palp_srv_events {
    * palp_LM_BEYOND_VALIDATED, as the stations get them) and the largest excess of a fingertip
    * over its validated depth so far [m]. */
   void (*valid_range)(void *ctx, uint32_t session_id, uint32_t flags, double deepest_m);
+  /* [a Cyclone thread] DDS Security refused a peer (no session): detail "WHO: WHY (handshake|
+   * permissions)", count the refusals it stands for; as the server's log says them
+   * (idl/palp_dds_refusals.h: the first at once, the repeats once a minute, the rest at stop). */
+  void (*security_refused)(void *ctx, const char *detail, uint64_t count);
 } palp_srv_events;
 
 #endif

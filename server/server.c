@@ -119,6 +119,16 @@ struct palp_srv {
 static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
 
 
+/* Cyclone's threads: a line about a refused peer was logged; the session log keeps it too. */
+static void record_refusal(void *ctx, const palp_dds_refusal *r, uint64_t count) {
+  const palp_srv *srv = ctx;
+  if (!srv->events || !srv->events->security_refused) return;
+  char detail[PALP_DDS_REFUSAL_WHO + PALP_DDS_REFUSAL_WHY + 32];
+  snprintf(detail, sizeof detail, "%s: %s (%s)", r->who, r->why,
+           r->kind == PALP_DDS_REFUSED_PERMISSIONS ? "permissions" : "handshake");
+  srv->events->security_refused(srv->events->ctx, detail, count);
+}
+
 static int fail(char *err, size_t errlen, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
@@ -1307,6 +1317,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     if (*rc < 0) goto fail;
   }
   palp_dds_refusals_init(&srv->refusals, palp_log_warn_line, srv->log, PALP_DDS_REFUSAL_WINDOW_S);
+  palp_dds_refusals_on_record(&srv->refusals, record_refusal, srv);
   srv->refusals_ready = 1;
   if (palp_dds_refusals_install(&srv->dds_log, &srv->refusals, srv->cfg.dds_log_lines, srv->cfg.dds_log_window) == 0)
     srv->dds_log_installed = 1;

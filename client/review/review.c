@@ -88,6 +88,20 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   }
   printf("%d session%s\n", n, n == 1 ? "" : "s");
   free(v);
+  /* Who could not join at all: no session, so nowhere above (palp-server logs them as
+   * server-wide events; docs/security.md). Listed for the same time range. */
+  palp_db_filter rf = {.since_unix_s = f.since_unix_s, .until_unix_s = f.until_unix_s};
+  palp_db_refused *rv;
+  int rn;
+  if (!f.trainee && !f.phantom && palp_db_list_refused(db, &rf, &rv, &rn) == 0) {
+    for (int i = 0; i < rn; i++) {
+      char a[64], b[64];
+      review_fmt_time(rv[i].first_unix_s, a, sizeof a);
+      review_fmt_time(rv[i].last_unix_s, b, sizeof b);
+      printf("refused by DDS Security: %s, %lld time(s) from %s to %s\n", rv[i].detail, (long long)rv[i].count, a, b);
+    }
+    free(rv);
+  }
   return REVIEW_OK;
 }
 

@@ -421,6 +421,42 @@ static void test_valid_range_detail(void) {
   CHECK(palp_db_valid_range_parse(NULL, 1, &b) == PALP_EINVAL, "refused: no detail");
 }
 
+/* --- peers DDS Security refused: server-wide events, summed per peer by the reader ---------- */
+static void test_refused(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "refused.db");
+  palp_db_writer *w;
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  REQUIRE(palp_db_writer_open(p, &o, &w, err, sizeof err) == 0, "open: %s", err);
+  /* As palp-server logs them: the first refusal, then the repeats summed (1 + 59 + 12), and
+   * another peer once; none belongs to a session. */
+  const char *mallory = "trainee/mallory: certificate revoked (handshake)";
+  const char *other = "participant 1:2:3:4: permissions not signed by the classroom (self-signed certificate) "
+                      "(permissions)";
+  CHECK(palp_db_log_event(w, 0, PALP_DB_EVENT_SECURITY_REFUSED, -1, mallory, 1) == 0 &&
+            palp_db_log_event(w, 0, PALP_DB_EVENT_SECURITY_REFUSED, -1, other, 1) == 0 &&
+            palp_db_log_event(w, 0, PALP_DB_EVENT_SECURITY_REFUSED, -1, mallory, 59) == 0 &&
+            palp_db_log_event(w, 0, PALP_DB_EVENT_SECURITY_REFUSED, -1, mallory, 12) == 0,
+        "four server-wide refusal events enqueued");
+  palp_db_writer_flush(w, 10);
+  palp_db_writer_close(w);
+  palp_db *db;
+  REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open: %s", err);
+  palp_db_refused *v;
+  int n;
+  REQUIRE(palp_db_list_refused(db, NULL, &v, &n) == 0, "list refused");
+  CHECK(n == 2 && !strcmp(v[0].detail, mallory) && v[0].count == 72 && !strcmp(v[1].detail, other) &&
+            v[1].count == 1 && v[0].first_unix_s <= v[0].last_unix_s,
+        "two peers, most refused first: %d rows, %s %lld", n, n ? v[0].detail : "-", n ? (long long)v[0].count : 0);
+  free(v);
+  palp_db_filter later = {.since_unix_s = 4102444800.0}; /* 2100-01-01: after every event */
+  CHECK(palp_db_list_refused(db, &later, &v, &n) == 0 && n == 0, "none after their time (%d)", n);
+  free(v);
+  CHECK(db_scalar(palp_db_handle(db), "SELECT count(*) FROM event WHERE session_id IS NOT NULL") == 0,
+        "none is tied to a session");
+  palp_db_close(db);
+}
+
 int main(int argc, char **argv) {
   if (argc < 3) {
     fprintf(stderr, "usage: %s TMPDIR MIGRATION_0001_SQL\n", argv[0]);
@@ -434,5 +470,6 @@ int main(int argc, char **argv) {
   test_newer();
   test_full_disk();
   test_valid_range_detail();
+  test_refused();
   CHECK_DONE();
 }
