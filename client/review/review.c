@@ -94,11 +94,10 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   palp_db_refused *rv;
   int rn;
   if (!f.trainee && !f.phantom && palp_db_list_refused(db, &rf, &rv, &rn) == 0) {
-    for (int i = 0; i < rn; i++) {
-      char a[64], b[64];
+    for (int i = 0; i < rn; i++) { /* the first row is written at the first refusal; later ones when said */
+      char a[64];
       review_fmt_time(rv[i].first_unix_s, a, sizeof a);
-      review_fmt_time(rv[i].last_unix_s, b, sizeof b);
-      printf("refused by DDS Security: %s, %lld time(s) from %s to %s\n", rv[i].detail, (long long)rv[i].count, a, b);
+      printf("refused by DDS Security: %s, %lld time(s), the first at %s\n", rv[i].detail, (long long)rv[i].count, a);
     }
     free(rv);
   }

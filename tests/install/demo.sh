@@ -32,7 +32,7 @@ check "no program's log carries Cyclone's raw refusal lines ($raw), palp-web say
   "[ $raw -eq 0 ] && grep -q 'WARN  palp-web: DDS Security refused trainee/mallory at the handshake: certificate revoked' '$out/demo/web.log'"
 # ... and the instructor's review lists her from the session log, every refusal the server counted.
 n_srv=$(sed -n 's/^DDS Security refused participants \([0-9]*\) time(s): trainee\/mallory: certificate revoked ([0-9]*x)$/\1/p' "$txt")
-n_db=$(sed -n 's/^refused by DDS Security: trainee\/mallory: certificate revoked (handshake), \([0-9]*\) time(s) from .*/\1/p' "$txt")
+n_db=$(sed -n 's/^refused by DDS Security: trainee\/mallory: certificate revoked (handshake), \([0-9]*\) time(s), the first at .*/\1/p' "$txt")
 check "the review lists mallory's refusals from the session log, as many as the server counted (${n_db:-none} of ${n_srv:-none})" \
   "[ -n '$n_db' ] && [ '$n_db' = '$n_srv' ] && [ $n_db -ge 1 ]"
 check "palp-web ran as instructor/bridge" "grep -q 'DDS Security on (identity instructor/bridge)' '$out/demo/web.log'"
