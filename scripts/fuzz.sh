@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every parser that reads the network or a file (issue 15), for a bounded time each.
 #
-#   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     # default 60 s, all 8 targets
+#   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     # default 60 s, all 9 targets
 #
 # Builds build-fuzz/ with clang-14, -DPALP_FUZZ=ON (libFuzzer + AddressSanitizer +
 # UndefinedBehaviorSanitizer), then runs each fuzz_<target> with tests/fuzz/corpus/<target>/ as
@@ -16,7 +16,7 @@ cd "$here"
 secs=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range)
+[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range refusal)
 
 need=()
 command -v clang-14 >/dev/null || need+=(clang-14)
