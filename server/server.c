@@ -98,7 +98,7 @@ struct palp_srv {
   guard_counts guard;
   palp_dds_log_limit dds_log;
   int dds_log_installed;
-  palp_dds_refusals refusals; /* peers DDS Security refused (refusals.h) */
+  palp_dds_refusals refusals; /* peers DDS Security refused (palp_dds_refusals.h) */
   int refusals_ready;
 
   closed_session *closed; /* ring of the last CLOSED_KEEP */
@@ -1568,13 +1568,9 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
     fprintf(out, "DDS Security on (identity %s/%s); requests refused for their identity: %llu\n",
             palp_dds_id_kind_name(srv->sec.kind), srv->sec.name,
             (unsigned long long)atomic_load(&((palp_srv *)srv)->refused_requests));
-    uint64_t total = 0;
     char who[600];
-    palp_dds_refusals_counts(&((palp_srv *)srv)->refusals, &total, NULL);
-    if (total) {
-      palp_dds_refusals_describe(&((palp_srv *)srv)->refusals, who, sizeof who);
-      fprintf(out, "DDS Security refused participants %llu time(s): %s\n", (unsigned long long)total, who);
-    }
+    const uint64_t total = palp_srv_security_refusals((palp_srv *)srv, who, sizeof who);
+    if (total) fprintf(out, "DDS Security refused participants %llu time(s): %s\n", (unsigned long long)total, who);
   }
   fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
           "contacts", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
