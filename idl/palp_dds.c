@@ -292,19 +292,15 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
 static void limited_sink(void *arg, const dds_log_data_t *d) {
   palp_dds_log_limit *l = arg;
   palp_dds_refusal r;
-  /* Read the hook under the lock; call it outside, so its own lock never nests in ours. */
+  const int refused = palp_dds_refusal_parse(d->message, d->size, &r); /* pure: outside the lock */
   pthread_mutex_lock(l->lock);
   void (*fn)(void *, const palp_dds_refusal *) = l->on_refusal;
   void *fn_arg = l->refusal_arg;
-  pthread_mutex_unlock(l->lock);
-  if (fn && palp_dds_refusal_parse(d->message, d->size, &r)) {
-    pthread_mutex_lock(l->lock);
-    l->refusals++;
+  if (refused && fn) { /* called outside our lock, so its own lock never nests in ours */
     pthread_mutex_unlock(l->lock);
     fn(fn_arg, &r);
     return;
   }
-  pthread_mutex_lock(l->lock);
   int64_t now = palp_dds_now_ns();
   if (now - l->window_start_ns >= l->window_ns) {
     if (l->suppressed_in_window)

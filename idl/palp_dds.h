@@ -126,7 +126,6 @@ typedef struct palp_dds_log_limit {
   /* Refusals by DDS Security (below) go here instead of `out` once set. */
   void (*on_refusal)(void *arg, const struct palp_dds_refusal *r);
   void *refusal_arg;
-  uint64_t refusals; /* lines handed to on_refusal */
 } palp_dds_log_limit;
 int palp_dds_log_limit_install(palp_dds_log_limit *l, FILE *out, int lines, double window_s);
 /* After install: hands each refusal line (palp_dds_refusal_parse) to fn instead of
