@@ -88,6 +88,15 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int
   pthread_mutex_unlock(&t->mu);
 }
 
+void palp_dds_refusals_tick(palp_dds_refusals *t, int64_t now_ns) {
+  pthread_mutex_lock(&t->mu);
+  for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) {
+    palp_dds_refusal_slot *s = &t->slot[i];
+    if (s->used && s->unreported && now_ns - s->reported_ns >= t->window_ns) report_repeats(t, s, now_ns);
+  }
+  pthread_mutex_unlock(&t->mu);
+}
+
 void palp_dds_refusals_flush(palp_dds_refusals *t) {
   pthread_mutex_lock(&t->mu);
   for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++)

@@ -61,6 +61,10 @@ void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record 
 /* One refusal seen at now_ns (monotonic): logs the first of its peer and reason,
  * or the repeats once `window` has passed since the last line about them. */
 void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns);
+/* Logs the repeats of each peer and reason whose last line is a `window` old, though no
+ * refusal came since to do it (a station that stopped retrying): call it now and then
+ * from the owner's loop (the server at each status, palp-web each second). */
+void palp_dds_refusals_tick(palp_dds_refusals *t, int64_t now_ns);
 /* Logs every repeat not yet reported (at shutdown). */
 void palp_dds_refusals_flush(palp_dds_refusals *t);
 /* Totals: refusals seen, log lines written. */

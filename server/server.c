@@ -1527,6 +1527,8 @@ int palp_srv_run(palp_srv *srv, double duration) {
         break;
       }
       publish_status(srv);
+      /* a refused peer that stopped retrying: its repeats logged (and kept) within a window */
+      if (srv->refusals_ready) palp_dds_refusals_tick(&srv->refusals, palp_dds_now_ns());
       next_status += status_period;
       if (next_status < palp_dds_now_ns()) next_status = palp_dds_now_ns() + status_period;
     }

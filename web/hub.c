@@ -796,6 +796,8 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
   ss->nsessions = n;
   if (n) memcpy(ss->loads, m->sessions._buffer, sizeof *loads * n); /* an empty sequence's buffer is NULL */
   ss->at_ns = palp_dds_now_ns();
+  /* a refused peer that stopped retrying: its repeats logged within a window of the last line */
+  if (h->def.refusals) palp_dds_refusals_tick(h->def.refusals, palp_dds_now_ns());
   build_status(h);
 }
 

@@ -187,6 +187,30 @@ static void test_throttle(void) {
             count_lines(path, "39 more time(s) over 39 s: certificate revoked (100 in all)") == 1,
         "the repeats line says how many, over how long and why");
 
+  /* A station that stops retrying after 10 s: its 9 repeats are said by the owner's tick once the
+   * window has passed since its first line (at 60 s, not before, and once), not only at shutdown. */
+  palp_log_init(&log, "palp-server", PALP_LOG_INFO, path);
+  palp_dds_refusals_init(&t, palp_log_warn_line, &log, 60.0);
+  for (int i = 0; i < 10; i++) palp_dds_refusals_note(&t, &fd_r, (int64_t)i * S);
+  uint64_t l_before = 0, l_early = 0, l_due = 0, l_later = 0;
+  palp_dds_refusals_counts(&t, NULL, &l_before);
+  for (int sec = 10; sec < 60; sec++) palp_dds_refusals_tick(&t, (int64_t)sec * S);
+  palp_dds_refusals_counts(&t, NULL, &l_early);
+  palp_dds_refusals_tick(&t, 60 * S);
+  palp_dds_refusals_counts(&t, NULL, &l_due);
+  for (int sec = 61; sec < 300; sec++) palp_dds_refusals_tick(&t, (int64_t)sec * S);
+  palp_dds_refusals_flush(&t);
+  palp_dds_refusals_counts(&t, NULL, &l_later);
+  palp_log_close(&log);
+  CHECK(l_before == 1 && l_early == 1 && l_due == 2 && l_later == 2,
+        "stopped retrying: %llu line(s) after 10 refusals, %llu by 59 s, %llu at 60 s, %llu at 300 s and the flush "
+        "(want 1, 1, 2, 2)", (unsigned long long)l_before, (unsigned long long)l_early, (unsigned long long)l_due,
+        (unsigned long long)l_later);
+  CHECK(count_lines(path, "9 more time(s) over 60 s: certificate revoked (10 in all)") == 1 &&
+            logged_refusals(path, "trainee/fd") == 100 + 10,
+        "the tick's line sums the 9 repeats (this log: %llu refusals of trainee/fd, want 110)",
+        logged_refusals(path, "trainee/fd"));
+
   /* 40 peers, each refused 3 times, 1 s apart: the table keeps 16, nothing is lost. */
   palp_log_init(&log, "palp-server", PALP_LOG_INFO, path);
   palp_dds_refusals_init(&t, palp_log_warn_line, &log, 60.0);
