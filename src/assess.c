@@ -115,6 +115,51 @@ static int footprint(const palp_mesh *mesh, const palp_assess_sample *s, double 
  * once the finger is that far from the last one). Motions smaller than a fingertip
  * are palpation in place (MammaCare's dime-sized circles, a press), not search. */
 #define STATION 0.008 /* [m] */
+/* Strips (MammaCare's vertical strip: parallel strokes a fingertip apart, each next to
+ * the one before, across the breast). A strip is a run of axial segments in one direction
+ * while touching, at least two stations long; it ends where the finger turns along the
+ * axis, lifts, or strokes half a station off the strip's line. Its place is the
+ * length-weighted mean of its segments' across-axis coordinate. A step between strips
+ * shorter than STRIP_STEP (retracing a strip, the proxy's sideways give) is no step. */
+#define STRIP_MIN (2.0 * STATION)   /* [m] */
+#define STRIP_WIDTH (0.5 * STATION) /* [m] */
+#define STRIP_STEP 0.002            /* [m] */
+
+typedef struct strip_track {
+  int open, dir, stretch;
+  double len, csum; /* axial length [m] and its across-weighted sum [m^2] */
+  int kept;         /* strips kept */
+  double last;      /* the last counted strip's place [m] */
+  int last_sign;    /* the direction of the last step between strips (0: none yet) */
+  int pairs, turns; /* successive steps between strips; those that reverse the one before */
+} strip_track;
+
+static void strip_close(strip_track *st) {
+  if (st->open && st->len >= STRIP_MIN) {
+    const double p = st->csum / st->len;
+    if (!st->kept) st->last = p;
+    else if (fabs(p - st->last) >= STRIP_STEP) {
+      const int sg = p > st->last ? 1 : -1;
+      if (st->last_sign) st->pairs++, st->turns += sg != st->last_sign;
+      st->last_sign = sg;
+      st->last = p;
+    }
+    st->kept++;
+  }
+  st->open = 0;
+}
+
+/* An axial segment of length w [m], direction dir (+1/-1 along the axis), its midpoint
+ * c [m] across the axis, in touching stretch `stretch`. */
+static void strip_add(strip_track *st, int dir, int stretch, double w, double c) {
+  if (st->open && (dir != st->dir || stretch != st->stretch || fabs(c - st->csum / st->len) > STRIP_WIDTH))
+    strip_close(st);
+  if (!st->open) *st = (strip_track){.open = 1, .dir = dir, .stretch = stretch, .kept = st->kept, .last = st->last,
+                                     .last_sign = st->last_sign, .pairs = st->pairs, .turns = st->turns};
+  st->len += w;
+  st->csum += w * c;
+}
+
 static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_evidence *ev, palp_pattern *out) {
   const double ca = cos(ALIGN_DEG * DEG), sa = sin(ALIGN_DEG * DEG);
   double c2 = 0.0, s2 = 0.0;
@@ -123,8 +168,9 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
       ev->path_length += v3_len(v3_sub(on_dome(s[i].proxy, R), on_dome(s[i - 1].proxy, R)));
   for (int pass = 0; pass < 2; ++pass) {
     const double ax = 0.5 * atan2(s2, c2), ux = cos(ax), uy = sin(ax);
-    double along = 0.0, tang = 0.0, rad = 0.0, step_pos = 0.0, step_neg = 0.0;
-    int have = 0;
+    double along = 0.0, tang = 0.0, rad = 0.0;
+    strip_track st = {0};
+    int have = 0, stretch = 0;
     double t_last = 0.0;
     palp_vec3 a = {0, 0, 0};
     for (int i = 0; i < n; ++i) {
@@ -134,7 +180,7 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
       t_last = s[i].t;
       const palp_vec3 b = on_dome(s[i].proxy, R);
       if (!have) {
-        a = b, have = 1;
+        a = b, have = 1, stretch++;
         continue;
       }
       if (v3_len(v3_sub(b, a)) < STATION) continue;
@@ -150,14 +196,12 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
         continue;
       }
       if (!(w > 0.0)) continue;
-      const double cu = fabs(dx * ux + dy * uy) / w;
-      if (cu >= ca) along += w;
-      else if (cu <= sa) { /* across the axis: a step from one strip to the next */
-        const double across = -dx * uy + dy * ux;
-        if (across > 0) step_pos += w;
-        else step_neg += w;
-      }
+      const double ua = dx * ux + dy * uy, cu = fabs(ua) / w;
       const double mx = 0.5 * (prev.x + b.x), my = 0.5 * (prev.y + b.y), rm = hypot(mx, my);
+      if (cu >= ca) {
+        along += w;
+        strip_add(&st, ua > 0 ? 1 : -1, stretch, w, -mx * uy + my * ux);
+      }
       if (rm < POLE_EXCLUSION) continue;
       const double cr = fabs(dx * mx + dy * my) / (w * rm);
       if (cr >= ca) rad += w;
@@ -169,7 +213,9 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
       ev->share_axial = L > 0 ? along / L : 0.0;
       ev->share_tangential = L > 0 ? tang / L : 0.0;
       ev->share_radial = L > 0 ? rad / L : 0.0;
-      ev->sweep_monotony = step_pos + step_neg > 0 ? fmax(step_pos, step_neg) / (step_pos + step_neg) : 0.0;
+      strip_close(&st);
+      ev->strips = st.kept;
+      ev->sweep_monotony = st.pairs > 0 ? (double)(st.pairs - st.turns) / st.pairs : 0.0;
     }
   }
   *out = PALP_PATTERN_UNSYSTEMATIC;

@@ -152,10 +152,13 @@ typedef struct palp_pattern_evidence {
   double axis_deg;         /* that axis [deg] from +x */
   double share_tangential; /* within 20 deg of the circle about the pole [-] */
   double share_radial;     /* within 20 deg of the radius from the pole [-] */
-  double sweep_monotony;   /* strips: share of strip-to-strip steps (across the axis) in one direction */
+  double sweep_monotony;   /* strips: share of the steps between successive strips (across the axis) that
+                              keep the direction of the step before: 1 when the strips follow each other
+                              across the breast in order; 0 with fewer than two steps (three strips) [-] */
   double overlap;          /* covered area's mean number of separate visits [-] */
   double gap_share;        /* dome area never palpated [-] */
   double largest_gap;      /* largest connected unpalpated area [m^2] */
+  int strips;              /* strips: runs along the axis at least 16 mm long (docs/assessment.md) */
 } palp_pattern_evidence;
 
 typedef struct palp_assess_result {

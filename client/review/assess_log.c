@@ -201,7 +201,8 @@ fail:
 void review_metrics_csv_header(FILE *f) {
   fputs("session,trainee,started_unix_s,exercise,samples,lesions,found,sensitivity,findings,withdrawn,"
         "false_positives,coverage_light,coverage_medium,coverage_deep,coverage_any,pattern,path_length_m,"
-        "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass,outside_valid_range_s\n",
+        "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass,outside_valid_range_s,strips,"
+        "strip_order\n",
         f);
 }
 
@@ -223,8 +224,9 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
   if (a->has_exercise) fprintf(f, "%.1f,%d,", r->score, r->pass);
   else fputs(",,", f);
   /* out_of_range above is the force's (episodes above the exercise's limit); this is the model's */
-  if (outside_s >= 0) fprintf(f, "%.2f\n", outside_s);
-  else fputs("\n", f);
+  if (outside_s >= 0) fprintf(f, "%.2f", outside_s);
+  /* added after the rest (2026-12-04), so a reader of the older columns reads them where they were */
+  fprintf(f, ",%d,%.4f\n", r->evidence.strips, r->evidence.sweep_monotony);
 }
 
 void review_metrics_print(FILE *f, const review_assessment *a) {
@@ -252,6 +254,12 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
           palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
           100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4,
           !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_PATTERN] ? "   pass" : "   FAIL");
+  if (r->evidence.strips >= 3)
+    fprintf(f, "  strips           %d, in order %.2f (share of the steps between strips that keep the direction of "
+               "the step before; 1: one pass across the breast)\n",
+            r->evidence.strips, r->evidence.sweep_monotony);
+  else if (r->pattern == PALP_PATTERN_VERTICAL_STRIP)
+    fprintf(f, "  strips           %d: too few to tell their order\n", r->evidence.strips);
   fprintf(f, "  time             %.2f s%s\n", r->duration,
           !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_TIME] ? "   pass" : "   FAIL");
   fprintf(f, "  force            peak %.2f N, %d episode%s above %.2f N (%.2f s)%s\n", r->peak_force, r->out_of_range,

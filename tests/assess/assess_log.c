@@ -51,9 +51,11 @@ int main(int argc, char **argv) {
   }
   const palp_assess_result r = a.r;
   printf("%s (session %s, exercise %s): %d samples, %d findings: found %d/%d, false %d, coverage light %.3f "
-         "medium %.3f deep %.3f, pattern %s (axial %.2f), time %.1f s, peak %.2f N, score %.1f, pass %d\n",
+         "medium %.3f deep %.3f, pattern %s (axial %.2f, %d strips in order %.2f), time %.1f s, peak %.2f N, score %.1f, "
+         "pass %d\n",
          argv[2], si->uid, a.exercise_name, a.samples, r.findings, r.found, r.lesion_count, r.false_positives,
-         r.coverage[0], r.coverage[1], r.coverage[2], palp_pattern_name(r.pattern), r.evidence.share_axial, r.duration,
+         r.coverage[0], r.coverage[1], r.coverage[2], palp_pattern_name(r.pattern), r.evidence.share_axial, r.evidence.strips,
+         r.evidence.sweep_monotony, r.duration,
          r.peak_force, r.score, r.pass);
   if (expert) {
     CHECK(r.found == r.lesion_count && r.lesion_count > 0, "the expert finds every lesion (%d of %d)", r.found,
@@ -61,6 +63,11 @@ int main(int argc, char **argv) {
     CHECK(r.false_positives == 0, "no false positive (%d)", r.false_positives);
     CHECK(r.coverage[PALP_BAND_MEDIUM] >= 0.95, "medium coverage %.3f >= 0.95", r.coverage[PALP_BAND_MEDIUM]);
     CHECK(r.pattern == PALP_PATTERN_VERTICAL_STRIP, "pattern vertical strip (%s)", palp_pattern_name(r.pattern));
+    /* one pass of 15 strips, each next to the one before (in process: 15, order 1.00); the
+     * tolerance is for edge strips a late tick shortens below 16 mm, and a strip the proxy's
+     * sideways give breaks into pieces more than 2 mm apart */
+    CHECK(r.evidence.strips >= 12 && r.evidence.sweep_monotony >= 0.8, "the strips in order: %d strips, order %.2f",
+          r.evidence.strips, r.evidence.sweep_monotony);
   } else {
     CHECK(r.coverage[PALP_BAND_MEDIUM] < 0.30, "novice medium coverage %.3f < 0.30", r.coverage[PALP_BAND_MEDIUM]);
     CHECK(r.found < r.lesion_count, "the novice misses a lesion (%d of %d found)", r.found, r.lesion_count);

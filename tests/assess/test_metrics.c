@@ -63,9 +63,9 @@ static palp_pattern classify(const palp_mesh *mesh, traj *T, const char *what, p
   palp_exercise ex = exercise();
   palp_assess_result res;
   CHECK(palp_assess(&ex, mesh, r, T->s, T->n, NULL, 0, &res, NULL, NULL) == 0, "%s assessed", what);
-  printf("%-8s plan %.3f m  axial %.2f (axis %.0f deg) tangential %.2f radial %.2f -> %s\n", what,
-         res.evidence.plan_length, res.evidence.share_axial, res.evidence.axis_deg, res.evidence.share_tangential,
-         res.evidence.share_radial, palp_pattern_name(res.pattern));
+  printf("%-8s plan %.3f m  axial %.2f (axis %.0f deg) tangential %.2f radial %.2f, %d strips in order %.2f -> %s\n",
+         what, res.evidence.plan_length, res.evidence.share_axial, res.evidence.axis_deg, res.evidence.share_tangential,
+         res.evidence.share_radial, res.evidence.strips, res.evidence.sweep_monotony, palp_pattern_name(res.pattern));
   if (ev) *ev = res.evidence;
   free(T->s);
   memset(T, 0, sizeof *T);
@@ -168,6 +168,38 @@ int main(void) {
   }
   CHECK(classify(&mesh, &T, "strips", &ev) == PALP_PATTERN_VERTICAL_STRIP, "strips");
   CHECK(fabs(fabs(ev.axis_deg) - 90.0) < 5.0, "strip axis along y (%.1f deg)", ev.axis_deg);
+  /* nine strips, each a step the same way across: every step keeps the one before's direction */
+  CHECK(ev.strips == 9, "nine strips (%d)", ev.strips);
+  CHECK(ev.sweep_monotony == 1.0, "strips in order across the dome (%.3f)", ev.sweep_monotony);
+  /* The same strips in a scattered order (places -4..4 visited 0, 3, -2, 4, -4, 1, -1, 2, -3: every
+   * step reverses the one before) are still strips, but not in order; and a search of the left half
+   * in order and then the right half in order (0..-4, 4..1) reverses twice in its 7 pairs of steps:
+   * at the jump to the right edge, and where it goes on leftwards from there. */
+  static const int scattered[9] = {0, 3, -2, 4, -4, 1, -1, 2, -3}, halves[9] = {0, -1, -2, -3, -4, 4, 3, 2, 1};
+  const int *order[2] = {scattered, halves};
+  const double want_order[2] = {0.0, 5.0 / 7.0};
+  for (int o = 0; o < 2; ++o) {
+    for (int j = 0; j < 9; ++j) {
+      const int k = order[o][j];
+      const double x = k * 0.008, h = sqrt(0.037 * 0.037 - x * x), y = (j % 2) ? h : -h;
+      if (T.n) line(&T, T.s[T.n - 1].point.x, T.s[T.n - 1].point.y, x, y);
+      line(&T, x, y, x, -y);
+    }
+    CHECK(classify(&mesh, &T, o ? "halves" : "scatter", &ev) == PALP_PATTERN_VERTICAL_STRIP, "strips in any order");
+    CHECK(ev.strips == 9, "nine strips (%d)", ev.strips);
+    CHECK(fabs(ev.sweep_monotony - want_order[o]) < 1e-12, "%s: strips in order %.3f (want %.3f)",
+          o ? "two halves" : "scattered", ev.sweep_monotony, want_order[o]);
+  }
+  /* strips all stroked the same way, each followed by a lift and a return in the air: lifts end strips */
+  for (int k = -4; k <= 4; ++k) {
+    const double x = k * 0.008, h = sqrt(0.037 * 0.037 - x * x);
+    const double t0 = T.n ? T.s[T.n - 1].t + 1.0 : 0.0; /* a 1 s lift */
+    const int first = T.n;
+    line(&T, x, -h, x, h);
+    for (int i = first; i < T.n; ++i) T.s[i].t += t0;
+  }
+  CHECK(classify(&mesh, &T, "lifted", &ev) == PALP_PATTERN_VERTICAL_STRIP, "lifted strips");
+  CHECK(ev.strips == 9 && ev.sweep_monotony == 1.0, "lifted strips: %d in order %.3f", ev.strips, ev.sweep_monotony);
   /* the same, rotated by 30 deg: any strip direction counts */
   for (int k = -4; k <= 4; ++k) {
     const double x = k * 0.008, h = sqrt(0.037 * 0.037 - x * x), y = (k % 2) ? h : -h;

@@ -37,11 +37,11 @@ static palp_world *world_for(const char *path, palp_exercise *ex, palp_scene *sc
 
 static void report(const char *who, const palp_assess_result *r) {
   printf("%s: found %d/%d, false %d, coverage light %.3f medium %.3f deep %.3f, pattern %s (axial %.2f tangential "
-         "%.2f radial %.2f, path %.2f m, plan %.2f m, presses %d, overlap %.2f, gaps %.3f, largest gap %.2f cm^2), "
+         "%.2f radial %.2f, %d strips in order %.2f, path %.2f m, plan %.2f m, presses %d, overlap %.2f, gaps %.3f, largest gap %.2f cm^2), "
          "time %.1f s, peak %.2f N, out of range %d, score %.1f, pass %d\n",
          who, r->found, r->lesion_count, r->false_positives, r->coverage[0], r->coverage[1], r->coverage[2],
          palp_pattern_name(r->pattern), r->evidence.share_axial, r->evidence.share_tangential,
-         r->evidence.share_radial, r->evidence.path_length, r->evidence.plan_length, r->evidence.presses,
+         r->evidence.share_radial, r->evidence.strips, r->evidence.sweep_monotony, r->evidence.path_length, r->evidence.plan_length, r->evidence.presses,
          r->evidence.overlap, r->evidence.gap_share, r->evidence.largest_gap * 1e4, r->duration, r->peak_force,
          r->out_of_range, r->score, r->pass);
 }
@@ -116,6 +116,10 @@ int main(void) {
         "light %.3f >= 0.90, deep %.3f >= 0.80", er.coverage[PALP_BAND_LIGHT], er.coverage[PALP_BAND_DEEP]);
   CHECK(er.pattern == PALP_PATTERN_VERTICAL_STRIP, "the expert's pattern is named vertical strip (%s)",
         palp_pattern_name(er.pattern));
+  /* her script strokes 15 strips in one pass across the dome, each next to the one before
+   * (measured 15, order 1.00); 13 allows for edge strips shorter than the 16 mm a strip needs */
+  CHECK(er.evidence.strips >= 13 && er.evidence.sweep_monotony >= 0.9, "the expert's strips in order: %d, order %.2f",
+        er.evidence.strips, er.evidence.sweep_monotony);
   CHECK(er.pass && er.score >= 90.0, "the expert passes with >= 90 (%.1f)", er.score);
   CHECK(er.duration <= ex.time_limit, "within the time limit (%.1f s)", er.duration);
   /* The lump rule's margins (measured +16.5 / +18.2 % and +2.9 %, threshold 12 %). */

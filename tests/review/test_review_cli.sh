@@ -25,6 +25,8 @@ R show class-alice-1 > "$dir/show-alice.txt" 2>&1 || bad "show alice exit status
 expect "show: the expert found 2 of 2" "sensitivity +2 of 2 lesions found \(100%\) +pass" "$dir/show-alice.txt"
 expect "show: medium coverage >= 99%" "thoroughness +light 9[0-9]\.[0-9]%, medium (99\.[0-9]|100\.0)%" "$dir/show-alice.txt"
 expect "show: vertical strip" "search pattern +vertical_strip" "$dir/show-alice.txt"
+# the expert's script strokes 15 strips in one pass across the dome (in process: 15, order 1.00)
+expect "show: the strips and their order" "strips +1[3-5], in order (0\.9[0-9]|1\.00) " "$dir/show-alice.txt"
 expect "show: score and PASS" "score +9[0-9]\.[0-9] / 100 \(pass at 70\): PASS" "$dir/show-alice.txt"
 R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
 expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
@@ -52,8 +54,9 @@ r = rows[0]
 assert r["session"] == "class-alice-1" and r["trainee"] == "alice" and r["found"] == "2" and r["pass"] == "1", r
 assert float(r["coverage_medium"]) >= 0.95 and r["pattern"] == "vertical_strip", r
 assert r["outside_valid_range_s"] == "1.42", r  # review_gen's 355 flagged steps of 4 ms
+assert 13 <= int(r["strips"]) <= 15 and float(r["strip_order"]) >= 0.9, r  # the columns added last
 PY
-then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range"; else bad "export --table metrics"; fi
+then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range, 13-15 strips in order"; else bad "export --table metrics"; fi
 
 # Structured grades: each refused form exits 2 with a message saying what is allowed.
 for g in "--score 101" "--score -1" "--score 7/10" "--level B+" "--grade B+" "--grade 7/10" "--level excellent"; do
@@ -77,6 +80,7 @@ render() { # render HTML PNG DOM
 }
 R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"
 R report class-bob-1 --out "$dir/bob.html" > /dev/null || bad "report bob"
+expect "report: the strips and their order" '<tr data-metric="strips"><th>Strips and their order</th><td class="value">1[3-5] strips, in order (0\.9[0-9]|1\.00)' "$dir/alice.html"
 R class --exercise test-two-lumps --out "$dir/class.html" --csv "$dir/class.csv" > "$dir/class.txt" || bad "class report"
 expect "class: the text table has alice's row" "^alice +class-alice-1 +2026-01-06 +2/2 +0 " "$dir/class.txt"
 for f in alice bob class; do
