@@ -20,6 +20,13 @@ typedef struct row {
   char outside[24];  /* the same as text, "-" where the log does not say */
 } row;
 
+/* "15, 1.00": the strips and their order (docs/assessment.md); "-" with fewer than three, as
+ * for a pruned session, whose stored metrics do not keep them. */
+static void class_strips(const palp_assess_result *m, char *buf, size_t len) {
+  if (m->evidence.strips >= 3) snprintf(buf, len, "%d, %.2f", m->evidence.strips, m->evidence.sweep_monotony);
+  else snprintf(buf, len, "-");
+}
+
 int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   const char *exercise = NULL, *out = NULL, *csv = NULL;
   palp_db_filter flt = {0};
@@ -95,17 +102,21 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   printf("class report: exercise %s, %d session%s\n", exercise, nr, nr == 1 ? "" : "s");
   /* OUTSIDE[s]: how long the phantom's model was outside its valid range (review_valid_range;
    * "-" where the log does not say), beside the pressure levels that rest on its forces */
-  printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %7s %6s %-6s %10s %s\n", "TRAINEE", "SESSION", "DATE", "FOUND",
-         "FALSE", "LIGHT", "MEDIUM", "DEEP", "PATTERN", "TIME[s]", "SCORE", "RUBRIC", "OUTSIDE[s]", "GRADE");
+  /* STRIPS: how many, and the share of the steps between them that keep their direction
+   * (docs/assessment.md, "Strips and their order"); "-" with fewer than three */
+  printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %-9s %7s %6s %-6s %10s %s\n", "TRAINEE", "SESSION", "DATE",
+         "FOUND", "FALSE", "LIGHT", "MEDIUM", "DEEP", "PATTERN", "STRIPS", "TIME[s]", "SCORE", "RUBRIC", "OUTSIDE[s]",
+         "GRADE");
   for (int i = 0; i < nr; i++) {
     const palp_assess_result *m = &rows[i].a.r;
-    char t[64], found[16];
+    char t[64], found[16], strips[24];
     review_fmt_time(rows[i].s.start_unix_s, t, sizeof t);
     t[10] = '\0'; /* the date */
     snprintf(found, sizeof found, "%d/%d", m->found, m->lesion_count);
-    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %7.1f %6.1f %-6s %10s %s\n",
+    class_strips(m, strips, sizeof strips);
+    printf("%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %-9s %7.1f %6.1f %-6s %10s %s\n",
            rows[i].s.trainee, rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0],
-           100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), m->duration, m->score,
+           100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), strips, m->duration, m->score,
            m->pass ? "pass" : "fail", rows[i].outside,
            rows[i].grade[0] ? rows[i].grade : "-");
   }
@@ -139,7 +150,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     fputs("<h2>Side by side</h2>\n<table id=\"class-table\"><tr><th>trainee</th><th>session</th><th>started</th>"
           "<th>lesions found</th><th>false positives</th><th>coverage light</th><th>medium</th><th>deep</th>"
           "<th>search pattern</th><th>time [s]</th><th>peak force [N]</th><th>score</th><th>rubric</th>"
-          "<th>outside the model's valid range [s]</th><th>grade</th></tr>\n", f);
+          "<th>outside the model's valid range [s]</th><th>grade</th><th>strips, in order</th></tr>\n", f);
     for (int i = 0; i < nr; i++) {
       const row *r = &rows[i];
       const palp_assess_result *m = &r->a.r;
@@ -156,7 +167,9 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
               m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
       fprintf(f, "</td><td class=\"outside\">%s</td><td class=\"t\">", r->outside);
       html_str(f, r->grade);
-      fputs("</td></tr>\n", f);
+      char strips[24];
+      class_strips(m, strips, sizeof strips);
+      fprintf(f, "</td><td class=\"strips\">%s</td></tr>\n", strips); /* last: the cells before keep their places */
     }
     fputs("</table>\n<h2>Coverage maps</h2>\n<p class=\"key\">Seen from above (12 o'clock = +y). Palpated at "
           "<span style=\"background:#56b4e9\"></span>light <span style=\"background:#e69f00\"></span>medium "

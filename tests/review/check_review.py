@@ -5,6 +5,7 @@ usage: check_review.py session-expert|session-novice DOM.html SHOT.png
        check_review.py class DOM.html SHOT.png CLASS.csv"""
 import csv
 import os
+import re
 import sys
 from collections import Counter
 from html.parser import HTMLParser
@@ -169,6 +170,12 @@ def klass(dom_path, shot, csv_path):
     # seconds outside the model's valid range: alice's 355 logged steps of 4 ms; bob's logs do not say
     check(alice[13] == "1.42" and all(t[13] == "-" for t in tds if t[0] == "bob"),
           "class: outside the valid range, alice %r, bob %r" % (alice[13], [t[13] for t in tds if t[0] == "bob"]))
+    # the strips and their order, the last cell: alice's expert strokes one pass of 15 strips
+    ok = re.fullmatch(r"1[3-5], (0\.9[0-9]|1\.00)", alice[15]) is not None
+    check(ok and [t[15] for t in tds] == ["%s, %.2f" % (d["strips"], float(d["strip_order"])) if int(d["strips"]) >= 3
+                                          else "-" for d in data],
+          "class: the strips and their order, alice %r, and every row as in the CSV %r" %
+          (alice[15], [(d["strips"], d["strip_order"]) for d in data]))
     csv_out = {d["trainee"]: d["outside_valid_range_s"] for d in data}
     check(csv_out == {"alice": "1.42", "bob": ""}, "class CSV: outside_valid_range_s %r (bob's logs do not say)" % csv_out)
     maps = [e for e in dom.els if e["tag"] == "svg" and "coverage" in (e["a"].get("class") or "").split()]
