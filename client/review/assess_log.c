@@ -226,7 +226,8 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
   /* out_of_range above is the force's (episodes above the exercise's limit); this is the model's */
   if (outside_s >= 0) fprintf(f, "%.2f", outside_s);
   /* added after the rest (2026-12-04), so a reader of the older columns reads them where they were */
-  fprintf(f, ",%d,%.4f\n", r->evidence.strips, r->evidence.sweep_monotony);
+  if (r->evidence.strips >= 0) fprintf(f, ",%d,%.4f\n", r->evidence.strips, r->evidence.sweep_monotony);
+  else fputs(",,\n", f); /* a pruned session's stored metrics do not keep them */
 }
 
 void review_metrics_print(FILE *f, const review_assessment *a) {
@@ -304,6 +305,7 @@ int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
     r->out_of_range = sqlite3_column_int(st, 16);
     r->score = sqlite3_column_double(st, 17);
     r->pass = sqlite3_column_int(st, 18);
+    r->evidence.strips = -1; /* not kept in the stored metrics: unknown, not none */
     rc = 0;
   }
   sqlite3_finalize(st);

@@ -106,6 +106,17 @@ expect "prune: graded sessions kept" "kept +class-alice-1: graded" "$dir/prune.t
 expect "prune: bob's second session pruned" "pruned class-bob-2" "$dir/prune.txt"
 R show class-bob-2 > "$dir/show-pruned.txt" 2>&1
 expect "a pruned session still shows its metrics" "stored when the session was pruned" "$dir/show-pruned.txt"
+# the strips are not among the stored metrics: a pruned session's are unknown (empty), not none (0)
+R class --exercise test-two-lumps --out "$dir/class-pruned.html" --csv "$dir/class-pruned.csv" > /dev/null 2>&1 ||
+  bad "class report after the prune"
+if python3 - "$dir/class-pruned.csv" <<'PY'
+import csv, sys
+rows = {r["session"]: r for r in csv.DictReader(open(sys.argv[1]))}
+assert (rows["class-bob-2"]["strips"], rows["class-bob-2"]["strip_order"]) == ("", ""), rows["class-bob-2"]
+assert rows["class-alice-1"]["strips"] == "15" and rows["class-bob-1"]["strips"] == "0", rows
+PY
+then ok "class CSV after the prune: the pruned session's strips empty, the others' counted"
+else bad "class CSV after the prune"; fi
 R delete class-carol-1 > /dev/null 2>&1 || bad "delete"
 if python3 - "$db" <<'PY'
 
