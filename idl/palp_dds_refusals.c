@@ -8,17 +8,43 @@ static const char *kind_words(palp_dds_refusal_kind k) {
   return k == PALP_DDS_REFUSED_PERMISSIONS ? "for its permissions" : "at the handshake";
 }
 
-/* t->mu held. */
-static void say(palp_dds_refusals *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void say(palp_dds_refusals *t, const char *fmt, ...) {
+/* Lines and records made under t->mu and said after it is released: the owner's log and
+ * session log take locks of their own, which another thread may hold while it asks this
+ * table for its counts (palp-server's summary into its log file did: a lock-order
+ * inversion ThreadSanitizer found, a deadlock if a refusal came as the server stopped). */
+typedef struct pending_line {
   char line[512];
+  palp_dds_refusal r;
+  uint64_t count; /* for the record callback */
+} pending_line;
+
+typedef struct pending {
+  int n;
+  pending_line e[PALP_DDS_REFUSAL_SLOTS + 1];
+} pending;
+
+/* t->mu held. */
+static void say(palp_dds_refusals *t, pending *p, const palp_dds_refusal *r, uint64_t count, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static void say(palp_dds_refusals *t, pending *p, const palp_dds_refusal *r, uint64_t count, const char *fmt, ...) {
+  if (p->n >= (int)(sizeof p->e / sizeof p->e[0])) return; /* cannot happen: one per slot and one new peer */
+  pending_line *e = &p->e[p->n++];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(line, sizeof line, fmt, ap);
+  vsnprintf(e->line, sizeof e->line, fmt, ap);
   va_end(ap);
-  if (t->emit) t->emit(t->emit_ctx, line);
-  else fprintf(stderr, "%s\n", line);
+  e->r = *r;
+  e->count = count;
   t->lines++;
+}
+
+/* t->mu released: the lines to the log, the records to the owner, in the order made. */
+static void say_all(palp_dds_refusals *t, const pending *p) {
+  for (int i = 0; i < p->n; i++) {
+    if (t->emit) t->emit(t->emit_ctx, p->e[i].line);
+    else fprintf(stderr, "%s\n", p->e[i].line);
+    if (t->record) t->record(t->record_ctx, &p->e[i].r, p->e[i].count);
+  }
 }
 
 void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, void *ctx, double window_s) {
@@ -37,17 +63,17 @@ void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record 
 }
 
 /* The repeats of one slot since its last line; t->mu held. */
-static void report_repeats(palp_dds_refusals *t, palp_dds_refusal_slot *s, int64_t now_ns) {
+static void report_repeats(palp_dds_refusals *t, pending *p, palp_dds_refusal_slot *s, int64_t now_ns) {
   if (!s->unreported) return;
-  say(t, "DDS Security refused %s %s %llu more time(s) over %.0f s: %s (%llu in all)", s->r.who,
-      kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9, s->r.why,
-      (unsigned long long)s->count);
-  if (t->record) t->record(t->record_ctx, &s->r, s->unreported);
+  say(t, p, &s->r, s->unreported, "DDS Security refused %s %s %llu more time(s) over %.0f s: %s (%llu in all)",
+      s->r.who, kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9,
+      s->r.why, (unsigned long long)s->count);
   s->unreported = 0;
   s->reported_ns = now_ns;
 }
 
 void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns) {
+  pending p = {.n = 0};
   pthread_mutex_lock(&t->mu);
   t->total++;
   palp_dds_refusal_slot *s = NULL, *oldest = NULL, *free_slot = NULL;
@@ -67,12 +93,13 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int
     s->count++;
     s->unreported++;
     s->seen_ns = now_ns;
-    if (now_ns - s->reported_ns >= t->window_ns) report_repeats(t, s, now_ns);
+    if (now_ns - s->reported_ns >= t->window_ns) report_repeats(t, &p, s, now_ns);
     pthread_mutex_unlock(&t->mu);
+    say_all(t, &p);
     return;
   }
   if (!free_slot) { /* full: the peer seen longest ago makes room */
-    report_repeats(t, oldest, now_ns);
+    report_repeats(t, &p, oldest, now_ns);
     free_slot = oldest;
   }
   s = free_slot;
@@ -82,26 +109,30 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int
   s->count = 1;
   s->seen_ns = s->reported_ns = now_ns;
   /* A station retries once a second for as long as it runs: say it once, plainly. */
-  say(t, "DDS Security refused %s %s: %s; it gets no answer (repeats counted, logged at most every %.0f s)", r->who,
-      kind_words(r->kind), r->why, (double)t->window_ns * 1e-9);
-  if (t->record) t->record(t->record_ctx, r, 1);
+  say(t, &p, r, 1, "DDS Security refused %s %s: %s; it gets no answer (repeats counted, logged at most every %.0f s)",
+      r->who, kind_words(r->kind), r->why, (double)t->window_ns * 1e-9);
   pthread_mutex_unlock(&t->mu);
+  say_all(t, &p);
 }
 
 void palp_dds_refusals_tick(palp_dds_refusals *t, int64_t now_ns) {
+  pending p = {.n = 0};
   pthread_mutex_lock(&t->mu);
   for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) {
     palp_dds_refusal_slot *s = &t->slot[i];
-    if (s->used && s->unreported && now_ns - s->reported_ns >= t->window_ns) report_repeats(t, s, now_ns);
+    if (s->used && s->unreported && now_ns - s->reported_ns >= t->window_ns) report_repeats(t, &p, s, now_ns);
   }
   pthread_mutex_unlock(&t->mu);
+  say_all(t, &p);
 }
 
 void palp_dds_refusals_flush(palp_dds_refusals *t) {
+  pending p = {.n = 0};
   pthread_mutex_lock(&t->mu);
   for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++)
-    if (t->slot[i].used) report_repeats(t, &t->slot[i], t->slot[i].seen_ns);
+    if (t->slot[i].used) report_repeats(t, &p, &t->slot[i], t->slot[i].seen_ns);
   pthread_mutex_unlock(&t->mu);
+  say_all(t, &p);
 }
 
 void palp_dds_refusals_counts(palp_dds_refusals *t, uint64_t *total, uint64_t *lines) {

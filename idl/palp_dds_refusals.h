@@ -11,7 +11,10 @@
  * one line per peer and reason per `window` (one a minute by default). The table
  * is bounded: past PALP_DDS_REFUSAL_SLOTS peers, the one seen longest ago gives up
  * its slot (its unsaid repeats are said first). Lines go to the owner's `emit`
- * (the program's log, as a warning). Thread-safe: Cyclone's threads call in.
+ * (the program's log, as a warning). Thread-safe: Cyclone's threads call in. Lines
+ * and records are said after the table's lock is released, so `emit` and `record` may
+ * take locks of their own that a caller of the table holds (palp-server prints its
+ * summary, counts included, holding its log's lock).
  *
  * Every palp DDS program installs it (palp_dds_refusals_install): the server, the
  * stations, the recorder and palp-web.

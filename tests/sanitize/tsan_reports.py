@@ -16,7 +16,10 @@ import sys
 
 ACCESS = re.compile(r"^\s*(Write|Read|Previous write|Previous read|Atomic \w+|Previous atomic \w+)"
                     r"|^\s*Mutex M\d+ acquired|^\s*Cycle in lock order")
-FRAME = re.compile(r"^\s*#\d+ (\S+) (\S+)(?: \((\S+)\))?")
+# "#N FUNCTION PLACE (MODULE+OFFSET)": a C++ function's demangled name has spaces in it (its
+# parameters), so the place and the module are read from the end; until 2026-12-04 they were read
+# from the front, which took a Fast DDS frame's parameter types for its place and blamed palp.
+FRAME = re.compile(r"^\s*#\d+ (.+?) (\S+)(?: \((\S+)\))?\s*$")
 RUNTIME = ("libtsan", "sanitizer_common", "libc.so", "libstdc++")
 
 

@@ -7,10 +7,14 @@
  * subjects (control characters, an injected '/', 4 kB) and random bytes check that
  * what reaches the log is one printable line of bounded size.
  */
+#define _GNU_SOURCE /* pthread_timedjoin_np */
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "palp_dds.h"
@@ -243,9 +247,79 @@ static void test_throttle(void) {
   unlink(path);
 }
 
+/* The owner's log lock against the table's (found by ThreadSanitizer, 2026-12-04): a
+ * Cyclone thread notes a refusal and the table says it into the log, which takes the
+ * log's lock; meanwhile palp-server's main thread, holding that lock to print its summary
+ * into the log file, asks the table for its counts. With the line said under the table's
+ * lock, each waited for the other for ever. Here the emit callback blocks on a mutex the
+ * main thread holds while it asks for the counts; they must come back within 5 s. */
+typedef struct owner_log {
+  pthread_mutex_t mu;
+  atomic_int in_emit;
+  int lines;
+} owner_log;
+
+static void locking_emit(void *ctx, const char *line) {
+  owner_log *o = ctx;
+  (void)line;
+  atomic_store(&o->in_emit, 1);
+  pthread_mutex_lock(&o->mu); /* the log's lock */
+  o->lines++;
+  pthread_mutex_unlock(&o->mu);
+}
+
+typedef struct note_arg {
+  palp_dds_refusals *t;
+  palp_dds_refusal r;
+} note_arg;
+
+static void *noter(void *arg) {
+  note_arg *a = arg;
+  palp_dds_refusals_note(a->t, &a->r, 0);
+  return NULL;
+}
+
+static void *counter(void *arg) {
+  uint64_t total = 0;
+  palp_dds_refusals_counts(arg, &total, NULL);
+  return (void *)(uintptr_t)total;
+}
+
+static void test_lock_order(void) {
+  static palp_dds_refusals t; /* left as it is if the threads deadlock: the test then exits */
+  static owner_log o = {.mu = PTHREAD_MUTEX_INITIALIZER};
+  palp_dds_refusals_init(&t, locking_emit, &o, 60.0);
+  note_arg a = {.t = &t, .r = {.kind = PALP_DDS_REFUSED_HANDSHAKE}};
+  snprintf(a.r.who, sizeof a.r.who, "trainee/mallory");
+  snprintf(a.r.why, sizeof a.r.why, "certificate revoked");
+  pthread_mutex_lock(&o.mu); /* the main thread holds the log, as palp-server's summary does */
+  pthread_t tn, tc;
+  pthread_create(&tn, NULL, noter, &a);
+  struct timespec d = {0, 1000000};
+  for (int i = 0; i < 5000 && !atomic_load(&o.in_emit); i++) nanosleep(&d, NULL);
+  CHECK(atomic_load(&o.in_emit), "the refusal reached the log's emit callback");
+  pthread_create(&tc, NULL, counter, &t); /* the summary's counts, the log's lock held */
+  struct timespec until;
+  clock_gettime(CLOCK_REALTIME, &until);
+  until.tv_sec += 5;
+  void *total = NULL;
+  const int joined = pthread_timedjoin_np(tc, &total, &until) == 0;
+  CHECK(joined && (uintptr_t)total == 1, "counts asked while the log's lock is held come back (%s, %llu refusal)",
+        joined ? "returned" : "deadlocked for 5 s", (unsigned long long)(uintptr_t)total);
+  if (!joined) {
+    fprintf(stderr, "FAILED\n");
+    _exit(1); /* the two threads wait for each other for ever */
+  }
+  pthread_mutex_unlock(&o.mu);
+  pthread_join(tn, NULL);
+  CHECK(o.lines == 1, "the line was said once the log was free (%d)", o.lines);
+  palp_dds_refusals_destroy(&t);
+}
+
 int main(void) {
   test_parse();
   test_throttle();
+  test_lock_order();
   fprintf(stderr, "%s\n", failures ? "FAILED" : "passed");
   return failures ? 1 : 0;
 }
