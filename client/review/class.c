@@ -20,10 +20,12 @@ typedef struct row {
   char outside[24];  /* the same as text, "-" where the log does not say */
 } row;
 
-/* "15, 1.00": the strips and their order (docs/assessment.md); "-" with fewer than three, as
- * for a pruned session, whose stored metrics do not keep them. */
+/* "15, 1.00": a strip search's strips and their order (docs/assessment.md); "-" for another
+ * pattern (circles and spokes have axial runs too), with fewer than three, and for a pruned
+ * session, whose stored metrics do not keep them. */
 static void class_strips(const palp_assess_result *m, char *buf, size_t len) {
-  if (m->evidence.strips >= 3) snprintf(buf, len, "%d, %.2f", m->evidence.strips, m->evidence.sweep_monotony);
+  if (m->pattern == PALP_PATTERN_VERTICAL_STRIP && m->evidence.strips >= 3)
+    snprintf(buf, len, "%d, %.2f", m->evidence.strips, m->evidence.sweep_monotony);
   else snprintf(buf, len, "-");
 }
 
