@@ -230,6 +230,10 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
   else fputs(",,\n", f); /* a pruned session's stored metrics do not keep them */
 }
 
+int review_strips_shown(const palp_assess_result *r) {
+  return r->pattern == PALP_PATTERN_VERTICAL_STRIP && r->evidence.strips >= 3;
+}
+
 void review_metrics_print(FILE *f, const review_assessment *a) {
   const palp_assess_result *r = &a->r;
   const palp_rubric *rb = &a->ex.rubric;
@@ -255,8 +259,7 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
           palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
           100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4,
           !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_PATTERN] ? "   pass" : "   FAIL");
-  /* Only for a strip search: circles and spokes have axial runs too, whose "order" means nothing. */
-  if (r->pattern == PALP_PATTERN_VERTICAL_STRIP && r->evidence.strips >= 3)
+  if (review_strips_shown(r))
     fprintf(f, "  strips           %d, in order %.2f (share of the steps between strips that keep the direction of "
                "the step before; 1: one pass across the breast)\n",
             r->evidence.strips, r->evidence.sweep_monotony);

@@ -44,6 +44,10 @@ void review_metrics_csv_header(FILE *f);
 void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a, double outside_s);
 /* The metrics, score and rubric as text lines (palp-review show). */
 void review_metrics_print(FILE *f, const review_assessment *a);
+/* Whether the review shows a session's strips and their order (docs/assessment.md): a search
+ * classed vertical strip with three strips or more (circles and spokes have axial runs too,
+ * whose order means nothing; a pruned session's are unknown). The CSVs carry them always. */
+int review_strips_shown(const palp_assess_result *r);
 
 /* A pruned session's stored metrics (session_metrics, schema 4): printed, or into *out
  * (only the fields the table holds). 0, or PALP_DB_ENOTFOUND when none are stored. */

@@ -20,12 +20,9 @@ typedef struct row {
   char outside[24];  /* the same as text, "-" where the log does not say */
 } row;
 
-/* "15, 1.00": a strip search's strips and their order (docs/assessment.md); "-" for another
- * pattern (circles and spokes have axial runs too), with fewer than three, and for a pruned
- * session, whose stored metrics do not keep them. */
+/* "15, 1.00": the strips and their order where the review shows them, else "-". */
 static void class_strips(const palp_assess_result *m, char *buf, size_t len) {
-  if (m->pattern == PALP_PATTERN_VERTICAL_STRIP && m->evidence.strips >= 3)
-    snprintf(buf, len, "%d, %.2f", m->evidence.strips, m->evidence.sweep_monotony);
+  if (review_strips_shown(m)) snprintf(buf, len, "%d, %.2f", m->evidence.strips, m->evidence.sweep_monotony);
   else snprintf(buf, len, "-");
 }
 
@@ -105,7 +102,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   /* OUTSIDE[s]: how long the phantom's model was outside its valid range (review_valid_range;
    * "-" where the log does not say), beside the pressure levels that rest on its forces */
   /* STRIPS: how many, and the share of the steps between them that keep their direction
-   * (docs/assessment.md, "Strips and their order"); "-" with fewer than three */
+   * (docs/assessment.md, "Strips and their order"); class_strips */
   printf("%-12s %-30s %-10s %7s %5s %7s %7s %7s %-15s %-9s %7s %6s %-6s %10s %s\n", "TRAINEE", "SESSION", "DATE",
          "FOUND", "FALSE", "LIGHT", "MEDIUM", "DEEP", "PATTERN", "STRIPS", "TIME[s]", "SCORE", "RUBRIC", "OUTSIDE[s]",
          "GRADE");

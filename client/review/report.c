@@ -328,7 +328,7 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
            palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
            100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4);
   metric_row(f, "pattern", "Search pattern", v, ex ? "systematic" : "-", ex ? r->pass_metric[PALP_METRIC_PATTERN] : -1);
-  if (r->pattern == PALP_PATTERN_VERTICAL_STRIP && r->evidence.strips >= 3) { /* as palp-review show */
+  if (review_strips_shown(r)) {
     snprintf(v, sizeof v, "%d strips, in order %.2f (steps between strips that keep the direction of the one before)",
              r->evidence.strips, r->evidence.sweep_monotony);
     metric_row(f, "strips", "Strips and their order", v, "-", -1);
