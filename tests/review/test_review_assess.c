@@ -78,6 +78,17 @@ int main(int argc, char **argv) {
   CHECK(a[1].mark_n == 2 && a[1].marks[0].match == PALP_FINDING_WITHDRAWN, "the novice's withdrawn mark reads back (%d marks, first %d)",
         a[1].mark_n, a[1].mark_n ? a[1].marks[0].match : 0);
   CHECK(!a[2].has_exercise && a[2].r.lesion_count == 0, "free practice: no exercise, no lesions");
+  /* Where the review shows the strips: the logged expert's, not the novice's; not a circle search's
+   * axial runs (test_metrics' concentric circles make 5 such "strips"), not two strips, not a
+   * pruned session's (strips -1: unknown). */
+  palp_assess_result circles = *e, two = *e, pruned = *e;
+  circles.pattern = PALP_PATTERN_CIRCLES, circles.evidence.strips = 5;
+  two.evidence.strips = 2;
+  pruned.evidence.strips = -1;
+  CHECK(review_strips_shown(e) && e->evidence.strips >= 13 && !review_strips_shown(n) &&
+            !review_strips_shown(&circles) && !review_strips_shown(&two) && !review_strips_shown(&pruned),
+        "strips shown for the expert's strip search (%d, order %.2f) only", e->evidence.strips,
+        e->evidence.sweep_monotony);
   for (int i = 0; i < 3; i++) review_assessment_free(&a[i]);
   palp_db_close(db);
   CHECK_DONE();
