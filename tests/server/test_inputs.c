@@ -6,16 +6,8 @@
 #include "input.h"
 #include "palp.h"
 #include "view.h"
+#include "check.h"
 
-static int failures;
-#define CHECK(c, ...)                                                                                        \
-  do {                                                                                                       \
-    int ok_ = (c);                                                                                           \
-    fprintf(stderr, ok_ ? "ok   " : "FAIL ");                                                                \
-    fprintf(stderr, __VA_ARGS__);                                                                            \
-    fputc('\n', stderr);                                                                                     \
-    failures += !ok_;                                                                                        \
-  } while (0)
 
 int main(void) {
   /* Paper step (3 N for 2 s from t = 0), distribution II at polar 30 deg, azimuth 40 deg

@@ -13,16 +13,8 @@
 #include <string.h>
 
 #include "playout.h"
+#include "check.h"
 
-static int failures;
-#define CHECK(cond, ...)                                  \
-  do {                                                    \
-    const int ok_ = (cond);                               \
-    fprintf(stderr, "%s ", ok_ ? "ok  " : "FAIL");        \
-    fprintf(stderr, __VA_ARGS__);                         \
-    fprintf(stderr, "\n");                                \
-    if (!ok_) failures++;                                 \
-  } while (0)
 
 #define MS 1000000LL
 #define N 1000             /* samples: 4 s */

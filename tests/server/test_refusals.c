@@ -20,16 +20,8 @@
 #include "palp_dds.h"
 #include "palp_log.h"
 #include "palp_dds_refusals.h"
+#include "check.h"
 
-static int failures;
-#define CHECK(cond, ...)                           \
-  do {                                             \
-    const int ok_ = (cond);                        \
-    fprintf(stderr, "%s ", ok_ ? "ok  " : "FAIL"); \
-    fprintf(stderr, __VA_ARGS__);                  \
-    fprintf(stderr, "\n");                         \
-    if (!ok_) failures++;                          \
-  } while (0)
 
 static int parse(const char *line, palp_dds_refusal *r) { return palp_dds_refusal_parse(line, strlen(line), r); }
 
