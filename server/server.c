@@ -99,7 +99,7 @@ struct palp_srv {
   palp_dds_log_limit dds_log;
   int dds_log_installed;
   palp_dds_refusals refusals; /* peers DDS Security refused (palp_dds_refusals.h) */
-  int refusals_ready;
+  int refusals_ready; /* initialised: a server that failed before it is destroyed without them */
 
   closed_session *closed; /* ring of the last CLOSED_KEEP */
   int closed_count, closed_head;
@@ -117,7 +117,6 @@ struct palp_srv {
 };
 
 static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
-
 
 /* Cyclone's threads: a line about a refused peer was logged; the session log keeps it too. */
 static void record_refusal(void *ctx, const palp_dds_refusal *r, uint64_t count) {
@@ -1528,7 +1527,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
       }
       publish_status(srv);
       /* a refused peer that stopped retrying: its repeats logged (and kept) within a window */
-      if (srv->refusals_ready) palp_dds_refusals_tick(&srv->refusals, palp_dds_now_ns());
+      palp_dds_refusals_tick(&srv->refusals, palp_dds_now_ns());
       next_status += status_period;
       if (next_status < palp_dds_now_ns()) next_status = palp_dds_now_ns() + status_period;
     }
@@ -1537,15 +1536,11 @@ int palp_srv_run(palp_srv *srv, double duration) {
   while (srv->session_count > 0)
     close_session(srv, srv->sessions[srv->session_count - 1], result ? "server identity conflict" : "server shutdown");
   publish_status(srv);
-  if (srv->refusals_ready) palp_dds_refusals_flush(&srv->refusals); /* the repeats not yet logged, before the summary */
+  palp_dds_refusals_flush(&srv->refusals); /* the repeats not yet logged, before the summary */
   return result;
 }
 
 uint64_t palp_srv_security_refusals(palp_srv *srv, char *who, size_t len) {
-  if (!srv->refusals_ready) {
-    if (who && len) who[0] = '\0';
-    return 0;
-  }
   uint64_t total = 0;
   palp_dds_refusals_counts(&srv->refusals, &total, NULL);
   if (who && len) palp_dds_refusals_describe(&srv->refusals, who, len);
