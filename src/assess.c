@@ -315,7 +315,10 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const 
   c[PALP_METRIC_SENSITIVITY] = out->sensitivity;
   c[PALP_METRIC_FALSE_POSITIVES] = 1.0 / (1.0 + out->false_positives);
   c[PALP_METRIC_THOROUGHNESS] = (out->coverage[0] + out->coverage[1] + out->coverage[2]) / 3.0;
-  c[PALP_METRIC_PATTERN] = out->pattern == PALP_PATTERN_VERTICAL_STRIP ? 1.0
+  /* A vertical-strip search earns full credit in any order unless the rubric rests a share of it
+   * on the strips' order: at share 0.5 strips in a scattered order earn what circles earn. */
+  const double order = out->evidence.sweep_monotony;
+  c[PALP_METRIC_PATTERN] = out->pattern == PALP_PATTERN_VERTICAL_STRIP ? 1.0 - rb->strip_order_share * (1.0 - order)
                            : out->pattern == PALP_PATTERN_UNSYSTEMATIC ? 0.0
                                                                        : 0.5;
   c[PALP_METRIC_TIME] = out->duration <= ex->time_limit ? 1.0 : fmax(0.0, 2.0 - out->duration / ex->time_limit);
@@ -333,6 +336,7 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const 
   p[PALP_METRIC_PATTERN] = rb->pass_any_systematic ? out->pattern != PALP_PATTERN_UNSYSTEMATIC
                            : rb->pass_pattern == PALP_PATTERN_UNSYSTEMATIC ? 1
                                                                            : out->pattern == rb->pass_pattern;
+  if (out->pattern == PALP_PATTERN_VERTICAL_STRIP && !(order >= rb->pass_strip_order)) p[PALP_METRIC_PATTERN] = 0;
   p[PALP_METRIC_TIME] = out->duration <= ex->time_limit;
   p[PALP_METRIC_FORCE] = out->out_of_range <= rb->pass_max_out_of_range;
   out->pass = out->score >= rb->pass_score;

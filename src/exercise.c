@@ -151,9 +151,9 @@ static int parse_bands(ctx *c, const cJSON *o, palp_exercise *ex) {
 }
 
 static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
-  static const char *const keys[] = {"weights", "pass", "comment", NULL};
+  static const char *const keys[] = {"weights", "pass", "strip_order_share", "comment", NULL};
   static const char *const pkeys[] = {"sensitivity", "max_false_positives", "coverage", "pattern",
-                                      "max_out_of_range", "score", NULL};
+                                      "max_out_of_range", "score", "strip_order", NULL};
   int e;
   if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "rubric: expected an object");
   if ((e = only_keys(c, o, "rubric.", keys))) return e;
@@ -170,6 +170,8 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
     sum += r->weight[m];
   }
   if (!(sum > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "rubric.weights: at least one weight must be > 0");
+  r->strip_order_share = 0.0;
+  if ((e = get_num(c, o, "rubric.", "strip_order_share", 0, 0.0, 1.0, &r->strip_order_share))) return e;
 
   const cJSON *p = cJSON_GetObjectItemCaseSensitive(o, "pass");
   if (!cJSON_IsObject(p)) return palp_parse_fail(c, PALP_EPARSE, "rubric.pass: missing or not an object");
@@ -182,6 +184,8 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
   if ((e = get_int(c, p, "rubric.pass.", "max_out_of_range", 0, 1000000, &r->pass_max_out_of_range))) return e;
   r->pass_score = 0.0;
   if ((e = get_num(c, p, "rubric.pass.", "score", 1, 0.0, 100.0, &r->pass_score))) return e;
+  r->pass_strip_order = 0.0;
+  if ((e = get_num(c, p, "rubric.pass.", "strip_order", 0, 0.0, 1.0, &r->pass_strip_order))) return e;
   const cJSON *cov = cJSON_GetObjectItemCaseSensitive(p, "coverage");
   if (!cJSON_IsObject(cov)) return palp_parse_fail(c, PALP_EPARSE, "rubric.pass.coverage: missing or not an object");
   static const char *const ckeys[] = {"light", "medium", "deep", NULL};

@@ -77,6 +77,13 @@ typedef struct palp_rubric {
   int pass_any_systematic;
   int pass_max_out_of_range;        /* force episodes above max_force */
   double pass_score;                /* [0, 100] */
+  /* The strips' order (palp_pattern_evidence.sweep_monotony) in a vertical-strip search, for
+   * rubrics that ask for it (docs/assessment.md, "Score"); both 0 by default, which gives a
+   * vertical-strip search the pattern's full credit and pass in any order. */
+  double strip_order_share;         /* [0, 1]: share of a vertical-strip search's pattern credit that
+                                       rests on the order: credit = 1 - share (1 - order) */
+  double pass_strip_order;          /* [0, 1]: a vertical-strip search passes the pattern only with its
+                                       strips in order at least this */
 } palp_rubric;
 
 #define PALP_EXERCISE_TEXT 1024

@@ -234,6 +234,14 @@ int review_strips_shown(const palp_assess_result *r) {
   return r->pattern == PALP_PATTERN_VERTICAL_STRIP && r->evidence.strips >= 3;
 }
 
+void review_pattern_mark(const palp_rubric *rb, char *buf, size_t len) {
+  const char *what = rb->pass_any_systematic                        ? "systematic"
+                     : rb->pass_pattern == PALP_PATTERN_UNSYSTEMATIC ? "any"
+                                                                     : palp_pattern_name(rb->pass_pattern);
+  if (rb->pass_strip_order > 0.0) snprintf(buf, len, "%s; strips in order >= %.2f", what, rb->pass_strip_order);
+  else snprintf(buf, len, "%s", what);
+}
+
 void review_metrics_print(FILE *f, const review_assessment *a) {
   const palp_assess_result *r = &a->r;
   const palp_rubric *rb = &a->ex.rubric;
@@ -255,14 +263,28 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
     fprintf(f, " (pass at %.0f/%.0f/%.0f%%)%s", 100 * rb->pass_coverage[0], 100 * rb->pass_coverage[1],
             100 * rb->pass_coverage[2], r->pass_metric[PALP_METRIC_THOROUGHNESS] ? "   pass" : "   FAIL");
   fputc('\n', f);
-  fprintf(f, "  search pattern   %s (path %.2f m, %d presses, overlap %.2f, never palpated %.1f%%, largest gap %.1f cm^2)%s\n",
+  char mark[96] = "";
+  if (a->has_exercise) {
+    char m[80];
+    review_pattern_mark(rb, m, sizeof m);
+    snprintf(mark, sizeof mark, " (pass: %s)", m);
+  }
+  fprintf(f, "  search pattern   %s (path %.2f m, %d presses, overlap %.2f, never palpated %.1f%%, largest gap %.1f cm^2)%s%s\n",
           palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
-          100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4,
+          100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4, mark,
           !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_PATTERN] ? "   pass" : "   FAIL");
-  if (review_strips_shown(r))
+  if (review_strips_shown(r)) {
     fprintf(f, "  strips           %d, in order %.2f (share of the steps between strips that keep the direction of "
-               "the step before; 1: one pass across the breast)\n",
+               "the step before; 1: one pass across the breast)",
             r->evidence.strips, r->evidence.sweep_monotony);
+    if (a->has_exercise && rb->strip_order_share > 0.0)
+      fprintf(f, "; the rubric rests %.0f%% of the pattern's credit on it: %.2f of 1", 100 * rb->strip_order_share,
+              r->component[PALP_METRIC_PATTERN]);
+    if (a->has_exercise && rb->pass_strip_order > 0.0)
+      fprintf(f, "; pass at %.2f   %s", rb->pass_strip_order,
+              r->evidence.sweep_monotony >= rb->pass_strip_order ? "pass" : "FAIL");
+    fputc('\n', f);
+  }
   else if (r->pattern == PALP_PATTERN_VERTICAL_STRIP)
     fprintf(f, "  strips           %d: too few to tell their order\n", r->evidence.strips);
   fprintf(f, "  time             %.2f s%s\n", r->duration,

@@ -327,11 +327,19 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
   snprintf(v, sizeof v, "%s (path %.2f m, %d presses, overlap %.2f, never palpated %.1f%%, largest gap %.1f cm2)",
            palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
            100 * r->evidence.gap_share, r->evidence.largest_gap * 1e4);
-  metric_row(f, "pattern", "Search pattern", v, ex ? "systematic" : "-", ex ? r->pass_metric[PALP_METRIC_PATTERN] : -1);
+  review_pattern_mark(rb, m, sizeof m);
+  metric_row(f, "pattern", "Search pattern", v, ex ? m : "-", ex ? r->pass_metric[PALP_METRIC_PATTERN] : -1);
   if (review_strips_shown(r)) {
     snprintf(v, sizeof v, "%d strips, in order %.2f (steps between strips that keep the direction of the one before)",
              r->evidence.strips, r->evidence.sweep_monotony);
-    metric_row(f, "strips", "Strips and their order", v, "-", -1);
+    /* the order's verdict is part of the pattern's row; this row says what the rubric asks of it */
+    if (ex && (rb->pass_strip_order > 0.0 || rb->strip_order_share > 0.0))
+      snprintf(m, sizeof m, ">= %.2f; %.0f%% of the pattern's credit (%.2f of 1)", rb->pass_strip_order,
+               100 * rb->strip_order_share, r->component[PALP_METRIC_PATTERN]);
+    else snprintf(m, sizeof m, "-");
+    /* its own verdict where the rubric sets a pass mark (it is also part of the pattern's) */
+    metric_row(f, "strips", "Strips and their order", v, m,
+               ex && rb->pass_strip_order > 0.0 ? r->evidence.sweep_monotony >= rb->pass_strip_order : -1);
   }
   snprintf(v, sizeof v, "%.2f s", r->duration);
   snprintf(m, sizeof m, "<= %.0f s", a.ex.time_limit);

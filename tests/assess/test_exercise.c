@@ -45,6 +45,8 @@ int main(void) {
   CHECK_NEAR(ex.lesion[0].depth, 0.010, 1e-15, "depth_mm -> m");
   CHECK_NEAR(ex.lesion[0].polar, PI / 2, 1e-15, "polar_deg -> rad");
   CHECK_NEAR(ex.match_margin, 0.010, 1e-15, "default match margin 10 mm");
+  CHECK(ex.rubric.strip_order_share == 0.0 && ex.rubric.pass_strip_order == 0.0,
+        "a rubric that does not ask for the strips' order gives a strip search full credit in any order");
   /* bands: depth only for light/medium; deep also needs force in [0, 9) N */
   CHECK(palp_exercise_band(&ex, 0.003, 0.1) == PALP_BAND_LIGHT, "3 mm is light");
   CHECK(palp_exercise_band(&ex, 0.005, 0.1) == PALP_BAND_MEDIUM, "5 mm is medium (min inclusive)");
@@ -73,6 +75,9 @@ int main(void) {
   expect_error("\"sensitivity\": 1}", "\"sensitivity\": 0}", "rubric.weights");
   expect_error("\"score\": 50", "\"score\": 50, \"pattern\": \"spiral\"", "rubric.pass.pattern");
   expect_error("\"score\": 50", "\"score\": 150", "rubric.pass.score");
+  expect_error("\"score\": 50", "\"score\": 50, \"strip_order\": 1.2", "rubric.pass.strip_order");
+  expect_error("\"score\": 50", "\"score\": 50, \"strip_order\": \"in order\"", "rubric.pass.strip_order");
+  expect_error("\"pass\": {", "\"strip_order_share\": -0.5, \"pass\": {", "rubric.strip_order_share");
   expect_error("\"name\": \"t\"", "\"name\": \"T t\"", "name");
   CHECK(palp_exercise_parse("{", "", &ex, err, sizeof err) == PALP_EPARSE, "not JSON");
   CHECK(palp_exercise_load("/nonexistent/x.json", &ex, err, sizeof err) == PALP_EIO, "missing file");
@@ -87,6 +92,10 @@ int main(void) {
     snprintf(path, sizeof path, "%s/exercises/%s.json", PALP_CONFIG_DIR, shipped[k].file);
     CHECK(palp_exercise_load(path, &ex, err, sizeof err) == 0, "%s: %s", path, err);
     CHECK(ex.lesion_count == 1, "%s: one lesion", shipped[k].file);
+    /* the shipped rubrics ask for the strips' order (docs/assessment.md, "Score") */
+    CHECK(ex.rubric.strip_order_share == 0.5 && ex.rubric.pass_strip_order == 0.7,
+          "%s: half the pattern's credit on the strips' order, pass at 0.7 (%.2f, %.2f)", shipped[k].file,
+          ex.rubric.strip_order_share, ex.rubric.pass_strip_order);
     CHECK_NEAR(ex.lesion[0].diameter, shipped[k].diameter_mm * 1e-3, 1e-12, "diameter");
     palp_scene sc;
     CHECK(palp_exercise_scene(&ex, &sc, err, sizeof err) == 0, "%s scene: %s", shipped[k].file, err);

@@ -59,10 +59,18 @@ static void line(traj *T, double x0, double y0, double x1, double y1) {
   for (int i = 0; i <= k; ++i) add(T, x0 + (x1 - x0) * i / k, y0 + (y1 - y0) * i / k);
 }
 
-static palp_pattern classify(const palp_mesh *mesh, traj *T, const char *what, palp_pattern_evidence *ev) {
+/* Classifies under a rubric that asks for a systematic pattern, rests half a strip search's
+ * pattern credit on its strips' order and passes it from order 0.7 (the shipped exercises');
+ * the result goes to *out when given. */
+static palp_pattern classify_res(const palp_mesh *mesh, traj *T, const char *what, palp_pattern_evidence *ev,
+                                 palp_assess_result *out) {
   palp_exercise ex = exercise();
+  ex.rubric.pass_any_systematic = 1;
+  ex.rubric.strip_order_share = 0.5;
+  ex.rubric.pass_strip_order = 0.7;
   palp_assess_result res;
   CHECK(palp_assess(&ex, mesh, r, T->s, T->n, NULL, 0, &res, NULL, NULL) == 0, "%s assessed", what);
+  if (out) *out = res;
   printf("%-8s plan %.3f m  axial %.2f (axis %.0f deg) tangential %.2f radial %.2f, %d strips in order %.2f -> %s\n",
          what, res.evidence.plan_length, res.evidence.share_axial, res.evidence.axis_deg, res.evidence.share_tangential,
          res.evidence.share_radial, res.evidence.strips, res.evidence.sweep_monotony, palp_pattern_name(res.pattern));
@@ -70,6 +78,9 @@ static palp_pattern classify(const palp_mesh *mesh, traj *T, const char *what, p
   free(T->s);
   memset(T, 0, sizeof *T);
   return res.pattern;
+}
+static palp_pattern classify(const palp_mesh *mesh, traj *T, const char *what, palp_pattern_evidence *ev) {
+  return classify_res(mesh, T, what, ev, NULL);
 }
 
 int main(void) {
@@ -166,7 +177,12 @@ int main(void) {
     if (T.n) line(&T, T.s[T.n - 1].point.x, T.s[T.n - 1].point.y, x, y);
     line(&T, x, y, x, -y);
   }
-  CHECK(classify(&mesh, &T, "strips", &ev) == PALP_PATTERN_VERTICAL_STRIP, "strips");
+  palp_assess_result cr;
+  CHECK(classify_res(&mesh, &T, "strips", &ev, &cr) == PALP_PATTERN_VERTICAL_STRIP, "strips");
+  /* in order: the pattern's full credit and its pass under a rubric that asks for the order */
+  CHECK(cr.component[PALP_METRIC_PATTERN] == 1.0 && cr.pass_metric[PALP_METRIC_PATTERN],
+        "strips in order: credit %.3f (want 1), pass %d", cr.component[PALP_METRIC_PATTERN],
+        cr.pass_metric[PALP_METRIC_PATTERN]);
   CHECK(fabs(fabs(ev.axis_deg) - 90.0) < 5.0, "strip axis along y (%.1f deg)", ev.axis_deg);
   /* nine strips, each a step the same way across: every step keeps the one before's direction */
   CHECK(ev.strips == 9, "nine strips (%d)", ev.strips);
@@ -185,10 +201,18 @@ int main(void) {
       if (T.n) line(&T, T.s[T.n - 1].point.x, T.s[T.n - 1].point.y, x, y);
       line(&T, x, y, x, -y);
     }
-    CHECK(classify(&mesh, &T, o ? "halves" : "scatter", &ev) == PALP_PATTERN_VERTICAL_STRIP, "strips in any order");
+    CHECK(classify_res(&mesh, &T, o ? "halves" : "scatter", &ev, &cr) == PALP_PATTERN_VERTICAL_STRIP,
+          "strips in any order");
     CHECK(ev.strips == 9, "nine strips (%d)", ev.strips);
     CHECK(fabs(ev.sweep_monotony - want_order[o]) < 1e-12, "%s: strips in order %.3f (want %.3f)",
           o ? "two halves" : "scattered", ev.sweep_monotony, want_order[o]);
+    /* credit 1 - 0.5 (1 - order): scattered 0.5 (what circles earn), two halves 1 - 0.5 x 2/7 = 6/7;
+     * the pass at 0.7: the halves (5/7 = 0.714) pass, the scattered strips do not */
+    const double want_credit[2] = {0.5, 6.0 / 7.0};
+    CHECK(fabs(cr.component[PALP_METRIC_PATTERN] - want_credit[o]) < 1e-12, "%s: pattern credit %.4f (want %.4f)",
+          o ? "two halves" : "scattered", cr.component[PALP_METRIC_PATTERN], want_credit[o]);
+    CHECK(cr.pass_metric[PALP_METRIC_PATTERN] == o, "%s: pattern %s under pass 0.7", o ? "two halves" : "scattered",
+          cr.pass_metric[PALP_METRIC_PATTERN] ? "passes" : "fails");
   }
   /* strips all stroked the same way, each followed by a lift and a return in the air: lifts end strips */
   for (int k = -4; k <= 4; ++k) {
@@ -218,7 +242,11 @@ int main(void) {
       add(&T, rho * cos(a), rho * sin(a));
     }
   }
-  CHECK(classify(&mesh, &T, "circles", NULL) == PALP_PATTERN_CIRCLES, "circles");
+  CHECK(classify_res(&mesh, &T, "circles", &ev, &cr) == PALP_PATTERN_CIRCLES, "circles");
+  /* the strips' order is asked of a strip search only: circles keep their half credit and pass */
+  CHECK(cr.component[PALP_METRIC_PATTERN] == 0.5 && cr.pass_metric[PALP_METRIC_PATTERN],
+        "circles: credit %.3f (want 0.5), pass %d whatever their axial runs' order (%.2f)",
+        cr.component[PALP_METRIC_PATTERN], cr.pass_metric[PALP_METRIC_PATTERN], ev.sweep_monotony);
   /* radial spokes (wedges): out and back along 12 directions */
   for (int k = 0; k < 12; ++k) {
     const double a = k * PI / 6;

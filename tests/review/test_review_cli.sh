@@ -27,6 +27,9 @@ expect "show: medium coverage >= 99%" "thoroughness +light 9[0-9]\.[0-9]%, mediu
 expect "show: vertical strip" "search pattern +vertical_strip" "$dir/show-alice.txt"
 # the expert's script strokes 15 strips in one pass across the dome (in process: 15, order 1.00)
 expect "show: the strips and their order" "strips +1[3-5], in order (0\.9[0-9]|1\.00) " "$dir/show-alice.txt"
+# the rubric (tests/assess/exercise_expert.json, as the shipped exercises) asks for the strips' order
+expect "show: the pattern's pass mark from the rubric" "search pattern +vertical_strip .* \(pass: systematic; strips in order >= 0\.70\) +pass$" "$dir/show-alice.txt"
+expect "show: the order's share of the credit" "strips +1[3-5], in order (0\.9[0-9]|1\.00) .*; the rubric rests 50% of the pattern's credit on it: (0\.9[5-9]|1\.00) of 1; pass at 0\.70 +pass$" "$dir/show-alice.txt"
 expect "show: score and PASS" "score +9[0-9]\.[0-9] / 100 \(pass at 70\): PASS" "$dir/show-alice.txt"
 R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
 expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
@@ -81,6 +84,8 @@ render() { # render HTML PNG DOM
 R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"
 R report class-bob-1 --out "$dir/bob.html" > /dev/null || bad "report bob"
 expect "report: the strips and their order" '<tr data-metric="strips"><th>Strips and their order</th><td class="value">1[3-5] strips, in order (0\.9[0-9]|1\.00)' "$dir/alice.html"
+expect "report: the pattern's pass mark from the rubric" '<tr data-metric="pattern"><th>Search pattern</th><td class="value">vertical_strip [^<]*</td><td>systematic; strips in order &gt;= 0\.70</td><td class="pass">' "$dir/alice.html"
+expect "report: what the rubric asks of the order" '<tr data-metric="strips">.*</td><td>&gt;= 0\.70; 50% of the pattern&#39;s credit \((0\.9[5-9]|1\.00) of 1\)</td><td class="pass">pass</td>' "$dir/alice.html"
 R class --exercise test-two-lumps --out "$dir/class.html" --csv "$dir/class.csv" > "$dir/class.txt" || bad "class report"
 expect "class: the text table has alice's row" "^alice +class-alice-1 +2026-01-06 +2/2 +0 " "$dir/class.txt"
 for f in alice bob class; do
