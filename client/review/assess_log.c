@@ -227,7 +227,7 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
   if (outside_s >= 0) fprintf(f, "%.2f", outside_s);
   /* added after the rest (2026-12-04), so a reader of the older columns reads them where they were */
   if (r->evidence.strips >= 0) fprintf(f, ",%d,%.4f\n", r->evidence.strips, r->evidence.sweep_monotony);
-  else fputs(",,\n", f); /* a pruned session's stored metrics do not keep them */
+  else fputs(",,\n", f); /* metrics a prune stored before schema 5 do not keep them */
 }
 
 int review_strips_shown(const palp_assess_result *r) {
@@ -302,7 +302,8 @@ int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
   if (sqlite3_prepare_v2(palp_db_handle(db),
                          "SELECT exercise_name, samples, lesions, found, findings, withdrawn, false_positives, "
                          "coverage_light, coverage_medium, coverage_deep, coverage_any, pattern, path_length_m, presses, "
-                         "duration_s, peak_force_n, out_of_range, score, pass FROM session_metrics WHERE session_id = ?1",
+                         "duration_s, peak_force_n, out_of_range, score, pass, strips, strip_order FROM session_metrics "
+                         "WHERE session_id = ?1",
                          -1, &st, NULL) != SQLITE_OK)
     return PALP_DB_ESQL;
   sqlite3_bind_int64(st, 1, sid);
@@ -331,7 +332,10 @@ int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
     r->out_of_range = sqlite3_column_int(st, 16);
     r->score = sqlite3_column_double(st, 17);
     r->pass = sqlite3_column_int(st, 18);
-    r->evidence.strips = -1; /* not kept in the stored metrics: unknown, not none */
+    /* stored since schema 5; NULL in a row stored before: unknown, not none */
+    const int has_strips = sqlite3_column_type(st, 19) != SQLITE_NULL;
+    r->evidence.strips = has_strips ? sqlite3_column_int(st, 19) : -1;
+    r->evidence.sweep_monotony = has_strips ? sqlite3_column_double(st, 20) : 0.0;
     rc = 0;
   }
   sqlite3_finalize(st);
@@ -352,6 +356,9 @@ int review_stored_metrics_print(palp_db *db, int64_t sid, FILE *f) {
           100 * r->coverage[1], 100 * r->coverage[2], 100 * r->coverage_any);
   fprintf(f, "  search pattern   %s (path %.2f m, %d presses)\n", palp_pattern_name(r->pattern), r->evidence.path_length,
           r->evidence.presses);
+  if (review_strips_shown(r)) fprintf(f, "  strips           %d, in order %.2f\n", r->evidence.strips, r->evidence.sweep_monotony);
+  else if (r->pattern == PALP_PATTERN_VERTICAL_STRIP && r->evidence.strips < 0)
+    fprintf(f, "  strips           not stored (pruned before the log kept them)\n");
   fprintf(f, "  time             %.2f s\n  force            peak %.2f N, %d episodes out of range\n", r->duration,
           r->peak_force, r->out_of_range);
   if (a.has_exercise) fprintf(f, "  score            %.1f / 100: %s\n", r->score, r->pass ? "PASS" : "FAIL");

@@ -46,14 +46,15 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
 void review_metrics_print(FILE *f, const review_assessment *a);
 /* Whether the review shows a session's strips and their order (docs/assessment.md): a search
  * classed vertical strip with three strips or more (circles and spokes have axial runs too,
- * whose order means nothing; a pruned session's are unknown). The CSVs carry them always. */
+ * whose order means nothing; those of a session pruned before schema 5 are unknown). The CSVs
+ * carry them always. */
 int review_strips_shown(const palp_assess_result *r);
 /* The rubric's pass mark for the search pattern as the review writes it: "any", "systematic",
  * "vertical_strip", ..., followed by "; strips in order >= 0.70" when the rubric asks for an
  * order (palp_rubric.pass_strip_order). */
 void review_pattern_mark(const palp_rubric *rb, char *buf, size_t len);
 
-/* A pruned session's stored metrics (session_metrics, schema 4): printed, or into *out
+/* A pruned session's stored metrics (session_metrics, schema 4; the strips since schema 5): printed, or into *out
  * (only the fields the table holds). 0, or PALP_DB_ENOTFOUND when none are stored. */
 int review_stored_metrics_print(palp_db *db, int64_t sid, FILE *f);
 int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out);

@@ -54,8 +54,13 @@ static int exec_sid(sqlite3 *h, const char *fmt, const char *table, int64_t sid)
 static int store_metrics(sqlite3 *h, int64_t sid, const review_assessment *a) {
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(h,
-                         "INSERT OR REPLACE INTO session_metrics VALUES(?1, (julianday('now') - 2440587.5) * 86400.0, "
-                         "?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20)",
+                         "INSERT OR REPLACE INTO session_metrics(session_id, computed_unix_s, exercise_name, "
+                         "samples, lesions, found, findings, withdrawn, false_positives, coverage_light, "
+                         "coverage_medium, coverage_deep, coverage_any, pattern, path_length_m, presses, duration_s, "
+                         "peak_force_n, out_of_range, score, pass, strips, strip_order) "
+                         "VALUES(?1, (julianday('now') - 2440587.5) * 86400.0, "
+                         "?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, "
+                         "?22)",
                          -1, &st, NULL) != SQLITE_OK)
     return -1;
   const palp_assess_result *r = &a->r;
@@ -81,6 +86,8 @@ static int store_metrics(sqlite3 *h, int64_t sid, const review_assessment *a) {
     sqlite3_bind_double(st, 19, r->score);
     sqlite3_bind_int(st, 20, r->pass);
   }
+  sqlite3_bind_int(st, 21, r->evidence.strips); /* schema 5 */
+  sqlite3_bind_double(st, 22, r->evidence.sweep_monotony);
   int rc = sqlite3_step(st);
   sqlite3_finalize(st);
   return rc == SQLITE_DONE ? 0 : -1;

@@ -273,8 +273,8 @@ static void test_migration(const char *v1_sql) {
 
   palp_db *db;
   REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open v1: %s", err);
-  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 4,
-        "upgraded to %d (library %d, expected 4)", palp_db_file_version(db), palp_db_schema_version());
+  CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 5,
+        "upgraded to %d (library %d, expected 5)", palp_db_file_version(db), palp_db_schema_version());
   palp_db_session_info info;
   CHECK(palp_db_find_session(db, "old-1", &info) == 0 && !strcmp(info.trainee, "carol") && info.frames == 1 &&
             info.records_shed == 0,
@@ -283,6 +283,9 @@ static void test_migration(const char *v1_sql) {
   CHECK(db_scalar(h, "SELECT count(*) FROM writer_run") == 0, "writer_run created by migration 2");
   CHECK(db_scalar(h, "SELECT count(*) FROM meta WHERE key = 'upgraded_unix_s'") == 1, "meta.upgraded_unix_s");
   CHECK(db_scalar(h, "SELECT count(*) FROM frame WHERE state_hash = -42") == 1, "v1 frame intact");
+  CHECK(db_scalar(h, "SELECT count(*) FROM pragma_table_info('session_metrics') WHERE name IN ('strips', "
+                     "'strip_order')") == 2,
+        "session_metrics has the strips and their order (migration 5)");
   palp_db_close(db);
 
   /* Opening again is a no-op. */
@@ -293,7 +296,7 @@ static void test_migration(const char *v1_sql) {
   path_in(p, sizeof p, "fresh.db");
   REQUIRE(palp_db_open(p, 1, &db, err, sizeof err) == 0, "create: %s", err);
   h = palp_db_handle(db);
-  CHECK(palp_db_file_version(db) == 4, "fresh version");
+  CHECK(palp_db_file_version(db) == 5, "fresh version");
   CHECK(db_scalar(h, "SELECT count(*) FROM meta WHERE key IN ('created_unix_s','app_version','schema_version')") == 3,
         "meta rows");
   CHECK(db_scalar(h, "PRAGMA journal_mode = WAL") >= -1, "wal");
@@ -326,7 +329,7 @@ static void test_newer(void) {
   palp_db *db;
   int rc = palp_db_open(p, 0, &db, err, sizeof err);
   CHECK(rc == PALP_DB_ENEWER, "newer file refused (rc %d)", rc);
-  CHECK(strstr(err, "database schema version 99 is newer than this palp (4); upgrade palp") != NULL,
+  CHECK(strstr(err, "database schema version 99 is newer than this palp (5); upgrade palp") != NULL,
         "clear message, got: %s", err);
   palp_db_writer *w;
   err[0] = '\0';

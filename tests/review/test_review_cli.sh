@@ -111,17 +111,31 @@ expect "prune: graded sessions kept" "kept +class-alice-1: graded" "$dir/prune.t
 expect "prune: bob's second session pruned" "pruned class-bob-2" "$dir/prune.txt"
 R show class-bob-2 > "$dir/show-pruned.txt" 2>&1
 expect "a pruned session still shows its metrics" "stored when the session was pruned" "$dir/show-pruned.txt"
-# the strips are not among the stored metrics: a pruned session's are unknown (empty), not none (0)
+# the strips are among the stored metrics since schema 5: the pruned session's CSV fields as before the
+# prune; a row stored before schema 5 (NULL) has them unknown (empty), not none (0)
 R class --exercise test-two-lumps --out "$dir/class-pruned.html" --csv "$dir/class-pruned.csv" > /dev/null 2>&1 ||
   bad "class report after the prune"
-if python3 - "$dir/class-pruned.csv" <<'PY'
+if python3 - "$dir/class.csv" "$dir/class-pruned.csv" <<'PY'
+import csv, sys
+before = {r["session"]: r for r in csv.DictReader(open(sys.argv[1]))}
+rows = {r["session"]: r for r in csv.DictReader(open(sys.argv[2]))}
+b2 = rows["class-bob-2"]
+assert b2["strips"] != "" and (b2["strips"], b2["strip_order"]) == (before["class-bob-2"]["strips"], before["class-bob-2"]["strip_order"]), (b2, before["class-bob-2"])
+assert rows["class-alice-1"]["strips"] == "15" and rows["class-bob-1"]["strips"] == "0", rows
+PY
+then ok "class CSV after the prune: the pruned session's strips stored as computed before it, the others' counted"
+else bad "class CSV after the prune"; fi
+python3 -c "import sqlite3,sys; c=sqlite3.connect(sys.argv[1]); c.execute('update session_metrics set strips = NULL, strip_order = NULL'); c.commit()" "$db" ||
+  bad "clearing the stored strips"
+R class --exercise test-two-lumps --out "$dir/class-v4.html" --csv "$dir/class-v4.csv" > /dev/null 2>&1 ||
+  bad "class report over metrics stored before schema 5"
+if python3 - "$dir/class-v4.csv" <<'PY'
 import csv, sys
 rows = {r["session"]: r for r in csv.DictReader(open(sys.argv[1]))}
 assert (rows["class-bob-2"]["strips"], rows["class-bob-2"]["strip_order"]) == ("", ""), rows["class-bob-2"]
-assert rows["class-alice-1"]["strips"] == "15" and rows["class-bob-1"]["strips"] == "0", rows
 PY
-then ok "class CSV after the prune: the pruned session's strips empty, the others' counted"
-else bad "class CSV after the prune"; fi
+then ok "class CSV: metrics stored before schema 5 have the strips empty (unknown), not 0"
+else bad "class CSV over metrics stored before schema 5"; fi
 R delete class-carol-1 > /dev/null 2>&1 || bad "delete"
 if python3 - "$db" <<'PY'
 
