@@ -620,6 +620,9 @@ int main(int argc, char **argv) {
     }
     resolve_pending(r, 0, 0);
     end_lost_sessions(r, dds_time());
+    /* a service runs for days: a refused peer's repeats are said a window after its last line,
+     * not only at stop (idl/palp_dds_refusals.h) */
+    palp_dds_refusals_tick(&refusals, palp_dds_now_ns());
   }
   dds_delete(pp);
   palp_db_writer_stats st;
