@@ -24,9 +24,8 @@
 #define PATTERN_MIN_SHARE 0.60
 /* A vertex re-entering the footprint after this long away starts a new visit. */
 #define VISIT_GAP 0.5 /* [s] */
-/* Out of touch for longer than this is a lift; shorter losses of contact (the surface
- * recovering more slowly than the finger rises) keep the stroke going. */
-#define LIFT_GAP 0.25 /* [s] */
+/* Out of touch for longer than this is a lift (palp_assess.h). */
+#define LIFT_GAP PALP_ASSESS_LIFT_GAP_S /* [s] */
 
 static palp_vec3 on_dome(palp_vec3 p, double R) {
   const double n = v3_len(p);
@@ -225,6 +224,30 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
   if (ev->share_tangential > best) best = ev->share_tangential, p = PALP_PATTERN_CIRCLES;
   if (ev->share_radial > best) best = ev->share_radial, p = PALP_PATTERN_RADIAL;
   if (best >= PATTERN_MIN_SHARE) *out = p;
+}
+
+int palp_assess_touches(const palp_assess_sample *s, int n, double R, double r, palp_touch *out, int cap) {
+  int count = 0;
+  double t_touch = -INFINITY;
+  palp_touch cur = {0};
+  for (int i = 0; i < n; ++i) {
+    if (!s[i].contact) continue;
+    if (s[i].t - t_touch > LIFT_GAP) { /* a touch-down: the touch before (if any) is complete */
+      if (count > 0 && count <= cap) out[count - 1] = cur;
+      count++;
+      cur = (palp_touch){.t_on = s[i].t, .first_point = s[i].point};
+    }
+    t_touch = s[i].t;
+    cur.t_off = s[i].t;
+    cur.last_point = s[i].point;
+    /* the same segments as palp_assess's path: consecutive samples both in contact */
+    if (i > 0 && s[i - 1].contact) cur.path_length += v3_len(v3_sub(on_dome(s[i].proxy, R), on_dome(s[i - 1].proxy, R)));
+    const double F = fnorm(s[i].force), indent = R + r - v3_len(s[i].proxy);
+    if (F > cur.peak_force) cur.peak_force = F;
+    if (indent > cur.peak_indentation) cur.peak_indentation = indent;
+  }
+  if (count > 0 && count <= cap) out[count - 1] = cur;
+  return count;
 }
 
 int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const palp_assess_sample *s, int n,

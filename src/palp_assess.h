@@ -201,6 +201,28 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double finger_ra
                 int sample_count, const palp_finding *findings, int finding_count, palp_assess_result *out,
                 int *finding_match, uint8_t *coverage);
 
+/* Out of touch for longer than this [s] is a lift; shorter losses of contact (the surface
+ * recovering more slowly than the finger rises) keep the stroke going. palp_assess counts its
+ * presses (touch-downs) by it, and palp_assess_touches splits a session by it. */
+#define PALP_ASSESS_LIFT_GAP_S 0.25
+
+/* One touch: the fingertip on the phantom from a touch-down to its lift, as palp_assess counts
+ * presses. Places are contact points on the phantom's surface, not the fingertip's centre. */
+typedef struct palp_touch {
+  double t_on, t_off;      /* first and last sample in contact [s] */
+  palp_vec3 first_point;   /* contact point at the touch-down [m] */
+  palp_vec3 last_point;    /* at the lift [m] */
+  double path_length;      /* the fingertip's path over the dome while touching, as palp_assess's [m] */
+  double peak_force;       /* max |force| [N] */
+  double peak_indentation; /* max R + r - |proxy| below the rest surface [m] */
+} palp_touch;
+
+/* Splits a session's samples into touches (the same samples palp_assess takes, in time order).
+ * Writes the first cap of them into out (out may be NULL with cap 0) and returns how many there
+ * are: palp_assess's evidence.presses, and their path lengths sum to its path_length. */
+int palp_assess_touches(const palp_assess_sample *samples, int sample_count, double dome_radius,
+                        double finger_radius, palp_touch *out, int cap);
+
 /* The band of an indentation [m] and force magnitude [N], or -1 outside every band. */
 int palp_exercise_band(const palp_exercise *ex, double indentation, double force);
 

@@ -101,6 +101,7 @@ void review_assessment_free(review_assessment *a) {
   free(a->coverage);
   free(a->path);
   free(a->marks);
+  free(a->touches);
   memset(a, 0, sizeof *a);
 }
 
@@ -190,6 +191,14 @@ int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment 
   }
   for (int i = 0; i < sa.n; i++)
     if (sa.s[i].contact) out->path[out->path_n++] = sa.s[i].point;
+  const int nt = palp_assess_touches(sa.s, sa.n, out->dome_radius_m, sa.radius, NULL, 0);
+  out->touches = malloc(sizeof *out->touches * (size_t)(nt ? nt : 1));
+  if (!out->touches) {
+    rc = PALP_ENOMEM;
+    snprintf(err, errlen, "out of memory");
+    goto fail;
+  }
+  out->touch_n = palp_assess_touches(sa.s, sa.n, out->dome_radius_m, sa.radius, out->touches, nt);
   free(sa.s), free(sa.tri), free(sa.tri_at);
   return 0;
 fail:
@@ -228,6 +237,25 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
   /* added after the rest (2026-12-04), so a reader of the older columns reads them where they were */
   if (r->evidence.strips >= 0) fprintf(f, ",%d,%.4f\n", r->evidence.strips, r->evidence.sweep_monotony);
   else fputs(",,\n", f); /* metrics a prune stored before schema 5 do not keep them */
+}
+
+void review_touches_print(FILE *f, const review_assessment *a, int listed) {
+  fprintf(f, "where touched (the finger's %d touch%s, a lift being > %.2f s off the surface; contact points on the "
+             "phantom's surface seen from above: 12 o'clock = +y, 3 o'clock = +x; arc from the pole):\n",
+          a->touch_n, a->touch_n == 1 ? "" : "es", PALP_ASSESS_LIFT_GAP_S);
+  fprintf(f, "    %-4s %-17s %-22s %-8s %-9s %-8s %-9s %-10s %-13s %s\n", "#", "on .. off [s]", "down at x,y,z [mm]", "clock",
+          "arc [mm]", "lift at", "arc [mm]", "path [mm]", "deepest [mm]", "peak [N]");
+  for (int i = 0; i < a->touch_n && i < listed; i++) {
+    const palp_touch *t = &a->touches[i];
+    char at[40], on[24];
+    snprintf(at, sizeof at, "%.1f,%.1f,%.1f", t->first_point.x * 1e3, t->first_point.y * 1e3, t->first_point.z * 1e3);
+    snprintf(on, sizeof on, "%.2f .. %.2f", t->t_on, t->t_off);
+    fprintf(f, "    %-4d %-17s %-22s %5.1f h  %-9.1f %5.1f h  %-9.1f %-10.1f %-13.1f %.2f\n", i + 1, on, at,
+            review_clock_hours(t->first_point), review_arc_m(t->first_point) * 1e3, review_clock_hours(t->last_point),
+            review_arc_m(t->last_point) * 1e3, t->path_length * 1e3, t->peak_indentation * 1e3, t->peak_force);
+  }
+  if (a->touch_n > listed)
+    fprintf(f, "    ... and %d more (palp-review report lists every touch)\n", a->touch_n - listed);
 }
 
 int review_strips_shown(const palp_assess_result *r) {

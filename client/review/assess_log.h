@@ -29,6 +29,8 @@ typedef struct review_assessment {
   int path_n;
   review_mark *marks;
   int mark_n;
+  palp_touch *touches;       /* the finger's touches in time order (palp_assess_touches) */
+  int touch_n;
   palp_vec3 lesion_surface[PALP_MAX_LESIONS]; /* each lesion's surface projection [m] */
 } review_assessment;
 
@@ -44,6 +46,10 @@ void review_metrics_csv_header(FILE *f);
 void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a, double outside_s);
 /* The metrics, score and rubric as text lines (palp-review show). */
 void review_metrics_print(FILE *f, const review_assessment *a);
+/* The finger's touches as text (palp-review show): where each began and ended on the phantom's
+ * surface, its path, deepest indentation and peak force; the first `listed`, then how many more. */
+enum { REVIEW_TOUCHES_LISTED = 20 };
+void review_touches_print(FILE *f, const review_assessment *a, int listed);
 /* Whether the review shows a session's strips and their order (docs/assessment.md): a search
  * classed vertical strip with three strips or more (circles and spokes have axial runs too,
  * whose order means nothing; those of a session pruned before schema 5 are unknown). The CSVs

@@ -266,9 +266,13 @@ static void valid_range_section(palp_db *db, const palp_db_session_info *s, FILE
 
 /* The assessment (issue 13): metrics and score against the rubric, the coverage map per
  * pressure band, the finger's path with the findings against the now revealed lesions. */
-static void assessment_section(palp_log *log, palp_db *db, const palp_db_session_info *s, FILE *f) {
+/* Leaves the assessment in *keep (the caller frees it; zeroed when there is none) for the
+ * touches table further down. */
+static void assessment_section(palp_log *log, palp_db *db, const palp_db_session_info *s, FILE *f,
+                               review_assessment *keep) {
   review_assessment a;
   char err[256] = "";
+  memset(keep, 0, sizeof *keep);
   fputs("<h2>Assessment</h2>\n", f);
   const int rc = review_assess(db, s, &a, err, sizeof err);
   if (rc == PALP_DB_ENOTFOUND) {
@@ -401,7 +405,26 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
     }
     fputs("</table>\n", f);
   }
-  review_assessment_free(&a);
+  *keep = a; /* ownership moves to the caller */
+}
+
+/* Every touch of the finger (palp_assess_touches): where it came down and lifted on the
+ * phantom's surface, its path, deepest indentation and peak force. */
+static void touches_table(FILE *f, const review_assessment *a) {
+  fprintf(f, "<p>The finger's %d touch%s (a lift is more than %.2f s off the surface), at its contact points on the "
+             "phantom's surface:</p>\n<table id=\"touches\"><tr><th>#</th><th>on [s]</th><th>off [s]</th>"
+             "<th>down at x, y, z [mm]</th><th>clock</th><th>arc from the pole [mm]</th><th>lifted at clock</th>"
+             "<th>arc [mm]</th><th>path [mm]</th><th>deepest [mm]</th><th>peak force [N]</th></tr>\n",
+          a->touch_n, a->touch_n == 1 ? "" : "es", PALP_ASSESS_LIFT_GAP_S);
+  for (int i = 0; i < a->touch_n; i++) {
+    const palp_touch *t = &a->touches[i];
+    fprintf(f, "<tr><td>%d</td><td>%.2f</td><td>%.2f</td><td>%.1f, %.1f, %.1f</td><td>%.1f h</td><td>%.1f</td>"
+               "<td>%.1f h</td><td>%.1f</td><td>%.1f</td><td>%.1f</td><td>%.2f</td></tr>\n",
+            i + 1, t->t_on, t->t_off, t->first_point.x * 1e3, t->first_point.y * 1e3, t->first_point.z * 1e3,
+            review_clock_hours(t->first_point), review_arc_m(t->first_point) * 1e3, review_clock_hours(t->last_point),
+            review_arc_m(t->last_point) * 1e3, t->path_length * 1e3, t->peak_indentation * 1e3, t->peak_force);
+  }
+  fputs("</table>\n", f);
 }
 
 int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *out_path) {
@@ -470,7 +493,8 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
       fprintf(f, "<p class=\"warn\">This log is incomplete: %lld records were shed and %lld lost to disk errors.</p>\n",
               (long long)s->records_shed, (long long)s->records_failed);
 
-    assessment_section(log, db, s, f);
+    review_assessment a;
+    assessment_section(log, db, s, f, &a);
     valid_range_section(db, s, f);
     fputs("<h2>Force</h2>\n", f);
     series fs = {"contact force", "#c0392b", ts.t, ts.force, ts.n};
@@ -482,7 +506,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     fputs("<h2>Where the trainee pressed</h2>\n<p>Top view of the phantom (12 o'clock = +y). Circles mark where each "
           "contact started, sized by its peak force; lines follow a finger's path.</p>\n", f);
     svg_topview(f, have_mesh ? &mesh : NULL, &mc, &in, pr, np);
-    fputs("<table id=\"presses\"><tr><th>#</th><th>slot</th><th>kind</th><th>centre x, y, z [mm]</th>"
+    fputs("<table id=\"presses\"><tr><th>#</th><th>slot</th><th>kind</th><th>centre x, y, z [mm] (a finger: its device point at the start)</th>"
           "<th>clock</th><th>on [s]</th><th>off [s]</th><th>peak force [N]</th></tr>\n", f);
     for (int p = 0; p < np; p++) {
       const palp_vec3 c = pr[p].first_center_m;
@@ -493,7 +517,10 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
       else fputs("end", f);
       fprintf(f, "</td><td>%.3f</td></tr>\n", pr[p].peak_force_n);
     }
-    fputs("</table>\n<h2>Events</h2>\n<table id=\"events\"><tr><th>time</th><th>frame</th><th>kind</th>"
+    fputs("</table>\n", f);
+    if (a.touch_n > 0) touches_table(f, &a);
+    review_assessment_free(&a);
+    fputs("<h2>Events</h2>\n<table id=\"events\"><tr><th>time</th><th>frame</th><th>kind</th>"
           "<th>count</th><th>detail</th></tr>\n", f);
     palp_db_each_event(db, s->id, ev_row, f);
     fputs("</table>\n<h2>Instructor notes</h2>\n<table id=\"notes\"><tr><th>time</th><th>author</th><th>grade</th>"

@@ -218,15 +218,21 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   }
   printf("contacts   %d inputs: %d force contact%s, %d finger%s\n", c.n, nforce, nforce == 1 ? "" : "s", nfinger,
          nfinger == 1 ? "" : "s");
-  if (np) {
+  /* The finger's touches come from its logged samples (the assessment's reading of them): a
+   * finger slot lives for the whole session, and its input is the device point above the
+   * surface, so the slot alone says neither where nor how often the trainee touched. */
+  review_assessment a;
+  char aerr[512];
+  const int arc = review_assess(db, s, &a, aerr, sizeof aerr);
+  const int touches = arc == 0 && a.touch_n > 0;
+  if (np && (nforce || !touches)) {
     printf("where pressed (seen from above; 12 o'clock = +y, 3 o'clock = +x; arc from the pole):\n");
     printf("    %-4s %-6s %-18s %-26s %-8s %-9s %-15s %s\n", "slot", "kind", "distribution", "centre x,y,z [mm]", "clock",
            "arc [mm]", "on .. off [s]", "peak [N]");
     for (int i = 0; i < np; i++) {
       const review_press *q = &pr[i];
+      if (q->kind != PALP_DB_KIND_FORCE && touches) continue; /* listed by its touches below */
       const palp_vec3 x = q->first_center_m;
-      const double r = sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
-      const double arc = r > 0 ? r * acos(fmax(-1.0, fmin(1.0, x.z / r))) : 0.0;
       char off[24];
       if (q->t_off_s >= 0) snprintf(off, sizeof off, "%.2f", q->t_off_s);
       else snprintf(off, sizeof off, "end");
@@ -234,15 +240,13 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
       snprintf(ctr, sizeof ctr, "%.1f,%.1f,%.1f", x.x * 1e3, x.y * 1e3, x.z * 1e3);
       printf("    %-4d %-6s %-18s %-26s %5.1f h  %-9.1f %6.2f .. %-6s %.2f%s\n", q->slot,
              q->kind == PALP_DB_KIND_FORCE ? "force" : "finger", q->kind == PALP_DB_KIND_FORCE ? review_dist_name(q->distribution) : "-",
-             ctr, review_clock_hours(x), arc * 1e3, q->t_on_s, off, q->peak_force_n,
-             q->updates ? "" : "");
+             ctr, review_clock_hours(x), review_arc_m(x) * 1e3, q->t_on_s, off, q->peak_force_n,
+             q->kind == PALP_DB_KIND_FORCE ? "" : "  (the device point at the start: no finger samples logged)");
     }
   }
+  if (touches) review_touches_print(stdout, &a, REVIEW_TOUCHES_LISTED);
   free(pr);
   free(c.v);
-  review_assessment a;
-  char aerr[512];
-  const int arc = review_assess(db, s, &a, aerr, sizeof aerr);
   if (arc == 0) {
     review_metrics_print(stdout, &a);
     review_assessment_free(&a);

@@ -109,6 +109,12 @@ double review_clock_hours(palp_vec3 p) {
   return h;
 }
 
+double review_arc_m(palp_vec3 p) {
+  /* the great-circle distance from the pole of the sphere through p: r x (angle from +z) */
+  const double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  return r > 0 ? r * acos(fmax(-1.0, fmin(1.0, p.z / r))) : 0.0;
+}
+
 typedef struct press_acc {
   review_press *v;
   int n;

@@ -27,6 +27,8 @@ typedef struct review_press {
 int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n);
 /* "3 o'clock": the clock position of a point seen from above (12 = +y, 3 = +x). */
 double review_clock_hours(palp_vec3 p);
+/* The arc from the pole [m] along the sphere through p (centred at the dome's base centre). */
+double review_arc_m(palp_vec3 p);
 /* The one name of a force distribution everywhere (docs/naming.md). */
 const char *review_dist_name(palp_distribution d);
 

@@ -44,6 +44,8 @@ static palp_vec3 unit(double x, double y) { /* the dome point above plan positio
   return (palp_vec3){x / R, y / R, z / R};
 }
 
+static double v3_dist_mm(palp_vec3 a, palp_vec3 b) { return 1e3 * sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z)); }
+
 /* Plan-view trajectories, 1 mm per sample at 50 mm/s. */
 typedef struct traj {
   palp_assess_sample *s;
@@ -221,6 +223,36 @@ int main(void) {
     const int first = T.n;
     line(&T, x, -h, x, h);
     for (int i = first; i < T.n; ++i) T.s[i].t += t0;
+  }
+  {
+    /* The same strips as touches (palp_assess_touches): one per strip, each from (x, -h) to (x, h) on the
+     * dome, 8 mm deep at 0.5 N (at() above); as many as palp_assess's presses, their paths summing to
+     * its path length. */
+    palp_touch tv[12];
+    const int nt = palp_assess_touches(T.s, T.n, R, r, tv, 12);
+    palp_exercise tex = exercise();
+    palp_assess_result tres;
+    CHECK(palp_assess(&tex, &mesh, r, T.s, T.n, NULL, 0, &tres, NULL, NULL) == 0, "lifted strips assessed");
+    CHECK(nt == 9 && nt == tres.evidence.presses, "touches: %d, palp_assess's presses %d (want 9)", nt,
+          tres.evidence.presses);
+    double sum = 0.0, worst = 0.0;
+    for (int k = 0; k < nt && k < 12; ++k) {
+      const double x = (k - 4) * 0.008, h = sqrt(0.037 * 0.037 - x * x);
+      const palp_vec3 a = unit(x, -h), b = unit(x, h);
+      worst = fmax(worst, fmax(v3_dist_mm(tv[k].first_point, (palp_vec3){R * a.x, R * a.y, R * a.z}),
+                               v3_dist_mm(tv[k].last_point, (palp_vec3){R * b.x, R * b.y, R * b.z})));
+      CHECK(k == 0 || tv[k].t_on - tv[k - 1].t_off > PALP_ASSESS_LIFT_GAP_S, "touch %d starts after a lift", k + 1);
+      CHECK(fabs(tv[k].peak_force - 0.5) < 1e-12 && fabs(tv[k].peak_indentation - 0.008) < 1e-12,
+            "touch %d: peak %.3f N, deepest %.4f m (want 0.5 N, 0.008 m)", k + 1, tv[k].peak_force,
+            tv[k].peak_indentation);
+      sum += tv[k].path_length;
+    }
+    CHECK(worst < 1e-9, "each touch comes down and lifts where its strip begins and ends (worst %.2g mm)", worst);
+    CHECK(fabs(sum - tres.evidence.path_length) < 1e-12, "the touches' paths sum to the path length (%.6f vs %.6f m)",
+          sum, tres.evidence.path_length);
+    CHECK(palp_assess_touches(T.s, T.n, R, r, tv, 3) == 9, "a short buffer still gets the count");
+    CHECK(palp_assess_touches(T.s, T.n, R, r, NULL, 0) == 9 && palp_assess_touches(T.s, 0, R, r, NULL, 0) == 0,
+          "counting only; no samples, no touches");
   }
   CHECK(classify(&mesh, &T, "lifted", &ev) == PALP_PATTERN_VERTICAL_STRIP, "lifted strips");
   CHECK(ev.strips == 9 && ev.sweep_monotony == 1.0, "lifted strips: %d in order %.3f", ev.strips, ev.sweep_monotony);

@@ -5,6 +5,7 @@
  * rest mesh, finger samples, findings) and must give exactly what palp_assess gave on the
  * samples in memory: tolerance 0 (SQLite stores IEEE doubles bit for bit and the same pure
  * code runs on the same numbers). Then the issue's properties on the logged expert and novice. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -89,6 +90,29 @@ int main(int argc, char **argv) {
             !review_strips_shown(&circles) && !review_strips_shown(&two) && !review_strips_shown(&pruned),
         "strips shown for the expert's strip search (%d, order %.2f) only", e->evidence.strips,
         e->evidence.sweep_monotony);
+  /* The touches palp-review show and the report list, read back from the log: as many as the
+   * metrics' presses, in time order, their paths summing to the path length; the novice's script
+   * presses 5 times 3 mm deep at the device (about 2.6 mm into the surface behind the coupling). */
+  for (int i = 0; i < 3; i++) {
+    const review_assessment *x = &a[i];
+    double sum = 0.0;
+    int ordered = 1;
+    for (int k = 0; k < x->touch_n; k++) {
+      sum += x->touches[k].path_length;
+      if (x->touches[k].t_off < x->touches[k].t_on ||
+          (k > 0 && x->touches[k].t_on - x->touches[k - 1].t_off <= PALP_ASSESS_LIFT_GAP_S))
+        ordered = 0;
+    }
+    CHECK(x->touch_n == x->r.evidence.presses && x->touch_n > 0 && ordered, "%s: %d touches in time order, %d presses",
+          uid[i], x->touch_n, x->r.evidence.presses);
+    CHECK(fabs(sum - x->r.evidence.path_length) < 1e-9, "%s: the touches' paths sum to the path length (%.6f vs %.6f m)",
+          uid[i], sum, x->r.evidence.path_length);
+  }
+  int light = a[1].touch_n == 5;
+  for (int k = 0; k < a[1].touch_n; k++)
+    light = light && a[1].touches[k].peak_indentation > 0.0015 && a[1].touches[k].peak_indentation < 0.0035;
+  CHECK(light, "the novice's 5 light presses read back as 5 touches 1.5-3.5 mm deep (%d; first %.2f mm)", a[1].touch_n,
+        a[1].touch_n ? a[1].touches[0].peak_indentation * 1e3 : 0.0);
   for (int i = 0; i < 3; i++) review_assessment_free(&a[i]);
   palp_db_close(db);
   CHECK_DONE();

@@ -31,6 +31,26 @@ expect "show: the strips and their order" "strips +1[3-5], in order (0\.9[0-9]|1
 expect "show: the pattern's pass mark from the rubric" "search pattern +vertical_strip .* \(pass: systematic; strips in order >= 0\.70\) +pass$" "$dir/show-alice.txt"
 expect "show: the order's share of the credit" "strips +1[3-5], in order (0\.9[0-9]|1\.00) .*; the rubric rests 50% of the pattern's credit on it: (0\.9[5-9]|1\.00) of 1; pass at 0\.70 +pass$" "$dir/show-alice.txt"
 expect "show: score and PASS" "score +9[0-9]\.[0-9] / 100 \(pass at 70\): PASS" "$dir/show-alice.txt"
+# a finger's session lists its touches on the phantom's surface, one row each, as many as the metrics' presses
+# (the expert's whole search is 1 touch; bob the novice presses 5 times), not the finger slot's device point
+R show class-bob-1 > "$dir/show-bob1.txt" 2>&1 || bad "show bob-1 exit status"
+if python3 - "$dir/show-alice.txt" "$dir/show-bob1.txt" <<'PY'
+import re, sys
+for path, want in ((sys.argv[1], 1), (sys.argv[2], 5)):
+    text = open(path).read()
+    m = re.search(r"^where touched \(the finger's (\d+) touch(es)?, .*\n.*\n((?:    \d+ .*\n)+)", text, re.M)
+    assert m and int(m.group(1)) == want and len(m.group(3).splitlines()) == want, (path, m and m.group(0))
+    presses = int(re.search(r"search pattern .*?, (\d+) presses", text).group(1))
+    assert presses == want, (path, presses)
+    assert "where pressed" not in text, path  # no finger row with the device point above the dome
+    for row in m.group(3).splitlines():
+        f = row.split()
+        x, y, z = (float(v) for v in f[4].split(","))
+        r = (x * x + y * y + z * z) ** 0.5
+        assert 38.0 <= r <= 40.5, (path, row, r)  # on the 40 mm dome's surface (dented by the press), not the device's 50+ mm
+PY
+then ok "show: the finger's touches, 1 for the expert and 5 for the novice, on the dome's surface"
+else bad "show: the finger's touches"; cat "$dir/show-bob1.txt"; fi
 R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
 expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
 # The model's valid range, from the server's valid_range events (review_gen logs alice's: 355 steps
@@ -84,6 +104,10 @@ render() { # render HTML PNG DOM
 R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"
 R report class-bob-1 --out "$dir/bob.html" > /dev/null || bad "report bob"
 expect "report: the strips and their order" '<tr data-metric="strips"><th>Strips and their order</th><td class="value">1[3-5] strips, in order (0\.9[0-9]|1\.00)' "$dir/alice.html"
+expect "report: the touches table, the expert's one touch" '<table id="touches">.*' "$dir/alice.html"
+if [ "$(sed -n '/<table id="touches">/,/<\/table>/p' "$dir/bob.html" | grep -c '^<tr><td>')" = 5 ]; then
+  ok "report: the novice's 5 touches in the touches table"
+else bad "report: the novice's touches table"; sed -n '/<table id="touches">/,/<\/table>/p' "$dir/bob.html"; fi
 expect "report: the pattern's pass mark from the rubric" '<tr data-metric="pattern"><th>Search pattern</th><td class="value">vertical_strip [^<]*</td><td>systematic; strips in order &gt;= 0\.70</td><td class="pass">' "$dir/alice.html"
 expect "report: what the rubric asks of the order" '<tr data-metric="strips">.*</td><td>&gt;= 0\.70; 50% of the pattern&#39;s credit \((0\.9[5-9]|1\.00) of 1\)</td><td class="pass">pass</td>' "$dir/alice.html"
 R class --exercise test-two-lumps --out "$dir/class.html" --csv "$dir/class.csv" > "$dir/class.txt" || bad "class report"
