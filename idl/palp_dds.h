@@ -94,7 +94,14 @@ void palp_dds_session_partition(uint32_t session_id, char *buf, size_t len);
 typedef enum palp_dds_refusal_kind {
   PALP_DDS_REFUSED_HANDSHAKE = 1,   /* authentication: its identity certificate */
   PALP_DDS_REFUSED_PERMISSIONS = 2, /* access control: its permissions document */
+  PALP_DDS_REFUSED_UNAUTHENTICATED = 3, /* no identity at all: a plain DDS participant on a secured
+                                           domain (palp_dds_strangers.h; no Cyclone line says it) */
 } palp_dds_refusal_kind;
+/* "at the handshake", "for its permissions", "without an identity": how palp's lines say it. */
+const char *palp_dds_refusal_kind_words(palp_dds_refusal_kind kind);
+/* "handshake", "permissions", "unauthenticated": the word the session log's events and
+ * palp-web's dashboard carry. */
+const char *palp_dds_refusal_kind_name(palp_dds_refusal_kind kind);
 #define PALP_DDS_REFUSAL_WHO 96
 #define PALP_DDS_REFUSAL_WHY 160
 typedef struct palp_dds_refusal {

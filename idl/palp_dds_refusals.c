@@ -4,9 +4,19 @@
 #include <stdarg.h>
 #include <string.h>
 
-static const char *kind_words(palp_dds_refusal_kind k) {
-  return k == PALP_DDS_REFUSED_PERMISSIONS ? "for its permissions" : "at the handshake";
+const char *palp_dds_refusal_kind_words(palp_dds_refusal_kind k) {
+  return k == PALP_DDS_REFUSED_PERMISSIONS     ? "for its permissions"
+         : k == PALP_DDS_REFUSED_UNAUTHENTICATED ? "without an identity"
+                                                 : "at the handshake";
 }
+
+const char *palp_dds_refusal_kind_name(palp_dds_refusal_kind k) {
+  return k == PALP_DDS_REFUSED_PERMISSIONS     ? "permissions"
+         : k == PALP_DDS_REFUSED_UNAUTHENTICATED ? "unauthenticated"
+                                                 : "handshake";
+}
+
+static const char *kind_words(palp_dds_refusal_kind k) { return palp_dds_refusal_kind_words(k); }
 
 /* Lines and records made under t->mu and said after it is released: the owner's log and
  * session log take locks of their own, which another thread may hold while it asks this

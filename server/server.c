@@ -21,6 +21,7 @@
 #include "admission.h"
 #include "retire.h"
 #include "palp_dds_refusals.h"
+#include "palp_dds_strangers.h"
 #include "palp_dds_security.h"
 #include "session.h"
 #include "ticker.h"
@@ -100,6 +101,8 @@ struct palp_srv {
   int dds_log_installed;
   palp_dds_refusals refusals; /* peers DDS Security refused (palp_dds_refusals.h) */
   int refusals_ready; /* initialised: a server that failed before it is destroyed without them */
+  palp_dds_strangers strangers; /* plain participants on the secured domain (palp_dds_strangers.h) */
+  int strangers_ready;
 
   closed_session *closed; /* ring of the last CLOSED_KEEP */
   int closed_count, closed_head;
@@ -123,8 +126,7 @@ static void record_refusal(void *ctx, const palp_dds_refusal *r, uint64_t count)
   const palp_srv *srv = ctx;
   if (!srv->events || !srv->events->security_refused) return;
   char detail[PALP_DDS_REFUSAL_WHO + PALP_DDS_REFUSAL_WHY + 32];
-  snprintf(detail, sizeof detail, "%s: %s (%s)", r->who, r->why,
-           r->kind == PALP_DDS_REFUSED_PERMISSIONS ? "permissions" : "handshake");
+  snprintf(detail, sizeof detail, "%s: %s (%s)", r->who, r->why, palp_dds_refusal_kind_name(r->kind));
   srv->events->security_refused(srv->events->ctx, detail, count);
 }
 
@@ -1341,6 +1343,10 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
          secured(srv) ? "; DDS Security refused the identity (see above: revoked, expired, domain > 230?)" : "");
     goto fail;
   }
+  /* Secured, a participant without an identity is ignored by DDS Security without a word:
+   * look for such strangers at each status, so the log names the misconfigured station. */
+  if (secured(srv) && palp_dds_strangers_init(&srv->strangers, srv->pp, PALP_DDS_STRANGER_GRACE_S) == 0)
+    srv->strangers_ready = 1;
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
     /* Secured, palp_station_request is not offered (no identity to check; see below). */
     if (secured(srv) && k == PALP_TOPIC_STATION_REQUEST) continue;
@@ -1528,6 +1534,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
       publish_status(srv);
       /* a refused peer that stopped retrying: its repeats logged (and kept) within a window */
       palp_dds_refusals_tick(&srv->refusals, palp_dds_now_ns());
+      if (srv->strangers_ready) palp_dds_strangers_tick(&srv->strangers, &srv->refusals, palp_dds_now_ns());
       next_status += status_period;
       if (next_status < palp_dds_now_ns()) next_status = palp_dds_now_ns() + status_period;
     }
@@ -1599,6 +1606,7 @@ void palp_srv_destroy(palp_srv *srv) {
   }
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
+  if (srv->strangers_ready) palp_dds_strangers_destroy(&srv->strangers); /* its readers, before their participant */
   if (srv->pp > 0) dds_delete(srv->pp);
   palp_srv_identity_destroy(srv->identity);
   /* After the participant: the request filter (which uses the admission table)

@@ -15,6 +15,7 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "palp_dds_strangers.h"
 
 #define FINGERS 4
 #define TAKE 32
@@ -160,6 +161,8 @@ struct palp_web_hub {
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r;
   dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
+  palp_dds_strangers strangers; /* secured, with a refusal table: plain participants named (hub thread only) */
+  int strangers_ready;
   int hinted;           /* hint_if_unanswered has looked */
   dds_entity_t ws, stop_gc;
   pthread_t thread;
@@ -405,7 +408,7 @@ static void build_status(palp_web_hub *h) {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "who", e[k].r.who);
     cJSON_AddStringToObject(o, "why", e[k].r.why);
-    cJSON_AddStringToObject(o, "at", e[k].r.kind == PALP_DDS_REFUSED_PERMISSIONS ? "permissions" : "handshake");
+    cJSON_AddStringToObject(o, "at", palp_dds_refusal_kind_name(e[k].r.kind));
     cJSON_AddNumberToObject(o, "count", (double)e[k].count);
     cJSON_AddItemToArray(ref, o);
   }
@@ -798,6 +801,7 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
   ss->at_ns = palp_dds_now_ns();
   /* a refused peer that stopped retrying: its repeats logged within a window of the last line */
   if (h->def.refusals) palp_dds_refusals_tick(h->def.refusals, palp_dds_now_ns());
+  if (h->strangers_ready) palp_dds_strangers_tick(&h->strangers, h->def.refusals, palp_dds_now_ns());
   build_status(h);
 }
 
@@ -1226,6 +1230,9 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     palp_web_hub_destroy(h);
     return NULL;
   }
+  if (secured && def->refusals &&
+      palp_dds_strangers_init(&h->strangers, h->pp, PALP_DDS_STRANGER_GRACE_S) == 0)
+    h->strangers_ready = 1; /* the dashboard lists a station started without an identity too */
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
@@ -1298,6 +1305,7 @@ void palp_web_hub_stop(palp_web_hub *h) {
 void palp_web_hub_destroy(palp_web_hub *h) {
   if (!h) return;
   palp_web_hub_stop(h);
+  if (h->strangers_ready) palp_dds_strangers_destroy(&h->strangers);
   if (h->pp > 0) dds_delete(h->pp);
   for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++) {
     free(h->ph[i].rest);

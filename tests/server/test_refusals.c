@@ -20,6 +20,7 @@
 #include "palp_dds.h"
 #include "palp_log.h"
 #include "palp_dds_refusals.h"
+#include "palp_dds_strangers.h"
 #include "check.h"
 
 
@@ -308,7 +309,59 @@ static void test_lock_order(void) {
   palp_dds_refusals_destroy(&t);
 }
 
+typedef struct lines_t {
+  char line[4][512];
+  int n;
+} lines_t;
+static void collect(void *ctx, const char *line) {
+  lines_t *l = ctx;
+  if (l->n < 4) snprintf(l->line[l->n], sizeof l->line[0], "%s", line);
+  l->n++;
+}
+
+/* A plain participant's name from what it announces (palp_dds_stranger_name): the process
+ * without its directories, the host, each cut to 40 bytes, unprintable bytes made '?'; the
+ * expected strings written out by hand. And the line the table says for it. */
+static void test_stranger_name(void) {
+  char n[PALP_DDS_REFUSAL_WHO];
+  palp_dds_stranger_name("/usr/bin/palp-client", "lab-07", n, sizeof n);
+  CHECK(!strcmp(n, "palp-client on host lab-07"), "process and host: '%s'", n);
+  palp_dds_stranger_name(NULL, "lab-07", n, sizeof n);
+  CHECK(!strcmp(n, "a participant on host lab-07"), "host only: '%s'", n);
+  palp_dds_stranger_name("ros2", NULL, n, sizeof n);
+  CHECK(!strcmp(n, "ros2"), "process only: '%s'", n);
+  palp_dds_stranger_name("", "", n, sizeof n);
+  CHECK(!strcmp(n, "a participant that names neither its process nor its host"), "nothing: '%s'", n);
+  palp_dds_stranger_name("evil\n2026-12-04T00:00:00Z INFO fake", "h\x1b[31m", n, sizeof n);
+  CHECK(!strcmp(n, "evil?2026-12-04T00:00:00Z INFO fake on host h?[31m"), "control bytes made '?': '%s'", n);
+  char big[4096];
+  memset(big, 'x', sizeof big - 1), big[sizeof big - 1] = '\0';
+  palp_dds_stranger_name(big, big, n, sizeof n);
+  CHECK(printable(n, sizeof n) && strlen(n) == 40 + strlen(" on host ") + 40, "4 kB of each cut to 40 + 40 (%zu)",
+        strlen(n));
+  char small[12];
+  palp_dds_stranger_name("palp-client", "lab-07", small, sizeof small);
+  CHECK(!strcmp(small, "palp-client"), "a short buffer keeps a terminated prefix: '%s'", small);
+  /* said through the refusal table as the others are */
+  lines_t got = {0};
+  palp_dds_refusals t;
+  palp_dds_refusals_init(&t, collect, &got, 60.0);
+  palp_dds_refusal r = {.kind = PALP_DDS_REFUSED_UNAUTHENTICATED};
+  snprintf(r.who, sizeof r.who, "palp-client on host lab-07");
+  snprintf(r.why, sizeof r.why, "a plain DDS participant");
+  palp_dds_refusals_note(&t, &r, 0);
+  CHECK(got.n == 1 && !strcmp(got.line[0], "DDS Security refused palp-client on host lab-07 without an identity: a plain "
+                                           "DDS participant; it gets no answer (repeats counted, logged at most every 60 s)"),
+        "the stranger's line: '%s'", got.n ? got.line[0] : "");
+  CHECK(!strcmp(palp_dds_refusal_kind_name(PALP_DDS_REFUSED_UNAUTHENTICATED), "unauthenticated") &&
+            !strcmp(palp_dds_refusal_kind_name(PALP_DDS_REFUSED_HANDSHAKE), "handshake") &&
+            !strcmp(palp_dds_refusal_kind_name(PALP_DDS_REFUSED_PERMISSIONS), "permissions"),
+        "the kinds' names in the session log");
+  palp_dds_refusals_destroy(&t);
+}
+
 int main(void) {
+  test_stranger_name();
   test_parse();
   test_throttle();
   test_lock_order();
