@@ -238,6 +238,7 @@ int palp_assess_touches(const palp_assess_sample *s, int n, double R, double r, 
       cur = (palp_touch){.t_on = s[i].t, .first_point = s[i].point};
     }
     t_touch = s[i].t;
+    cur.contact_samples++;
     cur.t_off = s[i].t;
     cur.last_point = s[i].point;
     /* the same segments as palp_assess's path: consecutive samples both in contact */

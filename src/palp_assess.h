@@ -215,6 +215,7 @@ typedef struct palp_touch {
   double path_length;      /* the fingertip's path over the dome while touching, as palp_assess's [m] */
   double peak_force;       /* max |force| [N] */
   double peak_indentation; /* max R + r - |proxy| below the rest surface [m] */
+  int contact_samples;     /* samples in contact: the touches split the session's contact samples in order */
 } palp_touch;
 
 /* Splits a session's samples into touches (the same samples palp_assess takes, in time order).

@@ -134,8 +134,11 @@ static int mesh_cb(void *u, int64_t frame, const palp_vec3 *pos, int n) {
 
 static const char *const press_colors[] = {"#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b"};
 
+/* a: the assessment (NULL or no touches: none); its finger's touches replace the finger slot's
+ * device points with the contact points on the surface, one line per touch. */
 static void svg_topview(FILE *f, const palp_mesh *m, const mesh_ctx *mc, const review_contacts *in,
-                        const review_press *pr, int np) {
+                        const review_press *pr, int np, const review_assessment *a) {
+  const int touches = a && a->touch_n > 0;
   const double S = 440, C = S / 2, R = m ? sqrt(m->rest[0].x * m->rest[0].x + m->rest[0].y * m->rest[0].y +
                                                 m->rest[0].z * m->rest[0].z) : 0.04;
   const double k = (S / 2 - 30) / R; /* px per m */
@@ -174,6 +177,7 @@ static void svg_topview(FILE *f, const palp_mesh *m, const mesh_ctx *mc, const r
   /* Finger paths: every logged centre of the slot while it lived. */
   for (int p = 0; p < np; p++) {
     const char *col = press_colors[p % 6];
+    if (pr[p].kind == PALP_DB_KIND_FINGER && touches) continue; /* drawn by its touches below */
     if (pr[p].kind == PALP_DB_KIND_FINGER) {
       fprintf(f, "<polyline class=\"finger-path\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.5\" stroke-opacity=\"0.8\" points=\"", col);
       int live = 0;
@@ -196,6 +200,28 @@ static void svg_topview(FILE *f, const palp_mesh *m, const mesh_ctx *mc, const r
             pr[p].kind == PALP_DB_KIND_FORCE ? "force contact" : "finger", pr[p].peak_force_n);
     fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"middle\">%d</text>\n",
             TX(pr[p].first_center_m), TY(pr[p].first_center_m) + 4, p + 1);
+  }
+  /* (n, not k: k is the scale the TX/TY macros use.) The finger's touches: each one's contact points as a line (at most ~1500 points in all), and
+   * a circle where it came down, sized by its peak force, numbered as the touches table. */
+  const int stride = touches && a->path_n > 1500 ? (a->path_n + 1499) / 1500 : 1;
+  for (int n = 0, at = 0; touches && n < a->touch_n; at += a->touches[n].contact_samples, n++) {
+    const palp_touch *t = &a->touches[n];
+    fputs("<polyline class=\"touch-path\" fill=\"none\" stroke=\"#1f4e8c\" stroke-width=\"1.2\" stroke-opacity=\"0.7\" "
+          "points=\"", f);
+    const int end = at + t->contact_samples < a->path_n ? at + t->contact_samples : a->path_n;
+    for (int i = at; i < end; i += stride) fprintf(f, "%.1f,%.1f ", TX(a->path[i]), TY(a->path[i]));
+    if (end > at && (end - 1 - at) % stride) fprintf(f, "%.1f,%.1f", TX(a->path[end - 1]), TY(a->path[end - 1])); /* its lift */
+    fputs("\"/>\n", f);
+  }
+  for (int n = 0; touches && n < a->touch_n; n++) {
+    const palp_touch *t = &a->touches[n];
+    fprintf(f, "<circle class=\"touch\" cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"#1f4e8c\" fill-opacity=\"0.35\" "
+               "stroke=\"#1f4e8c\"><title>touch %d: %.2f .. %.2f s, deepest %.1f mm, peak %.2f N</title></circle>\n",
+            TX(t->first_point), TY(t->first_point), 3 + 2 * sqrt(t->peak_force), n + 1, t->t_on, t->t_off,
+            t->peak_indentation * 1e3, t->peak_force);
+    if (a->touch_n <= 30)
+      fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"10\" text-anchor=\"middle\">%d</text>\n", TX(t->first_point),
+              TY(t->first_point) - 6, n + 1);
   }
   if (mc->best_max > 0)
     fprintf(f, "<text x=\"8\" y=\"%.0f\" font-size=\"12\">shading: displacement at frame %lld, max %.2f mm</text>\n",
@@ -504,8 +530,10 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     svg_plot(f, "plot-displacement", "Displacement over time", "simulated time [s]", "displacement [mm]", ds, 2);
 
     fputs("<h2>Where the trainee pressed</h2>\n<p>Top view of the phantom (12 o'clock = +y). Circles mark where each "
-          "contact started, sized by its peak force; lines follow a finger's path.</p>\n", f);
-    svg_topview(f, have_mesh ? &mesh : NULL, &mc, &in, pr, np);
+          "contact started, sized by its peak force; lines follow a finger's path (with its touches logged, blue: a "
+          "circle where each touch came down, numbered as the touches table, and its contact points while "
+          "touching).</p>\n", f);
+    svg_topview(f, have_mesh ? &mesh : NULL, &mc, &in, pr, np, &a);
     fputs("<table id=\"presses\"><tr><th>#</th><th>slot</th><th>kind</th><th>centre x, y, z [mm] (a finger: its device point at the start)</th>"
           "<th>clock</th><th>on [s]</th><th>off [s]</th><th>peak force [N]</th></tr>\n", f);
     for (int p = 0; p < np; p++) {

@@ -96,15 +96,18 @@ int main(int argc, char **argv) {
   for (int i = 0; i < 3; i++) {
     const review_assessment *x = &a[i];
     double sum = 0.0;
-    int ordered = 1;
+    int ordered = 1, contact = 0;
     for (int k = 0; k < x->touch_n; k++) {
       sum += x->touches[k].path_length;
+      contact += x->touches[k].contact_samples;
       if (x->touches[k].t_off < x->touches[k].t_on ||
           (k > 0 && x->touches[k].t_on - x->touches[k - 1].t_off <= PALP_ASSESS_LIFT_GAP_S))
         ordered = 0;
     }
     CHECK(x->touch_n == x->r.evidence.presses && x->touch_n > 0 && ordered, "%s: %d touches in time order, %d presses",
           uid[i], x->touch_n, x->r.evidence.presses);
+    CHECK(contact == x->path_n, "%s: the touches split the %d contact samples the report draws (%d)", uid[i], x->path_n,
+          contact);
     CHECK(fabs(sum - x->r.evidence.path_length) < 1e-9, "%s: the touches' paths sum to the path length (%.6f vs %.6f m)",
           uid[i], sum, x->r.evidence.path_length);
   }

@@ -108,6 +108,15 @@ expect "report: the touches table, the expert's one touch" '<table id="touches">
 if [ "$(sed -n '/<table id="touches">/,/<\/table>/p' "$dir/bob.html" | grep -c '^<tr><td>')" = 5 ]; then
   ok "report: the novice's 5 touches in the touches table"
 else bad "report: the novice's touches table"; sed -n '/<table id="touches">/,/<\/table>/p' "$dir/bob.html"; fi
+# the top view marks each touch where it came down (not all at the centre: the novice pressed at 5 places)
+if python3 - "$dir/bob.html" <<'PY'
+import re, sys
+c = [(float(x), float(y)) for x, y in re.findall(r'<circle class="touch" cx="([-0-9.]+)" cy="([-0-9.]+)"', open(sys.argv[1]).read())]
+assert len(c) == 5, c
+assert max(((x - 220) ** 2 + (y - 220) ** 2) ** 0.5 for x, y in c) > 20, c  # 220, 220: the pole; 190 px: the rim
+PY
+then ok "report: the top view marks the novice's 5 touches where they came down"
+else bad "report: the top view's touches"; fi
 expect "report: the pattern's pass mark from the rubric" '<tr data-metric="pattern"><th>Search pattern</th><td class="value">vertical_strip [^<]*</td><td>systematic; strips in order &gt;= 0\.70</td><td class="pass">' "$dir/alice.html"
 expect "report: what the rubric asks of the order" '<tr data-metric="strips">.*</td><td>&gt;= 0\.70; 50% of the pattern&#39;s credit \((0\.9[5-9]|1\.00) of 1\)</td><td class="pass">pass</td>' "$dir/alice.html"
 R class --exercise test-two-lumps --out "$dir/class.html" --csv "$dir/class.csv" > "$dir/class.txt" || bad "class report"
