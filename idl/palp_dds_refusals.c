@@ -16,8 +16,6 @@ const char *palp_dds_refusal_kind_name(palp_dds_refusal_kind k) {
                                                  : "handshake";
 }
 
-static const char *kind_words(palp_dds_refusal_kind k) { return palp_dds_refusal_kind_words(k); }
-
 /* Lines and records made under t->mu and said after it is released: the owner's log and
  * session log take locks of their own, which another thread may hold while it asks this
  * table for its counts (palp-server's summary into its log file did: a lock-order
@@ -76,7 +74,7 @@ void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record 
 static void report_repeats(palp_dds_refusals *t, pending *p, palp_dds_refusal_slot *s, int64_t now_ns) {
   if (!s->unreported) return;
   say(t, p, &s->r, s->unreported, "DDS Security refused %s %s %llu more time(s) over %.0f s: %s (%llu in all)",
-      s->r.who, kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9,
+      s->r.who, palp_dds_refusal_kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9,
       s->r.why, (unsigned long long)s->count);
   s->unreported = 0;
   s->reported_ns = now_ns;
@@ -120,7 +118,7 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int
   s->seen_ns = s->reported_ns = now_ns;
   /* A station retries once a second for as long as it runs: say it once, plainly. */
   say(t, &p, r, 1, "DDS Security refused %s %s: %s; it gets no answer (repeats counted, logged at most every %.0f s)",
-      r->who, kind_words(r->kind), r->why, (double)t->window_ns * 1e-9);
+      r->who, palp_dds_refusal_kind_words(r->kind), r->why, (double)t->window_ns * 1e-9);
   pthread_mutex_unlock(&t->mu);
   say_all(t, &p);
 }

@@ -130,6 +130,7 @@ int palp_dds_strangers_tick(palp_dds_strangers *s, palp_dds_refusals *t, int64_t
       sl->seen = 1;
       if (sl->said) continue;
     }
+    /* all three asked (|, not ||): each one present is returned, allocated, and freed below */
     char *proc = NULL, *host = NULL, *pid = NULL;
     const int plain = p->qos && (dds_qget_prop(p->qos, "__ProcessName", &proc) | dds_qget_prop(p->qos, "__Hostname", &host) |
                                  dds_qget_prop(p->qos, "__Pid", &pid));

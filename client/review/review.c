@@ -241,7 +241,7 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
       printf("    %-4d %-6s %-18s %-26s %5.1f h  %-9.1f %6.2f .. %-6s %.2f%s\n", q->slot,
              q->kind == PALP_DB_KIND_FORCE ? "force" : "finger", q->kind == PALP_DB_KIND_FORCE ? review_dist_name(q->distribution) : "-",
              ctr, review_clock_hours(x), review_arc_m(x) * 1e3, q->t_on_s, off, q->peak_force_n,
-             q->kind == PALP_DB_KIND_FORCE ? "" : "  (the device point at the start: no finger samples logged)");
+             q->kind == PALP_DB_KIND_FORCE ? "" : "  (a finger: its device point at the start, above the surface)");
     }
   }
   if (touches) review_touches_print(stdout, &a, REVIEW_TOUCHES_LISTED);
