@@ -16,7 +16,21 @@ static void put(char *dst, size_t cap, size_t *j, const char *src, size_t n) {
   dst[*j] = '\0';
 }
 
-void palp_dds_stranger_name(const char *process, const char *host, char *out, size_t len) {
+/* The vendor ids of the RTPS specification's registry that a classroom may meet. */
+static const char *vendor_name(uint8_t a, uint8_t b) {
+  if (a != 0x01) return NULL;
+  switch (b) {
+  case 0x01: return "RTI Connext DDS";
+  case 0x03: return "OpenDDS";
+  case 0x0f: return "Fast DDS";
+  case 0x10: return "Cyclone DDS";
+  default: return NULL;
+  }
+}
+
+int palp_dds_guid_plain(const uint8_t prefix[12]) { return (prefix[0] & 0x80) == 0; }
+
+void palp_dds_stranger_name(const char *process, const char *host, const uint8_t *prefix, char *out, size_t len) {
   enum { PART = 40 };
   if (!len) return;
   out[0] = '\0';
@@ -27,6 +41,17 @@ void palp_dds_stranger_name(const char *process, const char *host, char *out, si
     put(out, len, &j, p, PART);
   } else if (host && *host) {
     put(out, len, &j, "a participant", PART);
+  } else if (prefix) { /* it names nothing: its vendor and GUID prefix, which the server's trace also shows */
+    const char *v = vendor_name(prefix[0], prefix[1]);
+    char buf[96];
+    if (v) snprintf(buf, sizeof buf, "a %s participant, GUID prefix ", v);
+    else snprintf(buf, sizeof buf, "a participant of vendor %02x%02x, GUID prefix ", prefix[0], prefix[1]);
+    put(out, len, &j, buf, sizeof buf);
+    for (int i = 0; i < 6; i++) {
+      snprintf(buf, sizeof buf, "%02x", prefix[i]);
+      put(out, len, &j, buf, 2);
+    }
+    return;
   } else {
     put(out, len, &j, "a participant that names neither its process nor its host", 64);
     return;
@@ -132,11 +157,11 @@ int palp_dds_strangers_tick(palp_dds_strangers *s, palp_dds_refusals *t, int64_t
     }
     /* all three asked (|, not ||): each one present is returned, allocated, and freed below */
     char *proc = NULL, *host = NULL, *pid = NULL;
-    const int plain = p->qos && (dds_qget_prop(p->qos, "__ProcessName", &proc) | dds_qget_prop(p->qos, "__Hostname", &host) |
+    const int props = p->qos && (dds_qget_prop(p->qos, "__ProcessName", &proc) | dds_qget_prop(p->qos, "__Hostname", &host) |
                                  dds_qget_prop(p->qos, "__Pid", &pid));
-    if (plain && nc < CAND) {
+    if ((props || palp_dds_guid_plain(p->key.v)) && nc < CAND) {
       cand[nc].key = p->key;
-      palp_dds_stranger_name(proc, host, cand[nc].name, sizeof cand[nc].name);
+      palp_dds_stranger_name(proc, host, p->key.v, cand[nc].name, sizeof cand[nc].name);
       nc++;
     }
     dds_free(proc), dds_free(host), dds_free(pid);

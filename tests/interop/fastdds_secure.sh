@@ -105,6 +105,10 @@ stop_server "governance without submessage protection"
 cp -r "$work/pki" "$work/pki-fd"
 bash "$mkpki" "$work/pki" revoke trainee/fd > "$work/revoke.out" 2>&1 || { bad "revoke trainee/fd"; cat "$work/revoke.out"; }
 start_server "$work/pki" server-revoked
+# meanwhile a Fast DDS station with no identity at all (plain DDS): it announces no name, so the
+# server names it by its vendor and GUID prefix (idl/palp_dds_strangers.c), once
+timeout 20 "$station" "$domain" 1 station 4 > "$work/plain.out" 2>&1 &
+ppid_=$!
 timeout 60 "$station" "$domain" 1 session 4 "$work/pki-fd" trainee/fd > "$work/revoked.out" 2>&1; rc=$?
 if [ $rc -ne 0 ] && [ -z "$(r revoked vertices)" ] && [ "$(r revoked catalogue_writers_matched)" = 0 ] \
    && grep -q "FAIL no catalogue entry" "$work/revoked.out"; then
@@ -113,6 +117,11 @@ else
   bad "revoked trainee/fd: exit $rc, $(r revoked vertices) vertices, catalogue writers matched \"$(r revoked catalogue_writers_matched)\""
   grep "^result\|^FAIL" "$work/revoked.out"
 fi
+wait $ppid_
+n=$(grep -c "DDS Security refused a Fast DDS participant, GUID prefix 010f[0-9a-f]\{8\} without an identity: a plain DDS participant" "$work/server-revoked.log")
+[ "$n" = 1 ] && [ "$(grep -c 'without an identity' "$work/server-revoked.log")" = 1 ] \
+  && ok "the plain Fast DDS station is named once, by its vendor and GUID prefix: $(grep -o 'a Fast DDS participant, GUID prefix [0-9a-f]*' "$work/server-revoked.log" | head -1); the revoked one is not among the strangers" \
+  || { bad "plain Fast DDS station: named $n time(s)"; grep "refused" "$work/server-revoked.log"; }
 timeout 60 "$station" "$domain" 1 session 4 "$work/pki" trainee/alice > "$work/alice.out" 2>&1; rc=$?
 case $(r alice partition) in
   palp/s/alice/*) [ $rc -eq 0 ] && [ "$(r alice leave_reason)" = "trainee station left" ] \
@@ -150,7 +159,8 @@ stop_server "revoked station"
 # The server names the refused station in its own log (idl/palp_dds_refusals.c): once at
 # the first refusal, then the repeats summed (the station retried ~1/s for 15 s).
 first=$(grep -c "WARN  palp-server: DDS Security refused trainee/fd at the handshake: certificate revoked; it gets no answer" "$work/server-revoked.log")
-total=$(sed -n 's/^DDS Security refused participants \([0-9]*\) time(s): trainee\/fd: certificate revoked ([0-9]*x)$/\1/p' "$work/server-revoked.log")
+# (the summary also lists the plain station above: fd's own count is its "(Nx)")
+total=$(sed -n 's/^DDS Security refused participants [0-9]* time(s): trainee\/fd: certificate revoked (\([0-9]*\)x).*$/\1/p' "$work/server-revoked.log")
 if [ "$first" = 1 ] && [ "${total:-0}" -ge 5 ] && ! grep -q "certificate revoked.*alice\|alice.*certificate revoked" "$work/server-revoked.log"; then
   ok "the server's log names trainee/fd and why (certificate revoked): one warning, $total refusals counted in its summary"
 else

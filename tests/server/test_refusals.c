@@ -324,23 +324,35 @@ static void collect(void *ctx, const char *line) {
  * expected strings written out by hand. And the line the table says for it. */
 static void test_stranger_name(void) {
   char n[PALP_DDS_REFUSAL_WHO];
-  palp_dds_stranger_name("/usr/bin/palp-client", "lab-07", n, sizeof n);
+  palp_dds_stranger_name("/usr/bin/palp-client", "lab-07", NULL, n, sizeof n);
   CHECK(!strcmp(n, "palp-client on host lab-07"), "process and host: '%s'", n);
-  palp_dds_stranger_name(NULL, "lab-07", n, sizeof n);
+  palp_dds_stranger_name(NULL, "lab-07", NULL, n, sizeof n);
   CHECK(!strcmp(n, "a participant on host lab-07"), "host only: '%s'", n);
-  palp_dds_stranger_name("ros2", NULL, n, sizeof n);
+  palp_dds_stranger_name("ros2", NULL, NULL, n, sizeof n);
   CHECK(!strcmp(n, "ros2"), "process only: '%s'", n);
-  palp_dds_stranger_name("", "", n, sizeof n);
+  palp_dds_stranger_name("", "", NULL, n, sizeof n);
   CHECK(!strcmp(n, "a participant that names neither its process nor its host"), "nothing: '%s'", n);
-  palp_dds_stranger_name("evil\n2026-12-04T00:00:00Z INFO fake", "h\x1b[31m", n, sizeof n);
+  palp_dds_stranger_name("evil\n2026-12-04T00:00:00Z INFO fake", "h\x1b[31m", NULL, n, sizeof n);
   CHECK(!strcmp(n, "evil?2026-12-04T00:00:00Z INFO fake on host h?[31m"), "control bytes made '?': '%s'", n);
   char big[4096];
   memset(big, 'x', sizeof big - 1), big[sizeof big - 1] = '\0';
-  palp_dds_stranger_name(big, big, n, sizeof n);
+  palp_dds_stranger_name(big, big, NULL, n, sizeof n);
   CHECK(printable(n, sizeof n) && strlen(n) == 40 + strlen(" on host ") + 40, "4 kB of each cut to 40 + 40 (%zu)",
         strlen(n));
+  /* nothing announced: the vendor and GUID prefix (the prefixes measured on loopback, docs/security.md) */
+  const uint8_t fastdds[12] = {0x01, 0x0f, 0x4a, 0x2b, 0x3c, 0x4d, 1, 2, 3, 4, 5, 6},
+                other[12] = {0x01, 0x77, 0xde, 0xad, 0xbe, 0xef, 0, 0, 0, 0, 0, 0},
+                secured[12] = {0xd3, 0x4f, 0x10, 0x20, 0x30, 0x40, 0, 0, 0, 0, 0, 0};
+  palp_dds_stranger_name(NULL, NULL, fastdds, n, sizeof n);
+  CHECK(!strcmp(n, "a Fast DDS participant, GUID prefix 010f4a2b3c4d"), "a plain Fast DDS peer: '%s'", n);
+  palp_dds_stranger_name(NULL, NULL, other, n, sizeof n);
+  CHECK(!strcmp(n, "a participant of vendor 0177, GUID prefix 0177deadbeef"), "an unknown vendor: '%s'", n);
+  palp_dds_stranger_name("palp-client", NULL, fastdds, n, sizeof n);
+  CHECK(!strcmp(n, "palp-client"), "what it announces comes first: '%s'", n);
+  CHECK(palp_dds_guid_plain(fastdds) && palp_dds_guid_plain(other) && !palp_dds_guid_plain(secured),
+        "a prefix with its first bit set may be a secured participant's (DDS Security 9.3.3); 0x01... cannot");
   char small[12];
-  palp_dds_stranger_name("palp-client", "lab-07", small, sizeof small);
+  palp_dds_stranger_name("palp-client", "lab-07", NULL, small, sizeof small);
   CHECK(!strcmp(small, "palp-client"), "a short buffer keeps a terminated prefix: '%s'", small);
   /* said through the refusal table as the others are */
   lines_t got = {0};
