@@ -196,7 +196,7 @@ int64_t palp_dds_now_ns(void) {
 
 /* Copies src[0..n) into dst (size cap), each unprintable byte as '?': the text
  * came from a peer's certificate, and a log line must stay one line. */
-static void copy_printable(char *dst, size_t cap, const char *src, size_t n) {
+void palp_dds_copy_printable(char *dst, size_t cap, const char *src, size_t n) {
   size_t j = 0;
   for (size_t i = 0; i < n && j + 1 < cap; i++) {
     const unsigned char c = (unsigned char)src[i];
@@ -224,11 +224,11 @@ static void subject_who(char *who, size_t cap, const char *s, size_t n) {
     if (ours && nn > 0 && !memchr(name, '/', nn) && kn + nn + 2 <= cap) {
       char tmp[PALP_DDS_REFUSAL_WHO * 2];
       snprintf(tmp, sizeof tmp, "%.*s/%.*s", (int)kn, kind, (int)nn, name);
-      copy_printable(who, cap, tmp, strlen(tmp));
+      palp_dds_copy_printable(who, cap, tmp, strlen(tmp));
       return;
     }
   }
-  copy_printable(who, cap, s, n);
+  palp_dds_copy_printable(who, cap, s, n);
 }
 
 int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
@@ -267,20 +267,20 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
   const char *verify = find_n(body, bn, "Verify error: ");
   if (err && subj && subj > err) {
     const char *why = err + 30, *who = subj + 11;
-    copy_printable(out->why, sizeof out->why, why, (size_t)(subj - why));
+    palp_dds_copy_printable(out->why, sizeof out->why, why, (size_t)(subj - why));
     subject_who(out->who, sizeof out->who, who, (size_t)(body + bn - who));
   } else if (kind == PALP_DDS_REFUSED_PERMISSIONS && verify) {
     char tmp[PALP_DDS_REFUSAL_WHY];
     const char *v = verify + 14;
     snprintf(tmp, sizeof tmp, "permissions not signed by the classroom (%.*s)", (int)(body + bn - v), v);
-    copy_printable(out->why, sizeof out->why, tmp, strlen(tmp));
+    palp_dds_copy_printable(out->why, sizeof out->why, tmp, strlen(tmp));
   } else {
-    copy_printable(out->why, sizeof out->why, body, bn);
+    palp_dds_copy_printable(out->why, sizeof out->why, body, bn);
   }
   if (kind == PALP_DDS_REFUSED_PERMISSIONS) {
     char tmp[PALP_DDS_REFUSAL_WHO];
     snprintf(tmp, sizeof tmp, "participant %.*s", (int)guid_n, guid);
-    copy_printable(out->who, sizeof out->who, tmp, strlen(tmp));
+    palp_dds_copy_printable(out->who, sizeof out->who, tmp, strlen(tmp));
   } else if (!out->who[0]) {
     snprintf(out->who, sizeof out->who, "a participant");
   }

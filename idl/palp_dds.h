@@ -115,6 +115,9 @@ typedef struct palp_dds_refusal {
 } palp_dds_refusal;
 /* 1 and *out filled when msg[0..len) is such a line; 0 for any other line. */
 int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out);
+/* src[0..n) into dst (size cap, always terminated when cap > 0), each unprintable byte as '?':
+ * text from the network (a certificate, a peer's announcement) kept to one log line. */
+void palp_dds_copy_printable(char *dst, size_t cap, const char *src, size_t n);
 
 /* Cyclone prints a warning line per malformed sample (e.g. an out-of-range enum
  * fails deserialisation): a hostile peer could fill a disk with them. This sink

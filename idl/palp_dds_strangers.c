@@ -7,13 +7,10 @@
 
 #include "palp.h" /* PALP_E* codes */
 
-/* At most `n` bytes of src into dst at *j (dst's size cap), unprintable bytes as '?'. */
+/* At most `n` bytes of src appended to dst at *j (dst's size cap), unprintable bytes as '?'. */
 static void put(char *dst, size_t cap, size_t *j, const char *src, size_t n) {
-  for (size_t i = 0; src[i] && i < n && *j + 1 < cap; i++) {
-    const unsigned char c = (unsigned char)src[i];
-    dst[(*j)++] = (c >= 0x20 && c < 0x7f) ? (char)c : '?';
-  }
-  dst[*j] = '\0';
+  palp_dds_copy_printable(dst + *j, cap - *j, src, strnlen(src, n));
+  *j += strlen(dst + *j);
 }
 
 /* The vendor ids of the RTPS specification's registry that a classroom may meet. */
@@ -191,7 +188,6 @@ int palp_dds_strangers_tick(palp_dds_strangers *s, palp_dds_refusals *t, int64_t
                                   "--identity?)");
     palp_dds_refusals_note(t, &r, now_ns);
     sl->said = 1;
-    s->named++;
     noted++;
   }
   return noted;

@@ -51,7 +51,6 @@ typedef struct palp_dds_strangers {
   dds_entity_t rd[3]; /* DCPSParticipant, DCPSPublication, DCPSSubscription readers (owned) */
   dds_guid_t me;
   int64_t grace_ns;
-  uint64_t named;     /* strangers noted so far */
   void **ptr;         /* [PALP_DDS_STRANGER_READ] loans */
   dds_sample_info_t *info;
   palp_dds_stranger_slot slot[PALP_DDS_STRANGER_SLOTS];
