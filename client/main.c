@@ -50,7 +50,15 @@ typedef struct opts {
   const char *phantom_name, *server; /* several servers on one domain */
   int rejoin;
   palp_log *log; /* main's, once the options are read: diagnostics, not the station's output */
+  /* main's table of peers DDS Security refused: each run loop ticks it, so that a refused peer's
+   * repeats are said a window after its last line, not only when the station stops */
+  palp_dds_refusals *refusals;
 } opts;
+
+/* The refusal table's tick, once a turn of a run loop (cheap: a lock and a time compare). */
+static void tick_refusals(const opts *o) {
+  if (o->refusals) palp_dds_refusals_tick(o->refusals, palp_dds_now_ns());
+}
 
 /* --quiet already means "less station output" here: no --verbose/--quiet aliases. */
 #define CLIENT_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_DDS | PALP_APP_OPT_LOG)
@@ -592,6 +600,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   char reason[128] = "";
   while (!g_stop && !palp_cli_haptic_done(hl)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
+    tick_refusals(o);
     double lat_us;
     int n = palp_cli_haptic_feed(hl, st->local_model_r, &bad, &lat_us);
     models += (uint64_t)(n > 0 ? n : 0);
@@ -776,6 +785,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   char reason[128] = "";
   int closed = 0, ended = 0, rejoins = 0;
   while (!g_stop) {
+    tick_refusals(o);
     int64_t now = palp_dds_now_ns();
     double t = (double)(now - t0) * 1e-9;
     if (o->duration > 0 && t >= o->duration) break;
@@ -967,6 +977,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
    * and the log use: docs/naming.md), not this station's own clock since it joined. */
   double world_t = -1.0;
   while (!g_stop) {
+    tick_refusals(o);
     int64_t now = palp_dds_now_ns();
     double t = (double)(now - t0) * 1e-9;
     if (o->duration > 0 && t >= o->duration) break;
@@ -1138,6 +1149,7 @@ int main(int argc, char **argv) {
   static palp_dds_refusals refusals;
   palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
   palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
+  o.refusals = &refusals;
   palp_cli_station st;
   if (palp_cli_station_open_secure(&st, o.domain, label, &sec, err, sizeof err) < 0) {
     palp_log_error(o.log, "%s", err);

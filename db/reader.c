@@ -129,6 +129,15 @@ static void read_info(sqlite3_stmt *st, palp_db_session_info *o) {
   o->sim_duration_s = sqlite3_column_double(st, 19);
 }
 
+/* One growth rule for the lists read row by row: the room doubled (`first` rows at first).
+ * NULL when out of memory, v and *cap then unchanged so that the caller frees what it holds. */
+static void *grow_rows(void *v, int *cap, int first, size_t elem) {
+  const int ncap = *cap ? 2 * *cap : first;
+  void *nv = realloc(v, (size_t)ncap * elem);
+  if (nv) *cap = ncap;
+  return nv;
+}
+
 int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count) {
   *out = NULL;
   *count = 0;
@@ -147,8 +156,7 @@ int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_
   palp_db_session_info *v = NULL;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
     if (n == cap) {
-      cap = cap ? 2 * cap : 16;
-      palp_db_session_info *nv = realloc(v, (size_t)cap * sizeof *nv);
+      palp_db_session_info *nv = grow_rows(v, &cap, 16, sizeof *v);
       if (!nv) {
         free(v);
         sqlite3_finalize(st);
@@ -184,8 +192,7 @@ int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused *
   palp_db_refused *v = NULL;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
     if (n == cap) {
-      cap = cap ? 2 * cap : 8;
-      palp_db_refused *nv = realloc(v, (size_t)cap * sizeof *nv);
+      palp_db_refused *nv = grow_rows(v, &cap, 8, sizeof *v);
       if (!nv) {
         free(v);
         sqlite3_finalize(st);
