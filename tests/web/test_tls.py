@@ -143,8 +143,10 @@ def run(build, source, out):
         browsers.append(plain)
         page = plain.new_page(base + "/trainee.html?token=" + TOKEN)
         time.sleep(2.0)
-        state = page.eval("JSON.stringify({state: typeof window.palpState, canvas: "
-                          "document.querySelectorAll('canvas').length})")
+        # Polled, not read once: under load Chromium may still be swapping in its certificate
+        # error page after 2 s, and an evaluation then finds no execution context at all.
+        state = page.wait_for("JSON.stringify({state: typeof window.palpState, canvas: "
+                              "document.querySelectorAll('canvas').length})", 20) or ""
         check('"state":"undefined"' in state and '"canvas":0' in state,
               "Chromium without that trust: the page does not load: %s" % state)
     finally:

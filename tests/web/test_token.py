@@ -68,9 +68,10 @@ def run(build, source, out):
         page = browser.new_page(base + "/trainee.html")
         import time
         time.sleep(2.0)
-        state = page.eval("JSON.stringify({title: document.title, state: typeof window.palpState, "
-                          "canvas: document.querySelectorAll('canvas').length, text: document.body ? "
-                          "document.body.innerText.slice(0, 80) : ''})")
+        # polled (as in test_tls.py): a loaded machine may still be between documents at 2 s
+        state = page.wait_for("JSON.stringify({title: document.title, state: typeof window.palpState, "
+                              "canvas: document.querySelectorAll('canvas').length, text: document.body ? "
+                              "document.body.innerText.slice(0, 80) : ''})", 20) or ""
         page.screenshot(os.path.join(out, "token-denied.png"))
         check('"state":"undefined"' in state and '"canvas":0' in state and "trainee view" not in state,
               "Chromium without the token: no page, no script, no stream: %s" % state)
