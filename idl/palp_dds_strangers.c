@@ -152,10 +152,14 @@ int palp_dds_strangers_tick(palp_dds_strangers *s, palp_dds_refusals *t, int64_t
       sl->seen = 1;
       if (sl->said) continue;
     }
-    /* all three asked (|, not ||): each one present is returned, allocated, and freed below */
+    /* all three asked, one by one: each one present is returned, allocated, and freed below */
     char *proc = NULL, *host = NULL, *pid = NULL;
-    const int props = p->qos && (dds_qget_prop(p->qos, "__ProcessName", &proc) | dds_qget_prop(p->qos, "__Hostname", &host) |
-                                 dds_qget_prop(p->qos, "__Pid", &pid));
+    int props = 0;
+    if (p->qos) {
+      props += dds_qget_prop(p->qos, "__ProcessName", &proc);
+      props += dds_qget_prop(p->qos, "__Hostname", &host);
+      props += dds_qget_prop(p->qos, "__Pid", &pid);
+    }
     if ((props || palp_dds_guid_plain(p->key.v)) && nc < CAND) {
       cand[nc].key = p->key;
       palp_dds_stranger_name(proc, host, p->key.v, cand[nc].name, sizeof cand[nc].name);

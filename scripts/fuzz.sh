@@ -16,7 +16,7 @@ cd "$here"
 secs=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range refusal)
+[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise)
 
 need=()
 command -v clang-14 >/dev/null || need+=(clang-14)
@@ -46,7 +46,7 @@ for t in "${targets[@]}"; do
   log=$build/fuzz-$t.log
   dict=()
   case $t in
-    scene|server_config|fem_config) dict=(-dict=tests/fuzz/json.dict) ;;
+    scene|server_config|fem_config|exercise) dict=(-dict=tests/fuzz/json.dict) ;;
     inp) dict=(-dict=tests/fuzz/inp.dict) ;;
   esac
   set +e
