@@ -35,7 +35,9 @@ int palp_web_token_equal(const char *want, const char *given, size_t len) {
   if (!want || !given) return 0;
   const size_t n = strlen(want);
   /* Compare every byte of `want` whatever the input, so the time says nothing about the prefix. */
-  unsigned diff = (unsigned)(n ^ len);
+  /* The lengths compared whole: folded into an unsigned, a length 2^32 longer than `want` read as
+   * equal (not reachable through libwebsockets' bounded headers, but the function says "equals"). */
+  unsigned diff = (n ^ len) != 0;
   for (size_t i = 0; i < n; i++) diff |= (unsigned char)want[i] ^ (unsigned char)(i < len ? given[i] : 0);
   return diff == 0;
 }

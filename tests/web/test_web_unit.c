@@ -168,6 +168,9 @@ static void test_access(void) {
   CHECK(!palp_web_token_equal(want, "s3cret-token_01234567890", 24), "longer is not equal");
   CHECK(!palp_web_token_equal(want, "S3cret-token_0123456789", 23), "case matters");
   CHECK(!palp_web_token_equal(want, "", 0), "empty");
+  /* a length that differs by 2^32 (the function reads only strlen(want) bytes of given) */
+  if (sizeof(size_t) > 4)
+    CHECK(!palp_web_token_equal(want, want, strlen(want) + ((size_t)1 << 31) * 2), "2^32 longer is not equal");
 
   /* trainees' own tokens (--trainee-tokens) */
   static palp_web_trainee_token tt[4];
