@@ -24,6 +24,7 @@
 #include "palp_dds.h"
 #include "palp_dds_refusals.h"
 #include "serve.h"
+#include "tls.h"
 
 static atomic_int g_stop; /* atomic: a signal may land on any thread (client/main.c) */
 static atomic_int g_hup;  /* SIGHUP: re-open --log-file (log rotation), done on the hub thread */
@@ -357,6 +358,16 @@ int main(int argc, char **argv) {
   if (access(sd.www_dir, R_OK) != 0) {
     palp_log_error(&log, "--www %s: not readable", sd.www_dir);
     return 2;
+  }
+  /* The certificate and key read and checked here, before libwebsockets (web/tls.h): one reason per
+   * refusal, and the day the certificate must be renewed said at every start in its last month. */
+  if (sd.tls_cert) {
+    char terr[512], twarn[512];
+    if (palp_web_tls_check(sd.tls_cert, sd.tls_key, terr, sizeof terr, twarn, sizeof twarn) != 0) {
+      palp_log_error(&log, "%s", terr);
+      return 2;
+    }
+    if (twarn[0]) palp_log_warn(&log, "%s", twarn);
   }
   if (palp_app_use_dds_config(ao.dds_config, NULL, NULL, 0, derr, sizeof derr) != 0) {
     palp_log_error(&log, "DDS config: %s", derr);

@@ -3,8 +3,9 @@
 
 The token is palp-web's whole authentication; on a class network it must not cross the wire in clear.
 - palp-web refuses to serve beyond loopback without TLS (exit 2, before binding), a certificate without
-  its key, an unreadable file, a key that is not the certificate's, and a key or token file every user
-  of the machine can read;
+  its key, an unreadable file, a key that is not the certificate's (named as such, before libwebsockets
+  is given it: web/tls.c), and a key or token file every user of the machine can read;
+- a certificate with a day left is served, with a warning at start that says when it expires;
 - scripts/make-classroom-pki.sh DIR web 127.0.0.1,localhost issues the certificate;
 - a client that trusts the classroom CA gets the pages over HTTPS (200; the cookie is Secure), nothing
   without the token (401), and the WebSocket over WSS ("hello"); one that trusts only the system's CAs
@@ -16,6 +17,7 @@ DDS domain 127. usage: test_tls.py BUILD SOURCE OUT"""
 import base64
 import hashlib
 import os
+import re
 import socket
 import ssl
 import subprocess
@@ -64,8 +66,11 @@ def run(build, source, out):
         refused(["--tls-cert", cert, "--token", TOKEN], "go together", "a certificate without its key")
         refused(["--tls-cert", cert, "--tls-key", os.path.join(pki, "nope.pem")], "No such file",
                 "an unreadable key")
+        # checked before libwebsockets is given them (web/tls.c): exit 2, the reason named (libwebsockets
+        # said "must be PEM and belong together (the port may also be in use ...)", exit 1, and leaked)
         refused(["--tls-cert", cert, "--tls-key", os.path.join(pki, "server", "server.key.pem")],
-                "belong together", "another key than the certificate's", code=1)
+                "is not the key of", "another key than the certificate's")
+        refused(["--tls-cert", key, "--tls-key", key], "not a PEM certificate", "the key given as the certificate")
 
         open_key = os.path.join(pki, "open.key.pem")
         subprocess.run(["cp", key, open_key], check=True)
@@ -87,6 +92,18 @@ def run(build, source, out):
               and "http://0.0.0.0:" in r.stdout,
               "--insecure-http serves plain HTTP beyond loopback and warns (in a namespace with only lo; exit %d)"
               % r.returncode)
+
+        # a certificate in its last month: palp-web serves, and says at start when to renew it
+        r = subprocess.run(["bash", script, pki, "web", "localhost", "--days", "1"], capture_output=True, text=True,
+                           timeout=60)
+        soon_cert, soon_key = os.path.join(pki, "web", "localhost.cert.pem"), os.path.join(pki, "web", "localhost.key.pem")
+        r = subprocess.run([exe, "--port", "0", "--domain", "127", "--no-join", "--token", TOKEN, "--tls-cert",
+                            soon_cert, "--tls-key", soon_key, "--duration", "1"], capture_output=True, text=True,
+                           timeout=30, env=procs.env)
+        m = re.search(r"expires in ([0-9.]+) day\(s\)", r.stdout + r.stderr)
+        check(r.returncode == 0 and m is not None and 0.9 <= float(m.group(1)) <= 1.0 and "WARN" in r.stdout + r.stderr,
+              "a certificate with 1 day left: served (exit %d), and a warning says when: %s" %
+              (r.returncode, m.group(0) if m else (r.stdout + r.stderr)[-200:]))
 
         procs.server()
         procs.trainee("alice", 1, ["--profile", "step", "--magnitude", "2", "--t-on", "0.5", "--t-off", "60",
