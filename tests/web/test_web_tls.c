@@ -29,8 +29,8 @@ static int failures, checks;
 static char dir[64];
 
 /* A self-signed certificate valid from `from_h` to `to_h` hours from now, and its key, written to
- * DIR/NAME.cert.pem and DIR/NAME.key.pem; the key of `other` (if not NULL) signs nothing and is
- * written instead as the key, to make a pair that does not belong together. */
+ * DIR/NAME.cert.pem and DIR/NAME.key.pem; with wrong_key, another new key is written instead of the
+ * certificate's, to make a pair that does not belong together. */
 static void make(const char *name, long from_h, long to_h, int wrong_key) {
   EVP_PKEY *k = EVP_EC_gen("P-256"), *other = wrong_key ? EVP_EC_gen("P-256") : NULL;
   X509 *x = X509_new();
