@@ -14,6 +14,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <openssl/err.h>
 #include <openssl/pem.h>
 #include <openssl/x509.h>
 
@@ -147,6 +148,56 @@ static void expiries(const palp_dds_security *s, double *cert_days, double *crl_
   }
 }
 
+/* A key with a passphrase is not prompted for: palp gives Cyclone none, so it could not be used. */
+static int no_passphrase(char *buf, int size, int rwflag, void *u) {
+  (void)buf, (void)size, (void)rwflag, (void)u;
+  return 0;
+}
+
+/* The identity's key against its certificate, and the certificate against the classroom's CA. Either
+ * mistake fails every handshake, and nothing says so at participant creation: measured (2026-12-04),
+ * a station given bob's key for alice's certificate created its participant and then heard only "no
+ * answer from palp-server", while the server logged an unnamed participant refused with "Failed to
+ * finalize digest context". 0, or PALP_EINVAL with the reason; a file OpenSSL cannot read is left to
+ * the plugins, which say so at creation (as expiries() does). */
+static int identity_pair_check(const palp_dds_security *s, const char *identity, char *err, size_t errlen) {
+  char cf[PALP_DDS_PKI_PATH_MAX + 96], kf[PALP_DDS_PKI_PATH_MAX + 96], caf[PALP_DDS_PKI_PATH_MAX + 96];
+  if (file_of(s, ".cert.pem", cf, sizeof cf) < 0 || file_of(s, ".key.pem", kf, sizeof kf) < 0 ||
+      file_of(s, "ca.cert.pem", caf, sizeof caf) < 0)
+    return 0;
+  X509 *x = NULL, *ca = NULL;
+  EVP_PKEY *k = NULL, *cak = NULL;
+  int rc = 0;
+  FILE *fp = fopen(cf, "r");
+  if (fp) x = PEM_read_X509(fp, NULL, no_passphrase, NULL), fclose(fp);
+  fp = fopen(kf, "r");
+  if (fp) k = PEM_read_PrivateKey(fp, NULL, no_passphrase, NULL), fclose(fp);
+  fp = fopen(caf, "r");
+  if (fp) ca = PEM_read_X509(fp, NULL, no_passphrase, NULL), fclose(fp);
+  if (x && !k) {
+    rc = fail(err, errlen, PALP_EINVAL,
+              "identity %s: its private key %s is not a PEM private key, or has a passphrase (palp gives none)",
+              identity, kf);
+  } else if (x && k && X509_check_private_key(x, k) != 1) {
+    rc = fail(err, errlen, PALP_EINVAL,
+              "identity %s: its private key %s is not the key of its certificate %s (a key copied from another "
+              "identity, or kept from before the certificate was re-issued?): every handshake would fail",
+              identity, kf, cf);
+  } else if (x && ca && (cak = X509_get_pubkey(ca)) != NULL && X509_verify(x, cak) != 1) {
+    rc = fail(err, errlen, PALP_EINVAL,
+              "identity %s: its certificate %s was not issued by this classroom's CA (%s): it is another "
+              "classroom's, or the CA was made anew; every handshake would fail (make-classroom-pki.sh DIR add %s %s "
+              "issues one from this CA)",
+              identity, cf, caf, palp_dds_id_kind_name(s->kind), s->name);
+  }
+  X509_free(x);
+  X509_free(ca);
+  EVP_PKEY_free(k);
+  EVP_PKEY_free(cak);
+  ERR_clear_error(); /* nothing left for the plugins' own OpenSSL calls to misread */
+  return rc;
+}
+
 static void expiry_phrase(char *buf, size_t len, const char *what, double days) {
   char date[16];
   const time_t when = time(NULL) + (time_t)(days * 86400.0);
@@ -211,6 +262,7 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
                 "identity %s: its private key %s is readable by every user of this machine (mode %04o): "
                 "chmod o-rwx it (make-classroom-pki.sh makes keys 0600)",
                 identity, key, (unsigned)(st.st_mode & 07777));
+  if ((rc = identity_pair_check(&s, identity, err, errlen)) < 0) return rc;
   expiry_warning(&s);
   *sec = s;
   return 0;

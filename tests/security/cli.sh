@@ -3,7 +3,8 @@
 # --pki/--identity (the identity's name becomes the trainee name), a wrong --name
 # refused by the server, a bad identity refused before any network use, a station without an
 # identity told that the classroom may be secured (not only "is the server running?"), a plain
-# server refused a DDS config beyond loopback unless --insecure, and a secured
+# server refused a DDS config beyond loopback unless --insecure, an identity whose key is not its
+# certificate's or whose certificate another CA issued refused up front, and a secured
 # trainee whose process is stopped 1.5 s going on in its session (the server holds it;
 # the station, authenticated again, asks with the same request). Domain 131.
 # A palp-recorder without an identity says, 10 s in, that the classroom may be secured.
@@ -60,6 +61,23 @@ chmod 644 "$out/openkey/trainee/alice.key.pem"
 rc=$?
 check "a world-readable private key is refused (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'alice.key.pem is readable by every user of this machine (mode 0644): chmod o-rwx' '$out/openkey.log'"
+# A key that is not its certificate's, and a certificate another CA issued: each fails every handshake
+# with nothing said at creation (the station heard only "no answer"); both refused up front, named.
+cp -r "$pki" "$out/swapped"
+cp "$out/swapped/trainee/bob.key.pem" "$out/swapped/trainee/alice.key.pem"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/swapped" --identity trainee/alice --duration 1 \
+  >"$out/swapped.log" 2>&1
+rc=$?
+check "bob's key beside alice's certificate is refused before any network use (exit $rc)" \
+  "[ $rc -eq 1 ] && grep -q 'alice.key.pem is not the key of its certificate' '$out/swapped.log'"
+bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/otherca" classroom --trainees alice >/dev/null 2>&1
+cp -r "$pki" "$out/foreign"
+cp "$out/otherca/trainee/alice.cert.pem" "$out/otherca/trainee/alice.key.pem" "$out/foreign/trainee/"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/foreign" --identity trainee/alice --duration 1 \
+  >"$out/foreign.log" 2>&1
+rc=$?
+check "a certificate of another classroom's CA is refused before any network use (exit $rc)" \
+  "[ $rc -eq 1 ] && grep -q \"was not issued by this classroom's CA\" '$out/foreign.log'"
 # The rule's edge, seen by the server's --check: group-readable (a service's group, docs/deploy.md) passes.
 chmod 640 "$out/openkey/server/server.key.pem"
 "$server" --check --pki "$out/openkey" >"$out/check640.log" 2>&1
