@@ -70,6 +70,13 @@ cp "$out/swapped/trainee/bob.key.pem" "$out/swapped/trainee/alice.key.pem"
 rc=$?
 check "bob's key beside alice's certificate is refused before any network use (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'alice.key.pem is not the key of its certificate' '$out/swapped.log'"
+cp "$pki/trainee/alice.key.pem" "$out/swapped/trainee/alice.key.pem"
+openssl pkey -in "$pki/trainee/alice.key.pem" -aes128 -passout pass:lab -out "$out/swapped/trainee/alice.key.pem" 2>/dev/null
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/swapped" --identity trainee/alice --duration 1 \
+  >"$out/passphrase.log" 2>&1 </dev/null
+rc=$?
+check "a key with a passphrase is refused as such, not prompted for (exit $rc)" \
+  "[ $rc -eq 1 ] && grep -q 'or has a passphrase (palp gives none)' '$out/passphrase.log'"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/otherca" classroom --trainees alice >/dev/null 2>&1
 cp -r "$pki" "$out/foreign"
 cp "$out/otherca/trainee/alice.cert.pem" "$out/otherca/trainee/alice.key.pem" "$out/foreign/trainee/"
