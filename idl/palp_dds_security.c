@@ -154,12 +154,14 @@ static int no_passphrase(char *buf, int size, int rwflag, void *u) {
   return 0;
 }
 
-/* The identity's key against its certificate, and the certificate against the classroom's CA. Either
- * mistake fails every handshake, and nothing says so at participant creation: measured (2026-12-04),
- * a station given bob's key for alice's certificate created its participant and then heard only "no
- * answer from palp-server", while the server logged an unnamed participant refused with "Failed to
- * finalize digest context". 0, or PALP_EINVAL with the reason; a file OpenSSL cannot read is left to
- * the plugins, which say so at creation (as expiries() does). */
+/* The identity's key against its certificate, and the certificate against the classroom's CA, before
+ * any participant exists. Measured (2026-12-04): a station given bob's key for alice's certificate
+ * created its participant and then heard only "no answer from palp-server", while the server logged an
+ * unnamed participant refused with "Failed to finalize digest context"; another CA's certificate and a
+ * key under a passphrase were refused at creation, in OpenSSL's words ("unable to get local issuer
+ * certificate", a page of "bad decrypt"), under palp's guess "is the certificate revoked or expired".
+ * 0, or PALP_EINVAL with the reason; a file OpenSSL cannot read is left to the plugins, which say so
+ * at creation (as expiries() does). */
 static int identity_pair_check(const palp_dds_security *s, const char *identity, char *err, size_t errlen) {
   char cf[PALP_DDS_PKI_PATH_MAX + 96], kf[PALP_DDS_PKI_PATH_MAX + 96], caf[PALP_DDS_PKI_PATH_MAX + 96];
   if (file_of(s, ".cert.pem", cf, sizeof cf) < 0 || file_of(s, ".key.pem", kf, sizeof kf) < 0 ||
