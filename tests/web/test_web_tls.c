@@ -11,20 +11,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "check.h"
 #include "palp.h"
 #include "tls.h"
-
-static int failures, checks;
-#define CHECK(cond, ...)                                   \
-  do {                                                     \
-    checks++;                                              \
-    if (!(cond)) {                                         \
-      failures++;                                          \
-      fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__); \
-      fprintf(stderr, __VA_ARGS__);                        \
-      fputc('\n', stderr);                                 \
-    }                                                      \
-  } while (0)
 
 static char dir[64];
 

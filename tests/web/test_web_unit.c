@@ -12,21 +12,10 @@
 #include "coverage.h"
 #include "hub.h"
 #include "palp.h"
+#include "check.h"
 #include "palp_dds.h"
 
 #define PI 3.14159265358979323846
-
-static int failures, checks;
-#define CHECK(cond, ...)                                                                                       \
-  do {                                                                                                         \
-    checks++;                                                                                                  \
-    if (!(cond)) {                                                                                             \
-      failures++;                                                                                              \
-      fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                                     \
-      fprintf(stderr, __VA_ARGS__);                                                                            \
-      fputc('\n', stderr);                                                                                     \
-    }                                                                                                          \
-  } while (0)
 
 static void test_bands(void) {
   const palp_web_bands b = palp_web_bands_default();
