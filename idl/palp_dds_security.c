@@ -14,11 +14,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include <openssl/err.h>
-#include <openssl/pem.h>
-#include <openssl/x509.h>
-
 #include "palp.h" /* PALP_E* codes only */
+#include "palp_pem.h"
 
 /* Where Debian's libddsc0debian keeps the plugins (not on the loader path);
  * PALP_DDS_SECURITY_LIBDIR in the environment overrides the build's choice. */
@@ -119,85 +116,43 @@ static int revoked_copy(const palp_dds_security *sec, char *buf, size_t len) {
   return n > 0 && (size_t)n < len;
 }
 
-/* Days from now until t [d] (negative once past); 0 or -1 if t cannot be read. */
-static int days_until(const ASN1_TIME *t, double *days) {
-  int d = 0, sec = 0;
-  if (!t || !ASN1_TIME_diff(&d, &sec, NULL, t)) return -1;
-  *days = d + sec / 86400.0;
-  return 0;
-}
-
-/* The identity's certificate notAfter and the CRL's nextUpdate, in days from now (NAN when a file
- * or its date cannot be read: the plugins then say so themselves, at participant creation). */
-static void expiries(const palp_dds_security *s, double *cert_days, double *crl_days) {
-  char f[PALP_DDS_PKI_PATH_MAX + 96];
-  *cert_days = *crl_days = NAN;
-  FILE *fp = file_of(s, ".cert.pem", f, sizeof f) == 0 ? fopen(f, "r") : NULL;
-  if (fp) {
-    X509 *x = PEM_read_X509(fp, NULL, NULL, NULL);
-    if (x && days_until(X509_get0_notAfter(x), cert_days) < 0) *cert_days = NAN;
-    X509_free(x);
-    fclose(fp);
-  }
-  fp = file_of(s, "crl.pem", f, sizeof f) == 0 ? fopen(f, "r") : NULL;
-  if (fp) {
-    X509_CRL *c = PEM_read_X509_CRL(fp, NULL, NULL, NULL);
-    if (c && days_until(X509_CRL_get0_nextUpdate(c), crl_days) < 0) *crl_days = NAN;
-    X509_CRL_free(c);
-    fclose(fp);
-  }
-}
-
-/* A key with a passphrase is not prompted for: palp gives Cyclone none, so it could not be used. */
-static int no_passphrase(char *buf, int size, int rwflag, void *u) {
-  (void)buf, (void)size, (void)rwflag, (void)u;
-  return 0;
-}
-
 /* The identity's key against its certificate, and the certificate against the classroom's CA, before
- * any participant exists. Measured (2026-12-04): a station given bob's key for alice's certificate
- * created its participant and then heard only "no answer from palp-server", while the server logged an
- * unnamed participant refused with "Failed to finalize digest context"; another CA's certificate and a
- * key under a passphrase were refused at creation, in OpenSSL's words ("unable to get local issuer
- * certificate", a page of "bad decrypt"), under palp's guess "is the certificate revoked or expired".
- * 0, or PALP_EINVAL with the reason; a file OpenSSL cannot read is left to the plugins, which say so
- * at creation (as expiries() does). */
-static int identity_pair_check(const palp_dds_security *s, const char *identity, char *err, size_t errlen) {
+ * any participant exists (palp_pem_check). Measured (2026-12-04): a station given bob's key for alice's
+ * certificate created its participant and then heard only "no answer from palp-server", while the
+ * server logged an unnamed participant refused with "Failed to finalize digest context"; another CA's
+ * certificate and a key under a passphrase were refused at creation, in OpenSSL's words ("unable to
+ * get local issuer certificate", a page of "bad decrypt"), under palp's guess "is the certificate
+ * revoked or expired". 0, or PALP_EINVAL with the reason; *cert_days the certificate's notAfter from
+ * now [d] (NAN when it or its date cannot be read: the plugins then say so themselves, at creation). */
+static int identity_pair_check(const palp_dds_security *s, const char *identity, double *cert_days, char *err,
+                               size_t errlen) {
   char cf[PALP_DDS_PKI_PATH_MAX + 96], kf[PALP_DDS_PKI_PATH_MAX + 96], caf[PALP_DDS_PKI_PATH_MAX + 96];
+  *cert_days = NAN;
   if (file_of(s, ".cert.pem", cf, sizeof cf) < 0 || file_of(s, ".key.pem", kf, sizeof kf) < 0 ||
       file_of(s, "ca.cert.pem", caf, sizeof caf) < 0)
     return 0;
-  X509 *x = NULL, *ca = NULL;
-  EVP_PKEY *k = NULL, *cak = NULL;
-  int rc = 0;
-  FILE *fp = fopen(cf, "r");
-  if (fp) x = PEM_read_X509(fp, NULL, no_passphrase, NULL), fclose(fp);
-  fp = fopen(kf, "r");
-  if (fp) k = PEM_read_PrivateKey(fp, NULL, no_passphrase, NULL), fclose(fp);
-  fp = fopen(caf, "r");
-  if (fp) ca = PEM_read_X509(fp, NULL, no_passphrase, NULL), fclose(fp);
-  if (x && !k) {
-    rc = fail(err, errlen, PALP_EINVAL,
-              "identity %s: its private key %s is not a PEM private key, or has a passphrase (palp gives none)",
-              identity, kf);
-  } else if (x && k && X509_check_private_key(x, k) != 1) {
-    rc = fail(err, errlen, PALP_EINVAL,
-              "identity %s: its private key %s is not the key of its certificate %s (a key copied from another "
-              "identity, or kept from before the certificate was re-issued?): every handshake would fail",
-              identity, kf, cf);
-  } else if (x && ca && (cak = X509_get_pubkey(ca)) != NULL && X509_verify(x, cak) != 1) {
-    rc = fail(err, errlen, PALP_EINVAL,
-              "identity %s: its certificate %s was not issued by this classroom's CA (%s): it is another "
-              "classroom's, or the CA was made anew; every handshake would fail (make-classroom-pki.sh DIR add %s %s "
-              "issues one from this CA)",
-              identity, cf, caf, palp_dds_id_kind_name(s->kind), s->name);
+  palp_pem_info in;
+  const palp_pem_status st = palp_pem_check(cf, kf, caf, &in);
+  if (st != PALP_PEM_NO_CERT && st != PALP_PEM_BAD_DATES) *cert_days = in.end_days;
+  switch (st) {
+  case PALP_PEM_NO_KEY:
+    return fail(err, errlen, PALP_EINVAL,
+                "identity %s: its private key %s is not a PEM private key, or has a passphrase (palp gives none)",
+                identity, kf);
+  case PALP_PEM_NOT_ITS_KEY:
+    return fail(err, errlen, PALP_EINVAL,
+                "identity %s: its private key %s is not the key of its certificate %s (a key copied from another "
+                "identity, or kept from before the certificate was re-issued?): every handshake would fail",
+                identity, kf, cf);
+  case PALP_PEM_NOT_FROM_CA:
+    return fail(err, errlen, PALP_EINVAL,
+                "identity %s: its certificate %s was not issued by this classroom's CA (%s): it is another "
+                "classroom's, or the CA was made anew; every handshake would fail (make-classroom-pki.sh DIR add %s %s "
+                "issues one from this CA)",
+                identity, cf, caf, palp_dds_id_kind_name(s->kind), s->name);
+  default: /* read, or left to the plugins (NO_CERT, BAD_DATES) */
+    return 0;
   }
-  X509_free(x);
-  X509_free(ca);
-  EVP_PKEY_free(k);
-  EVP_PKEY_free(cak);
-  ERR_clear_error(); /* nothing left for the plugins' own OpenSSL calls to misread */
-  return rc;
 }
 
 static void expiry_phrase(char *buf, size_t len, const char *what, double days) {
@@ -211,9 +166,12 @@ static void expiry_phrase(char *buf, size_t len, const char *what, double days) 
     snprintf(buf, len, "%s expires in %.1f day(s) (%s)", what, days, date);
 }
 
-static void expiry_warning(palp_dds_security *s) {
-  double cert_days, crl_days;
-  expiries(s, &cert_days, &crl_days);
+/* cert_days: the identity certificate's notAfter from now [d] (identity_pair_check); the CRL's
+ * nextUpdate is read here (NAN when it cannot be: the plugins then say so at creation). */
+static void expiry_warning(palp_dds_security *s, double cert_days) {
+  char f[PALP_DDS_PKI_PATH_MAX + 96];
+  double crl_days = NAN;
+  if (file_of(s, "crl.pem", f, sizeof f) != 0 || palp_pem_crl_days(f, &crl_days) != 0) crl_days = NAN;
   char a[200] = "", b[200] = "";
   const char *kind = palp_dds_id_kind_name(s->kind);
   if (cert_days < PALP_DDS_EXPIRY_WARN_DAYS) {
@@ -264,8 +222,9 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
                 "identity %s: its private key %s is readable by every user of this machine (mode %04o): "
                 "chmod o-rwx it (make-classroom-pki.sh makes keys 0600)",
                 identity, key, (unsigned)(st.st_mode & 07777));
-  if ((rc = identity_pair_check(&s, identity, err, errlen)) < 0) return rc;
-  expiry_warning(&s);
+  double cert_days;
+  if ((rc = identity_pair_check(&s, identity, &cert_days, err, errlen)) < 0) return rc;
+  expiry_warning(&s, cert_days);
   *sec = s;
   return 0;
 }

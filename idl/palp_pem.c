@@ -1,0 +1,83 @@
+/* palp_pem.c - a PEM certificate and its key, checked before use (palp_pem.h). */
+#include "palp_pem.h"
+
+#include <openssl/err.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
+#include <stdio.h>
+#include <time.h>
+
+/* A key with a passphrase is refused, never prompted for (palp_pem.h). */
+static int no_passphrase(char *buf, int size, int rwflag, void *u) {
+  (void)buf, (void)size, (void)rwflag, (void)u;
+  return 0;
+}
+
+/* Days from now until t [d] (negative once past): 0, or -1 if t cannot be read. */
+static int days_until(const ASN1_TIME *t, double *days) {
+  int d = 0, s = 0;
+  if (!t || !ASN1_TIME_diff(&d, &s, NULL, t)) return -1;
+  *days = d + s / 86400.0;
+  return 0;
+}
+
+static void date_of(const ASN1_TIME *t, char *buf, size_t len) {
+  struct tm tm;
+  buf[0] = '\0';
+  if (t && ASN1_TIME_to_tm(t, &tm)) strftime(buf, len, "%Y-%m-%d %H:%M UTC", &tm);
+}
+
+static X509 *read_cert(const char *path) {
+  FILE *f = path ? fopen(path, "r") : NULL;
+  if (!f) return NULL;
+  X509 *x = PEM_read_X509(f, NULL, no_passphrase, NULL);
+  fclose(f);
+  return x;
+}
+
+palp_pem_status palp_pem_check(const char *cert, const char *key, const char *ca, palp_pem_info *info) {
+  palp_pem_status st = PALP_PEM_OK;
+  X509 *x = read_cert(cert), *cx = NULL;
+  EVP_PKEY *k = NULL, *cak = NULL;
+  if (!x) {
+    st = PALP_PEM_NO_CERT;
+    goto out;
+  }
+  if (days_until(X509_get0_notBefore(x), &info->start_days) != 0 ||
+      days_until(X509_get0_notAfter(x), &info->end_days) != 0)
+    st = PALP_PEM_BAD_DATES; /* said after the key and the CA, in the statuses' order */
+  date_of(X509_get0_notBefore(x), info->start_date, sizeof info->start_date);
+  date_of(X509_get0_notAfter(x), info->end_date, sizeof info->end_date);
+  if (key) {
+    FILE *f = fopen(key, "r");
+    if (f) k = PEM_read_PrivateKey(f, NULL, no_passphrase, NULL), fclose(f);
+    if (!k) {
+      st = PALP_PEM_NO_KEY;
+      goto out;
+    }
+    if (X509_check_private_key(x, k) != 1) {
+      st = PALP_PEM_NOT_ITS_KEY;
+      goto out;
+    }
+  }
+  if (ca && (cx = read_cert(ca)) != NULL && (cak = X509_get_pubkey(cx)) != NULL && X509_verify(x, cak) != 1)
+    st = PALP_PEM_NOT_FROM_CA;
+out:
+  X509_free(x);
+  X509_free(cx);
+  EVP_PKEY_free(k);
+  EVP_PKEY_free(cak);
+  ERR_clear_error(); /* nothing left for the DDS plugins' or libwebsockets' own OpenSSL calls to misread */
+  return st;
+}
+
+int palp_pem_crl_days(const char *crl, double *days) {
+  FILE *f = fopen(crl, "r");
+  if (!f) return -1;
+  X509_CRL *c = PEM_read_X509_CRL(f, NULL, no_passphrase, NULL);
+  fclose(f);
+  const int rc = c ? days_until(X509_CRL_get0_nextUpdate(c), days) : -1;
+  X509_CRL_free(c);
+  ERR_clear_error();
+  return rc;
+}
