@@ -1149,6 +1149,8 @@ int main(int argc, char **argv) {
   static palp_dds_refusals refusals;
   palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
   palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
+  /* a peer refused for its permissions named by its identity, not its GUID */
+  if (palp_dds_security_name_peers(&sec, &refusals) < 0) palp_log_warn(&log, "out of memory naming the classroom's identities");
   o.refusals = &refusals;
   palp_cli_station st;
   if (palp_cli_station_open_secure(&st, o.domain, label, &sec, err, sizeof err) < 0) {

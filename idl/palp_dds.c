@@ -212,9 +212,7 @@ static const char *find_n(const char *s, size_t n, const char *needle) {
   return NULL;
 }
 
-/* palp's subject /O=palp/OU=KIND/CN=NAME (make-classroom-pki.sh) as "KIND/NAME";
- * any other subject as written. */
-static void subject_who(char *who, size_t cap, const char *s, size_t n) {
+void palp_dds_subject_name(char *who, size_t cap, const char *s, size_t n) {
   const char *o = find_n(s, n, "/O=palp/OU="), *cn = find_n(s, n, "/CN=");
   if (o == s && cn && cn > o + 11) {
     const char *kind = o + 11, *name = cn + 4;
@@ -268,7 +266,7 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
   if (err && subj && subj > err) {
     const char *why = err + 30, *who = subj + 11;
     palp_dds_copy_printable(out->why, sizeof out->why, why, (size_t)(subj - why));
-    subject_who(out->who, sizeof out->who, who, (size_t)(body + bn - who));
+    palp_dds_subject_name(out->who, sizeof out->who, who, (size_t)(body + bn - who));
   } else if (kind == PALP_DDS_REFUSED_PERMISSIONS && verify) {
     char tmp[PALP_DDS_REFUSAL_WHY];
     const char *v = verify + 14;

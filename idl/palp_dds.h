@@ -118,6 +118,9 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out);
 /* src[0..n) into dst (size cap, always terminated when cap > 0), each unprintable byte as '?':
  * text from the network (a certificate, a peer's announcement) kept to one log line. */
 void palp_dds_copy_printable(char *dst, size_t cap, const char *src, size_t n);
+/* A certificate's subject s[0..n) as palp names the peer: palp's /O=palp/OU=KIND/CN=NAME
+ * (make-classroom-pki.sh) as "KIND/NAME", any other subject as written (printable). */
+void palp_dds_subject_name(char *who, size_t cap, const char *s, size_t n);
 
 /* Cyclone prints a warning line per malformed sample (e.g. an out-of-range enum
  * fails deserialisation): a hostile peer could fill a disk with them. This sink

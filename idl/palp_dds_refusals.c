@@ -2,7 +2,10 @@
 #include "palp_dds_refusals.h"
 
 #include <stdarg.h>
+#include <stdlib.h>
 #include <string.h>
+
+#include "palp.h"
 
 const char *palp_dds_refusal_kind_words(palp_dds_refusal_kind k) {
   return k == PALP_DDS_REFUSED_PERMISSIONS     ? "for its permissions"
@@ -63,7 +66,68 @@ void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, v
   t->window_ns = (int64_t)((window_s > 0 ? window_s : 60.0) * 1e9);
 }
 
-void palp_dds_refusals_destroy(palp_dds_refusals *t) { pthread_mutex_destroy(&t->mu); }
+void palp_dds_refusals_destroy(palp_dds_refusals *t) {
+  pthread_mutex_destroy(&t->mu);
+  free(t->names);
+  t->names = NULL;
+  t->n_names = 0;
+}
+
+int palp_dds_refusals_set_names(palp_dds_refusals *t, const palp_dds_peer_name *names, int n) {
+  if (n > PALP_DDS_PEER_NAMES_MAX) n = PALP_DDS_PEER_NAMES_MAX;
+  palp_dds_peer_name *copy = n > 0 ? malloc((size_t)n * sizeof *copy) : NULL;
+  if (n > 0 && !copy) return PALP_ENOMEM;
+  for (int i = 0; i < n; i++) {
+    copy[i] = names[i];
+    copy[i].who[sizeof copy[i].who - 1] = '\0';
+  }
+  pthread_mutex_lock(&t->mu);
+  palp_dds_peer_name *old = t->names;
+  t->names = copy;
+  t->n_names = n > 0 ? n : 0;
+  pthread_mutex_unlock(&t->mu);
+  free(old);
+  return 0;
+}
+
+/* Cyclone writes a GUID as four 32-bit words in hex, most significant byte first, without leading
+ * zeros ("f49f7aa2:789ee759:7810bd81:1c1"): the prefix's bytes 0-3, 4-7, 8-11, then the entity. */
+int palp_dds_refusal_guid_prefix(const char *who, unsigned char prefix[6]) {
+  static const char head[] = "participant ";
+  if (!who || strncmp(who, head, sizeof head - 1)) return 0;
+  const char *p = who + sizeof head - 1;
+  uint32_t w[2] = {0, 0};
+  for (int k = 0; k < 2; k++) {
+    int digits = 0;
+    for (; *p && *p != ':'; p++, digits++) {
+      const char c = *p;
+      const int v = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+      if (v < 0 || digits >= 8) return 0;
+      w[k] = w[k] << 4 | (uint32_t)v;
+    }
+    if (!digits || *p != ':') return 0;
+    p++;
+  }
+  for (int i = 0; i < 4; i++) prefix[i] = (unsigned char)(w[0] >> (24 - 8 * i));
+  prefix[4] = (unsigned char)(w[1] >> 24);
+  prefix[5] = (unsigned char)(w[1] >> 16);
+  return 1;
+}
+
+/* A peer refused for its permissions has authenticated, so its GUID prefix is its certificate's
+ * (palp_pem_guid_prefix): named by the one identity that has it, else left as Cyclone gave it.
+ * t->mu held. */
+static void name_peer(const palp_dds_refusals *t, palp_dds_refusal *r) {
+  unsigned char pre[6];
+  if (r->kind != PALP_DDS_REFUSED_PERMISSIONS || !t->n_names || !palp_dds_refusal_guid_prefix(r->who, pre)) return;
+  const palp_dds_peer_name *hit = NULL;
+  for (int i = 0; i < t->n_names; i++)
+    if (!memcmp(t->names[i].prefix, pre, 6)) {
+      if (hit) return; /* two identities, one prefix (47 bits: not in any classroom): nobody */
+      hit = &t->names[i];
+    }
+  if (hit) snprintf(r->who, sizeof r->who, "%s", hit->who);
+}
 
 void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record fn, void *ctx) {
   t->record = fn;
@@ -80,9 +144,12 @@ static void report_repeats(palp_dds_refusals *t, pending *p, palp_dds_refusal_sl
   s->reported_ns = now_ns;
 }
 
-void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns) {
+void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *seen, int64_t now_ns) {
   pending p = {.n = 0};
+  palp_dds_refusal named = *seen;
+  const palp_dds_refusal *r = &named;
   pthread_mutex_lock(&t->mu);
+  name_peer(t, &named);
   t->total++;
   palp_dds_refusal_slot *s = NULL, *oldest = NULL, *free_slot = NULL;
   for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++) {

@@ -46,8 +46,18 @@ typedef void (*palp_dds_refusals_emit)(void *ctx, const char *line);
  * repeats line: its repeats), e.g. to keep them in the session log. */
 typedef void (*palp_dds_refusals_record)(void *ctx, const palp_dds_refusal *r, uint64_t count);
 
+/* A classroom identity and the first 6 bytes of the GUID prefix DDS Security gives it
+ * (palp_pem_guid_prefix): how a peer refused for its permissions, which Cyclone names only by
+ * its GUID, is named as palp names it. */
+#define PALP_DDS_PEER_NAMES_MAX 1024
+typedef struct palp_dds_peer_name {
+  unsigned char prefix[6];
+  char who[PALP_DDS_REFUSAL_WHO];
+} palp_dds_peer_name;
 typedef struct palp_dds_refusals {
   pthread_mutex_t mu;
+  palp_dds_peer_name *names; /* owned; NULL: GUIDs stay GUIDs */
+  int n_names;
   palp_dds_refusals_emit emit; /* NULL: stderr */
   void *emit_ctx;
   palp_dds_refusals_record record; /* NULL: none */
@@ -61,6 +71,15 @@ void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, v
 void palp_dds_refusals_destroy(palp_dds_refusals *t);
 /* Before the sink is installed (not thread-safe against it). */
 void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record fn, void *ctx);
+/* The identities whose GUIDs name a peer refused for its permissions
+ * ("participant f49f7aa2:789ee759:...": the first 6 bytes of its prefix) by palp's name for them
+ * (trainee/bob); copied (replacing any before), at most PALP_DDS_PEER_NAMES_MAX; thread-safe. A prefix
+ * two of them share names nobody.
+ * 0 or PALP_ENOMEM. */
+int palp_dds_refusals_set_names(palp_dds_refusals *t, const palp_dds_peer_name *names, int n);
+/* "participant GUID" (palp_dds_refusal_parse) to the first 6 bytes of its prefix: 1, or 0 when who
+ * is not that. */
+int palp_dds_refusal_guid_prefix(const char *who, unsigned char prefix[6]);
 /* One refusal seen at now_ns (monotonic): logs the first of its peer and reason,
  * or the repeats once `window` has passed since the last line about them. */
 void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *r, int64_t now_ns);

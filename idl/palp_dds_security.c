@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "palp.h" /* PALP_E* codes only */
+#include "palp_dds_refusals.h"
 #include "palp_pem.h"
 
 /* Where Debian's libddsc0debian keeps the plugins (not on the loader path);
@@ -355,4 +356,43 @@ void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, cha
              "every station then needs), and is this certificate valid and not revoked? (the server's log names each "
              "identity it refuses, and why)",
              peers, peers == 1 ? " is" : "s are", palp_dds_id_kind_name(sec->kind), sec->name);
+}
+
+int palp_dds_security_name_peers(const palp_dds_security *sec, struct palp_dds_refusals *t) {
+  if (!sec || sec->kind == PALP_DDS_ID_NONE || !t) return 0;
+  static const char *const kinds[] = {"trainee", "instructor", "server"};
+  palp_dds_peer_name *names = NULL;
+  int n = 0, cap = 0;
+  for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+    char dir[PALP_DDS_PKI_PATH_MAX + 16];
+    snprintf(dir, sizeof dir, "%s/%s", sec->pki, kinds[k]);
+    DIR *d = opendir(dir);
+    if (!d) continue;
+    for (struct dirent *e; (e = readdir(d)) && n < PALP_DDS_PEER_NAMES_MAX;) {
+      const char *dot = strstr(e->d_name, ".cert.pem");
+      if (!dot || dot[9] != '\0' || dot == e->d_name) continue;
+      char path[PALP_DDS_PKI_PATH_MAX + 16 + 260], subject[512];
+      unsigned char pre[6];
+      if (snprintf(path, sizeof path, "%s/%s", dir, e->d_name) >= (int)sizeof path ||
+          palp_pem_guid_prefix(path, pre, subject, sizeof subject) < 0)
+        continue; /* not a certificate: nobody to name by it */
+      if (n == cap) {
+        const int ncap = cap ? 2 * cap : 32;
+        palp_dds_peer_name *g = realloc(names, (size_t)ncap * sizeof *g);
+        if (!g) {
+          closedir(d);
+          free(names);
+          return PALP_ENOMEM;
+        }
+        names = g, cap = ncap;
+      }
+      memcpy(names[n].prefix, pre, sizeof pre);
+      palp_dds_subject_name(names[n].who, sizeof names[n].who, subject, strlen(subject));
+      n++;
+    }
+    closedir(d);
+  }
+  const int rc = palp_dds_refusals_set_names(t, names, n);
+  free(names);
+  return rc < 0 ? rc : n;
 }

@@ -94,6 +94,13 @@ int palp_dds_peer_participants(dds_entity_t pp);
  * certificate). For the end of a "no answer" message. */
 void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, char *buf, size_t len);
 
+struct palp_dds_refusals;
+/* Gives t the classroom's identities found under sec's PKI directory (KIND/NAME.cert.pem for the
+ * trainees, instructors and the server; not the revoked ones), so that a peer refused for its
+ * permissions is named by its identity (trainee/bob) instead of its GUID (palp_dds_refusals_set_names).
+ * Returns how many were read (0 for a plain sec), or PALP_ENOMEM. */
+int palp_dds_security_name_peers(const palp_dds_security *sec, struct palp_dds_refusals *t);
+
 #ifdef __cplusplus
 }
 #endif

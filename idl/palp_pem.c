@@ -3,6 +3,7 @@
 
 #include <openssl/err.h>
 #include <openssl/pem.h>
+#include <openssl/sha.h>
 #include <openssl/x509.h>
 #include <stdio.h>
 #include <time.h>
@@ -78,6 +79,35 @@ int palp_pem_crl_days(const char *crl, double *days) {
   fclose(f);
   const int rc = c ? days_until(X509_CRL_get0_nextUpdate(c), days) : -1;
   X509_CRL_free(c);
+  ERR_clear_error();
+  return rc;
+}
+
+int palp_pem_guid_prefix(const char *cert, unsigned char prefix[6], char *subject, size_t cap) {
+  X509 *x = read_cert(cert);
+  const X509_NAME *name = x ? X509_get_subject_name(x) : NULL;
+  unsigned char *der = NULL;
+  const int n = name ? i2d_X509_NAME(name, &der) : -1;
+  int rc = -1;
+  if (n > 0) {
+    unsigned char high[SHA256_DIGEST_LENGTH];
+    SHA256(der, (size_t)n, high);
+    /* prefix[i] = (the bit before) | high[i] >> 1, the first bit 1: 9.3.3's "bit 0 set, then
+     * the hash's first 47 bits" (Cyclone's get_adjusted_participant_guid). */
+    unsigned char carry = 0x80;
+    for (int i = 0; i < 6; i++) {
+      prefix[i] = (unsigned char)(carry | high[i] >> 1);
+      carry = (unsigned char)(high[i] << 7);
+    }
+    if (subject && cap) {
+      char *one = X509_NAME_oneline(name, NULL, 0);
+      snprintf(subject, cap, "%s", one ? one : "");
+      OPENSSL_free(one);
+    }
+    rc = 0;
+  }
+  OPENSSL_free(der);
+  X509_free(x);
   ERR_clear_error();
   return rc;
 }

@@ -9,6 +9,8 @@
 #ifndef PALP_PEM_H
 #define PALP_PEM_H
 
+#include <stddef.h>
+
 typedef enum palp_pem_status {
   PALP_PEM_OK = 0,
   PALP_PEM_NO_CERT,      /* the certificate cannot be read as PEM */
@@ -30,5 +32,14 @@ palp_pem_status palp_pem_check(const char *cert, const char *key, const char *ca
 
 /* A CRL's nextUpdate from now [d] (negative: past): 0, or -1 when it cannot be read. */
 int palp_pem_crl_days(const char *crl, double *days);
+
+/* The first 6 bytes of the GUID prefix that DDS Security's builtin authentication gives a participant
+ * authenticated with this certificate (DDS Security 1.1, 9.3.3): bit 0 set, bits 1-47 the first 47 bits
+ * of SHA-256 over the DER encoding of the certificate's subject name. Cyclone's handshake refuses a peer
+ * whose prefix does not match its certificate ("incorrect participant guid"), so an authenticated
+ * participant's prefix names its subject. `subject` (when not NULL) gets the subject as OpenSSL writes
+ * it on one line ("/O=palp/OU=trainee/CN=bob", as in Cyclone's messages). 0, or -1 when the
+ * certificate cannot be read. */
+int palp_pem_guid_prefix(const char *cert, unsigned char prefix[6], char *subject, size_t cap);
 
 #endif

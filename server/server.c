@@ -1335,6 +1335,9 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     }
   }
   if (srv->sec.warning[0]) palp_log_warn(srv->log, "DDS Security: %s", srv->sec.warning);
+  /* a peer refused for its permissions named by its identity, not its GUID */
+  if (palp_dds_security_name_peers(&srv->sec, &srv->refusals) < 0)
+    palp_log_warn(srv->log, "out of memory naming the classroom's identities");
   srv->pp = palp_dds_create_participant((dds_domainid_t)srv->cfg.domain_id, &srv->sec);
   if (srv->pp < 0) {
     *rc = PALP_EIO;

@@ -384,6 +384,8 @@ int main(int argc, char **argv) {
   static palp_dds_refusals refusals;
   palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
   palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
+  /* a peer refused for its permissions named by its identity, not its GUID */
+  if (palp_dds_security_name_peers(&hd.sec, &refusals) < 0) palp_log_warn(&log, "out of memory naming the classroom's identities");
   hd.refusals = &refusals; /* the dashboard lists them */
   char err[256];
   palp_web_hub *hub = palp_web_hub_create(&hd, err, sizeof err);

@@ -534,6 +534,8 @@ int main(int argc, char **argv) {
   static palp_dds_refusals refusals;
   palp_dds_refusals_init(&refusals, palp_log_warn_line, &plog, PALP_DDS_REFUSAL_WINDOW_S);
   palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
+  /* a peer refused for its permissions named by its identity, not its GUID */
+  if (palp_dds_security_name_peers(&sec, &refusals) < 0) palp_log_warn(&plog, "out of memory naming the classroom's identities");
   dds_entity_t pp = palp_dds_create_participant(domain, &sec);
   if (pp < 0) {
     palp_log_error(&plog, "cannot create a DDS participant: %s\n", dds_strretcode(pp));

@@ -2,7 +2,8 @@
  * whose subject and reason come from that peer's certificate, so from the network; then the
  * refusal table every palp DDS program keeps (palp_dds_refusals). A parsed refusal must be
  * two terminated, printable fields of bounded size, and the table must count it once and say
- * it in one line. */
+ * it in one line; a GUID that parses names the peer by the identity given that prefix exactly
+ * when it was refused for its permissions. */
 #include "fuzz_util.h"
 #include "palp_dds_refusals.h"
 
@@ -28,7 +29,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   palp_dds_refusals t;
   int lines = 0;
   palp_dds_refusals_init(&t, count_line, &lines, 60.0);
+  unsigned char pre[6];
+  const int has_guid = palp_dds_refusal_guid_prefix(r.who, pre);
+  if (has_guid && strncmp(r.who, "participant ", 12)) abort();
+  if (has_guid) {
+    palp_dds_peer_name nm = {.who = "trainee/x"};
+    memcpy(nm.prefix, pre, sizeof pre);
+    if (palp_dds_refusals_set_names(&t, &nm, 1) != 0) abort();
+  }
   palp_dds_refusals_note(&t, &r, 0);
+  palp_dds_refusal_entry e;
+  if (palp_dds_refusals_list(&t, &e, 1) != 1) abort();
+  const int named = !strcmp(e.r.who, "trainee/x");
+  if (named != (has_guid && r.kind == PALP_DDS_REFUSED_PERMISSIONS) && strcmp(r.who, "trainee/x")) abort();
   palp_dds_refusals_note(&t, &r, 1000000000LL);
   palp_dds_refusals_flush(&t);
   uint64_t total = 0;

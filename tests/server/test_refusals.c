@@ -310,12 +310,12 @@ static void test_lock_order(void) {
 }
 
 typedef struct lines_t {
-  char line[4][512];
+  char line[8][512];
   int n;
 } lines_t;
 static void collect(void *ctx, const char *line) {
   lines_t *l = ctx;
-  if (l->n < 4) snprintf(l->line[l->n], sizeof l->line[0], "%s", line);
+  if (l->n < 8) snprintf(l->line[l->n], sizeof l->line[0], "%s", line);
   l->n++;
 }
 
@@ -372,7 +372,69 @@ static void test_stranger_name(void) {
   palp_dds_refusals_destroy(&t);
 }
 
+/* A peer refused for its permissions is named by the identity whose GUID prefix it has
+ * (palp_dds_refusals_set_names; the prefixes here written by hand: the forged participant's real
+ * prefix against Cyclone's is checked in security_classroom). */
+static void test_peer_names(void) {
+  unsigned char pre[6];
+  const unsigned char want[6] = {0xf4, 0x9f, 0x7a, 0xa2, 0x78, 0x9e}, small[6] = {0, 0, 0, 1, 0, 0x0a};
+  CHECK(palp_dds_refusal_guid_prefix("participant f49f7aa2:789ee759:7810bd81:1c1", pre) == 1 && !memcmp(pre, want, 6),
+        "Cyclone's GUID words to the prefix's first 6 bytes");
+  CHECK(palp_dds_refusal_guid_prefix("participant 1:a0000:3:4", pre) == 1 && !memcmp(pre, small, 6),
+        "words without their leading zeros");
+  const char *bad[] = {"trainee/bob", "participant ", "participant xyz:1:2:3", "participant 123456789:1:2:3",
+                       "participant :1:2:3", "participant 1:2", "participant 1", "a participant"};
+  int refused = 0;
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) refused += palp_dds_refusal_guid_prefix(bad[i], pre) == 0;
+  CHECK(refused == (int)(sizeof bad / sizeof bad[0]), "%d of %zu malformed GUIDs refused", refused,
+        sizeof bad / sizeof bad[0]);
+
+  lines_t got = {0};
+  palp_dds_refusals t;
+  palp_dds_refusals_init(&t, collect, &got, 60.0);
+  palp_dds_peer_name names[3] = {{{0xf4, 0x9f, 0x7a, 0xa2, 0x78, 0x9e}, "trainee/bob"},
+                                 {{0x95, 0xd9, 0x00, 0x01, 0x02, 0x03}, "instructor/ines"},
+                                 {{0x95, 0xd9, 0x00, 0x01, 0x02, 0x04}, "trainee/zoe"}};
+  CHECK(palp_dds_refusals_set_names(&t, names, 3) == 0, "three identities given");
+  palp_dds_refusal r = {.kind = PALP_DDS_REFUSED_PERMISSIONS};
+  snprintf(r.who, sizeof r.who, "participant f49f7aa2:789ee759:7810bd81:1c1");
+  snprintf(r.why, sizeof r.why, "permissions not signed by the classroom (self-signed certificate)");
+  palp_dds_refusals_note(&t, &r, 0);
+  CHECK(got.n == 1 && !strcmp(got.line[0], "DDS Security refused trainee/bob for its permissions: permissions not signed "
+                                           "by the classroom (self-signed certificate); it gets no answer (repeats "
+                                           "counted, logged at most every 60 s)"),
+        "named by its identity: '%s'", got.n ? got.line[0] : "");
+  palp_dds_refusals_note(&t, &r, 1);
+  palp_dds_refusal_entry e[4];
+  int n = palp_dds_refusals_list(&t, e, 4);
+  CHECK(n == 1 && e[0].count == 2 && !strcmp(e[0].r.who, "trainee/bob"), "its repeats counted under that name: %d, %s",
+        n, n ? e[0].r.who : "");
+  snprintf(r.who, sizeof r.who, "participant 95d90001:204ee759:7810bd81:1c1"); /* nobody's */
+  palp_dds_refusals_note(&t, &r, 2);
+  CHECK(got.n == 2 && strstr(got.line[1], "refused participant 95d90001:204ee759:7810bd81:1c1 for its permissions"),
+        "a prefix no identity has stays a GUID: '%s'", got.n > 1 ? got.line[1] : "");
+  palp_dds_refusal h = {.kind = PALP_DDS_REFUSED_HANDSHAKE};
+  snprintf(h.who, sizeof h.who, "participant f49f7aa2:789ee759:7810bd81:1c1");
+  snprintf(h.why, sizeof h.why, "certificate revoked");
+  palp_dds_refusals_note(&t, &h, 3);
+  CHECK(got.n == 3 && strstr(got.line[2], "refused participant f49f7aa2:789ee759:7810bd81:1c1 at the handshake"),
+        "only a permissions refusal is named by its GUID (it has authenticated): '%s'", got.n > 2 ? got.line[2] : "");
+  /* two identities with one prefix (47 bits: not in a classroom) name nobody */
+  names[1] = names[0];
+  snprintf(names[1].who, sizeof names[1].who, "trainee/eve");
+  CHECK(palp_dds_refusals_set_names(&t, names, 2) == 0, "replaced by two identities sharing a prefix");
+  snprintf(r.why, sizeof r.why, "another reason");
+  palp_dds_refusals_note(&t, &r, 4);
+  snprintf(r.who, sizeof r.who, "participant f49f7aa2:789ee759:7810bd81:1c1");
+  palp_dds_refusals_note(&t, &r, 5);
+  CHECK(got.n == 5 && strstr(got.line[4], "refused participant f49f7aa2:789ee759:7810bd81:1c1 for its permissions: another"),
+        "a shared prefix names neither: '%s'", got.n > 4 ? got.line[4] : "");
+  CHECK(palp_dds_refusals_set_names(&t, NULL, 0) == 0 && t.n_names == 0 && !t.names, "and none");
+  palp_dds_refusals_destroy(&t);
+}
+
 int main(void) {
+  test_peer_names();
   test_stranger_name();
   test_parse();
   test_throttle();
