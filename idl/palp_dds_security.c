@@ -373,9 +373,10 @@ int palp_dds_security_name_peers(const palp_dds_security *sec, struct palp_dds_r
       if (!dot || dot[9] != '\0' || dot == e->d_name) continue;
       char path[PALP_DDS_PKI_PATH_MAX + 16 + 260], subject[512];
       unsigned char pre[6];
-      if (snprintf(path, sizeof path, "%s/%s", dir, e->d_name) >= (int)sizeof path ||
-          palp_pem_guid_prefix(path, pre, subject, sizeof subject) < 0)
-        continue; /* not a certificate: nobody to name by it */
+      struct stat st;
+      if (snprintf(path, sizeof path, "%s/%s", dir, e->d_name) >= (int)sizeof path || stat(path, &st) != 0 ||
+          !S_ISREG(st.st_mode) || st.st_size > 65536 || palp_pem_guid_prefix(path, pre, subject, sizeof subject) < 0)
+        continue; /* not a certificate (a FIFO or a device would block the start): nobody to name by it */
       if (n == cap) {
         const int ncap = cap ? 2 * cap : 32;
         palp_dds_peer_name *g = realloc(names, (size_t)ncap * sizeof *g);

@@ -13,9 +13,11 @@
 #include <math.h>
 #include <spawn.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include "harness.h"
+#include "palp_dds_refusals.h"
 #include "palp_pem.h"
 
 #define DOMAIN 130
@@ -409,6 +411,38 @@ static int wait_child(pid_t pid, const char *role) {
   return ok;
 }
 
+/* The identities a program reads from its PKI directory to name peers refused for their permissions
+ * (palp_dds_security_name_peers): a certificate names its subject; a FIFO (which would block a read), a
+ * file that is no certificate and a directory are passed over, without blocking the start. */
+static void test_name_peers_dir(void) {
+  char dir[] = "/tmp/palp-names-XXXXXX", path[256], cmd[1200];
+  REQUIRE(mkdtemp(dir), "temporary directory");
+  snprintf(path, sizeof path, "%s/trainee", dir);
+  REQUIRE(mkdir(path, 0700) == 0, "%s", path);
+  snprintf(cmd, sizeof cmd, "cp '%s/trainee/bob.cert.pem' '%s/trainee/bob.cert.pem' && printf 'junk' > '%s/trainee/junk.cert.pem' "
+                            "&& mkfifo '%s/trainee/fifo.cert.pem' && mkdir '%s/trainee/dir.cert.pem'",
+           pki, dir, dir, dir, dir);
+  REQUIRE(system(cmd) == 0, "%s", cmd);
+  palp_dds_security sec = {.kind = PALP_DDS_ID_TRAINEE};
+  snprintf(sec.pki, sizeof sec.pki, "%s", dir);
+  palp_dds_refusals t;
+  palp_dds_refusals_init(&t, NULL, NULL, 60.0);
+  const int64_t t0 = palp_dds_now_ns();
+  const int n = palp_dds_security_name_peers(&sec, &t);
+  unsigned char want[6] = {0};
+  snprintf(path, sizeof path, "%s/trainee/bob.cert.pem", dir);
+  CHECK(n == 1 && t.n_names == 1 && !strcmp(t.names[0].who, "trainee/bob") &&
+            palp_pem_guid_prefix(path, want, NULL, 0) == 0 && !memcmp(t.names[0].prefix, want, 6),
+        "one identity named from a directory with a certificate, junk, a FIFO and a directory: %d (%s), %.3f s", n,
+        n > 0 ? t.names[0].who : "", (double)(palp_dds_now_ns() - t0) * 1e-9);
+  const palp_dds_security plain = {.kind = PALP_DDS_ID_NONE};
+  CHECK(palp_dds_security_name_peers(&plain, &t) == 0 && t.n_names == 1, "a plain program reads nothing");
+  CHECK(palp_pem_guid_prefix("/nonexistent/x.cert.pem", want, NULL, 0) == -1, "no certificate, no prefix");
+  palp_dds_refusals_destroy(&t);
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  CHECK(system(cmd) == 0, "removed %s", dir);
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: %s PKI_DIR\n", argv[0]);
@@ -426,6 +460,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(role, "dave")) child_dave();
     return palp_test_failures ? 1 : 0;
   }
+  test_name_peers_dir();
   palp_srv_config cfg;
   test_config(&cfg, DOMAIN, 100);
   snprintf(cfg.security_pki, sizeof cfg.security_pki, "%s", pki);
