@@ -9,6 +9,7 @@
  * its own, as a real attacker would be; the server and the good station run here. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/select.h>
 #include <sys/wait.h>
@@ -200,9 +201,15 @@ int main(void) {
         "(want <= 0.5%% + 3, none > 10 periods); before the flood: largest %.2f ms",
         (double)flood.max_gap_ns * 1e-6, period_ms, (long long)flood.over, (unsigned long long)flood.pairs,
         (double)warm.max_gap_ns * 1e-6);
-  /* 20,000 keys at ~760 B each (the unfiltered reader's cost) would be ~15 MB. */
-  CHECK(rss1 - rss0 < 4096, "server process memory grew by %ld kB over the flood (want < 4096 kB; unbounded: ~15,000 kB)",
-        rss1 - rss0);
+  /* 20,000 keys at ~760 B each (the unfiltered reader's cost) would be ~15 MB. Measured +304..+456 kB.
+   * Under AddressSanitizer its allocator and shadow grow by ~4 MB more whatever the code (+4084..+4132 kB,
+   * session 51's code and 52's alike, its quarantine off), so scripts/sanitize.sh raises the bound there
+   * (PALP_TEST_FLOOD_RSS_KB), still half the unbounded growth. */
+  const char *bound_env = getenv("PALP_TEST_FLOOD_RSS_KB");
+  const long bound_kb = bound_env && atol(bound_env) > 0 ? atol(bound_env) : 4096;
+  CHECK(rss1 - rss0 < bound_kb,
+        "server process memory grew by %ld kB over the flood (want < %ld kB; unbounded: ~15,000 kB)", rss1 - rss0,
+        bound_kb);
 
   palp_ServerGuard g;
   memset(&g, 0, sizeof g);
