@@ -89,6 +89,13 @@ static int file_of(const palp_dds_security *sec, const char *suffix, char *buf, 
 static const char *const identity_files[] = {".cert.pem", ".key.pem", ".permissions.p7s", "ca.cert.pem",
                                              "governance.p7s"};
 
+/* The length of STEM when a directory entry is named STEM.cert.pem with STEM not empty, else 0. */
+static size_t cert_stem(const char *name) {
+  static const char suffix[] = ".cert.pem";
+  const size_t n = strlen(name), k = sizeof suffix - 1;
+  return n > k && !strcmp(name + n - k, suffix) ? n - k : 0;
+}
+
 /* The newest DIR/revoked/KIND_NAME-STAMP of a revoked identity (make-classroom-pki.sh
  * revoke moves its files there, STAMP a UTC time that sorts): 1 and its path prefix
  * in buf, or 0 when the identity was never revoked here. */
@@ -103,9 +110,8 @@ static int revoked_copy(const palp_dds_security *sec, char *buf, size_t len) {
   }
   char best[256] = "";
   for (struct dirent *e; (e = readdir(d));) {
-    const char *dot = strstr(e->d_name, ".cert.pem");
-    if (strncmp(e->d_name, head, (size_t)hn) || !dot || dot[9] != '\0') continue;
-    const size_t stem = (size_t)(dot - e->d_name);
+    const size_t stem = cert_stem(e->d_name);
+    if (strncmp(e->d_name, head, (size_t)hn) || !stem) continue;
     if (stem < sizeof best && strncmp(e->d_name, best, sizeof best) > 0) {
       memcpy(best, e->d_name, stem);
       best[stem] = '\0';
@@ -369,8 +375,7 @@ int palp_dds_security_name_peers(const palp_dds_security *sec, struct palp_dds_r
     DIR *d = opendir(dir);
     if (!d) continue;
     for (struct dirent *e; (e = readdir(d)) && n < PALP_DDS_PEER_NAMES_MAX;) {
-      const char *dot = strstr(e->d_name, ".cert.pem");
-      if (!dot || dot[9] != '\0' || dot == e->d_name) continue;
+      if (!cert_stem(e->d_name)) continue;
       char path[PALP_DDS_PKI_PATH_MAX + 16 + 260], subject[512];
       unsigned char pre[6];
       struct stat st;
