@@ -233,6 +233,7 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
   static const char *const handshake[] = {"Validate remote identity failed: ", "Begin handshake request failed: ",
                                           "Begin handshake reply failed: ", "Process handshake failed: "};
   static const char perm_head[] = "Could not get remote participant ", perm_tail[] = " permissions from plugin: ";
+  static const char digest[] = "Failed to finalize digest context";
   if (!msg || !out) return 0;
   while (len && (*msg == ' ' || *msg == '\t')) msg++, len--;
   const char *body = NULL, *guid = NULL;
@@ -272,6 +273,13 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
     const char *v = verify + 14;
     snprintf(tmp, sizeof tmp, "permissions not signed by the classroom (%.*s)", (int)(body + bn - v), v);
     palp_dds_copy_printable(out->why, sizeof out->why, tmp, strlen(tmp));
+  } else if (kind == PALP_DDS_REFUSED_HANDSHAKE && bn >= sizeof digest - 1 && !memcmp(body, digest, sizeof digest - 1)) {
+    /* The plugin's signature check of the peer's handshake (EVP_DigestVerifyFinal) failed: the
+     * certificate has passed the CA and the CRL, but the peer cannot sign with its key. palp's own
+     * programs check their key against their certificate before they start, so what is left is
+     * someone else's certificate (certificates are public) or a foreign program's wrong key. */
+    snprintf(out->why, sizeof out->why, "its handshake is not signed by its certificate's key (someone else's "
+                                        "certificate, or a private key that is not its own)");
   } else {
     palp_dds_copy_printable(out->why, sizeof out->why, body, bn);
   }

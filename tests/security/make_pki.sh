@@ -5,11 +5,13 @@
 #                (a revoked station does not volunteer its own revocation)
 #   DIR-forged   bob's genuine identity with permissions granting the server's rights, signed by
 #                a CA of his own (DIR-rogue) instead of the classroom's
+#   DIR-thief    bob's certificate and permissions, copied (they are public), with a private key
+#                of the thief's own: an impersonation the handshake's signature must expose
 # usage: make_pki.sh make-classroom-pki.sh DIR
 set -eu
 script=$1
 dir=$2
-rm -rf "$dir" "$dir-dave" "$dir-rogue" "$dir-forged"
+rm -rf "$dir" "$dir-dave" "$dir-rogue" "$dir-forged" "$dir-thief"
 bash "$script" "$dir" classroom --trainees alice,bob,dave --instructors ines >/dev/null
 mkdir -p "$dir-dave/trainee"
 cp "$dir/ca.cert.pem" "$dir/governance.p7s" "$dir-dave/"
@@ -28,4 +30,9 @@ sed 's/CN=server,OU=server,O=palp/CN=bob,OU=trainee,O=palp/' "$dir-rogue/server/
 grep -q "CN=bob,OU=trainee" "$dir-forged/trainee/bob.permissions.xml"
 openssl smime -sign -in "$dir-forged/trainee/bob.permissions.xml" -text -out "$dir-forged/trainee/bob.permissions.p7s" \
   -signer "$dir-rogue/ca.cert.pem" -inkey "$dir-rogue/ca/ca.key.pem"
+
+mkdir -p "$dir-thief/trainee"
+cp "$dir/ca.cert.pem" "$dir/governance.p7s" "$dir/crl.pem" "$dir-thief/"
+cp "$dir/trainee/bob.cert.pem" "$dir/trainee/bob.permissions.p7s" "$dir-thief/trainee/"
+(umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$dir-thief/trainee/bob.key.pem")
 echo "make_pki: $dir ready"

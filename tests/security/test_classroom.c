@@ -367,6 +367,30 @@ static void child_forged(void) {
   dds_delete(pp);
 }
 
+/* ---- thief: bob's certificate and permissions (public files) with a key of the thief's own ---- */
+static void child_thief(void) {
+  char err[512], key[1100];
+  palp_dds_security sec; /* bob's genuine files, for everything but the key */
+  REQUIRE(palp_dds_security_init(&sec, pki, "trainee/bob", err, sizeof err) == 0, "thief: %s", err);
+  dds_qos_t *q = dds_create_qos();
+  palp_dds_security_qos(&sec, q);
+  snprintf(key, sizeof key, "file:%s-thief/trainee/bob.key.pem", pki);
+  dds_qset_prop(q, "dds.sec.auth.private_key", key);
+  dds_entity_t pp = dds_create_participant(DOMAIN, q, NULL);
+  dds_delete_qos(q);
+  /* Cyclone 0.10.2 does not match the key to the certificate at creation (palp's programs do,
+   * idl/palp_dds_security.c): the thief gets as far as the handshake, whose signature exposes it. */
+  REQUIRE(pp > 0, "the thief's participant is created: %s", pp < 0 ? dds_strretcode(pp) : "ok");
+  dds_entity_t ct = palp_dds_create_topic(pp, PALP_TOPIC_SERVER_STATUS);
+  dds_entity_t fr = palp_dds_create_reader(pp, ct, PALP_TOPIC_SERVER_STATUS);
+  REQUIRE(fr > 0, "locally it may read the server status (%d)", fr);
+  const int cat = count_samples(fr, 3.0);
+  CHECK(cat == 0 && matched_pubs(fr) == 0,
+        "the thief, with bob's certificate but not his key, hears nothing from the server in 3 s: %d status "
+        "samples from %d writers", cat, matched_pubs(fr));
+  dds_delete(pp);
+}
+
 /* ---- dave: revoked (in the classroom's CRL) ---- */
 static void child_dave(void) {
   char dir[1024], err[512];
@@ -458,6 +482,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(role, "anon")) child_anon();
     else if (!strcmp(role, "forged")) child_forged();
     else if (!strcmp(role, "dave")) child_dave();
+    else if (!strcmp(role, "thief")) child_thief();
     return palp_test_failures ? 1 : 0;
   }
   test_name_peers_dir();
@@ -473,10 +498,10 @@ int main(int argc, char **argv) {
   while (palp_srv_open_sessions(ts.srv) < 1 && palp_dds_now_ns() < end) test_sleep(0.05);
   REQUIRE(palp_srv_open_sessions(ts.srv) == 1, "alice's session is open after %.2f s (server start, handshake, join)",
           (double)(palp_dds_now_ns() - t0) * 1e-9);
-  const char *roles[] = {"bob", "ines", "anon", "forged", "dave"};
-  pid_t pids[5];
-  for (int i = 0; i < 5; i++) pids[i] = spawn(argv[0], roles[i]);
-  for (int i = 0; i < 5; i++) wait_child(pids[i], roles[i]);
+  const char *roles[] = {"bob", "ines", "anon", "forged", "dave", "thief"};
+  pid_t pids[6];
+  for (int i = 0; i < 6; i++) pids[i] = spawn(argv[0], roles[i]);
+  for (int i = 0; i < 6; i++) wait_child(pids[i], roles[i]);
   wait_child(alice, "alice");
   uint64_t refused = palp_srv_refused_requests(ts.srv);
   /* bob's LEAVE, JOIN and disposal of alice's station, and his JOIN as "alice" */
@@ -496,6 +521,10 @@ int main(int argc, char **argv) {
   const char *forged = strstr(who, "trainee/bob: permissions not signed by the classroom (");
   CHECK(forged && !strstr(who, "participant "),
         "and the forged participant, refused for its permissions, named by the identity it authenticated with: %s", who);
+  /* The thief's certificate passes the CA and the CRL; the signature of its handshake does not. Cyclone
+   * says "Failed to finalize digest context" and names nobody; the server says what it means. */
+  CHECK(strstr(who, "a participant: its handshake is not signed by its certificate's key (someone else's certificate"),
+        "and the thief, with bob's certificate and a key of its own, refused for its handshake's signature: %s", who);
   CHECK(!strstr(who, "alice") && !strstr(who, "ines") && forged && !strstr(forged + 11, "bob") &&
             strstr(who, "bob") == forged + 8,
         "nobody else of the classroom is among them: %s", who);

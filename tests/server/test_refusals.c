@@ -68,6 +68,24 @@ static void test_parse(void) {
   k = parse("Process handshake failed: Expiry date of the certificate is invalid(code: 200)", &r);
   CHECK(k == 1 && !strcmp(r.who, "a participant") && !strcmp(r.why, "Expiry date of the certificate is invalid"),
         "a reason without a subject: \"%s\", \"%s\"", r.who, r.why);
+  /* security_classroom's thief (bob's certificate, another key), as Cyclone printed it on 2026-12-04; the
+   * same words as the requester ("Process") and as the replier ("Begin handshake reply") */
+  k = parse("Process handshake failed: Failed to finalize digest context: (code: 200)", &r);
+  CHECK(k == 1 && r.kind == PALP_DDS_REFUSED_HANDSHAKE && !strcmp(r.who, "a participant") &&
+            !strcmp(r.why, "its handshake is not signed by its certificate's key (someone else's certificate, or a "
+                           "private key that is not its own)"),
+        "a handshake whose signature fails, in plain words: \"%s\", \"%s\"", r.who, r.why);
+  k = parse("Begin handshake reply failed: Failed to finalize digest context: error:1C800064:Provider routines::bad "
+            "decrypt(code: 200)",
+            &r);
+  CHECK(k == 1 && !strncmp(r.why, "its handshake is not signed by its certificate's key", 52),
+        "with OpenSSL's reason after it, the same words: \"%s\"", r.why);
+  k = parse("Process handshake failed: Failed to finalize digest context(code: 200)", &r);
+  CHECK(k == 1 && !strncmp(r.why, "its handshake is not signed", 27), "without the colon: \"%s\"", r.why);
+  k = parse("Could not get remote participant 1:2:3:4 permissions from plugin: Failed to finalize digest context: ",
+            &r);
+  CHECK(k == 1 && r.kind == PALP_DDS_REFUSED_PERMISSIONS && !strcmp(r.why, "Failed to finalize digest context:"),
+        "the words read as a signature only at the handshake: \"%s\"", r.why);
   k = parse("Process handshake failed: Certificate not valid: error: certificate revoked; subject: "
             "/O=palp/OU=trainee/CN=a/OU=server(code: 200)",
             &r);
