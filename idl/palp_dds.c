@@ -252,6 +252,13 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
     kind = PALP_DDS_REFUSED_PERMISSIONS;
   }
   if (!body) return 0;
+  /* A stale handshake message: the challenges of an attempt that was since restarted (a peer slow to
+   * answer, or a handshake failed for another reason and begun again). It is no verdict on the peer,
+   * which may authenticate at the next attempt, so it is left to the rate-limited log, not counted as a
+   * refusal (seen for security_classroom's thief under ThreadSanitizer, 2026-12-04). */
+  if (find_n(body, (size_t)(msg + len - body), "does not match future_challenge") ||
+      find_n(body, (size_t)(msg + len - body), "No future challenge exists"))
+    return 0;
   /* The exception's own text, without Cyclone's "(code: N)" and the trailing
    * newline OpenSSL's error string may carry. */
   size_t bn = (size_t)(msg + len - body);

@@ -80,6 +80,13 @@ static void test_parse(void) {
             &r);
   CHECK(k == 1 && !strncmp(r.why, "its handshake is not signed by its certificate's key", 52),
         "with OpenSSL's reason after it, the same words: \"%s\"", r.why);
+  /* The same thief under ThreadSanitizer: a late message of a restarted attempt, no verdict on the peer */
+  k = parse("Process handshake failed: process_handshake: HandshakeMessageToken property challenge1 does not match "
+            "future_challenge(code: 200)",
+            &r);
+  CHECK(k == 0, "a stale handshake message (challenge mismatch) is not a refusal: %d", k);
+  k = parse("Process handshake failed: process_handshake: No future challenge exists for this token(code: 200)", &r);
+  CHECK(k == 0, "nor one with no challenge left: %d", k);
   k = parse("Process handshake failed: Failed to finalize digest context(code: 200)", &r);
   CHECK(k == 1 && !strncmp(r.why, "its handshake is not signed", 27), "without the colon: \"%s\"", r.why);
   k = parse("Could not get remote participant 1:2:3:4 permissions from plugin: Failed to finalize digest context: ",
