@@ -68,8 +68,9 @@ static void test_parse(void) {
   k = parse("Process handshake failed: Expiry date of the certificate is invalid(code: 200)", &r);
   CHECK(k == 1 && !strcmp(r.who, "a participant") && !strcmp(r.why, "Expiry date of the certificate is invalid"),
         "a reason without a subject: \"%s\", \"%s\"", r.who, r.why);
-  /* security_classroom's thief (bob's certificate, another key), as Cyclone printed it on 2026-12-04; the
-   * same words as the requester ("Process") and as the replier ("Begin handshake reply") */
+  /* security_classroom's thief (bob's certificate, another key): the first line as Cyclone printed it on
+   * 2026-12-04; the next, and the last two below, made up here (the same words after the replier's header
+   * with an OpenSSL reason after them, without the colon, and after a permissions header) */
   k = parse("Process handshake failed: Failed to finalize digest context: (code: 200)", &r);
   CHECK(k == 1 && r.kind == PALP_DDS_REFUSED_HANDSHAKE && !strcmp(r.who, "a participant") &&
             !strcmp(r.why, "its handshake is not signed by its certificate's key (someone else's certificate, or a "
@@ -80,7 +81,8 @@ static void test_parse(void) {
             &r);
   CHECK(k == 1 && !strncmp(r.why, "its handshake is not signed by its certificate's key", 52),
         "with OpenSSL's reason after it, the same words: \"%s\"", r.why);
-  /* The same thief under ThreadSanitizer: a late message of a restarted attempt, no verdict on the peer */
+  /* The same thief under ThreadSanitizer (the first as printed; the second made up from Cyclone's source):
+   * a late message of a restarted attempt, no verdict on the peer */
   k = parse("Process handshake failed: process_handshake: HandshakeMessageToken property challenge1 does not match "
             "future_challenge(code: 200)",
             &r);
