@@ -54,6 +54,9 @@ kill -0 "$spid" 2>/dev/null && ok "palp-server alive after two SIGHUPs" || bad "
 kill -0 "$rpid" 2>/dev/null && ok "palp-recorder alive after SIGHUP" || bad "palp-recorder died on SIGHUP"
 n=$(grep -c "SIGHUP: log re-opened" "$work/server.log" 2>/dev/null || echo 0)
 [ "$n" -eq 2 ] && ok "server wrote to a new log file after rotation (2 SIGHUP lines)" || bad "new server log: $n SIGHUP lines"
+# a plain server says so when it starts (its DDS config is loopback; since 2026-12-04)
+grep -q "DDS Security off: every participant on domain $domain is trusted" "$work/server.log.1" \
+  && ok "the first log says the server runs without DDS Security" || bad "no 'DDS Security off' line at start"
 [ "$(grep -cE "session [0-9]+ opened" "$work/server.log.1")" -eq 2 ] && ! grep -qE "session [0-9]+ opened" "$work/server.log" \
   && ok "the rotated file kept the lines before SIGHUP" || bad "rotation split"
 grep -q "SIGHUP: log re-opened" "$work/recorder.log" 2>/dev/null && ok "recorder wrote to a new log file" || bad "recorder log"

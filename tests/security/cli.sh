@@ -131,6 +131,9 @@ check "a recorder without an identity says the classroom may be secured, and rec
   "grep -q 'no phantom from any palp-server in 10 s; .* none of which answered: if the classroom runs with DDS Security' '$out/recorder.log' && grep -q 'stopped; 0 records written' '$out/recorder.log'"
 kill -INT $spid
 wait $spid
+# make_pki.sh's classroom: alice, bob, ines and the server (dave's files moved to revoked/)
+check "the secured server says so when it starts, and how many identities it can name" \
+  "grep -q 'DDS Security on: identity server/server, classroom [^ ]*; refused peers are named from 4 classroom certificate(s)' '$out/server.log'"
 check "the server's summary has alice's session and counts the refusal" \
   "grep -q 'DDS Security on (identity server/server)' '$out/server.log' && grep -Eq '^1 +alice ' '$out/server.log' && grep -q 'refused request: user_name' '$out/server.log'"
 # The plain participants on the secured domain (the recorder and zed's station, both without an
