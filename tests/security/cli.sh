@@ -129,6 +129,11 @@ check "a secured trainee stopped 1.5 s goes on in its session $sid and exits 0 (
 wait $rpid
 check "a recorder without an identity says the classroom may be secured, and records nothing" \
   "grep -q 'no phantom from any palp-server in 10 s; .* none of which answered: if the classroom runs with DDS Security' '$out/recorder.log' && grep -q 'stopped; 0 records written' '$out/recorder.log'"
+# each recorder's first line says whether it runs secured (since 2026-12-04)
+"$recorder" --domain 131 --db "$out/rec2.db" --pki "$pki" --identity instructor/ines --duration 1 >"$out/recorder2.log" 2>&1
+rc=$?
+check "a recorder says at start whether DDS Security is on, and as whom (exit $rc)" \
+  "[ $rc -eq 0 ] && grep -q 'recording domain 131 into .*; DDS Security on (identity instructor/ines)' '$out/recorder2.log' && grep -q 'recording domain 131 into .*; DDS Security off' '$out/recorder.log'"
 kill -INT $spid
 wait $spid
 # make_pki.sh's classroom: alice, bob, ines and the server (dave's files moved to revoked/)
