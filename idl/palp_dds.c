@@ -300,6 +300,18 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
   return 1;
 }
 
+int palp_dds_startup_race(const char *msg, size_t len) {
+  static const char head[] = "Remote secure participant ", tail[] = " not allowed";
+  if (!msg) return 0;
+  while (len && (msg[len - 1] == '\n' || msg[len - 1] == ' ')) len--;
+  const size_t h = sizeof head - 1, t = sizeof tail - 1;
+  if (len <= h + t || memcmp(msg, head, h) || memcmp(msg + len - t, tail, t)) return 0;
+  /* a GUID between them: hex digits and ':' only */
+  for (size_t i = h; i < len - t; i++)
+    if (!(msg[i] == ':' || (msg[i] >= '0' && msg[i] <= '9') || (msg[i] >= 'a' && msg[i] <= 'f'))) return 0;
+  return 1;
+}
+
 /* ---- rate-limited Cyclone log sink ------------------------------------------ */
 
 static void limited_sink(void *arg, const dds_log_data_t *d) {
@@ -312,6 +324,12 @@ static void limited_sink(void *arg, const dds_log_data_t *d) {
   if (refused && fn) { /* called outside our lock, so its own lock never nests in ours */
     pthread_mutex_unlock(l->lock);
     fn(fn_arg, &r);
+    return;
+  }
+  /* Seen in every station of the secured demo, 1-7 lines at its start: noise that reads like an alarm. */
+  if (palp_dds_startup_race(d->message, d->size)) {
+    l->races++;
+    pthread_mutex_unlock(l->lock);
     return;
   }
   int64_t now = palp_dds_now_ns();

@@ -115,6 +115,13 @@ typedef struct palp_dds_refusal {
 } palp_dds_refusal;
 /* 1 and *out filled when msg[0..len) is such a line; 0 for any other line. */
 int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out);
+/* 1 when msg[0..len) is Cyclone 0.10.2's "Remote secure participant GUID not allowed". Cyclone says it
+ * when no local participant matches a secured peer's announcement (ddsi_proxy_participant_has_pp_match):
+ * either none exists yet (the domain's receive threads run while the participant and its security
+ * plugins are still being made, ~0.1 s at start; the peer's next announcement matches), or one differs
+ * in its governance's attributes, which Cyclone says first in a line of its own ("match
+ * remote_participant ... security_attributes mismatch: ...") that stays printed. Pure. */
+int palp_dds_startup_race(const char *msg, size_t len);
 /* src[0..n) into dst (size cap, always terminated when cap > 0), each unprintable byte as '?':
  * text from the network (a certificate, a peer's announcement) kept to one log line. */
 void palp_dds_copy_printable(char *dst, size_t cap, const char *src, size_t n);
@@ -136,6 +143,7 @@ typedef struct palp_dds_log_limit {
   int printed_in_window;
   uint64_t suppressed_in_window;
   uint64_t printed, suppressed; /* totals since install */
+  uint64_t races;               /* palp_dds_startup_race lines, not printed (totals since install) */
   /* Refusals by DDS Security (below) go here instead of `out` once set. */
   void (*on_refusal)(void *arg, const struct palp_dds_refusal *r);
   void *refusal_arg;

@@ -17,6 +17,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "dds/ddsrt/log.h"
 #include "palp_dds.h"
 #include "palp_log.h"
 #include "palp_dds_refusals.h"
@@ -460,7 +461,52 @@ static void test_peer_names(void) {
   palp_dds_refusals_destroy(&t);
 }
 
+/* Cyclone's "Remote secure participant GUID not allowed" at a station's start (palp_dds_startup_race):
+ * the demo's stations printed 1-7 of them each (2026-12-04, session 53; the first line below as printed
+ * by alice's); the sink counts them and prints nothing, while the governance-mismatch line Cyclone prints
+ * before a real refusal of that kind (ddsi_omg_is_similar_participant_security_info, made up here in its
+ * format) and any other warning still go out. */
+static void test_startup_race(void) {
+  static const char race[] = "Remote secure participant 92a2f162:7808689f:3bad2672:1c1 not allowed";
+  CHECK(palp_dds_startup_race(race, strlen(race)) == 1, "the start-up line is recognised");
+  static const char nl[] = "Remote secure participant 92a2f162:7808689f:3bad2672:1c1 not allowed\n";
+  CHECK(palp_dds_startup_race(nl, strlen(nl)) == 1, "with its newline too");
+  static const char *const not_it[] = {"Remote secure participant evil; rm -rf / not allowed",
+                                       "Remote secure participant  not allowed",
+                                       "Non secure remote writer 1:2:3:4 is not allowed."};
+  CHECK(palp_dds_startup_race(not_it[0], strlen(not_it[0])) == 0 && palp_dds_startup_race(not_it[1], strlen(not_it[1])) == 0 &&
+            palp_dds_startup_race(not_it[2], strlen(not_it[2])) == 0 && palp_dds_startup_race(NULL, 0) == 0,
+        "not a GUID, no GUID, another Cyclone line, NULL: not it");
+  char path[] = "/tmp/palp-race-XXXXXX";
+  const int fd = mkstemp(path);
+  FILE *out = fd >= 0 ? fdopen(fd, "w+") : NULL;
+  if (!out) {
+    CHECK(0, "temporary file %s", path);
+    return;
+  }
+  palp_dds_log_limit l;
+  CHECK(palp_dds_log_limit_install(&l, out, 10, 10.0) == 0, "sink installed");
+  DDS_WARNING("%s\n", race);
+  DDS_WARNING("match remote_participant 92a2f162:7808689f:3bad2672:1c1 with participant 1:2:3:1c1 security_attributes "
+              "mismatch: 0x80000007.0x80000007 - 0x80000003.0x80000003\n");
+  DDS_WARNING("Remote secure participant 92a2f162:7808689f:3bad2672:1c1 not allowed\n");
+  DDS_WARNING("some other warning\n");
+  palp_dds_log_limit_remove(&l);
+  fflush(out);
+  rewind(out);
+  char buf[2048];
+  const size_t n = fread(buf, 1, sizeof buf - 1, out);
+  buf[n] = '\0';
+  CHECK(l.races == 2 && !strstr(buf, "not allowed") && strstr(buf, "security_attributes mismatch") &&
+            strstr(buf, "some other warning"),
+        "the sink hides the 2 start-up lines and prints the mismatch and the other warning: %llu hidden, printed:\n%s",
+        (unsigned long long)l.races, buf);
+  fclose(out);
+  unlink(path);
+}
+
 int main(void) {
+  test_startup_race();
   test_peer_names();
   test_stranger_name();
   test_parse();
