@@ -364,6 +364,14 @@ void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, cha
              peers, peers == 1 ? " is" : "s are", palp_dds_id_kind_name(sec->kind), sec->name);
 }
 
+const char *palp_dds_security_state(const palp_dds_security *sec, char *buf, size_t len) {
+  if (!sec || sec->kind == PALP_DDS_ID_NONE)
+    snprintf(buf, len, "off");
+  else
+    snprintf(buf, len, "on (identity %s/%s)", palp_dds_id_kind_name(sec->kind), sec->name);
+  return buf;
+}
+
 int palp_dds_security_name_peers(const palp_dds_security *sec, struct palp_dds_refusals *t) {
   if (!sec || sec->kind == PALP_DDS_ID_NONE || !t) return 0;
   static const char *const kinds[] = {"trainee", "instructor", "server"};

@@ -94,6 +94,10 @@ int palp_dds_peer_participants(dds_entity_t pp);
  * certificate). For the end of a "no answer" message. */
 void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, char *buf, size_t len);
 
+/* "on (identity KIND/NAME)" or "off", into buf (returned): how every palp program's log says whether
+ * it runs secured. */
+const char *palp_dds_security_state(const palp_dds_security *sec, char *buf, size_t len);
+
 struct palp_dds_refusals;
 /* Gives t the classroom's identities found under sec's PKI directory (KIND/NAME.cert.pem for the
  * trainees, instructors and the server; not the revoked ones), so that a peer refused for its

@@ -113,7 +113,6 @@ struct palp_srv {
 
   /* DDS Security (docs/security.md); sec.kind PALP_DDS_ID_NONE: plain DDS */
   palp_dds_security sec;
-  int named_identities; /* classroom certificates read to name refused peers (palp_dds_security_name_peers) */
   dds_entity_t request_sub;
   atomic_ullong refused_requests; /* not from the station's own identity, or not allowed */
   int64_t refused_log_ns;     /* last log line about them */
@@ -1337,7 +1336,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   }
   if (srv->sec.warning[0]) palp_log_warn(srv->log, "DDS Security: %s", srv->sec.warning);
   /* a peer refused for its permissions named by its identity, not its GUID */
-  if ((srv->named_identities = palp_dds_security_name_peers(&srv->sec, &srv->refusals)) < 0)
+  if (palp_dds_security_name_peers(&srv->sec, &srv->refusals) < 0)
     palp_log_warn(srv->log, "out of memory naming the classroom's identities");
   srv->pp = palp_dds_create_participant((dds_domainid_t)srv->cfg.domain_id, &srv->sec);
   if (srv->pp < 0) {
@@ -1490,11 +1489,10 @@ int palp_srv_run(palp_srv *srv, double duration) {
                 srv->phantom_count, srv->cfg.tick_rate_hz, palp_srv_ticker_threads(srv->ticker), srv->cfg.max_sessions);
   /* Whether the classroom is secured is the first thing an administrator reading the log needs: until
    * 2026-12-04 the log said it only in the summary at exit. */
-  if (secured(srv))
+  if (secured(srv)) /* n_names: set before the participant existed, never again */
     palp_log_info(srv->log, "DDS Security on: identity %s/%s, classroom %s; refused peers are named from %d classroom "
                   "certificate(s)",
-                  palp_dds_id_kind_name(srv->sec.kind), srv->sec.name, srv->sec.pki,
-                  srv->named_identities > 0 ? srv->named_identities : 0);
+                  palp_dds_id_kind_name(srv->sec.kind), srv->sec.name, srv->sec.pki, srv->refusals.n_names);
   else
     palp_log_info(srv->log, "DDS Security off: every participant on domain %u is trusted (a classroom runs with "
                   "\"security\" in its config or --pki; docs/security.md)",
@@ -1584,8 +1582,9 @@ static void print_row(FILE *out, const palp_srv_session_summary *s, const char *
 
 void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
   if (secured(srv)) {
-    fprintf(out, "DDS Security on (identity %s/%s); requests refused for their identity: %llu\n",
-            palp_dds_id_kind_name(srv->sec.kind), srv->sec.name,
+    char state[96];
+    fprintf(out, "DDS Security %s; requests refused for their identity: %llu\n",
+            palp_dds_security_state(&srv->sec, state, sizeof state),
             (unsigned long long)atomic_load(&((palp_srv *)srv)->refused_requests));
     char who[600];
     const uint64_t total = palp_srv_security_refusals((palp_srv *)srv, who, sizeof who);

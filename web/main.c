@@ -418,10 +418,9 @@ int main(int argc, char **argv) {
   if (token) snprintf(q, sizeof q, "?token=%s", token_file ? "<the token>" : token);
   char scoped[64] = "";
   if (sd.trainee_count) snprintf(scoped, sizeof scoped, "; %d trainee token(s), each page scoped", sd.trainee_count);
-  printf("palp-web: DDS domain %u%s%s%s, serving%s on %s port %d%s%s%s\n", hd.domain,
-         hd.sec.kind != PALP_DDS_ID_NONE ? ", DDS Security on (identity instructor/" : "",
-         hd.sec.kind != PALP_DDS_ID_NONE ? hd.sec.name : "", hd.sec.kind != PALP_DDS_ID_NONE ? ")" : "",
-         sd.tls_cert ? " HTTPS" : "", sd.listen,
+  char security[96];
+  printf("palp-web: DDS domain %u, DDS Security %s, serving%s on %s port %d%s%s%s\n", hd.domain,
+         palp_dds_security_state(&hd.sec, security, sizeof security), sd.tls_cert ? " HTTPS" : "", sd.listen,
          port, token ? " (token required" : "", scoped, token ? ")" : "");
   const char *scheme = sd.tls_cert ? "https" : "http";
   if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert)

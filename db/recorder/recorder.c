@@ -574,11 +574,10 @@ int main(int argc, char **argv) {
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
   signal(SIGHUP, on_signal);
-  char security[96] = "off";
-  if (sec.kind != PALP_DDS_ID_NONE)
-    snprintf(security, sizeof security, "on (identity %s/%s)", palp_dds_id_kind_name(sec.kind), sec.name);
+  char security[96];
   palp_log_info(&plog, "%s recording domain %d into %s (sessions on partition %s), DDS config %s; DDS Security %s",
-                palp_app_version(), (int)domain, db, wildcard, dds_chosen, security);
+                palp_app_version(), (int)domain, db, wildcard, dds_chosen,
+                palp_dds_security_state(&sec, security, sizeof security));
   const dds_time_t t_end = duration > 0 ? dds_time() + (dds_duration_t)(duration * 1e9) : 0;
   /* No phantom 10 s after the start while other participants are on the domain: say once what may
    * be wrong (a secured classroom and a recorder without an identity records nothing). */
