@@ -1591,7 +1591,7 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
     if (total) fprintf(out, "DDS Security refused participants %llu time(s): %s\n", (unsigned long long)total, who);
   }
   fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
-          "contacts", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
+          "samples", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
   if (srv->sessions_forgotten)
     fprintf(out, "(%llu older closed sessions not kept)\n", (unsigned long long)srv->sessions_forgotten);
   for (int i = 0; i < srv->closed_count; i++) {

@@ -511,8 +511,10 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     snprintf(buf, sizeof buf, "%s (%s%s%s)", s->end_reason[0] ? t1 : "-", s->end_reason[0] ? s->end_reason : "not ended",
              s->end_detail[0] ? ": " : "", s->end_detail);
     info_row(f, "Ended", buf);
-    snprintf(buf, sizeof buf, "%.3f s simulated, %lld frames at %.0f Hz", s->sim_duration_s, (long long)s->frames,
-             s->tick_hz);
+    palp_db_log_health health;
+    char logging[200];
+    review_fmt_logging(s, palp_db_log_health_get(db, s, &health) == 0 ? &health : NULL, logging, sizeof logging);
+    snprintf(buf, sizeof buf, "%.3f s simulated, %s", s->sim_duration_s, logging);
     info_row(f, "Duration", buf);
     fputs("</table>\n", f);
     if (s->records_shed || s->records_failed)

@@ -192,9 +192,12 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   else printf("ended      - (still running, or the end was never logged)\n");
   peaks p = {0};
   palp_db_each_frame(db, s->id, peaks_cb, &p);
-  printf("duration   wall %.3f s, simulated %.3f s (%lld frames logged at %.0f Hz, dt %.6g s)\n",
-         s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0, s->sim_duration_s, (long long)s->frames,
-         s->tick_hz, s->dt_s);
+  palp_db_log_health health;
+  const int health_rc = palp_db_log_health_get(db, s, &health);
+  char logging[200];
+  review_fmt_logging(s, health_rc == 0 ? &health : NULL, logging, sizeof logging);
+  printf("duration   wall %.3f s, simulated %.3f s (%s)\n", s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0,
+         s->sim_duration_s, logging);
   printf("peak force           %.2f N at t = %.2f s (the phantom's force on the load, from the logged frames)\n", p.f,
          p.f_t);
   printf("peak displacement    top vertex %.2f mm at t = %.2f s; any vertex %.2f mm at t = %.2f s\n",
@@ -270,14 +273,13 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   }
   printf("notes      %lld\n", (long long)s->notes);
   review_each_note(db, s->id, note_cb, NULL);
-  palp_db_log_health h;
   char line[600];
-  if (palp_db_log_health_get(db, s, &h) == 0) {
-    palp_db_log_health_describe(&h, line, sizeof line);
+  if (health_rc == 0) {
+    palp_db_log_health_describe(&health, line, sizeof line);
     printf("log        %s\n", line);
-    if (h.cut_short && h.last_event_unix_s > 0) {
+    if (health.cut_short && health.last_event_unix_s > 0) {
       char t[64];
-      review_fmt_time(h.last_event_unix_s, t, sizeof t);
+      review_fmt_time(health.last_event_unix_s, t, sizeof t);
       printf("           last event logged at %s\n", t);
     }
   } else {

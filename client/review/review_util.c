@@ -263,3 +263,15 @@ double review_valid_range_seconds(palp_db *db, const palp_db_session_info *s) {
   if (rc == REVIEW_RANGE_OUTSIDE) return (double)r.steps * (s->dt_s > 0 ? s->dt_s : 0);
   return rc == REVIEW_RANGE_INSIDE ? 0.0 : -1.0;
 }
+
+void review_fmt_logging(const palp_db_session_info *s, const palp_db_log_health *h, char *buf, size_t len) {
+  /* The writer logs a frame every k-th physics step (k = rate / 100, server/db_log.c), so
+   * "frames at 250 Hz" would misstate a 250 Hz session's log by 3x: say both rates. */
+  const int64_t k = h && h->frame_step > 1 ? h->frame_step : 1;
+  if (k == 1)
+    snprintf(buf, len, "%lld frames logged, every physics step: %.0f Hz, dt %.6g s", (long long)s->frames, s->tick_hz,
+             s->dt_s);
+  else
+    snprintf(buf, len, "%lld frames logged, one every %lld physics steps (%.1f Hz) of %.0f Hz, dt %.6g s",
+             (long long)s->frames, (long long)k, s->tick_hz / (double)k, s->tick_hz, s->dt_s);
+}

@@ -48,5 +48,8 @@ int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid
                        int64_t *unreadable);
 /* Seconds outside it (steps x dt), 0 inside, -1 where the log does not say or cannot be read. */
 double review_valid_range_seconds(palp_db *db, const palp_db_session_info *s);
+/* How the log sampled the session: "10252 frames logged, one every 3 physics steps (83.3 Hz) of
+ * 250 Hz, dt 0.004 s" (h: the log's health, whose frame_step is the writer's stride; NULL: every step). */
+void review_fmt_logging(const palp_db_session_info *s, const palp_db_log_health *h, char *buf, size_t len);
 
 #endif
