@@ -370,6 +370,12 @@ typedef struct palp_db_refused {
 int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused **out, int *count);
 /* Finds a session by its uid or a unique prefix of it. */
 int palp_db_find_session(palp_db *db, const char *uid_or_prefix, palp_db_session_info *out);
+/* What a SESSION argument that names no session exactly may mean, newest first, at most max in
+ * out[] and the number of all of them in *total: the sessions whose uid starts with it, or, with
+ * by_number and a whole number N, the sessions the stations called "session N" (uid "<run>-N",
+ * docs/naming.md: one number per server run). 0, PALP_EINVAL or PALP_DB_ESQL. */
+int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp_db_session_info *out, int max,
+                               int *total);
 /* Session's scene and params JSON; malloc'd strings (free()). */
 int palp_db_session_json(palp_db *db, int64_t session_id, char **scene_json, char **params_json);
 

@@ -237,6 +237,41 @@ int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out
   return rc == SQLITE_ROW ? PALP_DB_EAMBIGUOUS : 0;
 }
 
+int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp_db_session_info *out, int max,
+                               int *total) {
+  if (!db || !arg || !*arg || max < 0 || (max > 0 && !out) || !total) return PALP_EINVAL;
+  *total = 0;
+  if (by_number) { /* "3": a whole number of at most 9 digits, nothing else */
+    size_t n = strlen(arg);
+    if (n > 9 || strspn(arg, "0123456789") != n) return 0;
+  }
+  /* The uid's tail after its last '-' is the station's session number; instr/substr on text, no
+   * LIKE (its wildcards would need escaping). */
+  const char *where = by_number ? "substr(s.uid, length(s.uid) - length(?1)) = '-' || ?1"
+                                : "substr(s.uid, 1, length(?1)) = ?1";
+  char sql[1024];
+  snprintf(sql, sizeof sql, "SELECT count(*) FROM session s WHERE %s", where);
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
+  sqlite3_bind_text(st, 1, arg, -1, SQLITE_STATIC);
+  int rc = sqlite3_step(st);
+  if (rc == SQLITE_ROW) *total = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  if (rc != SQLITE_ROW) return PALP_DB_ESQL;
+  if (max == 0 || *total == 0) return 0;
+  snprintf(sql, sizeof sql, "SELECT " SESSION_COLS "FROM session s WHERE %s ORDER BY s.start_unix_s DESC, s.id DESC "
+           "LIMIT ?2", where);
+  if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
+  sqlite3_bind_text(st, 1, arg, -1, SQLITE_STATIC);
+  sqlite3_bind_int(st, 2, max);
+  int n = 0;
+  while ((rc = sqlite3_step(st)) == SQLITE_ROW && n < max) read_info(st, &out[n++]);
+  sqlite3_finalize(st);
+  if (rc != SQLITE_DONE && rc != SQLITE_ROW) return PALP_DB_ESQL;
+  if (n < *total && n < max) *total = n; /* rows gone between the two reads */
+  return 0;
+}
+
 static char *dup_col(sqlite3_stmt *st, int i) {
   const unsigned char *s = sqlite3_column_text(st, i);
   size_t n = s ? strlen((const char *)s) : 0;

@@ -67,6 +67,28 @@ R show class-bob-1 > "$dir/show-bob.txt" 2>&1 || bad "show bob exit status"
 expect "show: a log without the key does not say, and names replay" "^valid range not in this log .*palp-review replay class-bob-1" "$dir/show-bob.txt"
 if grep -Eq "sensitivity +[0-9]" "$dir/show-carol.txt"; then bad "free practice shows a sensitivity"; else ok "free practice: no sensitivity line"; fi
 
+# A SESSION argument that names no session: the number a station showed ("session 2" is the uid's
+# tail) is taken when one session has it; otherwise the candidates are listed, newest first.
+R show 2 > "$dir/show-2.txt" 2> "$dir/show-2.err" || bad "show 2 (one session numbered 2) exit status"
+expect "show N: the one session numbered N is shown" "^session +class-bob-2 " "$dir/show-2.txt"
+expect "show N: and the review says which it took" "show: \"session 2\" on the stations is class-bob-2 \(bob, " "$dir/show-2.err"
+if R show 1 > "$dir/show-1.txt" 2> "$dir/show-1.err"; then bad "show 1 (three sessions numbered 1) succeeded"
+elif [ -s "$dir/show-1.txt" ]; then bad "show 1 printed a session"; cat "$dir/show-1.txt"
+else
+  expect "show N: several sessions numbered N are listed" "show: session '1' could be any of 3 sessions .*name one by its uid:" "$dir/show-1.err"
+  if python3 - "$dir/show-1.err" <<'PY'
+import sys
+uids = [l.split()[0] for l in open(sys.argv[1]) if l.startswith("  ")]
+sys.exit(0 if uids == ["class-carol-1", "class-alice-1", "class-bob-1"] else 1)
+PY
+  then ok "show N: the candidates are the three sessions numbered 1, newest first"
+  else bad "show N: candidates"; cat "$dir/show-1.err"; fi
+fi
+if R show class- > /dev/null 2> "$dir/show-prefix.err"; then bad "show class- (an ambiguous prefix) succeeded"
+else expect "show PREFIX: an ambiguous prefix lists its 4 sessions" "could be any of 4 sessions \(their uids start with it\)" "$dir/show-prefix.err"; fi
+if R show 7 > /dev/null 2> "$dir/show-7.err"; then bad "show 7 (no such session) succeeded"
+else expect "show N: none numbered N says where to look" "show: session '7': no such session \(palp-review list shows the sessions" "$dir/show-7.err"; fi
+
 R export class-alice-1 --format csv --table metrics --out "$dir/alice.csv" || bad "export metrics"
 if python3 - "$dir/alice.csv" <<'PY'
 
