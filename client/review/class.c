@@ -138,8 +138,9 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>palp class report: ", f);
     html_str(f, exercise);
     fputs("</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222;max-width:1200px}"
-          "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 8px;"
-          "text-align:right;font-size:13px}th{background:#f4f4f4}td.t{text-align:left}.fail{color:#a00}"
+          "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 5px;"
+          "text-align:right;font-size:13px}th{background:#f4f4f4}td.t{text-align:left}.nw{white-space:nowrap}"
+          ".fail{color:#a00}"
           ".multiples{display:flex;flex-wrap:wrap;gap:14px}.multiples figure{margin:0}"
           "figcaption{font-size:12px}.key span{display:inline-block;width:12px;height:12px;margin:0 4px 0 12px}"
           "</style>\n</head><body>\n<h1>Class report: exercise <span id=\"exercise\">", f);
@@ -148,8 +149,8 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
             nr == 1 ? "" : "s");
     fputs("<h2>Side by side</h2>\n<table id=\"class-table\"><tr><th>trainee</th><th>session</th><th>started</th>"
           "<th>lesions found</th><th>false positives</th><th>coverage light</th><th>medium</th><th>deep</th>"
-          "<th>search pattern</th><th>time [s]</th><th>peak force [N]</th><th>score</th><th>rubric</th>"
-          "<th>outside the model's valid range [s]</th><th>grade</th><th>strips, in order</th></tr>\n", f);
+          "<th>search pattern</th><th>strips, in order</th><th>time [s]</th><th>peak force [N]</th><th>score</th>"
+          "<th>rubric</th><th>outside the model's valid range [s]</th><th>grade</th></tr>\n", f);
     for (int i = 0; i < nr; i++) {
       const row *r = &rows[i];
       const palp_assess_result *m = &r->a.r;
@@ -157,18 +158,23 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       review_fmt_time(r->s.start_unix_s, t, sizeof t);
       fputs("<tr class=\"trainee-row\"><td class=\"t trainee\">", f);
       html_str(f, r->s.trainee);
-      fputs("</td><td class=\"t\">", f);
+      fputs("</td><td class=\"t nw\">", f);
       html_str(f, r->s.uid);
-      fprintf(f, "</td><td class=\"t\">%s</td><td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
-              "<td class=\"t\">%s</td><td>%.1f</td><td>%.2f</td><td class=\"score\">%.1f</td><td%s>%s",
-              t, m->found, m->lesion_count, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1],
-              100 * m->coverage[2], palp_pattern_name(m->pattern), m->duration, m->peak_force, m->score,
+      /* The columns in the terminal table's order (the strips beside the pattern they qualify). */
+      char strips[24];
+      class_strips(m, strips, sizeof strips);
+      /* The date on one line and the time with its offset on a second, never broken at a hyphen. */
+      char *sp = strchr(t, ' ');
+      if (sp) *sp = '\0';
+      fprintf(f, "</td><td class=\"t\"><span class=\"nw\">%s</span>%s<span class=\"nw\">%s</span></td><td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
+              "<td class=\"t\">%s</td><td class=\"strips nw\">%s</td><td>%.1f</td><td>%.2f</td><td class=\"score\">%.1f</td>"
+              "<td%s>%s",
+              t, sp ? " " : "", sp ? sp + 1 : "", m->found, m->lesion_count, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1],
+              100 * m->coverage[2], palp_pattern_name(m->pattern), strips, m->duration, m->peak_force, m->score,
               m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
       fprintf(f, "</td><td class=\"outside\">%s</td><td class=\"t\">", r->outside);
       html_str(f, r->grade);
-      char strips[24];
-      class_strips(m, strips, sizeof strips);
-      fprintf(f, "</td><td class=\"strips\">%s</td></tr>\n", strips); /* last: the cells before keep their places */
+      fputs("</td></tr>\n", f);
     }
     fputs("</table>\n<h2>Coverage maps</h2>\n<p class=\"key\">Seen from above (12 o'clock = +y). Palpated at "
           "<span style=\"background:#56b4e9\"></span>light <span style=\"background:#e69f00\"></span>medium "

@@ -156,27 +156,37 @@ def klass(dom_path, shot, csv_path):
     for r in rows:
         cells = [e for e in dom.els if e["tag"] == "td" and any(a is r["a"] for _, a in e["anc"])]
         tds.append([" ".join(c["text"].split()) for c in cells])
-    names = [t[0] for t in tds]
+    # cells by their column's heading, not their place (the columns follow the terminal table's order)
+    heads = [" ".join(e["text"].split()) for e in dom.els if e["tag"] == "th"
+             and any(a.get("id") == "class-table" for _, a in e["anc"])]
+    want = ["trainee", "session", "started", "lesions found", "false positives", "coverage light", "medium", "deep",
+            "search pattern", "strips, in order", "time [s]", "peak force [N]", "score", "rubric",
+            "outside the model's valid range [s]", "grade"]
+    check(heads == want, "class: the columns in the terminal table's order: %s" % heads)
+    col = {h: i for i, h in enumerate(heads)}
+    tds = [{h: t[i] if i < len(t) else None for h, i in col.items()} for t in tds]
+    names = [t["trainee"] for t in tds]
     check(names == ["bob", "alice", "bob"], "class: one row per session, oldest first: %s" % names)
     data = list(csv.DictReader(open(csv_path)))
     check([d["trainee"] for d in data] == names, "class: the CSV has the same rows (%s)" % [d["trainee"] for d in data])
     for t, d in zip(tds, data):
-        check(t[1] == d["session"] and t[3] == "%s of %s" % (d["found"], d["lesions"]) and
-              abs(float(t[11]) - float(d["score"])) < 0.051,
-              "class: %s row matches the CSV (found %s, score %s vs %s)" % (t[1], t[3], t[11], d["score"]))
-    alice = [t for t in tds if t[0] == "alice"][0]
-    check(alice[3] == "2 of 2" and alice[8] == "vertical_strip" and alice[12] == "pass",
+        check(t["session"] == d["session"] and t["lesions found"] == "%s of %s" % (d["found"], d["lesions"]) and
+              abs(float(t["score"]) - float(d["score"])) < 0.051,
+              "class: %s row matches the CSV (found %s, score %s vs %s)" % (t["session"], t["lesions found"], t["score"], d["score"]))
+    alice = [t for t in tds if t["trainee"] == "alice"][0]
+    check(alice["lesions found"] == "2 of 2" and alice["search pattern"] == "vertical_strip" and alice["rubric"] == "pass",
           "class: alice's row %s" % alice)
     # seconds outside the model's valid range: alice's 355 logged steps of 4 ms; bob's logs do not say
-    check(alice[13] == "1.42" and all(t[13] == "-" for t in tds if t[0] == "bob"),
-          "class: outside the valid range, alice %r, bob %r" % (alice[13], [t[13] for t in tds if t[0] == "bob"]))
-    # the strips and their order, the last cell: alice's expert strokes one pass of 15 strips
-    ok = re.fullmatch(r"1[3-5], (0\.9[0-9]|1\.00)", alice[15]) is not None
-    check(ok and [t[15] for t in tds] == ["%s, %.2f" % (d["strips"], float(d["strip_order"]))
+    out = "outside the model's valid range [s]"
+    check(alice[out] == "1.42" and all(t[out] == "-" for t in tds if t["trainee"] == "bob"),
+          "class: outside the valid range, alice %r, bob %r" % (alice[out], [t[out] for t in tds if t["trainee"] == "bob"]))
+    # the strips and their order, beside the pattern: alice's expert strokes one pass of 15 strips
+    ok = re.fullmatch(r"1[3-5], (0\.9[0-9]|1\.00)", alice["strips, in order"]) is not None
+    check(ok and [t["strips, in order"] for t in tds] == ["%s, %.2f" % (d["strips"], float(d["strip_order"]))
                                           if d["pattern"] == "vertical_strip" and int(d["strips"]) >= 3
                                           else "-" for d in data],
           "class: the strips and their order, alice %r, and every row as in the CSV %r" %
-          (alice[15], [(d["strips"], d["strip_order"]) for d in data]))
+          (alice["strips, in order"], [(d["strips"], d["strip_order"]) for d in data]))
     csv_out = {d["trainee"]: d["outside_valid_range_s"] for d in data}
     check(csv_out == {"alice": "1.42", "bob": ""}, "class CSV: outside_valid_range_s %r (bob's logs do not say)" % csv_out)
     maps = [e for e in dom.els if e["tag"] == "svg" and "coverage" in (e["a"].get("class") or "").split()]
