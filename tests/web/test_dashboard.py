@@ -46,7 +46,11 @@ def run(build, source, out):
                             % (str(expected).replace(" ", ""), CARDS), 20)
         check(got is not None, "the dashboard lists every open session %s: %s" % (expected, page.eval(CARDS)))
         names = page.eval("Array.from(document.querySelectorAll('.card h3 span:first-child')).map(e => e.textContent)")
-        check(sorted(n.split(" #")[0] for n in names) == ["alice", "bob", "carol"], "with the trainee names: %s" % names)
+        # each card named as the stations name a session: "alice, session 2" (docs/naming.md)
+        parsed = [re.fullmatch(r"(\w+), session (\d+)", n) for n in names]
+        check(all(parsed) and sorted(m.group(1) for m in parsed) == ["alice", "bob", "carol"] and
+              sorted(int(m.group(2)) for m in parsed) == sorted(expected),
+              "with the trainee names and the stations' session numbers %s: %s" % (expected, names))
         ok = page.wait_for("palpState.dashboard.frames > 6 && palpState.status && palpState.status.servers.length === 1 "
                            "&& document.getElementById('server').textContent.includes('tick p50/p99/max')", 15)
         check(ok is True, "top views receive frames and the server's status shows (load, ticks, log counters)")
@@ -88,7 +92,7 @@ def run(build, source, out):
 
         # bob's station stalls 1.5 s: the server holds his session and his card says so; then it goes on.
         station_js = ("(function () { const c = Array.from(document.querySelectorAll('.card')).find(e => "
-                      "e.querySelector('h3 span').textContent.startsWith('bob #')); if (!c) return null; "
+                      "e.querySelector('h3 span').textContent.startsWith('bob, session ')); if (!c) return null; "
                       "const r = Array.from(c.querySelectorAll('tr')).find(r => r.cells[0].textContent === "
                       "'trainee station'); return r ? [r.cells[1].textContent, r.cells[1].className] : null; })()")
         check(page.eval(station_js) == ["connected", ""], "bob's card shows his station connected: %s"
@@ -101,7 +105,7 @@ def run(build, source, out):
                              % station_js, 3)
         seen = page.eval(station_js)
         band_held = page.eval("Array.from(document.querySelectorAll('.card')).filter(e => e.querySelector('h3 span')"
-                              ".textContent.startsWith('bob #')).map(e => e.querySelector('.band').textContent)[0]")
+                              ".textContent.startsWith('bob, session ')).map(e => e.querySelector('.band').textContent)[0]")
         page.screenshot(os.path.join(out, "dashboard-station-held.png"))
         time.sleep(max(0.0, t_stop + 1.5 - time.time()))
         bob.send_signal(signal.SIGCONT)

@@ -79,7 +79,7 @@
     return (now.length ? "now " + now.join(", ") : "ok now") + "; seen " + names(s.model_flags_seen).join(", ") + outside;
   }
   function fill(c, s) {
-    c.name.textContent = s.trainee + " #" + s.id;
+    c.name.textContent = s.trainee + ", session " + s.id; /* the stations' "session N" (docs/naming.md) */
     /* Held for a lost station, the last force the bridge saw is stale: the server lifted the finger. */
     c.band.textContent = s.status ? "station lost" : fmt(s.force, 2) + " N " + s.band;
     c.band.className = s.status ? "band" : "band " + s.band;
