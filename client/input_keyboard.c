@@ -25,8 +25,8 @@ typedef struct keyboard {
   double last_status;
 } keyboard;
 
-static int k_open(void *ctx, double R) {
-  keyboard *k = ctx;
+/* The terminal in raw mode (no line buffering, no echo) for single keys; restored by close. */
+static int k_raw(keyboard *k, double R) {
   k->R = R;
   struct termios t;
   if (tcgetattr(STDIN_FILENO, &k->saved) != 0) return PALP_EIO;
@@ -36,8 +36,14 @@ static int k_open(void *ctx, double R) {
   t.c_cc[VTIME] = 0;
   if (tcsetattr(STDIN_FILENO, TCSANOW, &t) != 0) return PALP_EIO;
   k->raw = 1;
-  fprintf(stderr, "keyboard: arrows move, +/- force, space press/lift, 1-4 distribution, q quit\n");
   return 0;
+}
+
+static int k_open(void *ctx, double R) {
+  keyboard *k = ctx;
+  int rc = k_raw(k, R);
+  if (rc == 0) fprintf(stderr, "keyboard: arrows move, +/- force, space press/lift, 1-4 distribution, q quit\n");
+  return rc;
 }
 
 static void key(keyboard *k, int c) {
@@ -146,7 +152,7 @@ typedef struct kfinger {
 
 static int kf_open(void *ctx, double R) {
   kfinger *f = ctx;
-  int rc = k_open(&f->k, R);
+  int rc = k_raw(&f->k, R);
   if (rc == 0)
     fprintf(stderr, "keyboard (finger): arrows move the fingertip, +/- press deeper / come up one step (1 mm), "
                     "[/] halve / double the step, space lift, m mark a lump here, u withdraw the last mark, q quit\n");

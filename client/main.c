@@ -3,6 +3,7 @@
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -38,6 +39,11 @@ typedef struct opts {
   double magnitude, t_on, t_off, frequency, offset, polar, azimuth;
   double finger_radius_mm, patch_area_cm2;
   double rate, duration, timeout, print_period;
+  int print_period_given;
+  /* A keyboard input keeps a status line on the terminal (stderr, rewritten with \r): each of
+   * the station's own lines then starts by clearing it, and the status line comes back at its
+   * next refresh (<= 0.5 s), instead of the line being appended to it. */
+  int status_line;
   const char *feedback_csv, *contact_csv, *svg, *trainee;
   const char *pki, *identity; /* DDS Security (docs/security.md); env PALP_PKI / PALP_IDENTITY */
   double svg_every, map_every;
@@ -58,6 +64,16 @@ typedef struct opts {
 /* The refusal table's tick, once a turn of a run loop (cheap: a lock and a time compare). */
 static void tick_refusals(const opts *o) {
   if (o->refusals) palp_dds_refusals_tick(o->refusals, palp_dds_now_ns());
+}
+
+/* The station's own output lines (stdout): after the keyboard's status line, from its start. */
+static void tprintf(const opts *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void tprintf(const opts *o, const char *fmt, ...) {
+  if (o->status_line) fputs("\r\033[K", stdout);
+  va_list ap;
+  va_start(ap, fmt);
+  vprintf(fmt, ap);
+  va_end(ap);
 }
 
 /* --quiet already means "less station output" here: no --verbose/--quiet aliases. */
@@ -176,6 +192,7 @@ static int parse(int argc, char **argv, opts *o) {
     STR("--trace-csv", o->trace_csv)
     NUM("--duration", 0, 1e6, o->duration)
     NUM("--timeout", 0.1, 3600, o->timeout)
+    if (!strcmp(a, "--print-period")) o->print_period_given = 1;
     NUM("--print-period", 0, 3600, o->print_period)
     STR("--feedback-csv", o->feedback_csv)
     STR("--contact-csv", o->contact_csv)
@@ -198,6 +215,12 @@ static int parse(int argc, char **argv, opts *o) {
 #undef STR
   }
   if (o->app.version) return 0;
+  if (!strcmp(o->input, "keyboard") || !strcmp(o->input, "keyboard-finger")) {
+    /* The keyboard's status line shows what the periodic line would (position, depth, force),
+     * twice a second: the periodic line only on request. */
+    if (!o->print_period_given) o->print_period = 0;
+    o->status_line = isatty(STDOUT_FILENO) && isatty(STDERR_FILENO);
+  }
   if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
     fprintf(stderr, "palp-client: --role: expected trainee, visual or observer\n");
     return -1;
@@ -423,7 +446,7 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
     u->exercise = 1;
     u->time_limit = ex.time_limit;
     if (!o->quiet)
-      printf("[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
+      tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
              "device's button (keyboard: m), withdraw the last mark with u\n",
              o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
   }
@@ -438,23 +461,23 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
     /* Refused here, not sent: a mark needs a contact point, which exists only while
      * the fingertip touches the phantom. */
     if (!v->on || !v->model_contact)
-      printf("[trainee %s] mark refused here: the fingertip is not touching the phantom\n", o->name);
+      tprintf(o, "[trainee %s] mark refused here: the fingertip is not touching the phantom\n", o->name);
     else if (u->nsent >= UI_MARKS)
-      printf("[trainee %s] mark refused here: %d marks standing\n", o->name, u->nsent);
+      tprintf(o, "[trainee %s] mark refused here: %d marks standing\n", o->name, u->nsent);
     else {
       const int id = palp_cli_station_mark(st, v->point, v->model_time);
       if (id > 0) {
         u->sent[u->nsent++] = (uint32_t)id;
         if (!o->quiet)
-          printf("[trainee %s] mark %d sent at (%.1f, %.1f, %.1f) mm\n", o->name, id, v->point.x * 1e3,
+          tprintf(o, "[trainee %s] mark %d sent at (%.1f, %.1f, %.1f) mm\n", o->name, id, v->point.x * 1e3,
                  v->point.y * 1e3, v->point.z * 1e3);
       }
     }
   } else if (button == PALP_CLI_BUTTON_WITHDRAW) {
     if (u->nsent == 0)
-      printf("[trainee %s] no mark to withdraw\n", o->name);
+      tprintf(o, "[trainee %s] no mark to withdraw\n", o->name);
     else if (palp_cli_station_withdraw(st, u->sent[u->nsent - 1]) == 0) {
-      if (!o->quiet) printf("[trainee %s] withdrawing mark %u\n", o->name, u->sent[u->nsent - 1]);
+      if (!o->quiet) tprintf(o, "[trainee %s] withdrawing mark %u\n", o->name, u->sent[u->nsent - 1]);
       u->nsent--;
     }
   }
@@ -464,14 +487,14 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
     if (fs.last_mark_id != u->shown_id || (int)fs.last_accepted != u->shown_ok || fs.marks != u->shown_marks) {
       u->shown_id = fs.last_mark_id, u->shown_ok = fs.last_accepted, u->shown_marks = fs.marks;
       if (!fs.last_accepted) {
-        printf("[trainee %s] the server refused finding %u: %s\n", o->name, fs.last_mark_id, fs.reason);
+        tprintf(o, "[trainee %s] the server refused finding %u: %s\n", o->name, fs.last_mark_id, fs.reason);
         if (u->nsent && u->sent[u->nsent - 1] == fs.last_mark_id) u->nsent--;
       } else if (!o->quiet)
-        printf("[trainee %s] finding %u accepted: %u mark%s standing\n", o->name, fs.last_mark_id, fs.marks,
+        tprintf(o, "[trainee %s] finding %u accepted: %u mark%s standing\n", o->name, fs.last_mark_id, fs.marks,
                fs.marks == 1 ? "" : "s");
     }
     if (u->exercise && !o->quiet && palp_dds_now_ns() >= u->next_time_print) {
-      printf("[trainee %s] %.0f s left\n", o->name, fs.time_left);
+      tprintf(o, "[trainee %s] %.0f s left\n", o->name, fs.time_left);
       u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
     }
   }
@@ -481,7 +504,7 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
 static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st) {
   (void)st;
   if (!o->quiet && (u->exercise || u->nsent))
-    printf("[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
+    tprintf(o, "[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
 }
 
 /* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
@@ -577,7 +600,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                             "are likelier to be late", o->rt_priority);
   }
   if (!o->quiet)
-    printf("[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
+    tprintf(o, "[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
            "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
            d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
   fflush(stdout);
@@ -593,7 +616,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   int64_t next_print = t0, next_check = t0;
   unsigned stalls_seen[2] = {0, 0};
   int closed = 0, limited_shown = 0, oor_shown = 0;
-  double episode_peak = 0, oor_since = 0, oor_last = 0;
+  double episode_peak = 0, oor_since = 0, oor_last = 0, under_since = -1;
   uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0;
   int oor_why = 0; /* the limits met in this episode (valid_range_why) */
   char why_text[320];
@@ -621,21 +644,31 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       if (bin + 1 > plot.plot_bins) plot.plot_bins = bin + 1;
     }
     if (fm > plot.peak) plot.peak = fm;
-    /* The trainee is told at once when the force on her hand was limited. */
+    /* The trainee is told at once when the force on her hand was limited, and that it is back
+     * under the limit once it has stayed there 0.25 s: a press held at the limit dips under it
+     * for a tick now and then, which made the two lines alternate 20 ms apart. */
     const int limited = (v.flags & PALP_CLI_FORCE_LIMITED) != 0;
     if (limited && v.requested > episode_peak) episode_peak = v.requested;
-    if (limited && !limited_shown && !o->quiet) {
-      printf("[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
-             "device gets %.1f N\n", o->name, v.t, fm, fm);
-      fflush(stdout);
+    if (limited) under_since = -1;
+    else if (limited_shown && under_since < 0) under_since = v.t;
+    if (limited && !limited_shown) {
+      if (!o->quiet) {
+        tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
+               "device gets %.1f N\n", o->name, v.t, fm, fm);
+        fflush(stdout);
+      }
+      limited_shown = 1;
     }
-    if (!limited && limited_shown && !o->quiet) {
-      printf("[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name, v.t,
-             episode_peak);
-      fflush(stdout);
+    if (!limited && limited_shown && v.t - under_since >= 0.25) {
+      if (!o->quiet) {
+        tprintf(o, "[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name,
+               under_since, episode_peak);
+        fflush(stdout);
+      }
+      limited_shown = 0;
+      under_since = -1;
     }
-    if (!limited) episode_peak = 0;
-    limited_shown = limited;
+    if (!limited_shown) episode_peak = 0;
     /* And when the phantom is pressed beyond the model's valid range (the server's flag on
      * the models rendered since the last look), and when it is back: after 0.5 s clear, so
      * that the skin's check, which revisits each hinge every 0.2 s, does not make it flicker. */
@@ -649,7 +682,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       if (!oor_shown) {
         oor_since = v.t, oor_why = 0;
         if (!o->quiet) {
-          printf("[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
+          tprintf(o, "[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
                  o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
           fflush(stdout);
         }
@@ -657,7 +690,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       oor_shown = 1, oor_last = v.t, oor_why |= why;
     } else if (oor_shown && v.t - oor_last >= 0.5) {
       if (!o->quiet) {
-        printf("[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
+        tprintf(o, "[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
                oor_last - oor_since, valid_range_why(oor_why, why_text, sizeof why_text));
         fflush(stdout);
       }
@@ -665,7 +698,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     }
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
       const int touching = v.on && (v.flags & PALP_CLI_FORCE_CONTACT);
-      printf("[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s%s\n",
+      tprintf(o, "[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s%s\n",
              o->name, v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
              limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? "  OUTSIDE VALID RANGE" : "",
              (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
@@ -710,7 +743,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (hs.missed)
     snprintf(skipped, sizeof skipped, ", %llu deadline(s) skipped (the device held its last force)",
              (unsigned long long)hs.missed);
-  printf("[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms)%s; "
+  tprintf(o, "[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms)%s; "
          "%llu local models (%llu dropped as invalid), %llu contact samples sent at %.0f Hz; contact->model latency "
          "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s\n",
          o->name, st->session_id, (unsigned long long)hs.ticks, d.rate_hz, (unsigned long long)hs.late_ticks,
@@ -720,23 +753,23 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
          d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
          closed ? reason : "");
   if (hs.stalls)
-    printf("[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
+    tprintf(o, "[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
            "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "
            "above\n", o->name, (unsigned long long)hs.stalls, hs.stall_total, hs.stall_max);
   if (hs.floor_ticks)
-    printf("[trainee %s] this machine's timer floor over the same %.1f s: a thread doing nothing at the haptic "
+    tprintf(o, "[trainee %s] this machine's timer floor over the same %.1f s: a thread doing nothing at the haptic "
            "thread's priority woke > %.1f ms late on %llu of %llu ticks (%.3f%%, worst %.2f ms)\n", o->name,
            (double)(hs.floor_ticks + hs.floor_missed) / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
            (unsigned long long)hs.floor_ticks, 100.0 * (double)hs.floor_late_ticks / (double)hs.floor_ticks,
            hs.floor_late_max * 1e3);
   if (hs.limited_ticks)
-    printf("[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
+    tprintf(o, "[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
            o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
   if (hs.passivity_ticks)
-    printf("[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
+    tprintf(o, "[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
            "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
-    printf("[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
+    tprintf(o, "[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
            "(the device rendered those for %.2f s: %.2f s %s; %.2f s %s; %.2f s %s)\n", o->name,
            (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models,
            (double)hs.out_of_range_ticks / d.rate_hz, (double)hs.beyond_validated_ticks / d.rate_hz,
@@ -848,7 +881,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     }
     drain_feedback(&fx);
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
-      printf("[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, t,
+      tprintf(o, "[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, t,
              down[0] ? "pressing" : "lifted  ", fx.last, -fx.last_top * 1e3);
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
@@ -868,7 +901,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
           if (palp_cli_station_find_phantom(st, ph->name, -1, lost_server, o->timeout, &id, err, sizeof err) == 0 &&
               (j.phantom_id = id, palp_cli_station_join(st, &j, err, sizeof err)) == 0) {
             rejoins++;
-            printf("[trainee %s] t=%6.2f s  server of session %u lost; rejoined as session %u on phantom %u \"%s\"\n",
+            tprintf(o, "[trainee %s] t=%6.2f s  server of session %u lost; rejoined as session %u on phantom %u \"%s\"\n",
                    o->name, (double)(palp_dds_now_ns() - t0) * 1e-9, lost_session, st->session_id, id, ph->name);
             fflush(stdout);
             fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
@@ -910,7 +943,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     p50 = lat.us[(lat.n - 1) / 2];
     p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
   }
-  printf("[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
+  tprintf(o, "[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
          "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s\n",
          o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
          lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "",
