@@ -216,9 +216,10 @@ static int parse(int argc, char **argv, opts *o) {
   }
   if (o->app.version) return 0;
   if (!strcmp(o->input, "keyboard") || !strcmp(o->input, "keyboard-finger")) {
-    /* The keyboard's status line shows what the periodic line would (position, depth, force),
-     * twice a second: the periodic line only on request. */
-    if (!o->print_period_given) o->print_period = 0;
+    /* The finger keyboard's status line shows what its periodic line would (depth, rendered
+     * force), twice a second: that line only on request. The force keyboard's status line shows
+     * the command, not the phantom's answer (the pole's displacement): its periodic line stays. */
+    if (!strcmp(o->input, "keyboard-finger") && !o->print_period_given) o->print_period = 0;
     o->status_line = isatty(STDOUT_FILENO) && isatty(STDERR_FILENO);
   }
   if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
