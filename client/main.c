@@ -448,8 +448,8 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
     u->time_limit = ex.time_limit;
     if (!o->quiet)
       tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
-             "device's button (keyboard: m), withdraw the last mark with u\n",
-             o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
+                 "device's button (keyboard: m), withdraw the last mark with u\n",
+                 o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
   }
   u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
   u->shown_ok = -1;
@@ -471,7 +471,7 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
         u->sent[u->nsent++] = (uint32_t)id;
         if (!o->quiet)
           tprintf(o, "[trainee %s] mark %d sent at (%.1f, %.1f, %.1f) mm\n", o->name, id, v->point.x * 1e3,
-                 v->point.y * 1e3, v->point.z * 1e3);
+                     v->point.y * 1e3, v->point.z * 1e3);
       }
     }
   } else if (button == PALP_CLI_BUTTON_WITHDRAW) {
@@ -492,7 +492,7 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
         if (u->nsent && u->sent[u->nsent - 1] == fs.last_mark_id) u->nsent--;
       } else if (!o->quiet)
         tprintf(o, "[trainee %s] finding %u accepted: %u mark%s standing\n", o->name, fs.last_mark_id, fs.marks,
-               fs.marks == 1 ? "" : "s");
+                   fs.marks == 1 ? "" : "s");
     }
     if (u->exercise && !o->quiet && palp_dds_now_ns() >= u->next_time_print) {
       tprintf(o, "[trainee %s] %.0f s left\n", o->name, fs.time_left);
@@ -602,8 +602,8 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   }
   if (!o->quiet)
     tprintf(o, "[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
-           "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
-           d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
+               "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
+               d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
   fflush(stdout);
   findings_ui fu;
   findings_ui_start(&fu, o, st);
@@ -655,7 +655,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (limited && !limited_shown) {
       if (!o->quiet) {
         tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
-               "device gets %.1f N\n", o->name, v.t, fm, fm);
+                   "device gets %.1f N\n", o->name, v.t, fm, fm);
         fflush(stdout);
       }
       limited_shown = 1;
@@ -663,7 +663,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (!limited && limited_shown && v.t - under_since >= 0.25) {
       if (!o->quiet) {
         tprintf(o, "[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name,
-               under_since, episode_peak);
+                   under_since, episode_peak);
         fflush(stdout);
       }
       limited_shown = 0;
@@ -684,7 +684,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
         oor_since = v.t, oor_why = 0;
         if (!o->quiet) {
           tprintf(o, "[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
-                 o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
+                     o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
           fflush(stdout);
         }
       }
@@ -692,7 +692,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     } else if (oor_shown && v.t - oor_last >= 0.5) {
       if (!o->quiet) {
         tprintf(o, "[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
-               oor_last - oor_since, valid_range_why(oor_why, why_text, sizeof why_text));
+                   oor_last - oor_since, valid_range_why(oor_why, why_text, sizeof why_text));
         fflush(stdout);
       }
       oor_shown = 0;
@@ -700,9 +700,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
       const int touching = v.on && (v.flags & PALP_CLI_FORCE_CONTACT);
       tprintf(o, "[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s%s\n",
-             o->name, v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
-             limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? "  OUTSIDE VALID RANGE" : "",
-             (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
+                 o->name, v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
+                 limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? "  OUTSIDE VALID RANGE" : "",
+                 (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
     }
@@ -745,37 +745,37 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     snprintf(skipped, sizeof skipped, ", %llu deadline(s) skipped (the device held its last force)",
              (unsigned long long)hs.missed);
   tprintf(o, "[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms)%s; "
-         "%llu local models (%llu dropped as invalid), %llu contact samples sent at %.0f Hz; contact->model latency "
-         "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s\n",
-         o->name, st->session_id, (unsigned long long)hs.ticks, d.rate_hz, (unsigned long long)hs.late_ticks,
-         d.late_threshold * 1e3, hs.ticks ? 100.0 * (double)hs.late_ticks / (double)hs.ticks : 0.0, hs.late_max * 1e3,
-         skipped,
-         (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
-         d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
-         closed ? reason : "");
+             "%llu local models (%llu dropped as invalid), %llu contact samples sent at %.0f Hz; contact->model latency "
+             "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s\n",
+             o->name, st->session_id, (unsigned long long)hs.ticks, d.rate_hz, (unsigned long long)hs.late_ticks,
+             d.late_threshold * 1e3, hs.ticks ? 100.0 * (double)hs.late_ticks / (double)hs.ticks : 0.0, hs.late_max * 1e3,
+             skipped,
+             (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
+             d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
+             closed ? reason : "");
   if (hs.stalls)
     tprintf(o, "[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
-           "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "
-           "above\n", o->name, (unsigned long long)hs.stalls, hs.stall_total, hs.stall_max);
+               "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "
+               "above\n", o->name, (unsigned long long)hs.stalls, hs.stall_total, hs.stall_max);
   if (hs.floor_ticks)
     tprintf(o, "[trainee %s] this machine's timer floor over the same %.1f s: a thread doing nothing at the haptic "
-           "thread's priority woke > %.1f ms late on %llu of %llu ticks (%.3f%%, worst %.2f ms)\n", o->name,
-           (double)(hs.floor_ticks + hs.floor_missed) / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
-           (unsigned long long)hs.floor_ticks, 100.0 * (double)hs.floor_late_ticks / (double)hs.floor_ticks,
-           hs.floor_late_max * 1e3);
+               "thread's priority woke > %.1f ms late on %llu of %llu ticks (%.3f%%, worst %.2f ms)\n", o->name,
+               (double)(hs.floor_ticks + hs.floor_missed) / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
+               (unsigned long long)hs.floor_ticks, 100.0 * (double)hs.floor_late_ticks / (double)hs.floor_ticks,
+               hs.floor_late_max * 1e3);
   if (hs.limited_ticks)
     tprintf(o, "[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
-           o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
+               o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
   if (hs.passivity_ticks)
     tprintf(o, "[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
-           "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
+               "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   if (hs.server_limited_models || hs.out_of_range_models)
     tprintf(o, "[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
-           "(the device rendered those for %.2f s: %.2f s %s; %.2f s %s; %.2f s %s)\n", o->name,
-           (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models,
-           (double)hs.out_of_range_ticks / d.rate_hz, (double)hs.beyond_validated_ticks / d.rate_hz,
-           valid_range_text[0], (double)hs.strained_ticks / d.rate_hz, valid_range_text[1],
-           (double)hs.limit_ticks / d.rate_hz, valid_range_text[2]);
+               "(the device rendered those for %.2f s: %.2f s %s; %.2f s %s; %.2f s %s)\n", o->name,
+               (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models,
+               (double)hs.out_of_range_ticks / d.rate_hz, (double)hs.beyond_validated_ticks / d.rate_hz,
+               valid_range_text[0], (double)hs.strained_ticks / d.rate_hz, valid_range_text[1],
+               (double)hs.limit_ticks / d.rate_hz, valid_range_text[2]);
   if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
   free(lat.us);
   free(d.trace);
@@ -883,7 +883,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     drain_feedback(&fx);
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
       tprintf(o, "[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, t,
-             down[0] ? "pressing" : "lifted  ", fx.last, -fx.last_top * 1e3);
+                 down[0] ? "pressing" : "lifted  ", fx.last, -fx.last_top * 1e3);
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
     }
@@ -903,7 +903,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
               (j.phantom_id = id, palp_cli_station_join(st, &j, err, sizeof err)) == 0) {
             rejoins++;
             tprintf(o, "[trainee %s] t=%6.2f s  server of session %u lost; rejoined as session %u on phantom %u \"%s\"\n",
-                   o->name, (double)(palp_dds_now_ns() - t0) * 1e-9, lost_session, st->session_id, id, ph->name);
+                       o->name, (double)(palp_dds_now_ns() - t0) * 1e-9, lost_session, st->session_id, id, ph->name);
             fflush(stdout);
             fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
             dds_waitset_attach(ws, fb_cond, 0);
@@ -945,10 +945,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
   }
   tprintf(o, "[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
-         "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s\n",
-         o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
-         lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "",
-         rejoins ? "; rejoined after its server was lost" : "");
+             "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s\n",
+             o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
+             lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "",
+             rejoins ? "; rejoined after its server was lost" : "");
   if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
   (void)ended;

@@ -166,12 +166,14 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       /* The date on one line and the time with its offset on a second, never broken at a hyphen. */
       char *sp = strchr(t, ' ');
       if (sp) *sp = '\0';
-      fprintf(f, "</td><td class=\"t\"><span class=\"nw\">%s</span>%s<span class=\"nw\">%s</span></td><td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
-              "<td class=\"t\">%s</td><td class=\"strips nw\">%s</td><td>%.1f</td><td>%.2f</td><td class=\"score\">%.1f</td>"
-              "<td%s>%s",
-              t, sp ? " " : "", sp ? sp + 1 : "", m->found, m->lesion_count, m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1],
-              100 * m->coverage[2], palp_pattern_name(m->pattern), strips, m->duration, m->peak_force, m->score,
-              m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
+      fprintf(f,
+              "</td><td class=\"t\"><span class=\"nw\">%s</span>%s<span class=\"nw\">%s</span></td>"
+              "<td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
+              "<td class=\"t\">%s</td><td class=\"strips nw\">%s</td><td>%.1f</td><td>%.2f</td>"
+              "<td class=\"score\">%.1f</td><td%s>%s",
+              t, sp ? " " : "", sp ? sp + 1 : "", m->found, m->lesion_count, m->false_positives,
+              100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), strips,
+              m->duration, m->peak_force, m->score, m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
       fprintf(f, "</td><td class=\"outside\">%s</td><td class=\"t\">", r->outside);
       html_str(f, r->grade);
       fputs("</td></tr>\n", f);
