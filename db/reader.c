@@ -245,8 +245,8 @@ int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp
     size_t n = strlen(arg);
     if (n > 9 || strspn(arg, "0123456789") != n) return 0;
   }
-  /* The uid's tail after its last '-' is the station's session number; instr/substr on text, no
-   * LIKE (its wildcards would need escaping). */
+  /* The uid's tail after its last '-' is the station's session number: compared with substr, not
+   * LIKE (whose wildcards the argument would need escaped from). */
   const char *where = by_number ? "substr(s.uid, length(s.uid) - length(?1)) = '-' || ?1"
                                 : "substr(s.uid, 1, length(?1)) = ?1";
   char sql[1024];
