@@ -148,7 +148,15 @@ typedef struct kfinger {
   unsigned flags;
   double radius;
   atomic_int button;     /* issue 13: m / u pressed (haptic thread -> main thread) */
+  palp_vec3 device;      /* the device point handed to the station [m], moving towards the keys' point */
+  double device_t;       /* when it was last moved [s]; < 0: not yet placed */
 } kfinger;
+
+/* How fast the keys move the fingertip [m/s]: a brisk hand's press (the scripted trainees press and
+ * glide at 50 mm/s). A key is a step of 0.125-4 mm and several may come at once; taken in one tick,
+ * 7 mm put the device 7 mm under the surface before the server's next model and the station rendered
+ * (and announced as limited) a 14 N spike at a depth where the phantom answers 1.2 N. */
+#define KF_SPEED 0.05
 
 static int kf_open(void *ctx, double R) {
   kfinger *f = ctx;
@@ -187,7 +195,18 @@ static int kf_read(void *ctx, double t, palp_vec3 *x) {
   palp_vec3 n;
   palp_vec3 p = palp_cli_dome_point(f->k.R, f->k.polar, f->k.azimuth, &n);
   const double h = f->radius - f->depth;
-  *x = (palp_vec3){p.x + n.x * h, p.y + n.y * h, p.z + n.z * h};
+  const palp_vec3 target = {p.x + n.x * h, p.y + n.y * h, p.z + n.z * h};
+  if (f->device_t < 0 || t < f->device_t) {
+    f->device = target;
+  } else { /* towards the keys' point at KF_SPEED at most; a stall of the thread is not made up at once */
+    const double dt = t - f->device_t < 0.1 ? t - f->device_t : 0.1, reach = KF_SPEED * dt;
+    const palp_vec3 d = {target.x - f->device.x, target.y - f->device.y, target.z - f->device.z};
+    const double dist = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    const double s = dist > reach ? reach / dist : 1.0;
+    f->device = (palp_vec3){f->device.x + s * d.x, f->device.y + s * d.y, f->device.z + s * d.z};
+  }
+  f->device_t = t;
+  *x = f->device;
   return f->lifted ? 0 : 1;
 }
 
@@ -228,6 +247,7 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
   f->depth = -0.002; /* start 2 mm above the pole */
   f->step = 0.001;
   f->radius = 0.008;
+  f->device_t = -1;
   *out = (palp_cli_input){.name = "keyboard (finger)", .ctx = f, .open = kf_open, .close = kf_close,
                           .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius,
                           .button = kf_button};

@@ -33,7 +33,7 @@ spid=$!
  wait_for "$tmp/client.log" "depth +10 mm (step 1 mm): force"; sleep 1.5; printf '[[----'
  wait_for "$tmp/client.log" "depth +9 mm (step 0.25 mm): force"; sleep 1.5; printf ']]]+++++++'
  wait_for "$tmp/client.log" "depth +23 mm (step 2 mm): force"; sleep 2; printf 'q') |
-  script -qec "$client --role trainee --domain 114 --phantom 4 --name keys --input keyboard-finger" \
+  script -qec "$client --role trainee --domain 114 --phantom 4 --name keys --input keyboard-finger --trace-csv $tmp/trace.csv" \
     /dev/null > "$tmp/client.log" 2>&1
 crc=$?
 tr '\r' '\n' < "$tmp/client.log" > "$tmp/lines"
@@ -59,25 +59,36 @@ esc=$(printf '\033')
 periodic=$(grep -c "rendered |F| = " "$tmp/lines")
 forcehelp=$(grep -c "+/- force" "$tmp/lines")
 cleared=$(grep -c "${esc}\[K\[trainee keys\] haptic thread at" "$tmp/client.log")
+# The keys move the fingertip at 50 mm/s at most (client/input_keyboard.c, KF_SPEED), never by a whole
+# burst of steps in one tick: the device's fastest move between two haptic ticks (the trace, every tick)
+# is at most 50 mm/s (+2% for the trace's 6 digits) and, with 7 steps at once, reaches 40 mm/s.
+vmax=$(awk -F, 'NR > 2 && $1 > t { d = sqrt(($4 - x) ^ 2 + ($5 - y) ^ 2 + ($6 - z) ^ 2) / ($1 - t); if (d > m) m = d }
+                NR > 1 { t = $1; x = $4; y = $5; z = $6 } END { printf "%.4f", m }' "$tmp/trace.csv" 2>/dev/null)
+[ -n "$vmax" ] || vmax=-1
+# one press held at the 10 N safe force (23 mm): one announcement, however the force wavers at the limit
+limited=$(grep -c "FORCE LIMITED: the phantom pushes back harder" "$tmp/lines")
 # the 250 Hz session's log holds every 3rd step's frame (server/db_log.c: ~100 Hz): show says both rates
 stride=$(grep -c "^duration .*([0-9]* frames logged, one every 3 physics steps (83.3 Hz) of 250 Hz, dt 0.004 s)$" "$tmp/show.txt")
 log_deep_s=$(sed -n 's/^valid range OUTSIDE for [0-9.]* s of [0-9.]* s simulated ([0-9]* steps of 4 ms): \([0-9.]*\) s pressed deeper than this place of the phantom was checked against the reference model (by up to [0-9.]* mm).*/\1/p' "$tmp/show.txt")
 if [ $crc -eq 0 ] && [ -n "$f5" ] && [ -n "$f10" ] && [ -n "$f9" ] && [ -n "$f23" ] && [ -n "$models" ] &&
-   [ "$deep" -ge 1 ] && [ "$shallow" -eq 0 ] && [ "$stride" -eq 1 ] && [ "$periodic" -eq 0 ] && [ "$forcehelp" -eq 0 ] && [ "$cleared" -eq 1 ] && [ "$announced" -ge 1 ] && [ -n "$deep_s" ] && [ -n "$log_deep_s" ] &&
+   [ "$deep" -ge 1 ] && [ "$shallow" -eq 0 ] && [ "$stride" -eq 1 ] && [ "$periodic" -eq 0 ] && [ "$forcehelp" -eq 0 ] && [ "$cleared" -eq 1 ] && [ "$limited" -eq 1 ] &&
+   awk -v v="$vmax" 'BEGIN { exit !(v >= 0.040 && v <= 0.051) }' && [ "$announced" -ge 1 ] && [ -n "$deep_s" ] && [ -n "$log_deep_s" ] &&
    awk -v a="$f5" -v b="$f10" -v c="$f9" -v m="$models" -v s="$deep_s" -v g="$log_deep_s" \
      'BEGIN { d = g - s; if (d < 0) d = -d; exit !(a > 0.01 && b > a && c > a && c < b && m > 100 && s > 0.1 && d <= 0.1 + 0.1 * s) }'; then
   echo "ok   keyboard finger: exit 0, force $f5 N at 5 mm < $f9 N at 9 mm (0.25 mm steps) < $f10 N at 10 mm, $models local models;" \
        "at 23 mm ($f23 N) the status line says OUTSIDE VALID RANGE ($deep lines, $announced announcement(s) naming the limit;" \
        "$deep_s s deeper than validated in the summary, $log_deep_s s in the review of the session's log), at 5-10 mm never;" \
        "the review says the log holds one frame every 3 physics steps of 250 Hz; no periodic line beside the status line," \
-       "no force-keyboard help, the station's lines clear the status line"
+       "no force-keyboard help, the station's lines clear the status line, one force-limit announcement at 23 mm;" \
+       "the device moved at most $vmax m/s between ticks"
   exit 0
 fi
 echo "FAIL exit $crc, force at 5 mm '$f5' N, at 9 mm '$f9' N, at 10 mm '$f10' N, at 23 mm '$f23' N, models '$models';" \
      "23 mm lines saying OUTSIDE VALID RANGE '$deep' (want >= 1), 5-10 mm lines saying it '$shallow' (want 0)," \
      "announcements naming the limit '$announced' (want >= 1), summary's seconds deeper than validated '$deep_s' (want > 0.1)," \
      "the review's '$log_deep_s' (want within 0.1 s + 10% of the summary's), duration lines naming the log's stride '$stride' (want 1)," \
-     "periodic lines '$periodic' (want 0), force-keyboard help lines '$forcehelp' (want 0), lines clearing the status line '$cleared' (want 1):"
+     "periodic lines '$periodic' (want 0), force-keyboard help lines '$forcehelp' (want 0), lines clearing the status line '$cleared' (want 1)," \
+     "force-limit announcements '$limited' (want 1), the device's fastest move '$vmax' m/s (want 0.040-0.051):"
 cat "$tmp/lines"
 cat "$tmp/show.txt"
 exit 1
