@@ -39,7 +39,6 @@ typedef struct opts {
   double magnitude, t_on, t_off, frequency, offset, polar, azimuth;
   double finger_radius_mm, patch_area_cm2;
   double rate, duration, timeout, print_period;
-  int print_period_given;
   /* A keyboard input keeps a status line on the terminal (stderr, rewritten with \r): each of
    * the station's own lines then starts by clearing it, and the status line comes back at its
    * next refresh (<= 0.5 s), instead of the line being appended to it. */
@@ -129,6 +128,7 @@ static int parse(int argc, char **argv, opts *o) {
                * (docs/station.md): real-time by default where allowed, as a haptics library does. */
               .rt_priority = 20};
   palp_app_opts_init(&o->app, "palp-client");
+  int print_period_given = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     double x = 0;
@@ -193,7 +193,7 @@ static int parse(int argc, char **argv, opts *o) {
     STR("--trace-csv", o->trace_csv)
     NUM("--duration", 0, 1e6, o->duration)
     NUM("--timeout", 0.1, 3600, o->timeout)
-    if (!strcmp(a, "--print-period")) o->print_period_given = 1;
+    if (!strcmp(a, "--print-period")) print_period_given = 1;
     NUM("--print-period", 0, 3600, o->print_period)
     STR("--feedback-csv", o->feedback_csv)
     STR("--contact-csv", o->contact_csv)
@@ -220,7 +220,7 @@ static int parse(int argc, char **argv, opts *o) {
     /* The finger keyboard's status line shows what its periodic line would (depth, rendered
      * force), twice a second: that line only on request. The force keyboard's status line shows
      * the command, not the phantom's answer (the pole's displacement): its periodic line stays. */
-    if (!strcmp(o->input, "keyboard-finger") && !o->print_period_given) o->print_period = 0;
+    if (!strcmp(o->input, "keyboard-finger") && !print_period_given) o->print_period = 0;
     o->status_line = isatty(STDOUT_FILENO) && isatty(STDERR_FILENO);
   }
   if (!o->role || (strcmp(o->role, "trainee") && strcmp(o->role, "visual") && strcmp(o->role, "observer"))) {
