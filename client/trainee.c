@@ -54,8 +54,14 @@ palp_vec3 palp_cli_hand_device_at(const palp_cli_hand *h, palp_vec3 n, double de
 }
 
 /* ---- the expert ---------------------------------------------------------------------- */
+/* The deep press: device 14.5 mm, about 11.5 mm of indentation, inside the shipped parameters'
+ * validated depth everywhere (12 mm at the pole, 45 and 70 deg, 14 mm at 60 deg:
+ * config/params/breast_tissue.json) with 0.5 mm to spare, and well inside the deep band (9-18 mm).
+ * The expert shows the technique; her session is not where the model should be seen leaving
+ * its valid range. At 16 mm (until 2026-12-05) she pressed to 12.46 mm and the teaching
+ * session spent 6.3 s beyond the table, by up to 0.46 mm (tests/assess/phantom_figures expert). */
 palp_cli_expert_cfg palp_cli_expert_default(void) {
-  return (palp_cli_expert_cfg){.spacing = 0.008, .d_light = 0.003, .d_medium = 0.009, .d_deep = 0.016,
+  return (palp_cli_expert_cfg){.spacing = 0.008, .d_light = 0.003, .d_medium = 0.009, .d_deep = 0.0145,
                                .press_speed = 0.05, .glide_speed = 0.05, .hold = 0.12, .min_nz = 0.06,
                                .keep_force = 0.05, .patience = 0.3, .threshold = 0.12, .cluster = 0.015};
 }

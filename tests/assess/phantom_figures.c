@@ -310,6 +310,10 @@ static int cmd_expert(const char *path, int argc, char **argv) {
   double ind_max = 0;
   for (int i = 0; i < rc.n; ++i) ind_max = fmax(ind_max, R + R_FINGER - norm3(rc.s[i].proxy));
   printf("  deepest indentation %.2f mm\n", ind_max * 1e3);
+  palp_world_health hl;
+  palp_world_get_health(w, &hl);
+  printf("  deeper than validated: %lld steps of %.0f ms (by up to %.2f mm)\n", (long long)hl.beyond_validated_steps,
+         sc.world.dt * 1e3, hl.max_beyond_validated * 1e3);
   free(sp), free(rises);
   rec_free(&rc);
   palp_world_destroy(w);

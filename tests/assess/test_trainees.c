@@ -6,8 +6,9 @@
  * fat, on the breast-tissue dome (phantom_stiff.json; the shipped teaching exercise). There
  * each lump raises the fingertip force at equal depth by +18-26% over the same spot without
  * it (tests/assess/phantom_figures, 2-15 mm); in the expert's exam the two lumps' largest
- * rises over the fitted surroundings are +16.5% and +18.2% and the worst spot away from
- * them +2.9% (since 2026-11-28, when the rule's fit gained its term for the rise towards
+ * rises over the fitted surroundings are +16.4% and +17.5% and the worst spot away from
+ * them +2.7% (her deep level 14.5 mm, since 2026-12-05; +16.5 / +18.2% and +2.9% at 16 mm;
+ * since 2026-11-28, when the rule's fit gained its term for the rise towards
  * the base; +21.8 / +20.0% and +5.6% with the quadratic alone); the expert marks above
  * 12%. Asserted with margins: each lump rises >= 15%, no spot away from them above 7%.
  *
@@ -116,17 +117,18 @@ int main(void) {
         "light %.3f >= 0.90, deep %.3f >= 0.80", er.coverage[PALP_BAND_LIGHT], er.coverage[PALP_BAND_DEEP]);
   CHECK(er.pattern == PALP_PATTERN_VERTICAL_STRIP, "the expert's pattern is named vertical strip (%s)",
         palp_pattern_name(er.pattern));
-  /* her script strokes 15 strips in one pass across the dome, each next to the one before
-   * (measured 15, order 1.00); 13 allows for edge strips shorter than the 16 mm a strip needs */
+  /* her script strokes 14-15 strips in one pass across the dome, each next to the one before
+   * (measured 14, order 1.00; 15 with her deep level at 16 mm, before 2026-12-05); 13 allows for edge strips shorter than the 16 mm a strip needs */
   CHECK(er.evidence.strips >= 13 && er.evidence.sweep_monotony >= 0.9, "the expert's strips in order: %d, order %.2f",
         er.evidence.strips, er.evidence.sweep_monotony);
   CHECK(er.pass && er.score >= 90.0, "the expert passes with >= 90 (%.1f)", er.score);
   CHECK(er.duration <= ex.time_limit, "within the time limit (%.1f s)", er.duration);
-  /* The lump rule's margins (measured +16.5 / +18.2 % and +2.9 %, threshold 12 %). */
+  /* The lump rule's margins (measured +16.4 / +17.5 % and +2.7 %, threshold 12 %; +16.5 / +18.2 %
+   * and +2.9 % with her deep level at 16 mm). */
   CHECK(at[0] >= 0.15 && at[1] >= 0.15, "each lump rises >= 15%% over its surroundings (%+.3f, %+.3f; measured "
-        "+0.165, +0.182)", at[0], at[1]);
-  CHECK(away <= 0.07, "no spot away from the lumps rises above 7%% (%+.3f; measured +0.029)", away);
-  CHECK(judged >= 60, "the rule judges >= 60 spots (%d; measured 71)", judged);
+        "+0.164, +0.175)", at[0], at[1]);
+  CHECK(away <= 0.07, "no spot away from the lumps rises above 7%% (%+.3f; measured +0.027)", away);
+  CHECK(judged >= 60, "the rule judges >= 60 spots (%d; measured 85)", judged);
 
   /* 2. The novice on the same exercise: five light presses at random places. */
   palp_world_destroy(w);
@@ -175,16 +177,35 @@ int main(void) {
    * +20.6% with the support's relaxing branch alone; +18.9%,
    * +19.2% after the refit to the level-3 fingertip, +18.6%, +18.3% before), every spot
    * away from them at most 7% (measured +5.5%;
-   * deterministic, in process). */
+   * deterministic, in process). Measured 2026-12-05 with the expert's deep level at 14.5 mm:
+   * +23.2%, +22.0%, away +3.2% (+23.6%, +23.1%, +3.3% at 16 mm the same day). */
   snprintf(path, sizeof path, "%s/exercises/teaching.json", PALP_CONFIG_DIR);
   w = expert_run(path, r, &ex, &sc, &rc, &er, at, &away, &judged);
   if (w) {
     CHECK(sc.world.gel.support_stiffening > 0.0, "the shipped phantom stiffens (beta %g)", sc.world.gel.support_stiffening);
     CHECK(er.found == 2 && er.false_positives == 0, "shipped teaching: 2 of 2 found (%d), no false mark (%d)", er.found,
           er.false_positives);
-    CHECK(at[0] >= 0.15 && at[1] >= 0.15, "shipped teaching: each lump rises >= 15%% (%+.3f, %+.3f; measured +0.215, "
-          "+0.216)", at[0], at[1]);
-    CHECK(away <= 0.07, "shipped teaching: no spot away from the lumps above 7%% (%+.3f; measured +0.055)", away);
+    CHECK(at[0] >= 0.15 && at[1] >= 0.15, "shipped teaching: each lump rises >= 15%% (%+.3f, %+.3f; measured +0.232, "
+          "+0.220)", at[0], at[1]);
+    CHECK(away <= 0.07, "shipped teaching: no spot away from the lumps above 7%% (%+.3f; measured +0.032)", away);
+    /* The expert shows the technique inside the model's valid range: her deep presses reach
+     * the deep band (9-18 mm of indentation) and stay within the depths the shipped parameters
+     * were validated to against the FE (config/params/breast_tissue.json "validated": 12 mm at
+     * the pole, 45 and 70 deg, 14 mm at 60 deg). Measured: deepest 11.48 mm, 0 steps beyond
+     * (her device's deep level 14.5 mm); at 16 mm she pressed to 12.46 mm and 1,577 steps of
+     * 4 ms were beyond the table, by up to 0.46 mm. */
+    double deepest = 0.0;
+    for (int i = 0; i < rc.n; ++i) {
+      const palp_vec3 q = rc.s[i].proxy;
+      deepest = fmax(deepest, R + r - sqrt(q.x * q.x + q.y * q.y + q.z * q.z));
+    }
+    palp_world_health hl;
+    palp_world_get_health(w, &hl);
+    CHECK(deepest >= 0.010, "shipped teaching: the expert's deep presses reach %.2f mm, >= 10 mm (deep band from 9)",
+          deepest * 1e3);
+    CHECK(hl.beyond_validated_steps == 0 && hl.max_beyond_validated == 0.0,
+          "shipped teaching: the expert never presses deeper than validated (%lld steps, by up to %.2f mm; measured 0)",
+          (long long)hl.beyond_validated_steps, hl.max_beyond_validated * 1e3);
     rec_free(&rc);
     palp_world_destroy(w);
   }

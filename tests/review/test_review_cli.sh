@@ -25,7 +25,8 @@ R show class-alice-1 > "$dir/show-alice.txt" 2>&1 || bad "show alice exit status
 expect "show: the expert found 2 of 2" "sensitivity +2 of 2 lesions found \(100%\) +pass" "$dir/show-alice.txt"
 expect "show: medium coverage >= 99%" "thoroughness +light 9[0-9]\.[0-9]%, medium (99\.[0-9]|100\.0)%" "$dir/show-alice.txt"
 expect "show: vertical strip" "search pattern +vertical_strip" "$dir/show-alice.txt"
-# the expert's script strokes 15 strips in one pass across the dome (in process: 15, order 1.00)
+# the expert's script strokes 13-15 strips in one pass across the dome (in process: 14, order 1.00, since her deep
+# press is 14.5 mm; 15 at 16 mm)
 expect "show: the strips and their order" "strips +1[3-5], in order (0\.9[0-9]|1\.00) " "$dir/show-alice.txt"
 # the rubric (tests/assess/exercise_expert.json, as the shipped exercises) asks for the strips' order
 expect "show: the pattern's pass mark from the rubric" "search pattern +vertical_strip .* \(pass: systematic; strips in order >= 0\.70\) +pass$" "$dir/show-alice.txt"
@@ -176,7 +177,8 @@ before = {r["session"]: r for r in csv.DictReader(open(sys.argv[1]))}
 rows = {r["session"]: r for r in csv.DictReader(open(sys.argv[2]))}
 b2 = rows["class-bob-2"]
 assert b2["strips"] != "" and (b2["strips"], b2["strip_order"]) == (before["class-bob-2"]["strips"], before["class-bob-2"]["strip_order"]), (b2, before["class-bob-2"])
-assert rows["class-alice-1"]["strips"] == "15" and rows["class-bob-1"]["strips"] == "0", rows
+a1 = rows["class-alice-1"]  # the expert's strips (13-15, as above), counted again: the same as before the prune
+assert 13 <= int(a1["strips"]) <= 15 and a1["strips"] == before["class-alice-1"]["strips"] and rows["class-bob-1"]["strips"] == "0", rows
 PY
 then ok "class CSV after the prune: the pruned session's strips stored as computed before it, the others' counted"
 else bad "class CSV after the prune"; fi
