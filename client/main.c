@@ -10,6 +10,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "episode.h"
 #include "haptic_loop.h"
 #include "input_trainee.h"
 #include "input.h"
@@ -617,8 +618,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_print = t0, next_check = t0;
   unsigned stalls_seen[2] = {0, 0};
-  int closed = 0, limited_shown = 0, oor_shown = 0;
-  double episode_peak = 0, oor_since = 0, oor_last = 0, under_since = -1;
+  int closed = 0;
+  palp_cli_episode lim_ep = palp_cli_episode_make(PALP_CLI_LIMIT_HOLD_S);
+  palp_cli_episode oor_ep = palp_cli_episode_make(PALP_CLI_RANGE_HOLD_S);
+  double episode_peak = 0;
   uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0;
   int oor_why = 0; /* the limits met in this episode (valid_range_why) */
   char why_text[320];
@@ -648,29 +651,21 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (fm > plot.peak) plot.peak = fm;
     /* The trainee is told at once when the force on her hand was limited, and that it is back
      * under the limit once it has stayed there 0.25 s: a press held at the limit dips under it
-     * for a tick now and then, which made the two lines alternate 20 ms apart. */
+     * for a tick now and then, which made the two lines alternate 20 ms apart (episode.h). */
     const int limited = (v.flags & PALP_CLI_FORCE_LIMITED) != 0;
     if (limited && v.requested > episode_peak) episode_peak = v.requested;
-    if (limited) under_since = -1;
-    else if (limited_shown && under_since < 0) under_since = v.t;
-    if (limited && !limited_shown) {
-      if (!o->quiet) {
-        tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
-                   "device gets %.1f N\n", o->name, v.t, fm, fm);
-        fflush(stdout);
-      }
-      limited_shown = 1;
+    const int lim = palp_cli_episode_update(&lim_ep, v.t, limited);
+    if (lim == PALP_CLI_EPISODE_BEGAN && !o->quiet) {
+      tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
+                 "device gets %.1f N\n", o->name, v.t, fm, fm);
+      fflush(stdout);
     }
-    if (!limited && limited_shown && v.t - under_since >= 0.25) {
-      if (!o->quiet) {
-        tprintf(o, "[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name,
-                   under_since, episode_peak);
-        fflush(stdout);
-      }
-      limited_shown = 0;
-      under_since = -1;
+    if (lim == PALP_CLI_EPISODE_OVER && !o->quiet) {
+      tprintf(o, "[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name,
+                 lim_ep.clear_since, episode_peak);
+      fflush(stdout);
     }
-    if (!limited_shown) episode_peak = 0;
+    if (!lim_ep.shown) episode_peak = 0;
     /* And when the phantom is pressed beyond the model's valid range (the server's flag on
      * the models rendered since the last look), and when it is back: after 0.5 s clear, so
      * that the skin's check, which revisits each hinge every 0.2 s, does not make it flicker. */
@@ -680,23 +675,20 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                     (v.limit_ticks != lim_ticks ? 4 : 0);
     oor_ticks = v.out_of_range_ticks, bv_ticks = v.beyond_validated_ticks;
     strain_ticks = v.strained_ticks, lim_ticks = v.limit_ticks;
-    if (oor) {
-      if (!oor_shown) {
-        oor_since = v.t, oor_why = 0;
-        if (!o->quiet) {
-          tprintf(o, "[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
-                     o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
-          fflush(stdout);
-        }
-      }
-      oor_shown = 1, oor_last = v.t, oor_why |= why;
-    } else if (oor_shown && v.t - oor_last >= 0.5) {
+    const int out = palp_cli_episode_update(&oor_ep, v.t, oor);
+    if (out == PALP_CLI_EPISODE_BEGAN) {
+      oor_why = 0;
       if (!o->quiet) {
-        tprintf(o, "[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
-                   oor_last - oor_since, valid_range_why(oor_why, why_text, sizeof why_text));
+        tprintf(o, "[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
+                   o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
         fflush(stdout);
       }
-      oor_shown = 0;
+    }
+    if (oor) oor_why |= why;
+    if (out == PALP_CLI_EPISODE_OVER && !o->quiet) {
+      tprintf(o, "[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
+                 oor_ep.last_on - oor_ep.began, valid_range_why(oor_why, why_text, sizeof why_text));
+      fflush(stdout);
     }
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
       const int touching = v.on && (v.flags & PALP_CLI_FORCE_CONTACT);
