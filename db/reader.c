@@ -217,12 +217,16 @@ int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused *
   return 0;
 }
 
+/* A session whose uid starts with ?1: compared with substr, not LIKE (whose wildcards the
+ * argument would need escaped from). One clause for find_session and the candidates. */
+#define UID_PREFIX_WHERE "substr(s.uid, 1, length(?1)) = ?1"
+
 int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out) {
   if (!uid || !*uid) return PALP_EINVAL;
   sqlite3_stmt *st;
   /* An exact uid wins; otherwise a unique prefix (uids are long: "<run uuid>-<n>"). */
   const char *sql = "SELECT " SESSION_COLS "FROM session s WHERE s.uid = ?1 "
-                    "UNION ALL SELECT " SESSION_COLS "FROM session s WHERE substr(s.uid, 1, length(?1)) = ?1 "
+                    "UNION ALL SELECT " SESSION_COLS "FROM session s WHERE " UID_PREFIX_WHERE " "
                     "AND s.uid <> ?1 AND NOT EXISTS (SELECT 1 FROM session WHERE uid = ?1) LIMIT 2";
   if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
   sqlite3_bind_text(st, 1, uid, -1, SQLITE_STATIC);
@@ -245,10 +249,8 @@ int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp
     size_t n = strlen(arg);
     if (n > 9 || strspn(arg, "0123456789") != n) return 0;
   }
-  /* The uid's tail after its last '-' is the station's session number: compared with substr, not
-   * LIKE (whose wildcards the argument would need escaped from). */
-  const char *where = by_number ? "substr(s.uid, length(s.uid) - length(?1)) = '-' || ?1"
-                                : "substr(s.uid, 1, length(?1)) = ?1";
+  /* The uid's tail after its last '-' is the station's session number (substr, as the prefix). */
+  const char *where = by_number ? "substr(s.uid, length(s.uid) - length(?1)) = '-' || ?1" : UID_PREFIX_WHERE;
   char sql[1024];
   snprintf(sql, sizeof sql, "SELECT count(*) FROM session s WHERE %s", where);
   sqlite3_stmt *st;
