@@ -1571,11 +1571,11 @@ int palp_srv_open_sessions(const palp_srv *srv) { return atomic_load(&srv->sessi
 
 uint64_t palp_srv_refused_requests(palp_srv *srv) { return atomic_load(&srv->refused_requests); }
 
-static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state) {
+static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state, int pw) {
   uint64_t rej = 0;
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) rej += s->rejected[r];
-  fprintf(out, "%-7u %-16.16s %-26.26s %8.2f %9llu %8.2f %9.2f %9llu %8llu %8llu  %s\n", s->info.session_id,
-          s->info.trainee_name, s->info.phantom_name, s->duration, (unsigned long long)s->contact_samples,
+  fprintf(out, "%-7u %-16.16s %-*.*s %8.2f %9llu %8.2f %9.2f %9llu %8llu %8llu  %s\n", s->info.session_id,
+          s->info.trainee_name, pw, pw, s->info.phantom_name, s->duration, (unsigned long long)s->contact_samples,
           s->peak_force, s->peak_displacement * 1e3, (unsigned long long)s->ticks,
           (unsigned long long)s->overruns, (unsigned long long)rej, state);
 }
@@ -1590,18 +1590,32 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
     const uint64_t total = palp_srv_security_refusals((palp_srv *)srv, who, sizeof who);
     if (total) fprintf(out, "DDS Security refused participants %llu time(s): %s\n", (unsigned long long)total, who);
   }
-  fprintf(out, "%-7s %-16s %-26s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", "phantom", "dur[s]",
+  /* The phantom column as wide as its longest name, at most 44 characters: cut at 26 the
+   * demo's "dome C (long-term, haptic 250 Hz)" lost what set it apart from dome B. */
+  int pw = 7;
+  for (int i = 0; i < srv->closed_count; i++) {
+    const char *name = srv->closed[(srv->closed_head + i) % CLOSED_KEEP].sum.info.phantom_name;
+    const size_t n = name ? strlen(name) : 0;
+    if ((int)n > pw) pw = n > 44 ? 44 : (int)n;
+  }
+  for (int i = 0; i < srv->session_count; i++) {
+    palp_srv_session_info info;
+    palp_srv_session_info_fill(srv->sessions[i], &info);
+    const size_t n = info.phantom_name ? strlen(info.phantom_name) : 0;
+    if ((int)n > pw) pw = n > 44 ? 44 : (int)n;
+  }
+  fprintf(out, "%-7s %-16s %-*s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", pw, "phantom", "dur[s]",
           "samples", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
   if (srv->sessions_forgotten)
     fprintf(out, "(%llu older closed sessions not kept)\n", (unsigned long long)srv->sessions_forgotten);
   for (int i = 0; i < srv->closed_count; i++) {
     const closed_session *c = &srv->closed[(srv->closed_head + i) % CLOSED_KEEP];
-    print_row(out, &c->sum, c->reason);
+    print_row(out, &c->sum, c->reason, pw);
   }
   for (int i = 0; i < srv->session_count; i++) {
     palp_srv_session_summary sum;
     palp_srv_session_summary_fill(srv->sessions[i], "(open)", palp_dds_now_ns(), &sum);
-    print_row(out, &sum, "(open)");
+    print_row(out, &sum, "(open)", pw);
   }
 }
 

@@ -74,7 +74,14 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     palp_log_error(log, "list: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
-  printf("%-36s %-14s %-20s %-16s %-25s %9s %-16s %-5s %s\n", "SESSION", "TRAINEE", "PHANTOM", "EXERCISE", "STARTED",
+  /* The phantom column as wide as its longest name, at most 40 characters: cut at 20 the
+   * demo's "dome C (long-term, haptic 250 Hz)" read "dome C (long-term, h". */
+  int pw = 7;
+  for (int i = 0; i < n; i++) {
+    const int len = (int)strnlen(v[i].phantom_name, 40);
+    if (len > pw) pw = len;
+  }
+  printf("%-36s %-14s %-*s %-16s %-25s %9s %-16s %-5s %s\n", "SESSION", "TRAINEE", pw, "PHANTOM", "EXERCISE", "STARTED",
          "SIM [s]", "ENDED", "NOTES", "GRADE");
   for (int i = 0; i < n; i++) {
     char t[64];
@@ -84,7 +91,7 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     char exname[64] = "-", grade[160];
     if (palp_db_session_exercise(db, v[i].id, exname, sizeof exname, NULL) != 0) snprintf(exname, sizeof exname, "-");
     review_latest_grade(db, v[i].id, grade, sizeof grade);
-    printf("%-36s %-14s %-20.20s %-16.16s %-25s %9.2f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, v[i].phantom_name, exname,
+    printf("%-36s %-14s %-*.*s %-16.16s %-25s %9.2f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, pw, pw, v[i].phantom_name, exname,
            t, v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
            grade, known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
   }

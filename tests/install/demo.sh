@@ -52,6 +52,10 @@ check "dana felt the breast-tissue dome push back: peak rendered force ${peak:-n
 n=$(grep -c 'logged frames reproduced bit-identically' "$txt")
 check "the review lists 5 sessions and replays each bit-identically ($n of 5)" \
   "grep -q '^5 sessions' '$txt' && [ $n -eq 5 ]"
+# The tables name each phantom whole: cut at 26 / 20 characters, dome C read "dome C (long-term, haptic"
+# and "dome C (long-term, h", which no longer said what set it apart from dome B.
+check "the server's session table and the review's list name dome C whole" \
+  "grep -Eq '^[0-9]+ +carol +dome C \\(long-term, haptic 250 Hz\\) ' '$txt' && grep -Eq '^[0-9]+-[0-9]+-[0-9]+ +carol +dome C \\(long-term, haptic 250 Hz\\) ' '$txt'"
 check "it ends with the class report of the exercise" \
   "grep -q '== class report: exercise \"teaching\"' '$txt' && [ -s '$out/demo/class-teaching.html' ]"
 [ $fail -eq 0 ] || tail -n 60 "$txt"
