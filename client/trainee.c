@@ -413,8 +413,13 @@ void palp_cli_novice_exam(palp_cli_hand *h, int presses, double depth, unsigned 
       palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, (palp_vec3){m.x / lm, m.y / lm, m.z / lm}, -0.005), 0.1);
     }
     palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, n, depth), 0.03);
+    /* The mark 0.1 s into the hold, as a hand settles before it marks: pressed on arrival,
+     * the station's latest model could still be of the finger in the air (models come
+     * ~4 ms after the device point, tens of ms on a loaded station), and the station
+     * refused the mark as not touching (seen under AddressSanitizer, 2026-12-05). */
+    palp_cli_hand_hold(h, 0.1);
     if (k == presses - 1 && on_last_hold) on_last_hold(arg);
-    palp_cli_hand_hold(h, 0.3);
+    palp_cli_hand_hold(h, 0.2);
     palp_cli_hand_move_to(h, palp_cli_hand_device_at(h, n, -0.005), 0.03);
     if (last_press) *last_press = (palp_vec3){h->R * n.x, h->R * n.y, h->R * n.z};
   }
