@@ -346,12 +346,14 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
   return PALP_OK;
 }
 
-int palp_exercise_band(const palp_exercise *ex, double depth, double force) {
+int palp_band_of(const palp_band band[PALP_BAND_COUNT], double depth, double force) {
   for (int b = 0; b < PALP_BAND_COUNT; ++b) {
-    const palp_band *B = &ex->band[b];
+    const palp_band *B = &band[b];
     if (B->has_depth && !(depth >= B->depth_min && depth < B->depth_max)) continue;
     if (B->has_force && !(force >= B->force_min && force < B->force_max)) continue;
     return b;
   }
   return -1;
 }
+
+int palp_exercise_band(const palp_exercise *ex, double depth, double force) { return palp_band_of(ex->band, depth, force); }

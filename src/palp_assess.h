@@ -226,6 +226,9 @@ int palp_assess_touches(const palp_assess_sample *samples, int sample_count, dou
 
 /* The band of an indentation [m] and force magnitude [N], or -1 outside every band. */
 int palp_exercise_band(const palp_exercise *ex, double indentation, double force);
+/* The same rule on three bands alone (light, medium, deep): the first whose every given bound
+ * holds, or -1. palp-web classifies a live fingertip with it, as the assessment does. */
+int palp_band_of(const palp_band band[PALP_BAND_COUNT], double indentation, double force);
 
 #ifdef __cplusplus
 }

@@ -14,6 +14,7 @@
 #include <dds/dds.h>
 
 #include "palp.h"
+#include "palp_assess.h"
 #include "palp_dds.h"
 #include "palp_dds_strangers.h"
 
@@ -71,6 +72,11 @@ typedef struct exercise {
   uint32_t phantom_id;
   char name[64], title[128], instructions[1024];
   double time_limit, max_force;
+  /* Its pressure bands (light, medium, deep), by which the assessment grades; bands_ok when
+   * every band has a bound and every bound is finite and ordered: then an in-contact
+   * position-driven finger is banded by them, not by the gauge's force bands (docs/web.md). */
+  palp_band band[PALP_BAND_COUNT];
+  int bands_ok;
 } exercise;
 
 /* The server's answer on a session's findings (palp_finding_status). */
@@ -116,6 +122,8 @@ typedef struct session {
   finger f[FINGERS];
   double force;           /* magnitude of the summed finger forces [N] */
   int band;
+  int exercise_bands;     /* band is by the exercise's bands (else the gauge's force bands) */
+  double depth;           /* indentation of the deepest in-contact position finger [m]; NAN: none */
   double max_disp;        /* largest displacement in the newest frame [m] */
   double sim_time;
   uint64_t frame;
@@ -295,6 +303,7 @@ static void build_sessions(palp_web_hub *h) {
     cJSON_AddNumberToObject(o, "peak_disp_mm", s->st.peak_displacement * 1e3);
     cJSON_AddNumberToObject(o, "force", s->force);
     cJSON_AddStringToObject(o, "band", palp_web_band_name(s->band));
+    cJSON_AddStringToObject(o, "band_rule", s->exercise_bands ? "exercise" : "force");
     double cov[3];
     palp_web_coverage_fractions(s->cov, cov);
     cJSON_AddItemToObject(o, "coverage", vec_json(cov, 3, 1));
@@ -345,6 +354,21 @@ static void build_exercises(palp_web_hub *h) {
     cJSON_AddStringToObject(o, "instructions", e->instructions);
     cJSON_AddNumberToObject(o, "time_limit", e->time_limit);
     cJSON_AddNumberToObject(o, "max_force", e->max_force);
+    /* its bands, as the exercise file gives them (mm, N), when the bridge bands by them */
+    if (e->bands_ok) {
+      cJSON *bands = cJSON_AddObjectToObject(o, "bands");
+      for (int b = 0; b < PALP_BAND_COUNT; b++) {
+        cJSON *bo = cJSON_AddObjectToObject(bands, palp_band_name(b));
+        if (e->band[b].has_depth) {
+          const double d[2] = {round(e->band[b].depth_min * 1e6) / 1e3, round(e->band[b].depth_max * 1e6) / 1e3};
+          cJSON_AddItemToObject(bo, "depth_mm", cJSON_CreateDoubleArray(d, 2));
+        }
+        if (e->band[b].has_force) {
+          const double f[2] = {e->band[b].force_min, e->band[b].force_max};
+          cJSON_AddItemToObject(bo, "force_N", cJSON_CreateDoubleArray(f, 2));
+        }
+      }
+    }
     cJSON_AddItemToArray(arr, o);
   }
   publish_json(h, &h->exercises_msg, j);
@@ -422,10 +446,15 @@ static void build_live(palp_web_hub *h, int slot) {
   char buf[2048];
   size_t n = (size_t)snprintf(buf, sizeof buf,
                               "{\"type\":\"live\",\"session\":%u,\"frame\":%.0f,\"sim_time\":%.4f,\"force\":%.4f,"
-                              "\"band\":\"%s\",\"max_disp_mm\":%.3f,\"fps\":%.1f,\"coverage\":[%.4f,%.4f,%.4f],"
-                              "\"fingers\":[",
+                              "\"band\":\"%s\",\"band_rule\":\"%s\",\"max_disp_mm\":%.3f,\"fps\":%.1f,"
+                              "\"coverage\":[%.4f,%.4f,%.4f],",
                               s->id, (double)s->frame, s->sim_time, s->force, palp_web_band_name(s->band),
-                              s->max_disp * 1e3, s->fps, cov[0], cov[1], cov[2]);
+                              s->exercise_bands ? "exercise" : "force", s->max_disp * 1e3, s->fps, cov[0], cov[1],
+                              cov[2]);
+  /* the indentation the band was read from (exercise bands), [mm] */
+  if (s->exercise_bands && isfinite(s->depth))
+    n += (size_t)snprintf(buf + n, sizeof buf - n, "\"depth_mm\":%.3f,", s->depth * 1e3);
+  n += (size_t)snprintf(buf + n, sizeof buf - n, "\"fingers\":[");
   int first = 1;
   for (int k = 0; k < FINGERS && n < sizeof buf - 480; k++) {
     const finger *f = &s->f[k];
@@ -669,6 +698,7 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     memset(s, 0, sizeof *s);
     s->used = 1;
     s->id = m->session_id;
+    s->depth = NAN;
     if (h->def.sec.kind != PALP_DDS_ID_NONE) /* secured: the server takes only "KIND/NAME/..." from KIND/NAME;
                                               * 11 + 31 + 7 + 11 characters fit the 63 */
       snprintf(s->station, sizeof s->station, "%s/%s/%ld/w%u", palp_dds_id_kind_name(h->def.sec.kind),
@@ -713,6 +743,20 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
   copy_str(e->instructions, sizeof e->instructions, m->instructions);
   e->time_limit = m->time_limit;
   e->max_force = m->max_force;
+  /* The bands as sent, checked: a band with no bound, a bound not finite, negative or not
+   * ordered, and the bridge keeps its force bands for this exercise (and says which). */
+  e->bands_ok = 1;
+  for (int b = 0; b < PALP_BAND_COUNT; b++) {
+    const palp_PressureBand *in = &m->bands[b];
+    palp_band *B = &e->band[b];
+    *B = (palp_band){.has_depth = in->has_depth != 0, .has_force = in->has_force != 0, .depth_min = in->depth_min,
+                     .depth_max = in->depth_max, .force_min = in->force_min, .force_max = in->force_max};
+    const int depth_ok = !B->has_depth || (isfinite(B->depth_min) && isfinite(B->depth_max) && B->depth_min >= 0 &&
+                                           B->depth_min < B->depth_max);
+    const int force_ok = !B->has_force || (isfinite(B->force_min) && isfinite(B->force_max) && B->force_min >= 0 &&
+                                           B->force_min < B->force_max);
+    if (!(B->has_depth || B->has_force) || !depth_ok || !force_ok) e->bands_ok = 0;
+  }
   build_exercises(h);
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
     if (h->s[i].used && h->s[i].st.phantom_id == m->phantom_id) update_finding_writer(h, i);
@@ -805,6 +849,29 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
   build_status(h);
 }
 
+/* A position-driven finger's indentation [m] as the assessment measures it: the undeformed
+ * dome's radius plus the fingertip's, less the proxy's distance from the dome's centre. */
+static double finger_depth(const session *s, const finger *f) {
+  const double r = sqrt(f->proxy[0] * f->proxy[0] + f->proxy[1] * f->proxy[1] + f->proxy[2] * f->proxy[2]);
+  return s->ph ? s->ph->radius + f->radius - r : NAN;
+}
+
+/* The exercise whose bands band this session's fingers, or NULL (force bands). */
+static const exercise *banding_exercise(const palp_web_hub *h, const session *s) {
+  const exercise *ex = find_exercise(h, s->st.phantom_id);
+  return ex && ex->bands_ok && s->ph ? ex : NULL;
+}
+
+/* The band of an in-contact position-driven finger with a local model, of force `force` [N]:
+ * the exercise's, as palp_assess grades a sample (palp_band_of), when the session runs one;
+ * else the gauge's force bands. */
+static int finger_band(const palp_web_hub *h, const session *s, const finger *f, double force) {
+  const exercise *ex = banding_exercise(h, s);
+  if (!ex) return palp_web_band(&h->def.bands, force);
+  const int b = palp_band_of(ex->band, finger_depth(s, f), force);
+  return b < 0 ? PALP_WEB_BAND_NONE : b + 1; /* PALP_BAND_LIGHT = 0 is PALP_WEB_BAND_LIGHT = 1 */
+}
+
 static void recompute_force(palp_web_hub *h, session *s) {
   double sum[3] = {0, 0, 0};
   for (int k = 0; k < FINGERS; k++) {
@@ -815,10 +882,29 @@ static void recompute_force(palp_web_hub *h, session *s) {
       for (int d = 0; d < 3; d++) sum[d] += f->fb[d];
   }
   const double mag = sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-  const int band = palp_web_band(&h->def.bands, mag);
-  if (mag != s->force || band != s->band) s->changed = 1, h->sessions_dirty = 1;
+  int band = palp_web_band(&h->def.bands, mag);
+  /* In an exercise the band is the exercise's, as the assessment will grade it: of the deepest
+   * position-driven finger in contact (none while every such finger is in the air). */
+  const int xb = banding_exercise(h, s) != NULL;
+  double depth = NAN;
+  if (xb) {
+    band = PALP_WEB_BAND_NONE;
+    for (int k = 0; k < FINGERS; k++) {
+      const finger *f = &s->f[k];
+      if (f->mode != palp_CONTACT_FINGER || !f->lm_valid || !f->lm_contact) continue;
+      const double d = finger_depth(s, f);
+      if (!(d <= depth)) depth = d; /* NAN at first */
+      const int b = finger_band(h, s, f, f->lm_force);
+      if (b > band) band = b;
+    }
+  }
+  if (mag != s->force || band != s->band || xb != s->exercise_bands ||
+      !(depth == s->depth || (isnan(depth) && isnan(s->depth))))
+    s->changed = 1, h->sessions_dirty = 1;
   s->force = mag;
   s->band = band;
+  s->exercise_bands = xb;
+  s->depth = depth;
 }
 
 static void on_contact(palp_web_hub *h, const palp_Contact *m) {
@@ -963,6 +1049,7 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
     s->outside_counted = 1;
     h->sessions_dirty = 1;
   }
+  if (banding_exercise(h, s)) recompute_force(h, s); /* the band follows the fingertip's depth */
   s->changed = 1;
 }
 
@@ -1152,7 +1239,7 @@ static void *hub_main(void *arg) {
           if (f->mode == palp_CONTACT_FINGER && f->lm_valid) {
             if (!f->lm_contact) continue;
             const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
-            const int band = palp_web_band(&h->def.bands, f->lm_force);
+            const int band = finger_band(h, s, f, f->lm_force);
             if (band && palp_web_coverage_press(s->cov, f->point, r, band) > 0) s->changed = 1;
             continue;
           }

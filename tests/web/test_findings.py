@@ -76,6 +76,17 @@ def run(build, source, out):
                            "return !!f && f.in_contact === true && palpState.trainee.maxDispMm > 3;})()", 25)
         check(ok is True, "pat presses (proxy in contact, dent > 3 mm): %s"
               % page.eval("JSON.stringify(palpState.trainee.proxy)"))
+        # The band is the exercise's, by the fingertip's indentation as the assessment grades it
+        # (light 1-4, medium 4-9, deep 9-18 mm), not the gauge's force bands; the legend says so.
+        ok = page.wait_for("palpState.trainee.bandRule === 'exercise' && palpState.trainee.depthMm !== null", 10)
+        st = page.eval("JSON.stringify([palpState.trainee.band, palpState.trainee.depthMm, palpState.trainee.force, "
+                       "document.getElementById('band-legend').textContent, document.getElementById('depth').textContent])")
+        band, depth_mm, force, legend, depth_text = __import__("json").loads(st)
+        want = next((n for n, lo, hi in (("light", 1, 4), ("medium", 4, 9), ("deep", 9, 18)) if lo <= depth_mm < hi), "none")
+        check(ok is True and band == want and "by how deep the fingertip presses: light 1-4 mm, medium 4-9 mm, deep 9-18 mm"
+              in legend and re.match(r"pressed \d+\.\d mm deep", depth_text),
+              "the page bands the press by the exercise: %s at %.2f mm (%.2f N), legend %r, %r"
+              % (band, depth_mm if depth_mm is not None else float("nan"), force, legend, depth_text))
         proxy = page.eval("palpState.trainee.proxy.proxy")
         t_click = time.time()
         click(page, "lump")

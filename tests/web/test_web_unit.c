@@ -363,6 +363,143 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "not touching"), "... %s", why);
 }
 
+/* The next live message of session `sid` that has a band rule and satisfies want(): 1 if it came
+ * within 3 s, with its band, rule and depth_mm (NAN when absent). */
+static int live_band(palp_web_hub *h, palp_web_cursor *c, uint32_t sid, const char *want_band, char *band, char *rule,
+                     double *depth_mm) {
+  for (int i = 0; i < 300; i++) {
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
+    int found = 0;
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+      const char *b = cJSON_GetStringValue(cJSON_GetObjectItem(j, "band"));
+      const char *ru = cJSON_GetStringValue(cJSON_GetObjectItem(j, "band_rule"));
+      if (type && !strcmp(type, "live") && cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) == sid && b && ru &&
+          !strcmp(b, want_band)) {
+        snprintf(band, 16, "%s", b);
+        snprintf(rule, 16, "%s", ru);
+        const cJSON *d = cJSON_GetObjectItem(j, "depth_mm");
+        *depth_mm = cJSON_IsNumber(d) ? d->valuedouble : NAN;
+        found = 1;
+      }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (found) return 1;
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  return 0;
+}
+
+/* An exercise session's live band is the exercise's, by the fingertip's indentation as the
+ * assessment grades it (palp_band_of), not the gauge's force bands: the shipped exercises' bands
+ * (light 1-4, medium 4-9, deep 9-18 mm) on a 40 mm dome with an 8 mm fingertip. 5 N at 5 mm is
+ * "medium" (the force bands would say deep, > 3 N), 2 N at 10 mm "deep" (force: medium), 0.5 mm
+ * "none"; the exercises message carries the bands. Phantom 2, session 4712 (domain 195). */
+static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
+  const uint32_t sid = 4712;
+  palp_web_cursor cur, *c = &cur; /* a page of its own: the other is bound to session 4711 */
+  CHECK(palp_web_hub_attach(h, c, 4) == 0, "exercise bands: a second page");
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, part);
+  const dds_entity_t w_cat = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_CATALOGUE), PALP_TOPIC_CATALOGUE);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t w_ex = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_EXERCISE), PALP_TOPIC_EXERCISE);
+  const dds_entity_t w_contact = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_CONTACT), PALP_TOPIC_CONTACT);
+  const dds_entity_t w_lm = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_LOCAL_MODEL), PALP_TOPIC_LOCAL_MODEL);
+  CHECK(pub > 0 && w_cat > 0 && w_state > 0 && w_ex > 0 && w_contact > 0 && w_lm > 0, "exercise bands: DDS entities");
+  /* a phantom of radius 40 mm: the pole and three points of the rim, three dome triangles */
+  palp_Vec3 rest[4] = {{0, 0, 0.04}, {0.04, 0, 0}, {-0.02, 0.0346, 0}, {-0.02, -0.0346, 0}};
+  int32_t tri[9] = {0, 1, 2, 0, 2, 3, 0, 3, 1};
+  palp_Phantom ph;
+  memset(&ph, 0, sizeof ph);
+  ph.phantom_id = 2;
+  snprintf(ph.name, sizeof ph.name, "exercise dome");
+  ph.radius = 0.04;
+  ph.dome_triangle_count = 3;
+  ph.rest = (dds_sequence_palp_Vec3){._length = 4, ._maximum = 4, ._buffer = rest, ._release = false};
+  ph.triangles = (dds_sequence_long){._length = 9, ._maximum = 9, ._buffer = tri, ._release = false};
+  dds_write(w_cat, &ph);
+  palp_Exercise ex;
+  memset(&ex, 0, sizeof ex);
+  ex.phantom_id = 2;
+  snprintf(ex.name, sizeof ex.name, "teaching");
+  ex.time_limit = 600;
+  ex.max_force = 15;
+  const double lo[3] = {0.001, 0.004, 0.009}, hi[3] = {0.004, 0.009, 0.018};
+  for (int b = 0; b < 3; b++) ex.bands[b] = (palp_PressureBand){.has_depth = true, .depth_min = lo[b], .depth_max = hi[b]};
+  dds_write(w_ex, &ex);
+  palp_SessionState st;
+  memset(&st, 0, sizeof st);
+  st.session_id = sid;
+  st.phase = palp_PHASE_OPEN;
+  st.phantom_id = 2;
+  snprintf(st.partition, sizeof st.partition, "%s", part);
+  snprintf(st.trainee_name, sizeof st.trainee_name, "u");
+  dds_write(w_state, &st);
+  dds_sleepfor(DDS_MSECS(400));
+  char ctl[64];
+  snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid);
+  CHECK(palp_web_hub_control(h, c, ctl, strlen(ctl)) == 0, "follow session %u", sid);
+  /* the exercises message carries the bands the pages draw */
+  int bands_seen = 0;
+  for (int i = 0; i < 300 && !bands_seen; i++) {
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      const cJSON *e;
+      cJSON_ArrayForEach(e, cJSON_GetObjectItem(j, "exercises")) {
+        const cJSON *m = cJSON_GetObjectItem(cJSON_GetObjectItem(cJSON_GetObjectItem(e, "bands"), "medium"), "depth_mm");
+        if (cJSON_GetNumberValue(cJSON_GetObjectItem(e, "phantom")) == 2 && cJSON_GetArraySize(m) == 2 &&
+            cJSON_GetArrayItem(m, 0)->valuedouble == 4 && cJSON_GetArrayItem(m, 1)->valuedouble == 9)
+          bands_seen = 1;
+      }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  CHECK(bands_seen, "the exercises message gives the exercise's medium band as depth_mm [4, 9]");
+  palp_Contact ct;
+  memset(&ct, 0, sizeof ct);
+  ct.session_id = sid;
+  ct.mode = palp_CONTACT_FINGER;
+  ct.center = (palp_Vec3){0, 0, 0.04};
+  ct.radius = 0.008;
+  dds_write(w_contact, &ct);
+  const double depth[3] = {0.005, 0.010, 0.0005}, force[3] = {5, 2, 0.3};
+  const char *want[3] = {"medium", "deep", "none"};
+  for (int k = 0; k < 3; k++) {
+    palp_LocalModel lm;
+    memset(&lm, 0, sizeof lm);
+    lm.session_id = sid;
+    lm.frame = 100 + (uint64_t)k;
+    lm.in_contact = 1;
+    lm.period = 0.004;
+    lm.proxy = (palp_Vec3){0, 0, 0.048 - depth[k]}; /* R + r - depth from the dome's centre */
+    lm.device = (palp_Vec3){0, 0, 0.048 - depth[k] - 0.001};
+    lm.force = (palp_Vec3){0, 0, force[k]};
+    lm.point = (palp_Vec3){0, 0, 0.04 - depth[k]};
+    dds_write(w_lm, &lm);
+    char band[16] = "", rule[16] = "";
+    double dmm = NAN;
+    const int got = live_band(h, c, sid, want[k], band, rule, &dmm);
+    CHECK(got && !strcmp(rule, "exercise") && fabs(dmm - depth[k] * 1e3) < 1e-3,
+          "exercise bands: %.1f N at %.1f mm is %s (got %s, rule %s, depth %.3f mm)", force[k], depth[k] * 1e3, want[k],
+          got ? band : "nothing", rule, dmm);
+  }
+  palp_web_hub_detach(h, c);
+}
+
 static void test_local_model(void) {
   palp_web_hub_def d = palp_web_hub_default_def();
   d.domain = 195;
@@ -505,6 +642,7 @@ static void test_local_model(void) {
         "counted apart: 1 sample of no known session (got %llu), 1 malformed dropped (got %llu)",
         (unsigned long long)hs.no_session, (unsigned long long)hs.dropped);
   test_findings(h, &c, pp, pub, sid, w_lm, &lm);
+  test_exercise_bands(h, pp);
   palp_web_hub_detach(h, &c);
   dds_delete(pp);
   palp_web_hub_stop(h);

@@ -181,27 +181,41 @@
     dirty = true;
   };
 
-  /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded ---- */
-  let bands = { touch_min: 0.2, light_max: 1, medium_max: 3 };
-  function drawGauge(force) {
+  /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded. In an exercise whose bands are
+   * by indentation the bridge bands the fingertip by them, as the assessment grades it, and the
+   * gauge shows the indentation against them instead (docs/web.md). ---- */
+  let bands = { touch_min: 0.2, light_max: 1, medium_max: 3 }, rule = "force";
+  function depthBands() {
+    const b = T.exercise && T.exercise.bands;
+    if (rule !== "exercise" || !b || !b.light.depth_mm || !b.medium.depth_mm || !b.deep.depth_mm) return null;
+    return [b.light.depth_mm, b.medium.depth_mm, b.deep.depth_mm];
+  }
+  function drawGauge(force, depthMm) {
     const cv = document.getElementById("gauge"), g = cv.getContext("2d"), w = cv.width, h = cv.height;
-    const top = 6, bottom = h - 6, fmax = 2 * bands.medium_max, y = function (f) {
+    const db = depthBands(), unit = db ? " mm" : " N";
+    const fmax = db ? db[2][1] : 2 * bands.medium_max, top = 6, bottom = h - 6, y = function (f) {
       return bottom - Math.min(1, f / fmax) * (bottom - top);
     };
     g.clearRect(0, 0, w, h);
-    const zones = [[0, bands.light_max, "#cfe3f3"], [bands.light_max, bands.medium_max, "#f8e3b4"],
-      [bands.medium_max, fmax, "#f5cdb0"]];
+    const zones = db ? [[db[0][0], db[0][1], "#cfe3f3"], [db[1][0], db[1][1], "#f8e3b4"], [db[2][0], db[2][1], "#f5cdb0"]]
+      : [[0, bands.light_max, "#cfe3f3"], [bands.light_max, bands.medium_max, "#f8e3b4"], [bands.medium_max, fmax, "#f5cdb0"]];
+    if (db) force = depthMm > 0 ? depthMm : 0;
     for (const z of zones) { g.fillStyle = z[2]; g.fillRect(0, y(z[1]), 24, y(z[0]) - y(z[1])); }
     g.fillStyle = "#1d2330";
     g.fillRect(0, y(force) - 1.5, 30, 3);
     g.font = "10px system-ui, sans-serif";
     g.textBaseline = "middle";
-    for (const f of [0, bands.light_max, bands.medium_max, fmax]) g.fillText(f + " N", 28, Math.min(bottom - 4, Math.max(top + 4, y(f))));
+    const ticks = db ? [0, db[0][1], db[1][1], fmax] : [0, bands.light_max, bands.medium_max, fmax];
+    for (const f of ticks) g.fillText(f + unit, 28, Math.min(bottom - 4, Math.max(top + 4, y(f))));
   }
 
   function bandLegend() {
-    document.getElementById("band-legend").textContent = "light < " + bands.light_max + " N, medium " +
-      bands.light_max + "-" + bands.medium_max + " N, deep > " + bands.medium_max + " N";
+    const db = depthBands();
+    document.getElementById("band-legend").textContent = db ?
+      "the exercise's bands, as it grades you, by how deep the fingertip presses: light " + db[0][0] + "-" + db[0][1] +
+      " mm, medium " + db[1][0] + "-" + db[1][1] + " mm, deep " + db[2][0] + "-" + db[2][1] + " mm" :
+      "light < " + bands.light_max + " N, medium " + bands.light_max + "-" + bands.medium_max + " N, deep > " +
+      bands.medium_max + " N";
   }
 
   /* ---- which session ---- */
@@ -241,6 +255,7 @@
     document.getElementById("ex-controls").hidden = !ex || observer;
     if (!ex) return;
     document.getElementById("ex-title").textContent = ex.title || ex.name;
+    bandLegend();
     document.getElementById("ex-instructions").textContent = ex.instructions;
     tick();
   }
@@ -331,12 +346,17 @@
       if (m.session !== T.session) return;
       T.force = m.force;
       T.band = m.band;
+      T.bandRule = m.band_rule || "force";
+      T.depthMm = m.depth_mm === undefined ? null : m.depth_mm;
+      if (T.bandRule !== rule) { rule = T.bandRule; bandLegend(); }
+      document.getElementById("depth").textContent = rule === "exercise" ?
+        (T.depthMm === null ? "fingertip not pressing" : "pressed " + T.depthMm.toFixed(1) + " mm deep") : "";
       T.coverage = m.coverage;
       document.getElementById("force").textContent = m.force.toFixed(2);
       const b = document.getElementById("band");
       b.textContent = m.band;
       b.className = "band " + m.band;
-      drawGauge(m.force);
+      drawGauge(m.force, T.depthMm);
       for (let k = 0; k < 3; k++) {
         const pc = (100 * m.coverage[k]).toFixed(1);
         document.getElementById("cov" + k).textContent = pc;
