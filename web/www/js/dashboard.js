@@ -81,7 +81,9 @@
   function fill(c, s) {
     c.name.textContent = s.trainee + ", session " + s.id; /* the stations' "session N" (docs/naming.md) */
     /* Held for a lost station, the last force the bridge saw is stale: the server lifted the finger. */
-    c.band.textContent = s.status ? "station lost" : fmt(s.force, 2) + " N " + s.band;
+    /* an exercise's band is by the fingertip's depth, as it is graded: 3.5 N can be medium there */
+    c.band.textContent = s.status ? "station lost" : fmt(s.force, 2) + " N " + s.band +
+      (s.band_rule === "exercise" ? " (by depth)" : "");
     c.band.className = s.status ? "band" : "band " + s.band;
     const rows = [["phantom", s.phantom_name || s.phantom],
       ["trainee station", s.status ? s.status : "connected", !!s.status,
