@@ -263,9 +263,22 @@ static void test_control(void) {
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
-/* The next "finding_reply" this cursor is sent within 2 s: 1 if it came, *ok, *mark_id and reason. */
-static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark_id, char *reason, size_t rlen) {
-  for (int i = 0; i < 200; i++) {
+/* An open session's state, as a server writes it. */
+static void write_open_state(dds_entity_t w, uint32_t sid, uint32_t phantom, const char *part, const char *trainee) {
+  palp_SessionState st;
+  memset(&st, 0, sizeof st);
+  st.session_id = sid;
+  st.phase = palp_PHASE_OPEN;
+  st.phantom_id = phantom;
+  snprintf(st.partition, sizeof st.partition, "%s", part);
+  snprintf(st.trainee_name, sizeof st.trainee_name, "%s", trainee);
+  dds_write(w, &st);
+}
+
+/* Reads this cursor's messages, up to `tries` waits of 10 ms when none is there, passing each JSON
+ * message to match(); 1 as soon as match() returns nonzero, 0 if none did. */
+static int next_json(palp_web_hub *h, palp_web_cursor *c, int tries, int (*match)(const cJSON *j, void *arg), void *arg) {
+  for (int i = 0; i < tries; i++) {
     unsigned char *buf = NULL;
     size_t len = 0;
     int binary = 0;
@@ -273,13 +286,7 @@ static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark
     int found = 0;
     if (r == 1 && !binary) {
       cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
-      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
-      if (type && !strcmp(type, "finding_reply")) {
-        *ok = cJSON_IsTrue(cJSON_GetObjectItem(j, "ok"));
-        *mark_id = (int)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "mark_id"));
-        snprintf(reason, rlen, "%s", cJSON_GetStringValue(cJSON_GetObjectItem(j, "reason")));
-        found = 1;
-      }
+      found = j && match(j, arg);
       cJSON_Delete(j);
     }
     free(buf);
@@ -287,6 +294,28 @@ static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark
     if (r != 1) dds_sleepfor(DDS_MSECS(10));
   }
   return 0;
+}
+
+typedef struct reply_want {
+  int *ok, *mark_id;
+  char *reason;
+  size_t rlen;
+} reply_want;
+
+static int is_finding_reply(const cJSON *j, void *arg) {
+  const reply_want *w = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  if (!type || strcmp(type, "finding_reply")) return 0;
+  *w->ok = cJSON_IsTrue(cJSON_GetObjectItem(j, "ok"));
+  *w->mark_id = (int)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "mark_id"));
+  snprintf(w->reason, w->rlen, "%s", cJSON_GetStringValue(cJSON_GetObjectItem(j, "reason")));
+  return 1;
+}
+
+/* The next "finding_reply" this cursor is sent within 2 s: 1 if it came, *ok, *mark_id and reason. */
+static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark_id, char *reason, size_t rlen) {
+  reply_want w = {ok, mark_id, reason, rlen};
+  return next_json(h, c, 200, is_finding_reply, &w);
 }
 
 /* Findings through the hub: a viewer is refused, a bound trainee page without an exercise is
@@ -363,34 +392,36 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "not touching"), "... %s", why);
 }
 
-/* The next live message of session `sid` that has a band rule and satisfies want(): 1 if it came
- * within 3 s, with its band, rule and depth_mm (NAN when absent). */
-static int live_band(palp_web_hub *h, palp_web_cursor *c, uint32_t sid, const char *want_band, char *band, char *rule,
-                     double *depth_mm) {
-  for (int i = 0; i < 300; i++) {
-    unsigned char *buf = NULL;
-    size_t len = 0;
-    int binary = 0;
-    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
-    int found = 0;
-    if (r == 1 && !binary) {
-      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
-      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
-      const char *b = cJSON_GetStringValue(cJSON_GetObjectItem(j, "band"));
-      const char *ru = cJSON_GetStringValue(cJSON_GetObjectItem(j, "band_rule"));
-      if (type && !strcmp(type, "live") && cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) == sid && b && ru &&
-          !strcmp(b, want_band)) {
-        snprintf(band, 16, "%s", b);
-        snprintf(rule, 16, "%s", ru);
-        const cJSON *d = cJSON_GetObjectItem(j, "depth_mm");
-        *depth_mm = cJSON_IsNumber(d) ? d->valuedouble : NAN;
-        found = 1;
-      }
-      cJSON_Delete(j);
-    }
-    free(buf);
-    if (found) return 1;
-    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+typedef struct band_want {
+  uint32_t sid;
+  const char *band;
+  char *rule;
+  double *depth_mm;
+} band_want;
+
+static int is_live_band(const cJSON *j, void *arg) {
+  const band_want *w = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  const char *b = cJSON_GetStringValue(cJSON_GetObjectItem(j, "band"));
+  const char *ru = cJSON_GetStringValue(cJSON_GetObjectItem(j, "band_rule"));
+  if (!type || strcmp(type, "live") || cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) != w->sid || !b || !ru ||
+      strcmp(b, w->band))
+    return 0;
+  snprintf(w->rule, 16, "%s", ru);
+  const cJSON *d = cJSON_GetObjectItem(j, "depth_mm");
+  *w->depth_mm = cJSON_IsNumber(d) ? d->valuedouble : NAN;
+  return 1;
+}
+
+/* The exercises message gives phantom 2's medium band as depth_mm [4, 9]. */
+static int has_medium_band(const cJSON *j, void *arg) {
+  (void)arg;
+  const cJSON *e;
+  cJSON_ArrayForEach(e, cJSON_GetObjectItem(j, "exercises")) {
+    const cJSON *m = cJSON_GetObjectItem(cJSON_GetObjectItem(cJSON_GetObjectItem(e, "bands"), "medium"), "depth_mm");
+    if (cJSON_GetNumberValue(cJSON_GetObjectItem(e, "phantom")) == 2 && cJSON_GetArraySize(m) == 2 &&
+        cJSON_GetArrayItem(m, 0)->valuedouble == 4 && cJSON_GetArrayItem(m, 1)->valuedouble == 9)
+      return 1;
   }
   return 0;
 }
@@ -435,39 +466,13 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const double lo[3] = {0.001, 0.004, 0.009}, hi[3] = {0.004, 0.009, 0.018};
   for (int b = 0; b < 3; b++) ex.bands[b] = (palp_PressureBand){.has_depth = true, .depth_min = lo[b], .depth_max = hi[b]};
   dds_write(w_ex, &ex);
-  palp_SessionState st;
-  memset(&st, 0, sizeof st);
-  st.session_id = sid;
-  st.phase = palp_PHASE_OPEN;
-  st.phantom_id = 2;
-  snprintf(st.partition, sizeof st.partition, "%s", part);
-  snprintf(st.trainee_name, sizeof st.trainee_name, "u");
-  dds_write(w_state, &st);
+  write_open_state(w_state, sid, 2, part, "u");
   dds_sleepfor(DDS_MSECS(400));
   char ctl[64];
   snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid);
   CHECK(palp_web_hub_control(h, c, ctl, strlen(ctl)) == 0, "follow session %u", sid);
   /* the exercises message carries the bands the pages draw */
-  int bands_seen = 0;
-  for (int i = 0; i < 300 && !bands_seen; i++) {
-    unsigned char *buf = NULL;
-    size_t len = 0;
-    int binary = 0;
-    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
-    if (r == 1 && !binary) {
-      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
-      const cJSON *e;
-      cJSON_ArrayForEach(e, cJSON_GetObjectItem(j, "exercises")) {
-        const cJSON *m = cJSON_GetObjectItem(cJSON_GetObjectItem(cJSON_GetObjectItem(e, "bands"), "medium"), "depth_mm");
-        if (cJSON_GetNumberValue(cJSON_GetObjectItem(e, "phantom")) == 2 && cJSON_GetArraySize(m) == 2 &&
-            cJSON_GetArrayItem(m, 0)->valuedouble == 4 && cJSON_GetArrayItem(m, 1)->valuedouble == 9)
-          bands_seen = 1;
-      }
-      cJSON_Delete(j);
-    }
-    free(buf);
-    if (r != 1) dds_sleepfor(DDS_MSECS(10));
-  }
+  const int bands_seen = next_json(h, c, 300, has_medium_band, NULL);
   CHECK(bands_seen, "the exercises message gives the exercise's medium band as depth_mm [4, 9]");
   palp_Contact ct;
   memset(&ct, 0, sizeof ct);
@@ -490,12 +495,13 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
     lm.force = (palp_Vec3){0, 0, force[k]};
     lm.point = (palp_Vec3){0, 0, 0.04 - depth[k]};
     dds_write(w_lm, &lm);
-    char band[16] = "", rule[16] = "";
+    char rule[16] = "";
     double dmm = NAN;
-    const int got = live_band(h, c, sid, want[k], band, rule, &dmm);
+    band_want w = {sid, want[k], rule, &dmm};
+    const int got = next_json(h, c, 300, is_live_band, &w);
     CHECK(got && !strcmp(rule, "exercise") && fabs(dmm - depth[k] * 1e3) < 1e-3,
-          "exercise bands: %.1f N at %.1f mm is %s (got %s, rule %s, depth %.3f mm)", force[k], depth[k] * 1e3, want[k],
-          got ? band : "nothing", rule, dmm);
+          "exercise bands: %.1f N at %.1f mm is %s (%s; rule %s, depth %.3f mm)", force[k], depth[k] * 1e3, want[k],
+          got ? "so it was" : "never said", rule, dmm);
   }
   palp_web_hub_detach(h, c);
 }
@@ -526,14 +532,7 @@ static void test_local_model(void) {
   char ctl[64];
   snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid);
   CHECK(palp_web_hub_control(h, &c, ctl, strlen(ctl)) == 0, "follow");
-  palp_SessionState st;
-  memset(&st, 0, sizeof st);
-  st.session_id = sid;
-  st.phase = palp_PHASE_OPEN;
-  st.phantom_id = 1;
-  snprintf(st.partition, sizeof st.partition, "%s", part);
-  snprintf(st.trainee_name, sizeof st.trainee_name, "t");
-  dds_write(w_state, &st);
+  write_open_state(w_state, sid, 1, part, "t");
   dds_sleepfor(DDS_MSECS(300)); /* the hub knows the session before its streams */
   palp_Contact ct;
   memset(&ct, 0, sizeof ct);
