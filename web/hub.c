@@ -863,10 +863,9 @@ static const exercise *banding_exercise(const palp_web_hub *h, const session *s)
 }
 
 /* The band of an in-contact position-driven finger with a local model, of force `force` [N]:
- * the exercise's, as palp_assess grades a sample (palp_band_of), when the session runs one;
- * else the gauge's force bands. */
-static int finger_band(const palp_web_hub *h, const session *s, const finger *f, double force) {
-  const exercise *ex = banding_exercise(h, s);
+ * the exercise's `ex`, as palp_assess grades a sample (palp_band_of); without one the gauge's
+ * force bands. */
+static int finger_band(const palp_web_hub *h, const exercise *ex, const session *s, const finger *f, double force) {
   if (!ex) return palp_web_band(&h->def.bands, force);
   const int b = palp_band_of(ex->band, finger_depth(s, f), force);
   return b < 0 ? PALP_WEB_BAND_NONE : b + 1; /* PALP_BAND_LIGHT = 0 is PALP_WEB_BAND_LIGHT = 1 */
@@ -885,7 +884,8 @@ static void recompute_force(palp_web_hub *h, session *s) {
   int band = palp_web_band(&h->def.bands, mag);
   /* In an exercise the band is the exercise's, as the assessment will grade it: of the deepest
    * position-driven finger in contact (none while every such finger is in the air). */
-  const int xb = banding_exercise(h, s) != NULL;
+  const exercise *ex = banding_exercise(h, s);
+  const int xb = ex != NULL;
   double depth = NAN;
   if (xb) {
     band = PALP_WEB_BAND_NONE;
@@ -893,14 +893,13 @@ static void recompute_force(palp_web_hub *h, session *s) {
       const finger *f = &s->f[k];
       if (f->mode != palp_CONTACT_FINGER || !f->lm_valid || !f->lm_contact) continue;
       const double d = finger_depth(s, f);
-      if (!(d <= depth)) depth = d; /* NAN at first */
-      const int b = finger_band(h, s, f, f->lm_force);
+      if (isnan(depth) || d > depth) depth = d;
+      const int b = finger_band(h, ex, s, f, f->lm_force);
       if (b > band) band = b;
     }
   }
-  if (mag != s->force || band != s->band || xb != s->exercise_bands ||
-      !(depth == s->depth || (isnan(depth) && isnan(s->depth))))
-    s->changed = 1, h->sessions_dirty = 1;
+  if (mag != s->force || band != s->band || xb != s->exercise_bands) s->changed = 1, h->sessions_dirty = 1;
+  if (!(depth == s->depth || (isnan(depth) && isnan(s->depth)))) s->changed = 1; /* live only */
   s->force = mag;
   s->band = band;
   s->exercise_bands = xb;
@@ -1239,7 +1238,7 @@ static void *hub_main(void *arg) {
           if (f->mode == palp_CONTACT_FINGER && f->lm_valid) {
             if (!f->lm_contact) continue;
             const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
-            const int band = finger_band(h, s, f, f->lm_force);
+            const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
             if (band && palp_web_coverage_press(s->cov, f->point, r, band) > 0) s->changed = 1;
             continue;
           }
