@@ -87,6 +87,13 @@ def run(build, source, out):
               in legend and re.match(r"pressed \d+\.\d mm deep", depth_text),
               "the page bands the press by the exercise: %s at %.2f mm (%.2f N), legend %r, %r"
               % (band, depth_mm if depth_mm is not None else float("nan"), force, legend, depth_text))
+        # ... in the colours the review and reports give the bands (docs/naming.md, Okabe-Ito)
+        colour = {"light": "rgb(86, 180, 233)", "medium": "rgb(230, 159, 0)", "deep": "rgb(0, 158, 115)"}
+        shown = page.eval("[document.getElementById('band').textContent, "
+                          "getComputedStyle(document.getElementById('band')).backgroundColor, "
+                          "getComputedStyle(document.querySelector('.bar.deep > div')).backgroundColor]")
+        check(shown[0] in colour and shown[1] == colour[shown[0]] and shown[2] == colour["deep"],
+              "the band badge and the deep coverage bar in the reports' colours: %s" % shown)
         proxy = page.eval("palpState.trainee.proxy.proxy")
         t_click = time.time()
         click(page, "lump")

@@ -197,8 +197,8 @@
       return bottom - Math.min(1, f / fmax) * (bottom - top);
     };
     g.clearRect(0, 0, w, h);
-    const zones = db ? [[db[0][0], db[0][1], "#cfe3f3"], [db[1][0], db[1][1], "#f8e3b4"], [db[2][0], db[2][1], "#f5cdb0"]]
-      : [[0, bands.light_max, "#cfe3f3"], [bands.light_max, bands.medium_max, "#f8e3b4"], [bands.medium_max, fmax, "#f5cdb0"]];
+    const zones = db ? [[db[0][0], db[0][1], "#cce8f8"], [db[1][0], db[1][1], "#f8e3b4"], [db[2][0], db[2][1], "#b3e2d5"]]
+      : [[0, bands.light_max, "#cce8f8"], [bands.light_max, bands.medium_max, "#f8e3b4"], [bands.medium_max, fmax, "#b3e2d5"]];
     if (db) force = depthMm > 0 ? depthMm : 0;
     for (const z of zones) { g.fillStyle = z[2]; g.fillRect(0, y(z[1]), 24, y(z[0]) - y(z[1])); }
     g.fillStyle = "#1d2330";
