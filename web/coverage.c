@@ -12,8 +12,10 @@ struct palp_web_coverage {
   double *rest;    /* 3n [m] */
   double *area;    /* per vertex: a third of its dome triangles' area [m^2]; 0 off the dome */
   uint8_t *band;   /* per vertex: deepest band pressed */
+  uint8_t *bits;   /* per vertex: the bands pressed, 1 << band */
   double dome_area;
   double at_least[4]; /* area pressed at band >= k, kept current by press */
+  double in_band[4];  /* area pressed in band k itself, kept current by press */
 };
 
 palp_web_bands palp_web_bands_default(void) {
@@ -56,7 +58,8 @@ palp_web_coverage *palp_web_coverage_create(const double *rest, int n, const int
   c->rest = malloc(sizeof *c->rest * 3 * (size_t)n);
   c->area = calloc((size_t)n, sizeof *c->area);
   c->band = calloc((size_t)n, 1);
-  if (!c->rest || !c->area || !c->band) {
+  c->bits = calloc((size_t)n, 1);
+  if (!c->rest || !c->area || !c->band || !c->bits) {
     palp_web_coverage_destroy(c);
     return NULL;
   }
@@ -78,12 +81,15 @@ void palp_web_coverage_destroy(palp_web_coverage *c) {
   free(c->rest);
   free(c->area);
   free(c->band);
+  free(c->bits);
   free(c);
 }
 
 void palp_web_coverage_reset(palp_web_coverage *c) {
   memset(c->band, 0, (size_t)c->n);
+  memset(c->bits, 0, (size_t)c->n);
   memset(c->at_least, 0, sizeof c->at_least);
+  memset(c->in_band, 0, sizeof c->in_band);
 }
 
 int palp_web_coverage_press(palp_web_coverage *c, const double center[3], double radius, int band) {
@@ -104,13 +110,15 @@ int palp_web_coverage_press(palp_web_coverage *c, const double center[3], double
   if (near < 0) return 0;
   const double *q = c->rest + 3 * near, r2 = radius * radius;
   int raised = 0;
+  const uint8_t bit = (uint8_t)(1u << band);
   for (int i = 0; i < c->n; i++) {
-    if (c->area[i] <= 0 || c->band[i] >= band) continue;
+    if (c->area[i] <= 0 || (c->band[i] >= band && (c->bits[i] & bit))) continue;
     const double *p = c->rest + 3 * i;
     const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
     if (d2 > r2) continue;
+    if (!(c->bits[i] & bit)) c->bits[i] |= bit, c->in_band[band] += c->area[i];
     for (int k = c->band[i] + 1; k <= band; k++) c->at_least[k] += c->area[i];
-    c->band[i] = (uint8_t)band;
+    if (c->band[i] < band) c->band[i] = (uint8_t)band;
     raised++;
   }
   return raised;
@@ -119,6 +127,13 @@ int palp_web_coverage_press(palp_web_coverage *c, const double center[3], double
 void palp_web_coverage_fractions(const palp_web_coverage *c, double out[3]) {
   for (int k = 0; k < 3; k++) {
     double f = c && c->dome_area > 0 ? c->at_least[k + 1] / c->dome_area : 0;
+    out[k] = f < 0 ? 0 : f > 1 ? 1 : f;
+  }
+}
+
+void palp_web_coverage_band_fractions(const palp_web_coverage *c, double out[3]) {
+  for (int k = 0; k < 3; k++) {
+    double f = c && c->dome_area > 0 ? c->in_band[k + 1] / c->dome_area : 0;
     out[k] = f < 0 ? 0 : f > 1 ? 1 : f;
   }
 }

@@ -39,12 +39,15 @@ void palp_web_coverage_destroy(palp_web_coverage *c);
 void palp_web_coverage_reset(palp_web_coverage *c);
 
 /* Marks every dome vertex within `radius` [m] of `center` (its projection onto the rest surface:
- * the vertex nearest to it and its neighbours in that radius) with `band` unless already deeper.
- * Returns the number of vertices whose band rose. */
+ * the vertex nearest to it and its neighbours in that radius) as pressed in `band`. Returns the
+ * number of vertices whose deepest band rose or that had not been pressed in this band. */
 int palp_web_coverage_press(palp_web_coverage *c, const double center[3], double radius, int band);
 
 /* Area fractions of the dome pressed at least light / medium / deep, each in [0, 1]. */
 void palp_web_coverage_fractions(const palp_web_coverage *c, double out[3]);
+/* Area fractions pressed in the light / medium / deep band itself, as the assessment counts an
+ * exercise's thoroughness (a place pressed only deep counts for deep alone), each in [0, 1]. */
+void palp_web_coverage_band_fractions(const palp_web_coverage *c, double out[3]);
 double palp_web_coverage_dome_area(const palp_web_coverage *c);
 
 #endif

@@ -275,6 +275,13 @@ static void build_phantom(palp_web_hub *h, int slot) {
   publish_json(h, &h->phantom_msg[slot], j);
 }
 
+/* Coverage as the session's band rule counts it: in an exercise the area pressed in each band
+ * itself, as the assessment's thoroughness; else the area pressed at each band or deeper. */
+static void session_coverage(const session *s, double cov[3]) {
+  if (s->exercise_bands) palp_web_coverage_band_fractions(s->cov, cov);
+  else palp_web_coverage_fractions(s->cov, cov);
+}
+
 static void build_sessions(palp_web_hub *h) {
   cJSON *j = cJSON_CreateObject();
   cJSON_AddStringToObject(j, "type", "sessions");
@@ -305,7 +312,7 @@ static void build_sessions(palp_web_hub *h) {
     cJSON_AddStringToObject(o, "band", palp_web_band_name(s->band));
     cJSON_AddStringToObject(o, "band_rule", s->exercise_bands ? "exercise" : "force");
     double cov[3];
-    palp_web_coverage_fractions(s->cov, cov);
+    session_coverage(s, cov);
     cJSON_AddItemToObject(o, "coverage", vec_json(cov, 3, 1));
     cJSON_AddNumberToObject(o, "fps", s->fps);
     cJSON_AddBoolToObject(o, "joined", s->joined);
@@ -442,7 +449,7 @@ static void build_status(palp_web_hub *h) {
 static void build_live(palp_web_hub *h, int slot) {
   const session *s = &h->s[slot];
   double cov[3];
-  palp_web_coverage_fractions(s->cov, cov);
+  session_coverage(s, cov);
   char buf[2048];
   size_t n = (size_t)snprintf(buf, sizeof buf,
                               "{\"type\":\"live\",\"session\":%u,\"frame\":%.0f,\"sim_time\":%.4f,\"force\":%.4f,"

@@ -94,6 +94,8 @@ def run(build, source, out):
                           "getComputedStyle(document.querySelector('.bar.deep > div')).backgroundColor]")
         check(shown[0] in colour and shown[1] == colour[shown[0]] and shown[2] == colour["deep"],
               "the band badge and the deep coverage bar in the reports' colours: %s" % shown)
+        names = page.eval("[0, 1, 2].map(function(k){return document.getElementById('covname' + k).textContent;})")
+        check(names == ["light", "medium", "deep"], "coverage named per band, as the review's thoroughness: %s" % names)
         proxy = page.eval("palpState.trainee.proxy.proxy")
         t_click = time.time()
         click(page, "lump")

@@ -75,12 +75,28 @@ static void test_coverage_square(void) {
   palp_web_coverage_press(c, ctr, 0.1, PALP_WEB_BAND_DEEP);
   palp_web_coverage_fractions(c, f);
   CHECK(f[0] == light && fabs(f[1] - light) < 1e-15 && fabs(f[2] - light) < 1e-15, "deep covers medium and light");
+  /* ... but in each band itself (an exercise's thoroughness) it is light and deep, not medium */
+  double g[3];
+  palp_web_coverage_band_fractions(c, g);
+  CHECK(g[0] == light && g[1] == 0 && fabs(g[2] - light) < 1e-15, "in band: light and deep, not medium (%g %g %g)",
+        g[0], g[1], g[2]);
   /* Medium elsewhere (disjoint): light and medium grow by a disc, deep does not. */
   const double ctr2[3] = {0.3, 0.3, 0};
   palp_web_coverage_press(c, ctr2, 0.1, PALP_WEB_BAND_MEDIUM);
   palp_web_coverage_fractions(c, f);
   CHECK(fabs(f[0] - 2 * light) < 0.0063 && fabs(f[1] - f[0]) < 1e-15 && fabs(f[2] - light) < 1e-15,
         "medium elsewhere: %g %g %g", f[0], f[1], f[2]);
+  /* in band: the medium disc alone (a place pressed medium only is not light); medium at the first
+   * place too adds its medium, and changes no "at least" fraction */
+  palp_web_coverage_band_fractions(c, g);
+  CHECK(g[0] == light && fabs(g[1] - (f[0] - light)) < 1e-15 && fabs(g[2] - light) < 1e-15,
+        "in band, medium elsewhere: %g %g %g", g[0], g[1], g[2]);
+  CHECK(palp_web_coverage_press(c, ctr, 0.1, PALP_WEB_BAND_MEDIUM) > 0, "medium where it was deep: a band new there");
+  palp_web_coverage_band_fractions(c, g);
+  double f2[3];
+  palp_web_coverage_fractions(c, f2);
+  CHECK(fabs(g[1] - f[1]) < 1e-15 && f2[0] == f[0] && f2[1] == f[1] && f2[2] == f[2],
+        "in band medium now both discs (%g); at least unchanged", g[1]);
   /* Bad input changes nothing. */
   const double nan3[3] = {NAN, 0, 0};
   CHECK(palp_web_coverage_press(c, nan3, 0.1, 3) == 0 && palp_web_coverage_press(c, ctr, -1, 3) == 0 &&
@@ -413,6 +429,23 @@ static int is_live_band(const cJSON *j, void *arg) {
   return 1;
 }
 
+typedef struct cov_want {
+  uint32_t sid;
+  double *cov;
+} cov_want;
+
+/* A live message of session sid whose medium coverage is not 0: its coverage. */
+static int live_coverage(const cJSON *j, void *arg) {
+  const cov_want *w = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  const cJSON *cv = cJSON_GetObjectItem(j, "coverage");
+  if (!type || strcmp(type, "live") || cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) != w->sid ||
+      cJSON_GetArraySize(cv) != 3 || !(cJSON_GetArrayItem(cv, 1)->valuedouble > 0))
+    return 0;
+  for (int k = 0; k < 3; k++) w->cov[k] = cJSON_GetArrayItem(cv, k)->valuedouble;
+  return 1;
+}
+
 /* The exercises message gives phantom 2's medium band as depth_mm [4, 9]. */
 static int has_medium_band(const cJSON *j, void *arg) {
   (void)arg;
@@ -503,6 +536,23 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
           "exercise bands: %.1f N at %.1f mm is %s (%s; rule %s, depth %.3f mm)", force[k], depth[k] * 1e3, want[k],
           got ? "so it was" : "never said", rule, dmm);
   }
+  /* Coverage as the assessment counts thoroughness, per band itself: the pole was pressed medium
+   * and deep, never light (as "light or deeper" it would be covered light too). */
+  palp_LocalModel again; /* a new frame, so that a new live message comes */
+  memset(&again, 0, sizeof again);
+  again.session_id = sid;
+  again.frame = 110;
+  again.in_contact = 1;
+  again.period = 0.004;
+  again.proxy = (palp_Vec3){0, 0, 0.0479};
+  again.force = (palp_Vec3){0, 0, 0.2};
+  again.point = (palp_Vec3){0, 0, 0.0399};
+  dds_write(w_lm, &again);
+  double cov[3] = {-1, -1, -1};
+  const int got_cov = next_json(h, c, 300, live_coverage, &(cov_want){sid, cov});
+  CHECK(got_cov && cov[0] == 0 && cov[1] > 0 && cov[2] == cov[1],
+        "exercise coverage per band: light %g, medium %g, deep %g (the pole's share, medium and deep alone)", cov[0],
+        cov[1], cov[2]);
   palp_web_hub_detach(h, c);
 }
 

@@ -348,7 +348,18 @@
       T.band = m.band;
       T.bandRule = m.band_rule || "force";
       T.depthMm = m.depth_mm === undefined ? null : m.depth_mm;
-      if (T.bandRule !== rule) { rule = T.bandRule; bandLegend(); }
+      if (T.bandRule !== rule) {
+        rule = T.bandRule;
+        bandLegend();
+        /* in an exercise, coverage per band as the assessment counts it (a place pressed only deep
+         * is not light); else at each band or deeper */
+        const names = rule === "exercise" ? ["light", "medium", "deep"] : ["light or deeper", "medium or deeper", "deep"];
+        for (let k = 0; k < 3; k++) document.getElementById("covname" + k).textContent = names[k];
+        document.getElementById("covnote").textContent = rule === "exercise" ?
+          "share of the dome's skin pressed at each level, as the exercise grades thoroughness (approximately: " +
+          "the review counts the touched skin of every logged step), since the bridge began following the session" :
+          "share of the dome's skin pressed under the finger, since the bridge began following the session";
+      }
       document.getElementById("depth").textContent = rule === "exercise" ?
         (T.depthMm === null ? "fingertip not pressing" : "pressed " + T.depthMm.toFixed(1) + " mm deep") : "";
       T.coverage = m.coverage;
