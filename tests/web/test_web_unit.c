@@ -459,6 +459,21 @@ static int has_medium_band(const cJSON *j, void *arg) {
   return 0;
 }
 
+/* A local model of a fingertip (8 mm) pressed `depth` [m] into the 40 mm dome's pole with `force` [N]. */
+static void write_pole_model(dds_entity_t w, uint32_t sid, uint64_t frame, double depth, double force) {
+  palp_LocalModel lm;
+  memset(&lm, 0, sizeof lm);
+  lm.session_id = sid;
+  lm.frame = frame;
+  lm.in_contact = 1;
+  lm.period = 0.004;
+  lm.proxy = (palp_Vec3){0, 0, 0.048 - depth}; /* R + r - depth from the dome's centre */
+  lm.device = (palp_Vec3){0, 0, 0.048 - depth - 0.001};
+  lm.force = (palp_Vec3){0, 0, force};
+  lm.point = (palp_Vec3){0, 0, 0.04 - depth};
+  dds_write(w, &lm);
+}
+
 /* An exercise session's live band is the exercise's, by the fingertip's indentation as the
  * assessment grades it (palp_band_of), not the gauge's force bands: the shipped exercises' bands
  * (light 1-4, medium 4-9, deep 9-18 mm) on a 40 mm dome with an 8 mm fingertip. 5 N at 5 mm is
@@ -517,17 +532,7 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const double depth[3] = {0.005, 0.010, 0.0005}, force[3] = {5, 2, 0.3};
   const char *want[3] = {"medium", "deep", "none"};
   for (int k = 0; k < 3; k++) {
-    palp_LocalModel lm;
-    memset(&lm, 0, sizeof lm);
-    lm.session_id = sid;
-    lm.frame = 100 + (uint64_t)k;
-    lm.in_contact = 1;
-    lm.period = 0.004;
-    lm.proxy = (palp_Vec3){0, 0, 0.048 - depth[k]}; /* R + r - depth from the dome's centre */
-    lm.device = (palp_Vec3){0, 0, 0.048 - depth[k] - 0.001};
-    lm.force = (palp_Vec3){0, 0, force[k]};
-    lm.point = (palp_Vec3){0, 0, 0.04 - depth[k]};
-    dds_write(w_lm, &lm);
+    write_pole_model(w_lm, sid, 100 + (uint64_t)k, depth[k], force[k]);
     char rule[16] = "";
     double dmm = NAN;
     band_want w = {sid, want[k], rule, &dmm};
@@ -538,16 +543,7 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   }
   /* Coverage as the assessment counts thoroughness, per band itself: the pole was pressed medium
    * and deep, never light (as "light or deeper" it would be covered light too). */
-  palp_LocalModel again; /* a new frame, so that a new live message comes */
-  memset(&again, 0, sizeof again);
-  again.session_id = sid;
-  again.frame = 110;
-  again.in_contact = 1;
-  again.period = 0.004;
-  again.proxy = (palp_Vec3){0, 0, 0.0479};
-  again.force = (palp_Vec3){0, 0, 0.2};
-  again.point = (palp_Vec3){0, 0, 0.0399};
-  dds_write(w_lm, &again);
+  write_pole_model(w_lm, sid, 110, 0.0001, 0.2); /* a new frame, so that a new live message comes */
   double cov[3] = {-1, -1, -1};
   const int got_cov = next_json(h, c, 300, live_coverage, &(cov_want){sid, cov});
   CHECK(got_cov && cov[0] == 0 && cov[1] > 0 && cov[2] == cov[1],
