@@ -140,9 +140,10 @@ def run(build, source, out):
                            "&& s.findings === 0 && s.late_haptic !== null})", 15)
         check(ok is True, "the dashboard lists pat's exercise session, 0 findings, a late-haptic figure: %s"
               % dash.eval("JSON.stringify(palpState.sessions)"))
-        check(dash.wait_for("document.body.textContent.indexOf(' (by depth)') >= 0", 5) is True and
+        check(dash.wait_for("document.body.textContent.indexOf(' (by depth)') >= 0 && "
+                            "document.body.textContent.indexOf('coverage l / m / d') >= 0", 5) is True and
               dash.eval("palpState.sessions.find(function(s){return s.trainee==='pat'}).band_rule") == "exercise",
-              "the dashboard's card says pat's band is the exercise's, by depth")
+              "the dashboard's card says pat's band is the exercise's, by depth, and gives coverage per level")
         late = dash.eval("palpState.sessions.find(function(s){return s.trainee==='pat'})")
         print("dashboard: late haptic updates %s, lost %s, coverage %s" % (late["late_haptic"], late["lost_haptic"],
                                                                             late["coverage"]))

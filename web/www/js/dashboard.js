@@ -90,9 +90,15 @@
         "the server's word on the trainee's station: a station it lost (a crash, or a machine stalled past its lease) " +
         "keeps its session a few seconds to come back (docs/server.md, station_grace)"],
       ["exercise", s.exercise || "none"],
-      ["coverage", fmt(100 * s.coverage[0], 1) + " %", false,
-        "share of the dome's skin pressed at least lightly, since the bridge began following the session: " +
-        "the footprint disc (contact area) around each sampled contact point, marked on the rest mesh, 30 samples/s"],
+      s.band_rule === "exercise" ?
+        ["coverage l / m / d", fmt(100 * s.coverage[0], 0) + " / " + fmt(100 * s.coverage[1], 0) + " / " +
+          fmt(100 * s.coverage[2], 0) + " %", false,
+          "share of the dome's skin pressed at light, medium and deep pressure, each level itself, as the exercise " +
+          "grades thoroughness (by the fingertip's depth), since the bridge began following the session: the footprint " +
+          "disc around each sampled contact point, 30 samples/s; the review's figures count every logged step's touched skin"] :
+        ["coverage", fmt(100 * s.coverage[0], 1) + " %", false,
+          "share of the dome's skin pressed at least lightly, since the bridge began following the session: " +
+          "the footprint disc (contact area) around each sampled contact point, marked on the rest mesh, 30 samples/s"],
       ["findings", s.findings === null ? "n/a" : s.findings, false,
         s.findings === null ? "no findings status from the server (no exercise, or none marked yet)" : "marks standing (the server's count)"],
       ["peak force", fmt(s.peak_force, 2) + " N"],
