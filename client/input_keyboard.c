@@ -150,6 +150,10 @@ typedef struct kfinger {
   atomic_int button;     /* issue 13: m / u pressed (haptic thread -> main thread) */
   palp_vec3 device;      /* the device point handed to the station [m], moving towards the keys' point */
   double device_t;       /* when it was last moved [s]; < 0: not yet placed */
+  /* The fingertip's depth below the undeformed surface in the server's newest model, R + r - |proxy|
+   * [m] (what an exercise's pressure bands and the review read; the keys' depth is the device's,
+   * which the coupling spring keeps deeper by F / k); NAN when not touching. Haptic thread. */
+  double tip_depth;
 } kfinger;
 
 /* How fast the keys move the fingertip [m/s]: a brisk hand's press (the scripted trainees press and
@@ -216,12 +220,20 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
   f->flags = flags;
   if (f->t - f->last_status >= 0.5) {
     const double m = sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
-    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, depth %+.3g mm (step %g mm): force %.2f N%s%s   ",
-            f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, f->step * 1e3, m,
+    char tip[48] = "";
+    if (isfinite(f->tip_depth)) snprintf(tip, sizeof tip, ", fingertip %.1f mm deep", f->tip_depth * 1e3);
+    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, device %+.3g mm (step %g mm)%s: force %.2f N%s%s   ",
+            f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, f->step * 1e3, tip, m,
             (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "",
             (flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? " OUTSIDE VALID RANGE" : "");
     f->last_status = f->t;
   }
+}
+
+static void kf_model(void *ctx, const palp_local_model *m) {
+  kfinger *f = ctx;
+  const palp_vec3 p = m->proxy;
+  f->tip_depth = m->contact ? f->k.R + f->radius - sqrt(p.x * p.x + p.y * p.y + p.z * p.z) : NAN;
 }
 
 static int kf_button(void *ctx) {
@@ -248,8 +260,9 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
   f->step = 0.001;
   f->radius = 0.008;
   f->device_t = -1;
+  f->tip_depth = NAN;
   *out = (palp_cli_input){.name = "keyboard (finger)", .ctx = f, .open = kf_open, .close = kf_close,
                           .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius,
-                          .button = kf_button};
+                          .button = kf_button, .model = kf_model};
   return 0;
 }

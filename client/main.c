@@ -448,10 +448,25 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
   if (palp_cli_station_exercise(st, st->phantom_id, 1.0, &ex) == 1) {
     u->exercise = 1;
     u->time_limit = ex.time_limit;
-    if (!o->quiet)
+    if (!o->quiet) {
       tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
                  "device's button (keyboard: m), withdraw the last mark with u\n",
                  o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
+      /* The pressure levels the exercise grades by, in its own terms: the fingertip's depth below
+       * the undeformed skin (the finger keyboard's status line shows it) and/or the force. */
+      static const char *level[3] = {"light", "medium", "deep"};
+      char lv[256] = "";
+      size_t n = 0;
+      for (int b = 0; b < 3 && n < sizeof lv; b++) {
+        const palp_PressureBand *B = &ex.bands[b];
+        n += (size_t)snprintf(lv + n, sizeof lv - n, "%s%s", b ? ", " : "", level[b]);
+        if (B->has_depth && n < sizeof lv)
+          n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g mm deep", B->depth_min * 1e3, B->depth_max * 1e3);
+        if (B->has_force && n < sizeof lv)
+          n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g N", B->force_min, B->force_max);
+      }
+      tprintf(o, "[trainee %s] pressure levels graded (the fingertip below the undeformed skin): %s\n", o->name, lv);
+    }
   }
   u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
   u->shown_ok = -1;

@@ -41,6 +41,8 @@ for t in alice bob carol dana; do
 done
 check "the visual station (bob's own) and the observer (instructor ines) followed their sessions" \
   "grep -Eq '^\[visual\] session [0-9]+: [1-9][0-9]* deformation frames' '$txt' && grep -Eq '^\[observer\] session [0-9]+: [1-9][0-9]* deformation frames' '$txt'"
+check "nina's station names the pressure levels the exercise grades, as the review and the web pages do" \
+  "grep -q '^\[trainee nina\] pressure levels graded (the fingertip below the undeformed skin): light 1-4 mm deep, medium 4-9 mm deep, deep 9-18 mm deep$' '$txt'"
 check "nina took the exercise and her mark was accepted" \
   "grep -q '^\[trainee nina\] finding 1 accepted' '$txt' && grep -Eq '^\[scripted novice\] [1-9][0-9]* steps' '$txt'"
 check "carol is told when her 2 N safe force limits what she feels (the phantom asks ~2.2 N at 2 mm)" \
