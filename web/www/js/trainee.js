@@ -210,10 +210,14 @@
   }
 
   function bandLegend() {
-    const db = depthBands();
+    const db = depthBands(), xb = rule === "exercise" && T.exercise && T.exercise.bands;
     document.getElementById("band-legend").textContent = db ?
       "the exercise's bands, as it grades you, by how deep the fingertip presses: light " + db[0][0] + "-" + db[0][1] +
       " mm, medium " + db[1][0] + "-" + db[1][1] + " mm, deep " + db[2][0] + "-" + db[2][1] + " mm" :
+      xb ? "the exercise's bands, as it grades you: " + ["light", "medium", "deep"].map(function (n) {
+        const x = xb[n];
+        return n + (x.depth_mm ? " " + x.depth_mm.join("-") + " mm deep" : "") + (x.force_N ? " " + x.force_N.join("-") + " N" : "");
+      }).join(", ") :
       "light < " + bands.light_max + " N, medium " + bands.light_max + "-" + bands.medium_max + " N, deep > " +
       bands.medium_max + " N";
   }
