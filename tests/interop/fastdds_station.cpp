@@ -139,7 +139,11 @@ static int follow_session(DomainParticipant *pp, DataReader *r_st, DataReader *r
   for (double next_send = 0; !have_rp && since(tj) < 20;) {
     if (since(tj) >= next_send) w_rq->write(&rq), next_send += 2.0;
     SampleInfo info;
-    while (r_rp->take_next_sample(&rp, &info) == ReturnCode_t::RETCODE_OK)
+    // Stop at this station's reply: the reader holds every station's replies (the topic is
+    // keyed by station id), and taking on would overwrite rp with another's. It did once
+    // (2026-12-05): the earlier Fast DDS alice's "left" reply, late, after ines's own, read as
+    // ines's join refused while the server had her joined.
+    while (!have_rp && r_rp->take_next_sample(&rp, &info) == ReturnCode_t::RETCODE_OK)
       if (info.valid_data && rp.station_id() == sid && rp.request_seq() == 1) have_rp = true;
     if (!have_rp) nap(0.02);
   }
