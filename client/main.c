@@ -16,6 +16,7 @@
 #include "input.h"
 #include "palp.h"
 #include "palp_app.h"
+#include "palp_assess.h"
 #include "palp_dds.h"
 #include "palp_dds_refusals.h"
 #include "station.h"
@@ -454,12 +455,11 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
                  o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
       /* The pressure levels the exercise grades by, in its own terms: the fingertip's depth below
        * the undeformed skin (the finger keyboard's status line shows it) and/or the force. */
-      static const char *level[3] = {"light", "medium", "deep"};
       char lv[256] = "";
       size_t n = 0;
       for (int b = 0; b < 3 && n < sizeof lv; b++) {
         const palp_PressureBand *B = &ex.bands[b];
-        n += (size_t)snprintf(lv + n, sizeof lv - n, "%s%s", b ? ", " : "", level[b]);
+        n += (size_t)snprintf(lv + n, sizeof lv - n, "%s%s", b ? ", " : "", palp_band_name(b));
         if (B->has_depth && n < sizeof lv)
           n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g mm deep", B->depth_min * 1e3, B->depth_max * 1e3);
         if (B->has_force && n < sizeof lv)

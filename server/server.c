@@ -1580,6 +1580,12 @@ static void print_row(FILE *out, const palp_srv_session_summary *s, const char *
           (unsigned long long)s->overruns, (unsigned long long)rej, state);
 }
 
+/* A column width *w grown to fit name, at most 44 characters. */
+static void widen_to(int *w, const char *name) {
+  const int n = name ? (int)strnlen(name, 44) : 0;
+  if (n > *w) *w = n;
+}
+
 void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
   if (secured(srv)) {
     char state[96];
@@ -1593,16 +1599,12 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
   /* The phantom column as wide as its longest name, at most 44 characters: cut at 26 the
    * demo's "dome C (long-term, haptic 250 Hz)" lost what set it apart from dome B. */
   int pw = 7;
-  for (int i = 0; i < srv->closed_count; i++) {
-    const char *name = srv->closed[(srv->closed_head + i) % CLOSED_KEEP].sum.info.phantom_name;
-    const size_t n = name ? strlen(name) : 0;
-    if ((int)n > pw) pw = n > 44 ? 44 : (int)n;
-  }
+  for (int i = 0; i < srv->closed_count; i++)
+    widen_to(&pw, srv->closed[(srv->closed_head + i) % CLOSED_KEEP].sum.info.phantom_name);
   for (int i = 0; i < srv->session_count; i++) {
     palp_srv_session_info info;
     palp_srv_session_info_fill(srv->sessions[i], &info);
-    const size_t n = info.phantom_name ? strlen(info.phantom_name) : 0;
-    if ((int)n > pw) pw = n > 44 ? 44 : (int)n;
+    widen_to(&pw, info.phantom_name);
   }
   fprintf(out, "%-7s %-16s %-*s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", pw, "phantom", "dur[s]",
           "samples", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");

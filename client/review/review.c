@@ -45,6 +45,17 @@ static void usage(FILE *f) {
 }
 
 /* ---- list ------------------------------------------------------------------------------ */
+/* A phantom column as wide as its longest name, at most 40 characters: cut at 20 the demo's
+ * "dome C (long-term, haptic 250 Hz)" read "dome C (long-term, h". */
+static int phantom_width(const palp_db_session_info *v, int n) {
+  int pw = 7;
+  for (int i = 0; i < n; i++) {
+    const int len = (int)strnlen(v[i].phantom_name, 40);
+    if (len > pw) pw = len;
+  }
+  return pw;
+}
+
 static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   palp_db_filter f = {0};
   for (int i = 0; i < argc; i++) {
@@ -74,13 +85,7 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     palp_log_error(log, "list: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
-  /* The phantom column as wide as its longest name, at most 40 characters: cut at 20 the
-   * demo's "dome C (long-term, haptic 250 Hz)" read "dome C (long-term, h". */
-  int pw = 7;
-  for (int i = 0; i < n; i++) {
-    const int len = (int)strnlen(v[i].phantom_name, 40);
-    if (len > pw) pw = len;
-  }
+  const int pw = phantom_width(v, n);
   printf("%-36s %-14s %-*s %-16s %-25s %9s %-16s %-5s %s\n", "SESSION", "TRAINEE", pw, "PHANTOM", "EXERCISE", "STARTED",
          "SIM [s]", "ENDED", "NOTES", "GRADE");
   for (int i = 0; i < n; i++) {
@@ -325,10 +330,11 @@ static int resolve_session(palp_log *log, palp_db *db, const char *cmd, const ch
   }
   palp_log_error(log, "%s: session '%s' could be any of %d sessions (%s); name one by its uid:", cmd, arg, total,
                  by_number ? "\"session N\" on the stations of several server runs" : "their uids start with it");
+  const int pw = phantom_width(c, total < SHOW ? total : SHOW);
   for (int i = 0; i < total && i < SHOW; i++) {
     char t0[64];
     review_fmt_time(c[i].start_unix_s, t0, sizeof t0);
-    fprintf(stderr, "  %-36s %-14.14s %-20.20s %s\n", c[i].uid, c[i].trainee, c[i].phantom_name, t0);
+    fprintf(stderr, "  %-36s %-14.14s %-*.*s %s\n", c[i].uid, c[i].trainee, pw, pw, c[i].phantom_name, t0);
   }
   if (total > SHOW) fprintf(stderr, "  ... and %d more (palp-review list)\n", total - SHOW);
   return REVIEW_ERROR;
