@@ -6,6 +6,24 @@ cd "$here"
 bash scripts/setup.sh
 build=${PALP_BUILD_DIR:-build}
 cd "$build"
+# The tests' temporary files go to a directory of this run's own, so that a test that leaves
+# files behind is caught here rather than filling /tmp run after run (~45 MB a run until
+# 2026-12-05: docs/robustness.md, "Temporary files").
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/palp-tests.XXXXXX")
 # two slots per core: the CPU-bound tests take two each, and the cores are a resource that keeps
 # the timing-sensitive tests apart from them (tests/CMakeLists.txt, "Slots")
-ctest --output-on-failure -j"$((2 * $(nproc)))" --timeout 300 --resource-spec-file "$here/tests/resources.json"
+rc=0
+TMPDIR=$tmp ctest --output-on-failure -j"$((2 * $(nproc)))" --timeout 300 \
+  --resource-spec-file "$here/tests/resources.json" || rc=$?
+left=$(find "$tmp" -mindepth 1 -maxdepth 1 | sort)
+if [ "$rc" -ne 0 ]; then
+  [ -n "$left" ] && echo "The failed tests' temporary files are kept in $tmp"
+  exit "$rc"
+fi
+if [ -n "$left" ]; then
+  echo "FAIL: the tests passed but left $(echo "$left" | wc -l) temporary file(s) behind in $tmp (kept):"
+  echo "$left" | sed 's|^|  |' | head -40
+  exit 1
+fi
+rmdir "$tmp"
+echo "No temporary file left behind (TMPDIR $tmp, removed)."

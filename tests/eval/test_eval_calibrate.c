@@ -43,6 +43,7 @@
 #include <gsl/gsl_errno.h>
 
 #include "eval.h"
+#include "../tmpdir.h"
 
 static int failures = 0;
 #define CHECK(cond, ...)                                                                                               \
@@ -261,7 +262,8 @@ static void test_param_file_roundtrip(void) {
   palp_eval_params_set(&s.world, p);
   s.world.gel.support_stiffening = 4.25, s.world.gel.support_stiffening_power = 2.5; /* carried over, not fitted */
   s.world.membrane.skin_bending_stiffness = 1.25e-3; /* carried over too (below the fitted D 2.72e-3) */
-  char dir[] = "/tmp/palp_eval_paramsXXXXXX";
+  char dir[160];
+  palp_test_tmp(dir, sizeof dir, "palp_eval_paramsXXXXXX");
   CHECK(mkdtemp(dir) != NULL, "mkdtemp");
   char ppath[256], spath[256];
   snprintf(ppath, sizeof ppath, "%s/fitted.json", dir);

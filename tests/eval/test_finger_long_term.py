@@ -45,7 +45,6 @@ import csv
 import json
 import os
 import sys
-import tempfile
 
 import test_eval_evaluate as common  # its check() and failure count (this folder is on sys.path)
 
@@ -76,7 +75,7 @@ def columns(rows, site):
 def realtime_rows(tool, scene, data, sites, level="4", max_force="3", label=""):
     """`palp-fem finger --fe-from DATA`: the stored FE curves of SITES with the real-time side computed
     now, as rows; None (and a failed check) if the command fails."""
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_rt_"), "finger.csv")
+    out = os.path.join(common.scratch("palp_finger_rt_"), "finger.csv")
     r = run([tool, "finger", "--scene", scene, "--level", level, "--site", ",".join(sites), "--fe-from", data,
              "--no-force-table", "--max-force", max_force, "--out", out])
     check(r.returncode == 0, "palp-fem finger%s exited %d: %s" % (label, r.returncode, r.stderr[-500:]))
@@ -101,7 +100,7 @@ def stored(tool, scene, data, rt_rows=None):
             if y is not None:
                 rows.append(dict(x, realtime_N=y["realtime_N"], realtime_depth_m=y["realtime_depth_m"]))
     else:
-        out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_l4_"), "finger.csv")
+        out = os.path.join(common.scratch("palp_finger_l4_"), "finger.csv")
         # no --site: the default, every site of "all" (60deg, which the stored curves predate, is asked by name)
         r = run([tool, "finger", "--scene", scene, "--level", "4", "--fe-from", data, "--no-force-table", "--out", out])
         check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
@@ -171,7 +170,7 @@ def guard(tool, scene, data, curves="level-4 fingertip curves",
 def recompute(tool, scene, data):
     """By hand (60-75 s, over the test budget): the level-4 FE at the pole recomputed for its first
     depth equals the stored one within 1e-4 relative (measured: identical to the 7 stored digits)."""
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_guard_"), "finger.csv")
+    out = os.path.join(common.scratch("palp_finger_guard_"), "finger.csv")
     r = run([tool, "finger", "--scene", scene, "--level", "4", "--site", "pole", "--depths", "1", "--out", out])
     check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-500:]))
     if r.returncode:
@@ -203,7 +202,7 @@ def soft(tool, scene, data):
 def cyst_rows(tool, scene, data, level, max_force):
     """The real-time side at the stored FE depths of the pole and a 0.2x cyst (--fe-from data); None
     if palp-fem failed."""
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_cyst_"), "finger.csv")
+    out = os.path.join(common.scratch("palp_finger_cyst_"), "finger.csv")
     r = run([tool, "finger", "--scene", scene, "--level", level, "--site", "pole,pole_lesion", "--lesion-ratio", "0.2",
              "--fe-from", data, "--no-force-table", "--max-force", max_force, "--out", out])
     check(r.returncode == 0, "palp-fem finger (cyst) exited %d: %s" % (r.returncode, r.stderr[-500:]))
@@ -287,7 +286,7 @@ def graded(tool, scene, data, graded_csv, graded5_csv=None, bounds=None, gain_fl
     g4, u4 = read(graded_csv), read(data)
     g5 = read(graded5_csv) if graded5_csv else []
     keys = list(g4[0].keys())
-    joined = os.path.join(tempfile.mkdtemp(prefix="palp_finger_graded_"), "graded_joined.csv")
+    joined = os.path.join(common.scratch("palp_finger_graded_"), "graded_joined.csv")
     sites = GRADED_SITES + ("pole_lesion",)
     with open(joined, "w") as f:
         f.write(",".join(keys) + "\n")

@@ -57,7 +57,6 @@ src/fem/fem_finger.c and src/fem/fem_mesh.c in the file's header equal today's).
 import math
 import os
 import sys
-import tempfile
 
 import test_eval_evaluate as common  # check() and the failure count (this folder is on sys.path)
 import test_finger_long_term as lt  # read(), columns(), guard()
@@ -276,7 +275,7 @@ def realtime_once(tool, scene, data, deep, level4):
     took 15 + 20 s). Returns ({(site, depth): row}, the joined curves' path, composite()'s mesh of each of
     their rows); the first None if the run failed."""
     ref, dp, l4 = lt.read(data), lt.read(deep), lt.read(level4)
-    tmp = tempfile.mkdtemp(prefix="palp_finger_refined_")
+    tmp = common.scratch("palp_finger_refined_")
     joined = os.path.join(tmp, "refined_joined.csv")
     which = composite(ref, dp, l4, joined)
     jr = lt.read(joined)

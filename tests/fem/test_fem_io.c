@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "fem_test.h"
+#include "../tmpdir.h"
 
 /* Export level 1 and read it back: coordinates bit-identical (written with 17
  * significant digits), connectivity, regions, base and sets equal. A hand-written
@@ -16,7 +17,8 @@ static void test_inp(void) {
   d.level = 1;
   palp_fem_mesh a, b;
   CHECK(palp_fem_mesh_create(&d, &a) == 0, "mesh");
-  char path[] = "/tmp/palp_fem_test_XXXXXX";
+  char path[512];
+  palp_test_tmp(path, sizeof path, "palp_fem_test_XXXXXX");
   const int fd = mkstemp(path);
   CHECK(fd >= 0, "mkstemp");
   close(fd);
@@ -268,7 +270,8 @@ static int count_progress(void *ud, int frame, int frames, double t) {
 /* The cache: a second identical run is read back bit-identical; any input change
  * (a material constant, the profile, the mesh level) changes the key. */
 static void test_cache(void) {
-  char dir[] = "/tmp/palp_fem_cache_XXXXXX";
+  char dir[160];
+  palp_test_tmp(dir, sizeof dir, "palp_fem_cache_XXXXXX");
   CHECK(mkdtemp(dir) != NULL, "mkdtemp");
   palp_scene s;
   if (make_scene(&s, 5, "gaussian")) {

@@ -12,6 +12,7 @@
 """
 import csv
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -27,7 +28,7 @@ def check(ok, what):
 
 def main():
     tool, scene = sys.argv[1], sys.argv[2]
-    out = os.path.join(tempfile.mkdtemp(prefix="palp_finger_cli_"), "finger.csv")
+    out = os.path.join(scratch, "finger.csv")
     r = subprocess.run([tool, "finger", "--scene", scene, "--level", "1", "--site", "pole", "--depths", "2",
                         "--no-force-table", "--out", out], capture_output=True, text=True, timeout=240)
     check(r.returncode == 0, "palp-fem finger exited %d: %s" % (r.returncode, r.stderr[-400:]))
@@ -48,5 +49,10 @@ def main():
 
 
 if __name__ == "__main__":
+    scratch = tempfile.mkdtemp(prefix="palp_finger_cli_")
     main()
+    if failures:
+        print("kept for inspection: " + scratch, file=sys.stderr)
+    else:
+        shutil.rmtree(scratch, ignore_errors=True)
     sys.exit(1 if failures else 0)

@@ -18,10 +18,18 @@ static inline char *fuzz_cstr(const uint8_t *data, size_t size) {
   return s;
 }
 
-/* The input as a file, for readers that take a path: one per process, rewritten each run. */
+static char fuzz_file_path[256];
+static inline void fuzz_file_remove(void) {
+  if (fuzz_file_path[0]) unlink(fuzz_file_path);
+}
+
+/* The input as a file, for readers that take a path: one per process (under TMPDIR, else /tmp),
+ * rewritten each run and removed when the process exits. */
 static inline const char *fuzz_file(const uint8_t *data, size_t size, const char *ext) {
-  static char path[256];
-  snprintf(path, sizeof path, "/tmp/palp-fuzz-%ld%s", (long)getpid(), ext);
+  char *path = fuzz_file_path;
+  const char *tmp = getenv("TMPDIR");
+  if (!path[0]) atexit(fuzz_file_remove);
+  snprintf(path, sizeof fuzz_file_path, "%s/palp-fuzz-%ld%s", tmp && tmp[0] ? tmp : "/tmp", (long)getpid(), ext);
   FILE *f = fopen(path, "wb");
   if (!f) abort();
   if (size && fwrite(data, 1, size, f) != size) abort();

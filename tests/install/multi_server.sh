@@ -16,7 +16,7 @@
 # usage: multi_server.sh PALP_SERVER PALP_CLIENT PALP_RECORDER PALP_REVIEW LOOPBACK_DDS_CONFIG DOMAIN
 set -u
 server=$1 client=$2 recorder=$3 review=$4 loopback=$5 domain=$6
-work=$(mktemp -d /tmp/palp-multi-test.XXXXXX)
+work=$(mktemp -d -t palp-multi-test.XXXXXX)
 tag=pm$$
 pids=
 netns=0

@@ -10,7 +10,7 @@
 # usage: sighup.sh PALP_SERVER PALP_CLIENT PALP_REVIEW PALP_RECORDER DDS_CONFIG DOMAIN
 set -u
 server=$1 client=$2 review=$3 recorder=$4 dds=$5 domain=$6
-work=$(mktemp -d /tmp/palp-sighup-test.XXXXXX)
+work=$(mktemp -d -t palp-sighup-test.XXXXXX)
 spid= rpid=
 cleanup() {
   [ -n "$spid" ] && kill "$spid" 2>/dev/null

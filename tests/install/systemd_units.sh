@@ -11,7 +11,7 @@
 set -u
 build=$(cd "$1" && pwd)
 domain=$2
-work=$(mktemp -d /tmp/palp-systemd-test.XXXXXX)
+work=$(mktemp -d -t palp-systemd-test.XXXXXX)
 pid=
 cleanup() {
   [ -n "$pid" ] && kill "$pid" 2>/dev/null

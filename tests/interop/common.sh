@@ -21,7 +21,7 @@ in_private_netns() {
 
 # work_dir PREFIX: a fresh $work, removed (and the server $spid stopped) on exit.
 work_dir() {
-  work=$(mktemp -d "/tmp/$1.XXXXXX")
+  work=$(mktemp -d -t "$1.XXXXXX") # under TMPDIR (scripts/test.sh gives the tests one of their own)
   spid=
   trap '[ -n "$spid" ] && kill "$spid" 2>/dev/null; rm -rf "$work"' EXIT
 }

@@ -20,6 +20,7 @@
 #include "harness.h"
 #include "palp_dds_refusals.h"
 #include "palp_pem.h"
+#include "../tmpdir.h"
 
 #define DOMAIN 130
 #define ALICE_SECONDS 12.0
@@ -447,7 +448,8 @@ static int wait_child(pid_t pid, const char *role) {
  * (palp_dds_security_name_peers): a certificate names its subject; a FIFO (which would block a read), a
  * file that is no certificate and a directory are passed over, without blocking the start. */
 static void test_name_peers_dir(void) {
-  char dir[] = "/tmp/palp-names-XXXXXX", path[256], cmd[1200];
+  char dir[160], path[256], cmd[1200];
+  palp_test_tmp(dir, sizeof dir, "palp-names-XXXXXX");
   REQUIRE(mkdtemp(dir), "temporary directory");
   snprintf(path, sizeof path, "%s/trainee", dir);
   REQUIRE(mkdir(path, 0700) == 0, "%s", path);

@@ -23,6 +23,7 @@
 #include "palp_dds_refusals.h"
 #include "palp_dds_strangers.h"
 #include "check.h"
+#include "../tmpdir.h"
 
 
 static int parse(const char *line, palp_dds_refusal *r) { return palp_dds_refusal_parse(line, strlen(line), r); }
@@ -180,7 +181,8 @@ static unsigned long long logged_refusals(const char *path, const char *who) {
 }
 
 static void test_throttle(void) {
-  char path[] = "/tmp/palp-refusals-XXXXXX";
+  char path[512];
+  palp_test_tmp(path, sizeof path, "palp-refusals-XXXXXX");
   int fd = mkstemp(path);
   if (fd < 0) {
     CHECK(0, "mkstemp");
@@ -477,7 +479,8 @@ static void test_startup_race(void) {
   CHECK(palp_dds_startup_race(not_it[0], strlen(not_it[0])) == 0 && palp_dds_startup_race(not_it[1], strlen(not_it[1])) == 0 &&
             palp_dds_startup_race(not_it[2], strlen(not_it[2])) == 0 && palp_dds_startup_race(NULL, 0) == 0,
         "not a GUID, no GUID, another Cyclone line, NULL: not it");
-  char path[] = "/tmp/palp-race-XXXXXX";
+  char path[512];
+  palp_test_tmp(path, sizeof path, "palp-race-XXXXXX");
   const int fd = mkstemp(path);
   FILE *out = fd >= 0 ? fdopen(fd, "w+") : NULL;
   if (!out) {

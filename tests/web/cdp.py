@@ -115,7 +115,13 @@ class Chromium:
                 "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",
                 "--window-size=%d,%d" % (width, height), "--user-data-dir=" + self.dir,
                 "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=0"] + list(extra_args) + ["about:blank"]
-        self.proc = subprocess.Popen(args, stdout=self.log, stderr=self.log, start_new_session=True)
+        # Chromium puts its singleton socket in a directory of its own under TMPDIR, left behind
+        # when it is killed: keep it inside the profile, which close() removes (660 of them had
+        # gathered in /tmp by 2026-12-05).
+        tmp = os.path.join(self.dir, "tmp")
+        os.mkdir(tmp)
+        env = dict(os.environ, TMPDIR=tmp)
+        self.proc = subprocess.Popen(args, stdout=self.log, stderr=self.log, start_new_session=True, env=env)
         port_file = os.path.join(self.dir, "DevToolsActivePort")
         end = time.time() + 30
         while time.time() < end:
@@ -201,7 +207,21 @@ class Chromium:
             os.killpg(self.proc.pid, signal.SIGKILL)  # leftover renderers
         except (ProcessLookupError, PermissionError):
             pass
-        shutil.rmtree(self.dir, ignore_errors=True)
+        # A renderer killed a moment ago may still write into the profile while it is removed
+        # (a profile was left behind about once a test run): wait for the group to be gone, then
+        # remove it, again if something was still being written.
+        end = time.time() + 5
+        while time.time() < end:
+            try:
+                os.killpg(self.proc.pid, 0)
+            except (ProcessLookupError, PermissionError):
+                break
+            time.sleep(0.05)
+        for _ in range(3):
+            shutil.rmtree(self.dir, ignore_errors=True)
+            if not os.path.exists(self.dir):
+                break
+            time.sleep(0.2)
         self.log.close()
 
 

@@ -29,8 +29,7 @@ def run(build, source, out):
               "the trainee page streams frames")
         check(dash.wait_for("window.palpState && palpState.dashboard && palpState.dashboard.frames > 3", 15) is True,
               "the dashboard streams frames")
-        browser.kill()
-        browser = None
+        browser.kill()  # its profile is removed by close(), below
         t_kill = time.time()
         time.sleep(0.3)
         check(web.poll() is None, "palp-web is alive after Chromium was killed")

@@ -14,6 +14,7 @@
 #include "check.h"
 #include "palp.h"
 #include "tls.h"
+#include "../tmpdir.h"
 
 static char dir[64];
 
@@ -56,7 +57,7 @@ static int check_pair(const char *name, char *err, size_t errlen, char *warn, si
 }
 
 int main(void) {
-  snprintf(dir, sizeof dir, "/tmp/palp-web-tls-XXXXXX");
+  palp_test_tmp(dir, sizeof dir, "palp-web-tls-XXXXXX");
   if (!mkdtemp(dir)) return 2;
   make("good", -1, 24 * 365, 0);
   make("soon", -1, 24 * 10, 0); /* 10 days left: inside the 30-day warning */
