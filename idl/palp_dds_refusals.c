@@ -134,12 +134,14 @@ void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record 
   t->record_ctx = ctx;
 }
 
-/* The repeats of one slot since its last line; t->mu held. */
+/* The repeats of one slot since its last line; t->mu held. "over N s" is the span from that line
+ * to the last repeat, not to now: a station that retried for 9 s and stopped was said to have been
+ * refused "over 60 s" when the window's tick wrote the line (until 2026-12-05). */
 static void report_repeats(palp_dds_refusals *t, pending *p, palp_dds_refusal_slot *s, int64_t now_ns) {
   if (!s->unreported) return;
   say(t, p, &s->r, s->unreported, "DDS Security refused %s %s %llu more time(s) over %.0f s: %s (%llu in all)",
-      s->r.who, palp_dds_refusal_kind_words(s->r.kind), (unsigned long long)s->unreported, (double)(now_ns - s->reported_ns) * 1e-9,
-      s->r.why, (unsigned long long)s->count);
+      s->r.who, palp_dds_refusal_kind_words(s->r.kind), (unsigned long long)s->unreported,
+      (double)(s->seen_ns - s->reported_ns) * 1e-9, s->r.why, (unsigned long long)s->count);
   s->unreported = 0;
   s->reported_ns = now_ns;
 }
