@@ -11,6 +11,7 @@
 #include <sqlite3.h>
 
 #include "assess_log.h"
+#include "grades.h"
 #include "review_util.h"
 
 /* The shipped exercises' bands and force limit (config/exercises/easy.json). The phantom is not
@@ -211,11 +212,12 @@ void review_metrics_csv_header(FILE *f) {
   fputs("session,trainee,started_unix_s,exercise,samples,lesions,found,sensitivity,findings,withdrawn,"
         "false_positives,coverage_light,coverage_medium,coverage_deep,coverage_any,pattern,path_length_m,"
         "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass,outside_valid_range_s,strips,"
-        "strip_order\n",
+        "strip_order,grade_score,grade_level\n",
         f);
 }
 
-void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a, double outside_s) {
+void review_metrics_csv_row(FILE *f, palp_db *db, const palp_db_session_info *s, const review_assessment *a,
+                            double outside_s) {
   const palp_assess_result *r = &a->r;
   csv_str(f, s->uid);
   fputc(',', f);
@@ -235,8 +237,17 @@ void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review
   /* out_of_range above is the force's (episodes above the exercise's limit); this is the model's */
   if (outside_s >= 0) fprintf(f, "%.2f", outside_s);
   /* added after the rest (2026-12-04), so a reader of the older columns reads them where they were */
-  if (r->evidence.strips >= 0) fprintf(f, ",%d,%.4f\n", r->evidence.strips, r->evidence.sweep_monotony);
-  else fputs(",,\n", f); /* metrics a prune stored before schema 5 do not keep them */
+  if (r->evidence.strips >= 0) fprintf(f, ",%d,%.4f", r->evidence.strips, r->evidence.sweep_monotony);
+  else fputs(",,", f); /* metrics a prune stored before schema 5 do not keep them */
+  /* the instructor's latest grade (2026-12-05), so that a class's spreadsheet carries it beside the
+   * metrics; empty fields when the session is not graded */
+  double gs;
+  char gl[32];
+  review_latest_grade_parts(db, s->id, &gs, gl, sizeof gl);
+  if (gs >= 0) fprintf(f, ",%g,", gs);
+  else fputs(",,", f);
+  csv_str(f, gl);
+  fputc('\n', f);
 }
 
 void review_touches_print(FILE *f, const review_assessment *a, int listed) {

@@ -42,8 +42,9 @@ void review_assessment_free(review_assessment *a);
 /* The metrics as CSV: the header line, then one row per session. */
 void review_metrics_csv_header(FILE *f);
 /* outside_s: seconds outside the model's valid range (review_valid_range_seconds; < 0: the log does
- * not say, an empty field) */
-void review_metrics_csv_row(FILE *f, const palp_db_session_info *s, const review_assessment *a, double outside_s);
+ * not say, an empty field); the last columns are the instructor's latest grade, read from db. */
+void review_metrics_csv_row(FILE *f, palp_db *db, const palp_db_session_info *s, const review_assessment *a,
+                            double outside_s);
 /* The metrics, score and rubric as text lines (palp-review show). */
 void review_metrics_print(FILE *f, const review_assessment *a);
 /* The finger's touches as text (palp-review show): where each began and ended on the phantom's

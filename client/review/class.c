@@ -126,7 +126,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       rc = REVIEW_ERROR;
     } else {
       review_metrics_csv_header(c);
-      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, &rows[i].s, &rows[i].a, rows[i].outside_s);
+      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, db, &rows[i].s, &rows[i].a, rows[i].outside_s);
       if (c != stdout && fclose(c)) rc = REVIEW_ERROR;
     }
   }

@@ -200,7 +200,7 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
         return REVIEW_ERROR;
       } else rc = 1; /* computed: free it below */
       review_metrics_csv_header(f);
-      review_metrics_csv_row(f, s, &a, review_valid_range_seconds(db, s));
+      review_metrics_csv_row(f, db, s, &a, review_valid_range_seconds(db, s));
       if (rc == 1) review_assessment_free(&a);
       rc = 0;
     }

@@ -58,6 +58,17 @@ check "the review lists 5 sessions and replays each bit-identically ($n of 5)" \
 # and "dome C (long-term, h", which no longer said what set it apart from dome B.
 check "the server's session table and the review's list name dome C whole" \
   "grep -Eq '^[0-9]+ +carol +dome C \\(long-term, haptic 250 Hz\\) ' '$txt' && grep -Eq '^[0-9]+-[0-9]+-[0-9]+ +carol +dome C \\(long-term, haptic 250 Hz\\) ' '$txt'"
+# The instructor grades the exercise's sessions (a level and a note, in the log): nina's scripted
+# novice scores below 50, so insufficient, and her note names the criteria she failed; the list and
+# the class report (table and CSV) then carry her grade.
+nina_uid=$(sed -n 's/^exercise session: nina //p' "$txt" | head -1)
+check "the instructor graded nina's session ${nina_uid:-none}: insufficient, the note naming what failed" \
+  "[ -n '$nina_uid' ] && grep -q '^note added to $nina_uid by instructor/ines, grade insufficient$' '$txt' && grep -q '^== the instructor grades the exercise' '$txt'"
+check "the review's list and the class report show her grade" \
+  "grep -Eq '^$nina_uid +nina +Teaching.* insufficient$' '$txt' && grep -Eq '^nina +$nina_uid .* insufficient$' '$txt' && grep -q '\"$nina_uid\",\"nina\",.*,,\"insufficient\"$' '$out/demo/class-teaching.csv'"
+note=$(python3 -c "import sqlite3, sys; print(''.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute('select text from note join session on session.id = note.session_id where session.uid = ?', (sys.argv[2],))))" "$out/sessions.db" "$nina_uid" 2>/dev/null)
+check "her note names the criteria she failed: $note" \
+  'printf "%s\n" "$note" | grep -q "^Work on: sensitivity, .*thoroughness"'
 check "it ends with the class report of the exercise" \
   "grep -q '== class report: exercise \"teaching\"' '$txt' && [ -s '$out/demo/class-teaching.html' ]"
 [ $fail -eq 0 ] || tail -n 60 "$txt"

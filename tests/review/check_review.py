@@ -187,6 +187,14 @@ def klass(dom_path, shot, csv_path):
                                           else "-" for d in data],
           "class: the strips and their order, alice %r, and every row as in the CSV %r" %
           (alice["strips, in order"], [(d["strips"], d["strip_order"]) for d in data]))
+    # the instructor's latest grade, added as the last columns (2026-12-05): bob's first session
+    # scored 35, alice's proficient, bob's second ungraded; the page's grade column says the same
+    grades = [(d["session"], d["grade_score"], d["grade_level"]) for d in data]
+    check(sorted(grades) == [("class-alice-1", "", "proficient"), ("class-bob-1", "35", ""), ("class-bob-2", "", "")],
+          "class CSV: grade_score and grade_level of the latest grade %r" % grades)
+    page = [t["grade"] for t in tds]
+    want_page = [" ".join(x for x in (d["grade_score"], d["grade_level"]) if x) or "-" for d in data]
+    check(page == want_page, "class: the page's grades %r are the CSV's %r" % (page, want_page))
     csv_out = {d["trainee"]: d["outside_valid_range_s"] for d in data}
     check(csv_out == {"alice": "1.42", "bob": ""}, "class CSV: outside_valid_range_s %r (bob's logs do not say)" % csv_out)
     maps = [e for e in dom.els if e["tag"] == "svg" and "coverage" in (e["a"].get("class") or "").split()]

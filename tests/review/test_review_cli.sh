@@ -100,9 +100,10 @@ r = rows[0]
 assert r["session"] == "class-alice-1" and r["trainee"] == "alice" and r["found"] == "2" and r["pass"] == "1", r
 assert float(r["coverage_medium"]) >= 0.95 and r["pattern"] == "vertical_strip", r
 assert r["outside_valid_range_s"] == "1.42", r  # review_gen's 355 flagged steps of 4 ms
-assert 13 <= int(r["strips"]) <= 15 and float(r["strip_order"]) >= 0.9, r  # the columns added last
+assert 13 <= int(r["strips"]) <= 15 and float(r["strip_order"]) >= 0.9, r  # the columns added 2026-12-04
+assert (r["grade_score"], r["grade_level"]) == ("", ""), r  # not graded yet (the grade columns, added last)
 PY
-then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range, 13-15 strips in order"; else bad "export --table metrics"; fi
+then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range, 13-15 strips in order, no grade"; else bad "export --table metrics"; fi
 
 # Structured grades: each refused form exits 2 with a message saying what is allowed.
 for g in "--score 101" "--score -1" "--score 7/10" "--level B+" "--grade B+" "--grade 7/10" "--level excellent"; do
