@@ -905,7 +905,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
           dds_delete(fb_cond);
           palp_cli_station_end_session(st);
           uint32_t id = 0;
-          char err[256];
+          char err[PALP_DDS_HINT_MAX + 256];
           palp_cli_join j = {.role = palp_ROLE_TRAINEE, .user_name = o->name, .want_feedback = 1, .timeout = o->timeout};
           if (palp_cli_station_find_phantom(st, ph->name, -1, lost_server, o->timeout, &id, err, sizeof err) == 0 &&
               (j.phantom_id = id, palp_cli_station_join(st, &j, err, sizeof err)) == 0) {
@@ -1150,7 +1150,7 @@ int main(int argc, char **argv) {
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
-  char err[512];
+  char err[PALP_DDS_HINT_MAX + 256]; /* a join's "no answer" ends with palp_dds_unanswered_hint's */
   if (palp_app_use_dds_config(o.app.dds_config, NULL, NULL, 0, err, sizeof err) < 0) {
     palp_log_error(o.log, "%s (give --dds-config FILE or set CYCLONEDDS_URI)", err);
     return 1;

@@ -143,7 +143,7 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
     return fail(err, errlen, PALP_EINVAL, "no valid catalogue entry for phantom %u within %.1f s: %s", phantom_id,
                 timeout, bad);
   if (result != 0) {
-    char hint[320];
+    char hint[PALP_DDS_HINT_MAX];
     palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
     return fail(err, errlen, PALP_EIO, "no catalogue entry for phantom %u within %.1f s (is palp-server running on this domain?)%s",
                 phantom_id, timeout, hint);
@@ -246,7 +246,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     int got = await_reply(st, end, &r);
     if (got == 1) break;
     if (got < 0) {
-      char hint[320];
+      char hint[PALP_DDS_HINT_MAX];
       palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
       return fail(err, errlen, PALP_EIO, "no answer from palp-server within %.1f s (is it running on this domain?)%s",
                   j->timeout, hint);
@@ -525,7 +525,7 @@ int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_
     nap(0.05);
   }
   if (!best) {
-    char hint[320];
+    char hint[PALP_DDS_HINT_MAX];
     palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
     return fail(err, errlen, PALP_EIO, "no phantom named \"%s\"%s within %.1f s%s", name,
                 exclude_server >= 0 ? " on another server" : "", timeout, hint);

@@ -91,7 +91,10 @@ int palp_dds_peer_participants(dds_entity_t pp);
 /* When nothing answered pp: "" if no other participant is on the domain (nothing is running);
  * else "; N other DDS participants ..." with what to check, for a plain participant (the
  * classroom may be secured: --pki/--identity) or a secured one (the same PKI, a valid
- * certificate). For the end of a "no answer" message. */
+ * certificate). For the end of a "no answer" message; a buffer of PALP_DDS_HINT_MAX holds the
+ * longest (a secured one is ~480 characters: 320 cut it before its last question, 2026-12-05),
+ * and a message that ends with it wants PALP_DDS_HINT_MAX + 256. */
+#define PALP_DDS_HINT_MAX 768
 void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, char *buf, size_t len);
 
 /* "on (identity KIND/NAME)" or "off", into buf (returned): how every palp program's log says whether

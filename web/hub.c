@@ -1191,7 +1191,7 @@ static void hint_if_unanswered(palp_web_hub *h, int64_t now, int64_t start) {
   h->hinted = 1;
   for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)
     if (h->ph[i].used) return;
-  char hint[320];
+  char hint[PALP_DDS_HINT_MAX];
   palp_dds_unanswered_hint(h->pp, &h->def.sec, hint, sizeof hint);
   if (hint[0]) palp_log_warn(h->def.log, "no phantom from any palp-server in 10 s%s", hint);
 }

@@ -588,7 +588,7 @@ int main(int argc, char **argv) {
       hinted = 1;
       int any = 0;
       for (int i = 0; i < MAX_PHANTOMS && !any; i++) any = r->ph[i].used;
-      char hint[320];
+      char hint[PALP_DDS_HINT_MAX];
       if (!any) palp_dds_unanswered_hint(pp, &sec, hint, sizeof hint);
       if (!any && hint[0]) palp_log_warn(&plog, "no phantom from any palp-server in 10 s%s", hint);
     }
