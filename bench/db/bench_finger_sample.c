@@ -2,7 +2,8 @@
  * to a physics step when it logs a position-driven fingertip (palp_world_finger_local_model,
  * palp_world_finger_contacts and palp_db_log_finger_sample's enqueue into a real writer).
  *
- * usage: bench_finger_sample SCENE.json [DB_PATH=/tmp/bench_finger_sample.db] [STEPS=5000]
+ * usage: bench_finger_sample SCENE.json [DB_PATH] [STEPS=5000] (DB_PATH: by default in a scratch
+ * directory under TMPDIR, removed at exit)
  *
  * A fingertip (8 mm) pressed 9 mm into the dome at polar 30 deg, stepped STEPS times per
  * variant, alternating blocks of 250 steps so that both variants see the same machine load:
@@ -16,6 +17,7 @@
 #include <unistd.h>
 
 #include "palp.h"
+#include "../bench_tmp.h"
 #include "palp_db.h"
 
 static double now_us(void) {
@@ -51,7 +53,9 @@ int main(int argc, char **argv) {
     fprintf(stderr, "usage: %s SCENE.json [DB_PATH] [STEPS]\n", argv[0]);
     return 2;
   }
-  const char *db = argc > 2 ? argv[2] : "/tmp/bench_finger_sample.db";
+  char scratch[600];
+  const char *db = argc > 2 ? argv[2] : bench_tmp_path("palp-bench-finger-sample", "bench.db", scratch, sizeof scratch);
+  if (!db) return 1;
   const int steps = argc > 3 ? atoi(argv[3]) : 5000;
   g_part = argc > 4 ? atoi(argv[4]) : 0;
   palp_scene sc;

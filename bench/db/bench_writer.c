@@ -18,6 +18,7 @@
 
 #include <sqlite3.h>
 
+#include "../bench_tmp.h"
 #include "palp_db.h"
 
 #define MESH_VERTICES 338
@@ -184,11 +185,14 @@ int main(int argc, char **argv) {
     const int help = !strcmp(argv[i], "--help") || !strcmp(argv[i], "-h");
     fprintf(help ? stdout : stderr,
             "usage: %s [DB_PATH] [SECONDS>0] [SESSIONS>0] [PRODUCERS 1..SESSIONS]\n"
-            "Writes a synthetic 1 kHz load into DB_PATH (default /tmp/palp-bench-db.db; the file is replaced).\n",
+            "Writes a synthetic 1 kHz load into DB_PATH (the file is replaced; default: bench.db in a scratch\n"
+            "directory under TMPDIR, removed at exit).\n",
             argv[0]);
     return help ? 0 : 2;
   }
-  const char *path = argc > 1 ? argv[1] : "/tmp/palp-bench-db.db";
+  char scratch[600];
+  const char *path = argc > 1 ? argv[1] : bench_tmp_path("palp-bench-db", "bench.db", scratch, sizeof scratch);
+  if (!path) return 1;
   const double seconds = argc > 2 ? atof(argv[2]) : 10.0;
   const int nsess = argc > 3 ? atoi(argv[3]) : 32;
   const int nprod = argc > 4 ? atoi(argv[4]) : 2;

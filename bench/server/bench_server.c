@@ -15,7 +15,7 @@
  *
  * 4. --secure: latency and capacity (or, with `haptic`, the haptic capacity) with DDS Security
  *    off, then on, in the same run
- *    (docs/security.md): a classroom PKI is made in /tmp/palp-bench-pki by
+ *    (docs/security.md): a classroom PKI is made in the bench's work directory by
  *    scripts/make-classroom-pki.sh; the server runs with its identity, every bench
  *    station with the trainee identity "bench" (Cyclone 0.10.2 gives all secured
  *    participants of one process the permissions of the first, so one identity).
@@ -59,6 +59,7 @@
 #include <pthread.h>
 
 #include "../bench_motion.h"
+#include "../bench_tmp.h"
 #include "haptic_loop.h"
 #include "input.h"
 #include "palp_dds.h"
@@ -75,7 +76,9 @@ extern char **environ;
 #define DOMAIN_LAT_SECURE 142
 #define DOMAIN_CAP_SECURE 143
 #define DOMAIN_HAPTIC_SECURE 144
-#define BENCH_PKI "/tmp/palp-bench-pki"
+/* The server's config, log, database and the PKI live in the run's scratch directory
+ * (bench_tmp.h; fixed names in /tmp until 2026-12-05). */
+static char bench_pki[600];
 static unsigned haptic_domain = 120; /* --haptic-domain: parallel runs need their own */
 
 static double seconds = 5.0;
@@ -86,7 +89,7 @@ static int rt_priority = 0;
 static int no_db = 0;
 static double overrun_limit = 0.01; /* --overrun-limit PCT: stop adding sessions above this */
 static int secure = 0;             /* this pass runs with DDS Security */
-static palp_dds_security bench_sec; /* trainee/bench in BENCH_PKI */
+static palp_dds_security bench_sec; /* trainee/bench in bench_pki */
 
 static unsigned lat_domain(void) { return secure ? DOMAIN_LAT_SECURE : DOMAIN_LAT; }
 static unsigned cap_domain(void) { return secure ? DOMAIN_CAP_SECURE : DOMAIN_CAP; }
@@ -154,7 +157,10 @@ static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_ph
   snprintf(m, sizeof m, "%d", max_sessions);
   /* The shipped phantoms, logging to a scratch database (the real server's cost,
    * without touching the class's session log). */
-  const char *cfg_path = "/tmp/palp-bench-server.json", *db_path = "/tmp/palp-bench-sessions.db";
+  char cfg_path[600], db_path[600], log_path[600];
+  if (!bench_tmp_path("palp-bench-server", "server.json", cfg_path, sizeof cfg_path)) exit(1);
+  bench_tmp_path("palp-bench-server", "sessions.db", db_path, sizeof db_path);
+  bench_tmp_path("palp-bench-server", "server.log", log_path, sizeof log_path);
   remove(db_path);
   FILE *cf = fopen(cfg_path, "w");
   if (!cf) {
@@ -172,12 +178,12 @@ static pid_t spawn_server_cfg(unsigned domain, double rate, const char *extra_ph
   int argc = 13;
   if (secure) {
     argv[argc++] = "--pki";
-    argv[argc++] = BENCH_PKI;
+    argv[argc++] = bench_pki;
   }
   if (no_db) argv[argc++] = "--no-db";
   argv[argc] = NULL;
   /* The server's own log goes to a file; the bench prints its figures. */
-  const pid_t pid = spawn_tied(PALP_SERVER_PATH, argv, "/tmp/palp-bench-server.log");
+  const pid_t pid = spawn_tied(PALP_SERVER_PATH, argv, log_path);
   if (pid < 0) {
     fprintf(stderr, "bench: cannot start %s\n", PALP_SERVER_PATH);
     exit(1);
@@ -760,8 +766,8 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--secure")) compare_secure = 1;
     else if (!strcmp(argv[i], "--overrun-limit") && i + 1 < argc) overrun_limit = atof(argv[++i]) / 100.0;
     else if (!strcmp(argv[i], "--scene") && i + 1 < argc) {
-      /* The server resolves a relative scene against its config file's folder (/tmp
-       * here), so hand it the absolute path of the file the user named. */
+      /* The server resolves a relative scene against its config file's folder (the work
+       * directory here), so hand it the absolute path of the file the user named. */
       static char abs_scene[4096];
       scene_path = realpath(argv[++i], abs_scene) ? abs_scene : argv[i];
     }
@@ -782,12 +788,13 @@ int main(int argc, char **argv) {
     return 1;
   }
   if (!strcmp(what, "echo")) return echo_main();
+  if (!bench_tmp_path("palp-bench-server", "pki", bench_pki, sizeof bench_pki)) return 1;
   if (compare_secure) {
     char cmd[1024], err[512];
     snprintf(cmd, sizeof cmd, "bash '%s/../scripts/make-classroom-pki.sh' %s classroom --trainees bench >/dev/null",
-             PALP_CONFIG_DIR, BENCH_PKI);
-    if (system(cmd) != 0 || palp_dds_security_init(&bench_sec, BENCH_PKI, "trainee/bench", err, sizeof err) < 0) {
-      fprintf(stderr, "bench: cannot make the classroom PKI in %s\n", BENCH_PKI);
+             PALP_CONFIG_DIR, bench_pki);
+    if (system(cmd) != 0 || palp_dds_security_init(&bench_sec, bench_pki, "trainee/bench", err, sizeof err) < 0) {
+      fprintf(stderr, "bench: cannot make the classroom PKI in %s\n", bench_pki);
       return 1;
     }
   }
