@@ -255,31 +255,31 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   for t in nina ${eve:+eve}; do
     "$review" --db "$db" list --since "$since" | awk -v t="$t" 'NR > 1 && $2 == t { print "exercise session: " t " " $1 }'
   done
+  # Each session: its summary, its bit-identical replay, and its report. The instructor grades
+  # each exercise session after reading it, before its report is written (so the report carries
+  # the grade): a level of the rubric's four and a note, kept in the log beside the automatic
+  # score. Here a scripted instructor (ines) grades from what the review printed: the level from
+  # the score, the note naming the criteria that failed (docs/assessment.md, "The demo's grading").
+  graded=
   for uid in $("$review" --db "$db" list --since "$since" | awk 'NR > 1 && $1 ~ /-/ { print $1 }'); do
     echo
-    "$review" --db "$db" show "$uid" | sed -n '1,/^events/p' | sed '$d'
+    shown=$("$review" --db "$db" show "$uid")
+    echo "$shown" | sed -n '1,/^events/p' | sed '$d'
     "$review" --db "$db" replay "$uid" || status=1
+    score=$(echo "$shown" | sed -n 's/^  score *\([0-9.]*\) \/ 100.*/\1/p' | head -n 1)
+    if [ -n "$score" ]; then
+      failed=$(echo "$shown" | sed -n '/^metrics/,/^  score/p' | awk '/ FAIL$/ && $1 != "score" { sub(/^  /, ""); print $1 == "false" ? "false positives" : ($1 == "search" ? "search pattern" : $1) }' | paste -sd, - | sed 's/,/, /g')
+      level=$(awk -v s="$score" 'BEGIN { print s < 50 ? "insufficient" : s < 70 ? "developing" : s < 90 ? "competent" : "proficient" }')
+      if [ -n "$failed" ]; then note="Work on: $failed. Go over the report's coverage map, then repeat the exercise."
+      else note="Every criterion passed."; fi
+      "$review" --db "$db" annotate "$uid" --author "instructor/ines" --level "$level" --note "$note" || status=1
+      graded="$graded $uid"
+    fi
     "$review" --db "$db" report "$uid" --out "$out/report-$uid.html" >/dev/null &&
       echo "report: $out/report-$uid.html (opens in any browser, no server needed)"
   done
-  # The instructor grades the exercise's sessions after reading them: a level of the rubric's
-  # four and a note, kept in the log beside the automatic score; the list and the class report
-  # show it. Here a scripted instructor (ines) grades from what the review printed: the level
-  # from the score, the note naming the criteria that failed.
   echo
-  echo "== the instructor grades the exercise's sessions (palp-review annotate) =="
-  graded=
-  for uid in $("$review" --db "$db" list --since "$since" | awk 'NR > 1 && ($2 == "nina" || $2 == "eve") { print $1 }'); do
-    shown=$("$review" --db "$db" show "$uid")
-    score=$(echo "$shown" | sed -n 's/^  score *\([0-9.]*\) \/ 100.*/\1/p' | head -n 1)
-    [ -n "$score" ] || continue
-    failed=$(echo "$shown" | sed -n '/^metrics/,/^  score/p' | awk '/ FAIL$/ && $1 != "score" { sub(/^  /, ""); print $1 == "false" ? "false positives" : ($1 == "search" ? "search pattern" : $1) }' | paste -sd, - | sed 's/,/, /g')
-    level=$(awk -v s="$score" 'BEGIN { print s < 50 ? "insufficient" : s < 70 ? "developing" : s < 90 ? "competent" : "proficient" }')
-    if [ -n "$failed" ]; then note="Work on: $failed. Go over the report's coverage map, then repeat the exercise."
-    else note="Every criterion passed."; fi
-    "$review" --db "$db" annotate "$uid" --author "instructor/ines" --level "$level" --note "$note" || status=1
-    graded="$graded $uid"
-  done
+  echo "== the instructor's grades (palp-review list; palp-review annotate gave them) =="
   "$review" --db "$db" list --since "$since" | awk -v g="$graded" 'BEGIN { n = split(g, u, " "); for (i = 1; i <= n; i++) k[u[i]] = 1 } NR == 1 || ($1 in k)'
   # The end of the review: the class report of the exercise, every trainee of this run
   # side by side (metrics, score, coverage maps, progress) and the metrics as CSV.

@@ -135,7 +135,7 @@ static int json_array(palp_db *db, exp_ctx *x, const char *name, int last, int t
   case T_FEEDBACK: rc = palp_db_each_feedback(db, sid, feedback_cb, x); break;
   case T_FRAMES: rc = palp_db_each_frame(db, sid, frame_cb, x); break;
   case T_EVENTS: rc = palp_db_each_event(db, sid, event_cb, x); break;
-  default: rc = palp_db_each_note(db, sid, note_cb, x); break;
+  default: rc = review_each_note(db, sid, note_cb, x); break; /* the grade with its score and level */
   }
   fprintf(x->f, "%s]%s\n", x->first ? "" : "\n  ", last ? "" : ",");
   return rc;

@@ -63,9 +63,10 @@ check "the server's session table and the review's list name dome C whole" \
 # the class report (table and CSV) then carry her grade.
 nina_uid=$(sed -n 's/^exercise session: nina //p' "$txt" | head -1)
 check "the instructor graded nina's session ${nina_uid:-none}: insufficient, the note naming what failed" \
-  "[ -n '$nina_uid' ] && grep -q '^note added to $nina_uid by instructor/ines, grade insufficient$' '$txt' && grep -q '^== the instructor grades the exercise' '$txt'"
+  "[ -n '$nina_uid' ] && grep -q '^note added to $nina_uid by instructor/ines, grade insufficient$' '$txt' && grep -q \"^== the instructor's grades\" '$txt'"
 check "the review's list and the class report show her grade" \
   "grep -Eq '^$nina_uid +nina +Teaching.* insufficient$' '$txt' && grep -Eq '^nina +$nina_uid .* insufficient$' '$txt' && grep -q '\"$nina_uid\",\"nina\",.*,,\"insufficient\"$' '$out/demo/class-teaching.csv'"
+check "nina's report carries her grade" "grep -q 'insufficient' '$out/demo/report-$nina_uid.html'"
 note=$(python3 -c "import sqlite3, sys; print(''.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute('select text from note join session on session.id = note.session_id where session.uid = ?', (sys.argv[2],))))" "$out/sessions.db" "$nina_uid" 2>/dev/null)
 check "her note names the criteria she failed: $note" \
   'printf "%s\n" "$note" | grep -q "^Work on: sensitivity, .*thoroughness"'

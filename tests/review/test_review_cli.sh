@@ -127,6 +127,13 @@ render() { # render HTML PNG DOM
 }
 R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"
 R report class-bob-1 --out "$dir/bob.html" > /dev/null || bad "report bob"
+# the instructor's structured grades (score, level) in the report's notes and the JSON export: both read
+# only the free-text grade column until 2026-12-05, so they showed none
+expect "report: alice's note with its level" '<tr><td>[^<]*</td><td>Lee</td><td>proficient</td><td>systematic</td></tr>' "$dir/alice.html"
+expect "report: bob's note with its score" '<tr><td>[^<]*</td><td>Lee</td><td>35</td><td>missed both lumps</td></tr>' "$dir/bob.html"
+R export class-bob-1 --format json --out "$dir/bob.json" || bad "export json"
+if python3 -c "import json, sys; n = json.load(open(sys.argv[1]))['notes']; assert [(x['text'], x['grade']) for x in n if x['grade']] == [('missed both lumps', '35')], n" "$dir/bob.json"
+then ok "export json: bob's note with its score"; else bad "export json: the notes' grades"; fi
 expect "report: the strips and their order" '<tr data-metric="strips"><th>Strips and their order</th><td class="value">1[3-5] strips, in order (0\.9[0-9]|1\.00)' "$dir/alice.html"
 expect "report: the touches table, the expert's one touch" '<table id="touches">.*' "$dir/alice.html"
 if [ "$(sed -n '/<table id="touches">/,/<\/table>/p' "$dir/bob.html" | grep -c '^<tr><td>')" = 5 ]; then
