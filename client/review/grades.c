@@ -96,16 +96,17 @@ int review_latest_grade_parts(palp_db *db, int64_t sid, double *score, char *lev
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(palp_db_handle(db),
                          "SELECT score, level FROM note WHERE session_id = ?1 AND "
-                         "(score IS NOT NULL OR level IS NOT NULL) ORDER BY id DESC LIMIT 1",
+                         "(score IS NOT NULL OR level IS NOT NULL OR (grade IS NOT NULL AND grade <> '')) "
+                         "ORDER BY id DESC LIMIT 1",
                          -1, &st, NULL) != SQLITE_OK)
     return 0;
   sqlite3_bind_int64(st, 1, sid);
   int found = 0;
   if (sqlite3_step(st) == SQLITE_ROW) {
-    found = 1;
     if (sqlite3_column_type(st, 0) != SQLITE_NULL) *score = sqlite3_column_double(st, 0);
     const char *l = (const char *)sqlite3_column_text(st, 1);
     if (l && len) snprintf(level, len, "%s", l);
+    found = *score >= 0 || (l && *l);
   }
   sqlite3_finalize(st);
   return found;

@@ -22,8 +22,9 @@ int review_add_graded_note(palp_db *db, int64_t sid, const char *author, const c
 /* The latest grade of a session as one short string: "82 competent", "82", "competent",
  * "'B+' (free text)" for a pre-schema-3 grade, or "-". */
 void review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len);
-/* The latest structured grade's parts: *score (-1 when it gave none) and level ("" when none);
- * 1 when a note gives either, else 0 (a pre-schema-3 free-text grade is neither). */
+/* The parts of the grade review_latest_grade shows: *score (-1 when it gave none) and level (""
+ * when none); 1 when it has either, 0 when the session is ungraded or its latest grade is an old
+ * free-text one (which has neither). */
 int review_latest_grade_parts(palp_db *db, int64_t sid, double *score, char *level, size_t len);
 /* One note's grade for display, from its columns (any may be absent). */
 void review_grade_text(int has_score, double score, const char *level, const char *free_text, char *buf, size_t len);

@@ -207,9 +207,8 @@ class Chromium:
             os.killpg(self.proc.pid, signal.SIGKILL)  # leftover renderers
         except (ProcessLookupError, PermissionError):
             pass
-        # A renderer killed a moment ago may still write into the profile while it is removed
-        # (a profile was left behind about once a test run): wait for the group to be gone, then
-        # remove it, again if something was still being written.
+        # A renderer killed a moment ago may still write into the profile while it is removed:
+        # wait for the group to be gone, then remove it, again if something was still written.
         end = time.time() + 5
         while time.time() < end:
             try:
