@@ -105,6 +105,7 @@ class Chromium:
     """One headless Chromium; pages are DevTools targets."""
 
     def __init__(self, width=1000, height=700, out_dir=None, extra_args=()):
+        self.short_tmp = None
         self.dir = tempfile.mkdtemp(prefix="palp-chromium-")
         self.log = open(os.path.join(out_dir or self.dir, "chromium.log"), "ab")
         args = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -118,8 +119,13 @@ class Chromium:
         # Chromium puts its singleton socket in a directory of its own under TMPDIR, left behind
         # when it is killed: keep it inside the profile, which close() removes (660 of them had
         # gathered in /tmp by 2026-12-05).
+        # A Unix socket's path has at most 107 bytes and Chromium's adds ~45 to TMPDIR: under a
+        # long TMPDIR the socket's own directory is a short one in /tmp, removed by close() too.
         tmp = os.path.join(self.dir, "tmp")
-        os.mkdir(tmp)
+        if len(tmp) > 60:
+            tmp = self.short_tmp = tempfile.mkdtemp(prefix="palp-chr-", dir="/tmp")
+        else:
+            os.mkdir(tmp)
         env = dict(os.environ, TMPDIR=tmp)
         self.proc = subprocess.Popen(args, stdout=self.log, stderr=self.log, start_new_session=True, env=env)
         port_file = os.path.join(self.dir, "DevToolsActivePort")
@@ -221,6 +227,8 @@ class Chromium:
             if not os.path.exists(self.dir):
                 break
             time.sleep(0.2)
+        if self.short_tmp:
+            shutil.rmtree(self.short_tmp, ignore_errors=True)
         self.log.close()
 
 
