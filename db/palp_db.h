@@ -387,14 +387,15 @@ typedef int (*palp_db_feedback_fn)(void *user, int64_t frame, int slot, palp_vec
 typedef int (*palp_db_mesh_fn)(void *user, int64_t frame, const palp_vec3 *pos, int vertex_count);
 typedef int (*palp_db_event_fn)(void *user, double wall_unix_s, int64_t frame, const char *kind,
                                 const char *detail, int64_t count);
-typedef int (*palp_db_note_fn)(void *user, double wall_unix_s, const char *author, const char *text,
-                               const char *grade);
 int palp_db_each_contact(palp_db *db, int64_t session_id, palp_db_contact_fn fn, void *user);
 int palp_db_each_frame(palp_db *db, int64_t session_id, palp_db_frame_fn fn, void *user);
 int palp_db_each_feedback(palp_db *db, int64_t session_id, palp_db_feedback_fn fn, void *user);
 int palp_db_each_mesh(palp_db *db, int64_t session_id, palp_db_mesh_fn fn, void *user);
 int palp_db_each_event(palp_db *db, int64_t session_id, palp_db_event_fn fn, void *user);
-int palp_db_each_note(palp_db *db, int64_t session_id, palp_db_note_fn fn, void *user);
+/* Notes are read by palp-review's review_each_note (client/review/grades.c), which gives each note's
+ * grade with its score and level; palp_db_each_note, which gave only the free-text grade of before
+ * schema 3, was removed on 2026-12-05 after the report and the JSON export had shown no structured
+ * grade through it. */
 
 /* ---- the model's valid range (PALP_DB_EVENT_VALID_RANGE, db/valid_range.c) -------------- */
 /* What the phantom's model met outside its valid range over some physics steps (docs/model.md,

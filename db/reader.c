@@ -529,18 +529,6 @@ int palp_db_each_event(palp_db *db, int64_t sid, palp_db_event_fn fn, void *user
   return finish(st, stop ? SQLITE_DONE : rc, stop);
 }
 
-int palp_db_each_note(palp_db *db, int64_t sid, palp_db_note_fn fn, void *user) {
-  sqlite3_stmt *st;
-  if (prep(db, "SELECT wall_unix_s, author, text, grade FROM note WHERE session_id = ?1 ORDER BY id", sid,
-           &st))
-    return PALP_DB_ESQL;
-  int rc = SQLITE_DONE, stop = 0;
-  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW)
-    stop = fn(user, sqlite3_column_double(st, 0), (const char *)sqlite3_column_text(st, 1),
-              (const char *)sqlite3_column_text(st, 2), (const char *)sqlite3_column_text(st, 3));
-  return finish(st, stop ? SQLITE_DONE : rc, stop);
-}
-
 int palp_db_add_note(palp_db *db, int64_t sid, const char *author, const char *text, const char *grade) {
   if (!author || !*author || !text) return PALP_EINVAL;
   sqlite3_stmt *st;
