@@ -74,42 +74,41 @@ void review_grade_text(int has_score, double score, const char *level, const cha
   else snprintf(buf, len, "-");
 }
 
-void review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len) {
-  snprintf(buf, len, "-");
+/* The latest note that grades: its score (-1: none), level and free-text grade ("" when absent);
+ * 1 when there is one, else 0. One query for review_latest_grade and its parts. */
+static int latest_grade(palp_db *db, int64_t sid, double *score, char level[32], char text[128]) {
+  *score = -1, level[0] = text[0] = '\0';
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(palp_db_handle(db),
                          "SELECT score, level, grade FROM note WHERE session_id = ?1 AND "
                          "(score IS NOT NULL OR level IS NOT NULL OR (grade IS NOT NULL AND grade <> '')) "
                          "ORDER BY id DESC LIMIT 1",
                          -1, &st, NULL) != SQLITE_OK)
-    return;
-  sqlite3_bind_int64(st, 1, sid);
-  if (sqlite3_step(st) == SQLITE_ROW)
-    review_grade_text(sqlite3_column_type(st, 0) != SQLITE_NULL, sqlite3_column_double(st, 0),
-                      (const char *)sqlite3_column_text(st, 1), (const char *)sqlite3_column_text(st, 2), buf, len);
-  sqlite3_finalize(st);
-}
-
-int review_latest_grade_parts(palp_db *db, int64_t sid, double *score, char *level, size_t len) {
-  *score = -1;
-  if (len) level[0] = '\0';
-  sqlite3_stmt *st;
-  if (sqlite3_prepare_v2(palp_db_handle(db),
-                         "SELECT score, level FROM note WHERE session_id = ?1 AND "
-                         "(score IS NOT NULL OR level IS NOT NULL OR (grade IS NOT NULL AND grade <> '')) "
-                         "ORDER BY id DESC LIMIT 1",
-                         -1, &st, NULL) != SQLITE_OK)
     return 0;
   sqlite3_bind_int64(st, 1, sid);
-  int found = 0;
-  if (sqlite3_step(st) == SQLITE_ROW) {
+  const int found = sqlite3_step(st) == SQLITE_ROW;
+  if (found) {
     if (sqlite3_column_type(st, 0) != SQLITE_NULL) *score = sqlite3_column_double(st, 0);
-    const char *l = (const char *)sqlite3_column_text(st, 1);
-    if (l && len) snprintf(level, len, "%s", l);
-    found = *score >= 0 || (l && *l);
+    const char *l = (const char *)sqlite3_column_text(st, 1), *g = (const char *)sqlite3_column_text(st, 2);
+    snprintf(level, 32, "%s", l ? l : "");
+    snprintf(text, 128, "%s", g ? g : "");
   }
   sqlite3_finalize(st);
   return found;
+}
+
+void review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len) {
+  double score;
+  char level[32], text[128];
+  if (latest_grade(db, sid, &score, level, text)) review_grade_text(score >= 0, score, level, text, buf, len);
+  else snprintf(buf, len, "-");
+}
+
+int review_latest_grade_parts(palp_db *db, int64_t sid, double *score, char *level, size_t len) {
+  char l[32], text[128];
+  latest_grade(db, sid, score, l, text);
+  if (len) snprintf(level, len, "%s", l);
+  return *score >= 0 || l[0];
 }
 
 int review_each_note(palp_db *db, int64_t sid, review_note_fn fn, void *user) {
