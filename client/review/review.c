@@ -23,7 +23,7 @@
 
 static void usage(FILE *f) {
   fputs("usage: palp-review [--db FILE] COMMAND [ARGS]\n"
-        "  list     [--trainee NAME] [--phantom ID|NAME] [--since DATE] [--until DATE]\n"
+        "  list     [--trainee NAME] [--phantom ID|NAME] [--since DATE] [--until DATE] [--ungraded]\n"
         "  show     SESSION\n"
         "  export   SESSION --format csv|json [--table frames|contacts|feedback|events|notes|metrics] [--out FILE]\n"
         "  annotate SESSION --author NAME --note TEXT [--score 0-100] [--level LEVEL]\n"
@@ -58,8 +58,13 @@ static int phantom_width(const palp_db_session_info *v, int n) {
 
 static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   palp_db_filter f = {0};
+  int ungraded = 0; /* only the sessions no note grades yet: what is left to grade */
   for (int i = 0; i < argc; i++) {
     const char *a = argv[i];
+    if (!strcmp(a, "--ungraded")) {
+      ungraded = 1;
+      continue;
+    }
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review list: %s needs a value\n", a);
       return REVIEW_ERROR;
@@ -88,26 +93,28 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   const int pw = phantom_width(v, n);
   printf("%-36s %-14s %-*s %-16s %-25s %9s %-16s %-5s %s\n", "SESSION", "TRAINEE", pw, "PHANTOM", "EXERCISE", "STARTED",
          "SIM [s]", "ENDED", "NOTES", "GRADE");
+  int shown = 0;
   for (int i = 0; i < n; i++) {
-    char t[64];
+    char t[64], exname[64] = "-", grade[160];
+    review_latest_grade(db, v[i].id, grade, sizeof grade);
+    if (ungraded && strcmp(grade, "-")) continue;
+    shown++;
     review_fmt_time(v[i].start_unix_s, t, sizeof t);
     palp_db_log_health h;
     int known = palp_db_log_health_get(db, &v[i], &h) == 0;
-    char exname[64] = "-", grade[160];
     if (palp_db_session_exercise(db, v[i].id, exname, sizeof exname, NULL) != 0) snprintf(exname, sizeof exname, "-");
-    review_latest_grade(db, v[i].id, grade, sizeof grade);
     printf("%-36s %-14s %-*.*s %-16.16s %-25s %9.2f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, pw, pw, v[i].phantom_name, exname,
            t, v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
            grade, known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
   }
-  printf("%d session%s\n", n, n == 1 ? "" : "s");
+  printf("%d session%s%s\n", shown, shown == 1 ? "" : "s", ungraded ? " not graded yet" : "");
   free(v);
   /* Who could not join at all: no session, so nowhere above (palp-server logs them as
    * server-wide events; docs/security.md). Listed for the same time range. */
   palp_db_filter rf = {.since_unix_s = f.since_unix_s, .until_unix_s = f.until_unix_s};
   palp_db_refused *rv;
   int rn;
-  if (!f.trainee && !f.phantom && palp_db_list_refused(db, &rf, &rv, &rn) == 0) {
+  if (!f.trainee && !f.phantom && !ungraded && palp_db_list_refused(db, &rf, &rv, &rn) == 0) {
     for (int i = 0; i < rn; i++) { /* the first row is written at the first refusal; later ones when said */
       char a[64];
       review_fmt_time(rv[i].first_unix_s, a, sizeof a);

@@ -118,6 +118,12 @@ R annotate class-alice-1 --author Lee --note "systematic" --level proficient > /
 R list > "$dir/list.txt" 2>&1
 expect "list: alice's grade, phantom and exercise" "class-alice-1 +alice +dome_breast_test +test-two-lumps .* proficient" "$dir/list.txt"
 expect "list: bob's score" "class-bob-1 +bob .* 35" "$dir/list.txt"
+# what is left to grade: the two sessions no note grades (2026-12-05)
+R list --ungraded > "$dir/ungraded.txt" 2>&1 || bad "list --ungraded"
+if [ "$(awk 'NR > 1 && $1 ~ /^class-/ { print $1 }' "$dir/ungraded.txt" | tr '\n' ' ')" = "class-bob-2 class-carol-1 " ] &&
+   grep -q '^2 sessions not graded yet$' "$dir/ungraded.txt" && ! grep -q 'refused by DDS Security' "$dir/ungraded.txt"; then
+  ok "list --ungraded: class-bob-2 and class-carol-1, not the graded alice-1 and bob-1"
+else bad "list --ungraded:"; cat "$dir/ungraded.txt"; fi
 
 # Reports in headless Chromium, no network.
 . "$(dirname "$0")/../chromium.sh"
