@@ -30,6 +30,7 @@ typedef struct palp_cli_cmd {
   double patch_area;    /* [m^2], 0 = the paper's 5.2 cm^2 */
 } palp_cli_cmd;
 
+struct palp_band;
 typedef struct palp_cli_input {
   const char *name;
   void *ctx;
@@ -68,6 +69,11 @@ typedef struct palp_cli_input {
    * phantom's after the physics step, before the station limits or extrapolates it).
    * Called from the haptic thread; must not block. */
   void (*model)(void *ctx, const palp_local_model *m);
+  /* Optional (2026-12-05; added at the end: older drivers leave it zero): the pressure bands the
+   * session's exercise grades, PALP_BAND_COUNT of src/palp_assess.h's palp_band, checked, so that
+   * a device's display can name the band a press is in as the assessment will. Called once, from
+   * the station's main thread, after the haptic thread started; never outside an exercise. */
+  void (*bands)(void *ctx, const struct palp_band *band);
 } palp_cli_input;
 enum { PALP_CLI_BUTTON_MARK = 1, PALP_CLI_BUTTON_WITHDRAW = 2 };
 

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "input.h"
+#include "palp_assess.h" /* palp_band_of: the band a press is in, as the assessment grades it */
 
 typedef struct keyboard {
   struct termios saved;
@@ -154,6 +155,12 @@ typedef struct kfinger {
    * [m] (what an exercise's pressure bands and the review read; the keys' depth is the device's,
    * which the coupling spring keeps deeper by F / k); NAN when not touching. Haptic thread. */
   double tip_depth;
+  double model_force;    /* |F| of that model [N] (the phantom's, before the station limits it) */
+  /* The exercise's pressure bands (kf_bands, main thread), published by have_bands (release;
+   * the haptic thread reads them after an acquire): the status line names the band a press is
+   * in, as the assessment grades it (palp_band_of: depth and the model's force). */
+  palp_band band[PALP_BAND_COUNT];
+  atomic_int have_bands;
 } kfinger;
 
 /* How fast the keys move the fingertip [m/s]: a brisk hand's press (the scripted trainees press and
@@ -220,8 +227,14 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
   f->flags = flags;
   if (f->t - f->last_status >= 0.5) {
     const double m = sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
-    char tip[48] = "";
-    if (isfinite(f->tip_depth)) snprintf(tip, sizeof tip, ", fingertip %.1f mm deep", f->tip_depth * 1e3);
+    char tip[64] = "";
+    if (isfinite(f->tip_depth)) {
+      const int n = snprintf(tip, sizeof tip, ", fingertip %.1f mm deep", f->tip_depth * 1e3);
+      if (atomic_load_explicit(&f->have_bands, memory_order_acquire)) { /* an exercise: its band, or none */
+        const int b = palp_band_of(f->band, f->tip_depth, f->model_force);
+        snprintf(tip + n, sizeof tip - (size_t)n, " (%s)", b >= 0 ? palp_band_name(b) : "no band");
+      }
+    }
     fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, device %+.3g mm (step %g mm)%s: force %.2f N%s%s   ",
             f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, f->step * 1e3, tip, m,
             (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "",
@@ -234,6 +247,14 @@ static void kf_model(void *ctx, const palp_local_model *m) {
   kfinger *f = ctx;
   const palp_vec3 p = m->proxy;
   f->tip_depth = m->contact ? f->k.R + f->radius - sqrt(p.x * p.x + p.y * p.y + p.z * p.z) : NAN;
+  f->model_force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
+}
+
+static void kf_bands(void *ctx, const struct palp_band *band) {
+  kfinger *f = ctx;
+  if (atomic_load_explicit(&f->have_bands, memory_order_relaxed)) return; /* once: the haptic thread reads them */
+  memcpy(f->band, band, sizeof f->band);
+  atomic_store_explicit(&f->have_bands, 1, memory_order_release);
 }
 
 static int kf_button(void *ctx) {
@@ -263,6 +284,6 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
   f->tip_depth = NAN;
   *out = (palp_cli_input){.name = "keyboard (finger)", .ctx = f, .open = kf_open, .close = kf_close,
                           .read_position = kf_read, .write_force = kf_write, .finger_radius = f->radius,
-                          .button = kf_button, .model = kf_model};
+                          .button = kf_button, .model = kf_model, .bands = kf_bands};
   return 0;
 }

@@ -443,12 +443,15 @@ typedef struct findings_ui {
   uint32_t shown_marks;
 } findings_ui;
 
-static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *st) {
+static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *st, const palp_cli_input *in) {
   memset(u, 0, sizeof *u);
   palp_Exercise ex;
   if (palp_cli_station_exercise(st, st->phantom_id, 1.0, &ex) == 1) {
     u->exercise = 1;
     u->time_limit = ex.time_limit;
+    /* the device's display names the band a press is in, as the assessment grades it */
+    palp_band band[PALP_BAND_COUNT];
+    if (in->bands && palp_dds_exercise_bands(&ex, band)) in->bands(in->ctx, band);
     if (!o->quiet) {
       tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
                  "device's button (keyboard: m), withdraw the last mark with u\n",
@@ -623,7 +626,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
   fflush(stdout);
   findings_ui fu;
-  findings_ui_start(&fu, o, st);
+  findings_ui_start(&fu, o, st, &in);
   feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns()};
   latency lat = {0};
   uint64_t bad = 0, models = 0;

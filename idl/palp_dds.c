@@ -4,6 +4,7 @@
 #include "palp_dds.h"
 
 #include <limits.h>
+#include <math.h>
 #include <pthread.h>
 #include <string.h>
 
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include "palp.h" /* PALP_E* codes only; the model is not linked */
+#include "palp_assess.h" /* palp_band, a plain struct */
 
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
@@ -395,4 +397,20 @@ void palp_dds_log_limit_counts(palp_dds_log_limit *l, uint64_t *printed, uint64_
   *printed = l->printed;
   *suppressed = l->suppressed;
   pthread_mutex_unlock(l->lock);
+}
+
+int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {
+  int ok = 1;
+  for (int b = 0; b < PALP_BAND_COUNT; b++) {
+    const palp_PressureBand *in = &ex->bands[b];
+    palp_band *B = &out[b];
+    *B = (palp_band){.has_depth = in->has_depth != 0, .has_force = in->has_force != 0, .depth_min = in->depth_min,
+                     .depth_max = in->depth_max, .force_min = in->force_min, .force_max = in->force_max};
+    const int depth_ok = !B->has_depth || (isfinite(B->depth_min) && isfinite(B->depth_max) && B->depth_min >= 0 &&
+                                           B->depth_min < B->depth_max);
+    const int force_ok = !B->has_force || (isfinite(B->force_min) && isfinite(B->force_max) && B->force_min >= 0 &&
+                                           B->force_min < B->force_max);
+    if (!(B->has_depth || B->has_force) || !depth_ok || !force_ok) ok = 0;
+  }
+  return ok;
 }

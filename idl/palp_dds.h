@@ -167,6 +167,13 @@ int palp_dds_use_config(const char *path);
  * source time and its feedback's receive time compare directly. */
 int64_t palp_dds_now_ns(void);
 
+/* An Exercise's pressure bands as the assessment reads them (palp_band, src/palp_assess.h; out:
+ * PALP_BAND_COUNT of them, filled either way). 1 when every band has a bound and every bound is
+ * finite, >= 0 and ordered; 0 when not, and a reader keeps its own bands (palp-web its force
+ * gauge's, the station no band name). */
+struct palp_band;
+int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out);
+
 #ifdef __cplusplus
 }
 #endif

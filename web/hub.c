@@ -752,18 +752,7 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
   e->max_force = m->max_force;
   /* The bands as sent, checked: a band with no bound, a bound not finite, negative or not
    * ordered, and the bridge keeps its force bands for this exercise (and says which). */
-  e->bands_ok = 1;
-  for (int b = 0; b < PALP_BAND_COUNT; b++) {
-    const palp_PressureBand *in = &m->bands[b];
-    palp_band *B = &e->band[b];
-    *B = (palp_band){.has_depth = in->has_depth != 0, .has_force = in->has_force != 0, .depth_min = in->depth_min,
-                     .depth_max = in->depth_max, .force_min = in->force_min, .force_max = in->force_max};
-    const int depth_ok = !B->has_depth || (isfinite(B->depth_min) && isfinite(B->depth_max) && B->depth_min >= 0 &&
-                                           B->depth_min < B->depth_max);
-    const int force_ok = !B->has_force || (isfinite(B->force_min) && isfinite(B->force_max) && B->force_min >= 0 &&
-                                           B->force_min < B->force_max);
-    if (!(B->has_depth || B->has_force) || !depth_ok || !force_ok) e->bands_ok = 0;
-  }
+  e->bands_ok = palp_dds_exercise_bands(m, e->band);
   build_exercises(h);
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
     if (h->s[i].used && h->s[i].st.phantom_id == m->phantom_id) update_finding_writer(h, i);

@@ -3,7 +3,9 @@
 # a SQLite log); palp-client with the simulated device shows the exercise's title and
 # instructions, marks a lump with the device's button while touching (accepted by the
 # server, in the log) and withdraws it; a button pressed while not touching is refused on
-# the station with a message, nothing sent.
+# the station with a message, nothing sent. The finger keyboard (in a pty from script(1)) names the
+# band of each press on its status line, as the assessment grades it: pressed to ~2.6, ~6.8 and
+# ~16 mm (device +3, +8, +20 mm), each line's band is the one exercise_wire.json gives its depth.
 set -u
 server=$1 client=$2 config_dir=$3 test_dir=$4
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
@@ -26,7 +28,30 @@ check() { # pattern file what
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=2,mark_s=1.5,withdraw_s=2.2 > "$tmp/dora.log" 2>&1
 "$client" --role trainee --domain 61 --phantom 7 --name ed --timeout 10 --print-period 0 \
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=0.1 > "$tmp/ed.log" 2>&1
+if command -v script > /dev/null; then
+  . "$(dirname "$0")/../wait_for.sh"
+  (wait_for "$tmp/kim.log" "haptic thread at"; sleep 0.5; printf '+++++'
+   wait_for "$tmp/kim.log" "device +3 mm (step 1 mm), fingertip"; sleep 1.5; printf '+++++'
+   wait_for "$tmp/kim.log" "device +8 mm (step 1 mm), fingertip"; sleep 1.5; printf ']]+++'
+   wait_for "$tmp/kim.log" "device +20 mm (step 4 mm), fingertip"; sleep 1.5; printf 'q') |
+    script -qec "$client --role trainee --domain 61 --phantom 7 --name kim --timeout 10 --input keyboard-finger" \
+      /dev/null > "$tmp/kim.log" 2>&1
+else
+  echo "script(1) missing (util-linux)" > "$tmp/kim.log"
+fi
 kill $spid; wait $spid; spid=
+# exercise_wire.json's bands by depth alone: light [1, 5), medium [5, 12), deep [12, 25) mm; a line
+# within 0.05 mm of a bound (its depth is printed to 0.1 mm) is not judged
+tr '\r' '\n' < "$tmp/kim.log" | sed -n 's/.*fingertip \([0-9.]*\) mm deep (\([a-z ]*\)): force.*/\1 \2/p' > "$tmp/kim.bands"
+verdict=$(awk 'function band(d) { return d < 1 ? "no band" : d < 5 ? "light" : d < 12 ? "medium" : d < 25 ? "deep" : "no band" }
+  { near = 0; split("1 5 12 25", b, " "); for (i in b) if ($1 - b[i] < 0.05 && b[i] - $1 < 0.05) near = 1
+    name = $2 (NF > 2 ? " " $3 : ""); if (!near && name != band($1)) { bad++; print "wrong: " $0 > "/dev/stderr" }
+    seen[name] = 1 }
+  END { printf "%d %d %d %d", NR, bad, seen["light"] + seen["medium"] + seen["deep"], bad == 0 }' "$tmp/kim.bands")
+set -- $verdict
+if [ "${4:-0}" = 1 ] && [ "$3" = 3 ] && [ "$1" -ge 3 ]; then
+  echo "ok   the finger keyboard names each press's band as exercise_wire.json grades it ($1 status lines, light, medium and deep seen)"
+else echo "FAIL the finger keyboard's bands: '$verdict' (lines, wrong, bands seen, ok):"; cat "$tmp/kim.bands"; tr '\r' '\n' < "$tmp/kim.log" | tail -20; fail=1; fi
 check 'exercise "test-wire": Test: findings over the wire' "$tmp/dora.log" "the station shows the exercise's title"
 check 'Examine the dome and mark every lump you feel.' "$tmp/dora.log" "  and its instructions"
 check 'time limit 120 s' "$tmp/dora.log" "  and its time limit"
