@@ -30,10 +30,8 @@ check() { # pattern file what
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=0.1 > "$tmp/ed.log" 2>&1
 if command -v script > /dev/null; then
   . "$(dirname "$0")/../wait_for.sh"
-  (wait_for "$tmp/kim.log" "haptic thread at"; sleep 0.5; printf '+++++'
-   wait_for "$tmp/kim.log" "device +3 mm (step 1 mm), fingertip"; sleep 1.5; printf '+++++'
-   wait_for "$tmp/kim.log" "device +8 mm (step 1 mm), fingertip"; sleep 1.5; printf ']]+++'
-   wait_for "$tmp/kim.log" "device +20 mm (step 4 mm), fingertip"; sleep 1.5; printf 'q') |
+  type_keys "$tmp/kim.log" 1.5 "haptic thread at" '+++++' "device +3 mm (step 1 mm), fingertip" '+++++' \
+    "device +8 mm (step 1 mm), fingertip" ']]+++' "device +20 mm (step 4 mm), fingertip" 'q' |
     script -qec "$client --role trainee --domain 61 --phantom 7 --name kim --timeout 10 --input keyboard-finger" \
       /dev/null > "$tmp/kim.log" 2>&1
 else
