@@ -276,9 +276,6 @@ static void test_control(void) {
   if (hb) palp_web_hub_destroy(hb);
 }
 
-/* A position-driven finger's local model (palp_local_model, written here as the server would)
- * reaches a page following its session: proxy and device in metres, contact, |force| and the
- * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
 /* An open session's state, as a server writes it. */
 static void write_open_state(dds_entity_t w, uint32_t sid, uint32_t phantom, const char *part, const char *trainee) {
   palp_SessionState st;
@@ -552,6 +549,9 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   palp_web_hub_detach(h, c);
 }
 
+/* A position-driven finger's local model (palp_local_model, written here as the server would)
+ * reaches a page following its session: proxy and device in metres, contact, |force| and the
+ * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
 static void test_local_model(void) {
   palp_web_hub_def d = palp_web_hub_default_def();
   d.domain = 195;
