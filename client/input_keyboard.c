@@ -245,8 +245,7 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
 
 static void kf_model(void *ctx, const palp_local_model *m) {
   kfinger *f = ctx;
-  const palp_vec3 p = m->proxy;
-  f->tip_depth = m->contact ? f->k.R + f->radius - sqrt(p.x * p.x + p.y * p.y + p.z * p.z) : NAN;
+  f->tip_depth = m->contact ? palp_fingertip_depth(f->k.R, f->radius, m->proxy) : NAN;
   f->model_force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
 }
 

@@ -243,7 +243,7 @@ int palp_assess_touches(const palp_assess_sample *s, int n, double R, double r, 
     cur.last_point = s[i].point;
     /* the same segments as palp_assess's path: consecutive samples both in contact */
     if (i > 0 && s[i - 1].contact) cur.path_length += v3_len(v3_sub(on_dome(s[i].proxy, R), on_dome(s[i - 1].proxy, R)));
-    const double F = fnorm(s[i].force), indent = R + r - v3_len(s[i].proxy);
+    const double F = fnorm(s[i].force), indent = palp_fingertip_depth(R, r, s[i].proxy);
     if (F > cur.peak_force) cur.peak_force = F;
     if (indent > cur.peak_indentation) cur.peak_indentation = indent;
   }
@@ -290,7 +290,7 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const 
     if (s[i].t - t_touch > LIFT_GAP) out->evidence.presses++;
     t_touch = s[i].t;
     if (i > 0 && s[i - 1].contact) out->evidence.contact_time += s[i].t - s[i - 1].t;
-    const double indent = R + r - v3_len(s[i].proxy);
+    const double indent = palp_fingertip_depth(R, r, s[i].proxy);
     const int b = palp_exercise_band(ex, indent, F);
     const int k = footprint(mesh, &s[i], R, list, stamp, i);
     for (int j = 0; j < k; ++j) {

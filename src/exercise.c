@@ -346,6 +346,10 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
   return PALP_OK;
 }
 
+double palp_fingertip_depth(double dome_radius, double tip_radius, palp_vec3 proxy) {
+  return dome_radius + tip_radius - v3_len(proxy); /* [m] */
+}
+
 int palp_band_of(const palp_band band[PALP_BAND_COUNT], double depth, double force) {
   for (int b = 0; b < PALP_BAND_COUNT; ++b) {
     const palp_band *B = &band[b];

@@ -224,6 +224,11 @@ typedef struct palp_touch {
 int palp_assess_touches(const palp_assess_sample *samples, int sample_count, double dome_radius,
                         double finger_radius, palp_touch *out, int cap);
 
+/* A fingertip's depth [m] (its indentation, docs/naming.md "fingertip depth"): how far its centre,
+ * the proxy, lies below where it would touch the undeformed dome, R + r - |proxy|, for a dome of
+ * radius R centred at the origin and a fingertip of radius r. What the bands grade, in the
+ * assessment, palp-web and the station alike. */
+double palp_fingertip_depth(double dome_radius, double tip_radius, palp_vec3 proxy);
 /* The band of an indentation [m] and force magnitude [N], or -1 outside every band. */
 int palp_exercise_band(const palp_exercise *ex, double indentation, double force);
 /* The same rule on three bands alone (light, medium, deep): the first whose every given bound

@@ -848,8 +848,8 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
 /* A position-driven finger's indentation [m] as the assessment measures it: the undeformed
  * dome's radius plus the fingertip's, less the proxy's distance from the dome's centre. */
 static double finger_depth(const session *s, const finger *f) {
-  const double r = sqrt(f->proxy[0] * f->proxy[0] + f->proxy[1] * f->proxy[1] + f->proxy[2] * f->proxy[2]);
-  return s->ph ? s->ph->radius + f->radius - r : NAN;
+  return s->ph ? palp_fingertip_depth(s->ph->radius, f->radius, (palp_vec3){f->proxy[0], f->proxy[1], f->proxy[2]})
+               : NAN;
 }
 
 /* The exercise whose bands band this session's fingers, or NULL (force bands). */
