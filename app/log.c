@@ -126,3 +126,4 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {
 }
 
 void palp_log_warn_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_WARN, "%s", line); }
+void palp_log_debug_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_DEBUG, "%s", line); }

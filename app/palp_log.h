@@ -63,6 +63,8 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...)
 /* A callback for code that reports lines without knowing palp_log (ctx is the
  * palp_log *, NULL for stderr): one warning line, e.g. palp_dds_refusals' emit. */
 void palp_log_warn_line(void *ctx, const char *line);
+/* The same at debug level (what a trainee station sets aside: palp_dds_refusals_focus). */
+void palp_log_debug_line(void *ctx, const char *line);
 
 /* Formats the current UTC time as 2024-05-01T10:00:00.123Z into buf (>= 25 bytes). */
 void palp_log_timestamp(char *buf, size_t len);

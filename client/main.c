@@ -1193,6 +1193,13 @@ int main(int argc, char **argv) {
   static palp_dds_log_limit dds_sink;
   static palp_dds_refusals refusals;
   palp_dds_refusals_init(&refusals, palp_log_warn_line, &log, PALP_DDS_REFUSAL_WINDOW_S);
+  /* A trainee's terminal says what stands between it and the server (its own identity refused,
+   * the server's); a classmate's revoked laptop is for the server's log and the instructor
+   * (which name it), and goes to this station's debug log (until 2026-12-05 every trainee's
+   * terminal named her). */
+  char me[PALP_DDS_REFUSAL_WHO] = "";
+  if (sec.kind == PALP_DDS_ID_TRAINEE) snprintf(me, sizeof me, "trainee/%s", sec.name);
+  palp_dds_refusals_focus(&refusals, me, palp_log_debug_line, &log);
   palp_dds_refusals_install(&dds_sink, &refusals, 10, 10.0);
   /* a peer refused for its permissions named by its identity, not its GUID */
   if (palp_dds_security_name_peers(&sec, &refusals) < 0) palp_log_warn(&log, "out of memory naming the classroom's identities");

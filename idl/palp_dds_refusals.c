@@ -52,7 +52,9 @@ static void say(palp_dds_refusals *t, pending *p, const palp_dds_refusal *r, uin
 /* t->mu released: the lines to the log, the records to the owner, in the order made. */
 static void say_all(palp_dds_refusals *t, const pending *p) {
   for (int i = 0; i < p->n; i++) {
-    if (t->emit) t->emit(t->emit_ctx, p->e[i].line);
+    if (t->me[0] && t->aside && !palp_dds_refusal_concerns_trainee(&p->e[i].r, t->me))
+      t->aside(t->aside_ctx, p->e[i].line);
+    else if (t->emit) t->emit(t->emit_ctx, p->e[i].line);
     else fprintf(stderr, "%s\n", p->e[i].line);
     if (t->record) t->record(t->record_ctx, &p->e[i].r, p->e[i].count);
   }
@@ -127,6 +129,17 @@ static void name_peer(const palp_dds_refusals *t, palp_dds_refusal *r) {
       hit = &t->names[i];
     }
   if (hit) snprintf(r->who, sizeof r->who, "%s", hit->who);
+}
+
+int palp_dds_refusal_concerns_trainee(const palp_dds_refusal *r, const char *me) {
+  if (me && *me && !strcmp(r->who, me)) return 1;
+  return strncmp(r->who, "trainee/", 8) && strncmp(r->who, "instructor/", 11);
+}
+
+void palp_dds_refusals_focus(palp_dds_refusals *t, const char *me, palp_dds_refusals_emit aside, void *ctx) {
+  snprintf(t->me, sizeof t->me, "%s", me ? me : "");
+  t->aside = aside;
+  t->aside_ctx = ctx;
 }
 
 void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record fn, void *ctx) {

@@ -62,6 +62,11 @@ typedef struct palp_dds_refusals {
   void *emit_ctx;
   palp_dds_refusals_record record; /* NULL: none */
   void *record_ctx;
+  /* A trainee's focus (palp_dds_refusals_focus): "" none, else its identity; the lines about
+   * the classmates and instructors refused go to `aside` */
+  char me[PALP_DDS_REFUSAL_WHO];
+  palp_dds_refusals_emit aside;
+  void *aside_ctx;
   int64_t window_ns;
   uint64_t total, lines;
   palp_dds_refusal_slot slot[PALP_DDS_REFUSAL_SLOTS];
@@ -71,6 +76,16 @@ void palp_dds_refusals_init(palp_dds_refusals *t, palp_dds_refusals_emit emit, v
 void palp_dds_refusals_destroy(palp_dds_refusals *t);
 /* Before the sink is installed (not thread-safe against it). */
 void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record fn, void *ctx);
+/* Whether refusal r is a trainee station's concern (1), `me` its identity ("trainee/alice"): its
+ * own identity refused (the server's answer to it), or a peer that is neither a trainee nor an
+ * instructor (the server, another CA's subject, a GUID): what may stand between it and the server.
+ * A classmate or an instructor refused (a revoked laptop: the server refuses it too, and its log,
+ * palp-web and the review name it to the instructor) is not (0). */
+int palp_dds_refusal_concerns_trainee(const palp_dds_refusal *r, const char *me);
+/* Before the sink is installed: the table of trainee station `me` says the lines about refusals
+ * that are not its concern (palp_dds_refusal_concerns_trainee) to `aside` (its debug log) instead
+ * of `emit`. Counts, lists and records are unchanged. */
+void palp_dds_refusals_focus(palp_dds_refusals *t, const char *me, palp_dds_refusals_emit aside, void *ctx);
 /* The identities whose GUIDs name a peer refused for its permissions
  * ("participant f49f7aa2:789ee759:...": the first 6 bytes of its prefix) by palp's name for them
  * (trainee/bob); copied (replacing any before), at most PALP_DDS_PEER_NAMES_MAX; thread-safe. A prefix

@@ -30,6 +30,12 @@ check "mallory's lost laptop (a revoked identity) is refused, and the server's l
 raw=$(cat "$out"/demo/*.log | grep -c "handshake failed")
 check "no program's log carries Cyclone's raw refusal lines ($raw), palp-web says it in its own words" \
   "[ $raw -eq 0 ] && grep -q 'WARN  palp-web: DDS Security refused trainee/mallory at the handshake: certificate revoked' '$out/demo/web.log'"
+# A trainee's terminal says only what stands between it and the server: her classmates' stations
+# keep mallory's refusal to their debug logs (until 2026-12-05 every trainee's terminal named her);
+# the instructor's observer station still names her.
+named=$(grep -l "refused trainee/mallory" "$out"/demo/{alice,bob,carol,dana,nina,eve}.log 2>/dev/null | wc -l)
+check "no classmate's station names mallory ($named of 6 do); the instructor's observer does" \
+  "[ $named -eq 0 ] && grep -q 'WARN  palp-client: DDS Security refused trainee/mallory at the handshake: certificate revoked' '$out/demo/observer.log'"
 # ... and the instructor's review lists her from the session log, every refusal the server counted.
 n_srv=$(sed -n 's/^DDS Security refused participants \([0-9]*\) time(s): trainee\/mallory: certificate revoked ([0-9]*x)$/\1/p' "$txt")
 n_db=$(sed -n 's/^refused by DDS Security: trainee\/mallory: certificate revoked (handshake), \([0-9]*\) time(s), the first at .*/\1/p' "$txt")

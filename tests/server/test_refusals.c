@@ -509,7 +509,61 @@ static void test_startup_race(void) {
   unlink(path);
 }
 
+/* A trainee station's focus (palp_dds_refusals_focus): its own identity refused and the server's
+ * are said as warnings; a classmate's or an instructor's refusal goes aside (its debug log), though
+ * still counted and listed; the repeats follow their first line. */
+static void test_focus(void) {
+  palp_dds_refusal r = {.kind = PALP_DDS_REFUSED_HANDSHAKE};
+  snprintf(r.why, sizeof r.why, "certificate revoked");
+  const struct {
+    const char *who;
+    int concerns;
+  } cases[] = {{"trainee/alice", 1},       {"trainee/mallory", 0}, {"instructor/ines", 0}, {"server/server", 1},
+               {"participant 1:2:3:4", 1}, {"/O=other/CN=x", 1},   {"trainee/alicea", 0}, {"trainee", 1}};
+  int right = 0;
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    snprintf(r.who, sizeof r.who, "%s", cases[i].who);
+    const int got = palp_dds_refusal_concerns_trainee(&r, "trainee/alice");
+    if (got == cases[i].concerns) right++;
+    else fprintf(stderr, "  %s: %d, want %d\n", cases[i].who, got, cases[i].concerns);
+  }
+  CHECK(right == (int)(sizeof cases / sizeof cases[0]), "%d of %zu refusals judged as trainee/alice's concern or not",
+        right, sizeof cases / sizeof cases[0]);
+
+  lines_t warn = {0}, aside = {0};
+  palp_dds_refusals t;
+  palp_dds_refusals_init(&t, collect, &warn, 60.0);
+  palp_dds_refusals_focus(&t, "trainee/alice", collect, &aside);
+  snprintf(r.who, sizeof r.who, "trainee/mallory");
+  const int64_t s = 1000000000;
+  palp_dds_refusals_note(&t, &r, 0);
+  palp_dds_refusals_note(&t, &r, 1 * s);
+  snprintf(r.who, sizeof r.who, "server/server");
+  palp_dds_refusals_note(&t, &r, 2 * s);
+  snprintf(r.who, sizeof r.who, "trainee/alice");
+  palp_dds_refusals_note(&t, &r, 3 * s);
+  palp_dds_refusals_tick(&t, 61 * s); /* mallory's repeat, a minute after her first line */
+  CHECK(warn.n == 2 && strstr(warn.line[0], "refused server/server at the handshake") &&
+            strstr(warn.line[1], "refused trainee/alice at the handshake"),
+        "the server's and its own refusal said as warnings (%d lines)", warn.n);
+  CHECK(aside.n == 2 && strstr(aside.line[0], "refused trainee/mallory at the handshake: certificate revoked") &&
+            strstr(aside.line[1], "refused trainee/mallory at the handshake 1 more time(s) over 1 s"),
+        "the classmate's refusal and its repeat set aside (%d lines: '%s')", aside.n, aside.n ? aside.line[0] : "");
+  uint64_t total = 0;
+  palp_dds_refusals_counts(&t, &total, NULL);
+  palp_dds_refusal_entry e[4];
+  CHECK(total == 4 && palp_dds_refusals_list(&t, e, 4) == 3 && !strcmp(e[0].r.who, "trainee/mallory") && e[0].count == 2,
+        "all four counted, mallory listed first with 2 (total %llu)", (unsigned long long)total);
+  palp_dds_refusals_focus(&t, "", collect, &aside); /* no focus (an instructor): every line a warning */
+  snprintf(r.who, sizeof r.who, "trainee/bob");
+  palp_dds_refusals_note(&t, &r, 62 * s);
+  CHECK(warn.n == 3 && strstr(warn.line[2], "refused trainee/bob") && aside.n == 2,
+        "without a focus a classmate's refusal is a warning (%d / %d)", warn.n, aside.n);
+  palp_dds_refusals_destroy(&t);
+}
+
 int main(void) {
+  test_focus();
   test_startup_race();
   test_peer_names();
   test_stranger_name();
