@@ -60,6 +60,19 @@ check "dana felt the breast-tissue dome push back: peak rendered force ${peak:-n
 n=$(grep -c 'logged frames reproduced bit-identically' "$txt")
 check "the review lists 5 sessions and replays each bit-identically ($n of 5)" \
   "grep -q '^5 sessions' '$txt' && [ $n -eq 5 ]"
+# Each lift is logged with its contact's kind: dana's fingertip lifted is a finger, bob's force
+# contact a force (until 2026-11-22 every lift was logged as a force; db.md listed it as a gap
+# until 2026-12-05).
+lifts=$(python3 -c "
+import sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+rows = db.execute('''select s.trainee, a.kind, r.kind from contact_input r
+  join contact_input a on a.id = (select max(id) from contact_input x where x.session_id = r.session_id
+    and x.slot = r.slot and x.op = 'add' and x.id < r.id)
+  join session s on s.id = r.session_id where r.op = 'remove' ''').fetchall()
+print(' '.join(f'{n}:{a}/{r}' for n, a, r in sorted(set(rows))))" "$out/sessions.db" 2>&1)
+check "each lift is logged as the kind it lifts ($lifts)" \
+  "printf '%s\n' '$lifts' | grep -q 'dana:finger/finger' && printf '%s\n' '$lifts' | grep -q 'bob:force/force' && ! printf '%s\n' '$lifts' | grep -Eq ':(finger/force|force/finger)'"
 # The tables name each phantom whole: cut at 26 / 20 characters, dome C read "dome C (long-term, haptic"
 # and "dome C (long-term, h", which no longer said what set it apart from dome B.
 check "the server's session table and the review's list name dome C whole" \
