@@ -43,6 +43,14 @@ void palp_web_coverage_reset(palp_web_coverage *c);
  * number of vertices whose deepest band rose or that had not been pressed in this band. */
 int palp_web_coverage_press(palp_web_coverage *c, const double center[3], double radius, int band);
 
+/* The assessment's footprint (src/assess.c: every vertex of the dome triangles the fingertip
+ * touches) as near as the wire lets the bridge come: a local model gives how many triangles are in
+ * contact and the contact point, not which. The touched patch is taken as the `count` dome
+ * triangles whose rest centroids lie nearest `point` (at most PALP_WEB_COVERAGE_TRIANGLES_MAX);
+ * their vertices are marked in `band`. Returns as palp_web_coverage_press. */
+#define PALP_WEB_COVERAGE_TRIANGLES_MAX 64
+int palp_web_coverage_press_triangles(palp_web_coverage *c, const double point[3], int count, int band);
+
 /* Area fractions of the dome pressed at least light / medium / deep, each in [0, 1]. */
 void palp_web_coverage_fractions(const palp_web_coverage *c, double out[3]);
 /* Area fractions pressed in the light / medium / deep band itself, as the assessment counts an

@@ -64,6 +64,7 @@ typedef struct finger {
   uint32_t lm_flags;          /* LM_* of the newest model */
   int64_t lm_server_ns;       /* its server_time_ns */
   double point[3], area;      /* its contact point [m] and footprint [m^2] */
+  int lm_triangles;           /* triangles in contact (0 when not known) */
 } finger;
 
 /* What a trainee may know of an exercise (palp_exercise), per phantom. */
@@ -1017,6 +1018,7 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   const int point_ok = vec_finite(&m->point) && isfinite(m->area) && m->area >= 0 && isfinite(m->time);
   f->point[0] = m->point.x, f->point[1] = m->point.y, f->point[2] = m->point.z;
   f->area = point_ok ? m->area : 0;
+  f->lm_triangles = point_ok && m->triangles > 0 ? (int)m->triangles : 0;
   /* The contact point a trainee page's "lump here" marks: the newest in-contact model of any
    * finger; a finger that lifts clears it if it set it. */
   pthread_mutex_lock(&h->mu);
@@ -1228,14 +1230,18 @@ static void *hub_main(void *arg) {
         for (int k = 0; k < FINGERS; k++) {
           const finger *f = &s->f[k];
           if (f->mode == palp_CONTACT_RELEASE || !s->cov) continue;
-          /* A position-driven finger with a local model in contact: the disc of its footprint
-           * area around its contact point, at the band of the model's force. Else the contact's
-           * centre and radius with the force it carries or its feedback (docs/web.md). */
+          /* A position-driven finger with a local model in contact: the triangles it touches as the
+           * assessment counts them (as many as the model says, nearest its contact point), at the
+           * band of the model's force; without a count, the disc of its footprint area. Else the
+           * contact's centre and radius with the force it carries or its feedback (docs/web.md). */
           if (f->mode == palp_CONTACT_FINGER && f->lm_valid) {
             if (!f->lm_contact) continue;
-            const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
             const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
-            if (band && palp_web_coverage_press(s->cov, f->point, r, band) > 0) s->changed = 1;
+            if (!band) continue;
+            const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
+            const int raised = f->lm_triangles > 0 ? palp_web_coverage_press_triangles(s->cov, f->point, f->lm_triangles, band)
+                                                   : palp_web_coverage_press(s->cov, f->point, r, band);
+            if (raised > 0) s->changed = 1;
             continue;
           }
           const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;

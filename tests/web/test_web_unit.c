@@ -151,6 +151,98 @@ static void test_coverage_dome(void) {
   palp_mesh_destroy(&m);
 }
 
+/* The assessment's footprint as the bridge takes it (palp_web_coverage_press_triangles): the
+ * `count` dome triangles nearest the contact point. Expected here by brute force on the model's own
+ * mesh (its triangles sorted by the distance of their centroids from the point projected onto the
+ * dome, then the model's lumped areas of their vertices), for points on and 2-10 mm inside the skin,
+ * in general position (at the pole a ring of centroids ties). */
+typedef struct tri_dist {
+  double d;
+  int t;
+} tri_dist;
+static int by_dist(const void *a, const void *b) {
+  const double x = ((const tri_dist *)a)->d, y = ((const tri_dist *)b)->d;
+  return x < y ? -1 : x > y;
+}
+static void test_coverage_triangles(void) {
+  palp_mesh m;
+  palp_mesh_def d = palp_mesh_default_def();
+  CHECK(palp_mesh_create(&d, &m) == 0, "model mesh");
+  double *rest = malloc(sizeof *rest * 3 * (size_t)m.vertex_count);
+  int32_t *tri = malloc(sizeof *tri * 3 * (size_t)m.triangle_count);
+  tri_dist *td = malloc(sizeof *td * (size_t)m.dome_triangle_count);
+  uint8_t *hit = malloc((size_t)m.vertex_count);
+  for (int i = 0; i < m.vertex_count; i++) rest[3 * i] = m.rest[i].x, rest[3 * i + 1] = m.rest[i].y, rest[3 * i + 2] = m.rest[i].z;
+  for (int t = 0; t < m.triangle_count; t++)
+    for (int k = 0; k < 3; k++) tri[3 * t + k] = m.tri[t][k];
+  int rc;
+  palp_web_coverage *c = palp_web_coverage_create(rest, m.vertex_count, tri, m.triangle_count, m.dome_triangle_count, &rc);
+  const double R = d.radius, A = palp_web_coverage_dome_area(c);
+  /* polar / azimuth [deg] and depth below the skin [m] */
+  const double where[][3] = {{3, 10, 0}, {30, 40, 0.006}, {55, 200, 0.002}, {70, 300, 0.010}};
+  const int counts[] = {1, 3, 7, 20};
+  int right = 0, cases = 0;
+  for (size_t w = 0; w < sizeof where / sizeof where[0]; w++)
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+      const double th = where[w][0] * PI / 180, ph = where[w][1] * PI / 180, r = R - where[w][2];
+      const double u[3] = {sin(th) * cos(ph), sin(th) * sin(ph), cos(th)}, p[3] = {r * u[0], r * u[1], r * u[2]};
+      for (int t = 0; t < m.dome_triangle_count; t++) {
+        double g[3] = {0, 0, 0};
+        for (int v = 0; v < 3; v++) g[0] += m.rest[m.tri[t][v]].x / 3, g[1] += m.rest[m.tri[t][v]].y / 3, g[2] += m.rest[m.tri[t][v]].z / 3;
+        const double dx = g[0] - R * u[0], dy = g[1] - R * u[1], dz = g[2] - R * u[2];
+        td[t] = (tri_dist){dx * dx + dy * dy + dz * dz, t};
+      }
+      qsort(td, (size_t)m.dome_triangle_count, sizeof *td, by_dist);
+      memset(hit, 0, (size_t)m.vertex_count);
+      double want = 0;
+      for (int j = 0; j < counts[k]; j++)
+        for (int v = 0; v < 3; v++) {
+          const int i = m.tri[td[j].t][v];
+          if (!hit[i]) hit[i] = 1, want += m.vertex_area[i];
+        }
+      want /= A;
+      palp_web_coverage_reset(c);
+      const int raised = palp_web_coverage_press_triangles(c, p, counts[k], PALP_WEB_BAND_MEDIUM);
+      double f[3], g[3];
+      palp_web_coverage_fractions(c, f);
+      palp_web_coverage_band_fractions(c, g);
+      const int ok = raised > 0 && fabs(f[1] - want) < 1e-12 && fabs(g[1] - want) < 1e-12 && g[0] == 0 && f[2] == 0;
+      if (!ok)
+        fprintf(stderr, "  %g deg, %g deg, %g mm, %d triangles: %.6f of the dome, want %.6f (raised %d)\n", where[w][0],
+                where[w][1], where[w][2] * 1e3, counts[k], g[1], want, raised);
+      right += ok, cases++;
+    }
+  CHECK(right == cases, "%d of %d presses mark the vertices of the nearest triangles (1e-12 of the dome's area)", right,
+        cases);
+  /* at a triangle's own centroid, one triangle: its three vertices, nothing else */
+  const int t0 = m.dome_triangle_count / 2;
+  double g0[3] = {0, 0, 0};
+  for (int v = 0; v < 3; v++) g0[0] += m.rest[m.tri[t0][v]].x / 3, g0[1] += m.rest[m.tri[t0][v]].y / 3, g0[2] += m.rest[m.tri[t0][v]].z / 3;
+  palp_web_coverage_reset(c);
+  const int three = palp_web_coverage_press_triangles(c, g0, 1, PALP_WEB_BAND_LIGHT);
+  double f[3];
+  palp_web_coverage_fractions(c, f);
+  const double a3 = (m.vertex_area[m.tri[t0][0]] + m.vertex_area[m.tri[t0][1]] + m.vertex_area[m.tri[t0][2]]) / A;
+  CHECK(three == 3 && fabs(f[0] - a3) < 1e-12, "one triangle at its centroid: its 3 vertices (%d), %.6f of the dome", three,
+        f[0]);
+  const double nan3[3] = {NAN, 0, 0};
+  palp_web_coverage_reset(c);
+  CHECK(palp_web_coverage_press_triangles(c, g0, 0, 2) == 0 && palp_web_coverage_press_triangles(c, nan3, 3, 2) == 0 &&
+            palp_web_coverage_press_triangles(c, g0, 3, 0) == 0 && palp_web_coverage_press_triangles(NULL, g0, 3, 2) == 0,
+        "no triangles, a NaN point, no band, no map: nothing marked");
+  /* a count beyond the cap (a hostile or corrupt model) marks the cap's triangles, no more */
+  palp_web_coverage_press_triangles(c, g0, 1000000, PALP_WEB_BAND_DEEP);
+  palp_web_coverage_fractions(c, f);
+  CHECK(f[2] > 0 && f[2] < 0.25, "a million triangles asked: %d at most, %.3f of the dome", PALP_WEB_COVERAGE_TRIANGLES_MAX,
+        f[2]);
+  palp_web_coverage_destroy(c);
+  free(hit);
+  free(td);
+  free(rest);
+  free(tri);
+  palp_mesh_destroy(&m);
+}
+
 static void test_access(void) {
   const char *loop[] = {"127.0.0.1", "127.1.2.3", "::1", "localhost"};
   const char *wide[] = {"0.0.0.0", "192.168.1.10", "10.0.0.1", "::", "128.0.0.1", "", "127.0.0.1x", "example.org"};
@@ -698,6 +790,7 @@ int main(void) {
   test_bands();
   test_coverage_square();
   test_coverage_dome();
+  test_coverage_triangles();
   test_access();
   test_control();
   test_local_model();
