@@ -119,7 +119,7 @@ typedef struct session {
   uint32_t id;
   palp_SessionState st;
   const phantom *ph;
-  palp_web_coverage *cov;
+  palp_coverage *cov;
   finger f[FINGERS];
   double force;           /* magnitude of the summed finger forces [N] */
   int band;
@@ -279,8 +279,8 @@ static void build_phantom(palp_web_hub *h, int slot) {
 /* Coverage as the session's band rule counts it: in an exercise the area pressed in each band
  * itself, as the assessment's thoroughness; else the area pressed at each band or deeper. */
 static void session_coverage(const session *s, double cov[3]) {
-  if (s->exercise_bands) palp_web_coverage_band_fractions(s->cov, cov);
-  else palp_web_coverage_fractions(s->cov, cov);
+  if (s->exercise_bands) palp_coverage_band_fractions(s->cov, cov);
+  else palp_coverage_fractions(s->cov, cov);
 }
 
 static void build_sessions(palp_web_hub *h) {
@@ -528,7 +528,7 @@ static session *find_session(palp_web_hub *h, uint32_t id, int *slot) {
 static void attach_coverage(session *s) {
   if (s->cov || !s->ph) return;
   int rc;
-  s->cov = palp_web_coverage_create(s->ph->rest, s->ph->n, s->ph->tri, s->ph->tri_count, s->ph->dome_tris, &rc);
+  s->cov = palp_coverage_create(s->ph->rest, s->ph->n, s->ph->tri, s->ph->tri_count, s->ph->dome_tris, &rc);
 }
 
 static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
@@ -568,7 +568,7 @@ static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
     /* Sessions of this phantom lose their coverage map (its vertex count changed). */
     for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
       if (h->s[i].used && h->s[i].ph == ph) {
-        palp_web_coverage_destroy(h->s[i].cov);
+        palp_coverage_destroy(h->s[i].cov);
         h->s[i].cov = NULL;
       }
     free(ph->rest);
@@ -679,7 +679,7 @@ static void free_session(palp_web_hub *h, int slot) {
   pthread_mutex_unlock(&h->mu);
   if (fpub > 0) dds_delete(fpub);
   if (s->fb_sub > 0) dds_delete(s->fb_sub);
-  palp_web_coverage_destroy(s->cov);
+  palp_coverage_destroy(s->cov);
   memset(s, 0, sizeof *s);
   publish(h, &h->deform_msg[slot], NULL, 0);
   publish(h, &h->live_msg[slot], NULL, 0);
@@ -1239,15 +1239,15 @@ static void *hub_main(void *arg) {
             const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
             if (!band) continue;
             const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
-            const int raised = f->lm_triangles > 0 ? palp_web_coverage_press_triangles(s->cov, f->point, f->lm_triangles, band)
-                                                   : palp_web_coverage_press(s->cov, f->point, r, band);
+            const int raised = f->lm_triangles > 0 ? palp_coverage_press_triangles(s->cov, f->point, f->lm_triangles, band - 1)
+                                                   : palp_coverage_press(s->cov, f->point, r, band - 1);
             if (raised > 0) s->changed = 1;
             continue;
           }
           const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
           if (f->mode == palp_CONTACT_FINGER && !f->fb_active) continue;
           const int band = palp_web_band(&h->def.bands, sqrt(fv[0] * fv[0] + fv[1] * fv[1] + fv[2] * fv[2]));
-          if (band && palp_web_coverage_press(s->cov, f->center, f->radius, band) > 0) s->changed = 1;
+          if (band && palp_coverage_press(s->cov, f->center, f->radius, band - 1) > 0) s->changed = 1;
         }
         if (s->changed) {
           build_live(h, i);
@@ -1401,7 +1401,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
     free(h->phantom_msg[i].buf);
   }
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
-    palp_web_coverage_destroy(h->s[i].cov);
+    palp_coverage_destroy(h->s[i].cov);
     free(h->deform_msg[i].buf);
     free(h->live_msg[i].buf);
   }
