@@ -523,6 +523,7 @@ int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t 
         const int64_t now = palp_dds_now_ns();
         const double age = w->contact_source_time_ns > 0 ? (double)(now - w->contact_source_time_ns) * 1e-9 : -1;
         palp_cli_mailbox_put(&l->mailbox, &m, w->flags, w->max_force, age);
+        if (l->def.on_model) l->def.on_model(l->def.on_model_ctx, &m, w->frame);
         if (latency_us && age > 0) *latency_us = age * 1e6;
         taken++;
       } else if (bad) {

@@ -119,6 +119,10 @@ typedef struct palp_cli_haptic_def {
   palp_cli_haptic_sample *trace; /* optional: every tick recorded here */
   size_t trace_cap;
   int timer_floor;         /* 1: measure this machine's timer floor beside the loop (stats.floor_*) */
+  /* optional: each valid local model palp_cli_haptic_feed takes, with its world frame, on its
+   * caller's thread (the station's live coverage of an exercise) */
+  void (*on_model)(void *ctx, const palp_local_model *m, uint64_t frame);
+  void *on_model_ctx;
 } palp_cli_haptic_def;
 
 palp_cli_haptic_def palp_cli_haptic_default_def(void);

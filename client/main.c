@@ -18,6 +18,7 @@
 #include "palp_app.h"
 #include "palp_assess.h"
 #include "palp_dds.h"
+#include "palp_coverage.h"
 #include "palp_dds_refusals.h"
 #include "station.h"
 #include "view.h"
@@ -441,9 +442,37 @@ typedef struct findings_ui {
   uint32_t shown_id;       /* the answer last printed */
   int shown_ok;
   uint32_t shown_marks;
+  /* The exercise's coverage as this station's local models show it, by the rule palp-web's pages
+   * mark by (palp_coverage_press_contact) and at the band the exercise grades (palp_band_of): what
+   * the review's thoroughness will say, within a point where measured (docs/station.md). */
+  palp_coverage *cov;
+  palp_band band[PALP_BAND_COUNT];
+  double dome_radius, tip_radius; /* [m] */
+  int sample_every;               /* the models of the steps the server's log samples for the review */
 } findings_ui;
 
-static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *st, const palp_cli_input *in) {
+/* One local model (the haptic loop's on_model, the main thread): its contact into the coverage,
+ * from the physics steps the assessment samples (a station that took every step's model read up to
+ * 0.9 points more than the review, 2026-12-05). */
+static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t frame) {
+  findings_ui *u = ctx;
+  if (!u->cov || !m->contact || frame % (uint64_t)u->sample_every) return;
+  const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
+  const int b = palp_band_of(u->band, palp_fingertip_depth(u->dome_radius, u->tip_radius, m->proxy), force);
+  const double point[3] = {m->point.x, m->point.y, m->point.z};
+  if (b >= 0) palp_coverage_press_contact(u->cov, point, m->triangles, m->area, u->tip_radius, b);
+}
+
+/* "light 6.3%, medium 0.0%, deep 0.0%" of the dome, in each band as the review's thoroughness. */
+static const char *findings_ui_coverage(const findings_ui *u, char *buf, size_t len) {
+  double f[3];
+  palp_coverage_band_fractions(u->cov, f);
+  snprintf(buf, len, "light %.1f%%, medium %.1f%%, deep %.1f%%", 100 * f[0], 100 * f[1], 100 * f[2]);
+  return buf;
+}
+
+static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *st, const palp_cli_input *in,
+                              const palp_Phantom *ph, double tip_radius, double physics_hz) {
   memset(u, 0, sizeof *u);
   palp_Exercise ex;
   if (palp_cli_station_exercise(st, st->phantom_id, 1.0, &ex) == 1) {
@@ -451,7 +480,23 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
     u->time_limit = ex.time_limit;
     /* the device's display names the band a press is in, as the assessment grades it */
     palp_band band[PALP_BAND_COUNT];
-    if (in->bands && palp_dds_exercise_bands(&ex, band)) in->bands(in->ctx, band);
+    const int banded = palp_dds_exercise_bands(&ex, band);
+    if (in->bands && banded) in->bands(in->ctx, band);
+    /* ... and the trainee is told how much of the dome was covered in each band */
+    const uint32_t nv = ph->rest._length;
+    double *rest = banded && nv ? malloc(sizeof *rest * 3 * nv) : NULL;
+    if (rest) {
+      for (uint32_t i = 0; i < nv; i++)
+        rest[3 * i] = ph->rest._buffer[i].x, rest[3 * i + 1] = ph->rest._buffer[i].y, rest[3 * i + 2] = ph->rest._buffer[i].z;
+      int rc;
+      u->cov = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
+                                    ph->dome_triangle_count, &rc);
+      free(rest);
+      memcpy(u->band, band, sizeof u->band);
+      u->dome_radius = ph->radius;
+      u->tip_radius = tip_radius;
+      u->sample_every = palp_assess_sample_every(physics_hz, PALP_ASSESS_SAMPLE_HZ);
+    }
     if (!o->quiet) {
       tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
                  "device's button (keyboard: m), withdraw the last mark with u\n",
@@ -515,7 +560,10 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
                    fs.marks == 1 ? "" : "s");
     }
     if (u->exercise && !o->quiet && palp_dds_now_ns() >= u->next_time_print) {
-      tprintf(o, "[trainee %s] %.0f s left\n", o->name, fs.time_left);
+      char cov[96];
+      if (u->cov) tprintf(o, "[trainee %s] %.0f s left; covered so far: %s\n", o->name, fs.time_left,
+                          findings_ui_coverage(u, cov, sizeof cov));
+      else tprintf(o, "[trainee %s] %.0f s left\n", o->name, fs.time_left);
       u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
     }
   }
@@ -526,6 +574,13 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
   (void)st;
   if (!o->quiet && (u->exercise || u->nsent))
     tprintf(o, "[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
+  if (!o->quiet && u->cov) {
+    char cov[96];
+    tprintf(o, "[trainee %s] you covered %s of the dome (the instructor's review counts the same within about "
+               "a point, and shows which lumps you found)\n", o->name, findings_ui_coverage(u, cov, sizeof cov));
+  }
+  palp_coverage_destroy(u->cov);
+  u->cov = NULL;
 }
 
 /* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
@@ -588,6 +643,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   d.session_id = st->session_id;
   d.duration = o->duration;
   d.timer_floor = 1; /* the late ticks are printed beside this machine's own floor */
+  findings_ui fu;
+  memset(&fu, 0, sizeof fu);
+  d.on_model = findings_ui_model; /* fu's coverage: NULL until findings_ui_start makes it */
+  d.on_model_ctx = &fu;
   FILE *trace = NULL;
   if (o->trace_csv) {
     trace = fopen(o->trace_csv, "w");
@@ -625,8 +684,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
                d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
   fflush(stdout);
-  findings_ui fu;
-  findings_ui_start(&fu, o, st, &in);
+  findings_ui_start(&fu, o, st, &in, ph, hl->def.radius, d.physics_rate_hz);
   feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns()};
   latency lat = {0};
   uint64_t bad = 0, models = 0;

@@ -219,7 +219,7 @@ sed -n '/^rendered |F|/,$p' "$out/dana.log"
 echo
 echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found =="
 for t in nina ${eve:+eve}; do
-  grep -E "^\[trainee $t\] (exercise|pressure levels|mark|finding|the server refused|[0-9]+ marks? standing)|^\[scripted" "$out/$t.log" || true
+  grep -E "^\[trainee $t\] (exercise|pressure levels|mark|finding|the server refused|[0-9]+ marks? standing|you covered)|^\[scripted" "$out/$t.log" || true
 done
 echo "(the lesions are revealed only in the instructor's log: the review below assesses each session)"
 echo

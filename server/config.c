@@ -11,6 +11,7 @@
 #include <cjson/cJSON.h>
 
 #include "palp.h"
+#include "palp_assess.h" /* PALP_ASSESS_SAMPLE_HZ */
 
 static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
   if (err && errlen) {
@@ -44,7 +45,7 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   cfg->station_grace = 5.0; /* a station stalled by its machine (swap, a busy core) keeps its session */
   cfg->dds_log_lines = 10;
   cfg->dds_log_window = 10.0;
-  cfg->assess_sample_hz = 100.0; /* a 10 ms path resolution: 0.5 mm at a 5 cm/s glide */
+  cfg->assess_sample_hz = PALP_ASSESS_SAMPLE_HZ;
   snprintf(cfg->dds_config, sizeof cfg->dds_config, "cyclonedds-loopback.xml");
   snprintf(cfg->security_identity, sizeof cfg->security_identity, "server");
 }

@@ -7,6 +7,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "palp_assess.h" /* palp_assess_sample_every */
 #include "palp_db.h"
 #include "palp_dds.h"
 
@@ -119,8 +120,8 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   s->h = h;
   s->last_flush_ns = palp_dds_now_ns();
   /* Every physics step when the physics is slower than assess_sample_hz. */
-  const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : 100.0;
-  s->sample_every = log_every(i->tick_rate_hz, hz);
+  const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : PALP_ASSESS_SAMPLE_HZ;
+  s->sample_every = palp_assess_sample_every(i->tick_rate_hz, hz);
   /* From the session's own physics rate, not the server's tick rate: a 1 kHz phantom on a
    * 100 Hz server logged every frame and a mesh 20 times a second (10x and 10x the intent),
    * and summarising and hashing each frame cost its tick ~10 us (issue 11). */

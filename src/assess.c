@@ -226,6 +226,11 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
   if (best >= PATTERN_MIN_SHARE) *out = p;
 }
 
+int palp_assess_sample_every(double physics_hz, double sample_hz) {
+  const long k = physics_hz > sample_hz && sample_hz > 0 ? lround(physics_hz / sample_hz) : 1;
+  return k > 0 && k < 1000000 ? (int)k : 1;
+}
+
 int palp_assess_touches(const palp_assess_sample *s, int n, double R, double r, palp_touch *out, int cap) {
   int count = 0;
   double t_touch = -INFINITY;

@@ -141,6 +141,13 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
   return raised;
 }
 
+int palp_coverage_press_contact(palp_coverage *c, const double point[3], int triangles, double area, double tip_radius,
+                                int band) {
+  if (triangles > 0) return palp_coverage_press_triangles(c, point, triangles, band);
+  const double r = area > 0 && isfinite(area) ? sqrt(area / 3.14159265358979323846) : tip_radius;
+  return palp_coverage_press(c, point, r, band);
+}
+
 void palp_coverage_fractions(const palp_coverage *c, double out[3]) {
   for (int k = 0; k < 3; k++) {
     double f = c && c->dome_area > 0 ? c->at_least[k + 1] / c->dome_area : 0;

@@ -201,6 +201,13 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double finger_ra
                 int sample_count, const palp_finding *findings, int finding_count, palp_assess_result *out,
                 int *finding_match, uint8_t *coverage);
 
+/* A session's fingertip is sampled for the assessment every this many physics steps (the steps whose
+ * world frame it divides): round(physics_hz / sample_hz), 1 when the physics is slower; sample_hz is
+ * the server's `assess_sample_hz`, PALP_ASSESS_SAMPLE_HZ by default. The server logs by it, and a
+ * station that shows its trainee's coverage takes the same steps' local models. */
+#define PALP_ASSESS_SAMPLE_HZ 100.0 /* [Hz]: a 10 ms path resolution, 0.5 mm at a 5 cm/s glide */
+int palp_assess_sample_every(double physics_hz, double sample_hz);
+
 /* Out of touch for longer than this [s] is a lift; shorter losses of contact (the surface
  * recovering more slowly than the finger rises) keep the stroke going. palp_assess counts its
  * presses (touch-downs) by it, and palp_assess_touches splits a session by it. */

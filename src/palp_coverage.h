@@ -42,6 +42,13 @@ int palp_coverage_press(palp_coverage *c, const double center[3], double radius,
 #define PALP_COVERAGE_TRIANGLES_MAX 64
 int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int count, int band);
 
+/* A fingertip's contact as a local model gives it (palp_local_model: its point, how many triangles
+ * it touches, its footprint area), pressed in `band`: the nearest `triangles` triangles; without a
+ * count, the disc of the footprint's area (radius sqrt(area / pi); tip_radius [m] when the area is
+ * 0). The one rule palp-web's pages and a station's terminal mark by. Returns as palp_coverage_press. */
+int palp_coverage_press_contact(palp_coverage *c, const double point[3], int triangles, double area, double tip_radius,
+                                int band);
+
 /* Area fractions of the dome pressed at least light / medium / deep, each in [0, 1]. */
 void palp_coverage_fractions(const palp_coverage *c, double out[3]);
 /* Area fractions pressed in the light / medium / deep band itself, as the assessment counts an

@@ -1046,6 +1046,15 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
     s->outside_counted = 1;
     h->sessions_dirty = 1;
   }
+  /* Coverage from the physics steps the assessment samples (palp_assess_sample_every on the model's
+   * own period), marked as a station marks them (palp_coverage_press_contact): the models the review's
+   * thoroughness is computed from. At the live rate (30 Hz), as until 2026-12-05, the page read up to
+   * 0.9 points off the review, by which models a tick happened to see. */
+  if (s->cov && f->lm_contact && isfinite(m->period) && m->period > 0 &&
+      m->frame % (uint64_t)palp_assess_sample_every(1.0 / m->period, PALP_ASSESS_SAMPLE_HZ) == 0) {
+    const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
+    if (band) palp_coverage_press_contact(s->cov, f->point, f->lm_triangles, f->area, f->radius, band - 1);
+  }
   if (banding_exercise(h, s)) recompute_force(h, s); /* the band follows the fingertip's depth */
   s->changed = 1;
 }
@@ -1230,20 +1239,10 @@ static void *hub_main(void *arg) {
         for (int k = 0; k < FINGERS; k++) {
           const finger *f = &s->f[k];
           if (f->mode == palp_CONTACT_RELEASE || !s->cov) continue;
-          /* A position-driven finger with a local model in contact: the triangles it touches as the
-           * assessment counts them (as many as the model says, nearest its contact point), at the
-           * band of the model's force; without a count, the disc of its footprint area. Else the
-           * contact's centre and radius with the force it carries or its feedback (docs/web.md). */
-          if (f->mode == palp_CONTACT_FINGER && f->lm_valid) {
-            if (!f->lm_contact) continue;
-            const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
-            if (!band) continue;
-            const double r = f->area > 0 ? sqrt(f->area / 3.14159265358979323846) : f->radius;
-            const int raised = f->lm_triangles > 0 ? palp_coverage_press_triangles(s->cov, f->point, f->lm_triangles, band - 1)
-                                                   : palp_coverage_press(s->cov, f->point, r, band - 1);
-            if (raised > 0) s->changed = 1;
-            continue;
-          }
+          /* A position-driven finger with local models is marked as its models arrive
+           * (on_local_model). Else the contact's centre and radius with the force it carries or
+           * its feedback (docs/web.md). */
+          if (f->mode == palp_CONTACT_FINGER && f->lm_valid) continue;
           const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
           if (f->mode == palp_CONTACT_FINGER && !f->fb_active) continue;
           const int band = palp_web_band(&h->def.bands, sqrt(fv[0] * fv[0] + fv[1] * fv[1] + fv[2] * fv[2]));

@@ -49,6 +49,12 @@ check "the visual station (bob's own) and the observer (instructor ines) followe
   "grep -Eq '^\[visual\] session [0-9]+: [1-9][0-9]* deformation frames' '$txt' && grep -Eq '^\[observer\] session [0-9]+: [1-9][0-9]* deformation frames' '$txt'"
 check "nina's station names the pressure levels the exercise grades, as the review and the web pages do" \
   "grep -q '^\[trainee nina\] pressure levels graded (the fingertip below the undeformed skin): light 1-4 mm deep, medium 4-9 mm deep, deep 9-18 mm deep$' '$txt'"
+# The coverage nina's station tells her at its end is what the review grades (the class report's
+# LIGHT column), within 1.5 points of the dome (tests/web/test_coverage.py).
+said=$(sed -n 's/^\[trainee nina\] you covered light \([0-9.]*\)%.*/\1/p' "$txt" | head -1)
+graded=$(awk '$1 == "nina" && $4 ~ /^[0-9]+\/[0-9]+$/ { sub("%", "", $6); print $6; exit }' "$txt")
+check "nina's station told her the light coverage the review grades (${said:-none}% against ${graded:-none}%)" \
+  "[ -n '$said' ] && [ -n '$graded' ] && awk 'BEGIN { d = $said - $graded; exit !(d <= 1.5 && d >= -1.5) }'"
 check "nina took the exercise and her mark was accepted" \
   "grep -q '^\[trainee nina\] finding 1 accepted' '$txt' && grep -Eq '^\[scripted novice\] [1-9][0-9]* steps' '$txt'"
 check "carol is told when her 2 N safe force limits what she feels (the phantom asks ~2.2 N at 2 mm)" \

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""web_coverage: the coverage palp-web shows a trainee live is the thoroughness the review grades.
+"""web_coverage: the coverage palp-web shows a trainee live, and the one the trainee's own station
+reports at its end, are the thoroughness the review grades.
 
 palp-server hosts the shipped exercises (config/server-exercises.json) and logs to a SQLite file of
 the test's; palp-web follows every session over a WebSocket. Two trainees palpate by position with
@@ -7,7 +8,9 @@ the simulated device: kim two vertical strips 6 mm deep on "easy" (phantom 11), 
 slide 2 mm deep on "medium" (phantom 12). When their stations are done, the last coverage the bridge
 sent for each session (light, medium, deep: the share of the dome's area pressed in each band) is
 compared with the thoroughness `palp-review show` computes from the log (src/assess.c, the touched
-triangles' vertices), within 1 point of the dome's area per band. Until 2026-12-05 the bridge
+triangles' vertices), within 1.5 points of the dome's area per band (five of its 338 vertices; the
+nearest triangles stand for the touched ones: 0-0.9 points measured); so is each station's own last line
+("you covered light ..%, medium ..%, deep ..% of the dome", since 2026-12-05). Until 2026-12-05 the bridge
 marked a disc of the footprint's area around the contact point: 1.9 (lee) and 5.1-5.3 points (kim)
 more than the review in these sessions, 1.5-7.1 in others (docs/web.md: a trainee's page read 45%
 where the grade said 38%). No browser. DDS domain 198.
@@ -22,7 +25,7 @@ import harness
 from harness import check
 
 DOMAIN = 198
-TOLERANCE = 0.01  # of the dome's area, per band
+TOLERANCE = 0.015  # of the dome's area, per band: ~5 vertices of the 338-vertex dome (measured: within 0.9)
 TRAINEES = {"kim": (11, "sim:strips,depth_mm=6,strips=2"), "lee": (12, "sim:slide,depth_mm=2,slide_mm=30")}
 
 
@@ -42,8 +45,11 @@ def run(build, source, out):
         web = procs.web()
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=10)
         ws.send(json.dumps({"follow": "all"}))
-        stations = {name: procs.trainee(name, phantom=ph, extra=["--input", traj]) for name, (ph, traj) in
-                    TRAINEES.items()}
+        # not --quiet: each station says at its end what it covered
+        stations = {name: procs.start("trainee-" + name, [os.path.join(build, "client", "palp-client"), "--role",
+                                                          "trainee", "--domain", str(DOMAIN), "--phantom", str(ph),
+                                                          "--name", name, "--print-period", "0", "--input", traj])
+                    for name, (ph, traj) in TRAINEES.items()}
         end = time.time() + 90
         while time.time() < end and any(p.poll() is None for p in stations.values()):
             for op, data in harness.ws_read(ws, 0.5):
@@ -85,9 +91,18 @@ def run(build, source, out):
               % (name, cov, rule))
         diff = [abs(a - b) for a, b in zip(cov, graded)]
         check(max(graded) > 0.03 and max(diff) <= TOLERANCE,
-              "%s: the page's coverage %s is the review's thoroughness %s within %.0f point (differences %s points)"
+              "%s: the page's coverage %s is the review's thoroughness %s within %.1f points (differences %s points)"
               % (name, ["%.1f%%" % (100 * c) for c in cov], ["%.1f%%" % (100 * g) for g in graded], 100 * TOLERANCE,
                  ["%.2f" % (100 * d) for d in diff]))
+        # ... and so is what the trainee's own station says at its end (every local model, not 30 Hz)
+        log = procs.log(stations[name])
+        m = re.search(r"\[trainee %s\] you covered light ([0-9.]+)%%, medium ([0-9.]+)%%, deep ([0-9.]+)%% of the dome"
+                      % name, log)
+        check(m is not None, "%s: the station says what it covered" % name)
+        said = [float(x) / 100 for x in m.groups()]
+        diff = [abs(a - b) for a, b in zip(said, graded)]
+        check(max(diff) <= TOLERANCE, "%s: the station's coverage %s is the review's within %.1f points (differences %s "
+              "points)" % (name, m.group(0).split("covered ")[1], 100 * TOLERANCE, ["%.2f" % (100 * d) for d in diff]))
 
 
 if __name__ == "__main__":

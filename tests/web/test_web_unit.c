@@ -414,7 +414,8 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const double depth[3] = {0.005, 0.010, 0.0005}, force[3] = {5, 2, 0.3};
   const char *want[3] = {"medium", "deep", "none"};
   for (int k = 0; k < 3; k++) {
-    write_pole_model(w_lm, sid, 100 + (uint64_t)k, depth[k], force[k]);
+    /* frames the assessment samples (every 3rd at 250 Hz, palp_assess_sample_every): the ones coverage marks */
+    write_pole_model(w_lm, sid, 99 + 3 * (uint64_t)k, depth[k], force[k]);
     char rule[16] = "";
     double dmm = NAN;
     band_want w = {sid, want[k], rule, &dmm};
@@ -425,7 +426,7 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   }
   /* Coverage as the assessment counts thoroughness, per band itself: the pole was pressed medium
    * and deep, never light (as "light or deeper" it would be covered light too). */
-  write_pole_model(w_lm, sid, 110, 0.0001, 0.2); /* a new frame, so that a new live message comes */
+  write_pole_model(w_lm, sid, 111, 0.0001, 0.2); /* a new frame, so that a new live message comes */
   double cov[3] = {-1, -1, -1};
   const int got_cov = next_json(h, c, 300, live_coverage, &(cov_want){sid, cov});
   CHECK(got_cov && cov[0] == 0 && cov[1] > 0 && cov[2] == cov[1],
