@@ -452,8 +452,9 @@ typedef struct findings_ui {
 } findings_ui;
 
 /* One local model (the haptic loop's on_model, the main thread): its contact into the coverage,
- * from the physics steps the assessment samples (a station that took every step's model read up to
- * 0.9 points more than the review, 2026-12-05). */
+ * if its step is one the assessment samples: the station, palp-web and the review then count the
+ * same steps, and what is left between them is the footprint (the nearest triangles for the
+ * touched ones: 0-0.9 points of the dome measured, docs/station.md). */
 static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t frame) {
   findings_ui *u = ctx;
   if (!u->cov || !m->contact || frame % (uint64_t)u->sample_every) return;
