@@ -95,19 +95,44 @@ static void test_coverage_square(void) {
   free(tri);
 }
 
-/* The server's phantom: the model's own mesh (its triangles as the catalogue sends them). */
-static void test_coverage_dome(void) {
+/* The server's phantom: the model's own mesh, its triangles as the catalogue sends them, and a
+ * coverage map on it. */
+typedef struct dome {
+  palp_mesh_def d;
   palp_mesh m;
-  palp_mesh_def d = palp_mesh_default_def();
-  CHECK(palp_mesh_create(&d, &m) == 0, "model mesh");
-  double *rest = malloc(sizeof *rest * 3 * (size_t)m.vertex_count);
-  int32_t *tri = malloc(sizeof *tri * 3 * (size_t)m.triangle_count);
-  for (int i = 0; i < m.vertex_count; i++) rest[3 * i] = m.rest[i].x, rest[3 * i + 1] = m.rest[i].y, rest[3 * i + 2] = m.rest[i].z;
-  for (int t = 0; t < m.triangle_count; t++)
-    for (int k = 0; k < 3; k++) tri[3 * t + k] = m.tri[t][k];
+  double *rest;
+  int32_t *tri;
+  palp_coverage *c;
+} dome;
+static int dome_open(dome *o) {
+  memset(o, 0, sizeof *o);
+  o->d = palp_mesh_default_def();
+  if (palp_mesh_create(&o->d, &o->m) != 0) return -1;
+  const palp_mesh *m = &o->m;
+  o->rest = malloc(sizeof *o->rest * 3 * (size_t)m->vertex_count);
+  o->tri = malloc(sizeof *o->tri * 3 * (size_t)m->triangle_count);
+  if (!o->rest || !o->tri) return -1;
+  for (int i = 0; i < m->vertex_count; i++)
+    o->rest[3 * i] = m->rest[i].x, o->rest[3 * i + 1] = m->rest[i].y, o->rest[3 * i + 2] = m->rest[i].z;
+  for (int t = 0; t < m->triangle_count; t++)
+    for (int k = 0; k < 3; k++) o->tri[3 * t + k] = m->tri[t][k];
   int rc;
-  palp_coverage *c = palp_coverage_create(rest, m.vertex_count, tri, m.triangle_count, m.dome_triangle_count, &rc);
-  CHECK(c != NULL, "dome accepted");
+  o->c = palp_coverage_create(o->rest, m->vertex_count, o->tri, m->triangle_count, m->dome_triangle_count, &rc);
+  return o->c ? 0 : -1;
+}
+static void dome_close(dome *o) {
+  palp_coverage_destroy(o->c);
+  free(o->rest);
+  free(o->tri);
+  palp_mesh_destroy(&o->m);
+}
+
+static void test_coverage_dome(void) {
+  dome o;
+  CHECK(dome_open(&o) == 0, "the model's mesh, accepted as a dome");
+  const palp_mesh m = o.m;
+  palp_coverage *c = o.c;
+  const palp_mesh_def d = o.d;
   double model_area = 0;
   for (int i = 0; i < m.vertex_count; i++) model_area += m.vertex_area[i];
   const double A = palp_coverage_dome_area(c), R = d.radius, hemi = 2 * PI * R * R;
@@ -123,10 +148,7 @@ static void test_coverage_dome(void) {
   palp_coverage_fractions(c, f);
   CHECK(fabs(f[0] - 5.2e-4 / hemi) < 0.2 * 5.2e-4 / hemi, "patch at the pole: %.4f of the dome vs %.4f", f[0],
         5.2e-4 / hemi);
-  palp_coverage_destroy(c);
-  free(rest);
-  free(tri);
-  palp_mesh_destroy(&m);
+  dome_close(&o);
 }
 
 /* The assessment's footprint as the bridge takes it (palp_coverage_press_triangles): the
@@ -143,18 +165,13 @@ static int by_dist(const void *a, const void *b) {
   return x < y ? -1 : x > y;
 }
 static void test_coverage_triangles(void) {
-  palp_mesh m;
-  palp_mesh_def d = palp_mesh_default_def();
-  CHECK(palp_mesh_create(&d, &m) == 0, "model mesh");
-  double *rest = malloc(sizeof *rest * 3 * (size_t)m.vertex_count);
-  int32_t *tri = malloc(sizeof *tri * 3 * (size_t)m.triangle_count);
+  dome o;
+  CHECK(dome_open(&o) == 0, "the model's mesh, accepted as a dome");
+  const palp_mesh m = o.m;
+  palp_coverage *c = o.c;
+  const palp_mesh_def d = o.d;
   tri_dist *td = malloc(sizeof *td * (size_t)m.dome_triangle_count);
   uint8_t *hit = malloc((size_t)m.vertex_count);
-  for (int i = 0; i < m.vertex_count; i++) rest[3 * i] = m.rest[i].x, rest[3 * i + 1] = m.rest[i].y, rest[3 * i + 2] = m.rest[i].z;
-  for (int t = 0; t < m.triangle_count; t++)
-    for (int k = 0; k < 3; k++) tri[3 * t + k] = m.tri[t][k];
-  int rc;
-  palp_coverage *c = palp_coverage_create(rest, m.vertex_count, tri, m.triangle_count, m.dome_triangle_count, &rc);
   const double R = d.radius, A = palp_coverage_dome_area(c);
   /* polar / azimuth [deg] and depth below the skin [m] */
   const double where[][3] = {{3, 10, 0}, {30, 40, 0.006}, {55, 200, 0.002}, {70, 300, 0.010}};
@@ -215,12 +232,9 @@ static void test_coverage_triangles(void) {
   palp_coverage_fractions(c, f);
   CHECK(f[2] > 0 && f[2] < 0.25, "a million triangles asked: %d at most, %.3f of the dome", PALP_COVERAGE_TRIANGLES_MAX,
         f[2]);
-  palp_coverage_destroy(c);
   free(hit);
   free(td);
-  free(rest);
-  free(tri);
-  palp_mesh_destroy(&m);
+  dome_close(&o);
 }
 
 int main(void) {
