@@ -127,12 +127,11 @@ static void dome_close(dome *o) {
   palp_mesh_destroy(&o->m);
 }
 
-static void test_coverage_dome(void) {
-  dome o;
-  CHECK(dome_open(&o) == 0, "the model's mesh, accepted as a dome");
-  const palp_mesh m = o.m;
-  palp_coverage *c = o.c;
-  const palp_mesh_def d = o.d;
+static void test_coverage_dome(const dome *o) {
+  const palp_mesh m = o->m;
+  const palp_mesh_def d = o->d;
+  palp_coverage *c = o->c;
+  palp_coverage_reset(c);
   double model_area = 0;
   for (int i = 0; i < m.vertex_count; i++) model_area += m.vertex_area[i];
   const double A = palp_coverage_dome_area(c), R = d.radius, hemi = 2 * PI * R * R;
@@ -148,7 +147,6 @@ static void test_coverage_dome(void) {
   palp_coverage_fractions(c, f);
   CHECK(fabs(f[0] - 5.2e-4 / hemi) < 0.2 * 5.2e-4 / hemi, "patch at the pole: %.4f of the dome vs %.4f", f[0],
         5.2e-4 / hemi);
-  dome_close(&o);
 }
 
 /* The assessment's footprint as the bridge takes it (palp_coverage_press_triangles): the
@@ -164,15 +162,12 @@ static int by_dist(const void *a, const void *b) {
   const double x = ((const tri_dist *)a)->d, y = ((const tri_dist *)b)->d;
   return x < y ? -1 : x > y;
 }
-static void test_coverage_triangles(void) {
-  dome o;
-  CHECK(dome_open(&o) == 0, "the model's mesh, accepted as a dome");
-  const palp_mesh m = o.m;
-  palp_coverage *c = o.c;
-  const palp_mesh_def d = o.d;
+static void test_coverage_triangles(const dome *o) {
+  const palp_mesh m = o->m;
+  palp_coverage *c = o->c;
+  const double R = o->d.radius, A = palp_coverage_dome_area(c);
   tri_dist *td = malloc(sizeof *td * (size_t)m.dome_triangle_count);
   uint8_t *hit = malloc((size_t)m.vertex_count);
-  const double R = d.radius, A = palp_coverage_dome_area(c);
   /* polar / azimuth [deg] and depth below the skin [m] */
   const double where[][3] = {{3, 10, 0}, {30, 40, 0.006}, {55, 200, 0.002}, {70, 300, 0.010}};
   const int counts[] = {1, 3, 7, 20};
@@ -234,12 +229,14 @@ static void test_coverage_triangles(void) {
         f[2]);
   free(hit);
   free(td);
-  dome_close(&o);
 }
 
 int main(void) {
   test_coverage_square();
-  test_coverage_dome();
-  test_coverage_triangles();
+  dome o;
+  CHECK(dome_open(&o) == 0, "the model's mesh, accepted as a dome");
+  test_coverage_dome(&o);
+  test_coverage_triangles(&o);
+  dome_close(&o);
   CHECK_DONE();
 }
