@@ -4,9 +4,11 @@
  * the report and the class report print), so the DDS test checks what the instructor sees.
  * Used by exercise_trainees.sh on sessions played by palp-client's scripted trainees.
  *
- * usage: assess_log DB TRAINEE expert|novice
+ * usage: assess_log DB TRAINEE expert|novice [STATION_LOG]
  * Asserts for an expert: every lesion found, no false positive, medium coverage >= 0.95,
- * pattern vertical strip; for a novice: medium coverage < 0.30 and not every lesion found.
+ * pattern vertical strip; for a novice: medium coverage < 0.30 and not every lesion found. With
+ * the trainee's station log: the coverage the station told her at its end ("you covered light
+ * X%, medium Y%, deep Z% of the dome", palp_coverage) is this coverage within 1.5 points per band.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,9 +26,24 @@ static int failures;
     if (!(c)) failures++;                        \
   } while (0)
 
+/* The station's last "you covered light X%, medium Y%, deep Z% of the dome" as fractions: 1, or 0. */
+static int station_coverage(const char *path, const char *trainee, double out[3]) {
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  char line[1024], head[96];
+  snprintf(head, sizeof head, "[trainee %s] you covered light %%lf%%%%, medium %%lf%%%%, deep %%lf%%%%", trainee);
+  int found = 0;
+  while (fgets(line, sizeof line, f)) {
+    double l, m, d;
+    if (sscanf(line, head, &l, &m, &d) == 3) out[0] = l / 100, out[1] = m / 100, out[2] = d / 100, found = 1;
+  }
+  fclose(f);
+  return found;
+}
+
 int main(int argc, char **argv) {
-  if (argc != 4 || (strcmp(argv[3], "expert") && strcmp(argv[3], "novice"))) {
-    fprintf(stderr, "usage: %s DB TRAINEE expert|novice\n", argv[0]);
+  if ((argc != 4 && argc != 5) || (strcmp(argv[3], "expert") && strcmp(argv[3], "novice"))) {
+    fprintf(stderr, "usage: %s DB TRAINEE expert|novice [STATION_LOG]\n", argv[0]);
     return 2;
   }
   const int expert = !strcmp(argv[3], "expert");
@@ -71,6 +88,17 @@ int main(int argc, char **argv) {
   } else {
     CHECK(r.coverage[PALP_BAND_MEDIUM] < 0.30, "novice medium coverage %.3f < 0.30", r.coverage[PALP_BAND_MEDIUM]);
     CHECK(r.found < r.lesion_count, "the novice misses a lesion (%d of %d found)", r.found, r.lesion_count);
+  }
+  if (argc == 5) { /* what the station told the trainee, against the review's thoroughness */
+    double said[3];
+    const int got = station_coverage(argv[4], argv[2], said);
+    double worst = 0;
+    for (int b = 0; got && b < 3; b++) {
+      const double d = said[b] > r.coverage[b] ? said[b] - r.coverage[b] : r.coverage[b] - said[b];
+      if (d > worst) worst = d;
+    }
+    CHECK(got && worst <= 0.015, "the station told %s light %.3f, medium %.3f, deep %.3f: the review's within 0.015 "
+          "(worst %.4f)", argv[2], got ? said[0] : -1, got ? said[1] : -1, got ? said[2] : -1, worst);
   }
   review_assessment_free(&a);
   free(ss);
