@@ -549,7 +549,8 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
     }
   }
   palp_FindingStatus fs;
-  if (palp_cli_station_finding_status(st, &fs) == 1 && fs.last_mark_id) {
+  const int have_status = palp_cli_station_finding_status(st, &fs) == 1;
+  if (have_status && fs.last_mark_id) {
     /* Each answer once (the server refreshes the status every half second). */
     if (fs.last_mark_id != u->shown_id || (int)fs.last_accepted != u->shown_ok || fs.marks != u->shown_marks) {
       u->shown_id = fs.last_mark_id, u->shown_ok = fs.last_accepted, u->shown_marks = fs.marks;
@@ -560,13 +561,16 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
         tprintf(o, "[trainee %s] finding %u accepted: %u mark%s standing\n", o->name, fs.last_mark_id, fs.marks,
                    fs.marks == 1 ? "" : "s");
     }
-    if (u->exercise && !o->quiet && palp_dds_now_ns() >= u->next_time_print) {
-      char cov[96];
-      if (u->cov) tprintf(o, "[trainee %s] %.0f s left; covered so far: %s\n", o->name, fs.time_left,
-                          findings_ui_coverage(u, cov, sizeof cov));
-      else tprintf(o, "[trainee %s] %.0f s left\n", o->name, fs.time_left);
-      u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
-    }
+  }
+  /* The time left every 30 s from the server's status, which it publishes from the session's
+   * start: until 2026-12-05 this waited for a first mark's answer, and a trainee searching for
+   * two minutes before marking was told nothing. */
+  if (have_status && u->exercise && !o->quiet && palp_dds_now_ns() >= u->next_time_print) {
+    char cov[96];
+    if (u->cov) tprintf(o, "[trainee %s] %.0f s left; covered so far: %s\n", o->name, fs.time_left,
+                        findings_ui_coverage(u, cov, sizeof cov));
+    else tprintf(o, "[trainee %s] %.0f s left\n", o->name, fs.time_left);
+    u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
   }
   fflush(stdout);
 }

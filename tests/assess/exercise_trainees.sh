@@ -37,7 +37,17 @@ kill $spid; wait $spid; spid=
 grep -E "mark|finding" "$tmp/nina.log"
 "$assess" "$tmp/log.db" nina novice "$tmp/nina.log" || fail=1
 if [ "${PALP_TEST_EXPERT:-1}" = 1 ]; then
-  grep -E "mark|finding|scripted" "$tmp/eve.log"
+  grep -E "mark|finding|scripted|s left" "$tmp/eve.log"
   "$assess" "$tmp/log.db" eve expert "$tmp/eve.log" || fail=1
+  # Her station tells her the time left and her coverage so far every 30 s from the start: she
+  # searches ~100 s before her first mark, and until 2026-12-05 the first such line waited for it.
+  left=$(grep -n "^\[trainee eve\] [0-9]* s left; covered so far: light" "$tmp/eve.log" | head -1 | cut -d: -f1)
+  mark=$(grep -n "^\[trainee eve\] mark 1 sent" "$tmp/eve.log" | head -1 | cut -d: -f1)
+  if [ -n "$left" ] && [ -n "$mark" ] && [ "$left" -lt "$mark" ]; then
+    echo "ok   eve's station told her the time left and her coverage before her first mark (line $left, mark at line $mark)"
+  else
+    echo "FAIL eve's station told her the time left and her coverage before her first mark (line ${left:-none}, mark at line ${mark:-none})"
+    fail=1
+  fi
 fi
 exit $fail
