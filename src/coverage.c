@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "palp.h" /* PALP_E* codes */
+#include "vec3.h" /* PALP_PI */
 
 struct palp_coverage {
   int n;
@@ -21,8 +22,8 @@ struct palp_coverage {
   double in_band[4];  /* area pressed in band k itself, kept current by press */
 };
 
-palp_coverage *palp_coverage_create(const double *rest, int n, const int32_t *tri, int tri_count,
-                                            int dome_tris, int *rc) {
+palp_coverage *palp_coverage_create(const double *rest, int n, const int32_t *tri, int tri_count, int dome_tris,
+                                    int *rc) {
   *rc = PALP_EINVAL;
   if (!rest || !tri || n <= 0 || tri_count <= 0 || dome_tris <= 0 || dome_tris > tri_count) return NULL;
   for (int i = 0; i < 3 * tri_count; i++)
@@ -77,7 +78,8 @@ void palp_coverage_reset(palp_coverage *c) {
   memset(c->in_band, 0, sizeof c->in_band);
 }
 
-/* Vertex i pressed in `band` (1 light .. 3 deep here: 0 is "none" in c->band): 1 when its deepest band rose or it had not been pressed in this band. */
+/* Vertex i pressed in `band` (1 light .. 3 deep here: 0 is "none" in c->band): 1 when its deepest
+ * band rose or it had not been pressed in this band. */
 static int mark(palp_coverage *c, int i, int band) {
   const uint8_t bit = (uint8_t)(1u << band);
   if (c->area[i] <= 0 || (c->band[i] >= band && (c->bits[i] & bit))) return 0;
@@ -144,7 +146,7 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
 int palp_coverage_press_contact(palp_coverage *c, const double point[3], int triangles, double area, double tip_radius,
                                 int band) {
   if (triangles > 0) return palp_coverage_press_triangles(c, point, triangles, band);
-  const double r = area > 0 && isfinite(area) ? sqrt(area / 3.14159265358979323846) : tip_radius;
+  const double r = area > 0 && isfinite(area) ? sqrt(area / PALP_PI) : tip_radius;
   return palp_coverage_press(c, point, r, band);
 }
 

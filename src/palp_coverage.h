@@ -30,15 +30,15 @@ void palp_coverage_reset(palp_coverage *c);
 
 /* Marks every dome vertex within `radius` [m] of `center` (its projection onto the rest surface:
  * the vertex nearest to it and its neighbours in that radius) as pressed in `band` (PALP_BAND_LIGHT,
- * _MEDIUM or _DEEP; anything else marks nothing). Returns the
- * number of vertices whose deepest band rose or that had not been pressed in this band. */
+ * _MEDIUM or _DEEP; anything else marks nothing). Returns the number of vertices whose deepest band
+ * rose or that had not been pressed in this band. */
 int palp_coverage_press(palp_coverage *c, const double center[3], double radius, int band);
 
 /* The assessment's footprint (src/assess.c: every vertex of the dome triangles the fingertip
- * touches) as near as a local model lets a reader of it come (palp-web, a station): it gives how many
- * triangles are in contact and the contact point, not which. The touched patch is taken as the `count` dome
- * triangles whose rest centroids lie nearest `point` (at most PALP_COVERAGE_TRIANGLES_MAX);
- * their vertices are marked in `band`. Returns as palp_coverage_press. */
+ * touches) as near as a local model lets a reader of it come (palp-web, a station): it gives how
+ * many triangles are in contact and the contact point, not which. The touched patch is taken as the
+ * `count` dome triangles whose rest centroids lie nearest `point` (at most
+ * PALP_COVERAGE_TRIANGLES_MAX); their vertices are marked in `band`. Returns as palp_coverage_press. */
 #define PALP_COVERAGE_TRIANGLES_MAX 64
 int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int count, int band);
 
@@ -55,7 +55,6 @@ void palp_coverage_fractions(const palp_coverage *c, double out[3]);
  * exercise's thoroughness (a place pressed only deep counts for deep alone), each in [0, 1]. */
 void palp_coverage_band_fractions(const palp_coverage *c, double out[3]);
 double palp_coverage_dome_area(const palp_coverage *c);
-
 
 #ifdef __cplusplus
 }
