@@ -453,15 +453,15 @@ typedef struct findings_ui {
 
 /* One local model (the haptic loop's on_model, the main thread): its contact into the coverage,
  * if its step is one the assessment samples: the station, palp-web and the review then count the
- * same steps, and what is left between them is the footprint (the nearest triangles for the
- * touched ones: 0-0.9 points of the dome measured, docs/station.md). */
+ * same steps, and what is left between them is the footprint (the triangles under the fingertip for
+ * the touched ones: 0-1.1 points of the dome in the tests, docs/web.md). */
 static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t frame) {
   findings_ui *u = ctx;
   if (!u->cov || !m->contact || frame % (uint64_t)u->sample_every) return;
   const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
   const int b = palp_band_of(u->band, palp_fingertip_depth(u->dome_radius, u->tip_radius, m->proxy), force);
-  const double point[3] = {m->point.x, m->point.y, m->point.z};
-  if (b >= 0) palp_coverage_press_contact(u->cov, point, m->triangles, m->area, u->tip_radius, b);
+  const double point[3] = {m->point.x, m->point.y, m->point.z}, proxy[3] = {m->proxy.x, m->proxy.y, m->proxy.z};
+  if (b >= 0) palp_coverage_press_contact(u->cov, point, proxy, m->triangles, m->area, u->tip_radius, b);
 }
 
 /* "light 6.3%, medium 0.0%, deep 0.0%" of the dome, in each band as the review's thoroughness. */

@@ -15,6 +15,7 @@ struct palp_coverage {
   uint8_t *band;   /* per vertex: deepest band pressed, 1 light .. 3 deep, 0 none */
   uint8_t *bits;   /* per vertex: the bands pressed, 1 << (1 light .. 3 deep) */
   double dome_area;
+  double radius;      /* the largest |rest| [m]: the dome's, at its pole */
   int dome_tris;
   int32_t *tri;       /* 3 per dome triangle */
   double *centroid;   /* 3 per dome triangle, on the rest mesh [m] */
@@ -47,6 +48,10 @@ palp_coverage *palp_coverage_create(const double *rest, int n, const int32_t *tr
   }
   memcpy(c->rest, rest, sizeof *c->rest * 3 * (size_t)n);
   memcpy(c->tri, tri, sizeof *c->tri * 3 * (size_t)dome_tris);
+  for (int i = 0; i < n; i++) {
+    const double *p = rest + 3 * i;
+    c->radius = fmax(c->radius, sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
+  }
   for (int t = 0; t < dome_tris; t++) {
     const double *a = rest + 3 * tri[3 * t], *b = rest + 3 * tri[3 * t + 1], *d = rest + 3 * tri[3 * t + 2];
     for (int k = 0; k < 3; k++) c->centroid[3 * t + k] = (a[k] + b[k] + d[k]) / 3.0;
@@ -119,19 +124,19 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
   if (!c || band < PALP_BAND_LIGHT || band > PALP_BAND_DEEP || count <= 0 || !isfinite(point[0]) ||
       !isfinite(point[1]) || !isfinite(point[2]))
     return 0;
+  const double len = sqrt(point[0] * point[0] + point[1] * point[1] + point[2] * point[2]);
+  if (!(len > 0)) return 0;
   if (count > PALP_COVERAGE_TRIANGLES_MAX) count = PALP_COVERAGE_TRIANGLES_MAX;
   if (count > c->dome_tris) count = c->dome_tris;
-  /* The `count` centroids nearest the point, by insertion into a sorted list. Nearest in space is
-   * nearest on the dome: from a point on a ray through the centre, the distance to the sphere's
-   * points grows with their angle to that ray, so a contact point pressed inside the rest surface
-   * picks the same triangles as its projection onto it. */
+  /* The point projected onto the dome (a fingertip's centre lies outside it, a contact point
+   * pressed in inside), then the `count` centroids nearest it, by insertion into a sorted list. */
+  const double q[3] = {point[0] * c->radius / len, point[1] * c->radius / len, point[2] * c->radius / len};
   int best[PALP_COVERAGE_TRIANGLES_MAX];
   double bd[PALP_COVERAGE_TRIANGLES_MAX];
   int have = 0;
   for (int t = 0; t < c->dome_tris; t++) {
     const double *g = c->centroid + 3 * t;
-    const double d2 = (g[0] - point[0]) * (g[0] - point[0]) + (g[1] - point[1]) * (g[1] - point[1]) +
-                      (g[2] - point[2]) * (g[2] - point[2]);
+    const double d2 = (g[0] - q[0]) * (g[0] - q[0]) + (g[1] - q[1]) * (g[1] - q[1]) + (g[2] - q[2]) * (g[2] - q[2]);
     if (have == count && !(d2 < bd[have - 1])) continue;
     int j = have < count ? have++ : have - 1;
     while (j > 0 && bd[j - 1] > d2) bd[j] = bd[j - 1], best[j] = best[j - 1], j--;
@@ -143,9 +148,9 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
   return raised;
 }
 
-int palp_coverage_press_contact(palp_coverage *c, const double point[3], int triangles, double area, double tip_radius,
-                                int band) {
-  if (triangles > 0) return palp_coverage_press_triangles(c, point, triangles, band);
+int palp_coverage_press_contact(palp_coverage *c, const double point[3], const double proxy[3], int triangles,
+                                double area, double tip_radius, int band) {
+  if (triangles > 0) return palp_coverage_press_triangles(c, proxy, triangles, band);
   const double r = area > 0 && isfinite(area) ? sqrt(area / PALP_PI) : tip_radius;
   return palp_coverage_press(c, point, r, band);
 }

@@ -36,18 +36,21 @@ int palp_coverage_press(palp_coverage *c, const double center[3], double radius,
 
 /* The assessment's footprint (src/assess.c: every vertex of the dome triangles the fingertip
  * touches) as near as a local model lets a reader of it come (palp-web, a station): it gives how
- * many triangles are in contact and the contact point, not which. The touched patch is taken as the
- * `count` dome triangles whose rest centroids lie nearest `point` (at most
- * PALP_COVERAGE_TRIANGLES_MAX); their vertices are marked in `band`. Returns as palp_coverage_press. */
+ * many triangles are in contact and where the fingertip is, not which triangles. The touched patch
+ * is taken as the `count` dome triangles whose rest centroids lie nearest `point` projected onto
+ * the dome (at most PALP_COVERAGE_TRIANGLES_MAX), `point` the fingertip's centre (the proxy): the
+ * patch under it. Their vertices are marked in `band`. Returns as palp_coverage_press. */
 #define PALP_COVERAGE_TRIANGLES_MAX 64
 int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int count, int band);
 
-/* A fingertip's contact as a local model gives it (palp_local_model: its point, how many triangles
- * it touches, its footprint area), pressed in `band`: the nearest `triangles` triangles; without a
- * count, the disc of the footprint's area (radius sqrt(area / pi); tip_radius [m] when the area is
- * 0). The one rule palp-web's pages and a station's terminal mark by. Returns as palp_coverage_press. */
-int palp_coverage_press_contact(palp_coverage *c, const double point[3], int triangles, double area, double tip_radius,
-                                int band);
+/* A fingertip's contact as a local model gives it (palp_local_model: its contact point, its centre
+ * the proxy, how many triangles it touches, its footprint area), pressed in `band`: the `triangles`
+ * triangles under the proxy; without a count, the disc of the footprint's area around the contact
+ * point (radius sqrt(area / pi); tip_radius [m] when the area is 0). The one rule palp-web's pages
+ * and a station's terminal mark by (docs/web.md, "Measured against the grade"). Returns as
+ * palp_coverage_press. */
+int palp_coverage_press_contact(palp_coverage *c, const double point[3], const double proxy[3], int triangles,
+                                double area, double tip_radius, int band);
 
 /* Area fractions of the dome pressed at least light / medium / deep, each in [0, 1]. */
 void palp_coverage_fractions(const palp_coverage *c, double out[3]);

@@ -1053,7 +1053,7 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   if (s->cov && f->lm_contact && isfinite(m->period) && m->period > 0 &&
       m->frame % (uint64_t)palp_assess_sample_every(1.0 / m->period, PALP_ASSESS_SAMPLE_HZ) == 0) {
     const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
-    if (band) palp_coverage_press_contact(s->cov, f->point, f->lm_triangles, f->area, f->radius, band - 1);
+    if (band) palp_coverage_press_contact(s->cov, f->point, f->proxy, f->lm_triangles, f->area, f->radius, band - 1);
   }
   if (banding_exercise(h, s)) recompute_force(h, s); /* the band follows the fingertip's depth */
   s->changed = 1;
