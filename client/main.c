@@ -581,8 +581,9 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
     tprintf(o, "[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
   if (!o->quiet && u->cov) {
     char cov[96];
-    tprintf(o, "[trainee %s] you covered %s of the dome (the instructor's review counts the same within about "
-               "a point, and shows which lumps you found)\n", o->name, findings_ui_coverage(u, cov, sizeof cov));
+    tprintf(o, "[trainee %s] you covered %s of the dome (the instructor's review counts it from the triangles "
+               "you touched, a few points either way, and shows which lumps you found)\n", o->name,
+               findings_ui_coverage(u, cov, sizeof cov));
   }
   palp_coverage_destroy(u->cov);
   u->cov = NULL;
