@@ -65,8 +65,10 @@ forcehelp=$(grep -c "+/- force" "$tmp/lines")
 cleared=$(grep -c "${esc}\[K\[trainee keys\] haptic thread at" "$tmp/client.log")
 # The keys move the fingertip at 50 mm/s at most (client/input_keyboard.c, KF_SPEED), never by a whole
 # burst of steps in one tick: the device's fastest move between two haptic ticks (the trace, every tick)
-# is at most 50 mm/s (+2% for the trace's 6 digits) and, with 7 steps at once, reaches 40 mm/s.
-vmax=$(awk -F, 'NR > 2 && $1 > t { d = sqrt(($4 - x) ^ 2 + ($5 - y) ^ 2 + ($6 - z) ^ 2) / ($1 - t); if (d > m) m = d }
+# is at most 50 mm/s (+2% for the trace's 6 digits) and, with 7 steps at once, reaches 40 mm/s. Ticks
+# under half a period apart (the one after a late wake-up) are left out: over 0.1-0.5 ms the trace's
+# digits (1 us, 0.1 um) are worth several per cent (a fresh clone's run read 51.2 mm/s, 2026-12-05).
+vmax=$(awk -F, 'NR > 2 && $1 - t >= 0.0005 { d = sqrt(($4 - x) ^ 2 + ($5 - y) ^ 2 + ($6 - z) ^ 2) / ($1 - t); if (d > m) m = d }
                 NR > 1 { t = $1; x = $4; y = $5; z = $6 } END { printf "%.4f", m }' "$tmp/trace.csv" 2>/dev/null)
 [ -n "$vmax" ] || vmax=-1
 # one press held at the 10 N safe force (23 mm): one announcement, however the force wavers at the limit
