@@ -76,11 +76,9 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
 
 /* ---- main-thread hooks ----------------------------------------------------------- */
 
-/* Frames between two logged records for a record rate of hz at a physics rate of rate_hz. */
-static int log_every(double rate_hz, double hz) {
-  const long k = rate_hz > hz ? lround(rate_hz / hz) : 1;
-  return k > 0 && k < 1000000 ? (int)k : 1;
-}
+/* Frames between two logged records for a record rate of hz at a physics rate of rate_hz: the
+ * assessment's sampling rule (palp_assess_sample_every), which the stations' coverage also follows. */
+static int log_every(double rate_hz, double hz) { return palp_assess_sample_every(rate_hz, hz); }
 
 static void on_opened(void *ctx, const palp_srv_session_info *i) {
   palp_srv_db_log *l = ctx;
@@ -121,7 +119,7 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   s->last_flush_ns = palp_dds_now_ns();
   /* Every physics step when the physics is slower than assess_sample_hz. */
   const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : PALP_ASSESS_SAMPLE_HZ;
-  s->sample_every = palp_assess_sample_every(i->tick_rate_hz, hz);
+  s->sample_every = log_every(i->tick_rate_hz, hz);
   /* From the session's own physics rate, not the server's tick rate: a 1 kHz phantom on a
    * 100 Hz server logged every frame and a mesh 20 times a second (10x and 10x the intent),
    * and summarising and hashing each frame cost its tick ~10 us (issue 11). */

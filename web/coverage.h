@@ -10,8 +10,6 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "palp_coverage.h"
-
 /* Pressure bands of the force gauge [N]: light below light_max, medium up to medium_max, deep
  * above; a force below touch_min is resting on the skin, not palpating (docs/web.md). */
 typedef struct palp_web_bands {

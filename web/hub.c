@@ -15,6 +15,7 @@
 
 #include "palp.h"
 #include "palp_assess.h"
+#include "palp_coverage.h"
 #include "palp_dds.h"
 #include "palp_dds_strangers.h"
 
