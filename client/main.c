@@ -20,6 +20,7 @@
 #include "palp_dds.h"
 #include "palp_coverage.h"
 #include "palp_dds_refusals.h"
+#include "palp_place.h"
 #include "station.h"
 #include "view.h"
 
@@ -587,6 +588,52 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
   }
   palp_coverage_destroy(u->cov);
   u->cov = NULL;
+}
+
+/* What the trainee's marks found, as the server told it at the session's end (palp_debrief,
+ * docs/assessment.md "Debrief"): as much as the exercise lets her know. The server writes it as
+ * the session closes: at once after its time limit, or as this station's LEAVE reaches it. */
+#define DEBRIEF_WAIT_S 3.0
+static void print_debrief(const opts *o, palp_cli_station *st) {
+  if (st->debrief_topic_refused) {
+    tprintf(o, "[trainee %s] no debrief: this identity's permissions predate it (the instructor re-issues them with "
+               "make-classroom-pki.sh DIR init); the instructor's review shows which lumps you found\n", o->name);
+    return;
+  }
+  palp_Debrief d;
+  palp_DebriefLesion les[PALP_DEBRIEF_MAX_LESIONS];
+  char err[160];
+  const int rc = palp_cli_station_debrief(st, DEBRIEF_WAIT_S, &d, les, err, sizeof err);
+  if (rc < 0) {
+    palp_log_warn(o->log, "%s", err);
+    return;
+  }
+  if (rc == 0) {
+    tprintf(o, "[trainee %s] no debrief came from the server within %.0f s; the instructor's review shows which "
+               "lumps you found\n", o->name, DEBRIEF_WAIT_S);
+    return;
+  }
+  if (d.level == palp_DEBRIEF_NONE) {
+    tprintf(o, "[trainee %s] debrief: this exercise keeps its lumps for the instructor's review (%u mark%s standing)\n",
+               o->name, d.marks, d.marks == 1 ? "" : "s");
+    return;
+  }
+  char extra[64] = "";
+  if (d.duplicates) snprintf(extra, sizeof extra, ", %u on a lump already found", d.duplicates);
+  tprintf(o, "[trainee %s] debrief: you found %u of %u lump%s with %u mark%s standing; %u mark%s near no lump%s%s\n",
+             o->name, d.found, d.lesions, d.lesions == 1 ? "" : "s", d.marks, d.marks == 1 ? "" : "s", d.false_marks,
+             d.false_marks == 1 ? " was" : "s were", extra,
+             d.level == palp_DEBRIEF_COUNT ? " (this exercise does not say where its lumps are: the instructor's "
+                                             "review does)" : "");
+  for (uint32_t i = 0; i < d.lesion._length; i++) {
+    const palp_DebriefLesion *l = &les[i];
+    const palp_vec3 p = {l->point.x, l->point.y, l->point.z};
+    char by[32] = "MISSED";
+    if (l->found_by) snprintf(by, sizeof by, "found by mark %u", l->found_by);
+    tprintf(o, "[trainee %s]   lump %u %s: at %.1f o'clock, %.0f mm from the pole along the skin; %.0f mm across, "
+               "its centre %.0f mm deep\n", o->name, i + 1, by, palp_place_clock_hours(p), palp_place_arc(p) * 1e3,
+               l->diameter * 1e3, l->depth * 1e3);
+  }
 }
 
 /* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
@@ -1350,6 +1397,7 @@ int main(int argc, char **argv) {
   fflush(stdout);
   rc = trainee ? run_trainee(&o, &st, &ph, in) : run_viewer(&o, &st, &ph, observer);
   palp_cli_station_leave(&st);
+  if (trainee && st.in_exercise && !o.quiet) print_debrief(&o, &st);
   if (st.goodbye_unanswered) {
     /* Said even with --quiet: the instructor may otherwise read "not back" in the log as a crash. */
     printf("[%s %s] the server did not answer within %.0f s after this station's stall, so its goodbye may be lost: "

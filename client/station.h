@@ -32,6 +32,10 @@ typedef struct palp_cli_station {
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
   dds_entity_t exercise_r;    /* palp_exercise (issue 13): what the trainee may know of an exercise */
   dds_entity_t finding_w, finding_status_r; /* trainee: "lump here" marks and the server's answers */
+  dds_entity_t debrief_r;     /* trainee: palp_debrief, what its marks found, at its session's end; 0: none
+                               * (a secured identity whose permissions predate the topic) */
+  int debrief_topic_refused;  /* ... and that is why: said once at the end of an exercise */
+  int in_exercise;            /* palp_cli_station_exercise found the joined phantom's exercise */
   uint32_t next_mark_id;      /* the station numbers its marks from 1 */
   uint32_t request_seq;
   palp_dds_security sec;    /* identity; kind PALP_DDS_ID_NONE: plain DDS */
@@ -142,6 +146,14 @@ int palp_cli_station_mark(palp_cli_station *st, palp_vec3 point, double t);
 int palp_cli_station_withdraw(palp_cli_station *st, uint32_t mark_id);
 /* Non-blocking: 1 and the newest palp_finding_status when one came since the last call. */
 int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *out);
+/* The session's debrief (palp_debrief), which the server writes once as an exercise session
+ * closes: 1 and *out when it came within timeout [s], its lesions copied into lesions
+ * [PALP_DEBRIEF_MAX_LESIONS] (out->lesion points there; checked: at most that many, levels
+ * known, found_by a mark this station numbered), 0 when none came, a negative code when
+ * what came is malformed (err says why). */
+#define PALP_DEBRIEF_MAX_LESIONS 8
+int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief *out, palp_DebriefLesion *lesions,
+                             char *err, size_t errlen);
 
 /* Non-blocking: 1 and the state when the session's state changed to closed. Call it
  * about every 100 ms: a longer gap is taken for a stall of this process, after which

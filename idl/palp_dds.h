@@ -35,6 +35,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_EXERCISE,        /* added with issue 13: what a trainee may know of an exercise */
   PALP_TOPIC_FINDING,         /* added with issue 13: "lump here" marks, trainee -> server */
   PALP_TOPIC_FINDING_STATUS,  /* added with issue 13: the server's answer to the findings */
+  PALP_TOPIC_DEBRIEF,         /* added 2026-12-05: what the trainee found, told at the session's end */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 

@@ -44,6 +44,7 @@ T_STATE=palp_session_state T_CONTACT=palp_contact T_FEEDBACK=palp_feedback
 T_DEFORMATION=palp_deformation T_STATUS=palp_server_status
 T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard T_IDENTITY=palp_server_identity
 T_EXERCISE=palp_exercise T_FINDING=palp_finding T_FINDING_STATUS=palp_finding_status
+T_DEBRIEF=palp_debrief
 # palp_station_request (other vendors, docs/interop.md) is not offered by a secured server.
 
 check_name() {
@@ -100,6 +101,9 @@ utc() { date -u -d "$1" +%Y-%m-%dT%H:%M:%S; }
 # The governance's version: init and classroom re-issue an older one (docs/security.md,
 # "Stations of another vendor"). 2: the topics stations write carry a submessage MAC (SIGN).
 GOVERNANCE_VERSION=2
+# The permissions' version: init and classroom re-issue every identity's older permissions (same
+# validity as its certificate). 2 (2026-12-05): palp_debrief, server -> the trainee's session.
+PERMISSIONS_VERSION=2
 
 topic_rule() { # topic expression, metadata protection kind
   cat <<EOF
@@ -179,6 +183,7 @@ permissions() { # kind name not_before not_after
   {
     cat <<EOF
 <?xml version="1.0" encoding="utf-8"?>
+<!-- palp permissions, version $PERMISSIONS_VERSION (scripts/make-classroom-pki.sh) -->
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
   <permissions>
@@ -196,7 +201,7 @@ EOF
       # Only the server publishes the catalogue, replies, states, status and every session's
       # feedback and deformation; it reads requests from every identity's own partition.
       rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE" '""'
-      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS" "palp/s/*"
+      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS $T_DEBRIEF" "palp/s/*"
       rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
       rule subscribe "$T_CONTACT $T_FINDING" "palp/s/*"
       rule subscribe "$T_STATUS $T_GUARD $T_IDENTITY" '""'
@@ -208,7 +213,8 @@ EOF
       rule publish "$T_REQUEST" "palp/trainee/$name"
       rule publish "$T_CONTACT $T_FINDING" "palp/s/$name/*"
       rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE" '""'
-      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING $T_FINDING_STATUS" "palp/s/$name/*"
+      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING $T_FINDING_STATUS $T_DEBRIEF" \
+        "palp/s/$name/*"
       ;;
     instructor)
       # Reads everything; writes only its own requests (joins as observer or visual station).
@@ -239,12 +245,33 @@ add() { # kind name
   openssl ca -batch -config "$dir/ca/ca.cnf" -days "$days" -notext -in "$base.csr" -out "$base.cert.pem" 2>/dev/null ||
     die "signing $kind/$name failed"
   rm -f "$base.csr"
-  # The permissions are valid exactly as long as the certificate.
-  local nb na
+  permissions_of "$kind" "$name"
+  echo "make-classroom-pki: $kind/$name: $(openssl x509 -in "$base.cert.pem" -noout -serial) until $(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)"
+}
+
+# The permissions are valid exactly as long as the certificate.
+permissions_of() { # kind name
+  local base="$dir/$1/$2" nb na
   nb=$(openssl x509 -in "$base.cert.pem" -noout -startdate | cut -d= -f2)
   na=$(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)
-  permissions "$kind" "$name" "$(utc "$nb")" "$(utc "$na")"
-  echo "make-classroom-pki: $kind/$name: $(openssl x509 -in "$base.cert.pem" -noout -serial) until $na"
+  permissions "$1" "$2" "$(utc "$nb")" "$(utc "$na")"
+}
+
+# Every current identity whose permissions are older than PERMISSIONS_VERSION gets them re-issued
+# (a topic added to palp needs a rule: a station's older permissions cannot create it).
+permissions_refresh() {
+  local c kind name n=0
+  set +f
+  for c in "$dir"/server/*.cert.pem "$dir"/trainee/*.cert.pem "$dir"/instructor/*.cert.pem; do
+    [ -f "$c" ] || continue
+    kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem)
+    grep -q "palp permissions, version $PERMISSIONS_VERSION " "$dir/$kind/$name.permissions.xml" 2>/dev/null && continue
+    permissions_of "$kind" "$name"
+    n=$((n + 1))
+  done
+  set -f
+  [ "$n" -eq 0 ] ||
+    echo "make-classroom-pki: $n identities' permissions re-issued (version $PERMISSIONS_VERSION): copy each $dir/KIND/NAME.permissions.p7s to its station and restart them and the server"
 }
 
 # A TLS server certificate for palp-web (docs/web.md, "HTTPS"), signed by the classroom CA, so that a
@@ -308,6 +335,7 @@ init() {
   fi
   [ -f "$dir/crl.pem" ] || crl
   [ -f "$dir/server/server.cert.pem" ] || add server server
+  permissions_refresh
 }
 
 case $cmd in

@@ -65,9 +65,52 @@ int palp_srv_findings_offer(palp_srv_findings *f, const palp_Finding *in, int64_
     return refuse(f, "mark %u: %d marks made, at most %d per session", in->mark_id, f->made, PALP_SRV_MAX_MARKS);
   f->mark[f->made] = in->mark_id;
   f->standing[f->made] = 1;
+  f->point[f->made] = (palp_vec3){p.x, p.y, p.z};
   f->made++;
   f->marks++;
   f->last_accepted = 1;
   f->accepted++;
   return 1;
+}
+
+int palp_srv_findings_debrief(const palp_srv_findings *f, const palp_exercise *ex, double dome_radius,
+                              uint32_t session_id, const char *reason, palp_Debrief *out,
+                              palp_DebriefLesion *lesion_buf) {
+  memset(out, 0, sizeof *out);
+  out->session_id = session_id;
+  out->level = palp_DEBRIEF_NONE;
+  out->marks = (uint32_t)f->marks;
+  out->lesion._buffer = lesion_buf;
+  out->lesion._release = false;
+  snprintf(out->reason, sizeof out->reason, "%s", reason ? reason : "");
+  /* Only the standing marks count: a withdrawn one is the trainee's own correction. The review
+   * counts the same (its log holds both, palp_assess drops the withdrawn). */
+  palp_finding marks[PALP_SRV_MAX_MARKS];
+  uint32_t ids[PALP_SRV_MAX_MARKS];
+  int n = 0;
+  for (int i = 0; i < f->made && i < PALP_SRV_MAX_MARKS; i++)
+    if (f->standing[i]) {
+      marks[n] = (palp_finding){.t = 0.0, .point = f->point[i], .withdrawn = 0};
+      ids[n++] = f->mark[i];
+    }
+  palp_assess_result r;
+  int match[PALP_SRV_MAX_MARKS];
+  const int rc = palp_assess_findings(ex, dome_radius, marks, n, &r, match);
+  if (rc < 0) return rc;
+  if (ex->debrief == PALP_DEBRIEF_NONE) return 0;
+  out->level = ex->debrief == PALP_DEBRIEF_LESIONS ? palp_DEBRIEF_LESIONS : palp_DEBRIEF_COUNT;
+  out->lesions = (uint32_t)r.lesion_count;
+  out->found = (uint32_t)r.found;
+  out->false_marks = (uint32_t)r.false_positives;
+  out->duplicates = (uint32_t)r.duplicates;
+  if (out->level != palp_DEBRIEF_LESIONS) return 0;
+  for (int l = 0; l < ex->lesion_count && l < PALP_MAX_LESIONS; l++) {
+    const palp_vec3 c = palp_exercise_lesion_surface(&ex->lesion[l], dome_radius);
+    lesion_buf[l] = (palp_DebriefLesion){.point = {c.x, c.y, c.z},
+                                         .depth = ex->lesion[l].depth,
+                                         .diameter = ex->lesion[l].diameter,
+                                         .found_by = r.lesion_found[l] >= 0 ? ids[r.lesion_found[l]] : 0};
+  }
+  out->lesion._length = out->lesion._maximum = (uint32_t)ex->lesion_count;
+  return 0;
 }

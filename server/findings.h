@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "palp.h"
+#include "palp_assess.h"
 #include "palp_types.h"
 
 #define PALP_SRV_MAX_MARKS 64 /* marks a session may make (withdrawn ones count): the log stays bounded */
@@ -32,6 +33,7 @@ typedef struct palp_srv_findings {
   palp_srv_findings_limits lim;
   uint32_t mark[PALP_SRV_MAX_MARKS]; /* ids of the marks made, in order */
   uint8_t standing[PALP_SRV_MAX_MARKS]; /* 1 until withdrawn */
+  palp_vec3 point[PALP_SRV_MAX_MARKS];  /* where each was made [m] (checked finite, on the phantom) */
   int made;                /* marks made (<= PALP_SRV_MAX_MARKS) */
   int marks;               /* standing */
   double tokens;
@@ -49,5 +51,15 @@ void palp_srv_findings_init(palp_srv_findings *f, const palp_srv_findings_limits
  * Returns 1 (accepted) or 0 (refused; f->reason says why). In either case
  * last_mark_id, last_accepted and reason describe this finding. */
 int palp_srv_findings_offer(palp_srv_findings *f, const palp_Finding *in, int64_t now_ns);
+
+/* The session's debrief (palp_debrief, docs/assessment.md "Debrief"): its standing marks matched
+ * to the exercise's lesions as the instructor's review matches them (palp_assess_findings on a dome
+ * of dome_radius [m], the rest pole's distance from the base centre), told at the exercise's level.
+ * reason: why the session ended. Fills every field of out, its lesion sequence pointing into
+ * lesion_buf [PALP_MAX_LESIONS]. Returns 0, or a negative PALP_E* code (out then says nothing of
+ * the lesions). */
+int palp_srv_findings_debrief(const palp_srv_findings *f, const palp_exercise *ex, double dome_radius,
+                              uint32_t session_id, const char *reason, palp_Debrief *out,
+                              palp_DebriefLesion *lesion_buf);
 
 #endif

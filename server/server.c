@@ -554,6 +554,35 @@ static void publish_finding_status(palp_srv_session *s) {
   s->findings_status_ns = now;
 }
 
+/* An exercise session's debrief, written once as it closes (docs/assessment.md, "Debrief"): what
+ * its standing marks found, matched as the review matches them, told at the exercise's level. */
+static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reason) {
+  const palp_exercise *ex = s->phantom->exercise;
+  if (!ex || s->debrief_writer <= 0) return;
+  const palp_mesh *mesh = palp_world_mesh(s->world);
+  const palp_vec3 pole = mesh->rest[mesh->top_vertex];
+  const double R = sqrt(pole.x * pole.x + pole.y * pole.y + pole.z * pole.z); /* as palp_assess's [m] */
+  palp_Debrief m;
+  palp_DebriefLesion lesions[PALP_MAX_LESIONS];
+  const int rc = palp_srv_findings_debrief(&s->findings, ex, R, s->id, reason, &m, lesions);
+  if (rc < 0) {
+    palp_log_warn(srv->log, "session %u: no debrief: %s", s->id, palp_strerror(rc));
+    return;
+  }
+  const dds_return_t w = dds_write(s->debrief_writer, &m);
+  if (w < 0) {
+    palp_log_warn(srv->log, "session %u: the debrief was not sent: %s", s->id, dds_strretcode(w));
+    return;
+  }
+  if (m.level == palp_DEBRIEF_NONE)
+    palp_log_info(srv->log, "session %u: debrief sent: the exercise tells nothing of its lesions (marks standing: %u)",
+                  s->id, m.marks);
+  else
+    palp_log_info(srv->log, "session %u: debrief sent (%s): lesions found %u of %u; marks standing %u, near no lesion %u",
+                  s->id, m.level == palp_DEBRIEF_LESIONS ? "with the lesions' places" : "the count only", m.found,
+                  m.lesions, m.marks, m.false_marks);
+}
+
 /* At most this many findings per session per pass of the main loop: a flooding
  * station cannot hold the main thread; the rest wait in the (bounded) reader. */
 #define FINDINGS_PER_PASS 64
@@ -599,7 +628,11 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
 
 static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason) {
   palp_srv_ticker_remove(srv->ticker, s);
+  /* A mark the station sent just before it left still counts, in its log and its debrief. */
+  handle_findings(srv, s);
   if (s->finding_rc > 0) dds_waitset_detach(srv->waitset, s->finding_rc);
+  /* Before the CLOSED state, which a station waits on: the debrief is there when it looks. */
+  publish_debrief(srv, s, reason);
   /* Detached: the stats are final and owned by this thread now. */
   palp_srv_session_summary sum;
   palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
@@ -867,6 +900,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .local_model_topic = srv->topic[PALP_TOPIC_LOCAL_MODEL],
                               .finding_topic = srv->topic[PALP_TOPIC_FINDING],
                               .finding_status_topic = srv->topic[PALP_TOPIC_FINDING_STATUS],
+                              .debrief_topic = srv->topic[PALP_TOPIC_DEBRIEF],
                               .events = srv->events,
                               .partition = partition,
                               .log = srv->log};
@@ -1354,6 +1388,16 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     /* Secured, palp_station_request is not offered (no identity to check; see below). */
     if (secured(srv) && k == PALP_TOPIC_STATION_REQUEST) continue;
     srv->topic[k] = palp_dds_create_topic(srv->pp, (palp_dds_topic_kind)k);
+    /* palp_debrief came after the classroom PKIs of 2026-12-04 and before: with permissions
+     * that predate it, the server serves on and tells nobody what they found (the review still
+     * does). make-classroom-pki.sh init re-issues them. */
+    if (srv->topic[k] < 0 && k == PALP_TOPIC_DEBRIEF && secured(srv)) {
+      palp_log_warn(srv->log, "no debriefs: the server's permissions do not allow topic palp_debrief (%s); "
+                              "re-issue the classroom's permissions with scripts/make-classroom-pki.sh DIR init "
+                              "(docs/security.md)", dds_strretcode(srv->topic[k]));
+      srv->topic[k] = 0;
+      continue;
+    }
     if (srv->topic[k] < 0) {
       *rc = PALP_EIO;
       fail(err, errlen, "cannot create topic %s: %s", palp_dds_topic_name((palp_dds_topic_kind)k),

@@ -157,6 +157,11 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
                                          .burst = PALP_SRV_FINDING_BURST};
     palp_srv_findings_init(&s->findings, &fl);
   }
+  /* Only an exercise's session is debriefed (docs/assessment.md, "Debrief"). */
+  if (def->debrief_topic > 0 && def->phantom->exercise) {
+    s->debrief_writer = palp_dds_create_writer(s->pub, def->debrief_topic, PALP_TOPIC_DEBRIEF);
+    if (s->debrief_writer < 0) goto dds_fail;
+  }
   palp_world_get_health(s->world, &s->health);
   s->opened_ns = palp_dds_now_ns();
   *err = 0;

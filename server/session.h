@@ -83,6 +83,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t contact_topic, feedback_topic, deformation_topic;
   dds_entity_t local_model_topic; /* 0: no local models (older callers) */
   dds_entity_t finding_topic, finding_status_topic; /* 0: no findings (older callers) */
+  dds_entity_t debrief_topic; /* 0: no debrief (older callers, or permissions that predate it) */
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
@@ -101,6 +102,7 @@ typedef struct palp_srv_session {
   /* issue 13: "lump here" marks, read and answered by the main thread (findings.h) */
   dds_entity_t finding_reader, finding_status_writer, finding_rc;
   palp_srv_findings findings;
+  dds_entity_t debrief_writer; /* palp_debrief, written once as an exercise session closes; 0: none */
   palp_srv_limits limits;
   const palp_srv_events *events;
   palp_log *log;

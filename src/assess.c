@@ -226,6 +226,18 @@ static void pattern(const palp_assess_sample *s, int n, double R, palp_pattern_e
   if (best >= PATTERN_MIN_SHARE) *out = p;
 }
 
+int palp_assess_findings(const palp_exercise *ex, double dome_radius, const palp_finding *f, int nf,
+                         palp_assess_result *out, int *match) {
+  if (!ex || !out || nf < 0 || (nf && !f) || !(dome_radius > 0.0) || ex->lesion_count < 0 ||
+      ex->lesion_count > PALP_MAX_LESIONS)
+    return PALP_EINVAL;
+  for (int i = 0; i < nf; ++i)
+    if (!v3_isfinite(f[i].point)) return PALP_EINVAL;
+  memset(out, 0, sizeof *out);
+  match_findings(ex, dome_radius, f, nf, out, match);
+  return PALP_OK;
+}
+
 int palp_assess_sample_every(double physics_hz, double sample_hz) {
   const long k = physics_hz > sample_hz && sample_hz > 0 ? lround(physics_hz / sample_hz) : 1;
   return k > 0 && k < 1000000 ? (int)k : 1;

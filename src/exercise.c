@@ -217,7 +217,7 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
 static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise *ex) {
   static const char *const keys[] = {"name", "title", "phantom", "instructions", "time_limit_s", "lesions",
                                      "decoys", "pressure_bands", "max_force_N", "match_margin_mm", "rubric",
-                                     "comment", NULL};
+                                     "debrief", "comment", NULL};
   memset(ex, 0, sizeof *ex);
   if (!cJSON_IsObject(root)) return palp_parse_fail(c, PALP_EPARSE, "exercise: expected a JSON object");
   int e;
@@ -257,6 +257,15 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
   double margin = 10.0;
   if ((e = get_num(c, root, "", "match_margin_mm", 0, 0.0, 100.0, &margin))) return e;
   ex->match_margin = margin * 1e-3;
+  /* What the trainee is told at the session's end (docs/assessment.md, "Debrief"). Absent:
+   * nothing, so that a file written before the key, or for an examination, never tells a
+   * trainee where its lesions are. */
+  char debrief[16] = "none";
+  if ((e = get_str(c, root, "", "debrief", 0, debrief, sizeof debrief))) return e;
+  if (strcmp(debrief, "none") == 0) ex->debrief = PALP_DEBRIEF_NONE;
+  else if (strcmp(debrief, "count") == 0) ex->debrief = PALP_DEBRIEF_COUNT;
+  else if (strcmp(debrief, "lesions") == 0) ex->debrief = PALP_DEBRIEF_LESIONS;
+  else return palp_parse_fail(c, PALP_EPARSE, "debrief: unknown \"%s\" (none, count, lesions)", debrief);
   const cJSON *rub = cJSON_GetObjectItemCaseSensitive(root, "rubric");
   if (!rub) return palp_parse_fail(c, PALP_EPARSE, "rubric: missing (an object is required)");
   return parse_rubric(c, rub, &ex->rubric);

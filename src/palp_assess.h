@@ -86,6 +86,13 @@ typedef struct palp_rubric {
                                        strips in order at least this */
 } palp_rubric;
 
+/* What a trainee is told of the lesions when her session ends (the exercise's "debrief"). */
+typedef enum palp_debrief_level {
+  PALP_DEBRIEF_NONE = 0,   /* nothing: the instructor's review tells */
+  PALP_DEBRIEF_COUNT = 1,  /* how many she found, and how many marks found nothing */
+  PALP_DEBRIEF_LESIONS = 2 /* and where each lesion is, found or missed */
+} palp_debrief_level;
+
 #define PALP_EXERCISE_TEXT 1024
 typedef struct palp_exercise {
   char name[64];
@@ -101,6 +108,7 @@ typedef struct palp_exercise {
   double match_margin;    /* [m]: a finding within lesion radius + margin of a lesion's surface
                              projection finds it */
   palp_rubric rubric;
+  palp_debrief_level debrief; /* "debrief": none (default), count, lesions */
 } palp_exercise;
 
 /* Loads or parses an exercise. base_dir resolves a relative "phantom" (NULL or "" = as
@@ -200,6 +208,15 @@ typedef struct palp_assess_result {
 int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double finger_radius, const palp_assess_sample *samples,
                 int sample_count, const palp_finding *findings, int finding_count, palp_assess_result *out,
                 int *finding_match, uint8_t *coverage);
+
+/* Matches findings to the exercise's lesions exactly as palp_assess does, without a session: a
+ * standing finding finds the nearest lesion not yet found whose surface projection on the dome of
+ * dome_radius [m] (|rest pole|) lies within its radius + match_margin of the finding projected onto
+ * the dome. Fills out's lesion_count, found, lesion_found, findings, withdrawn, false_positives,
+ * duplicates and sensitivity, the rest zeroed; match as palp_assess's finding_match. The server
+ * debriefs a trainee with it (docs/assessment.md, "Debrief"). */
+int palp_assess_findings(const palp_exercise *ex, double dome_radius, const palp_finding *findings, int finding_count,
+                         palp_assess_result *out, int *finding_match);
 
 /* A session's fingertip is sampled for the assessment every this many physics steps (the steps whose
  * world frame it divides): round(physics_hz / sample_hz), 1 when the physics is slower; sample_hz is

@@ -9,9 +9,9 @@
 
 #include <cjson/cJSON.h>
 
+#include "palp_place.h"
 #include "review_util.h"
 
-#define PI 3.14159265358979323846
 
 void review_fmt_time(double unix_s, char *buf, size_t len) {
   if (!(unix_s > 0)) {
@@ -101,19 +101,9 @@ int review_load_contacts(palp_db *db, int64_t sid, review_contacts *out) {
   return palp_db_each_contact(db, sid, contact_cb, out);
 }
 
-double review_clock_hours(palp_vec3 p) {
-  /* Angle clockwise from +y seen from above (+z towards the viewer), in hours of a clock face. */
-  double a = atan2(p.x, p.y); /* 0 at +y, +pi/2 at +x */
-  double h = a / (2.0 * PI) * 12.0;
-  if (h <= 0.0) h += 12.0;
-  return h;
-}
+double review_clock_hours(palp_vec3 p) { return palp_place_clock_hours(p); }
 
-double review_arc_m(palp_vec3 p) {
-  /* the great-circle distance from the pole of the sphere through p: r x (angle from +z) */
-  const double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
-  return r > 0 ? r * acos(fmax(-1.0, fmin(1.0, p.z / r))) : 0.0;
-}
+double review_arc_m(palp_vec3 p) { return palp_place_arc(p); }
 
 typedef struct press_acc {
   review_press *v;

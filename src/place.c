@@ -1,0 +1,20 @@
+/* place.c - the clock position and the arc from the pole of a place on the phantom. */
+#include "palp_place.h"
+
+#include <math.h>
+
+#include "vec3.h" /* PALP_PI */
+
+double palp_place_clock_hours(palp_vec3 p) {
+  /* Angle clockwise from +y seen from above (+z towards the viewer), in hours of a clock face. */
+  const double a = atan2(p.x, p.y); /* 0 at +y, +pi/2 at +x [rad] */
+  double h = a / (2.0 * PALP_PI) * 12.0;
+  if (h <= 0.0) h += 12.0;
+  return h;
+}
+
+double palp_place_arc(palp_vec3 p) {
+  /* the great-circle distance from the pole of the sphere through p: r x (angle from +z) [m] */
+  const double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  return r > 0 ? r * acos(fmax(-1.0, fmin(1.0, p.z / r))) : 0.0;
+}
