@@ -59,6 +59,23 @@ int main(void) {
   printf("base: %s\n", err);
   CHECK(strstr(err, "lesions[0]") != NULL, "names the lesion");
 
+  /* The debrief: none unless the file asks (an examination's lesions never leave the server). */
+  CHECK(ex.debrief == PALP_DEBRIEF_NONE, "no \"debrief\" key: none (%d)", (int)ex.debrief);
+  {
+    static const char *const words[] = {"none", "count", "lesions"};
+    static const palp_debrief_level levels[] = {PALP_DEBRIEF_NONE, PALP_DEBRIEF_COUNT, PALP_DEBRIEF_LESIONS};
+    for (int i = 0; i < 3; i++) {
+      char json[2048]; /* good is ~600 characters */
+      const char *at = strstr(good, "\"max_force_N\"");
+      snprintf(json, sizeof json, "%.*s\"debrief\": \"%s\", %s", (int)(at - good), good, words[i], at);
+      palp_exercise d;
+      CHECK(palp_exercise_parse(json, "/x", &d, err, sizeof err) == 0 && d.debrief == levels[i], "\"debrief\": \"%s\" (%s)",
+            words[i], err);
+    }
+  }
+  expect_error("\"max_force_N\": 5", "\"max_force_N\": 5, \"debrief\": \"all\"", "debrief: unknown \"all\"");
+  expect_error("\"max_force_N\": 5", "\"max_force_N\": 5, \"debrief\": true", "debrief: expected a string");
+
   /* 2. Bad files, each naming its field. */
   expect_error("\"title\": \"T\", ", "", "title");
   expect_error("\"depth_mm\": 10", "\"depth_mm\": 1", "lesions[0].depth_mm");

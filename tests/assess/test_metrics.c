@@ -113,6 +113,21 @@ int main(void) {
   CHECK(res.false_positives == 2 && res.duplicates == 1 && res.withdrawn == 1 && res.findings == 4,
         "fp %d dup %d withdrawn %d findings %d", res.false_positives, res.duplicates, res.withdrawn, res.findings);
   CHECK_NEAR(res.sensitivity, 1.0, 0.0, "sensitivity");
+  /* The same findings without a session (the server's debrief): the same verdicts, on the dome of
+   * the mesh's pole radius (40 mm, the default mesh). */
+  {
+    palp_assess_result d;
+    int dm[5];
+    CHECK(palp_assess_findings(&ex, 0.04, f, 5, &d, dm) == 0, "palp_assess_findings");
+    CHECK(d.found == 1 && d.lesion_found[0] == 1 && d.false_positives == 2 && d.duplicates == 1 && d.withdrawn == 1 &&
+              d.findings == 4 && dm[0] == PALP_FINDING_FALSE && dm[1] == 0 && dm[2] == PALP_FINDING_DUPLICATE &&
+              dm[3] == PALP_FINDING_WITHDRAWN && dm[4] == PALP_FINDING_FALSE,
+          "  as palp_assess: found %d by %d, fp %d, dup %d, withdrawn %d", d.found, d.lesion_found[0],
+          d.false_positives, d.duplicates, d.withdrawn);
+    const palp_finding bad = {0.0, {NAN, 0, 0.04}, 0};
+    CHECK(palp_assess_findings(&ex, 0.04, &bad, 1, &d, NULL) == PALP_EINVAL, "  a NaN point refused");
+    CHECK(palp_assess_findings(&ex, 0.0, f, 5, &d, NULL) == PALP_EINVAL, "  a zero radius refused");
+  }
 
   /* 2. Coverage: one sample touching every dome triangle at 8 mm covers the whole
    * surface in the medium band and nothing in the others. */

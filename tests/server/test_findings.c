@@ -13,7 +13,10 @@
  *    (logged as events); another session keeps stepping during the flood;
  *  - finger samples of the position-driven fingertip are logged at assess_sample_hz;
  *  - an exercise's time limit ends its session ("exercise time limit reached", end
- *    reason normal in the log, the station told in the state's reason).
+ *    reason normal in the log, the station told in the state's reason);
+ *  - debriefs: carol's ("lesions") says which of her two marks found which lesion and where
+ *    each lesion is; alice's (no "debrief" key: none) carries no lesion value nor count, and the
+ *    spy reads it among the rest.
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -150,7 +153,8 @@ static void spy_start(spy *s) {
 static void spy_session(spy *s, const char *partition) {
   s->sub_session = palp_dds_session_subscriber(s->pp, partition);
   const palp_dds_topic_kind sess[] = {PALP_TOPIC_CONTACT,     PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
-                                      PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINDING,  PALP_TOPIC_FINDING_STATUS};
+                                      PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINDING,  PALP_TOPIC_FINDING_STATUS,
+                                      PALP_TOPIC_DEBRIEF};
   for (size_t i = 0; i < sizeof sess / sizeof sess[0]; i++) spy_reader(s, s->sub_session, sess[i]);
 }
 
@@ -468,6 +472,11 @@ int main(void) {
   palp_cli_station c;
   test_station_join(&c, DOMAIN, "carol", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
   const int64_t tj = palp_dds_now_ns(); /* the join answered: the session is open */
+  /* carol marks over lesion 1 (polar 31, azimuth 41: the surface above its centre) and 20 mm
+   * from the pole's other side, near neither: her debrief must say 1 of 2, mark 2 near none. */
+  const int c1 = palp_cli_station_mark(&c, dome_point(0.04, 31, 41), 0.1);
+  const int c2 = palp_cli_station_mark(&c, dome_point(0.04, 60, 130), 0.2);
+  CHECK(c1 == 1 && c2 == 2, "carol's marks sent (ids %d, %d)", c1, c2);
   char reason[160] = "";
   int closed = 0;
   while (!closed && palp_dds_now_ns() - tj < (int64_t)6e9) {
@@ -482,14 +491,53 @@ int main(void) {
   CHECK(limit_s >= 1.8 && limit_s <= 3.5, "  within [1.8, 3.5] s of the join");
   const uint32_t carol_session = c.session_id;
 
+  /* ---- debriefs (palp_debrief, docs/assessment.md "Debrief") ----
+   * carol's exercise ("debrief": "lesions") tells her what her marks found and where each lesion
+   * is: the surface above its centre, palp_exercise_lesion_surface of the file's angles, here
+   * computed from the test's own copy of them (polar 31 / 52, azimuth 41 / 217 on R = 40 mm). */
+  {
+    palp_Debrief d;
+    palp_DebriefLesion dl[PALP_DEBRIEF_MAX_LESIONS];
+    char derr[160] = "";
+    const int got = palp_cli_station_debrief(&c, 3.0, &d, dl, derr, sizeof derr);
+    CHECK(got == 1, "carol's debrief came after her time limit (%d %s)", got, derr);
+    CHECK(got == 1 && d.level == palp_DEBRIEF_LESIONS && d.lesions == 2 && d.found == 1 && d.marks == 2 &&
+              d.false_marks == 1 && d.duplicates == 0,
+          "  1 of 2 lesions found, 2 marks standing, 1 near no lesion (level %d, %u of %u, marks %u, false %u, dup %u)",
+          got == 1 ? (int)d.level : -1, d.found, d.lesions, d.marks, d.false_marks, d.duplicates);
+    CHECK(got == 1 && strcmp(d.reason, "exercise time limit reached") == 0, "  the reason: \"%s\"", d.reason);
+    const double pol[2] = {31, 52}, az[2] = {41, 217};
+    for (int l = 0; l < 2 && got == 1 && d.lesion._length == 2; l++) {
+      const palp_vec3 e = dome_point(0.04, pol[l], az[l]);
+      const double err_m = hypot(hypot(dl[l].point.x - e.x, dl[l].point.y - e.y), dl[l].point.z - e.z);
+      CHECK(err_m < 1e-9, "  lesion %d at the surface above its centre (off by %.1e m, tolerance 1e-9)", l + 1, err_m);
+    }
+    CHECK(got == 1 && d.lesion._length == 2 && dl[0].found_by == 1 && dl[1].found_by == 0 &&
+              fabs(dl[0].depth - 0.0103) < 1e-12 && fabs(dl[1].diameter - 0.0106) < 1e-12,
+          "  lesion 1 found by mark 1, lesion 2 missed; depth 10.3 mm, diameter 10.6 mm as the file says");
+  }
+
   palp_cli_station_leave(&a);
   palp_cli_station_leave(&b);
+  /* alice's exercise says nothing ("debrief" absent: none): her debrief comes, with her marks
+   * standing and not one lesion, nor how many (the spy below checks its bytes too). */
+  {
+    palp_Debrief d;
+    palp_DebriefLesion dl[PALP_DEBRIEF_MAX_LESIONS];
+    char derr[160] = "";
+    const int got = palp_cli_station_debrief(&a, 3.0, &d, dl, derr, sizeof derr);
+    CHECK(got == 1 && d.level == palp_DEBRIEF_NONE && d.marks == 63 && d.lesions == 0 && d.found == 0 &&
+              d.false_marks == 0 && d.lesion._length == 0,
+          "alice's debrief tells nothing of the lesions (got %d, level %d, marks %u, lesions %u, found %u, listed %u)",
+          got, got == 1 ? (int)d.level : -1, d.marks, d.lesions, d.found, d.lesion._length);
+  }
   test_sleep(0.5);
   atomic_store(&sp.stop, 1);
   pthread_join(sp.thread, NULL);
   const palp_dds_topic_kind must_see[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_EXERCISE,    PALP_TOPIC_SESSION_STATE,
                                           PALP_TOPIC_SESSION_REPLY, PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FEEDBACK,
-                                          PALP_TOPIC_DEFORMATION, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_FINDING};
+                                          PALP_TOPIC_DEFORMATION, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_FINDING,
+                                          PALP_TOPIC_DEBRIEF};
   for (size_t i = 0; i < sizeof must_see / sizeof must_see[0]; i++)
     CHECK(sp.samples[must_see[i]] > 0, "spy captured %llu samples of %s",
           (unsigned long long)sp.samples[must_see[i]], palp_dds_topic_name(must_see[i]));
