@@ -219,9 +219,10 @@ sed -n '/^rendered |F|/,$p' "$out/dana.log"
 echo
 echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found =="
 for t in nina ${eve:+eve}; do
-  grep -E "^\[trainee $t\] (exercise|pressure levels|mark|finding|the server refused|[0-9]+ marks? standing|you covered)|^\[scripted" "$out/$t.log" || true
+  grep -E "^\[trainee $t\] (exercise|pressure levels|mark|finding|the server refused|[0-9]+ marks? standing|you covered|debrief|no debrief|  lump)|^\[scripted" "$out/$t.log" || true
 done
-echo "(the lesions are revealed only in the instructor's log: the review below assesses each session)"
+echo "(the teaching exercise debriefs each trainee as her session ends: what her marks found and where its lumps"
+echo " are; an exercise can keep them for the instructor's review alone. The review below assesses each session)"
 echo
 if [ -n "$mallory" ]; then
   echo "== a revoked identity: mallory's lost laptop =="

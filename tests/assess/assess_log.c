@@ -8,14 +8,19 @@
  * Asserts for an expert: every lesion found, no false positive, medium coverage >= 0.95,
  * pattern vertical strip; for a novice: medium coverage < 0.30 and not every lesion found. With
  * the trainee's station log: the coverage the station told her at its end ("you covered light
- * X%, medium Y%, deep Z% of the dome", palp_coverage) is this coverage within 1.5 points per band.
+ * X%, medium Y%, deep Z% of the dome", palp_coverage) is this coverage within 1.5 points per band,
+ * and the debrief the server sent her at the end (palp_debrief, printed by the station) is the
+ * review's: lesions found and marks near none, and per lesion found or missed, by which mark, its
+ * clock position and arc from the pole (as printed, to its rounding), diameter and depth.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "assess_log.h"
 #include "palp_db.h"
+#include "review_util.h"
 
 static int failures;
 #define CHECK(c, ...)                            \
@@ -39,6 +44,53 @@ static int station_coverage(const char *path, const char *trainee, double out[3]
   }
   fclose(f);
   return found;
+}
+
+/* The station's debrief lines (client/main.c, print_debrief). */
+typedef struct said_lump {
+  int found_by; /* 0: MISSED */
+  double clock_h, arc_mm, across_mm, deep_mm;
+} said_lump;
+typedef struct said_debrief {
+  int seen;
+  unsigned found, lesions, marks, near_none;
+  int lumps;
+  said_lump lump[PALP_MAX_LESIONS];
+} said_debrief;
+
+static void station_debrief(const char *path, const char *trainee, said_debrief *d) {
+  memset(d, 0, sizeof *d);
+  FILE *f = fopen(path, "r");
+  if (!f) return;
+  char line[1024], head[160], found[160], missed[160];
+  snprintf(head, sizeof head, "[trainee %s] debrief: you found ", trainee);
+  snprintf(found, sizeof found, "[trainee %s]   lump %%d found by mark %%d: at %%lf o'clock, %%lf mm from the pole along "
+           "the skin; %%lf mm across, its centre %%lf mm deep", trainee);
+  snprintf(missed, sizeof missed, "[trainee %s]   lump %%d MISSED: at %%lf o'clock, %%lf mm from the pole along "
+           "the skin; %%lf mm across, its centre %%lf mm deep", trainee);
+  while (fgets(line, sizeof line, f)) {
+    int i, by;
+    double c, a, w, dp;
+    /* "... you found 1 of 2 lumps with 1 mark standing; 0 marks were near no lump" (singular or plural) */
+    const char *with = strstr(line, " with "), *semi = strstr(line, "; ");
+    if (!strncmp(line, head, strlen(head)) && with && semi &&
+        sscanf(line + strlen(head), "%u of %u", &d->found, &d->lesions) == 2 && sscanf(with, " with %u", &d->marks) == 1 &&
+        sscanf(semi, "; %u", &d->near_none) == 1)
+      d->seen = 1;
+    else if (sscanf(line, found, &i, &by, &c, &a, &w, &dp) == 6 && i >= 1 && i <= PALP_MAX_LESIONS)
+      d->lump[i - 1] = (said_lump){by, c, a, w, dp}, d->lumps = i > d->lumps ? i : d->lumps;
+    else if (sscanf(line, missed, &i, &c, &a, &w, &dp) == 5 && i >= 1 && i <= PALP_MAX_LESIONS)
+      d->lump[i - 1] = (said_lump){0, c, a, w, dp}, d->lumps = i > d->lumps ? i : d->lumps;
+  }
+  fclose(f);
+}
+
+/* A clock reading's difference in hours, across 12. */
+static double clock_diff(double a, double b) {
+  double d = a - b;
+  while (d > 6) d -= 12;
+  while (d < -6) d += 12;
+  return d < 0 ? -d : d;
 }
 
 int main(int argc, char **argv) {
@@ -99,6 +151,30 @@ int main(int argc, char **argv) {
     }
     CHECK(got && worst <= 0.015, "the station told %s light %.3f, medium %.3f, deep %.3f: the review's within 0.015 "
           "(worst %.4f)", argv[2], got ? said[0] : -1, got ? said[1] : -1, got ? said[2] : -1, worst);
+    /* The debrief: the server matched her standing marks itself (palp_assess_findings); the
+     * review matches the logged ones (palp_assess). The places are printed to 0.1 h and 1 mm. */
+    said_debrief d;
+    station_debrief(argv[4], argv[2], &d);
+    int standing = 0;
+    for (int i = 0; i < a.mark_n; i++) standing += !a.marks[i].f.withdrawn;
+    CHECK(d.seen && (int)d.found == r.found && (int)d.lesions == r.lesion_count && (int)d.near_none == r.false_positives &&
+              (int)d.marks == standing,
+          "the station's debrief told %s: %u of %u found, %u marks standing, %u near none (review: %d of %d, %d, %d)",
+          argv[2], d.found, d.lesions, d.marks, d.near_none, r.found, r.lesion_count, standing, r.false_positives);
+    CHECK(d.lumps == r.lesion_count, "  every lesion listed (%d of %d)", d.lumps, r.lesion_count);
+    for (int l = 0; l < d.lumps && l < r.lesion_count; l++) {
+      const said_lump *u = &d.lump[l];
+      const int by = r.lesion_found[l] >= 0 ? (int)a.marks[r.lesion_found[l]].mark_id : 0;
+      const palp_vec3 p = a.lesion_surface[l];
+      const double clock = review_clock_hours(p), arc = review_arc_m(p) * 1e3;
+      CHECK(u->found_by == by, "  lesion %d: %s (review: %s by mark %d)", l + 1, u->found_by ? "found" : "missed",
+            by ? "found" : "missed", by);
+      CHECK(clock_diff(u->clock_h, clock) <= 0.051 && fabs(u->arc_mm - arc) <= 0.51 &&
+                fabs(u->across_mm - a.ex.lesion[l].diameter * 1e3) <= 0.51 && fabs(u->deep_mm - a.ex.lesion[l].depth * 1e3) <= 0.51,
+            "  lesion %d at %.1f o'clock, %.0f mm from the pole, %.0f mm across, %.0f mm deep (review: %.2f h, %.2f mm, %.1f, "
+            "%.1f; tolerance the printed rounding)", l + 1, u->clock_h, u->arc_mm, u->across_mm, u->deep_mm, clock, arc,
+            a.ex.lesion[l].diameter * 1e3, a.ex.lesion[l].depth * 1e3);
+    }
   }
   review_assessment_free(&a);
   free(ss);

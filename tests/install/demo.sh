@@ -55,6 +55,13 @@ said=$(sed -n 's/^\[trainee nina\] you covered light \([0-9.]*\)%.*/\1/p' "$txt"
 graded=$(awk '$1 == "nina" && $4 ~ /^[0-9]+\/[0-9]+$/ { sub("%", "", $6); print $6; exit }' "$txt")
 check "nina's station told her the light coverage the review grades (${said:-none}% against ${graded:-none}%)" \
   "[ -n '$said' ] && [ -n '$graded' ] && awk 'BEGIN { d = $said - $graded; exit !(d <= 1.5 && d >= -1.5) }'"
+# At her session's end the server debriefs her (the teaching exercise tells the lesions): what her
+# standing marks found is what the review counts (the class report's FOUND column).
+told=$(sed -n 's/^\[trainee nina\] debrief: you found \([0-9]*\) of \([0-9]*\) lumps.*/\1\/\2/p' "$txt" | head -1)
+found=$(awk '$1 == "nina" && $4 ~ /^[0-9]+\/[0-9]+$/ { print $4; exit }' "$txt")
+lumps=$(grep -Ec "^\[trainee nina\]   lump [0-9]+ (MISSED|found by mark [0-9]+): at [0-9.]+ o'clock, [0-9]+ mm from the pole" "$txt")
+check "nina's debrief told her she found ${told:-none} lumps, as the review counts (${found:-none}), and where each is ($lumps listed)" \
+  "[ -n '$told' ] && [ '$told' = '$found' ] && [ $lumps -eq \${told#*/} ]"
 check "nina took the exercise and her mark was accepted" \
   "grep -q '^\[trainee nina\] finding 1 accepted' '$txt' && grep -Eq '^\[scripted novice\] [1-9][0-9]* steps' '$txt'"
 check "carol is told when her 2 N safe force limits what she feels (the phantom asks ~2.2 N at 2 mm)" \
