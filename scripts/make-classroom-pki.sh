@@ -271,7 +271,7 @@ permissions_refresh() {
   done
   set -f
   [ "$n" -eq 0 ] ||
-    echo "make-classroom-pki: $n identities' permissions re-issued (version $PERMISSIONS_VERSION): copy each $dir/KIND/NAME.permissions.p7s to its station and restart them and the server"
+    echo "make-classroom-pki: permissions re-issued (version $PERMISSIONS_VERSION) for $n identities: copy each $dir/KIND/NAME.permissions.p7s to its station and restart them and the server"
 }
 
 # A TLS server certificate for palp-web (docs/web.md, "HTTPS"), signed by the classroom CA, so that a

@@ -118,6 +118,22 @@ rc=$?
 # ... whole: the hint is ~480 characters, and a 320-byte buffer cut it mid-sentence until 2026-12-05
 check "a station on an old governance is not answered and is told, in full, to check it (exit $rc)" \
   "[ $rc -ne 0 ] && grep -q 'none of which answered trainee/alice: .*governance.p7s differs from this station.*is this certificate valid and not revoked? (the server.s log names each identity it refuses, and why)\$' '$out/oldgov.log'"
+# A classroom made before palp_debrief (2026-12-05): alice's permissions of version 1 have no rule
+# for it. Her station still palpates (it cannot create the topic, and says so only at an exercise's
+# end), and the script's init re-issues her permissions, signed, with the rule.
+cp -r "$pki" "$out/oldperm"
+sed -i -e '/palp permissions, version/d' -e 's| palp_debrief||; /<topic>palp_debrief<\/topic>/d' \
+  "$out/oldperm/trainee/alice.permissions.xml"
+openssl smime -sign -in "$out/oldperm/trainee/alice.permissions.xml" -text \
+  -out "$out/oldperm/trainee/alice.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/oldperm" --identity trainee/alice --duration 1 \
+  --timeout 4 --quiet >"$out/oldperm.log" 2>&1
+rc=$?
+check "a station whose permissions predate palp_debrief still runs its session (exit $rc)" \
+  "[ $rc -eq 0 ] && ! grep -q palp_debrief '$out/oldperm/trainee/alice.permissions.xml' && grep -q 'session [0-9]*: .* contact samples sent' '$out/oldperm.log'"
+bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
+check "init re-issues her permissions alone, with palp_debrief and signed by the CA" \
+  "grep -q 'permissions re-issued (version 2) for 1 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
   --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
 cpid=$!

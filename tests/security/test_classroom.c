@@ -209,6 +209,14 @@ static void child_bob(void) {
         "bob's finding writer and finding-status reader in %s are refused: %s, %s", a.partition, dds_strretcode(fw),
         dds_strretcode(fr));
   CHECK(bob.finding_w > 0 && bob.finding_status_r > 0, "bob's own session has his finding writer and status reader");
+  /* 2026-12-05: nor read her debrief (what she found, and where the lesions are), nor write one as
+   * the server in his own session; his own session has his debrief reader */
+  dds_entity_t dr = palp_dds_create_reader(sub, bob.topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
+  dds_entity_t dw_own = palp_dds_create_writer(palp_dds_session_publisher(bob.pp, bob.partition),
+                                               bob.topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
+  CHECK(dr == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && dw_own == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.debrief_r > 0,
+        "bob's debrief reader in %s is refused (%s), and a debrief writer in his own (%s); he reads his own", a.partition,
+        dds_strretcode(dr), dds_strretcode(dw_own));
   /* nor answer findings as the server, nor publish an exercise */
   dds_entity_t own_pub = palp_dds_session_publisher(bob.pp, bob.partition);
   dds_entity_t fsw = palp_dds_create_writer(own_pub, bob.topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
