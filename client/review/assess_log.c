@@ -106,6 +106,62 @@ void review_assessment_free(review_assessment *a) {
   memset(a, 0, sizeof *a);
 }
 
+/* The same lesions: as many, each at the same place, depth and size (to 1e-9 of the file's SI values). */
+static int same_lesions(const palp_exercise *a, const palp_exercise *b) {
+  if (a->lesion_count != b->lesion_count) return 0;
+  for (int i = 0; i < a->lesion_count; i++) {
+    const palp_exercise_lesion *x = &a->lesion[i], *y = &b->lesion[i];
+    if (fabs(x->polar - y->polar) > 1e-9 || fabs(x->azimuth - y->azimuth) > 1e-9 || fabs(x->depth - y->depth) > 1e-9 ||
+        fabs(x->diameter - y->diameter) > 1e-9)
+      return 0;
+  }
+  return 1;
+}
+
+int review_told_before(palp_db *db, const palp_db_session_info *s, const review_assessment *a, review_told *out) {
+  memset(out, 0, sizeof *out);
+  if (!a->has_exercise || !a->ex.lesion_count) return 0;
+  palp_db_filter flt = {.trainee = s->trainee, .until_unix_s = s->start_unix_s};
+  palp_db_session_info *v = NULL;
+  int n = 0;
+  const int rc = palp_db_list_sessions(db, &flt, &v, &n);
+  if (rc < 0) return rc;
+  int found = 0;
+  for (int i = 0; i < n; i++) {
+    /* ended before this one began: its debrief went out as it closed (a log cut short by a killed
+     * server has no end, and its session sent none) */
+    if (v[i].id == s->id || !(v[i].end_unix_s > 0) || v[i].end_unix_s > s->start_unix_s) continue;
+    char name[64];
+    char *json = NULL;
+    if (palp_db_session_exercise(db, v[i].id, name, sizeof name, &json) != 0) continue;
+    palp_exercise e;
+    char perr[256];
+    const int ok = strcmp(name, a->exercise_name) == 0 && palp_exercise_parse(json, NULL, &e, perr, sizeof perr) == 0 &&
+                   e.debrief != PALP_DEBRIEF_NONE && same_lesions(&e, &a->ex);
+    free(json);
+    if (ok && (!found || v[i].end_unix_s > out->end_unix_s)) {
+      snprintf(out->uid, sizeof out->uid, "%s", v[i].uid);
+      out->end_unix_s = v[i].end_unix_s;
+      out->level = e.debrief;
+      found = 1;
+    }
+  }
+  free(v);
+  return found;
+}
+
+void review_told_text(const palp_db_session_info *s, const review_told *t, char *buf, size_t len) {
+  if (!t->uid[0]) {
+    if (len) buf[0] = 0;
+    return;
+  }
+  char when[64];
+  review_fmt_time(t->end_unix_s, when, sizeof when);
+  snprintf(buf, len, "%s had been told %s when session %s ended (%s): this attempt was not blind", s->trainee,
+           t->level == PALP_DEBRIEF_LESIONS ? "where this exercise's lesions are" : "how many lesions this exercise hides",
+           t->uid, when);
+}
+
 int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment *out, char *err, size_t errlen) {
   memset(out, 0, sizeof *out);
   if (errlen) err[0] = 0;

@@ -39,6 +39,20 @@ typedef struct review_assessment {
 int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment *out, char *err, size_t errlen);
 void review_assessment_free(review_assessment *a);
 
+/* Whether the trainee had been debriefed on these very lesions before this attempt (docs/assessment.md,
+ * "Debrief"): the latest earlier session of the same trainee, ended, whose logged exercise has the
+ * same name and lesions and a debrief other than none. 1 and *out when there is one, 0 when not, a
+ * negative code on a database error. An attempt after a debrief that told the lesions is not blind. */
+typedef struct review_told {
+  char uid[128];          /* the earlier session */
+  double end_unix_s;      /* when it ended: the debrief was sent then */
+  palp_debrief_level level;
+} review_told;
+int review_told_before(palp_db *db, const palp_db_session_info *s, const review_assessment *a, review_told *out);
+/* "bob had been told where this exercise's lesions are when session X ended (DATE): this attempt was
+ * not blind" into buf, for show and the report; "" when there was no such session. */
+void review_told_text(const palp_db_session_info *s, const review_told *t, char *buf, size_t len);
+
 /* The metrics as CSV: the header line, then one row per session. */
 void review_metrics_csv_header(FILE *f);
 /* outside_s: seconds outside the model's valid range (review_valid_range_seconds; < 0: the log does

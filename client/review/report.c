@@ -333,6 +333,15 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
     html_str(f, a.ex.title);
     fprintf(f, " (time limit %.0f s). Metrics from %d finger samples; definitions in docs/assessment.md.</p>\n",
             a.ex.time_limit, a.samples);
+    /* an attempt after a debrief on the same lesions (docs/assessment.md, "Debrief") */
+    review_told told;
+    if (review_told_before(db, s, &a, &told) == 1) {
+      char t[512];
+      review_told_text(s, &told, t, sizeof t);
+      fputs("<p class=\"warn\" id=\"told-before\">", f);
+      html_str(f, t);
+      fputs(".</p>\n", f);
+    }
   } else {
     fprintf(f, "<p id=\"exercise-name\">Free practice: no exercise, no hidden lesions, so no sensitivity and no score. "
             "Metrics from %d finger samples.</p>\n", a.samples);

@@ -273,6 +273,13 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   free(c.v);
   if (arc == 0) {
     review_metrics_print(stdout, &a);
+    /* an attempt after a debrief on the same lesions is not blind (docs/assessment.md, "Debrief") */
+    review_told told;
+    if (review_told_before(db, s, &a, &told) == 1) {
+      char t[512];
+      review_told_text(s, &told, t, sizeof t);
+      printf("told       %s\n", t);
+    }
     review_assessment_free(&a);
   } else if (arc == PALP_DB_ENOTFOUND) {
     if (review_stored_metrics_print(db, s->id, stdout) != 0) printf("metrics    none: %s\n", aerr);

@@ -52,6 +52,15 @@ for path, want in ((sys.argv[1], 1), (sys.argv[2], 5)):
 PY
 then ok "show: the finger's touches, 1 for the expert and 5 for the novice, on the dome's surface"
 else bad "show: the finger's touches"; cat "$dir/show-bob1.txt"; fi
+# bob's second attempt came after his first had ended, and the exercise (tests/assess/exercise_expert.json)
+# debriefs with the lesions' places: the review says this attempt was not blind; his first and
+# alice's only attempt were (docs/assessment.md, "Debrief")
+R show class-bob-2 > "$dir/show-bob2.txt" 2>&1 || bad "show bob-2 exit status"
+expect "show: bob's second attempt is not blind, told by his first" \
+  "^told +bob had been told where this exercise's lesions are when session class-bob-1 ended \(2026-01-05 [0-9:]+ [-+][0-9]{4}\): this attempt was not blind$" \
+  "$dir/show-bob2.txt"
+if grep -q "^told" "$dir/show-bob1.txt" "$dir/show-alice.txt"; then bad "show: a first attempt said to be not blind"
+else ok "show: bob's first attempt and alice's say nothing of a debrief before"; fi
 R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
 expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
 # The model's valid range, from the server's valid_range events (review_gen logs alice's: 355 steps
@@ -133,6 +142,10 @@ render() { # render HTML PNG DOM
 }
 R report class-alice-1 --out "$dir/alice.html" > /dev/null || bad "report alice"
 R report class-bob-1 --out "$dir/bob.html" > /dev/null || bad "report bob"
+R report class-bob-2 --out "$dir/bob2.html" > /dev/null || bad "report bob-2"
+expect "report: bob's second attempt is not blind" '<p class="warn" id="told-before">bob had been told where this exercise&#39;s lesions are when session class-bob-1 ended' "$dir/bob2.html"
+if grep -q 'id="told-before"' "$dir/bob.html" "$dir/alice.html"; then bad "report: a first attempt said to be not blind"
+else ok "report: bob's first attempt and alice's say nothing of a debrief before"; fi
 # the instructor's structured grades (score, level) in the report's notes and the JSON export: both read
 # only the free-text grade column until 2026-12-05, so they showed none
 expect "report: alice's note with its level" '<tr><td>[^<]*</td><td>Lee</td><td>proficient</td><td>systematic</td></tr>' "$dir/alice.html"
