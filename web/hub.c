@@ -18,6 +18,7 @@
 #include "palp_coverage.h"
 #include "palp_dds.h"
 #include "palp_dds_strangers.h"
+#include "palp_place.h"
 
 #define FINGERS 4
 #define TAKE 32
@@ -164,12 +165,21 @@ typedef struct server_status {
 
 #define MAX_SERVERS 4
 
+/* The newest debriefs (palp_debrief: what a trainee's marks found, at her exercise session's end),
+ * kept for the pages that should see them: a class's sessions may close within the same second. */
+#define DEBRIEFS 16
+typedef struct debrief_item {
+  item msg;
+  uint32_t sid;
+  char trainee[64];
+} debrief_item;
+
 struct palp_web_hub {
   palp_web_hub_def def;
   char host[32];
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
-  dds_entity_t exercise_r, fstatus_r;
+  dds_entity_t exercise_r, fstatus_r, debrief_r;
   dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
   palp_dds_strangers strangers; /* secured, with a refusal table: plain participants named (hub thread only) */
   int strangers_ready;
@@ -187,6 +197,10 @@ struct palp_web_hub {
   server_status srv[MAX_SERVERS];
   exercise ex[MAX_EXERCISES];
   int sessions_dirty, sessions_structure;
+  /* sessions closed lately, with their trainees: a debrief may come after its session's CLOSED state */
+  uint32_t closed_sid[DEBRIEFS];
+  char closed_trainee[DEBRIEFS][64];
+  int closed_next;
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
 
   /* shared with the web thread, under mu */
@@ -198,6 +212,8 @@ struct palp_web_hub {
   item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS];
   uint32_t slot_sid[PALP_WEB_MAX_SESSIONS]; /* 0: free */
   char slot_trainee[PALP_WEB_MAX_SESSIONS][64]; /* its trainee's name, for scoped pages */
+  debrief_item debrief[DEBRIEFS];
+  int debrief_next;
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
@@ -685,6 +701,9 @@ static void free_session(palp_web_hub *h, int slot) {
   publish(h, &h->deform_msg[slot], NULL, 0);
   publish(h, &h->live_msg[slot], NULL, 0);
   pthread_mutex_lock(&h->mu);
+  h->closed_sid[h->closed_next] = h->slot_sid[slot];
+  memcpy(h->closed_trainee[h->closed_next], h->slot_trainee[slot], sizeof h->closed_trainee[0]);
+  h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
   pthread_mutex_unlock(&h->mu);
   h->sessions_dirty = h->sessions_structure = 1;
@@ -759,6 +778,88 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
     if (h->s[i].used && h->s[i].st.phantom_id == m->phantom_id) update_finding_writer(h, i);
   h->sessions_dirty = 1;
+}
+
+static int vec_finite(const palp_Vec3 *v);
+
+/* A session's debrief (docs/assessment.md, "Debrief"), checked as the station checks it, as a page
+ * message: {"type": "debrief", "session", "trainee", "level", "lesions", "found", "marks",
+ * "false_marks", "duplicates", "reason", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm",
+ * "deep_mm", "point_mm"}]}, the places named as every tool names them (palp_place_*). */
+static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
+  const uint32_t n = m->lesion._length;
+  int ok = m->level <= palp_DEBRIEF_LESIONS && m->lesions <= PALP_MAX_LESIONS && m->found <= m->lesions &&
+           n <= PALP_MAX_LESIONS && (n == 0 || m->lesion._buffer) &&
+           (m->level == palp_DEBRIEF_LESIONS ? n == m->lesions : n == 0);
+  uint32_t found_by = 0;
+  for (uint32_t i = 0; ok && i < n; i++) {
+    const palp_DebriefLesion *l = &m->lesion._buffer[i];
+    ok = vec_finite(&l->point) && isfinite(l->depth) && isfinite(l->diameter) && l->depth >= 0 && l->diameter >= 0;
+    found_by += l->found_by != 0;
+  }
+  if (!ok || (m->level == palp_DEBRIEF_LESIONS && found_by != m->found)) {
+    h->stats.dropped++;
+    return;
+  }
+  char trainee[64] = "";
+  int slot, known = 0;
+  if (find_session(h, m->session_id, &slot)) {
+    pthread_mutex_lock(&h->mu);
+    memcpy(trainee, h->slot_trainee[slot], sizeof trainee);
+    pthread_mutex_unlock(&h->mu);
+    known = 1;
+  }
+  for (int k = 0; k < DEBRIEFS && !known; k++)
+    if (h->closed_sid[k] == m->session_id) memcpy(trainee, h->closed_trainee[k], sizeof trainee), known = 1;
+  if (!known) {
+    h->stats.no_session++;
+    return;
+  }
+  static const char *const level[] = {"none", "count", "lesions"};
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "debrief");
+  cJSON_AddNumberToObject(j, "session", m->session_id);
+  cJSON_AddStringToObject(j, "trainee", trainee);
+  cJSON_AddStringToObject(j, "level", level[m->level]);
+  cJSON_AddNumberToObject(j, "lesions", m->lesions);
+  cJSON_AddNumberToObject(j, "found", m->found);
+  cJSON_AddNumberToObject(j, "marks", m->marks);
+  cJSON_AddNumberToObject(j, "false_marks", m->false_marks);
+  cJSON_AddNumberToObject(j, "duplicates", m->duplicates);
+  char reason[128];
+  copy_str(reason, sizeof reason, m->reason);
+  cJSON_AddStringToObject(j, "reason", reason);
+  cJSON *arr = cJSON_AddArrayToObject(j, "lumps");
+  for (uint32_t i = 0; i < n; i++) {
+    const palp_DebriefLesion *l = &m->lesion._buffer[i];
+    const palp_vec3 p = {l->point.x, l->point.y, l->point.z};
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "found_by", l->found_by);
+    cJSON_AddNumberToObject(o, "clock_h", round(palp_place_clock_hours(p) * 100) / 100);
+    cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
+    cJSON_AddNumberToObject(o, "across_mm", round(l->diameter * 1e4) / 10);
+    cJSON_AddNumberToObject(o, "deep_mm", round(l->depth * 1e4) / 10);
+    const double pt[3] = {round(p.x * 1e4) / 10, round(p.y * 1e4) / 10, round(p.z * 1e4) / 10};
+    cJSON_AddItemToObject(o, "point_mm", cJSON_CreateDoubleArray(pt, 3));
+    cJSON_AddItemToArray(arr, o);
+  }
+  char *text = cJSON_PrintUnformatted(j);
+  cJSON_Delete(j);
+  if (!text) {
+    h->stats.dropped++;
+    return;
+  }
+  pthread_mutex_lock(&h->mu);
+  debrief_item *d = &h->debrief[h->debrief_next];
+  h->debrief_next = (h->debrief_next + 1) % DEBRIEFS;
+  free(d->msg.buf);
+  d->msg.buf = (unsigned char *)text;
+  d->msg.len = strlen(text);
+  d->msg.ver = ++h->next_ver;
+  d->sid = m->session_id;
+  memcpy(d->trainee, trainee, sizeof d->trainee);
+  pthread_mutex_unlock(&h->mu);
+  if (h->wake) h->wake(h->wake_ctx);
 }
 
 /* An exercise withdrawn (disposed) or its server gone: no longer offered. */
@@ -1222,6 +1323,7 @@ static void *hub_main(void *arg) {
         if (h->s[i].used && h->s[i].fb_r > 0) drain(h, h->s[i].fb_r, (sample_fn)on_feedback, NULL, &h->stats.feedbacks);
       drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
       drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
+      drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
       news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
     }
     check_replies(h, now);
@@ -1347,11 +1449,13 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     dds_delete_qos(q);
   }
   h->fstatus_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
+  /* an instructor's permissions read every topic: no older permissions to allow for here */
+  h->debrief_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
   h->exercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->req_pub < 0 || h->fstatus_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -1407,6 +1511,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   }
   for (int i = 0; i < MAX_SERVERS; i++) free(h->srv[i].loads);
   free(h->hello.buf);
+  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf);
   free(h->sessions_msg.buf);
   free(h->status_msg.buf);
   free(h->exercises_msg.buf);
@@ -1432,6 +1537,7 @@ int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients) {
   int rc = PALP_EFULL;
   if (h->nclients < max_clients) {
     h->clients[h->nclients++] = c;
+    c->debrief_ver = h->next_ver; /* a page is sent the debriefs that come after it */
     rc = 0;
   }
   pthread_mutex_unlock(&h->mu);
@@ -1671,6 +1777,24 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
     rc = take(&h->status_msg, pre, buf, len);
     if (rc > 0) c->status_ver = h->status_msg.ver;
     goto out;
+  }
+  {
+    /* the oldest debrief not yet sent that is this page's: its own trainee session's (it may have
+     * followed nothing since the session closed), or an instructor's page's sessions */
+    const debrief_item *pick = NULL;
+    for (int k = 0; k < DEBRIEFS; k++) {
+      const debrief_item *d = &h->debrief[k];
+      if (!d->msg.buf || d->msg.ver <= c->debrief_ver || (pick && d->msg.ver >= pick->msg.ver)) continue;
+      if (c->scope[0] && strcmp(c->scope, d->trainee) != 0) continue;
+      if (c->trainee == d->sid ||
+          (!c->scope[0] && (c->mode == PALP_WEB_FOLLOW_ALL || (c->mode == PALP_WEB_FOLLOW_SESSION && c->follow == d->sid))))
+        pick = d;
+    }
+    if (pick) {
+      rc = take(&pick->msg, pre, buf, len);
+      if (rc > 0) c->debrief_ver = pick->msg.ver;
+      goto out;
+    }
   }
   if (c->mode == PALP_WEB_FOLLOW_NONE) goto out;
   const int64_t min_gap = c->mode == PALP_WEB_FOLLOW_ALL ? (int64_t)(1e9 / h->def.dashboard_hz) : 0;

@@ -74,6 +74,9 @@ typedef struct palp_web_cursor {
    * trainee's token, serve.c): only that trainee's sessions are listed and may be followed, no
    * dashboard, no server status; set after palp_web_hub_attach. */
   char scope[32];
+  /* the newest debrief (palp_debrief) this page was sent: it is sent those of its own trainee session,
+   * or, an instructor's page, of the sessions it follows, that come after it attached */
+  uint64_t debrief_ver;
   /* the answer to this page's last finding request, sent before anything else */
   char reply[320];
   size_t reply_len;
@@ -86,6 +89,7 @@ typedef struct palp_web_hub_stats {
                         * opened (its first contacts can overtake its state) or just closed */
   uint64_t joins, leaves, join_rejected;
   uint64_t exercises, finding_statuses;            /* DDS samples taken */
+  uint64_t debriefs;                               /* palp_debrief samples taken (2026-12-05) */
   uint64_t findings_written, findings_refused;     /* browser finding requests */
   uint64_t late_haptic, lost_haptic;               /* local models late / missing, all sessions */
   int sessions_open, clients;

@@ -14,7 +14,10 @@ triangles under the fingertip stand for the touched ones: 0-0.3 points measured)
 ("you covered light ..%, medium ..%, deep ..% of the dome", since 2026-12-05). Until 2026-12-05 the bridge
 marked a disc of the footprint's area around the contact point: 1.9 (lee) and 5.1-5.3 points (kim)
 more than the review in these sessions, 1.5-7.1 in others (docs/web.md: a trainee's page read 45%
-where the grade said 38%). No browser. DDS domain 198.
+where the grade said 38%). The bridge also passes on each session's debrief (palp_debrief, since
+2026-12-05): the shipped exercises tell the lesions, and the page's message must say what the trainee's
+own station printed (counts, and per lump found or missed, clock and arc within the printed rounding).
+No browser. DDS domain 198.
 usage: test_coverage.py BUILD SOURCE OUT"""
 import json
 import os
@@ -42,6 +45,7 @@ def run(build, source, out):
     procs = harness.Procs(build, source, out, DOMAIN)
     review = os.path.join(build, "client", "review", "palp-review")
     web_cov = {}
+    debriefs = {}  # trainee -> the bridge's debrief message
     try:
         srv = procs.start("server", [os.path.join(build, "server", "palp-server"), "--config",
                                      os.path.join(source, "config", "server-exercises.json"), "--domain", str(DOMAIN),
@@ -61,6 +65,8 @@ def run(build, source, out):
                 if op != 1:
                     continue
                 m = json.loads(data)
+                if m.get("type") == "debrief":
+                    debriefs[m.get("trainee")] = m
                 if m.get("type") == "sessions":
                     for s in m["sessions"]:
                         if s.get("trainee") in TRAINEES and s.get("coverage") is not None:
@@ -68,6 +74,8 @@ def run(build, source, out):
         for op, data in harness.ws_read(ws, 1.0):  # the last list, at 5 Hz
             if op == 1:
                 m = json.loads(data)
+                if m.get("type") == "debrief":
+                    debriefs[m.get("trainee")] = m
                 if m.get("type") == "sessions":
                     for s in m["sessions"]:
                         if s.get("trainee") in TRAINEES and s.get("coverage") is not None:
@@ -108,6 +116,26 @@ def run(build, source, out):
         diff = [abs(a - b) for a, b in zip(said, graded)]
         check(max(diff) <= TOLERANCE, "%s: the station's coverage %s is the review's within %.1f points (differences %s "
               "points)" % (name, m.group(0).split("covered ")[1], 100 * TOLERANCE, ["%.2f" % (100 * d) for d in diff]))
+        # the debrief the page is sent is the one the station printed (both from the server's one sample)
+        d = debriefs.get(name)
+        head = re.search(r"\[trainee %s\] debrief: you found (\d+) of (\d+) lumps? with (\d+) marks? standing; (\d+) "
+                         % name, log)
+        lumps = re.findall(r"\[trainee %s\]   lump (\d+) (MISSED|found by mark \d+): at ([0-9.]+) o'clock, (\d+) mm from the "
+                           r"pole along the skin; (\d+) mm across, its centre (\d+) mm deep" % name, log)
+        check(d is not None and d.get("level") == "lesions" and head is not None,
+              "%s: the bridge sent the session's debrief (%s) and the station printed it" % (name, d and d.get("level")))
+        said = [int(x) for x in head.groups()]
+        check([d["found"], d["lesions"], d["marks"], d["false_marks"]] == said and len(d["lumps"]) == len(lumps) == d["lesions"],
+              "%s: the page's debrief says found %d of %d, %d marks, %d near none, %d lumps, as the station (%s, %d lumps)"
+              % (name, d["found"], d["lesions"], d["marks"], d["false_marks"], len(d["lumps"]), said, len(lumps)))
+        for (k, verdict, clock, arc, across, deep), l in zip(lumps, d["lumps"]):
+            same = (verdict == "MISSED") == (l["found_by"] == 0) and abs(float(clock) - l["clock_h"]) <= 0.051 and \
+                abs(float(arc) - l["arc_mm"]) <= 0.51 and abs(float(across) - l["across_mm"]) <= 0.51 and \
+                abs(float(deep) - l["deep_mm"]) <= 0.51
+            check(same, "%s: lump %s on the page (%s, %.2f h, %.1f mm from the pole, %.1f across, %.1f deep) is the "
+                  "station's (%s, %s h, %s mm, %s, %s; tolerance the printed rounding)"
+                  % (name, k, "found" if l["found_by"] else "missed", l["clock_h"], l["arc_mm"], l["across_mm"],
+                     l["deep_mm"], verdict, clock, arc, across, deep))
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ position-driven finger presses reaches the domain as a Finding at the fingertip'
 (read by a listening DDS reader, web_exercise_peer with phantom 0) and palp-server, hosting the
 shipped exercises (config/server-exercises.json; "easy" is phantom 11), answers: the page then
 shows 1 mark; key W withdraws it; a dashboard
-page's and an observer page's attempts to send a finding are refused and nothing is written.
+page's and an observer page's attempts to send a finding are refused and nothing is written. When
+pat's station leaves, her page shows the server's debrief (the lump missed, where it is).
 DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
 import math
 import os
@@ -59,7 +60,7 @@ def run(build, source, out):
         browser = harness.cdp.Chromium(width=1000, height=760, out_dir=out)
         page = browser.new_page(web.base + "/trainee.html?trainee=pat")
         check(page.wait_for("window.palpState && palpState.connected", 20) is True, "trainee page loaded and connected")
-        procs.trainee("pat", phantom=11, extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
+        pat = procs.trainee("pat", phantom=11, extra=["--input", "sim:press,hold_s=45", "--duration", "80"])
 
         ok = page.wait_for("palpState.trainee.exercise !== null && palpState.trainee.timeLeft !== null && "
                            "!document.getElementById('ex-controls').hidden", 20)
@@ -164,6 +165,22 @@ def run(build, source, out):
         check(r is not None and r["ok"] is False, "the observer's finding is refused: %s" % r)
         time.sleep(1.0)
         check(len(findings(procs, peer)) == 2, "nothing more was written to the domain (2 findings in all)")
+
+        # pat's station leaves: the server debriefs her session ("easy" tells its lesion), and her page
+        # shows it, the missed lump drawn on the phantom; the observer (an instructor's page following
+        # the session) is sent it too (docs/assessment.md, "Debrief").
+        procs.stop(pat)
+        ok = page.wait_for("palpState.trainee.debrief !== null && !document.getElementById('debrief').hidden", 10)
+        shown = page.eval("[document.getElementById('debrief-text').textContent, "
+                          "Array.from(document.querySelectorAll('#debrief-lumps li')).map(function(l){"
+                          "return [l.className, l.textContent];})]")
+        check(ok is True and shown[0].startswith("You found 0 of 1 lump with 0 marks standing") and len(shown[1]) == 1 and
+              shown[1][0][0] == "missed" and re.match(r"lump 1 MISSED: at 11\.0 o'clock, 21 mm from the pole along the "
+                                                      r"skin; 20 mm across, its centre 12 mm deep$", shown[1][0][1]),
+              "pat's page shows her debrief: %s" % shown)
+        # (her station runs --quiet here; web_coverage compares the page's debrief with the station's lines)
+        check(obs.wait_for("palpState.trainee.debrief !== null", 5) is True, "the observer's page is sent it too")
+        print("screenshot:", page.screenshot(os.path.join(out, "trainee-debrief.png")))
     finally:
         if browser:
             browser.close()

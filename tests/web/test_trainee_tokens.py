@@ -6,7 +6,9 @@ bob each press a sine on their own phantom. With alice's token:
 - the pages are served (200) and the cookie set is alice's token, not the instructors';
 - the session list names alice's session only, no server status is sent;
 - following bob's session, or every session (the dashboard), gets nothing: no frame in 3 s;
-- following her own session streams it.
+- following her own session streams it;
+- bob's exercise session ("easy") ends: its debrief, with the lesion's place, reaches an instructors'
+  page and not alice's.
 With the instructors' token the list has both sessions and the dashboard streams. A token nobody was
 given is refused (401). No browser: raw HTTP and WebSocket clients. DDS domain 126.
 usage: test_trainee_tokens.py BUILD SOURCE OUT"""
@@ -50,13 +52,13 @@ def run(build, source, out):
         check(r.returncode == 2 and "readable by every user" in r.stderr,
               "a world-readable --trainee-tokens file is refused (exit %d): %s" % (r.returncode, r.stderr.strip()[:100]))
         os.chmod(tokfile, 0o600)
-        procs.server()
+        procs.server(config="server-exercises.json")  # phantoms 1 and 2 as server-paper's, and the exercises
         web = procs.web(extra=["--token", INSTR, "--trainee-tokens", tokfile])
         check("2 trainee token(s), each page scoped" in procs.log(web), "palp-web says it has 2 scoped trainee tokens")
         sine = ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1", "--t-on", "0.5",
                 "--t-off", "60", "--duration", "60"]
         procs.trainee("alice", 1, sine)
-        procs.trainee("bob", 2, sine)
+        bob = procs.trainee("bob", 11, sine)  # the "easy" exercise: his session ends with a debrief
 
         status, body, headers = harness.http_get(web.base + "/trainee.html?token=" + ALICE)
         cookie = headers.get("Set-Cookie", "")
@@ -96,6 +98,17 @@ def run(build, source, out):
         check("status" not in seen and set(lists) <= {"alice"},
               "no server status and no other trainee in any list alice's page got (%s; %s)"
               % (sorted(seen), sorted(set(lists))))
+        # bob's exercise session ends: its debrief (where the exercise's lesion is, docs/assessment.md) goes to
+        # an instructors' page, never to alice's, which follows her own session meanwhile
+        inst = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, INSTR), timeout=10)
+        inst.send(json.dumps({"follow": "all"}))
+        procs.stop(bob)
+        d = harness.ws_until(inst, 10, lambda m: m.get("type") == "debrief")
+        inst.close()
+        check(d is not None and d["trainee"] == "bob" and d["session"] == ids["bob"] and d["level"] == "lesions" and
+              len(d["lumps"]) == 1, "the instructors' page is sent bob's debrief: %s" % d)
+        k4, _ = harness.ws_messages(ws, 2.0)
+        check("debrief" not in k4, "alice's page is not (%s)" % sorted(k4))
         ws.close()
 
         rc = procs.stop(web)

@@ -250,6 +250,59 @@
   }
 
   /* ---- exercise and findings ---- */
+  /* ---- the debrief at the session's end (docs/assessment.md, "Debrief") ----
+   * What the trainee's standing marks found, as much as the exercise tells: the lines the station
+   * prints, and at "lesions" each lump drawn on the phantom where it is (green found, red missed). */
+  const debriefObjs = [];
+  const foundMat = new THREE.MeshBasicMaterial({ color: 0x2e9e44, side: THREE.DoubleSide }),
+    missedMat = new THREE.MeshBasicMaterial({ color: 0xd0342c, side: THREE.DoubleSide });
+  function debriefText(m) {
+    if (m.level === "none") return "This exercise keeps its lumps for the instructor's review (" + m.marks +
+      (m.marks === 1 ? " mark" : " marks") + " standing).";
+    let t = "You found " + m.found + " of " + m.lesions + (m.lesions === 1 ? " lump" : " lumps") + " with " + m.marks +
+      (m.marks === 1 ? " mark" : " marks") + " standing; " + m.false_marks + (m.false_marks === 1 ? " mark was" : " marks were") +
+      " near no lump" + (m.duplicates ? ", " + m.duplicates + " on a lump already found" : "") + ".";
+    if (m.level === "count") t += " This exercise does not say where its lumps are: the instructor's review does.";
+    return t;
+  }
+  function lumpText(l, i) {
+    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : "MISSED") + ": at " +
+      l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; " +
+      l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
+  }
+  function clearDebrief() {
+    for (const o of debriefObjs) scene.remove(o);
+    debriefObjs.length = 0;
+    document.getElementById("debrief").hidden = true;
+    T.debrief = null;
+    dirty = true;
+  }
+  function showDebrief(m) {
+    clearDebrief();
+    T.debrief = m;
+    document.getElementById("debrief-text").textContent = debriefText(m);
+    const ul = document.getElementById("debrief-lumps");
+    ul.textContent = "";
+    m.lumps.forEach(function (l, i) {
+      const li = document.createElement("li");
+      li.textContent = lumpText(l, i);
+      li.className = l.found_by ? "found" : "missed";
+      ul.appendChild(li);
+      /* a ring of the lump's size on the skin above its centre, facing out along the dome's normal
+       * (the point's direction from the base centre), lifted 0.5 mm so the skin does not hide it */
+      const r = Math.max(l.across_mm, 2) / 2000;
+      const o = new THREE.Mesh(new THREE.RingBufferGeometry(0.7 * r, r, 40), l.found_by ? foundMat : missedMat);
+      const n = new THREE.Vector3(l.point_mm[0], l.point_mm[1], l.point_mm[2]).normalize();
+      o.position.set(l.point_mm[0] / 1000, l.point_mm[1] / 1000, l.point_mm[2] / 1000).addScaledVector(n, 0.0005);
+      o.lookAt(o.position.clone().add(n));
+      scene.add(o);
+      debriefObjs.push(o);
+    });
+    document.getElementById("debrief").hidden = false;
+    dirty = true;
+  }
+  window.palpDebriefText = function (m) { return [debriefText(m)].concat(m.lumps.map(lumpText)); };
+
   function followMsg(id) { return id && !observer ? { trainee: id } : { follow: id || null }; }
   function showExercise() {
     const ex = lastSession ? exercises.find(function (e) { return e.phantom === lastSession.phantom; }) : null;
@@ -299,6 +352,7 @@
   send = PALP.connect({
     open: function (snd) { send = snd; if (T.session) send(followMsg(T.session)); },
     exercises: function (m) { exercises = m.exercises; showExercise(); },
+    debrief: function (m) { showDebrief(m); },
     finding_reply: function (m) {
       T.replies.push(m);
       if (m.ok) message(m.op === "mark" ? "mark " + m.mark_id + " sent" : "mark " + m.mark_id + " withdrawn", true);
@@ -320,9 +374,22 @@
         T.session = id;
         setScale(scaleMin); /* a new session starts on the smallest scale */
         if (send) send(followMsg(id));
+        if (id) clearDebrief(); /* a new session: the last one's debrief goes (kept while waiting) */
         findings = null;
         setFingers([], null);
-        if (!id) document.getElementById("info").textContent = "waiting for a session";
+        if (!id) {
+          document.getElementById("info").textContent = "waiting for a session";
+          /* the session is over: the phantom at rest and no force, not its last frame's dent and force
+           * (the debrief's rings are drawn on the rest skin) */
+          latest = null;
+          if (geom) setDisplacement(null);
+          document.getElementById("force").textContent = "0.00";
+          const b = document.getElementById("band");
+          b.textContent = "none";
+          b.className = "band none";
+          document.getElementById("depth").textContent = "";
+          drawGauge(0);
+        }
       }
       const s = m.sessions.find(function (x) { return x.id === id; });
       lastSession = s || null;
