@@ -190,7 +190,8 @@ static char *read_text(const char *path) {
 /* issue 13: an exercise is hosted as a phantom: the exercise's phantom scene with its
  * lesions hidden in it (palp_exercise_scene), named by the exercise's title. The scene
  * and the file's text stay on the server and in its log; what goes on the wire is the
- * catalogue's rest mesh (which lesions do not change) and the palp_exercise sample. */
+ * catalogue's rest mesh (which lesions do not change) and the palp_exercise sample, and at a
+ * session's end its debrief, as much as the exercise tells (publish_debrief). */
 static int load_exercise(palp_srv_phantom *ph, char *err, size_t errlen) {
   char msg[256] = "";
   const palp_srv_phantom_cfg *pc = &ph->cfg;
