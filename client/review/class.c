@@ -18,6 +18,7 @@ typedef struct row {
   char grade[160];
   double outside_s;  /* seconds outside the model's valid range, -1 where the log does not say */
   char outside[24];  /* the same as text, "-" where the log does not say */
+  char told[512];    /* an attempt after a debrief on the same lesions: review_told_text; "" */
 } row;
 
 /* "15, 1.00": the strips and their order where the review shows them, else "-". */
@@ -79,6 +80,10 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     r->outside_s = review_valid_range_seconds(db, &v[i]);
     if (r->outside_s >= 0) snprintf(r->outside, sizeof r->outside, "%.2f", r->outside_s);
     else snprintf(r->outside, sizeof r->outside, "-");
+    /* (a pruned session's stored metrics carry no lesions: it is not looked at) */
+    review_told told;
+    if (r->computed && review_told_before(db, &v[i], &r->a, &told) == 1)
+      review_told_text(&v[i], &told, r->told, sizeof r->told);
     nr++;
   }
   if (nr == 0) {
@@ -119,6 +124,9 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
            m->pass ? "pass" : "fail", rows[i].outside,
            rows[i].grade[0] ? rows[i].grade : "-");
   }
+  /* Attempts that were not blind (docs/assessment.md, "Debrief"), under the table they qualify. */
+  for (int i = 0; i < nr; i++)
+    if (rows[i].told[0]) printf("not blind: %s: %s\n", rows[i].s.uid, rows[i].told);
   if (csv) {
     FILE *c = strcmp(csv, "-") ? palp_app_fopen_private(csv) : stdout;
     if (!c) {
@@ -178,7 +186,16 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       html_str(f, r->grade);
       fputs("</td></tr>\n", f);
     }
-    fputs("</table>\n<h2>Coverage maps</h2>\n<p class=\"key\">Seen from above (12 o'clock = +y). Palpated at "
+    fputs("</table>\n", f);
+    for (int i = 0; i < nr; i++)
+      if (rows[i].told[0]) {
+        fputs("<p class=\"fail told-before\">Not blind: ", f);
+        html_str(f, rows[i].s.uid);
+        fputs(": ", f);
+        html_str(f, rows[i].told);
+        fputs(".</p>\n", f);
+      }
+    fputs("<h2>Coverage maps</h2>\n<p class=\"key\">Seen from above (12 o'clock = +y). Palpated at "
           "<span style=\"background:#56b4e9\"></span>light <span style=\"background:#e69f00\"></span>medium "
           "<span style=\"background:#009e73\"></span>deep pressure; <span style=\"background:#e6e6e6\"></span>never.</p>\n"
           "<div class=\"multiples\">\n", f);
@@ -196,8 +213,8 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     }
     fputs("</div>\n<h2>Progress</h2>\n<table id=\"progress\"><tr><th>trainee</th><th>sessions</th>"
           "<th>scores, oldest first</th><th>chart</th></tr>\n", f);
-    int *done = calloc((size_t)(nr ? nr : 1), sizeof *done);
-    double *sc = malloc(sizeof *sc * (size_t)(nr ? nr : 1));
+    int *done = calloc((size_t)(nr > 0 ? nr : 1), sizeof *done);
+    double *sc = malloc(sizeof *sc * (size_t)(nr > 0 ? nr : 1));
     for (int i = 0; done && sc && i < nr; i++) {
       if (done[i]) continue;
       int k = 0;

@@ -171,6 +171,12 @@ expect "report: the pattern's pass mark from the rubric" '<tr data-metric="patte
 expect "report: what the rubric asks of the order" '<tr data-metric="strips">.*</td><td>&gt;= 0\.70; 50% of the pattern&#39;s credit \((0\.9[5-9]|1\.00) of 1\)</td><td class="pass">pass</td>' "$dir/alice.html"
 R class --exercise test-two-lumps --out "$dir/class.html" --csv "$dir/class.csv" > "$dir/class.txt" || bad "class report"
 expect "class: the text table has alice's row" "^alice +class-alice-1 +2026-01-06 +2/2 +0 " "$dir/class.txt"
+expect "class: bob's second attempt is said not to be blind, under the table" \
+  "^not blind: class-bob-2: bob had been told where this exercise's lesions are when session class-bob-1 ended" "$dir/class.txt"
+if [ "$(grep -c '^not blind:' "$dir/class.txt")" = 1 ] && [ "$(grep -c 'class="fail told-before"' "$dir/class.html")" = 1 ] &&
+  grep -q '<p class="fail told-before">Not blind: class-bob-2: bob had been told' "$dir/class.html"; then
+  ok "class: only bob's second attempt is not blind, in the text and the HTML report"
+else bad "class: the not-blind attempts"; grep -n "not blind\|told-before" "$dir/class.txt" "$dir/class.html"; fi
 for f in alice bob class; do
   if grep -Eiq '(src|href)=.(https?:)?//|@import|url\(' "$dir/$f.html"; then bad "$f.html references an external resource"; fi
   render "$dir/$f.html" "$dir/$f.png" "$dir/$f.dom.html"
