@@ -180,7 +180,8 @@ def run(build, source, out):
               "pat's page shows her debrief: %s" % shown)
         # (her station runs --quiet here; web_coverage compares the page's debrief with the station's lines)
         check(obs.wait_for("palpState.trainee.debrief !== null", 5) is True, "the observer's page is sent it too")
-        print("screenshot:", page.screenshot(os.path.join(out, "trainee-debrief.png")))
+        # (no screenshot here: with the dashboard and observer pages opened since, this page is a background
+        # tab, which Chromium may not paint: a capture timed out once in a full run)
     finally:
         if browser:
             browser.close()
