@@ -134,9 +134,17 @@ openssl smime -sign -in "$out/oldperm/trainee/alice.permissions.xml" -text \
 rc=$?
 check "a station whose permissions predate palp_debrief still runs its session (exit $rc)" \
   "[ $rc -eq 0 ] && ! grep -q palp_debrief '$out/oldperm/trainee/alice.permissions.xml' && grep -q 'session [0-9]*: .* contact samples sent' '$out/oldperm.log'"
+# ... and a server on such permissions serves on, without debriefs, and says so (domain 132, 2 s)
+sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
+openssl smime -sign -in "$out/oldperm/server/server.permissions.xml" -text \
+  -out "$out/oldperm/server/server.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
+"$server" --domain 132 --no-db --pki "$out/oldperm" --duration 2 >"$out/oldperm-server.log" 2>&1
+rc=$?
+check "a server whose permissions predate palp_debrief serves, and warns that it cannot debrief (exit $rc)" \
+  "[ $rc -eq 0 ] && grep -q 'no debriefs: the server.s permissions do not allow topic palp_debrief' '$out/oldperm-server.log'"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
-check "init re-issues her permissions alone, with palp_debrief and signed by the CA" \
-  "grep -q 'permissions re-issued (version 2) for 1 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+check "init re-issues their permissions alone, with palp_debrief and signed by the CA" \
+  "grep -q 'permissions re-issued (version 2) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
   --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
 cpid=$!
