@@ -59,9 +59,9 @@ def run(build, source, out):
                                                           "trainee", "--domain", str(DOMAIN), "--phantom", str(ph),
                                                           "--name", name, "--print-period", "0", "--input", traj])
                     for name, (ph, traj) in TRAINEES.items()}
-        end = time.time() + 90
-        while time.time() < end and any(p.poll() is None for p in stations.values()):
-            for op, data in harness.ws_read(ws, 0.5):
+        def take(seconds):
+            """The bridge's messages for `seconds`: each session's newest coverage, and each debrief."""
+            for op, data in harness.ws_read(ws, seconds):
                 if op != 1:
                     continue
                 m = json.loads(data)
@@ -71,15 +71,11 @@ def run(build, source, out):
                     for s in m["sessions"]:
                         if s.get("trainee") in TRAINEES and s.get("coverage") is not None:
                             web_cov[s["trainee"]] = (s["coverage"], s.get("band_rule"))
-        for op, data in harness.ws_read(ws, 1.0):  # the last list, at 5 Hz
-            if op == 1:
-                m = json.loads(data)
-                if m.get("type") == "debrief":
-                    debriefs[m.get("trainee")] = m
-                if m.get("type") == "sessions":
-                    for s in m["sessions"]:
-                        if s.get("trainee") in TRAINEES and s.get("coverage") is not None:
-                            web_cov[s["trainee"]] = (s["coverage"], s.get("band_rule"))
+
+        end = time.time() + 90
+        while time.time() < end and any(p.poll() is None for p in stations.values()):
+            take(0.5)
+        take(1.0)  # the last list, at 5 Hz
         check(all(p.poll() == 0 for p in stations.values()),
               "every station ran its trajectory and exited 0: %s" % {n: p.poll() for n, p in stations.items()})
         ws.close()
