@@ -400,16 +400,8 @@ int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief 
     while (dds_take(st->debrief_r, ptr, &info, 1, 1) > 0) {
       const palp_Debrief *d = ptr[0];
       if (info.valid_data && d->session_id == st->session_id) {
-        /* A mark that found a lesion may be this station's or the trainee web page's (palp-web
-         * numbers its own): found_by is checked against the count, not against our numbering. */
         const uint32_t n = d->lesion._length;
-        uint32_t found_by = 0;
-        for (uint32_t i = 0; d->lesion._buffer && i < n && i < PALP_DEBRIEF_MAX_LESIONS; i++)
-          found_by += d->lesion._buffer[i].found_by != 0;
-        const int listed = d->level == palp_DEBRIEF_LESIONS;
-        if (d->level > palp_DEBRIEF_LESIONS || n > PALP_DEBRIEF_MAX_LESIONS || (n && !d->lesion._buffer) ||
-            d->found > d->lesions || d->lesions > PALP_DEBRIEF_MAX_LESIONS || (listed && n != d->lesions) ||
-            (!listed && n != 0) || (listed && found_by != d->found)) {
+        if (!palp_dds_debrief_ok(d)) {
           rc = fail(err, errlen, PALP_EPARSE, "a malformed debrief (level %d, %u lesions listed of %u, %u found): ignored",
                     (int)d->level, n, d->lesions, d->found);
         } else {

@@ -148,11 +148,9 @@ int palp_cli_station_withdraw(palp_cli_station *st, uint32_t mark_id);
 int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *out);
 /* The session's debrief (palp_debrief), which the server writes once as an exercise session
  * closes: 1 and *out when it came within timeout [s], its lesions copied into lesions
- * [PALP_DEBRIEF_MAX_LESIONS] (out->lesion points there; checked: a known level, at most that
- * many lesions, listed only at DEBRIEF_LESIONS and then all of them, found <= lesions and the
- * count of found_by), 0 when none came, a negative code when what came is malformed (err says
- * why). */
-#define PALP_DEBRIEF_MAX_LESIONS 8
+ * [PALP_DEBRIEF_MAX_LESIONS] (out->lesion points there; checked by palp_dds_debrief_ok), 0 when
+ * none came, a negative code when what came is malformed (err says why). */
+#define PALP_DEBRIEF_MAX_LESIONS PALP_MAX_LESIONS
 int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief *out, palp_DebriefLesion *lesions,
                              char *err, size_t errlen);
 

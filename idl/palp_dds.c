@@ -402,6 +402,23 @@ void palp_dds_log_limit_counts(palp_dds_log_limit *l, uint64_t *printed, uint64_
   pthread_mutex_unlock(l->lock);
 }
 
+int palp_dds_debrief_ok(const palp_Debrief *d) {
+  const uint32_t n = d->lesion._length;
+  const int listed = d->level == palp_DEBRIEF_LESIONS;
+  if (d->level > palp_DEBRIEF_LESIONS || d->lesions > PALP_MAX_LESIONS || d->found > d->lesions ||
+      n > PALP_MAX_LESIONS || (n && !d->lesion._buffer) || (listed ? n != d->lesions : n != 0))
+    return 0;
+  uint32_t found_by = 0;
+  for (uint32_t i = 0; i < n; i++) {
+    const palp_DebriefLesion *l = &d->lesion._buffer[i];
+    if (!isfinite(l->point.x) || !isfinite(l->point.y) || !isfinite(l->point.z) || !(l->depth >= 0) ||
+        !(l->diameter >= 0) || !isfinite(l->depth) || !isfinite(l->diameter))
+      return 0;
+    found_by += l->found_by != 0;
+  }
+  return !listed || found_by == d->found;
+}
+
 int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {
   int ok = 1;
   for (int b = 0; b < PALP_BAND_COUNT; b++) {

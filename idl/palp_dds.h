@@ -175,6 +175,13 @@ int64_t palp_dds_now_ns(void);
 struct palp_band;
 int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out);
 
+/* A debrief (palp_debrief) as a reader may use it: a known level; at most PALP_MAX_LESIONS
+ * lesions, listed only at DEBRIEF_LESIONS and then all of them, each place, depth and size
+ * finite and >= 0; found <= lesions and, listed, the count of found_by. found_by is not checked
+ * against a station's own numbering: a mark made from palp-web's page has the bridge's number.
+ * 1 when it holds, 0 when not (the station and palp-web both check with it). */
+int palp_dds_debrief_ok(const palp_Debrief *d);
+
 #ifdef __cplusplus
 }
 #endif

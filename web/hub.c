@@ -780,27 +780,17 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
   h->sessions_dirty = 1;
 }
 
-static int vec_finite(const palp_Vec3 *v);
-
-/* A session's debrief (docs/assessment.md, "Debrief"), checked as the station checks it, as a page
+/* A session's debrief (docs/assessment.md, "Debrief"), checked as the station checks it
+ * (palp_dds_debrief_ok), as a page
  * message: {"type": "debrief", "session", "trainee", "level", "lesions", "found", "marks",
  * "false_marks", "duplicates", "reason", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm",
  * "deep_mm", "point_mm"}]}, the places named as every tool names them (palp_place_*). */
 static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
-  const uint32_t n = m->lesion._length;
-  int ok = m->level <= palp_DEBRIEF_LESIONS && m->lesions <= PALP_MAX_LESIONS && m->found <= m->lesions &&
-           n <= PALP_MAX_LESIONS && (n == 0 || m->lesion._buffer) &&
-           (m->level == palp_DEBRIEF_LESIONS ? n == m->lesions : n == 0);
-  uint32_t found_by = 0;
-  for (uint32_t i = 0; ok && i < n; i++) {
-    const palp_DebriefLesion *l = &m->lesion._buffer[i];
-    ok = vec_finite(&l->point) && isfinite(l->depth) && isfinite(l->diameter) && l->depth >= 0 && l->diameter >= 0;
-    found_by += l->found_by != 0;
-  }
-  if (!ok || (m->level == palp_DEBRIEF_LESIONS && found_by != m->found)) {
+  if (!palp_dds_debrief_ok(m)) {
     h->stats.dropped++;
     return;
   }
+  const uint32_t n = m->lesion._length;
   char trainee[64] = "";
   int slot, known = 0;
   if (find_session(h, m->session_id, &slot)) {

@@ -5,7 +5,8 @@
  * (polar 30 / 60 deg, azimuth 0 / 180 deg, 10 mm deep, 15 mm across, match margin 10 mm) on a
  * 40 mm dome, told at each of the three levels. Expected values come from the geometry stated
  * here (a mark on the skin above a lesion's centre finds it; one 40 mm away finds none), not from
- * the code under test.
+ * the code under test. What it writes passes the readers' check (palp_dds_debrief_ok), and copies
+ * altered to not add up do not.
  */
 #include <math.h>
 #include <stdio.h>
@@ -13,6 +14,7 @@
 
 #include "check.h"
 #include "findings.h"
+#include "palp_dds.h"
 
 #define PI 3.14159265358979323846
 #define R 0.04
@@ -81,6 +83,27 @@ int main(void) {
             "dup %u)", level_key[k], d.found, d.lesions, d.false_marks, d.duplicates);
     }
     if (k == 2) CHECK(d.lesion._length == 0, "  count: no lesion listed (%u)", d.lesion._length);
+    /* what the server writes, a reader takes (palp_dds_debrief_ok, the station's and palp-web's check) */
+    CHECK(palp_dds_debrief_ok(&d) == 1, "  the readers' check takes it");
+    if (k == 3) {
+      /* ... and refuses what does not add up (each altered copy, then put back) */
+      palp_Debrief bad = d;
+      bad.found = 1;
+      const int wrong_count = palp_dds_debrief_ok(&bad);
+      bad = d, bad.level = palp_DEBRIEF_COUNT;
+      const int listed_at_count = palp_dds_debrief_ok(&bad);
+      bad = d, bad.lesion._length = 1;
+      const int one_of_two = palp_dds_debrief_ok(&bad);
+      const double z = les[1].point.z;
+      les[1].point.z = NAN;
+      const int nan_point = palp_dds_debrief_ok(&d);
+      les[1].point.z = z;
+      bad = d, bad.level = (palp_DebriefLevel)7;
+      const int unknown_level = palp_dds_debrief_ok(&bad);
+      CHECK(!wrong_count && !listed_at_count && !one_of_two && !nan_point && !unknown_level,
+            "  refused: found not the count of found_by (%d), lesions listed at count (%d), 1 of 2 listed (%d), a NaN "
+            "place (%d), level 7 (%d)", wrong_count, listed_at_count, one_of_two, nan_point, unknown_level);
+    }
     if (k == 3) {
       const palp_vec3 s1 = skin(30, 0), s2 = skin(60, 180);
       const double e1 = hypot(hypot(les[0].point.x - s1.x, les[0].point.y - s1.y), les[0].point.z - s1.z);
