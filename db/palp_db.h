@@ -99,7 +99,12 @@ typedef enum palp_db_event_kind {
   /* server-wide (no session): a peer DDS Security refused (idl/palp_dds_refusals.h); detail
    * "WHO: WHY (handshake|permissions)", count = the refusals this row stands for (the first,
    * then the repeats summed once a minute, as the server's log says them) */
-  PALP_DB_EVENT_SECURITY_REFUSED = 10
+  PALP_DB_EVENT_SECURITY_REFUSED = 10,
+  /* an exercise session's debrief as it closed (docs/assessment.md, "Debrief"): what its trainee
+   * was told, or that the debrief was not sent and why; detail written and read by db/debrief.c
+   * (palp_db_debrief_format / _parse); one per session, by palp-server (since 2026-12-05, session
+   * 59; its params_json then says "debrief_events": true) and by palp-recorder as it hears it */
+  PALP_DB_EVENT_DEBRIEF = 11
 } palp_db_event_kind;
 
 /* A trainee's own leave and join in its session: its station lost and the session held
@@ -108,7 +113,7 @@ typedef enum palp_db_event_kind {
 #define PALP_DB_DETAIL_TRAINEE_HELD " (trainee, lost; session held)"
 #define PALP_DB_DETAIL_TRAINEE_BACK " (trainee, back from a stall)"
 
-#define PALP_DB_EVENT_KIND_COUNT 11
+#define PALP_DB_EVENT_KIND_COUNT 12
 const char *palp_db_event_kind_name(palp_db_event_kind k); /* "join", ... */
 
 typedef struct palp_db_session_def {
@@ -421,6 +426,41 @@ int palp_db_valid_range_parse(const char *detail, int64_t count, palp_db_valid_r
  * *unreadable = how many did not parse (their count is still added to steps). */
 int palp_db_session_valid_range(palp_db *db, int64_t session_id, palp_db_valid_range *sum, int64_t *events,
                                 int64_t *unreadable);
+
+/* ---- an exercise session's debrief (PALP_DB_EVENT_DEBRIEF, db/debrief.c) ---------------- */
+/* What the server told the trainee as her exercise session closed, as much as the exercise's
+ * "debrief" key allowed (palp_debrief_level, src/palp_assess.h; the wire's palp_Debrief); the
+ * lesions' places are not repeated: the session's exercise, logged with it, has them in order. */
+#define PALP_DB_DEBRIEF_MAX_LESIONS 8 /* = PALP_MAX_LESIONS, the wire's sequence bound */
+typedef enum palp_db_debrief_level {
+  PALP_DB_DEBRIEF_NONE = 0,   /* nothing of the lesions, not even how many */
+  PALP_DB_DEBRIEF_COUNT = 1,  /* how many were found, how many marks were near none */
+  PALP_DB_DEBRIEF_LESIONS = 2 /* also each lesion, found (by which mark) or missed */
+} palp_db_debrief_level;
+typedef struct palp_db_debrief {
+  int sent;                   /* 1: written to the trainee's station; 0: not (why says why) */
+  palp_db_debrief_level level;
+  int lesions, found;         /* count and lesions levels (0 at none) */
+  int marks;                  /* marks standing */
+  int false_marks, duplicates;/* count and lesions levels (0 at none) */
+  int listed;                 /* lesions level: = lesions, else 0 */
+  uint32_t found_by[PALP_DB_DEBRIEF_MAX_LESIONS]; /* per listed lesion, in the exercise's order:
+                                                      the mark that found it, 0 missed */
+  char why[160];              /* not sent: why ("" when sent) */
+} palp_db_debrief;
+/* "told at level none: marks standing M" |
+ * "told at level count: found F of L lesions; marks standing M, near no lesion X, duplicates D" |
+ * the same at level lesions followed by "; found by marks B1 B2 ..." (one per lesion, 0 missed) |
+ * "not sent (level LEVEL): WHY". Returns what snprintf returns; PALP_EINVAL for a debrief that
+ * contradicts itself (the checks of palp_db_debrief_parse). */
+int palp_db_debrief_format(const palp_db_debrief *d, char *buf, size_t len);
+/* Reads a detail back; PALP_EINVAL for one this format did not write or whose numbers contradict
+ * each other (found above lesions, more found_by than lesions, found not the count of found_by). */
+int palp_db_debrief_parse(const char *detail, palp_db_debrief *out);
+/* The session's debrief event: 1 and *out, 0 when none is logged, PALP_EINVAL when its detail
+ * does not parse (*out then zeroed), < 0 on a database error. The last one if several. */
+int palp_db_session_debrief(palp_db *db, int64_t session_id, palp_db_debrief *out);
+const char *palp_db_debrief_level_name(palp_db_debrief_level l); /* "none", "count", "lesions"; NULL */
 
 /* Schema 3 (assessment). The session's exercise: name (up to namelen) and its JSON
  * (malloc'd, free()); PALP_DB_ENOTFOUND when the session ran none. */

@@ -195,7 +195,7 @@ const char *palp_db_end_reason_name(palp_db_end_reason r) {
 const char *palp_db_event_kind_name(palp_db_event_kind k) {
   static const char *const n[PALP_DB_EVENT_KIND_COUNT] = {
       NULL, "join", "leave", "reject", "clamp", "overrun", "shed", "disk_error", "info", "valid_range",
-      "security_refused"};
+      "security_refused", "debrief"};
   return (k > 0 && k < PALP_DB_EVENT_KIND_COUNT) ? n[k] : NULL;
 }
 

@@ -16,7 +16,7 @@ cd "$here"
 secs=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access)
+[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access debrief)
 
 need=()
 command -v clang-14 >/dev/null || need+=(clang-14)

@@ -87,13 +87,15 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
     palp_log_error(l->log, "session log: slot of session %u busy; session %u not logged", s->id, i->session_id);
     return;
   }
-  char uid[96], phantom[16], params[384];
+  char uid[96], phantom[16], params[512];
   snprintf(uid, sizeof uid, "%s-%u", l->run_id, i->session_id);
   snprintf(phantom, sizeof phantom, "%u", i->phantom_id);
   /* valid_range_events: this server logs the steps outside the model's valid range as events
-   * (none then means none happened; a log without the key does not say) */
+   * (none then means none happened; a log without the key does not say); debrief_events: it logs
+   * each exercise session's debrief, sent or not (none then means none was sent; since session 59) */
   snprintf(params, sizeof params,
-           "{\"max_force_n\": %.17g, \"tick_rate_hz\": %.17g, \"partition\": \"%s\", \"valid_range_events\": true}",
+           "{\"max_force_n\": %.17g, \"tick_rate_hz\": %.17g, \"partition\": \"%s\", \"valid_range_events\": true, "
+           "\"debrief_events\": true}",
            i->max_force, i->tick_rate_hz, i->partition);
   /* Self-contained (parameters inlined), so the log alone rebuilds the world. */
   char *scene = palp_scene_to_json(i->scene);
@@ -173,6 +175,30 @@ static void on_finding(void *ctx, uint32_t session_id, const palp_srv_finding_ev
   char detail[200];
   snprintf(detail, sizeof detail, "finding %u refused: %s", ev->mark_id, ev->reason ? ev->reason : "");
   palp_db_log_event(l->w, s->h, PALP_DB_EVENT_REJECT, ev->frame, detail, 1);
+}
+
+/* What the trainee was told as her exercise session closed (docs/assessment.md, "Debrief"): the
+ * review's "not blind" and its debrief line read it back (palp_db_session_debrief). */
+static void on_debrief(void *ctx, uint32_t session_id, const palp_srv_debrief_event *ev) {
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  palp_db_debrief d = {.sent = ev->sent,
+                       .level = (palp_db_debrief_level)ev->level,
+                       .lesions = (int)ev->lesions,
+                       .found = (int)ev->found,
+                       .marks = (int)ev->marks,
+                       .false_marks = (int)ev->false_marks,
+                       .duplicates = (int)ev->duplicates};
+  if (ev->sent && ev->level == PALP_DB_DEBRIEF_LESIONS)
+    for (uint32_t i = 0; i < ev->listed && i < PALP_DB_DEBRIEF_MAX_LESIONS; i++) d.found_by[d.listed++] = ev->found_by[i];
+  if (!ev->sent) snprintf(d.why, sizeof d.why, "%s", ev->why && ev->why[0] ? ev->why : "(no reason given)");
+  char detail[400];
+  if (palp_db_debrief_format(&d, detail, sizeof detail) < 0) {
+    palp_log_error(l->log, "session log: session %u's debrief contradicts itself; not logged", session_id);
+    return;
+  }
+  palp_db_log_event(l->w, s->h, PALP_DB_EVENT_DEBRIEF, s->last_frame, detail, 1);
 }
 
 static void on_member(void *ctx, uint32_t session_id, const char *station, int role, int joined) {
@@ -327,6 +353,7 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
                             .overrun = on_overrun,
                             .valid_range = on_valid_range,
                             .finding = on_finding,
+                            .debrief = on_debrief,
                             .security_refused = on_security_refused,
                             .log_counts = on_log_counts};
   *out = l;

@@ -67,6 +67,17 @@ typedef struct palp_srv_finding_event {
   const char *reason;          /* why it was refused ("" when accepted) */
 } palp_srv_finding_event;
 
+/* An exercise session's debrief as it closed (docs/assessment.md, "Debrief"): what its trainee was
+ * told, or that it was not sent and why. The numbers are the wire's (palp_Debrief). */
+typedef struct palp_srv_debrief_event {
+  int sent;                    /* 1 written to the trainee's station, 0 not (why) */
+  int level;                   /* palp_debrief_level (src/palp_assess.h): 0 none, 1 count, 2 lesions */
+  uint32_t lesions, found, marks, false_marks, duplicates;
+  uint32_t listed;             /* lesions level: the lesions, in the exercise's order */
+  const uint32_t *found_by;    /* listed of them: the mark that found each, 0 missed */
+  const char *why;             /* not sent: why */
+} palp_srv_debrief_event;
+
 typedef struct palp_srv_session_summary {
   palp_srv_session_info info;
   double duration;             /* [s] wall time open */
@@ -102,6 +113,8 @@ typedef struct palp_srv_events {
   void (*log_counts)(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed);
   /* [main thread] a finding was accepted or refused (issue 13). */
   void (*finding)(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev);
+  /* [main thread] an exercise session's debrief, once, as it closes (before session_closed). */
+  void (*debrief)(void *ctx, uint32_t session_id, const palp_srv_debrief_event *ev);
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
   /* [tick thread] after a step that left the model's valid range (issue 12; docs/model.md,

@@ -555,11 +555,34 @@ static void publish_finding_status(palp_srv_session *s) {
   s->findings_status_ns = now;
 }
 
+/* The debrief's record in the session log: what the trainee was told, or that nothing was sent
+ * and why, so the review's "not blind" rests on what happened (docs/assessment.md, "Debrief"). */
+static void log_debrief(palp_srv *srv, const palp_srv_session *s, const palp_Debrief *m, int level, const char *why) {
+  if (!srv->events || !srv->events->debrief) return;
+  uint32_t found_by[PALP_MAX_LESIONS] = {0};
+  palp_srv_debrief_event ev = {.sent = why == NULL, .level = level, .why = why};
+  if (m && !why) {
+    ev.lesions = m->lesions, ev.found = m->found, ev.marks = m->marks, ev.false_marks = m->false_marks;
+    ev.duplicates = m->duplicates;
+    ev.listed = m->lesion._length <= PALP_MAX_LESIONS ? m->lesion._length : 0;
+    for (uint32_t i = 0; i < ev.listed; i++) found_by[i] = m->lesion._buffer[i].found_by;
+    ev.found_by = found_by;
+  }
+  srv->events->debrief(srv->events->ctx, s->id, &ev);
+}
+
 /* An exercise session's debrief, written once as it closes (docs/assessment.md, "Debrief"): what
  * its standing marks found, matched as the review matches them, told at the exercise's level. */
 static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reason) {
   const palp_exercise *ex = s->phantom->exercise;
-  if (!ex || s->debrief_writer <= 0) return;
+  if (!ex) return;
+  char why[160];
+  if (s->debrief_writer <= 0) {
+    /* palp_debrief came after the classroom PKIs of 2026-12-04 and before (server start warns) */
+    log_debrief(srv, s, NULL, (int)ex->debrief,
+                "the server's permissions do not allow topic palp_debrief (make-classroom-pki.sh re-issues them)");
+    return;
+  }
   const palp_mesh *mesh = palp_world_mesh(s->world);
   const palp_vec3 pole = mesh->rest[mesh->top_vertex];
   const double R = sqrt(pole.x * pole.x + pole.y * pole.y + pole.z * pole.z); /* as palp_assess's [m] */
@@ -568,13 +591,18 @@ static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reas
   const int rc = palp_srv_findings_debrief(&s->findings, ex, R, s->id, reason, &m, lesions);
   if (rc < 0) {
     palp_log_warn(srv->log, "session %u: no debrief: %s", s->id, palp_strerror(rc));
+    snprintf(why, sizeof why, "the marks could not be matched: %s", palp_strerror(rc));
+    log_debrief(srv, s, NULL, (int)ex->debrief, why);
     return;
   }
   const dds_return_t w = dds_write(s->debrief_writer, &m);
   if (w < 0) {
     palp_log_warn(srv->log, "session %u: the debrief was not sent: %s", s->id, dds_strretcode(w));
+    snprintf(why, sizeof why, "DDS refused the write: %s", dds_strretcode(w));
+    log_debrief(srv, s, NULL, (int)ex->debrief, why);
     return;
   }
+  log_debrief(srv, s, &m, (int)m.level, NULL);
   if (m.level == palp_DEBRIEF_NONE)
     palp_log_info(srv->log, "session %u: debrief sent: the exercise tells nothing of its lesions (marks standing: %u)",
                   s->id, m.marks);

@@ -5,6 +5,7 @@
  * it is assessed against FREE_PRACTICE below (no lesions, the shipped pressure bands), and the
  * review shows its coverage, pattern and forces but no sensitivity and no score. */
 #include <math.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -118,6 +119,80 @@ static int same_lesions(const palp_exercise *a, const palp_exercise *b) {
   return 1;
 }
 
+int review_debrief(palp_db *db, const palp_db_session_info *s, palp_db_debrief *d) {
+  const int rc = palp_db_session_debrief(db, s->id, d);
+  if (rc == 1) return REVIEW_DEBRIEF_LOGGED;
+  if (rc == PALP_EINVAL) return REVIEW_DEBRIEF_UNREADABLE;
+  if (rc < 0) return rc;
+  return review_params_flag(db, s->id, "debrief_events") ? REVIEW_DEBRIEF_NONE : REVIEW_DEBRIEF_UNKNOWN;
+}
+
+/* appends to buf at *n, never past len */
+static void cat(char *buf, size_t len, size_t *n, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+static void cat(char *buf, size_t len, size_t *n, const char *fmt, ...) {
+  if (*n >= len) return;
+  va_list ap;
+  va_start(ap, fmt);
+  const int k = vsnprintf(buf + *n, len - *n, fmt, ap);
+  va_end(ap);
+  if (k > 0) *n = *n + (size_t)k < len ? *n + (size_t)k : len;
+}
+
+void review_debrief_text(int status, const palp_db_debrief *d, const review_assessment *a, char *buf, size_t len) {
+  size_t n = 0;
+  if (len) buf[0] = 0;
+  switch (status) {
+  case REVIEW_DEBRIEF_UNKNOWN:
+    cat(buf, len, &n, "not in this log (its writer logged no debriefs: a server before 2026-12-05's session 59, or "
+                      "palp-recorder)");
+    return;
+  case REVIEW_DEBRIEF_NONE:
+    cat(buf, len, &n, "none sent: the session's close was not logged (its server stopped first), so its trainee was "
+                      "told nothing");
+    return;
+  case REVIEW_DEBRIEF_UNREADABLE:
+    cat(buf, len, &n, "UNREADABLE: the logged debrief does not parse (was the log altered?)");
+    return;
+  case REVIEW_DEBRIEF_LOGGED: break;
+  default:
+    cat(buf, len, &n, "UNKNOWN: the log could not be read");
+    return;
+  }
+  const char *lv = palp_db_debrief_level_name(d->level);
+  if (!d->sent) {
+    cat(buf, len, &n, "NOT SENT (the exercise's debrief: %s): %s; its trainee was told nothing", lv ? lv : "?", d->why);
+    return;
+  }
+  if (d->level == PALP_DB_DEBRIEF_NONE) {
+    cat(buf, len, &n, "told nothing of the lesions (the exercise's debrief: none); %d mark%s standing", d->marks,
+        d->marks == 1 ? "" : "s");
+    return;
+  }
+  cat(buf, len, &n, "%s: found %d of %d lump%s", d->level == PALP_DB_DEBRIEF_LESIONS ? "told where each lump is" : "told the count only",
+      d->found, d->lesions, d->lesions == 1 ? "" : "s");
+  const int places = a && a->has_exercise && a->ex.lesion_count == d->listed;
+  for (int l = 0; l < d->listed; l++) {
+    cat(buf, len, &n, "%s lump %d ", l ? "," : ";", l + 1);
+    if (d->found_by[l]) cat(buf, len, &n, "found by mark %u", (unsigned)d->found_by[l]);
+    else cat(buf, len, &n, "MISSED");
+    if (places)
+      cat(buf, len, &n, " (at %.1f o'clock, %.0f mm from the pole)", review_clock_hours(a->lesion_surface[l]),
+          review_arc_m(a->lesion_surface[l]) * 1e3);
+  }
+  cat(buf, len, &n, "; %d mark%s standing, %d near no lump", d->marks, d->marks == 1 ? "" : "s", d->false_marks);
+  if (d->duplicates) cat(buf, len, &n, ", %d on a lump already found", d->duplicates);
+  /* The server matched with the review's own function (palp_assess_findings) on the same marks:
+   * a difference means the log and the trainee's screen disagree, which the instructor must see. */
+  if (a && a->has_exercise) {
+    int differ = a->r.found != d->found || a->r.lesion_count != d->lesions;
+    for (int l = 0; l < d->listed && l < a->r.lesion_count && !differ; l++)
+      differ = (a->r.lesion_found[l] >= 0) != (d->found_by[l] != 0);
+    if (differ)
+      cat(buf, len, &n, " (DIFFERS from this review, which counts %d of %d found: the trainee was told otherwise)",
+          a->r.found, a->r.lesion_count);
+  }
+}
+
 int review_told_before(palp_db *db, const palp_db_session_info *s, const review_assessment *a, review_told *out) {
   memset(out, 0, sizeof *out);
   if (!a->has_exercise || !a->ex.lesion_count) return 0;
@@ -136,15 +211,29 @@ int review_told_before(palp_db *db, const palp_db_session_info *s, const review_
     if (palp_db_session_exercise(db, v[i].id, name, sizeof name, &json) != 0) continue;
     palp_exercise e;
     char perr[256];
-    const int ok = strcmp(name, a->exercise_name) == 0 && palp_exercise_parse(json, NULL, &e, perr, sizeof perr) == 0 &&
-                   e.debrief != PALP_DEBRIEF_NONE && same_lesions(&e, &a->ex);
+    const int same = strcmp(name, a->exercise_name) == 0 && palp_exercise_parse(json, NULL, &e, perr, sizeof perr) == 0 &&
+                     same_lesions(&e, &a->ex);
     free(json);
-    if (ok && (!found || v[i].end_unix_s > out->end_unix_s)) {
-      snprintf(out->uid, sizeof out->uid, "%s", v[i].uid);
-      out->end_unix_s = v[i].end_unix_s;
-      out->level = e.debrief;
-      found = 1;
+    if (!same || (found && v[i].end_unix_s <= out->end_unix_s)) continue;
+    /* what its log says was sent; a log from before debriefs were logged, or a row that does not
+     * parse, by what its exercise file allowed (inferred: the debrief may have failed to go out) */
+    palp_db_debrief d;
+    const int st = review_debrief(db, &v[i], &d);
+    if (st < 0) {
+      free(v);
+      return st;
     }
+    int inferred = 0;
+    palp_debrief_level level;
+    if (st == REVIEW_DEBRIEF_LOGGED) level = d.sent ? (palp_debrief_level)d.level : PALP_DEBRIEF_NONE;
+    else if (st == REVIEW_DEBRIEF_NONE) level = PALP_DEBRIEF_NONE;
+    else level = e.debrief, inferred = 1;
+    if (level == PALP_DEBRIEF_NONE) continue;
+    snprintf(out->uid, sizeof out->uid, "%s", v[i].uid);
+    out->end_unix_s = v[i].end_unix_s;
+    out->level = level;
+    out->inferred = inferred;
+    found = 1;
   }
   free(v);
   return found;
@@ -157,9 +246,10 @@ void review_told_text(const palp_db_session_info *s, const review_told *t, char 
   }
   char when[64];
   review_fmt_time(t->end_unix_s, when, sizeof when);
-  snprintf(buf, len, "%s had been told %s when session %s ended (%s): this attempt was not blind", s->trainee,
+  snprintf(buf, len, "%s had been told %s when session %s ended (%s): this attempt was not blind%s", s->trainee,
            t->level == PALP_DEBRIEF_LESIONS ? "where this exercise's lesions are" : "how many lesions this exercise hides",
-           t->uid, when);
+           t->uid, when,
+           t->inferred ? " (inferred from that session's exercise file: its log does not record what was sent)" : "");
 }
 
 int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment *out, char *err, size_t errlen) {
@@ -268,7 +358,7 @@ void review_metrics_csv_header(FILE *f) {
   fputs("session,trainee,started_unix_s,exercise,samples,lesions,found,sensitivity,findings,withdrawn,"
         "false_positives,coverage_light,coverage_medium,coverage_deep,coverage_any,pattern,path_length_m,"
         "presses,overlap,gap_share,duration_s,peak_force_n,out_of_range,score,pass,outside_valid_range_s,strips,"
-        "strip_order,grade_score,grade_level\n",
+        "strip_order,grade_score,grade_level,debrief,not_blind_after\n",
         f);
 }
 
@@ -303,6 +393,22 @@ void review_metrics_csv_row(FILE *f, palp_db *db, const palp_db_session_info *s,
   if (gs >= 0) fprintf(f, ",%g,", gs);
   else fputs(",,", f);
   csv_str(f, gl);
+  /* since session 59: what the trainee was told as this session closed (the level sent, or
+   * "not_sent"; empty when the log does not say or there is no exercise), and the earlier session
+   * whose debrief told her these lesions or their count (empty: a blind attempt) */
+  const char *told_now = "";
+  review_told t = {0};
+  if (a->has_exercise) {
+    palp_db_debrief d;
+    const int st = review_debrief(db, s, &d);
+    if (st == REVIEW_DEBRIEF_LOGGED) told_now = d.sent ? palp_db_debrief_level_name(d.level) : "not_sent";
+    else if (st == REVIEW_DEBRIEF_UNREADABLE) told_now = "unreadable";
+    if (review_told_before(db, s, a, &t) != 1) t.uid[0] = 0;
+  }
+  fputc(',', f);
+  csv_str(f, told_now ? told_now : "");
+  fputc(',', f);
+  csv_str(f, t.uid);
   fputc('\n', f);
 }
 

@@ -39,14 +39,34 @@ typedef struct review_assessment {
 int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment *out, char *err, size_t errlen);
 void review_assessment_free(review_assessment *a);
 
+/* What a session's trainee was told as it closed (docs/assessment.md, "Debrief"), from its logged
+ * debrief event (palp_db_session_debrief): */
+enum {
+  REVIEW_DEBRIEF_UNKNOWN = 0,    /* its server logged no debriefs (before 2026-12-05's session 59,
+                                    or palp-recorder): the log does not say */
+  REVIEW_DEBRIEF_LOGGED = 1,     /* *d: sent (what was told) or not sent (why) */
+  REVIEW_DEBRIEF_NONE = 2,       /* its server logs debriefs and logged none (no exercise, or a
+                                    session that never closed: a killed server) */
+  REVIEW_DEBRIEF_UNREADABLE = 3  /* its row does not parse (a log edited by hand) */
+};
+int review_debrief(palp_db *db, const palp_db_session_info *s, palp_db_debrief *d);
+/* The instructor's line for it, the lesions' places named as every tool names them ("told where
+ * each lump is: found 1 of 2; lump 1 found by mark 1 (at 1.7 o'clock, 21 mm from the pole), lump 2
+ * MISSED (...); 2 marks standing, 1 near no lump"); a, the session's assessment, gives the places
+ * (NULL, or one without the exercise: lumps by number only). */
+void review_debrief_text(int status, const palp_db_debrief *d, const struct review_assessment *a, char *buf, size_t len);
+
 /* Whether the trainee had been debriefed on these very lesions before this attempt (docs/assessment.md,
  * "Debrief"): the latest earlier session of the same trainee, ended, whose logged exercise has the
- * same name and lesions and a debrief other than none. 1 and *out when there is one, 0 when not, a
- * negative code on a database error. An attempt after a debrief that told the lesions is not blind. */
+ * same name and lesions and whose debrief told the lesions or their count: as its log records it
+ * (review_debrief), or, for a log from before debriefs were logged, as its exercise file's level
+ * says (inferred). 1 and *out when there is one, 0 when not, a negative code on a database error.
+ * An attempt after a debrief that told the lesions is not blind. */
 typedef struct review_told {
   char uid[128];          /* the earlier session */
   double end_unix_s;      /* when it ended: the debrief was sent then */
   palp_debrief_level level;
+  int inferred;           /* 1: from the exercise file, the log not recording what was sent */
 } review_told;
 int review_told_before(palp_db *db, const palp_db_session_info *s, const review_assessment *a, review_told *out);
 /* "bob had been told where this exercise's lesions are when session X ended (DATE): this attempt was
@@ -56,7 +76,9 @@ void review_told_text(const palp_db_session_info *s, const review_told *t, char 
 /* The metrics as CSV: the header line, then one row per session. */
 void review_metrics_csv_header(FILE *f);
 /* outside_s: seconds outside the model's valid range (review_valid_range_seconds; < 0: the log does
- * not say, an empty field); the last columns are the instructor's latest grade, read from db. */
+ * not say, an empty field); then the instructor's latest grade, read from db; the last two (since
+ * session 59) what the trainee was told as the session closed and the earlier session whose
+ * debrief made this attempt not blind. */
 void review_metrics_csv_row(FILE *f, palp_db *db, const palp_db_session_info *s, const review_assessment *a,
                             double outside_s);
 /* The metrics, score and rubric as text lines (palp-review show). */

@@ -342,6 +342,15 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
       html_str(f, t);
       fputs(".</p>\n", f);
     }
+    /* and what this session's debrief told as it closed */
+    palp_db_debrief d;
+    const int st = review_debrief(db, s, &d);
+    char t[1024];
+    review_debrief_text(st, &d, &a, t, sizeof t);
+    fprintf(f, "<p id=\"debrief\"%s>Debrief as the session ended: ",
+            (st == REVIEW_DEBRIEF_LOGGED && d.sent) || st == REVIEW_DEBRIEF_UNKNOWN ? "" : " class=\"warn\"");
+    html_str(f, t);
+    fputs(".</p>\n", f);
   } else {
     fprintf(f, "<p id=\"exercise-name\">Free practice: no exercise, no hidden lesions, so no sensitivity and no score. "
             "Metrics from %d finger samples.</p>\n", a.samples);

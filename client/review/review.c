@@ -165,12 +165,14 @@ static int ev_cb(void *u, double wall, int64_t frame, const char *kind, const ch
   if (i == t->n && t->n < 16) snprintf(t->kind[t->n++], sizeof t->kind[0], "%s", kind);
   if (i < 16) t->count[i] += count;
   /* The unusual ones are worth reading in full; joins and leaves are in the summary line, and
-   * the valid-range events (one a second while outside) in the "valid range" line above. A
+   * the valid-range events (one a second while outside) in the "valid range" line above, the
+   * debrief in the "debrief" line. A
    * trainee's own leave and join are unusual: its station was lost and its session held
    * (docs/server.md, station_grace), which the instructor should see. */
   const int member = !strcmp(kind, "join") || !strcmp(kind, "leave");
   if ((member ? strstr(detail ? detail : "", "(trainee") != NULL
-              : strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_VALID_RANGE)) != 0) &&
+              : strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_VALID_RANGE)) != 0 &&
+                    strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_DEBRIEF)) != 0) &&
       t->listed < 20) {
     char ts[64];
     review_fmt_time(wall, ts, sizeof ts);
@@ -271,6 +273,14 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   if (touches) review_touches_print(stdout, &a, REVIEW_TOUCHES_LISTED);
   free(pr);
   free(c.v);
+  /* what the trainee was told as the session closed (docs/assessment.md, "Debrief") */
+  char exname[64], debrief[1024] = "";
+  char *exjson = NULL;
+  if (arc == 0 ? a.has_exercise : palp_db_session_exercise(db, s->id, exname, sizeof exname, &exjson) == 0) {
+    palp_db_debrief d;
+    review_debrief_text(review_debrief(db, s, &d), &d, arc == 0 ? &a : NULL, debrief, sizeof debrief);
+  }
+  free(exjson);
   if (arc == 0) {
     review_metrics_print(stdout, &a);
     /* an attempt after a debrief on the same lesions is not blind (docs/assessment.md, "Debrief") */
@@ -286,6 +296,7 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   } else {
     printf("metrics    UNKNOWN: %s\n", aerr);
   }
+  if (debrief[0]) printf("debrief    %s\n", debrief);
   /* Where the phantom's model answered outside its valid range: the forces (and so the pressure
    * bands the metrics above count) there are extrapolations (docs/model.md, "Valid range"). */
   char range[640];

@@ -191,15 +191,19 @@ int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid
   if (rc < 0) return rc;
   if (*events) return REVIEW_RANGE_OUTSIDE;
   /* none logged: inside at every step only if this server logged such events at all */
+  return review_params_flag(db, s->id, "valid_range_events") ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
+}
+
+int review_params_flag(palp_db *db, int64_t session_id, const char *key) {
   char *params = NULL;
   int said = 0;
-  if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params) {
+  if (palp_db_session_json(db, session_id, NULL, &params) == 0 && params) {
     cJSON *j = cJSON_Parse(params);
-    said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "valid_range_events"));
+    said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, key));
     cJSON_Delete(j);
   }
   free(params);
-  return said ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
+  return said;
 }
 
 int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *buf, size_t len) {

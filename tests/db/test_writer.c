@@ -424,6 +424,75 @@ static void test_valid_range_detail(void) {
   CHECK(palp_db_valid_range_parse(NULL, 1, &b) == PALP_EINVAL, "refused: no detail");
 }
 
+/* The debrief event's detail (db/debrief.c): each level written as the docs say and read back,
+ * and rows that contradict themselves or were not written by it refused. */
+static void test_debrief_detail(void) {
+  char d[400];
+  palp_db_debrief b;
+  const palp_db_debrief lesions = {.sent = 1, .level = PALP_DB_DEBRIEF_LESIONS, .lesions = 3, .found = 2, .marks = 4,
+                                   .false_marks = 1, .duplicates = 1, .listed = 3, .found_by = {2, 0, 4000000000u}};
+  CHECK(palp_db_debrief_format(&lesions, d, sizeof d) > 0 &&
+            !strcmp(d, "told at level lesions: found 2 of 3 lesions; marks standing 4, near no lesion 1, duplicates 1; "
+                       "found by marks 2 0 4000000000"),
+        "lesions: '%s'", d);
+  CHECK(palp_db_debrief_parse(d, &b) == 0 && b.sent && b.level == PALP_DB_DEBRIEF_LESIONS && b.lesions == 3 &&
+            b.found == 2 && b.marks == 4 && b.false_marks == 1 && b.duplicates == 1 && b.listed == 3 &&
+            b.found_by[0] == 2 && b.found_by[1] == 0 && b.found_by[2] == 4000000000u,
+        "  read back");
+  const palp_db_debrief count = {.sent = 1, .level = PALP_DB_DEBRIEF_COUNT, .lesions = 2, .found = 0, .marks = 1,
+                                 .false_marks = 1};
+  CHECK(palp_db_debrief_format(&count, d, sizeof d) > 0 &&
+            !strcmp(d, "told at level count: found 0 of 2 lesions; marks standing 1, near no lesion 1, duplicates 0"),
+        "count: '%s'", d);
+  CHECK(palp_db_debrief_parse(d, &b) == 0 && b.level == PALP_DB_DEBRIEF_COUNT && b.lesions == 2 && b.listed == 0,
+        "  read back");
+  const palp_db_debrief none = {.sent = 1, .level = PALP_DB_DEBRIEF_NONE, .marks = 63};
+  CHECK(palp_db_debrief_format(&none, d, sizeof d) > 0 && !strcmp(d, "told at level none: marks standing 63"),
+        "none: '%s'", d);
+  CHECK(palp_db_debrief_parse(d, &b) == 0 && b.sent && b.level == PALP_DB_DEBRIEF_NONE && b.marks == 63, "  read back");
+  palp_db_debrief unsent = {.sent = 0, .level = PALP_DB_DEBRIEF_LESIONS};
+  snprintf(unsent.why, sizeof unsent.why, "DDS refused the write: Error");
+  CHECK(palp_db_debrief_format(&unsent, d, sizeof d) > 0 && !strcmp(d, "not sent (level lesions): DDS refused the write: Error"),
+        "not sent: '%s'", d);
+  CHECK(palp_db_debrief_parse(d, &b) == 0 && !b.sent && b.level == PALP_DB_DEBRIEF_LESIONS &&
+            !strcmp(b.why, "DDS refused the write: Error"),
+        "  read back");
+  /* a debrief that contradicts itself is not written either */
+  const palp_db_debrief liar = {.sent = 1, .level = PALP_DB_DEBRIEF_LESIONS, .lesions = 2, .found = 2, .marks = 1,
+                                .listed = 2, .found_by = {1, 0}};
+  CHECK(palp_db_debrief_format(&liar, d, sizeof d) == PALP_EINVAL, "format refuses found 2 with one lesion found by a mark");
+  static const struct { const char *detail, *why; } bad[] = {
+      {"told at level lesions: found 2 of 1 lesions; marks standing 4, near no lesion 1, duplicates 0; found by marks 1",
+       "more found than lesions"},
+      {"told at level lesions: found 1 of 2 lesions; marks standing 4, near no lesion 1, duplicates 0; found by marks 1",
+       "fewer lesions listed than counted"},
+      {"told at level lesions: found 2 of 2 lesions; marks standing 4, near no lesion 1, duplicates 0; found by marks 1 0",
+       "found not the count of found_by"},
+      {"told at level lesions: found 1 of 9 lesions; marks standing 4, near no lesion 1, duplicates 0; found by marks 1 0 0 "
+       "0 0 0 0 0 0",
+       "nine lesions (the wire carries eight)"},
+      {"told at level count: found 1 of 2 lesions; marks standing 1, near no lesion 2, duplicates 0",
+       "more marks near no lesion than marks"},
+      {"told at level count: found 1 of 2 lesions; marks standing 1, near no lesion 0, duplicates 0; found by marks 1 0",
+       "lesions listed at level count"},
+      {"told at level count: found -1 of 2 lesions; marks standing 1, near no lesion 0, duplicates 0", "a sign"},
+      {"told at level count: found 1 of 2 lesions; marks standing 99999999999, near no lesion 0, duplicates 0",
+       "a number past int"},
+      {"told at level count: found 01 of 2 lesions; marks standing 1, near no lesion 0, duplicates 0", "a leading zero"},
+      {"told at level lesions: found 1 of 1 lesions; marks standing 1, near no lesion 0, duplicates 0; found by marks 4294967296",
+       "a mark past uint32"},
+      {"told at level lesions: found 1 of 1 lesions; marks standing 1, near no lesion 0, duplicates 0; found by marks  1",
+       "two spaces"},
+      {"told at level none: marks standing 3; found 1", "trailing text"},
+      {"told at level all: marks standing 3", "an unknown level"},
+      {"not sent (level lesions): ", "not sent without a reason"},
+      {"not sent (level most): permissions", "not sent at an unknown level"},
+      {"", "empty"}};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+    CHECK(palp_db_debrief_parse(bad[i].detail, &b) == PALP_EINVAL, "refused: %s", bad[i].why);
+  CHECK(palp_db_debrief_parse(NULL, &b) == PALP_EINVAL, "refused: no detail");
+}
+
 /* --- peers DDS Security refused: server-wide events, summed per peer by the reader ---------- */
 static void test_refused(void) {
   char p[600], err[512];
@@ -473,6 +542,7 @@ int main(int argc, char **argv) {
   test_newer();
   test_full_disk();
   test_valid_range_detail();
+  test_debrief_detail();
   test_refused();
   CHECK_DONE();
 }

@@ -62,6 +62,16 @@ found=$(awk '$1 == "nina" && $4 ~ /^[0-9]+\/[0-9]+$/ { print $4; exit }' "$txt")
 lumps=$(grep -Ec "^\[trainee nina\]   lump [0-9]+ (MISSED|found by mark [0-9]+): at [0-9.]+ o'clock, [0-9]+ mm from the pole" "$txt")
 check "nina's debrief told her she found ${told:-none} lumps, as the review counts (${found:-none}), and where each is ($lumps listed)" \
   "[ -n '$told' ] && [ '$told' = '$found' ] && [ $lumps -eq \${told#*/} ]"
+# ... and the session log records what she was told (the debrief event, since session 59), so the
+# review's "not blind" of a later attempt rests on what was sent
+logged=$(python3 -c "
+import re, sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+rows = db.execute(\"select e.detail from event e join session s on s.id = e.session_id where s.trainee = 'nina' and e.kind = 'debrief'\").fetchall()
+m = [re.match(r'told at level lesions: found (\\d+) of (\\d+) lesions; ', d) for (d,) in rows]
+print(' '.join(x.group(1) + '/' + x.group(2) if x else 'unreadable' for x in m))" "$out/sessions.db" 2>&1)
+check "nina's session log records the debrief she was told (${logged:-none} against ${told:-none})" \
+  "[ -n '$told' ] && [ '$logged' = '$told' ]"
 check "nina took the exercise and her mark was accepted" \
   "grep -q '^\[trainee nina\] finding 1 accepted' '$txt' && grep -Eq '^\[scripted novice\] [1-9][0-9]* steps' '$txt'"
 check "carol is told when her 2 N safe force limits what she feels (the phantom asks ~2.2 N at 2 mm)" \
@@ -92,12 +102,13 @@ check "the server's session table and the review's list name dome C whole" \
   "grep -Eq '^[0-9]+ +carol +dome C \\(long-term, haptic 250 Hz\\) ' '$txt' && grep -Eq '^[0-9]+-[0-9]+-[0-9]+ +carol +dome C \\(long-term, haptic 250 Hz\\) ' '$txt'"
 # The instructor grades the exercise's sessions (a level and a note, in the log): nina's scripted
 # novice scores below 50, so insufficient, and her note names the criteria she failed; the list and
-# the class report (table and CSV) then carry her grade.
+# the class report (table and CSV) then carry her grade (and, in its last two columns since session
+# 59, that her session's debrief told her the lesions, and that hers was a blind attempt).
 nina_uid=$(sed -n 's/^exercise session: nina //p' "$txt" | head -1)
 check "the instructor graded nina's session ${nina_uid:-none}: insufficient, the note naming what failed" \
   "[ -n '$nina_uid' ] && grep -q '^note added to $nina_uid by instructor/ines, grade insufficient$' '$txt' && grep -q \"^== the instructor's grades\" '$txt'"
 check "the review's list and the class report show her grade" \
-  "grep -Eq '^$nina_uid +nina +Teaching.* insufficient$' '$txt' && grep -Eq '^nina +$nina_uid .* insufficient$' '$txt' && grep -q '\"$nina_uid\",\"nina\",.*,,\"insufficient\"$' '$out/demo/class-teaching.csv'"
+  "grep -Eq '^$nina_uid +nina +Teaching.* insufficient$' '$txt' && grep -Eq '^nina +$nina_uid .* insufficient$' '$txt' && grep -q '\"$nina_uid\",\"nina\",.*,,\"insufficient\",\"lesions\",\"\"$' '$out/demo/class-teaching.csv'"
 check "nina's report carries her grade" "grep -q 'insufficient' '$out/demo/report-$nina_uid.html'"
 note=$(python3 -c "import sqlite3, sys; print(''.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute('select text from note join session on session.id = note.session_id where session.uid = ?', (sys.argv[2],))))" "$out/sessions.db" "$nina_uid" 2>/dev/null)
 check "her note names the criteria she failed: $note" \

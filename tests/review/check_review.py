@@ -195,6 +195,12 @@ def klass(dom_path, shot, csv_path):
     page = [t["grade"] for t in tds]
     want_page = [" ".join(x for x in (d["grade_score"], d["grade_level"]) if x) or "-" for d in data]
     check(page == want_page, "class: the page's grades %r are the CSV's %r" % (page, want_page))
+    # what each was told as the session closed, and after which debrief an attempt was not blind
+    # (the last columns, since session 59): alice's server logged her debrief, bob's did not, and
+    # bob's second attempt came after his first's debrief (inferred: his logs do not record it)
+    told = sorted((d["session"], d["debrief"], d["not_blind_after"]) for d in data)
+    check(told == [("class-alice-1", "lesions", ""), ("class-bob-1", "", ""), ("class-bob-2", "", "class-bob-1")],
+          "class CSV: debrief and not_blind_after %r" % told)
     csv_out = {d["trainee"]: d["outside_valid_range_s"] for d in data}
     check(csv_out == {"alice": "1.42", "bob": ""}, "class CSV: outside_valid_range_s %r (bob's logs do not say)" % csv_out)
     maps = [e for e in dom.els if e["tag"] == "svg" and "coverage" in (e["a"].get("class") or "").split()]

@@ -34,9 +34,12 @@ static char *gen_slurp(const char *path) {
 
 typedef enum { GEN_EXPERT = 0, GEN_NOVICE = 1, GEN_FREE = 2 } gen_kind;
 
-/* Logs one session; *ref receives the in-process assessment. 0 or a message on stderr and -1. */
+/* Logs one session; *ref receives the in-process assessment. 0 or a message on stderr and -1.
+ * debrief: NULL, a log as a server before session 59 wrote it (no debriefs logged, no
+ * "debrief_events" key); "", a server that logs debriefs and logged none; else the debrief
+ * event's detail, as the server would have logged it (a fixture: the review reads it back). */
 static int gen_session(palp_db_writer *w, const char *test_dir, const char *uid, const char *trainee, gen_kind kind,
-                       unsigned seed, double start_unix_s, palp_assess_result *ref) {
+                       unsigned seed, double start_unix_s, palp_assess_result *ref, const char *debrief) {
   char ex_path[1024], sc_path[1024], err[512] = "";
   snprintf(ex_path, sizeof ex_path, "%s/exercise_expert.json", test_dir);
   snprintf(sc_path, sizeof sc_path, "%s/phantom_stiff.json", test_dir);
@@ -78,11 +81,14 @@ static int gen_session(palp_db_writer *w, const char *test_dir, const char *uid,
     fprintf(stderr, "gen: the exam failed after %d samples\n", rc.n);
     return -1;
   }
+  /* a server that logs valid-range events says so (server/db_log.c); the novice's log is as an
+   * earlier server wrote it, without the key; so for debriefs */
+  char params[128];
+  snprintf(params, sizeof params, "{%s%s%s}", kind == GEN_NOVICE ? "" : "\"valid_range_events\": true",
+           kind != GEN_NOVICE && debrief ? ", " : "", debrief ? "\"debrief_events\": true" : "");
   palp_db_session_def d = {.uid = uid, .trainee = trainee, .station = "gen", .phantom_id = "stiff",
                            .phantom_name = sc->name[0] ? sc->name : "phantom_stiff", .scene_json = sc_json,
-                           /* a server that logs valid-range events says so (server/db_log.c); the
-                            * novice's log is as an earlier server wrote it, without the key */
-                           .params_json = kind == GEN_NOVICE ? "{}" : "{\"valid_range_events\": true}", .tick_hz = 1.0 / sc->world.dt, .dt_s = sc->world.dt,
+                           .params_json = params, .tick_hz = 1.0 / sc->world.dt, .dt_s = sc->world.dt,
                            .start_unix_s = start_unix_s};
   palp_db_session s;
   int rc_ = palp_db_log_session_begin(w, &d, &s);
@@ -120,6 +126,8 @@ static int gen_session(palp_db_writer *w, const char *test_dir, const char *uid,
     }
     if (!rc_) rc_ = palp_db_log_event(w, s, PALP_DB_EVENT_VALID_RANGE, 3000, "outside at many steps", 5);
   }
+  if (!rc_ && debrief && debrief[0])
+    rc_ = palp_db_log_event(w, s, PALP_DB_EVENT_DEBRIEF, rc.n, debrief, 1);
   if (!rc_) rc_ = palp_db_log_session_end(w, s, PALP_DB_END_NORMAL, NULL, start_unix_s + palp_world_time(world));
   if (!rc_) rc_ = palp_db_writer_flush(w, 60.0);
   if (rc_) fprintf(stderr, "gen: logging failed: %s\n", palp_strerror(rc_));

@@ -44,9 +44,40 @@ int main(int argc, char **argv) {
   palp_db_writer *w;
   REQUIRE(palp_db_writer_open(path, NULL, &w, err, sizeof err) == 0, "writer: %s", err);
   palp_assess_result ref[3];
-  REQUIRE(gen_session(w, argv[2], "ra-expert", "alice", GEN_EXPERT, 0, 1.7e9, &ref[0]) == 0, "expert logged");
-  REQUIRE(gen_session(w, argv[2], "ra-novice", "bob", GEN_NOVICE, 7u, 1.7e9 + 1000, &ref[1]) == 0, "novice logged");
-  REQUIRE(gen_session(w, argv[2], "ra-free", "carol", GEN_FREE, 3u, 1.7e9 + 2000, &ref[2]) == 0, "free logged");
+  REQUIRE(gen_session(w, argv[2], "ra-expert", "alice", GEN_EXPERT, 0, 1.7e9, &ref[0], NULL) == 0, "expert logged");
+  REQUIRE(gen_session(w, argv[2], "ra-novice", "bob", GEN_NOVICE, 7u, 1.7e9 + 1000, &ref[1], NULL) == 0, "novice logged");
+  REQUIRE(gen_session(w, argv[2], "ra-free", "carol", GEN_FREE, 3u, 1.7e9 + 2000, &ref[2], NULL) == 0, "free logged");
+  /* dora's attempts at the same exercise, each logged as a server would (no samples: the "not
+   * blind" rule reads only the sessions' ends, exercises and debriefs): 1 its debrief not sent,
+   * 2 told the count, 3 a log from before debriefs were logged, 4 a server that logs them and
+   * logged none, 5 a debrief row that does not parse. */
+  static const struct { const char *uid, *params, *debrief; } dora[] = {
+      {"dora-1", "{\"debrief_events\": true}", "not sent (level lesions): DDS refused the write: Error"},
+      {"dora-2", "{\"debrief_events\": true}",
+       "told at level count: found 1 of 2 lesions; marks standing 1, near no lesion 0, duplicates 0"},
+      {"dora-3", "{}", NULL},
+      {"dora-4", "{\"debrief_events\": true}", NULL},
+      {"dora-5", "{\"debrief_events\": true}", "told at level count: found 3 of 2 lesions"}};
+  {
+    char ex_path[1024];
+    snprintf(ex_path, sizeof ex_path, "%s/exercise_expert.json", argv[2]);
+    char *ex_json = gen_slurp(ex_path);
+    REQUIRE(ex_json, "read %s", ex_path);
+    for (int k = 0; k < 5; k++) {
+      const double t = 1.7e9 + 3000 + 1000 * k;
+      palp_db_session_def d = {.uid = dora[k].uid, .trainee = "dora", .station = "gen", .phantom_id = "stiff",
+                               .phantom_name = "dome_breast_test", .scene_json = "{}", .params_json = dora[k].params,
+                               .tick_hz = 250, .dt_s = 0.004, .start_unix_s = t};
+      palp_db_session h;
+      int rc = palp_db_log_session_begin(w, &d, &h);
+      if (!rc) rc = palp_db_log_exercise(w, h, "test-two-lumps", ex_json);
+      if (!rc && dora[k].debrief) rc = palp_db_log_event(w, h, PALP_DB_EVENT_DEBRIEF, 10, dora[k].debrief, 1);
+      if (!rc) rc = palp_db_log_session_end(w, h, PALP_DB_END_NORMAL, NULL, t + 10);
+      REQUIRE(rc == 0, "%s logged: %s", dora[k].uid, palp_strerror(rc));
+    }
+    free(ex_json);
+    REQUIRE(palp_db_writer_flush(w, 30.0) == 0, "flushed");
+  }
   palp_db_writer_stats st;
   palp_db_writer_stats_get(w, &st);
   CHECK(st.shed == 0 && st.failed == 0, "nothing shed (%lld) or failed (%lld)", (long long)st.shed, (long long)st.failed);
@@ -116,6 +147,52 @@ int main(int argc, char **argv) {
     light = light && a[1].touches[k].peak_indentation > 0.0015 && a[1].touches[k].peak_indentation < 0.0035;
   CHECK(light, "the novice's 5 light presses read back as 5 touches 1.5-3.5 mm deep (%d; first %.2f mm)", a[1].touch_n,
         a[1].touch_n ? a[1].touches[0].peak_indentation * 1e3 : 0.0);
+  /* What dora was told, read back from each log (docs/assessment.md, "Debrief") */
+  {
+    static const int want[5] = {REVIEW_DEBRIEF_LOGGED, REVIEW_DEBRIEF_LOGGED, REVIEW_DEBRIEF_UNKNOWN, REVIEW_DEBRIEF_NONE,
+                                REVIEW_DEBRIEF_UNREADABLE};
+    for (int k = 0; k < 5; k++) {
+      palp_db_session_info s;
+      palp_db_debrief d;
+      REQUIRE(palp_db_find_session(db, dora[k].uid, &s) == 0, "%s found", dora[k].uid);
+      const int st_ = review_debrief(db, &s, &d);
+      CHECK(st_ == want[k], "%s: its debrief reads as status %d (got %d)", dora[k].uid, want[k], st_);
+    }
+    palp_db_session_info s1;
+    palp_db_debrief d;
+    REQUIRE(palp_db_find_session(db, "dora-1", &s1) == 0, "dora-1");
+    char text[1024];
+    review_debrief_text(review_debrief(db, &s1, &d), &d, NULL, text, sizeof text);
+    CHECK(!strcmp(text, "NOT SENT (the exercise's debrief: lesions): DDS refused the write: Error; its trainee was told "
+                        "nothing"),
+          "dora-1's line: %s", text);
+    /* Her attempt after each: the latest earlier session whose debrief told her something. */
+    static const struct { double after; int told; const char *uid; palp_debrief_level level; int inferred; } q[] = {
+        {3500, 0, "", PALP_DEBRIEF_NONE, 0},       /* dora-1's debrief was not sent: blind */
+        {4500, 1, "dora-2", PALP_DEBRIEF_COUNT, 0}, /* told the count, as logged */
+        {5500, 1, "dora-3", PALP_DEBRIEF_LESIONS, 1}, /* a log without debriefs: the file's level */
+        {6500, 1, "dora-3", PALP_DEBRIEF_LESIONS, 1}, /* dora-4 was told nothing: dora-3 still stands */
+        {7500, 1, "dora-5", PALP_DEBRIEF_LESIONS, 1}}; /* unreadable: the file's level, said inferred */
+    for (size_t k = 0; k < sizeof q / sizeof q[0]; k++) {
+      palp_db_session_info later = {.id = -1, .start_unix_s = 1.7e9 + q[k].after};
+      snprintf(later.trainee, sizeof later.trainee, "dora");
+      review_told t;
+      const int rc = review_told_before(db, &later, &a[1], &t);
+      CHECK(rc == q[k].told && (!q[k].told || (!strcmp(t.uid, q[k].uid) && t.level == q[k].level &&
+                                               t.inferred == q[k].inferred)),
+            "an attempt %.0f s in: told %d by '%s' at level %d, inferred %d (got %d by '%s' at %d, %d)", q[k].after,
+            q[k].told, q[k].uid, (int)q[k].level, q[k].inferred, rc, t.uid, (int)t.level, t.inferred);
+    }
+    /* A debrief that agrees with the review's count reads plainly; one that does not says so. */
+    palp_db_debrief agree = {.sent = 1, .level = PALP_DB_DEBRIEF_COUNT, .lesions = a[1].r.lesion_count,
+                             .found = a[1].r.found, .marks = 1};
+    review_debrief_text(REVIEW_DEBRIEF_LOGGED, &agree, &a[1], text, sizeof text);
+    CHECK(!strstr(text, "DIFFERS"), "a debrief agreeing with the review: %s", text);
+    palp_db_debrief other = agree;
+    other.found = agree.found == 0 ? 1 : 0;
+    review_debrief_text(REVIEW_DEBRIEF_LOGGED, &other, &a[1], text, sizeof text);
+    CHECK(strstr(text, "DIFFERS from this review"), "one that does not: %s", text);
+  }
   for (int i = 0; i < 3; i++) review_assessment_free(&a[i]);
   palp_db_close(db);
   CHECK_DONE();

@@ -56,13 +56,27 @@ else bad "show: the finger's touches"; cat "$dir/show-bob1.txt"; fi
 # debriefs with the lesions' places: the review says this attempt was not blind; his first and
 # alice's only attempt were (docs/assessment.md, "Debrief")
 R show class-bob-2 > "$dir/show-bob2.txt" 2>&1 || bad "show bob-2 exit status"
+# (bob's logs are as a server before session 59 wrote them, without their debriefs: inferred from the
+# first attempt's exercise file, and said so)
 expect "show: bob's second attempt is not blind, told by his first" \
-  "^told +bob had been told where this exercise's lesions are when session class-bob-1 ended \(2026-01-05 [0-9:]+ [-+][0-9]{4}\): this attempt was not blind$" \
+  "^told +bob had been told where this exercise's lesions are when session class-bob-1 ended \(2026-01-05 [0-9:]+ [-+][0-9]{4}\): this attempt was not blind \(inferred from that session's exercise file: its log does not record what was sent\)$" \
   "$dir/show-bob2.txt"
+# what each trainee was told as her session closed: alice's server logged it (review_gen: lump 1
+# found by her mark 2, lump 2 by mark 1), placed by tests/assess/exercise_expert.json's angles on the
+# 40 mm dome, by hand: polar 30 deg, azimuth 40 deg (from +x towards +y) is 90 - 40 = 50 deg clockwise
+# from +y = 1.7 o'clock, 40 mm x 30 deg = 20.9 mm of arc; polar 50, azimuth 215: 90 - 215 + 360 = 235
+# deg = 7.8 o'clock, 40 mm x 50 deg = 34.9 mm; bob's logs do not say
+expect "show: alice's debrief as her server logged it, the lumps placed as the review places them" \
+  "^debrief +told where each lump is: found 2 of 2 lumps; lump 1 found by mark 2 \(at 1\.7 o'clock, 21 mm from the pole\), lump 2 found by mark 1 \(at 7\.8 o'clock, 35 mm from the pole\); 2 marks standing, 0 near no lump$" \
+  "$dir/show-alice.txt"
+expect "show: bob's log does not say what he was told" \
+  "^debrief +not in this log \(its writer logged no debriefs" "$dir/show-bob1.txt"
 if grep -q "^told" "$dir/show-bob1.txt" "$dir/show-alice.txt"; then bad "show: a first attempt said to be not blind"
 else ok "show: bob's first attempt and alice's say nothing of a debrief before"; fi
 R show class-carol-1 > "$dir/show-carol.txt" 2>&1 || bad "show carol exit status"
 expect "show: free practice named, no sensitivity" "exercise +none: free practice" "$dir/show-carol.txt"
+if grep -q "^debrief" "$dir/show-carol.txt"; then bad "show: free practice with a debrief line"
+else ok "show: carol's free practice has no debrief line"; fi
 # The model's valid range, from the server's valid_range events (review_gen logs alice's: 355 steps
 # of 4 ms, 310 deeper than validated by up to 2.4 mm, 50 with the skin beyond its range, one
 # event unreadable); carol's server logged none, bob's log is from a server that did not log them.
@@ -110,9 +124,10 @@ assert r["session"] == "class-alice-1" and r["trainee"] == "alice" and r["found"
 assert float(r["coverage_medium"]) >= 0.95 and r["pattern"] == "vertical_strip", r
 assert r["outside_valid_range_s"] == "1.42", r  # review_gen's 355 flagged steps of 4 ms
 assert 13 <= int(r["strips"]) <= 15 and float(r["strip_order"]) >= 0.9, r  # the columns added 2026-12-04
-assert (r["grade_score"], r["grade_level"]) == ("", ""), r  # not graded yet (the grade columns, added last)
+assert (r["grade_score"], r["grade_level"]) == ("", ""), r  # not graded yet (the grade columns)
+assert (r["debrief"], r["not_blind_after"]) == ("lesions", ""), r  # told the lesions at its end; a blind attempt (added last)
 PY
-then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range, 13-15 strips in order, no grade"; else bad "export --table metrics"; fi
+then ok "export --table metrics: header and one row, found 2, pass 1, 1.42 s outside the valid range, 13-15 strips in order, no grade, debriefed at level lesions, blind"; else bad "export --table metrics"; fi
 
 # Structured grades: each refused form exits 2 with a message saying what is allowed.
 for g in "--score 101" "--score -1" "--score 7/10" "--level B+" "--grade B+" "--grade 7/10" "--level excellent"; do
@@ -146,6 +161,8 @@ R report class-bob-2 --out "$dir/bob2.html" > /dev/null || bad "report bob-2"
 expect "report: bob's second attempt is not blind" '<p class="warn" id="told-before">bob had been told where this exercise&#39;s lesions are when session class-bob-1 ended' "$dir/bob2.html"
 if grep -q 'id="told-before"' "$dir/bob.html" "$dir/alice.html"; then bad "report: a first attempt said to be not blind"
 else ok "report: bob's first attempt and alice's say nothing of a debrief before"; fi
+expect "report: alice's debrief as logged" \
+  '<p id="debrief">Debrief as the session ended: told where each lump is: found 2 of 2 lumps; lump 1 found by mark 2 \(at 1\.7 o&#39;clock, 21 mm from the pole\), lump 2 found by mark 1' "$dir/alice.html"
 # the instructor's structured grades (score, level) in the report's notes and the JSON export: both read
 # only the free-text grade column until 2026-12-05, so they showed none
 expect "report: alice's note with its level" '<tr><td>[^<]*</td><td>Lee</td><td>proficient</td><td>systematic</td></tr>' "$dir/alice.html"

@@ -615,6 +615,25 @@ int main(void) {
         "  %d touching, %d with their triangles, fingertip radius 8 mm", ls.touching, ls.with_triangles);
   CHECK(strcmp(sc->end_reason, "normal") == 0 && strcmp(sc->end_detail, "exercise time limit reached") == 0,
         "carol's session (%u) ended %s: \"%s\"", carol_session, sc->end_reason, sc->end_detail);
+  /* What each trainee was told is in the log (PALP_DB_EVENT_DEBRIEF, since session 59), as her
+   * station got it above: carol's 1 of 2 with lesion 1 found by mark 1, alice's nothing but her
+   * 63 marks; bob's free practice had no debrief. */
+  {
+    palp_db_debrief d;
+    CHECK(palp_db_session_debrief(db, sc->id, &d) == 1 && d.sent && d.level == PALP_DB_DEBRIEF_LESIONS &&
+              d.lesions == 2 && d.found == 1 && d.marks == 2 && d.false_marks == 1 && d.duplicates == 0 &&
+              d.listed == 2 && d.found_by[0] == 1 && d.found_by[1] == 0,
+          "carol's log: her debrief as sent (level %d, %d of %d, marks %d, false %d, listed %d: %u %u)", (int)d.level,
+          d.found, d.lesions, d.marks, d.false_marks, d.listed, d.found_by[0], d.found_by[1]);
+    CHECK(palp_db_session_debrief(db, sa->id, &d) == 1 && d.sent && d.level == PALP_DB_DEBRIEF_NONE && d.marks == 63 &&
+              d.lesions == 0 && d.listed == 0,
+          "alice's log: told nothing of the lesions, 63 marks standing (level %d, marks %d)", (int)d.level, d.marks);
+    CHECK(palp_db_session_debrief(db, sb->id, &d) == 0, "bob's free practice logged no debrief");
+    char *p2 = NULL;
+    CHECK(palp_db_session_json(db, sa->id, NULL, &p2) == 0 && p2 && strstr(p2, "\"debrief_events\": true"),
+          "  the sessions say their server logs debriefs (\"debrief_events\": true)");
+    free(p2);
+  }
   free(ss);
   palp_db_close(db);
   fprintf(stderr, "server_findings: %.1f s\n", (double)(palp_dds_now_ns() - t_start) * 1e-9);
