@@ -9,6 +9,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/random.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -89,6 +90,7 @@ struct palp_srv {
   palp_srv_session **sessions; /* open sessions, [cfg.max_sessions] */
   atomic_int session_count; /* changed by the server's thread; read by any (palp_srv_open_sessions) */
   uint32_t next_session_id;
+  uint64_t placement_key; /* this run's secret for random exercises' draws (placement_seed) */
   uint64_t sessions_total;
   uint64_t rejected_closed[PALP_SRV_REJ_COUNT]; /* counters of sessions already closed */
 
@@ -534,8 +536,8 @@ static const closed_session *closed_by_request(const palp_srv *srv, const char *
 
 /* Seconds left of the session's exercise time limit, or -1 without one. */
 static double time_left(const palp_srv_session *s, int64_t now_ns) {
-  if (!s->phantom->exercise) return -1.0;
-  const double left = s->phantom->exercise->time_limit - (double)(now_ns - s->opened_ns) * 1e-9;
+  if (!s->exercise) return -1.0;
+  const double left = s->exercise->time_limit - (double)(now_ns - s->opened_ns) * 1e-9;
   return left > 0 ? left : 0.0;
 }
 
@@ -553,6 +555,15 @@ static void publish_finding_status(palp_srv_session *s) {
   m.time_left = time_left(s, now);
   dds_write(s->finding_status_writer, &m);
   s->findings_status_ns = now;
+}
+
+/* A random exercise's seed for one session: the run's key and the session id through splitmix64's
+ * finaliser, so that neighbouring sessions' draws share nothing. */
+static uint32_t placement_seed(uint64_t key, uint32_t session_id) {
+  uint64_t z = key + 0x9e3779b97f4a7c15ULL * ((uint64_t)session_id + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return (uint32_t)((z ^ (z >> 31)) >> 32);
 }
 
 /* The debrief's record in the session log: what the trainee was told, or that nothing was sent
@@ -574,7 +585,7 @@ static void log_debrief(palp_srv *srv, const palp_srv_session *s, const palp_Deb
 /* An exercise session's debrief, written once as it closes (docs/assessment.md, "Debrief"): what
  * its standing marks found, matched as the review matches them, told at the exercise's level. */
 static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reason) {
-  const palp_exercise *ex = s->phantom->exercise;
+  const palp_exercise *ex = s->exercise;
   if (!ex) return;
   char why[160];
   if (s->debrief_writer <= 0) {
@@ -932,7 +943,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .debrief_topic = srv->topic[PALP_TOPIC_DEBRIEF],
                               .events = srv->events,
                               .partition = partition,
-                              .log = srv->log};
+                              .log = srv->log,
+                              .placement_seed = placement_seed(srv->placement_key, srv->next_session_id)};
     int rc = 0;
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
@@ -1349,6 +1361,10 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->log = def->log;
   srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
   srv->start_ns = palp_dds_now_ns();
+  /* Unpredictable, so that a trainee cannot work out a random exercise's lesions from her session
+   * number; each draw's seed is logged with it (docs/assessment.md, "Lesions drawn for each session"). */
+  if (getrandom(&srv->placement_key, sizeof srv->placement_key, 0) != (ssize_t)sizeof srv->placement_key)
+    srv->placement_key = (uint64_t)time(NULL) * 0x9e3779b97f4a7c15ULL ^ (uint64_t)getpid() ^ (uint64_t)srv->start_ns;
   char host[32] = "host";
   gethostname(host, sizeof host - 1);
   snprintf(srv->server_id, sizeof srv->server_id, "palp-server/%s/%ld", host, (long)getpid());
@@ -1602,7 +1618,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
         i--;
         continue;
       }
-      if (s->phantom->exercise && time_left(s, t) <= 0) {
+      if (s->exercise && time_left(s, t) <= 0) {
         close_session(srv, s, "exercise time limit reached");
         i--;
         continue;

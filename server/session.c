@@ -87,9 +87,41 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     palp_dds_session_partition(s->id, s->partition, sizeof s->partition);
   for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) s->finger[i].world_contact = -1;
 
+  s->exercise = def->phantom->exercise;
+  s->scene = &def->phantom->scene;
+  s->exercise_json = def->phantom->exercise_json;
+  if (s->exercise && s->exercise->placement.kind == PALP_PLACEMENT_RANDOM) {
+    /* This session's own lesions: the phantom's scene with the exercise's lesions (the last
+     * lesion_count of the scene's) moved to a draw of their own. */
+    s->own_exercise = malloc(sizeof *s->own_exercise);
+    s->own_scene = malloc(sizeof *s->own_scene);
+    if (!s->own_exercise || !s->own_scene) {
+      *err = PALP_ENOMEM;
+      goto fail;
+    }
+    char msg[256] = "";
+    const double R = def->phantom->scene.world.mesh.radius;
+    *s->own_scene = def->phantom->scene;
+    const int base = s->own_scene->world.lesion_count - s->exercise->lesion_count;
+    int rc = base >= 0 ? palp_exercise_draw(s->exercise, R, def->placement_seed, s->own_exercise, msg, sizeof msg)
+                       : PALP_EINVAL;
+    if (rc == 0)
+      rc = palp_exercise_lesions(s->own_exercise, R, s->own_scene->world.lesion + base, PALP_MAX_LESIONS - base, msg,
+                                 sizeof msg);
+    if (rc >= 0 && !(s->own_exercise_json = palp_exercise_drawn_json(def->phantom->exercise_json, s->own_exercise)))
+      rc = PALP_ENOMEM;
+    if (rc < 0) {
+      palp_log_error(def->log, "session %u: its lesions could not be drawn: %s", def->id, msg[0] ? msg : palp_strerror(rc));
+      *err = rc;
+      goto fail;
+    }
+    s->exercise = s->own_exercise;
+    s->scene = s->own_scene;
+    s->exercise_json = s->own_exercise_json;
+  }
   /* Built the way a recorder replays it (db/palp_db.h): the scene with its own
    * contacts, then those contacts removed; stations drive the contacts. */
-  s->world = palp_scene_create_world(&def->phantom->scene, err);
+  s->world = palp_scene_create_world(s->scene, err);
   if (!s->world) goto fail;
   for (int i = 0; i < def->phantom->scene.contact_count; i++) palp_world_remove_contact(s->world, i);
   const palp_mesh *mesh = palp_world_mesh(s->world);
@@ -190,6 +222,9 @@ void palp_srv_session_destroy(palp_srv_session *s) {
   if (s->contact_topic > 0) dds_delete(s->contact_topic);
   free(s->deformation.positions._buffer);
   palp_world_destroy(s->world);
+  free(s->own_exercise);
+  free(s->own_scene);
+  free(s->own_exercise_json);
   free(s);
 }
 
@@ -628,11 +663,11 @@ void palp_srv_session_info_fill(const palp_srv_session *s, palp_srv_session_info
   out->tick_rate_hz = 1.0 / s->phantom->scene.world.dt;
   out->dt = s->phantom->scene.world.dt;
   out->scene_path = s->phantom->cfg.scene_path;
-  out->scene = &s->phantom->scene;
+  out->scene = s->scene;
   out->max_force = s->limits.max_force;
   out->opened_ns = s->opened_ns;
-  out->exercise_name = s->phantom->exercise ? s->phantom->exercise->name : NULL;
-  out->exercise_json = s->phantom->exercise ? s->phantom->exercise_json : NULL;
+  out->exercise_name = s->exercise ? s->exercise->name : NULL;
+  out->exercise_json = s->exercise ? s->exercise_json : NULL;
   out->assess_sample_hz = s->assess_sample_hz;
 }
 

@@ -87,11 +87,22 @@ typedef struct palp_srv_session_def {
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
+  uint32_t placement_seed;       /* a random exercise's draw for this session (palp_exercise_draw) */
 } palp_srv_session_def;
 
 typedef struct palp_srv_session {
   uint32_t id;
   palp_srv_phantom *phantom;
+  /* The exercise this session runs (NULL: none), the scene its world was built from and the
+   * exercise's text for the log: the phantom's, or for a random exercise this session's own draw
+   * (docs/assessment.md, "Lesions drawn for each session"), which the findings, the debrief and
+   * the log then use. */
+  const palp_exercise *exercise;
+  const palp_scene *scene;
+  const char *exercise_json;
+  palp_exercise *own_exercise;   /* owned: a draw's (NULL otherwise) */
+  palp_scene *own_scene;
+  char *own_exercise_json;
   palp_world *world;
   char partition[64];
   char trainee_station[64];

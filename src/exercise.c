@@ -93,7 +93,7 @@ static int get_range(ctx *c, const cJSON *obj, const char *path, const char *key
   return PALP_OK;
 }
 
-static int parse_lesion(ctx *c, const cJSON *o, int i, palp_exercise_lesion *L) {
+static int parse_lesion(ctx *c, const cJSON *o, int i, int drawn_here, palp_exercise_lesion *L) {
   char path[32];
   snprintf(path, sizeof path, "lesions[%d].", i);
   if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
@@ -102,8 +102,14 @@ static int parse_lesion(ctx *c, const cJSON *o, int i, palp_exercise_lesion *L) 
   int e;
   double polar = 0, az = 0, depth = 0, dia = 0;
   if ((e = only_keys(c, o, path, keys))) return e;
-  if ((e = get_num(c, o, path, "polar_deg", 1, 0.0, 90.0, &polar))) return e;
-  if ((e = get_num(c, o, path, "azimuth_deg", 1, -360.0, 360.0, &az))) return e;
+  if (drawn_here) { /* placement random: the server draws them; a place here would mislead a reader */
+    if (cJSON_GetObjectItemCaseSensitive(o, "polar_deg") || cJSON_GetObjectItemCaseSensitive(o, "azimuth_deg"))
+      return palp_parse_fail(c, PALP_EPARSE, "%spolar_deg, azimuth_deg: drawn for each session (placement random): leave "
+                             "them out", path);
+  } else {
+    if ((e = get_num(c, o, path, "polar_deg", 1, 0.0, 90.0, &polar))) return e;
+    if ((e = get_num(c, o, path, "azimuth_deg", 1, -360.0, 360.0, &az))) return e;
+  }
   if ((e = get_num(c, o, path, "depth_mm", 1, 0.0, 1000.0, &depth))) return e;
   if ((e = get_num(c, o, path, "diameter_mm", 1, 0.0, 1000.0, &dia))) return e;
   if (!(dia > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "%sdiameter_mm: must be > 0", path);
@@ -117,6 +123,48 @@ static int parse_lesion(ctx *c, const cJSON *o, int i, palp_exercise_lesion *L) 
   L->azimuth = az * PALP_PI / 180.0;
   L->depth = depth * 1e-3;
   L->diameter = dia * 1e-3;
+  return PALP_OK;
+}
+
+/* "placement": {"kind": "fixed" | "random" | "drawn", "polar_deg": [min, max], "min_gap_mm": g,
+ * "seed": n (drawn only), "comment"}. Absent: fixed. */
+static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
+  static const char *const keys[] = {"kind", "polar_deg", "min_gap_mm", "seed", "comment", NULL};
+  memset(P, 0, sizeof *P);
+  if (!o) return PALP_OK;
+  if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "placement: expected an object");
+  int e;
+  if ((e = only_keys(c, o, "placement.", keys))) return e;
+  char kind[16] = "";
+  if ((e = get_str(c, o, "placement.", "kind", 1, kind, sizeof kind))) return e;
+  if (strcmp(kind, "fixed") == 0) P->kind = PALP_PLACEMENT_FIXED;
+  else if (strcmp(kind, "random") == 0) P->kind = PALP_PLACEMENT_RANDOM;
+  else if (strcmp(kind, "drawn") == 0) P->kind = PALP_PLACEMENT_DRAWN;
+  else return palp_parse_fail(c, PALP_EPARSE, "placement.kind: unknown \"%s\" (fixed, random, drawn)", kind);
+  const int band = P->kind != PALP_PLACEMENT_FIXED;
+  if (!band) {
+    if (cJSON_GetObjectItemCaseSensitive(o, "polar_deg") || cJSON_GetObjectItemCaseSensitive(o, "min_gap_mm") ||
+        cJSON_GetObjectItemCaseSensitive(o, "seed"))
+      return palp_parse_fail(c, PALP_EPARSE, "placement: polar_deg, min_gap_mm and seed belong to kind random or drawn");
+    return PALP_OK;
+  }
+  int has = 0;
+  /* up to 80 deg: the last 10 deg before the fixed rim are the model's stiffest and least like a breast */
+  if ((e = get_range(c, o, "placement.", "polar_deg", PALP_PI / 180.0, 80.0, &has, &P->polar_min, &P->polar_max))) return e;
+  if (!has) return palp_parse_fail(c, PALP_EPARSE, "placement.polar_deg: missing ([min, max] degrees from the pole)");
+  double gap = 10.0;
+  if ((e = get_num(c, o, "placement.", "min_gap_mm", 0, 0.0, 100.0, &gap))) return e;
+  P->min_gap = gap * 1e-3;
+  const cJSON *seed = cJSON_GetObjectItemCaseSensitive(o, "seed");
+  if (P->kind == PALP_PLACEMENT_RANDOM && seed)
+    return palp_parse_fail(c, PALP_EPARSE, "placement.seed: the server draws a seed for each session (only a drawn "
+                           "exercise, as logged, carries one)");
+  if (P->kind == PALP_PLACEMENT_DRAWN) {
+    double v = -1;
+    if ((e = get_num(c, o, "placement.", "seed", 1, 0.0, 4294967295.0, &v))) return e;
+    if (v != floor(v)) return palp_parse_fail(c, PALP_EPARSE, "placement.seed: expected an integer (got %g)", v);
+    P->seed = (uint32_t)v;
+  }
   return PALP_OK;
 }
 
@@ -217,7 +265,7 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
 static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise *ex) {
   static const char *const keys[] = {"name", "title", "phantom", "instructions", "time_limit_s", "lesions",
                                      "decoys", "pressure_bands", "max_force_N", "match_margin_mm", "rubric",
-                                     "debrief", "comment", NULL};
+                                     "debrief", "placement", "comment", NULL};
   memset(ex, 0, sizeof *ex);
   if (!cJSON_IsObject(root)) return palp_parse_fail(c, PALP_EPARSE, "exercise: expected a JSON object");
   int e;
@@ -240,8 +288,10 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
   if (!cJSON_IsArray(ls)) return palp_parse_fail(c, PALP_EPARSE, "lesions: expected an array");
   const int nl = cJSON_GetArraySize(ls);
   if (nl > PALP_MAX_LESIONS) return palp_parse_fail(c, PALP_EPARSE, "lesions: at most %d", PALP_MAX_LESIONS);
+  if ((e = parse_placement(c, cJSON_GetObjectItemCaseSensitive(root, "placement"), &ex->placement))) return e;
   for (int i = 0; i < nl; ++i)
-    if ((e = parse_lesion(c, cJSON_GetArrayItem(ls, i), i, &ex->lesion[i]))) return e;
+    if ((e = parse_lesion(c, cJSON_GetArrayItem(ls, i), i, ex->placement.kind == PALP_PLACEMENT_RANDOM, &ex->lesion[i])))
+      return e;
   ex->lesion_count = nl;
   /* Normal nodularity (a decoy that feels lumpy but is not a lesion) needs a textured
    * material the model does not have yet: refuse rather than ignore it. */
@@ -348,6 +398,12 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
   if (out->world.lesion_count + ex->lesion_count > PALP_MAX_LESIONS)
     return palp_parse_fail(&c, PALP_EINVAL, "lesions: the phantom has %d and the exercise %d; at most %d in all",
                 out->world.lesion_count, ex->lesion_count, PALP_MAX_LESIONS);
+  /* a random exercise: one draw, which also proves its lesions can be placed */
+  palp_exercise drawn;
+  if (ex->placement.kind == PALP_PLACEMENT_RANDOM) {
+    if ((e = palp_exercise_draw(ex, out->world.mesh.radius, 0u, &drawn, err, errlen))) return e;
+    ex = &drawn;
+  }
   const int n = palp_exercise_lesions(ex, out->world.mesh.radius, out->world.lesion + out->world.lesion_count,
                                       PALP_MAX_LESIONS - out->world.lesion_count, err, errlen);
   if (n < 0) return n;
@@ -370,3 +426,38 @@ int palp_band_of(const palp_band band[PALP_BAND_COUNT], double depth, double for
 }
 
 int palp_exercise_band(const palp_exercise *ex, double depth, double force) { return palp_band_of(ex->band, depth, force); }
+
+char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *d) {
+  if (!file_json || !d) return NULL;
+  cJSON *root = cJSON_Parse(file_json);
+  cJSON *ls = root ? cJSON_GetObjectItemCaseSensitive(root, "lesions") : NULL;
+  if (!cJSON_IsArray(ls) || cJSON_GetArraySize(ls) != d->lesion_count) {
+    cJSON_Delete(root);
+    return NULL;
+  }
+  int ok = 1;
+  for (int i = 0; i < d->lesion_count && ok; ++i) {
+    cJSON *o = cJSON_GetArrayItem(ls, i);
+    cJSON_DeleteItemFromObjectCaseSensitive(o, "polar_deg");
+    cJSON_DeleteItemFromObjectCaseSensitive(o, "azimuth_deg");
+    /* cJSON prints a number with up to 17 significant digits when 15 do not give it back:
+     * the degrees parse back to the same radians the world was built from (to rounding of the
+     * degree conversion, ~1e-16 rad) */
+    ok = cJSON_AddNumberToObject(o, "polar_deg", d->lesion[i].polar * 180.0 / PALP_PI) &&
+         cJSON_AddNumberToObject(o, "azimuth_deg", d->lesion[i].azimuth * 180.0 / PALP_PI);
+  }
+  cJSON_DeleteItemFromObjectCaseSensitive(root, "placement");
+  cJSON *p = ok ? cJSON_AddObjectToObject(root, "placement") : NULL;
+  /* the band and gap as the file said them (to 1e-9 deg / mm): the radians' round trip could put
+   * an 80 deg band's end a bit past the parser's 80 */
+  const double band[2] = {round(d->placement.polar_min * 180.0 / PALP_PI * 1e9) / 1e9,
+                          round(d->placement.polar_max * 180.0 / PALP_PI * 1e9) / 1e9};
+  ok = p && cJSON_AddStringToObject(p, "kind", d->placement.kind == PALP_PLACEMENT_FIXED ? "fixed" : "drawn") &&
+       (d->placement.kind == PALP_PLACEMENT_FIXED ||
+        (cJSON_AddNumberToObject(p, "seed", (double)d->placement.seed) &&
+         cJSON_AddItemToObject(p, "polar_deg", cJSON_CreateDoubleArray(band, 2)) &&
+         cJSON_AddNumberToObject(p, "min_gap_mm", round(d->placement.min_gap * 1e12) / 1e9)));
+  char *text = ok ? cJSON_Print(root) : NULL;
+  cJSON_Delete(root);
+  return text;
+}

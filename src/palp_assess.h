@@ -93,6 +93,24 @@ typedef enum palp_debrief_level {
   PALP_DEBRIEF_LESIONS = 2 /* and where each lesion is, found or missed */
 } palp_debrief_level;
 
+/* Where the lesions are (the exercise's "placement"; docs/assessment.md, "Lesions drawn for each
+ * session"). A practice exercise whose lesions stay put is learnt, not examined: after one debrief
+ * the trainee knows where to press. RANDOM draws them anew for each session, on the server. */
+typedef enum palp_placement_kind {
+  PALP_PLACEMENT_FIXED = 0,  /* where the file says (the default) */
+  PALP_PLACEMENT_RANDOM = 1, /* each lesion's polar and azimuth drawn for each session
+                                (palp_exercise_draw); the file gives their size, depth, stiffness */
+  PALP_PLACEMENT_DRAWN = 2   /* drawn: the places the file carries are one draw's (the session
+                                log's copy of a random exercise), seed says which */
+} palp_placement_kind;
+typedef struct palp_exercise_placement {
+  palp_placement_kind kind;
+  double polar_min, polar_max; /* [rad] from the pole: the band the lesions are drawn in */
+  double min_gap;              /* [m] along the skin between two lesions' edges (their surface
+                                  discs, a diameter across), so that each is felt apart */
+  uint32_t seed;               /* DRAWN: the draw's seed */
+} palp_exercise_placement;
+
 #define PALP_EXERCISE_TEXT 1024
 typedef struct palp_exercise {
   char name[64];
@@ -109,6 +127,7 @@ typedef struct palp_exercise {
                              projection finds it */
   palp_rubric rubric;
   palp_debrief_level debrief; /* "debrief": none (default), count, lesions */
+  palp_exercise_placement placement; /* "placement": fixed (default), random, drawn */
 } palp_exercise;
 
 /* Loads or parses an exercise. base_dir resolves a relative "phantom" (NULL or "" = as
@@ -128,8 +147,24 @@ int palp_exercise_lesions(const palp_exercise *ex, double dome_radius, palp_lesi
 palp_vec3 palp_exercise_lesion_surface(const palp_exercise_lesion *l, double dome_radius);
 
 /* Loads the exercise's phantom and hides its lesions in it (added to any the scene
- * declares; at most PALP_MAX_LESIONS in all). */
+ * declares; at most PALP_MAX_LESIONS in all). A RANDOM exercise's lesions are placed by one
+ * draw (seed 0): the scene is then valid, and a file whose lesions cannot be placed in its band
+ * is refused at load, not at a trainee's session. */
 int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, size_t errlen);
+
+/* One session's lesions of a RANDOM exercise (src/placement.c): out is ex with each lesion's
+ * polar and azimuth drawn, uniformly over the skin of the band [polar_min, polar_max] (cos(polar)
+ * uniform), each inside the dome above its base and at least min_gap from every other along the
+ * skin; kind DRAWN, seed kept. The same seed gives the same places on every machine. A FIXED or
+ * DRAWN exercise is copied unchanged. PALP_EINVAL (message in err) when the lesions cannot be
+ * placed (10,000 tries at each of 100 fresh starts). */
+int palp_exercise_draw(const palp_exercise *ex, double dome_radius, uint32_t seed, palp_exercise *out, char *err,
+                       size_t errlen);
+/* The exercise file's text with a draw's places written in: each lesion's polar_deg and
+ * azimuth_deg, and "placement" {"kind": "drawn", "seed", "polar_deg", "min_gap_mm"}; parsed back it
+ * gives drawn's lesions (to the last bit). For the session log, so that the review assesses the
+ * lesions the trainee searched. malloc'd; NULL when file_json does not parse or memory runs out. */
+char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *drawn);
 
 /* ---- a session ------------------------------------------------------------- */
 /* One sample of the fingertip, as the server steps it (palp_local_model and

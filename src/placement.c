@@ -1,0 +1,79 @@
+/*
+ * placement.c - one session's lesions of a random exercise (palp_exercise_draw; docs/assessment.md,
+ * "Lesions drawn for each session"). Pure and deterministic: a small counter-based generator
+ * (splitmix64) seeded by the server per session, so that the same seed gives the same places on
+ * every machine and a logged draw can be checked by drawing it again.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "palp_assess.h"
+#include "parse_error.h"
+#include "vec3.h"
+
+#define TRIES_PER_LESION 10000
+#define STARTS 100
+
+/* splitmix64 (Steele, Lea & Flood 2014): full-period 64-bit state, good enough to place a few
+ * lesions; its output's top 53 bits give a double uniform in [0, 1). */
+static uint64_t next(uint64_t *s) {
+  uint64_t z = (*s += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+static double uniform(uint64_t *s) { return (double)(next(s) >> 11) * 0x1.0p-53; }
+
+static palp_vec3 dir_of(double polar, double az) {
+  return v3(sin(polar) * cos(az), sin(polar) * sin(az), cos(polar));
+}
+
+/* Inside the dome and clear of its base: palp_exercise_lesions' test. */
+static int fits(const palp_exercise_lesion *L, double R) {
+  const double a = L->diameter / 2.0;
+  const palp_vec3 c = v3_scale(dir_of(L->polar, L->azimuth), R - L->depth);
+  return R - L->depth + a < R && L->depth + a < 2.0 * R && c.z - a > 0.0;
+}
+
+/* The gap along the skin between two lesions' surface discs [m]: the great-circle arc between
+ * the points above their centres, R * angle, less their two radii. */
+static double gap(const palp_exercise_lesion *a, const palp_exercise_lesion *b, double R) {
+  const double c = v3_dot(dir_of(a->polar, a->azimuth), dir_of(b->polar, b->azimuth));
+  return R * acos(fmax(-1.0, fmin(1.0, c))) - (a->diameter + b->diameter) / 2.0;
+}
+
+int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_exercise *out, char *err, size_t errlen) {
+  palp_parse_ctx c = {err, errlen};
+  if (!ex || !out || !(R > 0.0)) return palp_parse_fail(&c, PALP_EINVAL, "exercise draw: bad arguments");
+  *out = *ex;
+  if (ex->placement.kind != PALP_PLACEMENT_RANDOM) return PALP_OK;
+  const palp_exercise_placement *P = &ex->placement;
+  /* cos(polar) uniform in [cos max, cos min]: every square millimetre of the band's skin as likely */
+  const double c0 = cos(P->polar_max), c1 = cos(P->polar_min);
+  uint64_t s = 0x5eed5eed00000000ULL ^ seed;
+  for (int start = 0; start < STARTS; start++) {
+    int placed = 0;
+    for (int i = 0; i < ex->lesion_count; i++) {
+      palp_exercise_lesion *L = &out->lesion[i];
+      int ok = 0;
+      for (int t = 0; t < TRIES_PER_LESION && !ok; t++) {
+        L->polar = acos(c0 + (c1 - c0) * uniform(&s));
+        L->azimuth = 2.0 * PALP_PI * uniform(&s);
+        ok = fits(L, R);
+        for (int j = 0; j < i && ok; j++) ok = gap(L, &out->lesion[j], R) >= P->min_gap;
+      }
+      if (!ok) break;
+      placed++;
+    }
+    if (placed == ex->lesion_count) {
+      out->placement.kind = PALP_PLACEMENT_DRAWN;
+      out->placement.seed = seed;
+      return PALP_OK;
+    }
+  }
+  return palp_parse_fail(&c, PALP_EINVAL,
+                         "placement: cannot place %d lesions in the band %g-%g deg from the pole at least %g mm apart "
+                         "(a wider band, a smaller gap or fewer lesions)",
+                         ex->lesion_count, P->polar_min * 180.0 / PALP_PI, P->polar_max * 180.0 / PALP_PI, P->min_gap * 1e3);
+}

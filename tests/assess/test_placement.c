@@ -1,0 +1,185 @@
+/*
+ * test_placement.c - lesions drawn for each session (src/placement.c, the exercise's "placement";
+ * docs/assessment.md, "Lesions drawn for each session"). A random exercise of three 15 mm lesions
+ * 10 mm deep in the band 20-55 deg from the pole of a 40 mm dome, at least 10 mm apart along the
+ * skin. Every property is checked with the test's own geometry, not the module's:
+ *  - each draw keeps the file's sizes, depths and stiffnesses, places every lesion in the band,
+ *    inside the dome above its base and >= 10 mm from the others' edges along the skin;
+ *  - the same seed gives the same places, bit for bit; 200 seeds give 200 different first places;
+ *  - uniform over the band's skin: over 4000 one-lesion draws the share below the polar angle that
+ *    halves the band's area is 0.5 +- 0.03 (4 sigma of a binomial at n = 4000: 0.032), and each
+ *    azimuth quadrant holds 0.25 +- 0.03;
+ *  - a file that asks too much (three 15 mm lesions 60 mm apart in a 5 deg band) is refused at
+ *    load, with a message naming the placement;
+ *  - the file's text with a draw written in parses back to the same places (within 1e-12 rad) as
+ *    kind "drawn" with its seed; a random file with places, or a seed, is refused.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "palp_assess.h"
+
+/* a check the rest depends on: stop here when it fails */
+#define REQUIRE(cond, ...)   \
+  do {                       \
+    CHECK(cond, __VA_ARGS__); \
+    if (!(cond)) return 1;   \
+  } while (0)
+
+#define PI 3.14159265358979323846
+#define R 0.040
+
+static const char *random3 =
+    "{\"name\": \"r\", \"title\": \"R\", \"phantom\": \"p.json\", \"instructions\": \"go\", \"time_limit_s\": 60,"
+    " \"placement\": {\"kind\": \"random\", \"polar_deg\": [20, 55], \"min_gap_mm\": 10},"
+    " \"lesions\": [{\"depth_mm\": 10, \"diameter_mm\": 15, \"stiffness_ratio\": 5},"
+    "               {\"depth_mm\": 10, \"diameter_mm\": 15, \"stiffness_ratio\": 5},"
+    "               {\"depth_mm\": 12, \"diameter_mm\": 10, \"stiffness_ratio\": 8}],"
+    " \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 4]}, \"medium\": {\"depth_mm\": [4, 9]}, \"deep\": {\"depth_mm\": [9, 18]}},"
+    " \"max_force_N\": 15, \"debrief\": \"lesions\", \"rubric\": {\"weights\": {\"sensitivity\": 1},"
+    " \"pass\": {\"sensitivity\": 1, \"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}";
+
+static char *replaced(const char *text, const char *from, const char *to) {
+  const char *at = strstr(text, from);
+  if (!at) return NULL;
+  const size_t n = strlen(text) - strlen(from) + strlen(to) + 1;
+  char *out = malloc(n);
+  snprintf(out, n, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+  return out;
+}
+
+/* the test's own geometry: the unit direction of (polar, azimuth) */
+static void dir(double polar, double az, double d[3]) {
+  d[0] = sin(polar) * cos(az), d[1] = sin(polar) * sin(az), d[2] = cos(polar);
+}
+
+static int valid_draw(const palp_exercise *src, const palp_exercise *d, char *why, size_t len) {
+  if (d->lesion_count != src->lesion_count) return snprintf(why, len, "count"), 0;
+  for (int i = 0; i < d->lesion_count; i++) {
+    const palp_exercise_lesion *L = &d->lesion[i], *S = &src->lesion[i];
+    if (L->depth != S->depth || L->diameter != S->diameter || L->stiffness_ratio != S->stiffness_ratio)
+      return snprintf(why, len, "lesion %d's size, depth or stiffness changed", i), 0;
+    const double deg = L->polar * 180 / PI;
+    if (!(deg >= 20 - 1e-9 && deg <= 55 + 1e-9)) return snprintf(why, len, "lesion %d at polar %.3f deg", i, deg), 0;
+    /* centre (R - depth) n; its lowest point above the base z = 0, its top below the skin */
+    if (!((R - L->depth) * cos(L->polar) - L->diameter / 2 > 0) || !(L->depth > L->diameter / 2))
+      return snprintf(why, len, "lesion %d not inside the dome above its base", i), 0;
+    for (int j = 0; j < i; j++) {
+      double a[3], b[3];
+      dir(L->polar, L->azimuth, a);
+      dir(d->lesion[j].polar, d->lesion[j].azimuth, b);
+      const double arc = R * acos(fmin(1.0, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]));
+      const double g = arc - (L->diameter + d->lesion[j].diameter) / 2;
+      if (g < 0.010 - 1e-12) return snprintf(why, len, "lesions %d and %d %.2f mm apart", j, i, g * 1e3), 0;
+    }
+  }
+  return 1;
+}
+
+int main(void) {
+  char err[512] = "";
+  palp_exercise ex;
+  REQUIRE(palp_exercise_parse(random3, "", &ex, err, sizeof err) == 0, "the random exercise parses: %s", err);
+  CHECK(ex.placement.kind == PALP_PLACEMENT_RANDOM && fabs(ex.placement.polar_min - 20 * PI / 180) < 1e-15 &&
+            fabs(ex.placement.polar_max - 55 * PI / 180) < 1e-15 && fabs(ex.placement.min_gap - 0.010) < 1e-15,
+        "  placement random, band 20-55 deg, gap 10 mm");
+
+  /* 1000 draws: every one valid */
+  int bad = 0;
+  char why[160] = "";
+  for (uint32_t seed = 0; seed < 1000; seed++) {
+    palp_exercise d;
+    if (palp_exercise_draw(&ex, R, seed, &d, err, sizeof err) != 0 || d.placement.kind != PALP_PLACEMENT_DRAWN ||
+        d.placement.seed != seed || !valid_draw(&ex, &d, why, sizeof why)) {
+      if (!bad) printf("seed %u: %s %s\n", seed, err, why);
+      bad++;
+    }
+  }
+  CHECK(bad == 0, "1000 draws: each in the band, inside the dome, 10 mm apart, sizes kept (%d bad)", bad);
+
+  /* the same seed, the same places; different seeds, different places */
+  palp_exercise d1, d2;
+  CHECK(palp_exercise_draw(&ex, R, 12345u, &d1, err, sizeof err) == 0 &&
+            palp_exercise_draw(&ex, R, 12345u, &d2, err, sizeof err) == 0 && memcmp(&d1, &d2, sizeof d1) == 0,
+        "seed 12345 twice: the same exercise, bit for bit");
+  int same = 0;
+  double first[200];
+  for (uint32_t k = 0; k < 200; k++) {
+    palp_exercise d;
+    palp_exercise_draw(&ex, R, 777u + k, &d, err, sizeof err);
+    first[k] = d.lesion[0].polar * 1000 + d.lesion[0].azimuth;
+    for (uint32_t j = 0; j < k; j++) same += first[j] == first[k];
+  }
+  CHECK(same == 0, "200 seeds: 200 different first places (%d repeats)", same);
+
+  /* uniform over the band's skin: one lesion, 4000 draws */
+  char *one = replaced(random3,
+                       ",               {\"depth_mm\": 10, \"diameter_mm\": 15, \"stiffness_ratio\": 5},"
+                       "               {\"depth_mm\": 12, \"diameter_mm\": 10, \"stiffness_ratio\": 8}]",
+                       "]");
+  palp_exercise ex1;
+  REQUIRE(one && palp_exercise_parse(one, "", &ex1, err, sizeof err) == 0 && ex1.lesion_count == 1, "one lesion: %s", err);
+  /* the band's area splits in half at cos(p) = (cos 20 + cos 55) / 2 */
+  const double half = acos((cos(20 * PI / 180) + cos(55 * PI / 180)) / 2);
+  int below = 0, quad[4] = {0};
+  for (uint32_t seed = 0; seed < 4000; seed++) {
+    palp_exercise d;
+    palp_exercise_draw(&ex1, R, seed, &d, err, sizeof err);
+    below += d.lesion[0].polar < half;
+    double az = fmod(d.lesion[0].azimuth, 2 * PI);
+    if (az < 0) az += 2 * PI;
+    quad[(int)(az / (PI / 2)) & 3]++;
+  }
+  CHECK(fabs(below / 4000.0 - 0.5) <= 0.03, "uniform over the skin: %.3f below the band's half-area angle %.1f deg (0.5 +- 0.03)",
+        below / 4000.0, half * 180 / PI);
+  for (int q = 0; q < 4; q++)
+    CHECK(fabs(quad[q] / 4000.0 - 0.25) <= 0.03, "  azimuth quadrant %d: %.3f (0.25 +- 0.03)", q, quad[q] / 4000.0);
+
+  /* asking too much: refused when drawn, and so at the exercise's load (palp_exercise_scene) */
+  char *tight = replaced(random3, "\"polar_deg\": [20, 55], \"min_gap_mm\": 10", "\"polar_deg\": [30, 35], \"min_gap_mm\": 60");
+  palp_exercise ext;
+  REQUIRE(tight && palp_exercise_parse(tight, "", &ext, err, sizeof err) == 0, "the tight file parses: %s", err);
+  palp_exercise dt;
+  const int rc = palp_exercise_draw(&ext, R, 1u, &dt, err, sizeof err);
+  printf("tight: %s\n", err);
+  CHECK(rc == PALP_EINVAL && strstr(err, "placement: cannot place 3 lesions in the band 30-35 deg"),
+        "three lesions 60 mm apart in a 5 deg band: refused (%d: %s)", rc, err);
+
+  /* the text the log keeps: parsed back, the same places, kind drawn with its seed */
+  char *logged = palp_exercise_drawn_json(random3, &d1);
+  palp_exercise back;
+  REQUIRE(logged && palp_exercise_parse(logged, "", &back, err, sizeof err) == 0, "the drawn text parses: %s", err);
+  double worst = 0;
+  for (int i = 0; i < 3; i++)
+    worst = fmax(worst, fmax(fabs(back.lesion[i].polar - d1.lesion[i].polar), fabs(back.lesion[i].azimuth - d1.lesion[i].azimuth)));
+  CHECK(back.placement.kind == PALP_PLACEMENT_DRAWN && back.placement.seed == 12345u && worst < 1e-12 &&
+            back.lesion_count == 3 && back.lesion[2].stiffness_ratio == 8,
+        "  kind drawn, seed 12345, places within %.1e rad (1e-12)", worst);
+  palp_exercise again;
+  CHECK(palp_exercise_draw(&back, R, 99u, &again, err, sizeof err) == 0 && memcmp(&again, &back, sizeof back) == 0,
+        "  a drawn exercise is not drawn again (its places stay)");
+
+  /* refused: places in a random file, a seed in a random file, an unknown kind, no band */
+  static const struct { const char *from, *to, *field; } refuse[] = {
+      {"{\"depth_mm\": 10, \"diameter_mm\": 15", "{\"polar_deg\": 30, \"depth_mm\": 10, \"diameter_mm\": 15", "drawn for each session"},
+      {"\"min_gap_mm\": 10}", "\"min_gap_mm\": 10, \"seed\": 4}", "placement.seed"},
+      {"\"kind\": \"random\"", "\"kind\": \"shuffled\"", "placement.kind"},
+      {"\"polar_deg\": [20, 55], ", "", "placement.polar_deg: missing"},
+      {"\"polar_deg\": [20, 55]", "\"polar_deg\": [20, 85]", "placement.polar_deg[1]"},
+      {"\"kind\": \"random\", \"polar_deg\": [20, 55], \"min_gap_mm\": 10", "\"kind\": \"fixed\", \"min_gap_mm\": 10",
+       "belong to kind random or drawn"}};
+  for (size_t k = 0; k < sizeof refuse / sizeof refuse[0]; k++) {
+    char *j = replaced(random3, refuse[k].from, refuse[k].to);
+    palp_exercise x;
+    err[0] = 0;
+    const int e = j ? palp_exercise_parse(j, "", &x, err, sizeof err) : 0;
+    printf("%-60.60s -> %s\n", refuse[k].to, err);
+    CHECK(e == PALP_EPARSE && strstr(err, refuse[k].field), "refused, naming %s: %s", refuse[k].field, err);
+    free(j);
+  }
+  free(one), free(tight), free(logged);
+  CHECK_DONE();
+}

@@ -1,0 +1,108 @@
+#!/bin/sh
+# Lesions drawn for each session (docs/assessment.md, "Lesions drawn for each session"): palp-server
+# hosts exercise_random.json (two lesions, 15 and 12 mm across, 10 mm deep, drawn in the band 20-50
+# deg from the pole of the 40 mm dome, at least 10 mm apart along the skin, debrief "lesions") on
+# domain 181 with a SQLite log; trainee dora takes it twice with the simulated device (a press and a
+# mark at polar 30, azimuth 0). Checked, with the test's own geometry:
+#  - each session's log keeps the exercise as drawn ("placement" kind "drawn", its seed), its lesions
+#    in the band and 10 mm apart, and a scene whose lesion spheres are those lesions (centre
+#    (R - depth) n(polar, azimuth), radius diameter / 2, within 1e-9 m): the world and its replay
+#    are built with the lesions the trainee searched;
+#  - the two sessions' draws differ (seeds and places), and each debrief her station printed names
+#    its own session's lesions (clock and arc as computed here from the logged angles, to the
+#    printed precision);
+#  - the review: her second attempt is blind (its lesions are not the ones her first debrief told),
+#    and `show` prints each session's debrief with the same places; replay is bit-identical.
+# usage: exercise_random.sh SERVER CLIENT REVIEW CONFIG_DIR TEST_DIR
+set -u
+server=$1 client=$2 review=$3 config_dir=$4 test_dir=$5
+export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
+tmp=$(mktemp -d)
+spid=
+trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
+cat > "$tmp/server.json" <<JSON
+{ "domain_id": 181, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
+  "dds_config": "$config_dir/cyclonedds-loopback.xml",
+  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
+  "exercises": [ { "id": 7, "file": "$test_dir/exercise_random.json", "physics_rate_hz": 250 } ] }
+JSON
+"$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
+spid=$!
+fail=0
+for k in 1 2; do
+  "$client" --role trainee --domain 181 --phantom 7 --name dora --timeout 10 --print-period 0 \
+    --input sim:press,polar=30,azimuth=0,depth_mm=6,hold_s=1.5,mark_s=1 > "$tmp/dora$k.log" 2>&1
+done
+kill $spid; wait $spid; spid=
+for k in 1 2; do
+  grep "debrief" "$tmp/dora$k.log" > /dev/null || { echo "FAIL dora's session $k printed no debrief:"; cat "$tmp/dora$k.log"; fail=1; }
+done
+python3 - "$tmp/log.db" "$tmp/dora1.log" "$tmp/dora2.log" <<'PY' || fail=1
+import json, math, re, sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+rows = db.execute("select s.id, s.uid, s.scene_json, e.exercise_json from session s join session_exercise e "
+                  "on e.session_id = s.id where s.trainee = 'dora' order by s.id").fetchall()
+bad = 0
+def check(ok, what):
+    global bad
+    print(("ok   " if ok else "FAIL ") + what)
+    bad += not ok
+check(len(rows) == 2, "two sessions of dora's logged with their exercise (%d)" % len(rows))
+R = 0.040
+draws = []
+for k, (sid, uid, scene_json, ex_json) in enumerate(rows):
+    ex, sc = json.loads(ex_json), json.loads(scene_json)
+    p = ex.get("placement", {})
+    check(p.get("kind") == "drawn" and isinstance(p.get("seed"), (int, float)) and p.get("polar_deg") == [20, 50],
+          "session %s: its exercise as drawn (placement %s)" % (uid, p))
+    les = ex["lesions"]
+    ok = len(les) == 2 and all(20 <= l["polar_deg"] <= 50 for l in les)
+    n = [(math.sin(math.radians(l["polar_deg"])) * math.cos(math.radians(l["azimuth_deg"])),
+          math.sin(math.radians(l["polar_deg"])) * math.sin(math.radians(l["azimuth_deg"])),
+          math.cos(math.radians(l["polar_deg"]))) for l in les]
+    arc = R * math.acos(max(-1, min(1, sum(a * b for a, b in zip(n[0], n[1])))))
+    gap = arc - (les[0]["diameter_mm"] + les[1]["diameter_mm"]) / 2e3
+    check(ok and gap >= 0.010 - 1e-12, "  lesions at polar %.1f / %.1f deg (band 20-50), %.1f mm apart (>= 10)" %
+          (les[0]["polar_deg"], les[1]["polar_deg"], gap * 1e3))
+    spheres = sc.get("lesions", [])
+    err = max(max(abs(c - (R - l["depth_mm"] / 1e3) * x) for c, x in zip(s["center_m"], d)) for s, l, d in zip(spheres, les, n)) if len(spheres) == 2 else 1
+    rad = all(abs(s["radius_m"] - l["diameter_mm"] / 2e3) < 1e-12 for s, l in zip(spheres, les))
+    check(len(spheres) == 2 and err < 1e-9 and rad, "  the logged scene's lesion spheres are those lesions (off by %.1e m)" % err)
+    # what her station printed: "lump N MISSED|found by mark M: at H o'clock, A mm from the pole"
+    said = re.findall(r"lump (\d) (?:MISSED|found by mark \d+): at ([0-9.]+) o'clock, (\d+) mm from the pole",
+                      open(sys.argv[2 + k]).read())
+    want = []
+    for l, d in zip(les, n):
+        h = math.degrees(math.atan2(d[0], d[1])) / 30  # clockwise from +y (12 o'clock), +x at 3: (0, 12]
+        h = h + 12 if h <= 0 else h
+        want.append(("%.1f" % h, "%.0f" % (R * math.radians(l["polar_deg"]) * 1e3)))
+    check([(c, a) for _, c, a in said] == want, "  dora's debrief named these places: %s (computed here: %s)" % (said, want))
+    draws.append((p.get("seed"), [(l["polar_deg"], l["azimuth_deg"]) for l in les]))
+check(len(draws) == 2 and draws[0][0] != draws[1][0] and draws[0][1] != draws[1][1],
+      "the two sessions' draws differ: seeds %s" % [d[0] for d in draws])
+for k, (sid, uid, _, _) in enumerate(rows):
+    print("uid%d=%s" % (k + 1, uid), file=open(sys.argv[1] + ".uids", "a"))
+sys.exit(1 if bad else 0)
+PY
+. "$tmp/log.db.uids" 2>/dev/null || true
+if [ -n "${uid2:-}" ]; then
+  "$review" --db "$tmp/log.db" show "$uid2" > "$tmp/show2.txt" 2>&1
+  "$review" --db "$tmp/log.db" show "$uid1" > "$tmp/show1.txt" 2>&1
+  if grep -q "^told" "$tmp/show2.txt"; then echo "FAIL the second attempt said not blind:"; grep "^told" "$tmp/show2.txt"; fail=1
+  else echo "ok   the second attempt is blind: its lesions are not those her first debrief told"; fi
+  for k in 1 2; do
+    # the review's places are the station's (both name them with palp_place_*)
+    st=$(sed -n "s/.*lump \([0-9]\) [A-Za-z0-9 ]*: at \([0-9.]*\) o'clock, \([0-9]*\) mm from the pole.*/\2 \3/p" "$tmp/dora$k.log" | tr '\n' ' ')
+    rv=$(grep "^debrief" "$tmp/show$k.txt" | grep -o "at [0-9.]* o'clock, [0-9]* mm from the pole" | sed "s/at \([0-9.]*\) o'clock, \([0-9]*\) mm.*/\1 \2/" | tr '\n' ' ')
+    if [ -n "$st" ] && [ "$st" = "$rv" ]; then echo "ok   show session $k: the debrief's places as her station printed them ($rv)"
+    else echo "FAIL show session $k: the review's places '$rv', the station's '$st'"; cat "$tmp/show$k.txt"; fail=1; fi
+    u=$([ $k = 1 ] && echo "$uid1" || echo "$uid2")
+    if "$review" --db "$tmp/log.db" replay "$u" > "$tmp/replay$k.txt" 2>&1 && grep -q "reproduced bit-identically" "$tmp/replay$k.txt"; then
+      echo "ok   replay of session $k: bit-identical (its world rebuilt with its own lesions)"
+    else echo "FAIL replay of session $k:"; cat "$tmp/replay$k.txt"; fail=1; fi
+  done
+else
+  echo "FAIL no sessions to review"; fail=1
+fi
+[ $fail = 0 ] || { echo "--- server log"; tail -20 "$tmp/server.log"; }
+exit $fail
