@@ -103,8 +103,8 @@ int main(void) {
   const struct {
     const char *file;
     double polar_deg, az_deg, depth_mm, diameter_mm;
-  } shipped[] = {{"easy", 30, 120, 12, 20}, {"medium", 45, 300, 12, 15}, {"hard", 35, 200, 10, 10}};
-  for (int k = 0; k < 3; ++k) {
+  } shipped[] = {{"easy", 30, 120, 12, 20}, {"hard", 35, 200, 10, 10}};
+  for (int k = 0; k < 2; ++k) {
     char path[1024];
     snprintf(path, sizeof path, "%s/exercises/%s.json", PALP_CONFIG_DIR, shipped[k].file);
     CHECK(palp_exercise_load(path, &ex, err, sizeof err) == 0, "%s: %s", path, err);
@@ -132,6 +132,25 @@ int main(void) {
     palp_world *w = palp_scene_create_world(&sc, &e);
     CHECK(w != NULL, "%s: the world accepts the lesion (%s)", shipped[k].file, palp_strerror(e));
     palp_world_destroy(w);
+  }
+  /* "medium" draws its lesion for each session (since 2026-12-05): the band 20-55 deg, 10 mm
+   * gaps; loaded, its scene holds one draw, a 15 mm lesion 12 mm deep in that band. */
+  {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/exercises/medium.json", PALP_CONFIG_DIR);
+    CHECK(palp_exercise_load(path, &ex, err, sizeof err) == 0, "%s: %s", path, err);
+    CHECK(ex.lesion_count == 1 && ex.placement.kind == PALP_PLACEMENT_RANDOM &&
+              fabs(ex.placement.polar_min - 20 * PI / 180) < 1e-15 && fabs(ex.placement.polar_max - 55 * PI / 180) < 1e-15,
+          "medium: one lesion drawn for each session in the band 20-55 deg");
+    palp_scene sc;
+    CHECK(palp_exercise_scene(&ex, &sc, err, sizeof err) == 0 && sc.world.lesion_count == 1, "medium scene: %s", err);
+    const palp_vec3 c = sc.world.lesion[0].center;
+    const double r = sqrt(c.x * c.x + c.y * c.y + c.z * c.z), polar = acos(c.z / r) * 180 / PI;
+    printf("medium: one draw at polar %.1f deg, centre %.1f mm from the dome's centre\n", polar, r * 1e3);
+    CHECK(fabs(r - 0.028) < 1e-12 && polar >= 20 - 1e-9 && polar <= 55 + 1e-9 &&
+              fabs(sc.world.lesion[0].radius - 0.0075) < 1e-12,
+          "  its centre 12 mm under the skin (R - depth = 28 mm: %.6f), at polar %.1f in the band, radius 7.5 mm", r * 1e3,
+          polar);
   }
   CHECK_DONE();
 }

@@ -15,6 +15,7 @@
  * step, fingertip centre, force, contact point, footprint, contact flag, up to 3 touched
  * triangles of any index) or, when its first byte is 0xff, a mark (point, withdrawn). */
 #include <math.h>
+#include <string.h>
 
 #include "fuzz_util.h"
 #include "palp.h"
@@ -42,6 +43,36 @@ static int fin(palp_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(
     fputc('\n', stderr);          \
     abort();                      \
   } while (0)
+
+/* A random exercise as the server draws it for a session (src/placement.c): a draw is refused
+ * with a message or gives a drawn exercise whose lesions lie in the band, fit the dome, and come
+ * back the same from the text the session log keeps. */
+static void check_draw(const char *json, const palp_exercise *ex) {
+  const double R = 0.04;
+  palp_exercise d;
+  char err[512] = "";
+  if (palp_exercise_draw(ex, R, 7u, &d, err, sizeof err) != 0) {
+    if (!err[0]) FAIL("draw refused without a message");
+    return;
+  }
+  if (ex->placement.kind != PALP_PLACEMENT_RANDOM) {
+    if (memcmp(&d, ex, sizeof d)) FAIL("a fixed or drawn exercise changed by a draw");
+    return;
+  }
+  if (d.placement.kind != PALP_PLACEMENT_DRAWN || d.placement.seed != 7u) FAIL("draw: kind %d", (int)d.placement.kind);
+  for (int i = 0; i < d.lesion_count; ++i)
+    if (!(d.lesion[i].polar >= ex->placement.polar_min - 1e-12 && d.lesion[i].polar <= ex->placement.polar_max + 1e-12))
+      FAIL("drawn lesion %d at polar %g outside the band", i, d.lesion[i].polar);
+  palp_lesion les[PALP_MAX_LESIONS];
+  if (palp_exercise_lesions(&d, R, les, PALP_MAX_LESIONS, err, sizeof err) != d.lesion_count) FAIL("drawn lesions: %s", err);
+  char *text = palp_exercise_drawn_json(json, &d);
+  palp_exercise back;
+  if (!text || palp_exercise_parse(text, "/nonexistent", &back, err, sizeof err) != 0) FAIL("drawn text: %s", err);
+  for (int i = 0; i < d.lesion_count; ++i)
+    if (fabs(back.lesion[i].polar - d.lesion[i].polar) > 1e-12 || fabs(back.lesion[i].azimuth - d.lesion[i].azimuth) > 1e-12)
+      FAIL("drawn lesion %d not read back", i);
+  free(text);
+}
 
 static void check_exercise(const palp_exercise *ex) {
   if (ex->lesion_count < 0 || ex->lesion_count > PALP_MAX_LESIONS) FAIL("lesion count %d", ex->lesion_count);
@@ -82,6 +113,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   char err[512] = "";
   if (palp_exercise_parse(json, "/nonexistent", &ex, err, sizeof err) == 0) {
     check_exercise(&ex);
+    check_draw(json, &ex);
   } else {
     if (!err[0]) FAIL("exercise refused without a message");
     if (palp_exercise_parse(fallback, NULL, &ex, err, sizeof err) != 0) FAIL("fallback: %s", err);
