@@ -138,10 +138,26 @@ check "a station whose permissions predate palp_debrief still runs its session (
 sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
 openssl smime -sign -in "$out/oldperm/server/server.permissions.xml" -text \
   -out "$out/oldperm/server/server.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
-"$server" --domain 132 --no-db --pki "$out/oldperm" --duration 2 >"$out/oldperm-server.log" 2>&1
+# It hosts the shipped exercises and logs: alice (her permissions old too) takes "easy" by position
+# and leaves; nobody can write her debrief, her station says why, and the session log records that
+# none was sent, and why, so that her next attempt is not taken for one after a debrief (session 59).
+"$server" --domain 132 --config "$(dirname "$0")/../../config/server-exercises.json" --database "$out/oldperm.db" \
+  --pki "$out/oldperm" --duration 30 >"$out/oldperm-server.log" 2>&1 &
+opid=$!
+sleep 1
+"$client" --role trainee --domain 132 --phantom 11 --pki "$out/oldperm" --identity trainee/alice --duration 2 \
+  --timeout 8 --print-period 0 --input sim:press,depth_mm=4,hold_s=1 >"$out/oldperm-ex.log" 2>&1
+kill -INT $opid 2>/dev/null
+wait $opid
 rc=$?
 check "a server whose permissions predate palp_debrief serves, and warns that it cannot debrief (exit $rc)" \
   "[ $rc -eq 0 ] && grep -q 'no debriefs: the server.s permissions do not allow topic palp_debrief' '$out/oldperm-server.log'"
+check "  alice's station, on old permissions too, says at her exercise's end why she had no debrief" \
+  "grep -q 'no debrief: this identity.s permissions predate it' '$out/oldperm-ex.log'"
+logged=$(python3 -c "import sqlite3, sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select e.detail from event e join session s on s.id = e.session_id where s.trainee = 'alice' and e.kind = 'debrief'\")))" "$out/oldperm.db" 2>&1)
+want="not sent (level lesions): the server's permissions do not allow topic palp_debrief (make-classroom-pki.sh re-issues them)"
+same=0; [ "$logged" = "$want" ] && same=1
+check "  the session log records that no debrief was sent, and why: $logged" "[ $same = 1 ]"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
 check "init re-issues their permissions alone, with palp_debrief and signed by the CA" \
   "grep -q 'permissions re-issued (version 2) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
