@@ -200,6 +200,7 @@ struct palp_web_hub {
   /* sessions closed lately, with their trainees: a debrief may come after its session's CLOSED state */
   uint32_t closed_sid[DEBRIEFS];
   char closed_trainee[DEBRIEFS][64];
+  uint32_t closed_phantom[DEBRIEFS]; /* and their phantoms: the debrief names the exercise */
   int closed_next;
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
 
@@ -688,6 +689,7 @@ static void update_finding_writer(palp_web_hub *h, int slot) {
 
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
+  const uint32_t phantom = s->st.phantom_id;
   leave(h, s);
   if (s->req_w > 0) dds_delete(s->req_w);
   pthread_mutex_lock(&h->mu);
@@ -702,6 +704,7 @@ static void free_session(palp_web_hub *h, int slot) {
   publish(h, &h->live_msg[slot], NULL, 0);
   pthread_mutex_lock(&h->mu);
   h->closed_sid[h->closed_next] = h->slot_sid[slot];
+  h->closed_phantom[h->closed_next] = phantom;
   memcpy(h->closed_trainee[h->closed_next], h->slot_trainee[slot], sizeof h->closed_trainee[0]);
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
@@ -782,7 +785,7 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
 
 /* A session's debrief (docs/assessment.md, "Debrief"), checked as the station checks it
  * (palp_dds_debrief_ok), as a page
- * message: {"type": "debrief", "session", "trainee", "level", "lesions", "found", "marks",
+ * message: {"type": "debrief", "session", "trainee", "exercise", "level", "lesions", "found", "marks",
  * "false_marks", "duplicates", "reason", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm",
  * "deep_mm", "point_mm"}]}, the places named as every tool names them (palp_place_*). */
 static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
@@ -793,14 +796,17 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   const uint32_t n = m->lesion._length;
   char trainee[64] = "";
   int slot, known = 0;
+  uint32_t phantom = 0;
   if (find_session(h, m->session_id, &slot)) {
     pthread_mutex_lock(&h->mu);
     memcpy(trainee, h->slot_trainee[slot], sizeof trainee);
     pthread_mutex_unlock(&h->mu);
+    phantom = h->s[slot].st.phantom_id;
     known = 1;
   }
   for (int k = 0; k < DEBRIEFS && !known; k++)
-    if (h->closed_sid[k] == m->session_id) memcpy(trainee, h->closed_trainee[k], sizeof trainee), known = 1;
+    if (h->closed_sid[k] == m->session_id)
+      memcpy(trainee, h->closed_trainee[k], sizeof trainee), phantom = h->closed_phantom[k], known = 1;
   if (!known) {
     h->stats.no_session++;
     return;
@@ -810,6 +816,10 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   cJSON_AddStringToObject(j, "type", "debrief");
   cJSON_AddNumberToObject(j, "session", m->session_id);
   cJSON_AddStringToObject(j, "trainee", trainee);
+  /* the exercise's name, so that a page that did not see the session open still names it */
+  const exercise *ex = find_exercise(h, phantom);
+  if (ex) cJSON_AddStringToObject(j, "exercise", ex->name);
+  else cJSON_AddNullToObject(j, "exercise");
   cJSON_AddStringToObject(j, "level", level[m->level]);
   cJSON_AddNumberToObject(j, "lesions", m->lesions);
   cJSON_AddNumberToObject(j, "found", m->found);
@@ -1527,7 +1537,7 @@ int palp_web_hub_attach(palp_web_hub *h, palp_web_cursor *c, int max_clients) {
   int rc = PALP_EFULL;
   if (h->nclients < max_clients) {
     h->clients[h->nclients++] = c;
-    c->debrief_ver = h->next_ver; /* a page is sent the debriefs that come after it */
+    c->debrief_from = h->next_ver; /* a page is sent the debriefs that come after it (and a dashboard more) */
     rc = 0;
   }
   pthread_mutex_unlock(&h->mu);
@@ -1710,6 +1720,8 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
     c->trainee = id;
     c->bind_seq = ++h->bind_seq; /* the newest binding of a session wins */
   }
+  if (c->mode == PALP_WEB_FOLLOW_SESSION && !(mode == PALP_WEB_FOLLOW_SESSION && id == c->follow))
+    c->followed = c->follow;
   c->mode = mode;
   c->follow = id;
   /* A new follow starts from the newest frame, not from whatever was skipped. */
@@ -1770,15 +1782,26 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   }
   {
     /* the oldest debrief not yet sent that is this page's: its own trainee session's (it may have
-     * followed nothing since the session closed), or an instructor's page's sessions */
+     * followed nothing since the session closed), or an instructor's page's sessions. Those that came
+     * before the page attached go only to an instructor's page following every session, the class
+     * dashboard: an instructor who opens or reloads it then sees the sessions that ended lately (up to
+     * DEBRIEFS). The rule is checked here, as each debrief is picked, so the order of the page's
+     * follow messages does not matter: whatever it followed before, once it follows every session the
+     * older ones it was not sent come, oldest first; as debrief_ver only grows, none is sent twice
+     * (one older than a debrief the page was already sent is skipped). A trainee's page (scoped, or
+     * bound to its session) and a page following one session keep the rule of before: only what came
+     * after they attached. An instructor's page is also sent the debrief of the session it followed
+     * last (c->followed): the page lets go of a session as the session list drops it, and the server's
+     * debrief, written before its CLOSED state, can reach the bridge after it (polled, not woken). */
+    const int replay = !c->scope[0] && !c->trainee && c->mode == PALP_WEB_FOLLOW_ALL;
     const debrief_item *pick = NULL;
     for (int k = 0; k < DEBRIEFS; k++) {
       const debrief_item *d = &h->debrief[k];
       if (!d->msg.buf || d->msg.ver <= c->debrief_ver || (pick && d->msg.ver >= pick->msg.ver)) continue;
+      if (d->msg.ver <= c->debrief_from && !replay) continue;
       if (c->scope[0] && strcmp(c->scope, d->trainee) != 0) continue;
-      if (c->trainee == d->sid ||
-          (!c->scope[0] && (c->mode == PALP_WEB_FOLLOW_ALL || (c->mode == PALP_WEB_FOLLOW_SESSION && c->follow == d->sid))))
-        pick = d;
+      const int follows = c->mode == PALP_WEB_FOLLOW_ALL || (c->mode == PALP_WEB_FOLLOW_SESSION && c->follow == d->sid);
+      if (c->trainee == d->sid || (!c->scope[0] && (follows || c->followed == d->sid))) pick = d;
     }
     if (pick) {
       rc = take(&pick->msg, pre, buf, len);

@@ -75,8 +75,13 @@ typedef struct palp_web_cursor {
    * dashboard, no server status; set after palp_web_hub_attach. */
   char scope[32];
   /* the newest debrief (palp_debrief) this page was sent: it is sent those of its own trainee session,
-   * or, an instructor's page, of the sessions it follows, that come after it attached */
-  uint64_t debrief_ver;
+   * or, an instructor's page, of the sessions it follows, that come after it attached (debrief_from,
+   * the hub's version then); an instructor's page following every session (the dashboard) is also
+   * sent those the hub still holds from before (palp_web_hub_next) */
+  uint64_t debrief_ver, debrief_from;
+  /* the session this page followed before its last change of follow (0: none): an instructor's page
+   * lets go of a session as its CLOSED state arrives, which may come before its debrief */
+  uint32_t followed;
   /* the answer to this page's last finding request, sent before anything else */
   char reply[320];
   size_t reply_len;

@@ -6,7 +6,8 @@ position-driven finger presses reaches the domain as a Finding at the fingertip'
 shipped exercises (config/server-exercises.json; "easy" is phantom 11), answers: the page then
 shows 1 mark; key W withdraws it; a dashboard
 page's and an observer page's attempts to send a finding are refused and nothing is written. When
-pat's station leaves, her page shows the server's debrief (the lump missed, where it is).
+pat's station leaves, her page shows the server's debrief (the lump missed, where it is), and so does
+the class dashboard, under "Ended exercise sessions", both the one open meanwhile and one opened after.
 DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
 import math
 import os
@@ -180,6 +181,41 @@ def run(build, source, out):
               "pat's page shows her debrief: %s" % shown)
         # (her station runs --quiet here; web_coverage compares the page's debrief with the station's lines)
         check(obs.wait_for("palpState.trainee.debrief !== null", 5) is True, "the observer's page is sent it too")
+
+        # The class dashboard, open since pat's session ran, lists it under "Ended exercise sessions" with what
+        # her page was told: the counts of the server's debrief her page got, each lump in her page's words
+        # (a missed one in red), and the exercise the dashboard's session list named while the session was open.
+        told = page.eval("palpState.trainee.debrief")
+        check(told["session"] == late["id"] and told["trainee"] == "pat",
+              "her page's debrief is of the session the dashboard listed (%s, session %s)" % (told["trainee"], told["session"]))
+        row = ("(function(){const rs=document.querySelectorAll('#debriefs tr[data-session=\"%d\"]');"
+               "if(!rs.length) return null; const r=rs[0]; return {rows: rs.length,"
+               "cells: Array.from(r.cells).slice(0, 8).map(function(c){return c.textContent;}),"
+               "lumps: Array.from(r.querySelectorAll('li')).map(function(l){"
+               "return [l.textContent, getComputedStyle(l).color];})};})()" % told["session"])
+        want = [str(told["session"]), "pat", "easy", "found %d of %d lump%s" % (told["found"], told["lesions"],
+                "" if told["lesions"] == 1 else "s"), str(told["marks"]), str(told["false_marks"]),
+                str(told["duplicates"]), told["reason"]]
+        page_lumps = [t for _, t in shown[1]]
+        red = "rgb(176, 0, 32)"  # the dashboard's warning colour (the cards' "warn", the server's "bad")
+
+        def shows_it(r, exercise):
+            return (r is not None and r["rows"] == 1 and r["cells"] == want[:2] + [exercise] + want[3:] and
+                    [t for t, _ in r["lumps"]] == page_lumps and
+                    all((c == red) == (l["found_by"] == 0) for (_, c), l in zip(r["lumps"], told["lumps"])))
+
+        check(dash.wait_for("document.querySelector('#debriefs tr') !== null", 5) is True and
+              shows_it(dash.eval(row), "easy") and told["reason"] != "" and
+              dash.eval("document.getElementById('no-debriefs').hidden") is True,
+              "the dashboard shows pat's ended session as her page's debrief told it: %s (her page: %s, %s)"
+              % (dash.eval(row), want, page_lumps))
+        # A dashboard opened only now is sent the debriefs the bridge still holds (docs/web.md): the same row,
+        # the exercise named by the debrief message itself (the session closed before this page connected).
+        dash2 = browser.new_page(web.base + "/dashboard.html")
+        check(dash2.wait_for("document.querySelector('#debriefs tr') !== null", 15) is True and
+              shows_it(dash2.eval(row), "easy") and dash2.eval("document.querySelectorAll('#debriefs tr').length") == 1,
+              "a dashboard opened after the session ended shows it too, once: %s" % dash2.eval(row))
+        print("screenshot:", dash2.screenshot(os.path.join(out, "dashboard-ended.png")))
         # (no screenshot here: with the dashboard and observer pages opened since, this page is a background
         # tab, which Chromium may not paint: a capture timed out once in a full run)
     finally:

@@ -8,7 +8,9 @@ bob each press a sine on their own phantom. With alice's token:
 - following bob's session, or every session (the dashboard), gets nothing: no frame in 3 s;
 - following her own session streams it;
 - bob's exercise session ("easy") ends: its debrief, with the lesion's place, reaches an instructors'
-  page and not alice's.
+  page and not alice's; opened afterwards, an instructors' page following every session is sent it from
+  the bridge's last 16 (the dashboard's replay), one following his session alone is not, and alice's
+  page is not.
 With the instructors' token the list has both sessions and the dashboard streams. A token nobody was
 given is refused (401). No browser: raw HTTP and WebSocket clients. DDS domain 126.
 usage: test_trainee_tokens.py BUILD SOURCE OUT"""
@@ -110,6 +112,26 @@ def run(build, source, out):
         k4, _ = harness.ws_messages(ws, 2.0)
         check("debrief" not in k4, "alice's page is not (%s)" % sorted(k4))
         ws.close()
+        # Pages opened after bob's session ended (docs/web.md, the dashboard's replay): an instructors' page
+        # following bob's session alone is not sent his debrief (one session: only what comes after the page
+        # connected); the same page following every session then is, the very message sent live. A page of
+        # alice's token opened now, following her own session and asking for every session, is sent none.
+        inst = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, INSTR), timeout=10)
+        inst.send(json.dumps({"follow": ids["bob"]}))
+        k5, _ = harness.ws_messages(inst, 1.0)
+        inst.send(json.dumps({"follow": "all"}))
+        d2 = harness.ws_until(inst, 10, lambda m: m.get("type") == "debrief")
+        inst.close()
+        check("debrief" not in k5 and d2 == d, "an instructors' page opened later is sent bob's debrief once it follows "
+              "every session, not while it follows his session alone (%s; %s)" % (sorted(k5), d2 and d2["trainee"]))
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=10)
+        ws.send(json.dumps({"follow": ids["alice"]}))
+        k6, _ = harness.ws_messages(ws, 1.0)
+        ws.send(json.dumps({"follow": "all"}))
+        k7, _ = harness.ws_messages(ws, 1.0)
+        ws.close()
+        check("debrief" not in k6 and "debrief" not in k7 and "sessions" in k6,
+              "a page of alice's token opened later is not sent bob's debrief either (%s; %s)" % (sorted(k6), sorted(k7)))
 
         rc = procs.stop(web)
         check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)

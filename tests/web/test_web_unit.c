@@ -435,6 +435,97 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   palp_web_hub_detach(h, c);
 }
 
+/* Counts the debriefs this cursor is sent within `tries` waits of 10 ms, in order of arrival: their
+ * session ids into sid[] (up to n). */
+typedef struct debriefs_seen {
+  uint32_t sid[8];
+  int n;
+} debriefs_seen;
+static int is_debrief(const cJSON *j, void *arg) {
+  debriefs_seen *d = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  if (type && !strcmp(type, "debrief") && d->n < 8) d->sid[d->n++] = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session"));
+  return 0; /* read on: every debrief within the time */
+}
+static debriefs_seen debriefs_sent(palp_web_hub *h, palp_web_cursor *c, int tries) {
+  debriefs_seen d = {.n = 0};
+  next_json(h, c, tries, is_debrief, &d);
+  return d;
+}
+
+/* Which pages are sent which debrief (docs/web.md, "The debrief"): two exercise sessions, of trainees
+ * ann and bea, end with a debrief each (written as the server writes them, in the session's partition).
+ * A page that followed ann's session and let go of it (as a page does when the session list drops
+ * it) is still sent hers; an instructor's page opened afterwards that follows every session is sent
+ * both, oldest first, once each, whatever it followed before; one following ann's session alone, or
+ * a page of ann's own token, is sent none (they came before it attached). */
+static void test_debriefs(palp_web_hub *h, dds_entity_t pp) {
+  const uint32_t sid[2] = {4721, 4722};
+  const char *trainee[2] = {"ann", "bea"};
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t t_db = palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF);
+  dds_entity_t w_db[2];
+  for (int k = 0; k < 2; k++) {
+    char part[64];
+    palp_dds_session_partition(sid[k], part, sizeof part);
+    w_db[k] = palp_dds_create_writer(palp_dds_session_publisher(pp, part), t_db, PALP_TOPIC_DEBRIEF);
+    write_open_state(w_state, sid[k], 1, part, trainee[k]);
+  }
+  CHECK(w_state > 0 && w_db[0] > 0 && w_db[1] > 0, "debriefs: the test's writers");
+  palp_web_cursor before;
+  CHECK(palp_web_hub_attach(h, &before, 8) == 0, "debriefs: a page attached before the sessions end");
+  char ctl[64];
+  snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid[0]);
+  CHECK(palp_web_hub_control(h, &before, ctl, strlen(ctl)) == 0, "it follows ann's session");
+  dds_sleepfor(DDS_MSECS(500)); /* the hub knows both sessions (their trainees), and the readers matched */
+  CHECK(palp_web_hub_control(h, &before, "{\"follow\":null}", 15) == 0, "... and lets go of it (its session closing)");
+  for (int k = 0; k < 2; k++) {
+    palp_Debrief d;
+    memset(&d, 0, sizeof d);
+    d.session_id = sid[k];
+    d.level = palp_DEBRIEF_COUNT;
+    d.lesions = 2;
+    d.found = (uint32_t)k;
+    d.marks = 1;
+    snprintf(d.reason, sizeof d.reason, "trainee station left");
+    CHECK(dds_write(w_db[k], &d) == 0, "%s's debrief written", trainee[k]);
+    dds_sleepfor(DDS_MSECS(100)); /* taken in this order (the streams are polled every 16.7 ms) */
+  }
+  debriefs_seen got = debriefs_sent(h, &before, 50);
+  CHECK(got.n == 1 && got.sid[0] == sid[0], "the page that let go of ann's session is sent hers, not bea's (%d sent)",
+        got.n);
+  palp_web_hub_detach(h, &before);
+
+  palp_web_cursor inst, one, own;
+  CHECK(palp_web_hub_attach(h, &inst, 8) == 0 && palp_web_hub_attach(h, &one, 8) == 0 &&
+            palp_web_hub_attach(h, &own, 8) == 0, "debriefs: three pages attached after the sessions ended");
+  palp_web_hub_scope(h, &own, "ann");
+  CHECK(palp_web_hub_control(h, &inst, ctl, strlen(ctl)) == 0 && palp_web_hub_control(h, &one, ctl, strlen(ctl)) == 0,
+        "an instructor's page and another follow ann's (closed) session");
+  got = debriefs_sent(h, &inst, 30);
+  CHECK(got.n == 0, "following ann's session alone, a page is not sent the debriefs from before it (%d sent)", got.n);
+  CHECK(palp_web_hub_control(h, &inst, "{\"follow\":\"all\"}", 16) == 0, "the instructor's page follows every session");
+  got = debriefs_sent(h, &inst, 50);
+  CHECK(got.n == 2 && got.sid[0] == sid[0] && got.sid[1] == sid[1],
+        "it is sent both debriefs the hub holds, oldest first (%d sent: %u, %u)", got.n, got.n > 0 ? got.sid[0] : 0,
+        got.n > 1 ? got.sid[1] : 0);
+  CHECK(palp_web_hub_control(h, &inst, ctl, strlen(ctl)) == 0 &&
+            palp_web_hub_control(h, &inst, "{\"follow\":\"all\"}", 16) == 0,
+        "it follows ann's session, then every session again");
+  got = debriefs_sent(h, &inst, 30);
+  CHECK(got.n == 0, "none is sent twice (%d sent)", got.n);
+  got = debriefs_sent(h, &one, 30);
+  CHECK(got.n == 0, "the page following ann's session alone is still sent none (%d sent)", got.n);
+  CHECK(palp_web_hub_control(h, &own, "{\"follow\":\"all\"}", 16) == PALP_EINVAL,
+        "a page of ann's own token cannot follow every session");
+  got = debriefs_sent(h, &own, 30);
+  CHECK(got.n == 0, "and is sent neither debrief, not even her own from before it (%d sent)", got.n);
+  palp_web_hub_detach(h, &inst);
+  palp_web_hub_detach(h, &one);
+  palp_web_hub_detach(h, &own);
+}
+
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
@@ -575,6 +666,7 @@ static void test_local_model(void) {
   test_findings(h, &c, pp, pub, sid, w_lm, &lm);
   test_exercise_bands(h, pp);
   palp_web_hub_detach(h, &c);
+  test_debriefs(h, pp);
   dds_delete(pp);
   palp_web_hub_stop(h);
   palp_web_hub_destroy(h);

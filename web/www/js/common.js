@@ -1,5 +1,5 @@
 /* common.js - what both palp-web pages share: the WebSocket to the bridge, the deformation frame
- * format, and the colour-blind-safe displacement scale (viridis) and how it grows. window.palpState is what
+ * format, the colour-blind-safe displacement scale (viridis) and how it grows, and the debrief's words. window.palpState is what
  * the pages show, readable by tests (tests/web). */
 "use strict";
 const PALP = (function () {
@@ -111,6 +111,25 @@ const PALP = (function () {
     }
   }
 
+  /* The debrief's words (a `debrief` message, docs/assessment.md "Debrief"), the station's, for the
+   * trainee page ("You " + these) and the dashboard's ended sessions alike. At levels "count" and
+   * "lesions" only: at "none" the message holds no lesion, not even how many. */
+  function plural(n, one, many) { return n + " " + (n === 1 ? one : many); }
+  function debriefFound(m) { return "found " + m.found + " of " + plural(m.lesions, "lump", "lumps"); }
+  function debriefSummary(m) {
+    return debriefFound(m) + " with " + plural(m.marks, "mark", "marks") + " standing; " +
+      plural(m.false_marks, "mark was", "marks were") + " near no lump" +
+      (m.duplicates ? ", " + m.duplicates + " on a lump already found" : "");
+  }
+  /* one lump of a debrief at "lesions" (i from 0), where it is in the words every palp tool uses for a
+   * place (docs/naming.md: the clock seen from above, the arc from the pole along the skin) */
+  function debriefLump(l, i) {
+    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : "MISSED") + ": at " +
+      l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; " +
+      l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
+  }
+
   return { viridis: viridis, css: css, params: params, connect: connect, state: state,
-    decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor };
+    decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
+    plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump };
 })();

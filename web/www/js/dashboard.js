@@ -1,6 +1,7 @@
 /* dashboard.js - every open session of the class on a grid, each with a live top view, and the
  * server's load and log counters. Sessions appear and disappear as the bridge's session list
- * changes (no reload); a click opens the trainee view of that session. */
+ * changes (no reload); a click opens the trainee view of that session. Below the grid, the exercise
+ * sessions that ended lately, each with what its trainee's marks found (the server's debrief). */
 "use strict";
 (function () {
   const st = PALP.state, token = PALP.params().get("token");
@@ -163,6 +164,62 @@
     }
   }
 
+  /* ---- ended exercise sessions: each one's debrief (docs/web.md, "Debrief") ----
+   * The bridge sends a debrief as a session ends and, to a page following every session, the ones it
+   * still holds from before the page connected (its last 16, oldest first); so each is put on top.
+   * Everything in a row comes from the network: textContent only. */
+  const ENDED_MAX = 16; /* the bridge's ring (web/hub.c DEBRIEFS): a long class does not grow the page */
+  const ended = document.getElementById("debriefs"), endedRows = new Map(); /* session id -> its row */
+  /* session id -> its exercise's name, from the session list while it was open: the debrief names it
+   * too (web/hub.c, from the phantom's palp_exercise), this for a bridge that did not see that one.
+   * Bounded: the oldest entries go first, an open session's comes back with the next list. */
+  const exerciseOf = new Map(), EXERCISES_KEPT = 4 * ENDED_MAX + 64;
+  function cell(tr, text, cls, title) {
+    const td = tr.insertCell();
+    td.textContent = String(text);
+    if (cls) td.className = cls;
+    if (title) td.title = title;
+    return td;
+  }
+  function debrief(m) {
+    const old = endedRows.get(m.session);
+    if (old) old.remove(); /* a reconnect's replay: each session once, in the bridge's order */
+    const tr = document.createElement("tr"), told = m.level !== "none";
+    tr.dataset.session = m.session;
+    cell(tr, m.session, "n");
+    cell(tr, m.trainee);
+    cell(tr, m.exercise || exerciseOf.get(m.session) || "n/a");
+    cell(tr, told ? PALP.debriefFound(m) : "not told: the exercise tells nothing", told && m.found < m.lesions ? "warn" : "",
+      told ? "lumps the standing marks found (the server matches them as the review does)"
+        : "the exercise's debrief is \"none\": the trainee was told nothing of its lumps, not even how many; the review tells");
+    cell(tr, m.marks, "n", "marks standing at the session's end (withdrawn marks do not count)");
+    cell(tr, told ? m.false_marks : "n/a", "n" + (told && m.false_marks > 0 ? " bad" : ""), "standing marks near no lump");
+    cell(tr, told ? m.duplicates : "n/a", "n" + (told && m.duplicates > 0 ? " warn" : ""), "standing marks on a lump another mark found");
+    cell(tr, m.reason, "", "why the session ended (the server's word)");
+    const lumps = tr.insertCell();
+    if (m.level === "lesions") {
+      const ul = document.createElement("ul");
+      m.lumps.forEach(function (l, i) {
+        const li = document.createElement("li");
+        li.textContent = PALP.debriefLump(l, i); /* the trainee page's words */
+        li.className = l.found_by ? "found" : "bad";
+        ul.appendChild(li);
+      });
+      lumps.appendChild(ul);
+    } else {
+      lumps.textContent = m.level === "count" ? "not told where: the exercise tells the count only" : "";
+      lumps.className = "muted";
+    }
+    ended.insertBefore(tr, ended.firstChild);
+    endedRows.set(m.session, tr);
+    while (ended.rows.length > ENDED_MAX) {
+      const last = ended.rows[ended.rows.length - 1];
+      endedRows.delete(Number(last.dataset.session));
+      last.remove();
+    }
+    document.getElementById("no-debriefs").hidden = true;
+  }
+
   PALP.connect({
     open: function (send) { send({ follow: "all" }); },
     hello: function (m) {
@@ -179,13 +236,16 @@
       for (const s of m.sessions) {
         seen.add(s.id);
         fill(cards.get(s.id) || makeCard(s), s);
+        if (s.exercise) exerciseOf.set(s.id, s.exercise);
       }
+      for (const id of exerciseOf.keys()) { if (exerciseOf.size <= EXERCISES_KEPT) break; exerciseOf.delete(id); }
       for (const [id, c] of cards) if (!seen.has(id)) { c.el.remove(); cards.delete(id); }
       st.dashboard.cards = Array.from(cards.keys()).sort(function (a, b) { return a - b; });
       document.getElementById("empty").hidden = cards.size > 0;
       document.getElementById("info").textContent = "class dashboard: " + cards.size + " open session" + (cards.size === 1 ? "" : "s");
     },
     status: serverStatus,
+    debrief: debrief,
     deformation: function (f) {
       const c = cards.get(f.session);
       if (!c) return;

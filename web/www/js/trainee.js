@@ -257,18 +257,11 @@
   const foundMat = new THREE.MeshBasicMaterial({ color: 0x2e9e44, side: THREE.DoubleSide }),
     missedMat = new THREE.MeshBasicMaterial({ color: 0xd0342c, side: THREE.DoubleSide });
   function debriefText(m) {
-    if (m.level === "none") return "This exercise keeps its lumps for the instructor's review (" + m.marks +
-      (m.marks === 1 ? " mark" : " marks") + " standing).";
-    let t = "You found " + m.found + " of " + m.lesions + (m.lesions === 1 ? " lump" : " lumps") + " with " + m.marks +
-      (m.marks === 1 ? " mark" : " marks") + " standing; " + m.false_marks + (m.false_marks === 1 ? " mark was" : " marks were") +
-      " near no lump" + (m.duplicates ? ", " + m.duplicates + " on a lump already found" : "") + ".";
+    if (m.level === "none") return "This exercise keeps its lumps for the instructor's review (" +
+      PALP.plural(m.marks, "mark", "marks") + " standing).";
+    let t = "You " + PALP.debriefSummary(m) + ".";
     if (m.level === "count") t += " This exercise does not say where its lumps are: the instructor's review does.";
     return t;
-  }
-  function lumpText(l, i) {
-    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : "MISSED") + ": at " +
-      l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; " +
-      l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
   }
   function clearDebrief() {
     for (const o of debriefObjs) scene.remove(o);
@@ -285,7 +278,7 @@
     ul.textContent = "";
     m.lumps.forEach(function (l, i) {
       const li = document.createElement("li");
-      li.textContent = lumpText(l, i);
+      li.textContent = PALP.debriefLump(l, i);
       li.className = l.found_by ? "found" : "missed";
       ul.appendChild(li);
       /* a ring of the lump's size on the skin above its centre, facing out along the dome's normal
@@ -301,7 +294,7 @@
     document.getElementById("debrief").hidden = false;
     dirty = true;
   }
-  window.palpDebriefText = function (m) { return [debriefText(m)].concat(m.lumps.map(lumpText)); };
+  window.palpDebriefText = function (m) { return [debriefText(m)].concat(m.lumps.map(PALP.debriefLump)); };
 
   function followMsg(id) { return id && !observer ? { trainee: id } : { follow: id || null }; }
   function showExercise() {
