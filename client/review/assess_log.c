@@ -14,6 +14,7 @@
 #include "assess_log.h"
 #include "grades.h"
 #include "review_util.h"
+#include "vec3.h" /* PALP_PI */
 
 /* The shipped exercises' bands and force limit (config/exercises/easy.json). The phantom is not
  * loaded: the mesh comes from the session's own scene. */
@@ -447,7 +448,15 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
   const palp_assess_result *r = &a->r;
   const palp_rubric *rb = &a->ex.rubric;
   if (a->has_exercise)
+  {
     fprintf(f, "exercise   %s: %s (time limit %.0f s)\n", a->exercise_name, a->ex.title, a->ex.time_limit);
+    /* a random exercise's lesions were drawn for this session (docs/assessment.md): say so, and which
+     * draw, so that the instructor reads the places below as this attempt's own */
+    if (a->ex.placement.kind == PALP_PLACEMENT_DRAWN)
+      fprintf(f, "           its lesions drawn for this session (seed %u, polar %.0f-%.0f deg from the pole, at "
+                 "least %.0f mm apart)\n", (unsigned)a->ex.placement.seed, a->ex.placement.polar_min * 180.0 / PALP_PI,
+              a->ex.placement.polar_max * 180.0 / PALP_PI, a->ex.placement.min_gap * 1e3);
+  }
   else fprintf(f, "exercise   none: free practice (no hidden lesions; no sensitivity, no score)\n");
   fprintf(f, "metrics    from %d finger samples (definitions: docs/assessment.md)\n", a->samples);
   if (a->has_exercise) {

@@ -91,6 +91,12 @@ if [ -n "${uid2:-}" ]; then
   if grep -q "^told" "$tmp/show2.txt"; then echo "FAIL the second attempt said not blind:"; grep "^told" "$tmp/show2.txt"; fail=1
   else echo "ok   the second attempt is blind: its lesions are not those her first debrief told"; fi
   for k in 1 2; do
+    seed=$(python3 -c "import json, sqlite3, sys; print(json.loads(sqlite3.connect(sys.argv[1]).execute('select exercise_json from session_exercise order by session_id').fetchall()[$k - 1][0])['placement']['seed'])" "$tmp/log.db")
+    if grep -q "^           its lesions drawn for this session (seed $seed, polar 20-50 deg from the pole, at least 10 mm apart)$" "$tmp/show$k.txt"; then
+      echo "ok   show session $k says its lesions were drawn for it, with the logged seed $seed"
+    else echo "FAIL show session $k: no 'drawn for this session (seed $seed ...)' line"; grep -A1 "^exercise" "$tmp/show$k.txt"; fail=1; fi
+  done
+  for k in 1 2; do
     # the review's places are the station's (both name them with palp_place_*)
     st=$(sed -n "s/.*lump \([0-9]\) [A-Za-z0-9 ]*: at \([0-9.]*\) o'clock, \([0-9]*\) mm from the pole.*/\2 \3/p" "$tmp/dora$k.log" | tr '\n' ' ')
     rv=$(grep "^debrief" "$tmp/show$k.txt" | grep -o "at [0-9.]* o'clock, [0-9]* mm from the pole" | sed "s/at \([0-9.]*\) o'clock, \([0-9]*\) mm.*/\1 \2/" | tr '\n' ' ')
