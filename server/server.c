@@ -946,9 +946,11 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .log = srv->log,
                               .placement_seed = placement_seed(srv->placement_key, srv->next_session_id)};
     int rc = 0;
+    char refusal[200] = "";
+    d.refusal = refusal, d.refusal_len = sizeof refusal;
     s = palp_srv_session_create(&d, &rc);
     if (!s) {
-      snprintf(why, sizeof why, "cannot create the session: %s", palp_strerror(rc));
+      snprintf(why, sizeof why, "cannot create the session: %s", refusal[0] ? refusal : palp_strerror(rc));
       refuse(srv, rq, &g->joins_refused_other, why);
       return;
     }

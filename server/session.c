@@ -103,8 +103,14 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     const double R = def->phantom->scene.world.mesh.radius;
     *s->own_scene = def->phantom->scene;
     const int base = s->own_scene->world.lesion_count - s->exercise->lesion_count;
-    int rc = base >= 0 ? palp_exercise_draw(s->exercise, R, def->placement_seed, s->own_exercise, msg, sizeof msg)
-                       : PALP_EINVAL;
+    /* A file whose lesions fit its band only now and then (the server's start proved one draw) must
+     * not turn a trainee away: other seeds, derived from hers, before giving up. */
+    int rc = PALP_EINVAL, tries = 0;
+    for (; base >= 0 && tries < 16 && rc != 0; tries++)
+      rc = palp_exercise_draw(s->exercise, R, def->placement_seed + 0x9e3779b9u * (uint32_t)tries, s->own_exercise, msg,
+                              sizeof msg);
+    if (rc == 0 && tries > 1)
+      palp_log_warn(def->log, "session %u: its lesions were placed at the %d-th seed (%s)", def->id, tries, msg);
     if (rc == 0)
       rc = palp_exercise_lesions(s->own_exercise, R, s->own_scene->world.lesion + base, PALP_MAX_LESIONS - base, msg,
                                  sizeof msg);
@@ -112,6 +118,9 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
       rc = PALP_ENOMEM;
     if (rc < 0) {
       palp_log_error(def->log, "session %u: its lesions could not be drawn: %s", def->id, msg[0] ? msg : palp_strerror(rc));
+      if (def->refusal)
+        snprintf(def->refusal, def->refusal_len,
+                 "its lesions could not be placed (the exercise file asks too much; the server's log says why)");
       *err = rc;
       goto fail;
     }

@@ -88,6 +88,8 @@ typedef struct palp_srv_session_def {
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
   uint32_t placement_seed;       /* a random exercise's draw for this session (palp_exercise_draw) */
+  char *refusal;                 /* NULL, or where palp_srv_session_create says why it failed, in */
+  size_t refusal_len;            /* the trainee's words, when it can say more than its error code */
 } palp_srv_session_def;
 
 typedef struct palp_srv_session {
