@@ -620,8 +620,12 @@ static void print_debrief(const opts *o, palp_cli_station *st) {
   }
   char extra[64] = "";
   if (d.duplicates) snprintf(extra, sizeof extra, ", %u on a lump already found", d.duplicates);
-  tprintf(o, "[trainee %s] debrief: you found %u of %u lump%s with %u mark%s standing; %u mark%s near no lump%s%s\n",
-             o->name, d.found, d.lesions, d.lesions == 1 ? "" : "s", d.marks, d.marks == 1 ? "" : "s", d.false_marks,
+  /* an exercise whose lumps are drawn for each session may hide none (docs/assessment.md) */
+  char found[64];
+  if (d.lesions) snprintf(found, sizeof found, "found %u of %u lump%s", d.found, d.lesions, d.lesions == 1 ? "" : "s");
+  else snprintf(found, sizeof found, "had no lump to find this time");
+  tprintf(o, "[trainee %s] debrief: you %s with %u mark%s standing; %u mark%s near no lump%s%s\n",
+             o->name, found, d.marks, d.marks == 1 ? "" : "s", d.false_marks,
              d.false_marks == 1 ? " was" : "s were", extra,
              d.level == palp_DEBRIEF_COUNT ? " (this exercise does not say where its lumps are: the instructor's "
                                              "review does)" : "");

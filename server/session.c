@@ -111,9 +111,12 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
                               sizeof msg);
     if (rc == 0 && tries > 1)
       palp_log_warn(def->log, "session %u: its lesions were placed at the %d-th seed (%s)", def->id, tries, msg);
-    if (rc == 0)
+    if (rc == 0) {
+      /* this session's lesions in place of the exercise's (as many as its draw hides: maybe fewer) */
       rc = palp_exercise_lesions(s->own_exercise, R, s->own_scene->world.lesion + base, PALP_MAX_LESIONS - base, msg,
                                  sizeof msg);
+      if (rc >= 0) s->own_scene->world.lesion_count = base + rc;
+    }
     if (rc >= 0 && !(s->own_exercise_json = palp_exercise_drawn_json(def->phantom->exercise_json, s->own_exercise)))
       rc = PALP_ENOMEM;
     if (rc < 0) {

@@ -129,7 +129,7 @@ static int parse_lesion(ctx *c, const cJSON *o, int i, int drawn_here, palp_exer
 /* "placement": {"kind": "fixed" | "random" | "drawn", "polar_deg": [min, max], "min_gap_mm": g,
  * "seed": n (drawn only), "comment"}. Absent: fixed. */
 static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
-  static const char *const keys[] = {"kind", "polar_deg", "min_gap_mm", "seed", "comment", NULL};
+  static const char *const keys[] = {"kind", "polar_deg", "min_gap_mm", "seed", "count", "comment", NULL};
   memset(P, 0, sizeof *P);
   if (!o) return PALP_OK;
   if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "placement: expected an object");
@@ -144,8 +144,8 @@ static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
   const int band = P->kind != PALP_PLACEMENT_FIXED;
   if (!band) {
     if (cJSON_GetObjectItemCaseSensitive(o, "polar_deg") || cJSON_GetObjectItemCaseSensitive(o, "min_gap_mm") ||
-        cJSON_GetObjectItemCaseSensitive(o, "seed"))
-      return palp_parse_fail(c, PALP_EPARSE, "placement: polar_deg, min_gap_mm and seed belong to kind random or drawn");
+        cJSON_GetObjectItemCaseSensitive(o, "seed") || cJSON_GetObjectItemCaseSensitive(o, "count"))
+      return palp_parse_fail(c, PALP_EPARSE, "placement: polar_deg, min_gap_mm, seed and count belong to kind random or drawn");
     return PALP_OK;
   }
   int has = 0;
@@ -159,6 +159,20 @@ static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
   if (P->kind == PALP_PLACEMENT_RANDOM && seed)
     return palp_parse_fail(c, PALP_EPARSE, "placement.seed: the server draws a seed for each session (only a drawn "
                            "exercise, as logged, carries one)");
+  /* "count": [min, max] integers; checked against the lesions listed once they are read */
+  P->count_min = P->count_max = -1;
+  const cJSON *cnt = cJSON_GetObjectItemCaseSensitive(o, "count");
+  if (cnt) {
+    const cJSON *a = cJSON_IsArray(cnt) && cJSON_GetArraySize(cnt) == 2 ? cJSON_GetArrayItem(cnt, 0) : NULL;
+    const cJSON *b = a ? cJSON_GetArrayItem(cnt, 1) : NULL;
+    if (!cJSON_IsNumber(a) || !cJSON_IsNumber(b) || a->valuedouble != floor(a->valuedouble) ||
+        b->valuedouble != floor(b->valuedouble) || !(a->valuedouble >= 0) || !(b->valuedouble >= a->valuedouble) ||
+        !(b->valuedouble <= PALP_MAX_LESIONS))
+      return palp_parse_fail(c, PALP_EPARSE, "placement.count: expected [min, max], whole numbers, 0 <= min <= max <= %d",
+                             PALP_MAX_LESIONS);
+    P->count_min = (int)a->valuedouble;
+    P->count_max = (int)b->valuedouble;
+  }
   if (P->kind == PALP_PLACEMENT_DRAWN) {
     double v = -1;
     if ((e = get_num(c, o, "placement.", "seed", 1, 0.0, 4294967295.0, &v))) return e;
@@ -293,6 +307,15 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
     if ((e = parse_lesion(c, cJSON_GetArrayItem(ls, i), i, ex->placement.kind == PALP_PLACEMENT_RANDOM, &ex->lesion[i])))
       return e;
   ex->lesion_count = nl;
+  palp_exercise_placement *P = &ex->placement;
+  if (P->kind == PALP_PLACEMENT_RANDOM && P->count_max > nl)
+    return palp_parse_fail(c, PALP_EPARSE, "placement.count: at most the %d lesion%s listed (got [%d, %d])", nl,
+                           nl == 1 ? "" : "s", P->count_min, P->count_max);
+  if (P->kind == PALP_PLACEMENT_DRAWN && P->count_max >= 0 && !(nl >= P->count_min && nl <= P->count_max))
+    return palp_parse_fail(c, PALP_EPARSE, "placement.count: this draw's %d lesion%s outside [%d, %d]", nl,
+                           nl == 1 ? "" : "s", P->count_min, P->count_max);
+  if (P->kind != PALP_PLACEMENT_FIXED && P->count_max < 0) P->count_min = P->count_max = nl; /* all of them */
+  for (int i = 0; i < nl; ++i) P->source[i] = i;
   /* Normal nodularity (a decoy that feels lumpy but is not a lesion) needs a textured
    * material the model does not have yet: refuse rather than ignore it. */
   const cJSON *dec = cJSON_GetObjectItemCaseSensitive(root, "decoys");
@@ -401,7 +424,11 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
   /* a random exercise: one draw, which also proves its lesions can be placed */
   palp_exercise drawn;
   if (ex->placement.kind == PALP_PLACEMENT_RANDOM) {
-    if ((e = palp_exercise_draw(ex, out->world.mesh.radius, 0u, &drawn, err, errlen))) return e;
+    /* all the lesions listed, the hardest draw: the scene then holds each (the server's sessions
+     * replace them with their own draws, server/session.c) */
+    palp_exercise all = *ex;
+    all.placement.count_min = all.placement.count_max = ex->lesion_count;
+    if ((e = palp_exercise_draw(&all, out->world.mesh.radius, 0u, &drawn, err, errlen))) return e;
     ex = &drawn;
   }
   const int n = palp_exercise_lesions(ex, out->world.mesh.radius, out->world.lesion + out->world.lesion_count,
@@ -430,14 +457,19 @@ int palp_exercise_band(const palp_exercise *ex, double depth, double force) { re
 char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *d) {
   if (!file_json || !d) return NULL;
   cJSON *root = cJSON_Parse(file_json);
-  cJSON *ls = root ? cJSON_GetObjectItemCaseSensitive(root, "lesions") : NULL;
-  if (!cJSON_IsArray(ls) || cJSON_GetArraySize(ls) != d->lesion_count) {
-    cJSON_Delete(root);
-    return NULL;
-  }
-  int ok = 1;
+  cJSON *file_ls = root ? cJSON_GetObjectItemCaseSensitive(root, "lesions") : NULL;
+  const int listed = cJSON_IsArray(file_ls) ? cJSON_GetArraySize(file_ls) : -1;
+  int ok = listed >= d->lesion_count;
+  /* the lesions drawn, each the file's object it came from (its size, depth, comment) */
+  cJSON *ls = ok ? cJSON_CreateArray() : NULL;
   for (int i = 0; i < d->lesion_count && ok; ++i) {
-    cJSON *o = cJSON_GetArrayItem(ls, i);
+    const int src = d->placement.kind == PALP_PLACEMENT_FIXED ? i : d->placement.source[i];
+    cJSON *o = src >= 0 && src < listed ? cJSON_Duplicate(cJSON_GetArrayItem(file_ls, src), 1) : NULL;
+    ok = o && cJSON_AddItemToArray(ls, o);
+    if (!ok) {
+      cJSON_Delete(o);
+      break;
+    }
     cJSON_DeleteItemFromObjectCaseSensitive(o, "polar_deg");
     cJSON_DeleteItemFromObjectCaseSensitive(o, "azimuth_deg");
     /* cJSON prints a number with up to 17 significant digits when 15 do not give it back:
@@ -446,6 +478,11 @@ char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *d) {
     ok = cJSON_AddNumberToObject(o, "polar_deg", d->lesion[i].polar * 180.0 / PALP_PI) &&
          cJSON_AddNumberToObject(o, "azimuth_deg", d->lesion[i].azimuth * 180.0 / PALP_PI);
   }
+  if (ok) {
+    ok = cJSON_ReplaceItemInObjectCaseSensitive(root, "lesions", ls);
+    if (ok) ls = NULL; /* root's now */
+  }
+  cJSON_Delete(ls);
   cJSON_DeleteItemFromObjectCaseSensitive(root, "placement");
   cJSON *p = ok ? cJSON_AddObjectToObject(root, "placement") : NULL;
   /* the band and gap as the file said them (to 1e-9 deg / mm): the radians' round trip could put
@@ -456,7 +493,8 @@ char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *d) {
        (d->placement.kind == PALP_PLACEMENT_FIXED ||
         (cJSON_AddNumberToObject(p, "seed", (double)d->placement.seed) &&
          cJSON_AddItemToObject(p, "polar_deg", cJSON_CreateDoubleArray(band, 2)) &&
-         cJSON_AddNumberToObject(p, "min_gap_mm", round(d->placement.min_gap * 1e12) / 1e9)));
+         cJSON_AddNumberToObject(p, "min_gap_mm", round(d->placement.min_gap * 1e12) / 1e9) &&
+        cJSON_AddItemToObject(p, "count", cJSON_CreateIntArray((const int[2]){d->placement.count_min, d->placement.count_max}, 2))));
   char *text = ok ? cJSON_Print(root) : NULL;
   cJSON_Delete(root);
   return text;

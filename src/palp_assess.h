@@ -109,6 +109,12 @@ typedef struct palp_exercise_placement {
   double min_gap;              /* [m] along the skin between two lesions' edges (their surface
                                   discs, a diameter across), so that each is felt apart */
   uint32_t seed;               /* DRAWN: the draw's seed */
+  int count_min, count_max;    /* RANDOM: how many of the file's lesions a session hides, drawn
+                                  uniformly in [min, max] (the file's "count"; default all of them,
+                                  0 allowed: a breast with no lump teaches not to mark one);
+                                  DRAWN: as the file said */
+  int source[PALP_MAX_LESIONS];/* DRAWN by palp_exercise_draw: the file's lesion (its index) each of
+                                  these is, in the file's order */
 } palp_exercise_placement;
 
 #define PALP_EXERCISE_TEXT 1024
@@ -152,17 +158,19 @@ palp_vec3 palp_exercise_lesion_surface(const palp_exercise_lesion *l, double dom
  * is refused at load, not at a trainee's session. */
 int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, size_t errlen);
 
-/* One session's lesions of a RANDOM exercise (src/placement.c): out is ex with each lesion's
- * polar and azimuth drawn, uniformly over the skin of the band [polar_min, polar_max] (cos(polar)
+/* One session's lesions of a RANDOM exercise (src/placement.c): out is ex with how many of its
+ * lesions drawn (uniformly in [count_min, count_max]; which ones, uniformly, kept in the file's
+ * order, placement.source naming each), and each one's polar and azimuth drawn, uniformly over the skin of the band [polar_min, polar_max] (cos(polar)
  * uniform), each inside the dome above its base and at least min_gap from every other along the
  * skin; kind DRAWN, seed kept. The same seed gives the same places on every machine. A FIXED or
  * DRAWN exercise is copied unchanged. PALP_EINVAL (message in err) when the lesions cannot be
  * placed (10,000 tries at each of 100 fresh starts). */
 int palp_exercise_draw(const palp_exercise *ex, double dome_radius, uint32_t seed, palp_exercise *out, char *err,
                        size_t errlen);
-/* The exercise file's text with a draw's places written in: each lesion's polar_deg and
- * azimuth_deg, and "placement" {"kind": "drawn", "seed", "polar_deg", "min_gap_mm"}; parsed back it
- * gives drawn's lesions (to the last bit). For the session log, so that the review assesses the
+/* The exercise file's text with a draw written in: the lesions drawn (each the file's object it
+ * came from, placement.source) with their polar_deg and azimuth_deg, and "placement" {"kind":
+ * "drawn", "seed", "polar_deg", "min_gap_mm", "count"}; parsed back it gives drawn's lesions (places
+ * within 1e-12 rad). For the session log, so that the review assesses the
  * lesions the trainee searched. malloc'd; NULL when file_json does not parse or memory runs out. */
 char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *drawn);
 

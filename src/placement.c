@@ -52,9 +52,36 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
   /* cos(polar) uniform in [cos max, cos min]: every square millimetre of the band's skin as likely */
   const double c0 = cos(P->polar_max), c1 = cos(P->polar_min);
   uint64_t s = 0x5eed5eed00000000ULL ^ seed;
+  /* How many, then which: k uniform in [count_min, count_max], a uniform k-subset (the first k of a
+   * partial Fisher-Yates shuffle), kept in the file's order. */
+  const int n = ex->lesion_count;
+  const int lo = P->count_min >= 0 ? P->count_min : n, hi = P->count_max >= 0 && P->count_max <= n ? P->count_max : n;
+  int k = lo + (int)(uniform(&s) * (double)(hi - lo + 1));
+  if (k > hi) k = hi;
+  if (k < 0) k = 0;
+  int idx[PALP_MAX_LESIONS];
+  for (int i = 0; i < n; i++) idx[i] = i;
+  for (int i = 0; i < k; i++) {
+    const int j = i + (int)(uniform(&s) * (double)(n - i));
+    const int t = idx[i];
+    idx[i] = idx[j < n ? j : n - 1];
+    idx[j < n ? j : n - 1] = t;
+  }
+  for (int i = 1; i < k; i++) /* insertion sort of the chosen: the file's order */
+    for (int j = i; j > 0 && idx[j - 1] > idx[j]; j--) {
+      const int t = idx[j];
+      idx[j] = idx[j - 1];
+      idx[j - 1] = t;
+    }
+  out->lesion_count = k;
+  memset(out->lesion, 0, sizeof out->lesion); /* nothing of the lesions left out stays */
+  for (int i = 0; i < k; i++) {
+    out->lesion[i] = ex->lesion[idx[i]];
+    out->placement.source[i] = idx[i];
+  }
   for (int start = 0; start < STARTS; start++) {
     int placed = 0;
-    for (int i = 0; i < ex->lesion_count; i++) {
+    for (int i = 0; i < k; i++) {
       palp_exercise_lesion *L = &out->lesion[i];
       int ok = 0;
       for (int t = 0; t < TRIES_PER_LESION && !ok; t++) {
@@ -66,7 +93,7 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
       if (!ok) break;
       placed++;
     }
-    if (placed == ex->lesion_count) {
+    if (placed == k) {
       out->placement.kind = PALP_PLACEMENT_DRAWN;
       out->placement.seed = seed;
       return PALP_OK;
@@ -75,5 +102,5 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
   return palp_parse_fail(&c, PALP_EINVAL,
                          "placement: cannot place %d lesions in the band %g-%g deg from the pole at least %g mm apart "
                          "(a wider band, a smaller gap or fewer lesions)",
-                         ex->lesion_count, P->polar_min * 180.0 / PALP_PI, P->polar_max * 180.0 / PALP_PI, P->min_gap * 1e3);
+                         k, P->polar_min * 180.0 / PALP_PI, P->polar_max * 180.0 / PALP_PI, P->min_gap * 1e3);
 }

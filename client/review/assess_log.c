@@ -169,8 +169,12 @@ void review_debrief_text(int status, const palp_db_debrief *d, const review_asse
         d->marks == 1 ? "" : "s");
     return;
   }
-  cat(buf, len, &n, "%s: found %d of %d lump%s", d->level == PALP_DB_DEBRIEF_LESIONS ? "told where each lump is" : "told the count only",
-      d->found, d->lesions, d->lesions == 1 ? "" : "s");
+  if (d->lesions == 0) /* a draw that hid none (docs/assessment.md, "Lesions drawn for each session") */
+    cat(buf, len, &n, "told there was no lump to find this time");
+  else
+    cat(buf, len, &n, "%s: found %d of %d lump%s",
+        d->level == PALP_DB_DEBRIEF_LESIONS ? "told where each lump is" : "told the count only", d->found, d->lesions,
+        d->lesions == 1 ? "" : "s");
   const int places = a && a->has_exercise && a->ex.lesion_count == d->listed;
   for (int l = 0; l < d->listed; l++) {
     cat(buf, len, &n, "%s lump %d ", l ? "," : ";", l + 1);
@@ -460,8 +464,12 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
   else fprintf(f, "exercise   none: free practice (no hidden lesions; no sensitivity, no score)\n");
   fprintf(f, "metrics    from %d finger samples (definitions: docs/assessment.md)\n", a->samples);
   if (a->has_exercise) {
-    fprintf(f, "  sensitivity      %d of %d lesions found (%.0f%%)%s\n", r->found, r->lesion_count,
-            100.0 * r->sensitivity, r->pass_metric[PALP_METRIC_SENSITIVITY] ? "   pass" : "   FAIL");
+    if (r->lesion_count == 0) /* a random exercise's draw that hid none: only false marks count */
+      fprintf(f, "  sensitivity      no lesion hidden in this session (nothing to find: 100%%)%s\n",
+              r->pass_metric[PALP_METRIC_SENSITIVITY] ? "   pass" : "   FAIL");
+    else
+      fprintf(f, "  sensitivity      %d of %d lesions found (%.0f%%)%s\n", r->found, r->lesion_count,
+              100.0 * r->sensitivity, r->pass_metric[PALP_METRIC_SENSITIVITY] ? "   pass" : "   FAIL");
     fprintf(f, "  false positives  %d (of %d marks, %d withdrawn)%s\n", r->false_positives, r->findings,
             r->withdrawn, r->pass_metric[PALP_METRIC_FALSE_POSITIVES] ? "   pass" : "   FAIL");
   } else {

@@ -12,7 +12,9 @@
  *  - a file that asks too much (three 15 mm lesions 60 mm apart in a 5 deg band) is refused at
  *    load, with a message naming the placement;
  *  - the file's text with a draw written in parses back to the same places (within 1e-12 rad) as
- *    kind "drawn" with its seed; a random file with places, or a seed, is refused.
+ *    kind "drawn" with its seed; a random file with places, or a seed, is refused;
+ *  - "count": how many of the file's lesions a session hides, uniform in [min, max], which ones
+ *    uniform and in the file's order; a draw of fewer, or of none, reads back from its logged text.
  */
 #include <math.h>
 #include <stdio.h>
@@ -180,6 +182,83 @@ int main(void) {
     CHECK(e == PALP_EPARSE && strstr(err, refuse[k].field), "refused, naming %s: %s", refuse[k].field, err);
     free(j);
   }
+  /* How many and which (the file's "count"): [0, 3] of the three, 4000 draws. Each k in 0..3 a
+   * quarter of them (+- 0.03, 4 sigma of a binomial at n = 4000: 0.027); each lesion hidden one of the
+   * file's, in its order, with the file's size, depth and stiffness, in the band and 10 mm apart;
+   * with [1, 1] each of the three hidden a third of the time (+- 0.03). */
+  char *counted = replaced(random3, "\"min_gap_mm\": 10}", "\"min_gap_mm\": 10, \"count\": [0, 3]}");
+  palp_exercise exc;
+  REQUIRE(counted && palp_exercise_parse(counted, "", &exc, err, sizeof err) == 0, "count [0, 3] parses: %s", err);
+  CHECK(exc.placement.count_min == 0 && exc.placement.count_max == 3, "  count 0..3 (%d..%d)", exc.placement.count_min,
+        exc.placement.count_max);
+  CHECK(ex.placement.count_min == 3 && ex.placement.count_max == 3, "without count, all three (%d..%d)",
+        ex.placement.count_min, ex.placement.count_max);
+  int kcount[4] = {0}, badk = 0;
+  for (uint32_t seed = 0; seed < 4000; seed++) {
+    palp_exercise d;
+    if (palp_exercise_draw(&exc, R, seed, &d, err, sizeof err) != 0 || d.lesion_count < 0 || d.lesion_count > 3) {
+      badk++;
+      continue;
+    }
+    kcount[d.lesion_count]++;
+    palp_exercise t = ex; /* the templates the draw took, in order, to check the draw against */
+    int order = 1;
+    for (int i = 0; i < d.lesion_count; i++) {
+      const int src = d.placement.source[i];
+      order = order && src >= 0 && src < 3 && (i == 0 || src > d.placement.source[i - 1]);
+      if (order) t.lesion[i] = ex.lesion[src];
+    }
+    t.lesion_count = d.lesion_count;
+    if (!order || !valid_draw(&t, &d, why, sizeof why)) {
+      if (!badk) printf("count seed %u: %s\n", seed, order ? why : "sources out of order");
+      badk++;
+    }
+  }
+  CHECK(badk == 0, "4000 draws of [0, 3]: each a subset of the file's lesions in order, placed as above (%d bad)", badk);
+  for (int k = 0; k < 4; k++)
+    CHECK(fabs(kcount[k] / 4000.0 - 0.25) <= 0.03, "  %d lesions hidden in %.3f of them (0.25 +- 0.03)", k, kcount[k] / 4000.0);
+  char *one_of = replaced(random3, "\"min_gap_mm\": 10}", "\"min_gap_mm\": 10, \"count\": [1, 1]}");
+  palp_exercise ex11;
+  REQUIRE(one_of && palp_exercise_parse(one_of, "", &ex11, err, sizeof err) == 0, "count [1, 1]: %s", err);
+  int which[3] = {0};
+  for (uint32_t seed = 0; seed < 3000; seed++) {
+    palp_exercise d;
+    if (palp_exercise_draw(&ex11, R, seed, &d, err, sizeof err) == 0 && d.lesion_count == 1) which[d.placement.source[0]]++;
+  }
+  for (int i = 0; i < 3; i++)
+    CHECK(fabs(which[i] / 3000.0 - 1.0 / 3) <= 0.03, "  count [1, 1]: the file's lesion %d hidden in %.3f (1/3 +- 0.03)", i,
+          which[i] / 3000.0);
+  /* a draw of fewer, and of none, written for the log and read back */
+  for (uint32_t seed = 0, seen = 0; seed < 200 && seen != 3; seed++) {
+    palp_exercise d, b;
+    palp_exercise_draw(&exc, R, seed, &d, err, sizeof err);
+    if (d.lesion_count != 0 && d.lesion_count != 2) continue;
+    seen |= d.lesion_count == 0 ? 1u : 2u;
+    char *txt = palp_exercise_drawn_json(counted, &d);
+    const int prc = txt ? palp_exercise_parse(txt, "", &b, err, sizeof err) : -99;
+    int same_ = prc == 0 && b.lesion_count == d.lesion_count && b.placement.kind == PALP_PLACEMENT_DRAWN &&
+                b.placement.count_min == 0 && b.placement.count_max == 3;
+    for (int i = 0; same_ && i < d.lesion_count; i++)
+      same_ = fabs(b.lesion[i].polar - d.lesion[i].polar) < 1e-12 && b.lesion[i].diameter == d.lesion[i].diameter &&
+              b.lesion[i].stiffness_ratio == d.lesion[i].stiffness_ratio;
+    CHECK(same_, "a draw of %d of 3 (seed %u) read back from its logged text: %d lesions, count [0, 3] (%d %s)",
+          d.lesion_count, seed, b.lesion_count, prc, err);
+    free(txt);
+  }
+  static const struct { const char *to, *field; } refuse_count[] = {
+      {"\"min_gap_mm\": 10, \"count\": [2, 5]}", "placement.count: at most the 3 lesions"},
+      {"\"min_gap_mm\": 10, \"count\": [2, 1]}", "placement.count: expected"},
+      {"\"min_gap_mm\": 10, \"count\": [0.5, 1]}", "placement.count: expected"},
+      {"\"min_gap_mm\": 10, \"count\": 2}", "placement.count: expected"}};
+  for (size_t k = 0; k < sizeof refuse_count / sizeof refuse_count[0]; k++) {
+    char *j = replaced(random3, "\"min_gap_mm\": 10}", refuse_count[k].to);
+    palp_exercise x;
+    err[0] = 0;
+    const int e = j ? palp_exercise_parse(j, "", &x, err, sizeof err) : 0;
+    CHECK(e == PALP_EPARSE && strstr(err, refuse_count[k].field), "refused, naming %s: %s", refuse_count[k].field, err);
+    free(j);
+  }
+  free(counted), free(one_of);
   free(one), free(tight), free(logged);
   CHECK_DONE();
 }

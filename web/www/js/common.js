@@ -115,7 +115,10 @@ const PALP = (function () {
    * trainee page ("You " + these) and the dashboard's ended sessions alike. At levels "count" and
    * "lesions" only: at "none" the message holds no lesion, not even how many. */
   function plural(n, one, many) { return n + " " + (n === 1 ? one : many); }
-  function debriefFound(m) { return "found " + m.found + " of " + plural(m.lesions, "lump", "lumps"); }
+  /* an exercise whose lumps are drawn for each session may hide none (docs/assessment.md) */
+  function debriefFound(m) {
+    return m.lesions ? "found " + m.found + " of " + plural(m.lesions, "lump", "lumps") : "had no lump to find this time";
+  }
   function debriefSummary(m) {
     return debriefFound(m) + " with " + plural(m.marks, "mark", "marks") + " standing; " +
       plural(m.false_marks, "mark was", "marks were") + " near no lump" +
