@@ -12,7 +12,8 @@
 #    its own session's lesions (clock and arc as computed here from the logged angles, to the
 #    printed precision);
 #  - the review: her second attempt is blind (its lesions are not the ones her first debrief told),
-#    and `show` prints each session's debrief with the same places; replay is bit-identical.
+#    and `show` prints each session's debrief with the same places; replay is bit-identical;
+#  - the same exercise with "count": [0, 0] hides none: eli's station, her log and the review say so.
 # usage: exercise_random.sh SERVER CLIENT REVIEW CONFIG_DIR TEST_DIR
 set -u
 server=$1 client=$2 review=$3 config_dir=$4 test_dir=$5
@@ -20,11 +21,15 @@ export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.x
 tmp=$(mktemp -d)
 spid=
 trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
+# the same exercise hiding none of its lesions ("count": [0, 0]): a breast with no lump
+sed -e 's|"name": "test-random"|"name": "test-none"|' -e 's|"min_gap_mm": 10 }|"min_gap_mm": 10, "count": [0, 0] }|' \
+  -e "s|\"\.\./assess/|\"$test_dir/../assess/|" "$test_dir/exercise_random.json" > "$tmp/exercise_none.json"
 cat > "$tmp/server.json" <<JSON
 { "domain_id": 181, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
   "dds_config": "$config_dir/cyclonedds-loopback.xml",
   "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
-  "exercises": [ { "id": 7, "file": "$test_dir/exercise_random.json", "physics_rate_hz": 250 } ] }
+  "exercises": [ { "id": 7, "file": "$test_dir/exercise_random.json", "physics_rate_hz": 250 },
+                 { "id": 8, "file": "$tmp/exercise_none.json", "physics_rate_hz": 250 } ] }
 JSON
 "$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
 spid=$!
@@ -33,6 +38,8 @@ for k in 1 2; do
   "$client" --role trainee --domain 181 --phantom 7 --name dora --timeout 10 --print-period 0 \
     --input sim:press,polar=30,azimuth=0,depth_mm=6,hold_s=1.5,mark_s=1 > "$tmp/dora$k.log" 2>&1
 done
+"$client" --role trainee --domain 181 --phantom 8 --name eli --timeout 10 --print-period 0 \
+  --input sim:press,polar=30,azimuth=0,depth_mm=6,hold_s=1.5,mark_s=1 > "$tmp/eli.log" 2>&1
 kill $spid; wait $spid; spid=
 for k in 1 2; do
   grep "debrief" "$tmp/dora$k.log" > /dev/null || { echo "FAIL dora's session $k printed no debrief:"; cat "$tmp/dora$k.log"; fail=1; }
@@ -110,5 +117,21 @@ if [ -n "${uid2:-}" ]; then
 else
   echo "FAIL no sessions to review"; fail=1
 fi
+# eli's session hid none: her station says so, the log's drawn exercise has no lesion and its scene
+# none, and the review says there was nothing to find and what she was told
+if grep -q "debrief: you had no lump to find this time with 1 mark standing; 1 mark was near no lump" "$tmp/eli.log"; then
+  echo "ok   a session that hid no lump: the station says there was none to find, her mark near none"
+else echo "FAIL eli's debrief:"; cat "$tmp/eli.log"; fail=1; fi
+none=$(python3 -c "
+import json, sqlite3, sys
+r = sqlite3.connect(sys.argv[1]).execute(\"select s.uid, s.scene_json, e.exercise_json from session s join session_exercise e on e.session_id = s.id where s.trainee = 'eli'\").fetchone()
+ex, sc = json.loads(r[2]), json.loads(r[1])
+print(r[0] if ex['lesions'] == [] and ex['placement']['count'] == [0, 0] and not sc.get('lesions') else 'bad')" "$tmp/log.db" 2>&1)
+if [ -n "$none" ] && [ "$none" != bad ] && "$review" --db "$tmp/log.db" show "$none" > "$tmp/show-eli.txt" 2>&1 &&
+   grep -q "^  sensitivity      no lesion hidden in this session (nothing to find: 100%)   pass$" "$tmp/show-eli.txt" &&
+   grep -q "^  false positives  1 (of 1 marks, 0 withdrawn)   FAIL$" "$tmp/show-eli.txt" &&
+   grep -q "^debrief    told there was no lump to find this time; 1 mark standing, 1 near no lump$" "$tmp/show-eli.txt"; then
+  echo "ok   its log holds no lesion (exercise and scene), and the review: nothing to find, her mark a false one, told so"
+else echo "FAIL eli's log or review ($none):"; cat "$tmp/show-eli.txt" 2>/dev/null; fail=1; fi
 [ $fail = 0 ] || { echo "--- server log"; tail -20 "$tmp/server.log"; }
 exit $fail
