@@ -58,6 +58,23 @@ static void dir(double polar, double az, double d[3]) {
   d[0] = sin(polar) * cos(az), d[1] = sin(polar) * sin(az), d[2] = cos(polar);
 }
 
+/* The same lesions and placement, field by field (a struct's padding is not compared: memcmp
+ * would see whatever the copy left there, and did under AddressSanitizer). */
+static int same_draw(const palp_exercise *a, const palp_exercise *b) {
+  const palp_exercise_placement *p = &a->placement, *q = &b->placement;
+  if (a->lesion_count != b->lesion_count || p->kind != q->kind || p->seed != q->seed || p->polar_min != q->polar_min ||
+      p->polar_max != q->polar_max || p->min_gap != q->min_gap || p->count_min != q->count_min ||
+      p->count_max != q->count_max)
+    return 0;
+  for (int i = 0; i < a->lesion_count; i++) {
+    const palp_exercise_lesion *x = &a->lesion[i], *y = &b->lesion[i];
+    if (x->polar != y->polar || x->azimuth != y->azimuth || x->depth != y->depth || x->diameter != y->diameter ||
+        x->stiffness_ratio != y->stiffness_ratio || p->source[i] != q->source[i])
+      return 0;
+  }
+  return 1;
+}
+
 static int valid_draw(const palp_exercise *src, const palp_exercise *d, char *why, size_t len) {
   if (d->lesion_count != src->lesion_count) return snprintf(why, len, "count"), 0;
   for (int i = 0; i < d->lesion_count; i++) {
@@ -105,8 +122,8 @@ int main(void) {
   /* the same seed, the same places; different seeds, different places */
   palp_exercise d1, d2;
   CHECK(palp_exercise_draw(&ex, R, 12345u, &d1, err, sizeof err) == 0 &&
-            palp_exercise_draw(&ex, R, 12345u, &d2, err, sizeof err) == 0 && memcmp(&d1, &d2, sizeof d1) == 0,
-        "seed 12345 twice: the same exercise, bit for bit");
+            palp_exercise_draw(&ex, R, 12345u, &d2, err, sizeof err) == 0 && same_draw(&d1, &d2),
+        "seed 12345 twice: the same lesions and placement, bit for bit");
   int same = 0;
   double first[200];
   for (uint32_t k = 0; k < 200; k++) {
@@ -161,7 +178,7 @@ int main(void) {
             back.lesion_count == 3 && back.lesion[2].stiffness_ratio == 8,
         "  kind drawn, seed 12345, places within %.1e rad (1e-12)", worst);
   palp_exercise again;
-  CHECK(palp_exercise_draw(&back, R, 99u, &again, err, sizeof err) == 0 && memcmp(&again, &back, sizeof back) == 0,
+  CHECK(palp_exercise_draw(&back, R, 99u, &again, err, sizeof err) == 0 && same_draw(&again, &back),
         "  a drawn exercise is not drawn again (its places stay)");
 
   /* refused: places in a random file, a seed in a random file, an unknown kind, no band */

@@ -56,7 +56,11 @@ static void check_draw(const char *json, const palp_exercise *ex) {
     return;
   }
   if (ex->placement.kind != PALP_PLACEMENT_RANDOM) {
-    if (memcmp(&d, ex, sizeof d)) FAIL("a fixed or drawn exercise changed by a draw");
+    int same = d.lesion_count == ex->lesion_count && d.placement.kind == ex->placement.kind;
+    for (int i = 0; same && i < d.lesion_count; ++i) /* field by field: not the structs' padding */
+      same = d.lesion[i].polar == ex->lesion[i].polar && d.lesion[i].azimuth == ex->lesion[i].azimuth &&
+             d.lesion[i].depth == ex->lesion[i].depth && d.lesion[i].diameter == ex->lesion[i].diameter;
+    if (!same) FAIL("a fixed or drawn exercise changed by a draw");
     return;
   }
   if (d.placement.kind != PALP_PLACEMENT_DRAWN || d.placement.seed != 7u) FAIL("draw: kind %d", (int)d.placement.kind);
