@@ -16,6 +16,7 @@
 #include <dds/dds.h>
 
 #include "palp.h"
+#include "palp_rng.h"
 #include "identity.h"
 #include "server_identity.h"
 #include "palp_dds.h"
@@ -557,13 +558,11 @@ static void publish_finding_status(palp_srv_session *s) {
   s->findings_status_ns = now;
 }
 
-/* A random exercise's seed for one session: the run's key and the session id through splitmix64's
- * finaliser, so that neighbouring sessions' draws share nothing. */
+/* A random exercise's seed for one session: the stream of the run's key at the session id's place
+ * (src/palp_rng.h), so that neighbouring sessions' draws share nothing. */
 static uint32_t placement_seed(uint64_t key, uint32_t session_id) {
-  uint64_t z = key + 0x9e3779b97f4a7c15ULL * ((uint64_t)session_id + 1);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return (uint32_t)((z ^ (z >> 31)) >> 32);
+  uint64_t state = key + 0x9e3779b97f4a7c15ULL * (uint64_t)session_id;
+  return (uint32_t)(palp_rng_next(&state) >> 32);
 }
 
 /* The debrief's record in the session log: what the trainee was told, or that nothing was sent

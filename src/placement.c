@@ -9,21 +9,12 @@
 #include <string.h>
 
 #include "palp_assess.h"
+#include "palp_rng.h"
 #include "parse_error.h"
 #include "vec3.h"
 
 #define TRIES_PER_LESION 10000
 #define STARTS 100
-
-/* splitmix64 (Steele, Lea & Flood 2014): full-period 64-bit state, good enough to place a few
- * lesions; its output's top 53 bits give a double uniform in [0, 1). */
-static uint64_t next(uint64_t *s) {
-  uint64_t z = (*s += 0x9e3779b97f4a7c15ULL);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-static double uniform(uint64_t *s) { return (double)(next(s) >> 11) * 0x1.0p-53; }
 
 static palp_vec3 dir_of(double polar, double az) {
   return v3(sin(polar) * cos(az), sin(polar) * sin(az), cos(polar));
@@ -56,13 +47,13 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
    * partial Fisher-Yates shuffle), kept in the file's order. */
   const int n = ex->lesion_count;
   const int lo = P->count_min >= 0 ? P->count_min : n, hi = P->count_max >= 0 && P->count_max <= n ? P->count_max : n;
-  int k = lo + (int)(uniform(&s) * (double)(hi - lo + 1));
+  int k = lo + (int)(palp_rng_uniform(&s) * (double)(hi - lo + 1));
   if (k > hi) k = hi;
   if (k < 0) k = 0;
   int idx[PALP_MAX_LESIONS];
   for (int i = 0; i < n; i++) idx[i] = i;
   for (int i = 0; i < k; i++) {
-    const int j = i + (int)(uniform(&s) * (double)(n - i));
+    const int j = i + (int)(palp_rng_uniform(&s) * (double)(n - i));
     const int t = idx[i];
     idx[i] = idx[j < n ? j : n - 1];
     idx[j < n ? j : n - 1] = t;
@@ -85,8 +76,8 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
       palp_exercise_lesion *L = &out->lesion[i];
       int ok = 0;
       for (int t = 0; t < TRIES_PER_LESION && !ok; t++) {
-        L->polar = acos(c0 + (c1 - c0) * uniform(&s));
-        L->azimuth = 2.0 * PALP_PI * uniform(&s);
+        L->polar = acos(c0 + (c1 - c0) * palp_rng_uniform(&s));
+        L->azimuth = 2.0 * PALP_PI * palp_rng_uniform(&s);
         ok = fits(L, R);
         for (int j = 0; j < i && ok; j++) ok = gap(L, &out->lesion[j], R) >= P->min_gap;
       }

@@ -16,19 +16,8 @@
 #include <string.h>
 
 #include "eval.h"
+#include "palp_rng.h" /* SplitMix64: a seed names the same sites everywhere */
 #include "vec3.h"
-
-/* SplitMix64 (Steele, Lea & Flood 2014): a fixed, platform-independent stream, so a
- * seed names the same sites everywhere (as the block bootstrap's draws). */
-static uint64_t splitmix64(uint64_t *state) {
-  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-/* uniform on [0, 1) with 53 random bits */
-static double uniform01(uint64_t *state) { return (double)(splitmix64(state) >> 11) * 0x1.0p-53; }
 
 int palp_eval_sites_draw(unsigned long long seed, int count, double polar_min_deg, double polar_max_deg,
                          palp_eval_site *out) {
@@ -39,9 +28,9 @@ int palp_eval_sites_draw(unsigned long long seed, int count, double polar_min_de
    * over the area between the two polar angles. */
   const double c_hi = cos(polar_min_deg * PALP_PI / 180.0), c_lo = cos(polar_max_deg * PALP_PI / 180.0);
   for (int i = 0; i < count; ++i) {
-    const double c = c_hi - (c_hi - c_lo) * uniform01(&st);
+    const double c = c_hi - (c_hi - c_lo) * palp_rng_uniform(&st);
     out[i].polar_deg = acos(fmin(1.0, fmax(-1.0, c))) * 180.0 / PALP_PI;
-    out[i].azimuth_deg = 360.0 * uniform01(&st);
+    out[i].azimuth_deg = 360.0 * palp_rng_uniform(&st);
   }
   return PALP_OK;
 }
