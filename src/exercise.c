@@ -72,6 +72,25 @@ static int get_str(ctx *c, const cJSON *obj, const char *path, const char *key, 
   return PALP_OK;
 }
 
+/* One of names[0..n-1] (a NULL-terminated list), its index in *out; absent and not required: *out
+ * untouched. The error lists the names, so a misspelt choice says what it could have been. */
+static int get_choice(ctx *c, const cJSON *obj, const char *path, const char *key, int required,
+                      const char *const *names, int *out) {
+  char v[32] = "", list[160] = "";
+  int e;
+  if (!cJSON_GetObjectItemCaseSensitive(obj, key) && !required) return PALP_OK;
+  if ((e = get_str(c, obj, path, key, 1, v, sizeof v))) return e;
+  for (int i = 0; names[i]; i++) {
+    if (strcmp(v, names[i]) == 0) {
+      *out = i;
+      return PALP_OK;
+    }
+    const size_t n = strlen(list);
+    snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", names[i]);
+  }
+  return palp_parse_fail(c, PALP_EPARSE, "%s%s: unknown \"%s\" (%s)", path, key, v, list);
+}
+
 /* [min, max] pair in the given unit, scaled to SI. */
 static int get_range(ctx *c, const cJSON *obj, const char *path, const char *key, double scale, double hi, int *has,
                      double *lo_out, double *hi_out) {
@@ -135,12 +154,10 @@ static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
   if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "placement: expected an object");
   int e;
   if ((e = only_keys(c, o, "placement.", keys))) return e;
-  char kind[16] = "";
-  if ((e = get_str(c, o, "placement.", "kind", 1, kind, sizeof kind))) return e;
-  if (strcmp(kind, "fixed") == 0) P->kind = PALP_PLACEMENT_FIXED;
-  else if (strcmp(kind, "random") == 0) P->kind = PALP_PLACEMENT_RANDOM;
-  else if (strcmp(kind, "drawn") == 0) P->kind = PALP_PLACEMENT_DRAWN;
-  else return palp_parse_fail(c, PALP_EPARSE, "placement.kind: unknown \"%s\" (fixed, random, drawn)", kind);
+  static const char *const kinds[] = {"fixed", "random", "drawn", NULL}; /* palp_placement_kind's order */
+  int kind = 0;
+  if ((e = get_choice(c, o, "placement.", "kind", 1, kinds, &kind))) return e;
+  P->kind = (palp_placement_kind)kind;
   const int band = P->kind != PALP_PLACEMENT_FIXED;
   if (!band) {
     if (cJSON_GetObjectItemCaseSensitive(o, "polar_deg") || cJSON_GetObjectItemCaseSensitive(o, "min_gap_mm") ||
@@ -333,12 +350,10 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
   /* What the trainee is told at the session's end (docs/assessment.md, "Debrief"). Absent:
    * nothing, so that a file written before the key, or for an examination, never tells a
    * trainee where its lesions are. */
-  char debrief[16] = "none";
-  if ((e = get_str(c, root, "", "debrief", 0, debrief, sizeof debrief))) return e;
-  if (strcmp(debrief, "none") == 0) ex->debrief = PALP_DEBRIEF_NONE;
-  else if (strcmp(debrief, "count") == 0) ex->debrief = PALP_DEBRIEF_COUNT;
-  else if (strcmp(debrief, "lesions") == 0) ex->debrief = PALP_DEBRIEF_LESIONS;
-  else return palp_parse_fail(c, PALP_EPARSE, "debrief: unknown \"%s\" (none, count, lesions)", debrief);
+  static const char *const levels[] = {"none", "count", "lesions", NULL}; /* palp_debrief_level's order */
+  int level = PALP_DEBRIEF_NONE;
+  if ((e = get_choice(c, root, "", "debrief", 0, levels, &level))) return e;
+  ex->debrief = (palp_debrief_level)level;
   const cJSON *rub = cJSON_GetObjectItemCaseSensitive(root, "rubric");
   if (!rub) return palp_parse_fail(c, PALP_EPARSE, "rubric: missing (an object is required)");
   return parse_rubric(c, rub, &ex->rubric);
