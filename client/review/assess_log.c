@@ -125,7 +125,9 @@ int review_debrief(palp_db *db, const palp_db_session_info *s, palp_db_debrief *
   if (rc == 1) return REVIEW_DEBRIEF_LOGGED;
   if (rc == PALP_EINVAL) return REVIEW_DEBRIEF_UNREADABLE;
   if (rc < 0) return rc;
-  return review_params_flag(db, s->id, "debrief_events") ? REVIEW_DEBRIEF_NONE : REVIEW_DEBRIEF_UNKNOWN;
+  if (!review_params_flag(db, s->id, "debrief_events")) return REVIEW_DEBRIEF_UNKNOWN;
+  /* the server writes the debrief before it closes the session: a close without one lost it */
+  return s->end_unix_s > 0 && s->end_reason[0] ? REVIEW_DEBRIEF_LOST : REVIEW_DEBRIEF_NONE;
 }
 
 /* appends to buf at *n, never past len */
@@ -153,6 +155,10 @@ void review_debrief_text(int status, const palp_db_debrief *d, const review_asse
     return;
   case REVIEW_DEBRIEF_UNREADABLE:
     cat(buf, len, &n, "UNREADABLE: the logged debrief does not parse (was the log altered?)");
+    return;
+  case REVIEW_DEBRIEF_LOST:
+    cat(buf, len, &n, "LOST: the session closed but its debrief's record is not in the log (see the log's shed and "
+                      "failed records): what the trainee was told is not known");
     return;
   case REVIEW_DEBRIEF_LOGGED: break;
   default:
@@ -232,7 +238,7 @@ int review_told_before(palp_db *db, const palp_db_session_info *s, const review_
     palp_debrief_level level;
     if (st == REVIEW_DEBRIEF_LOGGED) level = d.sent ? (palp_debrief_level)d.level : PALP_DEBRIEF_NONE;
     else if (st == REVIEW_DEBRIEF_NONE) level = PALP_DEBRIEF_NONE;
-    else level = e.debrief, inferred = 1;
+    else level = e.debrief, inferred = 1; /* unknown, unreadable or lost: what the file allowed */
     if (level == PALP_DEBRIEF_NONE) continue;
     snprintf(out->uid, sizeof out->uid, "%s", v[i].uid);
     out->end_unix_s = v[i].end_unix_s;

@@ -47,7 +47,9 @@ enum {
   REVIEW_DEBRIEF_LOGGED = 1,     /* *d: sent (what was told) or not sent (why) */
   REVIEW_DEBRIEF_NONE = 2,       /* its server logs debriefs and logged none (no exercise, or a
                                     session that never closed: a killed server) */
-  REVIEW_DEBRIEF_UNREADABLE = 3  /* its row does not parse (a log edited by hand) */
+  REVIEW_DEBRIEF_UNREADABLE = 3, /* its row does not parse (a log edited by hand) */
+  REVIEW_DEBRIEF_LOST = 4        /* none, though the session's close was logged: the row was lost
+                                    (a full queue shed it, a disk error): the log does not say */
 };
 int review_debrief(palp_db *db, const palp_db_session_info *s, palp_db_debrief *d);
 /* The instructor's line for it, the lesions' places named as every tool names them ("told where

@@ -50,20 +50,22 @@ int main(int argc, char **argv) {
   /* dora's attempts at the same exercise, each logged as a server would (no samples: the "not
    * blind" rule reads only the sessions' ends, exercises and debriefs): 1 its debrief not sent,
    * 2 told the count, 3 a log from before debriefs were logged, 4 a server that logs them and
-   * logged none, 5 a debrief row that does not parse. */
+   * logged none though the session closed (the row lost), 5 a debrief row that does not parse, 6 a
+   * session whose close was never logged (its server killed: no debrief went out). */
   static const struct { const char *uid, *params, *debrief; } dora[] = {
       {"dora-1", "{\"debrief_events\": true}", "not sent (level lesions): DDS refused the write: Error"},
       {"dora-2", "{\"debrief_events\": true}",
        "told at level count: found 1 of 2 lesions; marks standing 1, near no lesion 0, duplicates 0"},
       {"dora-3", "{}", NULL},
       {"dora-4", "{\"debrief_events\": true}", NULL},
-      {"dora-5", "{\"debrief_events\": true}", "told at level count: found 3 of 2 lesions"}};
+      {"dora-5", "{\"debrief_events\": true}", "told at level count: found 3 of 2 lesions"},
+      {"dora-6", "{\"debrief_events\": true}", NULL}};
   {
     char ex_path[1024];
     snprintf(ex_path, sizeof ex_path, "%s/exercise_expert.json", argv[2]);
     char *ex_json = gen_slurp(ex_path);
     REQUIRE(ex_json, "read %s", ex_path);
-    for (int k = 0; k < 5; k++) {
+    for (int k = 0; k < 6; k++) {
       const double t = 1.7e9 + 3000 + 1000 * k;
       palp_db_session_def d = {.uid = dora[k].uid, .trainee = "dora", .station = "gen", .phantom_id = "stiff",
                                .phantom_name = "dome_breast_test", .scene_json = "{}", .params_json = dora[k].params,
@@ -72,7 +74,7 @@ int main(int argc, char **argv) {
       int rc = palp_db_log_session_begin(w, &d, &h);
       if (!rc) rc = palp_db_log_exercise(w, h, "test-two-lumps", ex_json);
       if (!rc && dora[k].debrief) rc = palp_db_log_event(w, h, PALP_DB_EVENT_DEBRIEF, 10, dora[k].debrief, 1);
-      if (!rc) rc = palp_db_log_session_end(w, h, PALP_DB_END_NORMAL, NULL, t + 10);
+      if (!rc && k < 5) rc = palp_db_log_session_end(w, h, PALP_DB_END_NORMAL, NULL, t + 10);
       REQUIRE(rc == 0, "%s logged: %s", dora[k].uid, palp_strerror(rc));
     }
     free(ex_json);
@@ -149,9 +151,9 @@ int main(int argc, char **argv) {
         a[1].touch_n ? a[1].touches[0].peak_indentation * 1e3 : 0.0);
   /* What dora was told, read back from each log (docs/assessment.md, "Debrief") */
   {
-    static const int want[5] = {REVIEW_DEBRIEF_LOGGED, REVIEW_DEBRIEF_LOGGED, REVIEW_DEBRIEF_UNKNOWN, REVIEW_DEBRIEF_NONE,
-                                REVIEW_DEBRIEF_UNREADABLE};
-    for (int k = 0; k < 5; k++) {
+    static const int want[6] = {REVIEW_DEBRIEF_LOGGED, REVIEW_DEBRIEF_LOGGED, REVIEW_DEBRIEF_UNKNOWN, REVIEW_DEBRIEF_LOST,
+                                REVIEW_DEBRIEF_UNREADABLE, REVIEW_DEBRIEF_NONE};
+    for (int k = 0; k < 6; k++) {
       palp_db_session_info s;
       palp_db_debrief d;
       REQUIRE(palp_db_find_session(db, dora[k].uid, &s) == 0, "%s found", dora[k].uid);
@@ -171,8 +173,9 @@ int main(int argc, char **argv) {
         {3500, 0, "", PALP_DEBRIEF_NONE, 0},       /* dora-1's debrief was not sent: blind */
         {4500, 1, "dora-2", PALP_DEBRIEF_COUNT, 0}, /* told the count, as logged */
         {5500, 1, "dora-3", PALP_DEBRIEF_LESIONS, 1}, /* a log without debriefs: the file's level */
-        {6500, 1, "dora-3", PALP_DEBRIEF_LESIONS, 1}, /* dora-4 was told nothing: dora-3 still stands */
-        {7500, 1, "dora-5", PALP_DEBRIEF_LESIONS, 1}}; /* unreadable: the file's level, said inferred */
+        {6500, 1, "dora-4", PALP_DEBRIEF_LESIONS, 1}, /* lost: the file's level, said inferred */
+        {7500, 1, "dora-5", PALP_DEBRIEF_LESIONS, 1}, /* unreadable: the same */
+        {9500, 1, "dora-5", PALP_DEBRIEF_LESIONS, 1}}; /* dora-6 never closed: it told nothing */
     for (size_t k = 0; k < sizeof q / sizeof q[0]; k++) {
       palp_db_session_info later = {.id = -1, .start_unix_s = 1.7e9 + q[k].after};
       snprintf(later.trainee, sizeof later.trainee, "dora");
