@@ -181,6 +181,12 @@ def run(build, source, out):
               "pat's page shows her debrief: %s" % shown)
         # (her station runs --quiet here; web_coverage compares the page's debrief with the station's lines)
         check(obs.wait_for("palpState.trainee.debrief !== null", 5) is True, "the observer's page is sent it too")
+        # A random exercise's session may hide no lump (docs/assessment.md, "Lesions drawn for each session"):
+        # the page's words for such a debrief, as the station prints them (tests/server/exercise_random.sh)
+        none = page.eval("palpDebriefText({level: 'lesions', lesions: 0, found: 0, marks: 1, false_marks: 1, "
+                         "duplicates: 0, lumps: []})")
+        check(none == ["You had no lump to find this time with 1 mark standing; 1 mark was near no lump."],
+              "a debrief that hid no lump, in the page's words: %s" % none)
 
         # The class dashboard, open since pat's session ran, lists it under "Ended exercise sessions" with what
         # her page was told: the counts of the server's debrief her page got, each lump in her page's words
