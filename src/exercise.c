@@ -146,7 +146,7 @@ static int parse_lesion(ctx *c, const cJSON *o, int i, int drawn_here, palp_exer
 }
 
 /* "placement": {"kind": "fixed" | "random" | "drawn", "polar_deg": [min, max], "min_gap_mm": g,
- * "seed": n (drawn only), "comment"}. Absent: fixed. */
+ * "count": [lo, hi], "seed": n (drawn only), "comment"}. Absent: fixed. */
 static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
   static const char *const keys[] = {"kind", "polar_deg", "min_gap_mm", "seed", "count", "comment", NULL};
   memset(P, 0, sizeof *P);

@@ -1,8 +1,8 @@
 /*
  * placement.c - one session's lesions of a random exercise (palp_exercise_draw; docs/assessment.md,
- * "Lesions drawn for each session"). Pure and deterministic: a small counter-based generator
- * (splitmix64) seeded by the server per session, so that the same seed gives the same places on
- * every machine and a logged draw can be checked by drawing it again.
+ * "Lesions drawn for each session"). Pure and deterministic: SplitMix64 (src/palp_rng.h), seeded by
+ * the server per session, so that the same seed gives the same lesions on every machine and a logged
+ * draw can be checked by drawing it again.
  */
 #include <math.h>
 #include <stdint.h>
