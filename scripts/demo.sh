@@ -44,7 +44,7 @@ rm -f "$out"/*.log "$out"/*.svg "$out"/*.csv
 # own sessions and read only them; instructors read every session; the server alone publishes
 # the phantoms, replies and feedback. Nothing unauthenticated is heard (docs/security.md).
 secure=${PALP_SECURE:-1}
-trainees=(alice bob carol dana nina eve)
+trainees=(alice bob carol dana nina eve fay)
 declare -A sec
 for t in "${trainees[@]}"; do sec[$t]="--name $t"; done
 srv_sec=() visual_sec=(--name screen) observer_sec=(--name instructor) web_sec=()
@@ -160,6 +160,15 @@ dana=$!
   >"$out/nina.log" 2>&1 &
 pids+=($!)
 nina=$!
+# Lesions drawn for each session (docs/assessment.md): fay, another novice, takes "medium"
+# (phantom 12) twice in a row; its lump is placed anew for each session, so her two debriefs name
+# two places, and her second attempt is as blind as her first.
+(for k in 1 2; do
+  "$client" --role trainee --domain "$domain" --phantom 12 ${sec[fay]} --input sim:novice --print-period 0 \
+    >"$out/fay$k.log" 2>&1 || exit 1
+done) &
+pids+=($!)
+fay=$!
 eve=
 if [ "${PALP_DEMO_EXPERT:-1}" = 1 ]; then
   echo "demo: eve, the scripted expert, examines the teaching exercise for ~2 minutes (PALP_DEMO_EXPERT=0 skips her)"
@@ -188,7 +197,7 @@ pids+=($!)
 observer=$!
 
 status=0
-for p in "$alice" "$bob" "$carol" "$dana" "$visual" "$observer" "$nina" $eve; do wait "$p" || status=$?; done
+for p in "$alice" "$bob" "$carol" "$dana" "$visual" "$observer" "$nina" "$fay" $eve; do wait "$p" || status=$?; done
 # mallory's station must fail: it is no part of the status
 [ -n "$mallory" ] && { wait "$mallory" && { echo "demo: the revoked trainee/mallory was let in" >&2; status=1; }; }
 [ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
@@ -224,6 +233,11 @@ done
 echo "(the teaching exercise debriefs each trainee as her session ends: what her marks found and where its lumps"
 echo " are; an exercise can keep them for the instructor's review alone. The review below assesses each session)"
 echo
+echo "== exercise \"medium\" (phantom 12): its lump drawn anew for each session, fay's two attempts =="
+for k in 1 2; do
+  grep -E "^\[trainee fay\] (debrief|  lump)" "$out/fay$k.log" | sed "s/^\[trainee fay\]/[fay, attempt $k]/" || true
+done
+echo
 if [ -n "$mallory" ]; then
   echo "== a revoked identity: mallory's lost laptop =="
   grep -E "DDS Security refused trainee/mallory" "$out/server.log" | head -n 1 | sed 's/^.*palp-server: /palp-server: /'
@@ -253,7 +267,7 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   echo "== instructor review (palp-review, from $db) =="
   "$review" --db "$db" list --since "$since"
   # The exercise's sessions by trainee (the class report of issue 13 takes these uids).
-  for t in nina ${eve:+eve}; do
+  for t in nina ${eve:+eve} fay; do
     "$review" --db "$db" list --since "$since" | awk -v t="$t" 'NR > 1 && $2 == t { print "exercise session: " t " " $1 }'
   done
   # Each session: its summary, its bit-identical replay, and its report. The instructor grades
@@ -289,5 +303,12 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   "$review" --db "$db" class --exercise teaching --since "$since" --out "$out/class-teaching.html" \
     --csv "$out/class-teaching.csv" || status=1
   echo "class report: $out/class-teaching.html; metrics per session: $out/class-teaching.csv"
+  # fay's two attempts at "medium": each with its own lump, so neither is "not blind" (the CSV's
+  # last columns: what each was told, and after which debrief an attempt was not blind)
+  echo
+  echo "== class report: exercise \"medium\", lumps drawn for each session (palp-review class) =="
+  "$review" --db "$db" class --exercise medium --since "$since" --out "$out/class-medium.html" \
+    --csv "$out/class-medium.csv" || status=1
+  echo "class report: $out/class-medium.html; metrics per session: $out/class-medium.csv"
 fi
 exit "$status"

@@ -81,8 +81,25 @@ peak=$(sed -n 's/^\[trainee dana\] session.*peak rendered force \([0-9.]*\) N.*/
 check "dana felt the breast-tissue dome push back: peak rendered force ${peak:-none} N in [1, 10]" \
   "[ -n '$peak' ] && awk 'BEGIN{exit !($peak >= 1 && $peak <= 10)}'"
 n=$(grep -c 'logged frames reproduced bit-identically' "$txt")
-check "the review lists 5 sessions and replays each bit-identically ($n of 5)" \
-  "grep -q '^5 sessions' '$txt' && [ $n -eq 5 ]"
+check "the review lists 7 sessions and replays each bit-identically ($n of 7)" \
+  "grep -q '^7 sessions' '$txt' && [ $n -eq 7 ]"
+# fay takes "medium" twice: its lump is drawn anew for each session (docs/assessment.md). Her two
+# debriefs name two places; each session's log keeps its own draw (its seed); the review finds her
+# second attempt blind, and the class report of "medium" lists both, neither after a debrief of hers.
+p1=$(sed -n "s/^\[fay, attempt 1\]   lump 1 [A-Za-z0-9 ]*: \(at [0-9.]* o'clock, [0-9]* mm from the pole\).*/\1/p" "$txt")
+p2=$(sed -n "s/^\[fay, attempt 2\]   lump 1 [A-Za-z0-9 ]*: \(at [0-9.]* o'clock, [0-9]* mm from the pole\).*/\1/p" "$txt")
+seeds=$(python3 -c "
+import json, sqlite3, sys
+rows = sqlite3.connect(sys.argv[1]).execute(\"select e.exercise_json from session_exercise e join session s on s.id = e.session_id where s.trainee = 'fay' order by s.id\").fetchall()
+print(' '.join(str(json.loads(r[0])['placement']['seed']) for r in rows))" "$out/sessions.db" 2>&1)
+apart=0 # (the places hold a quote, "o'clock": compared here, not in check's eval)
+[ -n "$p1" ] && [ -n "$p2" ] && [ "$p1" != "$p2" ] && [ "$(echo "$seeds" | wc -w)" -eq 2 ] &&
+  [ "$(echo "$seeds" | tr ' ' '\n' | sort -u | wc -l)" -eq 2 ] && apart=1
+check "fay's two attempts at medium: her debriefs place its lump apart (${p1:-none}; ${p2:-none}), their logged seeds differ ($seeds)" \
+  "[ $apart = 1 ]"
+not_blind=$(awk -F, 'NR > 1 { print $NF }' "$out/demo/class-medium.csv" 2>/dev/null | tr -d '"' | sort -u | tr '\n' ' ')
+check "  the class report of medium lists both, neither 'not blind' (not_blind_after: '$not_blind')" \
+  "[ \$(awk 'NR > 1' '$out/demo/class-medium.csv' | wc -l) -eq 2 ] && [ '$not_blind' = ' ' ] && ! grep -q '^not blind:' '$txt'"
 # Each lift is logged with its contact's kind: dana's fingertip lifted is a finger, bob's force
 # contact a force (until 2026-11-22 every lift was logged as a force; db.md listed it as a gap
 # until 2026-12-05).
