@@ -190,23 +190,50 @@ static char *read_text(const char *path) {
   return buf;
 }
 
+/* A random exercise's seed for one session: the stream of the run's key at the session id's place
+ * (src/palp_rng.h), so that neighbouring sessions' draws share nothing. */
+static uint32_t placement_seed(uint64_t key, uint32_t session_id) {
+  uint64_t state = key + 0x9e3779b97f4a7c15ULL * (uint64_t)session_id;
+  return (uint32_t)(palp_rng_next(&state) >> 32);
+}
+
 /* issue 13: an exercise is hosted as a phantom: the exercise's phantom scene with its
  * lesions hidden in it (palp_exercise_scene), named by the exercise's title. The scene
  * and the file's text stay on the server and in its log; what goes on the wire is the
  * catalogue's rest mesh (which lesions do not change) and the palp_exercise sample, and at a
  * session's end its debrief, as much as the exercise tells (publish_debrief). */
-static int load_exercise(palp_srv_phantom *ph, char *err, size_t errlen) {
+static int load_exercise(palp_srv *srv, palp_srv_phantom *ph, char *err, size_t errlen) {
   char msg[256] = "";
   const palp_srv_phantom_cfg *pc = &ph->cfg;
   ph->exercise = calloc(1, sizeof *ph->exercise);
   if (!ph->exercise) return PALP_ENOMEM;
   int rc = palp_exercise_load(pc->exercise_path, ph->exercise, msg, sizeof msg);
-  if (rc == 0) rc = palp_exercise_scene(ph->exercise, &ph->scene, msg, sizeof msg);
+  /* "per": "run" (an examination): one draw now, for every session of this run; the phantom then
+   * holds the drawn exercise, which the sessions do not draw again (docs/assessment.md) */
+  palp_exercise drawn;
+  const int per_run = rc == 0 && ph->exercise->placement.kind == PALP_PLACEMENT_RANDOM && ph->exercise->placement.per_run;
+  if (per_run) {
+    /* the dome's radius from its scene (loaded again, lesions and all, just below) */
+    rc = palp_scene_load(ph->exercise->phantom_path, &ph->scene, msg, sizeof msg);
+    /* the phantom's id in place of a session's: its own stream of the run's key */
+    if (rc == 0)
+      rc = palp_exercise_draw(ph->exercise, ph->scene.world.mesh.radius, placement_seed(srv->placement_key, ~pc->id),
+                              &drawn, msg, sizeof msg);
+  }
+  if (rc == 0) rc = palp_exercise_scene(per_run ? &drawn : ph->exercise, &ph->scene, msg, sizeof msg);
   if (rc < 0) {
     fail(err, errlen, "exercises (id %u): %s: %s", pc->id, pc->exercise_path, msg[0] ? msg : palp_strerror(rc));
     return rc;
   }
   ph->exercise_json = read_text(pc->exercise_path);
+  if (ph->exercise_json && per_run) {
+    char *text = palp_exercise_drawn_json(ph->exercise_json, &drawn);
+    free(ph->exercise_json);
+    ph->exercise_json = text;
+    *ph->exercise = drawn;
+    palp_log_info(srv->log, "exercise %s: its lesions drawn once for this run (seed %u): every session of the run "
+                  "searches the same", drawn.name, (unsigned)drawn.placement.seed);
+  }
   if (!ph->exercise_json) {
     fail(err, errlen, "exercises (id %u): %s: cannot read it again for the log", pc->id, pc->exercise_path);
     return PALP_EIO;
@@ -245,7 +272,7 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
   ph->cfg = *pc;
   int rc;
   if (pc->exercise_path[0]) {
-    rc = load_exercise(ph, err, errlen);
+    rc = load_exercise(srv, ph, err, errlen);
     if (rc < 0) return rc;
   } else
     rc = palp_scene_load(pc->scene_path, &ph->scene, msg, sizeof msg);
@@ -556,13 +583,6 @@ static void publish_finding_status(palp_srv_session *s) {
   m.time_left = time_left(s, now);
   dds_write(s->finding_status_writer, &m);
   s->findings_status_ns = now;
-}
-
-/* A random exercise's seed for one session: the stream of the run's key at the session id's place
- * (src/palp_rng.h), so that neighbouring sessions' draws share nothing. */
-static uint32_t placement_seed(uint64_t key, uint32_t session_id) {
-  uint64_t state = key + 0x9e3779b97f4a7c15ULL * (uint64_t)session_id;
-  return (uint32_t)(palp_rng_next(&state) >> 32);
 }
 
 /* The debrief's record in the session log: what the trainee was told, or that nothing was sent

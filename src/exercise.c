@@ -146,9 +146,9 @@ static int parse_lesion(ctx *c, const cJSON *o, int i, int drawn_here, palp_exer
 }
 
 /* "placement": {"kind": "fixed" | "random" | "drawn", "polar_deg": [min, max], "min_gap_mm": g,
- * "count": [lo, hi], "seed": n (drawn only), "comment"}. Absent: fixed. */
+ * "count": [lo, hi], "per": "session" | "run", "seed": n (drawn only), "comment"}. Absent: fixed. */
 static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
-  static const char *const keys[] = {"kind", "polar_deg", "min_gap_mm", "seed", "count", "comment", NULL};
+  static const char *const keys[] = {"kind", "polar_deg", "min_gap_mm", "seed", "count", "per", "comment", NULL};
   memset(P, 0, sizeof *P);
   if (!o) return PALP_OK;
   if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "placement: expected an object");
@@ -161,8 +161,10 @@ static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
   const int band = P->kind != PALP_PLACEMENT_FIXED;
   if (!band) {
     if (cJSON_GetObjectItemCaseSensitive(o, "polar_deg") || cJSON_GetObjectItemCaseSensitive(o, "min_gap_mm") ||
-        cJSON_GetObjectItemCaseSensitive(o, "seed") || cJSON_GetObjectItemCaseSensitive(o, "count"))
-      return palp_parse_fail(c, PALP_EPARSE, "placement: polar_deg, min_gap_mm, seed and count belong to kind random or drawn");
+        cJSON_GetObjectItemCaseSensitive(o, "seed") || cJSON_GetObjectItemCaseSensitive(o, "count") ||
+        cJSON_GetObjectItemCaseSensitive(o, "per"))
+      return palp_parse_fail(c, PALP_EPARSE,
+                             "placement: polar_deg, min_gap_mm, seed, count and per belong to kind random or drawn");
     return PALP_OK;
   }
   int has = 0;
@@ -176,6 +178,8 @@ static int parse_placement(ctx *c, const cJSON *o, palp_exercise_placement *P) {
   if (P->kind == PALP_PLACEMENT_RANDOM && seed)
     return palp_parse_fail(c, PALP_EPARSE, "placement.seed: the server draws a seed for each session (only a drawn "
                            "exercise, as logged, carries one)");
+  static const char *const pers[] = {"session", "run", NULL};
+  if ((e = get_choice(c, o, "placement.", "per", 0, pers, &P->per_run))) return e;
   /* "count": [min, max] integers; checked against the lesions listed once they are read */
   P->count_min = P->count_max = -1;
   const cJSON *cnt = cJSON_GetObjectItemCaseSensitive(o, "count");
@@ -509,6 +513,7 @@ char *palp_exercise_drawn_json(const char *file_json, const palp_exercise *d) {
         (cJSON_AddNumberToObject(p, "seed", (double)d->placement.seed) &&
          cJSON_AddItemToObject(p, "polar_deg", cJSON_CreateDoubleArray(band, 2)) &&
          cJSON_AddNumberToObject(p, "min_gap_mm", round(d->placement.min_gap * 1e12) / 1e9) &&
+         cJSON_AddStringToObject(p, "per", d->placement.per_run ? "run" : "session") &&
         cJSON_AddItemToObject(p, "count", cJSON_CreateIntArray((const int[2]){d->placement.count_min, d->placement.count_max}, 2))));
   char *text = ok ? cJSON_Print(root) : NULL;
   cJSON_Delete(root);

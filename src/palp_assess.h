@@ -109,6 +109,9 @@ typedef struct palp_exercise_placement {
   double min_gap;              /* [m] along the skin between two lesions' edges (their surface
                                   discs, a diameter across), so that each is felt apart */
   uint32_t seed;               /* DRAWN: the draw's seed */
+  int per_run;                 /* RANDOM ("per": "run"): one draw for a whole server run, every
+                                  session of it the same lesions (an examination: fair within a
+                                  class, new for the next); 0 ("session", the default): each its own */
   int count_min, count_max;    /* RANDOM: how many of the file's lesions a session hides, drawn
                                   uniformly in [min, max] (the file's "count"; default all of them,
                                   0 allowed: a breast with no lump teaches not to mark one);

@@ -266,7 +266,8 @@ int main(void) {
       {"\"min_gap_mm\": 10, \"count\": [2, 5]}", "placement.count: at most the 3 lesions"},
       {"\"min_gap_mm\": 10, \"count\": [2, 1]}", "placement.count: expected"},
       {"\"min_gap_mm\": 10, \"count\": [0.5, 1]}", "placement.count: expected"},
-      {"\"min_gap_mm\": 10, \"count\": 2}", "placement.count: expected"}};
+      {"\"min_gap_mm\": 10, \"count\": 2}", "placement.count: expected"},
+      {"\"min_gap_mm\": 10, \"per\": \"class\"}", "placement.per: unknown \"class\" (session, run)"}};
   for (size_t k = 0; k < sizeof refuse_count / sizeof refuse_count[0]; k++) {
     char *j = replaced(random3, "\"min_gap_mm\": 10}", refuse_count[k].to);
     palp_exercise x;
@@ -275,6 +276,17 @@ int main(void) {
     CHECK(e == PALP_EPARSE && strstr(err, refuse_count[k].field), "refused, naming %s: %s", refuse_count[k].field, err);
     free(j);
   }
+  /* "per": "run" kept through the log's text (the server draws once per run: server_exercise_random) */
+  char *per_run = replaced(random3, "\"min_gap_mm\": 10}", "\"min_gap_mm\": 10, \"per\": \"run\"}");
+  palp_exercise exr, dr, br;
+  REQUIRE(per_run && palp_exercise_parse(per_run, "", &exr, err, sizeof err) == 0 && exr.placement.per_run == 1 &&
+              ex.placement.per_run == 0,
+          "per run parses (and per session is the default): %s", err);
+  char *rtxt = palp_exercise_draw(&exr, R, 5u, &dr, err, sizeof err) == 0 ? palp_exercise_drawn_json(per_run, &dr) : NULL;
+  CHECK(rtxt && palp_exercise_parse(rtxt, "", &br, err, sizeof err) == 0 && br.placement.per_run == 1 &&
+            br.placement.kind == PALP_PLACEMENT_DRAWN,
+        "  and reads back from the drawn text as per run (%s)", err);
+  free(rtxt), free(per_run);
   free(counted), free(one_of);
   free(one), free(tight), free(logged);
   CHECK_DONE();

@@ -13,7 +13,9 @@
 #    printed precision);
 #  - the review: her second attempt is blind (its lesions are not the ones her first debrief told),
 #    and `show` prints each session's debrief with the same places; replay is bit-identical;
-#  - the same exercise with "count": [0, 0] hides none: eli's station, her log and the review say so.
+#  - the same exercise with "count": [0, 0] hides none: eli's station, her log and the review say so;
+#  - with "per": "run" one draw serves a whole server run: gus's two attempts in it search the same
+#    lesions (his second not blind, by his first's logged debrief), his third, in the next run, others.
 # usage: exercise_random.sh SERVER CLIENT REVIEW CONFIG_DIR TEST_DIR
 set -u
 server=$1 client=$2 review=$3 config_dir=$4 test_dir=$5
@@ -24,12 +26,16 @@ trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 # the same exercise hiding none of its lesions ("count": [0, 0]): a breast with no lump
 sed -e 's|"name": "test-random"|"name": "test-none"|' -e 's|"min_gap_mm": 10 }|"min_gap_mm": 10, "count": [0, 0] }|' \
   -e "s|\"\.\./assess/|\"$test_dir/../assess/|" "$test_dir/exercise_random.json" > "$tmp/exercise_none.json"
+# ... and drawn once per server run ("per": "run"): an examination, the same for a class, new for the next
+sed -e 's|"name": "test-random"|"name": "test-run"|' -e 's|"min_gap_mm": 10 }|"min_gap_mm": 10, "per": "run" }|' \
+  -e "s|\"\.\./assess/|\"$test_dir/../assess/|" "$test_dir/exercise_random.json" > "$tmp/exercise_run.json"
 cat > "$tmp/server.json" <<JSON
 { "domain_id": 181, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
   "dds_config": "$config_dir/cyclonedds-loopback.xml",
   "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
   "exercises": [ { "id": 7, "file": "$test_dir/exercise_random.json", "physics_rate_hz": 250 },
-                 { "id": 8, "file": "$tmp/exercise_none.json", "physics_rate_hz": 250 } ] }
+                 { "id": 8, "file": "$tmp/exercise_none.json", "physics_rate_hz": 250 },
+                 { "id": 9, "file": "$tmp/exercise_run.json", "physics_rate_hz": 250 } ] }
 JSON
 "$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
 spid=$!
@@ -40,6 +46,15 @@ for k in 1 2; do
 done
 "$client" --role trainee --domain 181 --phantom 8 --name eli --timeout 10 --print-period 0 \
   --input sim:press,polar=30,azimuth=0,depth_mm=6,hold_s=1.5,mark_s=1 > "$tmp/eli.log" 2>&1
+for k in 1 2; do # gus takes the per-run exercise twice in this server run, then once in the next
+  "$client" --role trainee --domain 181 --phantom 9 --name gus --timeout 10 --print-period 0 \
+    --input sim:press,polar=30,azimuth=0,depth_mm=6,hold_s=1,mark_s=0.5 > "$tmp/gus$k.log" 2>&1
+done
+kill $spid; wait $spid; spid=
+"$server" --config "$tmp/server.json" > "$tmp/server2.log" 2>&1 &
+spid=$!
+"$client" --role trainee --domain 181 --phantom 9 --name gus --timeout 10 --print-period 0 \
+  --input sim:press,polar=30,azimuth=0,depth_mm=6,hold_s=1,mark_s=0.5 > "$tmp/gus3.log" 2>&1
 kill $spid; wait $spid; spid=
 for k in 1 2; do
   grep "debrief" "$tmp/dora$k.log" > /dev/null || { echo "FAIL dora's session $k printed no debrief:"; cat "$tmp/dora$k.log"; fail=1; }
@@ -133,5 +148,25 @@ if [ -n "$none" ] && [ "$none" != bad ] && "$review" --db "$tmp/log.db" show "$n
    grep -q "^debrief    told there was no lump to find this time; 1 mark standing, 1 near no lump$" "$tmp/show-eli.txt"; then
   echo "ok   its log holds no lesion (exercise and scene), and the review: nothing to find, her mark a false one, told so"
 else echo "FAIL eli's log or review ($none):"; cat "$tmp/show-eli.txt" 2>/dev/null; fail=1; fi
+# gus's three attempts at the per-run exercise: the first two (one server run) the same draw, the
+# third (the next run) another; his second attempt, after his first's debrief of those very lesions,
+# is not blind, as logged (not inferred); his third is blind again
+gus=$(python3 -c "
+import json, sqlite3, sys
+rows = sqlite3.connect(sys.argv[1]).execute(\"select s.uid, e.exercise_json from session s join session_exercise e on e.session_id = s.id where s.trainee = 'gus' order by s.start_unix_s\").fetchall()
+d = [json.loads(r[1]) for r in rows]
+key = [(x['placement']['seed'], [(l['polar_deg'], l['azimuth_deg']) for l in x['lesions']]) for x in d]
+ok = len(rows) == 3 and all(x['placement'].get('per') == 'run' for x in d) and key[0] == key[1] and key[2][0] != key[0][0] and key[2][1] != key[0][1]
+print(' '.join(r[0] for r in rows) if ok else 'bad %s' % key)" "$tmp/log.db" 2>&1)
+set -- $gus
+if [ $# = 3 ] && [ "$1" != bad ]; then
+  echo "ok   per run: gus's two attempts in one server run searched the same draw, his third (the next run) another"
+  "$review" --db "$tmp/log.db" show "$2" > "$tmp/show-gus2.txt" 2>&1
+  "$review" --db "$tmp/log.db" show "$3" > "$tmp/show-gus3.txt" 2>&1
+  if grep -q "^told       gus had been told where this exercise's lesions are when session $1 ended (.*): this attempt was not blind$" "$tmp/show-gus2.txt" &&
+     ! grep -q "^told" "$tmp/show-gus3.txt"; then
+    echo "ok   his second attempt is not blind, by his first's logged debrief (not inferred); his third is blind"
+  else echo "FAIL gus's attempts' 'told' lines:"; grep -H "^told" "$tmp/show-gus2.txt" "$tmp/show-gus3.txt"; fail=1; fi
+else echo "FAIL per run: $gus"; fail=1; fi
 [ $fail = 0 ] || { echo "--- server log"; tail -20 "$tmp/server.log"; }
 exit $fail
