@@ -47,16 +47,15 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
    * partial Fisher-Yates shuffle), kept in the file's order. */
   const int n = ex->lesion_count;
   const int lo = P->count_min >= 0 ? P->count_min : n, hi = P->count_max >= 0 && P->count_max <= n ? P->count_max : n;
-  int k = lo + (int)(palp_rng_uniform(&s) * (double)(hi - lo + 1));
-  if (k > hi) k = hi;
-  if (k < 0) k = 0;
+  /* u < 1 (53 bits), so u * m < m for m <= 9: k <= hi and j <= n - 1 without a clamp */
+  const int k = lo + (int)(palp_rng_uniform(&s) * (double)(hi - lo + 1));
   int idx[PALP_MAX_LESIONS];
   for (int i = 0; i < n; i++) idx[i] = i;
   for (int i = 0; i < k; i++) {
     const int j = i + (int)(palp_rng_uniform(&s) * (double)(n - i));
     const int t = idx[i];
-    idx[i] = idx[j < n ? j : n - 1];
-    idx[j < n ? j : n - 1] = t;
+    idx[i] = idx[j];
+    idx[j] = t;
   }
   for (int i = 1; i < k; i++) /* insertion sort of the chosen: the file's order */
     for (int j = i; j > 0 && idx[j - 1] > idx[j]; j--) {

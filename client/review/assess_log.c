@@ -204,6 +204,15 @@ void review_debrief_text(int status, const palp_db_debrief *d, const review_asse
   }
 }
 
+int review_drawn_text(const palp_exercise *ex, char *buf, size_t len) {
+  if (len) buf[0] = 0;
+  if (ex->placement.kind != PALP_PLACEMENT_DRAWN) return 0;
+  snprintf(buf, len, "drawn for this session (seed %u, polar %.0f-%.0f deg from the pole, at least %.0f mm apart)",
+           (unsigned)ex->placement.seed, ex->placement.polar_min * 180.0 / PALP_PI,
+           ex->placement.polar_max * 180.0 / PALP_PI, ex->placement.min_gap * 1e3);
+  return 1;
+}
+
 int review_told_before(palp_db *db, const palp_db_session_info *s, const review_assessment *a, review_told *out) {
   memset(out, 0, sizeof *out);
   if (!a->has_exercise || !a->ex.lesion_count) return 0;
@@ -457,17 +466,14 @@ void review_pattern_mark(const palp_rubric *rb, char *buf, size_t len) {
 void review_metrics_print(FILE *f, const review_assessment *a) {
   const palp_assess_result *r = &a->r;
   const palp_rubric *rb = &a->ex.rubric;
-  if (a->has_exercise)
-  {
+  if (a->has_exercise) {
     fprintf(f, "exercise   %s: %s (time limit %.0f s)\n", a->exercise_name, a->ex.title, a->ex.time_limit);
     /* a random exercise's lesions were drawn for this session (docs/assessment.md): say so, and which
      * draw, so that the instructor reads the places below as this attempt's own */
-    if (a->ex.placement.kind == PALP_PLACEMENT_DRAWN)
-      fprintf(f, "           its lesions drawn for this session (seed %u, polar %.0f-%.0f deg from the pole, at "
-                 "least %.0f mm apart)\n", (unsigned)a->ex.placement.seed, a->ex.placement.polar_min * 180.0 / PALP_PI,
-              a->ex.placement.polar_max * 180.0 / PALP_PI, a->ex.placement.min_gap * 1e3);
-  }
-  else fprintf(f, "exercise   none: free practice (no hidden lesions; no sensitivity, no score)\n");
+    char drawn[160];
+    if (review_drawn_text(&a->ex, drawn, sizeof drawn)) fprintf(f, "           its lesions %s\n", drawn);
+  } else
+    fprintf(f, "exercise   none: free practice (no hidden lesions; no sensitivity, no score)\n");
   fprintf(f, "metrics    from %d finger samples (definitions: docs/assessment.md)\n", a->samples);
   if (a->has_exercise) {
     if (r->lesion_count == 0) /* a random exercise's draw that hid none: only false marks count */

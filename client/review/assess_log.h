@@ -58,6 +58,11 @@ int review_debrief(palp_db *db, const palp_db_session_info *s, palp_db_debrief *
  * (NULL, or one without the exercise: lumps by number only). */
 void review_debrief_text(int status, const palp_db_debrief *d, const struct review_assessment *a, char *buf, size_t len);
 
+/* For a drawn exercise (its lesions drawn for the session, docs/assessment.md): "drawn for this
+ * session (seed N, polar A-B deg from the pole, at least G mm apart)" into buf, 1; else "" and 0.
+ * One wording for show and the session report. */
+int review_drawn_text(const palp_exercise *ex, char *buf, size_t len);
+
 /* Whether the trainee had been debriefed on these very lesions before this attempt (docs/assessment.md,
  * "Debrief"): the latest earlier session of the same trainee, ended, whose logged exercise has the
  * same name and lesions and whose debrief told the lesions or their count: as its log records it

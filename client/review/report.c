@@ -12,7 +12,6 @@
 #include "grades.h"
 #include "palp_app.h"
 #include "review.h"
-#include "vec3.h" /* PALP_PI */
 
 #define PLOT_POINTS 1500 /* time-series points per plot; buckets keep their maxima so peaks survive */
 
@@ -334,11 +333,9 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
     html_str(f, a.ex.title);
     fprintf(f, " (time limit %.0f s). Metrics from %d finger samples; definitions in docs/assessment.md.</p>\n",
             a.ex.time_limit, a.samples);
-    if (a.ex.placement.kind == PALP_PLACEMENT_DRAWN)
-      fprintf(f, "<p id=\"drawn\">Its lesions were drawn for this session (seed %u, polar %.0f-%.0f deg from the pole, "
-                 "at least %.0f mm apart): the places below are this attempt's own.</p>\n",
-              (unsigned)a.ex.placement.seed, a.ex.placement.polar_min * 180.0 / PALP_PI,
-              a.ex.placement.polar_max * 180.0 / PALP_PI, a.ex.placement.min_gap * 1e3);
+    char drawn[160];
+    if (review_drawn_text(&a.ex, drawn, sizeof drawn))
+      fprintf(f, "<p id=\"drawn\">Its lesions were %s: the places below are this attempt's own.</p>\n", drawn);
     /* an attempt after a debrief on the same lesions (docs/assessment.md, "Debrief") */
     review_told told;
     if (review_told_before(db, s, &a, &told) == 1) {
