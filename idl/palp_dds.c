@@ -22,7 +22,7 @@ static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_local_model",   "palp_server_guard",
     "palp_server_identity", "palp_station_request",
     "palp_exercise",      "palp_finding",         "palp_finding_status",
-    "palp_debrief"};
+    "palp_debrief",       "palp_session_exercise"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -46,6 +46,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_FINDING: return &palp_Finding_desc;
   case PALP_TOPIC_FINDING_STATUS: return &palp_FindingStatus_desc;
   case PALP_TOPIC_DEBRIEF: return &palp_Debrief_desc;
+  case PALP_TOPIC_SESSION_EXERCISE: return &palp_SessionExercise_desc;
   default: return NULL;
   }
 }
@@ -60,6 +61,7 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_EXERCISE:
   case PALP_TOPIC_FINDING_STATUS:
   case PALP_TOPIC_DEBRIEF:
+  case PALP_TOPIC_SESSION_EXERCISE:
     /* State that a late joiner must see: the last value per key, kept by the writer. */
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);

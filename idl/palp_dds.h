@@ -36,6 +36,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_FINDING,         /* added with issue 13: "lump here" marks, trainee -> server */
   PALP_TOPIC_FINDING_STATUS,  /* added with issue 13: the server's answer to the findings */
   PALP_TOPIC_DEBRIEF,         /* added 2026-12-05: what the trainee found, told at the session's end */
+  PALP_TOPIC_SESSION_EXERCISE, /* added 2026-12-05: a session's exercise with its lesions, for instructors */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 
@@ -53,6 +54,8 @@ typedef enum palp_dds_topic_kind {
 
 /* Partition of a session's contact/feedback/deformation traffic. */
 #define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"
+/* palp_session_exercise: its json is a string<32767> (idl/palp_types.idl). */
+#define PALP_SESSION_EXERCISE_JSON_MAX 32767
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind);
 const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind);

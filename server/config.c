@@ -115,7 +115,7 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "join_rate",      "join_burst",     "closed_retention",
                                        "dds_log_lines",  "dds_log_window", "security",
                                        "server_name",    "server_number",  "log_level",      "exercises",
-                                       "assess_sample_hz", "station_grace", NULL};
+                                       "assess_sample_hz", "station_grace", "session_exercise", NULL};
 static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 static const char *const exercise_keys[] = {"id", "file", "physics_rate_hz", "comment", NULL};
@@ -329,6 +329,21 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
     }
   }
   if ((rc = get_number(root, "assess_sample_hz", w, 1, 10000, 0, &cfg->assess_sample_hz, err, errlen))) goto out;
+  {
+    char policy[16] = "secured";
+    if ((rc = get_string(root, "session_exercise", w, 0, policy, sizeof policy, err, errlen))) goto out;
+    if (strcmp(policy, "secured") == 0)
+      cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_SECURED;
+    else if (strcmp(policy, "always") == 0)
+      cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_ALWAYS;
+    else if (strcmp(policy, "off") == 0)
+      cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_OFF;
+    else {
+      rc = fail(err, errlen, PALP_EINVAL, "session_exercise: \"%s\" is not \"secured\", \"always\" or \"off\"",
+                policy);
+      goto out;
+    }
+  }
   if ((rc = parse_security(cJSON_GetObjectItemCaseSensitive(root, "security"), base_dir, cfg, err, errlen))) goto out;
   if ((rc = get_string(root, "log_level", w, 0, cfg->log_level, sizeof cfg->log_level, err, errlen))) goto out;
   if (cfg->log_level[0] && strcmp(cfg->log_level, "error") && strcmp(cfg->log_level, "warn") &&

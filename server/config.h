@@ -35,6 +35,12 @@ typedef struct palp_srv_phantom_cfg {
                                             the server from the exercise (its title, its phantom) */
 } palp_srv_phantom_cfg;
 
+typedef enum palp_srv_session_exercise_policy {
+  PALP_SRV_SESSION_EXERCISE_SECURED = 0,
+  PALP_SRV_SESSION_EXERCISE_ALWAYS,
+  PALP_SRV_SESSION_EXERCISE_OFF
+} palp_srv_session_exercise_policy;
+
 typedef struct palp_srv_config {
   uint32_t domain_id;          /* DDS domain, 0..232 */
   double tick_rate_hz;         /* session step rate [Hz]: 100 (paper) or 1000 (haptics) */
@@ -71,6 +77,11 @@ typedef struct palp_srv_config {
   uint32_t server_number;      /* 0..4095: high bits of every phantom and session id it hands out */
   double assess_sample_hz;     /* issue 13: finger samples logged per second per position-driven
                                   finger, at most every physics step (default 100) */
+  /* palp_session_exercise (an exercise session's lesions, for instructors' recorders; session
+   * 60): written when the server runs with DDS Security, whose permissions keep it from
+   * trainees (SECURED, the default), always (ALWAYS: a trusted bench without DDS Security,
+   * where any participant can read it), or never (OFF). */
+  palp_srv_session_exercise_policy session_exercise;
   int phantom_count;           /* phantoms and exercises: exercises come after the phantoms */
   int exercise_count;          /* of phantom[]: the last exercise_count entries */
   palp_srv_phantom_cfg phantom[PALP_SRV_MAX_PHANTOMS];

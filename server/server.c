@@ -83,6 +83,9 @@ struct palp_srv {
   unsigned lost_n;
   dds_entity_t catalogue_w, request_r, reply_w, state_w, status_w, status_r, guard_w;
   dds_entity_t exercise_w; /* palp_exercise: what a trainee may know of each exercise */
+  /* palp_session_exercise: each exercise session's exercise with its lesions, for instructors'
+   * recorders (session 60); 0: not written (config "session_exercise", or permissions before it) */
+  dds_entity_t session_exercise_w;
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
@@ -264,6 +267,43 @@ static void publish_exercise(palp_srv *srv, const palp_srv_phantom *ph) {
     o->force_min = in->force_min, o->force_max = in->force_max;
   }
   dds_write(srv->exercise_w, &m);
+}
+
+/* An exercise session's exercise, its lesions included, for the instructors' recorders (only
+ * their permissions read it): what the server's own log holds, so that a recorder's log of the
+ * session is assessed as the server's is. Too long for the topic's bound, it is not sent, and
+ * said why: the recorder's log then assesses the session without its lesions. */
+static void publish_session_exercise(palp_srv *srv, const palp_srv_session *s, const char *name, const char *json) {
+  if (srv->session_exercise_w <= 0 || !name || !json) return;
+  const size_t n = strlen(json);
+  if (n > PALP_SESSION_EXERCISE_JSON_MAX) {
+    palp_log_warn(srv->log, "session %u: its exercise (%zu bytes) is longer than palp_session_exercise carries "
+                            "(%d): a recorder cannot assess this session",
+                  s->id, n, PALP_SESSION_EXERCISE_JSON_MAX);
+    return;
+  }
+  palp_SessionExercise *m = calloc(1, sizeof *m); /* 32 KiB: not on the main loop's stack */
+  if (!m) {
+    palp_log_warn(srv->log, "session %u: its exercise was not sent to recorders: out of memory", s->id);
+    return;
+  }
+  m->session_id = s->id;
+  m->phantom_id = s->phantom->cfg.id;
+  snprintf(m->name, sizeof m->name, "%s", name);
+  memcpy(m->json, json, n + 1);
+  const dds_return_t rc = dds_write(srv->session_exercise_w, m);
+  free(m);
+  if (rc < 0) palp_log_warn(srv->log, "session %u: its exercise was not sent to recorders: %s", s->id, dds_strretcode(rc));
+}
+
+/* Its instance goes with the session: a recorder has logged it, and a late one has no session to log. */
+static void release_session_exercise(palp_srv *srv, const palp_srv_session *s) {
+  if (srv->session_exercise_w <= 0 || !s->exercise) return;
+  palp_SessionExercise *key = calloc(1, sizeof *key);
+  if (!key) return;
+  key->session_id = s->id;
+  dds_unregister_instance(srv->session_exercise_w, key);
+  free(key);
 }
 
 static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_phantom *ph, char *err,
@@ -692,6 +732,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   if (s->finding_rc > 0) dds_waitset_detach(srv->waitset, s->finding_rc);
   /* Before the CLOSED state, which a station waits on: the debrief is there when it looks. */
   publish_debrief(srv, s, reason);
+  release_session_exercise(srv, s);
   /* Detached: the stats are final and owned by this thread now. */
   palp_srv_session_summary sum;
   palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
@@ -999,6 +1040,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       refuse(srv, rq, &g->joins_refused_other, "tick pool full");
       return;
     }
+    publish_session_exercise(srv, s, info.exercise_name, info.exercise_json);
     srv->next_session_id++;
     /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
     if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
@@ -1457,6 +1499,15 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     /* palp_debrief came after the classroom PKIs of 2026-12-04 and before: with permissions
      * that predate it, the server serves on and tells nobody what they found (the review still
      * does). make-classroom-pki.sh init re-issues them. */
+    /* palp_session_exercise came later still (session 60): with older permissions the
+     * recorders get no exercise, and their logs cannot assess the exercise sessions. */
+    if (srv->topic[k] < 0 && k == PALP_TOPIC_SESSION_EXERCISE && secured(srv)) {
+      palp_log_warn(srv->log, "no exercises for recorders: the server's permissions do not allow topic "
+                              "palp_session_exercise (%s); re-issue the classroom's permissions with "
+                              "scripts/make-classroom-pki.sh DIR init (docs/security.md)", dds_strretcode(srv->topic[k]));
+      srv->topic[k] = 0;
+      continue;
+    }
     if (srv->topic[k] < 0 && k == PALP_TOPIC_DEBRIEF && secured(srv)) {
       palp_log_warn(srv->log, "no debriefs: the server's permissions do not allow topic palp_debrief (%s); "
                               "re-issue the classroom's permissions with scripts/make-classroom-pki.sh DIR init "
@@ -1500,6 +1551,25 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->state_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   srv->status_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   srv->exercise_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
+  /* The lesions go on the wire only where permissions keep them from trainees, unless the
+   * config says otherwise (docs/server.md, "session_exercise"). */
+  const int answers = srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_ALWAYS ||
+                      (srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_SECURED && secured(srv));
+  if (answers && srv->topic[PALP_TOPIC_SESSION_EXERCISE] > 0) {
+    srv->session_exercise_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_EXERCISE],
+                                                     PALP_TOPIC_SESSION_EXERCISE);
+    if (srv->session_exercise_w < 0) {
+      palp_log_warn(srv->log, "no exercises for recorders: cannot write palp_session_exercise: %s",
+                    dds_strretcode(srv->session_exercise_w));
+      srv->session_exercise_w = 0;
+    }
+  }
+  if (srv->cfg.exercise_count > 0 && srv->session_exercise_w <= 0)
+    palp_log_info(srv->log, "exercise sessions' lesions stay on this server (%s): a palp-recorder's log cannot "
+                            "assess them; this server's own log can",
+                  srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_OFF ? "session_exercise \"off\""
+                  : !secured(srv) ? "no DDS Security: session_exercise \"always\" sends them anyway"
+                                  : "the permissions predate palp_session_exercise");
   /* Only to notice a second server on the domain: both would answer every join. */
   srv->status_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   srv->waitset = dds_create_waitset(srv->pp);

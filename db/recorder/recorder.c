@@ -13,7 +13,13 @@
  * default) and carry no state hash. So a recorded session supports show, export and report but
  * not an exact replay; its params_json says "recorded_by": "palp-recorder" and replay refuses it.
  * Best-effort topics (contact, feedback) may lose samples; readers keep 256 samples per instance
- * so a busy recorder does not overwrite them itself. */
+ * so a busy recorder does not overwrite them itself.
+ *
+ * Exercise sessions (session 60): the exercise with its lesions (palp_session_exercise, which
+ * only an instructor's permissions read), the trainee's findings with the server's answer to
+ * each (palp_finding, palp_finding_status), the fingertip's samples from the local models the
+ * server streams to the station (palp_local_model, at the assessment's rate), and the debrief
+ * (palp_debrief): what the review needs to assess the session as it assesses the server's log. */
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -25,12 +31,20 @@
 #include <dds/dds.h>
 
 #include "palp_app.h"
+#include "palp_assess.h"
 #include "palp_db.h"
 #include "palp_dds.h"
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 
 #define MAX_PHANTOMS 64
+#define MAX_PENDING_FINDINGS 32 /* per session: findings awaiting the server's answer */
+/* A finding whose answer the recorder did not see within this long is logged as unanswered,
+ * not counted: the server's keep-last-1 status can replace an answer before it is sent. */
+#define FINDING_ANSWER_WAIT DDS_SECS(2)
+/* A closed exercise session waits this long for its debrief (written just before the CLOSED
+ * state, on another topic: the two can arrive in either order). */
+#define DEBRIEF_WAIT DDS_SECS(1)
 #define MAX_SESSIONS 1024
 #define FINGERS 4
 #define TAKE 64
@@ -60,6 +74,28 @@ typedef struct rsession {
   double volume, pressure, max_disp; /* from the newest deformation sample, 0 until one arrives */
   uint64_t mesh_hash; /* FNV-1a of the newest logged mesh's positions (0: none yet) */
   int held;           /* its open state says why it waits: its trainee station lost, the session held */
+  /* Exercise sessions (session 60). */
+  int exercise;       /* its exercise (with lesions) is logged */
+  int debriefed;      /* its debrief is logged */
+  double radius[FINGERS];       /* position-driven fingertips' radii [m], from their contact samples */
+  int64_t next_sample[FINGERS]; /* the frame from which a local model is logged as a finger sample */
+  int sample_every;             /* physics steps between finger samples (palp_assess_sample_every) */
+  struct {
+    palp_Finding f;
+    dds_time_t since;
+  } finding[MAX_PENDING_FINDINGS]; /* awaiting the server's answer, oldest first */
+  int findings;
+  struct {
+    uint32_t mark_id;
+    int accepted;
+    char reason[128];
+    dds_time_t since;
+  } answer[8]; /* the server's answers not yet matched to a finding, oldest first */
+  int answers;
+  int64_t findings_unanswered;
+  int closing;                  /* CLOSED seen; ended when its debrief arrives or DEBRIEF_WAIT passes */
+  dds_time_t closing_since;
+  palp_SessionState close_state;
   dds_time_t lost_since; /* its state's writer lapsed then (0: alive); ended as lost RECORDER_SERVER_GRACE later */
 } rsession;
 
@@ -79,8 +115,20 @@ typedef struct pending_open {
 #define MAX_PENDING 64
 #define PENDING_WAIT DDS_SECS(2)
 
+/* A session's exercise that arrived before the session's OPEN state (the two topics race). */
+typedef struct pending_exercise {
+  uint32_t session_id;
+  char name[64];
+  char *json; /* checked: it parses as an exercise */
+  dds_time_t since;
+} pending_exercise;
+#define MAX_PENDING_EXERCISES 64
+#define PENDING_EXERCISE_WAIT DDS_SECS(10)
+
 typedef struct recorder {
   palp_db_writer *w;
+  pending_exercise pending_ex[MAX_PENDING_EXERCISES];
+  int64_t exercises_refused;
   pending_open pending[MAX_PENDING];
   phantom ph[MAX_PHANTOMS];
   rsession s[MAX_SESSIONS];
@@ -177,6 +225,55 @@ static palp_db_end_reason end_reason(const char *why) {
   return PALP_DB_END_NORMAL;
 }
 
+static void log_exercise(recorder *r, rsession *s, const char *name, const char *json) {
+  if (s->exercise) return; /* transient-local re-delivery */
+  const int rc = palp_db_log_exercise(r->w, s->h, name, json);
+  count(r, rc);
+  if (rc == 0) s->exercise = 1;
+  else palp_log_error(r->log, "session %u: its exercise not logged: %s", s->id, palp_db_strerror(rc));
+}
+
+/* An exercise session's exercise, lesions included: checked as an exercise file is (it comes
+ * from the network), then logged with its session, or kept until the session opens. */
+static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
+  char name[64], err[256];
+  snprintf(name, sizeof name, "%s", m->name);
+  palp_exercise *ex = malloc(sizeof *ex);
+  snprintf(err, sizeof err, "out of memory");
+  const int rc = ex ? palp_exercise_parse(m->json, NULL, ex, err, sizeof err) : PALP_ENOMEM;
+  const int named = ex && rc == 0 && strcmp(ex->name, name) == 0;
+  free(ex);
+  if (rc < 0 || !named) {
+    r->exercises_refused++;
+    palp_log_warn(r->log, "session %u: its exercise \"%s\" refused: %s", m->session_id, name,
+                  rc < 0 ? err : "its name is not the exercise's own");
+    return;
+  }
+  rsession *s = find_session(r, m->session_id, 0);
+  if (s) {
+    log_exercise(r, s, name, m->json);
+    return;
+  }
+  const dds_time_t now = dds_time();
+  pending_exercise *slot = NULL;
+  for (int i = 0; i < MAX_PENDING_EXERCISES; i++) {
+    pending_exercise *pe = &r->pending_ex[i];
+    if (pe->json && pe->session_id == m->session_id) return; /* re-delivered */
+    if (pe->json && now - pe->since > PENDING_EXERCISE_WAIT) { /* its session never opened here */
+      free(pe->json);
+      memset(pe, 0, sizeof *pe);
+    }
+    if (!pe->json && !slot) slot = pe;
+  }
+  char *json = slot ? strdup(m->json) : NULL;
+  if (!json) {
+    palp_log_warn(r->log, "session %u: its exercise arrived before the session and could not be kept", m->session_id);
+    return;
+  }
+  *slot = (pending_exercise){.session_id = m->session_id, .json = json, .since = now};
+  snprintf(slot->name, sizeof slot->name, "%s", name);
+}
+
 static void open_session(recorder *r, const palp_SessionState *m) {
   rsession *s = find_session(r, m->session_id, 1);
   {
@@ -201,10 +298,18 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     s->id = m->session_id;
     s->open = 1;
     s->ph = ph;
+    s->sample_every = palp_assess_sample_every(d.tick_hz, PALP_ASSESS_SAMPLE_HZ);
     char detail[160];
     snprintf(detail, sizeof detail, "%s joined as trainee from %s", m->trainee_name, m->trainee_station);
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_JOIN, -1, detail, 1));
     palp_log_info(r->log, "recording session %u as %s", m->session_id, uid);
+    for (int i = 0; i < MAX_PENDING_EXERCISES; i++) {
+      pending_exercise *pe = &r->pending_ex[i];
+      if (!pe->json || pe->session_id != m->session_id) continue;
+      log_exercise(r, s, pe->name, pe->json);
+      free(pe->json);
+      memset(pe, 0, sizeof *pe);
+    }
   }
 }
 
@@ -222,6 +327,9 @@ static void resolve_pending(recorder *r, uint32_t session_id, int force) {
     }
   }
 }
+
+static void settle_findings(recorder *r, rsession *s, int all);
+static void close_session(recorder *r, rsession *s, const palp_SessionState *m);
 
 /* An open session's state carries a reason only while the server holds it for its lost
  * trainee station (station_grace, docs/server.md): logged as that station's leave, and
@@ -264,7 +372,18 @@ static void on_state(recorder *r, const palp_SessionState *m) {
   }
   resolve_pending(r, m->session_id, 1); /* opened and closed before its catalogue arrived */
   rsession *s = find_session(r, m->session_id, 0);
-  if (!s || !s->open) return;
+  if (!s || !s->open || s->closing) return;
+  if (s->exercise && !s->debriefed) { /* its debrief may still be on its way (DEBRIEF_WAIT) */
+    s->closing = 1;
+    s->closing_since = dds_time();
+    s->close_state = *m;
+    return;
+  }
+  close_session(r, s, m);
+}
+
+static void close_session(recorder *r, rsession *s, const palp_SessionState *m) {
+  settle_findings(r, s, 1);
   if (m->rejected_samples)
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, "samples rejected by the server",
                                (int64_t)m->rejected_samples));
@@ -275,6 +394,15 @@ static void on_state(recorder *r, const palp_SessionState *m) {
   count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
   palp_log_info(r->log, "session %u closed (%s)", m->session_id, m->reason);
   s->open = 0;
+}
+
+/* Closed exercise sessions whose debrief arrived, or did not within DEBRIEF_WAIT. */
+static void end_closing_sessions(recorder *r, dds_time_t now) {
+  for (int i = 0; i < MAX_SESSIONS; i++) {
+    rsession *s = &r->s[i];
+    if (s->open && s->closing && (s->debriefed || now - s->closing_since >= DEBRIEF_WAIT))
+      close_session(r, s, &s->close_state);
+  }
 }
 
 /* A session state whose writer is gone: its server died (several servers on one
@@ -303,6 +431,155 @@ static void end_lost_sessions(recorder *r, dds_time_t now) {
     s->open = 0;
     s->lost_since = 0;
   }
+}
+
+/* ---- findings: a mark counts as the server answered it --------------------------------
+ * The server answers each finding, in the order it takes them, on palp_finding_status (keep-last
+ * 1: an answer can be replaced before it is sent). A finding is logged when its answer is seen:
+ * accepted as a finding record, refused as a `reject` event, as the server's own log has them. An
+ * answer to a later finding means the earlier ones' answers were replaced: those, and any not
+ * answered within FINDING_ANSWER_WAIT, are logged as unanswered events and not counted. */
+static void unanswered(recorder *r, rsession *s, const palp_Finding *f) {
+  char detail[160];
+  snprintf(detail, sizeof detail, "finding %u (%s) not logged: the recorder did not see the server's answer",
+           f->mark_id, f->op == palp_FINDING_WITHDRAW ? "withdrawal" : "mark");
+  count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, detail, 1));
+  s->findings_unanswered++;
+}
+
+static void drop_finding(rsession *s, int i) {
+  memmove(&s->finding[i], &s->finding[i + 1], sizeof s->finding[0] * (size_t)(s->findings - i - 1));
+  s->findings--;
+}
+
+static void drop_answer(rsession *s, int i) {
+  memmove(&s->answer[i], &s->answer[i + 1], sizeof s->answer[0] * (size_t)(s->answers - i - 1));
+  s->answers--;
+}
+
+static void match_findings(recorder *r, rsession *s) {
+  for (int i = 0; i < s->findings; i++) {
+    const palp_Finding *f = &s->finding[i].f;
+    int a = 0;
+    while (a < s->answers && s->answer[a].mark_id != f->mark_id) a++;
+    if (a == s->answers) continue;
+    for (int k = 0; k < i; k++) unanswered(r, s, &s->finding[k].f);
+    if (s->answer[a].accepted) {
+      const int withdraw = f->op == palp_FINDING_WITHDRAW;
+      const palp_db_finding rec = {.mark_id = f->mark_id,
+                                   .op = withdraw ? PALP_DB_FINDING_WITHDRAW : PALP_DB_FINDING_MARK,
+                                   .frame = s->frame,
+                                   .sim_time_s = s->t,
+                                   .point_m = withdraw ? (palp_vec3){0, 0, 0}
+                                                       : (palp_vec3){f->point.x, f->point.y, f->point.z}};
+      count(r, palp_db_log_finding(r->w, s->h, &rec));
+    } else {
+      char detail[200];
+      snprintf(detail, sizeof detail, "finding %u refused: %s", f->mark_id, s->answer[a].reason);
+      count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, detail, 1));
+    }
+    drop_answer(s, a);
+    for (int k = 0; k <= i; k++) drop_finding(s, 0);
+    i = -1; /* again from the oldest */
+  }
+}
+
+/* Findings and answers older than FINDING_ANSWER_WAIT (all: the session ends) are given up. */
+static void settle_findings(recorder *r, rsession *s, int all) {
+  match_findings(r, s);
+  const dds_time_t now = dds_time();
+  while (s->findings && (all || now - s->finding[0].since > FINDING_ANSWER_WAIT)) {
+    unanswered(r, s, &s->finding[0].f);
+    drop_finding(s, 0);
+  }
+  while (s->answers && (all || now - s->answer[0].since > FINDING_ANSWER_WAIT)) drop_answer(s, 0);
+}
+
+static void on_finding(recorder *r, const palp_Finding *m) {
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s) {
+    r->unknown_session_samples++;
+    return;
+  }
+  if (s->findings == MAX_PENDING_FINDINGS) { /* a flood: the oldest is given up */
+    unanswered(r, s, &s->finding[0].f);
+    drop_finding(s, 0);
+  }
+  s->finding[s->findings].f = *m;
+  s->finding[s->findings++].since = dds_time();
+  match_findings(r, s);
+}
+
+static void on_finding_status(recorder *r, const palp_FindingStatus *m) {
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || m->last_mark_id == 0) return;
+  /* the same answer again (a late joiner's transient-local copy): once */
+  if (s->answers && s->answer[s->answers - 1].mark_id == m->last_mark_id &&
+      s->answer[s->answers - 1].accepted == (m->last_accepted != 0))
+    return;
+  if (s->answers == (int)(sizeof s->answer / sizeof s->answer[0])) drop_answer(s, 0);
+  s->answer[s->answers].mark_id = m->last_mark_id;
+  s->answer[s->answers].accepted = m->last_accepted != 0;
+  snprintf(s->answer[s->answers].reason, sizeof s->answer[0].reason, "%s", m->reason);
+  s->answer[s->answers++].since = dds_time();
+  match_findings(r, s);
+}
+
+/* What the trainee was told as the session closed, logged as the server logs it (db/debrief.c);
+ * one that contradicts itself is refused. */
+static void on_debrief(recorder *r, const palp_Debrief *m) {
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || s->debriefed) return;
+  settle_findings(r, s, 0); /* the marks before what was told of them */
+  palp_db_debrief d = {.sent = 1,
+                       .level = (palp_db_debrief_level)m->level,
+                       .lesions = (int)m->lesions,
+                       .found = (int)m->found,
+                       .marks = (int)m->marks,
+                       .false_marks = (int)m->false_marks,
+                       .duplicates = (int)m->duplicates};
+  if (m->level == palp_DEBRIEF_LESIONS)
+    for (uint32_t i = 0; i < m->lesion._length && i < PALP_DB_DEBRIEF_MAX_LESIONS; i++)
+      d.found_by[d.listed++] = m->lesion._buffer[i].found_by;
+  char detail[400];
+  if ((unsigned)m->level > palp_DEBRIEF_LESIONS || palp_db_debrief_format(&d, detail, sizeof detail) < 0) {
+    palp_log_warn(r->log, "session %u: its debrief contradicts itself; not logged", s->id);
+    return;
+  }
+  count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_DEBRIEF, s->frame, detail, 1));
+  s->debriefed = 1;
+}
+
+/* The local models the server streams to the station are the fingertip's state each physics
+ * step: logged as finger samples at the assessment's rate, as the server logs them, but without
+ * the touched triangles (not on the wire): the review's coverage then takes the footprint as a
+ * disc of the contact's area (palp_assess). */
+static void on_local_model(recorder *r, const palp_LocalModel *m) {
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || m->finger >= FINGERS) {
+    r->unknown_session_samples++;
+    return;
+  }
+  const int f = m->finger;
+  const int64_t frame = (int64_t)m->frame;
+  const double v[] = {m->time, m->device.x, m->device.y, m->device.z, m->proxy.x, m->proxy.y, m->proxy.z,
+                      m->force.x, m->force.y, m->force.z, m->point.x, m->point.y, m->point.z, m->area};
+  for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
+    if (!isfinite(v[i])) return; /* a sample the server cannot have meant: not logged */
+  if (frame < s->next_sample[f] || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
+  const int every = s->sample_every > 0 ? s->sample_every : 1;
+  s->next_sample[f] = frame - frame % every + every;
+  const palp_db_finger_sample fs = {.frame = frame,
+                                    .sim_time_s = m->time,
+                                    .slot = f,
+                                    .radius_m = s->radius[f],
+                                    .device_m = {m->device.x, m->device.y, m->device.z},
+                                    .proxy_m = {m->proxy.x, m->proxy.y, m->proxy.z},
+                                    .force_n = {m->force.x, m->force.y, m->force.z},
+                                    .in_contact = m->in_contact != 0,
+                                    .point_m = {m->point.x, m->point.y, m->point.z},
+                                    .area_m2 = m->area > 0 ? m->area : 0};
+  count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
 }
 
 static void on_contact(recorder *r, const palp_Contact *m) {
@@ -348,6 +625,7 @@ static void on_contact(recorder *r, const palp_Contact *m) {
   } else {
     c.center_m = ctr;
     c.radius_m = m->radius;
+    s->radius[f] = m->radius;
   }
   s->live[f] = 1;
   s->kind[f] = (uint8_t)kind;
@@ -430,7 +708,8 @@ static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dd
   /* The topic's QoS, but a deeper reader history: the recorder, not a display, must see every
    * sample that arrives, and history depth is not part of the writer/reader match. */
   dds_qos_t *q = palp_dds_qos(kind);
-  if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION)
+  if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION ||
+      kind == PALP_TOPIC_LOCAL_MODEL || kind == PALP_TOPIC_FINDING_STATUS)
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
   dds_entity_t rd = dds_create_reader(parent, topic, q, NULL);
   dds_delete_qos(q);
@@ -552,15 +831,24 @@ int main(int argc, char **argv) {
   /* secured sessions live in palp/s/TRAINEE/ID */
   if (sec.kind != PALP_DDS_ID_NONE) snprintf(wildcard, sizeof wildcard, "palp/s/*");
   dds_entity_t sub = palp_dds_session_subscriber(pp, wildcard);
-  dds_entity_t rd[5] = {
+  /* In the order a pass takes them: catalogue and state first, so that a session's samples
+   * find it open; its exercise before its findings; the debrief last. */
+  enum { RD_CATALOGUE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_LOCAL_MODEL,
+         RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
+  dds_entity_t rd[RD_COUNT] = {
       reader_deep(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
       reader_deep(pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE),
+      reader_deep(pp, t[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE),
       reader_deep(sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
       reader_deep(sub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK),
       reader_deep(sub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION),
+      reader_deep(sub, t[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL),
+      reader_deep(sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING),
+      reader_deep(sub, t[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS),
+      reader_deep(sub, t[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF),
   };
   dds_entity_t ws = dds_create_waitset(pp);
-  for (int k = 0; k < 5; k++) {
+  for (int k = 0; k < RD_COUNT; k++) {
     if (rd[k] < 0) {
       palp_log_error(&plog, "cannot create a reader: %s\n", dds_strretcode(rd[k]));
       dds_delete(pp);
@@ -599,31 +887,40 @@ int main(int argc, char **argv) {
       else palp_log_info(&plog, "SIGHUP: log re-opened; recording goes on");
     }
     /* Catalogue and session state first, so a session's samples find it open. */
-    for (int k = 0; k < 5; k++) {
+    for (int k = 0; k < RD_COUNT; k++) {
       void *samples[TAKE] = {NULL};
       dds_sample_info_t info[TAKE];
       int n;
       while ((n = dds_take(rd[k], samples, info, TAKE, TAKE)) > 0) {
         for (int i = 0; i < n; i++) {
           if (!info[i].valid_data) {
-            if (k == 1 && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
+            if (k == RD_STATE && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
             continue;
           }
           switch (k) {
-          case 0: on_phantom(r, samples[i]); break;
-          case 1: on_state(r, samples[i]); break;
-          case 2: on_contact(r, samples[i]); break;
-          case 3: on_feedback(r, samples[i]); break;
-          default: on_deformation(r, samples[i]); break;
+          case RD_CATALOGUE: on_phantom(r, samples[i]); break;
+          case RD_STATE: on_state(r, samples[i]); break;
+          case RD_SESSION_EXERCISE: on_session_exercise(r, samples[i]); break;
+          case RD_CONTACT: on_contact(r, samples[i]); break;
+          case RD_FEEDBACK: on_feedback(r, samples[i]); break;
+          case RD_DEFORMATION: on_deformation(r, samples[i]); break;
+          case RD_LOCAL_MODEL: on_local_model(r, samples[i]); break;
+          case RD_FINDING: on_finding(r, samples[i]); break;
+          case RD_FINDING_STATUS: on_finding_status(r, samples[i]); break;
+          default: on_debrief(r, samples[i]); break;
           }
         }
         dds_return_loan(rd[k], samples, n);
         if (n < TAKE) break;
       }
-      if (k == 0) resolve_pending(r, 0, 0);
+      if (k == RD_CATALOGUE) resolve_pending(r, 0, 0);
     }
     resolve_pending(r, 0, 0);
-    end_lost_sessions(r, dds_time());
+    const dds_time_t now = dds_time();
+    for (int i = 0; i < MAX_SESSIONS; i++)
+      if (r->s[i].open) settle_findings(r, &r->s[i], 0);
+    end_closing_sessions(r, now);
+    end_lost_sessions(r, now);
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
      * not only at stop (idl/palp_dds_refusals.h) */
     palp_dds_refusals_tick(&refusals, palp_dds_now_ns());
@@ -634,13 +931,15 @@ int main(int argc, char **argv) {
   palp_db_writer_stats_get(r->w, &st);
   palp_db_writer_close(r->w);
   palp_log_info(&plog,
-          "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions%s%s\n",
+          "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
+          "%lld exercises refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
-          st.last_error[0] ? "; last error: " : "", st.last_error);
+          (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "", st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) {
     free(r->ph[i].rest);
     free(r->ph[i].scene_json);
   }
+  for (int i = 0; i < MAX_PENDING_EXERCISES; i++) free(r->pending_ex[i].json);
   free(r);
   palp_dds_log_limit_remove(&dds_sink); /* before the log closes; then the repeats not yet said */
   palp_dds_refusals_flush(&refusals);
