@@ -135,7 +135,8 @@ rc=$?
 check "a station whose permissions predate palp_debrief still runs its session (exit $rc)" \
   "[ $rc -eq 0 ] && ! grep -q palp_debrief '$out/oldperm/trainee/alice.permissions.xml' && grep -q 'session [0-9]*: .* contact samples sent' '$out/oldperm.log'"
 # ... and a server on such permissions serves on, without debriefs, and says so (domain 132, 2 s)
-sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
+sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d' \
+  -e '/<topic>palp_session_exercise<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
 openssl smime -sign -in "$out/oldperm/server/server.permissions.xml" -text \
   -out "$out/oldperm/server/server.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
 # It hosts the shipped exercises and logs: alice (her permissions old too) takes "easy" by position
@@ -152,6 +153,8 @@ wait $opid
 rc=$?
 check "a server whose permissions predate palp_debrief serves, and warns that it cannot debrief (exit $rc)" \
   "[ $rc -eq 0 ] && grep -q 'no debriefs: the server.s permissions do not allow topic palp_debrief' '$out/oldperm-server.log'"
+check "  ... nor send its exercises to recorders, and says that their lesions stay on it" \
+  "grep -q 'no exercises for recorders: the server.s permissions do not allow topic palp_session_exercise' '$out/oldperm-server.log' && grep -q 'lesions stay on this server (the permissions predate palp_session_exercise)' '$out/oldperm-server.log'"
 check "  alice's station, on old permissions too, says at her exercise's end why she had no debrief" \
   "grep -q 'no debrief: this identity.s permissions predate it' '$out/oldperm-ex.log'"
 logged=$(python3 -c "import sqlite3, sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select e.detail from event e join session s on s.id = e.session_id where s.trainee = 'alice' and e.kind = 'debrief'\")))" "$out/oldperm.db" 2>&1)
@@ -159,8 +162,39 @@ want="not sent (level lesions): the server's permissions do not allow topic palp
 same=0; [ "$logged" = "$want" ] && same=1
 check "  the session log records that no debrief was sent, and why: $logged" "[ $same = 1 ]"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
-check "init re-issues their permissions alone, with palp_debrief and signed by the CA" \
-  "grep -q 'permissions re-issued (version 2) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+check "init re-issues their permissions alone, with palp_debrief and palp_session_exercise, signed by the CA" \
+  "grep -q 'permissions re-issued (version 3) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q palp_session_exercise '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+# Re-issued, the server sends each exercise session's exercise, its lesions included, to the
+# instructors alone (session 60): a secured palp-recorder (instructor ines) logs alice's attempt at
+# "easy" with its exercise, her mark and her debrief as the server's own log has them.
+"$recorder" --domain 132 --db "$out/rec-ex.db" --pki "$out/oldperm" --identity instructor/ines --duration 30 \
+  >"$out/rec-ex.log" 2>&1 &
+rpid=$!
+"$server" --domain 132 --config "$(dirname "$0")/../../config/server-exercises.json" --database "$out/ex.db" \
+  --pki "$out/oldperm" --duration 30 >"$out/ex-server.log" 2>&1 &
+opid=$!
+sleep 1
+"$client" --role trainee --domain 132 --phantom 11 --pki "$out/oldperm" --identity trainee/alice --duration 3 \
+  --timeout 8 --print-period 0 --input sim:press,depth_mm=4,hold_s=1,mark_s=0.5 >"$out/ex.log" 2>&1
+sleep 1.5 # the recorder takes her debrief and the CLOSED state
+kill -INT $opid 2>/dev/null
+wait $opid
+kill -INT $rpid 2>/dev/null
+wait $rpid
+same=$(python3 - "$out/ex.db" "$out/rec-ex.db" <<'PY' 2>&1
+import sqlite3, sys
+def of(path):
+    db = sqlite3.connect(path)
+    sid = db.execute("select id from session where trainee = 'alice'").fetchone()[0]
+    ex = db.execute("select exercise_json from session_exercise where session_id = ?", (sid,)).fetchone()
+    fnd = db.execute("select mark_id, op, point_x_m, point_y_m, point_z_m from finding where session_id = ?", (sid,)).fetchall()
+    deb = db.execute("select detail from event where session_id = ? and kind = 'debrief'", (sid,)).fetchall()
+    return ex, fnd, deb
+a, b = of(sys.argv[1]), of(sys.argv[2])
+print("same" if a == b and a[0] and len(a[1]) == 1 and len(a[2]) == 1 else "differ: server %r, recorder %r" % (a[1:], b[1:]))
+PY
+)
+check "a secured recorder logs alice's exercise, mark and debrief as the server does: $same" "[ '$same' = same ]"
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --identity trainee/alice --profile sine --t-on 0 \
   --t-off 60 --duration 8 --print-period 0 >"$out/stall.log" 2>&1 &
 cpid=$!

@@ -224,6 +224,11 @@ static void child_bob(void) {
   CHECK(fsw == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && exw == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY,
         "bob may not write finding status (even in his own session) nor exercises: %s, %s", dds_strretcode(fsw),
         dds_strretcode(exw));
+  /* session 60: nor read any session's exercise with its lesions (the answers), the server's to
+   * instructors: a trainee's permissions do not even create the topic (its station does not try) */
+  const dds_entity_t sx = palp_dds_create_topic(bob.pp, PALP_TOPIC_SESSION_EXERCISE);
+  CHECK(sx == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.topic[PALP_TOPIC_SESSION_EXERCISE] == 0,
+        "bob may not create topic palp_session_exercise (%s), and his station does not try", dds_strretcode(sx));
   /* nor publish as the server */
   const palp_dds_topic_kind server_topics[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_SESSION_REPLY,
                                                 PALP_TOPIC_SESSION_STATE, PALP_TOPIC_SERVER_STATUS};
