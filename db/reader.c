@@ -249,8 +249,11 @@ int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp
     size_t n = strlen(arg);
     if (n > 9 || strspn(arg, "0123456789") != n) return 0;
   }
-  /* The uid's tail after its last '-' is the station's session number (substr, as the prefix). */
-  const char *where = by_number ? "substr(s.uid, length(s.uid) - length(?1)) = '-' || ?1" : UID_PREFIX_WHERE;
+  /* The uid's tail after its last '-' is the station's session number (substr, as the prefix);
+   * palp-recorder's uids, "dds-PHANTOM-SESSION-START_MS", have it between their last two. */
+  const char *where = by_number ? "((substr(s.uid, 1, 4) <> 'dds-' AND substr(s.uid, length(s.uid) - length(?1)) = '-' || ?1)"
+                                  " OR (substr(s.uid, 1, 4) = 'dds-' AND instr(substr(s.uid, 5), '-' || ?1 || '-') > 0))"
+                                : UID_PREFIX_WHERE;
   char sql[1024];
   snprintf(sql, sizeof sql, "SELECT count(*) FROM session s WHERE %s", where);
   sqlite3_stmt *st;

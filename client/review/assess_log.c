@@ -146,8 +146,8 @@ void review_debrief_text(int status, const palp_db_debrief *d, const review_asse
   if (len) buf[0] = 0;
   switch (status) {
   case REVIEW_DEBRIEF_UNKNOWN:
-    cat(buf, len, &n, "not in this log (its writer logged no debriefs: a server before 2026-12-05's session 59, or "
-                      "palp-recorder)");
+    cat(buf, len, &n, "not in this log (its writer logged no debriefs: a server before 2026-12-05's session 59, a "
+                      "palp-recorder before session 60, or one that did not receive it)");
     return;
   case REVIEW_DEBRIEF_NONE:
     cat(buf, len, &n, "none sent: the session's close was not logged (its server stopped first), so its trainee was "

@@ -43,7 +43,7 @@ void review_assessment_free(review_assessment *a);
  * debrief event (palp_db_session_debrief): */
 enum {
   REVIEW_DEBRIEF_UNKNOWN = 0,    /* its server logged no debriefs (before 2026-12-05's session 59,
-                                    or palp-recorder): the log does not say */
+                                    a palp-recorder before session 60, or one that missed it): the log does not say */
   REVIEW_DEBRIEF_LOGGED = 1,     /* *d: sent (what was told) or not sent (why) */
   REVIEW_DEBRIEF_NONE = 2,       /* its server logs debriefs and logged none (no exercise, or a
                                     session that never closed: a killed server) */

@@ -199,7 +199,12 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   const char *dash = strrchr(s->uid, '-');
   char *endp = NULL;
   const unsigned long wire = dash ? strtoul(dash + 1, &endp, 10) : 0;
-  if (dash && endp && *endp == '\0' && endp != dash + 1 && dash != s->uid)
+  unsigned rec_phantom = 0, rec_session = 0;
+  int rec_n = 0;
+  /* palp-recorder's uid is "dds-PHANTOM-SESSION-START_MS" (db/recorder): no server run in it */
+  if (sscanf(s->uid, "dds-%u-%u-%*[0-9]%n", &rec_phantom, &rec_session, &rec_n) == 2 && s->uid[rec_n] == '\0')
+    printf("session    %s  (\"session %u\" on the stations; recorded over DDS)\n", s->uid, rec_session);
+  else if (dash && endp && *endp == '\0' && endp != dash + 1 && dash != s->uid)
     printf("session    %s  (\"session %lu\" on the stations; server run %.*s)\n", s->uid, wire, (int)(dash - s->uid),
            s->uid);
   else printf("session    %s\n", s->uid);

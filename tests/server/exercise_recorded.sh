@@ -129,7 +129,17 @@ check(worst <= 3.0, "%s: each band's coverage within 3 points of the server log'
 a, b = numbers(srv, "score", r"([0-9.]+) / 100"), numbers(rec, "score", r"([0-9.]+) / 100")
 check(a and b and abs(a[0] - b[0]) <= 3.0, "%s: the score within 3 points of the server log's (server %s, recorder %s)" % (uid, a, b))
 check("recorded over DDS" in rec and "recorded over DDS" not in srv, "%s: the recorder's log says it was recorded over DDS" % uid)
+n = uid.split("-")[2]
+check(re.search(r'^session +%s  \("session %s" on the stations; recorded over DDS\)$' % (uid, n), rec, re.M) is not None,
+      "%s: review show names it \"session %s\", as dora's station did" % (uid, n))
 sys.exit(1 if bad else 0)
 PY
+  # the number her station showed finds the recorder's log of the session too
+  n=$(echo "$ruid" | cut -d- -f3)
+  "$review" --db "$tmp/always-rec.db" show "$n" > "$tmp/show-n.txt" 2>&1
+  grep -q "^session    $ruid " "$tmp/show-n.txt" && grep -q "$n\" on the stations is $ruid" "$tmp/show-n.txt" &&
+    grep -q "joined session $n on phantom 7" "$tmp/always-dora1.log" "$tmp/always-dora2.log"; r=$?
+  [ $r -eq 0 ] && echo "ok   show $n (dora's station's number) finds the recorder's $ruid" ||
+    { echo "FAIL show $n (dora's station's number) finds the recorder's $ruid:"; cat "$tmp/show-n.txt"; fail=1; }
 done < "$tmp/uids"
 exit $fail
