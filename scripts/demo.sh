@@ -91,6 +91,18 @@ echo "demo: palp-server on DDS domain $domain (loopback only), logs in $out/"
 # own in the build tree).
 db_arg=()
 [ -n "${PALP_DEMO_DB:-}" ] && db_arg=(--database "$PALP_DEMO_DB")
+# A logging machine's copy (docs/deploy.md): palp-recorder, holding instructor ines's identity, logs
+# every session it sees on the domain into a file of its own. Secured, it receives each exercise
+# session's lesions (palp_session_exercise, which only instructors may read), so the review
+# assesses its copy as it assesses the server's own log (shown at the end).
+recorder=$build/db/recorder/palp-recorder
+recdb=${PALP_DEMO_RECORDED_DB:-$out/recorded-sessions.db}
+rec_pid=
+if [ -x "$recorder" ]; then
+  "$recorder" --domain "$domain" "${observer_sec[@]}" --db "$recdb" >"$out/recorder.log" 2>&1 &
+  rec_pid=$!
+  pids+=("$rec_pid")
+fi
 "$server" --config config/server-exercises.json --domain "$domain" "${srv_sec[@]}" "${db_arg[@]}" \
   >"$out/server.log" 2>&1 &
 server_pid=$!
@@ -203,6 +215,11 @@ for p in "$alice" "$bob" "$carol" "$dana" "$visual" "$observer" "$nina" "$fay" $
 [ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
 kill -INT "$server_pid"
 wait "$server_pid" || status=$?
+if [ -n "$rec_pid" ]; then
+  sleep 1.5 # the last closed session's debrief and CLOSED state reach it
+  kill -INT "$rec_pid" 2>/dev/null
+  wait "$rec_pid" || { echo "demo: palp-recorder:" >&2; tail -n 3 "$out/recorder.log" >&2; status=1; }
+fi
 pids=()
 
 echo
@@ -310,5 +327,20 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   "$review" --db "$db" class --exercise medium --since "$since" --out "$out/class-medium.html" \
     --csv "$out/class-medium.csv" || status=1
   echo "class report: $out/class-medium.html; metrics per session: $out/class-medium.csv"
+  # The logging machine's copy of the same sessions, assessed from its own file (docs/assessment.md,
+  # "Recorded over DDS"): what each of fay's attempts found and scored, in both logs.
+  echo
+  echo "== the logging machine's copy (palp-recorder, instructor/ines): exercise \"medium\" from $recdb =="
+  if [ "$secure" = 1 ] && [ -f "$recdb" ] &&
+    "$review" --db "$recdb" class --exercise medium --since "$since" --out "$out/class-medium-recorded.html" \
+      --csv "$out/class-medium-recorded.csv" >/dev/null; then
+    # columns: 2 trainee, 6 lesions, 7 found, 9 findings, 11 false positives, 12 light coverage, 24 score
+    paste -d, "$out/class-medium.csv" "$out/class-medium-recorded.csv" | awk -F, -v n=32 'NR > 1 {
+      printf "%s, attempt %d: server'"'"'s log: lumps found %d of %d, marks %d, light coverage %.1f%%, score %s; recorded copy: %d of %d, marks %d, %.1f%%, score %s\n",
+        $2, NR - 1, $7, $6, $9, 100 * $12, $24, $(n + 7), $(n + 6), $(n + 9), 100 * $(n + 12), $(n + 24) }' | tr -d '"'
+    echo "class report from the recorded copy: $out/class-medium-recorded.html"
+  else
+    echo "(no exercise in the recorded copy: without DDS Security the server keeps its exercises' lesions to itself)"
+  fi
 fi
 exit "$status"

@@ -100,6 +100,15 @@ check "fay's two attempts at medium: her debriefs place its lump apart (${p1:-no
 not_blind=$(awk -F, 'NR > 1 { print $NF }' "$out/demo/class-medium.csv" 2>/dev/null | tr -d '"' | sort -u | tr '\n' ' ')
 check "  the class report of medium lists both, neither 'not blind' (not_blind_after: '$not_blind')" \
   "[ \$(awk 'NR > 1' '$out/demo/class-medium.csv' | wc -l) -eq 2 ] && [ '$not_blind' = ' ' ] && ! grep -q '^not blind:' '$txt'"
+# The logging machine's copy (palp-recorder as instructor ines, session 60): it ran secured, lost
+# nothing, and the review of its own file assesses fay's two attempts as the server's log does: the
+# same lesions, found, marks and false marks, the score within 3 points (its coverage takes a disc
+# of the contact's area: docs/assessment.md, "Recorded over DDS").
+agree=$(paste -d, "$out/demo/class-medium.csv" "$out/demo/class-medium-recorded.csv" 2>/dev/null | awk -F, 'NR > 1 {
+  n++; if ($6 == $38 && $7 == $39 && $9 == $41 && $11 == $43 && $6 >= 1 && $24 - $56 <= 3 && $56 - $24 <= 3) ok++ }
+  END { printf "%d of %d", ok, n }')
+check "the recorder ran as instructor/ines and shed nothing; its copy assesses fay's attempts as the server's log ($agree agree)" \
+  "grep -q 'DDS Security on (identity instructor/ines)' '$out/demo/recorder.log' && grep -q 'stopped; [0-9]* records written, 0 shed, 0 failed' '$out/demo/recorder.log' && [ '$agree' = '2 of 2' ] && grep -q '^fay, attempt 2: server.s log: lumps found [0-9] of 1, .*; recorded copy: [0-9] of 1, marks [0-9]' '$txt'"
 # Each lift is logged with its contact's kind: dana's fingertip lifted is a finger, bob's force
 # contact a force (until 2026-11-22 every lift was logged as a force; db.md listed it as a gap
 # until 2026-12-05).
