@@ -1499,19 +1499,19 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     /* palp_debrief came after the classroom PKIs of 2026-12-04 and before: with permissions
      * that predate it, the server serves on and tells nobody what they found (the review still
      * does). make-classroom-pki.sh init re-issues them. */
+    if (srv->topic[k] < 0 && k == PALP_TOPIC_DEBRIEF && secured(srv)) {
+      palp_log_warn(srv->log, "no debriefs: the server's permissions do not allow topic palp_debrief (%s); "
+                              "re-issue the classroom's permissions with scripts/make-classroom-pki.sh DIR init "
+                              "(docs/security.md)", dds_strretcode(srv->topic[k]));
+      srv->topic[k] = 0;
+      continue;
+    }
     /* palp_session_exercise came later still (session 60): with older permissions the
      * recorders get no exercise, and their logs cannot assess the exercise sessions. */
     if (srv->topic[k] < 0 && k == PALP_TOPIC_SESSION_EXERCISE && secured(srv)) {
       palp_log_warn(srv->log, "no exercises for recorders: the server's permissions do not allow topic "
                               "palp_session_exercise (%s); re-issue the classroom's permissions with "
                               "scripts/make-classroom-pki.sh DIR init (docs/security.md)", dds_strretcode(srv->topic[k]));
-      srv->topic[k] = 0;
-      continue;
-    }
-    if (srv->topic[k] < 0 && k == PALP_TOPIC_DEBRIEF && secured(srv)) {
-      palp_log_warn(srv->log, "no debriefs: the server's permissions do not allow topic palp_debrief (%s); "
-                              "re-issue the classroom's permissions with scripts/make-classroom-pki.sh DIR init "
-                              "(docs/security.md)", dds_strretcode(srv->topic[k]));
       srv->topic[k] = 0;
       continue;
     }
@@ -1569,7 +1569,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
                             "assess them; this server's own log can",
                   srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_OFF ? "session_exercise \"off\""
                   : !secured(srv) ? "no DDS Security: session_exercise \"always\" sends them anyway"
-                                  : "the permissions predate palp_session_exercise");
+                  : srv->topic[PALP_TOPIC_SESSION_EXERCISE] <= 0 ? "the permissions predate palp_session_exercise"
+                                                                 : "palp_session_exercise could not be written");
   /* Only to notice a second server on the domain: both would answer every join. */
   srv->status_r = palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   srv->waitset = dds_create_waitset(srv->pp);

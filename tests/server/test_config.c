@@ -31,6 +31,8 @@ int main(void) {
   expect_error("{\"domain_id\": 233, " PH "}", "domain_id: 233 is outside", PALP_EINVAL);
   expect_error("{\"max_force\": -1, " PH "}", "max_force:", PALP_EINVAL);
   expect_error("{\"force_policy\": \"maybe\", " PH "}", "force_policy:", PALP_EINVAL);
+  expect_error("{\"session_exercise\": \"yes\", " PH "}",
+               "session_exercise: \"yes\" is not \"secured\", \"always\" or \"off\"", PALP_EINVAL);
   expect_error("{\"tick_rate\": 100, " PH "}", "tick_rate: unknown field", PALP_EPARSE);
   expect_error("{\"finger_radius_min\": 0.02, \"finger_radius_max\": 0.01, " PH "}", "finger_radius_max:", PALP_EINVAL);
   expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\"}]}", "phantoms[0].scene: missing", PALP_EPARSE);
@@ -92,6 +94,23 @@ int main(void) {
        cfg.force_policy == PALP_SRV_FORCE_REJECT && cfg.tick_rate_hz == 1000 && cfg.phantom[0].id == 7;
   fprintf(stderr, "%s absolute scene path kept, database resolved (%s)\n", ok ? "ok  " : "FAIL", cfg.database);
   failures += !ok;
+
+  /* session 60: the lesions go to instructors only with DDS Security unless the config says so */
+  {
+    const char *v[] = {"", "\"session_exercise\": \"always\", ", "\"session_exercise\": \"off\", ",
+                       "\"session_exercise\": \"secured\", "};
+    const palp_srv_session_exercise_policy want[] = {PALP_SRV_SESSION_EXERCISE_SECURED, PALP_SRV_SESSION_EXERCISE_ALWAYS,
+                                                     PALP_SRV_SESSION_EXERCISE_OFF, PALP_SRV_SESSION_EXERCISE_SECURED};
+    for (int i = 0; i < 4; i++) {
+      char json[256];
+      snprintf(json, sizeof json, "{%s" PH "}", v[i]);
+      rc = palp_srv_config_parse(json, "/base", &cfg, err, sizeof err);
+      ok = rc == 0 && cfg.session_exercise == want[i];
+      fprintf(stderr, "%s session_exercise {%s}: %d (want %d)\n", ok ? "ok  " : "FAIL", v[i], (int)cfg.session_exercise,
+              (int)want[i]);
+      failures += !ok;
+    }
+  }
 
   /* A phantom's own physics rate (issue 11); absent = 0, i.e. the server's tick_rate_hz. */
   rc = palp_srv_config_parse("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"physics_rate_hz\": 250},"
