@@ -78,7 +78,6 @@ typedef struct rsession {
   int exercise;       /* its exercise (with lesions) is logged */
   int debriefed;      /* its debrief is logged */
   double radius[FINGERS];       /* position-driven fingertips' radii [m], from their contact samples */
-  int64_t next_sample[FINGERS]; /* the frame from which a local model is logged as a finger sample */
   int sample_every;             /* physics steps between finger samples (palp_assess_sample_every) */
   struct {
     palp_Finding f;
@@ -566,9 +565,9 @@ static void on_local_model(recorder *r, const palp_LocalModel *m) {
                       m->force.x, m->force.y, m->force.z, m->point.x, m->point.y, m->point.z, m->area};
   for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
     if (!isfinite(v[i])) return; /* a sample the server cannot have meant: not logged */
-  if (frame < s->next_sample[f] || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
+  /* the server's rule (server/db_log.c): every sample_every-th frame of the world */
   const int every = s->sample_every > 0 ? s->sample_every : 1;
-  s->next_sample[f] = frame - frame % every + every;
+  if (frame % every != 0 || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
   const palp_db_finger_sample fs = {.frame = frame,
                                     .sim_time_s = m->time,
                                     .slot = f,
