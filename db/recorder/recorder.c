@@ -924,6 +924,20 @@ int main(int argc, char **argv) {
      * not only at stop (idl/palp_dds_refusals.h) */
     palp_dds_refusals_tick(&refusals, palp_dds_now_ns());
   }
+  /* Sessions still running end here in this log, saying so: left "(running)", a restarted
+   * recorder's copy of their rest (a new uid) looked like a second session beside an unended one. */
+  int cut = 0;
+  for (int i = 0; i < MAX_SESSIONS; i++) {
+    rsession *s = &r->s[i];
+    if (!s->open) continue;
+    const char *why = "palp-recorder stopped while the session ran (the server's own log has the rest)";
+    settle_findings(r, s, 1);
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
+    count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
+    s->open = 0;
+    cut++;
+  }
+  if (cut) palp_log_warn(&plog, "stopping: %d session(s) still running end here in this log, cut short", cut);
   dds_delete(pp);
   palp_db_writer_stats st;
   palp_db_writer_flush(r->w, 10);

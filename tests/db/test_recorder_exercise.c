@@ -12,6 +12,7 @@
  * NaN; the debrief (level lesions, mark 4 found lesion 1, lesion 2 missed); the CLOSED state.
  * Session 9: its exercise is not JSON (refused, said and counted; the session is logged without one).
  * Session 10: its CLOSED state comes 0.3 s before its debrief (the recorder waits for it).
+ * Session 11: still open when the recorder is stopped.
  * Checked in the file, against values written here by hand:
  *  - session 8's exercise is the text sent, byte for byte; session 9 has none, and the recorder's
  *    stop line counts 1 exercise refused;
@@ -22,7 +23,8 @@
  *    but 30 (NaN), 19 rows, radius 0.008 m, device and force as sent (1e-12), no triangles;
  *  - the debrief lines, "told at level lesions: found 1 of 2 lesions; marks standing 2, near no
  *    lesion 1, duplicates 0; found by marks 4 0" for session 8 and "told at level none: marks
- *    standing 0" for session 10, whose session ended normally after it. */
+ *    standing 0" for session 10, whose session ended normally after it;
+ *  - session 11 ended `error`, "palp-recorder stopped while the session ran (...)", and said. */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -199,6 +201,8 @@ int main(int argc, char **argv) {
   /* session 10: a well-formed exercise */
   exercise(w_ex, 10, "teaching", json);
   state(w_state, 10, 0);
+  /* session 11: still running when the recorder stops */
+  state(w_state, 11, 0);
   sleep_ms(300);
 
   /* session 8's fingertip: a contact (its radius), then local models of frames 1..60 */
@@ -302,7 +306,7 @@ int main(int argc, char **argv) {
                      "WHERE s.uid LIKE 'dds-14-9-%'") == 0 &&
             db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'dds-14-9-%'") == 1,
         "session 9 is logged without its malformed exercise");
-  char text[8192] = "";
+  static char text[65536];
   FILE *lf = fopen(log, "r");
   size_t n = lf ? fread(text, 1, sizeof text - 1, lf) : 0;
   if (lf) fclose(lf);
@@ -355,6 +359,10 @@ int main(int argc, char **argv) {
                      "AND e.kind = 'debrief' AND e.detail = 'told at level none: marks standing 0'") == 1 &&
             db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'dds-14-10-%' AND end_reason = 'normal'") == 1,
         "session 10's debrief, 0.3 s after its CLOSED state, is logged, and the session ended normally");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'dds-14-11-%' AND end_reason = 'error' AND "
+                     "end_detail = 'palp-recorder stopped while the session ran (the server''s own log has the rest)'") == 1 &&
+            strstr(text, "stopping: 1 session(s) still running end here in this log, cut short") != NULL,
+        "session 11, still running at the recorder's stop, ends in its log saying why, and the recorder says so");
   sqlite3_close(h);
   free(rest);
   free(json);
