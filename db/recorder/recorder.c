@@ -511,11 +511,10 @@ static void on_finding(recorder *r, const palp_Finding *m) {
 
 static void on_finding_status(recorder *r, const palp_FindingStatus *m) {
   rsession *s = find_session(r, m->session_id, 0);
+  /* A mark and its withdrawal answered in quick succession carry the same id and verdict: both are
+   * kept. A stale answer (the transient-local copy a recorder started mid-session receives) finds
+   * no finding and expires after FINDING_ANSWER_WAIT. */
   if (!s || m->last_mark_id == 0) return;
-  /* the same answer again (a late joiner's transient-local copy): once */
-  if (s->answers && s->answer[s->answers - 1].mark_id == m->last_mark_id &&
-      s->answer[s->answers - 1].accepted == (m->last_accepted != 0))
-    return;
   if (s->answers == (int)(sizeof s->answer / sizeof s->answer[0])) drop_answer(s, 0);
   s->answer[s->answers].mark_id = m->last_mark_id;
   s->answer[s->answers].accepted = m->last_accepted != 0;
