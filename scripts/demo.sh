@@ -47,7 +47,7 @@ secure=${PALP_SECURE:-1}
 trainees=(alice bob carol dana nina eve fay)
 declare -A sec
 for t in "${trainees[@]}"; do sec[$t]="--name $t"; done
-srv_sec=() visual_sec=(--name screen) observer_sec=(--name instructor) web_sec=()
+srv_sec=() visual_sec=(--name screen) observer_sec=(--name instructor) web_sec=() recorder_sec=()
 if [ "$secure" = 1 ]; then
   command -v openssl >/dev/null || { echo "demo: openssl is needed for the classroom PKI (PALP_SECURE=0 runs plain DDS)" >&2; exit 1; }
   pki=${PALP_PKI_DIR:-out/pki}
@@ -61,6 +61,7 @@ if [ "$secure" = 1 ]; then
   # bob's own screen (a trainee may watch only its own sessions); the instructor sees every session
   visual_sec=(--pki "$pki" --identity trainee/bob)
   observer_sec=(--pki "$pki" --identity instructor/ines)
+  recorder_sec=(--pki "$pki" --identity instructor/ines)
   web_sec=(--pki "$pki" --identity instructor/bridge)
   # A lost laptop (docs/security.md, "Revoke an identity"): trainee/mallory's files as copied
   # onto it before the classroom revoked her. Made once per classroom CA and kept, like the PKI.
@@ -99,7 +100,7 @@ recorder=$build/db/recorder/palp-recorder
 recdb=${PALP_DEMO_RECORDED_DB:-$out/recorded-sessions.db}
 rec_pid=
 if [ -x "$recorder" ]; then
-  "$recorder" --domain "$domain" "${observer_sec[@]}" --db "$recdb" >"$out/recorder.log" 2>&1 &
+  "$recorder" --domain "$domain" "${recorder_sec[@]}" --db "$recdb" >"$out/recorder.log" 2>&1 &
   rec_pid=$!
   pids+=("$rec_pid")
 fi
@@ -330,7 +331,7 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   # The logging machine's copy of the same sessions, assessed from its own file (docs/assessment.md,
   # "Recorded over DDS"): what each of fay's attempts found and scored, in both logs.
   echo
-  echo "== the logging machine's copy (palp-recorder, instructor/ines): exercise \"medium\" from $recdb =="
+  echo "== the logging machine's copy (palp-recorder$([ "$secure" = 1 ] && echo ", instructor/ines")): exercise \"medium\" from $recdb =="
   if [ "$secure" = 1 ] && [ -f "$recdb" ] &&
     "$review" --db "$recdb" class --exercise medium --since "$since" --out "$out/class-medium-recorded.html" \
       --csv "$out/class-medium-recorded.csv" >/dev/null; then
