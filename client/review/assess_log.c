@@ -289,7 +289,10 @@ int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment 
     snprintf(err, errlen, "the logged exercise '%s' does not parse: %s", out->exercise_name, perr);
     return rc;
   }
-  if (!out->has_exercise) snprintf(out->exercise_name, sizeof out->exercise_name, "%s", "");
+  if (!out->has_exercise) {
+    snprintf(out->exercise_name, sizeof out->exercise_name, "%s", "");
+    review_params_string(db, s->id, "exercise_name", out->exercise_unlogged, sizeof out->exercise_unlogged);
+  }
 
   char *scene = NULL;
   if ((rc = palp_db_session_json(db, s->id, &scene, NULL))) {
@@ -472,7 +475,11 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
      * draw, so that the instructor reads the places below as this attempt's own */
     char drawn[160];
     if (review_drawn_text(&a->ex, drawn, sizeof drawn)) fprintf(f, "           its lesions %s\n", drawn);
-  } else
+  } else if (a->exercise_unlogged[0])
+    fprintf(f, "exercise   %s, WITHOUT ITS LESIONS: they did not reach palp-recorder (a server without DDS Security, "
+               "or on permissions before palp_session_exercise, keeps them; its own log has them): assessed here as "
+               "free practice (no sensitivity, no score)\n", a->exercise_unlogged);
+  else
     fprintf(f, "exercise   none: free practice (no hidden lesions; no sensitivity, no score)\n");
   fprintf(f, "metrics    from %d finger samples (definitions: docs/assessment.md)\n", a->samples);
   if (a->has_exercise) {

@@ -18,6 +18,9 @@ typedef struct review_mark {
 typedef struct review_assessment {
   int has_exercise;          /* 0: free practice (no lesions, default bands, no sensitivity/score) */
   char exercise_name[64];
+  /* no exercise logged, but the recorder saw the session's phantom run this one (params_json
+   * "exercise_name", palp-recorder since session 60): its lesions never reached the log */
+  char exercise_unlogged[64];
   palp_exercise ex;
   palp_assess_result r;
   int samples;               /* finger samples logged */

@@ -194,6 +194,23 @@ int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid
   return review_params_flag(db, s->id, "valid_range_events") ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
 }
 
+int review_params_string(palp_db *db, int64_t session_id, const char *key, char *buf, size_t len) {
+  char *params = NULL;
+  int found = 0;
+  if (len) buf[0] = 0;
+  if (palp_db_session_json(db, session_id, NULL, &params) == 0 && params) {
+    cJSON *j = cJSON_Parse(params);
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(j, key);
+    if (cJSON_IsString(v) && v->valuestring && len) {
+      snprintf(buf, len, "%s", v->valuestring);
+      found = 1;
+    }
+    cJSON_Delete(j);
+  }
+  free(params);
+  return found;
+}
+
 int review_params_flag(palp_db *db, int64_t session_id, const char *key) {
   char *params = NULL;
   int said = 0;

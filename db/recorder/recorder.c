@@ -124,8 +124,16 @@ typedef struct pending_exercise {
 #define MAX_PENDING_EXERCISES 64
 #define PENDING_EXERCISE_WAIT DDS_SECS(10)
 
+/* What palp_exercise says a phantom runs (its public part: the name): a session on it whose
+ * lesions never arrive is logged as that exercise's, without them (params_json "exercise_name"). */
+typedef struct public_exercise {
+  uint32_t phantom_id;
+  char name[64];
+} public_exercise;
+
 typedef struct recorder {
   palp_db_writer *w;
+  public_exercise pex[MAX_PHANTOMS];
   pending_exercise pending_ex[MAX_PENDING_EXERCISES];
   int64_t exercises_refused;
   pending_open pending[MAX_PENDING];
@@ -273,20 +281,47 @@ static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
   snprintf(slot->name, sizeof slot->name, "%s", name);
 }
 
+/* The exercise a catalogue phantom runs, by name. Only names of letters, digits and "-_." are
+ * kept: the name goes into params_json as it is. */
+static void on_public_exercise(recorder *r, const palp_Exercise *m) {
+  const size_t n = strnlen(m->name, sizeof m->name);
+  if (n == 0 || n >= sizeof m->name || strspn(m->name, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") != n)
+    return;
+  public_exercise *slot = NULL;
+  for (int i = 0; i < MAX_PHANTOMS; i++) {
+    if (r->pex[i].name[0] && r->pex[i].phantom_id == m->phantom_id) {
+      slot = &r->pex[i];
+      break;
+    }
+    if (!r->pex[i].name[0] && !slot) slot = &r->pex[i];
+  }
+  if (!slot) return;
+  slot->phantom_id = m->phantom_id;
+  snprintf(slot->name, sizeof slot->name, "%s", m->name);
+}
+
+static const char *public_exercise_of(const recorder *r, uint32_t phantom_id) {
+  for (int i = 0; i < MAX_PHANTOMS; i++)
+    if (r->pex[i].name[0] && r->pex[i].phantom_id == phantom_id) return r->pex[i].name;
+  return NULL;
+}
+
 static void open_session(recorder *r, const palp_SessionState *m) {
   rsession *s = find_session(r, m->session_id, 1);
   {
     if (!s || s->open) return; /* already recording (transient-local re-delivery) */
     const phantom *ph = find_phantom(r, m->phantom_id, 0);
     const double start = now_unix() - m->duration;
-    char uid[128], pid[32], params[512];
+    char uid[128], pid[32], params[640], exname[96] = "";
     /* Session ids restart with each server run: the start time makes the uid unique. */
     snprintf(uid, sizeof uid, "dds-%u-%u-%.0f", m->phantom_id, m->session_id, start * 1e3);
     snprintf(pid, sizeof pid, "%u", m->phantom_id);
+    const char *pex = public_exercise_of(r, m->phantom_id);
+    if (pex) snprintf(exname, sizeof exname, ", \"exercise_name\": \"%s\"", pex);
     snprintf(params, sizeof params,
              "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
-             "\"max_force_n\": %.17g}",
-             m->partition, ph ? ph->max_force : 0.0);
+             "\"max_force_n\": %.17g%s}",
+             m->partition, ph ? ph->max_force : 0.0, exname);
     palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
                              .phantom_id = pid, .phantom_name = ph ? ph->name : "",
                              .scene_json = ph && ph->scene_json ? ph->scene_json : "{}", .params_json = params,
@@ -831,10 +866,11 @@ int main(int argc, char **argv) {
   dds_entity_t sub = palp_dds_session_subscriber(pp, wildcard);
   /* In the order a pass takes them: catalogue and state first, so that a session's samples
    * find it open; its exercise before its findings; the debrief last. */
-  enum { RD_CATALOGUE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_LOCAL_MODEL,
+  enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_LOCAL_MODEL,
          RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
   dds_entity_t rd[RD_COUNT] = {
       reader_deep(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
+      reader_deep(pp, t[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE),
       reader_deep(pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE),
       reader_deep(pp, t[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE),
       reader_deep(sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
@@ -897,6 +933,7 @@ int main(int argc, char **argv) {
           }
           switch (k) {
           case RD_CATALOGUE: on_phantom(r, samples[i]); break;
+          case RD_EXERCISE: on_public_exercise(r, samples[i]); break;
           case RD_STATE: on_state(r, samples[i]); break;
           case RD_SESSION_EXERCISE: on_session_exercise(r, samples[i]); break;
           case RD_CONTACT: on_contact(r, samples[i]); break;

@@ -14,7 +14,8 @@
 #    3 points (the recorder has no touched triangles: a disc of the contact's area stands in).
 # Then the same server without "session_exercise" (the default, "secured", and no DDS Security):
 # the lesions stay on the server: its log names them, the recorder's has no exercise for the
-# session, and the server's log says why at start.
+# session (its review names the exercise and says its lesions are missing), and the server's log
+# says why at start.
 # usage: exercise_recorded.sh SERVER CLIENT RECORDER REVIEW CONFIG_DIR TEST_DIR
 set -u
 server=$1 client=$2 recorder=$3 review=$4 config_dir=$5 test_dir=$6
@@ -96,6 +97,15 @@ n_rec = rec.execute("select count(*) from session_exercise").fetchone()[0]
 check(n_srv == 1 and n_rec == 0, "the lesions stay on the server: its log has the exercise (%d), the recorder's none (%d)" % (n_srv, n_rec))
 sys.exit(1 if bad else 0)
 PY
+# ... and the review of the recorder's copy says which exercise it was, and that its lesions are missing
+"$review" --db "$tmp/secured-rec.db" show 1 > "$tmp/show-secured.txt" 2>&1
+if grep -q "^exercise   test-random, WITHOUT ITS LESIONS: they did not reach palp-recorder" "$tmp/show-secured.txt" &&
+  grep -q "^metrics    from [1-9][0-9]* finger samples" "$tmp/show-secured.txt"; then
+  echo "ok   the review of the recorder's copy names the exercise and says its lesions did not reach the recorder"
+else
+  echo "FAIL the review of the recorder's copy names the exercise and says its lesions did not reach the recorder:"
+  cat "$tmp/show-secured.txt"; fail=1
+fi
 grep -q "exercise sessions' lesions stay on this server (no DDS Security: session_exercise \"always\" sends them anyway)" \
   "$tmp/secured-server.log" && ! grep -q "lesions stay on this server" "$tmp/always-server.log"
 r=$?
