@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "dds_util.h"
 #include "sqlite_util.h"
 #include "palp.h"
 #include "palp_dds.h"
@@ -32,20 +33,6 @@
 #define DOMAIN 161
 #define SESSION 7u
 #define PHANTOM 3u
-
-static void sleep_ms(int ms) {
-  struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
-  nanosleep(&ts, NULL);
-}
-
-static int wait_matched(dds_entity_t w, int want, double timeout_s) {
-  for (int i = 0; i < (int)(timeout_s * 100); i++) {
-    dds_publication_matched_status_t st;
-    if (dds_get_publication_matched_status(w, &st) == 0 && (int)st.current_count >= want) return 0;
-    sleep_ms(10);
-  }
-  return -1;
-}
 
 int main(int argc, char **argv) {
   if (argc < 5) {
@@ -85,22 +72,9 @@ int main(int argc, char **argv) {
   palp_mesh mesh;
   REQUIRE(palp_mesh_create(&md, &mesh) == 0, "mesh");
   palp_Vec3 *rest = calloc((size_t)mesh.vertex_count, sizeof *rest);
-  for (int i = 0; i < mesh.vertex_count; i++) rest[i] = (palp_Vec3){mesh.rest[i].x, mesh.rest[i].y, mesh.rest[i].z};
-  palp_Phantom ph;
-  memset(&ph, 0, sizeof ph);
-  ph.phantom_id = PHANTOM;
-  snprintf(ph.name, sizeof ph.name, "left dome");
+  palp_Phantom ph = test_phantom(PHANTOM, "left dome", &md, &mesh, rest, 1000);
   snprintf(ph.scene_name, sizeof ph.scene_name, "paper_step");
-  ph.radius = md.radius;
-  ph.tick_rate_hz = 1000;
-  ph.max_force = 20;
   ph.effects = PALP_EFFECT_ALL;
-  ph.membrane = (palp_MembraneParams){0.002, 950, 4.2e6, 2e8, 8e6, 8e5};
-  ph.gel = (palp_GelParams){0, 101325, 10, 5e6, 0};
-  ph.top_vertex = mesh.top_vertex;
-  ph.dome_triangle_count = mesh.dome_triangle_count;
-  ph.rest._length = ph.rest._maximum = (uint32_t)mesh.vertex_count;
-  ph.rest._buffer = rest;
   REQUIRE(dds_write(w_cat, &ph) == 0, "catalogue");
 
   palp_SessionState ss;
@@ -194,10 +168,8 @@ int main(int argc, char **argv) {
   snprintf(ss.reason, sizeof ss.reason, "lost (liveliness lease expired)");
   REQUIRE(dds_write(w_state, &ss) == 0, "state closed");
   sleep_ms(600);
-  kill(pid, SIGTERM);
   int status;
-  waitpid(pid, &status, 0);
-  CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0, "recorder exit status %d", status);
+  CHECK(stop_recorder(pid, &status), "recorder exit status %d", status);
   dds_delete(pp);
 
   sqlite3 *h;

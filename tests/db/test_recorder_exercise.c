@@ -36,26 +36,13 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "dds_util.h"
 #include "sqlite_util.h"
 #include "palp.h"
 #include "palp_dds.h"
 
 #define DOMAIN 183
 #define PHANTOM 14u
-
-static void sleep_ms(int ms) {
-  struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
-  nanosleep(&ts, NULL);
-}
-
-static int wait_matched(dds_entity_t w, int want, double timeout_s) {
-  for (int i = 0; i < (int)(timeout_s * 100); i++) {
-    dds_publication_matched_status_t st;
-    if (dds_get_publication_matched_status(w, &st) == 0 && (int)st.current_count >= want) return 0;
-    sleep_ms(10);
-  }
-  return -1;
-}
 
 static char *read_file(const char *path) {
   FILE *f = fopen(path, "rb");
@@ -174,20 +161,7 @@ int main(int argc, char **argv) {
   palp_mesh mesh;
   REQUIRE(palp_mesh_create(&md, &mesh) == 0, "mesh");
   palp_Vec3 *rest = calloc((size_t)mesh.vertex_count, sizeof *rest);
-  for (int i = 0; i < mesh.vertex_count; i++) rest[i] = (palp_Vec3){mesh.rest[i].x, mesh.rest[i].y, mesh.rest[i].z};
-  palp_Phantom ph;
-  memset(&ph, 0, sizeof ph);
-  ph.phantom_id = PHANTOM;
-  snprintf(ph.name, sizeof ph.name, "Teaching");
-  ph.radius = md.radius;
-  ph.tick_rate_hz = 250;
-  ph.max_force = 20;
-  ph.membrane = (palp_MembraneParams){0.002, 950, 4.2e6, 2e8, 8e6, 8e5};
-  ph.gel = (palp_GelParams){0, 101325, 10, 5e6, 0};
-  ph.top_vertex = mesh.top_vertex;
-  ph.dome_triangle_count = mesh.dome_triangle_count;
-  ph.rest._length = ph.rest._maximum = (uint32_t)mesh.vertex_count;
-  ph.rest._buffer = rest;
+  palp_Phantom ph = test_phantom(PHANTOM, "Teaching", &md, &mesh, rest, 250);
   REQUIRE(dds_write(w_cat, &ph) == 0, "catalogue");
   sleep_ms(200);
 
@@ -284,10 +258,8 @@ int main(int argc, char **argv) {
   d10.level = palp_DEBRIEF_NONE;
   REQUIRE(dds_write(s10.debrief, &d10) == 0, "debrief 10");
   sleep_ms(1500);
-  kill(pid, SIGTERM);
   int status;
-  waitpid(pid, &status, 0);
-  CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0, "recorder exit status %d", status);
+  CHECK(stop_recorder(pid, &status), "recorder exit status %d", status);
   dds_delete(pp);
 
   sqlite3 *h;
