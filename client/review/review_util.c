@@ -194,32 +194,29 @@ int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid
   return review_params_flag(db, s->id, "valid_range_events") ? REVIEW_RANGE_INSIDE : REVIEW_RANGE_UNKNOWN;
 }
 
-int review_params_string(palp_db *db, int64_t session_id, const char *key, char *buf, size_t len) {
+/* The session's params_json parsed (the caller deletes it), NULL when absent or unreadable. */
+static cJSON *session_params(palp_db *db, int64_t session_id) {
   char *params = NULL;
-  int found = 0;
-  if (len) buf[0] = 0;
-  if (palp_db_session_json(db, session_id, NULL, &params) == 0 && params) {
-    cJSON *j = cJSON_Parse(params);
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(j, key);
-    if (cJSON_IsString(v) && v->valuestring && len) {
-      snprintf(buf, len, "%s", v->valuestring);
-      found = 1;
-    }
-    cJSON_Delete(j);
-  }
+  cJSON *j = NULL;
+  if (palp_db_session_json(db, session_id, NULL, &params) == 0 && params) j = cJSON_Parse(params);
   free(params);
+  return j;
+}
+
+int review_params_string(palp_db *db, int64_t session_id, const char *key, char *buf, size_t len) {
+  if (len) buf[0] = 0;
+  cJSON *j = session_params(db, session_id);
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(j, key);
+  const int found = cJSON_IsString(v) && v->valuestring && len;
+  if (found) snprintf(buf, len, "%s", v->valuestring);
+  cJSON_Delete(j);
   return found;
 }
 
 int review_params_flag(palp_db *db, int64_t session_id, const char *key) {
-  char *params = NULL;
-  int said = 0;
-  if (palp_db_session_json(db, session_id, NULL, &params) == 0 && params) {
-    cJSON *j = cJSON_Parse(params);
-    said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, key));
-    cJSON_Delete(j);
-  }
-  free(params);
+  cJSON *j = session_params(db, session_id);
+  const int said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, key));
+  cJSON_Delete(j);
   return said;
 }
 
