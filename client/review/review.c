@@ -211,8 +211,14 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   printf("trainee    %s   station %s\n", s->trainee, s->station);
   printf("phantom    %s (%s)\n", s->phantom_id, s->phantom_name);
   char *params = NULL;
-  if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params && strstr(params, "\"recorded_by\""))
+  if (palp_db_session_json(db, s->id, NULL, &params) == 0 && params && strstr(params, "\"recorded_by\"")) {
     printf("source     recorded over DDS by palp-recorder (inputs as received; not replayable)\n");
+    /* a recorder started after the session opened holds only its rest (db/recorder) */
+    double from = 0;
+    if (review_params_number(db, s->id, "recorded_from_s", &from) && from > 0)
+      printf("           FROM %.1f s INTO THE SESSION: the recorder joined late; what came before (marks, touches) "
+             "is not in this log, its metrics are of the rest\n", from);
+  }
   free(params);
   printf("started    %s\n", t0);
   if (s->end_reason[0])

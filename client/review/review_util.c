@@ -213,6 +213,15 @@ int review_params_string(palp_db *db, int64_t session_id, const char *key, char 
   return found;
 }
 
+int review_params_number(palp_db *db, int64_t session_id, const char *key, double *out) {
+  cJSON *j = session_params(db, session_id);
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(j, key);
+  const int found = cJSON_IsNumber(v) && isfinite(v->valuedouble);
+  if (found) *out = v->valuedouble;
+  cJSON_Delete(j);
+  return found;
+}
+
 int review_params_flag(palp_db *db, int64_t session_id, const char *key) {
   cJSON *j = session_params(db, session_id);
   const int said = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, key));

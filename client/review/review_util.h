@@ -47,6 +47,8 @@ enum { REVIEW_RANGE_UNKNOWN = 0, REVIEW_RANGE_INSIDE = 1, REVIEW_RANGE_OUTSIDE =
 int review_params_flag(palp_db *db, int64_t session_id, const char *key);
 /* The session's params_json string `key` into buf (1), or "" (0: absent, not a string). */
 int review_params_string(palp_db *db, int64_t session_id, const char *key, char *buf, size_t len);
+/* The session's params_json number `key` into *out (1), or 0 (absent, not a finite number). */
+int review_params_number(palp_db *db, int64_t session_id, const char *key, double *out);
 int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *buf, size_t len);
 /* The same, as numbers: the events summed (palp_db_session_valid_range) and the same code. */
 int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,

@@ -312,16 +312,21 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     if (!s || s->open) return; /* already recording (transient-local re-delivery) */
     const phantom *ph = find_phantom(r, m->phantom_id, 0);
     const double start = now_unix() - m->duration;
-    char uid[128], pid[32], params[640], exname[96] = "";
+    char uid[128], pid[32], params[700], exname[96] = "", late[64] = "";
     /* Session ids restart with each server run: the start time makes the uid unique. */
     snprintf(uid, sizeof uid, "dds-%u-%u-%.0f", m->phantom_id, m->session_id, start * 1e3);
     snprintf(pid, sizeof pid, "%u", m->phantom_id);
     const char *pex = public_exercise_of(r, m->phantom_id);
     if (pex) snprintf(exname, sizeof exname, ", \"exercise_name\": \"%s\"", pex);
+    /* Started (or restarted) after the session opened: what came before is not in this log, and
+     * the review says so (its marks, its coverage are this log's part of the session). A session
+     * seen within a second of its opening counts as seen from its start. */
+    if (m->duration > 1.0 && isfinite(m->duration))
+      snprintf(late, sizeof late, ", \"recorded_from_s\": %.3f", m->duration);
     snprintf(params, sizeof params,
              "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
-             "\"max_force_n\": %.17g%s}",
-             m->partition, ph ? ph->max_force : 0.0, exname);
+             "\"max_force_n\": %.17g%s%s}",
+             m->partition, ph ? ph->max_force : 0.0, exname, late);
     palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
                              .phantom_id = pid, .phantom_name = ph ? ph->name : "",
                              .scene_json = ph && ph->scene_json ? ph->scene_json : "{}", .params_json = params,

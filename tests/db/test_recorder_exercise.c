@@ -1,6 +1,6 @@
 /* palp-recorder logs an exercise session as the server's own log has it (session 60; docs/db.md,
  * "palp-recorder"), over real DDS on loopback (domain 183, of its own). The test plays the server.
- * usage: test_db_recorder_exercise TMPDIR PALP_RECORDER DDS_CONFIG EXERCISE_JSON
+ * usage: test_db_recorder_exercise TMPDIR PALP_RECORDER DDS_CONFIG EXERCISE_JSON PALP_REVIEW
  *
  * Session 8 (exercise "teaching", the shipped file's text): its palp_session_exercise sample comes
  * before its OPEN state (the two topics race), then the trainee's findings and the server's answers
@@ -12,7 +12,7 @@
  * NaN; the debrief (level lesions, mark 4 found lesion 1, lesion 2 missed); the CLOSED state.
  * Session 9: its exercise is not JSON (refused, said and counted; the session is logged without one).
  * Session 10: its CLOSED state comes 0.3 s before its debrief (the recorder waits for it).
- * Session 11: still open when the recorder is stopped.
+ * Session 11: open 12.5 s when the recorder first sees it, still open when the recorder is stopped.
  * Checked in the file, against values written here by hand:
  *  - session 8's exercise is the text sent, byte for byte; session 9 has none, and the recorder's
  *    stop line counts 1 exercise refused;
@@ -24,7 +24,9 @@
  *  - the debrief lines, "told at level lesions: found 1 of 2 lesions; marks standing 2, near no
  *    lesion 1, duplicates 0; found by marks 4 0" for session 8 and "told at level none: marks
  *    standing 0" for session 10, whose session ended normally after it;
- *  - session 11 ended `error`, "palp-recorder stopped while the session ran (...)", and said. */
+ *  - session 11 ended `error`, "palp-recorder stopped while the session ran (...)", and said; its
+ *    params say "recorded_from_s": 12.5 (session 8's nothing) and `palp-review show` says the
+ *    recorder joined 12.5 s into it. */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -75,7 +77,7 @@ static void sess_open(dds_entity_t pp, const dds_entity_t *t, uint32_t id, sess 
   s->debrief = palp_dds_create_writer(s->pub, t[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
 }
 
-static void state(dds_entity_t w, uint32_t id, int closed) {
+static void state_at(dds_entity_t w, uint32_t id, int closed, double duration) {
   palp_SessionState ss;
   memset(&ss, 0, sizeof ss);
   ss.session_id = id;
@@ -85,9 +87,12 @@ static void state(dds_entity_t w, uint32_t id, int closed) {
   snprintf(ss.trainee_station, sizeof ss.trainee_station, "host/77/trainee:nina");
   snprintf(ss.trainee_name, sizeof ss.trainee_name, "nina");
   ss.tick_rate_hz = 250;
+  ss.duration = duration;
   if (closed) snprintf(ss.reason, sizeof ss.reason, "trainee station left");
   dds_write(w, &ss);
 }
+
+static void state(dds_entity_t w, uint32_t id, int closed) { state_at(w, id, closed, 0.0); }
 
 static void exercise(dds_entity_t w, uint32_t id, const char *name, const char *json) {
   palp_SessionExercise *m = calloc(1, sizeof *m);
@@ -121,8 +126,8 @@ static void answer(const sess *s, uint32_t mark, int accepted, const char *reaso
 }
 
 int main(int argc, char **argv) {
-  if (argc < 5) {
-    fprintf(stderr, "usage: %s TMPDIR PALP_RECORDER DDS_CONFIG EXERCISE_JSON\n", argv[0]);
+  if (argc < 6) {
+    fprintf(stderr, "usage: %s TMPDIR PALP_RECORDER DDS_CONFIG EXERCISE_JSON PALP_REVIEW\n", argv[0]);
     return 2;
   }
   char db[600], log[600];
@@ -175,8 +180,8 @@ int main(int argc, char **argv) {
   /* session 10: a well-formed exercise */
   exercise(w_ex, 10, "teaching", json);
   state(w_state, 10, 0);
-  /* session 11: still running when the recorder stops */
-  state(w_state, 11, 0);
+  /* session 11: still running when the recorder stops, and open 12.5 s when the recorder first saw it */
+  state_at(w_state, 11, 0, 12.5);
   sleep_ms(300);
 
   /* session 8's fingertip: a contact (its radius), then local models of frames 1..60 */
@@ -335,7 +340,17 @@ int main(int argc, char **argv) {
                      "end_detail = 'palp-recorder stopped while the session ran (the server''s own log has the rest)'") == 1 &&
             strstr(text, "stopping: 1 session(s) still running end here in this log, cut short") != NULL,
         "session 11, still running at the recorder's stop, ends in its log saying why, and the recorder says so");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'dds-14-11-%' AND "
+                     "json_extract(params_json, '$.recorded_from_s') = 12.5") == 1 &&
+            db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'dds-14-8-%' AND "
+                         "json_extract(params_json, '$.recorded_from_s') IS NULL") == 1,
+        "session 11's log says the recorder saw it 12.5 s after it opened; session 8's, seen at once, says nothing");
   sqlite3_close(h);
+  char cmd[1600];
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' show 11 2>/dev/null | grep -q '^           FROM 12.5 s INTO THE SESSION: the recorder joined late'",
+           argv[5], db);
+  const int st = system(cmd);
+  CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "palp-review show 11 says the recorder joined 12.5 s into the session");
   free(rest);
   free(json);
   palp_mesh_destroy(&mesh);
