@@ -33,6 +33,7 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   cfg->max_sessions = 32;
   cfg->max_force = 20.0; /* well above the paper's 3 N; a real finger stays < 10 N */
   cfg->force_policy = PALP_SRV_FORCE_CLAMP;
+  cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_SECURED; /* lesions on the wire only where permissions guard them */
   cfg->finger_radius_min = 0.002;
   cfg->finger_radius_max = 0.03;
   cfg->log_interval = 1.0;
@@ -92,6 +93,27 @@ static int get_string(const cJSON *obj, const char *key, const char *where, int 
     return fail(err, errlen, PALP_EINVAL, "%s%s: longer than %zu characters", where, key, outlen - 1);
   snprintf(out, outlen, "%s", it->valuestring);
   return 0;
+}
+
+/* A string that must be one of names (NULL-terminated, at most 8); *out keeps its value when the
+ * key is absent, else becomes the name's index. */
+static int get_choice(const cJSON *obj, const char *key, const char *where, const char *const *names, int *out,
+                      char *err, size_t errlen) {
+  char v[32] = "";
+  int rc = get_string(obj, key, where, 0, v, sizeof v, err, errlen);
+  if (rc || !cJSON_GetObjectItemCaseSensitive(obj, key)) return rc;
+  int n = 0;
+  for (; names[n]; n++)
+    if (strcmp(v, names[n]) == 0) {
+      *out = n;
+      return 0;
+    }
+  char list[160] = "";
+  size_t at = 0;
+  for (int i = 0; i < n && at < sizeof list; i++)
+    at += (size_t)snprintf(list + at, sizeof list - at, "%s\"%s\"", i == 0 ? "" : i == n - 1 ? (n == 2 ? " nor " : " or ") : ", ",
+                           names[i]);
+  return fail(err, errlen, PALP_EINVAL, "%s%s: \"%s\" is %s %s", where, key, v, n == 2 ? "neither" : "not", list);
 }
 
 /* A misspelt key would otherwise silently fall back to a default. */
@@ -301,17 +323,11 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   if ((rc = get_number(root, "dds_log_window", w, 0.1, 86400, 0, &cfg->dds_log_window, err, errlen)))
     goto out;
   {
-    char policy[16] = "clamp";
-    if ((rc = get_string(root, "force_policy", w, 0, policy, sizeof policy, err, errlen))) goto out;
-    if (strcmp(policy, "clamp") == 0)
-      cfg->force_policy = PALP_SRV_FORCE_CLAMP;
-    else if (strcmp(policy, "reject") == 0)
-      cfg->force_policy = PALP_SRV_FORCE_REJECT;
-    else {
-      rc = fail(err, errlen, PALP_EINVAL, "force_policy: \"%s\" is neither \"clamp\" nor \"reject\"",
-                policy);
-      goto out;
-    }
+    /* in the order of palp_srv_force_policy */
+    static const char *const policies[] = {"clamp", "reject", NULL};
+    int policy = (int)cfg->force_policy;
+    if ((rc = get_choice(root, "force_policy", w, policies, &policy, err, errlen))) goto out;
+    cfg->force_policy = (palp_srv_force_policy)policy;
   }
   {
     char tmp[PALP_SRV_PATH_MAX];
@@ -330,19 +346,11 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   }
   if ((rc = get_number(root, "assess_sample_hz", w, 1, 10000, 0, &cfg->assess_sample_hz, err, errlen))) goto out;
   {
-    char policy[16] = "secured";
-    if ((rc = get_string(root, "session_exercise", w, 0, policy, sizeof policy, err, errlen))) goto out;
-    if (strcmp(policy, "secured") == 0)
-      cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_SECURED;
-    else if (strcmp(policy, "always") == 0)
-      cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_ALWAYS;
-    else if (strcmp(policy, "off") == 0)
-      cfg->session_exercise = PALP_SRV_SESSION_EXERCISE_OFF;
-    else {
-      rc = fail(err, errlen, PALP_EINVAL, "session_exercise: \"%s\" is not \"secured\", \"always\" or \"off\"",
-                policy);
-      goto out;
-    }
+    /* in the order of palp_srv_session_exercise_policy */
+    static const char *const policies[] = {"secured", "always", "off", NULL};
+    int policy = (int)cfg->session_exercise;
+    if ((rc = get_choice(root, "session_exercise", w, policies, &policy, err, errlen))) goto out;
+    cfg->session_exercise = (palp_srv_session_exercise_policy)policy;
   }
   if ((rc = parse_security(cJSON_GetObjectItemCaseSensitive(root, "security"), base_dir, cfg, err, errlen))) goto out;
   if ((rc = get_string(root, "log_level", w, 0, cfg->log_level, sizeof cfg->log_level, err, errlen))) goto out;

@@ -269,6 +269,17 @@ static void publish_exercise(palp_srv *srv, const palp_srv_phantom *ph) {
   dds_write(srv->exercise_w, &m);
 }
 
+/* What a server whose permissions predate a topic goes without (NULL: a topic it cannot serve
+ * without). palp_debrief (2026-12-04): nobody is told what they found (the review still is);
+ * palp_session_exercise (session 60): recorders get no exercise, their logs cannot assess them. */
+static const char *optional_topic_loss(palp_dds_topic_kind k) {
+  switch (k) {
+  case PALP_TOPIC_DEBRIEF: return "no debriefs";
+  case PALP_TOPIC_SESSION_EXERCISE: return "no exercises for recorders";
+  default: return NULL;
+  }
+}
+
 /* An exercise session's exercise, its lesions included, for the instructors' recorders (only
  * their permissions read it): what the server's own log holds, so that a recorder's log of the
  * session is assessed as the server's is. Too long for the topic's bound, it is not sent, and
@@ -1496,22 +1507,13 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     /* Secured, palp_station_request is not offered (no identity to check; see below). */
     if (secured(srv) && k == PALP_TOPIC_STATION_REQUEST) continue;
     srv->topic[k] = palp_dds_create_topic(srv->pp, (palp_dds_topic_kind)k);
-    /* palp_debrief came after the classroom PKIs of 2026-12-04 and before: with permissions
-     * that predate it, the server serves on and tells nobody what they found (the review still
-     * does). make-classroom-pki.sh init re-issues them. */
-    if (srv->topic[k] < 0 && k == PALP_TOPIC_DEBRIEF && secured(srv)) {
-      palp_log_warn(srv->log, "no debriefs: the server's permissions do not allow topic palp_debrief (%s); "
-                              "re-issue the classroom's permissions with scripts/make-classroom-pki.sh DIR init "
-                              "(docs/security.md)", dds_strretcode(srv->topic[k]));
-      srv->topic[k] = 0;
-      continue;
-    }
-    /* palp_session_exercise came later still (session 60): with older permissions the
-     * recorders get no exercise, and their logs cannot assess the exercise sessions. */
-    if (srv->topic[k] < 0 && k == PALP_TOPIC_SESSION_EXERCISE && secured(srv)) {
-      palp_log_warn(srv->log, "no exercises for recorders: the server's permissions do not allow topic "
-                              "palp_session_exercise (%s); re-issue the classroom's permissions with "
-                              "scripts/make-classroom-pki.sh DIR init (docs/security.md)", dds_strretcode(srv->topic[k]));
+    /* Topics added after a classroom's PKI was made: with permissions that predate one, the
+     * server serves on without it and says what is lost. make-classroom-pki.sh init re-issues them. */
+    const char *lost = optional_topic_loss((palp_dds_topic_kind)k);
+    if (srv->topic[k] < 0 && lost && secured(srv)) {
+      palp_log_warn(srv->log, "%s: the server's permissions do not allow topic %s (%s); re-issue the classroom's "
+                              "permissions with scripts/make-classroom-pki.sh DIR init (docs/security.md)",
+                    lost, palp_dds_topic_name((palp_dds_topic_kind)k), dds_strretcode(srv->topic[k]));
       srv->topic[k] = 0;
       continue;
     }
