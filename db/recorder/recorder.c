@@ -36,12 +36,9 @@
 #include "palp_dds.h"
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
+#include "palp_finding_answers.h"
 
 #define MAX_PHANTOMS 64
-#define MAX_PENDING_FINDINGS 32 /* per session: findings awaiting the server's answer */
-/* A finding whose answer the recorder did not see within this long is logged as unanswered,
- * not counted: the server's keep-last-1 status can replace an answer before it is sent. */
-#define FINDING_ANSWER_WAIT DDS_SECS(2)
 /* A closed exercise session waits this long for its debrief (written just before the CLOSED
  * state, on another topic: the two can arrive in either order). */
 #define DEBRIEF_WAIT DDS_SECS(1)
@@ -79,18 +76,7 @@ typedef struct rsession {
   int debriefed;      /* its debrief is logged */
   double radius[FINGERS];       /* position-driven fingertips' radii [m], from their contact samples */
   int sample_every;             /* physics steps between finger samples (palp_assess_sample_every) */
-  struct {
-    palp_Finding f;
-    dds_time_t since;
-  } finding[MAX_PENDING_FINDINGS]; /* awaiting the server's answer, oldest first */
-  int findings;
-  struct {
-    uint32_t mark_id;
-    int accepted;
-    char reason[128];
-    dds_time_t since;
-  } answer[8]; /* the server's answers not yet matched to a finding, oldest first */
-  int answers;
+  palp_finding_answers marks; /* findings awaiting the server's answer, and answers their finding */
   int64_t findings_unanswered;
   int closing;                  /* CLOSED seen; ended when its debrief arrives or DEBRIEF_WAIT passes */
   dds_time_t closing_since;
@@ -473,65 +459,42 @@ static void end_lost_sessions(recorder *r, dds_time_t now) {
 }
 
 /* ---- findings: a mark counts as the server answered it --------------------------------
- * The server answers each finding, in the order it takes them, on palp_finding_status (keep-last
- * 1: an answer can be replaced before it is sent). A finding is logged when its answer is seen:
- * accepted as a finding record, refused as a `reject` event, as the server's own log has them. An
- * answer to a later finding means the earlier ones' answers were replaced: those, and any not
- * answered within FINDING_ANSWER_WAIT, are logged as unanswered events and not counted. */
-static void unanswered(recorder *r, rsession *s, const palp_Finding *f) {
-  char detail[160];
-  snprintf(detail, sizeof detail, "finding %u (%s) not logged: the recorder did not see the server's answer",
-           f->mark_id, f->op == palp_FINDING_WITHDRAW ? "withdrawal" : "mark");
+ * Paired as src/palp_finding_answers.h says: a finding is logged when its answer is seen, accepted
+ * as a finding record, refused as a `reject` event, as the server's own log has them; one whose
+ * answer was replaced (keep-last 1) or not seen within PALP_FINDING_ANSWER_WAIT_S is logged as an
+ * unanswered event and not counted. */
+typedef struct verdict_ctx {
+  recorder *r;
+  rsession *s;
+} verdict_ctx;
+
+static void log_verdict(void *ctx, const palp_finding_sent *f, int verdict, const char *reason) {
+  recorder *r = ((verdict_ctx *)ctx)->r;
+  rsession *s = ((verdict_ctx *)ctx)->s;
+  char detail[200];
+  if (verdict == PALP_VERDICT_ACCEPTED) {
+    const palp_db_finding rec = {.mark_id = f->mark_id,
+                                 .op = f->withdraw ? PALP_DB_FINDING_WITHDRAW : PALP_DB_FINDING_MARK,
+                                 .frame = s->frame,
+                                 .sim_time_s = s->t,
+                                 .point_m = f->withdraw ? (palp_vec3){0, 0, 0} : f->point};
+    count(r, palp_db_log_finding(r->w, s->h, &rec));
+    return;
+  }
+  if (verdict == PALP_VERDICT_REFUSED) {
+    snprintf(detail, sizeof detail, "finding %u refused: %s", f->mark_id, reason);
+  } else {
+    snprintf(detail, sizeof detail, "finding %u (%s) not logged: the recorder did not see the server's answer",
+             f->mark_id, f->withdraw ? "withdrawal" : "mark");
+    s->findings_unanswered++;
+  }
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, detail, 1));
-  s->findings_unanswered++;
 }
 
-static void drop_finding(rsession *s, int i) {
-  memmove(&s->finding[i], &s->finding[i + 1], sizeof s->finding[0] * (size_t)(s->findings - i - 1));
-  s->findings--;
-}
-
-static void drop_answer(rsession *s, int i) {
-  memmove(&s->answer[i], &s->answer[i + 1], sizeof s->answer[0] * (size_t)(s->answers - i - 1));
-  s->answers--;
-}
-
-static void match_findings(recorder *r, rsession *s) {
-  for (int i = 0; i < s->findings; i++) {
-    const palp_Finding *f = &s->finding[i].f;
-    int a = 0;
-    while (a < s->answers && s->answer[a].mark_id != f->mark_id) a++;
-    if (a == s->answers) continue;
-    for (int k = 0; k < i; k++) unanswered(r, s, &s->finding[k].f);
-    if (s->answer[a].accepted) {
-      const int withdraw = f->op == palp_FINDING_WITHDRAW;
-      const palp_db_finding rec = {.mark_id = f->mark_id,
-                                   .op = withdraw ? PALP_DB_FINDING_WITHDRAW : PALP_DB_FINDING_MARK,
-                                   .frame = s->frame,
-                                   .sim_time_s = s->t,
-                                   .point_m = withdraw ? (palp_vec3){0, 0, 0}
-                                                       : (palp_vec3){f->point.x, f->point.y, f->point.z}};
-      count(r, palp_db_log_finding(r->w, s->h, &rec));
-    } else {
-      char detail[200];
-      snprintf(detail, sizeof detail, "finding %u refused: %s", f->mark_id, s->answer[a].reason);
-      count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, detail, 1));
-    }
-    drop_answer(s, a);
-    for (int k = 0; k <= i; k++) drop_finding(s, 0);
-    i = -1; /* again from the oldest */
-  }
-}
-
-/* Findings and answers older than FINDING_ANSWER_WAIT (all: the session ends) are given up. */
+/* Findings and answers older than the wait (all: the session ends) are given up. */
 static void settle_findings(recorder *r, rsession *s, int all) {
-  match_findings(r, s);
-  const dds_time_t now = dds_time();
-  while (s->findings && (all || now - s->finding[0].since > FINDING_ANSWER_WAIT)) {
-    unanswered(r, s, &s->finding[0].f);
-    drop_finding(s, 0);
-  }
-  while (s->answers && (all || now - s->answer[0].since > FINDING_ANSWER_WAIT)) drop_answer(s, 0);
+  verdict_ctx v = {r, s};
+  palp_finding_answers_settle(&s->marks, (double)dds_time() * 1e-9, PALP_FINDING_ANSWER_WAIT_S, all, log_verdict, &v);
 }
 
 static void on_finding(recorder *r, const palp_Finding *m) {
@@ -540,27 +503,20 @@ static void on_finding(recorder *r, const palp_Finding *m) {
     r->unknown_session_samples++;
     return;
   }
-  if (s->findings == MAX_PENDING_FINDINGS) { /* a flood: the oldest is given up */
-    unanswered(r, s, &s->finding[0].f);
-    drop_finding(s, 0);
-  }
-  s->finding[s->findings].f = *m;
-  s->finding[s->findings++].since = dds_time();
-  match_findings(r, s);
+  const palp_finding_sent f = {.mark_id = m->mark_id,
+                               .withdraw = m->op == palp_FINDING_WITHDRAW,
+                               .point = {m->point.x, m->point.y, m->point.z},
+                               .t = m->time};
+  verdict_ctx v = {r, s};
+  palp_finding_answers_finding(&s->marks, &f, (double)dds_time() * 1e-9, log_verdict, &v);
 }
 
 static void on_finding_status(recorder *r, const palp_FindingStatus *m) {
   rsession *s = find_session(r, m->session_id, 0);
-  /* A mark and its withdrawal answered in quick succession carry the same id and verdict: both are
-   * kept. A stale answer (the transient-local copy a recorder started mid-session receives) finds
-   * no finding and expires after FINDING_ANSWER_WAIT. */
-  if (!s || m->last_mark_id == 0) return;
-  if (s->answers == (int)(sizeof s->answer / sizeof s->answer[0])) drop_answer(s, 0);
-  s->answer[s->answers].mark_id = m->last_mark_id;
-  s->answer[s->answers].accepted = m->last_accepted != 0;
-  snprintf(s->answer[s->answers].reason, sizeof s->answer[0].reason, "%s", m->reason);
-  s->answer[s->answers++].since = dds_time();
-  match_findings(r, s);
+  if (!s) return;
+  verdict_ctx v = {r, s};
+  palp_finding_answers_answer(&s->marks, m->last_mark_id, m->last_accepted, m->reason, (double)dds_time() * 1e-9,
+                              log_verdict, &v);
 }
 
 /* What the trainee was told as the session closed, logged as the server logs it (db/debrief.c);

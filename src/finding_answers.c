@@ -1,0 +1,71 @@
+/* finding_answers.c - findings paired with the server's answers (palp_finding_answers.h). */
+#include "palp_finding_answers.h"
+
+#include <stdio.h>
+#include <string.h>
+
+void palp_finding_answers_reset(palp_finding_answers *a) {
+  a->findings = 0;
+  a->answers = 0;
+}
+
+static void drop_finding(palp_finding_answers *a, int i) {
+  memmove(&a->finding[i], &a->finding[i + 1], sizeof a->finding[0] * (size_t)(a->findings - i - 1));
+  a->findings--;
+}
+
+static void drop_answer(palp_finding_answers *a, int i) {
+  memmove(&a->answer[i], &a->answer[i + 1], sizeof a->answer[0] * (size_t)(a->answers - i - 1));
+  a->answers--;
+}
+
+/* Every finding that has an answer gets it; the findings sent before it, which the server
+ * answered first, lost their answers (keep-last 1) and are given up. Again from the oldest after
+ * each match: a later answer may now match an earlier-queued finding of the same id. */
+static void match(palp_finding_answers *a, palp_finding_verdict_fn fn, void *ctx) {
+  for (int i = 0; i < a->findings; i++) {
+    int k = 0;
+    while (k < a->answers && a->answer[k].mark_id != a->finding[i].f.mark_id) k++;
+    if (k == a->answers) continue;
+    for (int j = 0; j < i; j++) fn(ctx, &a->finding[j].f, PALP_VERDICT_UNANSWERED, "");
+    fn(ctx, &a->finding[i].f, a->answer[k].accepted ? PALP_VERDICT_ACCEPTED : PALP_VERDICT_REFUSED,
+       a->answer[k].accepted ? "" : a->answer[k].reason);
+    drop_answer(a, k);
+    for (int j = 0; j <= i; j++) drop_finding(a, 0);
+    i = -1;
+  }
+}
+
+void palp_finding_answers_finding(palp_finding_answers *a, const palp_finding_sent *f, double now,
+                                  palp_finding_verdict_fn fn, void *ctx) {
+  if (a->findings == PALP_FINDING_ANSWERS_PENDING) { /* a flood: the oldest is given up */
+    fn(ctx, &a->finding[0].f, PALP_VERDICT_UNANSWERED, "");
+    drop_finding(a, 0);
+  }
+  a->finding[a->findings].f = *f;
+  a->finding[a->findings++].since = now;
+  match(a, fn, ctx);
+}
+
+void palp_finding_answers_answer(palp_finding_answers *a, uint32_t mark_id, int accepted, const char *reason,
+                                 double now, palp_finding_verdict_fn fn, void *ctx) {
+  /* A stale answer (the transient-local copy a reader that started mid-session receives) finds no
+   * finding and expires after the wait. */
+  if (mark_id == 0) return;
+  if (a->answers == PALP_FINDING_ANSWERS_QUEUED) drop_answer(a, 0);
+  a->answer[a->answers].mark_id = mark_id;
+  a->answer[a->answers].accepted = accepted != 0;
+  snprintf(a->answer[a->answers].reason, sizeof a->answer[0].reason, "%s", reason ? reason : "");
+  a->answer[a->answers++].since = now;
+  match(a, fn, ctx);
+}
+
+void palp_finding_answers_settle(palp_finding_answers *a, double now, double wait, int all,
+                                 palp_finding_verdict_fn fn, void *ctx) {
+  match(a, fn, ctx);
+  while (a->findings && (all || now - a->finding[0].since > wait)) {
+    fn(ctx, &a->finding[0].f, PALP_VERDICT_UNANSWERED, "");
+    drop_finding(a, 0);
+  }
+  while (a->answers && (all || now - a->answer[0].since > wait)) drop_answer(a, 0);
+}

@@ -1,0 +1,108 @@
+/* test_finding_answers.c - a trainee's findings paired with the server's answers as a reader of
+ * the wire sees both (src/finding_answers.c): every order the two topics and the keep-last-1
+ * status allow. Expected verdicts are written out by hand, in the order findings were sent. */
+#include <stdio.h>
+#include <string.h>
+
+#include "check.h"
+#include "palp_finding_answers.h"
+
+typedef struct log_t {
+  int n;
+  uint32_t id[64];
+  int withdraw[64], verdict[64];
+  char reason[64][128];
+} log_t;
+
+static void record(void *ctx, const palp_finding_sent *f, int verdict, const char *reason) {
+  log_t *l = ctx;
+  if (l->n == 64) return;
+  l->id[l->n] = f->mark_id;
+  l->withdraw[l->n] = f->withdraw;
+  l->verdict[l->n] = verdict;
+  snprintf(l->reason[l->n], sizeof l->reason[0], "%s", reason);
+  l->n++;
+}
+
+static void mark(palp_finding_answers *a, log_t *l, uint32_t id, int withdraw, double now) {
+  const palp_finding_sent f = {.mark_id = id, .withdraw = withdraw, .point = {0.001 * id, 0, 0.03}, .t = now};
+  palp_finding_answers_finding(a, &f, now, record, l);
+}
+
+static void answer(palp_finding_answers *a, log_t *l, uint32_t id, int ok, const char *why, double now) {
+  palp_finding_answers_answer(a, id, ok, why, now, record, l);
+}
+
+#define EXPECT(l, k, mid, wd, v)                                                                            \
+  CHECK((l).n > (k) && (l).id[k] == (mid) && (l).withdraw[k] == (wd) && (l).verdict[k] == (v),              \
+        "verdict %d: mark %u withdraw %d verdict %d (got n %d, mark %u, withdraw %d, verdict %d)", k, mid, wd, \
+        v, (l).n, (l).id[k], (l).withdraw[k], (l).verdict[k])
+
+int main(void) {
+  static palp_finding_answers a;
+  static log_t l;
+  palp_finding_answers_reset(&a);
+
+  /* the plain order: mark, its answer */
+  mark(&a, &l, 1, 0, 0.0);
+  CHECK(l.n == 0, "no verdict before the answer (%d)", l.n);
+  answer(&a, &l, 1, 1, "", 0.01);
+  EXPECT(l, 0, 1u, 0, PALP_VERDICT_ACCEPTED);
+  CHECK(a.findings == 0 && a.answers == 0, "nothing left (%d, %d)", a.findings, a.answers);
+
+  /* the answer overtakes its mark (two topics) */
+  answer(&a, &l, 4, 1, "", 0.1);
+  CHECK(l.n == 1, "an answer alone decides nothing (%d)", l.n);
+  mark(&a, &l, 4, 0, 0.11);
+  EXPECT(l, 1, 4u, 0, PALP_VERDICT_ACCEPTED);
+
+  /* mark 2's answer replaced by mark 3's before it went out: 2 unanswered, then 3 */
+  mark(&a, &l, 2, 0, 0.2);
+  mark(&a, &l, 3, 0, 0.21);
+  answer(&a, &l, 3, 1, "", 0.22);
+  EXPECT(l, 2, 2u, 0, PALP_VERDICT_UNANSWERED);
+  EXPECT(l, 3, 3u, 0, PALP_VERDICT_ACCEPTED);
+
+  /* refused, with the server's reason */
+  mark(&a, &l, 5, 0, 0.3);
+  answer(&a, &l, 5, 0, "mark 5: too close to mark 4", 0.31);
+  EXPECT(l, 4, 5u, 0, PALP_VERDICT_REFUSED);
+  CHECK(!strcmp(l.reason[4], "mark 5: too close to mark 4"), "reason \"%s\"", l.reason[4]);
+
+  /* a mark and its withdrawal share the id; each answer goes to the oldest of them */
+  mark(&a, &l, 6, 0, 0.4);
+  mark(&a, &l, 6, 1, 0.41);
+  answer(&a, &l, 6, 1, "", 0.42);
+  answer(&a, &l, 6, 1, "", 0.43);
+  EXPECT(l, 5, 6u, 0, PALP_VERDICT_ACCEPTED);
+  EXPECT(l, 6, 6u, 1, PALP_VERDICT_ACCEPTED);
+
+  /* no answer: given up after the wait, not before */
+  mark(&a, &l, 7, 0, 1.0);
+  palp_finding_answers_settle(&a, 1.0 + PALP_FINDING_ANSWER_WAIT_S - 0.1, PALP_FINDING_ANSWER_WAIT_S, 0, record, &l);
+  CHECK(l.n == 7, "still waiting 0.1 s before the wait ends (%d verdicts)", l.n);
+  palp_finding_answers_settle(&a, 1.0 + PALP_FINDING_ANSWER_WAIT_S + 0.1, PALP_FINDING_ANSWER_WAIT_S, 0, record, &l);
+  EXPECT(l, 7, 7u, 0, PALP_VERDICT_UNANSWERED);
+
+  /* a stale answer (a transient-local copy) expires; a mark of that id sent later is not taken by it */
+  answer(&a, &l, 9, 1, "", 4.0);
+  answer(&a, &l, 0, 1, "", 4.0); /* mark 0: none yet, ignored */
+  CHECK(a.answers == 1, "mark 0's answer ignored (%d answers)", a.answers);
+  palp_finding_answers_settle(&a, 4.0 + PALP_FINDING_ANSWER_WAIT_S + 0.1, PALP_FINDING_ANSWER_WAIT_S, 0, record, &l);
+  CHECK(a.answers == 0, "stale answer expired (%d)", a.answers);
+  mark(&a, &l, 9, 0, 6.5);
+  CHECK(l.n == 8, "mark 9 waits for its own answer (%d)", l.n);
+
+  /* a flood: the 33rd pending finding gives up the oldest (mark 9) */
+  for (uint32_t k = 0; k < PALP_FINDING_ANSWERS_PENDING; k++) mark(&a, &l, 100 + k, 0, 7.0);
+  EXPECT(l, 8, 9u, 0, PALP_VERDICT_UNANSWERED);
+  CHECK(a.findings == PALP_FINDING_ANSWERS_PENDING, "bounded at %d (%d)", PALP_FINDING_ANSWERS_PENDING, a.findings);
+
+  /* the session ends: everything left is unanswered, oldest first */
+  palp_finding_answers_settle(&a, 7.1, PALP_FINDING_ANSWER_WAIT_S, 1, record, &l);
+  CHECK(l.n == 9 + PALP_FINDING_ANSWERS_PENDING, "all given up (%d)", l.n);
+  EXPECT(l, 9, 100u, 0, PALP_VERDICT_UNANSWERED);
+  EXPECT(l, 8 + PALP_FINDING_ANSWERS_PENDING, 100u + PALP_FINDING_ANSWERS_PENDING - 1, 0, PALP_VERDICT_UNANSWERED);
+  CHECK(a.findings == 0 && a.answers == 0, "empty (%d, %d)", a.findings, a.answers);
+  CHECK_DONE();
+}
