@@ -18,6 +18,7 @@
 #include "palp_coverage.h"
 #include "palp_dds.h"
 #include "palp_dds_strangers.h"
+#include "palp_finding_answers.h"
 #include "palp_place.h"
 
 #define FINGERS 4
@@ -41,6 +42,10 @@
 #define FINDING_GAP_NS 500000000LL
 #define FINDING_MARKS_MAX 64
 #define CONTACT_FRESH_NS 250000000LL
+/* An exercise session's exercise can come before its OPEN state (two topics): kept this long. */
+#define SESSION_EXERCISE_WAIT_NS 10000000000LL
+#define SESSION_EXERCISES_PENDING 16
+#define ANSWER_MARKS 64 /* marks a session's answers list: the server's own bound (findings.c) */
 
 /* One published message: bytes and the version they were built at (versions are unique across
  * the hub, so a cursor holding an old version of a reused slot is never mistaken as current). */
@@ -106,6 +111,25 @@ typedef struct finding_slot {
   int64_t last_ns;
 } finding_slot;
 
+/* An exercise session's answers, for an instructor's dashboard (docs/web.md, "The hidden lumps"):
+ * the exercise as the server drew it for this session (palp_session_exercise) and the trainee's
+ * marks the server accepted, paired with its answers as palp-recorder pairs them. */
+typedef struct answers {
+  palp_exercise *ex;             /* NULL until the session's exercise arrives */
+  palp_finding_answers pairs;
+  int n;                         /* marks accepted, in order; a withdrawal sets withdrawn */
+  uint32_t id[ANSWER_MARKS];
+  palp_finding mark[ANSWER_MARKS];
+  int refused, unanswered;
+  int dirty;
+} answers;
+
+typedef struct pending_exercise {
+  uint32_t sid;
+  palp_exercise *ex;
+  int64_t at_ns;
+} pending_exercise;
+
 typedef struct phantom {
   int used;
   uint32_t id;
@@ -142,6 +166,7 @@ typedef struct session {
   uint64_t late_haptic;    /* local models published > 2 periods after the previous frame's */
   uint64_t lost_haptic;    /* frames the bridge never received (while a finger stayed down) */
   finding_status fst;
+  answers *ans;           /* def.answers: its exercise's lumps and the marks (NULL: none yet) */
   int changed;            /* live data changed since the last live message */
   int64_t next_live_ns;
   /* feedback of this session's partition, read only while a position-driven finger presses (its
@@ -180,6 +205,7 @@ struct palp_web_hub {
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r, debrief_r;
+  dds_entity_t sexercise_r, finding_r; /* def.answers */
   dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
   palp_dds_strangers strangers; /* secured, with a refusal table: plain participants named (hub thread only) */
   int strangers_ready;
@@ -202,6 +228,7 @@ struct palp_web_hub {
   char closed_trainee[DEBRIEFS][64];
   uint32_t closed_phantom[DEBRIEFS]; /* and their phantoms: the debrief names the exercise */
   int closed_next;
+  pending_exercise pending_ex[SESSION_EXERCISES_PENDING];
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
 
   /* shared with the web thread, under mu */
@@ -210,7 +237,7 @@ struct palp_web_hub {
   item hello, phantom_msg[PALP_WEB_MAX_PHANTOMS], sessions_msg, status_msg, exercises_msg;
   finding_slot fs[PALP_WEB_MAX_SESSIONS];
   uint64_t bind_seq;
-  item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS];
+  item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS], answers_msg[PALP_WEB_MAX_SESSIONS];
   uint32_t slot_sid[PALP_WEB_MAX_SESSIONS]; /* 0: free */
   char slot_trainee[PALP_WEB_MAX_SESSIONS][64]; /* its trainee's name, for scoped pages */
   debrief_item debrief[DEBRIEFS];
@@ -231,7 +258,8 @@ static int fail(char *err, size_t errlen, const char *fmt, ...) {
 
 palp_web_hub_def palp_web_hub_default_def(void) {
   return (palp_web_hub_def){.domain = 0, .join = 1, .read_feedback = 1, .dashboard_hz = 10, .live_hz = 30,
-                            .scale_mm = 30, .scale_min_mm = 0.5, .linger_s = 2, .bands = palp_web_bands_default()};
+                            .scale_mm = 30, .scale_min_mm = 0.5, .linger_s = 2, .bands = palp_web_bands_default(),
+                            .answers = 1};
 }
 
 /* ---- publishing (DDS thread) --------------------------------------------------------------- */
@@ -276,6 +304,8 @@ static void build_hello(palp_web_hub *h) {
   cJSON_AddBoolToObject(j, "findings", h->def.sec.kind == PALP_DDS_ID_NONE);
   cJSON_AddNumberToObject(j, "finding_gap_s", FINDING_GAP_NS * 1e-9);
   cJSON_AddBoolToObject(j, "proxy", 1); /* palp_local_model: live fingers carry proxy and device */
+  /* An instructor's dashboard is sent where exercise sessions' lumps are (docs/web.md). */
+  cJSON_AddBoolToObject(j, "answers", h->def.answers);
   publish_json(h, &h->hello, j);
 }
 
@@ -687,6 +717,214 @@ static void update_finding_writer(palp_web_hub *h, int slot) {
   pthread_mutex_unlock(&h->mu);
 }
 
+/* ---- the hidden lumps, for an instructor's dashboard (docs/web.md, "The hidden lumps") ---------
+ * The server writes an exercise session's exercise, lesions included, on palp_session_exercise for
+ * instructors' readers only; the bridge is one when secured. What the dashboard is sent is what the
+ * debrief would say if the session ended now, matched by the same function (palp_assess_findings),
+ * live: each lump's place and whether a standing mark found it, and each standing mark's lump. */
+
+static answers *session_answers(palp_web_hub *h, session *s) {
+  if (!h->def.answers) return NULL;
+  if (!s->ans) s->ans = calloc(1, sizeof *s->ans);
+  if (!s->ans) h->stats.dropped++;
+  return s->ans;
+}
+
+/* The dome's radius as the assessment measures it: |rest pole|, the highest rest vertex [m]. */
+static double dome_radius(const phantom *p) {
+  int top = 0;
+  for (int i = 1; i < p->n; i++)
+    if (p->rest[3 * i + 2] > p->rest[3 * top + 2]) top = i;
+  const double *v = p->rest + 3 * top;
+  return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+static cJSON *place_json(palp_vec3 p) {
+  const double pt[3] = {round(p.x * 1e4) / 10, round(p.y * 1e4) / 10, round(p.z * 1e4) / 10};
+  return cJSON_CreateDoubleArray(pt, 3);
+}
+
+/* {"type": "answers", "session", "exercise", "lesions", "found", "marks", "false_marks", "duplicates",
+ *  "refused", "unanswered", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm", "deep_mm", "point_mm"}],
+ *  "marks_at": [{"id", "point_mm", "lump"}]}: lump is the lump's number (from 1) a mark found, 0 near no
+ * lump, -1 on a lump another mark found. Places as every tool names them (palp_place_*). */
+static void build_answers(palp_web_hub *h, int slot) {
+  session *s = &h->s[slot];
+  answers *a = s->ans;
+  a->dirty = 0;
+  if (!a->ex || !s->ph) return;
+  const double R = dome_radius(s->ph);
+  palp_assess_result r;
+  int match[ANSWER_MARKS];
+  if (palp_assess_findings(a->ex, R, a->mark, a->n, &r, match) < 0) {
+    h->stats.dropped++;
+    return;
+  }
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "answers");
+  cJSON_AddNumberToObject(j, "session", s->id);
+  cJSON_AddStringToObject(j, "exercise", a->ex->name);
+  cJSON_AddNumberToObject(j, "lesions", r.lesion_count);
+  cJSON_AddNumberToObject(j, "found", r.found);
+  cJSON_AddNumberToObject(j, "marks", r.findings); /* standing: palp_assess counts the withdrawn apart */
+  cJSON_AddNumberToObject(j, "false_marks", r.false_positives);
+  cJSON_AddNumberToObject(j, "duplicates", r.duplicates);
+  cJSON_AddNumberToObject(j, "refused", a->refused);
+  cJSON_AddNumberToObject(j, "unanswered", a->unanswered);
+  cJSON *lumps = cJSON_AddArrayToObject(j, "lumps");
+  for (int l = 0; l < a->ex->lesion_count && l < PALP_MAX_LESIONS; l++) {
+    const palp_exercise_lesion *L = &a->ex->lesion[l];
+    const palp_vec3 p = palp_exercise_lesion_surface(L, R);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "found_by", r.lesion_found[l] >= 0 ? a->id[r.lesion_found[l]] : 0);
+    cJSON_AddNumberToObject(o, "clock_h", round(palp_place_clock_hours(p) * 100) / 100);
+    cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
+    cJSON_AddNumberToObject(o, "across_mm", round(L->diameter * 1e4) / 10);
+    cJSON_AddNumberToObject(o, "deep_mm", round(L->depth * 1e4) / 10);
+    cJSON_AddItemToObject(o, "point_mm", place_json(p));
+    cJSON_AddItemToArray(lumps, o);
+  }
+  cJSON *marks = cJSON_AddArrayToObject(j, "marks_at");
+  for (int k = 0; k < a->n; k++) {
+    if (a->mark[k].withdrawn) continue;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "id", a->id[k]);
+    cJSON_AddItemToObject(o, "point_mm", place_json(a->mark[k].point));
+    cJSON_AddNumberToObject(o, "lump", match[k] >= 0 ? match[k] + 1 : match[k] == PALP_FINDING_DUPLICATE ? -1 : 0);
+    cJSON_AddItemToArray(marks, o);
+  }
+  publish_json(h, &h->answers_msg[slot], j);
+}
+
+/* A finding's verdict (palp_finding_answers): an accepted mark stands until its withdrawal. */
+typedef struct verdict_ctx {
+  palp_web_hub *h;
+  answers *a;
+} verdict_ctx;
+
+static void on_verdict(void *ctx, const palp_finding_sent *f, int verdict, const char *reason) {
+  (void)reason;
+  verdict_ctx *v = ctx;
+  answers *a = v->a;
+  a->dirty = 1;
+  if (verdict == PALP_VERDICT_REFUSED) {
+    a->refused++;
+  } else if (verdict == PALP_VERDICT_UNANSWERED) {
+    a->unanswered++;
+    v->h->stats.findings_unanswered++;
+  } else if (f->withdraw) {
+    for (int k = a->n - 1; k >= 0; k--)
+      if (a->id[k] == f->mark_id && !a->mark[k].withdrawn) {
+        a->mark[k].withdrawn = 1;
+        break;
+      }
+  } else if (a->n < ANSWER_MARKS) { /* the server refuses mark 65 on: never reached */
+    a->id[a->n] = f->mark_id;
+    a->mark[a->n++] = (palp_finding){.t = f->t, .point = f->point, .withdrawn = 0};
+  }
+}
+
+static void on_finding(palp_web_hub *h, const palp_Finding *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s) {
+    h->stats.no_session++;
+    return;
+  }
+  answers *a = session_answers(h, s);
+  if (!a) return;
+  if (!isfinite(m->point.x) || !isfinite(m->point.y) || !isfinite(m->point.z) || !isfinite(m->time)) {
+    h->stats.dropped++; /* the server refuses it too; its answer then finds no finding and expires */
+    return;
+  }
+  const palp_finding_sent f = {.mark_id = m->mark_id,
+                               .withdraw = m->op == palp_FINDING_WITHDRAW,
+                               .point = {m->point.x, m->point.y, m->point.z},
+                               .t = m->time};
+  verdict_ctx v = {h, a};
+  palp_finding_answers_finding(&a->pairs, &f, (double)palp_dds_now_ns() * 1e-9, on_verdict, &v);
+}
+
+static void attach_exercise(palp_web_hub *h, session *s, palp_exercise *ex) {
+  answers *a = session_answers(h, s);
+  if (!a) {
+    free(ex);
+    return;
+  }
+  free(a->ex);
+  a->ex = ex;
+  a->dirty = 1;
+}
+
+/* The session's exercise from the server, checked as an exercise file is: it comes from the
+ * network. One whose name is not its JSON's is refused too. */
+static void on_session_exercise(palp_web_hub *h, const palp_SessionExercise *m) {
+  char err[256];
+  palp_exercise *ex = malloc(sizeof *ex);
+  const int rc = ex ? palp_exercise_parse(m->json, NULL, ex, err, sizeof err) : PALP_ENOMEM;
+  if (rc == 0 && strcmp(ex->name, m->name) != 0) {
+    snprintf(err, sizeof err, "it names exercise \"%.60s\", its JSON \"%.60s\"", m->name, ex->name);
+    free(ex);
+    ex = NULL;
+  } else if (rc != 0) {
+    if (rc == PALP_ENOMEM) snprintf(err, sizeof err, "out of memory");
+    free(ex);
+    ex = NULL;
+  }
+  if (!ex) {
+    h->stats.dropped++;
+    palp_log_warn(h->def.log, "session %u: its exercise from the server refused: %s", m->session_id, err);
+    return;
+  }
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (s) {
+    attach_exercise(h, s, ex);
+    return;
+  }
+  /* before its OPEN state: kept a while (the oldest given up) */
+  pending_exercise *keep = &h->pending_ex[0];
+  for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) {
+    pending_exercise *p = &h->pending_ex[k];
+    if (!p->ex || p->sid == m->session_id) {
+      keep = p;
+      break;
+    }
+    if (p->at_ns < keep->at_ns) keep = p;
+  }
+  free(keep->ex);
+  *keep = (pending_exercise){.sid = m->session_id, .ex = ex, .at_ns = palp_dds_now_ns()};
+}
+
+static void claim_session_exercise(palp_web_hub *h, session *s) {
+  for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) {
+    pending_exercise *p = &h->pending_ex[k];
+    if (p->ex && p->sid == s->id) {
+      attach_exercise(h, s, p->ex);
+      *p = (pending_exercise){0};
+    }
+  }
+}
+
+/* Each poll: findings whose answers did not come are given up, pending exercises of sessions that
+ * never opened here dropped, and changed answers rebuilt. */
+static void tend_answers(palp_web_hub *h, int64_t now) {
+  for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) {
+    pending_exercise *p = &h->pending_ex[k];
+    if (p->ex && now - p->at_ns > SESSION_EXERCISE_WAIT_NS) {
+      free(p->ex);
+      *p = (pending_exercise){0};
+    }
+  }
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    session *s = &h->s[i];
+    if (!s->used || !s->ans) continue;
+    verdict_ctx v = {h, s->ans};
+    palp_finding_answers_settle(&s->ans->pairs, (double)now * 1e-9, PALP_FINDING_ANSWER_WAIT_S, 0, on_verdict, &v);
+    if (s->ans->dirty) build_answers(h, i);
+  }
+}
+
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   const uint32_t phantom = s->st.phantom_id;
@@ -699,9 +937,12 @@ static void free_session(palp_web_hub *h, int slot) {
   if (fpub > 0) dds_delete(fpub);
   if (s->fb_sub > 0) dds_delete(s->fb_sub);
   palp_coverage_destroy(s->cov);
+  if (s->ans) free(s->ans->ex);
+  free(s->ans);
   memset(s, 0, sizeof *s);
   publish(h, &h->deform_msg[slot], NULL, 0);
   publish(h, &h->live_msg[slot], NULL, 0);
+  publish(h, &h->answers_msg[slot], NULL, 0);
   pthread_mutex_lock(&h->mu);
   h->closed_sid[h->closed_next] = h->slot_sid[slot];
   h->closed_phantom[h->closed_next] = phantom;
@@ -751,6 +992,7 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
   s->ph = find_phantom(h, m->phantom_id, 0, &ps);
   attach_coverage(s);
   update_finding_writer(h, slot);
+  claim_session_exercise(h, s);
   h->sessions_dirty = 1;
 }
 
@@ -893,6 +1135,12 @@ static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
   copy_str(s->fst.reason, sizeof s->fst.reason, m->reason);
   s->fst.time_left = m->time_left;
   s->fst.at_ns = palp_dds_now_ns();
+  answers *a = session_answers(h, s);
+  if (a) {
+    verdict_ctx v = {h, a};
+    palp_finding_answers_answer(&a->pairs, m->last_mark_id, m->last_accepted, m->reason,
+                                (double)palp_dds_now_ns() * 1e-9, on_verdict, &v);
+  }
   /* A mark the server refused does not stand: "withdraw last" must not name it. */
   pthread_mutex_lock(&h->mu);
   finding_slot *fs = &h->fs[slot];
@@ -1315,6 +1563,7 @@ static void *hub_main(void *arg) {
     news += drain(h, h->state_r, (sample_fn)on_state, on_state_lost, &h->stats.states);
     news += drain(h, h->status_r, (sample_fn)on_status, NULL, &h->stats.statuses);
     news += drain(h, h->exercise_r, (sample_fn)on_exercise, on_exercise_lost, &h->stats.exercises);
+    drain(h, h->sexercise_r, (sample_fn)on_session_exercise, NULL, &h->stats.session_exercises);
     /* Contacts and feedback arrive at the tick rate (up to 1 kHz): polled here, newest per key,
      * instead of waking the thread per sample. */
     if (poll_due) {
@@ -1324,6 +1573,10 @@ static void *hub_main(void *arg) {
       drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
       drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
       drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
+      if (h->def.answers) {
+        drain(h, h->finding_r, (sample_fn)on_finding, NULL, &h->stats.findings_read);
+        tend_answers(h, now);
+      }
       news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
     }
     check_replies(h, now);
@@ -1452,10 +1705,15 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   /* an instructor's permissions read every topic: no older permissions to allow for here */
   h->debrief_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
   h->exercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
+  if (def->answers) {
+    /* the answers (instructors only: a trainee's permissions cannot even create the topic) */
+    h->sexercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE);
+    h->finding_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+  }
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -1508,7 +1766,11 @@ void palp_web_hub_destroy(palp_web_hub *h) {
     palp_coverage_destroy(h->s[i].cov);
     free(h->deform_msg[i].buf);
     free(h->live_msg[i].buf);
+    free(h->answers_msg[i].buf);
+    if (h->s[i].ans) free(h->s[i].ans->ex);
+    free(h->s[i].ans);
   }
+  for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) free(h->pending_ex[k].ex);
   for (int i = 0; i < MAX_SERVERS; i++) free(h->srv[i].loads);
   free(h->hello.buf);
   for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf);
@@ -1727,6 +1989,7 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
   /* A new follow starts from the newest frame, not from whatever was skipped. */
   memset(c->deform_ver, 0, sizeof c->deform_ver);
   memset(c->live_ver, 0, sizeof c->live_ver);
+  memset(c->answers_ver, 0, sizeof c->answers_ver);
   pthread_mutex_unlock(&h->mu);
   return 0;
 }
@@ -1811,9 +2074,18 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   }
   if (c->mode == PALP_WEB_FOLLOW_NONE) goto out;
   const int64_t min_gap = c->mode == PALP_WEB_FOLLOW_ALL ? (int64_t)(1e9 / h->def.dashboard_hz) : 0;
+  /* The hidden lumps go to an instructor's page following every session, the dashboard, alone:
+   * never to a trainee's token, never to a page bound as a trainee page (whoever opened it), never
+   * to a page following one session (the dashboard's click opens one in front of the trainee). */
+  const int answers_ok = !c->scope[0] && !c->trainee && c->mode == PALP_WEB_FOLLOW_ALL;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
     if (!h->slot_sid[i] || (c->mode == PALP_WEB_FOLLOW_SESSION && h->slot_sid[i] != c->follow)) continue;
-    const item *d = &h->deform_msg[i], *l = &h->live_msg[i];
+    const item *d = &h->deform_msg[i], *l = &h->live_msg[i], *a = &h->answers_msg[i];
+    if (answers_ok && a->buf && c->answers_ver[i] != a->ver) {
+      rc = take(a, pre, buf, len);
+      if (rc > 0) c->answers_ver[i] = a->ver;
+      goto out;
+    }
     /* 1 ms of slack: frames that arrive at exactly the dashboard rate are not pushed to the next one. */
     if (d->buf && c->deform_ver[i] != d->ver && now - c->deform_sent_ns[i] >= min_gap - 1000000) {
       rc = take(d, pre, buf, len);

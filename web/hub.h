@@ -47,6 +47,12 @@ typedef struct palp_web_hub_def {
   /* The peers DDS Security refused (main's table, idl/palp_dds_refusals.h; NULL: none): listed
    * in the dashboard's status, so the instructor sees who cannot join and why. */
   palp_dds_refusals *refusals;
+  /* 1 (default): read each exercise session's exercise, lesions included (palp_session_exercise:
+   * the server writes it for instructors only), and its findings, and send an instructor's
+   * dashboard where the hidden lumps are and which of them the trainee's marks found, live
+   * (docs/web.md, "The hidden lumps"). 0 (--no-answers): a bridge whose dashboard must not show
+   * them (one projected in the room) reads neither. */
+  int answers;
 } palp_web_hub_def;
 
 palp_web_hub_def palp_web_hub_default_def(void);
@@ -66,6 +72,9 @@ typedef struct palp_web_cursor {
   uint64_t deform_ver[PALP_WEB_MAX_SESSIONS], live_ver[PALP_WEB_MAX_SESSIONS];
   int64_t deform_sent_ns[PALP_WEB_MAX_SESSIONS];
   uint64_t exercises_ver;
+  /* an exercise session's hidden lumps and marks (palp_web_hub_next sends them only to an
+   * instructor's page following every session: the dashboard) */
+  uint64_t answers_ver[PALP_WEB_MAX_SESSIONS];
   /* {"trainee": ID}: this page is that session's trainee page (the newest binding wins); only a
    * bound page may send findings. 0: a viewer (dashboard, observer). */
   uint32_t trainee;
@@ -95,6 +104,8 @@ typedef struct palp_web_hub_stats {
   uint64_t joins, leaves, join_rejected;
   uint64_t exercises, finding_statuses;            /* DDS samples taken */
   uint64_t debriefs;                               /* palp_debrief samples taken (2026-12-05) */
+  uint64_t session_exercises, findings_read;       /* palp_session_exercise, palp_finding samples taken */
+  uint64_t findings_unanswered;                    /* findings whose answer the bridge did not see */
   uint64_t findings_written, findings_refused;     /* browser finding requests */
   uint64_t late_haptic, lost_haptic;               /* local models late / missing, all sessions */
   int sessions_open, clients;

@@ -57,6 +57,9 @@ static void usage(FILE *f) {
           "  --max-clients N     WebSocket connections at once (default 32)\n"
           "  --no-join           never join a session: show only what the server already streams\n"
           "  --no-feedback       never read feedback (a position-driven finger's force then shows 0 N)\n"
+          "  --no-answers        never read or show where exercise sessions' lumps are (by default the\n"
+          "                      dashboard shows them, and which the marks found: for a dashboard the\n"
+          "                      trainees can see, e.g. projected in the room)\n"
           "  --www DIR           the pages (default <data>/www: share/palp/www installed, web/www in a build)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
           "  --duration S        stop after S seconds (tests, benchmarks)\n"
@@ -153,9 +156,11 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.ws_opened,
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
   if (h.exercises || h.findings_written || h.findings_refused || h.local_models)
-    palp_log_info(log, "exercises %llu, finding statuses %llu; findings written %llu, refused %llu; local models %llu "
-                       "(late %llu, lost %llu)",
-                  (unsigned long long)h.exercises, (unsigned long long)h.finding_statuses,
+    palp_log_info(log, "exercises %llu (sessions' %llu), finding statuses %llu, findings read %llu (%llu unanswered); "
+                       "findings written %llu, refused %llu; local models %llu (late %llu, lost %llu)",
+                  (unsigned long long)h.exercises, (unsigned long long)h.session_exercises,
+                  (unsigned long long)h.finding_statuses, (unsigned long long)h.findings_read,
+                  (unsigned long long)h.findings_unanswered,
                   (unsigned long long)h.findings_written, (unsigned long long)h.findings_refused,
                   (unsigned long long)h.local_models, (unsigned long long)h.late_haptic,
                   (unsigned long long)h.lost_haptic);
@@ -198,6 +203,7 @@ int main(int argc, char **argv) {
     if (common) continue;
     if (!strcmp(a, "--no-join")) { hd.join = 0; continue; }
     if (!strcmp(a, "--no-feedback")) { hd.read_feedback = 0; continue; }
+    if (!strcmp(a, "--no-answers")) { hd.answers = 0; continue; }
     if (!strcmp(a, "--stats")) { stats = 1; continue; }
     if (!strcmp(a, "--insecure-http")) { insecure_http = 1; continue; }
     if (!v) {
@@ -428,6 +434,15 @@ int main(int argc, char **argv) {
                   sd.listen);
   printf("palp-web: trainee page  %s://%s:%d/trainee.html%s\n", scheme, host, port, q);
   printf("palp-web: dashboard     %s://%s:%d/dashboard.html%s\n", scheme, host, port, q);
+  /* Who sees the answers: the dashboard's viewers (docs/web.md, "The hidden lumps"). */
+  if (!hd.answers)
+    printf("palp-web: hidden lumps: not shown (--no-answers)\n");
+  else
+    printf("palp-web: hidden lumps: on the dashboard, for %s; never on a trainee page%s\n",
+           token ? "holders of the instructors' token" : "anyone who opens it on this host (no --token)",
+           hd.sec.kind == PALP_DDS_ID_NONE ? " (a server without DDS Security sends them only if its config "
+                                             "says \"session_exercise\": \"always\")"
+                                           : "");
   fflush(stdout);
   palp_web_serve_run(srv, &g_stop);
   palp_web_hub_stop(hub);

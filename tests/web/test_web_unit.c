@@ -526,6 +526,228 @@ static void test_debriefs(palp_web_hub *h, dds_entity_t pp) {
   palp_web_hub_detach(h, &own);
 }
 
+/* ---- the hidden lumps (docs/web.md, "The hidden lumps") ---------------------------------------- */
+#define ANSWERS_EXERCISE                                                                                           \
+  "{\"name\":\"answers-test\",\"title\":\"Two lumps\",\"phantom\":\"dome.json\",\"instructions\":\"Search.\","     \
+  "\"time_limit_s\":300,\"lesions\":["                                                                             \
+  "{\"polar_deg\":30,\"azimuth_deg\":0,\"depth_mm\":12,\"diameter_mm\":10,\"stiffness_ratio\":5},"                 \
+  "{\"polar_deg\":60,\"azimuth_deg\":90,\"depth_mm\":15,\"diameter_mm\":12,\"stiffness_ratio\":5}],"                \
+  "\"pressure_bands\":{\"light\":{\"depth_mm\":[1,4]},\"medium\":{\"depth_mm\":[4,9]},\"deep\":{\"depth_mm\":[9,18]}}," \
+  "\"max_force_N\":15,\"match_margin_mm\":10,"                                                                     \
+  "\"rubric\":{\"weights\":{\"sensitivity\":1},\"pass\":{\"sensitivity\":1,\"score\":50,"                          \
+  "\"coverage\":{\"light\":0,\"medium\":0,\"deep\":0}}}}"
+
+typedef struct answers_seen {
+  uint32_t sid;
+  int n;       /* answers messages of that session */
+  cJSON *last; /* the newest */
+} answers_seen;
+
+static int is_answers(const cJSON *j, void *arg) {
+  answers_seen *a = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  if (!type || strcmp(type, "answers") || cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) != a->sid) return 0;
+  a->n++;
+  cJSON_Delete(a->last);
+  a->last = cJSON_Duplicate(j, 1);
+  return 0; /* read on */
+}
+
+/* Reads every message this cursor is sent within `tries` waits of 10 ms; the answers of sid counted. */
+static void read_answers(palp_web_hub *h, palp_web_cursor *c, int tries, answers_seen *a) {
+  next_json(h, c, tries, is_answers, a);
+}
+
+static int num(const cJSON *o, const char *k) { return (int)cJSON_GetNumberValue(cJSON_GetObjectItem(o, k)); }
+
+/* The marks standing in an answers message, as "id:lump" pairs ("1:1 2:0"). */
+static void marks_text(const cJSON *a, char *out, size_t n) {
+  out[0] = 0;
+  const cJSON *m;
+  cJSON_ArrayForEach(m, cJSON_GetObjectItem(a, "marks_at")) {
+    const size_t used = strlen(out);
+    snprintf(out + used, n - used, "%s%d:%d", used ? " " : "", num(m, "id"), num(m, "lump"));
+  }
+}
+
+/* An exercise session's hidden lumps reach an instructor's dashboard alone, with what the trainee's
+ * marks found as the server accepted them: a session of cat's on phantom 2 (radius 40 mm, from
+ * test_exercise_bands), its exercise written before its OPEN state (two lumps: polar 30 deg azimuth 0
+ * and polar 60 deg azimuth 90, so on the skin at R (sin 30, 0, cos 30) = (20.0, 0, 34.6) mm and
+ * R (0, sin 60, cos 60) = (0, 34.6, 20.0) mm; 10 mm of margin beyond their radii); marks and answers
+ * written as station and server write them, in the orders the wire allows. */
+static void test_answers(palp_web_hub *h, dds_entity_t pp) {
+  const uint32_t sid = 4731;
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, part);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t w_sx =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_EXERCISE), PALP_TOPIC_SESSION_EXERCISE);
+  const dds_entity_t w_f = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINDING), PALP_TOPIC_FINDING);
+  const dds_entity_t w_fs =
+      palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINDING_STATUS), PALP_TOPIC_FINDING_STATUS);
+  CHECK(pub > 0 && w_state > 0 && w_sx > 0 && w_f > 0 && w_fs > 0, "answers: the test's writers");
+  palp_web_cursor dash, obs, own, bound;
+  CHECK(palp_web_hub_attach(h, &dash, 8) == 0 && palp_web_hub_attach(h, &obs, 8) == 0 &&
+            palp_web_hub_attach(h, &own, 8) == 0 && palp_web_hub_attach(h, &bound, 8) == 0,
+        "answers: four pages");
+  palp_web_hub_scope(h, &own, "cat");
+  char follow[64], bind[64];
+  snprintf(follow, sizeof follow, "{\"follow\":%u}", sid);
+  snprintf(bind, sizeof bind, "{\"trainee\":%u}", sid);
+  CHECK(palp_web_hub_control(h, &dash, "{\"follow\":\"all\"}", 16) == 0, "the instructor's dashboard follows all");
+  CHECK(palp_web_hub_control(h, &obs, follow, strlen(follow)) == 0, "an instructor's page follows cat's session");
+
+  /* a malformed exercise and one whose name is not its JSON's: refused, counted, never shown */
+  palp_web_hub_stats st0;
+  palp_web_hub_stats_get(h, &st0);
+  static palp_SessionExercise sx; /* 32 KB of JSON: not on the stack */
+  memset(&sx, 0, sizeof sx);
+  sx.session_id = 4732;
+  sx.phantom_id = 2;
+  snprintf(sx.name, sizeof sx.name, "answers-test");
+  snprintf(sx.json, sizeof sx.json, "{\"name\":\"answers-test\",\"lesions\":[{\"polar_deg\":");
+  dds_write(w_sx, &sx);
+  sx.session_id = 4733;
+  snprintf(sx.name, sizeof sx.name, "other");
+  snprintf(sx.json, sizeof sx.json, "%s", ANSWERS_EXERCISE);
+  dds_write(w_sx, &sx);
+  /* cat's, before her session's OPEN state (the two topics race) */
+  sx.session_id = sid;
+  snprintf(sx.name, sizeof sx.name, "answers-test");
+  dds_write(w_sx, &sx);
+  dds_sleepfor(DDS_MSECS(200));
+  write_open_state(w_state, sid, 2, part, "cat");
+  write_open_state(w_state, 4732, 2, "palp/session/4732", "dan");
+  write_open_state(w_state, 4733, 2, "palp/session/4733", "eve");
+  dds_sleepfor(DDS_MSECS(300)); /* cat's session known: her own page may follow it */
+  CHECK(palp_web_hub_control(h, &own, follow, strlen(follow)) == 0, "a page of cat's own token follows her session");
+  CHECK(palp_web_hub_control(h, &bound, bind, strlen(bind)) == 0, "a page bound as her trainee page");
+  answers_seen a = {.sid = sid};
+  read_answers(h, &dash, 100, &a);
+  CHECK(a.n >= 1 && a.last, "the dashboard is sent cat's session's lumps (%d messages)", a.n);
+  if (a.last) {
+    const cJSON *l = cJSON_GetObjectItem(a.last, "lumps");
+    const double want[2][3] = {{20.0, 0.0, 34.6}, {0.0, 34.6, 20.0}};
+    CHECK(cJSON_GetArraySize(l) == 2 && num(a.last, "lesions") == 2 && num(a.last, "found") == 0, "two lumps, none found");
+    for (int k = 0; k < 2 && cJSON_GetArraySize(l) == 2; k++) {
+      const cJSON *p = cJSON_GetObjectItem(cJSON_GetArrayItem(l, k), "point_mm");
+      for (int i = 0; i < 3; i++)
+        CHECK(fabs(cJSON_GetNumberValue(cJSON_GetArrayItem(p, i)) - want[k][i]) <= 0.051,
+              "lump %d on the skin at coordinate %d: %.1f mm (want %.1f, within the message's 0.1 mm)", k + 1, i,
+              cJSON_GetNumberValue(cJSON_GetArrayItem(p, i)), want[k][i]);
+      CHECK(fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(cJSON_GetArrayItem(l, k), "across_mm")) - (k ? 12 : 10)) < 1e-9,
+            "lump %d across as the exercise says", k + 1);
+    }
+    CHECK(!strcmp(cJSON_GetStringValue(cJSON_GetObjectItem(a.last, "exercise")), "answers-test"), "the exercise named");
+  }
+  answers_seen none = {.sid = 4732}, none2 = {.sid = 4733};
+  read_answers(h, &dash, 20, &none);
+  read_answers(h, &dash, 20, &none2);
+  palp_web_hub_stats st1;
+  palp_web_hub_stats_get(h, &st1);
+  CHECK(none.n == 0 && none2.n == 0 && st1.dropped == st0.dropped + 2,
+        "a malformed exercise and a misnamed one are refused and counted (%d, %d sent; %llu dropped)", none.n, none2.n,
+        (unsigned long long)(st1.dropped - st0.dropped));
+
+  /* marks: 1 near lump 1, accepted; 2 near no lump, accepted (its answer before the mark); 3 near
+   * lump 2, whose answer is replaced by 4's (refused): 3 is not counted; 5 near lump 2, accepted;
+   * then mark 2 withdrawn */
+  palp_Finding f;
+  palp_FindingStatus fs;
+  const struct {
+    uint32_t id;
+    int op, answer_first, answered, accepted;
+    double x, y, z;
+  } step[] = {{1, palp_FINDING_MARK, 0, 1, 1, 0.0195, 0.0010, 0.0345},
+              {2, palp_FINDING_MARK, 1, 1, 1, -0.0300, -0.0200, 0.0173},
+              {3, palp_FINDING_MARK, 0, 0, 1, 0.0005, 0.0345, 0.0195},
+              {4, palp_FINDING_MARK, 0, 1, 0, 0.0010, 0.0340, 0.0200},
+              {5, palp_FINDING_MARK, 0, 1, 1, 0.0005, 0.0345, 0.0195},
+              {2, palp_FINDING_WITHDRAW, 0, 1, 1, 0, 0, 0}};
+  uint32_t standing = 0;
+  for (size_t k = 0; k < sizeof step / sizeof step[0]; k++) {
+    memset(&f, 0, sizeof f);
+    f.session_id = sid;
+    f.mark_id = step[k].id;
+    f.op = step[k].op;
+    f.point = (palp_Vec3){step[k].x, step[k].y, step[k].z};
+    f.time = 1.0 + (double)k;
+    memset(&fs, 0, sizeof fs);
+    fs.session_id = sid;
+    if (step[k].accepted && step[k].answered) standing += step[k].op == palp_FINDING_MARK ? 1 : (uint32_t)-1;
+    fs.marks = standing;
+    fs.last_mark_id = step[k].id;
+    fs.last_accepted = step[k].accepted;
+    snprintf(fs.reason, sizeof fs.reason, "%s", step[k].accepted ? "" : "mark 4: too close to mark 3");
+    fs.time_left = 200;
+    if (step[k].answer_first) dds_write(w_fs, &fs), dds_sleepfor(DDS_MSECS(60));
+    dds_write(w_f, &f);
+    dds_sleepfor(DDS_MSECS(60));
+    if (step[k].answered && !step[k].answer_first) dds_write(w_fs, &fs), dds_sleepfor(DDS_MSECS(60));
+    if (k == 1) { /* before the withdrawal: mark 2 stands near no lump */
+      char got[64] = "";
+      for (int i = 0; i < 30 && strcmp(got, "1:1 2:0"); i++) {
+        read_answers(h, &dash, 5, &a);
+        if (a.last) marks_text(a.last, got, sizeof got);
+      }
+      CHECK(!strcmp(got, "1:1 2:0") && a.last && num(a.last, "found") == 1 && num(a.last, "false_marks") == 1,
+            "after marks 1 and 2: mark 1 on lump 1, mark 2 near no lump, 1 found, 1 false (\"%s\")", got);
+    }
+  }
+  char got[64] = "";
+  for (int i = 0; i < 40 && strcmp(got, "1:1 5:2"); i++) {
+    read_answers(h, &dash, 5, &a);
+    if (a.last) marks_text(a.last, got, sizeof got);
+  }
+  CHECK(!strcmp(got, "1:1 5:2"), "standing at the end: mark 1 on lump 1, mark 5 on lump 2 (\"%s\")", got);
+  if (a.last) {
+    const cJSON *l = cJSON_GetObjectItem(a.last, "lumps");
+    CHECK(num(a.last, "found") == 2 && num(a.last, "marks") == 2 && num(a.last, "false_marks") == 0 &&
+              num(cJSON_GetArrayItem(l, 0), "found_by") == 1 && num(cJSON_GetArrayItem(l, 1), "found_by") == 5,
+          "both lumps found, by marks 1 and 5; 2 marks standing, none false (found %d, marks %d, false %d)",
+          num(a.last, "found"), num(a.last, "marks"), num(a.last, "false_marks"));
+    CHECK(num(a.last, "refused") == 1 && num(a.last, "unanswered") == 1,
+          "mark 4 refused; mark 3, whose answer was replaced, unanswered (refused %d, unanswered %d)",
+          num(a.last, "refused"), num(a.last, "unanswered"));
+  }
+  /* never to a page following one session, one of cat's own token, or her bound trainee page */
+  answers_seen o = {.sid = sid}, w = {.sid = sid}, b = {.sid = sid};
+  read_answers(h, &obs, 30, &o);
+  read_answers(h, &own, 30, &w);
+  read_answers(h, &bound, 30, &b);
+  CHECK(o.n == 0 && w.n == 0 && b.n == 0,
+        "not sent to an instructor's page following the session (%d), cat's own (%d) or her trainee page (%d)", o.n, w.n,
+        b.n);
+  /* the session closes: the dashboard's lumps go with it */
+  palp_SessionState closed;
+  memset(&closed, 0, sizeof closed);
+  closed.session_id = sid;
+  closed.phase = palp_PHASE_CLOSED;
+  dds_write(w_state, &closed);
+  dds_sleepfor(DDS_MSECS(200));
+  palp_web_cursor late;
+  CHECK(palp_web_hub_attach(h, &late, 8) == 0 && palp_web_hub_control(h, &late, "{\"follow\":\"all\"}", 16) == 0,
+        "a dashboard opened after the session closed");
+  answers_seen after = {.sid = sid};
+  read_answers(h, &late, 30, &after);
+  CHECK(after.n == 0, "is sent no lumps of the closed session (%d)", after.n);
+  cJSON_Delete(a.last);
+  cJSON_Delete(o.last);
+  cJSON_Delete(w.last);
+  cJSON_Delete(b.last);
+  cJSON_Delete(after.last);
+  cJSON_Delete(none.last);
+  cJSON_Delete(none2.last);
+  palp_web_hub_detach(h, &dash);
+  palp_web_hub_detach(h, &obs);
+  palp_web_hub_detach(h, &own);
+  palp_web_hub_detach(h, &bound);
+  palp_web_hub_detach(h, &late);
+}
+
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
@@ -665,6 +887,7 @@ static void test_local_model(void) {
         (unsigned long long)hs.no_session, (unsigned long long)hs.dropped);
   test_findings(h, &c, pp, pub, sid, w_lm, &lm);
   test_exercise_bands(h, pp);
+  test_answers(h, pp);
   palp_web_hub_detach(h, &c);
   test_debriefs(h, pp);
   dds_delete(pp);

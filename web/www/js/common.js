@@ -124,10 +124,11 @@ const PALP = (function () {
       plural(m.false_marks, "mark was", "marks were") + " near no lump" +
       (m.duplicates ? ", " + m.duplicates + " on a lump already found" : "");
   }
-  /* one lump of a debrief at "lesions" (i from 0), where it is in the words every palp tool uses for a
+  /* one lump of a debrief at "lesions" (i from 0), or of the dashboard's hidden lumps, where it is in the words every palp tool uses for a
    * place (docs/naming.md: the clock seen from above, the arc from the pole along the skin) */
-  function debriefLump(l, i) {
-    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : "MISSED") + ": at " +
+  function debriefLump(l, i, live) {
+    /* live: the dashboard's hidden lumps while the session runs (an `answers` message): not missed yet */
+    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : live ? "not found yet" : "MISSED") + ": at " +
       l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; " +
       l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
   }

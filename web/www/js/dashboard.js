@@ -12,6 +12,10 @@
   const REJECT = ["nonfinite", "unknown_session", "bad_finger", "bad_mode", "bad_distribution", "bad_vertex",
     "out_of_reach", "force_limit", "bad_radius", "model_refused"];
   const SIZE = 150;
+  /* The hidden lumps of exercise sessions (an `answers` message: the bridge sends them to this page
+   * alone, docs/web.md "The hidden lumps"), by session id; shown unless the instructor hides them
+   * (the box in the legend, e.g. before turning the screen to the class). */
+  const answersOf = new Map(), showAnswers = document.getElementById("show-answers");
 
   function fmt(x, d) { return x === null || x === undefined ? "n/a" : Number(x).toFixed(d); }
 
@@ -25,13 +29,15 @@
     const cv = document.createElement("canvas");
     cv.width = cv.height = SIZE;
     const tb = document.createElement("table");
-    el.append(h, cv, tb);
+    const lumps = document.createElement("ul");
+    lumps.className = "lumps";
+    el.append(h, cv, lumps, tb);
     el.addEventListener("click", function () {
       /* followed as an observer: the instructor's view of a trainee page never marks findings */
       location.href = "trainee.html?session=" + s.id + "&role=observer" + (token ? "&token=" + encodeURIComponent(token) : "");
     });
     grid.appendChild(el);
-    const c = { el: el, name: name, band: band, canvas: cv, table: tb, proj: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0,
+    const c = { el: el, name: name, band: band, canvas: cv, table: tb, lumps: lumps, proj: null, disp: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0,
       scaleMm: scaleMin };
     cards.set(s.id, c);
     return c;
@@ -41,11 +47,71 @@
   function projection(ph) {
     const R = ph.radius, k = (SIZE / 2 - 4) / R, n = ph.dome_triangles, xy = new Float32Array(ph.rest.length / 3 * 2);
     for (let i = 0; i < xy.length / 2; i++) { xy[2 * i] = SIZE / 2 + k * ph.rest[3 * i]; xy[2 * i + 1] = SIZE / 2 - k * ph.rest[3 * i + 1]; }
-    return { xy: xy, tri: ph.triangles.slice(0, 3 * n), n: ph.rest.length / 3 };
+    return { xy: xy, tri: ph.triangles.slice(0, 3 * n), n: ph.rest.length / 3, k: k };
+  }
+
+  /* The hidden lumps over the top view: each lump a circle of its size around its place on the skin
+   * (solid when a standing mark found it, dashed while none has), each standing mark a cross (in
+   * the warning red when near no lump), numbered as the lists number them. */
+  function drawAnswers(c, g) {
+    const a = answersOf.get(Number(c.el.dataset.session));
+    if (!a || !showAnswers.checked || !c.proj) return;
+    const k = c.proj.k;
+    const at = function (p) { return [SIZE / 2 + k * p[0] / 1000, SIZE / 2 - k * p[1] / 1000]; };
+    g.save();
+    g.lineWidth = 2;
+    g.font = "10px sans-serif";
+    a.lumps.forEach(function (l, i) {
+      const p = at(l.point_mm);
+      g.setLineDash(l.found_by ? [] : [4, 3]);
+      g.strokeStyle = "#fff";
+      g.beginPath();
+      g.arc(p[0], p[1], Math.max(3, k * l.across_mm / 2000), 0, 2 * Math.PI);
+      g.stroke();
+      g.fillStyle = "#fff";
+      g.fillText(String(i + 1), p[0] + 2, p[1] - 2);
+    });
+    g.setLineDash([]);
+    for (const m of a.marks_at) {
+      const p = at(m.point_mm);
+      g.strokeStyle = m.lump > 0 ? "#000" : "#b00020";
+      g.beginPath();
+      g.moveTo(p[0] - 4, p[1] - 4); g.lineTo(p[0] + 4, p[1] + 4);
+      g.moveTo(p[0] + 4, p[1] - 4); g.lineTo(p[0] - 4, p[1] + 4);
+      g.stroke();
+    }
+    g.restore();
+  }
+
+  /* The hidden lumps under the top view, in the debrief's words (PALP.debriefLump), live. */
+  function listAnswers(c) {
+    const a = answersOf.get(Number(c.el.dataset.session));
+    c.lumps.textContent = "";
+    if (!a) return;
+    const head = document.createElement("li");
+    if (!showAnswers.checked) {
+      head.textContent = "hidden lumps: not shown (the box above)";
+      head.className = "muted";
+      c.lumps.appendChild(head);
+      return;
+    }
+    const near = a.marks_at.filter(function (m) { return m.lump === 0; }).length;
+    head.textContent = "hidden lumps, the trainee does not see them: " + PALP.debriefFound(a) + "; " +
+      PALP.plural(a.marks, "mark", "marks") + " standing, " + near + " near no lump" +
+      (a.unanswered ? "; " + PALP.plural(a.unanswered, "finding", "findings") + " whose answer the bridge missed" : "");
+    head.className = a.found < a.lesions || near ? "warn" : "";
+    c.lumps.appendChild(head);
+    a.lumps.forEach(function (l, i) {
+      const li = document.createElement("li");
+      li.textContent = PALP.debriefLump(l, i, true);
+      li.className = l.found_by ? "found" : "";
+      c.lumps.appendChild(li);
+    });
   }
 
   function draw(c, disp) {
     if (!c.proj || (disp && disp.length !== 3 * c.proj.n)) return;
+    c.disp = disp;
     const g = c.canvas.getContext("2d"), xy = c.proj.xy, tri = c.proj.tri;
     g.clearRect(0, 0, SIZE, SIZE);
     const mag = new Float32Array(c.proj.n);
@@ -64,6 +130,7 @@
       g.fill();
       g.stroke();
     }
+    drawAnswers(c, g);
   }
 
   /* LM_* bits (idl/palp_types.idl): now / seen since the session opened, in the station's and the
@@ -129,6 +196,7 @@
       c.proj = projection(st.phantoms[s.phantom]);
       draw(c, null);
     }
+    listAnswers(c);
   }
 
   function serverStatus(m) {
@@ -220,6 +288,10 @@
     document.getElementById("no-debriefs").hidden = true;
   }
 
+  showAnswers.addEventListener("change", function () {
+    for (const c of cards.values()) { listAnswers(c); draw(c, c.disp); }
+  });
+
   PALP.connect({
     open: function (send) { send({ follow: "all" }); },
     hello: function (m) {
@@ -239,13 +311,20 @@
         if (s.exercise) exerciseOf.set(s.id, s.exercise);
       }
       for (const id of exerciseOf.keys()) { if (exerciseOf.size <= EXERCISES_KEPT) break; exerciseOf.delete(id); }
-      for (const [id, c] of cards) if (!seen.has(id)) { c.el.remove(); cards.delete(id); }
+      for (const [id, c] of cards) if (!seen.has(id)) { c.el.remove(); cards.delete(id); answersOf.delete(id); }
       st.dashboard.cards = Array.from(cards.keys()).sort(function (a, b) { return a - b; });
       document.getElementById("empty").hidden = cards.size > 0;
       document.getElementById("info").textContent = "class dashboard: " + cards.size + " open session" + (cards.size === 1 ? "" : "s");
     },
     status: serverStatus,
     debrief: debrief,
+    answers: function (m) {
+      answersOf.set(m.session, m);
+      st.dashboard.answers = st.dashboard.answers || {};
+      st.dashboard.answers[m.session] = m; /* for the tests */
+      const c = cards.get(m.session);
+      if (c) { listAnswers(c); draw(c, c.disp); }
+    },
     deformation: function (f) {
       const c = cards.get(f.session);
       if (!c) return;
