@@ -4,7 +4,8 @@ exercise's instructions, time left and marks; a mouse click on "lump here" while
 position-driven finger presses reaches the domain as a Finding at the fingertip's contact point
 (read by a listening DDS reader, web_exercise_peer with phantom 0) and palp-server, hosting the
 shipped exercises (config/server-exercises.json; "easy" is phantom 11), answers: the page then
-shows 1 mark; key W withdraws it; a dashboard
+shows 1 mark; key W withdraws it; the class dashboard shows where the lump is hidden (palp-server
+runs with "session_exercise": "always"), not found yet, and hides it when told; a dashboard
 page's and an observer page's attempts to send a finding are refused and nothing is written. When
 pat's station leaves, her page shows the server's debrief (the lump missed, where it is), and so does
 the class dashboard, under "Ended exercise sessions", both the one open meanwhile and one opened after.
@@ -54,7 +55,7 @@ def run(build, source, out):
     procs = harness.Procs(build, source, out, DOMAIN)
     browser = None
     try:
-        procs.server(config="server-exercises.json")
+        procs.server(config=harness.answers_config(source, out))  # the shipped exercises; lumps to instructors
         peer = procs.start("peer", [os.path.join(build, "tests", "web", "web_exercise_peer"), str(DOMAIN), "0", "110"])
         procs.wait_log(peer, r"READY", 10)
         web = procs.web()
@@ -154,7 +155,23 @@ def run(build, source, out):
         r = dash.wait_for("palpState.findingReplies.length > 0 && palpState.findingReplies[0]", 5)
         check(r is not None and r["ok"] is False and "viewer" in r["reason"],
               "the dashboard's finding is refused: %s" % r)
+        # where pat's lump is hidden, under her card's top view, for the instructor alone (docs/web.md,
+        # "The hidden lumps"): her one mark was withdrawn, so none found yet; in the debrief's words
+        lumps = ("Array.from(document.querySelectorAll('.card ul.lumps li')).map(function(l){"
+                 "return [l.className, l.textContent];})")
+        ok = dash.wait_for("document.querySelectorAll('.card ul.lumps li').length === 2", 10)
+        got = dash.eval(lumps)
+        check(ok is True and got[0][1] == "hidden lumps, the trainee does not see them: found 0 of 1 lump; "
+              "0 marks standing, 0 near no lump" and got[0][0] == "warn" and
+              re.match(r"lump 1 not found yet: at 11\.0 o'clock, 21 mm from the pole along the skin; 20 mm across, "
+                       r"its centre 12 mm deep$", got[1][1]),
+              "the dashboard shows where pat's lump is hidden, not found yet: %s" % got)
         print("screenshot:", dash.screenshot(os.path.join(out, "dashboard.png")))
+        click(dash, "show-answers")
+        got = dash.eval(lumps)
+        check(got == [["muted", "hidden lumps: not shown (the box above)"]],
+              "unticking 'show hidden lumps' takes them off the page: %s" % got)
+        click(dash, "show-answers")
 
         obs = browser.new_page(web.base + "/trainee.html?trainee=pat&role=observer")
         check(obs.wait_for("palpState.trainee.exercise !== null", 15) is True, "an observer page shows the exercise")

@@ -7,6 +7,10 @@ bob each press a sine on their own phantom. With alice's token:
 - the session list names alice's session only, no server status is sent;
 - following bob's session, or every session (the dashboard), gets nothing: no frame in 3 s;
 - following her own session streams it;
+- while bob's exercise session ("easy") runs, the instructors' dashboard is sent where its lump is hidden
+  (an `answers` message: the server runs with "session_exercise": "always", this test's copy of
+  config/server-exercises.json), at the place easy.json gives (polar 30 deg, azimuth 120 deg on the 40 mm
+  dome) and the place bob's debrief names; alice's page is never sent one;
 - bob's exercise session ("easy") ends: its debrief, with the lesion's place, reaches an instructors'
   page and not alice's; opened afterwards, an instructors' page following every session is sent it from
   the bridge's last 16 (the dashboard's replay), one following his session alone is not, and alice's
@@ -15,6 +19,7 @@ With the instructors' token the list has both sessions and the dashboard streams
 given is refused (401). No browser: raw HTTP and WebSocket clients. DDS domain 126.
 usage: test_trainee_tokens.py BUILD SOURCE OUT"""
 import json
+import math
 import os
 import subprocess
 
@@ -54,7 +59,8 @@ def run(build, source, out):
         check(r.returncode == 2 and "readable by every user" in r.stderr,
               "a world-readable --trainee-tokens file is refused (exit %d): %s" % (r.returncode, r.stderr.strip()[:100]))
         os.chmod(tokfile, 0o600)
-        procs.server(config="server-exercises.json")  # phantoms 1 and 2 as server-paper's, and the exercises
+        # phantoms 1 and 2 as server-paper's, and the exercises; the lumps sent to instructors
+        procs.server(config=harness.answers_config(source, out))
         web = procs.web(extra=["--token", INSTR, "--trainee-tokens", tokfile])
         check("2 trainee token(s), each page scoped" in procs.log(web), "palp-web says it has 2 scoped trainee tokens")
         sine = ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1", "--t-on", "0.5",
@@ -77,8 +83,21 @@ def run(build, source, out):
         ids = {s["trainee"]: s["id"] for s in both}
         inst.send(json.dumps({"follow": "all"}))
         kinds, frames = harness.ws_messages(inst, 3.0)
-        inst.close()
         check(frames >= 15, "the instructors' dashboard streams: %d frames in 3 s (>= 15)" % frames)
+        # where bob's lump is hidden (docs/web.md, "The hidden lumps"): easy.json's lesion at polar 30 deg,
+        # azimuth 120 deg, on the skin of the 40 mm dome: 40 (sin 30 cos 120, sin 30 sin 120, cos 30) mm
+        ans = [m for m in kinds.get("answers", []) if m["session"] == ids["bob"]]
+        if not ans:
+            a = harness.ws_until(inst, 5, lambda m: m.get("type") == "answers" and m["session"] == ids["bob"])
+            ans = [a] if a else []
+        inst.close()
+        r, pol, az = 40.0, math.radians(30), math.radians(120)
+        want = [r * math.sin(pol) * math.cos(az), r * math.sin(pol) * math.sin(az), r * math.cos(pol)]
+        lump = ans[-1]["lumps"][0] if ans and len(ans[-1]["lumps"]) == 1 else None
+        check(lump is not None and ans[-1]["exercise"] == "easy" and ans[-1]["found"] == 0 and
+              all(abs(lump["point_mm"][k] - want[k]) <= 0.2 for k in range(3)) and lump["across_mm"] == 20,
+              "the instructors' dashboard is sent where bob's lump is hidden: %s (want %s mm within 0.2 mm, 20 mm "
+              "across, not found)" % (lump, [round(w, 1) for w in want]))
 
         # Alice's view.
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=10)
@@ -97,6 +116,7 @@ def run(build, source, out):
         seen = kinds | set(k1) | set(k2) | set(k3)
         lists = [s["trainee"] for m in k1.get("sessions", []) + k2.get("sessions", []) + k3.get("sessions", [])
                  for s in m["sessions"]]
+        check("answers" not in seen, "alice's page is never sent where a lump is hidden (%s)" % sorted(seen))
         check("status" not in seen and set(lists) <= {"alice"},
               "no server status and no other trainee in any list alice's page got (%s; %s)"
               % (sorted(seen), sorted(set(lists))))
@@ -109,6 +129,9 @@ def run(build, source, out):
         inst.close()
         check(d is not None and d["trainee"] == "bob" and d["session"] == ids["bob"] and d["level"] == "lesions" and
               len(d["lumps"]) == 1, "the instructors' page is sent bob's debrief: %s" % d)
+        check(d is not None and lump is not None and d["lumps"][0]["point_mm"] == lump["point_mm"],
+              "the dashboard's lump is where the server's debrief puts it (%s, %s)"
+              % (d and d["lumps"][0]["point_mm"], lump and lump["point_mm"]))
         k4, _ = harness.ws_messages(ws, 2.0)
         check("debrief" not in k4, "alice's page is not (%s)" % sorted(k4))
         ws.close()
@@ -130,6 +153,8 @@ def run(build, source, out):
         ws.send(json.dumps({"follow": "all"}))
         k7, _ = harness.ws_messages(ws, 1.0)
         ws.close()
+        check("answers" not in k4 and "answers" not in k6 and "answers" not in k7,
+              "nor, at any time, where a lump is hidden (%s; %s; %s)" % (sorted(k4), sorted(k6), sorted(k7)))
         check("debrief" not in k6 and "debrief" not in k7 and "sessions" in k6,
               "a page of alice's token opened later is not sent bob's debrief either (%s; %s)" % (sorted(k6), sorted(k7)))
 
