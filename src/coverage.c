@@ -120,10 +120,8 @@ int palp_coverage_press(palp_coverage *c, const double center[3], double radius,
   return raised;
 }
 
-int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int count, int band) {
-  if (!c || band < PALP_BAND_LIGHT || band > PALP_BAND_DEEP || count <= 0 || !isfinite(point[0]) ||
-      !isfinite(point[1]) || !isfinite(point[2]))
-    return 0;
+int palp_coverage_patch(const palp_coverage *c, const double point[3], int count, int32_t *out) {
+  if (!c || count <= 0 || !out || !isfinite(point[0]) || !isfinite(point[1]) || !isfinite(point[2])) return 0;
   const double len = sqrt(point[0] * point[0] + point[1] * point[1] + point[2] * point[2]);
   if (!(len > 0)) return 0;
   if (count > PALP_COVERAGE_TRIANGLES_MAX) count = PALP_COVERAGE_TRIANGLES_MAX;
@@ -142,9 +140,17 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
     while (j > 0 && bd[j - 1] > d2) bd[j] = bd[j - 1], best[j] = best[j - 1], j--;
     bd[j] = d2, best[j] = t;
   }
+  for (int k = 0; k < have; k++) out[k] = best[k];
+  return have;
+}
+
+int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int count, int band) {
+  if (!c || band < PALP_BAND_LIGHT || band > PALP_BAND_DEEP) return 0;
+  int32_t patch[PALP_COVERAGE_TRIANGLES_MAX];
+  const int have = palp_coverage_patch(c, point, count, patch);
   int raised = 0;
   for (int k = 0; k < have; k++)
-    for (int v = 0; v < 3; v++) raised += mark(c, c->tri[3 * best[k] + v], band + 1);
+    for (int v = 0; v < 3; v++) raised += mark(c, c->tri[3 * patch[k] + v], band + 1);
   return raised;
 }
 

@@ -42,6 +42,11 @@ int palp_coverage_press(palp_coverage *c, const double center[3], double radius,
  * patch under it. Their vertices are marked in `band`. Returns as palp_coverage_press. */
 #define PALP_COVERAGE_TRIANGLES_MAX 64
 int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int count, int band);
+/* That patch itself: the `count` dome triangles (indices into tri, which are the mesh's, the dome's
+ * first) whose rest centroids lie nearest `point` projected onto the dome, nearest first, into out
+ * (room for min(count, PALP_COVERAGE_TRIANGLES_MAX)). Returns how many (0 for bad input). palp-recorder
+ * logs a local model's footprint by it (docs/assessment.md, "Recorded over DDS"). */
+int palp_coverage_patch(const palp_coverage *c, const double point[3], int count, int32_t *out);
 
 /* A fingertip's contact as a local model gives it (palp_local_model: its contact point, its centre
  * the proxy, how many triangles it touches, its footprint area), pressed in `band`: the `triangles`

@@ -293,6 +293,9 @@ int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment 
     snprintf(out->exercise_name, sizeof out->exercise_name, "%s", "");
     review_params_string(db, s->id, "exercise_name", out->exercise_unlogged, sizeof out->exercise_unlogged);
   }
+  char footprint[16] = "";
+  out->footprint_patch = review_params_string(db, s->id, "footprint", footprint, sizeof footprint) &&
+                         !strcmp(footprint, "patch");
 
   char *scene = NULL;
   if ((rc = palp_db_session_json(db, s->id, &scene, NULL))) {
@@ -500,6 +503,9 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
     fprintf(f, " (pass at %.0f/%.0f/%.0f%%)%s", 100 * rb->pass_coverage[0], 100 * rb->pass_coverage[1],
             100 * rb->pass_coverage[2], r->pass_metric[PALP_METRIC_THOROUGHNESS] ? "   pass" : "   FAIL");
   fputc('\n', f);
+  if (a->footprint_patch) /* docs/assessment.md, "Recorded over DDS" */
+    fprintf(f, "                   (recorded over DDS: each press's skin taken as the patch of as many triangles as it "
+               "touched, under the fingertip; the server's own log has the touched ones)\n");
   char mark[96] = "";
   if (a->has_exercise) {
     char m[80];

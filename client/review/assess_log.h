@@ -21,6 +21,9 @@ typedef struct review_assessment {
   /* no exercise logged, but the recorder saw the session's phantom run this one (params_json
    * "exercise_name", palp-recorder since session 60): its lesions never reached the log */
   char exercise_unlogged[64];
+  /* the finger samples' triangles are the patch under the fingertip, as many as it touched, not the
+   * touched triangles themselves (params_json "footprint": "patch", palp-recorder since session 61) */
+  int footprint_patch;
   palp_exercise ex;
   palp_assess_result r;
   int samples;               /* finger samples logged */

@@ -32,6 +32,7 @@
 
 #include "palp_app.h"
 #include "palp_assess.h"
+#include "palp_coverage.h"
 #include "palp_db.h"
 #include "palp_dds.h"
 #include "palp_dds_refusals.h"
@@ -55,6 +56,9 @@ typedef struct phantom {
   int n;
   palp_vec3 *rest;
   char *scene_json;
+  /* its dome, for the footprint of a local model (palp_coverage_patch): the touched triangles are
+   * not on the wire, how many there are is */
+  palp_coverage *cov;
 } phantom;
 
 typedef struct rsession {
@@ -209,6 +213,19 @@ static void on_phantom(recorder *r, const palp_Phantom *p) {
   }
   free(ph->scene_json);
   ph->scene_json = scene_from_catalogue(p);
+  /* Checked as it is built (indices in range, the dome's triangles first): a catalogue it refuses
+   * leaves the footprint a disc of the contact's area. */
+  palp_coverage_destroy(ph->cov);
+  ph->cov = NULL;
+  double *xyz = malloc(sizeof *xyz * 3 * (p->rest._length ? p->rest._length : 1));
+  if (xyz && p->rest._length && p->triangles._length % 3 == 0) {
+    for (uint32_t i = 0; i < p->rest._length; i++)
+      xyz[3 * i] = p->rest._buffer[i].x, xyz[3 * i + 1] = p->rest._buffer[i].y, xyz[3 * i + 2] = p->rest._buffer[i].z;
+    int rc;
+    ph->cov = palp_coverage_create(xyz, (int)p->rest._length, p->triangles._buffer, (int)(p->triangles._length / 3),
+                                   p->dome_triangle_count, &rc);
+  }
+  free(xyz);
 }
 
 static palp_db_end_reason end_reason(const char *why) {
@@ -311,7 +328,7 @@ static void open_session(recorder *r, const palp_SessionState *m) {
       snprintf(late, sizeof late, ", \"recorded_from_s\": %.3f", m->duration);
     snprintf(params, sizeof params,
              "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
-             "\"max_force_n\": %.17g%s%s}",
+             "\"max_force_n\": %.17g, \"footprint\": \"patch\"%s%s}",
              m->partition, ph ? ph->max_force : 0.0, exname, late);
     palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
                              .phantom_id = pid, .phantom_name = ph ? ph->name : "",
@@ -545,9 +562,11 @@ static void on_debrief(recorder *r, const palp_Debrief *m) {
 }
 
 /* The local models the server streams to the station are the fingertip's state each physics
- * step: logged as finger samples at the assessment's rate, as the server logs them, but without
- * the touched triangles (not on the wire): the review's coverage then takes the footprint as a
- * disc of the contact's area (palp_assess). */
+ * step: logged as finger samples at the assessment's rate, as the server logs them. The touched
+ * triangles are not on the wire, how many there are is: the sample's triangles are that many
+ * under the fingertip (palp_coverage_patch, the rule palp-web's and the stations' coverage marks
+ * by; the session's params say "footprint": "patch", and the review says so). Without a count or
+ * the phantom's mesh, none: the review then takes a disc of the contact's area (palp_assess). */
 static void on_local_model(recorder *r, const palp_LocalModel *m) {
   rsession *s = find_session(r, m->session_id, 0);
   if (!s || m->finger >= FINGERS) {
@@ -563,7 +582,7 @@ static void on_local_model(recorder *r, const palp_LocalModel *m) {
   /* the server's rule (server/db_log.c): every sample_every-th frame of the world */
   const int every = s->sample_every > 0 ? s->sample_every : 1;
   if (frame % every != 0 || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
-  const palp_db_finger_sample fs = {.frame = frame,
+  palp_db_finger_sample fs = {.frame = frame,
                                     .sim_time_s = m->time,
                                     .slot = f,
                                     .radius_m = s->radius[f],
@@ -573,6 +592,12 @@ static void on_local_model(recorder *r, const palp_LocalModel *m) {
                                     .in_contact = m->in_contact != 0,
                                     .point_m = {m->point.x, m->point.y, m->point.z},
                                     .area_m2 = m->area > 0 ? m->area : 0};
+  int32_t patch[PALP_COVERAGE_TRIANGLES_MAX];
+  if (m->in_contact && m->triangles > 0 && s->ph && s->ph->cov) {
+    const double proxy[3] = {m->proxy.x, m->proxy.y, m->proxy.z};
+    fs.triangle_count = palp_coverage_patch(s->ph->cov, proxy, m->triangles, patch);
+    fs.triangles = patch;
+  }
   count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
 }
 
@@ -948,6 +973,7 @@ int main(int argc, char **argv) {
   for (int i = 0; i < MAX_PHANTOMS; i++) {
     free(r->ph[i].rest);
     free(r->ph[i].scene_json);
+    palp_coverage_destroy(r->ph[i].cov);
   }
   for (int i = 0; i < MAX_PENDING_EXERCISES; i++) free(r->pending_ex[i].json);
   free(r);

@@ -167,6 +167,13 @@ int main(int argc, char **argv) {
   REQUIRE(palp_mesh_create(&md, &mesh) == 0, "mesh");
   palp_Vec3 *rest = calloc((size_t)mesh.vertex_count, sizeof *rest);
   palp_Phantom ph = test_phantom(PHANTOM, "Teaching", &md, &mesh, rest, 250);
+  /* its triangles, as the server's catalogue sends them: the recorder's footprint patches need them */
+  int32_t *tri = calloc((size_t)mesh.triangle_count * 3, sizeof *tri);
+  REQUIRE(tri != NULL, "triangles");
+  for (int t = 0; t < mesh.triangle_count; t++)
+    for (int v = 0; v < 3; v++) tri[3 * t + v] = mesh.tri[t][v];
+  ph.triangles._length = ph.triangles._maximum = (uint32_t)mesh.triangle_count * 3;
+  ph.triangles._buffer = tri;
   REQUIRE(dds_write(w_cat, &ph) == 0, "catalogue");
   sleep_ms(200);
 
@@ -205,10 +212,11 @@ int main(int argc, char **argv) {
     m.period = 0.004;
     m.in_contact = true;
     m.device = (palp_Vec3){0.0001 * k, 0, 0.045};
-    m.proxy = (palp_Vec3){0.0001 * k, 0, 0.047};
+    m.proxy = (palp_Vec3){0.0001 * k, k > 30 ? 0.0013 : 0, 0.047}; /* off the mirror plane y = 0: no ties */
     m.force = (palp_Vec3){0, 0, k == 30 ? NAN : 0.01 * k};
     m.point = (palp_Vec3){0.0001 * k, 0, 0.039};
     m.area = 1e-5;
+    m.triangles = k > 30 ? 6 : 0; /* from frame 31 on, 6 triangles touched: a patch of 6 logged */
     dds_write(s8.local_model, &m);
     sleep_ms(2);
   }
@@ -318,13 +326,58 @@ int main(int argc, char **argv) {
   snprintf(sql, sizeof sql,
            "SELECT count(*) FROM finger_sample WHERE session_id = %s AND frame %% 3 = 0 AND frame <> 30 AND "
            "radius_m = 0.008 AND abs(device_x_m - 0.0001 * frame) < 1e-12 AND abs(force_z_n - 0.01 * frame) < 1e-12 "
-           "AND in_contact = 1 AND area_m2 = 1e-5 AND triangles IS NULL",
+           "AND in_contact = 1 AND area_m2 = 1e-5 AND (triangles IS NULL) = (frame <= 30)",
            uid8);
   const int64_t good = db_scalar(h, sql);
   snprintf(sql, sizeof sql, "SELECT count(*) FROM finger_sample WHERE session_id = %s", uid8);
   const int64_t all_samples = db_scalar(h, sql);
   printf("finger samples: %lld as sent of %lld logged (want 19 of 19)\n", (long long)good, (long long)all_samples);
-  CHECK(good == 19 && all_samples == 19, "finger samples every 3rd frame of 60 (250 Hz / 100 Hz), frame 30's NaN left out");
+  CHECK(good == 19 && all_samples == 19, "finger samples every 3rd frame of 60 (250 Hz / 100 Hz), frame 30's NaN left out; "
+        "triangles only from frame 31, where the local models count them");
+  /* The patch: at frame 45 (proxy (4.5, 1.3, 47) mm) the 6 dome triangles whose rest centroids lie
+   * nearest the proxy projected onto the dome, by a brute-force sort here */
+  {
+    const double px = 0.0045, py = 0.0013, pz = 0.047, len = sqrt(px * px + py * py + pz * pz), R = md.radius;
+    const double q[3] = {px * R / len, py * R / len, pz * R / len};
+    int order[6];
+    double dist[6];
+    for (int k = 0; k < 6; k++) order[k] = -1, dist[k] = INFINITY;
+    for (int t = 0; t < mesh.dome_triangle_count; t++) {
+      double g[3] = {0, 0, 0};
+      for (int v = 0; v < 3; v++) {
+        g[0] += mesh.rest[mesh.tri[t][v]].x / 3, g[1] += mesh.rest[mesh.tri[t][v]].y / 3;
+        g[2] += mesh.rest[mesh.tri[t][v]].z / 3;
+      }
+      const double d = (g[0] - q[0]) * (g[0] - q[0]) + (g[1] - q[1]) * (g[1] - q[1]) + (g[2] - q[2]) * (g[2] - q[2]);
+      for (int k = 0; k < 6; k++)
+        if (d < dist[k]) {
+          for (int j = 5; j > k; j--) dist[j] = dist[j - 1], order[j] = order[j - 1];
+          dist[k] = d, order[k] = t;
+          break;
+        }
+    }
+    /* as sets (the order is nearest first, but near-equal distances may swap) */
+    snprintf(sql, sizeof sql, "SELECT hex(triangles) FROM finger_sample WHERE session_id = %s AND frame = 45", uid8);
+    char got_hex[64] = "";
+    db_text(h, sql, got_hex, sizeof got_hex);
+    int got[6], n = 0;
+    for (; n < 6 && strlen(got_hex) >= (size_t)(8 * (n + 1)); n++) {
+      unsigned b[4];
+      sscanf(got_hex + 8 * n, "%2x%2x%2x%2x", &b[0], &b[1], &b[2], &b[3]);
+      got[n] = (int)(b[0] | b[1] << 8 | b[2] << 16 | b[3] << 24);
+    }
+    int same = n == 6 && strlen(got_hex) == 48;
+    for (int k = 0; k < 6 && same; k++) {
+      int in = 0;
+      for (int j = 0; j < 6; j++) in |= got[j] == order[k];
+      same = in;
+    }
+    CHECK(same, "frame 45's footprint: the 6 dome triangles nearest the fingertip (%s; want %d %d %d %d %d %d)", got_hex,
+          order[0], order[1], order[2], order[3], order[4], order[5]);
+    snprintf(sql, sizeof sql,
+             "SELECT count(*) FROM session WHERE id = %s AND json_extract(params_json, '$.footprint') = 'patch'", uid8);
+    CHECK(db_scalar(h, sql) == 1, "the session's params say its footprints are patches");
+  }
 
   /* the debriefs */
   snprintf(sql, sizeof sql,
@@ -352,6 +405,7 @@ int main(int argc, char **argv) {
   const int st = system(cmd);
   CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "palp-review show 11 says the recorder joined 12.5 s into the session");
   free(rest);
+  free(tri);
   free(json);
   palp_mesh_destroy(&mesh);
   CHECK_DONE();

@@ -11,7 +11,8 @@
 #  - finger samples at the assessment's rate: at least 90 % of the server's count, and at every
 #    frame both logged, the same device point, proxy, force and contact point (1e-12);
 #  - palp-review show of each: the same "found" and "debrief" lines; each band's coverage within
-#    3 points (the recorder has no touched triangles: a disc of the contact's area stands in).
+#    3 points (the touched triangles are not on the wire: the recorder logs as many under the
+#    fingertip, and the review of its log says so).
 # Then the same server without "session_exercise" (the default, "secured", and no DDS Security):
 # the lesions stay on the server: its log names them, the recorder's has no exercise for the
 # session (its review names the exercise and says its lesions are missing), and the server's log
@@ -139,6 +140,8 @@ check(worst <= 3.0, "%s: each band's coverage within 3 points of the server log'
 a, b = numbers(srv, "score", r"([0-9.]+) / 100"), numbers(rec, "score", r"([0-9.]+) / 100")
 check(a and b and abs(a[0] - b[0]) <= 3.0, "%s: the score within 3 points of the server log's (server %s, recorder %s)" % (uid, a, b))
 check("recorded over DDS" in rec and "recorded over DDS" not in srv, "%s: the recorder's log says it was recorded over DDS" % uid)
+check("each press's skin taken as the patch of as many triangles as it touched" in rec and "patch of" not in srv,
+      "%s: the review says the recorder's footprints are patches under the fingertip, the server's not" % uid)
 n = uid.split("-")[2]
 check(re.search(r'^session +%s  \("session %s" on the stations; recorded over DDS\)$' % (uid, n), rec, re.M) is not None,
       "%s: review show names it \"session %s\", as dora's station did" % (uid, n))
