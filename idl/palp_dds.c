@@ -15,6 +15,7 @@
 
 #include "palp.h" /* PALP_E* codes only; the model is not linked */
 #include "palp_assess.h" /* palp_band, a plain struct */
+#include "palp_finding_answers.h" /* palp_finding_sent, a plain struct */
 
 static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_catalogue",     "palp_session_request", "palp_session_reply", "palp_session_state",
@@ -419,6 +420,13 @@ int palp_dds_debrief_ok(const palp_Debrief *d) {
     found_by += l->found_by != 0;
   }
   return !listed || found_by == d->found;
+}
+
+void palp_dds_finding_sent(const palp_Finding *m, struct palp_finding_sent *out) {
+  *out = (palp_finding_sent){.mark_id = m->mark_id,
+                             .withdraw = m->op == palp_FINDING_WITHDRAW,
+                             .point = {m->point.x, m->point.y, m->point.z},
+                             .t = m->time};
 }
 
 int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {

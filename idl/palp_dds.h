@@ -185,6 +185,11 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out);
  * 1 when it holds, 0 when not (the station and palp-web both check with it). */
 int palp_dds_debrief_ok(const palp_Debrief *d);
 
+/* A Finding as src/palp_finding_answers.h pairs it with the server's answer (palp-recorder, palp-web).
+ * The point is copied as sent; a reader that uses it checks it. */
+struct palp_finding_sent;
+void palp_dds_finding_sent(const palp_Finding *m, struct palp_finding_sent *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -837,10 +837,8 @@ static void on_finding(palp_web_hub *h, const palp_Finding *m) {
     h->stats.dropped++; /* the server refuses it too; its answer then finds no finding and expires */
     return;
   }
-  const palp_finding_sent f = {.mark_id = m->mark_id,
-                               .withdraw = m->op == palp_FINDING_WITHDRAW,
-                               .point = {m->point.x, m->point.y, m->point.z},
-                               .t = m->time};
+  palp_finding_sent f;
+  palp_dds_finding_sent(m, &f);
   verdict_ctx v = {h, a};
   palp_finding_answers_finding(&a->pairs, &f, (double)palp_dds_now_ns() * 1e-9, on_verdict, &v);
 }

@@ -520,10 +520,8 @@ static void on_finding(recorder *r, const palp_Finding *m) {
     r->unknown_session_samples++;
     return;
   }
-  const palp_finding_sent f = {.mark_id = m->mark_id,
-                               .withdraw = m->op == palp_FINDING_WITHDRAW,
-                               .point = {m->point.x, m->point.y, m->point.z},
-                               .t = m->time};
+  palp_finding_sent f;
+  palp_dds_finding_sent(m, &f);
   verdict_ctx v = {r, s};
   palp_finding_answers_finding(&s->marks, &f, (double)dds_time() * 1e-9, log_verdict, &v);
 }
