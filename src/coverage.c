@@ -161,6 +161,12 @@ int palp_coverage_press_contact(palp_coverage *c, const double point[3], const d
   return palp_coverage_press(c, point, r, band);
 }
 
+int palp_coverage_vertex_bands(const palp_coverage *c, uint8_t *out, int n) {
+  if (!c || !out || n != c->n) return 0;
+  for (int i = 0; i < n; i++) out[i] = (uint8_t)(c->bits[i] >> 1); /* bits 1 << (1 light .. 3 deep) */
+  return n;
+}
+
 void palp_coverage_fractions(const palp_coverage *c, double out[3]) {
   for (int k = 0; k < 3; k++) {
     double f = c && c->dome_area > 0 ? c->at_least[k + 1] / c->dome_area : 0;

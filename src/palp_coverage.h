@@ -57,6 +57,10 @@ int palp_coverage_patch(const palp_coverage *c, const double point[3], int count
 int palp_coverage_press_contact(palp_coverage *c, const double point[3], const double proxy[3], int triangles,
                                 double area, double tip_radius, int band);
 
+/* Each vertex's bands pressed, as bits: 1 light, 2 medium, 4 deep (0: not pressed; off the dome
+ * never), into out[n], n the mesh's vertex count. Returns n, or 0 when n is not the mesh's. */
+int palp_coverage_vertex_bands(const palp_coverage *c, uint8_t *out, int n);
+
 /* Area fractions of the dome pressed at least light / medium / deep, each in [0, 1]. */
 void palp_coverage_fractions(const palp_coverage *c, double out[3]);
 /* Area fractions pressed in the light / medium / deep band itself, as the assessment counts an

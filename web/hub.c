@@ -28,6 +28,7 @@
 #define WAKE_PERIOD_NS 100000000LL
 #define JOIN_PERIOD_NS 100000000LL
 #define SESSIONS_PERIOD_NS 200000000LL /* the list's live figures (force, coverage) at 5 Hz */
+#define COVER_PERIOD_NS 500000000LL    /* a session's pressed-skin map to the dashboard at most at 2 Hz */
 #define REJOIN_AFTER_NS 5000000000LL
 /* Streams are polled at this period rather than woken per sample: 8 sessions at 30 Hz would wake
  * the thread 240 times a second, and on a virtual machine every wake-up costs more than the work
@@ -168,6 +169,8 @@ typedef struct session {
   finding_status fst;
   answers *ans;           /* def.answers: its exercise's lumps and the marks (NULL: none yet) */
   int changed;            /* live data changed since the last live message */
+  int cover_changed;      /* its coverage map changed since the last "cover" message */
+  int64_t next_cover_ns;
   int64_t next_live_ns;
   /* feedback of this session's partition, read only while a position-driven finger presses (its
    * force comes from feedback alone; a force-driven contact carries its own) */
@@ -237,7 +240,8 @@ struct palp_web_hub {
   item hello, phantom_msg[PALP_WEB_MAX_PHANTOMS], sessions_msg, status_msg, exercises_msg;
   finding_slot fs[PALP_WEB_MAX_SESSIONS];
   uint64_t bind_seq;
-  item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS], answers_msg[PALP_WEB_MAX_SESSIONS];
+  item deform_msg[PALP_WEB_MAX_SESSIONS], live_msg[PALP_WEB_MAX_SESSIONS], answers_msg[PALP_WEB_MAX_SESSIONS],
+      cover_msg[PALP_WEB_MAX_SESSIONS];
   uint32_t slot_sid[PALP_WEB_MAX_SESSIONS]; /* 0: free */
   char slot_trainee[PALP_WEB_MAX_SESSIONS][64]; /* its trainee's name, for scoped pages */
   debrief_item debrief[DEBRIEFS];
@@ -322,6 +326,28 @@ static void build_phantom(palp_web_hub *h, int slot) {
   cJSON *tri = cJSON_AddArrayToObject(j, "triangles");
   for (int i = 0; i < 3 * p->tri_count; i++) cJSON_AddItemToArray(tri, cJSON_CreateNumber(p->tri[i]));
   publish_json(h, &h->phantom_msg[slot], j);
+}
+
+/* A session's pressed-skin map for the dashboard (docs/web.md, "The pressed skin"):
+ * {"type": "cover", "session", "phantom", "bands": one hex digit per rest vertex, the bands it was
+ * pressed in as bits (1 light, 2 medium, 4 deep; 0 not pressed)}, by the rule its coverage figures
+ * count by (palp_coverage): 338 characters for the shipped dome. */
+static void build_cover(palp_web_hub *h, int slot) {
+  const session *s = &h->s[slot];
+  if (!s->cov || !s->ph) return;
+  const int n = s->ph->n;
+  uint8_t *bits = malloc((size_t)n);
+  char *text = malloc((size_t)n + 128);
+  if (!bits || !text || palp_coverage_vertex_bands(s->cov, bits, n) != n) {
+    free(bits);
+    free(text);
+    return;
+  }
+  int k = snprintf(text, 128, "{\"type\":\"cover\",\"session\":%u,\"phantom\":%u,\"bands\":\"", s->id, s->ph->id);
+  for (int i = 0; i < n; i++) text[k++] = "0123456789abcdef"[bits[i] & 15];
+  memcpy(text + k, "\"}", 3);
+  free(bits);
+  publish(h, &h->cover_msg[slot], (unsigned char *)text, (size_t)k + 2);
 }
 
 /* Coverage as the session's band rule counts it: in an exercise the area pressed in each band
@@ -941,6 +967,7 @@ static void free_session(palp_web_hub *h, int slot) {
   publish(h, &h->deform_msg[slot], NULL, 0);
   publish(h, &h->live_msg[slot], NULL, 0);
   publish(h, &h->answers_msg[slot], NULL, 0);
+  publish(h, &h->cover_msg[slot], NULL, 0);
   pthread_mutex_lock(&h->mu);
   h->closed_sid[h->closed_next] = h->slot_sid[slot];
   h->closed_phantom[h->closed_next] = phantom;
@@ -1401,7 +1428,8 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   if (s->cov && f->lm_contact && isfinite(m->period) && m->period > 0 &&
       m->frame % (uint64_t)palp_assess_sample_every(1.0 / m->period, PALP_ASSESS_SAMPLE_HZ) == 0) {
     const int band = finger_band(h, banding_exercise(h, s), s, f, f->lm_force);
-    if (band) palp_coverage_press_contact(s->cov, f->point, f->proxy, f->lm_triangles, f->area, f->radius, band - 1);
+    if (band && palp_coverage_press_contact(s->cov, f->point, f->proxy, f->lm_triangles, f->area, f->radius, band - 1) > 0)
+      s->cover_changed = 1;
   }
   if (banding_exercise(h, s)) recompute_force(h, s); /* the band follows the fingertip's depth */
   s->changed = 1;
@@ -1600,7 +1628,7 @@ static void *hub_main(void *arg) {
           const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
           if (f->mode == palp_CONTACT_FINGER && !f->fb_active) continue;
           const int band = palp_web_band(&h->def.bands, sqrt(fv[0] * fv[0] + fv[1] * fv[1] + fv[2] * fv[2]));
-          if (band && palp_coverage_press(s->cov, f->center, f->radius, band - 1) > 0) s->changed = 1;
+          if (band && palp_coverage_press(s->cov, f->center, f->radius, band - 1) > 0) s->changed = s->cover_changed = 1;
         }
         if (s->changed) {
           build_live(h, i);
@@ -1608,6 +1636,12 @@ static void *hub_main(void *arg) {
           news++;
         }
         s->next_live_ns = now + live_period;
+      }
+      if (s->cover_changed && now >= s->next_cover_ns) {
+        build_cover(h, i);
+        s->cover_changed = 0;
+        s->next_cover_ns = now + COVER_PERIOD_NS;
+        news++;
       }
     }
     if (h->sessions_structure || (h->sessions_dirty && now >= h->next_sessions_ns)) {
@@ -1765,6 +1799,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
     free(h->deform_msg[i].buf);
     free(h->live_msg[i].buf);
     free(h->answers_msg[i].buf);
+    free(h->cover_msg[i].buf);
     if (h->s[i].ans) free(h->s[i].ans->ex);
     free(h->s[i].ans);
   }
@@ -1988,6 +2023,7 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
   memset(c->deform_ver, 0, sizeof c->deform_ver);
   memset(c->live_ver, 0, sizeof c->live_ver);
   memset(c->answers_ver, 0, sizeof c->answers_ver);
+  memset(c->cover_ver, 0, sizeof c->cover_ver);
   pthread_mutex_unlock(&h->mu);
   return 0;
 }
@@ -2078,10 +2114,15 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   const int answers_ok = !c->scope[0] && !c->trainee && c->mode == PALP_WEB_FOLLOW_ALL;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
     if (!h->slot_sid[i] || (c->mode == PALP_WEB_FOLLOW_SESSION && h->slot_sid[i] != c->follow)) continue;
-    const item *d = &h->deform_msg[i], *l = &h->live_msg[i], *a = &h->answers_msg[i];
+    const item *d = &h->deform_msg[i], *l = &h->live_msg[i], *a = &h->answers_msg[i], *cv = &h->cover_msg[i];
     if (answers_ok && a->buf && c->answers_ver[i] != a->ver) {
       rc = take(a, pre, buf, len);
       if (rc > 0) c->answers_ver[i] = a->ver;
+      goto out;
+    }
+    if (c->mode == PALP_WEB_FOLLOW_ALL && cv->buf && c->cover_ver[i] != cv->ver) {
+      rc = take(cv, pre, buf, len);
+      if (rc > 0) c->cover_ver[i] = cv->ver;
       goto out;
     }
     /* 1 ms of slack: frames that arrive at exactly the dashboard rate are not pushed to the next one. */

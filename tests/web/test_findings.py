@@ -166,6 +166,14 @@ def run(build, source, out):
               re.match(r"lump 1 not found yet: at 11\.0 o'clock, 21 mm from the pole along the skin; 20 mm across, "
                        r"its centre 12 mm deep$", got[1][1]),
               "the dashboard shows where pat's lump is hidden, not found yet: %s" % got)
+        # where she has pressed so far (docs/web.md, "The pressed skin"): a digit per vertex of her phantom
+        cover = dash.wait_for("(function(){const s=palpState.sessions.find(function(s){return s.trainee==='pat'});"
+                              "const b=s && palpState.dashboard.cover && palpState.dashboard.cover[s.id];"
+                              "return b && /[1-7]/.test(b) ? [b, palpState.phantoms[s.phantom].rest.length / 3] : null;})()",
+                              10)
+        check(cover is not None and len(cover[0]) == cover[1] and 0 < sum(ch != "0" for ch in cover[0]) < cover[1] / 4,
+              "the dashboard has pat's pressed-skin map, a digit per vertex, her one press's few vertices marked: %s"
+              % (cover and "%d of %d" % (sum(ch != "0" for ch in cover[0]), cover[1])))
         print("screenshot:", dash.screenshot(os.path.join(out, "dashboard.png")))
         click(dash, "show-answers")
         got = dash.eval(lumps)

@@ -361,10 +361,26 @@ static void write_pole_model(dds_entity_t w, uint32_t sid, uint64_t frame, doubl
  * (light 1-4, medium 4-9, deep 9-18 mm) on a 40 mm dome with an 8 mm fingertip. 5 N at 5 mm is
  * "medium" (the force bands would say deep, > 3 N), 2 N at 10 mm "deep" (force: medium), 0.5 mm
  * "none"; the exercises message carries the bands. Phantom 2, session 4712 (domain 195). */
+typedef struct cover_want {
+  uint32_t sid;
+  char bands[16];
+} cover_want;
+
+static int is_cover(const cJSON *j, void *arg) {
+  cover_want *w = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  if (!type || strcmp(type, "cover") || cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) != w->sid) return 0;
+  snprintf(w->bands, sizeof w->bands, "%s", cJSON_GetStringValue(cJSON_GetObjectItem(j, "bands")));
+  return 1;
+}
+
 static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const uint32_t sid = 4712;
   palp_web_cursor cur, *c = &cur; /* a page of its own: the other is bound to session 4711 */
   CHECK(palp_web_hub_attach(h, c, 4) == 0, "exercise bands: a second page");
+  palp_web_cursor dash; /* and the dashboard, for the pressed-skin map */
+  CHECK(palp_web_hub_attach(h, &dash, 8) == 0 && palp_web_hub_control(h, &dash, "{\"follow\":\"all\"}", 16) == 0,
+        "exercise bands: a dashboard");
   char part[64];
   palp_dds_session_partition(sid, part, sizeof part);
   const dds_entity_t pub = palp_dds_session_publisher(pp, part);
@@ -432,6 +448,16 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   CHECK(got_cov && cov[0] == 0 && cov[1] > 0 && cov[2] == cov[1],
         "exercise coverage per band: light %g, medium %g, deep %g (the pole's share, medium and deep alone)", cov[0],
         cov[1], cov[2]);
+  /* The dashboard's map of it: the pole (vertex 0) pressed medium and deep, 2 | 4 = 6; the rim's
+   * three vertices, 40 mm beyond the footprint, not at all. The page following one session is not
+   * sent the map. */
+  cover_want cw = {sid, ""};
+  for (int i = 0; i < 100 && strcmp(cw.bands, "6000"); i++) next_json(h, &dash, 5, is_cover, &cw);
+  CHECK(!strcmp(cw.bands, "6000"), "the dashboard's pressed-skin map: \"%s\" (want \"6000\")", cw.bands);
+  cover_want none = {sid, ""};
+  next_json(h, c, 30, is_cover, &none);
+  CHECK(none.bands[0] == 0, "the page following one session is not sent it (\"%s\")", none.bands);
+  palp_web_hub_detach(h, &dash);
   palp_web_hub_detach(h, c);
 }
 

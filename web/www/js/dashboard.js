@@ -16,6 +16,10 @@
    * alone, docs/web.md "The hidden lumps"), by session id; shown unless the instructor hides them
    * (the box in the legend, e.g. before turning the screen to the class). */
   const answersOf = new Map(), showAnswers = document.getElementById("show-answers");
+  /* Each session's pressed skin so far (a `cover` message: a hex digit per rest vertex, its bands as
+   * bits 1 light, 2 medium, 4 deep), dotted on the top view in the bands' colours (docs/naming.md). */
+  const showCover = document.getElementById("show-cover");
+  const BAND_DOT = [[4, "#009E73"], [2, "#E69F00"], [1, "#56B4E9"]]; /* deepest first */
 
   function fmt(x, d) { return x === null || x === undefined ? "n/a" : Number(x).toFixed(d); }
 
@@ -109,6 +113,27 @@
     });
   }
 
+  function drawCover(c, g) {
+    const b = c.cover;
+    if (!b || !showCover.checked || !c.proj || b.length !== c.proj.n) return;
+    const xy = c.proj.xy;
+    g.save();
+    g.strokeStyle = "#000";
+    g.lineWidth = 0.5;
+    for (let i = 0; i < b.length; i++) {
+      const v = parseInt(b[i], 16);
+      if (!v) continue;
+      const band = BAND_DOT.find(function (d) { return v & d[0]; });
+      if (!band) continue;
+      g.fillStyle = band[1];
+      g.beginPath();
+      g.arc(xy[2 * i], xy[2 * i + 1], 2, 0, 2 * Math.PI);
+      g.fill();
+      g.stroke();
+    }
+    g.restore();
+  }
+
   function draw(c, disp) {
     if (!c.proj || (disp && disp.length !== 3 * c.proj.n)) return;
     c.disp = disp;
@@ -130,6 +155,7 @@
       g.fill();
       g.stroke();
     }
+    drawCover(c, g);
     drawAnswers(c, g);
   }
 
@@ -291,6 +317,9 @@
   showAnswers.addEventListener("change", function () {
     for (const c of cards.values()) { listAnswers(c); draw(c, c.disp); }
   });
+  showCover.addEventListener("change", function () {
+    for (const c of cards.values()) draw(c, c.disp);
+  });
 
   PALP.connect({
     open: function (send) { send({ follow: "all" }); },
@@ -318,6 +347,14 @@
     },
     status: serverStatus,
     debrief: debrief,
+    cover: function (m) {
+      const c = cards.get(m.session);
+      if (!c || typeof m.bands !== "string" || !/^[0-9a-f]*$/.test(m.bands)) return;
+      c.cover = m.bands;
+      st.dashboard.cover = st.dashboard.cover || {};
+      st.dashboard.cover[m.session] = m.bands; /* for the tests */
+      draw(c, c.disp);
+    },
     answers: function (m) {
       answersOf.set(m.session, m);
       st.dashboard.answers = st.dashboard.answers || {};
