@@ -75,6 +75,16 @@ static void test_coverage_square(void) {
   palp_coverage_fractions(c, f2);
   CHECK(fabs(g[1] - f[1]) < 1e-15 && f2[0] == f[0] && f2[1] == f[1] && f2[2] == f[2],
         "in band medium now both discs (%g); at least unchanged", g[1]);
+  /* Each vertex's bands (palp-web's dashboard map): the centre vertex (50, 50) light, deep and now
+   * medium, 1 | 2 | 4 = 7; the vertex at (0.3, 0.3), index 80 * 101 + 80, medium alone, 2; a corner
+   * none. The wrong vertex count gives nothing. */
+  uint8_t *vb = malloc((size_t)nv);
+  CHECK(vb && palp_coverage_vertex_bands(c, vb, nv) == nv && vb[50 * 101 + 50] == 7 && vb[80 * 101 + 80] == 2 &&
+            vb[0] == 0,
+        "vertex bands: centre %d, (0.3, 0.3) %d, corner %d", vb ? vb[50 * 101 + 50] : -1, vb ? vb[80 * 101 + 80] : -1,
+        vb ? vb[0] : -1);
+  CHECK(vb && palp_coverage_vertex_bands(c, vb, nv - 1) == 0, "vertex bands: a wrong count refused");
+  free(vb);
   /* Bad input changes nothing. */
   const double nan3[3] = {NAN, 0, 0};
   CHECK(palp_coverage_press(c, nan3, 0.1, PALP_BAND_DEEP) == 0 && palp_coverage_press(c, ctr, -1, PALP_BAND_DEEP) == 0 &&
