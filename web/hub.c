@@ -336,18 +336,17 @@ static void build_cover(palp_web_hub *h, int slot) {
   const session *s = &h->s[slot];
   if (!s->cov || !s->ph) return;
   const int n = s->ph->n;
-  uint8_t *bits = malloc((size_t)n);
   char *text = malloc((size_t)n + 128);
-  if (!bits || !text || palp_coverage_vertex_bands(s->cov, bits, n) != n) {
-    free(bits);
+  if (!text) return;
+  const int k = snprintf(text, 128, "{\"type\":\"cover\",\"session\":%u,\"phantom\":%u,\"bands\":\"", s->id, s->ph->id);
+  uint8_t *bits = (uint8_t *)text + k; /* the bits, then their digits in their place */
+  if (palp_coverage_vertex_bands(s->cov, bits, n) != n) {
     free(text);
     return;
   }
-  int k = snprintf(text, 128, "{\"type\":\"cover\",\"session\":%u,\"phantom\":%u,\"bands\":\"", s->id, s->ph->id);
-  for (int i = 0; i < n; i++) text[k++] = "0123456789abcdef"[bits[i] & 15];
-  memcpy(text + k, "\"}", 3);
-  free(bits);
-  publish(h, &h->cover_msg[slot], (unsigned char *)text, (size_t)k + 2);
+  for (int i = 0; i < n; i++) text[k + i] = "0123456789abcdef"[bits[i] & 15];
+  memcpy(text + k + n, "\"}", 3);
+  publish(h, &h->cover_msg[slot], (unsigned char *)text, (size_t)(k + n + 2));
 }
 
 /* Coverage as the session's band rule counts it: in an exercise the area pressed in each band
