@@ -28,7 +28,7 @@
 #define WAKE_PERIOD_NS 100000000LL
 #define JOIN_PERIOD_NS 100000000LL
 #define SESSIONS_PERIOD_NS 200000000LL /* the list's live figures (force, coverage) at 5 Hz */
-#define COVER_PERIOD_NS 500000000LL    /* a session's pressed-skin map to the dashboard at most at 2 Hz */
+#define COVER_PERIOD_NS 500000000LL    /* a session's pressed-skin map to its pages at most at 2 Hz */
 #define REJOIN_AFTER_NS 5000000000LL
 /* Streams are polled at this period rather than woken per sample: 8 sessions at 30 Hz would wake
  * the thread 240 times a second, and on a virtual machine every wake-up costs more than the work
@@ -328,7 +328,7 @@ static void build_phantom(palp_web_hub *h, int slot) {
   publish_json(h, &h->phantom_msg[slot], j);
 }
 
-/* A session's pressed-skin map for the dashboard (docs/web.md, "The pressed skin"):
+/* A session's pressed-skin map for the dashboard and the pages following it (docs/web.md, "The pressed skin"):
  * {"type": "cover", "session", "phantom", "bands": one hex digit per rest vertex, the bands it was
  * pressed in as bits (1 light, 2 medium, 4 deep; 0 not pressed)}, by the rule its coverage figures
  * count by (palp_coverage): 338 characters for the shipped dome. */
@@ -2119,7 +2119,7 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       if (rc > 0) c->answers_ver[i] = a->ver;
       goto out;
     }
-    if (c->mode == PALP_WEB_FOLLOW_ALL && cv->buf && c->cover_ver[i] != cv->ver) {
+    if (cv->buf && c->cover_ver[i] != cv->ver) { /* to the dashboard, and to a page following this session */
       rc = take(cv, pre, buf, len);
       if (rc > 0) c->cover_ver[i] = cv->ver;
       goto out;

@@ -129,6 +129,9 @@ def run(build, source, out):
               is True, "the page shows 1 mark (the server's finding status)")
         reply = page.eval("palpState.findingReplies[palpState.findingReplies.length-1]")
         check(reply["ok"] is True and reply["mark_id"] == 1, "the bridge answered ok, mark 1: %s" % reply)
+        # her page dots the skin she has pressed so far (docs/web.md, "The pressed skin")
+        check(page.wait_for("palpState.trainee.coverVertices > 0", 5) is True,
+              "her page dots the skin she pressed: %s vertices" % page.eval("palpState.trainee.coverVertices"))
         page.eval("palpShowFingers(true)")
         print("screenshot:", page.screenshot(os.path.join(out, "trainee-marked.png")))
 
@@ -204,6 +207,8 @@ def run(build, source, out):
               shown[1][0][0] == "missed" and re.match(r"lump 1 MISSED: at 11\.0 o'clock, 21 mm from the pole along the "
                                                       r"skin; 20 mm across, its centre 12 mm deep$", shown[1][0][1]),
               "pat's page shows her debrief: %s" % shown)
+        check(page.eval("palpState.trainee.coverVertices") > 0,
+              "the pressed skin stays beside the debrief's rings (%s vertices)" % page.eval("palpState.trainee.coverVertices"))
         # (her station runs --quiet here; web_coverage compares the page's debrief with the station's lines)
         check(obs.wait_for("palpState.trainee.debrief !== null", 5) is True, "the observer's page is sent it too")
         # A random exercise's session may hide no lump (docs/assessment.md, "Lesions drawn for each session"):

@@ -449,14 +449,14 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
         "exercise coverage per band: light %g, medium %g, deep %g (the pole's share, medium and deep alone)", cov[0],
         cov[1], cov[2]);
   /* The dashboard's map of it: the pole (vertex 0) pressed medium and deep, 2 | 4 = 6; the rim's
-   * three vertices, 40 mm beyond the footprint, not at all. The page following one session is not
-   * sent the map. */
+   * three vertices, 40 mm beyond the footprint, not at all. The page following the session is sent
+   * it too (its trainee page draws it on the phantom). */
   cover_want cw = {sid, ""};
   for (int i = 0; i < 100 && strcmp(cw.bands, "6000"); i++) next_json(h, &dash, 5, is_cover, &cw);
   CHECK(!strcmp(cw.bands, "6000"), "the dashboard's pressed-skin map: \"%s\" (want \"6000\")", cw.bands);
-  cover_want none = {sid, ""};
-  next_json(h, c, 30, is_cover, &none);
-  CHECK(none.bands[0] == 0, "the page following one session is not sent it (\"%s\")", none.bands);
+  cover_want own = {sid, ""};
+  for (int i = 0; i < 30 && strcmp(own.bands, "6000"); i++) next_json(h, c, 5, is_cover, &own);
+  CHECK(!strcmp(own.bands, "6000"), "the page following the session is sent the same map (\"%s\")", own.bands);
   palp_web_hub_detach(h, &dash);
   palp_web_hub_detach(h, c);
 }

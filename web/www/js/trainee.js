@@ -67,8 +67,44 @@
   }
   window.addEventListener("resize", resize);
 
+  /* The skin pressed so far (a `cover` message, docs/web.md "The pressed skin"): a dot on each
+   * pressed vertex in its deepest band's colour (docs/naming.md). The dots share the mesh's positions,
+   * so they follow the dent. */
+  const showCover = document.getElementById("show-cover");
+  const BAND_RGB = [[4, [0, 158, 115]], [2, [230, 159, 0]], [1, [86, 180, 233]]]; /* deepest first */
+  let coverPts = null;
+  T.coverVertices = 0;
+  function clearCover() {
+    if (coverPts) { scene.remove(coverPts); coverPts.geometry.dispose(); coverPts = null; }
+    T.coverVertices = 0;
+  }
+  function setCover(bands) {
+    if (!geom || typeof bands !== "string" || bands.length !== rest.length / 3 || !/^[0-9a-f]*$/.test(bands)) return;
+    clearCover();
+    const idx = [], col = new Float32Array(rest.length);
+    for (let i = 0; i < bands.length; i++) {
+      const v = parseInt(bands[i], 16), b = BAND_RGB.find(function (d) { return v & d[0]; });
+      if (!b) continue;
+      idx.push(i);
+      for (let k = 0; k < 3; k++) col[3 * i + k] = b[1][k] / 255;
+    }
+    T.coverVertices = idx.length;
+    if (!idx.length) return;
+    const g = new THREE.BufferGeometry();
+    g.setAttribute("position", geom.attributes.position);
+    g.setAttribute("color", new THREE.BufferAttribute(col, 3));
+    g.setIndex(idx);
+    coverPts = new THREE.Points(g, new THREE.PointsMaterial({ size: 5, sizeAttenuation: false, vertexColors: THREE.VertexColors }));
+    coverPts.visible = showCover.checked;
+    coverPts.renderOrder = 5; /* after the skin: a dot at a vertex's own depth passes the depth test */
+    scene.add(coverPts);
+    dirty = true;
+  }
+  showCover.addEventListener("change", function () { if (coverPts) coverPts.visible = showCover.checked; dirty = true; });
+
   function buildMesh(ph) {
     if (mesh) { scene.remove(mesh); geom.dispose(); }
+    clearCover();
     phantom = ph;
     rest = new Float32Array(ph.rest);
     geom = new THREE.BufferGeometry();
@@ -346,6 +382,7 @@
     open: function (snd) { send = snd; if (T.session) send(followMsg(T.session)); },
     exercises: function (m) { exercises = m.exercises; showExercise(); },
     debrief: function (m) { showDebrief(m); },
+    cover: function (m) { if (m.session === T.session && m.phantom === T.phantom) setCover(m.bands); },
     finding_reply: function (m) {
       T.replies.push(m);
       if (m.ok) message(m.op === "mark" ? "mark " + m.mark_id + " sent" : "mark " + m.mark_id + " withdrawn", true);
@@ -367,7 +404,9 @@
         T.session = id;
         setScale(scaleMin); /* a new session starts on the smallest scale */
         if (send) send(followMsg(id));
-        if (id) clearDebrief(); /* a new session: the last one's debrief goes (kept while waiting) */
+        /* a new session: the last one's debrief and pressed skin go (kept while waiting: the skin she
+         * pressed beside the debrief's rings shows where her search passed the lumps) */
+        if (id) { clearDebrief(); clearCover(); }
         findings = null;
         setFingers([], null);
         if (!id) {
