@@ -133,7 +133,18 @@ const PALP = (function () {
       l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
   }
 
-  return { viridis: viridis, css: css, params: params, connect: connect, state: state,
+  /* The deepest band pressed at one vertex of a `cover` message's map (a hex digit: bits 1 light,
+   * 2 medium, 4 deep), as the colour every palp tool gives that band (docs/naming.md, Okabe-Ito; the
+   * stylesheet's .band colours): [r, g, b] 0-255, or null when not pressed. */
+  const BAND_RGB = [[4, [0, 158, 115]], [2, [230, 159, 0]], [1, [86, 180, 233]]]; /* deepest first */
+  function coverColour(digit) {
+    const v = parseInt(digit, 16), b = BAND_RGB.find(function (d) { return v & d[0]; });
+    return b ? b[1] : null;
+  }
+  function coverValid(bands, n) { return typeof bands === "string" && bands.length === n && /^[0-9a-f]*$/.test(bands); }
+
+  return { viridis: viridis, css: css, params: params, connect: connect, state: state, coverColour: coverColour,
+    coverValid: coverValid,
     decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
     plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump };
 })();

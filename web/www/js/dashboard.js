@@ -19,7 +19,6 @@
   /* Each session's pressed skin so far (a `cover` message: a hex digit per rest vertex, its bands as
    * bits 1 light, 2 medium, 4 deep), dotted on the top view in the bands' colours (docs/naming.md). */
   const showCover = document.getElementById("show-cover");
-  const BAND_DOT = [[4, "#009E73"], [2, "#E69F00"], [1, "#56B4E9"]]; /* deepest first */
 
   function fmt(x, d) { return x === null || x === undefined ? "n/a" : Number(x).toFixed(d); }
 
@@ -115,17 +114,15 @@
 
   function drawCover(c, g) {
     const b = c.cover;
-    if (!b || !showCover.checked || !c.proj || b.length !== c.proj.n) return;
+    if (!showCover.checked || !c.proj || !PALP.coverValid(b, c.proj.n)) return;
     const xy = c.proj.xy;
     g.save();
     g.strokeStyle = "#000";
     g.lineWidth = 0.5;
     for (let i = 0; i < b.length; i++) {
-      const v = parseInt(b[i], 16);
-      if (!v) continue;
-      const band = BAND_DOT.find(function (d) { return v & d[0]; });
-      if (!band) continue;
-      g.fillStyle = band[1];
+      const rgb = PALP.coverColour(b[i]);
+      if (!rgb) continue;
+      g.fillStyle = PALP.css(rgb);
       g.beginPath();
       g.arc(xy[2 * i], xy[2 * i + 1], 2, 0, 2 * Math.PI);
       g.fill();
@@ -349,7 +346,7 @@
     debrief: debrief,
     cover: function (m) {
       const c = cards.get(m.session);
-      if (!c || typeof m.bands !== "string" || !/^[0-9a-f]*$/.test(m.bands)) return;
+      if (!c || typeof m.bands !== "string") return; /* checked against the phantom as drawn (drawCover) */
       c.cover = m.bands;
       st.dashboard.cover = st.dashboard.cover || {};
       st.dashboard.cover[m.session] = m.bands; /* for the tests */

@@ -71,7 +71,6 @@
    * pressed vertex in its deepest band's colour (docs/naming.md). The dots share the mesh's positions,
    * so they follow the dent. */
   const showCover = document.getElementById("show-cover");
-  const BAND_RGB = [[4, [0, 158, 115]], [2, [230, 159, 0]], [1, [86, 180, 233]]]; /* deepest first */
   let coverPts = null;
   T.coverVertices = 0;
   function clearCover() {
@@ -79,14 +78,14 @@
     T.coverVertices = 0;
   }
   function setCover(bands) {
-    if (!geom || typeof bands !== "string" || bands.length !== rest.length / 3 || !/^[0-9a-f]*$/.test(bands)) return;
+    if (!geom || !PALP.coverValid(bands, rest.length / 3)) return;
     clearCover();
     const idx = [], col = new Float32Array(rest.length);
     for (let i = 0; i < bands.length; i++) {
-      const v = parseInt(bands[i], 16), b = BAND_RGB.find(function (d) { return v & d[0]; });
-      if (!b) continue;
+      const rgb = PALP.coverColour(bands[i]);
+      if (!rgb) continue;
       idx.push(i);
-      for (let k = 0; k < 3; k++) col[3 * i + k] = b[1][k] / 255;
+      for (let k = 0; k < 3; k++) col[3 * i + k] = rgb[k] / 255;
     }
     T.coverVertices = idx.length;
     if (!idx.length) return;
