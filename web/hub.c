@@ -246,6 +246,8 @@ struct palp_web_hub {
   char slot_trainee[PALP_WEB_MAX_SESSIONS][64]; /* its trainee's name, for scoped pages */
   debrief_item debrief[DEBRIEFS];
   int debrief_next;
+  item ended_answers[DEBRIEFS]; /* the last answers of the exercise sessions that ended lately */
+  int ended_answers_next;
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
@@ -773,17 +775,16 @@ static cJSON *place_json(palp_vec3 p) {
  *  "refused", "unanswered", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm", "deep_mm", "point_mm"}],
  *  "marks_at": [{"id", "point_mm", "lump"}]}: lump is the lump's number (from 1) a mark found, 0 near no
  * lump, -1 on a lump another mark found. Places as every tool names them (palp_place_*). */
-static void build_answers(palp_web_hub *h, int slot) {
-  session *s = &h->s[slot];
+static cJSON *answers_json(palp_web_hub *h, session *s) {
   answers *a = s->ans;
   a->dirty = 0;
-  if (!a->ex || !s->ph) return;
+  if (!a->ex || !s->ph) return NULL;
   const double R = dome_radius(s->ph);
   palp_assess_result r;
   int match[ANSWER_MARKS];
   if (palp_assess_findings(a->ex, R, a->mark, a->n, &r, match) < 0) {
     h->stats.dropped++;
-    return;
+    return NULL;
   }
   cJSON *j = cJSON_CreateObject();
   cJSON_AddStringToObject(j, "type", "answers");
@@ -818,7 +819,12 @@ static void build_answers(palp_web_hub *h, int slot) {
     cJSON_AddNumberToObject(o, "lump", match[k] >= 0 ? match[k] + 1 : match[k] == PALP_FINDING_DUPLICATE ? -1 : 0);
     cJSON_AddItemToArray(marks, o);
   }
-  publish_json(h, &h->answers_msg[slot], j);
+  return j;
+}
+
+static void build_answers(palp_web_hub *h, int slot) {
+  cJSON *j = answers_json(h, &h->s[slot]);
+  if (j) publish_json(h, &h->answers_msg[slot], j);
 }
 
 /* A finding's verdict (palp_finding_answers): an accepted mark stands until its withdrawal. */
@@ -948,9 +954,47 @@ static void tend_answers(palp_web_hub *h, int64_t now) {
   }
 }
 
+typedef void (*sample_fn)(palp_web_hub *h, const void *sample);
+/* An instance that turned not-alive; sample holds its key fields (an invalid sample's key is
+ * filled in), since the instance itself may already be gone once its last sample is taken. */
+typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih, const void *sample);
+static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter);
+static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m);
+
+/* An exercise session that ended: what its marks found, kept for the dashboard's list of ended
+ * sessions beside the server's debrief (docs/web.md, "The hidden lumps"). The debrief tells what
+ * the exercise lets the trainee be told, nothing at all in an examination; the instructor is shown
+ * the whole of it. Its last marks and their answers may still wait in the polled readers as the
+ * CLOSED state wakes the thread: they are taken first, so that what is kept counts what the
+ * server's debrief counted; a finding still without its answer then counts as unanswered. */
+static void keep_ended_answers(palp_web_hub *h, int slot) {
+  session *s = &h->s[slot];
+  if (!s->ans || !s->ans->ex) return;
+  drain(h, h->finding_r, (sample_fn)on_finding, NULL, &h->stats.findings_read);
+  drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
+  verdict_ctx v = {h, s->ans};
+  palp_finding_answers_settle(&s->ans->pairs, (double)palp_dds_now_ns() * 1e-9, PALP_FINDING_ANSWER_WAIT_S, 1,
+                              on_verdict, &v);
+  cJSON *j = answers_json(h, s);
+  if (!j) return;
+  cJSON_AddBoolToObject(j, "ended", 1);
+  char *text = cJSON_PrintUnformatted(j);
+  cJSON_Delete(j);
+  if (!text) return;
+  pthread_mutex_lock(&h->mu);
+  item *it = &h->ended_answers[h->ended_answers_next];
+  h->ended_answers_next = (h->ended_answers_next + 1) % DEBRIEFS;
+  free(it->buf);
+  it->buf = (unsigned char *)text;
+  it->len = strlen(text);
+  it->ver = ++h->next_ver;
+  pthread_mutex_unlock(&h->mu);
+}
+
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   const uint32_t phantom = s->st.phantom_id;
+  keep_ended_answers(h, slot);
   leave(h, s);
   if (s->req_w > 0) dds_delete(s->req_w);
   pthread_mutex_lock(&h->mu);
@@ -1474,11 +1518,6 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
 
 /* ---- the thread ------------------------------------------------------------------------------ */
 
-typedef void (*sample_fn)(palp_web_hub *h, const void *sample);
-/* An instance that turned not-alive; sample holds its key fields (an invalid sample's key is
- * filled in), since the instance itself may already be gone once its last sample is taken. */
-typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih, const void *sample);
-
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
   if (rd <= 0) return 0;
   int total = 0, n;
@@ -1805,7 +1844,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) free(h->pending_ex[k].ex);
   for (int i = 0; i < MAX_SERVERS; i++) free(h->srv[i].loads);
   free(h->hello.buf);
-  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf);
+  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf), free(h->ended_answers[k].buf);
   free(h->sessions_msg.buf);
   free(h->status_msg.buf);
   free(h->exercises_msg.buf);
@@ -2102,6 +2141,18 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
     if (pick) {
       rc = take(&pick->msg, pre, buf, len);
       if (rc > 0) c->debrief_ver = pick->msg.ver;
+      goto out;
+    }
+    /* the ended sessions' answers, oldest first, to the dashboard alone (as the live answers below),
+     * those from before it attached too: a reloaded dashboard still shows what an examination found */
+    const item *ended = NULL;
+    for (int k = 0; k < DEBRIEFS && replay; k++) {
+      const item *e = &h->ended_answers[k];
+      if (e->buf && e->ver > c->ended_answers_ver && (!ended || e->ver < ended->ver)) ended = e;
+    }
+    if (ended && h->def.answers) {
+      rc = take(ended, pre, buf, len);
+      if (rc > 0) c->ended_answers_ver = ended->ver;
       goto out;
     }
   }

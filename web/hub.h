@@ -75,6 +75,8 @@ typedef struct palp_web_cursor {
   /* an exercise session's hidden lumps and marks (palp_web_hub_next sends them only to an
    * instructor's page following every session: the dashboard) */
   uint64_t answers_ver[PALP_WEB_MAX_SESSIONS];
+  /* the newest of the ended exercise sessions' last answers this page was sent (the dashboard only) */
+  uint64_t ended_answers_ver;
   /* a session's pressed-skin map (palp_web_hub_next sends it to pages following every session) */
   uint64_t cover_ver[PALP_WEB_MAX_SESSIONS];
   /* {"trainee": ID}: this page is that session's trainee page (the newest binding wins); only a

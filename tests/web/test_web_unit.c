@@ -747,19 +747,57 @@ static void test_answers(palp_web_hub *h, dds_entity_t pp) {
   CHECK(o.n == 0 && w.n == 0 && b.n == 0,
         "not sent to an instructor's page following the session (%d), cat's own (%d) or her trainee page (%d)", o.n, w.n,
         b.n);
-  /* the session closes: the dashboard's lumps go with it */
+  /* the session closes just after a last mark near no lump, its answer and the CLOSED state written
+   * together (the server answers a mark at its tick, then ends the session): the live lumps go, and
+   * what the marks found is kept, the last mark counted (the bridge takes the polled findings and
+   * answers before letting the session go), for the dashboard's list of ended sessions */
+  memset(&f, 0, sizeof f);
+  f.session_id = sid;
+  f.mark_id = 6;
+  f.op = palp_FINDING_MARK;
+  f.point = (palp_Vec3){-0.0300, -0.0200, 0.0173};
+  f.time = 9.0;
+  fs.marks = 3;
+  fs.last_mark_id = 6;
+  fs.last_accepted = 1;
+  fs.reason[0] = 0;
   palp_SessionState closed;
   memset(&closed, 0, sizeof closed);
   closed.session_id = sid;
   closed.phase = palp_PHASE_CLOSED;
+  dds_write(w_f, &f);
+  dds_write(w_fs, &fs);
   dds_write(w_state, &closed);
-  dds_sleepfor(DDS_MSECS(200));
+  answers_seen fin = {.sid = sid};
+  read_answers(h, &dash, 40, &fin);
+  CHECK(fin.last && cJSON_IsTrue(cJSON_GetObjectItem(fin.last, "ended")),
+        "the dashboard is sent the ended session's answers, marked ended (%d messages)", fin.n);
+  if (fin.last) {
+    marks_text(fin.last, got, sizeof got);
+    CHECK(!strcmp(got, "1:1 5:2 6:0") && num(fin.last, "found") == 2 && num(fin.last, "false_marks") == 1 &&
+              num(fin.last, "unanswered") == 1,
+          "ended: marks 1 and 5 on the lumps, the last mark (answered as the session closed) near no lump; "
+          "2 found, 1 false, only mark 3 unanswered (\"%s\", found %d, false %d, unanswered %d)",
+          got, num(fin.last, "found"), num(fin.last, "false_marks"), num(fin.last, "unanswered"));
+  }
   palp_web_cursor late;
   CHECK(palp_web_hub_attach(h, &late, 8) == 0 && palp_web_hub_control(h, &late, "{\"follow\":\"all\"}", 16) == 0,
         "a dashboard opened after the session closed");
   answers_seen after = {.sid = sid};
   read_answers(h, &late, 30, &after);
-  CHECK(after.n == 0, "is sent no lumps of the closed session (%d)", after.n);
+  CHECK(after.n == 1 && after.last && cJSON_IsTrue(cJSON_GetObjectItem(after.last, "ended")),
+        "is sent the closed session's answers once, as ended, no live lumps (%d messages)", after.n);
+  /* and never a page following one session, one of cat's token, or her trainee page */
+  answers_seen o2 = {.sid = sid}, w2 = {.sid = sid}, b2 = {.sid = sid};
+  read_answers(h, &obs, 20, &o2);
+  read_answers(h, &own, 20, &w2);
+  read_answers(h, &bound, 20, &b2);
+  CHECK(o2.n == 0 && w2.n == 0 && b2.n == 0, "the ended answers reach none of the other pages (%d, %d, %d)", o2.n, w2.n,
+        b2.n);
+  cJSON_Delete(fin.last);
+  cJSON_Delete(o2.last);
+  cJSON_Delete(w2.last);
+  cJSON_Delete(b2.last);
   cJSON_Delete(a.last);
   cJSON_Delete(o.last);
   cJSON_Delete(w.last);

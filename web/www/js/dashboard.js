@@ -272,6 +272,38 @@
     if (title) td.title = title;
     return td;
   }
+  /* An ended session whose trainee was not told where the lumps were (debrief "count" or "none",
+   * an examination): what the marks found, from the bridge's last answers of the session (an
+   * `answers` message with "ended"), for the instructor's eyes, under the same box as the live ones. */
+  const endedAnswers = new Map(); /* session id -> its last answers; bounded as the rows are */
+  function hiddenEnded(tr) {
+    const level = tr.dataset.untold, a = endedAnswers.get(Number(tr.dataset.session));
+    const cellEl = tr.querySelector("td.lumps");
+    cellEl.textContent = "";
+    cellEl.className = "lumps muted";
+    const told = level === "count" ? "not told where: the exercise tells the count only"
+      : "not told: the exercise tells nothing";
+    if (!a) { cellEl.textContent = level === "count" ? told : ""; return; }
+    if (!showAnswers.checked) {
+      cellEl.textContent = (level === "count" ? told + "; " : "") + "hidden lumps: not shown (the box above)";
+      return;
+    }
+    const near = a.marks_at.filter(function (k) { return k.lump === 0; }).length;
+    const ul = document.createElement("ul"), head = document.createElement("li");
+    head.textContent = "hidden lumps, the trainee was not told: " + PALP.debriefFound(a) +
+      "; " + PALP.plural(a.marks, "mark", "marks") + " standing, " + near + " near no lump" +
+      (a.unanswered ? "; " + PALP.plural(a.unanswered, "finding", "findings") + " whose answer the bridge missed" : "");
+    head.className = a.found < a.lesions || near ? "warn" : "";
+    ul.appendChild(head);
+    a.lumps.forEach(function (l, i) {
+      const li = document.createElement("li");
+      li.textContent = PALP.debriefLump(l, i);
+      li.className = l.found_by ? "found" : "bad";
+      ul.appendChild(li);
+    });
+    cellEl.className = "lumps";
+    cellEl.appendChild(ul);
+  }
   function debrief(m) {
     const old = endedRows.get(m.session);
     if (old) old.remove(); /* a reconnect's replay: each session once, in the bridge's order */
@@ -288,6 +320,7 @@
     cell(tr, told ? m.duplicates : "n/a", "n" + (told && m.duplicates > 0 ? " warn" : ""), "standing marks on a lump another mark found");
     cell(tr, m.reason, "", "why the session ended (the server's word)");
     const lumps = tr.insertCell();
+    lumps.className = "lumps";
     if (m.level === "lesions") {
       const ul = document.createElement("ul");
       m.lumps.forEach(function (l, i) {
@@ -298,8 +331,8 @@
       });
       lumps.appendChild(ul);
     } else {
-      lumps.textContent = m.level === "count" ? "not told where: the exercise tells the count only" : "";
-      lumps.className = "muted";
+      tr.dataset.untold = m.level; /* the instructor's view of it, when the bridge kept one (hiddenEnded) */
+      hiddenEnded(tr);
     }
     ended.insertBefore(tr, ended.firstChild);
     endedRows.set(m.session, tr);
@@ -313,6 +346,7 @@
 
   showAnswers.addEventListener("change", function () {
     for (const c of cards.values()) { listAnswers(c); draw(c, c.disp); }
+    for (const tr of endedRows.values()) if (tr.dataset.untold) hiddenEnded(tr);
   });
   showCover.addEventListener("change", function () {
     for (const c of cards.values()) draw(c, c.disp);
@@ -353,6 +387,20 @@
       draw(c, c.disp);
     },
     answers: function (m) {
+      if (m.ended) {
+        endedAnswers.delete(m.session); /* newest last: the oldest go first */
+        endedAnswers.set(m.session, m);
+        st.dashboard.endedAnswers = st.dashboard.endedAnswers || {}; /* for the tests, as endedAnswers */
+        st.dashboard.endedAnswers[m.session] = m;
+        for (const id of endedAnswers.keys()) {
+          if (endedAnswers.size <= 2 * ENDED_MAX) break;
+          endedAnswers.delete(id);
+          delete st.dashboard.endedAnswers[id];
+        }
+        const tr = endedRows.get(m.session);
+        if (tr && tr.dataset.untold) hiddenEnded(tr);
+        return;
+      }
       answersOf.set(m.session, m);
       st.dashboard.answers = st.dashboard.answers || {};
       st.dashboard.answers[m.session] = m; /* for the tests */
