@@ -8,7 +8,10 @@ shows 1 mark; key W withdraws it; the class dashboard shows where the lump is hi
 runs with "session_exercise": "always"), not found yet, and hides it when told; a dashboard
 page's and an observer page's attempts to send a finding are refused and nothing is written. When
 pat's station leaves, her page shows the server's debrief (the lump missed, where it is), and so does
-the class dashboard, under "Ended exercise sessions", both the one open meanwhile and one opened after.
+the class dashboard, under "Ended exercise sessions", both the one open meanwhile and one opened after;
+the latter is also sent what her marks found, as the server's debrief said it. sam then examines on
+"hard", whose debrief tells the count only: his ended row on the dashboard shows where the lump was,
+missed, under the "show hidden lumps" box.
 DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
 import math
 import os
@@ -251,6 +254,42 @@ def run(build, source, out):
         check(dash2.wait_for("document.querySelector('#debriefs tr') !== null", 15) is True and
               shows_it(dash2.eval(row), "easy") and dash2.eval("document.querySelectorAll('#debriefs tr').length") == 1,
               "a dashboard opened after the session ended shows it too, once: %s" % dash2.eval(row))
+        # The bridge keeps what the ended session's marks found (docs/web.md, "The hidden lumps"), matched by
+        # its own reading of the exercise and the marks: it says what the server's debrief said.
+        kept = dash2.wait_for("palpState.dashboard.endedAnswers && palpState.dashboard.endedAnswers[%d]"
+                              % told["session"], 10)
+        check(kept is not None and kept["ended"] is True and
+              [kept["found"], kept["lesions"], kept["marks"], kept["false_marks"]] ==
+              [told["found"], told["lesions"], told["marks"], told["false_marks"]] and
+              [[l["found_by"], l["clock_h"], l["arc_mm"], l["across_mm"], l["deep_mm"]] for l in kept["lumps"]] ==
+              [[l["found_by"], l["clock_h"], l["arc_mm"], l["across_mm"], l["deep_mm"]] for l in told["lumps"]],
+              "a dashboard opened after the session ended is sent what its marks found, as the server's debrief "
+              "said it: %s" % kept)
+
+        # sam examines on "hard" (phantom 13), whose debrief tells the count only: the trainee is not
+        # told where the lump was, the instructor's dashboard is, under the "show hidden lumps" box,
+        # in the debrief's words: polar 35 deg azimuth 200 deg on the 40 mm dome is at 8.3 o'clock
+        # (clockwise from +y: atan2(cos 200, sin 200) = -110 deg), 40 mm x 35 pi/180 = 24.4 mm from
+        # the pole; 10 mm across, 10 mm deep (config/exercises/hard.json).
+        sam = procs.trainee("sam", phantom=13, extra=["--input", "sim:press,hold_s=1", "--duration", "6"])
+        sam_row = ("(function(){const r=Array.from(document.querySelectorAll('#debriefs tr')).find(function(r){"
+                   "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {found: r.cells[3].textContent,"
+                   "lumps: r.cells[8].textContent, items: Array.from(r.cells[8].querySelectorAll('li')).map(function(l){"
+                   "return [l.className, l.textContent];})};})()")
+        got = dash2.wait_for("(function(){const r=%s; return r && r.items.length === 2 ? r : null;})()" % sam_row, 30)
+        check(got is not None and got["found"] == "found 0 of 1 lump" and
+              got["items"][0] == ["warn", "hidden lumps, the trainee was not told: found 0 of 1 lump; 0 marks standing, "
+                                          "0 near no lump"] and
+              got["items"][1] == ["bad", "lump 1 MISSED: at 8.3 o'clock, 24 mm from the pole along the skin; 10 mm "
+                                         "across, its centre 10 mm deep"],
+              "sam's ended examination on the dashboard: told the count, the instructor shown where the lump "
+              "was: %s (sam's station %s)" % (got or dash2.eval(sam_row), sam.poll()))
+        click(dash2, "show-answers")
+        got = dash2.eval(sam_row)
+        check(got is not None and got["items"] == [] and got["lumps"] == "not told where: the exercise tells the count "
+              "only; hidden lumps: not shown (the box above)",
+              "unticking 'show hidden lumps' takes them off the ended row too: %s" % got)
+        click(dash2, "show-answers")
         print("screenshot:", dash2.screenshot(os.path.join(out, "dashboard-ended.png")))
         # (no screenshot here: with the dashboard and observer pages opened since, this page is a background
         # tab, which Chromium may not paint: a capture timed out once in a full run)
