@@ -95,7 +95,7 @@
     g.setIndex(idx);
     coverPts = new THREE.Points(g, new THREE.PointsMaterial({ size: 5, sizeAttenuation: false, vertexColors: THREE.VertexColors }));
     coverPts.visible = showCover.checked;
-    coverPts.renderOrder = 5; /* after the skin: a dot at a vertex's own depth passes the depth test */
+    coverPts.renderOrder = 5; /* after the skin, which is offset behind its depth: a dot at a vertex passes the depth test */
     scene.add(coverPts);
     dirty = true;
   }
@@ -111,7 +111,11 @@
     const colours = new Float32Array(rest.length);
     geom.setAttribute("color", new THREE.BufferAttribute(colours, 3));
     geom.setIndex(ph.triangles);
-    mesh = new THREE.Mesh(geom, new THREE.MeshLambertMaterial({ vertexColors: THREE.VertexColors, side: THREE.DoubleSide }));
+    /* The skin drawn a little behind its own depth (polygon offset): the pressed-skin dots sit at its
+     * vertices, and half of each square sprite would otherwise fail the depth test where the skin
+     * curves towards the eye (the dots read half-hidden, session 61's note). */
+    mesh = new THREE.Mesh(geom, new THREE.MeshLambertMaterial({ vertexColors: THREE.VertexColors, side: THREE.DoubleSide,
+      polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 }));
     scene.add(mesh);
     setDisplacement(null);
     const R = ph.radius;
