@@ -411,6 +411,14 @@ static void build_sessions(palp_web_hub *h) {
     else cJSON_AddNullToObject(o, "exercise");
     if (s->fst.valid) cJSON_AddNumberToObject(o, "findings", s->fst.marks);
     else cJSON_AddNullToObject(o, "findings");
+    /* Time left of the exercise's limit [s]: the server's newest figure (its finding status, 2 Hz)
+     * less the time since it came; null without a status or a limit (the server's -1). */
+    if (s->fst.valid && isfinite(s->fst.time_left) && s->fst.time_left >= 0) {
+      const double age = (double)(palp_dds_now_ns() - s->fst.at_ns) * 1e-9;
+      cJSON_AddNumberToObject(o, "time_left", round(fmax(0.0, s->fst.time_left - age) * 10) / 10);
+    } else {
+      cJSON_AddNullToObject(o, "time_left");
+    }
     if (pos) {
       cJSON_AddNumberToObject(o, "late_haptic", (double)s->late_haptic);
       cJSON_AddNumberToObject(o, "lost_haptic", (double)s->lost_haptic);

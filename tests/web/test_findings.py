@@ -157,6 +157,20 @@ def run(build, source, out):
         print("dashboard: late haptic updates %s, lost %s, coverage %s" % (late["late_haptic"], late["lost_haptic"],
                                                                             late["coverage"]))
         check(late["coverage"][0] > 0, "coverage from the local model's contact > 0 (%.4f)" % late["coverage"][0])
+        # the time left of easy's 300 s limit on pat's card, counting down (the server's finding status, 2 Hz)
+        tl = ("(function(){const s=palpState.sessions.find(function(s){return s.trainee==='pat'});"
+              "const r=Array.from(document.querySelectorAll('.card tr')).find(function(r){"
+              "return r.cells[0].textContent==='time left';});"
+              "return [s.time_left, s.duration, r ? r.cells[1].textContent : null];})()")
+        t1 = dash.eval(tl)
+        time.sleep(1.5)
+        t2 = dash.eval(tl)
+        # tolerances: the session's age comes with the server's session state (1 Hz), the time left is
+        # the status's figure less its age, and the list is rebuilt as the statuses come (2 Hz)
+        check(t1[0] is not None and abs(t1[0] + t1[1] - 300) <= 2.0 and 0.7 <= t1[0] - t2[0] <= 2.3 and
+              re.match(r"^4:[0-5]\d$", t2[2]) and int(t2[2][2:]) == int(t2[0] % 60),
+              "pat's card gives the time left of easy's 300 s, counting down: %s then, 1.5 s later, %s "
+              "(time left + the session's age = 300 s within 2 s; fallen 0.7-2.3 s; m:ss of it)" % (t1, t2))
         dash.eval("palpSend({finding: 'mark'})")
         r = dash.wait_for("palpState.findingReplies.length > 0 && palpState.findingReplies[0]", 5)
         check(r is not None and r["ok"] is False and "viewer" in r["reason"],

@@ -124,6 +124,11 @@ const PALP = (function () {
       plural(m.false_marks, "mark was", "marks were") + " near no lump" +
       (m.duplicates ? ", " + m.duplicates + " on a lump already found" : "");
   }
+  /* seconds as m:ss, as the station and the trainee page show an exercise's time left (never below 0:00) */
+  function minutes(t) {
+    const s = Math.max(0, t);
+    return Math.floor(s / 60) + ":" + String(Math.floor(s % 60)).padStart(2, "0");
+  }
   /* one lump of a debrief at "lesions" (i from 0), or of the dashboard's hidden lumps, where it is in the words every palp tool uses for a
    * place (docs/naming.md: the clock seen from above, the arc from the pole along the skin) */
   function debriefLump(l, i, live) {
@@ -146,5 +151,6 @@ const PALP = (function () {
   return { viridis: viridis, css: css, params: params, connect: connect, state: state, coverColour: coverColour,
     coverValid: coverValid,
     decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
-    plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump };
+    plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump,
+    minutes: minutes };
 })();

@@ -185,13 +185,18 @@
         ["coverage l / m / d", fmt(100 * s.coverage[0], 0) + " / " + fmt(100 * s.coverage[1], 0) + " / " +
           fmt(100 * s.coverage[2], 0) + " %", false,
           "share of the dome's skin pressed at light, medium and deep pressure, each level itself, as the exercise " +
-          "grades thoroughness (by the fingertip's depth), since the bridge began following the session: the footprint " +
-          "disc around each sampled contact point, 30 samples/s; the review's figures count every logged step's touched skin"] :
+          "grades thoroughness (by the fingertip's depth), since the bridge began following the session: the skin under " +
+          "the fingertip at the physics steps the review samples (a force-driven finger: the footprint disc around each " +
+          "sampled contact point, 30 samples/s); the review's figures count every logged step's touched skin"] :
         ["coverage", fmt(100 * s.coverage[0], 1) + " %", false,
           "share of the dome's skin pressed at least lightly, since the bridge began following the session: " +
-          "the footprint disc (contact area) around each sampled contact point, marked on the rest mesh, 30 samples/s"],
+          "the skin under the fingertip at the physics steps the review samples (a force-driven finger: the footprint " +
+          "disc around each sampled contact point, 30 samples/s), marked on the rest mesh"],
       ["findings", s.findings === null ? "n/a" : s.findings, false,
         s.findings === null ? "no findings status from the server (no exercise, or none marked yet)" : "marks standing (the server's count)"],
+      ["time left", s.time_left === null || s.time_left === undefined ? (s.exercise ? "no limit" : "n/a") : PALP.minutes(s.time_left),
+        s.time_left !== null && s.time_left !== undefined && s.time_left < 60,
+        "the exercise's time limit less the session's age (the server's figure, twice a second); in its last minute in red"],
       ["peak force", fmt(s.peak_force, 2) + " N"],
       ["late physics steps", s.overruns, s.overruns > 0,
         "its physics steps that ended after the next tick's start, or that its tick thread skipped behind schedule (the server's count)"], ["rejected samples", s.rejected, s.rejected > 0],

@@ -357,8 +357,7 @@
     else if (findings && findings.time_left < 0) left = null;
     else if (lastSession && T.exercise.time_limit > 0) left = T.exercise.time_limit - lastSession.duration;
     T.timeLeft = left;
-    document.getElementById("ex-time").textContent = left === null ? "no limit" :
-      Math.floor(Math.max(0, left) / 60) + ":" + String(Math.floor(Math.max(0, left) % 60)).padStart(2, "0");
+    document.getElementById("ex-time").textContent = left === null ? "no limit" : PALP.minutes(left);
     T.marks = findings ? findings.marks : (lastSession && lastSession.findings !== null ? lastSession.findings : 0);
     document.getElementById("ex-marks").textContent = String(T.marks);
   }
