@@ -230,6 +230,10 @@ struct palp_web_hub {
   uint32_t closed_sid[DEBRIEFS];
   char closed_trainee[DEBRIEFS][64];
   uint32_t closed_phantom[DEBRIEFS]; /* and their phantoms: the debrief names the exercise */
+  /* and what the bridge saw them cover (session_coverage; rule 0: none, 1 force bands, 2 the
+   * exercise's): the debrief carries it, as the station's last lines do */
+  double closed_cov[DEBRIEFS][3];
+  int closed_cov_rule[DEBRIEFS];
   int closed_next;
   pending_exercise pending_ex[SESSION_EXERCISES_PENDING];
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
@@ -1003,6 +1007,9 @@ static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   const uint32_t phantom = s->st.phantom_id;
   keep_ended_answers(h, slot);
+  double cov[3] = {0, 0, 0};
+  const int cov_rule = s->cov ? (s->exercise_bands ? 2 : 1) : 0;
+  if (s->cov) session_coverage(s, cov);
   leave(h, s);
   if (s->req_w > 0) dds_delete(s->req_w);
   pthread_mutex_lock(&h->mu);
@@ -1022,6 +1029,8 @@ static void free_session(palp_web_hub *h, int slot) {
   pthread_mutex_lock(&h->mu);
   h->closed_sid[h->closed_next] = h->slot_sid[slot];
   h->closed_phantom[h->closed_next] = phantom;
+  h->closed_cov_rule[h->closed_next] = cov_rule;
+  memcpy(h->closed_cov[h->closed_next], cov, sizeof cov);
   memcpy(h->closed_trainee[h->closed_next], h->slot_trainee[slot], sizeof h->closed_trainee[0]);
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
@@ -1113,18 +1122,25 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   }
   const uint32_t n = m->lesion._length;
   char trainee[64] = "";
-  int slot, known = 0;
+  int slot, known = 0, cov_rule = 0;
   uint32_t phantom = 0;
+  double cov[3] = {0, 0, 0};
   if (find_session(h, m->session_id, &slot)) {
     pthread_mutex_lock(&h->mu);
     memcpy(trainee, h->slot_trainee[slot], sizeof trainee);
     pthread_mutex_unlock(&h->mu);
-    phantom = h->s[slot].st.phantom_id;
+    const session *s = &h->s[slot];
+    phantom = s->st.phantom_id;
+    cov_rule = s->cov ? (s->exercise_bands ? 2 : 1) : 0;
+    if (s->cov) session_coverage(s, cov);
     known = 1;
   }
   for (int k = 0; k < DEBRIEFS && !known; k++)
-    if (h->closed_sid[k] == m->session_id)
+    if (h->closed_sid[k] == m->session_id) {
       memcpy(trainee, h->closed_trainee[k], sizeof trainee), phantom = h->closed_phantom[k], known = 1;
+      cov_rule = h->closed_cov_rule[k];
+      memcpy(cov, h->closed_cov[k], sizeof cov);
+    }
   if (!known) {
     h->stats.no_session++;
     return;
@@ -1147,6 +1163,14 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   char reason[128];
   copy_str(reason, sizeof reason, m->reason);
   cJSON_AddStringToObject(j, "reason", reason);
+  /* The bridge's own figure, not the server's: the skin it saw pressed since it began following the
+   * session (docs/web.md, "Measured against the grade"), as the station's last line says it */
+  if (cov_rule) {
+    cJSON_AddItemToObject(j, "coverage", vec_json(cov, 3, 1));
+    cJSON_AddStringToObject(j, "band_rule", cov_rule == 2 ? "exercise" : "force");
+  } else {
+    cJSON_AddNullToObject(j, "coverage");
+  }
   cJSON *arr = cJSON_AddArrayToObject(j, "lumps");
   for (uint32_t i = 0; i < n; i++) {
     const palp_DebriefLesion *l = &m->lesion._buffer[i];

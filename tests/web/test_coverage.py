@@ -108,7 +108,7 @@ def run(build, source, out):
         m = re.search(r"\[trainee %s\] you covered light ([0-9.]+)%%, medium ([0-9.]+)%%, deep ([0-9.]+)%% of the dome"
                       % name, log)
         check(m is not None, "%s: the station says what it covered" % name)
-        said = [float(x) / 100 for x in m.groups()]
+        said = station_cov = [float(x) / 100 for x in m.groups()]
         diff = [abs(a - b) for a, b in zip(said, graded)]
         check(max(diff) <= TOLERANCE, "%s: the station's coverage %s is the review's within %.1f points (differences %s "
               "points)" % (name, m.group(0).split("covered ")[1], 100 * TOLERANCE, ["%.2f" % (100 * d) for d in diff]))
@@ -124,6 +124,14 @@ def run(build, source, out):
         check([d["found"], d["lesions"], d["marks"], d["false_marks"]] == said and len(d["lumps"]) == len(lumps) == d["lesions"],
               "%s: the page's debrief says found %d of %d, %d marks, %d near none, %d lumps, as the station (%s, %d lumps)"
               % (name, d["found"], d["lesions"], d["marks"], d["false_marks"], len(d["lumps"]), said, len(lumps)))
+        # ... and it carries the bridge's coverage at the end, which the station's last line also says
+        # (both the skin under the fingertip, each from the local models it received; since session 62)
+        c = d.get("coverage")
+        check(c is not None and d.get("band_rule") == "exercise" and len(c) == 3 and
+              max(abs(a - b) for a, b in zip(c, station_cov)) <= TOLERANCE,
+              "%s: the debrief's coverage %s is the station's %s within %.1f points"
+              % (name, c and ["%.1f%%" % (100 * x) for x in c], ["%.1f%%" % (100 * x) for x in station_cov],
+                 100 * TOLERANCE))
         for (k, verdict, clock, arc, across, deep), l in zip(lumps, d["lumps"]):
             same = (verdict == "MISSED") == (l["found_by"] == 0) and abs(float(clock) - l["clock_h"]) <= 0.051 and \
                 abs(float(arc) - l["arc_mm"]) <= 0.51 and abs(float(across) - l["across_mm"]) <= 0.51 and \

@@ -243,17 +243,26 @@ def run(build, source, out):
               "her page's debrief is of the session the dashboard listed (%s, session %s)" % (told["trainee"], told["session"]))
         row = ("(function(){const rs=document.querySelectorAll('#debriefs tr[data-session=\"%d\"]');"
                "if(!rs.length) return null; const r=rs[0]; return {rows: rs.length,"
-               "cells: Array.from(r.cells).slice(0, 8).map(function(c){return c.textContent;}),"
+               "cells: Array.from(r.cells).slice(0, 9).map(function(c){return c.textContent;}),"
                "lumps: Array.from(r.querySelectorAll('li')).map(function(l){"
                "return [l.textContent, getComputedStyle(l).color];})};})()" % told["session"])
+        cov = told.get("coverage") or [0, 0, 0]
         want = [str(told["session"]), "pat", "easy", "found %d of %d lump%s" % (told["found"], told["lesions"],
                 "" if told["lesions"] == 1 else "s"), str(told["marks"]), str(told["false_marks"]),
                 str(told["duplicates"]), told["reason"]]
+        # the bridge's coverage at the end (her one press, a few percent light and medium), in her debrief
+        # in the station's words and on the dashboard's row as its card gave it
+        said = re.search(r"You covered light ([0-9.]+)%, medium ([0-9.]+)%, deep ([0-9.]+)% of the dome", shown[0])
+        check(told.get("band_rule") == "exercise" and 0 < cov[0] < 0.1 and said is not None and
+              all(abs(float(x) - 100 * c) <= 0.05 + 1e-9 for x, c in zip(said.groups(), cov)),
+              "her debrief gives what she covered (within its 0.1 point rounding): %s in %r" % (cov, shown[0]))
         page_lumps = [t for _, t in shown[1]]
         red = "rgb(176, 0, 32)"  # the dashboard's warning colour (the cards' "warn", the server's "bad")
 
         def shows_it(r, exercise):
-            return (r is not None and r["rows"] == 1 and r["cells"] == want[:2] + [exercise] + want[3:] and
+            covered = re.match(r"^(\d+) / (\d+) / (\d+) %$", r["cells"][8]) if r is not None else None
+            return (r is not None and r["rows"] == 1 and r["cells"][:8] == want[:2] + [exercise] + want[3:] and
+                    covered is not None and all(abs(int(x) - 100 * c) <= 0.5 + 1e-9 for x, c in zip(covered.groups(), cov)) and
                     [t for t, _ in r["lumps"]] == page_lumps and
                     all((c == red) == (l["found_by"] == 0) for (_, c), l in zip(r["lumps"], told["lumps"])))
 
@@ -288,7 +297,7 @@ def run(build, source, out):
         sam = procs.trainee("sam", phantom=13, extra=["--input", "sim:press,hold_s=1", "--duration", "6"])
         sam_row = ("(function(){const r=Array.from(document.querySelectorAll('#debriefs tr')).find(function(r){"
                    "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {found: r.cells[3].textContent,"
-                   "lumps: r.cells[8].textContent, items: Array.from(r.cells[8].querySelectorAll('li')).map(function(l){"
+                   "lumps: r.cells[9].textContent, items: Array.from(r.cells[9].querySelectorAll('li')).map(function(l){"
                    "return [l.className, l.textContent];})};})()")
         got = dash2.wait_for("(function(){const r=%s; return r && r.items.length === 2 ? r : null;})()" % sam_row, 30)
         check(got is not None and got["found"] == "found 0 of 1 lump" and

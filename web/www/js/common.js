@@ -124,6 +124,12 @@ const PALP = (function () {
       plural(m.false_marks, "mark was", "marks were") + " near no lump" +
       (m.duplicates ? ", " + m.duplicates + " on a lump already found" : "");
   }
+  /* A debrief's coverage (the bridge's own, in the exercise's bands) in the station's words: "light
+   * 19.4%, medium 20.1%, deep 0.0%" (client/main.c, findings_ui_coverage); "" without one. */
+  function coveredText(m) {
+    if (!m.coverage || m.band_rule !== "exercise" || m.coverage.length !== 3) return "";
+    return ["light", "medium", "deep"].map(function (b, k) { return b + " " + (100 * m.coverage[k]).toFixed(1) + "%"; }).join(", ");
+  }
   /* seconds as m:ss, as the station and the trainee page show an exercise's time left (never below 0:00) */
   function minutes(t) {
     const s = Math.max(0, t);
@@ -152,5 +158,5 @@ const PALP = (function () {
     coverValid: coverValid,
     decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
     plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump,
-    minutes: minutes };
+    minutes: minutes, coveredText: coveredText };
 })();

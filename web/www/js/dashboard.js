@@ -324,6 +324,11 @@
     cell(tr, told ? m.false_marks : "n/a", "n" + (told && m.false_marks > 0 ? " bad" : ""), "standing marks near no lump");
     cell(tr, told ? m.duplicates : "n/a", "n" + (told && m.duplicates > 0 ? " warn" : ""), "standing marks on a lump another mark found");
     cell(tr, m.reason, "", "why the session ended (the server's word)");
+    const cov = PALP.coveredText(m); /* as the card's "coverage l / m / d" while it ran */
+    cell(tr, cov ? m.coverage.map(function (f) { return (100 * f).toFixed(0); }).join(" / ") + " %" : "n/a", "n",
+      cov ? "the skin pressed at light, medium and deep pressure, each level itself, as the exercise grades thoroughness " +
+        "(the bridge's own figure since it began following the session; the review's within a few points): " + cov
+        : "the bridge saw no coverage in the exercise's bands for this session");
     const lumps = tr.insertCell();
     lumps.className = "lumps";
     if (m.level === "lesions") {

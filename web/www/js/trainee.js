@@ -300,6 +300,8 @@
       PALP.plural(m.marks, "mark", "marks") + " standing).";
     let t = "You " + PALP.debriefSummary(m) + ".";
     if (m.level === "count") t += " This exercise does not say where its lumps are: the instructor's review does.";
+    const cov = PALP.coveredText(m);
+    if (cov) t += " You covered " + cov + " of the dome (as this page saw it; the review counts it from the triangles you touched).";
     return t;
   }
   function clearDebrief() {
