@@ -127,7 +127,8 @@ const PALP = (function () {
   /* A debrief's coverage (the bridge's own, in the exercise's bands) in the station's words: "light
    * 19.4%, medium 20.1%, deep 0.0%" (client/main.c, findings_ui_coverage); "" without one. */
   function coveredText(m) {
-    if (!m.coverage || m.band_rule !== "exercise" || m.coverage.length !== 3) return "";
+    if (!Array.isArray(m.coverage) || m.band_rule !== "exercise" || m.coverage.length !== 3 ||
+        !m.coverage.every(Number.isFinite)) return "";
     return ["light", "medium", "deep"].map(function (b, k) { return b + " " + (100 * m.coverage[k]).toFixed(1) + "%"; }).join(", ");
   }
   /* seconds as m:ss, as the station and the trainee page show an exercise's time left (never below 0:00) */

@@ -194,7 +194,7 @@
           "disc around each sampled contact point, 30 samples/s), marked on the rest mesh"],
       ["findings", s.findings === null ? "n/a" : s.findings, false,
         s.findings === null ? "no findings status from the server (no exercise, or none marked yet)" : "marks standing (the server's count)"],
-      ["time left", s.time_left === null || s.time_left === undefined ? (s.exercise ? "no limit" : "n/a") : PALP.minutes(s.time_left),
+      ["time left", s.time_left === null || s.time_left === undefined ? (s.findings !== null ? "no limit" : "n/a") : PALP.minutes(s.time_left),
         s.time_left !== null && s.time_left !== undefined && s.time_left < 60,
         "the exercise's time limit less the session's age (the server's figure, twice a second); in its last minute in red"],
       ["peak force", fmt(s.peak_force, 2) + " N"],

@@ -296,11 +296,14 @@
   const foundMat = new THREE.MeshBasicMaterial({ color: 0x2e9e44, side: THREE.DoubleSide }),
     missedMat = new THREE.MeshBasicMaterial({ color: 0xd0342c, side: THREE.DoubleSide });
   function debriefText(m) {
-    if (m.level === "none") return "This exercise keeps its lumps for the instructor's review (" +
-      PALP.plural(m.marks, "mark", "marks") + " standing).";
-    let t = "You " + PALP.debriefSummary(m) + ".";
-    if (m.level === "count") t += " This exercise does not say where its lumps are: the instructor's review does.";
-    const cov = PALP.coveredText(m);
+    let t;
+    if (m.level === "none") {
+      t = "This exercise keeps its lumps for the instructor's review (" + PALP.plural(m.marks, "mark", "marks") + " standing).";
+    } else {
+      t = "You " + PALP.debriefSummary(m) + ".";
+      if (m.level === "count") t += " This exercise does not say where its lumps are: the instructor's review does.";
+    }
+    const cov = PALP.coveredText(m); /* not an answer: her station prints it at any level */
     if (cov) t += " You covered " + cov + " of the dome (as this page saw it; the review counts it from the triangles you touched).";
     return t;
   }
