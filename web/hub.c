@@ -234,6 +234,7 @@ struct palp_web_hub {
    * exercise's): the debrief carries it, as the station's last lines do */
   double closed_cov[DEBRIEFS][3];
   int closed_cov_rule[DEBRIEFS];
+  double closed_duration[DEBRIEFS]; /* how long they ran [s] (the server's figure) */
   int closed_next;
   pending_exercise pending_ex[SESSION_EXERCISES_PENDING];
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
@@ -1006,6 +1007,7 @@ static void keep_ended_answers(palp_web_hub *h, int slot) {
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   const uint32_t phantom = s->st.phantom_id;
+  const double duration = s->st.duration;
   keep_ended_answers(h, slot);
   double cov[3] = {0, 0, 0};
   const int cov_rule = s->cov ? (s->exercise_bands ? 2 : 1) : 0;
@@ -1030,6 +1032,7 @@ static void free_session(palp_web_hub *h, int slot) {
   h->closed_sid[h->closed_next] = h->slot_sid[slot];
   h->closed_phantom[h->closed_next] = phantom;
   h->closed_cov_rule[h->closed_next] = cov_rule;
+  h->closed_duration[h->closed_next] = duration;
   memcpy(h->closed_cov[h->closed_next], cov, sizeof cov);
   memcpy(h->closed_trainee[h->closed_next], h->slot_trainee[slot], sizeof h->closed_trainee[0]);
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
@@ -1042,6 +1045,7 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   if (m->phase != palp_PHASE_OPEN) {
+    if (s && isfinite(m->duration) && m->duration >= 0) s->st.duration = m->duration; /* its last: kept for the debrief */
     if (s) free_session(h, slot);
     return;
   }
@@ -1124,13 +1128,14 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   char trainee[64] = "";
   int slot, known = 0, cov_rule = 0;
   uint32_t phantom = 0;
-  double cov[3] = {0, 0, 0};
+  double cov[3] = {0, 0, 0}, duration = NAN;
   if (find_session(h, m->session_id, &slot)) {
     pthread_mutex_lock(&h->mu);
     memcpy(trainee, h->slot_trainee[slot], sizeof trainee);
     pthread_mutex_unlock(&h->mu);
     const session *s = &h->s[slot];
     phantom = s->st.phantom_id;
+    duration = s->st.duration;
     cov_rule = s->cov ? (s->exercise_bands ? 2 : 1) : 0;
     if (s->cov) session_coverage(s, cov);
     known = 1;
@@ -1140,6 +1145,7 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
       memcpy(trainee, h->closed_trainee[k], sizeof trainee), phantom = h->closed_phantom[k], known = 1;
       cov_rule = h->closed_cov_rule[k];
       memcpy(cov, h->closed_cov[k], sizeof cov);
+      duration = h->closed_duration[k];
     }
   if (!known) {
     h->stats.no_session++;
@@ -1165,6 +1171,9 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   cJSON_AddStringToObject(j, "reason", reason);
   /* The bridge's own figure, not the server's: the skin it saw pressed since it began following the
    * session (docs/web.md, "Measured against the grade"), as the station's last line says it */
+  /* how long it ran [s], the server's session state's figure (its last; null if not a number) */
+  if (isfinite(duration) && duration >= 0) cJSON_AddNumberToObject(j, "duration", round(duration * 10) / 10);
+  else cJSON_AddNullToObject(j, "duration");
   if (cov_rule) {
     cJSON_AddItemToObject(j, "coverage", vec_json(cov, 3, 1));
     cJSON_AddStringToObject(j, "band_rule", cov_rule == 2 ? "exercise" : "force");

@@ -249,7 +249,9 @@ def run(build, source, out):
         cov = told.get("coverage") or [0, 0, 0]
         want = [str(told["session"]), "pat", "easy", "found %d of %d lump%s" % (told["found"], told["lesions"],
                 "" if told["lesions"] == 1 else "s"), str(told["marks"]), str(told["false_marks"]),
-                str(told["duplicates"]), told["reason"]]
+                str(told["duplicates"]), "%s after %d:%02d" % (told["reason"], told["duration"] // 60, told["duration"] % 60)]
+        # how long it ran, the server's figure: the test's steps since her station started (a few seconds)
+        check(0 < told["duration"] < 60, "her session's debrief says how long it ran: %.1f s" % told["duration"])
         # the bridge's coverage at the end (her one press, a few percent light and medium), in her debrief
         # in the station's words and on the dashboard's row as its card gave it
         said = re.search(r"You covered light ([0-9.]+)%, medium ([0-9.]+)%, deep ([0-9.]+)% of the dome", shown[0])
@@ -296,17 +298,17 @@ def run(build, source, out):
         # the pole; 10 mm across, 10 mm deep (config/exercises/hard.json).
         sam = procs.trainee("sam", phantom=13, extra=["--input", "sim:press,hold_s=1", "--duration", "6"])
         sam_row = ("(function(){const r=Array.from(document.querySelectorAll('#debriefs tr')).find(function(r){"
-                   "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {found: r.cells[3].textContent,"
+                   "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {found: r.cells[3].textContent, ended: r.cells[7].textContent,"
                    "lumps: r.cells[9].textContent, items: Array.from(r.cells[9].querySelectorAll('li')).map(function(l){"
                    "return [l.className, l.textContent];})};})()")
         got = dash2.wait_for("(function(){const r=%s; return r && r.items.length === 2 ? r : null;})()" % sam_row, 30)
-        check(got is not None and got["found"] == "found 0 of 1 lump" and
+        check(got is not None and got["found"] == "found 0 of 1 lump" and re.match(r"^trainee station left after 0:[01]\d$", got["ended"]) and
               got["items"][0] == ["warn", "hidden lumps, the trainee was not told: found 0 of 1 lump; 0 marks standing, "
                                           "0 near no lump"] and
               got["items"][1] == ["bad", "lump 1 MISSED: at 8.3 o'clock, 24 mm from the pole along the skin; 10 mm "
                                          "across, its centre 10 mm deep"],
-              "sam's ended examination on the dashboard: told the count, the instructor shown where the lump "
-              "was: %s (sam's station %s)" % (got or dash2.eval(sam_row), sam.poll()))
+              "sam's ended examination on the dashboard (his station runs 6 s, joining included: ended after at most 0:19): told the count, "
+              "the instructor shown where the lump was: %s (sam's station %s)" % (got or dash2.eval(sam_row), sam.poll()))
         click(dash2, "show-answers")
         got = dash2.eval(sam_row)
         check(got is not None and got["items"] == [] and got["lumps"] == "not told where: the exercise tells the count "

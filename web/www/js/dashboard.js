@@ -323,7 +323,8 @@
     cell(tr, m.marks, "n", "marks standing at the session's end (withdrawn marks do not count)");
     cell(tr, told ? m.false_marks : "n/a", "n" + (told && m.false_marks > 0 ? " bad" : ""), "standing marks near no lump");
     cell(tr, told ? m.duplicates : "n/a", "n" + (told && m.duplicates > 0 ? " warn" : ""), "standing marks on a lump another mark found");
-    cell(tr, m.reason, "", "why the session ended (the server's word)");
+    cell(tr, m.reason + (Number.isFinite(m.duration) ? " after " + PALP.minutes(m.duration) : ""), "",
+      "why the session ended (the server's word), and after how long (m:ss, the server's figure)");
     const cov = PALP.coveredText(m); /* as the card's "coverage l / m / d" while it ran */
     cell(tr, cov ? m.coverage.map(function (f) { return (100 * f).toFixed(0); }).join(" / ") + " %" : "n/a", "n",
       cov ? "the skin pressed at light, medium and deep pressure, each level itself, as the exercise grades thoroughness " +
