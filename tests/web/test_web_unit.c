@@ -465,12 +465,17 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
  * session ids into sid[] (up to n). */
 typedef struct debriefs_seen {
   uint32_t sid[8];
+  double duration[8]; /* NAN: null */
   int n;
 } debriefs_seen;
 static int is_debrief(const cJSON *j, void *arg) {
   debriefs_seen *d = arg;
   const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
-  if (type && !strcmp(type, "debrief") && d->n < 8) d->sid[d->n++] = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session"));
+  if (type && !strcmp(type, "debrief") && d->n < 8) {
+    const cJSON *dur = cJSON_GetObjectItem(j, "duration");
+    d->duration[d->n] = cJSON_IsNumber(dur) ? cJSON_GetNumberValue(dur) : NAN;
+    d->sid[d->n++] = (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session"));
+  }
   return 0; /* read on: every debrief within the time */
 }
 static debriefs_seen debriefs_sent(palp_web_hub *h, palp_web_cursor *c, int tries) {
@@ -506,6 +511,15 @@ static void test_debriefs(palp_web_hub *h, dds_entity_t pp) {
   CHECK(palp_web_hub_control(h, &before, ctl, strlen(ctl)) == 0, "it follows ann's session");
   dds_sleepfor(DDS_MSECS(500)); /* the hub knows both sessions (their trainees), and the readers matched */
   CHECK(palp_web_hub_control(h, &before, "{\"follow\":null}", 15) == 0, "... and lets go of it (its session closing)");
+  /* ann's session closes after 123.44 s (the server's CLOSED state) before her debrief comes; bea's
+   * stays open */
+  palp_SessionState closed;
+  memset(&closed, 0, sizeof closed);
+  closed.session_id = sid[0];
+  closed.phase = palp_PHASE_CLOSED;
+  closed.duration = 123.44;
+  CHECK(dds_write(w_state, &closed) == 0, "ann's CLOSED state written");
+  dds_sleepfor(DDS_MSECS(100));
   for (int k = 0; k < 2; k++) {
     palp_Debrief d;
     memset(&d, 0, sizeof d);
@@ -521,6 +535,8 @@ static void test_debriefs(palp_web_hub *h, dds_entity_t pp) {
   debriefs_seen got = debriefs_sent(h, &before, 50);
   CHECK(got.n == 1 && got.sid[0] == sid[0], "the page that let go of ann's session is sent hers, not bea's (%d sent)",
         got.n);
+  CHECK(got.n == 1 && fabs(got.duration[0] - 123.4) < 1e-9,
+        "hers says how long it ran, the CLOSED state's 123.44 s to the message's 0.1 s (%.2f)", got.n ? got.duration[0] : NAN);
   palp_web_hub_detach(h, &before);
 
   palp_web_cursor inst, one, own;
