@@ -196,6 +196,18 @@ typedef struct server_status {
 /* The newest debriefs (palp_debrief: what a trainee's marks found, at her exercise session's end),
  * kept for the pages that should see them: a class's sessions may close within the same second. */
 #define DEBRIEFS 16
+/* What a session's debrief message says beside the server's debrief: its trainee, its phantom (the
+ * exercise's name), what the bridge saw it cover (session_coverage; cov_rule 0: nothing tracked, 1
+ * the force bands, 2 the exercise's), as the station's last lines say it, and how long it ran [s]
+ * (the server's figure). Taken from the open session, or kept as it closes. */
+typedef struct session_end {
+  uint32_t sid, phantom;
+  char trainee[64];
+  double cov[3];
+  int cov_rule;
+  double duration;
+} session_end;
+
 typedef struct debrief_item {
   item msg;
   uint32_t sid;
@@ -226,15 +238,8 @@ struct palp_web_hub {
   server_status srv[MAX_SERVERS];
   exercise ex[MAX_EXERCISES];
   int sessions_dirty, sessions_structure;
-  /* sessions closed lately, with their trainees: a debrief may come after its session's CLOSED state */
-  uint32_t closed_sid[DEBRIEFS];
-  char closed_trainee[DEBRIEFS][64];
-  uint32_t closed_phantom[DEBRIEFS]; /* and their phantoms: the debrief names the exercise */
-  /* and what the bridge saw them cover (session_coverage; rule 0: none, 1 force bands, 2 the
-   * exercise's): the debrief carries it, as the station's last lines do */
-  double closed_cov[DEBRIEFS][3];
-  int closed_cov_rule[DEBRIEFS];
-  double closed_duration[DEBRIEFS]; /* how long they ran [s] (the server's figure) */
+  /* sessions closed lately: a debrief may come after its session's CLOSED state */
+  session_end closed[DEBRIEFS];
   int closed_next;
   pending_exercise pending_ex[SESSION_EXERCISES_PENDING];
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
@@ -1004,14 +1009,24 @@ static void keep_ended_answers(palp_web_hub *h, int slot) {
   pthread_mutex_unlock(&h->mu);
 }
 
+/* The session's figures for its debrief (session_end); the trainee's name under h->mu. */
+static void session_end_of(palp_web_hub *h, int slot, session_end *e) {
+  const session *s = &h->s[slot];
+  *e = (session_end){.sid = s->id, .phantom = s->st.phantom_id, .duration = s->st.duration};
+  if (s->cov) {
+    e->cov_rule = s->exercise_bands ? 2 : 1;
+    session_coverage(s, e->cov);
+  }
+  pthread_mutex_lock(&h->mu);
+  memcpy(e->trainee, h->slot_trainee[slot], sizeof e->trainee);
+  pthread_mutex_unlock(&h->mu);
+}
+
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
-  const uint32_t phantom = s->st.phantom_id;
-  const double duration = s->st.duration;
   keep_ended_answers(h, slot);
-  double cov[3] = {0, 0, 0};
-  const int cov_rule = s->cov ? (s->exercise_bands ? 2 : 1) : 0;
-  if (s->cov) session_coverage(s, cov);
+  session_end end;
+  session_end_of(h, slot, &end);
   leave(h, s);
   if (s->req_w > 0) dds_delete(s->req_w);
   pthread_mutex_lock(&h->mu);
@@ -1029,12 +1044,7 @@ static void free_session(palp_web_hub *h, int slot) {
   publish(h, &h->answers_msg[slot], NULL, 0);
   publish(h, &h->cover_msg[slot], NULL, 0);
   pthread_mutex_lock(&h->mu);
-  h->closed_sid[h->closed_next] = h->slot_sid[slot];
-  h->closed_phantom[h->closed_next] = phantom;
-  h->closed_cov_rule[h->closed_next] = cov_rule;
-  h->closed_duration[h->closed_next] = duration;
-  memcpy(h->closed_cov[h->closed_next], cov, sizeof cov);
-  memcpy(h->closed_trainee[h->closed_next], h->slot_trainee[slot], sizeof h->closed_trainee[0]);
+  h->closed[h->closed_next] = end;
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
   pthread_mutex_unlock(&h->mu);
@@ -1125,28 +1135,11 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
     return;
   }
   const uint32_t n = m->lesion._length;
-  char trainee[64] = "";
-  int slot, known = 0, cov_rule = 0;
-  uint32_t phantom = 0;
-  double cov[3] = {0, 0, 0}, duration = NAN;
-  if (find_session(h, m->session_id, &slot)) {
-    pthread_mutex_lock(&h->mu);
-    memcpy(trainee, h->slot_trainee[slot], sizeof trainee);
-    pthread_mutex_unlock(&h->mu);
-    const session *s = &h->s[slot];
-    phantom = s->st.phantom_id;
-    duration = s->st.duration;
-    cov_rule = s->cov ? (s->exercise_bands ? 2 : 1) : 0;
-    if (s->cov) session_coverage(s, cov);
-    known = 1;
-  }
+  session_end e;
+  int slot, known = 0;
+  if (find_session(h, m->session_id, &slot)) session_end_of(h, slot, &e), known = 1;
   for (int k = 0; k < DEBRIEFS && !known; k++)
-    if (h->closed_sid[k] == m->session_id) {
-      memcpy(trainee, h->closed_trainee[k], sizeof trainee), phantom = h->closed_phantom[k], known = 1;
-      cov_rule = h->closed_cov_rule[k];
-      memcpy(cov, h->closed_cov[k], sizeof cov);
-      duration = h->closed_duration[k];
-    }
+    if (h->closed[k].sid == m->session_id) e = h->closed[k], known = 1;
   if (!known) {
     h->stats.no_session++;
     return;
@@ -1155,9 +1148,9 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   cJSON *j = cJSON_CreateObject();
   cJSON_AddStringToObject(j, "type", "debrief");
   cJSON_AddNumberToObject(j, "session", m->session_id);
-  cJSON_AddStringToObject(j, "trainee", trainee);
+  cJSON_AddStringToObject(j, "trainee", e.trainee);
   /* the exercise's name, so that a page that did not see the session open still names it */
-  const exercise *ex = find_exercise(h, phantom);
+  const exercise *ex = find_exercise(h, e.phantom);
   if (ex) cJSON_AddStringToObject(j, "exercise", ex->name);
   else cJSON_AddNullToObject(j, "exercise");
   cJSON_AddStringToObject(j, "level", level[m->level]);
@@ -1169,14 +1162,14 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   char reason[128];
   copy_str(reason, sizeof reason, m->reason);
   cJSON_AddStringToObject(j, "reason", reason);
+  /* how long it ran [s], the server's session state's figure (its last; null if not a number) */
+  if (isfinite(e.duration) && e.duration >= 0) cJSON_AddNumberToObject(j, "duration", round(e.duration * 10) / 10);
+  else cJSON_AddNullToObject(j, "duration");
   /* The bridge's own figure, not the server's: the skin it saw pressed since it began following the
    * session (docs/web.md, "Measured against the grade"), as the station's last line says it */
-  /* how long it ran [s], the server's session state's figure (its last; null if not a number) */
-  if (isfinite(duration) && duration >= 0) cJSON_AddNumberToObject(j, "duration", round(duration * 10) / 10);
-  else cJSON_AddNullToObject(j, "duration");
-  if (cov_rule) {
-    cJSON_AddItemToObject(j, "coverage", vec_json(cov, 3, 1));
-    cJSON_AddStringToObject(j, "band_rule", cov_rule == 2 ? "exercise" : "force");
+  if (e.cov_rule) {
+    cJSON_AddItemToObject(j, "coverage", vec_json(e.cov, 3, 1));
+    cJSON_AddStringToObject(j, "band_rule", e.cov_rule == 2 ? "exercise" : "force");
   } else {
     cJSON_AddNullToObject(j, "coverage");
   }
@@ -1208,7 +1201,7 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   d->msg.len = strlen(text);
   d->msg.ver = ++h->next_ver;
   d->sid = m->session_id;
-  memcpy(d->trainee, trainee, sizeof d->trainee);
+  memcpy(d->trainee, e.trainee, sizeof d->trainee);
   pthread_mutex_unlock(&h->mu);
   if (h->wake) h->wake(h->wake_ctx);
 }
