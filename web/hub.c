@@ -996,17 +996,8 @@ static void keep_ended_answers(palp_web_hub *h, int slot) {
   cJSON *j = answers_json(h, s);
   if (!j) return;
   cJSON_AddBoolToObject(j, "ended", 1);
-  char *text = cJSON_PrintUnformatted(j);
-  cJSON_Delete(j);
-  if (!text) return;
-  pthread_mutex_lock(&h->mu);
-  item *it = &h->ended_answers[h->ended_answers_next];
-  h->ended_answers_next = (h->ended_answers_next + 1) % DEBRIEFS;
-  free(it->buf);
-  it->buf = (unsigned char *)text;
-  it->len = strlen(text);
-  it->ver = ++h->next_ver;
-  pthread_mutex_unlock(&h->mu);
+  publish_json(h, &h->ended_answers[h->ended_answers_next], j); /* the oldest replaced */
+  h->ended_answers_next = (h->ended_answers_next + 1) % DEBRIEFS; /* the DDS thread's alone */
 }
 
 /* The session's figures for its debrief (session_end); the trainee's name under h->mu. */

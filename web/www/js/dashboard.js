@@ -87,6 +87,15 @@
   }
 
   /* The hidden lumps under the top view, in the debrief's words (PALP.debriefLump), live. */
+  /* The first line of a session's hidden lumps (an `answers` message), live or ended: what its
+   * standing marks found, in warning red while a lump is unfound or a mark near none. */
+  function answersHead(li, lead, a) {
+    const near = a.marks_at.filter(function (m) { return m.lump === 0; }).length;
+    li.textContent = lead + PALP.debriefFound(a) + "; " + PALP.plural(a.marks, "mark", "marks") + " standing, " + near +
+      " near no lump" +
+      (a.unanswered ? "; " + PALP.plural(a.unanswered, "finding", "findings") + " whose answer the bridge missed" : "");
+    li.className = a.found < a.lesions || near ? "warn" : "";
+  }
   function listAnswers(c) {
     const a = answersOf.get(Number(c.el.dataset.session));
     c.lumps.textContent = "";
@@ -98,11 +107,7 @@
       c.lumps.appendChild(head);
       return;
     }
-    const near = a.marks_at.filter(function (m) { return m.lump === 0; }).length;
-    head.textContent = "hidden lumps, the trainee does not see them: " + PALP.debriefFound(a) + "; " +
-      PALP.plural(a.marks, "mark", "marks") + " standing, " + near + " near no lump" +
-      (a.unanswered ? "; " + PALP.plural(a.unanswered, "finding", "findings") + " whose answer the bridge missed" : "");
-    head.className = a.found < a.lesions || near ? "warn" : "";
+    answersHead(head, "hidden lumps, the trainee does not see them: ", a);
     c.lumps.appendChild(head);
     a.lumps.forEach(function (l, i) {
       const li = document.createElement("li");
@@ -293,12 +298,8 @@
       cellEl.textContent = (level === "count" ? told + "; " : "") + "hidden lumps: not shown (the box above)";
       return;
     }
-    const near = a.marks_at.filter(function (k) { return k.lump === 0; }).length;
     const ul = document.createElement("ul"), head = document.createElement("li");
-    head.textContent = "hidden lumps, the trainee was not told: " + PALP.debriefFound(a) +
-      "; " + PALP.plural(a.marks, "mark", "marks") + " standing, " + near + " near no lump" +
-      (a.unanswered ? "; " + PALP.plural(a.unanswered, "finding", "findings") + " whose answer the bridge missed" : "");
-    head.className = a.found < a.lesions || near ? "warn" : "";
+    answersHead(head, "hidden lumps, the trainee was not told: ", a);
     ul.appendChild(head);
     a.lumps.forEach(function (l, i) {
       const li = document.createElement("li");
