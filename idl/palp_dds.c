@@ -23,7 +23,7 @@ static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_local_model",   "palp_server_guard",
     "palp_server_identity", "palp_station_request",
     "palp_exercise",      "palp_finding",         "palp_finding_status",
-    "palp_debrief",       "palp_session_exercise"};
+    "palp_debrief",       "palp_session_exercise", "palp_session_score"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -48,6 +48,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_FINDING_STATUS: return &palp_FindingStatus_desc;
   case PALP_TOPIC_DEBRIEF: return &palp_Debrief_desc;
   case PALP_TOPIC_SESSION_EXERCISE: return &palp_SessionExercise_desc;
+  case PALP_TOPIC_SESSION_SCORE: return &palp_SessionScore_desc;
   default: return NULL;
   }
 }
@@ -63,6 +64,7 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_FINDING_STATUS:
   case PALP_TOPIC_DEBRIEF:
   case PALP_TOPIC_SESSION_EXERCISE:
+  case PALP_TOPIC_SESSION_SCORE:
     /* State that a late joiner must see: the last value per key, kept by the writer. */
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
@@ -420,6 +422,24 @@ int palp_dds_debrief_ok(const palp_Debrief *d) {
     found_by += l->found_by != 0;
   }
   return !listed || found_by == d->found;
+}
+
+static int unit(double x) { return x >= 0 && x <= 1; } /* NaN fails */
+
+int palp_dds_session_score_ok(const palp_SessionScore *m) {
+  if (m->status == palp_SCORE_NOT_GRADED) return 1;
+  if (m->status != palp_SCORE_GRADED || !(m->score >= 0 && m->score <= 100) || m->found > m->lesions ||
+      m->lesions > PALP_MAX_LESIONS || !(m->duration >= 0) || !isfinite(m->duration) || !(m->peak_force >= 0) ||
+      !isfinite(m->peak_force))
+    return 0;
+  for (int i = 0; i < 6; i++)
+    if (!unit(m->credit[i])) return 0;
+  for (int b = 0; b < 3; b++)
+    if (!unit(m->coverage[b])) return 0;
+  static const char *const patterns[] = {"unsystematic", "vertical_strip", "circles", "radial"};
+  for (size_t i = 0; i < sizeof patterns / sizeof *patterns; i++)
+    if (!strcmp(m->pattern, patterns[i])) return 1;
+  return 0;
 }
 
 void palp_dds_finding_sent(const palp_Finding *m, struct palp_finding_sent *out) {

@@ -37,6 +37,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_FINDING_STATUS,  /* added with issue 13: the server's answer to the findings */
   PALP_TOPIC_DEBRIEF,         /* added 2026-12-05: what the trainee found, told at the session's end */
   PALP_TOPIC_SESSION_EXERCISE, /* added 2026-12-05: a session's exercise with its lesions, for instructors */
+  PALP_TOPIC_SESSION_SCORE,   /* added 2026-12-05 (session 63): a closed session's automatic score, for instructors */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 
@@ -184,6 +185,11 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out);
  * against a station's own numbering: a mark made from palp-web's page has the bridge's number.
  * 1 when it holds, 0 when not (the station and palp-web both check with it). */
 int palp_dds_debrief_ok(const palp_Debrief *d);
+
+/* A session score (palp_session_score) as a reader may use it: a known status; GRADED: score in
+ * [0, 100], each component in [0, 1], each coverage in [0, 1], found <= lesions, duration and
+ * peak force finite and >= 0, a known pattern name. 1 when it holds, 0 when not (palp-web checks). */
+int palp_dds_session_score_ok(const palp_SessionScore *m);
 
 /* A Finding as src/palp_finding_answers.h pairs it with the server's answer (palp-recorder, palp-web).
  * The point is copied as sent; a reader that uses it checks it. */

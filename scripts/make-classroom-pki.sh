@@ -44,7 +44,7 @@ T_STATE=palp_session_state T_CONTACT=palp_contact T_FEEDBACK=palp_feedback
 T_DEFORMATION=palp_deformation T_STATUS=palp_server_status
 T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard T_IDENTITY=palp_server_identity
 T_EXERCISE=palp_exercise T_FINDING=palp_finding T_FINDING_STATUS=palp_finding_status
-T_DEBRIEF=palp_debrief T_SESSION_EXERCISE=palp_session_exercise
+T_DEBRIEF=palp_debrief T_SESSION_EXERCISE=palp_session_exercise T_SESSION_SCORE=palp_session_score
 # palp_station_request (other vendors, docs/interop.md) is not offered by a secured server.
 
 check_name() {
@@ -104,7 +104,8 @@ GOVERNANCE_VERSION=2
 # The permissions' version: init and classroom re-issue every identity's older permissions (same
 # validity as its certificate). 2 (2026-12-05): palp_debrief, server -> the trainee's session.
 # 3 (2026-12-05, session 60): palp_session_exercise, server -> instructors (the lesions).
-PERMISSIONS_VERSION=3
+# 4 (2026-12-05, session 63): palp_session_score, server -> instructors (a closed session's score).
+PERMISSIONS_VERSION=4
 
 topic_rule() { # topic expression, metadata protection kind
   cat <<EOF
@@ -201,7 +202,7 @@ EOF
     server)
       # Only the server publishes the catalogue, replies, states, status and every session's
       # feedback and deformation; it reads requests from every identity's own partition.
-      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE $T_SESSION_EXERCISE" '""'
+      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE $T_SESSION_EXERCISE $T_SESSION_SCORE" '""'
       rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS $T_DEBRIEF" "palp/s/*"
       rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
       rule subscribe "$T_CONTACT $T_FINDING" "palp/s/*"

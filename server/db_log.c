@@ -7,6 +7,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "grader.h"
 #include "palp_assess.h" /* palp_assess_sample_every */
 #include "palp_db.h"
 #include "palp_dds.h"
@@ -29,6 +30,9 @@ typedef struct slot {
   int refusals_logged;         /* logged one by one since the last flush */
   double finger_radius[SLOT_FINGERS]; /* per model contact id, from the world ops [m] */
   palp_db_valid_range range;          /* steps outside the model's valid range since the last flush */
+  /* session 63: an exercise session is scored from this log once it closes (grader.h) */
+  char uid[96];
+  char exercise[64];                  /* "" for none */
 } slot;
 
 struct palp_srv_db_log {
@@ -37,6 +41,7 @@ struct palp_srv_db_log {
   char run_id[48];
   slot s[SLOTS];
   palp_log *log; /* may be NULL (stderr) */
+  palp_srv_grader *grader; /* NULL: closed sessions are not scored live */
 };
 
 static slot *find(palp_srv_db_log *l, uint32_t id) {
@@ -119,6 +124,8 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   s->id = i->session_id;
   s->h = h;
   s->last_flush_ns = palp_dds_now_ns();
+  snprintf(s->uid, sizeof s->uid, "%s", uid);
+  if (i->exercise_name && i->exercise_json) snprintf(s->exercise, sizeof s->exercise, "%s", i->exercise_name);
   /* Every physics step when the physics is slower than assess_sample_hz. */
   const double hz = i->assess_sample_hz > 0 ? i->assess_sample_hz : PALP_ASSESS_SAMPLE_HZ;
   s->sample_every = log_every(i->tick_rate_hz, hz);
@@ -147,7 +154,16 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
   else if (strstr(why, "failed") || strstr(why, "full")) r = PALP_DB_END_ERROR;
   palp_db_log_event(l->w, s->h, PALP_DB_EVENT_LEAVE, s->last_frame, sum->info.trainee_station, 1);
   palp_db_log_session_end(l->w, s->h, r, why, 0);
+  /* An exercise session is scored for the instructors once its end is in the log; not one the
+   * server's shutdown closed: nobody would be told. */
+  if (l->grader && s->exercise[0] && r != PALP_DB_END_SERVER_SHUTDOWN)
+    palp_srv_grader_submit(l->grader, s->id, s->uid, s->exercise);
   memset(s, 0, sizeof *s);
+}
+
+static int take_score(void *ctx, palp_srv_score *out) {
+  palp_srv_db_log *l = ctx;
+  return l->grader ? palp_srv_grader_take(l->grader, out) : 0;
 }
 
 /* Accepted findings are records; refusals are events, one by one up to a few per
@@ -341,6 +357,11 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
     free(l);
     return rc;
   }
+  /* Without a grader the server runs on; its sessions are only scored by the review. */
+  if (palp_srv_grader_open(path, l->w, log, &l->grader) != 0) {
+    palp_log_warn(log, "session log: closed sessions will not be scored live (no grader thread)");
+    l->grader = NULL;
+  }
   /* uid = <start time>-<pid>-<session>: unique across server runs on one host. */
   snprintf(l->run_id, sizeof l->run_id, "%lld-%ld", (long long)time(NULL), (long)getpid());
   l->ev = (palp_srv_events){.ctx = l,
@@ -355,7 +376,8 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
                             .finding = on_finding,
                             .debrief = on_debrief,
                             .security_refused = on_security_refused,
-                            .log_counts = on_log_counts};
+                            .log_counts = on_log_counts,
+                            .take_score = take_score};
   *out = l;
   return 0;
 }
@@ -364,6 +386,7 @@ const palp_srv_events *palp_srv_db_log_events(palp_srv_db_log *l) { return &l->e
 
 void palp_srv_db_log_close(palp_srv_db_log *l) {
   if (!l) return;
+  palp_srv_grader_close(l->grader); /* it waits on the writer: stopped first */
   palp_db_writer_flush(l->w, 10.0);
   palp_db_writer_stats st;
   palp_db_writer_stats_get(l->w, &st);

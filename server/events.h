@@ -89,6 +89,28 @@ typedef struct palp_srv_session_summary {
   const char *close_reason;
 } palp_srv_session_summary;
 
+/* A closed exercise session's automatic score (session 63): what palp-review gives the session's own
+ * log, graded off the main thread once the log holds the session's end (server/grader.c). The numbers
+ * are palp_assess_result's (src/palp_assess.h); the wire's palp_SessionScore carries them. */
+typedef struct palp_srv_score {
+  uint32_t session_id;
+  int graded;                  /* 1: the fields below; 0: reason says why not */
+  char log_session[96];        /* the session's uid in the log (palp-review show takes it) */
+  char exercise[64];
+  double score;                /* [0, 100] */
+  int pass;
+  double component[6];         /* PALP_METRIC_* order, each [0, 1] */
+  int pass_metric[6];
+  uint32_t lesions, found, false_marks;
+  double coverage[3];          /* light, medium, deep [0, 1] */
+  int pattern;                 /* palp_pattern */
+  double duration;             /* [s] */
+  double peak_force;           /* [N] */
+  uint32_t out_of_range;
+  uint32_t samples;
+  char reason[128];
+} palp_srv_score;
+
 typedef struct palp_srv_events {
   void *ctx;
   /* [main thread] a trainee's session opened. */
@@ -126,6 +148,10 @@ typedef struct palp_srv_events {
    * permissions)", count the refusals it stands for; as the server's log says them
    * (idl/palp_dds_refusals.h: the first at once, the repeats once a minute, the rest at stop). */
   void (*security_refused)(void *ctx, const char *detail, uint64_t count);
+  /* [main thread] a closed exercise session's score, when one is ready: 1 and *out filled, 0 when
+   * none is waiting. The server asks after every wake (<= 100 ms) and writes it on
+   * palp_session_score for the instructors. */
+  int (*take_score)(void *ctx, palp_srv_score *out);
 } palp_srv_events;
 
 #endif

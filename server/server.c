@@ -16,6 +16,7 @@
 #include <dds/dds.h>
 
 #include "palp.h"
+#include "palp_assess.h" /* palp_pattern_name */
 #include "palp_rng.h"
 #include "identity.h"
 #include "server_identity.h"
@@ -49,6 +50,8 @@ typedef struct station {
   int keyed;           /* last request came on palp_station_request */
   dds_instance_handle_t ih; /* its instance there (keyed by station_key) */
 } station;
+
+#define SCORES_KEPT 64 /* palp_session_score instances kept for late dashboards */
 
 typedef struct guard_counts {
   uint64_t joins_refused_rate, joins_refused_writer, joins_refused_viewers, joins_refused_other;
@@ -86,6 +89,12 @@ struct palp_srv {
   /* palp_session_exercise: each exercise session's exercise with its lesions, for instructors'
    * recorders (session 60); 0: not written (config "session_exercise", or permissions before it) */
   dds_entity_t session_exercise_w;
+  /* palp_session_score (session 63): each closed exercise session's score, for the instructors;
+   * written when palp_session_exercise is (it tells the answers); 0: not written. The newest
+   * SCORES_KEPT instances are kept for a dashboard opened later, older ones unregistered. */
+  dds_entity_t session_score_w;
+  uint32_t scored[SCORES_KEPT];
+  int scored_next;
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
@@ -276,6 +285,7 @@ static const char *optional_topic_loss(palp_dds_topic_kind k) {
   switch (k) {
   case PALP_TOPIC_DEBRIEF: return "no debriefs";
   case PALP_TOPIC_SESSION_EXERCISE: return "no exercises for recorders";
+  case PALP_TOPIC_SESSION_SCORE: return "no live scores for the instructors";
   default: return NULL;
   }
 }
@@ -315,6 +325,58 @@ static void release_session_exercise(palp_srv *srv, const palp_srv_session *s) {
   key->session_id = s->id;
   dds_unregister_instance(srv->session_exercise_w, key);
   free(key);
+}
+
+/* A closed exercise session's score, as the session log graded it (events.h take_score), for the
+ * instructors' dashboards. Keep-last 1 per session and transient-local, so a dashboard opened later
+ * still gets it: the newest 64 are kept, the oldest unregistered (bounded memory in the writer). */
+static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
+  if (srv->session_score_w <= 0) return;
+  palp_SessionScore m;
+  memset(&m, 0, sizeof m);
+  m.session_id = sc->session_id;
+  m.status = sc->graded ? palp_SCORE_GRADED : palp_SCORE_NOT_GRADED;
+  snprintf(m.log_session, sizeof m.log_session, "%s", sc->log_session);
+  snprintf(m.exercise_name, sizeof m.exercise_name, "%s", sc->exercise);
+  snprintf(m.reason, sizeof m.reason, "%s", sc->reason);
+  if (sc->graded) {
+    m.score = sc->score;
+    m.pass = sc->pass != 0;
+    for (int i = 0; i < 6; i++) {
+      m.credit[i] = sc->component[i];
+      m.passed[i] = sc->pass_metric[i] != 0;
+    }
+    m.lesions = sc->lesions;
+    m.found = sc->found;
+    m.false_marks = sc->false_marks;
+    for (int b = 0; b < 3; b++) m.coverage[b] = sc->coverage[b];
+    snprintf(m.pattern, sizeof m.pattern, "%s", palp_pattern_name((palp_pattern)sc->pattern));
+    m.duration = sc->duration;
+    m.peak_force = sc->peak_force;
+    m.out_of_range = sc->out_of_range;
+    m.samples = sc->samples;
+  }
+  const dds_return_t rc = dds_write(srv->session_score_w, &m);
+  if (rc < 0) {
+    palp_log_warn(srv->log, "session %u: its score was not sent to the instructors: %s", sc->session_id,
+                  dds_strretcode(rc));
+    return;
+  }
+  uint32_t *slot = &srv->scored[srv->scored_next];
+  if (*slot) {
+    palp_SessionScore key;
+    memset(&key, 0, sizeof key);
+    key.session_id = *slot;
+    dds_unregister_instance(srv->session_score_w, &key);
+  }
+  *slot = sc->session_id;
+  srv->scored_next = (srv->scored_next + 1) % SCORES_KEPT;
+}
+
+static void publish_scores(palp_srv *srv) {
+  if (!srv->events || !srv->events->take_score) return;
+  palp_srv_score sc;
+  while (srv->events->take_score(srv->events->ctx, &sc)) publish_session_score(srv, &sc);
 }
 
 static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_phantom *ph, char *err,
@@ -1566,6 +1628,15 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
       srv->session_exercise_w = 0;
     }
   }
+  if (answers && srv->topic[PALP_TOPIC_SESSION_SCORE] > 0) {
+    srv->session_score_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_SCORE],
+                                                  PALP_TOPIC_SESSION_SCORE);
+    if (srv->session_score_w < 0) {
+      palp_log_warn(srv->log, "no live scores for the instructors: cannot write palp_session_score: %s",
+                    dds_strretcode(srv->session_score_w));
+      srv->session_score_w = 0;
+    }
+  }
   if (srv->cfg.exercise_count > 0 && srv->session_exercise_w <= 0)
     palp_log_info(srv->log, "exercise sessions' lesions stay on this server (%s): a palp-recorder's log cannot "
                             "assess them; this server's own log can",
@@ -1692,6 +1763,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
     if (wake - now > 100000000) wake = now + 100000000;
     dds_waitset_wait(srv->waitset, NULL, 0, wake - now > 0 ? wake - now : 0);
     handle_requests(srv);
+    publish_scores(srv);
     palp_srv_retire_due(&srv->retire, palp_dds_now_ns(), release_instance, srv);
     for (int i = 0; i < srv->session_count; i++) {
       palp_srv_session *s = srv->sessions[i];

@@ -162,8 +162,8 @@ want="not sent (level lesions): the server's permissions do not allow topic palp
 same=0; [ "$logged" = "$want" ] && same=1
 check "  the session log records that no debrief was sent, and why: $logged" "[ $same = 1 ]"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
-check "init re-issues their permissions alone, with palp_debrief and palp_session_exercise, signed by the CA" \
-  "grep -q 'permissions re-issued (version 3) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q palp_session_exercise '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+check "init re-issues their permissions alone, with palp_debrief, palp_session_exercise and palp_session_score, signed by the CA" \
+  "grep -q 'permissions re-issued (version 4) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 # Re-issued, the server sends each exercise session's exercise, its lesions included, to the
 # instructors alone (session 60): a secured palp-recorder (instructor ines) logs alice's attempt at
 # "easy" with its exercise, her mark and her debrief as the server's own log has them.

@@ -16,7 +16,12 @@
  *    reason normal in the log, the station told in the state's reason);
  *  - debriefs: carol's ("lesions") says which of her two marks found which lesion and where
  *    each lesion is; alice's (no "debrief" key: none) carries no lesion value nor count, and the
- *    spy reads it among the rest.
+ *    spy reads it among the rest;
+ *  - scores (palp_session_score, session 63): as each exercise session closes the server grades
+ *    it from its own log and writes the score for the instructors: alice's (she pressed over
+ *    lesion 1 and marked it) 1 of 2 found, no false mark, the very numbers palp-review's reading
+ *    of the log gives; carol's (no fingertip: marks only) not graded, and why; bob's free practice
+ *    none. The spy (a trainee's topics) never reads it.
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -32,6 +37,7 @@
 #include <dds/ddsi/ddsi_serdata.h>
 #undef asm
 
+#include "assess_log.h"
 #include "db_log.h"
 #include "harness.h"
 #include "palp_assess.h"
@@ -328,6 +334,7 @@ int main(void) {
   char json[2048];
   snprintf(json, sizeof json,
            "{\"domain_id\": %d, \"tick_rate_hz\": 100, \"tick_threads\": 1, \"max_force\": 20,"
+           " \"session_exercise\": \"always\","
            " \"phantoms\": [{\"id\": 1, \"name\": \"test dome\", \"scene\": \"paper_step.json\"}],"
            " \"exercises\": [{\"id\": %d, \"file\": \"%s/exercise_wire.json\", \"physics_rate_hz\": 250},"
            "                 {\"id\": %d, \"file\": \"%s/exercise_short.json\", \"physics_rate_hz\": 250}]}",
@@ -348,6 +355,12 @@ int main(void) {
 
   spy sp;
   spy_start(&sp);
+  /* An instructor's reader of the scores, in the default partition (an instructor's permissions). */
+  const dds_entity_t ipp = dds_create_participant(DOMAIN, NULL, NULL);
+  REQUIRE(ipp > 0, "instructor participant");
+  const dds_entity_t score_r = palp_dds_create_reader(
+      ipp, palp_dds_create_topic(ipp, PALP_TOPIC_SESSION_SCORE), PALP_TOPIC_SESSION_SCORE);
+  REQUIRE(score_r > 0, "score reader");
 
   /* ---- the trainee on the exercise ---- */
   palp_cli_station a;
@@ -531,9 +544,43 @@ int main(void) {
           "alice's debrief tells nothing of the lesions (got %d, level %d, marks %u, lesions %u, found %u, listed %u)",
           got, got == 1 ? (int)d.level : -1, d.marks, d.lesions, d.found, d.lesion._length);
   }
+  /* ---- scores (palp_session_score): alice's and carol's, not bob's ---- */
+  palp_SessionScore score_a, score_c;
+  int got_a = 0, got_c = 0, got_other = 0;
+  for (int k = 0; k < 500 && !(got_a && got_c); k++) { /* up to 10 s: the log's writer, then the grading */
+    palp_SessionScore m;
+    void *ptr[1] = {&m};
+    dds_sample_info_t info;
+    while (dds_take(score_r, ptr, &info, 1, 1) > 0) {
+      if (!info.valid_data) continue;
+      if (m.session_id == a.session_id) score_a = m, got_a = 1;
+      else if (m.session_id == carol_session) score_c = m, got_c = 1;
+      else got_other++;
+    }
+    if (!(got_a && got_c)) test_sleep(0.02);
+  }
+  CHECK(got_a && score_a.status == palp_SCORE_GRADED && strcmp(score_a.exercise_name, "test-wire") == 0 &&
+            palp_dds_session_score_ok(&score_a),
+        "alice's session scored for the instructors (got %d, status %d, exercise \"%s\")", got_a,
+        got_a ? (int)score_a.status : -1, got_a ? score_a.exercise_name : "");
+  CHECK(got_a && score_a.lesions == 2 && score_a.found == 1 && score_a.false_marks == 0 && score_a.samples > 100,
+        "  1 of 2 lesions found (mark 1 over lesion 1), no false mark (mark 2 withdrawn), %u finger samples",
+        got_a ? score_a.samples : 0);
+  CHECK(got_c && score_c.status == palp_SCORE_NOT_GRADED && strstr(score_c.reason, "no finger samples"),
+        "carol's (marks, no fingertip) not graded, and why: \"%s\"", got_c ? score_c.reason : "");
   test_sleep(0.5);
+  {
+    palp_SessionScore m;
+    void *ptr[1] = {&m};
+    dds_sample_info_t info;
+    while (dds_take(score_r, ptr, &info, 1, 1) > 0) got_other += info.valid_data;
+  }
+  CHECK(got_other == 0, "no score for bob's free practice, nor any other (%d)", got_other);
+  dds_delete(ipp);
   atomic_store(&sp.stop, 1);
   pthread_join(sp.thread, NULL);
+  CHECK(sp.samples[PALP_TOPIC_SESSION_SCORE] == 0 && sp.samples[PALP_TOPIC_SESSION_EXERCISE] == 0,
+        "the spy (a trainee's topics and partitions) read no score nor session exercise");
   const palp_dds_topic_kind must_see[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_EXERCISE,    PALP_TOPIC_SESSION_STATE,
                                           PALP_TOPIC_SESSION_REPLY, PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FEEDBACK,
                                           PALP_TOPIC_DEFORMATION, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_FINDING,
@@ -633,6 +680,30 @@ int main(void) {
     CHECK(palp_db_session_json(db, sa->id, NULL, &p2) == 0 && p2 && strstr(p2, "\"debrief_events\": true"),
           "  the sessions say their server logs debriefs (\"debrief_events\": true)");
     free(p2);
+  }
+  /* The score sent is palp-review's reading of the same log, to the last bit: the dashboard and the
+   * review give the instructor one number. */
+  {
+    review_assessment *ra = calloc(1, sizeof *ra);
+    REQUIRE(ra, "memory");
+    const int arc = review_assess(db, sa, ra, err, sizeof err);
+    CHECK(arc == 0 && got_a && strcmp(score_a.log_session, sa->uid) == 0,
+          "alice's score names her logged session \"%s\" (the log's uid \"%s\"; review: %s)",
+          got_a ? score_a.log_session : "", sa->uid, arc ? err : "ok");
+    if (arc == 0 && got_a) {
+      int same = score_a.score == ra->r.score && (int)score_a.pass == ra->r.pass && score_a.found == (uint32_t)ra->r.found &&
+                 score_a.samples == (uint32_t)ra->samples && score_a.duration == ra->r.duration &&
+                 score_a.peak_force == ra->r.peak_force && strcmp(score_a.pattern, palp_pattern_name(ra->r.pattern)) == 0;
+      for (int m = 0; m < PALP_METRIC_COUNT; m++)
+        same = same && score_a.credit[m] == ra->r.component[m] && (int)score_a.passed[m] == ra->r.pass_metric[m];
+      for (int b = 0; b < PALP_BAND_COUNT; b++) same = same && score_a.coverage[b] == ra->r.coverage[b];
+      CHECK(same, "  and its numbers are the review's, exactly (score %.3f / %.3f, light %.4f / %.4f)", score_a.score,
+            ra->r.score, score_a.coverage[0], ra->r.coverage[0]);
+      CHECK(!score_a.pass && score_a.score < 70, "  a 20 s session over one lesion does not pass (score %.1f)",
+            score_a.score);
+      review_assessment_free(ra);
+    }
+    free(ra);
   }
   free(ss);
   palp_db_close(db);

@@ -1,0 +1,201 @@
+/* grader.c - a closed exercise session's automatic score from the server's own log (grader.h). */
+#include "grader.h"
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "assess_log.h" /* review_assess: palp-review's own reading of a log */
+#include "palp_assess.h"
+
+#define QUEUE 32            /* sessions waiting to be graded, scores waiting to be taken */
+#define WRITER_WAIT_S 30.0  /* the log's writer must have written the session's end by then */
+
+typedef struct job {
+  uint32_t session_id;
+  char uid[96];
+  char exercise[64];
+} job;
+
+struct palp_srv_grader {
+  char *path;
+  palp_db_writer *w;
+  palp_log *log;
+  pthread_t thread;
+  pthread_mutex_t mu;
+  pthread_cond_t wake;
+  int stop;
+  job jobs[QUEUE];
+  int job_head, job_n;
+  palp_srv_score done[QUEUE];
+  int done_head, done_n;
+  palp_db *db; /* the grader thread's read connection, opened at its first job */
+};
+
+void palp_srv_score_of(const review_assessment *a, uint32_t session_id, const char *uid, const char *exercise,
+                       const char *reason, palp_srv_score *out) {
+  memset(out, 0, sizeof *out);
+  out->session_id = session_id;
+  snprintf(out->log_session, sizeof out->log_session, "%s", uid ? uid : "");
+  snprintf(out->exercise, sizeof out->exercise, "%s", exercise ? exercise : "");
+  if (!a) {
+    snprintf(out->reason, sizeof out->reason, "%s", reason && reason[0] ? reason : "not graded");
+    return;
+  }
+  const palp_assess_result *r = &a->r;
+  out->graded = 1;
+  out->score = r->score;
+  out->pass = r->pass != 0;
+  for (int m = 0; m < PALP_METRIC_COUNT && m < 6; m++) {
+    out->component[m] = r->component[m];
+    out->pass_metric[m] = r->pass_metric[m] != 0;
+  }
+  out->lesions = (uint32_t)r->lesion_count;
+  out->found = (uint32_t)r->found;
+  out->false_marks = (uint32_t)r->false_positives;
+  for (int b = 0; b < PALP_BAND_COUNT; b++) out->coverage[b] = r->coverage[b];
+  out->pattern = (int)r->pattern;
+  out->duration = r->duration;
+  out->peak_force = r->peak_force;
+  out->out_of_range = (uint32_t)r->out_of_range;
+  out->samples = (uint32_t)a->samples;
+}
+
+/* Grades one session: waits for the writer to have written everything queued so far (the session's
+ * end was queued before the job), then reads the session back as palp-review does. */
+static void grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
+  char err[512] = "";
+  if (palp_db_writer_flush(g->w, WRITER_WAIT_S) != 0) {
+    snprintf(err, sizeof err, "the session log's writer did not catch up within %.0f s", WRITER_WAIT_S);
+    palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, err, out);
+    return;
+  }
+  if (!g->db && palp_db_open(g->path, 0, &g->db, err, sizeof err) != 0) {
+    g->db = NULL;
+    char why[160];
+    snprintf(why, sizeof why, "the session log could not be read: %.120s", err);
+    palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, why, out);
+    return;
+  }
+  palp_db_session_info info;
+  if (palp_db_find_session(g->db, j->uid, &info) != 0) {
+    palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, "the session is not in the log", out);
+    return;
+  }
+  review_assessment *a = calloc(1, sizeof *a);
+  if (!a) {
+    palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, "out of memory", out);
+    return;
+  }
+  /* On an error review_assess has freed what it made. */
+  const int assessed = review_assess(g->db, &info, a, err, sizeof err) == 0;
+  if (assessed && !a->has_exercise) snprintf(err, sizeof err, "the log holds no exercise for the session");
+  palp_srv_score_of(assessed && a->has_exercise ? a : NULL, j->session_id, j->uid, j->exercise, err, out);
+  if (assessed) review_assessment_free(a);
+  free(a);
+}
+
+static void *grader_main(void *arg) {
+  palp_srv_grader *g = arg;
+  pthread_mutex_lock(&g->mu);
+  for (;;) {
+    while (!g->stop && g->job_n == 0) pthread_cond_wait(&g->wake, &g->mu);
+    if (g->stop) break;
+    job j = g->jobs[g->job_head];
+    pthread_mutex_unlock(&g->mu);
+    palp_srv_score s;
+    grade(g, &j, &s);
+    if (s.graded)
+      palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_session,
+                    s.score, s.pass ? "pass" : "fail");
+    else
+      palp_log_warn(g->log, "session %u (%s): not scored: %s (palp-review show grades it from the log)",
+                    s.session_id, s.log_session, s.reason);
+    pthread_mutex_lock(&g->mu);
+    g->job_head = (g->job_head + 1) % QUEUE;
+    g->job_n--;
+    if (g->done_n == QUEUE) {
+      palp_log_warn(g->log, "session %u: its score was not sent: %d scores are waiting for the server", s.session_id,
+                    QUEUE);
+      continue;
+    }
+    g->done[(g->done_head + g->done_n++) % QUEUE] = s;
+  }
+  pthread_mutex_unlock(&g->mu);
+  return NULL;
+}
+
+int palp_srv_grader_open(const char *db_path, palp_db_writer *w, palp_log *log, palp_srv_grader **out) {
+  *out = NULL;
+  if (!db_path || !w) return PALP_EINVAL;
+  palp_srv_grader *g = calloc(1, sizeof *g);
+  if (!g) return PALP_ENOMEM;
+  g->path = strdup(db_path);
+  g->w = w;
+  g->log = log;
+  if (!g->path) {
+    free(g);
+    return PALP_ENOMEM;
+  }
+  pthread_mutex_init(&g->mu, NULL);
+  pthread_cond_init(&g->wake, NULL);
+  if (pthread_create(&g->thread, NULL, grader_main, g) != 0) {
+    pthread_cond_destroy(&g->wake);
+    pthread_mutex_destroy(&g->mu);
+    free(g->path);
+    free(g);
+    return PALP_ENOMEM;
+  }
+  *out = g;
+  return 0;
+}
+
+int palp_srv_grader_submit(palp_srv_grader *g, uint32_t session_id, const char *uid, const char *exercise) {
+  pthread_mutex_lock(&g->mu);
+  if (g->job_n == QUEUE) {
+    pthread_mutex_unlock(&g->mu);
+    palp_log_warn(g->log, "session %u (%s): not scored live: %d sessions are waiting to be graded (palp-review show "
+                          "grades it from the log)",
+                  session_id, uid, QUEUE);
+    return PALP_EFULL;
+  }
+  job *j = &g->jobs[(g->job_head + g->job_n++) % QUEUE];
+  j->session_id = session_id;
+  snprintf(j->uid, sizeof j->uid, "%s", uid);
+  snprintf(j->exercise, sizeof j->exercise, "%s", exercise ? exercise : "");
+  pthread_cond_signal(&g->wake);
+  pthread_mutex_unlock(&g->mu);
+  return 0;
+}
+
+int palp_srv_grader_take(palp_srv_grader *g, palp_srv_score *out) {
+  pthread_mutex_lock(&g->mu);
+  const int got = g->done_n > 0;
+  if (got) {
+    *out = g->done[g->done_head];
+    g->done_head = (g->done_head + 1) % QUEUE;
+    g->done_n--;
+  }
+  pthread_mutex_unlock(&g->mu);
+  return got;
+}
+
+void palp_srv_grader_close(palp_srv_grader *g) {
+  if (!g) return;
+  pthread_mutex_lock(&g->mu);
+  g->stop = 1;
+  const int waiting = g->job_n;
+  pthread_cond_signal(&g->wake);
+  pthread_mutex_unlock(&g->mu);
+  pthread_join(g->thread, NULL);
+  if (waiting)
+    palp_log_info(g->log, "session log: %d closed session(s) not scored live as the server stopped (palp-review show "
+                          "grades them from the log)",
+                  waiting);
+  if (g->db) palp_db_close(g->db);
+  pthread_cond_destroy(&g->wake);
+  pthread_mutex_destroy(&g->mu);
+  free(g->path);
+  free(g);
+}
