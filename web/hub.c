@@ -220,7 +220,7 @@ struct palp_web_hub {
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r, debrief_r;
-  dds_entity_t sexercise_r, finding_r; /* def.answers */
+  dds_entity_t sexercise_r, finding_r, score_r; /* def.answers */
   dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
   palp_dds_strangers strangers; /* secured, with a refusal table: plain participants named (hub thread only) */
   int strangers_ready;
@@ -258,6 +258,8 @@ struct palp_web_hub {
   int debrief_next;
   item ended_answers[DEBRIEFS]; /* the last answers of the exercise sessions that ended lately */
   int ended_answers_next;
+  item scores[DEBRIEFS];        /* the scores of the exercise sessions the server graded lately */
+  int scores_next;
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
@@ -1088,6 +1090,58 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
 
 static void copy_str(char *out, size_t outlen, const char *in) { snprintf(out, outlen, "%s", in ? in : ""); }
 
+/* A closed exercise session's score, as the server graded it from its own log (palp_session_score,
+ * session 63): kept beside the ended answers for the dashboard's list of ended sessions, where the
+ * instructor reads it with the session's id in the log (palp-review show takes it). A score that
+ * does not make sense is refused and counted. */
+static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
+  if (!palp_dds_session_score_ok(m)) {
+    h->stats.dropped++;
+    return;
+  }
+  static const char *const metric[6] = {"sensitivity", "false_positives", "thoroughness", "pattern", "time", "force"};
+  char text[128];
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "type", "score");
+  cJSON_AddNumberToObject(j, "session", m->session_id);
+  const char *trainee = NULL;
+  for (int k = 0; k < DEBRIEFS && !trainee; k++)
+    if (h->closed[k].sid == m->session_id) trainee = h->closed[k].trainee;
+  if (trainee) cJSON_AddStringToObject(j, "trainee", trainee);
+  else cJSON_AddNullToObject(j, "trainee");
+  copy_str(text, sizeof text, m->exercise_name);
+  cJSON_AddStringToObject(j, "exercise", text);
+  copy_str(text, sizeof text, m->log_session);
+  cJSON_AddStringToObject(j, "log_session", text);
+  const int graded = m->status == palp_SCORE_GRADED;
+  cJSON_AddBoolToObject(j, "graded", graded);
+  if (!graded) {
+    copy_str(text, sizeof text, m->reason);
+    cJSON_AddStringToObject(j, "reason", text);
+  } else {
+    cJSON_AddNumberToObject(j, "score", round(m->score * 10) / 10);
+    cJSON_AddBoolToObject(j, "pass", m->pass);
+    cJSON *cr = cJSON_AddObjectToObject(j, "credit"), *ps = cJSON_AddObjectToObject(j, "passed");
+    for (int i = 0; i < 6; i++) {
+      cJSON_AddNumberToObject(cr, metric[i], round(m->credit[i] * 1000) / 1000);
+      cJSON_AddBoolToObject(ps, metric[i], m->passed[i]);
+    }
+    cJSON_AddNumberToObject(j, "lesions", m->lesions);
+    cJSON_AddNumberToObject(j, "found", m->found);
+    cJSON_AddNumberToObject(j, "false_marks", m->false_marks);
+    const double cov[3] = {m->coverage[0] * 100, m->coverage[1] * 100, m->coverage[2] * 100};
+    cJSON *c = cJSON_AddArrayToObject(j, "coverage"); /* [%], 0.1 */
+    for (int b = 0; b < 3; b++) cJSON_AddItemToArray(c, cJSON_CreateNumber(round(cov[b] * 10) / 10));
+    cJSON_AddStringToObject(j, "pattern", m->pattern);
+    cJSON_AddNumberToObject(j, "duration", round(m->duration * 10) / 10);
+    cJSON_AddNumberToObject(j, "peak_force", round(m->peak_force * 100) / 100);
+    cJSON_AddNumberToObject(j, "out_of_range", m->out_of_range);
+    cJSON_AddNumberToObject(j, "samples", m->samples);
+  }
+  publish_json(h, &h->scores[h->scores_next], j); /* the oldest replaced */
+  h->scores_next = (h->scores_next + 1) % DEBRIEFS; /* the DDS thread's alone */
+}
+
 static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
   exercise *e = NULL;
   for (int k = 0; k < MAX_EXERCISES && !e; k++)
@@ -1662,6 +1716,7 @@ static void *hub_main(void *arg) {
       drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
       drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
       drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
+      if (h->score_r > 0) drain(h, h->score_r, (sample_fn)on_score, NULL, &h->stats.scores);
       if (h->def.answers) {
         drain(h, h->finding_r, (sample_fn)on_finding, NULL, &h->stats.findings_read);
         tend_answers(h, now);
@@ -1804,11 +1859,12 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     /* the answers (instructors only: a trainee's permissions cannot even create the topic) */
     h->sexercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE);
     h->finding_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+    h->score_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_SCORE], PALP_TOPIC_SESSION_SCORE);
   }
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -1869,7 +1925,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) free(h->pending_ex[k].ex);
   for (int i = 0; i < MAX_SERVERS; i++) free(h->srv[i].loads);
   free(h->hello.buf);
-  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf), free(h->ended_answers[k].buf);
+  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf), free(h->ended_answers[k].buf), free(h->scores[k].buf);
   free(h->sessions_msg.buf);
   free(h->status_msg.buf);
   free(h->exercises_msg.buf);
@@ -2178,6 +2234,17 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
     if (ended && h->def.answers) {
       rc = take(ended, pre, buf, len);
       if (rc > 0) c->ended_answers_ver = ended->ver;
+      goto out;
+    }
+    /* the closed sessions' scores, the same way (they tell what the marks found) */
+    const item *score = NULL;
+    for (int k = 0; k < DEBRIEFS && replay; k++) {
+      const item *e = &h->scores[k];
+      if (e->buf && e->ver > c->scores_ver && (!score || e->ver < score->ver)) score = e;
+    }
+    if (score && h->def.answers) {
+      rc = take(score, pre, buf, len);
+      if (rc > 0) c->scores_ver = score->ver;
       goto out;
     }
   }

@@ -63,9 +63,11 @@ class Procs:
     # Most web tests look for a deep dent (20-30 mm, the top of the pages' colour scale), so by default they
     # host the paper's literal reading (config/server-paper.json: 3 N dents ~20 mm); the shipped
     # long-term domes dent ~0.5 mm under 3 N (docs/materials.md).
-    def server(self, tick_hz=None, extra=(), config="server-paper.json"):
+    def server(self, tick_hz=None, extra=(), config="server-paper.json", db=None):
+        """palp-server on the test's domain; its session log at db (a path), or none."""
         args = [os.path.join(self.build, "server", "palp-server"), "--config",
-                os.path.join(self.source, "config", config), "--domain", str(self.domain), "--no-db"]
+                os.path.join(self.source, "config", config), "--domain", str(self.domain)]
+        args += ["--database", db] if db else ["--no-db"]
         if tick_hz:
             args += ["--tick-rate", str(tick_hz)]
         p = self.start("server", args + list(extra))

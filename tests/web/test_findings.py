@@ -9,13 +9,15 @@ runs with "session_exercise": "always"), not found yet, and hides it when told; 
 page's and an observer page's attempts to send a finding are refused and nothing is written. When
 pat's station leaves, her page shows the server's debrief (the lump missed, where it is), and so does
 the class dashboard, under "Ended exercise sessions", both the one open meanwhile and one opened after;
-the latter is also sent what her marks found, as the server's debrief said it. sam then examines on
+the latter is also sent what her marks found, as the server's debrief said it, and the score the server
+graded from its session log (as palp-review show prints it from that log). sam then examines on
 "hard", whose debrief tells the count only: his ended row on the dashboard shows where the lump was,
 missed, under the "show hidden lumps" box.
 DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
 import math
 import os
 import re
+import subprocess
 import time
 
 import harness
@@ -58,7 +60,10 @@ def run(build, source, out):
     procs = harness.Procs(build, source, out, DOMAIN)
     browser = None
     try:
-        procs.server(config=harness.answers_config(source, out))  # the shipped exercises; lumps to instructors
+        # the shipped exercises; lumps and scores to instructors; its own session log, which it grades each
+        # closed exercise session from (palp_session_score, session 63)
+        db = os.path.join(out, "sessions.db")
+        procs.server(config=harness.answers_config(source, out), db=db)
         peer = procs.start("peer", [os.path.join(build, "tests", "web", "web_exercise_peer"), str(DOMAIN), "0", "110"])
         procs.wait_log(peer, r"READY", 10)
         web = procs.web()
@@ -291,6 +296,31 @@ def run(build, source, out):
               "a dashboard opened after the session ended is sent what its marks found, as the server's debrief "
               "said it: %s" % kept)
 
+        # The server grades pat's closed session from its own log and sends the score to the instructors
+        # (palp_session_score): both dashboards show it on her row, with the command that prints it in full,
+        # and it is what palp-review show prints from the same log (to its 0.1 rounding).
+        score_cell = ("(function(){const r=document.querySelector('#debriefs tr[data-session=\"%d\"]');"
+                      "const c=r && r.querySelector('td.score'); return c ? [c.textContent, c.className, c.title] : null;})()"
+                      % told["session"])
+        sc = dash2.wait_for("palpState.dashboard.scores && palpState.dashboard.scores[%d]" % told["session"], 20)
+        cells = [d.wait_for("(function(){const c=%s; return c && c[0] !== 'n/a' ? c : null;})()" % score_cell, 5)
+                 for d in (dash, dash2)]
+        shown_ok = sc is not None and sc["graded"] is True and sc["exercise"] == "easy" and all(
+            c is not None and c[0] == "%.1f %spalp-review show %s" % (sc["score"], "pass" if sc["pass"] else "fail",
+                                                                       sc["log_session"]) and
+            ("pass" if sc["pass"] else "bad") in c[1].split() and "sensitivity" in c[2] for c in cells)
+        check(shown_ok and sc["found"] == told["found"] and sc["lesions"] == told["lesions"] and
+              sc["false_marks"] == told["false_marks"],
+              "pat's score on both dashboards, its found / lesions / false marks the debrief's: %s; cells %s"
+              % (sc, cells))
+        review = subprocess.run([os.path.join(build, "client", "review", "palp-review"), "--db", db, "show",
+                                         sc["log_session"] if sc else "none"], capture_output=True, text=True, timeout=60)
+        said = re.search(r"score\s+([0-9.]+) / 100 \(pass at \d+\): (PASS|FAIL)", review.stdout)
+        check(sc is not None and said is not None and abs(float(said.group(1)) - sc["score"]) < 0.05 + 1e-9 and
+              (said.group(2) == "PASS") == sc["pass"],
+              "the score the dashboard shows is palp-review show's from the server's log: %s vs %s (rc %d %s)"
+              % (said and said.groups(), sc and [sc["score"], sc["pass"]], review.returncode, review.stderr[-300:]))
+
         # sam examines on "hard" (phantom 13), whose debrief tells the count only: the trainee is not
         # told where the lump was, the instructor's dashboard is, under the "show hidden lumps" box,
         # in the debrief's words: polar 35 deg azimuth 200 deg on the 40 mm dome is at 8.3 o'clock
@@ -299,7 +329,7 @@ def run(build, source, out):
         sam = procs.trainee("sam", phantom=13, extra=["--input", "sim:press,hold_s=1", "--duration", "6"])
         sam_row = ("(function(){const r=Array.from(document.querySelectorAll('#debriefs tr')).find(function(r){"
                    "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {found: r.cells[3].textContent, ended: r.cells[7].textContent,"
-                   "lumps: r.cells[9].textContent, items: Array.from(r.cells[9].querySelectorAll('li')).map(function(l){"
+                   "lumps: r.cells[10].textContent, items: Array.from(r.cells[10].querySelectorAll('li')).map(function(l){"
                    "return [l.className, l.textContent];})};})()")
         got = dash2.wait_for("(function(){const r=%s; return r && r.items.length === 2 ? r : null;})()" % sam_row, 30)
         check(got is not None and got["found"] == "found 0 of 1 lump" and re.match(r"^trainee station left after 0:[01]\d$", got["ended"]) and

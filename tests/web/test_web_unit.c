@@ -828,6 +828,131 @@ static void test_answers(palp_web_hub *h, dds_entity_t pp) {
   palp_web_hub_detach(h, &late);
 }
 
+/* The scores of closed exercise sessions (palp_session_score, session 63), written here as the server
+ * writes them after grading its log: the dashboard gets each, as sent, rounded for display, with the
+ * trainee's name when the bridge saw the session close (cat's, sid 4731 of test_answers); a score out
+ * of its range is refused and counted; a dashboard opened later gets them oldest first; no page that
+ * follows one session, no trainee's token and no bound trainee page ever gets one. */
+typedef struct scores_seen {
+  int n;
+  cJSON *msg[4];
+} scores_seen;
+
+static int is_score(const cJSON *j, void *arg) {
+  scores_seen *a = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  if (!type || strcmp(type, "score")) return 0;
+  if (a->n < 4) a->msg[a->n] = cJSON_Duplicate(j, 1);
+  a->n++;
+  return 0;
+}
+
+static void scores_free(scores_seen *a) {
+  for (int i = 0; i < a->n && i < 4; i++) cJSON_Delete(a->msg[i]);
+}
+
+static void test_scores(palp_web_hub *h, dds_entity_t pp) {
+  const dds_entity_t w =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_SCORE), PALP_TOPIC_SESSION_SCORE);
+  CHECK(w > 0, "scores: the test's writer");
+  palp_web_cursor dash, obs, own, bound;
+  CHECK(palp_web_hub_attach(h, &dash, 8) == 0 && palp_web_hub_attach(h, &obs, 8) == 0 &&
+            palp_web_hub_attach(h, &own, 8) == 0 && palp_web_hub_attach(h, &bound, 8) == 0,
+        "scores: four pages");
+  palp_web_hub_scope(h, &own, "cat");
+  CHECK(palp_web_hub_control(h, &dash, "{\"follow\":\"all\"}", 16) == 0 &&
+            palp_web_hub_control(h, &obs, "{\"follow\":4731}", 15) == 0 &&
+            palp_web_hub_control(h, &bound, "{\"trainee\":4731}", 16) == 0,
+        "scores: the dashboard follows all, a page follows cat's session, one is her trainee page");
+  scores_seen drain0 = {0};
+  next_json(h, &dash, 20, is_score, &drain0); /* what the dashboard had before */
+  scores_free(&drain0);
+  palp_web_hub_stats st0;
+  palp_web_hub_stats_get(h, &st0);
+
+  palp_SessionScore m;
+  memset(&m, 0, sizeof m);
+  m.session_id = 4731;
+  m.status = palp_SCORE_GRADED;
+  snprintf(m.log_session, sizeof m.log_session, "1796488098-29362-4731");
+  snprintf(m.exercise_name, sizeof m.exercise_name, "answers-test");
+  snprintf(m.pattern, sizeof m.pattern, "unsystematic");
+  m.session_id = 4791; /* its own instance: keep-last 1 would let the next sample supersede it */
+  m.score = 150;       /* out of its range: refused */
+  dds_write(w, &m);
+  m.session_id = 4731;
+  m.score = 45.474;
+  m.pass = 0;
+  const double credit[6] = {0.5, 1, 0.0253, 0, 1, 1};
+  for (int i = 0; i < 6; i++) m.credit[i] = credit[i], m.passed[i] = i >= 4;
+  m.lesions = 2, m.found = 1, m.false_marks = 0;
+  m.coverage[0] = 0.02534, m.coverage[1] = 0.0111, m.coverage[2] = 0;
+  m.duration = 18.04, m.peak_force = 4.891, m.out_of_range = 0, m.samples = 1515;
+  dds_write(w, &m);
+  palp_SessionScore n;
+  memset(&n, 0, sizeof n);
+  n.session_id = 4790;
+  n.status = palp_SCORE_NOT_GRADED;
+  snprintf(n.log_session, sizeof n.log_session, "1796488098-29362-4790");
+  snprintf(n.exercise_name, sizeof n.exercise_name, "answers-test");
+  snprintf(n.reason, sizeof n.reason, "no finger samples logged");
+  dds_write(w, &n);
+
+  scores_seen d = {0};
+  next_json(h, &dash, 60, is_score, &d);
+  CHECK(d.n == 2, "the dashboard is sent the two scores, not the one out of range (%d)", d.n);
+  if (d.n >= 2) {
+    const cJSON *a = d.msg[0], *b = d.msg[1];
+    const char *trainee = cJSON_GetStringValue(cJSON_GetObjectItem(a, "trainee"));
+    CHECK(num(a, "session") == 4731 && trainee && !strcmp(trainee, "cat") && cJSON_IsTrue(cJSON_GetObjectItem(a, "graded")) &&
+              cJSON_IsFalse(cJSON_GetObjectItem(a, "pass")),
+          "cat's score: session 4731, her name (the bridge saw it close), graded, not passed");
+    const cJSON *cov = cJSON_GetObjectItem(a, "coverage"), *cr = cJSON_GetObjectItem(a, "credit");
+    CHECK(fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(a, "score")) - 45.5) < 1e-9 &&
+              fabs(cJSON_GetNumberValue(cJSON_GetArrayItem(cov, 0)) - 2.5) < 1e-9 &&
+              fabs(cJSON_GetNumberValue(cJSON_GetArrayItem(cov, 1)) - 1.1) < 1e-9 &&
+              fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(cr, "sensitivity")) - 0.5) < 1e-9 &&
+              fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(cr, "thoroughness")) - 0.025) < 1e-9 &&
+              fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(a, "duration")) - 18.0) < 1e-9 &&
+              fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(a, "peak_force")) - 4.89) < 1e-9 && num(a, "found") == 1 &&
+              num(a, "lesions") == 2 && num(a, "samples") == 1515,
+          "  45.474 shown 45.5, coverage 2.5 / 1.1 %%, credits 0.5 / 0.025, 18.0 s, 4.89 N, 1 of 2, 1515 samples");
+    const char *ls = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_session"));
+    CHECK(ls && !strcmp(ls, "1796488098-29362-4731"), "  with its id in the server's log (palp-review show takes it)");
+    const char *why = cJSON_GetStringValue(cJSON_GetObjectItem(b, "reason"));
+    CHECK(num(b, "session") == 4790 && cJSON_IsFalse(cJSON_GetObjectItem(b, "graded")) && why &&
+              !strcmp(why, "no finger samples logged") && cJSON_IsNull(cJSON_GetObjectItem(b, "trainee")) &&
+              !cJSON_GetObjectItem(b, "score"),
+          "the other: not graded, the server's reason, no trainee known, no score");
+  }
+  palp_web_hub_stats st1;
+  palp_web_hub_stats_get(h, &st1);
+  CHECK(st1.dropped == st0.dropped + 1 && st1.scores >= st0.scores + 3, "the one out of range counted as dropped (%llu)",
+        (unsigned long long)(st1.dropped - st0.dropped));
+  palp_web_cursor late;
+  CHECK(palp_web_hub_attach(h, &late, 8) == 0 && palp_web_hub_control(h, &late, "{\"follow\":\"all\"}", 16) == 0,
+        "a dashboard opened after the scores came");
+  scores_seen l = {0};
+  next_json(h, &late, 40, is_score, &l);
+  int order = 0;
+  for (int i = 0; i + 1 < l.n && i + 1 < 4; i++)
+    if (num(l.msg[i], "session") == 4731 && num(l.msg[i + 1], "session") == 4790) order = 1;
+  CHECK(order, "is sent them, cat's before the other, oldest first (%d score messages)", l.n);
+  scores_seen o = {0}, ow = {0}, bd = {0};
+  next_json(h, &obs, 20, is_score, &o);
+  next_json(h, &own, 20, is_score, &ow);
+  next_json(h, &bound, 20, is_score, &bd);
+  CHECK(o.n == 0 && ow.n == 0 && bd.n == 0,
+        "no score reaches a page following one session (%d), cat's token (%d) or her trainee page (%d)", o.n, ow.n,
+        bd.n);
+  scores_free(&d), scores_free(&l), scores_free(&o), scores_free(&ow), scores_free(&bd);
+  palp_web_hub_detach(h, &dash);
+  palp_web_hub_detach(h, &obs);
+  palp_web_hub_detach(h, &own);
+  palp_web_hub_detach(h, &bound);
+  palp_web_hub_detach(h, &late);
+}
+
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
@@ -970,6 +1095,7 @@ static void test_local_model(void) {
   test_answers(h, pp);
   palp_web_hub_detach(h, &c);
   test_debriefs(h, pp);
+  test_scores(h, pp);
   dds_delete(pp);
   palp_web_hub_stop(h);
   palp_web_hub_destroy(h);

@@ -310,6 +310,45 @@
     cellEl.className = "lumps";
     cellEl.appendChild(ul);
   }
+  /* The server's score of an ended session (a `score` message: palp_session_score, graded from the
+   * server's own log seconds after the session ended; web/hub.c on_score), with the command that shows
+   * it in full. It may come before the session's row (a reconnect's replay sends debriefs first, but a
+   * bridge may miss one): kept by session, bounded as the rows are. */
+  const scores = new Map(); /* session id -> its score message */
+  const METRICS = [["sensitivity", "sensitivity"], ["false_positives", "false positives"], ["thoroughness", "thoroughness"],
+    ["pattern", "search pattern"], ["time", "time"], ["force", "force"]];
+  function scoreCell(tr) {
+    const td = tr.querySelector("td.score"), s = scores.get(Number(tr.dataset.session));
+    td.textContent = "";
+    td.className = "score n";
+    if (!s) {
+      td.textContent = "n/a";
+      td.className += " muted";
+      td.title = "no score from the server (yet): it scores an exercise session from its log seconds after the " +
+        "session ends, where only instructors can read it (DDS Security on, or its config's session_exercise " +
+        "\"always\"); palp-review show gives it from the log";
+      return;
+    }
+    const how = document.createElement("div");
+    how.className = "muted";
+    how.textContent = "palp-review show " + s.log_session;
+    if (!s.graded) {
+      td.append("not scored");
+      td.appendChild(how);
+      td.className += " muted";
+      td.title = "the server could not score this session from its log: " + s.reason;
+      return;
+    }
+    td.append(s.score.toFixed(1) + " " + (s.pass ? "pass" : "fail"));
+    td.appendChild(how);
+    td.className += s.pass ? " pass" : " bad";
+    td.title = "the automatic score (0-100) of the exercise's rubric, as palp-review show prints it: " +
+      METRICS.map(function (k) {
+        return k[1] + " " + Number(s.credit[k[0]]).toFixed(2) + (s.passed[k[0]] ? " (passed)" : " (not passed)");
+      }).join(", ") + "; found " + s.found + " of " + s.lesions + ", " + PALP.plural(s.false_marks, "mark", "marks") +
+      " near no lump; covered " + s.coverage.join(" / ") + " %; " + s.pattern.replace("_", " ") + " search; " +
+      PALP.minutes(s.duration) + " palpating, peak " + s.peak_force + " N";
+  }
   function debrief(m) {
     const old = endedRows.get(m.session);
     if (old) old.remove(); /* a reconnect's replay: each session once, in the bridge's order */
@@ -331,6 +370,7 @@
       cov ? "the skin pressed at light, medium and deep pressure, each level itself, as the exercise grades thoroughness " +
         "(the bridge's own figure since it began following the session; the review's within a few points): " + cov
         : "the bridge saw no coverage in the exercise's bands for this session");
+    tr.insertCell().className = "score"; /* the server's score, when it comes (scoreCell) */
     const lumps = tr.insertCell();
     lumps.className = "lumps";
     if (m.level === "lesions") {
@@ -346,6 +386,7 @@
       tr.dataset.untold = m.level; /* the instructor's view of it, when the bridge kept one (hiddenEnded) */
       hiddenEnded(tr);
     }
+    scoreCell(tr);
     ended.insertBefore(tr, ended.firstChild);
     endedRows.set(m.session, tr);
     while (ended.rows.length > ENDED_MAX) {
@@ -390,6 +431,19 @@
     },
     status: serverStatus,
     debrief: debrief,
+    score: function (m) {
+      scores.delete(m.session); /* newest last: the oldest go first */
+      scores.set(m.session, m);
+      st.dashboard.scores = st.dashboard.scores || {}; /* for the tests */
+      st.dashboard.scores[m.session] = m;
+      for (const id of scores.keys()) {
+        if (scores.size <= 2 * ENDED_MAX) break;
+        scores.delete(id);
+        delete st.dashboard.scores[id];
+      }
+      const tr = endedRows.get(m.session);
+      if (tr) scoreCell(tr);
+    },
     cover: function (m) {
       const c = cards.get(m.session);
       if (!c || typeof m.bands !== "string") return; /* checked against the phantom as drawn (drawCover) */
