@@ -256,6 +256,12 @@ for k in 1 2; do
   grep -E "^\[trainee fay\] (debrief|  lump)" "$out/fay$k.log" | sed "s/^\[trainee fay\]/[fay, attempt $k]/" || true
 done
 echo
+# As each exercise session closed, the server graded it from its own log, as the review below does, and
+# sent the score to the instructors alone (palp_session_score): the class dashboard's "Ended exercise
+# sessions" shows it seconds after the session ends (docs/assessment.md, "Scored as the session ends").
+echo "== the server's scores, sent to the class dashboard as each exercise session closed =="
+grep -E "\): (scored|not scored)" "$out/server.log" | sed 's/^.*palp-server: //' || true
+echo
 if [ -n "$mallory" ]; then
   echo "== a revoked identity: mallory's lost laptop =="
   grep -E "DDS Security refused trainee/mallory" "$out/server.log" | head -n 1 | sed 's/^.*palp-server: /palp-server: /'

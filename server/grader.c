@@ -101,7 +101,9 @@ static void *grader_main(void *arg) {
   pthread_mutex_lock(&g->mu);
   for (;;) {
     while (!g->stop && g->job_n == 0) pthread_cond_wait(&g->wake, &g->mu);
-    if (g->stop) break;
+    /* Stopping, the sessions already waiting are still graded (at most QUEUE, each well under a
+     * second): the log then says each one's score, as the review will. */
+    if (g->job_n == 0) break;
     job j = g->jobs[g->job_head];
     pthread_mutex_unlock(&g->mu);
     palp_srv_score s;
@@ -185,14 +187,12 @@ void palp_srv_grader_close(palp_srv_grader *g) {
   if (!g) return;
   pthread_mutex_lock(&g->mu);
   g->stop = 1;
-  const int waiting = g->job_n;
   pthread_cond_signal(&g->wake);
   pthread_mutex_unlock(&g->mu);
   pthread_join(g->thread, NULL);
-  if (waiting)
-    palp_log_info(g->log, "session log: %d closed session(s) not scored live as the server stopped (palp-review show "
-                          "grades them from the log)",
-                  waiting);
+  if (g->done_n)
+    palp_log_info(g->log, "session log: %d score(s) not sent: the server stopped (palp-review show gives them)",
+                  g->done_n);
   if (g->db) palp_db_close(g->db);
   pthread_cond_destroy(&g->wake);
   pthread_mutex_destroy(&g->mu);

@@ -139,6 +139,28 @@ check "nina's report carries her grade" "grep -q 'insufficient' '$out/demo/repor
 note=$(python3 -c "import sqlite3, sys; print(''.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute('select text from note join session on session.id = note.session_id where session.uid = ?', (sys.argv[2],))))" "$out/sessions.db" "$nina_uid" 2>/dev/null)
 check "her note names the criteria she failed: $note" \
   'printf "%s\n" "$note" | grep -q "^Work on: sensitivity, .*thoroughness"'
+# As each exercise session closed the server scored it from its own log and sent the score to the
+# instructors (palp_session_score, session 63): every exercise session of the run (nina's, fay's two,
+# eve's when she runs) has its line, and each score is the one palp-review show printed for that session
+# from the same log, to its 0.1 rounding.
+scored=$(sed -n 's/^session [0-9]* (\([0-9-]*\)): scored \([0-9.]*\), \(pass\|fail\), from the session log$/\1 \2 \3/p' "$txt")
+n_ex=$(grep -c '^exercise session: ' "$txt")
+same=1 n_sc=0
+while read -r uid sc verdict; do
+  [ -n "$uid" ] || continue
+  n_sc=$((n_sc + 1))
+  want=$("$build/client/review/palp-review" --db "$out/sessions.db" show "$uid" 2>/dev/null |
+    sed -n 's#^  score *\([0-9.]*\) / 100 (pass at [0-9]*): \(PASS\|FAIL\)$#\1 \2#p')
+  [ "$want" = "$sc $(echo "$verdict" | tr a-z A-Z)" ] || { same=0; echo "  $uid: the server said $sc $verdict, the review $want"; }
+done <<EOF_SCORED
+$scored
+EOF_SCORED
+check "the server scored each exercise session as it closed ($n_sc of $n_ex), each as palp-review show does" \
+  "[ $n_sc -ge 3 ] && [ $n_sc -eq $n_ex ] && [ $same = 1 ] && grep -q \"^== the server's scores, sent to the class dashboard\" '$txt'"
+# ... and sent them, secured, to the bridge (instructor/bridge), which took each one (its stats at exit)
+w_sc=$(sed -n "s/.*(sessions' [0-9]*, scores \([0-9]*\)).*/\1/p" "$out/demo/web.log" | tail -n 1)
+check "palp-web, an instructor, received the $n_sc scores over DDS Security (${w_sc:-none})" \
+  "[ '${w_sc:-x}' = '$n_sc' ] && ! grep -q 'no live scores' '$out/demo/server.log'"
 check "it ends with the class report of the exercise" \
   "grep -q '== class report: exercise \"teaching\"' '$txt' && [ -s '$out/demo/class-teaching.html' ]"
 [ $fail -eq 0 ] || tail -n 60 "$txt"

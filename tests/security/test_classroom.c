@@ -229,6 +229,10 @@ static void child_bob(void) {
   const dds_entity_t sx = palp_dds_create_topic(bob.pp, PALP_TOPIC_SESSION_EXERCISE);
   CHECK(sx == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.topic[PALP_TOPIC_SESSION_EXERCISE] == 0,
         "bob may not create topic palp_session_exercise (%s), and his station does not try", dds_strretcode(sx));
+  /* session 63: nor the closed exercise sessions' scores (what every trainee's marks found) */
+  const dds_entity_t ss = palp_dds_create_topic(bob.pp, PALP_TOPIC_SESSION_SCORE);
+  CHECK(ss == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.topic[PALP_TOPIC_SESSION_SCORE] == 0,
+        "bob may not create topic palp_session_score (%s), and his station does not try", dds_strretcode(ss));
   /* nor publish as the server */
   const palp_dds_topic_kind server_topics[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_SESSION_REPLY,
                                                 PALP_TOPIC_SESSION_STATE, PALP_TOPIC_SERVER_STATUS};
