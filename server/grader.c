@@ -79,7 +79,8 @@ static void grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
     return;
   }
   palp_db_session_info info;
-  if (palp_db_find_session(g->db, j->uid, &info) != 0) {
+  /* Exactly this uid: palp_db_find_session also takes a unique prefix, and "...-1" is one of "...-10". */
+  if (palp_db_find_session(g->db, j->uid, &info) != 0 || strcmp(info.uid, j->uid) != 0) {
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, "the session is not in the log", out);
     return;
   }
