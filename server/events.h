@@ -109,6 +109,8 @@ typedef struct palp_srv_score {
   uint32_t out_of_range;
   uint32_t samples;
   char reason[128];
+  int log_complete;            /* graded: palp_db_log_health's complete */
+  char log_health[128];        /* graded: palp_db_log_health_describe's line */
 } palp_srv_score;
 
 typedef struct palp_srv_events {

@@ -11,6 +11,7 @@
 
 #define QUEUE 32            /* sessions waiting to be graded, scores waiting to be taken */
 #define WRITER_WAIT_S 30.0  /* the log's writer must have written the session's end by then */
+#define STOPPING_WAIT_S 2.0 /* ... and stopping: a server whose disk hangs must still stop */
 
 typedef struct job {
   uint32_t session_id;
@@ -64,51 +65,62 @@ void palp_srv_score_of(const review_assessment *a, uint32_t session_id, const ch
 
 /* Grades one session: waits for the writer to have written everything queued so far (the session's
  * end was queued before the job), then reads the session back as palp-review does. */
-static void grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
+static int grade(palp_srv_grader *g, const job *j, double wait_s, palp_srv_score *out) {
   char err[512] = "";
-  if (palp_db_writer_flush(g->w, WRITER_WAIT_S) != 0) {
-    snprintf(err, sizeof err, "the session log's writer did not catch up within %.0f s", WRITER_WAIT_S);
+  if (palp_db_writer_flush(g->w, wait_s) != 0) {
+    snprintf(err, sizeof err, "the session log's writer did not catch up within %.0f s", wait_s);
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, err, out);
-    return;
+    return -1;
   }
   if (!g->db && palp_db_open(g->path, 0, &g->db, err, sizeof err) != 0) {
     g->db = NULL;
     char why[160];
     snprintf(why, sizeof why, "the session log could not be read: %.120s", err);
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, why, out);
-    return;
+    return 0;
   }
   palp_db_session_info info;
   /* Exactly this uid: palp_db_find_session also takes a unique prefix, and "...-1" is one of "...-10". */
   if (palp_db_find_session(g->db, j->uid, &info) != 0 || strcmp(info.uid, j->uid) != 0) {
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, "the session is not in the log", out);
-    return;
+    return 0;
   }
   review_assessment *a = calloc(1, sizeof *a);
   if (!a) {
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, "out of memory", out);
-    return;
+    return 0;
   }
   /* On an error review_assess has freed what it made. */
   const int assessed = review_assess(g->db, &info, a, err, sizeof err) == 0;
   if (assessed && !a->has_exercise) snprintf(err, sizeof err, "the log holds no exercise for the session");
   palp_srv_score_of(assessed && a->has_exercise ? a : NULL, j->session_id, j->uid, j->exercise, err, out);
+  /* How far the log can be trusted for it: a score from a log that lost records may be low. */
+  palp_db_log_health health;
+  if (out->graded && palp_db_log_health_get(g->db, &info, &health) == 0) {
+    out->log_complete = health.complete != 0;
+    palp_db_log_health_describe(&health, out->log_health, sizeof out->log_health);
+  } else if (out->graded) {
+    snprintf(out->log_health, sizeof out->log_health, "unknown: %s", palp_db_errmsg(g->db));
+  }
   if (assessed) review_assessment_free(a);
   free(a);
+  return 0;
 }
 
 static void *grader_main(void *arg) {
   palp_srv_grader *g = arg;
+  int writer_stuck = 0; /* stopping, the writer did not catch up: the rest are not graded */
   pthread_mutex_lock(&g->mu);
   for (;;) {
     while (!g->stop && g->job_n == 0) pthread_cond_wait(&g->wake, &g->mu);
     /* Stopping, the sessions already waiting are still graded (at most QUEUE, each well under a
-     * second): the log then says each one's score, as the review will. */
-    if (g->job_n == 0) break;
+     * second): the log then says each one's score, as the review will; unless the writer is stuck. */
+    if (g->job_n == 0 || writer_stuck) break;
     job j = g->jobs[g->job_head];
+    const int stopping = g->stop;
     pthread_mutex_unlock(&g->mu);
     palp_srv_score s;
-    grade(g, &j, &s);
+    if (grade(g, &j, stopping ? STOPPING_WAIT_S : WRITER_WAIT_S, &s) < 0 && stopping) writer_stuck = 1;
     if (s.graded)
       palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_session,
                     s.score, s.pass ? "pass" : "fail");
@@ -191,6 +203,10 @@ void palp_srv_grader_close(palp_srv_grader *g) {
   pthread_cond_signal(&g->wake);
   pthread_mutex_unlock(&g->mu);
   pthread_join(g->thread, NULL);
+  if (g->job_n)
+    palp_log_warn(g->log, "session log: %d closed session(s) not scored: the log's writer is behind as the server "
+                          "stops (palp-review show grades them from the log)",
+                  g->job_n);
   if (g->done_n)
     palp_log_info(g->log, "session log: %d score(s) not sent: the server stopped (palp-review show gives them)",
                   g->done_n);

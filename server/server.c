@@ -355,6 +355,8 @@ static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
     m.peak_force = sc->peak_force;
     m.out_of_range = sc->out_of_range;
     m.samples = sc->samples;
+    m.log_complete = sc->log_complete != 0;
+    snprintf(m.log_health, sizeof m.log_health, "%s", sc->log_health);
   }
   const dds_return_t rc = dds_write(srv->session_score_w, &m);
   if (rc < 0) {

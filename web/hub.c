@@ -1137,6 +1137,9 @@ static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
     cJSON_AddNumberToObject(j, "peak_force", round(m->peak_force * 100) / 100);
     cJSON_AddNumberToObject(j, "out_of_range", m->out_of_range);
     cJSON_AddNumberToObject(j, "samples", m->samples);
+    cJSON_AddBoolToObject(j, "log_complete", m->log_complete);
+    copy_str(text, sizeof text, m->log_health);
+    cJSON_AddStringToObject(j, "log_health", text);
   }
   publish_json(h, &h->scores[h->scores_next], j); /* the oldest replaced */
   h->scores_next = (h->scores_next + 1) % DEBRIEFS; /* the DDS thread's alone */

@@ -701,6 +701,12 @@ int main(void) {
             ra->r.score, score_a.coverage[0], ra->r.coverage[0]);
       CHECK(!score_a.pass && score_a.score < 70, "  a 20 s session over one lesion does not pass (score %.1f)",
             score_a.score);
+      palp_db_log_health hl;
+      char line[128] = "";
+      if (palp_db_log_health_get(db, sa, &hl) == 0) palp_db_log_health_describe(&hl, line, sizeof line);
+      CHECK(score_a.log_complete && hl.complete && strncmp(score_a.log_health, "complete: ", 10) == 0 &&
+                strcmp(score_a.log_health, line) == 0,
+            "  from a complete log, in the review's words: \"%s\"", score_a.log_health);
       review_assessment_free(ra);
     }
     free(ra);

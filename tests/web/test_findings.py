@@ -310,7 +310,8 @@ def run(build, source, out):
                                                                        sc["log_session"]) and
             ("pass" if sc["pass"] else "bad") in c[1].split() and "sensitivity" in c[2] for c in cells)
         check(shown_ok and sc["found"] == told["found"] and sc["lesions"] == told["lesions"] and
-              sc["false_marks"] == told["false_marks"],
+              sc["false_marks"] == told["false_marks"] and sc["log_complete"] is True and
+              sc["log_health"].startswith("complete: ") and all("damaged" not in c[0] for c in cells),
               "pat's score on both dashboards, its found / lesions / false marks the debrief's: %s; cells %s"
               % (sc, cells))
         review = subprocess.run([os.path.join(build, "client", "review", "palp-review"), "--db", db, "show",

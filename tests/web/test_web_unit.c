@@ -888,6 +888,8 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
   m.lesions = 2, m.found = 1, m.false_marks = 0;
   m.coverage[0] = 0.02534, m.coverage[1] = 0.0111, m.coverage[2] = 0;
   m.duration = 18.04, m.peak_force = 4.891, m.out_of_range = 0, m.samples = 1515;
+  m.log_complete = 0;
+  snprintf(m.log_health, sizeof m.log_health, "damaged: ended normal; 3 records lost to disk errors");
   dds_write(w, &m);
   palp_SessionScore n;
   memset(&n, 0, sizeof n);
@@ -919,6 +921,10 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
           "  45.474 shown 45.5, coverage 2.5 / 1.1 %%, credits 0.5 / 0.025, 18.0 s, 4.89 N, 1 of 2, 1515 samples");
     const char *ls = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_session"));
     CHECK(ls && !strcmp(ls, "1796488098-29362-4731"), "  with its id in the server's log (palp-review show takes it)");
+    const char *lh = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_health"));
+    CHECK(cJSON_IsFalse(cJSON_GetObjectItem(a, "log_complete")) && lh &&
+              !strcmp(lh, "damaged: ended normal; 3 records lost to disk errors"),
+          "  and, its log damaged, that said, in the review's words");
     const char *why = cJSON_GetStringValue(cJSON_GetObjectItem(b, "reason"));
     CHECK(num(b, "session") == 4790 && cJSON_IsFalse(cJSON_GetObjectItem(b, "graded")) && why &&
               !strcmp(why, "no finger samples logged") && cJSON_IsNull(cJSON_GetObjectItem(b, "trainee")) &&

@@ -340,6 +340,12 @@
       return;
     }
     td.append(s.score.toFixed(1) + " " + (s.pass ? "pass" : "fail"));
+    if (s.log_complete === false) { /* records lost: the score may be low; the review says the same */
+      const warn = document.createElement("div");
+      warn.className = "warn";
+      warn.textContent = "from a damaged log";
+      td.appendChild(warn);
+    }
     td.appendChild(how);
     td.className += s.pass ? " pass" : " bad";
     td.title = "the automatic score (0-100) of the exercise's rubric, as palp-review show prints it: " +
@@ -347,7 +353,7 @@
         return k[1] + " " + Number(s.credit[k[0]]).toFixed(2) + (s.passed[k[0]] ? " (passed)" : " (not passed)");
       }).join(", ") + "; found " + s.found + " of " + s.lesions + ", " + PALP.plural(s.false_marks, "mark", "marks") +
       " near no lump; covered " + s.coverage.join(" / ") + " %; " + s.pattern.replace("_", " ") + " search; " +
-      PALP.minutes(s.duration) + " palpating, peak " + s.peak_force + " N";
+      PALP.minutes(s.duration) + " palpating, peak " + s.peak_force + " N; the log: " + s.log_health;
   }
   function debrief(m) {
     const old = endedRows.get(m.session);
