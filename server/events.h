@@ -95,7 +95,7 @@ typedef struct palp_srv_session_summary {
 typedef struct palp_srv_score {
   uint32_t session_id;
   int graded;                  /* 1: the fields below; 0: reason says why not */
-  char log_session[96];        /* the session's uid in the log (palp-review show takes it) */
+  char log_uid[96];        /* the session's uid in the log (palp-review show takes it) */
   char exercise[64];
   double score;                /* [0, 100] */
   int pass;

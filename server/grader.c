@@ -38,7 +38,7 @@ void palp_srv_score_of(const review_assessment *a, uint32_t session_id, const ch
                        const char *reason, palp_srv_score *out) {
   memset(out, 0, sizeof *out);
   out->session_id = session_id;
-  snprintf(out->log_session, sizeof out->log_session, "%s", uid ? uid : "");
+  snprintf(out->log_uid, sizeof out->log_uid, "%s", uid ? uid : "");
   snprintf(out->exercise, sizeof out->exercise, "%s", exercise ? exercise : "");
   if (!a) {
     snprintf(out->reason, sizeof out->reason, "%s", reason && reason[0] ? reason : "not graded");
@@ -122,11 +122,11 @@ static void *grader_main(void *arg) {
     palp_srv_score s;
     if (grade(g, &j, stopping ? STOPPING_WAIT_S : WRITER_WAIT_S, &s) < 0 && stopping) writer_stuck = 1;
     if (s.graded)
-      palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_session,
+      palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_uid,
                     s.score, s.pass ? "pass" : "fail");
     else
       palp_log_warn(g->log, "session %u (%s): not scored: %s (palp-review show grades it from the log)",
-                    s.session_id, s.log_session, s.reason);
+                    s.session_id, s.log_uid, s.reason);
     pthread_mutex_lock(&g->mu);
     g->job_head = (g->job_head + 1) % QUEUE;
     g->job_n--;

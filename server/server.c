@@ -336,7 +336,7 @@ static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
   memset(&m, 0, sizeof m);
   m.session_id = sc->session_id;
   m.status = sc->graded ? palp_SCORE_GRADED : palp_SCORE_NOT_GRADED;
-  snprintf(m.log_session, sizeof m.log_session, "%s", sc->log_session);
+  snprintf(m.log_uid, sizeof m.log_uid, "%s", sc->log_uid);
   snprintf(m.exercise_name, sizeof m.exercise_name, "%s", sc->exercise);
   snprintf(m.reason, sizeof m.reason, "%s", sc->reason);
   if (sc->graded) {

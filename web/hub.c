@@ -1111,8 +1111,8 @@ static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
   else cJSON_AddNullToObject(j, "trainee");
   copy_str(text, sizeof text, m->exercise_name);
   cJSON_AddStringToObject(j, "exercise", text);
-  copy_str(text, sizeof text, m->log_session);
-  cJSON_AddStringToObject(j, "log_session", text);
+  copy_str(text, sizeof text, m->log_uid);
+  cJSON_AddStringToObject(j, "log_uid", text);
   const int graded = m->status == palp_SCORE_GRADED;
   cJSON_AddBoolToObject(j, "graded", graded);
   if (!graded) {

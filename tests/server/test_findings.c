@@ -687,9 +687,9 @@ int main(void) {
     review_assessment *ra = calloc(1, sizeof *ra);
     REQUIRE(ra, "memory");
     const int arc = review_assess(db, sa, ra, err, sizeof err);
-    CHECK(arc == 0 && got_a && strcmp(score_a.log_session, sa->uid) == 0,
+    CHECK(arc == 0 && got_a && strcmp(score_a.log_uid, sa->uid) == 0,
           "alice's score names her logged session \"%s\" (the log's uid \"%s\"; review: %s)",
-          got_a ? score_a.log_session : "", sa->uid, arc ? err : "ok");
+          got_a ? score_a.log_uid : "", sa->uid, arc ? err : "ok");
     if (arc == 0 && got_a) {
       int same = score_a.score == ra->r.score && (int)score_a.pass == ra->r.pass && score_a.found == (uint32_t)ra->r.found &&
                  score_a.samples == (uint32_t)ra->samples && score_a.duration == ra->r.duration &&

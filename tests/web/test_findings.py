@@ -307,7 +307,7 @@ def run(build, source, out):
                  for d in (dash, dash2)]
         shown_ok = sc is not None and sc["graded"] is True and sc["exercise"] == "easy" and all(
             c is not None and c[0] == "%.1f %spalp-review show %s" % (sc["score"], "pass" if sc["pass"] else "fail",
-                                                                       sc["log_session"]) and
+                                                                       sc["log_uid"]) and
             ("pass" if sc["pass"] else "bad") in c[1].split() and "sensitivity" in c[2] for c in cells)
         check(shown_ok and sc["found"] == told["found"] and sc["lesions"] == told["lesions"] and
               sc["false_marks"] == told["false_marks"] and sc["log_complete"] is True and
@@ -315,7 +315,7 @@ def run(build, source, out):
               "pat's score on both dashboards, its found / lesions / false marks the debrief's: %s; cells %s"
               % (sc, cells))
         review = subprocess.run([os.path.join(build, "client", "review", "palp-review"), "--db", db, "show",
-                                         sc["log_session"] if sc else "none"], capture_output=True, text=True, timeout=60)
+                                         sc["log_uid"] if sc else "none"], capture_output=True, text=True, timeout=60)
         said = re.search(r"score\s+([0-9.]+) / 100 \(pass at \d+\): (PASS|FAIL)", review.stdout)
         check(sc is not None and said is not None and abs(float(said.group(1)) - sc["score"]) < 0.05 + 1e-9 and
               (said.group(2) == "PASS") == sc["pass"],

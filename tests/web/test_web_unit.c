@@ -874,7 +874,7 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
   memset(&m, 0, sizeof m);
   m.session_id = 4731;
   m.status = palp_SCORE_GRADED;
-  snprintf(m.log_session, sizeof m.log_session, "1796488098-29362-4731");
+  snprintf(m.log_uid, sizeof m.log_uid, "1796488098-29362-4731");
   snprintf(m.exercise_name, sizeof m.exercise_name, "answers-test");
   snprintf(m.pattern, sizeof m.pattern, "unsystematic");
   m.session_id = 4791; /* its own instance: keep-last 1 would let the next sample supersede it */
@@ -895,7 +895,7 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
   memset(&n, 0, sizeof n);
   n.session_id = 4790;
   n.status = palp_SCORE_NOT_GRADED;
-  snprintf(n.log_session, sizeof n.log_session, "1796488098-29362-4790");
+  snprintf(n.log_uid, sizeof n.log_uid, "1796488098-29362-4790");
   snprintf(n.exercise_name, sizeof n.exercise_name, "answers-test");
   snprintf(n.reason, sizeof n.reason, "no finger samples logged");
   dds_write(w, &n);
@@ -919,7 +919,7 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
               fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(a, "peak_force")) - 4.89) < 1e-9 && num(a, "found") == 1 &&
               num(a, "lesions") == 2 && num(a, "samples") == 1515,
           "  45.474 shown 45.5, coverage 2.5 / 1.1 %%, credits 0.5 / 0.025, 18.0 s, 4.89 N, 1 of 2, 1515 samples");
-    const char *ls = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_session"));
+    const char *ls = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_uid"));
     CHECK(ls && !strcmp(ls, "1796488098-29362-4731"), "  with its id in the server's log (palp-review show takes it)");
     const char *lh = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_health"));
     CHECK(cJSON_IsFalse(cJSON_GetObjectItem(a, "log_complete")) && lh &&

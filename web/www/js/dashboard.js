@@ -331,7 +331,7 @@
     }
     const how = document.createElement("div");
     how.className = "muted";
-    how.textContent = "palp-review show " + s.log_session;
+    how.textContent = "palp-review show " + s.log_uid;
     if (!s.graded) {
       td.append("not scored");
       td.appendChild(how);
