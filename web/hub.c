@@ -2159,6 +2159,14 @@ static int take(const item *it, size_t pre, unsigned char **buf, size_t *len) {
   return 1;
 }
 
+/* The oldest message of a ring that is newer than ver (a page's cursor into it), or NULL. */
+static const item *oldest_after(const item *ring, int n, uint64_t ver) {
+  const item *pick = NULL;
+  for (int k = 0; k < n; k++)
+    if (ring[k].buf && ring[k].ver > ver && (!pick || ring[k].ver < pick->ver)) pick = &ring[k];
+  return pick;
+}
+
 int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned char **buf, size_t *len,
                       int *binary) {
   int rc = 0;
@@ -2227,27 +2235,18 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       if (rc > 0) c->debrief_ver = pick->msg.ver;
       goto out;
     }
-    /* the ended sessions' answers, oldest first, to the dashboard alone (as the live answers below),
-     * those from before it attached too: a reloaded dashboard still shows what an examination found */
-    const item *ended = NULL;
-    for (int k = 0; k < DEBRIEFS && replay; k++) {
-      const item *e = &h->ended_answers[k];
-      if (e->buf && e->ver > c->ended_answers_ver && (!ended || e->ver < ended->ver)) ended = e;
-    }
-    if (ended && h->def.answers) {
-      rc = take(ended, pre, buf, len);
-      if (rc > 0) c->ended_answers_ver = ended->ver;
-      goto out;
-    }
-    /* the closed sessions' scores, the same way (they tell what the marks found) */
-    const item *score = NULL;
-    for (int k = 0; k < DEBRIEFS && replay; k++) {
-      const item *e = &h->scores[k];
-      if (e->buf && e->ver > c->scores_ver && (!score || e->ver < score->ver)) score = e;
-    }
-    if (score && h->def.answers) {
-      rc = take(score, pre, buf, len);
-      if (rc > 0) c->scores_ver = score->ver;
+    /* the ended sessions' answers, then the closed sessions' scores (session 63), oldest first, to the
+     * dashboard alone (as the live answers below: they tell what the marks found), those from before it
+     * attached too: a reloaded dashboard still shows what an examination found and how it scored */
+    struct {
+      const item *ring;
+      uint64_t *ver;
+    } const kept[] = {{h->ended_answers, &c->ended_answers_ver}, {h->scores, &c->scores_ver}};
+    for (size_t r = 0; r < sizeof kept / sizeof kept[0] && replay && h->def.answers; r++) {
+      const item *next = oldest_after(kept[r].ring, DEBRIEFS, *kept[r].ver);
+      if (!next) continue;
+      rc = take(next, pre, buf, len);
+      if (rc > 0) *kept[r].ver = next->ver;
       goto out;
     }
   }

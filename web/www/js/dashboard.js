@@ -317,6 +317,19 @@
   const scores = new Map(); /* session id -> its score message */
   const METRICS = [["sensitivity", "sensitivity"], ["false_positives", "false positives"], ["thoroughness", "thoroughness"],
     ["pattern", "search pattern"], ["time", "time"], ["force", "force"]];
+  /* An ended session's message kept by session (its row may come later), newest last, bounded as the
+   * rows are: the oldest go first. The tests read the same in palpState.dashboard[name]. */
+  function keepEnded(map, name, m) {
+    map.delete(m.session);
+    map.set(m.session, m);
+    st.dashboard[name] = st.dashboard[name] || {};
+    st.dashboard[name][m.session] = m;
+    for (const id of map.keys()) {
+      if (map.size <= 2 * ENDED_MAX) break;
+      map.delete(id);
+      delete st.dashboard[name][id];
+    }
+  }
   function scoreCell(tr) {
     const td = tr.querySelector("td.score"), s = scores.get(Number(tr.dataset.session));
     td.textContent = "";
@@ -438,15 +451,7 @@
     status: serverStatus,
     debrief: debrief,
     score: function (m) {
-      scores.delete(m.session); /* newest last: the oldest go first */
-      scores.set(m.session, m);
-      st.dashboard.scores = st.dashboard.scores || {}; /* for the tests */
-      st.dashboard.scores[m.session] = m;
-      for (const id of scores.keys()) {
-        if (scores.size <= 2 * ENDED_MAX) break;
-        scores.delete(id);
-        delete st.dashboard.scores[id];
-      }
+      keepEnded(scores, "scores", m);
       const tr = endedRows.get(m.session);
       if (tr) scoreCell(tr);
     },
@@ -460,15 +465,7 @@
     },
     answers: function (m) {
       if (m.ended) {
-        endedAnswers.delete(m.session); /* newest last: the oldest go first */
-        endedAnswers.set(m.session, m);
-        st.dashboard.endedAnswers = st.dashboard.endedAnswers || {}; /* for the tests, as endedAnswers */
-        st.dashboard.endedAnswers[m.session] = m;
-        for (const id of endedAnswers.keys()) {
-          if (endedAnswers.size <= 2 * ENDED_MAX) break;
-          endedAnswers.delete(id);
-          delete st.dashboard.endedAnswers[id];
-        }
+        keepEnded(endedAnswers, "endedAnswers", m);
         const tr = endedRows.get(m.session);
         if (tr && tr.dataset.untold) hiddenEnded(tr);
         return;
