@@ -327,6 +327,18 @@ static void release_session_exercise(palp_srv *srv, const palp_srv_session *s) {
   free(key);
 }
 
+/* A writer of a topic that tells the answers (palp_session_exercise, palp_session_score), in the
+ * default partition, for the instructors; 0 when the permissions predate the topic (its loss was
+ * said as the topics were made) or the writer cannot be made (said here: what is lost). */
+static dds_entity_t answers_writer(palp_srv *srv, palp_dds_topic_kind k) {
+  if (srv->topic[k] <= 0) return 0;
+  const dds_entity_t w = palp_dds_create_writer(srv->pp, srv->topic[k], k);
+  if (w >= 0) return w;
+  palp_log_warn(srv->log, "%s: cannot write %s: %s", optional_topic_loss(k), palp_dds_topic_name(k),
+                dds_strretcode(w));
+  return 0;
+}
+
 /* A closed exercise session's score, as the session log graded it (events.h take_score), for the
  * instructors' dashboards. Keep-last 1 per session and transient-local, so a dashboard opened later
  * still gets it: the newest 64 are kept, the oldest unregistered (bounded memory in the writer). */
@@ -1621,24 +1633,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
    * config says otherwise (docs/server.md, "session_exercise"). */
   const int answers = srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_ALWAYS ||
                       (srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_SECURED && secured(srv));
-  if (answers && srv->topic[PALP_TOPIC_SESSION_EXERCISE] > 0) {
-    srv->session_exercise_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_EXERCISE],
-                                                     PALP_TOPIC_SESSION_EXERCISE);
-    if (srv->session_exercise_w < 0) {
-      palp_log_warn(srv->log, "no exercises for recorders: cannot write palp_session_exercise: %s",
-                    dds_strretcode(srv->session_exercise_w));
-      srv->session_exercise_w = 0;
-    }
-  }
-  if (answers && srv->topic[PALP_TOPIC_SESSION_SCORE] > 0) {
-    srv->session_score_w = palp_dds_create_writer(srv->pp, srv->topic[PALP_TOPIC_SESSION_SCORE],
-                                                  PALP_TOPIC_SESSION_SCORE);
-    if (srv->session_score_w < 0) {
-      palp_log_warn(srv->log, "no live scores for the instructors: cannot write palp_session_score: %s",
-                    dds_strretcode(srv->session_score_w));
-      srv->session_score_w = 0;
-    }
-  }
+  srv->session_exercise_w = answers ? answers_writer(srv, PALP_TOPIC_SESSION_EXERCISE) : 0;
+  srv->session_score_w = answers ? answers_writer(srv, PALP_TOPIC_SESSION_SCORE) : 0; /* session 63 */
   if (srv->cfg.exercise_count > 0 && srv->session_exercise_w <= 0)
     palp_log_info(srv->log, "exercise sessions' lesions stay on this server (%s): a palp-recorder's log cannot "
                             "assess them; this server's own log can",
