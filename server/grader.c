@@ -125,7 +125,9 @@ static void *grader_main(void *arg) {
       palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_uid,
                     s.score, s.pass ? "pass" : "fail");
     else
-      palp_log_warn(g->log, "session %u (%s): not scored: %s (palp-review show grades it from the log)",
+      /* info: the common case is a session without a fingertip, nothing to mend; a disk's trouble
+       * is the writer's warning already */
+      palp_log_info(g->log, "session %u (%s): not scored: %s (palp-review show grades it from the log)",
                     s.session_id, s.log_uid, s.reason);
     pthread_mutex_lock(&g->mu);
     g->job_head = (g->job_head + 1) % QUEUE;
