@@ -212,6 +212,7 @@ typedef struct debrief_item {
   item msg;
   uint32_t sid;
   char trainee[64];
+  int level; /* palp_DebriefLevel: what the trainee was told (her page's score goes with "lesions") */
 } debrief_item;
 
 struct palp_web_hub {
@@ -259,6 +260,8 @@ struct palp_web_hub {
   item ended_answers[DEBRIEFS]; /* the last answers of the exercise sessions that ended lately */
   int ended_answers_next;
   item scores[DEBRIEFS];        /* the scores of the exercise sessions the server graded lately */
+  uint32_t scores_sid[DEBRIEFS];  /* each one's session */
+  unsigned char scores_told[DEBRIEFS]; /* 1: its debrief told the trainee the lesions: her page gets it */
   int scores_next;
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
@@ -1141,8 +1144,29 @@ static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
     copy_str(text, sizeof text, m->log_health);
     cJSON_AddStringToObject(j, "log_health", text);
   }
-  publish_json(h, &h->scores[h->scores_next], j); /* the oldest replaced */
-  h->scores_next = (h->scores_next + 1) % DEBRIEFS; /* the DDS thread's alone */
+  char *out = cJSON_PrintUnformatted(j);
+  cJSON_Delete(j);
+  if (!out) {
+    h->stats.dropped++;
+    return;
+  }
+  /* The trainee's own page is sent it too where her debrief told her the lesions (a practice
+   * exercise: what was found is hers already; an examination's score stays the instructor's). The
+   * debrief came first (written before the session closed, taken first at each poll); without one,
+   * she is not sent it. Message, session and that rule change together, under the lock. */
+  pthread_mutex_lock(&h->mu);
+  int told = 0;
+  for (int k = 0; k < DEBRIEFS; k++)
+    if (h->debrief[k].msg.buf && h->debrief[k].sid == m->session_id) told = h->debrief[k].level == palp_DEBRIEF_LESIONS;
+  const int k = h->scores_next; /* the oldest replaced */
+  h->scores_next = (h->scores_next + 1) % DEBRIEFS;
+  unsigned char *old = h->scores[k].buf;
+  h->scores[k] = (item){.buf = (unsigned char *)out, .len = strlen(out), .ver = ++h->next_ver};
+  h->scores_sid[k] = m->session_id;
+  h->scores_told[k] = (unsigned char)told;
+  pthread_mutex_unlock(&h->mu);
+  free(old);
+  if (h->wake) h->wake(h->wake_ctx);
 }
 
 static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
@@ -1249,6 +1273,7 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   d->msg.len = strlen(text);
   d->msg.ver = ++h->next_ver;
   d->sid = m->session_id;
+  d->level = (int)m->level;
   memcpy(d->trainee, e.trainee, sizeof d->trainee);
   pthread_mutex_unlock(&h->mu);
   if (h->wake) h->wake(h->wake_ctx);
@@ -2233,6 +2258,19 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
     if (pick) {
       rc = take(&pick->msg, pre, buf, len);
       if (rc > 0) c->debrief_ver = pick->msg.ver;
+      goto out;
+    }
+    /* a page's own trainee session's score, where its debrief told her the lesions (on_score) */
+    const item *mine = NULL;
+    for (int k = 0; k < DEBRIEFS && c->trainee; k++) {
+      const item *e = &h->scores[k];
+      if (e->buf && h->scores_sid[k] == c->trainee && h->scores_told[k] && e->ver > c->scores_ver &&
+          (!mine || e->ver < mine->ver))
+        mine = e;
+    }
+    if (mine) {
+      rc = take(mine, pre, buf, len);
+      if (rc > 0) c->scores_ver = mine->ver;
       goto out;
     }
     /* the ended sessions' answers, then the closed sessions' scores (session 63), oldest first, to the

@@ -77,7 +77,8 @@ typedef struct palp_web_cursor {
   uint64_t answers_ver[PALP_WEB_MAX_SESSIONS];
   /* the newest of the ended exercise sessions' last answers this page was sent (the dashboard only) */
   uint64_t ended_answers_ver;
-  /* the newest of the closed exercise sessions' scores this page was sent (the dashboard only) */
+  /* the newest of the closed exercise sessions' scores this page was sent: the dashboard all of them, a
+   * trainee page its own session's where its debrief told her the lesions (session 63) */
   uint64_t scores_ver;
   /* a session's pressed-skin map (palp_web_hub_next sends it to pages following every session) */
   uint64_t cover_ver[PALP_WEB_MAX_SESSIONS];

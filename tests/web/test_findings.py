@@ -314,6 +314,22 @@ def run(build, source, out):
               sc["log_health"].startswith("complete: ") and all("damaged" not in c[0] for c in cells),
               "pat's score on both dashboards, its found / lesions / false marks the debrief's: %s; cells %s"
               % (sc, cells))
+        # "easy" tells its lesions (a practice exercise): pat's own page is sent her score too, after her
+        # debrief, with what to work on in her words (the metrics she did not pass)
+        words = [("sensitivity", "finding the lumps"), ("false_positives", "marking only lumps"),
+                 ("thoroughness", "covering the whole dome at each pressure"),
+                 ("pattern", "a systematic search pattern"), ("time", "finishing within the time"),
+                 ("force", "pressing within the force limit")]
+        mine = page.wait_for("palpState.trainee.score", 10)
+        text = page.eval("document.getElementById('debrief-score').hidden ? null : "
+                         "document.getElementById('debrief-score').textContent")
+        work = [w for k, w in words if sc and not sc["passed"][k]]
+        want_text = ("Your score: %.1f of 100, %s (the automatic score, as the review gives it; your instructor "
+                     "grades you).%s" % (sc["score"], "passed" if sc["pass"] else "not passed",
+                                         " To work on: %s." % ", ".join(work) if work else "")) if sc else None
+        check(mine is not None and mine["session"] == told["session"] and mine["score"] == sc["score"] and
+              text == want_text,
+              "pat's page (easy tells its lesions) shows her score after her debrief: %r (want %r)" % (text, want_text))
         review = subprocess.run([os.path.join(build, "client", "review", "palp-review"), "--db", db, "show",
                                          sc["log_uid"] if sc else "none"], capture_output=True, text=True, timeout=60)
         said = re.search(r"score\s+([0-9.]+) / 100 \(pass at \d+\): (PASS|FAIL)", review.stdout)

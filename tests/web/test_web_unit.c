@@ -952,6 +952,48 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
         "no score reaches a page following one session (%d), cat's token (%d) or her trainee page (%d)", o.n, ow.n,
         bd.n);
   scores_free(&d), scores_free(&l), scores_free(&o), scores_free(&ow), scores_free(&bd);
+
+  /* A trainee's own page is sent her session's score where her debrief told her the lesions (dee's
+   * practice, "lesions"), never where it told less (eli's examination, "count"). */
+  const uint32_t ps[2] = {4797, 4798};
+  const char *pt[2] = {"dee", "eli"};
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t t_db = palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF);
+  dds_entity_t w_db[2];
+  palp_web_cursor page[2];
+  for (int k = 0; k < 2; k++) {
+    char part[64], bindc[64];
+    palp_dds_session_partition(ps[k], part, sizeof part);
+    w_db[k] = palp_dds_create_writer(palp_dds_session_publisher(pp, part), t_db, PALP_TOPIC_DEBRIEF);
+    write_open_state(w_state, ps[k], 1, part, pt[k]);
+    snprintf(bindc, sizeof bindc, "{\"trainee\":%u}", ps[k]);
+    CHECK(palp_web_hub_attach(h, &page[k], 8) == 0, "scores: %s's trainee page", pt[k]);
+    dds_sleepfor(DDS_MSECS(300)); /* the hub knows her session, the debrief writer matched */
+    CHECK(palp_web_hub_control(h, &page[k], bindc, strlen(bindc)) == 0, "  bound to her session %u", ps[k]);
+  }
+  for (int k = 0; k < 2; k++) {
+    palp_Debrief db;
+    memset(&db, 0, sizeof db);
+    db.session_id = ps[k];
+    db.level = k == 0 ? palp_DEBRIEF_LESIONS : palp_DEBRIEF_COUNT;
+    db.marks = 0;
+    snprintf(db.reason, sizeof db.reason, "trainee station left");
+    CHECK(dds_write(w_db[k], &db) == 0, "%s's debrief written (%s)", pt[k], k == 0 ? "lesions" : "count");
+  }
+  dds_sleepfor(DDS_MSECS(200)); /* the debriefs taken before the scores */
+  for (int k = 0; k < 2; k++) {
+    m.session_id = ps[k];
+    snprintf(m.log_uid, sizeof m.log_uid, "1796488098-29362-%u", ps[k]);
+    m.lesions = 0, m.found = 0;
+    dds_write(w, &m);
+  }
+  scores_seen mine[2] = {{0}, {0}};
+  for (int k = 0; k < 2; k++) next_json(h, &page[k], 40, is_score, &mine[k]);
+  CHECK(mine[0].n == 1 && num(mine[0].msg[0], "session") == (int)ps[0] && mine[1].n == 0,
+        "dee's page (her debrief told the lesions) is sent her score once (%d), eli's (told the count) none (%d)",
+        mine[0].n, mine[1].n);
+  for (int k = 0; k < 2; k++) scores_free(&mine[k]), palp_web_hub_detach(h, &page[k]);
   palp_web_hub_detach(h, &dash);
   palp_web_hub_detach(h, &obs);
   palp_web_hub_detach(h, &own);

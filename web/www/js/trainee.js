@@ -25,6 +25,8 @@
   T.marks = null;         /* marks standing, from the server's finding status */
   T.replies = [];         /* the bridge's answers to this page's finding requests */
   T.timeLeft = null;
+  T.debrief = null;       /* the server's debrief of her last session, as the bridge sent it */
+  T.score = null;         /* its score, where the exercise tells the lesions (a practice exercise) */
   let exercises = [], lastSession = null, findings = null, findingsAt = 0;
   const token = p.get("token");
   if (token) document.getElementById("back").href = "dashboard.html?token=" + encodeURIComponent(token);
@@ -307,11 +309,34 @@
     if (cov) t += " You covered " + cov + " of the dome (as this page saw it; the review counts it from the triangles you touched).";
     return t;
   }
+  /* Her score, where the exercise tells her the lesions (a practice exercise; web/hub.c on_score): the
+   * server's automatic score of her session, graded from its log as the review grades it, and what to
+   * work on, in her words. */
+  const TO_WORK_ON = [["sensitivity", "finding the lumps"], ["false_positives", "marking only lumps"],
+    ["thoroughness", "covering the whole dome at each pressure"], ["pattern", "a systematic search pattern"],
+    ["time", "finishing within the time"], ["force", "pressing within the force limit"]];
+  function scoreText(m) {
+    if (!m.graded) return "";
+    const work = TO_WORK_ON.filter(function (k) { return !m.passed[k[0]]; }).map(function (k) { return k[1]; });
+    return "Your score: " + m.score.toFixed(1) + " of 100, " + (m.pass ? "passed" : "not passed") +
+      " (the automatic score, as the review gives it; your instructor grades you)." +
+      (work.length ? " To work on: " + work.join(", ") + "." : "");
+  }
+  function showScore(m) {
+    if (!T.debrief || T.debrief.session !== m.session) return; /* her debrief first (the bridge sends it first) */
+    T.score = m;
+    const p = document.getElementById("debrief-score");
+    p.textContent = scoreText(m);
+    p.hidden = p.textContent === "";
+  }
+  window.palpScoreText = scoreText;
   function clearDebrief() {
     for (const o of debriefObjs) scene.remove(o);
     debriefObjs.length = 0;
     document.getElementById("debrief").hidden = true;
+    document.getElementById("debrief-score").hidden = true;
     T.debrief = null;
+    T.score = null;
     dirty = true;
   }
   function showDebrief(m) {
@@ -389,6 +414,7 @@
     open: function (snd) { send = snd; if (T.session) send(followMsg(T.session)); },
     exercises: function (m) { exercises = m.exercises; showExercise(); },
     debrief: function (m) { showDebrief(m); },
+    score: function (m) { showScore(m); },
     cover: function (m) { if (m.session === T.session && m.phantom === T.phantom) setCover(m.bands); },
     finding_reply: function (m) {
       T.replies.push(m);
