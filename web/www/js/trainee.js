@@ -325,11 +325,10 @@
   function showScore(m) {
     if (!T.debrief || T.debrief.session !== m.session) return; /* her debrief first (the bridge sends it first) */
     T.score = m;
-    const p = document.getElementById("debrief-score");
-    p.textContent = scoreText(m);
-    p.hidden = p.textContent === "";
+    const el = document.getElementById("debrief-score");
+    el.textContent = scoreText(m);
+    el.hidden = el.textContent === "";
   }
-  window.palpScoreText = scoreText;
   function clearDebrief() {
     for (const o of debriefObjs) scene.remove(o);
     debriefObjs.length = 0;
