@@ -99,8 +99,8 @@ typedef struct palp_srv_score {
   char exercise[64];
   double score;                /* [0, 100] */
   int pass;
-  double component[6];         /* PALP_METRIC_* order, each [0, 1] */
-  int pass_metric[6];
+  double credit[6];            /* palp_assess_result.component, PALP_METRIC_* order, each [0, 1] */
+  int passed[6];               /* palp_assess_result.pass_metric */
   uint32_t lesions, found, false_marks;
   double coverage[3];          /* light, medium, deep [0, 1] */
   int pattern;                 /* palp_pattern */

@@ -49,8 +49,8 @@ void palp_srv_score_of(const review_assessment *a, uint32_t session_id, const ch
   out->score = r->score;
   out->pass = r->pass != 0;
   for (int m = 0; m < PALP_METRIC_COUNT && m < 6; m++) {
-    out->component[m] = r->component[m];
-    out->pass_metric[m] = r->pass_metric[m] != 0;
+    out->credit[m] = r->component[m];
+    out->passed[m] = r->pass_metric[m] != 0;
   }
   out->lesions = (uint32_t)r->lesion_count;
   out->found = (uint32_t)r->found;

@@ -355,8 +355,8 @@ static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
     m.score = sc->score;
     m.pass = sc->pass != 0;
     for (int i = 0; i < 6; i++) {
-      m.credit[i] = sc->component[i];
-      m.passed[i] = sc->pass_metric[i] != 0;
+      m.credit[i] = sc->credit[i];
+      m.passed[i] = sc->passed[i] != 0;
     }
     m.lesions = sc->lesions;
     m.found = sc->found;
