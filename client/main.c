@@ -594,11 +594,12 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
  * docs/assessment.md "Debrief"): as much as the exercise lets her know. The server writes it as
  * the session closes: at once after its time limit, or as this station's LEAVE reaches it. */
 #define DEBRIEF_WAIT_S 3.0
-static void print_debrief(const opts *o, palp_cli_station *st) {
+/* Returns the level told (palp_DebriefLevel), -1 when none was. */
+static int print_debrief(const opts *o, palp_cli_station *st) {
   if (st->debrief_topic_refused) {
     tprintf(o, "[trainee %s] no debrief: this identity's permissions predate it (the instructor re-issues them with "
                "make-classroom-pki.sh DIR init); the instructor's review shows which lumps you found\n", o->name);
-    return;
+    return -1;
   }
   palp_Debrief d;
   palp_DebriefLesion les[PALP_DEBRIEF_MAX_LESIONS];
@@ -606,17 +607,17 @@ static void print_debrief(const opts *o, palp_cli_station *st) {
   const int rc = palp_cli_station_debrief(st, DEBRIEF_WAIT_S, &d, les, err, sizeof err);
   if (rc < 0) {
     palp_log_warn(o->log, "%s", err);
-    return;
+    return -1;
   }
   if (rc == 0) {
     tprintf(o, "[trainee %s] no debrief came from the server within %.0f s; the instructor's review shows which "
                "lumps you found\n", o->name, DEBRIEF_WAIT_S);
-    return;
+    return -1;
   }
   if (d.level == palp_DEBRIEF_NONE) {
     tprintf(o, "[trainee %s] debrief: this exercise keeps its lumps for the instructor's review (%u mark%s standing)\n",
                o->name, d.marks, d.marks == 1 ? "" : "s");
-    return;
+    return (int)d.level;
   }
   char extra[64] = "";
   if (d.duplicates) snprintf(extra, sizeof extra, ", %u on a lump already found", d.duplicates);
@@ -638,6 +639,49 @@ static void print_debrief(const opts *o, palp_cli_station *st) {
                "its centre %.0f mm deep\n", o->name, i + 1, by, palp_place_clock_hours(p), palp_place_arc(p) * 1e3,
                l->diameter * 1e3, l->depth * 1e3);
   }
+  return (int)d.level;
+}
+
+/* A practice exercise's score (palp_debrief_score, session 64): after a debrief that told the
+ * lesions, the server grades the session from its log as the review does and tells her the score,
+ * and what to work on in her words (the same words as her web page, web/www/js/trainee.js). The
+ * grader has it milliseconds after the close is logged; a slow disk may take seconds. */
+#define SCORE_WAIT_S 5.0
+static const char *const to_work_on[6] = {"finding the lumps", "marking only lumps",
+                                          "covering the whole dome at each pressure", "a systematic search pattern",
+                                          "finishing within the time", "pressing within the force limit"};
+static void print_debrief_score(const opts *o, palp_cli_station *st) {
+  if (st->debrief_score_topic_refused) {
+    tprintf(o, "[trainee %s] no score: this identity's permissions predate it (the instructor re-issues them with "
+               "make-classroom-pki.sh DIR init); the instructor's review scores the session\n", o->name);
+    return;
+  }
+  palp_SessionScore m;
+  char err[160];
+  const int rc = palp_cli_station_debrief_score(st, SCORE_WAIT_S, &m, err, sizeof err);
+  if (rc < 0) {
+    palp_log_warn(o->log, "%s", err);
+    return;
+  }
+  if (rc == 0) {
+    tprintf(o, "[trainee %s] no score came from the server within %.0f s; the instructor's review scores the session\n",
+            o->name, SCORE_WAIT_S);
+    return;
+  }
+  if (m.status != palp_SCORE_GRADED) {
+    tprintf(o, "[trainee %s] no score: %s\n", o->name, m.reason);
+    return;
+  }
+  char work[256] = "";
+  size_t n = 0;
+  for (int i = 0; i < 6; i++)
+    if (!m.passed[i])
+      n += (size_t)snprintf(work + n, n < sizeof work ? sizeof work - n : 0, "%s%s", n ? ", " : " To work on: ",
+                            to_work_on[i]);
+  if (n) snprintf(work + n, n < sizeof work ? sizeof work - n : 0, ".");
+  tprintf(o, "[trainee %s] score: %.1f of 100, %s (the automatic score, as the review gives it; your instructor grades "
+             "you).%s%s\n", o->name, m.score, m.pass ? "passed" : "not passed", work,
+          m.log_complete ? "" : " The session's log is incomplete: the score may be low.");
 }
 
 /* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
@@ -1401,7 +1445,8 @@ int main(int argc, char **argv) {
   fflush(stdout);
   rc = trainee ? run_trainee(&o, &st, &ph, in) : run_viewer(&o, &st, &ph, observer);
   palp_cli_station_leave(&st);
-  if (trainee && st.in_exercise && !o.quiet) print_debrief(&o, &st);
+  if (trainee && st.in_exercise && !o.quiet && print_debrief(&o, &st) == (int)palp_DEBRIEF_LESIONS)
+    print_debrief_score(&o, &st);
   if (st.goodbye_unanswered) {
     /* Said even with --quiet: the instructor may otherwise read "not back" in the log as a crash. */
     printf("[%s %s] the server did not answer within %.0f s after this station's stall, so its goodbye may be lost: "

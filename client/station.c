@@ -63,6 +63,11 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
       st->debrief_topic_refused = 1;
       continue;
     }
+    if (st->topic[k] < 0 && k == PALP_TOPIC_DEBRIEF_SCORE && secured) { /* likewise, session 64 */
+      st->topic[k] = 0;
+      st->debrief_score_topic_refused = 1;
+      continue;
+    }
     if (st->topic[k] < 0) {
       palp_cli_station_close(st);
       return fail(err, errlen, PALP_EIO, "cannot create topic %s", palp_dds_topic_name((palp_dds_topic_kind)k));
@@ -295,10 +300,13 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
         palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
     if (st->topic[PALP_TOPIC_DEBRIEF] > 0)
       st->debrief_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
+    if (st->topic[PALP_TOPIC_DEBRIEF_SCORE] > 0)
+      st->debrief_score_r =
+          palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
     st->next_mark_id = 1;
   }
   if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0 || st->local_model_r < 0 ||
-      st->finding_w < 0 || st->finding_status_r < 0 || st->debrief_r < 0)
+      st->finding_w < 0 || st->finding_status_r < 0 || st->debrief_r < 0 || st->debrief_score_r < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
   await_matched(st, end);
   return 0;
@@ -419,6 +427,35 @@ int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief 
       }
       dds_return_loan(st->debrief_r, ptr, 1);
       ptr[0] = NULL;
+    }
+    if (got) return 1;
+    if (rc < 0) return rc;
+    if (palp_dds_now_ns() >= end) return 0;
+    nap(0.02);
+  }
+}
+
+int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_SessionScore *out, char *err,
+                                   size_t errlen) {
+  if (st->debrief_score_r <= 0) return 0;
+  const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
+  for (;;) {
+    palp_SessionScore m;
+    void *ptr[1] = {&m};
+    dds_sample_info_t info;
+    int got = 0, rc = 0;
+    while (dds_take(st->debrief_score_r, ptr, &info, 1, 1) > 0) {
+      if (!info.valid_data || m.session_id != st->session_id) continue;
+      /* bounded strings, but terminated only by the sender: made so before any use */
+      m.log_uid[sizeof m.log_uid - 1] = m.exercise_name[sizeof m.exercise_name - 1] = 0;
+      m.pattern[sizeof m.pattern - 1] = m.reason[sizeof m.reason - 1] = m.log_health[sizeof m.log_health - 1] = 0;
+      if (!palp_dds_session_score_ok(&m)) {
+        rc = fail(err, errlen, PALP_EPARSE, "a malformed score (status %d, score %g, %u found of %u): ignored",
+                  (int)m.status, m.score, m.found, m.lesions);
+        continue;
+      }
+      *out = m;
+      got = 1, rc = 0;
     }
     if (got) return 1;
     if (rc < 0) return rc;
@@ -615,6 +652,6 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   if (st->pub > 0) dds_delete(st->pub);
   if (st->sub > 0) dds_delete(st->sub);
   st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
-  st->finding_w = st->finding_status_r = st->debrief_r = 0;
+  st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = 0;
   st->session_id = 0;
 }

@@ -35,6 +35,9 @@ typedef struct palp_cli_station {
   dds_entity_t debrief_r;     /* trainee: palp_debrief, what its marks found, at its session's end; 0: none
                                * (a secured identity whose permissions predate the topic) */
   int debrief_topic_refused;  /* ... and that is why: said once at the end of an exercise */
+  dds_entity_t debrief_score_r; /* trainee: palp_debrief_score, a practice session's score after its
+                                 * debrief (session 64); 0: none (permissions that predate the topic) */
+  int debrief_score_topic_refused; /* ... and that is why */
   int in_exercise;            /* palp_cli_station_exercise found the joined phantom's exercise */
   uint32_t next_mark_id;      /* the station numbers its marks from 1 */
   uint32_t request_seq;
@@ -153,6 +156,12 @@ int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *ou
 #define PALP_DEBRIEF_MAX_LESIONS PALP_MAX_LESIONS
 int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief *out, palp_DebriefLesion *lesions,
                              char *err, size_t errlen);
+/* The session's score (palp_debrief_score), which the server writes after a debrief that told the
+ * lesions, once it has graded the session from its log: 1 and *out when it came within timeout [s]
+ * (checked by palp_dds_session_score_ok), 0 when none came, a negative code when what came is
+ * malformed (err says why). */
+int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_SessionScore *out, char *err,
+                                   size_t errlen);
 
 /* Non-blocking: 1 and the state when the session's state changed to closed. Call it
  * about every 100 ms: a longer gap is taken for a stall of this process, after which

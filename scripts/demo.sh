@@ -246,14 +246,15 @@ sed -n '/^rendered |F|/,$p' "$out/dana.log"
 echo
 echo "== exercise \"teaching\" (phantom 14): what each scripted trainee found =="
 for t in nina ${eve:+eve}; do
-  grep -E "^\[trainee $t\] (exercise|pressure levels|mark|finding|the server refused|[0-9]+ marks? standing|you covered|debrief|no debrief|  lump)|^\[scripted" "$out/$t.log" || true
+  grep -E "^\[trainee $t\] (exercise|pressure levels|mark|finding|the server refused|[0-9]+ marks? standing|you covered|debrief|no debrief|  lump|score|no score)|^\[scripted" "$out/$t.log" || true
 done
 echo "(the teaching exercise debriefs each trainee as her session ends: what her marks found and where its lumps"
-echo " are; an exercise can keep them for the instructor's review alone. The review below assesses each session)"
+echo " are, then her score, which the server grades from its log as the review does; an exercise can keep all"
+echo " of it for the instructor's review alone. The review below assesses each session)"
 echo
 echo "== exercise \"medium\" (phantom 12): its lump drawn anew for each session, fay's two attempts =="
 for k in 1 2; do
-  grep -E "^\[trainee fay\] (debrief|  lump)" "$out/fay$k.log" | sed "s/^\[trainee fay\]/[fay, attempt $k]/" || true
+  grep -E "^\[trainee fay\] (debrief|  lump|score|no score)" "$out/fay$k.log" | sed "s/^\[trainee fay\]/[fay, attempt $k]/" || true
 done
 echo
 # As each exercise session closed, the server graded it from its own log, as the review below does, and

@@ -52,6 +52,14 @@ typedef struct station {
 } station;
 
 #define SCORES_KEPT 64 /* palp_session_score instances kept for late dashboards */
+#define TOLD_KEPT 16   /* palp_debrief_score: practice sessions awaiting their score, writers kept */
+
+/* A practice session whose trainee is told her score when the grader has it (palp_debrief_score):
+ * its partition outlives the session's publisher, which its close deleted. */
+typedef struct score_to_tell {
+  uint32_t session_id; /* 0: free */
+  char partition[64];
+} score_to_tell;
 
 typedef struct guard_counts {
   uint64_t joins_refused_rate, joins_refused_writer, joins_refused_viewers, joins_refused_other;
@@ -95,6 +103,14 @@ struct palp_srv {
   dds_entity_t session_score_w;
   uint32_t scored[SCORES_KEPT];
   int scored_next;
+  /* palp_debrief_score (session 64): practice sessions (debrief DEBRIEF_LESIONS) waiting for their
+   * score, and the publishers (one per session partition) that told the last TOLD_KEPT: the oldest
+   * is deleted as a new one is made, so a station has had 16 scores' time to take hers. */
+  score_to_tell to_tell[TOLD_KEPT];
+  int to_tell_next;
+  dds_entity_t told_pub[TOLD_KEPT];
+  int told_next;
+  int stopping; /* closing every session as the server stops: none of them will be scored live */
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
@@ -286,6 +302,7 @@ static const char *optional_topic_loss(palp_dds_topic_kind k) {
   case PALP_TOPIC_DEBRIEF: return "no debriefs";
   case PALP_TOPIC_SESSION_EXERCISE: return "no exercises for recorders";
   case PALP_TOPIC_SESSION_SCORE: return "no live scores for the instructors";
+  case PALP_TOPIC_DEBRIEF_SCORE: return "no scores told to the trainees of practice exercises";
   default: return NULL;
   }
 }
@@ -342,8 +359,7 @@ static dds_entity_t answers_writer(palp_srv *srv, palp_dds_topic_kind k) {
 /* A closed exercise session's score, as the session log graded it (events.h take_score), for the
  * instructors' dashboards. Keep-last 1 per session and transient-local, so a dashboard opened later
  * still gets it: the newest 64 are kept, the oldest unregistered (bounded memory in the writer). */
-static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
-  if (srv->session_score_w <= 0) return;
+static void score_message(const palp_srv_score *sc, palp_SessionScore *out) {
   palp_SessionScore m;
   memset(&m, 0, sizeof m);
   m.session_id = sc->session_id;
@@ -370,6 +386,70 @@ static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
     m.log_complete = sc->log_complete != 0;
     snprintf(m.log_health, sizeof m.log_health, "%s", sc->log_health);
   }
+  *out = m;
+}
+
+/* The trainee of a practice exercise is told her score in her session's partition (palp_debrief_score):
+ * a publisher there of the server's own (the session's went with it), kept for TOLD_KEPT more. */
+static void write_told_score(palp_srv *srv, const char *partition, const palp_SessionScore *m) {
+  const dds_entity_t pub = palp_dds_session_publisher(srv->pp, partition);
+  const dds_entity_t w =
+      pub < 0 ? pub : palp_dds_create_writer(pub, srv->topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
+  const dds_return_t rc = w < 0 ? w : dds_write(w, m);
+  if (rc < 0) {
+    palp_log_warn(srv->log, "session %u: its trainee was not told her score: %s", m->session_id, dds_strretcode(rc));
+    if (pub > 0) dds_delete(pub);
+    return;
+  }
+  dds_entity_t *slot = &srv->told_pub[srv->told_next];
+  if (*slot > 0) dds_delete(*slot); /* its writer, and the sample it kept for a late reader */
+  *slot = pub;
+  srv->told_next = (srv->told_next + 1) % TOLD_KEPT;
+}
+
+/* A session whose debrief told its trainee the lesions (a practice exercise) is told its score as
+ * well, when the grader has it; told at once that there will be none when nothing will grade it. */
+static void expect_told_score(palp_srv *srv, const palp_srv_session *s) {
+  if (srv->topic[PALP_TOPIC_DEBRIEF_SCORE] <= 0 || !s->exercise) return;
+  const char *none = !srv->events || !srv->events->take_score
+                         ? "this server keeps no session log to score it from; your instructor grades the session"
+                     : srv->stopping ? "the server stopped before it scored the session; the instructor's review "
+                                       "scores it from the session log"
+                                     : NULL;
+  if (none) {
+    palp_SessionScore m;
+    memset(&m, 0, sizeof m);
+    m.session_id = s->id;
+    m.status = palp_SCORE_NOT_GRADED;
+    snprintf(m.exercise_name, sizeof m.exercise_name, "%s", s->exercise->name);
+    snprintf(m.reason, sizeof m.reason, "%s", none);
+    write_told_score(srv, s->partition, &m);
+    return;
+  }
+  /* The grader takes at most 32 waiting, so 16 slots are only outrun by a burst of closes; the
+   * oldest then goes untold (its station says no score came). */
+  score_to_tell *t = &srv->to_tell[srv->to_tell_next];
+  t->session_id = s->id;
+  snprintf(t->partition, sizeof t->partition, "%s", s->partition);
+  srv->to_tell_next = (srv->to_tell_next + 1) % TOLD_KEPT;
+}
+
+static void tell_score(palp_srv *srv, const palp_SessionScore *m) {
+  if (srv->topic[PALP_TOPIC_DEBRIEF_SCORE] <= 0) return;
+  for (int i = 0; i < TOLD_KEPT; i++) {
+    score_to_tell *t = &srv->to_tell[i];
+    if (t->session_id != m->session_id) continue;
+    write_told_score(srv, t->partition, m);
+    t->session_id = 0;
+    return;
+  }
+}
+
+static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
+  palp_SessionScore m;
+  score_message(sc, &m);
+  tell_score(srv, &m);
+  if (srv->session_score_w <= 0) return;
   const dds_return_t rc = dds_write(srv->session_score_w, &m);
   if (rc < 0) {
     palp_log_warn(srv->log, "session %u: its score was not sent to the instructors: %s", sc->session_id,
@@ -730,15 +810,15 @@ static void log_debrief(palp_srv *srv, const palp_srv_session *s, const palp_Deb
 
 /* An exercise session's debrief, written once as it closes (docs/assessment.md, "Debrief"): what
  * its standing marks found, matched as the review matches them, told at the exercise's level. */
-static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reason) {
+static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reason) {
   const palp_exercise *ex = s->exercise;
-  if (!ex) return;
+  if (!ex) return -1;
   char why[160];
   if (s->debrief_writer <= 0) {
     /* palp_debrief came after the classroom PKIs of 2026-12-04 and before (server start warns) */
     log_debrief(srv, s, NULL, (int)ex->debrief,
                 "the server's permissions do not allow topic palp_debrief (make-classroom-pki.sh re-issues them)");
-    return;
+    return -1;
   }
   const palp_mesh *mesh = palp_world_mesh(s->world);
   const palp_vec3 pole = mesh->rest[mesh->top_vertex];
@@ -750,14 +830,14 @@ static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reas
     palp_log_warn(srv->log, "session %u: no debrief: %s", s->id, palp_strerror(rc));
     snprintf(why, sizeof why, "the marks could not be matched: %s", palp_strerror(rc));
     log_debrief(srv, s, NULL, (int)ex->debrief, why);
-    return;
+    return -1;
   }
   const dds_return_t w = dds_write(s->debrief_writer, &m);
   if (w < 0) {
     palp_log_warn(srv->log, "session %u: the debrief was not sent: %s", s->id, dds_strretcode(w));
     snprintf(why, sizeof why, "DDS refused the write: %s", dds_strretcode(w));
     log_debrief(srv, s, NULL, (int)ex->debrief, why);
-    return;
+    return -1;
   }
   log_debrief(srv, s, &m, (int)m.level, NULL);
   if (m.level == palp_DEBRIEF_NONE)
@@ -767,6 +847,7 @@ static void publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reas
     palp_log_info(srv->log, "session %u: debrief sent (%s): lesions found %u of %u; marks standing %u, near no lesion %u",
                   s->id, m.level == palp_DEBRIEF_LESIONS ? "with the lesions' places" : "the count only", m.found,
                   m.lesions, m.marks, m.false_marks);
+  return (int)m.level;
 }
 
 /* At most this many findings per session per pass of the main loop: a flooding
@@ -818,7 +899,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   handle_findings(srv, s);
   if (s->finding_rc > 0) dds_waitset_detach(srv->waitset, s->finding_rc);
   /* Before the CLOSED state, which a station waits on: the debrief is there when it looks. */
-  publish_debrief(srv, s, reason);
+  if (publish_debrief(srv, s, reason) == (int)palp_DEBRIEF_LESIONS) expect_told_score(srv, s);
   release_session_exercise(srv, s);
   /* Detached: the stats are final and owned by this thread now. */
   palp_srv_session_summary sum;
@@ -1806,6 +1887,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
     }
   }
   dds_set_guardcondition(srv->stop_gc, false);
+  srv->stopping = 1;
   while (srv->session_count > 0)
     close_session(srv, srv->sessions[srv->session_count - 1], result ? "server identity conflict" : "server shutdown");
   publish_status(srv);

@@ -157,6 +157,14 @@ $scored
 EOF_SCORED
 check "the server scored each exercise session as it closed ($n_sc of $n_ex), each as palp-review show does" \
   "[ $n_sc -ge 3 ] && [ $n_sc -eq $n_ex ] && [ $same = 1 ] && grep -q \"^== the server's scores, sent to the class dashboard\" '$txt'"
+# ... and told each trainee hers at her station, after the debrief that told her the lesions (the
+# teaching and medium exercises are practice; palp_debrief_score, session 64): nina's station says
+# the score and verdict palp-review show gives her session.
+nina_said=$(sed -n 's/^\[trainee nina\] score: \([0-9.]*\) of 100, \(passed\|not passed\) (the automatic score.*/\1 \2/p' "$txt" | head -1)
+nina_review=$("$build/client/review/palp-review" --db "$out/sessions.db" show "$nina_uid" 2>/dev/null |
+  sed -n 's#^  score *\([0-9.]*\) / 100 (pass at [0-9]*): \(PASS\|FAIL\)$#\1 \2#p' | sed 's/ PASS$/ passed/; s/ FAIL$/ not passed/')
+check "nina's station told her her score, as palp-review show gives it (station: ${nina_said:-none}; review: ${nina_review:-none})" \
+  "[ -n \"$nina_said\" ] && [ \"$nina_said\" = \"$nina_review\" ] && [ \$(grep -c '^\[fay, attempt [12]\] score: [0-9.]* of 100' '$txt') -eq 2 ]"
 # ... and sent them, secured, to the bridge (instructor/bridge), which took each one (its stats at exit)
 w_sc=$(sed -n "s/.*(sessions' [0-9]*, scores \([0-9]*\)).*/\1/p" "$out/demo/web.log" | tail -n 1)
 check "palp-web, an instructor, received the $n_sc scores over DDS Security (${w_sc:-none})" \

@@ -217,6 +217,15 @@ static void child_bob(void) {
   CHECK(dr == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && dw_own == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.debrief_r > 0,
         "bob's debrief reader in %s is refused (%s), and a debrief writer in his own (%s); he reads his own", a.partition,
         dds_strretcode(dr), dds_strretcode(dw_own));
+  /* session 64: likewise her score (palp_debrief_score): not read in her session, not forged in his;
+   * he reads his own */
+  dds_entity_t sr = palp_dds_create_reader(sub, bob.topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
+  dds_entity_t sw_own = palp_dds_create_writer(palp_dds_session_publisher(bob.pp, bob.partition),
+                                               bob.topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
+  CHECK(sr == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && sw_own == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY &&
+            bob.debrief_score_r > 0,
+        "bob's score reader in %s is refused (%s), and a score writer in his own (%s); he reads his own", a.partition,
+        dds_strretcode(sr), dds_strretcode(sw_own));
   /* nor answer findings as the server, nor publish an exercise */
   dds_entity_t own_pub = palp_dds_session_publisher(bob.pp, bob.partition);
   dds_entity_t fsw = palp_dds_create_writer(own_pub, bob.topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);

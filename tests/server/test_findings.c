@@ -160,7 +160,7 @@ static void spy_session(spy *s, const char *partition) {
   s->sub_session = palp_dds_session_subscriber(s->pp, partition);
   const palp_dds_topic_kind sess[] = {PALP_TOPIC_CONTACT,     PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
                                       PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINDING,  PALP_TOPIC_FINDING_STATUS,
-                                      PALP_TOPIC_DEBRIEF};
+                                      PALP_TOPIC_DEBRIEF,     PALP_TOPIC_DEBRIEF_SCORE};
   for (size_t i = 0; i < sizeof sess / sizeof sess[0]; i++) spy_reader(s, s->sub_session, sess[i]);
 }
 
@@ -576,6 +576,23 @@ int main(void) {
     while (dds_take(score_r, ptr, &info, 1, 1) > 0) got_other += info.valid_data;
   }
   CHECK(got_other == 0, "no score for bob's free practice, nor any other (%d)", got_other);
+  /* ---- the trainee's own score (palp_debrief_score, session 64): carol's exercise told her the
+   * lesions (a practice exercise), so her station is told her score as well, the instructors' one
+   * (here not graded, and why); alice's (debrief none: an examination) is never sent to hers, though
+   * the instructors have had it for 0.5 s. */
+  {
+    palp_SessionScore m;
+    char serr[160] = "";
+    const int got = palp_cli_station_debrief_score(&c, 5.0, &m, serr, sizeof serr);
+    CHECK(got == 1 && got_c && m.session_id == carol_session && m.status == palp_SCORE_NOT_GRADED &&
+              strcmp(m.reason, score_c.reason) == 0 && strcmp(m.log_uid, score_c.log_uid) == 0 &&
+              strcmp(m.exercise_name, score_c.exercise_name) == 0,
+          "carol's station is told her score as the instructors are: not graded, \"%s\" (got %d %s)",
+          got == 1 ? m.reason : "", got, serr);
+    const int got_alice = palp_cli_station_debrief_score(&a, 0.5, &m, serr, sizeof serr);
+    CHECK(got_alice == 0 && got_a, "alice's station is told no score (her exercise's debrief is none): got %d",
+          got_alice);
+  }
   dds_delete(ipp);
   atomic_store(&sp.stop, 1);
   pthread_join(sp.thread, NULL);
