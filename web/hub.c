@@ -212,7 +212,6 @@ typedef struct debrief_item {
   item msg;
   uint32_t sid;
   char trainee[64];
-  int level; /* palp_DebriefLevel: what the trainee was told (her page's score goes with "lesions") */
 } debrief_item;
 
 struct palp_web_hub {
@@ -221,6 +220,7 @@ struct palp_web_hub {
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
   dds_entity_t exercise_r, fstatus_r, debrief_r;
+  dds_entity_t debrief_score_r; /* palp_debrief_score (session 64): a practice session's score, for her page */
   dds_entity_t sexercise_r, finding_r, score_r; /* def.answers */
   dds_entity_t req_pub; /* secured: the publisher of the bridge's requests, in "palp/instructor/NAME" */
   palp_dds_strangers strangers; /* secured, with a refusal table: plain participants named (hub thread only) */
@@ -260,9 +260,12 @@ struct palp_web_hub {
   item ended_answers[DEBRIEFS]; /* the last answers of the exercise sessions that ended lately */
   int ended_answers_next;
   item scores[DEBRIEFS];        /* the scores of the exercise sessions the server graded lately */
-  uint32_t scores_sid[DEBRIEFS];  /* each one's session */
-  unsigned char scores_told[DEBRIEFS]; /* 1: its debrief told the trainee the lesions: her page gets it */
   int scores_next;
+  /* the scores the server told trainees lately (palp_debrief_score, session 64: practice sessions
+   * alone, the server decides), each for its session's bound page */
+  item told_scores[DEBRIEFS];
+  uint32_t told_scores_sid[DEBRIEFS];
+  int told_scores_next;
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
@@ -1093,14 +1096,12 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
 
 static void copy_str(char *out, size_t outlen, const char *in) { snprintf(out, outlen, "%s", in ? in : ""); }
 
-/* A closed exercise session's score, as the server graded it from its own log (palp_session_score,
- * session 63): kept beside the ended answers for the dashboard's list of ended sessions, where the
- * instructor reads it with the session's id in the log (palp-review show takes it). A score that
- * does not make sense is refused and counted. */
-static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
+/* A closed exercise session's score as the pages get it ("score", docs/web.md): malloc'd JSON, or
+ * NULL when m does not make sense (refused and counted) or memory ran out (counted). */
+static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
   if (!palp_dds_session_score_ok(m)) {
     h->stats.dropped++;
-    return;
+    return NULL;
   }
   static const char *const metric[6] = {"sensitivity", "false_positives", "thoroughness", "pattern", "time", "force"};
   char text[128];
@@ -1146,27 +1147,37 @@ static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
   }
   char *out = cJSON_PrintUnformatted(j);
   cJSON_Delete(j);
-  if (!out) {
-    h->stats.dropped++;
-    return;
-  }
-  /* The trainee's own page is sent it too where her debrief told her the lesions (a practice
-   * exercise: what was found is hers already; an examination's score stays the instructor's). The
-   * debrief came first (written before the session closed, taken first at each poll); without one,
-   * she is not sent it. Message, session and that rule change together, under the lock. */
+  if (!out) h->stats.dropped++;
+  return out;
+}
+
+/* Keeps msg in ring[*next] (the oldest replaced; sid beside it when sids is not NULL) and wakes the
+ * web thread. */
+static void keep_score(palp_web_hub *h, char *msg, item *ring, uint32_t *sids, int *next, uint32_t sid) {
+  if (!msg) return;
   pthread_mutex_lock(&h->mu);
-  int told = 0;
-  for (int k = 0; k < DEBRIEFS; k++)
-    if (h->debrief[k].msg.buf && h->debrief[k].sid == m->session_id) told = h->debrief[k].level == palp_DEBRIEF_LESIONS;
-  const int k = h->scores_next; /* the oldest replaced */
-  h->scores_next = (h->scores_next + 1) % DEBRIEFS;
-  unsigned char *old = h->scores[k].buf;
-  h->scores[k] = (item){.buf = (unsigned char *)out, .len = strlen(out), .ver = ++h->next_ver};
-  h->scores_sid[k] = m->session_id;
-  h->scores_told[k] = (unsigned char)told;
+  const int k = *next;
+  *next = (*next + 1) % DEBRIEFS;
+  unsigned char *old = ring[k].buf;
+  ring[k] = (item){.buf = (unsigned char *)msg, .len = strlen(msg), .ver = ++h->next_ver};
+  if (sids) sids[k] = sid;
   pthread_mutex_unlock(&h->mu);
   free(old);
   if (h->wake) h->wake(h->wake_ctx);
+}
+
+/* A closed exercise session's score, as the server graded it from its own log (palp_session_score,
+ * session 63): kept beside the ended answers for the dashboard's list of ended sessions, where the
+ * instructor reads it with the session's id in the log (palp-review show takes it). */
+static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
+  keep_score(h, score_json(h, m), h->scores, NULL, &h->scores_next, m->session_id);
+}
+
+/* The same score as the server told it to the trainee (palp_debrief_score, session 64), which it does
+ * only for a practice session, after a debrief that told her the lesions: for her bound page. The
+ * server decides who is told, in either security mode; the bridge relays it to her session's page. */
+static void on_debrief_score(palp_web_hub *h, const palp_SessionScore *m) {
+  keep_score(h, score_json(h, m), h->told_scores, h->told_scores_sid, &h->told_scores_next, m->session_id);
 }
 
 static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
@@ -1273,7 +1284,6 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   d->msg.len = strlen(text);
   d->msg.ver = ++h->next_ver;
   d->sid = m->session_id;
-  d->level = (int)m->level;
   memcpy(d->trainee, e.trainee, sizeof d->trainee);
   pthread_mutex_unlock(&h->mu);
   if (h->wake) h->wake(h->wake_ctx);
@@ -1745,6 +1755,7 @@ static void *hub_main(void *arg) {
       drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
       drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
       if (h->score_r > 0) drain(h, h->score_r, (sample_fn)on_score, NULL, &h->stats.scores);
+      drain(h, h->debrief_score_r, (sample_fn)on_debrief_score, NULL, &h->stats.told_scores); /* after the debriefs */
       if (h->def.answers) {
         drain(h, h->finding_r, (sample_fn)on_finding, NULL, &h->stats.findings_read);
         tend_answers(h, now);
@@ -1882,6 +1893,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->fstatus_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
   /* an instructor's permissions read every topic: no older permissions to allow for here */
   h->debrief_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
+  h->debrief_score_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
   h->exercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   if (def->answers) {
     /* the answers (instructors only: a trainee's permissions cannot even create the topic) */
@@ -1892,7 +1904,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->debrief_score_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -1953,7 +1965,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   for (int k = 0; k < SESSION_EXERCISES_PENDING; k++) free(h->pending_ex[k].ex);
   for (int i = 0; i < MAX_SERVERS; i++) free(h->srv[i].loads);
   free(h->hello.buf);
-  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf), free(h->ended_answers[k].buf), free(h->scores[k].buf);
+  for (int k = 0; k < DEBRIEFS; k++) free(h->debrief[k].msg.buf), free(h->ended_answers[k].buf), free(h->scores[k].buf), free(h->told_scores[k].buf);
   free(h->sessions_msg.buf);
   free(h->status_msg.buf);
   free(h->exercises_msg.buf);
@@ -2260,11 +2272,11 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       if (rc > 0) c->debrief_ver = pick->msg.ver;
       goto out;
     }
-    /* a page's own trainee session's score, where its debrief told her the lesions (on_score) */
+    /* a page's own trainee session's score, where the server told her it (on_debrief_score) */
     const item *mine = NULL;
     for (int k = 0; k < DEBRIEFS && c->trainee; k++) {
-      const item *e = &h->scores[k];
-      if (e->buf && h->scores_sid[k] == c->trainee && h->scores_told[k] && e->ver > c->scores_ver &&
+      const item *e = &h->told_scores[k];
+      if (e->buf && h->told_scores_sid[k] == c->trainee && e->ver > c->scores_ver &&
           (!mine || e->ver < mine->ver))
         mine = e;
     }

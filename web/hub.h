@@ -77,8 +77,8 @@ typedef struct palp_web_cursor {
   uint64_t answers_ver[PALP_WEB_MAX_SESSIONS];
   /* the newest of the ended exercise sessions' last answers this page was sent (the dashboard only) */
   uint64_t ended_answers_ver;
-  /* the newest of the closed exercise sessions' scores this page was sent: the dashboard all of them, a
-   * trainee page its own session's where its debrief told her the lesions (session 63) */
+  /* the newest of the closed exercise sessions' scores this page was sent: the dashboard all of them
+   * (session 63), a trainee page its own session's where the server told her it (session 64) */
   uint64_t scores_ver;
   /* a session's pressed-skin map (palp_web_hub_next sends it to pages following every session) */
   uint64_t cover_ver[PALP_WEB_MAX_SESSIONS];
@@ -113,6 +113,7 @@ typedef struct palp_web_hub_stats {
   uint64_t debriefs;                               /* palp_debrief samples taken (2026-12-05) */
   uint64_t session_exercises, findings_read;       /* palp_session_exercise, palp_finding samples taken */
   uint64_t scores;                                 /* palp_session_score samples taken (session 63) */
+  uint64_t told_scores;                            /* palp_debrief_score samples taken (session 64) */
   uint64_t findings_unanswered;                    /* findings whose answer the bridge did not see */
   uint64_t findings_written, findings_refused;     /* browser finding requests */
   uint64_t late_haptic, lost_haptic;               /* local models late / missing, all sessions */

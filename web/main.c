@@ -156,9 +156,11 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.ws_opened,
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
   if (h.exercises || h.findings_written || h.findings_refused || h.local_models)
-    palp_log_info(log, "exercises %llu (sessions' %llu, scores %llu), finding statuses %llu, findings read %llu (%llu "
-                       "unanswered); findings written %llu, refused %llu; local models %llu (late %llu, lost %llu)",
+    palp_log_info(log, "exercises %llu (sessions' %llu, scores %llu), trainees' scores %llu, finding statuses %llu, "
+                       "findings read %llu (%llu unanswered); findings written %llu, refused %llu; local models %llu "
+                       "(late %llu, lost %llu)",
                   (unsigned long long)h.exercises, (unsigned long long)h.session_exercises, (unsigned long long)h.scores,
+                  (unsigned long long)h.told_scores,
                   (unsigned long long)h.finding_statuses, (unsigned long long)h.findings_read,
                   (unsigned long long)h.findings_unanswered,
                   (unsigned long long)h.findings_written, (unsigned long long)h.findings_refused,

@@ -953,19 +953,25 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
         bd.n);
   scores_free(&d), scores_free(&l), scores_free(&o), scores_free(&ow), scores_free(&bd);
 
-  /* A trainee's own page is sent her session's score where her debrief told her the lesions (dee's
-   * practice, "lesions"), never where it told less (eli's examination, "count"). */
+  /* A trainee's own page is sent her session's score as the server told it to her (palp_debrief_score,
+   * session 64: written into her session's partition only after a debrief that told her the lesions):
+   * dee's (practice) is told hers there; eli's examination has its score on the instructors' topic
+   * alone, which never reaches a trainee's page. dee's told score does not reach eli's page, nor the
+   * dashboard (which has the instructors' topic). */
   const uint32_t ps[2] = {4797, 4798};
   const char *pt[2] = {"dee", "eli"};
   const dds_entity_t w_state =
       palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
   const dds_entity_t t_db = palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF);
-  dds_entity_t w_db[2];
+  const dds_entity_t t_told = palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF_SCORE);
+  dds_entity_t w_db[2], w_told[2];
   palp_web_cursor page[2];
   for (int k = 0; k < 2; k++) {
     char part[64], bindc[64];
     palp_dds_session_partition(ps[k], part, sizeof part);
-    w_db[k] = palp_dds_create_writer(palp_dds_session_publisher(pp, part), t_db, PALP_TOPIC_DEBRIEF);
+    const dds_entity_t pub = palp_dds_session_publisher(pp, part);
+    w_db[k] = palp_dds_create_writer(pub, t_db, PALP_TOPIC_DEBRIEF);
+    w_told[k] = palp_dds_create_writer(pub, t_told, PALP_TOPIC_DEBRIEF_SCORE);
     write_open_state(w_state, ps[k], 1, part, pt[k]);
     snprintf(bindc, sizeof bindc, "{\"trainee\":%u}", ps[k]);
     CHECK(palp_web_hub_attach(h, &page[k], 8) == 0, "scores: %s's trainee page", pt[k]);
@@ -982,17 +988,31 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
     CHECK(dds_write(w_db[k], &db) == 0, "%s's debrief written (%s)", pt[k], k == 0 ? "lesions" : "count");
   }
   dds_sleepfor(DDS_MSECS(200)); /* the debriefs taken before the scores */
-  for (int k = 0; k < 2; k++) {
-    m.session_id = ps[k];
-    snprintf(m.log_uid, sizeof m.log_uid, "1796488098-29362-%u", ps[k]);
-    m.lesions = 0, m.found = 0;
-    dds_write(w, &m);
-  }
-  scores_seen mine[2] = {{0}, {0}};
+  scores_seen drain1 = {0};
+  next_json(h, &dash, 20, is_score, &drain1); /* what the dashboard had before */
+  scores_free(&drain1);
+  m.lesions = 0, m.found = 0;
+  m.session_id = ps[0]; /* dee's, told her (her partition) */
+  snprintf(m.log_uid, sizeof m.log_uid, "1796488098-29362-%u", ps[0]);
+  m.score = 61.25;
+  CHECK(dds_write(w_told[0], &m) == 0, "dee's score told in her session's partition");
+  m.session_id = ps[1]; /* eli's, to the instructors alone */
+  snprintf(m.log_uid, sizeof m.log_uid, "1796488098-29362-%u", ps[1]);
+  m.score = 33.3;
+  CHECK(dds_write(w, &m) == 0, "eli's score written for the instructors");
+  scores_seen mine[2] = {{0}, {0}}, dash_told = {0};
   for (int k = 0; k < 2; k++) next_json(h, &page[k], 40, is_score, &mine[k]);
-  CHECK(mine[0].n == 1 && num(mine[0].msg[0], "session") == (int)ps[0] && mine[1].n == 0,
-        "dee's page (her debrief told the lesions) is sent her score once (%d), eli's (told the count) none (%d)",
-        mine[0].n, mine[1].n);
+  next_json(h, &dash, 20, is_score, &dash_told);
+  CHECK(mine[0].n == 1 && num(mine[0].msg[0], "session") == (int)ps[0] &&
+            fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(mine[0].msg[0], "score")) - 61.3) < 1e-9 && mine[1].n == 0,
+        "dee's page is sent the score the server told her, once, 61.25 as 61.3 (%d); eli's, whose score went to the "
+        "instructors alone, none (%d)", mine[0].n, mine[1].n);
+  CHECK(dash_told.n == 1 && num(dash_told.msg[0], "session") == (int)ps[1],
+        "the dashboard is sent eli's (the instructors' topic), not dee's told one (%d score messages)", dash_told.n);
+  palp_web_hub_stats st2;
+  palp_web_hub_stats_get(h, &st2);
+  CHECK(st2.told_scores >= 1, "the trainees' scores counted (%llu)", (unsigned long long)st2.told_scores);
+  scores_free(&dash_told);
   for (int k = 0; k < 2; k++) scores_free(&mine[k]), palp_web_hub_detach(h, &page[k]);
   palp_web_hub_detach(h, &dash);
   palp_web_hub_detach(h, &obs);
