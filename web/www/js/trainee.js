@@ -309,7 +309,8 @@
     if (cov) t += " You covered " + cov + " of the dome (as this page saw it; the review counts it from the triangles you touched).";
     return t;
   }
-  /* Her score, where the exercise tells her the lesions (a practice exercise; web/hub.c on_score): the
+  /* Her score, where the exercise tells her the lesions (a practice exercise; the server tells it on
+   * palp_debrief_score, web/hub.c on_debrief_score): the
    * server's automatic score of her session, graded from its log as the review grades it, and what to
    * work on, in her words. */
   const TO_WORK_ON = [["sensitivity", "finding the lumps"], ["false_positives", "marking only lumps"],
