@@ -177,6 +177,11 @@ void palp_db_writer_close(palp_db_writer *w);
 /* Blocks until every record enqueued before the call is committed or dropped, or timeout_s
  * passes. For tests and shutdown, never for the tick loop. Returns 0 or PALP_EIO on timeout. */
 int palp_db_writer_flush(palp_db_writer *w, double timeout_s);
+/* The same for the records enqueued up to a mark taken earlier (palp_db_writer_mark: every record
+ * enqueued before it), so that a waiter in short slices waits for those alone, not for what the
+ * sessions went on logging meanwhile (server/grader.c). */
+int64_t palp_db_writer_mark(palp_db_writer *w);
+int palp_db_writer_wait(palp_db_writer *w, int64_t mark, double timeout_s);
 
 /* The enqueue calls: never block on disk. Return 0, PALP_EFULL (queue full: shed and counted),
  * PALP_EINVAL (bad argument or unknown session) or PALP_ENOMEM. */

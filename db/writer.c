@@ -521,13 +521,24 @@ void palp_db_writer_stats_get(palp_db_writer *w, palp_db_writer_stats *out) {
   pthread_mutex_unlock(&w->mu);
 }
 
+int64_t palp_db_writer_mark(palp_db_writer *w) {
+  if (!w) return 0;
+  pthread_mutex_lock(&w->mu);
+  const int64_t m = w->enq_seq;
+  pthread_mutex_unlock(&w->mu);
+  return m;
+}
+
 int palp_db_writer_flush(palp_db_writer *w, double timeout_s) {
+  return palp_db_writer_wait(w, palp_db_writer_mark(w), timeout_s);
+}
+
+int palp_db_writer_wait(palp_db_writer *w, int64_t target, double timeout_s) {
   if (!w) return PALP_EINVAL;
   struct timespec dl;
   abs_deadline(&dl, timeout_s);
   int rc = 0;
   pthread_mutex_lock(&w->mu);
-  const int64_t target = w->enq_seq;
   w->flush_waiters++;
   pthread_cond_signal(&w->wake);
   while (w->done_seq < target) {

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "assess_log.h" /* review_assess: palp-review's own reading of a log */
 #include "palp_assess.h"
@@ -12,9 +13,11 @@
 #define QUEUE 32            /* sessions waiting to be graded, scores waiting to be taken */
 #define WRITER_WAIT_S 30.0  /* the log's writer must have written the session's end by then */
 #define STOPPING_WAIT_S 2.0 /* ... and stopping: a server whose disk hangs must still stop */
+#define WAIT_SLICE_S 0.1    /* the writer is waited for in slices, so that a stop is seen */
 
 typedef struct job {
   uint32_t session_id;
+  int64_t mark; /* the log writer's mark as it was submitted: the session's end was enqueued before */
   char uid[96];
   char exercise[64];
 } job;
@@ -63,12 +66,36 @@ void palp_srv_score_of(const review_assessment *a, uint32_t session_id, const ch
   out->samples = (uint32_t)a->samples;
 }
 
-/* Grades one session: waits for the writer to have written everything queued so far (the session's
- * end was queued before the job), then reads the session back as palp-review does. */
-static int grade(palp_srv_grader *g, const job *j, double wait_s, palp_srv_score *out) {
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Waits for the log's writer to have written every record enqueued before the job (the session's end
+ * among them), in slices: at most WRITER_WAIT_S, and once the server is stopping at most
+ * STOPPING_WAIT_S more, even when the wait began before the stop. 0, or -1 and *waited [s]. */
+static int wait_writer(palp_srv_grader *g, int64_t mark, double *waited) {
+  const double t0 = now_s();
+  double stop_t = -1;
+  for (;;) {
+    if (palp_db_writer_wait(g->w, mark, WAIT_SLICE_S) == 0) return 0;
+    const double t = now_s();
+    pthread_mutex_lock(&g->mu);
+    if (g->stop && stop_t < 0) stop_t = t;
+    pthread_mutex_unlock(&g->mu);
+    *waited = t - t0;
+    if (*waited >= WRITER_WAIT_S || (stop_t >= 0 && t - stop_t >= STOPPING_WAIT_S)) return -1;
+  }
+}
+
+/* Grades one session: waits for the writer to have written the session's end, then reads the session
+ * back as palp-review does. -1 when the writer did not catch up. */
+static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
   char err[512] = "";
-  if (palp_db_writer_flush(g->w, wait_s) != 0) {
-    snprintf(err, sizeof err, "the session log's writer did not catch up within %.0f s", wait_s);
+  double waited = 0;
+  if (wait_writer(g, j->mark, &waited) != 0) {
+    snprintf(err, sizeof err, "the session log's writer did not catch up within %.0f s", waited);
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, err, out);
     return -1;
   }
@@ -117,10 +144,9 @@ static void *grader_main(void *arg) {
      * second): the log then says each one's score, as the review will; unless the writer is stuck. */
     if (g->job_n == 0 || writer_stuck) break;
     job j = g->jobs[g->job_head];
-    const int stopping = g->stop;
     pthread_mutex_unlock(&g->mu);
     palp_srv_score s;
-    if (grade(g, &j, stopping ? STOPPING_WAIT_S : WRITER_WAIT_S, &s) < 0 && stopping) writer_stuck = 1;
+    const int caught_up = grade(g, &j, &s) == 0;
     if (s.graded)
       palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_uid,
                     s.score, s.pass ? "pass" : "fail");
@@ -130,6 +156,7 @@ static void *grader_main(void *arg) {
       palp_log_info(g->log, "session %u (%s): not scored: %s (palp-review show grades it from the log)",
                     s.session_id, s.log_uid, s.reason);
     pthread_mutex_lock(&g->mu);
+    if (!caught_up && g->stop) writer_stuck = 1;
     g->job_head = (g->job_head + 1) % QUEUE;
     g->job_n--;
     if (g->done_n == QUEUE) {
@@ -169,6 +196,7 @@ int palp_srv_grader_open(const char *db_path, palp_db_writer *w, palp_log *log, 
 }
 
 int palp_srv_grader_submit(palp_srv_grader *g, uint32_t session_id, const char *uid, const char *exercise) {
+  const int64_t mark = palp_db_writer_mark(g->w); /* taken outside g->mu: no lock order to keep */
   pthread_mutex_lock(&g->mu);
   if (g->job_n == QUEUE) {
     pthread_mutex_unlock(&g->mu);
@@ -179,6 +207,7 @@ int palp_srv_grader_submit(palp_srv_grader *g, uint32_t session_id, const char *
   }
   job *j = &g->jobs[(g->job_head + g->job_n++) % QUEUE];
   j->session_id = session_id;
+  j->mark = mark;
   snprintf(j->uid, sizeof j->uid, "%s", uid);
   snprintf(j->exercise, sizeof j->exercise, "%s", exercise ? exercise : "");
   pthread_cond_signal(&g->wake);

@@ -29,8 +29,9 @@ int palp_srv_grader_open(const char *db_path, palp_db_writer *w, palp_log *log, 
 int palp_srv_grader_submit(palp_srv_grader *g, uint32_t session_id, const char *uid, const char *exercise);
 /* [main thread] 1 and *out when a score is ready, else 0. */
 int palp_srv_grader_take(palp_srv_grader *g, palp_srv_score *out);
-/* Grades the sessions still waiting (the writer given 2 s, else the rest are left, logged), then stops
- * the thread; scores not taken are not sent (logged). */
+/* Grades the sessions still waiting (the writer given 2 s from now, even when the grader was already
+ * waiting on it; else the rest are left, logged), then stops the thread; scores not taken are not
+ * sent (logged). Test: server_grader. */
 void palp_srv_grader_close(palp_srv_grader *g);
 
 /* The score of an assessment as the wire carries it (pure; the tests check it against the review's
