@@ -4,6 +4,7 @@
 #ifndef PALP_SERVER_CHECK_H
 #define PALP_SERVER_CHECK_H
 #include <stdio.h>
+#include <string.h>
 
 static int failures;
 #define CHECK(cond, ...)                           \
@@ -14,5 +15,17 @@ static int failures;
     fprintf(stderr, "\n");                         \
     if (!ok_) failures++;                          \
   } while (0)
+
+/* How many lines of the file at path hold needle (-1: no file): what a test reads of a log. */
+static inline long count_lines(const char *path, const char *needle) {
+  FILE *f = fopen(path, "r");
+  if (!f) return -1;
+  char line[2048];
+  long n = 0;
+  while (fgets(line, sizeof line, f))
+    if (strstr(line, needle)) n++;
+  fclose(f);
+  return n;
+}
 
 #endif

@@ -37,23 +37,11 @@ static void nap(double s) {
   nanosleep(&ts, NULL);
 }
 
-/* How many times needle occurs in the file at path. */
-static int count_in(const char *path, const char *needle) {
-  FILE *f = fopen(path, "r");
-  if (!f) return -1;
-  char line[1024];
-  int n = 0;
-  while (fgets(line, sizeof line, f))
-    for (const char *p = line; (p = strstr(p, needle)) != NULL; p += strlen(needle)) n++;
-  fclose(f);
-  return n;
-}
-
 /* Waits up to timeout_s for needle to occur at least n times in the log. */
-static int wait_for_lines(const char *path, const char *needle, int n, double timeout_s) {
+static long wait_for_lines(const char *path, const char *needle, long n, double timeout_s) {
   const double end = now_s() + timeout_s;
-  int got;
-  while ((got = count_in(path, needle)) < n && now_s() < end) nap(0.02);
+  long got;
+  while ((got = count_lines(path, needle)) < n && now_s() < end) nap(0.02);
   return got;
 }
 
@@ -136,7 +124,7 @@ int main(int argc, char **argv) {
   }
   CHECK(accepted == 32 && refused_rc == PALP_EFULL, "32 sessions wait to be graded (%d accepted), the 33rd is refused: %s",
         accepted, palp_strerror(refused_rc));
-  CHECK(count_in(log_path, "session 33 (test-grader-33): not scored live: 32 sessions are waiting to be graded") == 1,
+  CHECK(count_lines(log_path, "session 33 (test-grader-33): not scored live: 32 sessions are waiting to be graded") == 1,
         "  the log says the 33rd will not be scored live (palp-review show grades it)");
   nap(0.3);
   palp_srv_score s;
@@ -158,8 +146,8 @@ int main(int argc, char **argv) {
     uid_of(id, uid, sizeof uid);
     accepted += palp_srv_grader_submit(g, id, uid, "t") == 0;
   }
-  const int graded_lines = wait_for_lines(log_path, "): not scored: the session is not in the log", 64, 15.0);
-  CHECK(accepted == 32 && graded_lines == 64, "32 more sessions graded, none taken (%d accepted, %d graded in all)",
+  const long graded_lines = wait_for_lines(log_path, "): not scored: the session is not in the log", 64, 15.0);
+  CHECK(accepted == 32 && graded_lines == 64, "32 more sessions graded, none taken (%d accepted, %ld graded in all)",
         accepted, graded_lines);
   uid_of(133, uid, sizeof uid);
   CHECK(palp_srv_grader_submit(g, 133, uid, "t") == 0, "a 33rd is accepted (the grader has room to grade it)");
@@ -189,8 +177,8 @@ int main(int argc, char **argv) {
    * loaded machine's scheduling, against the 30 s a wait begun before the stop used to hold. */
   CHECK(stop_s >= 1.9 && stop_s < 8.0, "the grader stops %.2f s after it is asked, waiting on a held writer (2 s the "
                                        "stop gives it; tolerance 1.9-8 s, not 30)", stop_s);
-  CHECK(count_in(log_path, "session 201 (test-grader-201): not scored: the session log's writer did not catch up") == 1 &&
-            count_in(log_path, "session log: 2 closed session(s) not scored: the log's writer is behind as the server "
+  CHECK(count_lines(log_path, "session 201 (test-grader-201): not scored: the session log's writer did not catch up") == 1 &&
+            count_lines(log_path, "session log: 2 closed session(s) not scored: the log's writer is behind as the server "
                                "stops") == 1,
         "  the log says 201 was not scored (the writer behind) and that the 2 after it were left");
   palp_db_writer_close(w);

@@ -151,17 +151,6 @@ static void test_parse(void) {
         "unterminated", seen, bad);
 }
 
-static long count_lines(const char *path, const char *needle) {
-  FILE *f = fopen(path, "r");
-  if (!f) return -1;
-  char line[2048];
-  long n = 0;
-  while (fgets(line, sizeof line, f))
-    if (strstr(line, needle)) n++;
-  fclose(f);
-  return n;
-}
-
 /* The sum of "N more time(s)" over the file's lines, plus one per first line. */
 static unsigned long long logged_refusals(const char *path, const char *who) {
   FILE *f = fopen(path, "r");
