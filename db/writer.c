@@ -577,7 +577,8 @@ static void set_error(palp_db_writer *w, int rc, const char *what) {
   w->st_.last_error_code = rc;
   const char *msg = sqlite3_errmsg(w->db), *gen = sqlite3_errstr(rc);
   /* a rollback after the failure succeeded: errmsg then says "not an error", which tells nothing */
-  if (strcmp(msg, gen) == 0 || sqlite3_errcode(w->db) == SQLITE_OK) palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s: %s", what, msg);
+  if (strcmp(msg, gen) == 0 || sqlite3_errcode(w->db) == SQLITE_OK)
+    palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s: %s", what, gen);
   else palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s: %s (%s)", what, msg, gen);
   pthread_mutex_unlock(&w->mu);
 }

@@ -356,9 +356,8 @@ static dds_entity_t answers_writer(palp_srv *srv, palp_dds_topic_kind k) {
   return 0;
 }
 
-/* A closed exercise session's score, as the session log graded it (events.h take_score), for the
- * instructors' dashboards. Keep-last 1 per session and transient-local, so a dashboard opened later
- * still gets it: the newest 64 are kept, the oldest unregistered (bounded memory in the writer). */
+/* A closed exercise session's score, as the session log graded it (events.h take_score), as the wire
+ * carries it (both palp_session_score and palp_debrief_score). */
 static void score_message(const palp_srv_score *sc, palp_SessionScore *out) {
   palp_SessionScore m;
   memset(&m, 0, sizeof m);
@@ -445,6 +444,9 @@ static void tell_score(palp_srv *srv, const palp_SessionScore *m) {
   }
 }
 
+/* The score to its trainee when she is told it (tell_score), and to the instructors' dashboards.
+ * Keep-last 1 per session and transient-local, so a dashboard opened later still gets it: the newest
+ * 64 are kept, the oldest unregistered (bounded memory in the writer). */
 static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
   palp_SessionScore m;
   score_message(sc, &m);
