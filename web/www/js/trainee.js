@@ -321,7 +321,8 @@
     const work = TO_WORK_ON.filter(function (k) { return !m.passed[k[0]]; }).map(function (k) { return k[1]; });
     return "Your score: " + m.score.toFixed(1) + " of 100, " + (m.pass ? "passed" : "not passed") +
       " (the automatic score, as the review gives it; your instructor grades you)." +
-      (work.length ? " To work on: " + work.join(", ") + "." : "");
+      (work.length ? " To work on: " + work.join(", ") + "." : "") +
+      (m.log_complete === false ? " The session's log is incomplete: the score may be low." : ""); /* as her station says */
   }
   function showScore(m) {
     if (!T.debrief || T.debrief.session !== m.session) return; /* her debrief first (the bridge sends it first) */
