@@ -199,10 +199,19 @@ int palp_srv_grader_submit(palp_srv_grader *g, uint32_t session_id, const char *
   const int64_t mark = palp_db_writer_mark(g->w); /* taken outside g->mu: no lock order to keep */
   pthread_mutex_lock(&g->mu);
   if (g->job_n == QUEUE) {
+    /* Answered at once as not graded, where there is room for the answer: the dashboard and her
+     * station then say why rather than wait for a score that will not come. */
+    const int told = g->done_n < QUEUE;
+    if (told) {
+      char why[128];
+      snprintf(why, sizeof why, "%d sessions were waiting to be graded as it closed; palp-review show grades it from "
+                                "the log", QUEUE);
+      palp_srv_score_of(NULL, session_id, uid, exercise, why, &g->done[(g->done_head + g->done_n++) % QUEUE]);
+    }
     pthread_mutex_unlock(&g->mu);
     palp_log_warn(g->log, "session %u (%s): not scored live: %d sessions are waiting to be graded (palp-review show "
-                          "grades it from the log)",
-                  session_id, uid, QUEUE);
+                          "grades it from the log)%s",
+                  session_id, uid, QUEUE, told ? "" : "; not even that could be sent");
     return PALP_EFULL;
   }
   job *j = &g->jobs[(g->job_head + g->job_n++) % QUEUE];

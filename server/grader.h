@@ -25,7 +25,8 @@ typedef struct palp_srv_grader palp_srv_grader;
 /* db_path: the log the writer w writes (the grader waits on w before it reads). */
 int palp_srv_grader_open(const char *db_path, palp_db_writer *w, palp_log *log, palp_srv_grader **out);
 /* [main thread] grade the session logged as uid once the log holds its end. 0, or
- * PALP_EFULL when 32 are already waiting (logged). */
+ * PALP_EFULL when 32 are already waiting (logged; answered at once as not graded, with why, when
+ * fewer than 32 answers wait to be taken). */
 int palp_srv_grader_submit(palp_srv_grader *g, uint32_t session_id, const char *uid, const char *exercise);
 /* [main thread] 1 and *out when a score is ready, else 0. */
 int palp_srv_grader_take(palp_srv_grader *g, palp_srv_score *out);

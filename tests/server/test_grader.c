@@ -5,9 +5,11 @@
  * not in the log, so each is answered "not graded" (what is graded, and that it equals the review's
  * reading, is server_findings' and install_demo's).
  *
- *  1. 32 sessions wait while the writer is held; the 33rd is refused (PALP_EFULL) and the log says
- *     it will not be scored live; nothing is answered while the writer is held; released, the 32
- *     are answered in the order they closed, each "the session is not in the log".
+ *  1. 32 sessions wait while the writer is held; the 33rd is refused (PALP_EFULL), the log says it
+ *     will not be scored live and it is answered at once as not graded, with why (since session 64:
+ *     the dashboard and her station say so rather than wait); nothing else is answered while the
+ *     writer is held; released, the 32 are answered in the order they closed, each "the session is
+ *     not in the log".
  *  2. 32 answers not taken: the 33rd is graded but not kept (the log says so), and the 32 are.
  *  3. Stopping while the grader already waits on a held writer (a wait that began before the stop,
  *     which would have held the server up to 30 s until session 64): close returns after the
@@ -126,9 +128,14 @@ int main(int argc, char **argv) {
         accepted, palp_strerror(refused_rc));
   CHECK(count_lines(log_path, "session 33 (test-grader-33): not scored live: 32 sessions are waiting to be graded") == 1,
         "  the log says the 33rd will not be scored live (palp-review show grades it)");
-  nap(0.3);
   palp_srv_score s;
-  CHECK(!palp_srv_grader_take(g, &s), "nothing is answered while the writer is held (0.3 s)");
+  const int told33 = palp_srv_grader_take(g, &s);
+  CHECK(told33 && s.session_id == 33 && !s.graded &&
+            strcmp(s.reason, "32 sessions were waiting to be graded as it closed; palp-review show grades it from the "
+                             "log") == 0,
+        "  and answered at once as not graded, with why: \"%s\"", told33 ? s.reason : "");
+  nap(0.3);
+  CHECK(!palp_srv_grader_take(g, &s), "nothing else is answered while the writer is held (0.3 s)");
   release(h);
   uint32_t ids[40];
   int not_in_log = 0;
@@ -138,7 +145,7 @@ int main(int argc, char **argv) {
   int in_order = n == 32;
   for (int i = 0; i < n && in_order; i++) in_order = ids[i] == (uint32_t)(i + 1);
   CHECK(in_order && not_in_log, "released, the 32 are answered in the order they closed (%d answers), each \"the "
-                                "session is not in the log\" (%s); the 33rd never", n, not_in_log ? "yes" : "no");
+                                "session is not in the log\" (%s); the 33rd not again", n, not_in_log ? "yes" : "no");
 
   /* ---- 2. 32 answers not taken: the 33rd is not kept ---- */
   accepted = 0;
