@@ -644,12 +644,9 @@ static int print_debrief(const opts *o, palp_cli_station *st) {
 
 /* A practice exercise's score (palp_debrief_score, session 64): after a debrief that told the
  * lesions, the server grades the session from its log as the review does and tells her the score,
- * and what to work on in her words (the same words as her web page, web/www/js/trainee.js). The
+ * and what to work on in her words (palp_metric_to_work_on, which her web page is sent too). The
  * grader has it milliseconds after the close is logged; a slow disk may take seconds. */
 #define SCORE_WAIT_S 5.0
-static const char *const to_work_on[6] = {"finding the lumps", "marking only lumps",
-                                          "covering the whole dome at each pressure", "a systematic search pattern",
-                                          "finishing within the time", "pressing within the force limit"};
 static void print_debrief_score(const opts *o, palp_cli_station *st) {
   if (st->debrief_score_topic_refused) {
     tprintf(o, "[trainee %s] no score: this identity's permissions predate it (the instructor re-issues them with "
@@ -674,10 +671,10 @@ static void print_debrief_score(const opts *o, palp_cli_station *st) {
   }
   char work[256] = "";
   size_t n = 0;
-  for (int i = 0; i < 6; i++)
+  for (int i = 0; i < PALP_METRIC_COUNT && i < 6; i++)
     if (!m.passed[i])
       n += (size_t)snprintf(work + n, n < sizeof work ? sizeof work - n : 0, "%s%s", n ? ", " : " To work on: ",
-                            to_work_on[i]);
+                            palp_metric_to_work_on(i));
   if (n) snprintf(work + n, n < sizeof work ? sizeof work - n : 0, ".");
   tprintf(o, "[trainee %s] score: %.1f of 100, %s (the automatic score, as the review gives it; your instructor grades "
              "you).%s%s\n", o->name, m.score, m.pass ? "passed" : "not passed", work,

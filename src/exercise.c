@@ -25,6 +25,12 @@ static const char *const pattern_names[] = {"unsystematic", "vertical_strip", "c
 
 const char *palp_band_name(int b) { return b >= 0 && b < PALP_BAND_COUNT ? band_names[b] : "none"; }
 const char *palp_metric_name(int m) { return m >= 0 && m < PALP_METRIC_COUNT ? metric_names[m] : "?"; }
+const char *palp_metric_to_work_on(int m) {
+  static const char *const words[PALP_METRIC_COUNT] = {
+      "finding the lumps",           "marking only lumps",        "covering the whole dome at each pressure",
+      "a systematic search pattern", "finishing within the time", "pressing within the force limit"};
+  return m >= 0 && m < PALP_METRIC_COUNT ? words[m] : "?";
+}
 const char *palp_pattern_name(palp_pattern p) {
   return p >= PALP_PATTERN_UNSYSTEMATIC && p <= PALP_PATTERN_RADIAL ? pattern_names[p] : "?";
 }

@@ -66,6 +66,9 @@ enum {
   PALP_METRIC_COUNT
 };
 const char *palp_metric_name(int metric);
+/* What a trainee who did not pass the metric works on, in her words ("finding the lumps"): her
+ * station and her web page say the same (session 64). */
+const char *palp_metric_to_work_on(int metric);
 
 typedef struct palp_rubric {
   double weight[PALP_METRIC_COUNT]; /* >= 0, at least one > 0; the score is their weighted mean x 100 */

@@ -1103,7 +1103,6 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
     h->stats.dropped++;
     return NULL;
   }
-  static const char *const metric[6] = {"sensitivity", "false_positives", "thoroughness", "pattern", "time", "force"};
   char text[128];
   cJSON *j = cJSON_CreateObject();
   cJSON_AddStringToObject(j, "type", "score");
@@ -1126,9 +1125,11 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
     cJSON_AddNumberToObject(j, "score", round(m->score * 10) / 10);
     cJSON_AddBoolToObject(j, "pass", m->pass);
     cJSON *cr = cJSON_AddObjectToObject(j, "credit"), *ps = cJSON_AddObjectToObject(j, "passed");
-    for (int i = 0; i < 6; i++) {
-      cJSON_AddNumberToObject(cr, metric[i], round(m->credit[i] * 1000) / 1000);
-      cJSON_AddBoolToObject(ps, metric[i], m->passed[i]);
+    cJSON *work = cJSON_AddArrayToObject(j, "work_on"); /* her words for what she did not pass (session 64) */
+    for (int i = 0; i < PALP_METRIC_COUNT && i < 6; i++) {
+      cJSON_AddNumberToObject(cr, palp_metric_name(i), round(m->credit[i] * 1000) / 1000);
+      cJSON_AddBoolToObject(ps, palp_metric_name(i), m->passed[i]);
+      if (!m->passed[i]) cJSON_AddItemToArray(work, cJSON_CreateString(palp_metric_to_work_on(i)));
     }
     cJSON_AddNumberToObject(j, "lesions", m->lesions);
     cJSON_AddNumberToObject(j, "found", m->found);

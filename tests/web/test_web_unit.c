@@ -921,6 +921,16 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
           "  45.474 shown 45.5, coverage 2.5 / 1.1 %%, credits 0.5 / 0.025, 18.0 s, 4.89 N, 1 of 2, 1515 samples");
     const char *ls = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_uid"));
     CHECK(ls && !strcmp(ls, "1796488098-29362-4731"), "  with its id in the server's log (palp-review show takes it)");
+    /* what to work on, her words for the four metrics not passed (session 64), in the metrics' order */
+    const char *want_work[4] = {"finding the lumps", "marking only lumps", "covering the whole dome at each pressure",
+                                "a systematic search pattern"};
+    const cJSON *work = cJSON_GetObjectItem(a, "work_on");
+    int work_ok = cJSON_GetArraySize(work) == 4;
+    for (int i = 0; i < 4 && work_ok; i++) {
+      const char *w = cJSON_GetStringValue(cJSON_GetArrayItem(work, i));
+      work_ok = w && !strcmp(w, want_work[i]);
+    }
+    CHECK(work_ok, "  what to work on: the four metrics not passed, in her words (%d words)", cJSON_GetArraySize(work));
     const char *lh = cJSON_GetStringValue(cJSON_GetObjectItem(a, "log_health"));
     CHECK(cJSON_IsFalse(cJSON_GetObjectItem(a, "log_complete")) && lh &&
               !strcmp(lh, "damaged: ended normal; 3 records lost to disk errors"),

@@ -310,15 +310,12 @@
     return t;
   }
   /* Her score, where the exercise tells her the lesions (a practice exercise; the server tells it on
-   * palp_debrief_score, web/hub.c on_debrief_score): the
-   * server's automatic score of her session, graded from its log as the review grades it, and what to
-   * work on, in her words. */
-  const TO_WORK_ON = [["sensitivity", "finding the lumps"], ["false_positives", "marking only lumps"],
-    ["thoroughness", "covering the whole dome at each pressure"], ["pattern", "a systematic search pattern"],
-    ["time", "finishing within the time"], ["force", "pressing within the force limit"]];
+   * palp_debrief_score, web/hub.c on_debrief_score): the server's automatic score of her session,
+   * graded from its log as the review grades it, and what to work on, in her words (work_on: the
+   * words her station prints too, palp_metric_to_work_on). */
   function scoreText(m) {
     if (!m.graded) return "";
-    const work = TO_WORK_ON.filter(function (k) { return !m.passed[k[0]]; }).map(function (k) { return k[1]; });
+    const work = Array.isArray(m.work_on) ? m.work_on.filter(function (w) { return typeof w === "string"; }) : [];
     return "Your score: " + m.score.toFixed(1) + " of 100, " + (m.pass ? "passed" : "not passed") +
       " (the automatic score, as the review gives it; your instructor grades you)." +
       (work.length ? " To work on: " + work.join(", ") + "." : "") +
