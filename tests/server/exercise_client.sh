@@ -57,4 +57,25 @@ check 'finding 1 accepted: 1 mark standing' "$tmp/dora.log" "the button marks a 
 check 'finding 1 accepted: 0 marks standing' "$tmp/dora.log" "  and withdraws it"
 check 'mark refused here: the fingertip is not touching' "$tmp/ed.log" "a mark while not touching is refused on the station"
 if grep -q "mark 1 sent" "$tmp/ed.log"; then echo "FAIL ed sent a mark"; fail=1; else echo "ok     and not sent"; fi
+# Session 64: a practice exercise (debrief "lesions") on a server that keeps no session log: after her
+# debrief the station is told at once that no score will come, and why (palp_debrief_score), rather
+# than waiting its 5 s. The same exercise with "debrief": "lesions", on a server without "database".
+sed -e 's|"\.\./assess/phantom_stiff\.json"|"'"$test_dir"'/../assess/phantom_stiff.json"|' \
+  -e 's|"time_limit_s": 120,|"time_limit_s": 120, "debrief": "lesions",|' "$test_dir/exercise_wire.json" > "$tmp/practice.json"
+cat > "$tmp/nolog.json" <<JSON
+{ "domain_id": 61, "tick_rate_hz": 100, "tick_threads": 1,
+  "dds_config": "$config_dir/cyclonedds-loopback.xml",
+  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
+  "exercises": [ { "id": 7, "file": "$tmp/practice.json", "physics_rate_hz": 250 } ] }
+JSON
+"$server" --config "$tmp/nolog.json" > "$tmp/nolog-server.log" 2>&1 &
+spid=$!
+"$client" --role trainee --domain 61 --phantom 7 --name fia --timeout 10 --print-period 0 \
+  --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=0.5 > "$tmp/fia.log" 2>&1
+kill $spid; wait $spid; spid=
+check 'debrief: you found 1 of 2 lumps' "$tmp/fia.log" "a practice exercise on a server without a log: her debrief tells the lumps"
+check 'no score: this server keeps no session log to score it from; your instructor grades the session' "$tmp/fia.log" \
+  "  and her station is told at once why no score comes"
+if grep -q "no score came from the server within" "$tmp/fia.log"; then echo "FAIL fia's station waited for a score"; fail=1
+else echo "ok     not left waiting for one"; fi
 exit $fail
