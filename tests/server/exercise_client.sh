@@ -12,12 +12,15 @@ export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.x
 tmp=$(mktemp -d)
 spid=
 trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
-cat > "$tmp/server.json" <<JSON
-{ "domain_id": 61, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
+server_config() { # OUT EXERCISE_FILE [DATABASE_LINE]: the server's config on domain 61
+  cat > "$1" <<JSON
+{ "domain_id": 61, "tick_rate_hz": 100, "tick_threads": 1, ${3:-}
   "dds_config": "$config_dir/cyclonedds-loopback.xml",
   "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
-  "exercises": [ { "id": 7, "file": "$test_dir/exercise_wire.json", "physics_rate_hz": 250 } ] }
+  "exercises": [ { "id": 7, "file": "$2", "physics_rate_hz": 250 } ] }
 JSON
+}
+server_config "$tmp/server.json" "$test_dir/exercise_wire.json" "\"database\": \"$tmp/log.db\","
 "$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
 spid=$!
 fail=0
@@ -62,12 +65,7 @@ if grep -q "mark 1 sent" "$tmp/ed.log"; then echo "FAIL ed sent a mark"; fail=1;
 # than waiting its 5 s. The same exercise with "debrief": "lesions", on a server without "database".
 sed -e 's|"\.\./assess/phantom_stiff\.json"|"'"$test_dir"'/../assess/phantom_stiff.json"|' \
   -e 's|"time_limit_s": 120,|"time_limit_s": 120, "debrief": "lesions",|' "$test_dir/exercise_wire.json" > "$tmp/practice.json"
-cat > "$tmp/nolog.json" <<JSON
-{ "domain_id": 61, "tick_rate_hz": 100, "tick_threads": 1,
-  "dds_config": "$config_dir/cyclonedds-loopback.xml",
-  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ],
-  "exercises": [ { "id": 7, "file": "$tmp/practice.json", "physics_rate_hz": 250 } ] }
-JSON
+server_config "$tmp/nolog.json" "$tmp/practice.json"
 "$server" --config "$tmp/nolog.json" > "$tmp/nolog-server.log" 2>&1 &
 spid=$!
 "$client" --role trainee --domain 61 --phantom 7 --name fia --timeout 10 --print-period 0 \
