@@ -851,6 +851,16 @@ static void scores_free(scores_seen *a) {
   for (int i = 0; i < a->n && i < 4; i++) cJSON_Delete(a->msg[i]);
 }
 
+/* A score as the server writes it for session sid of exercise "answers-test", its uid in the log
+ * named after sid; the caller fills what it grades. */
+static void score_sample(palp_SessionScore *m, uint32_t sid, palp_ScoreStatus status) {
+  memset(m, 0, sizeof *m);
+  m->session_id = sid;
+  m->status = status;
+  snprintf(m->log_uid, sizeof m->log_uid, "1796488098-29362-%u", sid);
+  snprintf(m->exercise_name, sizeof m->exercise_name, "answers-test");
+}
+
 static void test_scores(palp_web_hub *h, dds_entity_t pp) {
   const dds_entity_t w =
       palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_SCORE), PALP_TOPIC_SESSION_SCORE);
@@ -871,11 +881,7 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
   palp_web_hub_stats_get(h, &st0);
 
   palp_SessionScore m;
-  memset(&m, 0, sizeof m);
-  m.session_id = 4731;
-  m.status = palp_SCORE_GRADED;
-  snprintf(m.log_uid, sizeof m.log_uid, "1796488098-29362-4731");
-  snprintf(m.exercise_name, sizeof m.exercise_name, "answers-test");
+  score_sample(&m, 4731, palp_SCORE_GRADED);
   snprintf(m.pattern, sizeof m.pattern, "unsystematic");
   m.session_id = 4791; /* its own instance: keep-last 1 would let the next sample supersede it */
   m.score = 150;       /* out of its range: refused */
@@ -892,11 +898,7 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
   snprintf(m.log_health, sizeof m.log_health, "damaged: ended normal; 3 records lost to disk errors");
   dds_write(w, &m);
   palp_SessionScore n;
-  memset(&n, 0, sizeof n);
-  n.session_id = 4790;
-  n.status = palp_SCORE_NOT_GRADED;
-  snprintf(n.log_uid, sizeof n.log_uid, "1796488098-29362-4790");
-  snprintf(n.exercise_name, sizeof n.exercise_name, "answers-test");
+  score_sample(&n, 4790, palp_SCORE_NOT_GRADED);
   snprintf(n.reason, sizeof n.reason, "no finger samples logged");
   dds_write(w, &n);
 
