@@ -163,7 +163,7 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
 
 static int take_score(void *ctx, palp_srv_score *out) {
   palp_srv_db_log *l = ctx;
-  return l->grader ? palp_srv_grader_take(l->grader, out) : 0;
+  return palp_srv_grader_take(l->grader, out);
 }
 
 /* Accepted findings are records; refusals are events, one by one up to a few per
@@ -358,8 +358,10 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
     return rc;
   }
   /* Without a grader the server runs on; its sessions are only scored by the review. */
-  if (palp_srv_grader_open(path, l->w, log, &l->grader) != 0) {
-    palp_log_warn(log, "session log: closed sessions will not be scored live (no grader thread)");
+  rc = palp_srv_grader_open(path, l->w, log, &l->grader);
+  if (rc != 0) {
+    palp_log_warn(log, "session log: closed sessions will not be scored live (no grader thread: %s); palp-review "
+                       "show scores them from the log", palp_strerror(rc));
     l->grader = NULL;
   }
   /* uid = <start time>-<pid>-<session>: unique across server runs on one host. */
@@ -377,7 +379,11 @@ int palp_srv_db_log_open(const char *path, palp_log *log, palp_srv_db_log **out,
                             .debrief = on_debrief,
                             .security_refused = on_security_refused,
                             .log_counts = on_log_counts,
-                            .take_score = take_score};
+                            /* A server whose grader did not start tells her so at once rather than
+                             * leave her station waiting for a score that will not come. */
+                            .take_score = l->grader ? take_score : NULL,
+                            .unscored = "this server's grader did not start (its log says why); the "
+                                        "instructor's review scores the session from the session log"};
   *out = l;
   return 0;
 }

@@ -152,8 +152,11 @@ typedef struct palp_srv_events {
   void (*security_refused)(void *ctx, const char *detail, uint64_t count);
   /* [main thread] a closed exercise session's score, when one is ready: 1 and *out filled, 0 when
    * none is waiting. The server asks after every wake (<= 100 ms) and writes it on
-   * palp_session_score for the instructors. */
+   * palp_session_score for the instructors. NULL when nothing scores sessions live: its trainee is
+   * then told at once (palp_debrief_score) why, in unscored's words or, without them, that the
+   * server keeps no session log. */
   int (*take_score)(void *ctx, palp_srv_score *out);
+  const char *unscored;
 } palp_srv_events;
 
 #endif
