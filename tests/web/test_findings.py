@@ -345,7 +345,8 @@ def run(build, source, out):
         # the pole; 10 mm across, 10 mm deep (config/exercises/hard.json).
         sam = procs.trainee("sam", phantom=13, extra=["--input", "sim:press,hold_s=1", "--duration", "6"])
         sam_row = ("(function(){const r=Array.from(document.querySelectorAll('#debriefs tr')).find(function(r){"
-                   "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {found: r.cells[3].textContent, ended: r.cells[7].textContent,"
+                   "return r.cells[1].textContent === 'sam';}); if(!r) return null; return {session: Number(r.dataset.session), "
+                   "found: r.cells[3].textContent, ended: r.cells[7].textContent,"
                    "lumps: r.cells[10].textContent, items: Array.from(r.cells[10].querySelectorAll('li')).map(function(l){"
                    "return [l.className, l.textContent];})};})()")
         got = dash2.wait_for("(function(){const r=%s; return r && r.items.length === 2 ? r : null;})()" % sam_row, 30)
@@ -363,6 +364,34 @@ def run(build, source, out):
               "unticking 'show hidden lumps' takes them off the ended row too: %s" % got)
         click(dash2, "show-answers")
         print("screenshot:", dash2.screenshot(os.path.join(out, "dashboard-ended.png")))
+
+        # palp-web restarted (session 65): its new dashboard lists the ended sessions from the scores the
+        # server keeps for late readers, though their debriefs are gone with their sessions' writers: pat's
+        # and sam's rows, sam's (the later session) on top, each with its score as the first bridge showed
+        # it, no trainee name (the score carries none) and where the rest is.
+        sam_sc = dash2.wait_for("palpState.dashboard.scores && palpState.dashboard.scores[%d]" % got["session"], 20)
+        check(sam_sc is not None and sam_sc["exercise"] == "hard", "sam's session scored: %s" % sam_sc)
+        procs.stop(web)
+        web2 = procs.web(name="web-restarted")
+        dash3 = browser.new_page(web2.base + "/dashboard.html")
+        rows = ("Array.from(document.querySelectorAll('#debriefs tr')).map(function(r){return {session: "
+                "Number(r.dataset.session), fromScore: r.dataset.fromScore === '1', cells: Array.from(r.cells).map("
+                "function(c){return c.textContent;})};})")
+        listed = dash3.wait_for("(function(){const r=%s; return r.length >= 2 ? r : null;})()" % rows, 20)
+        by = {r["session"]: r for r in (listed or [])}
+        def shows(sc, r):
+            want_score = ("%.1f %s" % (sc["score"], "pass" if sc["pass"] else "fail") if sc["graded"] else "not scored") + \
+                "palp-review show " + sc["log_uid"]
+            found = "found %d of %d lump%s" % (sc["found"], sc["lesions"], "" if sc["lesions"] == 1 else "s") \
+                if sc["graded"] else "n/a"
+            return r is not None and r["fromScore"] and r["cells"][1] == "n/a" and r["cells"][2] == sc["exercise"] and \
+                r["cells"][3] == found and r["cells"][9] == want_score and r["cells"][10] == \
+                "not seen by this bridge: palp-review show %s gives it from the server's log" % sc["log_uid"]
+        order = [r["session"] for r in (listed or []) if r["session"] in (told["session"], got["session"])]
+        check(sc is not None and shows(sc, by.get(told["session"])) and shows(sam_sc, by.get(got["session"])) and
+              order == [got["session"], told["session"]],
+              "a restarted palp-web's dashboard lists pat's and sam's ended sessions from the server's scores, "
+              "newest on top: %s" % listed)
         # (no screenshot here: with the dashboard and observer pages opened since, this page is a background
         # tab, which Chromium may not paint: a capture timed out once in a full run)
     finally:

@@ -406,14 +406,48 @@
       hiddenEnded(tr);
     }
     scoreCell(tr);
-    ended.insertBefore(tr, ended.firstChild);
-    endedRows.set(m.session, tr);
+    addEnded(tr, m.session, ended.firstChild);
+  }
+  function addEnded(tr, session, before) {
+    ended.insertBefore(tr, before);
+    endedRows.set(session, tr);
     while (ended.rows.length > ENDED_MAX) {
       const last = ended.rows[ended.rows.length - 1];
       endedRows.delete(Number(last.dataset.session));
       last.remove();
     }
     document.getElementById("no-debriefs").hidden = true;
+  }
+  /* A score whose session has no row: one that ended before this page's bridge began following it (a
+   * restarted palp-web gets the server's last 64 scores, kept for late readers, but no debrief: the
+   * session's own writer is gone). The row says what the score says and where the rest is; the
+   * session's debrief, should it come after all, replaces it (debrief()). In session order, newest on
+   * top, among the rows there are (ids grow as sessions open). */
+  function scoreRow(m) {
+    const tr = document.createElement("tr"), g = m.graded === true && Array.isArray(m.coverage) && Number.isFinite(m.duration);
+    const rest = "palp-review show " + m.log_uid + " gives it from the server's log";
+    tr.dataset.session = m.session;
+    tr.dataset.fromScore = "1";
+    cell(tr, m.session, "n");
+    cell(tr, m.trainee || "n/a", m.trainee ? "" : "muted",
+      "the session ended before this page's bridge followed it, and the server's score does not name its trainee: " + rest);
+    cell(tr, m.exercise || "n/a");
+    cell(tr, g ? PALP.debriefFound(m) : "n/a", g && m.found < m.lesions ? "warn" : "",
+      "lumps the standing marks found, as the server's score counts them");
+    cell(tr, "n/a", "n muted", "not in the server's score: " + rest);
+    cell(tr, g ? m.false_marks : "n/a", "n" + (g && m.false_marks > 0 ? " bad" : ""), "standing marks near no lump");
+    cell(tr, "n/a", "n muted", "not in the server's score: " + rest);
+    cell(tr, "before this page's bridge followed it" + (g ? "; palpated " + PALP.minutes(m.duration) : ""), "muted",
+      "the bridge did not see this session end (it was restarted since); the time is the score's, first to last " +
+      "finger sample");
+    cell(tr, g ? m.coverage.map(function (f) { return Number(f).toFixed(0); }).join(" / ") + " %" : "n/a", "n",
+      "the skin pressed at light, medium and deep pressure, as the server's score grades thoroughness");
+    tr.insertCell().className = "score";
+    cell(tr, "not seen by this bridge: " + rest, "lumps muted");
+    scoreCell(tr);
+    let before = ended.firstChild;
+    while (before && Number(before.dataset.session) > m.session) before = before.nextSibling;
+    addEnded(tr, m.session, before);
   }
 
   showAnswers.addEventListener("change", function () {
@@ -454,6 +488,7 @@
       keepEnded(scores, "scores", m);
       const tr = endedRows.get(m.session);
       if (tr) scoreCell(tr);
+      else if (Number.isFinite(m.session)) scoreRow(m);
     },
     cover: function (m) {
       const c = cards.get(m.session);
