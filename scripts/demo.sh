@@ -335,6 +335,11 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   "$review" --db "$db" class --exercise medium --since "$since" --out "$out/class-medium.html" \
     --csv "$out/class-medium.csv" || status=1
   echo "class report: $out/class-medium.html; metrics per session: $out/class-medium.csv"
+  # One trainee's record, for the instructor's talk with her: her sessions of this run, each
+  # exercise's scores in order, and what to work on.
+  echo
+  echo "== fay's record (palp-review trainee) =="
+  "$review" --db "$db" trainee fay --since "$since" || status=1
   # The logging machine's copy of the same sessions, assessed from its own file (docs/assessment.md,
   # "Recorded over DDS"): what each of fay's attempts found and scored, in both logs.
   echo

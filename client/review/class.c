@@ -10,16 +10,9 @@
 #include "grades.h"
 #include "palp_app.h"
 #include "review.h"
+#include "session_row.h"
 
-typedef struct row {
-  palp_db_session_info s;
-  review_assessment a;
-  int computed; /* 1: from the samples (has maps); 0: stored metrics */
-  char grade[160];
-  double outside_s;  /* seconds outside the model's valid range, -1 where the log does not say */
-  char outside[24];  /* the same as text, "-" where the log does not say */
-  char told[512];    /* an attempt after a debrief on the same lesions: review_told_text; "" */
-} row;
+typedef review_row row;
 
 /* "15, 1.00": the strips and their order where the review shows them, else "-". */
 static void class_strips(const palp_assess_result *m, char *buf, size_t len) {
@@ -67,23 +60,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   for (int i = 0; i < n; i++) {
     char name[64];
     if (palp_db_session_exercise(db, v[i].id, name, sizeof name, NULL) || strcmp(name, exercise)) continue;
-    row *r = &rows[nr];
-    r->s = v[i];
-    char err[512];
-    int rc = review_assess(db, &v[i], &r->a, err, sizeof err);
-    if (rc == 0) r->computed = 1;
-    else if (review_stored_metrics(db, v[i].id, &r->a) != 0) {
-      palp_log_warn(log, "class: %s left out: %s", v[i].uid, err);
-      continue;
-    }
-    review_latest_grade(db, v[i].id, r->grade, sizeof r->grade);
-    r->outside_s = review_valid_range_seconds(db, &v[i]);
-    if (r->outside_s >= 0) snprintf(r->outside, sizeof r->outside, "%.2f", r->outside_s);
-    else snprintf(r->outside, sizeof r->outside, "-");
-    /* (a pruned session's stored metrics carry no lesions: it is not looked at) */
-    review_told told;
-    if (r->computed && review_told_before(db, &v[i], &r->a, &told) == 1)
-      review_told_text(&v[i], &told, r->told, sizeof r->told);
+    if (review_row_fill(log, "class", db, &v[i], &rows[nr]) != 0) continue;
     nr++;
   }
   if (nr == 0) {
@@ -238,7 +215,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     if (fclose(f)) rc = REVIEW_ERROR;
     else printf("class: wrote %s (%d sessions)\n", out, nr);
   }
-  for (int i = 0; i < nr; i++) review_assessment_free(&rows[i].a);
+  for (int i = 0; i < nr; i++) review_row_free(&rows[i]);
   free(rows);
   return rc;
 }

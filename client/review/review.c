@@ -31,6 +31,8 @@ static void usage(FILE *f) {
         "  replay   SESSION [--verbose]\n"
         "  report   SESSION --out FILE.html\n"
         "  class    --exercise NAME [--since DATE] --out FILE.html [--csv FILE]\n"
+        "  trainee  NAME [--since DATE] [--until DATE] [--csv FILE]\n"
+        "           (her sessions oldest first, each exercise's scores, what to work on)\n"
         "  delete   SESSION...                  (the sessions and all their data)\n"
         "  prune    --older-than DAYS [--keep-graded] [--dry-run]\n"
         "           (ended sessions: frames, feedback, contacts, meshes, finger samples go; the session,\n"
@@ -478,7 +480,8 @@ int main(int argc, char **argv) {
     return REVIEW_ERROR;
   }
   const char *cmd = argv[i++];
-  static const char *const cmds[] = {"list", "show", "export", "annotate", "replay", "report", "class", "delete", "prune"};
+  static const char *const cmds[] = {"list", "show", "export", "annotate", "replay", "report", "class", "trainee", "delete",
+                                     "prune"};
   int known = 0;
   for (size_t k = 0; k < sizeof cmds / sizeof cmds[0]; k++) known |= !strcmp(cmd, cmds[k]);
   if (!known) {
@@ -498,9 +501,11 @@ int main(int argc, char **argv) {
     return REVIEW_ERROR;
   }
   int rc;
-  if (!strcmp(cmd, "list") || !strcmp(cmd, "class") || !strcmp(cmd, "delete") || !strcmp(cmd, "prune")) {
+  if (!strcmp(cmd, "list") || !strcmp(cmd, "class") || !strcmp(cmd, "trainee") || !strcmp(cmd, "delete") ||
+      !strcmp(cmd, "prune")) {
     if (!strcmp(cmd, "list")) rc = cmd_list(&log, db, argc - i, argv + i);
     else if (!strcmp(cmd, "class")) rc = review_class(&log, db, argc - i, argv + i);
+    else if (!strcmp(cmd, "trainee")) rc = review_trainee(&log, db, argc - i, argv + i);
     else if (!strcmp(cmd, "delete")) rc = review_delete(&log, db, path, argc - i, argv + i);
     else rc = review_prune(&log, db, path, argc - i, argv + i);
     palp_db_close(db);

@@ -100,6 +100,12 @@ check "fay's two attempts at medium: her debriefs place its lump apart (${p1:-no
 not_blind=$(awk -F, 'NR > 1 { print $NF }' "$out/demo/class-medium.csv" 2>/dev/null | tr -d '"' | sort -u | tr '\n' ' ')
 check "  the class report of medium lists both, neither 'not blind' (not_blind_after: '$not_blind')" \
   "[ \$(awk 'NR > 1' '$out/demo/class-medium.csv' | wc -l) -eq 2 ] && [ '$not_blind' = ' ' ] && ! grep -q '^not blind:' '$txt'"
+# fay's record (palp-review trainee, session 65): her two attempts at medium in order, the scores the
+# class report of medium gives (its CSV's score column), neither passed.
+fay_csv=$(awk -F, 'NR > 1 { printf "%s%.1f", n++ ? ", " : "", $24 }' "$out/demo/class-medium.csv" 2>/dev/null)
+fay_rec=$(sed -n 's/^  medium  *scores \(.*\); passed 0 of 2; latest .* fail$/\1/p' "$txt")
+check "fay's record lists her two attempts at medium with the class report's scores (record: ${fay_rec:-none}; class CSV: ${fay_csv:-none})" \
+  "grep -q '^trainee fay: 2 sessions assessed, ' '$txt' && [ -n \"$fay_rec\" ] && [ \"$fay_rec\" = \"$fay_csv\" ]"
 # The logging machine's copy (palp-recorder as instructor ines, session 60): it ran secured, lost
 # nothing, and the review of its own file assesses fay's two attempts as the server's log does: the
 # same lesions, found, marks and false marks, the score within 3 points (its coverage takes a disc

@@ -211,6 +211,52 @@ fi
 if R class --exercise no-such-exercise --out "$dir/none.html" > "$dir/none.txt" 2>&1; then bad "class for an unknown exercise succeeded"
 else expect "class: unknown exercise named in the error" "no-such-exercise" "$dir/none.txt"; fi
 
+# One trainee's record (session 65): bob's two attempts oldest first, the first blind and the second
+# not (as show says), each score and verdict show's, his exercise's scores in order, and what to work
+# on: the metrics show marks FAIL for his latest attempt, in the words his station uses (the test's
+# own table below, not the code's).
+R trainee bob --csv "$dir/bob-record.csv" > "$dir/trainee-bob.txt" 2> "$dir/trainee-bob.err" || bad "trainee bob exit status"
+R show class-bob-2 > "$dir/show-bob2-again.txt" 2>&1
+if python3 - "$dir/trainee-bob.txt" "$dir/show-bob1.txt" "$dir/show-bob2-again.txt" "$dir/bob-record.csv" <<'PY'
+import csv, re, sys
+text = open(sys.argv[1]).read()
+shows = [open(p).read() for p in sys.argv[2:4]]
+lines = text.splitlines()
+assert lines[0] == "trainee bob: 2 sessions assessed, 2026-01-05 to 2026-01-07: 2 of exercises, 0 of free practice", lines[0]
+rows = [l.split() for l in lines if l.startswith("class-")]
+assert [r[0] for r in rows] == ["class-bob-1", "class-bob-2"], rows
+scores = []
+for r, show in zip(rows, shows):
+    m = re.search(r"score +([0-9.]+) / 100 \(pass at \d+\): (PASS|FAIL)", show)
+    found = re.search(r"sensitivity +(\d+) of (\d+) lesions", show)
+    assert m and r[3] == "%s/%s" % found.groups() and r[2] == "test-two-lumps", (r, show[:200])
+    # SCORE RUBRIC BLIND GRADE are the last four columns
+    assert r[-4] == m.group(1) and r[-3] == m.group(2).lower(), (r, m.groups())
+    scores.append(m.group(1))
+assert [r[-2] for r in rows] == ["yes", "no"], rows  # bob-2 came after bob-1's debrief told the lesions
+assert [r[-1] for r in rows] == ["35", "-"], rows  # the grade annotate gave bob-1 above; none for bob-2
+assert "  test-two-lumps   scores %s, %s; passed 0 of 2; latest %s fail" % (scores[0], scores[1], scores[1]) in lines, text
+words = {"sensitivity": "finding the lumps", "false positives": "marking only lumps",
+         "thoroughness": "covering the whole dome at each pressure", "search pattern": "a systematic search pattern",
+         "time": "finishing within the time", "force": "pressing within the force limit"}
+failed = [w for k, w in words.items() if re.search(r"^  %s .*FAIL$" % k, shows[1], re.M)]
+i = lines.index("to work on (what the latest session of each exercise did not pass, the most often first):")
+listed = [re.sub(r" \(1 of 1 exercise\)$", "", l.strip()) for l in lines[i + 1:i + 1 + len(failed)]]
+assert failed and listed == failed, (failed, lines[i:])
+assert "not blind: class-bob-2: bob had been told where this exercise's lesions are" in text, text
+got = [r["session"] for r in csv.DictReader(open(sys.argv[4]))]
+assert got == ["class-bob-1", "class-bob-2"], got
+PY
+then ok "trainee bob: his two attempts in order, blind then not, the scores and verdicts show gives, what to work on"
+else bad "trainee bob"; cat "$dir/trainee-bob.txt" "$dir/trainee-bob.err"; fi
+R trainee carol > "$dir/trainee-carol.txt" 2>&1 || bad "trainee carol exit status"
+expect "trainee carol: one session of free practice, no score" \
+  "^class-carol-1 +2026-01-08 +\(practice\) +- +[0-9]+ .* +- +- +- +-$" "$dir/trainee-carol.txt"
+if R trainee alice --since 2026-01-07 > "$dir/trainee-none.txt" 2>&1; then bad "trainee alice since 2026-01-07 (none) succeeded"
+else expect "trainee: none in the time asked, said" "no session of trainee 'alice' in that time" "$dir/trainee-none.txt"; fi
+if R trainee > "$dir/trainee-noname.txt" 2>&1; then bad "trainee without a name succeeded"
+else expect "trainee: the name is asked for" "NAME is required" "$dir/trainee-noname.txt"; fi
+
 # Retention: prune keeps graded sessions; pruned ones keep their metrics; delete removes one.
 R prune --older-than 1 --keep-graded > "$dir/prune.txt" 2>&1 || bad "prune exit status"
 expect "prune: graded sessions kept" "kept +class-alice-1: graded" "$dir/prune.txt"

@@ -1,0 +1,27 @@
+/* One logged session as the review's tables show it (class.c, trainee.c): its assessment (from
+ * the samples, or the metrics kept when it was pruned), the instructor's latest grade, the time
+ * outside the model's valid range and whether the attempt was blind. */
+#ifndef PALP_REVIEW_SESSION_ROW_H
+#define PALP_REVIEW_SESSION_ROW_H
+
+#include "assess_log.h"
+#include "palp_db.h"
+#include "palp_log.h"
+
+typedef struct review_row {
+  palp_db_session_info s;
+  review_assessment a;
+  int computed;      /* 1: from the samples (has maps); 0: stored metrics */
+  char grade[160];
+  double outside_s;  /* seconds outside the model's valid range, -1 where the log does not say */
+  char outside[24];  /* the same as text, "-" where the log does not say */
+  char told[512];    /* an attempt after a debrief on the same lesions: review_told_text; "" */
+} review_row;
+
+/* Fills *r for session s: 0, or a negative code (logged as a warning naming `cmd`, unless log is
+ * NULL) when the session has neither samples nor stored metrics to assess (it is then left out of
+ * the table: PALP_DB_ENOTFOUND for one without finger samples, force contacts only). */
+int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_session_info *s, review_row *r);
+void review_row_free(review_row *r);
+
+#endif
