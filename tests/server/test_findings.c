@@ -728,6 +728,52 @@ int main(void) {
   }
   free(ss);
   palp_db_close(db);
+
+  /* ---- a server whose grader did not start (session 65) ----
+   * palp_srv_db_log_open leaves take_score NULL when palp_srv_grader_open fails (a thread or memory
+   * refused): nothing will score the session, so a practice exercise's trainee is told at once why
+   * (the log's `unscored` words), not left to wait her station's 5 s for a score that will not come.
+   * The same log's events, take_score taken away as that failure leaves it. */
+  {
+    char db2[760];
+    snprintf(db2, sizeof db2, "%s/server_findings_nograder.db", cwd);
+    unlink(db2);
+    palp_srv_db_log *dbl2 = NULL;
+    REQUIRE(palp_srv_db_log_open(db2, NULL, &dbl2, err, sizeof err) == 0, "second log: %s", err);
+    palp_srv_events ev = *palp_srv_db_log_events(dbl2);
+    ev.take_score = NULL;
+    palp_srv_def def2 = {.cfg = cfg, .events = &ev, .verbose = 0};
+    test_server ts2 = {0};
+    ts2.srv = palp_srv_create(&def2, &rc, err, sizeof err);
+    REQUIRE(ts2.srv != NULL, "second server: %s", err);
+    REQUIRE(pthread_create(&ts2.thread, NULL, test_findings_server_main, &ts2) == 0, "second server thread");
+    ts2.running = 1;
+    palp_cli_station d;
+    test_station_join(&d, DOMAIN, "dora", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
+    palp_Debrief db_;
+    palp_DebriefLesion dl[PALP_DEBRIEF_MAX_LESIONS];
+    char derr[160] = "";
+    const int got_d = palp_cli_station_debrief(&d, 6.0, &db_, dl, derr, sizeof derr); /* the 2 s limit, then */
+    const int64_t t_debrief = palp_dds_now_ns();
+    palp_SessionScore m;
+    char serr[160] = "";
+    const int got = got_d == 1 ? palp_cli_station_debrief_score(&d, 5.0, &m, serr, sizeof serr) : -1;
+    const double after_s = (double)(palp_dds_now_ns() - t_debrief) * 1e-9;
+    CHECK(got_d == 1 && db_.level == palp_DEBRIEF_LESIONS, "dora's practice session debriefed (got %d %s)", got_d, derr);
+    CHECK(got == 1 && m.session_id == d.session_id && m.status == palp_SCORE_NOT_GRADED &&
+              strcmp(m.reason, "this server's grader did not start (its log says why); the instructor's review "
+                               "scores the session from the session log") == 0 &&
+              strcmp(m.exercise_name, "test-short") == 0,
+          "a server without its grader tells dora at once why she gets no score: \"%s\" (got %d %s)",
+          got == 1 ? m.reason : "", got, serr);
+    CHECK(got == 1 && after_s < 1.0, "  %.2f s after her debrief (tolerance 1 s; her station waits 5 s for a score)",
+          after_s);
+    palp_cli_station_leave(&d);
+    test_server_stop(&ts2);
+    palp_srv_db_log_close(dbl2);
+    palp_cli_station_close(&d);
+    unlink(db2);
+  }
   fprintf(stderr, "server_findings: %.1f s\n", (double)(palp_dds_now_ns() - t_start) * 1e-9);
   return palp_test_failures ? 1 : 0;
 }
