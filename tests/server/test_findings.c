@@ -770,8 +770,32 @@ int main(void) {
           after_s);
     palp_cli_station_leave(&d);
     test_server_stop(&ts2);
-    palp_srv_db_log_close(dbl2);
     palp_cli_station_close(&d);
+    palp_srv_db_log_close(dbl2);
+    unlink(db2);
+    /* A log with its grader (a log of its own: a log's session uids are its server run's): a server stopped while ema's practice session runs closes it
+     * and tells her at once that it will not be scored (the grader takes no session the shutdown
+     * closed): the debrief and the answer are written as the server stops, and reach her station. */
+    REQUIRE(palp_srv_db_log_open(db2, NULL, &dbl2, err, sizeof err) == 0, "third log: %s", err);
+    palp_srv_def def3 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl2), .verbose = 0};
+    test_server ts3 = {0};
+    ts3.srv = palp_srv_create(&def3, &rc, err, sizeof err);
+    REQUIRE(ts3.srv != NULL, "third server: %s", err);
+    REQUIRE(pthread_create(&ts3.thread, NULL, test_findings_server_main, &ts3) == 0, "third server thread");
+    ts3.running = 1;
+    palp_cli_station e;
+    test_station_join(&e, DOMAIN, "ema", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
+    test_server_stop(&ts3);
+    const int got_de = palp_cli_station_debrief(&e, 3.0, &db_, dl, derr, sizeof derr);
+    const int got_e = got_de == 1 ? palp_cli_station_debrief_score(&e, 3.0, &m, serr, sizeof serr) : -1;
+    CHECK(got_de == 1 && db_.level == palp_DEBRIEF_LESIONS && strcmp(db_.reason, "server shutdown") == 0,
+          "ema's practice session, closed by the server's stop, debriefed (got %d, \"%s\" %s)", got_de,
+          got_de == 1 ? db_.reason : "", derr);
+    CHECK(got_e == 1 && m.session_id == e.session_id && m.status == palp_SCORE_NOT_GRADED &&
+              strncmp(m.reason, "the server stopped before it scored the session", 47) == 0,
+          "  and told why she gets no score: \"%s\" (got %d %s)", got_e == 1 ? m.reason : "", got_e, serr);
+    palp_cli_station_close(&e);
+    palp_srv_db_log_close(dbl2);
     unlink(db2);
   }
   fprintf(stderr, "server_findings: %.1f s\n", (double)(palp_dds_now_ns() - t_start) * 1e-9);
