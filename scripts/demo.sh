@@ -339,7 +339,7 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
   # exercise's scores in order, and what to work on.
   echo
   echo "== fay's record (palp-review trainee) =="
-  "$review" --db "$db" trainee fay --since "$since" || status=1
+  "$review" --db "$db" trainee fay --since "$since" --out "$out/record-fay.html" || status=1
   # The logging machine's copy of the same sessions, assessed from its own file (docs/assessment.md,
   # "Recorded over DDS"): what each of fay's attempts found and scored, in both logs.
   echo

@@ -31,7 +31,7 @@ static void usage(FILE *f) {
         "  replay   SESSION [--verbose]\n"
         "  report   SESSION --out FILE.html\n"
         "  class    --exercise NAME [--since DATE] --out FILE.html [--csv FILE]\n"
-        "  trainee  NAME [--since DATE] [--until DATE] [--csv FILE]\n"
+        "  trainee  NAME [--since DATE] [--until DATE] [--csv FILE] [--out FILE.html]\n"
         "           (her sessions oldest first, each exercise's scores, what to work on)\n"
         "  delete   SESSION...                  (the sessions and all their data)\n"
         "  prune    --older-than DAYS [--keep-graded] [--dry-run]\n"

@@ -18,7 +18,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
 
 /* palp-review class --exercise NAME [--since DATE] --out FILE.html [--csv FILE] (class.c). */
 int review_class(palp_log *log, palp_db *db, int argc, char **argv);
-/* palp-review trainee NAME [--since DATE] [--until DATE] [--csv FILE] (trainee.c). */
+/* palp-review trainee NAME [--since DATE] [--until DATE] [--csv FILE] [--out FILE.html] (trainee.c). */
 int review_trainee(palp_log *log, palp_db *db, int argc, char **argv);
 
 #endif

@@ -105,7 +105,7 @@ check "  the class report of medium lists both, neither 'not blind' (not_blind_a
 fay_csv=$(awk -F, 'NR > 1 { printf "%s%.1f", n++ ? ", " : "", $24 }' "$out/demo/class-medium.csv" 2>/dev/null)
 fay_rec=$(sed -n 's/^  medium  *scores \(.*\); passed 0 of 2; latest .* fail$/\1/p' "$txt")
 check "fay's record lists her two attempts at medium with the class report's scores (record: ${fay_rec:-none}; class CSV: ${fay_csv:-none})" \
-  "grep -q '^trainee fay: 2 sessions assessed, ' '$txt' && [ -n \"$fay_rec\" ] && [ \"$fay_rec\" = \"$fay_csv\" ]"
+  "grep -q '^trainee fay: 2 sessions assessed, ' '$txt' && [ -n \"$fay_rec\" ] && [ \"$fay_rec\" = \"$fay_csv\" ] && [ \$(grep -c 'class=\"record-row\"' '$out/demo/record-fay.html') -eq 2 ]"
 # The logging machine's copy (palp-recorder as instructor ines, session 60): it ran secured, lost
 # nothing, and the review of its own file assesses fay's two attempts as the server's log does: the
 # same lesions, found, marks and false marks, the score within 3 points (its coverage takes a disc

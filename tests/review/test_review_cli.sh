@@ -215,10 +215,11 @@ else expect "class: unknown exercise named in the error" "no-such-exercise" "$di
 # not (as show says), each score and verdict show's, his exercise's scores in order, and what to work
 # on: the metrics show marks FAIL for his latest attempt, in the words his station uses (the test's
 # own table below, not the code's).
-R trainee bob --csv "$dir/bob-record.csv" > "$dir/trainee-bob.txt" 2> "$dir/trainee-bob.err" || bad "trainee bob exit status"
+R trainee bob --csv "$dir/bob-record.csv" --out "$dir/bob-record.html" > "$dir/trainee-bob.txt" 2> "$dir/trainee-bob.err" ||
+  bad "trainee bob exit status"
 R show class-bob-2 > "$dir/show-bob2-again.txt" 2>&1
-if python3 - "$dir/trainee-bob.txt" "$dir/show-bob1.txt" "$dir/show-bob2-again.txt" "$dir/bob-record.csv" <<'PY'
-import csv, re, sys
+if python3 - "$dir/trainee-bob.txt" "$dir/show-bob1.txt" "$dir/show-bob2-again.txt" "$dir/bob-record.csv" "$dir/bob-record.html" <<'PY'
+import csv, html, re, sys
 text = open(sys.argv[1]).read()
 shows = [open(p).read() for p in sys.argv[2:4]]
 lines = text.splitlines()
@@ -246,9 +247,21 @@ assert failed and listed == failed, (failed, lines[i:])
 assert "not blind: class-bob-2: bob had been told where this exercise's lesions are" in text, text
 got = [r["session"] for r in csv.DictReader(open(sys.argv[4]))]
 assert got == ["class-bob-1", "class-bob-2"], got
+# the page (--out): the same sessions, scores, blindness, grades and words, self-contained
+page = open(sys.argv[5]).read()
+cells = lambda cls: [html.unescape(c) for c in re.findall(r'<td class="[^"]*\b%s\b[^"]*">([^<]*)</td>' % cls, page)]
+assert cells("session") == ["class-bob-1", "class-bob-2"] and cells("score") == scores, (cells("session"), cells("score"))
+assert cells("blind") == ["yes", "no"] and cells("grade") == ["35", "-"], (cells("blind"), cells("grade"))
+assert re.findall(r'<li data-metric="[a-z_]+">([^<(]*) \(1 of 1 exercise\)</li>', page) == failed, page
+assert '<td class="t scores">%s, %s</td>' % (scores[0], scores[1]) in page and '<svg' in page, page
+assert "Not blind: class-bob-2: bob had been told" in html.unescape(page), page
+assert not re.search(r"(src|href)=.(https?:)?//|@import|url\(|<script", page, re.I), "external resource or script"
 PY
-then ok "trainee bob: his two attempts in order, blind then not, the scores and verdicts show gives, what to work on"
+then ok "trainee bob: his two attempts in order, blind then not, the scores and verdicts show gives, what to work on; the page the same"
 else bad "trainee bob"; cat "$dir/trainee-bob.txt" "$dir/trainee-bob.err"; fi
+if [ "$(stat -c '%a' "$dir/bob-record.html" "$dir/bob-record.csv" | sort -u)" = 600 ]; then
+  ok "trainee: the record's page and CSV are created mode 0600"
+else bad "trainee: the record's modes: $(stat -c '%n %a' "$dir/bob-record.html" "$dir/bob-record.csv" | tr '\n' ' ')"; fi
 R trainee carol > "$dir/trainee-carol.txt" 2>&1 || bad "trainee carol exit status"
 expect "trainee carol: one session of free practice, no score" \
   "^class-carol-1 +2026-01-08 +\(practice\) +- +[0-9]+ .* +- +- +- +-$" "$dir/trainee-carol.txt"
