@@ -104,33 +104,16 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   /* Attempts that were not blind (docs/assessment.md, "Debrief"), under the table they qualify. */
   for (int i = 0; i < nr; i++)
     if (rows[i].told[0]) printf("not blind: %s: %s\n", rows[i].s.uid, rows[i].told);
-  if (csv) {
-    FILE *c = strcmp(csv, "-") ? palp_app_fopen_private(csv) : stdout;
-    if (!c) {
-      palp_log_error(log, "class: %s: %s", csv, strerror(errno));
-      rc = REVIEW_ERROR;
-    } else {
-      review_metrics_csv_header(c);
-      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, db, &rows[i].s, &rows[i].a, rows[i].outside_s);
-      if (c != stdout && fclose(c)) rc = REVIEW_ERROR;
-    }
-  }
+  if (csv && review_rows_csv(log, "class", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
   FILE *f = palp_app_fopen_private(out);
   if (!f) {
     palp_log_error(log, "class: %s: %s", out, strerror(errno));
     rc = REVIEW_ERROR;
   } else {
-    fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>palp class report: ", f);
-    html_str(f, exercise);
-    fputs("</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222;max-width:1200px}"
-          "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 5px;"
-          "text-align:right;font-size:13px}th{background:#f4f4f4}td.t{text-align:left}.nw{white-space:nowrap}"
-          ".fail{color:#a00}"
-          ".multiples{display:flex;flex-wrap:wrap;gap:14px}.multiples figure{margin:0}"
-          "figcaption{font-size:12px}.key span{display:inline-block;width:12px;height:12px;margin:0 4px 0 12px}"
-          "</style>\n</head><body>\n<h1>Class report: exercise <span id=\"exercise\">", f);
-    html_str(f, exercise);
-    fprintf(f, "</span></h1>\n<p>%d session%s. Definitions: docs/assessment.md; names: docs/naming.md.</p>\n", nr,
+    review_html_head(f, "palp class report: ", "Class report: exercise ", "exercise", exercise,
+                     ".multiples{display:flex;flex-wrap:wrap;gap:14px}.multiples figure{margin:0}"
+                     "figcaption{font-size:12px}.key span{display:inline-block;width:12px;height:12px;margin:0 4px 0 12px}");
+    fprintf(f, "<p>%d session%s. Definitions: docs/assessment.md; names: docs/naming.md.</p>\n", nr,
             nr == 1 ? "" : "s");
     fputs("<h2>Side by side</h2>\n<table id=\"class-table\"><tr><th>trainee</th><th>session</th><th>started</th>"
           "<th>lesions found</th><th>false positives</th><th>coverage light</th><th>medium</th><th>deep</th>"
@@ -139,8 +122,6 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     for (int i = 0; i < nr; i++) {
       const row *r = &rows[i];
       const palp_assess_result *m = &r->a.r;
-      char t[64];
-      review_fmt_time(r->s.start_unix_s, t, sizeof t);
       fputs("<tr class=\"trainee-row\"><td class=\"t trainee\">", f);
       html_str(f, r->s.trainee);
       fputs("</td><td class=\"t nw\">", f);
@@ -148,15 +129,13 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       /* The columns in the terminal table's order (the strips beside the pattern they qualify). */
       char strips[24];
       class_strips(m, strips, sizeof strips);
-      /* The date on one line and the time with its offset on a second, never broken at a hyphen. */
-      char *sp = strchr(t, ' ');
-      if (sp) *sp = '\0';
+      fputs("</td>", f);
+      review_html_started_cell(f, r->s.start_unix_s);
       fprintf(f,
-              "</td><td class=\"t\"><span class=\"nw\">%s</span>%s<span class=\"nw\">%s</span></td>"
               "<td>%d of %d</td><td>%d</td><td>%.1f%%</td><td>%.1f%%</td><td>%.1f%%</td>"
               "<td class=\"t\">%s</td><td class=\"strips nw\">%s</td><td>%.1f</td><td>%.2f</td>"
               "<td class=\"score\">%.1f</td><td%s>%s",
-              t, sp ? " " : "", sp ? sp + 1 : "", m->found, m->lesion_count, m->false_positives,
+              m->found, m->lesion_count, m->false_positives,
               100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), strips,
               m->duration, m->peak_force, m->score, m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
       fprintf(f, "</td><td class=\"outside\">%s</td><td class=\"t\">", r->outside);
@@ -164,14 +143,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       fputs("</td></tr>\n", f);
     }
     fputs("</table>\n", f);
-    for (int i = 0; i < nr; i++)
-      if (rows[i].told[0]) {
-        fputs("<p class=\"fail told-before\">Not blind: ", f);
-        html_str(f, rows[i].s.uid);
-        fputs(": ", f);
-        html_str(f, rows[i].told);
-        fputs(".</p>\n", f);
-      }
+    review_html_not_blind(f, rows, nr);
     fputs("<h2>Coverage maps</h2>\n<p class=\"key\">Seen from above (12 o'clock = +y). Palpated at "
           "<span style=\"background:#56b4e9\"></span>light <span style=\"background:#e69f00\"></span>medium "
           "<span style=\"background:#009e73\"></span>deep pressure; <span style=\"background:#e6e6e6\"></span>never.</p>\n"

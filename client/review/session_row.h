@@ -4,6 +4,8 @@
 #ifndef PALP_REVIEW_SESSION_ROW_H
 #define PALP_REVIEW_SESSION_ROW_H
 
+#include <stdio.h>
+
 #include "assess_log.h"
 #include "palp_db.h"
 #include "palp_log.h"
@@ -23,5 +25,17 @@ typedef struct review_row {
  * the table: PALP_DB_ENOTFOUND for one without finger samples, force contacts only). */
 int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_session_info *s, review_row *r);
 void review_row_free(review_row *r);
+
+/* The HTML both tables' pages share (class.c, trainee.c): the page's head up to and including
+ * `<h1>HEADING<span id=ID>NAME</span></h1>` (the shared style plus extra_css), a start time as a
+ * cell (the date on one line, the time and its offset on a second, never broken at a hyphen), and
+ * the "Not blind" paragraphs of the rows that were not. */
+void review_html_head(FILE *f, const char *title, const char *heading, const char *id, const char *name,
+                      const char *extra_css);
+void review_html_started_cell(FILE *f, double unix_s);
+void review_html_not_blind(FILE *f, const review_row *rows, int n);
+/* The rows' metrics as CSV (review_metrics_csv_header and _row) into path ("-": stdout), created
+ * private; 0, or -1 logged as `cmd: path: why`. */
+int review_rows_csv(palp_log *log, const char *cmd, palp_db *db, const char *path, const review_row *rows, int n);
 
 #endif

@@ -65,14 +65,8 @@ static int write_page(const char *path, const char *name, const review_row *rows
                       const char *summary) {
   FILE *f = palp_app_fopen_private(path);
   if (!f) return -1;
-  fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>palp trainee record: ", f);
-  html_str(f, name);
-  fputs("</title>\n<style>body{font-family:sans-serif;margin:24px;color:#222;max-width:1100px}"
-        "table{border-collapse:collapse;margin:8px 0 20px}td,th{border:1px solid #ccc;padding:3px 5px;"
-        "text-align:right;font-size:13px}th{background:#f4f4f4}td.t{text-align:left}.nw{white-space:nowrap}"
-        ".fail{color:#a00}.muted{color:#777}</style>\n</head><body>\n<h1>Trainee record: <span id=\"trainee\">", f);
-  html_str(f, name);
-  fputs("</span></h1>\n<p id=\"summary\">", f);
+  review_html_head(f, "palp trainee record: ", "Trainee record: ", "trainee", name, ".muted{color:#777}");
+  fputs("<p id=\"summary\">", f);
   html_str(f, summary);
   fputs(". Definitions: docs/assessment.md. The automatic score informs the grade; the grade is the "
         "instructor's.</p>\n<h2>Sessions, oldest first</h2>\n<table id=\"record\"><tr><th>session</th><th>started</th>"
@@ -83,16 +77,11 @@ static int write_page(const char *path, const char *name, const review_row *rows
     const review_row *r = &rows[i];
     const palp_assess_result *m = &r->a.r;
     const int ex = r->a.has_exercise;
-    char t[64];
-    review_fmt_time(r->s.start_unix_s, t, sizeof t);
     fputs("<tr class=\"record-row\"><td class=\"t nw session\">", f);
     html_str(f, r->s.uid);
-    /* the date on one line and the time with its offset on a second, as the class report's */
-    char *sp = strchr(t, ' ');
-    if (sp) *sp = '\0';
-    fprintf(f, "</td><td class=\"t\"><span class=\"nw\">%s</span>%s<span class=\"nw\">%s</span>", t, sp ? " " : "",
-            sp ? sp + 1 : "");
-    fputs("</td><td class=\"t exercise\">", f);
+    fputs("</td>", f);
+    review_html_started_cell(f, r->s.start_unix_s);
+    fputs("<td class=\"t exercise\">", f);
     html_str(f, ex ? r->a.exercise_name : "(practice)");
     if (ex) fprintf(f, "</td><td>%d of %d", m->found, m->lesion_count);
     else fputs("</td><td class=\"muted\">-", f);
@@ -109,14 +98,7 @@ static int write_page(const char *path, const char *name, const review_row *rows
     fputs("</td></tr>\n", f);
   }
   fputs("</table>\n", f);
-  for (int i = 0; i < nr; i++)
-    if (rows[i].told[0]) {
-      fputs("<p class=\"fail told-before\">Not blind: ", f);
-      html_str(f, rows[i].s.uid);
-      fputs(": ", f);
-      html_str(f, rows[i].told);
-      fputs(".</p>\n", f);
-    }
+  review_html_not_blind(f, rows, nr);
   if (rec->exercises) {
     fputs("<h2>By exercise</h2>\n<table id=\"by-exercise\"><tr><th>exercise</th><th>sessions</th>"
           "<th>scores, oldest first</th><th>passed</th><th>latest</th><th>chart</th></tr>\n", f);
@@ -291,17 +273,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   for (int i = 0; i < nr; i++)
     if (rows[i].told[0]) printf("not blind: %s: %s\n", rows[i].s.uid, rows[i].told);
   int rc = REVIEW_OK;
-  if (csv) {
-    FILE *c = strcmp(csv, "-") ? palp_app_fopen_private(csv) : stdout;
-    if (!c) {
-      palp_log_error(log, "trainee: %s: %s", csv, strerror(errno));
-      rc = REVIEW_ERROR;
-    } else {
-      review_metrics_csv_header(c);
-      for (int i = 0; i < nr; i++) review_metrics_csv_row(c, db, &rows[i].s, &rows[i].a, rows[i].outside_s);
-      if (c != stdout && fclose(c)) rc = REVIEW_ERROR;
-    }
-  }
+  if (csv && review_rows_csv(log, "trainee", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
   if (out) {
     if (write_page(out, name, rows, nr, &rec, summary) != 0) {
       palp_log_error(log, "trainee: %s: %s", out, strerror(errno));

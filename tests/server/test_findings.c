@@ -294,6 +294,8 @@ static int on_log_event(void *user, double wall, int64_t frame, const char *kind
   return 0;
 }
 
+static void start_server(test_server *ts, const palp_srv_def *def);
+
 int main(void) {
   test_init();
   const int64_t t_start = palp_dds_now_ns();
@@ -744,10 +746,7 @@ int main(void) {
     ev.take_score = NULL;
     palp_srv_def def2 = {.cfg = cfg, .events = &ev, .verbose = 0};
     test_server ts2 = {0};
-    ts2.srv = palp_srv_create(&def2, &rc, err, sizeof err);
-    REQUIRE(ts2.srv != NULL, "second server: %s", err);
-    REQUIRE(pthread_create(&ts2.thread, NULL, test_findings_server_main, &ts2) == 0, "second server thread");
-    ts2.running = 1;
+    start_server(&ts2, &def2);
     palp_cli_station d;
     test_station_join(&d, DOMAIN, "dora", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
     palp_Debrief db_;
@@ -773,16 +772,14 @@ int main(void) {
     palp_cli_station_close(&d);
     palp_srv_db_log_close(dbl2);
     unlink(db2);
-    /* A log with its grader (a log of its own: a log's session uids are its server run's): a server stopped while ema's practice session runs closes it
-     * and tells her at once that it will not be scored (the grader takes no session the shutdown
-     * closed): the debrief and the answer are written as the server stops, and reach her station. */
+    /* A log with its grader (a log of its own: a log's session uids are its server run's): a server
+     * stopped while ema's practice session runs closes it and tells her at once that it will not be
+     * scored (the grader takes no session the shutdown closed): the debrief and the answer are
+     * written as the server stops, and reach her station. */
     REQUIRE(palp_srv_db_log_open(db2, NULL, &dbl2, err, sizeof err) == 0, "third log: %s", err);
     palp_srv_def def3 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl2), .verbose = 0};
     test_server ts3 = {0};
-    ts3.srv = palp_srv_create(&def3, &rc, err, sizeof err);
-    REQUIRE(ts3.srv != NULL, "third server: %s", err);
-    REQUIRE(pthread_create(&ts3.thread, NULL, test_findings_server_main, &ts3) == 0, "third server thread");
-    ts3.running = 1;
+    start_server(&ts3, &def3);
     palp_cli_station e;
     test_station_join(&e, DOMAIN, "ema", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
     test_server_stop(&ts3);
@@ -806,4 +803,15 @@ void *test_findings_server_main(void *arg) {
   test_server *ts = arg;
   palp_srv_run(ts->srv, 0);
   return NULL;
+}
+
+/* A server of def's on a thread of its own (test_server_stop stops it); exits the test on failure. */
+static void start_server(test_server *ts, const palp_srv_def *def) {
+  char err[256] = "";
+  int rc = 0;
+  *ts = (test_server){0};
+  ts->srv = palp_srv_create(def, &rc, err, sizeof err);
+  REQUIRE(ts->srv != NULL, "server: %s", err);
+  REQUIRE(pthread_create(&ts->thread, NULL, test_findings_server_main, ts) == 0, "server thread");
+  ts->running = 1;
 }
