@@ -17,7 +17,7 @@
 
 /* What the terminal and the page both say, worked out once from the rows (oldest first). */
 typedef struct record {
-  int exercise_first[64]; /* the row of each exercise's first session, in the order she met them */
+  int *exercise_first; /* [rows] the row of each exercise's first session, in the order she met them */
   int exercises;
   int missed[PALP_METRIC_COUNT]; /* over the latest session of each exercise whose passes are kept */
   int judged, pruned_latest;
@@ -27,13 +27,16 @@ static int same_exercise(const review_row *a, const review_row *b) {
   return a->a.has_exercise && b->a.has_exercise && !strcmp(a->a.exercise_name, b->a.exercise_name);
 }
 
-static void record_of(const review_row *rows, int nr, record *rec) {
+/* 0, or -1 when memory ran out; record_free after either. */
+static int record_of(const review_row *rows, int nr, record *rec) {
   memset(rec, 0, sizeof *rec);
+  rec->exercise_first = malloc(sizeof *rec->exercise_first * (size_t)(nr > 0 ? nr : 1));
+  if (!rec->exercise_first) return -1;
   for (int i = 0; i < nr; i++) {
     if (!rows[i].a.has_exercise) continue;
     int seen = 0;
     for (int j = 0; j < i && !seen; j++) seen = same_exercise(&rows[j], &rows[i]);
-    if (seen || rec->exercises == (int)(sizeof rec->exercise_first / sizeof rec->exercise_first[0])) continue;
+    if (seen) continue;
     rec->exercise_first[rec->exercises++] = i;
     int latest = i;
     for (int j = i; j < nr; j++)
@@ -46,7 +49,10 @@ static void record_of(const review_row *rows, int nr, record *rec) {
     rec->judged++;
     for (int mt = 0; mt < PALP_METRIC_COUNT; mt++) rec->missed[mt] += !rows[latest].a.r.pass_metric[mt];
   }
+  return 0;
 }
+
+static void record_free(record *rec) { free(rec->exercise_first); }
 
 /* The scores of exercise e's sessions, oldest first, into sc; how many; *passed, *latest (a row). */
 static int exercise_scores(const review_row *rows, int nr, int first, double *sc, int *passed, int *latest) {
@@ -241,9 +247,10 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   }
   /* By exercise, in the order she first met each: her scores in order, how many passed, the latest. */
   record rec;
-  record_of(rows, nr, &rec);
   double *sc = malloc(sizeof *sc * (size_t)nr);
-  if (!sc) {
+  if (record_of(rows, nr, &rec) != 0 || !sc) {
+    free(sc);
+    record_free(&rec);
     for (int i = 0; i < nr; i++) review_row_free(&rows[i]);
     free(rows);
     return REVIEW_ERROR;
@@ -280,6 +287,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
       rc = REVIEW_ERROR;
     } else printf("trainee: wrote %s\n", out);
   }
+  record_free(&rec);
   for (int i = 0; i < nr; i++) review_row_free(&rows[i]);
   free(rows);
   return rc;
