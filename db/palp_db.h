@@ -236,6 +236,11 @@ typedef struct palp_db_finding {
  * palp_db_log_session_begin. */
 int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exercise_name,
                          const char *exercise_json);
+/* A session begun before its phantom was known (palp-recorder: the session's samples came before
+ * its phantom's catalogue entry, and were not to be lost): its phantom's name and scene, once known.
+ * Only a session logged with the empty scene "{}" is changed (session 65). */
+int palp_db_log_session_scene(palp_db_writer *w, palp_db_session s, const char *phantom_name,
+                              const char *scene_json);
 /* Copies the triangles. PALP_EINVAL for more than PALP_DB_MAX_SAMPLE_TRIANGLES. */
 int palp_db_log_finger_sample(palp_db_writer *w, palp_db_session s, const palp_db_finger_sample *fs);
 int palp_db_log_finding(palp_db_writer *w, palp_db_session s, const palp_db_finding *f);
@@ -251,6 +256,7 @@ typedef enum palp_db_record_kind {
   PALP_DB_REC_EXERCISE,      /* schema 3 */
   PALP_DB_REC_FINGER_SAMPLE, /* schema 3 */
   PALP_DB_REC_FINDING,       /* schema 3 */
+  PALP_DB_REC_SESSION_SCENE, /* session 65: palp_db_log_session_scene */
   PALP_DB_REC_KIND_COUNT
 } palp_db_record_kind;
 const char *palp_db_record_kind_name(palp_db_record_kind k);

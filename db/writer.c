@@ -97,7 +97,7 @@ typedef struct wsess {
 } wsess;
 
 enum { ST_BEGIN, ST_SEL_SESSION, ST_END, ST_CONTACT, ST_FEEDBACK, ST_FRAME, ST_MESH, ST_EVENT,
-       ST_COUNTS, ST_EXERCISE, ST_FINGER_SAMPLE, ST_FINDING, ST_COUNT };
+       ST_COUNTS, ST_EXERCISE, ST_FINGER_SAMPLE, ST_FINDING, ST_SCENE, ST_COUNT };
 
 static const char *const stmt_sql[ST_COUNT] = {
     [ST_BEGIN] = "INSERT INTO session(uid, trainee, station, phantom_id, phantom_name, scene_json, "
@@ -120,6 +120,7 @@ static const char *const stmt_sql[ST_COUNT] = {
                  "VALUES(?1,?2,?3,?4,?5,?6)",
     [ST_COUNTS] = "UPDATE session SET records_shed = ?2, records_failed = ?3 WHERE id = ?1",
     [ST_EXERCISE] = "INSERT INTO session_exercise(session_id, exercise_name, exercise_json) VALUES(?1,?2,?3)",
+    [ST_SCENE] = "UPDATE session SET phantom_name = ?2, scene_json = ?3 WHERE id = ?1 AND scene_json = '{}'",
     [ST_FINGER_SAMPLE] = "INSERT INTO finger_sample(session_id, frame, slot, sim_time_s, radius_m, device_x_m, "
                          "device_y_m, device_z_m, proxy_x_m, proxy_y_m, proxy_z_m, force_x_n, force_y_n, "
                          "force_z_n, in_contact, point_x_m, point_y_m, point_z_m, area_m2, triangles) "
@@ -178,7 +179,8 @@ palp_db_writer_opts palp_db_writer_default_opts(void) {
 const char *palp_db_record_kind_name(palp_db_record_kind k) {
   static const char *const n[PALP_DB_REC_KIND_COUNT] = {"session_begin", "session_end", "contact",
                                                         "feedback", "frame", "mesh", "event",
-                                                        "exercise", "finger_sample", "finding"};
+                                                        "exercise", "finger_sample", "finding",
+                                                        "session_scene"};
   return (unsigned)k < PALP_DB_REC_KIND_COUNT ? n[k] : "?";
 }
 
@@ -205,7 +207,8 @@ static void rec_free(rec *r) {
   case PALP_DB_REC_SESSION_END: free(r->u.end.detail); break;
   case PALP_DB_REC_MESH: free(r->u.mesh.xyz); break;
   case PALP_DB_REC_EVENT: free(r->u.ev.detail); break;
-  case PALP_DB_REC_EXERCISE: free(r->u.ex.name); break;
+  case PALP_DB_REC_EXERCISE:
+  case PALP_DB_REC_SESSION_SCENE: free(r->u.ex.name); break;
   case PALP_DB_REC_FINGER_SAMPLE: free(r->u.fs.tri); break;
   default: break;
   }
@@ -237,7 +240,8 @@ static double mono_now(void) {
 static rec *claim(palp_db_writer *w, palp_db_record_kind kind, palp_db_session s, size_t bytes) {
   /* An exercise and a trainee's findings are as rare and as needed as who was in a session. */
   const int control = kind == PALP_DB_REC_SESSION_BEGIN || kind == PALP_DB_REC_SESSION_END ||
-                      kind == PALP_DB_REC_EVENT || kind == PALP_DB_REC_EXERCISE || kind == PALP_DB_REC_FINDING;
+                      kind == PALP_DB_REC_EVENT || kind == PALP_DB_REC_EXERCISE || kind == PALP_DB_REC_FINDING ||
+                      kind == PALP_DB_REC_SESSION_SCENE;
   const int limit = control ? w->cap : w->data_cap;
   if (w->count >= limit || (bytes > 0 && w->queue_bytes + bytes > w->opts.queue_max_bytes)) {
     w->st_.shed++;
@@ -456,16 +460,16 @@ int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_re
   return r ? 0 : PALP_EFULL;
 }
 
-int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exercise_name,
-                         const char *exercise_json) {
-  if (!w || !exercise_name || !*exercise_name || !exercise_json) return PALP_EINVAL;
-  const size_t nn = strlen(exercise_name) + 1, nj = strlen(exercise_json) + 1;
+/* A record of a name and a JSON text, packed in one allocation (the exercise, the session's scene). */
+static int log_named_json(palp_db_writer *w, palp_db_session s, palp_db_record_kind kind, const char *name,
+                          const char *json) {
+  const size_t nn = strlen(name) + 1, nj = strlen(json) + 1;
   char *blob = malloc(nn + nj);
   if (!blob) return PALP_ENOMEM;
-  memcpy(blob, exercise_name, nn);
-  memcpy(blob + nn, exercise_json, nj);
+  memcpy(blob, name, nn);
+  memcpy(blob + nn, json, nj);
   if (lock_session(w, s, 0, blob)) return PALP_EINVAL;
-  rec *r = claim(w, PALP_DB_REC_EXERCISE, s, nn + nj);
+  rec *r = claim(w, kind, s, nn + nj);
   if (r) {
     r->u.ex.name = blob;
     r->u.ex.json = blob + nn;
@@ -473,6 +477,18 @@ int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exerc
   publish(w);
   if (!r) free(blob);
   return r ? 0 : PALP_EFULL;
+}
+
+int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exercise_name,
+                         const char *exercise_json) {
+  if (!w || !exercise_name || !*exercise_name || !exercise_json) return PALP_EINVAL;
+  return log_named_json(w, s, PALP_DB_REC_EXERCISE, exercise_name, exercise_json);
+}
+
+int palp_db_log_session_scene(palp_db_writer *w, palp_db_session s, const char *phantom_name,
+                              const char *scene_json) {
+  if (!w || !phantom_name || !scene_json || !*scene_json) return PALP_EINVAL;
+  return log_named_json(w, s, PALP_DB_REC_SESSION_SCENE, phantom_name, scene_json);
 }
 
 int palp_db_log_finger_sample(palp_db_writer *w, palp_db_session s, const palp_db_finger_sample *fs) {
@@ -761,7 +777,8 @@ static int write_rec(palp_db_writer *w, rec *r) {
     sqlite3_bind_int64(st, 6, r->u.ev.count);
     return step_reset(st);
   case PALP_DB_REC_EXERCISE:
-    st = w->st[ST_EXERCISE];
+  case PALP_DB_REC_SESSION_SCENE:
+    st = w->st[r->kind == PALP_DB_REC_EXERCISE ? ST_EXERCISE : ST_SCENE];
     sqlite3_bind_int64(st, 1, sid);
     bind_text(st, 2, r->u.ex.name);
     bind_text(st, 3, r->u.ex.json);

@@ -65,7 +65,8 @@ typedef struct rsession {
   uint32_t id;
   int open;
   palp_db_session h;
-  const phantom *ph;
+  uint32_t phantom_id;
+  const phantom *ph; /* NULL while its catalogue entry has not come (on_phantom completes it) */
   int64_t frame;   /* newest frame seen from the server (feedback or deformation) */
   double t;        /* its simulated time [s] */
   uint8_t live[FINGERS];
@@ -197,6 +198,21 @@ static char *scene_from_catalogue(const palp_Phantom *p) {
   return palp_scene_to_json(&sc);
 }
 
+/* Sessions opened before their phantom's catalogue entry came (their samples forced the open: a
+ * contact is not to be lost waiting): the entry, now here, gives their phantom's name and scene
+ * to the log, which the review's metrics and replay read. */
+static void complete_sessions(recorder *r, const phantom *ph, uint32_t phantom_id) {
+  for (int i = 0; i < MAX_SESSIONS; i++) {
+    rsession *s = &r->s[i];
+    if (!s->open || s->ph || s->phantom_id != phantom_id || !ph->scene_json) continue;
+    s->ph = ph;
+    const int rc = palp_db_log_session_scene(r->w, s->h, ph->name, ph->scene_json);
+    count(r, rc);
+    palp_log_info(r->log, "session %u: phantom %u's catalogue entry came after the session: its scene logged now%s",
+                  s->id, phantom_id, rc == 0 ? "" : " (refused: the log's queue is full)");
+  }
+}
+
 static void on_phantom(recorder *r, const palp_Phantom *p) {
   phantom *ph = find_phantom(r, p->phantom_id, 1);
   if (!ph) return;
@@ -226,6 +242,7 @@ static void on_phantom(recorder *r, const palp_Phantom *p) {
                                    p->dome_triangle_count, &rc);
   }
   free(xyz);
+  complete_sessions(r, ph, p->phantom_id);
 }
 
 static palp_db_end_reason end_reason(const char *why) {
@@ -339,7 +356,12 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     if (palp_db_log_session_begin(r->w, &d, &s->h) != 0) return;
     s->id = m->session_id;
     s->open = 1;
+    s->phantom_id = m->phantom_id;
     s->ph = ph;
+    if (!ph)
+      palp_log_warn(r->log, "session %u: recording before phantom %u's catalogue entry came (its samples would "
+                            "otherwise be lost); its scene is logged when the entry comes",
+                    m->session_id, m->phantom_id);
     s->sample_every = palp_assess_sample_every(d.tick_hz, PALP_ASSESS_SAMPLE_HZ);
     char detail[160];
     snprintf(detail, sizeof detail, "%s joined as trainee from %s", m->trainee_name, m->trainee_station);

@@ -13,7 +13,9 @@
  *  - contact inputs: one add, one remove, and at least 54 of the 59 updates (best-effort topic on
  *    loopback: tolerance 10 %), feedback samples likewise at least 54 of 60;
  *  - join, reject x3, overrun x1, leave events, and a held trainee station's leave and return
- *    (an open state with a reason, then without); `show` works and `replay` refuses (exit 2). */
+ *    (an open state with a reason, then without); `show` works and `replay` refuses (exit 2);
+ *  - session 8, whose open state and first contacts come before its phantom's catalogue entry:
+ *    opened without losing them, its phantom's name and scene logged when the entry comes. */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -33,6 +35,8 @@
 #define DOMAIN 161
 #define SESSION 7u
 #define PHANTOM 3u
+/* session 7's rows alone (session 8 is logged beside it) */
+#define DANA " session_id = (SELECT id FROM session WHERE trainee = 'dana')"
 
 int main(int argc, char **argv) {
   if (argc < 5) {
@@ -167,6 +171,49 @@ int main(int argc, char **argv) {
   ss.duration = 0.6;
   snprintf(ss.reason, sizeof ss.reason, "lost (liveliness lease expired)");
   REQUIRE(dds_write(w_state, &ss) == 0, "state closed");
+
+  /* Session 8 (session 65): its open state and its first contacts come before its phantom's
+   * catalogue entry (the two race at a recorder's start; a large fragmented entry can lose). The
+   * contacts force the session open, not to lose them; the entry, when it comes, gives the log the
+   * phantom's name and scene (before, the session kept "{}" and the review could not assess it). */
+  char part8[64];
+  palp_dds_session_partition(SESSION + 1, part8, sizeof part8);
+  dds_entity_t pub8 = palp_dds_session_publisher(pp, part8);
+  dds_entity_t w_con8 = palp_dds_create_writer(pub8, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+  REQUIRE(wait_matched(w_con8, 1, 20) == 0, "session 8's contact writer never matched the recorder");
+  palp_SessionState s8 = ss;
+  s8.session_id = SESSION + 1;
+  s8.phantom_id = PHANTOM + 1;
+  s8.phase = palp_PHASE_OPEN;
+  s8.reason[0] = 0;
+  s8.rejected_samples = s8.overruns = 0;
+  s8.duration = 0;
+  snprintf(s8.partition, sizeof s8.partition, "%s", part8);
+  snprintf(s8.trainee_name, sizeof s8.trainee_name, "erin");
+  REQUIRE(dds_write(w_state, &s8) == 0, "session 8 open");
+  sleep_ms(200);
+  for (int k = 0; k < 40; k++) {
+    if (k == 20) { /* the catalogue entry, half-way */
+      palp_Phantom ph8 = test_phantom(PHANTOM + 1, "right dome", &md, &mesh, rest, 1000);
+      snprintf(ph8.scene_name, sizeof ph8.scene_name, "paper_step");
+      ph8.effects = PALP_EFFECT_ALL;
+      REQUIRE(dds_write(w_cat, &ph8) == 0, "session 8's catalogue entry");
+      sleep_ms(200);
+    }
+    palp_Contact c;
+    memset(&c, 0, sizeof c);
+    c.session_id = SESSION + 1;
+    c.seq = (uint64_t)k + 1;
+    c.mode = palp_CONTACT_FINGER;
+    c.center = (palp_Vec3){0, 0, 0.047 - 1e-5 * k};
+    c.radius = 0.008;
+    dds_write(w_con8, &c);
+    sleep_ms(4);
+  }
+  s8.phase = palp_PHASE_CLOSED;
+  s8.duration = 0.4;
+  snprintf(s8.reason, sizeof s8.reason, "trainee station left");
+  REQUIRE(dds_write(w_state, &s8) == 0, "session 8 closed");
   sleep_ms(600);
   int status;
   CHECK(stop_recorder(pid, &status), "recorder exit status %d", status);
@@ -189,28 +236,40 @@ int main(int argc, char **argv) {
                "abs(contact_force_n - 0.05 * (frame - 1)) < 1e-12 AND max_disp_m >= top_disp_m") ==
             db_scalar(h, "SELECT count(*) FROM frame"),
         "frame rows carry the sent displacement and force");
-  int64_t adds = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'add' AND kind = 'finger'");
-  int64_t upd = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'update'");
-  int64_t rem = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'remove'");
+  int64_t adds = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'add' AND kind = 'finger' AND" DANA);
+  int64_t upd = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'update' AND" DANA);
+  int64_t rem = db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'remove' AND" DANA);
   int64_t fbn = db_scalar(h, "SELECT count(*) FROM feedback");
   printf("recorded: %lld add, %lld of 59 updates, %lld remove, %lld of 60 feedback samples\n", (long long)adds,
          (long long)upd, (long long)rem, (long long)fbn);
   CHECK(adds == 1 && rem == 1 && upd >= 54 && upd <= 59, "contact inputs (best effort, >= 90 %% of updates)");
   CHECK(fbn >= 54 && fbn <= 60, "feedback samples (best effort, >= 90 %%): %lld", (long long)fbn);
-  CHECK(db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'update' AND radius_m = 0.008 AND center_z_m < 0.047") >= 54,
+  CHECK(db_scalar(h, "SELECT count(*) FROM contact_input WHERE op = 'update' AND radius_m = 0.008 AND center_z_m < 0.047 AND" DANA) >= 54,
         "finger radius and centre recorded");
   CHECK(db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'reject'") == 3 &&
             db_scalar(h, "SELECT sum(count) FROM event WHERE kind = 'overrun'") == 1 &&
-            db_scalar(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave')") == 4,
+            db_scalar(h, "SELECT count(*) FROM event WHERE kind IN ('join', 'leave') AND" DANA) == 4,
         "join, reject x3, overrun x1, leave, and the held station's leave and return");
   CHECK(db_scalar(h, "SELECT count(*) FROM event WHERE kind = 'leave' AND detail = "
                      "'host/4242/haptic-1 (trainee, lost; session held)'") == 1 &&
             db_scalar(h, "SELECT count(*) FROM event WHERE kind = 'join' AND detail = "
                          "'host/4242/haptic-1 (trainee, back from a stall)'") == 1,
         "the held station's leave once (its state repeated) and its return once, named as palp-server names them");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'erin' AND phantom_id = '4' AND "
+                     "phantom_name = 'right dome' AND scene_json <> '{}' AND end_reason = 'normal'") == 1,
+        "session 8, begun before its phantom's catalogue entry: the entry's name and scene logged when it came");
+  const int64_t upd8 = db_scalar(h, "SELECT count(*) FROM contact_input c JOIN session s ON s.id = c.session_id "
+                                    "WHERE s.trainee = 'erin' AND c.op IN ('add', 'update')");
+  CHECK(upd8 >= 36 && upd8 <= 40, "  none of its contacts lost waiting for it: %lld of 40 (best effort, >= 90 %%)",
+        (long long)upd8);
+  char uid8[128] = "";
+  sqlite3_stmt *q8;
+  sqlite3_prepare_v2(h, "SELECT uid FROM session WHERE trainee = 'erin'", -1, &q8, NULL);
+  if (sqlite3_step(q8) == SQLITE_ROW) snprintf(uid8, sizeof uid8, "%s", (const char *)sqlite3_column_text(q8, 0));
+  sqlite3_finalize(q8);
   char uid[128] = "";
   sqlite3_stmt *q;
-  sqlite3_prepare_v2(h, "SELECT uid FROM session", -1, &q, NULL);
+  sqlite3_prepare_v2(h, "SELECT uid FROM session WHERE trainee = 'dana'", -1, &q, NULL);
   if (sqlite3_step(q) == SQLITE_ROW) snprintf(uid, sizeof uid, "%s", (const char *)sqlite3_column_text(q, 0));
   sqlite3_finalize(q);
   sqlite3_close(h);
@@ -223,6 +282,11 @@ int main(int argc, char **argv) {
   st = system(cmd);
   CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 2, "replay refuses a recorded session with exit 2 (got %d)",
         WIFEXITED(st) ? WEXITSTATUS(st) : -1);
+  /* its review reads the scene (the phantom named, the scene parsed: the paper's dome) */
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' show %s 2>&1 | grep -q '^phantom    4 (right dome)' && ! '%s' --db '%s' show %s "
+           "2>&1 | grep -q 'does not parse'", argv[3], db, uid8, argv[3], db, uid8);
+  st = system(cmd);
+  CHECK(uid8[0] && WIFEXITED(st) && WEXITSTATUS(st) == 0, "  show %s names its phantom and reads its scene", uid8);
   free(pos);
   free(rest);
   palp_mesh_destroy(&mesh);
