@@ -410,11 +410,11 @@ static void write_told_score(palp_srv *srv, const char *partition, const palp_Se
  * well, when the grader has it; told at once that there will be none when nothing will grade it. */
 static void expect_told_score(palp_srv *srv, const palp_srv_session *s) {
   if (srv->topic[PALP_TOPIC_DEBRIEF_SCORE] <= 0 || !s->exercise) return;
-  const char *none = !srv->events ? "this server keeps no session log to score it from; your instructor grades the session"
-                     : !srv->events->take_score
-                         ? (srv->events->unscored ? srv->events->unscored
-                                                  : "this server keeps no session log to score it from; your "
-                                                    "instructor grades the session")
+  const palp_srv_events *ev = srv->events;
+  const char *none = !ev || !ev->take_score
+                         ? (ev && ev->unscored ? ev->unscored
+                                               : "this server keeps no session log to score it from; your instructor "
+                                                 "grades the session")
                      : srv->stopping ? "the server stopped before it scored the session; the instructor's review "
                                        "scores it from the session log"
                                      : NULL;
