@@ -241,6 +241,9 @@ int palp_db_log_exercise(palp_db_writer *w, palp_db_session s, const char *exerc
  * Only a session logged with the empty scene "{}" is changed (session 65). */
 int palp_db_log_session_scene(palp_db_writer *w, palp_db_session s, const char *phantom_name,
                               const char *scene_json);
+/* The same session's params, rewritten with what came late (its phantom's force limit, the name of
+ * the exercise its phantom runs): replaces params_json (session 65). */
+int palp_db_log_session_params(palp_db_writer *w, palp_db_session s, const char *params_json);
 /* Copies the triangles. PALP_EINVAL for more than PALP_DB_MAX_SAMPLE_TRIANGLES. */
 int palp_db_log_finger_sample(palp_db_writer *w, palp_db_session s, const palp_db_finger_sample *fs);
 int palp_db_log_finding(palp_db_writer *w, palp_db_session s, const palp_db_finding *f);
@@ -257,6 +260,7 @@ typedef enum palp_db_record_kind {
   PALP_DB_REC_FINGER_SAMPLE, /* schema 3 */
   PALP_DB_REC_FINDING,       /* schema 3 */
   PALP_DB_REC_SESSION_SCENE, /* session 65: palp_db_log_session_scene */
+  PALP_DB_REC_SESSION_PARAMS, /* session 65: palp_db_log_session_params */
   PALP_DB_REC_KIND_COUNT
 } palp_db_record_kind;
 const char *palp_db_record_kind_name(palp_db_record_kind k);

@@ -97,7 +97,7 @@ typedef struct wsess {
 } wsess;
 
 enum { ST_BEGIN, ST_SEL_SESSION, ST_END, ST_CONTACT, ST_FEEDBACK, ST_FRAME, ST_MESH, ST_EVENT,
-       ST_COUNTS, ST_EXERCISE, ST_FINGER_SAMPLE, ST_FINDING, ST_SCENE, ST_COUNT };
+       ST_COUNTS, ST_EXERCISE, ST_FINGER_SAMPLE, ST_FINDING, ST_SCENE, ST_PARAMS, ST_COUNT };
 
 static const char *const stmt_sql[ST_COUNT] = {
     [ST_BEGIN] = "INSERT INTO session(uid, trainee, station, phantom_id, phantom_name, scene_json, "
@@ -121,6 +121,7 @@ static const char *const stmt_sql[ST_COUNT] = {
     [ST_COUNTS] = "UPDATE session SET records_shed = ?2, records_failed = ?3 WHERE id = ?1",
     [ST_EXERCISE] = "INSERT INTO session_exercise(session_id, exercise_name, exercise_json) VALUES(?1,?2,?3)",
     [ST_SCENE] = "UPDATE session SET phantom_name = ?2, scene_json = ?3 WHERE id = ?1 AND scene_json = '{}'",
+    [ST_PARAMS] = "UPDATE session SET params_json = ?2 WHERE id = ?1",
     [ST_FINGER_SAMPLE] = "INSERT INTO finger_sample(session_id, frame, slot, sim_time_s, radius_m, device_x_m, "
                          "device_y_m, device_z_m, proxy_x_m, proxy_y_m, proxy_z_m, force_x_n, force_y_n, "
                          "force_z_n, in_contact, point_x_m, point_y_m, point_z_m, area_m2, triangles) "
@@ -180,7 +181,7 @@ const char *palp_db_record_kind_name(palp_db_record_kind k) {
   static const char *const n[PALP_DB_REC_KIND_COUNT] = {"session_begin", "session_end", "contact",
                                                         "feedback", "frame", "mesh", "event",
                                                         "exercise", "finger_sample", "finding",
-                                                        "session_scene"};
+                                                        "session_scene", "session_params"};
   return (unsigned)k < PALP_DB_REC_KIND_COUNT ? n[k] : "?";
 }
 
@@ -208,7 +209,8 @@ static void rec_free(rec *r) {
   case PALP_DB_REC_MESH: free(r->u.mesh.xyz); break;
   case PALP_DB_REC_EVENT: free(r->u.ev.detail); break;
   case PALP_DB_REC_EXERCISE:
-  case PALP_DB_REC_SESSION_SCENE: free(r->u.ex.name); break;
+  case PALP_DB_REC_SESSION_SCENE:
+  case PALP_DB_REC_SESSION_PARAMS: free(r->u.ex.name); break;
   case PALP_DB_REC_FINGER_SAMPLE: free(r->u.fs.tri); break;
   default: break;
   }
@@ -241,7 +243,7 @@ static rec *claim(palp_db_writer *w, palp_db_record_kind kind, palp_db_session s
   /* An exercise and a trainee's findings are as rare and as needed as who was in a session. */
   const int control = kind == PALP_DB_REC_SESSION_BEGIN || kind == PALP_DB_REC_SESSION_END ||
                       kind == PALP_DB_REC_EVENT || kind == PALP_DB_REC_EXERCISE || kind == PALP_DB_REC_FINDING ||
-                      kind == PALP_DB_REC_SESSION_SCENE;
+                      kind == PALP_DB_REC_SESSION_SCENE || kind == PALP_DB_REC_SESSION_PARAMS;
   const int limit = control ? w->cap : w->data_cap;
   if (w->count >= limit || (bytes > 0 && w->queue_bytes + bytes > w->opts.queue_max_bytes)) {
     w->st_.shed++;
@@ -489,6 +491,11 @@ int palp_db_log_session_scene(palp_db_writer *w, palp_db_session s, const char *
                               const char *scene_json) {
   if (!w || !phantom_name || !scene_json || !*scene_json) return PALP_EINVAL;
   return log_named_json(w, s, PALP_DB_REC_SESSION_SCENE, phantom_name, scene_json);
+}
+
+int palp_db_log_session_params(palp_db_writer *w, palp_db_session s, const char *params_json) {
+  if (!w || !params_json || !*params_json) return PALP_EINVAL;
+  return log_named_json(w, s, PALP_DB_REC_SESSION_PARAMS, "", params_json);
 }
 
 int palp_db_log_finger_sample(palp_db_writer *w, palp_db_session s, const palp_db_finger_sample *fs) {
@@ -782,6 +789,11 @@ static int write_rec(palp_db_writer *w, rec *r) {
     sqlite3_bind_int64(st, 1, sid);
     bind_text(st, 2, r->u.ex.name);
     bind_text(st, 3, r->u.ex.json);
+    return step_reset(st);
+  case PALP_DB_REC_SESSION_PARAMS:
+    st = w->st[ST_PARAMS];
+    sqlite3_bind_int64(st, 1, sid);
+    bind_text(st, 2, r->u.ex.json);
     return step_reset(st);
   case PALP_DB_REC_FINGER_SAMPLE: {
     const palp_db_finger_sample *fs = &r->u.fs.s;

@@ -67,6 +67,9 @@ typedef struct rsession {
   palp_db_session h;
   uint32_t phantom_id;
   const phantom *ph; /* NULL while its catalogue entry has not come (on_phantom completes it) */
+  char partition[64];
+  double recorded_from; /* the session's age when the recorder first saw it [s] */
+  int exercise_named;   /* its params name the exercise its phantom runs */
   int64_t frame;   /* newest frame seen from the server (feedback or deformation) */
   double t;        /* its simulated time [s] */
   uint8_t live[FINGERS];
@@ -198,6 +201,32 @@ static char *scene_from_catalogue(const palp_Phantom *p) {
   return palp_scene_to_json(&sc);
 }
 
+static const char *public_exercise_of(const recorder *r, uint32_t phantom_id);
+
+/* The session's params as the log keeps them, from what the recorder knows now of its phantom (its
+ * force limit) and of the exercise the phantom runs (its name); rewritten when either comes late. */
+static void session_params(const recorder *r, const rsession *s, char *buf, size_t len) {
+  const char *pex = public_exercise_of(r, s->phantom_id);
+  char exname[96] = "", late[64] = "";
+  if (pex) snprintf(exname, sizeof exname, ", \"exercise_name\": \"%s\"", pex);
+  /* Started (or restarted) after the session opened: what came before is not in this log, and
+   * the review says so (its marks, its coverage are this log's part of the session). A session
+   * seen within a second of its opening counts as seen from its start. */
+  if (s->recorded_from > 1.0 && isfinite(s->recorded_from))
+    snprintf(late, sizeof late, ", \"recorded_from_s\": %.3f", s->recorded_from);
+  snprintf(buf, len,
+           "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
+           "\"max_force_n\": %.17g, \"footprint\": \"patch\"%s%s}",
+           s->partition, s->ph ? s->ph->max_force : 0.0, exname, late);
+}
+
+static void log_params(recorder *r, rsession *s) {
+  char params[700];
+  s->exercise_named = public_exercise_of(r, s->phantom_id) != NULL;
+  session_params(r, s, params, sizeof params);
+  count(r, palp_db_log_session_params(r->w, s->h, params));
+}
+
 /* Sessions opened before their phantom's catalogue entry came (their samples forced the open: a
  * contact is not to be lost waiting): the entry, now here, gives their phantom's name and scene
  * to the log, which the review's metrics and replay read. */
@@ -208,6 +237,7 @@ static void complete_sessions(recorder *r, const phantom *ph, uint32_t phantom_i
     s->ph = ph;
     const int rc = palp_db_log_session_scene(r->w, s->h, ph->name, ph->scene_json);
     count(r, rc);
+    log_params(r, s); /* its force limit, known now */
     palp_log_info(r->log, "session %u: phantom %u's catalogue entry came after the session: its scene logged now%s",
                   s->id, phantom_id, rc == 0 ? "" : " (refused: the log's queue is full)");
   }
@@ -318,6 +348,15 @@ static void on_public_exercise(recorder *r, const palp_Exercise *m) {
   if (!slot) return;
   slot->phantom_id = m->phantom_id;
   snprintf(slot->name, sizeof slot->name, "%s", m->name);
+  /* A session on this phantom opened before this came, and without its lesions (they stay on the
+   * server): its params name the exercise now, so that its review says which it was. */
+  for (int i = 0; i < MAX_SESSIONS; i++) {
+    rsession *s = &r->s[i];
+    if (!s->open || s->exercise || s->exercise_named || s->phantom_id != m->phantom_id) continue;
+    log_params(r, s);
+    palp_log_info(r->log, "session %u: the exercise its phantom runs (%s) came after the session: named now", s->id,
+                  slot->name);
+  }
 }
 
 static const char *public_exercise_of(const recorder *r, uint32_t phantom_id) {
@@ -332,32 +371,25 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     if (!s || s->open) return; /* already recording (transient-local re-delivery) */
     const phantom *ph = find_phantom(r, m->phantom_id, 0);
     const double start = now_unix() - m->duration;
-    char uid[128], pid[32], params[700], exname[96] = "", late[64] = "";
+    char uid[128], pid[32], params[700];
     /* Session ids restart with each server run: the start time makes the uid unique. */
     snprintf(uid, sizeof uid, "dds-%u-%u-%.0f", m->phantom_id, m->session_id, start * 1e3);
     snprintf(pid, sizeof pid, "%u", m->phantom_id);
-    const char *pex = public_exercise_of(r, m->phantom_id);
-    if (pex) snprintf(exname, sizeof exname, ", \"exercise_name\": \"%s\"", pex);
-    /* Started (or restarted) after the session opened: what came before is not in this log, and
-     * the review says so (its marks, its coverage are this log's part of the session). A session
-     * seen within a second of its opening counts as seen from its start. */
-    if (m->duration > 1.0 && isfinite(m->duration))
-      snprintf(late, sizeof late, ", \"recorded_from_s\": %.3f", m->duration);
-    snprintf(params, sizeof params,
-             "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
-             "\"max_force_n\": %.17g, \"footprint\": \"patch\"%s%s}",
-             m->partition, ph ? ph->max_force : 0.0, exname, late);
+    memset(s, 0, sizeof *s);
+    s->phantom_id = m->phantom_id;
+    s->ph = ph;
+    snprintf(s->partition, sizeof s->partition, "%s", m->partition);
+    s->recorded_from = m->duration;
+    s->exercise_named = public_exercise_of(r, m->phantom_id) != NULL;
+    session_params(r, s, params, sizeof params);
     palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
                              .phantom_id = pid, .phantom_name = ph ? ph->name : "",
                              .scene_json = ph && ph->scene_json ? ph->scene_json : "{}", .params_json = params,
                              .tick_hz = m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000,
                              .dt_s = 1.0 / (m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000), .start_unix_s = start};
-    memset(s, 0, sizeof *s);
     if (palp_db_log_session_begin(r->w, &d, &s->h) != 0) return;
     s->id = m->session_id;
     s->open = 1;
-    s->phantom_id = m->phantom_id;
-    s->ph = ph;
     if (!ph)
       palp_log_warn(r->log, "session %u: recording before phantom %u's catalogue entry came (its samples would "
                             "otherwise be lost); its scene is logged when the entry comes",

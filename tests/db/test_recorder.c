@@ -14,8 +14,9 @@
  *    loopback: tolerance 10 %), feedback samples likewise at least 54 of 60;
  *  - join, reject x3, overrun x1, leave events, and a held trainee station's leave and return
  *    (an open state with a reason, then without); `show` works and `replay` refuses (exit 2);
- *  - session 8, whose open state and first contacts come before its phantom's catalogue entry:
- *    opened without losing them, its phantom's name and scene logged when the entry comes. */
+ *  - session 8, whose open state and first contacts come before its phantom's catalogue entry and
+ *    the exercise it runs: opened without losing them, its phantom's name and scene logged when the
+ *    entry comes, its params naming the exercise when that comes. */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -180,7 +181,9 @@ int main(int argc, char **argv) {
   palp_dds_session_partition(SESSION + 1, part8, sizeof part8);
   dds_entity_t pub8 = palp_dds_session_publisher(pp, part8);
   dds_entity_t w_con8 = palp_dds_create_writer(pub8, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+  dds_entity_t w_pex = palp_dds_create_writer(pp, t[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   REQUIRE(wait_matched(w_con8, 1, 20) == 0, "session 8's contact writer never matched the recorder");
+  REQUIRE(wait_matched(w_pex, 1, 20) == 0, "the exercise writer never matched the recorder");
   palp_SessionState s8 = ss;
   s8.session_id = SESSION + 1;
   s8.phantom_id = PHANTOM + 1;
@@ -198,6 +201,14 @@ int main(int argc, char **argv) {
       snprintf(ph8.scene_name, sizeof ph8.scene_name, "paper_step");
       ph8.effects = PALP_EFFECT_ALL;
       REQUIRE(dds_write(w_cat, &ph8) == 0, "session 8's catalogue entry");
+      sleep_ms(200);
+    }
+    if (k == 30) { /* the exercise its phantom runs, public part (its lesions stay on the server) */
+      palp_Exercise ex8;
+      memset(&ex8, 0, sizeof ex8);
+      ex8.phantom_id = PHANTOM + 1;
+      snprintf(ex8.name, sizeof ex8.name, "right-ex");
+      REQUIRE(dds_write(w_pex, &ex8) == 0, "session 8's exercise (public part)");
       sleep_ms(200);
     }
     palp_Contact c;
@@ -258,6 +269,10 @@ int main(int argc, char **argv) {
   CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'erin' AND phantom_id = '4' AND "
                      "phantom_name = 'right dome' AND scene_json <> '{}' AND end_reason = 'normal'") == 1,
         "session 8, begun before its phantom's catalogue entry: the entry's name and scene logged when it came");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'erin' AND json_extract(params_json, "
+                     "'$.exercise_name') = 'right-ex' AND json_extract(params_json, '$.max_force_n') = 20 AND "
+                     "json_extract(params_json, '$.partition') = 'palp/session/8'") == 1,
+        "  and its params name the exercise that came after it (right-ex) and the entry's force limit (20 N)");
   const int64_t upd8 = db_scalar(h, "SELECT count(*) FROM contact_input c JOIN session s ON s.id = c.session_id "
                                     "WHERE s.trainee = 'erin' AND c.op IN ('add', 'update')");
   CHECK(upd8 >= 36 && upd8 <= 40, "  none of its contacts lost waiting for it: %lld of 40 (best effort, >= 90 %%)",
@@ -283,6 +298,8 @@ int main(int argc, char **argv) {
   CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 2, "replay refuses a recorded session with exit 2 (got %d)",
         WIFEXITED(st) ? WEXITSTATUS(st) : -1);
   /* its review reads the scene (the phantom named, the scene parsed: the paper's dome) */
+  /* (no finger samples here: show's exercise line, which the params' name gives, comes with an
+   * assessment; server_exercise_recorded checks it on a recorded exercise session) */
   snprintf(cmd, sizeof cmd, "'%s' --db '%s' show %s 2>&1 | grep -q '^phantom    4 (right dome)' && ! '%s' --db '%s' show %s "
            "2>&1 | grep -q 'does not parse'", argv[3], db, uid8, argv[3], db, uid8);
   st = system(cmd);
