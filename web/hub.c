@@ -2197,11 +2197,13 @@ static int take(const item *it, size_t pre, unsigned char **buf, size_t *len) {
   return 1;
 }
 
-/* The oldest message of a ring that is newer than ver (a page's cursor into it), or NULL. */
-static const item *oldest_after(const item *ring, int n, uint64_t ver) {
+/* The oldest message of a ring that is newer than ver (a page's cursor into it), or NULL; with sids,
+ * only one kept for session sid. */
+static const item *oldest_after(const item *ring, const uint32_t *sids, uint32_t sid, int n, uint64_t ver) {
   const item *pick = NULL;
   for (int k = 0; k < n; k++)
-    if (ring[k].buf && ring[k].ver > ver && (!pick || ring[k].ver < pick->ver)) pick = &ring[k];
+    if (ring[k].buf && ring[k].ver > ver && (!sids || sids[k] == sid) && (!pick || ring[k].ver < pick->ver))
+      pick = &ring[k];
   return pick;
 }
 
@@ -2274,13 +2276,9 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       goto out;
     }
     /* a page's own trainee session's score, where the server told her it (on_debrief_score) */
-    const item *mine = NULL;
-    for (int k = 0; k < DEBRIEFS && c->trainee; k++) {
-      const item *e = &h->told_scores[k];
-      if (e->buf && h->told_scores_sid[k] == c->trainee && e->ver > c->scores_ver &&
-          (!mine || e->ver < mine->ver))
-        mine = e;
-    }
+    const item *mine = c->trainee ? oldest_after(h->told_scores, h->told_scores_sid, c->trainee, DEBRIEFS,
+                                                 c->scores_ver)
+                                  : NULL;
     if (mine) {
       rc = take(mine, pre, buf, len);
       if (rc > 0) c->scores_ver = mine->ver;
@@ -2294,7 +2292,7 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       uint64_t *ver;
     } const kept[] = {{h->ended_answers, &c->ended_answers_ver}, {h->scores, &c->scores_ver}};
     for (size_t r = 0; r < sizeof kept / sizeof kept[0] && replay && h->def.answers; r++) {
-      const item *next = oldest_after(kept[r].ring, DEBRIEFS, *kept[r].ver);
+      const item *next = oldest_after(kept[r].ring, NULL, 0, DEBRIEFS, *kept[r].ver);
       if (!next) continue;
       rc = take(next, pre, buf, len);
       if (rc > 0) *kept[r].ver = next->ver;
