@@ -665,20 +665,8 @@ static void print_debrief_score(const opts *o, palp_cli_station *st) {
             o->name, SCORE_WAIT_S);
     return;
   }
-  if (m.status != palp_SCORE_GRADED) {
-    tprintf(o, "[trainee %s] no score: %s\n", o->name, m.reason);
-    return;
-  }
-  char work[256] = "";
-  size_t n = 0;
-  for (int i = 0; i < PALP_METRIC_COUNT && i < 6; i++)
-    if (!m.passed[i])
-      n += (size_t)snprintf(work + n, n < sizeof work ? sizeof work - n : 0, "%s%s", n ? ", " : " To work on: ",
-                            palp_metric_to_work_on(i));
-  if (n) snprintf(work + n, n < sizeof work ? sizeof work - n : 0, ".");
-  tprintf(o, "[trainee %s] score: %.1f of 100, %s (the automatic score, as the review gives it; your instructor grades "
-             "you).%s%s\n", o->name, m.score, m.pass ? "passed" : "not passed", work,
-          m.log_complete ? "" : " The session's log is incomplete: the score may be low.");
+  char text[640];
+  tprintf(o, "[trainee %s] %s\n", o->name, palp_cli_score_text(&m, text, sizeof text));
 }
 
 /* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,

@@ -2,6 +2,8 @@
 #include "station.h"
 #include "view.h"
 
+#include "palp_assess.h" /* palp_metric_to_work_on: the words her page uses too */
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -462,6 +464,25 @@ int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_Se
     if (palp_dds_now_ns() >= end) return 0;
     nap(0.02);
   }
+}
+
+const char *palp_cli_score_text(const palp_SessionScore *m, char *buf, size_t len) {
+  if (!len) return buf;
+  if (m->status != palp_SCORE_GRADED) {
+    snprintf(buf, len, "no score: %s", m->reason);
+    return buf;
+  }
+  char work[256] = "";
+  size_t n = 0;
+  for (int i = 0; i < PALP_METRIC_COUNT && i < 6; i++)
+    if (!m->passed[i])
+      n += (size_t)snprintf(work + n, n < sizeof work ? sizeof work - n : 0, "%s%s", n ? ", " : " To work on: ",
+                            palp_metric_to_work_on(i));
+  if (n) snprintf(work + n, n < sizeof work ? sizeof work - n : 0, ".");
+  snprintf(buf, len, "score: %.1f of 100, %s (the automatic score, as the review gives it; your instructor grades "
+                     "you).%s%s", m->score, m->pass ? "passed" : "not passed", work,
+           m->log_complete ? "" : " The session's log is incomplete: the score may be low.");
+  return buf;
 }
 
 /* Writes rq (again, unless already_sent) every 0.3 s until the server answers its

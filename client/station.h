@@ -162,6 +162,11 @@ int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief 
  * malformed (err says why). */
 int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_SessionScore *out, char *err,
                                    size_t errlen);
+/* What the trainee is told of a score (the station's line after "[trainee NAME] "; her web page says
+ * the same, web/www/js/trainee.js): "score: S of 100, passed|not passed (...). To work on: ... ." and,
+ * from a log that lost records, " The session's log is incomplete: the score may be low."; or "no
+ * score: REASON" when it was not graded. Returns buf. */
+const char *palp_cli_score_text(const palp_SessionScore *m, char *buf, size_t len);
 
 /* Non-blocking: 1 and the state when the session's state changed to closed. Call it
  * about every 100 ms: a longer gap is taken for a stall of this process, after which

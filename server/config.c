@@ -137,7 +137,8 @@ static const char *const top_keys[] = {"domain_id",      "tick_rate_hz",   "tick
                                        "join_rate",      "join_burst",     "closed_retention",
                                        "dds_log_lines",  "dds_log_window", "security",
                                        "server_name",    "server_number",  "log_level",      "exercises",
-                                       "assess_sample_hz", "station_grace", "session_exercise", NULL};
+                                       "assess_sample_hz", "station_grace", "session_exercise",
+                                       "session_log_max_mb", NULL};
 static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 static const char *const exercise_keys[] = {"id", "file", "physics_rate_hz", "comment", NULL};
@@ -298,6 +299,12 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
     goto out;
   }
   if ((rc = get_number(root, "log_interval", w, 0, 3600, 0, &cfg->log_interval, err, errlen))) goto out;
+  /* 0 (no cap) or at least 1 MB: a smaller cap would hold less than a minute's session; at most 10 TB */
+  if ((rc = get_number(root, "session_log_max_mb", w, 0, 1e7, 0, &cfg->session_log_max_mb, err, errlen))) goto out;
+  if (cfg->session_log_max_mb > 0 && cfg->session_log_max_mb < 1) {
+    rc = fail(err, errlen, PALP_EINVAL, "session_log_max_mb: %g is below 1 MB (0 sets no cap)", cfg->session_log_max_mb);
+    goto out;
+  }
   if ((rc = get_number(root, "absurd_force", w, 0.01, 1e6, 0, &cfg->absurd_force, err, errlen))) goto out;
   if (cfg->absurd_force < cfg->max_force) {
     rc = fail(err, errlen, PALP_EINVAL, "absurd_force: %g is below max_force %g", cfg->absurd_force,

@@ -326,7 +326,8 @@ int main(int argc, char **argv) {
       *slash = 0;
       mkdir(dir, 0777);
     }
-    rc = palp_srv_db_log_open(def.cfg.database, &plog, &log, err, sizeof err);
+    rc = palp_srv_db_log_open(def.cfg.database, (int64_t)(def.cfg.session_log_max_mb * 1e6), &plog, &log, err,
+                              sizeof err);
     if (rc < 0) {
       fprintf(stderr, "palp-server: bad configuration: %s: database: %s: %s\n", config_path, def.cfg.database, err);
       return 1;

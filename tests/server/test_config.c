@@ -34,6 +34,12 @@ int main(void) {
   expect_error("{\"session_exercise\": \"yes\", " PH "}",
                "session_exercise: \"yes\" is not \"secured\", \"always\" or \"off\"", PALP_EINVAL);
   expect_error("{\"tick_rate\": 100, " PH "}", "tick_rate: unknown field", PALP_EPARSE);
+  /* session 66: the session log's cap, in MB: 0 (none) or 1 .. 10^7 */
+  expect_error("{\"session_log_max_mb\": 0.5, " PH "}", "session_log_max_mb: 0.5 is below 1 MB (0 sets no cap)",
+               PALP_EINVAL);
+  expect_error("{\"session_log_max_mb\": -1, " PH "}", "session_log_max_mb: -1 is outside", PALP_EINVAL);
+  expect_error("{\"session_log_max_mb\": 2e7, " PH "}", "session_log_max_mb: 2e+07 is outside", PALP_EINVAL);
+  expect_error("{\"session_log_max_mb\": \"16 GB\", " PH "}", "session_log_max_mb: expected a number", PALP_EPARSE);
   expect_error("{\"finger_radius_min\": 0.02, \"finger_radius_max\": 0.01, " PH "}", "finger_radius_max:", PALP_EINVAL);
   expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\"}]}", "phantoms[0].scene: missing", PALP_EPARSE);
   expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": 3}]}", "phantoms[0].scene: expected a string",
@@ -82,7 +88,8 @@ int main(void) {
   int ok = rc == 0 && cfg.tick_rate_hz == 100 && cfg.domain_id == 0 && cfg.max_sessions == 32 &&
            cfg.deformation_rate_hz == 30 && cfg.max_force == 20 && cfg.force_policy == PALP_SRV_FORCE_CLAMP &&
            cfg.phantom_count == 1 && strcmp(cfg.phantom[0].scene_path, "/base/s.json") == 0 &&
-           strcmp(cfg.dds_config, "/base/cyclonedds-loopback.xml") == 0 && cfg.database[0] == 0;
+           strcmp(cfg.dds_config, "/base/cyclonedds-loopback.xml") == 0 && cfg.database[0] == 0 &&
+           cfg.session_log_max_mb == 0; /* no cap unless the lab sets one */
   fprintf(stderr, "%s defaults: rc %d, %g Hz, %d sessions, scene %s, dds %s\n", ok ? "ok  " : "FAIL", rc,
           cfg.tick_rate_hz, cfg.max_sessions, cfg.phantom[0].scene_path, cfg.dds_config);
   failures += !ok;

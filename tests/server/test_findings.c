@@ -345,7 +345,7 @@ int main(void) {
   REQUIRE(palp_srv_config_parse(json, PALP_CONFIG_DIR, &cfg, err, sizeof err) == 0, "config: %s", err);
   CHECK(cfg.phantom_count == 3 && cfg.exercise_count == 2, "config: 1 phantom + 2 exercises hosted");
   palp_srv_db_log *dbl = NULL;
-  REQUIRE(palp_srv_db_log_open(db_path, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
+  REQUIRE(palp_srv_db_log_open(db_path, 0, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
   palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
   int rc = 0;
   test_server ts = {0};
@@ -741,7 +741,7 @@ int main(void) {
     snprintf(db2, sizeof db2, "%s/server_findings_nograder.db", cwd);
     unlink(db2);
     palp_srv_db_log *dbl2 = NULL;
-    REQUIRE(palp_srv_db_log_open(db2, NULL, &dbl2, err, sizeof err) == 0, "second log: %s", err);
+    REQUIRE(palp_srv_db_log_open(db2, 0, NULL, &dbl2, err, sizeof err) == 0, "second log: %s", err);
     palp_srv_events ev = *palp_srv_db_log_events(dbl2);
     ev.take_score = NULL;
     palp_srv_def def2 = {.cfg = cfg, .events = &ev, .verbose = 0};
@@ -776,7 +776,7 @@ int main(void) {
      * stopped while ema's practice session runs closes it and tells her at once that it will not be
      * scored (the grader takes no session the shutdown closed): the debrief and the answer are
      * written as the server stops, and reach her station. */
-    REQUIRE(palp_srv_db_log_open(db2, NULL, &dbl2, err, sizeof err) == 0, "third log: %s", err);
+    REQUIRE(palp_srv_db_log_open(db2, 0, NULL, &dbl2, err, sizeof err) == 0, "third log: %s", err);
     palp_srv_def def3 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl2), .verbose = 0};
     test_server ts3 = {0};
     start_server(&ts3, &def3);

@@ -1,0 +1,280 @@
+/*
+ * test_log_full.c - a session log that fills mid-session (session 66), over real DDS into a real
+ * SQLite file (domain 134). The file is capped (palp_srv_db_log_open's max_bytes, the config's
+ * session_log_max_mb: PRAGMA max_page_count, which SQLite enforces as SQLITE_FULL, the very error a
+ * full disk gives) a little above what the empty log and one session's opening need:
+ *  - fia's practice exercise (tests/server/exercise_short.json, 2 s) fills it as she presses: her
+ *    session goes on to its time limit, she is debriefed, and her score comes graded from what the
+ *    log holds, with log_complete false and the review's health line ("CUT SHORT: no end was logged"); the
+ *    words her station prints (palp_cli_score_text) end with "The session's log is incomplete: the
+ *    score may be low.";
+ *  - gus's session on a plain phantom, pressing all along, keeps stepping through it (its frames
+ *    counted over 1 s after the loss);
+ *  - the server's log says the loss as it happens, with the cap and what to do, before the stop;
+ *  - the file stays sound (PRAGMA integrity_check ok), and palp-review's reading of it gives the
+ *    score fia was told, to the last bit;
+ *  - pages freed in the file (a second connection deletes gus's feedback rows, as an instructor
+ *    pruning old sessions would) let the log write again, and the server's log says that too.
+ */
+#define _GNU_SOURCE
+#include <math.h>
+#include <pthread.h>
+#include <sqlite3.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "assess_log.h"
+#include "db_log.h"
+#include "harness.h"
+#include "palp_assess.h"
+#include "palp_db.h"
+
+#define DOMAIN 134
+#define EX_SHORT 8
+#define PI 3.14159265358979323846
+/* Above the empty log: fia's session's opening rows (its scene and exercise, ~20 KB) and its
+ * first second or so of samples; her 2 s of pressing at 250 Hz write several times that. */
+#define MARGIN_BYTES (96 * 1024)
+
+static palp_vec3 dome_point(double R, double polar_deg, double az_deg) {
+  const double p = polar_deg * PI / 180, a = az_deg * PI / 180;
+  return (palp_vec3){R * sin(p) * cos(a), R * sin(p) * sin(a), R * cos(p)};
+}
+
+/* A position-driven 8 mm fingertip at depth d [m] below the surface along the normal at (polar, az). */
+static void send_finger(palp_cli_station *st, double polar, double az, double depth, uint64_t seq) {
+  const double r = 0.008;
+  const palp_vec3 c = dome_point(0.04 + r - depth, polar, az);
+  palp_Contact m;
+  memset(&m, 0, sizeof m);
+  m.session_id = st->session_id;
+  m.seq = seq;
+  m.source_time_ns = palp_dds_now_ns();
+  m.mode = palp_CONTACT_FINGER;
+  m.distribution = 1;
+  m.vertex = -1;
+  m.center = (palp_Vec3){c.x, c.y, c.z};
+  m.radius = r;
+  dds_write(st->contact_w, &m);
+}
+
+static long file_size(const char *path) {
+  struct stat sb;
+  return stat(path, &sb) == 0 ? (long)sb.st_size : -1;
+}
+
+/* 1 when the file at path holds needle, the first such line copied into line. */
+static int log_has(const char *path, const char *needle, char *line, size_t len) {
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  char buf[2048];
+  int found = 0;
+  while (!found && fgets(buf, sizeof buf, f))
+    if (strstr(buf, needle)) {
+      found = 1;
+      snprintf(line, len, "%s", buf);
+      line[strcspn(line, "\n")] = 0;
+    }
+  fclose(f);
+  return found;
+}
+
+static int wait_log(const char *path, const char *needle, double seconds, char *line, size_t len) {
+  for (double t = 0; t < seconds; t += 0.1) {
+    if (log_has(path, needle, line, len)) return 1;
+    test_sleep(0.1);
+  }
+  return log_has(path, needle, line, len);
+}
+
+/* Frames gus's station saw over `seconds` (feedback samples carry the world's frame). */
+static int64_t frames_over(palp_cli_station *st, double seconds) {
+  int n = 0;
+  test_last_feedback(st, seconds, &n);
+  return n;
+}
+
+int main(void) {
+  test_init();
+  char err[512];
+  char cwd[512], db_path[700], log_path[700];
+  REQUIRE(getcwd(cwd, sizeof cwd) != NULL, "cwd");
+  snprintf(db_path, sizeof db_path, "%s/server_log_full.db", cwd);
+  snprintf(log_path, sizeof log_path, "%s/server_log_full.log", cwd);
+  unlink(db_path);
+  unlink(log_path);
+  char json[1024];
+  snprintf(json, sizeof json,
+           "{\"domain_id\": %d, \"tick_rate_hz\": 100, \"tick_threads\": 1, \"max_force\": 20,"
+           " \"session_exercise\": \"always\", \"session_log_max_mb\": 1,"
+           " \"phantoms\": [{\"id\": 1, \"name\": \"test dome\", \"scene\": \"paper_step.json\"}],"
+           " \"exercises\": [{\"id\": %d, \"file\": \"%s/exercise_short.json\", \"physics_rate_hz\": 250}]}",
+           DOMAIN, EX_SHORT, PALP_TEST_DIR);
+  palp_srv_config cfg;
+  REQUIRE(palp_srv_config_parse(json, PALP_CONFIG_DIR, &cfg, err, sizeof err) == 0, "config: %s", err);
+  CHECK(cfg.session_log_max_mb == 1.0, "config: session_log_max_mb read (%g MB)", cfg.session_log_max_mb);
+
+  /* The empty log's size: the schema, written by an uncapped open and close. */
+  palp_srv_db_log *dbl = NULL;
+  REQUIRE(palp_srv_db_log_open(db_path, 0, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
+  palp_srv_db_log_close(dbl);
+  const long empty = file_size(db_path);
+  REQUIRE(empty > 0, "the empty log's file (%ld bytes)", empty);
+  const int64_t cap = empty + MARGIN_BYTES;
+
+  palp_log plog;
+  REQUIRE(palp_log_init(&plog, "palp-server", PALP_LOG_INFO, log_path) == 0, "server log file");
+  REQUIRE(palp_srv_db_log_open(db_path, cap, &plog, &dbl, err, sizeof err) == 0, "capped log: %s", err);
+  char line[2048] = "", cap_text[64];
+  snprintf(cap_text, sizeof cap_text, "of its cap of %.2f MB (session_log_max_mb)", (double)cap * 1e-6);
+  CHECK(log_has(log_path, cap_text, line, sizeof line),
+        "the server's log says the cap as it opens: \"%s\"", line);
+  palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
+  test_server ts = {0};
+  int rc = 0;
+  ts.srv = palp_srv_create(&def, &rc, err, sizeof err);
+  REQUIRE(ts.srv != NULL, "server: %s", err);
+  extern void *test_log_full_server_main(void *);
+  REQUIRE(pthread_create(&ts.thread, NULL, test_log_full_server_main, &ts) == 0, "server thread");
+  ts.running = 1;
+
+  /* gus presses a plain phantom all along; fia's practice session fills the log. */
+  palp_cli_station g, f;
+  test_station_join(&g, DOMAIN, "gus", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  test_send_force(&g, 0, 1, 0, 0, 2.0, 1);
+  test_station_join(&f, DOMAIN, "fia", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
+  uint64_t seq = 1;
+  for (int k = 0; k < 120; k++) { /* down to 12 mm over lesion 1, then slide; her 2 s limit ends it */
+    send_finger(&f, 31 + (k > 60 ? 0.2 * (k - 60) : 0), 41, k <= 40 ? 0.012 * k / 40.0 : 0.012, seq++);
+    test_sleep(0.02);
+  }
+  char loss[2048] = "";
+  CHECK(wait_log(log_path, "records lost so far", 5.0, loss, sizeof loss) &&
+            strstr(loss, "failed: writing the session log: database or disk is full") &&
+            strstr(loss, "reached its cap of ") && strstr(loss, cap_text + strlen("of its cap of ")) &&
+            strstr(loss, "sessions go on"),
+        "the server's log says the loss as it happens, and what to do: \"%s\"", loss);
+  const int64_t gus_frames = frames_over(&g, 1.0);
+  CHECK(gus_frames >= 50, "gus's session steps on with the log full: %lld feedback samples over 1 s (100 Hz; >= 50)",
+        (long long)gus_frames);
+
+  palp_Debrief d;
+  palp_DebriefLesion dl[PALP_DEBRIEF_MAX_LESIONS];
+  char derr[160] = "", serr[160] = "";
+  const int got_d = palp_cli_station_debrief(&f, 6.0, &d, dl, derr, sizeof derr);
+  CHECK(got_d == 1 && d.level == palp_DEBRIEF_LESIONS && d.lesions == 2,
+        "fia's session ran to its limit and she is debriefed (got %d, level %d %s)", got_d, got_d == 1 ? (int)d.level : -1,
+        derr);
+  palp_SessionScore m;
+  memset(&m, 0, sizeof m);
+  /* the writer retries each failing batch (0.35 s of back-off) before the grader may read */
+  const int got = got_d == 1 ? palp_cli_station_debrief_score(&f, 15.0, &m, serr, sizeof serr) : -1;
+  char text[640] = "";
+  if (got == 1) palp_cli_score_text(&m, text, sizeof text);
+  CHECK(got == 1 && m.status == palp_SCORE_GRADED && !m.log_complete &&
+            strncmp(m.log_health, "CUT SHORT: no end was logged", 28) == 0,
+        "fia's score is graded from what the log holds, which it says is incomplete: \"%s\" (got %d %s)",
+        got == 1 ? m.log_health : "", got, serr);
+  const char *tail = " The session's log is incomplete: the score may be low.";
+  CHECK(strlen(text) > strlen(tail) && strcmp(text + strlen(text) - strlen(tail), tail) == 0 &&
+            strncmp(text, "score: ", 7) == 0,
+        "  and her station tells her so: \"%s\"", text);
+
+  /* Pages freed in the file (gus gone, his session's samples deleted by a second connection, as an
+   * instructor pruning old sessions would): the log writes again, says so, and hal's session, opened
+   * after, is logged whole. */
+  palp_cli_station_leave(&g);
+  test_sleep(0.5);
+  sqlite3 *h = NULL;
+  REQUIRE(sqlite3_open(db_path, &h) == SQLITE_OK, "second connection");
+  sqlite3_busy_timeout(h, 5000);
+  static const char *const tables[] = {"feedback", "frame", "mesh", "contact_input"};
+  int deleted = 0, del_ok = 1;
+  for (int i = 0; i < 4; i++) {
+    char q[256];
+    snprintf(q, sizeof q, "DELETE FROM %s WHERE session_id = (SELECT id FROM session WHERE trainee = 'gus')", tables[i]);
+    del_ok = del_ok && sqlite3_exec(h, q, NULL, NULL, NULL) == SQLITE_OK;
+    deleted += sqlite3_changes(h);
+  }
+  CHECK(del_ok && deleted > 100, "gus's samples deleted by a second connection (%d rows: %s)", deleted,
+        sqlite3_errmsg(h));
+  palp_cli_station hs;
+  test_station_join(&hs, DOMAIN, "hal", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  test_send_force(&hs, 0, 1, 0, 0, 1.0, 1);
+  test_sleep(0.5);
+  palp_cli_station_leave(&hs);
+  char again[2048] = "";
+  CHECK(wait_log(log_path, "session log: writing again", 8.0, again, sizeof again),
+        "with pages free the log writes again, and says so: \"%s\"", again);
+  const uint32_t hal_session = hs.session_id;
+
+  test_server_stop(&ts);
+  palp_cli_station_close(&g);
+  palp_cli_station_close(&f);
+  palp_cli_station_close(&hs);
+  palp_srv_db_log_close(dbl);
+  char closing[2048] = "";
+  CHECK(log_has(log_path, "records written,", closing, sizeof closing) && !strstr(closing, " 0 failed"),
+        "the closing line counts the lost records: \"%s\"", closing);
+  palp_log_close(&plog);
+
+  /* The file is sound, and the review's reading of it is the score she was told. */
+  sqlite3_stmt *st = NULL;
+  const char *ic = "";
+  if (sqlite3_prepare_v2(h, "PRAGMA integrity_check", -1, &st, NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW)
+    ic = (const char *)sqlite3_column_text(st, 0);
+  CHECK(ic && strcmp(ic, "ok") == 0, "the capped file is sound: integrity_check \"%s\"", ic ? ic : "");
+  sqlite3_finalize(st);
+  sqlite3_close(h);
+  palp_db *db = NULL;
+  REQUIRE(palp_db_open(db_path, 0, &db, err, sizeof err) == 0, "read the log: %s", err);
+  palp_db_session_info info;
+  const int found = got == 1 && palp_db_find_session(db, m.log_uid, &info) == 0 && strcmp(info.uid, m.log_uid) == 0;
+  CHECK(found && info.end_unix_s == 0, "fia's session is in the log (%s), its end not (the file was full)",
+        got == 1 ? m.log_uid : "");
+  if (found) {
+    review_assessment *ra = calloc(1, sizeof *ra);
+    REQUIRE(ra, "memory");
+    const int arc = review_assess(db, &info, ra, err, sizeof err);
+    CHECK(arc == 0 && ra->r.score == m.score && (int)m.pass == ra->r.pass && m.samples == (uint32_t)ra->samples &&
+              m.samples > 0,
+          "  palp-review reads the score she was told: %.3f / %.3f from %u / %d finger samples (%s)", m.score,
+          arc == 0 ? ra->r.score : -1.0, m.samples, arc == 0 ? ra->samples : -1, arc ? err : "ok");
+    palp_db_log_health hl;
+    char hline[400] = "";
+    if (palp_db_log_health_get(db, &info, &hl) == 0) palp_db_log_health_describe(&hl, hline, sizeof hline);
+    /* the wire's string<127> holds its first 127 characters */
+    CHECK(strlen(m.log_health) >= 100 && strncmp(hline, m.log_health, strlen(m.log_health)) == 0,
+          "  and her score's health line is the review's (its first %zu characters): \"%s\"", strlen(m.log_health),
+          hline);
+    if (arc == 0) review_assessment_free(ra);
+    free(ra);
+  }
+  palp_db_session_info hi;
+  char hal_uid[32];
+  snprintf(hal_uid, sizeof hal_uid, "-%u", hal_session);
+  int hal_whole = 0;
+  {
+    palp_db_filter flt = {.trainee = "hal"};
+    palp_db_session_info *list = NULL;
+    int n = 0;
+    if (palp_db_list_sessions(db, &flt, &list, &n) == 0 && n == 1) {
+      hi = list[0];
+      palp_db_log_health hh;
+      hal_whole = strstr(hi.uid, hal_uid) != NULL && palp_db_log_health_get(db, &hi, &hh) == 0 && hh.complete;
+    }
+    free(list);
+  }
+  CHECK(hal_whole, "hal's session, opened after, is logged whole (ended, no frame missing)");
+  palp_db_close(db);
+  fprintf(stderr, "server_log_full: empty log %ld bytes, cap %lld bytes; %s\n", empty, (long long)cap, closing);
+  if (!palp_test_failures) unlink(db_path), unlink(log_path);
+  return palp_test_failures ? 1 : 0;
+}
+
+void *test_log_full_server_main(void *arg) {
+  test_server *ts = arg;
+  palp_srv_run(ts->srv, 0);
+  return NULL;
+}
