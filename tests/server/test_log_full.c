@@ -11,6 +11,8 @@
  *  - gus's session on a plain phantom, pressing all along, keeps stepping through it (its frames
  *    counted over 1 s after the loss);
  *  - the server's log says the loss as it happens, with the cap and what to do, before the stop;
+ *  - ida's practice session, opened while the log is full, is debriefed and told why she gets no
+ *    score ("not in the session log, which is losing records (database or disk is full); ...");
  *  - the file stays sound (PRAGMA integrity_check ok), and palp-review's reading of it gives the
  *    score fia was told, to the last bit;
  *  - pages freed in the file (a second connection deletes gus's feedback rows, as an instructor
@@ -166,8 +168,10 @@ int main(void) {
   CHECK(got_d == 1 && d.level == palp_DEBRIEF_LESIONS && d.lesions == 2,
         "fia's session ran to its limit and she is debriefed (got %d, level %d %s)", got_d, got_d == 1 ? (int)d.level : -1,
         derr);
-  palp_SessionScore m;
+  palp_SessionScore m, m2;
   memset(&m, 0, sizeof m);
+  memset(&m2, 0, sizeof m2);
+  char text2[640] = "";
   /* the writer retries each failing batch (0.35 s of back-off) before the grader may read */
   const int got = got_d == 1 ? palp_cli_station_debrief_score(&f, 15.0, &m, serr, sizeof serr) : -1;
   char text[640] = "";
@@ -180,6 +184,24 @@ int main(void) {
   CHECK(strlen(text) > strlen(tail) && strcmp(text + strlen(text) - strlen(tail), tail) == 0 &&
             strncmp(text, "score: ", 7) == 0,
         "  and her station tells her so: \"%s\"", text);
+
+  /* ida's practice session opens while the log is full: its opening is lost with the rest, and she is
+   * told why she gets no score, not that the server forgot her. */
+  palp_cli_station ia;
+  test_station_join(&ia, DOMAIN, "ida", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
+  for (int k = 0; k < 40; k++) {
+    send_finger(&ia, 31, 41, 0.008 * k / 40.0, seq++);
+    test_sleep(0.02);
+  }
+  const int got_di = palp_cli_station_debrief(&ia, 6.0, &d, dl, derr, sizeof derr);
+  const int got_i = got_di == 1 ? palp_cli_station_debrief_score(&ia, 15.0, &m2, serr, sizeof serr) : -1;
+  if (got_i == 1) palp_cli_score_text(&m2, text2, sizeof text2);
+  CHECK(got_di == 1 && got_i == 1 && m2.status == palp_SCORE_NOT_GRADED &&
+            strcmp(text2, "no score: not in the session log, which is losing records (database or disk is full); tell "
+                          "your instructor") == 0,
+        "ida's session, opened with the log full, is debriefed and she is told why no score: \"%s\" (got %d %d %s %s)",
+        text2, got_di, got_i, derr, serr);
+  palp_cli_station_close(&ia);
 
   /* Pages freed in the file (gus gone, his session's samples deleted by a second connection, as an
    * instructor pruning old sessions would): the log writes again, says so, and hal's session, opened
