@@ -284,6 +284,30 @@ typedef struct palp_db_writer_stats {
 } palp_db_writer_stats;
 void palp_db_writer_stats_get(palp_db_writer *w, palp_db_writer_stats *out);
 
+/* ---- a log's losses said as they happen (session 66, db/loss_watch.c) ---------------------
+ * A full disk, or the file's cap (max_db_bytes), loses every batch from then on; the tick loop goes
+ * on, so the lab must hear it from the program's log when it happens, with what to do. */
+typedef struct palp_db_loss_watch {
+  int64_t max_bytes;    /* the writer's max_db_bytes, 0 none: named in the advice */
+  const char *cap_name; /* what sets it, for the advice: "session_log_max_mb", "--max-mb" */
+  int64_t lost_said, said_ns, lost_seen, written_seen;
+  int losing;           /* a loss said and no recovery said since */
+} palp_db_loss_watch;
+/* Looks at the writer's counters (call it every second or so, now_ns a monotonic clock): 1 and a
+ * warning in line when records were lost since the last one said (at once, then at most once a
+ * minute while losses go on: "session log: 49 records lost so far (0 shed: the queue was full; 49
+ * failed: ...database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb)
+ * or its disk is full: move the log away or raise the cap"); 2 and "session log: writing again (N
+ * records lost in all)" on the first look after a loss with no new loss and records written; 0 and
+ * "" otherwise. */
+int palp_db_loss_watch_look(palp_db_loss_watch *w, const palp_db_writer_stats *st, int64_t now_ns, char *line,
+                            size_t len);
+/* How full the log at path is against max_bytes (its pages, as the cap counts them; 0: no cap,
+ * returns 0 and ""), for the program's log as it opens the writer: "session log: 29 MB of its cap of
+ * 16384 MB (CAP_NAME)"; returns 1 with "...: nearly full; ..." from 90%, 2 with "...: FULL, new
+ * sessions will not be logged; ..." at the cap, 0 otherwise. */
+int palp_db_cap_describe(const char *path, int64_t max_bytes, const char *cap_name, char *line, size_t len);
+
 /* ---- frame summary (needs the palp model library: link palp_db_sim) -------------- */
 /* Fills f from the world's current state with the definitions above. Server and replay both
  * call this, so the logged and replayed summaries are computed by the same code. */

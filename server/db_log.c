@@ -4,7 +4,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -16,7 +15,6 @@
 #define SLOT_FINGERS 16 /* model contact ids whose fingertip radius is tracked */
 #define SLOTS 1024 /* open sessions are far fewer; a slot is found by id % SLOTS */
 #define FLUSH_NS 1000000000 /* reject/clamp/overrun counts are logged once a second per session */
-#define LOSS_SAY_NS 60000000000LL /* a log that goes on losing records is said again at most once a minute */
 
 typedef struct slot {
   uint32_t id;           /* 0: free */
@@ -44,12 +42,7 @@ struct palp_srv_db_log {
   slot s[SLOTS];
   palp_log *log; /* may be NULL (stderr) */
   palp_srv_grader *grader; /* NULL: closed sessions are not scored live */
-  /* session 66: the log's health said while the server runs (watch_health) */
-  int64_t max_bytes;   /* the file's cap (config session_log_max_mb), 0 none */
-  int64_t lost_said;   /* records lost (shed + failed) when last said */
-  int64_t said_ns;     /* when last said (CLOCK_MONOTONIC) */
-  int64_t lost_seen, written_seen; /* at the previous look */
-  int losing;          /* a loss said and no recovery said since */
+  palp_db_loss_watch watch; /* session 66: the log's losses said as they happen */
 };
 
 static slot *find(palp_srv_db_log *l, uint32_t id) {
@@ -345,39 +338,17 @@ static void on_security_refused(void *ctx, const char *detail, uint64_t count) {
   palp_db_log_event(l->w, 0, PALP_DB_EVENT_SECURITY_REFUSED, -1, detail, (int64_t)count);
 }
 
-/* The log's health said in the server's log while it runs, not only at its stop: a disk that fills,
- * or the file's cap (session_log_max_mb), loses every batch from then on, and the lab must hear it
- * when it happens, with what to do. The first loss at once, then at most once a minute while the
- * losses go on; writing again, once. Sessions go on meanwhile (the tick loop never waits on the disk);
- * a session that lost records is scored from what its log holds and its score says the log is
- * incomplete (docs/db.md, "A full session log"). */
-/* A size in MB (10^6 bytes) as a lab reads it: "16384", or "0.26" below 10 MB. */
-static const char *mb_text(double bytes, char *buf, size_t len) {
-  snprintf(buf, len, "%.*f", bytes < 10e6 ? 2 : 0, bytes * 1e-6);
-  return buf;
-}
-
+/* The log's losses said in the server's log while it runs, not only at its stop (palp_db_loss_watch):
+ * sessions go on meanwhile; an exercise session that lost records is scored from what its log holds,
+ * and its score says the log is incomplete (docs/server.md, "A full session log"). */
 static void watch_health(palp_srv_db_log *l, const palp_db_writer_stats *st) {
-  const int64_t lost = st->shed + st->failed, now = palp_dds_now_ns();
-  if (lost > l->lost_said && (!l->losing || now - l->said_ns >= LOSS_SAY_NS)) {
-    const int full = strstr(st->last_error, "full") != NULL;
-    char hint[200] = "", mb[32];
-    if (full && l->max_bytes > 0)
-      snprintf(hint, sizeof hint, "; the file reached its cap of %s MB (session_log_max_mb) or its disk is full: "
-                                  "move the log away or raise the cap", mb_text((double)l->max_bytes, mb, sizeof mb));
-    else if (full)
-      snprintf(hint, sizeof hint, "; its disk is full: free space or move the log away");
-    palp_log_warn(l->log, "session log: %lld records lost so far (%lld shed: the queue was full; %lld failed%s%s)%s; "
-                          "sessions go on; an exercise session is scored from what its log holds, and its score says when that "
-                          "is incomplete",
-                  (long long)lost, (long long)st->shed, (long long)st->failed, st->last_error[0] ? ": " : "",
-                  st->last_error, hint);
-    l->lost_said = lost, l->said_ns = now, l->losing = 1;
-  } else if (l->losing && !st->in_error && lost == l->lost_seen && st->written > l->written_seen) {
-    palp_log_info(l->log, "session log: writing again (%lld records lost in all)", (long long)lost);
-    l->losing = 0, l->lost_said = lost;
-  }
-  l->lost_seen = lost, l->written_seen = st->written;
+  char line[640];
+  const int said = palp_db_loss_watch_look(&l->watch, st, palp_dds_now_ns(), line, sizeof line);
+  if (said == 1)
+    palp_log_warn(l->log, "%s; sessions go on; an exercise session is scored from what its log holds, and its score "
+                          "says when that is incomplete", line);
+  else if (said == 2)
+    palp_log_info(l->log, "%s", line);
 }
 
 static void on_log_counts(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed) {
@@ -395,27 +366,19 @@ int palp_srv_db_log_open(const char *path, int64_t max_bytes, palp_log *log, pal
   palp_srv_db_log *l = calloc(1, sizeof *l);
   if (!l) return PALP_ENOMEM;
   l->log = log;
-  l->max_bytes = max_bytes > 0 ? max_bytes : 0;
+  l->watch = (palp_db_loss_watch){.max_bytes = max_bytes > 0 ? max_bytes : 0, .cap_name = "session_log_max_mb"};
   palp_db_writer_opts o = palp_db_writer_default_opts();
-  o.max_db_bytes = l->max_bytes; /* PRAGMA max_page_count: at the cap, SQLITE_FULL as on a full disk */
+  o.max_db_bytes = l->watch.max_bytes; /* PRAGMA max_page_count: at the cap, SQLITE_FULL as on a full disk */
   int rc = palp_db_writer_open(path, &o, &l->w, err, errlen);
   if (rc < 0) {
     free(l);
     return rc;
   }
-  if (l->max_bytes > 0) {
-    /* Said at the start, so that a log already near its cap is moved or its cap raised before a class,
-     * not found full at the end of one (SQLite keeps a cap below the file's size at the file's size). */
-    struct stat sb;
-    const double used = stat(path, &sb) == 0 ? (double)sb.st_size : 0, cap = (double)l->max_bytes;
-    char u[32], c[32];
-    palp_logf(log, used >= 0.9 * cap ? PALP_LOG_WARN : PALP_LOG_INFO, "session log: %s MB of its cap of %s MB (session_log_max_mb)%s",
-              mb_text(used, u, sizeof u), mb_text(cap, c, sizeof c),
-              used >= cap         ? ": FULL, new sessions will not be logged nor scored; move the log away or raise "
-                                    "the cap"
-              : used >= 0.9 * cap ? ": nearly full; move the log away or raise the cap"
-                                  : "");
-  }
+  /* Said at the start, so that a log near its cap is moved or its cap raised before a class, not
+   * found full at the end of one. */
+  char line[320];
+  const int full = palp_db_cap_describe(path, l->watch.max_bytes, "session_log_max_mb", line, sizeof line);
+  if (line[0]) palp_logf(log, full ? PALP_LOG_WARN : PALP_LOG_INFO, "%s", line);
   /* Without a grader the server runs on; its sessions are only scored by the review. */
   rc = palp_srv_grader_open(path, l->w, log, &l->grader);
   if (rc != 0) {

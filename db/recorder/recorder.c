@@ -790,10 +790,11 @@ static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dd
 #define RECORDER_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
 
 static void usage(FILE *f) {
-  fputs("usage: palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S]\n"
+  fputs("usage: palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S] [--max-mb MB]\n"
         "                     [--pki DIR --identity instructor/NAME]   (DDS Security; or PALP_PKI, PALP_IDENTITY)\n"
         "Records every classroom session seen on DDS into the session log until SIGINT/SIGTERM\n"
-        "(or for S seconds). SIGHUP re-opens --log-file.\n",
+        "(or for S seconds). SIGHUP re-opens --log-file. --max-mb caps the log's file (0: no cap, or\n"
+        ">= 1; at the cap it is full, as on a full disk: records lost are counted and said as they happen).\n",
         f);
   palp_app_common_usage(f, RECORDER_OPTS);
 }
@@ -801,7 +802,7 @@ static void usage(FILE *f) {
 int main(int argc, char **argv) {
   const char *db = NULL, *pki = NULL, *identity = NULL;
   dds_domainid_t domain = DDS_DOMAIN_DEFAULT;
-  double duration = 0;
+  double duration = 0, max_mb = 0;
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-recorder");
   for (int i = 1; i < argc; i++) {
@@ -828,6 +829,13 @@ int main(int argc, char **argv) {
         return 2;
       }
       domain = (dds_domainid_t)v;
+    } else if (!strcmp(a, "--max-mb")) {
+      char *end;
+      max_mb = strtod(argv[++i], &end);
+      if (*end || !(max_mb == 0 || (max_mb >= 1 && max_mb <= 1e7))) {
+        fprintf(stderr, "palp-recorder: --max-mb: expected 0 (no cap) or 1..10000000 MB, got '%s'\n", argv[i]);
+        return 2;
+      }
     } else if (!strcmp(a, "--duration")) {
       duration = atof(argv[++i]);
       if (!(duration > 0)) {
@@ -874,10 +882,20 @@ int main(int argc, char **argv) {
   if (sec.warning[0]) palp_log_warn(&plog, "DDS Security: %s", sec.warning);
   recorder *r = calloc(1, sizeof *r);
   if (r) r->log = &plog;
-  if (!r || palp_db_writer_open(db, NULL, &r->w, err, sizeof err) != 0) {
+  palp_db_writer_opts wo = palp_db_writer_default_opts();
+  wo.max_db_bytes = (int64_t)(max_mb * 1e6);
+  if (!r || palp_db_writer_open(db, &wo, &r->w, err, sizeof err) != 0) {
     palp_log_error(&plog, "%s", r ? err : "out of memory");
     free(r);
     return 1;
+  }
+  /* the fill against the cap as it opens, then its losses as they happen (db/loss_watch.c, as palp-server) */
+  palp_db_loss_watch watch = {.max_bytes = wo.max_db_bytes, .cap_name = "--max-mb"};
+  int64_t next_watch_ns = palp_dds_now_ns() + 1000000000;
+  {
+    char line[320];
+    const int full = palp_db_cap_describe(db, wo.max_db_bytes, "--max-mb", line, sizeof line);
+    if (line[0]) palp_logf(&plog, full ? PALP_LOG_WARN : PALP_LOG_INFO, "%s", line);
   }
   /* Cyclone's warnings bounded, a refused peer said once (client/main.c does the same). */
   static palp_dds_log_limit dds_sink;
@@ -997,6 +1015,15 @@ int main(int argc, char **argv) {
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
      * not only at stop (idl/palp_dds_refusals.h) */
     palp_dds_refusals_tick(&refusals, palp_dds_now_ns());
+    if (palp_dds_now_ns() >= next_watch_ns) {
+      next_watch_ns = palp_dds_now_ns() + 1000000000;
+      palp_db_writer_stats ws_;
+      palp_db_writer_stats_get(r->w, &ws_);
+      char line[640];
+      const int said = palp_db_loss_watch_look(&watch, &ws_, palp_dds_now_ns(), line, sizeof line);
+      if (said == 1) palp_log_warn(&plog, "%s; recording goes on", line);
+      else if (said == 2) palp_log_info(&plog, "%s", line);
+    }
   }
   /* Sessions still running end here in this log, saying so: left "(running)", a restarted
    * recorder's copy of their rest (a new uid) looked like a second session beside an unended one. */

@@ -304,6 +304,16 @@ int main(int argc, char **argv) {
            "2>&1 | grep -q 'does not parse'", argv[3], db, uid8, argv[3], db, uid8);
   st = system(cmd);
   CHECK(uid8[0] && WIFEXITED(st) && WEXITSTATUS(st) == 0, "  show %s names its phantom and reads its scene", uid8);
+  /* --max-mb (session 66): the log's fill against its cap said as the recorder opens it (the losses as
+   * they happen are palp-server's words, db/loss_watch.c: server_log_full); a cap under 1 MB refused. */
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' --domain %d --max-mb 1 --duration 0.3 2>&1 | grep -q "
+           "'palp-recorder: session log: [0-9.]* MB of its cap of 1.00 MB (--max-mb)'", argv[2], db, DOMAIN);
+  st = system(cmd);
+  CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "--max-mb 1: the recorder says the log's fill against its cap");
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' --max-mb 0.5 2>&1 | grep -q -- '--max-mb: expected 0 (no cap) or 1..10000000 "
+           "MB'", argv[2], db);
+  st = system(cmd);
+  CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "--max-mb 0.5 refused with its reason");
   free(pos);
   free(rest);
   palp_mesh_destroy(&mesh);
