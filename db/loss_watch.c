@@ -8,6 +8,10 @@
 #include "palp_db.h"
 
 #define LOSS_SAY_NS 60000000000LL /* a log that goes on losing records is said again at most once a minute */
+/* What to do, in one wording: pruning old sessions (their samples deleted, their metrics kept) frees
+ * pages the writer reuses at once (docs/db.md, "Retention"). */
+#define ADVICE_CAP "prune old sessions (palp-review prune), move the log away or raise the cap"
+#define ADVICE_DISK "prune old sessions (palp-review prune), free space or move the log away"
 
 /* A size in MB (10^6 bytes) as a lab reads it: "16384", or "0.26" below 10 MB. */
 static const char *mb_text(double bytes, char *buf, size_t len) {
@@ -37,8 +41,8 @@ int palp_db_cap_describe(const char *path, int64_t max_bytes, const char *cap_na
   const int level = used >= cap ? 2 : used >= 0.9 * cap ? 1 : 0;
   snprintf(line, len, "session log: %s MB of its cap of %s MB (%s)%s", mb_text(used, u, sizeof u),
            mb_text(cap, c, sizeof c), cap_name,
-           level == 2   ? ": FULL, new sessions will not be logged; move the log away or raise the cap"
-           : level == 1 ? ": nearly full; move the log away or raise the cap"
+           level == 2   ? ": FULL, new sessions will not be logged; " ADVICE_CAP
+           : level == 1 ? ": nearly full; " ADVICE_CAP
                         : "");
   return level;
 }
@@ -51,11 +55,10 @@ int palp_db_loss_watch_look(palp_db_loss_watch *w, const palp_db_writer_stats *s
   if (lost > w->lost_said && (!w->losing || now_ns - w->said_ns >= LOSS_SAY_NS)) {
     char hint[200] = "", mb[32];
     if (strstr(st->last_error, "full") && w->max_bytes > 0)
-      snprintf(hint, sizeof hint, "; the file reached its cap of %s MB (%s) or its disk is full: move the log away or "
-                                  "raise the cap", mb_text((double)w->max_bytes, mb, sizeof mb),
-               w->cap_name ? w->cap_name : "its cap");
+      snprintf(hint, sizeof hint, "; the file reached its cap of %s MB (%s) or its disk is full: " ADVICE_CAP,
+               mb_text((double)w->max_bytes, mb, sizeof mb), w->cap_name ? w->cap_name : "its cap");
     else if (strstr(st->last_error, "full"))
-      snprintf(hint, sizeof hint, "; its disk is full: free space or move the log away");
+      snprintf(hint, sizeof hint, "; its disk is full: " ADVICE_DISK);
     snprintf(line, len, "session log: %lld records lost so far (%lld shed: the queue was full; %lld failed%s%s)%s",
              (long long)lost, (long long)st->shed, (long long)st->failed, st->last_error[0] ? ": " : "", st->last_error,
              hint);

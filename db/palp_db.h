@@ -297,7 +297,7 @@ typedef struct palp_db_loss_watch {
  * warning in line when records were lost since the last one said (at once, then at most once a
  * minute while losses go on: "session log: 49 records lost so far (0 shed: the queue was full; 49
  * failed: ...database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb)
- * or its disk is full: move the log away or raise the cap"); 2 and "session log: writing again (N
+ * or its disk is full: prune old sessions (palp-review prune), move the log away or raise the cap"); 2 and "session log: writing again (N
  * records lost in all)" on the first look after a loss with no new loss and records written; 0 and
  * "" otherwise. */
 int palp_db_loss_watch_look(palp_db_loss_watch *w, const palp_db_writer_stats *st, int64_t now_ns, char *line,

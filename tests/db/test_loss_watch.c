@@ -35,15 +35,15 @@ int main(int argc, char **argv) {
   look(&w, stats(100, 0, 0, 0, ""), 0, 0, "");
   look(&w, stats(120, 0, 49, 1, full), 1 * S, 1,
        "session log: 49 records lost so far (0 shed: the queue was full; 49 failed: writing the session log: database "
-       "or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: move the log "
-       "away or raise the cap");
+       "or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: prune old "
+       "sessions (palp-review prune), move the log away or raise the cap");
   /* losing on: not again within the minute */
   look(&w, stats(120, 0, 300, 1, full), 2 * S, 0, "");
   look(&w, stats(120, 0, 900, 1, full), 60 * S, 0, "");
   look(&w, stats(120, 0, 950, 1, full), 61 * S, 1,
        "session log: 950 records lost so far (0 shed: the queue was full; 950 failed: writing the session log: "
-       "database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: move "
-       "the log away or raise the cap");
+       "database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: prune "
+       "old sessions (palp-review prune), move the log away or raise the cap");
   /* no new loss, but nothing written yet: not recovered */
   look(&w, stats(120, 0, 950, 0, full), 62 * S, 0, "");
   look(&w, stats(180, 0, 950, 0, full), 63 * S, 2, "session log: writing again (950 records lost in all)");
@@ -51,21 +51,21 @@ int main(int argc, char **argv) {
   /* a new loss after a recovery is said at once */
   look(&w, stats(240, 0, 951, 1, full), 65 * S, 1,
        "session log: 951 records lost so far (0 shed: the queue was full; 951 failed: writing the session log: "
-       "database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: move "
-       "the log away or raise the cap");
+       "database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: prune "
+       "old sessions (palp-review prune), move the log away or raise the cap");
   /* no cap: the disk; a shed queue without an error; a cap of 16 GB in whole MB */
   palp_db_loss_watch d = {0};
   look(&d, stats(10, 0, 7, 1, full), 0, 1,
        "session log: 7 records lost so far (0 shed: the queue was full; 7 failed: writing the session log: database or "
-       "disk is full); its disk is full: free space or move the log away");
+       "disk is full); its disk is full: prune old sessions (palp-review prune), free space or move the log away");
   palp_db_loss_watch q = {.max_bytes = 16384000000LL, .cap_name = "--max-mb"};
   look(&q, stats(10, 5, 0, 0, ""), 0, 1, "session log: 5 records lost so far (5 shed: the queue was full; 0 failed)");
   look(&q, stats(10, 0, 3, 1, full), 0, 0, "");
   palp_db_loss_watch c = {.max_bytes = 16384000000LL, .cap_name = "--max-mb"};
   look(&c, stats(10, 0, 3, 1, full), 0, 1,
        "session log: 3 records lost so far (0 shed: the queue was full; 3 failed: writing the session log: database or "
-       "disk is full); the file reached its cap of 16384 MB (--max-mb) or its disk is full: move the log away or raise "
-       "the cap");
+       "disk is full); the file reached its cap of 16384 MB (--max-mb) or its disk is full: prune old sessions "
+       "(palp-review prune), move the log away or raise the cap");
 
   /* The fill against the cap, from a SQLite file written here in rollback-journal mode, whose size on
    * disk is then its pages (the cap counts pages); the caps are set around that size. */
@@ -89,13 +89,14 @@ int main(int argc, char **argv) {
   CHECK(lv == 0 && strcmp(line, want) == 0, "%d \"%s\"", lv, line);
   lv = palp_db_cap_describe(path, (int64_t)(size / 0.95), "--max-mb", line, sizeof line);
   snprintf(want, sizeof want,
-           "session log: %.2f MB of its cap of %.2f MB (--max-mb): nearly full; move the log away or raise the cap",
+           "session log: %.2f MB of its cap of %.2f MB (--max-mb): nearly full; prune old sessions (palp-review prune), "
+           "move the log away or raise the cap",
            size * 1e-6, (double)(int64_t)(size / 0.95) * 1e-6);
   CHECK(lv == 1 && strcmp(line, want) == 0, "at 95%%: %d \"%s\"", lv, line);
   lv = palp_db_cap_describe(path, (int64_t)size - 4096, "--max-mb", line, sizeof line);
   snprintf(want, sizeof want,
-           "session log: %.2f MB of its cap of %.2f MB (--max-mb): FULL, new sessions will not be logged; move the log "
-           "away or raise the cap",
+           "session log: %.2f MB of its cap of %.2f MB (--max-mb): FULL, new sessions will not be logged; prune old "
+           "sessions (palp-review prune), move the log away or raise the cap",
            size * 1e-6, (size - 4096) * 1e-6);
   CHECK(lv == 2 && strcmp(line, want) == 0, "a page over: %d \"%s\"", lv, line);
   unlink(path);

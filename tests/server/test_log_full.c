@@ -15,8 +15,9 @@
  *    score ("not in the session log, which is losing records (database or disk is full); ...");
  *  - the file stays sound (PRAGMA integrity_check ok), and palp-review's reading of it gives the
  *    score fia was told, to the last bit;
- *  - pages freed in the file (a second connection deletes gus's feedback rows, as an instructor
- *    pruning old sessions would) let the log write again, and the server's log says that too.
+ *  - the instructor's `palp-review prune --older-than 0` (ava's session, logged whole by an
+ *    uncapped server before, and any other ended one; not fia's, whose end was lost) frees pages: the log writes again, the server's log says so, and hal's
+ *    session, opened after, is logged whole.
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -24,6 +25,7 @@
 #include <sqlite3.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "assess_log.h"
@@ -35,7 +37,7 @@
 #define DOMAIN 134
 #define EX_SHORT 8
 #define PI 3.14159265358979323846
-/* Above the empty log: fia's session's opening rows (its scene and exercise, ~20 KB) and its
+/* Above the log after ava's session: fia's session's opening rows (its scene and exercise, ~20 KB) and its
  * first second or so of samples; her 2 s of pressing at 250 Hz write several times that. */
 #define MARGIN_BYTES (96 * 1024)
 
@@ -97,7 +99,10 @@ static int64_t frames_over(palp_cli_station *st, double seconds) {
   return n;
 }
 
-int main(void) {
+void *test_log_full_server_main(void *arg);
+
+int main(int argc, char **argv) {
+  REQUIRE(argc > 1, "usage: test_server_log_full PALP_REVIEW");
   test_init();
   char err[512];
   char cwd[512], db_path[700], log_path[700];
@@ -117,13 +122,43 @@ int main(void) {
   REQUIRE(palp_srv_config_parse(json, PALP_CONFIG_DIR, &cfg, err, sizeof err) == 0, "config: %s", err);
   CHECK(cfg.session_log_max_mb == 1.0, "config: session_log_max_mb read (%g MB)", cfg.session_log_max_mb);
 
-  /* The empty log's size: the schema, written by an uncapped open and close. */
+  /* Yesterday's class: ava's session, logged whole by an uncapped server; the file's size then. */
   palp_srv_db_log *dbl = NULL;
   REQUIRE(palp_srv_db_log_open(db_path, 0, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
+  {
+    palp_srv_def def0 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
+    test_server ts0 = {0};
+    int rc0 = 0;
+    ts0.srv = palp_srv_create(&def0, &rc0, err, sizeof err);
+    REQUIRE(ts0.srv != NULL, "server: %s", err);
+    REQUIRE(pthread_create(&ts0.thread, NULL, test_log_full_server_main, &ts0) == 0, "server thread");
+    ts0.running = 1;
+    palp_cli_station a;
+    test_station_join(&a, DOMAIN, "ava", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+    test_send_force(&a, 0, 1, 0, 0, 2.0, 1);
+    test_sleep(2.0);
+    palp_cli_station_leave(&a);
+    test_sleep(0.3);
+    test_server_stop(&ts0);
+    palp_cli_station_close(&a);
+  }
   palp_srv_db_log_close(dbl);
-  const long empty = file_size(db_path);
-  REQUIRE(empty > 0, "the empty log's file (%ld bytes)", empty);
-  const int64_t cap = empty + MARGIN_BYTES;
+  char ava_uid[128] = "";
+  {
+    palp_db *db0 = NULL;
+    REQUIRE(palp_db_open(db_path, 0, &db0, err, sizeof err) == 0, "read the log: %s", err);
+    palp_db_filter flt = {.trainee = "ava"};
+    palp_db_session_info *list = NULL;
+    int n = 0;
+    REQUIRE(palp_db_list_sessions(db0, &flt, &list, &n) == 0 && n == 1 && list[0].end_unix_s > 0,
+            "ava's session logged whole (%d)", n);
+    snprintf(ava_uid, sizeof ava_uid, "%s", list[0].uid);
+    free(list);
+    palp_db_close(db0);
+  }
+  const long before = file_size(db_path);
+  REQUIRE(before > 0, "the log's file after ava's session (%ld bytes)", before);
+  const int64_t cap = before + MARGIN_BYTES;
 
   palp_log plog;
   REQUIRE(palp_log_init(&plog, "palp-server", PALP_LOG_INFO, log_path) == 0, "server log file");
@@ -137,7 +172,6 @@ int main(void) {
   int rc = 0;
   ts.srv = palp_srv_create(&def, &rc, err, sizeof err);
   REQUIRE(ts.srv != NULL, "server: %s", err);
-  extern void *test_log_full_server_main(void *);
   REQUIRE(pthread_create(&ts.thread, NULL, test_log_full_server_main, &ts) == 0, "server thread");
   ts.running = 1;
 
@@ -203,24 +237,26 @@ int main(void) {
         text2, got_di, got_i, derr, serr);
   palp_cli_station_close(&ia);
 
-  /* Pages freed in the file (gus gone, his session's samples deleted by a second connection, as an
-   * instructor pruning old sessions would): the log writes again, says so, and hal's session, opened
-   * after, is logged whole. */
+  /* The instructor prunes the old sessions (ava's: ended and logged; fia's and gus's ends were lost,
+   * so they are not taken): the pages freed, the log writes again, says so, and hal's session,
+   * opened after, is logged whole. */
   palp_cli_station_leave(&g);
   test_sleep(0.5);
-  sqlite3 *h = NULL;
-  REQUIRE(sqlite3_open(db_path, &h) == SQLITE_OK, "second connection");
-  sqlite3_busy_timeout(h, 5000);
-  static const char *const tables[] = {"feedback", "frame", "mesh", "contact_input"};
-  int deleted = 0, del_ok = 1;
-  for (int i = 0; i < 4; i++) {
-    char q[256];
-    snprintf(q, sizeof q, "DELETE FROM %s WHERE session_id = (SELECT id FROM session WHERE trainee = 'gus')", tables[i]);
-    del_ok = del_ok && sqlite3_exec(h, q, NULL, NULL, NULL) == SQLITE_OK;
-    deleted += sqlite3_changes(h);
-  }
-  CHECK(del_ok && deleted > 100, "gus's samples deleted by a second connection (%d rows: %s)", deleted,
-        sqlite3_errmsg(h));
+  char cmd[2400], out[1024] = "";
+  snprintf(cmd, sizeof cmd, "'%s' --db '%s' prune --older-than 0 2>&1", argv[1], db_path);
+  FILE *p = popen(cmd, "r");
+  REQUIRE(p != NULL, "palp-review prune");
+  const size_t nout = fread(out, 1, sizeof out - 1, p);
+  out[nout] = 0;
+  const int prc = pclose(p);
+  char ava_line[160];
+  snprintf(ava_line, sizeof ava_line, "pruned %s\n", ava_uid);
+  char fia_line[160];
+  snprintf(fia_line, sizeof fia_line, "kept   %s: no end logged", m.log_uid);
+  CHECK(WIFEXITED(prc) && WEXITSTATUS(prc) == 0 && strstr(out, ava_line) && strstr(out, fia_line),
+        "palp-review prune --older-than 0 takes ava's session (%s) and leaves fia's (%s), whose end was lost (exit %d): "
+        "%s",
+        ava_uid, m.log_uid, WIFEXITED(prc) ? WEXITSTATUS(prc) : -1, out);
   palp_cli_station hs;
   test_station_join(&hs, DOMAIN, "hal", palp_ROLE_TRAINEE, 1, 0, 1, 0);
   test_send_force(&hs, 0, 1, 0, 0, 1.0, 1);
@@ -242,6 +278,8 @@ int main(void) {
   palp_log_close(&plog);
 
   /* The file is sound, and the review's reading of it is the score she was told. */
+  sqlite3 *h = NULL;
+  REQUIRE(sqlite3_open(db_path, &h) == SQLITE_OK, "a connection of the test's own");
   sqlite3_stmt *st = NULL;
   const char *ic = "";
   if (sqlite3_prepare_v2(h, "PRAGMA integrity_check", -1, &st, NULL) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW)
@@ -290,7 +328,8 @@ int main(void) {
   }
   CHECK(hal_whole, "hal's session, opened after, is logged whole (ended, no frame missing)");
   palp_db_close(db);
-  fprintf(stderr, "server_log_full: empty log %ld bytes, cap %lld bytes; %s\n", empty, (long long)cap, closing);
+  fprintf(stderr, "server_log_full: the log %ld bytes after ava's session, cap %lld bytes; %s\n", before, (long long)cap,
+          closing);
   if (!palp_test_failures) unlink(db_path), unlink(log_path);
   return palp_test_failures ? 1 : 0;
 }
