@@ -69,8 +69,9 @@ typedef struct palp_srv_config {
   char dds_config[PALP_SRV_PATH_MAX]; /* Cyclone XML, resolved against the config's directory */
   char database[PALP_SRV_PATH_MAX];   /* SQLite session log; "" disables logging */
   double session_log_max_mb;   /* [MB, 10^6 bytes] cap on the session log's file (0: none); at the cap
-                                * the log behaves as on a full disk (docs/db.md): sessions go on, lost
-                                * records are counted and said, and their scores say the log is incomplete */
+                                * the log behaves as on a full disk (docs/server.md, "A full session
+                                * log"): sessions go on, lost records are counted and said, and their
+                                * scores say the log is incomplete */
   /* DDS Security ("security": {"pki": DIR, "identity": "server"}; docs/security.md):
    * pki "" runs plain DDS (the quick local demo). */
   char security_pki[PALP_SRV_PATH_MAX]; /* resolved against the config's directory */

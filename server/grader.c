@@ -109,9 +109,9 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
   palp_db_session_info info;
   /* Exactly this uid: palp_db_find_session also takes a unique prefix, and "...-1" is one of "...-10". */
   if (palp_db_find_session(g->db, j->uid, &info) != 0 || strcmp(info.uid, j->uid) != 0) {
-    /* A log that is losing records (a full disk, or its cap: session_log_max_mb) lost the session's
-     * opening: the trainee is told that, not left to think the server forgot her (docs/server.md, "A
-     * full session log"). */
+    /* A log that is losing records (a full disk, or its cap: session_log_max_mb), or lost some since
+     * the server started, lost the session's opening: the trainee is told that, not left to think the
+     * server forgot her (docs/server.md, "A full session log"). */
     palp_db_writer_stats st;
     palp_db_writer_stats_get(g->w, &st);
     char why[128] = "the session is not in the log";
@@ -119,7 +119,8 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
       const char *what = st.last_error[0] ? st.last_error : "its queue was full";
       static const char prefix[] = "writing the session log: ";
       if (strncmp(what, prefix, sizeof prefix - 1) == 0) what += sizeof prefix - 1;
-      snprintf(why, sizeof why, "not in the session log, which is losing records (%.48s); tell your instructor", what);
+      snprintf(why, sizeof why, "not in the session log, which %s records (%.48s); tell your instructor",
+               st.in_error ? "is losing" : "lost", what);
     }
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, why, out);
     return 0;

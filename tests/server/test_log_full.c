@@ -1,23 +1,24 @@
 /*
  * test_log_full.c - a session log that fills mid-session (session 66), over real DDS into a real
- * SQLite file (domain 134). The file is capped (palp_srv_db_log_open's max_bytes, the config's
- * session_log_max_mb: PRAGMA max_page_count, which SQLite enforces as SQLITE_FULL, the very error a
- * full disk gives) a little above what the empty log and one session's opening need:
+ * SQLite file (domain 134). After ava's session, logged whole by an uncapped server (yesterday's
+ * class), the file is capped (palp_srv_db_log_open's max_bytes, the config's session_log_max_mb:
+ * PRAGMA max_page_count, which SQLite enforces as SQLITE_FULL, the very error a full disk gives) a
+ * little above its size:
  *  - fia's practice exercise (tests/server/exercise_short.json, 2 s) fills it as she presses: her
  *    session goes on to its time limit, she is debriefed, and her score comes graded from what the
- *    log holds, with log_complete false and the review's health line ("CUT SHORT: no end was logged"); the
- *    words her station prints (palp_cli_score_text) end with "The session's log is incomplete: the
- *    score may be low.";
- *  - gus's session on a plain phantom, pressing all along, keeps stepping through it (its frames
+ *    log holds, with log_complete false and the review's health line ("CUT SHORT: ..." or
+ *    "DAMAGED: ...", as the batches fell); the words her station prints (palp_cli_score_text) end
+ *    with "The session's log is incomplete: the score may be low."; palp-review's reading of the
+ *    log gives the score she was told, to the last bit, and the same health line;
+ *  - gus's session on a plain phantom, pressing all along, keeps stepping through it (its feedback
  *    counted over 1 s after the loss);
  *  - the server's log says the loss as it happens, with the cap and what to do, before the stop;
  *  - ida's practice session, opened while the log is full, is debriefed and told why she gets no
  *    score ("not in the session log, which is losing records (database or disk is full); ...");
- *  - the file stays sound (PRAGMA integrity_check ok), and palp-review's reading of it gives the
- *    score fia was told, to the last bit;
- *  - the instructor's `palp-review prune --older-than 0` (ava's session, logged whole by an
- *    uncapped server before, and any other ended one; not fia's, whose end was lost) frees pages: the log writes again, the server's log says so, and hal's
- *    session, opened after, is logged whole.
+ *  - the instructor's `palp-review prune --older-than 0` takes ava's session (and any other whose
+ *    end got in) and frees pages: the log writes again, the server's log says so, and hal's
+ *    session, opened after, is logged whole;
+ *  - the file stays sound (PRAGMA integrity_check ok).
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -210,14 +211,43 @@ int main(int argc, char **argv) {
   const int got = got_d == 1 ? palp_cli_station_debrief_score(&f, 15.0, &m, serr, sizeof serr) : -1;
   char text[640] = "";
   if (got == 1) palp_cli_score_text(&m, text, sizeof text);
+  /* Which, depends on the batches: her end lost with the rest (CUT SHORT), or, when a small batch found
+   * room on a partly filled page, logged after records were lost (DAMAGED); both seen under load. */
   CHECK(got == 1 && m.status == palp_SCORE_GRADED && !m.log_complete &&
-            strncmp(m.log_health, "CUT SHORT: no end was logged", 28) == 0,
+            (strncmp(m.log_health, "CUT SHORT: ", 11) == 0 || strncmp(m.log_health, "DAMAGED: ", 9) == 0),
         "fia's score is graded from what the log holds, which it says is incomplete: \"%s\" (got %d %s)",
         got == 1 ? m.log_health : "", got, serr);
   const char *tail = " The session's log is incomplete: the score may be low.";
   CHECK(strlen(text) > strlen(tail) && strcmp(text + strlen(text) - strlen(tail), tail) == 0 &&
             strncmp(text, "score: ", 7) == 0,
         "  and her station tells her so: \"%s\"", text);
+
+  /* palp-review's reading of the log, while the server runs (a reader beside the writer: WAL), gives
+   * the score she was told (before the prune below, which may take her session if its end got in). */
+  palp_db *db = NULL;
+  REQUIRE(palp_db_open(db_path, 0, &db, err, sizeof err) == 0, "read the log: %s", err);
+  palp_db_session_info info;
+  const int found = got == 1 && palp_db_find_session(db, m.log_uid, &info) == 0 && strcmp(info.uid, m.log_uid) == 0;
+  CHECK(found, "fia's session is in the log (%s)", got == 1 ? m.log_uid : "");
+  if (found) {
+    review_assessment *ra = calloc(1, sizeof *ra);
+    REQUIRE(ra, "memory");
+    const int arc = review_assess(db, &info, ra, err, sizeof err);
+    CHECK(arc == 0 && ra->r.score == m.score && (int)m.pass == ra->r.pass && m.samples == (uint32_t)ra->samples &&
+              m.samples > 0,
+          "  palp-review reads the score she was told: %.3f / %.3f from %u / %d finger samples (%s)", m.score,
+          arc == 0 ? ra->r.score : -1.0, m.samples, arc == 0 ? ra->samples : -1, arc ? err : "ok");
+    palp_db_log_health hl;
+    char hline[400] = "";
+    if (palp_db_log_health_get(db, &info, &hl) == 0) palp_db_log_health_describe(&hl, hline, sizeof hline);
+    /* the wire's string<127> holds its first 127 characters */
+    CHECK(m.log_health[0] && strncmp(hline, m.log_health, strlen(m.log_health)) == 0,
+          "  and her score's health line is the review's (its first %zu characters): \"%s\"", strlen(m.log_health),
+          hline);
+    if (arc == 0) review_assessment_free(ra);
+    free(ra);
+  }
+  palp_db_close(db);
 
   /* ida's practice session opens while the log is full: its opening is lost with the rest, and she is
    * told why she gets no score, not that the server forgot her. */
@@ -230,16 +260,19 @@ int main(int argc, char **argv) {
   const int got_di = palp_cli_station_debrief(&ia, 6.0, &d, dl, derr, sizeof derr);
   const int got_i = got_di == 1 ? palp_cli_station_debrief_score(&ia, 15.0, &m2, serr, sizeof serr) : -1;
   if (got_i == 1) palp_cli_score_text(&m2, text2, sizeof text2);
+  /* "is losing" while the writer's last batch failed, "lost" when a small one found room since */
   CHECK(got_di == 1 && got_i == 1 && m2.status == palp_SCORE_NOT_GRADED &&
-            strcmp(text2, "no score: not in the session log, which is losing records (database or disk is full); tell "
-                          "your instructor") == 0,
+            (strcmp(text2, "no score: not in the session log, which is losing records (database or disk is full); "
+                           "tell your instructor") == 0 ||
+             strcmp(text2, "no score: not in the session log, which lost records (database or disk is full); tell your "
+                           "instructor") == 0),
         "ida's session, opened with the log full, is debriefed and she is told why no score: \"%s\" (got %d %d %s %s)",
         text2, got_di, got_i, derr, serr);
   palp_cli_station_close(&ia);
 
-  /* The instructor prunes the old sessions (ava's: ended and logged; fia's and gus's ends were lost,
-   * so they are not taken): the pages freed, the log writes again, says so, and hal's session,
-   * opened after, is logged whole. */
+  /* The instructor prunes the old sessions (ava's, ended and logged; the others too where their ends
+   * got in, else kept as "no end logged"): the pages freed, the log writes again, says so, and hal's
+   * session, opened after, is logged whole. */
   palp_cli_station_leave(&g);
   test_sleep(0.5);
   char cmd[2400], out[1024] = "";
@@ -251,12 +284,9 @@ int main(int argc, char **argv) {
   const int prc = pclose(p);
   char ava_line[160];
   snprintf(ava_line, sizeof ava_line, "pruned %s\n", ava_uid);
-  char fia_line[160];
-  snprintf(fia_line, sizeof fia_line, "kept   %s: no end logged", m.log_uid);
-  CHECK(WIFEXITED(prc) && WEXITSTATUS(prc) == 0 && strstr(out, ava_line) && strstr(out, fia_line),
-        "palp-review prune --older-than 0 takes ava's session (%s) and leaves fia's (%s), whose end was lost (exit %d): "
-        "%s",
-        ava_uid, m.log_uid, WIFEXITED(prc) ? WEXITSTATUS(prc) : -1, out);
+  CHECK(WIFEXITED(prc) && WEXITSTATUS(prc) == 0 && strstr(out, ava_line),
+        "palp-review prune --older-than 0 takes ava's session (%s) (exit %d): %s", ava_uid,
+        WIFEXITED(prc) ? WEXITSTATUS(prc) : -1, out);
   palp_cli_station hs;
   test_station_join(&hs, DOMAIN, "hal", palp_ROLE_TRAINEE, 1, 0, 1, 0);
   test_send_force(&hs, 0, 1, 0, 0, 1.0, 1);
@@ -277,7 +307,7 @@ int main(int argc, char **argv) {
         "the closing line counts the lost records: \"%s\"", closing);
   palp_log_close(&plog);
 
-  /* The file is sound, and the review's reading of it is the score she was told. */
+  /* The file is sound, and hal's session whole. */
   sqlite3 *h = NULL;
   REQUIRE(sqlite3_open(db_path, &h) == SQLITE_OK, "a connection of the test's own");
   sqlite3_stmt *st = NULL;
@@ -287,30 +317,7 @@ int main(int argc, char **argv) {
   CHECK(ic && strcmp(ic, "ok") == 0, "the capped file is sound: integrity_check \"%s\"", ic ? ic : "");
   sqlite3_finalize(st);
   sqlite3_close(h);
-  palp_db *db = NULL;
   REQUIRE(palp_db_open(db_path, 0, &db, err, sizeof err) == 0, "read the log: %s", err);
-  palp_db_session_info info;
-  const int found = got == 1 && palp_db_find_session(db, m.log_uid, &info) == 0 && strcmp(info.uid, m.log_uid) == 0;
-  CHECK(found && info.end_unix_s == 0, "fia's session is in the log (%s), its end not (the file was full)",
-        got == 1 ? m.log_uid : "");
-  if (found) {
-    review_assessment *ra = calloc(1, sizeof *ra);
-    REQUIRE(ra, "memory");
-    const int arc = review_assess(db, &info, ra, err, sizeof err);
-    CHECK(arc == 0 && ra->r.score == m.score && (int)m.pass == ra->r.pass && m.samples == (uint32_t)ra->samples &&
-              m.samples > 0,
-          "  palp-review reads the score she was told: %.3f / %.3f from %u / %d finger samples (%s)", m.score,
-          arc == 0 ? ra->r.score : -1.0, m.samples, arc == 0 ? ra->samples : -1, arc ? err : "ok");
-    palp_db_log_health hl;
-    char hline[400] = "";
-    if (palp_db_log_health_get(db, &info, &hl) == 0) palp_db_log_health_describe(&hl, hline, sizeof hline);
-    /* the wire's string<127> holds its first 127 characters */
-    CHECK(strlen(m.log_health) >= 100 && strncmp(hline, m.log_health, strlen(m.log_health)) == 0,
-          "  and her score's health line is the review's (its first %zu characters): \"%s\"", strlen(m.log_health),
-          hline);
-    if (arc == 0) review_assessment_free(ra);
-    free(ra);
-  }
   palp_db_session_info hi;
   char hal_uid[32];
   snprintf(hal_uid, sizeof hal_uid, "-%u", hal_session);
