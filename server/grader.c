@@ -66,6 +66,38 @@ void palp_srv_score_of(const review_assessment *a, uint32_t session_id, const ch
   out->samples = (uint32_t)a->samples;
 }
 
+void palp_srv_health_fit(const char *line, char *out, size_t len) {
+  if (!len) return;
+  if (strlen(line) < len) {
+    snprintf(out, len, "%s", line);
+    return;
+  }
+  /* Too long for the wire's string<127> (a damaged and cut-short log's line runs to ~200): first
+   * without its explanations in parentheses, which the review prints; then, if still too long, cut
+   * after its last whole phrase (", " or "; ") that leaves room for " ...", never inside a count. */
+  char bare[512];
+  size_t n = 0;
+  for (const char *c = line; *c && n + 1 < sizeof bare; c++) {
+    const char *close = c[0] == ' ' && c[1] == '(' ? strchr(c, ')') : NULL;
+    if (close) {
+      c = close;
+      continue;
+    }
+    bare[n++] = *c;
+  }
+  bare[n] = 0;
+  if (n < len) {
+    memcpy(out, bare, n + 1);
+    return;
+  }
+  static const char more[] = " ...";
+  size_t cut = 0;
+  for (size_t i = 0; i + sizeof more <= len && i < n; i++)
+    if ((bare[i] == ',' || bare[i] == ';') && bare[i + 1] == ' ') cut = i;
+  if (!cut) cut = len - sizeof more;
+  snprintf(out, len, "%.*s%s", (int)cut, bare, more);
+}
+
 static double now_s(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -138,7 +170,9 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
   palp_db_log_health health;
   if (out->graded && palp_db_log_health_get(g->db, &info, &health) == 0) {
     out->log_complete = health.complete != 0;
-    palp_db_log_health_describe(&health, out->log_health, sizeof out->log_health);
+    char line[512];
+    palp_db_log_health_describe(&health, line, sizeof line);
+    palp_srv_health_fit(line, out->log_health, sizeof out->log_health);
   } else if (out->graded) {
     snprintf(out->log_health, sizeof out->log_health, "unknown: %s", palp_db_errmsg(g->db));
   }

@@ -40,5 +40,9 @@ void palp_srv_grader_close(palp_srv_grader *g);
 struct review_assessment;
 void palp_srv_score_of(const struct review_assessment *a, uint32_t session_id, const char *uid, const char *exercise,
                        const char *reason, palp_srv_score *out);
+/* The review's log-health line (palp_db_log_health_describe) into the wire's len (128) bytes: whole;
+ * or, too long, without its parenthesised explanations; or, still too long, cut after its last whole
+ * phrase that fits, ending " ..." (palp-review show prints all of it). */
+void palp_srv_health_fit(const char *line, char *out, size_t len);
 
 #endif

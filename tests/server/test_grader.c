@@ -92,6 +92,31 @@ int main(int argc, char **argv) {
     fprintf(stderr, "usage: %s TMPDIR\n", argv[0]);
     return 2;
   }
+  /* The log's health line fitted to the wire's 128 bytes (palp_srv_health_fit, session 66): a short
+   * one whole; a damaged and cut-short one (211 characters; 143 without its explanations) and one with
+   * larger counts, each without its explanations and cut after a whole phrase, " ..." at its end,
+   * never inside a count. */
+  {
+    char out[128];
+    palp_srv_health_fit("complete: an end was logged; 1504 of 1504 frames present, no records shed or lost", out,
+                        sizeof out);
+    CHECK(strcmp(out, "complete: an end was logged; 1504 of 1504 frames present, no records shed or lost") == 0,
+          "health fit: a short line whole: \"%s\"", out);
+    palp_srv_health_fit("CUT SHORT: no end was logged (the server was killed, or is still writing); the data ends at "
+                        "frame 240, t = 0.960 s; DAMAGED: 0 records shed (queue full), 343 lost to disk errors, 0 of 80 "
+                        "frames missing (0.0%)",
+                        out, sizeof out);
+    CHECK(strcmp(out, "CUT SHORT: no end was logged; the data ends at frame 240, t = 0.960 s; DAMAGED: 0 records shed, "
+                      "343 lost to disk errors ...") == 0,
+          "health fit: a long line without its explanations, cut after a whole phrase: \"%s\"", out);
+    palp_srv_health_fit("CUT SHORT: no end was logged (the server was killed, or is still writing); the data ends at "
+                        "frame 1234567, t = 12345.678 s; DAMAGED: 123456 records shed (queue full), 1234567 lost to "
+                        "disk errors, 123456 of 1234567 frames missing (10.0%)",
+                        out, sizeof out);
+    CHECK(strcmp(out, "CUT SHORT: no end was logged; the data ends at frame 1234567, t = 12345.678 s; DAMAGED: 123456 "
+                      "records shed ...") == 0,
+          "health fit: still too long, cut after a whole phrase: \"%s\"", out);
+  }
   char path[512], log_path[512];
   snprintf(path, sizeof path, "%s/grader-%ld.db", argv[1], (long)getpid());
   snprintf(log_path, sizeof log_path, "%s/grader-%ld.log", argv[1], (long)getpid());
