@@ -64,8 +64,11 @@ int palp_db_loss_watch_look(palp_db_loss_watch *w, const palp_db_writer_stats *s
              hint);
     w->lost_said = lost, w->said_ns = now_ns, w->losing = 1;
     said = 1;
-  } else if (w->losing && !st->in_error && lost == w->lost_seen && st->written > w->written_seen) {
-    /* a look with no new loss, the writer out of error and writing: space came back */
+  } else if (w->losing && lost == w->lost_seen &&
+             (st->failed > 0 ? !st->in_error : st->written > w->written_seen)) {
+    /* A whole look's period without a new loss, and the writer writing: after disk errors, its last
+     * attempt succeeded (in_error is cleared only by a success, which may have come in the period of
+     * the last loss); after a full queue alone, records written in this period. */
     snprintf(line, len, "session log: writing again (%lld records lost in all)", (long long)lost);
     w->losing = 0, w->lost_said = lost;
     said = 2;

@@ -298,8 +298,9 @@ typedef struct palp_db_loss_watch {
  * minute while losses go on: "session log: 49 records lost so far (0 shed: the queue was full; 49
  * failed: ...database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb)
  * or its disk is full: prune old sessions (palp-review prune), move the log away or raise the cap"); 2 and "session log: writing again (N
- * records lost in all)" on the first look after a loss with no new loss and records written; 0 and
- * "" otherwise. */
+ * records lost in all)" on the first look after a loss with no new loss since the look before and
+ * the writer writing (its last attempt a success; after sheds alone, records written since the look
+ * before); 0 and "" otherwise. */
 int palp_db_loss_watch_look(palp_db_loss_watch *w, const palp_db_writer_stats *st, int64_t now_ns, char *line,
                             size_t len);
 /* How full the log at path is against max_bytes (its pages, as the cap counts them; 0: no cap,

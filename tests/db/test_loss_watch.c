@@ -44,15 +44,19 @@ int main(int argc, char **argv) {
        "session log: 950 records lost so far (0 shed: the queue was full; 950 failed: writing the session log: "
        "database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: prune "
        "old sessions (palp-review prune), move the log away or raise the cap");
-  /* no new loss, but nothing written yet: not recovered */
-  look(&w, stats(120, 0, 950, 0, full), 62 * S, 0, "");
-  look(&w, stats(180, 0, 950, 0, full), 63 * S, 2, "session log: writing again (950 records lost in all)");
+  /* no new loss, but its last attempt failed: not recovered; then one succeeded (what it wrote may
+   * have come in the period of the last loss: nothing more written since is still a recovery) */
+  look(&w, stats(120, 0, 950, 1, full), 62 * S, 0, "");
+  look(&w, stats(120, 0, 950, 0, full), 63 * S, 2, "session log: writing again (950 records lost in all)");
   look(&w, stats(240, 0, 950, 0, full), 64 * S, 0, "");
   /* a new loss after a recovery is said at once */
   look(&w, stats(240, 0, 951, 1, full), 65 * S, 1,
        "session log: 951 records lost so far (0 shed: the queue was full; 951 failed: writing the session log: "
        "database or disk is full); the file reached its cap of 0.21 MB (session_log_max_mb) or its disk is full: prune "
        "old sessions (palp-review prune), move the log away or raise the cap");
+  /* a new loss in the period of a look is not a recovery, whatever was written beside it */
+  look(&w, stats(300, 0, 960, 0, full), 66 * S, 0, "");
+  look(&w, stats(300, 0, 960, 0, full), 67 * S, 2, "session log: writing again (960 records lost in all)");
   /* no cap: the disk; a shed queue without an error; a cap of 16 GB in whole MB */
   palp_db_loss_watch d = {0};
   look(&d, stats(10, 0, 7, 1, full), 0, 1,
@@ -60,7 +64,10 @@ int main(int argc, char **argv) {
        "disk is full); its disk is full: prune old sessions (palp-review prune), free space or move the log away");
   palp_db_loss_watch q = {.max_bytes = 16384000000LL, .cap_name = "--max-mb"};
   look(&q, stats(10, 5, 0, 0, ""), 0, 1, "session log: 5 records lost so far (5 shed: the queue was full; 0 failed)");
-  look(&q, stats(10, 0, 3, 1, full), 0, 0, "");
+  look(&q, stats(40, 7, 0, 0, ""), 1 * S, 0, "");
+  /* sheds alone: recovered only by a period with records written and none shed */
+  look(&q, stats(40, 7, 0, 0, ""), 2 * S, 0, "");
+  look(&q, stats(90, 7, 0, 0, ""), 3 * S, 2, "session log: writing again (7 records lost in all)");
   palp_db_loss_watch c = {.max_bytes = 16384000000LL, .cap_name = "--max-mb"};
   look(&c, stats(10, 0, 3, 1, full), 0, 1,
        "session log: 3 records lost so far (0 shed: the queue was full; 3 failed: writing the session log: database or "

@@ -392,6 +392,18 @@ def run(build, source, out):
               order == [got["session"], told["session"]],
               "a restarted palp-web's dashboard lists pat's and sam's ended sessions from the server's scores, "
               "newest on top: %s" % listed)
+        # A practice session the server cannot score (session 66): kim presses "easy" by force, so her log
+        # holds no finger samples; her page says why no score comes, in her station's words
+        # (palp_cli_score_text's "no score: REASON"; this test's stations run --quiet).
+        kim_page = browser.new_page(web2.base + "/trainee.html?trainee=kim")
+        check(kim_page.wait_for("window.palpState && palpState.connected", 20) is True, "kim's page connected")
+        kim = procs.trainee("kim", phantom=11, extra=["--duration", "4"])
+        reason = "no finger samples logged (a session of force contacts only, or logged before schema 3)"
+        kim_text = kim_page.wait_for("(function(){const e=document.getElementById('debrief-score');"
+                                     "return e && !e.hidden && e.textContent ? e.textContent : null;})()", 30)
+        check(kim_text == "No score: %s." % reason,
+              "kim's page (easy, pressed by force) says why no score comes: %r (her station: %s)"
+              % (kim_text, kim.poll()))
         # (no screenshot here: with the dashboard and observer pages opened since, this page is a background
         # tab, which Chromium may not paint: a capture timed out once in a full run)
     finally:

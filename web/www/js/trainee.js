@@ -314,7 +314,8 @@
    * graded from its log as the review grades it, and what to work on, in her words (work_on: the
    * words her station prints too, palp_metric_to_work_on). */
   function scoreText(m) {
-    if (!m.graded) return "";
+    /* not graded: why, as her station says it (palp_cli_score_text: "no score: REASON"; session 66) */
+    if (!m.graded) return typeof m.reason === "string" && m.reason ? "No score: " + m.reason + "." : "";
     const work = Array.isArray(m.work_on) ? m.work_on.filter(function (w) { return typeof w === "string"; }) : [];
     return "Your score: " + m.score.toFixed(1) + " of 100, " + (m.pass ? "passed" : "not passed") +
       " (the automatic score, as the review gives it; your instructor grades you)." +
