@@ -43,10 +43,15 @@ static void *server_main(void *arg) {
 }
 
 void test_server_start(test_server *ts, const palp_srv_config *cfg) {
-  palp_srv_def def = {.cfg = *cfg, .verbose = 1};
+  const palp_srv_def def = {.cfg = *cfg, .verbose = 1};
+  test_server_start_def(ts, &def);
+}
+
+void test_server_start_def(test_server *ts, const palp_srv_def *def) {
   char err[512];
   int rc = 0;
-  ts->srv = palp_srv_create(&def, &rc, err, sizeof err);
+  *ts = (test_server){0};
+  ts->srv = palp_srv_create(def, &rc, err, sizeof err);
   if (!ts->srv) {
     fprintf(stderr, "server: %s\n", err);
     exit(1);
@@ -97,6 +102,23 @@ void test_send_force(palp_cli_station *st, int finger, int d, double polar, doub
   c.center = (palp_Vec3){p.x, p.y, p.z};
   c.force = (palp_Vec3){-force * n.x, -force * n.y, -force * n.z};
   dds_write(st->contact_w, &c);
+}
+
+void test_send_finger(palp_cli_station *st, double polar, double azimuth, double depth, uint64_t seq) {
+  const double r = 0.008;
+  const palp_vec3 c = palp_cli_dome_point(0.04 + r - depth, polar, azimuth, NULL);
+  palp_Contact m;
+  memset(&m, 0, sizeof m);
+  m.session_id = st->session_id;
+  m.finger = 0;
+  m.seq = seq;
+  m.source_time_ns = palp_dds_now_ns();
+  m.mode = palp_CONTACT_FINGER;
+  m.distribution = 1;
+  m.vertex = -1;
+  m.center = (palp_Vec3){c.x, c.y, c.z};
+  m.radius = r;
+  dds_write(st->contact_w, &m);
 }
 
 double test_last_feedback(palp_cli_station *st, double seconds, int *samples) {

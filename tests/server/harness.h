@@ -49,6 +49,8 @@ typedef struct test_server {
 void test_config(palp_srv_config *cfg, unsigned domain, double tick_rate_hz);
 /* Starts palp_srv_run on a thread; exits the test on failure. */
 void test_server_start(test_server *ts, const palp_srv_config *cfg);
+/* The same with a def of the caller's (events, a log: palp_srv_create copies it). */
+void test_server_start_def(test_server *ts, const palp_srv_def *def);
 void test_server_stop(test_server *ts);
 
 /* Opens a station and joins; exits the test on failure. */
@@ -61,6 +63,9 @@ void test_station_join_as(palp_cli_station *st, unsigned domain, const char *lab
 void test_send_force(palp_cli_station *st, int finger, int d, double polar, double azimuth, double force,
                      uint64_t seq);
 void test_send_raw(palp_cli_station *st, const palp_Contact *c);
+/* Sends one position-driven 8 mm fingertip (finger 0) whose sphere goes depth [m] below the 40 mm
+ * dome's undeformed surface along the normal at polar/azimuth [deg]. */
+void test_send_finger(palp_cli_station *st, double polar, double azimuth, double depth, uint64_t seq);
 
 /* Takes feedback samples for `seconds`, returning the last finger-0 force magnitude [N]. */
 double test_last_feedback(palp_cli_station *st, double seconds, int *samples);

@@ -203,23 +203,6 @@ static palp_vec3 dome_point(double R, double polar_deg, double az_deg) {
   return (palp_vec3){R * sin(p) * cos(a), R * sin(p) * sin(a), R * cos(p)};
 }
 
-/* A position-driven fingertip at depth d [m] below the surface along the normal at (polar, az). */
-static void send_finger(palp_cli_station *st, double polar, double az, double depth, uint64_t seq) {
-  const double r = 0.008;
-  const palp_vec3 c = dome_point(0.04 + r - depth, polar, az);
-  palp_Contact m;
-  memset(&m, 0, sizeof m);
-  m.session_id = st->session_id;
-  m.finger = 0;
-  m.seq = seq;
-  m.source_time_ns = palp_dds_now_ns();
-  m.mode = palp_CONTACT_FINGER;
-  m.distribution = 1;
-  m.vertex = -1;
-  m.center = (palp_Vec3){c.x, c.y, c.z};
-  m.radius = r;
-  dds_write(st->contact_w, &m);
-}
 
 /* The newest feedback frame of a station within wait [s], or -1. */
 static int64_t latest_frame(palp_cli_station *st, double wait) {
@@ -294,7 +277,6 @@ static int on_log_event(void *user, double wall, int64_t frame, const char *kind
   return 0;
 }
 
-static void start_server(test_server *ts, const palp_srv_def *def);
 
 int main(void) {
   test_init();
@@ -347,13 +329,8 @@ int main(void) {
   palp_srv_db_log *dbl = NULL;
   REQUIRE(palp_srv_db_log_open(db_path, 0, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
   palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
-  int rc = 0;
-  test_server ts = {0};
-  ts.srv = palp_srv_create(&def, &rc, err, sizeof err);
-  REQUIRE(ts.srv != NULL, "server: %s", err);
-  extern void *test_findings_server_main(void *);
-  REQUIRE(pthread_create(&ts.thread, NULL, test_findings_server_main, &ts) == 0, "server thread");
-  ts.running = 1;
+  test_server ts;
+  test_server_start_def(&ts, &def);
 
   spy sp;
   spy_start(&sp);
@@ -402,7 +379,7 @@ int main(void) {
   /* ---- alice palpates over lesion 1 (position-driven fingertip) ---- */
   uint64_t seq = 1;
   for (int k = 0; k <= 60; k++) { /* down to 12 mm over 0.6 s, then hold 0.6 s */
-    send_finger(&a, 31, 41, k <= 30 ? 0.012 * k / 30.0 : 0.012, seq++);
+    test_send_finger(&a, 31, 41, k <= 30 ? 0.012 * k / 30.0 : 0.012, seq++);
     test_sleep(0.02);
   }
 
@@ -746,7 +723,7 @@ int main(void) {
     ev.take_score = NULL;
     palp_srv_def def2 = {.cfg = cfg, .events = &ev, .verbose = 0};
     test_server ts2 = {0};
-    start_server(&ts2, &def2);
+    test_server_start_def(&ts2, &def2);
     palp_cli_station d;
     test_station_join(&d, DOMAIN, "dora", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
     palp_Debrief db_;
@@ -779,7 +756,7 @@ int main(void) {
     REQUIRE(palp_srv_db_log_open(db2, 0, NULL, &dbl2, err, sizeof err) == 0, "third log: %s", err);
     palp_srv_def def3 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl2), .verbose = 0};
     test_server ts3 = {0};
-    start_server(&ts3, &def3);
+    test_server_start_def(&ts3, &def3);
     palp_cli_station e;
     test_station_join(&e, DOMAIN, "ema", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
     test_server_stop(&ts3);
@@ -797,21 +774,4 @@ int main(void) {
   }
   fprintf(stderr, "server_findings: %.1f s\n", (double)(palp_dds_now_ns() - t_start) * 1e-9);
   return palp_test_failures ? 1 : 0;
-}
-
-void *test_findings_server_main(void *arg) {
-  test_server *ts = arg;
-  palp_srv_run(ts->srv, 0);
-  return NULL;
-}
-
-/* A server of def's on a thread of its own (test_server_stop stops it); exits the test on failure. */
-static void start_server(test_server *ts, const palp_srv_def *def) {
-  char err[256] = "";
-  int rc = 0;
-  *ts = (test_server){0};
-  ts->srv = palp_srv_create(def, &rc, err, sizeof err);
-  REQUIRE(ts->srv != NULL, "server: %s", err);
-  REQUIRE(pthread_create(&ts->thread, NULL, test_findings_server_main, ts) == 0, "server thread");
-  ts->running = 1;
 }

@@ -38,32 +38,9 @@
 
 #define DOMAIN 134
 #define EX_SHORT 8
-#define PI 3.14159265358979323846
 /* Above the log after ava's session: fia's session's opening rows (its scene and exercise, ~20 KB) and its
  * first second or so of samples; her 2 s of pressing at 250 Hz write several times that. */
 #define MARGIN_BYTES (96 * 1024)
-
-static palp_vec3 dome_point(double R, double polar_deg, double az_deg) {
-  const double p = polar_deg * PI / 180, a = az_deg * PI / 180;
-  return (palp_vec3){R * sin(p) * cos(a), R * sin(p) * sin(a), R * cos(p)};
-}
-
-/* A position-driven 8 mm fingertip at depth d [m] below the surface along the normal at (polar, az). */
-static void send_finger(palp_cli_station *st, double polar, double az, double depth, uint64_t seq) {
-  const double r = 0.008;
-  const palp_vec3 c = dome_point(0.04 + r - depth, polar, az);
-  palp_Contact m;
-  memset(&m, 0, sizeof m);
-  m.session_id = st->session_id;
-  m.seq = seq;
-  m.source_time_ns = palp_dds_now_ns();
-  m.mode = palp_CONTACT_FINGER;
-  m.distribution = 1;
-  m.vertex = -1;
-  m.center = (palp_Vec3){c.x, c.y, c.z};
-  m.radius = r;
-  dds_write(st->contact_w, &m);
-}
 
 static long file_size(const char *path) {
   struct stat sb;
@@ -101,8 +78,6 @@ static int64_t frames_over(palp_cli_station *st, double seconds) {
   return n;
 }
 
-void *test_log_full_server_main(void *arg);
-
 int main(int argc, char **argv) {
   REQUIRE(argc > 1, "usage: test_server_log_full PALP_REVIEW");
   test_init();
@@ -128,13 +103,9 @@ int main(int argc, char **argv) {
   palp_srv_db_log *dbl = NULL;
   REQUIRE(palp_srv_db_log_open(db_path, 0, NULL, &dbl, err, sizeof err) == 0, "log: %s", err);
   {
-    palp_srv_def def0 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
-    test_server ts0 = {0};
-    int rc0 = 0;
-    ts0.srv = palp_srv_create(&def0, &rc0, err, sizeof err);
-    REQUIRE(ts0.srv != NULL, "server: %s", err);
-    REQUIRE(pthread_create(&ts0.thread, NULL, test_log_full_server_main, &ts0) == 0, "server thread");
-    ts0.running = 1;
+    const palp_srv_def def0 = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
+    test_server ts0;
+    test_server_start_def(&ts0, &def0);
     palp_cli_station a;
     test_station_join(&a, DOMAIN, "ava", palp_ROLE_TRAINEE, 1, 0, 1, 0);
     test_send_force(&a, 0, 1, 0, 0, 2.0, 1);
@@ -169,13 +140,9 @@ int main(int argc, char **argv) {
   snprintf(cap_text, sizeof cap_text, "of its cap of %.2f MB (session_log_max_mb)", (double)cap * 1e-6);
   CHECK(log_has(log_path, cap_text, line, sizeof line),
         "the server's log says the cap as it opens: \"%s\"", line);
-  palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
-  test_server ts = {0};
-  int rc = 0;
-  ts.srv = palp_srv_create(&def, &rc, err, sizeof err);
-  REQUIRE(ts.srv != NULL, "server: %s", err);
-  REQUIRE(pthread_create(&ts.thread, NULL, test_log_full_server_main, &ts) == 0, "server thread");
-  ts.running = 1;
+  const palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
+  test_server ts;
+  test_server_start_def(&ts, &def);
 
   /* gus presses a plain phantom all along; fia's practice session fills the log. */
   palp_cli_station g, f;
@@ -184,7 +151,7 @@ int main(int argc, char **argv) {
   test_station_join(&f, DOMAIN, "fia", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
   uint64_t seq = 1;
   for (int k = 0; k < 120; k++) { /* down to 12 mm over lesion 1, then slide; her 2 s limit ends it */
-    send_finger(&f, 31 + (k > 60 ? 0.2 * (k - 60) : 0), 41, k <= 40 ? 0.012 * k / 40.0 : 0.012, seq++);
+    test_send_finger(&f, 31 + (k > 60 ? 0.2 * (k - 60) : 0), 41, k <= 40 ? 0.012 * k / 40.0 : 0.012, seq++);
     test_sleep(0.02);
   }
   char loss[2048] = "";
@@ -258,7 +225,7 @@ int main(int argc, char **argv) {
   palp_cli_station ia;
   test_station_join(&ia, DOMAIN, "ida", palp_ROLE_TRAINEE, EX_SHORT, 0, 1, 0);
   for (int k = 0; k < 40; k++) {
-    send_finger(&ia, 31, 41, 0.008 * k / 40.0, seq++);
+    test_send_finger(&ia, 31, 41, 0.008 * k / 40.0, seq++);
     test_sleep(0.02);
   }
   const int got_di = palp_cli_station_debrief(&ia, 6.0, &d, dl, derr, sizeof derr);
@@ -343,10 +310,4 @@ int main(int argc, char **argv) {
           closing);
   if (!palp_test_failures) unlink(db_path), unlink(log_path);
   return palp_test_failures ? 1 : 0;
-}
-
-void *test_log_full_server_main(void *arg) {
-  test_server *ts = arg;
-  palp_srv_run(ts->srv, 0);
-  return NULL;
 }
