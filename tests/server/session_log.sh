@@ -5,7 +5,8 @@
 # reproduces every logged frame bit for bit (exit 0) - the replay contract of
 # db/palp_db.h. A second trainee, erin, stopped 1.5 s (SIGSTOP) mid-press, keeps her one
 # session, the review lists her station's loss and return, and her session replays too.
-# Also: SIGINT stops the server with exit 0. Domain 106.
+# Also: SIGINT stops the server with exit 0; the config's session_log_max_mb (1000) is the cap the
+# server's log says as it opens (session 66). Domain 106.
 set -u
 . "$(dirname "$0")/../stall.sh"
 server=$1 client=$2 review=$3 driver=$4 config_dir=$5
@@ -13,7 +14,7 @@ tmp=$(mktemp -d)
 trap 'kill $spid 2>/dev/null; [ -n "${KEEP_TMP:-}" ] || rm -rf "$tmp"' EXIT
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 cat > "$tmp/server.json" <<JSON
-{"domain_id": 106, "tick_rate_hz": 1000, "database": "log/sessions.db",
+{"domain_id": 106, "tick_rate_hz": 1000, "database": "log/sessions.db", "session_log_max_mb": 1000,
  "dds_config": "$config_dir/cyclonedds-loopback.xml",
  "phantoms": [{"id": 1, "name": "dome", "scene": "$config_dir/paper_step.json"}]}
 JSON
@@ -59,4 +60,8 @@ out=$("$review" --db "$db" replay "$euid" 2>&1); rrc=$?
 if [ $rrc -eq 0 ]; then echo "ok   erin's held and resumed session replays, exit 0: $out"; else echo "FAIL erin's replay exit $rrc: $out"; fail=1; fi
 grep -q "session log: .* 0 shed" "$tmp/server.log" && echo "ok   nothing shed: $(grep 'session log:' "$tmp/server.log")" \
   || { echo "FAIL writer counts: $(grep 'session log' "$tmp/server.log")"; fail=1; }
+# the config's session_log_max_mb, in MB, is the cap palp-server gives its log (session 66)
+grep -q "INFO  palp-server: session log: 0\.[0-9][0-9] MB of its cap of 1000 MB (session_log_max_mb)$" "$tmp/server.log" \
+  && echo "ok   the log's cap from the config said as it opens" \
+  || { echo "FAIL no cap line: $(grep 'session log' "$tmp/server.log")"; fail=1; }
 exit $fail

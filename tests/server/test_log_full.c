@@ -97,6 +97,8 @@ int main(int argc, char **argv) {
            DOMAIN, EX_SHORT, PALP_TEST_DIR);
   palp_srv_config cfg;
   REQUIRE(palp_srv_config_parse(json, PALP_CONFIG_DIR, &cfg, err, sizeof err) == 0, "config: %s", err);
+  /* palp-server gives its log the config's MB (server/main.c; test server_session_log checks the line it
+   * says); this test gives palp_srv_db_log_open a cap in bytes, 96 KB above the log it makes */
   CHECK(cfg.session_log_max_mb == 1.0, "config: session_log_max_mb read (%g MB)", cfg.session_log_max_mb);
 
   /* Yesterday's class: ava's session, logged whole by an uncapped server; the file's size then. */
