@@ -54,10 +54,11 @@ int palp_db_loss_watch_look(palp_db_loss_watch *w, const palp_db_writer_stats *s
   int said = 0;
   if (lost > w->lost_said && (!w->losing || now_ns - w->said_ns >= LOSS_SAY_NS)) {
     char hint[200] = "", mb[32];
-    if (strstr(st->last_error, "full") && w->max_bytes > 0)
+    const int full = (st->last_error_code & 0xff) == SQLITE_FULL; /* the cap's error is the full disk's */
+    if (full && w->max_bytes > 0)
       snprintf(hint, sizeof hint, "; the file reached its cap of %s MB (%s) or its disk is full: " ADVICE_CAP,
                mb_text((double)w->max_bytes, mb, sizeof mb), w->cap_name ? w->cap_name : "its cap");
-    else if (strstr(st->last_error, "full"))
+    else if (full)
       snprintf(hint, sizeof hint, "; its disk is full: " ADVICE_DISK);
     snprintf(line, len, "session log: %lld records lost so far (%lld shed: the queue was full; %lld failed%s%s)%s",
              (long long)lost, (long long)st->shed, (long long)st->failed, st->last_error[0] ? ": " : "", st->last_error,

@@ -350,6 +350,8 @@ int palp_db_file_version(palp_db *db);
 /* The underlying connection, for ad-hoc queries (palp-review, tests). */
 struct sqlite3 *palp_db_handle(palp_db *db);
 const char *palp_db_errmsg(palp_db *db);
+/* SQLite's words for a result code, e.g. a writer's last_error_code: "database or disk is full". */
+const char *palp_db_error_text(int code);
 
 typedef struct palp_db_session_info {
   int64_t id;

@@ -80,6 +80,7 @@ void palp_db_close(palp_db *db) {
 
 struct sqlite3 *palp_db_handle(palp_db *db) { return db->db; }
 const char *palp_db_errmsg(palp_db *db) { return sqlite3_errmsg(db->db); }
+const char *palp_db_error_text(int code) { return sqlite3_errstr(code); }
 
 int palp_db_file_version(palp_db *db) {
   sqlite3_stmt *st;

@@ -148,9 +148,7 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
     palp_db_writer_stats_get(g->w, &st);
     char why[128] = "the session is not in the log";
     if (st.failed > 0 || st.shed > 0) {
-      const char *what = st.last_error[0] ? st.last_error : "its queue was full";
-      static const char prefix[] = "writing the session log: ";
-      if (strncmp(what, prefix, sizeof prefix - 1) == 0) what += sizeof prefix - 1;
+      const char *what = st.last_error_code ? palp_db_error_text(st.last_error_code) : "its queue was full";
       snprintf(why, sizeof why, "not in the session log, which %s records (%.48s); tell your instructor",
                st.in_error ? "is losing" : "lost", what);
     }

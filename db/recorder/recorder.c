@@ -1015,12 +1015,13 @@ int main(int argc, char **argv) {
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
      * not only at stop (idl/palp_dds_refusals.h) */
     palp_dds_refusals_tick(&refusals, palp_dds_now_ns());
-    if (palp_dds_now_ns() >= next_watch_ns) {
-      next_watch_ns = palp_dds_now_ns() + 1000000000;
+    const int64_t now_ns = palp_dds_now_ns();
+    if (now_ns >= next_watch_ns) {
+      next_watch_ns = now_ns + 1000000000;
       palp_db_writer_stats ws_;
       palp_db_writer_stats_get(r->w, &ws_);
       char line[640];
-      const int said = palp_db_loss_watch_look(&watch, &ws_, palp_dds_now_ns(), line, sizeof line);
+      const int said = palp_db_loss_watch_look(&watch, &ws_, now_ns, line, sizeof line);
       if (said == 1) palp_log_warn(&plog, "%s; recording goes on", line);
       else if (said == 2) palp_log_info(&plog, "%s", line);
     }

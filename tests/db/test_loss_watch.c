@@ -19,6 +19,7 @@ static palp_db_writer_stats stats(int64_t written, int64_t shed, int64_t failed,
   memset(&st, 0, sizeof st);
   st.written = written, st.shed = shed, st.failed = failed, st.in_error = in_error;
   snprintf(st.last_error, sizeof st.last_error, "%s", error);
+  st.last_error_code = strstr(error, "database or disk is full") ? SQLITE_FULL : 0; /* as the writer sets both */
   return st;
 }
 
