@@ -370,8 +370,27 @@ static void test_full_disk(void) {
         st.last_error, st.last_error_code);
   CHECK(st.written + st.failed == st.enqueued, "every record is written or counted as failed (%lld + %lld vs %lld)",
         (long long)st.written, (long long)st.failed, (long long)st.enqueued);
-  palp_db_writer_close(w);
+  /* A flush returns once the losses are in the session's row as well: the grader reads that row's
+   * count into a trainee's score right after its wait, and palp-review reads it later; they must agree.
+   * Each round loses more records (the file stays full) and reads the row beside the writer. */
   sqlite3 *h;
+  sqlite3_open_v2(p, &h, SQLITE_OPEN_READONLY, NULL);
+  int stale = 0;
+  long long row = -1;
+  for (int round = 0; round < 8; round++) {
+    for (int64_t i = 1; i <= 600; i++) {
+      palp_db_frame f = frame_of(20000 + 600 * round + i);
+      (void)palp_db_log_frame(w, s, &f);
+    }
+    palp_db_writer_flush(w, 20);
+    palp_db_writer_stats_get(w, &st);
+    row = db_scalar(h, "SELECT records_failed FROM session WHERE uid = 'full-1'");
+    if (row != st.failed) stale++;
+  }
+  CHECK(stale == 0, "after each flush the session's row counts every lost record: %d of 8 rounds stale (last: row %lld, "
+        "writer %lld)", stale, row, (long long)st.failed);
+  sqlite3_close(h);
+  palp_db_writer_close(w);
   sqlite3_open(p, &h);
   CHECK(db_scalar(h, "PRAGMA integrity_check") != -2, "integrity");
   sqlite3_stmt *q;
