@@ -163,6 +163,19 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
   /* On an error review_assess has freed what it made. */
   const int assessed = review_assess(g->db, &info, a, err, sizeof err) == 0;
   if (assessed && !a->has_exercise) snprintf(err, sizeof err, "the log holds no exercise for the session");
+  if (!(assessed && a->has_exercise) && (info.records_failed > 0 || info.records_shed > 0)) {
+    /* The session's row got in (a small batch found room in a full file) but what scoring needs (its
+     * exercise, its fingertip's samples) did not: the loss is the reason, and what to do about it is
+     * the instructor's; the row's counts are this session's own, up to date once the wait returns. */
+    palp_db_writer_stats st;
+    palp_db_writer_stats_get(g->w, &st);
+    const char *what = info.records_failed > 0 && st.last_error_code ? palp_db_error_text(st.last_error_code)
+                                                                     : "its queue was full";
+    palp_log_info(g->log, "session %u (%s): %s, after the session log lost %lld of its records", j->session_id,
+                  j->uid, err, (long long)(info.records_failed + info.records_shed));
+    snprintf(err, sizeof err, "the session log lost %lld of its records (%.40s); tell your instructor",
+             (long long)(info.records_failed + info.records_shed), what);
+  }
   palp_srv_score_of(assessed && a->has_exercise ? a : NULL, j->session_id, j->uid, j->exercise, err, out);
   /* How far the log can be trusted for it: a score from a log that lost records may be low. */
   palp_db_log_health health;

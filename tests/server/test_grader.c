@@ -11,6 +11,11 @@
  *     writer is held; released, the 32 are answered in the order they closed, each "the session is
  *     not in the log".
  *  2. 32 answers not taken: the 33rd is graded but not kept (the log says so), and the 32 are.
+ *  0. Sessions in the log that cannot be scored (session 67; their scene "{}" has no name): one whose
+ *     row counts 7 records shed is told the loss, in the grader's words, as what lost records (an
+ *     exercise, a scene, samples) cannot be scored from; one that lost nothing is told the assessment's
+ *     own reason. (The row's count is set by the test's own connection: the loss of a full file is
+ *     server_log_full's; this is the grader's choice of words, exactly.)
  *  3. Stopping while the grader already waits on a held writer (a wait that began before the stop,
  *     which would have held the server up to 30 s until session 64): close returns after the
  *     2 s the stop gives the writer, not 30, and the log names the sessions left.
@@ -137,6 +142,41 @@ int main(int argc, char **argv) {
   CHECK(palp_srv_grader_open(path, w, &log, &g) == 0 && g, "the grader thread started");
   if (!g) return 1;
   char uid[64];
+
+  /* ---- 0. in the log, not scorable: lost records, or none ---- */
+  {
+    palp_db_session ls[2];
+    for (int k = 0; k < 2; k++) {
+      uid_of(301 + k, uid, sizeof uid);
+      const palp_db_session_def d = {.uid = uid, .trainee = "ida", .scene_json = "{}", .tick_hz = 100, .dt_s = 0.01};
+      CHECK(palp_db_log_session_begin(w, &d, &ls[k]) == 0, "session %d begun in the log", 301 + k);
+    }
+    CHECK(palp_db_writer_flush(w, 10) == 0, "their rows written");
+    sqlite3 *c = NULL;
+    CHECK(sqlite3_open(path, &c) == SQLITE_OK && sqlite3_busy_timeout(c, 5000) == SQLITE_OK &&
+              sqlite3_exec(c, "UPDATE session SET records_shed = 7 WHERE uid = 'test-grader-301'", NULL, NULL, NULL) ==
+                  SQLITE_OK && sqlite3_changes(c) == 1,
+          "session 301's row counts 7 records shed");
+    sqlite3_close(c);
+    for (uint32_t id = 301; id <= 302; id++) {
+      uid_of(id, uid, sizeof uid);
+      CHECK(palp_srv_grader_submit(g, id, uid, "t") == 0, "session %u submitted", id);
+    }
+    palp_srv_score got[2];
+    int n0 = 0;
+    for (double end = now_s() + 15; n0 < 2 && now_s() < end;)
+      if (!palp_srv_grader_take(g, &got[n0])) nap(0.02);
+      else n0++;
+    CHECK(n0 == 2 && got[0].session_id == 301 && !got[0].graded &&
+              strcmp(got[0].reason, "the session log lost 7 of its records (its queue was full); tell your instructor") == 0,
+          "in the log, not scorable, 7 records lost: told the loss: \"%s\"", n0 > 0 ? got[0].reason : "");
+    CHECK(n0 == 2 && got[1].session_id == 302 && !got[1].graded &&
+              strcmp(got[1].reason, "the logged scene does not parse: name: missing or not a string") == 0,
+          "in the log, not scorable, nothing lost: the assessment's reason: \"%s\"", n0 > 1 ? got[1].reason : "");
+    CHECK(count_lines(log_path, "session 301 (test-grader-301): the logged scene does not parse: name: missing or not a "
+                                "string, after the session log lost 7 of its records") == 1,
+          "  the server's log keeps what the assessment found too");
+  }
 
   /* ---- 1. 32 waiting, the 33rd refused ---- */
   sqlite3 *h = hold(path, w);

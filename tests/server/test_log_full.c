@@ -227,12 +227,19 @@ int main(int argc, char **argv) {
   const int got_di = palp_cli_station_debrief(&ia, 6.0, &d, dl, derr, sizeof derr);
   const int got_i = got_di == 1 ? palp_cli_station_debrief_score(&ia, 15.0, &m2, serr, sizeof serr) : -1;
   if (got_i == 1) palp_cli_score_text(&m2, text2, sizeof text2);
-  /* "is losing" while the writer's last batch failed, "lost" when a small one found room since */
+  /* "is losing" while the writer's last batch failed, "lost" when a small one found room since; and when
+   * her session's row found room but her exercise did not (seen once in 9 runs under load), the count
+   * her row holds (session 67: "the log holds no exercise for the session" before). */
+  long long lost_n = 0;
+  int used = 0;
+  sscanf(text2, "no score: the session log lost %lld of its records (database or disk is full); tell your instructor%n",
+         &lost_n, &used);
   CHECK(got_di == 1 && got_i == 1 && m2.status == palp_SCORE_NOT_GRADED &&
             (strcmp(text2, "no score: not in the session log, which is losing records (database or disk is full); "
                            "tell your instructor") == 0 ||
              strcmp(text2, "no score: not in the session log, which lost records (database or disk is full); tell your "
-                           "instructor") == 0),
+                           "instructor") == 0 ||
+             (used > 0 && (size_t)used == strlen(text2) && lost_n > 0)),
         "ida's session, opened with the log full, is debriefed and she is told why no score: \"%s\" (got %d %d %s %s)",
         text2, got_di, got_i, derr, serr);
   palp_cli_station_close(&ia);
