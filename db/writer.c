@@ -29,6 +29,7 @@
 #define CONTROL_RESERVE 1024 /* slots above queue_capacity for begin/end/event records */
 #define MAX_TXN_RECORDS 16384 /* records per transaction: bounds one commit's latency */
 #define SHED_LOG_INTERVAL_S 1.0
+#define DROP_SAY_INTERVAL_S 10.0 /* stderr lines for dropped batches: a full disk fails one every ~0.4 s */
 
 #ifndef PALP_VERSION_STRING
 #define PALP_VERSION_STRING "unknown"
@@ -162,6 +163,9 @@ struct palp_db_writer {
   int64_t failed_logged;
   int64_t counts_shed, counts_failed; /* the writer's totals when the sessions' counts were last synced */
   int counts_resync;                  /* a sync rolled back: every session's row goes again */
+  int64_t drop_unsaid;                /* records in dropped batches not yet said on stderr */
+  int drop_unsaid_batches, drop_said; /* ... in so many batches; a line was printed already */
+  double drop_said_at, shed_said_at;  /* when the last such line was printed [s, monotonic] */
   palp_db_session *touched; /* sessions whose row was inserted in the current attempt */
   int touched_n, touched_cap;
 };
@@ -864,6 +868,32 @@ static int attempt_batch(palp_db_writer *w, int tail, int n, int *rc_out, uint8_
   return bad;
 }
 
+/* The library's line on stderr for batches dropped after their retries: the first at once, then at
+ * most one per DROP_SAY_INTERVAL_S with what was dropped since, and the rest as the writer closes. A
+ * full disk fails a batch every ~0.4 s for as long as it stays full: a line each filled the journal
+ * (~9,000 lines an hour); the server's own log says the loss at most once a minute (db/loss_watch.c). */
+static void say_dropped(palp_db_writer *w, int n, int force) {
+  w->drop_unsaid += n;
+  w->drop_unsaid_batches += n > 0;
+  const double now = mono_now();
+  if (!w->drop_unsaid || (!force && w->drop_said && now - w->drop_said_at < DROP_SAY_INTERVAL_S)) return;
+  char last[256];
+  pthread_mutex_lock(&w->mu);
+  memcpy(last, w->st_.last_error, sizeof last);
+  pthread_mutex_unlock(&w->mu);
+  if (w->drop_unsaid_batches == 1)
+    fprintf(stderr, "palp_db: %s: dropped %lld records after %d attempts: %s\n", w->path, (long long)w->drop_unsaid,
+            w->opts.retry_limit + 1, last);
+  else
+    fprintf(stderr, "palp_db: %s: dropped %lld records in %d batches, each after %d attempts, over %.0f s: %s\n",
+            w->path, (long long)w->drop_unsaid, w->drop_unsaid_batches, w->opts.retry_limit + 1,
+            w->drop_said ? now - w->drop_said_at : 0.0, last);
+  w->drop_unsaid = 0;
+  w->drop_unsaid_batches = 0;
+  w->drop_said = 1;
+  w->drop_said_at = now;
+}
+
 /* Per-session loss counts, so `palp-review show` and the grader can say a log is incomplete. Their own
  * transaction, every pass: an UPDATE in place still fits a full file (its cap, or a full disk) where
  * the loss event below, a new row, does not; tied to that event they went stale as the file filled,
@@ -927,7 +957,11 @@ static void write_accounting(palp_db_writer *w, int force) {
                  (long long)d, (long long)shed, (long long)sk[PALP_DB_REC_FRAME],
                  (long long)sk[PALP_DB_REC_FEEDBACK], (long long)sk[PALP_DB_REC_CONTACT],
                  (long long)sk[PALP_DB_REC_MESH]);
-    fprintf(stderr, "palp_db: %s: %s\n", w->path, detail);
+    /* the line once per interval even while a full file refuses the event (which is retried each pass) */
+    if (force || now - w->shed_said_at >= SHED_LOG_INTERVAL_S) {
+      fprintf(stderr, "palp_db: %s: %s\n", w->path, detail);
+      w->shed_said_at = now;
+    }
     sqlite3_bind_double(st, 2, palp_db__now());
     bind_text(st, 4, "shed");
     bind_text(st, 5, detail);
@@ -1021,8 +1055,7 @@ static void *worker(void *arg) {
           wsess *ws = r->s > 0 ? wsess_get(w, r->s) : NULL;
           if (ws) ws->failed++;
         }
-        fprintf(stderr, "palp_db: %s: dropped %d records after %d attempts: %s\n", w->path, n,
-                w->opts.retry_limit + 1, w->st_.last_error);
+        say_dropped(w, n, 0);
       } else {
         written = n - bad;
         for (int i = 0; bad && i < n; i++) {
@@ -1059,6 +1092,7 @@ static void *worker(void *arg) {
     if (w->stop && w->count == 0) break;
   }
   pthread_mutex_unlock(&w->mu);
+  say_dropped(w, 0, 1);
   /* The last pass may have read stop = 0 and skipped the rate-limited shed event; a closing
    * writer always accounts for every record it shed. */
   write_accounting(w, 1);

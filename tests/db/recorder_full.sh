@@ -55,6 +55,16 @@ then ok "  before its stop"; else bad "the loss was not said before the stop"; f
 if grep -q "stopped; [0-9]* records written, 0 shed, [1-9][0-9]* failed" "$tmp/recorder.log" && [ "$rrc" -eq 1 ]
 then ok "its stop line counts the failed records, exit 1"; else bad "stop line or exit ($rrc):
 $log"; fi
+# The writer's own stderr lines for dropped batches (session 67): the first at once, then at most one per
+# 10 s, the rest as it closes: at most 2 over this ~6 s run (a line per batch before: one each ~0.4 s),
+# and together they count every failed record the stop line counts.
+failed=$(sed -n 's/.*stopped; [0-9]* records written, 0 shed, \([0-9]*\) failed.*/\1/p' "$tmp/recorder.log" | head -1)
+lines=$(grep -c "palp_db: .*: dropped [0-9]* records" "$tmp/recorder.log")
+said=$(sed -n 's/.*palp_db: .*: dropped \([0-9]*\) records.*/\1/p' "$tmp/recorder.log" | awk '{ n += $1 } END { print n + 0 }')
+if [ -n "$failed" ] && [ "$lines" -ge 1 ] && [ "$lines" -le 2 ] && [ "$said" -eq "$failed" ]
+then ok "the writer's stderr says the dropped batches in $lines line(s), $said records = the $failed failed"
+else bad "dropped-batch lines: $lines (want 1-2), $said records said, $failed failed:
+$log"; fi
 ic=$(python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execute('PRAGMA integrity_check').fetchone()[0])" "$tmp/rec.db")
 if [ "$ic" = ok ] && "$review" --db "$tmp/rec.db" list > "$tmp/list.txt" 2>&1
 then ok "the file is sound (integrity_check $ic) and palp-review reads it"; else bad "integrity_check $ic, or list failed:
