@@ -232,6 +232,33 @@
     listAnswers(c);
   }
 
+  /* The session log in words, from the counters of successive statuses (1 Hz), as the server's own log
+   * says it (db/loss_watch.c): losing now (it lost more within the last LOSING_HOLD_MS: a full file's
+   * batches fail some 0.4 s apart, and a small one may find room between), writing again (wrote more
+   * since, lost no more), or lost earlier and quiet since. The counters alone (red) left an instructor
+   * to guess what was wrong and what to do. server id -> {lost, rose (ms), writtenAtRise, state} */
+  const LOSING_HOLD_MS = 3000;
+  const logSeen = new Map();
+  function logWords(s) {
+    const written = s.log[0], shed = s.log[1], failed = s.log[2], lost = shed + failed, now = Date.now();
+    const prev = logSeen.get(s.id);
+    let cur;
+    if (prev && lost > prev.lost) cur = {lost: lost, rose: now, writtenAtRise: written, state: "losing"};
+    else if (prev && prev.state === "losing" && now - prev.rose < LOSING_HOLD_MS) cur = prev;
+    else if (prev) cur = {lost: lost, rose: prev.rose, writtenAtRise: prev.writtenAtRise,
+                          state: written > prev.writtenAtRise ? "writing" : "quiet"};
+    else cur = {lost: lost, rose: null, writtenAtRise: written, state: "quiet"}; /* lost before this page came */
+    logSeen.set(s.id, cur);
+    if (!lost) return null;
+    const why = "(" + shed + " shed: its queue was full; " + failed + " failed: its file reached its cap " +
+      "(session_log_max_mb) or its disk is full, or it cannot write)";
+    const todo = "; prune old sessions (palp-review prune), free space or raise the cap; the server's log says which";
+    if (cur.state === "losing") return "LOSING records: " + lost + " lost so far " + why + todo;
+    if (cur.state === "writing") return "writing again; " + lost + " records lost earlier " + why;
+    return lost + " records lost " + why + (cur.rose !== null ? ", the last " + PALP.minutes((now - cur.rose) / 1000) +
+      " ago; nothing written since" : ", before this page opened") + todo;
+  }
+
   function serverStatus(m) {
     const box = document.getElementById("server");
     box.textContent = "";
@@ -244,6 +271,8 @@
         ["tick passes overrun", s.overruns, s.overruns > 0], ["rejected", rej + (why ? " (" + why + ")" : ""), rej > 0],
         ["log written/shed/failed", s.log[0] + " / " + s.log[1] + " / " + s.log[2], s.log[1] + s.log[2] > 0],
         ["up", fmt(s.uptime, 0) + " s"]];
+      const words = logWords(s);
+      if (words) items.splice(items.length - 1, 0, ["session log", words, true]);
       for (const it of items) {
         const k = document.createElement("span"), v = document.createElement("span");
         k.className = "k";

@@ -1,0 +1,134 @@
+#!/usr/bin/env python3
+"""web_log_full: the instructor's dashboard says the session log's trouble in words (session 67), as the
+server's own log does (db/loss_watch.c), not only as red counters. A real palp-server whose log is capped
+at 1 MB (session_log_max_mb) and padded by the test to ~0.96 MB; a trainee presses for 6 s and the log
+fills: the dashboard says LOSING records, with the counts of the status it came in and what to do; her
+station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
+frees the padding (as a prune would) and a second trainee presses: "writing again", with the count the
+server's own log gives in its "writing again" line. DDS domain 137.
+usage: test_log_full.py BUILD SOURCE OUT"""
+import json
+import os
+import re
+import sqlite3
+import time
+
+import harness
+from harness import check
+
+DOMAIN = 137
+
+
+def capped_config(source, out):
+    """config/server-paper.json with its paths made absolute and the log capped at 1 MB."""
+    cdir = os.path.join(source, "config")
+    with open(os.path.join(cdir, "server-paper.json")) as f:
+        cfg = json.load(f)
+    cfg["dds_config"] = os.path.join(cdir, cfg["dds_config"])
+    for p in cfg["phantoms"]:
+        p["scene"] = os.path.join(cdir, p["scene"])
+    cfg["session_log_max_mb"] = 1
+    path = os.path.join(out, "server-capped.json")
+    with open(path, "w") as f:
+        json.dump(cfg, f)
+    return path
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, DOMAIN)
+    browser = None
+    db = os.path.join(out, "sessions.db")
+    for suffix in ("", "-wal", "-shm"):
+        if os.path.exists(db + suffix):
+            os.unlink(db + suffix)
+    try:
+        # the server makes its log (schema and all), stops; the test pads it to ~0.96 MB of the 1 MB cap
+        first = procs.server(db=db)
+        check(procs.wait_log(first, r"tick thread", 20) is not None, "a first server makes the log")
+        procs.stop(first)
+        h = sqlite3.connect(db)
+        h.execute("CREATE TABLE pad(x BLOB)")
+        h.execute("INSERT INTO pad VALUES(zeroblob(850000))")
+        h.commit()
+        size = h.execute("SELECT page_count * page_size FROM pragma_page_count, pragma_page_size").fetchone()[0]
+        h.close()
+        check(900000 <= size < 1000000, "the log padded to %d bytes (0.90-1.00 MB of its 1 MB cap)" % size)
+
+        server = procs.server(config=capped_config(source, out), db=db)
+        check(procs.wait_log(server, r"session log: 0\.9\d MB of its cap of 1\.00 MB \(session_log_max_mb\): nearly "
+                                     r"full", 20) is not None, "the server says at start that its log is nearly full")
+        web = procs.web()
+        browser = harness.cdp.Chromium(width=1200, height=800, out_dir=out)
+        page = browser.new_page(web.base + "/dashboard.html")
+        check(page.wait_for("window.palpState && palpState.status && palpState.status.servers.length === 1", 20) is True,
+              "the dashboard has the server's status")
+        check(page.eval("document.getElementById('server').textContent.indexOf('session log') < 0") is True,
+              "no session-log line while nothing is lost")
+
+        press = ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1", "--t-on", "0",
+                 "--t-off", "60", "--duration", "6"]
+        ann = procs.trainee("ann", 1, press)
+        # the line and the counts of the status it was built from, read in one go
+        line = ("(function(){const ks=Array.from(document.querySelectorAll('#server .k'));"
+                "const k=ks.find(function(e){return e.textContent==='session log';});"
+                "const l=palpState.status.servers[0].log;"
+                "return k ? {text: k.nextSibling.textContent, bad: k.nextSibling.className, log: l} : null;})()")
+        losing = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('LOSING') === 0 ? r : null;})()"
+                               % line, 25)
+        want = None
+        if losing:
+            n_shed, n_failed = int(losing["log"][1]), int(losing["log"][2])
+            want = ("LOSING records: %d lost so far (%d shed: its queue was full; %d failed: its file reached its cap "
+                    "(session_log_max_mb) or its disk is full, or it cannot write); prune old sessions (palp-review "
+                    "prune), free space or raise the cap; the server's log says which"
+                    % (n_shed + n_failed, n_shed, n_failed))
+        check(losing is not None and losing["text"] == want and n_failed > 0 and "bad" in losing["bad"],
+              "as ann fills the log, the dashboard says it is losing records, the status's counts and what to do, "
+              "in red: %r" % (losing and losing["text"]))
+        print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-losing.png")))
+
+        # ann's station ends: nothing more is lost; 3 s of "losing" held, then quiet, or "writing again" when
+        # her session's last small batch found room on a partly filled page (both seen in server_log_full)
+        ann.wait(timeout=30)
+        quiet = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('LOSING') < 0 ? r : null;})()"
+                              % line, 20)
+        m = quiet and re.fullmatch(r"(\d+) records lost \(0 shed: its queue was full; (\d+) failed: its file reached "
+                                   r"its cap \(session_log_max_mb\) or its disk is full, or it cannot write\), the "
+                                   r"last 0:(\d\d) ago; nothing written since; prune old sessions \(palp-review "
+                                   r"prune\), free space or raise the cap; the server's log says which", quiet["text"])
+        m2 = quiet and re.fullmatch(r"writing again; (\d+) records lost earlier \(0 shed: its queue was full; (\d+) "
+                                    r"failed: its file reached its cap \(session_log_max_mb\) or its disk is full, or "
+                                    r"it cannot write\)", quiet["text"])
+        n_lost = int(quiet["log"][2]) if quiet else -1
+        check((m is not None and int(m.group(1)) == n_lost and int(m.group(2)) == n_lost and 3 <= int(m.group(3)) <= 30)
+              or (m2 is not None and int(m2.group(1)) == n_lost and int(m2.group(2)) == n_lost),
+              "her station gone, the dashboard says the loss has stopped (3-30 s since the last, nothing written "
+              "since; or, her last batch in, writing again), with the status's count: %r" % (quiet and quiet["text"]))
+
+        # the padding freed (a prune's part), another trainee: the log writes again, and says so
+        h = sqlite3.connect(db, timeout=10)
+        h.execute("DROP TABLE pad")
+        h.commit()
+        h.close()
+        procs.trainee("bea", 2, press)
+        again = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('writing again') === 0 ? r : null;})()"
+                              % line, 25)
+        procs.wait_log(server, r"session log: writing again \((\d+) records lost in all\)", 10)
+        said = list(re.finditer(r"session log: writing again \((\d+) records lost in all\)", procs.log(server)))
+        said = said[-1] if said else None  # the last recovery the server's watch said
+        m = again and re.fullmatch(r"writing again; (\d+) records lost earlier \(0 shed: its queue was full; (\d+) "
+                                   r"failed: its file reached its cap \(session_log_max_mb\) or its disk is full, or it "
+                                   r"cannot write\)", again["text"])
+        check(m is not None and said is not None and int(m.group(1)) == int(said.group(1)) and
+              int(m.group(2)) == int(said.group(1)),
+              "the padding freed, bea's session is written: the dashboard says 'writing again' with the count the "
+              "server's own log gives (%s): %r" % (said and said.group(0), again and again["text"]))
+        print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-again.png")))
+    finally:
+        if browser:
+            browser.close()
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)
