@@ -102,22 +102,30 @@ class Procs:
             self.stop(p, timeout=5)
 
 
-def answers_config(source, out):
-    """config/server-exercises.json with its paths made absolute and the lumps sent to instructors'
-    readers without DDS Security ("session_exercise": "always", a trusted bench: docs/security.md)."""
+def server_config(source, out, name, out_name, edit=None):
+    """config/NAME with its paths (relative to that file) made absolute, edited by edit(cfg), written to
+    OUT/out_name; its path."""
     cdir = os.path.join(source, "config")
-    with open(os.path.join(cdir, "server-exercises.json")) as f:
+    with open(os.path.join(cdir, name)) as f:
         cfg = json.load(f)
     cfg["dds_config"] = os.path.join(cdir, cfg["dds_config"])
     for p in cfg["phantoms"]:
         p["scene"] = os.path.join(cdir, p["scene"])
-    for e in cfg["exercises"]:
+    for e in cfg.get("exercises", []):
         e["file"] = os.path.join(cdir, e["file"])
-    cfg["session_exercise"] = "always"
-    path = os.path.join(out, "server-exercises-answers.json")
+    if edit:
+        edit(cfg)
+    path = os.path.join(out, out_name)
     with open(path, "w") as f:
         json.dump(cfg, f)
     return path
+
+
+def answers_config(source, out):
+    """config/server-exercises.json with the lumps sent to instructors' readers without DDS Security
+    ("session_exercise": "always", a trusted bench: docs/security.md)."""
+    return server_config(source, out, "server-exercises.json", "server-exercises-answers.json",
+                         lambda cfg: cfg.update(session_exercise="always"))
 
 
 def http_get(url, headers=None, context=None):

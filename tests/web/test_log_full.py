@@ -7,7 +7,6 @@ station gone, nothing more is lost or written: it says so, with how long ago the
 frees the padding (as a prune would) and a second trainee presses: "writing again", with the count the
 server's own log gives in its "writing again" line. DDS domain 137.
 usage: test_log_full.py BUILD SOURCE OUT"""
-import json
 import os
 import re
 import sqlite3
@@ -17,21 +16,6 @@ import harness
 from harness import check
 
 DOMAIN = 137
-
-
-def capped_config(source, out):
-    """config/server-paper.json with its paths made absolute and the log capped at 1 MB."""
-    cdir = os.path.join(source, "config")
-    with open(os.path.join(cdir, "server-paper.json")) as f:
-        cfg = json.load(f)
-    cfg["dds_config"] = os.path.join(cdir, cfg["dds_config"])
-    for p in cfg["phantoms"]:
-        p["scene"] = os.path.join(cdir, p["scene"])
-    cfg["session_log_max_mb"] = 1
-    path = os.path.join(out, "server-capped.json")
-    with open(path, "w") as f:
-        json.dump(cfg, f)
-    return path
 
 
 def run(build, source, out):
@@ -54,7 +38,8 @@ def run(build, source, out):
         h.close()
         check(900000 <= size < 1000000, "the log padded to %d bytes (0.90-1.00 MB of its 1 MB cap)" % size)
 
-        server = procs.server(config=capped_config(source, out), db=db)
+        server = procs.server(config=harness.server_config(source, out, "server-paper.json", "server-capped.json",
+                                                           lambda cfg: cfg.update(session_log_max_mb=1)), db=db)
         check(procs.wait_log(server, r"session log: 0\.9\d MB of its cap of 1\.00 MB \(session_log_max_mb\): nearly "
                                      r"full", 20) is not None, "the server says at start that its log is nearly full")
         web = procs.web()
