@@ -169,8 +169,9 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
      * the instructor's; the row's counts are this session's own, up to date once the wait returns. */
     palp_db_writer_stats st;
     palp_db_writer_stats_get(g->w, &st);
-    const char *what = info.records_failed > 0 && st.last_error_code ? palp_db_error_text(st.last_error_code)
-                                                                     : "its queue was full";
+    const char *what = info.records_failed == 0    ? "its queue was full"
+                       : st.last_error_code ? palp_db_error_text(st.last_error_code)
+                                            : "records refused by the database";
     palp_log_info(g->log, "session %u (%s): %s, after the session log lost %lld of its records", j->session_id,
                   j->uid, err, (long long)(info.records_failed + info.records_shed));
     snprintf(err, sizeof err, "the session log lost %lld of its records (%.40s); tell your instructor",
