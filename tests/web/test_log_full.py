@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """web_log_full: the instructor's dashboard says the session log's trouble in words (session 67), as the
 server's own log does (db/loss_watch.c), not only as red counters. A real palp-server whose log is capped
-at 1 MB (session_log_max_mb) and padded by the test to ~0.96 MB; a trainee presses for 6 s and the log
-fills: the dashboard says LOSING records, with the counts of the status it came in and what to do; her
-station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
+at 1 MB (session_log_max_mb) and padded by the test to ~0.96 MB; a trainee practises "easy" for 7 s and
+the log fills: the dashboard says LOSING records, with the counts of the status it came in and what to do,
+and her own page that her score comes from an incomplete log (or why none comes); her station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
 frees the padding (as a prune would) and a second trainee presses: "writing again", with the count the
 server's own log gives in its "writing again" line. DDS domain 137.
 usage: test_log_full.py BUILD SOURCE OUT"""
@@ -38,7 +38,8 @@ def run(build, source, out):
         h.close()
         check(900000 <= size < 1000000, "the log padded to %d bytes (0.90-1.00 MB of its 1 MB cap)" % size)
 
-        server = procs.server(config=harness.server_config(source, out, "server-paper.json", "server-capped.json",
+        # the shipped exercises, the log capped at 1 MB
+        server = procs.server(config=harness.server_config(source, out, "server-exercises.json", "server-capped.json",
                                                            lambda cfg: cfg.update(session_log_max_mb=1)), db=db)
         check(procs.wait_log(server, r"session log: 0\.9\d MB of its cap of 1\.00 MB \(session_log_max_mb\): nearly "
                                      r"full", 20) is not None, "the server says at start that its log is nearly full")
@@ -50,9 +51,11 @@ def run(build, source, out):
         check(page.eval("document.getElementById('server').textContent.indexOf('session log') < 0") is True,
               "no session-log line while nothing is lost")
 
-        press = ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1", "--t-on", "0",
-                 "--t-off", "60", "--duration", "6"]
-        ann = procs.trainee("ann", 1, press)
+        # ann practises "easy" (phantom 11) with a fingertip, her page open: the server scores her session from
+        # what the log holds, and her page says what that score is worth
+        ann_page = browser.new_page(web.base + "/trainee.html?trainee=ann")
+        check(ann_page.wait_for("window.palpState && palpState.connected", 20) is True, "ann's page connected")
+        ann = procs.trainee("ann", 11, ["--input", "sim:press,hold_s=4", "--duration", "7"])
         # the line and the counts of the status it was built from, read in one go
         line = ("(function(){const ks=Array.from(document.querySelectorAll('#server .k'));"
                 "const k=ks.find(function(e){return e.textContent==='session log';});"
@@ -71,6 +74,20 @@ def run(build, source, out):
               "as ann fills the log, the dashboard says it is losing records, the status's counts and what to do, "
               "in red: %r" % (losing and losing["text"]))
         print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-losing.png")))
+
+        # what ann's page says of her score: scored from a log that lost records, and so said; or, where the log
+        # kept too little of her session to score (its row, or its exercise, lost), why no score comes
+        told = ann_page.wait_for("(function(){const e=document.getElementById('debrief-score');"
+                                 "return e && !e.hidden && e.textContent ? e.textContent : null;})()", 40)
+        graded = told is not None and re.fullmatch(r"Your score: \d+\.\d of 100, (passed|not passed) \(the automatic "
+                                                  r"score, as the review gives it; your instructor grades you\)\..* The "
+                                                  r"session's log is incomplete: the score may be low\.", told)
+        unscored = told is not None and re.fullmatch(r"No score: (the session log lost \d+ of its records|not in the "
+                                                    r"session log, which (is losing|lost) records) \(database or disk "
+                                                    r"is full\); tell your instructor\.", told)
+        check(bool(graded or unscored), "ann's page says her score comes from an incomplete log, or why none comes: %r"
+              % told)
+        print("screenshot:", ann_page.screenshot(os.path.join(out, "trainee-log-incomplete.png")))
 
         # ann's station ends: nothing more is lost; 3 s of "losing" held, then quiet, or "writing again" when
         # her session's last small batch found room on a partly filled page (both seen in server_log_full)
@@ -95,7 +112,8 @@ def run(build, source, out):
         h.execute("DROP TABLE pad")
         h.commit()
         h.close()
-        procs.trainee("bea", 2, press)
+        procs.trainee("bea", 2, ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1",
+                                 "--t-on", "0", "--t-off", "60", "--duration", "6"])
         again = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('writing again') === 0 ? r : null;})()"
                               % line, 25)
         procs.wait_log(server, r"session log: writing again \((\d+) records lost in all\)", 10)
