@@ -903,17 +903,18 @@ static void write_session_counts(palp_db_writer *w) {
   const int64_t shed = w->st_.shed, failed = w->st_.failed;
   pthread_mutex_unlock(&w->mu);
   if (!w->counts_resync && shed == w->counts_shed && failed == w->counts_failed) return; /* the common pass */
-  int dirty = 0;
-  for (int s = 1; s < w->ws_cap && !dirty; s++) {
-    const wsess *ws = &w->ws[s];
-    dirty = ws->rowid && (shed_of(w, s) != ws->shed_synced || ws->failed != ws->failed_synced);
-  }
-  int rc = SQLITE_DONE;
-  if (dirty && sqlite3_exec(w->db, "BEGIN", NULL, NULL, NULL) != SQLITE_OK) rc = SQLITE_ERROR;
-  for (int s = 1; dirty && rc == SQLITE_DONE && s < w->ws_cap; s++) {
+  int rc = SQLITE_DONE, open = 0; /* the transaction begins at the first row that needs it */
+  for (int s = 1; rc == SQLITE_DONE && s < w->ws_cap; s++) {
     wsess *ws = &w->ws[s];
     const int64_t sh = ws->rowid ? shed_of(w, s) : 0;
     if (!ws->rowid || (sh == ws->shed_synced && ws->failed == ws->failed_synced)) continue;
+    if (!open) {
+      if (sqlite3_exec(w->db, "BEGIN", NULL, NULL, NULL) != SQLITE_OK) {
+        rc = SQLITE_ERROR;
+        break;
+      }
+      open = 1;
+    }
     sqlite3_stmt *st = w->st[ST_COUNTS];
     sqlite3_bind_int64(st, 1, ws->rowid);
     sqlite3_bind_int64(st, 2, sh);
@@ -922,7 +923,7 @@ static void write_session_counts(palp_db_writer *w) {
     ws->shed_synced = sh; /* taken back below if the transaction does not commit */
     ws->failed_synced = ws->failed;
   }
-  if (rc == SQLITE_DONE && (!dirty || sqlite3_exec(w->db, "COMMIT", NULL, NULL, NULL) == SQLITE_OK)) {
+  if (rc == SQLITE_DONE && (!open || sqlite3_exec(w->db, "COMMIT", NULL, NULL, NULL) == SQLITE_OK)) {
     w->counts_shed = shed;
     w->counts_failed = failed;
     w->counts_resync = 0;
