@@ -121,6 +121,13 @@ static int wait_writer(palp_srv_grader *g, int64_t mark, double *waited) {
   }
 }
 
+/* Why records were lost, in SQLite's words where there are some: a queue that overflowed sheds (no
+ * error), a full file or disk fails with one, a record the database refused fails without. */
+static const char *loss_cause(const palp_db_writer_stats *st, int failed) {
+  if (!failed) return "its queue was full";
+  return st->last_error_code ? palp_db_error_text(st->last_error_code) : "records refused by the database";
+}
+
 /* Grades one session: waits for the writer to have written the session's end, then reads the session
  * back as palp-review does. -1 when the writer did not catch up. */
 static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
@@ -148,9 +155,8 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
     palp_db_writer_stats_get(g->w, &st);
     char why[128] = "the session is not in the log";
     if (st.failed > 0 || st.shed > 0) {
-      const char *what = st.last_error_code ? palp_db_error_text(st.last_error_code) : "its queue was full";
       snprintf(why, sizeof why, "not in the session log, which %s records (%.48s); tell your instructor",
-               st.in_error ? "is losing" : "lost", what);
+               st.in_error ? "is losing" : "lost", loss_cause(&st, st.failed > 0));
     }
     palp_srv_score_of(NULL, j->session_id, j->uid, j->exercise, why, out);
     return 0;
@@ -169,13 +175,10 @@ static int grade(palp_srv_grader *g, const job *j, palp_srv_score *out) {
      * the instructor's; the row's counts are this session's own, up to date once the wait returns. */
     palp_db_writer_stats st;
     palp_db_writer_stats_get(g->w, &st);
-    const char *what = info.records_failed == 0    ? "its queue was full"
-                       : st.last_error_code ? palp_db_error_text(st.last_error_code)
-                                            : "records refused by the database";
     palp_log_info(g->log, "session %u (%s): %s, after the session log lost %lld of its records", j->session_id,
                   j->uid, err, (long long)(info.records_failed + info.records_shed));
     snprintf(err, sizeof err, "the session log lost %lld of its records (%.40s); tell your instructor",
-             (long long)(info.records_failed + info.records_shed), what);
+             (long long)(info.records_failed + info.records_shed), loss_cause(&st, info.records_failed > 0));
   }
   palp_srv_score_of(assessed && a->has_exercise ? a : NULL, j->session_id, j->uid, j->exercise, err, out);
   /* How far the log can be trusted for it: a score from a log that lost records may be low. */
