@@ -706,6 +706,17 @@ static void report_stall(const opts *o, const palp_cli_station *st, unsigned see
   fflush(stdout);
 }
 
+/* The server's session log lost records while this session runs, or writes again (session 68): the
+ * trainee is told at her station, since her session will be incomplete in the instructor's review.
+ * Said even with --quiet, as the lost goodbye is: it is not progress but the record of her work. */
+static void report_log(const opts *o, palp_cli_station *st, const char *role, int named) {
+  char line[320];
+  if (!palp_cli_station_log_news(st, line, sizeof line)) return;
+  const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
+  printf("[%s%s%s] %s\n", role, sep, name, line);
+  fflush(stdout);
+}
+
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
@@ -868,6 +879,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
         break;
       }
       report_stall(o, st, stalls_seen, "trainee", 1);
+      report_log(o, st, "trainee", 1);
       next_check = now + 100000000;
     }
   }
@@ -1045,6 +1057,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     if (now >= next_state_check) {
       const int was_closed = palp_cli_station_session_closed(st, reason, sizeof reason);
       report_stall(o, st, stalls_seen, "trainee", 1);
+      report_log(o, st, "trainee", 1);
       if (was_closed) {
         if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
           /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
@@ -1254,6 +1267,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
         break;
       }
       report_stall(o, st, stalls_seen, observer ? "observer" : "visual", 0);
+      report_log(o, st, observer ? "observer" : "visual", 0);
       next_check = now + 100000000;
     }
   }

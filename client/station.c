@@ -89,6 +89,10 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
   st->reply_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
   st->state_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   st->exercise_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
+  /* The server's status, for its session log's losses (palp_cli_station_log_news); a station whose
+   * permissions refuse it palpates all the same and is told nothing of the log. */
+  st->status_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  if (st->status_r < 0) st->status_r = 0;
   if (st->exercise_r < 0 || st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
     palp_cli_station_close(st);
     return fail(err, errlen, PALP_EIO, "cannot create the station's DDS endpoints");
@@ -282,6 +286,8 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->closed_seen = 0;
   st->next_held_ask_ns = 0;
+  memset(&st->log, 0, sizeof st->log);
+  memset(&st->log_said, 0, sizeof st->log_said);
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
   st->pub = palp_dds_session_publisher(st->pp, st->partition);
   st->sub = palp_dds_session_subscriber(st->pp, st->partition);
@@ -548,9 +554,50 @@ int palp_cli_station_leave(palp_cli_station *st) {
   return dds_dispose(st->request_w, &key) < 0 ? PALP_EIO : 0;
 }
 
+/* ---- the server's session log, as this session sees it (session 68) ------------------------------ */
+
+/* Takes the newest statuses; only the one whose server lists this session counts (session ids carry
+ * their server's number, so one server's). */
+static void watch_log(palp_cli_station *st, int64_t now) {
+  if (st->status_r <= 0 || !st->session_id) return;
+  void *ptr[4] = {NULL};
+  dds_sample_info_t info[4];
+  int n;
+  while ((n = dds_take(st->status_r, ptr, info, 4, 4)) > 0) {
+    for (int i = 0; i < n; i++) {
+      const palp_ServerStatus *m = ptr[i];
+      if (!info[i].valid_data) continue;
+      int mine = 0;
+      for (uint32_t k = 0; k < m->sessions._length && !mine; k++) mine = m->sessions._buffer[k].session_id == st->session_id;
+      if (mine) palp_dds_log_view_status(&st->log, m->log_written, m->log_shed, m->log_failed, now);
+    }
+    dds_return_loan(st->status_r, ptr, n);
+  }
+}
+
+int palp_cli_station_log_news(palp_cli_station *st, char *line, size_t len) {
+  if (len) line[0] = 0;
+  const palp_dds_log_view *v = &st->log;
+  palp_cli_log_news *n = &st->log_said;
+  const uint64_t lost = v->shed + v->failed;
+  const int64_t now = palp_dds_now_ns();
+  const int say_loss = v->losing && lost > n->said_lost &&
+                       (!n->said_losing || now - n->said_ns >= (int64_t)(PALP_CLI_LOG_SAY_S * 1e9));
+  const int say_again = n->said_losing && !v->losing;
+  if (!say_loss && !say_again) return 0;
+  /* A trainee tells her instructor; an instructor following the session is the one to act. */
+  const int trainee = !st->has_last_join || st->last_join.role == palp_ROLE_TRAINEE;
+  palp_dds_log_view_words(v, trainee, line, len);
+  n->said_lost = lost;
+  n->said_losing = say_loss;
+  if (say_loss) n->said_ns = now;
+  return 1;
+}
+
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
   station_alive(st, now);
+  watch_log(st, now);
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];
@@ -675,4 +722,7 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
   st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = 0;
   st->session_id = 0;
+  /* the next session's server counts from its own base */
+  memset(&st->log, 0, sizeof st->log);
+  memset(&st->log_said, 0, sizeof st->log_said);
 }

@@ -15,7 +15,15 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "palp_dds_log_view.h"
 #include "palp_dds_security.h"
+
+/* The session log's news said to the station's user (palp_cli_station_log_news). */
+typedef struct palp_cli_log_news {
+  uint64_t said_lost;             /* the loss the last line said [records] */
+  int64_t said_ns;                /* when the last "losing" line was said; 0: none */
+  int said_losing;                /* a "losing" line said, no "writing again" since */
+} palp_cli_log_news;
 
 typedef struct palp_cli_station {
   char station_id[64];
@@ -58,6 +66,11 @@ typedef struct palp_cli_station {
   unsigned server_returns; /* lapses of the server's lease it came back from */
   int64_t next_held_ask_ns;  /* the server holds our session for us: the JOIN again, not before this */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
+  /* The server's session log as this station's session sees it (session 68): read from
+   * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */
+  dds_entity_t status_r;  /* 0: none (permissions that refuse it; nothing is said then) */
+  palp_dds_log_view log;
+  palp_cli_log_news log_said;
   int goodbye_unanswered; /* palp_cli_station_leave, after a stall: the server did not answer its JOIN
                            * (within PALP_CLI_LEAVE_WAIT_S) or then its LEAVE: the goodbye may be lost */
 } palp_cli_station;
@@ -175,5 +188,15 @@ const char *palp_cli_score_text(const palp_SessionScore *m, char *buf, size_t le
  * within 2 s of it waits up to PALP_CLI_SERVER_WAIT_S for the server to be found again
  * before it closes the session as "server lost". st->stalls counts the stalls. */
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);
+
+/* A session whose server's log goes on losing records is said again at most this often [s]. */
+#define PALP_CLI_LOG_SAY_S 60.0
+/* The session log's news for the station's user (session 68), from what palp_cli_station_session_closed
+ * read of the server's status (palp_dds_log_view): 1 and the line (after "[trainee NAME] ") when the
+ * server's log lost records since this session was first listed in its status, at once and then at most
+ * every PALP_CLI_LOG_SAY_S while the losses go on, or when it writes again after one was said; the words
+ * are palp_dds_log_view_words' (palp-web's trainee page shows the same). 0 and "" otherwise: a server
+ * that logs nothing, or lost nothing, says nothing. */
+int palp_cli_station_log_news(palp_cli_station *st, char *line, size_t len);
 
 #endif

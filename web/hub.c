@@ -17,6 +17,7 @@
 #include "palp_assess.h"
 #include "palp_coverage.h"
 #include "palp_dds.h"
+#include "palp_dds_log_view.h"
 #include "palp_dds_strangers.h"
 #include "palp_finding_answers.h"
 #include "palp_place.h"
@@ -167,6 +168,9 @@ typedef struct session {
   uint64_t late_haptic;    /* local models published > 2 periods after the previous frame's */
   uint64_t lost_haptic;    /* frames the bridge never received (while a finger stayed down) */
   finding_status fst;
+  /* the server's session log as this session sees it, from its server's status (session 68): its
+   * trainee's page says what her station says when it loses records */
+  palp_dds_log_view log;
   answers *ans;           /* def.answers: its exercise's lumps and the marks (NULL: none yet) */
   int changed;            /* live data changed since the last live message */
   int cover_changed;      /* its coverage map changed since the last "cover" message */
@@ -437,6 +441,10 @@ static void build_sessions(palp_web_hub *h) {
     } else {
       cJSON_AddNullToObject(o, "time_left");
     }
+    /* The session log's losses while it runs, in her station's words (palp_dds_log_view_words); "": none. */
+    char log_words[320];
+    palp_dds_log_view_words(&s->log, 1, log_words, sizeof log_words);
+    cJSON_AddStringToObject(o, "log", log_words);
     if (pos) {
       cJSON_AddNumberToObject(o, "late_haptic", (double)s->late_haptic);
       cJSON_AddNumberToObject(o, "lost_haptic", (double)s->lost_haptic);
@@ -1376,6 +1384,17 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
   ss->nsessions = n;
   if (n) memcpy(ss->loads, m->sessions._buffer, sizeof *loads * n); /* an empty sequence's buffer is NULL */
   ss->at_ns = palp_dds_now_ns();
+  /* Each session this server lists: its log's losses since the bridge first saw it there. */
+  for (uint32_t k = 0; k < n; k++) {
+    int slot;
+    session *s = find_session(h, ss->loads[k].session_id, &slot);
+    if (!s) continue;
+    const int was = palp_dds_log_view_words(&s->log, 1, NULL, 0);
+    const uint64_t lost = s->log.shed + s->log.failed;
+    palp_dds_log_view_status(&s->log, m->log_written, m->log_shed, m->log_failed, ss->at_ns);
+    if (palp_dds_log_view_words(&s->log, 1, NULL, 0) != was || s->log.shed + s->log.failed != lost)
+      h->sessions_dirty = 1;
+  }
   /* a refused peer that stopped retrying: its repeats logged within a window of the last line */
   if (h->def.refusals) palp_dds_refusals_tick(h->def.refusals, palp_dds_now_ns());
   if (h->strangers_ready) palp_dds_strangers_tick(&h->strangers, h->def.refusals, palp_dds_now_ns());

@@ -11,7 +11,9 @@
  *    with "The session's log is incomplete: the score may be low."; palp-review's reading of the
  *    log gives the score she was told, to the last bit, and the same health line;
  *  - gus's session on a plain phantom, pressing all along, keeps stepping through it (its feedback
- *    counted over 1 s after the loss);
+ *    counted over 1 s after the loss); his station, reading his server's status, tells him the log is
+ *    losing records while his session runs (session 68: a free-practice trainee has no score to say it;
+ *    "writing again" is test_log_view's: the prune below frees too little for a session pressing on);
  *  - the server's log says the loss as it happens, with the cap and what to do, before the stop;
  *  - ida's practice session, opened while the log is full, is debriefed and told why she gets no
  *    score ("not in the session log, which is losing records (database or disk is full); ...");
@@ -147,6 +149,7 @@ int main(int argc, char **argv) {
   uint64_t seq = 1;
   for (int k = 0; k < 120; k++) { /* down to 12 mm over lesion 1, then slide; her 2 s limit ends it */
     test_send_finger(&f, 31 + (k > 60 ? 0.2 * (k - 60) : 0), 41, k <= 40 ? 0.012 * k / 40.0 : 0.012, seq++);
+    palp_cli_station_session_closed(&g, NULL, 0); /* gus's station reads its server's status as palp-client does */
     test_sleep(0.02);
   }
   char loss[2048] = "";
@@ -159,6 +162,23 @@ int main(int argc, char **argv) {
   test_last_feedback(&g, 1.0, &gus_samples);
   CHECK(gus_samples >= 50, "gus's session steps on with the log full: %d feedback samples over 1 s (100 Hz; >= 50)",
         gus_samples);
+  /* gus practises freely: no debrief, no score to say it. His station says his session is not being
+   * recorded whole (session 68), from his server's status, in words he can pass on. */
+  char news[400] = "";
+  long long gus_lost = 0;
+  for (int k = 0; k < 60 && !news[0]; k++) {
+    palp_cli_station_session_closed(&g, NULL, 0);
+    if (!palp_cli_station_log_news(&g, news, sizeof news)) test_sleep(0.1);
+  }
+  int gn = 0;
+  sscanf(news, "the server's session log is losing records: %lld so far while this session runs (%n", &gus_lost, &gn);
+  const char *gus_tail = "); this session will be incomplete in the review: tell your instructor";
+  const char *rest = gn > 0 ? news + gn : "";
+  CHECK(gus_lost > 0 &&
+            (!strncmp(rest, "the log's disk or its cap is full", 33) ||
+             !strncmp(rest, "the server was too busy to write some, and the log's disk or its cap is full", 76)) &&
+            strlen(news) > strlen(gus_tail) && !strcmp(news + strlen(news) - strlen(gus_tail), gus_tail),
+        "gus's station tells him the log is losing records while his session runs, within 6 s: \"%s\"", news);
 
   palp_Debrief d;
   palp_DebriefLesion dl[PALP_DEBRIEF_MAX_LESIONS];

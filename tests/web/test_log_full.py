@@ -3,7 +3,8 @@
 server's own log does (db/loss_watch.c), not only as red counters. A real palp-server whose log is capped
 at 1 MB (session_log_max_mb) and padded by the test to ~0.96 MB; a trainee practises "easy" for 7 s and
 the log fills: the dashboard says LOSING records, with the counts of the status it came in and what to do,
-and her own page that her score comes from an incomplete log (or why none comes); her station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
+and her own page and station that the log is losing records while her session runs (session 68), and her page
+that her score comes from an incomplete log (or why none comes); her station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
 frees the padding (as a prune would) and a second trainee presses: "writing again", with the count the
 server's own log gives in its "writing again" line. DDS domain 137.
 usage: test_log_full.py BUILD SOURCE OUT"""
@@ -75,6 +76,18 @@ def run(build, source, out):
               "in red: %r" % (losing and losing["text"]))
         print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-losing.png")))
 
+        # her own page says it too while her session runs (session 68), in her station's words: the bridge reads
+        # her server's status as her station does (idl/palp_dds_log_view.c)
+        ann_log = ann_page.wait_for("(function(){const e=document.getElementById('log');"
+                                    "return e && !e.hidden && e.textContent.indexOf('losing') >= 0 ? "
+                                    "{text: e.textContent, cls: e.className} : null;})()", 15)
+        why = r"(the log's disk or its cap is full|the server was too busy to write some, and the log's disk or its cap is full)"
+        m = ann_log and re.fullmatch(r"The server's session log is losing records: (\d+) so far while this session runs "
+                                     r"\(" + why + r"\); this session will be incomplete in the review: tell your "
+                                     r"instructor\.", ann_log["text"])
+        check(m is not None and int(m.group(1)) > 0 and ann_log["cls"] == "",
+              "ann's page tells her the log is losing records while her session runs: %r" % (ann_log and ann_log["text"]))
+
         # what ann's page says of her score: scored from a log that lost records, and so said; or, where the log
         # kept too little of her session to score (its row, or its exercise, lost), why no score comes
         told = ann_page.wait_for("(function(){const e=document.getElementById('debrief-score');"
@@ -92,6 +105,11 @@ def run(build, source, out):
         # ann's station ends: nothing more is lost; 3 s of "losing" held, then quiet, or "writing again" when
         # her session's last small batch found room on a partly filled page (both seen in server_log_full)
         ann.wait(timeout=30)
+        said = re.search(r"\[trainee ann\] the server's session log is losing records: (\d+) so far while this session "
+                         r"runs \(" + why + r"\); this session will be incomplete in the review: tell your instructor\n",
+                         procs.log(ann))
+        check(said is not None and int(said.group(1)) > 0,
+              "  and her station said so, --quiet as it is: %r" % (said and said.group(0)))
         quiet = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('LOSING') < 0 ? r : null;})()"
                               % line, 20)
         m = quiet and re.fullmatch(r"(\d+) records lost \(0 shed: its queue was full; (\d+) failed: its file reached "

@@ -290,6 +290,21 @@
       " (session " + s.id + ")";
   }
 
+  /* The server's session log losing records while her session runs, in her station's words (the bridge
+   * sends them, web/hub.c: palp_dds_log_view_words); kept after the session ends, so that she still
+   * reads why its review will be incomplete, and cleared when a new one starts. */
+  function showLog(words) {
+    const el = document.getElementById("log");
+    if (!words) {
+      el.hidden = true;
+      el.textContent = "";
+      return;
+    }
+    el.textContent = words.charAt(0).toUpperCase() + words.slice(1) + ".";
+    el.className = words.indexOf("writing again") >= 0 ? "again" : "";
+    el.hidden = false;
+  }
+
   /* ---- exercise and findings ---- */
   /* ---- the debrief at the session's end (docs/assessment.md, "Debrief") ----
    * What the trainee's standing marks found, as much as the exercise tells: the lines the station
@@ -438,7 +453,7 @@
         if (send) send(followMsg(id));
         /* a new session: the last one's debrief and pressed skin go (kept while waiting: the skin she
          * pressed beside the debrief's rings shows where her search passed the lumps) */
-        if (id) { clearDebrief(); clearCover(); }
+        if (id) { clearDebrief(); clearCover(); showLog(""); }
         findings = null;
         setFingers([], null);
         if (!id) {
@@ -460,6 +475,7 @@
       showExercise();
       if (s) {
         showSession(s);
+        showLog(s.log);
         if (s.phantom !== pendingPhantom) {
           pendingPhantom = s.phantom;
           if (PALP.state.phantoms[s.phantom]) buildMesh(PALP.state.phantoms[s.phantom]);

@@ -1,0 +1,53 @@
+/* palp_dds_log_view.c - the server's session log as one session sees it (palp_dds_log_view.h). */
+#include <stdio.h>
+
+#include "palp_dds_log_view.h"
+
+void palp_dds_log_view_status(palp_dds_log_view *v, uint64_t written, uint64_t shed, uint64_t failed, int64_t now_ns) {
+  const uint64_t lost = shed + failed;
+  if (!v->seen) { /* the base from which the session's losses are counted */
+    *v = (palp_dds_log_view){.seen = 1, .base_shed = (int64_t)shed, .base_failed = (int64_t)failed,
+                             .lost_prev = lost, .written_prev = written};
+    return;
+  }
+  if (lost < v->lost_prev || written < v->written_prev) {
+    /* Counts that fall: a server begun again. What was lost before stays lost: the base moves so
+     * that the counts go on from there. */
+    v->base_shed = (int64_t)shed - (int64_t)v->shed;
+    v->base_failed = (int64_t)failed - (int64_t)v->failed;
+  } else if (lost > v->lost_prev) {
+    v->losing = 1;
+    v->rose_ns = now_ns;
+    v->written_at_rise = written;
+  } else if (v->losing && now_ns - v->rose_ns >= (int64_t)(PALP_DDS_LOG_QUIET_S * 1e9) &&
+             written > v->written_at_rise) {
+    v->losing = 0;
+  }
+  v->shed = (uint64_t)((int64_t)shed - v->base_shed);
+  v->failed = (uint64_t)((int64_t)failed - v->base_failed);
+  v->lost_prev = lost;
+  v->written_prev = written;
+}
+
+int palp_dds_log_view_words(const palp_dds_log_view *v, int trainee, char *buf, size_t len) {
+  if (len) buf[0] = 0;
+  const unsigned long long lost = v->shed + v->failed;
+  if (!lost) return 0;
+  if (v->losing) {
+    /* Why, as far as its user can do anything with it: an instructor can (the dashboard and the
+     * server's log say what to do), a trainee tells one. */
+    const char *why = v->failed && v->shed ? "the server was too busy to write some, and the log's disk or its cap is full"
+                      : v->failed          ? "the log's disk or its cap is full"
+                                           : "the server was too busy to write them";
+    snprintf(buf, len,
+             "the server's session log is losing records: %llu so far while this session runs (%s); this session "
+             "will be incomplete in the review%s",
+             lost, why, trainee ? ": tell your instructor" : "; the server's log says what to do");
+    return 1;
+  }
+  snprintf(buf, len,
+           "the server's session log is writing again; %llu records were lost while this session ran: it will be "
+           "incomplete in the review",
+           lost);
+  return 2;
+}
