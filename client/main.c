@@ -1453,6 +1453,13 @@ int main(int argc, char **argv) {
            o.role, o.name, PALP_CLI_LEAVE_WAIT_S, st.session_id);
     fflush(stdout);
   }
+  /* The session log's loss while the session ran, in all: said as it happened (report_log), this is the
+   * count to pass on. Said even with --quiet. */
+  char lost_line[320];
+  if (palp_dds_log_view_summary(&st.log, lost_line, sizeof lost_line)) {
+    printf("[%s %s] %s\n", o.role, o.name, lost_line);
+    fflush(stdout);
+  }
   /* Give the disposal a moment to reach the server before the participant goes. */
   struct timespec ts = {0, 100000000};
   nanosleep(&ts, NULL);

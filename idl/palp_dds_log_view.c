@@ -29,20 +29,23 @@ void palp_dds_log_view_status(palp_dds_log_view *v, uint64_t written, uint64_t s
   v->written_prev = written;
 }
 
+/* Why, as far as the session's user can do anything with it: an instructor can (the dashboard and the
+ * server's log say what to do), a trainee tells one. */
+static const char *why(const palp_dds_log_view *v) {
+  return v->failed && v->shed ? "the server was too busy to write some, and the log's disk or its cap is full"
+         : v->failed          ? "the log's disk or its cap is full"
+                              : "the server was too busy to write them";
+}
+
 int palp_dds_log_view_words(const palp_dds_log_view *v, int trainee, char *buf, size_t len) {
   if (len) buf[0] = 0;
   const unsigned long long lost = v->shed + v->failed;
   if (!lost) return 0;
   if (v->losing) {
-    /* Why, as far as its user can do anything with it: an instructor can (the dashboard and the
-     * server's log say what to do), a trainee tells one. */
-    const char *why = v->failed && v->shed ? "the server was too busy to write some, and the log's disk or its cap is full"
-                      : v->failed          ? "the log's disk or its cap is full"
-                                           : "the server was too busy to write them";
     snprintf(buf, len,
              "the server's session log is losing records: %llu so far while this session runs (%s); this session "
              "will be incomplete in the review%s",
-             lost, why, trainee ? ": tell your instructor" : "; the server's log says what to do");
+             lost, why(v), trainee ? ": tell your instructor" : "; the server's log says what to do");
     return 1;
   }
   snprintf(buf, len,
@@ -50,4 +53,15 @@ int palp_dds_log_view_words(const palp_dds_log_view *v, int trainee, char *buf, 
            "incomplete in the review",
            lost);
   return 2;
+}
+
+int palp_dds_log_view_summary(const palp_dds_log_view *v, char *buf, size_t len) {
+  if (len) buf[0] = 0;
+  const unsigned long long lost = v->shed + v->failed;
+  if (!lost) return 0;
+  snprintf(buf, len,
+           "the server's session log lost %llu records while this session ran (%s): it will be incomplete in the "
+           "review",
+           lost, why(v));
+  return 1;
 }

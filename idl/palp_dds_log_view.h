@@ -39,5 +39,8 @@ void palp_dds_log_view_status(palp_dds_log_view *v, uint64_t written, uint64_t s
  * "the server's session log is writing again; 12 records were lost while this session ran: it will
  * be incomplete in the review". */
 int palp_dds_log_view_words(const palp_dds_log_view *v, int trainee, char *buf, size_t len);
+/* The loss in all, as the session ends, 0 and "" when none: "the server's session log lost 1210 records
+ * while this session ran (the log's disk or its cap is full): it will be incomplete in the review". */
+int palp_dds_log_view_summary(const palp_dds_log_view *v, char *buf, size_t len);
 
 #endif

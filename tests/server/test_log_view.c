@@ -81,9 +81,15 @@ static void test_view(void) {
   palp_dds_log_view_status(&z, 100, 0, 5, 1 * S);
   palp_dds_log_view_status(&z, 100, 0, 5, 7 * S);
   CHECK(words(&z, 1, &lvl)[0] && lvl == 1, "no loss for 6 s and nothing written: still losing (%d)", lvl);
+  char sum[300];
+  CHECK(palp_dds_log_view_summary(&v, sum, sizeof sum) == 1 &&
+            !strcmp(sum, "the server's session log lost 68 records while this session ran (the server was too busy to "
+                         "write some, and the log's disk or its cap is full): it will be incomplete in the review"),
+        "the loss in all as the session ends: \"%s\"", sum);
   palp_dds_log_view n = {0};
   for (int k = 0; k < 5; k++) palp_dds_log_view_status(&n, 100 * (uint64_t)k, 0, 0, k * S);
-  CHECK(!strcmp(words(&n, 1, &lvl), "") && lvl == 0, "a log that loses nothing says nothing (%d)", lvl);
+  CHECK(!strcmp(words(&n, 1, &lvl), "") && lvl == 0 && palp_dds_log_view_summary(&n, sum, sizeof sum) == 0 && !sum[0],
+        "a log that loses nothing says nothing, during the session or at its end (%d)", lvl);
 }
 
 /* The station's news: said at once, not again within PALP_CLI_LOG_SAY_S while losing, "writing again"

@@ -110,6 +110,10 @@ def run(build, source, out):
                          procs.log(ann))
         check(said is not None and int(said.group(1)) > 0,
               "  and her station said so, --quiet as it is: %r" % (said and said.group(0)))
+        in_all = re.search(r"\[trainee ann\] the server's session log lost (\d+) records while this session ran \(" + why +
+                           r"\): it will be incomplete in the review\n", procs.log(ann))
+        check(in_all is not None and said is not None and int(in_all.group(1)) >= int(said.group(1)),
+              "  and as it ended, the loss in all (>= the first said): %r" % (in_all and in_all.group(0)))
         quiet = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('LOSING') < 0 ? r : null;})()"
                               % line, 20)
         m = quiet and re.fullmatch(r"(\d+) records lost \(0 shed: its queue was full; (\d+) failed: its file reached "
