@@ -445,6 +445,9 @@ static void build_sessions(palp_web_hub *h) {
     char log_words[320];
     palp_dds_log_view_words(&s->log, 1, log_words, sizeof log_words);
     cJSON_AddStringToObject(o, "log", log_words);
+    /* ... and in the words of an instructor's station following it (she is the one to act) */
+    palp_dds_log_view_words(&s->log, 0, log_words, sizeof log_words);
+    cJSON_AddStringToObject(o, "log_observer", log_words);
     if (pos) {
       cJSON_AddNumberToObject(o, "late_haptic", (double)s->late_haptic);
       cJSON_AddNumberToObject(o, "lost_haptic", (double)s->lost_haptic);

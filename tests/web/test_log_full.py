@@ -56,6 +56,8 @@ def run(build, source, out):
         # what the log holds, and her page says what that score is worth
         ann_page = browser.new_page(web.base + "/trainee.html?trainee=ann")
         check(ann_page.wait_for("window.palpState && palpState.connected", 20) is True, "ann's page connected")
+        obs_page = browser.new_page(web.base + "/trainee.html?role=observer")  # the instructor follows any session
+        check(obs_page.wait_for("window.palpState && palpState.connected", 20) is True, "an observer's page connected")
         ann = procs.trainee("ann", 11, ["--input", "sim:press,hold_s=4", "--duration", "7"])
         # the line and the counts of the status it was built from, read in one go
         line = ("(function(){const ks=Array.from(document.querySelectorAll('#server .k'));"
@@ -87,6 +89,15 @@ def run(build, source, out):
                                      r"instructor\.", ann_log["text"])
         check(m is not None and int(m.group(1)) > 0 and ann_log["cls"] == "",
               "ann's page tells her the log is losing records while her session runs: %r" % (ann_log and ann_log["text"]))
+        obs_log = obs_page.wait_for("(function(){const e=document.getElementById('log');"
+                                    "return e && !e.hidden && e.textContent.indexOf('losing') >= 0 ? e.textContent : null;})()",
+                                    15)
+        m = obs_log and re.fullmatch(r"The server's session log is losing records: (\d+) so far while this session runs "
+                                     r"\(" + why + r"\); this session will be incomplete in the review; the server's log "
+                                     r"says what to do\.", obs_log)
+        check(m is not None and int(m.group(1)) > 0,
+              "  and the instructor following her session is told what to do, not to tell an instructor: %r" % obs_log)
+        obs_page.close()  # while it is open, ann's page is a background tab, whose screenshot hangs
 
         # what ann's page says of her score: scored from a log that lost records, and so said; or, where the log
         # kept too little of her session to score (its row, or its exercise, lost), why no score comes

@@ -475,7 +475,7 @@
       showExercise();
       if (s) {
         showSession(s);
-        showLog(s.log);
+        showLog(observer ? s.log_observer : s.log); /* an instructor following is told what to do, not to tell one */
         if (s.phantom !== pendingPhantom) {
           pendingPhantom = s.phantom;
           if (PALP.state.phantoms[s.phantom]) buildMesh(PALP.state.phantoms[s.phantom]);
