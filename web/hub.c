@@ -1392,11 +1392,9 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
     int slot;
     session *s = find_session(h, ss->loads[k].session_id, &slot);
     if (!s) continue;
-    const int was = palp_dds_log_view_words(&s->log, 1, NULL, 0);
-    const uint64_t lost = s->log.shed + s->log.failed;
+    const palp_dds_log_view was = s->log; /* its words change with these two alone */
     palp_dds_log_view_status(&s->log, m->log_written, m->log_shed, m->log_failed, ss->at_ns);
-    if (palp_dds_log_view_words(&s->log, 1, NULL, 0) != was || s->log.shed + s->log.failed != lost)
-      h->sessions_dirty = 1;
+    if (s->log.losing != was.losing || s->log.shed + s->log.failed != was.shed + was.failed) h->sessions_dirty = 1;
   }
   /* a refused peer that stopped retrying: its repeats logged within a window of the last line */
   if (h->def.refusals) palp_dds_refusals_tick(h->def.refusals, palp_dds_now_ns());
