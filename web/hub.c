@@ -448,6 +448,9 @@ static void build_sessions(palp_web_hub *h) {
     /* ... and in the words of an instructor's station following it (she is the one to act) */
     palp_dds_log_view_words(&s->log, 0, log_words, sizeof log_words);
     cJSON_AddStringToObject(o, "log_observer", log_words);
+    /* ... and the loss in all, which a page shows once the session has ended (her station's last line) */
+    palp_dds_log_view_summary(&s->log, log_words, sizeof log_words);
+    cJSON_AddStringToObject(o, "log_summary", log_words);
     if (pos) {
       cJSON_AddNumberToObject(o, "late_haptic", (double)s->late_haptic);
       cJSON_AddNumberToObject(o, "lost_haptic", (double)s->lost_haptic);

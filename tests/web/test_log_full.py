@@ -125,6 +125,13 @@ def run(build, source, out):
                            r"\): it will be incomplete in the review\n", procs.log(ann))
         check(in_all is not None and said is not None and int(in_all.group(1)) >= int(said.group(1)),
               "  and as it ended, the loss in all (>= the first said): %r" % (in_all and in_all.group(0)))
+        page_all = ann_page.wait_for("(function(){const e=document.getElementById('log');"
+                                     "return e && !e.hidden && e.textContent.indexOf(' lost ') >= 0 ? e.textContent : null;})()",
+                                     10)
+        m = page_all and re.fullmatch(r"The server's session log lost (\d+) records while this session ran \(" + why +
+                                      r"\): it will be incomplete in the review\.", page_all)
+        check(m is not None and said is not None and int(m.group(1)) >= int(said.group(1)),
+              "  and her page, the session over, says the loss in all as her station does: %r" % page_all)
         quiet = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('LOSING') < 0 ? r : null;})()"
                               % line, 20)
         m = quiet and re.fullmatch(r"(\d+) records lost \(0 shed: its queue was full; (\d+) failed: its file reached "

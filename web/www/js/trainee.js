@@ -291,8 +291,9 @@
   }
 
   /* The server's session log losing records while her session runs, in her station's words (the bridge
-   * sends them, web/hub.c: palp_dds_log_view_words); kept after the session ends, so that she still
-   * reads why its review will be incomplete, and cleared when a new one starts. */
+   * sends them, web/hub.c: palp_dds_log_view_words); as the session ends, the loss in all
+   * (palp_dds_log_view_summary), kept so that she still reads why its review will be incomplete, and
+   * cleared when a new one starts. */
   function showLog(words) {
     const el = document.getElementById("log");
     if (!words) {
@@ -458,6 +459,8 @@
         setFingers([], null);
         if (!id) {
           document.getElementById("info").textContent = "waiting for a session";
+          /* the log's loss while it ran, in all, as her station says it as it ends */
+          if (lastSession && lastSession.log_summary) showLog(lastSession.log_summary);
           /* the session is over: the phantom at rest and no force, not its last frame's dent and force
            * (the debrief's rings are drawn on the rest skin) */
           latest = null;
