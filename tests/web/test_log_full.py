@@ -6,7 +6,8 @@ the log fills: the dashboard says LOSING records, with the counts of the status 
 and her own page and station that the log is losing records while her session runs (session 68), and her page
 that her score comes from an incomplete log (or why none comes); her station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
 frees the padding (as a prune would) and a second trainee presses: "writing again", with the count the
-server's own log gives in its "writing again" line. DDS domain 137.
+server's own log gives in its "writing again" line; cid, practising freely across the fill's end, is told
+by his station that the log is losing records, then that it writes again, then the loss in all. DDS domain 137.
 usage: test_log_full.py BUILD SOURCE OUT"""
 import os
 import re
@@ -147,6 +148,14 @@ def run(build, source, out):
               "her station gone, the dashboard says the loss has stopped (3-30 s since the last, nothing written "
               "since; or, her last batch in, writing again), with the status's count: %r" % (quiet and quiet["text"]))
 
+        # cid practises freely (force-driven, dome A) on the full log: his station says it is losing records (session
+        # 68), and once the padding is freed, that it writes again, and as it ends the loss in all
+        cid = procs.trainee("cid", 1, ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1",
+                                       "--t-on", "0", "--t-off", "60", "--duration", "60"])
+        cid_losing = procs.wait_log(cid, r"\[trainee cid\] the server's session log is losing records: (\d+) so far while "
+                                         r"this session runs \(" + why + r"\); this session will be incomplete in the "
+                                         r"review: tell your instructor\n", 15)
+
         # the padding freed (a prune's part), another trainee: the log writes again, and says so
         h = sqlite3.connect(db, timeout=10)
         h.execute("DROP TABLE pad")
@@ -167,6 +176,16 @@ def run(build, source, out):
               "the padding freed, bea's session is written: the dashboard says 'writing again' with the count the "
               "server's own log gives (%s): %r" % (said and said.group(0), again and again["text"]))
         print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-again.png")))
+        cid_again = procs.wait_log(cid, r"\[trainee cid\] the server's session log is writing again; (\d+) records were "
+                                        r"lost while this session ran: it will be incomplete in the review\n", 20)
+        procs.stop(cid)
+        cid_all = re.search(r"\[trainee cid\] the server's session log lost (\d+) records while this session ran \(" + why +
+                            r"\): it will be incomplete in the review\n", procs.log(cid))
+        check(int(cid_again.group(1)) >= int(cid_losing.group(1)) > 0 and cid_all is not None and
+              int(cid_all.group(1)) == int(cid_again.group(1)),
+              "cid's station, practising freely on the full log, said it was losing records (%s), then, the padding "
+              "freed, that it writes again (%s), and as it ended the same loss in all (%s)"
+              % (cid_losing.group(1), cid_again.group(1), cid_all and cid_all.group(1)))
     finally:
         if browser:
             browser.close()
