@@ -70,6 +70,10 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
       st->debrief_score_topic_refused = 1;
       continue;
     }
+    if (st->topic[k] < 0 && k == PALP_TOPIC_SESSION_LOG && secured) { /* session 69: the server's counts instead */
+      st->topic[k] = 0;
+      continue;
+    }
     if (st->topic[k] < 0) {
       palp_cli_station_close(st);
       return fail(err, errlen, PALP_EIO, "cannot create topic %s", palp_dds_topic_name((palp_dds_topic_kind)k));
@@ -312,6 +316,12 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       st->debrief_score_r =
           palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
     st->next_mark_id = 1;
+  }
+  /* Every role: her session's own losses in the server's log (session 69); without them (a server or
+   * permissions that predate the topic) the station counts the server's, from its status. */
+  if (st->topic[PALP_TOPIC_SESSION_LOG] > 0) {
+    st->session_log_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_SESSION_LOG], PALP_TOPIC_SESSION_LOG);
+    if (st->session_log_r < 0) st->session_log_r = 0;
   }
   if (st->contact_w < 0 || st->contact_r < 0 || st->feedback_r < 0 || st->deformation_r < 0 || st->local_model_r < 0 ||
       st->finding_w < 0 || st->finding_status_r < 0 || st->debrief_r < 0 || st->debrief_score_r < 0)
@@ -573,6 +583,12 @@ static void watch_log(palp_cli_station *st, int64_t now) {
     }
     dds_return_loan(st->status_r, ptr, n);
   }
+  if (st->session_log_r <= 0) return;
+  palp_SessionLog m;
+  void *one[1] = {&m};
+  dds_sample_info_t mi;
+  while (dds_take(st->session_log_r, one, &mi, 1, 1) > 0)
+    if (mi.valid_data && m.session_id == st->session_id) palp_dds_log_view_session(&st->log, m.shed, m.failed, now);
 }
 
 int palp_cli_station_log_news(palp_cli_station *st, char *line, size_t len) {
@@ -720,7 +736,7 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   if (st->pub > 0) dds_delete(st->pub);
   if (st->sub > 0) dds_delete(st->sub);
   st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
-  st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = 0;
+  st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = st->session_log_r = 0;
   st->session_id = 0;
   /* the next session's server counts from its own base */
   memset(&st->log, 0, sizeof st->log);

@@ -69,6 +69,7 @@ typedef struct palp_cli_station {
   /* The server's session log as this station's session sees it (session 68): read from
    * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */
   dds_entity_t status_r;  /* 0: none (permissions that refuse it; nothing is said then) */
+  dds_entity_t session_log_r; /* palp_session_log (session 69), in the session: its own losses; 0: none */
   palp_dds_log_view log;
   palp_cli_log_news log_said;
   int goodbye_unanswered; /* palp_cli_station_leave, after a stall: the server did not answer its JOIN

@@ -283,6 +283,10 @@ typedef struct palp_db_writer_stats {
   char last_error[256]; /* text of the last error, "" if none */
 } palp_db_writer_stats;
 void palp_db_writer_stats_get(palp_db_writer *w, palp_db_writer_stats *out);
+/* One logged session's losses so far: its records shed (queue full) and failed (disk errors), the
+ * counts its session row gets (records_shed, records_failed). Any thread. 0, or PALP_EINVAL for a
+ * handle this writer never gave (session 69: the server tells each session its own loss). */
+int palp_db_writer_session_losses(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed);
 
 /* ---- a log's losses said as they happen (session 66, db/loss_watch.c) ---------------------
  * A full disk, or the file's cap (max_db_bytes), loses every batch from then on; the tick loop goes

@@ -83,6 +83,7 @@ typedef struct rec {
 /* Producer-side view of a session: guarded by the mutex. */
 typedef struct psess {
   int64_t shed;
+  int64_t failed; /* the worker's wsess.failed, copied under the mutex for palp_db_writer_session_losses */
   uint8_t open;
 } psess;
 
@@ -343,7 +344,7 @@ int palp_db_log_session_begin(palp_db_writer *w, const palp_db_session_def *def,
   }
   w->next_session++;
   w->ps[s].open = 1;
-  w->ps[s].shed = 0;
+  w->ps[s].shed = w->ps[s].failed = 0;
   r->s = s;
   r->u.begin.blob = blob;
   r->u.begin.def = d;
@@ -540,6 +541,19 @@ int palp_db_log_finding(palp_db_writer *w, palp_db_session s, const palp_db_find
   }
   publish(w);
   return r ? 0 : PALP_EFULL;
+}
+
+int palp_db_writer_session_losses(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed) {
+  *shed = *failed = 0;
+  if (!w) return PALP_EINVAL;
+  pthread_mutex_lock(&w->mu);
+  const int known = s > 0 && s < w->next_session && s < w->ps_cap;
+  if (known) {
+    *shed = w->ps[s].shed;
+    *failed = w->ps[s].failed;
+  }
+  pthread_mutex_unlock(&w->mu);
+  return known ? 0 : PALP_EINVAL;
 }
 
 void palp_db_writer_stats_get(palp_db_writer *w, palp_db_writer_stats *out) {
@@ -1015,6 +1029,17 @@ static void retire(palp_db_writer *w, int n, int64_t written, int committed,
   pthread_mutex_unlock(&w->mu);
 }
 
+/* The batch's failed records (every one, or those refused[i] marks) counted per session where other
+ * threads may read them (palp_db_writer_session_losses). */
+static void count_failed(palp_db_writer *w, int tail, int n, const uint8_t *refused) {
+  pthread_mutex_lock(&w->mu);
+  for (int i = 0; i < n; i++) {
+    const rec *r = &w->ring[(tail + i) % w->cap];
+    if ((!refused || refused[i]) && r->s > 0 && r->s < w->ps_cap) w->ps[r->s].failed++;
+  }
+  pthread_mutex_unlock(&w->mu);
+}
+
 static void *worker(void *arg) {
   palp_db_writer *w = arg;
   uint8_t *refused = malloc(MAX_TXN_RECORDS);
@@ -1057,6 +1082,7 @@ static void *worker(void *arg) {
           if (ws) ws->failed++;
         }
         say_dropped(w, n, 0);
+        count_failed(w, tail, n, NULL);
       } else {
         written = n - bad;
         for (int i = 0; bad && i < n; i++) {
@@ -1066,6 +1092,7 @@ static void *worker(void *arg) {
           wsess *ws = r->s > 0 ? wsess_get(w, r->s) : NULL;
           if (ws) ws->failed++;
         }
+        if (bad) count_failed(w, tail, n, refused);
         pthread_mutex_lock(&w->mu);
         w->st_.in_error = 0;
         pthread_mutex_unlock(&w->mu);

@@ -361,6 +361,16 @@ static void on_log_counts(void *ctx, uint64_t *written, uint64_t *shed, uint64_t
   *failed = (uint64_t)st.failed;
 }
 
+static int on_session_log_losses(void *ctx, uint32_t session_id, uint64_t *shed, uint64_t *failed) {
+  palp_srv_db_log *l = ctx;
+  const slot *s = find(l, session_id);
+  int64_t sh = 0, f = 0;
+  if (!s || palp_db_writer_session_losses(l->w, s->h, &sh, &f) != 0) return 0;
+  *shed = (uint64_t)sh;
+  *failed = (uint64_t)f;
+  return 1;
+}
+
 int palp_srv_db_log_open(const char *path, int64_t max_bytes, palp_log *log, palp_srv_db_log **out, char *err,
                          size_t errlen) {
   palp_srv_db_log *l = calloc(1, sizeof *l);
@@ -401,6 +411,7 @@ int palp_srv_db_log_open(const char *path, int64_t max_bytes, palp_log *log, pal
                             .debrief = on_debrief,
                             .security_refused = on_security_refused,
                             .log_counts = on_log_counts,
+                            .session_log_losses = on_session_log_losses,
                             /* A server whose grader did not start tells her so at once rather than
                              * leave her station waiting for a score that will not come. */
                             .take_score = l->grader ? take_score : NULL,

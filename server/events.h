@@ -135,6 +135,10 @@ typedef struct palp_srv_events {
   /* [main thread] the log's counters for palp_server_status: records written,
    * shed (queue full) and failed (disk errors). */
   void (*log_counts)(void *ctx, uint64_t *written, uint64_t *shed, uint64_t *failed);
+  /* [main thread] an open session's own losses in that log (session 69, palp_session_log): 1 and the
+   * counts of its records shed and failed so far; 0 when the log does not hold the session (its
+   * opening was lost with the rest, or nothing logs): its station then counts the server's losses. */
+  int (*session_log_losses)(void *ctx, uint32_t session_id, uint64_t *shed, uint64_t *failed);
   /* [main thread] a finding was accepted or refused (issue 13). */
   void (*finding)(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev);
   /* [main thread] an exercise session's debrief, once, as it closes (before session_closed). */

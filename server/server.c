@@ -303,9 +303,13 @@ static const char *optional_topic_loss(palp_dds_topic_kind k) {
   case PALP_TOPIC_SESSION_EXERCISE: return "no exercises for recorders";
   case PALP_TOPIC_SESSION_SCORE: return "no live scores for the instructors";
   case PALP_TOPIC_DEBRIEF_SCORE: return "no scores told to the trainees of practice exercises";
+  case PALP_TOPIC_SESSION_LOG:
+    return "no session told its own records the session log lost (stations count the server's instead)";
   default: return NULL;
   }
 }
+
+static void publish_session_log(palp_srv *srv, palp_srv_session *s);
 
 /* An exercise session's exercise, its lesions included, for the instructors' recorders (only
  * their permissions read it): what the server's own log holds, so that a recorder's log of the
@@ -1174,6 +1178,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .finding_topic = srv->topic[PALP_TOPIC_FINDING],
                               .finding_status_topic = srv->topic[PALP_TOPIC_FINDING_STATUS],
                               .debrief_topic = srv->topic[PALP_TOPIC_DEBRIEF],
+                              .session_log_topic = srv->topic[PALP_TOPIC_SESSION_LOG],
                               .events = srv->events,
                               .partition = partition,
                               .log = srv->log,
@@ -1214,6 +1219,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       return;
     }
     publish_session_exercise(srv, s, info.exercise_name, info.exercise_json);
+    publish_session_log(srv, s);
     srv->next_session_id++;
     /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
     if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
@@ -1527,6 +1533,22 @@ static void check_other_servers(palp_srv *srv) {
   }
 }
 
+/* A session's own losses in the session log (palp_session_log, session 69): written as it opens and
+ * whenever they rose, so that its station says the records of her session the log lost, not the
+ * whole server's. None for a session the log does not hold (its opening lost with the rest): its
+ * station then counts the server's losses from palp_server_status. */
+static void publish_session_log(palp_srv *srv, palp_srv_session *s) {
+  if (s->session_log_writer <= 0) return;
+  uint64_t shed = 0, failed = 0;
+  if (!srv->events->session_log_losses(srv->events->ctx, s->id, &shed, &failed)) return;
+  if (s->session_log_sent && shed == s->session_log_shed && failed == s->session_log_failed) return;
+  const palp_SessionLog m = {.session_id = s->id, .shed = shed, .failed = failed};
+  if (dds_write(s->session_log_writer, &m) < 0) return; /* tried again at the next status */
+  s->session_log_sent = 1;
+  s->session_log_shed = shed;
+  s->session_log_failed = failed;
+}
+
 static void publish_status(palp_srv *srv) {
   check_other_servers(srv);
   palp_srv_tick_stats ts;
@@ -1577,7 +1599,10 @@ static void publish_status(palp_srv *srv) {
   gm.dds_log_suppressed = suppressed;
   gm.sessions_forgotten = srv->sessions_forgotten;
   dds_write(srv->guard_w, &gm);
-  for (int i = 0; i < srv->session_count; i++) publish_state(srv, srv->sessions[i], 0, NULL, NULL);
+  for (int i = 0; i < srv->session_count; i++) {
+    publish_state(srv, srv->sessions[i], 0, NULL, NULL);
+    publish_session_log(srv, srv->sessions[i]);
+  }
 }
 
 /* ---- lifecycle ------------------------------------------------------------------- */

@@ -206,6 +206,11 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     s->debrief_writer = palp_dds_create_writer(s->pub, def->debrief_topic, PALP_TOPIC_DEBRIEF);
     if (s->debrief_writer < 0) goto dds_fail;
   }
+  /* Only where something logs the session: its station then hears its own losses, not the server's. */
+  if (def->session_log_topic > 0 && def->events && def->events->session_log_losses) {
+    s->session_log_writer = palp_dds_create_writer(s->pub, def->session_log_topic, PALP_TOPIC_SESSION_LOG);
+    if (s->session_log_writer < 0) goto dds_fail;
+  }
   palp_world_get_health(s->world, &s->health);
   s->opened_ns = palp_dds_now_ns();
   *err = 0;

@@ -84,6 +84,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t local_model_topic; /* 0: no local models (older callers) */
   dds_entity_t finding_topic, finding_status_topic; /* 0: no findings (older callers) */
   dds_entity_t debrief_topic; /* 0: no debrief (older callers, or permissions that predate it) */
+  dds_entity_t session_log_topic; /* 0: no palp_session_log (older callers, permissions that predate it) */
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
@@ -116,6 +117,10 @@ typedef struct palp_srv_session {
   dds_entity_t finding_reader, finding_status_writer, finding_rc;
   palp_srv_findings findings;
   dds_entity_t debrief_writer; /* palp_debrief, written once as an exercise session closes; 0: none */
+  /* palp_session_log (session 69): this session's records the log lost, as last written; 0: none */
+  dds_entity_t session_log_writer;
+  int session_log_sent;
+  uint64_t session_log_shed, session_log_failed;
   palp_srv_limits limits;
   const palp_srv_events *events;
   palp_log *log;

@@ -270,6 +270,14 @@ struct palp_web_hub {
   item told_scores[DEBRIEFS];
   uint32_t told_scores_sid[DEBRIEFS];
   int told_scores_next;
+  /* palp_session_log (session 69): the newest own-loss counts per session, kept so that one read
+   * before its session's state is applied once the session is known (on_status) */
+  dds_entity_t session_log_r; /* 0: none (a bridge whose permissions predate the topic) */
+  struct {
+    uint32_t sid; /* 0: free */
+    uint64_t shed, failed;
+  } slog[2 * PALP_WEB_MAX_SESSIONS];
+  int slog_next;
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
@@ -1362,6 +1370,28 @@ static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void 
   }
 }
 
+/* A session's own losses (palp_session_log, session 69): kept, and told to its view at once where
+ * the session is known (else at its server's next status, on_status). */
+static void on_session_log(palp_web_hub *h, const palp_SessionLog *m) {
+  int k = -1;
+  for (int i = 0; i < 2 * PALP_WEB_MAX_SESSIONS && k < 0; i++)
+    if (h->slog[i].sid == m->session_id) k = i;
+  if (k < 0) { /* the oldest replaced: more than twice the sessions the bridge can follow */
+    k = h->slog_next;
+    h->slog_next = (h->slog_next + 1) % (2 * PALP_WEB_MAX_SESSIONS);
+  }
+  h->slog[k].sid = m->session_id;
+  h->slog[k].shed = m->shed;
+  h->slog[k].failed = m->failed;
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s) return;
+  const palp_dds_log_view was = s->log;
+  palp_dds_log_view_session(&s->log, m->shed, m->failed, palp_dds_now_ns());
+  if (s->log.losing != was.losing || s->log.shed + s->log.failed != was.shed + was.failed || s->log.own != was.own)
+    h->sessions_dirty = 1;
+}
+
 static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
   server_status *ss = NULL;
   for (int i = 0; i < MAX_SERVERS && !ss; i++)
@@ -1395,9 +1425,12 @@ static void on_status(palp_web_hub *h, const palp_ServerStatus *m) {
     int slot;
     session *s = find_session(h, ss->loads[k].session_id, &slot);
     if (!s) continue;
-    const palp_dds_log_view was = s->log; /* its words change with these two alone */
+    const palp_dds_log_view was = s->log; /* its words change with these three alone */
     palp_dds_log_view_status(&s->log, m->log_written, m->log_shed, m->log_failed, ss->at_ns);
-    if (s->log.losing != was.losing || s->log.shed + s->log.failed != was.shed + was.failed) h->sessions_dirty = 1;
+    for (int i = 0; i < 2 * PALP_WEB_MAX_SESSIONS && !s->log.own; i++) /* its own counts, read before it was known */
+      if (h->slog[i].sid == s->id) palp_dds_log_view_session(&s->log, h->slog[i].shed, h->slog[i].failed, ss->at_ns);
+    if (s->log.losing != was.losing || s->log.shed + s->log.failed != was.shed + was.failed || s->log.own != was.own)
+      h->sessions_dirty = 1;
   }
   /* a refused peer that stopped retrying: its repeats logged within a window of the last line */
   if (h->def.refusals) palp_dds_refusals_tick(h->def.refusals, palp_dds_now_ns());
@@ -1780,6 +1813,7 @@ static void *hub_main(void *arg) {
       drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
       if (h->score_r > 0) drain(h, h->score_r, (sample_fn)on_score, NULL, &h->stats.scores);
       drain(h, h->debrief_score_r, (sample_fn)on_debrief_score, NULL, &h->stats.told_scores); /* after the debriefs */
+      drain(h, h->session_log_r, (sample_fn)on_session_log, NULL, &h->stats.session_logs);
       if (h->def.answers) {
         drain(h, h->finding_r, (sample_fn)on_finding, NULL, &h->stats.findings_read);
         tend_answers(h, now);
@@ -1918,6 +1952,11 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   /* an instructor's permissions read every topic: no older permissions to allow for here */
   h->debrief_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
   h->debrief_score_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF_SCORE], PALP_TOPIC_DEBRIEF_SCORE);
+  /* session 69: a bridge on permissions from before it counts the server's losses, as a station does */
+  h->session_log_r = h->topic[PALP_TOPIC_SESSION_LOG] > 0
+                         ? make_reader(h->sub, h->topic[PALP_TOPIC_SESSION_LOG], PALP_TOPIC_SESSION_LOG)
+                         : 0;
+  if (h->session_log_r < 0) h->session_log_r = 0;
   h->exercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   if (def->answers) {
     /* the answers (instructors only: a trainee's permissions cannot even create the topic) */

@@ -92,6 +92,58 @@ static void test_view(void) {
         "a log that loses nothing says nothing, during the session or at its end (%d)", lvl);
 }
 
+/* A server that says each session's own losses (palp_session_log, session 69): her own counts replace
+ * the server's, which then say only whether the log writes again; another session's losses are not
+ * hers. */
+static void test_own(void) {
+  palp_dds_log_view v = {0};
+  int lvl;
+  palp_dds_log_view_status(&v, 100, 0, 0, 0);
+  palp_dds_log_view_session(&v, 0, 0, 0); /* her session opened: nothing of hers lost */
+  palp_dds_log_view_status(&v, 150, 0, 400, 1 * S); /* another session loses 400 */
+  palp_dds_log_view_session(&v, 0, 0, 1 * S);
+  CHECK(!strcmp(words(&v, 1, &lvl), "") && lvl == 0 && v.own,
+        "the server loses 400 records of another session, none of hers: nothing said (\"%s\", %d)", words(&v, 1, &lvl),
+        lvl);
+  palp_dds_log_view_session(&v, 0, 37, 2 * S);
+  palp_dds_log_view_status(&v, 150, 0, 900, 2 * S);
+  CHECK(!strcmp(words(&v, 1, &lvl),
+                "the server's session log is losing this session's records: 37 so far (the log's disk or its cap is "
+                "full); this session will be incomplete in the review: tell your instructor") &&
+            lvl == 1,
+        "37 of hers among the server's 900: her 37 said: \"%s\" (%d)", words(&v, 1, &lvl), lvl);
+  CHECK(!strcmp(words(&v, 0, &lvl),
+                "the server's session log is losing this session's records: 37 so far (the log's disk or its cap is "
+                "full); this session will be incomplete in the review; the server's log says what to do"),
+        "  to an observer: \"%s\"", words(&v, 0, &lvl));
+  palp_dds_log_view_session(&v, 0, 37, 3 * S); /* the same count again (a repeat): no rise */
+  palp_dds_log_view_status(&v, 300, 0, 950, 8 * S); /* written, the others still losing, hers not for 6 s */
+  CHECK(!strcmp(words(&v, 1, &lvl),
+                "the server's session log is writing again; 37 of this session's records were lost: it will be "
+                "incomplete in the review") &&
+            lvl == 2,
+        "hers quiet 6 s and records written, while the server loses others': writing again: \"%s\" (%d)",
+        words(&v, 1, &lvl), lvl);
+  palp_dds_log_view_session(&v, 3, 37, 9 * S);
+  lvl = palp_dds_log_view_words(&v, 1, NULL, 0);
+  CHECK(lvl == 1 && v.shed == 3 && v.failed == 37,
+        "3 of hers shed after: losing again (%d; %llu shed, %llu failed)", lvl, (unsigned long long)v.shed,
+        (unsigned long long)v.failed);
+  char sum[300];
+  CHECK(palp_dds_log_view_summary(&v, sum, sizeof sum) == 1 &&
+            !strcmp(sum, "the server's session log lost 40 of this session's records (the server was too busy to write "
+                         "some, and the log's disk or its cap is full): it will be incomplete in the review"),
+        "the loss in all, hers: \"%s\"", sum);
+  /* Her counts heard after the server's had said "losing" (a status read first): hers replace them. */
+  palp_dds_log_view w = {0};
+  palp_dds_log_view_status(&w, 100, 0, 0, 0);
+  palp_dds_log_view_status(&w, 100, 0, 25, 1 * S);
+  CHECK(palp_dds_log_view_words(&w, 1, NULL, 0) == 1, "the server's counts first: losing");
+  palp_dds_log_view_session(&w, 0, 0, 1 * S);
+  CHECK(palp_dds_log_view_words(&w, 1, NULL, 0) == 0 && w.shed + w.failed == 0,
+        "  then her own, none lost: nothing to say (%llu)", (unsigned long long)(w.shed + w.failed));
+}
+
 /* The station's news: said at once, not again within PALP_CLI_LOG_SAY_S while losing, "writing again"
  * once after it; an observer is not told to tell an instructor. */
 static void test_news(void) {
@@ -128,6 +180,7 @@ static void test_news(void) {
 
 int main(void) {
   test_view();
+  test_own();
   test_news();
   return failures ? 1 : 0;
 }
