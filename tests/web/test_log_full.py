@@ -7,7 +7,8 @@ and her own page and station that the log is losing records while her session ru
 that her score comes from an incomplete log (or why none comes); her station gone, nothing more is lost or written: it says so, with how long ago the last loss was; the test
 frees the padding (as a prune would) and a second trainee presses: "writing again", with the count the
 server's own log gives in its "writing again" line; cid, practising freely across the fill's end, is told
-by his station that the log is losing records, then that it writes again, then the loss in all. DDS domain 137.
+by his station that the log is losing his session's records, then that it writes again, then the loss in all, which
+is his session's own (session 69: palp_session_log), the count the log's row for his session holds. DDS domain 137.
 usage: test_log_full.py BUILD SOURCE OUT"""
 import os
 import re
@@ -85,7 +86,7 @@ def run(build, source, out):
                                     "return e && !e.hidden && e.textContent.indexOf('losing') >= 0 ? "
                                     "{text: e.textContent, cls: e.className} : null;})()", 15)
         why = r"(the log's disk or its cap is full|the server was too busy to write some, and the log's disk or its cap is full)"
-        m = ann_log and re.fullmatch(r"The server's session log is losing records: (\d+) so far while this session runs "
+        m = ann_log and re.fullmatch(r"The server's session log is losing this session's records: (\d+) so far "
                                      r"\(" + why + r"\); this session will be incomplete in the review: tell your "
                                      r"instructor\.", ann_log["text"])
         check(m is not None and int(m.group(1)) > 0 and ann_log["cls"] == "",
@@ -93,7 +94,7 @@ def run(build, source, out):
         obs_log = obs_page.wait_for("(function(){const e=document.getElementById('log');"
                                     "return e && !e.hidden && e.textContent.indexOf('losing') >= 0 ? e.textContent : null;})()",
                                     15)
-        m = obs_log and re.fullmatch(r"The server's session log is losing records: (\d+) so far while this session runs "
+        m = obs_log and re.fullmatch(r"The server's session log is losing this session's records: (\d+) so far "
                                      r"\(" + why + r"\); this session will be incomplete in the review; the server's log "
                                      r"says what to do\.", obs_log)
         check(m is not None and int(m.group(1)) > 0,
@@ -117,19 +118,19 @@ def run(build, source, out):
         # ann's station ends: nothing more is lost; 3 s of "losing" held, then quiet, or "writing again" when
         # her session's last small batch found room on a partly filled page (both seen in server_log_full)
         ann.wait(timeout=30)
-        said = re.search(r"\[trainee ann\] the server's session log is losing records: (\d+) so far while this session "
-                         r"runs \(" + why + r"\); this session will be incomplete in the review: tell your instructor\n",
+        said = re.search(r"\[trainee ann\] the server's session log is losing this session's records: (\d+) so far "
+                         r"\(" + why + r"\); this session will be incomplete in the review: tell your instructor\n",
                          procs.log(ann))
         check(said is not None and int(said.group(1)) > 0,
               "  and her station said so, --quiet as it is: %r" % (said and said.group(0)))
-        in_all = re.search(r"\[trainee ann\] the server's session log lost (\d+) records while this session ran \(" + why +
+        in_all = re.search(r"\[trainee ann\] the server's session log lost (\d+) of this session's records \(" + why +
                            r"\): it will be incomplete in the review\n", procs.log(ann))
         check(in_all is not None and said is not None and int(in_all.group(1)) >= int(said.group(1)),
               "  and as it ended, the loss in all (>= the first said): %r" % (in_all and in_all.group(0)))
         page_all = ann_page.wait_for("(function(){const e=document.getElementById('log');"
                                      "return e && !e.hidden && e.textContent.indexOf(' lost ') >= 0 ? e.textContent : null;})()",
                                      10)
-        m = page_all and re.fullmatch(r"The server's session log lost (\d+) records while this session ran \(" + why +
+        m = page_all and re.fullmatch(r"The server's session log lost (\d+) of this session's records \(" + why +
                                       r"\): it will be incomplete in the review\.", page_all)
         check(m is not None and said is not None and int(m.group(1)) >= int(said.group(1)),
               "  and her page, the session over, says the loss in all as her station does: %r" % page_all)
@@ -152,8 +153,8 @@ def run(build, source, out):
         # 68), and once the padding is freed, that it writes again, and as it ends the loss in all
         cid = procs.trainee("cid", 1, ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1",
                                        "--t-on", "0", "--t-off", "60", "--duration", "60"])
-        cid_losing = procs.wait_log(cid, r"\[trainee cid\] the server's session log is losing records: (\d+) so far while "
-                                         r"this session runs \(" + why + r"\); this session will be incomplete in the "
+        cid_losing = procs.wait_log(cid, r"\[trainee cid\] the server's session log is losing this session's records: "
+                                         r"(\d+) so far \(" + why + r"\); this session will be incomplete in the "
                                          r"review: tell your instructor\n", 15)
 
         # the padding freed (a prune's part), another trainee: the log writes again, and says so
@@ -176,16 +177,31 @@ def run(build, source, out):
               "the padding freed, bea's session is written: the dashboard says 'writing again' with the count the "
               "server's own log gives (%s): %r" % (said and said.group(0), again and again["text"]))
         print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-again.png")))
-        cid_again = procs.wait_log(cid, r"\[trainee cid\] the server's session log is writing again; (\d+) records were "
-                                        r"lost while this session ran: it will be incomplete in the review\n", 20)
+        cid_again = procs.wait_log(cid, r"\[trainee cid\] the server's session log is writing again; (\d+) of this "
+                                        r"session's records were lost: it will be incomplete in the review\n", 20)
         procs.stop(cid)
-        cid_all = re.search(r"\[trainee cid\] the server's session log lost (\d+) records while this session ran \(" + why +
+        cid_all = re.search(r"\[trainee cid\] the server's session log lost (\d+) of this session's records \(" + why +
                             r"\): it will be incomplete in the review\n", procs.log(cid))
         check(int(cid_again.group(1)) >= int(cid_losing.group(1)) > 0 and cid_all is not None and
               int(cid_all.group(1)) == int(cid_again.group(1)),
               "cid's station, practising freely on the full log, said it was losing records (%s), then, the padding "
               "freed, that it writes again (%s), and as it ended the same loss in all (%s)"
               % (cid_losing.group(1), cid_again.group(1), cid_all and cid_all.group(1)))
+        # what cid was told is his own session's loss (palp_session_log, session 69), the count the review shows for
+        # his session (its row, made once the log took his records again), not the server's: ann's before him too
+        row = None
+        for _ in range(50):
+            h = sqlite3.connect(db, timeout=10)
+            got = h.execute("SELECT records_shed + records_failed FROM session WHERE trainee = 'cid'").fetchall()
+            h.close()
+            row = got[0][0] if len(got) == 1 else None
+            if cid_all is not None and row == int(cid_all.group(1)):
+                break
+            time.sleep(0.1)
+        server_lost = int(again["log"][1]) + int(again["log"][2]) if again else -1
+        check(cid_all is not None and row == int(cid_all.group(1)) and row < server_lost,
+              "  his loss in all is his session's own, as the log's row for it counts: station %s, row %s, of the "
+              "server's %d" % (cid_all and cid_all.group(1), row, server_lost))
     finally:
         if browser:
             browser.close()
