@@ -226,6 +226,15 @@ static void child_bob(void) {
             bob.debrief_score_r > 0,
         "bob's score reader in %s is refused (%s), and a score writer in his own (%s); he reads his own", a.partition,
         dds_strretcode(sr), dds_strretcode(sw_own));
+  /* session 69: nor read her session's own log losses (palp_session_log), nor write them into his; he
+   * reads his own */
+  dds_entity_t lr = palp_dds_create_reader(sub, bob.topic[PALP_TOPIC_SESSION_LOG], PALP_TOPIC_SESSION_LOG);
+  dds_entity_t lw_own = palp_dds_create_writer(palp_dds_session_publisher(bob.pp, bob.partition),
+                                               bob.topic[PALP_TOPIC_SESSION_LOG], PALP_TOPIC_SESSION_LOG);
+  CHECK(lr == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && lw_own == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY &&
+            bob.session_log_r > 0,
+        "bob's session-log reader in %s is refused (%s), and a session-log writer in his own (%s); he reads his own",
+        a.partition, dds_strretcode(lr), dds_strretcode(lw_own));
   /* nor answer findings as the server, nor publish an exercise */
   dds_entity_t own_pub = palp_dds_session_publisher(bob.pp, bob.partition);
   dds_entity_t fsw = palp_dds_create_writer(own_pub, bob.topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
