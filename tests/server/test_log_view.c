@@ -129,6 +129,9 @@ static void test_own(void) {
   CHECK(lvl == 1 && v.shed == 3 && v.failed == 37,
         "3 of hers shed after: losing again (%d; %llu shed, %llu failed)", lvl, (unsigned long long)v.shed,
         (unsigned long long)v.failed);
+  palp_dds_log_view_session(&v, 0, 5, 10 * S); /* counts that fall cannot be her server's */
+  CHECK(v.shed == 3 && v.failed == 37, "a sample whose counts fall is ignored: what was lost stays (%llu, %llu)",
+        (unsigned long long)v.shed, (unsigned long long)v.failed);
   char sum[300];
   CHECK(palp_dds_log_view_summary(&v, sum, sizeof sum) == 1 &&
             !strcmp(sum, "the server's session log lost 40 of this session's records (the server was too busy to write "
