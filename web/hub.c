@@ -449,6 +449,11 @@ static void build_sessions(palp_web_hub *h) {
     } else {
       cJSON_AddNullToObject(o, "time_left");
     }
+    /* The records the session log lost while the session ran (session 69): its own where its server
+     * says them (palp_session_log, log_own), else the whole server's since the bridge saw it listed;
+     * the dashboard's card shows them, so the instructor knows which reviews will be incomplete. */
+    cJSON_AddNumberToObject(o, "log_lost", (double)(s->log.shed + s->log.failed));
+    cJSON_AddBoolToObject(o, "log_own", s->log.own);
     /* The session log's losses while it runs, in her station's words (palp_dds_log_view_words); "": none. */
     char log_words[320];
     palp_dds_log_view_words(&s->log, 1, log_words, sizeof log_words);

@@ -179,6 +179,18 @@ def run(build, source, out):
         print("screenshot:", page.screenshot(os.path.join(out, "dashboard-log-again.png")))
         cid_again = procs.wait_log(cid, r"\[trainee cid\] the server's session log is writing again; (\d+) of this "
                                         r"session's records were lost: it will be incomplete in the review\n", 20)
+        # the dashboard's card for his session says the same count, his own (session 69): which reviews will be
+        # incomplete, not only that the server's log loses records
+        card = page.wait_for(
+            "(function(){const c=Array.from(document.querySelectorAll('.card')).find(function(e){"
+            "return e.querySelector('h3 span').textContent.indexOf('cid, session ') === 0;});"
+            "if(!c) return null; const r=Array.from(c.querySelectorAll('tr')).find(function(t){"
+            "return t.cells[0].textContent==='session log';});"
+            "return r && r.cells[1].textContent !== 'nothing lost' ? {text: r.cells[1].textContent, "
+            "cls: r.cells[1].className} : null;})()", 5)
+        check(card is not None and card["text"] == "%s of its records lost" % cid_again.group(1) and card["cls"] == "warn",
+              "the dashboard's card for cid's session says his own count, in red: %r (his station: %s)"
+              % (card, cid_again.group(1)))
         procs.stop(cid)
         cid_all = re.search(r"\[trainee cid\] the server's session log lost (\d+) of this session's records \(" + why +
                             r"\): it will be incomplete in the review\n", procs.log(cid))

@@ -213,6 +213,13 @@
         s.late_haptic === null ? "n/a: no haptic local models in this session (force-driven input has none)"
           : "local models published more than 2 physics periods after the previous frame's (server clock); " +
             "lost: frames the bridge never received"],
+      /* session 69: which sessions' reviews will be incomplete, not only that the server's log loses records */
+      ["session log", !s.log_lost ? "nothing lost" : s.log_own ? s.log_lost + " of its records lost"
+        : PALP.plural(s.log_lost, "record", "records") + " lost by the server while it ran", s.log_lost > 0,
+        s.log_own || !s.log_lost ? "this session's own records the server's session log lost while it ran (palp_session_log): " +
+          "its review will be incomplete by that many (palp-review show counts the same)"
+          : "the records the server's session log lost while this session ran, all sessions' (its server says no " +
+            "session's own: older server or permissions)"],
       ["colour scale", "0-" + c.scaleMm + " mm", false, "the top view's full colour scale: grows with the session's deepest displacement, never shrinks"],
       ["frames/s", fmt(c.fps, 1)], ["open", fmt(s.duration, 0) + " s"]];
     c.table.textContent = "";
