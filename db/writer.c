@@ -83,7 +83,7 @@ typedef struct rec {
 /* Producer-side view of a session: guarded by the mutex. */
 typedef struct psess {
   int64_t shed;
-  int64_t failed; /* the worker's wsess.failed, copied under the mutex for palp_db_writer_session_losses */
+  int64_t failed; /* counted by the worker (count_failed), read by any thread (palp_db_writer_session_losses) */
   uint8_t open;
 } psess;
 
@@ -92,7 +92,6 @@ typedef struct wsess {
   int64_t rowid; /* 0 until the session row exists */
   char *blob;    /* the begin record's strings, kept until the row is durable and ended */
   palp_db_session_def def;
-  int64_t failed;
   int64_t shed_synced; /* records_shed last written */
   int64_t failed_synced;
   int ended;
@@ -701,11 +700,13 @@ static void bind_vec(sqlite3_stmt *st, int i, palp_vec3 v) {
   sqlite3_bind_double(st, i + 2, v.z);
 }
 
-static int64_t shed_of(palp_db_writer *w, palp_db_session s) {
+/* A session's losses so far (the producer's sheds, the worker's failures), under the mutex. */
+static void losses_of(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed) {
   pthread_mutex_lock(&w->mu);
-  int64_t n = (s > 0 && s < w->ps_cap) ? w->ps[s].shed : 0;
+  const int ok = s > 0 && s < w->ps_cap;
+  *shed = ok ? w->ps[s].shed : 0;
+  *failed = ok ? w->ps[s].failed : 0;
   pthread_mutex_unlock(&w->mu);
-  return n;
 }
 
 /* Writes one record inside the open transaction. Returns an SQLite code. */
@@ -735,8 +736,10 @@ static int write_rec(palp_db_writer *w, rec *r) {
     sqlite3_bind_double(st, 2, r->u.end.end_unix_s);
     bind_text(st, 3, palp_db_end_reason_name(r->u.end.reason));
     if (r->u.end.detail) bind_text(st, 4, r->u.end.detail);
-    sqlite3_bind_int64(st, 5, shed_of(w, r->s));
-    sqlite3_bind_int64(st, 6, ws->failed);
+    int64_t shed, failed;
+    losses_of(w, r->s, &shed, &failed);
+    sqlite3_bind_int64(st, 5, shed);
+    sqlite3_bind_int64(st, 6, failed);
     ws->ended = 1;
     return step_reset(st);
   }
@@ -920,8 +923,9 @@ static void write_session_counts(palp_db_writer *w) {
   int rc = SQLITE_DONE, open = 0; /* the transaction begins at the first row that needs it */
   for (int s = 1; rc == SQLITE_DONE && s < w->ws_cap; s++) {
     wsess *ws = &w->ws[s];
-    const int64_t sh = ws->rowid ? shed_of(w, s) : 0;
-    if (!ws->rowid || (sh == ws->shed_synced && ws->failed == ws->failed_synced)) continue;
+    int64_t sh = 0, fl = 0;
+    if (ws->rowid) losses_of(w, s, &sh, &fl);
+    if (!ws->rowid || (sh == ws->shed_synced && fl == ws->failed_synced)) continue;
     if (!open) {
       if (sqlite3_exec(w->db, "BEGIN", NULL, NULL, NULL) != SQLITE_OK) {
         rc = SQLITE_ERROR;
@@ -932,10 +936,10 @@ static void write_session_counts(palp_db_writer *w) {
     sqlite3_stmt *st = w->st[ST_COUNTS];
     sqlite3_bind_int64(st, 1, ws->rowid);
     sqlite3_bind_int64(st, 2, sh);
-    sqlite3_bind_int64(st, 3, ws->failed);
+    sqlite3_bind_int64(st, 3, fl);
     rc = step_reset(st);
     ws->shed_synced = sh; /* taken back below if the transaction does not commit */
-    ws->failed_synced = ws->failed;
+    ws->failed_synced = fl;
   }
   if (rc == SQLITE_DONE && (!open || sqlite3_exec(w->db, "COMMIT", NULL, NULL, NULL) == SQLITE_OK)) {
     w->counts_shed = shed;
@@ -1029,13 +1033,16 @@ static void retire(palp_db_writer *w, int n, int64_t written, int committed,
   pthread_mutex_unlock(&w->mu);
 }
 
-/* The batch's failed records (every one, or those refused[i] marks) counted per session where other
- * threads may read them (palp_db_writer_session_losses). */
-static void count_failed(palp_db_writer *w, int tail, int n, const uint8_t *refused) {
+/* The batch's failed records (every one, or those refused[i] marks) counted per kind (by_kind, for
+ * retire) and per session, where any thread may read them (palp_db_writer_session_losses) and the
+ * session's row gets them (write_session_counts). */
+static void count_failed(palp_db_writer *w, int tail, int n, const uint8_t *refused, int64_t *by_kind) {
   pthread_mutex_lock(&w->mu);
   for (int i = 0; i < n; i++) {
     const rec *r = &w->ring[(tail + i) % w->cap];
-    if ((!refused || refused[i]) && r->s > 0 && r->s < w->ps_cap) w->ps[r->s].failed++;
+    if (refused && !refused[i]) continue;
+    by_kind[r->kind]++;
+    if (r->s > 0 && r->s < w->ps_cap) w->ps[r->s].failed++;
   }
   pthread_mutex_unlock(&w->mu);
 }
@@ -1075,24 +1082,11 @@ static void *worker(void *arg) {
       int64_t written = n;
       if (rc != SQLITE_OK) { /* dropped after retries: count every record, per kind and session */
         written = 0;
-        for (int i = 0; i < n; i++) {
-          rec *r = &w->ring[(tail + i) % w->cap];
-          failed_by_kind[r->kind]++;
-          wsess *ws = r->s > 0 ? wsess_get(w, r->s) : NULL;
-          if (ws) ws->failed++;
-        }
+        count_failed(w, tail, n, NULL, failed_by_kind);
         say_dropped(w, n, 0);
-        count_failed(w, tail, n, NULL);
       } else {
         written = n - bad;
-        for (int i = 0; bad && i < n; i++) {
-          rec *r = &w->ring[(tail + i) % w->cap];
-          if (!refused[i]) continue;
-          failed_by_kind[r->kind]++;
-          wsess *ws = r->s > 0 ? wsess_get(w, r->s) : NULL;
-          if (ws) ws->failed++;
-        }
-        if (bad) count_failed(w, tail, n, refused);
+        if (bad) count_failed(w, tail, n, refused, failed_by_kind);
         pthread_mutex_lock(&w->mu);
         w->st_.in_error = 0;
         pthread_mutex_unlock(&w->mu);
