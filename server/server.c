@@ -913,11 +913,17 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   /* Detached: the stats are final and owned by this thread now. */
   palp_srv_session_summary sum;
   palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
+  publish_session_log(srv, s); /* its last count, before the CLOSED state its station ends on */
   publish_state(srv, s, 1, reason, &s->stats);
   remember_closed(srv, &sum, 0, s->trainee_request_seq);
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
   palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
+  if (s->session_log_shed + s->session_log_failed > 0) /* its own records (session 69); more may fail still queued */
+    palp_log_warn(srv->log, "session %u: the session log lost %llu of its records while it ran (%llu shed, %llu failed): "
+                            "its review will be incomplete",
+                  s->id, (unsigned long long)(s->session_log_shed + s->session_log_failed),
+                  (unsigned long long)s->session_log_shed, (unsigned long long)s->session_log_failed);
   if (s->deformations_sent > 0)
     palp_log_info(srv->log, "session %u: %llu deformation frames sent to its displays", s->id,
                   (unsigned long long)s->deformations_sent);

@@ -137,7 +137,8 @@ int main(int argc, char **argv) {
   snprintf(cap_text, sizeof cap_text, "of its cap of %.2f MB (session_log_max_mb)", (double)cap * 1e-6);
   CHECK(log_has(log_path, cap_text, line, sizeof line),
         "the server's log says the cap as it opens: \"%s\"", line);
-  const palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0};
+  /* one log for the server and its session log, as palp-server has */
+  const palp_srv_def def = {.cfg = cfg, .events = palp_srv_db_log_events(dbl), .verbose = 0, .log = &plog};
   test_server ts;
   test_server_start_def(&ts, &def);
 
@@ -272,6 +273,7 @@ int main(int argc, char **argv) {
     palp_cli_station_session_closed(&g, NULL, 0);
     test_sleep(0.1);
   }
+  const uint32_t gus_session = g.session_id;
   palp_cli_station_leave(&g);
   test_sleep(0.5);
   /* What gus's station says as his session ends is his own loss (session 69): no more than his
@@ -296,6 +298,19 @@ int main(int argc, char **argv) {
         "gus's station, his session over, says his own loss: %lld (first said %lld) <= his session's row in the log, "
         "%lld, of the server's %lld: \"%s\"",
         gus_all, gus_lost, gus_row, server_lost, gus_sum);
+  /* ... and the server's log says it as his session closes, in the same count: between what his station
+   * last heard and what his row holds */
+  char closed_line[600] = "", needle[96];
+  long long closed_lost = -1;
+  snprintf(needle, sizeof needle, "session %u: the session log lost ", gus_session);
+  if (log_has(log_path, needle, closed_line, sizeof closed_line)) {
+    const char *at = strstr(closed_line, needle);
+    if (at) sscanf(at + strlen(needle), "%lld", &closed_lost);
+  }
+  CHECK(closed_lost >= gus_all && closed_lost <= gus_row && strstr(closed_line, "of its records while it ran (") &&
+            strstr(closed_line, "its review will be incomplete"),
+        "  and the server's log, as his session closed: %lld (%lld .. %lld): \"%s\"", closed_lost, gus_all, gus_row,
+        closed_line);
   char cmd[2400], out[1024] = "";
   snprintf(cmd, sizeof cmd, "'%s' --db '%s' prune --older-than 0 2>&1", argv[1], db_path);
   FILE *p = popen(cmd, "r");
