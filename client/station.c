@@ -567,13 +567,14 @@ int palp_cli_station_leave(palp_cli_station *st) {
 /* ---- the server's session log, as this session sees it (session 68) ------------------------------ */
 
 /* Takes the newest statuses; only the one whose server lists this session counts (session ids carry
- * their server's number, so one server's). */
+ * their server's number, so one server's); then the session's own losses (session 69), each read
+ * without the other where only one is there. */
 static void watch_log(palp_cli_station *st, int64_t now) {
-  if (st->status_r <= 0 || !st->session_id) return;
+  if (!st->session_id) return;
   void *ptr[4] = {NULL};
   dds_sample_info_t info[4];
   int n;
-  while ((n = dds_take(st->status_r, ptr, info, 4, 4)) > 0) {
+  while (st->status_r > 0 && (n = dds_take(st->status_r, ptr, info, 4, 4)) > 0) {
     for (int i = 0; i < n; i++) {
       const palp_ServerStatus *m = ptr[i];
       if (!info[i].valid_data) continue;
