@@ -56,6 +56,7 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
     /* palp_session_exercise and palp_session_score hold an exercise's answers: for instructors'
      * tools only. */
     if (k == PALP_TOPIC_SESSION_EXERCISE || k == PALP_TOPIC_SESSION_SCORE) continue;
+    if (k == PALP_TOPIC_SESSION_CLOSED) continue; /* the instructors' dashboards' (session 69) */
     st->topic[k] = palp_dds_create_topic(st->pp, (palp_dds_topic_kind)k);
     /* palp_debrief came after the classroom PKIs of 2026-12-04 and before: an identity whose
      * permissions predate it still palpates, and is told at an exercise's end why it is not

@@ -24,7 +24,7 @@ static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_server_identity", "palp_station_request",
     "palp_exercise",      "palp_finding",         "palp_finding_status",
     "palp_debrief",       "palp_session_exercise", "palp_session_score",
-    "palp_debrief_score", "palp_session_log"};
+    "palp_debrief_score", "palp_session_log", "palp_session_closed"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -52,6 +52,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_SESSION_SCORE: return &palp_SessionScore_desc;
   case PALP_TOPIC_DEBRIEF_SCORE: return &palp_SessionScore_desc; /* the same score, in the session's partition */
   case PALP_TOPIC_SESSION_LOG: return &palp_SessionLog_desc;
+  case PALP_TOPIC_SESSION_CLOSED: return &palp_SessionClosed_desc;
   default: return NULL;
   }
 }
@@ -70,6 +71,7 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_SESSION_SCORE:
   case PALP_TOPIC_DEBRIEF_SCORE:
   case PALP_TOPIC_SESSION_LOG:
+  case PALP_TOPIC_SESSION_CLOSED:
     /* State that a late joiner must see: the last value per key, kept by the writer. */
     dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);

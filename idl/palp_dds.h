@@ -40,6 +40,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_SESSION_SCORE,   /* added 2026-12-05 (session 63): a closed session's automatic score, for instructors */
   PALP_TOPIC_DEBRIEF_SCORE,   /* added 2026-12-05 (session 64): that score, told to the trainee of a practice exercise */
   PALP_TOPIC_SESSION_LOG,     /* added 2026-12-06 (session 69): the records of a session its server's log lost */
+  PALP_TOPIC_SESSION_CLOSED,  /* added 2026-12-06 (session 69): who a closed session was, for instructors */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 

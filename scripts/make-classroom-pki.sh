@@ -45,7 +45,7 @@ T_DEFORMATION=palp_deformation T_STATUS=palp_server_status
 T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard T_IDENTITY=palp_server_identity
 T_EXERCISE=palp_exercise T_FINDING=palp_finding T_FINDING_STATUS=palp_finding_status
 T_DEBRIEF=palp_debrief T_SESSION_EXERCISE=palp_session_exercise T_SESSION_SCORE=palp_session_score
-T_DEBRIEF_SCORE=palp_debrief_score T_SESSION_LOG=palp_session_log
+T_DEBRIEF_SCORE=palp_debrief_score T_SESSION_LOG=palp_session_log T_SESSION_CLOSED=palp_session_closed
 # palp_station_request (other vendors, docs/interop.md) is not offered by a secured server.
 
 check_name() {
@@ -110,7 +110,9 @@ GOVERNANCE_VERSION=2
 # exercise's score, after a debrief that told the lesions).
 # 6 (2026-12-06, session 69): palp_session_log, server -> the trainee's session (the records of her
 # session the server's log lost; without it her station counts the whole server's).
-PERMISSIONS_VERSION=6
+# 7 (2026-12-06, session 69): palp_session_closed, server -> instructors (who each closed session was,
+# for a dashboard begun after it).
+PERMISSIONS_VERSION=7
 
 topic_rule() { # topic expression, metadata protection kind
   cat <<EOF
@@ -207,7 +209,7 @@ EOF
     server)
       # Only the server publishes the catalogue, replies, states, status and every session's
       # feedback and deformation; it reads requests from every identity's own partition.
-      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE $T_SESSION_EXERCISE $T_SESSION_SCORE" '""'
+      rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE $T_SESSION_EXERCISE $T_SESSION_SCORE $T_SESSION_CLOSED" '""'
       rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS $T_DEBRIEF $T_DEBRIEF_SCORE $T_SESSION_LOG" "palp/s/*"
       rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
       rule subscribe "$T_CONTACT $T_FINDING" "palp/s/*"

@@ -103,6 +103,12 @@ struct palp_srv {
   dds_entity_t session_score_w;
   uint32_t scored[SCORES_KEPT];
   int scored_next;
+  /* palp_session_closed (session 69): who each closed session was, for a dashboard begun after it
+   * (every server, secured or not: the names are palp_session_state's); the newest SCORES_KEPT kept,
+   * as the scores are. 0: not written (permissions that predate it). */
+  dds_entity_t session_closed_w;
+  uint32_t closed_sent[SCORES_KEPT];
+  int closed_sent_next;
   /* palp_debrief_score (session 64): practice sessions (debrief DEBRIEF_LESIONS) waiting for their
    * score, and the publishers (one per session partition) that told the last TOLD_KEPT: the oldest
    * is deleted as a new one is made, so a station has had 16 scores' time to take hers. */
@@ -305,6 +311,7 @@ static const char *optional_topic_loss(palp_dds_topic_kind k) {
   case PALP_TOPIC_DEBRIEF_SCORE: return "no scores told to the trainees of practice exercises";
   case PALP_TOPIC_SESSION_LOG:
     return "no session told its own records the session log lost (stations count the server's instead)";
+  case PALP_TOPIC_SESSION_CLOSED: return "no names for the ended sessions of a dashboard begun after them";
   default: return NULL;
   }
 }
@@ -358,6 +365,31 @@ static dds_entity_t answers_writer(palp_srv *srv, palp_dds_topic_kind k) {
   palp_log_warn(srv->log, "%s: cannot write %s: %s", optional_topic_loss(k), palp_dds_topic_name(k),
                 dds_strretcode(w));
   return 0;
+}
+
+/* Who a closed session was, for a dashboard whose bridge began after it (palp_session_closed, session
+ * 69): its score (palp_session_score) names no trainee. Keep-last 1 per session, transient-local: the
+ * newest SCORES_KEPT kept, the oldest unregistered (bounded memory in the writer), as the scores. */
+static void publish_session_closed(palp_srv *srv, const palp_srv_session *s, double duration, const char *reason) {
+  if (srv->session_closed_w <= 0) return;
+  palp_SessionClosed m;
+  memset(&m, 0, sizeof m);
+  m.session_id = s->id;
+  m.phantom_id = s->phantom->cfg.id;
+  snprintf(m.trainee_name, sizeof m.trainee_name, "%s", s->trainee_name);
+  snprintf(m.trainee_station, sizeof m.trainee_station, "%s", s->trainee_station);
+  m.duration = duration;
+  snprintf(m.reason, sizeof m.reason, "%s", reason ? reason : "");
+  if (dds_write(srv->session_closed_w, &m) < 0) return; /* the dashboard then shows it without a name */
+  uint32_t *slot = &srv->closed_sent[srv->closed_sent_next];
+  if (*slot) {
+    palp_SessionClosed key;
+    memset(&key, 0, sizeof key);
+    key.session_id = *slot;
+    dds_unregister_instance(srv->session_closed_w, &key);
+  }
+  *slot = s->id;
+  srv->closed_sent_next = (srv->closed_sent_next + 1) % SCORES_KEPT;
 }
 
 /* A closed exercise session's score, as the session log graded it (events.h take_score), as the wire
@@ -915,6 +947,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   palp_srv_session_summary_fill(s, reason, palp_dds_now_ns(), &sum);
   publish_session_log(srv, s); /* its last count, before the CLOSED state its station ends on */
   publish_state(srv, s, 1, reason, &s->stats);
+  publish_session_closed(srv, s, sum.duration, reason);
   remember_closed(srv, &sum, 0, s->trainee_request_seq);
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
@@ -1752,6 +1785,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
                       (srv->cfg.session_exercise == PALP_SRV_SESSION_EXERCISE_SECURED && secured(srv));
   srv->session_exercise_w = answers ? answers_writer(srv, PALP_TOPIC_SESSION_EXERCISE) : 0;
   srv->session_score_w = answers ? answers_writer(srv, PALP_TOPIC_SESSION_SCORE) : 0; /* session 63 */
+  srv->session_closed_w = answers_writer(srv, PALP_TOPIC_SESSION_CLOSED);             /* session 69 */
   if (srv->cfg.exercise_count > 0 && srv->session_exercise_w <= 0)
     palp_log_info(srv->log, "exercise sessions' lesions stay on this server (%s): a palp-recorder's log cannot "
                             "assess them; this server's own log can",

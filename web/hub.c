@@ -264,7 +264,16 @@ struct palp_web_hub {
   item ended_answers[DEBRIEFS]; /* the last answers of the exercise sessions that ended lately */
   int ended_answers_next;
   item scores[DEBRIEFS];        /* the scores of the exercise sessions the server graded lately */
+  uint32_t scores_sid[DEBRIEFS];
   int scores_next;
+  /* palp_session_closed (session 69): who the sessions that closed lately were, as the server said
+   * it, so that a score of a session this bridge never saw open names its trainee */
+  dds_entity_t closed_r; /* 0: none (a server or permissions from before it) */
+  struct {
+    uint32_t sid; /* 0: free */
+    char trainee[64];
+  } closed_names[64];
+  int closed_names_next;
   /* the scores the server told trainees lately (palp_debrief_score, session 64: practice sessions
    * alone, the server decides), each for its session's bound page */
   item told_scores[DEBRIEFS];
@@ -1137,6 +1146,8 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
   const char *trainee = NULL;
   for (int k = 0; k < DEBRIEFS && !trainee; k++)
     if (h->closed[k].sid == m->session_id) trainee = h->closed[k].trainee;
+  for (int k = 0; k < 64 && !trainee; k++) /* a session this bridge did not see close (session 69) */
+    if (h->closed_names[k].sid == m->session_id) trainee = h->closed_names[k].trainee;
   if (trainee) cJSON_AddStringToObject(j, "trainee", trainee);
   else cJSON_AddNullToObject(j, "trainee");
   copy_str(text, sizeof text, m->exercise_name);
@@ -1198,7 +1209,46 @@ static void keep_score(palp_web_hub *h, char *msg, item *ring, uint32_t *sids, i
  * session 63): kept beside the ended answers for the dashboard's list of ended sessions, where the
  * instructor reads it with the session's id in the log (palp-review show takes it). */
 static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
-  keep_score(h, score_json(h, m), h->scores, NULL, &h->scores_next, m->session_id);
+  keep_score(h, score_json(h, m), h->scores, h->scores_sid, &h->scores_next, m->session_id);
+}
+
+/* Who a closed session was (palp_session_closed, session 69): kept for the scores to come, and given
+ * to a kept score that came first without a name (a bridge begun after the close reads both topics'
+ * histories in no set order): that score's message is sent again, named. */
+static void on_session_closed(palp_web_hub *h, const palp_SessionClosed *m) {
+  if (!m->session_id) {
+    h->stats.dropped++;
+    return;
+  }
+  int k = -1;
+  for (int i = 0; i < 64 && k < 0; i++)
+    if (h->closed_names[i].sid == m->session_id) k = i;
+  if (k < 0) {
+    k = h->closed_names_next;
+    h->closed_names_next = (h->closed_names_next + 1) % 64;
+  }
+  h->closed_names[k].sid = m->session_id;
+  copy_str(h->closed_names[k].trainee, sizeof h->closed_names[k].trainee, m->trainee_name);
+  for (int i = 0; i < DEBRIEFS; i++) {
+    if (h->scores_sid[i] != m->session_id || !h->scores[i].buf) continue;
+    pthread_mutex_lock(&h->mu);
+    cJSON *j = cJSON_ParseWithLength((const char *)h->scores[i].buf, h->scores[i].len);
+    pthread_mutex_unlock(&h->mu);
+    cJSON *t = j ? cJSON_GetObjectItemCaseSensitive(j, "trainee") : NULL;
+    char *named = NULL;
+    if (t && cJSON_IsNull(t)) {
+      cJSON_ReplaceItemInObjectCaseSensitive(j, "trainee", cJSON_CreateString(h->closed_names[k].trainee));
+      named = cJSON_PrintUnformatted(j);
+    }
+    cJSON_Delete(j);
+    if (!named) continue;
+    pthread_mutex_lock(&h->mu); /* in place, a new version: a page replaces the row it has */
+    unsigned char *old = h->scores[i].buf;
+    h->scores[i] = (item){.buf = (unsigned char *)named, .len = strlen(named), .ver = ++h->next_ver};
+    pthread_mutex_unlock(&h->mu);
+    free(old);
+    if (h->wake) h->wake(h->wake_ctx);
+  }
 }
 
 /* The same score as the server told it to the trainee (palp_debrief_score, session 64), which it does
@@ -1816,6 +1866,7 @@ static void *hub_main(void *arg) {
       drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
       drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
       drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
+      drain(h, h->closed_r, (sample_fn)on_session_closed, NULL, &h->stats.closed_sessions); /* before the scores */
       if (h->score_r > 0) drain(h, h->score_r, (sample_fn)on_score, NULL, &h->stats.scores);
       drain(h, h->debrief_score_r, (sample_fn)on_debrief_score, NULL, &h->stats.told_scores); /* after the debriefs */
       drain(h, h->session_log_r, (sample_fn)on_session_log, NULL, &h->stats.session_logs);
@@ -1962,6 +2013,11 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
                          ? make_reader(h->sub, h->topic[PALP_TOPIC_SESSION_LOG], PALP_TOPIC_SESSION_LOG)
                          : 0;
   if (h->session_log_r < 0) h->session_log_r = 0;
+  /* session 69: a bridge whose permissions predate it shows the ended sessions it did not see unnamed */
+  h->closed_r = h->topic[PALP_TOPIC_SESSION_CLOSED] > 0
+                    ? make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_CLOSED], PALP_TOPIC_SESSION_CLOSED)
+                    : 0;
+  if (h->closed_r < 0) h->closed_r = 0;
   h->exercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   if (def->answers) {
     /* the answers (instructors only: a trainee's permissions cannot even create the topic) */

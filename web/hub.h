@@ -115,6 +115,7 @@ typedef struct palp_web_hub_stats {
   uint64_t scores;                                 /* palp_session_score samples taken (session 63) */
   uint64_t told_scores;                            /* palp_debrief_score samples taken (session 64) */
   uint64_t session_logs;                           /* palp_session_log samples taken (session 69) */
+  uint64_t closed_sessions;                        /* palp_session_closed samples taken (session 69) */
   uint64_t findings_unanswered;                    /* findings whose answer the bridge did not see */
   uint64_t findings_written, findings_refused;     /* browser finding requests */
   uint64_t late_haptic, lost_haptic;               /* local models late / missing, all sessions */

@@ -136,7 +136,8 @@ check "a station whose permissions predate palp_debrief still runs its session (
   "[ $rc -eq 0 ] && ! grep -q palp_debrief '$out/oldperm/trainee/alice.permissions.xml' && grep -q 'session [0-9]*: .* contact samples sent' '$out/oldperm.log'"
 # ... and a server on such permissions serves on, without debriefs, and says so (domain 132, 2 s)
 sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d; /<topic>palp_debrief_score<\/topic>/d' \
-  -e '/<topic>palp_session_exercise<\/topic>/d; /<topic>palp_session_log<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
+  -e '/<topic>palp_session_exercise<\/topic>/d; /<topic>palp_session_log<\/topic>/d; /<topic>palp_session_closed<\/topic>/d' \
+  "$out/oldperm/server/server.permissions.xml"
 openssl smime -sign -in "$out/oldperm/server/server.permissions.xml" -text \
   -out "$out/oldperm/server/server.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
 # It hosts the shipped exercises and logs: alice (her permissions old too) takes "easy" by position
@@ -157,6 +158,8 @@ check "  ... nor send its exercises to recorders, and says that their lesions st
   "grep -q 'no exercises for recorders: the server.s permissions do not allow topic palp_session_exercise' '$out/oldperm-server.log' && grep -q 'lesions stay on this server (the permissions predate palp_session_exercise)' '$out/oldperm-server.log'"
 check "  ... nor tell the trainees of practice exercises their scores (session 64), and says so" \
   "grep -q 'no scores told to the trainees of practice exercises: the server.s permissions do not allow topic palp_debrief_score' '$out/oldperm-server.log'"
+check "  ... nor name the ended sessions of a dashboard begun after them (session 69), and says so" \
+  "grep -q 'no names for the ended sessions of a dashboard begun after them: the server.s permissions do not allow topic palp_session_closed' '$out/oldperm-server.log'"
 check "  ... nor tell each session its own records the log lost (session 69), and says so" \
   "grep -q 'no session told its own records the session log lost (stations count the server.s instead): the server.s permissions do not allow topic palp_session_log' '$out/oldperm-server.log'"
 check "  alice's station, on old permissions too, says at her exercise's end why she had no debrief" \
@@ -166,8 +169,8 @@ want="not sent (level lesions): the server's permissions do not allow topic palp
 same=0; [ "$logged" = "$want" ] && same=1
 check "  the session log records that no debrief was sent, and why: $logged" "[ $same = 1 ]"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
-check "init re-issues their permissions alone, with palp_debrief, palp_debrief_score, palp_session_log, palp_session_exercise and palp_session_score, signed by the CA" \
-  "grep -q 'permissions re-issued (version 6) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+check "init re-issues their permissions alone, with palp_debrief, palp_debrief_score, palp_session_log, palp_session_exercise, palp_session_score and palp_session_closed, signed by the CA" \
+  "grep -q 'permissions re-issued (version 7) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_session_closed</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_closed' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 # Re-issued, the server sends each exercise session's exercise, its lesions included, to the
 # instructors alone (session 60): a secured palp-recorder (instructor ines) logs alice's attempt at
 # "easy" with its exercise, her mark and her debrief as the server's own log has them.

@@ -375,7 +375,8 @@ def run(build, source, out):
         # palp-web restarted (session 65): its new dashboard lists the ended sessions from the scores the
         # server keeps for late readers, though their debriefs are gone with their sessions' writers: pat's
         # and sam's rows, sam's (the later session) on top, each with its score as the first bridge showed
-        # it, no trainee name (the score carries none) and where the rest is.
+        # it, its trainee's name (the score carries none: the server's palp_session_closed does, since
+        # session 69; before, "n/a") and where the rest is.
         sam_sc = dash2.wait_for("palpState.dashboard.scores && palpState.dashboard.scores[%d]" % got["session"], 20)
         check(sam_sc is not None and sam_sc["exercise"] == "hard", "sam's session scored: %s" % sam_sc)
         procs.stop(web)
@@ -384,21 +385,22 @@ def run(build, source, out):
         rows = ("Array.from(document.querySelectorAll('#debriefs tr')).map(function(r){return {session: "
                 "Number(r.dataset.session), fromScore: r.dataset.fromScore === '1', cells: Array.from(r.cells).map("
                 "function(c){return c.textContent;})};})")
-        listed = dash3.wait_for("(function(){const r=%s; return r.length >= 2 ? r : null;})()" % rows, 20)
+        listed = dash3.wait_for("(function(){const r=%s; return r.filter(function(x){return x.cells[1] !== 'n/a';})"
+                                ".length >= 2 ? r : null;})()" % rows, 20)
         by = {r["session"]: r for r in (listed or [])}
-        def shows(sc, r):
+        def shows(sc, r, name):
             want_score = ("%.1f %s" % (sc["score"], "pass" if sc["pass"] else "fail") if sc["graded"] else "not scored") + \
                 "palp-review show " + sc["log_uid"]
             found = "found %d of %d lump%s" % (sc["found"], sc["lesions"], "" if sc["lesions"] == 1 else "s") \
                 if sc["graded"] else "n/a"
-            return r is not None and r["fromScore"] and r["cells"][1] == "n/a" and r["cells"][2] == sc["exercise"] and \
+            return r is not None and r["fromScore"] and r["cells"][1] == name and r["cells"][2] == sc["exercise"] and \
                 r["cells"][3] == found and r["cells"][9] == want_score and r["cells"][10] == \
                 "not seen by this bridge: palp-review show %s gives it from the server's log" % sc["log_uid"]
         order = [r["session"] for r in (listed or []) if r["session"] in (told["session"], got["session"])]
-        check(sc is not None and shows(sc, by.get(told["session"])) and shows(sam_sc, by.get(got["session"])) and
+        check(sc is not None and shows(sc, by.get(told["session"]), "pat") and shows(sam_sc, by.get(got["session"]), "sam") and
               order == [got["session"], told["session"]],
               "a restarted palp-web's dashboard lists pat's and sam's ended sessions from the server's scores, "
-              "newest on top: %s" % listed)
+              "named (palp_session_closed), newest on top: %s" % listed)
         # A practice session the server cannot score (session 66): kim presses "easy" by force, so her log
         # holds no finger samples; her page says why no score comes, in her station's words
         # (palp_cli_score_text's "no score: REASON"; this test's stations run --quiet).

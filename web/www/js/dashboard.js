@@ -465,8 +465,10 @@
     tr.dataset.session = m.session;
     tr.dataset.fromScore = "1";
     cell(tr, m.session, "n");
-    cell(tr, m.trainee || "n/a", m.trainee ? "" : "muted",
-      "the session ended before this page's bridge followed it, and the server's score does not name its trainee: " + rest);
+    cell(tr, m.trainee || "n/a", m.trainee ? "" : "muted", m.trainee ?
+      "the session ended before this page's bridge followed it; its trainee as the server named her as it closed" :
+      "the session ended before this page's bridge followed it, and no server said its trainee (an older server or " +
+      "permissions): " + rest);
     cell(tr, m.exercise || "n/a");
     cell(tr, g ? PALP.debriefFound(m) : "n/a", g && m.found < m.lesions ? "warn" : "",
       "lumps the standing marks found, as the server's score counts them");
@@ -523,7 +525,9 @@
     score: function (m) {
       keepEnded(scores, "scores", m);
       const tr = endedRows.get(m.session);
-      if (tr) scoreCell(tr);
+      /* a row made from a score alone is made again from the newer (its trainee named since: session 69) */
+      if (tr && tr.dataset.fromScore === "1") { tr.remove(); endedRows.delete(m.session); scoreRow(m); }
+      else if (tr) scoreCell(tr);
       else if (Number.isFinite(m.session)) scoreRow(m);
     },
     cover: function (m) {
