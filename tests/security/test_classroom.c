@@ -251,6 +251,10 @@ static void child_bob(void) {
   const dds_entity_t ss = palp_dds_create_topic(bob.pp, PALP_TOPIC_SESSION_SCORE);
   CHECK(ss == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.topic[PALP_TOPIC_SESSION_SCORE] == 0,
         "bob may not create topic palp_session_score (%s), and his station does not try", dds_strretcode(ss));
+  /* session 69: nor the instructors' list of who the closed sessions were (nor forge one) */
+  const dds_entity_t sc = palp_dds_create_topic(bob.pp, PALP_TOPIC_SESSION_CLOSED);
+  CHECK(sc == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && bob.topic[PALP_TOPIC_SESSION_CLOSED] == 0,
+        "bob may not create topic palp_session_closed (%s), and his station does not try", dds_strretcode(sc));
   /* nor publish as the server */
   const palp_dds_topic_kind server_topics[] = {PALP_TOPIC_CATALOGUE, PALP_TOPIC_SESSION_REPLY,
                                                 PALP_TOPIC_SESSION_STATE, PALP_TOPIC_SERVER_STATUS};
