@@ -355,9 +355,10 @@ static void release_session_exercise(palp_srv *srv, const palp_srv_session *s) {
   free(key);
 }
 
-/* A writer of a topic that tells the answers (palp_session_exercise, palp_session_score), in the
- * default partition, for the instructors; 0 when the permissions predate the topic (its loss was
- * said as the topics were made) or the writer cannot be made (said here: what is lost). */
+/* A writer of a topic for the instructors alone (palp_session_exercise and palp_session_score, which
+ * tell the answers; palp_session_closed), in the default partition; 0 when the permissions predate the
+ * topic (its loss was said as the topics were made) or the writer cannot be made (said here: what is
+ * lost). */
 static dds_entity_t answers_writer(palp_srv *srv, palp_dds_topic_kind k) {
   if (srv->topic[k] <= 0) return 0;
   const dds_entity_t w = palp_dds_create_writer(srv->pp, srv->topic[k], k);
