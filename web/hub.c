@@ -200,6 +200,8 @@ typedef struct server_status {
 /* The newest debriefs (palp_debrief: what a trainee's marks found, at her exercise session's end),
  * kept for the pages that should see them: a class's sessions may close within the same second. */
 #define DEBRIEFS 16
+/* The names of the sessions that closed lately (palp_session_closed), as many as the server keeps. */
+#define CLOSED_NAMES 64
 /* What a session's debrief message says beside the server's debrief: its trainee, its phantom (the
  * exercise's name), what the bridge saw it cover (session_coverage; cov_rule 0: nothing tracked, 1
  * the force bands, 2 the exercise's), as the station's last lines say it, and how long it ran [s]
@@ -272,7 +274,7 @@ struct palp_web_hub {
   struct {
     uint32_t sid; /* 0: free */
     char trainee[64];
-  } closed_names[64];
+  } closed_names[CLOSED_NAMES];
   int closed_names_next;
   /* the scores the server told trainees lately (palp_debrief_score, session 64: practice sessions
    * alone, the server decides), each for its session's bound page */
@@ -1146,7 +1148,7 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
   const char *trainee = NULL;
   for (int k = 0; k < DEBRIEFS && !trainee; k++)
     if (h->closed[k].sid == m->session_id) trainee = h->closed[k].trainee;
-  for (int k = 0; k < 64 && !trainee; k++) /* a session this bridge did not see close (session 69) */
+  for (int k = 0; k < CLOSED_NAMES && !trainee; k++) /* a session this bridge did not see close (session 69) */
     if (h->closed_names[k].sid == m->session_id) trainee = h->closed_names[k].trainee;
   if (trainee) cJSON_AddStringToObject(j, "trainee", trainee);
   else cJSON_AddNullToObject(j, "trainee");
@@ -1221,11 +1223,11 @@ static void on_session_closed(palp_web_hub *h, const palp_SessionClosed *m) {
     return;
   }
   int k = -1;
-  for (int i = 0; i < 64 && k < 0; i++)
+  for (int i = 0; i < CLOSED_NAMES && k < 0; i++)
     if (h->closed_names[i].sid == m->session_id) k = i;
   if (k < 0) {
     k = h->closed_names_next;
-    h->closed_names_next = (h->closed_names_next + 1) % 64;
+    h->closed_names_next = (h->closed_names_next + 1) % CLOSED_NAMES;
   }
   h->closed_names[k].sid = m->session_id;
   copy_str(h->closed_names[k].trainee, sizeof h->closed_names[k].trainee, m->trainee_name);
