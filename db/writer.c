@@ -542,17 +542,11 @@ int palp_db_log_finding(palp_db_writer *w, palp_db_session s, const palp_db_find
   return r ? 0 : PALP_EFULL;
 }
 
+static int losses_of(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed);
+
 int palp_db_writer_session_losses(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed) {
   *shed = *failed = 0;
-  if (!w) return PALP_EINVAL;
-  pthread_mutex_lock(&w->mu);
-  const int known = s > 0 && s < w->next_session && s < w->ps_cap;
-  if (known) {
-    *shed = w->ps[s].shed;
-    *failed = w->ps[s].failed;
-  }
-  pthread_mutex_unlock(&w->mu);
-  return known ? 0 : PALP_EINVAL;
+  return w && losses_of(w, s, shed, failed) ? 0 : PALP_EINVAL;
 }
 
 void palp_db_writer_stats_get(palp_db_writer *w, palp_db_writer_stats *out) {
@@ -700,13 +694,15 @@ static void bind_vec(sqlite3_stmt *st, int i, palp_vec3 v) {
   sqlite3_bind_double(st, i + 2, v.z);
 }
 
-/* A session's losses so far (the producer's sheds, the worker's failures), under the mutex. */
-static void losses_of(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed) {
+/* A session's losses so far (the producer's sheds, the worker's failures), under the mutex: 1, or 0
+ * (both 0) for a handle this writer never gave. */
+static int losses_of(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_t *failed) {
   pthread_mutex_lock(&w->mu);
-  const int ok = s > 0 && s < w->ps_cap;
+  const int ok = s > 0 && s < w->next_session && s < w->ps_cap;
   *shed = ok ? w->ps[s].shed : 0;
   *failed = ok ? w->ps[s].failed : 0;
   pthread_mutex_unlock(&w->mu);
+  return ok;
 }
 
 /* Writes one record inside the open transaction. Returns an SQLite code. */

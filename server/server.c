@@ -368,6 +368,19 @@ static dds_entity_t answers_writer(palp_srv *srv, palp_dds_topic_kind k) {
   return 0;
 }
 
+/* Keeps a writer's newest SCORES_KEPT instances, keyed by session (palp_session_score,
+ * palp_session_closed): id takes the oldest's place in ring, which is unregistered (bounded memory in
+ * the writer). key: a zeroed sample of the writer's type, whose key field *key_id this sets. */
+static void keep_newest(dds_entity_t w, uint32_t *ring, int *next, uint32_t id, const void *key, uint32_t *key_id) {
+  uint32_t *slot = &ring[*next];
+  if (*slot) {
+    *key_id = *slot;
+    dds_unregister_instance(w, key);
+  }
+  *slot = id;
+  *next = (*next + 1) % SCORES_KEPT;
+}
+
 /* Who a closed session was, for a dashboard whose bridge began after it (palp_session_closed, session
  * 69): its score (palp_session_score) names no trainee. Keep-last 1 per session, transient-local: the
  * newest SCORES_KEPT kept, the oldest unregistered (bounded memory in the writer), as the scores. */
@@ -382,15 +395,9 @@ static void publish_session_closed(palp_srv *srv, const palp_srv_session *s, dou
   m.duration = duration;
   snprintf(m.reason, sizeof m.reason, "%s", reason ? reason : "");
   if (dds_write(srv->session_closed_w, &m) < 0) return; /* the dashboard then shows it without a name */
-  uint32_t *slot = &srv->closed_sent[srv->closed_sent_next];
-  if (*slot) {
-    palp_SessionClosed key;
-    memset(&key, 0, sizeof key);
-    key.session_id = *slot;
-    dds_unregister_instance(srv->session_closed_w, &key);
-  }
-  *slot = s->id;
-  srv->closed_sent_next = (srv->closed_sent_next + 1) % SCORES_KEPT;
+  palp_SessionClosed key;
+  memset(&key, 0, sizeof key);
+  keep_newest(srv->session_closed_w, srv->closed_sent, &srv->closed_sent_next, s->id, &key, &key.session_id);
 }
 
 /* A closed exercise session's score, as the session log graded it (events.h take_score), as the wire
@@ -498,15 +505,9 @@ static void publish_session_score(palp_srv *srv, const palp_srv_score *sc) {
                   dds_strretcode(rc));
     return;
   }
-  uint32_t *slot = &srv->scored[srv->scored_next];
-  if (*slot) {
-    palp_SessionScore key;
-    memset(&key, 0, sizeof key);
-    key.session_id = *slot;
-    dds_unregister_instance(srv->session_score_w, &key);
-  }
-  *slot = sc->session_id;
-  srv->scored_next = (srv->scored_next + 1) % SCORES_KEPT;
+  palp_SessionScore key;
+  memset(&key, 0, sizeof key);
+  keep_newest(srv->session_score_w, srv->scored, &srv->scored_next, sc->session_id, &key, &key.session_id);
 }
 
 static void publish_scores(palp_srv *srv) {
