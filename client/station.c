@@ -76,8 +76,11 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
       continue;
     }
     if (st->topic[k] < 0) {
+      char hint[PALP_DDS_HINT_MAX];
+      const char *name = palp_dds_topic_name((palp_dds_topic_kind)k);
+      palp_dds_refused_hint(&st->sec, name, hint, sizeof hint);
       palp_cli_station_close(st);
-      return fail(err, errlen, PALP_EIO, "cannot create topic %s", palp_dds_topic_name((palp_dds_topic_kind)k));
+      return fail(err, errlen, PALP_EIO, "cannot create topic %s%s", name, hint);
     }
   }
   st->catalogue_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);

@@ -372,6 +372,22 @@ const char *palp_dds_security_state(const palp_dds_security *sec, char *buf, siz
   return buf;
 }
 
+const char *palp_dds_refused_hint(const palp_dds_security *sec, const char *topic, char *buf, size_t len) {
+  if (!buf || len == 0) return buf;
+  buf[0] = '\0';
+  if (!sec || sec->kind == PALP_DDS_ID_NONE) return buf;
+  /* Secured, a topic or reader the process needs is refused when its permissions have no rule for it:
+   * permissions older than the program (a topic added since), or damaged ones (the PKI script wrote an
+   * instructor's "*" as file names until 2026-12-06). Both are mended by the script's init. */
+  const char *kind = palp_dds_id_kind_name(sec->kind);
+  snprintf(buf, len,
+           "; DDS Security: the permissions of %s/%s (%s/%s/%s.permissions.p7s) may not allow %s%s: "
+           "re-issue them with scripts/make-classroom-pki.sh %s init, copy them to this machine and restart "
+           "(docs/security.md, \"Permissions version\")",
+           kind, sec->name, sec->pki, kind, sec->name, topic ? "topic " : "its topics", topic ? topic : "", sec->pki);
+  return buf;
+}
+
 int palp_dds_security_name_peers(const palp_dds_security *sec, struct palp_dds_refusals *t) {
   if (!sec || sec->kind == PALP_DDS_ID_NONE || !t) return 0;
   static const char *const kinds[] = {"trainee", "instructor", "server"};

@@ -101,6 +101,11 @@ void palp_dds_unanswered_hint(dds_entity_t pp, const palp_dds_security *sec, cha
  * it runs secured. */
 const char *palp_dds_security_state(const palp_dds_security *sec, char *buf, size_t len);
 
+/* For the end of a "cannot create topic T" (or reader) message: "" on plain DDS; secured, that the
+ * identity's permissions may not allow T (topic NULL: the process's topics) and how they are re-issued
+ * (make-classroom-pki.sh DIR init). buf of PALP_DDS_HINT_MAX holds it. Returns buf. */
+const char *palp_dds_refused_hint(const palp_dds_security *sec, const char *topic, char *buf, size_t len);
+
 struct palp_dds_refusals;
 /* Gives t the classroom's identities found under sec's PKI directory (KIND/NAME.cert.pem for the
  * trainees, instructors and the server; not the revoked ones), so that a peer refused for its

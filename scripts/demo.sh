@@ -210,18 +210,38 @@ pids+=($!)
 observer=$!
 
 status=0
-for p in "$alice" "$bob" "$carol" "$dana" "$visual" "$observer" "$nina" "$fay" $eve; do wait "$p" || status=$?; done
+# Each process that failed is named, with the end of its log, here and again at the very end: a
+# demo that stops short must say why (a PKI whose instructors could create no topic ended it
+# silently here once, 2026-12-06).
+stopped=()
+stopped_log() { # who: the log it wrote
+  case $1 in fay) ls -t "$out"/fay[12].log 2>/dev/null | head -n 1 ;; palp-web) echo "$out/web.log" ;;
+  palp-recorder) echo "$out/recorder.log" ;; palp-server) echo "$out/server.log" ;; *) echo "$out/$1.log" ;; esac
+}
+for who in alice bob carol dana visual observer nina fay ${eve:+eve}; do
+  wait "${!who}" || { status=$?; stopped+=("$who (exit $status)"); }
+done
 # mallory's station must fail: it is no part of the status
 [ -n "$mallory" ] && { wait "$mallory" && { echo "demo: the revoked trainee/mallory was let in" >&2; status=1; }; }
-[ -n "${web_pid:-}" ] && kill -INT "$web_pid" 2>/dev/null
-kill -INT "$server_pid"
-wait "$server_pid" || status=$?
+if [ -n "${web_pid:-}" ] && ! kill -INT "$web_pid" 2>/dev/null; then
+  rc=0
+  wait "$web_pid" || rc=$?
+  stopped+=("palp-web (exit $rc)")
+  status=1
+fi
+# (a process that already ended cannot be signalled: its wait gives its exit status)
+kill -INT "$server_pid" 2>/dev/null || true
+wait "$server_pid" || { status=$?; stopped+=("palp-server (exit $status)"); }
 if [ -n "$rec_pid" ]; then
   sleep 1.5 # the last closed session's debrief and CLOSED state reach it
-  kill -INT "$rec_pid" 2>/dev/null
-  wait "$rec_pid" || { echo "demo: palp-recorder:" >&2; tail -n 3 "$out/recorder.log" >&2; status=1; }
+  kill -INT "$rec_pid" 2>/dev/null || true
+  wait "$rec_pid" || { status=$?; stopped+=("palp-recorder (exit $status)"); }
 fi
 pids=()
+for f in "${stopped[@]}"; do
+  echo "demo: $f failed; the end of $(stopped_log "${f%% *}"):" >&2
+  tail -n 3 "$(stopped_log "${f%% *}")" | sed 's/^/  /' >&2
+done
 
 echo
 echo "== instructor observer (following alice) =="
@@ -356,4 +376,5 @@ if [ -x "$review" ] && [ -n "$db" ] && [ -f "$db" ]; then
     echo "(no exercise in the recorded copy: without DDS Security the server keeps its exercises' lesions to itself)"
   fi
 fi
+[ ${#stopped[@]} -eq 0 ] || echo "demo: FAILED: $(printf '%s, ' "${stopped[@]}" | sed 's/, $//') (their logs in $out/; the reasons are printed after the stations stopped, above)" >&2
 exit "$status"

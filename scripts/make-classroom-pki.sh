@@ -173,22 +173,26 @@ EOF
 governance_current() { grep -q "palp classroom governance, version $GOVERNANCE_VERSION " "$dir/governance.xml" 2>/dev/null; }
 
 # rule publish|subscribe "topic ..." "partition ..." ("" = the default partition)
+# Split into words with read -a, never by unquoted expansion: a pattern such as "*" or "palp/s/*"
+# must stay a pattern whatever the shell's globbing state and the caller's directory.
 rule() {
-  local what=$1 topics=$2 parts=$3 t p
+  local what=$1 t p topics parts
+  read -r -a topics <<<"$2"
+  read -r -a parts <<<"$3"
   echo "        <$what>"
   echo "          <topics>"
-  for t in $topics; do echo "            <topic>$t</topic>"; done
+  for t in "${topics[@]}"; do echo "            <topic>$t</topic>"; done
   echo "          </topics>"
   echo "          <partitions>"
-  for p in $parts; do
+  for p in "${parts[@]}"; do
     if [ "$p" = '""' ]; then echo "            <partition></partition>"; else echo "            <partition>$p</partition>"; fi
   done
   echo "          </partitions>"
   echo "        </$what>"
 }
 
-permissions() { # kind name not_before not_after
-  local kind=$1 name=$2 xml="$dir/$1/$2.permissions.xml"
+permissions_xml() { # kind name not_before not_after
+  local kind=$1 name=$2
   {
     cat <<EOF
 <?xml version="1.0" encoding="utf-8"?>
@@ -238,8 +242,13 @@ EOF
   </permissions>
 </dds>
 EOF
-  } >"$xml"
-  sign "$xml" "$dir/$kind/$name.permissions.p7s"
+  }
+}
+
+permissions() { # kind name not_before not_after
+  local xml="$dir/$1/$2.permissions.xml"
+  permissions_xml "$@" >"$xml"
+  sign "$xml" "$dir/$1/$2.permissions.p7s"
 }
 
 add() { # kind name
@@ -258,27 +267,36 @@ add() { # kind name
   echo "make-classroom-pki: $kind/$name: $(openssl x509 -in "$base.cert.pem" -noout -serial) until $(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)"
 }
 
-# The permissions are valid exactly as long as the certificate.
-permissions_of() { # kind name
+# The permissions are valid exactly as long as the certificate. With "stale", only if the identity's
+# permissions differ from what this script issues (returns 1 when they are current).
+permissions_of() { # kind name [stale]
   local base="$dir/$1/$2" nb na
   nb=$(openssl x509 -in "$base.cert.pem" -noout -startdate | cut -d= -f2)
   na=$(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)
+  if [ "${3:-}" = stale ] && [ -f "$base.permissions.p7s" ] &&
+    permissions_xml "$1" "$2" "$(utc "$nb")" "$(utc "$na")" | cmp -s - "$base.permissions.xml"; then
+    return 1
+  fi
   permissions "$1" "$2" "$(utc "$nb")" "$(utc "$na")"
 }
 
-# Every current identity whose permissions are older than PERMISSIONS_VERSION gets them re-issued
-# (a topic added to palp needs a rule: a station's older permissions cannot create it).
+# Every current identity whose permissions differ from what this script issues gets them re-issued:
+# older than PERMISSIONS_VERSION (a topic added to palp needs a rule: a station's older permissions
+# cannot create it), or damaged (until 2026-12-06 a re-issue run from a directory holding files wrote
+# an instructor's "*" as those files' names, and its stations could then create no topic).
 permissions_refresh() {
-  local c kind name n=0
+  local c kind name n=0 certs
+  # File names are expanded here only: the rules written below hold "*" (an instructor reads every
+  # topic), which with expansion on became the names of the files in the caller's directory.
   set +f
-  for c in "$dir"/server/*.cert.pem "$dir"/trainee/*.cert.pem "$dir"/instructor/*.cert.pem; do
+  certs=("$dir"/server/*.cert.pem "$dir"/trainee/*.cert.pem "$dir"/instructor/*.cert.pem)
+  set -f
+  for c in "${certs[@]}"; do
     [ -f "$c" ] || continue
     kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem)
-    grep -q "palp permissions, version $PERMISSIONS_VERSION " "$dir/$kind/$name.permissions.xml" 2>/dev/null && continue
-    permissions_of "$kind" "$name"
+    permissions_of "$kind" "$name" stale || continue
     n=$((n + 1))
   done
-  set -f
   [ "$n" -eq 0 ] ||
     echo "make-classroom-pki: permissions re-issued (version $PERMISSIONS_VERSION) for $n identities: copy each $dir/KIND/NAME.permissions.p7s to its station and restart them and the server"
 }

@@ -141,7 +141,7 @@ int main(int argc, char **argv) {
   int check = 0, verbose = 0, no_db = 0;
   const char *pki = NULL, *identity = NULL;
   int insecure = 0;
-  char err[768];
+  char err[PALP_DDS_HINT_MAX + 512]; /* palp_dds_refused_hint's ends a refused topic's message */
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     int bad = 0, common = palp_app_common_opt(&ao, SERVER_OPTS, argc, argv, &i);

@@ -1747,8 +1747,10 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     }
     if (srv->topic[k] < 0) {
       *rc = PALP_EIO;
-      fail(err, errlen, "cannot create topic %s: %s", palp_dds_topic_name((palp_dds_topic_kind)k),
-           dds_strretcode(srv->topic[k]));
+      char hint[PALP_DDS_HINT_MAX];
+      const char *name = palp_dds_topic_name((palp_dds_topic_kind)k);
+      fail(err, errlen, "cannot create topic %s: %s%s", name, dds_strretcode(srv->topic[k]),
+           palp_dds_refused_hint(&srv->sec, name, hint, sizeof hint));
       goto fail;
     }
   }

@@ -2040,7 +2040,8 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   }
   if (!bad) bad = dds_waitset_attach(h->ws, h->stop_gc, -1) < 0;
   if (bad) {
-    fail(err, errlen, "cannot create the bridge's DDS readers");
+    char hint[PALP_DDS_HINT_MAX];
+    fail(err, errlen, "cannot create the bridge's DDS readers%s", palp_dds_refused_hint(&def->sec, NULL, hint, sizeof hint));
     palp_web_hub_destroy(h);
     return NULL;
   }

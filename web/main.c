@@ -395,7 +395,7 @@ int main(int argc, char **argv) {
   /* a peer refused for its permissions named by its identity, not its GUID */
   if (palp_dds_security_name_peers(&hd.sec, &refusals) < 0) palp_log_warn(&log, "out of memory naming the classroom's identities");
   hd.refusals = &refusals; /* the dashboard lists them */
-  char err[256];
+  char err[PALP_DDS_HINT_MAX + 256]; /* a refused reader's message ends with palp_dds_refused_hint's */
   palp_web_hub *hub = palp_web_hub_create(&hd, err, sizeof err);
   if (!hub) {
     palp_log_error(&log, "%s", err);

@@ -940,7 +940,9 @@ int main(int argc, char **argv) {
   dds_entity_t ws = dds_create_waitset(pp);
   for (int k = 0; k < RD_COUNT; k++) {
     if (rd[k] < 0) {
-      palp_log_error(&plog, "cannot create a reader: %s\n", dds_strretcode(rd[k]));
+      char hint[PALP_DDS_HINT_MAX];
+      palp_log_error(&plog, "cannot create a reader: %s%s\n", dds_strretcode(rd[k]),
+                     palp_dds_refused_hint(&sec, NULL, hint, sizeof hint));
       dds_delete(pp);
       palp_db_writer_close(r->w);
       free(r);

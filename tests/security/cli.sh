@@ -8,10 +8,12 @@
 # trainee whose process is stopped 1.5 s going on in its session (the server holds it;
 # the station, authenticated again, asks with the same request). Domain 131.
 # A palp-recorder without an identity says, 10 s in, that the classroom may be secured.
-# usage: cli.sh palp-server palp-client PKI_DIR PALP_RECORDER
+# Permissions the PKI script wrote damaged (until 2026-12-06) are mended by its init, and an
+# instructor's observer, recorder and palp-web on them say so and what to do.
+# usage: cli.sh palp-server palp-client PKI_DIR PALP_RECORDER PALP_WEB
 set -u
 . "$(dirname "$0")/../stall.sh"
-server=$1 client=$2 pki=$3 recorder=$4
+server=$1 client=$2 pki=$3 recorder=$4 web=$5
 out=$(mktemp -d)
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
@@ -168,9 +170,37 @@ logged=$(python3 -c "import sqlite3, sys; print('|'.join(r[0] for r in sqlite3.c
 want="not sent (level lesions): the server's permissions do not allow topic palp_debrief (make-classroom-pki.sh re-issues them)"
 same=0; [ "$logged" = "$want" ] && same=1
 check "  the session log records that no debrief was sent, and why: $logged" "[ $same = 1 ]"
-bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/oldperm" init >"$out/oldperm-init.log" 2>&1
+# Two instructors' permissions re-issued too, init run from a directory holding files (as a teacher runs
+# it): ines's older by version, ivy's at this version but as the script wrote them until 2026-12-06, the
+# files' names in place of "*" (its stations could then create no topic: the demo's palp-web, observer
+# and recorder after the version-7 upgrade). Both come back as a fresh issue has them, "*" whole.
+pkiscript=$(cd "$(dirname "$0")/../../scripts" && pwd)/make-classroom-pki.sh
+resign() { openssl smime -sign -in "$1.xml" -text -out "$1.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"; }
+cp "$out/oldperm/instructor/ines.permissions.xml" "$out/ines.intact.xml"
+sed -i 's/palp permissions, version [0-9]* /palp permissions, version 0 /' "$out/oldperm/instructor/ines.permissions.xml"
+resign "$out/oldperm/instructor/ines.permissions"
+bash "$pkiscript" "$out/oldperm" add instructor ivy >/dev/null
+cp "$out/oldperm/instructor/ivy.permissions.xml" "$out/ivy.intact.xml"
+sed -i 's|<topic>\*</topic>|<topic>alice.log</topic><topic>bob.log</topic>|; s|<partition>\*</partition>|<partition>alice.log</partition>|' \
+  "$out/oldperm/instructor/ivy.permissions.xml"
+resign "$out/oldperm/instructor/ivy.permissions"
+# Such damaged permissions refuse an instructor's every topic: her observer and recorder say what to do
+# (they said only "cannot create topic palp_catalogue" and "cannot create a reader: Bad Parameter").
+"$client" --role observer --domain 131 --trainee alice --pki "$out/oldperm" --identity instructor/ivy --duration 1 \
+  --timeout 3 >"$out/ivy-observer.log" 2>&1
+rc=$?
+"$recorder" --domain 131 --db "$out/ivy.db" --pki "$out/oldperm" --identity instructor/ivy --duration 1 \
+  >"$out/ivy-recorder.log" 2>&1
+rc2=$?
+"$web" --domain 131 --pki "$out/oldperm" --identity instructor/ivy --port 0 --duration 1 >"$out/ivy-web.log" 2>&1
+rc3=$?
+check "an instructor whose permissions allow no topic is told to re-issue them (observer exit $rc, recorder exit $rc2, palp-web exit $rc3)" \
+  "[ $rc -ne 0 ] && [ $rc2 -ne 0 ] && [ $rc3 -ne 0 ] && grep -q 'cannot create the bridge.s DDS readers; DDS Security: the permissions of instructor/ivy .* may not allow its topics: re-issue them with scripts/make-classroom-pki.sh .*/oldperm init' '$out/ivy-web.log' && grep -q 'cannot create topic palp_[a-z_]*; DDS Security: the permissions of instructor/ivy (.*/oldperm/instructor/ivy.permissions.p7s) may not allow topic palp_[a-z_]*: re-issue them with scripts/make-classroom-pki.sh .*/oldperm init' '$out/ivy-observer.log' && grep -q 'cannot create a reader: .*; DDS Security: the permissions of instructor/ivy .* may not allow its topics: re-issue them' '$out/ivy-recorder.log'"
+(cd "$out" && bash "$pkiscript" oldperm init) >"$out/oldperm-init.log" 2>&1
+check "init, run where files are, re-issues an instructor's older permissions and mends damaged ones, \"*\" whole" \
+  "grep -q '<topic>\*</topic>' '$out/ines.intact.xml' && cmp -s '$out/ines.intact.xml' '$out/oldperm/instructor/ines.permissions.xml' && cmp -s '$out/ivy.intact.xml' '$out/oldperm/instructor/ivy.permissions.xml' && openssl smime -verify -in '$out/oldperm/instructor/ivy.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 check "init re-issues their permissions alone, with palp_debrief, palp_debrief_score, palp_session_log, palp_session_exercise, palp_session_score and palp_session_closed, signed by the CA" \
-  "grep -q 'permissions re-issued (version 7) for 2 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_session_closed</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_closed' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+  "grep -q 'permissions re-issued (version 7) for 4 identities' '$out/oldperm-init.log' && grep -q '<topic>palp_session_closed</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_closed' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 # Re-issued, the server sends each exercise session's exercise, its lesions included, to the
 # instructors alone (session 60): a secured palp-recorder (instructor ines) logs alice's attempt at
 # "easy" with its exercise, her mark and her debrief as the server's own log has them.
