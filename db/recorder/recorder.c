@@ -955,8 +955,13 @@ int main(int argc, char **argv) {
   signal(SIGTERM, on_signal);
   signal(SIGHUP, on_signal);
   char security[96];
-  palp_log_info(&plog, "%s recording domain %d into %s (sessions on partition %s), DDS config %s; DDS Security %s",
-                palp_app_version(), (int)domain, db, wildcard, dds_chosen,
+  /* Without --domain, the DDS config's default domain: named by its number, as the server and stations
+   * name theirs (it said "domain -1", DDS_DOMAIN_DEFAULT, until 2026-12-06). */
+  dds_domainid_t joined = domain;
+  if (dds_get_domainid(pp, &joined) < 0) joined = domain;
+  palp_log_info(&plog, "%s recording domain %u%s into %s (sessions on partition %s), DDS config %s; DDS Security %s",
+                palp_app_version(), (unsigned)joined, domain == DDS_DOMAIN_DEFAULT ? " (the DDS config's default)" : "",
+                db, wildcard, dds_chosen,
                 palp_dds_security_state(&sec, security, sizeof security));
   const dds_time_t t_end = duration > 0 ? dds_time() + (dds_duration_t)(duration * 1e9) : 0;
   /* No phantom 10 s after the start while other participants are on the domain: say once what may

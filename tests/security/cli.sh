@@ -255,6 +255,12 @@ check "a recorder without an identity says the classroom may be secured, and rec
 rc=$?
 check "a recorder says at start whether DDS Security is on, and as whom (exit $rc)" \
   "[ $rc -eq 0 ] && grep -q 'recording domain 131 into .*; DDS Security on (identity instructor/ines)' '$out/recorder2.log' && grep -q 'recording domain 131 into .*; DDS Security off' '$out/recorder.log'"
+# ... and, without --domain, the DDS config's default by its number, as the server and the stations
+# (loopback config: Domain Id "any", so 0; it said "domain -1" until 2026-12-06). Listens 0.5 s.
+"$recorder" --db "$out/rec0.db" --duration 0.5 >"$out/recorder0.log" 2>&1
+rc=$?
+check "a recorder without --domain names the domain it records (exit $rc)" \
+  "[ $rc -eq 0 ] && grep -q 'recording domain 0 (the DDS config.s default) into ' '$out/recorder0.log'"
 kill -INT $spid
 wait $spid
 # make_pki.sh's classroom: alice, bob, ines and the server (dave's files moved to revoked/)
