@@ -14,12 +14,6 @@
 
 #include "palp.h"
 
-#ifndef PALP_VERSION_STRING
-#define PALP_VERSION_STRING "unknown"
-#endif
-
-const char *palp_app_version(void) { return PALP_VERSION_STRING; }
-
 void palp_app_print_version(FILE *f, const char *prog) {
   fprintf(f, "%s %s\n", prog, palp_app_version());
 }

@@ -15,9 +15,7 @@
 #include "migrations.h"
 #include "palp_db.h"
 
-#ifndef PALP_VERSION_STRING
-#define PALP_VERSION_STRING "unknown"
-#endif
+#include "palp_version.h" /* PALP_VERSION_STRING, written at each build (cmake/PalpVersion.cmake) */
 
 int palp_db_schema_version(void) { return palp_db_migration_count; }
 

@@ -31,9 +31,7 @@
 #define SHED_LOG_INTERVAL_S 1.0
 #define DROP_SAY_INTERVAL_S 10.0 /* stderr lines for dropped batches: a full disk fails one every ~0.4 s */
 
-#ifndef PALP_VERSION_STRING
-#define PALP_VERSION_STRING "unknown"
-#endif
+#include "palp_version.h" /* PALP_VERSION_STRING, written at each build (cmake/PalpVersion.cmake) */
 
 typedef struct rec {
   uint8_t kind; /* palp_db_record_kind */
