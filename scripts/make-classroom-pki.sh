@@ -10,7 +10,8 @@
 #   make-classroom-pki.sh DIR init           CA (10 years), governance, empty CRL, identity server
 #   make-classroom-pki.sh DIR add KIND NAME [--days N]   KIND: trainee | instructor | server
 #   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
-#   make-classroom-pki.sh DIR list                       identities, validity and revocation
+#   make-classroom-pki.sh DIR list                       identities, validity, whether their permissions are
+#                                                        current (init mends them), revocation
 #   make-classroom-pki.sh DIR web HOST[,HOST...] [--days N]   a TLS certificate for palp-web (HTTPS)
 #   make-classroom-pki.sh DIR crl                        re-issue the CRL (valid 365 days; palp warns 30 ahead)
 #   make-classroom-pki.sh DIR governance                 re-issue the governance (init and classroom
@@ -429,13 +430,45 @@ web)
   web_cert "$hosts"
   ;;
 list)
+  # Each identity with its serial, its expiry and whether its permissions are what this script issues
+  # (older or damaged ones: "init" re-issues them); then the revoked ones and palp-web's certificates.
+  dir=$(cd "$dir" && pwd)
   set +f
-  for c in "$dir"/*/*.cert.pem; do
+  certs=("$dir"/server/*.cert.pem "$dir"/trainee/*.cert.pem "$dir"/instructor/*.cert.pem)
+  revoked=("$dir"/revoked/*.cert.pem)
+  webs=("$dir"/web/*.cert.pem)
+  set -f
+  stale=0
+  for c in "${certs[@]}"; do
     [ -f "$c" ] || continue
-    echo "$(basename "$(dirname "$c")")/$(basename "$c" .cert.pem)  $(openssl x509 -in "$c" -noout -serial -enddate | tr '\n' ' ')"
+    kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem) xml=$dir/$kind/$name.permissions.xml
+    nb=$(openssl x509 -in "$c" -noout -startdate | cut -d= -f2)
+    na=$(openssl x509 -in "$c" -noout -enddate | cut -d= -f2)
+    if [ ! -f "$xml" ] || [ ! -f "${xml%.xml}.p7s" ]; then
+      perm="NO PERMISSIONS: run init"
+      stale=$((stale + 1))
+    elif permissions_xml "$kind" "$name" "$(utc "$nb")" "$(utc "$na")" | cmp -s - "$xml"; then
+      perm="permissions current (version $PERMISSIONS_VERSION)"
+    else
+      v=$(sed -n 's/^<!-- palp permissions, version \([0-9]*\) .*/\1/p' "$xml")
+      if [ -n "$v" ] && [ "$v" -lt "$PERMISSIONS_VERSION" ]; then
+        perm="PERMISSIONS OLDER (version $v of $PERMISSIONS_VERSION): run init"
+      else
+        perm="PERMISSIONS DIFFER from what this script issues: run init"
+      fi
+      stale=$((stale + 1))
+    fi
+    echo "$kind/$name  $(openssl x509 -in "$c" -noout -serial | tr '\n' ' ') until $na; $perm"
   done
+  [ "$stale" -eq 0 ] || echo "make-classroom-pki: $stale identities' permissions are not what this script issues: '$0 $dir init' re-issues them"
   echo "revoked (crl.pem):"
   openssl crl -in "$dir/crl.pem" -noout -text | grep -E "Serial Number" || echo "  none"
+  for c in "${revoked[@]}"; do
+    if [ -f "$c" ]; then echo "  kept aside: revoked/$(basename "$c" .cert.pem)  $(openssl x509 -in "$c" -noout -serial)"; fi
+  done
+  for c in "${webs[@]}"; do
+    if [ -f "$c" ]; then echo "palp-web TLS: web/$(basename "$c" .cert.pem)  until $(openssl x509 -in "$c" -noout -enddate | cut -d= -f2)"; fi
+  done
   ;;
 *) die "unknown command $cmd" ;;
 esac

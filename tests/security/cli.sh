@@ -196,7 +196,14 @@ rc2=$?
 rc3=$?
 check "an instructor whose permissions allow no topic is told to re-issue them (observer exit $rc, recorder exit $rc2, palp-web exit $rc3)" \
   "[ $rc -ne 0 ] && [ $rc2 -ne 0 ] && [ $rc3 -ne 0 ] && grep -q 'cannot create the bridge.s DDS readers; DDS Security: the permissions of instructor/ivy .* may not allow its topics: re-issue them with scripts/make-classroom-pki.sh .*/oldperm init' '$out/ivy-web.log' && grep -q 'cannot create topic palp_[a-z_]*; DDS Security: the permissions of instructor/ivy (.*/oldperm/instructor/ivy.permissions.p7s) may not allow topic palp_[a-z_]*: re-issue them with scripts/make-classroom-pki.sh .*/oldperm init' '$out/ivy-observer.log' && grep -q 'cannot create a reader: .*; DDS Security: the permissions of instructor/ivy .* may not allow its topics: re-issue them' '$out/ivy-recorder.log'"
+bash "$pkiscript" "$out/oldperm" list >"$out/list-before.log" 2>&1
+rc=$?
+check "list names the older and the damaged permissions and what mends them (exit $rc)" \
+  "[ $rc -eq 0 ] && grep -q '^instructor/ines .*; PERMISSIONS OLDER (version 0 of [0-9]*): run init\$' '$out/list-before.log' && grep -q '^instructor/ivy .*; PERMISSIONS DIFFER from what this script issues: run init\$' '$out/list-before.log' && grep -q '^trainee/bob .*; permissions current (version [0-9]*)\$' '$out/list-before.log' && grep -q '^make-classroom-pki: 4 identities. permissions are not what this script issues' '$out/list-before.log'"
 (cd "$out" && bash "$pkiscript" oldperm init) >"$out/oldperm-init.log" 2>&1
+bash "$pkiscript" "$out/oldperm" list >"$out/list-after.log" 2>&1
+check "  ... and after init, every identity's are current" \
+  "[ \$(grep -c 'permissions current' '$out/list-after.log') -eq 5 ] && ! grep -q 'PERMISSIONS\\|not what this script' '$out/list-after.log'"
 check "init, run where files are, re-issues an instructor's older permissions and mends damaged ones, \"*\" whole" \
   "grep -q '<topic>\*</topic>' '$out/ines.intact.xml' && cmp -s '$out/ines.intact.xml' '$out/oldperm/instructor/ines.permissions.xml' && cmp -s '$out/ivy.intact.xml' '$out/oldperm/instructor/ivy.permissions.xml' && openssl smime -verify -in '$out/oldperm/instructor/ivy.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 check "init re-issues their permissions alone, with palp_debrief, palp_debrief_score, palp_session_log, palp_session_exercise, palp_session_score and palp_session_closed, signed by the CA" \
