@@ -120,11 +120,26 @@ done
 
 # The browser view (palp-web): the class dashboard and a 3D trainee view while the demo runs.
 web=$build/web/palp-web
-if [ -x "$web" ]; then
-  "$web" --domain "$domain" "${web_sec[@]}" --port "${PALP_DEMO_WEB_PORT:-8090}" >"$out/web.log" 2>&1 &
+start_web() { # port
+  "$web" --domain "$domain" "${web_sec[@]}" --port "$1" >"$out/web.log" 2>&1 &
   web_pid=$!
   pids+=("$web_pid")
-  for _ in $(seq 20); do grep -q "dashboard" "$out/web.log" 2>/dev/null && break; sleep 0.1; done
+  for _ in $(seq 20); do
+    grep -q "dashboard" "$out/web.log" 2>/dev/null && break
+    kill -0 "$web_pid" 2>/dev/null || break
+    sleep 0.1
+  done
+}
+if [ -x "$web" ]; then
+  web_port=${PALP_DEMO_WEB_PORT:-8090}
+  start_web "$web_port"
+  # Another program (or another demo) holding the port costs the browser view its usual address,
+  # not the demo: palp-web then takes any free port and says which.
+  if ! kill -0 "$web_pid" 2>/dev/null && grep -q "cannot listen on" "$out/web.log"; then
+    wait "$web_pid" || true
+    echo "demo: port $web_port is in use: palp-web serves on a free port instead ($(grep -o 'cannot listen on .*' "$out/web.log" | head -n 1))"
+    start_web 0
+  fi
   sed -n 's/^palp-web: \(trainee page\|dashboard\) */demo: open in a browser while it runs, \1: /p' "$out/web.log"
 fi
 

@@ -10,10 +10,19 @@ src=$1 build=$2 out=$3 domain=$4
 rm -rf "$out"
 mkdir -p "$out"
 t0=$(date +%s)
+# The browser view's port held by another program, as a lab machine's 8090 may be: the demo goes on,
+# palp-web on a free port (until 2026-12-06 the demo stopped after its stations, saying nothing).
+python3 -c 'import socket, sys, time
+s = socket.socket(); s.bind(("127.0.0.1", 0)); s.listen(1); print(s.getsockname()[1], flush=True); time.sleep(120)' \
+  >"$out/held-port" &
+holder=$!
+for _ in 1 2 3 4 5 6 7 8 9 10; do [ -s "$out/held-port" ] && break; sleep 0.2; done
+held=$(cat "$out/held-port")
 PALP_SKIP_SETUP=1 PALP_BUILD_DIR="$build" PALP_DEMO_EXPERT=0 PALP_DEMO_OUT="$out/demo" PALP_DEMO_DOMAIN="$domain" \
-  PALP_DEMO_WEB_PORT=0 PALP_PKI_DIR="$out/pki" PALP_DEMO_DB="$out/sessions.db" bash "$src/scripts/demo.sh" \
+  PALP_DEMO_WEB_PORT="$held" PALP_PKI_DIR="$out/pki" PALP_DEMO_DB="$out/sessions.db" bash "$src/scripts/demo.sh" \
   >"$out/demo.txt" 2>&1
 rc=$?
+kill "$holder" 2>/dev/null
 echo "demo: exit $rc after $(($(date +%s) - t0)) s; its output in $out/demo.txt"
 txt=$out/demo.txt
 fail=0
@@ -47,6 +56,8 @@ n_db=$(sed -n 's/^refused by DDS Security: trainee\/mallory: certificate revoked
 check "the review lists mallory's refusals from the session log, as many as the server counted (${n_db:-none} of ${n_srv:-none})" \
   "[ -n '$n_db' ] && [ '$n_db' = '$n_srv' ] && [ $n_db -ge 1 ]"
 check "palp-web ran as instructor/bridge" "grep -q 'DDS Security on (identity instructor/bridge)' '$out/demo/web.log'"
+check "its port ($held) held by another program, the demo says so and palp-web serves on a free one" \
+  "[ -n '$held' ] && grep -q '^demo: port $held is in use: palp-web serves on a free port instead' '$txt' && grep -q '^demo: open in a browser while it runs, dashboard: http://127.0.0.1:[0-9]*/dashboard.html' '$txt' && ! grep -q 'dashboard: http://127.0.0.1:$held/' '$txt'"
 for t in alice bob carol dana; do
   check "trainee $t ran a session" "grep -Eq '^\[trainee $t\] session [0-9]+: ' '$txt'"
 done
