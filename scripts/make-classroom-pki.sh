@@ -246,12 +246,6 @@ EOF
   }
 }
 
-permissions() { # kind name not_before not_after
-  local xml="$dir/$1/$2.permissions.xml"
-  permissions_xml "$@" >"$xml"
-  sign "$xml" "$dir/$1/$2.permissions.p7s"
-}
-
 add() { # kind name
   local kind=$1 name=$2
   check_kind "$kind"
@@ -268,17 +262,27 @@ add() { # kind name
   echo "make-classroom-pki: $kind/$name: $(openssl x509 -in "$base.cert.pem" -noout -serial) until $(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)"
 }
 
-# The permissions are valid exactly as long as the certificate. With "stale", only if the identity's
-# permissions differ from what this script issues (returns 1 when they are current).
-permissions_of() { # kind name [stale]
+# The permissions this script issues for KIND/NAME (stdout), valid exactly as long as its certificate.
+permissions_for() { # kind name
   local base="$dir/$1/$2" nb na
   nb=$(openssl x509 -in "$base.cert.pem" -noout -startdate | cut -d= -f2)
   na=$(openssl x509 -in "$base.cert.pem" -noout -enddate | cut -d= -f2)
-  if [ "${3:-}" = stale ] && [ -f "$base.permissions.p7s" ] &&
-    permissions_xml "$1" "$2" "$(utc "$nb")" "$(utc "$na")" | cmp -s - "$base.permissions.xml"; then
-    return 1
-  fi
-  permissions "$1" "$2" "$(utc "$nb")" "$(utc "$na")"
+  permissions_xml "$1" "$2" "$(utc "$nb")" "$(utc "$na")"
+}
+
+# ... written and signed by the CA.
+permissions_of() { # kind name
+  local xml="$dir/$1/$2.permissions.xml"
+  permissions_for "$1" "$2" >"$xml"
+  sign "$xml" "$dir/$1/$2.permissions.p7s"
+}
+
+# 0 when KIND/NAME's permissions are what this script issues; 1 when they are missing; 2 when they
+# differ (older, or damaged).
+permissions_current() { # kind name
+  local base="$dir/$1/$2"
+  [ -f "$base.permissions.xml" ] && [ -f "$base.permissions.p7s" ] || return 1
+  permissions_for "$1" "$2" | cmp -s - "$base.permissions.xml" || return 2
 }
 
 # Every current identity whose permissions differ from what this script issues gets them re-issued:
@@ -295,7 +299,8 @@ permissions_refresh() {
   for c in "${certs[@]}"; do
     [ -f "$c" ] || continue
     kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem)
-    permissions_of "$kind" "$name" stale || continue
+    permissions_current "$kind" "$name" && continue
+    permissions_of "$kind" "$name"
     n=$((n + 1))
   done
   [ "$n" -eq 0 ] ||
@@ -441,24 +446,21 @@ list)
   stale=0
   for c in "${certs[@]}"; do
     [ -f "$c" ] || continue
-    kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem) xml=$dir/$kind/$name.permissions.xml
-    nb=$(openssl x509 -in "$c" -noout -startdate | cut -d= -f2)
-    na=$(openssl x509 -in "$c" -noout -enddate | cut -d= -f2)
-    if [ ! -f "$xml" ] || [ ! -f "${xml%.xml}.p7s" ]; then
-      perm="NO PERMISSIONS: run init"
-      stale=$((stale + 1))
-    elif permissions_xml "$kind" "$name" "$(utc "$nb")" "$(utc "$na")" | cmp -s - "$xml"; then
-      perm="permissions current (version $PERMISSIONS_VERSION)"
-    else
-      v=$(sed -n 's/^<!-- palp permissions, version \([0-9]*\) .*/\1/p' "$xml")
-      if [ -n "$v" ] && [ "$v" -lt "$PERMISSIONS_VERSION" ]; then
-        perm="PERMISSIONS OLDER (version $v of $PERMISSIONS_VERSION): run init"
-      else
-        perm="PERMISSIONS DIFFER from what this script issues: run init"
-      fi
-      stale=$((stale + 1))
-    fi
-    echo "$kind/$name  $(openssl x509 -in "$c" -noout -serial | tr '\n' ' ') until $na; $perm"
+    kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem)
+    st=0
+    permissions_current "$kind" "$name" || st=$?
+    v=$(sed -n 's/^<!-- palp permissions, version \([0-9]*\) .*/\1/p' "$dir/$kind/$name.permissions.xml" 2>/dev/null)
+    case $st in
+    0) perm="permissions current (version $PERMISSIONS_VERSION)" ;;
+    1) perm="NO PERMISSIONS: run init" ;;
+    *) if [ -n "$v" ] && [ "$v" -lt "$PERMISSIONS_VERSION" ]; then
+         perm="PERMISSIONS OLDER (version $v of $PERMISSIONS_VERSION): run init"
+       else
+         perm="PERMISSIONS DIFFER from what this script issues: run init"
+       fi ;;
+    esac
+    [ "$st" -eq 0 ] || stale=$((stale + 1))
+    echo "$kind/$name  $(openssl x509 -in "$c" -noout -serial) until $(openssl x509 -in "$c" -noout -enddate | cut -d= -f2); $perm"
   done
   [ "$stale" -eq 0 ] || echo "make-classroom-pki: $stale identities' permissions are not what this script issues: '$0 $dir init' re-issues them"
   echo "revoked (crl.pem):"
