@@ -19,7 +19,9 @@ in_private_netns "$0" "$@"
 server=$1 station=$2 dds=$3 domain=$4
 work_dir palp-fastdds-test
 unset CYCLONEDDS_URI
-"$server" --dds-config "$dds" --domain "$domain" --no-db --log-file "$work/server.log" > "$work/server.out" 2>&1 &
+# (a session log of its own: the server writes each session's palp_session_log only when it keeps one)
+"$server" --dds-config "$dds" --domain "$domain" --database "$work/sessions.db" --log-file "$work/server.log" \
+  > "$work/server.out" 2>&1 &
 spid=$!
 sleep 1
 
@@ -30,6 +32,11 @@ timeout 60 "$station" "$domain" 1 station 4 > "$work/station.out" 2>&1; rc=$?
   || bad "catalogue: $(r station vertices) vertices"
 [ -n "$(r station session)" ] && ok "joined session $(r station session) in partition $(r station partition) after $(r station join_s) s" || bad "join"
 check_press station
+# a type added since (palp_session_log, session 69; @final, XCDR1 as every palp type) read by Fast DDS as
+# idlc writes it: the session's own log losses, none on this quiet log
+[ "$(r station session_log)" = "$(r station session) 0 0" ] \
+  && ok "palp_session_log (added in session 69) read by Fast DDS: \"$(r station session_log)\" (session, shed, failed)" \
+  || bad "palp_session_log through Fast DDS: \"$(r station session_log)\", want \"$(r station session) 0 0\""
 reason=$(r station leave_reason)
 [ "$reason" = "trainee station left (request disposed)" ] \
   && ok "dispose alone on palp_station_request ended the session in $(r station leave_closed_s) s: \"$reason\"" \

@@ -32,7 +32,9 @@ grep -q "<metadata_protection_kind>SIGN</metadata_protection_kind>" "$work/pki/g
   || bad "the governance signs no submessage"
 
 start_server() { # PKI log
-  "$server" --dds-config "$dds" --domain "$domain" --no-db --pki "$1" --log-file "$work/$2.log" > "$work/$2.out" 2>&1 &
+  # (a session log of its own: the server writes each session's palp_session_log only when it keeps one)
+  "$server" --dds-config "$dds" --domain "$domain" --database "$work/$2.db" --pki "$1" --log-file "$work/$2.log" \
+    > "$work/$2.out" 2>&1 &
   spid=$!
   sleep 1
 }
@@ -53,6 +55,10 @@ case $part in
   *) bad "join: partition \"$part\" (want palp/s/fd/N)" ;;
 esac
 check_press fd
+# palp_session_log (session 69) in the trainee's own partition, as her permissions (version 6) allow it
+[ "$(r fd session_log)" = "$(r fd session) 0 0" ] \
+  && ok "palp_session_log read by Fast DDS in its own partition, encrypted: \"$(r fd session_log)\" (session, shed, failed)" \
+  || bad "palp_session_log through secured Fast DDS: \"$(r fd session_log)\", want \"$(r fd session) 0 0\""
 # Position in, force out: 1.6 s of 100 Hz physics on dome A, so 160 local models; a best-effort
 # stream, so at least 100. The force must not fall while the device only goes deeper (2% or 0.01 N
 # of slack). Held 3 mm deep, the proxy sits (device depth - coupling) deep in the surface, and the

@@ -286,8 +286,8 @@ int main(int argc, char **argv) {
               t_srq = make_type<palp::StationRequestPubSubType>(), t_rp = make_type<palp::SessionReplyPubSubType>(),
               t_st = make_type<palp::SessionStatePubSubType>(), t_ct = make_type<palp::ContactPubSubType>(),
               t_fb = make_type<palp::FeedbackPubSubType>(), t_df = make_type<palp::DeformationPubSubType>(),
-              t_lm = make_type<palp::LocalModelPubSubType>();
-  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm}) t->register_type(pp);
+              t_lm = make_type<palp::LocalModelPubSubType>(), t_sl = make_type<palp::SessionLogPubSubType>();
+  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl}) t->register_type(pp);
   Topic *tp_ph = pp->create_topic("palp_catalogue", t_ph.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_rq = station_topic ? pp->create_topic("palp_station_request", t_srq.get_type_name(), TOPIC_QOS_DEFAULT)
                                : pp->create_topic("palp_session_request", t_rq.get_type_name(), TOPIC_QOS_DEFAULT);
@@ -296,7 +296,9 @@ int main(int argc, char **argv) {
   Topic *tp_ct = pp->create_topic("palp_contact", t_ct.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_fb = pp->create_topic("palp_feedback", t_fb.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_df = pp->create_topic("palp_deformation", t_df.get_type_name(), TOPIC_QOS_DEFAULT);
-  if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df) return fail("cannot create the topics");
+  // a type added by session 69 (its server writes it as the session opens, when it keeps a log)
+  Topic *tp_sl = pp->create_topic("palp_session_log", t_sl.get_type_name(), TOPIC_QOS_DEFAULT);
+  if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df || !tp_sl) return fail("cannot create the topics");
 
   Subscriber *sub = pp->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
   PublisherQos req_pubq = PUBLISHER_QOS_DEFAULT;
@@ -424,7 +426,8 @@ int main(int argc, char **argv) {
   rq_df.reliability().kind = RELIABLE_RELIABILITY_QOS;
   rq_df.history().depth = 1;
   DataReader *r_df = ssub->create_datareader(tp_df, rq_df);
-  if (!w_ct || !r_fb || !r_df) return fail("cannot create the session endpoints");
+  DataReader *r_sl = ssub->create_datareader(tp_sl, rq_state); // reliable, transient-local, keep-last 1
+  if (!w_ct || !r_fb || !r_df || !r_sl) return fail("cannot create the session endpoints");
   nap(0.5); // discovery of the new endpoints (best-effort contacts are not resent)
 
   // 4. Press 3 N (distribution II) at the pole for 1.5 s at 100 Hz; feedback and deformation.
@@ -474,6 +477,20 @@ int main(int argc, char **argv) {
         }
       }
     nap(0.01);
+  }
+  // The session's own log losses (palp_session_log): written as the session opened, kept for a late
+  // reader (transient-local); "none" when the server keeps no log.
+  {
+    palp::SessionLog sl, got;
+    SampleInfo info;
+    bool have = false;
+    while (r_sl->take_next_sample(&sl, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data && sl.session_id() == session) have = true, got = sl;
+    if (have)
+      std::printf("result session_log %u %llu %llu\n", got.session_id(), (unsigned long long)got.shed(),
+                  (unsigned long long)got.failed());
+    else
+      std::printf("result session_log none\n");
   }
   std::printf("result contacts_sent %llu\nresult feedback_samples %llu\nresult feedback_last_N %.4f\n"
               "result feedback_peak_N %.4f\nresult deformation_samples %llu\nresult deformation_vertices %zu\n"
