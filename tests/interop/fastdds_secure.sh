@@ -158,6 +158,13 @@ if [ $rc -eq 0 ] && [ "${contacts:-0}" -ge 50 ] && [ "${frames:-0}" -ge 10 ] \
 else
   bad "ines observed: exit $rc, $contacts contacts (peak $peak N), $frames frames"
 fi
+# ... and, an instructor, who each session closed before it came was (palp_session_closed, session 69):
+# the Fast DDS alice's, "trainee station left"
+closed=$(sed -n "s/^result closed $(r alice session) //p" "$work/ines.out" | head -n 1)
+case $closed in
+  "alice "*" trainee station left") ok "it reads palp_session_closed (added in session 69): session $(r alice session) \"$closed\" (trainee, duration s, reason)" ;;
+  *) bad "palp_session_closed through Fast DDS: session $(r alice session): \"$closed\" ($(r ines closed_sessions) read)" ;;
+esac
 [ "$(r ines contact_writer_refused)" = 1 ] && ok "its own permissions refuse it a contact writer in alice's session (an instructor follows, it does not palpate)" \
   || bad "the instructor got a contact writer in alice's session"
 wait $apid; arc=$?

@@ -202,6 +202,32 @@ static int follow_session(DomainParticipant *pp, DataReader *r_st, DataReader *r
   }
   std::printf("result observed_contacts %llu\nresult observed_contact_peak_N %.3f\nresult observed_frames %llu\n",
               (unsigned long long)ct_n, ct_peak, (unsigned long long)df_n);
+  // The sessions that closed before this instructor came (palp_session_closed, a type session 69 added,
+  // for instructors alone: transient-local, the newest 64 kept): who each was and how it ended.
+  {
+    TypeSupport t_sc = make_type<palp::SessionClosedPubSubType>();
+    t_sc.register_type(pp);
+    Topic *tp_sc = pp->create_topic("palp_session_closed", t_sc.get_type_name(), TOPIC_QOS_DEFAULT);
+    DataReaderQos q = DATAREADER_QOS_DEFAULT;
+    state_qos(q);
+    Subscriber *sub = tp_sc ? pp->create_subscriber(SUBSCRIBER_QOS_DEFAULT) : nullptr;
+    DataReader *r_sc = sub ? sub->create_datareader(tp_sc, q) : nullptr;
+    if (!r_sc) return fail("cannot read palp_session_closed");
+    unsigned n = 0;
+    const auto tc = Clock::now();
+    while (n == 0 && since(tc) < 10) { // once the reader has matched and taken the history
+      palp::SessionClosed sc;
+      SampleInfo info;
+      while (r_sc->take_next_sample(&sc, &info) == ReturnCode_t::RETCODE_OK)
+        if (info.valid_data) {
+          std::printf("result closed %u %s %.1f %s\n", sc.session_id(), sc.trainee_name().c_str(), sc.duration(),
+                      sc.reason().c_str());
+          n++;
+        }
+      if (n == 0) nap(0.05);
+    }
+    std::printf("result closed_sessions %u\n", n);
+  }
   rq.request_seq(2);
   rq.op(palp::OP_LEAVE);
   std::printf("result leave_written %d\n", w_rq->write(&rq) ? 1 : 0);
