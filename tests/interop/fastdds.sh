@@ -37,6 +37,15 @@ check_press station
 [ "$(r station session_log)" = "$(r station session) 0 0" ] \
   && ok "palp_session_log (added in session 69) read by Fast DDS: \"$(r station session_log)\" (session, shed, failed)" \
   || bad "palp_session_log through Fast DDS: \"$(r station session_log)\", want \"$(r station session) 0 0\""
+# palp_server_status (a sequence of per-session loads with arrays inside; best-effort, 1 Hz): the
+# server lists this session, with the contact samples it took (1 to as many as the station had sent
+# by then, the NaN and release samples included) and the records its log wrote (> 0)
+set -- $(r station status)
+if [ $# -eq 4 ] && [ "$1" -ge 1 ] && [ "$2" -ge 1 ] && [ "$2" -le "$4" ] && [ "$3" -ge 1 ]; then
+  ok "palp_server_status read by Fast DDS: $1 session(s) open, this one listed with $2 contact samples (of $4 sent), $3 log records written"
+else
+  bad "palp_server_status through Fast DDS: \"$(r station status)\""
+fi
 reason=$(r station leave_reason)
 [ "$reason" = "trainee station left (request disposed)" ] \
   && ok "dispose alone on palp_station_request ended the session in $(r station leave_closed_s) s: \"$reason\"" \

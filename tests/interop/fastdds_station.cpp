@@ -312,8 +312,9 @@ int main(int argc, char **argv) {
               t_srq = make_type<palp::StationRequestPubSubType>(), t_rp = make_type<palp::SessionReplyPubSubType>(),
               t_st = make_type<palp::SessionStatePubSubType>(), t_ct = make_type<palp::ContactPubSubType>(),
               t_fb = make_type<palp::FeedbackPubSubType>(), t_df = make_type<palp::DeformationPubSubType>(),
-              t_lm = make_type<palp::LocalModelPubSubType>(), t_sl = make_type<palp::SessionLogPubSubType>();
-  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl}) t->register_type(pp);
+              t_lm = make_type<palp::LocalModelPubSubType>(), t_sl = make_type<palp::SessionLogPubSubType>(),
+              t_ss = make_type<palp::ServerStatusPubSubType>();
+  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss}) t->register_type(pp);
   Topic *tp_ph = pp->create_topic("palp_catalogue", t_ph.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_rq = station_topic ? pp->create_topic("palp_station_request", t_srq.get_type_name(), TOPIC_QOS_DEFAULT)
                                : pp->create_topic("palp_session_request", t_rq.get_type_name(), TOPIC_QOS_DEFAULT);
@@ -324,7 +325,10 @@ int main(int argc, char **argv) {
   Topic *tp_df = pp->create_topic("palp_deformation", t_df.get_type_name(), TOPIC_QOS_DEFAULT);
   // a type added by session 69 (its server writes it as the session opens, when it keeps a log)
   Topic *tp_sl = pp->create_topic("palp_session_log", t_sl.get_type_name(), TOPIC_QOS_DEFAULT);
-  if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df || !tp_sl) return fail("cannot create the topics");
+  // the server's status: nested sequence of structs with arrays, fields added up to session 68
+  Topic *tp_ss = pp->create_topic("palp_server_status", t_ss.get_type_name(), TOPIC_QOS_DEFAULT);
+  if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df || !tp_sl || !tp_ss)
+    return fail("cannot create the topics");
 
   Subscriber *sub = pp->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
   PublisherQos req_pubq = PUBLISHER_QOS_DEFAULT;
@@ -335,6 +339,10 @@ int main(int argc, char **argv) {
   DataReader *r_ph = sub->create_datareader(tp_ph, rq_state);
   DataReader *r_rp = sub->create_datareader(tp_rp, rq_state);
   DataReader *r_st = sub->create_datareader(tp_st, rq_state);
+  DataReaderQos rq_ss = DATAREADER_QOS_DEFAULT; // best-effort, volatile, keep-last 1 (docs/server.md)
+  rq_ss.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  rq_ss.history().depth = 1;
+  DataReader *r_ss = sub->create_datareader(tp_ss, rq_ss);
   DataWriterQos wq_rq = DATAWRITER_QOS_DEFAULT;
   wq_rq.reliability().kind = RELIABLE_RELIABILITY_QOS;
   wq_rq.durability().kind = TRANSIENT_LOCAL_DURABILITY_QOS;
@@ -547,14 +555,31 @@ int main(int argc, char **argv) {
   for (int k = 0; k < 3; k++) c.seq(++seq), w_ct->write(&c), nap(0.02);
   uint64_t rejected = 0;
   const auto tr = Clock::now();
-  while (rejected == 0 && since(tr) < 4) {
+  // ... and a status of the server (1 Hz) listing this session, read alongside
+  bool status_seen = false;
+  unsigned long long st_open = 0, st_contacts = 0, st_log = 0;
+  while ((rejected == 0 || !status_seen) && since(tr) < 4) {
     palp::SessionState s;
     SampleInfo info;
     while (r_st->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK)
       if (info.valid_data && s.session_id() == session) rejected = s.rejected_samples();
+    palp::ServerStatus ss;
+    while (r_ss && r_ss->take_next_sample(&ss, &info) == ReturnCode_t::RETCODE_OK)
+      if (info.valid_data)
+        for (const palp::SessionLoad &l : ss.sessions())
+          if (l.session_id() == session) {
+            status_seen = true;
+            st_open = ss.sessions_open();
+            st_contacts = l.contact_samples();
+            st_log = ss.log_written();
+          }
     nap(0.05);
   }
   std::printf("result rejected_samples %llu\n", (unsigned long long)rejected);
+  if (status_seen)
+    std::printf("result status %llu %llu %llu %llu\n", st_open, st_contacts, st_log, (unsigned long long)seq);
+  else
+    std::printf("result status none\n");
 
   // 5b. Position in, force out (issue 11), optional ("+finger"): the fingertip (8 mm sphere) is
   // driven by position at the pole, from 2 mm above the surface to 3 mm deep at 5 mm/s at 100 Hz,
