@@ -19,9 +19,10 @@ in_private_netns "$0" "$@"
 server=$1 station=$2 dds=$3 domain=$4
 work_dir palp-fastdds-test
 unset CYCLONEDDS_URI
-# (a session log of its own: the server writes each session's palp_session_log only when it keeps one)
-"$server" --dds-config "$dds" --domain "$domain" --database "$work/sessions.db" --log-file "$work/server.log" \
-  > "$work/server.out" 2>&1 &
+# (a session log of its own: the server writes each session's palp_session_log only when it keeps one;
+# the exercises' config: domes A and B as before, and the shipped exercises for step 4)
+"$server" --config "$(dirname "$dds")/server-exercises.json" --dds-config "$dds" --domain "$domain" \
+  --database "$work/sessions.db" --log-file "$work/server.log" > "$work/server.out" 2>&1 &
 spid=$!
 sleep 1
 
@@ -86,6 +87,30 @@ else
 fi
 [ "$(r session feedback_samples)" -ge 50 ] 2>/dev/null && ok "palp_session_request join, feedback ($(r session feedback_samples) samples, last $(r session feedback_last_N) N) work too" \
   || bad "palp_session_request session: $(r session feedback_samples) feedback samples"
+
+# 4. An exercise through Fast DDS (the types added with issue 13 and after): "easy" (phantom 11, one
+#    2 cm lesion at polar 30 deg, azimuth 120 deg, centre 12 mm deep, config/exercises/easy.json), pressed by
+#    position at the pole; a "lump here" mark (palp_finding) where the fingertip touches, answered on
+#    palp_finding_status; the station leaves, and reads its debrief (palp_debrief: the lesions' places,
+#    a sequence of structs) and its score (palp_debrief_score), as palp-client does.
+timeout 60 "$station" "$domain" 11 station+exercise 4 > "$work/exercise.out" 2>&1; rc=$?
+[ "$(r exercise finding)" = "1 1 -" ] && ok "its mark (palp_finding) accepted on palp_finding_status: \"$(r exercise finding)\" (marks standing, accepted, reason)" \
+  || { bad "mark through Fast DDS: exit $rc, \"$(r exercise finding)\""; grep "^result\|^FAIL" "$work/exercise.out"; }
+set -- $(r exercise debrief)
+# level 2 DEBRIEF_LESIONS ("debrief": "lesions"), 1 lesion, found 0 (the pole is 20 mm of arc from it,
+# beyond its 10 mm margin), 1 mark, 1 place, and the session's closing reason
+[ "$1 $2 $3 $4 $5" = "2 1 0 1 1" ] && [ "$(r exercise debrief | cut -d' ' -f6-)" = "$(r exercise leave_reason)" ] \
+  && ok "palp_debrief read by Fast DDS: \"$(r exercise debrief)\" (level, lesions, found, marks, places, reason)" \
+  || bad "palp_debrief through Fast DDS: \"$(r exercise debrief)\""
+# the lesion's place from the file by hand: R 40 mm, polar 30 deg: (20 cos 120, 20 sin 120, 40 cos 30) mm
+[ "$(r exercise debrief_lesion)" = "-10.0 17.3 34.6 12.0 20.0 0" ] \
+  && ok "  its lesion where easy.json puts it: \"$(r exercise debrief_lesion)\" (x y z, depth, diameter [mm], missed)" \
+  || bad "  the debrief's lesion: \"$(r exercise debrief_lesion)\", want \"-10.0 17.3 34.6 12.0 20.0 0\""
+set -- $(r exercise debrief_score)
+logged=$(sed -n "s/^.*palp-server: session $(r exercise session) ([^)]*): scored \([0-9.]*\), .*/\1/p" "$work/server.log" | head -n 1)
+[ "$1 $2 $4 $5 $6" = "0 easy 0 1 0" ] && [ -n "$logged" ] && [ "$3" = "$logged" ] \
+  && ok "palp_debrief_score read by Fast DDS: \"$(r exercise debrief_score)\" (status, exercise, score, pass, lesions, found), the score the server logged ($logged)" \
+  || bad "palp_debrief_score through Fast DDS: \"$(r exercise debrief_score)\", the server logged \"$logged\""
 kill -INT "$spid"; wait "$spid"; rc=$?; spid=
 [ $rc -eq 0 ] && ok "palp-server stopped cleanly" || bad "palp-server exit $rc"
 [ $fail -ne 0 ] && { echo "--- server log"; cat "$work/server.log"; }

@@ -27,14 +27,16 @@
 // (the permissions do not grant palp_station_request), and leaves with OP_LEAVE. CLAIM (optional)
 // is the user name it claims instead of NAME: a forged identity the server must refuse.
 //
-// usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES [PKI trainee/NAME [CLAIM]]
+// usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger|+exercise] PEER_INDICES [PKI trainee/NAME [CLAIM]]
 //        fastdds_station DOMAIN PHANTOM_ID observe PEER_INDICES PKI instructor/NAME TRAINEE
 // (observe: an instructor's station, secured only: finds TRAINEE's open session in the session
 // states, joins it as observer, reads its contacts and deformation for 1.5 s, is refused a
 // contact writer there by its own permissions, and leaves with OP_LEAVE)
 // PALP_FASTDDS_WARNINGS=1 in the environment prints Fast DDS's own warnings (for debugging a peer).
 // (station-crash: press, then wait to be killed, for the crash-versus-goodbye check; +finger: then
-// press by position and read the server's local contact models)
+// press by position and read the server's local contact models; +exercise, on an exercise phantom: as
+// +finger, then mark a lump where the fingertip touches (palp_finding), read the answer
+// (palp_finding_status), and after leaving the debrief and the score (palp_debrief, palp_debrief_score))
 #include <cmath>
 #include <chrono>
 #include <cstdio>
@@ -250,7 +252,10 @@ int main(int argc, char **argv) {
   const uint32_t phantom_id = (uint32_t)std::strtoul(argv[2], nullptr, 10);
   const bool station_topic = std::strncmp(argv[3], "station", 7) == 0;
   const bool crash = std::strstr(argv[3], "-crash") != nullptr;
-  const bool finger = std::strstr(argv[3], "+finger") != nullptr; // also press by position
+  // +exercise (on an exercise phantom): press by position, mark a lump where the fingertip is, and read
+  // the mark's answer, the debrief and the score as the session ends
+  const bool exercise = std::strstr(argv[3], "+exercise") != nullptr;
+  const bool finger = exercise || std::strstr(argv[3], "+finger") != nullptr; // also press by position
   const bool observe = std::strcmp(argv[3], "observe") == 0;       // an instructor follows a trainee
   const int peers = std::atoi(argv[4]);
   const bool secure = argc >= 7;
@@ -313,8 +318,13 @@ int main(int argc, char **argv) {
               t_st = make_type<palp::SessionStatePubSubType>(), t_ct = make_type<palp::ContactPubSubType>(),
               t_fb = make_type<palp::FeedbackPubSubType>(), t_df = make_type<palp::DeformationPubSubType>(),
               t_lm = make_type<palp::LocalModelPubSubType>(), t_sl = make_type<palp::SessionLogPubSubType>(),
-              t_ss = make_type<palp::ServerStatusPubSubType>();
-  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss}) t->register_type(pp);
+              t_ss = make_type<palp::ServerStatusPubSubType>(),
+              t_fi = make_type<palp::FindingPubSubType>(), t_fs = make_type<palp::FindingStatusPubSubType>(),
+              t_db = make_type<palp::DebriefPubSubType>(), t_sc = make_type<palp::SessionScorePubSubType>();
+  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss})
+    t->register_type(pp);
+  if (exercise)
+    for (TypeSupport *t : {&t_fi, &t_fs, &t_db, &t_sc}) t->register_type(pp);
   Topic *tp_ph = pp->create_topic("palp_catalogue", t_ph.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_rq = station_topic ? pp->create_topic("palp_station_request", t_srq.get_type_name(), TOPIC_QOS_DEFAULT)
                                : pp->create_topic("palp_session_request", t_rq.get_type_name(), TOPIC_QOS_DEFAULT);
@@ -581,6 +591,7 @@ int main(int argc, char **argv) {
   else
     std::printf("result status none\n");
 
+  DataReader *r_db = nullptr, *r_sc = nullptr; // the exercise's debrief and score (5c)
   // 5b. Position in, force out (issue 11), optional ("+finger"): the fingertip (8 mm sphere) is
   // driven by position at the pole, from 2 mm above the surface to 3 mm deep at 5 mm/s at 100 Hz,
   // then held 0.6 s; the server answers each physics step with a local contact model
@@ -611,6 +622,8 @@ int main(int argc, char **argv) {
     dev.x(0);
     dev.y(0);
     uint64_t lm_n = 0, lm_contact = 0, lm_drops = 0, hold_n = 0;
+    palp::Vec3 mark_at;
+    double mark_time = -1;
     double last_f = -1, hold_f = 0, hold_kzz = 0, hold_depth = 0, hold_dev_mm = 0, peak_f = 0;
     const auto tf = Clock::now();
     for (double t = 0; t < 1.6; t = since(tf)) {
@@ -627,7 +640,7 @@ int main(int argc, char **argv) {
         lm_n++;
         const double fm = std::sqrt(lm.force().x() * lm.force().x() + lm.force().y() * lm.force().y() +
                                     lm.force().z() * lm.force().z());
-        if (lm.in_contact()) lm_contact++;
+        if (lm.in_contact()) lm_contact++, mark_at = lm.point(), mark_time = lm.time();
         // deeper every step until the hold: the force must not fall (2% or 0.01 N of slack)
         if (last_f >= 0 && fm < last_f - std::fmax(0.02 * last_f, 0.01)) lm_drops++;
         last_f = fm;
@@ -648,6 +661,44 @@ int main(int argc, char **argv) {
                 "result lm_hold_device_depth_mm %.3f\nresult lm_hold_coupling_mm %.4f\n",
                 (unsigned long long)lm_n, (unsigned long long)lm_contact, (unsigned long long)lm_drops,
                 (unsigned long long)hold_n, hold_f, peak_f, hold_kzz * 1e-3, hold_dev_mm, hold_depth * 1e3);
+    if (exercise) { // 5c. a "lump here" mark where the fingertip touches, while it still does
+      Topic *tp_fi = pp->create_topic("palp_finding", t_fi.get_type_name(), TOPIC_QOS_DEFAULT);
+      Topic *tp_fs = pp->create_topic("palp_finding_status", t_fs.get_type_name(), TOPIC_QOS_DEFAULT);
+      Topic *tp_db = pp->create_topic("palp_debrief", t_db.get_type_name(), TOPIC_QOS_DEFAULT);
+      Topic *tp_sc = pp->create_topic("palp_debrief_score", t_sc.get_type_name(), TOPIC_QOS_DEFAULT);
+      DataWriterQos wq_fi = DATAWRITER_QOS_DEFAULT; // reliable, volatile, keep-all (docs/server.md)
+      wq_fi.reliability().kind = RELIABLE_RELIABILITY_QOS;
+      wq_fi.durability().kind = VOLATILE_DURABILITY_QOS;
+      wq_fi.history().kind = KEEP_ALL_HISTORY_QOS;
+      DataWriter *w_fi = tp_fi ? spub->create_datawriter(tp_fi, wq_fi) : nullptr;
+      DataReader *r_fs = tp_fs ? ssub->create_datareader(tp_fs, rq_state) : nullptr;
+      r_db = tp_db ? ssub->create_datareader(tp_db, rq_state) : nullptr;
+      r_sc = tp_sc ? ssub->create_datareader(tp_sc, rq_state) : nullptr;
+      if (!w_fi || !r_fs || !r_db || !r_sc) return fail("cannot create the exercise's endpoints");
+      if (mark_time < 0) return fail("the fingertip never touched: nothing to mark");
+      nap(0.5); // discovery of the new endpoints (the fingertip stays held)
+      palp::Finding fi;
+      fi.session_id(session);
+      fi.mark_id(1);
+      fi.op(palp::FINDING_MARK);
+      fi.point(mark_at);
+      fi.time(mark_time);
+      w_fi->write(&fi);
+      bool answered = false;
+      const auto tm = Clock::now();
+      while (!answered && since(tm) < 3) {
+        palp::FindingStatus fs;
+        SampleInfo info;
+        while (r_fs->take_next_sample(&fs, &info) == ReturnCode_t::RETCODE_OK)
+          if (info.valid_data && fs.session_id() == session && fs.last_mark_id() == 1) {
+            std::printf("result finding %u %d %s\n", fs.marks(), fs.last_accepted() ? 1 : 0,
+                        fs.reason().size() == 0 ? "-" : fs.reason().c_str());
+            answered = true;
+          }
+        if (!answered) nap(0.02);
+      }
+      if (!answered) std::printf("result finding none\n");
+    }
     fc.mode(palp::CONTACT_RELEASE);
     for (int k = 0; k < 3; k++) fc.seq(++seq), w_ct->write(&fc), nap(0.02);
   }
@@ -678,6 +729,33 @@ int main(int argc, char **argv) {
     nap(0.02);
   }
   std::printf("result leave_closed_s %.3f\nresult leave_reason %s\n", closed_s, reason.c_str());
+  if (r_db) { // the exercise's end: its debrief, then its score, in the session's partition
+    bool have_db = false, have_sc = false;
+    const auto td = Clock::now();
+    while ((!have_db || !have_sc) && since(td) < 5) {
+      palp::Debrief db;
+      palp::SessionScore sc;
+      SampleInfo info;
+      while (!have_db && r_db->take_next_sample(&db, &info) == ReturnCode_t::RETCODE_OK)
+        if (info.valid_data && db.session_id() == session) {
+          have_db = true;
+          std::printf("result debrief %d %u %u %u %zu %s\n", (int)db.level(), db.lesions(), db.found(), db.marks(),
+                      db.lesion().size(), db.reason().c_str());
+          for (const palp::DebriefLesion &l : db.lesion())
+            std::printf("result debrief_lesion %.1f %.1f %.1f %.1f %.1f %u\n", l.point().x() * 1e3, l.point().y() * 1e3,
+                        l.point().z() * 1e3, l.depth() * 1e3, l.diameter() * 1e3, l.found_by());
+        }
+      while (!have_sc && r_sc->take_next_sample(&sc, &info) == ReturnCode_t::RETCODE_OK)
+        if (info.valid_data && sc.session_id() == session) {
+          have_sc = true;
+          std::printf("result debrief_score %d %s %.1f %d %u %u\n", (int)sc.status(), sc.exercise_name().c_str(),
+                      sc.score(), sc.pass() ? 1 : 0, sc.lesions(), sc.found());
+        }
+      nap(0.05);
+    }
+    if (!have_db) std::printf("result debrief none\n");
+    if (!have_sc) std::printf("result debrief_score none\n");
+  }
   pp->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(pp);
   return 0;
