@@ -94,6 +94,10 @@ fi
 #    palp_finding_status; the station leaves, and reads its debrief (palp_debrief: the lesions' places,
 #    a sequence of structs) and its score (palp_debrief_score), as palp-client does.
 timeout 60 "$station" "$domain" 11 station+exercise 4 > "$work/exercise.out" 2>&1; rc=$?
+# palp_exercise as easy.json has it: 300 s, 15 N, light 1-4, medium 4-9, deep 9-18 mm (an array of structs)
+[ "$(r exercise exercise)" = "easy 300 15.0 1-4 4-9 9-18" ] \
+  && ok "palp_exercise read by Fast DDS as easy.json has it: \"$(r exercise exercise)\" (name, time limit s, max force N, bands mm)" \
+  || bad "palp_exercise through Fast DDS: \"$(r exercise exercise)\", want \"easy 300 15.0 1-4 4-9 9-18\""
 [ "$(r exercise finding)" = "1 1 -" ] && ok "its mark (palp_finding) accepted on palp_finding_status: \"$(r exercise finding)\" (marks standing, accepted, reason)" \
   || { bad "mark through Fast DDS: exit $rc, \"$(r exercise finding)\""; grep "^result\|^FAIL" "$work/exercise.out"; }
 set -- $(r exercise debrief)

@@ -341,11 +341,12 @@ int main(int argc, char **argv) {
               t_lm = make_type<palp::LocalModelPubSubType>(), t_sl = make_type<palp::SessionLogPubSubType>(),
               t_ss = make_type<palp::ServerStatusPubSubType>(),
               t_fi = make_type<palp::FindingPubSubType>(), t_fs = make_type<palp::FindingStatusPubSubType>(),
-              t_db = make_type<palp::DebriefPubSubType>(), t_sc = make_type<palp::SessionScorePubSubType>();
+              t_db = make_type<palp::DebriefPubSubType>(), t_sc = make_type<palp::SessionScorePubSubType>(),
+              t_ex = make_type<palp::ExercisePubSubType>();
   for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss})
     t->register_type(pp);
   if (exercise)
-    for (TypeSupport *t : {&t_fi, &t_fs, &t_db, &t_sc}) t->register_type(pp);
+    for (TypeSupport *t : {&t_fi, &t_fs, &t_db, &t_sc, &t_ex}) t->register_type(pp);
   Topic *tp_ph = pp->create_topic("palp_catalogue", t_ph.get_type_name(), TOPIC_QOS_DEFAULT);
   Topic *tp_rq = station_topic ? pp->create_topic("palp_station_request", t_srq.get_type_name(), TOPIC_QOS_DEFAULT)
                                : pp->create_topic("palp_session_request", t_rq.get_type_name(), TOPIC_QOS_DEFAULT);
@@ -695,9 +696,31 @@ int main(int argc, char **argv) {
       DataReader *r_fs = tp_fs ? ssub->create_datareader(tp_fs, rq_state) : nullptr;
       r_db = tp_db ? ssub->create_datareader(tp_db, rq_state) : nullptr;
       r_sc = tp_sc ? ssub->create_datareader(tp_sc, rq_state) : nullptr;
-      if (!w_fi || !r_fs || !r_db || !r_sc) return fail("cannot create the exercise's endpoints");
+      // the exercise as every station reads it (palp_exercise, public, default partition: an array of
+      // three pressure bands among its fields)
+      Topic *tp_ex = pp->create_topic("palp_exercise", t_ex.get_type_name(), TOPIC_QOS_DEFAULT);
+      DataReader *r_ex = tp_ex ? sub->create_datareader(tp_ex, rq_state) : nullptr;
+      if (!w_fi || !r_fs || !r_db || !r_sc || !r_ex) return fail("cannot create the exercise's endpoints");
       if (mark_time < 0) return fail("the fingertip never touched: nothing to mark");
       nap(0.5); // discovery of the new endpoints (the fingertip stays held)
+      {
+        palp::Exercise ex;
+        SampleInfo info;
+        bool have_ex = false;
+        const auto te = Clock::now();
+        while (!have_ex && since(te) < 3) {
+          while (!have_ex && r_ex->take_next_sample(&ex, &info) == ReturnCode_t::RETCODE_OK)
+            if (info.valid_data && ex.phantom_id() == phantom_id) have_ex = true;
+          if (!have_ex) nap(0.02);
+        }
+        if (have_ex)
+          std::printf("result exercise %s %.0f %.1f %.0f-%.0f %.0f-%.0f %.0f-%.0f\n", ex.name().c_str(), ex.time_limit(),
+                      ex.max_force(), ex.bands()[0].depth_min() * 1e3, ex.bands()[0].depth_max() * 1e3,
+                      ex.bands()[1].depth_min() * 1e3, ex.bands()[1].depth_max() * 1e3, ex.bands()[2].depth_min() * 1e3,
+                      ex.bands()[2].depth_max() * 1e3);
+        else
+          std::printf("result exercise none\n");
+      }
       palp::Finding fi;
       fi.session_id(session);
       fi.mark_id(1);
