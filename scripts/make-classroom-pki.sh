@@ -290,7 +290,7 @@ permissions_current() { # kind name
 # cannot create it), or damaged (until 2026-12-06 a re-issue run from a directory holding files wrote
 # an instructor's "*" as those files' names, and its stations could then create no topic).
 permissions_refresh() {
-  local c kind name n=0 certs
+  local c kind name n=0 certs who=""
   # File names are expanded here only: the rules written below hold "*" (an instructor reads every
   # topic), which with expansion on became the names of the files in the caller's directory.
   set +f
@@ -301,10 +301,11 @@ permissions_refresh() {
     kind=$(basename "$(dirname "$c")") name=$(basename "$c" .cert.pem)
     permissions_current "$kind" "$name" && continue
     permissions_of "$kind" "$name"
-    n=$((n + 1))
+    n=$((n + 1)) who="$who${who:+, }$kind/$name"
   done
+  # named, so that whoever copies them knows which machines to visit
   [ "$n" -eq 0 ] ||
-    echo "make-classroom-pki: permissions re-issued (version $PERMISSIONS_VERSION) for $n identities: copy each $dir/KIND/NAME.permissions.p7s to its station and restart them and the server"
+    echo "make-classroom-pki: permissions re-issued (version $PERMISSIONS_VERSION) for $n identities ($who): copy each $dir/KIND/NAME.permissions.p7s to its station and restart them and the server"
 }
 
 # A TLS server certificate for palp-web (docs/web.md, "HTTPS"), signed by the classroom CA, so that a
