@@ -195,6 +195,35 @@ static void expiry_warning(palp_dds_security *s, double cert_days) {
                 : "");
 }
 
+/* The version make-classroom-pki.sh wrote into the identity's signed permissions (their text is in
+ * the S/MIME file's clear part, near its start): 1 when they carry none (made before versions were),
+ * 0 when the file cannot be read (the plugins then say why at creation). */
+static int permissions_version(const palp_dds_security *s) {
+  char f[PALP_DDS_PKI_PATH_MAX + 96], buf[4096];
+  if (file_of(s, ".permissions.p7s", f, sizeof f) < 0) return 0;
+  FILE *fp = fopen(f, "r");
+  if (!fp) return 0;
+  const size_t n = fread(buf, 1, sizeof buf - 1, fp);
+  fclose(fp);
+  buf[n] = '\0';
+  static const char mark[] = "palp permissions, version ";
+  const char *m = strstr(buf, mark);
+  return m ? atoi(m + sizeof mark - 1) : 1;
+}
+
+/* Appends to the start-up warning that the identity's permissions predate this build's topics. */
+static void permissions_warning(palp_dds_security *s) {
+  const int v = permissions_version(s);
+  if (v <= 0 || v >= PALP_DDS_PERMISSIONS_VERSION) return;
+  const char *kind = palp_dds_id_kind_name(s->kind);
+  const size_t used = strlen(s->warning);
+  snprintf(s->warning + used, sizeof s->warning - used,
+           "%sthe permissions of %s/%s are version %d, older than this palp's %d: the topics added since are "
+           "refused to it (they go without them, and say what is lost); re-issue them with "
+           "scripts/make-classroom-pki.sh %s init and copy %s/%s/%s.permissions.p7s to this machine",
+           used ? "; " : "", kind, s->name, v, PALP_DDS_PERMISSIONS_VERSION, s->pki, s->pki, kind, s->name);
+}
+
 int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *identity, char *err, size_t errlen) {
   memset(sec, 0, sizeof *sec);
   if (!pki || !identity || !pki[0] || !identity[0]) return 0;
@@ -232,6 +261,7 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
   double cert_days;
   if ((rc = identity_pair_check(&s, identity, &cert_days, err, errlen)) < 0) return rc;
   expiry_warning(&s, cert_days);
+  permissions_warning(&s);
   *sec = s;
   return 0;
 }

@@ -41,14 +41,21 @@ typedef enum palp_dds_id_kind {
 /* Days before an expiry palp warns of it (docs/security.md, "Keep in mind"). */
 #define PALP_DDS_EXPIRY_WARN_DAYS 30
 
+/* The permissions version this build's topics need: scripts/make-classroom-pki.sh's PERMISSIONS_VERSION,
+ * which it writes into each identity's permissions ("palp permissions, version N"); test security_cli
+ * checks the two agree. An identity whose permissions are older is warned of at start
+ * (palp_dds_security.warning): the topics added since are refused to it. */
+#define PALP_DDS_PERMISSIONS_VERSION 7
+
 typedef struct palp_dds_security {
   palp_dds_id_kind kind;              /* PALP_DDS_ID_NONE: plain DDS */
   char name[PALP_DDS_NAME_MAX];
   char pki[PALP_DDS_PKI_PATH_MAX];    /* absolute directory of the classroom PKI */
   /* Set by palp_dds_security_init when the identity's certificate or the classroom CRL expires
-   * within PALP_DDS_EXPIRY_WARN_DAYS or has expired (an expired CRL fails every handshake):
-   * what and what to do, for the program to log at its start. Empty otherwise. */
-  char warning[600];
+   * within PALP_DDS_EXPIRY_WARN_DAYS or has expired (an expired CRL fails every handshake), or its
+   * permissions are older than PALP_DDS_PERMISSIONS_VERSION: what and what to do, for the program
+   * to log at its start. Empty otherwise. */
+  char warning[1024];
 } palp_dds_security;
 
 /* "trainee", "instructor", "server" (NULL for NONE). */

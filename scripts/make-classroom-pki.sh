@@ -113,6 +113,8 @@ GOVERNANCE_VERSION=2
 # session the server's log lost; without it her station counts the whole server's).
 # 7 (2026-12-06, session 69): palp_session_closed, server -> instructors (who each closed session was,
 # for a dashboard begun after it).
+# palp's programs warn at start of permissions older than their PALP_DDS_PERMISSIONS_VERSION
+# (idl/palp_dds_security.h): raise both together (test security_cli checks they agree).
 PERMISSIONS_VERSION=7
 
 topic_rule() { # topic expression, metadata protection kind

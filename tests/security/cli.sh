@@ -134,6 +134,11 @@ openssl smime -sign -in "$out/oldperm/trainee/alice.permissions.xml" -text \
 "$client" --role trainee --domain 131 --phantom 1 --pki "$out/oldperm" --identity trainee/alice --duration 1 \
   --timeout 4 --quiet >"$out/oldperm.log" 2>&1
 rc=$?
+# ... and says at its start that its permissions are older than this palp's, and what to do (since
+# 2026-12-06; the version palp checks against is the script's: the two must agree)
+pv=$(sed -n 's/^PERMISSIONS_VERSION=\([0-9]*\)$/\1/p' "$(dirname "$0")/../../scripts/make-classroom-pki.sh")
+check "  it is told at start that its permissions (version 1) are older than this palp's $pv, and how to re-issue them" \
+  "[ -n '$pv' ] && grep -q 'WARN  palp-client: DDS Security: the permissions of trainee/alice are version 1, older than this palp.s $pv: the topics added since are refused to it (they go without them, and say what is lost); re-issue them with scripts/make-classroom-pki.sh .*/oldperm init and copy .*/oldperm/trainee/alice.permissions.p7s to this machine' '$out/oldperm.log'"
 check "a station whose permissions predate palp_debrief still runs its session (exit $rc)" \
   "[ $rc -eq 0 ] && ! grep -q palp_debrief '$out/oldperm/trainee/alice.permissions.xml' && grep -q 'session [0-9]*: .* contact samples sent' '$out/oldperm.log'"
 # ... and a server on such permissions serves on, without debriefs, and says so (domain 132, 2 s)
@@ -156,6 +161,9 @@ wait $opid
 rc=$?
 check "a server whose permissions predate palp_debrief serves, and warns that it cannot debrief (exit $rc)" \
   "[ $rc -eq 0 ] && grep -q 'no debriefs: the server.s permissions do not allow topic palp_debrief' '$out/oldperm-server.log'"
+"$server" --config "$(dirname "$0")/../../config/server.json" --pki "$out/oldperm" --check >"$out/oldperm-check.log" 2>&1
+check "  ... and says at start that its permissions are older than this palp's, --check too" \
+  "grep -q 'WARN  palp-server: DDS Security: the permissions of server/server are version 1, older than this palp.s $pv' '$out/oldperm-server.log' && grep -q '^palp-server: warning: DDS Security: the permissions of server/server are version 1, older than this palp.s $pv' '$out/oldperm-check.log'"
 check "  ... nor send its exercises to recorders, and says that their lesions stay on it" \
   "grep -q 'no exercises for recorders: the server.s permissions do not allow topic palp_session_exercise' '$out/oldperm-server.log' && grep -q 'lesions stay on this server (the permissions predate palp_session_exercise)' '$out/oldperm-server.log'"
 check "  ... nor tell the trainees of practice exercises their scores (session 64), and says so" \
