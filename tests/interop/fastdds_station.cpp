@@ -229,27 +229,6 @@ static int follow_session(DomainParticipant *pp, DataReader *r_st, DataReader *r
       if (n == 0) nap(0.05);
     }
     std::printf("result closed_sessions %u\n", n);
-    // ... and the exercise sessions' scores (palp_session_score, session 63, instructors only, the newest
-    // 64 kept): the score the server graded from its log as each closed
-    TypeSupport t_ss = make_type<palp::SessionScorePubSubType>();
-    t_ss.register_type(pp);
-    Topic *tp_ss = pp->create_topic("palp_session_score", t_ss.get_type_name(), TOPIC_QOS_DEFAULT);
-    DataReader *r_ss = tp_ss ? sub->create_datareader(tp_ss, q) : nullptr;
-    if (!r_ss) return fail("cannot read palp_session_score");
-    unsigned ns = 0;
-    const auto ts = Clock::now();
-    while (ns == 0 && since(ts) < 10) {
-      palp::SessionScore sc;
-      SampleInfo info;
-      while (r_ss->take_next_sample(&sc, &info) == ReturnCode_t::RETCODE_OK)
-        if (info.valid_data) {
-          std::printf("result score %u %s %.1f %d %u %u\n", sc.session_id(), sc.exercise_name().c_str(), sc.score(),
-                      sc.pass() ? 1 : 0, sc.lesions(), sc.found());
-          ns++;
-        }
-      if (ns == 0) nap(0.05);
-    }
-    std::printf("result scores %u\n", ns);
   }
   rq.request_seq(2);
   rq.op(palp::OP_LEAVE);
