@@ -240,6 +240,7 @@ static int follow_session(DomainParticipant *pp, DataReader *r_st, DataReader *r
 }
 
 int main(int argc, char **argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0); // each result as it comes: a station killed by timeout keeps them
   if (argc != 5 && argc != 7 && argc != 8) {
     std::fprintf(stderr, "usage: fastdds_station DOMAIN PHANTOM_ID session|station|station-crash[+finger] PEER_INDICES "
                          "[PKI trainee/NAME [CLAIM]]\n"
