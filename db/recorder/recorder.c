@@ -957,7 +957,7 @@ int main(int argc, char **argv) {
   char security[96];
   /* Without --domain, the DDS config's default domain: named by its number, as the server and stations
    * name theirs (it said "domain -1", DDS_DOMAIN_DEFAULT, until 2026-12-06). */
-  dds_domainid_t joined = domain;
+  dds_domainid_t joined;
   if (dds_get_domainid(pp, &joined) < 0) joined = domain;
   palp_log_info(&plog, "%s recording domain %u%s into %s (sessions on partition %s), DDS config %s; DDS Security %s",
                 palp_app_version(), (unsigned)joined, domain == DDS_DOMAIN_DEFAULT ? " (the DDS config's default)" : "",

@@ -17,6 +17,8 @@ server=$1 client=$2 pki=$3 recorder=$4 web=$5
 out=$(mktemp -d)
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+# resign DIR STEM: DIR/STEM.xml, edited by the test, signed again by DIR's CA into DIR/STEM.p7s
+resign() { openssl smime -sign -in "$1/$2.xml" -text -out "$1/$2.p7s" -signer "$1/ca.cert.pem" -inkey "$1/ca/ca.key.pem"; }
 # --duration: the server outlives every station below (~25 s of them on a quiet machine; 30 s ended the
 # stall check's session mid-way in a fresh clone's run once the permissions checks came before it, 2026-12-05);
 # it is stopped by SIGINT at the end anyway
@@ -115,8 +117,7 @@ check "a certificate and a CRL about to expire are warned of (server --check exi
 cp -r "$pki" "$out/oldgov"
 sed -i 's|<metadata_protection_kind>SIGN</metadata_protection_kind>|<metadata_protection_kind>NONE</metadata_protection_kind>|' \
   "$out/oldgov/governance.xml"
-openssl smime -sign -in "$out/oldgov/governance.xml" -text -out "$out/oldgov/governance.p7s" \
-  -signer "$out/oldgov/ca.cert.pem" -inkey "$out/oldgov/ca/ca.key.pem"
+resign "$out/oldgov" governance
 "$client" --role trainee --domain 131 --phantom 1 --pki "$out/oldgov" --identity trainee/alice --duration 1 --timeout 4 \
   >"$out/oldgov.log" 2>&1
 rc=$?
@@ -129,8 +130,7 @@ check "a station on an old governance is not answered and is told, in full, to c
 cp -r "$pki" "$out/oldperm"
 sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d; /<topic>palp_debrief_score<\/topic>/d' \
   -e '/<topic>palp_session_log<\/topic>/d' "$out/oldperm/trainee/alice.permissions.xml"
-openssl smime -sign -in "$out/oldperm/trainee/alice.permissions.xml" -text \
-  -out "$out/oldperm/trainee/alice.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
+resign "$out/oldperm" trainee/alice.permissions
 "$client" --role trainee --domain 131 --phantom 1 --pki "$out/oldperm" --identity trainee/alice --duration 1 \
   --timeout 4 --quiet >"$out/oldperm.log" 2>&1
 rc=$?
@@ -145,8 +145,7 @@ check "a station whose permissions predate palp_debrief still runs its session (
 sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d; /<topic>palp_debrief_score<\/topic>/d' \
   -e '/<topic>palp_session_exercise<\/topic>/d; /<topic>palp_session_log<\/topic>/d; /<topic>palp_session_closed<\/topic>/d' \
   "$out/oldperm/server/server.permissions.xml"
-openssl smime -sign -in "$out/oldperm/server/server.permissions.xml" -text \
-  -out "$out/oldperm/server/server.permissions.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"
+resign "$out/oldperm" server/server.permissions
 # It hosts the shipped exercises and logs: alice (her permissions old too) takes "easy" by position
 # and leaves; nobody can write her debrief, her station says why, and the session log records that
 # none was sent, and why, so that her next attempt is not taken for one after a debrief (session 59).
@@ -183,15 +182,14 @@ check "  the session log records that no debrief was sent, and why: $logged" "[ 
 # files' names in place of "*" (its stations could then create no topic: the demo's palp-web, observer
 # and recorder after the version-7 upgrade). Both come back as a fresh issue has them, "*" whole.
 pkiscript=$(cd "$(dirname "$0")/../../scripts" && pwd)/make-classroom-pki.sh
-resign() { openssl smime -sign -in "$1.xml" -text -out "$1.p7s" -signer "$out/oldperm/ca.cert.pem" -inkey "$out/oldperm/ca/ca.key.pem"; }
 cp "$out/oldperm/instructor/ines.permissions.xml" "$out/ines.intact.xml"
 sed -i 's/palp permissions, version [0-9]* /palp permissions, version 0 /' "$out/oldperm/instructor/ines.permissions.xml"
-resign "$out/oldperm/instructor/ines.permissions"
+resign "$out/oldperm" instructor/ines.permissions
 bash "$pkiscript" "$out/oldperm" add instructor ivy >/dev/null
 cp "$out/oldperm/instructor/ivy.permissions.xml" "$out/ivy.intact.xml"
 sed -i 's|<topic>\*</topic>|<topic>alice.log</topic><topic>bob.log</topic>|; s|<partition>\*</partition>|<partition>alice.log</partition>|' \
   "$out/oldperm/instructor/ivy.permissions.xml"
-resign "$out/oldperm/instructor/ivy.permissions"
+resign "$out/oldperm" instructor/ivy.permissions
 # Such damaged permissions refuse an instructor's every topic: her observer and recorder say what to do
 # (they said only "cannot create topic palp_catalogue" and "cannot create a reader: Bad Parameter").
 "$client" --role observer --domain 131 --trainee alice --pki "$out/oldperm" --identity instructor/ivy --duration 1 \
