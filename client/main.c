@@ -450,6 +450,10 @@ typedef struct findings_ui {
   palp_band band[PALP_BAND_COUNT];
   double dome_radius, tip_radius; /* [m] */
   int sample_every;               /* the models of the steps the server's log samples for the review */
+  double physics_hz;              /* the server's physics rate for this exercise [Hz] */
+  uint64_t last_frame;            /* the newest model's step; 0: none yet */
+  int last_contact;               /* ... and whether the fingertip touched the phantom in it */
+  uint64_t sampled_lost;          /* sampled steps in contact whose models never reached the coverage */
 } findings_ui;
 
 /* One local model (the haptic loop's on_model, the main thread): its contact into the coverage,
@@ -458,7 +462,17 @@ typedef struct findings_ui {
  * the touched ones: 0-1.1 points of the dome in the tests, docs/web.md). */
 static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t frame) {
   findings_ui *u = ctx;
-  if (!u->cov || !m->contact || frame % (uint64_t)u->sample_every) return;
+  if (!u->cov) return;
+  /* The server publishes a model every step while the finger is down: a gap between two models
+   * in contact is models lost on the way (best-effort) or overwritten in the reader's history
+   * (PALP_CLI_MODEL_DEPTH) before this thread took them; a gap with a lifted finger at either
+   * end may be the finger up, and is not counted. Counted are the sampled steps in the gap,
+   * (last, frame) exclusive: what the review may count and this station could not. */
+  const uint64_t se = (uint64_t)u->sample_every;
+  if (u->last_frame && u->last_contact && m->contact && frame > u->last_frame + 1)
+    u->sampled_lost += (frame - 1) / se - u->last_frame / se;
+  if (frame > u->last_frame) u->last_frame = frame, u->last_contact = m->contact != 0;
+  if (!m->contact || frame % se) return;
   const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
   const int b = palp_band_of(u->band, palp_fingertip_depth(u->dome_radius, u->tip_radius, m->proxy), force);
   const double point[3] = {m->point.x, m->point.y, m->point.z}, proxy[3] = {m->proxy.x, m->proxy.y, m->proxy.z};
@@ -498,6 +512,7 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
       u->dome_radius = ph->radius;
       u->tip_radius = tip_radius;
       u->sample_every = palp_assess_sample_every(physics_hz, PALP_ASSESS_SAMPLE_HZ);
+      u->physics_hz = physics_hz;
     }
     if (!o->quiet) {
       tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
@@ -585,6 +600,11 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
     tprintf(o, "[trainee %s] you covered %s of the dome (the instructor's review counts it from the triangles "
                "you touched, a few points either way, and shows which lumps you found)\n", o->name,
                findings_ui_coverage(u, cov, sizeof cov));
+    if (u->sampled_lost)
+      tprintf(o, "[trainee %s] %llu of the steps the review samples reached this station too late to be counted "
+                 "(%.1f s of the exercise; its machine was busy): the review may count more than told here\n",
+                 o->name, (unsigned long long)u->sampled_lost,
+                 (double)u->sampled_lost * (double)u->sample_every / u->physics_hz);
   }
   palp_coverage_destroy(u->cov);
   u->cov = NULL;

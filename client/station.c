@@ -306,8 +306,17 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     st->contact_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   if (j->want_feedback && !(j->local_models_only && j->role == palp_ROLE_TRAINEE))
     st->feedback_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
-  if (j->want_feedback && j->role == palp_ROLE_TRAINEE)
-    st->local_model_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL);
+  if (j->want_feedback && j->role == palp_ROLE_TRAINEE) {
+    /* The haptic loop needs only the newest model, but the exercise's coverage counts every step
+     * the review samples: a station whose main thread a busy machine delays past one physics
+     * period (4 ms at 250 Hz) lost models from a keep-last-1 history (eve's light coverage read
+     * 1.6 points under the review's with her machine loaded; docs/station.md). The writer keeps
+     * one and sends best-effort, so a deeper reader history changes nothing on the wire. */
+    dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
+    st->local_model_r = dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL);
+    dds_delete_qos(q);
+  }
   if (j->want_deformation)
     st->deformation_r = palp_dds_create_display_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION]);
   if (j->role == palp_ROLE_TRAINEE) { /* issue 13: findings, any session (free practice too) */

@@ -25,6 +25,10 @@ typedef struct palp_cli_log_news {
   int said_losing;                /* a "losing" line said, no "writing again" since */
 } palp_cli_log_news;
 
+/* The local models a trainee's station holds between two takes of its main thread: 128 ms of
+ * physics steps at 250 Hz, 32 ms at 1 kHz (station.c). */
+#define PALP_CLI_MODEL_DEPTH 32
+
 typedef struct palp_cli_station {
   char station_id[64];
   dds_entity_t pp;

@@ -22,16 +22,32 @@ typedef struct station_run {
   uint64_t models_seen;      /* samples fed to the loop */
   uint64_t bad;              /* dropped as invalid */
   double lat_p50_us;
+  /* The models' steps: the server publishes one every physics step while the finger is down,
+   * so a step between two taken models that none came for was lost on the way or overwritten in
+   * the reader's history before the main thread took it. */
+  uint64_t frame_first, frame_last, frames_missing;
 } station_run;
+
+/* Each model the loop takes (the haptic loop's on_model, the main thread). */
+static void sr_on_model(void *ctx, const palp_local_model *m, uint64_t frame) {
+  station_run *o = ctx;
+  (void)m;
+  if (o->frame_last && frame > o->frame_last + 1) o->frames_missing += frame - o->frame_last - 1;
+  if (!o->frame_first) o->frame_first = frame;
+  if (frame > o->frame_last) o->frame_last = frame;
+}
 
 static int sr_cmp(const void *a, const void *b) {
   const double x = *(const double *)a, y = *(const double *)b;
   return (x > y) - (x < y);
 }
 
-/* Runs one trainee on `domain`, phantom `phantom`, along traj; trace_cap ticks kept. */
+/* Runs one trainee on `domain`, phantom `phantom`, along traj; trace_cap ticks kept. The main
+ * thread sleeps feed_pause [s] after each take of the models (0: none), as a busy machine's
+ * scheduler may hold palp-client's. */
 static void station_run_once(unsigned domain, uint32_t phantom, const char *label, const palp_cli_simdevice_def *traj,
-                             double station_max_force, int rt_priority, size_t trace_cap, station_run *out) {
+                             double station_max_force, int rt_priority, size_t trace_cap, double feed_pause,
+                             station_run *out) {
   memset(out, 0, sizeof *out);
   palp_cli_station st;
   /* joined as palp-client joins a position-driven trainee: local models, no Feedback reader */
@@ -55,6 +71,8 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   d.trace = calloc(trace_cap, sizeof *d.trace);
   d.trace_cap = trace_cap;
   d.timer_floor = 1; /* as palp-client runs it */
+  d.on_model = sr_on_model;
+  d.on_model_ctx = out;
   palp_cli_haptic_loop *hl = calloc(1, sizeof *hl);
   char err[256];
   if (!d.trace || !hl || palp_cli_haptic_start(hl, &d, err, sizeof err) < 0) {
@@ -72,6 +90,7 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
     const int n = palp_cli_haptic_feed(hl, st.local_model_r, &out->bad, &l_us);
     if (n > 0) out->models_seen += (uint64_t)n;
     if (n > 0 && isfinite(l_us) && nl < cap) lat[nl++] = l_us;
+    if (feed_pause > 0) test_sleep(feed_pause);
   }
   palp_cli_haptic_join(hl, &out->hs);
   out->trace = d.trace;

@@ -159,7 +159,7 @@ int main(void) {
   /* SCHED_FIFO for the haptic thread (priority 20) and the server's tick threads
    * (10) when the kernel grants it, as a deployed station would run; the output
    * says whether it was granted. */
-  station_run_once(112, 1, "direct", &traj, 0, 20, GRID + 500, &direct);
+  station_run_once(112, 1, "direct", &traj, 0, 20, GRID + 500, 0, &direct);
   palp_netem_def nd = {.domain_a = 113, .domain_b = 112, .delay = 0.020, .jitter = 0.005, .loss = 0.05, .seed = 11};
   char err[256];
   palp_netem *n = palp_netem_start(&nd, err, sizeof err);
@@ -167,7 +167,7 @@ int main(void) {
     fprintf(stderr, "%s\n", err);
     return 1;
   }
-  station_run_once(113, 1, "relayed", &traj, 0, 20, GRID + 500, &relayed);
+  station_run_once(113, 1, "relayed", &traj, 0, 20, GRID + 500, 0, &relayed);
   palp_netem_stats ns;
   palp_netem_get_stats(n, &ns);
   palp_netem_stop(n);
