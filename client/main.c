@@ -454,6 +454,12 @@ typedef struct findings_ui {
   uint64_t last_frame;            /* the newest model's step; 0: none yet */
   int last_contact;               /* ... and whether the fingertip touched the phantom in it */
   uint64_t sampled_lost;          /* sampled steps in contact whose models never reached the coverage */
+  /* From a server that sends them (palp_finger_sample, session 71): the same coverage from the
+   * assessment's own samples, touched triangles named: the review's, not an approximation. Told
+   * once one has come; the local models' above otherwise. */
+  palp_coverage *touched;
+  uint64_t samples, samples_bad, samples_lost, last_sample_frame;
+  int last_sample_contact;
 } findings_ui;
 
 /* One local model (the haptic loop's on_model, the main thread): its contact into the coverage,
@@ -479,10 +485,54 @@ static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t fra
   if (b >= 0) palp_coverage_press_contact(u->cov, point, proxy, m->triangles, m->area, u->tip_radius, b);
 }
 
+/* The server's finger samples of this station's finger (palp_finger_sample), each checked: its
+ * session and finger, finite numbers, a frame after the last one's; each in contact marked at the
+ * band the exercise grades, from the fingertip's depth as the review measures it (the sample's own
+ * radius), on the triangles it names (src/assess.c's footprint). */
+static void findings_ui_samples(findings_ui *u, const palp_cli_station *st, int finger) {
+  if (!u->touched || st->finger_sample_r <= 0) return;
+  for (;;) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    if (dds_take(st->finger_sample_r, ptr, &info, 1, 1) <= 0) break;
+    const palp_FingerSample *w = ptr[0];
+    if (info.valid_data && w->session_id == st->session_id && w->finger == (uint8_t)finger) {
+      const palp_Vec3 v[4] = {w->device, w->proxy, w->force, w->point};
+      int ok = isfinite(w->time) && isfinite(w->radius) && w->radius > 0 && isfinite(w->area) && w->area >= 0 &&
+               w->triangles._length <= PALP_FINGER_SAMPLE_TRIANGLES_MAX && w->frame > u->last_sample_frame;
+      for (int k = 0; k < 4; k++) ok &= isfinite(v[k].x) && isfinite(v[k].y) && isfinite(v[k].z);
+      if (!ok) {
+        u->samples_bad++;
+      } else {
+        /* consecutive samples are sample_every steps apart: a larger gap between two in contact
+         * is samples lost on the way (best-effort) or overwritten before this thread took them */
+        const uint64_t se = (uint64_t)u->sample_every;
+        if (u->last_sample_frame && u->last_sample_contact && w->in_contact && w->frame > u->last_sample_frame + se)
+          u->samples_lost += (w->frame - u->last_sample_frame) / se - 1;
+        u->last_sample_frame = w->frame, u->last_sample_contact = w->in_contact;
+        u->samples++;
+        if (w->in_contact) {
+          const double force = sqrt(w->force.x * w->force.x + w->force.y * w->force.y + w->force.z * w->force.z);
+          const palp_vec3 proxy = {w->proxy.x, w->proxy.y, w->proxy.z};
+          const int b = palp_band_of(u->band, palp_fingertip_depth(u->dome_radius, w->radius, proxy), force);
+          if (b >= 0 && w->triangles._length > 0) {
+            palp_coverage_press_touched(u->touched, w->triangles._buffer, (int)w->triangles._length, b);
+          } else if (b >= 0) { /* none named: the disc of the footprint's area, as the review */
+            const double point[3] = {w->point.x, w->point.y, w->point.z};
+            const double centre[3] = {proxy.x, proxy.y, proxy.z};
+            palp_coverage_press_contact(u->touched, point, centre, 0, w->area, w->radius, b);
+          }
+        }
+      }
+    }
+    dds_return_loan(st->finger_sample_r, ptr, 1);
+  }
+}
+
 /* "light 6.3%, medium 0.0%, deep 0.0%" of the dome, in each band as the review's thoroughness. */
 static const char *findings_ui_coverage(const findings_ui *u, char *buf, size_t len) {
   double f[3];
-  palp_coverage_band_fractions(u->cov, f);
+  palp_coverage_band_fractions(u->samples ? u->touched : u->cov, f);
   snprintf(buf, len, "light %.1f%%, medium %.1f%%, deep %.1f%%", 100 * f[0], 100 * f[1], 100 * f[2]);
   return buf;
 }
@@ -507,6 +557,9 @@ static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *s
       int rc;
       u->cov = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
                                     ph->dome_triangle_count, &rc);
+      if (u->cov && st->finger_sample_r > 0)
+        u->touched = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
+                                          ph->dome_triangle_count, &rc);
       free(rest);
       memcpy(u->band, band, sizeof u->band);
       u->dome_radius = ph->radius;
@@ -597,17 +650,28 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
     tprintf(o, "[trainee %s] %d mark%s standing at the end\n", o->name, u->nsent, u->nsent == 1 ? "" : "s");
   if (!o->quiet && u->cov) {
     char cov[96];
-    tprintf(o, "[trainee %s] you covered %s of the dome (the instructor's review counts it from the triangles "
-               "you touched, a few points either way, and shows which lumps you found)\n", o->name,
-               findings_ui_coverage(u, cov, sizeof cov));
-    if (u->sampled_lost)
+    if (u->samples)
+      tprintf(o, "[trainee %s] you covered %s of the dome (counted as the instructor's review counts it, from the "
+                 "triangles you touched; the review also shows which lumps you found)\n", o->name,
+                 findings_ui_coverage(u, cov, sizeof cov));
+    else
+      tprintf(o, "[trainee %s] you covered %s of the dome (the instructor's review counts it from the triangles "
+                 "you touched, a few points either way, and shows which lumps you found)\n", o->name,
+                 findings_ui_coverage(u, cov, sizeof cov));
+    if (u->samples && (u->samples_lost || u->samples_bad))
+      tprintf(o, "[trainee %s] %llu of the server's samples of your touches were lost on the way (%.1f s of the "
+                 "exercise) and %llu refused as malformed: the review, which has them all, may count more than told "
+                 "here\n", o->name, (unsigned long long)u->samples_lost,
+                 (double)u->samples_lost * (double)u->sample_every / u->physics_hz, (unsigned long long)u->samples_bad);
+    else if (!u->samples && u->sampled_lost)
       tprintf(o, "[trainee %s] %llu of the steps the review samples reached this station too late to be counted "
                  "(%.1f s of the exercise; its machine was busy): the review may count more than told here\n",
                  o->name, (unsigned long long)u->sampled_lost,
                  (double)u->sampled_lost * (double)u->sample_every / u->physics_hz);
   }
   palp_coverage_destroy(u->cov);
-  u->cov = NULL;
+  palp_coverage_destroy(u->touched);
+  u->cov = u->touched = NULL;
 }
 
 /* What the trainee's marks found, as the server told it at the session's end (palp_debrief,
@@ -824,6 +888,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     tick_refusals(o);
     double lat_us;
     int n = palp_cli_haptic_feed(hl, st->local_model_r, &bad, &lat_us);
+    findings_ui_samples(&fu, st, hl->def.finger);
     models += (uint64_t)(n > 0 ? n : 0);
     if (n > 0 && isfinite(lat_us)) lat_add(&lat, lat_us);
     if (st->feedback_r > 0) { /* the summary topic is not needed here: keep its queue empty */

@@ -75,6 +75,10 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
       st->topic[k] = 0;
       continue;
     }
+    if (st->topic[k] < 0 && k == PALP_TOPIC_FINGER_SAMPLE && secured) { /* session 71: coverage approximated */
+      st->topic[k] = 0;
+      continue;
+    }
     if (st->topic[k] < 0) {
       char hint[PALP_DDS_HINT_MAX];
       const char *name = palp_dds_topic_name((palp_dds_topic_kind)k);
@@ -316,6 +320,17 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
     st->local_model_r = dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL);
     dds_delete_qos(q);
+    /* ... and from a server that sends them (session 71), the assessment's own finger samples,
+     * touched triangles named: the coverage is then the review's. The same depth: 320 ms of
+     * samples at 100 Hz. Without them (a server or permissions that predate the topic) the
+     * coverage is approximated from the local models. */
+    if (st->topic[PALP_TOPIC_FINGER_SAMPLE] > 0) {
+      q = palp_dds_qos(PALP_TOPIC_FINGER_SAMPLE);
+      dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
+      st->finger_sample_r = dds_create_reader(st->sub, st->topic[PALP_TOPIC_FINGER_SAMPLE], q, NULL);
+      dds_delete_qos(q);
+      if (st->finger_sample_r < 0) st->finger_sample_r = 0;
+    }
   }
   if (j->want_deformation)
     st->deformation_r = palp_dds_create_display_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION]);
@@ -751,6 +766,7 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   if (st->sub > 0) dds_delete(st->sub);
   st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
   st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = st->session_log_r = 0;
+  st->local_model_r = st->finger_sample_r = 0;
   st->session_id = 0;
   /* the next session's server counts from its own base */
   memset(&st->log, 0, sizeof st->log);

@@ -25,8 +25,8 @@ typedef struct palp_cli_log_news {
   int said_losing;                /* a "losing" line said, no "writing again" since */
 } palp_cli_log_news;
 
-/* The local models a trainee's station holds between two takes of its main thread: 128 ms of
- * physics steps at 250 Hz, 32 ms at 1 kHz (station.c). */
+/* The local models (and finger samples) a trainee's station holds between two takes of its main
+ * thread: 128 ms of physics steps at 250 Hz, 32 ms at 1 kHz (station.c). */
 #define PALP_CLI_MODEL_DEPTH 32
 
 typedef struct palp_cli_station {
@@ -42,6 +42,7 @@ typedef struct palp_cli_station {
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
+  dds_entity_t finger_sample_r; /* ... and its finger samples, touched triangles named (session 71); 0: none */
   dds_entity_t exercise_r;    /* palp_exercise (issue 13): what the trainee may know of an exercise */
   dds_entity_t finding_w, finding_status_r; /* trainee: "lump here" marks and the server's answers */
   dds_entity_t debrief_r;     /* trainee: palp_debrief, what its marks found, at its session's end; 0: none

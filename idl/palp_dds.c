@@ -24,7 +24,7 @@ static const char *const topic_names[PALP_TOPIC_COUNT] = {
     "palp_server_identity", "palp_station_request",
     "palp_exercise",      "palp_finding",         "palp_finding_status",
     "palp_debrief",       "palp_session_exercise", "palp_session_score",
-    "palp_debrief_score", "palp_session_log", "palp_session_closed"};
+    "palp_debrief_score", "palp_session_log", "palp_session_closed", "palp_finger_sample"};
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
@@ -53,6 +53,7 @@ const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind
   case PALP_TOPIC_DEBRIEF_SCORE: return &palp_SessionScore_desc; /* the same score, in the session's partition */
   case PALP_TOPIC_SESSION_LOG: return &palp_SessionLog_desc;
   case PALP_TOPIC_SESSION_CLOSED: return &palp_SessionClosed_desc;
+  case PALP_TOPIC_FINGER_SAMPLE: return &palp_FingerSample_desc;
   default: return NULL;
   }
 }
@@ -116,6 +117,10 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind) {
   case PALP_TOPIC_LOCAL_MODEL:
     /* Only the newest state matters: a lost local model is superseded by the next
      * physics step, and the station's renderer extrapolates across the gap. */
+  case PALP_TOPIC_FINGER_SAMPLE:
+    /* A lost finger sample leaves a place unmarked in a live coverage map, which the review
+     * (from the log) still counts: never worth blocking the physics thread's writer for.
+     * Readers that count them keep a deeper history (keep-last per finger). */
   case PALP_TOPIC_SERVER_GUARD:
     dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
     dds_qset_durability(q, DDS_DURABILITY_VOLATILE);

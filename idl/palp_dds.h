@@ -41,6 +41,7 @@ typedef enum palp_dds_topic_kind {
   PALP_TOPIC_DEBRIEF_SCORE,   /* added 2026-12-05 (session 64): that score, told to the trainee of a practice exercise */
   PALP_TOPIC_SESSION_LOG,     /* added 2026-12-06 (session 69): the records of a session its server's log lost */
   PALP_TOPIC_SESSION_CLOSED,  /* added 2026-12-06 (session 69): who a closed session was, for instructors */
+  PALP_TOPIC_FINGER_SAMPLE,   /* added 2026-12-06 (session 71): the assessment's finger samples, touched triangles named */
   PALP_TOPIC_COUNT
 } palp_dds_topic_kind;
 
@@ -58,6 +59,9 @@ typedef enum palp_dds_topic_kind {
 
 /* Partition of a session's contact/feedback/deformation traffic. */
 #define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"
+/* palp_finger_sample: its triangles are a sequence<long, 256> (idl/palp_types.idl), the session
+ * log's PALP_DB_MAX_SAMPLE_TRIANGLES. */
+#define PALP_FINGER_SAMPLE_TRIANGLES_MAX 256
 /* palp_session_exercise: its json is a string<32767> (idl/palp_types.idl). */
 #define PALP_SESSION_EXERCISE_JSON_MAX 32767
 

@@ -45,7 +45,7 @@ typedef enum palp_dds_id_kind {
  * which it writes into each identity's permissions ("palp permissions, version N"); test security_cli
  * checks the two agree. An identity whose permissions are older is warned of at start
  * (palp_dds_security.warning): the topics added since are refused to it. */
-#define PALP_DDS_PERMISSIONS_VERSION 7
+#define PALP_DDS_PERMISSIONS_VERSION 8
 
 typedef struct palp_dds_security {
   palp_dds_id_kind kind;              /* PALP_DDS_ID_NONE: plain DDS */

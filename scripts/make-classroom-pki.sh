@@ -47,6 +47,7 @@ T_LOCAL_MODEL=palp_local_model T_GUARD=palp_server_guard T_IDENTITY=palp_server_
 T_EXERCISE=palp_exercise T_FINDING=palp_finding T_FINDING_STATUS=palp_finding_status
 T_DEBRIEF=palp_debrief T_SESSION_EXERCISE=palp_session_exercise T_SESSION_SCORE=palp_session_score
 T_DEBRIEF_SCORE=palp_debrief_score T_SESSION_LOG=palp_session_log T_SESSION_CLOSED=palp_session_closed
+T_FINGER_SAMPLE=palp_finger_sample
 # palp_station_request (other vendors, docs/interop.md) is not offered by a secured server.
 
 check_name() {
@@ -113,9 +114,12 @@ GOVERNANCE_VERSION=2
 # session the server's log lost; without it her station counts the whole server's).
 # 7 (2026-12-06, session 69): palp_session_closed, server -> instructors (who each closed session was,
 # for a dashboard begun after it).
+# 8 (2026-12-06, session 71): palp_finger_sample, server -> the trainee's session (the assessment's
+# finger samples with the touched triangles; without it her coverage is approximated from the
+# local models).
 # palp's programs warn at start of permissions older than their PALP_DDS_PERMISSIONS_VERSION
 # (idl/palp_dds_security.h): raise both together (test security_cli checks they agree).
-PERMISSIONS_VERSION=7
+PERMISSIONS_VERSION=8
 
 topic_rule() { # topic expression, metadata protection kind
   cat <<EOF
@@ -217,7 +221,7 @@ EOF
       # Only the server publishes the catalogue, replies, states, status and every session's
       # feedback and deformation; it reads requests from every identity's own partition.
       rule publish "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE $T_SESSION_EXERCISE $T_SESSION_SCORE $T_SESSION_CLOSED" '""'
-      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS $T_DEBRIEF $T_DEBRIEF_SCORE $T_SESSION_LOG" "palp/s/*"
+      rule publish "$T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING_STATUS $T_DEBRIEF $T_DEBRIEF_SCORE $T_SESSION_LOG $T_FINGER_SAMPLE" "palp/s/*"
       rule subscribe "$T_REQUEST" "palp/trainee/* palp/instructor/*"
       rule subscribe "$T_CONTACT $T_FINDING" "palp/s/*"
       rule subscribe "$T_STATUS $T_GUARD $T_IDENTITY" '""'
@@ -229,7 +233,7 @@ EOF
       rule publish "$T_REQUEST" "palp/trainee/$name"
       rule publish "$T_CONTACT $T_FINDING" "palp/s/$name/*"
       rule subscribe "$T_CATALOGUE $T_REPLY $T_STATE $T_STATUS $T_GUARD $T_IDENTITY $T_EXERCISE" '""'
-      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING $T_FINDING_STATUS $T_DEBRIEF $T_DEBRIEF_SCORE $T_SESSION_LOG" \
+      rule subscribe "$T_CONTACT $T_FEEDBACK $T_DEFORMATION $T_LOCAL_MODEL $T_FINDING $T_FINDING_STATUS $T_DEBRIEF $T_DEBRIEF_SCORE $T_SESSION_LOG $T_FINGER_SAMPLE" \
         "palp/s/$name/*"
       ;;
     instructor)

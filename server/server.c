@@ -312,6 +312,8 @@ static const char *optional_topic_loss(palp_dds_topic_kind k) {
   case PALP_TOPIC_SESSION_LOG:
     return "no session told its own records the session log lost (stations count the server's instead)";
   case PALP_TOPIC_SESSION_CLOSED: return "no names for the ended sessions of a dashboard begun after them";
+  case PALP_TOPIC_FINGER_SAMPLE:
+    return "no touched triangles for the stations' and pages' coverage (they approximate it from the local models)";
   default: return NULL;
   }
 }
@@ -1220,6 +1222,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .finding_status_topic = srv->topic[PALP_TOPIC_FINDING_STATUS],
                               .debrief_topic = srv->topic[PALP_TOPIC_DEBRIEF],
                               .session_log_topic = srv->topic[PALP_TOPIC_SESSION_LOG],
+                              .finger_sample_topic = srv->topic[PALP_TOPIC_FINGER_SAMPLE],
                               .events = srv->events,
                               .partition = partition,
                               .log = srv->log,

@@ -206,6 +206,15 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     s->debrief_writer = palp_dds_create_writer(s->pub, def->debrief_topic, PALP_TOPIC_DEBRIEF);
     if (s->debrief_writer < 0) goto dds_fail;
   }
+  /* The steps the log samples, from the session's own physics rate (server/db_log.c). */
+  {
+    const double hz = s->assess_sample_hz > 0 ? s->assess_sample_hz : PALP_ASSESS_SAMPLE_HZ;
+    s->sample_every = palp_assess_sample_every(1.0 / def->phantom->scene.world.dt, hz);
+  }
+  if (def->finger_sample_topic > 0) {
+    s->finger_sample_writer = palp_dds_create_writer(s->pub, def->finger_sample_topic, PALP_TOPIC_FINGER_SAMPLE);
+    if (s->finger_sample_writer < 0) goto dds_fail;
+  }
   /* Only where something logs the session: its station then hears its own losses, not the server's. */
   if (def->session_log_topic > 0 && def->events && def->events->session_log_losses) {
     s->session_log_writer = palp_dds_create_writer(s->pub, def->session_log_topic, PALP_TOPIC_SESSION_LOG);
@@ -484,6 +493,35 @@ static uint32_t step_flags(palp_srv_session *s) {
   return fl;
 }
 
+/* A position-driven finger's sample on a step the session log samples, as the log keeps it
+ * (server/db_log.c): the touched triangles are what a station's and palp-web's coverage needs to be
+ * the review's (the local model only counts them). */
+static void publish_finger_sample(palp_srv_session *s, int i, const palp_srv_finger_state *f, const palp_local_model *m,
+                                  uint64_t frame, double time) {
+  int tri[PALP_FINGER_SAMPLE_TRIANGLES_MAX];
+  const int nt = palp_world_finger_contacts(s->world, f->world_contact, tri, NULL, PALP_FINGER_SAMPLE_TRIANGLES_MAX);
+  palp_FingerSample *o = &s->fs;
+  memset(o, 0, sizeof *o);
+  o->session_id = s->id;
+  o->finger = (uint8_t)i;
+  o->frame = frame;
+  o->time = time;
+  o->radius = f->cmd.radius;
+  o->in_contact = m->contact != 0;
+  o->device = (palp_Vec3){m->device.x, m->device.y, m->device.z};
+  o->proxy = (palp_Vec3){m->proxy.x, m->proxy.y, m->proxy.z};
+  o->force = (palp_Vec3){m->force.x, m->force.y, m->force.z};
+  o->point = (palp_Vec3){m->point.x, m->point.y, m->point.z};
+  o->area = m->area;
+  /* the count of all touched (it may pass cap: those named are the first cap, as the log keeps them) */
+  const int n = nt < 0 ? 0 : nt > PALP_FINGER_SAMPLE_TRIANGLES_MAX ? PALP_FINGER_SAMPLE_TRIANGLES_MAX : nt;
+  for (int k = 0; k < n; k++) s->fs_tri[k] = tri[k];
+  o->triangles._buffer = s->fs_tri;
+  o->triangles._length = o->triangles._maximum = (uint32_t)n;
+  o->triangles._release = false;
+  (void)dds_write(s->finger_sample_writer, o); /* best-effort: a lost one is the review's still */
+}
+
 /* The local contact model of every position-driven finger after the step
  * (issue 11): the station's 1 kHz loop renders from it between physics steps.
  * A force above max_force is reported (LM_FORCE_LIMIT), not clamped: with a
@@ -533,6 +571,8 @@ static void publish_local_models(palp_srv_session *s, int64_t now_ns, uint32_t f
     if (flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) s->stats.out_of_range_steps++;
     o->server_time_ns = palp_dds_now_ns();
     if (dds_write(s->local_model_writer, o) == 0) s->stats.local_models++;
+    if (s->finger_sample_writer > 0 && o->frame % (uint64_t)s->sample_every == 0)
+      publish_finger_sample(s, i, f, &m, o->frame, o->time);
   }
 }
 

@@ -22,6 +22,7 @@
 #include "palp_log.h"
 #include "palp.h"
 #include "palp_assess.h"
+#include "palp_dds.h" /* PALP_FINGER_SAMPLE_TRIANGLES_MAX */
 #include "palp_types.h"
 #include "playout.h"
 #include "findings.h"
@@ -85,6 +86,7 @@ typedef struct palp_srv_session_def {
   dds_entity_t finding_topic, finding_status_topic; /* 0: no findings (older callers) */
   dds_entity_t debrief_topic; /* 0: no debrief (older callers, or permissions that predate it) */
   dds_entity_t session_log_topic; /* 0: no palp_session_log (older callers, permissions that predate it) */
+  dds_entity_t finger_sample_topic; /* 0: no palp_finger_sample (older callers, permissions that predate it) */
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
@@ -166,6 +168,12 @@ typedef struct palp_srv_session {
   palp_Deformation deformation;
   palp_world_health health;   /* after the previous step: per-step flags are deltas */
   palp_LocalModel lm;
+  /* palp_finger_sample (session 71): the assessment's samples, touched triangles named, written on
+   * the steps the log samples (every sample_every-th); 0: none */
+  dds_entity_t finger_sample_writer;
+  int sample_every;
+  palp_FingerSample fs;
+  int32_t fs_tri[PALP_FINGER_SAMPLE_TRIANGLES_MAX];
   int64_t last_limit_log_ns;
   /* Set by the ticker that holds the session: rebuilds go to its helper (NULL: the
    * world computes them itself at their due frame). */

@@ -154,6 +154,17 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
   return raised;
 }
 
+int palp_coverage_press_touched(palp_coverage *c, const int32_t *tri, int count, int band) {
+  if (!c || !tri || count <= 0 || band < PALP_BAND_LIGHT || band > PALP_BAND_DEEP) return 0;
+  int raised = 0;
+  for (int k = 0; k < count; k++) {
+    const int32_t t = tri[k];
+    if (t < 0 || t >= c->dome_tris) continue; /* base triangles are not palpable */
+    for (int v = 0; v < 3; v++) raised += mark(c, c->tri[3 * t + v], band + 1);
+  }
+  return raised;
+}
+
 int palp_coverage_press_contact(palp_coverage *c, const double point[3], const double proxy[3], int triangles,
                                 double area, double tip_radius, int band) {
   if (triangles > 0) return palp_coverage_press_triangles(c, proxy, triangles, band);

@@ -48,6 +48,12 @@ int palp_coverage_press_triangles(palp_coverage *c, const double point[3], int c
  * logs a local model's footprint by it (docs/assessment.md, "Recorded over DDS"). */
 int palp_coverage_patch(const palp_coverage *c, const double point[3], int count, int32_t *out);
 
+/* The assessment's footprint itself (src/assess.c), where the touched triangles are known (the
+ * server's palp_finger_sample, session 71): every vertex of the `count` triangles in tri (indices
+ * into the mesh's triangles) that are dome triangles is marked in `band`; base triangles and
+ * indices out of range are skipped, as the assessment skips them. Returns as palp_coverage_press. */
+int palp_coverage_press_touched(palp_coverage *c, const int32_t *tri, int count, int band);
+
 /* A fingertip's contact as a local model gives it (palp_local_model: its contact point, its centre
  * the proxy, how many triangles it touches, its footprint area), pressed in `band`: the `triangles`
  * triangles under the proxy; without a count, the disc of the footprint's area around the contact

@@ -148,6 +148,11 @@ typedef struct session {
   palp_SessionState st;
   const phantom *ph;
   palp_coverage *cov;
+  /* From the server's finger samples (palp_finger_sample, session 71), touched triangles named:
+   * the review's own footprint. Shown once one has come (samples > 0); cov, marked from the local
+   * models' count, otherwise (a server that predates the topic). */
+  palp_coverage *touched;
+  uint64_t samples, samples_frame[FINGERS];
   finger f[FINGERS];
   double force;           /* magnitude of the summed finger forces [N] */
   int band;
@@ -211,6 +216,7 @@ typedef struct session_end {
   char trainee[64];
   double cov[3];
   int cov_rule;
+  int cov_touched; /* from the server's finger samples (session 71): the review's footprint */
   double duration;
 } session_end;
 
@@ -225,6 +231,7 @@ struct palp_web_hub {
   char host[32];
   dds_entity_t pp, topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, state_r, status_r, reply_r, sub, contact_r, deform_r, lm_r;
+  dds_entity_t fsample_r; /* palp_finger_sample (session 71); 0: none */
   dds_entity_t exercise_r, fstatus_r, debrief_r;
   dds_entity_t debrief_score_r; /* palp_debrief_score (session 64): a practice session's score, for her page */
   dds_entity_t sexercise_r, finding_r, score_r; /* def.answers */
@@ -375,6 +382,9 @@ static void build_phantom(palp_web_hub *h, int slot) {
  * {"type": "cover", "session", "phantom", "bands": one hex digit per rest vertex, the bands it was
  * pressed in as bits (1 light, 2 medium, 4 deep; 0 not pressed)}, by the rule its coverage figures
  * count by (palp_coverage): 338 characters for the shipped dome. */
+/* The session's coverage map: the finger samples' once one has come, else the local models'. */
+static const palp_coverage *session_map(const session *s) { return s->samples && s->touched ? s->touched : s->cov; }
+
 static void build_cover(palp_web_hub *h, int slot) {
   const session *s = &h->s[slot];
   if (!s->cov || !s->ph) return;
@@ -383,7 +393,7 @@ static void build_cover(palp_web_hub *h, int slot) {
   if (!text) return;
   const int k = snprintf(text, 128, "{\"type\":\"cover\",\"session\":%u,\"phantom\":%u,\"bands\":\"", s->id, s->ph->id);
   uint8_t *bits = (uint8_t *)text + k; /* the bits, then their digits in their place */
-  if (palp_coverage_vertex_bands(s->cov, bits, n) != n) {
+  if (palp_coverage_vertex_bands(session_map(s), bits, n) != n) {
     free(text);
     return;
   }
@@ -395,8 +405,8 @@ static void build_cover(palp_web_hub *h, int slot) {
 /* Coverage as the session's band rule counts it: in an exercise the area pressed in each band
  * itself, as the assessment's thoroughness; else the area pressed at each band or deeper. */
 static void session_coverage(const session *s, double cov[3]) {
-  if (s->exercise_bands) palp_coverage_band_fractions(s->cov, cov);
-  else palp_coverage_fractions(s->cov, cov);
+  if (s->exercise_bands) palp_coverage_band_fractions(session_map(s), cov);
+  else palp_coverage_fractions(session_map(s), cov);
 }
 
 static void build_sessions(palp_web_hub *h) {
@@ -431,6 +441,8 @@ static void build_sessions(palp_web_hub *h) {
     double cov[3];
     session_coverage(s, cov);
     cJSON_AddItemToObject(o, "coverage", vec_json(cov, 3, 1));
+    /* "touched": from the server's finger samples, the review's own footprint (session 71) */
+    cJSON_AddStringToObject(o, "coverage_rule", s->samples && s->touched ? "touched" : "approximated");
     cJSON_AddNumberToObject(o, "fps", s->fps);
     cJSON_AddBoolToObject(o, "joined", s->joined);
     int pos = 0;
@@ -668,6 +680,9 @@ static void attach_coverage(session *s) {
   if (s->cov || !s->ph) return;
   int rc;
   s->cov = palp_coverage_create(s->ph->rest, s->ph->n, s->ph->tri, s->ph->tri_count, s->ph->dome_tris, &rc);
+  if (s->cov)
+    s->touched = palp_coverage_create(s->ph->rest, s->ph->n, s->ph->tri, s->ph->tri_count, s->ph->dome_tris, &rc);
+  s->samples = 0;
 }
 
 static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
@@ -708,7 +723,9 @@ static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
     for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
       if (h->s[i].used && h->s[i].ph == ph) {
         palp_coverage_destroy(h->s[i].cov);
-        h->s[i].cov = NULL;
+        palp_coverage_destroy(h->s[i].touched);
+        h->s[i].cov = h->s[i].touched = NULL;
+        h->s[i].samples = 0;
       }
     free(ph->rest);
     free(ph->tri);
@@ -1052,6 +1069,7 @@ static void session_end_of(palp_web_hub *h, int slot, session_end *e) {
   *e = (session_end){.sid = s->id, .phantom = s->st.phantom_id, .duration = s->st.duration};
   if (s->cov) {
     e->cov_rule = s->exercise_bands ? 2 : 1;
+    e->cov_touched = s->samples && s->touched;
     session_coverage(s, e->cov);
   }
   pthread_mutex_lock(&h->mu);
@@ -1073,6 +1091,7 @@ static void free_session(palp_web_hub *h, int slot) {
   if (fpub > 0) dds_delete(fpub);
   if (s->fb_sub > 0) dds_delete(s->fb_sub);
   palp_coverage_destroy(s->cov);
+  palp_coverage_destroy(s->touched);
   if (s->ans) free(s->ans->ex);
   free(s->ans);
   memset(s, 0, sizeof *s);
@@ -1333,6 +1352,7 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   if (e.cov_rule) {
     cJSON_AddItemToObject(j, "coverage", vec_json(e.cov, 3, 1));
     cJSON_AddStringToObject(j, "band_rule", e.cov_rule == 2 ? "exercise" : "force");
+    cJSON_AddStringToObject(j, "coverage_rule", e.cov_touched ? "touched" : "approximated");
   } else {
     cJSON_AddNullToObject(j, "coverage");
   }
@@ -1709,6 +1729,50 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   s->changed = 1;
 }
 
+/* A position-driven finger's sample on a step the session log samples (palp_finger_sample, session
+ * 71), checked (its finger, finite numbers, a frame after the finger's last, triangle ids against the
+ * mesh in palp_coverage_press_touched) and marked at the band its session counts by, from the sample's
+ * own fingertip (the review's depth), on the triangles it names: the review's footprint. */
+static void on_finger_sample(palp_web_hub *h, const palp_FingerSample *m) {
+  int slot;
+  session *s = find_session(h, m->session_id, &slot);
+  if (!s) {
+    h->stats.no_session++;
+    return;
+  }
+  const palp_Vec3 v[4] = {m->device, m->proxy, m->force, m->point};
+  int ok = m->finger < FINGERS && isfinite(m->time) && isfinite(m->radius) && m->radius > 0 && isfinite(m->area) &&
+           m->area >= 0 && m->triangles._length <= PALP_FINGER_SAMPLE_TRIANGLES_MAX;
+  for (int k = 0; k < 4; k++) ok &= vec_finite(&v[k]);
+  if (!ok || m->frame <= s->samples_frame[m->finger]) {
+    h->stats.dropped++;
+    return;
+  }
+  s->samples_frame[m->finger] = m->frame;
+  if (!s->touched) return;
+  s->samples++;
+  if (!m->in_contact) return;
+  const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
+  const exercise *ex = banding_exercise(h, s);
+  int band;
+  if (ex) {
+    const int b = palp_band_of(ex->band, palp_fingertip_depth(s->ph->radius, m->radius,
+                                                              (palp_vec3){m->proxy.x, m->proxy.y, m->proxy.z}), force);
+    band = b < 0 ? PALP_WEB_BAND_NONE : b + 1;
+  } else {
+    band = palp_web_band(&h->def.bands, force);
+  }
+  if (!band) return;
+  int raised;
+  if (m->triangles._length > 0) {
+    raised = palp_coverage_press_touched(s->touched, m->triangles._buffer, (int)m->triangles._length, band - 1);
+  } else { /* none named: the disc of the footprint's area, as the review */
+    const double point[3] = {m->point.x, m->point.y, m->point.z}, proxy[3] = {m->proxy.x, m->proxy.y, m->proxy.z};
+    raised = palp_coverage_press_contact(s->touched, point, proxy, 0, m->area, m->radius, band - 1);
+  }
+  if (raised > 0 || s->samples == 1) s->cover_changed = s->changed = 1;
+}
+
 static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
@@ -1866,6 +1930,7 @@ static void *hub_main(void *arg) {
       for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
         if (h->s[i].used && h->s[i].fb_r > 0) drain(h, h->s[i].fb_r, (sample_fn)on_feedback, NULL, &h->stats.feedbacks);
       drain(h, h->lm_r, (sample_fn)on_local_model, NULL, &h->stats.local_models);
+      drain(h, h->fsample_r, (sample_fn)on_finger_sample, NULL, &h->stats.finger_samples);
       drain(h, h->fstatus_r, (sample_fn)on_finding_status, NULL, &h->stats.finding_statuses);
       drain(h, h->debrief_r, (sample_fn)on_debrief, NULL, &h->stats.debriefs);
       drain(h, h->closed_r, (sample_fn)on_session_closed, NULL, &h->stats.closed_sessions); /* before the scores */
@@ -1902,6 +1967,7 @@ static void *hub_main(void *arg) {
           if (f->mode == palp_CONTACT_FINGER && !f->fb_active) continue;
           const int band = palp_web_band(&h->def.bands, sqrt(fv[0] * fv[0] + fv[1] * fv[1] + fv[2] * fv[2]));
           if (band && palp_coverage_press(s->cov, f->center, f->radius, band - 1) > 0) s->changed = s->cover_changed = 1;
+          if (band && s->touched) palp_coverage_press(s->touched, f->center, f->radius, band - 1);
         }
         if (s->changed) {
           build_live(h, i);
@@ -2005,6 +2071,13 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, LM_DEPTH); /* every frame, for late updates */
     h->lm_r = dds_create_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL);
     dds_delete_qos(q);
+    /* ... and the finger samples, 100 Hz per finger: 64 hold 0.64 s between polls */
+    if (h->topic[PALP_TOPIC_FINGER_SAMPLE] > 0) {
+      q = palp_dds_qos(PALP_TOPIC_FINGER_SAMPLE);
+      dds_qset_history(q, DDS_HISTORY_KEEP_LAST, LM_DEPTH);
+      h->fsample_r = dds_create_reader(h->sub, h->topic[PALP_TOPIC_FINGER_SAMPLE], q, NULL);
+      dds_delete_qos(q);
+    }
   }
   h->fstatus_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
   /* an instructor's permissions read every topic: no older permissions to allow for here */
@@ -2030,7 +2103,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->debrief_score_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->debrief_score_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->fsample_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {

@@ -105,6 +105,7 @@ typedef struct palp_web_cursor {
 
 typedef struct palp_web_hub_stats {
   uint64_t catalogue, states, statuses, contacts, feedbacks, deformations, local_models; /* DDS samples taken */
+  uint64_t finger_samples; /* palp_finger_sample samples taken (session 71) */
   uint64_t dropped;   /* samples refused: malformed, or no room (sessions, exercises, memory) */
   uint64_t no_session; /* samples of a session the bridge has no state for: benign when it has just
                         * opened (its first contacts can overtake its state) or just closed */

@@ -158,14 +158,14 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
   if (h.exercises || h.findings_written || h.findings_refused || h.local_models)
     palp_log_info(log, "exercises %llu (sessions' %llu, scores %llu), trainees' scores %llu, finding statuses %llu, "
                        "findings read %llu (%llu unanswered); findings written %llu, refused %llu; local models %llu "
-                       "(late %llu, lost %llu)",
+                       "(late %llu, lost %llu), finger samples %llu",
                   (unsigned long long)h.exercises, (unsigned long long)h.session_exercises, (unsigned long long)h.scores,
                   (unsigned long long)h.told_scores,
                   (unsigned long long)h.finding_statuses, (unsigned long long)h.findings_read,
                   (unsigned long long)h.findings_unanswered,
                   (unsigned long long)h.findings_written, (unsigned long long)h.findings_refused,
                   (unsigned long long)h.local_models, (unsigned long long)h.late_haptic,
-                  (unsigned long long)h.lost_haptic);
+                  (unsigned long long)h.lost_haptic, (unsigned long long)h.finger_samples);
 }
 
 static void on_wake(void *ctx) {

@@ -8,7 +8,8 @@
  * Asserts for an expert: every lesion found, no false positive, medium coverage >= 0.95,
  * pattern vertical strip; for a novice: medium coverage < 0.30 and not every lesion found. With
  * the trainee's station log: the coverage the station told her at its end ("you covered light
- * X%, medium Y%, deep Z% of the dome", palp_coverage) is this coverage within 1.5 points per band,
+ * X%, medium Y%, deep Z% of the dome", palp_coverage, from the server's finger samples) is this
+ * coverage to the 0.1 point it prints,
  * and the debrief the server sent her at the end (palp_debrief, printed by the station) is the
  * review's: lesions found and marks near none, and per lesion found or missed, by which mark, its
  * clock position and arc from the pole (as printed, to its rounding), diameter and depth.
@@ -31,8 +32,9 @@ static int failures;
     if (!(c)) failures++;                        \
   } while (0)
 
-/* The station's last "you covered light X%, medium Y%, deep Z% of the dome" as fractions: 1, or 0. */
-static int station_coverage(const char *path, const char *trainee, double out[3]) {
+/* The station's last "you covered light X%, medium Y%, deep Z% of the dome" as fractions: 1, or 0;
+ * *exact 1 when it said it counted them as the review does (from the server's finger samples). */
+static int station_coverage(const char *path, const char *trainee, double out[3], int *exact, int *lossy) {
   FILE *f = fopen(path, "r");
   if (!f) return 0;
   char line[1024], head[96];
@@ -40,7 +42,11 @@ static int station_coverage(const char *path, const char *trainee, double out[3]
   int found = 0;
   while (fgets(line, sizeof line, f)) {
     double l, m, d;
-    if (sscanf(line, head, &l, &m, &d) == 3) out[0] = l / 100, out[1] = m / 100, out[2] = d / 100, found = 1;
+    if (sscanf(line, head, &l, &m, &d) == 3) {
+      out[0] = l / 100, out[1] = m / 100, out[2] = d / 100, found = 1;
+      *exact = strstr(line, "counted as the instructor's review counts it") != NULL;
+    }
+    if (strstr(line, "of the server's samples of your touches were lost on the way")) *lossy = 1;
   }
   fclose(f);
   return found;
@@ -143,14 +149,31 @@ int main(int argc, char **argv) {
   }
   if (argc == 5) { /* what the station told the trainee, against the review's thoroughness */
     double said[3];
-    const int got = station_coverage(argv[4], argv[2], said);
-    double worst = 0;
+    int exact = 0, lossy = 0;
+    const int got = station_coverage(argv[4], argv[2], said, &exact, &lossy);
+    double worst = 0, over = 0;
     for (int b = 0; got && b < 3; b++) {
       const double d = said[b] > r.coverage[b] ? said[b] - r.coverage[b] : r.coverage[b] - said[b];
       if (d > worst) worst = d;
+      if (said[b] - r.coverage[b] > over) over = said[b] - r.coverage[b];
     }
-    CHECK(got && worst <= 0.015, "the station told %s light %.3f, medium %.3f, deep %.3f: the review's within 0.015 "
-          "(worst %.4f)", argv[2], got ? said[0] : -1, got ? said[1] : -1, got ? said[2] : -1, worst);
+    /* Samples lost on the way (which the station then says) can only leave places it did not
+     * mark: it may read under the review, never over it. */
+    if (lossy) {
+      printf("note %s's station lost some of the server's finger samples: asserted only that it reads no more "
+             "than the review\n", argv[2]);
+      worst = over;
+    }
+    /* From the server's finger samples (session 71) the station counts the review's own footprint:
+     * equal to the 0.1 point it prints (half of it, and 1e-9 for the binary fractions), unless
+     * samples were lost on the way, which it then says (not in these runs on loopback). Before,
+     * from the local models' count of touched triangles, 1.5 points: the patch approximated the
+     * footprint (0.8-1.6 points in eve's whole exam, docs/web.md). A station that lost samples says so,
+ * and is held only to not reading over the review. */
+    CHECK(got && exact, "%s's station counted her coverage from the server's finger samples", argv[2]);
+    const double tol = exact ? 0.0005 + 1e-9 : 0.015;
+    CHECK(got && worst <= tol, "the station told %s light %.3f, medium %.3f, deep %.3f: the review's within %.4f "
+          "(worst %.4f)", argv[2], got ? said[0] : -1, got ? said[1] : -1, got ? said[2] : -1, tol, worst);
     /* The debrief: the server matched her standing marks itself (palp_assess_findings); the
      * review matches the logged ones (palp_assess). The places are printed to 0.1 h and 1 mm. */
     said_debrief d;

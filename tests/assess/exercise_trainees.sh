@@ -7,7 +7,7 @@
 # readers): medium coverage < 30 %, a lesion missed. Domain 62.
 # The scripted expert (--input sim:expert) plays ~165 s in real time; asserted: every
 # lesion, no false positive, medium coverage >= 95 %, vertical strip. Each station's own
-# coverage line is the review's within 1.5 points per band (palp_coverage). It runs beside the
+# coverage line is the review's to the 0.1 point it prints (from the server's finger samples). It runs beside the
 # other tests: its holds count the server's physics time at the held point and it
 # re-palpates suspected lumps (docs/assessment.md), which took a run with 3 busy loops
 # beside it from 1 false lump to none. PALP_TEST_EXPERT=0 leaves it out

@@ -241,12 +241,52 @@ static void test_coverage_triangles(const dome *o) {
   free(td);
 }
 
+/* The assessment's own footprint where the touched triangles are named (palp_finger_sample, session
+ * 71; palp_coverage_press_touched): every vertex of the dome triangles given, base triangles and ids
+ * out of range skipped, as src/assess.c's footprint. Expected: the model's lumped areas of those
+ * vertices, gathered here from the mesh's own triangle list. */
+static void test_coverage_touched(const dome *o) {
+  const palp_mesh *m = &o->m;
+  palp_coverage *c = o->c;
+  palp_coverage_reset(c);
+  const int nd = m->dome_triangle_count;
+  CHECK(m->triangle_count > nd, "the model's mesh has base triangles after the dome's (%d of %d)", nd,
+        m->triangle_count);
+  /* three dome triangles apart, one next to the first, the first twice, a base triangle, two bad ids */
+  const int32_t ids[] = {0, nd / 3, nd - 1, 1, 0, nd, -1, m->triangle_count + 5};
+  const int n = (int)(sizeof ids / sizeof ids[0]);
+  char *seen = calloc((size_t)m->vertex_count, 1);
+  double want = 0, dome_area = 0;
+  for (int k = 0; k < n; k++) {
+    if (ids[k] < 0 || ids[k] >= nd) continue;
+    for (int j = 0; j < 3; j++) {
+      const int v = m->tri[ids[k]][j];
+      if (!seen[v]) seen[v] = 1, want += m->vertex_area[v];
+    }
+  }
+  for (int i = 0; i < m->vertex_count; i++) dome_area += m->vertex_area[i];
+  const int raised = palp_coverage_press_touched(c, ids, n, PALP_BAND_MEDIUM);
+  int marked = 0;
+  for (int i = 0; i < m->vertex_count; i++) marked += seen[i];
+  double f[3];
+  palp_coverage_band_fractions(c, f);
+  CHECK(raised == marked && fabs(f[1] - want / dome_area) < 1e-12 && f[0] == 0 && f[2] == 0,
+        "touched: the %d vertices of the 4 dome triangles named marked medium, %.6f of the dome (want %.6f, 1e-12); "
+        "the base triangle and the ids out of range skipped", raised, f[1], want / dome_area);
+  CHECK(palp_coverage_press_touched(c, ids, n, PALP_BAND_MEDIUM) == 0, "touched again at the same band: nothing raised");
+  CHECK(palp_coverage_press_touched(c, ids + 5, 3, PALP_BAND_DEEP) == 0 && palp_coverage_press_touched(c, NULL, 3, 1) == 0 &&
+            palp_coverage_press_touched(c, ids, n, 7) == 0,
+        "only a base triangle and bad ids, no list, or no band: nothing marked");
+  free(seen);
+}
+
 int main(void) {
   test_coverage_square();
   dome o;
   CHECK(dome_open(&o) == 0, "the model's mesh, accepted as a dome");
   test_coverage_dome(&o);
   test_coverage_triangles(&o);
+  test_coverage_touched(&o);
   dome_close(&o);
   CHECK_DONE();
 }

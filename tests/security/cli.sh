@@ -129,7 +129,7 @@ check "a station on an old governance is not answered and is told, in full, to c
 # end), and the script's init re-issues her permissions, signed, with the rule.
 cp -r "$pki" "$out/oldperm"
 sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d; /<topic>palp_debrief_score<\/topic>/d' \
-  -e '/<topic>palp_session_log<\/topic>/d' "$out/oldperm/trainee/alice.permissions.xml"
+  -e '/<topic>palp_session_log<\/topic>/d; /<topic>palp_finger_sample<\/topic>/d' "$out/oldperm/trainee/alice.permissions.xml"
 resign "$out/oldperm" trainee/alice.permissions
 "$client" --role trainee --domain 131 --phantom 1 --pki "$out/oldperm" --identity trainee/alice --duration 1 \
   --timeout 4 --quiet >"$out/oldperm.log" 2>&1
@@ -144,7 +144,7 @@ check "a station whose permissions predate palp_debrief still runs its session (
 # ... and a server on such permissions serves on, without debriefs, and says so (domain 132, 2 s)
 sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d; /<topic>palp_debrief_score<\/topic>/d' \
   -e '/<topic>palp_session_exercise<\/topic>/d; /<topic>palp_session_log<\/topic>/d; /<topic>palp_session_closed<\/topic>/d' \
-  "$out/oldperm/server/server.permissions.xml"
+  -e '/<topic>palp_finger_sample<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
 resign "$out/oldperm" server/server.permissions
 # It hosts the shipped exercises and logs: alice (her permissions old too) takes "easy" by position
 # and leaves; nobody can write her debrief, her station says why, and the session log records that
@@ -171,6 +171,8 @@ check "  ... nor name the ended sessions of a dashboard begun after them (sessio
   "grep -q 'no names for the ended sessions of a dashboard begun after them: the server.s permissions do not allow topic palp_session_closed' '$out/oldperm-server.log'"
 check "  ... nor tell each session its own records the log lost (session 69), and says so" \
   "grep -q 'no session told its own records the session log lost (stations count the server.s instead): the server.s permissions do not allow topic palp_session_log' '$out/oldperm-server.log'"
+check "  ... nor send the stations the touched triangles (session 71), and says that their coverage is approximated" \
+  "grep -q 'no touched triangles for the stations. and pages. coverage (they approximate it from the local models): the server.s permissions do not allow topic palp_finger_sample' '$out/oldperm-server.log'"
 check "  alice's station, on old permissions too, says at her exercise's end why she had no debrief" \
   "grep -q 'no debrief: this identity.s permissions predate it' '$out/oldperm-ex.log'"
 logged=$(python3 -c "import sqlite3, sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select e.detail from event e join session s on s.id = e.session_id where s.trainee = 'alice' and e.kind = 'debrief'\")))" "$out/oldperm.db" 2>&1)
@@ -212,8 +214,8 @@ check "  ... and after init, every identity's are current" \
   "[ \$(grep -c 'permissions current' '$out/list-after.log') -eq 5 ] && ! grep -q 'PERMISSIONS\\|not what this script' '$out/list-after.log'"
 check "init, run where files are, re-issues an instructor's older permissions and mends damaged ones, \"*\" whole" \
   "grep -q '<topic>\*</topic>' '$out/ines.intact.xml' && cmp -s '$out/ines.intact.xml' '$out/oldperm/instructor/ines.permissions.xml' && cmp -s '$out/ivy.intact.xml' '$out/oldperm/instructor/ivy.permissions.xml' && openssl smime -verify -in '$out/oldperm/instructor/ivy.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
-check "init re-issues their permissions alone, naming them, with palp_debrief, palp_debrief_score, palp_session_log, palp_session_exercise, palp_session_score and palp_session_closed, signed by the CA" \
-  "grep -q 'permissions re-issued (version 7) for 4 identities (server/server, trainee/alice, instructor/ines, instructor/ivy): copy each' '$out/oldperm-init.log' && grep -q '<topic>palp_session_closed</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_closed' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
+check "init re-issues their permissions alone, naming them, with palp_debrief, palp_debrief_score, palp_session_log, palp_finger_sample, palp_session_exercise, palp_session_score and palp_session_closed, signed by the CA" \
+  "grep -q 'permissions re-issued (version $pv) for 4 identities (server/server, trainee/alice, instructor/ines, instructor/ivy): copy each' '$out/oldperm-init.log' && grep -q '<topic>palp_session_closed</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_closed' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_session_log</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_finger_sample</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_finger_sample</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_debrief</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/trainee/alice.permissions.xml' && grep -q '<topic>palp_debrief_score</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_exercise</topic>' '$out/oldperm/server/server.permissions.xml' && grep -q '<topic>palp_session_score</topic>' '$out/oldperm/server/server.permissions.xml' && ! grep -q 'palp_session_exercise\|palp_session_score' '$out/oldperm/trainee/alice.permissions.xml' && openssl smime -verify -in '$out/oldperm/trainee/alice.permissions.p7s' -CAfile '$out/oldperm/ca.cert.pem' >/dev/null 2>&1"
 # Re-issued, the server sends each exercise session's exercise, its lesions included, to the
 # instructors alone (session 60): a secured palp-recorder (instructor ines) logs alice's attempt at
 # "easy" with its exercise, her mark and her debrief as the server's own log has them.

@@ -63,7 +63,7 @@ struct palp_netem {
 
 static int is_session_topic(int k) {
   return k == PALP_TOPIC_CONTACT || k == PALP_TOPIC_FEEDBACK || k == PALP_TOPIC_DEFORMATION ||
-         k == PALP_TOPIC_LOCAL_MODEL;
+         k == PALP_TOPIC_LOCAL_MODEL || k == PALP_TOPIC_FINGER_SAMPLE;
 }
 
 static int is_reliable(int k) {

@@ -322,7 +322,10 @@
       if (m.level === "count") t += " This exercise does not say where its lumps are: the instructor's review does.";
     }
     const cov = PALP.coveredText(m); /* not an answer: her station prints it at any level */
-    if (cov) t += " You covered " + cov + " of the dome (as this page saw it; the review counts it from the triangles you touched).";
+    /* "touched": the bridge marked the server's own samples of her touches, as the review counts them */
+    if (cov && m.coverage_rule === "touched")
+      t += " You covered " + cov + " of the dome (counted as the review counts it, from the triangles you touched).";
+    else if (cov) t += " You covered " + cov + " of the dome (as this page saw it; the review counts it from the triangles you touched).";
     return t;
   }
   /* Her score, where the exercise tells her the lesions (a practice exercise; the server tells it on
