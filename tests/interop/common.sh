@@ -34,6 +34,24 @@ r() { sed -n "s/^result $2 //p" "$work/$1.out" | head -1; }
 num_ge() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 >= b + 0) }'; }
 num_in() { awk -v a="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(a + 0 >= lo + 0 && a + 0 <= hi + 0) }'; }
 
+# check_finger_samples NAME: the assessment's finger samples (palp_finger_sample, session 71: a bounded
+# sequence of touched-triangle ids) as fastdds_station read them over its 1.6 s press by position: one
+# every lround(physics / 100 Hz) steps (the session log's sampling, every step at 100 Hz or less), so
+# the nearest step between two read is that; best-effort, so at least 60% of them; every sample in
+# contact names 1-256 triangles of the catalogue's mesh.
+check_finger_samples() {
+  hz=$(r "$1" physics_hz)
+  want=$(awk -v h="$hz" 'BEGIN { k = h > 100 ? int(h / 100 + 0.5) : 1; print k }')
+  least=$(awk -v h="$hz" -v k="$want" 'BEGIN { printf "%d", 0.6 * 1.6 * h / k }')
+  if num_ge "$(r "$1" fsm_samples)" "$least" && num_ge "$(r "$1" fsm_in_contact)" 20 \
+     && [ "$(r "$1" fsm_touching)" = "$(r "$1" fsm_in_contact)" ] && num_in "$(r "$1" fsm_tri_max)" 1 256 \
+     && [ "$(r "$1" fsm_bad_ids)" = 0 ] && [ "$(r "$1" fsm_step_min)" = "$want" ]; then
+    ok "palp_finger_sample read by Fast DDS: $(r "$1" fsm_samples) samples (>= $least), $(r "$1" fsm_in_contact) in contact, each naming 1-$(r "$1" fsm_tri_max) triangles of the mesh; frames $(r "$1" fsm_step_min)-$(r "$1" fsm_step_max) steps apart at $hz Hz (want $want)"
+  else
+    bad "palp_finger_sample through Fast DDS: $(r "$1" fsm_samples) samples (want >= $least), $(r "$1" fsm_in_contact) in contact, $(r "$1" fsm_touching) naming triangles, at most $(r "$1" fsm_tri_max), $(r "$1" fsm_bad_ids) ids off the mesh, frames $(r "$1" fsm_step_min)-$(r "$1" fsm_step_max) steps apart at $hz Hz (want $want)"
+  fi
+}
+
 # check_press NAME: fastdds_station's 3 N press (distribution II, pole, 1.5 s) as seen in $work/NAME.out.
 # The phantom pushes back with the applied load once the press has settled (docs/model.md: within 5%
 # from 0.03 s), so 1.5 s in the feedback reads 3 N within 5%; the default long-term dome dents

@@ -100,6 +100,7 @@ timeout 60 "$station" "$domain" 11 station+exercise 4 > "$work/exercise.out" 2>&
   || bad "palp_exercise through Fast DDS: \"$(r exercise exercise)\", want \"easy 300 15.0 1-4 4-9 9-18\""
 [ "$(r exercise finding)" = "1 1 -" ] && ok "its mark (palp_finding) accepted on palp_finding_status: \"$(r exercise finding)\" (marks standing, accepted, reason)" \
   || { bad "mark through Fast DDS: exit $rc, \"$(r exercise finding)\""; grep "^result\|^FAIL" "$work/exercise.out"; }
+check_finger_samples exercise
 set -- $(r exercise debrief)
 # level 2 DEBRIEF_LESIONS ("debrief": "lesions"), 1 lesion, found 0 (the pole is 20 mm of arc from it,
 # beyond its 10 mm margin), 1 mark, 1 place, and the session's closing reason

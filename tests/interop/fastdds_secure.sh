@@ -73,6 +73,8 @@ if num_ge "$(r fd lm_samples)" 100 && num_ge "$(r fd lm_in_contact)" 50 && [ "$(
 else
   bad "press by position: $(r fd lm_samples) local models, $(r fd lm_in_contact) in contact, $(r fd lm_force_drops) force drops, hold $(r fd lm_hold_force_N) N at $(r fd lm_hold_device_depth_mm) mm (coupling $(r fd lm_hold_coupling_mm) mm: $sec N/mm), Kzz $(r fd lm_hold_kzz_N_per_mm) N/mm"
 fi
+# ... and the finger samples in her own partition, as her permissions (version 8) allow them
+check_finger_samples fd
 [ "$(r fd leave_reason)" = "trainee station left" ] && ok "OP_LEAVE closed the session in $(r fd leave_closed_s) s" \
   || bad "leave: \"$(r fd leave_reason)\""
 

@@ -37,6 +37,7 @@
 // press by position and read the server's local contact models; +exercise, on an exercise phantom: as
 // +finger, then mark a lump where the fingertip touches (palp_finding), read the answer
 // (palp_finding_status), and after leaving the debrief and the score (palp_debrief, palp_debrief_score))
+#include <algorithm>
 #include <cmath>
 #include <chrono>
 #include <cstdio>
@@ -322,8 +323,8 @@ int main(int argc, char **argv) {
               t_ss = make_type<palp::ServerStatusPubSubType>(),
               t_fi = make_type<palp::FindingPubSubType>(), t_fs = make_type<palp::FindingStatusPubSubType>(),
               t_db = make_type<palp::DebriefPubSubType>(), t_sc = make_type<palp::SessionScorePubSubType>(),
-              t_ex = make_type<palp::ExercisePubSubType>();
-  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss})
+              t_ex = make_type<palp::ExercisePubSubType>(), t_fsm = make_type<palp::FingerSamplePubSubType>();
+  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss, &t_fsm})
     t->register_type(pp);
   if (exercise)
     for (TypeSupport *t : {&t_fi, &t_fs, &t_db, &t_sc, &t_ex}) t->register_type(pp);
@@ -607,6 +608,18 @@ int main(int argc, char **argv) {
     rq_lm.history().depth = 1;
     DataReader *r_lm = tp_lm ? ssub->create_datareader(tp_lm, rq_lm) : nullptr;
     if (!r_lm) return fail("cannot create the local model reader");
+    // ... and the assessment's finger samples (palp_finger_sample, session 71: a bounded sequence of
+    // touched triangle ids), every one kept: 100 Hz for 1.6 s
+    Topic *tp_fsm = pp->create_topic("palp_finger_sample", t_fsm.get_type_name(), TOPIC_QOS_DEFAULT);
+    DataReaderQos rq_fsm = DATAREADER_QOS_DEFAULT;
+    rq_fsm.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+    rq_fsm.history().depth = 64;
+    DataReader *r_fsm = tp_fsm ? ssub->create_datareader(tp_fsm, rq_fsm) : nullptr;
+    if (!r_fsm) return fail("cannot create the finger sample reader");
+    uint64_t fsm_n = 0, fsm_contact = 0, fsm_touching = 0, fsm_bad_ids = 0, fsm_last = 0, fsm_step_min = 0,
+             fsm_step_max = 0;
+    size_t fsm_tri_max = 0;
+    const size_t mesh_tris = ph.triangles().size() / 3;
     nap(0.5); // discovery of the new reader
     const double r_tip = 0.008, top = ph.radius() + r_tip;
     palp::Contact fc;
@@ -655,8 +668,27 @@ int main(int argc, char **argv) {
           hold_dev_mm += (top - lm.device().z()) * 1e3;
         }
       }
+      palp::FingerSample fsm;
+      while (r_fsm->take_next_sample(&fsm, &info) == ReturnCode_t::RETCODE_OK) {
+        if (!info.valid_data || fsm.session_id() != session || fsm.finger() != 1) continue;
+        fsm_n++;
+        if (fsm_last && fsm.frame() > fsm_last) {
+          const uint64_t step = fsm.frame() - fsm_last;
+          if (!fsm_step_min || step < fsm_step_min) fsm_step_min = step;
+          if (step > fsm_step_max) fsm_step_max = step;
+        }
+        fsm_last = fsm.frame();
+        if (fsm.in_contact()) fsm_contact++, fsm_touching += !fsm.triangles().empty();
+        fsm_tri_max = std::max(fsm_tri_max, fsm.triangles().size());
+        for (int32_t id : fsm.triangles()) fsm_bad_ids += id < 0 || (size_t)id >= mesh_tris;
+      }
       nap(0.01);
     }
+    std::printf("result fsm_samples %llu\nresult fsm_in_contact %llu\nresult fsm_touching %llu\nresult fsm_tri_max %zu\n"
+                "result fsm_bad_ids %llu\nresult fsm_step_min %llu\nresult fsm_step_max %llu\nresult physics_hz %.1f\n",
+                (unsigned long long)fsm_n, (unsigned long long)fsm_contact, (unsigned long long)fsm_touching, fsm_tri_max,
+                (unsigned long long)fsm_bad_ids, (unsigned long long)fsm_step_min, (unsigned long long)fsm_step_max,
+                ph.tick_rate_hz());
     if (hold_n) hold_f /= (double)hold_n, hold_kzz /= (double)hold_n, hold_depth /= (double)hold_n, hold_dev_mm /= (double)hold_n;
     std::printf("result lm_samples %llu\nresult lm_in_contact %llu\nresult lm_force_drops %llu\nresult lm_hold_samples %llu\n"
                 "result lm_hold_force_N %.4f\nresult lm_peak_force_N %.4f\nresult lm_hold_kzz_N_per_mm %.4f\n"
