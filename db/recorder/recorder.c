@@ -57,8 +57,9 @@ typedef struct phantom {
   palp_vec3 *rest;
   char *scene_json;
   /* its dome, for the footprint of a local model (palp_coverage_patch): the touched triangles are
-   * not on the wire, how many there are is */
+   * not in a local model, how many there are is */
   palp_coverage *cov;
+  int tri_count; /* the mesh's triangles, the ids a finger sample may name (with cov) */
 } phantom;
 
 typedef struct rsession {
@@ -84,6 +85,11 @@ typedef struct rsession {
   int debriefed;      /* its debrief is logged */
   double radius[FINGERS];       /* position-driven fingertips' radii [m], from their contact samples */
   int sample_every;             /* physics steps between finger samples (palp_assess_sample_every) */
+  /* The server's own finger samples (palp_finger_sample, session 71), touched triangles named: once
+   * one has come the session's samples are logged from them and no longer from the local models
+   * (its params then say "footprint": "touched"). Frames logged so far per finger, either way. */
+  int touched;
+  int64_t sample_frame[FINGERS];
   palp_finding_answers marks; /* findings awaiting the server's answer, and answers their finding */
   int64_t findings_unanswered;
   int closing;                  /* CLOSED seen; ended when its debrief arrives or DEBRIEF_WAIT passes */
@@ -216,8 +222,8 @@ static void session_params(const recorder *r, const rsession *s, char *buf, size
     snprintf(late, sizeof late, ", \"recorded_from_s\": %.3f", s->recorded_from);
   snprintf(buf, len,
            "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
-           "\"max_force_n\": %.17g, \"footprint\": \"patch\"%s%s}",
-           s->partition, s->ph ? s->ph->max_force : 0.0, exname, late);
+           "\"max_force_n\": %.17g, \"footprint\": \"%s\"%s%s}",
+           s->partition, s->ph ? s->ph->max_force : 0.0, s->touched ? "touched" : "patch", exname, late);
 }
 
 static void log_params(recorder *r, rsession *s) {
@@ -270,6 +276,7 @@ static void on_phantom(recorder *r, const palp_Phantom *p) {
     int rc;
     ph->cov = palp_coverage_create(xyz, (int)p->rest._length, p->triangles._buffer, (int)(p->triangles._length / 3),
                                    p->dome_triangle_count, &rc);
+    ph->tri_count = (int)(p->triangles._length / 3);
   }
   free(xyz);
   complete_sessions(r, ph, p->phantom_id);
@@ -634,6 +641,8 @@ static void on_local_model(recorder *r, const palp_LocalModel *m) {
   /* the server's rule (server/db_log.c): every sample_every-th frame of the world */
   const int every = s->sample_every > 0 ? s->sample_every : 1;
   if (frame % every != 0 || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
+  if (s->touched || frame <= s->sample_frame[f]) return; /* the server's own samples log this session */
+  s->sample_frame[f] = frame;
   palp_db_finger_sample fs = {.frame = frame,
                                     .sim_time_s = m->time,
                                     .slot = f,
@@ -650,6 +659,47 @@ static void on_local_model(recorder *r, const palp_LocalModel *m) {
     fs.triangle_count = palp_coverage_patch(s->ph->cov, proxy, m->triangles, patch);
     fs.triangles = patch;
   }
+  count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
+}
+
+/* The server's finger samples (palp_finger_sample, session 71): what its own log keeps, the touched
+ * triangles named, so that this log's coverage is the server log's. Checked: finger, finite numbers,
+ * a frame after the last logged for that finger, every id a triangle of the phantom's mesh (a sample
+ * naming one that is not is refused whole). The first one turns the session's footprint to
+ * "touched": its local models are no longer logged. */
+static void on_finger_sample(recorder *r, const palp_FingerSample *m) {
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || m->finger >= FINGERS) {
+    r->unknown_session_samples++;
+    return;
+  }
+  const int f = m->finger;
+  const double v[] = {m->time, m->radius, m->device.x, m->device.y, m->device.z, m->proxy.x, m->proxy.y, m->proxy.z,
+                      m->force.x, m->force.y, m->force.z, m->point.x, m->point.y, m->point.z, m->area};
+  for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
+    if (!isfinite(v[i])) return; /* a sample the server cannot have meant: not logged */
+  if (!(m->radius > 0) || m->triangles._length > PALP_DB_MAX_SAMPLE_TRIANGLES || (int64_t)m->frame <= s->sample_frame[f])
+    return;
+  const int mesh_tris = s->ph && s->ph->cov ? s->ph->tri_count : -1;
+  for (uint32_t k = 0; k < m->triangles._length; k++)
+    if (m->triangles._buffer[k] < 0 || (mesh_tris >= 0 && m->triangles._buffer[k] >= mesh_tris)) return;
+  if (!s->touched) {
+    s->touched = 1;
+    log_params(r, s); /* "footprint": "touched" */
+  }
+  s->sample_frame[f] = (int64_t)m->frame;
+  const palp_db_finger_sample fs = {.frame = (int64_t)m->frame,
+                                    .sim_time_s = m->time,
+                                    .slot = f,
+                                    .radius_m = m->radius,
+                                    .device_m = {m->device.x, m->device.y, m->device.z},
+                                    .proxy_m = {m->proxy.x, m->proxy.y, m->proxy.z},
+                                    .force_n = {m->force.x, m->force.y, m->force.z},
+                                    .in_contact = m->in_contact != 0,
+                                    .point_m = {m->point.x, m->point.y, m->point.z},
+                                    .area_m2 = m->area > 0 ? m->area : 0,
+                                    .triangle_count = (int)m->triangles._length,
+                                    .triangles = m->triangles._length ? m->triangles._buffer : NULL};
   count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
 }
 
@@ -780,7 +830,7 @@ static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dd
    * sample that arrives, and history depth is not part of the writer/reader match. */
   dds_qos_t *q = palp_dds_qos(kind);
   if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION ||
-      kind == PALP_TOPIC_LOCAL_MODEL || kind == PALP_TOPIC_FINDING_STATUS)
+      kind == PALP_TOPIC_LOCAL_MODEL || kind == PALP_TOPIC_FINDING_STATUS || kind == PALP_TOPIC_FINGER_SAMPLE)
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
   dds_entity_t rd = dds_create_reader(parent, topic, q, NULL);
   dds_delete_qos(q);
@@ -922,8 +972,10 @@ int main(int argc, char **argv) {
   dds_entity_t sub = palp_dds_session_subscriber(pp, wildcard);
   /* In the order a pass takes them: catalogue and state first, so that a session's samples
    * find it open; its exercise before its findings; the debrief last. */
-  enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_LOCAL_MODEL,
-         RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
+  /* The finger samples before the local models: a session whose server sends them is logged from
+   * them from the first one on (on_finger_sample). */
+  enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_FINGER_SAMPLE,
+         RD_LOCAL_MODEL, RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
   dds_entity_t rd[RD_COUNT] = {
       reader_deep(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
       reader_deep(pp, t[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE),
@@ -932,6 +984,7 @@ int main(int argc, char **argv) {
       reader_deep(sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
       reader_deep(sub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK),
       reader_deep(sub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION),
+      reader_deep(sub, t[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE),
       reader_deep(sub, t[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL),
       reader_deep(sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING),
       reader_deep(sub, t[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS),
@@ -1002,6 +1055,7 @@ int main(int argc, char **argv) {
           case RD_CONTACT: on_contact(r, samples[i]); break;
           case RD_FEEDBACK: on_feedback(r, samples[i]); break;
           case RD_DEFORMATION: on_deformation(r, samples[i]); break;
+          case RD_FINGER_SAMPLE: on_finger_sample(r, samples[i]); break;
           case RD_LOCAL_MODEL: on_local_model(r, samples[i]); break;
           case RD_FINDING: on_finding(r, samples[i]); break;
           case RD_FINDING_STATUS: on_finding_status(r, samples[i]); break;
