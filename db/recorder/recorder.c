@@ -620,12 +620,40 @@ static void on_debrief(recorder *r, const palp_Debrief *m) {
   s->debriefed = 1;
 }
 
+/* A finger sample into the log, from a local model or the server's own finger sample: its numbers
+ * checked finite first (a sample the server cannot have meant is not logged), then logged for finger
+ * f at frame, frames only rising per finger. v: device, proxy, force, contact point. 1 if logged. */
+static int log_finger_sample(recorder *r, rsession *s, int f, int64_t frame, double time, double radius,
+                              const palp_Vec3 v[4], double area, int in_contact, int tri_n, const int32_t *tri) {
+  if (!isfinite(time) || !isfinite(radius) || !isfinite(area)) return 0;
+  for (int k = 0; k < 4; k++)
+    if (!isfinite(v[k].x) || !isfinite(v[k].y) || !isfinite(v[k].z)) return 0;
+  if (frame <= s->sample_frame[f]) return 0;
+  s->sample_frame[f] = frame;
+  const palp_db_finger_sample fs = {.frame = frame,
+                                    .sim_time_s = time,
+                                    .slot = f,
+                                    .radius_m = radius,
+                                    .device_m = {v[0].x, v[0].y, v[0].z},
+                                    .proxy_m = {v[1].x, v[1].y, v[1].z},
+                                    .force_n = {v[2].x, v[2].y, v[2].z},
+                                    .in_contact = in_contact,
+                                    .point_m = {v[3].x, v[3].y, v[3].z},
+                                    .area_m2 = area > 0 ? area : 0,
+                                    .triangle_count = tri_n,
+                                    .triangles = tri_n > 0 ? tri : NULL};
+  count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
+  return 1;
+}
+
 /* The local models the server streams to the station are the fingertip's state each physics
- * step: logged as finger samples at the assessment's rate, as the server logs them. The touched
- * triangles are not on the wire, how many there are is: the sample's triangles are that many
- * under the fingertip (palp_coverage_patch, the rule palp-web's and the stations' coverage marks
- * by; the session's params say "footprint": "patch", and the review says so). Without a count or
- * the phantom's mesh, none: the review then takes a disc of the contact's area (palp_assess). */
+ * step: logged as finger samples at the assessment's rate, as the server logs them, where the server
+ * sends no finger samples of its own (a server older than session 71: on_finger_sample below). The
+ * touched triangles are not in a local model, how many there are is: the sample's triangles are that
+ * many under the fingertip (palp_coverage_patch, the rule palp-web's and the stations' coverage marked
+ * by before session 71; the session's params say "footprint": "patch", and the review says so).
+ * Without a count or the phantom's mesh, none: the review then takes a disc of the contact's area
+ * (palp_assess). */
 static void on_local_model(recorder *r, const palp_LocalModel *m) {
   rsession *s = find_session(r, m->session_id, 0);
   if (!s || m->finger >= FINGERS) {
@@ -634,32 +662,17 @@ static void on_local_model(recorder *r, const palp_LocalModel *m) {
   }
   const int f = m->finger;
   const int64_t frame = (int64_t)m->frame;
-  const double v[] = {m->time, m->device.x, m->device.y, m->device.z, m->proxy.x, m->proxy.y, m->proxy.z,
-                      m->force.x, m->force.y, m->force.z, m->point.x, m->point.y, m->point.z, m->area};
-  for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
-    if (!isfinite(v[i])) return; /* a sample the server cannot have meant: not logged */
   /* the server's rule (server/db_log.c): every sample_every-th frame of the world */
   const int every = s->sample_every > 0 ? s->sample_every : 1;
-  if (frame % every != 0 || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
-  if (s->touched || frame <= s->sample_frame[f]) return; /* the server's own samples log this session */
-  s->sample_frame[f] = frame;
-  palp_db_finger_sample fs = {.frame = frame,
-                                    .sim_time_s = m->time,
-                                    .slot = f,
-                                    .radius_m = s->radius[f],
-                                    .device_m = {m->device.x, m->device.y, m->device.z},
-                                    .proxy_m = {m->proxy.x, m->proxy.y, m->proxy.z},
-                                    .force_n = {m->force.x, m->force.y, m->force.z},
-                                    .in_contact = m->in_contact != 0,
-                                    .point_m = {m->point.x, m->point.y, m->point.z},
-                                    .area_m2 = m->area > 0 ? m->area : 0};
+  if (s->touched || frame % every != 0 || !(s->radius[f] > 0) || s->kind[f] != PALP_DB_KIND_FINGER) return;
+  const palp_Vec3 v[4] = {m->device, m->proxy, m->force, m->point};
   int32_t patch[PALP_COVERAGE_TRIANGLES_MAX];
+  int n = 0;
   if (m->in_contact && m->triangles > 0 && s->ph && s->ph->cov) {
     const double proxy[3] = {m->proxy.x, m->proxy.y, m->proxy.z};
-    fs.triangle_count = palp_coverage_patch(s->ph->cov, proxy, m->triangles, patch);
-    fs.triangles = patch;
+    n = palp_coverage_patch(s->ph->cov, proxy, m->triangles, patch);
   }
-  count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
+  (void)log_finger_sample(r, s, f, frame, m->time, s->radius[f], v, m->area, m->in_contact != 0, n, patch);
 }
 
 /* The server's finger samples (palp_finger_sample, session 71): what its own log keeps, the touched
@@ -674,33 +687,17 @@ static void on_finger_sample(recorder *r, const palp_FingerSample *m) {
     return;
   }
   const int f = m->finger;
-  const double v[] = {m->time, m->radius, m->device.x, m->device.y, m->device.z, m->proxy.x, m->proxy.y, m->proxy.z,
-                      m->force.x, m->force.y, m->force.z, m->point.x, m->point.y, m->point.z, m->area};
-  for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
-    if (!isfinite(v[i])) return; /* a sample the server cannot have meant: not logged */
-  if (!(m->radius > 0) || m->triangles._length > PALP_DB_MAX_SAMPLE_TRIANGLES || (int64_t)m->frame <= s->sample_frame[f])
-    return;
+  if (!(m->radius > 0) || m->triangles._length > PALP_DB_MAX_SAMPLE_TRIANGLES) return;
   const int mesh_tris = s->ph && s->ph->cov ? s->ph->tri_count : -1;
   for (uint32_t k = 0; k < m->triangles._length; k++)
     if (m->triangles._buffer[k] < 0 || (mesh_tris >= 0 && m->triangles._buffer[k] >= mesh_tris)) return;
-  if (!s->touched) {
+  const palp_Vec3 v[4] = {m->device, m->proxy, m->force, m->point};
+  if (log_finger_sample(r, s, f, (int64_t)m->frame, m->time, m->radius, v, m->area, m->in_contact != 0,
+                        (int)m->triangles._length, m->triangles._buffer) &&
+      !s->touched) {
     s->touched = 1;
     log_params(r, s); /* "footprint": "touched" */
   }
-  s->sample_frame[f] = (int64_t)m->frame;
-  const palp_db_finger_sample fs = {.frame = (int64_t)m->frame,
-                                    .sim_time_s = m->time,
-                                    .slot = f,
-                                    .radius_m = m->radius,
-                                    .device_m = {m->device.x, m->device.y, m->device.z},
-                                    .proxy_m = {m->proxy.x, m->proxy.y, m->proxy.z},
-                                    .force_n = {m->force.x, m->force.y, m->force.z},
-                                    .in_contact = m->in_contact != 0,
-                                    .point_m = {m->point.x, m->point.y, m->point.z},
-                                    .area_m2 = m->area > 0 ? m->area : 0,
-                                    .triangle_count = (int)m->triangles._length,
-                                    .triangles = m->triangles._length ? m->triangles._buffer : NULL};
-  count(r, palp_db_log_finger_sample(r->w, s->h, &fs));
 }
 
 static void on_contact(recorder *r, const palp_Contact *m) {
