@@ -62,7 +62,7 @@ static char *read_file(const char *path) {
 /* A session's writers in its partition. */
 typedef struct sess {
   uint32_t id;
-  dds_entity_t pub, contact, local_model, finding, status, debrief;
+  dds_entity_t pub, contact, local_model, finding, status, debrief, finger_sample;
 } sess;
 
 static void sess_open(dds_entity_t pp, const dds_entity_t *t, uint32_t id, sess *s) {
@@ -75,6 +75,28 @@ static void sess_open(dds_entity_t pp, const dds_entity_t *t, uint32_t id, sess 
   s->finding = palp_dds_create_writer(s->pub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
   s->status = palp_dds_create_writer(s->pub, t[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
   s->debrief = palp_dds_create_writer(s->pub, t[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
+  s->finger_sample = palp_dds_create_writer(s->pub, t[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE);
+}
+
+/* A finger sample of session s's finger 0 as a server writes it (session 71), in contact, touching
+ * the n triangles in tri. */
+static void finger_sample(const sess *s, uint64_t frame, double fz, const int32_t *tri, uint32_t n) {
+  palp_FingerSample m;
+  memset(&m, 0, sizeof m);
+  m.session_id = s->id;
+  m.finger = 0;
+  m.frame = frame;
+  m.time = 0.004 * (double)frame;
+  m.radius = 0.008;
+  m.in_contact = true;
+  m.device = (palp_Vec3){0, 0, 0.045};
+  m.proxy = (palp_Vec3){0, 0, 0.047};
+  m.force = (palp_Vec3){0, 0, fz};
+  m.point = (palp_Vec3){0, 0, 0.039};
+  m.area = 1e-5;
+  m.triangles._buffer = (int32_t *)tri;
+  m.triangles._length = m.triangles._maximum = n;
+  dds_write(s->finger_sample, &m);
 }
 
 static void state_at(dds_entity_t w, uint32_t id, int closed, double duration) {
@@ -158,7 +180,7 @@ int main(int argc, char **argv) {
   sess_open(pp, t, 9, &s9);
   sess_open(pp, t, 10, &s10);
   const dds_entity_t all[] = {w_cat, w_state, w_ex, s8.contact, s8.local_model, s8.finding, s8.status, s8.debrief,
-                              s10.debrief};
+                              s10.debrief, s10.contact, s10.local_model, s10.finger_sample};
   for (size_t k = 0; k < sizeof all / sizeof all[0]; k++)
     REQUIRE(wait_matched(all[k], 1, 20) == 0, "writer %zu never matched the recorder", k);
 
@@ -219,6 +241,39 @@ int main(int argc, char **argv) {
     m.triangles = k > 30 ? 6 : 0; /* from frame 31 on, 6 triangles touched: a patch of 6 logged */
     dds_write(s8.local_model, &m);
     sleep_ms(2);
+  }
+  sleep_ms(200);
+
+  /* session 10's fingertip from a server that writes finger samples (session 71): a local model at
+   * frame 3 (logged, as no finger sample has come yet), then finger samples: frames 6 and 9 logged
+   * with their triangles; 12 with a NaN force, 15 naming a triangle past the mesh's and 9 again
+   * (not after the last) refused; 18 logged; and a local model at frame 21, no longer logged */
+  c.session_id = 10;
+  dds_write(s10.contact, &c);
+  sleep_ms(100);
+  {
+    palp_LocalModel m;
+    memset(&m, 0, sizeof m);
+    m.session_id = 10;
+    m.frame = 3;
+    m.time = 0.012;
+    m.period = 0.004;
+    m.in_contact = true;
+    m.proxy = (palp_Vec3){0, 0, 0.047};
+    m.device = m.point = m.proxy;
+    m.area = 1e-5;
+    dds_write(s10.local_model, &m);
+    sleep_ms(50);
+    const int32_t a[] = {0, 1, 2}, b[] = {5}, off[] = {4, mesh.triangle_count}, d[] = {7, 8};
+    finger_sample(&s10, 6, 0.5, a, 3);
+    finger_sample(&s10, 9, 0.6, b, 1);
+    finger_sample(&s10, 12, NAN, b, 1);
+    finger_sample(&s10, 15, 0.7, off, 2);
+    finger_sample(&s10, 9, 0.6, d, 2);
+    finger_sample(&s10, 18, 0.8, d, 2);
+    sleep_ms(50);
+    m.frame = 21;
+    dds_write(s10.local_model, &m);
   }
   sleep_ms(200);
 
@@ -377,6 +432,23 @@ int main(int argc, char **argv) {
     snprintf(sql, sizeof sql,
              "SELECT count(*) FROM session WHERE id = %s AND json_extract(params_json, '$.footprint') = 'patch'", uid8);
     CHECK(db_scalar(h, sql) == 1, "the session's params say its footprints are patches");
+  }
+
+  /* session 10's samples from the server's finger samples: frame 3 from its local model (no
+   * triangles), then 6, 9 and 18 with the triangles sent, the malformed, off-mesh and repeated
+   * ones refused, the later local model not logged; its params say "touched" */
+  {
+    const char *uid10 = "(SELECT id FROM session WHERE uid LIKE 'dds-14-10-%')";
+    snprintf(sql, sizeof sql,
+             "SELECT group_concat(frame || ':' || CASE WHEN triangles IS NULL THEN '-' ELSE hex(triangles) END, ' ') FROM "
+             "(SELECT frame, triangles FROM finger_sample WHERE session_id = %s ORDER BY frame)", uid10);
+    char rows[256] = "";
+    db_text(h, sql, rows, sizeof rows);
+    const char *want = "3:- 6:000000000100000002000000 9:05000000 18:0700000008000000";
+    CHECK(!strcmp(rows, want), "session 10's finger samples: %s (want %s)", rows, want);
+    snprintf(sql, sizeof sql,
+             "SELECT count(*) FROM session WHERE id = %s AND json_extract(params_json, '$.footprint') = 'touched'", uid10);
+    CHECK(db_scalar(h, sql) == 1, "session 10's params say its footprints are the touched triangles");
   }
 
   /* the debriefs */
