@@ -1750,7 +1750,7 @@ static void on_finger_sample(palp_web_hub *h, const palp_FingerSample *m) {
   }
   s->samples_frame[m->finger] = m->frame;
   if (!s->touched) return;
-  s->samples++;
+  if (++s->samples == 1) h->sessions_dirty = 1, s->cover_changed = 1; /* its coverage_rule is "touched" now */
   if (!m->in_contact) return;
   const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
   const exercise *ex = banding_exercise(h, s);
@@ -1770,7 +1770,7 @@ static void on_finger_sample(palp_web_hub *h, const palp_FingerSample *m) {
     const double point[3] = {m->point.x, m->point.y, m->point.z}, proxy[3] = {m->proxy.x, m->proxy.y, m->proxy.z};
     raised = palp_coverage_press_contact(s->touched, point, proxy, 0, m->area, m->radius, band - 1);
   }
-  if (raised > 0 || s->samples == 1) s->cover_changed = s->changed = 1;
+  if (raised > 0) s->cover_changed = s->changed = 1;
 }
 
 static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {

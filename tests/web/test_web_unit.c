@@ -356,6 +356,45 @@ static void write_pole_model(dds_entity_t w, uint32_t sid, uint64_t frame, doubl
   dds_write(w, &lm);
 }
 
+/* A finger sample (palp_finger_sample, session 71) of the fingertip `depth` [m] into the pole, in
+ * contact, naming the dome triangles tri[0..n). */
+static void write_pole_sample(dds_entity_t w, uint32_t sid, uint64_t frame, double depth, double fz, int32_t *tri,
+                              uint32_t n) {
+  palp_FingerSample m;
+  memset(&m, 0, sizeof m);
+  m.session_id = sid;
+  m.frame = frame;
+  m.time = 0.004 * (double)frame;
+  m.radius = 0.008;
+  m.in_contact = 1;
+  m.proxy = (palp_Vec3){0, 0, 0.048 - depth};
+  m.device = (palp_Vec3){0, 0, 0.048 - depth - 0.001};
+  m.force = (palp_Vec3){0, 0, fz};
+  m.point = (palp_Vec3){0, 0, 0.04 - depth};
+  m.triangles = (dds_sequence_long){._length = n, ._maximum = n, ._buffer = tri, ._release = false};
+  dds_write(w, &m);
+}
+
+/* The sessions message's coverage_rule for session sid, into arg (char[16]). */
+typedef struct rule_want {
+  uint32_t sid;
+  char rule[16];
+} rule_want;
+static int sessions_rule(const cJSON *j, void *arg) {
+  rule_want *w = arg;
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  const cJSON *ss = cJSON_GetObjectItem(j, "sessions");
+  if (!type || strcmp(type, "sessions") || !cJSON_IsArray(ss)) return 0;
+  const cJSON *o;
+  cJSON_ArrayForEach(o, ss) {
+    if (cJSON_GetNumberValue(cJSON_GetObjectItem(o, "id")) != w->sid) continue;
+    const char *r = cJSON_GetStringValue(cJSON_GetObjectItem(o, "coverage_rule"));
+    snprintf(w->rule, sizeof w->rule, "%s", r ? r : "");
+    return !strcmp(w->rule, "touched");
+  }
+  return 0;
+}
+
 /* An exercise session's live band is the exercise's, by the fingertip's indentation as the
  * assessment grades it (palp_band_of), not the gauge's force bands: the shipped exercises' bands
  * (light 1-4, medium 4-9, deep 9-18 mm) on a 40 mm dome with an 8 mm fingertip. 5 N at 5 mm is
@@ -374,6 +413,20 @@ static int is_cover(const cJSON *j, void *arg) {
   return 1;
 }
 
+/* Both: the newest map and whether a sessions message said "touched"; 1 once the map is want. */
+typedef struct map_rule_want {
+  cover_want cw;
+  rule_want rw;
+  int said_touched;
+  const char *want;
+} map_rule_want;
+static int map_and_rule(const cJSON *j, void *arg) {
+  map_rule_want *w = arg;
+  if (sessions_rule(j, &w->rw)) w->said_touched = 1;
+  is_cover(j, &w->cw);
+  return !strcmp(w->cw.bands, w->want);
+}
+
 static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const uint32_t sid = 4712;
   palp_web_cursor cur, *c = &cur; /* a page of its own: the other is bound to session 4711 */
@@ -390,7 +443,10 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const dds_entity_t w_ex = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_EXERCISE), PALP_TOPIC_EXERCISE);
   const dds_entity_t w_contact = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_CONTACT), PALP_TOPIC_CONTACT);
   const dds_entity_t w_lm = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_LOCAL_MODEL), PALP_TOPIC_LOCAL_MODEL);
-  CHECK(pub > 0 && w_cat > 0 && w_state > 0 && w_ex > 0 && w_contact > 0 && w_lm > 0, "exercise bands: DDS entities");
+  const dds_entity_t w_fs =
+      palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINGER_SAMPLE), PALP_TOPIC_FINGER_SAMPLE);
+  CHECK(pub > 0 && w_cat > 0 && w_state > 0 && w_ex > 0 && w_contact > 0 && w_lm > 0 && w_fs > 0,
+        "exercise bands: DDS entities");
   /* a phantom of radius 40 mm: the pole and three points of the rim, three dome triangles */
   palp_Vec3 rest[4] = {{0, 0, 0.04}, {0.04, 0, 0}, {-0.02, 0.0346, 0}, {-0.02, -0.0346, 0}};
   int32_t tri[9] = {0, 1, 2, 0, 2, 3, 0, 3, 1};
@@ -457,6 +513,25 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   cover_want own = {sid, ""};
   for (int i = 0; i < 30 && strcmp(own.bands, "6000"); i++) next_json(h, c, 5, is_cover, &own);
   CHECK(!strcmp(own.bands, "6000"), "the page following the session is sent the same map (\"%s\")", own.bands);
+  /* From the server's finger samples (session 71) the map is the triangles they name, at the band of
+   * the sample's own depth: triangle 1 (vertices 0, 2, 3) 2 mm deep, light; a sample with a NaN force
+   * naming triangle 2 (vertices 0, 3, 1) refused; then triangle 2 at 6 mm, medium. Per vertex:
+   * 0 light and medium (3), 1 medium (2), 2 light (1), 3 light and medium (3). The sessions message
+   * says the coverage is "touched". */
+  int32_t t1[] = {1}, t2[] = {2};
+  write_pole_sample(w_fs, sid, 120, 0.002, 0.5, t1, 1);
+  write_pole_sample(w_fs, sid, 123, 0.006, NAN, t2, 1);
+  map_rule_want mr = {.cw = {sid, ""}, .rw = {sid, ""}, .want = "1011"};
+  next_json(h, &dash, 300, map_and_rule, &mr);
+  CHECK(!strcmp(mr.cw.bands, "1011"), "finger samples: triangle 1 pressed light, the NaN sample refused: \"%s\" (want \"1011\")",
+        mr.cw.bands);
+  write_pole_sample(w_fs, sid, 126, 0.006, 3, t2, 1);
+  mr.want = "3213";
+  next_json(h, &dash, 300, map_and_rule, &mr);
+  CHECK(!strcmp(mr.cw.bands, "3213"), "finger samples: then triangle 2 medium: \"%s\" (want \"3213\")", mr.cw.bands);
+  for (int i = 0; i < 60 && !mr.said_touched; i++) next_json(h, &dash, 5, map_and_rule, &mr); /* <= 5 Hz lists */
+  CHECK(mr.said_touched, "the sessions message says the coverage is counted from the touched triangles (\"%s\")",
+        mr.rw.rule);
   palp_web_hub_detach(h, &dash);
   palp_web_hub_detach(h, c);
 }
