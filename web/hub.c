@@ -479,8 +479,10 @@ static void build_sessions(palp_web_hub *h) {
     cJSON_AddBoolToObject(o, "log_own", s->log.own);
     /* The session log's losses while it runs, in her station's words (palp_dds_log_view_words); "": none. */
     char log_words[320];
-    palp_dds_log_view_words(&s->log, 1, log_words, sizeof log_words);
+    const int log_state = palp_dds_log_view_words(&s->log, 1, log_words, sizeof log_words);
     cJSON_AddStringToObject(o, "log", log_words);
+    /* ... and which of them, so that a page colours them without reading its words (session 71) */
+    cJSON_AddStringToObject(o, "log_state", log_state == 1 ? "losing" : log_state == 2 ? "writing" : "");
     /* ... and in the words of an instructor's station following it (she is the one to act) */
     palp_dds_log_view_words(&s->log, 0, log_words, sizeof log_words);
     cJSON_AddStringToObject(o, "log_observer", log_words);

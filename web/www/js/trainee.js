@@ -294,7 +294,7 @@
    * sends them, web/hub.c: palp_dds_log_view_words); as the session ends, the loss in all
    * (palp_dds_log_view_summary), kept so that she still reads why its review will be incomplete, and
    * cleared when a new one starts. */
-  function showLog(words) {
+  function showLog(words, state) {
     const el = document.getElementById("log");
     if (!words) {
       el.hidden = true;
@@ -302,7 +302,7 @@
       return;
     }
     el.textContent = words.charAt(0).toUpperCase() + words.slice(1) + ".";
-    el.className = words.indexOf("writing again") >= 0 ? "again" : "";
+    el.className = state === "writing" ? "again" : ""; /* the bridge's log_state: "losing", "writing" or "" */
     el.hidden = false;
   }
 
@@ -481,7 +481,7 @@
       showExercise();
       if (s) {
         showSession(s);
-        showLog(observer ? s.log_observer : s.log); /* an instructor following is told what to do, not to tell one */
+        showLog(observer ? s.log_observer : s.log, s.log_state); /* an instructor following is told what to do, not to tell one */
         if (s.phantom !== pendingPhantom) {
           pendingPhantom = s.phantom;
           if (PALP.state.phantoms[s.phantom]) buildMesh(PALP.state.phantoms[s.phantom]);
