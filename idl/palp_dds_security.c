@@ -4,6 +4,7 @@
 #include "palp_dds_security.h"
 
 #include <dirent.h>
+#include <fnmatch.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -211,8 +212,58 @@ static int permissions_version(const palp_dds_security *s) {
   return m ? atoi(m + sizeof mark - 1) : 1;
 }
 
+/* Whether the identity's signed permissions name a rule for `topic` (a <topic> pattern matching it, as
+ * DDS Security matches them, fnmatch): 1 yes, 0 no, -1 unreadable. Read from the S/MIME file's clear
+ * part (at most 64 KiB: the script's are ~2 KiB), so it is what the plugins enforce. Partitions and the
+ * rule's kind (publish or subscribe) are not told apart: enough to say that no rule names a topic. */
+static int permissions_name(const palp_dds_security *s, const char *topic) {
+  char f[PALP_DDS_PKI_PATH_MAX + 96];
+  if (file_of(s, ".permissions.p7s", f, sizeof f) < 0) return -1;
+  FILE *fp = fopen(f, "r");
+  if (!fp) return -1;
+  enum { CAP = 65536 };
+  char *buf = malloc(CAP);
+  if (!buf) {
+    fclose(fp);
+    return -1;
+  }
+  const size_t n = fread(buf, 1, CAP - 1, fp);
+  fclose(fp);
+  buf[n] = '\0';
+  int named = 0;
+  static const char open_tag[] = "<topic>", close_tag[] = "</topic>";
+  for (const char *p = strstr(buf, open_tag); p && !named; p = strstr(p, open_tag)) {
+    p += sizeof open_tag - 1;
+    const char *e = strstr(p, close_tag);
+    if (!e) break;
+    char pat[256];
+    const size_t k = (size_t)(e - p);
+    if (k < sizeof pat) {
+      memcpy(pat, p, k);
+      pat[k] = '\0';
+      named = fnmatch(pat, topic, 0) == 0;
+    }
+    p = e;
+  }
+  free(buf);
+  return named;
+}
+
 /* Appends to the start-up warning that the identity's permissions predate this build's topics. */
 static void permissions_warning(palp_dds_security *s) {
+  /* Every palp program of every identity reads palp_catalogue: permissions with no rule naming it
+   * are damaged, whatever their version (until 2026-12-06 the PKI script could write an instructor's
+   * "*" as file names), and every topic will be refused. Said at start, --check too. */
+  if (permissions_name(s, "palp_catalogue") == 0) {
+    const char *kind = palp_dds_id_kind_name(s->kind);
+    const size_t used = strlen(s->warning);
+    snprintf(s->warning + used, sizeof s->warning - used,
+             "%sthe permissions of %s/%s name no rule for palp_catalogue, which every palp program reads: they "
+             "are damaged, and every topic will be refused; re-issue them with scripts/make-classroom-pki.sh %s "
+             "init and copy %s/%s/%s.permissions.p7s to this machine",
+             used ? "; " : "", kind, s->name, s->pki, s->pki, kind, s->name);
+    return;
+  }
   const int v = permissions_version(s);
   if (v <= 0 || v >= PALP_DDS_PERMISSIONS_VERSION) return;
   const char *kind = palp_dds_id_kind_name(s->kind);
@@ -410,11 +461,24 @@ const char *palp_dds_refused_hint(const palp_dds_security *sec, const char *topi
    * permissions older than the program (a topic added since), or damaged ones (the PKI script wrote an
    * instructor's "*" as file names until 2026-12-06). Both are mended by the script's init. */
   const char *kind = palp_dds_id_kind_name(sec->kind);
+  /* Said for sure where the file tells (session 71): no rule names the topic, or one does and the
+   * refusal is for something else (a partition, a signature). */
+  const int named = topic ? permissions_name(sec, topic) : -1;
+  if (named == 1) {
+    snprintf(buf, len,
+             "; DDS Security: the permissions of %s/%s (%s/%s/%s.permissions.p7s) name topic %s, but not for "
+             "this use (publish or subscribe, partition), or they are not signed by this classroom's CA: "
+             "re-issue them with scripts/make-classroom-pki.sh %s init, copy them to this machine and restart "
+             "(docs/security.md)",
+             kind, sec->name, sec->pki, kind, sec->name, topic, sec->pki);
+    return buf;
+  }
   snprintf(buf, len,
-           "; DDS Security: the permissions of %s/%s (%s/%s/%s.permissions.p7s) may not allow %s%s: "
+           "; DDS Security: the permissions of %s/%s (%s/%s/%s.permissions.p7s) %s %s%s: "
            "re-issue them with scripts/make-classroom-pki.sh %s init, copy them to this machine and restart "
            "(docs/security.md, \"Permissions version\")",
-           kind, sec->name, sec->pki, kind, sec->name, topic ? "topic " : "its topics", topic ? topic : "", sec->pki);
+           kind, sec->name, sec->pki, kind, sec->name, named == 0 ? "have no rule for" : "may not allow",
+           topic ? "topic " : "its topics", topic ? topic : "", sec->pki);
   return buf;
 }
 
