@@ -47,6 +47,21 @@ if [ $# -eq 4 ] && [ "$1" -ge 1 ] && [ "$2" -ge 1 ] && [ "$2" -le "$4" ] && [ "$
 else
   bad "palp_server_status through Fast DDS: \"$(r station status)\""
 fi
+# palp_server_guard (best-effort, 1 Hz) and palp_server_identity (transient-local, a sequence of structs
+# with strings), read alongside (session 71): this station holds a slot of the server's, and the server
+# names itself as its config says (no server_name: the host's name; server_number 0) and hosts phantom 1
+set -- $(r station guard)
+if [ $# -eq 2 ] && [ "$1" -ge 1 ] && [ "$2" -ge "$1" ]; then
+  ok "palp_server_guard read by Fast DDS: $1 of $2 station slots in use (>= 1, this station's)"
+else
+  bad "palp_server_guard through Fast DDS: \"$(r station guard)\""
+fi
+set -- $(r station identity)
+if [ $# -eq 4 ] && [ "$1" = "$(hostname)" ] && [ "$2" = 0 ] && [ "$3" -ge 1 ] && [ "$4" = 1 ]; then
+  ok "palp_server_identity read by Fast DDS: server \"$1\" (the host's name), number $2, $3 phantoms hosted, phantom 1 among them"
+else
+  bad "palp_server_identity through Fast DDS: \"$(r station identity)\", want \"$(hostname) 0 N 1\""
+fi
 reason=$(r station leave_reason)
 [ "$reason" = "trainee station left (request disposed)" ] \
   && ok "dispose alone on palp_station_request ended the session in $(r station leave_closed_s) s: \"$reason\"" \

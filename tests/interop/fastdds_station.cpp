@@ -323,8 +323,9 @@ int main(int argc, char **argv) {
               t_ss = make_type<palp::ServerStatusPubSubType>(),
               t_fi = make_type<palp::FindingPubSubType>(), t_fs = make_type<palp::FindingStatusPubSubType>(),
               t_db = make_type<palp::DebriefPubSubType>(), t_sc = make_type<palp::SessionScorePubSubType>(),
-              t_ex = make_type<palp::ExercisePubSubType>(), t_fsm = make_type<palp::FingerSamplePubSubType>();
-  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss, &t_fsm})
+              t_ex = make_type<palp::ExercisePubSubType>(), t_fsm = make_type<palp::FingerSamplePubSubType>(),
+              t_id = make_type<palp::ServerIdentityPubSubType>(), t_gd = make_type<palp::ServerGuardPubSubType>();
+  for (TypeSupport *t : {&t_ph, &t_rq, &t_srq, &t_rp, &t_st, &t_ct, &t_fb, &t_df, &t_lm, &t_sl, &t_ss, &t_fsm, &t_id, &t_gd})
     t->register_type(pp);
   if (exercise)
     for (TypeSupport *t : {&t_fi, &t_fs, &t_db, &t_sc, &t_ex}) t->register_type(pp);
@@ -340,7 +341,11 @@ int main(int argc, char **argv) {
   Topic *tp_sl = pp->create_topic("palp_session_log", t_sl.get_type_name(), TOPIC_QOS_DEFAULT);
   // the server's status: nested sequence of structs with arrays, fields added up to session 68
   Topic *tp_ss = pp->create_topic("palp_server_status", t_ss.get_type_name(), TOPIC_QOS_DEFAULT);
-  if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df || !tp_sl || !tp_ss)
+  // the server's identity (a sequence of structs with strings, transient-local) and its guard
+  // counters (best-effort at 1 Hz), read beside the status (session 71)
+  Topic *tp_id = pp->create_topic("palp_server_identity", t_id.get_type_name(), TOPIC_QOS_DEFAULT);
+  Topic *tp_gd = pp->create_topic("palp_server_guard", t_gd.get_type_name(), TOPIC_QOS_DEFAULT);
+  if (!tp_ph || !tp_rq || !tp_rp || !tp_st || !tp_ct || !tp_fb || !tp_df || !tp_sl || !tp_ss || !tp_id || !tp_gd)
     return fail("cannot create the topics");
 
   Subscriber *sub = pp->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
@@ -356,6 +361,8 @@ int main(int argc, char **argv) {
   rq_ss.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
   rq_ss.history().depth = 1;
   DataReader *r_ss = sub->create_datareader(tp_ss, rq_ss);
+  DataReader *r_gd = sub->create_datareader(tp_gd, rq_ss); // the same QoS as the status
+  DataReader *r_id = sub->create_datareader(tp_id, rq_state);
   DataWriterQos wq_rq = DATAWRITER_QOS_DEFAULT;
   wq_rq.reliability().kind = RELIABLE_RELIABILITY_QOS;
   wq_rq.durability().kind = TRANSIENT_LOCAL_DURABILITY_QOS;
@@ -569,9 +576,25 @@ int main(int argc, char **argv) {
   uint64_t rejected = 0;
   const auto tr = Clock::now();
   // ... and a status of the server (1 Hz) listing this session, read alongside
-  bool status_seen = false;
-  unsigned long long st_open = 0, st_contacts = 0, st_log = 0;
-  while ((rejected == 0 || !status_seen) && since(tr) < 4) {
+  bool status_seen = false, guard_seen = false, identity_seen = false;
+  unsigned long long st_open = 0, st_contacts = 0, st_log = 0, gd_stations = 0, gd_slots = 0;
+  std::string id_name;
+  unsigned long id_number = 0, id_phantoms = 0, id_has_joined = 0;
+  while ((rejected == 0 || !status_seen || !guard_seen || !identity_seen) && since(tr) < 4) {
+    palp::ServerGuard gd;
+    SampleInfo gi;
+    while (r_gd && r_gd->take_next_sample(&gd, &gi) == ReturnCode_t::RETCODE_OK)
+      if (gi.valid_data) guard_seen = true, gd_stations = gd.stations(), gd_slots = gd.station_slots();
+    palp::ServerIdentity id;
+    while (r_id && r_id->take_next_sample(&id, &gi) == ReturnCode_t::RETCODE_OK)
+      if (gi.valid_data) {
+        identity_seen = true;
+        id_name = id.server_name();
+        id_number = id.server_number();
+        id_phantoms = (unsigned long)id.phantoms().size();
+        id_has_joined = 0;
+        for (const palp::HostedPhantom &h : id.phantoms()) id_has_joined += h.phantom_id() == phantom_id;
+      }
     palp::SessionState s;
     SampleInfo info;
     while (r_st->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK)
@@ -593,6 +616,10 @@ int main(int argc, char **argv) {
     std::printf("result status %llu %llu %llu %llu\n", st_open, st_contacts, st_log, (unsigned long long)seq);
   else
     std::printf("result status none\n");
+  if (guard_seen) std::printf("result guard %llu %llu\n", gd_stations, gd_slots);
+  else std::printf("result guard none\n");
+  if (identity_seen) std::printf("result identity %s %lu %lu %lu\n", id_name.c_str(), id_number, id_phantoms, id_has_joined);
+  else std::printf("result identity none\n");
 
   DataReader *r_db = nullptr, *r_sc = nullptr; // the exercise's debrief and score (5c)
   // 5b. Position in, force out (issue 11), optional ("+finger"): the fingertip (8 mm sphere) is
