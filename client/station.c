@@ -1,6 +1,7 @@
 /* station.c - the DDS side of a palp station. */
 #include "station.h"
 #include "view.h"
+#include "input.h" /* PALP_CLI_MAX_FINGERS */
 
 #include "palp_assess.h" /* palp_metric_to_work_on: the words her page uses too */
 
@@ -271,6 +272,14 @@ static void await_matched(palp_cli_station *st, int64_t end_ns) {
   }
 }
 
+/* The finger-sample reader's filter (DDS receive thread): this station's session and a finger it may
+ * have. st->session_id is set before the reader exists and cleared after it is deleted. */
+static bool own_finger_sample(const void *sample, void *arg) {
+  const palp_FingerSample *m = sample;
+  const palp_cli_station *st = arg;
+  return m->session_id == st->session_id && m->finger < PALP_CLI_MAX_FINGERS;
+}
+
 int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen) {
   int64_t end = palp_dds_now_ns() + (int64_t)(j->timeout * 1e9);
   palp_SessionReply r;
@@ -325,9 +334,14 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
      * samples at 100 Hz. Without them (a server or permissions that predate the topic) the
      * coverage is approximated from the local models. */
     if (st->topic[PALP_TOPIC_FINGER_SAMPLE] > 0) {
+      /* On a topic entity of its own that carries a filter: a sample of another session or of a
+       * finger past the last never becomes an instance in this reader (a flood of made-up keys in
+       * an unsecured classroom costs the station nothing; server/session.c filters contacts so). */
+      const dds_entity_t tp = st->finger_sample_topic = palp_dds_create_topic(st->pp, PALP_TOPIC_FINGER_SAMPLE);
+      struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_finger_sample}, .arg = st};
       q = palp_dds_qos(PALP_TOPIC_FINGER_SAMPLE);
       dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
-      st->finger_sample_r = dds_create_reader(st->sub, st->topic[PALP_TOPIC_FINGER_SAMPLE], q, NULL);
+      st->finger_sample_r = tp > 0 && dds_set_topic_filter_extended(tp, &flt) == 0 ? dds_create_reader(st->sub, tp, q, NULL) : -1;
       dds_delete_qos(q);
       if (st->finger_sample_r < 0) st->finger_sample_r = 0;
     }
@@ -767,6 +781,8 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   st->pub = st->sub = st->contact_w = st->contact_r = st->feedback_r = st->deformation_r = 0;
   st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = st->session_log_r = 0;
   st->local_model_r = st->finger_sample_r = 0;
+  if (st->finger_sample_topic > 0) dds_delete(st->finger_sample_topic); /* its filter's, this session's */
+  st->finger_sample_topic = 0;
   st->session_id = 0;
   /* the next session's server counts from its own base */
   memset(&st->log, 0, sizeof st->log);

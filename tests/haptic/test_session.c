@@ -6,7 +6,8 @@
  * the server's 100 Hz. Then the same press on a server whose max_force is below
  * the phantom's push: the server flags it (LM_FORCE_LIMIT) instead of clamping,
  * and the station limits what reaches the device and says so. And a station whose main thread
- * a busy machine holds still takes every step's model.
+ * a busy machine holds still takes every step's model, and a flood of finger samples with made-up
+ * keys in its partition leaves no instance in its reader.
  */
 #include "station_run.h"
 
@@ -21,6 +22,61 @@ static void config(palp_srv_config *cfg, unsigned domain, double max_force) {
     fprintf(stderr, "test config: %s\n", err);
     exit(1);
   }
+}
+
+/* A flood of finger samples with made-up keys in a station's session partition (an unsecured
+ * classroom: anyone may write there) never becomes instances in its finger-sample reader (its topic
+ * filter, client/station.c): 500 of other sessions and 100 of fingers past the last leave no instance;
+ * one of its own session does. */
+static void finger_sample_flood(unsigned domain) {
+  palp_cli_station st;
+  const palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = 1, .user_name = "flooded", .want_feedback = 1,
+                           .local_models_only = 1, .timeout = 10};
+  test_station_join_as(&st, domain, "flooded", &j);
+  CHECK(st.finger_sample_r > 0, "flood: the station reads finger samples");
+  const dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, st.partition);
+  const dds_entity_t w = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINGER_SAMPLE),
+                                                PALP_TOPIC_FINGER_SAMPLE);
+  for (int i = 0; i < 200 && w > 0; i++) { /* matched before the flood: up to 2 s */
+    dds_publication_matched_status_t m;
+    if (dds_get_publication_matched_status(w, &m) == 0 && m.current_count > 0) break;
+    test_sleep(0.01);
+  }
+  palp_FingerSample m;
+  memset(&m, 0, sizeof m);
+  m.radius = 0.008;
+  int written = 0;
+  for (uint32_t k = 0; k < 600 && w > 0; k++) {
+    m.session_id = k < 500 ? st.session_id + 1000 + k : st.session_id; /* then fingers 4..103 of its own */
+    m.finger = (uint8_t)(k < 500 ? 0 : 4 + (k - 500));
+    m.frame = k + 1;
+    written += dds_write(w, &m) == 0;
+  }
+  m.session_id = st.session_id, m.finger = 0, m.frame = 1000;
+  written += dds_write(w, &m) == 0;
+  test_sleep(0.5);
+  int bogus = 0;
+  for (uint32_t k = 0; k < 600; k++) {
+    palp_FingerSample key;
+    memset(&key, 0, sizeof key);
+    key.session_id = k < 500 ? st.session_id + 1000 + k : st.session_id;
+    key.finger = (uint8_t)(k < 500 ? 0 : 4 + (k - 500));
+    bogus += dds_lookup_instance(st.finger_sample_r, &key) != 0;
+  }
+  palp_FingerSample own;
+  memset(&own, 0, sizeof own);
+  own.session_id = st.session_id;
+  const int own_there = dds_lookup_instance(st.finger_sample_r, &own) != 0;
+  printf("flood: %d samples written, %d made-up keys became instances, its own %s\n", written, bogus,
+         own_there ? "did" : "did not");
+  CHECK(written == 601 && bogus == 0 && own_there,
+        "flood: 600 finger samples of other sessions and of fingers past the last leave no instance in the station's "
+        "reader (%d did), one of its own session does (%d)", bogus, own_there);
+  dds_delete(pp);
+  palp_cli_station_leave(&st);
+  test_sleep(0.1);
+  palp_cli_station_close(&st);
 }
 
 int main(void) {
@@ -101,6 +157,7 @@ int main(void) {
         (unsigned long long)r.frames_missing, (unsigned long long)span);
   CHECK(r.hs.ended && !r.hs.failed, "the paused station's trajectory ran to its end");
   free(r.trace);
+  finger_sample_flood(domain);
   test_server_stop(&t);
 
   /* A server limit below the phantom's push: reported, not clamped; the station limits. */
