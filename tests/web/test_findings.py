@@ -270,6 +270,10 @@ def run(build, source, out):
         check(told.get("band_rule") == "exercise" and 0 < cov[0] < 0.1 and said is not None and
               all(abs(float(x) - 100 * c) <= 0.05 + 1e-9 for x, c in zip(said.groups(), cov)),
               "her debrief gives what she covered (within its 0.1 point rounding): %s in %r" % (cov, shown[0]))
+        # ... counted from the server's finger samples, as the review counts it, and her page says so (session 71)
+        check(told.get("coverage_rule") == "touched" and
+              "of the dome (counted as the review counts it, from the triangles you touched)." in shown[0],
+              "her page says her coverage was counted as the review counts it (coverage_rule %r)" % told.get("coverage_rule"))
         page_lumps = [t for _, t in shown[1]]
         red = "rgb(176, 0, 32)"  # the dashboard's warning colour (the cards' "warn", the server's "bad")
 
