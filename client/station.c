@@ -280,6 +280,12 @@ static bool own_finger_sample(const void *sample, void *arg) {
   return m->session_id == st->session_id && m->finger < PALP_CLI_MAX_FINGERS;
 }
 
+static bool own_local_model(const void *sample, void *arg) {
+  const palp_LocalModel *m = sample;
+  const palp_cli_station *st = arg;
+  return m->session_id == st->session_id && m->finger < PALP_CLI_MAX_FINGERS;
+}
+
 int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *err, size_t errlen) {
   int64_t end = palp_dds_now_ns() + (int64_t)(j->timeout * 1e9);
   palp_SessionReply r;
@@ -327,7 +333,11 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
      * one and sends best-effort, so a deeper reader history changes nothing on the wire. */
     dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
-    st->local_model_r = dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL);
+    /* Filtered as the finger samples below: its topic entity is this reader's alone. */
+    struct dds_topic_filter lflt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_local_model}, .arg = st};
+    st->local_model_r = dds_set_topic_filter_extended(st->topic[PALP_TOPIC_LOCAL_MODEL], &lflt) == 0
+                            ? dds_create_reader(st->sub, st->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL)
+                            : -1;
     dds_delete_qos(q);
     /* ... and from a server that sends them (session 71), the assessment's own finger samples,
      * touched triangles named: the coverage is then the review's. The same depth: 320 ms of

@@ -7,7 +7,7 @@
  * the phantom's push: the server flags it (LM_FORCE_LIMIT) instead of clamping,
  * and the station limits what reaches the device and says so. And a station whose main thread
  * a busy machine holds still takes every step's model, and a flood of finger samples with made-up
- * keys in its partition leaves no instance in its reader.
+ * keys in its partition (finger samples, local models) leaves no instance in its readers.
  */
 #include "station_run.h"
 
@@ -73,6 +73,31 @@ static void finger_sample_flood(unsigned domain) {
   CHECK(written == 601 && bogus == 0 && own_there,
         "flood: 600 finger samples of other sessions and of fingers past the last leave no instance in the station's "
         "reader (%d did), one of its own session does (%d)", bogus, own_there);
+  /* ... and the same of local models (the haptic loop's): 300 of other sessions, none an instance */
+  const dds_entity_t wl = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_LOCAL_MODEL),
+                                                 PALP_TOPIC_LOCAL_MODEL);
+  for (int i = 0; i < 200 && wl > 0; i++) {
+    dds_publication_matched_status_t ms;
+    if (dds_get_publication_matched_status(wl, &ms) == 0 && ms.current_count > 0) break;
+    test_sleep(0.01);
+  }
+  palp_LocalModel lm;
+  memset(&lm, 0, sizeof lm);
+  int lwritten = 0, lbogus = 0;
+  for (uint32_t k = 0; k < 300 && wl > 0; k++) {
+    lm.session_id = st.session_id + 2000 + k;
+    lm.frame = k + 1;
+    lwritten += dds_write(wl, &lm) == 0;
+  }
+  test_sleep(0.5);
+  for (uint32_t k = 0; k < 300; k++) {
+    palp_LocalModel key;
+    memset(&key, 0, sizeof key);
+    key.session_id = st.session_id + 2000 + k;
+    lbogus += dds_lookup_instance(st.local_model_r, &key) != 0;
+  }
+  CHECK(lwritten == 300 && lbogus == 0, "flood: 300 local models of other sessions leave no instance in the station's "
+        "reader (%d did)", lbogus);
   dds_delete(pp);
   palp_cli_station_leave(&st);
   test_sleep(0.1);
