@@ -249,30 +249,28 @@ static int permissions_name(const palp_dds_security *s, const char *topic) {
   return named;
 }
 
-/* Appends to the start-up warning that the identity's permissions predate this build's topics. */
+/* Appends to the start-up warning that the identity's permissions are damaged or predate this
+ * build's topics, and what to do. */
 static void permissions_warning(palp_dds_security *s) {
+  char what[200];
   /* Every palp program of every identity reads palp_catalogue: permissions with no rule naming it
    * are damaged, whatever their version (until 2026-12-06 the PKI script could write an instructor's
    * "*" as file names), and every topic will be refused. Said at start, --check too. */
   if (permissions_name(s, "palp_catalogue") == 0) {
-    const char *kind = palp_dds_id_kind_name(s->kind);
-    const size_t used = strlen(s->warning);
-    snprintf(s->warning + used, sizeof s->warning - used,
-             "%sthe permissions of %s/%s name no rule for palp_catalogue, which every palp program reads: they "
-             "are damaged, and every topic will be refused; re-issue them with scripts/make-classroom-pki.sh %s "
-             "init and copy %s/%s/%s.permissions.p7s to this machine",
-             used ? "; " : "", kind, s->name, s->pki, s->pki, kind, s->name);
-    return;
+    snprintf(what, sizeof what, "name no rule for palp_catalogue, which every palp program reads: they are damaged, "
+                                "and every topic will be refused");
+  } else {
+    const int v = permissions_version(s);
+    if (v <= 0 || v >= PALP_DDS_PERMISSIONS_VERSION) return;
+    snprintf(what, sizeof what, "are version %d, older than this palp's %d: the topics added since are refused to it "
+                                "(they go without them, and say what is lost)", v, PALP_DDS_PERMISSIONS_VERSION);
   }
-  const int v = permissions_version(s);
-  if (v <= 0 || v >= PALP_DDS_PERMISSIONS_VERSION) return;
   const char *kind = palp_dds_id_kind_name(s->kind);
   const size_t used = strlen(s->warning);
   snprintf(s->warning + used, sizeof s->warning - used,
-           "%sthe permissions of %s/%s are version %d, older than this palp's %d: the topics added since are "
-           "refused to it (they go without them, and say what is lost); re-issue them with "
-           "scripts/make-classroom-pki.sh %s init and copy %s/%s/%s.permissions.p7s to this machine",
-           used ? "; " : "", kind, s->name, v, PALP_DDS_PERMISSIONS_VERSION, s->pki, s->pki, kind, s->name);
+           "%sthe permissions of %s/%s %s; re-issue them with scripts/make-classroom-pki.sh %s init and copy "
+           "%s/%s/%s.permissions.p7s to this machine",
+           used ? "; " : "", kind, s->name, what, s->pki, s->pki, kind, s->name);
 }
 
 int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *identity, char *err, size_t errlen) {
