@@ -459,6 +459,7 @@ typedef struct findings_ui {
    * once one has come; the local models' above otherwise. */
   palp_coverage *touched;
   uint64_t samples, samples_bad, samples_lost, last_sample_frame;
+  uint64_t sample_step; /* the steps between two samples, the least seen (the server's assess_sample_hz) */
   int last_sample_contact;
 } findings_ui;
 
@@ -504,11 +505,13 @@ static void findings_ui_samples(findings_ui *u, const palp_cli_station *st, int 
       if (!ok) {
         u->samples_bad++;
       } else {
-        /* consecutive samples are sample_every steps apart: a larger gap between two in contact
-         * is samples lost on the way (best-effort) or overwritten before this thread took them */
-        const uint64_t se = (uint64_t)u->sample_every;
-        if (u->last_sample_frame && u->last_sample_contact && w->in_contact && w->frame > u->last_sample_frame + se)
-          u->samples_lost += (w->frame - u->last_sample_frame) / se - 1;
+        /* consecutive samples are the server's sampling step apart (the least seen: its config's
+         * assess_sample_hz may not be the default): a larger gap between two in contact is samples
+         * lost on the way (best-effort) or overwritten before this thread took them */
+        const uint64_t gap = u->last_sample_frame ? w->frame - u->last_sample_frame : 0;
+        if (gap && (!u->sample_step || gap < u->sample_step)) u->sample_step = gap;
+        if (gap > u->sample_step && u->last_sample_contact && w->in_contact)
+          u->samples_lost += gap / u->sample_step - 1;
         u->last_sample_frame = w->frame, u->last_sample_contact = w->in_contact;
         u->samples++;
         if (w->in_contact) {
@@ -662,7 +665,7 @@ static void findings_ui_end(findings_ui *u, const opts *o, palp_cli_station *st)
       tprintf(o, "[trainee %s] %llu of the server's samples of your touches were lost on the way (%.1f s of the "
                  "exercise) and %llu refused as malformed: the review, which has them all, may count more than told "
                  "here\n", o->name, (unsigned long long)u->samples_lost,
-                 (double)u->samples_lost * (double)u->sample_every / u->physics_hz, (unsigned long long)u->samples_bad);
+                 (double)u->samples_lost * (double)u->sample_step / u->physics_hz, (unsigned long long)u->samples_bad);
     else if (!u->samples && u->sampled_lost)
       tprintf(o, "[trainee %s] %llu of the steps the review samples reached this station too late to be counted "
                  "(%.1f s of the exercise; its machine was busy): the review may count more than told here\n",
