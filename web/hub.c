@@ -1533,10 +1533,16 @@ static const exercise *banding_exercise(const palp_web_hub *h, const session *s)
 /* The band of an in-contact position-driven finger with a local model, of force `force` [N]:
  * the exercise's `ex`, as palp_assess grades a sample (palp_band_of); without one the gauge's
  * force bands. */
-static int finger_band(const palp_web_hub *h, const exercise *ex, const session *s, const finger *f, double force) {
+/* The band of a fingertip `depth` [m] below the skin pushed back with `force` [N]: the exercise's, or
+ * the gauge's force bands without one. */
+static int band_at(const palp_web_hub *h, const exercise *ex, double depth, double force) {
   if (!ex) return palp_web_band(&h->def.bands, force);
-  const int b = palp_band_of(ex->band, finger_depth(s, f), force);
+  const int b = palp_band_of(ex->band, depth, force);
   return b < 0 ? PALP_WEB_BAND_NONE : b + 1; /* PALP_BAND_LIGHT = 0 is PALP_WEB_BAND_LIGHT = 1 */
+}
+
+static int finger_band(const palp_web_hub *h, const exercise *ex, const session *s, const finger *f, double force) {
+  return band_at(h, ex, ex ? finger_depth(s, f) : NAN, force);
 }
 
 static void recompute_force(palp_web_hub *h, session *s) {
@@ -1755,15 +1761,8 @@ static void on_finger_sample(palp_web_hub *h, const palp_FingerSample *m) {
   if (++s->samples == 1) h->sessions_dirty = 1, s->cover_changed = 1; /* its coverage_rule is "touched" now */
   if (!m->in_contact) return;
   const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
-  const exercise *ex = banding_exercise(h, s);
-  int band;
-  if (ex) {
-    const int b = palp_band_of(ex->band, palp_fingertip_depth(s->ph->radius, m->radius,
-                                                              (palp_vec3){m->proxy.x, m->proxy.y, m->proxy.z}), force);
-    band = b < 0 ? PALP_WEB_BAND_NONE : b + 1;
-  } else {
-    band = palp_web_band(&h->def.bands, force);
-  }
+  const double depth = palp_fingertip_depth(s->ph->radius, m->radius, (palp_vec3){m->proxy.x, m->proxy.y, m->proxy.z});
+  const int band = band_at(h, banding_exercise(h, s), depth, force);
   if (!band) return;
   int raised;
   if (m->triangles._length > 0) {
