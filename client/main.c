@@ -498,11 +498,7 @@ static void findings_ui_samples(findings_ui *u, const palp_cli_station *st, int 
     if (dds_take(st->finger_sample_r, ptr, &info, 1, 1) <= 0) break;
     const palp_FingerSample *w = ptr[0];
     if (info.valid_data && w->session_id == st->session_id && w->finger == (uint8_t)finger) {
-      const palp_Vec3 v[4] = {w->device, w->proxy, w->force, w->point};
-      int ok = isfinite(w->time) && isfinite(w->radius) && w->radius > 0 && isfinite(w->area) && w->area >= 0 &&
-               w->triangles._length <= PALP_FINGER_SAMPLE_TRIANGLES_MAX && w->frame > u->last_sample_frame;
-      for (int k = 0; k < 4; k++) ok &= isfinite(v[k].x) && isfinite(v[k].y) && isfinite(v[k].z);
-      if (!ok) {
+      if (!palp_dds_finger_sample_ok(w, -1) || w->frame <= u->last_sample_frame) {
         u->samples_bad++;
       } else {
         /* consecutive samples are the server's sampling step apart (the least seen: its config's

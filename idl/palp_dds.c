@@ -436,6 +436,18 @@ int palp_dds_debrief_ok(const palp_Debrief *d) {
   return !listed || found_by == d->found;
 }
 
+static int vec_ok(palp_Vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+int palp_dds_finger_sample_ok(const palp_FingerSample *m, int mesh_triangles) {
+  if (m->finger >= 4 || !isfinite(m->time) || !(m->radius > 0) || !isfinite(m->radius) || !(m->area >= 0) ||
+      !isfinite(m->area) || !vec_ok(m->device) || !vec_ok(m->proxy) || !vec_ok(m->force) || !vec_ok(m->point) ||
+      m->triangles._length > PALP_FINGER_SAMPLE_TRIANGLES_MAX || (m->triangles._length && !m->triangles._buffer))
+    return 0;
+  for (uint32_t k = 0; mesh_triangles >= 0 && k < m->triangles._length; k++)
+    if (m->triangles._buffer[k] < 0 || m->triangles._buffer[k] >= mesh_triangles) return 0;
+  return 1;
+}
+
 static int unit(double x) { return x >= 0 && x <= 1; } /* NaN fails */
 
 int palp_dds_session_score_ok(const palp_SessionScore *m) {

@@ -193,6 +193,13 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out);
  * 1 when it holds, 0 when not (the station and palp-web both check with it). */
 int palp_dds_debrief_ok(const palp_Debrief *d);
 
+/* A palp_finger_sample (session 71) as its readers may use it: a finger 0..3, finite time, radius > 0,
+ * finite device, proxy, force and contact point, area >= 0, at most PALP_FINGER_SAMPLE_TRIANGLES_MAX
+ * ids; with mesh_triangles >= 0, every id a triangle of that mesh (the recorder logs the ids as they
+ * are; the station and palp-web skip those that are not dome triangles). 1 when it holds, 0 when not
+ * (the station, palp-web and palp-recorder all check with it). */
+int palp_dds_finger_sample_ok(const palp_FingerSample *m, int mesh_triangles);
+
 /* A session score (palp_session_score) as a reader may use it: a known status; GRADED: score in
  * [0, 100], each component in [0, 1], each coverage in [0, 1], found <= lesions, duration and
  * peak force finite and >= 0, a known pattern name. 1 when it holds, 0 when not (palp-web checks). */

@@ -1748,11 +1748,7 @@ static void on_finger_sample(palp_web_hub *h, const palp_FingerSample *m) {
     h->stats.no_session++;
     return;
   }
-  const palp_Vec3 v[4] = {m->device, m->proxy, m->force, m->point};
-  int ok = m->finger < FINGERS && isfinite(m->time) && isfinite(m->radius) && m->radius > 0 && isfinite(m->area) &&
-           m->area >= 0 && m->triangles._length <= PALP_FINGER_SAMPLE_TRIANGLES_MAX;
-  for (int k = 0; k < 4; k++) ok &= vec_finite(&v[k]);
-  if (!ok || m->frame <= s->samples_frame[m->finger]) {
+  if (!palp_dds_finger_sample_ok(m, -1) || m->finger >= FINGERS || m->frame <= s->samples_frame[m->finger]) {
     h->stats.dropped++;
     return;
   }

@@ -687,10 +687,7 @@ static void on_finger_sample(recorder *r, const palp_FingerSample *m) {
     return;
   }
   const int f = m->finger;
-  if (!(m->radius > 0) || m->triangles._length > PALP_DB_MAX_SAMPLE_TRIANGLES) return;
-  const int mesh_tris = s->ph && s->ph->cov ? s->ph->tri_count : -1;
-  for (uint32_t k = 0; k < m->triangles._length; k++)
-    if (m->triangles._buffer[k] < 0 || (mesh_tris >= 0 && m->triangles._buffer[k] >= mesh_tris)) return;
+  if (!palp_dds_finger_sample_ok(m, s->ph && s->ph->cov ? s->ph->tri_count : INT32_MAX)) return;
   const palp_Vec3 v[4] = {m->device, m->proxy, m->force, m->point};
   if (log_finger_sample(r, s, f, (int64_t)m->frame, m->time, m->radius, v, m->area, m->in_contact != 0,
                         (int)m->triangles._length, m->triangles._buffer) &&
