@@ -4,6 +4,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -48,6 +49,9 @@
 #define SESSION_EXERCISE_WAIT_NS 10000000000LL
 #define SESSION_EXERCISES_PENDING 16
 #define ANSWER_MARKS 64 /* marks a session's answers list: the server's own bound (findings.c) */
+/* Sessions whose OPEN state has arrived (the state topic's filter, DDS receive thread) but that the
+ * hub's thread may not have read yet: their first contacts and models pass the streams' filters. */
+#define HEARD_SESSIONS 128
 
 /* One published message: bytes and the version they were built at (versions are unique across
  * the hub, so a cursor holding an old version of a reused slot is never mistaken as current). */
@@ -245,6 +249,14 @@ struct palp_web_hub {
   palp_web_wake_fn wake;
   void *wake_ctx;
   uint32_t request_seq;
+  /* The sessions the stream readers' topic filters pass (contacts, deformations, local models,
+   * finger samples): a flood of made-up keys in an unsecured classroom becomes no reader instance
+   * (each would hold memory until its writer goes). The hub's table, slot by slot (written by the
+   * hub's thread), and the sessions heard open lately (written by the state topic's filter, so that
+   * the first samples of a session are not lost to the hub's thread reading its state later). */
+  _Atomic uint32_t pass_sid[PALP_WEB_MAX_SESSIONS];
+  _Atomic uint32_t heard_sid[HEARD_SESSIONS];
+  atomic_uint heard_next;
 
   /* DDS-thread state */
   phantom ph[PALP_WEB_MAX_PHANTOMS];
@@ -1106,6 +1118,7 @@ static void free_session(palp_web_hub *h, int slot) {
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
   pthread_mutex_unlock(&h->mu);
+  atomic_store(&h->pass_sid[slot], 0);
   h->sessions_dirty = h->sessions_structure = 1;
 }
 
@@ -1138,6 +1151,7 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     pthread_mutex_lock(&h->mu);
     h->slot_sid[slot] = s->id;
     pthread_mutex_unlock(&h->mu);
+    atomic_store(&h->pass_sid[slot], s->id);
     h->sessions_structure = 1;
   }
   s->st = *m; /* bounded strings: a plain copy */
@@ -2005,6 +2019,50 @@ static dds_entity_t make_reader(dds_entity_t parent, dds_entity_t topic, palp_dd
   return palp_dds_create_reader(parent, topic, kind);
 }
 
+/* The state topic's filter (DDS receive thread): passes every state, and notes an open session's id
+ * before the hub's thread reads it (see pass_sid). A forged flood of states cycles this ring, not
+ * the hub's table. */
+static bool heard_state(const void *sample, void *arg) {
+  const palp_SessionState *m = sample;
+  palp_web_hub *h = arg;
+  if (m->phase == palp_PHASE_OPEN && m->session_id != 0) {
+    const unsigned k = atomic_fetch_add(&h->heard_next, 1u) % HEARD_SESSIONS;
+    atomic_store(&h->heard_sid[k], m->session_id);
+  }
+  return true;
+}
+
+static int session_passes(palp_web_hub *h, uint32_t sid) {
+  if (sid == 0) return 0;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (atomic_load_explicit(&h->pass_sid[i], memory_order_relaxed) == sid) return 1;
+  for (int i = 0; i < HEARD_SESSIONS; i++)
+    if (atomic_load_explicit(&h->heard_sid[i], memory_order_relaxed) == sid) return 1;
+  return 0;
+}
+
+/* The streams' filters (DDS receive thread): a session the hub knows and a finger it may have. The
+ * session id is each type's first key; the finger its second (static asserts below). */
+static bool known_session(const void *sample, void *arg) { return session_passes(arg, *(const uint32_t *)sample); }
+
+static bool known_finger(const void *sample, void *arg) {
+  return ((const uint8_t *)sample)[offsetof(palp_Contact, finger)] < FINGERS && known_session(sample, arg);
+}
+
+_Static_assert(offsetof(palp_Deformation, session_id) == 0, "session id first");
+_Static_assert(offsetof(palp_Contact, session_id) == 0 && offsetof(palp_LocalModel, session_id) == 0 &&
+                   offsetof(palp_FingerSample, session_id) == 0,
+               "session id first");
+_Static_assert(offsetof(palp_LocalModel, finger) == offsetof(palp_Contact, finger) &&
+                   offsetof(palp_FingerSample, finger) == offsetof(palp_Contact, finger),
+               "the finger second");
+
+static int filter_topic(palp_web_hub *h, dds_entity_t topic, bool (*fn)(const void *, void *)) {
+  if (topic <= 0) return 0;
+  struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = fn}, .arg = h};
+  return dds_set_topic_filter_extended(topic, &flt) < 0 ? -1 : 0;
+}
+
 palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t errlen) {
   if (palp_web_bands_check(&def->bands) != 0) {
     fail(err, errlen, "bands: need 0 <= touch < light < medium");
@@ -2045,6 +2103,12 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
       palp_dds_strangers_init(&h->strangers, h->pp, PALP_DDS_STRANGER_GRACE_S) == 0)
     h->strangers_ready = 1; /* the dashboard lists a station started without an identity too */
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
+  /* before the readers, so that no sample of theirs passes unfiltered */
+  int filters = filter_topic(h, h->topic[PALP_TOPIC_SESSION_STATE], heard_state);
+  filters |= filter_topic(h, h->topic[PALP_TOPIC_CONTACT], known_finger);
+  filters |= filter_topic(h, h->topic[PALP_TOPIC_DEFORMATION], known_session);
+  filters |= filter_topic(h, h->topic[PALP_TOPIC_LOCAL_MODEL], known_finger);
+  filters |= filter_topic(h, h->topic[PALP_TOPIC_FINGER_SAMPLE], known_finger);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
@@ -2100,7 +2164,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   h->ws = dds_create_waitset(h->pp);
   h->stop_gc = dds_create_guardcondition(h->pp);
   const dds_entity_t wake_on[] = {h->catalogue_r, h->state_r, h->status_r, h->reply_r, h->exercise_r};
-  int bad = h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->debrief_score_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->fsample_r < 0 || h->ws < 0 || h->stop_gc < 0;
+  int bad = filters < 0 || h->sexercise_r < 0 || h->finding_r < 0 || h->score_r < 0 || h->req_pub < 0 || h->fstatus_r < 0 || h->debrief_r < 0 || h->debrief_score_r < 0 || h->sub < 0 || h->contact_r < 0 || h->deform_r < 0 || h->lm_r < 0 || h->fsample_r < 0 || h->ws < 0 || h->stop_gc < 0;
   for (size_t k = 0; k < sizeof wake_on / sizeof wake_on[0]; k++) {
     bad |= wake_on[k] < 0;
     if (wake_on[k] > 0) {
@@ -2168,6 +2232,28 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   free(h->exercises_msg.buf);
   pthread_mutex_destroy(&h->mu);
   free(h);
+}
+
+int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, unsigned finger) {
+  /* Every stream's key is (session id[, finger]) first (the static asserts above): one key buffer
+   * as large as the largest of the four types serves them all. */
+  union {
+    palp_Contact c;
+    palp_Deformation d;
+    palp_LocalModel l;
+    palp_FingerSample f;
+  } key;
+  memset(&key, 0, sizeof key);
+  key.c.session_id = session_id;
+  dds_entity_t rd;
+  switch (topic) {
+  case PALP_TOPIC_CONTACT: rd = h->contact_r, key.c.finger = (uint8_t)finger; break;
+  case PALP_TOPIC_DEFORMATION: rd = h->deform_r; break;
+  case PALP_TOPIC_LOCAL_MODEL: rd = h->lm_r, key.l.finger = (uint8_t)finger; break;
+  case PALP_TOPIC_FINGER_SAMPLE: rd = h->fsample_r, key.f.finger = (uint8_t)finger; break;
+  default: return PALP_EINVAL;
+  }
+  return rd > 0 && dds_lookup_instance(rd, &key) != 0;
 }
 
 void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
