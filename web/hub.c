@@ -2063,6 +2063,24 @@ static int filter_topic(palp_web_hub *h, dds_entity_t topic, bool (*fn)(const vo
   return dds_set_topic_filter_extended(topic, &flt) < 0 ? -1 : 0;
 }
 
+/* A stream's reader (contacts, deformations, local models, finger samples), best-effort, keeping
+ * `depth` samples per instance and at most as many instances as its filter can pass: a dispose
+ * carries no sample for the filter to judge (Cyclone 0.10 creates its instance unfiltered), so a
+ * flood of disposes of made-up keys would otherwise grow the reader until its writer goes. Past
+ * the bound a new key's samples are rejected (counted: palp_web_hub_stats.rejected); the instances
+ * the bridge already has go on. Best-effort, so a rejected sample is dropped, never retried on the
+ * delivery path as a reliable one would be (docs/robustness.md). */
+static dds_entity_t stream_reader(dds_entity_t sub, dds_entity_t topic, palp_dds_topic_kind kind, int32_t depth) {
+  const int32_t instances = (kind == PALP_TOPIC_DEFORMATION ? 1 : FINGERS) * (PALP_WEB_MAX_SESSIONS + HEARD_SESSIONS);
+  dds_qos_t *q = palp_dds_qos(kind);
+  dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0); /* a reliable writer's too: never waits for a retransmit */
+  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, depth);
+  dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, instances, DDS_LENGTH_UNLIMITED);
+  const dds_entity_t r = dds_create_reader(sub, topic, q, NULL);
+  dds_delete_qos(q);
+  return r;
+}
+
 palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t errlen) {
   if (palp_web_bands_check(&def->bands) != 0) {
     fail(err, errlen, "bands: need 0 <= touch < light < medium");
@@ -2125,21 +2143,13 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     h->req_pub = palp_dds_session_publisher(h->pp, part);
   }
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
-  h->contact_r = make_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
-  h->deform_r = palp_dds_create_display_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION]);
-  {
-    dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
-    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, LM_DEPTH); /* every frame, for late updates */
-    h->lm_r = dds_create_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], q, NULL);
-    dds_delete_qos(q);
-    /* ... and the finger samples, 100 Hz per finger: 64 hold 0.64 s between polls */
-    if (h->topic[PALP_TOPIC_FINGER_SAMPLE] > 0) {
-      q = palp_dds_qos(PALP_TOPIC_FINGER_SAMPLE);
-      dds_qset_history(q, DDS_HISTORY_KEEP_LAST, LM_DEPTH);
-      h->fsample_r = dds_create_reader(h->sub, h->topic[PALP_TOPIC_FINGER_SAMPLE], q, NULL);
-      dds_delete_qos(q);
-    }
-  }
+  h->contact_r = stream_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT, 1);
+  h->deform_r = stream_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION, 1);
+  /* local models in full (not just the newest), every frame, for late updates */
+  h->lm_r = stream_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL, LM_DEPTH);
+  /* ... and the finger samples, 100 Hz per finger: 64 hold 0.64 s between polls */
+  if (h->topic[PALP_TOPIC_FINGER_SAMPLE] > 0)
+    h->fsample_r = stream_reader(h->sub, h->topic[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE, LM_DEPTH);
   h->fstatus_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
   /* an instructor's permissions read every topic: no older permissions to allow for here */
   h->debrief_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
@@ -2257,8 +2267,15 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
 }
 
 void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
+  uint64_t rejected = 0;
+  const dds_entity_t streams[4] = {h->contact_r, h->deform_r, h->lm_r, h->fsample_r};
+  for (int k = 0; k < 4; k++) {
+    dds_sample_rejected_status_t st;
+    if (streams[k] > 0 && dds_get_sample_rejected_status(streams[k], &st) == 0) rejected += st.total_count;
+  }
   pthread_mutex_lock(&h->mu);
   *out = h->stats; /* the counters are written by the DDS thread; a torn read only misreports one */
+  out->rejected = rejected;
   out->clients = h->nclients;
   out->sessions_open = 0;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) out->sessions_open += h->slot_sid[i] != 0;

@@ -109,6 +109,8 @@ typedef struct palp_web_hub_stats {
   uint64_t dropped;   /* samples refused: malformed, or no room (sessions, exercises, memory) */
   uint64_t no_session; /* samples of a session the bridge has no state for: benign when it has just
                         * opened (its first contacts can overtake its state) or just closed */
+  uint64_t rejected;   /* stream samples of a new key refused at the readers' instance bound (a flood of
+                        * disposes of made-up keys, unsecured; Cyclone's sample-rejected status) */
   uint64_t joins, leaves, join_rejected;
   uint64_t exercises, finding_statuses;            /* DDS samples taken */
   uint64_t debriefs;                               /* palp_debrief samples taken (2026-12-05) */

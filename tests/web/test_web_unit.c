@@ -1146,6 +1146,11 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
     written += dds_write(w[2], &lm) == 0;
     written += dds_write(w[3], &fs) == 0;
   }
+  for (uint32_t i = 0; i < 50; i++) { /* disposes of keys never written: no sample to filter */
+    ct.session_id = df.session_id = lm.session_id = fs.session_id = 9500 + i;
+    ct.finger = lm.finger = fs.finger = 0;
+    dds_dispose(w[0], &ct), dds_dispose(w[1], &df), dds_dispose(w[2], &lm), dds_dispose(w[3], &fs);
+  }
   char part[64];
   palp_dds_session_partition(fresh, part, sizeof part);
   write_open_state(w_state, fresh, 1, part, "fresh");
@@ -1164,6 +1169,33 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
         "(%d did; %d of 751 written)", bogus, written);
   CHECK(palp_web_hub_has_instance(h, PALP_TOPIC_FINGER_SAMPLE, fresh, 2) == 1,
         "a finger sample written right after its session's OPEN state is kept");
+  /* Disposes carry no sample for a filter (Cyclone makes their instances unfiltered): the readers'
+   * instance bound, 4 fingers x (64 sessions + 128 heard) = 768, holds them; a session's instance
+   * there before still takes its models. */
+  lm.session_id = fresh, lm.finger = 0, lm.frame = 1;
+  dds_write(w[2], &lm);
+  dds_sleepfor(DDS_MSECS(200));
+  palp_web_hub_stats before, after;
+  palp_web_hub_stats_get(h, &before);
+  for (uint32_t i = 0; i < 1000; i++) {
+    lm.session_id = 10000 + i, lm.finger = 0;
+    dds_dispose(w[2], &lm);
+  }
+  dds_sleepfor(DDS_MSECS(300));
+  lm.session_id = fresh, lm.finger = 0, lm.frame = 2;
+  dds_write(w[2], &lm);
+  dds_sleepfor(DDS_MSECS(300));
+  palp_web_hub_stats_get(h, &after);
+  int held = 0;
+  for (uint32_t i = 0; i < 1000; i++) held += palp_web_hub_has_instance(h, PALP_TOPIC_LOCAL_MODEL, 10000 + i, 0) == 1;
+  printf("dispose flood: 1000 made-up keys disposed, %d instances held, %llu rejected\n", held,
+         (unsigned long long)(after.rejected - before.rejected));
+  CHECK(held <= 768 && after.rejected - before.rejected >= 1000 - 768 - 4 && held >= 768 - 64 - 50 - 2,
+        "a flood of 1000 disposes of made-up local-model keys holds at most the bound of 768 instances (%d held, "
+        "%llu rejected)", held, (unsigned long long)(after.rejected - before.rejected));
+  CHECK(after.local_models > before.local_models,
+        "a session's model still reaches the bridge after the flood (%llu then %llu models taken)",
+        (unsigned long long)before.local_models, (unsigned long long)after.local_models);
   palp_SessionState closed;
   memset(&closed, 0, sizeof closed);
   closed.session_id = fresh;
