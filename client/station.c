@@ -333,6 +333,10 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
      * one and sends best-effort, so a deeper reader history changes nothing on the wire. */
     dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
+    /* A dispose carries no sample for the filter (Cyclone 0.10 makes its instance unfiltered): a
+     * flood of disposes of made-up keys is held to PALP_CLI_MODEL_INSTANCES (best-effort: a
+     * rejected sample is dropped, never retried), as the server holds its contacts. */
+    dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_MODEL_INSTANCES, DDS_LENGTH_UNLIMITED);
     /* Filtered as the finger samples below: its topic entity is this reader's alone. */
     struct dds_topic_filter lflt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_local_model}, .arg = st};
     st->local_model_r = dds_set_topic_filter_extended(st->topic[PALP_TOPIC_LOCAL_MODEL], &lflt) == 0
@@ -351,6 +355,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_finger_sample}, .arg = st};
       q = palp_dds_qos(PALP_TOPIC_FINGER_SAMPLE);
       dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
+      dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_MODEL_INSTANCES, DDS_LENGTH_UNLIMITED);
       st->finger_sample_r = tp > 0 && dds_set_topic_filter_extended(tp, &flt) == 0 ? dds_create_reader(st->sub, tp, q, NULL) : -1;
       dds_delete_qos(q);
       if (st->finger_sample_r < 0) st->finger_sample_r = 0;

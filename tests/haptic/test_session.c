@@ -98,6 +98,25 @@ static void finger_sample_flood(unsigned domain) {
   }
   CHECK(lwritten == 300 && lbogus == 0, "flood: 300 local models of other sessions leave no instance in the station's "
         "reader (%d did)", lbogus);
+  /* ... and disposes, which carry no sample for a filter: 100 made-up keys each, held to the readers'
+   * PALP_CLI_MODEL_INSTANCES (32) instances */
+  int dheld = 0;
+  for (uint32_t k = 0; k < 100; k++) {
+    lm.session_id = m.session_id = st.session_id + 3000 + k;
+    m.finger = lm.finger = 0;
+    dds_dispose(wl, &lm), dds_dispose(w, &m);
+  }
+  test_sleep(0.5);
+  for (uint32_t k = 0; k < 100; k++) {
+    palp_LocalModel lkey;
+    palp_FingerSample fkey;
+    memset(&lkey, 0, sizeof lkey), memset(&fkey, 0, sizeof fkey);
+    lkey.session_id = fkey.session_id = st.session_id + 3000 + k;
+    dheld += (dds_lookup_instance(st.local_model_r, &lkey) != 0) + (dds_lookup_instance(st.finger_sample_r, &fkey) != 0);
+  }
+  printf("flood: 200 disposes of made-up keys, %d instances held\n", dheld);
+  CHECK(dheld <= 2 * PALP_CLI_MODEL_INSTANCES, "flood: 100 disposes of made-up keys per reader hold at most %d instances "
+        "in each (%d in both)", PALP_CLI_MODEL_INSTANCES, dheld);
   dds_delete(pp);
   palp_cli_station_leave(&st);
   test_sleep(0.1);
