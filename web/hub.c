@@ -18,6 +18,7 @@
 #include "palp_assess.h"
 #include "palp_coverage.h"
 #include "palp_dds.h"
+#include "palp_dds_gate.h"
 #include "palp_dds_log_view.h"
 #include "palp_dds_strangers.h"
 #include "palp_finding_answers.h"
@@ -49,9 +50,6 @@
 #define SESSION_EXERCISE_WAIT_NS 10000000000LL
 #define SESSION_EXERCISES_PENDING 16
 #define ANSWER_MARKS 64 /* marks a session's answers list: the server's own bound (findings.c) */
-/* Sessions whose OPEN state has arrived (the state topic's filter, DDS receive thread) but that the
- * hub's thread may not have read yet: their first contacts and models pass the streams' filters. */
-#define HEARD_SESSIONS 128
 
 /* One published message: bytes and the version they were built at (versions are unique across
  * the hub, so a cursor holding an old version of a reused slot is never mistaken as current). */
@@ -249,14 +247,10 @@ struct palp_web_hub {
   palp_web_wake_fn wake;
   void *wake_ctx;
   uint32_t request_seq;
-  /* The sessions the stream readers' topic filters pass (contacts, deformations, local models,
-   * finger samples): a flood of made-up keys in an unsecured classroom becomes no reader instance
-   * (each would hold memory until its writer goes). The hub's table, slot by slot (written by the
-   * hub's thread), and the sessions heard open lately (written by the state topic's filter, so that
-   * the first samples of a session are not lost to the hub's thread reading its state later). */
-  _Atomic uint32_t pass_sid[PALP_WEB_MAX_SESSIONS];
-  _Atomic uint32_t heard_sid[HEARD_SESSIONS];
-  atomic_uint heard_next;
+  /* The sessions the stream readers' topic filters pass (contacts, feedback, deformations, local
+   * models, finger samples): the hub's table, slot by slot, and the sessions heard open lately; a
+   * flood of made-up keys in an unsecured classroom becomes no reader instance (idl/palp_dds_gate.h). */
+  palp_dds_gate gate;
 
   /* DDS-thread state */
   phantom ph[PALP_WEB_MAX_PHANTOMS];
@@ -1054,6 +1048,8 @@ typedef void (*sample_fn)(palp_web_hub *h, const void *sample);
  * filled in), since the instance itself may already be gone once its last sample is taken. */
 typedef void (*lost_fn)(palp_web_hub *h, dds_instance_handle_t ih, const void *sample);
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter);
+static dds_entity_t stream_reader(const palp_web_hub *h, dds_entity_t sub, dds_entity_t topic, palp_dds_topic_kind kind,
+                                  int32_t depth);
 static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m);
 
 /* An exercise session that ended: what its marks found, kept for the dashboard's list of ended
@@ -1118,7 +1114,7 @@ static void free_session(palp_web_hub *h, int slot) {
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
   pthread_mutex_unlock(&h->mu);
-  atomic_store(&h->pass_sid[slot], 0);
+  palp_dds_gate_set(&h->gate, slot, 0);
   h->sessions_dirty = h->sessions_structure = 1;
 }
 
@@ -1151,7 +1147,7 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     pthread_mutex_lock(&h->mu);
     h->slot_sid[slot] = s->id;
     pthread_mutex_unlock(&h->mu);
-    atomic_store(&h->pass_sid[slot], s->id);
+    palp_dds_gate_set(&h->gate, slot, s->id);
     h->sessions_structure = 1;
   }
   s->st = *m; /* bounded strings: a plain copy */
@@ -1630,7 +1626,7 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
   }
   if (f->mode == palp_CONTACT_FINGER && h->def.read_feedback && s->fb_sub <= 0 && s->st.partition[0]) {
     s->fb_sub = palp_dds_session_subscriber(h->pp, s->st.partition);
-    s->fb_r = s->fb_sub > 0 ? palp_dds_create_reader(s->fb_sub, h->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK) : -1;
+    s->fb_r = s->fb_sub > 0 ? stream_reader(h, s->fb_sub, h->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK, 1) : -1;
     if (s->fb_r < 0) h->stats.dropped++;
   }
   s->changed = 1;
@@ -2019,63 +2015,19 @@ static dds_entity_t make_reader(dds_entity_t parent, dds_entity_t topic, palp_dd
   return palp_dds_create_reader(parent, topic, kind);
 }
 
-/* The state topic's filter (DDS receive thread): passes every state, and notes an open session's id
- * before the hub's thread reads it (see pass_sid). A forged flood of states cycles this ring, not
- * the hub's table. */
-static bool heard_state(const void *sample, void *arg) {
-  const palp_SessionState *m = sample;
-  palp_web_hub *h = arg;
-  if (m->phase == palp_PHASE_OPEN && m->session_id != 0) {
-    const unsigned k = atomic_fetch_add(&h->heard_next, 1u) % HEARD_SESSIONS;
-    atomic_store(&h->heard_sid[k], m->session_id);
-  }
-  return true;
-}
-
-static int session_passes(palp_web_hub *h, uint32_t sid) {
-  if (sid == 0) return 0;
-  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
-    if (atomic_load_explicit(&h->pass_sid[i], memory_order_relaxed) == sid) return 1;
-  for (int i = 0; i < HEARD_SESSIONS; i++)
-    if (atomic_load_explicit(&h->heard_sid[i], memory_order_relaxed) == sid) return 1;
-  return 0;
-}
-
-/* The streams' filters (DDS receive thread): a session the hub knows and a finger it may have. The
- * session id is each type's first key; the finger its second (static asserts below). */
-static bool known_session(const void *sample, void *arg) { return session_passes(arg, *(const uint32_t *)sample); }
-
-static bool known_finger(const void *sample, void *arg) {
-  return ((const uint8_t *)sample)[offsetof(palp_Contact, finger)] < FINGERS && known_session(sample, arg);
-}
-
-_Static_assert(offsetof(palp_Deformation, session_id) == 0, "session id first");
-_Static_assert(offsetof(palp_Contact, session_id) == 0 && offsetof(palp_LocalModel, session_id) == 0 &&
-                   offsetof(palp_FingerSample, session_id) == 0,
-               "session id first");
-_Static_assert(offsetof(palp_LocalModel, finger) == offsetof(palp_Contact, finger) &&
-                   offsetof(palp_FingerSample, finger) == offsetof(palp_Contact, finger),
-               "the finger second");
-
-static int filter_topic(palp_web_hub *h, dds_entity_t topic, bool (*fn)(const void *, void *)) {
-  if (topic <= 0) return 0;
-  struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = fn}, .arg = h};
-  return dds_set_topic_filter_extended(topic, &flt) < 0 ? -1 : 0;
-}
-
-/* A stream's reader (contacts, deformations, local models, finger samples), best-effort, keeping
- * `depth` samples per instance and at most as many instances as its filter can pass: a dispose
- * carries no sample for the filter to judge (Cyclone 0.10 creates its instance unfiltered), so a
- * flood of disposes of made-up keys would otherwise grow the reader until its writer goes. Past
- * the bound a new key's samples are rejected (counted: palp_web_hub_stats.rejected); the instances
- * the bridge already has go on. Best-effort, so a rejected sample is dropped, never retried on the
- * delivery path as a reliable one would be (docs/robustness.md). */
-static dds_entity_t stream_reader(dds_entity_t sub, dds_entity_t topic, palp_dds_topic_kind kind, int32_t depth) {
-  const int32_t instances = (kind == PALP_TOPIC_DEFORMATION ? 1 : FINGERS) * (PALP_WEB_MAX_SESSIONS + HEARD_SESSIONS);
+/* A stream's reader (contacts, feedback, deformations, local models, finger samples), best-effort,
+ * keeping `depth` samples per instance and at most as many instances as the gate can pass: a
+ * dispose carries no sample for the filter to judge, so a flood of disposes of made-up keys would
+ * otherwise grow the reader until its writer goes. Past the bound a new key's samples are rejected
+ * (counted: palp_web_hub_stats.rejected); the instances the bridge already has go on. Best-effort,
+ * so a rejected sample is dropped, never retried on the delivery path as a reliable one would be
+ * (docs/robustness.md). */
+static dds_entity_t stream_reader(const palp_web_hub *h, dds_entity_t sub, dds_entity_t topic, palp_dds_topic_kind kind,
+                                  int32_t depth) {
   dds_qos_t *q = palp_dds_qos(kind);
   dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0); /* a reliable writer's too: never waits for a retransmit */
   dds_qset_history(q, DDS_HISTORY_KEEP_LAST, depth);
-  dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, instances, DDS_LENGTH_UNLIMITED);
+  palp_dds_gate_limit(&h->gate, q, kind);
   const dds_entity_t r = dds_create_reader(sub, topic, q, NULL);
   dds_delete_qos(q);
   return r;
@@ -2122,11 +2074,12 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     h->strangers_ready = 1; /* the dashboard lists a station started without an identity too */
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
   /* before the readers, so that no sample of theirs passes unfiltered */
-  int filters = filter_topic(h, h->topic[PALP_TOPIC_SESSION_STATE], heard_state);
-  filters |= filter_topic(h, h->topic[PALP_TOPIC_CONTACT], known_finger);
-  filters |= filter_topic(h, h->topic[PALP_TOPIC_DEFORMATION], known_session);
-  filters |= filter_topic(h, h->topic[PALP_TOPIC_LOCAL_MODEL], known_finger);
-  filters |= filter_topic(h, h->topic[PALP_TOPIC_FINGER_SAMPLE], known_finger);
+  palp_dds_gate_init(&h->gate, PALP_WEB_MAX_SESSIONS);
+  int filters = palp_dds_gate_filter_state(&h->gate, h->topic[PALP_TOPIC_SESSION_STATE]);
+  const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
+                                         PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
+  for (size_t k = 0; k < sizeof streams / sizeof streams[0]; k++)
+    filters |= palp_dds_gate_filter_stream(&h->gate, h->topic[streams[k]], streams[k]);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
@@ -2143,13 +2096,13 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     h->req_pub = palp_dds_session_publisher(h->pp, part);
   }
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
-  h->contact_r = stream_reader(h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT, 1);
-  h->deform_r = stream_reader(h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION, 1);
+  h->contact_r = stream_reader(h, h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT, 1);
+  h->deform_r = stream_reader(h, h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION, 1);
   /* local models in full (not just the newest), every frame, for late updates */
-  h->lm_r = stream_reader(h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL, LM_DEPTH);
+  h->lm_r = stream_reader(h, h->sub, h->topic[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL, LM_DEPTH);
   /* ... and the finger samples, 100 Hz per finger: 64 hold 0.64 s between polls */
   if (h->topic[PALP_TOPIC_FINGER_SAMPLE] > 0)
-    h->fsample_r = stream_reader(h->sub, h->topic[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE, LM_DEPTH);
+    h->fsample_r = stream_reader(h, h->sub, h->topic[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE, LM_DEPTH);
   h->fstatus_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS);
   /* an instructor's permissions read every topic: no older permissions to allow for here */
   h->debrief_r = make_reader(h->sub, h->topic[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF);
@@ -2245,9 +2198,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
 }
 
 int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, unsigned finger) {
-  /* Every stream's key is (session id[, finger]) first (the static asserts above): one key buffer
-   * as large as the largest of the four types serves them all. */
-  union {
+  union { /* every stream's key is (session id[, finger]) first (idl/palp_dds_gate.c) */
     palp_Contact c;
     palp_Deformation d;
     palp_LocalModel l;

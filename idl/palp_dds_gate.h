@@ -1,0 +1,60 @@
+/*
+ * palp_dds_gate.h - which sessions a classroom-wide reader lets into its stream readers.
+ *
+ * palp-web and palp-recorder read every session's partition ("palp/session/" "*", "palp/s/" "*").
+ * In an unsecured classroom anyone may write there, and every new key (session, finger) a reader
+ * sees becomes an instance it keeps until the key's writer goes: a flood of made-up keys grows the
+ * reader without bound. The gate is a set of session ids consulted by topic filters on the
+ * streams' topics (contacts, feedback, deformations, local models, finger samples), on the DDS
+ * receive thread, before an instance exists (Cyclone evaluates a filter before it stores a new
+ * instance): a sample passes when its session is one the owner keeps open (palp_dds_gate_set, the
+ * owner's thread, slot by slot) or one whose OPEN state arrived lately (a ring the state topic's
+ * filter fills as the state arrives, so that a session's first samples are not lost to the owner
+ * reading its state a little later), and its finger, where it has one, is 0-3.
+ *
+ * A dispose carries no sample for a filter (Cyclone 0.10 makes its instance unfiltered): a
+ * best-effort stream reader also takes palp_dds_gate_limit's instance bound, as many keys as the
+ * gate can pass. A reliable one cannot (Cyclone retries a reliable sample a reader refuses for
+ * resource limits on the delivery path, docs/robustness.md).
+ *
+ * Lock-free: the owner writes its slots, the state filter the ring, the stream filters only read.
+ */
+#ifndef PALP_DDS_GATE_H
+#define PALP_DDS_GATE_H
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include "dds/dds.h"
+#include "palp_dds.h"
+
+#define PALP_DDS_GATE_SLOTS_MAX 1024 /* palp-recorder's sessions; palp-web keeps 64 */
+#define PALP_DDS_GATE_HEARD 128      /* sessions heard open, not yet (or no longer) in a slot */
+
+typedef struct palp_dds_gate {
+  int slots; /* the owner's session slots in use, <= PALP_DDS_GATE_SLOTS_MAX */
+  _Atomic uint32_t slot_sid[PALP_DDS_GATE_SLOTS_MAX]; /* 0: free */
+  _Atomic uint32_t heard[PALP_DDS_GATE_HEARD];
+  atomic_uint heard_next;
+} palp_dds_gate;
+
+/* An empty gate for an owner with `slots` session slots (1..PALP_DDS_GATE_SLOTS_MAX). */
+void palp_dds_gate_init(palp_dds_gate *g, int slots);
+/* Filters: the session-state topic (every state passes; an open one is noted) and a stream's
+ * (PALP_TOPIC_CONTACT, _FEEDBACK, _DEFORMATION, _LOCAL_MODEL or _FINGER_SAMPLE). Set them before
+ * the topic's readers exist; a filter applies to every reader of its topic entity. 0, or a
+ * negative DDS return code (PALP_EINVAL: another topic). A topic <= 0 (not allowed by older
+ * permissions) is left alone: 0. */
+int palp_dds_gate_filter_state(palp_dds_gate *g, dds_entity_t state_topic);
+int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_topic_kind kind);
+/* The owner's slot `slot` now holds session `sid` (0: none). */
+void palp_dds_gate_set(palp_dds_gate *g, int slot, uint32_t sid);
+/* Whether a sample of session `sid` passes (sid 0 never does). */
+int palp_dds_gate_passes(palp_dds_gate *g, uint32_t sid);
+/* The instance bound for a best-effort reader of a stream: as many keys as the gate passes (4
+ * fingers each for the finger-keyed topics). Sets it on q (max_samples and per instance left to
+ * the history). */
+void palp_dds_gate_limit(const palp_dds_gate *g, dds_qos_t *q, palp_dds_topic_kind kind);
+int32_t palp_dds_gate_instances(const palp_dds_gate *g, palp_dds_topic_kind kind);
+
+#endif
