@@ -2078,8 +2078,8 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   int filters = palp_dds_gate_filter_state(&h->gate, h->topic[PALP_TOPIC_SESSION_STATE]);
   const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
                                          PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
-  for (size_t k = 0; k < sizeof streams / sizeof streams[0]; k++)
-    filters |= palp_dds_gate_filter_stream(&h->gate, h->topic[streams[k]], streams[k]);
+  for (size_t k = 0; k < sizeof streams / sizeof streams[0] && filters == 0; k++)
+    filters = palp_dds_gate_filter_stream(&h->gate, h->topic[streams[k]], streams[k]);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);

@@ -35,6 +35,7 @@
 #include "palp_coverage.h"
 #include "palp_db.h"
 #include "palp_dds.h"
+#include "palp_dds_gate.h"
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "palp_finding_answers.h"
@@ -141,7 +142,16 @@ typedef struct recorder {
   rsession s[MAX_SESSIONS];
   int64_t unknown_session_samples, refused;
   palp_log *log;
+  /* The sessions the stream readers' topic filters pass: those open here (slot = index in s[]) and
+   * those heard open lately; a flood of made-up keys becomes no reader instance (idl/palp_dds_gate.h). */
+  palp_dds_gate gate;
 } recorder;
+
+/* A session opens or ends in this log: its streams pass the gate as long as it is open here. */
+static void set_open(recorder *r, rsession *s, int open) {
+  s->open = open;
+  palp_dds_gate_set(&r->gate, (int)(s - r->s), open ? s->id : 0);
+}
 
 static atomic_int stop_flag, hup_flag; /* atomic: a signal may land on any thread (client/main.c) */
 static void on_signal(int sig) {
@@ -396,7 +406,7 @@ static void open_session(recorder *r, const palp_SessionState *m) {
                              .dt_s = 1.0 / (m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000), .start_unix_s = start};
     if (palp_db_log_session_begin(r->w, &d, &s->h) != 0) return;
     s->id = m->session_id;
-    s->open = 1;
+    set_open(r, s, 1);
     if (!ph)
       palp_log_warn(r->log, "session %u: recording before phantom %u's catalogue entry came (its samples would "
                             "otherwise be lost); its scene is logged when the entry comes",
@@ -496,7 +506,7 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
   count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
   palp_log_info(r->log, "session %u closed (%s)", m->session_id, m->reason);
-  s->open = 0;
+  set_open(r, s, 0);
 }
 
 /* Closed exercise sessions whose debrief arrived, or did not within DEBRIEF_WAIT. */
@@ -531,7 +541,7 @@ static void end_lost_sessions(recorder *r, dds_time_t now) {
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
     count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
     palp_log_warn(r->log, "session %u: %s", s->id, why);
-    s->open = 0;
+    set_open(r, s, 0);
     s->lost_since = 0;
   }
 }
@@ -819,13 +829,19 @@ static void on_deformation(recorder *r, const palp_Deformation *m) {
   free(pos);
 }
 
-static dds_entity_t reader_deep(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+static dds_entity_t reader_deep(const recorder *r, dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
   /* The topic's QoS, but a deeper reader history: the recorder, not a display, must see every
    * sample that arrives, and history depth is not part of the writer/reader match. */
   dds_qos_t *q = palp_dds_qos(kind);
   if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION ||
       kind == PALP_TOPIC_LOCAL_MODEL || kind == PALP_TOPIC_FINDING_STATUS || kind == PALP_TOPIC_FINGER_SAMPLE)
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);
+  /* The best-effort streams hold at most the keys the gate passes (a dispose passes no filter);
+   * deformations are reliable, and a reliable sample refused for resource limits is retried on
+   * the delivery path (docs/robustness.md): filtered only. */
+  if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_LOCAL_MODEL ||
+      kind == PALP_TOPIC_FINGER_SAMPLE)
+    palp_dds_gate_limit(&r->gate, q, kind);
   dds_entity_t rd = dds_create_reader(parent, topic, q, NULL);
   dds_delete_qos(q);
   return rd;
@@ -957,6 +973,13 @@ int main(int argc, char **argv) {
   }
   dds_entity_t t[PALP_TOPIC_COUNT];
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) t[k] = palp_dds_create_topic(pp, (palp_dds_topic_kind)k);
+  /* the streams' filters before their readers, so that no sample of theirs passes unfiltered */
+  palp_dds_gate_init(&r->gate, MAX_SESSIONS);
+  int filters = palp_dds_gate_filter_state(&r->gate, t[PALP_TOPIC_SESSION_STATE]);
+  const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
+                                         PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
+  for (size_t k = 0; k < sizeof streams / sizeof streams[0] && filters == 0; k++)
+    filters = palp_dds_gate_filter_stream(&r->gate, t[streams[k]], streams[k]);
   char wildcard[64];
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
   char *z = strrchr(wildcard, '/');
@@ -971,24 +994,25 @@ int main(int argc, char **argv) {
   enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_FINGER_SAMPLE,
          RD_LOCAL_MODEL, RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
   dds_entity_t rd[RD_COUNT] = {
-      reader_deep(pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
-      reader_deep(pp, t[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE),
-      reader_deep(pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE),
-      reader_deep(pp, t[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE),
-      reader_deep(sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
-      reader_deep(sub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK),
-      reader_deep(sub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION),
-      reader_deep(sub, t[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE),
-      reader_deep(sub, t[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL),
-      reader_deep(sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING),
-      reader_deep(sub, t[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS),
-      reader_deep(sub, t[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF),
+      reader_deep(r, pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
+      reader_deep(r, pp, t[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE),
+      reader_deep(r, pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE),
+      reader_deep(r, pp, t[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE),
+      reader_deep(r, sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
+      reader_deep(r, sub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK),
+      reader_deep(r, sub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION),
+      reader_deep(r, sub, t[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE),
+      reader_deep(r, sub, t[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL),
+      reader_deep(r, sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING),
+      reader_deep(r, sub, t[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS),
+      reader_deep(r, sub, t[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF),
   };
   dds_entity_t ws = dds_create_waitset(pp);
   for (int k = 0; k < RD_COUNT; k++) {
-    if (rd[k] < 0) {
+    if (rd[k] < 0 || filters < 0) {
       char hint[PALP_DDS_HINT_MAX];
-      palp_log_error(&plog, "cannot create a reader: %s%s\n", dds_strretcode(rd[k]),
+      palp_log_error(&plog, "cannot create a reader%s: %s%s\n", filters < 0 ? "'s topic filter" : "",
+                     dds_strretcode(rd[k] < 0 ? rd[k] : filters),
                      palp_dds_refused_hint(&sec, NULL, hint, sizeof hint));
       dds_delete(pp);
       palp_db_writer_close(r->w);
@@ -1091,7 +1115,7 @@ int main(int argc, char **argv) {
     settle_findings(r, s, 1);
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
     count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
-    s->open = 0;
+    set_open(r, s, 0);
     cut++;
   }
   if (cut) palp_log_warn(&plog, "stopping: %d session(s) still running end here in this log, cut short", cut);

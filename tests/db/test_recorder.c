@@ -16,7 +16,8 @@
  *    (an open state with a reason, then without); `show` works and `replay` refuses (exit 2);
  *  - session 8, whose open state and first contacts come before its phantom's catalogue entry and
  *    the exercise it runs: opened without losing them, its phantom's name and scene logged when the
- *    entry comes, its params naming the exercise when that comes. */
+ *    entry comes, its params naming the exercise when that comes;
+ *  - then a flood of made-up keys (20,000 contacts, 20,000 disposes) grows the recorder under 8 MB. */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -38,6 +39,18 @@
 #define PHANTOM 3u
 /* session 7's rows alone (session 8 is logged beside it) */
 #define DANA " session_id = (SELECT id FROM session WHERE trainee = 'dana')"
+
+/* A process's resident set [kB] (/proc/PID/status VmRSS), or -1. */
+static long rss_kb(pid_t pid) {
+  char path[64], line[256];
+  snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
+  FILE *f = fopen(path, "r");
+  long kb = -1;
+  while (f && fgets(line, sizeof line, f))
+    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
+  if (f) fclose(f);
+  return kb;
+}
 
 int main(int argc, char **argv) {
   if (argc < 5) {
@@ -226,6 +239,30 @@ int main(int argc, char **argv) {
   snprintf(s8.reason, sizeof s8.reason, "trainee station left");
   REQUIRE(dds_write(w_state, &s8) == 0, "session 8 closed");
   sleep_ms(600);
+  /* A flood in a session partition with made-up keys (unsecured: anyone may write there): 20,000
+   * contacts of sessions never open, which the streams' topic filters pass none of, and 20,000
+   * disposes of made-up keys, which pass no filter (they carry no sample) and which the reader's
+   * instance bound holds to 4 x (1024 + 128) = 4,608 keys (idl/palp_dds_gate.h). Each key a reader
+   * keeps costs ~0.7 kB (docs/robustness.md): unfiltered and unbounded, the recorder grew by
+   * 17.4 MB (measured, session 72); filtered and bounded, by 3.4 MB. */
+  const long rss0 = rss_kb(pid);
+  int flooded = 0;
+  for (uint32_t k = 0; k < 20000; k++) {
+    palp_Contact c;
+    memset(&c, 0, sizeof c);
+    c.session_id = 100000 + k;
+    c.mode = palp_CONTACT_FINGER;
+    c.radius = 0.008;
+    flooded += dds_write(w_con, &c) == 0;
+    c.session_id = 200000 + k;
+    flooded += dds_dispose(w_con, &c) == 0;
+  }
+  sleep_ms(1500);
+  const long rss1 = rss_kb(pid);
+  printf("flood: %d samples and disposes of made-up keys; the recorder's RSS %ld kB -> %ld kB (+%ld kB)\n", flooded,
+         rss0, rss1, rss1 - rss0);
+  CHECK(flooded == 40000 && rss0 > 0 && rss1 - rss0 < 8000,
+        "a flood of 20,000 made-up contacts and 20,000 disposes grows the recorder by under 8 MB (+%ld kB)", rss1 - rss0);
   int status;
   CHECK(stop_recorder(pid, &status), "recorder exit status %d", status);
   dds_delete(pp);
