@@ -935,6 +935,14 @@ int main(int argc, char **argv) {
     snprintf(err, sizeof err, "--pki and --identity go together");
     src = -1;
   }
+  if (src == 0 && sec.kind != PALP_DDS_ID_NONE && sec.kind != PALP_DDS_ID_INSTRUCTOR) {
+    /* refused here, not by a reader later: its permissions are sound, and re-issuing them mends nothing */
+    snprintf(err, sizeof err,
+             "--identity: the recorder needs an instructor identity (instructor/NAME), not %s/%s: it reads every "
+             "session's every topic, as only an instructor's permissions allow (docs/security.md)",
+             palp_dds_id_kind_name(sec.kind), sec.name);
+    src = -1;
+  }
   if (src < 0) {
     fprintf(stderr, "palp-recorder: %s\n", err);
     return 2;

@@ -40,6 +40,12 @@ check "a malformed identity is refused up front (exit $rc)" "[ $rc -eq 1 ] && gr
 "$client" --role trainee --domain 131 --phantom 1 --pki "$pki" --duration 1 >"$out/half.log" 2>&1
 rc=$?
 check "--pki without --identity is refused (exit $rc)" "[ $rc -eq 1 ] && grep -q 'go together' '$out/half.log'"
+# A recorder started with a trainee's identity is refused up front, saying which identity it needs (it
+# failed at its readers with "re-issue them with ... init", which mends nothing: bob's are sound).
+"$recorder" --domain 131 --db "$out/bob-rec.db" --pki "$pki" --identity trainee/bob --duration 1 >"$out/bob-rec.log" 2>&1
+rc=$?
+check "a recorder with a trainee identity is refused up front: it needs an instructor's (exit $rc)" \
+  "[ $rc -eq 2 ] && grep -q 'the recorder needs an instructor identity (instructor/NAME), not trainee/bob' '$out/bob-rec.log' && ! grep -q 're-issue' '$out/bob-rec.log' && [ ! -e '$out/bob-rec.db' ]"
 # dave was revoked (make_pki.sh): his files moved to DIR/revoked; the classroom's copy says so
 # rather than "cannot read" (idl/palp_dds_security.c), before any network use.
 "$client" --pki "$pki" --identity trainee/dave --role trainee --phantom 1 --duration 1 >"$out/dave.log" 2>&1; rc=$?
