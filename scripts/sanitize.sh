@@ -20,7 +20,9 @@
 # - server_flood bounds the server's memory growth over a flood to 4 MB: ASan's quarantine of
 #   freed blocks (256 MB) is growth by design, so that test runs with the quarantine off; its
 #   allocator and shadow still add ~4 MB whatever the code (+4084..+4132 kB measured 2026-12-04, plain
-#   +332 kB), so its bound is 8 MB there, half the ~15 MB of an unbounded reader.
+#   +332 kB), so its bound is 8 MB there, half the ~15 MB of an unbounded reader. db_recorder's flood
+#   likewise (session 72): +8152 kB under ASan, quarantine off, +3.4 MB plain, so 12 MB there (8 MB
+#   plain; ~17.4 MB unbounded plain).
 # - eval_finger_long_term_fine and model_finger_surface exceed their CTest timeouts 3-10x slower;
 #   left out by default (run by hand under ASan on 2026-12-03: both passed, no report).
 # - Debian's Fast DDS 2.9 (interop_fastdds's peer) deletes one of its own objects through the
@@ -40,7 +42,7 @@ case "$kind" in
     flags="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
     link="-fsanitize=address,undefined"
     build=${PALP_BUILD_DIR:-build-asan}
-    exclude='^(model_effects|model_finger_memcheck|install_prefix|eval_finger_long_term_fine|model_finger_surface|server_flood)$'
+    exclude='^(model_effects|model_finger_memcheck|install_prefix|eval_finger_long_term_fine|model_finger_surface|server_flood|db_recorder)$'
     ;;
   thread)
     flags="-fsanitize=thread -fno-omit-frame-pointer"
@@ -72,12 +74,16 @@ export UBSAN_OPTIONS="print_stacktrace=1:log_path=$logs/ubsan"
 # exitcode=0: every process reports the uninstrumented libraries' hand-offs, so TSan's default exit
 # status 66 would fail every test; the tests judge their own checks, tsan_reports.py the reports.
 export TSAN_OPTIONS="halt_on_error=0:exitcode=0:second_deadlock_stack=1:log_path=$logs/tsan"
-select=(-E "$exclude") # address: server_flood runs on its own below, its quarantine off
+select=(-E "$exclude") # address: server_flood and db_recorder run on their own below, the quarantine off
 [ -n "$regex" ] && select+=(-R "$regex")
 tests_ok=1
 (cd "$build" && ctest -j"$(nproc)" --resource-spec-file ../tests/resources.json "${select[@]}" --output-on-failure) >"$logs/ctest.log" 2>&1 || tests_ok=0
 if [ "$kind" = address ] && { [ -z "$regex" ] || [[ server_flood =~ $regex ]]; }; then
   (cd "$build" && ASAN_OPTIONS="$ASAN_OPTIONS:quarantine_size_mb=0" PALP_TEST_FLOOD_RSS_KB=8192 ctest -R '^server_flood$' --output-on-failure) \
+    >>"$logs/ctest.log" 2>&1 || tests_ok=0
+fi
+if [ "$kind" = address ] && { [ -z "$regex" ] || [[ db_recorder =~ $regex ]]; }; then
+  (cd "$build" && ASAN_OPTIONS="$ASAN_OPTIONS:quarantine_size_mb=0" PALP_TEST_RECORDER_RSS_KB=12288 ctest -R '^db_recorder$' --output-on-failure) \
     >>"$logs/ctest.log" 2>&1 || tests_ok=0
 fi
 grep -E "tests passed|\*\*\*" "$logs/ctest.log" || true

@@ -261,8 +261,13 @@ int main(int argc, char **argv) {
   const long rss1 = rss_kb(pid);
   printf("flood: %d samples and disposes of made-up keys; the recorder's RSS %ld kB -> %ld kB (+%ld kB)\n", flooded,
          rss0, rss1, rss1 - rss0);
-  CHECK(flooded == 40000 && rss0 > 0 && rss1 - rss0 < 8000,
-        "a flood of 20,000 made-up contacts and 20,000 disposes grows the recorder by under 8 MB (+%ld kB)", rss1 - rss0);
+  /* Under AddressSanitizer, its quarantine off, its allocator and shadow add ~4.7 MB (+8152 kB measured):
+   * scripts/sanitize.sh raises the bound there (PALP_TEST_RECORDER_RSS_KB), still under the unbounded growth. */
+  const char *bound_env = getenv("PALP_TEST_RECORDER_RSS_KB");
+  const long bound_kb = bound_env && atol(bound_env) > 0 ? atol(bound_env) : 8000;
+  CHECK(flooded == 40000 && rss0 > 0 && rss1 - rss0 < bound_kb,
+        "a flood of 20,000 made-up contacts and 20,000 disposes grows the recorder by under %ld kB (+%ld kB; unbounded: "
+        "~17,400 kB)", bound_kb, rss1 - rss0);
   int status;
   CHECK(stop_recorder(pid, &status), "recorder exit status %d", status);
   dds_delete(pp);
