@@ -6,6 +6,7 @@
 #include "palp_assess.h" /* palp_metric_to_work_on: the words her page uses too */
 
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,6 +26,31 @@ static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
 static void nap(double s) {
   struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
   nanosleep(&ts, NULL);
+}
+
+/* The session topics' filter (DDS receive thread): this station's session. Each type's first key is
+ * its session id. st->session_id is set before the session's readers exist and they are deleted
+ * (palp_cli_station_end_session) before another session's id replaces it. */
+static bool own_session(const void *sample, void *arg) {
+  const palp_cli_station *st = arg;
+  return *(const uint32_t *)sample == st->session_id;
+}
+_Static_assert(offsetof(palp_Contact, session_id) == 0 && offsetof(palp_Feedback, session_id) == 0 &&
+                   offsetof(palp_Deformation, session_id) == 0 && offsetof(palp_FindingStatus, session_id) == 0 &&
+                   offsetof(palp_Debrief, session_id) == 0 && offsetof(palp_SessionScore, session_id) == 0 &&
+                   offsetof(palp_SessionLog, session_id) == 0,
+               "the session id first");
+
+/* A best-effort stream's reader of the session (contacts, feedback, deformations), holding at most
+ * PALP_CLI_STREAM_INSTANCES keys: a dispose of a made-up key passes no filter. Deformations are read
+ * best-effort from the server's reliable writer, as palp_dds_create_display_reader does. */
+static dds_entity_t stream_reader(const palp_cli_station *st, palp_dds_topic_kind kind) {
+  dds_qos_t *q = palp_dds_qos(kind);
+  dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
+  dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_STREAM_INSTANCES, DDS_LENGTH_UNLIMITED);
+  const dds_entity_t r = dds_create_reader(st->sub, st->topic[kind], q, NULL);
+  dds_delete_qos(q);
+  return r;
 }
 
 int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *label, char *err, size_t errlen) {
@@ -86,6 +112,21 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
       palp_dds_refused_hint(&st->sec, name, hint, sizeof hint);
       palp_cli_station_close(st);
       return fail(err, errlen, PALP_EIO, "cannot create topic %s%s", name, hint);
+    }
+  }
+  /* The session's other streams take only this session's samples too (its local models and finger
+   * samples are filtered in palp_cli_station_join): a flood of made-up keys in its partition of an
+   * unsecured classroom never becomes an instance in its readers (server/session.c filters its
+   * contacts so). A filter applies to every reader of its topic entity: these topics' readers are
+   * all of the session. */
+  static const palp_dds_topic_kind own[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
+                                            PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE,
+                                            PALP_TOPIC_SESSION_LOG};
+  for (size_t k = 0; k < sizeof own / sizeof own[0]; k++) {
+    struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_session}, .arg = st};
+    if (st->topic[own[k]] > 0 && dds_set_topic_filter_extended(st->topic[own[k]], &flt) < 0) {
+      palp_cli_station_close(st);
+      return fail(err, errlen, PALP_EIO, "cannot filter topic %s", palp_dds_topic_name(own[k]));
     }
   }
   st->catalogue_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
@@ -322,9 +363,9 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   if (j->role == palp_ROLE_TRAINEE)
     st->contact_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
   else
-    st->contact_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+    st->contact_r = stream_reader(st, PALP_TOPIC_CONTACT);
   if (j->want_feedback && !(j->local_models_only && j->role == palp_ROLE_TRAINEE))
-    st->feedback_r = palp_dds_create_reader(st->sub, st->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
+    st->feedback_r = stream_reader(st, PALP_TOPIC_FEEDBACK);
   if (j->want_feedback && j->role == palp_ROLE_TRAINEE) {
     /* The haptic loop needs only the newest model, but the exercise's coverage counts every step
      * the review samples: a station whose main thread a busy machine delays past one physics
@@ -334,9 +375,9 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     dds_qos_t *q = palp_dds_qos(PALP_TOPIC_LOCAL_MODEL);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
     /* A dispose carries no sample for the filter (Cyclone 0.10 makes its instance unfiltered): a
-     * flood of disposes of made-up keys is held to PALP_CLI_MODEL_INSTANCES (best-effort: a
+     * flood of disposes of made-up keys is held to PALP_CLI_STREAM_INSTANCES (best-effort: a
      * rejected sample is dropped, never retried), as the server holds its contacts. */
-    dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_MODEL_INSTANCES, DDS_LENGTH_UNLIMITED);
+    dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_STREAM_INSTANCES, DDS_LENGTH_UNLIMITED);
     /* Filtered as the finger samples below: its topic entity is this reader's alone. */
     struct dds_topic_filter lflt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_local_model}, .arg = st};
     st->local_model_r = dds_set_topic_filter_extended(st->topic[PALP_TOPIC_LOCAL_MODEL], &lflt) == 0
@@ -355,14 +396,14 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_finger_sample}, .arg = st};
       q = palp_dds_qos(PALP_TOPIC_FINGER_SAMPLE);
       dds_qset_history(q, DDS_HISTORY_KEEP_LAST, PALP_CLI_MODEL_DEPTH);
-      dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_MODEL_INSTANCES, DDS_LENGTH_UNLIMITED);
+      dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_STREAM_INSTANCES, DDS_LENGTH_UNLIMITED);
       st->finger_sample_r = tp > 0 && dds_set_topic_filter_extended(tp, &flt) == 0 ? dds_create_reader(st->sub, tp, q, NULL) : -1;
       dds_delete_qos(q);
       if (st->finger_sample_r < 0) st->finger_sample_r = 0;
     }
   }
   if (j->want_deformation)
-    st->deformation_r = palp_dds_create_display_reader(st->sub, st->topic[PALP_TOPIC_DEFORMATION]);
+    st->deformation_r = stream_reader(st, PALP_TOPIC_DEFORMATION);
   if (j->role == palp_ROLE_TRAINEE) { /* issue 13: findings, any session (free practice too) */
     st->finding_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
     st->finding_status_r =

@@ -28,9 +28,10 @@ typedef struct palp_cli_log_news {
 /* The local models (and finger samples) a trainee's station holds between two takes of its main
  * thread: 128 ms of physics steps at 250 Hz, 32 ms at 1 kHz (station.c). */
 #define PALP_CLI_MODEL_DEPTH 32
-/* ... and at most this many instances: its 4 fingers, and room for a few disposes of made-up keys
- * (a dispose passes no topic filter); past it a new key's samples are dropped. */
-#define PALP_CLI_MODEL_INSTANCES 32
+/* ... and at most this many instances (those and its other best-effort streams: contacts, feedback,
+ * deformations): its 4 fingers, and room for a few disposes of made-up keys (a dispose passes no
+ * topic filter); past it a new key's samples are dropped. */
+#define PALP_CLI_STREAM_INSTANCES 32
 
 typedef struct palp_cli_station {
   char station_id[64];
