@@ -99,7 +99,7 @@ static void finger_sample_flood(unsigned domain) {
   CHECK(lwritten == 300 && lbogus == 0, "flood: 300 local models of other sessions leave no instance in the station's "
         "reader (%d did)", lbogus);
   /* ... and disposes, which carry no sample for a filter: 100 made-up keys each, held to the readers'
-   * PALP_CLI_MODEL_INSTANCES (32) instances */
+   * PALP_CLI_STREAM_INSTANCES (32) instances */
   int dheld = 0;
   for (uint32_t k = 0; k < 100; k++) {
     lm.session_id = m.session_id = st.session_id + 3000 + k;
@@ -114,9 +114,47 @@ static void finger_sample_flood(unsigned domain) {
     lkey.session_id = fkey.session_id = st.session_id + 3000 + k;
     dheld += (dds_lookup_instance(st.local_model_r, &lkey) != 0) + (dds_lookup_instance(st.finger_sample_r, &fkey) != 0);
   }
+  /* ... and the session's reliable topics (finding answers, debriefs, the log's losses): 100 each of
+   * other sessions, none an instance (the station's own-session filter, client/station.c) */
+  const dds_entity_t wfs = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINDING_STATUS),
+                                                  PALP_TOPIC_FINDING_STATUS);
+  const dds_entity_t wdb = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF), PALP_TOPIC_DEBRIEF);
+  const dds_entity_t wsl = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_LOG),
+                                                  PALP_TOPIC_SESSION_LOG);
+  for (int i = 0; i < 200; i++) { /* matched: up to 2 s */
+    dds_publication_matched_status_t a, b, c;
+    if (dds_get_publication_matched_status(wfs, &a) == 0 && a.current_count > 0 &&
+        dds_get_publication_matched_status(wdb, &b) == 0 && b.current_count > 0 &&
+        dds_get_publication_matched_status(wsl, &c) == 0 && c.current_count > 0)
+      break;
+    test_sleep(0.01);
+  }
+  int rwritten = 0, rbogus = 0;
+  for (uint32_t k = 0; k < 100; k++) {
+    palp_FindingStatus fsm;
+    palp_Debrief dbm;
+    palp_SessionLog slm;
+    memset(&fsm, 0, sizeof fsm), memset(&dbm, 0, sizeof dbm), memset(&slm, 0, sizeof slm);
+    fsm.session_id = dbm.session_id = slm.session_id = st.session_id + 4000 + k;
+    rwritten += (dds_write(wfs, &fsm) == 0) + (dds_write(wdb, &dbm) == 0) + (dds_write(wsl, &slm) == 0);
+  }
+  test_sleep(0.5);
+  /* Counted as the samples the readers hold (the station's main loop has not taken them): a lookup of
+   * the key would find the test's own reliable writers' instances, which keep their samples. */
+  const dds_entity_t held_by[3] = {st.finding_status_r, st.debrief_r, st.session_log_r};
+  for (int r = 0; r < 3; r++) {
+    void *ptr[256] = {NULL};
+    dds_sample_info_t info[256];
+    const int n = dds_read(held_by[r], ptr, info, 256, 256);
+    for (int i = 0; i < n; i++) rbogus += info[i].valid_data && *(const uint32_t *)ptr[i] != st.session_id;
+    if (n > 0) dds_return_loan(held_by[r], ptr, n);
+  }
+  CHECK(st.finding_status_r > 0 && st.debrief_r > 0 && st.session_log_r > 0 && rwritten == 300 && rbogus == 0,
+        "flood: 100 finding answers, debriefs and log-loss records each of other sessions leave no sample in the "
+        "station's readers (%d samples held; %d of 300 written)", rbogus, rwritten);
   printf("flood: 200 disposes of made-up keys, %d instances held\n", dheld);
-  CHECK(dheld <= 2 * PALP_CLI_MODEL_INSTANCES, "flood: 100 disposes of made-up keys per reader hold at most %d instances "
-        "in each (%d in both)", PALP_CLI_MODEL_INSTANCES, dheld);
+  CHECK(dheld <= 2 * PALP_CLI_STREAM_INSTANCES, "flood: 100 disposes of made-up keys per reader hold at most %d instances "
+        "in each (%d in both)", PALP_CLI_STREAM_INSTANCES, dheld);
   dds_delete(pp);
   palp_cli_station_leave(&st);
   test_sleep(0.1);
