@@ -2214,7 +2214,17 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
   case PALP_TOPIC_FINGER_SAMPLE: rd = h->fsample_r, key.f.finger = (uint8_t)finger; break;
   default: return PALP_EINVAL;
   }
-  return rd > 0 && dds_lookup_instance(rd, &key) != 0;
+  if (rd <= 0) return 0;
+  /* dds_lookup_instance answers from the domain's key map, which any entity of this process that
+   * keeps the key (a reliable writer's history) fills too: a read of the instance asks this reader
+   * (Cyclone: "precondition not met" for a handle it holds no instance of). */
+  const dds_instance_handle_t ih = dds_lookup_instance(rd, &key);
+  if (ih == 0) return 0;
+  void *ptr[1] = {NULL};
+  dds_sample_info_t info[1];
+  const dds_return_t n = dds_read_instance(rd, ptr, info, 1, 1, ih);
+  if (n > 0) dds_return_loan(rd, ptr, n);
+  return n >= 0;
 }
 
 void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
