@@ -44,11 +44,11 @@ _Static_assert(offsetof(palp_Contact, session_id) == 0 && offsetof(palp_Feedback
 /* A best-effort stream's reader of the session (contacts, feedback, deformations), holding at most
  * PALP_CLI_STREAM_INSTANCES keys: a dispose of a made-up key passes no filter. Deformations are read
  * best-effort from the server's reliable writer, as palp_dds_create_display_reader does. */
-static dds_entity_t stream_reader(const palp_cli_station *st, palp_dds_topic_kind kind) {
+static dds_entity_t stream_reader(const palp_cli_station *st, dds_entity_t topic, palp_dds_topic_kind kind) {
   dds_qos_t *q = palp_dds_qos(kind);
   dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
   dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, PALP_CLI_STREAM_INSTANCES, DDS_LENGTH_UNLIMITED);
-  const dds_entity_t r = dds_create_reader(st->sub, st->topic[kind], q, NULL);
+  const dds_entity_t r = dds_create_reader(st->sub, topic, q, NULL);
   dds_delete_qos(q);
   return r;
 }
@@ -119,7 +119,9 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
    * unsecured classroom never becomes an instance in its readers (server/session.c filters its
    * contacts so). A filter applies to every reader of its topic entity: these topics' readers are
    * all of the session. */
-  static const palp_dds_topic_kind own[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
+  /* Not the contacts: Cyclone applies a topic's filter to its writers too, and a trainee writes hers on
+   * this topic entity (a viewer's contact reader has a filtered topic entity of its own, below). */
+  static const palp_dds_topic_kind own[] = {PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
                                             PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE,
                                             PALP_TOPIC_SESSION_LOG};
   for (size_t k = 0; k < sizeof own / sizeof own[0]; k++) {
@@ -362,10 +364,15 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   if (st->pub < 0 || st->sub < 0) return fail(err, errlen, PALP_EIO, "cannot create the session's publisher/subscriber");
   if (j->role == palp_ROLE_TRAINEE)
     st->contact_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
-  else
-    st->contact_r = stream_reader(st, PALP_TOPIC_CONTACT);
+  else { /* a viewer reads the trainee's contacts through a topic entity of its own, filtered to the session */
+    st->contact_topic = palp_dds_create_topic(st->pp, PALP_TOPIC_CONTACT);
+    struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = own_session}, .arg = st};
+    st->contact_r = st->contact_topic > 0 && dds_set_topic_filter_extended(st->contact_topic, &flt) == 0
+                        ? stream_reader(st, st->contact_topic, PALP_TOPIC_CONTACT)
+                        : -1;
+  }
   if (j->want_feedback && !(j->local_models_only && j->role == palp_ROLE_TRAINEE))
-    st->feedback_r = stream_reader(st, PALP_TOPIC_FEEDBACK);
+    st->feedback_r = stream_reader(st, st->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK);
   if (j->want_feedback && j->role == palp_ROLE_TRAINEE) {
     /* The haptic loop needs only the newest model, but the exercise's coverage counts every step
      * the review samples: a station whose main thread a busy machine delays past one physics
@@ -403,7 +410,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     }
   }
   if (j->want_deformation)
-    st->deformation_r = stream_reader(st, PALP_TOPIC_DEFORMATION);
+    st->deformation_r = stream_reader(st, st->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION);
   if (j->role == palp_ROLE_TRAINEE) { /* issue 13: findings, any session (free practice too) */
     st->finding_w = palp_dds_create_writer(st->pub, st->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
     st->finding_status_r =
@@ -838,7 +845,8 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   st->finding_w = st->finding_status_r = st->debrief_r = st->debrief_score_r = st->session_log_r = 0;
   st->local_model_r = st->finger_sample_r = 0;
   if (st->finger_sample_topic > 0) dds_delete(st->finger_sample_topic); /* its filter's, this session's */
-  st->finger_sample_topic = 0;
+  if (st->contact_topic > 0) dds_delete(st->contact_topic);               /* likewise */
+  st->finger_sample_topic = st->contact_topic = 0;
   st->session_id = 0;
   /* the next session's server counts from its own base */
   memset(&st->log, 0, sizeof st->log);

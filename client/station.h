@@ -48,6 +48,7 @@ typedef struct palp_cli_station {
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
   dds_entity_t finger_sample_r; /* ... and its finger samples, touched triangles named (session 71); 0: none */
   dds_entity_t finger_sample_topic; /* the reader's own topic entity, which carries its session filter */
+  dds_entity_t contact_topic;       /* a viewer's contact reader's, likewise (session 72) */
   dds_entity_t exercise_r;    /* palp_exercise (issue 13): what the trainee may know of an exercise */
   dds_entity_t finding_w, finding_status_r; /* trainee: "lump here" marks and the server's answers */
   dds_entity_t debrief_r;     /* trainee: palp_debrief, what its marks found, at its session's end; 0: none
