@@ -77,6 +77,15 @@ int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_t
   return PALP_EINVAL;
 }
 
+int palp_dds_gate_filter_topics(palp_dds_gate *g, const dds_entity_t topic[PALP_TOPIC_COUNT]) {
+  static const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
+                                                PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
+  int rc = palp_dds_gate_filter_state(g, topic[PALP_TOPIC_SESSION_STATE]);
+  for (size_t k = 0; k < sizeof streams / sizeof streams[0] && rc == 0; k++)
+    rc = palp_dds_gate_filter_stream(g, topic[streams[k]], streams[k]);
+  return rc;
+}
+
 int32_t palp_dds_gate_instances(const palp_dds_gate *g, palp_dds_topic_kind kind) {
   return (finger_keyed(kind) ? FINGERS : 1) * (g->slots + PALP_DDS_GATE_HEARD);
 }

@@ -47,6 +47,8 @@ void palp_dds_gate_init(palp_dds_gate *g, int slots);
  * permissions) is left alone: 0. */
 int palp_dds_gate_filter_state(palp_dds_gate *g, dds_entity_t state_topic);
 int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_topic_kind kind);
+/* Both, on a participant's topics indexed by palp_dds_topic_kind: the state and the five streams. */
+int palp_dds_gate_filter_topics(palp_dds_gate *g, const dds_entity_t topic[PALP_TOPIC_COUNT]);
 /* The owner's slot `slot` now holds session `sid` (0: none). */
 void palp_dds_gate_set(palp_dds_gate *g, int slot, uint32_t sid);
 /* Whether a sample of session `sid` passes (sid 0 never does). */

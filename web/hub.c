@@ -4,7 +4,6 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
-#include <stddef.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -2075,11 +2074,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
   /* before the readers, so that no sample of theirs passes unfiltered */
   palp_dds_gate_init(&h->gate, PALP_WEB_MAX_SESSIONS);
-  int filters = palp_dds_gate_filter_state(&h->gate, h->topic[PALP_TOPIC_SESSION_STATE]);
-  const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
-                                         PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
-  for (size_t k = 0; k < sizeof streams / sizeof streams[0] && filters == 0; k++)
-    filters = palp_dds_gate_filter_stream(&h->gate, h->topic[streams[k]], streams[k]);
+  const int filters = palp_dds_gate_filter_topics(&h->gate, h->topic);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);

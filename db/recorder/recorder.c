@@ -983,11 +983,7 @@ int main(int argc, char **argv) {
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) t[k] = palp_dds_create_topic(pp, (palp_dds_topic_kind)k);
   /* the streams' filters before their readers, so that no sample of theirs passes unfiltered */
   palp_dds_gate_init(&r->gate, MAX_SESSIONS);
-  int filters = palp_dds_gate_filter_state(&r->gate, t[PALP_TOPIC_SESSION_STATE]);
-  const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
-                                         PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
-  for (size_t k = 0; k < sizeof streams / sizeof streams[0] && filters == 0; k++)
-    filters = palp_dds_gate_filter_stream(&r->gate, t[streams[k]], streams[k]);
+  const int filters = palp_dds_gate_filter_topics(&r->gate, t);
   char wildcard[64];
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
   char *z = strrchr(wildcard, '/');
