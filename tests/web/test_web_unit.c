@@ -1109,7 +1109,7 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
 }
 
 /* A flood of the streams with made-up keys (an unsecured classroom: anyone may write in a session's
- * partition) becomes no instance in the bridge's readers (their topic filters, web/hub.c): 150 each
+ * partition) becomes no instance in the bridge's readers (their topic filters, idl/palp_dds_gate.c): 150 each
  * of contacts, deformations, local models and finger samples of sessions it never heard open, and
  * 50 of fingers past the last of its own session (4711). A session whose OPEN state is written just
  * before its first finger sample is not lost to that filter (the state's filter notes it at once). */
@@ -1261,7 +1261,7 @@ static void test_local_model(void) {
   lm.point = (palp_Vec3){0.003, -0.004, 0.0385};
   lm.area = 2e-4;
   dds_write(w_lm, &lm);
-  /* The readers' filters (web/hub.c) pass none of a contact of a session the bridge never heard
+  /* The readers' filters (idl/palp_dds_gate.c) pass none of a contact of a session the bridge never heard
    * of or a local model of finger 7 (of 0-3): neither reaches the hub (no instance, not counted);
    * a malformed model of its session does, and is counted as dropped. */
   palp_Contact stray = ct;
