@@ -130,6 +130,24 @@ rc=$?
 # ... whole: the hint is ~480 characters, and a 320-byte buffer cut it mid-sentence until 2026-12-05
 check "a station on an old governance is not answered and is told, in full, to check it (exit $rc)" \
   "[ $rc -ne 0 ] && grep -q 'none of which answered trainee/alice: .*governance.p7s differs from this station.*is this certificate valid and not revoked? (the server.s log names each identity it refuses, and why)\$' '$out/oldgov.log'"
+# Permissions edited by hand to deny bob the catalogue (a deny rule before his allow rule, signed by
+# the classroom's CA): they name the topic, so his station is told they name it but not for this use,
+# and how to mend them (the hint's other branch; "have no rule for" is the ivy check's below).
+cp -r "$pki" "$out/denied"
+python3 - "$out/denied/trainee/bob.permissions.xml" <<'PY'
+import sys
+p = sys.argv[1]
+s = open(p).read()
+deny = ("      <deny_rule>\n        <domains><id_range><min>0</min><max>230</max></id_range></domains>\n"
+        "        <subscribe><topics><topic>palp_catalogue</topic></topics></subscribe>\n      </deny_rule>\n")
+open(p, "w").write(s.replace("      <allow_rule>", deny + "      <allow_rule>", 1))
+PY
+resign "$out/denied" trainee/bob.permissions
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/denied" --identity trainee/bob --duration 1 --timeout 3 \
+  >"$out/denied.log" 2>&1
+rc=$?
+check "permissions that deny a topic they name: the station says they name it, but not for this use, and how to mend them (exit $rc)" \
+  "[ $rc -ne 0 ] && grep -q 'deny_rule' '$out/denied/trainee/bob.permissions.xml' && grep -q 'cannot create topic palp_catalogue; DDS Security: the permissions of trainee/bob (.*/denied/trainee/bob.permissions.p7s) name topic palp_catalogue, but not for this use (publish or subscribe, partition), or they are not signed by this classroom.s CA: re-issue them with scripts/make-classroom-pki.sh .*/denied init' '$out/denied.log'"
 # A classroom made before palp_debrief (2026-12-05): alice's permissions of version 1 have no rule
 # for it. Her station still palpates (it cannot create the topic, and says so only at an exercise's
 # end), and the script's init re-issues her permissions, signed, with the rule.
