@@ -58,6 +58,18 @@ int main(void) {
   mark(&f, 4, palp_FINDING_MARK, skin(60, 90), t += 300000000);
   mark(&f, 5, palp_FINDING_MARK, skin(60, 180), t += 300000000);
 
+  /* 200 findings naming other sessions at once (a peer's flood in this partition, unsecured) are
+   * each refused with their reason, and spend none of the session's tokens (burst 10): the
+   * trainee's next mark, 1 ms later, is accepted (it was refused "too many findings"). */
+  int stray_refused = 0;
+  for (uint32_t k = 0; k < 200; k++) {
+    const palp_Finding in = {.session_id = 5000 + k, .mark_id = 1, .op = palp_FINDING_MARK, .point = {0, 0, R}};
+    stray_refused += palp_srv_findings_offer(&f, &in, t) == 0 && strstr(f.reason, "names session") != NULL;
+  }
+  CHECK(stray_refused == 200, "200 findings of other sessions refused, each naming why (%d)", stray_refused);
+  mark(&f, 6, palp_FINDING_MARK, skin(60, 90), t += 1000000);
+  mark(&f, 6, palp_FINDING_WITHDRAW, skin(0, 0), t += 1000000);
+
   static const char *const level_key[] = {NULL, "none", "count", "lesions"};
   for (int k = 0; k < 4; k++) {
     char json[2048], err[256];
