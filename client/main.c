@@ -443,6 +443,7 @@ typedef struct findings_ui {
   uint32_t shown_id;       /* the answer last printed */
   int shown_ok;
   uint32_t shown_marks;
+  int said_stranger; /* an answer to a finding this station never sent was said (once a session) */
   /* The exercise's coverage as this station's local models show it, by the rule palp-web's pages
    * mark by (palp_coverage_press_contact) and at the band the exercise grades (palp_band_of): what
    * the review's thoroughness will say, within a point where measured (docs/station.md). */
@@ -622,7 +623,16 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
     /* Each answer once (the server refreshes the status every half second). */
     if (fs.last_mark_id != u->shown_id || (int)fs.last_accepted != u->shown_ok || fs.marks != u->shown_marks) {
       u->shown_id = fs.last_mark_id, u->shown_ok = fs.last_accepted, u->shown_marks = fs.marks;
-      if (!fs.last_accepted) {
+      /* The station numbers its marks 1, 2, ...: an answer to a higher id answers another writer's
+       * finding in this session's partition (an unsecured classroom), not hers; said once, and none
+       * of her marks is taken back for it. */
+      if (fs.last_mark_id >= st->next_mark_id) {
+        if (!u->said_stranger)
+          tprintf(o, "[trainee %s] the server answered finding %u, which this station did not send: someone else "
+                     "writes findings into this session (is the classroom unsecured?); its answer: %s\n",
+                  o->name, fs.last_mark_id, fs.last_accepted ? "accepted" : fs.reason);
+        u->said_stranger = 1;
+      } else if (!fs.last_accepted) {
         tprintf(o, "[trainee %s] the server refused finding %u: %s\n", o->name, fs.last_mark_id, fs.reason);
         if (u->nsent && u->sent[u->nsent - 1] == fs.last_mark_id) u->nsent--;
       } else if (!o->quiet)

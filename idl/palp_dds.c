@@ -147,8 +147,18 @@ dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind) {
   return t;
 }
 
-dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+dds_qos_t *palp_dds_reader_qos(palp_dds_topic_kind kind) {
   dds_qos_t *q = palp_dds_qos(kind);
+  /* Every mark counts, in order (keep-all), at most PALP_DDS_FINDING_READER_DEPTH unread per session;
+   * no bound on the sessions: a 65th instance refused stalled delivery until its writer went, a
+   * 257th unread sample of one only until the reader takes (the server: every pass of its loop). */
+  if (q && kind == PALP_TOPIC_FINDING)
+    dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED, PALP_DDS_FINDING_READER_DEPTH);
+  return q;
+}
+
+dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
+  dds_qos_t *q = palp_dds_reader_qos(kind);
   dds_entity_t r = dds_create_reader(parent, topic, q, NULL);
   dds_delete_qos(q);
   return r;

@@ -76,6 +76,16 @@ dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind);
 
 /* A reader/writer on `parent` (participant, subscriber or publisher) for a topic
  * made by palp_dds_create_topic, with the topic's QoS. */
+/* A reader's QoS for a topic: the topic's, except that a reader of findings bounds only the samples
+ * per session (PALP_DDS_FINDING_READER_DEPTH), not the sessions. Cyclone 0.10 retries a reliable
+ * sample a reader refuses for its limits on the delivery path: a peer writing findings under 64+
+ * made-up session ids filled the 64 instances for as long as its writer lived, and every topic's
+ * delivery to that process stalled (session 72: another session's trainee got 38 of 203 contacts to
+ * the server in 5 s). The server's reader also drops other sessions' findings by a filter
+ * (server/session.c). The writers keep their bound: a flood blocks at its own writer. Caller deletes
+ * the QoS. */
+#define PALP_DDS_FINDING_READER_DEPTH 256
+dds_qos_t *palp_dds_reader_qos(palp_dds_topic_kind kind);
 dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 

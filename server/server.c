@@ -900,6 +900,25 @@ static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reaso
 #define FINDINGS_PER_PASS 64
 static void handle_findings(palp_srv *srv, palp_srv_session *s) {
   if (s->finding_reader <= 0) return;
+  /* Findings naming another session, dropped by the reader's filter: logged as one refusal per pass
+   * that saw any (not answered: the station that wrote them is not this session's). */
+  const uint64_t stray = atomic_load_explicit(&s->filtered_findings, memory_order_relaxed);
+  if (stray > s->filtered_findings_said) {
+    const uint64_t n = stray - s->filtered_findings_said;
+    s->filtered_findings_said = stray;
+    char why[176];
+    snprintf(why, sizeof why, "%llu finding(s) of another writer dropped unanswered at the reader; the last names "
+             "session %u, not this partition's session %u", (unsigned long long)n,
+             (unsigned)atomic_load_explicit(&s->filtered_finding_session, memory_order_relaxed), s->id);
+    const palp_srv_session_stats st = session_stats(srv, s);
+    if (srv->events && srv->events->finding) {
+      const palp_srv_finding_event ev = {.accepted = 0, .frame = st.last_frame, .sim_time = st.sim_time, .reason = why};
+      srv->events->finding(srv->events->ctx, s->id, &ev);
+    }
+    /* said once a session at warning level (a peer writes here); the later counts in the debug log */
+    if (stray == n) palp_logf(srv->log, PALP_LOG_WARN, "session %u: %s", s->id, why);
+    else logf_(srv, "session %u: %s", s->id, why);
+  }
   palp_Finding buf[16];
   void *ptr[16];
   dds_sample_info_t info[16];

@@ -56,6 +56,19 @@ static bool contact_filter(const void *sample, void *arg) {
   return true;
 }
 
+/* The finding reader's filter (DDS receive thread): this session's findings only. A finding naming
+ * another session is a peer's in this partition (an unsecured classroom, or a trainee writing into
+ * her own partition): each made-up session id would be an instance of the reader; dropped here and
+ * counted, the main thread logs it (handle_findings). */
+static bool finding_filter(const void *sample, void *arg) {
+  const palp_Finding *f = sample;
+  palp_srv_session *s = arg;
+  if (f->session_id == s->id) return true;
+  atomic_store_explicit(&s->filtered_finding_session, f->session_id, memory_order_relaxed);
+  atomic_fetch_add_explicit(&s->filtered_findings, 1, memory_order_relaxed);
+  return false;
+}
+
 /* When sample seq of finger arrived, if the filter stamped it (else the take's time). */
 static int64_t arrival_ns(palp_srv_session *s, int finger, uint64_t seq, int64_t taken_ns) {
   palp_srv_arrival *a = &s->arrival[finger][seq % 16];
@@ -186,7 +199,12 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   /* issue 13: findings (docs/assessment.md). Read and answered by the server's main
    * thread, not the tick: a mark is a rare event, and its log record needs no step. */
   if (def->finding_topic > 0 && def->finding_status_topic > 0) {
-    s->finding_reader = palp_dds_create_reader(s->sub, def->finding_topic, PALP_TOPIC_FINDING);
+    (void)def->finding_topic;
+    s->finding_topic = palp_dds_create_topic(def->participant, PALP_TOPIC_FINDING);
+    struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = finding_filter}, .arg = s};
+    if (s->finding_topic < 0 || dds_set_topic_filter_extended(s->finding_topic, &flt) < 0) goto dds_fail;
+    /* keep-last, unbounded by resource limits (palp_dds_reader_qos): never refuses a reliable sample */
+    s->finding_reader = palp_dds_create_reader(s->sub, s->finding_topic, PALP_TOPIC_FINDING);
     s->finding_status_writer = palp_dds_create_writer(s->pub, def->finding_status_topic, PALP_TOPIC_FINDING_STATUS);
     if (s->finding_reader < 0 || s->finding_status_writer < 0) goto dds_fail;
     s->finding_rc = dds_create_readcondition(s->finding_reader, DDS_ANY_STATE);
@@ -246,6 +264,7 @@ void palp_srv_session_destroy(palp_srv_session *s) {
   if (s->pub > 0) dds_delete(s->pub);
   /* After its reader: nothing calls the filter (whose argument is s) any more. */
   if (s->contact_topic > 0) dds_delete(s->contact_topic);
+  if (s->finding_topic > 0) dds_delete(s->finding_topic);
   free(s->deformation.positions._buffer);
   palp_world_destroy(s->world);
   free(s->own_exercise);

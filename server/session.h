@@ -117,6 +117,12 @@ typedef struct palp_srv_session {
   dds_entity_t contact_topic; /* this session's own topic entity: it carries the filter below */
   /* issue 13: "lump here" marks, read and answered by the main thread (findings.h) */
   dds_entity_t finding_reader, finding_status_writer, finding_rc;
+  dds_entity_t finding_topic; /* this session's own topic entity for its finding reader: its filter's */
+  /* [DDS receive thread] findings the filter dropped for naming another session (session 72: made-up
+   * keys would each become an instance), and the last such session id; [main] the count logged. */
+  atomic_uint_fast64_t filtered_findings;
+  _Atomic uint32_t filtered_finding_session;
+  uint64_t filtered_findings_said;
   palp_srv_findings findings;
   dds_entity_t debrief_writer; /* palp_debrief, written once as an exercise session closes; 0: none */
   /* palp_session_log (session 69): this session's records the log lost, as last written; 0: none */

@@ -832,7 +832,7 @@ static void on_deformation(recorder *r, const palp_Deformation *m) {
 static dds_entity_t reader_deep(const recorder *r, dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
   /* The topic's QoS, but a deeper reader history: the recorder, not a display, must see every
    * sample that arrives, and history depth is not part of the writer/reader match. */
-  dds_qos_t *q = palp_dds_qos(kind);
+  dds_qos_t *q = palp_dds_reader_qos(kind);
   if (kind == PALP_TOPIC_CONTACT || kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION ||
       kind == PALP_TOPIC_LOCAL_MODEL || kind == PALP_TOPIC_FINDING_STATUS || kind == PALP_TOPIC_FINGER_SAMPLE)
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 256);

@@ -7,7 +7,7 @@
 # band of each press on its status line, as the assessment grades it: pressed to ~2.6, ~6.8 and
 # ~16 mm (device +3, +8, +20 mm), each line's band is the one exercise_wire.json gives its depth.
 set -u
-server=$1 client=$2 config_dir=$3 test_dir=$4
+server=$1 client=$2 config_dir=$3 test_dir=$4 finding_writer=$5
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 tmp=$(mktemp -d)
 spid=
@@ -70,7 +70,31 @@ server_config "$tmp/nolog.json" "$tmp/practice.json"
 spid=$!
 "$client" --role trainee --domain 61 --phantom 7 --name fia --timeout 10 --print-period 0 \
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=0.5 > "$tmp/fia.log" 2>&1
+# Session 72: a peer writes into gus's partition (an unsecured classroom, or a trainee into her own):
+# first one withdrawal of a mark 9 naming his session, which the server answers (his station says,
+# once, that someone else writes findings into his session: mark 9 is none of his), then findings
+# naming made-up sessions, 20 every 100 ms for 4 s, through his press and mark. Those became
+# instances of the server's finding reader, which refused the 65th and on for its resource limits,
+# and Cyclone retried each on its delivery path: every session's contacts stalled (his fingertip never
+# reached the dome: 37 of ~1,050 contacts arrived) and the flood spent his findings rate. Now the
+# reader's filter drops them, counted and logged, unanswered; his mark over lump 1 stands.
+"$client" --role trainee --domain 61 --phantom 7 --name gus --timeout 10 --print-period 0 \
+  --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=3,mark_s=2 > "$tmp/gus.log" 2>&1 &
+gpid=$!
+"$finding_writer" 61 gus 9 1 0.1 own > "$tmp/writer.log" 2>&1
+"$finding_writer" 61 gus 9 20 4 >> "$tmp/writer.log" 2>&1
+wait $gpid
 kill $spid; wait $spid; spid=
+check 'finding_writer: 1 findings naming the session itself written' "$tmp/writer.log" "a peer writes a finding into gus's session"
+check 'finding_writer: [0-9]* findings naming other sessions written' "$tmp/writer.log" "  then floods it with findings naming other sessions"
+check 'debrief: you found 1 of 2 lumps with 1 mark standing' "$tmp/gus.log" "  his press reaches the lump and his mark through the flood stands"
+check 'the server answered finding 9, which this station did not send: someone else writes findings into this session' "$tmp/gus.log" \
+  "  his station says once that someone else writes findings into his session"
+if grep -q "the server refused finding 9" "$tmp/gus.log" || [ "$(grep -c 'did not send' "$tmp/gus.log")" != 1 ]; then
+  echo "FAIL gus's station took the peer's answer for his own, or said it more than once:"; cat "$tmp/gus.log"; fail=1
+else echo "ok     said once, and not taken for his"; fi
+check "finding(s) of another writer dropped unanswered at the reader; the last names session" "$tmp/nolog-server.log" \
+  "  the server logs the findings naming other sessions it dropped"
 check 'debrief: you found 1 of 2 lumps' "$tmp/fia.log" "a practice exercise on a server without a log: her debrief tells the lumps"
 check 'no score: this server keeps no session log to score it from; your instructor grades the session' "$tmp/fia.log" \
   "  and her station is told at once why no score comes"

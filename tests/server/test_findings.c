@@ -399,9 +399,11 @@ int main(void) {
   send_finding(&tf, palp_FINDING_WITHDRAW, 2, a.session_id, (palp_vec3){0, 0, 0});
   test_sleep(0.05);
   CHECK(wait_status(&tf, 2, 3, &st) && st.last_accepted && st.marks == 1, "mark 2 withdrawn (marks %u)", st.marks);
+  /* Since session 72 a finding naming another session is dropped by the reader's filter (made-up
+   * session ids were instances of a reader whose limits stalled the server's delivery): not answered,
+   * logged (the events below). */
   send_finding(&tf, palp_FINDING_MARK, 3, a.session_id + 1000, p1);
-  CHECK(wait_status(&tf, 3, 3, &st) && !st.last_accepted && strstr(st.reason, "names session"),
-        "forged session id refused: \"%s\"", st.reason);
+  CHECK(!wait_status(&tf, 3, 1, &st), "forged session id dropped at the reader: no answer within 1 s");
   send_finding(&tf, palp_FINDING_MARK, 4, a.session_id, (palp_vec3){NAN, 0, 0.04});
   CHECK(wait_status(&tf, 4, 3, &st) && !st.last_accepted && strstr(st.reason, "not finite"),
         "NaN point refused: \"%s\"", st.reason);
