@@ -271,9 +271,17 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
   const char *body = NULL, *guid = NULL;
   size_t guid_n = 0;
   palp_dds_refusal_kind kind = PALP_DDS_REFUSED_HANDSHAKE;
+  /* Anywhere in the line, not only at its start: Cyclone ends some of its lines without a newline
+   * ("fsm: Send handshake: failed to send message (lguid=...)", a handshake message it could not
+   * send), and the next message, the refusal, reaches the sink on the same line (session 72: such a
+   * line went raw into palp-recorder's log in install_demo). */
   for (size_t i = 0; i < sizeof handshake / sizeof handshake[0] && !body; i++) {
-    const size_t k = strlen(handshake[i]);
-    if (len >= k && !memcmp(msg, handshake[i], k)) body = msg + k;
+    const char *at = find_n(msg, len, handshake[i]);
+    if (at) {
+      body = at + strlen(handshake[i]);
+      len -= (size_t)(at - msg);
+      msg = at;
+    }
   }
   if (!body && len > sizeof perm_head && !memcmp(msg, perm_head, sizeof perm_head - 1)) {
     const char *t = find_n(msg, len, perm_tail);

@@ -44,6 +44,14 @@ static void test_parse(void) {
   CHECK(k == 1 && r.kind == PALP_DDS_REFUSED_HANDSHAKE && !strcmp(r.who, "trainee/fd") &&
             !strcmp(r.why, "certificate revoked"),
         "a revoked Fast DDS station: \"%s\", \"%s\"", r.who, r.why);
+  /* a line Cyclone left unterminated, the refusal after it on the same line (install_demo, session 72) */
+  k = parse("fsm: Send handshake: failed to send message (lguid=e35a173a:2a2349a0:ea09da91:1c1 "
+            "rguid=82f2f6cc:a26fb0b7:817343b9:1c1)Process handshake failed: Certificate not valid: error: certificate "
+            "revoked; subject: /O=palp/OU=trainee/CN=mallory(code: 200)",
+            &r);
+  CHECK(k == 1 && r.kind == PALP_DDS_REFUSED_HANDSHAKE && !strcmp(r.who, "trainee/mallory") &&
+            !strcmp(r.why, "certificate revoked"),
+        "a refusal after an unterminated line on the same line: \"%s\", \"%s\"", r.who, r.why);
   k = parse("Begin handshake reply failed: Certificate not valid: error: certificate revoked; subject: "
             "/O=palp/OU=trainee/CN=dave(code: 200)",
             &r);
