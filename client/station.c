@@ -114,13 +114,12 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
       return fail(err, errlen, PALP_EIO, "cannot create topic %s%s", name, hint);
     }
   }
-  /* The session's other streams take only this session's samples too (its local models and finger
+  /* The session's other topics take only this session's samples too (its local models and finger
    * samples are filtered in palp_cli_station_join): a flood of made-up keys in its partition of an
    * unsecured classroom never becomes an instance in its readers (server/session.c filters its
-   * contacts so). A filter applies to every reader of its topic entity: these topics' readers are
-   * all of the session. */
-  /* Not the contacts: Cyclone applies a topic's filter to its writers too, and a trainee writes hers on
-   * this topic entity (a viewer's contact reader has a filtered topic entity of its own, below). */
+   * contacts so). A filter applies to every reader of its topic entity, and these topics' readers
+   * are all of the session; and to its writers: hence not the contacts, which a trainee writes here
+   * (a viewer's contact reader has a filtered topic entity of its own, palp_cli_station_join). */
   static const palp_dds_topic_kind own[] = {PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
                                             PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE,
                                             PALP_TOPIC_SESSION_LOG};
