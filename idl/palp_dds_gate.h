@@ -41,7 +41,9 @@ typedef struct palp_dds_gate {
 /* An empty gate for an owner with `slots` session slots (1..PALP_DDS_GATE_SLOTS_MAX). */
 void palp_dds_gate_init(palp_dds_gate *g, int slots);
 /* Filters: the session-state topic (every state passes; an open one is noted) and a stream's
- * (PALP_TOPIC_CONTACT, _FEEDBACK, _DEFORMATION, _LOCAL_MODEL or _FINGER_SAMPLE). Set them before
+ * (PALP_TOPIC_CONTACT, _FEEDBACK, _DEFORMATION, _LOCAL_MODEL or _FINGER_SAMPLE; or one of the
+ * session's reliable topics a tool reads only while the session is open: _FINDING, _FINDING_STATUS,
+ * _DEBRIEF, as palp-recorder does; a filter applies to its topic's writers too). Set them before
  * the topic's readers exist; a filter applies to every reader of its topic entity. 0, or a
  * negative DDS return code (PALP_EINVAL: another topic). A topic <= 0 (not allowed by older
  * permissions) is left alone: 0. */
