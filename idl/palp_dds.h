@@ -74,8 +74,6 @@ dds_qos_t *palp_dds_qos(palp_dds_topic_kind kind);
 /* Creates (or finds) the topic on participant pp with its QoS. */
 dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind);
 
-/* A reader/writer on `parent` (participant, subscriber or publisher) for a topic
- * made by palp_dds_create_topic, with the topic's QoS. */
 /* A reader's QoS for a topic: the topic's, except that a reader of findings bounds only the samples
  * per session (PALP_DDS_FINDING_READER_DEPTH), not the sessions. Cyclone 0.10 retries a reliable
  * sample a reader refuses for its limits on the delivery path: a peer writing findings under 64+
@@ -86,6 +84,9 @@ dds_entity_t palp_dds_create_topic(dds_entity_t pp, palp_dds_topic_kind kind);
  * the QoS. */
 #define PALP_DDS_FINDING_READER_DEPTH 256
 dds_qos_t *palp_dds_reader_qos(palp_dds_topic_kind kind);
+
+/* A reader/writer on `parent` (participant, subscriber or publisher) for a topic
+ * made by palp_dds_create_topic, with the topic's QoS (a reader's: palp_dds_reader_qos). */
 dds_entity_t palp_dds_create_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 dds_entity_t palp_dds_create_writer(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 

@@ -31,10 +31,10 @@ static int find_mark(const palp_srv_findings *f, uint32_t id) {
 int palp_srv_findings_offer(palp_srv_findings *f, const palp_Finding *in, int64_t now_ns) {
   f->last_mark_id = in->mark_id;
   f->reason[0] = 0;
-  /* Another session's id first, and not charged to this session's bucket: in an unsecured classroom
-   * a peer flooding this partition with made-up session ids spent the trainee's tokens, and her
-   * real mark was refused "too many findings" (measured, session 72). Refused and answered as any
-   * refusal; one comparison, as the bucket's. */
+  /* Another session's id first, and not charged to this session's bucket: findings naming made-up
+   * sessions spent the session's tokens, and its trainee's mark right after was refused "too many
+   * findings" (test server_debrief). Over DDS the reader's filter drops them before they come here
+   * (server/session.c, session 72); this is the second line. One comparison, as the bucket's. */
   if (in->session_id != f->lim.session_id)
     return refuse(f, "finding names session %u, not this partition's session %u", in->session_id,
                   f->lim.session_id);

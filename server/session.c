@@ -199,11 +199,10 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   /* issue 13: findings (docs/assessment.md). Read and answered by the server's main
    * thread, not the tick: a mark is a rare event, and its log record needs no step. */
   if (def->finding_topic > 0 && def->finding_status_topic > 0) {
-    (void)def->finding_topic;
     s->finding_topic = palp_dds_create_topic(def->participant, PALP_TOPIC_FINDING);
     struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = finding_filter}, .arg = s};
     if (s->finding_topic < 0 || dds_set_topic_filter_extended(s->finding_topic, &flt) < 0) goto dds_fail;
-    /* keep-last, unbounded by resource limits (palp_dds_reader_qos): never refuses a reliable sample */
+    /* no bound on its instances (palp_dds_reader_qos): a reliable sample refused for one stalls delivery */
     s->finding_reader = palp_dds_create_reader(s->sub, s->finding_topic, PALP_TOPIC_FINDING);
     s->finding_status_writer = palp_dds_create_writer(s->pub, def->finding_status_topic, PALP_TOPIC_FINDING_STATUS);
     if (s->finding_reader < 0 || s->finding_status_writer < 0) goto dds_fail;
