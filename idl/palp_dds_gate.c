@@ -17,7 +17,8 @@
 _Static_assert(offsetof(palp_Contact, session_id) == 0 && offsetof(palp_Feedback, session_id) == 0 &&
                    offsetof(palp_Deformation, session_id) == 0 && offsetof(palp_LocalModel, session_id) == 0 &&
                    offsetof(palp_FingerSample, session_id) == 0 && offsetof(palp_Finding, session_id) == 0 &&
-                   offsetof(palp_FindingStatus, session_id) == 0 && offsetof(palp_Debrief, session_id) == 0,
+                   offsetof(palp_FindingStatus, session_id) == 0 && offsetof(palp_Debrief, session_id) == 0 &&
+                   offsetof(palp_SessionScore, session_id) == 0 && offsetof(palp_SessionLog, session_id) == 0,
                "the session id first");
 _Static_assert(offsetof(palp_LocalModel, finger) == offsetof(palp_Contact, finger) &&
                    offsetof(palp_FingerSample, finger) == offsetof(palp_Contact, finger),
@@ -75,7 +76,8 @@ int palp_dds_gate_filter_state(palp_dds_gate *g, dds_entity_t state_topic) { ret
 int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_topic_kind kind) {
   if (finger_keyed(kind)) return set_filter(topic, finger_passes, g);
   if (kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION || kind == PALP_TOPIC_FINDING ||
-      kind == PALP_TOPIC_FINDING_STATUS || kind == PALP_TOPIC_DEBRIEF)
+      kind == PALP_TOPIC_FINDING_STATUS || kind == PALP_TOPIC_DEBRIEF || kind == PALP_TOPIC_DEBRIEF_SCORE ||
+      kind == PALP_TOPIC_SESSION_LOG)
     return set_filter(topic, session_passes, g);
   return PALP_EINVAL;
 }

@@ -42,8 +42,9 @@ typedef struct palp_dds_gate {
 void palp_dds_gate_init(palp_dds_gate *g, int slots);
 /* Filters: the session-state topic (every state passes; an open one is noted) and a stream's
  * (PALP_TOPIC_CONTACT, _FEEDBACK, _DEFORMATION, _LOCAL_MODEL or _FINGER_SAMPLE; or one of the
- * session's reliable topics a tool reads only while the session is open: _FINDING, _FINDING_STATUS,
- * _DEBRIEF, as palp-recorder does; a filter applies to its topic's writers too). Set them before
+ * session's reliable topics a tool reads only while the session is open or just closed: _FINDING,
+ * _FINDING_STATUS, _DEBRIEF, _DEBRIEF_SCORE, _SESSION_LOG; a filter applies to its topic's writers
+ * too). Set them before
  * the topic's readers exist; a filter applies to every reader of its topic entity. 0, or a
  * negative DDS return code (PALP_EINVAL: another topic). A topic <= 0 (not allowed by older
  * permissions) is left alone: 0. */

@@ -2074,7 +2074,14 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
   /* before the readers, so that no sample of theirs passes unfiltered */
   palp_dds_gate_init(&h->gate, PALP_WEB_MAX_SESSIONS);
-  const int filters = palp_dds_gate_filter_topics(&h->gate, h->topic);
+  int filters = palp_dds_gate_filter_topics(&h->gate, h->topic);
+  /* ... and the session's reliable topics it only reads (not the findings: it writes its pages' on that
+   * topic entity, and a filter applies to writes too): a debrief, a told score or the log's losses of a
+   * session that just closed still pass, by the ring of sessions heard open */
+  const palp_dds_topic_kind read_only[] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE,
+                                           PALP_TOPIC_SESSION_LOG};
+  for (size_t k = 0; k < sizeof read_only / sizeof read_only[0] && filters == 0; k++)
+    filters = palp_dds_gate_filter_stream(&h->gate, h->topic[read_only[k]], read_only[k]);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
@@ -2198,6 +2205,10 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
     palp_Deformation d;
     palp_LocalModel l;
     palp_FingerSample f;
+    palp_FindingStatus fs;
+    palp_Debrief db;
+    palp_SessionScore sc;
+    palp_SessionLog sl;
   } key;
   memset(&key, 0, sizeof key);
   key.c.session_id = session_id;
@@ -2207,6 +2218,10 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
   case PALP_TOPIC_DEFORMATION: rd = h->deform_r; break;
   case PALP_TOPIC_LOCAL_MODEL: rd = h->lm_r, key.l.finger = (uint8_t)finger; break;
   case PALP_TOPIC_FINGER_SAMPLE: rd = h->fsample_r, key.f.finger = (uint8_t)finger; break;
+  case PALP_TOPIC_FINDING_STATUS: rd = h->fstatus_r; break;
+  case PALP_TOPIC_DEBRIEF: rd = h->debrief_r; break;
+  case PALP_TOPIC_DEBRIEF_SCORE: rd = h->debrief_score_r; break;
+  case PALP_TOPIC_SESSION_LOG: rd = h->session_log_r; break;
   default: return PALP_EINVAL;
   }
   if (rd <= 0) return 0;

@@ -1196,6 +1196,31 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
   CHECK(after.local_models > before.local_models,
         "a session's model still reaches the bridge after the flood (%llu then %llu models taken)",
         (unsigned long long)before.local_models, (unsigned long long)after.local_models);
+  /* The session topics the bridge only reads (finding answers, debriefs, told scores, the log's
+   * losses; reliable): 50 each of sessions never heard open leave no instance; a debrief of the
+   * session that just closed (below) still passes, by the ring of sessions heard open. */
+  const int rkind[4] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE, PALP_TOPIC_SESSION_LOG};
+  dds_entity_t rw[4];
+  for (int k = 0; k < 4; k++) {
+    rw[k] = palp_dds_create_writer(pub, palp_dds_create_topic(pp, (palp_dds_topic_kind)rkind[k]),
+                                   (palp_dds_topic_kind)rkind[k]);
+    for (int i = 0; i < 200 && rw[k] > 0; i++) {
+      dds_publication_matched_status_t m;
+      if (dds_get_publication_matched_status(rw[k], &m) == 0 && m.current_count > 0) break;
+      dds_sleepfor(DDS_MSECS(10));
+    }
+  }
+  int rwritten = 0;
+  for (uint32_t i = 0; i < 50; i++) {
+    palp_FindingStatus fsm;
+    palp_Debrief dbm;
+    palp_SessionScore scm;
+    palp_SessionLog slm;
+    memset(&fsm, 0, sizeof fsm), memset(&dbm, 0, sizeof dbm), memset(&scm, 0, sizeof scm), memset(&slm, 0, sizeof slm);
+    fsm.session_id = dbm.session_id = scm.session_id = slm.session_id = 9600 + i;
+    rwritten += (dds_write(rw[0], &fsm) == 0) + (dds_write(rw[1], &dbm) == 0) + (dds_write(rw[2], &scm) == 0) +
+                (dds_write(rw[3], &slm) == 0);
+  }
   palp_SessionState closed;
   memset(&closed, 0, sizeof closed);
   closed.session_id = fresh;
@@ -1203,6 +1228,23 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
   snprintf(closed.partition, sizeof closed.partition, "%s", part);
   dds_write(w_state, &closed); /* out of the tests that follow */
   dds_sleepfor(DDS_MSECS(100));
+  palp_Debrief late;
+  memset(&late, 0, sizeof late);
+  late.session_id = fresh;
+  late.level = palp_DEBRIEF_COUNT, late.lesions = 1, late.found = 2; /* malformed: dropped by the hub after
+                                                                      * its reader took it (kept out of the
+                                                                      * debrief tests below) */
+  rwritten += dds_write(rw[1], &late) == 0;
+  dds_sleepfor(DDS_MSECS(300));
+  int rbogus = 0;
+  for (int k = 0; k < 4; k++)
+    for (uint32_t i = 0; i < 50; i++) rbogus += palp_web_hub_has_instance(h, rkind[k], 9600 + i, 0) != 0;
+  CHECK(rwritten == 201 && rbogus == 0,
+        "flood: 50 each of finding answers, debriefs, told scores and log losses of sessions never heard open leave no "
+        "instance in the bridge's readers (%d did; %d of 201 written)", rbogus, rwritten);
+  CHECK(palp_web_hub_has_instance(h, PALP_TOPIC_DEBRIEF, fresh, 0) == 1,
+        "a debrief of a session that just closed still reaches the bridge");
+  for (int k = 0; k < 4; k++) dds_delete(rw[k]);
   for (int k = 0; k < 4; k++) dds_delete(w[k]);
 }
 
