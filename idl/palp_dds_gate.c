@@ -71,9 +71,7 @@ static int set_filter(dds_entity_t topic, bool (*fn)(const void *, void *), palp
   return rc < 0 ? (int)rc : 0;
 }
 
-int palp_dds_gate_filter_state(palp_dds_gate *g, dds_entity_t state_topic) { return set_filter(state_topic, state_heard, g); }
-
-int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_topic_kind kind) {
+static int filter_session_topic(palp_dds_gate *g, dds_entity_t topic, palp_dds_topic_kind kind) {
   if (finger_keyed(kind)) return set_filter(topic, finger_passes, g);
   if (kind == PALP_TOPIC_FEEDBACK || kind == PALP_TOPIC_DEFORMATION || kind == PALP_TOPIC_FINDING ||
       kind == PALP_TOPIC_FINDING_STATUS || kind == PALP_TOPIC_DEBRIEF || kind == PALP_TOPIC_DEBRIEF_SCORE ||
@@ -82,12 +80,16 @@ int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_t
   return PALP_EINVAL;
 }
 
-int palp_dds_gate_filter_topics(palp_dds_gate *g, const dds_entity_t topic[PALP_TOPIC_COUNT]) {
+int palp_dds_gate_filter_topics(palp_dds_gate *g, const dds_entity_t topic[PALP_TOPIC_COUNT],
+                                const palp_dds_topic_kind *more, size_t n_more) {
   static const palp_dds_topic_kind streams[] = {PALP_TOPIC_CONTACT, PALP_TOPIC_FEEDBACK, PALP_TOPIC_DEFORMATION,
                                                 PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINGER_SAMPLE};
-  int rc = palp_dds_gate_filter_state(g, topic[PALP_TOPIC_SESSION_STATE]);
-  for (size_t k = 0; k < sizeof streams / sizeof streams[0] && rc == 0; k++)
-    rc = palp_dds_gate_filter_stream(g, topic[streams[k]], streams[k]);
+  const size_t n_streams = sizeof streams / sizeof streams[0];
+  int rc = set_filter(topic[PALP_TOPIC_SESSION_STATE], state_heard, g);
+  for (size_t k = 0; k < n_streams + n_more && rc == 0; k++) {
+    const palp_dds_topic_kind kind = k < n_streams ? streams[k] : more[k - n_streams];
+    rc = filter_session_topic(g, topic[kind], kind);
+  }
   return rc;
 }
 

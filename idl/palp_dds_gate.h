@@ -40,18 +40,16 @@ typedef struct palp_dds_gate {
 
 /* An empty gate for an owner with `slots` session slots (1..PALP_DDS_GATE_SLOTS_MAX). */
 void palp_dds_gate_init(palp_dds_gate *g, int slots);
-/* Filters: the session-state topic (every state passes; an open one is noted) and a stream's
- * (PALP_TOPIC_CONTACT, _FEEDBACK, _DEFORMATION, _LOCAL_MODEL or _FINGER_SAMPLE; or one of the
- * session's reliable topics a tool reads only while the session is open or just closed: _FINDING,
- * _FINDING_STATUS, _DEBRIEF, _DEBRIEF_SCORE, _SESSION_LOG; a filter applies to its topic's writers
- * too). Set them before
- * the topic's readers exist; a filter applies to every reader of its topic entity. 0, or a
- * negative DDS return code (PALP_EINVAL: another topic). A topic <= 0 (not allowed by older
- * permissions) is left alone: 0. */
-int palp_dds_gate_filter_state(palp_dds_gate *g, dds_entity_t state_topic);
-int palp_dds_gate_filter_stream(palp_dds_gate *g, dds_entity_t topic, palp_dds_topic_kind kind);
-/* Both, on a participant's topics indexed by palp_dds_topic_kind: the state and the five streams. */
-int palp_dds_gate_filter_topics(palp_dds_gate *g, const dds_entity_t topic[PALP_TOPIC_COUNT]);
+/* The gate's topic filters on a participant's topics (indexed by palp_dds_topic_kind): the
+ * session-state topic's (every state passes; an open one is noted) and the streams' (PALP_TOPIC_CONTACT,
+ * _FEEDBACK, _DEFORMATION, _LOCAL_MODEL, _FINGER_SAMPLE), and the owner's `more` of the session's
+ * reliable topics it reads only while a session is open or just closed (_FINDING, _FINDING_STATUS,
+ * _DEBRIEF, _DEBRIEF_SCORE, _SESSION_LOG; not one the owner writes on: a filter applies to its
+ * topic's writers too). Set before the topics' readers exist; a filter applies to every reader of
+ * its topic entity; a topic <= 0 (not allowed by older permissions) is left alone. 0, or a negative
+ * DDS return code (PALP_EINVAL: a topic the gate cannot filter). */
+int palp_dds_gate_filter_topics(palp_dds_gate *g, const dds_entity_t topic[PALP_TOPIC_COUNT],
+                                const palp_dds_topic_kind *more, size_t n_more);
 /* The owner's slot `slot` now holds session `sid` (0: none). */
 void palp_dds_gate_set(palp_dds_gate *g, int slot, uint32_t sid);
 /* Whether a sample of session `sid` passes (sid 0 never does). */

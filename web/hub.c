@@ -2072,16 +2072,14 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
       palp_dds_strangers_init(&h->strangers, h->pp, PALP_DDS_STRANGER_GRACE_S) == 0)
     h->strangers_ready = 1; /* the dashboard lists a station started without an identity too */
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
-  /* before the readers, so that no sample of theirs passes unfiltered */
+  /* The gate's filters, before the readers so that no sample of theirs passes unfiltered: the streams'
+   * and the session's reliable topics it only reads (not the findings: it writes its pages' on that
+   * topic entity, and a filter applies to writes too); a debrief, a told score or the log's losses of a
+   * session that just closed still pass, by the ring of sessions heard open. */
   palp_dds_gate_init(&h->gate, PALP_WEB_MAX_SESSIONS);
-  int filters = palp_dds_gate_filter_topics(&h->gate, h->topic);
-  /* ... and the session's reliable topics it only reads (not the findings: it writes its pages' on that
-   * topic entity, and a filter applies to writes too): a debrief, a told score or the log's losses of a
-   * session that just closed still pass, by the ring of sessions heard open */
-  const palp_dds_topic_kind read_only[] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE,
-                                           PALP_TOPIC_SESSION_LOG};
-  for (size_t k = 0; k < sizeof read_only / sizeof read_only[0] && filters == 0; k++)
-    filters = palp_dds_gate_filter_stream(&h->gate, h->topic[read_only[k]], read_only[k]);
+  static const palp_dds_topic_kind read_only[] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF,
+                                                  PALP_TOPIC_DEBRIEF_SCORE, PALP_TOPIC_SESSION_LOG};
+  const int filters = palp_dds_gate_filter_topics(&h->gate, h->topic, read_only, sizeof read_only / sizeof read_only[0]);
   h->catalogue_r = make_reader(h->pp, h->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
   h->state_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
   h->status_r = make_reader(h->pp, h->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);

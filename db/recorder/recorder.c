@@ -981,14 +981,12 @@ int main(int argc, char **argv) {
   }
   dds_entity_t t[PALP_TOPIC_COUNT];
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) t[k] = palp_dds_create_topic(pp, (palp_dds_topic_kind)k);
-  /* the streams' filters before their readers, so that no sample of theirs passes unfiltered */
+  /* The gate's filters, before the readers so that no sample of theirs passes unfiltered: the streams'
+   * and the findings, their answers and the debriefs, which it logs only for a session it records
+   * (find_session): reliable, so filtered only, never bounded (docs/robustness.md). */
   palp_dds_gate_init(&r->gate, MAX_SESSIONS);
-  int filters = palp_dds_gate_filter_topics(&r->gate, t);
-  /* ... and the findings, their answers and the debriefs, which it logs only for a session it
-   * records (find_session): reliable, so filtered only, never bounded (docs/robustness.md) */
-  const palp_dds_topic_kind logged[] = {PALP_TOPIC_FINDING, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF};
-  for (size_t k = 0; k < sizeof logged / sizeof logged[0] && filters == 0; k++)
-    filters = palp_dds_gate_filter_stream(&r->gate, t[logged[k]], logged[k]);
+  static const palp_dds_topic_kind logged[] = {PALP_TOPIC_FINDING, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF};
+  const int filters = palp_dds_gate_filter_topics(&r->gate, t, logged, sizeof logged / sizeof logged[0]);
   char wildcard[64];
   snprintf(wildcard, sizeof wildcard, PALP_DDS_SESSION_PARTITION_FMT, 0u);
   char *z = strrchr(wildcard, '/');
