@@ -2073,9 +2073,10 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     h->strangers_ready = 1; /* the dashboard lists a station started without an identity too */
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) h->topic[k] = palp_dds_create_topic(h->pp, (palp_dds_topic_kind)k);
   /* The gate's filters, before the readers so that no sample of theirs passes unfiltered: the streams'
-   * and the session's reliable topics it only reads (not the findings: it writes its pages' on that
-   * topic entity, and a filter applies to writes too); a debrief, a told score or the log's losses of a
-   * session that just closed still pass, by the ring of sessions heard open. */
+   * and the session's reliable topics it only reads (the findings on a topic entity of their own,
+   * below: it writes its pages' on this one, and a filter applies to writes too); a debrief, a told
+   * score or the log's losses of a session that just closed still pass, by the ring of sessions heard
+   * open. */
   palp_dds_gate_init(&h->gate, PALP_WEB_MAX_SESSIONS);
   static const palp_dds_topic_kind read_only[] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF,
                                                   PALP_TOPIC_DEBRIEF_SCORE, PALP_TOPIC_SESSION_LOG};
@@ -2121,7 +2122,17 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
   if (def->answers) {
     /* the answers (instructors only: a trainee's permissions cannot even create the topic) */
     h->sexercise_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE);
-    h->finding_r = make_reader(h->sub, h->topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+    /* The findings are read through a topic entity of their own, gated as the answers are: the pages'
+     * findings are written on h->topic[PALP_TOPIC_FINDING], which must stay unfiltered (a filter applies
+     * to its topic entity's writers too), so made-up sessions' findings become no instance here. */
+    dds_entity_t only[PALP_TOPIC_COUNT] = {0};
+    static const palp_dds_topic_kind finding[] = {PALP_TOPIC_FINDING};
+    only[PALP_TOPIC_FINDING] = palp_dds_create_topic(h->pp, PALP_TOPIC_FINDING);
+    h->finding_r = only[PALP_TOPIC_FINDING];
+    if (h->finding_r > 0) {
+      const int rc = palp_dds_gate_filter_topics(&h->gate, only, finding, 1);
+      h->finding_r = rc < 0 ? rc : make_reader(h->sub, only[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+    }
     h->score_r = make_reader(h->pp, h->topic[PALP_TOPIC_SESSION_SCORE], PALP_TOPIC_SESSION_SCORE);
   }
   h->ws = dds_create_waitset(h->pp);
@@ -2207,6 +2218,7 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
     palp_Debrief db;
     palp_SessionScore sc;
     palp_SessionLog sl;
+    palp_Finding fi;
   } key;
   memset(&key, 0, sizeof key);
   key.c.session_id = session_id;
@@ -2220,6 +2232,7 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
   case PALP_TOPIC_DEBRIEF: rd = h->debrief_r; break;
   case PALP_TOPIC_DEBRIEF_SCORE: rd = h->debrief_score_r; break;
   case PALP_TOPIC_SESSION_LOG: rd = h->session_log_r; break;
+  case PALP_TOPIC_FINDING: rd = h->finding_r; break;
   default: return PALP_EINVAL;
   }
   if (rd <= 0) return 0;

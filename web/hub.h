@@ -136,7 +136,8 @@ void palp_web_hub_stop(palp_web_hub *h);
 void palp_web_hub_destroy(palp_web_hub *h);
 void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out);
 /* Whether the bridge's reader of a session topic (PALP_TOPIC_CONTACT, _DEFORMATION, _LOCAL_MODEL,
- * _FINGER_SAMPLE, _FINDING_STATUS, _DEBRIEF, _DEBRIEF_SCORE or _SESSION_LOG, as palp_dds_topic_kind;
+ * _FINGER_SAMPLE, _FINDING (with answers), _FINDING_STATUS, _DEBRIEF, _DEBRIEF_SCORE or _SESSION_LOG, as
+ * palp_dds_topic_kind;
  * the finger where the key has one) holds an instance of (session, finger), itself (not
  * another entity of the process): 1 or 0, or PALP_EINVAL for another topic. For tests of its
  * filters and for diagnostics. */

@@ -1196,12 +1196,14 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
   CHECK(after.local_models > before.local_models,
         "a session's model still reaches the bridge after the flood (%llu then %llu models taken)",
         (unsigned long long)before.local_models, (unsigned long long)after.local_models);
-  /* The session topics the bridge only reads (finding answers, debriefs, told scores, the log's
-   * losses; reliable): 50 each of sessions never heard open leave no instance; a debrief of the
-   * session that just closed (below) still passes, by the ring of sessions heard open. */
-  const int rkind[4] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE, PALP_TOPIC_SESSION_LOG};
-  dds_entity_t rw[4];
-  for (int k = 0; k < 4; k++) {
+  /* The session topics the bridge reads (finding answers, debriefs, told scores, the log's losses;
+   * and the findings, which it also writes for its pages, on a topic entity of their own; reliable):
+   * 50 each of sessions never heard open leave no instance; a debrief of the session that just
+   * closed (below) still passes, by the ring of sessions heard open. */
+  const int rkind[5] = {PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF, PALP_TOPIC_DEBRIEF_SCORE, PALP_TOPIC_SESSION_LOG,
+                        PALP_TOPIC_FINDING};
+  dds_entity_t rw[5];
+  for (int k = 0; k < 5; k++) {
     rw[k] = palp_dds_create_writer(pub, palp_dds_create_topic(pp, (palp_dds_topic_kind)rkind[k]),
                                    (palp_dds_topic_kind)rkind[k]);
     for (int i = 0; i < 200 && rw[k] > 0; i++) {
@@ -1216,10 +1218,13 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
     palp_Debrief dbm;
     palp_SessionScore scm;
     palp_SessionLog slm;
+    palp_Finding fim;
     memset(&fsm, 0, sizeof fsm), memset(&dbm, 0, sizeof dbm), memset(&scm, 0, sizeof scm), memset(&slm, 0, sizeof slm);
-    fsm.session_id = dbm.session_id = scm.session_id = slm.session_id = 9600 + i;
+    memset(&fim, 0, sizeof fim);
+    fsm.session_id = dbm.session_id = scm.session_id = slm.session_id = fim.session_id = 9600 + i;
+    fim.mark_id = 1;
     rwritten += (dds_write(rw[0], &fsm) == 0) + (dds_write(rw[1], &dbm) == 0) + (dds_write(rw[2], &scm) == 0) +
-                (dds_write(rw[3], &slm) == 0);
+                (dds_write(rw[3], &slm) == 0) + (dds_write(rw[4], &fim) == 0);
   }
   palp_SessionState closed;
   memset(&closed, 0, sizeof closed);
@@ -1237,14 +1242,14 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
   rwritten += dds_write(rw[1], &late) == 0;
   dds_sleepfor(DDS_MSECS(300));
   int rbogus = 0;
-  for (int k = 0; k < 4; k++)
+  for (int k = 0; k < 5; k++)
     for (uint32_t i = 0; i < 50; i++) rbogus += palp_web_hub_has_instance(h, rkind[k], 9600 + i, 0) != 0;
-  CHECK(rwritten == 201 && rbogus == 0,
-        "flood: 50 each of finding answers, debriefs, told scores and log losses of sessions never heard open leave no "
-        "instance in the bridge's readers (%d did; %d of 201 written)", rbogus, rwritten);
+  CHECK(rwritten == 251 && rbogus == 0,
+        "flood: 50 each of finding answers, debriefs, told scores, log losses and findings of sessions never heard open "
+        "leave no instance in the bridge's readers (%d did; %d of 251 written)", rbogus, rwritten);
   CHECK(palp_web_hub_has_instance(h, PALP_TOPIC_DEBRIEF, fresh, 0) == 1,
         "a debrief of a session that just closed still reaches the bridge");
-  for (int k = 0; k < 4; k++) dds_delete(rw[k]);
+  for (int k = 0; k < 5; k++) dds_delete(rw[k]);
   for (int k = 0; k < 4; k++) dds_delete(w[k]);
 }
 
