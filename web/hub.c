@@ -18,6 +18,7 @@
 #include "palp_coverage.h"
 #include "palp_dds.h"
 #include "palp_dds_gate.h"
+#include "palp_dds_origin.h"
 #include "palp_dds_log_view.h"
 #include "palp_dds_strangers.h"
 #include "palp_finding_answers.h"
@@ -252,6 +253,7 @@ struct palp_web_hub {
   palp_dds_gate gate;
 
   /* DDS-thread state */
+  palp_dds_origin origin; /* where each contact's and finding's writer writes (from_its_partition) */
   phantom ph[PALP_WEB_MAX_PHANTOMS];
   session s[PALP_WEB_MAX_SESSIONS];
   server_status srv[MAX_SERVERS];
@@ -1819,13 +1821,29 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
 
 /* ---- the thread ------------------------------------------------------------------------------ */
 
+/* Whether a contact or finding naming a session the bridge follows came from a writer in that
+ * session's partition: a trainee may write only in her own partitions, so one naming another
+ * trainee's session there forges it (idl/palp_dds_origin.h). A sample of a session the bridge does
+ * not follow passes on, for its handler to count. */
+static int from_its_partition(palp_web_hub *h, dds_entity_t rd, const void *sample, const dds_sample_info_t *info) {
+  int slot;
+  const session *s = find_session(h, *(const uint32_t *)sample, &slot); /* the session id first (palp_dds_gate.c) */
+  if (!s || !s->st.partition[0] || palp_dds_origin_check(&h->origin, rd, info, s->st.partition) == PALP_DDS_ORIGIN_SAME)
+    return 1;
+  h->stats.foreign++;
+  return 0;
+}
+
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
   if (rd <= 0) return 0;
   int total = 0, n;
   void *ptr[TAKE] = {NULL};
   dds_sample_info_t info[TAKE];
+  /* the topics a trainee may write (contacts, findings): checked for where they were written */
+  const int check = rd == h->contact_r || rd == h->finding_r;
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
+      if (info[i].valid_data && check && !from_its_partition(h, rd, ptr[i], &info[i])) continue;
       if (info[i].valid_data) {
         on(h, ptr[i]);
         (*counter)++;

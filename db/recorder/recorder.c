@@ -36,6 +36,7 @@
 #include "palp_db.h"
 #include "palp_dds.h"
 #include "palp_dds_gate.h"
+#include "palp_dds_origin.h"
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "palp_finding_answers.h"
@@ -97,6 +98,7 @@ typedef struct rsession {
   dds_time_t closing_since;
   palp_SessionState close_state;
   dds_time_t lost_since; /* its state's writer lapsed then (0: alive); ended as lost RECORDER_SERVER_GRACE later */
+  int64_t foreign; /* contacts and findings naming it from a writer outside its partition: not recorded */
 } rsession;
 
 /* How long a session whose state's writer lapsed is kept open for its server to come back
@@ -145,6 +147,10 @@ typedef struct recorder {
   /* The sessions the stream readers' topic filters pass: those open here (slot = index in s[]) and
    * those heard open lately; a flood of made-up keys becomes no reader instance (idl/palp_dds_gate.h). */
   palp_dds_gate gate;
+  /* Which partition each contact's and finding's writer writes in: a sample naming a session must
+   * come from that session's partition (a trainee may write only in her own; idl/palp_dds_origin.h). */
+  palp_dds_origin origin;
+  int64_t foreign_samples;
 } recorder;
 
 /* A session opens or ends in this log: its streams pass the gate as long as it is open here. */
@@ -503,6 +509,11 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
   if (m->overruns)
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_OVERRUN, s->frame, "tick overruns reported by the server",
                                (int64_t)m->overruns));
+  if (s->foreign) /* the review then says this copy was written into by someone else */
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame,
+                               "contacts and findings naming this session from a writer outside its partition, "
+                               "not recorded (someone forged its session id)",
+                               s->foreign));
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
   count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
   palp_log_info(r->log, "session %u closed (%s)", m->session_id, m->reason);
@@ -705,6 +716,31 @@ static void on_finger_sample(recorder *r, const palp_FingerSample *m) {
     s->touched = 1;
     log_params(r, s); /* "footprint": "touched" */
   }
+}
+
+/* Whether a contact or finding (taken from `reader`) naming an open session came from a writer in
+ * that session's partition: a trainee's permissions let her write in her own partitions only, so
+ * one naming another trainee's session there forges it (not recorded, said once per session). A
+ * sample of a session not open here passes on, for its handler to count. */
+static int from_its_partition(recorder *r, dds_entity_t reader, const void *sample, const dds_sample_info_t *info,
+                              const char *what) {
+  const uint32_t sid = *(const uint32_t *)sample; /* every session topic's first key (idl/palp_dds_gate.c) */
+  resolve_pending(r, sid, 1);
+  rsession *s = find_session(r, sid, 0);
+  if (!s || !s->partition[0]) return 1;
+  const palp_dds_origin_verdict v = palp_dds_origin_check(&r->origin, reader, info, s->partition);
+  if (v == PALP_DDS_ORIGIN_SAME) return 1;
+  r->foreign_samples++;
+  if (s->foreign++ == 0) {
+    const char *from = palp_dds_origin_partition(&r->origin, reader, info);
+    palp_log_warn(r->log,
+                  "session %u: a %s naming it came from a writer %s%s%s, not its partition %s: not recorded, nor "
+                  "any such sample of it (counted at its end; someone forges its session id)",
+                  sid, what, v == PALP_DDS_ORIGIN_UNKNOWN ? "no longer matched" : from && from[0] ? "in partition " : "in several or no partitions",
+                  v == PALP_DDS_ORIGIN_UNKNOWN || !from ? "" : from, v == PALP_DDS_ORIGIN_UNKNOWN ? " (unknown partition)" : "",
+                  s->partition);
+  }
+  return 0;
 }
 
 static void on_contact(recorder *r, const palp_Contact *m) {
@@ -985,6 +1021,7 @@ int main(int argc, char **argv) {
    * and the findings, their answers and the debriefs, which it logs only for a session it records
    * (find_session): reliable, so filtered only, never bounded (docs/robustness.md). */
   palp_dds_gate_init(&r->gate, MAX_SESSIONS);
+  palp_dds_origin_init(&r->origin);
   static const palp_dds_topic_kind logged[] = {PALP_TOPIC_FINDING, PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF};
   const int filters = palp_dds_gate_filter_topics(&r->gate, t, logged, sizeof logged / sizeof logged[0]);
   char wildcard[64];
@@ -1072,6 +1109,9 @@ int main(int argc, char **argv) {
             if (k == RD_STATE && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
             continue;
           }
+          if ((k == RD_CONTACT && !from_its_partition(r, rd[k], samples[i], &info[i], "contact")) ||
+              (k == RD_FINDING && !from_its_partition(r, rd[k], samples[i], &info[i], "finding")))
+            continue;
           switch (k) {
           case RD_CATALOGUE: on_phantom(r, samples[i]); break;
           case RD_EXERCISE: on_public_exercise(r, samples[i]); break;
@@ -1133,9 +1173,9 @@ int main(int argc, char **argv) {
   palp_db_writer_close(r->w);
   palp_log_info(&plog,
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
-          "%lld exercises refused%s%s\n",
+          "%lld of a writer outside their session's partition, %lld exercises refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
-          (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "", st.last_error);
+          (long long)r->foreign_samples, (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "", st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) {
     free(r->ph[i].rest);
     free(r->ph[i].scene_json);

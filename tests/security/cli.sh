@@ -10,10 +10,12 @@
 # A palp-recorder without an identity says, 10 s in, that the classroom may be secured.
 # Permissions the PKI script wrote damaged (until 2026-12-06) are mended by its init, and an
 # instructor's observer, recorder and palp-web on them say so and what to do.
-# usage: cli.sh palp-server palp-client PKI_DIR PALP_RECORDER PALP_WEB
+# Bob, authenticated, writes contacts and marks naming alice's session into his own partition (his
+# permissions allow it): the secured recorder and palp-web take none of them for hers (session 73).
+# usage: cli.sh palp-server palp-client PKI_DIR PALP_RECORDER PALP_WEB FORGER
 set -u
 . "$(dirname "$0")/../stall.sh"
-server=$1 client=$2 pki=$3 recorder=$4 web=$5
+server=$1 client=$2 pki=$3 recorder=$4 web=$5 forger=$6
 out=$(mktemp -d)
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
@@ -249,14 +251,39 @@ rpid=$!
 "$server" --domain 132 --config "$(dirname "$0")/../../config/server-exercises.json" --database "$out/ex.db" \
   --pki "$out/oldperm" --duration 30 >"$out/ex-server.log" 2>&1 &
 opid=$!
+"$web" --domain 132 --pki "$out/oldperm" --identity instructor/ines --port 0 --no-join --duration 12 \
+  >"$out/ex-web.log" 2>&1 &
+wpid=$!
+# bob, in his own partition palp/s/bob/<her id>, names her session: 2 s of contacts (finger 1) and marks
+"$forger" 132 "$out/oldperm" trainee/bob alice 2 >"$out/forger.log" 2>&1 &
+fpid=$!
 sleep 1
 "$client" --role trainee --domain 132 --phantom 11 --pki "$out/oldperm" --identity trainee/alice --duration 3 \
   --timeout 8 --print-period 0 --input sim:press,depth_mm=4,hold_s=1,mark_s=0.5 >"$out/ex.log" 2>&1
+wait $fpid
+rc=$?
 sleep 1.5 # the recorder takes her debrief and the CLOSED state
 kill -INT $opid 2>/dev/null
 wait $opid
 kill -INT $rpid 2>/dev/null
 wait $rpid
+kill -INT $wpid 2>/dev/null
+wait $wpid
+check "bob wrote contacts and marks naming alice's session into his own partition (exit $rc): $(cat "$out/forger.log")" \
+  "[ $rc -eq 0 ] && grep -q 'forger: [1-9][0-9]* contacts and [1-9][0-9]* marks naming alice.s session [0-9]* written into palp/s/bob/[0-9]*' '$out/forger.log'"
+forged=$(python3 - "$out/rec-ex.db" <<'PY' 2>&1
+import sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+sid = db.execute("select id from session where trainee = 'alice'").fetchone()[0]
+fingers = db.execute("select count(*) from contact_input where session_id = ? and slot = 1", (sid,)).fetchone()[0]
+ev = db.execute("select coalesce(sum(count), 0) from event where session_id = ? and kind = 'reject' and detail like '%writer outside its partition%'", (sid,)).fetchone()[0]
+print("%d %d" % (fingers, ev))
+PY
+)
+check "the secured recorder records none of bob's contacts as alice's, and says it refused them (finger-1 contacts, refused: $forged)" \
+  "[ \"\${forged%% *}\" = 0 ] && [ \"\${forged#* }\" -gt 0 ] 2>/dev/null && grep -q 'WARN  palp-recorder: session [0-9]*: a [a-z]* naming it came from a writer in partition palp/s/bob/[0-9]*, not its partition palp/s/alice/[0-9]*: not recorded' '$out/rec-ex.log'"
+check "palp-web drops them too, and counts them" \
+  "grep -q ' [1-9][0-9]* from outside their session.s partition' '$out/ex-web.log'"
 same=$(python3 - "$out/ex.db" "$out/rec-ex.db" <<'PY' 2>&1
 import sqlite3, sys
 def of(path):
