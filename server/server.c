@@ -898,6 +898,90 @@ static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reaso
 /* At most this many findings per session per pass of the main loop: a flooding
  * station cannot hold the main thread; the rest wait in the (bounded) reader. */
 #define FINDINGS_PER_PASS 64
+
+/* A dispose of a made-up finding key passes the reader's filter (Cyclone filters data, and a dispose
+ * carries none) and becomes an instance the reader keeps while its writer lives: ~1 kB each; 100,000
+ * in 5 s grew the server by 98 MB (2026-12-06, before this bound). No instance limit can stop it (a
+ * reliable reader refusing one stalls delivery, docs/robustness.md), so after this many such disposes
+ * the session's finding reader is made anew, at most once per FINDING_READER_RENEW_NS: what it held
+ * of the session's own findings is answered first, and the server's memory stays bounded by what a
+ * flood sends in that time. */
+#define FINDING_STRAYS_MAX 256
+#define FINDING_READER_RENEW_NS 250000000LL
+
+/* One finding of this session, taken: offered, logged and answered. */
+static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding *f, palp_srv_session_stats *st,
+                          int *have_st) {
+  const int ok = palp_srv_findings_offer(&s->findings, f, palp_dds_now_ns());
+  if (!*have_st) { /* the world's frame and time, once per batch: a snapshot under the tick lock */
+    *st = session_stats(srv, s);
+    *have_st = 1;
+  }
+  if (srv->events && srv->events->finding) {
+    const palp_srv_finding_event ev = {.accepted = ok,
+                                       .mark_id = f->mark_id,
+                                       .withdraw = f->op == palp_FINDING_WITHDRAW,
+                                       .point = {f->point.x, f->point.y, f->point.z},
+                                       .frame = st->last_frame,
+                                       .sim_time = st->sim_time,
+                                       .reason = s->findings.reason};
+    srv->events->finding(srv->events->ctx, s->id, &ev);
+  }
+  /* The first few, then every 100th: a flood must not flood the server's log either. */
+  if (!ok && (s->findings.refused <= 16 || s->findings.refused % 100 == 0))
+    logf_(srv, "session %u: finding %u refused: %s (%llu refused so far)", s->id, f->mark_id, s->findings.reason,
+          (unsigned long long)s->findings.refused);
+  /* Every answer goes out (keep-last 1: a station reading slower sees the latest). */
+  publish_finding_status(s);
+}
+
+/* The session's finding reader made anew (FINDING_STRAYS_MAX): its own findings still held are
+ * answered first; the strays' instances go with the old reader. */
+static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now_ns) {
+  palp_Finding key, buf[16];
+  memset(&key, 0, sizeof key);
+  key.session_id = s->id;
+  const dds_instance_handle_t own = dds_lookup_instance(s->finding_reader, &key);
+  void *ptr[16];
+  dds_sample_info_t info[16];
+  for (int i = 0; i < 16; i++) ptr[i] = &buf[i];
+  palp_srv_session_stats st = {0};
+  int have_st = 0, n;
+  while (own != 0 && (n = dds_take_instance(s->finding_reader, ptr, info, 16, 16, own)) > 0)
+    for (int i = 0; i < n; i++)
+      if (info[i].valid_data) offer_finding(srv, s, &buf[i], &st, &have_st);
+  dds_waitset_detach(srv->waitset, s->finding_rc);
+  dds_delete(s->finding_reader); /* its read condition with it */
+  s->finding_reader = palp_dds_create_reader(s->sub, s->finding_topic, PALP_TOPIC_FINDING);
+  s->finding_rc = s->finding_reader > 0 ? dds_create_readcondition(s->finding_reader, DDS_ANY_STATE) : 0;
+  if (s->finding_rc > 0) dds_waitset_attach(srv->waitset, s->finding_rc, 0);
+  const uint64_t strays = s->finding_strays;
+  s->finding_strays_total += strays;
+  s->finding_strays = 0;
+  s->finding_reader_renewed_ns = now_ns;
+  s->finding_reader_renewals++;
+  if (s->finding_reader <= 0 || s->finding_rc <= 0) {
+    palp_logf(srv->log, PALP_LOG_ERROR, "session %u: its finding reader could not be made anew (%s): its findings "
+              "go unanswered from now on", s->id, dds_strretcode(s->finding_reader <= 0 ? s->finding_reader : s->finding_rc));
+    if (s->finding_reader > 0) dds_delete(s->finding_reader);
+    s->finding_reader = s->finding_rc = 0;
+    return;
+  }
+  /* said once a session at warning level (a peer writes here); the later ones in the debug log */
+  if (s->finding_reader_renewals == 1)
+    palp_logf(srv->log, PALP_LOG_WARN, "session %u: %llu disposes of other sessions' finding keys reached its "
+              "reader (each kept while its writer lives: a flood); the reader was made anew to drop them, as it "
+              "will be at most four times a second while they go on (a finding sent in that instant may go "
+              "unanswered)",
+              s->id, (unsigned long long)strays);
+  else if (now_ns - s->finding_renewal_said_ns >= (int64_t)(srv->cfg.log_interval * 1e9)) /* a flood goes on */
+    logf_(srv, "session %u: finding reader made anew (%llu times), %llu stray disposes in all", s->id,
+          (unsigned long long)s->finding_reader_renewals, (unsigned long long)s->finding_strays_total);
+  else
+    return;
+  s->finding_renewal_said_ns = now_ns;
+}
+
 static void handle_findings(palp_srv *srv, palp_srv_session *s) {
   if (s->finding_reader <= 0) return;
   /* Findings naming another session, dropped by the reader's filter: logged as one refusal per pass
@@ -930,31 +1014,15 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
     palp_srv_session_stats st = {0};
     int have_st = 0;
     for (int i = 0; i < n; i++) {
-      if (!info[i].valid_data) continue;
-      const int ok = palp_srv_findings_offer(&s->findings, &buf[i], palp_dds_now_ns());
-      if (!have_st) { /* the world's frame and time, once per batch: a snapshot under the tick lock */
-        st = session_stats(srv, s);
-        have_st = 1;
-      }
-      if (srv->events && srv->events->finding) {
-        const palp_srv_finding_event ev = {.accepted = ok,
-                                           .mark_id = buf[i].mark_id,
-                                           .withdraw = buf[i].op == palp_FINDING_WITHDRAW,
-                                           .point = {buf[i].point.x, buf[i].point.y, buf[i].point.z},
-                                           .frame = st.last_frame,
-                                           .sim_time = st.sim_time,
-                                           .reason = s->findings.reason};
-        srv->events->finding(srv->events->ctx, s->id, &ev);
-      }
-      /* The first few, then every 100th: a flood must not flood the server's log either. */
-      if (!ok && (s->findings.refused <= 16 || s->findings.refused % 100 == 0))
-        logf_(srv, "session %u: finding %u refused: %s (%llu refused so far)", s->id, buf[i].mark_id,
-              s->findings.reason, (unsigned long long)s->findings.refused);
-      /* Every answer goes out (keep-last 1: a station reading slower sees the latest). */
-      publish_finding_status(s);
+      if (info[i].valid_data) offer_finding(srv, s, &buf[i], &st, &have_st);
+      else if (info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED && buf[i].session_id != s->id)
+        s->finding_strays++; /* Cyclone fills an invalid sample's key */
     }
     if (n < 16) break;
   }
+  const int64_t now = palp_dds_now_ns();
+  if (s->finding_strays >= FINDING_STRAYS_MAX && now - s->finding_reader_renewed_ns >= FINDING_READER_RENEW_NS)
+    renew_finding_reader(srv, s, now);
 }
 
 static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason) {

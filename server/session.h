@@ -123,6 +123,10 @@ typedef struct palp_srv_session {
   atomic_uint_fast64_t filtered_findings;
   _Atomic uint32_t filtered_finding_session;
   uint64_t filtered_findings_said;
+  /* [main] disposes of other sessions' finding keys its reader took (each an instance it keeps while
+   * their writer lives): past a bound the reader is made anew (server/server.c, renew_finding_reader) */
+  uint64_t finding_strays, finding_strays_total, finding_reader_renewals;
+  int64_t finding_reader_renewed_ns, finding_renewal_said_ns;
   palp_srv_findings findings;
   dds_entity_t debrief_writer; /* palp_debrief, written once as an exercise session closes; 0: none */
   /* palp_session_log (session 69): this session's records the log lost, as last written; 0: none */

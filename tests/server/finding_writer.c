@@ -48,13 +48,14 @@ int main(int argc, char **argv) {
   memset(&f, 0, sizeof f);
   f.op = palp_FINDING_WITHDRAW;
   const int own = argc > 6 && !strcmp(argv[6], "own");
+  const int dispose = argc > 6 && !strcmp(argv[6], "dispose"); /* disposes of the made-up keys: no sample */
   f.mark_id = (uint32_t)atoi(argv[3]);
   const int burst = atoi(argv[4]), rounds = (int)(atof(argv[5]) * 10);
   int written = 0;
   for (int r = 0; r < rounds; r++) {
     for (int k = 0; k < burst; k++) {
       f.session_id = own ? st.session_id : st.session_id + 1000 + (uint32_t)(r * burst + k);
-      written += dds_write(w, &f) == 0;
+      written += (dispose ? dds_dispose(w, &f) : dds_write(w, &f)) == 0;
     }
     dds_sleepfor(DDS_MSECS(100));
   }

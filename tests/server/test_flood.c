@@ -4,6 +4,10 @@
  * period of its slot; the server's memory stays bounded; the flood is counted;
  * Cyclone's per-sample warnings are rate-limited; and a finger whose instance is
  * disposed is still lifted (the key is read from the invalid sample).
+ * Then a second one disposes 40,000 made-up keys of the finding topic in the same
+ * partition while it lives (session 73): each was an instance of the session's finding
+ * reader (~1 kB) until its writer went; the server's memory stays bounded while it
+ * floods, and the session's next mark is still answered.
  *
  * The flooder is a child process (fork before any DDS call) with a participant of
  * its own, as a real attacker would be; the server and the good station run here. */
@@ -23,6 +27,7 @@
 #define KEYS 20000
 #define DISPOSES 5000
 #define BAD_ENUMS 2000
+#define FINDING_DISPOSES 40000
 
 static long rss_kb(void) {
   FILE *f = fopen("/proc/self/status", "r");
@@ -88,6 +93,37 @@ static int flooder(int go_fd, int done_fd) {
   return 0;
 }
 
+/* The second flooder (child): disposes of made-up finding keys into session 2's partition, then
+ * stays (its instances are kept while its writer lives) until told to go. */
+static int finding_flooder(int go_fd, int done_fd) {
+  test_init();
+  dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
+  if (pp < 0) return 2;
+  char part[64];
+  palp_dds_session_partition(2, part, sizeof part);
+  dds_entity_t w = palp_dds_create_writer(palp_dds_session_publisher(pp, part),
+                                          palp_dds_create_topic(pp, PALP_TOPIC_FINDING), PALP_TOPIC_FINDING);
+  if (w < 0) return 4;
+  char c;
+  if (read(go_fd, &c, 1) != 1) return 5;
+  const int64_t t0 = palp_dds_now_ns();
+  palp_Finding f;
+  memset(&f, 0, sizeof f);
+  int ok = 0;
+  for (int i = 0; i < FINDING_DISPOSES; i++) {
+    f.session_id = 700000u + (uint32_t)i;
+    ok += dds_dispose(w, &f) == 0;
+    if (i % 200 == 199) test_sleep(0.01);
+  }
+  fprintf(stderr, "finding flooder: %d of %d disposes in %.2f s\n", ok, FINDING_DISPOSES,
+          (double)(palp_dds_now_ns() - t0) * 1e-9);
+  test_sleep(0.5); /* delivered */
+  if (write(done_fd, "f", 1) != 1) return 6;
+  if (read(go_fd, &c, 1) != 1) return 7; /* alive until the server's memory is read */
+  dds_delete(pp);
+  return ok == FINDING_DISPOSES ? 0 : 8;
+}
+
 /* ---- the server side (parent) --------------------------------------------------- */
 
 typedef struct tick_trace {
@@ -128,16 +164,24 @@ static void trace_feedback(palp_cli_station *st, tick_trace *t, double seconds, 
 }
 
 int main(void) {
-  int go[2], done[2];
-  if (pipe(go) || pipe(done)) return 1;
+  int go[2], done[2], fgo[2], fdone[2];
+  if (pipe(go) || pipe(done) || pipe(fgo) || pipe(fdone)) return 1;
   pid_t child = fork();
   if (child == 0) {
     close(go[1]);
     close(done[0]);
     _exit(flooder(go[0], done[1]));
   }
+  pid_t child2 = fork();
+  if (child2 == 0) {
+    close(fgo[1]);
+    close(fdone[0]);
+    _exit(finding_flooder(fgo[0], fdone[1]));
+  }
   close(go[0]);
   close(done[1]);
+  close(fgo[0]);
+  close(fdone[1]);
 
   test_init();
   palp_srv_config cfg;
@@ -256,6 +300,38 @@ int main(void) {
   }
   CHECK(fl == 0, "disposed finger lifted within %.0f ms (feedback says inactive; %llu samples seen)",
         (double)(palp_dds_now_ns() - lift_t0) * 1e-6, (unsigned long long)seen);
+
+  /* The finding disposes: measured while their writer lives (it keeps their instances). Before the
+   * server made a flooded finding reader anew (server/server.c, renew_finding_reader), each was an
+   * instance of session 2's reader: 100,000 grew a server by 98 MB (2026-12-06), so these 40,000
+   * ~40 MB; now at most a quarter second of the flood (~5 MB at ~20,000 a second) plus the
+   * allocator's slack. */
+  const long rss_f0 = rss_kb();
+  if (write(fgo[1], "g", 1) != 1) return 1;
+  const int got_f = read(fdone[0], &c, 1) == 1;
+  test_sleep(0.5); /* the main loop takes what arrived last */
+  const long rss_f1 = rss_kb();
+  if (write(fgo[1], "x", 1) != 1) return 1;
+  int status2 = 0;
+  waitpid(child2, &status2, 0);
+  CHECK(got_f && WIFEXITED(status2) && WEXITSTATUS(status2) == 0, "finding flooder exit status %d",
+        WEXITSTATUS(status2));
+  CHECK(rss_f1 - rss_f0 < 16384,
+        "server process memory grew by %ld kB over %d disposes of made-up finding keys, their writer alive (want < 16,384 "
+        "kB; unbounded: ~40,000 kB)", rss_f1 - rss_f0, FINDING_DISPOSES);
+  /* ... and session 2's reader, made anew, still answers its station's mark (a session without an
+   * exercise: refused, with the reason, which is an answer) */
+  palp_FindingStatus fst;
+  while (palp_cli_station_finding_status(&bad, &fst) == 1) {
+  }
+  const int mark = palp_cli_station_mark(&bad, (palp_vec3){0, 0, 0.04}, 1.0);
+  int answered = 0;
+  for (int i = 0; i < 300 && !answered; i++) {
+    answered = palp_cli_station_finding_status(&bad, &fst) == 1 && fst.last_mark_id == (uint32_t)mark;
+    if (!answered) test_sleep(0.01);
+  }
+  CHECK(mark > 0 && answered, "session 2's mark %d after the finding flood is answered within 3 s (%s)", mark,
+        !answered ? "no answer" : fst.last_accepted ? "accepted" : fst.reason);
 
   palp_cli_station_leave(&bad);
   palp_cli_station_leave(&good);
