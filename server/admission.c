@@ -117,9 +117,10 @@ bool palp_srv_admission_admit(palp_srv_admission *a, uint64_t iid, uint64_t writ
   return ok;
 }
 
-void palp_srv_admission_release(palp_srv_admission *a, uint64_t iid) {
+bool palp_srv_admission_release(palp_srv_admission *a, uint64_t iid) {
   pthread_mutex_lock(&a->lock);
   entry *e = map_find(&a->instances, iid);
+  const bool known = e != NULL;
   if (e) {
     uint64_t writer = e->val;
     map_erase(&a->instances, e);
@@ -128,6 +129,7 @@ void palp_srv_admission_release(palp_srv_admission *a, uint64_t iid) {
     if (w && --w->val == 0) map_erase(&a->writers, w);
   }
   pthread_mutex_unlock(&a->lock);
+  return known;
 }
 
 uint64_t palp_srv_admission_refused(palp_srv_admission *a) {

@@ -25,8 +25,9 @@ void palp_srv_admission_destroy(palp_srv_admission *a);
 /* [receive thread, via the topic filter] May instance `iid`, written by writer
  * `writer`, enter the reader cache? Known instances always may. */
 bool palp_srv_admission_admit(palp_srv_admission *a, uint64_t iid, uint64_t writer);
-/* [main thread] The instance went not-alive: its writer may use the slot again. */
-void palp_srv_admission_release(palp_srv_admission *a, uint64_t iid);
+/* [main thread] The instance went not-alive: its writer may use the slot again. Whether the
+ * table held it (a dispose of a key never written passes no filter, so was never admitted). */
+bool palp_srv_admission_release(palp_srv_admission *a, uint64_t iid);
 /* Instances refused by the filter since creation. */
 uint64_t palp_srv_admission_refused(palp_srv_admission *a);
 /* Instances admitted now. */

@@ -118,6 +118,12 @@ struct palp_srv {
   int told_next;
   int stopping; /* closing every session as the server stops: none of them will be scored live */
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
+  /* Disposes of request keys no station wrote (each an instance the request reader keeps while its
+   * writer lives; unbounded: docs/robustness.md): counted, and the writer named (note_request_stray). */
+  atomic_ullong request_strays; /* read by any thread (palp_srv_request_strays) */
+  uint64_t stray_writer_count;
+  dds_instance_handle_t stray_writer;
+  int64_t stray_said_ns;
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
 
@@ -903,11 +909,11 @@ static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reaso
  * carries none) and becomes an instance the reader keeps while its writer lives: ~1 kB each; 100,000
  * in 5 s grew the server by 98 MB (2026-12-06, before this bound). No instance limit can stop it (a
  * reliable reader refusing one stalls delivery, docs/robustness.md), so after this many such disposes
- * the session's finding reader is made anew, at most once per FINDING_READER_RENEW_NS: what it held
+ * the session's finding reader is made anew, at most once per READER_RENEW_NS: what it held
  * of the session's own findings is answered first, and the server's memory stays bounded by what a
  * flood sends in that time. */
-#define FINDING_STRAYS_MAX 256
-#define FINDING_READER_RENEW_NS 250000000LL
+#define STRAY_DISPOSES_MAX 256
+#define READER_RENEW_NS 250000000LL
 
 /* One finding of this session, taken: offered, logged and answered. */
 static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding *f, palp_srv_session_stats *st,
@@ -935,7 +941,7 @@ static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding
   publish_finding_status(s);
 }
 
-/* The session's finding reader made anew (FINDING_STRAYS_MAX): its own findings still held are
+/* The session's finding reader made anew (STRAY_DISPOSES_MAX): its own findings still held are
  * answered first; the strays' instances go with the old reader. */
 static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now_ns) {
   palp_Finding key, buf[16];
@@ -1021,7 +1027,7 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
     if (n < 16) break;
   }
   const int64_t now = palp_dds_now_ns();
-  if (s->finding_strays >= FINDING_STRAYS_MAX && now - s->finding_reader_renewed_ns >= FINDING_READER_RENEW_NS)
+  if (s->finding_strays >= STRAY_DISPOSES_MAX && now - s->finding_reader_renewed_ns >= READER_RENEW_NS)
     renew_finding_reader(srv, s, now);
 }
 
@@ -1509,6 +1515,33 @@ static void handle_station_requests(palp_srv *srv) {
   }
 }
 
+/* A dispose of a request key no station wrote passes the admission filter (it carries no data) and
+ * is an instance of the request reader for as long as its writer lives (~0.6 kB: 40,000 grew a
+ * server by 23 MB, 2026-12-06). Neither an instance bound (a reliable reader refusing one stalls
+ * delivery) nor a new reader (requests are transient-local: the writer's history hands it every
+ * disposed key again) can stop it, so the server says so and names the writer's identity, which
+ * the instructor can revoke and whose machine she can stop: once when one writer's count reaches
+ * STRAY_DISPOSES_MAX, then at most every log_interval while it goes on. */
+static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
+  atomic_fetch_add(&srv->request_strays, 1);
+  if (writer != srv->stray_writer) srv->stray_writer = writer, srv->stray_writer_count = 0;
+  if (++srv->stray_writer_count < STRAY_DISPOSES_MAX) return;
+  const int64_t now = palp_dds_now_ns();
+  if (srv->stray_said_ns && now - srv->stray_said_ns < (int64_t)(srv->cfg.log_interval * 1e9)) return;
+  srv->stray_said_ns = now;
+  palp_srv_requester who;
+  char by[96];
+  if (secured(srv) && palp_srv_requester_of(srv->request_r, writer, &who) == 0)
+    snprintf(by, sizeof by, "%s/%s", palp_dds_id_kind_name(who.kind), who.name);
+  else
+    snprintf(by, sizeof by, "%s", secured(srv) ? "a writer already gone" : "a participant without an identity (DDS Security is off)");
+  palp_logf(srv->log, PALP_LOG_WARN, "%s disposed %llu session-request keys no station wrote (%llu in all): a flood, each "
+            "kept by the server while that writer lives (~0.6 kB); %s", by, (unsigned long long)srv->stray_writer_count,
+            (unsigned long long)atomic_load(&srv->request_strays),
+            secured(srv) ? "revoke that identity (make-classroom-pki.sh DIR revoke KIND/NAME) and stop its machine"
+                         : "run the classroom with DDS Security, so that only its identities may write requests");
+}
+
 static void handle_requests(palp_srv *srv) {
   enum { N = 16 };
   palp_SessionRequest buf[N];
@@ -1584,10 +1617,14 @@ static void handle_requests(palp_srv *srv) {
       /* The instance is gone (disposed or no writers): its writer may register
        * another. Cyclone fills an invalid sample's key fields, so the station id is
        * read from it: dds_instance_get_key scans every instance ever seen. */
-      palp_srv_admission_release(srv->admission, info[i].instance_handle);
+      const bool admitted = palp_srv_admission_release(srv->admission, info[i].instance_handle);
       buf[i].station_id[sizeof buf[i].station_id - 1] = '\0';
       station *st = find_station(srv, buf[i].station_id);
-      if (!st) continue;
+      if (!st) {
+        if (!admitted && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED)
+          note_request_stray(srv, info[i].publication_handle);
+        continue;
+      }
       /* Secured: a dispose or unregister by any writer but the station's own
        * (another identity writing this key) says nothing about the station. */
       if (secured(srv) && info[i].publication_handle != st->writer) {
@@ -2069,6 +2106,8 @@ uint64_t palp_srv_security_refusals(palp_srv *srv, char *who, size_t len) {
 int palp_srv_open_sessions(const palp_srv *srv) { return atomic_load(&srv->session_count); }
 
 uint64_t palp_srv_refused_requests(palp_srv *srv) { return atomic_load(&srv->refused_requests); }
+
+uint64_t palp_srv_request_strays(palp_srv *srv) { return atomic_load(&srv->request_strays); }
 
 static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state, int pw) {
   uint64_t rej = 0;

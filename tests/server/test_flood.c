@@ -7,7 +7,9 @@
  * Then a second one disposes 40,000 made-up keys of the finding topic in the same
  * partition while it lives (session 73): each was an instance of the session's finding
  * reader (~1 kB) until its writer went; the server's memory stays bounded while it
- * floods, and the session's next mark is still answered.
+ * floods, and the session's next mark is still answered. And a third disposes 2,000 made-up
+ * session-request keys: those the server cannot bound (docs/robustness.md), so it counts them and
+ * says in its log who writes them.
  *
  * The flooder is a child process (fork before any DDS call) with a participant of
  * its own, as a real attacker would be; the server and the good station run here. */
@@ -19,7 +21,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "../tmpdir.h"
 #include "harness.h"
+#include "palp_log.h"
 #include "validate.h"
 
 #define DOMAIN 170
@@ -28,6 +32,7 @@
 #define DISPOSES 5000
 #define BAD_ENUMS 2000
 #define FINDING_DISPOSES 40000
+#define REQUEST_DISPOSES 2000
 
 static long rss_kb(void) {
   FILE *f = fopen("/proc/self/status", "r");
@@ -124,7 +129,41 @@ static int finding_flooder(int go_fd, int done_fd) {
   return ok == FINDING_DISPOSES ? 0 : 8;
 }
 
+/* The third flooder (child): disposes of made-up session-request keys, then stays until told to go. */
+static int request_flooder(int go_fd, int done_fd) {
+  test_init();
+  dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
+  if (pp < 0) return 2;
+  dds_entity_t w = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_REQUEST),
+                                          PALP_TOPIC_SESSION_REQUEST);
+  if (w < 0) return 4;
+  char c;
+  if (read(go_fd, &c, 1) != 1) return 5;
+  palp_SessionRequest r;
+  memset(&r, 0, sizeof r);
+  int ok = 0;
+  for (int i = 0; i < REQUEST_DISPOSES; i++) {
+    snprintf(r.station_id, sizeof r.station_id, "flood/%d", i);
+    ok += dds_dispose(w, &r) == 0;
+    if (i % 200 == 199) test_sleep(0.01);
+  }
+  test_sleep(0.5); /* delivered */
+  if (write(done_fd, "r", 1) != 1) return 6;
+  if (read(go_fd, &c, 1) != 1) return 7;
+  dds_delete(pp);
+  return ok == REQUEST_DISPOSES ? 0 : 8;
+}
+
 /* ---- the server side (parent) --------------------------------------------------- */
+
+static int log_has(const char *path, const char *needle) {
+  FILE *f = fopen(path, "r");
+  char buf[2048];
+  int found = 0;
+  while (f && !found && fgets(buf, sizeof buf, f)) found = strstr(buf, needle) != NULL;
+  if (f) fclose(f);
+  return found;
+}
 
 typedef struct tick_trace {
   uint64_t frames;
@@ -164,8 +203,8 @@ static void trace_feedback(palp_cli_station *st, tick_trace *t, double seconds, 
 }
 
 int main(void) {
-  int go[2], done[2], fgo[2], fdone[2];
-  if (pipe(go) || pipe(done) || pipe(fgo) || pipe(fdone)) return 1;
+  int go[2], done[2], fgo[2], fdone[2], rgo[2], rdone[2];
+  if (pipe(go) || pipe(done) || pipe(fgo) || pipe(fdone) || pipe(rgo) || pipe(rdone)) return 1;
   pid_t child = fork();
   if (child == 0) {
     close(go[1]);
@@ -178,10 +217,18 @@ int main(void) {
     close(fdone[0]);
     _exit(finding_flooder(fgo[0], fdone[1]));
   }
+  pid_t child3 = fork();
+  if (child3 == 0) {
+    close(rgo[1]);
+    close(rdone[0]);
+    _exit(request_flooder(rgo[0], rdone[1]));
+  }
   close(go[0]);
   close(done[1]);
   close(fgo[0]);
   close(fdone[1]);
+  close(rgo[0]);
+  close(rdone[1]);
 
   test_init();
   palp_srv_config cfg;
@@ -193,8 +240,16 @@ int main(void) {
   cfg.tick_priority = 20;
   cfg.dds_log_lines = 5;
   cfg.dds_log_window = 60;
+  /* the server's log in a file, for its words about the request flood */
+  char log_path[512];
+  palp_test_tmp(log_path, sizeof log_path, "palp-flood-XXXXXX");
+  const int log_fd = mkstemp(log_path);
+  palp_log plog;
+  REQUIRE(log_fd >= 0 && palp_log_init(&plog, "palp-server", PALP_LOG_INFO, log_path) == 0, "server log %s", log_path);
+  close(log_fd);
+  const palp_srv_def def = {.cfg = cfg, .verbose = 1, .log = &plog};
   test_server ts = {0};
-  test_server_start(&ts, &cfg);
+  test_server_start_def(&ts, &def);
   palp_cli_station good, bad;
   test_station_join(&good, DOMAIN, "good", palp_ROLE_TRAINEE, 1, 0, 1, 0);
   test_station_join(&bad, DOMAIN, "bad", palp_ROLE_TRAINEE, 2, 0, 1, 0);
@@ -333,12 +388,28 @@ int main(void) {
   CHECK(mark > 0 && answered, "session 2's mark %d after the finding flood is answered within 3 s (%s)", mark,
         !answered ? "no answer" : fst.last_accepted ? "accepted" : fst.reason);
 
+  /* The request disposes: counted, and the server's log says who writes them and what to do. */
+  if (write(rgo[1], "g", 1) != 1) return 1;
+  const int got_r = read(rdone[0], &c, 1) == 1;
+  const uint64_t strays = palp_srv_request_strays(ts.srv);
+  const int said = log_has(log_path, "a participant without an identity (DDS Security is off) disposed 256 "
+                                     "session-request keys no station wrote");
+  if (write(rgo[1], "x", 1) != 1) return 1;
+  int status3 = 0;
+  waitpid(child3, &status3, 0);
+  CHECK(got_r && WIFEXITED(status3) && WEXITSTATUS(status3) == 0, "request flooder exit status %d", WEXITSTATUS(status3));
+  CHECK(strays == REQUEST_DISPOSES, "%llu of %d disposes of made-up request keys counted (reliable: all)",
+        (unsigned long long)strays, REQUEST_DISPOSES);
+  CHECK(said, "the server's log names the flood's writer and what to do (%s)", log_path);
+
   palp_cli_station_leave(&bad);
   palp_cli_station_leave(&good);
   test_sleep(0.2);
   palp_cli_station_close(&bad);
   palp_cli_station_close(&good);
   test_server_stop(&ts);
+  palp_log_close(&plog);
+  if (!palp_test_failures) unlink(log_path); /* kept for a failed run */
   fprintf(stderr, "%d failure(s)\n", palp_test_failures);
   return palp_test_failures ? 1 : 0;
 }
