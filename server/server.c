@@ -976,10 +976,13 @@ static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now
   /* said once a session at warning level (a peer writes here); the later ones in the debug log */
   if (s->finding_reader_renewals == 1)
     palp_logf(srv->log, PALP_LOG_WARN, "session %u: %llu disposes of other sessions' finding keys reached its "
-              "reader (each kept while its writer lives: a flood); the reader was made anew to drop them, as it "
-              "will be at most four times a second while they go on (a finding sent in that instant may go "
+              "reader (each kept while its writer lives: a flood%s%s%s); the reader was made anew to drop them, as "
+              "it will be at most four times a second while they go on (a finding sent in that instant may go "
               "unanswered)",
-              s->id, (unsigned long long)strays);
+              s->id, (unsigned long long)strays,
+              /* secured, only the session's own trainee may write in its partition (docs/security.md) */
+              secured(srv) ? ", written by trainee/" : "", secured(srv) ? s->trainee_name : "",
+              secured(srv) ? ", the only identity that may write in this session's partition" : "");
   else if (now_ns - s->finding_renewal_said_ns >= (int64_t)(srv->cfg.log_interval * 1e9)) /* a flood goes on */
     logf_(srv, "session %u: finding reader made anew (%llu times), %llu stray disposes in all", s->id,
           (unsigned long long)s->finding_reader_renewals, (unsigned long long)s->finding_strays_total);
