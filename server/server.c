@@ -914,6 +914,7 @@ static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reaso
  * flood sends in that time. */
 #define STRAY_DISPOSES_MAX 256
 #define READER_RENEW_NS 250000000LL
+#define STRAY_DISPOSES_HARD 4096 /* made anew at once however soon: a fast flood's bound */
 
 /* One finding of this session, taken: offered, logged and answered. */
 static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding *f, palp_srv_session_stats *st,
@@ -977,8 +978,8 @@ static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now
   if (s->finding_reader_renewals == 1)
     palp_logf(srv->log, PALP_LOG_WARN, "session %u: %llu disposes of other sessions' finding keys reached its "
               "reader (each kept while its writer lives: a flood%s%s%s); the reader was made anew to drop them, as "
-              "it will be at most four times a second while they go on (a finding sent in that instant may go "
-              "unanswered)",
+              "it will be whenever 256 more come (at most four times a second, unless 4,096 do; a finding sent in "
+              "that instant may go unanswered)",
               s->id, (unsigned long long)strays,
               /* secured, only the session's own trainee may write in its partition (docs/security.md) */
               secured(srv) ? ", written by trainee/" : "", secured(srv) ? s->trainee_name : "",
@@ -1030,7 +1031,8 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
     if (n < 16) break;
   }
   const int64_t now = palp_dds_now_ns();
-  if (s->finding_strays >= STRAY_DISPOSES_MAX && now - s->finding_reader_renewed_ns >= READER_RENEW_NS)
+  if (s->finding_strays >= STRAY_DISPOSES_MAX &&
+      (now - s->finding_reader_renewed_ns >= READER_RENEW_NS || s->finding_strays >= STRAY_DISPOSES_HARD))
     renew_finding_reader(srv, s, now);
 }
 

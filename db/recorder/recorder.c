@@ -101,6 +101,12 @@ typedef struct rsession {
   int64_t foreign; /* contacts and findings naming it from a writer outside its partition: not recorded */
 } rsession;
 
+/* A flood of disposes of made-up finding keys (docs/robustness.md): the findings reader is made anew
+ * after this many, at most once per FINDING_RENEW_NS [ns]. */
+#define FINDING_STRAYS_MAX 256
+#define FINDING_RENEW_NS 250000000LL
+#define FINDING_STRAYS_HARD 4096 /* made anew at once however soon: a fast flood's bound */
+
 /* How long a session whose state's writer lapsed is kept open for its server to come back
  * [ns]: a server its machine stopped for a second or two lapses as a dead one does and
  * goes on with its sessions (docs/station.md, "A stalled server"); ended earlier, the
@@ -151,6 +157,10 @@ typedef struct recorder {
    * come from that session's partition (a trainee may write only in her own; idl/palp_dds_origin.h). */
   palp_dds_origin origin;
   int64_t foreign_samples;
+  /* Disposes of findings keys of sessions not recorded here: each an instance the findings reader keeps
+   * while its writer lives (a dispose passes no filter); past a bound the reader is made anew. */
+  int64_t finding_strays, finding_strays_total, finding_renewals;
+  int64_t finding_renewed_ns, finding_renewal_said_ns;
 } recorder;
 
 /* A session opens or ends in this log: its streams pass the gate as long as it is open here. */
@@ -1107,6 +1117,10 @@ int main(int argc, char **argv) {
         for (int i = 0; i < n; i++) {
           if (!info[i].valid_data) {
             if (k == RD_STATE && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
+            /* Cyclone fills an invalid sample's key: a dispose naming no session recorded here */
+            if (k == RD_FINDING && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
+                !find_session(r, *(const uint32_t *)samples[i], 0))
+              r->finding_strays++;
             continue;
           }
           if ((k == RD_CONTACT && !from_its_partition(r, rd[k], samples[i], &info[i], "contact")) ||
@@ -1133,6 +1147,34 @@ int main(int argc, char **argv) {
       if (k == RD_CATALOGUE) resolve_pending(r, 0, 0);
     }
     resolve_pending(r, 0, 0);
+    const int64_t renew_ns = palp_dds_now_ns();
+    if (r->finding_strays >= FINDING_STRAYS_MAX &&
+        (renew_ns - r->finding_renewed_ns >= FINDING_RENEW_NS || r->finding_strays >= FINDING_STRAYS_HARD)) {
+      /* As palp-server does with a session's (renew_finding_reader): the findings are volatile, so the new
+       * reader is handed none of the flood again; a finding in flight in that instant is lost, and its
+       * answer is then logged as one whose finding this recorder did not see. */
+      dds_waitset_detach(ws, rd[RD_FINDING]);
+      dds_delete(rd[RD_FINDING]);
+      rd[RD_FINDING] = reader_deep(r, sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+      if (rd[RD_FINDING] > 0) {
+        dds_set_status_mask(rd[RD_FINDING], DDS_DATA_AVAILABLE_STATUS);
+        dds_waitset_attach(ws, rd[RD_FINDING], RD_FINDING);
+      }
+      r->finding_strays_total += r->finding_strays;
+      r->finding_renewals++;
+      r->finding_renewed_ns = renew_ns;
+      if (rd[RD_FINDING] <= 0)
+        palp_log_error(&plog, "the findings reader could not be made anew (%s): findings are no longer recorded",
+                       dds_strretcode(rd[RD_FINDING]));
+      else if (r->finding_renewals == 1 || renew_ns - r->finding_renewal_said_ns >= 10000000000LL) {
+        palp_log_warn(&plog, "%lld disposes of finding keys of sessions not recorded here (%lld in all; each kept "
+                             "while its writer lives: a flood); the findings reader was made anew to drop them, as "
+                             "it will be whenever 256 more come (at most four times a second, unless 4,096 do)",
+                      (long long)r->finding_strays, (long long)r->finding_strays_total);
+        r->finding_renewal_said_ns = renew_ns;
+      }
+      r->finding_strays = 0;
+    }
     const dds_time_t now = dds_time();
     for (int i = 0; i < MAX_SESSIONS; i++)
       if (r->s[i].open) settle_findings(r, &r->s[i], 0);
@@ -1173,9 +1215,11 @@ int main(int argc, char **argv) {
   palp_db_writer_close(r->w);
   palp_log_info(&plog,
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
-          "%lld of a writer outside their session's partition, %lld exercises refused%s%s\n",
+          "%lld of a writer outside their session's partition, %lld disposes of other sessions' finding keys (the "
+          "findings reader made anew %lld times), %lld exercises refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
-          (long long)r->foreign_samples, (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "", st.last_error);
+          (long long)r->foreign_samples, (long long)(r->finding_strays_total + r->finding_strays),
+          (long long)r->finding_renewals, (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "", st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) {
     free(r->ph[i].rest);
     free(r->ph[i].scene_json);
