@@ -254,6 +254,11 @@ struct palp_web_hub {
 
   /* DDS-thread state */
   palp_dds_origin origin; /* where each contact's and finding's writer writes (from_its_partition) */
+  /* Disposes of finding keys of sessions not in the table: each an instance the findings reader keeps
+   * while its writer lives (a dispose passes no filter); past a bound it is made anew (renew_findings). */
+  dds_entity_t finding_topic_r; /* the findings reader's own, gated topic entity */
+  uint64_t finding_strays, finding_renewals;
+  int64_t finding_renewed_ns;
   phantom ph[PALP_WEB_MAX_PHANTOMS];
   session s[PALP_WEB_MAX_SESSIONS];
   server_status srv[MAX_SERVERS];
@@ -1834,6 +1839,23 @@ static int from_its_partition(palp_web_hub *h, dds_entity_t rd, const void *samp
   return 0;
 }
 
+/* A flood of disposes of made-up finding keys: the findings reader made anew past 256 of them, at
+ * most four times a second unless 4,096 come (as palp-server and palp-recorder do; docs/robustness.md).
+ * The findings are volatile, so the new reader is handed none of the flood again; a finding in
+ * flight in that instant is lost to the dashboard (its answer still comes). */
+static dds_entity_t make_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
+static void renew_findings(palp_web_hub *h, int64_t now) {
+  if (h->finding_r <= 0 || h->finding_strays < 256 ||
+      (now - h->finding_renewed_ns < 250000000LL && h->finding_strays < 4096))
+    return;
+  dds_delete(h->finding_r);
+  h->finding_r = make_reader(h->sub, h->finding_topic_r, PALP_TOPIC_FINDING);
+  h->finding_renewed_ns = now;
+  h->finding_renewals++;
+  h->finding_strays = 0;
+  h->stats.finding_renewals = h->finding_renewals;
+}
+
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
   if (rd <= 0) return 0;
   int total = 0, n;
@@ -1844,6 +1866,10 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data && check && !from_its_partition(h, rd, ptr[i], &info[i])) continue;
+      int slot;
+      if (!info[i].valid_data && rd == h->finding_r && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
+          !find_session(h, *(const uint32_t *)ptr[i], &slot)) /* Cyclone fills an invalid sample's key */
+        h->finding_strays++, h->stats.finding_strays++;
       if (info[i].valid_data) {
         on(h, ptr[i]);
         (*counter)++;
@@ -1963,6 +1989,7 @@ static void *hub_main(void *arg) {
       drain(h, h->session_log_r, (sample_fn)on_session_log, NULL, &h->stats.session_logs);
       if (h->def.answers) {
         drain(h, h->finding_r, (sample_fn)on_finding, NULL, &h->stats.findings_read);
+        renew_findings(h, now);
         tend_answers(h, now);
       }
       news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
@@ -2146,7 +2173,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     dds_entity_t only[PALP_TOPIC_COUNT] = {0};
     static const palp_dds_topic_kind finding[] = {PALP_TOPIC_FINDING};
     only[PALP_TOPIC_FINDING] = palp_dds_create_topic(h->pp, PALP_TOPIC_FINDING);
-    h->finding_r = only[PALP_TOPIC_FINDING];
+    h->finding_r = h->finding_topic_r = only[PALP_TOPIC_FINDING];
     if (h->finding_r > 0) {
       const int rc = palp_dds_gate_filter_topics(&h->gate, only, finding, 1);
       h->finding_r = rc < 0 ? rc : make_reader(h->sub, only[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);

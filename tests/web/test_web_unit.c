@@ -1249,6 +1249,35 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
         "leave no instance in the bridge's readers (%d did; %d of 251 written)", rbogus, rwritten);
   CHECK(palp_web_hub_has_instance(h, PALP_TOPIC_DEBRIEF, fresh, 0) == 1,
         "a debrief of a session that just closed still reaches the bridge");
+  /* Disposes of made-up finding keys pass the gate (no sample to filter) and were each an instance of
+   * the findings reader while their writer lived (session 73: it is made anew past 256 of them): of
+   * 1,000, at most the 744 after the first renewal stay; all 1,000 without it. Its session's next
+   * finding still reaches the bridge's new reader. */
+  palp_web_hub_stats fb, fa;
+  palp_web_hub_stats_get(h, &fb);
+  for (uint32_t i = 0; i < 1000; i++) {
+    palp_Finding fd;
+    memset(&fd, 0, sizeof fd);
+    fd.session_id = 20000 + i;
+    dds_dispose(rw[4], &fd);
+  }
+  dds_sleepfor(DDS_MSECS(600));
+  int fheld = 0;
+  for (uint32_t i = 0; i < 1000; i++) fheld += palp_web_hub_has_instance(h, PALP_TOPIC_FINDING, 20000 + i, 0) == 1;
+  palp_web_hub_stats_get(h, &fa);
+  printf("finding dispose flood: 1000 made-up keys disposed, %d instances held, %llu counted, reader made anew %llu "
+         "times\n", fheld, (unsigned long long)(fa.finding_strays - fb.finding_strays),
+         (unsigned long long)(fa.finding_renewals - fb.finding_renewals));
+  CHECK(fheld <= 744 && fa.finding_renewals > fb.finding_renewals,
+        "1,000 disposes of made-up finding keys: the findings reader made anew (%llu times), %d of them held (<= 744)",
+        (unsigned long long)(fa.finding_renewals - fb.finding_renewals), fheld);
+  palp_Finding mine;
+  memset(&mine, 0, sizeof mine);
+  mine.session_id = own, mine.mark_id = 77, mine.op = palp_FINDING_WITHDRAW;
+  CHECK(dds_write(rw[4], &mine) == 0, "a finding of the bridge's own session written after the flood");
+  dds_sleepfor(DDS_MSECS(300));
+  CHECK(palp_web_hub_has_instance(h, PALP_TOPIC_FINDING, own, 0) == 1,
+        "... and it reaches the findings reader made anew");
   for (int k = 0; k < 5; k++) dds_delete(rw[k]);
   for (int k = 0; k < 4; k++) dds_delete(w[k]);
 }
