@@ -1866,9 +1866,10 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data && check && !from_its_partition(h, rd, ptr[i], &info[i])) continue;
-      int slot;
+      /* a dispose of a key whose session the gate would not pass (never heard open, so not a station
+       * that leaves a session that just closed); Cyclone fills an invalid sample's key */
       if (!info[i].valid_data && rd == h->finding_r && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
-          !find_session(h, *(const uint32_t *)ptr[i], &slot)) /* Cyclone fills an invalid sample's key */
+          !palp_dds_gate_passes(&h->gate, *(const uint32_t *)ptr[i]))
         h->finding_strays++, h->stats.finding_strays++;
       if (info[i].valid_data) {
         on(h, ptr[i]);

@@ -1117,9 +1117,10 @@ int main(int argc, char **argv) {
         for (int i = 0; i < n; i++) {
           if (!info[i].valid_data) {
             if (k == RD_STATE && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
-            /* Cyclone fills an invalid sample's key: a dispose naming no session recorded here */
+            /* a dispose of a key whose session the gate would not pass (never heard open, so not a
+             * station that leaves a session that just closed); Cyclone fills an invalid sample's key */
             if (k == RD_FINDING && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
-                !find_session(r, *(const uint32_t *)samples[i], 0))
+                !palp_dds_gate_passes(&r->gate, *(const uint32_t *)samples[i]))
               r->finding_strays++;
             continue;
           }
@@ -1167,7 +1168,7 @@ int main(int argc, char **argv) {
         palp_log_error(&plog, "the findings reader could not be made anew (%s): findings are no longer recorded",
                        dds_strretcode(rd[RD_FINDING]));
       else if (r->finding_renewals == 1 || renew_ns - r->finding_renewal_said_ns >= 10000000000LL) {
-        palp_log_warn(&plog, "%lld disposes of finding keys of sessions not recorded here (%lld in all; each kept "
+        palp_log_warn(&plog, "%lld disposes of finding keys of sessions never heard open (%lld in all; each kept "
                              "while its writer lives: a flood); the findings reader was made anew to drop them, as "
                              "it will be whenever 256 more come (at most four times a second, unless 4,096 do)",
                       (long long)r->finding_strays, (long long)r->finding_strays_total);
@@ -1215,11 +1216,12 @@ int main(int argc, char **argv) {
   palp_db_writer_close(r->w);
   palp_log_info(&plog,
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
-          "%lld of a writer outside their session's partition, %lld disposes of other sessions' finding keys (the "
-          "findings reader made anew %lld times), %lld exercises refused%s%s\n",
+          "%lld of a writer outside their session's partition, %lld disposes of finding keys of sessions never "
+          "heard open (the findings reader made anew %lld times), %lld exercises refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
           (long long)r->foreign_samples, (long long)(r->finding_strays_total + r->finding_strays),
-          (long long)r->finding_renewals, (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "", st.last_error);
+          (long long)r->finding_renewals, (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "",
+          st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) {
     free(r->ph[i].rest);
     free(r->ph[i].scene_json);
