@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../open_session.h"
 #include "palp_dds.h"
 
 int main(int argc, char **argv) {
@@ -18,21 +19,8 @@ int main(int argc, char **argv) {
     return 2;
   }
   const dds_entity_t pp = dds_create_participant((dds_domainid_t)atoi(argv[1]), NULL, NULL);
-  const dds_entity_t state_r =
-      palp_dds_create_reader(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
   palp_SessionState st;
-  int found = 0;
-  for (int i = 0; i < 200 && !found && state_r > 0; i++) {
-    void *ptr[16] = {NULL};
-    dds_sample_info_t info[16];
-    const int n = dds_read(state_r, ptr, info, 16, 16);
-    for (int k = 0; k < n && !found; k++) {
-      const palp_SessionState *m = ptr[k];
-      if (info[k].valid_data && m->phase == palp_PHASE_OPEN && !strcmp(m->trainee_name, argv[2])) st = *m, found = 1;
-    }
-    if (n > 0) dds_return_loan(state_r, ptr, n);
-    if (!found) dds_sleepfor(DDS_MSECS(50));
-  }
+  const int found = palp_test_open_session(pp, argv[2], 10.0, &st);
   if (!found) {
     fprintf(stderr, "finding_writer: no open session of %s within 10 s\n", argv[2]);
     return 1;
