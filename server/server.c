@@ -26,6 +26,7 @@
 #include "palp_dds_refusals.h"
 #include "palp_dds_strangers.h"
 #include "palp_dds_security.h"
+#include "palp_dds_strays.h"
 #include "session.h"
 #include "ticker.h"
 
@@ -905,16 +906,10 @@ static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reaso
  * station cannot hold the main thread; the rest wait in the (bounded) reader. */
 #define FINDINGS_PER_PASS 64
 
-/* A dispose of a made-up finding key passes the reader's filter (Cyclone filters data, and a dispose
- * carries none) and becomes an instance the reader keeps while its writer lives: ~1 kB each; 100,000
- * in 5 s grew the server by 98 MB (2026-12-06, before this bound). No instance limit can stop it (a
- * reliable reader refusing one stalls delivery, docs/robustness.md), so after this many such disposes
- * the session's finding reader is made anew, at most once per READER_RENEW_NS: what it held
- * of the session's own findings is answered first, and the server's memory stays bounded by what a
- * flood sends in that time. */
-#define STRAY_DISPOSES_MAX 256
-#define READER_RENEW_NS 250000000LL
-#define STRAY_DISPOSES_HARD 4096 /* made anew at once however soon: a fast flood's bound */
+/* A dispose of a made-up finding key passes the reader's filter and becomes an instance the reader
+ * keeps while its writer lives: 100,000 in 5 s grew the server by 98 MB (2026-12-06, before this
+ * bound). The session's finding reader is made anew when idl/palp_dds_strays.h says so: what it held
+ * of the session's own findings is answered first. */
 
 /* One finding of this session, taken: offered, logged and answered. */
 static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding *f, palp_srv_session_stats *st,
@@ -942,7 +937,7 @@ static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding
   publish_finding_status(s);
 }
 
-/* The session's finding reader made anew (STRAY_DISPOSES_MAX): its own findings still held are
+/* The session's finding reader made anew (palp_dds_strays_renew_due): its own findings still held are
  * answered first; the strays' instances go with the old reader. */
 static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now_ns) {
   palp_Finding key, buf[16];
@@ -969,7 +964,8 @@ static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now
   s->finding_reader_renewals++;
   if (s->finding_reader <= 0 || s->finding_rc <= 0) {
     palp_logf(srv->log, PALP_LOG_ERROR, "session %u: its finding reader could not be made anew (%s): its findings "
-              "go unanswered from now on", s->id, dds_strretcode(s->finding_reader <= 0 ? s->finding_reader : s->finding_rc));
+              "go unanswered from now on",
+              s->id, dds_strretcode(s->finding_reader <= 0 ? s->finding_reader : s->finding_rc));
     if (s->finding_reader > 0) dds_delete(s->finding_reader);
     s->finding_reader = s->finding_rc = 0;
     return;
@@ -978,12 +974,13 @@ static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now
   if (s->finding_reader_renewals == 1)
     palp_logf(srv->log, PALP_LOG_WARN, "session %u: %llu disposes of other sessions' finding keys reached its "
               "reader (each kept while its writer lives: a flood%s%s%s); the reader was made anew to drop them, as "
-              "it will be whenever 256 more come (at most four times a second, unless 4,096 do; a finding sent in "
-              "that instant may go unanswered)",
+              "it will be whenever %d more come (at most every %.2f s, unless %d do; a finding sent in that "
+              "instant may go unanswered)",
               s->id, (unsigned long long)strays,
               /* secured, only the session's own trainee may write in its partition (docs/security.md) */
               secured(srv) ? ", written by trainee/" : "", secured(srv) ? s->trainee_name : "",
-              secured(srv) ? ", the only identity that may write in this session's partition" : "");
+              secured(srv) ? ", the only identity that may write in this session's partition" : "",
+              PALP_DDS_STRAYS_MIN, PALP_DDS_RENEW_NS * 1e-9, PALP_DDS_STRAYS_HARD);
   else if (now_ns - s->finding_renewal_said_ns >= (int64_t)(srv->cfg.log_interval * 1e9)) /* a flood goes on */
     logf_(srv, "session %u: finding reader made anew (%llu times), %llu stray disposes in all", s->id,
           (unsigned long long)s->finding_reader_renewals, (unsigned long long)s->finding_strays_total);
@@ -1031,9 +1028,7 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
     if (n < 16) break;
   }
   const int64_t now = palp_dds_now_ns();
-  if (s->finding_strays >= STRAY_DISPOSES_MAX &&
-      (now - s->finding_reader_renewed_ns >= READER_RENEW_NS || s->finding_strays >= STRAY_DISPOSES_HARD))
-    renew_finding_reader(srv, s, now);
+  if (palp_dds_strays_renew_due(s->finding_strays, now, s->finding_reader_renewed_ns)) renew_finding_reader(srv, s, now);
 }
 
 static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason) {
@@ -1526,11 +1521,11 @@ static void handle_station_requests(palp_srv *srv) {
  * delivery) nor a new reader (requests are transient-local: the writer's history hands it every
  * disposed key again) can stop it, so the server says so and names the writer's identity, which
  * the instructor can revoke and whose machine she can stop: once when one writer's count reaches
- * STRAY_DISPOSES_MAX, then at most every log_interval while it goes on. */
+ * PALP_DDS_STRAYS_MIN, then at most every log_interval while it goes on. */
 static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
   atomic_fetch_add(&srv->request_strays, 1);
   if (writer != srv->stray_writer) srv->stray_writer = writer, srv->stray_writer_count = 0;
-  if (++srv->stray_writer_count < STRAY_DISPOSES_MAX) return;
+  if (++srv->stray_writer_count < PALP_DDS_STRAYS_MIN) return;
   const int64_t now = palp_dds_now_ns();
   if (srv->stray_said_ns && now - srv->stray_said_ns < (int64_t)(srv->cfg.log_interval * 1e9)) return;
   srv->stray_said_ns = now;
@@ -1539,9 +1534,10 @@ static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
   if (secured(srv) && palp_srv_requester_of(srv->request_r, writer, &who) == 0)
     snprintf(by, sizeof by, "%s/%s", palp_dds_id_kind_name(who.kind), who.name);
   else
-    snprintf(by, sizeof by, "%s", secured(srv) ? "a writer already gone" : "a participant without an identity (DDS Security is off)");
-  palp_logf(srv->log, PALP_LOG_WARN, "%s disposed %llu session-request keys no station wrote (%llu in all): a flood, each "
-            "kept by the server while that writer lives (~0.6 kB); %s", by, (unsigned long long)srv->stray_writer_count,
+    snprintf(by, sizeof by, "%s",
+             secured(srv) ? "a writer already gone" : "a participant without an identity (DDS Security is off)");
+  palp_logf(srv->log, PALP_LOG_WARN, "%s disposed %llu session-request keys no station wrote (%llu in all): a flood, "
+            "each kept by the server while that writer lives (~0.6 kB); %s", by, (unsigned long long)srv->stray_writer_count,
             (unsigned long long)atomic_load(&srv->request_strays),
             secured(srv) ? "revoke that identity (make-classroom-pki.sh DIR revoke KIND/NAME) and stop its machine"
                          : "run the classroom with DDS Security, so that only its identities may write requests");

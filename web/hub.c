@@ -19,6 +19,7 @@
 #include "palp_dds.h"
 #include "palp_dds_gate.h"
 #include "palp_dds_origin.h"
+#include "palp_dds_strays.h"
 #include "palp_dds_log_view.h"
 #include "palp_dds_strangers.h"
 #include "palp_finding_answers.h"
@@ -1839,15 +1840,13 @@ static int from_its_partition(palp_web_hub *h, dds_entity_t rd, const void *samp
   return 0;
 }
 
-/* A flood of disposes of made-up finding keys: the findings reader made anew past 256 of them, at
- * most four times a second unless 4,096 come (as palp-server and palp-recorder do; docs/robustness.md).
+/* A flood of disposes of made-up finding keys: the findings reader made anew when
+ * idl/palp_dds_strays.h says so (as palp-server and palp-recorder do; docs/robustness.md).
  * The findings are volatile, so the new reader is handed none of the flood again; a finding in
  * flight in that instant is lost to the dashboard (its answer still comes). */
 static dds_entity_t make_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 static void renew_findings(palp_web_hub *h, int64_t now) {
-  if (h->finding_r <= 0 || h->finding_strays < 256 ||
-      (now - h->finding_renewed_ns < 250000000LL && h->finding_strays < 4096))
-    return;
+  if (h->finding_r <= 0 || !palp_dds_strays_renew_due(h->finding_strays, now, h->finding_renewed_ns)) return;
   dds_delete(h->finding_r);
   h->finding_r = make_reader(h->sub, h->finding_topic_r, PALP_TOPIC_FINDING);
   h->finding_renewed_ns = now;

@@ -37,6 +37,7 @@
 #include "palp_dds.h"
 #include "palp_dds_gate.h"
 #include "palp_dds_origin.h"
+#include "palp_dds_strays.h"
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "palp_finding_answers.h"
@@ -100,12 +101,6 @@ typedef struct rsession {
   dds_time_t lost_since; /* its state's writer lapsed then (0: alive); ended as lost RECORDER_SERVER_GRACE later */
   int64_t foreign; /* contacts and findings naming it from a writer outside its partition: not recorded */
 } rsession;
-
-/* A flood of disposes of made-up finding keys (docs/robustness.md): the findings reader is made anew
- * after this many, at most once per FINDING_RENEW_NS [ns]. */
-#define FINDING_STRAYS_MAX 256
-#define FINDING_RENEW_NS 250000000LL
-#define FINDING_STRAYS_HARD 4096 /* made anew at once however soon: a fast flood's bound */
 
 /* How long a session whose state's writer lapsed is kept open for its server to come back
  * [ns]: a server its machine stopped for a second or two lapses as a dead one does and
@@ -1149,8 +1144,7 @@ int main(int argc, char **argv) {
     }
     resolve_pending(r, 0, 0);
     const int64_t renew_ns = palp_dds_now_ns();
-    if (r->finding_strays >= FINDING_STRAYS_MAX &&
-        (renew_ns - r->finding_renewed_ns >= FINDING_RENEW_NS || r->finding_strays >= FINDING_STRAYS_HARD)) {
+    if (palp_dds_strays_renew_due((uint64_t)r->finding_strays, renew_ns, r->finding_renewed_ns)) {
       /* As palp-server does with a session's (renew_finding_reader): the findings are volatile, so the new
        * reader is handed none of the flood again; a finding in flight in that instant is lost, and its
        * answer is then logged as one whose finding this recorder did not see. */
@@ -1170,8 +1164,9 @@ int main(int argc, char **argv) {
       else if (r->finding_renewals == 1 || renew_ns - r->finding_renewal_said_ns >= 10000000000LL) {
         palp_log_warn(&plog, "%lld disposes of finding keys of sessions never heard open (%lld in all; each kept "
                              "while its writer lives: a flood); the findings reader was made anew to drop them, as "
-                             "it will be whenever 256 more come (at most four times a second, unless 4,096 do)",
-                      (long long)r->finding_strays, (long long)r->finding_strays_total);
+                             "it will be whenever %d more come (at most every %.2f s, unless %d do)",
+                      (long long)r->finding_strays, (long long)r->finding_strays_total, PALP_DDS_STRAYS_MIN,
+                      PALP_DDS_RENEW_NS * 1e-9, PALP_DDS_STRAYS_HARD);
         r->finding_renewal_said_ns = renew_ns;
       }
       r->finding_strays = 0;
