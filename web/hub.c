@@ -255,7 +255,7 @@ struct palp_web_hub {
 
   /* DDS-thread state */
   palp_dds_origin origin; /* where each contact's and finding's writer writes (from_its_partition) */
-  /* Disposes of finding keys of sessions not in the table: each an instance the findings reader keeps
+  /* Disposes of finding keys of sessions never heard open: each an instance the findings reader keeps
    * while its writer lives (a dispose passes no filter); past a bound it is made anew (renew_findings). */
   dds_entity_t finding_topic_r; /* the findings reader's own, gated topic entity */
   uint64_t finding_strays, finding_renewals;
