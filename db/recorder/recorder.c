@@ -152,7 +152,7 @@ typedef struct recorder {
    * come from that session's partition (a trainee may write only in her own; idl/palp_dds_origin.h). */
   palp_dds_origin origin;
   int64_t foreign_samples;
-  /* Disposes of findings keys of sessions not recorded here: each an instance the findings reader keeps
+  /* Disposes of finding keys of sessions never heard open: each an instance the findings reader keeps
    * while its writer lives (a dispose passes no filter); past a bound the reader is made anew. */
   int64_t finding_strays, finding_strays_total, finding_renewals;
   int64_t finding_renewed_ns, finding_renewal_said_ns;
@@ -737,13 +737,15 @@ static int from_its_partition(recorder *r, dds_entity_t reader, const void *samp
   if (v == PALP_DDS_ORIGIN_SAME) return 1;
   r->foreign_samples++;
   if (s->foreign++ == 0) {
-    const char *from = palp_dds_origin_partition(&r->origin, reader, info);
+    const char *from = v == PALP_DDS_ORIGIN_UNKNOWN ? NULL : palp_dds_origin_partition(&r->origin, reader, info);
+    char where[96];
+    if (!from) snprintf(where, sizeof where, "no longer matched (its partition unknown)");
+    else if (!from[0]) snprintf(where, sizeof where, "in several or no partitions");
+    else snprintf(where, sizeof where, "in partition %s", from);
     palp_log_warn(r->log,
-                  "session %u: a %s naming it came from a writer %s%s%s, not its partition %s: not recorded, nor "
-                  "any such sample of it (counted at its end; someone forges its session id)",
-                  sid, what, v == PALP_DDS_ORIGIN_UNKNOWN ? "no longer matched" : from && from[0] ? "in partition " : "in several or no partitions",
-                  v == PALP_DDS_ORIGIN_UNKNOWN || !from ? "" : from, v == PALP_DDS_ORIGIN_UNKNOWN ? " (unknown partition)" : "",
-                  s->partition);
+                  "session %u: a %s naming it came from a writer %s, not its partition %s: not recorded, nor any "
+                  "such sample of it (counted at its end; someone forges its session id)",
+                  sid, what, where, s->partition);
   }
   return 0;
 }
