@@ -1044,20 +1044,13 @@ int main(int argc, char **argv) {
    * them from the first one on (on_finger_sample). */
   enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_FINGER_SAMPLE,
          RD_LOCAL_MODEL, RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
-  dds_entity_t rd[RD_COUNT] = {
-      reader_deep(r, pp, t[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE),
-      reader_deep(r, pp, t[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE),
-      reader_deep(r, pp, t[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE),
-      reader_deep(r, pp, t[PALP_TOPIC_SESSION_EXERCISE], PALP_TOPIC_SESSION_EXERCISE),
-      reader_deep(r, sub, t[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT),
-      reader_deep(r, sub, t[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK),
-      reader_deep(r, sub, t[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION),
-      reader_deep(r, sub, t[PALP_TOPIC_FINGER_SAMPLE], PALP_TOPIC_FINGER_SAMPLE),
-      reader_deep(r, sub, t[PALP_TOPIC_LOCAL_MODEL], PALP_TOPIC_LOCAL_MODEL),
-      reader_deep(r, sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING),
-      reader_deep(r, sub, t[PALP_TOPIC_FINDING_STATUS], PALP_TOPIC_FINDING_STATUS),
-      reader_deep(r, sub, t[PALP_TOPIC_DEBRIEF], PALP_TOPIC_DEBRIEF),
-  };
+  /* Each reader's topic; those from RD_CONTACT on are the sessions' own, under the partition subscriber. */
+  static const palp_dds_topic_kind kind[RD_COUNT] = {
+      PALP_TOPIC_CATALOGUE, PALP_TOPIC_EXERCISE,      PALP_TOPIC_SESSION_STATE,  PALP_TOPIC_SESSION_EXERCISE,
+      PALP_TOPIC_CONTACT,   PALP_TOPIC_FEEDBACK,      PALP_TOPIC_DEFORMATION,    PALP_TOPIC_FINGER_SAMPLE,
+      PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINDING,     PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF};
+  dds_entity_t rd[RD_COUNT];
+  for (int k = 0; k < RD_COUNT; k++) rd[k] = reader_deep(r, k < RD_CONTACT ? pp : sub, t[kind[k]], kind[k]);
   dds_entity_t ws = dds_create_waitset(pp);
   for (int k = 0; k < RD_COUNT; k++) {
     if (rd[k] < 0 || filters < 0) {
@@ -1152,7 +1145,7 @@ int main(int argc, char **argv) {
        * answer is then logged as one whose finding this recorder did not see. */
       dds_waitset_detach(ws, rd[RD_FINDING]);
       dds_delete(rd[RD_FINDING]);
-      rd[RD_FINDING] = reader_deep(r, sub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+      rd[RD_FINDING] = reader_deep(r, sub, t[kind[RD_FINDING]], kind[RD_FINDING]);
       if (rd[RD_FINDING] > 0) {
         dds_set_status_mask(rd[RD_FINDING], DDS_DATA_AVAILABLE_STATUS);
         dds_waitset_attach(ws, rd[RD_FINDING], RD_FINDING);
