@@ -10,10 +10,11 @@ cd "$build"
 # files behind is caught here rather than filling /tmp run after run (~45 MB a run until
 # 2026-12-05: docs/robustness.md, "Temporary files").
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/palp-tests.XXXXXX")
-# two slots per core: the CPU-bound tests take two each, and the cores are a resource that keeps
-# the timing-sensitive tests apart from them (tests/CMakeLists.txt, "Slots")
+# three slots per core: a computation takes one slot and one core, the cores being a CTest resource
+# that also keeps the timing-sensitive tests apart from the computations, and the tests that mostly
+# wait fill the other slots (tests/CMakeLists.txt, "Slots")
 rc=0
-TMPDIR=$tmp ctest --output-on-failure -j"$((2 * $(nproc)))" --timeout 300 \
+TMPDIR=$tmp ctest --output-on-failure -j"$((3 * $(nproc)))" --timeout 300 \
   --resource-spec-file "$here/tests/resources.json" || rc=$?
 left=$(find "$tmp" -mindepth 1 -maxdepth 1 | sort)
 if [ "$rc" -ne 0 ]; then

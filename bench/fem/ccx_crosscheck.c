@@ -283,7 +283,7 @@ static int read_top_uz(const char *dat, double *uz, double *time) {
 int main(int argc, char **argv) {
   const char *levels = "1,2", *profile = "paper_long_term", *dir = "out/ccx", *ccx = "ccx";
   double force = 3.0, inc = 0.25, timeout = 0.0, area = 5.2e-4, grading = 1.0;
-  int no_project = 0, no_ccx = 0, quarter = 0, palp_inc = 4;
+  int no_project = 0, no_ccx = 0, quarter = 0, palp_inc = 4, ccx_threads = 2;
   for (int i = 1; i < argc; ++i) {
     if (i + 1 < argc && !strcmp(argv[i], "--levels")) levels = argv[++i];
     else if (i + 1 < argc && !strcmp(argv[i], "--profile")) profile = argv[++i];
@@ -298,10 +298,11 @@ int main(int argc, char **argv) {
     else if (i + 1 < argc && !strcmp(argv[i], "--palp-inc")) palp_inc = atoi(argv[++i]);
     else if (i + 1 < argc && !strcmp(argv[i], "--cap-area")) area = atof(argv[++i]);
     else if (i + 1 < argc && !strcmp(argv[i], "--grading")) grading = atof(argv[++i]);
+    else if (i + 1 < argc && !strcmp(argv[i], "--ccx-threads")) ccx_threads = atoi(argv[++i]);
     else {
       fprintf(stderr, "usage: ccx_crosscheck [--levels 1,2,3] [--profile NAME] [--force N] [--dir DIR] [--ccx PATH] "
                       "[--ccx-only | --palp-only] [--ccx-inc FRACTION] [--ccx-timeout SECONDS] [--ccx-quarter] [--palp-inc K] "
-                      "[--cap-area M2] [--grading ALPHA]\n");
+                      "[--cap-area M2] [--grading ALPHA] [--ccx-threads N]\n");
       return 2;
     }
   }
@@ -309,8 +310,9 @@ int main(int argc, char **argv) {
     fprintf(stderr, "ccx_crosscheck: --ccx-only and --palp-only exclude each other\n");
     return 2;
   }
-  if (!(inc > 0.0) || inc > 1.0 || timeout < 0.0 || timeout != timeout || palp_inc < 1 || palp_inc > 1000) {
-    fprintf(stderr, "ccx_crosscheck: --ccx-inc must be in (0, 1], --ccx-timeout >= 0 s, --palp-inc in 1..1000\n");
+  if (!(inc > 0.0) || inc > 1.0 || timeout < 0.0 || timeout != timeout || palp_inc < 1 || palp_inc > 1000 ||
+      ccx_threads < 1 || ccx_threads > 64) {
+    fprintf(stderr, "ccx_crosscheck: --ccx-inc must be in (0, 1], --ccx-timeout >= 0 s, --palp-inc in 1..1000, --ccx-threads in 1..64\n");
     return 2;
   }
   if (!(area >= 1e-6 && area <= 5.2e-4) || !(grading > 0.0 && grading <= 1.0)) {
@@ -384,10 +386,11 @@ int main(int argc, char **argv) {
       }
       if (timeout > 0.0) snprintf(lim, sizeof lim, "timeout %.0f ", timeout);
       /* SPOOLES is the only direct solver in Debian's build; CCX_NPROC_EQUATION_SOLVER lets it use
-       * both cores (OMP_NUM_THREADS alone leaves it on one) */
+       * both cores (OMP_NUM_THREADS alone leaves it on one). The test runs it on one thread
+       * (--ccx-threads 1): two threads beside other work spin and took 4x as long. */
       snprintf(cmd, sizeof cmd,
-               "cd '%s' && OMP_NUM_THREADS=2 CCX_NPROC_EQUATION_SOLVER=2 %s'%s' -i 'level%d_%s' > 'level%d_%s.log' 2>&1",
-               dir, lim, ccx, L, profile, L, profile);
+               "cd '%s' && OMP_NUM_THREADS=%d CCX_NPROC_EQUATION_SOLVER=%d %s'%s' -i 'level%d_%s' > 'level%d_%s.log' 2>&1",
+               dir, ccx_threads, ccx_threads, lim, ccx, L, profile, L, profile);
       const double t1 = now_s();
       const int st = system(cmd);
       tc = now_s() - t1;

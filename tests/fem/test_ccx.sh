@@ -17,17 +17,19 @@
 # ~5 mm at the pole), ccx on the quarter deck with load increments of 0.1: the same opposite-side
 # approach and 20% at level 2 (measured 14.6%; docs/materials.md has ccx to level 5). ~20 s more.
 # The converged comparison is bench/fem/ccx_crosscheck.
+# ccx runs on one thread here (--ccx-threads 1; the tool's default is both cores): its two OpenMP
+# threads beside the suite's other computations spun, 57-63 s against 15 s alone (2026-12-06).
 # usage: test_ccx.sh CCX_CROSSCHECK TMPDIR
 set -u
 tool=$1 tmp=$2
 command -v ccx >/dev/null 2>&1 || { echo "FAIL ccx (calculix-ccx) is not installed: scripts/debian-packages.txt lists it"; exit 1; }
 dir=$tmp/ccx
 rm -rf "$dir"
-"$tool" --levels 1,2 --profile paper_long_term --ccx-quarter --force 3 --dir "$dir" > "$dir.txt" 2>&1
+"$tool" --levels 1,2 --profile paper_long_term --ccx-quarter --force 3 --ccx-threads 1 --dir "$dir" > "$dir.txt" 2>&1
 st=$?
 cat "$dir.txt"
 [ $st -eq 0 ] || { echo "FAIL ccx_crosscheck exit $st"; exit 1; }
-"$tool" --levels 1 --profile paper_long_term --ccx-only --force 3 --dir "$dir/full" > "$dir.f.txt" 2>&1
+"$tool" --levels 1 --profile paper_long_term --ccx-only --force 3 --ccx-threads 1 --dir "$dir/full" > "$dir.f.txt" 2>&1
 st=$?
 cat "$dir.f.txt"
 [ $st -eq 0 ] || { echo "FAIL ccx_crosscheck --ccx-only (full deck) exit $st"; exit 1; }
@@ -49,7 +51,7 @@ awk '
     else { print "FAIL palp alone " pp " mm against " p1 " mm at level 1"; fail = 1 }
     exit fail
   }' "$dir.txt" "$dir.f.txt" "$dir.p.txt" || exit 1
-"$tool" --levels 1,2 --profile breast_tissue --ccx-quarter --ccx-inc 0.1 --force 3 --dir "$dir/bt" > "$dir.bt.txt" 2>&1
+"$tool" --levels 1,2 --profile breast_tissue --ccx-quarter --ccx-inc 0.1 --force 3 --ccx-threads 1 --dir "$dir/bt" > "$dir.bt.txt" 2>&1
 st=$?
 cat "$dir.bt.txt"
 [ $st -eq 0 ] || { echo "FAIL ccx_crosscheck --profile breast_tissue exit $st"; exit 1; }
