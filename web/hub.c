@@ -1830,12 +1830,17 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
 /* Whether a contact or finding naming a session the bridge follows came from a writer in that
  * session's partition: a trainee may write only in her own partitions, so one naming another
  * trainee's session there forges it (idl/palp_dds_origin.h). A sample of a session the bridge does
- * not follow passes on, for its handler to count. */
+ * not follow passes on, for its handler to count. A dispose is checked too (a forged one lifted
+ * the finger on the dashboard until its next contact), but refused only when its writer is known
+ * to write elsewhere: a station that leaves disposes its contacts and deletes its writer at once,
+ * so its last dispose may name a writer no longer matched (PALP_DDS_ORIGIN_UNKNOWN). Cyclone fills
+ * an invalid sample's key, the session id with it. */
 static int from_its_partition(palp_web_hub *h, dds_entity_t rd, const void *sample, const dds_sample_info_t *info) {
   int slot;
   const session *s = find_session(h, *(const uint32_t *)sample, &slot); /* the session id first (palp_dds_gate.c) */
-  if (!s || !s->st.partition[0] || palp_dds_origin_check(&h->origin, rd, info, s->st.partition) == PALP_DDS_ORIGIN_SAME)
-    return 1;
+  if (!s || !s->st.partition[0]) return 1;
+  const palp_dds_origin_verdict v = palp_dds_origin_check(&h->origin, rd, info, s->st.partition);
+  if (v == PALP_DDS_ORIGIN_SAME || (!info->valid_data && v == PALP_DDS_ORIGIN_UNKNOWN)) return 1;
   h->stats.foreign++;
   return 0;
 }
@@ -1864,7 +1869,9 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   const int check = rd == h->contact_r || rd == h->finding_r;
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
-      if (info[i].valid_data && check && !from_its_partition(h, rd, ptr[i], &info[i])) continue;
+      if (check && (info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE) &&
+          !from_its_partition(h, rd, ptr[i], &info[i]))
+        continue;
       /* a dispose of a key whose session the gate would not pass (never heard open, so not a station
        * that leaves a session that just closed); Cyclone fills an invalid sample's key */
       if (!info[i].valid_data && rd == h->finding_r && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&

@@ -113,7 +113,7 @@ typedef struct palp_web_hub_stats {
                         * disposes of made-up keys, unsecured; Cyclone's sample-rejected status) */
   uint64_t finding_strays, finding_renewals; /* disposes of finding keys of sessions it does not follow, and how
                                               * often the findings reader was made anew for them (a flood) */
-  uint64_t foreign;    /* contacts and findings naming a session from a writer outside its partition (a
+  uint64_t foreign;    /* contacts and findings (disposes too) naming a session from a writer outside its partition (a
                         * trainee forging another's session id, idl/palp_dds_origin.h): dropped */
   uint64_t joins, leaves, join_rejected;
   uint64_t exercises, finding_statuses;            /* DDS samples taken */

@@ -1282,6 +1282,76 @@ static void test_stream_flood(palp_web_hub *h, dds_entity_t pp, dds_entity_t w_s
   for (int k = 0; k < 4; k++) dds_delete(w[k]);
 }
 
+/* Whether session `sid`'s live view shows finger 1 (a lifted finger is left out of "fingers"): `want`
+ * once a live message says so within ~3 s, else -1. */
+static int next_live_finger1(palp_web_hub *h, palp_web_cursor *c, uint32_t sid, int want) {
+  for (int i = 0; i < 300; i++) {
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
+    int got = -1;
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+      if (type && !strcmp(type, "live") && cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) == sid) {
+        const cJSON *f = NULL;
+        got = 0;
+        cJSON_ArrayForEach(f, cJSON_GetObjectItem(j, "fingers")) got |= cJSON_GetNumberValue(cJSON_GetObjectItem(f, "finger")) == 1;
+      }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (got == want) return got;
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  return -1;
+}
+
+/* Another writer, in a partition not the session's (as a trainee writes in her own), contacts and
+ * then disposes the session's finger-1 instance: both are counted foreign and neither reaches the
+ * view (the forged dispose used to lift the finger until its next contact; web/hub.c,
+ * from_its_partition). The session's own writer's dispose still lifts it. Its contact is written
+ * again at the end, for the tests after this one. */
+static void test_forged_dispose(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, dds_entity_t t_contact,
+                                dds_entity_t w_contact, const palp_Contact *ct) {
+  palp_web_hub_stats hs;
+  palp_web_hub_stats_get(h, &hs);
+  const uint64_t before = hs.foreign;
+  char other[64];
+  palp_dds_session_partition(ct->session_id + 100, other, sizeof other);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, other);
+  const dds_entity_t w = palp_dds_create_writer(pub, t_contact, PALP_TOPIC_CONTACT);
+  CHECK(pub > 0 && w > 0, "a writer in %s", other);
+  dds_sleepfor(DDS_MSECS(300)); /* matched with the hub's reader */
+  /* one at a time: a dispose that finds the contact not yet taken marks that sample disposed and
+   * makes none of its own (the contacts keep one sample an instance) */
+  for (int k = 1; k <= 2; k++) {
+    CHECK((k == 1 ? dds_write(w, ct) : dds_dispose(w, ct)) == 0, "forged %s written", k == 1 ? "contact" : "dispose");
+    for (int i = 0; i < 300 && hs.foreign < before + (uint64_t)k; i++) {
+      dds_sleepfor(DDS_MSECS(10));
+      palp_web_hub_stats_get(h, &hs);
+    }
+  }
+  dds_sleepfor(DDS_MSECS(100)); /* anything more would have come by now */
+  palp_web_hub_stats_get(h, &hs);
+  CHECK(hs.foreign == before + 2, "the forged contact and its dispose both counted foreign (%llu more, want 2)",
+        (unsigned long long)(hs.foreign - before));
+  dds_delete(pub);
+  /* the forged dispose left the reader's instance disposed: the station's next contact (every
+   * 10 ms in a session) makes it alive again, and its own dispose then lifts the finger */
+  dds_write(w_contact, ct);
+  dds_sleepfor(DDS_MSECS(100));
+  CHECK(dds_dispose(w_contact, ct) == 0, "the session's own writer disposes finger 1");
+  CHECK(next_live_finger1(h, c, ct->session_id, 0) == 0,
+        "the session's own dispose lifts the finger (gone from the live view within 3 s)");
+  palp_web_hub_stats_get(h, &hs);
+  CHECK(hs.foreign == before + 2, "... and is not counted foreign (%llu more, want 2)",
+        (unsigned long long)(hs.foreign - before));
+  dds_write(w_contact, ct);
+  CHECK(next_live_finger1(h, c, ct->session_id, 1) == 1, "written again, the finger is down again");
+}
+
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
@@ -1427,6 +1497,7 @@ static void test_local_model(void) {
             palp_web_hub_has_instance(h, PALP_TOPIC_LOCAL_MODEL, sid, 1) == 1 &&
             palp_web_hub_has_instance(h, PALP_TOPIC_LOCAL_MODEL, sid, 7) == 0,
         "instances: its session's contact and model, not the stray session's contact nor finger 7's model");
+  test_forged_dispose(h, &c, pp, t_contact, w_contact, &ct);
   test_stream_flood(h, pp, w_state, pub);
   test_findings(h, &c, pp, pub, sid, w_lm, &lm);
   test_exercise_bands(h, pp);
