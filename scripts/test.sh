@@ -10,9 +10,9 @@ cd "$build"
 # files behind is caught here rather than filling /tmp run after run (~45 MB a run until
 # 2026-12-05: docs/robustness.md, "Temporary files").
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/palp-tests.XXXXXX")
-# three slots per core: a computation takes one slot and one core, the cores being a CTest resource
-# that also keeps the timing-sensitive tests apart from the computations, and the tests that mostly
-# wait fill the other slots (tests/CMakeLists.txt, "Slots")
+# three slots per core: a computation takes two slots and one core (the cores are a CTest resource,
+# which also keeps the timing-sensitive tests apart from the computations), and the tests that
+# mostly wait fill the other slots (tests/CMakeLists.txt, "Slots")
 rc=0
 TMPDIR=$tmp ctest --output-on-failure -j"$((3 * $(nproc)))" --timeout 300 \
   --resource-spec-file "$here/tests/resources.json" || rc=$?

@@ -1297,7 +1297,9 @@ static int next_live_finger1(palp_web_hub *h, palp_web_cursor *c, uint32_t sid, 
       if (type && !strcmp(type, "live") && cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) == sid) {
         const cJSON *f = NULL;
         got = 0;
-        cJSON_ArrayForEach(f, cJSON_GetObjectItem(j, "fingers")) got |= cJSON_GetNumberValue(cJSON_GetObjectItem(f, "finger")) == 1;
+        cJSON_ArrayForEach(f, cJSON_GetObjectItem(j, "fingers")) {
+          got |= cJSON_GetNumberValue(cJSON_GetObjectItem(f, "finger")) == 1;
+        }
       }
       cJSON_Delete(j);
     }
