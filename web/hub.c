@@ -1869,9 +1869,7 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   const int check = rd == h->contact_r || rd == h->finding_r;
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
-      if (check && (info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE) &&
-          !from_its_partition(h, rd, ptr[i], &info[i]))
-        continue;
+      if (check && !from_its_partition(h, rd, ptr[i], &info[i])) continue; /* data and disposes alike */
       /* a dispose of a key whose session the gate would not pass (never heard open, so not a station
        * that leaves a session that just closed); Cyclone fills an invalid sample's key */
       if (!info[i].valid_data && rd == h->finding_r && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
