@@ -14,4 +14,14 @@ double palp_place_clock_hours(palp_vec3 p);
  * |p| x (angle of p from +z). */
 double palp_place_arc(palp_vec3 p);
 
+/* Nearer the pole than this along the surface [m], a place has no clock position worth reading, and
+ * every tool says "the pole" instead of a clock. One clock hour there spans less than 2 pi s / 12 =
+ * 0.52 mm of skin, less than the fingertip's own wander while it holds still (0.1-0.5 mm in the logs),
+ * so the hour printed is noise (the demo's presses at the pole read 0.9 h, 6.8 h, 2.0 h before); a
+ * lesion at polar 0 has no azimuth at all. Breast reports likewise name a place behind the nipple by
+ * its region, not a clock face. */
+#define PALP_PLACE_POLE_ARC 1.0e-3
+/* 1 when p is within PALP_PLACE_POLE_ARC of the pole along the surface (palp_place_arc), else 0. */
+int palp_place_at_pole(palp_vec3 p);
+
 #endif

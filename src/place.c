@@ -18,3 +18,5 @@ double palp_place_arc(palp_vec3 p) {
   const double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
   return r > 0 ? r * acos(fmax(-1.0, fmin(1.0, p.z / r))) : 0.0;
 }
+
+int palp_place_at_pole(palp_vec3 p) { return palp_place_arc(p) < PALP_PLACE_POLE_ARC; }

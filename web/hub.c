@@ -868,7 +868,7 @@ static cJSON *place_json(palp_vec3 p) {
 }
 
 /* {"type": "answers", "session", "exercise", "lesions", "found", "marks", "false_marks", "duplicates",
- *  "refused", "unanswered", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm", "deep_mm", "point_mm"}],
+ *  "refused", "unanswered", "lumps": [{"found_by", "clock_h", "at_pole", "arc_mm", "across_mm", "deep_mm", "point_mm"}],
  *  "marks_at": [{"id", "point_mm", "lump"}]}: lump is the lump's number (from 1) a mark found, 0 near no
  * lump, -1 on a lump another mark found. Places as every tool names them (palp_place_*). */
 static cJSON *answers_json(palp_web_hub *h, session *s) {
@@ -900,6 +900,7 @@ static cJSON *answers_json(palp_web_hub *h, session *s) {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "found_by", r.lesion_found[l] >= 0 ? a->id[r.lesion_found[l]] : 0);
     cJSON_AddNumberToObject(o, "clock_h", round(palp_place_clock_hours(p) * 100) / 100);
+    cJSON_AddBoolToObject(o, "at_pole", palp_place_at_pole(p)); /* no clock worth reading there */
     cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
     cJSON_AddNumberToObject(o, "across_mm", round(L->diameter * 1e4) / 10);
     cJSON_AddNumberToObject(o, "deep_mm", round(L->depth * 1e4) / 10);
@@ -1328,7 +1329,7 @@ static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
 /* A session's debrief (docs/assessment.md, "Debrief"), checked as the station checks it
  * (palp_dds_debrief_ok), as a page
  * message: {"type": "debrief", "session", "trainee", "exercise", "level", "lesions", "found", "marks",
- * "false_marks", "duplicates", "reason", "lumps": [{"found_by", "clock_h", "arc_mm", "across_mm",
+ * "false_marks", "duplicates", "reason", "lumps": [{"found_by", "clock_h", "at_pole", "arc_mm", "across_mm",
  * "deep_mm", "point_mm"}]}, the places named as every tool names them (palp_place_*). */
 static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   if (!palp_dds_debrief_ok(m)) {
@@ -1382,6 +1383,7 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "found_by", l->found_by);
     cJSON_AddNumberToObject(o, "clock_h", round(palp_place_clock_hours(p) * 100) / 100);
+    cJSON_AddBoolToObject(o, "at_pole", palp_place_at_pole(p)); /* no clock worth reading there */
     cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
     cJSON_AddNumberToObject(o, "across_mm", round(l->diameter * 1e4) / 10);
     cJSON_AddNumberToObject(o, "deep_mm", round(l->depth * 1e4) / 10);

@@ -13,6 +13,7 @@
 
 #include "assess_log.h"
 #include "grades.h"
+#include "palp_place.h"
 #include "review_util.h"
 #include "vec3.h" /* PALP_PI */
 
@@ -186,7 +187,8 @@ void review_debrief_text(int status, const palp_db_debrief *d, const review_asse
     cat(buf, len, &n, "%s lump %d ", l ? "," : ";", l + 1);
     if (d->found_by[l]) cat(buf, len, &n, "found by mark %u", (unsigned)d->found_by[l]);
     else cat(buf, len, &n, "MISSED");
-    if (places)
+    if (places && palp_place_at_pole(a->lesion_surface[l])) cat(buf, len, &n, " (at the pole)");
+    else if (places)
       cat(buf, len, &n, " (at %.1f o'clock, %.0f mm from the pole)", review_clock_hours(a->lesion_surface[l]),
           review_arc_m(a->lesion_surface[l]) * 1e3);
   }
@@ -449,8 +451,10 @@ void review_touches_print(FILE *f, const review_assessment *a, int listed) {
     char at[40], on[24];
     snprintf(at, sizeof at, "%.1f,%.1f,%.1f", t->first_point.x * 1e3, t->first_point.y * 1e3, t->first_point.z * 1e3);
     snprintf(on, sizeof on, "%.2f .. %.2f", t->t_on, t->t_off);
-    fprintf(f, "    %-4d %-17s %-22s %5.1f h  %-9.1f %5.1f h  %-9.1f %-10.1f %-13.1f %.2f\n", i + 1, on, at,
-            review_clock_hours(t->first_point), review_arc_m(t->first_point) * 1e3, review_clock_hours(t->last_point),
+    char down[24], lift[24];
+    fprintf(f, "    %-4d %-17s %-22s %s  %-9.1f %s  %-9.1f %-10.1f %-13.1f %.2f\n", i + 1, on, at,
+            review_clock_cell(t->first_point, 7, down, sizeof down), review_arc_m(t->first_point) * 1e3,
+            review_clock_cell(t->last_point, 7, lift, sizeof lift),
             review_arc_m(t->last_point) * 1e3, t->path_length * 1e3, t->peak_indentation * 1e3, t->peak_force);
   }
   if (a->touch_n > listed)

@@ -430,9 +430,10 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
   for (int i = 0; i < a.mark_n; i++) {
     const review_mark *k = &a.marks[i];
     const palp_vec3 p = k->f.point;
-    fprintf(f, "<tr class=\"finding %s\"><td>%d</td><td>%lld</td><td>%.2f</td><td>%.1f, %.1f, %.1f</td><td>%.1f h</td><td>",
+    char clk[24];
+    fprintf(f, "<tr class=\"finding %s\"><td>%d</td><td>%lld</td><td>%.2f</td><td>%.1f, %.1f, %.1f</td><td>%s</td><td>",
             review_finding_class(k->match), i + 1, (long long)k->mark_id, k->f.t, p.x * 1e3, p.y * 1e3, p.z * 1e3,
-            review_clock_hours(p));
+            review_clock_cell(p, 0, clk, sizeof clk));
     if (k->match >= 0) fprintf(f, "found lesion %d", k->match + 1);
     else fputs(review_finding_class(k->match), f);
     fputs("</td></tr>\n", f);
@@ -466,10 +467,12 @@ static void touches_table(FILE *f, const review_assessment *a) {
           a->touch_n, a->touch_n == 1 ? "" : "es", PALP_ASSESS_LIFT_GAP_S);
   for (int i = 0; i < a->touch_n; i++) {
     const palp_touch *t = &a->touches[i];
-    fprintf(f, "<tr><td>%d</td><td>%.2f</td><td>%.2f</td><td>%.1f, %.1f, %.1f</td><td>%.1f h</td><td>%.1f</td>"
-               "<td>%.1f h</td><td>%.1f</td><td>%.1f</td><td>%.1f</td><td>%.2f</td></tr>\n",
+    char down[24], lift[24];
+    fprintf(f, "<tr><td>%d</td><td>%.2f</td><td>%.2f</td><td>%.1f, %.1f, %.1f</td><td>%s</td><td>%.1f</td>"
+               "<td>%s</td><td>%.1f</td><td>%.1f</td><td>%.1f</td><td>%.2f</td></tr>\n",
             i + 1, t->t_on, t->t_off, t->first_point.x * 1e3, t->first_point.y * 1e3, t->first_point.z * 1e3,
-            review_clock_hours(t->first_point), review_arc_m(t->first_point) * 1e3, review_clock_hours(t->last_point),
+            review_clock_cell(t->first_point, 0, down, sizeof down), review_arc_m(t->first_point) * 1e3,
+            review_clock_cell(t->last_point, 0, lift, sizeof lift),
             review_arc_m(t->last_point) * 1e3, t->path_length * 1e3, t->peak_indentation * 1e3, t->peak_force);
   }
   fputs("</table>\n", f);
@@ -562,9 +565,10 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
           "<th>clock</th><th>on [s]</th><th>off [s]</th><th>peak force [N]</th></tr>\n", f);
     for (int p = 0; p < np; p++) {
       const palp_vec3 c = pr[p].first_center_m;
-      fprintf(f, "<tr><td>%d</td><td>%d</td><td>%s</td><td>%.1f, %.1f, %.1f</td><td>%.1f h</td><td>%.3f</td><td>",
+      char clk[24];
+      fprintf(f, "<tr><td>%d</td><td>%d</td><td>%s</td><td>%.1f, %.1f, %.1f</td><td>%s</td><td>%.3f</td><td>",
               p + 1, pr[p].slot, pr[p].kind == PALP_DB_KIND_FORCE ? "force" : "finger", c.x * 1e3, c.y * 1e3,
-              c.z * 1e3, review_clock_hours(c), pr[p].t_on_s);
+              c.z * 1e3, review_clock_cell(c, 0, clk, sizeof clk), pr[p].t_on_s);
       if (pr[p].t_off_s >= 0) fprintf(f, "%.3f", pr[p].t_off_s);
       else fputs("end", f);
       fprintf(f, "</td><td>%.3f</td></tr>\n", pr[p].peak_force_n);

@@ -277,9 +277,10 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
       else snprintf(off, sizeof off, "end");
       char ctr[40];
       snprintf(ctr, sizeof ctr, "%.1f,%.1f,%.1f", x.x * 1e3, x.y * 1e3, x.z * 1e3);
-      printf("    %-4d %-6s %-18s %-26s %5.1f h  %-9.1f %6.2f .. %-6s %.2f%s\n", q->slot,
+      char clk[24];
+      printf("    %-4d %-6s %-18s %-26s %s  %-9.1f %6.2f .. %-6s %.2f%s\n", q->slot,
              q->kind == PALP_DB_KIND_FORCE ? "force" : "finger", q->kind == PALP_DB_KIND_FORCE ? review_dist_name(q->distribution) : "-",
-             ctr, review_clock_hours(x), review_arc_m(x) * 1e3, q->t_on_s, off, q->peak_force_n,
+             ctr, review_clock_cell(x, 7, clk, sizeof clk), review_arc_m(x) * 1e3, q->t_on_s, off, q->peak_force_n,
              q->kind == PALP_DB_KIND_FORCE ? "" : "  (a finger: its device point at the start, above the surface)");
     }
   }

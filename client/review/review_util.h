@@ -27,6 +27,9 @@ typedef struct review_press {
 int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n);
 /* "3 o'clock": the clock position of a point seen from above (12 = +y, 3 = +x). */
 double review_clock_hours(palp_vec3 p);
+/* A table's clock cell: "1.7 h", or "pole" within PALP_PLACE_POLE_ARC of the pole, where the hour is
+ * noise (src/palp_place.h); right-aligned in width characters (0: as it is, for HTML). Returns buf. */
+const char *review_clock_cell(palp_vec3 p, int width, char *buf, size_t len);
 /* The arc from the pole [m] along the sphere through p (centred at the dome's base centre). */
 double review_arc_m(palp_vec3 p);
 /* The one name of a force distribution everywhere (docs/naming.md). */

@@ -368,6 +368,16 @@ def run(build, source, out):
                                          "across, its centre 10 mm deep"],
               "sam's ended examination on the dashboard (his station runs 6 s, joining included: ended after at most 0:19): told the count, "
               "the instructor shown where the lump was: %s (sam's station %s)" % (got or dash2.eval(sam_row), sam.poll()))
+        # a lump within 1 mm of the pole has no clock worth reading (src/palp_place.h): the pages say
+        # "at the pole", as the station and the review do, from the bridge's at_pole (a hand-made lump:
+        # the shipped exercises place none there)
+        words = dash2.eval("[PALP.debriefLump({found_by: 0, clock_h: 12, at_pole: true, arc_mm: 0.4, across_mm: 15, "
+                           "deep_mm: 10}, 0, false), PALP.debriefLump({found_by: 2, clock_h: 1.67, at_pole: false, "
+                           "arc_mm: 20.9, across_mm: 15, deep_mm: 10}, 1, false)]")
+        check(words == ["lump 1 MISSED: at the pole; 15 mm across, its centre 10 mm deep",
+                        "lump 2 found by mark 2: at 1.7 o'clock, 21 mm from the pole along the skin; 15 mm across, "
+                        "its centre 10 mm deep"],
+              "the pages' words for a lump at the pole and one away from it: %s" % words)
         click(dash2, "show-answers")
         got = dash2.eval(sam_row)
         check(got is not None and got["items"] == [] and got["lumps"] == "not told where: the exercise tells the count "

@@ -140,8 +140,9 @@ const PALP = (function () {
    * place (docs/naming.md: the clock seen from above, the arc from the pole along the skin) */
   function debriefLump(l, i, live) {
     /* live: the dashboard's hidden lumps while the session runs (an `answers` message): not missed yet */
-    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : live ? "not found yet" : "MISSED") + ": at " +
-      l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; " +
+    /* at_pole: within 1 mm of it (src/palp_place.h), where a clock hour is noise */
+    return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : live ? "not found yet" : "MISSED") + ": " +
+      (l.at_pole ? "at the pole; " : "at " + l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; ") +
       l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
   }
 

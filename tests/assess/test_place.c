@@ -1,0 +1,64 @@
+/*
+ * test_place.c - a place on the phantom in the words every tool prints (src/place.c, docs/naming.md,
+ * "position on the phantom"): the clock seen from above, the arc from the pole, and "the pole" where
+ * a clock is noise. Expected values are worked by hand on the 40 mm dome:
+ *  - the clock: +x is 3 o'clock, -y 6, -x 9, +y 12 (never 0); polar 30 deg at azimuth 40 deg (from
+ *    +x towards +y) is 90 - 40 = 50 deg clockwise from +y = 1.667 h, and its arc 40 mm x pi/6 =
+ *    20.944 mm; tolerance 1e-9 (rounding only);
+ *  - "at the pole" below 1 mm of arc: polar 0, and polar 0.9 / 40 rad (0.9 mm) are; 1.1 / 40 rad
+ *    (1.1 mm) is not, whatever the azimuth; the apex dented 5 mm, (0, 0, 35) mm, still is;
+ *  - an exercise file's lesion at polar 0 has its surface point at the pole (the debrief then says "at
+ *    the pole"), one at polar 30 deg does not.
+ */
+#include <math.h>
+#include <stdio.h>
+
+#include "check.h"
+#include "palp_assess.h"
+#include "palp_place.h"
+
+#define PI 3.14159265358979323846
+#define R 0.040
+
+static palp_vec3 on_dome(double polar, double az) {
+  return (palp_vec3){R * sin(polar) * cos(az), R * sin(polar) * sin(az), R * cos(polar)};
+}
+
+int main(void) {
+  CHECK_NEAR(palp_place_clock_hours((palp_vec3){0.01, 0, 0.03}), 3.0, 1e-9, "+x: 3 o'clock");
+  CHECK_NEAR(palp_place_clock_hours((palp_vec3){0, -0.01, 0.03}), 6.0, 1e-9, "-y: 6 o'clock");
+  CHECK_NEAR(palp_place_clock_hours((palp_vec3){-0.01, 0, 0.03}), 9.0, 1e-9, "-x: 9 o'clock");
+  CHECK_NEAR(palp_place_clock_hours((palp_vec3){0, 0.01, 0.03}), 12.0, 1e-9, "+y: 12 o'clock, not 0");
+  const palp_vec3 p = on_dome(PI / 6, 40 * PI / 180);
+  CHECK_NEAR(palp_place_clock_hours(p), 50.0 / 30.0, 1e-9, "polar 30 deg, azimuth 40 deg");
+  CHECK_NEAR(palp_place_arc(p), R * PI / 6, 1e-12, "its arc from the pole [m]");
+  CHECK(!palp_place_at_pole(p), "polar 30 deg is not at the pole");
+
+  CHECK(palp_place_at_pole((palp_vec3){0, 0, R}), "the apex is at the pole");
+  CHECK(palp_place_at_pole((palp_vec3){0, 0, 0.035}), "the apex dented 5 mm is at the pole");
+  for (int k = 0; k < 12; k++) {
+    const double az = k * PI / 6;
+    CHECK(palp_place_at_pole(on_dome(0.9e-3 / R, az)), "0.9 mm of arc at azimuth %d deg is at the pole", k * 30);
+    CHECK(!palp_place_at_pole(on_dome(1.1e-3 / R, az)), "1.1 mm of arc at azimuth %d deg is not", k * 30);
+  }
+
+  /* an exercise's lesions: one at polar 0 (its azimuth meaningless), one at polar 30 */
+  static const char *file =
+      "{\"name\": \"pole\", \"title\": \"P\", \"phantom\": \"p.json\", \"instructions\": \"go\", \"time_limit_s\": 60,"
+      " \"lesions\": [{\"polar_deg\": 0, \"azimuth_deg\": 75, \"depth_mm\": 10, \"diameter_mm\": 15, \"stiffness_ratio\": 5},"
+      "               {\"polar_deg\": 30, \"azimuth_deg\": 40, \"depth_mm\": 10, \"diameter_mm\": 15, \"stiffness_ratio\": 5}],"
+      " \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 4]}, \"medium\": {\"depth_mm\": [4, 9]}, \"deep\": {\"depth_mm\": [9, 18]}},"
+      " \"max_force_N\": 15, \"debrief\": \"lesions\", \"rubric\": {\"weights\": {\"sensitivity\": 1},"
+      " \"pass\": {\"sensitivity\": 1, \"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}";
+  palp_exercise ex;
+  char err[256];
+  const int e = palp_exercise_parse(file, ".", &ex, err, sizeof err);
+  CHECK(e == 0, "the exercise parses: %s", err);
+  if (e == 0) {
+    const palp_vec3 a = palp_exercise_lesion_surface(&ex.lesion[0], R), b = palp_exercise_lesion_surface(&ex.lesion[1], R);
+    CHECK(palp_place_at_pole(a), "the lesion at polar 0 is at the pole (arc %.3g mm)", palp_place_arc(a) * 1e3);
+    CHECK(!palp_place_at_pole(b), "the lesion at polar 30 deg is not");
+    CHECK_NEAR(palp_place_clock_hours(b), 50.0 / 30.0, 1e-9, "the lesion at polar 30 deg, azimuth 40 deg: 1.667 h");
+  }
+  CHECK_DONE();
+}
