@@ -703,16 +703,23 @@ static int losses_of(palp_db_writer *w, palp_db_session s, int64_t *shed, int64_
   return ok;
 }
 
+/* A session-begin record's strings, taken over by its session: they outlive the record's slot for
+ * lazy re-inserts of the session's row (session_rowid). Returns the session's state, NULL without
+ * memory. */
+static wsess *take_begin(palp_db_writer *w, rec *r) {
+  wsess *ws = wsess_get(w, r->s);
+  if (ws && !ws->blob && r->u.begin.blob) {
+    ws->blob = r->u.begin.blob;
+    ws->def = r->u.begin.def;
+    r->u.begin.blob = NULL;
+  }
+  return ws;
+}
+
 /* Writes one record inside the open transaction. Returns an SQLite code. */
 static int write_rec(palp_db_writer *w, rec *r) {
   if (r->kind == PALP_DB_REC_SESSION_BEGIN) {
-    wsess *ws = wsess_get(w, r->s);
-    if (!ws) return SQLITE_NOMEM;
-    if (!ws->blob) { /* take the strings over: they outlive the slot for lazy re-inserts */
-      ws->blob = r->u.begin.blob;
-      ws->def = r->u.begin.def;
-      r->u.begin.blob = NULL;
-    }
+    if (!take_begin(w, r)) return SQLITE_NOMEM;
     int64_t id;
     return session_rowid(w, r->s, &id);
   }
@@ -1012,6 +1019,11 @@ static void retire(palp_db_writer *w, int n, int64_t written, int committed,
   for (int i = 0; i < n; i++) {
     rec *r = &w->ring[(w->tail + i) % w->cap];
     bytes += r->bytes;
+    /* A batch dropped on a disk error before it reached a session's begin: keep the strings, or
+     * every later record of that session is refused (session_rowid) even once space is back, and
+     * the session never gets its row. Its row is then made by the session's next record written; the
+     * begin record is still counted failed, with the batch. */
+    if (r->kind == PALP_DB_REC_SESSION_BEGIN) (void)take_begin(w, r);
     rec_free(r);
   }
   pthread_mutex_lock(&w->mu);

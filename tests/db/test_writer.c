@@ -400,6 +400,87 @@ static void test_full_disk(void) {
   sqlite3_close(h);
 }
 
+/* --- a session that begins while the file is full gets its row once space is back ------------
+ * A batch that fails on a full file fails at its first record and is dropped after its retries. A
+ * session's begin behind another session's mesh in such a batch was never reached: until session 75
+ * its strings were freed with the batch, and every later record of that session was refused even
+ * after the instructor freed space (here: another connection deletes the first session's meshes), so
+ * the session never got its row. Five sessions begin behind a mesh of the first while the file is
+ * full, then log 10 frames each and end once it has room: each must have its row, its 10 frames and
+ * its end (exact counts). */
+static void test_full_disk_new_session(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "full-new.db");
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  o.max_db_bytes = 160 * 1024;
+  o.retry_backoff_s = 0.02;
+  o.retry_limit = 1;
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, &o, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_def d = {.uid = "fill-1", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session a;
+  REQUIRE(palp_db_log_session_begin(w, &d, &a) == 0, "begin");
+  int64_t i = 1;
+  palp_db_writer_stats st;
+  /* fill the file with meshes (338 vertices: 8 kB each, overflow pages): once one fails, the file has
+   * no room for another, so every batch that starts with a mesh fails at it */
+  enum { NV = 338 };
+  static palp_vec3 mesh[NV];
+  for (int v = 0; v < NV; v++) mesh[v] = (palp_vec3){1e-3 * v, 2e-3 * v, 3e-3 * v};
+  for (int round = 0; round < 100; round++) {
+    for (int k = 0; k < 4; k++, i++) (void)palp_db_log_mesh(w, a, i, mesh, NV);
+    palp_db_writer_flush(w, 20);
+    palp_db_writer_stats_get(w, &st);
+    if (st.disk_errors > 0) break;
+  }
+  REQUIRE(st.disk_errors > 0, "the file must fill (%lld disk errors)", (long long)st.disk_errors);
+  enum { NEW = 5 };
+  palp_db_session b[NEW];
+  char uid[NEW][32];
+  for (int k = 0; k < NEW; k++) { /* each begin behind a mesh of the first session, in one batch */
+    (void)palp_db_log_mesh(w, a, i++, mesh, NV);
+    snprintf(uid[k], sizeof uid[k], "late-%d", k);
+    palp_db_session_def e = {.uid = uid[k], .trainee = "ida", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+    REQUIRE(palp_db_log_session_begin(w, &e, &b[k]) == 0, "begin %s", uid[k]);
+    for (int64_t j = 1; j <= 3; j++) {
+      palp_db_frame g = frame_of(j);
+      (void)palp_db_log_frame(w, b[k], &g);
+    }
+  }
+  palp_db_writer_flush(w, 20);
+  palp_db_writer_stats_get(w, &st);
+  const long long failed_full = (long long)st.failed;
+  sqlite3 *h;
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open a second connection");
+  sqlite3_busy_timeout(h, 5000);
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'late-%'") == 0,
+        "while the file is full no late session has its row yet");
+  CHECK(sqlite3_exec(h, "DELETE FROM mesh", NULL, NULL, NULL) == SQLITE_OK, "free space: %s", sqlite3_errmsg(h));
+  for (int k = 0; k < NEW; k++) {
+    for (int64_t j = 4; j <= 13; j++) {
+      palp_db_frame g = frame_of(j);
+      CHECK(palp_db_log_frame(w, b[k], &g) == 0, "frame %lld of %s", (long long)j, uid[k]);
+    }
+    CHECK(palp_db_log_session_end(w, b[k], PALP_DB_END_NORMAL, NULL, (double)time(NULL)) == 0, "end %s", uid[k]);
+  }
+  palp_db_writer_flush(w, 20);
+  palp_db_writer_stats_get(w, &st);
+  CHECK((long long)st.failed == failed_full, "nothing more is lost once there is room (%lld failed, %lld before)",
+        (long long)st.failed, failed_full);
+  for (int k = 0; k < NEW; k++) {
+    char q[256];
+    snprintf(q, sizeof q, "SELECT count(*) FROM session WHERE uid = '%s' AND trainee = 'ida' AND end_reason = 'normal'",
+             uid[k]);
+    CHECK(db_scalar(h, q) == 1, "%s has its row, its trainee and its end", uid[k]);
+    snprintf(q, sizeof q, "SELECT count(*) FROM frame JOIN session ON session.id = frame.session_id WHERE uid = '%s'",
+             uid[k]);
+    const long long n = db_scalar(h, q);
+    CHECK(n == 10, "%s has the 10 frames logged once there was room (%lld)", uid[k], n);
+  }
+  sqlite3_close(h);
+  palp_db_writer_close(w);
+}
+
 /* The valid_range event's detail (db/valid_range.c): written and read back, and what a
  * damaged or forged row says refused rather than summed. */
 static void test_valid_range_detail(void) {
@@ -560,6 +641,7 @@ int main(int argc, char **argv) {
   test_migration(argv[2]);
   test_newer();
   test_full_disk();
+  test_full_disk_new_session();
   test_valid_range_detail();
   test_debrief_detail();
   test_refused();
