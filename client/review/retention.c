@@ -11,8 +11,19 @@
  * Both run in one transaction per session on the WAL connection with its busy timeout, so a
  * server writing other sessions at the same time only waits; then the freed pages go back to
  * the file system with VACUUM (or PRAGMA incremental_vacuum when the file is in that mode),
- * which also waits on the busy timeout and leaves the file untouched if it cannot get the lock. */
+ * which also waits on the busy timeout and leaves the file untouched if it cannot get the lock.
+ *
+ * While a writer (palp-server, palp-recorder) has the file open (live_writer_pid), two things are
+ * refused (since session 75, both found by review): deleting a session with no end logged, which that
+ * writer may still be writing (session ids are rowids: the next session would be given the deleted
+ * one's id, and the deleted session's later records would land in it), and the VACUUM, which
+ * rewrites the whole file under the write lock for as long as that takes, seconds to minutes on a
+ * class's log, while the writer gives a batch up after ~21 s of retries and the stations' records
+ * are shed. The freed pages then stay in the file, where the writer reuses them. */
+#include <errno.h>
+#include <limits.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -93,7 +104,41 @@ static int store_metrics(sqlite3 *h, int64_t sid, const review_assessment *a) {
   return rc == SQLITE_DONE ? 0 : -1;
 }
 
+/* The pid of a writer that opened this file and has not closed it, and whose process is alive (a
+ * WAL file is shared by processes of one host only, so the pid is this host's); 0 if none. A pid
+ * reused by another process since a crash reads as alive: refused to the safe side, and said. */
+static long long live_writer_pid(sqlite3 *h) {
+  sqlite3_stmt *st;
+  long long found = 0;
+  if (sqlite3_prepare_v2(h, "SELECT pid FROM writer_run WHERE closed_unix_s IS NULL ORDER BY id DESC", -1, &st, NULL) !=
+      SQLITE_OK)
+    return 0; /* no writer_run (schema 1): nothing known */
+  while (!found && sqlite3_step(st) == SQLITE_ROW) {
+    const long long pid = sqlite3_column_int64(st, 0);
+    if (pid > 0 && pid <= INT_MAX && (kill((pid_t)pid, 0) == 0 || errno == EPERM)) found = pid;
+  }
+  sqlite3_finalize(st);
+  return found;
+}
+
+static long long freelist_pages(sqlite3 *h) {
+  sqlite3_stmt *st;
+  long long n = 0;
+  if (sqlite3_prepare_v2(h, "PRAGMA freelist_count", -1, &st, NULL) == SQLITE_OK) {
+    if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int64(st, 0);
+    sqlite3_finalize(st);
+  }
+  return n;
+}
+
 static int reclaim(palp_log *log, sqlite3 *h) {
+  const long long pid = live_writer_pid(h);
+  if (pid) {
+    printf("not compacted: a session log writer (pid %lld) has the file open, and compacting would hold its writes "
+           "for as long as it takes; the freed pages stay in the file, where the log reuses them (prune again once "
+           "it has stopped to give them back to the file system)\n", pid);
+    return 0;
+  }
   sqlite3_stmt *st;
   int mode = 0;
   if (sqlite3_prepare_v2(h, "PRAGMA auto_vacuum", -1, &st, NULL) == SQLITE_OK) {
@@ -132,6 +177,16 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
       return REVIEW_ERROR;
     }
     ids[i] = s.id;
+    long long pid;
+    if (!s.end_reason[0] && (pid = live_writer_pid(h))) {
+      palp_log_error(log,
+                     "delete: session '%s' has no end logged and a session log writer (pid %lld) has the file open: "
+                     "it may still be writing that session, and its records would go to the next session given its "
+                     "id; nothing deleted (end the session or stop that server first)",
+                     argv[i], pid);
+      free(ids);
+      return REVIEW_ERROR;
+    }
   }
   const long long before = file_bytes(path);
   for (int i = 0; i < argc; i++) {
@@ -233,7 +288,8 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
     pruned++;
   }
   free(v);
-  if (pruned) reclaim(log, h);
+  /* also when nothing was pruned this time: what an earlier prune freed beside a running server */
+  if (!dry && (pruned || freelist_pages(h) > 0)) reclaim(log, h);
   printf("%d session%s pruned; file %lld -> %lld bytes\n", pruned, pruned == 1 ? "" : "s", before, file_bytes(path));
   return rc;
 }
