@@ -22,6 +22,9 @@ static int check_palp_file(const char *path, char *err, size_t errlen) {
     sqlite3_close(db);
     return PALP_EIO;
   }
+  /* A live log's writer may hold a lock for a moment (a checkpoint, WAL recovery): wait for it as every
+   * other connection does, or a busy file would be called "not a palp session log". */
+  sqlite3_busy_timeout(db, PALP_DB_BUSY_TIMEOUT_MS);
   sqlite3_stmt *st;
   int version = -1, tables = -1, any = -1;
   if (sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK) {

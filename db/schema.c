@@ -83,6 +83,18 @@ static int has_tables(sqlite3 *db) {
   return n > 0;
 }
 
+/* palp's own tables, as every schema version since 1 has them (the reader's check_palp_file asks the same) */
+static int has_palp_tables(sqlite3 *db) {
+  sqlite3_stmt *st;
+  int n = 0;
+  if (sqlite3_prepare_v2(db, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN ('session', 'meta')",
+                         -1, &st, NULL) != SQLITE_OK)
+    return 0;
+  if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int(st, 0);
+  sqlite3_finalize(st);
+  return n == 2;
+}
+
 static int set_meta(sqlite3 *db, const char *key, const char *value) {
   sqlite3_stmt *st;
   int rc = sqlite3_prepare_v2(db,
@@ -193,6 +205,15 @@ int palp_db__connect(const char *path, int create, const char *app_version, sqli
   if (v == 0 && has_tables(db)) {
     /* Version 0 with tables: somebody else's database. Never add our schema to it. */
     palp_db__fmt(err, errlen, "%s: not a palp session log (it holds tables but no palp schema version)", path);
+    sqlite3_close(db);
+    return PALP_EINVAL;
+  }
+  if (v < 0 || (v > 0 && !has_palp_tables(db))) {
+    /* Another program's version number (palp's run 1..N): migrating from it would add palp's schema to
+     * that database, and the WAL pragma below would change its journal for good (session 75, found by
+     * review). Checked before anything is written. */
+    palp_db__fmt(err, errlen, "%s: not a palp session log (schema version %d without palp's tables; left untouched)",
+                 path, v);
     sqlite3_close(db);
     return PALP_EINVAL;
   }

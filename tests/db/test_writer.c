@@ -342,6 +342,41 @@ static void test_newer(void) {
   sqlite3_close(h);
 }
 
+/* --- another program's database with a version number of its own: refused, untouched -----------
+ * (session 75, found by review: a negative user_version ran every migration into it, and a version
+ * 1..5 made its journal WAL for good before the migration found no palp table). Each file keeps its
+ * version, its one table and its rollback journal (journal_mode 'delete'). */
+static void test_foreign_versioned(void) {
+  static const int versions[] = {-1, 3};
+  for (int k = 0; k < 2; k++) {
+    char p[600], err[512] = "", name[32];
+    snprintf(name, sizeof name, "foreign%d.db", k);
+    path_in(p, sizeof p, name);
+    sqlite3 *h;
+    REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+    char sql[128];
+    snprintf(sql, sizeof sql, "CREATE TABLE theirs(x); PRAGMA user_version = %d;", versions[k]);
+    REQUIRE(sqlite3_exec(h, sql, NULL, NULL, NULL) == SQLITE_OK, "make version %d", versions[k]);
+    sqlite3_close(h);
+    palp_db_writer *w = NULL;
+    const int rc = palp_db_writer_open(p, NULL, &w, err, sizeof err);
+    CHECK(rc == PALP_EINVAL && strstr(err, "not a palp session log") && strstr(err, "left untouched"),
+          "version %d: the writer refuses it (rc %d): %s", versions[k], rc, err);
+    if (rc == 0) palp_db_writer_close(w);
+    REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+    CHECK(db_scalar(h, "PRAGMA user_version") == versions[k] && db_scalar(h, "SELECT count(*) FROM sqlite_master") == 1,
+          "version %d: file untouched (version %lld, %lld objects)", versions[k],
+          (long long)db_scalar(h, "PRAGMA user_version"), (long long)db_scalar(h, "SELECT count(*) FROM sqlite_master"));
+    sqlite3_stmt *q;
+    const char *mode = "?";
+    if (sqlite3_prepare_v2(h, "PRAGMA journal_mode", -1, &q, NULL) == SQLITE_OK && sqlite3_step(q) == SQLITE_ROW)
+      mode = (const char *)sqlite3_column_text(q, 0);
+    CHECK(mode && !strcmp(mode, "delete"), "version %d: its journal mode stays 'delete' (got %s)", versions[k], mode);
+    sqlite3_finalize(q);
+    sqlite3_close(h);
+  }
+}
+
 /* --- a full disk: the caller never fails except by EFULL, and the loss is reported ----------- */
 static void test_full_disk(void) {
   char p[600], err[512];
@@ -640,6 +675,7 @@ int main(int argc, char **argv) {
   test_duplicate();
   test_migration(argv[2]);
   test_newer();
+  test_foreign_versioned();
   test_full_disk();
   test_full_disk_new_session();
   test_valid_range_detail();
