@@ -342,8 +342,11 @@ int palp_db_each_contact(palp_db *db, int64_t sid, palp_db_contact_fn fn, void *
     c.frame = sqlite3_column_int64(st, 0);
     c.sim_time_s = sqlite3_column_double(st, 1);
     c.slot = sqlite3_column_int(st, 2);
+    /* NULL in a file made elsewhere (no NOT NULL there): read as an unknown value, as any other */
     const char *op = (const char *)sqlite3_column_text(st, 3);
     const char *kind = (const char *)sqlite3_column_text(st, 4);
+    if (!op) op = "";
+    if (!kind) kind = "";
     c.op = !strcmp(op, "add") ? PALP_DB_OP_ADD : !strcmp(op, "update") ? PALP_DB_OP_UPDATE : PALP_DB_OP_REMOVE;
     c.kind = !strcmp(kind, "force") ? PALP_DB_KIND_FORCE : PALP_DB_KIND_FINGER;
     c.def.distribution = (palp_distribution)sqlite3_column_int(st, 5);
@@ -529,10 +532,12 @@ int palp_db_each_event(palp_db *db, int64_t sid, palp_db_event_fn fn, void *user
            sid, &st))
     return PALP_DB_ESQL;
   int rc = SQLITE_DONE, stop = 0;
-  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW)
-    stop = fn(user, sqlite3_column_double(st, 0), sqlite3_column_int64(st, 1),
-              (const char *)sqlite3_column_text(st, 2), (const char *)sqlite3_column_text(st, 3),
-              sqlite3_column_int64(st, 4));
+  while (!stop && (rc = sqlite3_step(st)) == SQLITE_ROW) {
+    /* a NULL kind (a file made elsewhere, without NOT NULL) reads as an empty, unknown kind */
+    const char *kind = (const char *)sqlite3_column_text(st, 2);
+    stop = fn(user, sqlite3_column_double(st, 0), sqlite3_column_int64(st, 1), kind ? kind : "",
+              (const char *)sqlite3_column_text(st, 3), sqlite3_column_int64(st, 4));
+  }
   return finish(st, stop ? SQLITE_DONE : rc, stop);
 }
 
@@ -584,7 +589,9 @@ int palp_db_log_health_get(palp_db *db, const palp_db_session_info *s, palp_db_l
     if (h->frame_step < 1) h->frame_step = 1;
   }
   if (h->frames > 0) {
-    h->frames_expected = (h->last_frame - h->first_frame) / h->frame_step + 1;
+    /* frame numbers from the file: a span past int64 (a damaged or forged row) would overflow */
+    const double span = (double)h->last_frame - (double)h->first_frame;
+    h->frames_expected = span >= 0 && span < 9e18 ? (h->last_frame - h->first_frame) / h->frame_step + 1 : h->frames;
     h->frames_missing = h->frames_expected > h->frames ? h->frames_expected - h->frames : 0;
   }
   h->cut_short = !h->ended;

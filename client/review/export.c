@@ -88,7 +88,9 @@ static int event_cb(void *u, double wall, int64_t frame, const char *kind, const
   exp_ctx *x = u;
   sep(x);
   if (x->csv) {
-    fprintf(x->f, "%.17g,%" PRId64 ",%s,%" PRId64 ",", wall, frame, kind, count);
+    fprintf(x->f, "%.17g,%" PRId64 ",", wall, frame);
+    csv_str(x->f, kind); /* text from the file: quoted like any other */
+    fprintf(x->f, ",%" PRId64 ",", count);
     csv_str(x->f, detail);
     fputc('\n', x->f);
     return 0;
@@ -141,9 +143,11 @@ static int json_array(palp_db *db, exp_ctx *x, const char *name, int last, int t
   return rc;
 }
 
-/* The logged JSON goes in as JSON when it parses, else as a string, so the export stays valid. */
+/* The logged JSON goes in as JSON when it parses whole, else as a string, so the export stays valid:
+ * cJSON_Parse alone stops after the first value, and text after it ('{}, "frames": [...]') would
+ * have gone out raw, as keys of the export's own. */
 static void json_embed(FILE *f, const char *s) {
-  cJSON *j = s && *s ? cJSON_Parse(s) : NULL;
+  cJSON *j = s && *s ? cJSON_ParseWithOpts(s, NULL, 1) : NULL;
   if (j) fputs(s, f);
   else if (s && *s) json_str(f, s);
   else fputs("null", f);

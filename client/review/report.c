@@ -483,7 +483,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   char *scene_json = NULL;
   palp_db_session_json(db, s->id, &scene_json, NULL);
   palp_scene sc;
-  char perr[256];
+  char perr[256] = "no scene logged";
   palp_mesh mesh;
   int have_mesh = 0;
   if (scene_json && palp_scene_parse(scene_json, &sc, perr, sizeof perr) == 0)

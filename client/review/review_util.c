@@ -18,10 +18,12 @@ void review_fmt_time(double unix_s, char *buf, size_t len) {
     snprintf(buf, len, "-");
     return;
   }
-  time_t t = (time_t)unix_s;
+  /* a time from the file: past the year 9999 (2.5e11 s) it is no time a log was written, and the cast
+   * to time_t would overflow */
   struct tm tm;
-  localtime_r(&t, &tm);
-  strftime(buf, len, "%Y-%m-%d %H:%M:%S %z", &tm);
+  const time_t t = (time_t)fmin(unix_s, 253402300799.0);
+  if (unix_s > 253402300799.0 || !localtime_r(&t, &tm) || !strftime(buf, len, "%Y-%m-%d %H:%M:%S %z", &tm))
+    snprintf(buf, len, "-");
 }
 
 void json_str(FILE *f, const char *s) {
@@ -50,8 +52,11 @@ void html_str(FILE *f, const char *s) {
 }
 
 void csv_str(FILE *f, const char *s) {
-  /* Always quoted (RFC 4180), quotes doubled: a field may hold commas and line breaks. */
+  /* Always quoted (RFC 4180), quotes doubled: a field may hold commas and line breaks. A text that a
+   * spreadsheet would run as a formula (=, +, -, @, or a tab or carriage return first: a trainee
+   * named '=HYPERLINK(...)') gets a leading apostrophe, the usual guard (OWASP, "CSV injection"). */
   fputc('"', f);
+  if (s && *s && strchr("=+-@\t\r", *s)) fputc('\'', f);
   for (const char *p = s ? s : ""; *p; p++) {
     if (*p == '"') fputc('"', f);
     fputc(*p, f);

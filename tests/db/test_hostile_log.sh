@@ -79,4 +79,64 @@ sum1=$(md5sum < "$dir/foreign.db")
 [ $rc -eq 2 ] && [ "$sum0" = "$sum1" ] && [ ! -e "$dir/foreign.db-wal" ] && echo "$msg" | grep -q "not a palp session log" \
   && ok "foreign SQLite file refused, byte-identical: $msg" || bad "foreign file: exit $rc: $msg"
 
+# Hostile text and numbers in a log made elsewhere (session 75, found by review):
+#  - NULL op and kind in contact_input and NULL kind in event (tables without NOT NULL): show,
+#    replay and the exports run to an exit status of their own (< 128: no crash);
+#  - an event kind holding a quote and a line break: the CSV export still parses to one row per
+#    event, the kind read back whole; a detail starting '=' goes out with an apostrophe first (a
+#    spreadsheet would run it as a formula);
+#  - scene_json of a value followed by more text: the JSON export is one valid document whose keys
+#    are the export's own, the scene kept as a string;
+#  - a start 1e300 s after 1970 and frames at -9e18 and 9e18: show runs (no crash), the start shown "-".
+copy nulls
+sqlite3 "$dir/nulls.db" "CREATE TABLE ci AS SELECT * FROM contact_input; DROP TABLE contact_input; ALTER TABLE ci RENAME TO contact_input;
+  UPDATE contact_input SET op = NULL, kind = NULL WHERE rowid = (SELECT min(rowid) FROM contact_input);
+  CREATE TABLE ev AS SELECT * FROM event; DROP TABLE event; ALTER TABLE ev RENAME TO event;
+  INSERT INTO event(session_id, wall_unix_s, frame, kind, detail, count) SELECT id, 1.0, 1, NULL, 'x', 1 FROM session;"
+crashed=""
+for cmd in show replay "export --format csv --table contacts" "export --format json --table events"; do
+  set +e
+  # shellcheck disable=SC2086
+  "$review" --db "$dir/nulls.db" $cmd "$uid" > "$dir/nulls.out" 2>&1; rc=$?
+  set -e
+  [ $rc -lt 128 ] || crashed="$crashed $cmd:$rc"
+done
+[ -z "$crashed" ] && ok "NULL op, kind and event kind: show, replay, exports exit on their own (no crash)" || bad "NULL columns crash:$crashed"
+
+copy text
+sqlite3 "$dir/text.db" "DELETE FROM event; INSERT INTO event(session_id, wall_unix_s, frame, kind, detail, count)
+  SELECT id, 1.0, 1, 'x\",1' || char(10) || '1,2,forged,1,\"', 'plain', 1 FROM session;
+  INSERT INTO event(session_id, wall_unix_s, frame, kind, detail, count) SELECT id, 2.0, 2, 'info', '=1+1', 1 FROM session;"
+"$review" --db "$dir/text.db" export "$uid" --format csv --table events --out "$dir/events.csv" >/dev/null 2>&1 || bad "events CSV export"
+if python3 - "$dir/events.csv" <<'PY'
+import csv, sys
+rows = list(csv.reader(open(sys.argv[1], newline="")))
+body = rows[1:]
+assert len(body) == 2, rows
+assert body[0][2] == 'x",1\n1,2,forged,1,"' and body[0][4] == "plain", body[0]
+assert body[1][4] == "'=1+1", body[1]
+PY
+then ok "events CSV: a kind with a quote and a line break stays one field of one row; '=1+1' goes out as \"'=1+1\""
+else bad "events CSV with hostile text: $(head -c 400 "$dir/events.csv")"; fi
+sqlite3 "$dir/text.db" "UPDATE session SET scene_json = '{}, \"frames\": [{\"frame\": 1}], \"x\": {}'"
+"$review" --db "$dir/text.db" export "$uid" --format json --table events --out "$dir/text.json" >/dev/null 2>&1 || bad "JSON export"
+if python3 - "$dir/text.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+s = d["session"]
+assert "x" not in d and "x" not in s and isinstance(d.get("frames", []), list), (sorted(d), sorted(s))
+assert isinstance(s["scene"], str) and s["scene"].startswith("{}, "), type(s["scene"]).__name__
+PY
+then ok "JSON export: a scene of a value and more text goes in as a string; no key of its own added"
+else bad "JSON export with a trailing-text scene: $(head -c 400 "$dir/text.json")"; fi
+
+copy huge
+sqlite3 "$dir/huge.db" "UPDATE session SET start_unix_s = 1e300; UPDATE frame SET frame = -9000000000000000000 WHERE frame = (SELECT min(frame) FROM frame);
+  UPDATE frame SET frame = 9000000000000000000 WHERE frame = (SELECT max(frame) FROM frame)"
+set +e
+out=$("$review" --db "$dir/huge.db" show "$uid" 2>&1); rc=$?
+set -e
+[ $rc -lt 128 ] && echo "$out" | grep -Eq "^started +-$" && ok "start 1e300 s and frames at +-9e18: show exits $rc, the start shown '-'" ||
+  bad "huge numbers: exit $rc: $(echo "$out" | head -8)"
+
 exit $fail
