@@ -94,9 +94,14 @@ int palp_db_file_version(palp_db *db) {
   return v;
 }
 
+/* A session's names from the file, as every tool prints them: control characters (an escape sequence
+ * in a trainee's name retitles or clears an instructor's terminal) read as '?'. palp's writers never
+ * log one; a file made or edited elsewhere may. */
 static void col_str(sqlite3_stmt *st, int i, char *dst, size_t len) {
   const unsigned char *s = sqlite3_column_text(st, i);
   palp_db__fmt(dst, len, "%s", s ? (const char *)s : "");
+  for (char *p = dst; *p; p++)
+    if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = '?';
 }
 
 #define SESSION_COLS                                                                                \

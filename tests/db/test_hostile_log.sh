@@ -130,6 +130,17 @@ PY
 then ok "JSON export: a scene of a value and more text goes in as a string; no key of its own added"
 else bad "JSON export with a trailing-text scene: $(head -c 400 "$dir/text.json")"; fi
 
+# an escape sequence in a trainee's name (OSC: retitle the terminal, then BEL) and a line break in the
+# station's: list and show print neither byte, the name read with '?' for each control character
+copy escape
+sqlite3 "$dir/escape.db" "UPDATE session SET trainee = char(27) || ']0;pwned' || char(7) || 'eve', station = 'a' || char(10) || 'b'"
+"$review" --db "$dir/escape.db" list > "$dir/escape.out" 2>&1 || bad "list with an escape in a name"
+"$review" --db "$dir/escape.db" show "$uid" >> "$dir/escape.out" 2>&1 || bad "show with an escape in a name"
+if ! LC_ALL=C grep -q "$(printf '\033')" "$dir/escape.out" && ! LC_ALL=C grep -q "$(printf '\007')" "$dir/escape.out" &&
+  grep -q '?\]0;pwned?eve' "$dir/escape.out" && grep -q 'station a?b' "$dir/escape.out"; then
+  ok "control characters in names: list and show print '?' for each, no escape or bell byte"
+else bad "control characters reach the terminal: $(od -c "$dir/escape.out" | head -5)"; fi
+
 copy huge
 sqlite3 "$dir/huge.db" "UPDATE session SET start_unix_s = 1e300; UPDATE frame SET frame = -9000000000000000000 WHERE frame = (SELECT min(frame) FROM frame);
   UPDATE frame SET frame = 9000000000000000000 WHERE frame = (SELECT max(frame) FROM frame)"
