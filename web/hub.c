@@ -29,6 +29,11 @@
 #define TAKE 32
 #define MAX_CLIENTS_HARD 256
 #define DEFAULT_PATCH_AREA 5.2e-4 /* [m^2], the server's default when a contact says 0 */
+/* The live view's bounds on what a contact may say: 10 m from the phantom's origin, 1 MN (the server's
+ * absurd_force may be set up to 1e6 N). Beyond them it is no palpation, and the numbers' width in the
+ * live message stays bounded (%.6f of 10 m: 10 characters). */
+#define LIVE_MAX_REACH_M 10.0
+#define LIVE_MAX_FORCE_N 1.0e6
 #define WAKE_PERIOD_NS 100000000LL
 #define JOIN_PERIOD_NS 100000000LL
 #define SESSIONS_PERIOD_NS 200000000LL /* the list's live figures (force, coverage) at 5 Hz */
@@ -613,56 +618,81 @@ static void build_status(palp_web_hub *h) {
   publish_json(h, &h->status_msg, j);
 }
 
+/* Appends to a fixed buffer: once a text does not fit, *n passes cap and every later call writes
+ * nothing, so the caller tests *n < cap once at the end. (snprintf returns the length it wanted: the
+ * pattern n += snprintf(buf + n, sizeof buf - n, ...) handed a wrapped size to the next call once n
+ * passed the buffer, and wrote past it; session 75, found by review with a contact of 1e308 m.) */
+static void app(char *buf, size_t cap, size_t *n, const char *fmt, ...) {
+  if (*n >= cap) return;
+  va_list ap;
+  va_start(ap, fmt);
+  const int r = vsnprintf(buf + *n, cap - *n, fmt, ap);
+  va_end(ap);
+  *n = r < 0 ? cap : *n + (size_t)r;
+}
+
+/* A number for the live message: JSON has no inf or nan (the page's JSON.parse would throw and its
+ * view freeze); every value here is checked where it arrives, so this is the last line only. */
+static double jnum(double x) { return isfinite(x) ? x : 0.0; }
+
 static void build_live(palp_web_hub *h, int slot) {
   const session *s = &h->s[slot];
   double cov[3];
   session_coverage(s, cov);
-  char buf[2048];
-  size_t n = (size_t)snprintf(buf, sizeof buf,
-                              "{\"type\":\"live\",\"session\":%u,\"frame\":%.0f,\"sim_time\":%.4f,\"force\":%.4f,"
-                              "\"band\":\"%s\",\"band_rule\":\"%s\",\"max_disp_mm\":%.3f,\"fps\":%.1f,"
-                              "\"coverage\":[%.4f,%.4f,%.4f],",
-                              s->id, (double)s->frame, s->sim_time, s->force, palp_web_band_name(s->band),
-                              s->exercise_bands ? "exercise" : "force", s->max_disp * 1e3, s->fps, cov[0], cov[1],
-                              cov[2]);
+  /* four fingers at the bounds on what arrives (LIVE_MAX_*: ~400 characters each with a local model),
+   * the findings' reason (128) and the head: ~2.2 kB at most */
+  char buf[4096];
+  size_t n = 0;
+  app(buf, sizeof buf, &n,
+      "{\"type\":\"live\",\"session\":%u,\"frame\":%.0f,\"sim_time\":%.4f,\"force\":%.4f,"
+      "\"band\":\"%s\",\"band_rule\":\"%s\",\"max_disp_mm\":%.3f,\"fps\":%.1f,"
+      "\"coverage\":[%.4f,%.4f,%.4f],",
+      s->id, jnum((double)s->frame), jnum(s->sim_time), jnum(s->force), palp_web_band_name(s->band),
+      s->exercise_bands ? "exercise" : "force", jnum(s->max_disp * 1e3), jnum(s->fps), jnum(cov[0]), jnum(cov[1]),
+      jnum(cov[2]));
   /* the indentation the band was read from (exercise bands), [mm] */
-  if (s->exercise_bands && isfinite(s->depth))
-    n += (size_t)snprintf(buf + n, sizeof buf - n, "\"depth_mm\":%.3f,", s->depth * 1e3);
-  n += (size_t)snprintf(buf + n, sizeof buf - n, "\"fingers\":[");
+  if (s->exercise_bands && isfinite(s->depth)) app(buf, sizeof buf, &n, "\"depth_mm\":%.3f,", s->depth * 1e3);
+  app(buf, sizeof buf, &n, "\"fingers\":[");
   int first = 1;
-  for (int k = 0; k < FINGERS && n < sizeof buf - 480; k++) {
+  for (int k = 0; k < FINGERS; k++) {
     const finger *f = &s->f[k];
     if (f->mode == palp_CONTACT_RELEASE) continue;
     const double *fv = f->mode == palp_CONTACT_FORCE ? f->force : f->fb;
-    n += (size_t)snprintf(buf + n, sizeof buf - n,
-                          "%s{\"finger\":%d,\"mode\":\"%s\",\"center\":[%.6f,%.6f,%.6f],\"force\":[%.4f,%.4f,%.4f],"
-                          "\"radius\":%.5f}",
-                          first ? "" : ",", k, f->mode == palp_CONTACT_FORCE ? "force" : "finger", f->center[0],
-                          f->center[1], f->center[2], fv[0], fv[1], fv[2], f->radius);
+    app(buf, sizeof buf, &n,
+        "%s{\"finger\":%d,\"mode\":\"%s\",\"center\":[%.6f,%.6f,%.6f],\"force\":[%.4f,%.4f,%.4f],"
+        "\"radius\":%.5f}",
+        first ? "" : ",", k, f->mode == palp_CONTACT_FORCE ? "force" : "finger", jnum(f->center[0]), jnum(f->center[1]),
+        jnum(f->center[2]), jnum(fv[0]), jnum(fv[1]), jnum(fv[2]), jnum(f->radius));
     /* A position-driven finger's newest local model: the proxy (fingertip on the surface) and
-     * the device point, so that the page draws the tip where the phantom stops it. */
-    if (f->mode == palp_CONTACT_FINGER && f->lm_valid)
-      n += (size_t)snprintf(buf + n - 1, sizeof buf - n + 1,
-                            ",\"proxy\":[%.6f,%.6f,%.6f],\"device\":[%.6f,%.6f,%.6f],\"in_contact\":%s,"
-                            "\"model_force\":%.4f,\"flags\":%u,\"force_limit\":%s,\"out_of_range\":%s}",
-                            f->proxy[0], f->proxy[1], f->proxy[2], f->device[0], f->device[1], f->device[2],
-                            f->lm_contact ? "true" : "false", f->lm_force, (unsigned)f->lm_flags,
-                            (f->lm_flags & palp_LM_FORCE_LIMIT) ? "true" : "false",
-                            (f->lm_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) ? "true" : "false") - 1;
+     * the device point, so that the page draws the tip where the phantom stops it (written over the
+     * finger's closing brace, and closing it again). */
+    if (f->mode == palp_CONTACT_FINGER && f->lm_valid && n < sizeof buf) {
+      n--;
+      app(buf, sizeof buf, &n,
+          ",\"proxy\":[%.6f,%.6f,%.6f],\"device\":[%.6f,%.6f,%.6f],\"in_contact\":%s,"
+          "\"model_force\":%.4f,\"flags\":%u,\"force_limit\":%s,\"out_of_range\":%s}",
+          jnum(f->proxy[0]), jnum(f->proxy[1]), jnum(f->proxy[2]), jnum(f->device[0]), jnum(f->device[1]),
+          jnum(f->device[2]), f->lm_contact ? "true" : "false", jnum(f->lm_force), (unsigned)f->lm_flags,
+          (f->lm_flags & palp_LM_FORCE_LIMIT) ? "true" : "false",
+          (f->lm_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) ? "true" : "false");
+    }
     first = 0;
   }
-  n += (size_t)snprintf(buf + n, sizeof buf - n, "]");
+  app(buf, sizeof buf, &n, "]");
   if (s->fst.valid) {
     char reason[128];
     json_safe(reason, sizeof reason, s->fst.reason);
-    n += (size_t)snprintf(buf + n, sizeof buf - n,
-                          ",\"findings\":{\"marks\":%u,\"last_mark_id\":%u,\"last_accepted\":%s,\"reason\":\"%s\","
-                          "\"time_left\":%.3f,\"age\":%.3f}",
-                          s->fst.marks, s->fst.last_mark_id, s->fst.last_accepted ? "true" : "false", reason,
-                          s->fst.time_left, (double)(palp_dds_now_ns() - s->fst.at_ns) * 1e-9);
+    app(buf, sizeof buf, &n,
+        ",\"findings\":{\"marks\":%u,\"last_mark_id\":%u,\"last_accepted\":%s,\"reason\":\"%s\","
+        "\"time_left\":%.3f,\"age\":%.3f}",
+        s->fst.marks, s->fst.last_mark_id, s->fst.last_accepted ? "true" : "false", reason, jnum(s->fst.time_left),
+        jnum((double)(palp_dds_now_ns() - s->fst.at_ns) * 1e-9));
   }
-  n += (size_t)snprintf(buf + n, sizeof buf - n, "}");
-  if (n >= sizeof buf) return;
+  app(buf, sizeof buf, &n, "}");
+  if (n >= sizeof buf) {
+    h->stats.dropped++; /* cannot be with the values checked as they arrive; counted, not sent */
+    return;
+  }
   unsigned char *m = malloc(n);
   if (!m) return;
   memcpy(m, buf, n);
@@ -670,6 +700,12 @@ static void build_live(palp_web_hub *h, int slot) {
 }
 
 /* ---- DDS samples ---------------------------------------------------------------------------- */
+
+static int vec_finite(const palp_Vec3 *v) { return isfinite(v->x) && isfinite(v->y) && isfinite(v->z); }
+/* finite and no longer than bound (the live message's bounds, LIVE_MAX_*) */
+static int vec_within(const palp_Vec3 *v, double bound) {
+  return vec_finite(v) && hypot(hypot(v->x, v->y), v->z) <= bound;
+}
 
 static phantom *find_phantom(palp_web_hub *h, uint32_t id, int create, int *slot) {
   for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++)
@@ -1608,9 +1644,14 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
     return;
   }
   finger *f = &s->f[m->finger];
+  /* finite, and of a size a phantom can have (the server refuses the same: a contact 10 m off or of
+   * 10 kN is no palpation; 1e308 m printed 316 characters into the live message, session 75) */
+  const double cm = hypot(hypot(m->center.x, m->center.y), m->center.z);
+  const double fm = hypot(hypot(m->force.x, m->force.y), m->force.z);
   const int finite = isfinite(m->center.x) && isfinite(m->center.y) && isfinite(m->center.z) &&
                      isfinite(m->force.x) && isfinite(m->force.y) && isfinite(m->force.z) && isfinite(m->radius) &&
-                     isfinite(m->patch_area);
+                     isfinite(m->patch_area) && cm <= LIVE_MAX_REACH_M && fm <= LIVE_MAX_FORCE_N &&
+                     fabs(m->radius) <= LIVE_MAX_REACH_M && fabs(m->patch_area) <= LIVE_MAX_REACH_M * LIVE_MAX_REACH_M;
   if (m->mode == palp_CONTACT_RELEASE || !finite ||
       (m->mode != palp_CONTACT_FORCE && m->mode != palp_CONTACT_FINGER)) {
     /* The server rejects what is not finite or of no known mode; so does the view. */
@@ -1664,23 +1705,23 @@ static void on_feedback(palp_web_hub *h, const palp_Feedback *m) {
   }
   for (uint32_t i = 0; i < m->fingers._length && i < FINGERS; i++) {
     const palp_FingerFeedback *ff = &m->fingers._buffer[i];
-    if (ff->finger >= FINGERS || !isfinite(ff->force.x) || !isfinite(ff->force.y) || !isfinite(ff->force.z)) continue;
+    if (ff->finger >= FINGERS || !vec_within(&ff->force, LIVE_MAX_FORCE_N)) continue;
     finger *f = &s->f[ff->finger];
     f->fb[0] = ff->force.x, f->fb[1] = ff->force.y, f->fb[2] = ff->force.z;
     f->fb_active = ff->active;
   }
-  if (m->sim_time > s->sim_time && !s->have_deform) s->sim_time = m->sim_time, s->frame = m->frame;
+  if (isfinite(m->sim_time) && m->sim_time > s->sim_time && !s->have_deform) s->sim_time = m->sim_time, s->frame = m->frame;
   recompute_force(h, s);
 }
 
-static int vec_finite(const palp_Vec3 *v) { return isfinite(v->x) && isfinite(v->y) && isfinite(v->z); }
 
 /* The server's local model of one finger (published while the trainee's station asks for
  * feedback): newest per finger kept, an older frame (reordered or replayed) ignored. */
 static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
-  if (!s || m->finger >= FINGERS || !vec_finite(&m->proxy) || !vec_finite(&m->device) || !vec_finite(&m->force)) {
+  if (!s || m->finger >= FINGERS || !vec_within(&m->proxy, LIVE_MAX_REACH_M) ||
+      !vec_within(&m->device, LIVE_MAX_REACH_M) || !vec_within(&m->force, LIVE_MAX_FORCE_N)) {
     if (s) h->stats.dropped++;
     else h->stats.no_session++;
     return;
@@ -1793,7 +1834,8 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   const uint32_t n = m->positions._length;
-  if (!s || !s->ph || (int)n != s->ph->n) {
+  /* a time the view can print (the live message's sim_time: JSON has no inf) */
+  if (!s || !s->ph || (int)n != s->ph->n || !isfinite(m->sim_time)) {
     if (s) h->stats.dropped++;
     else h->stats.no_session++;
     return;

@@ -1354,6 +1354,63 @@ static void test_forged_dispose(palp_web_hub *h, palp_web_cursor *c, dds_entity_
   CHECK(next_live_finger1(h, c, ct->session_id, 1) == 1, "written again, the finger is down again");
 }
 
+/* A contact of absurd size from the session's own writer (a trainee may write in her own partition):
+ * finger 0 pressing at 1e308 m with 1e308 N. Until session 75 the live message printed its 316-digit
+ * numbers into a 2 kB stack buffer and wrote past it (found by review: ASan, stack-buffer-overflow);
+ * now it is dropped as it arrives (counted, exactly 1), finger 1 stays in the view, and every live
+ * message after it is whole JSON. One at the bounds (9.9 m, 9.9e5 N) is taken: finger 0 is shown. */
+static void test_absurd_contact(palp_web_hub *h, palp_web_cursor *c, dds_entity_t w_contact, const palp_Contact *ct) {
+  palp_web_hub_stats hs;
+  palp_web_hub_stats_get(h, &hs);
+  const uint64_t before = hs.dropped;
+  palp_Contact a = *ct;
+  a.finger = 0;
+  a.mode = palp_CONTACT_FORCE;
+  a.center = (palp_Vec3){1e308, 1e308, 1e308};
+  a.force = (palp_Vec3){1e308, 1e308, 1e308};
+  CHECK(dds_write(w_contact, &a) == 0, "the absurd contact written");
+  for (int i = 0; i < 300 && hs.dropped == before; i++) {
+    dds_sleepfor(DDS_MSECS(10));
+    palp_web_hub_stats_get(h, &hs);
+  }
+  CHECK(hs.dropped == before + 1, "dropped as it arrives (%llu more, want 1)", (unsigned long long)(hs.dropped - before));
+  a.center = (palp_Vec3){0, 0, 9.9};
+  a.force = (palp_Vec3){0, 0, -9.9e5};
+  CHECK(dds_write(w_contact, &a) == 0, "a contact at the bounds written");
+  int whole = 0, bad = 0, finger0 = 0, finger1 = 0;
+  for (int i = 0; i < 300 && !(finger0 && whole >= 3); i++) {
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, c, 0, &buf, &len, &binary);
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      if (!j) bad++;
+      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+      if (type && !strcmp(type, "live") && cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) == ct->session_id) {
+        whole++;
+        const cJSON *f = NULL;
+        cJSON_ArrayForEach(f, cJSON_GetObjectItem(j, "fingers")) {
+          const double k = cJSON_GetNumberValue(cJSON_GetObjectItem(f, "finger"));
+          finger1 |= k == 1;
+          if (k == 0) {
+            const cJSON *fz = cJSON_GetArrayItem(cJSON_GetObjectItem(f, "force"), 2);
+            finger0 |= fabs(cJSON_GetNumberValue(fz) + 9.9e5) < 1e-3;
+          }
+        }
+      }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  CHECK(bad == 0 && whole >= 1 && finger1, "every message whole JSON (%d not), live messages of the session (%d) with "
+        "finger 1 still in them", bad, whole);
+  CHECK(finger0, "the contact at the bounds is taken: finger 0 pressing -9.9e5 N within 1 mN");
+  a.mode = palp_CONTACT_RELEASE;
+  dds_write(w_contact, &a); /* lifted again, for the tests after this one */
+}
+
 /* A position-driven finger's local model (palp_local_model, written here as the server would)
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
@@ -1500,6 +1557,7 @@ static void test_local_model(void) {
             palp_web_hub_has_instance(h, PALP_TOPIC_LOCAL_MODEL, sid, 7) == 0,
         "instances: its session's contact and model, not the stray session's contact nor finger 7's model");
   test_forged_dispose(h, &c, pp, t_contact, w_contact, &ct);
+  test_absurd_contact(h, &c, w_contact, &ct);
   test_stream_flood(h, pp, w_state, pub);
   test_findings(h, &c, pp, pub, sid, w_lm, &lm);
   test_exercise_bands(h, pp);
