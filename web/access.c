@@ -17,6 +17,32 @@ int palp_web_addr_is_loopback(const char *addr) {
   return 0;
 }
 
+int palp_web_host_is_loopback(const char *host) {
+  if (!host) return 0;
+  char addr[64];
+  const char *end;
+  if (host[0] == '[') { /* [v6]:port */
+    end = strchr(host, ']');
+    if (!end || (size_t)(end - host - 1) >= sizeof addr) return 0;
+    memcpy(addr, host + 1, (size_t)(end - host - 1));
+    addr[end - host - 1] = '\0';
+    end++;
+  } else {
+    end = strchr(host, ':');
+    if (!end) end = host + strlen(host);
+    if ((size_t)(end - host) >= sizeof addr) return 0;
+    memcpy(addr, host, (size_t)(end - host));
+    addr[end - host] = '\0';
+  }
+  if (*end == ':') { /* a port: 1-5 digits and nothing after */
+    size_t d = strspn(end + 1, "0123456789");
+    if (d < 1 || d > 5 || end[1 + d]) return 0;
+  } else if (*end) {
+    return 0;
+  }
+  return palp_web_addr_is_loopback(addr);
+}
+
 static int token_char(char c) {
   return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '.' || c == '_' ||
          c == '~' || c == '-';

@@ -15,6 +15,10 @@
 
 /* 1 when addr is a loopback address (127.0.0.0/8, ::1, "localhost"), else 0. */
 int palp_web_addr_is_loopback(const char *addr);
+/* 1 when an HTTP Host header names a loopback address ("127.0.0.1:8090", "[::1]:8090", "localhost",
+ * with or without a port), else 0: without a token palp-web answers only requests sent to such a
+ * name, so a page of another site made to resolve to 127.0.0.1 (DNS rebinding) gets nothing. */
+int palp_web_host_is_loopback(const char *host);
 
 /* 0 when the token may be used: PALP_WEB_TOKEN_MIN..MAX characters of [A-Za-z0-9._~-] (it travels
  * in URLs and a cookie unescaped); else PALP_EINVAL. */

@@ -2464,8 +2464,13 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
     set_reply(c, op, 0, 0, "the finding could not be written to the session");
   } else {
     if (h->slot_sid[slot] == f.session_id) { /* still the same session */
-      if (mark) fs->stack[fs->nstack++] = ++fs->next_mark;
-      else fs->nstack--;
+      /* The server's answer may have come while the lock was let go for the write (on_finding_status
+       * pops a refused top mark): pop the mark withdrawn only if it is still on top, push within the
+       * stack's bound (a plain nstack-- could pop another mark, or go to -1 and the next mark write
+       * stack[-1]; session 75, found by review). */
+      if (mark && fs->nstack < FINDING_MARKS_MAX) fs->stack[fs->nstack++] = ++fs->next_mark;
+      else if (mark) ++fs->next_mark;
+      else if (fs->nstack > 0 && fs->stack[fs->nstack - 1] == f.mark_id) fs->nstack--;
     }
     h->stats.findings_written++;
     set_reply(c, op, 1, f.mark_id, "");

@@ -91,10 +91,26 @@ static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int
  * token: the Origin's host:port must be the Host the request was sent to. */
 static int same_origin(struct lws *wsi) {
   char origin[256], host[256];
-  if (lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN) <= 0) return 1; /* not a browser */
+  /* absent: not a browser. Too long to copy is not absent (lws_hdr_copy says -1 for both; a page
+   * served from a 249-character host name went through as "no Origin" until session 75): refused. */
+  const int on = lws_hdr_total_length(wsi, WSI_TOKEN_ORIGIN);
+  if (on <= 0) return 1;
+  if (on >= (int)sizeof origin || lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN) <= 0) return 0;
   if (lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST) <= 0) return 0;
   const char *o = strstr(origin, "://");
   return o && !strcmp(o + 3, host);
+}
+
+/* Without a token palp-web listens on loopback only, and answers only a request sent to a loopback
+ * name: a page of another site whose name was made to resolve to 127.0.0.1 (DNS rebinding) is
+ * same-origin with itself (Origin = Host = evil.example:8090) and would read every session. With a
+ * token, such a page has none. */
+static int host_allowed(palp_web_server *s, struct lws *wsi) {
+  if (s->have_token) return 1;
+  char host[256];
+  const int n = lws_hdr_total_length(wsi, WSI_TOKEN_HOST);
+  return n > 0 && n < (int)sizeof host && lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST) > 0 &&
+         palp_web_host_is_loopback(host);
 }
 
 static int http_status(struct lws *wsi, unsigned code, palp_web_server *s, uint64_t *counter) {
@@ -107,7 +123,7 @@ static int http_status(struct lws *wsi, unsigned code, palp_web_server *s, uint6
 static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
   int from_url = 0;
   const int who = authorised(s, wsi, 1, &from_url);
-  if (who < 0) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, s, &s->stats.http_denied);
+  if (who < 0 || !host_allowed(s, wsi)) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, s, &s->stats.http_denied);
   const char *path = !strcmp(uri, "/") ? "/index.html" : uri;
   const char *mime = palp_web_mime(path);
   if (palp_web_path_check(path) != 0 || !mime) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
@@ -153,7 +169,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     const int who = lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) > 0 && !strcmp(uri, WS_PATH)
                         ? authorised(s, wsi, 0, &from_url)
                         : -1;
-    if (who < 0 || !same_origin(wsi) || !c) {
+    if (who < 0 || !same_origin(wsi) || !host_allowed(s, wsi) || !c) {
       s->stats.ws_denied++;
       return 1;
     }

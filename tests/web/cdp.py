@@ -22,7 +22,9 @@ CHROMIUM = "/usr/bin/chromium"
 class WebSocket:
     """Client side of one WebSocket connection (ws://, or wss:// with an ssl.SSLContext)."""
 
-    def __init__(self, url, timeout=30.0, headers=None, ssl_context=None):
+    def __init__(self, url, timeout=30.0, headers=None, ssl_context=None, host_header=None):
+        """host_header: the Host header to send instead of the URL's host:port (a page whose name was made to
+        resolve to this address sends its own)."""
         tls = url.startswith("wss://")
         assert url.startswith("ws://") or (tls and ssl_context is not None), url
         rest = url[6:] if tls else url[5:]
@@ -34,7 +36,7 @@ class WebSocket:
         key = base64.b64encode(os.urandom(16)).decode()
         extra = "".join("%s: %s\r\n" % kv for kv in (headers or {}).items())
         req = ("GET /%s HTTP/1.1\r\nHost: %s\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-               "Sec-WebSocket-Key: %s\r\nSec-WebSocket-Version: 13\r\n%s\r\n") % (path, hostport, key, extra)
+               "Sec-WebSocket-Key: %s\r\nSec-WebSocket-Version: 13\r\n%s\r\n") % (path, host_header or hostport, key, extra)
         self.sock.sendall(req.encode())
         head = b""
         while b"\r\n\r\n" not in head:

@@ -2,7 +2,8 @@
 """web_token: with an access token required, a request without it gets nothing: every page and
 script answers 401 with no content, the WebSocket handshake is refused, and a page opened in
 headless Chromium without the token shows no palp page and opens no stream. With the token the
-same page works. palp-web refuses to listen beyond loopback without a token. DDS domain 193.
+same page works. palp-web refuses to listen beyond loopback without a token; without one, it answers
+only requests sent to a loopback name (DNS rebinding), and an over-long Origin is refused. DDS domain 193.
 usage: test_token.py BUILD SOURCE OUT"""
 import os
 import subprocess
@@ -63,6 +64,37 @@ def run(build, source, out):
         op, data = ws.recv()
         ws.close()
         check(op == 1 and data.startswith(b'{"type":"hello"'), "WebSocket with the token: hello")
+
+        # An Origin too long to copy is not "no Origin" (session 75, found by review: a page served from a
+        # 249+ character host name drove the WebSocket as if it were no browser).
+        long_origin = "http://" + "a" * 290 + ".example"
+        try:
+            harness.cdp.WebSocket(ws_url + "?token=" + TOKEN, timeout=5, headers={"Origin": long_origin}).close()
+            refused = False
+        except (ConnectionError, OSError):
+            refused = True
+        check(refused, "WebSocket with the token and a %d-character foreign Origin: refused" % len(long_origin))
+
+        # Without a token (loopback only), a request sent to another name is refused: a site whose name was
+        # made to resolve to 127.0.0.1 (DNS rebinding) is same-origin with itself (Origin = Host). Sent to
+        # 127.0.0.1 the same page and WebSocket are served.
+        open_web = procs.web([], name="web-open")
+        evil = "evil.example:%d" % open_web.port
+        status, body, _ = harness.http_get(open_web.base + "/trainee.html", {"Host": evil})
+        check(status == 401 and b"trainee" not in body, "no token: GET with Host %s: %d, none of the page" % (evil, status))
+        status, body, _ = harness.http_get(open_web.base + "/trainee.html")
+        check(status == 200 and b"trainee" in body, "no token: GET with Host 127.0.0.1: served (%d)" % status)
+        open_ws = "ws://127.0.0.1:%d/ws" % open_web.port
+        try:
+            harness.cdp.WebSocket(open_ws, timeout=5, headers={"Origin": "http://" + evil}, host_header=evil).close()
+            refused = False
+        except (ConnectionError, OSError):
+            refused = True
+        check(refused, "no token: WebSocket with Host and Origin %s: refused" % evil)
+        ws = harness.cdp.WebSocket(open_ws, timeout=10, headers={"Origin": "http://127.0.0.1:%d" % open_web.port})
+        op, data = ws.recv()
+        ws.close()
+        check(op == 1 and data.startswith(b'{"type":"hello"'), "no token: WebSocket sent to 127.0.0.1: hello")
 
         browser = harness.cdp.Chromium(out_dir=out)
         page = browser.new_page(base + "/trainee.html")

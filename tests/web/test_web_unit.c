@@ -42,6 +42,17 @@ static void test_access(void) {
   for (size_t i = 0; i < 4; i++) CHECK(palp_web_addr_is_loopback(loop[i]) == 1, "%s is loopback", loop[i]);
   for (size_t i = 0; i < 8; i++) CHECK(palp_web_addr_is_loopback(wide[i]) == 0, "%s is not loopback", wide[i]);
   CHECK(palp_web_addr_is_loopback(NULL) == 0, "NULL");
+  /* Host headers (DNS rebinding: only a loopback name is answered without a token) */
+  const char *lhost[] = {"127.0.0.1:8090", "127.0.0.1", "[::1]:8090", "[::1]", "localhost:8090", "localhost",
+                         "127.9.9.9:1"};
+  const char *whost[] = {"evil.example:8090", "evil.example", "127.0.0.1:80x", "127.0.0.1:", "[::1]x", "[::1",
+                         "127.0.0.1:123456", "localhost.evil.example", "", "0.0.0.0:8090", "[::]:8090",
+                         "127.0.0.1.nip.io:8090"};
+  for (size_t i = 0; i < sizeof lhost / sizeof *lhost; i++)
+    CHECK(palp_web_host_is_loopback(lhost[i]) == 1, "Host %s is loopback", lhost[i]);
+  for (size_t i = 0; i < sizeof whost / sizeof *whost; i++)
+    CHECK(palp_web_host_is_loopback(whost[i]) == 0, "Host '%s' is not", whost[i]);
+  CHECK(palp_web_host_is_loopback(NULL) == 0, "Host NULL");
 
   CHECK(palp_web_token_check("abcdefghijklmnop") == 0, "16 characters accepted");
   CHECK(palp_web_token_check("abcdefghijklmno") != 0, "15 refused (too short)");
