@@ -62,13 +62,33 @@ int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
 
 static double clamp01(double s) { return s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s); }
 
-/* The models' force before damping, fade and limit: the newest model plus the
- * decaying offset of the last arrival. */
-static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now) {
+palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags) {
+  const double mag = v3_len(f);
+  if (mag <= max_force) return f; /* NaN fails this test and is handled below */
+  if (flags) *flags |= PALP_HAPTIC_LIMITED;
+  /* A non-finite force (an infinite K d, inf - inf) scaled by max / inf would be NaN on the
+   * device: nothing is rendered instead. */
+  if (!isfinite(mag) || !(max_force > 0.0)) return v3(0, 0, 0);
+  return v3_scale(f, max_force / mag);
+}
+
+/* The share of the blend offset still left at now: 1 at the arrival, 0 after blend_len. */
+static double offset_share(const palp_haptic *h, double now) {
+  return 1.0 - (h->blend_len > 0.0 ? clamp01((now - h->cur_at) / h->blend_len) : 1.0);
+}
+
+/* The models' force before damping and fade: the newest model, each model limited to
+ * max_force before it is blended (a 40 N model against a 10 N limit contributes 10 N, so
+ * a fade or a crossfade of it moves the rendered force over its whole length rather than
+ * holding the limit until the scale falls below 10/40), plus the decaying offset of the
+ * last arrival, the sum limited again. *raw (if not NULL) gets the same sum without any
+ * limit (what the models ask for) and *flags PALP_HAPTIC_LIMITED when a limit acted. */
+static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now, palp_vec3 *raw, unsigned *flags) {
   const double age = fmin(now - h->cur_at, h->def.max_extrapolation);
-  palp_vec3 f = palp_local_model_force(&h->cur, x, age);
-  const double s = h->blend_len > 0.0 ? clamp01((now - h->cur_at) / h->blend_len) : 1.0;
-  return v3_add(f, v3_scale(h->prev.force, 1.0 - s)); /* prev.force holds the offset delta */
+  const palp_vec3 f = palp_local_model_force(&h->cur, x, age);
+  const palp_vec3 off = v3_scale(h->prev.force, offset_share(h, now)); /* prev.force holds the offset delta */
+  if (raw) *raw = v3_add(f, off);
+  return palp_haptic_clamp(v3_add(palp_haptic_clamp(f, h->def.max_force, flags), off), h->def.max_force, flags);
 }
 
 /* The share of the model force a silent server still leaves on the hand: 1 while models
@@ -78,21 +98,42 @@ static double stale_scale(const palp_haptic *h, double now) {
   return age > h->def.stale_time ? clamp01(1.0 - (age - h->def.stale_time) / h->def.fade_time) : 1.0;
 }
 
+double palp_haptic_stale_scale(const palp_haptic *h, double now) {
+  if (!h || !h->have) return 0.0;
+  return isfinite(now) ? stale_scale(h, now) : 0.0;
+}
+
+int palp_haptic_accepts(const palp_haptic *h, const palp_local_model *m, double now) {
+  if (!h || !m || !isfinite(now) || !model_ok(m)) return 0;
+  if (!h->have) return 1;
+  if (!(m->time > h->cur.time)) return 0; /* late or repeated: the newer one stands */
+  /* A model's time may run ahead of the current one's by the station time since that one
+   * came, plus stale_time: world time does not run faster than the server's clock (its
+   * ticker drops lost slots rather than burst), and stale_time covers the current one's
+   * delivery delay. Without this bound one model stamped 1e300 s made every later model
+   * "older" and the force faded out for good. Once the current model is stale any newer
+   * one is taken: should a real jump exceed the bound, the models resume after stale_time
+   * rather than never. */
+  return m->time - h->cur.time <= (now - h->cur_at) + h->def.stale_time || now - h->cur_at > h->def.stale_time;
+}
+
 int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
   if (!h || !m || !isfinite(now)) return PALP_EINVAL;
   if (!model_ok(m)) return PALP_EINVAL;
-  if (h->have && !(m->time > h->cur.time)) return 0; /* late or repeated: the newer one stands */
+  if (!palp_haptic_accepts(h, m, now)) return 0;
   palp_vec3 delta = v3(0, 0, 0);
   double blend = h->def.blend_time > 0.0 ? h->def.blend_time : m->period;
   if (h->rendered) {
-    /* What the hand feels now (before damping and limit) minus the new model's answer.
-     * Before the first model the hand felt nothing, and a faded-out stale model left only
-     * its faded share: a device already pressed in when the models (re)start must not
-     * get the whole force in one tick (it did: 0 -> 2.1 N when the demo's first model
-     * came 0.8 s after the press), so those onsets blend over fade_time, not a period. */
+    /* What the hand feels now (before damping; limited and faded as rendered) minus the
+     * new model's answer, limited as it will be rendered: the blend then starts from the
+     * force the hand actually feels. Before the first model the hand felt nothing, and a
+     * faded-out stale model left only its faded share: a device already pressed in when
+     * the models (re)start must not get the whole force in one tick (it did: 0 -> 2.1 N
+     * when the demo's first model came 0.8 s after the press), so those onsets blend over
+     * fade_time, not a period. */
     const double keep = h->have ? stale_scale(h, now) : 0.0;
-    const palp_vec3 was = h->have ? v3_scale(model_part(h, h->last_x, now), keep) : v3(0, 0, 0);
-    delta = v3_sub(was, palp_local_model_force(m, h->last_x, 0.0));
+    const palp_vec3 was = h->have ? v3_scale(model_part(h, h->last_x, now, NULL, NULL), keep) : v3(0, 0, 0);
+    delta = v3_sub(was, palp_haptic_clamp(palp_local_model_force(m, h->last_x, 0.0), h->def.max_force, NULL));
     if (keep < 1.0) blend = fmax(blend, h->def.fade_time);
   }
   h->prev = h->cur;
@@ -114,34 +155,42 @@ void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out
     *out = o;
     return;
   }
-  palp_vec3 f = model_part(h, x, now);
+  unsigned lim = 0;
+  palp_vec3 raw;
+  palp_vec3 f = model_part(h, x, now, &raw, &lim);
+  /* A silent server must not leave a force on the hand: the limited model force fades
+   * linearly over fade_time, max_force / (fade_time / tick) per tick at most (0.1 N per
+   * 1 ms tick at 10 N, 0.1 s); the damper fades with it. */
+  const double keep = stale_scale(h, now);
+  if (now - h->cur_at > h->def.stale_time) o.flags |= PALP_HAPTIC_STALE;
+  f = v3_scale(f, keep);
+  raw = v3_scale(raw, keep);
   const palp_vec3 n = h->cur.normal;
-  const int contact = h->cur.contact && v3_dot(f, n) > 0.0;
+  /* In contact only while the (faded) force pushes: a faded-out model is no contact, so the
+   * station's passivity observer resets and its view stops saying "touching". */
+  const int contact = h->cur.contact && keep > 0.0 && v3_dot(f, n) > 0.0;
   if (contact) {
     o.flags |= PALP_HAPTIC_CONTACT;
     /* Shown proxy: the model's, carried along the surface by the device's tangential motion. */
     const palp_vec3 dx = v3_sub(x, h->cur.device);
     o.proxy = v3_add(h->cur.proxy, v3_sub(dx, v3_scale(n, v3_dot(dx, n))));
     const double fn0 = v3_dot(f, n);
-    /* Damper along the normal on the device's velocity, never pulling into the surface. */
+    /* Damper along the normal on the device's velocity, never pulling into the surface,
+     * scaled with the fade. */
     if (h->rendered && now > h->last_t && h->def.damping > 0.0) {
       const double vn = v3_dot(v3_sub(x, h->last_x), n) / (now - h->last_t); /* [m/s], < 0 going in */
-      const double fd = -h->def.damping * vn;
-      f = v3_add(f, v3_scale(n, fmax(fd, -fn0)));
+      const palp_vec3 fd = v3_scale(n, fmax(-keep * h->def.damping * vn, -fn0));
+      f = v3_add(f, fd);
+      raw = v3_add(raw, fd);
     }
   }
-  /* A silent server must not leave a force on the hand. */
-  if (now - h->cur_at > h->def.stale_time) {
-    o.flags |= PALP_HAPTIC_STALE;
-    f = v3_scale(f, stale_scale(h, now));
-  }
-  const double mag = v3_len(f);
-  o.requested = mag;
-  if (mag > h->def.max_force) {
-    f = v3_scale(f, h->def.max_force / mag);
-    o.flags |= PALP_HAPTIC_LIMITED;
-    h->limited_ticks++;
-  }
+  /* requested: the force without any limit (the models' raw sum, faded, plus the damper);
+   * when no limit acted it is the rendered force, so requested > max_force implies LIMITED. */
+  o.requested = v3_len(raw);
+  f = palp_haptic_clamp(f, h->def.max_force, &lim);
+  if (!v3_isfinite(raw)) o.requested = INFINITY;
+  o.flags |= lim;
+  if (lim) h->limited_ticks++;
   o.force = f;
   h->last_x = x;
   h->last_t = now;

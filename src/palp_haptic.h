@@ -10,8 +10,10 @@
  * the first after a stale fade-out, blend in from what the hand felt over fade_time. A model that
  * is late is extrapolated for at most max_extrapolation, then held; a model older
  * than stale_time fades the force out over fade_time (a vanished server must not
- * leave a force on the hand). The force is limited to max_force, and the caller is
- * told when it was (the station shows it). A damper on the device velocity along
+ * leave a force on the hand). Each model's force is limited to max_force before it is
+ * blended or faded, so a fade or crossfade of a model asking for more than the limit
+ * still ramps the rendered force over its whole length; the sum (damper included) is
+ * limited again, and the caller is told when a limit acted (the station shows it). A damper on the device velocity along
  * the contact normal, active only in contact, keeps the loop passive on a real
  * device.
  *
@@ -67,8 +69,18 @@ typedef struct palp_haptic {
 
 int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def);
 /* A new model arrived at station time now [s]. Models older than the current one
- * (by their time) are ignored; returns 1 if taken, 0 if ignored, < 0 on error. */
+ * (by their time), or ahead of it by more than the station time since it came plus
+ * stale_time, are ignored; returns 1 if taken, 0 if ignored, < 0 on error. Every model
+ * is limited to max_force before it is blended or faded. */
 int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now);
+/* 1 if palp_haptic_update(h, m, now) would take m, else 0 (nothing changes). */
+int palp_haptic_accepts(const palp_haptic *h, const palp_local_model *m, double now);
+/* The share of the model force left at now [0, 1]: 1 while models are fresh, down to 0
+ * over fade_time once the newest is older than stale_time; 0 before any model. */
+double palp_haptic_stale_scale(const palp_haptic *h, double now);
+/* f limited to a magnitude of max_force [N] (sets PALP_HAPTIC_LIMITED in *flags, if not
+ * NULL, when it acted); a non-finite f gives 0 N, flagged. */
+palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags);
 /* The force for device point x [m] at station time now [s]. */
 void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out *out);
 
