@@ -57,15 +57,37 @@ static double len3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z)
 
 int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out) {
   if (!in || !out) return PALP_EINVAL;
-  if (!isfinite(in->time) || !isfinite(in->period) || !(in->period >= 0 && in->period <= 1.0)) return PALP_EINVAL;
+  /* The period is the server's step, 1 / physics rate, and the server steps at 1..10000 Hz
+   * (server/config.c), a step retried in halves down to 1/16 of it (src/world.c): a period
+   * outside [1/(16 x 10000 Hz), 1 s] is no step. A period of 0 passed, and its crossfade of
+   * length 0 put the model's correction on the hand as a step. palp_cli_local_model_fits_rate
+   * holds it to the session's own rate. */
+  if (!isfinite(in->time) || !(in->period >= PALP_CLI_MODEL_PERIOD_MIN && in->period <= PALP_CLI_MODEL_PERIOD_MAX))
+    return PALP_EINVAL;
   if (!fin3(in->device) || !fin3(in->proxy) || !fin3(in->normal) || !fin3(in->force) || !fin3(in->drift) ||
       !fin3(in->point) || !isfinite(in->area) || !isfinite(in->depth))
     return PALP_EINVAL;
-  for (int i = 0; i < 9; i++)
+  double kmax = 0; /* [N/m] */
+  for (int i = 0; i < 9; i++) {
     if (!isfinite(in->stiffness[i]) || fabs(in->stiffness[i]) > 1e6) return PALP_EINVAL;
+    kmax = fmax(kmax, fabs(in->stiffness[i]));
+  }
+  /* K = -dF/dx is symmetric and positive semi-definite (palp.h; palp_contact_stiffness
+   * symmetrises it exactly), so its diagonal is >= 0: an asymmetric K (beyond 1e-6 of its
+   * largest entry, for any rounding on the way) or a negative diagonal entry (a surface
+   * pulling the hand on as it goes in) is no phantom's. */
+  const double ktol = 1e-6 * kmax;
+  for (int i = 0; i < 3; i++) {
+    if (in->stiffness[4 * i] < -ktol) return PALP_EINVAL;
+    for (int j = 0; j < i; j++)
+      if (fabs(in->stiffness[3 * i + j] - in->stiffness[3 * j + i]) > ktol) return PALP_EINVAL;
+  }
   const palp_vec3 f = vec(in->force), n = vec(in->normal);
   if (len3(f) > 1e4 || len3(vec(in->device)) > 10.0 || len3(vec(in->drift)) > 100.0) return PALP_EINVAL;
-  if (in->in_contact && fabs(len3(n) - 1.0) > 1e-3) return PALP_EINVAL;
+  /* The normal is read out of contact too (the passivity controller's n . K n), so it is a
+   * unit vector or, out of contact, 0. */
+  const double nl = len3(n);
+  if (fabs(nl - 1.0) > 1e-3 && (in->in_contact || nl > 1e-12)) return PALP_EINVAL;
   memset(out, 0, sizeof *out);
   out->time = in->time;
   out->period = in->period;
@@ -82,6 +104,24 @@ int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *
   out->depth = in->depth;
   out->point = vec(in->point);
   return 0;
+}
+
+int palp_cli_local_model_fits_rate(const palp_local_model *m, double physics_rate_hz) {
+  if (!m || !(physics_rate_hz >= PALP_CLI_PHYSICS_RATE_MIN && physics_rate_hz <= PALP_CLI_PHYSICS_RATE_MAX)) return 0;
+  /* one step, 1/f, or a retried step's half down to 1/16 of it; 1% for rounding */
+  const double step = 1.0 / physics_rate_hz;
+  return m->period >= step / 16.0 * 0.99 && m->period <= step * 1.01;
+}
+
+long palp_cli_contact_every(double rate_hz, double physics_rate_hz) {
+  /* rate / physics rate ticks per contact sample, in long and bounded: a physics rate of
+   * 1e-300 Hz made lround overflow, `every` 0 and `tick % every` a SIGFPE in the haptic
+   * thread, which died without writing its zero force. */
+  const double r = rate_hz / physics_rate_hz;
+  if (!(r > 1.0)) return 1; /* NaN, a physics rate at or above the haptic rate */
+  if (!(r <= 1e6)) return 1000000;
+  const long k = lround(r);
+  return k >= 1 ? k : 1;
 }
 
 /* ---- the thread ------------------------------------------------------------------------ */
@@ -168,8 +208,25 @@ int palp_cli_haptic_core_init(palp_cli_haptic_core *c, const palp_haptic_def *re
 
 int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, double t, palp_local_model *m,
                               double age, palp_haptic_out *out, palp_vec3 *xr_out) {
+  /* A device reading that is not finite (a driver returning NaN once) must not reach the
+   * offset, the renderer or the passivity observer: it summed into the offset and the
+   * rendered force was 0 until the finger lifted, and the observer's energy went NaN, which
+   * switched the controller off. The last good reading stands in for it; before any, the
+   * finger counts as lifted (no force). */
+  if (!(isfinite(x.x) && isfinite(x.y) && isfinite(x.z))) {
+    c->bad_x_ticks++;
+    if (c->have_x)
+      x = c->x_prev;
+    else
+      on = 0, x = (palp_vec3){0, 0, 0};
+  } else {
+    c->have_x = 1;
+  }
   const int age_ok = m && age >= 0 && age <= c->max_latency;
-  if (m) {
+  /* Only a model the renderer takes starts a new horizon: a refused one (older, or not
+   * valid) restarted it, so the held force was released to follow the device again. */
+  const int take = m && palp_haptic_accepts(&c->renderer, m, t);
+  if (take) {
     c->x_arrival_t = t;
     c->model_age = age_ok ? age : 0;
   }
@@ -204,14 +261,18 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
      * avoid) and K only shapes the motion that follows within the horizon.
      * Rejected: extrapolating by drift x age (with jittered arrivals the
      * server's device point moves in bursts, the drift jumps, and drift x 45 ms
-     * made a 0.5 N sawtooth). Ages outside [0, max_latency] are not trusted and
-     * the model is taken as is. */
-    if (c->compensate && age_ok && on) {
+     * made a 0.5 N sawtooth). Every model is anchored, whatever its age: one
+     * with an age outside [0, max_latency] (or none: no source time) was taken as
+     * is, at the server's device point, while the renderer read it at x minus
+     * the held motion, so its force was off by K x offset (6 N at 10 mm on
+     * 600 N/m) until the next model. Its drift is not extrapolated either: with
+     * the age unknown, so is how far the surface has moved. */
+    if (c->compensate && on) {
       m->device = xr;
       /* Past its horizon the model is held, and a held device point with the
        * surface drifting on would read as the finger coming off (measured:
        * -0.05 N per 4 ms at 20 mm/s): its drift is not extrapolated either. */
-      if (age > c->hold_after) m->drift = (palp_vec3){0, 0, 0};
+      if (!age_ok || age > c->hold_after) m->drift = (palp_vec3){0, 0, 0};
     }
     taken = palp_haptic_update(&c->renderer, m, t);
   }
@@ -253,22 +314,33 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
           double kn = 0; /* n . K n [N/m] */
           for (int i = 0; i < 3; i++)
             for (int j = 0; j < 3; j++) kn += n[i] * m->stiffness[i][j] * n[j];
-          const double tau = c->model_age + (t - c->x_arrival_t) + m->period; /* [s] */
+          /* The lag of a force that follows the hand through K ends at the horizon: past
+           * hold_after the force is held and lags nothing. Uncapped, the time since the
+           * last model grew without bound after the server fell silent, and so did
+           * the damper's limit. */
+          const double since = fmin(fmax(t - c->x_arrival_t, 0.0), c->hold_after);
+          const double tau = c->model_age + since + m->period; /* [s] */
           if (kn > 0 && tau > 0 && 2.0 * kn * tau > amax) amax = 2.0 * kn * tau;
         }
         if (a > amax) a = amax;
+        /* The controller fades with the models it corrects: a silent server leaves
+         * no damper on the hand either (palp_haptic_stale_scale: 1 while fresh). */
+        a *= palp_haptic_stale_scale(&c->renderer, t);
         const palp_vec3 f0 = o.force;
         o.force = v3sub(o.force, v3scale(v, a));
         /* The safe force bounds what reaches the hand, the damper included: pressing
          * in, -a v adds to the force, and with energy left by late or jittered models
          * it took a 0.15 N limit to 0.52 N (test haptic_session on a loaded machine;
          * 2.1 N in haptic_multirate's case). What the limit leaves of the damper is
-         * what it dissipated; the observer reads the force as rendered next tick. */
-        const double mag = len3(o.force), limit = c->renderer.def.max_force;
-        if (mag > limit) {
-          o.force = v3scale(o.force, limit / mag);
+         * what it dissipated; the observer reads the force as rendered next tick.
+         * palp_haptic_clamp also zeroes a force that is not finite (a NaN passed
+         * the former `mag > limit`). */
+        const double mag = len3(o.force);
+        unsigned lim = 0;
+        o.force = palp_haptic_clamp(o.force, c->renderer.def.max_force, &lim);
+        if (lim) {
           o.flags |= PALP_HAPTIC_LIMITED;
-          o.requested = fmax(o.requested, mag);
+          o.requested = isfinite(mag) ? fmax(o.requested, mag) : INFINITY;
         }
         const palp_vec3 df = v3sub(o.force, f0);
         c->dissipated += -(df.x * v.x + df.y * v.y + df.z * v.z) * dt;
@@ -291,8 +363,7 @@ static void *haptic_main(void *arg) {
   palp_cli_haptic_stats *st = &l->stats;
   const int64_t period = (int64_t)(1e9 / d->rate_hz + 0.5);
   /* Every k-th tick goes to the server: the physics step uses one sample per step. */
-  const int every = d->physics_rate_hz > 0 && d->physics_rate_hz < d->rate_hz
-                        ? (int)lround(d->rate_hz / d->physics_rate_hz) : 1;
+  const uint64_t every = (uint64_t)palp_cli_contact_every(d->rate_hz, d->physics_rate_hz);
   const int64_t late_ns = (int64_t)(d->late_threshold * 1e9);
   const int64_t t0 = l->t0_ns;
   int64_t next = t0;
@@ -331,7 +402,7 @@ static void *haptic_main(void *arg) {
     const double t = (double)(now - t0) * 1e-9;
     if (d->duration > 0 && t >= d->duration) break;
     palp_vec3 x = {0, 0, 0};
-    const int on = d->in->read_position(d->in->ctx, t, &x);
+    int on = d->in->read_position(d->in->ctx, t, &x);
     if (on == PALP_CLI_INPUT_END) {
       st->ended = 1;
       break;
@@ -351,12 +422,20 @@ static void *haptic_main(void *arg) {
       if (d->in->model) d->in->model(d->in->ctx, &m);
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
       if (sflags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) st->out_of_range_models++;
-      /* The safe force is the smaller of the station's and the phantom's limits. */
-      if (smax > 0 && smax < l->core.renderer.def.max_force) l->core.renderer.def.max_force = smax;
+      /* The safe force is the station's and the phantom's (palp_cli_haptic_start), not
+       * each model's max_force: lowered to any model's, one sample of 1e-9 N left the
+       * device without force for the rest of the session. */
     }
     palp_haptic_out o;
     palp_vec3 xr;
     const int taken = palp_cli_haptic_core_tick(&l->core, on, x, t, got ? &m : NULL, age, &o, &xr);
+    if (!fin3((palp_Vec3){x.x, x.y, x.z})) { /* the core rendered from the last good reading, or as lifted */
+      x = l->core.x_prev;
+      if (!l->core.have_x) on = 0;
+    }
+    /* Nothing but a finite force within the limit reaches the device (the core limits
+     * it: this is the last word before the hardware). */
+    if (!fin3((palp_Vec3){o.force.x, o.force.y, o.force.z})) o.force = (palp_vec3){0, 0, 0};
     /* The server's word on the model's validity travels with the force it gave, and
      * only while it is rendered: a lifted finger or a fading model says nothing. */
     if (on && (model_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) &&
@@ -379,7 +458,7 @@ static void *haptic_main(void *arg) {
     if (o.flags & PALP_HAPTIC_CONTACT) st->contact_ticks++;
     /* To the server at the physics rate; a lift is sent at once and repeated on
      * the next ticks (best-effort: one lost sample must not leave the finger down). */
-    if (on && (tick % (uint64_t)every == 0 || !was_on)) send_contact(l, 1, x, now);
+    if (on && (tick % every == 0 || !was_on)) send_contact(l, 1, x, now);
     if (!on && was_on) release_left = 3;
     if (!on && release_left > 0) {
       send_contact(l, 0, x, now);
@@ -424,15 +503,22 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
     snprintf(err, errlen, "haptic loop: the input is not a position-driven device (no read_position/write_force)");
     return PALP_EINVAL;
   }
-  if (!(def->rate_hz >= 10 && def->rate_hz <= 10000) || !(def->physics_rate_hz > 0) || def->finger < 0 ||
-      def->finger >= PALP_CLI_MAX_FINGERS || !(def->late_threshold > 0)) {
-    snprintf(err, errlen, "haptic loop: rate %g Hz (10..10000), physics rate %g Hz (> 0) or finger %d invalid",
-             def->rate_hz, def->physics_rate_hz, def->finger);
+  if (!(def->rate_hz >= 10 && def->rate_hz <= 10000) ||
+      !(def->physics_rate_hz >= PALP_CLI_PHYSICS_RATE_MIN && def->physics_rate_hz <= PALP_CLI_PHYSICS_RATE_MAX) ||
+      def->finger < 0 || def->finger >= PALP_CLI_MAX_FINGERS || !(def->late_threshold > 0)) {
+    snprintf(err, errlen, "haptic loop: rate %g Hz (10..10000), the server's physics rate %g Hz (%g..%g) or finger %d "
+             "invalid", def->rate_hz, def->physics_rate_hz, PALP_CLI_PHYSICS_RATE_MIN, PALP_CLI_PHYSICS_RATE_MAX,
+             def->finger);
     return PALP_EINVAL;
   }
   l->def = *def;
+  /* The safe force is the smaller of the station's and the phantom's limits (the
+   * catalogue's max_force, which the server also reports in every model). */
+  if (def->phantom_max_force > 0 && isfinite(def->phantom_max_force) &&
+      def->phantom_max_force < l->def.render.max_force)
+    l->def.render.max_force = def->phantom_max_force;
   if (!(l->def.radius > 0)) l->def.radius = def->in->finger_radius > 0 ? def->in->finger_radius : 0.008;
-  int rc = palp_cli_haptic_core_init(&l->core, &def->render, def->physics_rate_hz, def->latency_compensation,
+  int rc = palp_cli_haptic_core_init(&l->core, &l->def.render, def->physics_rate_hz, def->latency_compensation,
                                      def->hold_after, def->max_latency);
   if (rc < 0) {
     snprintf(err, errlen, "haptic loop: renderer parameters invalid: %s", palp_strerror(rc));
@@ -516,7 +602,8 @@ int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t 
     const palp_LocalModel *w = ptr[0];
     if (info.valid_data && w->finger == (uint8_t)l->def.finger && w->session_id == l->def.session_id) {
       palp_local_model m;
-      if (palp_cli_local_model_from_wire(w, &m) == 0 && isfinite(w->max_force) && w->max_force >= 0) {
+      if (palp_cli_local_model_from_wire(w, &m) == 0 && palp_cli_local_model_fits_rate(&m, l->def.physics_rate_hz) &&
+          isfinite(w->max_force) && w->max_force >= 0) {
         /* The model's age: it describes the surface when the device was at
          * m.device, which this station sent at contact_source_time_ns on its own
          * clock. The haptic thread re-anchors it with that (core_tick). */

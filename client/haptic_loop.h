@@ -51,10 +51,23 @@ void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint3
 int palp_cli_mailbox_take(palp_cli_mailbox *mb, uint64_t *seq, palp_local_model *m, uint32_t *server_flags,
                           double *max_force, double *age);
 
-/* Checks a wire sample before it reaches the renderer: finite fields, a unit
- * normal when in contact, a stiffness of at most 1e6 N/m and a force below 1e4 N
- * per entry. Returns 0 or PALP_EINVAL (the sample is dropped and counted). */
+/* A model's period: a step at those rates, or a retried step's 1/16 [s]. */
+#define PALP_CLI_MODEL_PERIOD_MIN (1.0 / (16.0 * PALP_CLI_PHYSICS_RATE_MAX))
+#define PALP_CLI_MODEL_PERIOD_MAX (1.0 / PALP_CLI_PHYSICS_RATE_MIN)
+
+/* Checks a wire sample before it reaches the renderer: finite fields; a period in
+ * [PALP_CLI_MODEL_PERIOD_MIN, PALP_CLI_MODEL_PERIOD_MAX]; a unit normal (out of contact:
+ * unit or 0); a stiffness of at most 1e6 N/m per entry, symmetric within 1e-6 of its
+ * largest entry, with a diagonal >= 0; a force of magnitude at most 1e4 N; a device
+ * point within 10 m and a drift below 100 m/s. Returns 0 or PALP_EINVAL (the sample
+ * is dropped and counted). */
 int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out);
+/* 1 if m's period is a step of the session's physics rate [Hz]: within 1% of 1/rate, or
+ * of a retried step's half down to 1/16 of it; else 0 (the feed drops the sample). */
+int palp_cli_local_model_fits_rate(const palp_local_model *m, double physics_rate_hz);
+/* Haptic ticks per contact sample sent to the server: rate / physics rate rounded, at
+ * least 1, at most 1e6, 1 for a physics rate at or above the haptic rate or not a number. */
+long palp_cli_contact_every(double rate_hz, double physics_rate_hz);
 
 /* ---- the per-tick logic, pure: the haptic thread runs it, tests drive it --------------- */
 typedef struct palp_cli_haptic_core {
@@ -64,7 +77,9 @@ typedef struct palp_cli_haptic_core {
   double max_latency;     /* [s] ages beyond are not trusted */
   double x_arrival_t, model_age;
   palp_vec3 offset;       /* device motion made while the force was held [m] */
-  palp_vec3 x_prev;
+  palp_vec3 x_prev;       /* the last good device reading [m] */
+  int have_x;             /* a finite reading was seen */
+  uint64_t bad_x_ticks;   /* ticks whose reading was not finite (the last good one stood in) */
   int was_on, holding;
   /* passivity observer/controller (time-domain, Hannaford & Ryu 2002) */
   int passivity;          /* on by default */
@@ -81,9 +96,10 @@ typedef struct palp_cli_haptic_core {
  * with a 20 N s/m damping limit; set core.passivity = 0 to switch it off. */
 int palp_cli_haptic_core_init(palp_cli_haptic_core *c, const palp_haptic_def *render, double physics_rate_hz,
                               int latency_compensation, double hold_after, double max_latency);
-/* One tick at station time t [s] with the device at x (on: finger on). m: a model
- * that arrived since the last tick (NULL if none; re-anchored in place), age: its
- * age on arrival [s] (< 0 unknown). Fills the force to render and (xr) the
+/* One tick at station time t [s] with the device at x (on: finger on; a reading that
+ * is not finite is replaced by the last good one, or, before any, counts as lifted).
+ * m: a model that arrived since the last tick (NULL if none; re-anchored in place
+ * whatever its age when compensating and on), age: its age on arrival [s] (< 0 unknown). Fills the force to render and (xr) the
  * renderer's device point; returns palp_haptic_update's result for m (1 taken). */
 int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, double t, palp_local_model *m,
                               double age, palp_haptic_out *out, palp_vec3 *xr);
@@ -106,7 +122,9 @@ typedef struct palp_cli_haptic_def {
   int rt_priority;         /* 0: normal scheduling; 1..99 SCHED_FIFO (refused: runs normal, says so) */
   int finger;              /* finger index on the wire, default 0 */
   double radius;           /* fingertip [m]; 0 = the input's, else 8 mm */
-  palp_haptic_def render;  /* renderer parameters (max_force: the safe force limit) */
+  palp_haptic_def render;  /* renderer parameters (max_force: the station's safe force limit) */
+  double phantom_max_force; /* the phantom's limit from the catalogue (Phantom.max_force) [N]: the
+                               safe force is the smaller; 0 = unknown (the station's alone) */
   int latency_compensation; /* re-anchor each model at the device's position on arrival (default 1) */
   double max_latency;       /* ages beyond this [s] are not compensated, default 0.2 */
   double hold_after;        /* the model's stiffness is used for this horizon [s] from the state it describes

@@ -832,6 +832,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   d.physics_rate_hz = st->tick_rate_hz > 0 ? st->tick_rate_hz : ph->tick_rate_hz;
   d.rt_priority = o->rt_priority;
   if (o->max_force > 0) d.render.max_force = o->max_force;
+  d.phantom_max_force = ph->max_force;
   d.in = &in;
   d.contact_w = st->contact_w;
   d.session_id = st->session_id;
@@ -876,7 +877,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (!o->quiet)
     tprintf(o, "[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
                "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
-               d.physics_rate_hz < d.rate_hz ? (int)lround(d.rate_hz / d.physics_rate_hz) : 1, d.render.max_force);
+               (int)palp_cli_contact_every(d.rate_hz, d.physics_rate_hz), hl->core.renderer.def.max_force);
   fflush(stdout);
   findings_ui_start(&fu, o, st, &in, ph, hl->def.radius, d.physics_rate_hz);
   feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns()};

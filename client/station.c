@@ -1,7 +1,7 @@
 /* station.c - the DDS side of a palp station. */
 #include "station.h"
 #include "view.h"
-#include "input.h" /* PALP_CLI_MAX_FINGERS */
+#include "input.h" /* PALP_CLI_MAX_FINGERS, PALP_CLI_PHYSICS_RATE_* */
 
 #include "palp_assess.h" /* palp_metric_to_work_on: the words her page uses too */
 
@@ -348,6 +348,12 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       return fail(err, errlen, PALP_EINVAL, "join rejected: %s", r.reason);
     nap(0.25);
   }
+  /* The server's physics rate paces the contact samples and the haptic thread's horizon:
+   * a rate outside the server's own bounds (1..10000 Hz, server/config.c) is no server's,
+   * and one of 1e-300 Hz crashed the haptic thread (a division by a sample interval of 0). */
+  if (!(r.tick_rate_hz >= PALP_CLI_PHYSICS_RATE_MIN && r.tick_rate_hz <= PALP_CLI_PHYSICS_RATE_MAX))
+    return fail(err, errlen, PALP_EINVAL, "join refused: the server's physics rate %g Hz is outside %g..%g Hz",
+                r.tick_rate_hz, PALP_CLI_PHYSICS_RATE_MIN, PALP_CLI_PHYSICS_RATE_MAX);
   st->session_id = r.session_id;
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;

@@ -63,6 +63,14 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   }
   palp_cli_haptic_def d = palp_cli_haptic_default_def();
   d.physics_rate_hz = st.tick_rate_hz;
+  { /* the phantom's limit from the catalogue, as palp-client takes it */
+    palp_Phantom ph;
+    char perr[256];
+    if (palp_cli_station_catalogue(&st, st.phantom_id, 10, &ph, perr, sizeof perr) == 0) {
+      d.phantom_max_force = ph.max_force;
+      palp_cli_phantom_free(&ph);
+    }
+  }
   d.rt_priority = rt_priority;
   if (station_max_force > 0) d.render.max_force = station_max_force;
   d.in = &in;

@@ -1,0 +1,415 @@
+/*
+ * test_render_core.c - the station's renderer (src/haptic.c) and per-tick core
+ * (client/haptic_loop.c) against the inputs session 75's review found them wrong on
+ * (docs/haptics.md, "Session 75 review fixes"). Pure and in process: station times are
+ * given (1 kHz ticks, exact), no DDS; the one loop run (the safe force) only counts
+ * what its callbacks saw, never how fast.
+ *
+ * Expected values are worked by hand from each test's own model:
+ *   F(x) = force - K (x - device), along the normal z, unilateral; limit L;
+ *   stale fade: scale 1 - (age - stale_time) / fade_time, 0.25 s and 0.1 s (100 ticks).
+ */
+#include <math.h>
+#include <string.h>
+#include <time.h>
+
+#include "check.h"
+#include "haptic_loop.h"
+#include "palp_haptic.h"
+
+#define TICK 1e-3 /* [s] */
+
+static double len(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+/* A model in contact along +z at device point (0, 0, z0) with force fz [N] and K_zz = k [N/m]. */
+static palp_local_model contact_model(double time, double z0, double fz, double k) {
+  palp_local_model m;
+  memset(&m, 0, sizeof m);
+  m.time = time, m.period = 0.004, m.contact = 1, m.triangles = 1;
+  m.device = (palp_vec3){0, 0, z0}, m.proxy = (palp_vec3){0, 0, z0 + 0.001};
+  m.normal = (palp_vec3){0, 0, 1}, m.force = (palp_vec3){0, 0, fz};
+  m.stiffness[2][2] = k;
+  return m;
+}
+
+/* 1. A model far above the limit, then silence: the rendered force goes from L to 0 over
+ * fade_time in steps of at most L / 100 ticks (slack 1%); so does its onset under a pressed
+ * device, and its return after the silence. Before the fix (limit after the fade) the fade
+ * held L until the scale fell below L/R and then dropped R/100 a tick: 0.4 N at R = 40 N,
+ * 10 N in one tick at R = 1e4 N. */
+static void test_fade_above_limit(double R) {
+  palp_haptic_def def = palp_haptic_default_def(); /* L = 10 N, stale 0.25 s, fade 0.1 s */
+  def.damping = 0;
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  const double L = def.max_force, bound = L / 100.0 * 1.01;
+  const palp_vec3 x = {0, 0, 0.03};
+  palp_haptic_out o;
+  palp_haptic_render(&h, x, -TICK, &o); /* pressed before the first model: the hand feels 0 N */
+  palp_local_model m = contact_model(1.0, 0.03, R, 500);
+  CHECK(palp_haptic_update(&h, &m, 0.0) == 1, "R = %g N: first model taken", R);
+  double prev = 0, worst_on = 0, worst_off = 0, at_half_on = -1, at_half_off = -1, at_full = -1, after = -1;
+  for (int k = 0; k <= 500; ++k) {
+    const double t = k * TICK;
+    palp_haptic_render(&h, x, t, &o);
+    const double f = len(o.force);
+    if (k <= 150) worst_on = fmax(worst_on, fabs(f - prev));
+    else worst_off = fmax(worst_off, fabs(f - prev));
+    if (k == 50) at_half_on = f;
+    if (k == 200) at_full = f;
+    if (k == 300) at_half_off = f; /* 50 ms into the 100 ms fade */
+    if (k == 360) after = f;
+    prev = f;
+  }
+  CHECK(worst_on <= bound && fabs(at_half_on - 0.5 * L) < 1e-9,
+        "R = %g N, onset under a pressed device: largest tick step %.4f N <= %.4f N (L / 100 ticks, +1%%), %.6f N "
+        "half way (5 N)", R, worst_on, bound, at_half_on);
+  CHECK(fabs(at_full - L) < 1e-9, "R = %g N: limited to %.6f N once in (10 N)", R, at_full);
+  CHECK(worst_off <= bound && fabs(at_half_off - 0.5 * L) < 1e-9 && after == 0.0,
+        "R = %g N, silent server: largest tick step %.4f N <= %.4f N, %.6f N half way through the fade (5 N), "
+        "%.6f N after it (0)", R, worst_off, bound, at_half_off, after);
+  /* The server comes back under the pressed device: the same ramp up. */
+  palp_local_model m2 = contact_model(1.004, 0.03, R, 500);
+  CHECK(palp_haptic_update(&h, &m2, 0.501) == 1, "R = %g N: the returning server's model taken", R);
+  prev = 0;
+  double worst_back = 0, half_back = -1;
+  for (int k = 0; k <= 150; ++k) {
+    palp_haptic_render(&h, x, 0.501 + k * TICK, &o);
+    worst_back = fmax(worst_back, fabs(len(o.force) - prev));
+    if (k == 50) half_back = len(o.force);
+    prev = len(o.force);
+  }
+  CHECK(worst_back <= bound && fabs(half_back - 0.5 * L) < 1e-9 && fabs(prev - L) < 1e-9,
+        "R = %g N, restart: largest tick step %.4f N <= %.4f N, %.6f N half way (5 N), %.6f N at the end (10 N)", R,
+        worst_back, bound, half_back, prev);
+}
+
+/* 1. A crossfade from a model asking 40 N to one asking 5 N (limit 10 N) over its 4 ms
+ * period: from the 10 N rendered to 5 N in 4 ticks of 1.25 N. Before, from the unlimited
+ * 40 N: 10 N held for three ticks, then 5 N in one. */
+static void test_crossfade_above_limit(void) {
+  palp_haptic_def def = palp_haptic_default_def();
+  def.damping = 0;
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  const palp_vec3 x = {0, 0, 0.03};
+  palp_local_model a = contact_model(1.0, 0.03, 40, 500), b = contact_model(1.004, 0.03, 5, 500);
+  palp_haptic_out o;
+  palp_haptic_update(&h, &a, 0.0);
+  palp_haptic_render(&h, x, 0.0, &o);
+  double prev = len(o.force), worst = 0;
+  palp_haptic_update(&h, &b, 0.004);
+  for (int k = 0; k <= 8; ++k) {
+    palp_haptic_render(&h, x, 0.004 + k * TICK, &o);
+    worst = fmax(worst, fabs(len(o.force) - prev));
+    prev = len(o.force);
+  }
+  CHECK(worst <= 1.25 * 1.01 && fabs(prev - 5.0) < 1e-9,
+        "crossfade 40 N -> 5 N asked, 10 N limit: largest tick step %.4f N <= 1.2625 N ((10 - 5) / 4 ticks, +1%%), "
+        "%.6f N after (5 N)", worst, prev);
+}
+
+/* 8. A finite K that overflows: K_zz = -1e308 N/m read 10 m off gives F = +inf; scaled by
+ * L / inf it rendered NaN. Now 0 N, flagged limited; and the clamp itself. */
+static void test_nonfinite(void) {
+  unsigned fl = 0;
+  palp_vec3 f = palp_haptic_clamp((palp_vec3){NAN, 0, 1}, 10, &fl);
+  CHECK(f.x == 0 && f.y == 0 && f.z == 0 && (fl & PALP_HAPTIC_LIMITED), "clamp: NaN gives 0 N, flagged");
+  fl = 0;
+  f = palp_haptic_clamp((palp_vec3){0, INFINITY, 0}, 10, &fl);
+  CHECK(len(f) == 0 && (fl & PALP_HAPTIC_LIMITED), "clamp: an infinite force gives 0 N, flagged");
+  fl = 0;
+  f = palp_haptic_clamp((palp_vec3){30, 40, 0}, 10, &fl);
+  CHECK(fabs(f.x - 6) < 1e-12 && fabs(f.y - 8) < 1e-12 && (fl & PALP_HAPTIC_LIMITED), "clamp: (30, 40, 0) N to (6, 8, 0)");
+  fl = 0;
+  f = palp_haptic_clamp((palp_vec3){3, 4, 0}, 10, &fl);
+  CHECK(f.x == 3 && f.y == 4 && !fl, "clamp: 5 N under 10 N unchanged, not flagged");
+  palp_haptic_def def = palp_haptic_default_def();
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  palp_local_model m = contact_model(1.0, 0.0, 1.0, -1e308);
+  CHECK(palp_haptic_update(&h, &m, 0.0) == 1, "an overflowing (finite) K is a model the renderer takes");
+  palp_haptic_out o;
+  palp_haptic_render(&h, (palp_vec3){0, 0, 10}, 0.001, &o);
+  CHECK(isfinite(o.force.x) && isfinite(o.force.y) && isfinite(o.force.z) && len(o.force) == 0.0 &&
+            (o.flags & PALP_HAPTIC_LIMITED),
+        "K d = -inf: rendered %g N (0, limited), requested %g", len(o.force), o.requested);
+}
+
+/* 5. One model stamped 1e300 s must not stop the models after it. */
+static void test_time_jump(void) {
+  palp_haptic_def def = palp_haptic_default_def();
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  palp_local_model m = contact_model(1.0, 0.03, 1.0, 500);
+  palp_haptic_update(&h, &m, 0.0);
+  palp_local_model far = contact_model(1e300, 0.03, 1.0, 500);
+  CHECK(palp_haptic_update(&h, &far, 0.002) == 0, "a model 1e300 s ahead is ignored");
+  palp_local_model ahead = contact_model(1.0 + 0.004 + 0.25 + 0.01, 0.03, 1.0, 500);
+  CHECK(palp_haptic_update(&h, &ahead, 0.004) == 0, "nor one 0.26 s ahead after 4 ms (bound: 4 ms + stale_time)");
+  int taken = 0, stale = 0;
+  palp_haptic_out o;
+  for (int k = 1; k <= 250; ++k) { /* 1 s of models at 250 Hz */
+    palp_local_model n = contact_model(1.0 + 0.004 * k, 0.03, 1.0, 500);
+    taken += palp_haptic_update(&h, &n, 0.004 * k) == 1;
+    palp_haptic_render(&h, (palp_vec3){0, 0, 0.03}, 0.004 * k, &o);
+    stale += (o.flags & PALP_HAPTIC_STALE) != 0;
+  }
+  CHECK(taken == 250 && stale == 0 && fabs(len(o.force) - 1.0) < 1e-9,
+        "the models after it: %d of 250 taken, %d stale ticks, %.6f N at the end (1 N)", taken, stale, len(o.force));
+  /* After a silence (the current model stale) a newer model is taken however far ahead. */
+  palp_local_model later = contact_model(2.0 + 10.0, 0.03, 1.0, 500);
+  CHECK(palp_haptic_update(&h, &later, 1.0 + 0.26) == 1, "after 0.26 s of silence a model 10 s ahead is taken");
+}
+
+/* A core as the station runs it, the pieces under test isolated: renderer damping off,
+ * passivity controller as given. */
+static void core_make(palp_cli_haptic_core *c, int passivity) {
+  palp_haptic_def def = palp_haptic_default_def();
+  def.damping = 0;
+  palp_cli_haptic_core_init(c, &def, 250, 1, 0, 0.2); /* hold_after 8 ms, max_latency 0.2 s */
+  c->passivity = passivity;
+}
+
+/* 2. The hand moves 5 mm out while the force is held (offset 4.75 mm); then a model comes
+ * whose age is unknown (-1), beyond max_latency (0.5 s) or negative (-0.3 s), at the
+ * server's device point x (its own frame), asking 2 N on 600 N/m. Expected: 2 N, the
+ * model's own answer at its point, once blended (4 ms). Before, it was read at x - offset:
+ * 2 + 600 x 0.00475 = 4.85 N. */
+static void test_unanchored(double age2) {
+  palp_cli_haptic_core c;
+  core_make(&c, 0);
+  palp_haptic_out o;
+  palp_local_model m = contact_model(0.0, 0.0, 1.0, 600);
+  double held_worst = 0;
+  for (int k = 0; k <= 40; ++k) {
+    const double t = k * TICK;
+    const double z = k <= 10 ? 0.0 : (k >= 30 ? 0.005 : 0.005 * (k - 10) / 20.0); /* 0.25 m/s out */
+    palp_local_model mk = m, m2 = contact_model(0.030, z, 2.0, 600);
+    palp_local_model *mp = k == 0 ? &mk : (k == 30 ? &m2 : NULL);
+    palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, z}, t, mp, k == 0 ? 0.001 : age2, &o, NULL);
+    if (k >= 10 && k < 30) held_worst = fmax(held_worst, fabs(o.force.z - 1.0));
+  }
+  CHECK(held_worst < 1e-9, "age %g: the force held at 1 N while the hand moved out (worst off %.2e N)", age2,
+        held_worst);
+  CHECK(fabs(o.force.z - 2.0) < 1e-6, "age %g s: a model at the server's device point renders its 2 N there "
+                                      "(%.6f N; taken as is it was 4.85 N)", age2, o.force.z);
+}
+
+/* 5. Models the renderer refuses (older: repeats of the current one) must not restart the
+ * horizon: the force stays held at 1 N while the hand goes 0.8 mm in at 20 mm/s. Before,
+ * each refused copy released the hold for 7 ms and the force followed K: up to
+ * 1 + 600 x 0.0008 = 1.48 N. */
+static void test_refused_keep_hold(void) {
+  palp_cli_haptic_core c;
+  core_make(&c, 0);
+  palp_haptic_out o;
+  const palp_local_model m = contact_model(0.0, 0.0, 1.0, 600);
+  double worst = 0;
+  int refused = 0;
+  for (int k = 0; k <= 50; ++k) {
+    const double z = k <= 10 ? 0.0 : -0.02 * (k - 10) * TICK;
+    palp_local_model mk = m;
+    const int r = palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, z}, k * TICK, k % 4 == 0 ? &mk : NULL, 0.001, &o,
+                                            NULL);
+    if (k > 0 && k % 4 == 0) refused += r == 0;
+    if (k >= 10) worst = fmax(worst, fabs(o.force.z - 1.0));
+  }
+  CHECK(refused == 12 && worst < 1e-9, "%d repeated models refused; the force held at 1 N while the hand went in "
+                                       "(worst off %.2e N)", refused, worst);
+}
+
+/* 4. The server falls silent while the finger moves in and out by 2 mm at 50 mm/s, with
+ * the passivity observer holding energy (1 mJ, set every tick as late models leave it).
+ * After the fade (0.35 s) the force is exactly 0 on every tick and nothing is "in contact";
+ * before, the contact flag came from the unfaded force, the observer never reset, and its
+ * damper pushed. */
+static void test_silence_damper(void) {
+  palp_cli_haptic_core c;
+  core_make(&c, 1);
+  palp_haptic_out o;
+  palp_local_model m = contact_model(0.0, 0.0, 1.0, 500);
+  double worst = 0;
+  int contact = 0, ticks = 0;
+  for (int k = 0; k <= 1000; ++k) {
+    const double t = k * TICK;
+    const double z = -0.002 * fabs(sin(2 * 3.14159265358979 * 6.25 * t)); /* ~50 mm/s peak, 2 mm deep */
+    palp_local_model mk = m;
+    if (k > 100) c.energy = 1e-3;
+    palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, z}, t, k == 0 ? &mk : NULL, 0.001, &o, NULL);
+    if (t > 0.3505) {
+      worst = fmax(worst, len(o.force));
+      contact += (o.flags & PALP_HAPTIC_CONTACT) != 0;
+      ticks++;
+    }
+  }
+  CHECK(worst == 0.0 && contact == 0, "after the fade: largest force %.3e N over %d moving ticks (0 exactly), %d ticks "
+                                      "in contact (0)", worst, ticks, contact);
+}
+
+/* 7. The device reads NaN once mid-press (held force, so the motion goes to the offset):
+ * the force goes on from the last good reading; before, it was 0 until the finger lifted. */
+static void test_nan_reading(void) {
+  palp_cli_haptic_core c;
+  core_make(&c, 1);
+  palp_haptic_out o;
+  palp_local_model m = contact_model(0.0, 0.0, 1.0, 500);
+  double least = INFINITY;
+  int finite = 1;
+  for (int k = 0; k <= 100; ++k) {
+    const double z = -0.01 * k * TICK; /* in at 10 mm/s */
+    palp_local_model mk = m;
+    palp_vec3 x = {0, 0, z};
+    if (k == 20) x.z = NAN;
+    palp_cli_haptic_core_tick(&c, 1, x, k * TICK, k == 0 ? &mk : NULL, 0.001, &o, NULL);
+    finite &= isfinite(o.force.x) && isfinite(o.force.y) && isfinite(o.force.z);
+    if (k >= 20) least = fmin(least, o.force.z);
+  }
+  CHECK(finite && least >= 1.0 - 1e-9 && isfinite(c.energy) && isfinite(c.offset.z) && c.bad_x_ticks == 1,
+        "one NaN reading at 20 ms: the force stays >= 1 N after it (least %.6f N), energy %g J and offset %g m finite",
+        least, c.energy, c.offset.z);
+  palp_cli_haptic_core c2;
+  core_make(&c2, 1);
+  palp_local_model mk = m;
+  palp_cli_haptic_core_tick(&c2, 1, (palp_vec3){NAN, 0, 0}, 0.0, &mk, 0.001, &o, NULL);
+  CHECK(len(o.force) == 0.0, "a NaN first reading: no force (%g N)", len(o.force));
+}
+
+/* 6. Hostile samples at the wire check. */
+static palp_LocalModel wire_ok(void) {
+  palp_LocalModel w;
+  memset(&w, 0, sizeof w);
+  w.time = 1.0, w.period = 0.004, w.in_contact = 1, w.triangles = 1;
+  w.normal = (palp_Vec3){0, 0, 1}, w.force = (palp_Vec3){0, 0, 1};
+  w.stiffness[0] = w.stiffness[4] = 100, w.stiffness[8] = 600, w.stiffness[1] = w.stiffness[3] = 20;
+  w.max_force = 20;
+  return w;
+}
+
+static void test_from_wire(void) {
+  palp_local_model m;
+  palp_LocalModel w = wire_ok();
+  CHECK(palp_cli_local_model_from_wire(&w, &m) == 0, "a sound sample passes");
+  const double periods[4] = {0, 1e-6, 1.5, -0.004};
+  for (int i = 0; i < 4; ++i) {
+    w = wire_ok(), w.period = periods[i];
+    CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "period %g s refused (%g..%g s)", periods[i],
+          PALP_CLI_MODEL_PERIOD_MIN, PALP_CLI_MODEL_PERIOD_MAX);
+  }
+  w = wire_ok(), w.stiffness[1] = 100, w.stiffness[3] = -100;
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "an asymmetric K (K_xy = 100, K_yx = -100 N/m) refused");
+  w = wire_ok(), w.stiffness[1] = 20 + 1e-5;
+  CHECK(palp_cli_local_model_from_wire(&w, &m) == 0, "K_xy - K_yx = 1e-5 N/m (1.7e-8 of 600 N/m) passes");
+  w = wire_ok(), w.stiffness[8] = -600;
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a negative K_zz refused");
+  w = wire_ok(), w.in_contact = 0, w.normal = (palp_Vec3){1e5, 0, 0};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "out of contact, a normal of length 1e5 refused");
+  w = wire_ok(), w.in_contact = 0, w.normal = (palp_Vec3){0, 0, 0};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) == 0, "out of contact, a zero normal passes");
+  w = wire_ok(), w.force = (palp_Vec3){6000, 6000, 6000};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a force of 6000 N per axis (|F| = 10392 N > 1e4 N) refused");
+  w = wire_ok();
+  palp_cli_local_model_from_wire(&w, &m);
+  CHECK(palp_cli_local_model_fits_rate(&m, 250), "4 ms at 250 Hz fits");
+  m.period = 0.004 / 16;
+  CHECK(palp_cli_local_model_fits_rate(&m, 250), "0.25 ms (a retried step's 1/16) at 250 Hz fits");
+  m.period = 0.008;
+  CHECK(!palp_cli_local_model_fits_rate(&m, 250), "8 ms at 250 Hz does not");
+  m.period = 1e-4;
+  CHECK(!palp_cli_local_model_fits_rate(&m, 250), "0.1 ms at 250 Hz does not");
+}
+
+/* 3. The server's physics rate: the contact sample interval is bounded, and the loop
+ * refuses a rate outside 1..10000 Hz (1e-300 Hz made it 0, and tick % 0 a SIGFPE). */
+static int no_read(void *ctx, double t, palp_vec3 *x) { (void)ctx, (void)t, (void)x; return PALP_CLI_INPUT_END; }
+static void no_write(void *ctx, palp_vec3 f, unsigned flags) { (void)ctx, (void)f, (void)flags; }
+
+static void test_physics_rate(void) {
+  CHECK(palp_cli_contact_every(1000, 250) == 4, "1 kHz over 250 Hz: every 4th tick");
+  CHECK(palp_cli_contact_every(1000, 300) == 3, "1 kHz over 300 Hz: every 3rd (3.33 rounded)");
+  CHECK(palp_cli_contact_every(1000, 2000) == 1, "physics above the haptic rate: every tick");
+  CHECK(palp_cli_contact_every(1000, 1e-300) == 1000000, "1e-300 Hz: bounded at 1e6 ticks (was 0 after overflow)");
+  CHECK(palp_cli_contact_every(1000, 0) == 1000000 && palp_cli_contact_every(1000, NAN) == 1,
+        "0 Hz bounded, NaN: every tick");
+  const double bad[4] = {1e-300, 0.5, 2e4, NAN};
+  for (int i = 0; i < 4; ++i) {
+    palp_cli_input in;
+    memset(&in, 0, sizeof in);
+    in.name = "test", in.read_position = no_read, in.write_force = no_write;
+    palp_cli_haptic_def d = palp_cli_haptic_default_def();
+    d.in = &in;
+    d.physics_rate_hz = bad[i];
+    static palp_cli_haptic_loop l;
+    char err[256] = "";
+    const int rc = palp_cli_haptic_start(&l, &d, err, sizeof err);
+    CHECK(rc == PALP_EINVAL && strstr(err, "physics rate"), "physics rate %g Hz refused: \"%s\"", bad[i], err);
+  }
+}
+
+/* 5. The safe force is the station's and the phantom's, not any model's: a loop with a
+ * 10 N station limit on a 3 N phantom renders a 5 N model at 3 N although the model's
+ * max_force says 1e-9 N (before: lowered to 1e-9 N for the rest of the session). The run
+ * ends 0.3 s (station time) after the model was taken: the 0.1 s onset is over. */
+typedef struct fake_dev {
+  atomic_int model_seen;
+  double t_model, peak;
+} fake_dev;
+static int fake_read(void *ctx, double t, palp_vec3 *x) {
+  fake_dev *d = ctx;
+  *x = (palp_vec3){0, 0, 0.03};
+  if (atomic_load(&d->model_seen) == 1) d->t_model = t, atomic_store(&d->model_seen, 2);
+  if (atomic_load(&d->model_seen) == 2 && t > d->t_model + 0.3) return PALP_CLI_INPUT_END;
+  if (t > 5.0) return PALP_CLI_INPUT_END; /* no model came: fails below */
+  return 1;
+}
+static void fake_write(void *ctx, palp_vec3 f, unsigned flags) {
+  (void)flags;
+  fake_dev *d = ctx;
+  d->peak = fmax(d->peak, len(f));
+}
+static void fake_model(void *ctx, const palp_local_model *m) {
+  (void)m;
+  fake_dev *d = ctx;
+  int z = 0;
+  atomic_compare_exchange_strong(&d->model_seen, &z, 1);
+}
+
+static void test_safe_force(void) {
+  static fake_dev dev;
+  palp_cli_input in;
+  memset(&in, 0, sizeof in);
+  in.name = "fake", in.ctx = &dev, in.read_position = fake_read, in.write_force = fake_write, in.model = fake_model;
+  palp_cli_haptic_def d = palp_cli_haptic_default_def();
+  d.in = &in;
+  d.phantom_max_force = 3.0;
+  static palp_cli_haptic_loop l;
+  char err[256] = "";
+  CHECK(palp_cli_haptic_start(&l, &d, err, sizeof err) == 0, "loop started %s", err);
+  palp_local_model m = contact_model(1.0, 0.03, 5.0, 500);
+  palp_cli_mailbox_put(&l.mailbox, &m, 0, 1e-9, 0.001);
+  while (!palp_cli_haptic_done(&l)) nanosleep(&(struct timespec){0, 10000000}, NULL);
+  palp_cli_haptic_stats st;
+  palp_cli_haptic_join(&l, &st);
+  CHECK(atomic_load(&dev.model_seen) == 2 && st.models == 1, "the model was taken (%llu)",
+        (unsigned long long)st.models);
+  CHECK(fabs(st.max_force - 3.0) < 1e-12 && fabs(dev.peak - 3.0) < 1e-9,
+        "safe force %.3g N (min of 10 N and the phantom's 3 N), peak written %.6f N (3 N)", st.max_force, dev.peak);
+}
+
+int main(void) {
+  test_fade_above_limit(40);
+  test_fade_above_limit(1e4);
+  test_crossfade_above_limit();
+  test_nonfinite();
+  test_time_jump();
+  test_unanchored(-1);
+  test_unanchored(0.5);
+  test_unanchored(-0.3);
+  test_refused_keep_hold();
+  test_silence_damper();
+  test_nan_reading();
+  test_from_wire();
+  test_physics_rate();
+  test_safe_force();
+  return check_exit();
+}
