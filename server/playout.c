@@ -10,7 +10,11 @@
 #define BUCKET_NS 1000000000LL /* the minimum offset is the least over the last 1-2 s */
 #define SLEW 0.1               /* T runs at most 10% fast or slow towards its target */
 #define SNAP_NS 50000000LL     /* further than 50 ms off (a pause, a new path): jump */
-#define CLOCK_LIMIT (1LL << 62)
+/* |stamp| < 2^61 ns (73 years either side of the clock's zero: a monotonic clock, or Unix time
+ * until 2043): every difference taken below (two stamps, an offset and the base offset, the
+ * playout time and a stamp) then stays under 2^63. At 2^62, allowed until session 75, the gap
+ * between stamps -2^62 and +2^62 was 2^63: a signed overflow, and a weight far outside [0, 1]. */
+#define CLOCK_LIMIT (1LL << 61)
 #define RESTART_NS 1000000000LL /* a stamp this much older than the newest: a new clock */
 /* Jitter under 2.5 ms: no buffer [s]. A loaded loopback's own scheduling spread (the
  * demo beside an FE run: 0.8-2.3 ms) stays as the server was without it; a network's
@@ -35,9 +39,10 @@ static const palp_srv_playout_sample *at(const palp_srv_playout *p, int i) {
 }
 
 int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, palp_vec3 x, uint64_t seq) {
-  /* Offsets between two clocks are relative, but must not overflow: a stamp beyond
-   * +-2^62 ns (146 years) is not a clock reading. */
-  if (src_ns > CLOCK_LIMIT || src_ns < -CLOCK_LIMIT || recv_ns > CLOCK_LIMIT || recv_ns < -CLOCK_LIMIT) return PALP_EINVAL;
+  /* Offsets between two clocks are relative, but must not overflow: a stamp at or beyond
+   * +-2^61 ns (73 years) is not a clock reading (CLOCK_LIMIT). */
+  if (src_ns >= CLOCK_LIMIT || src_ns <= -CLOCK_LIMIT || recv_ns >= CLOCK_LIMIT || recv_ns <= -CLOCK_LIMIT)
+    return PALP_EINVAL;
   if (p->n > 0 && src_ns <= at(p, p->n - 1)->src_ns) {
     if (at(p, p->n - 1)->src_ns - src_ns < RESTART_NS) return 0; /* repeated or overtaken: the newer stands */
     palp_srv_playout_init(p, p->reach); /* the station's clock went back (a restart): start over */
@@ -159,7 +164,11 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
     return 1;
   }
   const palp_srv_playout_sample *a = at(p, k), *b = at(p, k + 1);
-  const double w = (double)(T - a->src_ns) / (double)(b->src_ns - a->src_ns);
+  /* a <= T < b (k is the last at or before T; b is after it), so w is in [0, 1); held there
+   * against rounding, since a weight outside it would move the device beyond both samples. */
+  double w = (double)(T - a->src_ns) / (double)(b->src_ns - a->src_ns);
+  if (!(w >= 0)) w = 0;
+  if (w > 1) w = 1;
   *x = (palp_vec3){a->x.x + w * (b->x.x - a->x.x), a->x.y + w * (b->x.y - a->x.y), a->x.z + w * (b->x.z - a->x.z)};
   *src_ns = T;
   *seq = a->seq;

@@ -191,6 +191,34 @@ int main(void) {
   CHECK(x.z == c.z && seq == 5, "... and the buffer starts over from it (z %.3f, seq %llu)", x.z,
         (unsigned long long)seq);
 
+  /* Stamps at the ends of the clock range (session 75): until then +-2^62 was taken, and the
+   * gap between two such stamps, 2^63, overflowed int64 (undefined; the weight came out near -1,
+   * the device point beyond both samples). Now |t| >= 2^61 is refused, and between the
+   * farthest stamps taken the point stays between the two samples (within 1e-12 m). */
+  {
+    palp_srv_playout e;
+    palp_srv_playout_init(&e, 0.4);
+    const int64_t L = (1LL << 61) - 1;
+    const palp_vec3 lo = {0, 0, 0.0}, hi = {0, 0, 0.01};
+    CHECK(palp_srv_playout_push(&e, -(1LL << 62), 0, lo, 1) == PALP_EINVAL &&
+              palp_srv_playout_push(&e, 1LL << 62, 0, lo, 1) == PALP_EINVAL &&
+              palp_srv_playout_push(&e, 1LL << 61, 0, lo, 1) == PALP_EINVAL &&
+              palp_srv_playout_push(&e, 0, -(1LL << 61), lo, 1) == PALP_EINVAL,
+          "stamps at +-2^62 and +-2^61 ns (source or arrival) are refused (PALP_EINVAL)");
+    const int ta = palp_srv_playout_push(&e, -L, 0, lo, 1), tb = palp_srv_playout_push(&e, L, MS, hi, 2);
+    CHECK(ta == 1 && tb == 1, "stamps -(2^61 - 1) and 2^61 - 1 are taken (%d, %d)", ta, tb);
+    palp_vec3 y[2];
+    int64_t ys;
+    uint64_t yq;
+    /* arrival offsets L and 1 ms - L: the base is the second, D = 0, T = now - 1 ms + L */
+    palp_srv_playout_at(&e, MS - L, &y[0], &ys, &yq);            /* T = 0: halfway */
+    palp_srv_playout_at(&e, MS - 1000 * MS, &y[1], &ys, &yq);     /* T = L - 1 s: next to the newer */
+    const double want = 0.01 * (1.0 - 1e9 / (2.0 * (double)L)); /* 0.01 m less 2.2e-12 m */
+    CHECK(fabs(y[0].z - 0.005) <= 1e-15 && y[1].z >= 0 && y[1].z <= 0.01 && fabs(y[1].z - want) <= 1e-15,
+          "between them the point is interpolated within the two samples (to 1e-15 m): z %.15f m at the middle "
+          "(0.005), %.15f m 1 s before the newer (%.15f)", y[0].z, y[1].z, want);
+  }
+
   fprintf(stderr, failures ? "%d check(s) FAILED\n" : "all checks passed\n", failures);
   return failures ? 1 : 0;
 }
