@@ -127,3 +127,19 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {
 
 void palp_log_warn_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_WARN, "%s", line); }
 void palp_log_debug_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_DEBUG, "%s", line); }
+
+char *palp_log_printable(const char *in, char *out, size_t len) {
+  size_t o = 0;
+  for (const unsigned char *c = (const unsigned char *)(in ? in : ""); *c; c++) {
+    const int esc = *c < 0x20 || *c == 0x7f || *c == '\\';
+    const size_t need = esc ? 4 : 1;
+    if (o + need >= len) break; /* cut whole: never half an escape */
+    if (esc)
+      snprintf(out + o, 5, "\\x%02x", *c);
+    else
+      out[o] = (char)*c;
+    o += need;
+  }
+  out[o] = 0;
+  return out;
+}

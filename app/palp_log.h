@@ -66,6 +66,12 @@ void palp_log_warn_line(void *ctx, const char *line);
 /* The same at debug level (what a trainee station sets aside: palp_dds_refusals_focus). */
 void palp_log_debug_line(void *ctx, const char *line);
 
+/* A string from the network made safe for one log line: control bytes (a newline would forge a
+ * line of its own, an ESC would drive the terminal), DEL and the backslash itself are written
+ * as \xNN, so what is logged maps back to what came; cut to fit out (len >= 1), always
+ * terminated. Returns out. */
+char *palp_log_printable(const char *in, char *out, size_t len);
+
 /* Formats the current UTC time as 2024-05-01T10:00:00.123Z into buf (>= 25 bytes). */
 void palp_log_timestamp(char *buf, size_t len);
 

@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "palp_log.h"
 #include "validate.h"
 
 static int failures;
@@ -130,6 +131,29 @@ int main(void) {
   r.mode = palp_CONTACT_RELEASE;
   r.center.x = NAN; /* ignored on release */
   expect("release ignores the other fields", &r, PALP_SRV_FORCE_CLAMP, PALP_SRV_ACCEPT, 0, NULL);
+
+  /* Network strings for the text log (session 75): control bytes, DEL and the backslash as \xNN,
+   * UTF-8 kept, and a cut never halves an escape. */
+  {
+    char o[64];
+    const struct {
+      const char *in, *want;
+      size_t len;
+    } pr[] = {{"a\nINFO forged", "a\\x0aINFO forged", 64},
+              {"\x1b[2J\r\x7f", "\\x1b[2J\\x0d\\x7f", 64},
+              {"back\\slash", "back\\x5cslash", 64},
+              {"Jos\xc3\xa9", "Jos\xc3\xa9", 64},
+              {"ab\ncd", "ab", 6},      /* "ab\x0a" needs 7 bytes with its NUL: cut before the escape */
+              {"ab\ncd", "ab\\x0a", 7}, /* ... which fits in 7 */
+              {NULL, "", 4}};
+    for (size_t i = 0; i < sizeof pr / sizeof pr[0]; i++) {
+      palp_log_printable(pr[i].in, o, pr[i].len);
+      const int ok = strcmp(o, pr[i].want) == 0;
+      fprintf(stderr, "%s printable #%zu: \"%s\" (want \"%s\", %zu bytes)\n", ok ? "ok  " : "FAIL", i, o, pr[i].want,
+              pr[i].len);
+      failures += !ok;
+    }
+  }
 
   fprintf(stderr, "%d failure(s)\n", failures);
   return failures ? 1 : 0;
