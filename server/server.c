@@ -1994,6 +1994,8 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
                                  .phantom_id = ids,
                                  .phantom_name = names,
                                  .wait_s = def->identity_wait_s,
+                                 .log_interval_s = srv->cfg.log_interval,
+                                 .secured = secured(srv),
                                  .log = srv->log};
     srv->identity = palp_srv_identity_create(&idd, rc, err, errlen);
     if (!srv->identity) goto fail;
@@ -2075,6 +2077,8 @@ int palp_srv_run(palp_srv *srv, double duration) {
     }
     if (palp_dds_now_ns() >= next_status) {
       char why[256];
+      /* Only within its start-up window (server_identity.h): later, a claim of its name is warned
+       * about and ignored, so one sample cannot close every session. */
       if (palp_srv_identity_poll(srv->identity, why, sizeof why) < 0) {
         palp_log_error(srv->log, "stopping: %s", why);
         result = PALP_EINVAL;

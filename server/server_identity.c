@@ -8,8 +8,17 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "palp_log.h"
 
 #define MAX_PEERS 64
+/* Identity samples taken per call: a peer writing thousands of names cannot hold the main
+ * thread (the rest wait in the reader for the next poll). */
+#define SAMPLES_PER_PASS 64
+/* A server gives way to an older one with its name or number only within this long of its
+ * announcement (server_identity.h, "start-up window"): time for discovery to bring it the
+ * identity of a server started at the same moment (on loopback well under a second). */
+#define STARTUP_WINDOW_NS (5 * 1000000000LL)
+#define REWRITE_PERIOD_NS 1000000000LL /* its own announcement again at most once a second */
 
 typedef struct peer {
   int alive;
@@ -25,6 +34,15 @@ struct palp_srv_identity {
   palp_log *log;
   peer peers[MAX_PEERS];
   char conflict[256]; /* sticky: once this server must give way, every poll says so */
+  int64_t announced_ns; /* palp_dds_now_ns of its announcement; the start-up window runs from it */
+  double log_interval_s;
+  /* Claims of its name or number by an older server after the start-up window: anomalous
+   * (a forged sample, or a network that split and healed), warned about, never obeyed. */
+  uint64_t late_claims, late_unsaid;
+  int64_t late_said_ns;
+  int rewrite_pending;
+  int64_t rewritten_ns;
+  char sec_hint[200]; /* what the warning advises, secured or not */
 };
 
 static int64_t unix_ns(void) {
@@ -53,13 +71,61 @@ static int other_is_older(const palp_srv_identity *id, const palp_ServerIdentity
   return strcmp(o->instance, id->me.instance) < 0;
 }
 
-/* Takes every new sample. Returns 0, or PALP_EINVAL (message in err) when this
- * server must give way. announced: whether this server has written its identity. */
+/* Who wrote a claim, for the warning: the writer's participant GUID (plain DDS: any peer could
+ * have; secured: only a participant holding one of the classroom's server certificates may
+ * publish this topic, make-classroom-pki.sh). */
+static void claimant_of(const palp_srv_identity *id, dds_instance_handle_t pub, char *out, size_t len) {
+  dds_builtintopic_endpoint_t *ep = pub ? dds_get_matched_publication_data(id->reader, pub) : NULL;
+  if (!ep) {
+    snprintf(out, len, "a writer already gone");
+    return;
+  }
+  const unsigned char *g = ep->participant_key.v;
+  snprintf(out, len, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3], g[4],
+           g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
+  dds_builtintopic_free_endpoint(ep);
+}
+
+/* A claim of this server's name or number by an older server after its start-up window: giving way would close every session on the word of one sample,
+ * which on plain DDS anyone may write. Warned about at most once per log interval (with how
+ * many came meanwhile); this server keeps serving and says again that it holds them. */
+static void late_claim(palp_srv_identity *id, const palp_ServerIdentity *o, dds_instance_handle_t pub, int same_name) {
+  id->late_claims++;
+  id->rewrite_pending = 1;
+  const int64_t now = palp_dds_now_ns();
+  if (id->late_said_ns && now - id->late_said_ns < (int64_t)(id->log_interval_s * 1e9)) {
+    id->late_unsaid++;
+    return;
+  }
+  char who[96], raw[sizeof o->instance], inst[4 * sizeof o->instance], name[4 * sizeof o->server_name], more[96] = "";
+  claimant_of(id, pub, who, sizeof who);
+  /* bounded reads: the strings are a peer's, escaped for the log */
+  snprintf(raw, sizeof raw, "%.*s", (int)sizeof raw - 1, o->instance);
+  palp_log_printable(raw, inst, sizeof inst);
+  snprintf(raw, sizeof raw, "%.*s", (int)sizeof raw - 1, o->server_name);
+  palp_log_printable(raw, name, sizeof name);
+  if (id->late_unsaid)
+    snprintf(more, sizeof more, " (and %llu more such claims since the last line)", (unsigned long long)id->late_unsaid);
+  palp_log_warn(id->log, "server %s \"%s\" (number %u) claimed by an older server \"%s\" (number %u, instance \"%s\", "
+                         "started at %lld ns), written by %s, after its start-up window: ignored, this server keeps "
+                         "serving and announces itself again; %s%s",
+                same_name ? "name" : "number", id->me.server_name, id->me.server_number, name, o->server_number, inst,
+                (long long)o->started_unix_ns, who, id->sec_hint, more);
+  id->late_said_ns = now;
+  id->late_unsaid = 0;
+}
+
+/* Takes new samples, at most SAMPLES_PER_PASS. Returns 0, or PALP_EINVAL (message in err) when
+ * this server must give way. announced: whether this server has written its identity. */
 static int take_all(palp_srv_identity *id, int announced, char *err, size_t errlen) {
   void *ptr[8] = {NULL};
   dds_sample_info_t info[8];
-  int n, rc = 0, rewrite = 0;
-  while ((n = dds_take(id->reader, ptr, info, 8, 8)) > 0) {
+  int n, rc = 0, rewrite = 0, taken = 0;
+  /* Before its announcement a server always gives way (another holds the name); after it, only
+   * within its start-up window: two servers started at once both announce, and the younger stops. */
+  const int may_give_way = !announced || palp_dds_now_ns() - id->announced_ns < STARTUP_WINDOW_NS;
+  while (taken < SAMPLES_PER_PASS && (n = dds_take(id->reader, ptr, info, 8, 8)) > 0) {
+    taken += n;
     for (int i = 0; i < n; i++) {
       const palp_ServerIdentity *o = ptr[i];
       if (!info[i].valid_data) {
@@ -76,7 +142,9 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
       const int same_name = strcmp(o->server_name, id->me.server_name) == 0;
       const int same_number = o->server_number == id->me.server_number;
       if ((same_name || same_number) && info[i].instance_state == DDS_IST_ALIVE) {
-        if (!announced || other_is_older(id, o)) {
+        if (announced && other_is_older(id, o) && !may_give_way) {
+          late_claim(id, o, info[i].publication_handle, same_name);
+        } else if (!announced || other_is_older(id, o)) {
           snprintf(err, errlen,
                    "server %s \"%s\" (number %u) is already running on this domain as %s: give this server "
                    "another server_name and server_number, or stop that one",
@@ -105,8 +173,15 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
     if (n < 8) break;
   }
   /* Both wrote the same key (same name): the reader's last value may be the
-   * other's; say again who holds it. */
-  if (rewrite && announced && rc == 0) dds_write(id->writer, &id->me);
+   * other's; say again who holds it (at most once a second: a flood of claims must not
+   * become a flood of announcements; a pending one goes out at a later poll). */
+  if (rewrite) id->rewrite_pending = 1;
+  const int64_t now = palp_dds_now_ns();
+  if (id->rewrite_pending && announced && rc == 0 && now - id->rewritten_ns >= REWRITE_PERIOD_NS) {
+    dds_write(id->writer, &id->me);
+    id->rewritten_ns = now;
+    id->rewrite_pending = 0;
+  }
   return rc;
 }
 
@@ -118,6 +193,12 @@ palp_srv_identity *palp_srv_identity_create(const palp_srv_identity_def *def, in
     return NULL;
   }
   id->log = def->log;
+  id->log_interval_s = def->log_interval_s > 0 ? def->log_interval_s : 1.0;
+  snprintf(id->sec_hint, sizeof id->sec_hint, "%s",
+           def->secured ? "only the classroom's server certificates may write this topic: find the server started "
+                          "with this name, or revoke the certificate (make-classroom-pki.sh DIR revoke)"
+                        : "DDS Security is off, so any participant may write this: a forged sample, or a second "
+                          "server with this name on a network that split and healed; run the classroom secured");
   snprintf(id->me.server_name, sizeof id->me.server_name, "%s", def->name);
   id->me.server_number = def->number;
   snprintf(id->me.instance, sizeof id->me.instance, "%s", def->instance);
@@ -157,6 +238,7 @@ palp_srv_identity *palp_srv_identity_create(const palp_srv_identity_def *def, in
     snprintf(err, errlen, "cannot announce the server identity");
     goto fail;
   }
+  id->announced_ns = palp_dds_now_ns();
   *rc = 0;
   return id;
 fail:
@@ -170,6 +252,8 @@ int palp_srv_identity_poll(palp_srv_identity *id, char *err, size_t errlen) {
   snprintf(err, errlen, "%s", id->conflict);
   return PALP_EINVAL;
 }
+
+uint64_t palp_srv_identity_late_claims(const palp_srv_identity *id) { return id ? id->late_claims : 0; }
 
 int palp_srv_identity_peers(const palp_srv_identity *id) {
   int n = 0;

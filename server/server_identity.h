@@ -11,6 +11,15 @@
  * two servers that started at the same moment the younger stops (the older one
  * re-announces itself). Peers that appear or vanish are logged; a vanished
  * server's stations learn it from their session state (palp-client --rejoin).
+ *
+ * Start-up window: the younger gives way only within 5 s of its announcement (a
+ * server started at the same moment is found by then; the sessions it may have
+ * opened meanwhile from stations' durable requests close as it stops, as before).
+ * Later, a claim of its name or number by an older
+ * server is anomalous (on plain DDS one forged sample {its name, number 0,
+ * started_unix_ns 0} used to stop the server and close every session): it is
+ * warned about, naming the claimant, at most once per log_interval_s, and ignored;
+ * the server announces itself again (at most once a second).
  */
 #ifndef PALP_SRV_SERVER_IDENTITY_H
 #define PALP_SRV_SERVER_IDENTITY_H
@@ -34,15 +43,20 @@ typedef struct palp_srv_identity_def {
   const uint32_t *phantom_id;  /* qualified ids */
   const char *const *phantom_name;
   double wait_s;               /* how long to listen for existing identities before announcing */
+  double log_interval_s;       /* least time between two warnings of a late claim (0: 1 s) */
+  int secured;                 /* DDS Security on: only server certificates may write identities */
   palp_log *log;               /* may be NULL */
 } palp_srv_identity_def;
 
 /* Listens, checks, announces. Returns NULL with a message in err (e.g. the name is
  * held by another live server) and *rc < 0. */
 palp_srv_identity *palp_srv_identity_create(const palp_srv_identity_def *def, int *rc, char *err, size_t errlen);
-/* Reads what changed: returns 0, or PALP_EINVAL with a message in err when a
- * conflicting server that started before this one appeared (this one must stop). */
+/* Reads what changed (at most 64 samples): returns 0, or PALP_EINVAL with a message in err
+ * when a conflicting server that started before this one appeared within the start-up
+ * window (this one must stop). */
 int palp_srv_identity_poll(palp_srv_identity *id, char *err, size_t errlen);
+/* Claims of this server's name or number ignored after its start-up window. */
+uint64_t palp_srv_identity_late_claims(const palp_srv_identity *id);
 /* Other servers alive on the domain, as last polled (poll first for the newest). */
 int palp_srv_identity_peers(const palp_srv_identity *id);
 void palp_srv_identity_destroy(palp_srv_identity *id);
