@@ -50,7 +50,20 @@ typedef struct station {
   uint32_t request_seq; /* of the JOIN it was accepted with: the same request again is answered, not redone */
   int keyed;           /* last request came on palp_station_request */
   dds_instance_handle_t ih; /* its instance there (keyed by station_key) */
+  /* Its keyed instance was disposed while its writer was matched: a goodbye, unless the writer's
+   * liveliness turns out lapsed by gone_due_ns (decide_gone_stations); 0: nothing pending. */
+  int64_t gone_due_ns;
+  dds_instance_handle_t gone_writer;
 } station;
+
+/* How long after a keyed station's dispose the server looks whether its writer's liveliness
+ * lapsed: Cyclone calls the liveliness listener right after it unregisters (autodisposes) a
+ * lapsed writer's instances. Decided on a later pass of the main loop, never slept on. */
+#define GONE_GRACE_NS 50000000LL
+
+/* Request samples taken per topic per pass of the main loop (as findings are): a flood cannot
+ * hold the main thread; the rest wait in the reader, whose read condition wakes the next pass. */
+#define REQUESTS_PER_PASS 64
 
 #define SCORES_KEPT 64 /* palp_session_score instances kept for late dashboards */
 #define TOLD_KEPT 16   /* palp_debrief_score: practice sessions awaiting their score, writers kept */
@@ -139,6 +152,12 @@ struct palp_srv {
   station *stations;
   int station_slots;
   palp_srv_admission *admission;
+  /* palp_station_request's own (session 75): until then a plain peer could keep 10^6 station keys
+   * there for as long as its writer lived. Its topic entity carries the filter. */
+  palp_srv_admission *station_admission;
+  dds_entity_t station_request_topic;
+  uint64_t filtered_said; /* request keys refused by either filter, as last logged */
+  int64_t filtered_said_ns;
   palp_srv_retire retire;
   guard_counts guard;
   palp_dds_log_limit dds_log;
@@ -164,6 +183,13 @@ struct palp_srv {
 };
 
 static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
+
+/* A station id or user name from the network, for the text log: escaped (palp_log_printable),
+ * so a newline in it cannot forge a log line. buf: 4x the field, every byte escapable. */
+typedef struct printable {
+  char s[4 * 64];
+} printable;
+#define PRINTABLE(str) (palp_log_printable((str), (printable){{0}}.s, sizeof(printable)))
 
 /* Cyclone's threads: a line about a refused peer was logged; the session log keeps it too. */
 static void record_refusal(void *ctx, const palp_dds_refusal *r, uint64_t count) {
@@ -1154,8 +1180,8 @@ static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_Sessio
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
     srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 1);
-  palp_log_info(srv->log, "session %u: trainee station %s came back after %.1f s; the session goes on", s->id, st->id,
-                away);
+  palp_log_info(srv->log, "session %u: trainee station %s came back after %.1f s; the session goes on", s->id,
+                PRINTABLE(st->id), away);
 }
 
 /* The open session held for this trainee station, or NULL. */
@@ -1201,7 +1227,7 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
   if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
   /* At the level of its join (who followed a session, and until when, is the instructor's to read). */
-  palp_log_info(srv->log, "station %s (%s) left session %u: %s", st->id,
+  palp_log_info(srv->log, "station %s (%s) left session %u: %s", PRINTABLE(st->id),
                 role == palp_ROLE_VISUAL ? "visual" : "observer", sid, reason);
   free_station(srv, st); /* after its last read */
   publish_state(srv, s, 0, NULL, NULL);
@@ -1219,12 +1245,32 @@ static int not_mine(const palp_srv *srv, const palp_SessionRequest *rq) {
   return find_phantom((palp_srv *)srv, rq->phantom_id) == NULL;
 }
 
-/* A refused join: answered, counted, and its reply released after the retention
- * time (the station holds no slot, so nothing else would ever release it). */
-static void refuse(palp_srv *srv, const palp_SessionRequest *rq, uint64_t *counter, const char *why) {
-  (*counter)++;
+/* A reply (a refusal, a "left") to a station that holds no slot: its transient-local instance is
+ * released after the retention time, since nothing else ever would (free_station does it for a
+ * station that held one). Every such reply goes through here: until session 75 a LEAVE for an
+ * unknown station on palp_station_request left its reply instance behind for good. */
+static void reply_unslotted(palp_srv *srv, const palp_SessionRequest *rq, const char *why) {
   reply(srv, rq, NULL, why);
   if (!find_station(srv, rq->station_id)) retire_reply(srv, rq->station_id);
+}
+
+/* A refused join: answered, counted, and its reply released after the retention time. */
+static void refuse(palp_srv *srv, const palp_SessionRequest *rq, uint64_t *counter, const char *why) {
+  (*counter)++;
+  reply_unslotted(srv, rq, why);
+}
+
+/* A LEAVE: the station leaves what it is in (its slot freed, which schedules its reply's release),
+ * or the session held for it closes. Answered "left", and alone on the domain also when there was
+ * nothing to leave (with other servers, that request may be theirs). */
+static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq) {
+  station *st = find_station(srv, rq->station_id);
+  if (st) {
+    station_leave(srv, st, "left"); /* frees its slot: free_station retired its reply */
+    reply(srv, rq, NULL, "left");
+  } else if (leave_held(srv, rq->station_id) || !palp_srv_identity_peers(srv->identity)) {
+    reply_unslotted(srv, rq, "left");
+  }
 }
 
 /* who: the authenticated sender (secured), NULL on plain DDS; writer: its
@@ -1265,8 +1311,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                                    : NULL;
   if (done) {
     snprintf(why, sizeof why, "session %u closed: %.80s", done->sum.info.session_id, done->reason);
-    reply(srv, rq, NULL, why);
-    retire_reply(srv, rq->station_id);
+    reply_unslotted(srv, rq, why);
     return;
   }
   if (!palp_srv_admission_join_token(srv->admission, palp_dds_now_ns())) {
@@ -1370,7 +1415,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     publish_state(srv, s, 0, NULL, NULL);
     publish_catalogue(srv, ph);
     palp_log_info(srv->log, "session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s",
-            s->id, s->trainee_name, s->trainee_station, ph->cfg.id, ph->cfg.name, s->partition);
+            s->id, PRINTABLE(s->trainee_name), PRINTABLE(s->trainee_station), ph->cfg.id, ph->cfg.name,
+            PRINTABLE(s->partition));
     return;
   }
   /* Visual station or observer: a given session, else the newest on the phantom.
@@ -1381,7 +1427,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     s = find_session(srv, rq->session_id);
     if (s && only && strcmp(s->trainee_name, only) != 0) {
       snprintf(why, sizeof why, "session %u belongs to another trainee", rq->session_id);
-      reply(srv, rq, NULL, why);
+      reply_unslotted(srv, rq, why);
       return;
     }
   } else {
@@ -1417,7 +1463,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
     srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
-  palp_log_info(srv->log, "station %s joined session %u as %s", st->id, s->id,
+  palp_log_info(srv->log, "station %s joined session %u as %s", PRINTABLE(st->id), s->id,
           rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
 }
 
@@ -1445,29 +1491,57 @@ static int station_writer_lost(palp_srv *srv, dds_instance_handle_t w) {
 /* Cyclone 0.10 reports a dispose and a writer whose liveliness lapsed (autodispose)
  * alike, as a disposed instance, and unregisters the lapsed writer's instances just
  * before it calls the liveliness listener. So a disposed instance is a goodbye only
- * if its writer is still matched and, a moment later, has not lost its liveliness. */
-static const char *station_not_alive_reason(palp_srv *srv, const dds_sample_info_t *info) {
-  const char *lost = "lost (liveliness lease expired)";
-  if (info->instance_state != DDS_IST_NOT_ALIVE_DISPOSED || !info->publication_handle) return lost;
+ * if its writer is still matched and, a moment later, has not lost its liveliness.
+ * That moment is not slept on (until session 75 it was, 50 ms on the main thread per
+ * dispose: a peer joining and disposing at join_rate stalled every session's requests,
+ * findings and time limits): the station is marked, and decide_gone_stations judges
+ * it GONE_GRACE_NS later. Returns whether it was marked; else it is lost now. */
+static int station_gone_later(palp_srv *srv, station *st, const dds_sample_info_t *info) {
+  if (info->instance_state != DDS_IST_NOT_ALIVE_DISPOSED || !info->publication_handle) return 0;
   dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(srv->station_request_r, info->publication_handle);
-  if (!w) return lost;
+  if (!w) return 0;
   dds_builtintopic_free_endpoint(w);
-  const struct timespec grace = {0, 50000000}; /* the listener runs right after the unregister */
-  nanosleep(&grace, NULL);
-  return station_writer_lost(srv, info->publication_handle) ? lost : "left (request disposed)";
+  if (!st->gone_due_ns) st->gone_due_ns = palp_dds_now_ns() + GONE_GRACE_NS;
+  st->gone_writer = info->publication_handle;
+  return 1;
+}
+
+/* Judges one marked station now: lost if its writer's liveliness lapsed meanwhile, else it left. */
+static void decide_gone(palp_srv *srv, station *st) {
+  const int lost = station_writer_lost(srv, st->gone_writer);
+  st->gone_due_ns = 0;
+  station_leave(srv, st, lost ? "lost (liveliness lease expired)" : "left (request disposed)"); /* frees its slot */
+}
+
+/* The marked stations whose moment has passed (all of them when now_ns is INT64_MAX). */
+static void decide_gone_stations(palp_srv *srv, int64_t now_ns) {
+  for (int i = 0; i < srv->station_slots; i++) {
+    station *st = &srv->stations[i];
+    if (st->in_use && st->gone_due_ns && st->gone_due_ns <= now_ns) decide_gone(srv, st);
+  }
+}
+
+/* The earliest moment a marked station is due (INT64_MAX: none), so the main loop wakes for it. */
+static int64_t next_gone_due(const palp_srv *srv) {
+  int64_t due = INT64_MAX;
+  for (int i = 0; i < srv->station_slots; i++) {
+    const station *st = &srv->stations[i];
+    if (st->in_use && st->gone_due_ns && st->gone_due_ns < due) due = st->gone_due_ns;
+  }
+  return due;
 }
 
 static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, uint64_t writer, station **out_st) {
+  /* A station marked gone that asks again: its dispose is judged first, as it was before this
+   * sample when the server slept on it. */
+  station *marked = find_station(srv, rq->station_id);
+  if (marked && marked->gone_due_ns) decide_gone(srv, marked);
   if (rq->op == palp_OP_JOIN) {
     handle_join(srv, rq, NULL, writer); /* palp_station_request is not offered when secured */
     if (out_st) *out_st = find_station(srv, rq->station_id);
     return;
   }
-  station *st = find_station(srv, rq->station_id);
-  int left = st != NULL;
-  if (st) station_leave(srv, st, "left"); /* frees its slot */
-  else left = leave_held(srv, rq->station_id);
-  if (left || !palp_srv_identity_peers(srv->identity)) reply(srv, rq, NULL, "left");
+  handle_leave(srv, rq);
   if (out_st) *out_st = NULL;
 }
 
@@ -1478,8 +1552,10 @@ static void handle_station_requests(palp_srv *srv) {
   void *ptr[N];
   dds_sample_info_t info[N];
   for (int i = 0; i < N; i++) ptr[i] = &buf[i];
-  int n;
-  while (srv->station_request_r > 0 && (n = dds_take(srv->station_request_r, ptr, info, N, N)) > 0) {
+  int n, taken = 0;
+  while (srv->station_request_r > 0 && taken < REQUESTS_PER_PASS &&
+         (n = dds_take(srv->station_request_r, ptr, info, N, N)) > 0) {
+    taken += n;
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
         const palp_StationRequest *s = &buf[i];
@@ -1503,12 +1579,14 @@ static void handle_station_requests(palp_srv *srv) {
         continue;
       }
       if (info[i].instance_state == DDS_IST_ALIVE) continue;
+      /* The instance is gone: its writer may register another (admission.h). */
+      palp_srv_admission_release(srv->station_admission, info[i].instance_handle);
       /* By instance handle: once its last sample is taken, a "no writers" instance
        * may be gone, and its key with it. */
       for (int k = 0; k < srv->station_slots; k++) {
         station *st = &srv->stations[k];
         if (!st->in_use || !st->keyed || st->ih != info[i].instance_handle) continue;
-        station_leave(srv, st, station_not_alive_reason(srv, &info[i])); /* frees its slot */
+        if (!station_gone_later(srv, st, &info[i])) station_leave(srv, st, "lost (liveliness lease expired)");
       }
     }
     if (n < N) break;
@@ -1549,9 +1627,11 @@ static void handle_requests(palp_srv *srv) {
   void *ptr[N];
   dds_sample_info_t info[N];
   for (int i = 0; i < N; i++) ptr[i] = &buf[i];
-  int n;
+  int n, taken = 0;
   handle_station_requests(srv);
-  while ((n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
+  decide_gone_stations(srv, palp_dds_now_ns());
+  while (taken < REQUESTS_PER_PASS && (n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
+    taken += n;
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
         /* Strings from the wire are bounded by the IDL, but a forged sample need
@@ -1572,8 +1652,7 @@ static void handle_requests(palp_srv *srv) {
             if (buf[i].op == palp_OP_LEAVE) {
               station *own = find_station(srv, buf[i].station_id);
               if (own && own->writer == info[i].publication_handle) {
-                station_leave(srv, own, "left");
-                retire_reply(srv, buf[i].station_id);
+                station_leave(srv, own, "left"); /* frees its slot, whose reply free_station retired */
                 continue;
               }
               /* Nothing to leave (its session closed first, as an observer's does
@@ -1581,37 +1660,32 @@ static void handle_requests(palp_srv *srv) {
                * one to refuse. */
               if (!own) {
                 logf_(srv, "station \"%s\": LEAVE from a writer already gone, for no open station",
-                       buf[i].station_id);
+                       PRINTABLE(buf[i].station_id));
                 continue;
               }
             }
-            refuse_identity(srv, "station \"%s\": the writer's identity is unknown", buf[i].station_id);
+            refuse_identity(srv, "station \"%s\": the writer's identity is unknown", PRINTABLE(buf[i].station_id));
             continue;
           }
           if (!palp_srv_station_owned_by(buf[i].station_id, &who)) {
             refuse_identity(srv, "%s/%s sent a request for station \"%s\", which is not its own",
-                            palp_dds_id_kind_name(who.kind), who.name, buf[i].station_id);
+                            palp_dds_id_kind_name(who.kind), PRINTABLE(who.name), PRINTABLE(buf[i].station_id));
             continue;
           }
           if (buf[i].op == palp_OP_JOIN && strcmp(buf[i].user_name, who.name) != 0) {
             char why[160];
             snprintf(why, sizeof why, "user_name \"%.40s\" is not the authenticated identity %s/%s", buf[i].user_name,
                      palp_dds_id_kind_name(who.kind), who.name);
-            refuse_identity(srv, "%s", why);
-            reply(srv, &buf[i], NULL, why);
+            refuse_identity(srv, "user_name \"%s\" is not the authenticated identity %s/%s", PRINTABLE(buf[i].user_name),
+                            palp_dds_id_kind_name(who.kind), PRINTABLE(who.name));
+            reply_unslotted(srv, &buf[i], why);
             continue;
           }
         }
         if (buf[i].op == palp_OP_JOIN)
           handle_join(srv, &buf[i], secured(srv) ? &who : NULL, info[i].publication_handle);
-        else {
-          station *st = find_station(srv, buf[i].station_id);
-          int left = st != NULL;
-          if (st) station_leave(srv, st, "left");
-          else left = leave_held(srv, buf[i].station_id);
-          if (left || !palp_srv_identity_peers(srv->identity)) reply(srv, &buf[i], NULL, "left");
-          retire_reply(srv, buf[i].station_id);
-        }
+        else
+          handle_leave(srv, &buf[i]);
         continue;
       }
       if (info[i].instance_state == DDS_IST_ALIVE) continue;
@@ -1630,7 +1704,7 @@ static void handle_requests(palp_srv *srv) {
        * (another identity writing this key) says nothing about the station. */
       if (secured(srv) && info[i].publication_handle != st->writer) {
         refuse_identity(srv, "station \"%s\": disposed or unregistered by a writer that is not its own",
-                        buf[i].station_id);
+                        PRINTABLE(buf[i].station_id));
         continue;
       }
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
@@ -1645,15 +1719,33 @@ static void handle_requests(palp_srv *srv) {
   }
 }
 
-/* [receive thread] The request topic's filter: see admission.h. */
-static bool request_filter(const palp_SessionRequest *rq, const dds_sample_info_t *si, void *arg) {
-  (void)rq;
-  palp_srv *srv = arg;
-  return palp_srv_admission_admit(srv->admission, si->instance_handle, si->publication_handle);
+/* [receive thread] The request topics' filter: see admission.h. arg: that topic's admission
+ * table (palp_session_request's, palp_station_request's). */
+static bool request_filter_fn(const void *sample, const dds_sample_info_t *si, void *arg) {
+  (void)sample;
+  return palp_srv_admission_admit(arg, si->instance_handle, si->publication_handle);
 }
 
-static bool request_filter_fn(const void *sample, const dds_sample_info_t *si, void *arg) {
-  return request_filter(sample, si, arg);
+/* Request keys refused by the filters since the start (palp_server_guard.request_keys_filtered). */
+static uint64_t request_keys_filtered(palp_srv *srv) {
+  return palp_srv_admission_refused(srv->admission) +
+         (srv->station_admission ? palp_srv_admission_refused(srv->station_admission) : 0);
+}
+
+/* New refusals said in the log at most once per log_interval, with the limit that refused them:
+ * an operator sees a flood of station keys, not only a counter in palp_server_guard. */
+static void say_filtered(palp_srv *srv, int64_t now_ns) {
+  const uint64_t n = request_keys_filtered(srv);
+  if (n == srv->filtered_said) return;
+  if (srv->filtered_said_ns && now_ns - srv->filtered_said_ns < (int64_t)(srv->cfg.log_interval * 1e9)) return;
+  palp_logf(srv->log, PALP_LOG_WARN, "%llu new request keys refused (%llu in all; on palp_station_request %llu): a "
+            "writer may hold %d station ids at a time (stations_per_writer), the server %d per request topic; %s",
+            (unsigned long long)(n - srv->filtered_said), (unsigned long long)n,
+            (unsigned long long)(srv->station_admission ? palp_srv_admission_refused(srv->station_admission) : 0),
+            srv->cfg.stations_per_writer, 2 * srv->station_slots + 64,
+            secured(srv) ? "a classroom identity writes them" : "some participant writes them (DDS Security is off)");
+  srv->filtered_said = n;
+  srv->filtered_said_ns = now_ns;
 }
 
 /* ---- status -------------------------------------------------------------------- */
@@ -1757,7 +1849,7 @@ static void publish_status(palp_srv *srv) {
   gm.joins_refused_writer = srv->guard.joins_refused_writer;
   gm.joins_refused_viewers = srv->guard.joins_refused_viewers;
   gm.joins_refused_other = srv->guard.joins_refused_other;
-  gm.request_keys_filtered = palp_srv_admission_refused(srv->admission);
+  gm.request_keys_filtered = request_keys_filtered(srv);
   gm.contacts_filtered = lc.rejected[PALP_SRV_REJ_UNKNOWN_SESSION] + srv->rejected_closed[PALP_SRV_REJ_UNKNOWN_SESSION] +
                          lc.rejected[PALP_SRV_REJ_BAD_FINGER] + srv->rejected_closed[PALP_SRV_REJ_BAD_FINGER];
   gm.contacts_absurd_force = lc.rejected[PALP_SRV_REJ_ABSURD_FORCE] + srv->rejected_closed[PALP_SRV_REJ_ABSURD_FORCE];
@@ -1815,7 +1907,10 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
    * a refused join and their retry or exit. */
   srv->admission = palp_srv_admission_create(srv->cfg.stations_per_writer, 2 * srv->station_slots + 64,
                                              srv->cfg.join_rate, srv->cfg.join_burst);
-  if (!srv->sessions || !srv->loads || !srv->stations || !srv->closed || !srv->admission ||
+  /* The same bound on palp_station_request (its join tokens unused: joins take srv->admission's). */
+  srv->station_admission = palp_srv_admission_create(srv->cfg.stations_per_writer, 2 * srv->station_slots + 64,
+                                                     srv->cfg.join_rate, srv->cfg.join_burst);
+  if (!srv->sessions || !srv->loads || !srv->stations || !srv->closed || !srv->admission || !srv->station_admission ||
       palp_srv_retire_init(&srv->retire, 4 * srv->station_slots + 256, srv->cfg.closed_retention) < 0) {
     *rc = PALP_ENOMEM;
     fail(err, errlen, "out of memory");
@@ -1890,7 +1985,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   {
     struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_SAMPLEINFO_ARG,
                                    .f = {.sample_sampleinfo_arg = request_filter_fn},
-                                   .arg = srv};
+                                   .arg = srv->admission};
     if (srv->request_topic < 0 || dds_set_topic_filter_extended(srv->request_topic, &flt) < 0) {
       *rc = PALP_EIO;
       fail(err, errlen, "cannot create the session request topic");
@@ -1933,8 +2028,15 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   /* palp_station_request (other vendors' stations, docs/interop.md) carries no
    * identity the server could check, so a secured classroom does not offer it. */
   if (!secured(srv)) {
+    /* On a topic entity of its own, which carries its admission filter (as the session requests'). */
+    srv->station_request_topic = palp_dds_create_topic(srv->pp, PALP_TOPIC_STATION_REQUEST);
+    struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_SAMPLEINFO_ARG,
+                                   .f = {.sample_sampleinfo_arg = request_filter_fn},
+                                   .arg = srv->station_admission};
     srv->station_request_r =
-        palp_dds_create_reader(srv->pp, srv->topic[PALP_TOPIC_STATION_REQUEST], PALP_TOPIC_STATION_REQUEST);
+        srv->station_request_topic < 0 || dds_set_topic_filter_extended(srv->station_request_topic, &flt) < 0
+            ? -1
+            : palp_dds_create_reader(srv->pp, srv->station_request_topic, PALP_TOPIC_STATION_REQUEST);
     srv->station_request_rc = dds_create_readcondition(srv->station_request_r, DDS_ANY_STATE);
     if (srv->station_request_r > 0) {
       dds_listener_t *lv = dds_create_listener(NULL);
@@ -2044,6 +2146,8 @@ int palp_srv_run(palp_srv *srv, double duration) {
     int64_t wake = next_status < end ? next_status : end;
     /* Wake at least every 100 ms to notice sessions whose model failed. */
     if (wake - now > 100000000) wake = now + 100000000;
+    const int64_t gone_due = next_gone_due(srv); /* a disposed station's moment (station_gone_later) */
+    if (gone_due < wake) wake = gone_due;
     dds_waitset_wait(srv->waitset, NULL, 0, wake - now > 0 ? wake - now : 0);
     handle_requests(srv);
     publish_scores(srv);
@@ -2085,6 +2189,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
         break;
       }
       publish_status(srv);
+      say_filtered(srv, palp_dds_now_ns());
       /* a refused peer that stopped retrying: its repeats logged (and kept) within a window */
       palp_dds_refusals_tick(&srv->refusals, palp_dds_now_ns());
       if (srv->strangers_ready) palp_dds_strangers_tick(&srv->strangers, &srv->refusals, palp_dds_now_ns());
@@ -2185,6 +2290,7 @@ void palp_srv_destroy(palp_srv *srv) {
   /* After the participant: the request filter (which uses the admission table)
    * can no longer run. */
   palp_srv_admission_destroy(srv->admission);
+  palp_srv_admission_destroy(srv->station_admission);
   palp_srv_retire_free(&srv->retire);
   if (srv->dds_log_installed) palp_dds_log_limit_remove(&srv->dds_log);
   if (srv->refusals_ready) { /* after the sink is gone: nothing notes a refusal any more */
