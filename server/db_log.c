@@ -13,7 +13,7 @@
 #include "palp_dds.h"
 
 #define SLOT_FINGERS 16 /* model contact ids whose fingertip radius is tracked */
-#define SLOTS 1024 /* open sessions are far fewer; a slot is found by id % SLOTS */
+#define SLOTS 1024 /* open sessions are far fewer; a slot is found from id % SLOTS (find) */
 #define FLUSH_NS 1000000000 /* reject/clamp/overrun counts are logged once a second per session */
 
 typedef struct slot {
@@ -43,11 +43,31 @@ struct palp_srv_db_log {
   palp_log *log; /* may be NULL (stderr) */
   palp_srv_grader *grader; /* NULL: closed sessions are not scored live */
   palp_db_loss_watch watch; /* session 66: the log's losses said as they happen */
+  /* The farthest a session's slot has been placed from id % SLOTS: find looks no further. Written
+   * by the main thread before the session's first tick (on_opened), only ever grown. */
+  int max_probe;
 };
 
+/* Linear probing from id % SLOTS (until session 75 only that slot: a new session whose slot an
+ * older session still held, ids 1,024 apart, was not logged at all). A freed slot is no end of
+ * the probe (the id may lie past it), so find looks max_probe + 1 slots, not until a free one. */
 static slot *find(palp_srv_db_log *l, uint32_t id) {
-  slot *s = &l->s[id % SLOTS];
-  return s->id == id ? s : NULL;
+  for (int k = 0; k <= l->max_probe; k++) {
+    slot *s = &l->s[(id + (uint32_t)k) % SLOTS];
+    if (s->id == id) return s;
+  }
+  return NULL;
+}
+
+/* A free slot for a new session, nearest its home; NULL when all SLOTS are held. */
+static slot *place(palp_srv_db_log *l, uint32_t id) {
+  for (int k = 0; k < SLOTS; k++) {
+    slot *s = &l->s[(id + (uint32_t)k) % SLOTS];
+    if (s->id) continue;
+    if (k > l->max_probe) l->max_probe = k;
+    return s;
+  }
+  return NULL;
 }
 
 static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
@@ -88,9 +108,9 @@ static int log_every(double rate_hz, double hz) { return palp_assess_sample_ever
 
 static void on_opened(void *ctx, const palp_srv_session_info *i) {
   palp_srv_db_log *l = ctx;
-  slot *s = &l->s[i->session_id % SLOTS];
-  if (s->id) {
-    palp_log_error(l->log, "session log: slot of session %u busy; session %u not logged", s->id, i->session_id);
+  slot *s = place(l, i->session_id);
+  if (!s) { /* 1,024 sessions open at once: far beyond any max_sessions */
+    palp_log_error(l->log, "session log: all %d slots busy; session %u not logged", SLOTS, i->session_id);
     return;
   }
   char uid[96], phantom[16], params[512];
