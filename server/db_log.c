@@ -274,12 +274,12 @@ static void on_world_op(void *ctx, uint32_t session_id, const palp_srv_world_op 
     s->finger_radius[op->slot] = op->radius;
 }
 
-static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r, int clamped) {
+static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r, int clamped, uint64_t count) {
   palp_srv_db_log *l = ctx;
   slot *s = find(l, session_id);
   if (!s) return;
-  if (clamped) s->clamped++;
-  else if ((unsigned)r < PALP_SRV_REJ_COUNT) s->rejected[r]++;
+  if (clamped) s->clamped += count;
+  else if ((unsigned)r < PALP_SRV_REJ_COUNT) s->rejected[r] += count;
 }
 
 static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {

@@ -125,8 +125,9 @@ typedef struct palp_srv_events {
   void (*contact_applied)(void *ctx, uint32_t session_id, const palp_srv_contact *c, double t);
   /* [tick thread] every world contact change, in order (see palp_srv_world_op). */
   void (*world_op)(void *ctx, uint32_t session_id, const palp_srv_world_op *op);
-  /* [tick thread] a sample was rejected (reason) or clamped. */
-  void (*contact_rejected)(void *ctx, uint32_t session_id, palp_srv_reject_reason reason, int clamped);
+  /* [tick thread] count samples were rejected (reason) or clamped: 1 for a sample the session
+   * checked, any number for those the contact reader's filter dropped since the last tick. */
+  void (*contact_rejected)(void *ctx, uint32_t session_id, palp_srv_reject_reason reason, int clamped, uint64_t count);
   /* [tick thread] after every palp_world_step (sleeping ones too): the world may
    * be read (palp_world_frame/_hash/_positions...) but not changed; per finger:
    * its model contact id (-1 when lifted) and feedback force [N]. */

@@ -272,19 +272,27 @@ void palp_srv_session_destroy(palp_srv_session *s) {
   free(s);
 }
 
-static void count_reject(palp_srv_session *s, palp_srv_reject_reason r, int clamped, int64_t now_ns) {
-  s->stats.rejected[r]++;
-  if (s->events && s->events->contact_rejected) s->events->contact_rejected(s->events->ctx, s->id, r, clamped);
+/* n samples rejected (or clamped) for one reason: counted, told to the events and the log once
+ * (the filter's drops arrive as one count: until session 75 they were folded in one by one on
+ * the tick thread, an event and a clock comparison per sample of a flood). */
+static void count_rejects(palp_srv_session *s, palp_srv_reject_reason r, int clamped, uint64_t n, int64_t now_ns) {
+  if (n == 0) return;
+  s->stats.rejected[r] += n;
+  if (s->events && s->events->contact_rejected) s->events->contact_rejected(s->events->ctx, s->id, r, clamped, n);
   /* Rate-limited: a station flooding NaN at 1 kHz yields one line per interval. */
   if (now_ns - s->last_log_ns[r] >= (int64_t)(s->log_interval * 1e9)) {
     palp_log_warn(s->log, "session %u: contact %s: %s (%llu more since last report)", s->id,
             clamped ? "clamped" : "rejected", palp_srv_reject_name(r),
-            (unsigned long long)s->log_suppressed[r]);
+            (unsigned long long)(s->log_suppressed[r] + n - 1));
     s->last_log_ns[r] = now_ns;
     s->log_suppressed[r] = 0;
   } else {
-    s->log_suppressed[r]++;
+    s->log_suppressed[r] += n;
   }
+}
+
+static void count_reject(palp_srv_session *s, palp_srv_reject_reason r, int clamped, int64_t now_ns) {
+  count_rejects(s, r, clamped, 1, now_ns);
 }
 
 static void emit_op(palp_srv_session *s, int finger, int slot, palp_srv_world_op_kind op, int kind,
@@ -383,9 +391,11 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
 static void fold_filtered(palp_srv_session *s, int64_t now_ns) {
   uint64_t fs = atomic_load_explicit(&s->filtered_session, memory_order_relaxed);
   uint64_t ff = atomic_load_explicit(&s->filtered_finger, memory_order_relaxed);
-  for (; s->filtered_seen_session < fs; s->filtered_seen_session++)
-    count_reject(s, PALP_SRV_REJ_UNKNOWN_SESSION, 0, now_ns);
-  for (; s->filtered_seen_finger < ff; s->filtered_seen_finger++) count_reject(s, PALP_SRV_REJ_BAD_FINGER, 0, now_ns);
+  if (fs > s->filtered_seen_session)
+    count_rejects(s, PALP_SRV_REJ_UNKNOWN_SESSION, 0, fs - s->filtered_seen_session, now_ns);
+  if (ff > s->filtered_seen_finger) count_rejects(s, PALP_SRV_REJ_BAD_FINGER, 0, ff - s->filtered_seen_finger, now_ns);
+  s->filtered_seen_session = fs;
+  s->filtered_seen_finger = ff;
 }
 
 /* Moves each placed finger's device to its played-out point (playout.h): once per

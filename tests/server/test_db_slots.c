@@ -58,7 +58,7 @@ int main(void) {
   }
   /* Each session's own counts reach its own row: k + 1 rejections each, flushed at its close. */
   for (int k = 0; k < 4; k++)
-    for (int r = 0; r <= k; r++) ev->contact_rejected(ev->ctx, ids[k], PALP_SRV_REJ_NONFINITE, 0);
+    for (int r = 0; r <= k; r++) ev->contact_rejected(ev->ctx, ids[k], PALP_SRV_REJ_NONFINITE, 0, 1);
   for (int k = 3; k >= 0; k--) {
     palp_srv_session_summary sum;
     memset(&sum, 0, sizeof sum);

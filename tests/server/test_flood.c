@@ -14,6 +14,7 @@
  * The flooder is a child process (fork before any DDS call) with a participant of
  * its own, as a real attacker would be; the server and the good station run here. */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -156,6 +157,16 @@ static int request_flooder(int go_fd, int done_fd) {
 
 /* ---- the server side (parent) --------------------------------------------------- */
 
+/* [tick threads] The session log's view of what the filters dropped: events and samples. */
+static atomic_ullong filtered_events, filtered_samples;
+static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r, int clamped, uint64_t count) {
+  (void)ctx, (void)session_id, (void)clamped;
+  if (r != PALP_SRV_REJ_UNKNOWN_SESSION && r != PALP_SRV_REJ_BAD_FINGER) return;
+  atomic_fetch_add(&filtered_events, 1);
+  atomic_fetch_add(&filtered_samples, count);
+}
+static const palp_srv_events count_events = {.contact_rejected = on_rejected};
+
 static int log_has(const char *path, const char *needle) {
   FILE *f = fopen(path, "r");
   char buf[2048];
@@ -247,7 +258,7 @@ int main(void) {
   palp_log plog;
   REQUIRE(log_fd >= 0 && palp_log_init(&plog, "palp-server", PALP_LOG_INFO, log_path) == 0, "server log %s", log_path);
   close(log_fd);
-  const palp_srv_def def = {.cfg = cfg, .verbose = 1, .log = &plog};
+  const palp_srv_def def = {.cfg = cfg, .verbose = 1, .log = &plog, .events = &count_events};
   test_server ts = {0};
   test_server_start_def(&ts, &def);
   palp_cli_station good, bad;
@@ -317,6 +328,12 @@ int main(void) {
   CHECK(g.contacts_filtered >= KEYS / 2 && g.contacts_filtered <= KEYS,
         "contacts of other sessions dropped by the filter and counted: %llu of %d sent (best-effort: >= half)",
         (unsigned long long)g.contacts_filtered, KEYS);
+  /* Folded in once per tick (session 75), not one call per sample on the tick thread. */
+  const uint64_t fe = atomic_load(&filtered_events), fsamp = atomic_load(&filtered_samples);
+  CHECK(fsamp == g.contacts_filtered && fe * 10 <= fsamp,
+        "the filter's drops reach the session log as %llu events for %llu samples (want the guard's %llu, and at "
+        "least 10 samples an event: one per tick, not one per sample)",
+        (unsigned long long)fe, (unsigned long long)fsamp, (unsigned long long)g.contacts_filtered);
   CHECK(g.dds_log_printed <= 5 && g.dds_log_suppressed >= BAD_ENUMS / 2,
         "Cyclone warnings: %llu printed (want <= 5 per window), %llu suppressed of %d bad-enum samples sent",
         (unsigned long long)g.dds_log_printed, (unsigned long long)g.dds_log_suppressed, BAD_ENUMS);
