@@ -38,7 +38,7 @@ struct palp_srv_identity {
   double log_interval_s;
   /* Claims of its name or number by an older server after the start-up window: anomalous
    * (a forged sample, or a network that split and healed), warned about, never obeyed. */
-  uint64_t late_claims, late_unsaid;
+  uint64_t late_unsaid; /* claims not logged since the last line */
   int64_t late_said_ns;
   int rewrite_pending;
   int64_t rewritten_ns;
@@ -62,6 +62,19 @@ static peer *find_peer(palp_srv_identity *id, dds_instance_handle_t ih, int crea
     free_slot->ih = ih;
   }
   return create ? free_slot : NULL;
+}
+
+/* A peer's string field (64 bytes, bounded read) escaped for the log (palp_log_printable): a
+ * newline in a server name or instance must not forge a log line. */
+typedef struct esc64 {
+  char s[4 * 64];
+} esc64;
+static esc64 esc(const char *field) {
+  char raw[64];
+  esc64 e;
+  snprintf(raw, sizeof raw, "%.*s", (int)sizeof raw - 1, field);
+  palp_log_printable(raw, e.s, sizeof e.s);
+  return e;
 }
 
 /* The older of two servers keeps a name or number; equal start times (unlikely:
@@ -90,26 +103,21 @@ static void claimant_of(const palp_srv_identity *id, dds_instance_handle_t pub, 
  * which on plain DDS anyone may write. Warned about at most once per log interval (with how
  * many came meanwhile); this server keeps serving and says again that it holds them. */
 static void late_claim(palp_srv_identity *id, const palp_ServerIdentity *o, dds_instance_handle_t pub, int same_name) {
-  id->late_claims++;
   id->rewrite_pending = 1;
   const int64_t now = palp_dds_now_ns();
   if (id->late_said_ns && now - id->late_said_ns < (int64_t)(id->log_interval_s * 1e9)) {
     id->late_unsaid++;
     return;
   }
-  char who[96], raw[sizeof o->instance], inst[4 * sizeof o->instance], name[4 * sizeof o->server_name], more[96] = "";
+  char who[96], more[96] = "";
   claimant_of(id, pub, who, sizeof who);
-  /* bounded reads: the strings are a peer's, escaped for the log */
-  snprintf(raw, sizeof raw, "%.*s", (int)sizeof raw - 1, o->instance);
-  palp_log_printable(raw, inst, sizeof inst);
-  snprintf(raw, sizeof raw, "%.*s", (int)sizeof raw - 1, o->server_name);
-  palp_log_printable(raw, name, sizeof name);
   if (id->late_unsaid)
     snprintf(more, sizeof more, " (and %llu more such claims since the last line)", (unsigned long long)id->late_unsaid);
   palp_log_warn(id->log, "server %s \"%s\" (number %u) claimed by an older server \"%s\" (number %u, instance \"%s\", "
                          "started at %lld ns), written by %s, after its start-up window: ignored, this server keeps "
                          "serving and announces itself again; %s%s",
-                same_name ? "name" : "number", id->me.server_name, id->me.server_number, name, o->server_number, inst,
+                same_name ? "name" : "number", id->me.server_name, id->me.server_number, esc(o->server_name).s,
+                o->server_number, esc(o->instance).s,
                 (long long)o->started_unix_ns, who, id->sec_hint, more);
   id->late_said_ns = now;
   id->late_unsaid = 0;
@@ -134,7 +142,7 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
         if (p && p->alive) {
           p->alive = 0;
           palp_log_warn(id->log, "server \"%s\" (number %u, %s) is gone from the domain; its stations are told by "
-                                 "their session state", p->name, p->number, p->instance);
+                                 "their session state", esc(p->name).s, p->number, esc(p->instance).s);
         }
         continue;
       }
@@ -148,13 +156,12 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
           snprintf(err, errlen,
                    "server %s \"%s\" (number %u) is already running on this domain as %s: give this server "
                    "another server_name and server_number, or stop that one",
-                   same_name ? "name" : "number", o->server_name, o->server_number,
-                   o->instance);
+                   same_name ? "name" : "number", esc(o->server_name).s, o->server_number, esc(o->instance).s);
           rc = PALP_EINVAL;
         } else {
           palp_log_warn(id->log, "a second server (%s) claims %s \"%s\" / number %u, started after this one: it must "
                                  "stop; this server keeps them",
-                        o->instance, same_name ? "name" : "number", o->server_name, o->server_number);
+                        esc(o->instance).s, same_name ? "name" : "number", esc(o->server_name).s, o->server_number);
           rewrite = 1;
         }
         continue;
@@ -162,8 +169,8 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
       peer *p = find_peer(id, info[i].instance_handle, 1);
       if (!p) continue;
       if (!p->alive)
-        palp_log_info(id->log, "server \"%s\" (number %u, %s) is on this domain with %u phantom(s)", o->server_name,
-                      o->server_number, o->instance, o->phantoms._length);
+        palp_log_info(id->log, "server \"%s\" (number %u, %s) is on this domain with %u phantom(s)",
+                      esc(o->server_name).s, o->server_number, esc(o->instance).s, o->phantoms._length);
       p->alive = 1;
       p->number = o->server_number;
       snprintf(p->name, sizeof p->name, "%s", o->server_name);
@@ -252,8 +259,6 @@ int palp_srv_identity_poll(palp_srv_identity *id, char *err, size_t errlen) {
   snprintf(err, errlen, "%s", id->conflict);
   return PALP_EINVAL;
 }
-
-uint64_t palp_srv_identity_late_claims(const palp_srv_identity *id) { return id ? id->late_claims : 0; }
 
 int palp_srv_identity_peers(const palp_srv_identity *id) {
   int n = 0;

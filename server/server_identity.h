@@ -55,8 +55,6 @@ palp_srv_identity *palp_srv_identity_create(const palp_srv_identity_def *def, in
  * when a conflicting server that started before this one appeared within the start-up
  * window (this one must stop). */
 int palp_srv_identity_poll(palp_srv_identity *id, char *err, size_t errlen);
-/* Claims of this server's name or number ignored after its start-up window. */
-uint64_t palp_srv_identity_late_claims(const palp_srv_identity *id);
 /* Other servers alive on the domain, as last polled (poll first for the newest). */
 int palp_srv_identity_peers(const palp_srv_identity *id);
 void palp_srv_identity_destroy(palp_srv_identity *id);
