@@ -15,6 +15,12 @@
 #define COOKIE "palp_token"
 #define WS_PATH "/ws"
 #define CONTROL_MAX 256
+/* WebSocket pages a trainee's token may hold open at once (a page and a spare tab or two), and the
+ * connections of max_clients only an instructor's page (or a page without tokens) may take: one
+ * trainee, or a few, opening pages in a loop must not lock the class and its instructor out
+ * (session 75, found by review: max_clients was one pool for every token). */
+#define PAGES_PER_TRAINEE 3
+#define INSTRUCTOR_RESERVE 2
 
 struct palp_web_server {
   palp_web_serve_def def;
@@ -27,6 +33,9 @@ struct palp_web_server {
   struct lws_protocols protocols[2];
   lws_retry_bo_t retry;
   palp_web_serve_stats stats;
+  /* Pages open per trainee token, and in all for trainee tokens (the lws service thread alone
+   * counts them: no lock). */
+  int trainee_pages[PALP_WEB_TRAINEES_MAX + 1], trainee_pages_all;
 };
 
 /* Per connection (HTTP or WebSocket): libwebsockets allocates and zeroes it. */
@@ -179,10 +188,16 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
 
   case LWS_CALLBACK_ESTABLISHED: {
     const int who = c->who;
+    if (who > 0 && (who > PALP_WEB_TRAINEES_MAX || s->trainee_pages[who] >= PAGES_PER_TRAINEE ||
+                    s->trainee_pages_all >= s->def.max_clients - INSTRUCTOR_RESERVE)) {
+      s->stats.ws_full++;
+      return -1;
+    }
     if (palp_web_hub_attach(s->hub, &c->cursor, s->def.max_clients) != 0) {
       s->stats.ws_full++;
       return -1;
     }
+    if (who > 0) s->trainee_pages[who]++, s->trainee_pages_all++;
     if (who > 0) /* a trainee's page: that trainee's sessions only (palp_web_hub_attach zeroed the cursor) */
       palp_web_hub_scope(s->hub, &c->cursor, s->def.trainees[who - 1].name);
     c->attached = 1;
@@ -195,6 +210,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     if (c && c->attached) {
       palp_web_hub_detach(s->hub, &c->cursor);
       c->attached = 0;
+      if (c->who > 0 && c->who <= PALP_WEB_TRAINEES_MAX) s->trainee_pages[c->who]--, s->trainee_pages_all--;
       s->stats.ws_closed++;
     }
     return 0;

@@ -22,6 +22,7 @@ import json
 import math
 import os
 import subprocess
+import time
 
 import harness
 from harness import check
@@ -157,6 +158,34 @@ def run(build, source, out):
               "nor, at any time, where a lump is hidden (%s; %s; %s)" % (sorted(k4), sorted(k6), sorted(k7)))
         check("debrief" not in k6 and "debrief" not in k7 and "sessions" in k6,
               "a page of alice's token opened later is not sent bob's debrief either (%s; %s)" % (sorted(k6), sorted(k7)))
+
+        # One trainee's token holds at most 3 pages at once (session 75: one pool of max_clients for every
+        # token let a trainee opening pages in a loop lock out the class and its instructor); the
+        # instructors' token and another trainee's still get theirs, and a page closed frees its place.
+        mine = [harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=10) for _ in range(3)]
+        hello = [w.recv()[1].startswith(b'{"type":"hello"') for w in mine]
+        try:
+            extra = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=5)
+            op, _ = extra.recv()
+            extra.close()
+            fourth = op == 1
+        except (ConnectionError, OSError):
+            fourth = False
+        others = []
+        for tok in (INSTR, BOB):
+            w = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, tok), timeout=10)
+            others.append(w.recv()[1].startswith(b'{"type":"hello"'))
+            w.close()
+        mine.pop().close()
+        time.sleep(0.3)
+        w = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=10)
+        again = w.recv()[1].startswith(b'{"type":"hello"')
+        w.close()
+        for m in mine:
+            m.close()
+        check(all(hello) and not fourth and others == [True, True] and again,
+              "alice's token: 3 pages open (%s), a 4th refused (%s), the instructors' and bob's pages served (%s), "
+              "one closed frees its place (%s)" % (hello, "refused" if not fourth else "served", others, again))
 
         rc = procs.stop(web)
         check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)
