@@ -252,11 +252,25 @@ EOF
   }
 }
 
+# --days: a whole number of days, at least 1, and never past the classroom CA's own end: openssl signs a
+# certificate that outlives its CA (40000 days under a 10-year CA verified "OK"), and every peer refuses
+# it once the CA has expired anyway (session 75, found by review).
+check_days() {
+  [[ $days =~ ^[0-9]+$ ]] && [ "$days" -ge 1 ] || die "--days: expected a positive integer, got '$days'"
+  [ -f "$dir/ca.cert.pem" ] || return 0
+  local end left
+  end=$(openssl x509 -in "$dir/ca.cert.pem" -noout -enddate | cut -d= -f2)
+  left=$((($(date -d "$end" +%s) - $(date +%s)) / 86400))
+  [ "$days" -le "$left" ] ||
+    die "--days $days: past the classroom CA's own end ($end, $left days from now); issue for at most $left days"
+}
+
 add() { # kind name
   local kind=$1 name=$2
   check_kind "$kind"
   check_name "$name"
   [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  check_days
   mkdir -p "$dir/$kind"
   local base="$dir/$kind/$name"
   (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$base.key.pem")
@@ -321,6 +335,7 @@ permissions_refresh() {
 web_cert() {
   local hosts=$1 first san="" h base
   [[ $hosts =~ ^[A-Za-z0-9.:,-]+$ ]] || die "web: bad hosts \"$hosts\": DNS names or IP addresses, separated by commas"
+  check_days
   first=${hosts%%,*}
   for h in ${hosts//,/ }; do
     if [[ $h =~ ^[0-9]{1,3}(\.[0-9]{1,3}){3}$ || $h =~ ^[0-9a-fA-F:]+$ && $h == *:* ]]; then
@@ -353,18 +368,33 @@ EOF
   echo "make-classroom-pki: palp-web --tls-cert $base.cert.pem --tls-key $base.key.pem; browsers must trust $dir/ca.cert.pem"
 }
 
-crl() { openssl ca -config "$dir/ca/ca.cnf" -gencrl -out "$dir/crl.pem" 2>/dev/null; }
+# The CRL is written beside the old one and moved into place: a failed run leaves the old CRL whole and
+# says why (its errors went to /dev/null and the script just stopped, so a revoke whose CRL failed left
+# the identity accepted with nothing said; session 75).
+crl() {
+  local err
+  if ! err=$(openssl ca -config "$dir/ca/ca.cnf" -gencrl -out "$dir/crl.pem.new" 2>&1); then
+    rm -f "$dir/crl.pem.new" 2>/dev/null || true
+    die "the CRL was not issued: ${err//$'\n'/ }; mend that, then run '$0 $dir crl' (a revoked identity stays accepted until $dir/crl.pem names it)"
+  fi
+  mv -f "$dir/crl.pem.new" "$dir/crl.pem"
+}
 
 init() {
   mkdir -p "$dir"
   dir=$(cd "$dir" && pwd)
-  if [ -f "$dir/ca/ca.key.pem" ]; then
-    write_ca_config
-  else
-    write_ca_config
-    (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$dir/ca/ca.key.pem")
+  write_ca_config
+  if [ ! -f "$dir/ca/ca.key.pem" ]; then
+    # made under a temporary name and moved: an interrupted run leaves no key that looks like a CA's
+    (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$dir/ca/ca.key.pem.new" &&
+      mv -f "$dir/ca/ca.key.pem.new" "$dir/ca/ca.key.pem")
+  fi
+  if [ ! -f "$dir/ca.cert.pem" ]; then
+    # A key without its certificate (a run stopped between the two, before session 75 every later run
+    # then failed when signing): the certificate is made from that key; nobody can hold one made before.
     openssl req -x509 -new -key "$dir/ca/ca.key.pem" -subj "/O=palp/OU=ca/CN=palp classroom CA" -days 3650 \
-      -sha256 -out "$dir/ca.cert.pem"
+      -sha256 -out "$dir/ca.cert.pem.new" && mv -f "$dir/ca.cert.pem.new" "$dir/ca.cert.pem" ||
+      die "the CA certificate was not made"
     echo "make-classroom-pki: CA $dir/ca.cert.pem (key in $dir/ca/, keep it off the stations)"
   fi
   if [ ! -f "$dir/governance.p7s" ]; then
@@ -415,7 +445,13 @@ revoke)
   dir=$(cd "$dir" && pwd)
   cert="$dir/$1.cert.pem"
   [ -f "$cert" ] || die "no identity $1 in $dir"
-  openssl ca -config "$dir/ca/ca.cnf" -revoke "$cert" 2>/dev/null || die "revoking $1 failed"
+  # Again after a revoke whose CRL failed (the CA's index already says revoked): finished, not refused.
+  if ! err=$(openssl ca -config "$dir/ca/ca.cnf" -revoke "$cert" 2>&1); then
+    case $err in
+    *"Already revoked"*) echo "make-classroom-pki: $1 was already revoked in the CA's index (a revoke that stopped before its CRL): finishing it" ;;
+    *) die "revoking $1 failed: ${err//$'\n'/ }" ;;
+    esac
+  fi
   crl
   # The revoked files are kept aside (for the record), so the name can be issued again.
   mkdir -p "$dir/revoked"

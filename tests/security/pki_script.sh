@@ -1,0 +1,56 @@
+#!/bin/bash
+# scripts/make-classroom-pki.sh when things go wrong (session 75, a review's findings; no DDS, openssl only):
+#  - --days past the classroom CA's own end is refused, and nothing is issued (openssl signed a
+#    certificate for 40000 days under a 10-year CA, and it verified); a non-number is refused;
+#  - a revoke whose CRL cannot be written (here: a directory where the new CRL goes) says so, exit 2,
+#    and leaves the old CRL byte-identical; run again once mended it finishes the revoke (the CA's
+#    index already said revoked, which made the second run fail for good before): the CRL names the
+#    serial and the files are moved aside;
+#  - a CA key without its certificate (a run stopped between the two) is completed by init: the
+#    certificate made from that key, and a trainee issued after it verifies against it.
+# usage: pki_script.sh MAKE_CLASSROOM_PKI_SH
+set -u
+script=$1
+out=$(mktemp -d)
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+pki=$out/class
+
+bash "$script" "$pki" classroom --trainees ann --days 40000 >"$out/days.log" 2>&1
+rc=$?
+check "--days 40000 under a 10-year CA: refused (exit $rc), named, nothing issued for ann" \
+  "[ $rc -eq 2 ] && grep -q \"past the classroom CA's own end (.*, 36[0-9][0-9] days from now); issue for at most 36[0-9][0-9] days\" '$out/days.log' && [ ! -e '$pki/trainee/ann.cert.pem' ]"
+bash "$script" "$pki" add trainee bea --days 3x >"$out/days2.log" 2>&1
+rc=$?
+check "--days 3x: refused (exit $rc)" "[ $rc -eq 2 ] && grep -q 'expected a positive integer' '$out/days2.log'"
+bash "$script" "$pki" add trainee bea --days 30 >"$out/bea.log" 2>&1
+rc=$?
+ends=$(openssl x509 -in "$pki/trainee/bea.cert.pem" -noout -enddate 2>/dev/null | cut -d= -f2)
+left=$((($(date -d "${ends:-now}" +%s) - $(date +%s)) / 86400))
+check "--days 30: issued (exit $rc), valid 29-30 days from now ($left)" "[ $rc -eq 0 ] && [ $left -ge 29 ] && [ $left -le 30 ]"
+
+serial=$(openssl x509 -in "$pki/trainee/bea.cert.pem" -noout -serial | cut -d= -f2)
+sum0=$(md5sum <"$pki/crl.pem")
+mkdir "$pki/crl.pem.new" # where the new CRL is written: a directory, so writing it fails
+bash "$script" "$pki" revoke trainee/bea >"$out/revoke1.log" 2>&1
+rc=$?
+sum1=$(md5sum <"$pki/crl.pem")
+check "a revoke whose CRL cannot be written: exit $rc, says so, the old CRL untouched, bea's files where they were" \
+  "[ $rc -eq 2 ] && grep -q 'the CRL was not issued: .*run .* crl. (a revoked identity stays accepted until .*crl.pem names it)' '$out/revoke1.log' && [ '$sum0' = '$sum1' ] && [ -f '$pki/trainee/bea.cert.pem' ]"
+rmdir "$pki/crl.pem.new"
+bash "$script" "$pki" revoke trainee/bea >"$out/revoke2.log" 2>&1
+rc=$?
+check "run again once mended: finished (exit $rc), the CRL names serial $serial, bea's files moved aside" \
+  "[ $rc -eq 0 ] && grep -q 'was already revoked in the CA.s index .*: finishing it' '$out/revoke2.log' && openssl crl -in '$pki/crl.pem' -noout -text | grep -q 'Serial Number: $serial' && [ ! -e '$pki/trainee/bea.cert.pem' ] && ls '$pki'/revoked/trainee_bea-*.cert.pem >/dev/null 2>&1"
+
+half=$out/half
+bash "$script" "$half" init >/dev/null 2>&1
+rm -f "$half/ca.cert.pem"
+bash "$script" "$half" init >"$out/half.log" 2>&1
+rc=$?
+bash "$script" "$half" add trainee cai >/dev/null 2>&1
+same=$( [ "$(openssl x509 -in "$half/ca.cert.pem" -noout -pubkey 2>/dev/null)" = "$(openssl ec -in "$half/ca/ca.key.pem" -pubout 2>/dev/null)" ] && echo yes)
+check "a CA key without its certificate: init makes it from that key (exit $rc, same key: ${same:-no}), a trainee issued then verifies" \
+  "[ $rc -eq 0 ] && [ '$same' = yes ] && openssl verify -CAfile '$half/ca.cert.pem' '$half/trainee/cai.cert.pem' >/dev/null 2>&1"
+rm -rf "$out"
+exit $fail
