@@ -43,7 +43,8 @@ typedef struct palp_cli_input {
   /* Fills up to cap finger states for time t [s] since the start; returns how
    * many, PALP_CLI_INPUT_END when finished, or a negative PALP_E* code. */
   int (*poll)(void *ctx, double t, palp_cli_cmd *cmds, int cap);
-  /* Optional: the force the phantom exerts on a finger [N], every feedback sample. */
+  /* Optional: the force the phantom exerts on a finger [N], every feedback sample; limited to the
+   * station's safe force first (palp_cli_device_force). */
   void (*feedback)(void *ctx, int finger, palp_vec3 force);
   void (*close)(void *ctx);
   /* ---- position in, force out, at 1 kHz (issue 11); all optional, added at the
@@ -183,5 +184,11 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
  * which fills out (ops + its ctx) and returns 0. */
 typedef int (*palp_cli_device_entry)(const char *arg, palp_cli_input *out);
 int palp_cli_device_input(const char *path, const char *arg, palp_cli_input *out, char *err, size_t errlen);
+
+/* The server's feedback force as a device driver may be given it (feedback()): limited to max_force
+ * [N] in magnitude; a force that is not finite gives 0 N. Returns 0 as it was, 1 limited, PALP_EINVAL
+ * not finite. The 1 kHz haptic thread limits its own force; this is the force-driven stations' path,
+ * which handed a driver whatever a sample said (NaN, 1e6 N; session 75, found by review). */
+int palp_cli_device_force(palp_vec3 f, double max_force, palp_vec3 *out);
 
 #endif

@@ -1,5 +1,6 @@
 /* input_device.c - loads a haptic device driver from a shared object. */
 #include <dlfcn.h>
+#include <math.h>
 #include <stdio.h>
 
 #include "input.h"
@@ -27,4 +28,19 @@ int palp_cli_device_input(const char *path, const char *arg, palp_cli_input *out
   /* The handle stays open for the life of the process: the driver's code runs
    * until palp-client exits. */
   return 0;
+}
+
+int palp_cli_device_force(palp_vec3 f, double max_force, palp_vec3 *out) {
+  const double mag = sqrt(f.x * f.x + f.y * f.y + f.z * f.z); /* [N] */
+  if (!isfinite(mag) || !(max_force > 0)) {
+    *out = (palp_vec3){0, 0, 0};
+    return PALP_EINVAL;
+  }
+  if (mag <= max_force) {
+    *out = f;
+    return 0;
+  }
+  const double k = max_force / mag;
+  *out = (palp_vec3){f.x * k, f.y * k, f.z * k};
+  return 1;
 }

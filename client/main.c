@@ -73,10 +73,24 @@ static void tick_refusals(const opts *o) {
 static void tprintf(const opts *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 static void tprintf(const opts *o, const char *fmt, ...) {
   if (o->status_line) fputs("\r\033[K", stdout);
+  /* The lines carry text from the server and the classroom (an exercise's title and instructions,
+   * refusal and close reasons, phantom names): written terminal-safe, so no sample can move the
+   * cursor, rewrite a line the trainee reads or retitle her terminal (session 75, found by review). */
+  char small[1024], *buf = small;
   va_list ap;
   va_start(ap, fmt);
-  vprintf(fmt, ap);
+  const int n = vsnprintf(small, sizeof small, fmt, ap);
   va_end(ap);
+  if (n < 0) return;
+  if ((size_t)n >= sizeof small && (buf = malloc((size_t)n + 1)) != NULL) {
+    va_start(ap, fmt);
+    vsnprintf(buf, (size_t)n + 1, fmt, ap);
+    va_end(ap);
+  }
+  if (!buf) buf = small; /* no memory: the line cut at 1 kB */
+  palp_cli_terminal_safe(buf);
+  fputs(buf, stdout);
+  if (buf != small) free(buf);
 }
 
 /* --quiet already means "less station output" here: no --verbose/--quiet aliases. */
@@ -319,6 +333,9 @@ typedef struct latency {
 } latency;
 
 static void lat_add(latency *l, double us) {
+  /* Enough for hours of samples at 1 kHz (8 MB); a peer writing feedback with ever higher sequence
+   * numbers must not grow a station's memory for good. */
+  if (l->n >= (size_t)1 << 20 || !isfinite(us)) return;
   if (l->n == l->cap) {
     size_t cap = l->cap ? 2 * l->cap : 4096;
     double *p = realloc(l->us, cap * sizeof *p);
@@ -344,6 +361,7 @@ typedef struct feedback_ctx {
   /* finger-0 force magnitude [N] per 20 ms bin since t0, for --plot */
   double plot[PLOT_BINS];
   int plot_bins;
+  double max_force; /* [N] the station's safe force, for a driver's feedback() */
 } feedback_ctx;
 
 /* Takes every feedback sample; latency from the echoed contact stamp. */
@@ -375,8 +393,11 @@ static void drain_feedback(feedback_ctx *c) {
           }
         }
         if (m > c->peak) c->peak = m;
-        if (c->in->feedback && ff->finger < PALP_CLI_MAX_FINGERS)
-          c->in->feedback(c->in->ctx, ff->finger, (palp_vec3){ff->force.x, ff->force.y, ff->force.z});
+        if (c->in->feedback && ff->finger < PALP_CLI_MAX_FINGERS) {
+          palp_vec3 safe;
+          palp_cli_device_force((palp_vec3){ff->force.x, ff->force.y, ff->force.z}, c->max_force, &safe);
+          c->in->feedback(c->in->ctx, ff->finger, safe);
+        }
         if (c->csv)
           fprintf(c->csv, "%.6f,%llu,%.6f,%u,%d,%.6g,%.6g,%.6g,%.6g,%.1f\n", (double)(rx - c->t0) * 1e-9,
                   (unsigned long long)fb->frame, fb->sim_time, ff->finger, ff->active, ff->force.x, ff->force.y,
@@ -880,7 +901,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                (int)palp_cli_contact_every(d.rate_hz, d.physics_rate_hz), hl->core.renderer.def.max_force);
   fflush(stdout);
   findings_ui_start(&fu, o, st, &in, ph, hl->def.radius, d.physics_rate_hz);
-  feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns()};
+  feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns(), .max_force = hl->core.renderer.def.max_force};
   latency lat = {0};
   uint64_t bad = 0, models = 0;
   dds_entity_t ws = dds_create_waitset(st->pp);
@@ -1077,7 +1098,8 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
   int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
   uint64_t sent = 0;
-  feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0};
+  feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0,
+                     .max_force = o->max_force > 0 ? o->max_force : palp_cli_haptic_default_def().render.max_force};
   /* Feedback is taken as it arrives (waitset) so its receive time is exact. */
   dds_entity_t ws = dds_create_waitset(st->pp);
   dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);

@@ -52,10 +52,15 @@ int palp_cli_phantom_check(const palp_Phantom *ph, char *err, size_t errlen) {
 
 int palp_cli_deformation_check(const palp_Phantom *ph, const palp_Deformation *d) {
   if (d->positions._length != ph->rest._length || !d->positions._buffer) return PALP_EINVAL;
+  /* Finite is not enough: a vertex at 1e200 m squared to inf, the map's scale became inf and a
+   * cell's inf / inf a NaN index into the colour ramp (a crash; session 75, found by review). No
+   * phantom's vertex is 10 m from its origin (the server's scenes: a radius of 1 m at most). */
   for (uint32_t i = 0; i < d->positions._length; i++) {
     palp_Vec3 p = d->positions._buffer[i];
-    if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) return PALP_EINVAL;
+    if (!(fabs(p.x) <= 10.0 && fabs(p.y) <= 10.0 && fabs(p.z) <= 10.0)) return PALP_EINVAL;
   }
+  if (!isfinite(d->sim_time) || !isfinite(d->volume) || !isfinite(d->rest_volume) || !isfinite(d->pressure))
+    return PALP_EINVAL;
   return 0;
 }
 
@@ -132,7 +137,8 @@ void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FIL
         continue;
       }
       double f = disp(ph, d, (uint32_t)i) / scale;
-      if (f > 1) f = 1;
+      if (!(f >= 0)) f = 0; /* NaN too: it must never index the ramps */
+      if (!(f <= 1)) f = 1;
       if (color)
         fprintf(out, "\033[48;5;%dm ", ramp256[(int)(f * (nr - 1) + 0.5)]);
       else
@@ -148,8 +154,8 @@ void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FIL
 
 static void colour(double f, int *r, int *g, int *b) {
   /* Blue (0) -> green (0.5) -> red (1), linear in each half. */
-  if (f < 0) f = 0;
-  if (f > 1) f = 1;
+  if (!(f >= 0)) f = 0; /* NaN too */
+  if (!(f <= 1)) f = 1;
   if (f < 0.5) {
     *r = 0;
     *g = (int)(510 * f);
@@ -238,4 +244,9 @@ int palp_cli_view_svg(const palp_Phantom *ph, const palp_Deformation *d, const c
   int bad = ferror(f);
   if (fclose(f) != 0 || bad) return PALP_EIO;
   return 0;
+}
+
+void palp_cli_terminal_safe(char *s) {
+  for (; s && *s; s++)
+    if (((unsigned char)*s < 0x20 && *s != '\n' && *s != '\t') || *s == 0x7f) *s = '?';
 }

@@ -37,4 +37,9 @@ void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FIL
  * the lowest up. Returns 0 or a negative PALP_E* code. */
 int palp_cli_view_svg(const palp_Phantom *ph, const palp_Deformation *d, const char *title, const char *path);
 
+/* Makes s safe to print on a terminal, in place: control characters other than newline and tab (an
+ * escape sequence, a carriage return that rewrites the line, a bell) and DEL become '?'. UTF-8 text
+ * is left as it is. */
+void palp_cli_terminal_safe(char *s);
+
 #endif

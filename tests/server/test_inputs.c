@@ -1,6 +1,7 @@
 /* test_inputs.c - station input sources and the SVG snapshot, with hand-worked values. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "input.h"
@@ -142,6 +143,48 @@ int main(void) {
   CHECK(palp_cli_deformation_check(&ph, &def) == PALP_EINVAL, "a deformation frame one vertex short is refused");
   def.positions._length = (uint32_t)mesh.vertex_count;
   CHECK(palp_cli_deformation_check(&ph, &def) == 0, "the matching deformation frame passes");
+  /* A finite vertex far out (session 75: 1e200 m made the map's scale inf and a cell's colour index a NaN,
+   * a crash) is refused, as is one 11 m out and a non-finite time; one 9 m out passes and is drawn. */
+  const palp_Vec3 keep = pos[mesh.top_vertex];
+  pos[mesh.top_vertex].x = 1e200;
+  CHECK(palp_cli_deformation_check(&ph, &def) == PALP_EINVAL, "a vertex at 1e200 m refused");
+  pos[mesh.top_vertex].x = 11.0;
+  CHECK(palp_cli_deformation_check(&ph, &def) == PALP_EINVAL, "a vertex 11 m out refused");
+  pos[mesh.top_vertex].x = 9.0;
+  CHECK(palp_cli_deformation_check(&ph, &def) == 0, "a vertex 9 m out passes");
+  palp_cli_view view;
+  if (palp_cli_view_init(&view, &ph, 41, 21, 0) == 0) {
+    char *text = NULL;
+    size_t len = 0;
+    FILE *mem = open_memstream(&text, &len);
+    palp_cli_view_render(&view, &def, mem, 1);
+    palp_cli_view_render(&view, &def, mem, 0);
+    fclose(mem);
+    CHECK(text && strstr(text, "max displacement 9") != NULL, "and drawn, in colour and in characters (%zu bytes)", len);
+    free(text);
+    palp_cli_view_free(&view);
+  } else {
+    CHECK(0, "a view of the phantom");
+  }
+  pos[mesh.top_vertex] = keep;
+  /* What a device driver's feedback() is given (palp_cli_device_force): 3-4-0 N at a 2.5 N limit is
+   * 1.5-2-0 N (hand: x 2.5 / 5), flagged; 1-2-2 N (3 N) passes as it is; NaN and 1e308 N-squared
+   * overflow give 0 N. */
+  /* terminal-safe text: an OSC retitle, a carriage return and a bell become '?', newline, tab and UTF-8 stay */
+  char txt[] = "\033]0;x\007ok\rfake\tline\n30\xc2\xb0 \x7f";
+  palp_cli_terminal_safe(txt);
+  CHECK(strcmp(txt, "?]0;x?ok?fake\tline\n30\xc2\xb0 ?") == 0, "terminal-safe: \"%s\"", txt);
+  palp_vec3 dv;
+  CHECK(palp_cli_device_force((palp_vec3){3, 4, 0}, 2.5, &dv) == 1 && fabs(dv.x - 1.5) < 1e-12 && fabs(dv.y - 2.0) < 1e-12 &&
+            dv.z == 0, "5 N limited to 2.5 N: (%g, %g, %g)", dv.x, dv.y, dv.z);
+  CHECK(palp_cli_device_force((palp_vec3){1, 2, 2}, 10, &dv) == 0 && dv.x == 1 && dv.y == 2 && dv.z == 2, "3 N passes");
+  CHECK(palp_cli_device_force((palp_vec3){NAN, 0, 0}, 10, &dv) == PALP_EINVAL && dv.x == 0 && dv.y == 0 && dv.z == 0,
+        "NaN gives 0 N");
+  CHECK(palp_cli_device_force((palp_vec3){1e308, 1e308, 0}, 10, &dv) == PALP_EINVAL && dv.x == 0, "a magnitude past "
+        "double gives 0 N");
+  def.sim_time = INFINITY;
+  CHECK(palp_cli_deformation_check(&ph, &def) == PALP_EINVAL, "a frame at t = inf refused");
+  def.sim_time = 0;
   palp_mesh_destroy(&mesh);
   fprintf(stderr, "%d failure(s)\n", failures);
   return failures ? 1 : 0;
