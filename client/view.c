@@ -7,47 +7,11 @@
 #include <string.h>
 
 #include "palp.h"
+#include "palp_dds.h"
 
-/* A station renders meshes up to this size; the server's are 338..5,000 vertices. */
-#define MAX_VERTICES 1000000
-
+/* The check is palp_dds_phantom_check (idl/), shared with palp-recorder. */
 int palp_cli_phantom_check(const palp_Phantom *ph, char *err, size_t errlen) {
-  const uint32_t nv = ph->rest._length, ni = ph->triangles._length;
-  if (nv < 4 || nv > MAX_VERTICES || !ph->rest._buffer) {
-    snprintf(err, errlen, "phantom %u: %u rest vertices (want 4..%d)", ph->phantom_id, nv, MAX_VERTICES);
-    return PALP_EINVAL;
-  }
-  if (ni == 0 || ni % 3 != 0 || ni / 3 > 2u * MAX_VERTICES || !ph->triangles._buffer) {
-    snprintf(err, errlen, "phantom %u: %u triangle indices (want a positive multiple of 3)", ph->phantom_id, ni);
-    return PALP_EINVAL;
-  }
-  for (uint32_t i = 0; i < ni; i++)
-    if (ph->triangles._buffer[i] < 0 || (uint32_t)ph->triangles._buffer[i] >= nv) {
-      snprintf(err, errlen, "phantom %u: triangle %u has vertex index %d (want 0..%u)", ph->phantom_id, i / 3,
-               (int)ph->triangles._buffer[i], nv - 1);
-      return PALP_EINVAL;
-    }
-  if (ph->dome_triangle_count < 0 || (uint32_t)ph->dome_triangle_count > ni / 3) {
-    snprintf(err, errlen, "phantom %u: dome_triangle_count %d of %u triangles", ph->phantom_id,
-             (int)ph->dome_triangle_count, ni / 3);
-    return PALP_EINVAL;
-  }
-  if (ph->top_vertex < 0 || (uint32_t)ph->top_vertex >= nv) {
-    snprintf(err, errlen, "phantom %u: top_vertex %d of %u", ph->phantom_id, (int)ph->top_vertex, nv);
-    return PALP_EINVAL;
-  }
-  if (!(ph->radius > 0 && ph->radius < 10)) {
-    snprintf(err, errlen, "phantom %u: radius %g m (want 0 < R < 10 m)", ph->phantom_id, ph->radius);
-    return PALP_EINVAL;
-  }
-  for (uint32_t i = 0; i < nv; i++) {
-    palp_Vec3 p = ph->rest._buffer[i];
-    if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
-      snprintf(err, errlen, "phantom %u: rest vertex %u is not finite", ph->phantom_id, i);
-      return PALP_EINVAL;
-    }
-  }
-  return 0;
+  return palp_dds_phantom_check(ph, 0, err, errlen);
 }
 
 int palp_cli_deformation_check(const palp_Phantom *ph, const palp_Deformation *d) {

@@ -506,3 +506,50 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {
   }
   return ok;
 }
+
+/* A station renders meshes up to this size; the server's are 338..5,000 vertices. */
+#define PHANTOM_MAX_VERTICES 1000000
+
+int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char *err, size_t errlen) {
+  const uint32_t nv = ph->rest._length, ni = ph->triangles._length;
+  if (nv < 4 || nv > PHANTOM_MAX_VERTICES || !ph->rest._buffer) {
+    snprintf(err, errlen, "phantom %u: %u rest vertices (want 4..%d)", ph->phantom_id, nv, PHANTOM_MAX_VERTICES);
+    return PALP_EINVAL;
+  }
+  if ((ni == 0 && !triangles_optional) || ni % 3 != 0 || ni / 3 > 2u * PHANTOM_MAX_VERTICES) {
+    snprintf(err, errlen, "phantom %u: %u triangle indices (want a positive multiple of 3)", ph->phantom_id, ni);
+    return PALP_EINVAL;
+  }
+  if (ni && !ph->triangles._buffer) {
+    snprintf(err, errlen, "phantom %u: %u triangle indices and no buffer", ph->phantom_id, ni);
+    return PALP_EINVAL;
+  }
+  for (uint32_t i = 0; i < ni; i++)
+    if (ph->triangles._buffer[i] < 0 || (uint32_t)ph->triangles._buffer[i] >= nv) {
+      snprintf(err, errlen, "phantom %u: triangle %u has vertex index %d (want 0..%u)", ph->phantom_id, i / 3,
+               (int)ph->triangles._buffer[i], nv - 1);
+      return PALP_EINVAL;
+    }
+  /* (without triangles, their dome count names none: it is not used) */
+  if (ni && (ph->dome_triangle_count < 0 || (uint32_t)ph->dome_triangle_count > ni / 3)) {
+    snprintf(err, errlen, "phantom %u: dome_triangle_count %d of %u triangles", ph->phantom_id,
+             (int)ph->dome_triangle_count, ni / 3);
+    return PALP_EINVAL;
+  }
+  if (ph->top_vertex < 0 || (uint32_t)ph->top_vertex >= nv) {
+    snprintf(err, errlen, "phantom %u: top_vertex %d of %u", ph->phantom_id, (int)ph->top_vertex, nv);
+    return PALP_EINVAL;
+  }
+  if (!(ph->radius > 0 && ph->radius < 10)) {
+    snprintf(err, errlen, "phantom %u: radius %g m (want 0 < R < 10 m)", ph->phantom_id, ph->radius);
+    return PALP_EINVAL;
+  }
+  for (uint32_t i = 0; i < nv; i++) {
+    palp_Vec3 p = ph->rest._buffer[i];
+    if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) {
+      snprintf(err, errlen, "phantom %u: rest vertex %u is not finite", ph->phantom_id, i);
+      return PALP_EINVAL;
+    }
+  }
+  return 0;
+}

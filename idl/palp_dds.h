@@ -211,6 +211,13 @@ int palp_dds_debrief_ok(const palp_Debrief *d);
  * (the station, palp-web and palp-recorder all check with it). */
 int palp_dds_finger_sample_ok(const palp_FingerSample *m, int mesh_triangles);
 
+/* A catalogue entry (palp_catalogue) as its readers may use it: vertex and triangle counts within
+ * bounds (no triangles at all only with triangles_optional: a reader that logs the rest mesh and
+ * marks no coverage without them), every triangle index a vertex, the dome triangle count and top
+ * vertex in range, radius and rest positions finite. Returns 0, or PALP_EINVAL with the reason in err
+ * (the stations check with it as palp_cli_phantom_check, palp-recorder before it keeps an entry). */
+int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char *err, size_t errlen);
+
 /* A session score (palp_session_score) as a reader may use it: a known status; GRADED: score in
  * [0, 100], each component in [0, 1], each coverage in [0, 1], found <= lesions, duration and
  * peak force finite and >= 0, a known pattern name. 1 when it holds, 0 when not (palp-web checks). */

@@ -288,10 +288,10 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   i64 = cfg->max_sessions;
   if ((rc = get_int(root, "max_sessions", w, 1, 1024, 0, &i64, err, errlen))) goto out;
   cfg->max_sessions = (int)i64;
-  if ((rc = get_number(root, "max_force", w, 0.01, 1000, 0, &cfg->max_force, err, errlen))) goto out;
-  if ((rc = get_number(root, "finger_radius_min", w, 1e-4, 0.1, 0, &cfg->finger_radius_min, err, errlen)))
+  if ((rc = get_number(root, "max_force", w, 0.01, PALP_SRV_CFG_MAX_FORCE_MAX, 0, &cfg->max_force, err, errlen))) goto out;
+  if ((rc = get_number(root, "finger_radius_min", w, PALP_SRV_CFG_FINGER_RADIUS_MIN, PALP_SRV_CFG_FINGER_RADIUS_MAX, 0, &cfg->finger_radius_min, err, errlen)))
     goto out;
-  if ((rc = get_number(root, "finger_radius_max", w, 1e-4, 0.1, 0, &cfg->finger_radius_max, err, errlen)))
+  if ((rc = get_number(root, "finger_radius_max", w, PALP_SRV_CFG_FINGER_RADIUS_MIN, PALP_SRV_CFG_FINGER_RADIUS_MAX, 0, &cfg->finger_radius_max, err, errlen)))
     goto out;
   if (cfg->finger_radius_max < cfg->finger_radius_min) {
     rc = fail(err, errlen, PALP_EINVAL, "finger_radius_max: %g is below finger_radius_min %g",
@@ -305,7 +305,7 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
     rc = fail(err, errlen, PALP_EINVAL, "session_log_max_mb: %g is below 1 MB (0 sets no cap)", cfg->session_log_max_mb);
     goto out;
   }
-  if ((rc = get_number(root, "absurd_force", w, 0.01, 1e6, 0, &cfg->absurd_force, err, errlen))) goto out;
+  if ((rc = get_number(root, "absurd_force", w, 0.01, PALP_SRV_CFG_ABSURD_FORCE_MAX, 0, &cfg->absurd_force, err, errlen))) goto out;
   if (cfg->absurd_force < cfg->max_force) {
     rc = fail(err, errlen, PALP_EINVAL, "absurd_force: %g is below max_force %g", cfg->absurd_force,
               cfg->max_force);

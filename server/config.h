@@ -16,6 +16,13 @@
 /* Several servers on one domain: ids are server_number * 2^20 + local id (idl/palp_dds.h). */
 #define PALP_SRV_MAX_SERVER_NUMBER 4095
 #define PALP_SRV_MAX_LOCAL_ID 1048575u
+/* The widest contact limits a config may set (config.c refuses wider): a reader that cannot know a
+ * server's config (palp-recorder) checks contacts against these, so that it never drops a contact
+ * some server could have applied, and never keeps one no server applies. */
+#define PALP_SRV_CFG_FINGER_RADIUS_MIN 1e-4 /* [m] */
+#define PALP_SRV_CFG_FINGER_RADIUS_MAX 0.1  /* [m] */
+#define PALP_SRV_CFG_MAX_FORCE_MAX 1000.0   /* [N] max_force's bound */
+#define PALP_SRV_CFG_ABSURD_FORCE_MAX 1e6   /* [N] absurd_force's bound */
 
 typedef enum palp_srv_force_policy {
   PALP_SRV_FORCE_CLAMP = 0, /* scale the force down to the limit, apply it, count it */
