@@ -28,6 +28,7 @@
 #include <string.h>
 #include <time.h>
 
+#include <cjson/cJSON.h>
 #include <dds/dds.h>
 
 #include "palp_app.h"
@@ -41,6 +42,7 @@
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "palp_finding_answers.h"
+#include "validate.h" /* palp_srv_validate_contact: what the server applies is what is logged (server/) */
 
 #define MAX_PHANTOMS 64
 /* A closed exercise session waits this long for its debrief (written just before the CLOSED
@@ -49,6 +51,21 @@
 #define MAX_SESSIONS 1024
 #define FINGERS 4
 #define TAKE 64
+/* A session's counts of what was not logged one by one (contacts refused or over its rate, findings
+ * unanswered, refusals past FOLD_REFUSALS) become one event each this often: a trainee flooding her
+ * own session (allowed, even secured) costs the shared queue a few records a second, not one per
+ * sample, so other sessions keep theirs (as palp-server folds its counts, server/db_log.c). */
+#define FOLD_NS 1000000000LL
+#define FOLD_REFUSALS 8
+/* A finger's contacts are logged at most one per tick of its session's rate, as the server applies
+ * at most one per tick (server/session.c, play_out); a burst of this many ticks' worth passes (a
+ * station's samples come in bunches), the newest over it is kept and logged at the next token. */
+#define CONTACT_BURST 16.0
+/* A new run of a server hands out its session ids again (server/server.c: from
+ * PALP_DDS_ID(server_number, 1)): an OPEN state of a session already recorded is that session's only
+ * if its run goes on: ticks and duration never fall within a run (the server's monotonic clock), and
+ * a state from another writer whose session began more than this much later is another session. */
+#define RESTART_GAP_NS 1000000000LL
 
 typedef struct phantom {
   uint32_t id;
@@ -63,6 +80,9 @@ typedef struct phantom {
    * not in a local model, how many there are is */
   palp_coverage *cov;
   int tri_count; /* the mesh's triangles, the ids a finger sample may name (with cov) */
+  double radius;  /* the dome's [m], for the contact check's reach */
+  int gone;       /* its catalogue instance was disposed or lost its writer: the slot is freed once no open
+                     session holds it (at once, or when a new entry needs the slot) */
 } phantom;
 
 typedef struct rsession {
@@ -100,6 +120,25 @@ typedef struct rsession {
   palp_SessionState close_state;
   dds_time_t lost_since; /* its state's writer lapsed then (0: alive); ended as lost RECORDER_SERVER_GRACE later */
   int64_t foreign; /* contacts and findings naming it from a writer outside its partition: not recorded */
+  /* Its contacts' rate (CONTACT_BURST): a token bucket per finger at its tick rate; the newest contact
+   * over it kept (pending) until a token comes. */
+  double tick_hz;
+  double tokens[FINGERS];
+  int64_t tokens_ns[FINGERS];
+  int has_pending[FINGERS];
+  palp_srv_contact pending[FINGERS];
+  /* Folded into one event each per FOLD_NS (fold_counts). */
+  int64_t invalid[PALP_SRV_REJ_COUNT]; /* contacts the server's check refuses, by its reason */
+  int64_t coalesced;                   /* contacts over the rate, replaced by a newer one before logged */
+  int64_t unanswered;                  /* findings whose answer this recorder did not see, past FOLD_REFUSALS */
+  int64_t refused_more;                /* refused findings past FOLD_REFUSALS */
+  int refused_logged;                  /* refused and unanswered findings logged by name this interval */
+  int64_t folded_ns;
+  /* Its run, as its states tell it (RESTART_GAP_NS): a new run's OPEN state ends it. */
+  double last_duration;
+  uint64_t last_ticks;
+  int64_t start_ns;                 /* palp_dds_now_ns() - its duration, at its first state */
+  dds_instance_handle_t state_writer; /* of its states (0: not known, opened from a pending state) */
 } rsession;
 
 /* How long a session whose state's writer lapsed is kept open for its server to come back
@@ -144,6 +183,7 @@ typedef struct recorder {
   phantom ph[MAX_PHANTOMS];
   rsession s[MAX_SESSIONS];
   int64_t unknown_session_samples, refused;
+  int64_t phantoms_refused, phantoms_unkept; /* catalogue entries that failed phantom_ok; found no slot */
   palp_log *log;
   /* The sessions the stream readers' topic filters pass: those open here (slot = index in s[]) and
    * those heard open lately; a flood of made-up keys becomes no reader instance (idl/palp_dds_gate.h). */
@@ -170,6 +210,14 @@ static void on_signal(int sig) {
   else stop_flag = 1;
 }
 
+/* A string from the network, for the text log: escaped (palp_log_printable), so that a newline in it
+ * cannot forge a log line. 4x a 64-byte field: every byte escapable. */
+typedef struct printable {
+  char s[4 * 64];
+} printable;
+#define PRINTABLE(str) (palp_log_printable((str), (printable){{0}}.s, sizeof(printable)))
+#define PRINTABLE_LONG(str) (palp_log_printable((str), (char[4 * 128]){0}, 4 * 128))
+
 static double now_unix(void) {
   struct timespec ts;
   clock_gettime(CLOCK_REALTIME, &ts);
@@ -178,6 +226,19 @@ static double now_unix(void) {
 
 static void count(recorder *r, int rc) {
   if (rc == PALP_EFULL) r->refused++;
+}
+
+static int phantom_in_use(const recorder *r, const phantom *ph) {
+  for (int i = 0; i < MAX_SESSIONS; i++)
+    if (r->s[i].open && r->s[i].ph == ph) return 1;
+  return 0;
+}
+
+static void phantom_free(phantom *ph) {
+  free(ph->rest);
+  free(ph->scene_json);
+  palp_coverage_destroy(ph->cov);
+  memset(ph, 0, sizeof *ph);
 }
 
 static phantom *find_phantom(recorder *r, uint32_t id, int create) {
@@ -190,7 +251,25 @@ static phantom *find_phantom(recorder *r, uint32_t id, int create) {
       r->ph[i].id = id;
       return &r->ph[i];
     }
+  /* all held: a gone phantom's slot that no open session holds any more */
+  for (int i = 0; i < MAX_PHANTOMS; i++)
+    if (r->ph[i].gone && !phantom_in_use(r, &r->ph[i])) {
+      phantom_free(&r->ph[i]);
+      r->ph[i].used = 1;
+      r->ph[i].id = id;
+      return &r->ph[i];
+    }
   return NULL;
+}
+
+/* Its catalogue instance disposed (the phantom withdrawn) or without writers (its server gone): its
+ * slot freed now if no open session holds it, else kept for them and taken when a slot is needed. A
+ * server that comes back publishes its entry again. */
+static void on_phantom_gone(recorder *r, uint32_t id) {
+  phantom *ph = find_phantom(r, id, 0);
+  if (!ph) return;
+  if (phantom_in_use(r, ph)) ph->gone = 1;
+  else phantom_free(ph);
 }
 
 static rsession *find_session(recorder *r, uint32_t id, int create) {
@@ -232,26 +311,33 @@ static const char *public_exercise_of(const recorder *r, uint32_t phantom_id);
 
 /* The session's params as the log keeps them, from what the recorder knows now of its phantom (its
  * force limit) and of the exercise the phantom runs (its name); rewritten when either comes late. */
-static void session_params(const recorder *r, const rsession *s, char *buf, size_t len) {
+/* Built with cJSON, not by hand: the partition comes from the network (a quote in it made keys of
+ * its own, "footprint" among them), and a number that is not finite is no JSON (left out). */
+#define PARAMS_FALLBACK "{\"recorded_by\": \"palp-recorder\", \"replayable\": false}"
+static char *session_params(const recorder *r, const rsession *s) {
   const char *pex = public_exercise_of(r, s->phantom_id);
-  char exname[96] = "", late[64] = "";
-  if (pex) snprintf(exname, sizeof exname, ", \"exercise_name\": \"%s\"", pex);
+  cJSON *o = cJSON_CreateObject();
+  int ok = o && cJSON_AddStringToObject(o, "recorded_by", "palp-recorder") && cJSON_AddFalseToObject(o, "replayable") &&
+           cJSON_AddStringToObject(o, "partition", s->partition);
+  /* the limit only once its catalogue entry is here (it said 0 N before: a limit nobody set) */
+  if (ok && s->ph && isfinite(s->ph->max_force)) ok = cJSON_AddNumberToObject(o, "max_force_n", s->ph->max_force) != NULL;
+  if (ok) ok = cJSON_AddStringToObject(o, "footprint", s->touched ? "touched" : "patch") != NULL;
+  if (ok && pex) ok = cJSON_AddStringToObject(o, "exercise_name", pex) != NULL;
   /* Started (or restarted) after the session opened: what came before is not in this log, and
    * the review says so (its marks, its coverage are this log's part of the session). A session
    * seen within a second of its opening counts as seen from its start. */
-  if (s->recorded_from > 1.0 && isfinite(s->recorded_from))
-    snprintf(late, sizeof late, ", \"recorded_from_s\": %.3f", s->recorded_from);
-  snprintf(buf, len,
-           "{\"recorded_by\": \"palp-recorder\", \"replayable\": false, \"partition\": \"%s\", "
-           "\"max_force_n\": %.17g, \"footprint\": \"%s\"%s%s}",
-           s->partition, s->ph ? s->ph->max_force : 0.0, s->touched ? "touched" : "patch", exname, late);
+  if (ok && s->recorded_from > 1.0 && isfinite(s->recorded_from))
+    ok = cJSON_AddNumberToObject(o, "recorded_from_s", round(s->recorded_from * 1e3) / 1e3) != NULL;
+  char *json = ok ? cJSON_PrintUnformatted(o) : NULL;
+  cJSON_Delete(o);
+  return json;
 }
 
 static void log_params(recorder *r, rsession *s) {
-  char params[700];
   s->exercise_named = public_exercise_of(r, s->phantom_id) != NULL;
-  session_params(r, s, params, sizeof params);
-  count(r, palp_db_log_session_params(r->w, s->h, params));
+  char *params = session_params(r, s);
+  count(r, palp_db_log_session_params(r->w, s->h, params ? params : PARAMS_FALLBACK));
+  cJSON_free(params);
 }
 
 /* Sessions opened before their phantom's catalogue entry came (their samples forced the open: a
@@ -270,9 +356,48 @@ static void complete_sessions(recorder *r, const phantom *ph, uint32_t phantom_i
   }
 }
 
+/* A catalogue entry as the recorder may keep it: the stations' check (palp_dds_phantom_check: counts,
+ * indices, finite rest positions and radius), and the numbers the session's params and scene carry
+ * finite and in a server's range (tick rate 1..10,000 Hz as server/config.c allows; force limit >= 0). */
+static int phantom_ok(const palp_Phantom *p, char *why, size_t len) {
+  if (palp_dds_phantom_check(p, 1, why, len) < 0) return 0;
+  const double nums[] = {p->tick_rate_hz, p->max_force, p->membrane.thickness, p->membrane.density, p->membrane.E1,
+                         p->membrane.eta1, p->membrane.E2, p->membrane.eta2, p->gel.pressure, p->gel.a1, p->gel.a2,
+                         p->gel.a3};
+  for (size_t i = 0; i < sizeof nums / sizeof nums[0]; i++)
+    if (!isfinite(nums[i])) {
+      snprintf(why, len, "phantom %u: a number of its model is not finite", p->phantom_id);
+      return 0;
+    }
+  if (!(p->tick_rate_hz >= 1 && p->tick_rate_hz <= 10000) || !(p->max_force >= 0)) {
+    snprintf(why, len, "phantom %u: tick rate %g Hz, force limit %g N (want 1..10000 Hz, >= 0 N)", p->phantom_id,
+             p->tick_rate_hz, p->max_force);
+    return 0;
+  }
+  return 1;
+}
+
 static void on_phantom(recorder *r, const palp_Phantom *p) {
+  char why[160];
+  if (!phantom_ok(p, why, sizeof why)) {
+    /* one it already keeps for that id stays (a session on it goes on with it) */
+    r->phantoms_refused++;
+    if (r->phantoms_refused <= 8 || r->phantoms_refused % 100 == 0) { /* a flood of them: a line every 100 */
+      char name[4 * sizeof p->name];
+      palp_log_warn(r->log, "catalogue entry \"%s\" refused (%lld so far): %s", palp_log_printable(p->name, name, sizeof name),
+                    (long long)r->phantoms_refused, why);
+    }
+    return;
+  }
   phantom *ph = find_phantom(r, p->phantom_id, 1);
-  if (!ph) return;
+  if (!ph) {
+    if (r->phantoms_unkept++ == 0)
+      palp_log_warn(r->log, "phantom %u's catalogue entry not kept: %d phantoms are held already (its sessions are "
+                            "logged without their scene)", p->phantom_id, MAX_PHANTOMS);
+    return;
+  }
+  ph->gone = 0;
+  ph->radius = p->radius;
   snprintf(ph->name, sizeof ph->name, "%s", p->name);
   ph->tick_hz = p->tick_rate_hz;
   ph->max_force = p->max_force;
@@ -330,8 +455,8 @@ static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
   free(ex);
   if (rc < 0 || !named) {
     r->exercises_refused++;
-    palp_log_warn(r->log, "session %u: its exercise \"%s\" refused: %s", m->session_id, name,
-                  rc < 0 ? err : "its name is not the exercise's own");
+    palp_log_warn(r->log, "session %u: its exercise \"%s\" refused: %s", m->session_id, PRINTABLE(name),
+                  rc < 0 ? PRINTABLE_LONG(err) : "its name is not the exercise's own");
     return;
   }
   rsession *s = find_session(r, m->session_id, 0);
@@ -398,8 +523,10 @@ static void open_session(recorder *r, const palp_SessionState *m) {
   {
     if (!s || s->open) return; /* already recording (transient-local re-delivery) */
     const phantom *ph = find_phantom(r, m->phantom_id, 0);
-    const double start = now_unix() - m->duration;
-    char uid[128], pid[32], params[700];
+    /* a duration that is no wall time (not finite, negative, absurd) counts as 0 */
+    const double age = isfinite(m->duration) && m->duration >= 0 && m->duration < 1e9 ? m->duration : 0;
+    const double start = now_unix() - age;
+    char uid[128], pid[32];
     /* Session ids restart with each server run: the start time makes the uid unique. */
     snprintf(uid, sizeof uid, "dds-%u-%u-%.0f", m->phantom_id, m->session_id, start * 1e3);
     snprintf(pid, sizeof pid, "%u", m->phantom_id);
@@ -407,16 +534,26 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     s->phantom_id = m->phantom_id;
     s->ph = ph;
     snprintf(s->partition, sizeof s->partition, "%s", m->partition);
-    s->recorded_from = m->duration;
+    s->recorded_from = age;
     s->exercise_named = public_exercise_of(r, m->phantom_id) != NULL;
-    session_params(r, s, params, sizeof params);
+    /* its rate as the server's config allows it (1..10,000 Hz), else the haptic 1 kHz */
+    const double hz = m->tick_rate_hz >= 1 && m->tick_rate_hz <= 10000 ? m->tick_rate_hz : 1000;
+    char *params = session_params(r, s);
     palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
                              .phantom_id = pid, .phantom_name = ph ? ph->name : "",
-                             .scene_json = ph && ph->scene_json ? ph->scene_json : "{}", .params_json = params,
-                             .tick_hz = m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000,
-                             .dt_s = 1.0 / (m->tick_rate_hz > 0 ? m->tick_rate_hz : 1000), .start_unix_s = start};
-    if (palp_db_log_session_begin(r->w, &d, &s->h) != 0) return;
+                             .scene_json = ph && ph->scene_json ? ph->scene_json : "{}",
+                             .params_json = params ? params : PARAMS_FALLBACK, .tick_hz = hz, .dt_s = 1.0 / hz,
+                             .start_unix_s = start};
+    const int begun = palp_db_log_session_begin(r->w, &d, &s->h);
+    cJSON_free(params);
+    if (begun != 0) return;
     s->id = m->session_id;
+    s->tick_hz = hz;
+    s->last_duration = m->duration;
+    s->last_ticks = m->ticks;
+    s->start_ns = palp_dds_now_ns() - (int64_t)(age * 1e9);
+    s->folded_ns = palp_dds_now_ns();
+    for (int f = 0; f < FINGERS; f++) s->tokens[f] = CONTACT_BURST, s->tokens_ns[f] = s->folded_ns;
     set_open(r, s, 1);
     if (!ph)
       palp_log_warn(r->log, "session %u: recording before phantom %u's catalogue entry came (its samples would "
@@ -468,7 +605,59 @@ static void note_held(recorder *r, rsession *s, const palp_SessionState *m) {
   count(r, palp_db_log_event(r->w, s->h, held ? PALP_DB_EVENT_LEAVE : PALP_DB_EVENT_JOIN, s->frame, detail, 1));
 }
 
-static void on_state(recorder *r, const palp_SessionState *m) {
+static void fold_counts(recorder *r, rsession *s, int64_t now_ns, int all);
+static void flush_contacts(recorder *r, rsession *s, int64_t now_ns, int all);
+
+/* Ends a session in this log as cut short (why: its detail), its counts first. */
+static void end_cut(recorder *r, rsession *s, const char *why) {
+  settle_findings(r, s, 1);
+  flush_contacts(r, s, 0, 1);
+  fold_counts(r, s, palp_dds_now_ns(), 1);
+  count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
+  count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
+  set_open(r, s, 0);
+  s->lost_since = 0;
+}
+
+/* Whether an open session's state comes from a new run of its server, which hands out the same ids
+ * again (RESTART_GAP_NS): its ticks or its duration fell, or another writer's session began more than
+ * RESTART_GAP_NS after this one. A server stalled and back (the same run) passes: its clock ran on. */
+static int new_run(const rsession *s, const palp_SessionState *m, dds_instance_handle_t writer, int64_t now_ns) {
+  if (m->ticks < s->last_ticks || m->duration < s->last_duration) return 1;
+  if (!writer || !s->state_writer || writer == s->state_writer || !isfinite(m->duration)) return 0;
+  return now_ns - (int64_t)(m->duration * 1e9) - s->start_ns > RESTART_GAP_NS;
+}
+
+/* A state of a session recorded here: a new run of its server ends it (error, saying so), and the
+ * state is then a new session's; else its run's newest figures are kept. 1: ended. */
+static int check_run(recorder *r, rsession *s, const palp_SessionState *m, dds_instance_handle_t writer) {
+  const int64_t now_ns = palp_dds_now_ns();
+  if (new_run(s, m, writer, now_ns)) {
+    char why[200];
+    snprintf(why, sizeof why,
+             "server restarted: session %u's state began again (%.3f s, %llu ticks after %.3f s, %llu ticks); "
+             "the new run's session %u is logged as another session",
+             s->id, m->duration, (unsigned long long)m->ticks, s->last_duration, (unsigned long long)s->last_ticks,
+             m->session_id);
+    palp_log_warn(r->log, "session %u: %s", s->id, why);
+    end_cut(r, s, why);
+    return 1;
+  }
+  if (writer) s->state_writer = writer;
+  if (isfinite(m->duration)) s->last_duration = m->duration;
+  s->last_ticks = m->ticks;
+  return 0;
+}
+
+static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer) {
+  rsession *was = find_session(r, m->session_id, 0);
+  if (was && check_run(r, was, m, writer)) {
+    if (m->phase != palp_PHASE_OPEN) { /* the new run's session opened and closed before its state was seen open */
+      open_session(r, m);
+      rsession *s = find_session(r, m->session_id, 0);
+      if (s) s->state_writer = writer;
+    }
+  }
   if (m->phase == palp_PHASE_OPEN) {
     rsession *known = find_session(r, m->session_id, 0);
     if (known) {
@@ -492,6 +681,8 @@ static void on_state(recorder *r, const palp_SessionState *m) {
         }
     }
     open_session(r, m);
+    rsession *s = find_session(r, m->session_id, 0);
+    if (s && !s->state_writer) s->state_writer = writer;
     return;
   }
   resolve_pending(r, m->session_id, 1); /* opened and closed before its catalogue arrived */
@@ -508,6 +699,8 @@ static void on_state(recorder *r, const palp_SessionState *m) {
 
 static void close_session(recorder *r, rsession *s, const palp_SessionState *m) {
   settle_findings(r, s, 1);
+  flush_contacts(r, s, 0, 1);
+  fold_counts(r, s, palp_dds_now_ns(), 1);
   if (m->rejected_samples)
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, "samples rejected by the server",
                                (int64_t)m->rejected_samples));
@@ -521,7 +714,7 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
                                s->foreign));
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
   count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
-  palp_log_info(r->log, "session %u closed (%s)", m->session_id, m->reason);
+  palp_log_info(r->log, "session %u closed (%s)", m->session_id, PRINTABLE_LONG(m->reason));
   set_open(r, s, 0);
 }
 
@@ -554,11 +747,8 @@ static void end_lost_sessions(recorder *r, dds_time_t now) {
     rsession *s = &r->s[i];
     if (!s->open || !s->lost_since || now - s->lost_since < RECORDER_SERVER_GRACE) continue;
     const char *why = "server lost (its session state's writer is gone)";
-    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
-    count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
     palp_log_warn(r->log, "session %u: %s", s->id, why);
-    set_open(r, s, 0);
-    s->lost_since = 0;
+    end_cut(r, s, why);
   }
 }
 
@@ -585,13 +775,20 @@ static void log_verdict(void *ctx, const palp_finding_sent *f, int verdict, cons
     count(r, palp_db_log_finding(r->w, s->h, &rec));
     return;
   }
-  if (verdict == PALP_VERDICT_REFUSED) {
+  if (verdict != PALP_VERDICT_REFUSED) s->findings_unanswered++;
+  /* As palp-server logs refusals: the first FOLD_REFUSALS an interval by name, the rest counted (a
+   * flood of findings evicts one unanswered finding per finding past PALP_FINDING_ANSWERS_PENDING). */
+  if (s->refused_logged >= FOLD_REFUSALS) {
+    if (verdict == PALP_VERDICT_REFUSED) s->refused_more++;
+    else s->unanswered++;
+    return;
+  }
+  s->refused_logged++;
+  if (verdict == PALP_VERDICT_REFUSED)
     snprintf(detail, sizeof detail, "finding %u refused: %s", f->mark_id, reason);
-  } else {
+  else
     snprintf(detail, sizeof detail, "finding %u (%s) not logged: the recorder did not see the server's answer",
              f->mark_id, f->withdraw ? "withdrawal" : "mark");
-    s->findings_unanswered++;
-  }
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, detail, 1));
 }
 
@@ -738,33 +935,28 @@ static int from_its_partition(recorder *r, dds_entity_t reader, const void *samp
   r->foreign_samples++;
   if (s->foreign++ == 0) {
     const char *from = v == PALP_DDS_ORIGIN_UNKNOWN ? NULL : palp_dds_origin_partition(&r->origin, reader, info);
-    char where[96];
+    char where[320];
     if (!from) snprintf(where, sizeof where, "no longer matched (its partition unknown)");
     else if (!from[0]) snprintf(where, sizeof where, "in several or no partitions");
-    else snprintf(where, sizeof where, "in partition %s", from);
+    else snprintf(where, sizeof where, "in partition %s", PRINTABLE(from)); /* a writer's: anyone's */
     palp_log_warn(r->log,
                   "session %u: a %s naming it came from a writer %s, not its partition %s: not recorded, nor any "
                   "such sample of it (counted at its end; someone forges its session id)",
-                  sid, what, where, s->partition);
+                  sid, what, where, PRINTABLE(s->partition));
   }
   return 0;
 }
 
-static void on_contact(recorder *r, const palp_Contact *m) {
-  resolve_pending(r, m->session_id, 1);
-  rsession *s = find_session(r, m->session_id, 0);
-  if (!s || m->finger >= FINGERS) {
-    r->unknown_session_samples++;
-    return;
-  }
-  const int f = m->finger;
+/* A checked contact into the log, as the server's log has it: a switch of mode removes the finger's
+ * contact first (the server replaces it), a release removes it. */
+static void log_contact(recorder *r, rsession *s, const palp_srv_contact *v) {
+  const int f = v->finger;
   palp_db_contact c;
   memset(&c, 0, sizeof c);
   c.frame = s->frame;
   c.sim_time_s = s->t;
   c.slot = f;
-  const int kind = m->mode == palp_CONTACT_FORCE ? PALP_DB_KIND_FORCE : PALP_DB_KIND_FINGER;
-  if (m->mode == palp_CONTACT_RELEASE) {
+  if (v->mode == palp_CONTACT_RELEASE) {
     if (!s->live[f]) return;
     c.op = PALP_DB_OP_REMOVE;
     c.kind = s->kind[f];
@@ -772,6 +964,7 @@ static void on_contact(recorder *r, const palp_Contact *m) {
     count(r, palp_db_log_contact(r->w, s->h, &c));
     return;
   }
+  const int kind = v->mode == palp_CONTACT_FORCE ? PALP_DB_KIND_FORCE : PALP_DB_KIND_FINGER;
   if (s->live[f] && s->kind[f] != kind) { /* switched mode: the server replaces the contact */
     palp_db_contact rm = c;
     rm.op = PALP_DB_OP_REMOVE;
@@ -781,23 +974,127 @@ static void on_contact(recorder *r, const palp_Contact *m) {
   }
   c.op = s->live[f] ? PALP_DB_OP_UPDATE : PALP_DB_OP_ADD;
   c.kind = kind;
-  const palp_vec3 ctr = {m->center.x, m->center.y, m->center.z};
   if (kind == PALP_DB_KIND_FORCE) {
-    c.def.distribution = (palp_distribution)(m->distribution >= 1 && m->distribution <= 4 ? m->distribution : 1);
-    c.def.center = ctr;
-    c.def.patch_area = m->patch_area > 0 ? m->patch_area : 5.2e-4;
+    c.def.distribution = v->distribution;
+    c.def.center = v->center; /* on its vertex when it named one, as the server puts it */
+    c.def.patch_area = v->patch_area > 0 ? v->patch_area : 5.2e-4;
     c.def.sigma_fraction = 0.5;
     c.def.offset_fraction = 0.5;
-    c.def.offset_dir = (palp_vec3){m->offset_dir.x, m->offset_dir.y, m->offset_dir.z};
-    c.force_n = (palp_vec3){m->force.x, m->force.y, m->force.z};
+    c.def.offset_dir = v->offset_dir;
+    c.force_n = v->force; /* clamped to the phantom's limit */
   } else {
-    c.center_m = ctr;
-    c.radius_m = m->radius;
-    s->radius[f] = m->radius;
+    c.center_m = v->center;
+    c.radius_m = v->radius;
+    s->radius[f] = v->radius;
   }
   s->live[f] = 1;
   s->kind[f] = (uint8_t)kind;
   count(r, palp_db_log_contact(r->w, s->h, &c));
+}
+
+/* A token of finger f's bucket (CONTACT_BURST deep, filled at the session's tick rate), if one is there. */
+static int take_token(rsession *s, int f, int64_t now_ns) {
+  double t = s->tokens[f] + (double)(now_ns - s->tokens_ns[f]) * 1e-9 * s->tick_hz;
+  s->tokens_ns[f] = now_ns;
+  s->tokens[f] = t < CONTACT_BURST ? t : CONTACT_BURST;
+  if (s->tokens[f] < 1) return 0;
+  s->tokens[f] -= 1;
+  return 1;
+}
+
+/* Contacts kept over the rate, logged as their finger's next token comes (all: the session ends). */
+static void flush_contacts(recorder *r, rsession *s, int64_t now_ns, int all) {
+  for (int f = 0; f < FINGERS; f++)
+    if (s->has_pending[f] && (all || take_token(s, f, now_ns))) {
+      s->has_pending[f] = 0;
+      log_contact(r, s, &s->pending[f]);
+    }
+}
+
+/* A contact is checked as the server checks it (palp_srv_validate_contact) against the widest limits a
+ * server's config may set, the phantom's own from its catalogue entry (force limit, radius, rest
+ * vertices): one the server refuses is not logged, counted by reason; a force over the limit is logged
+ * clamped, as the server applies it under its default policy. Then at most one per finger per tick
+ * (take_token): a release always (it only follows a logged contact), the newest of the rest kept. */
+static void on_contact(recorder *r, const palp_Contact *m) {
+  resolve_pending(r, m->session_id, 1);
+  rsession *s = find_session(r, m->session_id, 0);
+  if (!s || m->finger >= FINGERS) {
+    r->unknown_session_samples++;
+    return;
+  }
+  const phantom *ph = s->ph;
+  /* Without its catalogue entry yet: no vertex to name, a reach of the largest dome a station accepts. */
+  const palp_srv_limits lim = {.session_id = s->id,
+                               .max_force = ph ? ph->max_force : PALP_SRV_CFG_MAX_FORCE_MAX,
+                               .absurd_force = PALP_SRV_CFG_ABSURD_FORCE_MAX,
+                               .force_policy = PALP_SRV_FORCE_CLAMP,
+                               .finger_radius_min = PALP_SRV_CFG_FINGER_RADIUS_MIN,
+                               .finger_radius_max = PALP_SRV_CFG_FINGER_RADIUS_MAX,
+                               .phantom_radius = ph ? ph->radius : 10.0,
+                               .vertex_count = ph ? ph->n : 0,
+                               .rest = ph ? ph->rest : NULL};
+  palp_srv_contact v;
+  palp_srv_reject_reason why = PALP_SRV_REJ_COUNT;
+  if (palp_srv_validate_contact(m, &lim, &v, &why) == PALP_SRV_REJECT) {
+    s->invalid[(unsigned)why < PALP_SRV_REJ_COUNT ? why : PALP_SRV_REJ_MODEL]++;
+    return;
+  }
+  const int f = v.finger;
+  if (v.mode == palp_CONTACT_RELEASE) {
+    s->has_pending[f] = 0; /* lifted: what was kept is no longer the finger's */
+    log_contact(r, s, &v);
+    return;
+  }
+  if (!s->has_pending[f] && take_token(s, f, palp_dds_now_ns())) {
+    log_contact(r, s, &v);
+    return;
+  }
+  s->coalesced += s->has_pending[f];
+  s->pending[f] = v;
+  s->has_pending[f] = 1;
+}
+
+/* The session's counts of what was not logged one by one, as one event each, once per FOLD_NS (all:
+ * now, the session ends). */
+static void fold_counts(recorder *r, rsession *s, int64_t now_ns, int all) {
+  if (!all && now_ns - s->folded_ns < FOLD_NS) return;
+  s->folded_ns = now_ns;
+  s->refused_logged = 0;
+  int64_t invalid = 0;
+  char detail[400];
+  size_t at = 0;
+  for (int k = 0; k < PALP_SRV_REJ_COUNT; k++) {
+    if (!s->invalid[k]) continue;
+    invalid += s->invalid[k];
+    const int n = snprintf(detail + at, sizeof detail - at, "%s%s %lld", at ? ", " : "", palp_srv_reject_name(k),
+                           (long long)s->invalid[k]);
+    if (n > 0 && (size_t)n < sizeof detail - at) at += (size_t)n;
+    s->invalid[k] = 0;
+  }
+  if (invalid) {
+    char line[480];
+    snprintf(line, sizeof line, "contacts not recorded: the server refuses them (%s)", detail);
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, line, invalid));
+  }
+  if (s->coalesced) {
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_INFO, s->frame,
+                               "contacts not recorded: more than one per finger per tick (the newest kept)",
+                               s->coalesced));
+    s->coalesced = 0;
+  }
+  if (s->unanswered) {
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame,
+                               "findings not logged: the recorder did not see the server's answer (more, not "
+                               "logged one by one)",
+                               s->unanswered));
+    s->unanswered = 0;
+  }
+  if (s->refused_more) {
+    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame,
+                               "finding refused (more, not logged one by one)", s->refused_more));
+    s->refused_more = 0;
+  }
 }
 
 static void on_feedback(recorder *r, const palp_Feedback *m) {
@@ -1107,6 +1404,8 @@ int main(int argc, char **argv) {
         for (int i = 0; i < n; i++) {
           if (!info[i].valid_data) {
             if (k == RD_STATE && info[i].instance_state != DDS_IST_ALIVE) on_state_lost(r, samples[i]);
+            if (k == RD_CATALOGUE && info[i].instance_state != DDS_IST_ALIVE)
+              on_phantom_gone(r, ((const palp_Phantom *)samples[i])->phantom_id);
             /* a dispose of a key whose session the gate would not pass (never heard open, so not a
              * station that leaves a session that just closed); Cyclone fills an invalid sample's key */
             if (k == RD_FINDING && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
@@ -1120,7 +1419,7 @@ int main(int argc, char **argv) {
           switch (k) {
           case RD_CATALOGUE: on_phantom(r, samples[i]); break;
           case RD_EXERCISE: on_public_exercise(r, samples[i]); break;
-          case RD_STATE: on_state(r, samples[i]); break;
+          case RD_STATE: on_state(r, samples[i], info[i].publication_handle); break;
           case RD_SESSION_EXERCISE: on_session_exercise(r, samples[i]); break;
           case RD_CONTACT: on_contact(r, samples[i]); break;
           case RD_FEEDBACK: on_feedback(r, samples[i]); break;
@@ -1167,8 +1466,13 @@ int main(int argc, char **argv) {
       r->finding_strays = 0;
     }
     const dds_time_t now = dds_time();
+    const int64_t pass_ns = palp_dds_now_ns();
     for (int i = 0; i < MAX_SESSIONS; i++)
-      if (r->s[i].open) settle_findings(r, &r->s[i], 0);
+      if (r->s[i].open) {
+        settle_findings(r, &r->s[i], 0);
+        flush_contacts(r, &r->s[i], pass_ns, 0);
+        fold_counts(r, &r->s[i], pass_ns, 0);
+      }
     end_closing_sessions(r, now);
     end_lost_sessions(r, now);
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
@@ -1191,11 +1495,7 @@ int main(int argc, char **argv) {
   for (int i = 0; i < MAX_SESSIONS; i++) {
     rsession *s = &r->s[i];
     if (!s->open) continue;
-    const char *why = "palp-recorder stopped while the session ran (the server's own log has the rest)";
-    settle_findings(r, s, 1);
-    count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
-    count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
-    set_open(r, s, 0);
+    end_cut(r, s, "palp-recorder stopped while the session ran (the server's own log has the rest)");
     cut++;
   }
   if (cut) palp_log_warn(&plog, "stopping: %d session(s) still running end here in this log, cut short", cut);
@@ -1207,16 +1507,14 @@ int main(int argc, char **argv) {
   palp_log_info(&plog,
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
           "%lld of a writer outside their session's partition, %lld disposes of finding keys of sessions never "
-          "heard open (the findings reader made anew %lld times), %lld exercises refused%s%s\n",
+          "heard open (the findings reader made anew %lld times), %lld exercises refused, %lld catalogue entries "
+          "refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
           (long long)r->foreign_samples, (long long)(r->finding_strays_total + r->finding_strays),
-          (long long)r->finding_renewals, (long long)r->exercises_refused, st.last_error[0] ? "; last error: " : "",
+          (long long)r->finding_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,
+          st.last_error[0] ? "; last error: " : "",
           st.last_error);
-  for (int i = 0; i < MAX_PHANTOMS; i++) {
-    free(r->ph[i].rest);
-    free(r->ph[i].scene_json);
-    palp_coverage_destroy(r->ph[i].cov);
-  }
+  for (int i = 0; i < MAX_PHANTOMS; i++) phantom_free(&r->ph[i]);
   for (int i = 0; i < MAX_PENDING_EXERCISES; i++) free(r->pending_ex[i].json);
   free(r);
   palp_dds_log_limit_remove(&dds_sink); /* before the log closes; then the repeats not yet said */
