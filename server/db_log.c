@@ -7,6 +7,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 #include "grader.h"
 #include "palp_assess.h" /* palp_assess_sample_every */
 #include "palp_db.h"
@@ -113,16 +115,21 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
     palp_log_error(l->log, "session log: all %d slots busy; session %u not logged", SLOTS, i->session_id);
     return;
   }
-  char uid[96], phantom[16], params[512];
+  char uid[96], phantom[16];
   snprintf(uid, sizeof uid, "%s-%u", l->run_id, i->session_id);
   snprintf(phantom, sizeof phantom, "%u", i->phantom_id);
   /* valid_range_events: this server logs the steps outside the model's valid range as events
    * (none then means none happened; a log without the key does not say); debrief_events: it logs
-   * each exercise session's debrief, sent or not (none then means none was sent; since session 59) */
-  snprintf(params, sizeof params,
-           "{\"max_force_n\": %.17g, \"tick_rate_hz\": %.17g, \"partition\": \"%s\", \"valid_range_events\": true, "
-           "\"debrief_events\": true}",
-           i->max_force, i->tick_rate_hz, i->partition);
+   * each exercise session's debrief, sent or not (none then means none was sent; since session 59).
+   * Built with cJSON (escaped, as palp-recorder's since session 75), not by hand. */
+  cJSON *pj = cJSON_CreateObject();
+  cJSON_AddNumberToObject(pj, "max_force_n", i->max_force);
+  cJSON_AddNumberToObject(pj, "tick_rate_hz", i->tick_rate_hz);
+  cJSON_AddStringToObject(pj, "partition", i->partition);
+  cJSON_AddBoolToObject(pj, "valid_range_events", 1);
+  cJSON_AddBoolToObject(pj, "debrief_events", 1);
+  char *params = cJSON_PrintUnformatted(pj);
+  cJSON_Delete(pj);
   /* Self-contained (parameters inlined), so the log alone rebuilds the world. */
   char *scene = palp_scene_to_json(i->scene);
   palp_db_session_def d = {.uid = uid,
@@ -131,12 +138,13 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
                            .phantom_id = phantom,
                            .phantom_name = i->phantom_name,
                            .scene_json = scene ? scene : "{}",
-                           .params_json = params,
+                           .params_json = params ? params : "{}",
                            .tick_hz = i->tick_rate_hz,
                            .dt_s = i->dt};
   palp_db_session h = 0;
   int rc = palp_db_log_session_begin(l->w, &d, &h);
   free(scene);
+  cJSON_free(params);
   if (rc < 0) {
     palp_log_error(l->log, "session log: session %u not logged: %s", i->session_id, palp_db_strerror(rc));
     return;

@@ -30,6 +30,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
 #include <dds/dds.h>
 /* Cyclone's serdata header (for the serialized bytes: ddsi_serdata_to_ser) uses GNU
  * `asm` in its inline atomics, which strict C17 does not know by that name. */
@@ -673,8 +674,10 @@ int main(void) {
           "alice's log: told nothing of the lesions, 63 marks standing (level %d, marks %d)", (int)d.level, d.marks);
     CHECK(palp_db_session_debrief(db, sb->id, &d) == 0, "bob's free practice logged no debrief");
     char *p2 = NULL;
-    CHECK(palp_db_session_json(db, sa->id, NULL, &p2) == 0 && p2 && strstr(p2, "\"debrief_events\": true"),
-          "  the sessions say their server logs debriefs (\"debrief_events\": true)");
+    cJSON *pj = palp_db_session_json(db, sa->id, NULL, &p2) == 0 && p2 ? cJSON_Parse(p2) : NULL;
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(pj, "debrief_events")),
+          "  the sessions say their server logs debriefs (\"debrief_events\": true): %s", p2 ? p2 : "(none)");
+    cJSON_Delete(pj);
     free(p2);
   }
   /* The score sent is palp-review's reading of the same log, to the last bit: the dashboard and the
