@@ -246,6 +246,11 @@ typedef struct palp_lesion {
   double stiffness_ratio; /* E_lesion / E_gel [-], > 0 (> 1: a hard lump; < 1: a soft cyst) */
 } palp_lesion;
 
+/* The longest fixed step a world is created with [s]: palp_world_create refuses more, as it
+ * has since the first model (ten times the paper's 0.01 s). A server's physics rate must
+ * therefore be >= 1 / this = 10 Hz; its config refuses less, naming the key. */
+#define PALP_WORLD_MAX_DT 0.1
+
 typedef struct palp_world_def {
   palp_mesh_def mesh;
   palp_membrane_params membrane;
@@ -541,11 +546,18 @@ typedef struct palp_scene {
   palp_scene_contact contact[PALP_SCENE_MAX_CONTACTS];
 } palp_scene;
 
-/* Loads a scene. A "parameters" entry names a JSON file (relative to the scene) whose
- * "membrane" and "gel" objects replace the scene's. On error returns a negative code and writes a message naming the
+/* Loads a scene. A "parameters" entry names a JSON file (relative to the scene) that gives
+ * the "membrane" and "gel" objects (the scene then has none of its own). Unknown keys are
+ * refused, in the scene and in its parameter file. On error returns a negative code and writes a message naming the
  * offending field (e.g. "membrane.E1: expected a number") into err. */
 int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen);
+/* Parses scene text that comes from no file of the caller's: a session log's scene, which
+ * is untrusted (a handed-over database). It must carry its "membrane" and "gel" itself; a
+ * "parameters" file reference is refused (reading it could hang on a FIFO or probe files). */
 int palp_scene_parse(const char *json, palp_scene *out, char *err, size_t errlen);
+/* Parses trusted scene text (a tool's or a test's own) as if it were a scene file in dir
+ * (NULL: "."): its "parameters" are read relative to dir. */
+int palp_scene_parse_in(const char *json, const char *dir, palp_scene *out, char *err, size_t errlen);
 /* The fully resolved scene as self-contained JSON (parameters inlined), so a logged
  * session can be rebuilt exactly; malloc'd, the caller frees it. NULL on failure. */
 char *palp_scene_to_json(const palp_scene *s);

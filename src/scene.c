@@ -2,6 +2,9 @@
  * scene.c - scene files (JSON, cJSON): geometry, material, time step, effects,
  * contacts and force profiles. Keys carry their SI unit (radius_m, E1_Pa, ...).
  * Every error names the field it is about, as "contacts[1].profile.t_off_s: ...".
+ * Unknown keys are refused (as exercise files and the server's config do): a misspelt
+ * optional key ("bending_stifness_N_m") would otherwise silently leave its default.
+ * Every object may carry a "comment".
  */
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -32,6 +35,39 @@ static int get_pos(ctx *c, const cJSON *obj, const char *path, const char *key, 
   if (e) return e;
   if (!(v > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be > 0 (got %g)", path, key, v);
   *out = v;
+  return PALP_OK;
+}
+
+/* A number > 0 and <= hi: the physical upper bounds below keep absurd values (1e300,
+ * a unit slip of 1000) from reaching the model, where they overflow or stall it. */
+static int get_pos_max(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double hi,
+                       double *out) {
+  double v = *out;
+  int e = get_pos(c, obj, path, key, required, &v);
+  if (e) return e;
+  if (!(v <= hi)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be <= %g (got %g)", path, key, hi, v);
+  *out = v;
+  return PALP_OK;
+}
+
+/* |v| <= hi, for signed quantities (forces). */
+static int get_abs_max(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double hi,
+                       double *out) {
+  double v = *out;
+  int e = get_num(c, obj, path, key, required, &v);
+  if (e) return e;
+  if (!(fabs(v) <= hi)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be within [-%g, %g] (got %g)", path, key, hi, hi, v);
+  *out = v;
+  return PALP_OK;
+}
+
+/* Refuses keys not in the NULL-terminated list; "comment" is allowed everywhere. */
+static int only_keys(ctx *c, const cJSON *obj, const char *path, const char *const *keys) {
+  for (const cJSON *it = obj->child; it; it = it->next) {
+    int ok = it->string && strcmp(it->string, "comment") == 0;
+    for (int k = 0; !ok && keys[k]; ++k) ok = it->string && strcmp(it->string, keys[k]) == 0;
+    if (!ok) return palp_parse_fail(c, PALP_EPARSE, "%s%s: unknown key", path, it->string ? it->string : "?");
+  }
   return PALP_OK;
 }
 
@@ -76,17 +112,40 @@ static const cJSON *get_obj(ctx *c, const cJSON *obj, const char *path, const ch
   return it;
 }
 
+/* Physical upper bounds (generous: each is far beyond any phantom, and below what makes
+ * the model's arithmetic overflow):
+ * - the dome's radius, 1 mm .. 1 m: a breast phantom is ~4 cm; a metre is a room's furniture;
+ * - the membrane's moduli E1, E2 <= 1 GPa: silicone rubbers are 0.1-100 MPa, tissue kPa; a
+ *   GPa is a rigid plastic, no longer a palpable skin;
+ * - its viscosities eta1, eta2 <= 1e14 Pa s: with E <= 1 GPa a relaxation time eta / E of
+ *   1e5 s (a day) is already a spring for any session (the shipped sets go to 1.7e10 Pa s);
+ * - gravity |g| <= 100 m/s^2: ten times the Earth's; a phantom on a table sees 9.81;
+ * - a scripted contact's force |F| <= 1e4 N: a tonne-force, ten times the server's
+ *   absurd_force of 1 kN (no hand presses that); the shipped scenes press 3 N;
+ * - a sine profile's frequency <= 1e4 Hz: the fastest physics rate the server runs
+ *   (physics_rate_hz <= 10 kHz); above it the load only aliases. */
+#define SCENE_RADIUS_MIN_M 1e-3
+#define SCENE_RADIUS_MAX_M 1.0
+#define SCENE_MODULUS_MAX_PA 1e9
+#define SCENE_VISCOSITY_MAX_PA_S 1e14
+#define SCENE_GRAVITY_MAX_M_S2 100.0
+#define SCENE_FORCE_MAX_N 1e4
+#define SCENE_FREQUENCY_MAX_HZ 1e4
+
 static const char *const dist_names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
 static const char *const profile_names[] = {"step", "ramp", "sine", "keyframes"};
 
 static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
+  static const char *const keys[] = {"thickness_m", "density_kg_m3", "E1_Pa", "eta1_Pa_s", "E2_Pa", "eta2_Pa_s",
+                                     "bending_stiffness_N_m", "rim_hinge_release", "skin_bending_stiffness_N_m", NULL};
   int e;
+  if ((e = only_keys(c, m, "membrane.", keys))) return e;
   if ((e = get_pos(c, m, "membrane.", "thickness_m", 1, &p->thickness))) return e;
   if ((e = get_pos(c, m, "membrane.", "density_kg_m3", 1, &p->density))) return e;
-  if ((e = get_pos(c, m, "membrane.", "E1_Pa", 1, &p->E1))) return e;
-  if ((e = get_pos(c, m, "membrane.", "eta1_Pa_s", 1, &p->eta1))) return e;
-  if ((e = get_pos(c, m, "membrane.", "E2_Pa", 1, &p->E2))) return e;
-  if ((e = get_pos(c, m, "membrane.", "eta2_Pa_s", 1, &p->eta2))) return e;
+  if ((e = get_pos_max(c, m, "membrane.", "E1_Pa", 1, SCENE_MODULUS_MAX_PA, &p->E1))) return e;
+  if ((e = get_pos_max(c, m, "membrane.", "eta1_Pa_s", 1, SCENE_VISCOSITY_MAX_PA_S, &p->eta1))) return e;
+  if ((e = get_pos_max(c, m, "membrane.", "E2_Pa", 1, SCENE_MODULUS_MAX_PA, &p->E2))) return e;
+  if ((e = get_pos_max(c, m, "membrane.", "eta2_Pa_s", 1, SCENE_VISCOSITY_MAX_PA_S, &p->eta2))) return e;
   /* optional: absent is the paper's membrane, without bending */
   if ((e = get_num(c, m, "membrane.", "bending_stiffness_N_m", 0, &p->bending_stiffness))) return e;
   if (p->bending_stiffness < 0.0)
@@ -105,7 +164,12 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
 }
 
 static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
+  static const char *const keys[] = {"law", "pressure_Pa", "a1", "a2_Pa_s_m3", "a3_s2", "support_modulus_Pa_m",
+                                     "support_viscosity_Pa_s_m", "support_bulk_fraction", "support_relax_modulus_Pa_m",
+                                     "support_relax_time_s", "support_stiffening", "support_stiffening_power",
+                                     "support_base_reach", "density_kg_m3", "added_mass_fraction", NULL};
   int e;
+  if ((e = only_keys(c, g, "gel.", keys))) return e;
   const cJSON *law = cJSON_GetObjectItemCaseSensitive(g, "law");
   if (!law) return palp_parse_fail(c, PALP_EPARSE, "gel.law: missing (\"polytropic\" or \"paper_literal\")");
   if (!cJSON_IsString(law)) return palp_parse_fail(c, PALP_EPARSE, "gel.law: expected a string");
@@ -165,7 +229,16 @@ static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile 
   if (!k) return palp_parse_fail(c, PALP_EPARSE, "%skind: unknown profile \"%s\" (step, ramp, sine, keyframes)", path,
                       kind->valuestring);
   p->kind = (palp_profile_kind)k;
+  /* only the kind's own keys: a "frequency_Hz" on a step would be silently unused */
+  static const char *const key_keys[] = {"kind", "keyframes", NULL};
+  static const char *const step_keys[] = {"kind", "magnitude_N", "t_on_s", "t_off_s", NULL};
+  static const char *const sine_keys[] = {"kind", "magnitude_N", "t_on_s", "t_off_s", "frequency_Hz", "offset_N", NULL};
   int e;
+  if ((e = only_keys(c, o, path,
+                     p->kind == PALP_PROFILE_KEYFRAMES ? key_keys
+                     : p->kind == PALP_PROFILE_SINE    ? sine_keys
+                                                       : step_keys)))
+    return e;
   if (p->kind == PALP_PROFILE_KEYFRAMES) {
     const cJSON *keys = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
     if (!cJSON_IsArray(keys)) return palp_parse_fail(c, PALP_EPARSE, "%skeyframes: expected an array of [t_s, force_N]", path);
@@ -178,6 +251,9 @@ static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile 
       if (!cJSON_IsArray(kf) || cJSON_GetArraySize(kf) != 2 || !cJSON_IsNumber(t) || !cJSON_IsNumber(f) ||
           !isfinite(t->valuedouble) || !isfinite(f->valuedouble))
         return palp_parse_fail(c, PALP_EPARSE, "%skeyframes[%d]: expected [t_s, force_N]", path, i);
+      if (!(fabs(f->valuedouble) <= SCENE_FORCE_MAX_N))
+        return palp_parse_fail(c, PALP_EPARSE, "%skeyframes[%d]: force_N must be within [-%g, %g] (got %g)", path, i,
+                               SCENE_FORCE_MAX_N, SCENE_FORCE_MAX_N, f->valuedouble);
       if (i > 0 && !(t->valuedouble > p->key_t[i - 1]))
         return palp_parse_fail(c, PALP_EPARSE, "%skeyframes[%d]: times must increase", path, i);
       p->key_t[i] = t->valuedouble;
@@ -186,13 +262,13 @@ static int parse_profile(ctx *c, const cJSON *o, const char *path, palp_profile 
     p->key_count = n;
     return PALP_OK;
   }
-  if ((e = get_num(c, o, path, "magnitude_N", 1, &p->magnitude))) return e;
+  if ((e = get_abs_max(c, o, path, "magnitude_N", 1, SCENE_FORCE_MAX_N, &p->magnitude))) return e;
   if ((e = get_num(c, o, path, "t_on_s", 1, &p->t_on))) return e;
   if ((e = get_num(c, o, path, "t_off_s", 1, &p->t_off))) return e;
   if (p->t_off < p->t_on) return palp_parse_fail(c, PALP_EPARSE, "%st_off_s: must be >= t_on_s", path);
   if (p->kind == PALP_PROFILE_SINE) {
-    if ((e = get_pos(c, o, path, "frequency_Hz", 1, &p->frequency))) return e;
-    if ((e = get_num(c, o, path, "offset_N", 0, &p->offset))) return e;
+    if ((e = get_pos_max(c, o, path, "frequency_Hz", 1, SCENE_FREQUENCY_MAX_HZ, &p->frequency))) return e;
+    if ((e = get_abs_max(c, o, path, "offset_N", 0, SCENE_FORCE_MAX_N, &p->offset))) return e;
   }
   return PALP_OK;
 }
@@ -201,6 +277,10 @@ static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_sc
   char path[48];
   snprintf(path, sizeof path, "contacts[%d].", idx);
   if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "contacts[%d]: expected an object", idx);
+  static const char *const keys[] = {"distribution",    "center_deg", "center_m",  "patch_area_m2", "sigma_fraction",
+                                     "offset_fraction", "offset_dir", "direction", "profile",       NULL};
+  int e;
+  if ((e = only_keys(c, o, path, keys))) return e;
   const cJSON *d = cJSON_GetObjectItemCaseSensitive(o, "distribution");
   int dist = 0;
   if (cJSON_IsString(d)) {
@@ -214,11 +294,14 @@ static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_sc
     return palp_parse_fail(c, PALP_EPARSE, "%sdistribution: expected single, uniform, gaussian, gaussian_offset or 1-4", path);
   palp_vec3 center = v3(0, 0, radius);
   const cJSON *deg = cJSON_GetObjectItemCaseSensitive(o, "center_deg");
-  int e;
+  if (deg && cJSON_GetObjectItemCaseSensitive(o, "center_m"))
+    return palp_parse_fail(c, PALP_EPARSE, "%scenter_m: not with center_deg (one centre)", path);
   if (deg) {
     if (!cJSON_IsObject(deg)) return palp_parse_fail(c, PALP_EPARSE, "%scenter_deg: expected {\"polar\": .., \"azimuth\": ..}", path);
     char p2[64];
     snprintf(p2, sizeof p2, "%scenter_deg.", path);
+    static const char *const deg_keys[] = {"polar", "azimuth", NULL};
+    if ((e = only_keys(c, deg, p2, deg_keys))) return e;
     double polar = 0, az = 0;
     if ((e = get_num(c, deg, p2, "polar", 1, &polar)) || (e = get_num(c, deg, p2, "azimuth", 1, &az))) return e;
     if (polar < 0 || polar > 90) return palp_parse_fail(c, PALP_EPARSE, "%spolar: must be within [0, 90] degrees", p2);
@@ -288,6 +371,13 @@ static int get_validated(ctx *c, const cJSON *obj, const char *path, palp_world_
   const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, "validated");
   if (!v) return PALP_OK;
   if (!cJSON_IsObject(v)) return palp_parse_fail(c, PALP_EPARSE, "%svalidated: expected an object {\"finger\": [...]}", path);
+  {
+    static const char *const keys[] = {"finger", "hinge_error_rad", NULL};
+    char p1[48];
+    snprintf(p1, sizeof p1, "%svalidated.", path);
+    const int rc = only_keys(c, v, p1, keys);
+    if (rc) return rc;
+  }
   const cJSON *f = cJSON_GetObjectItemCaseSensitive(v, "finger");
   const int n = cJSON_IsArray(f) ? cJSON_GetArraySize(f) : -1;
   if (n < 1 || n > PALP_MAX_VALIDATED)
@@ -298,7 +388,11 @@ static int get_validated(ctx *c, const cJSON *obj, const char *path, palp_world_
     char p2[64];
     snprintf(p2, sizeof p2, "%svalidated.finger[%d].", path, i);
     if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "%.*s: expected an object", (int)strlen(p2) - 1, p2);
+    static const char *const keys[] = {"polar_deg", "polar_rad", "depth_m", NULL};
     int e;
+    if ((e = only_keys(c, o, p2, keys))) return e;
+    if (cJSON_GetObjectItemCaseSensitive(o, "polar_rad") && cJSON_GetObjectItemCaseSensitive(o, "polar_deg"))
+      return palp_parse_fail(c, PALP_EPARSE, "%spolar_deg: not with polar_rad (one angle)", p2);
     double a = NAN, d = 0.0;
     if (cJSON_GetObjectItemCaseSensitive(o, "polar_rad")) {
       if ((e = get_num(c, o, p2, "polar_rad", 1, &a))) return e;
@@ -329,6 +423,9 @@ static int get_validated(ctx *c, const cJSON *obj, const char *path, palp_world_
   return PALP_OK;
 }
 
+/* The parameter file "name" (relative to dir, the scene's directory). Its errors are said
+ * as "parameters \"<its path>\": membrane.E1_Pa: ...": the caller names the scene file, and
+ * without the parameter file's own path one could not tell which of the two is wrong. */
 static int parse_params_file(ctx *c, const char *dir, const char *name, palp_scene *s) {
   char path[1024];
   if (name[0] == '/' || !dir[0]) snprintf(path, sizeof path, "%s", name);
@@ -338,34 +435,65 @@ static int parse_params_file(ctx *c, const char *dir, const char *name, palp_sce
   cJSON *root = cJSON_Parse(txt);
   free(txt);
   if (!root) return palp_parse_fail(c, PALP_EPARSE, "parameters: \"%s\" is not valid JSON", path);
-  int e;
-  const cJSON *m = get_obj(c, root, "parameters.", "membrane", 1, &e);
-  if (!e) e = parse_membrane(c, m, &s->world.membrane);
-  const cJSON *g = e ? NULL : get_obj(c, root, "parameters.", "gel", 1, &e);
-  if (!e) e = parse_gel(c, g, &s->world.gel);
-  if (!e) e = get_material(c, root, "parameters.", s);
-  if (!e) e = get_validated(c, root, "parameters.", &s->world);
+  char inner[400] = "";
+  ctx ic = {inner, sizeof inner};
+  static const char *const keys[] = {"membrane", "gel", "material", "validated", NULL};
+  int e = cJSON_IsObject(root) ? only_keys(&ic, root, "", keys)
+                               : palp_parse_fail(&ic, PALP_EPARSE, "expected a JSON object");
+  const cJSON *m = e ? NULL : get_obj(&ic, root, "", "membrane", 1, &e);
+  if (!e) e = parse_membrane(&ic, m, &s->world.membrane);
+  const cJSON *g = e ? NULL : get_obj(&ic, root, "", "gel", 1, &e);
+  if (!e) e = parse_gel(&ic, g, &s->world.gel);
+  if (!e) e = get_material(&ic, root, "", s);
+  if (!e) e = get_validated(&ic, root, "", &s->world);
   cJSON_Delete(root);
-  return e;
+  if (e) return palp_parse_fail(c, e, "parameters \"%s\": %s", path, inner);
+  return PALP_OK;
 }
 
+/* dir: the scene file's directory, where "parameters" is looked for; NULL for text from
+ * elsewhere (palp_scene_parse), which may not name a file. */
 static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s) {
   memset(s, 0, sizeof *s);
   s->world = palp_world_default_def();
   if (!cJSON_IsObject(root)) return palp_parse_fail(c, PALP_EPARSE, "scene: expected a JSON object");
+  static const char *const keys[] = {"name",       "material",   "mesh",          "parameters",   "membrane",
+                                     "gel",        "validated",  "time",          "effects",      "gravity_m_s2",
+                                     "max_contacts", "finger_surface", "finger_linearise", "lesions", "contacts",
+                                     NULL};
   int e;
+  if ((e = only_keys(c, root, "", keys))) return e;
   const cJSON *name = cJSON_GetObjectItemCaseSensitive(root, "name");
   if (!cJSON_IsString(name)) return palp_parse_fail(c, PALP_EPARSE, "name: missing or not a string");
   snprintf(s->name, sizeof s->name, "%s", name->valuestring);
 
   const cJSON *mesh = get_obj(c, root, "", "mesh", 1, &e);
   if (e) return e;
-  if ((e = get_pos(c, mesh, "mesh.", "radius_m", 1, &s->world.mesh.radius))) return e;
+  {
+    static const char *const mkeys[] = {"radius_m", "vertex_count", NULL};
+    if ((e = only_keys(c, mesh, "mesh.", mkeys))) return e;
+  }
+  if ((e = get_pos_max(c, mesh, "mesh.", "radius_m", 1, SCENE_RADIUS_MAX_M, &s->world.mesh.radius))) return e;
+  if (s->world.mesh.radius < SCENE_RADIUS_MIN_M)
+    return palp_parse_fail(c, PALP_EPARSE, "mesh.radius_m: must be >= %g m (got %g)", SCENE_RADIUS_MIN_M,
+                           s->world.mesh.radius);
   if ((e = get_int(c, mesh, "mesh.", "vertex_count", 1, 19, 200000, &s->world.mesh.vertex_count))) return e;
 
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
   if (params) {
     if (!cJSON_IsString(params)) return palp_parse_fail(c, PALP_EPARSE, "parameters: expected a file name");
+    /* Text not read from a scene file (a session log's scene, palp_scene_parse) is not
+     * trusted to name files: a handed-over database whose scene named a FIFO hung the
+     * reviewer, and any path served as an "exists / is JSON" probe. Logs store the resolved
+     * scene (palp_scene_to_json), never a reference. */
+    if (!dir)
+      return palp_parse_fail(c, PALP_EPARSE,
+                             "parameters: a file reference is only read from a scene file (palp_scene_load); "
+                             "this scene text must carry its \"membrane\" and \"gel\" itself");
+    /* and not both: the file's would silently win over the scene's own */
+    if (cJSON_GetObjectItemCaseSensitive(root, "membrane") || cJSON_GetObjectItemCaseSensitive(root, "gel"))
+      return palp_parse_fail(c, PALP_EPARSE, "%s: not with parameters (the parameter file gives it)",
+                             cJSON_GetObjectItemCaseSensitive(root, "membrane") ? "membrane" : "gel");
     if ((e = parse_params_file(c, dir, params->valuestring, s))) return e;
   } else {
     const cJSON *m = get_obj(c, root, "", "membrane", 1, &e);
@@ -380,8 +508,14 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
 
   const cJSON *t = get_obj(c, root, "", "time", 1, &e);
   if (e) return e;
+  {
+    static const char *const tkeys[] = {"dt_s", "frames", "refactor_lag_steps", "refactor_blend_steps",
+                                        "frame_period_s", NULL};
+    if ((e = only_keys(c, t, "time.", tkeys))) return e;
+  }
   if ((e = get_pos(c, t, "time.", "dt_s", 1, &s->world.dt))) return e;
-  if (s->world.dt > 0.1) return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: must be <= 0.1 s");
+  if (s->world.dt > PALP_WORLD_MAX_DT)
+    return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: must be <= %g s", PALP_WORLD_MAX_DT);
   /* 1 us is a thousand times finer than the haptic rate; below it a step is no physics,
    * and 1e-300 made every frame period a "whole multiple" (1e298 rounds to itself). */
   if (s->world.dt < 1e-6) return palp_parse_fail(c, PALP_EPARSE, "time.dt_s: %g s is below 1e-6 s", s->world.dt);
@@ -422,6 +556,9 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   if ((s->world.effects & PALP_EFFECT_GEL_SUPPORT) && !(s->world.gel.support_modulus > 0.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be > 0 when the gel_support effect is on");
   if ((e = get_vec(c, root, "", "gravity_m_s2", 0, &s->world.gravity))) return e;
+  if (!(v3_len(s->world.gravity) <= SCENE_GRAVITY_MAX_M_S2))
+    return palp_parse_fail(c, PALP_EPARSE, "gravity_m_s2: |g| must be <= %g m/s^2 (got %g)", SCENE_GRAVITY_MAX_M_S2,
+                           v3_len(s->world.gravity));
   if ((e = get_int(c, root, "", "max_contacts", 0, 1, 64, &s->world.max_contacts))) return e;
   /* The surface a finger meets (docs/haptics.md): part of the physics a log replays, so
    * a session's scene carries it; absent = "facets", how every scene and log before
@@ -448,6 +585,8 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
       char path[32];
       snprintf(path, sizeof path, "lesions[%d].", i);
       if (!cJSON_IsObject(o)) return palp_parse_fail(c, PALP_EPARSE, "lesions[%d]: expected an object", i);
+      static const char *const lkeys[] = {"center_m", "radius_m", "stiffness_ratio", NULL};
+      if ((e = only_keys(c, o, path, lkeys))) return e;
       palp_lesion *L = &s->world.lesion[i];
       if ((e = get_vec(c, o, path, "center_m", 1, &L->center))) return e;
       if ((e = get_pos(c, o, path, "radius_m", 1, &L->radius))) return e;
@@ -488,7 +627,11 @@ static int parse_with_dir(const char *json, const char *dir, palp_scene *out, ch
 }
 
 int palp_scene_parse(const char *json, palp_scene *out, char *err, size_t errlen) {
-  return parse_with_dir(json, "", out, err, errlen);
+  return parse_with_dir(json, NULL, out, err, errlen);
+}
+
+int palp_scene_parse_in(const char *json, const char *dir, palp_scene *out, char *err, size_t errlen) {
+  return parse_with_dir(json, dir ? dir : ".", out, err, errlen);
 }
 
 int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen) {
@@ -500,8 +643,9 @@ int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen)
   char dir[1024];
   snprintf(dir, sizeof dir, "%s", path);
   char *slash = strrchr(dir, '/');
-  if (slash) *slash = 0;
-  else dir[0] = 0;
+  if (!slash) snprintf(dir, sizeof dir, "."); /* "parameters" from the working directory, as before */
+  else if (slash == dir) dir[1] = 0;           /* "/x.json" lies in "/" */
+  else *slash = 0;
   int e = parse_with_dir(txt, dir, out, err, errlen);
   free(txt);
   return e;

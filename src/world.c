@@ -1864,7 +1864,7 @@ static void stage_feedback(palp_world *w, double h) {
 static int validate(const palp_world_def *d) {
   const palp_membrane_params *m = &d->membrane;
   const palp_gel_params *g = &d->gel;
-  if (!(d->dt > 0.0 && d->dt <= 0.1) || !isfinite(d->dt)) return PALP_EINVAL;
+  if (!(d->dt > 0.0 && d->dt <= PALP_WORLD_MAX_DT) || !isfinite(d->dt)) return PALP_EINVAL;
   if (d->max_contacts < 0 || d->max_contacts > 64) return PALP_EINVAL;
   if (d->refactor_lag < 0 || d->refactor_lag > 1000) return PALP_EINVAL;
   if (d->refactor_blend < 0 || d->refactor_blend > 1000) return PALP_EINVAL;

@@ -254,7 +254,7 @@ int main(void) {
                      " \"time\": {\"dt_s\": 0.01, \"frames\": 1}, \"effects\": [\"gel_support\"],"
                      " \"lesions\": [{\"center_m\": [0.0, 0.0, 0.03], \"radius_m\": 0.005, \"stiffness_ratio\": 5}],"
                      " \"contacts\": []}";
-  CHECK(palp_scene_parse(json, &s, err, sizeof err) == 0, "scene with a lesion: %s", err);
+  CHECK(palp_scene_parse_in(json, NULL, &s, err, sizeof err) == 0, "scene with a lesion: %s", err);
   CHECK(s.world.lesion_count == 1 && s.world.lesion[0].stiffness_ratio == 5.0, "lesion parsed");
   char *out = palp_scene_to_json(&s);
   palp_scene s2;
@@ -267,7 +267,7 @@ int main(void) {
                     " \"time\": {\"dt_s\": 0.01, \"frames\": 1}, \"effects\": [],"
                     " \"lesions\": [{\"center_m\": [0.0, 0.0, 0.038], \"radius_m\": 0.005, \"stiffness_ratio\": 5}],"
                     " \"contacts\": []}";
-  CHECK(palp_scene_parse(bad, &s, err, sizeof err) != 0 && strstr(err, "lesions[0]"),
+  CHECK(palp_scene_parse_in(bad, NULL, &s, err, sizeof err) != 0 && strstr(err, "lesions[0]"),
         "a lesion through the surface is refused, naming lesions[0] (%s)", err);
   test_hinges_see_lesion();
   test_base_column();

@@ -2,6 +2,11 @@
  * message that names the field; the serialised scene rebuilds a bit-identical run. */
 #include "common.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "../tmpdir.h"
+
 static const char *base =
     "{\"name\":\"t\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},"
     "\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,\"E1_Pa\":4.2e6,\"eta1_Pa_s\":2e8,"
@@ -32,9 +37,138 @@ static void expect_error(const char *from, const char *to, const char *field) {
   printf("rejected as expected: %s\n", err);
 }
 
+/* expect_error's replacement, accepted: "comment" keys and values at their bounds. */
+static void expect_ok(const char *from, const char *to, const char *what) {
+  char buf[4096];
+  const char *at = strstr(base, from);
+  CHECK(at != NULL, "test setup: \"%s\" not in the base scene", from);
+  if (!at) return;
+  snprintf(buf, sizeof buf, "%.*s%s%s", (int)(at - base), base, to, at + strlen(from));
+  palp_scene s;
+  char err[256] = "";
+  CHECK(palp_scene_parse(buf, &s, err, sizeof err) == PALP_OK, "%s is accepted: %s", what, err);
+}
+
+static void write_text(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0, "test setup: cannot write %s", path);
+}
+
+/* Session 75 review: unknown keys are refused, naming the key (a misspelt optional key
+ * silently kept its default); every object may carry a "comment". */
+static void test_unknown_keys(void) {
+  expect_error("\"radius_m\":0.04", "\"radius_m\":0.04,\"vertices\":3", "mesh.vertices: unknown key");
+  expect_error("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"bending_stifness_N_m\":0.002",
+               "membrane.bending_stifness_N_m: unknown key");
+  expect_error("\"law\":\"polytropic\"", "\"law\":\"polytropic\",\"suport_modulus_Pa_m\":1",
+               "gel.suport_modulus_Pa_m: unknown key");
+  expect_error("\"frames\":50", "\"frames\":50,\"refactor_lag_step\":4", "time.refactor_lag_step: unknown key");
+  expect_error("\"effects\":[", "\"gravity\":[0,0,-9.81],\"effects\":[", "gravity: unknown key");
+  expect_error("\"distribution\":\"gaussian\"", "\"distribution\":\"gaussian\",\"patch_area\":1e-4",
+               "contacts[0].patch_area: unknown key");
+  expect_error("\"polar\":20", "\"polar\":20,\"elevation\":3", "contacts[0].center_deg.elevation: unknown key");
+  /* a key of another profile kind is as unused as a misspelt one */
+  expect_error("\"t_on_s\":0", "\"t_on_s\":0,\"frequency_Hz\":2", "contacts[0].profile.frequency_Hz: unknown key");
+  expect_error("\"contacts\":[", "\"lesions\":[{\"center_m\":[0,0,0.02],\"radius_m\":0.005,\"stiffness\":5}],"
+               "\"contacts\":[", "lesions[0].stiffness: unknown key");
+  expect_error("\"mesh\":{", "\"validated\":{\"finger\":[{\"polar_deg\":0,\"depth_m\":0.01}],\"hinge_err\":0.3},"
+               "\"mesh\":{", "validated.hinge_err: unknown key");
+  expect_error("\"polar\":20,\"azimuth\":10}", "\"polar\":20,\"azimuth\":10},\"center_m\":[0,0,0.04]",
+               "contacts[0].center_m: not with center_deg");
+  expect_ok("\"name\":\"t\",", "\"name\":\"t\",\"comment\":\"why\",", "a top-level comment");
+  expect_ok("\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"comment\":\"x\"", "a membrane comment");
+  expect_ok("\"t_off_s\":0.3", "\"t_off_s\":0.3,\"comment\":\"x\"", "a profile comment");
+}
+
+/* Session 75 review: physical upper bounds (scene.c, SCENE_*_MAX); 1e300 was accepted. */
+static void test_bounds(void) {
+  expect_error("\"radius_m\":0.04", "\"radius_m\":1000", "mesh.radius_m: must be <= 1");
+  expect_error("\"radius_m\":0.04", "\"radius_m\":0.0005", "mesh.radius_m: must be >= 0.001");
+  expect_error("\"E1_Pa\":4.2e6", "\"E1_Pa\":1e300", "membrane.E1_Pa: must be <= 1e+09");
+  expect_error("\"E2_Pa\":8e6", "\"E2_Pa\":2e9", "membrane.E2_Pa: must be <= 1e+09");
+  expect_error("\"eta1_Pa_s\":2e8", "\"eta1_Pa_s\":1e300", "membrane.eta1_Pa_s: must be <= 1e+14");
+  expect_error("\"effects\":[", "\"gravity_m_s2\":[0,0,-1e300],\"effects\":[", "gravity_m_s2: |g| must be <= 100");
+  expect_error("\"effects\":[", "\"gravity_m_s2\":[80,0,-80],\"effects\":[", "gravity_m_s2: |g| must be <= 100");
+  expect_error("\"magnitude_N\":3", "\"magnitude_N\":1e300", "contacts[0].profile.magnitude_N: must be within");
+  expect_error("\"magnitude_N\":3", "\"magnitude_N\":-2e4", "contacts[0].profile.magnitude_N: must be within");
+  expect_error("\"kind\":\"step\"", "\"kind\":\"sine\",\"frequency_Hz\":1e300", "contacts[0].profile.frequency_Hz: must be <= 10000");
+  expect_error("\"kind\":\"step\"", "\"kind\":\"sine\",\"frequency_Hz\":2,\"offset_N\":1e5",
+               "contacts[0].profile.offset_N: must be within");
+  expect_error("\"kind\":\"step\",\"magnitude_N\":3,\"t_on_s\":0,\"t_off_s\":0.3",
+               "\"kind\":\"keyframes\",\"keyframes\":[[0,1],[1,1e300]]", "contacts[0].profile.keyframes[1]: force_N");
+  /* the bounds themselves are accepted, as is the Earth's gravity */
+  expect_ok("\"radius_m\":0.04", "\"radius_m\":1", "a 1 m dome");
+  expect_ok("\"E1_Pa\":4.2e6", "\"E1_Pa\":1e9", "E1 of 1 GPa");
+  expect_ok("\"effects\":[", "\"gravity_m_s2\":[0,0,-9.81],\"effects\":[", "the Earth's gravity");
+  expect_ok("\"magnitude_N\":3", "\"magnitude_N\":-1e4", "a 10 kN pull");
+  expect_ok("\"kind\":\"step\"", "\"kind\":\"sine\",\"frequency_Hz\":1e4", "a 10 kHz sine");
+}
+
+/* Session 75 review: "parameters" is read only from a scene file (palp_scene_load, or trusted
+ * text with its directory, palp_scene_parse_in), never from text palp_scene_parse is handed
+ * (a session log's scene: a database whose scene named a FIFO hung palp-review); the
+ * parameter file's own errors name it. */
+static void test_parameters_file(void) {
+  char dir[512], path[1400], fifo[600], scene[600], params[600];
+  palp_test_tmp(dir, sizeof dir, "palp_scene_XXXXXX");
+  CHECK(mkdtemp(dir) != NULL, "test setup: mkdtemp %s", dir);
+  snprintf(fifo, sizeof fifo, "%s/fifo.json", dir);
+  CHECK(mkfifo(fifo, 0600) == 0, "test setup: mkfifo %s", fifo);
+  char buf[4096], err[512] = "";
+  palp_scene s;
+  /* Without the fix this opens the FIFO and blocks until the test's timeout. */
+  snprintf(buf, sizeof buf, "{\"parameters\":\"%s\",%s", fifo, base + 1);
+  CHECK(palp_scene_parse(buf, &s, err, sizeof err) == PALP_EPARSE && strstr(err, "parameters: a file reference is only read"),
+        "a log's scene naming a FIFO is refused without opening it: %s", err);
+  CHECK(palp_scene_parse("{\"name\":\"t\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},"
+                         "\"parameters\":\"/etc/hostname\"}",
+                         &s, err, sizeof err) == PALP_EPARSE &&
+            !strstr(err, "hostname"),
+        "nor does a path probe answer whether a file exists: %s", err);
+
+  /* a parameter file with a bad value and one with an unknown key: the message names the file */
+  const char *mesh_time = strstr(base, "\"time\"");
+  snprintf(params, sizeof params, "%s/p.json", dir);
+  write_text(params, "{\"comment\":\"a test\",\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,"
+                     "\"E1_Pa\":-4.2e6,\"eta1_Pa_s\":2e8,\"E2_Pa\":8e6,\"eta2_Pa_s\":8e5},"
+                     "\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,\"a2_Pa_s_m3\":5e6,"
+                     "\"support_modulus_Pa_m\":1.5e6,\"support_viscosity_Pa_s_m\":6e5}}");
+  snprintf(scene, sizeof scene, "%s/scene.json", dir);
+  snprintf(buf, sizeof buf, "{\"name\":\"t\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},"
+                            "\"parameters\":\"p.json\",%s", mesh_time);
+  write_text(scene, buf);
+  snprintf(path, sizeof path, "parameters \"%s\": membrane.E1_Pa: must be > 0", params);
+  CHECK(palp_scene_load(scene, &s, err, sizeof err) == PALP_EPARSE && strstr(err, path),
+        "a parameter file's error names the file: \"%s\" (want \"%s\")", err, path);
+  write_text(params, "{\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,"
+                     "\"E1_Pa\":4.2e6,\"eta1_Pa_s\":2e8,\"E2_Pa\":8e6,\"eta2_Pa_s\":8e5},"
+                     "\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,\"a2_Pa_s_m3\":5e6,"
+                     "\"support_modulus_Pa_m\":1.5e6,\"support_viscosity_Pa_s_m\":6e5},\"materials\":\"x\"}");
+  snprintf(path, sizeof path, "parameters \"%s\": materials: unknown key", params);
+  CHECK(palp_scene_load(scene, &s, err, sizeof err) == PALP_EPARSE && strstr(err, path),
+        "an unknown key in a parameter file is named with the file: \"%s\"", err);
+  /* the same file without it loads, from the scene file and from trusted text in its directory */
+  write_text(params, "{\"membrane\":{\"thickness_m\":0.002,\"density_kg_m3\":950,"
+                     "\"E1_Pa\":4.2e6,\"eta1_Pa_s\":2e8,\"E2_Pa\":8e6,\"eta2_Pa_s\":8e5},"
+                     "\"gel\":{\"law\":\"polytropic\",\"pressure_Pa\":101325,\"a1\":10,\"a2_Pa_s_m3\":5e6,"
+                     "\"support_modulus_Pa_m\":1.5e6,\"support_viscosity_Pa_s_m\":6e5}}");
+  CHECK(palp_scene_load(scene, &s, err, sizeof err) == PALP_OK && s.world.membrane.E1 == 4.2e6,
+        "a scene file's parameter file is read: %s", err);
+  CHECK(palp_scene_parse_in(buf, dir, &s, err, sizeof err) == PALP_OK && s.world.membrane.E1 == 4.2e6,
+        "trusted text reads its parameter file relative to the directory given: %s", err);
+  /* a scene with both a parameter file and its own membrane: one of them would be ignored */
+  snprintf(buf, sizeof buf, "{\"parameters\":\"p.json\",%s", base + 1);
+  CHECK(palp_scene_parse_in(buf, dir, &s, err, sizeof err) == PALP_EPARSE && strstr(err, "membrane: not with parameters"),
+        "parameters and membrane together are refused: %s", err);
+  remove(scene), remove(params), remove(fifo), rmdir(dir);
+}
+
 int main(void) {
   palp_scene s;
   char err[256];
+  test_unknown_keys();
+  test_bounds();
+  test_parameters_file();
   CHECK(palp_scene_parse(base, &s, err, sizeof err) == PALP_OK, "base scene parses: %s", err);
   CHECK(s.world.mesh.vertex_count == 120 && s.frames == 50 && s.contact_count == 1, "fields read");
   CHECK(s.contact[0].def.distribution == PALP_DIST_GAUSSIAN, "distribution read");
@@ -80,7 +214,8 @@ int main(void) {
   /* The fingertip's contact surface (docs/haptics.md): "smooth" or "facets", nothing else. */
   expect_error("\"effects\":[", "\"finger_surface\":\"round\",\"effects\":[", "finger_surface");
   expect_error("\"effects\":[", "\"finger_surface\":1,\"effects\":[", "finger_surface");
-  expect_error("\"t_off_s\":0.3", "\"t_of_s\":0.3", "contacts[0].profile.t_off_s");
+  /* a misspelt key is named as such (Session 75: refused as unknown, before its absence) */
+  expect_error("\"t_off_s\":0.3", "\"t_of_s\":0.3", "contacts[0].profile.t_of_s: unknown key");
   expect_error("\"kind\":\"step\"", "\"kind\":5", "contacts[0].profile.kind");
   expect_error("\"distribution\":\"gaussian\"", "\"distribution\":\"round\"", "contacts[0].distribution");
   expect_error("\"gel_support\"", "\"gel_suport\"", "effects[4]");
@@ -88,7 +223,7 @@ int main(void) {
                "gel.added_mass_fraction");
   expect_error("\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"support_bulk_fraction\":1.5",
                "gel.support_bulk_fraction");
-  expect_error("\"effects\":[", "\"effects\":{\"a\":1},\"x\":[", "effects");
+  expect_error("\"effects\":[", "\"effects\":{\"a\":1},\"comment\":[", "effects");
   expect_error("{\"name\":\"t\",", "{\"name\":\"t\",,", "invalid JSON");
   expect_error("\"mesh\":{", "\"parameters\":\"/nonexistent/p.json\",\"mesh\":{", "parameters");
 
@@ -123,10 +258,13 @@ int main(void) {
       free(mj);
     }
     char buf[4096];
-    snprintf(buf, sizeof buf, "{\"material\":\"breast_tissue\",\"parameters\":\"%s/params/paper_long_term.json\",%s",
-             PALP_CONFIG_DIR, base + 1);
+    /* the base scene's name and mesh, its membrane and gel from the file, then its time on */
+    snprintf(buf, sizeof buf,
+             "{\"material\":\"breast_tissue\",\"parameters\":\"%s/params/paper_long_term.json\","
+             "\"name\":\"t\",\"mesh\":{\"radius_m\":0.04,\"vertex_count\":120},%s",
+             PALP_CONFIG_DIR, strstr(base, "\"time\""));
     palp_scene ov;
-    CHECK(palp_scene_parse(buf, &ov, err, sizeof err) == PALP_OK && strcmp(ov.material, "breast_tissue") == 0,
+    CHECK(palp_scene_parse_in(buf, NULL, &ov, err, sizeof err) == PALP_OK && strcmp(ov.material, "breast_tissue") == 0,
           "the scene's material overrides its parameter file's: \"%s\" %s", ov.material, err);
   }
   CHECK(palp_scene_load("/nonexistent/scene.json", &s, err, sizeof err) == PALP_EIO, "missing file: %s", err);
