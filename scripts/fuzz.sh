@@ -13,10 +13,21 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+all=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access debrief)
+usage() {
+  echo "usage: bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]   (targets: ${all[*]})" >&2
+  exit 2
+}
+# Checked before anything is installed or built: `fuzz.sh scene` took "scene" for the seconds,
+# and libFuzzer read -max_total_time=scene as no limit at all.
 secs=${1:-60}
+[[ $secs =~ ^[1-9][0-9]{0,6}$ ]] || { echo "fuzz: SECONDS_PER_TARGET must be a whole number > 0, got \"$secs\"" >&2; usage; }
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access debrief)
+[ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
+for t in "${targets[@]}"; do
+  [[ " ${all[*]} " == *" $t "* ]] || { echo "fuzz: unknown target \"$t\"" >&2; usage; }
+done
 
 need=()
 command -v clang-14 >/dev/null || need+=(clang-14)
