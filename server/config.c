@@ -51,6 +51,11 @@ void palp_srv_config_defaults(palp_srv_config *cfg) {
   snprintf(cfg->security_identity, sizeof cfg->security_identity, "server");
 }
 
+/* The slowest physics rate a world can step [Hz]: a step is 1 / rate, and palp_world_create
+ * refuses steps longer than PALP_WORLD_MAX_DT (0.1 s), so 10 Hz. Below it the start failed
+ * with "cannot build the world" naming neither key, and --check passed. */
+#define MIN_PHYSICS_RATE_HZ (1.0 / PALP_WORLD_MAX_DT)
+
 static int resolve(const char *base_dir, const char *rel, char *out, size_t outlen) {
   int n;
   if (rel[0] == '/' || !base_dir || !base_dir[0])
@@ -72,6 +77,16 @@ static int get_number(const cJSON *obj, const char *key, const char *where, doub
                 lo, hi);
   *v = it->valuedouble;
   return 0;
+}
+
+/* A physics rate [Hz], optional: MIN_PHYSICS_RATE_HZ to 10 kHz, the reason said when too slow. */
+static int get_rate(const cJSON *obj, const char *key, const char *where, double *v, char *err, size_t errlen) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (cJSON_IsNumber(it) && isfinite(it->valuedouble) && it->valuedouble < MIN_PHYSICS_RATE_HZ)
+    return fail(err, errlen, PALP_EINVAL,
+                "%s%s: %g is outside [%g, 10000] (a slower step is longer than the %g s a world steps)", where, key,
+                it->valuedouble, MIN_PHYSICS_RATE_HZ, PALP_WORLD_MAX_DT);
+  return get_number(obj, key, where, MIN_PHYSICS_RATE_HZ, 10000, 0, v, err, errlen);
 }
 
 static int get_int(const cJSON *obj, const char *key, const char *where, double lo, double hi,
@@ -185,7 +200,7 @@ static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_confi
     if (resolve(base_dir, scene, ph->scene_path, sizeof ph->scene_path))
       return fail(err, errlen, PALP_EINVAL, "%sscene: path too long", where);
     ph->physics_rate_hz = 0;
-    if ((rc = get_number(p, "physics_rate_hz", where, 1, 10000, 0, &ph->physics_rate_hz, err, errlen))) return rc;
+    if ((rc = get_rate(p, "physics_rate_hz", where, &ph->physics_rate_hz, err, errlen))) return rc;
   }
   cfg->phantom_count = n;
   return 0;
@@ -226,7 +241,7 @@ static int parse_exercises(const cJSON *arr, const char *base_dir, palp_srv_conf
     if (resolve(base_dir, file, ph->exercise_path, sizeof ph->exercise_path))
       return fail(err, errlen, PALP_EINVAL, "%sfile: path too long", where);
     ph->physics_rate_hz = 0;
-    if ((rc = get_number(p, "physics_rate_hz", where, 1, 10000, 0, &ph->physics_rate_hz, err, errlen))) return rc;
+    if ((rc = get_rate(p, "physics_rate_hz", where, &ph->physics_rate_hz, err, errlen))) return rc;
     snprintf(ph->name, sizeof ph->name, "exercise %u", ph->id); /* the title replaces it once loaded */
   }
   cfg->phantom_count += n;
@@ -273,7 +288,7 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
   /* 232 is the largest domain whose RTPS ports fit in 16 bits. */
   if ((rc = get_int(root, "domain_id", w, 0, 232, 0, &i64, err, errlen))) goto out;
   cfg->domain_id = (uint32_t)i64;
-  if ((rc = get_number(root, "tick_rate_hz", w, 1, 10000, 0, &cfg->tick_rate_hz, err, errlen))) goto out;
+  if ((rc = get_rate(root, "tick_rate_hz", w, &cfg->tick_rate_hz, err, errlen))) goto out;
   i64 = cfg->tick_threads;
   if ((rc = get_int(root, "tick_threads", w, 0, 64, 0, &i64, err, errlen))) goto out;
   cfg->tick_threads = (int)i64;
@@ -383,7 +398,15 @@ int palp_srv_config_load(const char *path, palp_srv_config *cfg, char *err, size
   if (!f) return fail(err, errlen, PALP_EIO, "%s: cannot open", path);
   char *buf = NULL;
   size_t len = 0, cap = 0;
+  /* A configuration is a few kB: 1 MiB (as for exercise files) bounds what a wrong path makes
+   * us hold; --config /dev/zero read until memory ran out. */
+  const size_t max_len = (size_t)1 << 20;
   for (;;) {
+    if (len > max_len) {
+      free(buf);
+      fclose(f);
+      return fail(err, errlen, PALP_EINVAL, "%s: larger than 1 MiB; not a configuration file", path);
+    }
     if (len + 4096 + 1 > cap) {
       cap = cap ? 2 * cap : 16384;
       char *nb = realloc(buf, cap);

@@ -1,5 +1,6 @@
 /* main.c - palp-server: the classroom server's command line. */
 #include <errno.h>
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -130,6 +131,19 @@ static int parse_num(const char *opt, const char *arg, double lo, double hi, dou
   return 0;
 }
 
+/* An option that counts (a domain, a number, threads, sessions, a priority): a fraction was
+ * cut silently (--domain 42.5 ran on domain 42), so it is refused. */
+static int parse_whole(const char *opt, const char *arg, double lo, double hi, double *out) {
+  double v = 0;
+  if (parse_num(opt, arg, lo, hi, &v)) return -1;
+  if (v != floor(v)) {
+    fprintf(stderr, "palp-server: %s: expected a whole number in [%g, %g], got \"%s\"\n", opt, lo, hi, arg);
+    return -1;
+  }
+  *out = v;
+  return 0;
+}
+
 int main(int argc, char **argv) {
   const char *config_path = NULL, *database = NULL;
   char default_config[PALP_SRV_PATH_MAX];
@@ -150,13 +164,14 @@ int main(int argc, char **argv) {
     if (!strcmp(a, "--config") && v) config_path = argv[++i];
     else if (!strcmp(a, "--database") && v) database = argv[++i];
     else if (!strcmp(a, "--server-name") && v && v[0] && strlen(v) < 64) server_name = argv[++i];
-    else if (!strcmp(a, "--server-number")) bad = parse_num(a, v, 0, 4095, &server_number), i++;
+    else if (!strcmp(a, "--server-number")) bad = parse_whole(a, v, 0, 4095, &server_number), i++;
     else if (!strcmp(a, "--identity-wait")) bad = parse_num(a, v, 0, 60, &identity_wait), i++;
-    else if (!strcmp(a, "--domain")) bad = parse_num(a, v, 0, 232, &domain), i++;
-    else if (!strcmp(a, "--tick-rate")) bad = parse_num(a, v, 1, 10000, &rate), i++;
-    else if (!strcmp(a, "--threads")) bad = parse_num(a, v, 0, 64, &threads), i++;
-    else if (!strcmp(a, "--rt-priority")) bad = parse_num(a, v, 0, 99, &prio), i++;
-    else if (!strcmp(a, "--max-sessions")) bad = parse_num(a, v, 1, 1024, &max_sessions), i++;
+    else if (!strcmp(a, "--domain")) bad = parse_whole(a, v, 0, 232, &domain), i++;
+    /* at least 1 / PALP_WORLD_MAX_DT: a slower rate's step is longer than a world steps */
+    else if (!strcmp(a, "--tick-rate")) bad = parse_num(a, v, 1.0 / PALP_WORLD_MAX_DT, 10000, &rate), i++;
+    else if (!strcmp(a, "--threads")) bad = parse_whole(a, v, 0, 64, &threads), i++;
+    else if (!strcmp(a, "--rt-priority")) bad = parse_whole(a, v, 0, 99, &prio), i++;
+    else if (!strcmp(a, "--max-sessions")) bad = parse_whole(a, v, 1, 1024, &max_sessions), i++;
     else if (!strcmp(a, "--duration")) bad = parse_num(a, v, 0, 1e7, &duration), i++;
     else if (!strcmp(a, "--check")) check = 1;
     else if (!strcmp(a, "--no-db")) no_db = 1;
@@ -249,27 +264,37 @@ int main(int argc, char **argv) {
     return 2;
   }
   if (check) {
-    /* Build every phantom's world once, without DDS. */
+    /* Build every phantom's world once, without DDS, as the start does (palp_srv_prepare_phantom:
+     * the physics rate's step, force feedback, a station's fingers, the world itself). */
     for (int i = 0; i < def.cfg.phantom_count; i++) {
-      palp_scene sc;
-      char msg[256] = "";
+      static palp_scene sc;
+      char msg[512] = "";
+      palp_srv_phantom_cfg pc = def.cfg.phantom[i];
       const int plain = def.cfg.phantom_count - def.cfg.exercise_count;
       if (i >= plain) { /* an exercise: its file, its phantom and its lesions in it */
         palp_exercise *ex = calloc(1, sizeof *ex);
         rc = ex ? palp_exercise_load(def.cfg.phantom[i].exercise_path, ex, msg, sizeof msg) : PALP_ENOMEM;
         if (rc == 0) rc = palp_exercise_scene(ex, &sc, msg, sizeof msg);
+        if (rc == 0) snprintf(pc.scene_path, sizeof pc.scene_path, "%s", ex->phantom_path);
         free(ex);
         if (rc < 0) {
           fprintf(stderr, "palp-server: bad configuration: exercises[%d].file: %s: %s\n", i - plain,
                   def.cfg.phantom[i].exercise_path, msg[0] ? msg : palp_strerror(rc));
           return 1;
         }
-        continue;
+      } else {
+        rc = palp_scene_load(def.cfg.phantom[i].scene_path, &sc, msg, sizeof msg);
+        if (rc < 0) {
+          fprintf(stderr, "palp-server: bad configuration: phantoms[%d].scene: %s: %s\n", i,
+                  def.cfg.phantom[i].scene_path, msg[0] ? msg : palp_strerror(rc));
+          return 1;
+        }
       }
-      rc = palp_scene_load(def.cfg.phantom[i].scene_path, &sc, msg, sizeof msg);
+      palp_world *w = NULL;
+      rc = palp_srv_prepare_phantom(&def.cfg, i, &pc, &sc, &w, msg, sizeof msg);
+      palp_world_destroy(w);
       if (rc < 0) {
-        fprintf(stderr, "palp-server: bad configuration: phantoms[%d].scene: %s: %s\n", i,
-                def.cfg.phantom[i].scene_path, msg[0] ? msg : palp_strerror(rc));
+        fprintf(stderr, "palp-server: bad configuration: %s: %s\n", config_path, msg);
         return 1;
       }
     }

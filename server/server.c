@@ -551,7 +551,78 @@ static void publish_scores(palp_srv *srv) {
   while (srv->events->take_score(srv->events->ctx, &sc)) publish_session_score(srv, &sc);
 }
 
-static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_phantom *ph, char *err,
+/* What the start does to a hosted phantom's loaded scene, shared with `palp-server --check`
+ * (main.c) so that the check refuses what the start would. */
+int palp_srv_prepare_phantom(const palp_srv_config *cfg, int index, palp_srv_phantom_cfg *pc, palp_scene *scene,
+                             palp_world **world, char *err, size_t errlen) {
+  *world = NULL;
+  const int plain = cfg->phantom_count - cfg->exercise_count;
+  /* the config key a message names: the entry's own rate, or the server's */
+  char entry[48], rate_key[80];
+  if (index >= plain) snprintf(entry, sizeof entry, "exercises[%d]", index - plain);
+  else snprintf(entry, sizeof entry, "phantoms[%d]", index);
+  if (pc->physics_rate_hz > 0) snprintf(rate_key, sizeof rate_key, "%s.physics_rate_hz", entry);
+  else snprintf(rate_key, sizeof rate_key, "%s: tick_rate_hz (or --tick-rate)", entry);
+  /* Every session steps at the server's tick rate. Stations drive the contacts:
+   * each session removes the scene's scripted contacts after building its world
+   * (session.c). The server needs contact feedback and a slot per finger besides
+   * the scene's contacts; a scene without them is refused rather than altered,
+   * so a recorded scene file always rebuilds the world the session ran. */
+  /* Each phantom steps at its own physics rate (issue 11), by default the server's. */
+  const double rate = pc->physics_rate_hz > 0 ? pc->physics_rate_hz : cfg->tick_rate_hz;
+  pc->physics_rate_hz = rate;
+  scene->world.dt = 1.0 / rate;
+  /* The config refuses rates below 1 / PALP_WORLD_MAX_DT; said here too, naming the key, for a
+   * config made in code (the world's own refusal names neither key nor bound). */
+  if (!(scene->world.dt <= PALP_WORLD_MAX_DT)) {
+    fail(err, errlen, "%s: %g Hz steps the world by %g s, above its %g s bound (at least %g Hz)", rate_key, rate,
+         scene->world.dt, PALP_WORLD_MAX_DT, 1.0 / PALP_WORLD_MAX_DT);
+    return PALP_EINVAL;
+  }
+  /* The literal gel law's momentum term is stable only for |a3| < dt^2 (world.c): a fast
+   * physics rate can break a scene that loads at its own dt_s. */
+  const palp_gel_params *g = &scene->world.gel;
+  if ((scene->world.effects & PALP_EFFECT_GEL_PRESSURE) && g->law == PALP_GEL_PAPER_LITERAL &&
+      !(fabs(g->a3) < scene->world.dt * scene->world.dt)) {
+    fail(err, errlen,
+         "%s: %g Hz steps the world by %g s, too fine for the scene %s's paper_literal gel (a3_s2 %g needs "
+         "dt^2 > |a3|: at most %g Hz)",
+         rate_key, rate, scene->world.dt, pc->scene_path, g->a3, 1.0 / sqrt(fabs(g->a3)));
+    return PALP_EINVAL;
+  }
+  /* Rebuilds are computed by the ticker's helper behind the ticks (docs/server.md);
+   * the logged scene carries the lag (time.refactor_lag_steps), so replay defers the same. */
+  scene->world.refactor_lag = palp_world_refactor_lag_for(scene->world.dt);
+  /* A rebuilt tangent takes over across ~8 ms (time.refactor_blend_steps in the logged
+   * scene, replayed the same): in one step, it stepped the finger's force (docs/haptics.md). */
+  scene->world.refactor_blend = palp_world_refactor_blend_for(scene->world.dt);
+  /* The recorded scene must stay loadable: its frame period a whole number of steps
+   * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */
+  {
+    const double steps = round(scene->frame_period / scene->world.dt);
+    scene->frame_period = scene->world.dt * (steps >= 1 ? steps : 1);
+  }
+  if (!(scene->world.effects & PALP_EFFECT_FORCE_FEEDBACK)) {
+    fail(err, errlen, "%s (id %u): scene %s: effects must include \"force_feedback\" for stations", entry, pc->id,
+         pc->scene_path);
+    return PALP_EINVAL;
+  }
+  if (scene->world.max_contacts < PALP_SRV_MAX_FINGERS) {
+    fail(err, errlen, "%s (id %u): scene %s: max_contacts %d is below the %d fingers of a station", entry, pc->id,
+         pc->scene_path, scene->world.max_contacts, PALP_SRV_MAX_FINGERS);
+    return PALP_EINVAL;
+  }
+  int rc = 0;
+  *world = palp_scene_create_world(scene, &rc);
+  if (!*world) {
+    fail(err, errlen, "%s (id %u): scene %s: cannot build the world at %g Hz (%s): %s", entry, pc->id,
+         pc->scene_path, rate, rate_key, palp_strerror(rc));
+    return rc < 0 ? rc : PALP_EINVAL;
+  }
+  return 0;
+}
+
+static int load_phantom(palp_srv *srv, int index, const palp_srv_phantom_cfg *pc, palp_srv_phantom *ph, char *err,
                         size_t errlen) {
   char msg[256] = "";
   ph->cfg = *pc;
@@ -565,42 +636,8 @@ static int load_phantom(palp_srv *srv, const palp_srv_phantom_cfg *pc, palp_srv_
     fail(err, errlen, "phantoms (id %u): scene %s: %s", pc->id, pc->scene_path, msg[0] ? msg : palp_strerror(rc));
     return rc;
   }
-  /* Every session steps at the server's tick rate. Stations drive the contacts:
-   * each session removes the scene's scripted contacts after building its world
-   * (session.c). The server needs contact feedback and a slot per finger besides
-   * the scene's contacts; a scene without them is refused rather than altered,
-   * so a recorded scene file always rebuilds the world the session ran. */
-  /* Each phantom steps at its own physics rate (issue 11), by default the server's. */
-  if (!(ph->cfg.physics_rate_hz > 0)) ph->cfg.physics_rate_hz = srv->cfg.tick_rate_hz;
-  ph->scene.world.dt = 1.0 / ph->cfg.physics_rate_hz;
-  /* Rebuilds are computed by the ticker's helper behind the ticks (docs/server.md);
-   * the logged scene carries the lag (time.refactor_lag_steps), so replay defers the same. */
-  ph->scene.world.refactor_lag = palp_world_refactor_lag_for(ph->scene.world.dt);
-  /* A rebuilt tangent takes over across ~8 ms (time.refactor_blend_steps in the logged
-   * scene, replayed the same): in one step, it stepped the finger's force (docs/haptics.md). */
-  ph->scene.world.refactor_blend = palp_world_refactor_blend_for(ph->scene.world.dt);
-  /* The recorded scene must stay loadable: its frame period a whole number of steps
-   * (0.01 s at 250 Hz is 2.5 steps; it becomes 3). */
-  {
-    const double steps = round(ph->scene.frame_period / ph->scene.world.dt);
-    ph->scene.frame_period = ph->scene.world.dt * (steps >= 1 ? steps : 1);
-  }
-  if (!(ph->scene.world.effects & PALP_EFFECT_FORCE_FEEDBACK)) {
-    fail(err, errlen, "phantoms (id %u): scene %s: effects must include \"force_feedback\" for stations", pc->id,
-         pc->scene_path);
-    return PALP_EINVAL;
-  }
-  if (ph->scene.world.max_contacts < PALP_SRV_MAX_FINGERS) {
-    fail(err, errlen, "phantoms (id %u): scene %s: max_contacts %d is below the %d fingers of a station", pc->id,
-         pc->scene_path, ph->scene.world.max_contacts, PALP_SRV_MAX_FINGERS);
-    return PALP_EINVAL;
-  }
-  ph->template_world = palp_scene_create_world(&ph->scene, &rc);
-  if (!ph->template_world) {
-    fail(err, errlen, "phantoms (id %u): scene %s: cannot build the world: %s", pc->id, pc->scene_path,
-         palp_strerror(rc));
-    return rc < 0 ? rc : PALP_EINVAL;
-  }
+  rc = palp_srv_prepare_phantom(&srv->cfg, index, &ph->cfg, &ph->scene, &ph->template_world, err, errlen);
+  if (rc < 0) return rc;
   ph->mesh = palp_world_mesh(ph->template_world);
   return 0;
 }
@@ -1917,7 +1954,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     goto fail;
   }
   for (int i = 0; i < srv->cfg.phantom_count; i++) {
-    *rc = load_phantom(srv, &srv->cfg.phantom[i], &srv->phantom[i], err, errlen);
+    *rc = load_phantom(srv, i, &srv->cfg.phantom[i], &srv->phantom[i], err, errlen);
     srv->phantom_count = i + (srv->phantom[i].template_world != NULL);
     if (*rc < 0) goto fail;
   }

@@ -16,6 +16,7 @@
 
 #include "config.h"
 #include "events.h"
+#include "palp.h"
 #include "palp_log.h"
 
 typedef struct palp_srv palp_srv;
@@ -53,5 +54,15 @@ uint64_t palp_srv_request_strays(palp_srv *srv);
  * when not NULL. Any thread. */
 uint64_t palp_srv_security_refusals(palp_srv *srv, char *who, size_t len);
 void palp_srv_destroy(palp_srv *srv);
+
+/* What the start does to hosted phantom `index` of cfg (phantoms, then exercises) once its scene
+ * is loaded, and what `palp-server --check` does too: the scene steps at the entry's physics rate
+ * (pc->physics_rate_hz, 0: the server's tick_rate_hz; set to the rate used) with the rebuild lag
+ * and blend of that step, must have force feedback and room for a station's fingers, and its
+ * template world is built into *world (the caller destroys it). pc is the entry (its scene_path
+ * the exercise's phantom for an exercise). On failure returns < 0 and a message that names the
+ * entry and, when the rate is the cause, its key. */
+int palp_srv_prepare_phantom(const palp_srv_config *cfg, int index, palp_srv_phantom_cfg *pc, palp_scene *scene,
+                             palp_world **world, char *err, size_t errlen);
 
 #endif

@@ -30,6 +30,46 @@ expect '{"phantoms": 3' 'not valid JSON'
 sed 's/"depth_mm": 12,/"depth_mm": -3,/' "$config_dir/exercises/easy.json" > "$tmp/bad-exercise.json"
 sed "s|\"phantom\": \"|\"phantom\": \"$config_dir/exercises/|" "$tmp/bad-exercise.json" > "$tmp/bad-exercise2.json"
 expect "{\"dds_config\": \"$config_dir/cyclonedds-loopback.xml\", \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"$config_dir/paper_step.json\"}], \"exercises\": [{\"id\": 2, \"file\": \"bad-exercise2.json\"}]}" 'exercises[0].file: '"$tmp"'/bad-exercise2.json: lesions[0].depth_mm'
+# Session 75 review: --check refuses what the start refuses (palp_srv_prepare_phantom), naming the
+# key. A rate below 10 Hz steps the world by more than its 0.1 s (the start failed with "cannot
+# build the world" naming no key, and --check said ok).
+dds="\"dds_config\": \"$config_dir/cyclonedds-loopback.xml\""
+paper="\"scene\": \"$config_dir/paper_step.json\""
+expect "{$dds, \"tick_rate_hz\": 5, \"phantoms\": [{\"id\": 1, \"name\": \"a\", $paper}]}" 'tick_rate_hz: 5 is outside [10, 10000]'
+expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", $paper, \"physics_rate_hz\": 9.5}]}" 'phantoms[0].physics_rate_hz: 9.5 is outside'
+expect "{$dds, \"phantoms\": [{\"id\": 2, \"name\": \"a\", $paper}], \"exercises\": [{\"id\": 1, \"file\": \"$config_dir/exercises/easy.json\", \"physics_rate_hz\": 5}]}" 'exercises[0].physics_rate_hz: 5 is outside'
+printf '{%s, "phantoms": [{"id": 1, "name": "a", %s}]}\n' "$dds" "$paper" > "$tmp/ok.json"
+out=$("$server" --config "$tmp/ok.json" --tick-rate 5 --check 2>&1); rc=$?
+if [ $rc -ne 0 ] && printf '%s' "$out" | grep -qF -- "--tick-rate: expected a number in [10, 10000]"; then echo "ok   exit $rc: $out"; else echo "FAIL --tick-rate 5: $out"; fail=1; fi
+# the scene as the start prepares it: force feedback, a station's fingers, its gel at the rate
+inline="$config_dir/../tests/fuzz/corpus/scene/seed-inline.json"
+sed 's/, "force_feedback"\]/]/' "$inline" > "$tmp/no_feedback.json"
+expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"no_feedback.json\"}]}" 'phantoms[0] (id 1): scene '"$tmp"'/no_feedback.json: effects must include "force_feedback"'
+sed 's/"contacts": \[/"max_contacts": 2, "contacts": [/' "$inline" > "$tmp/two_contacts.json"
+expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"two_contacts.json\"}]}" 'scene '"$tmp"'/two_contacts.json: max_contacts 2 is below'
+# the paper's literal gel law: |a3| < dt^2 holds at the scene's 1 kHz (1e-7 < 1e-6), not at 10 kHz
+sed 's/"law": "polytropic"/"law": "paper_literal"/; s/"a3_s2": 0.0/"a3_s2": 1e-7/' "$inline" > "$tmp/literal.json"
+expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"literal.json\", \"physics_rate_hz\": 10000}]}" 'phantoms[0].physics_rate_hz: 10000 Hz steps the world by 0.0001 s, too fine'
+printf '{%s, "phantoms": [{"id": 1, "name": "a", "scene": "literal.json", "physics_rate_hz": 1000}]}\n' "$dds" > "$tmp/literal_ok.json"
+out=$("$server" --config "$tmp/literal_ok.json" --check 2>&1); rc=$?
+if [ $rc -eq 0 ]; then echo "ok   the literal gel at 1 kHz: $out"; else echo "FAIL the literal gel at 1 kHz: $out"; fail=1; fi
+# Session 75 review: whole-number options refuse fractions (--domain 42.5 ran on domain 42)
+for opt in "--domain 42.5" "--server-number 3.7" "--threads 1.5" "--max-sessions 2.5" "--rt-priority 0.5"; do
+  # shellcheck disable=SC2086 # the option and its value, two words
+  out=$("$server" --config "$tmp/ok.json" $opt --check 2>&1); rc=$?
+  if [ $rc -ne 0 ] && printf '%s' "$out" | grep -qF -- "${opt%% *}: expected a whole number"; then echo "ok   exit $rc: $out"
+  else echo "FAIL $opt (want non-zero and \"${opt%% *}: expected a whole number\"): $out"; fail=1; fi
+done
+out=$("$server" --config "$tmp/ok.json" --domain 42 --max-sessions 3 --check 2>&1); rc=$?
+if [ $rc -eq 0 ]; then echo "ok   whole numbers accepted: $out"; else echo "FAIL --domain 42 --max-sessions 3: $out"; fail=1; fi
+# Session 75 review: a configuration file is at most 1 MiB (--config /dev/zero ran out of memory).
+# A valid 2 MiB one (padded with spaces) passed --check before; the limit keeps a missing fix
+# from taking the machine's memory with /dev/zero.
+{ printf '{%s, "phantoms": [{"id": 1, "name": "a", %s}]' "$dds" "$paper"; head -c 2097152 /dev/zero | tr '\0' ' '; printf '}\n'; } > "$tmp/big.json"
+out=$("$server" --config "$tmp/big.json" --check 2>&1); rc=$?
+if [ $rc -ne 0 ] && printf '%s' "$out" | grep -qF "big.json: larger than 1 MiB"; then echo "ok   exit $rc: $out"; else echo "FAIL 2 MiB config: $out"; fail=1; fi
+out=$( (ulimit -v 1000000; "$server" --config /dev/zero --check) 2>&1); rc=$?
+if [ $rc -ne 0 ] && printf '%s' "$out" | grep -qF "/dev/zero: larger than 1 MiB"; then echo "ok   exit $rc: $out"; else echo "FAIL --config /dev/zero: $out"; fail=1; fi
 out=$("$server" --config /nonexistent/server.json 2>&1); rc=$?
 if [ $rc -ne 0 ] && printf '%s' "$out" | grep -q "cannot open"; then echo "ok   exit $rc: $out"; else echo "FAIL missing file: $out"; fail=1; fi
 out=$("$server" --tick-rate fast 2>&1); rc=$?
