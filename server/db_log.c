@@ -2,6 +2,7 @@
 #include "db_log.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -19,7 +20,7 @@
 #define FLUSH_NS 1000000000 /* reject/clamp/overrun counts are logged once a second per session */
 
 typedef struct slot {
-  uint32_t id;           /* 0: free */
+  uint32_t id;           /* 0: free; its own session's threads read it, others probe ids[] */
   palp_db_session h;
   int64_t next_mesh_frame;
   int64_t last_flush_ns;
@@ -45,18 +46,25 @@ struct palp_srv_db_log {
   palp_log *log; /* may be NULL (stderr) */
   palp_srv_grader *grader; /* NULL: closed sessions are not scored live */
   palp_db_loss_watch watch; /* session 66: the log's losses said as they happen */
+  /* The slots' ids as the tick threads probe them (find): a tick thread reads other sessions' ids
+   * while the main thread opens and closes those sessions (on_opened, on_closed), so these are
+   * atomic, apart from the slots themselves, which only their own session's threads touch between
+   * its open and its close. */
+  _Atomic uint32_t ids[SLOTS];
   /* The farthest a session's slot has been placed from id % SLOTS: find looks no further. Written
    * by the main thread before the session's first tick (on_opened), only ever grown. */
-  int max_probe;
+  _Atomic int max_probe;
 };
 
 /* Linear probing from id % SLOTS (until session 75 only that slot: a new session whose slot an
  * older session still held, ids 1,024 apart, was not logged at all). A freed slot is no end of
  * the probe (the id may lie past it), so find looks max_probe + 1 slots, not until a free one. */
 static slot *find(palp_srv_db_log *l, uint32_t id) {
-  for (int k = 0; k <= l->max_probe; k++) {
-    slot *s = &l->s[(id + (uint32_t)k) % SLOTS];
-    if (s->id == id) return s;
+  const int probe = atomic_load_explicit(&l->max_probe, memory_order_relaxed);
+  for (int k = 0; k <= probe; k++) {
+    const uint32_t at = (id + (uint32_t)k) % SLOTS;
+    /* acquire: the slot was filled before its id was published (on_opened) */
+    if (atomic_load_explicit(&l->ids[at], memory_order_acquire) == id) return &l->s[at];
   }
   return NULL;
 }
@@ -64,10 +72,11 @@ static slot *find(palp_srv_db_log *l, uint32_t id) {
 /* A free slot for a new session, nearest its home; NULL when all SLOTS are held. */
 static slot *place(palp_srv_db_log *l, uint32_t id) {
   for (int k = 0; k < SLOTS; k++) {
-    slot *s = &l->s[(id + (uint32_t)k) % SLOTS];
-    if (s->id) continue;
-    if (k > l->max_probe) l->max_probe = k;
-    return s;
+    const uint32_t at = (id + (uint32_t)k) % SLOTS;
+    if (atomic_load_explicit(&l->ids[at], memory_order_relaxed)) continue; /* only the main thread writes them */
+    if (k > atomic_load_explicit(&l->max_probe, memory_order_relaxed))
+      atomic_store_explicit(&l->max_probe, k, memory_order_relaxed);
+    return &l->s[at];
   }
   return NULL;
 }
@@ -163,6 +172,7 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
    * and summarising and hashing each frame cost its tick ~10 us (issue 11). */
   s->frame_every = log_every(i->tick_rate_hz, 100.0);
   s->mesh_every = log_every(i->tick_rate_hz, 2.0);
+  atomic_store_explicit(&l->ids[s - l->s], i->session_id, memory_order_release); /* filled: find may return it */
   if (i->exercise_name && i->exercise_json) {
     rc = palp_db_log_exercise(l->w, h, i->exercise_name, i->exercise_json);
     if (rc < 0)
@@ -187,6 +197,7 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
    * server's shutdown closed: nobody would be told. */
   if (l->grader && s->exercise[0] && r != PALP_DB_END_SERVER_SHUTDOWN)
     palp_srv_grader_submit(l->grader, s->id, s->uid, s->exercise);
+  atomic_store_explicit(&l->ids[s - l->s], 0, memory_order_relaxed); /* free before its contents go */
   memset(s, 0, sizeof *s);
 }
 
