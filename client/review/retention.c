@@ -106,20 +106,27 @@ static int store_metrics(sqlite3 *h, int64_t sid, const review_assessment *a) {
 
 /* The pid of a writer that opened this file and has not closed it, and whose process is alive (a
  * WAL file is shared by processes of one host only, so the pid is this host's); 0 if none. A pid
- * reused by another process since a crash reads as alive: refused to the safe side, and said. */
-static long long live_writer_pid(sqlite3 *h) {
+ * reused by another process since a crash reads as alive: refused to the safe side, and said.
+ * *opened (if not NULL): when the earliest such writer opened the file [unix s]; a session begun
+ * before it is none of theirs. */
+static long long live_writer_pid_since(sqlite3 *h, double *opened) {
   sqlite3_stmt *st;
   long long found = 0;
-  if (sqlite3_prepare_v2(h, "SELECT pid FROM writer_run WHERE closed_unix_s IS NULL ORDER BY id DESC", -1, &st, NULL) !=
-      SQLITE_OK)
+  if (opened) *opened = INFINITY;
+  if (sqlite3_prepare_v2(h, "SELECT pid, opened_unix_s FROM writer_run WHERE closed_unix_s IS NULL ORDER BY id DESC",
+                         -1, &st, NULL) != SQLITE_OK)
     return 0; /* no writer_run (schema 1): nothing known */
-  while (!found && sqlite3_step(st) == SQLITE_ROW) {
+  while (sqlite3_step(st) == SQLITE_ROW) {
     const long long pid = sqlite3_column_int64(st, 0);
-    if (pid > 0 && pid <= INT_MAX && (kill((pid_t)pid, 0) == 0 || errno == EPERM)) found = pid;
+    if (pid > 0 && pid <= INT_MAX && (kill((pid_t)pid, 0) == 0 || errno == EPERM)) {
+      found = pid;
+      if (opened) *opened = fmin(*opened, sqlite3_column_double(st, 1));
+    }
   }
   sqlite3_finalize(st);
   return found;
 }
+static long long live_writer_pid(sqlite3 *h) { return live_writer_pid_since(h, NULL); }
 
 static long long freelist_pages(sqlite3 *h) {
   sqlite3_stmt *st;
@@ -178,11 +185,14 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
     }
     ids[i] = s.id;
     long long pid;
-    if (!s.end_reason[0] && (pid = live_writer_pid(h))) {
+    double since;
+    /* A session with no end begun while a live writer had the file open may be that writer's, still
+     * running; one begun before it opened is a dead writer's, cut short (a crash logs no end). */
+    if (!s.end_reason[0] && (pid = live_writer_pid_since(h, &since)) && s.start_unix_s >= since - 1.0) {
       palp_log_error(log,
-                     "delete: session '%s' has no end logged and a session log writer (pid %lld) has the file open: "
-                     "it may still be writing that session, and its records would go to the next session given its "
-                     "id; nothing deleted (end the session or stop that server first)",
+                     "delete: session '%s' has no end logged and a session log writer (pid %lld) has had the file "
+                     "open since before it began: it may still be writing that session, and its records would go to "
+                     "the next session given its id; nothing deleted (end the session or stop that server first)",
                      argv[i], pid);
       free(ids);
       return REVIEW_ERROR;
@@ -289,7 +299,7 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
   }
   free(v);
   /* also when nothing was pruned this time: what an earlier prune freed beside a running server */
-  if (!dry && (pruned || freelist_pages(h) > 0)) reclaim(log, h);
+  if (!dry && (pruned || (freelist_pages(h) > 0 && !live_writer_pid(h)))) reclaim(log, h);
   printf("%d session%s pruned; file %lld -> %lld bytes\n", pruned, pruned == 1 ? "" : "s", before, file_bytes(path));
   return rc;
 }

@@ -319,27 +319,29 @@ assert n("select count(*) from note where session_id = ?", sid["class-bob-1"]) =
 PY
 then ok "after prune and delete: integrity ok, samples only for kept sessions, findings/metrics/notes kept"
 else bad "after prune and delete"; fi
-# A session with no end logged while a writer has the file open (a writer_run not closed, its process
-# this shell, alive): delete refuses it (the writer may still be writing it, and a deleted row's id is
+# A session with no end logged, begun after a writer still open opened the file (a writer_run not
+# closed, its process this shell, alive): delete refuses it; one begun before (a dead writer's, cut
+# short: a crash logs no end) is deleted beside it (the writer may still be writing it, and a deleted row's id is
 # the next session's: its later records would land there) and deletes nothing, and neither delete nor
 # prune compacts the file under the writer; once the writer's process is gone (a crash: its row never
 # closed) a prune with nothing to prune compacts the pages freed before, and the same delete succeeds.
 python3 - "$db" $$ <<'PY' || bad "making a running session"
 import sqlite3, sys
 c = sqlite3.connect(sys.argv[1])
-c.execute("insert into writer_run(app_version, pid, opened_unix_s) values('test', ?, 0)", (int(sys.argv[2]),))
-c.execute("insert into session(uid, trainee, station, phantom_id, phantom_name, scene_json, params_json, tick_hz, dt_s, "
-          "start_unix_s) values('live-1', 'ida', 's', '1', 'p', '{}', '{}', 100, 0.01, 0)")
+c.execute("insert into writer_run(app_version, pid, opened_unix_s) values('test', ?, 100)", (int(sys.argv[2]),))
+for uid, start in (("live-1", 200), ("old-1", 50)):  # begun after the writer opened the file, and before
+    c.execute("insert into session(uid, trainee, station, phantom_id, phantom_name, scene_json, params_json, tick_hz, "
+              "dt_s, start_unix_s) values(?, 'ida', 's', '1', 'p', '{}', '{}', 100, 0.01, ?)", (uid, start))
 c.commit()
 PY
 if R delete class-bob-1 live-1 > "$dir/delete-live.txt" 2>&1; then bad "delete of a session a live writer may be writing succeeded"
 else expect "delete: a running session beside a live writer is refused, and why" \
-  "delete: session 'live-1' has no end logged and a session log writer \(pid $$\) has the file open: .* nothing deleted" \
+  "delete: session 'live-1' has no end logged and a session log writer \(pid $$\) has had the file open since before it began: .* nothing deleted" \
   "$dir/delete-live.txt"; fi
 n_left=$(python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execute(\"select count(*) from session where uid in ('class-bob-1', 'live-1')\").fetchone()[0])" "$db")
 [ "$n_left" = 2 ] && ok "  nothing deleted, class-bob-1 named before it included (2 of 2 kept)" || bad "  $n_left of 2 sessions kept"
-R delete class-bob-1 > "$dir/delete-beside.txt" 2>&1 || bad "delete of an ended session beside a live writer"
-expect "delete beside a live writer: an ended session goes, the file is not compacted under the writer" \
+R delete class-bob-1 old-1 > "$dir/delete-beside.txt" 2>&1 || bad "delete of an ended session, and one cut short before the writer opened, beside a live writer"
+expect "delete beside a live writer: an ended session and one cut short before it opened go, the file is not compacted under the writer" \
   "^not compacted: a session log writer \(pid $$\) has the file open" "$dir/delete-beside.txt"
 free_before=$(python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execute('pragma freelist_count').fetchone()[0])" "$db")
 sh -c 'echo $$' > "$dir/dead.pid" # a process that has exited: the writer that crashed
