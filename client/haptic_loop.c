@@ -57,7 +57,7 @@ static double len3(palp_vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z)
 
 int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *out) {
   if (!in || !out) return PALP_EINVAL;
-  /* The period is the server's step, 1 / physics rate, and the server steps at 1..10000 Hz
+  /* The period is the server's step, 1 / physics rate, and the server steps at 10..10000 Hz
    * (server/config.c), a step retried in halves down to 1/16 of it (src/world.c): a period
    * outside [1/(16 x 10000 Hz), 1 s] is no step. A period of 0 passed, and its crossfade of
    * length 0 put the model's correction on the hand as a step. palp_cli_local_model_fits_rate

@@ -16,9 +16,10 @@
 #include "palp.h"
 
 #define PALP_CLI_MAX_FINGERS 4
-/* The server's physics rates (server/config.c, palp-server --tick-rate: 1..10000 Hz); a
+/* The server's physics rates (server/config.c, palp-server --tick-rate: 10..10000 Hz, the floor
+ * 1 / PALP_WORLD_MAX_DT: a longer step no world takes); a
  * join with another is refused (palp_cli_station_join, palp_cli_haptic_start). */
-#define PALP_CLI_PHYSICS_RATE_MIN 1.0
+#define PALP_CLI_PHYSICS_RATE_MIN (1.0 / PALP_WORLD_MAX_DT)
 #define PALP_CLI_PHYSICS_RATE_MAX 10000.0
 #define PALP_CLI_INPUT_END 1000 /* poll(): the source has finished */
 

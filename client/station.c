@@ -349,7 +349,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     nap(0.25);
   }
   /* The server's physics rate paces the contact samples and the haptic thread's horizon:
-   * a rate outside the server's own bounds (1..10000 Hz, server/config.c) is no server's,
+   * a rate outside the server's own bounds (10..10000 Hz, server/config.c) is no server's,
    * and one of 1e-300 Hz crashed the haptic thread (a division by a sample interval of 0). */
   if (!(r.tick_rate_hz >= PALP_CLI_PHYSICS_RATE_MIN && r.tick_rate_hz <= PALP_CLI_PHYSICS_RATE_MAX))
     return fail(err, errlen, PALP_EINVAL, "join refused: the server's physics rate %g Hz is outside %g..%g Hz",

@@ -358,7 +358,7 @@ static void complete_sessions(recorder *r, const phantom *ph, uint32_t phantom_i
 
 /* A catalogue entry as the recorder may keep it: the stations' check (palp_dds_phantom_check: counts,
  * indices, finite rest positions and radius), and the numbers the session's params and scene carry
- * finite and in a server's range (tick rate 1..10,000 Hz as server/config.c allows; force limit >= 0). */
+ * finite and in a server's range (tick rate 10..10,000 Hz as server/config.c allows; force limit >= 0). */
 static int phantom_ok(const palp_Phantom *p, char *why, size_t len) {
   if (palp_dds_phantom_check(p, 1, why, len) < 0) return 0;
   const double nums[] = {p->tick_rate_hz, p->max_force, p->membrane.thickness, p->membrane.density, p->membrane.E1,
@@ -369,8 +369,8 @@ static int phantom_ok(const palp_Phantom *p, char *why, size_t len) {
       snprintf(why, len, "phantom %u: a number of its model is not finite", p->phantom_id);
       return 0;
     }
-  if (!(p->tick_rate_hz >= 1 && p->tick_rate_hz <= 10000) || !(p->max_force >= 0)) {
-    snprintf(why, len, "phantom %u: tick rate %g Hz, force limit %g N (want 1..10000 Hz, >= 0 N)", p->phantom_id,
+  if (!(p->tick_rate_hz >= 1.0 / PALP_WORLD_MAX_DT && p->tick_rate_hz <= 10000) || !(p->max_force >= 0)) {
+    snprintf(why, len, "phantom %u: tick rate %g Hz, force limit %g N (want 10..10000 Hz, >= 0 N)", p->phantom_id,
              p->tick_rate_hz, p->max_force);
     return 0;
   }
@@ -536,7 +536,7 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     snprintf(s->partition, sizeof s->partition, "%s", m->partition);
     s->recorded_from = age;
     s->exercise_named = public_exercise_of(r, m->phantom_id) != NULL;
-    /* its rate as the server's config allows it (1..10,000 Hz), else the haptic 1 kHz */
+    /* its rate as the server's config allows it (10..10,000 Hz), else the haptic 1 kHz */
     const double hz = m->tick_rate_hz >= 1 && m->tick_rate_hz <= 10000 ? m->tick_rate_hz : 1000;
     char *params = session_params(r, s);
     palp_db_session_def d = {.uid = uid, .trainee = m->trainee_name, .station = m->trainee_station,
