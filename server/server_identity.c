@@ -159,8 +159,11 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
                    same_name ? "name" : "number", esc(o->server_name).s, o->server_number, esc(o->instance).s);
           rc = PALP_EINVAL;
         } else {
-          palp_log_warn(id->log, "a second server (%s) claims %s \"%s\" / number %u, started after this one: it must "
-                                 "stop; this server keeps them",
+          /* A younger server gives way only within its own start-up window: one started long after
+           * (a network that split and healed) keeps serving too, and is told so in its log. */
+          palp_log_warn(id->log, "a second server (%s) claims %s \"%s\" / number %u, started after this one: it "
+                                 "gives way if it is within its start-up window (5 s), else both keep serving: stop "
+                                 "one of them; this server keeps them",
                         esc(o->instance).s, same_name ? "name" : "number", esc(o->server_name).s, o->server_number);
           rewrite = 1;
         }

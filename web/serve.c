@@ -21,6 +21,10 @@
  * (session 75, found by review: max_clients was one pool for every token). */
 #define PAGES_PER_TRAINEE 3
 #define INSTRUCTOR_RESERVE 2
+/* ... at most half of max_clients (a --max-clients of 2 left trainees none) */
+static int instructor_reserve(int max_clients) {
+  return max_clients / 2 < INSTRUCTOR_RESERVE ? max_clients / 2 : INSTRUCTOR_RESERVE;
+}
 
 struct palp_web_server {
   palp_web_serve_def def;
@@ -189,7 +193,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
   case LWS_CALLBACK_ESTABLISHED: {
     const int who = c->who;
     if (who > 0 && (who > PALP_WEB_TRAINEES_MAX || s->trainee_pages[who] >= PAGES_PER_TRAINEE ||
-                    s->trainee_pages_all >= s->def.max_clients - INSTRUCTOR_RESERVE)) {
+                    s->trainee_pages_all >= s->def.max_clients - instructor_reserve(s->def.max_clients))) {
       s->stats.ws_full++;
       return -1;
     }
