@@ -4,6 +4,7 @@
 #include <stdio.h>
 
 #include "input.h"
+#include "palp_haptic.h"
 
 int palp_cli_device_input(const char *path, const char *arg, palp_cli_input *out, char *err, size_t errlen) {
   void *h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
@@ -31,16 +32,13 @@ int palp_cli_device_input(const char *path, const char *arg, palp_cli_input *out
 }
 
 int palp_cli_device_force(palp_vec3 f, double max_force, palp_vec3 *out) {
-  const double mag = sqrt(f.x * f.x + f.y * f.y + f.z * f.z); /* [N] */
-  if (!isfinite(mag) || !(max_force > 0)) {
+  /* the renderer's own limit (src/haptic.c): magnitude, and 0 N for what is not finite */
+  unsigned flags = 0;
+  *out = palp_haptic_clamp(f, max_force, &flags);
+  if (!isfinite(f.x) || !isfinite(f.y) || !isfinite(f.z) || !(max_force > 0) ||
+      !isfinite(sqrt(f.x * f.x + f.y * f.y + f.z * f.z))) {
     *out = (palp_vec3){0, 0, 0};
     return PALP_EINVAL;
   }
-  if (mag <= max_force) {
-    *out = f;
-    return 0;
-  }
-  const double k = max_force / mag;
-  *out = (palp_vec3){f.x * k, f.y * k, f.z * k};
-  return 1;
+  return (flags & PALP_HAPTIC_LIMITED) ? 1 : 0;
 }
