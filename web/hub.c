@@ -317,7 +317,11 @@ struct palp_web_hub {
   palp_web_cursor *clients[MAX_CLIENTS_HARD];
   int nclients;
   int want[PALP_WEB_MAX_SESSIONS]; /* recomputed by the DDS thread from the cursors */
-  palp_web_hub_stats stats;
+  /* Counted by the DDS thread alone, without the lock, except findings_written and findings_refused,
+   * which the pages' requests count under mu. stats_pub is its copy under mu, made at the end of
+   * every pass of the thread (at least every 100 ms), which palp_web_hub_stats_get reads: the counters
+   * themselves were read under mu while the thread wrote them without it (ThreadSanitizer, session 75). */
+  palp_web_hub_stats stats, stats_pub;
 };
 
 static int fail(char *err, size_t errlen, const char *fmt, ...) {
@@ -2004,6 +2008,13 @@ static void hint_if_unanswered(palp_web_hub *h, int64_t now, int64_t start) {
   if (hint[0]) palp_log_warn(h->def.log, "no phantom from any palp-server in 10 s%s", hint);
 }
 
+/* The DDS thread's counters, copied under the lock for palp_web_hub_stats_get (stats_pub). */
+static void publish_stats(palp_web_hub *h) {
+  pthread_mutex_lock(&h->mu);
+  h->stats_pub = h->stats;
+  pthread_mutex_unlock(&h->mu);
+}
+
 static void *hub_main(void *arg) {
   palp_web_hub *h = arg;
   const int64_t live_period = (int64_t)(1e9 / h->def.live_hz);
@@ -2094,11 +2105,13 @@ static void *hub_main(void *arg) {
       h->next_join_ns = now + JOIN_PERIOD_NS;
       hint_if_unanswered(h, now, start);
     }
+    publish_stats(h);
     if ((news || now >= h->next_wake_ns) && h->wake) {
       h->wake(h->wake_ctx);
       h->next_wake_ns = now + WAKE_PERIOD_NS;
     }
   }
+  publish_stats(h);
   return NULL;
 }
 
@@ -2350,7 +2363,10 @@ void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
     if (streams[k] > 0 && dds_get_sample_rejected_status(streams[k], &st) == 0) rejected += st.total_count;
   }
   pthread_mutex_lock(&h->mu);
-  *out = h->stats; /* the counters are written by the DDS thread; a torn read only misreports one */
+  /* the DDS thread's counters as of its last pass; the pages' finding requests count under mu */
+  *out = h->stats_pub;
+  out->findings_written = h->stats.findings_written;
+  out->findings_refused = h->stats.findings_refused;
   out->rejected = rejected;
   out->clients = h->nclients;
   out->sessions_open = 0;
