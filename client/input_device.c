@@ -35,8 +35,8 @@ int palp_cli_device_force(palp_vec3 f, double max_force, palp_vec3 *out) {
   /* the renderer's own limit (src/haptic.c): magnitude, and 0 N for what is not finite */
   unsigned flags = 0;
   *out = palp_haptic_clamp(f, max_force, &flags);
-  if (!isfinite(f.x) || !isfinite(f.y) || !isfinite(f.z) || !(max_force > 0) ||
-      !isfinite(sqrt(f.x * f.x + f.y * f.y + f.z * f.z))) {
+  const double mag = sqrt(f.x * f.x + f.y * f.y + f.z * f.z); /* [N]: NaN or inf if any part is */
+  if (!isfinite(mag) || !(max_force > 0)) {
     *out = (palp_vec3){0, 0, 0};
     return PALP_EINVAL;
   }

@@ -20,7 +20,6 @@
 #define FLUSH_NS 1000000000 /* reject/clamp/overrun counts are logged once a second per session */
 
 typedef struct slot {
-  uint32_t id;           /* 0: free; its own session's threads read it, others probe ids[] */
   palp_db_session h;
   int64_t next_mesh_frame;
   int64_t last_flush_ns;
@@ -49,7 +48,7 @@ struct palp_srv_db_log {
   /* The slots' ids as the tick threads probe them (find): a tick thread reads other sessions' ids
    * while the main thread opens and closes those sessions (on_opened, on_closed), so these are
    * atomic, apart from the slots themselves, which only their own session's threads touch between
-   * its open and its close. */
+   * its open and its close. ids[k] is slot k's session, 0 when free. */
   _Atomic uint32_t ids[SLOTS];
   /* The farthest a session's slot has been placed from id % SLOTS: find looks no further. Written
    * by the main thread before the session's first tick (on_opened), only ever grown. */
@@ -159,7 +158,6 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
     return;
   }
   memset(s, 0, sizeof *s);
-  s->id = i->session_id;
   s->h = h;
   s->last_flush_ns = palp_dds_now_ns();
   snprintf(s->uid, sizeof s->uid, "%s", uid);
@@ -196,7 +194,7 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
   /* An exercise session is scored for the instructors once its end is in the log; not one the
    * server's shutdown closed: nobody would be told. */
   if (l->grader && s->exercise[0] && r != PALP_DB_END_SERVER_SHUTDOWN)
-    palp_srv_grader_submit(l->grader, s->id, s->uid, s->exercise);
+    palp_srv_grader_submit(l->grader, sum->info.session_id, s->uid, s->exercise);
   atomic_store_explicit(&l->ids[s - l->s], 0, memory_order_relaxed); /* free before its contents go */
   memset(s, 0, sizeof *s);
 }
