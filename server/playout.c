@@ -10,11 +10,18 @@
 #define BUCKET_NS 1000000000LL /* the minimum offset is the least over the last 1-2 s */
 #define SLEW 0.1               /* T runs at most 10% fast or slow towards its target */
 #define SNAP_NS 50000000LL     /* further than 50 ms off (a pause, a new path): jump */
-/* |stamp| < 2^61 ns (73 years either side of the clock's zero: a monotonic clock, or Unix time
- * until 2043): every difference taken below (two stamps, an offset and the base offset, the
- * playout time and a stamp) then stays under 2^63. At 2^62, allowed until session 75, the gap
- * between stamps -2^62 and +2^62 was 2^63: a signed overflow, and a weight far outside [0, 1]. */
-#define CLOCK_LIMIT (1LL << 61)
+/* A clock reading is |t| < LIM = 2^62 ns: 146 years either side of the clock's zero, so a
+ * monotonic clock, or Unix time until 2116 (at 2^61, the bound session 75 set, Unix-time
+ * stamps would have been refused from 2043). What that bound guarantees, and what it does not:
+ *  - two stamps (or two arrivals) differ by at most 2 (LIM - 1) = 2^63 - 2: exact in int64;
+ *  - so does an offset, arrival - stamp: |off| <= 2^63 - 2;
+ *  - two offsets, or a time and an offset, may differ by up to ~2^64 or 3 * 2^62: NOT int64. Those
+ *    differences go through sub_held, exact up to LIM in magnitude and held at +-LIM beyond it,
+ *    for any int64 operands. Every quantity the playout acts on is milliseconds (D <= 30 ms, a
+ *    snap at 50 ms, a restart at 1 s), so a held difference acts as what it is: too far;
+ *  - the playout time T is held to [-LIM, LIM]: a T beyond every stamp (|stamp| < LIM) plays the
+ *    newest or the oldest sample as a larger one would, and T - stamp stays within 2^63 - 1. */
+#define LIM (1LL << 62)
 #define RESTART_NS 1000000000LL /* a stamp this much older than the newest: a new clock */
 /* Jitter under 2.5 ms: no buffer [s]. A loaded loopback's own scheduling spread (the
  * demo beside an FE run: 0.8-2.3 ms) stays as the server was without it; a network's
@@ -38,19 +45,28 @@ static const palp_srv_playout_sample *at(const palp_srv_playout *p, int i) {
   return &p->s[(p->head + i) % PALP_SRV_PLAYOUT_SAMPLES];
 }
 
+/* a - b [ns] for any int64 a, b, held to [-LIM, LIM] (exact when |a - b| <= LIM). The held end
+ * is tested before subtracting: for b >= 0, b - LIM is in [-LIM, LIM) and a - b cannot exceed a;
+ * for b < 0, b + LIM is in [-LIM, LIM) and a - b cannot fall below a + 1; so a - b is computed
+ * only where it lies in [-LIM, a] or [a + 1, LIM], within int64. */
+static int64_t sub_held(int64_t a, int64_t b) {
+  if (b >= 0 ? a < b - LIM : a > b + LIM) return b >= 0 ? -LIM : LIM;
+  const int64_t d = a - b;
+  return d > LIM ? LIM : d < -LIM ? -LIM : d;
+}
+
 int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, palp_vec3 x, uint64_t seq) {
-  /* Offsets between two clocks are relative, but must not overflow: a stamp at or beyond
-   * +-2^61 ns (73 years) is not a clock reading (CLOCK_LIMIT). */
-  if (src_ns >= CLOCK_LIMIT || src_ns <= -CLOCK_LIMIT || recv_ns >= CLOCK_LIMIT || recv_ns <= -CLOCK_LIMIT)
-    return PALP_EINVAL;
+  /* A stamp at or beyond +-2^62 ns (146 years) is not a clock reading (LIM). */
+  if (src_ns >= LIM || src_ns <= -LIM || recv_ns >= LIM || recv_ns <= -LIM) return PALP_EINVAL;
   if (p->n > 0 && src_ns <= at(p, p->n - 1)->src_ns) {
+    /* two stamps: exact (LIM) */
     if (at(p, p->n - 1)->src_ns - src_ns < RESTART_NS) return 0; /* repeated or overtaken: the newer stands */
     palp_srv_playout_init(p, p->reach); /* the station's clock went back (a restart): start over */
   }
-  const int64_t off = recv_ns - src_ns;
+  const int64_t off = recv_ns - src_ns; /* |off| <= 2^63 - 2 (LIM) */
   /* Windowed minimum in two 1 s buckets: the fastest path lately, without a
    * sorted window; a path that became slower is adopted within 2 s. */
-  if (p->samples == 0 || recv_ns - p->bucket_ns >= BUCKET_NS) {
+  if (p->samples == 0 || recv_ns - p->bucket_ns >= BUCKET_NS) { /* two arrivals: exact */
     p->min_prev = p->samples == 0 ? off : p->min_cur;
     p->min_cur = off;
     p->bucket_ns = recv_ns;
@@ -89,7 +105,9 @@ static int cmp64(const void *a, const void *b) {
 static double target_delay(palp_srv_playout *p, int64_t base) {
   if (!p->off_dirty) return p->delay;
   int64_t v[PALP_SRV_PLAYOUT_OFFSETS];
-  for (int i = 0; i < p->off_n; i++) v[i] = p->off[(p->off_head + i) % PALP_SRV_PLAYOUT_OFFSETS] - base;
+  /* Two offsets may be ~2^64 apart (a station clock that leapt forward): held, which keeps the
+   * order the percentile needs, and any held lateness is far beyond the cap. */
+  for (int i = 0; i < p->off_n; i++) v[i] = sub_held(p->off[(p->off_head + i) % PALP_SRV_PLAYOUT_OFFSETS], base);
   qsort(v, (size_t)p->off_n, sizeof v[0], cmp64);
   double d = 1e-9 * (double)v[(p->off_n - 1) * 9 / 10];
   if (!(d >= DEADBAND)) d = 0;
@@ -100,27 +118,37 @@ static double target_delay(palp_srv_playout *p, int64_t base) {
 }
 
 int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64_t *src_ns, uint64_t *seq) {
+  if (now_ns >= LIM || now_ns <= -LIM) return PALP_EINVAL; /* not a clock reading (LIM) */
   if (p->n == 0) return 0;
   const int64_t base = p->min_cur < p->min_prev ? p->min_cur : p->min_prev;
   const double d = target_delay(p, base);
-  const int64_t target = now_ns - base - (int64_t)(d * 1e9);
+  /* now - base: a time less an offset, up to 3 * 2^62 (LIM): held, then D (<= 30 ms) off it. */
+  const int64_t target = sub_held(sub_held(now_ns, base), (int64_t)(d * 1e9));
   if (!p->playing || now_ns <= p->last_now_ns) {
     p->play_ns = p->playing ? p->play_ns : target;
   } else {
+    /* err = target - (T + dt), the free-running T's distance from its target. dt is two
+     * server times apart (exact, < 2^63). target and T are in [-LIM, LIM], so target - T may reach
+     * 2^63: held, and a held gap (146 years) snaps; otherwise err is exact wherever it matters
+     * (held beyond LIM, it snaps too). */
     const int64_t dt = now_ns - p->last_now_ns;
-    const int64_t free_run = p->play_ns + dt;
-    int64_t err = target - free_run;
-    if (err > SNAP_NS || err < -SNAP_NS) {
+    const int64_t gap = sub_held(target, p->play_ns);
+    const int64_t err = sub_held(gap, dt);
+    if (gap == LIM || gap == -LIM || err > SNAP_NS || err < -SNAP_NS) {
       p->play_ns = target;
     } else {
+      /* T + dt + step, written as target - (err - step) (T + dt = target - err, |err| <= 50 ms)
+       * so that T + dt, which a huge dt would overflow, is never formed. */
       const int64_t lim = (int64_t)(SLEW * (double)dt);
-      if (err > lim) err = lim;
-      if (err < -lim) err = -lim;
-      p->play_ns = free_run + err;
+      const int64_t step = err > lim ? lim : err < -lim ? -lim : err;
+      p->play_ns = target - (err - step);
     }
   }
   /* No buffer wanted: never behind the freshest sample (the world sees the newest point). */
   if (d == 0 && p->play_ns < target) p->play_ns = target;
+  /* Held to [-LIM, LIM] (a slewed T may lie 50 ms outside): beyond every stamp either way. */
+  if (p->play_ns > LIM) p->play_ns = LIM;
+  if (p->play_ns < -LIM) p->play_ns = -LIM;
   p->playing = 1;
   p->last_now_ns = now_ns;
   if (d > p->delay_max) p->delay_max = d;

@@ -79,11 +79,13 @@ void palp_srv_playout_clear(palp_srv_playout *p);
 /* A sample received at recv_ns (server clock). Returns 1 when taken, 0 when it is
  * not newer than the newest (repeated or out of order: the newer one stands; a
  * stamp more than 1 s older is a station clock that went back, and starts the
- * buffer over), PALP_EINVAL for a stamp that is no clock reading (|t| >= 2^61 ns). */
+ * buffer over), PALP_EINVAL for a stamp that is no clock reading (|t| >= 2^62 ns: 146 years
+ * either side of the clock's zero, so a monotonic clock or Unix time until 2116). */
 int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, palp_vec3 x, uint64_t seq);
 /* The device point to step with at now_ns (server clock): *x, the station time it
  * stands for (*src_ns) and the newest sample it uses (*seq). Returns 0 with no
- * sample, 1 otherwise. */
+ * sample, PALP_EINVAL for a now_ns that is no clock reading (|t| >= 2^62 ns; nothing
+ * written), 1 otherwise. */
 int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64_t *src_ns, uint64_t *seq);
 
 #endif

@@ -407,7 +407,7 @@ static void play_out(palp_srv_session *s, int64_t recv_ns, int64_t now_ns) {
     palp_srv_finger_state *f = &s->finger[i];
     if (f->mode != palp_CONTACT_FINGER || f->world_contact < 0) continue;
     palp_srv_contact c = f->cmd;
-    if (!palp_srv_playout_at(&f->playout, recv_ns, &c.center, &c.source_time_ns, &c.seq)) continue;
+    if (palp_srv_playout_at(&f->playout, recv_ns, &c.center, &c.source_time_ns, &c.seq) <= 0) continue;
     if (c.source_time_ns == f->cmd.source_time_ns && c.center.x == f->cmd.center.x &&
         c.center.y == f->cmd.center.y && c.center.z == f->cmd.center.z)
       continue;
