@@ -44,6 +44,7 @@ static const palp_dds_origin_writer *lookup(palp_dds_origin *o, dds_entity_t rea
     i = slot_of(pub);
   }
   o->w[i].pub = pub;
+  o->w[i].participant = ep->participant_instance_handle;
   partition_of(ep, o->w[i].partition);
   o->used++;
   dds_builtintopic_free_endpoint(ep);
@@ -60,4 +61,9 @@ palp_dds_origin_verdict palp_dds_origin_check(palp_dds_origin *o, dds_entity_t r
 const char *palp_dds_origin_partition(palp_dds_origin *o, dds_entity_t reader, const dds_sample_info_t *info) {
   const palp_dds_origin_writer *w = lookup(o, reader, info->publication_handle);
   return w ? w->partition : NULL;
+}
+
+dds_instance_handle_t palp_dds_origin_participant(palp_dds_origin *o, dds_entity_t reader, const dds_sample_info_t *info) {
+  const palp_dds_origin_writer *w = lookup(o, reader, info->publication_handle);
+  return w ? w->participant : 0;
 }

@@ -26,6 +26,7 @@
 
 typedef struct palp_dds_origin_writer {
   dds_instance_handle_t pub;                /* 0: a free entry */
+  dds_instance_handle_t participant;        /* its participant's instance handle (discovery's) */
   char partition[PALP_DDS_ORIGIN_PARTITION]; /* its one partition; "" when several, none or too long */
 } palp_dds_origin_writer;
 
@@ -49,5 +50,8 @@ palp_dds_origin_verdict palp_dds_origin_check(palp_dds_origin *o, dds_entity_t r
 /* The partition the writer of `info`'s sample writes in, as the cache knows it ("" when several or
  * none; NULL when unknown): for messages. */
 const char *palp_dds_origin_partition(palp_dds_origin *o, dds_entity_t reader, const dds_sample_info_t *info);
+/* The participant of the writer of `info`'s sample (its instance handle, the same from every reader),
+ * 0 when unknown: palp-recorder tells a server's runs apart by it (db/recorder/recorder.c). */
+dds_instance_handle_t palp_dds_origin_participant(palp_dds_origin *o, dds_entity_t reader, const dds_sample_info_t *info);
 
 #endif

@@ -66,6 +66,30 @@
  * if its run goes on: ticks and duration never fall within a run (the server's monotonic clock), and
  * a state from another writer whose session began more than this much later is another session. */
 #define RESTART_GAP_NS 1000000000LL
+/* A session's samples go to the session of the run that produced them (a server restarts). A server's
+ * samples (feedback, deformation, local models, finger samples, finding status, debrief, exercise) are
+ * that run's by their writer's participant, the participant of the run's state writer. A station's
+ * (contacts, findings) by their writer: a station makes its writers as it joins a session, so a writer
+ * taken as a session's station's stays that session's, and one of an ended session never becomes
+ * another's (RETIRED_WRITERS). A sample whose run the recorder does not know yet is held, at most
+ * HELD_WAIT_NS: a new run's, which can come before its OPEN state (palp-server answers the JOIN, then
+ * writes the state; the trainee's first contacts race it, the run's finding status and exercise come
+ * before both), until that state; a station writer's while the session's server has lapsed, or a second
+ * station writer of the same topic (a station that joined again: the same run or a new one), until the
+ * session's next state tells (the server writes one each second). Then it is logged in that state's
+ * session, in the order the samples came, contacts at the rate they came (their arrival times). */
+#define STATION_WRITERS 8
+#define RETIRED_WRITERS 256
+#define MAX_HELD 4096
+#define HELD_BYTES_MAX (16 << 20) /* a deformation is a whole mesh: ~60 kB for the default dome */
+#define HELD_WAIT_NS (RECORDER_SERVER_GRACE + DDS_SECS(1)) /* the old run's grace, and its new run's state */
+
+/* The readers, in the order a pass takes them: catalogue and state first, so that a session's samples
+ * find it open; its exercise before its findings; the debrief last. The finger samples before the
+ * local models: a session whose server sends them is logged from them from the first one on
+ * (on_finger_sample). Those from RD_CONTACT on are the sessions' own, under the partition subscriber. */
+enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION,
+       RD_FINGER_SAMPLE, RD_LOCAL_MODEL, RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
 
 typedef struct phantom {
   uint32_t id;
@@ -138,7 +162,12 @@ typedef struct rsession {
   double last_duration;
   uint64_t last_ticks;
   int64_t start_ns;                 /* palp_dds_now_ns() - its duration, at its first state */
-  dds_instance_handle_t state_writer; /* of its states (0: not known, opened from a pending state) */
+  dds_instance_handle_t state_writer; /* of its states (0: not known) */
+  dds_instance_handle_t run;          /* its state writer's participant: its server run (0: not known) */
+  /* Its station's contact and finding writers (RD_CONTACT, RD_FINDING), as taken (route_sample). */
+  dds_instance_handle_t station_writer[STATION_WRITERS];
+  uint8_t station_kind[STATION_WRITERS];
+  int station_writers;
 } rsession;
 
 /* How long a session whose state's writer lapsed is kept open for its server to come back
@@ -152,6 +181,7 @@ typedef struct rsession {
 typedef struct pending_open {
   int used;
   palp_SessionState state;
+  dds_instance_handle_t writer, run; /* its state writer and that writer's participant */
   dds_time_t since;
 } pending_open;
 #define MAX_PENDING 64
@@ -173,6 +203,19 @@ typedef struct public_exercise {
   uint32_t phantom_id;
   char name[64];
 } public_exercise;
+
+/* A session sample whose run is not known yet (route_sample), a deep copy of it. */
+typedef struct held_sample {
+  int kind;                         /* RD_* */
+  uint32_t session_id;
+  dds_instance_handle_t writer;     /* its writer */
+  dds_instance_handle_t run;        /* a server's sample: its writer's participant; 0 for a station's */
+  int64_t arrival_ns;               /* palp_dds_now_ns() as it was taken */
+  int from_known;                   /* a station's: its writer's partition is known, */
+  char from[PALP_DDS_ORIGIN_PARTITION]; /* and is this (checked against the session it is logged in) */
+  size_t bytes;
+  void *sample;                     /* one block (held_copy) */
+} held_sample;
 
 typedef struct recorder {
   palp_db_writer *w;
@@ -196,12 +239,29 @@ typedef struct recorder {
    * while its writer lives (a dispose passes no filter); past a bound the reader is made anew. */
   int64_t finding_strays, finding_strays_total, finding_renewals;
   int64_t finding_renewed_ns, finding_renewal_said_ns;
+  /* Samples held until their run is known (route_sample), in the order they came. */
+  held_sample held[MAX_HELD];
+  int nheld, releasing;
+  size_t held_bytes;
+  int64_t held_total, held_dropped;
+  /* Station writers of ended sessions: what they still write is no session's (counted). */
+  dds_instance_handle_t retired[RETIRED_WRITERS];
+  int retired_next;
+  int64_t ended_writer_samples;
 } recorder;
 
-/* A session opens or ends in this log: its streams pass the gate as long as it is open here. */
+/* A session opens or ends in this log: its streams pass the gate as long as it is open here. Ended,
+ * its station's writers are retired: a station writes a session's contacts and findings through
+ * writers of that session, so what they write after its end is no session's. */
 static void set_open(recorder *r, rsession *s, int open) {
   s->open = open;
   palp_dds_gate_set(&r->gate, (int)(s - r->s), open ? s->id : 0);
+  if (open) return;
+  for (int i = 0; i < s->station_writers; i++) {
+    r->retired[r->retired_next] = s->station_writer[i];
+    r->retired_next = (r->retired_next + 1) % RETIRED_WRITERS;
+  }
+  s->station_writers = 0;
 }
 
 static atomic_int stop_flag, hup_flag; /* atomic: a signal may land on any thread (client/main.c) */
@@ -518,7 +578,12 @@ static const char *public_exercise_of(const recorder *r, uint32_t phantom_id) {
   return NULL;
 }
 
-static void open_session(recorder *r, const palp_SessionState *m) {
+static int64_t held_since(const recorder *r, uint32_t session_id);
+static void release_held(recorder *r, uint32_t session_id);
+
+/* writer: its state's writer, run: that writer's participant (0: not known). */
+static void open_session(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer,
+                         dds_instance_handle_t run) {
   rsession *s = find_session(r, m->session_id, 1);
   {
     if (!s || s->open) return; /* already recording (transient-local re-delivery) */
@@ -552,8 +617,14 @@ static void open_session(recorder *r, const palp_SessionState *m) {
     s->last_duration = m->duration;
     s->last_ticks = m->ticks;
     s->start_ns = palp_dds_now_ns() - (int64_t)(age * 1e9);
+    s->state_writer = writer;
+    s->run = run;
     s->folded_ns = palp_dds_now_ns();
-    for (int f = 0; f < FINGERS; f++) s->tokens[f] = CONTACT_BURST, s->tokens_ns[f] = s->folded_ns;
+    /* Its contacts held before this state are logged at the times they came (release_held): the
+     * buckets start from the first of them, as they would have, had the state come first. */
+    const int64_t first = held_since(r, m->session_id);
+    for (int f = 0; f < FINGERS; f++)
+      s->tokens[f] = CONTACT_BURST, s->tokens_ns[f] = first < s->folded_ns ? first : s->folded_ns;
     set_open(r, s, 1);
     if (!ph)
       palp_log_warn(r->log, "session %u: recording before phantom %u's catalogue entry came (its samples would "
@@ -584,7 +655,8 @@ static void resolve_pending(recorder *r, uint32_t session_id, int force) {
     if (find_phantom(r, p->state.phantom_id, 0) || now - p->since > PENDING_WAIT ||
         (force && p->state.session_id == session_id)) {
       p->used = 0;
-      open_session(r, &p->state);
+      open_session(r, &p->state, p->writer, p->run);
+      release_held(r, p->state.session_id);
     }
   }
 }
@@ -630,7 +702,8 @@ static int new_run(const rsession *s, const palp_SessionState *m, dds_instance_h
 
 /* A state of a session recorded here: a new run of its server ends it (error, saying so), and the
  * state is then a new session's; else its run's newest figures are kept. 1: ended. */
-static int check_run(recorder *r, rsession *s, const palp_SessionState *m, dds_instance_handle_t writer) {
+static int check_run(recorder *r, rsession *s, const palp_SessionState *m, dds_instance_handle_t writer,
+                     dds_instance_handle_t run) {
   const int64_t now_ns = palp_dds_now_ns();
   if (new_run(s, m, writer, now_ns)) {
     char why[200];
@@ -644,19 +717,20 @@ static int check_run(recorder *r, rsession *s, const palp_SessionState *m, dds_i
     return 1;
   }
   if (writer) s->state_writer = writer;
+  if (run) s->run = run;
   if (isfinite(m->duration)) s->last_duration = m->duration;
   s->last_ticks = m->ticks;
   return 0;
 }
 
-static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer) {
+/* writer: the state's writer, run: that writer's participant (0: not known). What was held for the
+ * session is logged in the session this state leaves open (release_held, here before a close, and
+ * after each state in the main loop). */
+static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer, dds_instance_handle_t run) {
   rsession *was = find_session(r, m->session_id, 0);
-  if (was && check_run(r, was, m, writer)) {
-    if (m->phase != palp_PHASE_OPEN) { /* the new run's session opened and closed before its state was seen open */
-      open_session(r, m);
-      rsession *s = find_session(r, m->session_id, 0);
-      if (s) s->state_writer = writer;
-    }
+  if (was && check_run(r, was, m, writer, run)) {
+    if (m->phase != palp_PHASE_OPEN) /* the new run's session opened and closed before its state was seen open */
+      open_session(r, m, writer, run);
   }
   if (m->phase == palp_PHASE_OPEN) {
     rsession *known = find_session(r, m->session_id, 0);
@@ -676,18 +750,19 @@ static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handl
         if (!r->pending[i].used) {
           r->pending[i].used = 1;
           r->pending[i].state = *m; /* fixed-size strings: a plain copy */
+          r->pending[i].writer = writer;
+          r->pending[i].run = run;
           r->pending[i].since = dds_time();
           return;
         }
     }
-    open_session(r, m);
-    rsession *s = find_session(r, m->session_id, 0);
-    if (s && !s->state_writer) s->state_writer = writer;
+    open_session(r, m, writer, run);
     return;
   }
   resolve_pending(r, m->session_id, 1); /* opened and closed before its catalogue arrived */
   rsession *s = find_session(r, m->session_id, 0);
   if (!s || !s->open || s->closing) return;
+  release_held(r, m->session_id); /* this run's, before it ends */
   if (s->exercise && !s->debriefed) { /* its debrief may still be on its way (DEBRIEF_WAIT) */
     s->closing = 1;
     s->closing_since = dds_time();
@@ -920,21 +995,18 @@ static void on_finger_sample(recorder *r, const palp_FingerSample *m) {
   }
 }
 
-/* Whether a contact or finding (taken from `reader`) naming an open session came from a writer in
- * that session's partition: a trainee's permissions let her write in her own partitions only, so
- * one naming another trainee's session there forges it (not recorded, said once per session). A
- * sample of a session not open here passes on, for its handler to count. */
-static int from_its_partition(recorder *r, dds_entity_t reader, const void *sample, const dds_sample_info_t *info,
-                              const char *what) {
-  const uint32_t sid = *(const uint32_t *)sample; /* every session topic's first key (idl/palp_dds_gate.c) */
-  resolve_pending(r, sid, 1);
+/* Whether a contact or finding naming an open session came from a writer in that session's partition
+ * (v: palp_dds_origin_check against it; from: the writer's partition, NULL when unknown): a trainee's
+ * permissions let her write in her own partitions only, so one naming another trainee's session there
+ * forges it (not recorded, said once per session). A sample of a session not open here passes on, for
+ * its handler to count. */
+static int from_its_partition(recorder *r, uint32_t sid, palp_dds_origin_verdict v, const char *from, const char *what) {
   rsession *s = find_session(r, sid, 0);
   if (!s || !s->partition[0]) return 1;
-  const palp_dds_origin_verdict v = palp_dds_origin_check(&r->origin, reader, info, s->partition);
   if (v == PALP_DDS_ORIGIN_SAME) return 1;
   r->foreign_samples++;
   if (s->foreign++ == 0) {
-    const char *from = v == PALP_DDS_ORIGIN_UNKNOWN ? NULL : palp_dds_origin_partition(&r->origin, reader, info);
+    if (v == PALP_DDS_ORIGIN_UNKNOWN) from = NULL;
     char where[320];
     if (!from) snprintf(where, sizeof where, "no longer matched (its partition unknown)");
     else if (!from[0]) snprintf(where, sizeof where, "in several or no partitions");
@@ -994,8 +1066,10 @@ static void log_contact(recorder *r, rsession *s, const palp_srv_contact *v) {
 
 /* A token of finger f's bucket (CONTACT_BURST deep, filled at the session's tick rate), if one is there. */
 static int take_token(rsession *s, int f, int64_t now_ns) {
-  double t = s->tokens[f] + (double)(now_ns - s->tokens_ns[f]) * 1e-9 * s->tick_hz;
-  s->tokens_ns[f] = now_ns;
+  /* now_ns may lie before the bucket's time: a held contact, logged at the time it came (release_held) */
+  const int64_t dt = now_ns > s->tokens_ns[f] ? now_ns - s->tokens_ns[f] : 0;
+  double t = s->tokens[f] + (double)dt * 1e-9 * s->tick_hz;
+  s->tokens_ns[f] += dt;
   s->tokens[f] = t < CONTACT_BURST ? t : CONTACT_BURST;
   if (s->tokens[f] < 1) return 0;
   s->tokens[f] -= 1;
@@ -1015,9 +1089,9 @@ static void flush_contacts(recorder *r, rsession *s, int64_t now_ns, int all) {
  * server's config may set, the phantom's own from its catalogue entry (force limit, radius, rest
  * vertices): one the server refuses is not logged, counted by reason; a force over the limit is logged
  * clamped, as the server applies it under its default policy. Then at most one per finger per tick
- * (take_token): a release always (it only follows a logged contact), the newest of the rest kept. */
-static void on_contact(recorder *r, const palp_Contact *m) {
-  resolve_pending(r, m->session_id, 1);
+ * (take_token): a release always (it only follows a logged contact), the newest of the rest kept.
+ * now_ns: when it came (palp_dds_now_ns()). */
+static void on_contact(recorder *r, const palp_Contact *m, int64_t now_ns) {
   rsession *s = find_session(r, m->session_id, 0);
   if (!s || m->finger >= FINGERS) {
     r->unknown_session_samples++;
@@ -1046,7 +1120,7 @@ static void on_contact(recorder *r, const palp_Contact *m) {
     log_contact(r, s, &v);
     return;
   }
-  if (!s->has_pending[f] && take_token(s, f, palp_dds_now_ns())) {
+  if (!s->has_pending[f] && take_token(s, f, now_ns)) {
     log_contact(r, s, &v);
     return;
   }
@@ -1098,7 +1172,6 @@ static void fold_counts(recorder *r, rsession *s, int64_t now_ns, int all) {
 }
 
 static void on_feedback(recorder *r, const palp_Feedback *m) {
-  resolve_pending(r, m->session_id, 1);
   rsession *s = find_session(r, m->session_id, 0);
   if (!s) {
     r->unknown_session_samples++;
@@ -1134,7 +1207,6 @@ static uint64_t mesh_fnv1a(const palp_vec3 *pos, int n) {
 }
 
 static void on_deformation(recorder *r, const palp_Deformation *m) {
-  resolve_pending(r, m->session_id, 1);
   rsession *s = find_session(r, m->session_id, 0);
   if (!s) {
     r->unknown_session_samples++;
@@ -1167,6 +1239,274 @@ static void on_deformation(recorder *r, const palp_Deformation *m) {
     s->mesh_hash = hash;
   }
   free(pos);
+}
+
+/* ---- runs: the session a session sample goes to (STATION_WRITERS, above) ---------------------- */
+
+static int station_topic(int kind) { return kind == RD_CONTACT || kind == RD_FINDING; }
+
+static int station_writer_of(const rsession *s, dds_instance_handle_t w) {
+  for (int i = 0; i < s->station_writers; i++)
+    if (s->station_writer[i] == w) return 1;
+  return 0;
+}
+
+static int has_station_writer(const rsession *s, int kind) {
+  for (int i = 0; i < s->station_writers; i++)
+    if (s->station_kind[i] == kind) return 1;
+  return 0;
+}
+
+/* Taken as the session's station's (its oldest forgotten when STATION_WRITERS are: a station that
+ * joined again that often). */
+static void take_station_writer(rsession *s, dds_instance_handle_t w, int kind) {
+  if (s->station_writers == STATION_WRITERS) {
+    memmove(s->station_writer, s->station_writer + 1, sizeof s->station_writer[0] * (STATION_WRITERS - 1));
+    memmove(s->station_kind, s->station_kind + 1, sizeof s->station_kind[0] * (STATION_WRITERS - 1));
+    s->station_writers--;
+  }
+  s->station_writer[s->station_writers] = w;
+  s->station_kind[s->station_writers++] = (uint8_t)kind;
+}
+
+static int retired(const recorder *r, dds_instance_handle_t w) {
+  for (int i = 0; i < RETIRED_WRITERS; i++)
+    if (r->retired[i] == w) return 1;
+  return 0;
+}
+
+/* A server's samples held for s's id from a run other than s's: a new run of its server has begun. */
+static int other_run_held(const recorder *r, const rsession *s) {
+  for (int i = 0; i < r->nheld; i++) {
+    const held_sample *h = &r->held[i];
+    if (h->session_id == s->id && h->run && s->run && h->run != s->run) return 1;
+  }
+  return 0;
+}
+
+static int writer_held(const recorder *r, dds_instance_handle_t w) {
+  for (int i = 0; i < r->nheld; i++)
+    if (r->held[i].writer == w) return 1;
+  return 0;
+}
+
+/* When the first contact held for the session came (INT64_MAX: none). */
+static int64_t held_since(const recorder *r, uint32_t session_id) {
+  int64_t t = INT64_MAX;
+  for (int i = 0; i < r->nheld; i++)
+    if (r->held[i].session_id == session_id && r->held[i].kind == RD_CONTACT && r->held[i].arrival_ns < t)
+      t = r->held[i].arrival_ns;
+  return t;
+}
+
+/* palp_dds_origin_check's verdict from the writer's partition (from: NULL when unknown). */
+static palp_dds_origin_verdict origin_of(const char *from, const char *partition) {
+  if (!from) return PALP_DDS_ORIGIN_UNKNOWN;
+  return from[0] && !strcmp(from, partition) ? PALP_DDS_ORIGIN_SAME : PALP_DDS_ORIGIN_OTHER;
+}
+
+typedef enum route { ROUTE_LOG, ROUTE_HOLD, ROUTE_DROP } route;
+
+/* Where a sample of session sid goes (writer: its writer, run: a server sample's writer's participant,
+ * v: a station sample's writer's partition against the open session's): logged now (in the session open
+ * for sid, or, none open, its handler counts it as before), held until its run is known, or dropped (a
+ * writer of an ended session). */
+static route route_sample(recorder *r, int kind, uint32_t sid, dds_instance_handle_t writer, dds_instance_handle_t run,
+                          palp_dds_origin_verdict v) {
+  rsession *s = find_session(r, sid, 0);
+  if (!s) return ROUTE_LOG;
+  if (!station_topic(kind)) return !run || !s->run || run == s->run ? ROUTE_LOG : ROUTE_HOLD;
+  if (!writer || station_writer_of(s, writer)) return ROUTE_LOG;
+  if (retired(r, writer)) return ROUTE_DROP;
+  /* its server lapsed (back, or a new run, the next state tells), a new run began, or this writer's
+   * earlier samples wait: the state decides */
+  if (s->lost_since || other_run_held(r, s) || writer_held(r, writer)) return ROUTE_HOLD;
+  if (v != PALP_DDS_ORIGIN_SAME) return ROUTE_LOG; /* another partition's: counted as forged, never its station's */
+  if (has_station_writer(s, kind)) return ROUTE_HOLD; /* a station joined again: this run or a new one */
+  take_station_writer(s, writer, kind);
+  return ROUTE_LOG;
+}
+
+static void dispatch(recorder *r, int kind, const void *m, int64_t now_ns, palp_dds_origin_verdict v, const char *from) {
+  const uint32_t sid = *(const uint32_t *)m; /* every session topic's first key (idl/palp_dds_gate.c) */
+  switch (kind) {
+  case RD_SESSION_EXERCISE: on_session_exercise(r, m); break;
+  case RD_CONTACT:
+    if (from_its_partition(r, sid, v, from, "contact")) on_contact(r, m, now_ns);
+    break;
+  case RD_FEEDBACK: on_feedback(r, m); break;
+  case RD_DEFORMATION: on_deformation(r, m); break;
+  case RD_FINGER_SAMPLE: on_finger_sample(r, m); break;
+  case RD_LOCAL_MODEL: on_local_model(r, m); break;
+  case RD_FINDING:
+    if (from_its_partition(r, sid, v, from, "finding")) on_finding(r, m);
+    break;
+  case RD_FINDING_STATUS: on_finding_status(r, m); break;
+  default: on_debrief(r, m); break;
+  }
+}
+
+/* A copy of sample m of type T in one block, its one sequence `field` after it (elements of at most 8-byte
+ * alignment, T's own: the block's second T is aligned for them). */
+#define COPY_WITH_SEQ(T, field)                                                                          \
+  do {                                                                                                   \
+    const T *src_ = m;                                                                                   \
+    const size_t n_ = src_->field._length, size_ = sizeof(T) + n_ * sizeof *src_->field._buffer;        \
+    T *d_ = malloc(size_);                                                                               \
+    if (!d_) return NULL;                                                                                \
+    *d_ = *src_;                                                                                         \
+    d_->field._buffer = n_ ? (void *)(d_ + 1) : NULL;                                                    \
+    if (n_) memcpy(d_->field._buffer, src_->field._buffer, n_ * sizeof *src_->field._buffer);           \
+    d_->field._maximum = (uint32_t)n_;                                                                   \
+    d_->field._release = false;                                                                          \
+    *bytes = size_;                                                                                      \
+    return d_;                                                                                           \
+  } while (0)
+
+static void *copy_flat(const void *m, size_t size, size_t *bytes) {
+  void *d = malloc(size);
+  if (d) memcpy(d, m, size);
+  *bytes = size;
+  return d;
+}
+
+/* A deep copy of a session sample, freed with free(). */
+static void *held_copy(int kind, const void *m, size_t *bytes) {
+  switch (kind) {
+  case RD_SESSION_EXERCISE: return copy_flat(m, sizeof(palp_SessionExercise), bytes);
+  case RD_CONTACT: return copy_flat(m, sizeof(palp_Contact), bytes);
+  case RD_LOCAL_MODEL: return copy_flat(m, sizeof(palp_LocalModel), bytes);
+  case RD_FINDING: return copy_flat(m, sizeof(palp_Finding), bytes);
+  case RD_FINDING_STATUS: return copy_flat(m, sizeof(palp_FindingStatus), bytes);
+  case RD_FEEDBACK: COPY_WITH_SEQ(palp_Feedback, fingers);
+  case RD_DEFORMATION: COPY_WITH_SEQ(palp_Deformation, positions);
+  case RD_FINGER_SAMPLE: COPY_WITH_SEQ(palp_FingerSample, triangles);
+  case RD_DEBRIEF: COPY_WITH_SEQ(palp_Debrief, lesion);
+  default: *bytes = 0; return NULL; /* not a session's stream */
+  }
+}
+
+static const char *topic_word(int kind) {
+  static const char *const w[RD_COUNT] = {[RD_SESSION_EXERCISE] = "exercise", [RD_CONTACT] = "contact",
+                                          [RD_FEEDBACK] = "feedback",         [RD_DEFORMATION] = "deformation",
+                                          [RD_FINGER_SAMPLE] = "finger sample", [RD_LOCAL_MODEL] = "local model",
+                                          [RD_FINDING] = "finding",           [RD_FINDING_STATUS] = "finding status",
+                                          [RD_DEBRIEF] = "debrief"};
+  return kind >= 0 && kind < RD_COUNT && w[kind] ? w[kind] : "sample";
+}
+
+static void hold(recorder *r, int kind, const void *m, dds_instance_handle_t writer, dds_instance_handle_t run,
+                 const char *from) {
+  const uint32_t sid = *(const uint32_t *)m;
+  size_t bytes = 0;
+  void *copy = r->nheld < MAX_HELD ? held_copy(kind, m, &bytes) : NULL;
+  if (!copy || r->held_bytes + bytes > HELD_BYTES_MAX) {
+    free(copy);
+    if (r->held_dropped++ % 1000 == 0)
+      palp_log_warn(r->log, "session %u: a %s held for its run's state not kept (%d samples, %zu bytes held already); "
+                            "%lld so far", sid, topic_word(kind), r->nheld, r->held_bytes, (long long)r->held_dropped);
+    return;
+  }
+  int first = 1;
+  for (int i = 0; i < r->nheld && first; i++) first = r->held[i].session_id != sid;
+  held_sample *h = &r->held[r->nheld++];
+  *h = (held_sample){.kind = kind, .session_id = sid, .writer = writer, .run = run, .arrival_ns = palp_dds_now_ns(),
+                     .from_known = from != NULL, .bytes = bytes, .sample = copy};
+  snprintf(h->from, sizeof h->from, "%s", from ? from : "");
+  r->held_bytes += bytes;
+  r->held_total++;
+  if (first)
+    palp_log_info(r->log, "session %u: %s %s held until a state tells its run (%s)", sid,
+                  station_topic(kind) ? "a station's" : "a server's", topic_word(kind),
+                  station_topic(kind) ? "its server lapsed, another run began, or a second writer of its station"
+                                      : "another participant than its session's server: a new run");
+}
+
+/* What was held for session sid whose run is now known, logged in the session open for it, in the order
+ * it came: a server's samples of that session's run, and (no other run's waiting, its server not
+ * lapsed) its stations' (a writer taken as its station's then). Called after each state of sid. */
+static void release_held(recorder *r, uint32_t sid) {
+  if (r->releasing || r->nheld == 0) return;
+  rsession *s = find_session(r, sid, 0);
+  if (!s || s->lost_since) return;
+  r->releasing = 1; /* the handlers open and close no session, and hold nothing */
+  const int other = other_run_held(r, s);
+  int kept = 0, logged = 0, dropped = 0;
+  for (int i = 0; i < r->nheld; i++) {
+    held_sample *h = &r->held[i];
+    int keep = h->session_id != sid;
+    if (!keep) keep = station_topic(h->kind) ? other : h->run && s->run && h->run != s->run;
+    if (keep) {
+      r->held[kept++] = *h;
+      continue;
+    }
+    if (station_topic(h->kind) && retired(r, h->writer)) {
+      r->ended_writer_samples++;
+      dropped++;
+    } else {
+      const char *from = h->from_known ? h->from : NULL;
+      const palp_dds_origin_verdict v = s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
+      if (station_topic(h->kind) && v == PALP_DDS_ORIGIN_SAME && !station_writer_of(s, h->writer))
+        take_station_writer(s, h->writer, h->kind);
+      dispatch(r, h->kind, h->sample, h->arrival_ns, v, from);
+      logged++;
+    }
+    r->held_bytes -= h->bytes;
+    free(h->sample);
+  }
+  r->nheld = kept;
+  r->releasing = 0;
+  if (logged || dropped)
+    palp_log_info(r->log, "session %u: %d samples held until the state of their run came logged in its session%s", sid,
+                  logged, dropped ? " (and some of an ended session's station writer dropped)" : "");
+}
+
+/* Held samples whose run's state did not come within HELD_WAIT_NS: dropped, said once per session a pass. */
+static void expire_held(recorder *r, int64_t now_ns) {
+  int kept = 0;
+  uint32_t said = 0;
+  for (int i = 0; i < r->nheld; i++) {
+    held_sample *h = &r->held[i];
+    if (now_ns - h->arrival_ns <= HELD_WAIT_NS) {
+      r->held[kept++] = *h;
+      continue;
+    }
+    if (h->session_id != said) {
+      said = h->session_id;
+      palp_log_warn(r->log, "session %u: a %s held for the state of its run dropped: no state told its run within "
+                            "%.0f s (%lld held samples dropped so far)", said, topic_word(h->kind),
+                    (double)HELD_WAIT_NS * 1e-9, (long long)r->held_dropped + 1);
+    }
+    r->held_dropped++;
+    r->held_bytes -= h->bytes;
+    free(h->sample);
+  }
+  r->nheld = kept;
+}
+
+/* A sample of a session's stream, as taken from `reader`: routed (route_sample), then logged, held or
+ * dropped. */
+static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const void *m,
+                              const dds_sample_info_t *info) {
+  const uint32_t sid = *(const uint32_t *)m;
+  /* A session waiting for its catalogue entry opens as its inputs or frames come (not to lose them). */
+  if (kind == RD_CONTACT || kind == RD_FINDING || kind == RD_FEEDBACK || kind == RD_DEFORMATION)
+    resolve_pending(r, sid, 1);
+  const int station = station_topic(kind);
+  const dds_instance_handle_t run = station ? 0 : palp_dds_origin_participant(&r->origin, reader, info);
+  const char *from = station ? palp_dds_origin_partition(&r->origin, reader, info) : NULL;
+  const rsession *s = station ? find_session(r, sid, 0) : NULL;
+  const palp_dds_origin_verdict v = s && s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
+  switch (route_sample(r, kind, sid, info->publication_handle, run, v)) {
+  case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from); break;
+  case ROUTE_HOLD: hold(r, kind, m, info->publication_handle, run, from); break;
+  default:
+    if (r->ended_writer_samples++ == 0)
+      palp_log_warn(r->log, "session %u: a %s from a station writer of a session that had ended (its station not yet "
+                            "told its server restarted): not recorded, nor any such sample (counted at the stop)",
+                    sid, topic_word(kind));
+    break;
+  }
 }
 
 static dds_entity_t reader_deep(const recorder *r, dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
@@ -1335,13 +1675,8 @@ int main(int argc, char **argv) {
   /* secured sessions live in palp/s/TRAINEE/ID */
   if (sec.kind != PALP_DDS_ID_NONE) snprintf(wildcard, sizeof wildcard, "palp/s/*");
   dds_entity_t sub = palp_dds_session_subscriber(pp, wildcard);
-  /* In the order a pass takes them: catalogue and state first, so that a session's samples
-   * find it open; its exercise before its findings; the debrief last. */
-  /* The finger samples before the local models: a session whose server sends them is logged from
-   * them from the first one on (on_finger_sample). */
-  enum { RD_CATALOGUE, RD_EXERCISE, RD_STATE, RD_SESSION_EXERCISE, RD_CONTACT, RD_FEEDBACK, RD_DEFORMATION, RD_FINGER_SAMPLE,
-         RD_LOCAL_MODEL, RD_FINDING, RD_FINDING_STATUS, RD_DEBRIEF, RD_COUNT };
-  /* Each reader's topic; those from RD_CONTACT on are the sessions' own, under the partition subscriber. */
+  /* Each reader's topic (RD_*, in the order a pass takes them); those from RD_CONTACT on are the
+   * sessions' own, under the partition subscriber. */
   static const palp_dds_topic_kind kind[RD_COUNT] = {
       PALP_TOPIC_CATALOGUE, PALP_TOPIC_EXERCISE,      PALP_TOPIC_SESSION_STATE,  PALP_TOPIC_SESSION_EXERCISE,
       PALP_TOPIC_CONTACT,   PALP_TOPIC_FEEDBACK,      PALP_TOPIC_DEFORMATION,    PALP_TOPIC_FINGER_SAMPLE,
@@ -1413,22 +1748,16 @@ int main(int argc, char **argv) {
               r->finding_strays++;
             continue;
           }
-          if ((k == RD_CONTACT && !from_its_partition(r, rd[k], samples[i], &info[i], "contact")) ||
-              (k == RD_FINDING && !from_its_partition(r, rd[k], samples[i], &info[i], "finding")))
-            continue;
           switch (k) {
           case RD_CATALOGUE: on_phantom(r, samples[i]); break;
           case RD_EXERCISE: on_public_exercise(r, samples[i]); break;
-          case RD_STATE: on_state(r, samples[i], info[i].publication_handle); break;
-          case RD_SESSION_EXERCISE: on_session_exercise(r, samples[i]); break;
-          case RD_CONTACT: on_contact(r, samples[i]); break;
-          case RD_FEEDBACK: on_feedback(r, samples[i]); break;
-          case RD_DEFORMATION: on_deformation(r, samples[i]); break;
-          case RD_FINGER_SAMPLE: on_finger_sample(r, samples[i]); break;
-          case RD_LOCAL_MODEL: on_local_model(r, samples[i]); break;
-          case RD_FINDING: on_finding(r, samples[i]); break;
-          case RD_FINDING_STATUS: on_finding_status(r, samples[i]); break;
-          default: on_debrief(r, samples[i]); break;
+          case RD_STATE:
+            /* its run: the participant of its writer (route_sample); then what waited for it */
+            on_state(r, samples[i], info[i].publication_handle,
+                     palp_dds_origin_participant(&r->origin, rd[k], &info[i]));
+            release_held(r, ((const palp_SessionState *)samples[i])->session_id);
+            break;
+          default: on_session_sample(r, k, rd[k], samples[i], &info[i]); break;
           }
         }
         dds_return_loan(rd[k], samples, n);
@@ -1475,6 +1804,7 @@ int main(int argc, char **argv) {
       }
     end_closing_sessions(r, now);
     end_lost_sessions(r, now);
+    expire_held(r, pass_ns);
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
      * not only at stop (idl/palp_dds_refusals.h) */
     palp_dds_refusals_tick(&refusals, palp_dds_now_ns());
@@ -1506,16 +1836,19 @@ int main(int argc, char **argv) {
   palp_db_writer_close(r->w);
   palp_log_info(&plog,
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
-          "%lld of a writer outside their session's partition, %lld disposes of finding keys of sessions never "
-          "heard open (the findings reader made anew %lld times), %lld exercises refused, %lld catalogue entries "
-          "refused%s%s\n",
+          "%lld of a writer outside their session's partition, %lld samples from a station writer of a session "
+          "that had ended, %lld held for the state of their run (%lld held samples dropped: it did not come), %lld "
+          "disposes of finding keys of sessions never heard open (the findings reader made anew %lld times), %lld "
+          "exercises refused, %lld catalogue entries refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
-          (long long)r->foreign_samples, (long long)(r->finding_strays_total + r->finding_strays),
+          (long long)r->foreign_samples, (long long)r->ended_writer_samples, (long long)r->held_total,
+          (long long)(r->held_dropped + r->nheld), (long long)(r->finding_strays_total + r->finding_strays),
           (long long)r->finding_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,
           st.last_error[0] ? "; last error: " : "",
           st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) phantom_free(&r->ph[i]);
   for (int i = 0; i < MAX_PENDING_EXERCISES; i++) free(r->pending_ex[i].json);
+  for (int i = 0; i < r->nheld; i++) free(r->held[i].sample);
   free(r);
   palp_dds_log_limit_remove(&dds_sink); /* before the log closes; then the repeats not yet said */
   palp_dds_refusals_flush(&refusals);
