@@ -87,14 +87,20 @@ typedef struct reader {
   long *elem_id;
   int ne, ecap;
   raw_set *sets;
-  int nsets;
+  int nsets, setcap;
+  long members; /* set members over all sets together */
 } reader;
 
 /* Bounds on what a file may ask for (memory and time stay bounded whatever it says):
- * ids are whole numbers 1..INP_ID_MAX (Abaqus' own limit is 999,999,999), and nodes,
- * elements and set members are at most INP_COUNT_MAX each. */
+ * ids are whole numbers 1..INP_ID_MAX (Abaqus' own limit is 999,999,999); nodes,
+ * elements, and set members counted over all sets together, are at most INP_COUNT_MAX
+ * each; there are at most INP_SETS_MAX distinct sets. The members are capped in total,
+ * not per set: a per-set cap let each of a few kB of distinct "GENERATE 1, 999999999, 100"
+ * sets allocate 80 MB. The set cap bounds set_named's linear search (and the mesh's own
+ * one-at-a-time set list); palp's meshes have 5 sets, Abaqus files from other tools tens. */
 #define INP_ID_MAX 999999999.0
 #define INP_COUNT_MAX 10000000
+#define INP_SETS_MAX 1024
 
 /* An id read as a double: a whole number in 1..INP_ID_MAX, else an error. (Casting 1e19
  * to an integer is undefined behaviour and made distinct ids collide.) */
@@ -104,8 +110,8 @@ static int as_id(double v, long *out) {
   return 0;
 }
 
-static int push_id(raw_set *s, long id) {
-  if (s->count >= INP_COUNT_MAX) return PALP_EINVAL;
+static int push_id(reader *r, raw_set *s, long id) {
+  if (r->members >= INP_COUNT_MAX) return PALP_EINVAL;
   if (s->count == s->cap) {
     const int cap = s->cap ? 2 * s->cap : 64;
     long *p = realloc(s->ids, sizeof(long) * (size_t)cap);
@@ -113,6 +119,7 @@ static int push_id(raw_set *s, long id) {
     s->ids = p, s->cap = cap;
   }
   s->ids[s->count++] = id;
+  r->members++;
   return 0;
 }
 
@@ -151,17 +158,26 @@ static void reader_free(reader *r) {
   free(r->sets);
 }
 
-static raw_set *set_named(reader *r, const char *name, int is_element) {
+/* The set of that name, created if new: 0, PALP_EINVAL past INP_SETS_MAX sets, PALP_ENOMEM. */
+static int set_named(reader *r, const char *name, int is_element, raw_set **out) {
   for (int s = 0; s < r->nsets; ++s)
-    if (r->sets[s].is_element == is_element && strcmp(r->sets[s].name, name) == 0) return &r->sets[s];
-  raw_set *p = realloc(r->sets, sizeof *p * (size_t)(r->nsets + 1));
-  if (!p) return NULL;
-  r->sets = p;
-  raw_set *s = &p[r->nsets++];
+    if (r->sets[s].is_element == is_element && strcmp(r->sets[s].name, name) == 0) {
+      *out = &r->sets[s];
+      return 0;
+    }
+  if (r->nsets >= INP_SETS_MAX) return PALP_EINVAL;
+  if (r->nsets == r->setcap) {
+    const int cap = r->setcap ? 2 * r->setcap : 16;
+    raw_set *p = realloc(r->sets, sizeof *p * (size_t)cap);
+    if (!p) return PALP_ENOMEM;
+    r->sets = p, r->setcap = cap;
+  }
+  raw_set *s = &r->sets[r->nsets++];
   memset(s, 0, sizeof *s);
   snprintf(s->name, sizeof s->name, "%s", name);
   s->is_element = is_element;
-  return s;
+  *out = s;
+  return 0;
 }
 
 /* Parses up to max comma-separated numbers; returns how many, -1 on junk. */
@@ -233,10 +249,8 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
           break;
         }
         mode = ELEMENT;
-        if (param(line, "ELSET", val, sizeof val) && val[0]) {
-          cur = set_named(&r, val, 1);
-          if (!cur) rc = PALP_ENOMEM;
-        }
+        if (param(line, "ELSET", val, sizeof val) && val[0] && (rc = set_named(&r, val, 1, &cur)) == PALP_EINVAL)
+          snprintf(err, errlen, "%s:%d: more than %d sets", path, lineno, INP_SETS_MAX);
       } else if (strcmp(kw, "NSET") == 0 || strcmp(kw, "ELSET") == 0) {
         const int is_el = kw[0] == 'E';
         if (!param(line, is_el ? "ELSET" : "NSET", val, sizeof val) || !val[0]) {
@@ -244,8 +258,8 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
           rc = PALP_EPARSE;
           break;
         }
-        cur = set_named(&r, val, is_el);
-        if (!cur) rc = PALP_ENOMEM;
+        if ((rc = set_named(&r, val, is_el, &cur)) == PALP_EINVAL)
+          snprintf(err, errlen, "%s:%d: more than %d sets", path, lineno, INP_SETS_MAX);
         char flag[8];
         generate = param(line, "GENERATE", flag, sizeof flag) != NULL;
         mode = SET;
@@ -325,28 +339,28 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
       }
       r.elem_id[r.ne] = eid;
       for (int a = 0; a < 8; ++a) r.conn[r.ne][a] = conn[a];
-      if (cur && (rc = push_id(cur, eid)) == PALP_EINVAL)
-        snprintf(err, errlen, "%s:%d: a set with more than %d members", path, lineno, INP_COUNT_MAX);
+      if (cur && (rc = push_id(&r, cur, eid)) == PALP_EINVAL)
+        snprintf(err, errlen, "%s:%d: more than %d set members (all sets together)", path, lineno, INP_COUNT_MAX);
       r.ne++;
       npend = 0;
     } else if (mode == SET) {
       long a = 0, b = 0, step = 1;
       if (generate) {
-        /* Whole numbers, step >= 1, at most INP_COUNT_MAX members: a fractional step
-         * (cast to 0) or a 1e12 range used to loop while memory grew without bound. */
+        /* Whole numbers, step >= 1, at most INP_COUNT_MAX members in all sets: a fractional
+         * step (cast to 0) or a 1e12 range used to loop while memory grew without bound. */
         if (n < 2 || n > 3 || as_id(v[0], &a) || as_id(v[1], &b) || (n == 3 && as_id(v[2], &step)) || a > b) {
           snprintf(err, errlen, "%s:%d: GENERATE needs whole numbers start <= end in 1..%.0f[, step >= 1]", path,
                    lineno, INP_ID_MAX);
           rc = PALP_EPARSE;
           break;
         }
-        if ((b - a) / step + 1 > INP_COUNT_MAX - cur->count) {
-          snprintf(err, errlen, "%s:%d: GENERATE %ld..%ld step %ld makes more than %d set members", path, lineno, a,
-                   b, step, INP_COUNT_MAX);
+        if ((b - a) / step + 1 > INP_COUNT_MAX - r.members) {
+          snprintf(err, errlen, "%s:%d: GENERATE %ld..%ld step %ld makes more than %d set members (all sets together)",
+                   path, lineno, a, b, step, INP_COUNT_MAX);
           rc = PALP_EINVAL;
           break;
         }
-        for (long id = a; !rc && id <= b; id += step) rc = push_id(cur, id);
+        for (long id = a; !rc && id <= b; id += step) rc = push_id(&r, cur, id);
       } else
         for (int i = 0; !rc && i < n; ++i) {
           if (as_id(v[i], &a)) {
@@ -355,8 +369,8 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
             rc = PALP_EPARSE;
             break;
           }
-          if ((rc = push_id(cur, a)) == PALP_EINVAL)
-            snprintf(err, errlen, "%s:%d: a set with more than %d members", path, lineno, INP_COUNT_MAX);
+          if ((rc = push_id(&r, cur, a)) == PALP_EINVAL)
+            snprintf(err, errlen, "%s:%d: more than %d set members (all sets together)", path, lineno, INP_COUNT_MAX);
         }
     }
   }

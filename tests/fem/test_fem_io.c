@@ -95,15 +95,60 @@ static void test_inp(void) {
       {"*Nset, nset=a, generate\n10, 1, 1\n", "start <= end", PALP_EPARSE},
       {"*Nset, nset=a\n1, -3\n", "set member -3 is not a whole number", PALP_EPARSE},
   };
+  int rc;
   for (size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
     f = fopen(path, "w");
     fputs(hostile[i].body, f);
     fclose(f);
     err[0] = 0;
-    int rc = palp_fem_inp_read(path, &b, err, sizeof err);
+    rc = palp_fem_inp_read(path, &b, err, sizeof err);
     CHECK(rc == hostile[i].rc && strstr(err, hostile[i].want) && (strstr(err, ":2:") || strstr(err, ":4:")), "hostile .inp %zu refused: %s", i,
           err);
     if (rc == 0) palp_fem_mesh_destroy(&b);
+  }
+  /* Many sets (review, 2027): set members are capped over all sets together, not per set. Each
+   * block below asks for 10,000,000 members (80 MB), within a per-set cap; the second must be
+   * refused on its own data line (4) before it allocates, not after 8 blocks of 640 MB. */
+  f = fopen(path, "w");
+  for (int k = 0; k < 8; ++k) fprintf(f, "*NSET,NSET=S%d,GENERATE\n1,999999999,100\n", k);
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == PALP_EINVAL && strstr(err, ":4: GENERATE 1..999999999 step 100 makes more than 10000000 set members"),
+        "members over all sets capped: rc %d, %s", rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  /* ... and so are the sets themselves (1024): set 1025 is refused on its keyword line (2049) */
+  f = fopen(path, "w");
+  for (int k = 0; k < 2000; ++k) fprintf(f, "*ELSET,ELSET=E%d\n1\n", k);
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == PALP_EINVAL && strstr(err, ":2049: more than 1024 sets"), "set count capped: rc %d, %s", rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  /* At the limits nothing is refused: exactly 10,000,000 members in two sets reach the end of
+   * the file (refused there for having no nodes, not for the members) ... */
+  f = fopen(path, "w");
+  fprintf(f, "*NSET,NSET=A,GENERATE\n1,4000000\n*ELSET,ELSET=A,GENERATE\n1,6000000\n");
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == PALP_EPARSE && strstr(err, "no *NODE"), "10,000,000 members in all: rc %d, %s", rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  /* ... and 1024 sets on a unit cube read (a repeated name extends its set, not a new one). */
+  f = fopen(path, "w");
+  fprintf(f, "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n"
+             "8, 0, 1, 1\n*Element, type=C3D8, elset=E\n1, 1, 2, 3, 4, 5, 6, 7, 8\n");
+  for (int k = 0; k < 1023; ++k)
+    fprintf(f, "*NSET,NSET=N%d\n%d\n*NSET,NSET=N%d\n%d\n", k, 1 + k % 8, k, 1 + (k + 1) % 8);
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == 0, "1024 sets read: %s", err);
+  if (rc == 0) {
+    const palp_fem_set *q = palp_fem_mesh_find_set(&b, "N1022", 0);
+    CHECK(q && q->count == 2 && q->items[0] == 1022 % 8 && q->items[1] == 1023 % 8, "set N1022 is nodes 7 and 8");
+    CHECK(palp_fem_mesh_find_set(&b, "E", 1) && palp_fem_mesh_find_set(&b, "BASE", 0), "sets E and BASE");
+    palp_fem_mesh_destroy(&b);
   }
   f = fopen(path, "w"); /* ids up to 999,999,999 are fine, and distinct ids stay distinct */
   fprintf(f, "*Node\n999999999, 0, 0, 0\n999999998, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n"
