@@ -775,9 +775,15 @@ char *palp_scene_to_json(const palp_scene *s) {
     cJSON_AddStringToObject(p, "kind", profile_names[pr->kind - 1]);
     if (pr->kind == PALP_PROFILE_KEYFRAMES) {
       cJSON *keys = cJSON_AddArrayToObject(p, "keyframes");
+      /* exact_number, as every other number: cJSON_CreateDoubleArray prints 15 digits, and a
+       * key at 0.30000000000000004 s came back as 0.29999999999999999 s (a replay's profile
+       * then switches one step apart from the session's). */
       for (int k = 0; k < pr->key_count; ++k) {
-        const double kv[2] = {pr->key_t[k], pr->key_f[k]};
-        cJSON_AddItemToArray(keys, cJSON_CreateDoubleArray(kv, 2));
+        cJSON *kv = cJSON_CreateArray();
+        if (!kv) continue;
+        cJSON_AddItemToArray(kv, exact_number(pr->key_t[k]));
+        cJSON_AddItemToArray(kv, exact_number(pr->key_f[k]));
+        cJSON_AddItemToArray(keys, kv);
       }
     } else {
       add_exact(p, "magnitude_N", pr->magnitude);

@@ -294,6 +294,29 @@ int main(void) {
           xj ? xb.world.lesion[0].center.x : 0.0, err);
     free(xj);
   }
+  /* Keyframes too (review, 2027): they were printed by cJSON_CreateDoubleArray, 15 digits,
+   * so 0.30000000000000004 (0.1 + 0.2) read back as 0.29999999999999999, and 2/3 N as ...67. */
+  {
+    palp_scene x = a;
+    palp_profile *pr = &x.contact[0].profile;
+    memset(pr, 0, sizeof *pr);
+    pr->kind = PALP_PROFILE_KEYFRAMES;
+    pr->key_count = 3;
+    const double kt[3] = {0.0, 0.1 + 0.2, 0.7 + 0.1}, kf[3] = {0.1 + 0.2, 2.0 / 3.0, -1e-17 / 3.0};
+    for (int k = 0; k < 3; ++k) pr->key_t[k] = kt[k], pr->key_f[k] = kf[k];
+    CHECK(kt[1] != 0.3 && kf[0] != 0.3, "test setup: 0.1 + 0.2 is not the double nearest 0.3");
+    char *kj = palp_scene_to_json(&x);
+    palp_scene kb;
+    const int rc = kj ? palp_scene_parse(kj, &kb, err, sizeof err) : -1;
+    CHECK(rc == PALP_OK && kb.contact[0].profile.kind == PALP_PROFILE_KEYFRAMES && kb.contact[0].profile.key_count == 3,
+          "keyframes round trip parses (%s)", err);
+    int same = rc == PALP_OK;
+    for (int k = 0; same && k < 3; ++k)
+      same = kb.contact[0].profile.key_t[k] == kt[k] && kb.contact[0].profile.key_f[k] == kf[k];
+    CHECK(same, "keyframes round-trip bit for bit: t %.17g -> %.17g, f %.17g -> %.17g", kt[1],
+          rc == PALP_OK ? kb.contact[0].profile.key_t[1] : 0.0, kf[0], rc == PALP_OK ? kb.contact[0].profile.key_f[0] : 0.0);
+    free(kj);
+  }
   /* The finger surface: absent is the facets (how every scene and log before it was stepped),
    * and it survives the round trip; the facets print as earlier logs did (no key). */
   {
