@@ -7,6 +7,7 @@
  * Every object may carry a "comment".
  */
 #include <cjson/cJSON.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -81,6 +82,23 @@ static int get_int(ctx *c, const cJSON *obj, const char *path, const char *key, 
   *out = (int)v;
   return PALP_OK;
 }
+
+/* The unit vector along a finite, non-zero d. Plain d / |d| while d.d is well inside the
+ * doubles (>= DBL_MIN / DBL_EPSILON, so subnormal squares cost no precision, and finite): those
+ * are the bits every logged session was stepped with, so replays keep them. Otherwise d is first
+ * divided by its largest |component| (length then in [1, sqrt 3]): plainly, [1e200, 0, -1e200]
+ * had length inf and a silently zero force, and [1e-170, 0, -1e-170] length 0, which read as
+ * "no direction" and pushed along the default inward normal instead. */
+static palp_vec3 unit_direction(palp_vec3 d) {
+  const double d2 = v3_dot(d, d);
+  if (isfinite(d2) && d2 >= DBL_MIN / DBL_EPSILON) return v3_scale(d, 1.0 / sqrt(d2));
+  const double m = fmax(fabs(d.x), fmax(fabs(d.y), fabs(d.z)));
+  const palp_vec3 u = v3(d.x / m, d.y / m, d.z / m); /* divided, not times 1/m: 1/5e-324 is inf */
+  return v3_scale(u, 1.0 / v3_len(u));
+}
+
+/* An exactly zero direction: the default inward normal (palp_scene_to_json writes [0, 0, 0] for it). */
+static int is_zero(palp_vec3 d) { return d.x == 0.0 && d.y == 0.0 && d.z == 0.0; }
 
 static int get_vec(ctx *c, const cJSON *obj, const char *path, const char *key, int required, palp_vec3 *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -317,6 +335,13 @@ static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_sc
   if ((e = get_vec(c, o, path, "offset_dir", 0, &sc->def.offset_dir))) return e;
   sc->direction = v3(0, 0, 0);
   if ((e = get_vec(c, o, path, "direction", 0, &sc->direction))) return e;
+  /* Kept as given where plain normalisation is exact enough (the bits logged sessions were
+   * replayed with), made unit where it over- or underflows (unit_direction); all zero is the
+   * default inward normal, as palp_scene_to_json writes it and every log holds it. */
+  if (!is_zero(sc->direction)) {
+    const double d2 = v3_dot(sc->direction, sc->direction);
+    if (!(isfinite(d2) && d2 >= DBL_MIN / DBL_EPSILON)) sc->direction = unit_direction(sc->direction);
+  }
   const cJSON *prof = get_obj(c, o, path, "profile", 1, &e);
   if (e) return e;
   char p3[64];
@@ -820,12 +845,13 @@ int palp_scene_apply(const palp_scene *s, palp_world *w, double t) {
   for (int i = 0; i < s->contact_count; ++i) {
     const palp_scene_contact *sc = &s->contact[i];
     palp_vec3 dir = sc->direction;
-    if (v3_len(dir) == 0.0) {
+    if (!v3_isfinite(dir)) return PALP_EINVAL;
+    if (is_zero(dir)) {
       /* Inward normal at the contact centre: the rest surface normal of a sphere. */
       const int v = palp_mesh_nearest_vertex(m, m->rest, sc->def.center);
       dir = v3_scale(m->rest[v], -1.0);
     }
-    dir = v3_scale(dir, 1.0 / v3_len(dir));
+    dir = unit_direction(dir);
     const int e = palp_world_set_contact_force(w, i, v3_scale(dir, palp_profile_eval(&sc->profile, t)));
     if (e) return e;
   }

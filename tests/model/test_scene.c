@@ -163,12 +163,83 @@ static void test_parameters_file(void) {
   remove(scene), remove(params), remove(fifo), rmdir(dir);
 }
 
+/* The base scene with the contact's "direction" set to dir (JSON text); 0 when it parses. */
+static int parse_direction(const char *dir, palp_scene *s, char *err, size_t errlen) {
+  char buf[4096];
+  const char *at = strstr(base, "\"profile\":{");
+  snprintf(buf, sizeof buf, "%.*s\"direction\":%s,%s", (int)(at - base), base, dir, at);
+  return palp_scene_parse(buf, s, err, errlen);
+}
+
+/* Review (2027): the force direction was normalised by its plain length, so [1e200, 0, -1e200]
+ * (length inf) pushed with a zero force and [1e-170, 0, -1e-170] (length 0) along the default
+ * inward normal instead. Both now read as (1, 0, -1)/sqrt 2 (within 1e-12) and push as
+ * [1, 0, -1] does (every position within 1e-12 m after 20 steps, and the surface moved by more
+ * than 0.1 mm); a plain direction keeps its bits (what logged sessions replay with) and an all-zero
+ * one still means the default normal, as palp_scene_to_json writes it. */
+static void test_direction(void) {
+  char err[256] = "";
+  palp_scene ref;
+  CHECK(parse_direction("[1,0,-1]", &ref, err, sizeof err) == PALP_OK, "direction [1,0,-1]: %s", err);
+  int e;
+  palp_world *wr = palp_scene_create_world(&ref, &e);
+  CHECK(wr != NULL, "world");
+  if (!wr) return;
+  for (int k = 0; k < 20; ++k) CHECK(palp_scene_apply(&ref, wr, palp_world_time(wr)) == 0 && palp_world_step(wr) == 0, "step");
+  const palp_mesh *m = palp_world_mesh(wr);
+  double moved = 0.0;
+  for (int i = 0; i < m->vertex_count; ++i) {
+    const palp_vec3 p = palp_world_positions(wr)[i], r = m->rest[i];
+    moved = fmax(moved, sqrt((p.x - r.x) * (p.x - r.x) + (p.y - r.y) * (p.y - r.y) + (p.z - r.z) * (p.z - r.z)));
+  }
+  CHECK(moved > 1e-4, "[1,0,-1] moves the surface: %.3g m", moved);
+  static const char *const extreme[] = {"[1e200,0,-1e200]", "[1e-170,0,-1e-170]", "[1.7e308,0,-1.7e308]",
+                                        "[5e-324,0,-5e-324]"};
+  for (int i = 0; i < 4; ++i) {
+    palp_scene s;
+    err[0] = 0;
+    const int rc = parse_direction(extreme[i], &s, err, sizeof err);
+    CHECK(rc == PALP_OK, "direction %s parses: %s", extreme[i], err);
+    if (rc) continue;
+    const palp_vec3 d = s.contact[0].direction;
+    const double h = 1.0 / sqrt(2.0);
+    CHECK(fabs(d.x - h) < 1e-12 && fabs(d.y) < 1e-12 && fabs(d.z + h) < 1e-12,
+          "direction %s reads as (1, 0, -1)/sqrt 2 within 1e-12: (%.17g, %.17g, %.17g)", extreme[i], d.x, d.y, d.z);
+    palp_world *w = palp_scene_create_world(&s, &e);
+    CHECK(w != NULL, "world");
+    if (!w) continue;
+    /* and so does a direction set in the struct, not parsed (palp_scene_apply normalises it too) */
+    if (i == 0) s.contact[0].direction = (palp_vec3){1e200, 0, -1e200};
+    for (int k = 0; k < 20; ++k) CHECK(palp_scene_apply(&s, w, palp_world_time(w)) == 0 && palp_world_step(w) == 0, "step");
+    double diff = 0.0;
+    for (int v = 0; v < m->vertex_count; ++v) {
+      const palp_vec3 p = palp_world_positions(w)[v], q = palp_world_positions(wr)[v];
+      diff = fmax(diff, fmax(fabs(p.x - q.x), fmax(fabs(p.y - q.y), fabs(p.z - q.z))));
+    }
+    CHECK(diff < 1e-12, "direction %s pushes as [1,0,-1]: positions within %.3g m (tolerance 1e-12 m)", extreme[i], diff);
+    palp_world_destroy(w);
+  }
+  palp_world_destroy(wr);
+  palp_scene s;
+  CHECK(parse_direction("[1,2,3]", &s, err, sizeof err) == PALP_OK && s.contact[0].direction.x == 1.0 &&
+            s.contact[0].direction.y == 2.0 && s.contact[0].direction.z == 3.0,
+        "a plain direction is kept as given: %s", err);
+  CHECK(parse_direction("[0,0,0]", &s, err, sizeof err) == PALP_OK && s.contact[0].direction.x == 0.0 &&
+            s.contact[0].direction.y == 0.0 && s.contact[0].direction.z == 0.0,
+        "[0,0,0] is still the default inward normal: %s", err);
+  CHECK(parse_direction("[1,0,\"down\"]", &s, err, sizeof err) == PALP_EPARSE && strstr(err, "direction[2]"),
+        "a non-number is refused: %s", err);
+  CHECK(parse_direction("[1e999,0,-1]", &s, err, sizeof err) == PALP_EPARSE && strstr(err, "direction[0]: expected a finite number"),
+        "a non-finite direction is refused: %s", err);
+}
+
 int main(void) {
   palp_scene s;
   char err[256];
   test_unknown_keys();
   test_bounds();
   test_parameters_file();
+  test_direction();
   CHECK(palp_scene_parse(base, &s, err, sizeof err) == PALP_OK, "base scene parses: %s", err);
   CHECK(s.world.mesh.vertex_count == 120 && s.frames == 50 && s.contact_count == 1, "fields read");
   CHECK(s.contact[0].def.distribution == PALP_DIST_GAUSSIAN, "distribution read");
