@@ -26,24 +26,40 @@ static int cmpd(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* A world that refuses a step or the load measures nothing (a broken world "steps" in well
+ * under a microsecond): stop and say which case, which step and why. */
+static void check(int rc, uint32_t effects, const char *what, long step) {
+  if (rc >= 0) return;
+  fprintf(stderr, "bench_model_effects: effects 0x%x: %s", (unsigned)effects, what);
+  if (step >= 0) fprintf(stderr, ", step %ld", step);
+  fprintf(stderr, ": %s\n", palp_strerror(rc));
+  exit(1);
+}
+
 static double median_step(uint32_t effects, int steps, int load, char *stages, size_t len) {
   palp_world_def d = palp_world_default_def();
   d.effects = effects;
   int e;
   palp_world *w = palp_world_create(&d, &e);
-  if (!w) return NAN;
+  if (!w) check(e, effects, "cannot create the world", -1);
   const palp_vec3 c = {0.04 * sin(0.5236) * cos(0.698), 0.04 * sin(0.5236) * sin(0.698), 0.04 * cos(0.5236)};
   palp_contact_def cd = palp_contact_default_def(PALP_DIST_UNIFORM, c);
   const int id = palp_world_add_contact(w, &cd);
-  if (load) palp_world_set_contact_force(w, id, (palp_vec3){-3 * c.x / 0.04, -3 * c.y / 0.04, -3 * c.z / 0.04});
+  check(id, effects, "the 3 N load", -1);
+  long k = 0;
+  if (load)
+    check(palp_world_set_contact_force(w, id, (palp_vec3){-3 * c.x / 0.04, -3 * c.y / 0.04, -3 * c.z / 0.04}),
+          effects, "the 3 N load", -1);
   else
-    for (int i = 0; i < 200; ++i) palp_world_step(w); /* let it fall asleep */
-  for (int i = 0; i < 20; ++i) palp_world_step(w);
+    for (int i = 0; i < 200; ++i, ++k) check(palp_world_step(w), effects, "falling asleep", k);
+  for (int i = 0; i < 20; ++i, ++k) check(palp_world_step(w), effects, "warming up", k);
   double *t = malloc(sizeof(double) * (size_t)steps);
-  for (int i = 0; i < steps; ++i) {
+  if (!t) check(PALP_ENOMEM, effects, "the step times", -1);
+  for (int i = 0; i < steps; ++i, ++k) {
     const double s = now_s();
-    palp_world_step(w);
+    const int rc = palp_world_step(w);
     t[i] = now_s() - s;
+    check(rc, effects, "timed", k);
   }
   qsort(t, (size_t)steps, sizeof *t, cmpd);
   const double med = t[steps / 2];
@@ -61,7 +77,17 @@ static double median_step(uint32_t effects, int steps, int load, char *stages, s
 int main(int argc, char **argv) {
   int steps = 2000;
   for (int i = 1; i + 1 < argc; ++i)
-    if (!strcmp(argv[i], "--steps")) steps = atoi(argv[i + 1]);
+    if (!strcmp(argv[i], "--steps")) {
+      char *end;
+      const long v = strtol(argv[i + 1], &end, 10);
+      /* the median is of these steps: none (0 read t[0] of an empty sample) is no run */
+      if (*end || end == argv[i + 1] || v < 1 || v > 100000000) {
+        fprintf(stderr, "bench_model_effects: --steps must be a whole number from 1 to 100000000 (got \"%s\")\n",
+                argv[i + 1]);
+        return 2;
+      }
+      steps = (int)v;
+    }
   cpu_set_t set;
   CPU_ZERO(&set);
   CPU_SET(0, &set);

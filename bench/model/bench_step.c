@@ -52,6 +52,22 @@ static int cmpd(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
+/* A world that refuses a step, a force or a finger measures nothing (a broken world "steps"
+ * in well under a microsecond): stop and say which case, which step and why. */
+static void check(int rc, const char *what, long step) {
+  if (rc >= 0) return;
+  if (step >= 0) fprintf(stderr, "bench_model_step: %s, step %ld: %s\n", what, step, palp_strerror(rc));
+  else fprintf(stderr, "bench_model_step: %s: %s\n", what, palp_strerror(rc));
+  exit(1);
+}
+static void *check_alloc(void *p) {
+  if (!p) {
+    fprintf(stderr, "bench_model_step: out of memory\n");
+    exit(1);
+  }
+  return p;
+}
+
 /* Device of world i at t: presses 0..10 mm near the pole at 0.7 Hz, phase-shifted. */
 static palp_vec3 press_device(int i, double t) {
   const double R = 0.04, r = 0.008, pi = 3.14159265358979323846;
@@ -84,11 +100,10 @@ static int server_core(int K, int rounds, int surface, int hash, const char *pat
   double med[2] = {0, 0};
   for (int c = 0; c < 2; ++c) {
     const int n = cases[c];
-    palp_world **w = calloc((size_t)n, sizeof *w);
-    int *f = calloc((size_t)n, sizeof *f);
+    palp_world **w = check_alloc(calloc((size_t)n, sizeof *w));
+    int *f = check_alloc(calloc((size_t)n, sizeof *f));
     const int total = rounds * n;
-    double *t = malloc(sizeof(double) * (size_t)(rounds * n));
-    if (!w || !f || !t) return 1;
+    double *t = check_alloc(malloc(sizeof(double) * (size_t)(rounds * n)));
     for (int i = 0; i < n; ++i) {
       int rc;
       w[i] = palp_scene_create_world(&sc, &rc);
@@ -96,17 +111,19 @@ static int server_core(int K, int rounds, int surface, int hash, const char *pat
         fprintf(stderr, "cannot create the world: %s\n", palp_strerror(rc));
         return 1;
       }
-      for (int k = 0; k < sc.contact_count; ++k) palp_world_remove_contact(w[i], k);
+      for (int k = 0; k < sc.contact_count; ++k) check(palp_world_remove_contact(w[i], k), "server core: a scene contact", -1);
       f[i] = palp_world_add_finger(w[i], press_device(i, 0), 0.008);
+      check(f[i], "server core: the fingertip", -1);
     }
     int m = 0;
     uint64_t H = 14695981039346656037ull; /* FNV-1a over the worlds' state hashes, step by step */
     for (int k = 0; k < rounds; ++k)
       for (int i = 0; i < n; ++i) {
-        palp_world_set_finger(w[i], f[i], press_device(i, k / 250.0), 0.008);
+        check(palp_world_set_finger(w[i], f[i], press_device(i, k / 250.0), 0.008), "server core: the fingertip", k);
         const double s = now_s();
-        palp_world_step(w[i]);
+        const int rc = palp_world_step(w[i]);
         t[m++] = now_s() - s;
+        check(rc, n > 1 ? "server core, worlds in turn" : "server core, one world", k);
         if (hash) H = (H ^ palp_world_hash(w[i])) * 1099511628211ull;
       }
     double stage[PALP_STAGE_COUNT] = {0};
@@ -137,7 +154,16 @@ int main(int argc, char **argv) {
   const char *scene = PALP_CONFIG_DIR "/paper_step_long_term.json"; /* --core-only's dome */
   double bending = 0.0; /* [N m] */
   for (int i = 1; i < argc; ++i) {
-    if (!strcmp(argv[i], "--steps") && i + 1 < argc) steps = atoi(argv[++i]);
+    if (!strcmp(argv[i], "--steps") && i + 1 < argc) {
+      char *end;
+      const long v = strtol(argv[++i], &end, 10);
+      /* the median and p99 are of these steps: none (0 read t[0] of an empty sample) is no run */
+      if (*end || end == argv[i] || v < 1 || v > 100000000) {
+        fprintf(stderr, "bench_model_step: --steps must be a whole number from 1 to 100000000 (got \"%s\")\n", argv[i]);
+        return 2;
+      }
+      steps = (int)v;
+    }
     else if (!strcmp(argv[i], "--bending") && i + 1 < argc) bending = atof(argv[++i]);
     else if (!strcmp(argv[i], "--quick")) quick = 1;
     else if (!strcmp(argv[i], "--worlds") && i + 1 < argc) worlds = atoi(argv[++i]);
@@ -165,7 +191,7 @@ int main(int argc, char **argv) {
          "solve_us", "step/solve", "of_10ms_%", "refactors");
   const int counts[3] = {338, 1300, 5000};
   const double dts[2] = {0.01, 0.001};
-  double *t = malloc(sizeof(double) * (size_t)steps);
+  double *t = check_alloc(malloc(sizeof(double) * (size_t)steps));
   for (int c = 0; c < 3; ++c)
     for (int k = 0; k < 2; ++k) {
       palp_world_def d = palp_world_default_def();
@@ -173,24 +199,29 @@ int main(int argc, char **argv) {
       d.membrane.bending_stiffness = bending;
       d.dt = dts[k];
       d.effects = PALP_EFFECT_ALL;
-      int e;
-      palp_world *w = palp_world_create(&d, &e);
+      int ce;
+      palp_world *w = palp_world_create(&d, &ce);
       if (!w) {
-        fprintf(stderr, "cannot create a world of %d vertices: %s\n", counts[c], palp_strerror(e));
+        fprintf(stderr, "cannot create a world of %d vertices: %s\n", counts[c], palp_strerror(ce));
         return 1;
       }
       const double th = 30.0 * 3.14159265358979323846 / 180.0, ph = 40.0 * 3.14159265358979323846 / 180.0;
       const palp_vec3 ctr = {0.04 * sin(th) * cos(ph), 0.04 * sin(th) * sin(ph), 0.04 * cos(th)};
       palp_contact_def cd = palp_contact_default_def(PALP_DIST_UNIFORM, ctr);
       const int id = palp_world_add_contact(w, &cd);
-      palp_world_set_contact_force(w, id, (palp_vec3){-3.0 * ctr.x / 0.04, -3.0 * ctr.y / 0.04, -3.0 * ctr.z / 0.04});
-      for (int i = 0; i < 20; ++i) palp_world_step(w); /* warm caches and the factor */
+      check(id, "the 3 N load", -1);
+      check(palp_world_set_contact_force(w, id, (palp_vec3){-3.0 * ctr.x / 0.04, -3.0 * ctr.y / 0.04, -3.0 * ctr.z / 0.04}),
+            "the 3 N load", -1);
+      char what[64];
+      snprintf(what, sizeof what, "%d vertices, %g ms", counts[c], 1e3 * dts[k]);
+      for (int i = 0; i < 20; ++i) check(palp_world_step(w), what, i); /* warm caches and the factor */
       palp_stage_timings t0;
       palp_world_timings(w, &t0);
       for (int i = 0; i < steps; ++i) {
         const double s = now_s();
-        palp_world_step(w);
+        const int rc = palp_world_step(w);
         t[i] = now_s() - s;
+        check(rc, what, 20 + i);
       }
       palp_stage_timings t1;
       palp_world_timings(w, &t1);
@@ -227,26 +258,32 @@ int main(int argc, char **argv) {
       d.refactor_blend = deferred ? palp_world_refactor_blend_for(dt) : 0; /* as the server */
       if (surface >= 0) d.finger_surface = surface;
       d.membrane.bending_stiffness = bending;
-      palp_world *w = palp_world_create(&d, NULL);
+      int ce;
+      palp_world *w = palp_world_create(&d, &ce);
+      char what[64];
+      snprintf(what, sizeof what, "finger, %g ms, %s", 1e3 * dt, deferred ? "deferred" : "on the stepping thread");
+      if (!w) check(ce, what, -1);
       const palp_finger_def fd = palp_finger_default_def();
       const int id = palp_world_add_finger_def(w, &fd, (palp_vec3){0, 0, 0.06});
+      check(id, what, -1);
       const int n = quick ? 500 : (k ? 4000 : 2000);
-      double *tr = malloc(sizeof(double) * (size_t)n), *tn = malloc(sizeof(double) * (size_t)n);
+      double *tr = check_alloc(malloc(sizeof(double) * (size_t)n)), *tn = check_alloc(malloc(sizeof(double) * (size_t)n));
       int nr = 0, nn = 0;
       for (int i = 0; i < n; ++i) {
         const double tt = i * dt, pi = 3.14159265358979323846;
         const double depth = 0.010 + 0.008 * sin(2 * pi * 0.7 * tt);
-        palp_world_set_finger_device(w, id, (palp_vec3){0.01 * sin(2 * pi * 0.3 * tt), 0, 0.056 - depth});
+        check(palp_world_set_finger_device(w, id, (palp_vec3){0.01 * sin(2 * pi * 0.3 * tt), 0, 0.056 - depth}), what, i);
         palp_stage_timings a, b;
         palp_world_timings(w, &a);
         const double s = now_s();
-        palp_world_step(w);
+        const int rc = palp_world_step(w);
         const double e = now_s() - s;
+        check(rc, what, i);
         palp_world_timings(w, &b);
         palp_factor_job *j = palp_world_factor_claim(w);
         if (j) { /* requested by this step: the server's helper would run it now */
-          palp_factor_job_run(j);
-          palp_world_factor_done(w, j);
+          check(palp_factor_job_run(j), what, i);
+          check(palp_world_factor_done(w, j), what, i);
           tr[nr++] = e;
         } else if (b.refactors > a.refactors) {
           tr[nr++] = e;

@@ -46,8 +46,8 @@ def write(s, path):
     return path
 
 
-def run(cmd, timeout=100):
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+def run(cmd, timeout=100, cwd=None):
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=cwd)
     return r.returncode, r.stdout + r.stderr
 
 
@@ -100,13 +100,56 @@ def case_run_dt(a, tmp):
     check(rc == 2 and "at most 100000 steps per frame" in out, "palp-run --dt 1e-15 refused (rc %d): %s" % (rc, out.strip()))
 
 
+def case_sweep_broken(a, tmp):
+    # Every real-time point's world refuses to step: each used to go on "stepping" in ~0.3 us,
+    # two landed on the Pareto front and the sweep exited 0. Now each is marked failed in the
+    # table (never on the front), its reason printed, and the exit is 1.
+    out = os.path.join(tmp, "out")
+    rc, log = run([a.sweep, "--quick", "--ref-level", "1", "--frames", "40", "--scene", broken_scene(a, tmp),
+                   "--out", out], timeout=110, cwd=tmp)  # its FEM cache (cache/fem) goes there too
+    check(rc == 1, "palp-sweep on a broken scene exits 1 (rc %d)" % rc)
+    check("FAILED: step" in log and "non-finite" in log, "each failed point is reported with its step and reason")
+    check("never on the Pareto front" in log, "the summary says the failed points are off the front")
+    rows = []
+    try:
+        with open(os.path.join(out, "sweep.csv")) as f:
+            head = f.readline().strip().split(",")
+            rows = [dict(zip(head, re.findall(r'"[^"]*"|[^,]+', line.strip()))) for line in f]
+    except OSError as e:
+        check(False, "sweep.csv written: %s" % e)
+    failed = [r for r in rows if r.get("failed") == "1"]
+    check(len(failed) == 5, "5 real-time points marked failed in sweep.csv (got %d)" % len(failed))
+    check(all(r.get("pareto") == "0" for r in failed), "no failed point on the Pareto front")
+    check(all(r.get("cost_s_per_sim_s") == "nan" for r in failed), "no cost for a failed point")
+
+
+def case_bench_step_broken(a, tmp):
+    # The server core's view on a dome whose world refuses to step: stop with the case, the step
+    # and the reason (its median and p99 were of steps that did nothing).
+    rc, out = run([a.bench_step, "--core-only", "--quick", "--worlds", "2", "--scene", broken_scene(a, tmp)])
+    check(rc == 1 and re.search(r"bench_model_step: server core, one world, step \d+: state became non-finite", out),
+          "bench_model_step on a broken dome exits 1 naming the step (rc %d): %s" % (rc, out.strip()[-200:]))
+
+
+def case_bench_step_zero(a, tmp):
+    # --steps 0 read t[0] of a zero-size allocation and printed it as the median.
+    rc, out = run([a.bench_step, "--steps", "0"])
+    check(rc == 2 and "--steps must be a whole number from 1" in out, "bench_model_step --steps 0 refused (rc %d): %s" % (rc, out.strip()[-200:]))
+
+
+def case_bench_effects_zero(a, tmp):
+    rc, out = run([a.bench_effects, "--steps", "0"])
+    check(rc == 2 and "--steps must be a whole number from 1" in out,
+          "bench_model_effects --steps 0 refused (rc %d): %s" % (rc, out.strip()[-200:]))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--config", required=True)
     ap.add_argument("--run")
     ap.add_argument("--sweep")
-    ap.add_argument("--bench-step")
-    ap.add_argument("--bench-effects")
+    ap.add_argument("--bench-step", dest="bench_step")
+    ap.add_argument("--bench-effects", dest="bench_effects")
     ap.add_argument("case")
     a = ap.parse_args()
     fn = globals().get("case_" + a.case)

@@ -22,6 +22,7 @@
 #define _GNU_SOURCE
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -48,6 +49,8 @@ typedef struct point {
   double force_rmse;     /* [N] */
   double agreement;      /* share of |d| differences within bias +- 2 SD */
   int pareto, is_default;
+  int failed;            /* the run stopped (why: reason); no cost or error, never on the front */
+  char reason[160];
 } point;
 
 typedef struct reference {
@@ -131,9 +134,10 @@ static void finish(errs *e, point *pt) {
   pt->agreement = palp_stats_bland_altman(e->a, e->b, e->n, &ba) == PALP_OK ? ba.agreement : NAN;
 }
 
-/* Nearest probe vertex of each vertex of a mesh (rest positions). */
+/* Nearest probe vertex of each vertex of a mesh (rest positions); NULL without memory. */
 static int *nearest_map(const palp_vec3 *rest, int nv, const reference *R) {
   int *map = malloc(sizeof(int) * (size_t)nv);
+  if (!map) return NULL;
   for (int i = 0; i < nv; ++i) {
     double bd = INFINITY;
     for (int j = 0; j < R->nv; ++j) {
@@ -144,34 +148,57 @@ static int *nearest_map(const palp_vec3 *rest, int nv, const reference *R) {
   return map;
 }
 
+/* Marks the point failed (its reason logged and kept for the table): no cost, no error. */
+static int fail_point(palp_log *log, point *pt, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int fail_point(palp_log *log, point *pt, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(pt->reason, sizeof pt->reason, fmt, ap);
+  va_end(ap);
+  pt->failed = 1;
+  pt->step_median_s = pt->cost = pt->disp_rmse = pt->force_rmse = pt->agreement = NAN;
+  palp_log_error(log, "point \"%s\" failed: %s", pt->name, pt->reason);
+  return -1;
+}
+
+/* 0, or -1 with the point marked failed: a world that refuses a step or a force is no
+ * result (it used to go on "stepping" in ~0 us and could land on the Pareto front). */
 static int run_rt(palp_log *log, const palp_scene *s, const reference *R, point *pt) {
   int err;
   palp_world *w = palp_scene_create_world(s, &err);
-  if (!w) {
-    palp_log_error(log, "%s: %s", pt->name, palp_strerror(err));
-    return -1;
-  }
+  if (!w) return fail_point(log, pt, "cannot create the world: %s", palp_strerror(err));
   const palp_mesh *m = palp_world_mesh(w);
   const int nv = m->vertex_count;
   int *map = nearest_map(m->rest, nv, R);
   const int sub = (int)lround(s->frame_period / s->world.dt);
   const long nsteps = (long)R->frames * sub;
-  double *st = malloc(sizeof(double) * (size_t)nsteps);
+  double *st = malloc(sizeof(double) * (size_t)(nsteps > 0 ? nsteps : 1));
   palp_vec3 *disp = malloc(sizeof(palp_vec3) * (size_t)nv);
   errs e = {0};
   e.cap = (size_t)R->frames * (size_t)nv;
   e.a = malloc(sizeof(double) * e.cap);
   e.b = malloc(sizeof(double) * e.cap);
+  int rc = 0;
+  if (!map || !st || !disp || !e.a || !e.b) rc = fail_point(log, pt, "out of memory (%ld steps, %d vertices)", nsteps, nv);
   long k = 0;
   double wall = 0.0;
-  for (int f = 0; f < R->frames; ++f) {
+  for (int f = 0; !rc && f < R->frames; ++f) {
     for (int q = 0; q < sub; ++q, ++k) {
-      const double t0 = now_s();
-      palp_scene_apply(s, w, palp_world_time(w));
-      palp_world_step(w);
+      const double t0 = now_s(), t = palp_world_time(w); /* the step's start: a failed one may leave halves */
+      err = palp_scene_apply(s, w, t);
+      if (err) {
+        rc = fail_point(log, pt, "step %ld (from t = %g s): the scene's forces: %s", k, t, palp_strerror(err));
+        break;
+      }
+      err = palp_world_step(w);
+      if (err) {
+        rc = fail_point(log, pt, "step %ld (from t = %g s): %s", k, t, palp_strerror(err));
+        break;
+      }
       st[k] = now_s() - t0;
       wall += st[k];
     }
+    if (rc) break;
     const palp_vec3 *p = palp_world_positions(w);
     for (int i = 0; i < nv; ++i)
       disp[i] = (palp_vec3){p[i].x - m->rest[i].x, p[i].y - m->rest[i].y, p[i].z - m->rest[i].z};
@@ -182,20 +209,24 @@ static int run_rt(palp_log *log, const palp_scene *s, const reference *R, point 
     }
     add_frame(&e, R, f, disp, nv, map, norm(fb));
   }
-  qsort(st, (size_t)nsteps, sizeof *st, cmpd);
-  pt->step_median_s = st[nsteps / 2];
-  pt->cost = wall / (R->frames * s->frame_period);
-  finish(&e, pt);
+  if (!rc && nsteps < 1) rc = fail_point(log, pt, "no steps (%d frames of %d steps)", R->frames, sub);
+  if (!rc) {
+    qsort(st, (size_t)nsteps, sizeof *st, cmpd);
+    pt->step_median_s = st[nsteps / 2];
+    pt->cost = wall / (R->frames * s->frame_period);
+    finish(&e, pt);
+  }
   free(st), free(disp), free(map), free(e.a), free(e.b);
   palp_world_destroy(w);
-  return 0;
+  return rc;
 }
 
+/* Failed points are never on the front, nor keep another point off it. */
 static void mark_pareto(point *p, int n) {
   for (int i = 0; i < n; ++i) {
-    p[i].pareto = 1;
-    for (int j = 0; j < n; ++j) {
-      if (j == i) continue;
+    p[i].pareto = !p[i].failed;
+    for (int j = 0; p[i].pareto && j < n; ++j) {
+      if (j == i || p[j].failed) continue;
       const int no_worse = p[j].cost <= p[i].cost && p[j].disp_rmse <= p[i].disp_rmse;
       const int better = p[j].cost < p[i].cost || p[j].disp_rmse < p[i].disp_rmse;
       if (no_worse && better) {
@@ -217,9 +248,11 @@ static void write_svg(const char *path, const point *p, int n) {
   const double W = 920, H = 520, L = 80, Rm = 190, T = 62, B = 60;
   double xmin = INFINITY, xmax = 0, ymin = INFINITY, ymax = 0;
   for (int i = 0; i < n; ++i) {
+    if (p[i].failed) continue;
     xmin = fmin(xmin, p[i].cost), xmax = fmax(xmax, p[i].cost);
     ymin = fmin(ymin, p[i].disp_rmse), ymax = fmax(ymax, p[i].disp_rmse);
   }
+  if (!(xmin <= xmax)) xmin = xmax = 1.0, ymin = ymax = 1e-3; /* nothing to plot: empty axes */
   const double lx0 = floor(log10(xmin)), lx1 = ceil(log10(xmax)), ly0 = floor(log10(ymin * 1e3)),
                ly1 = ceil(log10(ymax * 1e3));
 #define SX(c) (L + (log10(c) - lx0) / (lx1 - lx0 > 0 ? lx1 - lx0 : 1) * (W - L - Rm))
@@ -250,16 +283,19 @@ static void write_svg(const char *path, const point *p, int n) {
              "[mm] (log)</text>\n",
           (T + H - B) / 2, (T + H - B) / 2);
   /* Pareto front as a line through its points in order of cost. */
-  point *sorted = malloc(sizeof(point) * (size_t)n);
-  memcpy(sorted, p, sizeof(point) * (size_t)n);
-  qsort(sorted, (size_t)n, sizeof *sorted, cmp_cost);
-  fprintf(f, "<polyline fill=\"none\" stroke=\"#d62728\" stroke-width=\"1.5\" points=\"");
-  for (int i = 0; i < n; ++i)
-    if (sorted[i].pareto) fprintf(f, "%.1f,%.1f ", SX(sorted[i].cost), SY(sorted[i].disp_rmse));
-  fprintf(f, "\"/>\n");
-  free(sorted);
+  point *sorted = malloc(sizeof(point) * (size_t)(n > 0 ? n : 1));
+  if (sorted) {
+    memcpy(sorted, p, sizeof(point) * (size_t)n);
+    qsort(sorted, (size_t)n, sizeof *sorted, cmp_cost);
+    fprintf(f, "<polyline fill=\"none\" stroke=\"#d62728\" stroke-width=\"1.5\" points=\"");
+    for (int i = 0; i < n; ++i)
+      if (sorted[i].pareto) fprintf(f, "%.1f,%.1f ", SX(sorted[i].cost), SY(sorted[i].disp_rmse));
+    fprintf(f, "\"/>\n");
+    free(sorted);
+  }
   int labelled = 0;
   for (int i = 0; i < n; ++i) {
+    if (p[i].failed) continue; /* no cost, no error: listed as failed in the table */
     const double x = SX(p[i].cost), y = SY(p[i].disp_rmse);
     fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"%s\"/>\n", x, y, p[i].fem ? "#1f77b4" : "#2ca02c");
     if (p[i].is_default)
@@ -283,6 +319,14 @@ static void write_svg(const char *path, const point *p, int n) {
   fclose(f);
 #undef SX
 #undef SY
+}
+
+static void print_point(const point *p) {
+  if (p->failed) printf("  %-28s FAILED: %s\n", p->name, p->reason);
+  else
+    printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
+           1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
+  fflush(stdout);
 }
 
 #define SWEEP_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE)
@@ -371,10 +415,21 @@ int main(int argc, char **argv) {
   }
   reference R = {.frames = ref.frames, .nv = ref.vertex_count};
   palp_mesh pm;
-  palp_mesh_create(&probe.world.mesh, &pm);
+  const int mrc = palp_mesh_create(&probe.world.mesh, &pm);
+  if (mrc) {
+    palp_log_error(&log, "the %d-vertex probe mesh: %s", PROBE_VERTICES, palp_strerror(mrc));
+    palp_fem_result_destroy(&ref);
+    return 1;
+  }
   R.rest = pm.rest;
   R.disp = ref.disp;
-  R.force = malloc(sizeof(double) * (size_t)R.frames);
+  R.force = malloc(sizeof(double) * (size_t)(R.frames > 0 ? R.frames : 1));
+  if (!R.force) {
+    palp_log_error(&log, "out of memory");
+    palp_mesh_destroy(&pm);
+    palp_fem_result_destroy(&ref);
+    return 1;
+  }
   for (int f = 0; f < R.frames; ++f) R.force[f] = total_force(&ref, f);
 
   point pts[40];
@@ -394,10 +449,9 @@ int main(int argc, char **argv) {
       snprintf(p->name, sizeof p->name, "RT %d v %g ms", vcounts[a], 1e3 * q.world.dt);
       p->vertices = vcounts[a], p->dt = q.world.dt;
       p->is_default = vcounts[a] == 338 && fabs(q.world.dt - 0.01) < 1e-12;
-      if (run_rt(&log, &q, &R, p) == 0) n++;
-      printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
-             1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
-      fflush(stdout);
+      run_rt(&log, &q, &R, p);
+      print_point(p);
+      n++;
     }
   /* Effects and gel law at the default mesh and step. */
   struct {
@@ -419,38 +473,43 @@ int main(int argc, char **argv) {
     memset(p, 0, sizeof *p);
     snprintf(p->name, sizeof p->name, "%s", fx[k].name);
     p->vertices = 338, p->dt = q.world.dt;
-    if (run_rt(&log, &q, &R, p) == 0) n++;
-    printf("  %-28s cost %.4f s/s, step %.1f us, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
-           1e6 * p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
-    fflush(stdout);
+    run_rt(&log, &q, &R, p);
+    print_point(p);
+    n++;
   }
   /* The FEM's own fidelity: coarser levels against the finest. */
   for (int level = 1; level < ref_level; ++level) {
     palp_fem_result r;
+    point *p = &pts[n++];
+    memset(p, 0, sizeof *p);
+    p->fem = 1, p->level = level, p->vertices = PROBE_VERTICES;
     if (run_fem(&probe, level, &r, err, sizeof err)) {
-      palp_log_error(&log, "FEM level %d failed: %s", level, err);
+      snprintf(p->name, sizeof p->name, "FEM level %d", level);
+      fail_point(&log, p, "%s", err);
+      print_point(p);
       continue;
     }
-    point *p = &pts[n];
-    memset(p, 0, sizeof *p);
     snprintf(p->name, sizeof p->name, "FEM level %d (%d hex)", level, r.element_count);
-    p->fem = 1, p->level = level, p->vertices = PROBE_VERTICES;
-    p->step_median_s = r.wall_seconds / r.frames;
-    p->cost = r.wall_seconds / (r.frames * s.frame_period);
     errs e = {0};
     e.cap = (size_t)R.frames * (size_t)R.nv;
     e.a = malloc(sizeof(double) * e.cap);
     e.b = malloc(sizeof(double) * e.cap);
     int *id = malloc(sizeof(int) * (size_t)R.nv);
-    for (int i = 0; i < R.nv; ++i) id[i] = i;
-    for (int f = 0; f < R.frames; ++f)
-      add_frame(&e, &R, f, r.disp + (size_t)f * r.vertex_count, r.vertex_count, id, total_force(&r, f));
-    finish(&e, p);
+    if (!e.a || !e.b || !id) fail_point(&log, p, "out of memory");
+    else {
+      p->step_median_s = r.wall_seconds / r.frames;
+      p->cost = r.wall_seconds / (r.frames * s.frame_period);
+      for (int i = 0; i < R.nv; ++i) id[i] = i;
+      for (int f = 0; f < R.frames; ++f)
+        add_frame(&e, &R, f, r.disp + (size_t)f * r.vertex_count, r.vertex_count, id, total_force(&r, f));
+      finish(&e, p);
+    }
     free(id), free(e.a), free(e.b);
     palp_fem_result_destroy(&r);
-    n++;
-    printf("  %-28s cost %.4f s/s, frame %.3f s, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
-           p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
+    if (p->failed) print_point(p);
+    else
+      printf("  %-28s cost %.4f s/s, frame %.3f s, displacement RMSE %.3f mm, force RMSE %.3f N\n", p->name, p->cost,
+             p->step_median_s, 1e3 * p->disp_rmse, p->force_rmse);
   }
   /* The reference itself: zero error by construction, its cost for the plot's scale. */
   {
@@ -476,15 +535,17 @@ int main(int argc, char **argv) {
     return 1;
   }
   fprintf(csv, "name,model,vertices,fem_level,dt_s,step_or_frame_s,cost_s_per_sim_s,disp_rmse_m,force_rmse_N,"
-               "agreement,pareto,server_default\n");
+               "agreement,pareto,server_default,failed\n");
   fprintf(md, "| point | cost [s per simulated s] | step or frame | displacement RMSE [mm] | force RMSE [N] | "
               "agreement | Pareto |\n|---|---|---|---|---|---|---|\n");
   for (int i = 0; i < n; ++i) {
     const point *p = &pts[i];
-    fprintf(csv, "\"%s\",%s,%d,%d,%g,%.6g,%.6g,%.6g,%.6g,%.4f,%d,%d\n", p->name, p->fem ? "fem" : "rt", p->vertices,
+    fprintf(csv, "\"%s\",%s,%d,%d,%g,%.6g,%.6g,%.6g,%.6g,%.4f,%d,%d,%d\n", p->name, p->fem ? "fem" : "rt", p->vertices,
             p->level, p->dt, p->step_median_s, p->cost, p->disp_rmse, p->force_rmse, p->agreement, p->pareto,
-            p->is_default);
-    if (i < nplot)
+            p->is_default, p->failed);
+    if (p->failed)
+      fprintf(md, "| %s%s | failed: %s | | | | | |\n", p->name, p->is_default ? " **(server default)**" : "", p->reason);
+    else if (i < nplot)
       fprintf(md, "| %s%s | %.4f | %s%.4g %s | %.3f | %.3f | %.1f%% | %s |\n", p->name,
               p->is_default ? " **(server default)**" : "", p->cost, "", p->fem ? p->step_median_s : 1e6 * p->step_median_s,
               p->fem ? "s/frame" : "us/step", 1e3 * p->disp_rmse, p->force_rmse, 100 * p->agreement,
@@ -496,11 +557,16 @@ int main(int argc, char **argv) {
   fclose(md);
   snprintf(path, sizeof path, "%s/sweep.svg", out);
   write_svg(path, pts, nplot);
-  int front = 0;
-  for (int i = 0; i < nplot; ++i) front += pts[i].pareto;
+  int front = 0, failed = 0;
+  for (int i = 0; i < nplot; ++i) front += pts[i].pareto, failed += pts[i].failed;
   printf("wrote %s/sweep.csv, sweep.md, sweep.svg (%d points, %d on the Pareto front)\n", out, n, front);
   free(R.force);
   palp_mesh_destroy(&pm);
   palp_fem_result_destroy(&ref);
+  /* The table is written either way (the failed rows say why); the exit says it is incomplete. */
+  if (failed) {
+    palp_log_error(&log, "%d of %d points failed (marked in the table, never on the Pareto front)", failed, nplot);
+    return 1;
+  }
   return 0;
 }
