@@ -58,6 +58,10 @@ struct palp_netem {
   int64_t last_due[2][PALP_TOPIC_COUNT];
   uint64_t rng;
   palp_netem_stats st;
+  /* st.delay_min holds a delay. Not "forwarded + retransmitted > 0": nothing is forwarded
+   * until the first sample falls due, and until then every enqueue overwrote the minimum.
+   * Like st, under lock (enqueue runs on both rx threads). */
+  int have_min;
   rx_arg *rx_args;
 };
 
@@ -114,7 +118,7 @@ static void enqueue(palp_netem *n, int to, int kind, int op, void *sample) {
   if (due < n->last_due[to][kind]) due = n->last_due[to][kind];
   n->last_due[to][kind] = due;
   const double applied = (double)(due - now) * 1e-9;
-  if (n->st.forwarded + n->st.retransmitted == 0 || applied < n->st.delay_min) n->st.delay_min = applied;
+  if (!n->have_min || applied < n->st.delay_min) n->st.delay_min = applied, n->have_min = 1;
   if (applied > n->st.delay_max) n->st.delay_max = applied;
   item *it = calloc(1, sizeof *it);
   if (!it) {
