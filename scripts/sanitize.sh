@@ -4,7 +4,8 @@
 #   scripts/sanitize.sh address [CTEST_REGEX]  AddressSanitizer + UndefinedBehaviorSanitizer
 #                                              (every test but the few listed below; ~35 min)
 #   scripts/sanitize.sh thread  [CTEST_REGEX]  ThreadSanitizer over the threaded programs' tests
-#                                              (servers, stations, recorder, web; ~20 min)
+#                                              (servers, stations, recorder, web, exercises
+#                                              parsed on four threads; ~20 min)
 #
 # Not part of the test command (scripts/test.sh must stay under 10 minutes); run it after a
 # change to threads, buffers or parsers, as scripts/fuzz.sh after a change to a parser.
@@ -49,7 +50,7 @@ case "$kind" in
     link="-fsanitize=thread"
     build=${PALP_BUILD_DIR:-build-tsan}
     exclude='^(model_finger_memcheck|install_prefix)$'
-    regex=${regex:-'^(model_refactor_lag|fem_phantom_background|server_|security_classroom|db_|haptic_|web_|assess_trainees_dds|review_cli|interop_fastdds)'}
+    regex=${regex:-'^(model_refactor_lag|fem_phantom_background|server_|security_classroom|db_|haptic_|web_|assess_trainees_dds|assess_exercise$|review_cli|interop_fastdds)'}
     bits=$(cat /proc/sys/vm/mmap_rnd_bits 2>/dev/null || echo 28)
     if [ "$bits" -gt 28 ]; then
       echo "sanitize: ThreadSanitizer needs vm.mmap_rnd_bits <= 28 (it is $bits): sysctl -w vm.mmap_rnd_bits=28" >&2

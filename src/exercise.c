@@ -248,7 +248,9 @@ static int parse_rubric(ctx *c, const cJSON *o, palp_rubric *r) {
   if ((e = only_keys(c, o, "rubric.", keys))) return e;
   const cJSON *w = cJSON_GetObjectItemCaseSensitive(o, "weights");
   if (!cJSON_IsObject(w)) return palp_parse_fail(c, PALP_EPARSE, "rubric.weights: missing or not an object");
-  static const char *wkeys[PALP_METRIC_COUNT + 1];
+  /* On the stack: a static table filled on every call was written by every thread that parses
+   * an exercise, a data race even though each wrote the same pointers. */
+  const char *wkeys[PALP_METRIC_COUNT + 1];
   for (int m = 0; m < PALP_METRIC_COUNT; ++m) wkeys[m] = metric_names[m];
   wkeys[PALP_METRIC_COUNT] = NULL;
   if ((e = only_keys(c, w, "rubric.weights.", wkeys))) return e;

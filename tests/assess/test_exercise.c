@@ -7,6 +7,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <pthread.h>
+
 #include "check.h"
 #include "palp_assess.h"
 
@@ -34,6 +36,24 @@ static void expect_error(const char *from, const char *to, const char *field) {
   printf("%-40s -> %s\n", to, err);
   CHECK(e == PALP_EPARSE, "replacing %s by %s: expected PALP_EPARSE, got %d", from, to, e);
   CHECK(strstr(err, field) != NULL, "message \"%s\" should name %s", err, field);
+}
+
+/* One thread of the concurrent parse below: 200 parses of `good`, counting those that fail or
+ * differ from the main thread's (no CHECK here: its counter is not for threads). */
+typedef struct parse_job {
+  const palp_exercise *want;
+  int bad;
+} parse_job;
+static void *parse_many(void *arg) {
+  parse_job *j = arg;
+  for (int i = 0; i < 200; ++i) {
+    palp_exercise ex;
+    char err[256];
+    if (palp_exercise_parse(good, "/x", &ex, err, sizeof err) != 0 ||
+        memcmp(&ex.rubric, &j->want->rubric, sizeof ex.rubric) != 0)
+      j->bad++;
+  }
+  return NULL;
 }
 
 int main(void) {
@@ -151,6 +171,24 @@ int main(void) {
               fabs(sc.world.lesion[0].radius - 0.0075) < 1e-12,
           "  its centre 12 mm under the skin (R - depth = 28 mm: %.6f), at polar %.1f in the band, radius 7.5 mm", r * 1e3,
           polar);
+  }
+  /* Exercises parsed on several threads at once (a server loads them while another reloads):
+   * the same result on each. parse_rubric filled a static key table on every call, a data race
+   * (review, 2027) that only ThreadSanitizer sees: scripts/sanitize.sh thread runs this test. */
+  {
+    palp_exercise want;
+    CHECK(palp_exercise_parse(good, "/x", &want, err, sizeof err) == 0, "template: %s", err);
+    parse_job jobs[4];
+    pthread_t th[4];
+    int started = 0;
+    for (int i = 0; i < 4; ++i) {
+      jobs[i] = (parse_job){&want, 0};
+      started += pthread_create(&th[i], NULL, parse_many, &jobs[i]) == 0;
+    }
+    CHECK(started == 4, "4 threads started (%d)", started);
+    int bad = 0;
+    for (int i = 0; i < started; ++i) pthread_join(th[i], NULL), bad += jobs[i].bad;
+    CHECK(bad == 0, "800 parses on 4 threads: %d failed or differed from one parse alone", bad);
   }
   CHECK_DONE();
 }
