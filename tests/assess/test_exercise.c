@@ -174,7 +174,7 @@ int main(void) {
   }
   /* Exercises parsed on several threads at once (a server loads them while another reloads):
    * the same result on each. parse_rubric filled a static key table on every call, a data race
-   * (review, 2027) that only ThreadSanitizer sees: scripts/sanitize.sh thread runs this test. */
+   * (review, 2026-12-06) that only ThreadSanitizer sees: scripts/sanitize.sh thread runs this test. */
   {
     palp_exercise want;
     CHECK(palp_exercise_parse(good, "/x", &want, err, sizeof err) == 0, "template: %s", err);

@@ -106,7 +106,7 @@ static void test_inp(void) {
           err);
     if (rc == 0) palp_fem_mesh_destroy(&b);
   }
-  /* Many sets (review, 2027): set members are capped over all sets together, not per set. Each
+  /* Many sets (review, 2026-12-06): set members are capped over all sets together, not per set. Each
    * block below asks for 10,000,000 members (80 MB), within a per-set cap; the second must be
    * refused on its own data line (4) before it allocates, not after 8 blocks of 640 MB. */
   f = fopen(path, "w");

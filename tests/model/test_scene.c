@@ -171,7 +171,7 @@ static int parse_direction(const char *dir, palp_scene *s, char *err, size_t err
   return palp_scene_parse(buf, s, err, errlen);
 }
 
-/* Review (2027): the force direction was normalised by its plain length, so [1e200, 0, -1e200]
+/* Review (2026-12-06): the force direction was normalised by its plain length, so [1e200, 0, -1e200]
  * (length inf) pushed with a zero force and [1e-170, 0, -1e-170] (length 0) along the default
  * inward normal instead. Both now read as (1, 0, -1)/sqrt 2 (within 1e-12) and push as
  * [1, 0, -1] does (every position within 1e-12 m after 20 steps, and the surface moved by more
@@ -365,7 +365,7 @@ int main(void) {
           xj ? xb.world.lesion[0].center.x : 0.0, err);
     free(xj);
   }
-  /* Keyframes too (review, 2027): they were printed by cJSON_CreateDoubleArray, 15 digits,
+  /* Keyframes too (review, 2026-12-06): they were printed by cJSON_CreateDoubleArray, 15 digits,
    * so 0.30000000000000004 (0.1 + 0.2) read back as 0.29999999999999999, and 2/3 N as ...67. */
   {
     palp_scene x = a;

@@ -1,5 +1,5 @@
 /*
- * test_netem_stats.c - palp-netem's applied-delay statistics (review, 2027).
+ * test_netem_stats.c - palp-netem's applied-delay statistics (review, 2026-12-06).
  *
  * White-box: netem.c is compiled into this test so that its enqueue() runs as the relay's
  * receive threads run it (under the lock), with no DDS entity and no domain: enqueue only
