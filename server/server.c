@@ -140,6 +140,9 @@ struct palp_srv {
   int64_t stray_said_ns;
   int warned_other_server;
   dds_entity_t request_rc, stop_gc, waitset;
+  /* A palp_session_request writer went away (the reader's matched count fell): when to look which
+   * stations' writers are gone (sweep_gone_writers); 0: nothing pending. */
+  int64_t writers_sweep_ns;
 
   palp_srv_ticker *ticker;
   palp_srv_session **sessions; /* open sessions, [cfg.max_sessions] */
@@ -1658,6 +1661,39 @@ static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
                          : "run the classroom with DDS Security, so that only its identities may write requests");
 }
 
+/* A station is gone when its own request writer is: its instance's state cannot say so once another
+ * writer has touched it. Secured, a dispose of the station's key by another identity is refused
+ * (handle_requests), but the instance stays disposed, so when the station's process later dies
+ * Cyclone has no new not-alive state to report, and the station held its slot and session for as
+ * long as that other writer lived (until 2026-12-07). So the server also watches the request
+ * reader's matched writers: when one goes, every station joined through palp_session_request whose
+ * writer is no longer matched is lost. Not slept on: the fall of the matched count is noted, and the
+ * stations are looked at GONE_GRACE_NS later, once the reader has been drained in that pass, so that
+ * a departing station's LEAVE and dispose (sent before its writer went) are taken first and it
+ * leaves rather than being lost. Keyed stations (palp_station_request, plain DDS only) keep their own
+ * rule (station_gone_later): there any writer's dispose ends the station. */
+static void note_request_unmatches(palp_srv *srv, int64_t now_ns) {
+  dds_subscription_matched_status_t ms;
+  if (dds_get_subscription_matched_status(srv->request_r, &ms) < 0) return;
+  /* total_count_change counts new matches, current_count_change new matches less lost ones */
+  if ((int64_t)ms.total_count_change - ms.current_count_change > 0 && !srv->writers_sweep_ns)
+    srv->writers_sweep_ns = now_ns + GONE_GRACE_NS;
+}
+
+static void sweep_gone_writers(palp_srv *srv) {
+  srv->writers_sweep_ns = 0;
+  for (int i = 0; i < srv->station_slots; i++) {
+    station *st = &srv->stations[i];
+    if (!st->in_use || st->keyed || !st->writer) continue;
+    dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(srv->request_r, st->writer);
+    if (w) {
+      dds_builtintopic_free_endpoint(w);
+      continue;
+    }
+    station_leave(srv, st, "lost (its request writer is gone)"); /* may free other slots: each is checked */
+  }
+}
+
 static void handle_requests(palp_srv *srv) {
   enum { N = 16 };
   palp_SessionRequest buf[N];
@@ -1667,6 +1703,8 @@ static void handle_requests(palp_srv *srv) {
   int n, taken = 0;
   handle_station_requests(srv);
   decide_gone_stations(srv, palp_dds_now_ns());
+  note_request_unmatches(srv, palp_dds_now_ns());
+  n = 0;
   while (taken < REQUESTS_PER_PASS && (n = dds_take(srv->request_r, ptr, info, N, N)) > 0) {
     taken += n;
     for (int i = 0; i < n; i++) {
@@ -1738,7 +1776,9 @@ static void handle_requests(palp_srv *srv) {
         continue;
       }
       /* Secured: a dispose or unregister by any writer but the station's own
-       * (another identity writing this key) says nothing about the station. */
+       * (another identity writing this key) says nothing about the station. Its own
+       * writer's going is then seen by sweep_gone_writers: the instance, already
+       * disposed, may turn not-alive no more. */
       if (secured(srv) && info[i].publication_handle != st->writer) {
         refuse_identity(srv, "station \"%s\": disposed or unregistered by a writer that is not its own",
                         PRINTABLE(buf[i].station_id));
@@ -1754,6 +1794,8 @@ static void handle_requests(palp_srv *srv) {
     }
     if (n < N) break;
   }
+  /* Drained (the last take came short): whatever a gone writer sent before it went has been taken. */
+  if (n < N && srv->writers_sweep_ns && palp_dds_now_ns() >= srv->writers_sweep_ns) sweep_gone_writers(srv);
 }
 
 /* [receive thread] The request topics' filter: see admission.h. arg: that topic's admission
@@ -2185,6 +2227,7 @@ int palp_srv_run(palp_srv *srv, double duration) {
     if (wake - now > 100000000) wake = now + 100000000;
     const int64_t gone_due = next_gone_due(srv); /* a disposed station's moment (station_gone_later) */
     if (gone_due < wake) wake = gone_due;
+    if (srv->writers_sweep_ns && srv->writers_sweep_ns < wake) wake = srv->writers_sweep_ns; /* sweep_gone_writers */
     dds_waitset_wait(srv->waitset, NULL, 0, wake - now > 0 ? wake - now : 0);
     handle_requests(srv);
     publish_scores(srv);
