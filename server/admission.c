@@ -62,6 +62,7 @@ struct palp_srv_admission {
   pthread_mutex_t lock;
   map instances; /* instance handle -> writer handle */
   map writers;   /* writer handle -> admitted instance count */
+  uint64_t *swept; /* [main thread] the writers a sweep looks at, copied out of the lock; [capacity] */
   int count, capacity, per_writer;
   uint64_t refused;
   double rate, tokens;
@@ -72,9 +73,11 @@ struct palp_srv_admission {
 palp_srv_admission *palp_srv_admission_create(int per_writer, int capacity, double rate_per_s, int burst) {
   palp_srv_admission *a = calloc(1, sizeof *a);
   if (!a) return NULL;
-  if (map_init(&a->instances, capacity) || map_init(&a->writers, capacity)) {
+  a->swept = calloc((size_t)capacity, sizeof *a->swept);
+  if (!a->swept || map_init(&a->instances, capacity) || map_init(&a->writers, capacity)) {
     free(a->instances.e);
     free(a->writers.e);
+    free(a->swept);
     free(a);
     return NULL;
   }
@@ -93,6 +96,7 @@ void palp_srv_admission_destroy(palp_srv_admission *a) {
   pthread_mutex_destroy(&a->lock);
   free(a->instances.e);
   free(a->writers.e);
+  free(a->swept);
   free(a);
 }
 
@@ -117,19 +121,45 @@ bool palp_srv_admission_admit(palp_srv_admission *a, uint64_t iid, uint64_t writ
   return ok;
 }
 
-bool palp_srv_admission_release(palp_srv_admission *a, uint64_t iid) {
+bool palp_srv_admission_holds(palp_srv_admission *a, uint64_t iid) {
   pthread_mutex_lock(&a->lock);
-  entry *e = map_find(&a->instances, iid);
-  const bool known = e != NULL;
-  if (e) {
-    uint64_t writer = e->val;
-    map_erase(&a->instances, e);
-    a->count--;
-    entry *w = map_find(&a->writers, writer);
-    if (w && --w->val == 0) map_erase(&a->writers, w);
-  }
+  const bool held = map_find(&a->instances, iid) != NULL;
   pthread_mutex_unlock(&a->lock);
-  return known;
+  return held;
+}
+
+/* Erases every instance of `writer`, and the writer. Its count says how many there are; each is
+ * found by a fresh scan, as a backward-shift erase moves the entries after it. */
+static int release_writer(palp_srv_admission *a, uint64_t writer) {
+  entry *w = map_find(&a->writers, writer);
+  if (!w) return 0;
+  const int n = (int)w->val;
+  map_erase(&a->writers, w);
+  for (int k = 0; k < n; k++)
+    for (uint32_t i = 0; i <= a->instances.mask; i++)
+      if (a->instances.e[i].key != 0 && a->instances.e[i].val == writer) {
+        map_erase(&a->instances, &a->instances.e[i]);
+        a->count--;
+        break;
+      }
+  return n;
+}
+
+int palp_srv_admission_sweep(palp_srv_admission *a, int (*matched)(uint64_t writer, void *arg), void *arg) {
+  int n = 0, released = 0;
+  pthread_mutex_lock(&a->lock);
+  for (uint32_t i = 0; i <= a->writers.mask && n < a->capacity; i++)
+    if (a->writers.e[i].key != 0) a->swept[n++] = a->writers.e[i].key;
+  pthread_mutex_unlock(&a->lock);
+  for (int k = 0; k < n; k++) {
+    /* Not matched now means gone for good (publication handles are never reused): it can send
+     * nothing more, so no instance of it is let in twice. */
+    if (matched(a->swept[k], arg)) continue;
+    pthread_mutex_lock(&a->lock);
+    released += release_writer(a, a->swept[k]);
+    pthread_mutex_unlock(&a->lock);
+  }
+  return released;
 }
 
 uint64_t palp_srv_admission_refused(palp_srv_admission *a) {

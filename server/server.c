@@ -132,8 +132,9 @@ struct palp_srv {
   int told_next;
   int stopping; /* closing every session as the server stops: none of them will be scored live */
   dds_entity_t request_topic; /* the server's own entity: it carries the admission filter */
-  /* Disposes of request keys no station wrote (each an instance the request reader keeps while its
-   * writer lives; unbounded: docs/robustness.md): counted, and the writer named (note_request_stray). */
+  /* Disposes of request keys no admitted request holds (never written, or written past
+   * stations_per_writer and refused; each an instance the request reader keeps while its writer lives;
+   * unbounded: docs/robustness.md): counted, and the writer named (note_request_stray). */
   atomic_ullong request_strays; /* read by any thread (palp_srv_request_strays) */
   uint64_t stray_writer_count;
   dds_instance_handle_t stray_writer;
@@ -1571,6 +1572,23 @@ static int64_t next_gone_due(const palp_srv *srv) {
   return due;
 }
 
+/* Whether `writer` is matched with the request reader *arg now (palp_srv_admission_sweep). */
+static int writer_matched(uint64_t writer, void *arg) {
+  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(*(const dds_entity_t *)arg, writer);
+  if (!w) return 0;
+  dds_builtintopic_free_endpoint(w);
+  return 1;
+}
+
+/* Whether the reader lost matched writers since the last call (its status' changes are read, and so
+ * reset, only here): total_count_change counts new matches, current_count_change new matches less
+ * lost ones. */
+static int writers_unmatched(dds_entity_t reader) {
+  dds_subscription_matched_status_t ms;
+  return dds_get_subscription_matched_status(reader, &ms) == 0 &&
+         (int64_t)ms.total_count_change - ms.current_count_change > 0;
+}
+
 static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, uint64_t writer, station **out_st) {
   /* A station marked gone that asks again: its dispose is judged first, as it was before this
    * sample when the server slept on it. */
@@ -1593,6 +1611,9 @@ static void handle_station_requests(palp_srv *srv) {
   dds_sample_info_t info[N];
   for (int i = 0; i < N; i++) ptr[i] = &buf[i];
   int n, taken = 0;
+  /* A writer gone: its request instances leave the table (admission.h), and only then. */
+  if (srv->station_request_r > 0 && writers_unmatched(srv->station_request_r))
+    palp_srv_admission_sweep(srv->station_admission, writer_matched, &srv->station_request_r);
   while (srv->station_request_r > 0 && taken < REQUESTS_PER_PASS &&
          (n = dds_take(srv->station_request_r, ptr, info, N, N)) > 0) {
     taken += n;
@@ -1619,10 +1640,9 @@ static void handle_station_requests(palp_srv *srv) {
         continue;
       }
       if (info[i].instance_state == DDS_IST_ALIVE) continue;
-      /* The instance is gone: its writer may register another (admission.h). */
-      palp_srv_admission_release(srv->station_admission, info[i].instance_handle);
-      /* By instance handle: once its last sample is taken, a "no writers" instance
-       * may be gone, and its key with it. */
+      /* The instance is gone, but not necessarily its writer, which keeps its admission until it
+       * goes (admission.h). By instance handle: once its last sample is taken, a "no writers"
+       * instance may be gone, and its key with it. */
       for (int k = 0; k < srv->station_slots; k++) {
         station *st = &srv->stations[k];
         if (!st->in_use || !st->keyed || st->ih != info[i].instance_handle) continue;
@@ -1633,7 +1653,8 @@ static void handle_station_requests(palp_srv *srv) {
   }
 }
 
-/* A dispose of a request key no station wrote passes the admission filter (it carries no data) and
+/* A dispose of a request key no admitted request holds (never written, or written by a writer past its
+ * stations_per_writer, whose request the filter refused) passes the admission filter (it carries no data) and
  * is an instance of the request reader for as long as its writer lives (~0.6 kB: 40,000 grew a
  * server by 23 MB, 2026-12-06). Neither an instance bound (a reliable reader refusing one stalls
  * delivery) nor a new reader (requests are transient-local: the writer's history hands it every
@@ -1654,8 +1675,9 @@ static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
   else
     snprintf(by, sizeof by, "%s",
              secured(srv) ? "a writer already gone" : "a participant without an identity (DDS Security is off)");
-  palp_logf(srv->log, PALP_LOG_WARN, "%s disposed %llu session-request keys no station wrote (%llu in all): a flood, "
-            "each kept by the server while that writer lives (~0.6 kB); %s", by, (unsigned long long)srv->stray_writer_count,
+  palp_logf(srv->log, PALP_LOG_WARN, "%s disposed %llu session-request keys that no admitted request holds (never "
+            "written, or written past stations_per_writer and refused; %llu in all): a flood, each kept by the server "
+            "while that writer lives (~0.6 kB); %s", by, (unsigned long long)srv->stray_writer_count,
             (unsigned long long)atomic_load(&srv->request_strays),
             secured(srv) ? "revoke that identity (make-classroom-pki.sh DIR revoke KIND/NAME) and stop its machine"
                          : "run the classroom with DDS Security, so that only its identities may write requests");
@@ -1673,23 +1695,16 @@ static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
  * leaves rather than being lost. Keyed stations (palp_station_request, plain DDS only) keep their own
  * rule (station_gone_later): there any writer's dispose ends the station. */
 static void note_request_unmatches(palp_srv *srv, int64_t now_ns) {
-  dds_subscription_matched_status_t ms;
-  if (dds_get_subscription_matched_status(srv->request_r, &ms) < 0) return;
-  /* total_count_change counts new matches, current_count_change new matches less lost ones */
-  if ((int64_t)ms.total_count_change - ms.current_count_change > 0 && !srv->writers_sweep_ns)
-    srv->writers_sweep_ns = now_ns + GONE_GRACE_NS;
+  if (writers_unmatched(srv->request_r) && !srv->writers_sweep_ns) srv->writers_sweep_ns = now_ns + GONE_GRACE_NS;
 }
 
 static void sweep_gone_writers(palp_srv *srv) {
   srv->writers_sweep_ns = 0;
+  /* Their request instances leave the admission table, and only then (admission.h). */
+  palp_srv_admission_sweep(srv->admission, writer_matched, &srv->request_r);
   for (int i = 0; i < srv->station_slots; i++) {
     station *st = &srv->stations[i];
-    if (!st->in_use || st->keyed || !st->writer) continue;
-    dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(srv->request_r, st->writer);
-    if (w) {
-      dds_builtintopic_free_endpoint(w);
-      continue;
-    }
+    if (!st->in_use || st->keyed || !st->writer || writer_matched(st->writer, &srv->request_r)) continue;
     station_leave(srv, st, "lost (its request writer is gone)"); /* may free other slots: each is checked */
   }
 }
@@ -1764,10 +1779,11 @@ static void handle_requests(palp_srv *srv) {
         continue;
       }
       if (info[i].instance_state == DDS_IST_ALIVE) continue;
-      /* The instance is gone (disposed or no writers): its writer may register
-       * another. Cyclone fills an invalid sample's key fields, so the station id is
-       * read from it: dds_instance_get_key scans every instance ever seen. */
-      const bool admitted = palp_srv_admission_release(srv->admission, info[i].instance_handle);
+      /* The instance is gone (disposed or no writers). Its writer keeps its admission
+       * until it is gone too (admission.h). Cyclone fills an invalid sample's key fields,
+       * so the station id is read from it: dds_instance_get_key scans every instance
+       * ever seen. */
+      const bool admitted = palp_srv_admission_holds(srv->admission, info[i].instance_handle);
       buf[i].station_id[sizeof buf[i].station_id - 1] = '\0';
       station *st = find_station(srv, buf[i].station_id);
       if (!st) {

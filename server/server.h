@@ -45,7 +45,8 @@ int palp_srv_open_sessions(const palp_srv *srv);
 /* Secured: session requests refused because they were not the sender's own
  * (another identity's station id, user name or disposal); any thread. */
 uint64_t palp_srv_refused_requests(palp_srv *srv);
-/* Disposes of session-request keys no station wrote: a flood (each an instance the request reader
+/* Disposes of session-request keys no admitted request holds (never written, or refused past
+ * stations_per_writer): a flood (each an instance the request reader
  * keeps while its writer lives; the server names the writer in its log); any thread. */
 uint64_t palp_srv_request_strays(palp_srv *srv);
 /* Secured: participants DDS Security refused (revoked, expired or foreign

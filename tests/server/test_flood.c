@@ -410,7 +410,7 @@ int main(void) {
   const int got_r = read(rdone[0], &c, 1) == 1;
   const uint64_t strays = palp_srv_request_strays(ts.srv);
   const int said = log_has(log_path, "a participant without an identity (DDS Security is off) disposed 256 "
-                                     "session-request keys no station wrote");
+                                     "session-request keys that no admitted request holds");
   if (write(rgo[1], "x", 1) != 1) return 1;
   int status3 = 0;
   waitpid(child3, &status3, 0);
