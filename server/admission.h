@@ -15,7 +15,7 @@
  * with the request before it (a station's LEAVE and dispose) shows no not-alive
  * sample of its own, so its instance, later dropped silently with its writer, was
  * never released: the table filled with departed stations until it refused every
- * new one (both until 2026-12-07). Bounded: `capacity` instances in all.
+ * new one (both until 2026-12-06). Bounded: `capacity` instances in all.
  *
  * The join rate limit (a token bucket) lives here too: it is the main thread's.
  */

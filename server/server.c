@@ -1687,7 +1687,7 @@ static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
  * writer has touched it. Secured, a dispose of the station's key by another identity is refused
  * (handle_requests), but the instance stays disposed, so when the station's process later dies
  * Cyclone has no new not-alive state to report, and the station held its slot and session for as
- * long as that other writer lived (until 2026-12-07). So the server also watches the request
+ * long as that other writer lived (until 2026-12-06). So the server also watches the request
  * reader's matched writers: when one goes, every station joined through palp_session_request whose
  * writer is no longer matched is lost. Not slept on: the fall of the matched count is noted, and the
  * stations are looked at GONE_GRACE_NS later, once the reader has been drained in that pass, so that

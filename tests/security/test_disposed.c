@@ -6,7 +6,7 @@
  * alice's writer), and her session goes on. Then alice's process is killed (SIGKILL): no goodbye,
  * her participant's lease (1 s in the loopback config) lapses. Her instance is already disposed, so
  * Cyclone has no new not-alive state to report; the server must notice her station's loss from her
- * request writer going away. Until 2026-12-07 it never did: her slot and session stayed held for as
+ * request writer going away. Until 2026-12-06 it never did: her slot and session stayed held for as
  * long as bob's writer lived.
  *
  * Properties: the server says alice's station left her session (member_changed, her station id,

@@ -1,7 +1,7 @@
 /* test_cycled.c - a request writer's admission lasts as long as the writer (plain DDS, domain 148).
  *
  * The request topic's filter admits a new instance only while its writer holds fewer than
- * stations_per_writer (2) of them (server/admission.h). Until 2026-12-07 the server gave a writer its
+ * stations_per_writer (2) of them (server/admission.h). Until 2026-12-06 the server gave a writer its
  * place back whenever it took a not-alive sample of one of its instances, and only then:
  * - a writer that writes a fresh station key, waits for the answer and then disposes it (the dispose
  *   then comes as a sample of its own) was never refused: 600 of 600 answered (A), and cycling trainee
