@@ -1900,8 +1900,14 @@ static int from_its_partition(palp_web_hub *h, dds_entity_t rd, const void *samp
 static dds_entity_t make_reader(dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind);
 static void renew_findings(palp_web_hub *h, int64_t now) {
   if (h->finding_r <= 0 || !palp_dds_strays_renew_due(h->finding_strays, now, h->finding_renewed_ns)) return;
+  /* Under mu: palp_web_hub_has_instance reads the handle from another thread and uses the reader
+   * under mu, so it never sees the handle half-replaced nor a reader deleted under it (ThreadSanitizer
+   * reported the handle read against this write). This thread alone writes it, so its own reads need
+   * no lock. */
+  pthread_mutex_lock(&h->mu);
   dds_delete(h->finding_r);
   h->finding_r = make_reader(h->sub, h->finding_topic_r, PALP_TOPIC_FINDING);
+  pthread_mutex_unlock(&h->mu);
   h->finding_renewed_ns = now;
   h->finding_renewals++;
   h->finding_strays = 0;
@@ -2330,6 +2336,10 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
   memset(&key, 0, sizeof key);
   key.c.session_id = session_id;
   dds_entity_t rd;
+  /* mu: the findings reader may be made anew meanwhile by the DDS thread (renew_findings); held until
+   * the read is done so that the reader is not deleted under it. The other readers live as long as
+   * the hub. */
+  pthread_mutex_lock(&h->mu);
   switch (topic) {
   case PALP_TOPIC_CONTACT: rd = h->contact_r, key.c.finger = (uint8_t)finger; break;
   case PALP_TOPIC_DEFORMATION: rd = h->deform_r; break;
@@ -2340,19 +2350,24 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
   case PALP_TOPIC_DEBRIEF_SCORE: rd = h->debrief_score_r; break;
   case PALP_TOPIC_SESSION_LOG: rd = h->session_log_r; break;
   case PALP_TOPIC_FINDING: rd = h->finding_r; break;
-  default: return PALP_EINVAL;
+  default: pthread_mutex_unlock(&h->mu); return PALP_EINVAL;
   }
-  if (rd <= 0) return 0;
-  /* dds_lookup_instance answers from the domain's key map, which any entity of this process that
-   * keeps the key (a reliable writer's history) fills too: a read of the instance asks this reader
-   * (Cyclone: "precondition not met" for a handle it holds no instance of). */
-  const dds_instance_handle_t ih = dds_lookup_instance(rd, &key);
-  if (ih == 0) return 0;
-  void *ptr[1] = {NULL};
-  dds_sample_info_t info[1];
-  const dds_return_t n = dds_read_instance(rd, ptr, info, 1, 1, ih);
-  if (n > 0) dds_return_loan(rd, ptr, n);
-  return n >= 0;
+  int held = 0;
+  if (rd > 0) {
+    /* dds_lookup_instance answers from the domain's key map, which any entity of this process that
+     * keeps the key (a reliable writer's history) fills too: a read of the instance asks this reader
+     * (Cyclone: "precondition not met" for a handle it holds no instance of). */
+    const dds_instance_handle_t ih = dds_lookup_instance(rd, &key);
+    if (ih != 0) {
+      void *ptr[1] = {NULL};
+      dds_sample_info_t info[1];
+      const dds_return_t n = dds_read_instance(rd, ptr, info, 1, 1, ih);
+      if (n > 0) dds_return_loan(rd, ptr, n);
+      held = n >= 0;
+    }
+  }
+  pthread_mutex_unlock(&h->mu);
+  return held;
 }
 
 void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {

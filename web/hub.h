@@ -144,7 +144,8 @@ void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out);
  * palp_dds_topic_kind;
  * the finger where the key has one) holds an instance of (session, finger), itself (not
  * another entity of the process): 1 or 0, or PALP_EINVAL for another topic. For tests of its
- * filters and for diagnostics. */
+ * filters and for diagnostics; safe from any thread while the hub runs (it takes the hub's lock, under
+ * which the DDS thread makes the findings reader anew). */
 int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, unsigned finger);
 
 /* A browser connection: attach when it opens (PALP_EFULL at max_clients), detach when it closes. */
