@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include <libwebsockets.h>
+#include <pthread.h>
 
 #include "access.h"
 #include "palp.h"
@@ -36,7 +37,12 @@ struct palp_web_server {
   struct lws_vhost *vh;
   struct lws_protocols protocols[2];
   lws_retry_bo_t retry;
-  palp_web_serve_stats stats;
+  /* Counted by the lws service thread alone, without a lock; stats_pub is its copy under stats_mu, made
+   * after every lws_service pass (at least every 100 ms: the hub wakes the loop), which
+   * palp_web_serve_stats_get reads. main's --stats line is printed from the hub's thread (on_wake),
+   * which read the counters themselves while this thread wrote them (a data race). */
+  palp_web_serve_stats stats, stats_pub;
+  pthread_mutex_t stats_mu;
   /* Pages open per trainee token, and in all for trainee tokens (the lws service thread alone
    * counts them: no lock). */
   int trainee_pages[PALP_WEB_TRAINEES_MAX + 1], trainee_pages_all;
@@ -338,15 +344,26 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
     free(s);
     return NULL;
   }
+  pthread_mutex_init(&s->stats_mu, NULL);
   return s;
 }
 
 int palp_web_serve_port(const palp_web_server *s) { return lws_get_vhost_listen_port(s->vh); }
 
+/* The service thread's counters, copied under the lock for palp_web_serve_stats_get (stats_pub). */
+static void publish_stats(palp_web_server *s) {
+  pthread_mutex_lock(&s->stats_mu);
+  s->stats_pub = s->stats;
+  pthread_mutex_unlock(&s->stats_mu);
+}
+
 void palp_web_serve_run(palp_web_server *s, atomic_int *stop) {
   /* The hub wakes the loop at least every 100 ms, so a stop request is seen that soon. */
-  while (!*stop)
-    if (lws_service(s->ctx, 0) < 0) break;
+  while (!*stop) {
+    const int rc = lws_service(s->ctx, 0);
+    publish_stats(s);
+    if (rc < 0) break;
+  }
 }
 
 void palp_web_serve_wake(void *server) {
@@ -354,10 +371,15 @@ void palp_web_serve_wake(void *server) {
   if (s && s->ctx) lws_cancel_service(s->ctx);
 }
 
-void palp_web_serve_stats_get(const palp_web_server *s, palp_web_serve_stats *out) { *out = s->stats; }
+void palp_web_serve_stats_get(palp_web_server *s, palp_web_serve_stats *out) {
+  pthread_mutex_lock(&s->stats_mu);
+  *out = s->stats_pub;
+  pthread_mutex_unlock(&s->stats_mu);
+}
 
 void palp_web_serve_destroy(palp_web_server *s) {
   if (!s) return;
   if (s->ctx) lws_context_destroy(s->ctx);
+  pthread_mutex_destroy(&s->stats_mu);
   free(s);
 }

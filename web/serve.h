@@ -50,7 +50,9 @@ int palp_web_serve_port(const palp_web_server *s);
 void palp_web_serve_run(palp_web_server *s, atomic_int *stop);
 /* Thread-safe: makes the service loop push new hub messages to the browsers. */
 void palp_web_serve_wake(void *server);
-void palp_web_serve_stats_get(const palp_web_server *s, palp_web_serve_stats *out);
+/* The counters as of the service loop's last pass (a copy it makes under a lock after each): safe from
+ * any thread, e.g. main's --stats line printed from the hub's. */
+void palp_web_serve_stats_get(palp_web_server *s, palp_web_serve_stats *out);
 void palp_web_serve_destroy(palp_web_server *s);
 
 #endif

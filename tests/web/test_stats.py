@@ -1,0 +1,58 @@
+#!/usr/bin/env python3
+"""web_stats: palp-web's --stats line counts what its web server did, as it did it (docs/web.md).
+
+palp-web alone (no palp-server: nothing to show, the pages are served all the same) with a token and
+--stats. Known traffic: 2 pages served (the token in the URL, then the cookie), 2 refused (no token, a
+wrong one), 1 WebSocket opened with the token (its hello sent) and closed, 1 refused without the token.
+The line printed every 5 s, from the hub's thread while the web server's thread counts (which read the
+counters themselves, unlocked, until they were copied under a lock: a data race for ThreadSanitizer,
+scripts/sanitize.sh thread 'web_stats'), says exactly these counts; so does the last line, at SIGINT.
+DDS domain 155. usage: test_stats.py BUILD SOURCE OUT"""
+import re
+import time
+
+import harness
+from harness import check
+
+TOKEN = "stats-test-token-0123456789"
+WANT = "http 2 ok, 2 denied; ws 1 opened, 1 closed, 1 denied"
+
+
+def run(build, source, out):
+    procs = harness.Procs(build, source, out, 155)
+    try:
+        web = procs.web(["--token", TOKEN, "--stats"])
+        status, _, _ = harness.http_get(web.base + "/trainee.html?token=" + TOKEN)
+        check(status == 200, "the page with the token: %d" % status)
+        status, _, _ = harness.http_get(web.base + "/js/common.js", {"Cookie": "palp_token=" + TOKEN})
+        check(status == 200, "its script with the cookie: %d" % status)
+        for url in [web.base + "/trainee.html", web.base + "/trainee.html?token=wrong-token-0123456789"]:
+            status, _, _ = harness.http_get(url)
+            check(status == 401, "%s: %d" % (url.replace(web.base, ""), status))
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, TOKEN), timeout=10)
+        op, data = ws.recv()
+        ws.close()
+        check(op == 1 and data.startswith(b'{"type":"hello"'), "a WebSocket with the token: hello")
+        try:
+            harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=5).close()
+            refused = False
+        except (ConnectionError, OSError):
+            refused = True
+        check(refused, "a WebSocket without it: refused")
+        # the next line printed (every 5 s) after the traffic, which the server has counted by now
+        t0 = time.time()
+        m = procs.wait_log(web, re.escape(WANT), 15)
+        check(m is not None, "a --stats line within %.1f s says \"%s\"" % (time.time() - t0, WANT))
+        line = [l for l in procs.log(web).splitlines() if WANT in l][:1]
+        sent = re.search(r"sent (\d+) messages", line[0]) if line else None
+        check(sent is not None and int(sent.group(1)) >= 1, "and at least the hello sent: %s" % (line or ["none"])[0])
+        rc = procs.stop(web)
+        last = [l for l in procs.log(web).splitlines() if "http " in l and " ok, " in l][-1:]
+        check(rc == 0 and last and WANT in last[0], "SIGINT: exit %s; the last stats line the same: %s"
+              % (rc, (last or ["none"])[0]))
+    finally:
+        procs.close()
+
+
+if __name__ == "__main__":
+    harness.main(run)
