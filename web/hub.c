@@ -56,6 +56,9 @@
 #define SESSION_EXERCISE_WAIT_NS 10000000000LL
 #define SESSION_EXERCISES_PENDING 16
 #define ANSWER_MARKS 64 /* marks a session's answers list: the server's own bound (findings.c) */
+/* Publishers of refused catalogue entries named in the log, each once; beyond them one line says more
+ * came (a peer making writers in a loop must not fill the log). */
+#define REFUSED_PUBLISHERS 16
 
 /* One published message: bytes and the version they were built at (versions are unique across
  * the hub, so a cursor holding an old version of a reused slot is never mistaken as current). */
@@ -265,6 +268,11 @@ struct palp_web_hub {
   dds_entity_t finding_topic_r; /* the findings reader's own, gated topic entity */
   uint64_t finding_strays, finding_renewals;
   int64_t finding_renewed_ns;
+  /* the writer of the sample drain() is handing its callback (on_phantom names a refused one's) */
+  dds_instance_handle_t sample_writer;
+  /* the publishers whose catalogue entries were refused and named in the log (refuse_phantom) */
+  dds_instance_handle_t refused_pub[REFUSED_PUBLISHERS];
+  int refused_pub_n, refused_pub_more;
   phantom ph[PALP_WEB_MAX_PHANTOMS];
   session s[PALP_WEB_MAX_SESSIONS];
   server_status srv[MAX_SERVERS];
@@ -740,17 +748,72 @@ static void attach_coverage(session *s) {
   s->samples = 0;
 }
 
+/* Why a catalogue entry cannot be used, into why (0 when it can). Checked before use: a mesh the pages
+ * could not draw is dropped, not half-shown; and one larger than any palp-server's is refused before
+ * it is walked, copied or sent. At the old bound (1M vertices, 4M triangles) the bridge kept ~70 MB of
+ * it, built ~100 MB of JSON through a cJSON tree of the order of 1 GB, and sent that to every page; at
+ * this bound a mesh's message is ~14 MB (measured: a 200,000-vertex hemisphere). */
+static int phantom_refusal(const palp_Phantom *p, char *why, size_t len) {
+  const uint32_t n = p->rest._length, nt = p->triangles._length;
+  if (n == 0 || n > PALP_WEB_PHANTOM_MAX_VERTICES || !p->rest._buffer)
+    return snprintf(why, len, "%u rest vertices, beyond the %d of the largest mesh a palp-server publishes",
+                    n, PALP_WEB_PHANTOM_MAX_VERTICES), 1;
+  if (nt == 0 || nt % 3 != 0 || nt / 3 > PALP_WEB_PHANTOM_MAX_TRIANGLES || !p->triangles._buffer)
+    return snprintf(why, len, "%u triangle indices (want a positive multiple of 3, at most %d triangles)", nt,
+                    PALP_WEB_PHANTOM_MAX_TRIANGLES), 1;
+  if (p->dome_triangle_count <= 0 || (uint32_t)p->dome_triangle_count > nt / 3)
+    return snprintf(why, len, "dome_triangle_count %d of %u triangles", (int)p->dome_triangle_count, nt / 3), 1;
+  if (!(isfinite(p->radius) && p->radius > 0)) return snprintf(why, len, "radius %g m", p->radius), 1;
+  for (uint32_t i = 0; i < nt; i++)
+    if (p->triangles._buffer[i] < 0 || (uint32_t)p->triangles._buffer[i] >= n)
+      return snprintf(why, len, "triangle %u names vertex %d of %u", i / 3, (int)p->triangles._buffer[i], n), 1;
+  for (uint32_t i = 0; i < n; i++)
+    if (!(isfinite(p->rest._buffer[i].x) && isfinite(p->rest._buffer[i].y) && isfinite(p->rest._buffer[i].z)))
+      return snprintf(why, len, "rest vertex %u is not finite", i), 1;
+  return 0;
+}
+
+/* Counts a refused catalogue entry and names its publisher in the log, once per publisher and for at
+ * most REFUSED_PUBLISHERS of them: a broken or hostile peer republishing (the server does at every
+ * session's open and close) must not fill the log; the stats line counts them all. */
+static void refuse_phantom(palp_web_hub *h, const palp_Phantom *p, const char *why) {
+  h->stats.dropped++;
+  h->stats.catalogue_refused++;
+  const dds_instance_handle_t w = h->sample_writer;
+  for (int k = 0; k < h->refused_pub_n; k++)
+    if (h->refused_pub[k] == w) return;
+  if (h->refused_pub_n == REFUSED_PUBLISHERS) {
+    if (!h->refused_pub_more)
+      palp_log_warn(h->def.log, "catalogue: more than %d publishers of refused phantoms; the others are counted, not "
+                                "named (--stats)", REFUSED_PUBLISHERS);
+    h->refused_pub_more = 1;
+    return;
+  }
+  h->refused_pub[h->refused_pub_n++] = w;
+  /* named by its participant's GUID (plain DDS: any peer may publish a catalogue) */
+  char who[64] = "a writer already gone", name[64];
+  dds_builtintopic_endpoint_t *ep = w ? dds_get_matched_publication_data(h->catalogue_r, w) : NULL;
+  if (ep) {
+    const unsigned char *g = ep->participant_key.v;
+    snprintf(who, sizeof who, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3],
+             g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
+    dds_builtintopic_free_endpoint(ep);
+  }
+  palp_log_warn(h->def.log, "catalogue: phantom %u \"%s\" from %s refused: %s; its publisher's further refusals are "
+                            "counted, not logged (--stats)",
+                p->phantom_id, palp_log_printable(p->name, name, sizeof name), who, why);
+}
+
 static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
   const uint32_t n = p->rest._length, nt = p->triangles._length;
-  /* Checked before use: a mesh the pages could not draw is dropped, not half-shown. */
-  int ok = n > 0 && n <= 1000000 && nt > 0 && nt % 3 == 0 && nt / 3 <= 4000000 && p->dome_triangle_count > 0 &&
-           (uint32_t)p->dome_triangle_count <= nt / 3 && isfinite(p->radius) && p->radius > 0;
-  for (uint32_t i = 0; ok && i < nt; i++) ok = p->triangles._buffer[i] >= 0 && (uint32_t)p->triangles._buffer[i] < n;
-  for (uint32_t i = 0; ok && i < n; i++)
-    ok = isfinite(p->rest._buffer[i].x) && isfinite(p->rest._buffer[i].y) && isfinite(p->rest._buffer[i].z);
+  char why[160];
+  if (phantom_refusal(p, why, sizeof why)) {
+    refuse_phantom(h, p, why);
+    return;
+  }
   int slot;
-  phantom *ph = ok ? find_phantom(h, p->phantom_id, 1, &slot) : NULL;
-  if (!ph) {
+  phantom *ph = find_phantom(h, p->phantom_id, 1, &slot);
+  if (!ph) { /* more phantoms than PALP_WEB_MAX_PHANTOMS */
     h->stats.dropped++;
     return;
   }
@@ -1930,6 +1993,7 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
           !palp_dds_gate_passes(&h->gate, *(const uint32_t *)ptr[i]))
         h->finding_strays++, h->stats.finding_strays++;
       if (info[i].valid_data) {
+        h->sample_writer = info[i].publication_handle;
         on(h, ptr[i]);
         (*counter)++;
       } else if (lost && info[i].instance_state != DDS_IST_ALIVE) {

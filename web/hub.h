@@ -27,6 +27,13 @@
 
 #define PALP_WEB_MAX_PHANTOMS 16
 #define PALP_WEB_MAX_SESSIONS 64
+/* The largest catalogue mesh the bridge takes: the largest a palp-server can publish (a scene's
+ * mesh.vertex_count, at most 200000 by palp_mesh_create; test_web_unit checks that the two agree) and
+ * the triangles of a closed surface of that many vertices (2V - 4). The shipped phantoms have 338 and
+ * 1300 vertices. A larger mesh is no server's: refused, its publisher named in the log once
+ * (docs/web.md). */
+#define PALP_WEB_PHANTOM_MAX_VERTICES 200000
+#define PALP_WEB_PHANTOM_MAX_TRIANGLES (2 * PALP_WEB_PHANTOM_MAX_VERTICES)
 
 typedef struct palp_web_hub_def {
   uint32_t domain;
@@ -107,6 +114,8 @@ typedef struct palp_web_hub_stats {
   uint64_t catalogue, states, statuses, contacts, feedbacks, deformations, local_models; /* DDS samples taken */
   uint64_t finger_samples; /* palp_finger_sample samples taken (session 71) */
   uint64_t dropped;   /* samples refused: malformed, or no room (sessions, exercises, memory) */
+  uint64_t catalogue_refused; /* of them, catalogue entries refused (malformed, or a mesh beyond
+                               * PALP_WEB_PHANTOM_MAX_VERTICES); each publisher's first is logged */
   uint64_t no_session; /* samples of a session the bridge has no state for: benign when it has just
                         * opened (its first contacts can overtake its state) or just closed */
   uint64_t rejected;   /* stream samples of a new key refused at the readers' instance bound (a flood of

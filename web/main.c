@@ -167,6 +167,9 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
                   (unsigned long long)h.findings_written, (unsigned long long)h.findings_refused,
                   (unsigned long long)h.local_models, (unsigned long long)h.late_haptic,
                   (unsigned long long)h.lost_haptic, (unsigned long long)h.finger_samples);
+  if (h.catalogue_refused) /* each publisher's first named in the log (hub.c, refuse_phantom) */
+    palp_log_warn(log, "%llu catalogue entries refused (a mesh beyond %d vertices, no palp-server's, or malformed)",
+                  (unsigned long long)h.catalogue_refused, PALP_WEB_PHANTOM_MAX_VERTICES);
   if (h.finding_renewals) /* a flood (docs/robustness.md): said apart, as a warning */
     palp_log_warn(log, "%llu disposes of finding keys of sessions this bridge does not follow (a flood: each kept "
                        "while its writer lives); the findings reader was made anew %llu times to drop them",

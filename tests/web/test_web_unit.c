@@ -1,13 +1,14 @@
 /* test_web_unit.c - palp-web's pure parts: pressure bands (the coverage map is the library's:
  * tests/assess/test_coverage.c), the access rules
  * (loopback, token, cookie, served paths) and the browser control messages (a real hub on DDS
- * domain 190; the local-model forwarding on domain 195). Expected values are worked by hand or come from
- * the model's own mesh code. */
+ * domain 190; the local-model forwarding on domain 195; the catalogue's mesh bound on domain 154). Expected
+ * values are worked by hand or come from the model's own mesh code. */
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "access.h"
 #include "coverage.h"
@@ -15,6 +16,8 @@
 #include "palp.h"
 #include "check.h"
 #include "palp_dds.h"
+#include "palp_log.h"
+#include "../tmpdir.h"
 
 #define PI 3.14159265358979323846
 
@@ -1581,11 +1584,189 @@ static void test_local_model(void) {
   palp_web_hub_destroy(h);
 }
 
+/* A catalogue entry of nv vertices written as palp-server writes one (server.c, publish_catalogue): from
+ * mesh m when given, else nv vertices on a line and one triangle (a mesh whose size alone is at issue). */
+static void write_phantom(dds_entity_t w, uint32_t id, const char *name, const palp_mesh *m, uint32_t nv) {
+  palp_Phantom msg;
+  memset(&msg, 0, sizeof msg);
+  msg.phantom_id = id;
+  snprintf(msg.name, sizeof msg.name, "%s", name);
+  msg.radius = m ? m->rest[m->top_vertex].z : 0.04;
+  const uint32_t nt = m ? (uint32_t)m->triangle_count : 1;
+  msg.top_vertex = m ? m->top_vertex : 0;
+  msg.dome_triangle_count = m ? m->dome_triangle_count : 1;
+  palp_Vec3 *rest = calloc(m ? (size_t)m->vertex_count : nv, sizeof *rest);
+  int32_t *tri = calloc(3 * (size_t)nt, sizeof *tri);
+  if (!rest || !tri) {
+    CHECK(0, "memory for a %u-vertex phantom", nv);
+    free(rest), free(tri);
+    return;
+  }
+  if (m) {
+    nv = (uint32_t)m->vertex_count;
+    for (uint32_t i = 0; i < nv; i++) rest[i] = (palp_Vec3){m->rest[i].x, m->rest[i].y, m->rest[i].z};
+    for (uint32_t i = 0; i < nt; i++)
+      for (int k = 0; k < 3; k++) tri[3 * i + k] = m->tri[i][k];
+  } else {
+    for (uint32_t i = 0; i < nv; i++) rest[i] = (palp_Vec3){1e-7 * i, 0, 0.01};
+    tri[0] = 0, tri[1] = 1, tri[2] = 2;
+  }
+  msg.rest = (dds_sequence_palp_Vec3){nv, nv, rest, false};
+  msg.triangles = (dds_sequence_long){3 * nt, 3 * nt, tri, false};
+  CHECK(dds_write(w, &msg) == 0, "phantom %u (%u vertices) written", id, nv);
+  free(rest);
+  free(tri);
+}
+
+/* The lines of a file that contain `needle`. */
+static int lines_with(const char *path, const char *needle, char *first, size_t flen) {
+  FILE *f = fopen(path, "r");
+  if (!f) return -1;
+  char line[1024];
+  int n = 0;
+  while (fgets(line, sizeof line, f))
+    if (strstr(line, needle) && n++ == 0 && first) snprintf(first, flen, "%s", line);
+  fclose(f);
+  return n;
+}
+
+static void guid_text(dds_entity_t pp, char *out, size_t len) {
+  dds_guid_t g;
+  memset(&g, 0, sizeof g);
+  dds_get_guid(pp, &g);
+  const unsigned char *v = g.v;
+  snprintf(out, len, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", v[0], v[1], v[2], v[3], v[4], v[5],
+           v[6], v[7], v[8], v[9], v[10], v[11]);
+}
+
+/* The catalogue's mesh bound (docs/web.md): the largest mesh a palp-server can publish is taken and
+ * sent to the pages; one vertex more is refused, never sent, and its publisher named in the log once
+ * however many it sends; a second publisher named once too. Domain 154. */
+static void test_catalogue_bound(void) {
+  /* the bound is the server's: palp_mesh_create (a scene's mesh.vertex_count) makes that many, not one more */
+  palp_mesh big, dome, none;
+  palp_mesh_def md = palp_mesh_default_def();
+  md.vertex_count = PALP_WEB_PHANTOM_MAX_VERTICES;
+  const int big_rc = palp_mesh_create(&md, &big);
+  CHECK(big_rc == 0 && big.triangle_count <= PALP_WEB_PHANTOM_MAX_TRIANGLES,
+        "a palp-server's largest mesh, %d vertices, can be made (rc %d), %d triangles <= %d",
+        PALP_WEB_PHANTOM_MAX_VERTICES, big_rc, big.triangle_count, PALP_WEB_PHANTOM_MAX_TRIANGLES);
+  md.vertex_count = PALP_WEB_PHANTOM_MAX_VERTICES + 1;
+  CHECK(palp_mesh_create(&md, &none) == PALP_EINVAL, "and not one vertex more: the bridge's bound is the server's");
+  md = palp_mesh_default_def();
+  const int dome_rc = palp_mesh_create(&md, &dome);
+  CHECK(dome_rc == 0 && dome.vertex_count == 338, "the paper's dome, 338 vertices");
+  if (big_rc != 0 || dome_rc != 0) return;
+
+  char logpath[512];
+  palp_test_tmp(logpath, sizeof logpath, "palp_web_unit_catalogue_XXXXXX");
+  const int fd = mkstemp(logpath);
+  CHECK(fd >= 0, "temporary log %s", logpath);
+  if (fd < 0) return;
+  close(fd);
+  static palp_log log;
+  CHECK(palp_log_init(&log, "palp-web", PALP_LOG_INFO, logpath) == 0, "log to %s", logpath);
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = 154;
+  d.join = 0;
+  d.log = &log;
+  char err[256];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain 154: %s", h ? "" : err);
+  const dds_entity_t pa = dds_create_participant(154, NULL, NULL), pb = dds_create_participant(154, NULL, NULL);
+  const dds_entity_t ta = palp_dds_create_topic(pa, PALP_TOPIC_CATALOGUE), tb = palp_dds_create_topic(pb, PALP_TOPIC_CATALOGUE);
+  const dds_entity_t wa = palp_dds_create_writer(pa, ta, PALP_TOPIC_CATALOGUE);
+  const dds_entity_t wb = palp_dds_create_writer(pb, tb, PALP_TOPIC_CATALOGUE);
+  CHECK(pa > 0 && pb > 0 && wa > 0 && wb > 0, "two publishers of a catalogue");
+  if (h && palp_web_hub_start(h, NULL, NULL) == 0 && wa > 0 && wb > 0) {
+    palp_web_cursor c;
+    CHECK(palp_web_hub_attach(h, &c, 4) == 0, "a page");
+    /* a reliable sample written before the match would be the writer's alone: wait for the hub's reader */
+    for (int i = 0; i < 300; i++) {
+      dds_publication_matched_status_t ma, mb;
+      if (dds_get_publication_matched_status(wa, &ma) == 0 && dds_get_publication_matched_status(wb, &mb) == 0 &&
+          ma.current_count > 0 && mb.current_count > 0)
+        break;
+      dds_sleepfor(DDS_MSECS(10));
+    }
+    write_phantom(wa, 1, "dome", &dome, 0);
+    write_phantom(wa, 2, "largest", &big, 0);
+    write_phantom(wa, 3, "one-too-many", NULL, PALP_WEB_PHANTOM_MAX_VERTICES + 1);
+    write_phantom(wa, 5, "one-too-many-again", NULL, PALP_WEB_PHANTOM_MAX_VERTICES + 1);
+    write_phantom(wb, 4, "other\npeer", NULL, 4 * PALP_WEB_PHANTOM_MAX_VERTICES);
+    palp_web_hub_stats hs;
+    memset(&hs, 0, sizeof hs);
+    int n_rest[6] = {0}, others = 0;
+    for (int i = 0; i < 1000 && !(hs.catalogue_refused >= 3 && n_rest[1] && n_rest[2]); i++) {
+      unsigned char *buf = NULL;
+      size_t len = 0;
+      int binary = 0;
+      const int r = palp_web_hub_next(h, &c, 0, &buf, &len, &binary);
+      if (r == 1 && !binary) {
+        cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+        const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+        if (type && !strcmp(type, "phantom")) {
+          const int id = (int)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "id"));
+          if (id >= 1 && id <= 2) n_rest[id] = cJSON_GetArraySize(cJSON_GetObjectItem(j, "rest"));
+          else others++;
+        }
+        cJSON_Delete(j);
+      }
+      free(buf);
+      if (r != 1) dds_sleepfor(DDS_MSECS(10));
+      palp_web_hub_stats_get(h, &hs);
+    }
+    CHECK(n_rest[1] == 3 * 338, "the dome is sent to the page: %d rest coordinates (want 3 x 338)", n_rest[1]);
+    CHECK(n_rest[2] == 3 * PALP_WEB_PHANTOM_MAX_VERTICES,
+          "so is the largest mesh a palp-server publishes: %d rest coordinates (want 3 x %d)", n_rest[2],
+          PALP_WEB_PHANTOM_MAX_VERTICES);
+    /* what was refused is never sent: a further 0.3 s of messages */
+    for (int i = 0; i < 30; i++) {
+      unsigned char *buf = NULL;
+      size_t len = 0;
+      int binary = 0;
+      const int r = palp_web_hub_next(h, &c, 0, &buf, &len, &binary);
+      if (r == 1 && !binary && len > 20 && !strncmp((const char *)buf, "{\"type\":\"phantom\"", 17)) others++;
+      free(buf);
+      if (r != 1) dds_sleepfor(DDS_MSECS(10));
+    }
+    palp_web_hub_stats_get(h, &hs);
+    CHECK(hs.catalogue_refused == 3 && hs.dropped == 3 && others == 0,
+          "the three meshes beyond %d vertices are refused (%llu refused, %llu dropped) and none is sent (%d sent)",
+          PALP_WEB_PHANTOM_MAX_VERTICES, (unsigned long long)hs.catalogue_refused, (unsigned long long)hs.dropped,
+          others);
+    palp_web_hub_detach(h, &c);
+    palp_web_hub_stop(h);
+    char ga[64], gb[64], line[1024] = "", lineb[1024] = "";
+    guid_text(pa, ga, sizeof ga);
+    guid_text(pb, gb, sizeof gb);
+    const int all = lines_with(logpath, "catalogue: phantom", NULL, 0);
+    const int na = lines_with(logpath, ga, line, sizeof line), nb = lines_with(logpath, gb, lineb, sizeof lineb);
+    char want[96];
+    snprintf(want, sizeof want, "%d rest vertices, beyond the %d", PALP_WEB_PHANTOM_MAX_VERTICES + 1,
+             PALP_WEB_PHANTOM_MAX_VERTICES);
+    CHECK(all == 2 && na == 1 && nb == 1,
+          "one warning per offending publisher (%d in all, want 2: %d naming %s, %d naming %s)", all, na, ga, nb, gb);
+    CHECK(strstr(line, "phantom 3 \"one-too-many\"") && strstr(line, want) && strstr(line, "refused"),
+          "the first publisher's says which phantom and why (%s): %s", want, line);
+    CHECK(strstr(lineb, "phantom 4 \"other\\x0apeer\"") && strstr(lineb, "800000 rest vertices"),
+          "the second's too, its name made printable: %s", lineb);
+  }
+  if (pa > 0) dds_delete(pa);
+  if (pb > 0) dds_delete(pb);
+  palp_web_hub_destroy(h);
+  palp_log_close(&log);
+  remove(logpath);
+  palp_mesh_destroy(&big);
+  palp_mesh_destroy(&dome);
+}
+
 int main(void) {
   test_bands();
   test_access();
   test_control();
   test_local_model();
+  test_catalogue_bound();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }
