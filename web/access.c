@@ -2,8 +2,10 @@
 #include "access.h"
 
 #include <arpa/inet.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 #include "palp.h" /* PALP_E* codes */
 
@@ -55,6 +57,20 @@ int palp_web_token_check(const char *token) {
   for (size_t i = 0; i < n; i++)
     if (!token_char(token[i])) return PALP_EINVAL;
   return 0;
+}
+
+int palp_web_token_expired(double issued_s, double lifetime_s, double now_s) {
+  if (lifetime_s == 0) return 0;
+  /* written so that a NaN fails the comparison and so expires: a token of unknown age opens nothing */
+  return !(now_s < issued_s + lifetime_s);
+}
+
+void palp_web_utc_text(double unix_s, char *out, size_t len) {
+  struct tm tm;
+  const time_t t = isfinite(unix_s) && fabs(unix_s) < 1e15 ? (time_t)floor(unix_s) : 0;
+  if (!len) return;
+  if (!isfinite(unix_s) || fabs(unix_s) >= 1e15 || !gmtime_r(&t, &tm) || !strftime(out, len, "%Y-%m-%dT%H:%M:%SZ", &tm))
+    snprintf(out, len, "?");
 }
 
 int palp_web_token_equal(const char *want, const char *given, size_t len) {
@@ -154,6 +170,7 @@ int palp_web_trainee_tokens_parse(const char *text, const char *instructor, palp
     palp_web_trainee_token *t = &out[n];
     memcpy(t->name, a, an);
     t->name[an] = '\0';
+    t->issued_s = 0;
     if (bn > PALP_WEB_TOKEN_MAX) {
       snprintf(err, errlen, "line %d (%s): the token must be %d-%d characters of A-Z a-z 0-9 . _ ~ -", line, t->name,
                PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX);

@@ -24,6 +24,22 @@ int palp_web_host_is_loopback(const char *host);
  * in URLs and a cookie unescaped); else PALP_EINVAL. */
 int palp_web_token_check(const char *token);
 
+/* How long an access token opens pages [s] after it was issued, unless --token-lifetime-h says
+ * otherwise: a class day, so that a token printed for Monday's class does not open Friday's. A token is
+ * issued when its file was last written (--token-file, --trainee-tokens), or at palp-web's start for a
+ * --token given on the command line (docs/web.md). */
+#define PALP_WEB_TOKEN_LIFETIME_DEFAULT_S (12.0 * 3600.0)
+/* What a page with an expired token is told (the HTTP answer's body, the WebSocket's "expired" message). */
+#define PALP_WEB_TOKEN_EXPIRED_TEXT "This access token has expired: ask your instructor for a new one."
+
+/* 1 when a token issued at issued_s [s, Unix time] is past its lifetime at now_s [s, Unix time]:
+ * now_s >= issued_s + lifetime_s; 0 while it is valid, and always for lifetime_s 0 (no expiry). The
+ * clock is the caller's (palp-web's wall clock; tests give theirs). A NaN anywhere reads as expired. */
+int palp_web_token_expired(double issued_s, double lifetime_s, double now_s);
+
+/* A Unix time [s] as UTC, "2026-12-07T05:00:00Z", into out (>= 21 bytes); "?" for one not representable. */
+void palp_web_utc_text(double unix_s, char *out, size_t len);
+
 /* 1 when `given` (len bytes, not necessarily NUL-terminated) equals the NUL-terminated `want`;
  * the time taken does not depend on where they differ. */
 int palp_web_token_equal(const char *want, const char *given, size_t len);
@@ -42,6 +58,8 @@ int palp_web_path_check(const char *path);
 typedef struct palp_web_trainee_token {
   char name[32];                       /* the trainee name of the sessions (an identity's NAME) */
   char token[PALP_WEB_TOKEN_MAX + 1];
+  double issued_s;                     /* when it was issued [s, Unix time]: its file's last write; 0 from
+                                        * palp_web_trainee_tokens_parse, which does not know it */
 } palp_web_trainee_token;
 
 /* Parses "NAME TOKEN" lines (blank lines and lines starting with '#' skipped): NAME 1-31 of

@@ -44,6 +44,9 @@ static void usage(FILE *f) {
           "  --port P            TCP port (default 8090; 0 = any free port, printed)\n"
           "  --token T           access token (%d-%d characters of A-Z a-z 0-9 . _ ~ -); pages need ?token=T\n"
           "  --token-file F      read the token from F (keeps it out of the process list)\n"
+          "  --token-lifetime-h H   every token opens pages for H hours after it was issued: when its file\n"
+          "                      (--token-file, --trainee-tokens) was last written, or at start for --token\n"
+          "                      (default %g: a class day; 0 = never expire)\n"
           "  --tls-cert F --tls-key F   serve HTTPS and WSS with this PEM certificate and key (made from the\n"
           "                      classroom CA by scripts/make-classroom-pki.sh DIR web HOST)\n"
           "  --insecure-http     serve plain HTTP beyond loopback: the token crosses the network in clear\n"
@@ -66,7 +69,7 @@ static void usage(FILE *f) {
           "  --stats             print the bridge's counters every 5 s (SIGHUP re-opens --log-file)\n"
           "  --pki DIR --identity instructor/NAME   DDS Security in a secured classroom (or PALP_PKI,\n"
           "                      PALP_IDENTITY; scripts/make-classroom-pki.sh): the bridge is that instructor\n",
-          PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_THREE_DIR);
+          PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_TOKEN_LIFETIME_DEFAULT_S / 3600.0, PALP_WEB_THREE_DIR);
   palp_app_common_usage(f, WEB_OPTS);
 }
 
@@ -125,6 +128,48 @@ static int read_small_file(const char *path, char **out) {
   return 0;
 }
 
+/* The wall clock [s, Unix time]: tokens age from their files' last write, a wall-clock time. */
+static double wall_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* When the tokens in a file were issued [s, Unix time]: its last write, or now (start) if that is later
+ * (a clock set back, a file from the future: never a lifetime beyond the one configured). */
+static double issued_at(const char *path, double start) {
+  struct stat st;
+  if (!path || stat(path, &st) != 0) return start;
+  const double m = (double)st.st_mtim.tv_sec + 1e-9 * (double)st.st_mtim.tv_nsec;
+  return m < start ? m : start;
+}
+
+/* At start: when the tokens expire, and a warning for one already expired (a stale file). */
+static void say_token_lifetime(palp_log *log, const palp_web_serve_def *sd, const char *token_file,
+                               const char *trainee_file, double start) {
+  if (!sd->token) return;
+  if (sd->token_lifetime_s == 0) {
+    printf("palp-web: tokens never expire (--token-lifetime-h 0)\n");
+    return;
+  }
+  char at[32];
+  for (int k = 0; k < 2; k++) {
+    if (k && !sd->trainee_count) break;
+    const double issued = k ? sd->trainees[0].issued_s : sd->token_issued_s, end = issued + sd->token_lifetime_s;
+    const char *whose = k ? "the trainees' tokens" : "the instructors' token";
+    palp_web_utc_text(end, at, sizeof at);
+    if (palp_web_token_expired(issued, sd->token_lifetime_s, start))
+      palp_log_warn(log, "%s expired at %s, %.1f h ago (%s was last written %.1f h ago, --token-lifetime-h %g): "
+                         "their pages are told to ask for a new one; write new tokens and restart palp-web",
+                    whose, at, (start - end) / 3600.0, k ? trainee_file : token_file ? token_file : "--token",
+                    (start - issued) / 3600.0,
+                    sd->token_lifetime_s / 3600.0);
+    else
+      printf("palp-web: %s expire%s at %s (%.1f h from now, --token-lifetime-h %g)\n", whose, k ? "" : "s", at,
+             (end - start) / 3600.0, sd->token_lifetime_s / 3600.0);
+  }
+}
+
 static double mono_s(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -156,6 +201,10 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
           (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.ws_opened,
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
+  if (w.http_expired || w.ws_expired) /* each token's first refusal is named in the log (serve.c) */
+    palp_log_warn(log, "pages told their token expired: %llu HTTP requests, %llu WebSockets (refused, or closed at "
+                       "the expiry)",
+                  (unsigned long long)w.http_expired, (unsigned long long)w.ws_expired);
   if (h.exercises || h.findings_written || h.findings_refused || h.local_models)
     palp_log_info(log, "exercises %llu (sessions' %llu, scores %llu), trainees' scores %llu, finding statuses %llu, "
                        "findings read %llu (%llu unanswered); findings written %llu, refused %llu; local models %llu "
@@ -201,6 +250,7 @@ int main(int argc, char **argv) {
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-web");
   double duration = 0, x = 0;
+  double token_lifetime_h = PALP_WEB_TOKEN_LIFETIME_DEFAULT_S / 3600.0;
   int stats = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -230,6 +280,9 @@ int main(int argc, char **argv) {
       sd.port = (int)x;
     } else if (!strcmp(a, "--token")) token = v;
     else if (!strcmp(a, "--token-file")) token_file = v;
+    else if (!strcmp(a, "--token-lifetime-h")) {
+      if (number(a, v, 0, 8760, &token_lifetime_h)) return 2;
+    }
     else if (!strcmp(a, "--trainee-tokens")) trainee_file = v;
     else if (!strcmp(a, "--tls-cert")) sd.tls_cert = v;
     else if (!strcmp(a, "--tls-key")) sd.tls_key = v;
@@ -338,6 +391,11 @@ int main(int argc, char **argv) {
     return 2;
   }
   sd.token = token;
+  /* Tokens expire (a token printed for Monday's class must not open Friday's): their age counts from
+   * when they were written, so a restart does not make an old file's tokens new again. */
+  const double start = wall_s();
+  sd.token_lifetime_s = token_lifetime_h * 3600.0;
+  sd.token_issued_s = token_file ? issued_at(token_file, start) : start;
   /* Trainees' own tokens: each page scoped to its trainee, as the trainee's DDS permissions are. */
   static palp_web_trainee_token trainees[PALP_WEB_TRAINEES_MAX];
   if (trainee_file) {
@@ -353,6 +411,8 @@ int main(int argc, char **argv) {
       fprintf(stderr, "palp-web: --trainee-tokens %s: %s\n", trainee_file, terr);
       return 2;
     }
+    const double issued = issued_at(trainee_file, start);
+    for (int k = 0; k < n; k++) trainees[k].issued_s = issued;
     sd.trainees = trainees;
     sd.trainee_count = n;
   }
@@ -362,6 +422,7 @@ int main(int argc, char **argv) {
     return 2;
   }
   hd.log = &log;
+  sd.log = &log;
   /* The pages live in the data directory (app/palp_app.h): never a source-tree path. */
   char www[1024], derr[256];
   if (!sd.www_dir) {
@@ -442,6 +503,7 @@ int main(int argc, char **argv) {
   if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert)
     palp_log_warn(&log, "serving plain HTTP on %s (--insecure-http): the token crosses the network in clear",
                   sd.listen);
+  say_token_lifetime(&log, &sd, token_file, trainee_file, start);
   printf("palp-web: trainee page  %s://%s:%d/trainee.html%s\n", scheme, host, port, q);
   printf("palp-web: dashboard     %s://%s:%d/dashboard.html%s\n", scheme, host, port, q);
   /* Who sees the answers: the dashboard's viewers (docs/web.md, "The hidden lumps"). */

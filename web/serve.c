@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <libwebsockets.h>
 #include <pthread.h>
@@ -46,12 +47,17 @@ struct palp_web_server {
   /* Pages open per trainee token, and in all for trainee tokens (the lws service thread alone
    * counts them: no lock). */
   int trainee_pages[PALP_WEB_TRAINEES_MAX + 1], trainee_pages_all;
+  /* Whose expired token the log has named (say_expired): 0 the instructors', k + 1 trainee k's (the
+   * service thread alone). */
+  unsigned char expired_said[PALP_WEB_TRAINEES_MAX + 1];
 };
 
 /* Per connection (HTTP or WebSocket): libwebsockets allocates and zeroes it. */
 typedef struct conn {
   palp_web_cursor cursor;
   int who; /* authorised()'s answer at the handshake: 0 an instructor's page, k + 1 trainee k's */
+  int expired; /* its token is past its lifetime: told so, then closed (tell_expired) */
+  int told;    /* tell_expired has written to it (lws may offer a closing connection a write again) */
   int attached;
   size_t rx_len;
   int rx_overflow;
@@ -80,11 +86,45 @@ static int token_owner(const palp_web_server *s, const char *v) {
   return who;
 }
 
+/* The wall clock [s, Unix time]: a token's age counts from its file's last write, a wall-clock time. */
+static double wall_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double issued_of(const palp_web_server *s, int who) {
+  return who > 0 ? s->def.trainees[who - 1].issued_s : s->def.token_issued_s;
+}
+
+/* 1 when who's token (token_owner's answer) is past its lifetime now. */
+static int token_expired(const palp_web_server *s, int who) {
+  return s->have_token && who >= 0 && palp_web_token_expired(issued_of(s, who), s->def.token_lifetime_s, wall_s());
+}
+
+/* The first refusal of each expired token in the log (a page left open retries every second: the
+ * stats line counts the rest). */
+static void say_expired(palp_web_server *s, int who) {
+  if (who < 0 || who > PALP_WEB_TRAINEES_MAX || s->expired_said[who]) return;
+  s->expired_said[who] = 1;
+  char at[32], issued[32], whose[64];
+  palp_web_utc_text(issued_of(s, who) + s->def.token_lifetime_s, at, sizeof at);
+  palp_web_utc_text(issued_of(s, who), issued, sizeof issued);
+  if (who > 0) snprintf(whose, sizeof whose, "trainee %s's token", s->def.trainees[who - 1].name);
+  else snprintf(whose, sizeof whose, "the instructors' token");
+  palp_log_warn(s->def.log,
+                "%s expired at %s (issued %s, lifetime %g h, --token-lifetime-h): its pages are refused and told to "
+                "ask for a new one; further refusals counted, not logged (--stats)",
+                whose, at, issued, s->def.token_lifetime_s / 3600.0);
+}
+
 /* Who the request is (token_owner: 0 an instructor, k + 1 trainee k, -1 refused) by the token in
  * its URL or its cookie; 0 when no token is required. *from_url says it came in the URL (the answer
- * then sets the cookie for the page's own requests). */
-static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int *from_url) {
+ * then sets the cookie for the page's own requests); *stale that the token is past its lifetime
+ * (checked at every request: the caller refuses it, saying why). */
+static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int *from_url, int *stale) {
   *from_url = 0;
+  *stale = 0;
   if (!s->have_token) return 0;
   char v[PALP_WEB_TOKEN_MAX + 16];
   /* lws copies "token=VALUE" into v and returns where VALUE starts */
@@ -92,6 +132,7 @@ static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int
   const int by_url = arg ? token_owner(s, arg) : -1;
   if (by_url >= 0) {
     *from_url = 1;
+    *stale = token_expired(s, by_url);
     return by_url;
   }
   if (!allow_cookie) return -1;
@@ -103,6 +144,7 @@ static int authorised(palp_web_server *s, struct lws *wsi, int allow_cookie, int
       palp_web_cookie_get(h, COOKIE, v, sizeof v) == 0)
     who = token_owner(s, v);
   free(h);
+  *stale = token_expired(s, who);
   return who;
 }
 
@@ -132,20 +174,25 @@ static int host_allowed(palp_web_server *s, struct lws *wsi) {
          palp_web_host_is_loopback(host);
 }
 
-static int http_status(struct lws *wsi, unsigned code, palp_web_server *s, uint64_t *counter) {
+/* An HTTP answer without a page; body (plain words, lws puts them in a minimal HTML page) may be NULL. */
+static int http_status(struct lws *wsi, unsigned code, const char *body, uint64_t *counter) {
   (*counter)++;
-  (void)s;
-  if (lws_return_http_status(wsi, code, NULL)) return -1;
+  if (lws_return_http_status(wsi, code, body)) return -1;
   return lws_http_transaction_completed(wsi) ? -1 : 0;
 }
 
 static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
-  int from_url = 0;
-  const int who = authorised(s, wsi, 1, &from_url);
-  if (who < 0 || !host_allowed(s, wsi)) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, s, &s->stats.http_denied);
+  int from_url = 0, stale = 0;
+  const int who = authorised(s, wsi, 1, &from_url, &stale);
+  if (who < 0 || !host_allowed(s, wsi)) return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, NULL, &s->stats.http_denied);
+  if (stale) { /* a token this bridge gave, too old: the page says why, not a bare 401 */
+    s->stats.http_expired++;
+    say_expired(s, who);
+    return http_status(wsi, HTTP_STATUS_UNAUTHORIZED, PALP_WEB_TOKEN_EXPIRED_TEXT, &s->stats.http_denied);
+  }
   const char *path = !strcmp(uri, "/") ? "/index.html" : uri;
   const char *mime = palp_web_mime(path);
-  if (palp_web_path_check(path) != 0 || !mime) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
+  if (palp_web_path_check(path) != 0 || !mime) return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
   char file[1024];
   static const char lib[] = "/lib/three/";
   if (!strncmp(path, lib, sizeof lib - 1))
@@ -164,10 +211,29 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
                   "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict%s\x0d\x0a",
                   who ? s->def.trainees[who - 1].token : s->token, s->def.tls_cert ? "; Secure" : "");
   const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
-  if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, s, &s->stats.http_missing);
+  if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
   s->stats.http_ok++;
   if (rc > 0 && lws_http_transaction_completed(wsi)) return -1;
   return 0;
+}
+
+/* Tells a WebSocket page that its token expired ({"type": "expired", "message": ...}, which the pages show
+ * and stop reconnecting on) and closes it (1008, policy violation): a refused handshake tells a page
+ * nothing it can show. Returns -1, the callback's "close". */
+static int tell_expired(struct lws *wsi, palp_web_server *s, conn *c) {
+  if (c->told) return -1;
+  c->told = 1;
+  if (c->attached) { /* open when its token expired (checked at each of its wake-ups, <= 100 ms) */
+    s->stats.ws_expired++;
+    say_expired(s, c->who);
+  }
+  static const char msg[] = "{\"type\":\"expired\",\"message\":\"" PALP_WEB_TOKEN_EXPIRED_TEXT "\"}";
+  unsigned char buf[LWS_PRE + sizeof msg];
+  memcpy(buf + LWS_PRE, msg, sizeof msg - 1);
+  lws_write(wsi, buf + LWS_PRE, sizeof msg - 1, LWS_WRITE_TEXT);
+  static const char why[] = "token expired";
+  lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION, (unsigned char *)why, sizeof why - 1);
+  return -1;
 }
 
 static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len) {
@@ -182,22 +248,31 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
 
   case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION: {
     char uri[64];
-    int from_url = 0;
+    int from_url = 0, stale = 0;
     /* The WebSocket carries the token in its URL (a page reads it from its own address); the
      * cookie alone is not enough, so a cross-site page cannot ride on it. */
     const int who = lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI) > 0 && !strcmp(uri, WS_PATH)
-                        ? authorised(s, wsi, 0, &from_url)
+                        ? authorised(s, wsi, 0, &from_url, &stale)
                         : -1;
     if (who < 0 || !same_origin(wsi) || !host_allowed(s, wsi) || !c) {
       s->stats.ws_denied++;
       return 1;
     }
     c->who = who; /* the connection's data exists from here on, zeroed */
+    /* An expired token's page is let in only to be told so (tell_expired): never attached to the hub. */
+    c->expired = stale;
     return 0;
   }
 
   case LWS_CALLBACK_ESTABLISHED: {
     const int who = c->who;
+    if (c->expired) {
+      s->stats.ws_denied++;
+      s->stats.ws_expired++;
+      say_expired(s, who);
+      lws_callback_on_writable(wsi);
+      return 0;
+    }
     if (who > 0 && (who > PALP_WEB_TRAINEES_MAX || s->trainee_pages[who] >= PAGES_PER_TRAINEE ||
                     s->trainee_pages_all >= s->def.max_clients - instructor_reserve(s->def.max_clients))) {
       s->stats.ws_full++;
@@ -228,7 +303,12 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
   case LWS_CALLBACK_RECEIVE: {
     /* Only control messages ({"follow": ...}, {"trainee": ...}, {"finding": ...}): the first two
      * change what this page is sent; a finding reaches DDS only from a bound trainee page, after
-     * the hub's checks. Anything longer than CONTROL_MAX is dropped whole. */
+     * the hub's checks. Anything longer than CONTROL_MAX is dropped whole. Nothing from a page
+     * whose token has expired (its next write tells it and closes). */
+    if (!c->attached || c->expired || token_expired(s, c->who)) {
+      lws_callback_on_writable(wsi);
+      return 0;
+    }
     if (lws_frame_is_binary(wsi)) c->rx_overflow = 1;
     if (!c->rx_overflow && c->rx_len + len <= CONTROL_MAX) {
       memcpy(c->rx + c->rx_len, in, len);
@@ -251,6 +331,9 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
   }
 
   case LWS_CALLBACK_SERVER_WRITEABLE: {
+    /* every page is offered a write at each of the hub's wake-ups (<= 100 ms): its token's lifetime
+     * is checked there too, so a page left open is closed at its token's expiry */
+    if (c->expired || (c->attached && token_expired(s, c->who))) return tell_expired(wsi, s, c);
     if (!c->attached) return 0;
     unsigned char *buf = NULL;
     size_t n = 0;

@@ -17,6 +17,7 @@
 
 #include "access.h"
 #include "hub.h"
+#include "palp_log.h"
 
 typedef struct palp_web_serve_def {
   const char *listen;    /* address to bind, default 127.0.0.1 */
@@ -29,6 +30,12 @@ typedef struct palp_web_serve_def {
    * that trainee's sessions (palp_web_cursor.scope). token stays the instructors'. */
   const palp_web_trainee_token *trainees;
   int trainee_count;
+  /* Every token's lifetime [s] (0: none), from when it was issued: token_issued_s [s, Unix time] for
+   * the instructors', each trainee's own issued_s. Checked on every request and handshake, and an open
+   * WebSocket is closed at its token's expiry; a page with an expired token is told so
+   * (PALP_WEB_TOKEN_EXPIRED_TEXT: the HTTP 401's body, an {"type": "expired"} WebSocket message). */
+  double token_lifetime_s, token_issued_s;
+  palp_log *log; /* each expired token's first refusal is logged (NULL: stderr) */
   /* HTTPS and WSS on the same port (both or neither; PEM files): the token and the pages then
    * cross the network encrypted, and the cookie is marked Secure. main refuses to serve beyond
    * loopback without them unless told --insecure-http. */
@@ -37,6 +44,8 @@ typedef struct palp_web_serve_def {
 
 typedef struct palp_web_serve_stats {
   uint64_t http_ok, http_denied, http_missing;
+  uint64_t http_expired, ws_expired; /* refused for an expired token (in http_denied, ws_denied) or, ws,
+                                      * closed at its expiry */
   uint64_t ws_opened, ws_closed, ws_denied, ws_full;
   uint64_t msgs, bytes, control_ok, control_bad;
 } palp_web_serve_stats;

@@ -57,6 +57,24 @@ static void test_access(void) {
     CHECK(palp_web_host_is_loopback(whost[i]) == 0, "Host '%s' is not", whost[i]);
   CHECK(palp_web_host_is_loopback(NULL) == 0, "Host NULL");
 
+  /* token lifetimes, the clock given (palp-web's is the wall clock; a token ages from its file's write) */
+  {
+    const double issued = 1.8e9, day = PALP_WEB_TOKEN_LIFETIME_DEFAULT_S;
+    CHECK(day == 43200.0, "the default lifetime is 12 h (a class day)");
+    CHECK(palp_web_token_expired(issued, day, issued) == 0, "a token is valid when issued");
+    CHECK(palp_web_token_expired(issued, day, issued + day - 1e-3) == 0, "and 1 ms before its lifetime ends");
+    CHECK(palp_web_token_expired(issued, day, issued + day) == 1, "expired at issued + lifetime");
+    CHECK(palp_web_token_expired(issued, day, issued + 4 * 86400.0) == 1, "Monday's token on Friday: expired");
+    CHECK(palp_web_token_expired(issued, day, issued - 3600.0) == 0, "an hour before issue (clock skew): valid");
+    CHECK(palp_web_token_expired(issued, 0, issued + 1e9) == 0, "lifetime 0: never expires");
+    CHECK(palp_web_token_expired(issued, day, NAN) == 1 && palp_web_token_expired(NAN, day, issued) == 1,
+          "an unknown time or age: expired");
+    char t[32];
+    palp_web_utc_text(issued + day, t, sizeof t);
+    CHECK(!strcmp(t, "2027-01-15T20:00:00Z"), "1.8e9 s + 12 h as UTC: %s", t);
+    palp_web_utc_text(NAN, t, sizeof t);
+    CHECK(!strcmp(t, "?"), "NaN as UTC: %s", t);
+  }
   CHECK(palp_web_token_check("abcdefghijklmnop") == 0, "16 characters accepted");
   CHECK(palp_web_token_check("abcdefghijklmno") != 0, "15 refused (too short)");
   CHECK(palp_web_token_check("abcdefghijklmnop&x=1") != 0, "URL syntax refused");

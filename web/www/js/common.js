@@ -29,11 +29,13 @@ const PALP = (function () {
   }
 
   const state = { connected: false, hello: null, phantoms: {}, sessions: [], status: null,
-    frames: 0, messages: 0, reconnects: 0, findingReplies: [] };
+    frames: 0, messages: 0, reconnects: 0, findingReplies: [], expired: null };
   window.palpState = state;
 
   /* Opens the WebSocket (the token from this page's own address), calls handlers[type](msg) for
-   * every message and handlers.deformation(frame) for frames; reconnects after a second. */
+   * every message and handlers.deformation(frame) for frames; reconnects after a second, except once
+   * the bridge said this page's token expired ({"type": "expired"}): its message stays shown, as no
+   * retry with the same token can succeed. */
   function connect(handlers) {
     const token = params().get("token");
     const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" +
@@ -49,6 +51,7 @@ const PALP = (function () {
       ws.binaryType = "arraybuffer";
       ws.onopen = function () { setConn(true, "live"); if (handlers.open) handlers.open(send); };
       ws.onclose = function () {
+        if (state.expired) { setConn(false, state.expired); return; }
         setConn(false, "disconnected, retrying");
         state.reconnects++;
         setTimeout(open, 1000);
@@ -67,6 +70,7 @@ const PALP = (function () {
         else if (m.type === "sessions") state.sessions = m.sessions;
         else if (m.type === "status") state.status = m;
         else if (m.type === "finding_reply") state.findingReplies.push(m);
+        else if (m.type === "expired") { state.expired = String(m.message); setConn(false, state.expired); }
         if (handlers[m.type]) handlers[m.type](m);
       };
     }
