@@ -60,7 +60,8 @@ enum {
   PALP_DB_ENEWER = -100, /* the file's schema is newer than this palp */
   PALP_DB_ENOTFOUND = -101, /* no such session */
   PALP_DB_ESQL = -102, /* SQLite reported an error; see the message */
-  PALP_DB_EAMBIGUOUS = -103 /* a session prefix matches several sessions */
+  PALP_DB_EAMBIGUOUS = -103, /* a session prefix matches several sessions */
+  PALP_DB_EOLDER = -104 /* the file's schema is older, and palp_db_open_readonly would not copy it */
 };
 
 /* ---- records --------------------------------------------------------------- */
@@ -343,11 +344,30 @@ int palp_db_world_step(palp_db_writer *w, palp_db_session s, palp_world *world, 
 /* ---- readers ---------------------------------------------------------------- */
 typedef struct palp_db palp_db;
 
-/* Opens for reading (and annotating). A file with an older schema is upgraded in a transaction;
+/* Opens read-write: for annotating and deleting, and for the server's own reads of its log
+ * (palp_db_open_readonly reads without ever writing). A file with an older schema is upgraded in a
+ * transaction;
  * one with a newer schema is refused (PALP_DB_ENEWER) with a message saying so. create = 0
  * refuses a missing file, and refuses an empty or foreign file (no palp schema) after
  * looking at it read-only, so it is left untouched. */
 int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t errlen);
+/* Opens an existing log for reading only (palp-review's list, show, export, ...): the connection is
+ * SQLITE_OPEN_READONLY, so reading never changes the file, whether it is a copy from an older palp,
+ * on read-only media, or being written by a live server. A file with the current schema is read in
+ * place. One with an older schema is copied into memory (the SQLite backup API) and the copy is
+ * upgraded, when the file (with its -wal) is at most copy_max_bytes; a larger one is refused
+ * (PALP_DB_EOLDER, the message naming `palp-review migrate`), as are newer, empty, foreign and
+ * missing files. A WAL-mode log without a -wal file in a directory this user cannot write (where
+ * SQLite cannot make the -wal and -shm it reads through) is opened immutable: with no -wal, no
+ * writer has it open. Writing through the handle fails (SQLITE_READONLY; a copy is query_only, as
+ * a write to it would be lost at close). */
+int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **out, char *err, size_t errlen);
+/* The file's schema version when db reads an upgraded in-memory copy of it (palp_db_open_readonly
+ * on an older file), else 0. */
+int palp_db_copied_from_version(palp_db *db);
+/* The schema version of the log at path, looked at read-only (as palp_db_open_readonly checks it);
+ * 0, or the codes palp_db_open_readonly returns for a file it refuses. */
+int palp_db_peek_version(const char *path, int *version, char *err, size_t errlen);
 void palp_db_close(palp_db *db);
 /* The file's schema version (PRAGMA user_version). */
 int palp_db_file_version(palp_db *db);

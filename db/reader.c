@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "db_internal.h"
 #include "migrations.h"
@@ -11,23 +12,101 @@
 
 struct palp_db {
   sqlite3 *db;
+  int copied_from; /* > 0: db is an upgraded in-memory copy of a file at this schema version */
 };
 
-/* Looks at a file read-only: is it a palp session log? 0, or PALP_EINVAL / PALP_EIO with a
- * message. Nothing is written, so an empty or foreign file stays as it was. */
-static int check_palp_file(const char *path, char *err, size_t errlen) {
-  sqlite3 *db = NULL;
-  if (sqlite3_open_v2(path, &db, SQLITE_OPEN_READONLY, NULL) != SQLITE_OK) {
-    palp_db__fmt(err, errlen, "%s: cannot open: %s", path, db ? sqlite3_errmsg(db) : "out of memory");
-    sqlite3_close(db);
-    return PALP_EIO;
+static int file_exists(const char *path) {
+  struct stat st;
+  return stat(path, &st) == 0;
+}
+
+/* path as a "file:" URI with query (RFC 3986: everything but unreserved characters and '/' as %XX,
+ * so that '?', '#' and '%' in a file name stay the name's; a leading "//" would read as an
+ * authority, so the second '/' is encoded too). malloc'd, NULL when out of memory. */
+static char *file_uri(const char *path, const char *query) {
+  const size_t n = strlen(path);
+  char *u = malloc(3 * n + strlen(query) + 8);
+  if (!u) return NULL;
+  char *o = u + sprintf(u, "file:");
+  for (size_t i = 0; i < n; i++) {
+    const unsigned char c = (unsigned char)path[i];
+    const int plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+                      c == '.' || c == '_' || c == '~' || (c == '/' && !(i == 1 && path[0] == '/'));
+    o += plain ? sprintf(o, "%c", c) : sprintf(o, "%%%02X", c);
   }
-  /* A live log's writer may hold a lock for a moment (a checkpoint, WAL recovery): wait for it as every
-   * other connection does, or a busy file would be called "not a palp session log". */
-  sqlite3_busy_timeout(db, PALP_DB_BUSY_TIMEOUT_MS);
+  sprintf(o, "?%s", query);
+  return u;
+}
+
+/* Opens path SQLITE_OPEN_READONLY and reads its header, so that a file SQLite cannot read fails here.
+ * Nothing through this connection writes to the file: SQLite refuses every write on it, and a
+ * read-only connection does not checkpoint the WAL into the file at close (NO_CKPT_ON_CLOSE says so
+ * twice). It may make the -wal and -shm files beside the file, as any reader of a WAL log does.
+ * Where it cannot (a directory this user may not write, read-only media) SQLite cannot read a
+ * WAL-mode file whose -wal is absent; such a file is opened again immutable (no locks, no -wal or
+ * -shm): with no -wal beside it, no connection has it open in WAL mode, so no writer is changing it,
+ * and its committed data is all in the file. With a -wal present, immutable would ignore the
+ * commits in it: refused with SQLite's words instead. 0, or PALP_EIO / PALP_EINVAL (message in err;
+ * *probe_rc the header read's SQLite code, so that the caller can tell a non-database). */
+static int open_ro(const char *path, sqlite3 **out, int *probe_rc, char *err, size_t errlen) {
+  *out = NULL;
+  *probe_rc = SQLITE_OK;
+  sqlite3 *db = NULL;
+  for (int immutable = 0; immutable < 2; immutable++) {
+    char *uri = immutable ? file_uri(path, "immutable=1") : NULL;
+    if (immutable && !uri) return PALP_ENOMEM;
+    const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_FULLMUTEX | (immutable ? SQLITE_OPEN_URI : 0);
+    int rc = sqlite3_open_v2(immutable ? uri : path, &db, flags, NULL);
+    free(uri);
+    if (rc != SQLITE_OK) {
+      palp_db__fmt(err, errlen, "%s: cannot open: %s", path, db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
+      sqlite3_close(db);
+      return PALP_EIO;
+    }
+    sqlite3_extended_result_codes(db, 1);
+    sqlite3_db_config(db, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, (int *)NULL);
+    /* A live log's writer may hold a lock for a moment (a checkpoint, WAL recovery): wait for it as every
+     * other connection does, or a busy file would be called "not a palp session log". */
+    sqlite3_busy_timeout(db, PALP_DB_BUSY_TIMEOUT_MS);
+    sqlite3_stmt *st;
+    rc = sqlite3_prepare_v2(db, "SELECT count(*) FROM sqlite_master", -1, &st, NULL);
+    if (rc == SQLITE_OK) {
+      rc = sqlite3_step(st);
+      sqlite3_finalize(st);
+      if (rc == SQLITE_ROW) rc = SQLITE_OK;
+    }
+    if (rc == SQLITE_OK) {
+      *out = db;
+      return 0;
+    }
+    char wal[4200];
+    snprintf(wal, sizeof wal, "%s-wal", path);
+    const int primary = rc & 0xff;
+    if (!immutable && (primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN) && !file_exists(wal) &&
+        file_exists(path)) {
+      sqlite3_close(db);
+      db = NULL;
+      continue;
+    }
+    *probe_rc = rc;
+    *out = db; /* the caller words it: "not an SQLite database", or SQLite's reason */
+    return 0;
+  }
+  return PALP_EIO; /* not reached */
+}
+
+/* Looks at a file read-only: is it a palp session log? 0 (*out the read-only connection, when out is
+ * not NULL, and *version its schema version), or PALP_EINVAL / PALP_EIO / PALP_DB_ENEWER with a
+ * message. Nothing is written, so an empty or foreign file stays as it was. */
+static int check_palp_file(const char *path, sqlite3 **out, int *version_out, char *err, size_t errlen) {
+  if (out) *out = NULL;
+  sqlite3 *db = NULL;
+  int probe = SQLITE_OK;
+  int rc = open_ro(path, &db, &probe, err, errlen);
+  if (rc) return rc;
   sqlite3_stmt *st;
   int version = -1, tables = -1, any = -1;
-  if (sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK) {
+  if (probe == SQLITE_OK && sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK) {
     if (sqlite3_step(st) == SQLITE_ROW) version = sqlite3_column_int(st, 0);
     sqlite3_finalize(st);
   }
@@ -38,11 +117,16 @@ static int check_palp_file(const char *path, char *err, size_t errlen) {
     if (sqlite3_step(st) == SQLITE_ROW) any = sqlite3_column_int(st, 0), tables = sqlite3_column_int(st, 1);
     sqlite3_finalize(st);
   }
-  int rc = 0;
+  const int primary = probe & 0xff;
   if (version > palp_db_migration_count) {
     palp_db__fmt(err, errlen, "%s: database schema version %d is newer than this palp (%d); upgrade palp", path,
                  version, palp_db_migration_count);
     rc = PALP_DB_ENEWER;
+  } else if (version < 0 && probe != SQLITE_OK && primary != SQLITE_NOTADB && primary != SQLITE_CORRUPT) {
+    /* the file may well be a log: SQLite could not read it (locked past the timeout, no -shm to be made beside a
+     * -wal in a read-only directory, an I/O error) */
+    palp_db__fmt(err, errlen, "%s: cannot read it: %s", path, sqlite3_errmsg(db));
+    rc = PALP_EIO;
   } else if (version < 0) {
     palp_db__fmt(err, errlen, "%s: not a palp session log (not an SQLite database: %s)", path, sqlite3_errmsg(db));
     rc = PALP_EINVAL;
@@ -53,7 +137,9 @@ static int check_palp_file(const char *path, char *err, size_t errlen) {
     palp_db__fmt(err, errlen, "%s: not a palp session log (no palp schema; left untouched)", path);
     rc = PALP_EINVAL;
   }
-  sqlite3_close(db);
+  if (rc == 0 && out) *out = db;
+  else sqlite3_close(db);
+  if (rc == 0 && version_out) *version_out = version;
   return rc;
 }
 
@@ -61,7 +147,7 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
   if (!out) return PALP_EINVAL;
   *out = NULL;
   if (!create && path && *path) {
-    int rc = check_palp_file(path, err, errlen);
+    int rc = check_palp_file(path, NULL, NULL, err, errlen);
     if (rc) return rc;
   }
   palp_db *d = calloc(1, sizeof *d);
@@ -74,6 +160,111 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
   *out = d;
   return 0;
 }
+
+int palp_db_peek_version(const char *path, int *version, char *err, size_t errlen) {
+  if (!path || !*path || !version) return PALP_EINVAL;
+  return check_palp_file(path, NULL, version, err, errlen);
+}
+
+/* The file and its -wal: what an in-memory copy of the log would hold at most. */
+static long long log_bytes(const char *path) {
+  struct stat st;
+  long long n = 0;
+  if (stat(path, &st) == 0) n += st.st_size;
+  char wal[4200];
+  snprintf(wal, sizeof wal, "%s-wal", path);
+  if (stat(wal, &st) == 0) n += st.st_size;
+  return n;
+}
+
+/* The read-only file connection fh copied into a new in-memory database, which is then upgraded to
+ * the current schema: the readers' queries are written for it (later columns, tables), and the file
+ * itself must not be changed by reading it. */
+static int upgraded_copy(sqlite3 *fh, const char *path, sqlite3 **out, char *err, size_t errlen) {
+  *out = NULL;
+  sqlite3 *mem = NULL;
+  if (sqlite3_open_v2(":memory:", &mem, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX, NULL) !=
+      SQLITE_OK) {
+    sqlite3_close(mem);
+    palp_db__fmt(err, errlen, "%s: no memory for a copy of the log", path);
+    return PALP_ENOMEM;
+  }
+  sqlite3_extended_result_codes(mem, 1);
+  /* The backup refuses an in-memory destination whose page size differs from the source's. */
+  int page = 0;
+  sqlite3_stmt *st;
+  if (sqlite3_prepare_v2(fh, "PRAGMA page_size", -1, &st, NULL) == SQLITE_OK) {
+    if (sqlite3_step(st) == SQLITE_ROW) page = sqlite3_column_int(st, 0);
+    sqlite3_finalize(st);
+  }
+  char sql[64];
+  snprintf(sql, sizeof sql, "PRAGMA page_size = %d", page > 0 ? page : 4096);
+  sqlite3_exec(mem, sql, NULL, NULL, NULL);
+  sqlite3_backup *b = sqlite3_backup_init(mem, "main", fh, "main");
+  int rc = b ? sqlite3_backup_step(b, -1) : sqlite3_errcode(mem);
+  const int fin = b ? sqlite3_backup_finish(b) : rc;
+  if (rc != SQLITE_DONE || fin != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: copying the log into memory failed: %s", path,
+                 sqlite3_errstr(rc != SQLITE_DONE ? rc : fin));
+    sqlite3_close(mem);
+    return rc == SQLITE_NOMEM ? PALP_ENOMEM : PALP_DB_ESQL;
+  }
+  if ((rc = palp_db__migrate(mem, path, NULL, err, errlen)) != 0) {
+    sqlite3_close(mem);
+    return rc;
+  }
+  /* as the file's connection refuses writes, so does its copy: a write to it would vanish at close */
+  sqlite3_exec(mem, "PRAGMA foreign_keys=ON; PRAGMA query_only=1", NULL, NULL, NULL);
+  *out = mem;
+  return 0;
+}
+
+int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **out, char *err, size_t errlen) {
+  if (!out) return PALP_EINVAL;
+  *out = NULL;
+  if (!path || !*path) {
+    palp_db__fmt(err, errlen, "no database path given");
+    return PALP_EINVAL;
+  }
+  sqlite3 *fh = NULL;
+  int version = 0;
+  int rc = check_palp_file(path, &fh, &version, err, errlen);
+  if (rc) return rc;
+  palp_db *d = calloc(1, sizeof *d);
+  if (!d) {
+    sqlite3_close(fh);
+    return PALP_ENOMEM;
+  }
+  if (version == palp_db_migration_count) {
+    d->db = fh;
+    *out = d;
+    return 0;
+  }
+  const long long bytes = log_bytes(path);
+  if (bytes > copy_max_bytes) {
+    palp_db__fmt(err, errlen,
+                 "%s: its schema version %d is older than this palp's (%d), and reading it unchanged needs a copy "
+                 "in memory of its %.1f MB, more than the %.1f MB allowed (PALP_REVIEW_COPY_MB); upgrade the file "
+                 "itself with `palp-review --db %s migrate` (it writes to the file: work on a copy to keep the "
+                 "original) and read it again",
+                 path, version, palp_db_migration_count, (double)bytes / 1048576.0,
+                 (double)(copy_max_bytes > 0 ? copy_max_bytes : 0) / 1048576.0, path);
+    sqlite3_close(fh);
+    free(d);
+    return PALP_DB_EOLDER;
+  }
+  rc = upgraded_copy(fh, path, &d->db, err, errlen);
+  sqlite3_close(fh);
+  if (rc) {
+    free(d);
+    return rc;
+  }
+  d->copied_from = version;
+  *out = d;
+  return 0;
+}
+
+int palp_db_copied_from_version(palp_db *db) { return db ? db->copied_from : 0; }
 
 void palp_db_close(palp_db *db) {
   if (!db) return;

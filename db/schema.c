@@ -39,6 +39,7 @@ const char *palp_db_strerror(int err) {
   case PALP_DB_ENOTFOUND: return "no such session";
   case PALP_DB_ESQL: return "SQLite error";
   case PALP_DB_EAMBIGUOUS: return "session prefix is ambiguous";
+  case PALP_DB_EOLDER: return "database schema is older than this palp, and reading it would need an upgrade";
   case PALP_OK: return "ok";
   case PALP_EINVAL: return "invalid argument";
   case PALP_ENOMEM: return "out of memory";
@@ -110,7 +111,8 @@ static int set_meta(sqlite3 *db, const char *key, const char *value) {
 }
 
 /* Brings the schema from its version to palp_db_migration_count inside one transaction. */
-static int migrate(sqlite3 *db, const char *path, const char *app_version, char *err, size_t errlen) {
+int palp_db__migrate(sqlite3 *db, const char *path, const char *app_version, char *err, size_t errlen) {
+  if (!app_version) app_version = PALP_VERSION_STRING;
   int v = 0;
   if (user_version(db, &v) != SQLITE_OK) {
     palp_db__fmt(err, errlen, "%s: cannot read the schema version: %s", path, sqlite3_errmsg(db));
@@ -222,7 +224,7 @@ int palp_db__connect(const char *path, int create, const char *app_version, sqli
    * commits made since the last checkpoint. */
   if ((rc = exec_fmt(db, err, errlen, path, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; "
                                              "PRAGMA foreign_keys=ON")) != 0 ||
-      (rc = migrate(db, path, app_version, err, errlen)) != 0) {
+      (rc = palp_db__migrate(db, path, app_version, err, errlen)) != 0) {
     sqlite3_close(db);
     return rc;
   }

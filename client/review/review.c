@@ -3,7 +3,11 @@
  *   palp-review [--db FILE] COMMAND [ARGS]
  *
  * The database defaults to $PALP_DB, then ./palp-sessions.db. The tool opens the file with a WAL
- * reader, so it works while the server is writing the same file. */
+ * reader, so it works while the server is writing the same file. The commands that only read (list,
+ * show, export, replay, report, class, trainee) open it read-only (palp_db_open_readonly): reading a
+ * log never changes it, be it a copy from an older palp (read through an upgraded copy in memory),
+ * on read-only media, or live. annotate, delete, prune and migrate write, and upgrade an older file. */
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,8 +25,13 @@
 /* replay --verbose has its own meaning, so only --log-level/--log-file. */
 #define REVIEW_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
 
+/* How large a log from an older palp the read-only commands copy into memory to read it unchanged
+ * (PALP_REVIEW_COPY_MB overrides): a class's term is tens of MB; a machine running palp-review has
+ * this much to spare, and a larger file is better upgraded once (migrate) than copied at every read. */
+#define REVIEW_COPY_MB_DEFAULT 256
+
 static void usage(FILE *f) {
-  fputs("usage: palp-review [--db FILE] COMMAND [ARGS]\n"
+  fprintf(f, "usage: palp-review [--db FILE] COMMAND [ARGS]\n"
         "  list     [--trainee NAME] [--phantom ID|NAME] [--since DATE] [--until DATE] [--ungraded]\n"
         "  show     SESSION\n"
         "  export   SESSION --format csv|json [--table frames|contacts|feedback|events|notes|metrics] [--out FILE]\n"
@@ -37,12 +46,17 @@ static void usage(FILE *f) {
         "  prune    --older-than DAYS [--keep-graded] [--dry-run]\n"
         "           (ended sessions: frames, feedback, contacts, meshes, finger samples go; the session,\n"
         "            exercise, findings, events, notes/grades and a metrics summary stay)\n"
+        "  migrate  (upgrades a log from an older palp to this palp's schema, in the file)\n"
+        "list, show, export, replay, report, class and trainee only read: the file is opened read-only and\n"
+        "never changed. A log from an older palp is read through an upgraded copy in memory, if it is at\n"
+        "most PALP_REVIEW_COPY_MB megabytes (default %d; 0: never copy); a larger one is refused, naming\n"
+        "migrate. annotate, delete, prune and migrate write to the file, and upgrade an older one in it.\n"
         "SESSION is a session uid or a unique prefix of one, or the number a station showed (\"session 3\")\n"
         "when one logged session has it (otherwise the candidates are listed).\n"
         "DATE is YYYY-MM-DD[THH:MM[:SS]] local time.\n"
         "The database is --db, else $PALP_DB, else ./palp-sessions.db.\n"
         "Errors are log lines (timestamp, level); tables and reports go to stdout.\n",
-        f);
+        REVIEW_COPY_MB_DEFAULT);
   palp_app_common_usage(f, REVIEW_OPTS);
 }
 
@@ -436,6 +450,47 @@ static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *
   return REVIEW_OK;
 }
 
+/* PALP_REVIEW_COPY_MB, else REVIEW_COPY_MB_DEFAULT, in bytes; a value that is not a whole number of
+ * megabytes >= 0 is said and the default taken. */
+static long long copy_max_bytes(palp_log *log) {
+  const char *e = getenv("PALP_REVIEW_COPY_MB");
+  long long mb = REVIEW_COPY_MB_DEFAULT;
+  if (e && *e) {
+    char *end;
+    const long long v = strtoll(e, &end, 10);
+    if (*end || v < 0 || v > LLONG_MAX / 1048576)
+      palp_log_warn(log, "PALP_REVIEW_COPY_MB=%s: not a number of megabytes >= 0; %d taken", e, REVIEW_COPY_MB_DEFAULT);
+    else mb = v;
+  }
+  return mb * 1048576;
+}
+
+/* ---- migrate --------------------------------------------------------------------------- */
+/* The one command that only upgrades: what the read-only commands name for a log too large to copy.
+ * palp_db_open upgrades in one transaction (a crash leaves the old schema or the new one). */
+static int cmd_migrate(palp_log *log, const char *path, int nargs) {
+  if (nargs > 0) {
+    fprintf(stderr, "palp-review migrate: no arguments (the file is --db, $PALP_DB or ./palp-sessions.db)\n");
+    return REVIEW_ERROR;
+  }
+  char err[1200] = "";
+  int was = 0;
+  if (palp_db_peek_version(path, &was, err, sizeof err)) {
+    palp_log_error(log, "migrate: %s", err);
+    return REVIEW_ERROR;
+  }
+  palp_db *db;
+  if (palp_db_open(path, 0, &db, err, sizeof err)) {
+    palp_log_error(log, "migrate: %s", err);
+    return REVIEW_ERROR;
+  }
+  const int now = palp_db_file_version(db);
+  palp_db_close(db);
+  if (was == now) printf("%s: schema version %d, this palp's: nothing to upgrade\n", path, now);
+  else printf("%s: upgraded from schema version %d to %d\n", path, was, now);
+  return REVIEW_OK;
+}
+
 int main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-review")) return 0;
   const char *path = getenv("PALP_DB");
@@ -482,7 +537,7 @@ int main(int argc, char **argv) {
   }
   const char *cmd = argv[i++];
   static const char *const cmds[] = {"list", "show", "export", "annotate", "replay", "report", "class", "trainee", "delete",
-                                     "prune"};
+                                     "prune", "migrate"};
   int known = 0;
   for (size_t k = 0; k < sizeof cmds / sizeof cmds[0]; k++) known |= !strcmp(cmd, cmds[k]);
   if (!known) {
@@ -495,12 +550,20 @@ int main(int argc, char **argv) {
     fprintf(stderr, "palp-review: --log-file %s: cannot open it\n", ao.log_file);
     return REVIEW_ERROR;
   }
-  char err[512] = "";
+  if (!strcmp(cmd, "migrate")) return cmd_migrate(&log, path, argc - i);
+  /* Only these write to the log (and so may upgrade it in place); the rest read it read-only. */
+  const int writes = !strcmp(cmd, "annotate") || !strcmp(cmd, "delete") || !strcmp(cmd, "prune");
+  char err[1200] = "";
   palp_db *db;
-  if (palp_db_open(path, 0, &db, err, sizeof err)) {
+  if (writes ? palp_db_open(path, 0, &db, err, sizeof err)
+             : palp_db_open_readonly(path, copy_max_bytes(&log), &db, err, sizeof err)) {
     palp_log_error(&log, "%s", err);
     return REVIEW_ERROR;
   }
+  if (palp_db_copied_from_version(db))
+    palp_log_info(&log, "%s: a log of schema version %d (an older palp's), read through a copy upgraded to version %d "
+                  "in memory; the file is left as it is (palp-review migrate upgrades it)",
+                  path, palp_db_copied_from_version(db), palp_db_schema_version());
   int rc;
   if (!strcmp(cmd, "list") || !strcmp(cmd, "class") || !strcmp(cmd, "trainee") || !strcmp(cmd, "delete") ||
       !strcmp(cmd, "prune")) {

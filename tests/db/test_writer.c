@@ -271,11 +271,29 @@ static void test_migration(const char *v1_sql) {
           "v1 rows: %s", sqlite3_errmsg(h));
   sqlite3_close(h);
 
+  /* Read-only first: an upgraded copy in memory to read, the file left at version 1 (2026-12-06: the
+   * readers upgraded it in place); too large to copy (0 bytes allowed) is refused, naming migrate. */
   palp_db *db;
+  REQUIRE(palp_db_open_readonly(p, 1LL << 30, &db, err, sizeof err) == 0, "open v1 read-only: %s", err);
+  palp_db_session_info info;
+  CHECK(palp_db_copied_from_version(db) == 1 && palp_db_file_version(db) == palp_db_schema_version() &&
+            palp_db_find_session(db, "old-1", &info) == 0 && !strcmp(info.trainee, "carol") && info.frames == 1,
+        "v1 read through a copy upgraded to %d (copied from %d)", palp_db_file_version(db),
+        palp_db_copied_from_version(db));
+  CHECK(palp_db_add_note(db, info.id, "Lee", "x", NULL) != 0, "the read-only copy refuses a write");
+  palp_db_close(db);
+  REQUIRE(sqlite3_open_v2(p, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK, "peek");
+  CHECK(db_scalar(h, "PRAGMA user_version") == 1 && db_scalar(h, "SELECT count(*) FROM note") == 0 &&
+            db_scalar(h, "SELECT count(*) FROM sqlite_master WHERE name = 'writer_run'") == 0,
+        "the file is still version 1, without the note or migration 2's table");
+  sqlite3_close(h);
+  int rc = palp_db_open_readonly(p, 0, &db, err, sizeof err);
+  CHECK(rc == PALP_DB_EOLDER && strstr(err, "palp-review --db") && strstr(err, "migrate"),
+        "too large to copy: refused (%d): %s", rc, err);
+
   REQUIRE(palp_db_open(p, 0, &db, err, sizeof err) == 0, "open v1: %s", err);
   CHECK(palp_db_file_version(db) == palp_db_schema_version() && palp_db_schema_version() == 5,
         "upgraded to %d (library %d, expected 5)", palp_db_file_version(db), palp_db_schema_version());
-  palp_db_session_info info;
   CHECK(palp_db_find_session(db, "old-1", &info) == 0 && !strcmp(info.trainee, "carol") && info.frames == 1 &&
             info.records_shed == 0,
         "v1 data survives the upgrade with the new columns at their defaults");

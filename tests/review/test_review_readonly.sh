@@ -1,0 +1,141 @@
+#!/bin/sh
+# palp-review's reading commands never change the log they read (found by review, 2026-12-06: they
+# opened it read-write and upgraded an older palp's schema in place, so an instructor reviewing a
+# copy of an old log, or a log on read-only media, changed it or failed):
+#  - logs of schema 1 and 4 (an older palp's, WAL mode as palp leaves them): list, show, export,
+#    report, replay, class and trainee leave the file byte-identical (sha256), its mtime (ns) and
+#    user_version as they were, and list/show/export print the old rows through the upgraded copy;
+#  - PALP_REVIEW_COPY_MB=0 (a log too large to copy): refused, exit 2, naming `palp-review migrate`,
+#    the file byte-identical;
+#  - a directory this user cannot write, the files 0444 (as root, palp-review runs as nobody
+#    through setpriv, as root ignores the permissions): the old log and a current one are read, and
+#    no -wal, -shm or -journal is made beside them;
+#  - migrate upgrades the file itself (user_version 1 -> current; the rows as the copy showed them),
+#    and says there is nothing to do the second time;
+#  - a write command (annotate) still writes and upgrades.
+# usage: test_review_readonly.sh PALP_REVIEW MIGRATIONS_DIR TMPDIR
+set -u
+review=$1 migrations=$2 tmp=$3
+dir=$tmp/readonly
+rm -rf "$dir"
+mkdir -p "$dir"
+fail=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fail=1; }
+current=$(ls "$migrations"/*.sql | wc -l)
+
+# A log as palp with schema VERSION left it: the migrations up to VERSION, a session (ended, with two
+# frames, an event and a graded note), WAL mode, cleanly closed (no -wal).
+old_log() { # FILE VERSION
+  {
+    for m in "$migrations"/*.sql; do
+      n=$(basename "$m" | cut -c1-4)
+      [ "$(expr "$n" + 0)" -le "$2" ] && cat "$m"
+    done
+    echo "PRAGMA user_version = $2;
+      INSERT INTO meta(key, value) VALUES('app_version', '0.0.9');
+      INSERT INTO session(uid, trainee, station, phantom_id, phantom_name, scene_json, params_json, tick_hz, dt_s,
+        start_unix_s, end_unix_s, end_reason, end_detail)
+        VALUES('old-run-1', 'carol', 'station-3', 'p1', 'dome old', '{}', '{}', 100, 0.01, 1.6e9, 1.6e9 + 2, 'normal', '');
+      INSERT INTO frame(session_id, frame, sim_time_s, top_disp_m, max_disp_m, volume_m3, pressure_pa, contact_force_n,
+        state_hash) VALUES(1, 1, 0.01, 1e-3, 2e-3, 1e-4, 5.0, 3.0, -42), (1, 2, 0.02, 1.5e-3, 2.5e-3, 1e-4, 5.5, 3.25, 7);
+      INSERT INTO event(session_id, wall_unix_s, frame, kind, detail, count) VALUES(1, 1.6e9 + 1, 1, 'info', 'old event', 1);
+      INSERT INTO note(session_id, author, wall_unix_s, text, grade) VALUES(1, 'Lee', 1.6e9 + 3, 'old note', 'B');
+      PRAGMA journal_mode = WAL;"
+  } | sqlite3 "$1" > /dev/null || bad "making $1"
+}
+state() { # FILE: what reading must not change; user_version from the header's bytes 60-63 (big-endian), as
+  # sqlite3 itself, run as root, would make a -wal beside the file in the read-only directory below
+  printf '%s %s %s' "$(sha256sum < "$1" | cut -c1-64)" "$(stat -c %.9Y "$1")" \
+    "$(od -A n -t u1 -j 60 -N 4 "$1" | awk '{ print (($1 * 256 + $2) * 256 + $3) * 256 + $4 }')"
+}
+
+for v in 1 4; do
+  db=$dir/v$v.db
+  old_log "$db" "$v"
+  before=$(state "$db")
+  R() { "$review" --db "$db" "$@"; }
+  R list > "$dir/list-$v.txt" 2> "$dir/list-$v.err" || bad "v$v: list exit status: $(cat "$dir/list-$v.err")"
+  R show old-run-1 > "$dir/show-$v.txt" 2>&1 || bad "v$v: show exit status"
+  R export old-run-1 --format csv > "$dir/export-$v.csv" 2>&1 || bad "v$v: export exit status"
+  R export old-run-1 --format json --table notes --out "$dir/notes-$v.json" > /dev/null 2>&1 || bad "v$v: export notes"
+  R report old-run-1 --out "$dir/report-$v.html" > /dev/null 2>&1 || bad "v$v: report exit status"
+  R replay old-run-1 > /dev/null 2>&1; rc=$? # an empty scene: replay may refuse it, but must not crash
+  [ $rc -lt 128 ] || bad "v$v: replay crashed ($rc)"
+  R class --exercise none --out "$dir/class-$v.html" > /dev/null 2>&1 # no exercise sessions: exit 2, said
+  R trainee carol > "$dir/trainee-$v.txt" 2>&1 || bad "v$v: trainee exit status"
+  after=$(state "$db")
+  if [ "$before" = "$after" ]; then
+    ok "v$v: list, show, export, report, replay, class and trainee leave the file as it was (sha256 mtime user_version: $after)"
+  else bad "v$v: the file changed by reading it: $before -> $after"; fi
+  if grep -Eq "^old-run-1 +carol +dome old +- +2020-09-13 .* +0\.02 normal +1 +'B' \(free text\)$" "$dir/list-$v.txt" &&
+     grep -q '^1 session$' "$dir/list-$v.txt" &&
+     grep -q "a log of schema version $v (an older palp's), read through a copy upgraded to version $current in memory; the file is left as it is" "$dir/list-$v.err"; then
+    ok "v$v: list shows the old session (trainee, phantom, end, note, grade) and says it read a copy"
+  else bad "v$v: list:"; cat "$dir/list-$v.txt" "$dir/list-$v.err"; fi
+  if grep -q '^trainee    carol   station station-3$' "$dir/show-$v.txt" && grep -q '^events     1$' "$dir/show-$v.txt" &&
+     grep -q "Lee \\[grade 'B' (free text)\\]: old note" "$dir/show-$v.txt" &&
+     grep -q '^peak force           3.25 N at t = 0.02 s' "$dir/show-$v.txt"; then
+    ok "v$v: show reads the old session's trainee, frames, event and note"
+  else bad "v$v: show:"; cat "$dir/show-$v.txt"; fi
+  if [ "$(grep -c '^[12],0.0[12],' "$dir/export-$v.csv")" = 2 ] && grep -Eq '^2,0\.02,0\.0015,0\.0025[0-9]*,0\.0001,5\.5,3\.25,0x0+7$' "$dir/export-$v.csv"; then
+    ok "v$v: export csv gives both old frames"
+  else bad "v$v: export:"; cat "$dir/export-$v.csv"; fi
+done
+
+# Too large to copy (PALP_REVIEW_COPY_MB=0: copy nothing): refused with the command that upgrades.
+db=$dir/v1.db
+before=$(state "$db")
+if PALP_REVIEW_COPY_MB=0 "$review" --db "$db" list > "$dir/big.txt" 2>&1; then bad "a log too large to copy was read"
+else
+  rc=$?
+  if [ $rc -eq 2 ] && grep -q "its schema version 1 is older than this palp's ($current), and reading it unchanged needs a copy in memory .*upgrade the file itself with \`palp-review --db $db migrate\`" "$dir/big.txt" &&
+     [ "$(state "$db")" = "$before" ]; then
+    ok "too large to copy: refused (exit 2), naming palp-review migrate, the file as it was"
+  else bad "too large to copy: exit $rc, $(cat "$dir/big.txt")"; fi
+fi
+
+# A read-only directory, read-only files: copies of the old log and of a current one, read as a user
+# who may not write there (root may write anywhere: palp-review then runs as nobody).
+ro=$dir/ro
+mkdir -p "$ro"
+old_log "$ro/old.db" 1
+old_log "$ro/current.db" 1
+"$review" --db "$ro/current.db" migrate > /dev/null 2>&1 || bad "migrating the current copy"
+chmod 0444 "$ro"/*.db
+chmod 0555 "$ro"
+as_reader() {
+  if [ "$(id -u)" = 0 ]; then setpriv --reuid=65534 --regid=65534 --clear-groups "$@"
+  else "$@"; fi
+}
+if [ "$(id -u)" = 0 ] && as_reader sh -c ": > '$ro/probe'" 2>/dev/null; then bad "the read-only directory is writable for the reader"; fi
+for f in old current; do
+  before=$(state "$ro/$f.db")
+  as_reader "$review" --db "$ro/$f.db" list > "$dir/ro-$f.txt" 2>&1 || bad "read-only $f: list exit status: $(cat "$dir/ro-$f.txt")"
+  as_reader "$review" --db "$ro/$f.db" show old-run-1 >> "$dir/ro-$f.txt" 2>&1 || bad "read-only $f: show exit status"
+  if grep -Eq "^old-run-1 +carol " "$dir/ro-$f.txt" && grep -q '^trainee    carol ' "$dir/ro-$f.txt" &&
+     [ "$(state "$ro/$f.db")" = "$before" ] && [ "$(ls -A "$ro" | tr '\n' ' ')" = "current.db old.db " ]; then
+    ok "read-only directory and file ($f log, as $(as_reader id -un)): list and show read it, nothing made beside it"
+  else bad "read-only directory ($f log): $(ls -A "$ro" | tr '\n' ' '): $(cat "$dir/ro-$f.txt")"; fi
+done
+chmod 0755 "$ro"
+
+# migrate: the file itself upgraded, its rows as the copy showed them; then nothing to do.
+"$review" --db "$db" migrate > "$dir/migrate.txt" 2>&1 || bad "migrate exit status"
+"$review" --db "$db" migrate >> "$dir/migrate.txt" 2>&1 || bad "migrate again exit status"
+"$review" --db "$db" list > "$dir/list-migrated.txt" 2>/dev/null
+if grep -q "^$db: upgraded from schema version 1 to $current$" "$dir/migrate.txt" &&
+   grep -q "^$db: schema version $current, this palp's: nothing to upgrade$" "$dir/migrate.txt" &&
+   [ "$(sqlite3 "$db" 'PRAGMA user_version')" = "$current" ] && cmp -s "$dir/list-1.txt" "$dir/list-migrated.txt"; then
+  ok "migrate: upgraded 1 -> $current in the file, list the same as through the copy; again: nothing to upgrade"
+else bad "migrate: $(cat "$dir/migrate.txt")"; diff "$dir/list-1.txt" "$dir/list-migrated.txt"; fi
+
+# annotate writes, so it opens the file read-write and upgrades it
+db=$dir/v4.db
+"$review" --db "$db" annotate old-run-1 --author Lee --note "again" --score 60 > /dev/null 2>&1 || bad "annotate exit status"
+if [ "$(sqlite3 "$db" 'PRAGMA user_version')" = "$current" ] && [ "$(sqlite3 "$db" "SELECT count(*) FROM note")" = 2 ]; then
+  ok "annotate on a v4 log: the note written, the file upgraded to $current"
+else bad "annotate on a v4 log"; fi
+
+[ $fail -eq 0 ] && rm -rf "$dir" && echo "passed" || echo "FAILED"
+exit $fail
