@@ -8,10 +8,12 @@
  *    and the metrics summary. A session with no end logged is never pruned (a server may still
  *    be writing it). --keep-graded skips sessions with any grade.
  *
- * Both run in one transaction per session on the WAL connection with its busy timeout, so a
- * server writing other sessions at the same time only waits; then the freed pages go back to
- * the file system with VACUUM (or PRAGMA incremental_vacuum when the file is in that mode),
- * which also waits on the busy timeout and leaves the file untouched if it cannot get the lock.
+ * Both run in transactions of up to RETENTION_BATCH_SESSIONS sessions, each closed once it has run
+ * RETENTION_BATCH_SECONDS, on the WAL connection with its busy timeout, so a server writing other
+ * sessions at the same time only waits, briefly; a transaction is all or nothing (a crash or an error
+ * leaves every session of it as it was). Then the freed pages go back to the file system with VACUUM
+ * (or PRAGMA incremental_vacuum when the file is in that mode), which also waits on the busy timeout
+ * and leaves the file untouched if it cannot get the lock.
  *
  * While a writer (palp-server, palp-recorder) has the file open (live_writer_pid), two things are
  * refused (since session 75, both found by review): deleting a session with no end logged, which that
@@ -36,6 +38,25 @@
 #include "grades.h"
 #include "retention.h"
 #include "review_util.h"
+
+/* Until 2026-12-06 each session had a transaction of its own: pruning a term's 10,000 sessions was
+ * 10,000 transactions, each taking the write lock and appending the session table's and its indexes'
+ * pages to the WAL again (found by review). A live writer waits while one runs, and gives a batch up
+ * after ~21 s of retries (5 s busy timeout each): half a second keeps its wait short, and a few
+ * hundred small sessions fit in it. A session larger than that still goes whole in one. */
+#define RETENTION_BATCH_SESSIONS 256
+#define RETENTION_BATCH_SECONDS 0.5
+
+static double mono_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Whether a transaction begun at t0 holding `taken` sessions takes another. */
+static int batch_has_room(int taken, double t0) {
+  return taken == 0 || (taken < RETENTION_BATCH_SESSIONS && mono_s() - t0 < RETENTION_BATCH_SECONDS);
+}
 
 static const char *const bulky[] = {"frame", "feedback", "contact_input", "mesh", "finger_sample"};
 static const char *const small[] = {"session_exercise", "finding", "event", "note", "session_metrics"};
@@ -62,7 +83,19 @@ static int exec_sid(sqlite3 *h, const char *fmt, const char *table, int64_t sid)
   return rc == SQLITE_DONE ? 0 : -1;
 }
 
-static int store_metrics(sqlite3 *h, int64_t sid, const review_assessment *a) {
+/* A session to prune and the metrics stored for it, taken from its assessment (review_assess) before
+ * its transaction: the assessment's mesh, coverage and path are freed at once, so a batch holds only
+ * these. */
+typedef struct prune_item {
+  int index;    /* in the session list */
+  int assessed; /* 0: no finger samples (PALP_DB_ENOTFOUND), no metrics stored */
+  int has_exercise;
+  char exercise_name[64];
+  int samples;
+  palp_assess_result r;
+} prune_item;
+
+static int store_metrics(sqlite3 *h, int64_t sid, const prune_item *a) {
   sqlite3_stmt *st;
   if (sqlite3_prepare_v2(h,
                          "INSERT OR REPLACE INTO session_metrics(session_id, computed_unix_s, exercise_name, "
@@ -165,6 +198,24 @@ static int reclaim(palp_log *log, sqlite3 *h) {
   return 0;
 }
 
+/* A session and everything logged for it, inside the caller's transaction. 0 or -1. */
+static int delete_session(sqlite3 *h, int64_t sid) {
+  for (size_t k = 0; k < sizeof bulky / sizeof *bulky; k++)
+    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], sid)) return -1;
+  for (size_t k = 0; k < sizeof small / sizeof *small; k++)
+    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", small[k], sid)) return -1;
+  return exec_sid(h, "DELETE FROM %s WHERE id = ?1", "session", sid);
+}
+
+/* A session's bulky data, its metrics stored first, inside the caller's transaction. 0 or -1. */
+static int prune_session(sqlite3 *h, int64_t sid, const prune_item *it) {
+  if (it->assessed && store_metrics(h, sid, it)) return -1;
+  for (size_t k = 0; k < sizeof bulky / sizeof *bulky; k++)
+    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], sid)) return -1;
+  return exec_sid(h, "UPDATE %s SET pruned_unix_s = (julianday('now') - 2440587.5) * 86400.0 WHERE id = ?1", "session",
+                  sid);
+}
+
 int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char **argv) {
   if (argc < 1) {
     fprintf(stderr, "palp-review delete: which SESSION(s)?\n");
@@ -199,20 +250,27 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
     }
   }
   const long long before = file_bytes(path);
-  for (int i = 0; i < argc; i++) {
+  int i = 0;
+  while (i < argc) {
+    const int first = i;
+    const double t0 = mono_s();
     int bad = sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK;
-    for (size_t k = 0; !bad && k < sizeof bulky / sizeof *bulky; k++)
-      bad = exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], ids[i]);
-    for (size_t k = 0; !bad && k < sizeof small / sizeof *small; k++)
-      bad = exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", small[k], ids[i]);
-    if (!bad) bad = exec_sid(h, "DELETE FROM %s WHERE id = ?1", "session", ids[i]);
+    while (!bad && i < argc && batch_has_room(i - first, t0)) {
+      bad = delete_session(h, ids[i]);
+      if (!bad) i++;
+    }
     if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
-      palp_log_error(log, "delete %s: %s (rolled back; that session is untouched)", argv[i], sqlite3_errmsg(h));
+      char msg[256];
+      snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
       sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
+      const int last = bad ? i : i - 1; /* the session that failed, or the transaction's last when COMMIT did */
+      palp_log_error(log, "delete %s: %s (rolled back with its transaction: %s .. %s, %d session%s, untouched%s)",
+                     argv[last], msg, argv[first], argv[last], last - first + 1, last > first ? "s" : "",
+                     last + 1 < argc ? "; the later ones not tried" : "");
       free(ids);
       return REVIEW_ERROR;
     }
-    printf("deleted %s\n", argv[i]);
+    for (int k = first; k < i; k++) printf("deleted %s\n", argv[k]);
   }
   free(ids);
   reclaim(log, h);
@@ -253,50 +311,91 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
   }
   const long long before = file_bytes(path);
   int pruned = 0, rc = REVIEW_OK;
-  for (int i = 0; i < n; i++) {
-    const palp_db_session_info *s = &v[i];
-    if (!s->end_reason[0]) {
-      printf("kept   %s: no end logged (may still be running)\n", s->uid);
-      continue;
-    }
-    if (keep_graded) {
-      char g[160];
-      review_latest_grade(db, s->id, g, sizeof g);
-      if (strcmp(g, "-")) {
-        printf("kept   %s: graded (%s)\n", s->uid, g);
+  prune_item *batch = dry ? NULL : malloc(RETENTION_BATCH_SESSIONS * sizeof *batch);
+  if (!dry && !batch) {
+    palp_log_error(log, "prune: out of memory");
+    free(v);
+    return REVIEW_ERROR;
+  }
+  int i = 0, stop = 0;
+  while (i < n && !stop) {
+    /* The next sessions to prune, up to a batch, each assessed before any transaction: the
+     * assessment reads a session's samples, which is no work to do while holding the write lock. */
+    int nb = 0;
+    for (; i < n && nb < RETENTION_BATCH_SESSIONS; i++) {
+      const palp_db_session_info *s = &v[i];
+      if (!s->end_reason[0]) {
+        printf("kept   %s: no end logged (may still be running)\n", s->uid);
         continue;
       }
-    }
-    review_assessment a;
-    char err[512];
-    const int arc = review_assess(db, s, &a, err, sizeof err);
-    if (arc && arc != PALP_DB_ENOTFOUND) {
-      /* Do not lose what cannot be summarised. */
-      printf("kept   %s: its metrics could not be computed (%s)\n", s->uid, err);
-      continue;
-    }
-    if (dry) {
-      printf("would prune %s\n", s->uid);
+      if (keep_graded) {
+        char g[160];
+        review_latest_grade(db, s->id, g, sizeof g);
+        if (strcmp(g, "-")) {
+          printf("kept   %s: graded (%s)\n", s->uid, g);
+          continue;
+        }
+      }
+      review_assessment a;
+      char err[512];
+      const int arc = review_assess(db, s, &a, err, sizeof err);
+      if (arc && arc != PALP_DB_ENOTFOUND) {
+        /* Do not lose what cannot be summarised. */
+        printf("kept   %s: its metrics could not be computed (%s)\n", s->uid, err);
+        continue;
+      }
+      if (dry) printf("would prune %s\n", s->uid);
+      else {
+        prune_item *it = &batch[nb++];
+        memset(it, 0, sizeof *it);
+        it->index = i;
+        if (!arc) {
+          it->assessed = 1;
+          it->has_exercise = a.has_exercise;
+          snprintf(it->exercise_name, sizeof it->exercise_name, "%s", a.exercise_name);
+          it->samples = a.samples;
+          it->r = a.r;
+        }
+      }
       if (!arc) review_assessment_free(&a);
-      continue;
     }
-    int bad = sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK;
-    if (!bad && !arc) bad = store_metrics(h, s->id, &a);
-    for (size_t k = 0; !bad && k < sizeof bulky / sizeof *bulky; k++)
-      bad = exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], s->id);
-    if (!bad)
-      bad = exec_sid(h, "UPDATE %s SET pruned_unix_s = (julianday('now') - 2440587.5) * 86400.0 WHERE id = ?1",
-                     "session", s->id);
-    if (!arc) review_assessment_free(&a);
-    if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
-      palp_log_error(log, "prune %s: %s (rolled back; that session is untouched)", s->uid, sqlite3_errmsg(h));
-      sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
-      rc = REVIEW_ERROR;
-      continue;
+    /* The batch, in as many transactions as the time allows each. */
+    int k = 0;
+    while (k < nb) {
+      const int first = k;
+      const double t0 = mono_s();
+      if (sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
+        /* the write lock not had within the busy timeout (a writer holding it), or the file not writable:
+         * every later transaction would wait as long, so the prune stops here */
+        palp_log_error(log, "prune: %s; %s and the sessions after it not pruned (run prune again)", sqlite3_errmsg(h),
+                       v[batch[k].index].uid);
+        rc = REVIEW_ERROR;
+        stop = 1;
+        break;
+      }
+      int bad = 0;
+      while (!bad && k < nb && batch_has_room(k - first, t0)) {
+        bad = prune_session(h, v[batch[k].index].id, &batch[k]);
+        if (!bad) k++;
+      }
+      if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+        char msg[256];
+        snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
+        sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
+        const int last = bad ? k : k - 1; /* the session that failed, or the transaction's last when COMMIT did */
+        palp_log_error(log, "prune %s: %s (rolled back with its transaction: %d session%s, untouched)",
+                       v[batch[last].index].uid, msg, last - first + 1, last > first ? "s" : "");
+        for (int j = first; j <= last; j++)
+          printf("kept   %s: rolled back (%s)\n", v[batch[j].index].uid, msg);
+        rc = REVIEW_ERROR;
+        k = last + 1; /* the rest of the batch in a transaction of its own */
+        continue;
+      }
+      for (int j = first; j < k; j++) printf("pruned %s\n", v[batch[j].index].uid);
+      pruned += k - first;
     }
-    printf("pruned %s\n", s->uid);
-    pruned++;
   }
+  free(batch);
   free(v);
   /* also when nothing was pruned this time: what an earlier prune freed beside a running server */
   if (!dry && (pruned || (freelist_pages(h) > 0 && !live_writer_pid(h)))) reclaim(log, h);
