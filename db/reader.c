@@ -421,13 +421,10 @@ int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused *
  * argument would need escaped from). One clause for find_session and the candidates. */
 #define UID_PREFIX_WHERE "substr(s.uid, 1, length(?1)) = ?1"
 
-int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out) {
-  if (!uid || !*uid) return PALP_EINVAL;
+/* One row of sql (uid bound as ?1) into *out: 0, PALP_DB_ENOTFOUND, PALP_DB_EAMBIGUOUS (a second row),
+ * PALP_DB_ESQL. */
+static int find_one(palp_db *db, const char *sql, const char *uid, palp_db_session_info *out) {
   sqlite3_stmt *st;
-  /* An exact uid wins; otherwise a unique prefix (uids are long: "<run uuid>-<n>"). */
-  const char *sql = "SELECT " SESSION_COLS "FROM session s WHERE s.uid = ?1 "
-                    "UNION ALL SELECT " SESSION_COLS "FROM session s WHERE " UID_PREFIX_WHERE " "
-                    "AND s.uid <> ?1 AND NOT EXISTS (SELECT 1 FROM session WHERE uid = ?1) LIMIT 2";
   if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
   sqlite3_bind_text(st, 1, uid, -1, SQLITE_STATIC);
   int rc = sqlite3_step(st);
@@ -438,7 +435,17 @@ int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out
   read_info(st, out);
   rc = sqlite3_step(st);
   sqlite3_finalize(st);
-  return rc == SQLITE_ROW ? PALP_DB_EAMBIGUOUS : 0;
+  return rc == SQLITE_ROW ? PALP_DB_EAMBIGUOUS : rc == SQLITE_DONE ? 0 : PALP_DB_ESQL;
+}
+
+int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out) {
+  if (!uid || !*uid) return PALP_EINVAL;
+  /* An exact uid wins; otherwise a unique prefix (uids are long: "<run uuid>-<n>"). The exact one is
+   * asked alone, through the uid index: asked together (UNION ALL), the prefix's scan of every uid ran
+   * too, and a delete of 5,000 sessions by uid on a 10,000-session log took 97 s resolving the names. */
+  int rc = find_one(db, "SELECT " SESSION_COLS "FROM session s WHERE s.uid = ?1", uid, out);
+  if (rc != PALP_DB_ENOTFOUND) return rc;
+  return find_one(db, "SELECT " SESSION_COLS "FROM session s WHERE " UID_PREFIX_WHERE " LIMIT 2", uid, out);
 }
 
 int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp_db_session_info *out, int max,
