@@ -15,10 +15,40 @@
 #                                   # (docs/security.md), as a classroom runs
 #   PALP_SECURE=0 bash scripts/demo.sh   # the same classroom on plain DDS (anyone on the domain
 #                                        # is trusted: for a quick look, never for a class)
+#   PALP_DEMO_OUT=DIR selects where its logs, snapshots, CSVs and reports go (default out/demo): a
+#   new or empty directory, or one an earlier demo made (it leaves .palp-demo-out there); the demo
+#   deletes its previous run's *.log, *.svg and *.csv in it, so it refuses a directory with other files
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
 build=${PALP_BUILD_DIR:-build}
+
+# Where the demo writes, and deletes the previous run's files: only a directory it made itself (the
+# marker file below), or a new or empty one, checked before anything is built or started. Until
+# 2026-12-06 it emptied "$out"/*.log, *.svg and *.csv wherever PALP_DEMO_OUT pointed: /var/log or a
+# home directory lost files palp never wrote (found by review). out/demo, the default, is the demo's
+# own even when an earlier demo left it without the marker.
+out=${PALP_DEMO_OUT:-out/demo}
+marker=.palp-demo-out
+demo_out_prepare() {
+  if [ -e "$out" ] && [ ! -d "$out" ]; then
+    echo "demo: PALP_DEMO_OUT=$out is not a directory; point it at a new or empty directory" >&2
+    exit 2
+  fi
+  if [ -d "$out" ] && [ ! -f "$out/$marker" ] && [ -n "${PALP_DEMO_OUT:-}" ] &&
+    [ -n "$(ls -A "$out" 2>/dev/null)" ]; then
+    echo "demo: PALP_DEMO_OUT=$out holds files the demo did not make (no $marker in it): the demo deletes its" \
+      "previous run's *.log, *.svg and *.csv where it writes, so it writes only into a new or empty directory," \
+      "or one an earlier demo made; point PALP_DEMO_OUT at one (nothing was changed in $out)" >&2
+    exit 2
+  fi
+  mkdir -p "$out"
+  [ -f "$out/$marker" ] ||
+    echo "made by palp's scripts/demo.sh, which deletes its previous run's *.log, *.svg and *.csv in this directory" \
+      >"$out/$marker"
+  rm -f "$out"/*.log "$out"/*.svg "$out"/*.csv
+}
+demo_out_prepare
 if [ "${PALP_SKIP_SETUP:-0}" != 1 ]; then
   bash scripts/setup.sh
 fi
@@ -34,9 +64,6 @@ done
 # demo does not meet a test run or a real class.
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$here/config/cyclonedds-loopback.xml}
 domain=${PALP_DEMO_DOMAIN:-42}
-out=${PALP_DEMO_OUT:-out/demo}
-mkdir -p "$out"
-rm -f "$out"/*.log "$out"/*.svg "$out"/*.csv
 
 # DDS Security (the default; PALP_SECURE=0 for plain DDS): every process gets an identity
 # from the classroom PKI (scripts/make-classroom-pki.sh, idempotent: a PKI made by an earlier

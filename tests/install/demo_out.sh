@@ -1,0 +1,71 @@
+#!/bin/sh
+# scripts/demo.sh deletes only what it wrote (2026-12-06, found by review: it ran
+# rm -f "$PALP_DEMO_OUT"/*.log *.svg *.csv wherever the variable pointed, so PALP_DEMO_OUT=/var/log or
+# a home directory lost files palp never wrote). Without running the demo: a copy of the script with
+# stub palp-server and palp-client (the server records that it was started and exits at once, so the
+# demo stops with "palp-server failed to start" within a second) and PALP_SKIP_SETUP=1, PALP_SECURE=0.
+#  - a directory holding a foreign .log, .svg and .csv (and no marker): refused before anything runs,
+#    exit 2, the message naming PALP_DEMO_OUT and the directory; the files byte-identical;
+#  - a file: refused, exit 2;
+#  - a new directory: used (the server started), the marker .palp-demo-out left in it;
+#  - that directory again: used, and the previous run's *.log deleted (the demo still cleans up after
+#    itself); an empty existing directory: used.
+# usage: demo_out.sh SOURCE_DIR
+set -u
+src=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$tmp/repo/scripts" "$tmp/build/server" "$tmp/build/client"
+cp "$src/scripts/demo.sh" "$tmp/repo/scripts/"
+printf '#!/bin/sh\necho started >> "%s/started"\nexit 1\n' "$tmp" > "$tmp/build/server/palp-server"
+printf '#!/bin/sh\nexit 1\n' > "$tmp/build/client/palp-client"
+chmod +x "$tmp/build/server/palp-server" "$tmp/build/client/palp-client"
+fail=0
+ok() { echo "ok   $*"; }
+bad() { echo "FAIL $*"; fail=1; }
+demo() { # OUT: runs the copy with PALP_DEMO_OUT=OUT; $rc, $msg; $started 1 if the stub server ran
+  rm -f "$tmp/started"
+  msg=$(cd "$tmp" && PALP_SKIP_SETUP=1 PALP_SECURE=0 PALP_BUILD_DIR="$tmp/build" PALP_DEMO_OUT="$1" PALP_DEMO_DOMAIN=229 \
+    timeout 30 bash "$tmp/repo/scripts/demo.sh" 2>&1)
+  rc=$?
+  started=0
+  [ -f "$tmp/started" ] && started=1
+}
+
+home=$tmp/home
+mkdir -p "$home/docs"
+echo "my own notes" > "$home/notes.log"
+echo "<svg/>" > "$home/drawing.svg"
+echo "a,b" > "$home/data.csv"
+echo "kept" > "$home/docs/letter.txt"
+sums=$(cd "$home" && find . -type f | sort | xargs md5sum)
+demo "$home"
+after=$(cd "$home" && find . -type f | sort | xargs md5sum)
+if [ $rc -eq 2 ] && [ $started -eq 0 ] && [ "$sums" = "$after" ] &&
+   printf '%s' "$msg" | grep -qF "PALP_DEMO_OUT=$home holds files the demo did not make (no .palp-demo-out in it)"; then
+  ok "a directory with foreign files: refused (exit 2) before anything ran, naming PALP_DEMO_OUT; its .log, .svg, .csv intact"
+else bad "a directory with foreign files: exit $rc, server started $started, files intact: $([ "$sums" = "$after" ] && echo yes || echo no): $msg"; fi
+
+: > "$tmp/afile"
+demo "$tmp/afile"
+if [ $rc -eq 2 ] && [ $started -eq 0 ] && printf '%s' "$msg" | grep -q "is not a directory"; then
+  ok "a file: refused (exit 2)"
+else bad "a file: exit $rc, server started $started: $msg"; fi
+
+new=$tmp/new/demo
+demo "$new"
+if [ $started -eq 1 ] && [ -f "$new/.palp-demo-out" ] && printf '%s' "$msg" | grep -q "palp-server failed to start"; then
+  ok "a new directory: used (the server started, then the stub stopped it), the marker left"
+else bad "a new directory: exit $rc, server started $started, marker $(ls -A "$new" 2>&1): $msg"; fi
+
+echo "an earlier run's" > "$new/alice.log"
+demo "$new"
+if [ $started -eq 1 ] && [ ! -e "$new/alice.log" ]; then
+  ok "the demo's own directory again: used, the previous run's alice.log deleted"
+else bad "the demo's own directory again: server started $started, $(ls -A "$new" | tr '\n' ' '): $msg"; fi
+
+mkdir -p "$tmp/empty"
+demo "$tmp/empty"
+if [ $started -eq 1 ] && [ -f "$tmp/empty/.palp-demo-out" ]; then ok "an empty directory: used, the marker left"
+else bad "an empty directory: server started $started: $msg"; fi
+exit $fail
