@@ -7,6 +7,7 @@
 #
 #   make-classroom-pki.sh DIR classroom [--trainees a,b] [--instructors c] [--days N]
 #                                            CA + governance + CRL + server + the listed identities
+#                                            (NAMEs separated by commas; a space is refused)
 #   make-classroom-pki.sh DIR init           CA (10 years), governance, empty CRL, identity server
 #   make-classroom-pki.sh DIR add KIND NAME [--days N]   KIND: trainee | instructor | server
 #   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
@@ -52,6 +53,24 @@ T_FINGER_SAMPLE=palp_finger_sample
 
 check_name() {
   [[ $1 =~ ^[a-z0-9_-]{1,31}$ ]] || die "bad name \"$1\": 1-31 characters of a-z 0-9 - _"
+}
+# --trainees / --instructors: NAMEs separated by commas, into the array `names`, each checked. They were
+# split on spaces too (for n in ${list//,/ }), so --trainees 'mary ann' made two identities, mary and
+# ann (found by review, 2026-12-06): a space, an empty name ("a,,b", a trailing comma) or any other
+# character outside NAME's set is refused, before anything is made.
+split_names() { # OPTION LIST
+  names=()
+  local list=$2 n
+  [ -n "$list" ] || return 0
+  list+=,
+  while [ -n "$list" ]; do
+    n=${list%%,*}
+    list=${list#*,}
+    [ -n "$n" ] || die "$1 \"$2\": an empty name (names are separated by single commas, e.g. $1 ann,bob)"
+    [[ $n =~ ^[a-z0-9_-]{1,31}$ ]] ||
+      die "$1: bad name \"$n\": a NAME is 1-31 characters of a-z 0-9 - _, and names are separated by commas (no spaces): e.g. $1 mary-ann,bob"
+    names+=("$n")
+  done
 }
 check_kind() {
   case $1 in trainee | instructor | server) ;; *) die "bad kind \"$1\": trainee, instructor or server" ;; esac
@@ -426,9 +445,13 @@ classroom)
     *) die "classroom: unknown option $1" ;;
     esac
   done
+  split_names --trainees "$trainees"
+  trainee_names=("${names[@]}")
+  split_names --instructors "$instructors"
+  instructor_names=("${names[@]}")
   init
-  for n in ${trainees//,/ }; do [ -f "$dir/trainee/$n.cert.pem" ] || add trainee "$n"; done
-  for n in ${instructors//,/ }; do [ -f "$dir/instructor/$n.cert.pem" ] || add instructor "$n"; done
+  for n in "${trainee_names[@]}"; do [ -f "$dir/trainee/$n.cert.pem" ] || add trainee "$n"; done
+  for n in "${instructor_names[@]}"; do [ -f "$dir/instructor/$n.cert.pem" ] || add instructor "$n"; done
   ;;
 add)
   [ $# -ge 2 ] || die "usage: $0 DIR add KIND NAME [--days N]"

@@ -7,7 +7,11 @@
 #    index already said revoked, which made the second run fail for good before): the CRL names the
 #    serial and the files are moved aside;
 #  - a CA key without its certificate (a run stopped between the two) is completed by init: the
-#    certificate made from that key, and a trainee issued after it verifies against it.
+#    certificate made from that key, and a trainee issued after it verifies against it;
+#  - (2026-12-06) classroom's --trainees and --instructors are split on commas only: 'mary ann' (split
+#    on the space into mary and ann before), an empty name, a capital, a '.', '*' are refused, exit 2,
+#    naming the name, before anything is made (no directory); 'mary-ann,bob' makes exactly those
+#    identities, CN=mary-ann.
 # usage: pki_script.sh MAKE_CLASSROOM_PKI_SH
 set -u
 script=$1
@@ -52,5 +56,23 @@ bash "$script" "$half" add trainee cai >/dev/null 2>&1
 same=$( [ "$(openssl x509 -in "$half/ca.cert.pem" -noout -pubkey 2>/dev/null)" = "$(openssl ec -in "$half/ca/ca.key.pem" -pubout 2>/dev/null)" ] && echo yes)
 check "a CA key without its certificate: init makes it from that key (exit $rc, same key: ${same:-no}), a trainee issued then verifies" \
   "[ $rc -eq 0 ] && [ '$same' = yes ] && openssl verify -CAfile '$half/ca.cert.pem' '$half/trainee/cai.cert.pem' >/dev/null 2>&1"
+names=$out/names
+for bad in "mary ann" "ann,,bob" "ann," "Ann" "a.b" "a*"; do
+  bash "$script" "$names" classroom --trainees "$bad" --instructors ines >"$out/names.log" 2>&1
+  rc=$?
+  case $bad in *,,* | *,) want="an empty name" ;; *) want="bad name \"$bad\"" ;; esac
+  check "--trainees '$bad': refused (exit $rc), named, nothing made" \
+    "[ $rc -eq 2 ] && grep -qF -- '$want' '$out/names.log' && [ ! -e '$names' ]"
+done
+bash "$script" "$names" classroom --instructors "ines bridge" >"$out/names.log" 2>&1
+rc=$?
+check "--instructors 'ines bridge': refused (exit $rc), nothing made" \
+  "[ $rc -eq 2 ] && grep -qF 'bad name \"ines bridge\"' '$out/names.log' && [ ! -e '$names' ]"
+bash "$script" "$names" classroom --trainees mary-ann,bob --instructors ines >"$out/names.log" 2>&1
+rc=$?
+made=$(cd "$names" 2>/dev/null && ls trainee/*.cert.pem instructor/*.cert.pem 2>/dev/null | tr '\n' ' ')
+cn=$(openssl x509 -in "$names/trainee/mary-ann.cert.pem" -noout -subject 2>/dev/null)
+check "--trainees mary-ann,bob --instructors ines: exit $rc, exactly those identities ($made), $cn" \
+  "[ $rc -eq 0 ] && [ '$made' = 'instructor/ines.cert.pem trainee/bob.cert.pem trainee/mary-ann.cert.pem ' ] && echo '$cn' | grep -q 'CN *= *mary-ann$'"
 rm -rf "$out"
 exit $fail
