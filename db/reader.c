@@ -20,6 +20,18 @@ static int file_exists(const char *path) {
   return stat(path, &st) == 0;
 }
 
+/* Whether the file's header says WAL mode (bytes 18 and 19, the read and write versions, are 2): the
+ * immutable fallback below is for such files only. A rollback-journal file that SQLite cannot read
+ * read-only may have a hot journal, which immutable would ignore. */
+static int is_wal_file(const char *path) {
+  unsigned char h[20];
+  FILE *f = fopen(path, "rb");
+  if (!f) return 0;
+  const size_t n = fread(h, 1, sizeof h, f);
+  fclose(f);
+  return n == sizeof h && memcmp(h, "SQLite format 3", 16) == 0 && h[18] == 2 && h[19] == 2;
+}
+
 /* path as a "file:" URI with query (RFC 3986: everything but unreserved characters and '/' as %XX,
  * so that '?', '#' and '%' in a file name stay the name's; a leading "//" would read as an
  * authority, so the second '/' is encoded too). malloc'd, NULL when out of memory. */
@@ -40,14 +52,15 @@ static char *file_uri(const char *path, const char *query) {
 
 /* Opens path SQLITE_OPEN_READONLY and reads its header, so that a file SQLite cannot read fails here.
  * Nothing through this connection writes to the file: SQLite refuses every write on it, and a
- * read-only connection does not checkpoint the WAL into the file at close (NO_CKPT_ON_CLOSE says so
- * twice). It may make the -wal and -shm files beside the file, as any reader of a WAL log does.
+ * read-only connection does not checkpoint the WAL into the file at close (NO_CKPT_ON_CLOSE makes
+ * sure of it). It may make the -wal and -shm files beside the file, as any reader of a WAL log does.
  * Where it cannot (a directory this user may not write, read-only media) SQLite cannot read a
- * WAL-mode file whose -wal is absent; such a file is opened again immutable (no locks, no -wal or
- * -shm): with no -wal beside it, no connection has it open in WAL mode, so no writer is changing it,
- * and its committed data is all in the file. With a -wal present, immutable would ignore the
- * commits in it: refused with SQLite's words instead. 0, or PALP_EIO / PALP_EINVAL (message in err;
- * *probe_rc the header read's SQLite code, so that the caller can tell a non-database). */
+ * WAL-mode file whose -wal is absent; such a file (its header says WAL) is opened again immutable
+ * (no locks, no -wal or -shm): with no -wal beside it, no connection has it open in WAL mode, so no
+ * writer is changing it, and its committed data is all in the file. With a -wal present, immutable
+ * would ignore the commits in it: refused with SQLite's words instead. 0, or PALP_EIO / PALP_ENOMEM
+ * (message in err); *probe_rc the header read's SQLite code, so that the caller can tell a
+ * non-database. */
 static int open_ro(const char *path, sqlite3 **out, int *probe_rc, char *err, size_t errlen) {
   *out = NULL;
   *probe_rc = SQLITE_OK;
@@ -83,7 +96,7 @@ static int open_ro(const char *path, sqlite3 **out, int *probe_rc, char *err, si
     snprintf(wal, sizeof wal, "%s-wal", path);
     const int primary = rc & 0xff;
     if (!immutable && (primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN) && !file_exists(wal) &&
-        file_exists(path)) {
+        is_wal_file(path)) {
       sqlite3_close(db);
       db = NULL;
       continue;

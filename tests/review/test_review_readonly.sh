@@ -9,7 +9,8 @@
 #    the file byte-identical;
 #  - a directory this user cannot write, the files 0444 (as root, palp-review runs as nobody
 #    through setpriv, as root ignores the permissions): the old log and a current one are read, and
-#    no -wal, -shm or -journal is made beside them;
+#    no -wal, -shm or -journal is made beside them; a rollback-mode copy with a hot journal is refused
+#    rather than read without its journal (immutable is for WAL files without a -wal only);
 #  - migrate upgrades the file itself (user_version 1 -> current; the rows as the copy showed them),
 #    and says there is nothing to do the second time;
 #  - a write command (annotate) still writes and upgrades.
@@ -102,7 +103,25 @@ mkdir -p "$ro"
 old_log "$ro/old.db" 1
 old_log "$ro/current.db" 1
 "$review" --db "$ro/current.db" migrate > /dev/null 2>&1 || bad "migrating the current copy"
-chmod 0444 "$ro"/*.db
+# ... and one in rollback-journal mode left with a hot journal (its writer killed mid-transaction, as
+# palp never leaves a log, but a copy made elsewhere may be): the journal holds the committed pages
+# the transaction overwrote, so reading the file without it (immutable) would not be reading the log
+python3 - "$ro/current.db" "$dir/hot.db" <<'PY' || bad "making a log with a hot journal"
+import shutil, sqlite3, sys
+c = sqlite3.connect(sys.argv[1], isolation_level=None)
+c.execute("PRAGMA journal_mode = DELETE")
+c.execute("PRAGMA cache_size = 5")  # dirty pages spill into the file before the commit
+c.execute("BEGIN")
+c.execute("UPDATE session SET trainee = 'uncommitted'")
+for i in range(2000):
+    c.execute("INSERT INTO event(session_id, wall_unix_s, frame, kind, detail) VALUES(1, 1.6e9, ?, 'info', ?)", (i, "x" * 200))
+shutil.copy(sys.argv[1], sys.argv[2])
+shutil.copy(sys.argv[1] + "-journal", sys.argv[2] + "-journal")
+c.execute("ROLLBACK")
+c.execute("PRAGMA journal_mode = WAL")
+PY
+mv "$dir/hot.db" "$dir/hot.db-journal" "$ro/"
+chmod 0444 "$ro"/*.db "$ro"/*.db-journal
 chmod 0555 "$ro"
 as_reader() {
   if [ "$(id -u)" = 0 ]; then setpriv --reuid=65534 --regid=65534 --clear-groups "$@"
@@ -114,10 +133,17 @@ for f in old current; do
   as_reader "$review" --db "$ro/$f.db" list > "$dir/ro-$f.txt" 2>&1 || bad "read-only $f: list exit status: $(cat "$dir/ro-$f.txt")"
   as_reader "$review" --db "$ro/$f.db" show old-run-1 >> "$dir/ro-$f.txt" 2>&1 || bad "read-only $f: show exit status"
   if grep -Eq "^old-run-1 +carol " "$dir/ro-$f.txt" && grep -q '^trainee    carol ' "$dir/ro-$f.txt" &&
-     [ "$(state "$ro/$f.db")" = "$before" ] && [ "$(ls -A "$ro" | tr '\n' ' ')" = "current.db old.db " ]; then
+     [ "$(state "$ro/$f.db")" = "$before" ] && [ "$(ls -A "$ro" | tr '\n' ' ')" = "current.db hot.db hot.db-journal old.db " ]; then
     ok "read-only directory and file ($f log, as $(as_reader id -un)): list and show read it, nothing made beside it"
   else bad "read-only directory ($f log): $(ls -A "$ro" | tr '\n' ' '): $(cat "$dir/ro-$f.txt")"; fi
 done
+before=$(state "$ro/hot.db") jbefore=$(sha256sum < "$ro/hot.db-journal")
+if as_reader "$review" --db "$ro/hot.db" list > "$dir/ro-hot.txt" 2>&1; then
+  bad "read-only directory: a log with a hot journal was read past its journal: $(cat "$dir/ro-hot.txt")"
+elif grep -q "hot.db: cannot read it: " "$dir/ro-hot.txt" && [ "$(state "$ro/hot.db")" = "$before" ] &&
+     [ "$(sha256sum < "$ro/hot.db-journal")" = "$jbefore" ]; then
+  ok "read-only directory: a rollback-mode log with a hot journal is refused (not read without its journal), both files as they were"
+else bad "read-only directory, hot journal: $(cat "$dir/ro-hot.txt")"; fi
 chmod 0755 "$ro"
 
 # migrate: the file itself upgraded, its rows as the copy showed them; then nothing to do.
