@@ -1299,12 +1299,18 @@ static int finger_collect(palp_world *w, contact *k, double h, double prev_tri_l
   return nc;
 }
 
-/* Constraint c's surface-force direction J_c as (vertex, 3-vector) entries. */
-static int constraint_j(const palp_world *w, const contact *k, int c, int *v, palp_vec3 *j) {
+/* Constraint c's surface-force direction J_c as (vertex, 3-vector) entries, and each
+ * entry's own barycentric weight b [-] (1 for a base row). The entries are packed: fixed
+ * corners and corners of zero weight are left out, so entry e is not corner e, and
+ * whoever weights an entry by the closest point's barycentric weights must take b[e],
+ * not cbary[c][e] (the drift did, and read corner 0's zero weight for a vertex at
+ * corner 2). */
+static int constraint_j(const palp_world *w, const contact *k, int c, int *v, palp_vec3 *j, double *b) {
   if (k->ctri[c] == -1 - w->mesh.vertex_count) return 0; /* the table: no surface share */
   if (k->ctri[c] < 0) {
     v[0] = -1 - k->ctri[c];
     j[0] = v3(0, 0, 1);
+    b[0] = 1.0;
     return 1;
   }
   int n = 0;
@@ -1312,6 +1318,7 @@ static int constraint_j(const palp_world *w, const contact *k, int c, int *v, pa
     const int vv = w->mesh.tri[k->ctri[c]][e];
     if (w->row_of[vv] < 0 || k->cbary[c][e] == 0.0) continue;
     v[n] = vv;
+    b[n] = k->cbary[c][e];
     j[n++] = v3_scale(k->cn[c], -k->cbary[c][e]);
   }
   return n;
@@ -1380,9 +1387,10 @@ static void stage_fingers(palp_world *w, double h) {
     /* Local vertices (every J entry) and their compliance columns. */
     int cv[PALP_FINGER_MAX_CON][3], cn_[PALP_FINGER_MAX_CON];
     palp_vec3 cj[PALP_FINGER_MAX_CON][3];
+    double cb[PALP_FINGER_MAX_CON][3]; /* each entry's barycentric weight (constraint_j) */
     int nl = 0;
     for (int c = 0; c < m; ++c) {
-      cn_[c] = constraint_j(w, k, c, cv[c], cj[c]);
+      cn_[c] = constraint_j(w, k, c, cv[c], cj[c], cb[c]);
       for (int e = 0; e < cn_[c]; ++e)
         if (fs->vloc[cv[c][e]] < 0) fs->vloc[cv[c][e]] = nl, fs->lvert[nl++] = cv[c][e];
     }
@@ -1613,13 +1621,16 @@ static void stage_fingers(palp_world *w, double h) {
     lm->depth = fmax(0.0, v3_dot(v3_sub(k->proxy, k->device), lm->normal));
     if (lsum > 0.0) {
       lm->point = v3_scale(point, 1.0 / lsum);
-      palp_vec3 vc = v3(0, 0, 0); /* drift: the surface's velocity at the contact after the step [m/s] */
+      /* drift: the surface's velocity at the contact after the step [m/s], sum_c lam_c
+       * sum_v b_cv v_v / sum_c lam_c, each vertex by its own weight b_cv (a fixed corner's
+       * velocity is 0 and it has no entry) */
+      palp_vec3 vc = v3(0, 0, 0);
       for (int c = 0; c < k->nfinger; ++c) {
         if (!(k->clam[c] > 0.0)) continue;
         if (k->ctri[c] >= 0) lm->triangles++;
         for (int e = 0; e < cn_[c]; ++e) {
           const int r = w->row_of[cv[c][e]];
-          vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[c] * k->cbary[c][e]));
+          vc = v3_add(vc, v3_scale(v3(x[3 * r], x[3 * r + 1], x[3 * r + 2]), k->clam[c] * cb[c][e]));
         }
       }
       lm->drift = palp_drift_observe(&lm_last, lm, v3_scale(vc, 1.0 / lsum), h, w->def.max_speed, &k->drift_corr);
