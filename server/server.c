@@ -583,15 +583,15 @@ int palp_srv_prepare_phantom(const palp_srv_config *cfg, int index, palp_srv_pha
          scene->world.dt, PALP_WORLD_MAX_DT, 1.0 / PALP_WORLD_MAX_DT);
     return PALP_EINVAL;
   }
-  /* The literal gel law's momentum term is stable only for |a3| < dt^2 (world.c): a fast
-   * physics rate can break a scene that loads at its own dt_s. */
+  /* The literal gel law's momentum term is stable only for -dt^2/2 < a3 < dt^2
+   * (palp_gel_literal_valid): a fast physics rate can break a scene that loads at its own dt_s. */
   const palp_gel_params *g = &scene->world.gel;
   if ((scene->world.effects & PALP_EFFECT_GEL_PRESSURE) && g->law == PALP_GEL_PAPER_LITERAL &&
-      !(fabs(g->a3) < scene->world.dt * scene->world.dt)) {
+      !palp_gel_literal_valid(g->a3, scene->world.dt, scene->world.dt)) {
     fail(err, errlen,
          "%s: %g Hz steps the world by %g s, too fine for the scene %s's paper_literal gel (a3_s2 %g needs "
-         "dt^2 > |a3|: at most %g Hz)",
-         rate_key, rate, scene->world.dt, pc->scene_path, g->a3, 1.0 / sqrt(fabs(g->a3)));
+         "-dt^2/2 < a3 < dt^2: at most %g Hz)",
+         rate_key, rate, scene->world.dt, pc->scene_path, g->a3, 1.0 / palp_gel_literal_min_step(g->a3));
     return PALP_EINVAL;
   }
   /* Rebuilds are computed by the ticker's helper behind the ticks (docs/server.md);

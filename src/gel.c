@@ -43,13 +43,34 @@ double palp_gel_polytropic(const palp_gel_params *g, double V0, double V, double
   return g->pressure * (r - 1.0);
 }
 
+int palp_gel_literal_valid(double a3, double h, double h_prev) {
+  /* The momentum term passes c = a3 / (h h_prev) of the last change of pressure on [-].
+   * Where the step's implicit solve removes a share s in [0, 1] of the pressure's excess
+   * e over its equilibrium (1 where the gel's stiffness dominates the volume mode, 0 where
+   * the volume does not respond), e_i = (1 - s + c) e_{i-1} - c e_{i-2}, whose roots lie
+   * inside the unit circle (Jury) iff c < 1 and c > s/2 - 1: for every s, -1/2 < c < 1.
+   * Outside, the changes grow frame by frame; a halved step (h/2 after h) already doubles
+   * c, h/16 makes it 128x. */
+  const double hh = h * h_prev; /* [s^2] */
+  return a3 < hh && a3 > -0.5 * hh;
+}
+
+double palp_gel_literal_min_step(double a3) {
+  /* the bound above at h = h_prev: h^2 > a3 for a3 > 0, h^2 > -2 a3 for a3 < 0 [s] */
+  return a3 > 0.0 ? sqrt(a3) : sqrt(-2.0 * a3);
+}
+
 double palp_gel_literal_step(const palp_gel_params *g, double p, double p_prev, double V, double V_prev, double h,
-                             int damping) {
+                             double h_prev, int damping, int *dropped) {
   /* F_i = F_{i-1} - F_{i-1} a1 (V_i - V_{i-1}) / V_{i-1} - a2 V/dt + a3 Fdot/dt with
-   * "V" read as the frame's volume change and Fdot = (F_{i-1} - F_{i-2}) / dt. */
+   * "V" read as the frame's volume change and Fdot = (F_{i-1} - F_{i-2}) / h_prev [Pa/s],
+   * the rate over the frame that made that change; "/dt" is this frame's h. At a fixed
+   * step this is the printed a3 (F_{i-1} - F_{i-2}) / dt^2, and the same bits. */
   const double dV = V - V_prev;
   double pn = p - p * g->a1 * dV / V_prev;
   if (damping) pn -= g->a2 * dV / h;
-  pn += g->a3 * (p - p_prev) / (h * h);
+  /* outside its stable range the momentum term is left out, and the caller told */
+  *dropped = !palp_gel_literal_valid(g->a3, h, h_prev);
+  if (!*dropped) pn += g->a3 * (p - p_prev) / (h * h_prev);
   return pn;
 }

@@ -15,8 +15,11 @@ double palp_gel_volume_gradient(const palp_mesh *m, const palp_vec3 *pos, palp_v
 double palp_gel_polytropic(const palp_gel_params *g, double V0, double V, double *dp_dV);
 
 /* Literal Eq. 3, one frame: absolute pressures [Pa] p (frame i-1), p_prev (i-2),
- * volumes [m^3] V (frame i) and V_prev (i-1), step h [s]. Returns p_i. */
+ * volumes [m^3] V (frame i) and V_prev (i-1), this frame's step h [s] and the last
+ * one's h_prev [s] (the momentum term is a3 (p - p_prev) / (h h_prev)). Returns p_i.
+ * *dropped is 1 outside palp_gel_literal_valid (palp.h), where the momentum term would
+ * amplify every change of pressure and is left out (docs/model.md), else 0. */
 double palp_gel_literal_step(const palp_gel_params *g, double p, double p_prev, double V, double V_prev,
-                             double h, int damping);
+                             double h, double h_prev, int damping, int *dropped);
 
 #endif

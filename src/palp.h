@@ -210,6 +210,17 @@ typedef struct palp_gel_params {
   double added_mass_fraction; /* [-] in [0, 1]: 0 = membrane mass only, 1 = the whole gel */
 } palp_gel_params;
 
+/* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / (h h_prev) [Pa], a3 [s^2], h
+ * this frame's step and h_prev the last one's [s], is stable only for
+ *   -1/2 < a3 / (h h_prev) < 1
+ * (docs/model.md, "Inside gel"): 1 when (a3, h, h_prev) lies inside. A world refuses a
+ * def.dt outside it; steps it meets outside (a rejected step's halves, palp_world_step_dt)
+ * leave the term out and count (palp_world_health.gel_momentum_dropped). */
+int palp_gel_literal_valid(double a3, double h, double h_prev);
+/* The step [s] at and below which a3 leaves that range at a fixed step: sqrt(a3) for
+ * a3 > 0, sqrt(-2 a3) for a3 < 0, 0 for a3 = 0 (any step). */
+double palp_gel_literal_min_step(double a3);
+
 typedef enum palp_effect {
   PALP_EFFECT_MEMBRANE_ELASTICITY = 1u << 0,
   PALP_EFFECT_MEMBRANE_VISCOSITY = 1u << 1, /* needs elasticity */
@@ -504,6 +515,13 @@ typedef struct palp_world_health {
                                  paths (a nested-dissection factor: nets of 600 vertices
                                  and more, sparse_ldl.h), on the tick or by a deferred job;
                                  0 where full compliance columns serve */
+  int64_t gel_momentum_dropped; /* frames (steps or their halves) of the literal gel law
+                                 (PALP_GEL_PAPER_LITERAL) whose momentum term a3 (p_{i-1} -
+                                 p_{i-2}) / (h h_prev) was left out because h, h_prev were
+                                 outside palp_gel_literal_valid, where it would amplify every
+                                 change of pressure: a halved step, or palp_world_step_dt
+                                 shorter than def.dt; the law there is the literal one
+                                 without a3 (docs/model.md) */
 } palp_world_health;
 void palp_world_get_health(const palp_world *w, palp_world_health *out);
 

@@ -239,6 +239,8 @@ struct palp_world {
   palp_vec3 *grad;    /* dV/dx [m^2] */
   double p_gauge;     /* reported gauge pressure [Pa] */
   double p_abs, p_abs_prev; /* literal law state [Pa] */
+  double h_gel_prev;  /* [s] the step that made p_abs from p_abs_prev (the literal law's momentum) */
+  int64_t gel_momentum_dropped; /* literal-law frames whose momentum term was left out (health) */
   double c_rank1;     /* coefficient of g g^T in the system [kg] */
   double *u;          /* A^{-1} g_u, [nfree*3] */
   double *g_u;        /* gradient u was computed for, [nfree*3] */
@@ -1805,10 +1807,13 @@ static void stage_gel_state(palp_world *w, double h) {
     w->p_gauge = palp_gel_polytropic(&w->def.gel, w->V0, w->V, NULL) -
                  (has(w, PALP_EFFECT_GEL_DAMPING) ? w->def.gel.a2 * w->Vdot : 0.0);
   } else {
-    const double pn = palp_gel_literal_step(&w->def.gel, w->p_abs, w->p_abs_prev, w->V, V_prev, h,
-                                            has(w, PALP_EFFECT_GEL_DAMPING));
+    int dropped = 0;
+    const double pn = palp_gel_literal_step(&w->def.gel, w->p_abs, w->p_abs_prev, w->V, V_prev, h, w->h_gel_prev,
+                                            has(w, PALP_EFFECT_GEL_DAMPING), &dropped);
+    w->gel_momentum_dropped += dropped;
     w->p_abs_prev = w->p_abs;
     w->p_abs = pn;
+    w->h_gel_prev = h;
     w->p_gauge = pn - w->def.gel.pressure;
   }
 }
@@ -1911,9 +1916,12 @@ static int validate(const palp_world_def *d) {
     if (!(g->pressure > 0.0 && g->a1 > 0.0) || !isfinite(g->pressure) || !isfinite(g->a1)) return PALP_EINVAL;
     if (!(g->a2 >= 0.0) || !isfinite(g->a2) || !isfinite(g->a3)) return PALP_EINVAL;
     if (g->law != PALP_GEL_POLYTROPIC && g->law != PALP_GEL_PAPER_LITERAL) return PALP_EINVAL;
-    /* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / h^2 is stable only
-     * for |a3| / h^2 < 1. */
-    if (g->law == PALP_GEL_PAPER_LITERAL && fabs(g->a3) >= d->dt * d->dt) return PALP_EINVAL;
+    /* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / (h h_prev) is stable only
+     * for -1/2 < a3 / (h h_prev) < 1 (palp_gel_literal_valid): refused where the world's
+     * own step cannot meet it. Shorter steps (a rejected step's halves, palp_world_step_dt)
+     * leave the term out where they break it, and count those frames
+     * (health.gel_momentum_dropped). */
+    if (g->law == PALP_GEL_PAPER_LITERAL && !palp_gel_literal_valid(g->a3, d->dt, d->dt)) return PALP_EINVAL;
   }
   if (!(g->density > 0.0) || !isfinite(g->density) || !(g->added_mass_fraction >= 0.0) ||
       !(g->added_mass_fraction <= 1.0)) /* at most the whole gel */
@@ -2215,6 +2223,7 @@ palp_world *palp_world_create(const palp_world_def *def, int *err) {
     if (fail) goto nomem;
     w->V0 = w->V = palp_gel_volume_gradient(&w->mesh, w->pos, w->grad);
     w->p_abs = w->p_abs_prev = def->gel.pressure;
+    w->h_gel_prev = def->dt; /* p_abs - p_abs_prev = 0: any step length gives no momentum */
   } else {
     w->V0 = w->V = palp_mesh_volume(&w->mesh, w->pos);
   }
@@ -3351,6 +3360,7 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->max_bend_error = w->max_bend_err;
   out->beyond_validated_steps = w->beyond_validated_steps;
   out->max_beyond_validated = w->max_beyond_validated;
+  out->gel_momentum_dropped = w->gel_momentum_dropped;
 }
 
 double palp_world_hinge_range(const palp_world_def *def) {

@@ -47,7 +47,7 @@ sed 's/, "force_feedback"\]/]/' "$inline" > "$tmp/no_feedback.json"
 expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"no_feedback.json\"}]}" 'phantoms[0] (id 1): scene '"$tmp"'/no_feedback.json: effects must include "force_feedback"'
 sed 's/"contacts": \[/"max_contacts": 2, "contacts": [/' "$inline" > "$tmp/two_contacts.json"
 expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"two_contacts.json\"}]}" 'scene '"$tmp"'/two_contacts.json: max_contacts 2 is below'
-# the paper's literal gel law: |a3| < dt^2 holds at the scene's 1 kHz (1e-7 < 1e-6), not at 10 kHz
+# the paper's literal gel law: -dt^2/2 < a3 < dt^2 holds at the scene's 1 kHz (1e-7 < 1e-6), not at 10 kHz
 sed 's/"law": "polytropic"/"law": "paper_literal"/; s/"a3_s2": 0.0/"a3_s2": 1e-7/' "$inline" > "$tmp/literal.json"
 expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"literal.json\", \"physics_rate_hz\": 10000}]}" 'phantoms[0].physics_rate_hz: 10000 Hz steps the world by 0.0001 s, too fine'
 printf '{%s, "phantoms": [{"id": 1, "name": "a", "scene": "literal.json", "physics_rate_hz": 1000}]}\n' "$dds" > "$tmp/literal_ok.json"
