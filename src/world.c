@@ -2259,25 +2259,33 @@ nomem:
   return NULL;
 }
 
+/* A finger contact's constraint rows (palp_world_add_finger_def), all or none. */
+static void finger_rows_free(contact *k) {
+  free(k->ctri), free(k->cbary), free(k->cn), free(k->cq), free(k->clam), free(k->ckey);
+  k->ctri = NULL, k->cbary = NULL, k->cn = NULL, k->cq = NULL, k->clam = NULL, k->ckey = NULL;
+}
+
+/* The finger scratch, also one that finger_scratch_create left half made. */
+static void finger_scratch_free(finger_scratch *fs) {
+  if (!fs) return;
+  free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
+  free(fs->G), free(fs->prev_pool), free(fs->prev_row_slot), free(fs->prev_slot_row);
+  zstore_free(&fs->z);
+  free(fs->zblk), free(fs->zparent);
+  free(fs->vloc), free(fs->lvert), free(fs->G_lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
+  free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
+  free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
+}
+
 void palp_world_destroy(palp_world *w) {
   if (!w) return;
   for (int c = 0; w->contacts && c < w->def.max_contacts; ++c) {
     free(w->contacts[c].vertex);
     free(w->contacts[c].weight);
     free(w->contacts[c].feedback);
-    free(w->contacts[c].ctri), free(w->contacts[c].cbary), free(w->contacts[c].cn), free(w->contacts[c].cq);
-    free(w->contacts[c].clam), free(w->contacts[c].ckey);
+    finger_rows_free(&w->contacts[c]);
   }
-  if (w->fs) {
-    finger_scratch *fs = w->fs;
-    free(fs->pool), free(fs->slot_row), free(fs->slot_used), free(fs->row_slot), free(fs->solve), free(fs->work);
-    free(fs->G), free(fs->prev_pool), free(fs->prev_row_slot), free(fs->prev_slot_row);
-    zstore_free(&fs->z);
-    free(fs->zblk), free(fs->zparent);
-    free(fs->vloc), free(fs->lvert), free(fs->G_lvert), free(fs->lf), free(fs->y), free(fs->W), free(fs->b), free(fs->lwork);
-    free(fs->cand), free(fs->fpos), free(fs->patch), free(fs->patch_max), free(fs->nrest), free(fs->mrest), free(fs->ncur);
-    free(fs->nstamp), free(fs->vtri_start), free(fs->vtri), free(fs->clist), free(fs->tbits), free(fs->tlist), free(fs->tcross), free(fs->tstamp), free(fs);
-  }
+  finger_scratch_free(w->fs);
   free(w->contacts);
   free(w->pos), free(w->vel), free(w->force), free(w->mass), free(w->sarea), free(w->sq), free(w->sheight), free(w->fsu), free(w->row_of), free(w->vertex_of);
   free(w->rest_len), free(w->inv_rest), free(w->ld), free(w->vfast), free(w->kx), free(w->xsec), free(w->eps), free(w->dir), free(w->xs);
@@ -3061,11 +3069,26 @@ palp_finger_def palp_finger_default_def(void) {
   return (palp_finger_def){.radius = 0.008, .coupling_stiffness = 2000.0, .pad_stiffness = 5000.0};
 }
 
+/* The finger scratch, made whole or not at all: w->fs is set only once every array is
+ * there, since every later call (and every step) takes a set w->fs as complete. Until
+ * 2026-12-06 it was set first, so after one failed allocation the next add_finger
+ * returned a finger and the step dereferenced the missing arrays (a server adds the
+ * finger again at the next touch: one failed allocation crashed every session). */
+static int finger_scratch_fill(palp_world *w, finger_scratch *fs);
 static int finger_scratch_create(palp_world *w) {
   if (w->fs) return PALP_OK;
   finger_scratch *fs = calloc(1, sizeof *fs);
   if (!fs) return PALP_ENOMEM;
+  const int e = finger_scratch_fill(w, fs);
+  if (e) {
+    finger_scratch_free(fs);
+    return e;
+  }
   w->fs = fs;
+  return PALP_OK;
+}
+
+static int finger_scratch_fill(palp_world *w, finger_scratch *fs) {
   const int nv = w->mesh.vertex_count, M = PALP_FINGER_MAX_CON;
   fs->n3 = 3 * w->nfree;
   fs->slots = w->nfree < 32 ? w->nfree : 32;
@@ -3088,7 +3111,7 @@ static int finger_scratch_create(palp_world *w) {
   fs->lwork = xcalloc((size_t)M * (size_t)M + 3 * (size_t)M, sizeof(double), &fail);
   fs->cand = xcalloc((size_t)nv, 1, &fail);
   fs->fpos = xcalloc((size_t)nv, sizeof(palp_vec3), &fail);
-  if (fail) return PALP_ENOMEM; /* freed with the world */
+  if (fail) return PALP_ENOMEM; /* freed by the caller */
   for (int q = 0; q < fs->slots; ++q) fs->slot_row[q] = -1;
   for (int r = 0; r < w->nfree; ++r) fs->row_slot[r] = fs->prev_row_slot[r] = -1;
   for (int i = 0; i < nv; ++i) fs->vloc[i] = -1;
@@ -3186,7 +3209,11 @@ int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_ve
     k->cq = calloc(M, sizeof *k->cq);
     k->clam = calloc(M, sizeof *k->clam);
     k->ckey = calloc(M, sizeof *k->ckey);
-    if (!k->ctri || !k->cbary || !k->cn || !k->cq || !k->clam || !k->ckey) return PALP_ENOMEM; /* freed with the world */
+    /* all or none: a set ctri is taken as all six there (the next add_finger, the step) */
+    if (!k->ctri || !k->cbary || !k->cn || !k->cq || !k->clam || !k->ckey) {
+      finger_rows_free(k);
+      return PALP_ENOMEM;
+    }
   }
   k->kind = CONTACT_FINGER;
   k->fdef = *def;
