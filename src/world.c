@@ -3371,6 +3371,117 @@ uint64_t palp_world_hash(const palp_world *w) {
   return h;
 }
 
+/* A factor's numbers: its 3x3 blocks and diagonal (the block form the solves use), or its
+ * scalar L and 1/D. The ordering is the analysis's, the same for every factor of a world. */
+static uint64_t ldl_hash(uint64_t h, const palp_ldl *f) {
+  if (f->nb > 0) {
+    h = fnv1a64(h, f->blk, sizeof(float) * 9 * (size_t)f->bcolp[f->nb]);
+    h = fnv1a64(h, f->bdiag, sizeof(double) * 3 * (size_t)f->nb);
+  } else if (f->n > 0) {
+    h = fnv1a64(h, f->val, sizeof(double) * (size_t)f->colp[f->n]);
+  }
+  if (f->n > 0) h = fnv1a64(h, f->dinv, sizeof(double) * (size_t)f->n);
+  return h;
+}
+
+static uint64_t vec3_hash(uint64_t h, palp_vec3 v) {
+  const double d[3] = {v.x, v.y, v.z};
+  return fnv1a64(h, d, sizeof d);
+}
+
+/* A contact: its load or finger, what it touched and fed back, and the finger's local
+ * model and drift observer. Field by field: the structs' padding is not state. */
+static uint64_t contact_hash(uint64_t h, const contact *k) {
+  const int head[3] = {k->kind, k->count, k->kind == CONTACT_FINGER ? k->ncon : 0};
+  h = fnv1a64(h, head, sizeof head);
+  if (k->kind == CONTACT_NONE) return h;
+  h = fnv1a64(h, k->vertex, sizeof(int) * (size_t)k->count);
+  h = fnv1a64(h, k->feedback, sizeof(palp_vec3) * (size_t)k->count);
+  h = vec3_hash(h, k->total);
+  if (k->kind == CONTACT_FORCE) {
+    h = fnv1a64(h, k->weight, sizeof(double) * (size_t)k->count);
+    return vec3_hash(h, k->force);
+  }
+  const double fd[3] = {k->fdef.radius, k->fdef.coupling_stiffness, k->fdef.pad_stiffness};
+  h = fnv1a64(h, fd, sizeof fd);
+  h = vec3_hash(vec3_hash(h, k->device), k->proxy);
+  const size_t n = (size_t)k->ncon;
+  h = fnv1a64(h, &k->nfinger, sizeof k->nfinger);
+  h = fnv1a64(h, k->ctri, sizeof(int) * n);
+  h = fnv1a64(h, k->cbary, sizeof(double[3]) * n);
+  h = fnv1a64(h, k->cn, sizeof(palp_vec3) * n);
+  h = fnv1a64(h, k->cq, sizeof(palp_vec3) * n);
+  h = fnv1a64(h, k->clam, sizeof(double) * n); /* the next step's warm start (with ckey) */
+  h = fnv1a64(h, k->ckey, sizeof(int64_t) * n);
+  const palp_local_model *m = &k->lm; /* the next step's drift observer reads it */
+  const int mi[2] = {m->contact, m->triangles};
+  h = fnv1a64(h, mi, sizeof mi);
+  const double md[3] = {m->period, m->area, m->depth}; /* its time is the world's (set when queried) */
+  h = fnv1a64(h, md, sizeof md);
+  h = fnv1a64(h, m->stiffness, sizeof m->stiffness);
+  const palp_vec3 mv[6] = {m->device, m->proxy, m->normal, m->force, m->drift, m->point};
+  for (int q = 0; q < 6; ++q) h = vec3_hash(h, mv[q]);
+  return vec3_hash(h, k->drift_corr);
+}
+
+uint64_t palp_world_state_hash(const palp_world *w) {
+  uint64_t h = palp_world_hash(w);
+  const size_t nv = (size_t)w->mesh.vertex_count, nl = (size_t)w->nlink;
+  /* the links' state beyond their strains: directions and stresses (the feedback's) */
+  if (nl) {
+    h = fnv1a64(h, w->dir, sizeof(palp_vec3) * nl);
+    h = fnv1a64(h, w->sigma, sizeof(double) * nl);
+  }
+  /* the gel: the literal law's previous pressure and step, the reported pressure and rate,
+   * and the solve's kept A^{-1} g (reused while the gradient turns little) */
+  const double gel[4] = {w->p_abs_prev, w->h_gel_prev, w->p_gauge, w->Vdot};
+  h = fnv1a64(h, gel, sizeof gel);
+  if (w->u) {
+    h = fnv1a64(h, &w->u_valid, sizeof w->u_valid);
+    if (w->u_valid) {
+      h = fnv1a64(h, w->u, sizeof(double) * 3 * (size_t)w->nfree);
+      h = fnv1a64(h, w->g_u, sizeof(double) * 3 * (size_t)w->nfree);
+    }
+  }
+  /* the installed tangent: its factor, what the steps check it against, whether it must
+   * be rebuilt; a blend's replaced factor; a deferred rebuild's matrix */
+  h = fnv1a64(h, &w->h_factored, sizeof w->h_factored);
+  h = ldl_hash(h, &w->ldl);
+  if (nl) {
+    h = fnv1a64(h, w->fdir, sizeof(palp_vec3) * nl);
+    h = fnv1a64(h, w->fbeta, sizeof(double) * nl);
+    h = fnv1a64(h, w->fslack, sizeof(double) * nl);
+  }
+  if (w->fsu) h = fnv1a64(h, w->fsu, sizeof(palp_vec3) * nv);
+  if (w->fsoft) h = fnv1a64(h, w->fsoft, sizeof(double) * ((size_t)w->nfree + 1));
+  const int flags[5] = {w->stale, w->unsafe, w->blend_k, w->job_state != JOB_NONE, w->job_obsolete};
+  h = fnv1a64(h, flags, sizeof flags);
+  if (w->blend_k > 0) h = ldl_hash(h, &w->ldl_prev);
+  if (w->job_state != JOB_NONE) {
+    /* who computes it (the state a host moves it through) does not change its bits */
+    const palp_factor_job *j = w->job;
+    h = fnv1a64(h, &w->job_due, sizeof w->job_due);
+    h = fnv1a64(h, &j->h, sizeof j->h);
+    h = fnv1a64(h, &j->nnz, sizeof j->nnz);
+    h = fnv1a64(h, j->ti, sizeof(int) * (size_t)j->nnz);
+    h = fnv1a64(h, j->tj, sizeof(int) * (size_t)j->nnz);
+    h = fnv1a64(h, j->tx, sizeof(double) * (size_t)j->nnz);
+    if (nl) {
+      h = fnv1a64(h, j->fdir, sizeof(palp_vec3) * nl);
+      h = fnv1a64(h, j->fbeta, sizeof(double) * nl);
+      h = fnv1a64(h, j->fslack, sizeof(double) * nl);
+    }
+    if (j->fsu) h = fnv1a64(h, j->fsu, sizeof(palp_vec3) * nv);
+  }
+  /* sleep */
+  const int wake[2] = {w->awake, w->broken};
+  h = fnv1a64(h, wake, sizeof wake);
+  h = fnv1a64(h, &w->quiet, sizeof w->quiet);
+  /* contacts */
+  for (int c = 0; c < w->def.max_contacts; ++c) h = contact_hash(h, &w->contacts[c]);
+  return h;
+}
+
 void palp_world_get_health(const palp_world *w, palp_world_health *out) {
   out->substeps = w->substeps;
   out->refactors = w->refactors;

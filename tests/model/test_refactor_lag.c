@@ -3,7 +3,8 @@
  * blended in over def.refactor_blend frames as the server steps it.
  * Checked on three domes at 1 kHz with a finger pressing and wobbling:
  * - a world whose jobs are claimed and factored on another thread has the same state
- *   hash after every frame as one that factors them itself at the due frame;
+ *   hash after every frame as one that factors them itself at the due frame (and the
+ *   same whole-state hash, palp_world_state_hash, in every frame no thread holds a job);
  * - each claimed job is due exactly k frames after the step that requested it, and a
  *   due job not handed back makes the step fail with PALP_EBUSY without advancing;
  * - the finger's force with the deferral stays near the force with rebuilds made at
@@ -66,7 +67,7 @@ static void run(const char *name, palp_world_def d0, double rms_bound, double wo
   const int fa = palp_world_add_finger_def(wa, &fd, device_at(0));
   const int fb = palp_world_add_finger_def(wb, &fd, device_at(0));
   const int frames = 2500;
-  int same = 1, jobs = 0, due_ok = 1, busy_checked = 0, threaded = 0;
+  int same = 1, same_state = 1, jobs = 0, due_ok = 1, busy_checked = 0, threaded = 0;
   double worst_rel = 0.0, worst_abs = 0.0, sum2 = 0.0, sumF2 = 0.0;
   palp_factor_job *held = NULL;
   pthread_t th;
@@ -92,6 +93,8 @@ static void run(const char *name, palp_world_def d0, double rms_bound, double wo
     CHECK(palp_world_step(w0) == PALP_OK && palp_world_step(wa) == PALP_OK && palp_world_step(wb) == PALP_OK,
           "step %d", f);
     if (palp_world_hash(wa) != palp_world_hash(wb)) same = 0;
+    /* the whole state too (a job's host is not part of it), read while no thread runs a job */
+    if (!threaded && palp_world_state_hash(wa) != palp_world_state_hash(wb)) same_state = 0;
     palp_factor_job *j = palp_world_factor_claim(wb);
     if (j) {
       CHECK(!held, "one job at a time");
@@ -136,6 +139,8 @@ static void run(const char *name, palp_world_def d0, double rms_bound, double wo
         "the reference analysed its blend's spare once: %lld (2)", name, jobs, (long long)ha.factor_analyses,
         (long long)hb.factor_analyses, (long long)h0.factor_analyses);
   CHECK(same, "claimed-and-threaded vs inline: identical hashes after each of %d frames", frames);
+  CHECK(same_state, "claimed-and-threaded vs inline: identical whole-state hashes (palp_world_state_hash) whenever no "
+        "thread held a job");
   CHECK(jobs >= 3, "the press triggers rebuilds (%d jobs)", jobs);
   CHECK(due_ok, "each job is due refactor_lag frames after the step that requested it");
   CHECK(busy_checked, "the PALP_EBUSY case was exercised");
