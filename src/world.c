@@ -3217,7 +3217,9 @@ int palp_world_add_finger_def(palp_world *w, const palp_finger_def *def, palp_ve
   }
   k->kind = CONTACT_FINGER;
   k->fdef = *def;
-  k->count = k->ncon = 0;
+  /* nfinger too: a slot a pressing finger left keeps its rows, and palp_world_finger_contacts
+   * (and the state hash) read the old finger's until the first step (review, 2026-12-06) */
+  k->count = k->ncon = k->nfinger = 0;
   k->device = k->proxy = device;
   /* The proxy must start outside the phantom: a device placed inside it starts its
    * proxy above the surface on the ray from the base's centre, and the first steps

@@ -109,6 +109,38 @@ static void touch(palp_vec3 point, palp_vec3 dir, double depth, const char *what
   palp_world_destroy(w);
 }
 
+/* A finger added again in a slot a pressing finger left (palp_world_remove_contact, then
+ * palp_world_add_finger_def): until its first step it touches nothing, so
+ * palp_world_finger_contacts must report no rows. Until session 76 (review, 2026-12-06) the
+ * slot's row count (nfinger) survived the re-add, and the new finger, 5 cm above the dome,
+ * reported the old finger's triangles and forces. */
+static void readded(void) {
+  palp_world_def d = palp_world_default_def();
+  d.dt = 0.001;
+  int err = 0;
+  palp_world *w = palp_world_create(&d, &err);
+  if (!w) {
+    CHECK(0, "world: %s", palp_strerror(err));
+    return;
+  }
+  const palp_finger_def fd = palp_finger_default_def();
+  const palp_vec3 pole = {0.0, 0.0, d.mesh.radius}; /* [m] the dome's top */
+  const int f = palp_world_add_finger_def(w, &fd, (palp_vec3){0.0, 0.0, pole.z + fd.radius - 0.002}); /* 2 mm in */
+  CHECK(f >= 0, "re-add: first finger %d", f);
+  for (int i = 0; i < 20; ++i) CHECK(palp_world_step(w) == 0, "re-add: step %d", i);
+  const int pressed = palp_world_finger_contacts(w, f, NULL, NULL, 0);
+  CHECK(pressed >= 1, "re-add: the first finger, 2 mm in at the pole, touches (%d rows)", pressed);
+  CHECK(palp_world_remove_contact(w, f) == 0, "re-add: remove");
+  const int g = palp_world_add_finger_def(w, &fd, (palp_vec3){0.0, 0.0, pole.z + 0.05}); /* 5 cm above */
+  CHECK(g == f, "re-add: the freed slot %d is taken again (%d)", f, g);
+  const int rows = palp_world_finger_contacts(w, g, NULL, NULL, 0);
+  CHECK(rows == 0, "re-add: a finger 5 cm above the dome, not yet stepped, touches nothing (%d rows; the old "
+        "finger's were %d)", rows, pressed);
+  CHECK(palp_world_step(w) == 0, "re-add: step");
+  CHECK(palp_world_finger_contacts(w, g, NULL, NULL, 0) == 0, "re-add: nor after a step");
+  palp_world_destroy(w);
+}
+
 int main(void) {
   const palp_mesh_def md = palp_mesh_default_def();
   palp_mesh m;
@@ -148,6 +180,7 @@ int main(void) {
         te.checked, te.misread);
   CHECK(tv.speed_min > 1e-4 && te.speed_min > 1e-4, "the touched surface moves (slowest %.3g / %.3g m/s)",
         tv.speed_min, te.speed_min);
+  readded();
   palp_mesh_destroy(&m);
   CHECK_DONE();
 }
