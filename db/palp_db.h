@@ -95,7 +95,10 @@ typedef enum palp_db_event_kind {
   PALP_DB_EVENT_INFO = 8,
   /* the model left its valid range (docs/model.md, "Valid range"): count = the physics steps
    * flagged since the last such event; detail (server/db_log.c, read back by palp_db_valid_range_parse):
-   * "outside at N steps: depth N, skin N, limit N; deepest X mm beyond the validated depth so far" */
+   * "outside at N steps: depth N, skin N, limit N; deepest X mm beyond the validated depth so far",
+   * and where the literal gel law left its momentum term out (since 2026-12-06) "outside at N steps:
+   * depth N, skin N, limit N, gel N; deepest X mm beyond the validated depth so far; gel momentum
+   * left out at N frames" */
   PALP_DB_EVENT_VALID_RANGE = 9,
   /* server-wide (no session): a peer DDS Security refused (idl/palp_dds_refusals.h); detail
    * "WHO: WHY (handshake|permissions)", count = the refusals this row stands for (the first,
@@ -482,8 +485,15 @@ typedef struct palp_db_valid_range {
                           (LM_BASE_CONTACT, LM_CLAMPED_STEP, LM_UNSOLVED) */
   double deepest_m;    /* the largest excess of a fingertip's indentation over its validated depth,
                           over the session so far [m] */
+  /* Since 2026-12-06 (session 76): the literal gel law outside its stable range, the server's own
+   * (no wire bit: the stations are not told, so the review's time outside may exceed theirs) */
+  int64_t gel_steps;   /* steps of which a frame (the step or a half) left the law's momentum term
+                          out (palp_world_health.gel_momentum_dropped rose) */
+  int64_t gel_frames;  /* those frames (>= gel_steps; 0 with it) */
 } palp_db_valid_range;
-/* The event's detail; returns what snprintf returns. */
+/* The event's detail; returns what snprintf returns. Without gel steps it is the detail written
+ * before 2026-12-06, word for word (an earlier palp-review reads it); with them, the head gains
+ * ", gel N" and the tail "; gel momentum left out at N frames". */
 int palp_db_valid_range_format(const palp_db_valid_range *r, char *buf, size_t len);
 /* Reads a detail back; count is the event's count, which must equal its steps. PALP_EINVAL
  * for a detail this format did not write or whose numbers contradict each other. */

@@ -98,10 +98,11 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
   }
   s->refusals_logged = 0;
   if (s->range.steps) {
-    char detail[200];
+    char detail[256]; /* the longest detail, every number at its bound, is 212 characters */
     palp_db_valid_range_format(&s->range, detail, sizeof detail);
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_VALID_RANGE, frame, detail, s->range.steps);
     s->range.steps = s->range.depth_steps = s->range.skin_steps = s->range.limit_steps = 0; /* deepest: so far */
+    s->range.gel_steps = s->range.gel_frames = 0;
   }
   if (s->overruns) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_OVERRUN, frame, "tick ended after the next tick's start",
@@ -306,8 +307,9 @@ static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {
   if (s) s->overruns++;
 }
 
-/* The three parts are the station's (client/haptic_loop.c): depth, skin, the model's limits. */
-static void on_valid_range(void *ctx, uint32_t session_id, uint32_t flags, double deepest_m) {
+/* The three parts are the station's (client/haptic_loop.c): depth, skin, the model's limits; the
+ * fourth, the literal gel law outside its stable range, is the server's alone (no wire bit). */
+static void on_valid_range(void *ctx, uint32_t session_id, uint32_t flags, int64_t gel_dropped, double deepest_m) {
   palp_srv_db_log *l = ctx;
   slot *s = find(l, session_id);
   if (!s) return;
@@ -315,6 +317,7 @@ static void on_valid_range(void *ctx, uint32_t session_id, uint32_t flags, doubl
   if (flags & palp_LM_BEYOND_VALIDATED) s->range.depth_steps++;
   if (flags & palp_LM_LARGE_STRAIN) s->range.skin_steps++;
   if (flags & (palp_LM_OUT_OF_RANGE & ~palp_LM_LARGE_STRAIN)) s->range.limit_steps++;
+  if (gel_dropped > 0) s->range.gel_steps++, s->range.gel_frames += gel_dropped;
   if (deepest_m > s->range.deepest_m) s->range.deepest_m = deepest_m;
 }
 

@@ -504,10 +504,13 @@ static void publish_feedback(palp_srv_session *s, int64_t now_ns, double top_dis
   s->last_feedback_ns = now_ns;
 }
 
-/* Model-validity flags of the step just taken: what the health counters gained. */
-static uint32_t step_flags(palp_srv_session *s) {
+/* Model-validity flags of the step just taken: what the health counters gained; *gel_dropped:
+ * the step's frames (it or its halves) the literal gel law took without its momentum term,
+ * which no wire bit carries (the stations are not told; the log and the review are). */
+static uint32_t step_flags(palp_srv_session *s, int64_t *gel_dropped) {
   palp_world_health h;
   palp_world_get_health(s->world, &h);
+  *gel_dropped = h.gel_momentum_dropped - s->health.gel_momentum_dropped;
   uint32_t fl = 0;
   /* large deformation, by stretching or by bending (the wire has one bit for both) */
   if (h.large_strain_steps > s->health.large_strain_steps || h.large_bend_steps > s->health.large_bend_steps)
@@ -519,6 +522,28 @@ static uint32_t step_flags(palp_srv_session *s) {
   if (h.beyond_validated_steps > s->health.beyond_validated_steps) fl |= palp_LM_BEYOND_VALIDATED;
   s->health = h;
   return fl;
+}
+
+/* Frames the literal gel law took without its momentum term (docs/model.md, "Steps of other
+ * lengths, and where a3 is stable"): there the phantom is not the law its scene names, so the
+ * server's log says so at the first, then at most every log_interval with the frames since (a
+ * hard press halves step after step); close_session says the total. */
+static void say_gel_dropped(palp_srv_session *s, int64_t n, int64_t now_ns) {
+  s->gel_unsaid += n;
+  if (s->gel_said_ns && now_ns - s->gel_said_ns < (int64_t)(s->log_interval * 1e9)) return;
+  const double a3 = palp_world_get_def(s->world)->gel.a3;
+  if (!s->gel_said_ns)
+    palp_log_warn(s->log, "session %u: the literal gel law's momentum term left out at %lld frame%s: a halved step "
+                          "(or the one after it) puts a3 / (h h_prev) outside (-1/2, 1) (a3 %.3g s^2), where the "
+                          "term would amplify every change of pressure; the gel there is the law without a3",
+                  s->id, (long long)s->gel_unsaid, s->gel_unsaid == 1 ? "" : "s", a3);
+  else
+    palp_log_warn(s->log, "session %u: the literal gel law's momentum term left out at %lld more frame%s since the "
+                          "last report (%lld in all)",
+                  s->id, (long long)s->gel_unsaid, s->gel_unsaid == 1 ? "" : "s",
+                  (long long)s->health.gel_momentum_dropped);
+  s->gel_said_ns = now_ns;
+  s->gel_unsaid = 0;
 }
 
 /* A position-driven finger's sample on a step the session log samples, as the log keeps it
@@ -697,10 +722,14 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
     s->events->frame(s->events->ctx, s->id, s->world, slot, ff, PALP_SRV_MAX_FINGERS);
   }
 
-  const uint32_t flags = step_flags(s);
-  /* the session log keeps what the stations were told, for the instructor's review */
-  if ((flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) && s->events && s->events->valid_range)
-    s->events->valid_range(s->events->ctx, s->id, flags, s->health.max_beyond_validated);
+  int64_t gel_dropped = 0;
+  const uint32_t flags = step_flags(s, &gel_dropped);
+  /* the session log keeps what the stations were told, for the instructor's review, and the
+   * literal gel law's frames outside its stable range, which they were not */
+  if (((flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) || gel_dropped > 0) && s->events &&
+      s->events->valid_range)
+    s->events->valid_range(s->events->ctx, s->id, flags, gel_dropped, s->health.max_beyond_validated);
+  if (gel_dropped > 0) say_gel_dropped(s, gel_dropped, now_ns);
   const int want_feedback = atomic_load_explicit(&s->want_feedback, memory_order_relaxed) != 0;
   if (want_feedback && s->local_model_writer > 0) publish_local_models(s, now_ns, flags);
   if (want_feedback && (awake || any_down || now_ns - s->last_feedback_ns >= IDLE_FEEDBACK_PERIOD_NS))

@@ -185,6 +185,11 @@ typedef struct palp_srv_session {
   palp_FingerSample fs;
   int32_t fs_tri[PALP_FINGER_SAMPLE_TRIANGLES_MAX];
   int64_t last_limit_log_ns;
+  /* The literal gel law's frames without their momentum term (health.gel_momentum_dropped):
+   * said in the server's log at the first, then at most every log_interval with the frames
+   * since; the rest in the total said at close. */
+  int64_t gel_said_ns;
+  int64_t gel_unsaid;
   /* Set by the ticker that holds the session: rebuilds go to its helper (NULL: the
    * world computes them itself at their due frame). */
   palp_srv_factor_pool *factor_pool;

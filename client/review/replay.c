@@ -213,6 +213,11 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
     if (palp_world_get_def(w)->validated_count > 0)
       printf("replay: %s: a fingertip deeper than the parameters were validated against the FE: %lld steps (by up to "
              "%.1f mm)\n", s->uid, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
+    /* and where the literal gel law stepped outside its stable range (only for that law; the server
+     * logs it since 2026-12-06, and this recomputes it for earlier logs) */
+    if (palp_world_get_def(w)->gel.law == PALP_GEL_PAPER_LITERAL)
+      printf("replay: %s: the literal gel law's momentum term left out at %lld frames (a3 / (h h_prev) outside "
+             "(-1/2, 1))\n", s->uid, (long long)h.gel_momentum_dropped);
     result = REVIEW_OK;
   }
   if (r->apply_errors) printf("replay: %d contact inputs could not be applied\n", r->apply_errors);

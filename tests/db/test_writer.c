@@ -571,10 +571,50 @@ static void test_valid_range_detail(void) {
       {"outside at 99999999999999999999 steps: depth 1, skin 0, limit 0; deepest 1.00 mm beyond the validated "
        "depth so far", 1, "a number past int64"},
       {"outside at many steps", 5, "not this format"},
-      {"", 1, "empty"}};
+      {"", 1, "empty"},
+      /* the literal gel law's part (2026-12-06) */
+      {"outside at 10 steps: depth 0, skin 0, limit 0, gel 0; deepest 0.00 mm beyond the validated depth so far; "
+       "gel momentum left out at 0 frames", 10, "gel 0 (written the old way): parts that do not cover the steps"},
+      {"outside at 10 steps: depth 10, skin 0, limit 0, gel 0; deepest 0.00 mm beyond the validated depth so far; "
+       "gel momentum left out at 0 frames", 10, "gel 0 with the gel tail (not what the writer writes)"},
+      {"outside at 10 steps: depth 0, skin 0, limit 0, gel 11; deepest 0.00 mm beyond the validated depth so far; "
+       "gel momentum left out at 20 frames", 10, "more gel steps than steps"},
+      {"outside at 10 steps: depth 0, skin 0, limit 0, gel 10; deepest 0.00 mm beyond the validated depth so far; "
+       "gel momentum left out at 9 frames", 10, "fewer gel frames than gel steps"},
+      {"outside at 10 steps: depth 0, skin 0, limit 0, gel 10; deepest 0.00 mm beyond the validated depth so far; "
+       "gel momentum left out at 2000000000000 frames", 10, "more gel frames than 31 years of steps"},
+      {"outside at 10 steps: depth 0, skin 0, limit 0, gel 10; deepest 0.00 mm beyond the validated depth so far",
+       10, "the gel part without its frames"},
+      {"outside at 10 steps: depth 10, skin 0, limit 0; deepest 0.00 mm beyond the validated depth so far; gel "
+       "momentum left out at 4 frames", 10, "gel frames without the gel part"},
+      {"outside at 10 steps: depth 0, skin 0, limit 0, gel 10; deepest 0.00 mm beyond the validated depth so far; "
+       "gel momentum left out at 12 frames; DROP", 10, "trailing text after the gel tail"}};
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
     CHECK(palp_db_valid_range_parse(bad[i].detail, bad[i].count, &b) == PALP_EINVAL, "refused: %s", bad[i].why);
   CHECK(palp_db_valid_range_parse(NULL, 1, &b) == PALP_EINVAL, "refused: no detail");
+  /* The literal gel law's steps outside its stable range (2026-12-06): a part of their own, the
+   * frames in the tail; a detail without them is the old one word for word (above). */
+  const palp_db_valid_range g = {.steps = 12, .depth_steps = 0, .skin_steps = 9, .limit_steps = 1, .deepest_m = 0,
+                                 .gel_steps = 4, .gel_frames = 11};
+  palp_db_valid_range_format(&g, d, sizeof d);
+  CHECK(!strcmp(d, "outside at 12 steps: depth 0, skin 9, limit 1, gel 4; deepest 0.00 mm beyond the validated "
+                   "depth so far; gel momentum left out at 11 frames"),
+        "with gel: the detail reads '%s'", d);
+  CHECK(palp_db_valid_range_parse(d, 12, &b) == 0 && b.steps == 12 && b.skin_steps == 9 && b.limit_steps == 1 &&
+            b.depth_steps == 0 && b.gel_steps == 4 && b.gel_frames == 11 && b.deepest_m == 0,
+        "with gel: read back: %lld steps, gel %lld steps %lld frames", (long long)b.steps, (long long)b.gel_steps,
+        (long long)b.gel_frames);
+  /* a step outside by the gel law alone is a step outside */
+  const palp_db_valid_range only = {.steps = 3, .gel_steps = 3, .gel_frames = 7};
+  palp_db_valid_range_format(&only, d, sizeof d);
+  CHECK(palp_db_valid_range_parse(d, 3, &b) == 0 && b.steps == 3 && b.gel_steps == 3 && b.gel_frames == 7 &&
+            b.depth_steps + b.skin_steps + b.limit_steps == 0,
+        "gel only: '%s' read back", d);
+  /* and the old detail reads with no gel part */
+  CHECK(palp_db_valid_range_parse("outside at 100 steps: depth 60, skin 50, limit 3; deepest 2.41 mm beyond the "
+                                  "validated depth so far", 100, &b) == 0 &&
+            b.gel_steps == 0 && b.gel_frames == 0 && b.steps == 100,
+        "the detail of before reads with no gel part");
 }
 
 /* The debrief event's detail (db/debrief.c): each level written as the docs say and read back,

@@ -16,13 +16,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (palp_db_valid_range_parse(text, count, &r) == 0) {
     if (r.steps < 1 || r.steps != count || r.depth_steps < 0 || r.skin_steps < 0 || r.limit_steps < 0 ||
         r.depth_steps > r.steps || r.skin_steps > r.steps || r.limit_steps > r.steps || !isfinite(r.deepest_m) ||
-        r.deepest_m < 0 || r.deepest_m > 1.0)
+        r.deepest_m < 0 || r.deepest_m > 1.0 || r.gel_steps < 0 || r.gel_steps > r.steps ||
+        (r.gel_steps == 0) != (r.gel_frames == 0) || r.gel_frames < r.gel_steps ||
+        r.depth_steps + r.skin_steps + r.limit_steps + r.gel_steps < r.steps)
       abort();
     char again[256];
     palp_db_valid_range_format(&r, again, sizeof again);
     palp_db_valid_range b;
     if (palp_db_valid_range_parse(again, count, &b) != 0 || b.steps != r.steps || b.depth_steps != r.depth_steps ||
-        b.skin_steps != r.skin_steps || b.limit_steps != r.limit_steps || fabs(b.deepest_m - r.deepest_m) > 6e-6)
+        b.skin_steps != r.skin_steps || b.limit_steps != r.limit_steps || b.gel_steps != r.gel_steps ||
+        b.gel_frames != r.gel_frames || fabs(b.deepest_m - r.deepest_m) > 6e-6)
       abort(); /* rewritten to 0.01 mm: within half of it */
   }
   free(text);
