@@ -507,13 +507,17 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {
   return ok;
 }
 
-/* A station renders meshes up to this size; the server's are 338..5,000 vertices. */
-#define PHANTOM_MAX_VERTICES 1000000
+/* The largest mesh a palp-server publishes (palp.h, a scene's mesh.vertex_count; the shipped
+ * phantoms have 338 and 1300 vertices), and the triangles of a closed surface of that many (2V - 4).
+ * Until 2026-12-06 this bound was 1,000,000 vertices of its own: five times any server's, a mesh a
+ * station or palp-recorder kept (~100 MB with its triangles) from any peer on an unsecured domain. */
+#define PHANTOM_MAX_VERTICES PALP_MESH_MAX_VERTICES
 
 int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char *err, size_t errlen) {
   const uint32_t nv = ph->rest._length, ni = ph->triangles._length;
   if (nv < 4 || nv > PHANTOM_MAX_VERTICES || !ph->rest._buffer) {
-    snprintf(err, errlen, "phantom %u: %u rest vertices (want 4..%d)", ph->phantom_id, nv, PHANTOM_MAX_VERTICES);
+    snprintf(err, errlen, "phantom %u: %u rest vertices (want 4..%d, the largest mesh a palp-server publishes)",
+             ph->phantom_id, nv, PHANTOM_MAX_VERTICES);
     return PALP_EINVAL;
   }
   if ((ni == 0 && !triangles_optional) || ni % 3 != 0 || ni / 3 > 2u * PHANTOM_MAX_VERTICES) {

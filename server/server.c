@@ -652,6 +652,16 @@ static int phantom_sessions(const palp_srv *srv, uint32_t phantom_id) {
   return n;
 }
 
+void palp_srv_catalogue_mesh(const palp_mesh *m, palp_Vec3 *rest, int32_t *tri, palp_Phantom *msg) {
+  msg->top_vertex = m->top_vertex;
+  msg->dome_triangle_count = m->dome_triangle_count;
+  for (int i = 0; i < m->vertex_count; i++) rest[i] = (palp_Vec3){m->rest[i].x, m->rest[i].y, m->rest[i].z};
+  for (int i = 0; i < m->triangle_count; i++)
+    for (int k = 0; k < 3; k++) tri[3 * i + k] = m->tri[i][k];
+  msg->rest = (dds_sequence_palp_Vec3){(uint32_t)m->vertex_count, (uint32_t)m->vertex_count, rest, false};
+  msg->triangles = (dds_sequence_long){(uint32_t)m->triangle_count * 3, (uint32_t)m->triangle_count * 3, tri, false};
+}
+
 static void publish_catalogue(palp_srv *srv, const palp_srv_phantom *ph) {
   const palp_mesh *m = ph->mesh;
   const palp_world_def *wd = &ph->scene.world;
@@ -667,8 +677,6 @@ static void publish_catalogue(palp_srv *srv, const palp_srv_phantom *ph) {
   msg.membrane = (palp_MembraneParams){wd->membrane.thickness, wd->membrane.density, wd->membrane.E1,
                                        wd->membrane.eta1, wd->membrane.E2, wd->membrane.eta2};
   msg.gel = (palp_GelParams){(int32_t)wd->gel.law, wd->gel.pressure, wd->gel.a1, wd->gel.a2, wd->gel.a3};
-  msg.top_vertex = m->top_vertex;
-  msg.dome_triangle_count = m->dome_triangle_count;
   palp_Vec3 *rest = malloc((size_t)m->vertex_count * sizeof *rest);
   int32_t *tri = malloc((size_t)m->triangle_count * 3 * sizeof *tri);
   if (!rest || !tri) {
@@ -676,11 +684,7 @@ static void publish_catalogue(palp_srv *srv, const palp_srv_phantom *ph) {
     free(tri);
     return;
   }
-  for (int i = 0; i < m->vertex_count; i++) rest[i] = (palp_Vec3){m->rest[i].x, m->rest[i].y, m->rest[i].z};
-  for (int i = 0; i < m->triangle_count; i++)
-    for (int k = 0; k < 3; k++) tri[3 * i + k] = m->tri[i][k];
-  msg.rest = (dds_sequence_palp_Vec3){(uint32_t)m->vertex_count, (uint32_t)m->vertex_count, rest, false};
-  msg.triangles = (dds_sequence_long){(uint32_t)m->triangle_count * 3, (uint32_t)m->triangle_count * 3, tri, false};
+  palp_srv_catalogue_mesh(m, rest, tri, &msg);
   msg.active_sessions = (uint32_t)phantom_sessions(srv, ph->cfg.id);
   dds_write(srv->catalogue_w, &msg);
   free(rest);

@@ -18,6 +18,7 @@
 #include "events.h"
 #include "palp.h"
 #include "palp_log.h"
+#include "palp_types.h" /* palp_Phantom */
 
 typedef struct palp_srv palp_srv;
 
@@ -65,5 +66,12 @@ void palp_srv_destroy(palp_srv *srv);
  * entry and, when the rate is the cause, its key. */
 int palp_srv_prepare_phantom(const palp_srv_config *cfg, int index, palp_srv_phantom_cfg *pc, palp_scene *scene,
                              palp_world **world, char *err, size_t errlen);
+
+/* A catalogue entry's mesh (palp_catalogue) as the server publishes a phantom's: its rest
+ * positions into rest (m->vertex_count) and triangles into tri (3 m->triangle_count, the dome's
+ * first), buffers the caller owns and msg then points to; its top vertex and dome triangle count.
+ * The stations and palp-recorder check it with palp_dds_phantom_check: test server_phantom_bound
+ * passes the largest mesh a scene can ask for (PALP_MESH_MAX_VERTICES) through both. */
+void palp_srv_catalogue_mesh(const palp_mesh *m, palp_Vec3 *rest, int32_t *tri, palp_Phantom *msg);
 
 #endif

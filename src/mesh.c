@@ -84,7 +84,7 @@ static void add_tri(palp_mesh *m, int a, int b, int c, palp_vec3 out) {
 int palp_mesh_create(const palp_mesh_def *def, palp_mesh *out) {
   memset(out, 0, sizeof *out);
   if (!def || !(def->radius > 0.0) || !isfinite(def->radius) || def->vertex_count < 19 ||
-      def->vertex_count > 200000)
+      def->vertex_count > PALP_MESH_MAX_VERTICES)
     return PALP_EINVAL;
   const int nv = def->vertex_count;
   const double r = def->radius;

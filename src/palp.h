@@ -43,9 +43,16 @@ typedef struct palp_vec3 {
  * holds `vertex_count` vertices on latitude rings; the rim ring lies on z = 0 and
  * is fixed. The flat base is closed with triangles between rim vertices only, so
  * the surface is a closed, consistently outward-oriented triangle mesh. */
+/* The largest mesh palp_mesh_create makes and a scene may ask for (mesh.vertex_count), and so
+ * the largest a palp-server publishes in its catalogue: the catalogue's readers take no larger
+ * (palp_dds_phantom_check, idl/, for the stations and palp-recorder; palp-web's bound). One
+ * constant, so that no reader refuses a mesh a server can publish (2026-12-06). A closed mesh
+ * of V vertices has 2V - 4 triangles. */
+#define PALP_MESH_MAX_VERTICES 200000
+
 typedef struct palp_mesh_def {
   double radius;    /* [m], default 0.04 (8.0 cm diameter) */
-  int vertex_count; /* default 338; any value from 19 to 200000 */
+  int vertex_count; /* default 338; any value from 19 to PALP_MESH_MAX_VERTICES */
 } palp_mesh_def;
 
 typedef struct palp_mesh {

@@ -502,7 +502,7 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_scene *s)
   if (s->world.mesh.radius < SCENE_RADIUS_MIN_M)
     return palp_parse_fail(c, PALP_EPARSE, "mesh.radius_m: must be >= %g m (got %g)", SCENE_RADIUS_MIN_M,
                            s->world.mesh.radius);
-  if ((e = get_int(c, mesh, "mesh.", "vertex_count", 1, 19, 200000, &s->world.mesh.vertex_count))) return e;
+  if ((e = get_int(c, mesh, "mesh.", "vertex_count", 1, 19, PALP_MESH_MAX_VERTICES, &s->world.mesh.vertex_count))) return e;
 
   const cJSON *params = cJSON_GetObjectItemCaseSensitive(root, "parameters");
   if (params) {

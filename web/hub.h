@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "coverage.h"
+#include "palp.h" /* PALP_MESH_MAX_VERTICES, a constant */
 #include "palp_dds_refusals.h"
 #include "palp_dds_security.h"
 #include "palp_log.h"
@@ -28,11 +29,12 @@
 #define PALP_WEB_MAX_PHANTOMS 16
 #define PALP_WEB_MAX_SESSIONS 64
 /* The largest catalogue mesh the bridge takes: the largest a palp-server can publish (a scene's
- * mesh.vertex_count, at most 200000 by palp_mesh_create; test_web_unit checks that the two agree) and
- * the triangles of a closed surface of that many vertices (2V - 4). The shipped phantoms have 338 and
+ * mesh.vertex_count, at most PALP_MESH_MAX_VERTICES by palp_mesh_create, the stations' and
+ * palp-recorder's bound too since 2026-12-06; test_web_unit checks that the mesh is made) and the
+ * triangles of a closed surface of that many vertices (2V - 4). The shipped phantoms have 338 and
  * 1300 vertices. A larger mesh is no server's: refused, its publisher named in the log once
  * (docs/web.md). */
-#define PALP_WEB_PHANTOM_MAX_VERTICES 200000
+#define PALP_WEB_PHANTOM_MAX_VERTICES PALP_MESH_MAX_VERTICES
 #define PALP_WEB_PHANTOM_MAX_TRIANGLES (2 * PALP_WEB_PHANTOM_MAX_VERTICES)
 
 typedef struct palp_web_hub_def {
