@@ -1347,6 +1347,14 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               ? find_session(srv, again->session_id)
                               : NULL;
   if (cur) {
+    /* From another writer: the station's participant was lost and found again, and Cyclone, which gave
+     * its writer a new handle, re-delivers the JOIN (its new sample wipes the pending not-alive one, so
+     * this JOIN is all the server sees). The station is that writer's now: left at the old handle, the
+     * old writer's unmatch made sweep_gone_writers declare a live station lost (until 2026-12-06).
+     * Secured, the sender was checked to own this station id before any JOIN (handle_requests). A
+     * writer already at stations_per_writer takes no more: that bound holds however a station came. */
+    if (again->writer != writer && stations_of_writer(srv, writer) < srv->cfg.stations_per_writer)
+      again->writer = writer;
     reply(srv, rq, cur, NULL);
     return;
   }
