@@ -128,37 +128,58 @@ bool palp_srv_admission_holds(palp_srv_admission *a, uint64_t iid) {
   return held;
 }
 
-/* Erases every instance of `writer`, and the writer. Its count says how many there are; each is
- * found by a fresh scan, as a backward-shift erase moves the entries after it. */
-static int release_writer(palp_srv_admission *a, uint64_t writer) {
-  entry *w = map_find(&a->writers, writer);
-  if (!w) return 0;
-  const int n = (int)w->val;
-  map_erase(&a->writers, w);
-  for (int k = 0; k < n; k++)
-    for (uint32_t i = 0; i <= a->instances.mask; i++)
-      if (a->instances.e[i].key != 0 && a->instances.e[i].val == writer) {
-        map_erase(&a->instances, &a->instances.e[i]);
-        a->count--;
-        break;
-      }
-  return n;
+/* A writer's count with this bit set: the writer is gone, its instances are being erased. Set and
+ * cleared under the lock, so the filter never sees it. */
+#define GONE_BIT (1ULL << 63)
+
+/* Erases the instances of the `n` writers gone[], and the writers; returns the instances erased.
+ * One pass over the instance map, each entry's writer looked up by hash: until 2026-12-06 each
+ * instance was found by a scan from slot 0, (instances x table size) probes, ~3.5e10 to empty the
+ * largest config's table. The pass stays on a slot it erased: the backward shift may have moved an
+ * entry not yet looked at into it. Entries only move back along their run, so one not yet looked at
+ * lands on this slot or a later one; one that wraps from the table's start to its end was looked at
+ * already (and kept). So one pass leaves none of a gone writer's. */
+static int release_writers(palp_srv_admission *a, const uint64_t *gone, int n) {
+  int marked = 0, released = 0;
+  for (int k = 0; k < n; k++) {
+    entry *w = map_find(&a->writers, gone[k]);
+    if (w && !(w->val & GONE_BIT)) w->val |= GONE_BIT, marked++;
+  }
+  if (!marked) return 0;
+  for (uint32_t i = 0; i <= a->instances.mask;) {
+    const entry *e = &a->instances.e[i];
+    const entry *w = e->key ? map_find(&a->writers, e->val) : NULL;
+    if (w && (w->val & GONE_BIT)) {
+      map_erase(&a->instances, &a->instances.e[i]);
+      released++;
+      continue; /* the same slot again */
+    }
+    i++;
+  }
+  for (int k = 0; k < n; k++) {
+    entry *w = map_find(&a->writers, gone[k]);
+    if (w) map_erase(&a->writers, w);
+  }
+  a->count -= released;
+  return released;
 }
 
 int palp_srv_admission_sweep(palp_srv_admission *a, int (*matched)(uint64_t writer, void *arg), void *arg) {
-  int n = 0, released = 0;
+  int n = 0, gone = 0;
   pthread_mutex_lock(&a->lock);
   for (uint32_t i = 0; i <= a->writers.mask && n < a->capacity; i++)
     if (a->writers.e[i].key != 0) a->swept[n++] = a->writers.e[i].key;
   pthread_mutex_unlock(&a->lock);
-  for (int k = 0; k < n; k++) {
+  /* Asked only now: every writer copied above was matched when it was admitted, so a `matched` that
+   * looks at the matched writers once, at its first call, still sees every one of them that lives. */
+  for (int k = 0; k < n; k++)
     /* Not matched now means gone for good (publication handles are never reused): it can send
      * nothing more, so no instance of it is let in twice. */
-    if (matched(a->swept[k], arg)) continue;
-    pthread_mutex_lock(&a->lock);
-    released += release_writer(a, a->swept[k]);
-    pthread_mutex_unlock(&a->lock);
-  }
+    if (!matched(a->swept[k], arg)) a->swept[gone++] = a->swept[k];
+  if (!gone) return 0;
+  pthread_mutex_lock(&a->lock);
+  const int released = release_writers(a, a->swept, gone);
+  pthread_mutex_unlock(&a->lock);
   return released;
 }
 

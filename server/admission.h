@@ -39,7 +39,9 @@ bool palp_srv_admission_holds(palp_srv_admission *a, uint64_t iid);
 /* [main thread] Releases the instances of every writer in the table for which `matched`
  * returns 0 (that writer is gone: it can admit nothing more). `matched` is called without the
  * table's lock held (it may take DDS's locks, which the receive thread holds while it calls the
- * filter). Returns the instances released. */
+ * filter), once per writer, all after the table's writers were copied: one that reads the matched
+ * writers at its first call (the server's, into a sorted set) sees every one that lives. The
+ * instances are erased in one pass over the table. Returns the instances released. */
 int palp_srv_admission_sweep(palp_srv_admission *a, int (*matched)(uint64_t writer, void *arg), void *arg);
 /* Instances refused by the filter since creation. */
 uint64_t palp_srv_admission_refused(palp_srv_admission *a);

@@ -144,6 +144,9 @@ struct palp_srv {
   /* A palp_session_request writer went away (the reader's matched count fell): when to look which
    * stations' writers are gone (sweep_gone_writers); 0: nothing pending. */
   int64_t writers_sweep_ns;
+  /* [main thread] The matched writers a sweep reads once (matched_set); grown as needed, kept. */
+  dds_instance_handle_t *matched;
+  size_t matched_cap;
 
   palp_srv_ticker *ticker;
   palp_srv_session **sessions; /* open sessions, [cfg.max_sessions] */
@@ -1590,12 +1593,63 @@ static int64_t next_gone_due(const palp_srv *srv) {
   return due;
 }
 
-/* Whether `writer` is matched with the request reader *arg now (palp_srv_admission_sweep). */
-static int writer_matched(uint64_t writer, void *arg) {
-  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(*(const dds_entity_t *)arg, writer);
+/* Whether `writer` is matched with `reader` now, asked alone: Cyclone walks the reader's matched writers and
+ * copies the one found's QoS. matched_has's way when it has no set. */
+static int writer_matched(dds_entity_t reader, uint64_t writer) {
+  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(reader, writer);
   if (!w) return 0;
   dds_builtintopic_free_endpoint(w);
   return 1;
+}
+
+/* A reader's matched writers as one sweep sees them: read at the first question (after the admission table's
+ * writers were copied, and after every station it asks about joined, so every writer of theirs that lives is
+ * in it), sorted, and each question a binary search. Until 2026-12-06 each table writer and each station was
+ * asked alone (writer_matched), (table writers + stations) x matched writers steps a sweep. */
+typedef struct matched_set {
+  palp_srv *srv;
+  dds_entity_t reader;
+  int loaded, alone; /* alone: the set could not be had (an error, no memory): writers asked alone */
+  size_t n;
+} matched_set;
+
+static int cmp_handle(const void *a, const void *b) {
+  const dds_instance_handle_t x = *(const dds_instance_handle_t *)a, y = *(const dds_instance_handle_t *)b;
+  return (x > y) - (x < y);
+}
+
+static void matched_load(matched_set *m) {
+  palp_srv *srv = m->srv;
+  m->loaded = 1;
+  for (;;) {
+    const dds_return_t n = dds_get_matched_publications(m->reader, srv->matched, srv->matched_cap);
+    if (n < 0) {
+      m->alone = 1;
+      return;
+    }
+    if ((size_t)n <= srv->matched_cap) {
+      m->n = (size_t)n;
+      break;
+    }
+    /* More than last time: room with some to spare, and asked again (more may have matched meanwhile). */
+    const size_t cap = (size_t)n + (size_t)n / 2 + 16;
+    dds_instance_handle_t *h = realloc(srv->matched, cap * sizeof *h);
+    if (!h) {
+      m->alone = 1;
+      return;
+    }
+    srv->matched = h, srv->matched_cap = cap;
+  }
+  qsort(srv->matched, m->n, sizeof *srv->matched, cmp_handle);
+}
+
+/* Whether `writer` is in the set *arg (palp_srv_admission_sweep's `matched`). */
+static int matched_has(uint64_t writer, void *arg) {
+  matched_set *m = arg;
+  if (!m->loaded) matched_load(m);
+  if (m->alone) return writer_matched(m->reader, writer);
+  const dds_instance_handle_t key = writer;
+  return bsearch(&key, m->srv->matched, m->n, sizeof key, cmp_handle) != NULL;
 }
 
 /* Whether the reader lost matched writers since the last call (its status' changes are read, and so
@@ -1630,8 +1684,10 @@ static void handle_station_requests(palp_srv *srv) {
   for (int i = 0; i < N; i++) ptr[i] = &buf[i];
   int n, taken = 0;
   /* A writer gone: its request instances leave the table (admission.h), and only then. */
-  if (srv->station_request_r > 0 && writers_unmatched(srv->station_request_r))
-    palp_srv_admission_sweep(srv->station_admission, writer_matched, &srv->station_request_r);
+  if (srv->station_request_r > 0 && writers_unmatched(srv->station_request_r)) {
+    matched_set m = {.srv = srv, .reader = srv->station_request_r};
+    palp_srv_admission_sweep(srv->station_admission, matched_has, &m);
+  }
   while (srv->station_request_r > 0 && taken < REQUESTS_PER_PASS &&
          (n = dds_take(srv->station_request_r, ptr, info, N, N)) > 0) {
     taken += n;
@@ -1719,10 +1775,11 @@ static void note_request_unmatches(palp_srv *srv, int64_t now_ns) {
 static void sweep_gone_writers(palp_srv *srv) {
   srv->writers_sweep_ns = 0;
   /* Their request instances leave the admission table, and only then (admission.h). */
-  palp_srv_admission_sweep(srv->admission, writer_matched, &srv->request_r);
+  matched_set m = {.srv = srv, .reader = srv->request_r}; /* one read of the matched writers for both */
+  palp_srv_admission_sweep(srv->admission, matched_has, &m);
   for (int i = 0; i < srv->station_slots; i++) {
     station *st = &srv->stations[i];
-    if (!st->in_use || st->keyed || !st->writer || writer_matched(st->writer, &srv->request_r)) continue;
+    if (!st->in_use || st->keyed || !st->writer || matched_has(st->writer, &m)) continue;
     station_leave(srv, st, "lost (its request writer is gone)"); /* may free other slots: each is checked */
   }
 }
@@ -2404,6 +2461,7 @@ void palp_srv_destroy(palp_srv *srv) {
   /* After the participant: the request filter (which uses the admission table)
    * can no longer run. */
   palp_srv_admission_destroy(srv->admission);
+  free(srv->matched);
   palp_srv_admission_destroy(srv->station_admission);
   palp_srv_retire_free(&srv->retire);
   if (srv->dds_log_installed) palp_dds_log_limit_remove(&srv->dds_log);
