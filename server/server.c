@@ -65,6 +65,12 @@ typedef struct station {
  * hold the main thread; the rest wait in the reader, whose read condition wakes the next pass. */
 #define REQUESTS_PER_PASS 64
 
+/* How long past its due time the writers sweep (sweep_gone_writers) waits for a pass that drains the
+ * request reader: traffic of REQUESTS_PER_PASS or more a pass drains none, and until 2026-12-06 the
+ * sweep then never ran (no loss found, no admission released for as long as the traffic lasted). Past
+ * it a station whose LEAVE is still queued is said lost rather than left: the lesser harm. */
+#define SWEEP_OVERDUE_NS 1000000000LL
+
 #define SCORES_KEPT 64 /* palp_session_score instances kept for late dashboards */
 #define TOLD_KEPT 16   /* palp_debrief_score: practice sessions awaiting their score, writers kept */
 
@@ -1885,8 +1891,12 @@ static void handle_requests(palp_srv *srv) {
     }
     if (n < N) break;
   }
-  /* Drained (the last take came short): whatever a gone writer sent before it went has been taken. */
-  if (n < N && srv->writers_sweep_ns && palp_dds_now_ns() >= srv->writers_sweep_ns) sweep_gone_writers(srv);
+  /* Drained (the last take came short): whatever a gone writer sent before it went has been taken. Or
+   * overdue: the reader is not drained in time (SWEEP_OVERDUE_NS). */
+  const int64_t now = palp_dds_now_ns();
+  if (srv->writers_sweep_ns && now >= srv->writers_sweep_ns &&
+      (n < N || now - srv->writers_sweep_ns >= SWEEP_OVERDUE_NS))
+    sweep_gone_writers(srv);
 }
 
 /* [receive thread] The request topics' filter: see admission.h. arg: that topic's admission
