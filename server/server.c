@@ -65,7 +65,7 @@ typedef struct station {
  * hold the main thread; the rest wait in the reader, whose read condition wakes the next pass. */
 #define REQUESTS_PER_PASS 64
 
-/* How long past its due time the writers sweep (sweep_gone_writers) waits for a pass that drains the
+/* How long past its first due time the writers sweep (sweep_gone_writers) waits for a pass that drains the
  * request reader: traffic of REQUESTS_PER_PASS or more a pass drains none, and until 2026-12-06 the
  * sweep then never ran (no loss found, no admission released for as long as the traffic lasted). Past
  * it a station whose LEAVE is still queued is said lost rather than left: the lesser harm. */
@@ -150,6 +150,8 @@ struct palp_srv {
   /* A palp_session_request writer went away (the reader's matched count fell): when to look which
    * stations' writers are gone (sweep_gone_writers); 0: nothing pending. */
   int64_t writers_sweep_ns;
+  int64_t writers_sweep_first_ns; /* its due time as first set: later unmatches move it no further than
+                                     SWEEP_OVERDUE_NS past this */
   /* [main thread] The matched writers a sweep reads once (matched_set); grown as needed, kept. */
   dds_instance_handle_t *matched;
   size_t matched_cap;
@@ -1775,7 +1777,14 @@ static void note_request_stray(palp_srv *srv, dds_instance_handle_t writer) {
  * leaves rather than being lost. Keyed stations (palp_station_request, plain DDS only) keep their own
  * rule (station_gone_later): there any writer's dispose ends the station. */
 static void note_request_unmatches(palp_srv *srv, int64_t now_ns) {
-  if (writers_unmatched(srv->request_r) && !srv->writers_sweep_ns) srv->writers_sweep_ns = now_ns + GONE_GRACE_NS;
+  if (!writers_unmatched(srv->request_r)) return;
+  /* Every writer that goes gets its GONE_GRACE_NS: a pending sweep is put off to give it (until
+   * 2026-12-06 one that unmatched just before the due time got almost none, and a departing viewer was
+   * said lost rather than left). A churn of writers puts it off no more than SWEEP_OVERDUE_NS past its
+   * first due time (handle_requests). */
+  const int64_t due = now_ns + GONE_GRACE_NS;
+  if (!srv->writers_sweep_ns) srv->writers_sweep_first_ns = due;
+  if (due > srv->writers_sweep_ns) srv->writers_sweep_ns = due;
 }
 
 static void sweep_gone_writers(palp_srv *srv) {
@@ -1892,10 +1901,11 @@ static void handle_requests(palp_srv *srv) {
     if (n < N) break;
   }
   /* Drained (the last take came short): whatever a gone writer sent before it went has been taken. Or
-   * overdue: the reader is not drained in time (SWEEP_OVERDUE_NS). */
+   * overdue: the reader not drained, or the sweep put off by writer after writer (SWEEP_OVERDUE_NS
+   * past its first due time). */
   const int64_t now = palp_dds_now_ns();
-  if (srv->writers_sweep_ns && now >= srv->writers_sweep_ns &&
-      (n < N || now - srv->writers_sweep_ns >= SWEEP_OVERDUE_NS))
+  if (srv->writers_sweep_ns && ((n < N && now >= srv->writers_sweep_ns) ||
+                                now - srv->writers_sweep_first_ns >= SWEEP_OVERDUE_NS))
     sweep_gone_writers(srv);
 }
 
