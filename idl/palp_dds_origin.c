@@ -5,14 +5,54 @@
 
 #include <string.h>
 
-_Static_assert((PALP_DDS_ORIGIN_WRITERS & (PALP_DDS_ORIGIN_WRITERS - 1)) == 0, "a power of two");
+_Static_assert((PALP_DDS_ORIGIN_SETS & (PALP_DDS_ORIGIN_SETS - 1)) == 0, "a power of two");
+_Static_assert(PALP_DDS_ORIGIN_SETS * PALP_DDS_ORIGIN_WAYS == PALP_DDS_ORIGIN_WRITERS, "whole sets");
 
 void palp_dds_origin_init(palp_dds_origin *o) { memset(o, 0, sizeof *o); }
 
-/* Fibonacci hashing of the 64-bit handle onto the table (handles are counters with a random base:
+/* Fibonacci hashing of the 64-bit handle onto the sets (handles are counters with a random base:
  * their high bits say little). */
-static size_t slot_of(dds_instance_handle_t pub) {
-  return (size_t)((pub * 0x9E3779B97F4A7C15ull) >> 40) & (PALP_DDS_ORIGIN_WRITERS - 1);
+static palp_dds_origin_writer *set_of(palp_dds_origin *o, dds_instance_handle_t pub, size_t *set) {
+  *set = (size_t)((pub * 0x9E3779B97F4A7C15ull) >> 40) & (PALP_DDS_ORIGIN_SETS - 1);
+  return &o->w[*set * PALP_DDS_ORIGIN_WAYS];
+}
+
+const palp_dds_origin_writer *palp_dds_origin_find(palp_dds_origin *o, dds_instance_handle_t pub) {
+  if (pub == 0) return NULL;
+  size_t k;
+  palp_dds_origin_writer *e = set_of(o, pub, &k);
+  for (int i = 0; i < PALP_DDS_ORIGIN_WAYS; i++)
+    if (e[i].pub == pub) {
+      e[i].used = 1;
+      return &e[i];
+    }
+  return NULL;
+}
+
+const palp_dds_origin_writer *palp_dds_origin_put(palp_dds_origin *o, dds_instance_handle_t pub,
+                                                  dds_instance_handle_t participant, const char *partition) {
+  if (pub == 0) return NULL;
+  size_t k;
+  palp_dds_origin_writer *e = set_of(o, pub, &k), *slot = NULL;
+  for (int i = 0; i < PALP_DDS_ORIGIN_WAYS && !slot; i++)
+    if (e[i].pub == 0 || e[i].pub == pub) slot = &e[i];
+  /* Full: the first the hand finds not used since it last passed (it clears those it passes), so a
+   * writer whose samples keep coming stays and one seen once goes; at most two turns. */
+  while (!slot) {
+    palp_dds_origin_writer *c = &e[o->hand[k]];
+    o->hand[k] = (uint8_t)((o->hand[k] + 1) % PALP_DDS_ORIGIN_WAYS);
+    if (c->used) c->used = 0;
+    else {
+      slot = c;
+      o->evictions++;
+    }
+  }
+  slot->pub = pub;
+  slot->participant = participant;
+  slot->partition[0] = '\0';
+  if (partition && strlen(partition) < PALP_DDS_ORIGIN_PARTITION) memcpy(slot->partition, partition, strlen(partition) + 1);
+  slot->used = 0; /* new: it earns its keep by being found again */
+  return slot;
 }
 
 /* The writer's one partition as discovery announced it: a publisher in several partitions (or a
@@ -30,25 +70,18 @@ static void partition_of(const dds_builtintopic_endpoint_t *ep, char *out) {
 
 static const palp_dds_origin_writer *lookup(palp_dds_origin *o, dds_entity_t reader, dds_instance_handle_t pub) {
   if (pub == 0) return NULL;
-  size_t i = slot_of(pub);
-  for (; o->w[i].pub != 0; i = (i + 1) & (PALP_DDS_ORIGIN_WRITERS - 1))
-    if (o->w[i].pub == pub) return &o->w[i];
+  const palp_dds_origin_writer *w = palp_dds_origin_find(o, pub);
+  if (w) return w;
   /* Not cached: ask the reader, which knows its matched writers (a writer already gone is
    * unknown: its samples are not vouched for). */
   dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(reader, pub);
   o->lookups++;
   if (!ep) return NULL;
-  if (o->used >= PALP_DDS_ORIGIN_WRITERS / 4 * 3) { /* a flood of writers: start over */
-    memset(o->w, 0, sizeof o->w);
-    o->used = 0;
-    i = slot_of(pub);
-  }
-  o->w[i].pub = pub;
-  o->w[i].participant = ep->participant_instance_handle;
-  partition_of(ep, o->w[i].partition);
-  o->used++;
+  char partition[PALP_DDS_ORIGIN_PARTITION];
+  partition_of(ep, partition);
+  w = palp_dds_origin_put(o, pub, ep->participant_instance_handle, partition);
   dds_builtintopic_free_endpoint(ep);
-  return &o->w[i];
+  return w;
 }
 
 palp_dds_origin_verdict palp_dds_origin_check(palp_dds_origin *o, dds_entity_t reader, const dds_sample_info_t *info,

@@ -79,6 +79,7 @@
  * session's next state tells (the server writes one each second). Then it is logged in that state's
  * session, in the order the samples came, contacts at the rate they came (their arrival times). */
 #define STATION_WRITERS 8
+#define SERVER_WRITERS 16 /* a run writes a session's 8 server topics; a new run's 8 more before its state */
 #define RETIRED_WRITERS 256
 #define MAX_HELD 4096
 #define HELD_BYTES_MAX (16 << 20) /* a deformation is a whole mesh: ~60 kB for the default dome */
@@ -164,6 +165,10 @@ typedef struct rsession {
   int64_t start_ns;                 /* palp_dds_now_ns() - its duration, at its first state */
   dds_instance_handle_t state_writer; /* of its states (0: not known) */
   dds_instance_handle_t run;          /* its state writer's participant: its server run (0: not known) */
+  /* The server writers its samples came from, with each one's participant (its run): a known writer's
+   * samples (local models up to 1 kHz) consult no cache (server_run_of); the oldest forgotten when full. */
+  dds_instance_handle_t server_writer[SERVER_WRITERS], server_run[SERVER_WRITERS];
+  int server_writers, server_next;
   /* Its station's contact and finding writers (RD_CONTACT, RD_FINDING), as taken (route_sample). */
   dds_instance_handle_t station_writer[STATION_WRITERS];
   uint8_t station_kind[STATION_WRITERS];
@@ -248,6 +253,9 @@ typedef struct recorder {
   dds_instance_handle_t retired[RETIRED_WRITERS];
   int retired_next;
   int64_t ended_writer_samples;
+  /* Server samples whose writer's run was looked up in the origin cache (server_run_of): each writer's
+   * first in its session, not each sample. */
+  int64_t origin_consults;
 } recorder;
 
 /* A session opens or ends in this log: its streams pass the gate as long as it is open here. Ended,
@@ -1484,6 +1492,28 @@ static void expire_held(recorder *r, int64_t now_ns) {
   r->nheld = kept;
 }
 
+/* The run (participant) of a server sample's writer: from its session's record when the writer wrote
+ * there before, else from the origin cache, then remembered there. Every server sample asked the cache
+ * until 2026-12-06: ~8 writers a session overflowed it past ~100 sessions, nearly every sample then
+ * missed and asked DDS (dds_get_matched_publication_data), and the recorder fell behind its
+ * best-effort topics. A writer's participant never changes, so what the record says stays true. */
+static dds_instance_handle_t server_run_of(recorder *r, rsession *s, dds_entity_t reader,
+                                           const dds_sample_info_t *info) {
+  const dds_instance_handle_t w = info->publication_handle;
+  if (s && w)
+    for (int i = 0; i < s->server_writers; i++)
+      if (s->server_writer[i] == w) return s->server_run[i];
+  r->origin_consults++;
+  const dds_instance_handle_t run = palp_dds_origin_participant(&r->origin, reader, info);
+  if (s && w && run) { /* unknown (0): asked again next time, as it may be known then */
+    const int i = s->server_writers < SERVER_WRITERS ? s->server_writers++ : s->server_next;
+    if (s->server_writers == SERVER_WRITERS) s->server_next = (i + 1) % SERVER_WRITERS;
+    s->server_writer[i] = w;
+    s->server_run[i] = run;
+  }
+  return run;
+}
+
 /* A sample of a session's stream, as taken from `reader`: routed (route_sample), then logged, held or
  * dropped. */
 static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const void *m,
@@ -1493,10 +1523,14 @@ static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const 
   if (kind == RD_CONTACT || kind == RD_FINDING || kind == RD_FEEDBACK || kind == RD_DEFORMATION)
     resolve_pending(r, sid, 1);
   const int station = station_topic(kind);
-  const dds_instance_handle_t run = station ? 0 : palp_dds_origin_participant(&r->origin, reader, info);
-  const char *from = station ? palp_dds_origin_partition(&r->origin, reader, info) : NULL;
-  const rsession *s = station ? find_session(r, sid, 0) : NULL;
-  const palp_dds_origin_verdict v = s && s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
+  rsession *s = find_session(r, sid, 0);
+  const dds_instance_handle_t run = station ? 0 : server_run_of(r, s, reader, info);
+  /* a station writer taken as the session's was taken for writing in its partition (route_sample) */
+  const char *from = !station                                          ? NULL
+                     : s && station_writer_of(s, info->publication_handle) ? s->partition
+                                                                          : palp_dds_origin_partition(&r->origin, reader, info);
+  const palp_dds_origin_verdict v =
+      station && s && s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
   switch (route_sample(r, kind, sid, info->publication_handle, run, v)) {
   case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from); break;
   case ROUTE_HOLD: hold(r, kind, m, info->publication_handle, run, from); break;
@@ -1838,11 +1872,13 @@ int main(int argc, char **argv) {
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
           "%lld of a writer outside their session's partition, %lld samples from a station writer of a session "
           "that had ended, %lld held for the state of their run (%lld held samples dropped: it did not come), %lld "
+          "server samples' writers looked up in the origin cache (%lld writers asked of DDS, %lld forgotten), %lld "
           "disposes of finding keys of sessions never heard open (the findings reader made anew %lld times), %lld "
           "exercises refused, %lld catalogue entries refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
           (long long)r->foreign_samples, (long long)r->ended_writer_samples, (long long)r->held_total,
-          (long long)(r->held_dropped + r->nheld), (long long)(r->finding_strays_total + r->finding_strays),
+          (long long)(r->held_dropped + r->nheld), (long long)r->origin_consults, (long long)r->origin.lookups,
+          (long long)r->origin.evictions, (long long)(r->finding_strays_total + r->finding_strays),
           (long long)r->finding_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,
           st.last_error[0] ? "; last error: " : "",
           st.last_error);

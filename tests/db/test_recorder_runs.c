@@ -283,6 +283,11 @@ int main(int argc, char **argv) {
   sqlite3_close(h);
   const long long ended = stop_count(logf, "samples from a station writer of a session that had ended"),
                   dropped = stop_count(logf, "held samples dropped");
+  /* Each server writer's run is looked up once per session it writes in (its session's record then
+   * knows it): run 1's feedback writer in old41, run 2's in old41 (its 10 early frames, held) and in
+   * new41, the stray writer in 43; every one of their 65 frames asked the origin cache until 2026-12-06. */
+  const long long consults = stop_count(logf, "server samples' writers looked up in the origin cache");
+  CHECK(consults == 4, "server writers' runs looked up once per writer and session: 4 (%lld)", consults);
   CHECK(ended == 5 && dropped == 5,
         "run 1's station's 5 contacts after its session ended are counted, not logged (%lld); the 5 stray frames "
         "of session 43 counted as held samples dropped, and no other (%lld)", ended, dropped);
