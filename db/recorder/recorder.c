@@ -81,6 +81,9 @@
 #define STATION_WRITERS 8
 #define SERVER_WRITERS 16 /* a run writes a session's 8 server topics; a new run's 8 more before its state */
 #define RETIRED_WRITERS 256
+/* Runs of a session id that have ended, with their writers (ended_run): a late sample of one is dropped,
+ * not held for a state that never comes. Up to 17 entries a session end (its run, its run's writers). */
+#define ENDED_RUNS 2048
 #define MAX_HELD 4096
 #define HELD_BYTES_MAX (16 << 20) /* a deformation is a whole mesh: ~60 kB for the default dome */
 #define HELD_WAIT_NS (RECORDER_SERVER_GRACE + DDS_SECS(1)) /* the old run's grace, and its new run's state */
@@ -222,6 +225,12 @@ typedef struct held_sample {
   void *sample;                     /* one block (held_copy) */
 } held_sample;
 
+/* A session's run that ended (set_open): its server's participant, and one of its writers (0: the run). */
+typedef struct ended_run {
+  uint32_t session_id;
+  dds_instance_handle_t run, writer;
+} ended_run;
+
 typedef struct recorder {
   palp_db_writer *w;
   public_exercise pex[MAX_PHANTOMS];
@@ -253,6 +262,10 @@ typedef struct recorder {
   dds_instance_handle_t retired[RETIRED_WRITERS];
   int retired_next;
   int64_t ended_writer_samples;
+  /* Runs (and their server writers) of sessions that ended here: a late sample of one is no session's. */
+  ended_run ended[ENDED_RUNS];
+  int ended_next;
+  int64_t earlier_run_samples;
   /* Server samples whose writer's run was looked up in the origin cache (server_run_of): each writer's
    * first in its session, not each sample. */
   int64_t origin_consults;
@@ -265,6 +278,13 @@ static void set_open(recorder *r, rsession *s, int open) {
   s->open = open;
   palp_dds_gate_set(&r->gate, (int)(s - r->s), open ? s->id : 0);
   if (open) return;
+  /* Its run's writers by handle too: a late sample of a writer no longer matched has no known
+   * participant (palp_dds_origin_participant: 0), and would otherwise be logged in the id's next session. */
+  for (int i = -1; i < s->server_writers && s->run; i++) {
+    if (i >= 0 && s->server_run[i] != s->run) continue; /* a new run's, held while this one ran */
+    r->ended[r->ended_next] = (ended_run){.session_id = s->id, .run = s->run, .writer = i < 0 ? 0 : s->server_writer[i]};
+    r->ended_next = (r->ended_next + 1) % ENDED_RUNS;
+  }
   for (int i = 0; i < s->station_writers; i++) {
     r->retired[r->retired_next] = s->station_writer[i];
     r->retired_next = (r->retired_next + 1) % RETIRED_WRITERS;
@@ -1283,11 +1303,25 @@ static int retired(const recorder *r, dds_instance_handle_t w) {
   return 0;
 }
 
-/* A server's samples held for s's id from a run other than s's: a new run of its server has begun. */
+/* Whether a server sample of s's id (its writer's participant `run`, 0: not known) comes from a run of
+ * s's id that ended here before s: a dead run's sample that came late. */
+static int earlier_run(const recorder *r, const rsession *s, dds_instance_handle_t run, dds_instance_handle_t writer) {
+  if (run && run == s->run) return 0;
+  for (int i = 0; i < ENDED_RUNS; i++) {
+    const ended_run *e = &r->ended[i];
+    if (e->session_id == s->id && e->run != s->run && ((run && e->run == run) || (!run && writer && e->writer == writer)))
+      return 1;
+  }
+  return 0;
+}
+
+/* A server's samples held for s's id from a run other than s's and none that ended before it: a new run
+ * of its server has begun. */
 static int other_run_held(const recorder *r, const rsession *s) {
   for (int i = 0; i < r->nheld; i++) {
     const held_sample *h = &r->held[i];
-    if (h->session_id == s->id && h->run && s->run && h->run != s->run) return 1;
+    if (h->session_id == s->id && h->run && s->run && h->run != s->run && !earlier_run(r, s, h->run, h->writer))
+      return 1;
   }
   return 0;
 }
@@ -1313,7 +1347,7 @@ static palp_dds_origin_verdict origin_of(const char *from, const char *partition
   return from[0] && !strcmp(from, partition) ? PALP_DDS_ORIGIN_SAME : PALP_DDS_ORIGIN_OTHER;
 }
 
-typedef enum route { ROUTE_LOG, ROUTE_HOLD, ROUTE_DROP } route;
+typedef enum route { ROUTE_LOG, ROUTE_HOLD, ROUTE_DROP, ROUTE_EARLIER } route;
 
 /* Where a sample of session sid goes (writer: its writer, run: a server sample's writer's participant,
  * v: a station sample's writer's partition against the open session's): logged now (in the session open
@@ -1323,7 +1357,13 @@ static route route_sample(recorder *r, int kind, uint32_t sid, dds_instance_hand
                           palp_dds_origin_verdict v) {
   rsession *s = find_session(r, sid, 0);
   if (!s) return ROUTE_LOG;
-  if (!station_topic(kind)) return !run || !s->run || run == s->run ? ROUTE_LOG : ROUTE_HOLD;
+  if (!station_topic(kind)) {
+    if (run && run == s->run) return ROUTE_LOG;
+    /* a dead run's, late: held, it waited for a state that never comes, and meanwhile held every new
+     * station writer's samples (other_run_held); its participant unknown, it was logged in this session */
+    if (earlier_run(r, s, run, writer)) return ROUTE_EARLIER;
+    return !run || !s->run ? ROUTE_LOG : ROUTE_HOLD;
+  }
   if (!writer || station_writer_of(s, writer)) return ROUTE_LOG;
   if (retired(r, writer)) return ROUTE_DROP;
   /* its server lapsed (back, or a new run, the next state tells), a new run began, or this writer's
@@ -1451,6 +1491,9 @@ static void release_held(recorder *r, uint32_t sid) {
     if (station_topic(h->kind) && retired(r, h->writer)) {
       r->ended_writer_samples++;
       dropped++;
+    } else if (!station_topic(h->kind) && earlier_run(r, s, h->run, h->writer)) {
+      r->earlier_run_samples++;
+      dropped++;
     } else {
       const char *from = h->from_known ? h->from : NULL;
       const palp_dds_origin_verdict v = s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
@@ -1466,7 +1509,7 @@ static void release_held(recorder *r, uint32_t sid) {
   r->releasing = 0;
   if (logged || dropped)
     palp_log_info(r->log, "session %u: %d samples held until the state of their run came logged in its session%s", sid,
-                  logged, dropped ? " (and some of an ended session's station writer dropped)" : "");
+                  logged, dropped ? " (and some of an ended session's writers dropped)" : "");
 }
 
 /* Held samples whose run's state did not come within HELD_WAIT_NS: dropped, said once per session a pass. */
@@ -1534,6 +1577,11 @@ static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const 
   switch (route_sample(r, kind, sid, info->publication_handle, run, v)) {
   case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from); break;
   case ROUTE_HOLD: hold(r, kind, m, info->publication_handle, run, from); break;
+  case ROUTE_EARLIER:
+    if (r->earlier_run_samples++ == 0)
+      palp_log_warn(r->log, "session %u: a %s from a run of its server that had ended (it came late): not recorded, "
+                            "nor any such sample (counted at the stop)", sid, topic_word(kind));
+    break;
   default:
     if (r->ended_writer_samples++ == 0)
       palp_log_warn(r->log, "session %u: a %s from a station writer of a session that had ended (its station not yet "
@@ -1871,12 +1919,13 @@ int main(int argc, char **argv) {
   palp_log_info(&plog,
           "stopped; %lld records written, %lld shed, %lld failed, %lld samples of unknown sessions, "
           "%lld of a writer outside their session's partition, %lld samples from a station writer of a session "
-          "that had ended, %lld held for the state of their run (%lld held samples dropped: it did not come), %lld "
+          "that had ended, %lld samples from an earlier run of their session's server, %lld held for the state of their run (%lld held samples dropped: it did not come), %lld "
           "server samples' writers looked up in the origin cache (%lld writers asked of DDS, %lld forgotten), %lld "
           "disposes of finding keys of sessions never heard open (the findings reader made anew %lld times), %lld "
           "exercises refused, %lld catalogue entries refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
-          (long long)r->foreign_samples, (long long)r->ended_writer_samples, (long long)r->held_total,
+          (long long)r->foreign_samples, (long long)r->ended_writer_samples, (long long)r->earlier_run_samples,
+          (long long)r->held_total,
           (long long)(r->held_dropped + r->nheld), (long long)r->origin_consults, (long long)r->origin.lookups,
           (long long)r->origin.evictions, (long long)(r->finding_strays_total + r->finding_strays),
           (long long)r->finding_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,

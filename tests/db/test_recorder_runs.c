@@ -23,6 +23,11 @@
  *  - session 43: its server's state writer is the one of 42's first run; a participant that never
  *    writes a state of 43 (no run of its server) sends 5 feedback frames for it: held, never logged
  *    in session 43 (0 frames), dropped at the stop, the only held samples dropped (the stop line: 5);
+ *  - session 44 (2026-12-06): its first run is 42's (not seen dead) and sends 10 frames; run 2 opens 44
+ *    anew; then 3 late frames of run 1's feedback writer come, then run 2's station (W5, a writer new to
+ *    44) sends 5 contacts. Expected: old44 10 frames; new44 none of the late 3 (dropped, counted as an
+ *    earlier run's: they were held for a state that never comes), and W5's 5 contacts (they were held
+ *    behind the late frames, then dropped with them);
  *  - the recorder exits 0.
  * The counts are exact: loopback, best effort but at 12 ms intervals (a lost sample would show as
  * one fewer, never as one in the wrong session). */
@@ -98,6 +103,13 @@ static run run_start(void) {
   return u;
 }
 
+/* A server writer of `kind` in session id's partition. */
+static dds_entity_t server_writer(dds_entity_t pp, uint32_t id, palp_dds_topic_kind kind) {
+  char part[64];
+  palp_dds_session_partition(id, part, sizeof part);
+  return palp_dds_create_writer(palp_dds_session_publisher(pp, part), palp_dds_create_topic(pp, kind), kind);
+}
+
 /* A station: a participant with a contact writer in session id's partition. */
 static dds_entity_t station(dds_entity_t *pp, uint32_t id) {
   if (!*pp) *pp = dds_create_participant(DOMAIN, NULL, NULL);
@@ -166,9 +178,10 @@ int main(int argc, char **argv) {
   dds_entity_t a1 = dds_create_participant(DOMAIN, NULL, NULL);
   dds_entity_t a1_state =
       palp_dds_create_writer(a1, palp_dds_create_topic(a1, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  dds_entity_t a1_fb44 = server_writer(a1, 44, PALP_TOPIC_FEEDBACK);
   dds_entity_t s1 = 0, s2 = 0;
   dds_entity_t w1 = station(&s1, 41), w3 = station(&s1, 42);
-  const dds_entity_t first[] = {w_cat, r1.state, r1.fb41, a1_state, w1, w3};
+  const dds_entity_t first[] = {w_cat, r1.state, r1.fb41, a1_state, a1_fb44, w1, w3};
   for (size_t k = 0; k < sizeof first / sizeof first[0]; k++)
     REQUIRE(wait_matched(first[k], 1, 20) == 0, "writer %zu never matched the recorder", k);
 
@@ -184,15 +197,18 @@ int main(int argc, char **argv) {
   state(r1.state, 41, "old41", 0, 0, 0);
   state(a1_state, 42, "old42", 0, 0, 0);
   state(a1_state, 43, "s43", 0, 0, 0);
+  state(a1_state, 44, "old44", 0, 0, 0);
   sleep_ms(300);
   for (int k = 0; k < 20; k++) {
     feedback(r1.fb41, 41, (uint64_t)k + 1);
+    if (k < 10) feedback(a1_fb44, 44, (uint64_t)k + 1);
     contact(w1, 41, k);
     if (k < 10) contact(w3, 42, k);
     sleep_ms(12);
   }
   state(r1.state, 41, "old41", 0, 0.5, 50); /* its 1 Hz refresh */
   state(a1_state, 42, "old42", 0, 0.5, 50);
+  state(a1_state, 44, "old44", 0, 0.5, 50);
   sleep_ms(300);
   dds_delete(r1.pp); /* session 41's server dies */
   REQUIRE(wait_log(logf, "session 41: its server's state lapsed", 10) == 0,
@@ -200,8 +216,8 @@ int main(int argc, char **argv) {
 
   /* ---- run 2: its stations' contacts and its frames before its OPEN state ---- */
   run r2 = run_start();
-  dds_entity_t w2 = station(&s2, 41), w4 = station(&s2, 42);
-  const dds_entity_t second[] = {r2.state, r2.fb41, w2, w4};
+  dds_entity_t w2 = station(&s2, 41), w4 = station(&s2, 42), w5 = station(&s2, 44);
+  const dds_entity_t second[] = {r2.state, r2.fb41, w2, w4, w5};
   for (size_t k = 0; k < sizeof second / sizeof second[0]; k++)
     REQUIRE(wait_matched(second[k], 1, 20) == 0, "run 2's writer %zu never matched the recorder", k);
   /* The writers see the recorder's readers before those see them, and a reader drops what a writer it
@@ -216,7 +232,12 @@ int main(int argc, char **argv) {
   sleep_ms(300); /* all taken by the recorder before the state is written */
   state(r2.state, 41, "new41", 0, 0.4, 40);
   state(r2.state, 42, "new42", 0, 0.4, 40);
+  state(r2.state, 44, "new44", 0, 0.4, 40);
   sleep_ms(300);
+  /* run 1's late frames of 44, after run 2's OPEN of it; then run 2's station's first contacts */
+  for (int k = 0; k < 3; k++) feedback(a1_fb44, 44, (uint64_t)k + 11), sleep_ms(12);
+  sleep_ms(300);
+  for (int k = 0; k < 5; k++) contact(w5, 44, k), sleep_ms(12);
   for (int k = 0; k < 10; k++) {
     contact(w2, 41, 130 + k);
     feedback(r2.fb41, 41, (uint64_t)k + 11);
@@ -237,6 +258,7 @@ int main(int argc, char **argv) {
   state(r2.state, 41, "new41", 1, 1.0, 100);
   state(r2.state, 42, "new42", 1, 1.0, 100);
   state(a1_state, 43, "s43", 1, 1.0, 100);
+  state(r2.state, 44, "new44", 1, 1.0, 100);
   sleep_ms(600);
   int status;
   const int exited_0 = stop_recorder(pid, &status);
@@ -279,15 +301,25 @@ int main(int argc, char **argv) {
             db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 's43' AND end_reason = 'normal'") == 1,
         "session 43: none of the 5 frames from a participant that is none of its server's runs (%lld), ended normal",
         (long long)db_scalar(h, FRAMES("s43")));
+  CHECK(db_scalar(h, FRAMES("old44")) == 10 && db_scalar(h, FRAMES("new44")) == 0 &&
+            db_scalar(h, CONTACTS("new44")) == 5 &&
+            db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'new44' AND end_reason = 'normal'") == 1,
+        "session 44: run 1's 10 frames in its session (%lld), none of its 3 late ones in run 2's (%lld), and run 2's "
+        "station's 5 contacts, not held behind them (%lld)",
+        (long long)db_scalar(h, FRAMES("old44")), (long long)db_scalar(h, FRAMES("new44")),
+        (long long)db_scalar(h, CONTACTS("new44")));
   CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE end_unix_s IS NULL") == 0, "every session ended");
   sqlite3_close(h);
   const long long ended = stop_count(logf, "samples from a station writer of a session that had ended"),
                   dropped = stop_count(logf, "held samples dropped");
   /* Each server writer's run is looked up once per session it writes in (its session's record then
    * knows it): run 1's feedback writer in old41, run 2's in old41 (its 10 early frames, held) and in
-   * new41, the stray writer in 43; every one of their 65 frames asked the origin cache until 2026-12-06. */
+   * new41, the stray writer in 43; run 1's in old44 and (late) in new44; every one of their 78 frames
+   * asked the origin cache until 2026-12-06. */
   const long long consults = stop_count(logf, "server samples' writers looked up in the origin cache");
-  CHECK(consults == 4, "server writers' runs looked up once per writer and session: 4 (%lld)", consults);
+  CHECK(consults == 6, "server writers' runs looked up once per writer and session: 6 (%lld)", consults);
+  const long long earlier = stop_count(logf, "samples from an earlier run of their session's server");
+  CHECK(earlier == 3, "session 44's 3 late frames of its ended run dropped, counted (%lld)", earlier);
   CHECK(ended == 5 && dropped == 5,
         "run 1's station's 5 contacts after its session ended are counted, not logged (%lld); the 5 stray frames "
         "of session 43 counted as held samples dropped, and no other (%lld)", ended, dropped);
