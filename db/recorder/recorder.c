@@ -87,6 +87,10 @@
 #define MAX_HELD 4096
 #define HELD_BYTES_MAX (16 << 20) /* a deformation is a whole mesh: ~60 kB for the default dome */
 #define HELD_WAIT_NS (RECORDER_SERVER_GRACE + DDS_SECS(1)) /* the old run's grace, and its new run's state */
+/* A station sample held for a session id that came this much before the session opening for it began
+ * (its OPEN state's duration back) is an earlier session's: a station joins a session after its server
+ * made it. The margin: the state's own latency makes that start a little late. */
+#define HELD_BEFORE_START_NS 250000000LL
 
 /* The readers, in the order a pass takes them: catalogue and state first, so that a session's samples
  * find it open; its exercise before its findings; the debrief last. The finger samples before the
@@ -191,6 +195,7 @@ typedef struct pending_open {
   palp_SessionState state;
   dds_instance_handle_t writer, run; /* its state writer and that writer's participant */
   dds_time_t since;
+  int64_t seen_ns; /* palp_dds_now_ns() as its state was taken: its duration was its age then */
 } pending_open;
 #define MAX_PENDING 64
 #define PENDING_WAIT DDS_SECS(2)
@@ -610,8 +615,12 @@ static int64_t held_since(const recorder *r, uint32_t session_id);
 static void release_held(recorder *r, uint32_t session_id);
 
 /* writer: its state's writer, run: that writer's participant (0: not known). */
+static void retire(recorder *r, dds_instance_handle_t w);
+static int station_topic(int kind);
+
+/* seen_ns: palp_dds_now_ns() as the state was taken. */
 static void open_session(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer,
-                         dds_instance_handle_t run) {
+                         dds_instance_handle_t run, int64_t seen_ns) {
   rsession *s = find_session(r, m->session_id, 1);
   {
     if (!s || s->open) return; /* already recording (transient-local re-delivery) */
@@ -644,7 +653,16 @@ static void open_session(recorder *r, const palp_SessionState *m, dds_instance_h
     s->tick_hz = hz;
     s->last_duration = m->duration;
     s->last_ticks = m->ticks;
-    s->start_ns = palp_dds_now_ns() - (int64_t)(age * 1e9);
+    s->start_ns = seen_ns - (int64_t)(age * 1e9);
+  /* A station writer whose samples were held for this id (its server lapsed) since before this session
+   * began is an earlier session's station's (a writer it made while its server was gone, or its second):
+   * taken as this one's, its samples were logged here and the station's later ones too. Retired, its held
+   * samples are dropped at the release (counted) as an ended session's. */
+  for (int i = 0; i < r->nheld; i++) {
+    const held_sample *h = &r->held[i];
+    if (h->session_id == m->session_id && station_topic(h->kind) && h->arrival_ns < s->start_ns - HELD_BEFORE_START_NS)
+      retire(r, h->writer);
+  }
     s->state_writer = writer;
     s->run = run;
     s->folded_ns = palp_dds_now_ns();
@@ -683,7 +701,7 @@ static void resolve_pending(recorder *r, uint32_t session_id, int force) {
     if (find_phantom(r, p->state.phantom_id, 0) || now - p->since > PENDING_WAIT ||
         (force && p->state.session_id == session_id)) {
       p->used = 0;
-      open_session(r, &p->state, p->writer, p->run);
+      open_session(r, &p->state, p->writer, p->run, p->seen_ns);
       release_held(r, p->state.session_id);
     }
   }
@@ -755,10 +773,11 @@ static int check_run(recorder *r, rsession *s, const palp_SessionState *m, dds_i
  * session is logged in the session this state leaves open (release_held, here before a close, and
  * after each state in the main loop). */
 static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handle_t writer, dds_instance_handle_t run) {
+  const int64_t seen_ns = palp_dds_now_ns();
   rsession *was = find_session(r, m->session_id, 0);
   if (was && check_run(r, was, m, writer, run)) {
     if (m->phase != palp_PHASE_OPEN) /* the new run's session opened and closed before its state was seen open */
-      open_session(r, m, writer, run);
+      open_session(r, m, writer, run, seen_ns);
   }
   if (m->phase == palp_PHASE_OPEN) {
     rsession *known = find_session(r, m->session_id, 0);
@@ -781,10 +800,11 @@ static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handl
           r->pending[i].writer = writer;
           r->pending[i].run = run;
           r->pending[i].since = dds_time();
+          r->pending[i].seen_ns = seen_ns;
           return;
         }
     }
-    open_session(r, m, writer, run);
+    open_session(r, m, writer, run, seen_ns);
     return;
   }
   resolve_pending(r, m->session_id, 1); /* opened and closed before its catalogue arrived */
@@ -1301,6 +1321,12 @@ static int retired(const recorder *r, dds_instance_handle_t w) {
   for (int i = 0; i < RETIRED_WRITERS; i++)
     if (r->retired[i] == w) return 1;
   return 0;
+}
+
+static void retire(recorder *r, dds_instance_handle_t w) {
+  if (!w || retired(r, w)) return;
+  r->retired[r->retired_next] = w;
+  r->retired_next = (r->retired_next + 1) % RETIRED_WRITERS;
 }
 
 /* Whether a server sample of s's id (its writer's participant `run`, 0: not known) comes from a run of

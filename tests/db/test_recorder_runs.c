@@ -23,6 +23,10 @@
  *  - session 43: its server's state writer is the one of 42's first run; a participant that never
  *    writes a state of 43 (no run of its server) sends 5 feedback frames for it: held, never logged
  *    in session 43 (0 frames), dropped at the stop, the only held samples dropped (the stop line: 5);
+ *  - session 41 again (2026-12-06): while its server has lapsed, run 1's station makes a second contact
+ *    writer (W1b) and sends 3 contacts, held; 500 ms later run 2 begins (its states' durations count from
+ *    then). W1b's contacts came before run 2's session began: an earlier session's, dropped (counted with
+ *    W1's 5 late ones: 8), not logged in new41, and W1b not taken as its station's;
  *  - session 44 (2026-12-06): its first run is 42's (not seen dead) and sends 10 frames; run 2 opens 44
  *    anew; then 3 late frames of run 1's feedback writer come, then run 2's station (W5, a writer new to
  *    44) sends 5 contacts. Expected: old44 10 frames; new44 none of the late 3 (dropped, counted as an
@@ -38,6 +42,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -47,6 +52,12 @@
 #include "palp_dds.h"
 
 #define DOMAIN 149
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static void state(dds_entity_t w, uint32_t id, const char *trainee, int closed, double duration, uint64_t ticks) {
   palp_SessionState ss;
@@ -180,8 +191,8 @@ int main(int argc, char **argv) {
       palp_dds_create_writer(a1, palp_dds_create_topic(a1, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
   dds_entity_t a1_fb44 = server_writer(a1, 44, PALP_TOPIC_FEEDBACK);
   dds_entity_t s1 = 0, s2 = 0;
-  dds_entity_t w1 = station(&s1, 41), w3 = station(&s1, 42);
-  const dds_entity_t first[] = {w_cat, r1.state, r1.fb41, a1_state, a1_fb44, w1, w3};
+  dds_entity_t w1 = station(&s1, 41), w3 = station(&s1, 42), w1b = station(&s1, 41);
+  const dds_entity_t first[] = {w_cat, r1.state, r1.fb41, a1_state, a1_fb44, w1, w3, w1b};
   for (size_t k = 0; k < sizeof first / sizeof first[0]; k++)
     REQUIRE(wait_matched(first[k], 1, 20) == 0, "writer %zu never matched the recorder", k);
 
@@ -213,6 +224,9 @@ int main(int argc, char **argv) {
   dds_delete(r1.pp); /* session 41's server dies */
   REQUIRE(wait_log(logf, "session 41: its server's state lapsed", 10) == 0,
           "the recorder never said session 41's state lapsed");
+  for (int k = 0; k < 3; k++) contact(w1b, 41, 50 + k), sleep_ms(12); /* held: its server lapsed */
+  sleep_ms(500);
+  const double run2_began = now_s(); /* run 2's sessions' durations count from here */
 
   /* ---- run 2: its stations' contacts and its frames before its OPEN state ---- */
   run r2 = run_start();
@@ -230,9 +244,9 @@ int main(int argc, char **argv) {
     sleep_ms(12);
   }
   sleep_ms(300); /* all taken by the recorder before the state is written */
-  state(r2.state, 41, "new41", 0, 0.4, 40);
-  state(r2.state, 42, "new42", 0, 0.4, 40);
-  state(r2.state, 44, "new44", 0, 0.4, 40);
+  state(r2.state, 41, "new41", 0, now_s() - run2_began, 40);
+  state(r2.state, 42, "new42", 0, now_s() - run2_began, 40);
+  state(r2.state, 44, "new44", 0, now_s() - run2_began, 40);
   sleep_ms(300);
   /* run 1's late frames of 44, after run 2's OPEN of it; then run 2's station's first contacts */
   for (int k = 0; k < 3; k++) feedback(a1_fb44, 44, (uint64_t)k + 11), sleep_ms(12);
@@ -255,10 +269,10 @@ int main(int argc, char **argv) {
   sleep_ms(500);
   for (int k = 0; k < 5; k++) feedback(x_fb, 43, (uint64_t)k + 1), sleep_ms(12);
   sleep_ms(300);
-  state(r2.state, 41, "new41", 1, 1.0, 100);
-  state(r2.state, 42, "new42", 1, 1.0, 100);
+  state(r2.state, 41, "new41", 1, now_s() - run2_began, 100);
+  state(r2.state, 42, "new42", 1, now_s() - run2_began, 100);
   state(a1_state, 43, "s43", 1, 1.0, 100);
-  state(r2.state, 44, "new44", 1, 1.0, 100);
+  state(r2.state, 44, "new44", 1, now_s() - run2_began, 100);
   sleep_ms(600);
   int status;
   const int exited_0 = stop_recorder(pid, &status);
@@ -320,8 +334,9 @@ int main(int argc, char **argv) {
   CHECK(consults == 6, "server writers' runs looked up once per writer and session: 6 (%lld)", consults);
   const long long earlier = stop_count(logf, "samples from an earlier run of their session's server");
   CHECK(earlier == 3, "session 44's 3 late frames of its ended run dropped, counted (%lld)", earlier);
-  CHECK(ended == 5 && dropped == 5,
-        "run 1's station's 5 contacts after its session ended are counted, not logged (%lld); the 5 stray frames "
+  CHECK(ended == 8 && dropped == 5,
+        "run 1's station's 5 contacts after its session ended and W1b's 3 held since before run 2 began are "
+        "counted, not logged (%lld); the 5 stray frames "
         "of session 43 counted as held samples dropped, and no other (%lld)", ended, dropped);
   free(rest);
   palp_mesh_destroy(&mesh);
