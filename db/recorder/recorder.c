@@ -91,6 +91,13 @@
  * (its OPEN state's duration back) is an earlier session's: a station joins a session after its server
  * made it. The margin: the state's own latency makes that start a little late. */
 #define HELD_BEFORE_START_NS 250000000LL
+/* A second station writer's samples held while nothing else says another run began (its session's server
+ * not lapsed, no other run's samples held) are released this long after they came, not at the session's
+ * next state: that comes at the server's status_rate_hz, which its config allows down to 0.1 Hz (below
+ * ~0.17 Hz they expired at HELD_WAIT_NS and were dropped; below ~0.5 Hz a held finding was logged as
+ * unanswered, PALP_FINDING_ANSWER_WAIT_S). A new run's OPEN state follows its station's JOIN within
+ * milliseconds, and its own samples held would keep these held. */
+#define SECOND_WRITER_WAIT_NS 1500000000LL
 
 /* The readers, in the order a pass takes them: catalogue and state first, so that a session's samples
  * find it open; its exercise before its findings; the debrief last. The finger samples before the
@@ -612,7 +619,7 @@ static const char *public_exercise_of(const recorder *r, uint32_t phantom_id) {
 }
 
 static int64_t held_since(const recorder *r, uint32_t session_id);
-static void release_held(recorder *r, uint32_t session_id);
+static void release_held(recorder *r, uint32_t session_id, const char *why);
 
 /* writer: its state's writer, run: that writer's participant (0: not known). */
 static void retire(recorder *r, dds_instance_handle_t w);
@@ -702,7 +709,7 @@ static void resolve_pending(recorder *r, uint32_t session_id, int force) {
         (force && p->state.session_id == session_id)) {
       p->used = 0;
       open_session(r, &p->state, p->writer, p->run, p->seen_ns);
-      release_held(r, p->state.session_id);
+      release_held(r, p->state.session_id, "its state came");
     }
   }
 }
@@ -810,7 +817,7 @@ static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handl
   resolve_pending(r, m->session_id, 1); /* opened and closed before its catalogue arrived */
   rsession *s = find_session(r, m->session_id, 0);
   if (!s || !s->open || s->closing) return;
-  release_held(r, m->session_id); /* this run's, before it ends */
+  release_held(r, m->session_id, "its state came"); /* this run's, before it ends */
   if (s->exercise && !s->debriefed) { /* its debrief may still be on its way (DEBRIEF_WAIT) */
     s->closing = 1;
     s->closing_since = dds_time();
@@ -1499,7 +1506,7 @@ static void hold(recorder *r, int kind, const void *m, dds_instance_handle_t wri
 /* What was held for session sid whose run is now known, logged in the session open for it, in the order
  * it came: a server's samples of that session's run, and (no other run's waiting, its server not
  * lapsed) its stations' (a writer taken as its station's then). Called after each state of sid. */
-static void release_held(recorder *r, uint32_t sid) {
+static void release_held(recorder *r, uint32_t sid, const char *why) {
   if (r->releasing || r->nheld == 0) return;
   rsession *s = find_session(r, sid, 0);
   if (!s || s->lost_since) return;
@@ -1534,8 +1541,22 @@ static void release_held(recorder *r, uint32_t sid) {
   r->nheld = kept;
   r->releasing = 0;
   if (logged || dropped)
-    palp_log_info(r->log, "session %u: %d samples held until the state of their run came logged in its session%s", sid,
-                  logged, dropped ? " (and some of an ended session's writers dropped)" : "");
+    palp_log_info(r->log, "session %u: %d held samples logged in its session (%s)%s", sid, logged, why,
+                  dropped ? "; some of an ended session's writers dropped" : "");
+}
+
+/* A second station writer's samples held SECOND_WRITER_WAIT_NS while no other run's are, its session's
+ * server not lapsed: released into its session (release_held leaves none of that session's held). */
+static void release_due(recorder *r, int64_t now_ns) {
+  for (int i = 0; i < r->nheld; i++) {
+    const held_sample *h = &r->held[i];
+    if (!station_topic(h->kind) || now_ns - h->arrival_ns < SECOND_WRITER_WAIT_NS) continue;
+    const rsession *s = find_session(r, h->session_id, 0);
+    if (!s || s->lost_since || other_run_held(r, s)) continue;
+    const int before = r->nheld;
+    release_held(r, h->session_id, "no other run's samples came within 1.5 s");
+    if (r->nheld < before) i = -1; /* the array was compacted: from its start again */
+  }
 }
 
 /* Held samples whose run's state did not come within HELD_WAIT_NS: dropped, said once per session a pass. */
@@ -1863,7 +1884,7 @@ int main(int argc, char **argv) {
             /* its run: the participant of its writer (route_sample); then what waited for it */
             on_state(r, samples[i], info[i].publication_handle,
                      palp_dds_origin_participant(&r->origin, rd[k], &info[i]));
-            release_held(r, ((const palp_SessionState *)samples[i])->session_id);
+            release_held(r, ((const palp_SessionState *)samples[i])->session_id, "its state came");
             break;
           default: on_session_sample(r, k, rd[k], samples[i], &info[i]); break;
           }
@@ -1912,6 +1933,7 @@ int main(int argc, char **argv) {
       }
     end_closing_sessions(r, now);
     end_lost_sessions(r, now);
+    release_due(r, pass_ns);
     expire_held(r, pass_ns);
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
      * not only at stop (idl/palp_dds_refusals.h) */

@@ -23,6 +23,10 @@
  *  - session 43: its server's state writer is the one of 42's first run; a participant that never
  *    writes a state of 43 (no run of its server) sends 5 feedback frames for it: held, never logged
  *    in session 43 (0 frames), dropped at the stop, the only held samples dropped (the stop line: 5);
+ *  - session 43 again (2026-12-06): its station's writer W6 sends 4 contacts, then a second writer W7 of
+ *    it 4 more, held (a station that joined again); no state of 43 comes for seconds (a server at
+ *    status_rate_hz 0.1): they are logged 1.5 s after they came (the log says so within 3 s), not at
+ *    the next state (at 6 s they were dropped): 8 contacts in s43;
  *  - session 41 again (2026-12-06): while its server has lapsed, run 1's station makes a second contact
  *    writer (W1b) and sends 3 contacts, held; 500 ms later run 2 begins (its states' durations count from
  *    then). W1b's contacts came before run 2's session began: an earlier session's, dropped (counted with
@@ -192,7 +196,8 @@ int main(int argc, char **argv) {
   dds_entity_t a1_fb44 = server_writer(a1, 44, PALP_TOPIC_FEEDBACK);
   dds_entity_t s1 = 0, s2 = 0;
   dds_entity_t w1 = station(&s1, 41), w3 = station(&s1, 42), w1b = station(&s1, 41);
-  const dds_entity_t first[] = {w_cat, r1.state, r1.fb41, a1_state, a1_fb44, w1, w3, w1b};
+  dds_entity_t w6 = station(&s1, 43), w7 = station(&s1, 43);
+  const dds_entity_t first[] = {w_cat, r1.state, r1.fb41, a1_state, a1_fb44, w1, w3, w1b, w6, w7};
   for (size_t k = 0; k < sizeof first / sizeof first[0]; k++)
     REQUIRE(wait_matched(first[k], 1, 20) == 0, "writer %zu never matched the recorder", k);
 
@@ -213,6 +218,7 @@ int main(int argc, char **argv) {
   for (int k = 0; k < 20; k++) {
     feedback(r1.fb41, 41, (uint64_t)k + 1);
     if (k < 10) feedback(a1_fb44, 44, (uint64_t)k + 1);
+    if (k < 4) contact(w6, 43, k);
     contact(w1, 41, k);
     if (k < 10) contact(w3, 42, k);
     sleep_ms(12);
@@ -221,6 +227,9 @@ int main(int argc, char **argv) {
   state(a1_state, 42, "old42", 0, 0.5, 50);
   state(a1_state, 44, "old44", 0, 0.5, 50);
   sleep_ms(300);
+  for (int k = 0; k < 4; k++) contact(w7, 43, 10 + k), sleep_ms(12); /* a second writer: held */
+  CHECK(wait_log(logf, "session 43: 4 held samples logged", 3) == 0,
+          "session 43's second writer's 4 contacts not released within 3 s, with no state of 43");
   dds_delete(r1.pp); /* session 41's server dies */
   REQUIRE(wait_log(logf, "session 41: its server's state lapsed", 10) == 0,
           "the recorder never said session 41's state lapsed");
@@ -311,6 +320,8 @@ int main(int argc, char **argv) {
   CHECK(c_old42 == 10 && c_new42 == 20,
         "session 42 (its first run not yet seen dead): 10 contacts in the first run's session, 15 + 5 in the "
         "new run's (%lld, %lld)", (long long)c_old42, (long long)c_new42);
+  CHECK(db_scalar(h, CONTACTS("s43")) == 8, "session 43: its station's 4 + 4 contacts (%lld)",
+        (long long)db_scalar(h, CONTACTS("s43")));
   CHECK(db_scalar(h, FRAMES("s43")) == 0 &&
             db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 's43' AND end_reason = 'normal'") == 1,
         "session 43: none of the 5 frames from a participant that is none of its server's runs (%lld), ended normal",
