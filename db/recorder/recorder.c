@@ -1561,25 +1561,34 @@ static void release_due(recorder *r, int64_t now_ns) {
 
 /* Held samples whose run's state did not come within HELD_WAIT_NS: dropped, said once per session a pass. */
 static void expire_held(recorder *r, int64_t now_ns) {
-  int kept = 0;
-  uint32_t said = 0;
+  int kept = 0, nsaid = 0;
+  /* The sessions said this pass (up to 16; past them one line for the rest): remembering only the last
+   * said one a line each time interleaved sessions' samples took turns, up to MAX_HELD lines a pass. */
+  uint32_t said[16];
+  int64_t unsaid = 0;
   for (int i = 0; i < r->nheld; i++) {
     held_sample *h = &r->held[i];
     if (now_ns - h->arrival_ns <= HELD_WAIT_NS) {
       r->held[kept++] = *h;
       continue;
     }
-    if (h->session_id != said) {
-      said = h->session_id;
+    int known = 0;
+    for (int j = 0; j < nsaid && !known; j++) known = said[j] == h->session_id;
+    if (!known && nsaid < (int)(sizeof said / sizeof said[0])) {
+      said[nsaid++] = h->session_id;
       palp_log_warn(r->log, "session %u: a %s held for the state of its run dropped: no state told its run within "
-                            "%.0f s (%lld held samples dropped so far)", said, topic_word(h->kind),
+                            "%.0f s (%lld held samples dropped so far)", h->session_id, topic_word(h->kind),
                     (double)HELD_WAIT_NS * 1e-9, (long long)r->held_dropped + 1);
-    }
+    } else if (!known)
+      unsaid++;
     r->held_dropped++;
     r->held_bytes -= h->bytes;
     free(h->sample);
   }
   r->nheld = kept;
+  if (unsaid)
+    palp_log_warn(r->log, "%lld more held samples of other sessions dropped as well: no state told their run within %.0f s",
+                  (long long)unsaid, (double)HELD_WAIT_NS * 1e-9);
 }
 
 /* The run (participant) of a server sample's writer: from its session's record when the writer wrote
