@@ -65,6 +65,42 @@ int palp_web_token_expired(double issued_s, double lifetime_s, double now_s) {
   return !(now_s < issued_s + lifetime_s);
 }
 
+static double read_clock(clockid_t id) {
+  struct timespec ts;
+  if (clock_gettime(id, &ts) != 0) return NAN; /* an unknown time: every token reads as expired */
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+static double system_wall(void *user) {
+  (void)user;
+  return read_clock(CLOCK_REALTIME);
+}
+static double system_steady(void *user) {
+  (void)user;
+  return read_clock(CLOCK_BOOTTIME);
+}
+
+const palp_web_clock *palp_web_clock_system(void) {
+  static const palp_web_clock c = {system_wall, system_steady, NULL};
+  return &c;
+}
+
+palp_web_token_deadline palp_web_token_deadline_at_start(double issued_s, double lifetime_s, const palp_web_clock *c) {
+  /* read together, so that the steady deadline stands for the same instant the wall clock names */
+  const double wall = c->wall_s(c->user), steady = c->steady_s(c->user);
+  double left = issued_s + lifetime_s - wall;
+  if (!(left > 0)) left = 0; /* expired already, or a NaN: expired at start */
+  else if (left > lifetime_s) left = lifetime_s;
+  /* by the wall clock: when it will expire, or for one expired before start when it did */
+  return (palp_web_token_deadline){
+      .lifetime_s = lifetime_s, .steady_s = steady + left, .wall_s = left > 0 ? wall + left : issued_s + lifetime_s};
+}
+
+int palp_web_token_past(const palp_web_token_deadline *d, const palp_web_clock *c) {
+  if (d->lifetime_s == 0) return 0;
+  /* a NaN fails the comparison and so expires */
+  return !(c->steady_s(c->user) < d->steady_s);
+}
+
 void palp_web_utc_text(double unix_s, char *out, size_t len) {
   struct tm tm;
   const time_t t = isfinite(unix_s) && fabs(unix_s) < 1e15 ? (time_t)floor(unix_s) : 0;

@@ -34,8 +34,41 @@ int palp_web_token_check(const char *token);
 
 /* 1 when a token issued at issued_s [s, Unix time] is past its lifetime at now_s [s, Unix time]:
  * now_s >= issued_s + lifetime_s; 0 while it is valid, and always for lifetime_s 0 (no expiry). The
- * clock is the caller's (palp-web's wall clock; tests give theirs). A NaN anywhere reads as expired. */
+ * clock is the caller's: palp-web reads it at start only (what it prints then); serving, it compares
+ * the deadlines below. A NaN anywhere reads as expired. */
 int palp_web_token_expired(double issued_s, double lifetime_s, double now_s);
+
+/* The clocks a token's lifetime is measured on: the wall clock [s, Unix time], which says when a token
+ * was issued (its file's last write is a wall-clock time), and a steady clock [s, any origin] that no
+ * setting of the wall clock moves. The wall clock is read once, at start; every later use compares the
+ * steady one, so that NTP correcting a machine that booted with a wrong clock (a jump of hours, in
+ * either direction) neither expires every open page at once nor lengthens a token's life (found by
+ * review, 2026-12-06). Tests give their own clock. */
+typedef struct palp_web_clock {
+  double (*wall_s)(void *user);
+  double (*steady_s)(void *user);
+  void *user;
+} palp_web_clock;
+/* The system's: CLOCK_REALTIME, and CLOCK_BOOTTIME as the steady clock (CLOCK_MONOTONIC stops while the
+ * machine is suspended: a laptop closed overnight would keep Monday's token open on Tuesday). */
+const palp_web_clock *palp_web_clock_system(void);
+
+/* A token's expiry, fixed once at start (palp_web_token_deadline_at_start). */
+typedef struct palp_web_token_deadline {
+  double lifetime_s; /* 0: never expires */
+  double steady_s;   /* the expiry on the clock's steady_s */
+  double wall_s;     /* the same instant by the wall clock as it read at start [s, Unix time] (for one
+                      * expired before start, issued + lifetime): for messages */
+} palp_web_token_deadline;
+
+/* The expiry of a token issued at issued_s [s, Unix time] with lifetime_s (0: none), read from clock c
+ * now (start): what is left of its life, issued_s + lifetime_s - the wall clock now, clamped to
+ * [0, lifetime_s] (a file written "in the future" gets no more than its lifetime), counted from the
+ * steady clock now. A NaN anywhere gives a token expired at start. */
+palp_web_token_deadline palp_web_token_deadline_at_start(double issued_s, double lifetime_s, const palp_web_clock *c);
+/* 1 when a token with deadline d is past it by clock c (the steady clock alone), 0 while valid, always 0
+ * for lifetime 0. */
+int palp_web_token_past(const palp_web_token_deadline *d, const palp_web_clock *c);
 
 /* A Unix time [s] as UTC, "2026-12-07T05:00:00Z", into out (>= 21 bytes); "?" for one not representable. */
 void palp_web_utc_text(double unix_s, char *out, size_t len);

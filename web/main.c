@@ -128,7 +128,8 @@ static int read_small_file(const char *path, char **out) {
   return 0;
 }
 
-/* The wall clock [s, Unix time]: tokens age from their files' last write, a wall-clock time. */
+/* The wall clock [s, Unix time]: tokens age from their files' last write, a wall-clock time. Read at start
+ * only: serve.c fixes each token's expiry then and counts it down on the steady clock. */
 static double wall_s(void) {
   struct timespec ts;
   clock_gettime(CLOCK_REALTIME, &ts);

@@ -50,6 +50,9 @@ struct palp_web_server {
   /* Whose expired token the log has named (say_expired): 0 the instructors', k + 1 trainee k's (the
    * service thread alone). */
   unsigned char expired_said[PALP_WEB_TRAINEES_MAX + 1];
+  /* Each token's expiry, fixed at palp_web_serve_create from the wall clock and compared on the steady
+   * clock after (palp_web_token_deadline_at_start): 0 the instructors', k + 1 trainee k's. */
+  palp_web_token_deadline deadline[PALP_WEB_TRAINEES_MAX + 1];
 };
 
 /* Per connection (HTTP or WebSocket): libwebsockets allocates and zeroes it. */
@@ -86,20 +89,15 @@ static int token_owner(const palp_web_server *s, const char *v) {
   return who;
 }
 
-/* The wall clock [s, Unix time]: a token's age counts from its file's last write, a wall-clock time. */
-static double wall_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static double issued_of(const palp_web_server *s, int who) {
   return who > 0 ? s->def.trainees[who - 1].issued_s : s->def.token_issued_s;
 }
 
-/* 1 when who's token (token_owner's answer) is past its lifetime now. */
+/* 1 when who's token (token_owner's answer) is past its lifetime now: its deadline, fixed at start, on the
+ * steady clock (a wall clock set by NTP mid-class moves no token's expiry). */
 static int token_expired(const palp_web_server *s, int who) {
-  return s->have_token && who >= 0 && palp_web_token_expired(issued_of(s, who), s->def.token_lifetime_s, wall_s());
+  return s->have_token && who >= 0 && who <= PALP_WEB_TRAINEES_MAX &&
+         palp_web_token_past(&s->deadline[who], palp_web_clock_system());
 }
 
 /* The first refusal of each expired token in the log (a page left open retries every second: the
@@ -108,7 +106,7 @@ static void say_expired(palp_web_server *s, int who) {
   if (who < 0 || who > PALP_WEB_TRAINEES_MAX || s->expired_said[who]) return;
   s->expired_said[who] = 1;
   char at[32], issued[32], whose[64];
-  palp_web_utc_text(issued_of(s, who) + s->def.token_lifetime_s, at, sizeof at);
+  palp_web_utc_text(s->deadline[who].wall_s, at, sizeof at); /* by the wall clock as it read at start */
   palp_web_utc_text(issued_of(s, who), issued, sizeof issued);
   if (who > 0) snprintf(whose, sizeof whose, "trainee %s's token", s->def.trainees[who - 1].name);
   else snprintf(whose, sizeof whose, "the instructors' token");
@@ -382,6 +380,10 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
     s->have_token = 1;
   }
   s->def.listen = s->listen;
+  /* the per-token arrays hold PALP_WEB_TRAINEES_MAX (main's parse reads no more) */
+  if (s->def.trainee_count > PALP_WEB_TRAINEES_MAX) s->def.trainee_count = PALP_WEB_TRAINEES_MAX;
+  for (int who = 0; who <= s->def.trainee_count; who++)
+    s->deadline[who] = palp_web_token_deadline_at_start(issued_of(s, who), def->token_lifetime_s, palp_web_clock_system());
   lws_set_log_level(LLL_ERR | LLL_WARN, lws_log_to_stderr);
   s->protocols[0] = (struct lws_protocols){.name = "palp", .callback = callback, .per_session_data_size = sizeof(conn),
                                            .rx_buffer_size = 4096};

@@ -31,8 +31,11 @@ typedef struct palp_web_serve_def {
   const palp_web_trainee_token *trainees;
   int trainee_count;
   /* Every token's lifetime [s] (0: none), from when it was issued: token_issued_s [s, Unix time] for
-   * the instructors', each trainee's own issued_s. Checked on every request and handshake, and an open
-   * WebSocket is closed at its token's expiry; a page with an expired token is told so
+   * the instructors', each trainee's own issued_s. What is left of each is fixed at
+   * palp_web_serve_create by the wall clock and counted down on the steady clock from then
+   * (palp_web_token_deadline_at_start: a wall clock corrected later moves no expiry). Checked on every
+   * request and handshake, and an open WebSocket is closed at its token's expiry; a page with an
+   * expired token is told so
    * (PALP_WEB_TOKEN_EXPIRED_TEXT: the HTTP 401's body, an {"type": "expired"} WebSocket message). */
   double token_lifetime_s, token_issued_s;
   palp_log *log; /* each expired token's first refusal is logged (NULL: stderr) */

@@ -5,8 +5,9 @@
 # checker works here), and the unit's ExecStart command line, run as systemd would run
 # it (its state and log paths moved into a temporary directory), must start the server,
 # log timestamped lines to the unit's --log-file and stop cleanly on the unit's
-# KillSignal. What this cannot check without systemd as PID 1: DynamicUser,
-# StateDirectory/LogsDirectory creation and the sandboxing options (docs/deploy.md).
+# KillSignal; palp-web's unit is ordered after time-sync.target. What this cannot check
+# without systemd as PID 1: DynamicUser, StateDirectory/LogsDirectory creation and the
+# sandboxing options (docs/deploy.md).
 # usage: systemd_units.sh BUILD_DIR DOMAIN
 set -u
 build=$(cd "$1" && pwd)
@@ -62,6 +63,13 @@ if grep -qE '^[0-9T:.-]+Z INFO  palp-server: SIGTERM: shutting down' "$work/log/
 else
   bad "unit paths: $(ls -R "$work/state" "$work/log")"; cat "$work/log/server.log"
 fi
+
+# palp-web fixes its tokens' expiries from the wall clock at start (2026-12-06): its unit starts after the
+# clock is synchronised, ordered after time-sync.target without pulling it in (systemd.special(7)).
+wf=$units/palp-web.service
+if grep -Eq '^After=.*\btime-sync\.target\b' "$wf" && ! grep -Eq '^(Wants|Requires)=.*\btime-sync\.target\b' "$wf"; then
+  ok "palp-web.service: After=time-sync.target, not pulling it in"
+else bad "palp-web.service ordering on time-sync.target: $(grep -E '^(After|Wants|Requires)=' "$wf" | tr '\n' ' ')"; fi
 
 # palp-web's unit (2026-12-04): its command line as systemd runs it, the site arguments of a test
 # (a free port on loopback, no join), SIGHUP re-opening its log as logrotate's postrotate asks,

@@ -9,13 +9,15 @@ files' modification times instead of waiting (the clock is the files'; margin 1 
   expired: ask your instructor for a new one." (by URL and by cookie), a token nobody was given a bare
   401 without it; her WebSocket is told {"type": "expired", ...} and closed; palp-web said at start that
   the trainees' tokens expired 1.0 h ago (within 0.1 h) and the instructors' expires in 1.0 h, logs the
-  expiry once however often alice tries, and --stats counts the refusals.
+  expiry once however often alice tries (its time 12 h after the issue it names, within 1 s), and
+  --stats counts the refusals.
 - --token T with --token-lifetime-h 0.003 (10.8 s from start): a trainee page in Chromium, open and
   streaming before, is told at the expiry (not before the start + 10.8 s, at most 1.5 s after the page's
   WebSocket opened + 10.8 s), shows the message and stops reconnecting; a raw WebSocket too (each
   counted once); a request afterwards gets the expired 401.
 - --token-lifetime-h 0: a token file written 30 days ago still serves.
 No palp-server (pages are served without one). DDS domain 155. usage: test_token_expiry.py BUILD SOURCE OUT"""
+import calendar
 import json
 import os
 import re
@@ -93,8 +95,14 @@ def run(build, source, out):
         rc = procs.stop(web)
         log = procs.log(web)
         said = [l for l in log.splitlines() if "trainee alice's token expired at" in l]
-        check(len(said) == 1 and "lifetime 12 h" in said[0],
-              "the log names alice's expired token once for 3 refusals: %s" % said)
+        m = re.search(r"expired at (\S+)Z \(issued (\S+)Z,", said[0]) if len(said) == 1 else None
+        span = None
+        if m:
+            span = (calendar.timegm(time.strptime(m.group(1), "%Y-%m-%dT%H:%M:%S")) -
+                    calendar.timegm(time.strptime(m.group(2), "%Y-%m-%dT%H:%M:%S"))) / HOUR
+        check(len(said) == 1 and "lifetime 12 h" in said[0] and span is not None and abs(span - 12.0) < 1.5 / HOUR,
+              "the log names alice's expired token once for 3 refusals, expired 12 h after issue (%s h): %s"
+              % (span, said))
         check(rc == 0 and "pages told their token expired: 2 HTTP requests, 1 WebSockets" in log,
               "--stats counts them: 2 HTTP requests, 1 WebSocket (exit %s)" % rc)
 

@@ -39,6 +39,13 @@ static void test_bands(void) {
   CHECK(!strcmp(palp_web_band_name(3), "deep") && !strcmp(palp_web_band_name(0), "none"), "band names");
 }
 
+/* The test's clock for token lifetimes: it sets both readings (palp_web_clock). */
+typedef struct fake_clock {
+  double wall, steady;
+} fake_clock;
+static double fake_wall(void *u) { return ((fake_clock *)u)->wall; }
+static double fake_steady(void *u) { return ((fake_clock *)u)->steady; }
+
 static void test_access(void) {
   const char *loop[] = {"127.0.0.1", "127.1.2.3", "::1", "localhost"};
   const char *wide[] = {"0.0.0.0", "192.168.1.10", "10.0.0.1", "::", "128.0.0.1", "", "127.0.0.1x", "example.org"};
@@ -69,6 +76,50 @@ static void test_access(void) {
     CHECK(palp_web_token_expired(issued, 0, issued + 1e9) == 0, "lifetime 0: never expires");
     CHECK(palp_web_token_expired(issued, day, NAN) == 1 && palp_web_token_expired(NAN, day, issued) == 1,
           "an unknown time or age: expired");
+    /* ... and what palp-web serves by (2026-12-06, found by review: it compared the wall clock at every use, so
+     * NTP setting a wrongly booted machine's clock 20 h forward mid-class expired every page at once, and a
+     * jump back lengthened every token): the expiry fixed at start from the wall clock, then counted on the
+     * steady clock alone. A fake clock: the test sets both readings. */
+    fake_clock fc = {.wall = issued, .steady = 500.0};
+    const palp_web_clock clk = {fake_wall, fake_steady, &fc};
+    palp_web_token_deadline d = palp_web_token_deadline_at_start(issued - 3600.0, day, &clk); /* 1 h old */
+    CHECK(d.steady_s == 500.0 + 11 * 3600.0 && d.wall_s == issued + 11 * 3600.0,
+          "a token 1 h old at start: 11 h left, on the steady clock %.0f (want %.0f), by the wall %.0f", d.steady_s,
+          500.0 + 11 * 3600.0, d.wall_s);
+    CHECK(palp_web_token_past(&d, &clk) == 0, "valid at start");
+    fc.wall += 20 * 3600.0, fc.steady += 60.0;
+    CHECK(palp_web_token_past(&d, &clk) == 0, "the wall clock set 20 h forward 60 s after start (NTP): still valid");
+    fc.steady = d.steady_s - 1e-3;
+    CHECK(palp_web_token_past(&d, &clk) == 0, "and 1 ms before its 11 h on the steady clock are up");
+    fc.steady = d.steady_s;
+    CHECK(palp_web_token_past(&d, &clk) == 1, "expired when they are, the wall clock 20 h ahead or not");
+    fc.wall = issued - 48 * 3600.0;
+    CHECK(palp_web_token_past(&d, &clk) == 1, "a wall clock set 2 days back after start does not revive it");
+    fc = (fake_clock){.wall = issued, .steady = 500.0};
+    d = palp_web_token_deadline_at_start(issued, day, &clk);
+    fc.wall -= 24 * 3600.0, fc.steady += day;
+    CHECK(palp_web_token_past(&d, &clk) == 1, "issued at start, the wall clock then set back a day: expired after 12 h "
+                                              "of the steady clock all the same");
+    fc = (fake_clock){.wall = issued, .steady = 500.0};
+    d = palp_web_token_deadline_at_start(issued + 5 * 3600.0, day, &clk); /* a file written "in the future" */
+    CHECK(d.steady_s == 500.0 + day, "a token issued 5 h after start (a clock set back): no more than its 12 h");
+    d = palp_web_token_deadline_at_start(issued - 13 * 3600.0, day, &clk);
+    CHECK(palp_web_token_past(&d, &clk) == 1 && d.steady_s == 500.0 && d.wall_s == issued - 3600.0,
+          "13 h old at start: expired at start, said to have expired 1 h before it");
+    d = palp_web_token_deadline_at_start(issued - 1e9, 0, &clk);
+    fc.steady += 1e9;
+    CHECK(palp_web_token_past(&d, &clk) == 0, "lifetime 0: never expires");
+    fc = (fake_clock){.wall = NAN, .steady = 500.0};
+    d = palp_web_token_deadline_at_start(issued, day, &clk);
+    CHECK(palp_web_token_past(&d, &clk) == 1, "an unknown wall clock at start: expired");
+    fc = (fake_clock){.wall = issued, .steady = 500.0};
+    d = palp_web_token_deadline_at_start(issued, day, &clk);
+    fc.steady = NAN;
+    CHECK(palp_web_token_past(&d, &clk) == 1, "an unknown steady clock: expired");
+    const palp_web_clock *sys = palp_web_clock_system();
+    d = palp_web_token_deadline_at_start(sys->wall_s(sys->user) - 60.0, day, sys);
+    CHECK(palp_web_token_past(&d, sys) == 0 && fabs(d.steady_s - sys->steady_s(sys->user) - (day - 60.0)) < 1.0,
+          "the system's clocks: a token written a minute ago has 12 h less a minute left (within 1 s)");
     char t[32];
     palp_web_utc_text(issued + day, t, sizeof t);
     CHECK(!strcmp(t, "2027-01-15T20:00:00Z"), "1.8e9 s + 12 h as UTC: %s", t);
