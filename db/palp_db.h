@@ -61,7 +61,8 @@ enum {
   PALP_DB_ENOTFOUND = -101, /* no such session */
   PALP_DB_ESQL = -102, /* SQLite reported an error; see the message */
   PALP_DB_EAMBIGUOUS = -103, /* a session prefix matches several sessions */
-  PALP_DB_EOLDER = -104 /* the file's schema is older, and palp_db_open_readonly would not copy it */
+  PALP_DB_EOLDER = -104, /* the file's schema is older, and palp_db_open_readonly would not copy it */
+  PALP_DB_ECOPY = -105   /* reading the file needs a copy in memory larger than palp_db_open_readonly may make */
 };
 
 /* ---- records --------------------------------------------------------------- */
@@ -361,13 +362,18 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
  * upgraded, when the file (with its -wal) is at most copy_max_bytes; a larger one is refused
  * (PALP_DB_EOLDER, the message naming `palp-review migrate`), as are newer, empty, foreign and
  * missing files. A WAL-mode log without a -wal file in a directory this user cannot write (where
- * SQLite cannot make the -wal and -shm it reads through) is opened immutable: with no -wal, no
- * writer has it open. Writing through the handle fails (SQLITE_READONLY; a copy is query_only, as
- * a write to it would be lost at close). */
+ * SQLite cannot make the -wal and -shm it reads through) is opened immutable (with no -wal, no
+ * writer has it open) and copied into memory at once (no lock keeps a writer that opens it later
+ * from checkpointing into it under the reads), within copy_max_bytes too (else PALP_DB_ECOPY); if
+ * the file changed while it was copied, PALP_EIO ("read it again"). Writing through the handle fails
+ * (SQLITE_READONLY; a copy is query_only, as a write to it would be lost at close). */
 int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **out, char *err, size_t errlen);
 /* The file's schema version when db reads an upgraded in-memory copy of it (palp_db_open_readonly
  * on an older file), else 0. */
 int palp_db_copied_from_version(palp_db *db);
+/* 1 when db reads an in-memory copy of a file opened immutable (palp_db_open_readonly: no -wal and a
+ * directory this user cannot write), else 0. */
+int palp_db_copied_unlocked(palp_db *db);
 /* The schema version of the log at path, looked at read-only (as palp_db_open_readonly checks it);
  * 0, or the codes palp_db_open_readonly returns for a file it refuses. */
 int palp_db_peek_version(const char *path, int *version, char *err, size_t errlen);

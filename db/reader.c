@@ -13,6 +13,7 @@
 struct palp_db {
   sqlite3 *db;
   int copied_from; /* > 0: db is an upgraded in-memory copy of a file at this schema version */
+  int unlocked;    /* db is an in-memory copy of a file opened immutable (open_ro), taken at once */
 };
 
 static int file_exists(const char *path) {
@@ -50,6 +51,30 @@ static char *file_uri(const char *path, const char *query) {
   return u;
 }
 
+/* What a file opened immutable was just before (open_ro): the same file, unchanged since, when
+ * these are (a write sets mtime and ctime; the kernel's timestamps are at worst a few ms coarse, so
+ * a file last written within that of the first look and written again in the same tick could pass:
+ * a window of a few ms, against a whole command's without the look). */
+typedef struct file_id {
+  dev_t dev;
+  ino_t ino;
+  off_t size;
+  struct timespec mtime, ctime;
+} file_id;
+
+static int file_id_of(const char *path, file_id *id) {
+  struct stat st;
+  if (stat(path, &st) != 0) return -1;
+  *id = (file_id){st.st_dev, st.st_ino, st.st_size, st.st_mtim, st.st_ctim};
+  return 0;
+}
+
+static int file_id_same(const file_id *a, const file_id *b) {
+  return a->dev == b->dev && a->ino == b->ino && a->size == b->size && a->mtime.tv_sec == b->mtime.tv_sec &&
+         a->mtime.tv_nsec == b->mtime.tv_nsec && a->ctime.tv_sec == b->ctime.tv_sec &&
+         a->ctime.tv_nsec == b->ctime.tv_nsec;
+}
+
 /* Opens path SQLITE_OPEN_READONLY and reads its header, so that a file SQLite cannot read fails here.
  * Nothing through this connection writes to the file: SQLite refuses every write on it, and a
  * read-only connection does not checkpoint the WAL into the file at close (NO_CKPT_ON_CLOSE makes
@@ -58,14 +83,22 @@ static char *file_uri(const char *path, const char *query) {
  * WAL-mode file whose -wal is absent; such a file (its header says WAL) is opened again immutable
  * (no locks, no -wal or -shm): with no -wal beside it, no connection has it open in WAL mode, so no
  * writer is changing it, and its committed data is all in the file. With a -wal present, immutable
- * would ignore the commits in it: refused with SQLite's words instead. 0, or PALP_EIO / PALP_ENOMEM
- * (message in err); *probe_rc the header read's SQLite code, so that the caller can tell a
- * non-database. */
-static int open_ro(const char *path, sqlite3 **out, int *probe_rc, char *err, size_t errlen) {
+ * would ignore the commits in it: refused with SQLite's words instead. Immutable holds no lock, so a
+ * writer opening the file later may checkpoint into it under the reader: *unlocked is then set and
+ * *before says what the file was just before it was opened, for palp_db_open_readonly to copy it at
+ * once and check it did not change meanwhile. 0, or PALP_EIO / PALP_ENOMEM (message in err);
+ * *probe_rc the header read's SQLite code, so that the caller can tell a non-database. */
+static int open_ro(const char *path, sqlite3 **out, int *probe_rc, int *unlocked, file_id *before, char *err,
+                   size_t errlen) {
   *out = NULL;
   *probe_rc = SQLITE_OK;
+  *unlocked = 0;
   sqlite3 *db = NULL;
   for (int immutable = 0; immutable < 2; immutable++) {
+    if (immutable && file_id_of(path, before) != 0) {
+      palp_db__fmt(err, errlen, "%s: cannot open: it is gone", path);
+      return PALP_EIO;
+    }
     char *uri = immutable ? file_uri(path, "immutable=1") : NULL;
     if (immutable && !uri) return PALP_ENOMEM;
     const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_FULLMUTEX | (immutable ? SQLITE_OPEN_URI : 0);
@@ -90,6 +123,7 @@ static int open_ro(const char *path, sqlite3 **out, int *probe_rc, char *err, si
     }
     if (rc == SQLITE_OK) {
       *out = db;
+      *unlocked = immutable;
       return 0;
     }
     char wal[4200];
@@ -111,11 +145,13 @@ static int open_ro(const char *path, sqlite3 **out, int *probe_rc, char *err, si
 /* Looks at a file read-only: is it a palp session log? 0 (*out the read-only connection, when out is
  * not NULL, and *version its schema version), or PALP_EINVAL / PALP_EIO / PALP_DB_ENEWER with a
  * message. Nothing is written, so an empty or foreign file stays as it was. */
-static int check_palp_file(const char *path, sqlite3 **out, int *version_out, char *err, size_t errlen) {
+static int check_palp_file(const char *path, sqlite3 **out, int *version_out, int *unlocked, file_id *before,
+                           char *err, size_t errlen) {
   if (out) *out = NULL;
   sqlite3 *db = NULL;
-  int probe = SQLITE_OK;
-  int rc = open_ro(path, &db, &probe, err, errlen);
+  int probe = SQLITE_OK, unlocked_ = 0;
+  file_id before_;
+  int rc = open_ro(path, &db, &probe, unlocked ? unlocked : &unlocked_, before ? before : &before_, err, errlen);
   if (rc) return rc;
   sqlite3_stmt *st;
   int version = -1, tables = -1, any = -1;
@@ -160,7 +196,7 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
   if (!out) return PALP_EINVAL;
   *out = NULL;
   if (!create && path && *path) {
-    int rc = check_palp_file(path, NULL, NULL, err, errlen);
+    int rc = check_palp_file(path, NULL, NULL, NULL, NULL, err, errlen);
     if (rc) return rc;
   }
   palp_db *d = calloc(1, sizeof *d);
@@ -176,7 +212,7 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
 
 int palp_db_peek_version(const char *path, int *version, char *err, size_t errlen) {
   if (!path || !*path || !version) return PALP_EINVAL;
-  return check_palp_file(path, NULL, version, err, errlen);
+  return check_palp_file(path, NULL, version, NULL, NULL, err, errlen);
 }
 
 /* The file and its -wal: what an in-memory copy of the log would hold at most. */
@@ -240,44 +276,69 @@ int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **
     return PALP_EINVAL;
   }
   sqlite3 *fh = NULL;
-  int version = 0;
-  int rc = check_palp_file(path, &fh, &version, err, errlen);
+  int version = 0, unlocked = 0;
+  file_id before;
+  int rc = check_palp_file(path, &fh, &version, &unlocked, &before, err, errlen);
   if (rc) return rc;
   palp_db *d = calloc(1, sizeof *d);
   if (!d) {
     sqlite3_close(fh);
     return PALP_ENOMEM;
   }
-  if (version == palp_db_migration_count) {
+  if (version == palp_db_migration_count && !unlocked) {
     d->db = fh;
     *out = d;
     return 0;
   }
+  /* An older schema is read through an upgraded copy; a file opened immutable (no locks) is copied at
+   * once, whatever its schema (2026-12-06, found by review: it was read in place for the whole command,
+   * and a writer opening the file meanwhile could checkpoint into it under the reads: rows of two
+   * states, or pages SQLite takes for corrupt). */
   const long long bytes = log_bytes(path);
   if (bytes > copy_max_bytes) {
-    palp_db__fmt(err, errlen,
-                 "%s: its schema version %d is older than this palp's (%d), and reading it unchanged needs a copy "
-                 "in memory of its %.1f MB, more than the %.1f MB allowed (PALP_REVIEW_COPY_MB); upgrade the file "
-                 "itself with `palp-review --db %s migrate` (it writes to the file: work on a copy to keep the "
-                 "original) and read it again",
-                 path, version, palp_db_migration_count, (double)bytes / 1048576.0,
-                 (double)(copy_max_bytes > 0 ? copy_max_bytes : 0) / 1048576.0, path);
+    if (unlocked)
+      palp_db__fmt(err, errlen,
+                   "%s: there is no -wal beside it and this user cannot write its directory, so SQLite cannot read "
+                   "it with its locks; it is read from a copy in memory taken at once, and its %.1f MB are more "
+                   "than the %.1f MB allowed (PALP_REVIEW_COPY_MB): raise PALP_REVIEW_COPY_MB, or read a copy of "
+                   "the file in a directory this user may write",
+                   path, (double)bytes / 1048576.0, (double)(copy_max_bytes > 0 ? copy_max_bytes : 0) / 1048576.0);
+    else
+      palp_db__fmt(err, errlen,
+                   "%s: its schema version %d is older than this palp's (%d), and reading it unchanged needs a copy "
+                   "in memory of its %.1f MB, more than the %.1f MB allowed (PALP_REVIEW_COPY_MB); upgrade the file "
+                   "itself with `palp-review --db %s migrate` (it writes to the file: work on a copy to keep the "
+                   "original) and read it again",
+                   path, version, palp_db_migration_count, (double)bytes / 1048576.0,
+                   (double)(copy_max_bytes > 0 ? copy_max_bytes : 0) / 1048576.0, path);
     sqlite3_close(fh);
     free(d);
-    return PALP_DB_EOLDER;
+    return unlocked ? PALP_DB_ECOPY : PALP_DB_EOLDER;
   }
   rc = upgraded_copy(fh, path, &d->db, err, errlen);
   sqlite3_close(fh);
+  file_id after;
+  if (!rc && unlocked && (file_id_of(path, &after) != 0 || !file_id_same(&before, &after))) {
+    /* a writer opened it while it was copied: the copy may hold pages of two states */
+    palp_db__fmt(err, errlen,
+                 "%s: changed while it was copied to be read without locks (a writer has opened it since): read it "
+                 "again",
+                 path);
+    sqlite3_close(d->db);
+    rc = PALP_EIO;
+  }
   if (rc) {
     free(d);
     return rc;
   }
-  d->copied_from = version;
+  d->copied_from = version < palp_db_migration_count ? version : 0;
+  d->unlocked = unlocked;
   *out = d;
   return 0;
 }
 
 int palp_db_copied_from_version(palp_db *db) { return db ? db->copied_from : 0; }
+int palp_db_copied_unlocked(palp_db *db) { return db ? db->unlocked : 0; }
 
 void palp_db_close(palp_db *db) {
   if (!db) return;

@@ -40,6 +40,7 @@ const char *palp_db_strerror(int err) {
   case PALP_DB_ESQL: return "SQLite error";
   case PALP_DB_EAMBIGUOUS: return "session prefix is ambiguous";
   case PALP_DB_EOLDER: return "database schema is older than this palp, and reading it would need an upgrade";
+  case PALP_DB_ECOPY: return "reading the file needs a copy in memory larger than allowed";
   case PALP_OK: return "ok";
   case PALP_EINVAL: return "invalid argument";
   case PALP_ENOMEM: return "out of memory";

@@ -10,7 +10,9 @@
 #  - a directory this user cannot write, the files 0444 (as root, palp-review runs as nobody
 #    through setpriv, as root ignores the permissions): the old log and a current one are read, and
 #    no -wal, -shm or -journal is made beside them; a rollback-mode copy with a hot journal is refused
-#    rather than read without its journal (immutable is for WAL files without a -wal only);
+#    rather than read without its journal (immutable is for WAL files without a -wal only); such a
+#    file (no -wal, no locks) is read from a copy in memory made at open, said in the log, and refused
+#    beyond PALP_REVIEW_COPY_MB (0 here) naming it;
 #  - migrate upgrades the file itself (user_version 1 -> current; the rows as the copy showed them),
 #    and says there is nothing to do the second time;
 #  - a write command (annotate) still writes and upgrades.
@@ -136,6 +138,19 @@ for f in old current; do
      [ "$(state "$ro/$f.db")" = "$before" ] && [ "$(ls -A "$ro" | tr '\n' ' ')" = "current.db hot.db hot.db-journal old.db " ]; then
     ok "read-only directory and file ($f log, as $(as_reader id -un)): list and show read it, nothing made beside it"
   else bad "read-only directory ($f log): $(ls -A "$ro" | tr '\n' ' '): $(cat "$dir/ro-$f.txt")"; fi
+  # ... from a copy taken at once (2026-12-06, found by review: read in place without locks for the whole
+  # command, a writer opening the file meanwhile could checkpoint into it under the reads): said, and
+  # bounded by PALP_REVIEW_COPY_MB as every copy is. What this shows is that the reads go to a copy made
+  # when the file was opened, not that a change during the copy is caught (no test makes that race).
+  if [ "$(grep -c "$ro/$f.db: no -wal beside it and a directory this user cannot write: read from a copy in memory taken at once" "$dir/ro-$f.txt")" = 2 ]; then
+    ok "read-only directory ($f log): list and show each read from a copy in memory taken at open"
+  else bad "read-only directory ($f log): no copy said: $(cat "$dir/ro-$f.txt")"; fi
+  if PALP_REVIEW_COPY_MB=0 as_reader "$review" --db "$ro/$f.db" list > "$dir/ro-big-$f.txt" 2>&1; then
+    bad "read-only directory ($f log): read without locks beyond PALP_REVIEW_COPY_MB=0: $(cat "$dir/ro-big-$f.txt")"
+  elif grep -q "there is no -wal beside it and this user cannot write its directory, .* more than the 0.0 MB allowed (PALP_REVIEW_COPY_MB)" "$dir/ro-big-$f.txt" &&
+       [ "$(state "$ro/$f.db")" = "$before" ]; then
+    ok "read-only directory ($f log), PALP_REVIEW_COPY_MB=0: refused naming PALP_REVIEW_COPY_MB, the file as it was"
+  else bad "read-only directory ($f log), PALP_REVIEW_COPY_MB=0: $(cat "$dir/ro-big-$f.txt")"; fi
 done
 before=$(state "$ro/hot.db") jbefore=$(sha256sum < "$ro/hot.db-journal")
 if as_reader "$review" --db "$ro/hot.db" list > "$dir/ro-hot.txt" 2>&1; then
