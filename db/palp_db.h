@@ -361,12 +361,15 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
  * place. One with an older schema is copied into memory (the SQLite backup API) and the copy is
  * upgraded, when the file (with its -wal) is at most copy_max_bytes; a larger one is refused
  * (PALP_DB_EOLDER, the message naming `palp-review migrate`), as are newer, empty, foreign and
- * missing files. A WAL-mode log without a -wal file in a directory this user cannot write (where
- * SQLite cannot make the -wal and -shm it reads through) is opened immutable (with no -wal, no
- * writer has it open) and copied into memory at once (no lock keeps a writer that opens it later
- * from checkpointing into it under the reads), within copy_max_bytes too (else PALP_DB_ECOPY); if
- * the file changed while it was copied, PALP_EIO ("read it again"). Writing through the handle fails
- * (SQLITE_READONLY; a copy is query_only, as a write to it would be lost at close). */
+ * missing files. A WAL-mode log without a -wal file (or with an empty one) in a directory this user
+ * cannot write (where SQLite cannot make the -wal and -shm it reads through), or that this user may
+ * not write in a directory it may (where it could not remove them after), is opened immutable (with
+ * no -wal, no writer has it open) and copied into memory at once (no lock keeps a writer that opens
+ * it later from checkpointing into it under the reads), within copy_max_bytes too (else
+ * PALP_DB_ECOPY); if the file changed while it was copied, PALP_EIO ("read it again"). The -wal and
+ * -shm SQLite makes beside a log that had no -wal are removed after the read (palp_db_close), unless
+ * another connection has the file open. Writing through the handle fails (SQLITE_READONLY; a copy is
+ * query_only, as a write to it would be lost at close). */
 int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **out, char *err, size_t errlen);
 /* The file's schema version when db reads an upgraded in-memory copy of it (palp_db_open_readonly
  * on an older file), else 0. */

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "db_internal.h"
 #include "migrations.h"
@@ -14,11 +15,20 @@ struct palp_db {
   sqlite3 *db;
   int copied_from; /* > 0: db is an upgraded in-memory copy of a file at this schema version */
   int unlocked;    /* db is an in-memory copy of a file opened immutable (open_ro), taken at once */
+  char *ro_path;   /* db is open_ro's connection to this file: tidy_wal after closing it */
+  int wal_before;  /* ... and a -wal was beside the file when it was opened */
 };
 
 static int file_exists(const char *path) {
   struct stat st;
   return stat(path, &st) == 0;
+}
+
+/* Whether the -wal beside a log may hold commits: present and not empty. A zero-length -wal (left by a
+ * reader or reset by a checkpoint) holds none: the committed data is all in the file. */
+static int wal_has_frames(const char *wal) {
+  struct stat st;
+  return stat(wal, &st) == 0 && st.st_size > 0;
 }
 
 /* Whether the file's header says WAL mode (bytes 18 and 19, the read and write versions, are 2): the
@@ -51,6 +61,16 @@ static char *file_uri(const char *path, const char *query) {
   return u;
 }
 
+/* Whether this user may make and remove files in path's directory. */
+static int dir_writable(const char *path) {
+  char dir[4200];
+  snprintf(dir, sizeof dir, "%s", path);
+  char *slash = strrchr(dir, '/');
+  if (!slash) snprintf(dir, sizeof dir, ".");
+  else slash[slash == dir] = '\0'; /* "/x.db": "/" */
+  return access(dir, W_OK | X_OK) == 0;
+}
+
 /* What a file opened immutable was just before (open_ro): the same file, unchanged since, when
  * these are (a write sets mtime and ctime; the kernel's timestamps are at worst a few ms coarse, so
  * a file last written within that of the first look and written again in the same tick could pass:
@@ -78,23 +98,32 @@ static int file_id_same(const file_id *a, const file_id *b) {
 /* Opens path SQLITE_OPEN_READONLY and reads its header, so that a file SQLite cannot read fails here.
  * Nothing through this connection writes to the file: SQLite refuses every write on it, and a
  * read-only connection does not checkpoint the WAL into the file at close (NO_CKPT_ON_CLOSE makes
- * sure of it). It may make the -wal and -shm files beside the file, as any reader of a WAL log does.
+ * sure of it). It may make the -wal and -shm files beside the file, as any reader of a WAL log does
+ * (*wal_before says whether a -wal was there: tidy_wal removes them after the close when it was not).
  * Where it cannot (a directory this user may not write, read-only media) SQLite cannot read a
- * WAL-mode file whose -wal is absent; such a file (its header says WAL) is opened again immutable
- * (no locks, no -wal or -shm): with no -wal beside it, no connection has it open in WAL mode, so no
- * writer is changing it, and its committed data is all in the file. With a -wal present, immutable
- * would ignore the commits in it: refused with SQLite's words instead. Immutable holds no lock, so a
+ * WAL-mode file whose -wal is absent (or empty); such a file (its header says WAL) is opened again
+ * immutable (no locks, no -wal or -shm): with no -wal beside it, no connection has it open in WAL mode,
+ * so no writer is changing it, and its committed data is all in the file; so is one this user may not
+ * write in a directory it may (below). With a -wal holding frames, immutable would ignore the commits
+ * in it: refused with SQLite's words instead. Immutable holds no lock, so a
  * writer opening the file later may checkpoint into it under the reader: *unlocked is then set and
  * *before says what the file was just before it was opened, for palp_db_open_readonly to copy it at
  * once and check it did not change meanwhile. 0, or PALP_EIO / PALP_ENOMEM (message in err);
  * *probe_rc the header read's SQLite code, so that the caller can tell a non-database. */
-static int open_ro(const char *path, sqlite3 **out, int *probe_rc, int *unlocked, file_id *before, char *err,
-                   size_t errlen) {
+static int open_ro(const char *path, sqlite3 **out, int *probe_rc, int *unlocked, file_id *before, int *wal_before,
+                   char *err, size_t errlen) {
   *out = NULL;
   *probe_rc = SQLITE_OK;
   *unlocked = 0;
+  char wal[4200];
+  snprintf(wal, sizeof wal, "%s-wal", path);
+  *wal_before = file_exists(wal);
+  /* A reader who may write the directory but not the file: SQLite would make a -wal and -shm there that
+   * tidy_wal cannot remove (its read-write open would be read-only), and that the log's owner could not
+   * write: such a log is opened immutable at once, as one where nothing can be made beside it. */
+  const int first = !*wal_before && dir_writable(path) && access(path, W_OK) != 0 && is_wal_file(path);
   sqlite3 *db = NULL;
-  for (int immutable = 0; immutable < 2; immutable++) {
+  for (int immutable = first; immutable < 2; immutable++) {
     if (immutable && file_id_of(path, before) != 0) {
       palp_db__fmt(err, errlen, "%s: cannot open: it is gone", path);
       return PALP_EIO;
@@ -126,10 +155,8 @@ static int open_ro(const char *path, sqlite3 **out, int *probe_rc, int *unlocked
       *unlocked = immutable;
       return 0;
     }
-    char wal[4200];
-    snprintf(wal, sizeof wal, "%s-wal", path);
     const int primary = rc & 0xff;
-    if (!immutable && (primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN) && !file_exists(wal) &&
+    if (!immutable && (primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN) && !wal_has_frames(wal) &&
         is_wal_file(path)) {
       sqlite3_close(db);
       db = NULL;
@@ -142,16 +169,48 @@ static int open_ro(const char *path, sqlite3 **out, int *probe_rc, int *unlocked
   return PALP_EIO; /* not reached */
 }
 
+/* After open_ro's connection to path has closed: the -wal and -shm SQLite made beside a WAL-mode log
+ * that had no -wal when it was opened (wal_before 0), removed as SQLite removes them when the last
+ * connection to a log closes. A read-only connection never removes them (it may not checkpoint), so
+ * they stayed, owned by the reader, and the log's owner, unable to write them, could no longer write
+ * the log ("attempt to write a readonly database"; found by review, 2026-12-06). A read-write
+ * connection (no CREATE, no migration, one read so that SQLite opens the WAL) is opened and closed:
+ * SQLite removes the -wal and -shm at a close only with an EXCLUSIVE lock on the file, which it cannot
+ * have while any other connection, of any process, has the file open in WAL mode (each holds a SHARED
+ * lock from its first read to its close), so a live writer's files stay; and it checkpoints first,
+ * which with an empty WAL writes nothing to the file. Only where this user may write the file and its
+ * directory: otherwise the open would be read-only again, or the files could not be removed. */
+static void tidy_wal(const char *path, int wal_before) {
+  char wal[4200];
+  snprintf(wal, sizeof wal, "%s-wal", path);
+  if (wal_before || !file_exists(wal) || !is_wal_file(path)) return;
+  if (!dir_writable(path) || access(path, R_OK | W_OK) != 0) return;
+  sqlite3 *db = NULL;
+  if (sqlite3_open_v2(path, &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_FULLMUTEX, NULL) == SQLITE_OK &&
+      !sqlite3_db_readonly(db, "main")) {
+    sqlite3_busy_timeout(db, PALP_DB_BUSY_TIMEOUT_MS);
+    sqlite3_exec(db, "SELECT count(*) FROM sqlite_master", NULL, NULL, NULL);
+  }
+  sqlite3_close(db);
+}
+
+static void close_ro(sqlite3 *db, const char *path, int wal_before) {
+  sqlite3_close(db);
+  tidy_wal(path, wal_before);
+}
+
 /* Looks at a file read-only: is it a palp session log? 0 (*out the read-only connection, when out is
  * not NULL, and *version its schema version), or PALP_EINVAL / PALP_EIO / PALP_DB_ENEWER with a
  * message. Nothing is written, so an empty or foreign file stays as it was. */
 static int check_palp_file(const char *path, sqlite3 **out, int *version_out, int *unlocked, file_id *before,
-                           char *err, size_t errlen) {
+                           int *wal_before, char *err, size_t errlen) {
   if (out) *out = NULL;
   sqlite3 *db = NULL;
-  int probe = SQLITE_OK, unlocked_ = 0;
+  int probe = SQLITE_OK, unlocked_ = 0, wal_before_ = 0;
   file_id before_;
-  int rc = open_ro(path, &db, &probe, unlocked ? unlocked : &unlocked_, before ? before : &before_, err, errlen);
+  if (!wal_before) wal_before = &wal_before_;
+  int rc = open_ro(path, &db, &probe, unlocked ? unlocked : &unlocked_, before ? before : &before_, wal_before, err,
+                   errlen);
   if (rc) return rc;
   sqlite3_stmt *st;
   int version = -1, tables = -1, any = -1;
@@ -187,7 +246,7 @@ static int check_palp_file(const char *path, sqlite3 **out, int *version_out, in
     rc = PALP_EINVAL;
   }
   if (rc == 0 && out) *out = db;
-  else sqlite3_close(db);
+  else close_ro(db, path, *wal_before);
   if (rc == 0 && version_out) *version_out = version;
   return rc;
 }
@@ -196,7 +255,7 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
   if (!out) return PALP_EINVAL;
   *out = NULL;
   if (!create && path && *path) {
-    int rc = check_palp_file(path, NULL, NULL, NULL, NULL, err, errlen);
+    int rc = check_palp_file(path, NULL, NULL, NULL, NULL, NULL, err, errlen);
     if (rc) return rc;
   }
   palp_db *d = calloc(1, sizeof *d);
@@ -212,7 +271,7 @@ int palp_db_open(const char *path, int create, palp_db **out, char *err, size_t 
 
 int palp_db_peek_version(const char *path, int *version, char *err, size_t errlen) {
   if (!path || !*path || !version) return PALP_EINVAL;
-  return check_palp_file(path, NULL, version, NULL, NULL, err, errlen);
+  return check_palp_file(path, NULL, version, NULL, NULL, NULL, err, errlen);
 }
 
 /* The file and its -wal: what an in-memory copy of the log would hold at most. */
@@ -276,17 +335,24 @@ int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **
     return PALP_EINVAL;
   }
   sqlite3 *fh = NULL;
-  int version = 0, unlocked = 0;
+  int version = 0, unlocked = 0, wal_before = 0;
   file_id before;
-  int rc = check_palp_file(path, &fh, &version, &unlocked, &before, err, errlen);
+  int rc = check_palp_file(path, &fh, &version, &unlocked, &before, &wal_before, err, errlen);
   if (rc) return rc;
   palp_db *d = calloc(1, sizeof *d);
   if (!d) {
-    sqlite3_close(fh);
+    close_ro(fh, path, wal_before);
     return PALP_ENOMEM;
   }
   if (version == palp_db_migration_count && !unlocked) {
+    /* read in place: palp_db_close tidies after it */
+    if (!(d->ro_path = strdup(path))) {
+      close_ro(fh, path, wal_before);
+      free(d);
+      return PALP_ENOMEM;
+    }
     d->db = fh;
+    d->wal_before = wal_before;
     *out = d;
     return 0;
   }
@@ -298,10 +364,10 @@ int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **
   if (bytes > copy_max_bytes) {
     if (unlocked)
       palp_db__fmt(err, errlen,
-                   "%s: there is no -wal beside it and this user cannot write its directory, so SQLite cannot read "
-                   "it with its locks; it is read from a copy in memory taken at once, and its %.1f MB are more "
-                   "than the %.1f MB allowed (PALP_REVIEW_COPY_MB): raise PALP_REVIEW_COPY_MB, or read a copy of "
-                   "the file in a directory this user may write",
+                   "%s: there is no -wal beside it and this user cannot write the file or its directory, so "
+                   "SQLite cannot read it with its locks; it is read from a copy in memory taken at once, and its "
+                   "%.1f MB are more than the %.1f MB allowed (PALP_REVIEW_COPY_MB): raise PALP_REVIEW_COPY_MB, or "
+                   "read a copy of the file that this user may write, in a directory it may write",
                    path, (double)bytes / 1048576.0, (double)(copy_max_bytes > 0 ? copy_max_bytes : 0) / 1048576.0);
     else
       palp_db__fmt(err, errlen,
@@ -311,12 +377,12 @@ int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **
                    "original) and read it again",
                    path, version, palp_db_migration_count, (double)bytes / 1048576.0,
                    (double)(copy_max_bytes > 0 ? copy_max_bytes : 0) / 1048576.0, path);
-    sqlite3_close(fh);
+    close_ro(fh, path, wal_before);
     free(d);
     return unlocked ? PALP_DB_ECOPY : PALP_DB_EOLDER;
   }
   rc = upgraded_copy(fh, path, &d->db, err, errlen);
-  sqlite3_close(fh);
+  close_ro(fh, path, wal_before);
   file_id after;
   if (!rc && unlocked && (file_id_of(path, &after) != 0 || !file_id_same(&before, &after))) {
     /* a writer opened it while it was copied: the copy may hold pages of two states */
@@ -343,6 +409,8 @@ int palp_db_copied_unlocked(palp_db *db) { return db ? db->unlocked : 0; }
 void palp_db_close(palp_db *db) {
   if (!db) return;
   sqlite3_close(db->db);
+  if (db->ro_path) tidy_wal(db->ro_path, db->wal_before);
+  free(db->ro_path);
   free(db);
 }
 

@@ -565,8 +565,9 @@ int main(int argc, char **argv) {
                   "in memory; the file is left as it is (palp-review migrate upgrades it)",
                   path, palp_db_copied_from_version(db), palp_db_schema_version());
   if (palp_db_copied_unlocked(db))
-    palp_log_info(&log, "%s: no -wal beside it and a directory this user cannot write: read from a copy in memory "
-                  "taken at once, as SQLite cannot lock it here; the file is left as it is", path);
+    palp_log_info(&log, "%s: no -wal beside it, and this user cannot write the file or its directory: read from a "
+                  "copy in memory taken at once, without the -wal and -shm SQLite would need beside it; the file is "
+                  "left as it is", path);
   int rc;
   if (!strcmp(cmd, "list") || !strcmp(cmd, "class") || !strcmp(cmd, "trainee") || !strcmp(cmd, "delete") ||
       !strcmp(cmd, "prune")) {

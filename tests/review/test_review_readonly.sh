@@ -10,9 +10,13 @@
 #  - a directory this user cannot write, the files 0444 (as root, palp-review runs as nobody
 #    through setpriv, as root ignores the permissions): the old log and a current one are read, and
 #    no -wal, -shm or -journal is made beside them; a rollback-mode copy with a hot journal is refused
-#    rather than read without its journal (immutable is for WAL files without a -wal only); such a
+#    rather than read without its journal (immutable is for WAL files without a -wal, or with an empty
+#    one, only: a copy with a zero-length -wal is read as the others); such a
 #    file (no -wal, no locks) is read from a copy in memory made at open, said in the log, and refused
 #    beyond PALP_REVIEW_COPY_MB (0 here) naming it;
+#  - a log shared through a group, read by another member: nothing left beside it (a read-only SQLite
+#    connection leaves its -wal and -shm, and the log's owner could not write them), and the owner
+#    writes after; the file not the reviewer's to write: read from a copy, nothing left either;
 #  - migrate upgrades the file itself (user_version 1 -> current; the rows as the copy showed them),
 #    and says there is nothing to do the second time;
 #  - a write command (annotate) still writes and upgrades.
@@ -68,9 +72,9 @@ for v in 1 4; do
   R class --exercise none --out "$dir/class-$v.html" > /dev/null 2>&1 # no exercise sessions: exit 2, said
   R trainee carol > "$dir/trainee-$v.txt" 2>&1 || bad "v$v: trainee exit status"
   after=$(state "$db")
-  if [ "$before" = "$after" ]; then
-    ok "v$v: list, show, export, report, replay, class and trainee leave the file as it was (sha256 mtime user_version: $after)"
-  else bad "v$v: the file changed by reading it: $before -> $after"; fi
+  if [ "$before" = "$after" ] && [ ! -e "$db-wal" ] && [ ! -e "$db-shm" ]; then
+    ok "v$v: list, show, export, report, replay, class and trainee leave the file as it was (sha256 mtime user_version: $after), no -wal or -shm beside it"
+  else bad "v$v: the file changed by reading it: $before -> $after; beside it: $(ls "$db"-* 2>&1)"; fi
   if grep -Eq "^old-run-1 +carol +dome old +- +2020-09-13 .* +0\.02 normal +1 +'B' \(free text\)$" "$dir/list-$v.txt" &&
      grep -q '^1 session$' "$dir/list-$v.txt" &&
      grep -q "a log of schema version $v (an older palp's), read through a copy upgraded to version $current in memory; the file is left as it is" "$dir/list-$v.err"; then
@@ -123,31 +127,35 @@ c.execute("ROLLBACK")
 c.execute("PRAGMA journal_mode = WAL")
 PY
 mv "$dir/hot.db" "$dir/hot.db-journal" "$ro/"
-chmod 0444 "$ro"/*.db "$ro"/*.db-journal
+# ... and a copy of the current log with an empty -wal beside it (a reader's, or one a checkpoint reset):
+# it holds no commit, so the file is read as one without a -wal (2026-12-06; it was refused)
+cp "$ro/current.db" "$ro/wal0.db"
+: > "$ro/wal0.db-wal"
+chmod 0444 "$ro"/*.db "$ro"/*.db-journal "$ro"/*.db-wal
 chmod 0555 "$ro"
 as_reader() {
   if [ "$(id -u)" = 0 ]; then setpriv --reuid=65534 --regid=65534 --clear-groups "$@"
   else "$@"; fi
 }
 if [ "$(id -u)" = 0 ] && as_reader sh -c ": > '$ro/probe'" 2>/dev/null; then bad "the read-only directory is writable for the reader"; fi
-for f in old current; do
+for f in old current wal0; do
   before=$(state "$ro/$f.db")
   as_reader "$review" --db "$ro/$f.db" list > "$dir/ro-$f.txt" 2>&1 || bad "read-only $f: list exit status: $(cat "$dir/ro-$f.txt")"
   as_reader "$review" --db "$ro/$f.db" show old-run-1 >> "$dir/ro-$f.txt" 2>&1 || bad "read-only $f: show exit status"
   if grep -Eq "^old-run-1 +carol " "$dir/ro-$f.txt" && grep -q '^trainee    carol ' "$dir/ro-$f.txt" &&
-     [ "$(state "$ro/$f.db")" = "$before" ] && [ "$(ls -A "$ro" | tr '\n' ' ')" = "current.db hot.db hot.db-journal old.db " ]; then
+     [ "$(state "$ro/$f.db")" = "$before" ] && [ "$(ls -A "$ro" | tr '\n' ' ')" = "current.db hot.db hot.db-journal old.db wal0.db wal0.db-wal " ]; then
     ok "read-only directory and file ($f log, as $(as_reader id -un)): list and show read it, nothing made beside it"
   else bad "read-only directory ($f log): $(ls -A "$ro" | tr '\n' ' '): $(cat "$dir/ro-$f.txt")"; fi
   # ... from a copy taken at once (2026-12-06, found by review: read in place without locks for the whole
   # command, a writer opening the file meanwhile could checkpoint into it under the reads): said, and
   # bounded by PALP_REVIEW_COPY_MB as every copy is. What this shows is that the reads go to a copy made
   # when the file was opened, not that a change during the copy is caught (no test makes that race).
-  if [ "$(grep -c "$ro/$f.db: no -wal beside it and a directory this user cannot write: read from a copy in memory taken at once" "$dir/ro-$f.txt")" = 2 ]; then
+  if [ "$(grep -c "$ro/$f.db: no -wal beside it, and this user cannot write the file or its directory: read from a copy in memory taken at once" "$dir/ro-$f.txt")" = 2 ]; then
     ok "read-only directory ($f log): list and show each read from a copy in memory taken at open"
   else bad "read-only directory ($f log): no copy said: $(cat "$dir/ro-$f.txt")"; fi
   if PALP_REVIEW_COPY_MB=0 as_reader "$review" --db "$ro/$f.db" list > "$dir/ro-big-$f.txt" 2>&1; then
     bad "read-only directory ($f log): read without locks beyond PALP_REVIEW_COPY_MB=0: $(cat "$dir/ro-big-$f.txt")"
-  elif grep -q "there is no -wal beside it and this user cannot write its directory, .* more than the 0.0 MB allowed (PALP_REVIEW_COPY_MB)" "$dir/ro-big-$f.txt" &&
+  elif grep -q "there is no -wal beside it and this user cannot write the file or its directory, .* more than the 0.0 MB allowed (PALP_REVIEW_COPY_MB)" "$dir/ro-big-$f.txt" &&
        [ "$(state "$ro/$f.db")" = "$before" ]; then
     ok "read-only directory ($f log), PALP_REVIEW_COPY_MB=0: refused naming PALP_REVIEW_COPY_MB, the file as it was"
   else bad "read-only directory ($f log), PALP_REVIEW_COPY_MB=0: $(cat "$dir/ro-big-$f.txt")"; fi
@@ -160,6 +168,50 @@ elif grep -q "hot.db: cannot read it: " "$dir/ro-hot.txt" && [ "$(state "$ro/hot
   ok "read-only directory: a rollback-mode log with a hot journal is refused (not read without its journal), both files as they were"
 else bad "read-only directory, hot journal: $(cat "$dir/ro-hot.txt")"; fi
 chmod 0755 "$ro"
+
+# A log shared through a group (found by review, 2026-12-06): its owner (uid 65533) and a reviewer
+# (uid 65534), both in group 4242, which may write the directory and the 0664 file. A read-only SQLite
+# connection makes a -wal and -shm beside a cleanly closed WAL log and never removes them: they were
+# left owned by the reviewer, 65534:65534 0664, and the owner's next write failed ("attempt to write a
+# readonly database"). Now the reviewer's list and show leave nothing beside the file, its bytes and
+# mtime as they were, and the owner writes. Then the file 0644 (the reviewer may write the directory,
+# not the file, so SQLite could not remove what it made): read from a copy, nothing beside it, the
+# owner writes again. Needs root to act as the two users.
+if [ "$(id -u)" = 0 ]; then
+  sh=$dir/shared
+  mkdir -p "$sh"
+  old_log "$sh/log.db" 1
+  "$review" --db "$sh/log.db" migrate > /dev/null 2>&1 || bad "migrating the shared log"
+  chown 65533:4242 "$sh/log.db" && chmod 0664 "$sh/log.db" && chown 0:4242 "$sh" && chmod 0775 "$sh" ||
+    bad "setting the shared directory's owners"
+  reviewer() { setpriv --reuid=65534 --regid=65534 --groups=4242 "$@"; }
+  owner() { setpriv --reuid=65533 --regid=65533 --groups=4242 "$@"; }
+  for mode in 0664 0644; do
+    chmod "$mode" "$sh/log.db"
+    # counted before the review: root's sqlite3, closing last, would remove what the reviewer left
+    notes=$(sqlite3 "$sh/log.db" "SELECT count(*) FROM note")
+    before=$(state "$sh/log.db")
+    reviewer "$review" --db "$sh/log.db" list > "$dir/shared-$mode.txt" 2>&1 || bad "shared $mode: list exit status"
+    reviewer "$review" --db "$sh/log.db" show old-run-1 >> "$dir/shared-$mode.txt" 2>&1 || bad "shared $mode: show exit status"
+    left=$(ls -A "$sh" | tr '\n' ' ')
+    if grep -Eq "^old-run-1 +carol " "$dir/shared-$mode.txt" && grep -q '^trainee    carol ' "$dir/shared-$mode.txt" &&
+       [ "$left" = "log.db " ] && [ "$(state "$sh/log.db")" = "$before" ]; then
+      ok "shared directory, the file $mode: the reviewer's list and show read it and leave nothing beside it, the file as it was"
+    else bad "shared directory, the file $mode: beside it: $left; $(ls -ln "$sh"); $(cat "$dir/shared-$mode.txt")"; fi
+    if owner "$review" --db "$sh/log.db" annotate old-run-1 --author Lee --note "after the review" > "$dir/shared-w-$mode.txt" 2>&1 &&
+       [ "$(sqlite3 "$sh/log.db" "SELECT count(*) FROM note")" = $((notes + 1)) ]; then
+      ok "shared directory, the file $mode: the owner writes the log after the review"
+    else bad "shared directory, the file $mode: the owner's write: $(cat "$dir/shared-w-$mode.txt")"; fi
+    rm -f "$sh/log.db-wal" "$sh/log.db-shm" # root's sqlite3 count above may leave them for the next round
+  done
+  if grep -q "no -wal beside it, and this user cannot write the file or its directory: read from a copy" "$dir/shared-0644.txt" &&
+     ! grep -q "read from a copy" "$dir/shared-0664.txt"; then
+    ok "shared directory: the 0664 file read in place, the 0644 one (not the reviewer's to tidy after) from a copy"
+  else bad "shared directory: how each was read: $(cat "$dir/shared-0664.txt" "$dir/shared-0644.txt")"; fi
+  chown -R 0:0 "$sh"
+else
+  echo "skip the shared directory (needs root to act as two users)"
+fi
 
 # migrate: the file itself upgraded, its rows as the copy showed them; then nothing to do.
 "$review" --db "$db" migrate > "$dir/migrate.txt" 2>&1 || bad "migrate exit status"
