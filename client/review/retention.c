@@ -11,7 +11,8 @@
  * Both run in transactions of up to RETENTION_BATCH_SESSIONS sessions, each closed once it has run
  * RETENTION_BATCH_SECONDS, on the WAL connection with its busy timeout, so a server writing other
  * sessions at the same time only waits, briefly; a transaction is all or nothing (a crash or an error
- * leaves every session of it as it was). Then the freed pages go back to the file system with VACUUM
+ * leaves every session of it as it was), and one rolled back because a session of it failed is run
+ * again without that session (delete then stops there; prune goes on). Then the freed pages go back to the file system with VACUUM
  * (or PRAGMA incremental_vacuum when the file is in that mode), which also waits on the busy timeout
  * and leaves the file untouched if it cannot get the lock.
  *
@@ -88,6 +89,7 @@ static int exec_sid(sqlite3 *h, const char *fmt, const char *table, int64_t sid)
  * these. */
 typedef struct prune_item {
   int index;    /* in the session list */
+  int failed;   /* its own statements failed: kept, and left out when its transaction is run again */
   int assessed; /* 0: no finger samples (PALP_DB_ENOTFOUND), no metrics stored */
   int has_exercise;
   char exercise_name[64];
@@ -250,16 +252,35 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
     }
   }
   const long long before = file_bytes(path);
-  int i = 0;
-  while (i < argc) {
+  /* A session whose own statements fail stops the delete there, as one transaction per session did
+   * before 2026-12-06: the sessions named before it are deleted (those of its transaction again, in
+   * one of their own; found by review: they were rolled back with it and left), it and the later ones
+   * not. end: where the transactions stop, the failed session once one has. */
+  int i = 0, end = argc, rc = REVIEW_OK;
+  while (i < end) {
     const int first = i;
     const double t0 = mono_s();
     int bad = sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK;
-    while (!bad && i < argc && batch_has_room(i - first, t0)) {
+    const int began = !bad;
+    while (!bad && i < end && batch_has_room(i - first, t0)) {
       bad = delete_session(h, ids[i]);
       if (!bad) i++;
     }
+    if (bad && began && end == argc) {
+      char msg[256];
+      snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
+      sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
+      palp_log_error(log, "delete %s: %s (untouched%s%s)", argv[i], msg,
+                     i > first ? "; the sessions named before it are deleted without it" : "",
+                     i + 1 < argc ? "; the later ones not tried" : "");
+      rc = REVIEW_ERROR;
+      end = i;
+      i = first;
+      continue;
+    }
     if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+      /* the write lock not had, a COMMIT refused (the disk full), or a session failing where it had not:
+       * the transaction's sessions are untouched, and nothing after them is tried */
       char msg[256];
       snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
       sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
@@ -273,6 +294,7 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
     for (int k = first; k < i; k++) printf("deleted %s\n", argv[k]);
   }
   free(ids);
+  if (rc != REVIEW_OK) return rc; /* no compaction after a failure: the command stops where it failed */
   reclaim(log, h);
   printf("file %lld -> %lld bytes\n", before, file_bytes(path));
   return REVIEW_OK;
@@ -359,9 +381,16 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
       }
       if (!arc) review_assessment_free(&a);
     }
-    /* The batch, in as many transactions as the time allows each. */
+    /* The batch, in as many transactions as the time allows each. A session whose own statements fail
+     * is kept and its transaction run again without it: until 2026-12-06 the sessions before it in
+     * that transaction were rolled back with it and not tried again in this run (found by review; the
+     * one transaction per session before kept only the failing one). */
     int k = 0;
     while (k < nb) {
+      if (batch[k].failed) {
+        k++;
+        continue;
+      }
       const int first = k;
       const double t0 = mono_s();
       if (sqlite3_exec(h, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
@@ -374,21 +403,34 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
         break;
       }
       int bad = 0;
-      while (!bad && k < nb && batch_has_room(k - first, t0)) {
+      while (!bad && k < nb && !batch[k].failed && batch_has_room(k - first, t0)) {
         bad = prune_session(h, v[batch[k].index].id, &batch[k]);
         if (!bad) k++;
       }
-      if (bad || sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+      if (bad) {
+        /* session k's own statements: it is kept; the ones before it in this transaction go again in
+         * one of their own (which stops at k), the rest of the batch after it */
         char msg[256];
         snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
         sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
-        const int last = bad ? k : k - 1; /* the session that failed, or the transaction's last when COMMIT did */
-        palp_log_error(log, "prune %s: %s (rolled back with its transaction: %d session%s, untouched)",
-                       v[batch[last].index].uid, msg, last - first + 1, last > first ? "s" : "");
-        for (int j = first; j <= last; j++)
-          printf("kept   %s: rolled back (%s)\n", v[batch[j].index].uid, msg);
+        palp_log_error(log, "prune %s: %s (kept, untouched%s)", v[batch[k].index].uid, msg,
+                       k > first ? "; the sessions before it in its transaction are pruned again without it" : "");
+        printf("kept   %s: %s\n", v[batch[k].index].uid, msg);
+        batch[k].failed = 1;
         rc = REVIEW_ERROR;
-        k = last + 1; /* the rest of the batch in a transaction of its own */
+        k = first;
+        continue;
+      }
+      if (sqlite3_exec(h, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+        /* no one session's fault (the disk full, an I/O error): the transaction's sessions are kept, and
+         * the prune goes on with the rest */
+        char msg[256];
+        snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
+        sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
+        palp_log_error(log, "prune: COMMIT: %s (rolled back: %s .. %s, %d session%s, untouched)", msg,
+                       v[batch[first].index].uid, v[batch[k - 1].index].uid, k - first, k - first > 1 ? "s" : "");
+        for (int j = first; j < k; j++) printf("kept   %s: rolled back (%s)\n", v[batch[j].index].uid, msg);
+        rc = REVIEW_ERROR;
         continue;
       }
       for (int j = first; j < k; j++) printf("pruned %s\n", v[batch[j].index].uid);
