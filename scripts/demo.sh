@@ -18,7 +18,14 @@
 #   PALP_DEMO_OUT=DIR selects where its logs, snapshots, CSVs and reports go (default out/demo): a
 #   new or empty directory, or one an earlier demo made (it leaves .palp-demo-out there); the demo
 #   deletes its previous run's *.log, *.svg and *.csv in it, so it refuses a directory with other files
+#   A relative PALP_DEMO_OUT, PALP_PKI_DIR, PALP_DEMO_DB or PALP_DEMO_RECORDED_DB is taken from the
+#   directory the demo is run from; PALP_BUILD_DIR, as scripts/setup.sh reads it, from the repository.
 set -euo pipefail
+# The paths a caller gives are the caller's: made absolute against the directory it ran the demo from,
+# before the cd below (until 2026-12-06 a relative one resolved against the repository; found by review).
+for v in PALP_DEMO_OUT PALP_PKI_DIR PALP_DEMO_DB PALP_DEMO_RECORDED_DB; do
+  case ${!v:-} in "" | /*) ;; *) printf -v "$v" '%s/%s' "$PWD" "${!v}" ;; esac
+done
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
 build=${PALP_BUILD_DIR:-build}
@@ -27,7 +34,8 @@ build=${PALP_BUILD_DIR:-build}
 # marker file below), or a new or empty one, checked before anything is built or started. Until
 # 2026-12-06 it emptied "$out"/*.log, *.svg and *.csv wherever PALP_DEMO_OUT pointed: /var/log or a
 # home directory lost files palp never wrote (found by review). out/demo, the default, is the demo's
-# own even when an earlier demo left it without the marker.
+# own even when an earlier demo left it without the marker, however it is named (PALP_DEMO_OUT unset,
+# or naming that directory: the resolved paths are compared).
 out=${PALP_DEMO_OUT:-out/demo}
 marker=.palp-demo-out
 demo_out_prepare() {
@@ -35,7 +43,7 @@ demo_out_prepare() {
     echo "demo: PALP_DEMO_OUT=$out is not a directory; point it at a new or empty directory" >&2
     exit 2
   fi
-  if [ -d "$out" ] && [ ! -f "$out/$marker" ] && [ -n "${PALP_DEMO_OUT:-}" ] &&
+  if [ -d "$out" ] && [ ! -f "$out/$marker" ] && [ "$(realpath -m "$out")" != "$(realpath -m out/demo)" ] &&
     [ -n "$(ls -A "$out" 2>/dev/null)" ]; then
     echo "demo: PALP_DEMO_OUT=$out holds files the demo did not make (no $marker in it): the demo deletes its" \
       "previous run's *.log, *.svg and *.csv where it writes, so it writes only into a new or empty directory," \
