@@ -380,6 +380,8 @@ int palp_db_copied_unlocked(palp_db *db);
 /* The schema version of the log at path, looked at read-only (as palp_db_open_readonly checks it);
  * 0, or the codes palp_db_open_readonly returns for a file it refuses. */
 int palp_db_peek_version(const char *path, int *version, char *err, size_t errlen);
+/* The log's bytes on disk: the file and its -wal (0 for what does not exist). */
+long long palp_db_file_bytes(const char *path);
 void palp_db_close(palp_db *db);
 /* The file's schema version (PRAGMA user_version). */
 int palp_db_file_version(palp_db *db);

@@ -274,10 +274,12 @@ int palp_db_peek_version(const char *path, int *version, char *err, size_t errle
   return check_palp_file(path, NULL, version, NULL, NULL, NULL, err, errlen);
 }
 
-/* The file and its -wal: what an in-memory copy of the log would hold at most. */
-static long long log_bytes(const char *path) {
+/* The file and its -wal: what the disk holds for this log, and what an in-memory copy of it
+ * would hold at most. */
+long long palp_db_file_bytes(const char *path) {
   struct stat st;
   long long n = 0;
+  if (!path) return 0;
   if (stat(path, &st) == 0) n += st.st_size;
   char wal[4200];
   snprintf(wal, sizeof wal, "%s-wal", path);
@@ -360,7 +362,7 @@ int palp_db_open_readonly(const char *path, long long copy_max_bytes, palp_db **
    * once, whatever its schema (2026-12-06, found by review: it was read in place for the whole command,
    * and a writer opening the file meanwhile could checkpoint into it under the reads: rows of two
    * states, or pages SQLite takes for corrupt). */
-  const long long bytes = log_bytes(path);
+  const long long bytes = palp_db_file_bytes(path);
   if (bytes > copy_max_bytes) {
     if (unlocked)
       palp_db__fmt(err, errlen,

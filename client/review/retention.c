@@ -62,17 +62,6 @@ static int batch_has_room(int taken, double t0) {
 static const char *const bulky[] = {"frame", "feedback", "contact_input", "mesh", "finger_sample"};
 static const char *const small[] = {"session_exercise", "finding", "event", "note", "session_metrics"};
 
-static long long file_bytes(const char *path) {
-  /* The main file plus its WAL: what the disk holds for this log. */
-  struct stat st;
-  long long n = 0;
-  if (stat(path, &st) == 0) n += st.st_size;
-  char wal[1100];
-  snprintf(wal, sizeof wal, "%s-wal", path);
-  if (stat(wal, &st) == 0) n += st.st_size;
-  return n;
-}
-
 static int exec_sid(sqlite3 *h, const char *fmt, const char *table, int64_t sid) {
   char sql[256];
   snprintf(sql, sizeof sql, fmt, table);
@@ -251,7 +240,7 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
       return REVIEW_ERROR;
     }
   }
-  const long long before = file_bytes(path);
+  const long long before = palp_db_file_bytes(path);
   /* A session whose own statements fail stops the delete there, as one transaction per session did
    * before 2026-12-06: the sessions named before it are deleted (those of its transaction again, in
    * one of their own; found by review: they were rolled back with it and left), it and the later ones
@@ -296,7 +285,7 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
   free(ids);
   if (rc != REVIEW_OK) return rc; /* no compaction after a failure: the command stops where it failed */
   reclaim(log, h);
-  printf("file %lld -> %lld bytes\n", before, file_bytes(path));
+  printf("file %lld -> %lld bytes\n", before, palp_db_file_bytes(path));
   return REVIEW_OK;
 }
 
@@ -331,7 +320,7 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
     palp_log_error(log, "prune: %s", palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
-  const long long before = file_bytes(path);
+  const long long before = palp_db_file_bytes(path);
   int pruned = 0, rc = REVIEW_OK;
   prune_item *batch = dry ? NULL : malloc(RETENTION_BATCH_SESSIONS * sizeof *batch);
   if (!dry && !batch) {
@@ -441,6 +430,6 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
   free(v);
   /* also when nothing was pruned this time: what an earlier prune freed beside a running server */
   if (!dry && (pruned || (freelist_pages(h) > 0 && !live_writer_pid(h)))) reclaim(log, h);
-  printf("%d session%s pruned; file %lld -> %lld bytes\n", pruned, pruned == 1 ? "" : "s", before, file_bytes(path));
+  printf("%d session%s pruned; file %lld -> %lld bytes\n", pruned, pruned == 1 ? "" : "s", before, palp_db_file_bytes(path));
   return rc;
 }
