@@ -83,6 +83,12 @@ static int get_int(ctx *c, const cJSON *obj, const char *path, const char *key, 
   return PALP_OK;
 }
 
+/* Whether plain d / |d| is exact enough for d: d.d finite and well inside the doubles. */
+static int well_scaled(palp_vec3 d) {
+  const double d2 = v3_dot(d, d);
+  return isfinite(d2) && d2 >= DBL_MIN / DBL_EPSILON;
+}
+
 /* The unit vector along a finite, non-zero d. Plain d / |d| while d.d is well inside the
  * doubles (>= DBL_MIN / DBL_EPSILON, so subnormal squares cost no precision, and finite): those
  * are the bits every logged session was stepped with, so replays keep them. Otherwise d is first
@@ -90,8 +96,7 @@ static int get_int(ctx *c, const cJSON *obj, const char *path, const char *key, 
  * had length inf and a silently zero force, and [1e-170, 0, -1e-170] length 0, which read as
  * "no direction" and pushed along the default inward normal instead. */
 static palp_vec3 unit_direction(palp_vec3 d) {
-  const double d2 = v3_dot(d, d);
-  if (isfinite(d2) && d2 >= DBL_MIN / DBL_EPSILON) return v3_scale(d, 1.0 / sqrt(d2));
+  if (well_scaled(d)) return v3_scale(d, 1.0 / sqrt(v3_dot(d, d)));
   const double m = fmax(fabs(d.x), fmax(fabs(d.y), fabs(d.z)));
   const palp_vec3 u = v3(d.x / m, d.y / m, d.z / m); /* divided, not times 1/m: 1/5e-324 is inf */
   return v3_scale(u, 1.0 / v3_len(u));
@@ -338,10 +343,7 @@ static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_sc
   /* Kept as given where plain normalisation is exact enough (the bits logged sessions were
    * replayed with), made unit where it over- or underflows (unit_direction); all zero is the
    * default inward normal, as palp_scene_to_json writes it and every log holds it. */
-  if (!is_zero(sc->direction)) {
-    const double d2 = v3_dot(sc->direction, sc->direction);
-    if (!(isfinite(d2) && d2 >= DBL_MIN / DBL_EPSILON)) sc->direction = unit_direction(sc->direction);
-  }
+  if (!is_zero(sc->direction) && !well_scaled(sc->direction)) sc->direction = unit_direction(sc->direction);
   const cJSON *prof = get_obj(c, o, path, "profile", 1, &e);
   if (e) return e;
   char p3[64];
