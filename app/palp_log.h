@@ -71,6 +71,14 @@ void palp_log_debug_line(void *ctx, const char *line);
  * as \xNN, so what is logged maps back to what came; cut to fit out (len >= 1), always
  * terminated. Returns out. */
 char *palp_log_printable(const char *in, char *out, size_t len);
+/* palp_log_printable of a network string into a buffer of the expression's own (a compound literal,
+ * alive to the end of the enclosing block): 4x the field, so every byte fits escaped. For a 64-byte
+ * field (a station id, a user name), and for a 128-byte one. */
+typedef struct palp_log_field {
+  char s[4 * 64];
+} palp_log_field;
+#define PALP_PRINTABLE(str) (palp_log_printable((str), (palp_log_field){{0}}.s, sizeof(palp_log_field)))
+#define PALP_PRINTABLE_LONG(str) (palp_log_printable((str), (char[4 * 128]){0}, 4 * 128))
 
 /* Formats the current UTC time as 2024-05-01T10:00:00.123Z into buf (>= 25 bytes). */
 void palp_log_timestamp(char *buf, size_t len);

@@ -199,13 +199,6 @@ struct palp_srv {
 
 static int secured(const palp_srv *srv) { return srv->sec.kind != PALP_DDS_ID_NONE; }
 
-/* A station id or user name from the network, for the text log: escaped (palp_log_printable),
- * so a newline in it cannot forge a log line. buf: 4x the field, every byte escapable. */
-typedef struct printable {
-  char s[4 * 64];
-} printable;
-#define PRINTABLE(str) (palp_log_printable((str), (printable){{0}}.s, sizeof(printable)))
-
 /* Cyclone's threads: a line about a refused peer was logged; the session log keeps it too. */
 static void record_refusal(void *ctx, const palp_dds_refusal *r, uint64_t count) {
   const palp_srv *srv = ctx;
@@ -1243,7 +1236,7 @@ static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_Sessio
   if (srv->events && srv->events->member_changed)
     srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 1);
   palp_log_info(srv->log, "session %u: trainee station %s came back after %.1f s; the session goes on", s->id,
-                PRINTABLE(st->id), away);
+                PALP_PRINTABLE(st->id), away);
 }
 
 /* The open session held for this trainee station, or NULL. */
@@ -1289,7 +1282,7 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
   if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
   /* At the level of its join (who followed a session, and until when, is the instructor's to read). */
-  palp_log_info(srv->log, "station %s (%s) left session %u: %s", PRINTABLE(st->id),
+  palp_log_info(srv->log, "station %s (%s) left session %u: %s", PALP_PRINTABLE(st->id),
                 role == palp_ROLE_VISUAL ? "visual" : "observer", sid, reason);
   free_station(srv, st); /* after its last read */
   publish_state(srv, s, 0, NULL, NULL);
@@ -1485,8 +1478,8 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     publish_state(srv, s, 0, NULL, NULL);
     publish_catalogue(srv, ph);
     palp_log_info(srv->log, "session %u opened: trainee \"%s\" (%s) on phantom %u \"%s\", partition %s",
-            s->id, PRINTABLE(s->trainee_name), PRINTABLE(s->trainee_station), ph->cfg.id, ph->cfg.name,
-            PRINTABLE(s->partition));
+            s->id, PALP_PRINTABLE(s->trainee_name), PALP_PRINTABLE(s->trainee_station), ph->cfg.id, ph->cfg.name,
+            PALP_PRINTABLE(s->partition));
     return;
   }
   /* Visual station or observer: a given session, else the newest on the phantom.
@@ -1533,7 +1526,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
     srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
-  palp_log_info(srv->log, "station %s joined session %u as %s", PRINTABLE(st->id), s->id,
+  palp_log_info(srv->log, "station %s joined session %u as %s", PALP_PRINTABLE(st->id), s->id,
           rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
 }
 
@@ -1840,24 +1833,24 @@ static void handle_requests(palp_srv *srv) {
                * one to refuse. */
               if (!own) {
                 logf_(srv, "station \"%s\": LEAVE from a writer already gone, for no open station",
-                       PRINTABLE(buf[i].station_id));
+                       PALP_PRINTABLE(buf[i].station_id));
                 continue;
               }
             }
-            refuse_identity(srv, "station \"%s\": the writer's identity is unknown", PRINTABLE(buf[i].station_id));
+            refuse_identity(srv, "station \"%s\": the writer's identity is unknown", PALP_PRINTABLE(buf[i].station_id));
             continue;
           }
           if (!palp_srv_station_owned_by(buf[i].station_id, &who)) {
             refuse_identity(srv, "%s/%s sent a request for station \"%s\", which is not its own",
-                            palp_dds_id_kind_name(who.kind), PRINTABLE(who.name), PRINTABLE(buf[i].station_id));
+                            palp_dds_id_kind_name(who.kind), PALP_PRINTABLE(who.name), PALP_PRINTABLE(buf[i].station_id));
             continue;
           }
           if (buf[i].op == palp_OP_JOIN && strcmp(buf[i].user_name, who.name) != 0) {
             char why[160];
             snprintf(why, sizeof why, "user_name \"%.40s\" is not the authenticated identity %s/%s", buf[i].user_name,
                      palp_dds_id_kind_name(who.kind), who.name);
-            refuse_identity(srv, "user_name \"%s\" is not the authenticated identity %s/%s", PRINTABLE(buf[i].user_name),
-                            palp_dds_id_kind_name(who.kind), PRINTABLE(who.name));
+            refuse_identity(srv, "user_name \"%s\" is not the authenticated identity %s/%s", PALP_PRINTABLE(buf[i].user_name),
+                            palp_dds_id_kind_name(who.kind), PALP_PRINTABLE(who.name));
             reply_unslotted(srv, &buf[i], why);
             continue;
           }
@@ -1887,7 +1880,7 @@ static void handle_requests(palp_srv *srv) {
        * disposed, may turn not-alive no more. */
       if (secured(srv) && info[i].publication_handle != st->writer) {
         refuse_identity(srv, "station \"%s\": disposed or unregistered by a writer that is not its own",
-                        PRINTABLE(buf[i].station_id));
+                        PALP_PRINTABLE(buf[i].station_id));
         continue;
       }
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
