@@ -286,6 +286,8 @@ typedef struct recorder {
 /* A session opens or ends in this log: its streams pass the gate as long as it is open here. Ended,
  * its station's writers are retired: a station writes a session's contacts and findings through
  * writers of that session, so what they write after its end is no session's. */
+static void retire(recorder *r, dds_instance_handle_t w);
+
 static void set_open(recorder *r, rsession *s, int open) {
   s->open = open;
   palp_dds_gate_set(&r->gate, (int)(s - r->s), open ? s->id : 0);
@@ -297,10 +299,7 @@ static void set_open(recorder *r, rsession *s, int open) {
     r->ended[r->ended_next] = (ended_run){.session_id = s->id, .run = s->run, .writer = i < 0 ? 0 : s->server_writer[i]};
     r->ended_next = (r->ended_next + 1) % ENDED_RUNS;
   }
-  for (int i = 0; i < s->station_writers; i++) {
-    r->retired[r->retired_next] = s->station_writer[i];
-    r->retired_next = (r->retired_next + 1) % RETIRED_WRITERS;
-  }
+  for (int i = 0; i < s->station_writers; i++) retire(r, s->station_writer[i]);
   s->station_writers = 0;
 }
 
@@ -309,14 +308,6 @@ static void on_signal(int sig) {
   if (sig == SIGHUP) hup_flag = 1; /* log rotation: re-open --log-file in the main loop */
   else stop_flag = 1;
 }
-
-/* A string from the network, for the text log: escaped (palp_log_printable), so that a newline in it
- * cannot forge a log line. 4x a 64-byte field: every byte escapable. */
-typedef struct printable {
-  char s[4 * 64];
-} printable;
-#define PRINTABLE(str) (palp_log_printable((str), (printable){{0}}.s, sizeof(printable)))
-#define PRINTABLE_LONG(str) (palp_log_printable((str), (char[4 * 128]){0}, 4 * 128))
 
 static double now_unix(void) {
   struct timespec ts;
@@ -555,8 +546,8 @@ static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
   free(ex);
   if (rc < 0 || !named) {
     r->exercises_refused++;
-    palp_log_warn(r->log, "session %u: its exercise \"%s\" refused: %s", m->session_id, PRINTABLE(name),
-                  rc < 0 ? PRINTABLE_LONG(err) : "its name is not the exercise's own");
+    palp_log_warn(r->log, "session %u: its exercise \"%s\" refused: %s", m->session_id, PALP_PRINTABLE(name),
+                  rc < 0 ? PALP_PRINTABLE_LONG(err) : "its name is not the exercise's own");
     return;
   }
   rsession *s = find_session(r, m->session_id, 0);
@@ -622,7 +613,6 @@ static int64_t held_since(const recorder *r, uint32_t session_id);
 static void release_held(recorder *r, uint32_t session_id, const char *why);
 
 /* writer: its state's writer, run: that writer's participant (0: not known). */
-static void retire(recorder *r, dds_instance_handle_t w);
 static int station_topic(int kind);
 
 /* seen_ns: palp_dds_now_ns() as the state was taken. */
@@ -733,11 +723,17 @@ static void note_held(recorder *r, rsession *s, const palp_SessionState *m) {
 static void fold_counts(recorder *r, rsession *s, int64_t now_ns, int all);
 static void flush_contacts(recorder *r, rsession *s, int64_t now_ns, int all);
 
-/* Ends a session in this log as cut short (why: its detail), its counts first. */
-static void end_cut(recorder *r, rsession *s, const char *why) {
+/* What a session still holds back, written before it ends: its unanswered findings, its pending
+ * contacts and its folded counts. */
+static void settle_all(recorder *r, rsession *s) {
   settle_findings(r, s, 1);
   flush_contacts(r, s, 0, 1);
   fold_counts(r, s, palp_dds_now_ns(), 1);
+}
+
+/* Ends a session in this log as cut short (why: its detail), its counts first. */
+static void end_cut(recorder *r, rsession *s, const char *why) {
+  settle_all(r, s);
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, why, 1));
   count(r, palp_db_log_session_end(r->w, s->h, PALP_DB_END_ERROR, why, 0));
   set_open(r, s, 0);
@@ -828,9 +824,7 @@ static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handl
 }
 
 static void close_session(recorder *r, rsession *s, const palp_SessionState *m) {
-  settle_findings(r, s, 1);
-  flush_contacts(r, s, 0, 1);
-  fold_counts(r, s, palp_dds_now_ns(), 1);
+  settle_all(r, s);
   if (m->rejected_samples)
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_REJECT, s->frame, "samples rejected by the server",
                                (int64_t)m->rejected_samples));
@@ -844,7 +838,7 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
                                s->foreign));
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
   count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
-  palp_log_info(r->log, "session %u closed (%s)", m->session_id, PRINTABLE_LONG(m->reason));
+  palp_log_info(r->log, "session %u closed (%s)", m->session_id, PALP_PRINTABLE_LONG(m->reason));
   set_open(r, s, 0);
 }
 
@@ -1065,11 +1059,11 @@ static int from_its_partition(recorder *r, uint32_t sid, palp_dds_origin_verdict
     char where[320];
     if (!from) snprintf(where, sizeof where, "no longer matched (its partition unknown)");
     else if (!from[0]) snprintf(where, sizeof where, "in several or no partitions");
-    else snprintf(where, sizeof where, "in partition %s", PRINTABLE(from)); /* a writer's: anyone's */
+    else snprintf(where, sizeof where, "in partition %s", PALP_PRINTABLE(from)); /* a writer's: anyone's */
     palp_log_warn(r->log,
                   "session %u: a %s naming it came from a writer %s, not its partition %s: not recorded, nor any "
                   "such sample of it (counted at its end; someone forges its session id)",
-                  sid, what, where, PRINTABLE(s->partition));
+                  sid, what, where, PALP_PRINTABLE(s->partition));
   }
   return 0;
 }
