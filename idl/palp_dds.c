@@ -513,6 +513,19 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {
  * station or palp-recorder kept (~100 MB with its triangles) from any peer on an unsecured domain. */
 #define PHANTOM_MAX_VERTICES PALP_MESH_MAX_VERTICES
 
+char *palp_dds_writer_participant_text(dds_entity_t reader, dds_instance_handle_t pub, char *out, size_t len) {
+  dds_builtintopic_endpoint_t *ep = pub ? dds_get_matched_publication_data(reader, pub) : NULL;
+  if (!ep) {
+    snprintf(out, len, "a writer already gone");
+    return out;
+  }
+  const unsigned char *g = ep->participant_key.v;
+  snprintf(out, len, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3], g[4],
+           g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
+  dds_builtintopic_free_endpoint(ep);
+  return out;
+}
+
 int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char *err, size_t errlen) {
   const uint32_t nv = ph->rest._length, ni = ph->triangles._length;
   if (nv < 4 || nv > PHANTOM_MAX_VERTICES || !ph->rest._buffer) {

@@ -217,6 +217,10 @@ int palp_dds_finger_sample_ok(const palp_FingerSample *m, int mesh_triangles);
  * vertex in range, radius and rest positions finite. Returns 0, or PALP_EINVAL with the reason in err
  * (the stations check with it as palp_cli_phantom_check, palp-recorder before it keeps an entry). */
 int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char *err, size_t errlen);
+/* Who wrote a sample taken from `reader`, for a log line: its writer's participant GUID as
+ * "participant xxxxxxxx:xxxxxxxx:xxxxxxxx" (38 characters), or "a writer already gone" when the
+ * writer (pub, 0: none) is no longer matched. Returns out. */
+char *palp_dds_writer_participant_text(dds_entity_t reader, dds_instance_handle_t pub, char *out, size_t len);
 
 /* A session score (palp_session_score) as a reader may use it: a known status; GRADED: score in
  * [0, 100], each component in [0, 1], each coverage in [0, 1], found <= lesions, duration and

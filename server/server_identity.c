@@ -84,21 +84,6 @@ static int other_is_older(const palp_srv_identity *id, const palp_ServerIdentity
   return strcmp(o->instance, id->me.instance) < 0;
 }
 
-/* Who wrote a claim, for the warning: the writer's participant GUID (plain DDS: any peer could
- * have; secured: only a participant holding one of the classroom's server certificates may
- * publish this topic, make-classroom-pki.sh). */
-static void claimant_of(const palp_srv_identity *id, dds_instance_handle_t pub, char *out, size_t len) {
-  dds_builtintopic_endpoint_t *ep = pub ? dds_get_matched_publication_data(id->reader, pub) : NULL;
-  if (!ep) {
-    snprintf(out, len, "a writer already gone");
-    return;
-  }
-  const unsigned char *g = ep->participant_key.v;
-  snprintf(out, len, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3], g[4],
-           g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
-  dds_builtintopic_free_endpoint(ep);
-}
-
 /* A claim of this server's name or number by an older server after its start-up window: giving way would close every session on the word of one sample,
  * which on plain DDS anyone may write. Warned about at most once per log interval (with how
  * many came meanwhile); this server keeps serving and says again that it holds them. */
@@ -110,7 +95,9 @@ static void late_claim(palp_srv_identity *id, const palp_ServerIdentity *o, dds_
     return;
   }
   char who[96], more[96] = "";
-  claimant_of(id, pub, who, sizeof who);
+  /* who wrote the claim: its participant's GUID (plain DDS: any peer could have; secured: only a
+   * participant holding one of the classroom's server certificates may publish this topic) */
+  palp_dds_writer_participant_text(id->reader, pub, who, sizeof who);
   if (id->late_unsaid)
     snprintf(more, sizeof more, " (and %llu more such claims since the last line)", (unsigned long long)id->late_unsaid);
   palp_log_warn(id->log, "server %s \"%s\" (number %u) claimed by an older server \"%s\" (number %u, instance \"%s\", "

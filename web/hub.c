@@ -768,7 +768,7 @@ static int phantom_refusal(const palp_Phantom *p, char *why, size_t len) {
     if (p->triangles._buffer[i] < 0 || (uint32_t)p->triangles._buffer[i] >= n)
       return snprintf(why, len, "triangle %u names vertex %d of %u", i / 3, (int)p->triangles._buffer[i], n), 1;
   for (uint32_t i = 0; i < n; i++)
-    if (!(isfinite(p->rest._buffer[i].x) && isfinite(p->rest._buffer[i].y) && isfinite(p->rest._buffer[i].z)))
+    if (!vec_finite(&p->rest._buffer[i]))
       return snprintf(why, len, "rest vertex %u is not finite", i), 1;
   return 0;
 }
@@ -791,14 +791,8 @@ static void refuse_phantom(palp_web_hub *h, const palp_Phantom *p, const char *w
   }
   h->refused_pub[h->refused_pub_n++] = w;
   /* named by its participant's GUID (plain DDS: any peer may publish a catalogue) */
-  char who[64] = "a writer already gone", name[64];
-  dds_builtintopic_endpoint_t *ep = w ? dds_get_matched_publication_data(h->catalogue_r, w) : NULL;
-  if (ep) {
-    const unsigned char *g = ep->participant_key.v;
-    snprintf(who, sizeof who, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3],
-             g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
-    dds_builtintopic_free_endpoint(ep);
-  }
+  char who[64], name[64];
+  palp_dds_writer_participant_text(h->catalogue_r, w, who, sizeof who);
   palp_log_warn(h->def.log, "catalogue: phantom %u \"%s\" from %s refused: %s; its publisher's further refusals are "
                             "counted, not logged (--stats)",
                 p->phantom_id, palp_log_printable(p->name, name, sizeof name), who, why);
@@ -1713,12 +1707,9 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
   finger *f = &s->f[m->finger];
   /* finite, and of a size a phantom can have (the server refuses the same: a contact 10 m off or of
    * 10 kN is no palpation; 1e308 m printed 316 characters into the live message, session 75) */
-  const double cm = hypot(hypot(m->center.x, m->center.y), m->center.z);
-  const double fm = hypot(hypot(m->force.x, m->force.y), m->force.z);
-  const int finite = isfinite(m->center.x) && isfinite(m->center.y) && isfinite(m->center.z) &&
-                     isfinite(m->force.x) && isfinite(m->force.y) && isfinite(m->force.z) && isfinite(m->radius) &&
-                     isfinite(m->patch_area) && cm <= LIVE_MAX_REACH_M && fm <= LIVE_MAX_FORCE_N &&
-                     fabs(m->radius) <= LIVE_MAX_REACH_M && fabs(m->patch_area) <= LIVE_MAX_REACH_M * LIVE_MAX_REACH_M;
+  const int finite = vec_within(&m->center, LIVE_MAX_REACH_M) && vec_within(&m->force, LIVE_MAX_FORCE_N) &&
+                     fabs(m->radius) <= LIVE_MAX_REACH_M && /* false for NaN and inf too */
+                     fabs(m->patch_area) <= LIVE_MAX_REACH_M * LIVE_MAX_REACH_M;
   if (m->mode == palp_CONTACT_RELEASE || !finite ||
       (m->mode != palp_CONTACT_FORCE && m->mode != palp_CONTACT_FINGER)) {
     /* The server rejects what is not finite or of no known mode; so does the view. */
