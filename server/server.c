@@ -1551,6 +1551,15 @@ static int station_writer_lost(palp_srv *srv, dds_instance_handle_t w) {
   return lost;
 }
 
+/* Whether `writer` is matched with `reader` now, asked alone: Cyclone walks the reader's matched writers and
+ * copies the one found's QoS. matched_has's way when it has no set. */
+static int writer_matched(dds_entity_t reader, uint64_t writer) {
+  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(reader, writer);
+  if (!w) return 0;
+  dds_builtintopic_free_endpoint(w);
+  return 1;
+}
+
 /* Cyclone 0.10 reports a dispose and a writer whose liveliness lapsed (autodispose)
  * alike, as a disposed instance, and unregisters the lapsed writer's instances just
  * before it calls the liveliness listener. So a disposed instance is a goodbye only
@@ -1561,9 +1570,7 @@ static int station_writer_lost(palp_srv *srv, dds_instance_handle_t w) {
  * it GONE_GRACE_NS later. Returns whether it was marked; else it is lost now. */
 static int station_gone_later(palp_srv *srv, station *st, const dds_sample_info_t *info) {
   if (info->instance_state != DDS_IST_NOT_ALIVE_DISPOSED || !info->publication_handle) return 0;
-  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(srv->station_request_r, info->publication_handle);
-  if (!w) return 0;
-  dds_builtintopic_free_endpoint(w);
+  if (!writer_matched(srv->station_request_r, info->publication_handle)) return 0;
   if (!st->gone_due_ns) st->gone_due_ns = palp_dds_now_ns() + GONE_GRACE_NS;
   st->gone_writer = info->publication_handle;
   return 1;
@@ -1592,15 +1599,6 @@ static int64_t next_gone_due(const palp_srv *srv) {
     if (st->in_use && st->gone_due_ns && st->gone_due_ns < due) due = st->gone_due_ns;
   }
   return due;
-}
-
-/* Whether `writer` is matched with `reader` now, asked alone: Cyclone walks the reader's matched writers and
- * copies the one found's QoS. matched_has's way when it has no set. */
-static int writer_matched(dds_entity_t reader, uint64_t writer) {
-  dds_builtintopic_endpoint_t *w = dds_get_matched_publication_data(reader, writer);
-  if (!w) return 0;
-  dds_builtintopic_free_endpoint(w);
-  return 1;
 }
 
 /* A reader's matched writers as one sweep sees them: read at the first question (after the admission table's
