@@ -189,20 +189,24 @@ static int reclaim(palp_log *log, sqlite3 *h) {
   return 0;
 }
 
+/* Rows of the given tables logged for a session, inside the caller's transaction. 0 or -1. */
+static int delete_rows(sqlite3 *h, int64_t sid, const char *const *tables, size_t n) {
+  for (size_t k = 0; k < n; k++)
+    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", tables[k], sid)) return -1;
+  return 0;
+}
+
 /* A session and everything logged for it, inside the caller's transaction. 0 or -1. */
 static int delete_session(sqlite3 *h, int64_t sid) {
-  for (size_t k = 0; k < sizeof bulky / sizeof *bulky; k++)
-    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], sid)) return -1;
-  for (size_t k = 0; k < sizeof small / sizeof *small; k++)
-    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", small[k], sid)) return -1;
+  if (delete_rows(h, sid, bulky, sizeof bulky / sizeof *bulky) || delete_rows(h, sid, small, sizeof small / sizeof *small))
+    return -1;
   return exec_sid(h, "DELETE FROM %s WHERE id = ?1", "session", sid);
 }
 
 /* A session's bulky data, its metrics stored first, inside the caller's transaction. 0 or -1. */
 static int prune_session(sqlite3 *h, int64_t sid, const prune_item *it) {
   if (it->assessed && store_metrics(h, sid, it)) return -1;
-  for (size_t k = 0; k < sizeof bulky / sizeof *bulky; k++)
-    if (exec_sid(h, "DELETE FROM %s WHERE session_id = ?1", bulky[k], sid)) return -1;
+  if (delete_rows(h, sid, bulky, sizeof bulky / sizeof *bulky)) return -1;
   return exec_sid(h, "UPDATE %s SET pruned_unix_s = (julianday('now') - 2440587.5) * 86400.0 WHERE id = ?1", "session",
                   sid);
 }
