@@ -421,7 +421,7 @@ static void *haptic_main(void *arg) {
       model_flags = sflags;
       if (d->in->model) d->in->model(d->in->ctx, &m);
       if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
-      if (sflags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) st->out_of_range_models++;
+      if (sflags & PALP_DDS_LM_OUTSIDE) st->out_of_range_models++;
       /* The safe force is the station's and the phantom's (palp_cli_haptic_start), not
        * each model's max_force: lowered to any model's, one sample of 1e-9 N left the
        * device without force for the rest of the session. */
@@ -438,7 +438,7 @@ static void *haptic_main(void *arg) {
     if (!fin3((palp_Vec3){o.force.x, o.force.y, o.force.z})) o.force = (palp_vec3){0, 0, 0};
     /* The server's word on the model's validity travels with the force it gave, and
      * only while it is rendered: a lifted finger or a fading model says nothing. */
-    if (on && (model_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) &&
+    if (on && (model_flags & PALP_DDS_LM_OUTSIDE) &&
         !(o.flags & (PALP_HAPTIC_STALE | PALP_HAPTIC_NO_MODEL)))
       o.flags |= PALP_CLI_FORCE_OUT_OF_RANGE;
     if (o.flags & PALP_CLI_FORCE_OUT_OF_RANGE) {
@@ -446,6 +446,7 @@ static void *haptic_main(void *arg) {
       if (model_flags & palp_LM_BEYOND_VALIDATED) st->beyond_validated_ticks++;
       if (model_flags & palp_LM_LARGE_STRAIN) st->strained_ticks++;
       if (model_flags & (palp_LM_OUT_OF_RANGE & ~palp_LM_LARGE_STRAIN)) st->limit_ticks++;
+      if (model_flags & palp_LM_GEL_LAW_RANGE) st->gel_ticks++;
     }
     if (taken > 0) st->models++;
     if (l->core.holding) st->held_ticks++;
@@ -482,7 +483,8 @@ static void *haptic_main(void *arg) {
                                      .out_of_range_ticks = st->out_of_range_ticks,
                                      .beyond_validated_ticks = st->beyond_validated_ticks,
                                      .strained_ticks = st->strained_ticks,
-                                     .limit_ticks = st->limit_ticks};
+                                     .limit_ticks = st->limit_ticks,
+                                     .gel_ticks = st->gel_ticks};
     pthread_mutex_unlock(&l->view_lock);
     }
   }

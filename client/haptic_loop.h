@@ -171,6 +171,8 @@ typedef struct palp_cli_haptic_stats {
                                       bending beyond the model's own linear range */
   uint64_t limit_ticks;            /* of those, flagged LM_BASE_CONTACT, LM_CLAMPED_STEP or LM_UNSOLVED: pressed
                                       onto the base or beyond what the step can follow (a tick may be in several) */
+  uint64_t gel_ticks;              /* of those, flagged LM_GEL_LAW_RANGE: the gel's literal pressure law
+                                      stepped outside its stable range (since 2026-12-06) */
   double peak_force, peak_requested; /* [N] rendered / before the limit */
   double max_force;             /* the limit in force [N] */
   size_t trace_len;
@@ -200,7 +202,7 @@ typedef struct palp_cli_haptic_view {
   unsigned flags;
   int on;
   uint64_t out_of_range_ticks; /* the stats' count so far: a reader sampling the view misses no episode */
-  uint64_t beyond_validated_ticks, strained_ticks, limit_ticks; /* the stats' counts by flag: which limit it was */
+  uint64_t beyond_validated_ticks, strained_ticks, limit_ticks, gel_ticks; /* the stats' counts by flag: which limit */
 } palp_cli_haptic_view;
 
 typedef struct palp_cli_haptic_loop {

@@ -787,22 +787,24 @@ static void print_debrief_score(const opts *o, palp_cli_station *st) {
   tprintf(o, "[trainee %s] %s\n", o->name, palp_cli_score_text(&m, text, sizeof text));
 }
 
-/* The valid range's three limits in the words every tool uses (docs/naming.md): the announcement,
+/* The valid range's four limits in the words every tool uses (docs/naming.md): the announcement,
  * the summary, and the instructor's review of the session's log (client/review/review_util.c). */
-static const char *const valid_range_text[3] = {
+static const char *const valid_range_text[4] = {
     "pressed deeper than this place of the phantom was checked against the reference model",
     "the skin is stretched or bent beyond what the model describes well",
-    "the phantom is pressed onto its base or harder than the model can follow"};
+    "the phantom is pressed onto its base or harder than the model can follow",
+    "the gel's literal pressure law stepped outside its stable range"};
 
 /* What the server's validity flags said, in the trainee's words, into buf (why: bit 1 the
  * fingertip deeper than the phantom's forces were checked against the FE there,
  * LM_BEYOND_VALIDATED; bit 2 a link or the skin's bending beyond the model's own linear
  * range, LM_LARGE_STRAIN; bit 4 pressed onto the base, or a step the model could not follow,
- * LM_BASE_CONTACT / LM_CLAMPED_STEP / LM_UNSOLVED). */
+ * LM_BASE_CONTACT / LM_CLAMPED_STEP / LM_UNSOLVED; bit 8 the scene's literal gel law outside its
+ * stable range, LM_GEL_LAW_RANGE). */
 static const char *valid_range_why(int why, char *buf, size_t len) {
   size_t n = 0;
   buf[0] = 0;
-  for (int b = 0; b < 3; b++)
+  for (int b = 0; b < 4; b++)
     if (why & (1 << b))
       n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%s", n ? "; " : "", valid_range_text[b]);
   if (!buf[0]) snprintf(buf, len, "the phantom is deformed beyond where its forces were validated");
@@ -914,7 +916,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   palp_cli_episode lim_ep = palp_cli_episode_make(PALP_CLI_LIMIT_HOLD_S);
   palp_cli_episode oor_ep = palp_cli_episode_make(PALP_CLI_RANGE_HOLD_S);
   double episode_peak = 0;
-  uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0;
+  uint64_t oor_ticks = 0, bv_ticks = 0, strain_ticks = 0, lim_ticks = 0, gel_ticks = 0;
   int oor_why = 0; /* the limits met in this episode (valid_range_why) */
   char why_text[320];
   char reason[128] = "";
@@ -965,9 +967,9 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     const int oor = v.out_of_range_ticks != oor_ticks;
     /* which limit: the trainee can act on "too deep here", not on "out of range" */
     const int why = (v.beyond_validated_ticks != bv_ticks ? 1 : 0) | (v.strained_ticks != strain_ticks ? 2 : 0) |
-                    (v.limit_ticks != lim_ticks ? 4 : 0);
+                    (v.limit_ticks != lim_ticks ? 4 : 0) | (v.gel_ticks != gel_ticks ? 8 : 0);
     oor_ticks = v.out_of_range_ticks, bv_ticks = v.beyond_validated_ticks;
-    strain_ticks = v.strained_ticks, lim_ticks = v.limit_ticks;
+    strain_ticks = v.strained_ticks, lim_ticks = v.limit_ticks, gel_ticks = v.gel_ticks;
     const int out = palp_cli_episode_update(&oor_ep, v.t, oor);
     if (out == PALP_CLI_EPISODE_BEGAN) {
       oor_why = 0;
@@ -1056,13 +1058,17 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (hs.passivity_ticks)
     tprintf(o, "[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
                "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
+  /* the gel law's part only where a scene's literal law met it (most never do) */
+  char gel_text[160] = "";
+  if (hs.gel_ticks)
+    snprintf(gel_text, sizeof gel_text, "; %.2f s %s", (double)hs.gel_ticks / d.rate_hz, valid_range_text[3]);
   if (hs.server_limited_models || hs.out_of_range_models)
     tprintf(o, "[trainee %s] the server flagged %llu models above its max_force and %llu outside the model's valid range "
-               "(the device rendered those for %.2f s: %.2f s %s; %.2f s %s; %.2f s %s)\n", o->name,
+               "(the device rendered those for %.2f s: %.2f s %s; %.2f s %s; %.2f s %s%s)\n", o->name,
                (unsigned long long)hs.server_limited_models, (unsigned long long)hs.out_of_range_models,
                (double)hs.out_of_range_ticks / d.rate_hz, (double)hs.beyond_validated_ticks / d.rate_hz,
                valid_range_text[0], (double)hs.strained_ticks / d.rate_hz, valid_range_text[1],
-               (double)hs.limit_ticks / d.rate_hz, valid_range_text[2]);
+               (double)hs.limit_ticks / d.rate_hz, valid_range_text[2], gel_text);
   if (o->plot) plot_feedback_titled(&plot, stdout, "rendered |F| on the device (1 kHz haptic loop)");
   free(lat.us);
   free(d.trace);

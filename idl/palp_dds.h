@@ -57,6 +57,10 @@ typedef enum palp_dds_topic_kind {
 #define PALP_DDS_ID_SERVER(id) ((uint32_t)(id) >> PALP_DDS_ID_LOCAL_BITS)
 #define PALP_DDS_ID_LOCAL(id) ((uint32_t)(id) & ((1u << PALP_DDS_ID_LOCAL_BITS) - 1u))
 
+/* The LocalModel.flags bits that put the model outside its valid range (docs/station.md): the
+ * station, the bridge and the server's counts all read them with this one mask. */
+#define PALP_DDS_LM_OUTSIDE (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED | palp_LM_GEL_LAW_RANGE)
+
 /* Partition of a session's contact/feedback/deformation traffic. */
 #define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"
 /* palp_finger_sample: its triangles are a sequence<long, 256> (idl/palp_types.idl), the session

@@ -307,8 +307,8 @@ static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {
   if (s) s->overruns++;
 }
 
-/* The three parts are the station's (client/haptic_loop.c): depth, skin, the model's limits; the
- * fourth, the literal gel law outside its stable range, is the server's alone (no wire bit). */
+/* The parts are the station's (client/haptic_loop.c): depth, skin, the model's limits and the
+ * literal gel law outside its stable range (LM_GEL_LAW_RANGE), whose frames are counted too. */
 static void on_valid_range(void *ctx, uint32_t session_id, uint32_t flags, int64_t gel_dropped, double deepest_m) {
   palp_srv_db_log *l = ctx;
   slot *s = find(l, session_id);

@@ -147,11 +147,10 @@ typedef struct palp_srv_events {
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
   /* [tick thread] after a step that left the model's valid range (issue 12; docs/model.md,
-   * "Valid range"): the step's model-validity bits (palp_LM_OUT_OF_RANGE and
-   * palp_LM_BEYOND_VALIDATED, as the stations get them), its frames (the step or its halves)
-   * whose literal gel law left its momentum term out (palp_world_health.gel_momentum_dropped's
-   * gain; no wire bit: the stations are not told, since 2026-12-06), and the largest excess of a
-   * fingertip over its validated depth so far [m]. */
+   * "Valid range"): the step's model-validity bits (PALP_DDS_LM_OUTSIDE, as the stations get
+   * them), its frames (the step or its halves) whose literal gel law left its momentum term out
+   * (palp_world_health.gel_momentum_dropped's gain, > 0 with palp_LM_GEL_LAW_RANGE), and the
+   * largest excess of a fingertip over its validated depth so far [m]. */
   void (*valid_range)(void *ctx, uint32_t session_id, uint32_t flags, int64_t gel_dropped, double deepest_m);
   /* [a Cyclone thread] DDS Security refused a peer (no session): detail "WHO: WHY (handshake|
    * permissions)", count the refusals it stands for; as the server's log says them

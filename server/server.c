@@ -1170,7 +1170,7 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
                             "at %lld steps (by up to %.1f mm)", s->id, (long long)h.beyond_validated_steps,
                   1e3 * h.max_beyond_validated);
   /* and where the literal gel law met steps outside its stable range and left its momentum term
-   * out (the stations were not told; the session log's valid_range events carry it) */
+   * out (LM_GEL_LAW_RANGE; the session log's valid_range events count its frames) */
   if (h.gel_momentum_dropped > 0)
     palp_log_info(srv->log, "session %u: the literal gel law's momentum term left out at %lld frames in all (steps or "
                             "their halves with a3 / (h h_prev) outside (-1/2, 1))", s->id,

@@ -505,8 +505,8 @@ static void publish_feedback(palp_srv_session *s, int64_t now_ns, double top_dis
 }
 
 /* Model-validity flags of the step just taken: what the health counters gained; *gel_dropped:
- * the step's frames (it or its halves) the literal gel law took without its momentum term,
- * which no wire bit carries (the stations are not told; the log and the review are). */
+ * the step's frames (it or its halves) the literal gel law took without its momentum term
+ * (LM_GEL_LAW_RANGE on the wire since 2026-12-06: the stations are told, as the log is). */
 static uint32_t step_flags(palp_srv_session *s, int64_t *gel_dropped) {
   palp_world_health h;
   palp_world_get_health(s->world, &h);
@@ -520,6 +520,7 @@ static uint32_t step_flags(palp_srv_session *s, int64_t *gel_dropped) {
   if (h.finger_unsolved > s->health.finger_unsolved) fl |= palp_LM_UNSOLVED;
   if (h.substeps > s->health.substeps) fl |= palp_LM_SUBSTEPPED;
   if (h.beyond_validated_steps > s->health.beyond_validated_steps) fl |= palp_LM_BEYOND_VALIDATED;
+  if (*gel_dropped > 0) fl |= palp_LM_GEL_LAW_RANGE;
   s->health = h;
   return fl;
 }
@@ -621,7 +622,7 @@ static void publish_local_models(palp_srv_session *s, int64_t now_ns, uint32_t f
         s->last_limit_log_ns = now_ns;
       }
     }
-    if (flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) s->stats.out_of_range_steps++;
+    if (flags & PALP_DDS_LM_OUTSIDE) s->stats.out_of_range_steps++;
     o->server_time_ns = palp_dds_now_ns();
     if (dds_write(s->local_model_writer, o) == 0) s->stats.local_models++;
     if (s->finger_sample_writer > 0 && o->frame % (uint64_t)s->sample_every == 0)
@@ -724,10 +725,9 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
 
   int64_t gel_dropped = 0;
   const uint32_t flags = step_flags(s, &gel_dropped);
-  /* the session log keeps what the stations were told, for the instructor's review, and the
-   * literal gel law's frames outside its stable range, which they were not */
-  if (((flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) || gel_dropped > 0) && s->events &&
-      s->events->valid_range)
+  /* the session log keeps what the stations were told, for the instructor's review, with the
+   * literal gel law's frames outside its stable range counted */
+  if ((flags & PALP_DDS_LM_OUTSIDE) && s->events && s->events->valid_range)
     s->events->valid_range(s->events->ctx, s->id, flags, gel_dropped, s->health.max_beyond_validated);
   if (gel_dropped > 0) say_gel_dropped(s, gel_dropped, now_ns);
   const int want_feedback = atomic_load_explicit(&s->want_feedback, memory_order_relaxed) != 0;

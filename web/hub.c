@@ -178,7 +178,7 @@ typedef struct session {
   double fps;
   uint32_t lm_flags_seen;  /* LM_* bits seen in this session's local models since it opened */
   double outside_s;        /* time the received local models were outside the model's valid range
-                              (LM_OUT_OF_RANGE, LM_BEYOND_VALIDATED): a period per frame [s] */
+                              (PALP_DDS_LM_OUTSIDE): a period per frame [s] */
   uint64_t outside_frame;  /* the last frame counted there (fingers of one frame count once) */
   int outside_counted;
   uint64_t late_haptic;    /* local models published > 2 periods after the previous frame's */
@@ -686,7 +686,7 @@ static void build_live(palp_web_hub *h, int slot) {
           jnum(f->proxy[0]), jnum(f->proxy[1]), jnum(f->proxy[2]), jnum(f->device[0]), jnum(f->device[1]),
           jnum(f->device[2]), f->lm_contact ? "true" : "false", jnum(f->lm_force), (unsigned)f->lm_flags,
           (f->lm_flags & palp_LM_FORCE_LIMIT) ? "true" : "false",
-          (f->lm_flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) ? "true" : "false");
+          (f->lm_flags & PALP_DDS_LM_OUTSIDE) ? "true" : "false");
     }
     first = 0;
   }
@@ -1828,13 +1828,13 @@ static void on_local_model(palp_web_hub *h, const palp_LocalModel *m) {
     fs->contact = 0;
   }
   pthread_mutex_unlock(&h->mu);
-  const uint32_t flags = (uint32_t)m->flags & (palp_LM_FORCE_LIMIT | palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED);
+  const uint32_t flags = (uint32_t)m->flags & (palp_LM_FORCE_LIMIT | PALP_DDS_LM_OUTSIDE);
   if (flags != f->lm_flags || (flags & ~s->lm_flags_seen)) h->sessions_dirty = 1;
   f->lm_flags = flags;
   s->lm_flags_seen |= flags;
   /* The time outside the valid range, as the station and the review count it (one physics period
    * per flagged frame; docs/db.md): frames the bridge never received are not counted. */
-  if ((flags & (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED)) && isfinite(m->period) && m->period > 0 &&
+  if ((flags & PALP_DDS_LM_OUTSIDE) && isfinite(m->period) && m->period > 0 &&
       m->period < 1 && !(s->outside_counted && s->outside_frame == m->frame)) {
     s->outside_s += m->period;
     s->outside_frame = m->frame;

@@ -116,6 +116,26 @@ static int replay(const char *review, const char *db_path, const char *uid, long
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+/* Takes the station's local models for `seconds`: *models counted, *gel those flagged
+ * LM_GEL_LAW_RANGE, *outside those any PALP_DDS_LM_OUTSIDE bit. */
+static void take_models(palp_cli_station *st, double seconds, long long *models, long long *gel, long long *outside) {
+  const int64_t end = palp_dds_now_ns() + (int64_t)(seconds * 1e9);
+  while (palp_dds_now_ns() < end) {
+    void *ptr[16] = {NULL};
+    dds_sample_info_t info[16];
+    const int n = dds_take(st->local_model_r, ptr, info, 16, 16);
+    for (int k = 0; k < n; k++) {
+      if (!info[k].valid_data) continue;
+      const palp_LocalModel *m = ptr[k];
+      (*models)++;
+      if (m->flags & palp_LM_GEL_LAW_RANGE) (*gel)++;
+      if (m->flags & PALP_DDS_LM_OUTSIDE) (*outside)++;
+    }
+    if (n > 0) dds_return_loan(st->local_model_r, ptr, n);
+    test_sleep(0.002);
+  }
+}
+
 /* The session of trainee `name` in the log: its info (uid, id, dt). */
 static int find_session(palp_db *db, const char *name, palp_db_session_info *out) {
   palp_db_filter flt = {.trainee = name};
@@ -178,6 +198,18 @@ int main(int argc, char **argv) {
   }
   palp_cli_station_leave(&b);
   palp_cli_station_close(&b);
+  /* cat: a position-driven fingertip at the pole, 12 mm deep for 0.2 s then lifted 2 mm clear for
+   * 0.2 s, five times: her station's local models say when the gel law left its range */
+  palp_cli_station c;
+  test_station_join(&c, DOMAIN, "cat", palp_ROLE_TRAINEE, 1, 0, 1, 0);
+  const uint32_t cat = c.session_id;
+  long long cat_models = 0, cat_gel = 0, cat_outside = 0;
+  for (int k = 0; k < 20; k++) {
+    test_send_finger(&c, 0, 0, (k / 2) % 2 ? -0.002 : 0.012, (uint64_t)k + 1);
+    take_models(&c, 0.1, &cat_models, &cat_gel, &cat_outside);
+  }
+  palp_cli_station_leave(&c);
+  palp_cli_station_close(&c);
   test_sleep(0.5);
   test_server_stop(&ts);
   palp_srv_db_log_close(dbl);
@@ -200,12 +232,20 @@ int main(int argc, char **argv) {
         "the lines said %lld of the %lld frames (the rest in the close's total), in %d lines over ~2 s of presses",
         sa.said, sa.total, sa.lines);
   CHECK(sb.lines == 0 && sb.total == -1, "bob's session: nothing said (%d lines, total %lld)", sb.lines, sb.total);
+  const said sc = read_log(log_path, cat);
+  printf("cat (session %u): %lld local models, %lld flagged LM_GEL_LAW_RANGE, %lld outside; %lld frames in all at close\n",
+         cat, cat_models, cat_gel, cat_outside, sc.total);
+  CHECK(sc.total > 0, "cat's fingertip made the literal law leave its range too (%lld frames)", sc.total);
+  CHECK(cat_gel >= 1 && cat_gel <= cat_outside && cat_outside < cat_models,
+        "her station was told: %lld of her %lld local models flagged LM_GEL_LAW_RANGE (%lld outside the valid range)",
+        cat_gel, cat_models, cat_outside);
 
   /* the session log and the review */
   palp_db *db = NULL;
   REQUIRE(palp_db_open(db_path, 0, &db, err, sizeof err) == 0, "read the session log: %s", err);
-  palp_db_session_info ia, ib;
-  REQUIRE(find_session(db, "ann", &ia) == 0 && find_session(db, "bob", &ib) == 0, "one session each logged");
+  palp_db_session_info ia, ib, ic;
+  REQUIRE(find_session(db, "ann", &ia) == 0 && find_session(db, "bob", &ib) == 0 && find_session(db, "cat", &ic) == 0,
+          "one session each logged");
   palp_db_valid_range ra, rb;
   int64_t ea = 0, ua = 0, eb = 0, ub = 0;
   REQUIRE(palp_db_session_valid_range(db, ia.id, &ra, &ea, &ua) == 0 &&
@@ -218,6 +258,13 @@ int main(int argc, char **argv) {
         (long long)ra.gel_frames, sa.total, (long long)ra.gel_steps, (long long)ra.steps);
   CHECK(rb.gel_steps == 0 && rb.gel_frames == 0, "bob's: no gel part (%lld steps, %lld frames; %lld events)",
         (long long)rb.gel_steps, (long long)rb.gel_frames, (long long)eb);
+  /* each flagged step sent her one model (finger 0), best-effort: none more than the steps */
+  palp_db_valid_range rc;
+  int64_t ec = 0, uc = 0;
+  REQUIRE(palp_db_session_valid_range(db, ic.id, &rc, &ec, &uc) == 0, "cat's valid_range events read");
+  CHECK(rc.gel_frames == sc.total && rc.gel_steps >= 1 && cat_gel <= rc.gel_steps,
+        "cat's valid_range events: %lld frames (the close line's %lld) over %lld steps, her station told of %lld",
+        (long long)rc.gel_frames, sc.total, (long long)rc.gel_steps, cat_gel);
   char text[640], want[128];
   review_valid_range_text(db, &ia, text, sizeof text);
   snprintf(want, sizeof want, "%.2f s the gel's literal pressure law stepped outside its stable range (its momentum "

@@ -57,8 +57,9 @@ def run(build, source, out):
         note = page.eval("document.getElementById('model') !== null")
         check(note is True, "the page has its force-limit / validity note")
         # The note names the validity limit from the model's flags (LM_BEYOND_VALIDATED 64,
-        # LM_LARGE_STRAIN 2 within LM_OUT_OF_RANGE 30, LM_FORCE_LIMIT 1), as the terminal station does.
-        notes = {fl: page.eval("palpModelNote(%d)" % fl) for fl in (0, 1, 2, 4, 64, 66, 65)}
+        # LM_LARGE_STRAIN 2 within LM_OUT_OF_RANGE 30, LM_FORCE_LIMIT 1, LM_GEL_LAW_RANGE 128), as the
+        # terminal station does.
+        notes = {fl: page.eval("palpModelNote(%d)" % fl) for fl in (0, 1, 2, 4, 64, 66, 65, 128)}
         print("notes by flags:", notes)
         check(notes[0] == "", "no flag, no note (%r)" % notes[0])
         check(notes[1] == "force limited", "LM_FORCE_LIMIT: 'force limited' (%r)" % notes[1])
@@ -70,6 +71,8 @@ def run(build, source, out):
         check(notes[65].startswith("force limited") and "deeper than" in notes[65], "limit and depth (%r)" % notes[65])
         check(notes[4] == "model outside its valid range: pressed onto the base or harder than the model can follow",
               "LM_BASE_CONTACT names the base (%r)" % notes[4])
+        check(notes[128] == "model outside its valid range: the gel's literal pressure law outside its stable range",
+              "LM_GEL_LAW_RANGE names the gel law (%r)" % notes[128])
         print("screenshot:", page.screenshot(os.path.join(out, "trainee-proxy.png")))
     finally:
         if browser:

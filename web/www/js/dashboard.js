@@ -165,7 +165,8 @@
    * review's words for the valid range's limits (docs/naming.md), and the time outside it. */
   const LM_NAMES = [[1, "force limit"], [2, "skin stretched or bent beyond the model"], [4, "on the base"],
                     [8, "harder than the model can follow"], [16, "contact unsolved"],
-                    [64, "deeper than checked against the reference model"]];
+                    [64, "deeper than checked against the reference model"],
+                    [128, "gel law outside its stable range"]];
   function modelFlags(s) {
     if (s.model_flags_seen === undefined) return "n/a";
     const names = function (v) { return LM_NAMES.filter(function (x) { return v & x[0]; }).map(function (x) { return x[1]; }); };

@@ -566,17 +566,19 @@
   requestAnimationFrame(loop);
 
   /* The note under the view from the local models' flags (LocalModel.flags, as palp-web
-   * passes them: LM_FORCE_LIMIT 1, LM_OUT_OF_RANGE 30, LM_BEYOND_VALIDATED 64), naming the
-   * validity limit as the terminal station does: 64 deeper than the FE validation there,
-   * LM_LARGE_STRAIN 2 the skin, 28 the base or the step's own limits. Exported for tests. */
+   * passes them: LM_FORCE_LIMIT 1, LM_OUT_OF_RANGE 30, LM_BEYOND_VALIDATED 64,
+   * LM_GEL_LAW_RANGE 128), naming the validity limit as the terminal station does: 64 deeper
+   * than the FE validation there, LM_LARGE_STRAIN 2 the skin, 28 the base or the step's own
+   * limits, 128 the scene's literal gel law outside its stable range. Exported for tests. */
   function modelNote(flags) {
     const f = flags | 0, parts = [];
     if (f & 1) parts.push("force limited");
-    if (f & 94) {
+    if (f & 222) {
       const why = [];
       if (f & 64) why.push("deeper than this place was checked against the reference model");
       if (f & 2) why.push("skin stretched or bent beyond the model's range");
       if (f & 28) why.push("pressed onto the base or harder than the model can follow");
+      if (f & 128) why.push("the gel's literal pressure law outside its stable range");
       parts.push("model outside its valid range" + (why.length ? ": " + why.join(", ") : ""));
     }
     return parts.join(" \u00b7 ");
