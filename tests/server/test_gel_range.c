@@ -18,9 +18,14 @@
  *    frames itself: the count the server said is the world's, not the sum of what was said;
  *  - bob presses 0.5 N over a patch on the same phantom: no halved step, so nothing is said for
  *    his session (no line, no gel part in his events, his review line names no gel), and his
- *    replay counts 0 frames: the silence is the model's, not a missed report.
+ *    replay counts 0 frames: the silence is the model's, not a missed report;
+ *  - cat's position-driven fingertip goes 12 mm deep and 2 mm clear at the pole, five times: it
+ *    halves steps too, and her station's local models carry LM_GEL_LAW_RANGE at some of those
+ *    steps (at least one; never more than the steps her valid_range events count, the models
+ *    being best-effort), which her station renders and names (tests/haptic/gel_law_range.sh).
  * Before: none of it (the server's log, the session log and the review said nothing of the
- * counter; replay did not count it).
+ * counter; replay did not count it); before the second fix of 2026-12-06 no wire bit carried it,
+ * and her station's models said nothing (0 of ~200 flagged).
  */
 #define _GNU_SOURCE
 #include <inttypes.h>
@@ -37,21 +42,6 @@
 #define DOMAIN 157
 #define LOG_INTERVAL 0.5 /* [s] */
 #define GEL_SAID "the literal gel law's momentum term left out at "
-
-/* The paper dome's scene (config/paper_step.json with config/params/calibrated.json inline), the
- * gel's law literal and a3 = 0.9 (10 ms)^2. */
-static const char *const SCENE =
-    "{\"name\": \"literal_a3\", \"mesh\": {\"radius_m\": 0.04, \"vertex_count\": 338},"
-    " \"time\": {\"dt_s\": 0.01, \"frames\": 400, \"frame_period_s\": 0.01},"
-    " \"effects\": [\"membrane_elasticity\", \"membrane_viscosity\", \"gel_pressure\", \"gel_damping\","
-    "             \"gel_support\", \"force_feedback\"],"
-    " \"finger_surface\": \"smooth\","
-    " \"membrane\": {\"thickness_m\": 0.002, \"density_kg_m3\": 950, \"E1_Pa\": 279971.432,"
-    "              \"eta1_Pa_s\": 1.31615336e+10, \"E2_Pa\": 98084.012, \"eta2_Pa_s\": 19589.3399},"
-    " \"gel\": {\"law\": \"paper_literal\", \"pressure_Pa\": 101325, \"a1\": 10, \"a2_Pa_s_m3\": 5360357.64,"
-    "         \"a3_s2\": 9e-05, \"support_modulus_Pa_m\": 21574.3345, \"support_viscosity_Pa_s_m\": 6884.34588,"
-    "         \"support_bulk_fraction\": 0.997409179, \"density_kg_m3\": 950, \"added_mass_fraction\": 0.820983601},"
-    " \"contacts\": []}";
 
 /* Seconds of the day of a log line's timestamp ("2026-12-06T10:00:00.123Z ..."); -1 if none. */
 static double line_time(const char *line) {
@@ -151,16 +141,16 @@ static int find_session(palp_db *db, const char *name, palp_db_session_info *out
 }
 
 int main(int argc, char **argv) {
-  REQUIRE(argc > 1, "usage: test_server_gel_range PALP_REVIEW");
+  /* SCENE: tests/data/literal_a3_scene.json, the paper dome's scene (config/paper_step.json with
+   * config/params/calibrated.json inline), its gel law literal and a3 = 0.9 (10 ms)^2 */
+  REQUIRE(argc > 2, "usage: test_server_gel_range PALP_REVIEW SCENE");
   test_init();
-  char err[512], dir[512], scene_path[600], db_path[600], log_path[600];
+  char err[512], dir[512], db_path[600], log_path[600];
+  const char *scene_path = argv[2];
   palp_test_tmp(dir, sizeof dir, "palp-gel-range-XXXXXX");
   REQUIRE(mkdtemp(dir) != NULL, "temporary directory");
-  snprintf(scene_path, sizeof scene_path, "%s/literal_a3.json", dir);
   snprintf(db_path, sizeof db_path, "%s/sessions.db", dir);
   snprintf(log_path, sizeof log_path, "%s/server.log", dir);
-  FILE *sf = fopen(scene_path, "w");
-  REQUIRE(sf && fputs(SCENE, sf) >= 0 && fclose(sf) == 0, "scene file");
 
   char json[1024];
   snprintf(json, sizeof json,
@@ -287,7 +277,6 @@ int main(int argc, char **argv) {
   const int rcb = replay(argv[1], db_path, ub_uid, &fb, out, sizeof out);
   CHECK(rcb == 0 && fb == 0, "bob's replay (exit %d) counts %lld frames: he never left the range", rcb, fb);
 
-  unlink(scene_path);
   unlink(db_path);
   char side[700];
   snprintf(side, sizeof side, "%s-wal", db_path);
