@@ -198,7 +198,7 @@ const char *review_dist_name(palp_distribution d) {
 /* The model's valid range over a session, from the server's valid_range events (db/valid_range.c),
  * in the station's words for the same three limits (client/main.c, valid_range_text), so the
  * trainee's screen, the log and the instructor's review name them alike (docs/naming.md); and,
- * since 2026-12-06, a fourth the station is not told of: the literal gel law's stable range. */
+ * a fourth, the literal gel law's stable range (LM_GEL_LAW_RANGE, on the station since session 77). */
 int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,
                        int64_t *unreadable) {
   const int rc = palp_db_session_valid_range(db, s->id, r, events, unreadable);
@@ -282,8 +282,8 @@ int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *bu
                           "than the model can follow", sep, (double)r.limit_steps * dt);
     sep = "; ";
   }
-  /* the server's alone (its stations are not told): the scene's literal gel law left its stable
-   * range, and the gel there was that law without its momentum term (docs/model.md) */
+  /* the scene's literal gel law left its stable range, and the gel there was that law without its
+   * momentum term (docs/model.md) */
   if (r.gel_steps) {
     n += (size_t)snprintf(buf + n, n < len ? len - n : 0, "%s%.2f s the gel's literal pressure law stepped outside "
                           "its stable range (its momentum term left out at %lld frames)", sep,
