@@ -196,9 +196,9 @@ const char *review_dist_name(palp_distribution d) {
 }
 
 /* The model's valid range over a session, from the server's valid_range events (db/valid_range.c),
- * in the station's words for the same three limits (client/main.c, valid_range_text), so the
- * trainee's screen, the log and the instructor's review name them alike (docs/naming.md); and,
- * a fourth, the literal gel law's stable range (LM_GEL_LAW_RANGE, on the station since session 77). */
+ * in the station's words for the same four limits (client/main.c, valid_range_text), so the
+ * trainee's screen, the log and the instructor's review name them alike (docs/naming.md); the
+ * fourth, the literal gel law's stable range (LM_GEL_LAW_RANGE), reaches the station since session 77. */
 int review_valid_range(palp_db *db, const palp_db_session_info *s, palp_db_valid_range *r, int64_t *events,
                        int64_t *unreadable) {
   const int rc = palp_db_session_valid_range(db, s->id, r, events, unreadable);
