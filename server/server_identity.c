@@ -64,19 +64,6 @@ static peer *find_peer(palp_srv_identity *id, dds_instance_handle_t ih, int crea
   return create ? free_slot : NULL;
 }
 
-/* A peer's string field (64 bytes, bounded read) escaped for the log (palp_log_printable): a
- * newline in a server name or instance must not forge a log line. */
-typedef struct esc64 {
-  char s[4 * 64];
-} esc64;
-static esc64 esc(const char *field) {
-  char raw[64];
-  esc64 e;
-  snprintf(raw, sizeof raw, "%.*s", (int)sizeof raw - 1, field);
-  palp_log_printable(raw, e.s, sizeof e.s);
-  return e;
-}
-
 /* The older of two servers keeps a name or number; equal start times (unlikely:
  * ns) fall back to the instance string so both sides agree. */
 static int other_is_older(const palp_srv_identity *id, const palp_ServerIdentity *o) {
@@ -103,8 +90,8 @@ static void late_claim(palp_srv_identity *id, const palp_ServerIdentity *o, dds_
   palp_log_warn(id->log, "server %s \"%s\" (number %u) claimed by an older server \"%s\" (number %u, instance \"%s\", "
                          "started at %lld ns), written by %s, after its start-up window: ignored, this server keeps "
                          "serving and announces itself again; %s%s",
-                same_name ? "name" : "number", id->me.server_name, id->me.server_number, esc(o->server_name).s,
-                o->server_number, esc(o->instance).s,
+                same_name ? "name" : "number", id->me.server_name, id->me.server_number, PALP_PRINTABLE(o->server_name),
+                o->server_number, PALP_PRINTABLE(o->instance),
                 (long long)o->started_unix_ns, who, id->sec_hint, more);
   id->late_said_ns = now;
   id->late_unsaid = 0;
@@ -129,7 +116,7 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
         if (p && p->alive) {
           p->alive = 0;
           palp_log_warn(id->log, "server \"%s\" (number %u, %s) is gone from the domain; its stations are told by "
-                                 "their session state", esc(p->name).s, p->number, esc(p->instance).s);
+                                 "their session state", PALP_PRINTABLE(p->name), p->number, PALP_PRINTABLE(p->instance));
         }
         continue;
       }
@@ -143,7 +130,7 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
           snprintf(err, errlen,
                    "server %s \"%s\" (number %u) is already running on this domain as %s: give this server "
                    "another server_name and server_number, or stop that one",
-                   same_name ? "name" : "number", esc(o->server_name).s, o->server_number, esc(o->instance).s);
+                   same_name ? "name" : "number", PALP_PRINTABLE(o->server_name), o->server_number, PALP_PRINTABLE(o->instance));
           rc = PALP_EINVAL;
         } else {
           /* A younger server gives way only within its own start-up window: one started long after
@@ -151,7 +138,7 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
           palp_log_warn(id->log, "a second server (%s) claims %s \"%s\" / number %u, started after this one: it "
                                  "gives way if it is within its start-up window (5 s), else both keep serving: stop "
                                  "one of them; this server keeps them",
-                        esc(o->instance).s, same_name ? "name" : "number", esc(o->server_name).s, o->server_number);
+                        PALP_PRINTABLE(o->instance), same_name ? "name" : "number", PALP_PRINTABLE(o->server_name), o->server_number);
           rewrite = 1;
         }
         continue;
@@ -160,7 +147,7 @@ static int take_all(palp_srv_identity *id, int announced, char *err, size_t errl
       if (!p) continue;
       if (!p->alive)
         palp_log_info(id->log, "server \"%s\" (number %u, %s) is on this domain with %u phantom(s)",
-                      esc(o->server_name).s, o->server_number, esc(o->instance).s, o->phantoms._length);
+                      PALP_PRINTABLE(o->server_name), o->server_number, PALP_PRINTABLE(o->instance), o->phantoms._length);
       p->alive = 1;
       p->number = o->server_number;
       snprintf(p->name, sizeof p->name, "%s", o->server_name);
