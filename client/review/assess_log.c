@@ -402,10 +402,14 @@ void review_metrics_csv_row(FILE *f, palp_db *db, const palp_db_session_info *s,
   if (a->has_exercise)
     fprintf(f, ",%d,%d,%d,%.4f,", a->samples, r->lesion_count, r->found, r->sensitivity);
   else fprintf(f, ",%d,0,0,,", a->samples);
-  fprintf(f, "%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%s,%.4f,%d,%.3f,%.4f,%.3f,%.2f,%d,", r->findings, r->withdrawn,
-          r->false_positives, r->coverage[0], r->coverage[1], r->coverage[2], r->coverage_any,
-          palp_pattern_name(r->pattern), r->evidence.path_length, r->evidence.presses, r->evidence.overlap,
-          r->evidence.gap_share, r->duration, r->peak_force, r->out_of_range);
+  fprintf(f, "%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%s,%.4f,%d,", r->findings, r->withdrawn, r->false_positives,
+          r->coverage[0], r->coverage[1], r->coverage[2], r->coverage_any, palp_pattern_name(r->pattern),
+          r->evidence.path_length, r->evidence.presses);
+  /* a pruned session's stored metrics do not keep them (review_stored_metrics): unknown, empty
+   * fields, not 0 overlap and 0 area left unpalpated */
+  if (r->evidence.overlap >= 0) fprintf(f, "%.3f,%.4f,", r->evidence.overlap, r->evidence.gap_share);
+  else fputs(",,", f);
+  fprintf(f, "%.3f,%.2f,%d,", r->duration, r->peak_force, r->out_of_range);
   if (a->has_exercise) fprintf(f, "%.1f,%d,", r->score, r->pass);
   else fputs(",,", f);
   /* out_of_range above is the force's (episodes above the exercise's limit); this is the model's */
@@ -557,6 +561,8 @@ int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
   int rc = PALP_DB_ENOTFOUND;
   if (sqlite3_step(st) == SQLITE_ROW) {
     palp_assess_result *r = &out->r;
+    /* not in the table (0004_retention.sql): unknown, which the CSV writes as empty fields */
+    r->evidence.overlap = r->evidence.gap_share = r->evidence.largest_gap = -1.0;
     const char *ex = (const char *)sqlite3_column_text(st, 0);
     out->has_exercise = ex != NULL;
     snprintf(out->exercise_name, sizeof out->exercise_name, "%s", ex ? ex : "");

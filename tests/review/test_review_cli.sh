@@ -291,6 +291,26 @@ assert 13 <= int(a1["strips"]) <= 15 and a1["strips"] == before["class-alice-1"]
 PY
 then ok "class CSV after the prune: the pruned session's strips stored as computed before it, the others' counted"
 else bad "class CSV after the prune"; fi
+# the overlap and the share never palpated are not among the stored metrics (0004_retention.sql): empty
+# fields for the pruned session in every metrics CSV (they said 0.000 and 0.0000, "nothing left
+# unpalpated", until 2026-12-06), the columns after them where they were; the sessions still whole keep theirs
+R export class-bob-2 --format csv --table metrics --out "$dir/bob2-pruned.csv" > /dev/null 2>&1 || bad "export metrics of a pruned session"
+R trainee bob --csv "$dir/bob-record-pruned.csv" > /dev/null 2>&1 || bad "trainee bob after the prune"
+if python3 - "$dir/class.csv" "$dir/class-pruned.csv" "$dir/bob2-pruned.csv" "$dir/bob-record-pruned.csv" <<'PY'
+import csv, sys
+before = {r["session"]: r for r in csv.DictReader(open(sys.argv[1]))}
+assert float(before["class-bob-2"]["gap_share"]) > 0.5, before["class-bob-2"]  # the novice left most of the dome
+for path in sys.argv[2:]:
+    rows = {r["session"]: r for r in csv.DictReader(open(path))}
+    b2 = rows["class-bob-2"]
+    assert (b2["overlap"], b2["gap_share"]) == ("", ""), (path, b2)
+    for k in ("presses", "duration_s", "peak_force_n", "out_of_range", "score", "pass"):
+        assert b2[k] == before["class-bob-2"][k], (path, k, b2[k], before["class-bob-2"][k])
+    for uid in set(rows) - {"class-bob-2"}:
+        assert float(rows[uid]["overlap"]) >= 1.0 and 0.0 <= float(rows[uid]["gap_share"]) <= 1.0, (path, rows[uid])
+PY
+then ok "class, export and trainee CSVs after the prune: the pruned session's overlap and gap_share empty, its other columns as before"
+else bad "the pruned session's overlap and gap_share in the CSVs"; head -3 "$dir/class-pruned.csv" "$dir/bob2-pruned.csv" "$dir/bob-record-pruned.csv"; fi
 python3 -c "import sqlite3,sys; c=sqlite3.connect(sys.argv[1]); c.execute('update session_metrics set strips = NULL, strip_order = NULL'); c.commit()" "$db" ||
   bad "clearing the stored strips"
 R class --exercise test-two-lumps --out "$dir/class-v4.html" --csv "$dir/class-v4.csv" > /dev/null 2>&1 ||
