@@ -265,6 +265,34 @@ else bad "trainee: the record's modes: $(stat -c '%n %a' "$dir/bob-record.html" 
 R trainee carol > "$dir/trainee-carol.txt" 2>&1 || bad "trainee carol exit status"
 expect "trainee carol: one session of free practice, no score" \
   "^class-carol-1 +2026-01-08 +\(practice\) +- +[0-9]+ .* +- +- +- +-$" "$dir/trainee-carol.txt"
+# A trainee with nothing to assess (2026-12-06, found by review: --csv and --out were not written, an
+# earlier run's files left standing, and a session left out by an error counted as "0 of force contacts
+# only"): dan's two sessions in a copy of the log, one of force contacts only (carol's scene, no finger
+# samples), one whose logged exercise does not parse. His record is written all the same (the CSV's
+# header alone, a page saying why), exit 0, and the line and the page give both reasons, counted.
+python3 - "$db" "$dir/dan.db" <<'PY' || bad "making dan's log"
+import sqlite3, sys
+src, c = sqlite3.connect(sys.argv[1]), sqlite3.connect(sys.argv[2])
+src.backup(c)
+for uid, day in (("class-dan-1", 3), ("class-dan-2", 4)):
+    c.execute("insert into session(uid, trainee, station, phantom_id, phantom_name, scene_json, params_json, tick_hz, dt_s, "
+              "start_unix_s) select ?, 'dan', station, phantom_id, phantom_name, scene_json, '{}', tick_hz, dt_s, "
+              "start_unix_s + ? * 86400 from session where uid = 'class-carol-1'", (uid, day))
+c.execute("insert into session_exercise(session_id, exercise_name, exercise_json) "
+          "select id, 'broken', '{\"name\": \"broken\", \"lesions\": [' from session where uid = 'class-dan-2'")
+c.commit()
+PY
+echo "stale: an earlier run's record" > "$dir/dan.csv"
+echo "stale: an earlier run's record" > "$dir/dan.html"
+if "$review" --db "$dir/dan.db" trainee dan --csv "$dir/dan.csv" --out "$dir/dan.html" > "$dir/trainee-dan.txt" 2> "$dir/trainee-dan.err"; then
+  summary="trainee dan: 2 sessions, none assessed; 1 of force contacts only (nothing to assess); 1 left out, could not be assessed (palp-review show SESSION says why)"
+  if [ "$(head -1 "$dir/trainee-dan.txt")" = "$summary" ] && grep -q "class-dan-2 left out" "$dir/trainee-dan.err" &&
+     [ "$(cat "$dir/dan.csv")" = "$(head -1 "$dir/bob-record.csv")" ] && ! grep -q stale "$dir/dan.html" &&
+     grep -qF "<p id=\"summary\">$summary." "$dir/dan.html" && grep -q '<p id="nothing">' "$dir/dan.html" &&
+     ! grep -q '<table' "$dir/dan.html"; then
+    ok "trainee dan (nothing to assess): exit 0, the CSV's header alone and a page saying why written over the old files, both reasons counted"
+  else bad "trainee dan (nothing to assess)"; cat "$dir/trainee-dan.txt" "$dir/trainee-dan.err" "$dir/dan.csv" "$dir/dan.html"; fi
+else bad "trainee dan (nothing to assess) exit status"; cat "$dir/trainee-dan.txt" "$dir/trainee-dan.err"; fi
 if R trainee alice --since 2026-01-07 > "$dir/trainee-none.txt" 2>&1; then bad "trainee alice since 2026-01-07 (none) succeeded"
 else expect "trainee: none in the time asked, said" "no session of trainee 'alice' in that time" "$dir/trainee-none.txt"; fi
 if R trainee > "$dir/trainee-noname.txt" 2>&1; then bad "trainee without a name succeeded"
