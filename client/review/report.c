@@ -304,12 +304,20 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
   const int rc = review_assess(db, s, &a, err, sizeof err);
   if (rc == PALP_DB_ENOTFOUND) {
     review_assessment st;
-    if (review_stored_metrics(db, s->id, &st) == 0) {
+    const int stored = review_stored_metrics(db, s->id, &st) == 0;
+    if (stored && st.has_exercise) {
       fprintf(f, "<p id=\"assessment-pruned\">The finger samples of this session were pruned; its stored metrics: "
               "%d of %d lesions found, %d false positives, coverage light/medium/deep %.1f%% / %.1f%% / %.1f%%, "
               "pattern %s, score %.1f (%s).</p>\n", st.r.found, st.r.lesion_count, st.r.false_positives,
               100 * st.r.coverage[0], 100 * st.r.coverage[1], 100 * st.r.coverage[2], palp_pattern_name(st.r.pattern),
               st.r.score, st.r.pass ? "pass" : "fail");
+    } else if (stored) {
+      /* free practice: no lesions to find and no score (stored as NULL), as show and the CSVs say */
+      fprintf(f, "<p id=\"assessment-pruned\">The finger samples of this session were pruned; its stored metrics "
+              "(free practice: no hidden lesions, no score): %d mark%s (%d withdrawn), coverage light/medium/deep "
+              "%.1f%% / %.1f%% / %.1f%%, pattern %s.</p>\n", st.r.findings, st.r.findings == 1 ? "" : "s",
+              st.r.withdrawn, 100 * st.r.coverage[0], 100 * st.r.coverage[1], 100 * st.r.coverage[2],
+              palp_pattern_name(st.r.pattern));
     } else {
       fputs("<p id=\"assessment-none\">No finger samples were logged for this session (a force-driven session, or a "
             "log from before the assessment): nothing to assess.</p>\n", f);

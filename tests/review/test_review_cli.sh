@@ -304,6 +304,26 @@ expect "prune: graded sessions kept" "kept +class-alice-1: graded" "$dir/prune.t
 expect "prune: bob's second session pruned" "pruned class-bob-2" "$dir/prune.txt"
 R show class-bob-2 > "$dir/show-pruned.txt" 2>&1
 expect "a pruned session still shows its metrics" "stored when the session was pruned" "$dir/show-pruned.txt"
+# the session report's paragraph of stored metrics: bob-2's exercise with its lesions and score, carol's free
+# practice with neither (2026-12-06, found by review: "0 of 0 lesions found ... score 0.0 (fail)", its NULL
+# score read as 0), its coverage as show gave it before the prune
+R report class-bob-2 --out "$dir/bob2-pruned.html" > /dev/null 2>&1 || bad "report of a pruned session"
+R report class-carol-1 --out "$dir/carol-pruned.html" > /dev/null 2>&1 || bad "report of a pruned free practice"
+if python3 - "$dir/bob2-pruned.html" "$dir/carol-pruned.html" "$dir/show-carol.txt" "$dir/class.csv" <<'PY'
+import csv, re, sys
+para = lambda p: re.search(r'<p id="assessment-pruned">([^<]*)</p>', open(p).read()).group(1)
+b2 = para(sys.argv[1])
+score = {r["session"]: r["score"] for r in csv.DictReader(open(sys.argv[4]))}["class-bob-2"]
+assert "0 of 2 lesions found" in b2 and ("score %s (fail)" % score) in b2, (b2, score)
+c = para(sys.argv[2])
+light = re.search(r"thoroughness +light ([0-9.]+)%, medium ([0-9.]+)%, deep ([0-9.]+)%", open(sys.argv[3]).read()).groups()
+m = re.search(r"free practice: no hidden lesions, no score\): \d+ marks? \(\d+ withdrawn\), coverage light/medium/deep "
+              r"([0-9.]+)% / ([0-9.]+)% / ([0-9.]+)%, pattern [a-z_]+\.$", c)
+assert m and m.groups() == light, (c, light)
+assert not re.search(r"score [0-9]|lesions found|\((fail|pass)\)", c), c
+PY
+then ok "report of pruned sessions: bob-2's stored lesions and score, carol's free practice without either"
+else bad "report of pruned sessions"; grep -h 'assessment-' "$dir/bob2-pruned.html" "$dir/carol-pruned.html"; fi
 # the strips are among the stored metrics since schema 5: the pruned session's CSV fields as before the
 # prune; a row stored before schema 5 (NULL) has them unknown (empty), not none (0)
 R class --exercise test-two-lumps --out "$dir/class-pruned.html" --csv "$dir/class-pruned.csv" > /dev/null 2>&1 ||
