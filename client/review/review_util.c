@@ -1,6 +1,7 @@
 /* palp-review's shared helpers: escaping for HTML, JSON and CSV, time formatting and parsing,
  * loading a session's contacts and deriving its presses. The command modules (review.c, export.c,
  * replay.c, report.c, assess_log.c, class.c) depend on this one and never on each other. */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,6 +25,16 @@ void review_fmt_time(double unix_s, char *buf, size_t len) {
   const time_t t = (time_t)fmin(unix_s, 253402300799.0);
   if (unix_s > 253402300799.0 || !localtime_r(&t, &tm) || !strftime(buf, len, "%Y-%m-%d %H:%M:%S %z", &tm))
     snprintf(buf, len, "-");
+}
+
+int review_finish_output(FILE *f) {
+  int err = 0;
+  if (fflush(f)) err = errno;
+  if (!err && ferror(f)) err = EIO;
+  if (f != stdout && fclose(f) && !err) err = errno;
+  if (!err) return 0;
+  errno = err;
+  return -1;
 }
 
 void json_str(FILE *f, const char *s) {

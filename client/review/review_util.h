@@ -38,6 +38,10 @@ const char *review_dist_name(palp_distribution d);
 void review_fmt_time(double unix_s, char *buf, size_t len); /* local time, with offset */
 /* YYYY-MM-DD[THH:MM[:SS]] (or a space for T) as local time; 0 or -1. */
 int review_parse_date(const char *s, double *out);
+/* Finishes a file the review wrote: flushed, its error flag read (a write that failed on the way,
+ * the disk full), closed unless it is stdout. 0, or -1 with errno saying why (EIO where an earlier
+ * write failed and its own errno is gone): what was written is incomplete. */
+int review_finish_output(FILE *f);
 void json_str(FILE *f, const char *s);
 void html_str(FILE *f, const char *s);
 void csv_str(FILE *f, const char *s);

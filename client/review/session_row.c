@@ -77,5 +77,7 @@ int review_rows_csv(palp_log *log, const char *cmd, palp_db *db, const char *pat
   }
   review_metrics_csv_header(c);
   for (int i = 0; i < n; i++) review_metrics_csv_row(c, db, &rows[i].s, &rows[i].a, rows[i].outside_s);
-  return c != stdout && fclose(c) ? -1 : 0;
+  if (review_finish_output(c) == 0) return 0;
+  palp_log_error(log, "%s: %s: %s (the CSV is incomplete)", cmd, c == stdout ? "standard output" : path, strerror(errno));
+  return -1;
 }

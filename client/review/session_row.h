@@ -35,7 +35,7 @@ void review_html_head(FILE *f, const char *title, const char *heading, const cha
 void review_html_started_cell(FILE *f, double unix_s);
 void review_html_not_blind(FILE *f, const review_row *rows, int n);
 /* The rows' metrics as CSV (review_metrics_csv_header and _row) into path ("-": stdout), created
- * private; 0, or -1 logged as `cmd: path: why`. */
+ * private; 0, or -1 logged as `cmd: path: why` (not opened, or a write or the close failed). */
 int review_rows_csv(palp_log *log, const char *cmd, palp_db *db, const char *path, const review_row *rows, int n);
 
 #endif

@@ -262,6 +262,29 @@ else bad "trainee bob"; cat "$dir/trainee-bob.txt" "$dir/trainee-bob.err"; fi
 if [ "$(stat -c '%a' "$dir/bob-record.html" "$dir/bob-record.csv" | sort -u)" = 600 ]; then
   ok "trainee: the record's page and CSV are created mode 0600"
 else bad "trainee: the record's modes: $(stat -c '%n %a' "$dir/bob-record.html" "$dir/bob-record.csv" | tr '\n' ' ')"; fi
+# A write that fails (2026-12-06, found by review: exit 2 and nothing said; --csv - mixed the CSV with the
+# text table on stdout): /dev/full takes the open and refuses every write. Each file named, with why, exit 2;
+# --csv - puts the CSV alone on stdout, the same bytes as the file, and its failure is said as well.
+for args in "class --exercise test-two-lumps --out /dev/full" \
+            "class --exercise test-two-lumps --out $dir/full.html --csv /dev/full" \
+            "trainee bob --out /dev/full" "trainee bob --csv /dev/full"; do
+  # shellcheck disable=SC2086
+  R $args > /dev/null 2> "$dir/full.err"; rc=$?
+  if [ $rc = 2 ] && grep -Eq "(class|trainee): /dev/full: No space left on device" "$dir/full.err"; then ok "$args: exit 2, said: $(tail -1 "$dir/full.err" | sed 's/.*ERROR *//')"
+  else bad "$args: exit $rc, stderr:"; cat "$dir/full.err"; fi
+done
+R class --exercise test-two-lumps --out "$dir/class-pipe.html" --csv - > "$dir/class-stdout.csv" 2> "$dir/class-stdout.err" || bad "class --csv - exit status"
+R trainee bob --csv - > "$dir/bob-stdout.csv" 2> "$dir/bob-stdout.err" || bad "trainee --csv - exit status"
+if cmp -s "$dir/class-stdout.csv" "$dir/class.csv" && cmp -s "$dir/bob-stdout.csv" "$dir/bob-record.csv" &&
+   grep -Eq "^alice +class-alice-1" "$dir/class-stdout.err" && grep -q "^trainee bob: 2 sessions assessed" "$dir/bob-stdout.err"; then
+  ok "class and trainee --csv -: stdout the CSV alone (the file's bytes), the text table on stderr"
+else bad "--csv -: stdout not the CSV alone"; head -3 "$dir/class-stdout.csv" "$dir/bob-stdout.csv"; fi
+for cmd in class trainee; do
+  if [ $cmd = class ]; then set -- class --exercise test-two-lumps --out "$dir/class-pipe.html" --csv -; else set -- trainee bob --csv -; fi
+  R "$@" > /dev/full 2> "$dir/full.err"; rc=$?
+  if [ $rc = 2 ] && grep -q "$cmd: standard output: No space left on device" "$dir/full.err"; then ok "$cmd --csv - > /dev/full: exit 2, said"
+  else bad "$cmd --csv - > /dev/full: exit $rc"; cat "$dir/full.err"; fi
+done
 R trainee carol > "$dir/trainee-carol.txt" 2>&1 || bad "trainee carol exit status"
 expect "trainee carol: one session of free practice, no score" \
   "^class-carol-1 +2026-01-08 +\(practice\) +- +[0-9]+ .* +- +- +- +-$" "$dir/trainee-carol.txt"
