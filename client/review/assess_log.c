@@ -559,7 +559,9 @@ int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
     return PALP_DB_ESQL;
   sqlite3_bind_int64(st, 1, sid);
   int rc = PALP_DB_ENOTFOUND;
-  if (sqlite3_step(st) == SQLITE_ROW) {
+  const int step = sqlite3_step(st);
+  if (step != SQLITE_ROW && step != SQLITE_DONE) rc = PALP_DB_ESQL; /* unreadable (a damaged page), not absent */
+  if (step == SQLITE_ROW) {
     palp_assess_result *r = &out->r;
     /* not in the table (0004_retention.sql): unknown, which the CSV writes as empty fields */
     r->evidence.overlap = r->evidence.gap_share = r->evidence.largest_gap = -1.0;

@@ -112,7 +112,8 @@ void review_pattern_mark(const palp_rubric *rb, char *buf, size_t len);
 
 /* A pruned session's stored metrics (session_metrics, schema 4; the strips since schema 5): printed, or into *out
  * (only the fields the table holds; the pattern's overlap, gap share and largest gap, which it does not
- * hold, -1: unknown, empty in the CSV). 0, or PALP_DB_ENOTFOUND when none are stored. */
+ * hold, -1: unknown, empty in the CSV). 0, PALP_DB_ENOTFOUND when none are stored, or PALP_DB_ESQL when the
+ * table could not be read (palp_db_errmsg says why). */
 int review_stored_metrics_print(palp_db *db, int64_t sid, FILE *f);
 int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out);
 

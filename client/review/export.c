@@ -197,8 +197,12 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
       review_assessment a;
       char err[512];
       rc = review_assess(db, s, &a, err, sizeof err);
-      if (rc == PALP_DB_ENOTFOUND && review_stored_metrics(db, s->id, &a) == 0) rc = 0;
+      int stored = PALP_DB_ENOTFOUND;
+      if (rc == PALP_DB_ENOTFOUND && (stored = review_stored_metrics(db, s->id, &a)) == 0) rc = 0;
       else if (rc) {
+        /* no samples, and the metrics a prune kept cannot be read: that is why */
+        if (stored != PALP_DB_ENOTFOUND)
+          snprintf(err, sizeof err, "the session_metrics table could not be read: %s", palp_db_errmsg(db));
         palp_log_error(log, "export metrics: %s", err);
         if (f != stdout) fclose(f);
         return REVIEW_ERROR;
@@ -235,18 +239,22 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     fputs("},\n", f);
     free(scene);
     free(params);
-    rc = json_array(db, &x, "contacts", 0, T_CONTACTS, s->id);
-    if (!rc) rc = json_array(db, &x, "feedback", 0, T_FEEDBACK, s->id);
-    if (!rc) rc = json_array(db, &x, "frames", 0, T_FRAMES, s->id);
-    if (!rc) rc = json_array(db, &x, "events", 0, T_EVENTS, s->id);
-    if (!rc) rc = json_array(db, &x, "notes", 1, T_NOTES, s->id);
+    /* in the order of T_CONTACTS ... T_NOTES; the first that cannot be read ends the export */
+    static const char *const arrays[] = {"contacts", "feedback", "frames", "events", "notes"};
+    for (int k = 0; k <= T_NOTES && !rc; k++)
+      if ((rc = json_array(db, &x, arrays[k], k == T_NOTES, k, s->id))) table = arrays[k];
     fputs("}\n", f);
   }
   int werr = ferror(f);
   if (f != stdout) werr |= fclose(f);
   else werr |= fflush(f);
-  if (rc || werr) {
-    palp_log_error(log, "export: %s", rc ? palp_db_errmsg(db) : "write error");
+  if (rc) { /* which table, and why: the file holds what came before (2026-12-06: the notes ended there silently) */
+    palp_log_error(log, "export: the %s could not be read: %s (the export is incomplete)", table,
+                   palp_db_errmsg(db));
+    return REVIEW_ERROR;
+  }
+  if (werr) {
+    palp_log_error(log, "export: write error");
     return REVIEW_ERROR;
   }
   return REVIEW_OK;

@@ -127,6 +127,8 @@ int review_each_note(palp_db *db, int64_t sid, review_note_fn fn, void *user) {
     const char *a = (const char *)sqlite3_column_text(st, 1), *t = (const char *)sqlite3_column_text(st, 2);
     rc = fn(user, sqlite3_column_double(st, 0), a ? a : "", t ? t : "", strcmp(g, "-") ? g : NULL);
   }
+  /* a step that fails (a damaged page) ends the notes early: an error, not their end */
+  if (!rc && step != SQLITE_DONE) rc = PALP_DB_ESQL;
   sqlite3_finalize(st);
   return rc;
 }

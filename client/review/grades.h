@@ -29,7 +29,8 @@ int review_latest_grade_parts(palp_db *db, int64_t sid, double *score, char *lev
 /* One note's grade for display, from its columns (any may be absent). */
 void review_grade_text(int has_score, double score, const char *level, const char *free_text, char *buf, size_t len);
 
-/* Every note of a session in order; grade is review_grade_text's string or NULL when ungraded. */
+/* Every note of a session in order; grade is review_grade_text's string or NULL when ungraded. 0, fn's
+ * nonzero return, or PALP_DB_ESQL when the table could not be read to its end (palp_db_errmsg says why). */
 typedef int (*review_note_fn)(void *user, double wall_unix_s, const char *author, const char *text, const char *grade);
 int review_each_note(palp_db *db, int64_t sid, review_note_fn fn, void *user);
 

@@ -259,6 +259,17 @@ static int note_row(void *u, double wall, const char *author, const char *text, 
   return 0;
 }
 
+/* A table of the log the page could not read to its end (a damaged page): said on the page where it
+ * stops, and the first such kept in why for the exit status (2026-12-06: the tables ended silently). */
+static void unreadable(FILE *f, palp_db *db, const char *table, char *why, size_t len) {
+  char msg[320];
+  snprintf(msg, sizeof msg, "the %s table could not be read: %s", table, palp_db_errmsg(db));
+  fputs("<p class=\"warn db-error\">Incomplete: ", f);
+  html_str(f, msg);
+  fputs(".</p>\n", f);
+  if (!why[0]) snprintf(why, len, "%s", msg);
+}
+
 static void info_row(FILE *f, const char *k, const char *v) {
   fprintf(f, "<tr><th>%s</th><td>", k);
   html_str(f, v);
@@ -296,7 +307,7 @@ static void valid_range_section(palp_db *db, const palp_db_session_info *s, FILE
 /* Leaves the assessment in *keep (the caller frees it; zeroed when there is none) for the
  * touches table further down. */
 static void assessment_section(palp_log *log, palp_db *db, const palp_db_session_info *s, FILE *f,
-                               review_assessment *keep) {
+                               review_assessment *keep, char *why, size_t whylen) {
   review_assessment a;
   char err[256] = "";
   memset(keep, 0, sizeof *keep);
@@ -304,20 +315,22 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
   const int rc = review_assess(db, s, &a, err, sizeof err);
   if (rc == PALP_DB_ENOTFOUND) {
     review_assessment st;
-    const int stored = review_stored_metrics(db, s->id, &st) == 0;
-    if (stored && st.has_exercise) {
+    const int stored = review_stored_metrics(db, s->id, &st);
+    if (stored == 0 && st.has_exercise) {
       fprintf(f, "<p id=\"assessment-pruned\">The finger samples of this session were pruned; its stored metrics: "
               "%d of %d lesions found, %d false positives, coverage light/medium/deep %.1f%% / %.1f%% / %.1f%%, "
               "pattern %s, score %.1f (%s).</p>\n", st.r.found, st.r.lesion_count, st.r.false_positives,
               100 * st.r.coverage[0], 100 * st.r.coverage[1], 100 * st.r.coverage[2], palp_pattern_name(st.r.pattern),
               st.r.score, st.r.pass ? "pass" : "fail");
-    } else if (stored) {
+    } else if (stored == 0) {
       /* free practice: no lesions to find and no score (stored as NULL), as show and the CSVs say */
       fprintf(f, "<p id=\"assessment-pruned\">The finger samples of this session were pruned; its stored metrics "
               "(free practice: no hidden lesions, no score): %d mark%s (%d withdrawn), coverage light/medium/deep "
               "%.1f%% / %.1f%% / %.1f%%, pattern %s.</p>\n", st.r.findings, st.r.findings == 1 ? "" : "s",
               st.r.withdrawn, 100 * st.r.coverage[0], 100 * st.r.coverage[1], 100 * st.r.coverage[2],
               palp_pattern_name(st.r.pattern));
+    } else if (stored != PALP_DB_ENOTFOUND) {
+      unreadable(f, db, "session_metrics", why, whylen);
     } else {
       fputs("<p id=\"assessment-none\">No finger samples were logged for this session (a force-driven session, or a "
             "log from before the assessment): nothing to assess.</p>\n", f);
@@ -511,6 +524,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   review_press *pr = NULL;
   int np = 0;
   int rc = 0;
+  char why[400] = ""; /* the first table of the log the page could not read to its end */
   if (!ts.t || !ts.force || !ts.top || !ts.max || (have_mesh && !mc.best)) rc = PALP_ENOMEM;
   if (!rc) rc = palp_db_each_frame(db, s->id, ts_cb, &ts);
   if (rc == 1) rc = 0; /* the bucket array filled: the last frames share the final point */
@@ -555,7 +569,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
               (long long)s->records_shed, (long long)s->records_failed);
 
     review_assessment a;
-    assessment_section(log, db, s, f, &a);
+    assessment_section(log, db, s, f, &a, why, sizeof why);
     valid_range_section(db, s, f);
     fputs("<h2>Force</h2>\n", f);
     series fs = {"contact force", "#c0392b", ts.t, ts.force, ts.n};
@@ -586,11 +600,15 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     review_assessment_free(&a);
     fputs("<h2>Events</h2>\n<table id=\"events\"><tr><th>time</th><th>frame</th><th>kind</th>"
           "<th>count</th><th>detail</th></tr>\n", f);
-    palp_db_each_event(db, s->id, ev_row, f);
-    fputs("</table>\n<h2>Instructor notes</h2>\n<table id=\"notes\"><tr><th>time</th><th>author</th><th>grade</th>"
+    const int evrc = palp_db_each_event(db, s->id, ev_row, f);
+    fputs("</table>\n", f);
+    if (evrc) unreadable(f, db, "event", why, sizeof why);
+    fputs("<h2>Instructor notes</h2>\n<table id=\"notes\"><tr><th>time</th><th>author</th><th>grade</th>"
           "<th>note</th></tr>\n", f);
-    review_each_note(db, s->id, note_row, f); /* each note's grade with its score and level */
-    fputs("</table>\n<p style=\"font-size:11px;color:#777\">Generated by palp-review from the session log.</p>\n"
+    const int nrc = review_each_note(db, s->id, note_row, f); /* each note's grade with its score and level */
+    fputs("</table>\n", f);
+    if (nrc) unreadable(f, db, "note", why, sizeof why);
+    fputs("<p style=\"font-size:11px;color:#777\">Generated by palp-review from the session log.</p>\n"
           "</body></html>\n", f);
     if (ferror(f)) rc = PALP_EIO;
     if (fclose(f)) rc = PALP_EIO;
@@ -605,6 +623,10 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   if (have_mesh) palp_mesh_destroy(&mesh);
   if (rc) {
     palp_log_error(log, "report: %s: %s", out_path, rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+    return REVIEW_ERROR;
+  }
+  if (why[0]) {
+    palp_log_error(log, "report: %s written, but %s (the report is incomplete)", out_path, why);
     return REVIEW_ERROR;
   }
   printf("report: wrote %s\n", out_path);

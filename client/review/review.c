@@ -206,7 +206,16 @@ static int note_cb(void *u, double wall, const char *author, const char *text, c
   return 0;
 }
 
+/* A table of the log show could not read to its end (a damaged page): said in its place, and the first
+ * such kept in why for the exit status (2026-12-06: the notes and events ended silently, stored metrics
+ * that could not be read were "none"). */
+static void show_unreadable(palp_db *db, const char *label, const char *table, char *why, size_t len) {
+  printf("%-10s UNREADABLE: the %s table could not be read: %s\n", label, table, palp_db_errmsg(db));
+  if (!why[0]) snprintf(why, len, "the %s table could not be read: %s", table, palp_db_errmsg(db));
+}
+
 static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
+  char why[400] = "";
   char t0[64], t1[64];
   review_fmt_time(s->start_unix_s, t0, sizeof t0);
   review_fmt_time(s->end_unix_s, t1, sizeof t1);
@@ -320,7 +329,9 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
     }
     review_assessment_free(&a);
   } else if (arc == PALP_DB_ENOTFOUND) {
-    if (review_stored_metrics_print(db, s->id, stdout) != 0) printf("metrics    none: %s\n", aerr);
+    const int stored = review_stored_metrics_print(db, s->id, stdout);
+    if (stored == PALP_DB_ENOTFOUND) printf("metrics    none: %s\n", aerr);
+    else if (stored) show_unreadable(db, "metrics", "session_metrics", why, sizeof why);
   } else {
     printf("metrics    UNKNOWN: %s\n", aerr);
   }
@@ -332,14 +343,14 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   printf("valid range %s\n", range);
   printf("events     %lld\n", (long long)s->events);
   ev_tally t = {0};
-  palp_db_each_event(db, s->id, ev_cb, &t);
+  if (palp_db_each_event(db, s->id, ev_cb, &t)) show_unreadable(db, "events", "event", why, sizeof why);
   if (t.n) {
     printf("    totals:");
     for (int i = 0; i < t.n; i++) printf(" %s %lld%s", t.kind[i], (long long)t.count[i], i + 1 < t.n ? "," : "");
     printf("\n");
   }
   printf("notes      %lld\n", (long long)s->notes);
-  review_each_note(db, s->id, note_cb, NULL);
+  if (review_each_note(db, s->id, note_cb, NULL)) show_unreadable(db, "notes", "note", why, sizeof why);
   char line[600];
   if (health_rc == 0) {
     palp_db_log_health_describe(&health, line, sizeof line);
@@ -351,6 +362,10 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
     }
   } else {
     printf("log        UNKNOWN: %s\n", palp_db_errmsg(db));
+  }
+  if (why[0]) {
+    palp_log_error(log, "show: %s: %s (what is shown is incomplete)", s->uid, why);
+    return REVIEW_ERROR;
   }
   return REVIEW_OK;
 }

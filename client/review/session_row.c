@@ -13,11 +13,19 @@ int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_s
   memset(r, 0, sizeof *r);
   r->s = *s;
   char err[512] = "";
-  const int rc = review_assess(db, s, &r->a, err, sizeof err);
+  int rc = review_assess(db, s, &r->a, err, sizeof err);
   if (rc == 0) r->computed = 1;
-  else if (review_stored_metrics(db, s->id, &r->a) != 0) {
-    if (log) palp_log_warn(log, "%s: %s left out: %s", cmd, s->uid, err);
-    return rc < 0 ? rc : PALP_DB_ENOTFOUND;
+  else {
+    const int stored = review_stored_metrics(db, s->id, &r->a);
+    if (stored != 0) {
+      /* no samples, and the metrics a prune kept cannot be read: that is why, not "force contacts only" */
+      if (stored != PALP_DB_ENOTFOUND && rc == PALP_DB_ENOTFOUND) {
+        snprintf(err, sizeof err, "the session_metrics table could not be read: %s", palp_db_errmsg(db));
+        rc = stored;
+      }
+      if (log) palp_log_warn(log, "%s: %s left out: %s", cmd, s->uid, err);
+      return rc < 0 ? rc : PALP_DB_ENOTFOUND;
+    }
   }
   review_latest_grade(db, s->id, r->grade, sizeof r->grade);
   r->outside_s = review_valid_range_seconds(db, s);

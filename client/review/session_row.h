@@ -22,7 +22,8 @@ typedef struct review_row {
 
 /* Fills *r for session s: 0, or a negative code (logged as a warning naming `cmd`, unless log is
  * NULL) when the session has neither samples nor stored metrics to assess (it is then left out of
- * the table: PALP_DB_ENOTFOUND for one without finger samples, force contacts only). */
+ * the table: PALP_DB_ENOTFOUND for one without finger samples, force contacts only; PALP_DB_ESQL for one
+ * without, whose stored metrics cannot be read). */
 int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_session_info *s, review_row *r);
 void review_row_free(review_row *r);
 

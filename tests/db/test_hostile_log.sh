@@ -5,7 +5,8 @@
 #  - no end logged (the server was SIGKILLed): "CUT SHORT ... the data ends at frame F", F = max(frame);
 #  - a mesh row claiming 178,956,971 vertices (x 24 B wraps to 8 in 32 bits): report and show run, exit 0;
 #  - a frame number of 10^12: replay stops at once with "DAMAGED LOG", exit 2, within 10 s;
-#  - an empty file and a foreign SQLite file: list refuses them (exit 2) and leaves them byte-identical.
+#  - an empty file and a foreign SQLite file: list refuses them (exit 2) and leaves them byte-identical;
+#  - a damaged page under the note, event or session_metrics table: show, report and export exit 2 naming it.
 # usage: test_hostile_log.sh SIM_SESSION PALP_REVIEW SCENE TMPDIR
 set -eu
 sim=$1 review=$2 scene=$3 tmp=$4
@@ -149,5 +150,77 @@ out=$("$review" --db "$dir/huge.db" show "$uid" 2>&1); rc=$?
 set -e
 [ $rc -lt 128 ] && echo "$out" | grep -Eq "^started +-$" && ok "start 1e300 s and frames at +-9e18: show exits $rc, the start shown '-'" ||
   bad "huge numbers: exit $rc: $(echo "$out" | head -8)"
+
+# A damaged page under a table that show, report and export read to its end (2026-12-06, found by review:
+# the notes and the events ended where the damage began, exit 0, as if there were no more; stored
+# metrics that could not be read were "none"). damage TABLE DB overwrites the header of TABLE's
+# highest-numbered leaf page (its page type 0xff): a scan in id order reads the rows before it, then
+# SQLite says the file is malformed. Each command says which table and why, and exits 2.
+damage() {
+  python3 - "$2" "$1" <<'PY'
+import sqlite3, sys
+c = sqlite3.connect(sys.argv[1])
+ps = c.execute("pragma page_size").fetchone()[0]
+pages = [r[0] for r in c.execute("select pageno from dbstat where name = ? and pagetype = 'leaf' order by pageno", (sys.argv[2],))]
+c.close()
+assert pages, sys.argv[2]
+with open(sys.argv[1], "r+b") as f:
+    f.seek((pages[-1] - 1) * ps)
+    f.write(b"\xff" * 16)
+PY
+}
+damaged() { # damaged DB VERB REST... : exit 2 and stderr naming the table, "malformed"
+  db=$1 verb=$2
+  shift 2
+  set +e
+  "$review" --db "$db" "$verb" "$uid" "$@" > "$dir/damaged.out" 2> "$dir/damaged.err"; rc=$?
+  set -e
+  if [ $rc -eq 2 ] && grep -Eq "the ($want) could not be read: database disk image is malformed" "$dir/damaged.err"; then
+    ok "$(basename "$db"): $verb $*: exit 2, said: $(sed 's/.*ERROR *palp-review: //' "$dir/damaged.err" | tail -1 | cut -c1-150)"
+  else bad "$(basename "$db"): $verb $*: exit $rc:"; tail -n 3 "$dir/damaged.out" "$dir/damaged.err" || true; fi
+}
+copy notes
+sqlite3 "$dir/notes.db" "WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 300)
+  INSERT INTO note(session_id, author, wall_unix_s, text) SELECT (SELECT id FROM session), 'Lee', 1000 + i,
+  'note ' || i || ' ' || hex(zeroblob(100)) FROM n; PRAGMA wal_checkpoint(TRUNCATE);" >/dev/null
+damage note "$dir/notes.db"
+want="note table|notes"
+damaged "$dir/notes.db" show
+damaged "$dir/notes.db" report --out "$dir/notes.html"
+damaged "$dir/notes.db" export --format csv --table notes --out "$dir/notes.csv"
+damaged "$dir/notes.db" export --format json --out "$dir/notes.json"
+# the damage is mid-way: the notes before it were read (and written), not all 300
+rows=$(python3 -c "import csv, sys; print(len(list(csv.reader(open(sys.argv[1])))) - 1)" "$dir/notes.csv")
+[ "$rows" -gt 0 ] && [ "$rows" -lt 300 ] && grep -q 'class="warn db-error"' "$dir/notes.html" &&
+  ok "  the damage mid-way: $rows of 300 notes read before it; the report's page says where it stops" ||
+  bad "  the notes before the damage: $rows read; the page: $(grep -c 'db-error' "$dir/notes.html")"
+copy events
+sqlite3 "$dir/events.db" "WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 300)
+  INSERT INTO event(session_id, wall_unix_s, frame, kind, detail, count) SELECT (SELECT id FROM session), 1000 + i, i,
+  'info', 'event ' || i || ' ' || hex(zeroblob(100)), 1 FROM n; PRAGMA wal_checkpoint(TRUNCATE);" >/dev/null
+damage event "$dir/events.db"
+want="event table|events"
+damaged "$dir/events.db" show
+damaged "$dir/events.db" report --out "$dir/events.html"
+damaged "$dir/events.db" export --format csv --table events --out "$dir/events-damaged.csv"
+# stored metrics as a prune leaves them (the samples gone, a session_metrics row), their page damaged
+copy metrics
+sqlite3 "$dir/metrics.db" "DELETE FROM finger_sample; UPDATE session SET pruned_unix_s = 2000;
+  INSERT INTO session_metrics(session_id, computed_unix_s, exercise_name, samples, lesions, found, findings, withdrawn,
+  false_positives, coverage_light, coverage_medium, coverage_deep, coverage_any, pattern, path_length_m, presses,
+  duration_s, peak_force_n, out_of_range, score, pass) SELECT id, 2000, NULL, 500, 0, 0, 0, 0, 0, 0.25, 0.1, 0, 0.3,
+  'unsystematic', 0.2, 3, 1.0, 4.5, 0, NULL, NULL FROM session; PRAGMA wal_checkpoint(TRUNCATE);" >/dev/null
+"$review" --db "$dir/metrics.db" show "$uid" | grep -q "stored when the session was pruned" &&
+  ok "stored metrics, undamaged: show gives them" || bad "stored metrics, undamaged: show does not give them"
+damage session_metrics "$dir/metrics.db"
+want="session_metrics table"
+damaged "$dir/metrics.db" show
+damaged "$dir/metrics.db" report --out "$dir/metrics.html"
+damaged "$dir/metrics.db" export --format csv --table metrics --out "$dir/metrics.csv"
+trainee=$(sqlite3 "$dir/base.db" "SELECT trainee FROM session")
+"$review" --db "$dir/metrics.db" trainee "$trainee" > "$dir/metrics-trainee.out" 2>&1 || true
+grep -q "none assessed; 1 left out, could not be assessed" "$dir/metrics-trainee.out" &&
+  ok "trainee: the session whose stored metrics cannot be read is left out as not assessed, not as force contacts only" ||
+  bad "trainee over damaged stored metrics: $(cat "$dir/metrics-trainee.out")"
 
 exit $fail
