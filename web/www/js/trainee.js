@@ -28,6 +28,7 @@
   T.debrief = null;       /* the server's debrief of her last session, as the bridge sent it */
   T.score = null;         /* its score, where the exercise tells the lesions (a practice exercise) */
   let exercises = [], lastSession = null, findings = null, findingsAt = 0;
+  let followedLast = 0; /* the session this page followed before T.session, whose debrief may come late */
   const token = p.get("token");
   if (token) document.getElementById("back").href = "dashboard.html?token=" + encodeURIComponent(token);
 
@@ -431,7 +432,10 @@
   send = PALP.connect({
     open: function (snd) { send = snd; if (T.session) send(followMsg(T.session)); },
     exercises: function (m) { exercises = m.exercises; showExercise(); },
-    debrief: function (m) { showDebrief(m); },
+    /* Only the followed session's debrief, or, following none, the one followed last (the bridge sends
+     * that too: the debrief can reach it after the CLOSED state). A page that moved on to a newer session
+     * ignores the old one's: drawn there, its rings would show the new trainee where her lumps are. */
+    debrief: function (m) { if (m.session === T.session || (!T.session && m.session === followedLast)) showDebrief(m); },
     score: function (m) { showScore(m); },
     cover: function (m) { if (m.session === T.session && m.phantom === T.phantom) setCover(m.bands); },
     finding_reply: function (m) {
@@ -452,6 +456,7 @@
     sessions: function (m) {
       const id = choose(m.sessions);
       if (id !== T.session) {
+        if (T.session) followedLast = T.session;
         T.session = id;
         setScale(scaleMin); /* a new session starts on the smallest scale */
         if (send) send(followMsg(id));
