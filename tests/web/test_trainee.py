@@ -35,6 +35,10 @@ def press_once(procs, page, out):
     check(ok is True, "during the press the page shows > 15 mm and the 3 N force: %s"
           % page.eval("JSON.stringify(palpState.trainee, (k, v) => k === \"arrivals\" ? undefined : v)"))
     time.sleep(1.0)  # let the renderer catch up with the newest frame
+    # alice's one force contact is drawn, for every live message, by the same 2 objects: its marker and
+    # its arrow (made anew each time, never disposed, they piled up over a class)
+    made = page.eval("palpState.trainee.fingerObjects")
+    check(made == 2, "2 objects made for alice's force contact in all, its marker and its arrow (%s)" % made)
     shot_during = page.screenshot(os.path.join(out, "trainee-during.png"))
     page.eval("palpShowFingers(true)")
     time.sleep(0.5)

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """web_trainee_proxy: a position-driven trainee (palp-client --input sim:press) seen on the trainee
 page in headless Chromium: the page receives the finger's haptic local model from palp-web and
-draws the fingertip at its proxy, the device point beneath it while pressed. DDS domain 196.
+draws the fingertip at its proxy, the device point beneath it while pressed, reusing its objects for
+every live message (the renderer's geometries stay flat). DDS domain 196.
 usage: test_trainee_proxy.py BUILD SOURCE OUT"""
 import json
 import math
@@ -20,8 +21,8 @@ def run(build, source, out):
         browser = harness.cdp.Chromium(width=1000, height=700, out_dir=out)
         page = browser.new_page(web.base + "/trainee.html?trainee=pat")
         check(page.wait_for("window.palpState && palpState.connected", 20) is True, "page loaded and connected to palp-web")
-        procs.trainee("pat", extra=["--input", "sim:press,hold_s=6", "--duration", "30"])
-        # Pressed: sim:press goes 10 mm deep at 20 mm/s and holds 6 s; wait until the dent is 5 mm deep
+        procs.trainee("pat", extra=["--input", "sim:press,hold_s=20", "--duration", "40"])
+        # Pressed: sim:press goes 10 mm deep at 20 mm/s and holds 20 s; wait until the dent is 5 mm deep
         # (the page's own displacement figure) so that the proxy is read mid-press.
         ok = page.wait_for("palpState.trainee.proxy !== null && palpState.trainee.proxy.in_contact === true && "
                            "palpState.trainee.maxDispMm > 5", 20)
@@ -51,6 +52,24 @@ def run(build, source, out):
         check(abs(depth_mm - disp_mm) < 1.5, "the fingertip rides the dent: its lowest point %.2f mm deep, the page's "
               "displacement figure %.2f mm (tolerance 1.5 mm)" % (depth_mm, disp_mm))
         check(rp < 2 * R, "the proxy is near the phantom (|p| %.4f < 2 R = %.4f m)" % (rp, 2 * R))
+        # The fingers are redrawn for every live message (30 Hz while she presses): the renderer's geometries
+        # stay flat over 300 more text messages (the live ones and the session list's, 5 Hz), within 2 (the pressed skin's
+        # dots are made anew, the old ones disposed, as `cover` messages come); made anew for each message,
+        # the fingertip's and the device point's spheres grew it by up to 2 per frame drawn.
+        mem = "JSON.stringify([palpState.messages - palpState.frames, palpState.trainee.rendered, " \
+              "palpState.trainee.memory.geometries])"
+        texts0, rendered0, geoms0 = json.loads(page.eval(mem))
+        page.wait_for("palpState.messages - palpState.frames >= %d" % (texts0 + 300), 30)
+        texts1, rendered1, geoms1 = json.loads(page.eval(mem))
+        print("over %d text messages and %d frames drawn: geometries %d -> %d, finger objects made %s"
+              % (texts1 - texts0, rendered1 - rendered0, geoms0, geoms1, page.eval("palpState.trainee.fingerObjects")))
+        check(texts1 - texts0 >= 300 and rendered1 - rendered0 >= 50 and page.eval("palpState.trainee.proxy.in_contact") is True,
+              "300 text messages (%d) and 50 frames drawn (%d) while pat presses"
+              % (texts1 - texts0, rendered1 - rendered0))
+        check(abs(geoms1 - geoms0) <= 2, "the renderer's geometries stay flat (%d -> %d, tolerance 2)" % (geoms0, geoms1))
+        check(page.eval("palpState.trainee.fingerObjects") == 2,
+              "2 objects made for pat's finger in all, its tip and its device point (%s)"
+              % page.eval("palpState.trainee.fingerObjects"))
         cx, cy = page.eval("palpProject(%r, %r, %r)" % tuple(p["proxy"]))
         w, h = page.eval("[innerWidth, innerHeight]")
         check(0 <= cx <= w and 0 <= cy <= h, "the proxy projects into the view (%.0f, %.0f)" % (cx, cy))

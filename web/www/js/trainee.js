@@ -161,10 +161,33 @@
    * the device point as a small translucent marker beneath it while it presses. */
   const tipMat = new THREE.MeshLambertMaterial({ color: 0xd55e00, transparent: true, opacity: 0.55 });
   const deviceMat = new THREE.MeshBasicMaterial({ color: 0x0072b2, transparent: true, opacity: 0.45 });
+  /* The fingers' objects are made once and reused by every live message (up to 30 a second): the
+   * spheres share one geometry each (the tip's of radius 1, scaled to the finger's), an arrow is moved
+   * and resized. Made anew for each message and never disposed, they grew the renderer's geometries
+   * without bound over a class. */
+  const tipGeom = new THREE.SphereBufferGeometry(1, 20, 14), deviceGeom = new THREE.SphereBufferGeometry(0.0025, 12, 8);
+  const pool = { tip: [], device: [], arrow: [] };
+  T.fingerObjects = 0;            /* objects ever made for the fingers, for tests */
+  T.memory = renderer.info.memory; /* the renderer's geometries and textures, for tests */
+  function pooled(kind, i, make) {
+    if (i < pool[kind].length) return pool[kind][i];
+    const o = make();
+    /* Drawn over the skin: a finger in its own dent would otherwise be hidden by the dent's rim. */
+    o.traverse(function (x) { if (x.material) x.material.depthTest = false; x.renderOrder = 10; });
+    scene.add(o);
+    pool[kind].push(o);
+    T.fingerObjects++;
+    return o;
+  }
   T.proxy = null; /* the newest drawn proxy, for tests: {proxy, device, in_contact, force_limit, out_of_range} */
   function setFingers(list) {
-    for (const o of fingerObjs) scene.remove(o);
     fingerObjs.length = 0;
+    const used = { tip: 0, device: 0, arrow: 0 };
+    function take(kind, make) {
+      const o = pooled(kind, used[kind]++, make);
+      fingerObjs.push(o);
+      return o;
+    }
     let flagsSeen = 0, drawnProxy = null; /* the drawn fingers' local-model flags, together */
     for (const f of list) {
       const hasProxy = f.mode === "finger" && Array.isArray(f.proxy) && Array.isArray(f.device);
@@ -182,23 +205,25 @@
         if (best >= 0) c.set(pos[best], pos[best + 1], pos[best + 2]);
       }
       const r = f.mode === "finger" && f.radius > 0 ? f.radius : 0.003;
-      const s = new THREE.Mesh(new THREE.SphereBufferGeometry(r, 20, 14), tipMat);
+      const s = take("tip", function () { return new THREE.Mesh(tipGeom, tipMat); });
+      s.scale.setScalar(r);
       s.position.copy(c);
-      fingerObjs.push(s);
       if (hasProxy) {
         flagsSeen |= f.flags | 0;
         drawnProxy = { proxy: f.proxy, device: f.device, in_contact: !!f.in_contact,
           force_limit: !!f.force_limit, out_of_range: !!f.out_of_range };
         if (f.in_contact) {
-          const m = new THREE.Mesh(new THREE.SphereBufferGeometry(0.0025, 12, 8), deviceMat);
+          const m = take("device", function () { return new THREE.Mesh(deviceGeom, deviceMat); });
           m.position.set(f.device[0], f.device[1], f.device[2]);
-          fingerObjs.push(m);
         }
       }
       const F = new THREE.Vector3(f.force[0], f.force[1], f.force[2]), mag = F.length();
       if (f.mode === "force" && mag > 1e-3) {
         const len = 0.01 * mag, dir = F.clone().normalize();
-        fingerObjs.push(new THREE.ArrowHelper(dir, c.clone().addScaledVector(dir, -len), len, 0xd55e00, 0.006, 0.004));
+        const a = take("arrow", function () { return new THREE.ArrowHelper(dir, c, len, 0xd55e00, 0.006, 0.004); });
+        a.position.copy(c).addScaledVector(dir, -len);
+        a.setDirection(dir);
+        a.setLength(len, 0.006, 0.004);
       }
     }
     T.proxy = drawnProxy;
@@ -207,12 +232,7 @@
       note.textContent = modelNote(flagsSeen);
       note.className = note.textContent ? "warn" : "muted";
     }
-    /* Drawn over the skin: a finger in its own dent would otherwise be hidden by the dent's rim. */
-    for (const o of fingerObjs) {
-      o.traverse(function (x) { if (x.material) x.material.depthTest = false; x.renderOrder = 10; });
-      o.visible = showFingers;
-      scene.add(o);
-    }
+    for (const k in pool) pool[k].forEach(function (o, i) { o.visible = showFingers && i < used[k]; }); /* the rest wait */
     dirty = true;
   }
   let showFingers = true;
