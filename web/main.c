@@ -195,12 +195,13 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           "%d sessions, %d pages; DDS taken: %llu deformations, %llu contacts, %llu feedbacks, %llu states, "
           "%llu dropped, %llu of no known session, %llu of new keys past the readers' bound, %llu from outside their "
           "session's partition; joins %llu, leaves %llu; sent %llu messages (%.1f MB); "
-          "http %llu ok, %llu denied; ws %llu opened, %llu closed, %llu denied",
+          "http %llu ok, %llu denied, %llu missing; ws %llu opened, %llu closed, %llu denied",
           h.sessions_open, h.clients, (unsigned long long)h.deformations, (unsigned long long)h.contacts,
           (unsigned long long)h.feedbacks, (unsigned long long)h.states, (unsigned long long)h.dropped,
           (unsigned long long)h.no_session, (unsigned long long)h.rejected, (unsigned long long)h.foreign,
           (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
-          (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.ws_opened,
+          (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.http_missing,
+          (unsigned long long)w.ws_opened,
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
   if (w.http_expired || w.ws_expired) /* each token's first refusal is named in the log (serve.c) */
     palp_log_warn(log, "pages told their token expired: %llu HTTP requests, %llu WebSockets (refused, or closed at "

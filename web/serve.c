@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include <libwebsockets.h>
@@ -172,6 +173,17 @@ static int host_allowed(palp_web_server *s, struct lws *wsi) {
          palp_web_host_is_loopback(host);
 }
 
+/* Every HTTP answer's headers (docs/web.md), a file's and a refusal's alike: libwebsockets adds the
+ * vhost's own to each status line it writes, which lws_return_http_status's answers (401, 404) lacked
+ * when they were passed to lws_serve_http_file only. */
+static const struct lws_protocol_vhost_options answer_headers[] = {
+    {&answer_headers[1], NULL, "Cache-Control:", "no-store"},
+    {&answer_headers[2], NULL, "X-Content-Type-Options:", "nosniff"},
+    {&answer_headers[3], NULL, "Referrer-Policy:", "no-referrer"},
+    {NULL, NULL, "Content-Security-Policy:",
+     "default-src 'self'; connect-src 'self'; img-src 'self' data:; frame-ancestors 'none'"},
+};
+
 /* An HTTP answer without a page; body (plain words, lws puts them in a minimal HTML page) may be NULL. */
 static int http_status(struct lws *wsi, unsigned code, const char *body, uint64_t *counter) {
   (*counter)++;
@@ -197,17 +209,16 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
     snprintf(file, sizeof file, "%s/%s", s->three, path + sizeof lib - 1);
   else
     snprintf(file, sizeof file, "%s%s", s->www, path);
-  char headers[512];
-  int n = snprintf(headers, sizeof headers,
-                   "Cache-Control: no-store\x0d\x0a"
-                   "X-Content-Type-Options: nosniff\x0d\x0a"
-                   "Referrer-Policy: no-referrer\x0d\x0a"
-                   "Content-Security-Policy: default-src 'self'; connect-src 'self'; img-src 'self' data:; "
-                   "frame-ancestors 'none'\x0d\x0a");
+  /* a file that is not there is answered here: lws_serve_http_file sends its own 404 for it and returns
+   * 1, as for a file it served, which counted it in http_ok */
+  struct stat sb;
+  if (stat(file, &sb) != 0 || !S_ISREG(sb.st_mode))
+    return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
+  char headers[512] = ""; /* answer_headers come with the status line */
+  int n = 0;
   if (from_url && s->have_token)
-    n += snprintf(headers + n, sizeof headers - (size_t)n,
-                  "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict%s\x0d\x0a",
-                  who ? s->def.trainees[who - 1].token : s->token, s->def.tls_cert ? "; Secure" : "");
+    n = snprintf(headers, sizeof headers, "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict%s\x0d\x0a",
+                 who ? s->def.trainees[who - 1].token : s->token, s->def.tls_cert ? "; Secure" : "");
   const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
   if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
   s->stats.http_ok++;
@@ -399,6 +410,7 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
   info.uid = -1;
   info.gid = -1;
   info.retry_and_idle_policy = &s->retry;
+  info.headers = answer_headers;
   if (!strchr(s->listen, ':')) info.options |= LWS_SERVER_OPTION_DISABLE_IPV6;
   if (def->tls_cert) {
     info.options |= LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;

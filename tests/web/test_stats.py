@@ -3,7 +3,8 @@
 
 palp-web alone (no palp-server: nothing to show, the pages are served all the same) with a token and
 --stats. Known traffic: 2 pages served (the token in the URL, then the cookie), 2 refused (no token, a
-wrong one), 1 WebSocket opened with the token (its hello sent) and closed, 1 refused without the token.
+wrong one; their 401s carry the headers every answer carries), 1 missing (a file that is not there,
+whose 404 was counted ok until 2026-12-06), 1 WebSocket opened with the token (its hello sent) and closed, 1 refused without the token.
 The line printed every 5 s, from the hub's thread while the web server's thread counts (which read the
 counters themselves, unlocked, until they were copied under a lock: a data race for ThreadSanitizer,
 scripts/sanitize.sh thread 'web_stats'), says exactly these counts; so does the last line, at SIGINT.
@@ -15,7 +16,16 @@ import harness
 from harness import check
 
 TOKEN = "stats-test-token-0123456789"
-WANT = "http 2 ok, 2 denied; ws 1 opened, 1 closed, 1 denied"
+WANT = "http 2 ok, 2 denied, 1 missing; ws 1 opened, 1 closed, 1 denied"
+# the headers docs/web.md says every answer carries, a refusal's too
+HEADERS = {"Content-Security-Policy": "default-src 'self'", "X-Content-Type-Options": "nosniff",
+           "Cache-Control": "no-store", "Referrer-Policy": "no-referrer"}
+
+
+def headers_missing(headers):
+    """The names of HEADERS an answer lacks or gives another value (the CSP: one that does not begin so)."""
+    got = {k.lower(): v for k, v in headers.items()}
+    return [k for k, v in HEADERS.items() if not got.get(k.lower(), "").startswith(v)]
 
 
 def run(build, source, out):
@@ -27,8 +37,13 @@ def run(build, source, out):
         status, _, _ = harness.http_get(web.base + "/js/common.js", {"Cookie": "palp_token=" + TOKEN})
         check(status == 200, "its script with the cookie: %d" % status)
         for url in [web.base + "/trainee.html", web.base + "/trainee.html?token=wrong-token-0123456789"]:
-            status, _, _ = harness.http_get(url)
-            check(status == 401, "%s: %d" % (url.replace(web.base, ""), status))
+            status, _, headers = harness.http_get(url)
+            check(status == 401 and not headers_missing(headers), "%s: %d, with every answer's headers (lacking %s)"
+                  % (url.replace(web.base, ""), status, headers_missing(headers)))
+        # a file that is not there, its path allowed and the token right: a 404 counted missing, not ok
+        status, _, headers = harness.http_get(web.base + "/nope.html?token=" + TOKEN)
+        check(status == 404 and not headers_missing(headers), "/nope.html with the token: %d, with every answer's "
+              "headers (lacking %s)" % (status, headers_missing(headers)))
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, TOKEN), timeout=10)
         op, data = ws.recv()
         ws.close()
