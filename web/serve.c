@@ -245,6 +245,14 @@ static int tell_expired(struct lws *wsi, palp_web_server *s, conn *c) {
   return -1;
 }
 
+/* Closes a page the bridge has no room for (1008) with the reason, which the page shows: a bare close
+ * told it nothing, and it retried every second without saying why. Returns -1, the callback's "close". */
+static int refuse_full(struct lws *wsi, palp_web_server *s, const char *why) {
+  s->stats.ws_full++;
+  lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION, (unsigned char *)why, strlen(why));
+  return -1;
+}
+
 static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len) {
   palp_web_server *s = server_of(wsi);
   conn *c = user;
@@ -282,15 +290,17 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
       lws_callback_on_writable(wsi);
       return 0;
     }
-    if (who > 0 && (who > PALP_WEB_TRAINEES_MAX || s->trainee_pages[who] >= PAGES_PER_TRAINEE ||
-                    s->trainee_pages_all >= s->def.max_clients - instructor_reserve(s->def.max_clients))) {
-      s->stats.ws_full++;
-      return -1;
+    /* (each reason at most 123 bytes, a close frame's) */
+    if (who > 0 && who <= PALP_WEB_TRAINEES_MAX && s->trainee_pages[who] >= PAGES_PER_TRAINEE) {
+      char why[96];
+      snprintf(why, sizeof why, "this trainee's token has %d pages open already: close one of them", PAGES_PER_TRAINEE);
+      return refuse_full(wsi, s, why);
     }
-    if (palp_web_hub_attach(s->hub, &c->cursor, s->def.max_clients) != 0) {
-      s->stats.ws_full++;
-      return -1;
-    }
+    if (who > 0 && (who > PALP_WEB_TRAINEES_MAX ||
+                    s->trainee_pages_all >= s->def.max_clients - instructor_reserve(s->def.max_clients)))
+      return refuse_full(wsi, s, "palp-web has no room for more trainees' pages (--max-clients)");
+    if (palp_web_hub_attach(s->hub, &c->cursor, s->def.max_clients) != 0)
+      return refuse_full(wsi, s, "palp-web has no room for more pages (--max-clients)");
     if (who > 0) s->trainee_pages[who]++, s->trainee_pages_all++;
     if (who > 0) /* a trainee's page: that trainee's sessions only (palp_web_hub_attach zeroed the cursor) */
       palp_web_hub_scope(s->hub, &c->cursor, s->def.trainees[who - 1].name);

@@ -2,7 +2,8 @@
 """web_token: with an access token required, a request without it gets nothing: every page and
 script answers 401 with no content, the WebSocket handshake is refused, and a page opened in
 headless Chromium without the token shows no palp page and opens no stream. With the token the
-same page works. palp-web refuses to listen beyond loopback without a token; without one, it answers
+same page works; a page loaded by the cookie alone says why its stream is refused and retries ever
+more slowly. palp-web refuses to listen beyond loopback without a token; without one, it answers
 only requests sent to a loopback name (DNS rebinding), and an over-long Origin is refused. DDS domain 193.
 usage: test_token.py BUILD SOURCE OUT"""
 import os
@@ -111,6 +112,21 @@ def run(build, source, out):
         ok = page2.wait_for("window.palpState && palpState.connected && palpState.trainee.rendered > 0", 20)
         page2.screenshot(os.path.join(out, "token-granted.png"))
         check(ok is True, "Chromium with the token: connected and drawing")
+        # A page loaded by the cookie alone (the one page2 was given; no ?token= in its address) is refused its
+        # WebSocket for good: it says why, and its attempts slow down. Waits from 1 s, doubling to at most
+        # 30 s: after the 3rd refusal (~3 s) 4 s, then 8 s, so over the next 10 s 1 or 2 attempts (retried every
+        # second, as until 2026-12-06, it made ~10 and said only "disconnected, retrying").
+        page3 = browser.new_page(base + "/dashboard.html")
+        why = page3.wait_for("(function(){const t=document.getElementById('conn').textContent;"
+                             "return window.palpState && t.indexOf('no ?token=') >= 0 ? t : null;})()", 15)
+        check(why is not None, "the dashboard opened by the cookie alone says why it is refused: %r"
+              % page3.eval("document.getElementById('conn').textContent"))
+        r0 = page3.eval("palpState.reconnects")
+        time.sleep(10.0)
+        r1 = page3.eval("palpState.reconnects")
+        check(page3.eval("palpState.connected") is False and 1 <= r1 - r0 <= 2,
+              "and retries ever more slowly: %d attempts in 10 s after %d (1 or 2), now waiting %s ms"
+              % (r1 - r0, r0, page3.eval("palpState.retryMs")))
     finally:
         if browser:
             browser.close()

@@ -21,6 +21,7 @@ usage: test_trainee_tokens.py BUILD SOURCE OUT"""
 import json
 import math
 import os
+import struct
 import subprocess
 import time
 
@@ -164,11 +165,15 @@ def run(build, source, out):
         # instructors' token and another trainee's still get theirs, and a page closed frees its place.
         mine = [harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=10) for _ in range(3)]
         hello = [w.recv()[1].startswith(b'{"type":"hello"') for w in mine]
+        told = None  # the 4th page's close frame: its status and reason, which the page shows
         try:
             extra = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, ALICE), timeout=5)
-            op, _ = extra.recv()
+            b0, b1 = extra._read(2)
+            payload = extra._read(b1 & 0x7F)
+            fourth = b0 & 0x0F != 8
+            if not fourth:
+                told = (struct.unpack("!H", payload[:2])[0], payload[2:].decode())
             extra.close()
-            fourth = op == 1
         except (ConnectionError, OSError):
             fourth = False
         others = []
@@ -186,6 +191,8 @@ def run(build, source, out):
         check(all(hello) and not fourth and others == [True, True] and again,
               "alice's token: 3 pages open (%s), a 4th refused (%s), the instructors' and bob's pages served (%s), "
               "one closed frees its place (%s)" % (hello, "refused" if not fourth else "served", others, again))
+        check(told == (1008, "this trainee's token has 3 pages open already: close one of them"),
+              "the 4th is told why, in the close frame its page shows: %s" % (told,))
 
         rc = procs.stop(web)
         check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)

@@ -33,30 +33,69 @@ const PALP = (function () {
   window.palpState = state;
 
   /* Opens the WebSocket (the token from this page's own address), calls handlers[type](msg) for
-   * every message and handlers.deformation(frame) for frames; reconnects after a second, except once
-   * the bridge said this page's token expired ({"type": "expired"}): its message stays shown, as no
-   * retry with the same token can succeed. */
+   * every message and handlers.deformation(frame) for frames; reconnects, except once the bridge said
+   * this page's token expired ({"type": "expired"}): its message stays shown, as no retry with the
+   * same token can succeed. The first retry comes after a second; each connection the bridge did not
+   * answer (refused at the handshake, or closed before its hello) doubles the wait, to at most 30 s,
+   * and one it answered starts again from a second: a page refused for good (no ?token= in its
+   * address, a token palp-web no longer takes, a trainee's fourth page) knocked every second and never
+   * said why. It says the bridge's reason where the bridge closes with one; after 3 refusals without,
+   * what its own address's answer tells (say()). */
+  const RETRY_MS = 1000, RETRY_MAX_MS = 30000, SAY_AFTER = 3;
   function connect(handlers) {
     const token = params().get("token");
     const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" +
       (token ? "?token=" + encodeURIComponent(token) : "");
     const conn = document.getElementById("conn");
-    let ws = null;
+    let ws = null, retryMs = RETRY_MS, unanswered = 0, answered = false, attempt = 0;
+    state.retryMs = 0;   /* the wait before the next attempt [ms], for tests */
+    state.refused = "";  /* why the bridge refuses this page, as shown, or "" */
     function setConn(ok, text) {
       state.connected = ok;
       if (conn) { conn.textContent = text; conn.className = ok ? "conn ok" : "conn"; }
     }
+    /* A handshake refused tells a page nothing (the browser gives 1006, as for a bridge that is down):
+     * the page asks for its own address, as it loaded, to tell them apart. */
+    function say(again) {
+      const at = attempt;
+      fetch(location.href, { cache: "no-store", credentials: "same-origin" }).then(function (r) {
+        return r.status === 401 ? "refused: palp-web does not take this link's token (ask for a new link)" :
+          !token ? "refused: this page's address has no ?token= (open the link with its token)" :
+          "refused by palp-web: check the link's token";
+      }, function () { return "palp-web not reachable"; }).then(function (why) {
+        if (at !== attempt || state.connected || state.expired) return; /* a newer attempt's news */
+        state.refused = why.startsWith("refused") ? why : "";
+        setConn(false, why + again);
+      });
+    }
     function open() {
+      attempt++;
       ws = new WebSocket(url);
       ws.binaryType = "arraybuffer";
       ws.onopen = function () { setConn(true, "live"); if (handlers.open) handlers.open(send); };
-      ws.onclose = function () {
+      ws.onclose = function (ev) {
         if (state.expired) { setConn(false, state.expired); return; }
-        setConn(false, "disconnected, retrying");
+        if (answered) retryMs = RETRY_MS, unanswered = 0;
+        else unanswered++;
+        const wait = retryMs, again = ", retrying in " + Math.round(wait / 1000) + " s";
+        if (!answered) retryMs = Math.min(RETRY_MAX_MS, 2 * retryMs);
+        answered = false;
         state.reconnects++;
-        setTimeout(open, 1000);
+        state.retryMs = wait;
+        setTimeout(open, wait);
+        if (ev.reason) { /* the bridge's own words (web/serve.c: a page it has no room for) */
+          state.refused = "palp-web: " + ev.reason;
+          setConn(false, state.refused + again);
+        } else if (unanswered >= SAY_AFTER) {
+          setConn(false, "not connected" + again);
+          say(again);
+        } else {
+          setConn(false, "disconnected, retrying");
+        }
       };
       ws.onmessage = function (ev) {
+        answered = true;
+        state.refused = "";
         state.messages++;
         if (typeof ev.data !== "string") {
           const f = decodeDeformation(ev.data);
