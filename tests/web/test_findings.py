@@ -13,7 +13,8 @@ the latter is also sent what her marks found, as the server's debrief said it, a
 graded from its session log (as palp-review show prints it from that log). sam then examines on
 "hard", whose debrief tells the count only: his ended row on the dashboard shows where the lump was,
 missed, under the "show hidden lumps" box. A bare trainee page that moved on from lee's closed session to
-max's shows no debrief of lee's, even one that comes late.
+max's shows no debrief of lee's, even one that comes late. fay's exercise, easy banded by force alone,
+has her page's force gauge shade its bands, as the band badge names them.
 DDS domain 75. usage: test_findings.py BUILD SOURCE OUT"""
 import json
 import math
@@ -77,6 +78,40 @@ def hooked_page(browser, url):
     return page
 
 
+FORCE_BANDS = {"light": [0.2, 2], "medium": [2, 8], "deep": [8, 15]}  # easy_force's bands [N]
+# the gauge's zone colours, light / medium / deep (web/www/js/trainee.js drawGauge)
+ZONE = {"light": [204, 232, 248], "medium": [248, 227, 180], "deep": [179, 226, 213]}
+
+
+def config_with_force_bands(source, out):
+    """harness.answers_config plus phantom 15, "easy_force": easy's exercise banded by fingertip force alone
+    (FORCE_BANDS; docs/assessment.md allows force_N without depth_mm), which no shipped exercise is."""
+    with open(os.path.join(source, "config", "exercises", "easy.json")) as f:
+        ex = json.load(f)
+    ex["name"], ex["title"] = "easy_force", "easy, banded by force"
+    ex["phantom"] = os.path.join(source, "config", "phantoms", "dome.json")
+    ex["pressure_bands"] = {k: {"force_N": v} for k, v in FORCE_BANDS.items()}
+    path = os.path.join(out, "easy_force.json")
+    with open(path, "w") as f:
+        json.dump(ex, f)
+
+    def edit(cfg):
+        cfg.update(session_exercise="always")
+        cfg["exercises"].append({"id": 15, "file": path, "physics_rate_hz": 250})
+    return harness.server_config(source, out, "server-exercises.json", "server-exercises-answers.json", edit)
+
+
+# The gauge's pixels where its marker (the force) stands: the zone's colour just above and below the marker,
+# the band badge's band, the force and the legend.
+GAUGE = """(function(){const c=document.getElementById('gauge'), W=c.width,
+d=c.getContext('2d').getImageData(0, 0, W, c.height).data;
+const px=function(x, y){const i=4*(y*W+x); return [d[i], d[i+1], d[i+2]];};
+const rows=[]; for (let y=0; y<c.height; y++){const p=px(26, y); if (p[0]===29 && p[1]===35 && p[2]===48) rows.push(y);}
+return {band: palpState.trainee.band, force: palpState.trainee.force, rows: rows.length,
+ above: rows.length ? px(10, rows[0]-3) : null, below: rows.length ? px(10, rows[rows.length-1]+3) : null,
+ legend: document.getElementById('band-legend').textContent};})()"""
+
+
 def run(build, source, out):
     procs = harness.Procs(build, source, out, DOMAIN)
     browser = None
@@ -84,7 +119,7 @@ def run(build, source, out):
         # the shipped exercises; lumps and scores to instructors; its own session log, which it grades each
         # closed exercise session from (palp_session_score, session 63)
         db = os.path.join(out, "sessions.db")
-        procs.server(config=harness.answers_config(source, out), db=db)
+        procs.server(config=config_with_force_bands(source, out), db=db)
         peer = procs.start("peer", [os.path.join(build, "tests", "web", "web_exercise_peer"), str(DOMAIN), "0", "110"])
         procs.wait_log(peer, r"READY", 10)
         web = procs.web()
@@ -487,6 +522,21 @@ def run(build, source, out):
                             "palpState.trainee.debrief.session === %d && !document.getElementById('debrief').hidden"
                             % max_id, 20) is True,
               "with no session left the page shows the debrief of max's, the session it followed last")
+
+        # An exercise banded by fingertip force alone (easy_force, FORCE_BANDS): fay presses and holds (~3.7 N,
+        # the exercise's medium, the bridge's own --bands' deep, > 3 N); the force gauge shades the exercise's
+        # bands, as the band badge and the legend name them: the zone at its marker is the badge's band. (Until
+        # 2026-12-06 it drew the bridge's 1 N / 3 N: the marker stood in its deep zone under a "medium" badge.)
+        fay_page = browser.new_page(web2.base + "/trainee.html?trainee=fay")
+        check(fay_page.wait_for("window.palpState && palpState.connected", 20) is True, "fay's page connected")
+        procs.trainee("fay", phantom=15, extra=["--input", "sim:press,hold_s=20", "--duration", "30"])
+        g = fay_page.wait_for("(function(){const t=palpState.trainee; if (!(t.bandRule === 'exercise' && t.proxy && "
+                              "t.proxy.in_contact && t.band === 'medium' && t.force > 3)) return null; return %s;})()"
+                              % GAUGE, 25)
+        check(g is not None and g["rows"] >= 2 and g["above"] == ZONE["medium"] and g["below"] == ZONE["medium"] and
+              "light 0.2-2 N, medium 2-8 N, deep 8-15 N" in g["legend"],
+              "fay's gauge (easy_force, by force) shades the exercise's medium band at its marker, as the badge "
+              "says: %s" % (g or fay_page.eval(GAUGE)))
     finally:
         if browser:
             browser.close()

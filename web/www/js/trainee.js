@@ -243,23 +243,27 @@
     dirty = true;
   };
 
-  /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded. In an exercise whose bands are
-   * by indentation the bridge bands the fingertip by them, as the assessment grades it, and the
-   * gauge shows the indentation against them instead (docs/web.md). ---- */
+  /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded. In an exercise the bridge bands the
+   * fingertip by the exercise's bands, as the assessment grades it, and the gauge shows them: by
+   * indentation, the indentation against them; by force alone, the force against them (0 .. the deep
+   * band's top), not the bridge's --bands, which the band badge and the legend then contradicted
+   * (docs/web.md). ---- */
   let bands = { touch_min: 0.2, light_max: 1, medium_max: 3 }, rule = "force";
-  function depthBands() {
+  /* the exercise's [light, medium, deep] bounds of one measure (key "depth_mm" or "force_N"), where all three give it */
+  function exerciseBands(key) {
     const b = T.exercise && T.exercise.bands;
-    if (rule !== "exercise" || !b || !b.light.depth_mm || !b.medium.depth_mm || !b.deep.depth_mm) return null;
-    return [b.light.depth_mm, b.medium.depth_mm, b.deep.depth_mm];
+    if (rule !== "exercise" || !b || !b.light[key] || !b.medium[key] || !b.deep[key]) return null;
+    return [b.light[key], b.medium[key], b.deep[key]];
   }
+  function depthBands() { return exerciseBands("depth_mm"); }
   function drawGauge(force, depthMm) {
     const cv = document.getElementById("gauge"), g = cv.getContext("2d"), w = cv.width, h = cv.height;
-    const db = depthBands(), unit = db ? " mm" : " N";
-    const fmax = db ? db[2][1] : 2 * bands.medium_max, top = 6, bottom = h - 6, y = function (f) {
+    const db = depthBands(), xb = db || exerciseBands("force_N"), unit = db ? " mm" : " N";
+    const fmax = xb ? xb[2][1] : 2 * bands.medium_max, top = 6, bottom = h - 6, y = function (f) {
       return bottom - Math.min(1, f / fmax) * (bottom - top);
     };
     g.clearRect(0, 0, w, h);
-    const zones = db ? [[db[0][0], db[0][1], "#cce8f8"], [db[1][0], db[1][1], "#f8e3b4"], [db[2][0], db[2][1], "#b3e2d5"]]
+    const zones = xb ? [[xb[0][0], xb[0][1], "#cce8f8"], [xb[1][0], xb[1][1], "#f8e3b4"], [xb[2][0], xb[2][1], "#b3e2d5"]]
       : [[0, bands.light_max, "#cce8f8"], [bands.light_max, bands.medium_max, "#f8e3b4"], [bands.medium_max, fmax, "#b3e2d5"]];
     if (db) force = depthMm > 0 ? depthMm : 0;
     for (const z of zones) { g.fillStyle = z[2]; g.fillRect(0, y(z[1]), 24, y(z[0]) - y(z[1])); }
@@ -267,7 +271,7 @@
     g.fillRect(0, y(force) - 1.5, 30, 3);
     g.font = "10px system-ui, sans-serif";
     g.textBaseline = "middle";
-    const ticks = db ? [0, db[0][1], db[1][1], fmax] : [0, bands.light_max, bands.medium_max, fmax];
+    const ticks = xb ? [0, xb[0][1], xb[1][1], fmax] : [0, bands.light_max, bands.medium_max, fmax];
     for (const f of ticks) g.fillText(f + unit, 28, Math.min(bottom - 4, Math.max(top + 4, y(f))));
   }
 
