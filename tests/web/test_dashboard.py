@@ -3,8 +3,10 @@
 running palp-server (the server's own log says which are open), shows the server's status and each
 card's own colour scale, adds a session that opens later without a reload, drops a closed one
 within a second, and shows a trainee station the server lost to a 1.5 s stall (SIGSTOP) as such
-on its card until it comes back to the same session. DDS domain 192.
+on its card until it comes back to the same session. A closed session's entries in the page's state go
+with its card, and the page keeps only the newest 32 finding replies. DDS domain 192.
 usage: test_dashboard.py BUILD SOURCE OUT"""
+import json
 import os
 import re
 import signal
@@ -71,6 +73,11 @@ def run(build, source, out):
         check(ok is True, "dave's new session appears without a reload: %s" % page.eval(CARDS))
         carol_id = [s for s in page.eval("palpState.sessions.map(s => [s.id, s.trainee])") if s[1] == "carol"][0][0]
 
+        # the page's per-session state holds carol's session while it is open (her pressed skin, her card's rate)
+        held = page.wait_for("palpState.dashboard.cover && %d in palpState.dashboard.cover && "
+                             "%d in palpState.dashboard.fpsPerSession" % (carol_id, carol_id), 10)
+        check(held is True, "the page keeps carol's session %d's pressed skin and frame rate while it is open" % carol_id)
+
         # carol leaves: the server closes her session; the card must go within a second.
         t0 = time.time()
         procs.stop(carol)
@@ -89,6 +96,28 @@ def run(build, source, out):
         check(sorted(page.eval("palpState.dashboard.cards")) == server_open_sessions(procs, server),
               "the remaining cards are the server's open sessions %s" % server_open_sessions(procs, server))
         page.screenshot(os.path.join(out, "dashboard-after-close.png"))
+        # ... and her entries in the page's state with it: they are each an open session's (kept, they grew with
+        # every session of a class); all 4 sessions have had them, 3 remain
+        kept = page.eval("JSON.stringify([palpState.dashboard.cards, Object.keys(palpState.dashboard.cover).map(Number), "
+                         "Object.keys(palpState.dashboard.fpsPerSession).map(Number)])")
+        cards_now, cover_ids, fps_ids = json.loads(kept)
+        check(carol_id not in cover_ids + fps_ids and set(cover_ids) <= set(cards_now) and set(fps_ids) <= set(cards_now),
+              "carol's closed session %d is gone from the page's state too: cards %s, pressed skin of %s, frame rates of %s"
+              % (carol_id, cards_now, cover_ids, fps_ids))
+
+        # The bridge's finding replies a page keeps are the newest 32 (PALP.REPLIES_KEPT), not all: 40 requests from
+        # this viewer page, each refused at once, one at a time.
+        got = page.eval("""(async function () {
+            const L = palpState.findingReplies; let got = 0;
+            for (let i = 0; i < 40; i++) {
+              const last = L[L.length - 1], t0 = performance.now();
+              palpSend({finding: 'mark'});
+              while (L[L.length - 1] === last && performance.now() - t0 < 3000) await new Promise(r => setTimeout(r, 10));
+              if (L[L.length - 1] !== last) got++;
+            }
+            return [got, L.length, L[L.length - 1] && L[L.length - 1].ok];
+          })()""")
+        check(got == [40, 32, False], "40 refused finding requests answered, the newest 32 replies kept: %s" % got)
 
         # bob's station stalls 1.5 s: the server holds his session and his card says so; then it goes on.
         station_js = ("(function () { const c = Array.from(document.querySelectorAll('.card')).find(e => "

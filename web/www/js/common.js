@@ -28,6 +28,14 @@ const PALP = (function () {
       sim_time: v.getFloat64(24, true), disp: new Float32Array(buf, HEADER, 3 * n) };
   }
 
+  /* The bridge's finding replies a page keeps (for its messages and the tests): the newest REPLIES_KEPT
+   * of them, not every one of a long session's. */
+  const REPLIES_KEPT = 32;
+  function keepReply(list, m) {
+    list.push(m);
+    if (list.length > REPLIES_KEPT) list.splice(0, list.length - REPLIES_KEPT);
+  }
+
   const state = { connected: false, hello: null, phantoms: {}, sessions: [], status: null,
     frames: 0, messages: 0, reconnects: 0, findingReplies: [], expired: null };
   window.palpState = state;
@@ -108,7 +116,7 @@ const PALP = (function () {
         else if (m.type === "phantom") state.phantoms[m.id] = m;
         else if (m.type === "sessions") state.sessions = m.sessions;
         else if (m.type === "status") state.status = m;
-        else if (m.type === "finding_reply") state.findingReplies.push(m);
+        else if (m.type === "finding_reply") keepReply(state.findingReplies, m);
         else if (m.type === "expired") { state.expired = String(m.message); setConn(false, state.expired); }
         if (handlers[m.type]) handlers[m.type](m);
       };
@@ -203,5 +211,5 @@ const PALP = (function () {
     coverValid: coverValid,
     decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
     plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump,
-    minutes: minutes, coveredText: coveredText };
+    minutes: minutes, coveredText: coveredText, keepReply: keepReply, REPLIES_KEPT: REPLIES_KEPT };
 })();

@@ -497,6 +497,12 @@
     for (const c of cards.values()) draw(c, c.disp);
   });
 
+  /* A closed session's entries in the page's state go with its card: kept, they grew with every session
+   * of a class (its pressed-skin map a digit per vertex). */
+  function forget(id) {
+    for (const k of ["cover", "answers", "fpsPerSession"]) if (st.dashboard[k]) delete st.dashboard[k][id];
+  }
+
   PALP.connect({
     open: function (send) { send({ follow: "all" }); },
     hello: function (m) {
@@ -516,7 +522,7 @@
         if (s.exercise) exerciseOf.set(s.id, s.exercise);
       }
       for (const id of exerciseOf.keys()) { if (exerciseOf.size <= EXERCISES_KEPT) break; exerciseOf.delete(id); }
-      for (const [id, c] of cards) if (!seen.has(id)) { c.el.remove(); cards.delete(id); answersOf.delete(id); }
+      for (const [id, c] of cards) if (!seen.has(id)) { c.el.remove(); cards.delete(id); answersOf.delete(id); forget(id); }
       st.dashboard.cards = Array.from(cards.keys()).sort(function (a, b) { return a - b; });
       document.getElementById("empty").hidden = cards.size > 0;
       document.getElementById("info").textContent = "class dashboard: " + cards.size + " open session" + (cards.size === 1 ? "" : "s");

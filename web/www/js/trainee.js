@@ -23,7 +23,7 @@
   T.role = observer ? "observer" : "trainee";
   T.exercise = null;      /* the exercise of the followed session's phantom, or null */
   T.marks = null;         /* marks standing, from the server's finding status */
-  T.replies = [];         /* the bridge's answers to this page's finding requests */
+  T.replies = [];         /* the bridge's answers to this page's finding requests, the newest PALP.REPLIES_KEPT */
   T.timeLeft = null;
   T.debrief = null;       /* the server's debrief of her last session, as the bridge sent it */
   T.score = null;         /* its score, where the exercise tells the lesions (a practice exercise) */
@@ -463,7 +463,7 @@
     score: function (m) { showScore(m); },
     cover: function (m) { if (m.session === T.session && m.phantom === T.phantom) setCover(m.bands); },
     finding_reply: function (m) {
-      T.replies.push(m);
+      PALP.keepReply(T.replies, m);
       if (m.ok) message(m.op === "mark" ? "mark " + m.mark_id + " sent" : "mark " + m.mark_id + " withdrawn", true);
       else message(m.reason, false);
     },
