@@ -917,21 +917,25 @@ int palp_db_log_health_get(palp_db *db, const palp_db_session_info *s, palp_db_l
                "(SELECT max(wall_unix_s) FROM event WHERE session_id = ?1) FROM frame WHERE session_id = ?1",
            s->id, &st))
     return PALP_DB_ESQL;
-  if (sqlite3_step(st) == SQLITE_ROW) {
-    h->frames = sqlite3_column_int64(st, 0);
-    h->first_frame = sqlite3_column_int64(st, 1);
-    h->last_frame = sqlite3_column_int64(st, 2);
-    h->last_sim_time_s = sqlite3_column_double(st, 3);
-    h->last_event_unix_s = sqlite3_column_double(st, 4);
-  }
+  /* An aggregate always gives its row: anything else is a read that failed (a damaged page under the
+   * frame or event table), which must not read as an empty, complete session (2026-12-06). */
+  if (sqlite3_step(st) != SQLITE_ROW) return finish(st, SQLITE_ERROR, 0);
+  h->frames = sqlite3_column_int64(st, 0);
+  h->first_frame = sqlite3_column_int64(st, 1);
+  h->last_frame = sqlite3_column_int64(st, 2);
+  h->last_sim_time_s = sqlite3_column_double(st, 3);
+  h->last_event_unix_s = sqlite3_column_double(st, 4);
   sqlite3_finalize(st);
   /* The writer logs every k-th frame (k = tick rate / 100): k is the commonest gap. */
   h->frame_step = 1;
-  if (h->frames > 1 &&
-      prep(db, "SELECT g FROM (SELECT frame - lag(frame) OVER (ORDER BY frame) AS g FROM frame WHERE session_id = ?1) "
-               "WHERE g > 0 GROUP BY g ORDER BY count(*) DESC, g LIMIT 1",
-           s->id, &st) == 0) {
-    if (sqlite3_step(st) == SQLITE_ROW) h->frame_step = sqlite3_column_int64(st, 0);
+  if (h->frames > 1) {
+    if (prep(db, "SELECT g FROM (SELECT frame - lag(frame) OVER (ORDER BY frame) AS g FROM frame WHERE session_id = ?1) "
+                 "WHERE g > 0 GROUP BY g ORDER BY count(*) DESC, g LIMIT 1",
+             s->id, &st))
+      return PALP_DB_ESQL;
+    const int rc = sqlite3_step(st);
+    if (rc != SQLITE_ROW && rc != SQLITE_DONE) return finish(st, rc, 0);
+    if (rc == SQLITE_ROW) h->frame_step = sqlite3_column_int64(st, 0);
     sqlite3_finalize(st);
     if (h->frame_step < 1) h->frame_step = 1;
   }

@@ -253,6 +253,8 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   palp_db_each_frame(db, s->id, peaks_cb, &p);
   palp_db_log_health health;
   const int health_rc = palp_db_log_health_get(db, s, &health);
+  char health_err[256] = ""; /* said below, after other reads have replaced SQLite's message */
+  if (health_rc) snprintf(health_err, sizeof health_err, "%s", palp_db_errmsg(db));
   char logging[200];
   review_fmt_logging(s, health_rc == 0 ? &health : NULL, logging, sizeof logging);
   printf("duration   wall %.3f s, simulated %.3f s (%s)\n", s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0,
@@ -361,7 +363,8 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
       printf("           last event logged at %s\n", t);
     }
   } else {
-    printf("log        UNKNOWN: %s\n", palp_db_errmsg(db));
+    printf("log        UNKNOWN: %s\n", health_err);
+    if (!why[0]) snprintf(why, sizeof why, "the log's frames and events could not be read: %s", health_err);
   }
   if (why[0]) {
     palp_log_error(log, "show: %s: %s (what is shown is incomplete)", s->uid, why);

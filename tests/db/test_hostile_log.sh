@@ -203,6 +203,11 @@ want="event table|events"
 damaged "$dir/events.db" show
 damaged "$dir/events.db" report --out "$dir/events.html"
 damaged "$dir/events.db" export --format csv --table events --out "$dir/events-damaged.csv"
+# the log's health reads the event table too (its last event's time): unknown, not "complete: 0 of 0
+# frames" (2026-12-06, session 77: palp_db_log_health_get took a failed read for an empty session)
+"$review" --db "$dir/events.db" show "$uid" 2>/dev/null | grep -Eq "^log +UNKNOWN: .*malformed" &&
+  ok "events damaged: show's log line says UNKNOWN and why" ||
+  bad "events damaged: show's log line: $("$review" --db "$dir/events.db" show "$uid" 2>/dev/null | grep '^log')"
 # stored metrics as a prune leaves them (the samples gone, a session_metrics row), their page damaged
 copy metrics
 sqlite3 "$dir/metrics.db" "DELETE FROM finger_sample; UPDATE session SET pruned_unix_s = 2000;
