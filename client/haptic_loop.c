@@ -83,7 +83,13 @@ int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *
       if (fabs(in->stiffness[3 * i + j] - in->stiffness[3 * j + i]) > ktol) return PALP_EINVAL;
   }
   const palp_vec3 f = vec(in->force), n = vec(in->normal);
-  if (len3(f) > 1e4 || len3(vec(in->device)) > 10.0 || len3(vec(in->drift)) > 100.0) return PALP_EINVAL;
+  /* Every position the station reads is held to the 10 m the device is: the proxy and the
+   * contact point feed the fingertip's depth (R + r - |proxy|) and the coverage, and a forged
+   * proxy of 1e40 m, finite, made the finger keyboard's status line 40-odd digits long. The
+   * device's depth beneath the proxy is then within 20 m. */
+  if (len3(f) > 1e4 || len3(vec(in->device)) > 10.0 || len3(vec(in->proxy)) > 10.0 || len3(vec(in->point)) > 10.0 ||
+      fabs(in->depth) > 20.0 || len3(vec(in->drift)) > 100.0)
+    return PALP_EINVAL;
   /* The normal is read out of contact too (the passivity controller's n . K n), so it is a
    * unit vector or, out of contact, 0. */
   const double nl = len3(n);

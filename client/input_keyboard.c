@@ -229,7 +229,12 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
     const double m = sqrt(force.x * force.x + force.y * force.y + force.z * force.z);
     char tip[64] = "";
     if (isfinite(f->tip_depth)) {
-      const int n = snprintf(tip, sizeof tip, ", fingertip %.1f mm deep", f->tip_depth * 1e3);
+      /* snprintf returns the length it wanted, not what it wrote: a depth of many digits (a model
+       * from the wire bounds the proxy, but this line must not rely on it) would put the band's
+       * words past the end of tip, so they go after what was written, or nowhere. */
+      int n = snprintf(tip, sizeof tip, ", fingertip %.1f mm deep", f->tip_depth * 1e3);
+      if (n < 0) n = 0, tip[0] = '\0';
+      if ((size_t)n >= sizeof tip) n = (int)sizeof tip - 1;
       if (atomic_load_explicit(&f->have_bands, memory_order_acquire)) { /* an exercise: its band, or none */
         const int b = palp_band_of(f->band, f->tip_depth, f->model_force);
         snprintf(tip + n, sizeof tip - (size_t)n, " (%s)", b >= 0 ? palp_band_name(b) : "no band");

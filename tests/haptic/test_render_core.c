@@ -308,6 +308,18 @@ static void test_from_wire(void) {
   CHECK(palp_cli_local_model_from_wire(&w, &m) == 0, "out of contact, a zero normal passes");
   w = wire_ok(), w.force = (palp_Vec3){6000, 6000, 6000};
   CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a force of 6000 N per axis (|F| = 10392 N > 1e4 N) refused");
+  /* Positions are held to the device's 10 m: a finite proxy of 1e40 m once reached the finger
+   * keyboard's fingertip depth (R + r - |proxy|) and its status line. */
+  w = wire_ok(), w.proxy = (palp_Vec3){0, 0, 1e40};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a proxy 1e40 m out refused");
+  w = wire_ok(), w.proxy = (palp_Vec3){0, 0, -11};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a proxy 11 m out refused (10 m, as the device)");
+  w = wire_ok(), w.proxy = (palp_Vec3){0, 0, 0.058};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) == 0 && m.proxy.z == 0.058, "a proxy 58 mm out (a dome's pole) passes");
+  w = wire_ok(), w.point = (palp_Vec3){1e40, 0, 0};
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a contact point 1e40 m out refused");
+  w = wire_ok(), w.depth = -1e40;
+  CHECK(palp_cli_local_model_from_wire(&w, &m) < 0, "a depth of -1e40 m refused (20 m: device and proxy within 10 m)");
   w = wire_ok();
   palp_cli_local_model_from_wire(&w, &m);
   CHECK(palp_cli_local_model_fits_rate(&m, 250), "4 ms at 250 Hz fits");
