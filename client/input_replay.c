@@ -69,9 +69,21 @@ int palp_cli_replay_input(const char *path, palp_cli_input *out, char *err, size
     if (buf[0] == '\n' || buf[0] == '#') continue;
     row w;
     memset(&w, 0, sizeof w);
-    int n = sscanf(buf, "%lf,%d,%d,%d,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &w.t, &w.c.finger, &w.c.mode,
+    int end = 0;
+    int n = sscanf(buf, "%lf,%d,%d,%d,%lf,%lf,%lf,%lf,%lf,%lf,%lf%n", &w.t, &w.c.finger, &w.c.mode,
                    &w.c.distribution, &w.c.center.x, &w.c.center.y, &w.c.center.z, &w.c.force.x, &w.c.force.y,
-                   &w.c.force.z, &w.c.radius);
+                   &w.c.force.z, &w.c.radius, &end);
+    /* Nothing but the line's end after the 11th field: sscanf stops there and took
+     * "...,0.008,junk" (or a twelfth column) as a good row. */
+    if (n == 11) {
+      size_t k = (size_t)end;
+      while (buf[k] == ' ' || buf[k] == '\t' || buf[k] == '\r' || buf[k] == '\n') k++;
+      if (buf[k] != '\0') {
+        snprintf(err, errlen, "%s:%d: text after radius_m, the 11th and last field of a row", path, line);
+        rc = PALP_EPARSE;
+        break;
+      }
+    }
     /* Every number finite (sscanf takes "nan" and "inf"; a NaN time compares false with
      * everything, so the order check alone let it through), t within a day. */
     const double num[] = {w.t, w.c.center.x, w.c.center.y, w.c.center.z, w.c.force.x, w.c.force.y, w.c.force.z,
@@ -82,6 +94,22 @@ int palp_cli_replay_input(const char *path, palp_cli_input *out, char *err, size
         w.c.mode < 0 || w.c.mode > 2 || (r->n > 0 && w.t < r->rows[r->n - 1].t)) {
       snprintf(err, errlen, "%s:%d: expected t_s,finger(0-3),mode(0-2),distribution,cx,cy,cz,fx,fy,fz,radius "
                "with finite numbers and non-decreasing t_s in [0, 86400]", path, line);
+      rc = PALP_EPARSE;
+      break;
+    }
+    /* What the server would refuse on every sample, refused here with the field: the station
+     * replayed such a file at 0 N and said nothing (and a distribution of 257 went on the wire as
+     * the byte 1). The server reads no distribution on a release or a finger row, nor a radius on a
+     * release or a force row: there --contact-csv writes 0 (or the session's 1-4). */
+    if (w.c.distribution < 0 || w.c.distribution > 4 || (w.c.mode == 1 && w.c.distribution < 1)) {
+      snprintf(err, errlen, "%s:%d: distribution %d: a force row (mode 1) takes 1-4 (I single, II uniform, "
+               "III gaussian, IV gaussian_offset), a release or finger row 0-4", path, line, w.c.distribution);
+      rc = PALP_EPARSE;
+      break;
+    }
+    if (w.c.mode == 2 && !(w.c.radius > 0)) {
+      snprintf(err, errlen, "%s:%d: radius_m %g: a finger row (mode 2) needs the fingertip's radius, > 0 m", path,
+               line, w.c.radius);
       rc = PALP_EPARSE;
       break;
     }

@@ -1136,7 +1136,9 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       m.session_id = st->session_id;
       m.finger = (uint8_t)c->finger;
       m.mode = (palp_ContactMode)c->mode;
-      m.distribution = (uint8_t)c->distribution;
+      /* A byte on the wire: a source's 257 went out as 1; out of a byte it goes as 0, which the
+       * server refuses by name (bad_distribution) as it refuses 0 and 5. */
+      m.distribution = c->distribution >= 0 && c->distribution <= 255 ? (uint8_t)c->distribution : 0;
       m.vertex = -1;
       m.center = (palp_Vec3){c->center.x, c->center.y, c->center.z};
       m.force = (palp_Vec3){c->force.x, c->force.y, c->force.z};

@@ -15,8 +15,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     int n = in.poll(in.ctx, k * 1e-3 * (1 + k / 1000), cmds, PALP_CLI_MAX_FINGERS);
     if (n == PALP_CLI_INPUT_END || n < 0) break;
     if (n > PALP_CLI_MAX_FINGERS) abort();
-    for (int i = 0; i < n; i++)
+    for (int i = 0; i < n; i++) {
       if (cmds[i].finger < 0 || cmds[i].finger >= PALP_CLI_MAX_FINGERS) abort();
+      /* nothing the server refuses on every sample: a force row's distribution 1-4, a finger's radius */
+      if (cmds[i].mode == 1 && (cmds[i].distribution < 1 || cmds[i].distribution > 4)) abort();
+      if (cmds[i].mode == 2 && !(cmds[i].radius > 0)) abort();
+    }
   }
   in.close(in.ctx);
   return 0;

@@ -76,6 +76,38 @@ int main(void) {
   fclose(w);
   CHECK(palp_cli_replay_input(path, &in, err, sizeof err) == PALP_EPARSE && strstr(err, ":2:"),
         "finger 9 is refused with its line number: %s", err);
+  /* What the server refuses on every sample is refused with its line and field, as --distribution
+   * is range-checked (the station replayed it at 0 N and said nothing; 257 went out as the byte 1);
+   * so is text after the 11th field. Line 3: a good row comes first. */
+  const struct {
+    const char *row, *field;
+  } bad[] = {{"0.2,0,1,257,0,0,0.04,0,0,-1,0", "distribution 257"},
+             {"0.2,0,1,0,0,0,0.04,0,0,-1,0", "distribution 0"},
+             {"0.2,0,1,-1,0,0,0.04,0,0,-1,0", "distribution -1"},
+             {"0.2,0,1,5,0,0,0.04,0,0,-1,0", "distribution 5"},
+             {"0.2,0,0,300,0,0,0.04,0,0,0,0", "distribution 300"},
+             {"0.2,0,2,3,0,0,0.05,0,0,0,0", "radius_m 0"},
+             {"0.2,0,2,3,0,0,0.05,0,0,0,-0.008", "radius_m -0.008"},
+             {"0.2,0,1,3,0,0,0.04,0,0,-1,0,junk", "after radius_m"},
+             {"0.2,0,2,3,0,0,0.05,0,0,0,8mm", "after radius_m"}};
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+    w = fopen(path, "w");
+    fprintf(w, "t_s,finger\n0.1,0,1,3,0,0,0.04,0,0,-1,0\n%s\n", bad[k].row);
+    fclose(w);
+    err[0] = '\0';
+    CHECK(palp_cli_replay_input(path, &in, err, sizeof err) == PALP_EPARSE && strstr(err, ":3:") &&
+              strstr(err, bad[k].field),
+          "\"%s\" is refused naming line 3 and \"%s\": %s", bad[k].row, bad[k].field, err);
+  }
+  /* what --contact-csv writes stays good: a release of distribution 0 and radius 0, a finger row
+   * of radius 8 mm, CRLF line ends */
+  w = fopen(path, "w");
+  fprintf(w, "t_s,finger\n0.1,0,2,0,0,0,0.05,0,0,0,0.008\r\n0.2,0,0,0,0,0,0,0,0,0,0\r\n");
+  fclose(w);
+  err[0] = '\0';
+  const int good = palp_cli_replay_input(path, &in, err, sizeof err);
+  CHECK(good == 0, "a finger row and a release (distribution 0, radius 0), CRLF, pass: %s", err);
+  if (good == 0) in.close(in.ctx);
   remove(path);
 
   /* SVG: one polygon per dome triangle of a 19-vertex mesh. */
