@@ -165,7 +165,8 @@ typedef struct palp_cli_simdevice_def {
 palp_cli_simdevice_def palp_cli_simdevice_default_def(palp_cli_sim_pattern pattern);
 /* Parses "press|slide|circles|cycles|strips[,key=value...]" (keys: depth_mm, speed_mm_s,
  * hold_s, slide_mm_s, slide_mm, circle_mm, circle_hz, circles, cycles, strips, polar,
- * azimuth, radius_mm); err names a bad key or value. */
+ * azimuth, radius_mm); err names a bad key or value. At most 21 circles, 510 cycles and
+ * 127 strips (what fits the trajectory's waypoints with its final lift; so for _input). */
 int palp_cli_simdevice_parse(const char *spec, palp_cli_simdevice_def *out, char *err, size_t errlen);
 int palp_cli_simdevice_input(const palp_cli_simdevice_def *def, palp_cli_input *out);
 /* The trajectory itself, for tests that drive a model directly: device point at t

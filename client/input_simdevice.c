@@ -17,6 +17,12 @@
 
 #define MAX_WP 1024
 #define PI 3.14159265358979323846
+/* The most of each count whose trajectory fits MAX_WP waypoints with its final lift (build: 8 + 48
+ * per circle, 4 + 2 per cycle, 4 + 8 per strip). add() drops what does not fit, and circles=30
+ * ended pressed 10 mm deep: the parser and palp_cli_simdevice_input refuse more. */
+#define SIM_MAX_CIRCLES ((MAX_WP - 8) / 48) /* 21 */
+#define SIM_MAX_CYCLES ((MAX_WP - 4) / 2)   /* 510 */
+#define SIM_MAX_STRIPS ((MAX_WP - 4) / 8)   /* 127 */
 
 typedef struct wp {
   double t, u, v, depth;
@@ -72,7 +78,8 @@ static void build(const palp_cli_simdevice_def *d, double R, path *p) {
   double u0 = s.x, v0 = s.y;
   if (d->pattern == PALP_CLI_SIM_STRIPS) {
     const double E = d->strip_extent > 0 ? d->strip_extent : 0.6 * R;
-    const int ns = d->strip_count > 1 ? d->strip_count : 1;
+    /* counts held to what fits (palp_cli_simdevice_at and _duration take a def as it is) */
+    const int ns = d->strip_count > 1 ? (d->strip_count < SIM_MAX_STRIPS ? d->strip_count : SIM_MAX_STRIPS) : 1;
     add(p, 0, -E, -E, up, 0);
     add(p, d->start, -E, -E, up, 1);
     const double depths[3] = {d->depth / 3, 2 * d->depth / 3, d->depth};
@@ -95,7 +102,8 @@ static void build(const palp_cli_simdevice_def *d, double R, path *p) {
   add(p, d->start, u0, v0, up, 1);
   switch (d->pattern) {
   case PALP_CLI_SIM_CYCLES:
-    for (int c = 0; c < (d->cycle_count > 0 ? d->cycle_count : 1); c++) {
+    for (int c = 0; c < (d->cycle_count > 0 ? (d->cycle_count < SIM_MAX_CYCLES ? d->cycle_count : SIM_MAX_CYCLES) : 1);
+         c++) {
       move(p, u0, v0, d->depth, d->speed, 1);
       move(p, u0, v0, up, d->speed, 1);
     }
@@ -116,7 +124,8 @@ static void build(const palp_cli_simdevice_def *d, double R, path *p) {
     move(p, u0 + r, v0, up, d->speed, 1);
     move(p, u0 + r, v0, d->depth, d->speed, 1);
     add(p, d->hold, u0 + r, v0, d->depth, 1);
-    const int steps = 48 * (d->circle_count > 0 ? d->circle_count : 1);
+    const int steps =
+        48 * (d->circle_count > 0 ? (d->circle_count < SIM_MAX_CIRCLES ? d->circle_count : SIM_MAX_CIRCLES) : 1);
     for (int i = 1; i <= steps; i++) {
       const double ph = 2 * PI * i / 48.0;
       add(p, 1.0 / (48 * hz), u0 + r * cos(ph), v0 + r * sin(ph), d->depth, 1);
@@ -253,7 +262,8 @@ static void sd_close(void *ctx) { free(ctx); }
 
 int palp_cli_simdevice_input(const palp_cli_simdevice_def *def, palp_cli_input *out) {
   if (!def || !out || !(def->depth >= 0 && def->depth < 0.1) || !(def->speed > 0) || !(def->radius > 0) ||
-      !(def->slide_speed > 0) || !(def->hold >= 0) || !(def->approach >= 0))
+      !(def->slide_speed > 0) || !(def->hold >= 0) || !(def->approach >= 0) || def->circle_count > SIM_MAX_CIRCLES ||
+      def->cycle_count > SIM_MAX_CYCLES || def->strip_count > SIM_MAX_STRIPS)
     return PALP_EINVAL;
   simdev *s = calloc(1, sizeof *s);
   if (!s) return PALP_ENOMEM;
@@ -322,6 +332,12 @@ int palp_cli_simdevice_parse(const char *spec, palp_cli_simdevice_def *out, char
   }
   if (!(d.depth < 0.1) || !(d.speed > 0) || !(d.slide_speed > 0) || !(d.radius > 0) || d.polar_deg > 90) {
     snprintf(err, errlen, "simulated device: depth must be < 100 mm, speeds and radius > 0, polar <= 90 deg");
+    return PALP_EINVAL;
+  }
+  if (d.circle_count > SIM_MAX_CIRCLES || d.cycle_count > SIM_MAX_CYCLES || d.strip_count > SIM_MAX_STRIPS) {
+    snprintf(err, errlen, "simulated device: at most %d circles, %d cycles and %d strips (a trajectory is %d "
+             "waypoints, and a longer one would be cut short while pressing)", SIM_MAX_CIRCLES, SIM_MAX_CYCLES,
+             SIM_MAX_STRIPS, MAX_WP);
     return PALP_EINVAL;
   }
   *out = d;

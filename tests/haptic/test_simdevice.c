@@ -94,5 +94,41 @@ int main(void) {
         err);
   CHECK(palp_cli_simdevice_parse("press,depth_mm=abc", &p, err, sizeof err) < 0, "parse: %s", err);
   CHECK(palp_cli_simdevice_parse("press,depth_mm=200", &p, err, sizeof err) < 0, "parse: %s", err);
+
+  /* Counts a trajectory of 1024 waypoints holds with its final lift (8 + 48 per circle, 4 + 2 per
+   * cycle, 4 + 8 per strip): one more is refused, naming the largest. The largest ends lifted:
+   * over the tail, the finger off and the device point at least radius + approach (3 mm, within
+   * 1 um) above the surface. Before, circles=30 ended pressed 10 mm deep and cycles=2000 and
+   * strips=200 were cut short while pressing. */
+  const struct {
+    const char *over, *max, *largest;
+  } counts[] = {{"circles,circles=22", "circles,circles=21", "21 circles"},
+                {"cycles,cycles=511", "cycles,cycles=510", "510 cycles"},
+                {"strips,strips=128", "strips,strips=127", "127 strips"}};
+  for (int k = 0; k < 3; k++) {
+    err[0] = '\0';
+    CHECK(palp_cli_simdevice_parse(counts[k].over, &p, err, sizeof err) < 0 && strstr(err, counts[k].largest),
+          "parse \"%s\" refused naming \"%s\": %s", counts[k].over, counts[k].largest, err);
+    const int ok = palp_cli_simdevice_parse(counts[k].max, &p, err, sizeof err) == 0;
+    const double T = ok ? palp_cli_simdevice_duration(&p, R) : 0;
+    palp_vec3 x = {0, 0, 0};
+    const int on = ok ? palp_cli_simdevice_at(&p, R, T - p.tail / 2, &x) : -1;
+    const double above = len3(x) - R - p.radius; /* the fingertip's lowest point above the dome [m] */
+    CHECK(ok && on == 0 && fabs(above - p.approach) < 1e-6,
+          "\"%s\" (%.0f s) ends lifted: finger %s, %.3f mm above the surface (3 mm)", counts[k].max, T,
+          on == 0 ? "off" : "on", above * 1e3);
+  }
+  palp_cli_input in;
+  p = palp_cli_simdevice_default_def(PALP_CLI_SIM_CIRCLES), p.circle_count = 30;
+  CHECK(palp_cli_simdevice_input(&p, &in) == PALP_EINVAL, "a def of 30 circles refused as an input");
+  {
+    const double T = palp_cli_simdevice_duration(&p, R);
+    palp_vec3 x = {0, 0, 0};
+    const int on = palp_cli_simdevice_at(&p, R, T - p.tail / 2, &x);
+    const double above = len3(x) - R - p.radius;
+    CHECK(on == 0 && fabs(above - p.approach) < 1e-6,
+          "a def of 30 circles given as it is (palp_cli_simdevice_at) ends lifted: finger %s, %.3f mm above the surface",
+          on == 0 ? "off" : "on", above * 1e3);
+  }
   return check_exit();
 }
