@@ -20,11 +20,22 @@ int palp_cli_device_input(const char *path, const char *arg, palp_cli_input *out
     dlclose(h);
     return PALP_EINVAL;
   }
+  *out = (palp_cli_input){0}; /* a driver built against an older header leaves the newer fields zero */
   int rc = entry(arg ? arg : "", out);
-  if (rc < 0 || !out->poll) {
-    snprintf(err, errlen, "device driver %s: initialisation failed (%d)", path, rc);
+  if (rc < 0) {
+    snprintf(err, errlen, "device driver %s: initialisation failed (%s)", path, palp_strerror(rc));
     dlclose(h);
-    return rc < 0 ? rc : PALP_EINVAL;
+    return rc;
+  }
+  /* A haptic device (read_position and write_force) runs on the haptic thread, which never calls
+   * poll (client/input.h); a force-driven source needs poll. Such a driver was refused for lacking
+   * poll, and its context left allocated: now only one with neither is, and closed first. */
+  if (!out->poll && !(out->read_position && out->write_force)) {
+    snprintf(err, errlen, "device driver %s: gives neither read_position and write_force (a haptic device) "
+             "nor poll (a force-driven source)", path);
+    if (out->close) out->close(out->ctx);
+    dlclose(h);
+    return PALP_EINVAL;
   }
   /* The handle stays open for the life of the process: the driver's code runs
    * until palp-client exits. */

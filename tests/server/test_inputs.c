@@ -1,4 +1,5 @@
 /* test_inputs.c - station input sources and the SVG snapshot, with hand-worked values. */
+#include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -214,6 +215,41 @@ int main(void) {
         "NaN gives 0 N");
   CHECK(palp_cli_device_force((palp_vec3){1e308, 1e308, 0}, 10, &dv) == PALP_EINVAL && dv.x == 0, "a magnitude past "
         "double gives 0 N");
+  /* The driver loader (palp_cli_device_input): a haptic device, read_position and write_force, runs
+   * on the haptic thread and needs no poll (client/input.h). Such a driver was refused with
+   * "initialisation failed (0)" and its context left allocated; one with neither that pair nor poll
+   * is refused, saying what is missing, and closed. The variants' own handle (dlopen counts) keeps
+   * their close() counter readable after the loader lets go of it. */
+  {
+    void *vh = dlopen(PALP_TEST_DEVICE_VARIANTS, RTLD_NOW | RTLD_LOCAL);
+    int *closed = vh ? (int *)dlsym(vh, "palp_test_driver_closed") : NULL;
+    CHECK(closed != NULL, "the test's driver variants load: %s", vh ? "" : dlerror());
+    palp_cli_input dv_in;
+    char derr[512] = "";
+    int rc = palp_cli_device_input(PALP_TEST_DEVICE_EXAMPLE, "1", &dv_in, derr, sizeof derr);
+    CHECK(rc == 0 && dv_in.poll && dv_in.read_position && dv_in.write_force, "the example driver loads: %s", derr);
+    if (rc == 0) dv_in.close(dv_in.ctx);
+    if (closed) {
+      derr[0] = '\0';
+      rc = palp_cli_device_input(PALP_TEST_DEVICE_VARIANTS, "haptic", &dv_in, derr, sizeof derr);
+      palp_vec3 x = {0, 0, 0};
+      const int on = rc == 0 ? dv_in.read_position(dv_in.ctx, 0.0, &x) : -1;
+      CHECK(rc == 0 && !dv_in.poll && on == 1 && x.z == 0.05,
+            "a driver with read_position and write_force and no poll loads and reads (rc %d, z %g m): %s", rc, x.z, derr);
+      if (rc == 0) dv_in.close(dv_in.ctx);
+      const int before = *closed;
+      derr[0] = '\0';
+      rc = palp_cli_device_input(PALP_TEST_DEVICE_VARIANTS, "read-only", &dv_in, derr, sizeof derr);
+      CHECK(rc == PALP_EINVAL && strstr(derr, "neither read_position and write_force") && strstr(derr, "nor poll") &&
+                *closed == before + 1,
+            "read_position alone is refused, saying what is missing, and closed (%d close call(s)): %s",
+            *closed - before, derr);
+      derr[0] = '\0';
+      rc = palp_cli_device_input(PALP_TEST_DEVICE_VARIANTS, "bogus", &dv_in, derr, sizeof derr);
+      CHECK(rc == PALP_EINVAL && strstr(derr, "initialisation failed"), "a driver's own refusal is passed on: %s", derr);
+    }
+    if (vh) dlclose(vh);
+  }
   def.sim_time = INFINITY;
   CHECK(palp_cli_deformation_check(&ph, &def) == PALP_EINVAL, "a frame at t = inf refused");
   def.sim_time = 0;
