@@ -2,7 +2,8 @@
  *
  * Arrow up/down move the finger towards the pole/rim, left/right around the
  * dome; + and - change the force by 0.25 N; space presses/lifts; 1-4 choose the
- * paper's distribution; q ends. The terminal is restored on close. */
+ * paper's distribution; q ends. The terminal is restored on close (and by palp-client on
+ * SIGQUIT, SIGHUP, a crash or exit, which never reach close: client/main.c, guard_tty). */
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>

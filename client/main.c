@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -31,6 +32,37 @@ static atomic_int g_stop;
 static void on_signal(int sig) {
   (void)sig;
   g_stop = 1;
+}
+
+/* The terminal as it was before a keyboard input made it raw (no echo, no line editing). The
+ * input's close() puts it back, and SIGINT/SIGTERM end the station through close(); SIGQUIT
+ * (Ctrl-\ works in the raw terminal), SIGHUP, a crash or an exit() elsewhere did not, and left the
+ * shell without echo. Those put it back here, then end the station as they did (the default
+ * action, re-raised). tcsetattr and raise are async-signal-safe. */
+static struct termios g_tty;
+static atomic_int g_tty_saved;
+static void restore_tty(void) {
+  if (atomic_load(&g_tty_saved)) tcsetattr(STDIN_FILENO, TCSANOW, &g_tty);
+}
+static void on_fatal_signal(int sig) {
+  restore_tty();
+  raise(sig); /* SA_RESETHAND: now the default action */
+}
+static void guard_tty(void) {
+  if (tcgetattr(STDIN_FILENO, &g_tty) != 0) return;
+  atomic_store(&g_tty_saved, 1);
+  atexit(restore_tty);
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_fatal_signal;
+  sa.sa_flags = SA_RESETHAND;
+  sigemptyset(&sa.sa_mask);
+  const int sigs[] = {SIGQUIT, SIGHUP, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+  for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) {
+    struct sigaction old;
+    /* an ignored signal stays ignored (nohup's SIGHUP, a background job's SIGQUIT): it ends nothing */
+    if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN) sigaction(sigs[i], &sa, NULL);
+  }
 }
 
 typedef struct opts {
@@ -1453,6 +1485,7 @@ int main(int argc, char **argv) {
     palp_log_error(o.log, "%s", err);
     return 1;
   }
+  if (trainee && (!strcmp(o.input, "keyboard") || !strcmp(o.input, "keyboard-finger"))) guard_tty();
   palp_dds_security sec;
   int src = o.pki || o.identity ? palp_dds_security_init(&sec, o.pki, o.identity, err, sizeof err)
                                 : palp_dds_security_from_env(&sec, err, sizeof err);
