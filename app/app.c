@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -178,6 +179,11 @@ void palp_app_common_usage(FILE *f, unsigned which) {
 }
 
 /* ---- is a DDS configuration loopback-only? ------------------------------------------------ */
+/* The XML is read as Cyclone DDS 0.10 reads it (ddsrt xmlparser, ddsi_config), since a difference
+ * is a way past the check: element and attribute names are [A-Za-z][A-Za-z0-9_:-]* compared
+ * case-insensitively, and in XML given inline in CYCLONEDDS_URI an unambiguous prefix of a name
+ * stands for it; attribute values are quoted with ", ' or typographic quotes and may hold '<' and
+ * '>'; comments may sit between any two tokens and inside text; CDATA is text. */
 
 static int loopback_value(const char *v, size_t n) {
   if (n == 9 && !strncmp(v, "localhost", 9)) return 1;
@@ -191,24 +197,70 @@ static int loopback_value(const char *v, size_t n) {
   return 0;
 }
 
-/* The value of attribute name="..." (or '...') inside the tag [t, end); NULL if absent. */
-static const char *attr(const char *t, const char *end, const char *name, size_t *n) {
-  const size_t ln = strlen(name);
-  for (const char *p = t; p + ln + 2 < end; p++) {
-    if (strncmp(p, name, ln) != 0 || !isspace((unsigned char)p[-1])) continue;
-    const char *q = p + ln;
-    while (q < end && isspace((unsigned char)*q)) q++;
-    if (q >= end || *q != '=') continue;
-    q++;
-    while (q < end && isspace((unsigned char)*q)) q++;
-    if (q >= end || (*q != '"' && *q != '\'')) continue;
-    const char quote = *q++;
-    const char *e = memchr(q, quote, (size_t)(end - q));
-    if (!e) return NULL;
-    *n = (size_t)(e - q);
-    return q;
+/* A <Peer Address>: Cyclone sends discovery there, so it must be loopback too; it may end in
+ * ":PORT" ("[::1]:PORT" for IPv6). */
+static int loopback_peer(const char *v, size_t n) {
+  size_t host = n, k;
+  if (n > 2 && v[0] == '[') {
+    const char *e = memchr(v, ']', n);
+    if (!e) return 0;
+    host = (size_t)(e - v) + 1;
+  } else if (!loopback_value(v, n)) {
+    const char *c = memchr(v, ':', n);
+    host = c ? (size_t)(c - v) : n;
   }
-  return NULL;
+  if (host < n) { /* ":PORT": digits only */
+    if (v[host] != ':' || host + 1 == n) return 0;
+    for (k = host + 1; k < n; k++)
+      if (!isdigit((unsigned char)v[k])) return 0;
+  }
+  if (host == 2 && !strncmp(v, "lo", 2)) return 0; /* an interface's name, not a host's */
+  return v[0] == '[' ? loopback_value(v + 1, host - 2) : loopback_value(v, host);
+}
+
+static int xml_space(int c) {
+  return c == ' ' || c == '\t' || c == '\v' || c == '\r' || c == '\n';
+}
+
+static int xml_namec(int c) {
+  return isalnum((unsigned char)c) || c == '_' || c == '-' || c == ':';
+}
+
+/* Past marker after p, or the end of the text when it never comes (Cyclone stops there too). */
+static const char *xml_past(const char *p, const char *marker) {
+  const char *e = strstr(p, marker);
+  return e ? e + strlen(marker) : p + strlen(p);
+}
+
+static const char *xml_blank(const char *p) {
+  for (;;) {
+    while (xml_space(*p)) p++;
+    if (strncmp(p, "<!--", 4) != 0) return p;
+    p = xml_past(p + 4, "-->");
+  }
+}
+
+/* name[0, n) is word (1), a shorter prefix of it (-1: Cyclone takes it for word in inline XML), or neither (0). */
+static int xml_name_is(const char *name, size_t n, const char *word) {
+  const size_t w = strlen(word);
+  if (!n || n > w || strncasecmp(name, word, n) != 0) return 0;
+  return n == w ? 1 : -1;
+}
+
+/* The quoted value at p into [*v, *v + *n); past it, or NULL when p holds no quoted value. */
+static const char *xml_quoted(const char *p, const char **v, size_t *n) {
+  char q[4] = {0};
+  if (*p == '"' || *p == '\'') q[0] = *p++;
+  else if (!strncmp(p, "\xe2\x80\x9c", 3) || !strncmp(p, "\xe2\x80\x98", 3)) { /* closed by U+201D, U+2019 */
+    memcpy(q, p, 3);
+    q[2]++;
+    p += 3;
+  } else return NULL;
+  const char *e = strstr(p, q);
+  if (!e) return NULL;
+  *v = p;
+  *n = (size_t)(e - p);
+  return e + strlen(q);
 }
 
 static int scope_why(char *why, size_t len, int rc, const char *fmt, const char *v, size_t n) {
@@ -216,50 +268,152 @@ static int scope_why(char *why, size_t len, int rc, const char *fmt, const char 
   return rc;
 }
 
+/* The elements that decide where Cyclone sends: their attributes that do, or (none) their text. */
+enum { EL_DOMAIN, EL_ID, EL_IFACE, EL_IFACE_ADDR, EL_PEER, EL_EXTERNAL, EL_OTHER };
+static const struct {
+  const char *name;
+  int el;
+  const char *attr[3];
+} scope_el[] = {
+    {"Domain", EL_DOMAIN, {"Id"}},
+    {"DDSI2", EL_DOMAIN, {"Id"}}, /* the old names of <Domain> */
+    {"DDSI2E", EL_DOMAIN, {"Id"}},
+    {"Id", EL_ID, {NULL}}, /* <Domain><Id>, the old form of <Domain Id> */
+    {"NetworkInterface", EL_IFACE, {"address", "name", "autodetermine"}},
+    {"NetworkInterfaceAddress", EL_IFACE_ADDR, {NULL}},
+    {"Peer", EL_PEER, {"Address"}},
+    {"ExternalNetworkAddress", EL_EXTERNAL, {NULL}},
+};
+
+/* Attribute a[0, an) = v[0, n) of element s: 1 if it keeps Cyclone on loopback or does not decide. */
+static int scope_attr(size_t s, const char *a, size_t an, const char *v, size_t n, char *why, size_t whylen) {
+  const int el = scope_el[s].el;
+  for (int k = 0; k < 3 && scope_el[s].attr[k]; k++) {
+    const int is = xml_name_is(a, an, scope_el[s].attr[k]);
+    if (is < 0) return scope_why(why, whylen, 0, "the attribute %.*s, which Cyclone DDS may read as a network setting", a, an);
+    if (!is) continue;
+    if (el == EL_DOMAIN && !(n == 3 && !strncasecmp(v, "any", 3))) /* Cyclone ignores it on other domains */
+      return scope_why(why, whylen, 0, "<Domain Id=\"%.*s\">: palp cannot tell it is the domain it runs on", v, n);
+    if (el == EL_IFACE && k == 2 && !(n == 5 && !strncasecmp(v, "false", 5)))
+      return scope_why(why, whylen, 0, "<NetworkInterface autodetermine=\"%.*s\">", v, n);
+    if (el == EL_IFACE && k < 2 && !loopback_value(v, n))
+      return scope_why(why, whylen, 0, "<NetworkInterface %.*s> is not loopback", v, n);
+    if (el == EL_PEER && !loopback_peer(v, n))
+      return scope_why(why, whylen, 0, "<Peer Address=\"%.*s\"> is not loopback: discovery is sent there", v, n);
+    return 1;
+  }
+  return 1;
+}
+
+/* The text of the element whose content starts at p, as Cyclone gathers it (comments out, CDATA in,
+ * blanks trimmed) into v[0, *n); 0 if it does not fit. */
+static int xml_text(const char *p, char *v, size_t len, size_t *n) {
+  int fits = 1;
+  *n = 0;
+  while (*p) {
+    const char *s = p, *e;
+    if (!strncmp(p, "<!--", 4)) {
+      p = xml_past(p + 4, "-->");
+      continue;
+    }
+    if (!strncmp(p, "<![CDATA[", 9)) {
+      s = p + 9;
+      e = strstr(s, "]]>");
+      if (!e) e = s + strlen(s);
+      p = *e ? e + 3 : e;
+    } else if (*p == '<') break;
+    else {
+      e = strchr(p, '<');
+      if (!e) e = p + strlen(p);
+      p = e;
+    }
+    for (; s < e; s++)
+      if (*n + 1 < len) v[(*n)++] = *s;
+      else fits = 0;
+  }
+  size_t b = 0;
+  while (b < *n && xml_space(v[b])) b++;
+  while (*n > b && xml_space(v[*n - 1])) (*n)--;
+  memmove(v, v + b, *n - b);
+  *n -= b;
+  return fits;
+}
+
 int palp_app_dds_xml_loopback_only(const char *xml, char *why, size_t whylen) {
   if (why && whylen) why[0] = '\0';
   if (!xml) return 0;
-  /* comments out: a commented-out interface must not count either way */
-  char *x = strdup(xml);
-  if (!x) return 0;
-  for (char *c; (c = strstr(x, "<!--"));) {
-    char *e = strstr(c + 4, "-->");
-    if (!e) {
-      *c = '\0';
-      break;
-    }
-    memmove(c, e + 3, strlen(e + 3) + 1);
-  }
-  int named = 0, rc = 1;
-  for (const char *p = x; rc && (p = strstr(p, "<NetworkInterface")); p++) {
-    const char *tag = p + 17, *end = strchr(tag, '>');
-    if (!end) break;
-    size_t n = 0;
-    const char *v;
-    if (!strncmp(tag, "Address", 7)) { /* <NetworkInterfaceAddress>VALUE</...>, the older form */
-      v = end + 1;
-      const char *e = strchr(v, '<');
-      n = e ? (size_t)(e - v) : 0;
-      while (n && isspace((unsigned char)*v)) v++, n--;
-      while (n && isspace((unsigned char)v[n - 1])) n--;
-      named = 1;
-      if (!loopback_value(v, n)) rc = scope_why(why, whylen, 0, "<NetworkInterfaceAddress>%.*s", v, n);
+  int named = 0, depth = 0, tops = 0;
+  for (const char *p = xml; *p;) {
+    const char *q = strchr(p, '<');
+    if (!q) q = p + strlen(p);
+    /* Outside the top element, Cyclone takes text in CYCLONEDDS_URI for a file's name and
+     * ignores what follows a file's top element: neither is told by this reading. */
+    for (const char *t = p; !depth && t < q; t++)
+      if (!xml_space(*t) && *t != ',') return scope_why(why, whylen, 0, "%.*s outside the XML's element", t, (size_t)(q - t));
+    if (!*(p = q)) break;
+    const char *past = !strncmp(p, "<!--", 4)        ? xml_past(p + 4, "-->")
+                       : !strncmp(p, "<![CDATA[", 9) ? xml_past(p + 9, "]]>")
+                       : !strncmp(p, "<?", 2)        ? xml_past(p + 2, "?>")
+                       : p[1] == '!' || p[1] == '/'  ? xml_past(p + 2, ">")
+                                                     : NULL;
+    if (past) {
+      depth -= p[1] == '/' && depth > 0;
+      p = past;
       continue;
     }
-    if (!isspace((unsigned char)*tag) && *tag != '/' && *tag != '>') continue; /* NetworkInterfaces? not a tag of ours */
-    named = 1;
-    if ((v = attr(tag, end, "autodetermine", &n)) && n == 4 && !strncmp(v, "true", 4)) {
-      rc = scope_why(why, whylen, 0, "<NetworkInterface autodetermine=\"%.*s\">", v, n);
-    } else if ((v = attr(tag, end, "address", &n)) || (v = attr(tag, end, "name", &n))) {
-      if (!loopback_value(v, n)) rc = scope_why(why, whylen, 0, "<NetworkInterface %.*s> is not loopback", v, n);
-    } else {
-      rc = scope_why(why, whylen, 0, "a <NetworkInterface>%.*s without address or name", "", 0);
+    const char *name = ++p;
+    while (xml_namec(*p)) p++;
+    const size_t nn = (size_t)(p - name);
+    if (!nn || !isalpha((unsigned char)*name))
+      return scope_why(why, whylen, 0, "<%.*s: not XML palp can read", name, strlen(name));
+    if (!depth && tops++)
+      return scope_why(why, whylen, 0, "<%.*s> after the top element: Cyclone DDS ignores it in a file", name, nn);
+    size_t s = sizeof scope_el / sizeof scope_el[0];
+    int abbrev = 0;
+    for (size_t k = 0; k < sizeof scope_el / sizeof scope_el[0]; k++) {
+      const int is = xml_name_is(name, nn, scope_el[k].name);
+      if (is > 0) s = k;
+      abbrev |= is < 0;
+    }
+    if (s == sizeof scope_el / sizeof scope_el[0] && abbrev) /* <Peers><P Address=...>, <Interfaces><N name=...> */
+      return scope_why(why, whylen, 0, "<%.*s>, which Cyclone DDS may read as a network setting", name, nn);
+    const int el = s < sizeof scope_el / sizeof scope_el[0] ? scope_el[s].el : EL_OTHER;
+    int where = 0;
+    for (;;) { /* the attributes */
+      p = xml_blank(p);
+      const char *a = p, *v = NULL;
+      while (xml_namec(*p)) p++;
+      const size_t an = (size_t)(p - a);
+      size_t n = 0;
+      if (!an) break;
+      p = xml_blank(p);
+      if (*p != '=' || !(p = xml_quoted(xml_blank(p + 1), &v, &n)))
+        return scope_why(why, whylen, 0, "the attribute %.*s: not XML palp can read", a, an);
+      if (el != EL_OTHER && !scope_attr(s, a, an, v, n, why, whylen)) return 0;
+      if (el == EL_IFACE && (xml_name_is(a, an, "address") > 0 || xml_name_is(a, an, "name") > 0)) where = 1;
+    }
+    const int empty = !strncmp(p, "/>", 2);
+    if (!empty && *p != '>') return scope_why(why, whylen, 0, "<%.*s ...: not XML palp can read", name, nn);
+    p += empty ? 2 : 1;
+    depth += !empty;
+    if (el == EL_IFACE && !where)
+      return scope_why(why, whylen, 0, "a <NetworkInterface>%.*s without address or name", "", 0);
+    named |= el == EL_IFACE || el == EL_IFACE_ADDR;
+    if (el == EL_ID || el == EL_IFACE_ADDR || el == EL_EXTERNAL) {
+      char v[128] = "";
+      size_t n = 0;
+      const int fits = empty || xml_text(p, v, sizeof v, &n);
+      if (el == EL_ID && (!fits || !(n == 3 && !strncasecmp(v, "any", 3))))
+        return scope_why(why, whylen, 0, "<Id>%.*s: palp cannot tell it is the domain it runs on", v, n);
+      if (el == EL_IFACE_ADDR && (!fits || !loopback_value(v, n)))
+        return scope_why(why, whylen, 0, "<NetworkInterfaceAddress>%.*s", v, n);
+      if (el == EL_EXTERNAL && (!fits || !(!n || loopback_value(v, n) || (n == 4 && !strncasecmp(v, "auto", 4)))))
+        return scope_why(why, whylen, 0, "<ExternalNetworkAddress>%.*s: other participants are told to send there", v,
+                         n);
     }
   }
-  free(x);
-  if (rc && !named) return scope_why(why, whylen, 0, "no <NetworkInterface>: Cyclone DDS picks one%.*s", "", 0);
-  if (rc) scope_why(why, whylen, 1, "every <NetworkInterface> is loopback%.*s", "", 0);
-  return rc;
+  if (!named) return scope_why(why, whylen, 0, "no <NetworkInterface>: Cyclone DDS picks one%.*s", "", 0);
+  return scope_why(why, whylen, 1, "every <NetworkInterface> and <Peer> is loopback%.*s", "", 0);
 }
 
 int palp_app_dds_loopback_only(char *why, size_t whylen) {

@@ -58,9 +58,12 @@ int palp_app_use_dds_config(const char *flag, const char *fallback, char *chosen
 
 /* Whether a Cyclone DDS configuration keeps a participant on loopback: 1 when every network
  * interface it names (<NetworkInterface address=|name=>, <NetworkInterfaceAddress>) is
- * loopback (127.0.0.0/8, ::1, "lo", "localhost") and it names at least one; 0 otherwise,
- * including whatever cannot be told for sure (no interface: Cyclone picks one; autodetermine;
- * a ${VARIABLE}). XML comments are ignored. why (may be NULL) says which element decided.
+ * loopback (127.0.0.0/8, ::1, "lo", "localhost"), it names at least one, and every address it
+ * sends to or has others send to (<Peer Address>, <ExternalNetworkAddress>) is loopback too;
+ * 0 otherwise, including whatever cannot be told for sure (no interface: Cyclone picks one;
+ * autodetermine; a ${VARIABLE}; a <Domain Id> other than "any"; an abbreviated name; XML this
+ * reading cannot follow). Names are read as Cyclone reads them, case-insensitively; comments
+ * and CDATA are not elements. why (may be NULL) says which element decided.
  * Fail-safe by design: "0" may be loopback after all, "1" never reaches the network. */
 int palp_app_dds_xml_loopback_only(const char *xml, char *why, size_t whylen);
 

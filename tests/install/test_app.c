@@ -148,6 +148,36 @@ int main(int argc, char **argv) {
       {"<Interfaces><NetworkInterface address=\"127.0.0.1x\"/></Interfaces>", 0, "127.0.0.1x"},
       {"<Interfaces><NetworkInterface/></Interfaces>", 0, "neither address nor name"},
       {"", 0, "empty"},
+      /* Cyclone reads names case-insensitively, takes an unambiguous prefix of a name in inline
+       * XML, sends discovery to every <Peer> and tells others to send to <ExternalNetworkAddress>. */
+      {"<Interfaces><NetworkInterface name=\"lo\"/><networkinterface name=\"eth0\"/></Interfaces>", 0,
+       "a lower-case <networkinterface> on eth0"},
+      {"<Interfaces><NetworkInterface NAME=\"eth0\"/></Interfaces>", 0, "NAME=eth0"},
+      {"<Interfaces><NETWORKINTERFACE Address=\"127.0.0.1\"/></Interfaces>", 1, "upper-case names on loopback"},
+      {"<Interfaces><N name=\"eth0\"/></Interfaces>", 0, "<N>, a prefix of NetworkInterface"},
+      {"<Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General><Discovery><Peers>"
+       "<Peer address=\"203.0.113.5\"/></Peers></Discovery></Domain>", 0, "lo with a peer 203.0.113.5"},
+      {"<Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General><Discovery><Peers>"
+       "<Peer Address=\"203.0.113.5:7410\"/></Peers></Discovery></Domain>", 0, "lo with a peer 203.0.113.5:7410"},
+      {"<Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General><Discovery><Peers>"
+       "<P Address=\"203.0.113.5\"/></Peers></Discovery></Domain>", 0, "lo with <P>, a prefix of Peer"},
+      {"<Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General><Discovery><Peers>"
+       "<Peer Address=\"lo\"/></Peers></Discovery></Domain>", 0, "a peer named lo, which is no host"},
+      {"<Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General><Discovery><Peers>"
+       "<Peer Address=\"localhost:7410\"/><Peer Address='[::1]:7410'/><PEER ADDRESS=\"127.0.0.1\"/></Peers>"
+       "</Discovery></Domain>", 1, "peers localhost:7410, [::1]:7410 and 127.0.0.1"},
+      {"<General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces>"
+       "<ExternalNetworkAddress>203.0.113.5</ExternalNetworkAddress></General>", 0, "an external address"},
+      {"<Domain Id=\"5\"><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General></Domain>", 0,
+       "lo for domain 5 only"},
+      {"<Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces><EntityAutoNaming seed=\"<!--\"/>"
+       "<Interfaces><NetworkInterface name=\"eth0\"/></Interfaces><EntityAutoNaming seed=\"-->\"/></General></Domain>",
+       0, "eth0 between two attribute values that look like a comment"},
+      {"<Domain><Discovery><Tag><![CDATA[<NetworkInterface name=\"lo\"/>]]></Tag></Discovery></Domain>", 0,
+       "an interface only in CDATA text"},
+      {"<CycloneDDS/><CycloneDDS><Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces></General>"
+       "</Domain></CycloneDDS>", 0, "lo only in a second top element"},
+      {"<Interfaces><NetworkInterface name=\"lo\"/></Interfaces>, file:///tmp/other.xml", 0, "inline XML and a file"},
   };
   for (size_t k = 0; k < sizeof scope / sizeof scope[0]; k++) {
     char why[200];
