@@ -284,6 +284,14 @@ static void test_errors(void) {
   const char *swapped[] = {"trials.csv:2", "group \"1.25\" has only one value",
                            "--group and --value swapped?", NULL};
   expect_error("swapped columns", "anova trials.csv --group depth_mm --value trial", 1, swapped);
+  /* Two options naming one column (by its case, or by number) would compare it with itself
+   * (Bland-Altman SD 0, "criteria: MET"): a wrong command line, exit 2, nothing printed. */
+  const char *same_ab[] = {"--a \"value\" and --b \"VALUE\" name the same column of groups.csv", NULL};
+  expect_error("usage: --a and --b one column", "bland-altman groups.csv --a value --b VALUE", 2, same_ab);
+  const char *same_num[] = {"--a \"2\" and --b \"value\" name the same column", "(\"value\", column 2)", NULL};
+  expect_error("usage: --a by number, --b by name", "rmse groups.csv --a 2 --b value", 2, same_num);
+  const char *same_gv[] = {"--group \"group\" and --value \"1\" name the same column", NULL};
+  expect_error("usage: --group and --value one column", "anova groups.csv --group group --value 1", 2, same_gv);
   const char *label[] = {"groups.csv:2", "\"A\" is not a number", "looks like a label", NULL};
   expect_error("label as value", "anova groups.csv --group value --value group", 1, label);
   expect_error("fewer than 2 groups", "anova single.csv --group group --value value", 1, single);

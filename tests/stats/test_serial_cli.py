@@ -27,7 +27,8 @@ Expected values come from the literature or closed forms, never from the code:
   equivalent; the same by units (three units of two rows with means 1, 2, 3);
   --serial on the cosine: SE = SD/sqrt(n_eff), df = n_eff - 1.
 - errors: a subject with one pair, a constant series, no margin, --serial with
-  --unit: exit status 1 or 2 with a message naming the problem.
+  --unit, --a and --b (or --subject and --a) naming one column: exit status 1 or 2
+  with a message naming the problem.
 """
 import json
 import math
@@ -193,6 +194,13 @@ def main():
     check(r.returncode == 2, "tost --serial with --unit: usage error")
     r = stats("tost", "cos.csv", "--value", "x", "--margin", "1", "--alpha", "0.7")
     check(r.returncode == 2 and "--alpha" in r.stderr, "tost --alpha 0.7: usage error")
+    # --a and --b naming one column: a - b = 0 would be EQUIVALENT; a label column that is measured
+    for args, tag in ((("tost", "co.csv", "--a", "rv", "--b", "RV", "--margin", "1"), "tost --a rv --b RV"),
+                      (("neff", "co.csv", "--a", "rv", "--b", "rv"), "neff --a rv --b rv"),
+                      (("ba-rm", "co.csv", "--subject", "rv", "--a", "rv", "--b", "ic"), "ba-rm --subject rv --a rv")):
+        r = stats(*args)
+        check(r.returncode == 2 and r.stdout == "" and "name the same column" in r.stderr,
+              tag + ": usage error (%r)" % r.stderr[-300:])
     r = stats("bootstrap", "six.csv", "--value", "x", "--block", "7")
     check(r.returncode == 1 and "longer" in r.stderr, "bootstrap: block longer than the series")
 

@@ -36,6 +36,11 @@ typedef struct options {
 } options;
 
 int find_column(const palp_csv *csv, const options *o, const char *want, const char *flag, int *col);
+/* 1, with a usage error ending in want, when columns c1 (given to option f1 as w1) and c2 are one. */
+int same_column(const options *o, const palp_csv *csv, int c1, const char *f1, const char *w1, int c2,
+                const char *f2, const char *w2, const char *want);
+/* The exit status for a column reader's failure: -2 a wrong command line, else the data. */
+static inline int read_exit(int rd) { return rd == -2 ? EXIT_USAGE : EXIT_DATA; }
 int cell_is_empty(const palp_csv *csv, size_t row, int col);
 /* Parses one numeric cell; on failure prints where and why, with a hint. */
 int cell_number(const palp_csv *csv, const options *o, size_t row, int col, palp_dec *out);

@@ -186,6 +186,17 @@ int find_column(const palp_csv *csv, const options *o, const char *want, const c
 
 /* ---- cells -------------------------------------------------------------------------- */
 
+/* Two options naming one column (by name, by its case or by number) would compare the column
+ * with itself: SD 0, p = 1, the paper's criteria met, EQUIVALENT. A wrong command line, so
+ * usage's exit status (the names are read against the header, hence after the file). */
+int same_column(const options *o, const palp_csv *csv, int c1, const char *f1, const char *w1, int c2,
+                const char *f2, const char *w2, const char *want) {
+  if (c1 != c2) return 0;
+  usage_error("%s \"%s\" and %s \"%s\" name the same column of %s (\"%s\", column %d); %s", f1, w1, f2, w2,
+              o->file, csv->header[c1], c1 + 1, want);
+  return 1;
+}
+
 int cell_is_empty(const palp_csv *csv, size_t row, int col) {
   return palp_csv_cell(csv, row, col)[0] == '\0';
 }
@@ -299,10 +310,8 @@ static int run_anova(const options *o, const palp_csv *csv) {
   int gc, vc;
   if (find_column(csv, o, o->group, "--group", &gc) < 0) return EXIT_DATA;
   if (find_column(csv, o, o->value, "--value", &vc) < 0) return EXIT_DATA;
-  if (gc == vc) {
-    data_error(o->log, "%s: --group and --value name the same column \"%s\"", o->file, csv->header[gc]);
-    return EXIT_DATA;
-  }
+  if (same_column(o, csv, gc, "--group", o->group, vc, "--value", o->value,
+                  "--group names the column of labels, --value the measurement")) return EXIT_USAGE;
   if (csv->nrows == 0) {
     data_error(o->log, "%s:%zu: no data rows after the header", o->file, csv->header_line);
     return EXIT_DATA;
@@ -483,6 +492,7 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
   memset(p, 0, sizeof *p);
   if (find_column(csv, o, o->a, "--a", &p->ca) < 0) return -1;
   if (find_column(csv, o, o->b, "--b", &p->cb) < 0) return -1;
+  if (same_column(o, csv, p->ca, "--a", o->a, p->cb, "--b", o->b, "give the two paired columns")) return -2;
   if (csv->nrows == 0) {
     data_error(o->log, "%s:%zu: no data rows after the header", o->file, csv->header_line);
     return -1;
@@ -544,7 +554,8 @@ done:
 
 static int run_rmse(const options *o, const palp_csv *csv) {
   paired p;
-  if (read_paired(o, csv, 1, "RMSE", &p) < 0) return EXIT_DATA;
+  const int rd = read_paired(o, csv, 1, "RMSE", &p);
+  if (rd < 0) return read_exit(rd);
   double r;
   int err = palp_stats_rmse(p.d, p.zero, p.n, &r);
   if (err < 0) {
@@ -574,7 +585,8 @@ static int run_rmse(const options *o, const palp_csv *csv) {
 
 static int run_bland_altman(const options *o, const palp_csv *csv) {
   paired p;
-  if (read_paired(o, csv, 2, "Bland-Altman (an SD of the differences)", &p) < 0) return EXIT_DATA;
+  const int rd = read_paired(o, csv, 2, "Bland-Altman (an SD of the differences)", &p);
+  if (rd < 0) return read_exit(rd);
   palp_stats_ba ba;
   palp_stats_anova an;
   double rmse;

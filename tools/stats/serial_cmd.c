@@ -48,16 +48,17 @@ static int read_series(const options *o, const palp_csv *csv, const char *label_
   } else {
     if (find_column(csv, o, o->a, "--a", &ca) < 0) return -1;
     if (find_column(csv, o, o->b, "--b", &cb) < 0) return -1;
+    if (same_column(o, csv, ca, "--a", o->a, cb, "--b", o->b, "a - b needs two different columns")) return -2;
   }
   s->label_col = -1;
   if (label_col) {
     if (find_column(csv, o, label_col, label_flag, &cl) < 0) return -1;
     s->label_col = cl;
-    if (cl == ca || cl == cb) {
-      data_error(o->log, "%s: %s names a measurement column (\"%s\"); it must name the column of labels",
-                 o->file, label_flag, csv->header[cl]);
-      return -1;
-    }
+    const char *fa = o->value ? "--value" : "--a", *wa = o->value ? o->value : o->a;
+    const char *labels = "it must name the column of labels, not a measured one";
+    if (same_column(o, csv, cl, label_flag, label_col, ca, fa, wa, labels) ||
+        (cb >= 0 && same_column(o, csv, cl, label_flag, label_col, cb, "--b", o->b, labels)))
+      return -2;
   }
   if (csv->nrows == 0) {
     data_error(o->log, "%s:%zu: no data rows after the header", o->file, csv->header_line);
@@ -126,7 +127,8 @@ static const char *what(const options *o) { return o->value ? o->value : "a - b"
 
 int run_neff(const options *o, const palp_csv *csv) {
   series s;
-  if (read_series(o, csv, NULL, NULL, &s) < 0) return EXIT_DATA;
+  const int rd = read_series(o, csv, NULL, NULL, &s);
+  if (rd < 0) return read_exit(rd);
   if (s.n < 3) {
     data_error(o->log, "%s: %zu values; the lag-1 autocorrelation needs at least 3", o->file, s.n);
     series_free(&s);
@@ -174,7 +176,8 @@ int run_neff(const options *o, const palp_csv *csv) {
 
 int run_bootstrap(const options *o, const palp_csv *csv) {
   series s;
-  if (read_series(o, csv, NULL, NULL, &s) < 0) return EXIT_DATA;
+  const int rd = read_series(o, csv, NULL, NULL, &s);
+  if (rd < 0) return read_exit(rd);
   if (s.n < 2) {
     data_error(o->log, "%s: %zu value; the bootstrap needs at least 2", o->file, s.n);
     series_free(&s);
@@ -237,7 +240,8 @@ int run_bootstrap(const options *o, const palp_csv *csv) {
 
 int run_tost(const options *o, const palp_csv *csv) {
   series s;
-  if (read_series(o, csv, o->unit, "--unit", &s) < 0) return EXIT_DATA;
+  const int rd = read_series(o, csv, o->unit, "--unit", &s);
+  if (rd < 0) return read_exit(rd);
   double lower = o->have_margin ? -o->margin : o->lower, upper = o->have_margin ? o->margin : o->upper;
   const double alpha = o->alpha ? o->alpha : 0.05;
   double est = 0, se = 0, df = 0, r1 = NAN, neff = NAN;
@@ -349,7 +353,8 @@ done:
 
 int run_ba_rm(const options *o, const palp_csv *csv) {
   series s;
-  if (read_series(o, csv, o->subject, "--subject", &s) < 0) return EXIT_DATA;
+  const int rd = read_series(o, csv, o->subject, "--subject", &s);
+  if (rd < 0) return read_exit(rd);
   int rc = EXIT_DATA;
   double *d = malloc(s.n * sizeof *d);
   size_t *start = calloc((size_t)s.labels + 1, sizeof *start), *fill = calloc((size_t)s.labels + 1, sizeof *fill);
