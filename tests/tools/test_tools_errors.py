@@ -98,6 +98,18 @@ def case_run_dt(a, tmp):
     # --dt 1e-15 on 10 ms frames asked for 1e13 steps a frame (an int overflow): refused.
     rc, out = run([a.run, os.path.join(a.config, "paper_step.json"), "--dt", "1e-15", "--quiet"])
     check(rc == 2 and "at most 100000 steps per frame" in out, "palp-run --dt 1e-15 refused (rc %d): %s" % (rc, out.strip()))
+    # Numbers read whole or refused (atoi/atof took "1e3" for 1 frame, "10k" for 10, "338x" for 338,
+    # ignored "abc", "-5", "0", "nan", and 99999999999 overflowed an int): exit 2, option and value named.
+    bad = [("--frames", v) for v in ("1e3", "10k", "abc", "-5", "0", "99999999999", "")] + \
+          [("--dt", v) for v in ("abc", "-1", "0", "nan", "inf", "1e-3s")] + \
+          [("--vertices", v) for v in ("338x", "abc", "5", "-338")]
+    for opt, v in bad:
+        rc, out = run([a.run, os.path.join(a.config, "paper_step.json"), opt, v, "--quiet"])
+        check(rc == 2 and opt in out and '"%s"' % v in out, "palp-run %s %r refused (rc %d): %s" % (opt, v, rc, out.strip()))
+    # and whole values still taken as given: 3 frames of 19 vertices at 1 ms
+    rc, out = run([a.run, os.path.join(a.config, "paper_step.json"), "--frames", "3", "--vertices", "19", "--dt", "0.001"])
+    check(rc == 0 and "19 vertices, dt 0.001 s, 3 frames of" in out, "palp-run --frames 3 --vertices 19 --dt 0.001 runs (rc %d): %s"
+          % (rc, out.strip()[:200]))
 
 
 def case_sweep_broken(a, tmp):

@@ -8,6 +8,8 @@
  * pressure, applied and feedback force per frame; PREFIX_vertices.csv: the
  * displacement of every vertex per frame. A summary goes to stdout.
  */
+#include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -179,6 +181,20 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
   return 0;
 }
 
+/* The whole of v as a whole number in [lo, hi] (the scene file's own limits): atoi read
+ * "1e3" as 1, "10k" as 10, ignored "abc", "-5" and "0", and overflowed on 99999999999. */
+static int whole_opt(const char *opt, const char *v, long lo, long hi, int *out) {
+  char *end;
+  errno = 0;
+  const long x = strtol(v, &end, 10);
+  if (!isdigit((unsigned char)v[0]) || *end || errno == ERANGE || x < lo || x > hi) {
+    fprintf(stderr, "palp-run: %s must be a whole number from %ld to %ld (got \"%s\")\n", opt, lo, hi, v);
+    return -1;
+  }
+  *out = (int)x;
+  return 0;
+}
+
 /* --quiet already means "no scene line on stdout" here, so only --log-level/--log-file. */
 #define RUN_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG)
 
@@ -201,10 +217,21 @@ int main(int argc, char **argv) {
     if (common < 0) return 2;
     if (common) continue;
     if (!strcmp(a, "--distribution") && v) dist = v, ++i;
-    else if (!strcmp(a, "--dt") && v) dt = atof(v), ++i;
-    else if (!strcmp(a, "--vertices") && v) vertices = atoi(v), ++i;
-    else if (!strcmp(a, "--frames") && v) frames = atoi(v), ++i;
-    else if (!strcmp(a, "--out") && v) prefix = v, ++i;
+    else if (!strcmp(a, "--dt") && v) {
+      char *end;
+      dt = strtod(v, &end);
+      if (isspace((unsigned char)v[0]) || end == v || *end || !isfinite(dt) || !(dt > 0.0)) {
+        fprintf(stderr, "palp-run: --dt must be a time step in seconds > 0 (got \"%s\")\n", v);
+        return 2;
+      }
+      ++i;
+    } else if (!strcmp(a, "--vertices") && v) {
+      if (whole_opt(a, v, 19, PALP_MESH_MAX_VERTICES, &vertices) < 0) return 2;
+      ++i;
+    } else if (!strcmp(a, "--frames") && v) {
+      if (whole_opt(a, v, 1, 100000000, &frames) < 0) return 2;
+      ++i;
+    } else if (!strcmp(a, "--out") && v) prefix = v, ++i;
     else if (!strcmp(a, "--quiet")) quiet = 1;
     else if (!strcmp(a, "-h") || !strcmp(a, "--help")) return usage(), 0;
     else if (a[0] != '-' && !scene_path) scene_path = a;
@@ -228,11 +255,11 @@ int main(int argc, char **argv) {
     rc = 2;
     goto out;
   }
-  if (dt > 0.0) {
+  if (dt > 0.0) { /* given (checked > 0 above) */
     /* The scene's own bound on steps per frame: a tiny --dt overflowed the int step count. */
     if (!(dt <= s.frame_period) || !(s.frame_period / dt < 100000.5)) {
-      palp_log_error(&log, "--dt must be > 0, <= the frame period %g s and give at most 100000 steps per frame",
-                     s.frame_period);
+      palp_log_error(&log, "--dt %g s: must be <= the frame period %g s and give at most 100000 steps per frame",
+                     dt, s.frame_period);
       rc = 2;
       goto out;
     }
