@@ -112,6 +112,27 @@ def case_run_dt(a, tmp):
           % (rc, out.strip()[:200]))
 
 
+def case_run_write(a, tmp):
+    # A CSV that cannot be written (a full disk: /dev/full; a missing directory) ended as exit 0
+    # with the file truncated, its open failure without a reason. Now: exit 1, the file and why.
+    scene_path = os.path.join(a.config, "paper_step.json")
+    for which in ("frames", "vertices"):
+        prefix = os.path.join(tmp, "full_" + which)
+        os.symlink("/dev/full", "%s_%s.csv" % (prefix, which))
+        rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--out", prefix, "--quiet"])
+        check(rc != 0 and "full_%s_%s.csv: cannot write it: No space left on device" % (which, which) in out
+              and "step median" not in out, "palp-run with %s_%s.csv on a full disk exits %d, naming it: %s"
+              % ("full_" + which, which, rc, out.strip()[-200:]))
+    rc, out = run([a.run, scene_path, "--frames", "3", "--out", os.path.join(tmp, "no", "dir", "x"), "--quiet"])
+    check(rc != 0 and "no/dir/x_frames.csv: No such file or directory" in out,
+          "palp-run --out into a missing directory exits %d with the reason: %s" % (rc, out.strip()[-200:]))
+    # and a writable prefix: both files whole (a header and 3 frames), exit 0
+    prefix = os.path.join(tmp, "ok")
+    rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--out", prefix, "--quiet"])
+    lines = [sum(1 for _ in open("%s_%s.csv" % (prefix, w))) for w in ("frames", "vertices")] if rc == 0 else []
+    check(rc == 0 and lines == [4, 4], "palp-run --out writes 4 lines to each CSV, exit 0 (rc %d, %s)" % (rc, lines))
+
+
 def case_sweep_broken(a, tmp):
     # Every real-time point's world refuses to step: each used to go on "stepping" in ~0.3 us,
     # two landed on the Pareto front and the sweep exited 0. Now each is marked failed in the

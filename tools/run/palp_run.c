@@ -46,6 +46,18 @@ static double now_s(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* Whether CSV file f (path) has taken every write: a full disk truncated PREFIX_frames.csv and
+ * the run still exited 0, as if finished. closing: flush and close it too (closed either way). */
+static int csv_ok(palp_log *log, FILE *f, const char *path, int closing) {
+  int e = ferror(f) ? (errno ? errno : EIO) : 0; /* errno: the failed write's, checked every frame */
+  if (closing) {
+    if (fflush(f) != 0 && !e) e = errno ? errno : EIO;
+    if (fclose(f) != 0 && !e) e = errno ? errno : EIO;
+  }
+  if (e) palp_log_error(log, "%s: cannot write it: %s", path, strerror(e));
+  return !e;
+}
+
 static const char *dist_label[] = {"", "I single", "II uniform", "III gaussian", "IV gaussian_offset"};
 
 static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summary *sum) {
@@ -60,14 +72,15 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
   const int probe = s->contact_count ? palp_mesh_nearest_vertex(m, m->rest, s->contact[0].def.center) : top;
   const int sub = (int)lround(s->frame_period / s->world.dt);
   FILE *ff = NULL, *fv = NULL;
+  char fpath[1100], vpath[1100];
   if (prefix) {
-    char path[1100];
-    snprintf(path, sizeof path, "%s_frames.csv", prefix);
-    ff = fopen(path, "w");
-    snprintf(path, sizeof path, "%s_vertices.csv", prefix);
-    fv = fopen(path, "w");
+    snprintf(fpath, sizeof fpath, "%s_frames.csv", prefix);
+    snprintf(vpath, sizeof vpath, "%s_vertices.csv", prefix);
+    errno = 0;
+    ff = fopen(fpath, "w");
+    if (!ff) palp_log_error(log, "cannot write %s: %s", fpath, strerror(errno));
+    else if (!(fv = fopen(vpath, "w"))) palp_log_error(log, "cannot write %s: %s", vpath, strerror(errno));
     if (!ff || !fv) {
-      palp_log_error(log, "cannot write %s_*.csv", prefix);
       if (ff) fclose(ff);
       if (fv) fclose(fv);
       palp_world_destroy(w);
@@ -166,6 +179,13 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
       for (int i = 0; i < nv; ++i)
         fprintf(fv, ",%.6e,%.6e,%.6e", p[i].x - m->rest[i].x, p[i].y - m->rest[i].y, p[i].z - m->rest[i].z);
       fprintf(fv, "\n");
+      if (!csv_ok(log, ff, fpath, 0) || !csv_ok(log, fv, vpath, 0)) {
+        free(st);
+        fclose(ff);
+        fclose(fv);
+        palp_world_destroy(w);
+        return 1;
+      }
     }
   }
   palp_world_get_health(w, &sum->health);
@@ -175,10 +195,9 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
     sum->step_p99_us = 1e6 * st[(long)(0.99 * (double)(nkeep - 1))];
   }
   free(st);
-  if (ff) fclose(ff);
-  if (fv) fclose(fv);
   palp_world_destroy(w);
-  return 0;
+  /* both closed even when the first fails */
+  return ff && !(csv_ok(log, ff, fpath, 1) & csv_ok(log, fv, vpath, 1)) ? 1 : 0;
 }
 
 /* The whole of v as a whole number in [lo, hi] (the scene file's own limits): atoi read
