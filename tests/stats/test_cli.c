@@ -46,19 +46,23 @@ typedef struct result {
 } result;
 
 /* Runs palp-stats with args (already shell-quoted) inside dir. */
-static result run(const char *args) {
+/* stdout to out.txt, read back; or to stdout_path (e.g. /dev/full), not read. */
+static result run_to(const char *args, const char *stdout_path) {
   char cmd[4096];
-  snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s >out.txt 2>err.txt", dir, tool, args);
+  snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s >'%s' 2>err.txt", dir, tool, args,
+           stdout_path ? stdout_path : "out.txt");
   int st = system(cmd);
   result r;
   r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
   char path[1024];
   snprintf(path, sizeof path, "%s/out.txt", dir);
-  r.out = slurp(path);
+  r.out = stdout_path ? strdup("") : slurp(path);
   snprintf(path, sizeof path, "%s/err.txt", dir);
   r.err = slurp(path);
   return r;
 }
+
+static result run(const char *args) { return run_to(args, NULL); }
 
 static void result_free(result *r) {
   free(r->out);
@@ -319,6 +323,18 @@ static void test_errors(void) {
   expect_error("usage: missing --b", "bland-altman groups.csv --a value", 2, usage);
   const char *unknown[] = {"unknown command \"anvoa\"", NULL};
   expect_error("usage: unknown command", "anvoa groups.csv", 2, unknown);
+
+  /* Results that cannot be written (stdout on a full disk) are no success: exit 1, and why. */
+  write_file("pairs.csv", "a,b\n1,1.1\n2,2.3\n3,2.9\n");
+  const char *full[] = {"rmse pairs.csv --a a --b b --json", "bland-altman pairs.csv --a a --b b", "--help"};
+  for (int k = 0; k < 3; ++k) {
+    result f = run_to(full[k], "/dev/full");
+    char buf[256];
+    snprintf(buf, sizeof buf, "palp-stats %s >/dev/full: exit 1 (got %d) and \"cannot write the results to stdout: "
+             "No space left on device\"", full[k], f.status);
+    check(buf, f.status == 1 && strstr(f.err, "cannot write the results to stdout: No space left on device"));
+    result_free(&f);
+  }
 
   /* The semicolon file works once told. */
   result r = run("anova semi.csv --group group --value value --sep ';' --json");

@@ -126,6 +126,12 @@ def case_run_write(a, tmp):
     rc, out = run([a.run, scene_path, "--frames", "3", "--out", os.path.join(tmp, "no", "dir", "x"), "--quiet"])
     check(rc != 0 and "no/dir/x_frames.csv: No such file or directory" in out,
           "palp-run --out into a missing directory exits %d with the reason: %s" % (rc, out.strip()[-200:]))
+    # the summary on stdout to a full disk: written to nothing, so exit 1 and why
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001"], stdout=full,
+                           stderr=subprocess.PIPE, text=True, timeout=100)
+    check(r.returncode == 1 and "cannot write the summary to stdout: No space left on device" in r.stderr,
+          "palp-run >/dev/full exits %d with the reason: %s" % (r.returncode, r.stderr.strip()[-200:]))
     # and a writable prefix: both files whole (a header and 3 frames), exit 0
     prefix = os.path.join(tmp, "ok")
     rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--out", prefix, "--quiet"])

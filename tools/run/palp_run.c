@@ -332,6 +332,12 @@ int main(int argc, char **argv) {
            (long long)sum.health.large_strain_steps);
   }
 out:
+  /* the summary on a full disk or a closed pipe was written to nothing: not a success */
+  errno = 0;
+  if (fflush(stdout) != 0 || ferror(stdout)) {
+    palp_log_error(&log, "cannot write the summary to stdout: %s", strerror(errno ? errno : EIO));
+    if (!rc) rc = 1;
+  }
   palp_log_close(&log);
   return rc;
 }

@@ -13,6 +13,7 @@
  * many constant leading digits lose nothing.
  */
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -73,8 +74,8 @@ static void usage(FILE *to) {
       "  --svg FILE      bland-altman only: also write a Bland-Altman plot (SVG)\n",
       to);
   palp_app_common_usage(to, STATS_OPTS);
-  fputs("exit status: 0 ok, 1 unusable data (the message names file, line and column),\n"
-        "2 wrong command line\n",
+  fputs("exit status: 0 ok, 1 unusable data (the message names file, line and column)\n"
+        "or results that cannot be written to stdout, 2 wrong command line\n",
         to);
 }
 
@@ -248,10 +249,12 @@ int cell_number(const palp_csv *csv, const options *o, size_t row, int col,
 
 void print_json(cJSON *root) {
   char *s = cJSON_Print(root);
-  if (s) {
-    puts(s);
-    free(s);
+  if (!s) { /* no result is not a result: never an empty stdout and exit 0 */
+    fputs("palp-stats: out of memory: the JSON result could not be printed\n", stderr);
+    exit(EXIT_DATA);
   }
+  puts(s); /* a failed write is caught at exit (main) */
+  free(s);
 }
 
 static cJSON *anova_json(const palp_stats_anova *a) {
@@ -752,6 +755,16 @@ static int number_opt(options *o, int argc, char **argv, int *i) {
 
 /* ---- main ------------------------------------------------------------------------------ */
 
+/* Results on a full disk or a closed pipe were written to nothing: not a success (rc 0 -> 1). */
+static int stdout_done(int rc) {
+  errno = 0;
+  if (fflush(stdout) != 0 || ferror(stdout)) {
+    fprintf(stderr, "palp-stats: cannot write the results to stdout: %s\n", strerror(errno ? errno : EIO));
+    if (!rc) rc = EXIT_DATA;
+  }
+  return rc;
+}
+
 int main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-stats")) return 0;
   palp_app_opts ao;
@@ -764,7 +777,7 @@ int main(int argc, char **argv) {
   }
   if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
     usage(stdout);
-    return 0;
+    return stdout_done(0);
   }
   o.command = argv[1];
   int is_anova = strcmp(o.command, "anova") == 0;
@@ -803,7 +816,7 @@ int main(int argc, char **argv) {
     }
     if (strcmp(s, "--help") == 0 || strcmp(s, "-h") == 0) {
       usage(stdout);
-      return 0;
+      return stdout_done(0);
     }
     if (strcmp(s, "--sep") == 0) {
       if (i + 1 >= argc) return usage_error("--sep needs a value: ',', ';' or 'tab'");
@@ -882,5 +895,5 @@ int main(int argc, char **argv) {
            : is_tost ? run_tost(&o, &csv)
                      : run_ba_rm(&o, &csv);
   palp_csv_free(&csv);
-  return rc;
+  return stdout_done(rc);
 }
