@@ -18,7 +18,11 @@ static FILE *open_append(const char *path) {
   int fd = open(path, O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0640);
   if (fd < 0) return NULL;
   FILE *f = fdopen(fd, "a");
-  if (!f) close(fd);
+  if (!f) {
+    const int e = errno; /* the caller prints fdopen's reason, not close's */
+    close(fd);
+    errno = e;
+  }
   return f;
 }
 
@@ -29,7 +33,10 @@ int palp_log_init(palp_log *l, const char *prog, palp_log_level level, const cha
   pthread_mutex_init(&l->mu, NULL);
   l->f = stderr;
   if (path && path[0]) {
-    if (strlen(path) >= sizeof l->path) return PALP_EINVAL;
+    if (strlen(path) >= sizeof l->path) { /* callers print strerror(errno): make it this reason */
+      errno = ENAMETOOLONG;
+      return PALP_EINVAL;
+    }
     FILE *f = open_append(path);
     if (!f) return PALP_EIO;
     snprintf(l->path, sizeof l->path, "%s", path);

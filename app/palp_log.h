@@ -37,7 +37,8 @@ typedef struct palp_log {
 } palp_log;
 
 /* path NULL or "" logs to stderr; otherwise appends to the file (created 0640).
- * Returns 0 or a negative PALP_E* code (the file cannot be opened). */
+ * Returns 0 or a negative PALP_E* code (the file cannot be opened), errno then saying why
+ * (ENAMETOOLONG for a path of PALP_LOG_PATH_MAX or more). */
 int palp_log_init(palp_log *l, const char *prog, palp_log_level level, const char *path);
 void palp_log_close(palp_log *l);
 /* Re-opens the log file (after logrotate moved it); a no-op on stderr.

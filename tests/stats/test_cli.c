@@ -324,8 +324,27 @@ static void test_errors(void) {
   const char *unknown[] = {"unknown command \"anvoa\"", NULL};
   expect_error("usage: unknown command", "anvoa groups.csv", 2, unknown);
 
-  /* Results that cannot be written (stdout on a full disk) are no success: exit 1, and why. */
+  /* Failures that say why: a - b or a shift beyond the largest double names its row (it said
+   * "could not be computed (error -1)"), a directory or a log file that cannot be opened says
+   * the system's reason (it said "read error", "cannot open it"). */
   write_file("pairs.csv", "a,b\n1,1.1\n2,2.3\n3,2.9\n");
+  write_file("big.csv", "a,b\n1,2\n1e308,-1e308\n3,4\n");
+  const char *big_ab[] = {"big.csv:3", "too large to analyse", "a - b exceeds the largest double", NULL};
+  expect_error("a - b beyond the largest double", "bland-altman big.csv --a a --b b", 1, big_ab);
+  expect_error("a - b beyond the largest double (rmse)", "rmse big.csv --a a --b b", 1, big_ab);
+  write_file("bigg.csv", "g,v\nA,1e308\nA,-1e308\nB,1\nB,2\n");
+  const char *big_g[] = {"bigg.csv:3", "too large to analyse", "difference from line 2's value", NULL};
+  expect_error("a group spread beyond the largest double", "anova bigg.csv --group g --value v", 1, big_g);
+  const char *isdir[] = {"cannot read it: Is a directory", NULL};
+  expect_error("a directory as the CSV", "rmse . --a a --b b", 1, isdir);
+  const char *nolog[] = {"--log-file", "cannot open it: No such file or directory", NULL};
+  expect_error("a log file in a missing directory", "rmse pairs.csv --a a --b b --log-file no/such/dir.log", 2, nolog);
+  char longlog[1200 + 64];
+  snprintf(longlog, sizeof longlog, "rmse pairs.csv --a a --b b --log-file %01200d", 0);
+  const char *toolong[] = {"cannot open it: File name too long", NULL};
+  expect_error("a log file name of 1200 characters", longlog, 2, toolong);
+
+  /* Results that cannot be written (stdout on a full disk) are no success: exit 1, and why. */
   const char *full[] = {"rmse pairs.csv --a a --b b --json", "bland-altman pairs.csv --a a --b b", "--help"};
   for (int k = 0; k < 3; ++k) {
     result f = run_to(full[k], "/dev/full");

@@ -132,6 +132,10 @@ def case_run_write(a, tmp):
                            stderr=subprocess.PIPE, text=True, timeout=100)
     check(r.returncode == 1 and "cannot write the summary to stdout: No space left on device" in r.stderr,
           "palp-run >/dev/full exits %d with the reason: %s" % (r.returncode, r.stderr.strip()[-200:]))
+    # a log file that cannot be opened: the system's reason (it said "cannot open it")
+    rc, out = run([a.run, scene_path, "--frames", "3", "--log-file", os.path.join(tmp, "no", "run.log")])
+    check(rc == 2 and "cannot open it: No such file or directory" in out,
+          "palp-run --log-file in a missing directory exits %d with the reason: %s" % (rc, out.strip()[-200:]))
     # and a writable prefix: both files whole (a header and 3 frames), exit 0
     prefix = os.path.join(tmp, "ok")
     rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--out", prefix, "--quiet"])

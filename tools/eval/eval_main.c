@@ -1372,7 +1372,7 @@ int main(int argc, char **argv) {
   }
   palp_log log;
   if (palp_log_init(&log, "palp-eval", o.app.log_level, o.app.log_file) < 0) {
-    fprintf(stderr, "palp-eval: --log-file %s: cannot open it\n", o.app.log_file);
+    fprintf(stderr, "palp-eval: --log-file %s: cannot open it: %s\n", o.app.log_file, strerror(errno));
     return 2;
   }
   o.log = &log; /* every line is flushed as written */

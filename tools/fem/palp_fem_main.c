@@ -22,6 +22,7 @@
  * vertex's feedback (units in the column names), and prints a summary. On a
  * terminal a progress bar with an ETA goes to stderr.
  */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -458,7 +459,7 @@ int main(int argc, char **argv) {
   }
   palp_log log;
   if (palp_log_init(&log, "palp-fem", o.app.log_level, o.app.log_file) < 0) {
-    fprintf(stderr, "palp-fem: --log-file %s: cannot open it\n", o.app.log_file);
+    fprintf(stderr, "palp-fem: --log-file %s: cannot open it: %s\n", o.app.log_file, strerror(errno));
     return 2;
   }
   o.log = &log; /* every line is flushed as written: returning without a close loses nothing */

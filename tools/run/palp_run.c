@@ -263,7 +263,7 @@ int main(int argc, char **argv) {
   if (!scene_path) return usage(), 2;
   palp_log log;
   if (palp_log_init(&log, "palp-run", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-run: --log-file %s: cannot open it\n", ao.log_file);
+    fprintf(stderr, "palp-run: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
     return 2;
   }
   int rc = 0;

@@ -269,6 +269,7 @@ int palp_csv_read(const char *path, char delim, palp_csv *out, char *err, size_t
   }
   char *buf = NULL;
   size_t n = 0, cap = 0;
+  errno = 0;
   for (;;) {
     if (n + 65536 + 1 > cap) {
       size_t nc = cap ? 2 * cap : 65536 + 1;
@@ -286,11 +287,11 @@ int palp_csv_read(const char *path, char delim, palp_csv *out, char *err, size_t
     n += got;
     if (got < 65536) break;
   }
-  int bad = ferror(f);
+  const int bad = ferror(f), why = errno; /* fread's reason (EISDIR for a directory), before fclose */
   fclose(f);
   if (bad) {
     free(buf);
-    msg(err, errlen, "%s: read error", path);
+    msg(err, errlen, "%s: cannot read it: %s", path, strerror(why ? why : EIO));
     return PALP_EIO;
   }
   buf[n] = '\0';

@@ -407,11 +407,24 @@ static int run_anova(const options *o, const palp_csv *csv) {
   }
   for (size_t r = 0; r < nr; ++r)
     if (gid[r] >= 0) values[fill[gid[r]]++] = palp_dec_sub(&dv[r], &dv[groups[gid[r]].first_row]);
+  /* 1e308 and -1e308: each finite, their difference not (the ANOVA refused it, saying only "error -1") */
+  for (size_t r = 0; r < nr; ++r) {
+    if (gid[r] < 0) continue;
+    const size_t f = groups[gid[r]].first_row;
+    if (!isfinite(palp_dec_sub(&dv[r], &dv[f])) || !isfinite(offset[gid[r]])) {
+      const size_t from = isfinite(offset[gid[r]]) ? f : groups[0].first_row;
+      data_error(o->log, "%s:%zu: the value is too large to analyse: its difference from line %zu's value exceeds "
+                 "the largest double (1.8e308)",
+                 o->file, csv->line[isfinite(offset[gid[r]]) ? r : f], csv->line[from]);
+      goto done;
+    }
+  }
 
   palp_stats_anova a;
   int err = palp_stats_anova_offset(values, start, ng, offset, &a);
   if (err < 0) {
-    data_error(o->log, "%s: the ANOVA could not be computed (error %d)", o->file, err);
+    data_error(o->log, "%s: the ANOVA could not be computed: a value or a sum is beyond the largest double "
+               "(error %d)", o->file, err);
     goto done;
   }
   a.grand_mean += origin->value;
@@ -533,6 +546,13 @@ static int read_paired(const options *o, const palp_csv *csv, size_t min_n, cons
       p->d[i] = palp_dec_sub(&da[r], &db[r]);
       p->ab[i] = palp_dec_sub(&da[r], &da[first]);
       p->ab[used + i] = palp_dec_sub(&db[r], &db[first]);
+      /* 1e308 and -1e308: each finite, a - b not (the statistics refused it, saying only "error -1") */
+      if (!isfinite(p->d[i]) || !isfinite(p->ab[i]) || !isfinite(p->ab[used + i])) {
+        data_error(o->log, "%s:%zu: the values are too large to analyse: %s exceeds the largest double (1.8e308)",
+                   o->file, csv->line[r],
+                   !isfinite(p->d[i]) ? "a - b" : "their difference from the first row's");
+        goto done;
+      }
       ++i;
     }
   p->n = used;
@@ -562,7 +582,8 @@ static int run_rmse(const options *o, const palp_csv *csv) {
   double r;
   int err = palp_stats_rmse(p.d, p.zero, p.n, &r);
   if (err < 0) {
-    data_error(o->log, "%s: RMSE could not be computed (error %d)", o->file, err);
+    data_error(o->log, "%s: RMSE could not be computed: a value or a sum is beyond the largest double (error %d)",
+               o->file, err);
     paired_free(&p);
     return EXIT_DATA;
   }
@@ -598,7 +619,8 @@ static int run_bland_altman(const options *o, const palp_csv *csv) {
   if (err == 0) err = palp_stats_anova_offset(p.ab, start, 2, p.off, &an);
   if (err == 0) err = palp_stats_rmse(p.d, p.zero, p.n, &rmse);
   if (err < 0) {
-    data_error(o->log, "%s: the statistics could not be computed (error %d)", o->file, err);
+    data_error(o->log, "%s: the statistics could not be computed: a value or a sum is beyond the largest double "
+               "(error %d)", o->file, err);
     paired_free(&p);
     return EXIT_DATA;
   }
@@ -879,7 +901,7 @@ int main(int argc, char **argv) {
 
   palp_log log;
   if (palp_log_init(&log, "palp-stats", ao.log_level, ao.log_file) < 0)
-    return usage_error("--log-file %s: cannot open it", ao.log_file);
+    return usage_error("--log-file %s: cannot open it: %s", ao.log_file, strerror(errno));
   o.log = &log; /* every line is flushed as written */
   palp_csv csv;
   char err[1024];

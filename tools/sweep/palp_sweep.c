@@ -366,7 +366,7 @@ int main(int argc, char **argv) {
   /* Every line is flushed as it is written, so the early returns below lose nothing. */
   palp_log log;
   if (palp_log_init(&log, "palp-sweep", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-sweep: --log-file %s: cannot open it\n", ao.log_file);
+    fprintf(stderr, "palp-sweep: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
     return 2;
   }
   char installed_scene[1024], derr[512];
