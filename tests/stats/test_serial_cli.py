@@ -27,8 +27,9 @@ Expected values come from the literature or closed forms, never from the code:
   equivalent; the same by units (three units of two rows with means 1, 2, 3);
   --serial on the cosine: SE = SD/sqrt(n_eff), df = n_eff - 1.
 - errors: a subject with one pair, a constant series, no margin, --serial with
-  --unit, --a and --b (or --subject and --a) naming one column: exit status 1 or 2
-  with a message naming the problem.
+  --unit, --a and --b (or --subject and --a) naming one column, an option of another
+  command, a --seed that is not 0..2^64-1: exit status 1 or 2 with a message naming
+  the problem.
 """
 import json
 import math
@@ -201,6 +202,22 @@ def main():
         r = stats(*args)
         check(r.returncode == 2 and r.stdout == "" and "name the same column" in r.stderr,
               tag + ": usage error (%r)" % r.stderr[-300:])
+    # an option of another command: refused naming the command it belongs to (it was dropped unread:
+    # bland-altman --subject gave plain Bland-Altman where the repeated-measures one was meant)
+    for args, opt, owner in ((("bland-altman", "co.csv", "--a", "rv", "--b", "ic", "--subject", "subject"), "--subject", "ba-rm"),
+                             (("rmse", "co.csv", "--a", "rv", "--b", "ic", "--margin", "1"), "--margin", "tost"),
+                             (("anova", "co.csv", "--group", "subject", "--value", "rv", "--alpha", "0.1"), "--alpha", "tost"),
+                             (("bland-altman", "co.csv", "--a", "rv", "--b", "ic", "--level", "0.9"), "--level", "bootstrap"),
+                             (("tost", "co.csv", "--a", "rv", "--b", "ic", "--margin", "1", "--seed", "3"), "--seed", "bootstrap")):
+        r = stats(*args)
+        check(r.returncode == 2 and r.stdout == "" and "%s does not take %s; it belongs to %s" % (args[0], opt, owner) in r.stderr,
+              "%s %s: usage error naming %s (%r)" % (args[0], opt, owner, r.stderr[-300:]))
+    # --seed: digits only, up to 2^64 - 1 (" -5" was 2^64 - 5, a larger one saturated)
+    for seed in (" -5", "-5", "18446744073709551616", "1e3", "0x10"):
+        r = stats("bootstrap", "six.csv", "--value", "x", "--seed", seed)
+        check(r.returncode == 2 and "--seed expects a whole number" in r.stderr, "bootstrap --seed %r: usage error" % seed)
+    r = stats("bootstrap", "six.csv", "--value", "x", "--seed", "18446744073709551615", "--resamples", "100")
+    check(r.returncode == 0, "bootstrap --seed 18446744073709551615 (2^64 - 1) taken (rc %d)" % r.returncode)
     r = stats("bootstrap", "six.csv", "--value", "x", "--block", "7")
     check(r.returncode == 1 and "longer" in r.stderr, "bootstrap: block longer than the series")
 

@@ -32,6 +32,7 @@ typedef struct options {
   long block;          /* bootstrap block length, 0 = the AR(1) rule */
   long resamples;      /* bootstrap resamples, default 10000 */
   unsigned long long seed;
+  int have_seed;       /* --seed given (bootstrap's only) */
   palp_log *log; /* main's: data errors and notes go through it */
 } options;
 

@@ -14,6 +14,7 @@
  */
 #include <ctype.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -740,7 +741,7 @@ static int number_opt(options *o, int argc, char **argv, int *i) {
   else if (!strcmp(s, "--level")) dst = &o->level, lo = 0, hi = 1;
   else if (!strcmp(s, "--block")) ldst = &o->block, lo = 1, hi = 1e9;
   else if (!strcmp(s, "--resamples")) ldst = &o->resamples, lo = 2, hi = 1e7;
-  else if (!strcmp(s, "--seed")) lo = 0, hi = 1.8e19;
+  else if (!strcmp(s, "--seed")) flag = &o->have_seed;
   else return 0;
   if (*i + 1 >= argc) {
     usage_error("%s needs a number", s);
@@ -749,16 +750,20 @@ static int number_opt(options *o, int argc, char **argv, int *i) {
   const char *v = argv[++*i];
   char *end = NULL;
   if (!strcmp(s, "--seed")) {
+    errno = 0;
     unsigned long long x = strtoull(v, &end, 10);
-    if (!*v || *end || v[0] == '-') {
-      usage_error("--seed expects a non-negative integer, got \"%s\"", v);
+    /* digits only: strtoull skips blanks and negates a '-' (" -5" was 2^64 - 5), and
+     * saturates beyond 2^64 - 1 (ERANGE: every larger seed was the same one) */
+    if (!isdigit((unsigned char)v[0]) || *end || errno == ERANGE) {
+      usage_error("--seed expects a whole number from 0 to %llu, got \"%s\"", ULLONG_MAX, v);
       return -1;
     }
     o->seed = x;
+    *flag = 1;
     return 1;
   }
   const double x = strtod(v, &end);
-  if (!*v || *end || !isfinite(x) || (ldst && x != floor(x)) || x < lo || x > hi ||
+  if (!*v || isspace((unsigned char)v[0]) || *end || !isfinite(x) || (ldst && x != floor(x)) || x < lo || x > hi ||
       ((dst == &o->alpha || dst == &o->level) && (x <= lo || x >= hi)) || (dst == &o->margin && !(x > 0))) {
     usage_error("%s expects %s, got \"%s\"", s,
                 dst == &o->alpha  ? "a number in (0, 0.5)"
@@ -866,17 +871,34 @@ int main(int argc, char **argv) {
     o.file = s;
   }
   if (!o.file) return usage_error("%s: no input CSV file given", o.command);
+  /* An option of another command is refused, naming that command: it was dropped unread, and
+   * bland-altman --subject s gave plain Bland-Altman where the repeated-measures one was meant. */
+  const struct {
+    int given;
+    const char *opt, *owner;
+    int ours;
+  } foreign[] = {
+      {o.subject != NULL, "--subject", "ba-rm (repeated-measures Bland-Altman)", is_barm},
+      {o.serial, "--serial", "tost", is_tost},
+      {o.unit != NULL, "--unit", "tost", is_tost},
+      {o.have_margin, "--margin", "tost", is_tost},
+      {o.have_lower, "--lower", "tost", is_tost},
+      {o.have_upper, "--upper", "tost", is_tost},
+      {o.alpha != 0, "--alpha", "tost", is_tost},
+      {o.block != 0, "--block", "bootstrap", is_boot},
+      {o.resamples != 0, "--resamples", "bootstrap", is_boot},
+      {o.level != 0, "--level", "bootstrap", is_boot},
+      {o.have_seed, "--seed", "bootstrap", is_boot},
+  };
+  for (size_t k = 0; k < sizeof foreign / sizeof foreign[0]; ++k)
+    if (foreign[k].given && !foreign[k].ours)
+      return usage_error("%s does not take %s; it belongs to %s", o.command, foreign[k].opt, foreign[k].owner);
   if (is_serial) {
     if (o.group || o.svg) return usage_error("%s takes --value or --a/--b, not --group/--svg", o.command);
     if (o.value && (o.a || o.b)) return usage_error("%s: give --value COL or --a COL --b COL, not both", o.command);
     if (!o.value && (!o.a || !o.b))
       return usage_error("%s needs --value COL (a series, e.g. differences) or --a COL --b COL (their difference)",
                          o.command);
-    if (!is_tost && (o.have_margin || o.have_lower || o.have_upper || o.alpha || o.serial || o.unit))
-      return usage_error("--margin, --lower, --upper, --alpha, --serial and --unit belong to tost");
-    if (!is_boot && (o.block || o.resamples || o.level))
-      return usage_error("--block, --resamples and --level belong to bootstrap");
-    if (!is_barm && o.subject) return usage_error("--subject belongs to ba-rm");
     if (is_barm && !o.subject) return usage_error("ba-rm needs --subject COL (the column naming each row's subject)");
     if (is_tost) {
       if (o.have_margin == (o.have_lower || o.have_upper))
