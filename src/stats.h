@@ -139,6 +139,11 @@ static inline double palp_stats_sum_value(const palp_stats_sum *acc) { return ac
  * then ssd = sum (x - mean)^2. n >= 1; ssd = 0 for n = 1. */
 void palp_stats_mean_ssd(const double *x, size_t n, double *mean, double *ssd);
 
+/* Quantile q in [0, 1] of s[0..n), n >= 1, sorted ascending: linear interpolation
+ * between order statistics (Hyndman & Fan's type 7, the default of R and NumPy; the
+ * bootstrap's percentile interval). Nondecreasing in q: a median never above a p99. */
+double palp_stats_quantile_sorted(const double *s, size_t n, double q);
+
 /* ---- serially correlated data: effective size, block bootstrap, TOST, ------- */
 /* ---- repeated-measures agreement (src/stats_serial.c) ------------------------ */
 /* The paper's statistics treat every vertex-frame as an independent observation;

@@ -78,9 +78,7 @@ static int cmp_double(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-/* Quantile of sorted data by linear interpolation between order statistics
- * (Hyndman & Fan's type 7, the default of R and NumPy). */
-static double quantile_sorted(const double *s, size_t n, double q) {
+double palp_stats_quantile_sorted(const double *s, size_t n, double q) {
   double h = q * (double)(n - 1);
   size_t lo = (size_t)floor(h);
   if (lo + 1 >= n) return s[n - 1];
@@ -111,8 +109,8 @@ int palp_stats_block_bootstrap_mean(const double *x, size_t n, size_t block, siz
   palp_stats_mean_ssd(work, resamples, &m, &ssd);
   o.se = sqrt(ssd / (double)(resamples - 1));
   qsort(work, resamples, sizeof *work, cmp_double);
-  o.ci_lower = quantile_sorted(work, resamples, 0.5 * (1.0 - level));
-  o.ci_upper = quantile_sorted(work, resamples, 0.5 * (1.0 + level));
+  o.ci_lower = palp_stats_quantile_sorted(work, resamples, 0.5 * (1.0 - level));
+  o.ci_upper = palp_stats_quantile_sorted(work, resamples, 0.5 * (1.0 + level));
   o.level = level;
   o.block = block;
   o.blocks = nblocks;

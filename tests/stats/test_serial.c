@@ -1,6 +1,6 @@
 /*
- * test_serial.c - lag-1 autocorrelation, AR(1) effective sample size, block
- * length rule, moving-block bootstrap, TOST and repeated-measures Bland-Altman
+ * test_serial.c - type-7 quantile, lag-1 autocorrelation, AR(1) effective sample size,
+ * block length rule, moving-block bootstrap, TOST and repeated-measures Bland-Altman
  * (src/stats_serial.c). Every expected value is worked by hand in the comment
  * beside it (closed forms of Student's t for 1 and 2 degrees of freedom, Kuensch's
  * exact bootstrap variance), never taken from the code under test.
@@ -190,8 +190,21 @@ static void test_ba_rm(void) {
   check("ba_rm 1 subject -> EINVAL", palp_stats_bland_altman_rm(d3, s3, 1, &r) == PALP_EINVAL);
 }
 
+/* Type 7: h = q (n - 1), x[floor h] + (h - floor h)(x[floor h + 1] - x[floor h]), by hand. */
+static void test_quantile(void) {
+  const double two[2] = {10.0, 20.0}, five[5] = {1.0, 2.0, 4.0, 8.0, 16.0}, one[1] = {3.0};
+  near("quantile n 2, q 0.5 = 15", palp_stats_quantile_sorted(two, 2, 0.5), 15.0, 1e-12);
+  near("quantile n 2, q 0.99 = 19.9", palp_stats_quantile_sorted(two, 2, 0.99), 19.9, 1e-12);
+  near("quantile n 5, q 0.5 = x[2] = 4", palp_stats_quantile_sorted(five, 5, 0.5), 4.0, 0.0);
+  near("quantile n 5, q 0.99: h 3.96, 8 + 0.96 * 8 = 15.68", palp_stats_quantile_sorted(five, 5, 0.99), 15.68, 1e-12);
+  near("quantile q 0 = min", palp_stats_quantile_sorted(five, 5, 0.0), 1.0, 0.0);
+  near("quantile q 1 = max", palp_stats_quantile_sorted(five, 5, 1.0), 16.0, 0.0);
+  near("quantile n 1 = the value", palp_stats_quantile_sorted(one, 1, 0.99), 3.0, 0.0);
+}
+
 int main(void) {
   (void)slurp; /* harness.h also serves the tool tests */
+  test_quantile();
   test_autocorr();
   test_bootstrap();
   test_tost();

@@ -92,6 +92,17 @@ def case_run_reservoir(a, tmp):
         med, p99 = float(m.group(1)), float(m.group(2))
         check(math.isfinite(med) and math.isfinite(p99) and 0 < med <= p99,
               "step median %g us, p99 %g us: finite, 0 < median <= p99" % (med, p99))
+    # 2 steps (2 frames of one step): st[n/2] and st[floor(0.99 (n - 1))] made the median the slower
+    # step and the p99 the faster one. Type 7 (palp-stats' rule): median the mean of the two,
+    # p99 = fast + 0.99 (slow - fast), never below it. Five runs: any one inverted is the fault.
+    s, path = scene(a.config, tmp, "two.json", dt_s=0.001, frames=2, frame_period_s=0.001)
+    s["mesh"]["vertex_count"] = 19
+    write(s, path)
+    for k in range(5):
+        rc, out = run([a.run, path, "--quiet"])
+        m = re.search(r"step median ([0-9.eE+-]+|nan|inf) us, p99 ([0-9.eE+-]+|nan|inf) us", out)
+        med, p99 = (float(m.group(1)), float(m.group(2))) if m else (float("nan"), float("nan"))
+        check(rc == 0 and 0 < med <= p99, "palp-run of 2 steps, run %d: median %g us <= p99 %g us" % (k + 1, med, p99))
 
 
 def case_run_dt(a, tmp):
