@@ -1463,7 +1463,7 @@ int main(int argc, char **argv) {
   }
   static palp_log log; /* static: Cyclone's threads may log through it until the process ends */
   if (palp_log_init(&log, "palp-client", o.app.log_level, o.app.log_file) < 0) {
-    fprintf(stderr, "palp-client: --log-file %s: cannot open it\n", o.app.log_file);
+    fprintf(stderr, "palp-client: --log-file %s: cannot open it: %s\n", o.app.log_file, strerror(errno));
     return 2;
   }
   o.log = &log; /* every line is flushed as written */

@@ -9,6 +9,7 @@
  * on read-only media, or live. annotate, delete, prune and migrate write, and upgrade an older file. */
 #include <limits.h>
 #include <math.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -565,7 +566,7 @@ int main(int argc, char **argv) {
   }
   palp_log log;
   if (palp_log_init(&log, "palp-review", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-review: --log-file %s: cannot open it\n", ao.log_file);
+    fprintf(stderr, "palp-review: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
     return REVIEW_ERROR;
   }
   if (!strcmp(cmd, "migrate")) return cmd_migrate(&log, path, argc - i);

@@ -23,6 +23,7 @@
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1748,7 +1749,7 @@ int main(int argc, char **argv) {
   }
   static palp_log plog; /* static: Cyclone's threads may log through it until the process ends */
   if (palp_log_init(&plog, "palp-recorder", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-recorder: --log-file %s: cannot open it\n", ao.log_file);
+    fprintf(stderr, "palp-recorder: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
     return 2;
   }
   /* Secured, the recorder needs an identity that reads every session: an

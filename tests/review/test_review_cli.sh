@@ -444,5 +444,10 @@ gone=$(python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execut
 [ "$gone" = 0 ] && [ "${free_before:-0}" -gt 0 ] && [ "$free_after" = 0 ] &&
   ok "its writer gone, the running session is deleted; the pages freed beside the writer are given back (free pages $free_before -> $free_after)" ||
   bad "after the writer died: live-1 rows $gone, free pages $free_before -> $free_after"
+# a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
+"$review" --log-file /nonexistent/dir/r.log --db "$db" list > "$dir/logfile.txt" 2>&1
+rc=$?
+[ $rc -ne 0 ] && grep -q -- "--log-file /nonexistent/dir/r.log: cannot open it: No such file or directory" "$dir/logfile.txt" &&
+  ok "a log file it cannot open: exit $rc, the reason said" || bad "a log file it cannot open: exit $rc: $(cat "$dir/logfile.txt")"
 [ $fail -eq 0 ] && echo "passed" || echo "FAILED"
 exit $fail

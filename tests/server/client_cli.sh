@@ -28,5 +28,8 @@ expect 1 "--profile" --role trainee --phantom 1 --profile square --domain 108
 expect 1 "needs a terminal" --role trainee --phantom 1 --input keyboard --domain 108
 expect 1 "cannot open" --role trainee --phantom 1 --input replay:/nonexistent.csv --domain 108
 expect 1 "device driver" --role trainee --phantom 1 --input device:/nonexistent.so --domain 108
+# a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
+expect 2 "--log-file /nonexistent/dir/c.log: cannot open it: No such file or directory" --role trainee --phantom 1 \
+  --log-file /nonexistent/dir/c.log --domain 108
 expect 1 "no answer from palp-server" --role trainee --phantom 1 --domain 108 --timeout 0.5
 exit $fail
