@@ -590,58 +590,72 @@ static const char *findings_ui_coverage(const findings_ui *u, char *buf, size_t 
   return buf;
 }
 
-static void findings_ui_start(findings_ui *u, const opts *o, palp_cli_station *st, const palp_cli_input *in,
-                              const palp_Phantom *ph, double tip_radius, double physics_hz) {
+/* How long the station looks for the joined phantom's exercise (transient-local, one per phantom):
+ * none by then, the phantom runs none. */
+#define EXERCISE_WAIT_S 1.0
+
+static void findings_ui_start(findings_ui *u) {
   memset(u, 0, sizeof *u);
-  palp_Exercise ex;
-  if (palp_cli_station_exercise(st, st->phantom_id, 1.0, &ex) == 1) {
-    u->exercise = 1;
-    u->time_limit = ex.time_limit;
-    /* the device's display names the band a press is in, as the assessment grades it */
-    palp_band band[PALP_BAND_COUNT];
-    const int banded = palp_dds_exercise_bands(&ex, band);
-    if (in->bands && banded) in->bands(in->ctx, band);
-    /* ... and the trainee is told how much of the dome was covered in each band */
-    const uint32_t nv = ph->rest._length;
-    double *rest = banded && nv ? malloc(sizeof *rest * 3 * nv) : NULL;
-    if (rest) {
-      for (uint32_t i = 0; i < nv; i++)
-        rest[3 * i] = ph->rest._buffer[i].x, rest[3 * i + 1] = ph->rest._buffer[i].y, rest[3 * i + 2] = ph->rest._buffer[i].z;
-      int rc;
-      u->cov = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
-                                    ph->dome_triangle_count, &rc);
-      if (u->cov && st->finger_sample_r > 0)
-        u->touched = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
-                                          ph->dome_triangle_count, &rc);
-      free(rest);
-      memcpy(u->band, band, sizeof u->band);
-      u->dome_radius = ph->radius;
-      u->tip_radius = tip_radius;
-      u->sample_every = palp_assess_sample_every(physics_hz, PALP_ASSESS_SAMPLE_HZ);
-      u->physics_hz = physics_hz;
-    }
-    if (!o->quiet) {
-      tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
-                 "device's button (keyboard: m), withdraw the last mark with u\n",
-                 o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
-      /* The pressure levels the exercise grades by, in its own terms: the fingertip's depth below
-       * the undeformed skin (the finger keyboard's status line shows it) and/or the force. */
-      char lv[256] = "";
-      size_t n = 0;
-      for (int b = 0; b < 3 && n < sizeof lv; b++) {
-        const palp_PressureBand *B = &ex.bands[b];
-        n += (size_t)snprintf(lv + n, sizeof lv - n, "%s%s", b ? ", " : "", palp_band_name(b));
-        if (B->has_depth && n < sizeof lv)
-          n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g mm deep", B->depth_min * 1e3, B->depth_max * 1e3);
-        if (B->has_force && n < sizeof lv)
-          n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g N", B->force_min, B->force_max);
-      }
-      tprintf(o, "[trainee %s] pressure levels graded (the fingertip below the undeformed skin): %s\n", o->name, lv);
-    }
-  }
   u->next_time_print = palp_dds_now_ns() + (int64_t)30e9;
   u->shown_ok = -1;
+}
+
+/* The joined phantom's exercise, looked for by the haptic loop's main thread once a turn until it is
+ * found or EXERCISE_WAIT_S passed since t0 [ns]: 1 found and told (decided), 0 none yet, -1 none
+ * (decided). Looked for in the loop, not before it: the haptic thread reads the device and sends its
+ * contact samples from its start, and only this loop feeds it the server's local models. Waiting
+ * here first (up to 1 s on every phantom without an exercise) let the server deform the phantom
+ * under the finger while the device rendered 0 N, the force fading in a second late (session 77). */
+static int findings_ui_exercise(findings_ui *u, const opts *o, palp_cli_station *st, const palp_cli_input *in,
+                                const palp_Phantom *ph, double tip_radius, double physics_hz, int64_t t0) {
+  palp_Exercise ex;
+  if (palp_cli_station_exercise(st, st->phantom_id, 0, &ex) != 1)
+    return palp_dds_now_ns() - t0 >= (int64_t)(EXERCISE_WAIT_S * 1e9) ? -1 : 0;
+  u->exercise = 1;
+  u->time_limit = ex.time_limit;
+  /* the device's display names the band a press is in, as the assessment grades it */
+  palp_band band[PALP_BAND_COUNT];
+  const int banded = palp_dds_exercise_bands(&ex, band);
+  if (in->bands && banded) in->bands(in->ctx, band);
+  /* ... and the trainee is told how much of the dome was covered in each band */
+  const uint32_t nv = ph->rest._length;
+  double *rest = banded && nv ? malloc(sizeof *rest * 3 * nv) : NULL;
+  if (rest) {
+    for (uint32_t i = 0; i < nv; i++)
+      rest[3 * i] = ph->rest._buffer[i].x, rest[3 * i + 1] = ph->rest._buffer[i].y, rest[3 * i + 2] = ph->rest._buffer[i].z;
+    int rc;
+    u->cov = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
+                                  ph->dome_triangle_count, &rc);
+    if (u->cov && st->finger_sample_r > 0)
+      u->touched = palp_coverage_create(rest, (int)nv, ph->triangles._buffer, (int)(ph->triangles._length / 3),
+                                        ph->dome_triangle_count, &rc);
+    free(rest);
+    memcpy(u->band, band, sizeof u->band);
+    u->dome_radius = ph->radius;
+    u->tip_radius = tip_radius;
+    u->sample_every = palp_assess_sample_every(physics_hz, PALP_ASSESS_SAMPLE_HZ);
+    u->physics_hz = physics_hz;
+  }
+  if (!o->quiet) {
+    tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "
+               "device's button (keyboard: m), withdraw the last mark with u\n",
+               o->name, ex.name, ex.title, o->name, ex.instructions, o->name, ex.time_limit);
+    /* The pressure levels the exercise grades by, in its own terms: the fingertip's depth below
+     * the undeformed skin (the finger keyboard's status line shows it) and/or the force. */
+    char lv[256] = "";
+    size_t n = 0;
+    for (int b = 0; b < 3 && n < sizeof lv; b++) {
+      const palp_PressureBand *B = &ex.bands[b];
+      n += (size_t)snprintf(lv + n, sizeof lv - n, "%s%s", b ? ", " : "", palp_band_name(b));
+      if (B->has_depth && n < sizeof lv)
+        n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g mm deep", B->depth_min * 1e3, B->depth_max * 1e3);
+      if (B->has_force && n < sizeof lv)
+        n += (size_t)snprintf(lv + n, sizeof lv - n, " %g-%g N", B->force_min, B->force_max);
+    }
+    tprintf(o, "[trainee %s] pressure levels graded (the fingertip below the undeformed skin): %s\n", o->name, lv);
+  }
   fflush(stdout);
+  return 1;
 }
 
 static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st, int button,
@@ -894,8 +908,8 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   d.duration = o->duration;
   d.timer_floor = 1; /* the late ticks are printed beside this machine's own floor */
   findings_ui fu;
-  memset(&fu, 0, sizeof fu);
-  d.on_model = findings_ui_model; /* fu's coverage: NULL until findings_ui_start makes it */
+  findings_ui_start(&fu);
+  d.on_model = findings_ui_model; /* fu's coverage: NULL until findings_ui_exercise makes it */
   d.on_model_ctx = &fu;
   FILE *trace = NULL;
   if (o->trace_csv) {
@@ -934,7 +948,6 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
                (int)palp_cli_contact_every(d.rate_hz, d.physics_rate_hz), hl->core.renderer.def.max_force);
   fflush(stdout);
-  findings_ui_start(&fu, o, st, &in, ph, hl->def.radius, d.physics_rate_hz);
   feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns(), .max_force = hl->core.renderer.def.max_force};
   latency lat = {0};
   uint64_t bad = 0, models = 0;
@@ -952,9 +965,13 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   int oor_why = 0; /* the limits met in this episode (valid_range_why) */
   char why_text[320];
   char reason[128] = "";
+  int exercise_decided = 0;
   while (!g_stop && !palp_cli_haptic_done(hl)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
     tick_refusals(o);
+    /* before the models are fed: those of the turn the exercise is found count in its coverage */
+    if (!exercise_decided)
+      exercise_decided = findings_ui_exercise(&fu, o, st, &in, ph, hl->def.radius, d.physics_rate_hz, t0) != 0;
     double lat_us;
     int n = palp_cli_haptic_feed(hl, st->local_model_r, &bad, &lat_us);
     findings_ui_samples(&fu, st, hl->def.finger);

@@ -462,11 +462,12 @@ static void station_alive(palp_cli_station *st, int64_t now) {
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out) {
   const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
   for (;;) {
-    /* A trainee station spends its first second after a join here when the phantom has no
-     * exercise, before its loop's first palp_cli_station_session_closed: a stop meanwhile is a
-     * stall like one in the loop (counted, and the server's lapsed lease after it waited for),
-     * and the loop's clock goes on from here (test haptic_station_stalled, which once stopped
-     * the station 1.0 s after its join, inside this wait: it blamed the server). */
+    /* A caller that waits here (a timeout > 0) before its loop's first
+     * palp_cli_station_session_closed keeps the loop's clock: a stop meanwhile is a stall like
+     * one in the loop (counted, and the server's lapsed lease after it waited for). Until
+     * 2026-12-06 a trainee station spent its first second after a join here on a phantom without
+     * an exercise (test haptic_station_stalled once stopped it inside this wait: it blamed the
+     * server); its haptic loop now looks once a turn, timeout 0 (client/main.c). */
     const int64_t now = palp_dds_now_ns();
     station_alive(st, now);
     palp_Exercise e;
