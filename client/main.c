@@ -1579,18 +1579,22 @@ int main(int argc, char **argv) {
                      .timeout = o.timeout};
   int rc = 1;
   if (!trainee && o.trainee && !o.session) {
-    /* Find the trainee's open session in the (transient-local) session states. */
+    /* Find the trainee's open session in the (transient-local) session states: each state once, as it
+     * comes (the samples not read yet, 8 at a time, until none is left). A plain read of 8 returned
+     * the same first 8 states on every pass: a trainee past the 8th session on the domain was never
+     * found (session 77; a server holds up to max_sessions open, its closed ones for a while). */
     int64_t end = palp_dds_now_ns() + (int64_t)(o.timeout * 1e9);
     while (!j.session_id && palp_dds_now_ns() < end && !g_stop) {
       palp_SessionState buf[8];
       void *ptr[8];
       dds_sample_info_t info[8];
       for (int i = 0; i < 8; i++) ptr[i] = &buf[i];
-      int n = dds_read(st.state_r, ptr, info, 8, 8);
-      for (int i = 0; i < n; i++)
-        if (info[i].valid_data && buf[i].phase == palp_PHASE_OPEN && !strcmp(buf[i].trainee_name, o.trainee) &&
-            (!o.phantom || buf[i].phantom_id == o.phantom))
-          j.session_id = buf[i].session_id;
+      int n;
+      while (!j.session_id && (n = dds_read_mask(st.state_r, ptr, info, 8, 8, DDS_NOT_READ_SAMPLE_STATE)) > 0)
+        for (int i = 0; i < n; i++)
+          if (info[i].valid_data && buf[i].phase == palp_PHASE_OPEN && !strcmp(buf[i].trainee_name, o.trainee) &&
+              (!o.phantom || buf[i].phantom_id == o.phantom))
+            j.session_id = buf[i].session_id;
       if (!j.session_id) {
         struct timespec ts = {0, 100000000};
         nanosleep(&ts, NULL);

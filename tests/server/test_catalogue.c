@@ -67,6 +67,29 @@ int main(void) {
   }
   palp_Phantom none;
   CHECK(palp_cli_station_catalogue(&st, 99, 0.5, &none, err, sizeof err) < 0, "phantom 99 is not hosted: %s", err);
+  /* Nine more servers' identities on the domain besides the harness server's, written in order: --server NAME
+   * must find the last, past any first 8 (the station read 8 at a time, the same first 8 on every pass, and
+   * never found a ninth server: session 77). Numbers no real server here has. */
+  const dds_entity_t fp = dds_create_participant(DOMAIN, NULL, NULL);
+  const dds_entity_t fw = palp_dds_create_writer(fp, palp_dds_create_topic(fp, PALP_TOPIC_SERVER_IDENTITY),
+                                                 PALP_TOPIC_SERVER_IDENTITY);
+  REQUIRE(fp > 0 && fw > 0, "a peer writes server identities");
+  for (int k = 1; k <= 9; k++) {
+    palp_ServerIdentity id;
+    memset(&id, 0, sizeof id);
+    snprintf(id.server_name, sizeof id.server_name, "room-%d", k);
+    id.server_number = 4000 + (uint32_t)k;
+    snprintf(id.instance, sizeof id.instance, "test/%d", k);
+    id.started_unix_ns = k;
+    dds_write(fw, &id);
+  }
+  uint32_t number = 0;
+  int rc = palp_cli_station_server_number(&st, "room-9", 5.0, &number, err, sizeof err);
+  CHECK(rc == 0 && number == 4009, "--server room-9, the tenth identity on the domain, is server %u (want 4009) %s",
+        number, rc ? err : "");
+  rc = palp_cli_station_server_number(&st, "room-1", 5.0, &number, err, sizeof err);
+  CHECK(rc == 0 && number == 4001, "--server room-1 is server %u (want 4001) %s", number, rc ? err : "");
+  dds_delete(fp);
   palp_cli_station_close(&st);
   test_server_stop(&ts);
   fprintf(stderr, "%d failure(s)\n", palp_test_failures);
