@@ -394,6 +394,14 @@ typedef struct feedback_ctx {
   double plot[PLOT_BINS];
   int plot_bins;
   double max_force; /* [N] the station's safe force, for a driver's feedback() */
+  /* A driver's feedback() is called as samples come; without one for stale_time [s] its force fades
+   * to 0 N over fade_time [s], the haptic thread's rule for its models (a server gone or stopped must
+   * not leave its last force on the hand: it stayed there until the station closed, or for good while
+   * a stopped server's lease held). given: each finger's force from the newest sample [N]; scale: the
+   * share of it the driver has now (1, fading, 0). */
+  palp_vec3 given[PALP_CLI_MAX_FINGERS];
+  double scale, stale_time, fade_time;
+  int64_t last_rx_ns;
 } feedback_ctx;
 
 /* Takes every feedback sample; latency from the echoed contact stamp. */
@@ -429,6 +437,9 @@ static void drain_feedback(feedback_ctx *c) {
           palp_vec3 safe;
           palp_cli_device_force((palp_vec3){ff->force.x, ff->force.y, ff->force.z}, c->max_force, &safe);
           c->in->feedback(c->in->ctx, ff->finger, safe);
+          c->given[ff->finger] = safe;
+          c->scale = 1;
+          c->last_rx_ns = rx;
         }
         if (c->csv)
           fprintf(c->csv, "%.6f,%llu,%.6f,%u,%d,%.6g,%.6g,%.6g,%.6g,%.1f\n", (double)(rx - c->t0) * 1e-9,
@@ -437,6 +448,21 @@ static void drain_feedback(feedback_ctx *c) {
       }
     }
     dds_return_loan(c->st->feedback_r, ptr, 1);
+  }
+}
+
+/* The driver's force faded after stale_time without a sample, 0 N after fade_time more (feedback_ctx);
+ * now_ns < 0: 0 N at once (the station stops: the driver is not left holding a force). */
+static void fade_feedback(feedback_ctx *c, int64_t now_ns) {
+  if (!c->in->feedback || c->scale <= 0) return;
+  const double age = (double)(now_ns - c->last_rx_ns) * 1e-9;
+  if (now_ns >= 0 && age <= c->stale_time) return;
+  const double s = now_ns < 0 || age >= c->stale_time + c->fade_time ? 0 : 1 - (age - c->stale_time) / c->fade_time;
+  if (s >= c->scale) return;
+  c->scale = s;
+  for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++) {
+    const palp_vec3 g = c->given[f];
+    if (g.x != 0 || g.y != 0 || g.z != 0) c->in->feedback(c->in->ctx, f, (palp_vec3){g.x * s, g.y * s, g.z * s});
   }
 }
 
@@ -1153,8 +1179,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
   int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
   uint64_t sent = 0;
+  const palp_haptic_def render = palp_cli_haptic_default_def().render;
   feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0,
-                     .max_force = o->max_force > 0 ? o->max_force : palp_cli_haptic_default_def().render.max_force};
+                     .max_force = o->max_force > 0 ? o->max_force : render.max_force,
+                     .stale_time = render.stale_time, .fade_time = render.fade_time};
   /* Feedback is taken as it arrives (waitset) so its receive time is exact. */
   dds_entity_t ws = dds_create_waitset(st->pp);
   dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
@@ -1226,6 +1254,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       }
     }
     drain_feedback(&fx);
+    fade_feedback(&fx, palp_dds_now_ns());
     if (o->print_period > 0 && !o->quiet && now >= next_print) {
       tprintf(o, "[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, t,
                  down[0] ? "pressing" : "lifted  ", fx.last, -fx.last_top * 1e3);
@@ -1272,6 +1301,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     for (int64_t w; !g_stop && (w = next - palp_dds_now_ns()) > 0;) {
       dds_waitset_wait(ws, NULL, 0, w);
       drain_feedback(&fx);
+      fade_feedback(&fx, palp_dds_now_ns());
     }
   }
   if (fb_cond > 0) dds_delete(fb_cond);
@@ -1280,6 +1310,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   for (int rep = 0; rep < 3 && !closed; rep++)
     for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++)
       if (seq[f]) send_release(st, f, &seq[f]);
+  fade_feedback(&fx, -1); /* the device let go before it is closed */
   if (in.close) in.close(in.ctx);
   if (fb_csv) fclose(fb_csv);
   if (ct_csv) fclose(ct_csv);
