@@ -1458,7 +1458,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     }
     if (show_map && last.valid && now >= next_map) {
       if (o->color && isatty(STDOUT_FILENO)) fputs("\033[H\033[2J", stdout);
-      printf("session %u, phantom %u \"%s\"\n", st->session_id, ph->phantom_id, ph->name);
+      tprintf(o, "session %u, phantom %u \"%s\"\n", st->session_id, ph->phantom_id, ph->name);
       palp_cli_view_render(&view, &last.d, stdout, o->color);
       fflush(stdout);
       next_map = now + (int64_t)(o->map_every * 1e9);
@@ -1488,11 +1488,11 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     if (palp_cli_view_svg(ph, &peak.d, title, o->svg) < 0)
       palp_log_error(o->log, "cannot write %s", o->svg);
   }
-  printf("[%s] session %u: %llu deformation frames, %llu contact samples seen, %llu feedback samples, peak "
-         "displacement %.2f mm%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
-         (unsigned long long)contacts, (unsigned long long)feedbacks, peak_disp * 1e3,
-         o->svg && peak.valid ? ", snapshot " : "", o->svg && peak.valid ? o->svg : "",
-         closed ? "; session closed: " : "", closed ? reason : "");
+  tprintf(o, "[%s] session %u: %llu deformation frames, %llu contact samples seen, %llu feedback samples, peak "
+             "displacement %.2f mm%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
+          (unsigned long long)contacts, (unsigned long long)feedbacks, peak_disp * 1e3,
+          o->svg && peak.valid ? ", snapshot " : "", o->svg && peak.valid ? o->svg : "",
+          closed ? "; session closed: " : "", closed ? reason : "");
   if (show_map) palp_cli_view_free(&view);
   free(last.pos);
   free(peak.pos);
@@ -1653,8 +1653,8 @@ int main(int argc, char **argv) {
     return 1;
   }
   if (!o.quiet)
-    printf("[%s %s] joined session %u on phantom %u \"%s\" (%u vertices, %.0f Hz), partition %s\n", o.role, o.name,
-           st.session_id, ph.phantom_id, ph.name, ph.rest._length, st.tick_rate_hz, st.partition);
+    tprintf(&o, "[%s %s] joined session %u on phantom %u \"%s\" (%u vertices, %.0f Hz), partition %s\n", o.role,
+            o.name, st.session_id, ph.phantom_id, ph.name, ph.rest._length, st.tick_rate_hz, st.partition);
   fflush(stdout);
   rc = trainee ? run_trainee(&o, &st, &ph, in) : run_viewer(&o, &st, &ph, observer);
   palp_cli_station_leave(&st);

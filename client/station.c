@@ -4,6 +4,7 @@
 #include "input.h" /* PALP_CLI_MAX_FINGERS, PALP_CLI_PHYSICS_RATE_* */
 
 #include "palp_assess.h" /* palp_metric_to_work_on: the words her page uses too */
+#include "palp_log.h"    /* PALP_PRINTABLE_LONG */
 
 #include <stdarg.h>
 #include <stddef.h>
@@ -345,7 +346,9 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     /* A viewer may start before the trainee it follows: ask again until the timeout. */
     int retry = j->role != palp_ROLE_TRAINEE && strncmp(r.reason, "no open session", 15) == 0;
     if (!retry || palp_dds_now_ns() + DDS_MSECS(250) >= end)
-      return fail(err, errlen, PALP_EINVAL, "join rejected: %s", r.reason);
+      /* the server's words, escaped as the log escapes a peer's fields: a forged reply's escape
+       * sequence must not reach the terminal the error is written to */
+      return fail(err, errlen, PALP_EINVAL, "join rejected: %s", PALP_PRINTABLE_LONG(r.reason));
     nap(0.25);
   }
   /* The server's physics rate paces the contact samples and the haptic thread's horizon:

@@ -37,5 +37,9 @@ for k in 9 10 1; do
     echo "FAIL --trainee t$k (session '$sid'): exit $rc: $out"; fail=1
   fi
 done
+# gone before the next test on this domain starts (server_station_text: its catalogue must be the only one)
+for p in $tpids; do kill $p; wait $p; done
+kill $spid; wait $spid
+tpids= spid=
 [ $fail -eq 0 ] || { for k in 1 2 3 4 5 6 7 8 9 10; do cat "$tmp/t$k.log"; done; tail -20 "$tmp/server.log"; }
 exit $fail
