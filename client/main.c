@@ -541,7 +541,19 @@ typedef struct findings_ui {
   uint64_t samples, samples_bad, samples_lost, last_sample_frame;
   uint64_t sample_step; /* the steps between two samples, the least seen (the server's assess_sample_hz) */
   int last_sample_contact;
+  int64_t join_asked_ns; /* the session opened after this [ns]: its frames are bounded by it (findings_ui_frame_max) */
 } findings_ui;
+
+/* The newest frame the session's server can have stepped by now: its physics rate since the JOIN was
+ * sent (the session opened after it; its ticker drops the slots it is late for rather than burst), a
+ * second and 1% over for the clocks. A local model or finger sample past it was written by another
+ * writer in the session's partition (an unsecured classroom), and is refused without moving the
+ * marks: one sample of frame 2^64 - 1 made every later genuine one "older", and the coverage stopped
+ * for the rest of the session; a model's jump inflated the steps counted lost (session 77). */
+static uint64_t findings_ui_frame_max(const findings_ui *u) {
+  const double s = (double)(palp_dds_now_ns() - u->join_asked_ns) * 1e-9 + 1.0;
+  return (uint64_t)(s * u->physics_hz * 1.01) + 1;
+}
 
 /* One local model (the haptic loop's on_model, the main thread): its contact into the coverage,
  * if its step is one the assessment samples: the station, palp-web and the review then count the
@@ -549,7 +561,7 @@ typedef struct findings_ui {
  * the touched ones: 0-1.1 points of the dome in the tests, docs/web.md). */
 static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t frame) {
   findings_ui *u = ctx;
-  if (!u->cov) return;
+  if (!u->cov || frame > findings_ui_frame_max(u)) return;
   /* The server publishes a model every step while the finger is down: a gap between two models
    * in contact is models lost on the way (best-effort) or overwritten in the reader's history
    * (PALP_CLI_MODEL_DEPTH) before this thread took them; a gap with a lifted finger at either
@@ -567,18 +579,20 @@ static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t fra
 }
 
 /* The server's finger samples of this station's finger (palp_finger_sample), each checked: its
- * session and finger, finite numbers, a frame after the last one's; each in contact marked at the
- * band the exercise grades, from the fingertip's depth as the review measures it (the sample's own
- * radius), on the triangles it names (src/assess.c's footprint). */
+ * session and finger, finite numbers, a frame after the last one's and not past the server's clock
+ * (findings_ui_frame_max); each in contact marked at the band the exercise grades, from the
+ * fingertip's depth as the review measures it (the sample's own radius), on the triangles it names
+ * (src/assess.c's footprint). */
 static void findings_ui_samples(findings_ui *u, const palp_cli_station *st, int finger) {
   if (!u->touched || st->finger_sample_r <= 0) return;
+  const uint64_t frame_max = findings_ui_frame_max(u);
   for (;;) {
     void *ptr[1] = {NULL};
     dds_sample_info_t info;
     if (dds_take(st->finger_sample_r, ptr, &info, 1, 1) <= 0) break;
     const palp_FingerSample *w = ptr[0];
     if (info.valid_data && w->session_id == st->session_id && w->finger == (uint8_t)finger) {
-      if (!palp_dds_finger_sample_ok(w, -1) || w->frame <= u->last_sample_frame) {
+      if (!palp_dds_finger_sample_ok(w, -1) || w->frame <= u->last_sample_frame || w->frame > frame_max) {
         u->samples_bad++;
       } else {
         /* consecutive samples are the server's sampling step apart (the least seen: its config's
@@ -661,6 +675,7 @@ static int findings_ui_exercise(findings_ui *u, const opts *o, palp_cli_station 
     u->tip_radius = tip_radius;
     u->sample_every = palp_assess_sample_every(physics_hz, PALP_ASSESS_SAMPLE_HZ);
     u->physics_hz = physics_hz;
+    u->join_asked_ns = st->join_asked_ns;
   }
   if (!o->quiet) {
     tprintf(o, "[trainee %s] exercise \"%s\": %s\n[trainee %s] %s\n[trainee %s] time limit %.0f s; mark a lump with the "

@@ -333,7 +333,9 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   int64_t end = palp_dds_now_ns() + (int64_t)(j->timeout * 1e9);
   palp_SessionReply r;
   memset(&r, 0, sizeof r);
+  int64_t asked = 0;
   for (;;) {
+    asked = palp_dds_now_ns();
     if (send_request(st, j, palp_OP_JOIN, NULL) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
     int got = await_reply(st, end, &r);
     if (got == 1) break;
@@ -360,6 +362,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->session_id = r.session_id;
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;
+  st->join_asked_ns = asked;
   st->has_last_join = 1;
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->closed_seen = 0;

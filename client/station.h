@@ -43,6 +43,7 @@ typedef struct palp_cli_station {
   uint32_t phantom_id;
   char partition[64];
   double tick_rate_hz;
+  int64_t join_asked_ns; /* when the accepted JOIN was sent (palp_dds_now_ns): the session opened after it */
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */

@@ -93,6 +93,27 @@ check 'the server answered finding 9, which this station did not send: someone e
 if grep -q "the server refused finding 9" "$tmp/gus.log" || [ "$(grep -c 'did not send' "$tmp/gus.log")" != 1 ]; then
   echo "FAIL gus's station took the peer's answer for his own, or said it more than once:"; cat "$tmp/gus.log"; fail=1
 else echo "ok     said once, and not taken for his"; fi
+# Session 77: a peer writes the session's first finger sample in contact and its first local model back
+# into hal's partition with frame 2^64 - 1, early in his press. The station took the sample, and every
+# later genuine one was "older" than it: refused as malformed, his coverage stopped there. Now a frame
+# past what the server can have stepped since his join is refused without moving the mark: at most
+# that one sample refused, his coverage counted through the press.
+"$server" --config "$tmp/server.json" > "$tmp/server3.log" 2>&1 &
+spid=$!
+"$client" --role trainee --domain 61 --phantom 7 --name hal --timeout 10 --print-period 0 \
+  --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=3 > "$tmp/hal.log" 2>&1 &
+hpid=$!
+"$finding_writer" 61 hal frames > "$tmp/frames.log" 2>&1
+wait $hpid
+kill $spid; wait $spid; spid=
+check 'finding_writer: 1 finger sample(s) and 1 local model(s) of session [0-9]* written again' "$tmp/frames.log" \
+  "a peer writes a finger sample and a local model into hal's session with frame 2^64 - 1"
+refused=$(sed -n 's/.* and \([0-9]*\) refused as malformed.*/\1/p' "$tmp/hal.log")
+covered=$(sed -n 's/.*you covered light \([0-9.]*\)%, medium \([0-9.]*\)%, deep \([0-9.]*\)% of the dome.*/\1 \2 \3/p' "$tmp/hal.log")
+if [ "${refused:-0}" -le 1 ] && [ -n "$covered" ] &&
+  awk -v c="$covered" 'BEGIN { split(c, b, " "); exit !(b[1] + b[2] + b[3] > 0) }'; then
+  echo "ok     at most that sample refused (${refused:-0}), his coverage counted (light, medium, deep: $covered %)"
+else echo "FAIL hal's samples refused: '${refused:-0}' (want <= 1), coverage '$covered':"; cat "$tmp/hal.log"; fail=1; fi
 check "finding(s) of another writer dropped unanswered at the reader; the last names session" "$tmp/nolog-server.log" \
   "  the server logs the findings naming other sessions it dropped"
 check 'debrief: you found 1 of 2 lumps' "$tmp/fia.log" "a practice exercise on a server without a log: her debrief tells the lumps"

@@ -5,7 +5,11 @@
  * session's id + 1000 + k) or, with "own", the session itself (withdrawals: they never add a mark).
  * Prints what it wrote; exit 0, or 1 when no such session opened.
  * usage: test_finding_writer DOMAIN TRAINEE MARK BURST SECONDS [own]
+ * With "frames" (DOMAIN TRAINEE frames): once the session's first finger sample in contact and its
+ * first local model are there, writes each back into the partition with frame 2^64 - 1 (a forged
+ * far-future step, otherwise the server's own), then exits; 1 when none came within 10 s.
  */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +17,61 @@
 #include "../open_session.h"
 #include "palp_dds.h"
 
+/* The session's first sample on topic k (of finger 0; a finger sample in contact), rewritten with frame
+ * 2^64 - 1: 1 written, 0 none within 10 s. */
+static int forge_frame(dds_entity_t pp, dds_entity_t pub, dds_entity_t sub, const palp_SessionState *st,
+                       palp_dds_topic_kind k) {
+  const dds_entity_t tp = palp_dds_create_topic(pp, k);
+  const dds_entity_t r = palp_dds_create_reader(sub, tp, k), w = palp_dds_create_writer(pub, tp, k);
+  int done = 0;
+  for (int i = 0; i < 200 && w > 0; i++) { /* matched with the station's reader (best-effort): up to 2 s */
+    dds_publication_matched_status_t m;
+    if (dds_get_publication_matched_status(w, &m) == 0 && m.current_count > 0) break;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  for (int i = 0; i < 1000 && !done && r > 0 && w > 0; i++) {
+    void *ptr[1] = {NULL};
+    dds_sample_info_t info;
+    while (!done && dds_take(r, ptr, &info, 1, 1) > 0) {
+      if (info.valid_data && k == PALP_TOPIC_FINGER_SAMPLE) {
+        palp_FingerSample m = *(const palp_FingerSample *)ptr[0]; /* its sequence the loan's until returned */
+        if (m.session_id == st->session_id && m.finger == 0 && m.in_contact) {
+          m.frame = UINT64_MAX;
+          done = dds_write(w, &m) == 0;
+        }
+      } else if (info.valid_data) {
+        palp_LocalModel m = *(const palp_LocalModel *)ptr[0];
+        if (m.session_id == st->session_id && m.finger == 0) {
+          m.frame = UINT64_MAX;
+          done = dds_write(w, &m) == 0;
+        }
+      }
+      dds_return_loan(r, ptr, 1);
+      ptr[0] = NULL;
+    }
+    if (!done) dds_sleepfor(DDS_MSECS(10));
+  }
+  return done;
+}
+
 int main(int argc, char **argv) {
+  if (argc == 4 && !strcmp(argv[3], "frames")) {
+    const dds_entity_t pp = dds_create_participant((dds_domainid_t)atoi(argv[1]), NULL, NULL);
+    palp_SessionState st;
+    if (!palp_test_open_session(pp, argv[2], 10.0, &st)) {
+      fprintf(stderr, "finding_writer: no open session of %s within 10 s\n", argv[2]);
+      return 1;
+    }
+    const dds_entity_t pub = palp_dds_session_publisher(pp, st.partition);
+    const dds_entity_t sub = palp_dds_session_subscriber(pp, st.partition);
+    const int fs = forge_frame(pp, pub, sub, &st, PALP_TOPIC_FINGER_SAMPLE);
+    const int lm = forge_frame(pp, pub, sub, &st, PALP_TOPIC_LOCAL_MODEL);
+    dds_sleepfor(DDS_MSECS(200)); /* delivered before the participant goes */
+    printf("finding_writer: %d finger sample(s) and %d local model(s) of session %u written again with frame "
+           "2^64 - 1\n", fs, lm, st.session_id);
+    dds_delete(pp);
+    return fs && lm ? 0 : 1;
+  }
   if (argc < 6) {
     fprintf(stderr, "usage: %s DOMAIN TRAINEE MARK BURST SECONDS\n", argv[0]);
     return 2;
