@@ -1170,7 +1170,8 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   if (in.read_position && in.write_force) return run_haptic_trainee(o, st, ph, in);
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
-    palp_log_error(o->log, "input %s: cannot open: %s", in.name, palp_strerror(rc));
+    const char *why = in.error ? in.error(in.ctx) : NULL; /* the driver's own words, as the haptic path says them */
+    palp_log_error(o->log, "input %s: cannot open: %s", in.name, why ? why : palp_strerror(rc));
     if (in.close) in.close(in.ctx);
     return 1;
   }
@@ -1203,7 +1204,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, fb_cond, 0);
   char reason[128] = "";
-  int closed = 0, ended = 0, rejoins = 0;
+  int closed = 0, ended = 0, rejoins = 0, failed = 0;
   while (!g_stop) {
     tick_refusals(o);
     int64_t now = palp_dds_now_ns();
@@ -1216,7 +1217,11 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       break;
     }
     if (n < 0) {
-      palp_log_error(o->log, "input %s failed: %s", in.name, palp_strerror(n));
+      /* the driver's own words when it has them, and a failed run's exit status (1), as on the haptic
+       * path: this exited 0, saying only the error code's name (session 77) */
+      const char *why = in.error ? in.error(in.ctx) : NULL;
+      palp_log_error(o->log, "input %s failed: %s", in.name, why ? why : palp_strerror(n));
+      failed = 1;
       break;
     }
     int want[PALP_CLI_MAX_FINGERS] = {0};
@@ -1344,7 +1349,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
   (void)ended;
-  return closed ? 3 : 0;
+  return failed ? 1 : (closed ? 3 : 0);
 }
 
 /* ---- visual station and observer ------------------------------------------------------------ */

@@ -9,6 +9,8 @@
 #    held the server's last ~3.7 N until the station closed, ~2 s later.
 #  - A station ending (--duration) while the device presses gives it 0 N before closing it, where it
 #    left the last force on it.
+#  - A driver whose poll() fails (1 s in): the station exits 1 with the driver's own message (error()),
+#    as the haptic path does; it exited 0, saying only "I/O error".
 set -u
 server=$1 client=$2 config_dir=$3 driver=$4
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
@@ -65,6 +67,16 @@ last=$(awk '$1 == "close" { printf "%g", sqrt($2 * $2 + $3 * $3 + $4 * $4) }' "$
 if [ $rc -eq 0 ] && [ "$last" = 0 ] && awk -v p="$peak" 'BEGIN { exit !(p >= 1) }'; then
   ok "the station ended (exit 0) with the device given 0 N before its close (up to $peak N before)"
 else bad "exit $rc, the device closed holding '$last' N (up to $peak N before; want exit 0 and 0 N)"; fi
+
+# ---- the driver fails: exit 1 with its message
+start_server ""
+"$client" --role trainee --domain 174 --phantom 1 --name hal --timeout 10 --print-period 0 --duration 5 \
+  --input "device:$driver:fail=1" > "$tmp/fail.out" 2>&1
+rc=$?
+stop_server
+if [ $rc -eq 1 ] && grep -q "input test force driver failed: test driver: the device stopped answering at 1.0 s (its USB link was lost)" \
+  "$tmp/fail.out"; then ok "a failing driver ends the station with exit 1 and the driver's own message"
+else bad "a failing driver: exit $rc (want 1), its message: $(grep -i failed "$tmp/fail.out")"; fi
 
 [ $fail -eq 0 ] || { cat "$tmp"/*.out; tail -20 "$tmp/server.log"; }
 exit $fail
