@@ -45,7 +45,8 @@ typedef struct palp_cli_input {
    * many, PALP_CLI_INPUT_END when finished, or a negative PALP_E* code. */
   int (*poll)(void *ctx, double t, palp_cli_cmd *cmds, int cap);
   /* Optional: the force the phantom exerts on a finger [N], every feedback sample; limited to the
-   * station's safe force first (palp_cli_device_force). With no sample for 0.25 s it fades to 0 N over
+   * station's safe force first (palp_cli_device_force: --max-force or 10 N, or the phantom's
+   * max_force where that is smaller). With no sample for 0.25 s it fades to 0 N over
    * 0.1 s (the haptic thread's stale_time and fade_time), and it is 0 N before close(). */
   void (*feedback)(void *ctx, int finger, palp_vec3 force);
   void (*close)(void *ctx);

@@ -1199,6 +1199,9 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0,
                      .max_force = o->max_force > 0 ? o->max_force : render.max_force,
                      .stale_time = render.stale_time, .fade_time = render.fade_time};
+  /* The safe force is the smaller of the station's and the phantom's (the catalogue's max_force), as
+   * on the haptic path: the server reports a finger's force above its limit as it is (session 77). */
+  if (ph->max_force > 0 && isfinite(ph->max_force) && ph->max_force < fx.max_force) fx.max_force = ph->max_force;
   /* Feedback is taken as it arrives (waitset) so its receive time is exact. */
   dds_entity_t ws = dds_create_waitset(st->pp);
   dds_entity_t fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);

@@ -10,7 +10,11 @@
 #  - A station ending (--duration) while the device presses gives it 0 N before closing it, where it
 #    left the last force on it.
 #  - A driver whose poll() fails (1 s in): the station exits 1 with the driver's own message (error()),
-#    as the haptic path does; it exited 0, saying only "I/O error".
+#    as the haptic path does; it exited 0, saying only "input/output error".
+#  - A server whose max_force is 2 N (the phantom's, in the catalogue; the server reports the finger's
+#    force above it, ~5 N at the press's peak): the driver is never given more than 2 N (+0.1%), the
+#    haptic path's limit (the smaller of the station's safe force and the phantom's). It was given up
+#    to the station's 10 N.
 set -u
 server=$1 client=$2 config_dir=$3 driver=$4
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
@@ -77,6 +81,17 @@ stop_server
 if [ $rc -eq 1 ] && grep -q "input test force driver failed: test driver: the device stopped answering at 1.0 s (its USB link was lost)" \
   "$tmp/fail.out"; then ok "a failing driver ends the station with exit 1 and the driver's own message"
 else bad "a failing driver: exit $rc (want 1), its message: $(grep -i failed "$tmp/fail.out")"; fi
+
+# ---- the phantom's limit below the station's: the driver's force is held to it
+start_server '"max_force": 2,'
+"$client" --role trainee --domain 174 --phantom 1 --name ida --timeout 10 --print-period 0 --duration 2.5 \
+  --input "device:$driver:log=$tmp/limit.log" > "$tmp/limit.out" 2>&1
+rc=$?
+stop_server
+peak=$(awk '$1 != "close" { f = sqrt($3 * $3 + $4 * $4 + $5 * $5); if (f > p) p = f } END { printf "%.4f", p }' "$tmp/limit.log")
+if [ $rc -eq 0 ] && awk -v p="$peak" 'BEGIN { exit !(p >= 1.5 && p <= 2.002) }'; then
+  ok "the driver was given at most $peak N, the phantom's 2 N limit (want 1.5-2.002 N: pressed to it, not past it)"
+else bad "exit $rc, the driver was given up to $peak N (want 1.5-2.002 N: the phantom's limit is 2 N)"; fi
 
 [ $fail -eq 0 ] || { cat "$tmp"/*.out; tail -20 "$tmp/server.log"; }
 exit $fail
