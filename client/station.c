@@ -363,6 +363,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;
   st->join_asked_ns = asked;
+  snprintf(st->session_trainee, sizeof st->session_trainee, "%s", j->role == palp_ROLE_TRAINEE ? st->station_id : "");
   st->has_last_join = 1;
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->closed_seen = 0;
@@ -740,6 +741,20 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
     for (int i = 0; i < n; i++) {
       if (info[i].valid_data) {
         if (buf[i].session_id != st->session_id) continue;
+        buf[i].trainee_station[sizeof buf[i].trainee_station - 1] = 0; /* terminated by the sender only */
+        if (!st->session_trainee[0])
+          snprintf(st->session_trainee, sizeof st->session_trainee, "%s", buf[i].trainee_station);
+        if (strcmp(buf[i].trainee_station, st->session_trainee) != 0) {
+          /* This session's id names another trainee's session: its server restarted and numbers its
+           * sessions from 1 again. Taken for "back" (and not even doubted when the new server's state
+           * came before the old one's lease lapsed), the station pressed on into that trainee's
+           * session, its contacts applied there (session 77). Its own session is gone. */
+          closed = 1;
+          if (reason)
+            snprintf(reason, len, "server lost (it restarted: session %u is now another trainee's session)",
+                     st->session_id);
+          continue;
+        }
         if (buf[i].phase == palp_PHASE_CLOSED) {
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);

@@ -44,6 +44,10 @@ typedef struct palp_cli_station {
   char partition[64];
   double tick_rate_hz;
   int64_t join_asked_ns; /* when the accepted JOIN was sent (palp_dds_now_ns): the session opened after it */
+  /* The session's trainee station as its state names it: a trainee's own station id; a viewer's, the
+   * first state's. A state of this session id naming another is a restarted server's session of another
+   * trainee (it numbers them from 1 again), not this one (palp_cli_station_session_closed). */
+  char session_trainee[64];
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */
