@@ -25,9 +25,10 @@
 #include "station.h"
 #include "view.h"
 
-/* Set by SIGINT/SIGTERM, polled by the loops. Atomic, not volatile sig_atomic_t: the signal may land
- * on any thread of the process (Cyclone's, OpenBLAS's), and only a lock-free atomic may be shared
- * between a handler and other threads (C17 7.14.1.1; ThreadSanitizer saw the race). */
+/* Set by SIGINT/SIGTERM, polled by the loops and the station's waits (palp_cli_station.stop).
+ * Atomic, not volatile sig_atomic_t: the signal may land on any thread of the process (Cyclone's,
+ * OpenBLAS's), and only a lock-free atomic may be shared between a handler and other threads (C17
+ * 7.14.1.1; ThreadSanitizer saw the race). */
 static atomic_int g_stop;
 static void on_signal(int sig) {
   (void)sig;
@@ -806,6 +807,7 @@ static int print_debrief(const opts *o, palp_cli_station *st) {
   palp_DebriefLesion les[PALP_DEBRIEF_MAX_LESIONS];
   char err[160];
   const int rc = palp_cli_station_debrief(st, DEBRIEF_WAIT_S, &d, les, err, sizeof err);
+  if (rc == PALP_CLI_ESTOPPED) return -1; /* stopped again while it waited: the user is going */
   if (rc < 0) {
     palp_log_warn(o->log, "%s", err);
     return -1;
@@ -861,6 +863,7 @@ static void print_debrief_score(const opts *o, palp_cli_station *st) {
   palp_SessionScore m;
   char err[160];
   const int rc = palp_cli_station_debrief_score(st, SCORE_WAIT_S, &m, err, sizeof err);
+  if (rc == PALP_CLI_ESTOPPED) return;
   if (rc < 0) {
     palp_log_warn(o->log, "%s", err);
     return;
@@ -1311,7 +1314,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
             next_state_check = now + 100000000;
             continue;
           }
-          palp_log_error(o->log, "server lost and no other server to rejoin: %s", err);
+          if (!g_stop) palp_log_error(o->log, "server lost and no other server to rejoin: %s", err);
           fb_cond = 0;
         }
         closed = 1;
@@ -1601,25 +1604,32 @@ int main(int argc, char **argv) {
     if (in.close) in.close(in.ctx);
     return 1;
   }
+  /* Its waits give up when the user stops the station: exit 0 and nothing said, as a stop during
+   * the session ends it (until 2026-12-06 a Ctrl-C with no server waited out --timeout twice, then
+   * said "no answer" and exited 1). */
+  st.stop = &g_stop;
   int64_t server_number = -1;
   if (o.server) { /* --phantom/--session are that server's local ids */
     uint32_t number = 0;
-    if (palp_cli_station_server_number(&st, o.server, o.timeout, &number, err, sizeof err) < 0) {
-      palp_log_error(o.log, "--server: %s", err);
+    const int got = palp_cli_station_server_number(&st, o.server, o.timeout, &number, err, sizeof err);
+    if (got < 0) {
+      if (got != PALP_CLI_ESTOPPED) palp_log_error(o.log, "--server: %s", err);
       if (in.close) in.close(in.ctx);
       palp_cli_station_close(&st);
-      return 1;
+      return got == PALP_CLI_ESTOPPED ? 0 : 1;
     }
     server_number = number;
     if (o.phantom) o.phantom = PALP_DDS_ID(number, o.phantom);
     if (o.session) o.session = PALP_DDS_ID(number, o.session);
   }
   if (o.phantom_name) {
-    if (palp_cli_station_find_phantom(&st, o.phantom_name, server_number, -1, o.timeout, &o.phantom, err, sizeof err) < 0) {
-      palp_log_error(o.log, "--phantom-name: %s", err);
+    const int got =
+        palp_cli_station_find_phantom(&st, o.phantom_name, server_number, -1, o.timeout, &o.phantom, err, sizeof err);
+    if (got < 0) {
+      if (got != PALP_CLI_ESTOPPED) palp_log_error(o.log, "--phantom-name: %s", err);
       if (in.close) in.close(in.ctx);
       palp_cli_station_close(&st);
-      return 1;
+      return got == PALP_CLI_ESTOPPED ? 0 : 1;
     }
   }
   palp_cli_join j = {.role = trainee ? palp_ROLE_TRAINEE : observer ? palp_ROLE_OBSERVER : palp_ROLE_VISUAL,
@@ -1655,31 +1665,36 @@ int main(int argc, char **argv) {
       }
     }
     if (!j.session_id) {
-      palp_log_error(o.log, "--trainee %s: no open session of that trainee within %.0f s", o.trainee,
-              o.timeout);
+      if (!g_stop)
+        palp_log_error(o.log, "--trainee %s: no open session of that trainee within %.0f s", o.trainee, o.timeout);
       palp_cli_station_close(&st);
-      return 1;
+      return g_stop ? 0 : 1; /* stopped: as a stop during the session */
     }
   }
-  if (palp_cli_station_join(&st, &j, err, sizeof err) < 0) {
-    palp_log_error(o.log, "%s", err);
+  const int joined = palp_cli_station_join(&st, &j, err, sizeof err);
+  if (joined < 0) {
+    if (joined != PALP_CLI_ESTOPPED) palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);
     palp_cli_station_close(&st);
-    return 1;
+    return joined == PALP_CLI_ESTOPPED ? 0 : 1;
   }
   palp_Phantom ph;
-  if (palp_cli_station_catalogue(&st, st.phantom_id, o.timeout, &ph, err, sizeof err) < 0) {
-    palp_log_error(o.log, "%s", err);
+  const int listed = palp_cli_station_catalogue(&st, st.phantom_id, o.timeout, &ph, err, sizeof err);
+  if (listed < 0) {
+    if (listed != PALP_CLI_ESTOPPED) palp_log_error(o.log, "%s", err);
     if (in.close) in.close(in.ctx);
     palp_cli_station_leave(&st);
     palp_cli_station_close(&st);
-    return 1;
+    return listed == PALP_CLI_ESTOPPED ? 0 : 1;
   }
   if (!o.quiet)
     tprintf(&o, "[%s %s] joined session %u on phantom %u \"%s\" (%u vertices, %.0f Hz), partition %s\n", o.role,
             o.name, st.session_id, ph.phantom_id, ph.name, ph.rest._length, st.tick_rate_hz, st.partition);
   fflush(stdout);
   rc = trainee ? run_trainee(&o, &st, &ph, in) : run_viewer(&o, &st, &ph, observer);
+  /* The stop that ended the session is spent: the debrief and score are still awaited after it (the
+   * server writes them as the LEAVE closes the session), and a second stop cuts those waits short. */
+  atomic_store(&g_stop, 0);
   palp_cli_station_leave(&st);
   if (trainee && st.in_exercise && !o.quiet && print_debrief(&o, &st) == (int)palp_DEBRIEF_LESIONS)
     print_debrief_score(&o, &st);

@@ -29,6 +29,13 @@ static void nap(double s) {
   nanosleep(&ts, NULL);
 }
 
+/* The caller asked the station to end (palp_cli_station.stop). */
+static int stopped(const palp_cli_station *st) { return st->stop && atomic_load(st->stop); }
+
+static int fail_stopped(char *err, size_t errlen) {
+  return fail(err, errlen, PALP_CLI_ESTOPPED, "interrupted");
+}
+
 /* The session topics' filter (DDS receive thread): this station's session. Each type's first key is
  * its session id. st->session_id is set before the session's readers exist and they are deleted
  * (palp_cli_station_end_session) before another session's id replaces it. */
@@ -210,12 +217,17 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
     }
     if (n > 0) dds_return_loan(st->catalogue_r, ptr, n);
     if (result != PALP_EIO) break;
+    if (stopped(st)) {
+      result = PALP_CLI_ESTOPPED;
+      break;
+    }
     int64_t now = palp_dds_now_ns();
     if (now >= end) break;
     dds_waitset_wait(ws, NULL, 0, end - now < DDS_MSECS(100) ? end - now : DDS_MSECS(100));
   }
   dds_delete(rc);
   dds_delete(ws);
+  if (result == PALP_CLI_ESTOPPED) return fail_stopped(err, errlen);
   if (result == PALP_ENOMEM) return fail(err, errlen, result, "out of memory");
   if (result != 0 && bad[0])
     return fail(err, errlen, PALP_EINVAL, "no valid catalogue entry for phantom %u within %.1f s: %s", phantom_id,
@@ -258,8 +270,9 @@ static int send_request(palp_cli_station *st, const palp_cli_join *j, int op, pa
   return dds_write(st->request_w, &rq) < 0 ? PALP_EIO : 0;
 }
 
-/* Waits for the reply to request seq until end_ns: 1 accepted, 0 rejected, -1 timeout. */
-static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, palp_SessionReply *out) {
+/* Waits for the reply to request seq until end_ns: 1 accepted, 0 rejected, -1 timeout, -2 the
+ * caller's stop flag set (looked at only when stoppable: a leave's waits are the goodbye itself). */
+static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, int stoppable, palp_SessionReply *out) {
   dds_entity_t ws = dds_create_waitset(st->pp);
   dds_entity_t rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, rc, 0);
@@ -278,6 +291,10 @@ static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, pa
         }
     int64_t now = palp_dds_now_ns();
     if (result >= 0 || now >= end_ns) break;
+    if (stoppable && stopped(st)) {
+      result = -2;
+      break;
+    }
     dds_waitset_wait(ws, NULL, 0, end_ns - now < DDS_MSECS(50) ? end_ns - now : DDS_MSECS(50));
   }
   dds_delete(rc);
@@ -286,7 +303,7 @@ static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, pa
 }
 
 static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *out) {
-  return await_reply_to(st, st->request_seq, end_ns, out);
+  return await_reply_to(st, st->request_seq, end_ns, 1, out);
 }
 
 /* The session's endpoints matched by the server's before the join returns. Contacts are
@@ -310,7 +327,8 @@ static void await_matched(palp_cli_station *st, int64_t end_ns) {
         dds_subscription_matched_status_t m;
         ready &= dds_get_subscription_matched_status(rd[k], &m) == 0 && m.current_count > 0;
       }
-    if (ready || palp_dds_now_ns() >= end_ns) return;
+    /* stopped: the join stands, and the caller's loop, seeing the stop, leaves the session */
+    if (ready || palp_dds_now_ns() >= end_ns || stopped(st)) return;
     nap(0.005);
   }
 }
@@ -339,6 +357,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
     if (send_request(st, j, palp_OP_JOIN, NULL) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
     int got = await_reply(st, end, &r);
     if (got == 1) break;
+    if (got == -2) return fail_stopped(err, errlen);
     if (got < 0) {
       char hint[PALP_DDS_HINT_MAX];
       palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
@@ -351,7 +370,10 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       /* the server's words, escaped as the log escapes a peer's fields: a forged reply's escape
        * sequence must not reach the terminal the error is written to */
       return fail(err, errlen, PALP_EINVAL, "join rejected: %s", PALP_PRINTABLE_LONG(r.reason));
-    nap(0.25);
+    for (int k = 0; k < 5; k++) { /* 0.25 s, the stop flag looked at every 50 ms */
+      if (stopped(st)) return fail_stopped(err, errlen);
+      nap(0.05);
+    }
   }
   /* The server's physics rate paces the contact samples and the haptic thread's horizon:
    * a rate outside the server's own bounds (10..10000 Hz, server/config.c) is no server's,
@@ -494,6 +516,7 @@ int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double 
       return 1;
     }
     if (now >= end) return 0;
+    if (stopped(st)) return PALP_CLI_ESTOPPED;
     nap(0.02);
   }
 }
@@ -567,6 +590,7 @@ int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief 
     if (got) return 1;
     if (rc < 0) return rc;
     if (palp_dds_now_ns() >= end) return 0;
+    if (stopped(st)) return fail_stopped(err, errlen);
     nap(0.02);
   }
 }
@@ -596,6 +620,7 @@ int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_Se
     if (got) return 1;
     if (rc < 0) return rc;
     if (palp_dds_now_ns() >= end) return 0;
+    if (stopped(st)) return fail_stopped(err, errlen);
     nap(0.02);
   }
 }
@@ -627,7 +652,7 @@ static int ask_until_answered(palp_cli_station *st, const palp_SessionRequest *r
     if (!already_sent && dds_write(st->request_w, rq) < 0) return 0;
     already_sent = 0;
     const int64_t slice = t + 300000000;
-    if (await_reply_to(st, rq->request_seq, slice < end_ns ? slice : end_ns, &r) >= 0) return 1;
+    if (await_reply_to(st, rq->request_seq, slice < end_ns ? slice : end_ns, 0, &r) >= 0) return 1;
   }
   return 0;
 }
@@ -827,6 +852,7 @@ int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_
     }
     if (n > 0) dds_return_loan(st->catalogue_r, ptr, n);
     if (best && settle == INT64_MAX) settle = palp_dds_now_ns() + DDS_MSECS(300);
+    if (stopped(st)) return fail_stopped(err, errlen);
     nap(0.05);
   }
   if (!best) {
@@ -864,6 +890,10 @@ int palp_cli_station_server_number(palp_cli_station *st, const char *server_name
       }
       if (n > 0) dds_return_loan(r, ptr, n);
     } while (!found && n > 0);
+    if (!found && stopped(st)) {
+      dds_delete(r);
+      return fail_stopped(err, errlen);
+    }
     if (!found) nap(0.05);
   }
   dds_delete(r);

@@ -8,6 +8,7 @@
 #ifndef PALP_CLI_STATION_H
 #define PALP_CLI_STATION_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -33,8 +34,17 @@ typedef struct palp_cli_log_news {
  * topic filter); past it a new key's samples are dropped. */
 #define PALP_CLI_STREAM_INSTANCES 32
 
+/* A wait given up because the caller's stop flag was set (palp_cli_station.stop): the user asked
+ * the station to end (Ctrl-C), not a failure. */
+#define PALP_CLI_ESTOPPED (-100)
+
 typedef struct palp_cli_station {
   char station_id[64];
+  /* The caller's stop flag (palp-client's SIGINT/SIGTERM/SIGHUP flag), or NULL: never. Set, every wait
+   * below (join, catalogue, phantom, server, exercise, debrief, score) returns PALP_CLI_ESTOPPED within
+   * its poll period (<= 100 ms): a Ctrl-C with no server waited out --timeout twice (up to 2 h).
+   * palp_cli_station_leave does not look at it: the goodbye is what a stop sends. Set after open. */
+  const atomic_int *stop;
   dds_entity_t pp;
   dds_entity_t topic[PALP_TOPIC_COUNT];
   dds_entity_t catalogue_r, request_w, reply_r, state_r;
@@ -170,7 +180,7 @@ int palp_cli_station_server_number(palp_cli_station *st, const char *server_name
 void palp_cli_station_end_session(palp_cli_station *st);
 
 /* issue 13. The exercise the phantom runs (title, instructions, limits): 1 and *out
- * when there is one within timeout [s], 0 when not (a plain phantom). */
+ * when there is one within timeout [s], 0 when not (a plain phantom), PALP_CLI_ESTOPPED when stopped. */
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out);
 /* Sends a "lump here" mark at point [m] (the fingertip's contact point, world time t)
  * and returns its mark id (> 0), or withdraws mark_id (op palp_FINDING_WITHDRAW);
@@ -182,14 +192,15 @@ int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *ou
 /* The session's debrief (palp_debrief), which the server writes once as an exercise session
  * closes: 1 and *out when it came within timeout [s], its lesions copied into lesions
  * [PALP_DEBRIEF_MAX_LESIONS] (out->lesion points there; checked by palp_dds_debrief_ok), 0 when
- * none came, a negative code when what came is malformed (err says why). */
+ * none came, a negative code when what came is malformed (err says why), PALP_CLI_ESTOPPED when the
+ * wait was stopped (palp_cli_station.stop). */
 #define PALP_DEBRIEF_MAX_LESIONS PALP_MAX_LESIONS
 int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief *out, palp_DebriefLesion *lesions,
                              char *err, size_t errlen);
 /* The session's score (palp_debrief_score), which the server writes after a debrief that told the
  * lesions, once it has graded the session from its log: 1 and *out when it came within timeout [s]
  * (checked by palp_dds_session_score_ok), 0 when none came, a negative code when what came is
- * malformed (err says why). */
+ * malformed (err says why), PALP_CLI_ESTOPPED when stopped. */
 int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_SessionScore *out, char *err,
                                    size_t errlen);
 /* What the trainee is told of a score (the station's line after "[trainee NAME] "; her web page says

@@ -1,7 +1,8 @@
 #!/bin/sh
 # palp-client refuses bad input with a non-zero exit and a message naming what is
 # wrong, before touching the network where it can; with no server it gives up
-# after --timeout with a clear message. Domain 108 (no server runs there).
+# after --timeout with a clear message, and a Ctrl-C ends its wait at once. Domain 108 (no server
+# runs there).
 set -u
 client=$1 config_dir=$2
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
@@ -32,4 +33,38 @@ expect 1 "device driver" --role trainee --phantom 1 --input device:/nonexistent.
 expect 2 "--log-file /nonexistent/dir/c.log: cannot open it: No such file or directory" --role trainee --phantom 1 \
   --log-file /nonexistent/dir/c.log --domain 108
 expect 1 "no answer from palp-server" --role trainee --phantom 1 --domain 108 --timeout 0.5
+# Ctrl-C while it waits for a server that is not there ends it at once, as a Ctrl-C during the
+# session does: exit 0 within 1 s of the SIGINT (its waits look at the stop every <= 100 ms; DDS's
+# teardown takes the rest), nothing said. Until 2026-12-06 it waited out --timeout (twice) and exited
+# 1 with "no answer". A station still running 3 s after it is killed and counted as a failure.
+interrupted() { # what args...
+  what=$1
+  shift
+  "$client" "$@" --domain 108 --timeout 30 > "$tmp_out" 2>&1 </dev/null &
+  pid=$!
+  sleep 0.5
+  t0=$(date +%s%N)
+  kill -INT $pid
+  n=0
+  while kill -0 $pid 2>/dev/null && [ $n -lt 60 ]; do n=$((n + 1)); sleep 0.05; done
+  ms=$((($(date +%s%N) - t0) / 1000000))
+  if kill -0 $pid 2>/dev/null; then
+    kill -KILL $pid; wait $pid 2>/dev/null
+    echo "FAIL $what: still running ${ms} ms after SIGINT (want it gone within 1000 ms, exit 0)"; fail=1
+    return
+  fi
+  wait $pid
+  rc=$?
+  if [ $rc -eq 0 ] && [ $ms -le 1000 ] && ! grep -q "no answer\|no open session" "$tmp_out"; then
+    echo "ok   $what: SIGINT 0.5 s in, exit $rc ${ms} ms after it (bound 1000 ms), nothing said"
+  else
+    echo "FAIL $what: SIGINT 0.5 s in, exit $rc ${ms} ms after it (want 0 within 1000 ms, no \"no answer\"): $(cat "$tmp_out")"
+    fail=1
+  fi
+}
+tmp_out=$(mktemp)
+trap 'rm -f "$tmp_out"' EXIT
+interrupted "a trainee waiting for its join's answer" --role trainee --phantom 1
+interrupted "an observer looking for --trainee bob's session" --role observer --trainee bob
+interrupted "a trainee looking for --phantom-name dome" --role trainee --phantom-name dome
 exit $fail
