@@ -25,7 +25,7 @@
 #include "station.h"
 #include "view.h"
 
-/* Set by SIGINT/SIGTERM, polled by the loops and the station's waits (palp_cli_station.stop).
+/* Set by SIGINT/SIGTERM/SIGHUP, polled by the loops and the station's waits (palp_cli_station.stop).
  * Atomic, not volatile sig_atomic_t: the signal may land on any thread of the process (Cyclone's,
  * OpenBLAS's), and only a lock-free atomic may be shared between a handler and other threads (C17
  * 7.14.1.1; ThreadSanitizer saw the race). */
@@ -36,9 +36,9 @@ static void on_signal(int sig) {
 }
 
 /* The terminal as it was before a keyboard input made it raw (no echo, no line editing). The
- * input's close() puts it back, and SIGINT/SIGTERM end the station through close(); SIGQUIT
- * (Ctrl-\ works in the raw terminal), SIGHUP, a crash or an exit() elsewhere did not, and left the
- * shell without echo. Those put it back here, then end the station as they did (the default
+ * input's close() puts it back, and SIGINT/SIGTERM/SIGHUP end the station through close(); SIGQUIT
+ * (Ctrl-\ works in the raw terminal), a crash or an exit() elsewhere did not, and left the shell
+ * without echo. Those put it back here, then end the station as they did (the default
  * action, re-raised). tcsetattr and raise are async-signal-safe. */
 static struct termios g_tty;
 static atomic_int g_tty_saved;
@@ -58,10 +58,10 @@ static void guard_tty(void) {
   sa.sa_handler = on_fatal_signal;
   sa.sa_flags = SA_RESETHAND;
   sigemptyset(&sa.sa_mask);
-  const int sigs[] = {SIGQUIT, SIGHUP, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+  const int sigs[] = {SIGQUIT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
   for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) {
     struct sigaction old;
-    /* an ignored signal stays ignored (nohup's SIGHUP, a background job's SIGQUIT): it ends nothing */
+    /* an ignored signal stays ignored (a background job's SIGQUIT): it ends nothing */
     if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN) sigaction(sigs[i], &sa, NULL);
   }
 }
@@ -1546,6 +1546,16 @@ int main(int argc, char **argv) {
   sa.sa_handler = on_signal;
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
+  /* A closed terminal window (SIGHUP) ends the station as SIGTERM does: the haptic thread's last
+   * 0 N, the LEAVE, the terminal put back by the keyboard's close(). Its default action killed the
+   * station outright, and the server took the trainee for lost and held her session for
+   * station_grace. Started ignoring it (nohup), it stays ignored. */
+  struct sigaction old;
+  if (sigaction(SIGHUP, NULL, &old) == 0 && old.sa_handler != SIG_IGN) sigaction(SIGHUP, &sa, NULL);
+  /* Output piped into a reader that went (| head) fails with EPIPE instead of killing the station
+   * mid-press, the device's force left where it was: the station goes on to its end. */
+  sa.sa_handler = SIG_IGN;
+  sigaction(SIGPIPE, &sa, NULL);
   char err[PALP_DDS_HINT_MAX + 256]; /* a join's "no answer" ends with palp_dds_unanswered_hint's */
   if (palp_app_use_dds_config(o.app.dds_config, NULL, NULL, 0, err, sizeof err) < 0) {
     palp_log_error(o.log, "%s (give --dds-config FILE or set CYCLONEDDS_URI)", err);
