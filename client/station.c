@@ -386,6 +386,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->tick_rate_hz = r.tick_rate_hz;
   st->join_asked_ns = asked;
   snprintf(st->session_trainee, sizeof st->session_trainee, "%s", j->role == palp_ROLE_TRAINEE ? st->station_id : "");
+  st->session_ticks = 0;
   st->has_last_join = 1;
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->closed_seen = 0;
@@ -780,6 +781,18 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
                      st->session_id);
           continue;
         }
+        if (buf[i].ticks < st->session_ticks) {
+          /* The same id and station, but a session that has stepped less than this one had: a
+           * restarted server took this station's last JOIN again (the request topic keeps it) and
+           * opened a new session for it, a fresh phantom, exercise and clock, its marks forgotten.
+           * Taken for "back", the station went on into it unaware (session 77). Its session is gone. */
+          closed = 1;
+          if (reason)
+            snprintf(reason, len, "server lost (it restarted: session %u was opened anew, at tick %llu after %llu)",
+                     st->session_id, (unsigned long long)buf[i].ticks, (unsigned long long)st->session_ticks);
+          continue;
+        }
+        st->session_ticks = buf[i].ticks;
         if (buf[i].phase == palp_PHASE_CLOSED) {
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);

@@ -58,6 +58,9 @@ typedef struct palp_cli_station {
    * first state's. A state of this session id naming another is a restarted server's session of another
    * trainee (it numbers them from 1 again), not this one (palp_cli_station_session_closed). */
   char session_trainee[64];
+  /* SessionState.ticks last seen for this session: a server steps on, never back; fewer ticks are
+   * a new session under the same id (a restarted server that took this station's JOIN again) */
+  uint64_t session_ticks;
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */

@@ -89,4 +89,33 @@ else echo "FAIL gil's station: exit $crc after ${ms} ms (want 3 within 3000 ms, 
 if [ -n "$applied" ] && [ "$applied" -le 30 ]; then
   echo "ok   $applied of gil's contact samples applied to hana's session (want <= 30)"
 else echo "FAIL '$applied' of gil's contact samples applied to hana's session (want <= 30)"; fail=1; fi
+
+# ---- the same server restarted with gil's phantom: it takes gil's last JOIN again (the request topic
+# keeps it) and opens session 1 anew, naming gil's own station. Gil's station must see the new
+# session for what it is (its state's ticks fall back: a session steps on, never back) and end: exit
+# 3 within 3 s, "server lost (it restarted". Before (session 77's review), it took the new session
+# for its server being back and pressed on unaware into a fresh phantom, its clock and marks reset.
+"$server" --config "$tmp/a.json" --no-db > "$tmp/a2.log" 2>&1 &
+spid=$!
+"$client" --role trainee --domain 107 --server room-lost --phantom 1 --name ida --profile sine --t-on 0 --t-off 30 \
+  --duration 12 --print-period 0 > "$tmp/ida.log" 2>&1 &
+cpid=$!
+i=0
+until grep -q "joined session" "$tmp/ida.log" || [ $i -ge 100 ]; do sleep 0.1; i=$((i+1)); done
+sleep 1
+kill -9 $spid
+t0=$(date +%s%N)
+"$server" --config "$tmp/a.json" --no-db > "$tmp/a3.log" 2>&1 &
+spid=$!
+wait $cpid
+crc=$? cpid=
+ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+sleep 0.5
+kill $spid; wait $spid; spid=
+isid=$(sed -n 's/.*joined session \([0-9]*\) .*/\1/p' "$tmp/ida.log")
+reopened=$(grep -c "session $isid opened" "$tmp/a3.log")
+echo "the restarted server opened ida's session $isid anew: $reopened time(s) (0: it did not take her JOIN again)"
+if [ $crc -eq 3 ] && [ $ms -le 3000 ] && grep -q "server lost" "$tmp/ida.log"; then
+  echo "ok   ida's station ended ${ms} ms after its server's SIGKILL (want <= 3000 ms), exit 3: $(grep -o 'server lost[^;]*' "$tmp/ida.log" | tail -1)"
+else echo "FAIL ida's station: exit $crc after ${ms} ms (want 3 within 3000 ms, server lost):"; cat "$tmp/ida.log"; fail=1; fi
 exit $fail
