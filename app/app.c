@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <arpa/inet.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -189,10 +190,15 @@ static int loopback_value(const char *v, size_t n) {
   if (n == 9 && !strncmp(v, "localhost", 9)) return 1;
   if (n == 2 && !strncmp(v, "lo", 2)) return 1;
   if (n == 3 && !strncmp(v, "::1", 3)) return 1;
-  if (n > 4 && !strncmp(v, "127.", 4)) {
-    for (size_t k = 4; k < n; k++)
-      if (!isdigit((unsigned char)v[k]) && v[k] != '.') return 0;
-    return 1;
+  /* a whole dotted address in 127.0.0.0/8: "127.0.0.256" or "127..1" is no address, and Cyclone
+   * takes such a string for a host name to look up, which a resolver's search list may send
+   * anywhere (session 77's review; it passed as "127." and digits) */
+  char a[INET_ADDRSTRLEN];
+  struct in_addr in;
+  if (n < sizeof a) {
+    memcpy(a, v, n);
+    a[n] = '\0';
+    if (inet_pton(AF_INET, a, &in) == 1) return (ntohl(in.s_addr) >> 24) == 127;
   }
   return 0;
 }
@@ -216,6 +222,22 @@ static int loopback_peer(const char *v, size_t n) {
   }
   if (host == 2 && !strncmp(v, "lo", 2)) return 0; /* an interface's name, not a host's */
   return v[0] == '[' ? loopback_value(v + 1, host - 2) : loopback_value(v, host);
+}
+
+/* <MulticastRecvNetworkInterfaceAddresses>: "preferred" (the interface chosen, loopback here), "none",
+ * empty, or a comma-separated list of loopback addresses; "any" and "all" are not. */
+static int mc_recv_loopback(const char *v, size_t n) {
+  if (!n || (n == 9 && !strncasecmp(v, "preferred", 9)) || (n == 4 && !strncasecmp(v, "none", 4))) return 1;
+  for (size_t s = 0; s <= n;) {
+    size_t e = s;
+    while (e < n && v[e] != ',') e++;
+    size_t a = s, b = e;
+    while (a < b && (v[a] == ' ' || v[a] == '\t')) a++;
+    while (b > a && (v[b - 1] == ' ' || v[b - 1] == '\t')) b--;
+    if (!loopback_value(v + a, b - a) || (b - a == 2 && !strncmp(v + a, "lo", 2))) return 0;
+    s = e + 1;
+  }
+  return 1;
 }
 
 static int xml_space(int c) {
@@ -269,7 +291,7 @@ static int scope_why(char *why, size_t len, int rc, const char *fmt, const char 
 }
 
 /* The elements that decide where Cyclone sends: their attributes that do, or (none) their text. */
-enum { EL_DOMAIN, EL_ID, EL_IFACE, EL_IFACE_ADDR, EL_PEER, EL_EXTERNAL, EL_OTHER };
+enum { EL_DOMAIN, EL_ID, EL_IFACE, EL_IFACE_ADDR, EL_PEER, EL_EXTERNAL, EL_MC_RECV, EL_OTHER };
 static const struct {
   const char *name;
   int el;
@@ -283,6 +305,9 @@ static const struct {
     {"NetworkInterfaceAddress", EL_IFACE_ADDR, {NULL}},
     {"Peer", EL_PEER, {"Address"}},
     {"ExternalNetworkAddress", EL_EXTERNAL, {NULL}},
+    /* where multicast is received: "any" or "all" join the groups on other interfaces than the one
+     * chosen, so that other hosts' traffic reaches the process (session 77's review) */
+    {"MulticastRecvNetworkInterfaceAddresses", EL_MC_RECV, {NULL}},
 };
 
 /* Attribute a[0, an) = v[0, n) of element s: 1 if it keeps Cyclone on loopback or does not decide. */
@@ -399,7 +424,7 @@ int palp_app_dds_xml_loopback_only(const char *xml, char *why, size_t whylen) {
     if (el == EL_IFACE && !where)
       return scope_why(why, whylen, 0, "a <NetworkInterface>%.*s without address or name", "", 0);
     named |= el == EL_IFACE || el == EL_IFACE_ADDR;
-    if (el == EL_ID || el == EL_IFACE_ADDR || el == EL_EXTERNAL) {
+    if (el == EL_ID || el == EL_IFACE_ADDR || el == EL_EXTERNAL || el == EL_MC_RECV) {
       char v[128] = "";
       size_t n = 0;
       const int fits = empty || xml_text(p, v, sizeof v, &n);
@@ -410,6 +435,9 @@ int palp_app_dds_xml_loopback_only(const char *xml, char *why, size_t whylen) {
       if (el == EL_EXTERNAL && (!fits || !(!n || loopback_value(v, n) || (n == 4 && !strncasecmp(v, "auto", 4)))))
         return scope_why(why, whylen, 0, "<ExternalNetworkAddress>%.*s: other participants are told to send there", v,
                          n);
+      if (el == EL_MC_RECV && (!fits || !mc_recv_loopback(v, n)))
+        return scope_why(why, whylen, 0, "<MulticastRecvNetworkInterfaceAddresses>%.*s: multicast received on other "
+                         "interfaces", v, n);
     }
   }
   if (!named) return scope_why(why, whylen, 0, "no <NetworkInterface>: Cyclone DDS picks one%.*s", "", 0);

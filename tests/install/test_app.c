@@ -132,6 +132,27 @@ int main(int argc, char **argv) {
       {"<CycloneDDS><Domain><General><Interfaces><NetworkInterface address=\"127.0.0.1\" multicast=\"false\"/>"
        "</Interfaces></General></Domain></CycloneDDS>", 1, "127.0.0.1"},
       {"<Interfaces><NetworkInterface name='lo'/></Interfaces>", 1, "name lo"},
+      /* session 77's review: a 127. prefix that is no address (a host name to look up), and
+       * multicast received on every interface */
+      {"<Domain><General><Interfaces><NetworkInterface name='lo'/></Interfaces></General><Discovery><Peers>"
+       "<Peer address=\"127.0.0.256\"/></Peers></Discovery></Domain>", 0, "a peer 127.0.0.256 (no address)"},
+      {"<Domain><General><Interfaces><NetworkInterface name='lo'/></Interfaces></General><Discovery><Peers>"
+       "<Peer address=\"127..1\"/></Peers></Discovery></Domain>", 0, "a peer 127..1"},
+      {"<Domain><General><Interfaces><NetworkInterface name='lo'/></Interfaces></General><Discovery><Peers>"
+       "<Peer address=\"127.0.0.1.10\"/></Peers></Discovery></Domain>", 0, "a peer 127.0.0.1.10"},
+      {"<Domain><General><Interfaces><NetworkInterface name='lo'/></Interfaces></General><Discovery><Peers>"
+       "<Peer address=\"127.3.0.1:7400\"/></Peers></Discovery></Domain>", 1, "a peer 127.3.0.1:7400"},
+      {"<General><Interfaces><NetworkInterface name='lo' multicast='true'/></Interfaces><AllowMulticast>true"
+       "</AllowMulticast><MulticastRecvNetworkInterfaceAddresses>any</MulticastRecvNetworkInterfaceAddresses></General>",
+       0, "multicast received on any interface"},
+      {"<General><Interfaces><NetworkInterface name='lo'/></Interfaces><MulticastRecvNetworkInterfaceAddresses>all"
+       "</MulticastRecvNetworkInterfaceAddresses></General>", 0, "multicast received on all interfaces"},
+      {"<General><Interfaces><NetworkInterface name='lo'/></Interfaces><MulticastRecvNetworkInterfaceAddresses>"
+       "127.0.0.1, 192.0.2.7</MulticastRecvNetworkInterfaceAddresses></General>", 0, "multicast received on 192.0.2.7"},
+      {"<General><Interfaces><NetworkInterface name='lo'/></Interfaces><MulticastRecvNetworkInterfaceAddresses>"
+       "preferred</MulticastRecvNetworkInterfaceAddresses></General>", 1, "multicast received where preferred"},
+      {"<General><Interfaces><NetworkInterface name='lo'/></Interfaces><MulticastRecvNetworkInterfaceAddresses>"
+       "127.0.0.1</MulticastRecvNetworkInterfaceAddresses></General>", 1, "multicast received on 127.0.0.1"},
       {"<Interfaces><NetworkInterface address=\"::1\"/></Interfaces>", 1, "::1"},
       {"<General><NetworkInterfaceAddress> 127.0.0.1 </NetworkInterfaceAddress></General>", 1, "the older element"},
       {"<Interfaces><NetworkInterface address=\"10.77.0.3\"/></Interfaces>", 0, "10.77.0.3"},
