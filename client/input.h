@@ -92,8 +92,9 @@ enum {
   PALP_CLI_FORCE_CONTACT = 1u << 2,  /* the fingertip touches the surface */
   PALP_CLI_FORCE_NO_MODEL = 1u << 3, /* no model yet */
   /* The model being rendered was flagged by the server outside the phantom model's valid
-   * range (LocalModel.flags & LM_OUT_OF_RANGE: a link strained beyond +-50%, the skin's
-   * linearised bending off by more than 0.1 rad or the set's validated miss, ...): the force is less certain than
+   * range (LocalModel.flags & PALP_DDS_LM_OUTSIDE: a link strained beyond +-50%, the skin's
+   * linearised bending off by more than 0.1 rad or the set's validated miss, deeper than validated,
+   * the literal gel law outside its stable range, ...): the force is less certain than
    * the model's validation says (docs/model.md, "Valid range"). Show the trainee. */
   PALP_CLI_FORCE_OUT_OF_RANGE = 1u << 4
 };

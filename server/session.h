@@ -50,7 +50,7 @@ typedef struct palp_srv_session_stats {
   double step_us_max;                       /* longest tick of this session in the status period [us] */
   uint64_t local_models;                    /* palp_local_model samples published */
   uint64_t force_limited_steps;             /* finger-steps whose force exceeded max_force (reported, not clamped) */
-  uint64_t out_of_range_steps;              /* steps with a model-validity flag (LM_OUT_OF_RANGE) */
+  uint64_t out_of_range_steps;              /* steps with a model-validity flag (PALP_DDS_LM_OUTSIDE) */
   uint64_t factor_jobs;                     /* lagged-tangent rebuilds handed to the helper */
   uint64_t factor_waits;                    /* ... that were due before the helper had finished */
   int64_t factor_wait_ns;                   /* time ticks spent waiting for them [ns] */

@@ -10,12 +10,12 @@
 #  - the first tick whose device point is inside the dome (|x| < R + r: R = 40 mm, the scene's
 #    radius, r = 8 mm, the simulated fingertip's; the press is at the pole, 3 mm at 20 mm/s after
 #    3 mm of approach from 0.2 s: ~0.35 s);
-#  - the first tick rendering a contact (flag CONTACT, 4) comes within 0.15 s of it, and the first
+#  - the first tick rendering a contact (flag CONTACT, 4) comes within 0.4 s of it, and the first
 #    finger-on tick with a model (flag NO_MODEL, 8, clear) no later. Measured 2026-12-06 on this
 #    2-core machine: the contact rendered 3-6 ms after the device entered the dome, the first model
 #    1-60 ms after the finger went down (before the touch); without the fix the first model came at
-#    ~1.0 s, 0.65 s after the touch. 0.15 s leaves a loaded machine's discovery and stepping room
-#    and is still a quarter of what the wait cost.
+#    ~1.0 s, 0.65 s after the touch. 0.4 s (0.15 s at first; widened by review, 2026-12-06) leaves a
+#    loaded machine's discovery and stepping room and still fails the 0.65 s the wait cost.
 set -u
 server=$1 client=$2 config_dir=$3
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
@@ -45,11 +45,11 @@ times=$(awk -F, -v R=0.040 -v r=0.008 'NR > 1 {
 set -- $times
 inside=$1 touch=$2 model=$3
 echo "     the device entered the dome at $inside s, a contact was rendered at $touch s, the first model at $model s"
-if [ "$inside" != - ] && [ "$touch" != - ] && awk -v a="$inside" -v b="$touch" 'BEGIN { exit !(b - a <= 0.15) }'; then
-  echo "ok   the press was felt $(awk -v a="$inside" -v b="$touch" 'BEGIN { printf "%.3f", b - a }') s after the touch (want <= 0.15 s)"
-else echo "FAIL the press was not felt within 0.15 s of the touch"; fail=1; fi
-if [ "$inside" != - ] && [ "$model" != - ] && awk -v a="$inside" -v b="$model" 'BEGIN { exit !(b - a <= 0.15) }'; then
-  echo "ok   the first local model was rendered at $model s, within 0.15 s of the touch"
-else echo "FAIL no local model within 0.15 s of the touch (NO_MODEL until $model s)"; fail=1; fi
+if [ "$inside" != - ] && [ "$touch" != - ] && awk -v a="$inside" -v b="$touch" 'BEGIN { exit !(b - a <= 0.4) }'; then
+  echo "ok   the press was felt $(awk -v a="$inside" -v b="$touch" 'BEGIN { printf "%.3f", b - a }') s after the touch (want <= 0.4 s)"
+else echo "FAIL the press was not felt within 0.4 s of the touch"; fail=1; fi
+if [ "$inside" != - ] && [ "$model" != - ] && awk -v a="$inside" -v b="$model" 'BEGIN { exit !(b - a <= 0.4) }'; then
+  echo "ok   the first local model was rendered at $model s, within 0.4 s of the touch"
+else echo "FAIL no local model within 0.4 s of the touch (NO_MODEL until $model s)"; fail=1; fi
 [ $fail -eq 0 ] || { cat "$tmp/flo.log"; tail -20 "$tmp/server.log"; }
 exit $fail

@@ -17,12 +17,12 @@ ok() { echo "ok   $1"; }
 bad() { echo "FAIL $1"; fail=1; }
 raw() { tr -dc '\033\007\015' < "$1" | wc -c; } # ESC, BEL, CR bytes in a file
 
-"$hostile" 173 accept 4 > "$tmp/hostile.out" 2>&1 &
+"$hostile" 173 accept 12 > "$tmp/hostile.out" 2>&1 &
 hpid=$!
-"$client" --role visual --domain 173 --session 1 --map --no-color --map-every 0.2 --duration 5 --timeout 5 \
+"$client" --role visual --domain 173 --session 1 --map --no-color --map-every 0.2 --duration 12 --timeout 10 \
   > "$tmp/visual.out" 2>&1 &
 vpid=$!
-"$client" --role trainee --domain 173 --phantom 1 --name eve --duration 5 --timeout 5 --print-period 0 \
+"$client" --role trainee --domain 173 --phantom 1 --name eve --duration 12 --timeout 10 --print-period 0 \
   > "$tmp/trainee.out" 2>&1
 wait $vpid
 wait $hpid; hpid=

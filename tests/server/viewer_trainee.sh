@@ -10,7 +10,7 @@ server=$1 client=$2 config_dir=$3
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 tmp=$(mktemp -d)
 spid= tpids=
-trap 'for p in $tpids $spid; do kill $p 2>/dev/null; done; rm -rf "$tmp"' EXIT
+trap 'for p in $tpids $spid; do kill $p 2>/dev/null; done; for p in $tpids $spid; do wait $p 2>/dev/null; done; rm -rf "$tmp"' EXIT
 cat > "$tmp/server.json" <<JSON
 { "domain_id": 173, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
   "dds_config": "$config_dir/cyclonedds-loopback.xml",
