@@ -20,6 +20,13 @@ static void class_strips(const palp_assess_result *m, char *buf, size_t len) {
   else snprintf(buf, len, "-");
 }
 
+/* Appends uid to the list in buf ("a, b"), ", ..." once it is full. */
+static void uid_list_add(char *buf, size_t len, const char *uid) {
+  const size_t used = strlen(buf);
+  if (used + strlen(uid) + 8 < len) snprintf(buf + used, len - used, "%s%s", used ? ", " : "", uid);
+  else if (used + 5 < len && !strstr(buf, "...")) snprintf(buf + used, len - used, ", ...");
+}
+
 int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   const char *exercise = NULL, *out = NULL, *csv = NULL;
   palp_db_filter flt = {0};
@@ -58,12 +65,36 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     free(v);
     return REVIEW_ERROR;
   }
-  int nr = 0;
+  /* A session left out is named: one whose log could not be read (its exercise, samples or stored
+   * metrics: a damaged page, say) also makes the run a failure (exit 2), the report lacking it; one
+   * whose logged exercise or scene does not parse is warned of, as show reports it and exits 0. A
+   * session of force contacts only (ENOTFOUND) has nothing to assess: no error. */
+  int nr = 0, left = 0, unread = 0;
+  char left_uids[512] = "", unread_uids[512] = "";
   for (int i = 0; i < n; i++) {
     char name[64];
-    if (palp_db_session_exercise(db, v[i].id, name, sizeof name, NULL) || strcmp(name, exercise)) continue;
-    if (review_row_fill(log, "class", db, &v[i], &rows[nr]) != 0) continue;
-    nr++;
+    int rc = palp_db_session_exercise(db, v[i].id, name, sizeof name, NULL);
+    if (rc == PALP_DB_ENOTFOUND || (rc == 0 && strcmp(name, exercise))) continue;
+    if (rc == 0 && (rc = review_row_fill(log, "class", db, &v[i], &rows[nr])) == 0) {
+      nr++;
+      continue;
+    }
+    if (rc == PALP_DB_ENOTFOUND) continue;
+    if (!rows[nr].s.uid[0]) /* review_row_fill warned with the reason; the exercise's read did not */
+      palp_log_warn(log, "class: %s left out: its exercise could not be read: %s", v[i].uid, palp_db_errmsg(db));
+    memset(&rows[nr], 0, sizeof rows[nr]);
+    left++;
+    uid_list_add(left_uids, sizeof left_uids, v[i].uid);
+    if (review_row_unreadable(rc)) unread++, uid_list_add(unread_uids, sizeof unread_uids, v[i].uid);
+  }
+  if (nr == 0 && left) {
+    char why[96] = "";
+    if (unread == left) snprintf(why, sizeof why, " because the log could not be read");
+    else if (unread) snprintf(why, sizeof why, ", %d because the log could not be read", unread);
+    fprintf(stderr, "palp-review class: exercise '%s': no session could be assessed: %d left out%s (%s; palp-review "
+            "show SESSION says why)\n", exercise, left, why, left_uids);
+    free(v), free(rows);
+    return REVIEW_ERROR;
   }
   if (nr == 0) {
     /* Name what there is, so a typo is seen at once. */
@@ -80,7 +111,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     return REVIEW_ERROR;
   }
   free(v);
-  int rc = REVIEW_OK;
+  int rc = unread ? REVIEW_ERROR : REVIEW_OK;
   /* The instructor at a terminal: the same table as the report's, as text. */
   fprintf(tty, "class report: exercise %s, %d session%s\n", exercise, nr, nr == 1 ? "" : "s");
   /* OUTSIDE[s]: how long the phantom's model was outside its valid range (review_valid_range;
@@ -191,6 +222,9 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       rc = REVIEW_ERROR;
     } else fprintf(tty, "class: wrote %s (%d sessions)\n", out, nr);
   }
+  if (unread)
+    fprintf(stderr, "palp-review class: %d session%s left out because the log could not be read (%s; palp-review show "
+            "SESSION says why)\n", unread, unread == 1 ? "" : "s", unread_uids);
   for (int i = 0; i < nr; i++) review_row_free(&rows[i]);
   free(rows);
   return rc;

@@ -37,6 +37,8 @@ int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_s
   return 0;
 }
 
+int review_row_unreadable(int rc) { return rc <= PALP_DB_ENEWER && rc >= PALP_DB_ECOPY && rc != PALP_DB_ENOTFOUND; }
+
 void review_row_free(review_row *r) { review_assessment_free(&r->a); }
 
 void review_html_head(FILE *f, const char *title, const char *heading, const char *id, const char *name,

@@ -25,6 +25,10 @@ typedef struct review_row {
  * the table: PALP_DB_ENOTFOUND for one without finger samples, force contacts only; PALP_DB_ESQL for one
  * without, whose stored metrics cannot be read). */
 int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_session_info *s, review_row *r);
+/* 1 when review_row_fill's (or a read's) code says the log itself could not be read (SQLite failed: a
+ * damaged page, say), 0 when the session holds nothing to assess or what it logged does not parse. The
+ * tables exit 2 for the first, as show does for the same reads; show exits 0 for the second. */
+int review_row_unreadable(int rc);
 void review_row_free(review_row *r);
 
 /* The HTML both tables' pages share (class.c, trainee.c): the page's head up to and including

@@ -214,13 +214,14 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   }
   /* A session without a fingertip (force contacts only: the paper's experiment) has nothing to
    * assess: counted, not listed; one that fails otherwise is left out with a warning, and counted. */
-  int nr = 0, forced = 0, failed = 0;
+  int nr = 0, forced = 0, failed = 0, unread = 0;
   for (int i = 0; i < n; i++) {
     const int rc = review_row_fill(NULL, "trainee", db, &v[i], &rows[nr]);
     if (rc == 0) nr++;
     else if (rc == PALP_DB_ENOTFOUND) forced++;
     else {
       failed++;
+      unread += review_row_unreadable(rc);
       palp_log_warn(log, "trainee: %s left out: it could not be assessed (palp-review show says why)", v[i].uid);
     }
   }
@@ -249,7 +250,8 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   /* Nothing to assess is still her record: --csv and --out are written (a header, a page saying so), so a
    * script over the class never finds an earlier run's file standing in for this one. */
   if (nr == 0) {
-    int rc = REVIEW_OK;
+    /* a session left out because the log could not be read leaves the record short: not a success */
+    int rc = unread ? REVIEW_ERROR : REVIEW_OK;
     record none = {0};
     if (csv && review_rows_csv(log, "trainee", db, csv, rows, 0) != 0) rc = REVIEW_ERROR;
     if (out) {
@@ -315,7 +317,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
            rec.pruned_latest == 1 ? "" : "s");
   for (int i = 0; i < nr; i++)
     if (rows[i].told[0]) fprintf(tty, "not blind: %s: %s\n", rows[i].s.uid, rows[i].told);
-  int rc = REVIEW_OK;
+  int rc = unread ? REVIEW_ERROR : REVIEW_OK; /* the record lacks the sessions that could not be read */
   if (csv && review_rows_csv(log, "trainee", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
   if (out) {
     if (write_page(out, name, rows, nr, &rec, summary) != 0) {

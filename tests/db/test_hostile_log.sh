@@ -217,15 +217,39 @@ sqlite3 "$dir/metrics.db" "DELETE FROM finger_sample; UPDATE session SET pruned_
   'unsystematic', 0.2, 3, 1.0, 4.5, 0, NULL, NULL FROM session; PRAGMA wal_checkpoint(TRUNCATE);" >/dev/null
 "$review" --db "$dir/metrics.db" show "$uid" | grep -q "stored when the session was pruned" &&
   ok "stored metrics, undamaged: show gives them" || bad "stored metrics, undamaged: show does not give them"
+# the same with an exercise logged, for class (its sessions are those of one exercise)
+cp "$dir/metrics.db" "$dir/metricsx.db"
+python3 - "$dir/metricsx.db" "$(dirname "$scene")/../assess/exercise_expert.json" <<'PY'
+import sqlite3, sys
+c = sqlite3.connect(sys.argv[1])
+c.execute("INSERT INTO session_exercise(session_id, exercise_name, exercise_json) SELECT id, 'test-two-lumps', ? FROM session",
+          (open(sys.argv[2]).read(),))
+c.commit()
+c.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+c.close()
+PY
 damage session_metrics "$dir/metrics.db"
+damage session_metrics "$dir/metricsx.db"
 want="session_metrics table"
 damaged "$dir/metrics.db" show
 damaged "$dir/metrics.db" report --out "$dir/metrics.html"
 damaged "$dir/metrics.db" export --format csv --table metrics --out "$dir/metrics.csv"
 trainee=$(sqlite3 "$dir/base.db" "SELECT trainee FROM session")
-"$review" --db "$dir/metrics.db" trainee "$trainee" > "$dir/metrics-trainee.out" 2>&1 || true
-grep -q "none assessed; 1 left out, could not be assessed" "$dir/metrics-trainee.out" &&
-  ok "trainee: the session whose stored metrics cannot be read is left out as not assessed, not as force contacts only" ||
-  bad "trainee over damaged stored metrics: $(cat "$dir/metrics-trainee.out")"
+# trainee and class over a log they cannot read: exit 2, the sessions left out counted and named, not
+# "exit 0" (trainee) or "no session of exercise 'X' ... (exercises logged: X)" (class) (2026-12-06, found by review)
+set +e
+"$review" --db "$dir/metrics.db" trainee "$trainee" > "$dir/metrics-trainee.out" 2>&1; rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "none assessed; 1 left out, could not be assessed" "$dir/metrics-trainee.out" &&
+  ok "trainee: the session whose stored metrics cannot be read is left out as not assessed, not as force contacts only; exit 2" ||
+  bad "trainee over damaged stored metrics: exit $rc: $(cat "$dir/metrics-trainee.out")"
+set +e
+"$review" --db "$dir/metricsx.db" class --exercise test-two-lumps --out "$dir/metricsx.html" > "$dir/metricsx-class.out" 2> "$dir/metricsx-class.err"; rc=$?
+set -e
+if [ $rc -eq 2 ] && grep -q "session_metrics table could not be read" "$dir/metricsx-class.err" &&
+   grep -q "no session could be assessed: 1 left out because the log could not be read ($uid;" "$dir/metricsx-class.err" &&
+   ! grep -q "no session of exercise" "$dir/metricsx-class.err"; then
+  ok "class: the session whose log cannot be read counted and named, exit 2: $(tail -1 "$dir/metricsx-class.err" | cut -c1-150)"
+else bad "class over damaged stored metrics: exit $rc:"; cat "$dir/metricsx-class.out" "$dir/metricsx-class.err"; fi
 
 exit $fail
