@@ -510,7 +510,7 @@ static int cmd_migrate(palp_log *log, const char *path, int nargs) {
   return REVIEW_OK;
 }
 
-int main(int argc, char **argv) {
+static int review_main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-review")) return 0;
   const char *path = getenv("PALP_DB");
   if (!path || !*path) path = "palp-sessions.db";
@@ -651,5 +651,16 @@ int main(int argc, char **argv) {
     } else rc = review_report(&log, db, &s, out);
   }
   palp_db_close(db);
+  return rc;
+}
+
+/* What a command printed on a full disk or a closed pipe was written to nothing: said, and not a
+ * success (exit 2), as palp-stats does; the commands check only the files they open themselves. */
+int main(int argc, char **argv) {
+  int rc = review_main(argc, argv);
+  if (review_finish_output(stdout) != 0) {
+    fprintf(stderr, "palp-review: stdout: %s (what was printed is incomplete)\n", strerror(errno));
+    rc = REVIEW_ERROR;
+  }
   return rc;
 }

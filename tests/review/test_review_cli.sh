@@ -285,6 +285,13 @@ for cmd in class trainee; do
   if [ $rc = 2 ] && grep -q "$cmd: standard output: No space left on device" "$dir/full.err"; then ok "$cmd --csv - > /dev/full: exit 2, said"
   else bad "$cmd --csv - > /dev/full: exit $rc"; cat "$dir/full.err"; fi
 done
+# what list and show print, on a full disk (2026-12-06, found by review: exit 0, the text lost unsaid)
+for args in "list" "show class-alice-1"; do
+  # shellcheck disable=SC2086
+  R $args > /dev/full 2> "$dir/full.err"; rc=$?
+  if [ $rc = 2 ] && grep -q "^palp-review: stdout: No space left on device" "$dir/full.err"; then ok "$args > /dev/full: exit 2, said"
+  else bad "$args > /dev/full: exit $rc"; cat "$dir/full.err"; fi
+done
 R trainee carol > "$dir/trainee-carol.txt" 2>&1 || bad "trainee carol exit status"
 expect "trainee carol: one session of free practice, no score" \
   "^class-carol-1 +2026-01-08 +\(practice\) +- +[0-9]+ .* +- +- +- +-$" "$dir/trainee-carol.txt"
