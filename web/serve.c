@@ -1,6 +1,7 @@
 /* serve.c - palp-web's HTTP + WebSocket server on libwebsockets. */
 #include "serve.h"
 
+#include <fcntl.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -8,6 +9,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <libwebsockets.h>
 #include <pthread.h>
@@ -209,18 +211,25 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
     snprintf(file, sizeof file, "%s/%s", s->three, path + sizeof lib - 1);
   else
     snprintf(file, sizeof file, "%s%s", s->www, path);
-  /* a file that is not there is answered here: lws_serve_http_file sends its own 404 for it and returns
-   * 1, as for a file it served, which counted it in http_ok */
+  /* a file that is not there, or that this user cannot open (mode 000), is answered here:
+   * lws_serve_http_file sends its own 404 for it and returns 1, as for a file it served, which counted it
+   * in http_ok. Opened, not only stat()ed, so a file stat() sees but open() refuses is missing too. */
   struct stat sb;
-  if (stat(file, &sb) != 0 || !S_ISREG(sb.st_mode))
-    return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
+  const int fd = open(file, O_RDONLY | O_CLOEXEC);
+  const int regular = fd >= 0 && fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode);
+  if (fd >= 0) close(fd);
+  if (!regular) return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
   char headers[512] = ""; /* answer_headers come with the status line */
   int n = 0;
   if (from_url && s->have_token)
     n = snprintf(headers, sizeof headers, "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict%s\x0d\x0a",
                  who ? s->def.trainees[who - 1].token : s->token, s->def.tls_cert ? "; Secure" : "");
   const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
-  if (rc < 0) return http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL, &s->stats.http_missing);
+  /* < 0: lws failed (it may have answered already, lws-http.h): no second answer; the connection closes */
+  if (rc < 0) {
+    s->stats.http_missing++;
+    return -1;
+  }
   s->stats.http_ok++;
   if (rc > 0 && lws_http_transaction_completed(wsi)) return -1;
   return 0;

@@ -74,9 +74,9 @@ class Procs:
         self.wait_log(p, "tick thread", 20)
         return p
 
-    def web(self, extra=(), name="web"):
-        p = self.start(name, [os.path.join(self.build, "web", "palp-web"), "--domain", str(self.domain),
-                              "--port", "0"] + list(extra))
+    def web(self, extra=(), name="web", prefix=()):
+        p = self.start(name, list(prefix) + [os.path.join(self.build, "web", "palp-web"), "--domain",
+                                             str(self.domain), "--port", "0"] + list(extra))
         m = self.wait_log(p, r"serving on \S+ port (\d+)", 20)
         p.port = int(m.group(1))
         p.base = "http://127.0.0.1:%d" % p.port

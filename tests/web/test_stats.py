@@ -3,20 +3,23 @@
 
 palp-web alone (no palp-server: nothing to show, the pages are served all the same) with a token and
 --stats. Known traffic: 2 pages served (the token in the URL, then the cookie), 2 refused (no token, a
-wrong one; their 401s carry the headers every answer carries), 1 missing (a file that is not there,
-whose 404 was counted ok until 2026-12-06), 1 WebSocket opened with the token (its hello sent) and closed, 1 refused without the token.
+wrong one; their 401s carry the headers every answer carries), 2 missing (a file that is not there,
+whose 404 was counted ok until 2026-12-06; a file of mode 000 in a copy of the pages, which stat() passes
+and open() refuses: lws answered its own 404 and it was counted ok, until 2026-12-06), 1 WebSocket opened with the token (its hello sent) and closed, 1 refused without the token.
 The line printed every 5 s, from the hub's thread while the web server's thread counts (which read the
 counters themselves, unlocked, until they were copied under a lock: a data race for ThreadSanitizer,
 scripts/sanitize.sh thread 'web_stats'), says exactly these counts; so does the last line, at SIGINT.
 DDS domain 155. usage: test_stats.py BUILD SOURCE OUT"""
+import os
 import re
+import shutil
 import time
 
 import harness
 from harness import check
 
 TOKEN = "stats-test-token-0123456789"
-WANT = "http 2 ok, 2 denied, 1 missing; ws 1 opened, 1 closed, 1 denied"
+WANT = "http 2 ok, 2 denied, 2 missing; ws 1 opened, 1 closed, 1 denied"
 # the headers docs/web.md says every answer carries, a refusal's too
 HEADERS = {"Content-Security-Policy": "default-src 'self'", "X-Content-Type-Options": "nosniff",
            "Cache-Control": "no-store", "Referrer-Policy": "no-referrer"}
@@ -31,7 +34,16 @@ def headers_missing(headers):
 def run(build, source, out):
     procs = harness.Procs(build, source, out, 155)
     try:
-        web = procs.web(["--token", TOKEN, "--stats"])
+        www = os.path.join(out, "www")
+        shutil.rmtree(www, ignore_errors=True)
+        shutil.copytree(os.path.join(source, "web", "www"), www)
+        locked = os.path.join(www, "locked.html")
+        with open(locked, "w") as f:
+            f.write("<p>not to be served</p>\n")
+        os.chmod(locked, 0)
+        # root reads a file of mode 000 all the same: palp-web runs without the capabilities that let it
+        prefix = ["setpriv", "--bounding-set=-dac_override,-dac_read_search", "--"] if os.geteuid() == 0 else []
+        web = procs.web(["--token", TOKEN, "--stats", "--www", www], prefix=prefix)
         status, _, _ = harness.http_get(web.base + "/trainee.html?token=" + TOKEN)
         check(status == 200, "the page with the token: %d" % status)
         status, _, _ = harness.http_get(web.base + "/js/common.js", {"Cookie": "palp_token=" + TOKEN})
@@ -44,6 +56,10 @@ def run(build, source, out):
         status, _, headers = harness.http_get(web.base + "/nope.html?token=" + TOKEN)
         check(status == 404 and not headers_missing(headers), "/nope.html with the token: %d, with every answer's "
               "headers (lacking %s)" % (status, headers_missing(headers)))
+        # a file there that palp-web cannot open: a 404 counted missing, not lws's own 404 counted ok
+        status, _, headers = harness.http_get(web.base + "/locked.html?token=" + TOKEN)
+        check(status == 404 and not headers_missing(headers), "/locked.html (mode 000) with the token: %d, with "
+              "every answer's headers (lacking %s)" % (status, headers_missing(headers)))
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws?token=%s" % (web.port, TOKEN), timeout=10)
         op, data = ws.recv()
         ws.close()
