@@ -127,6 +127,26 @@ def run(build, source, out):
         check(page3.eval("palpState.connected") is False and 1 <= r1 - r0 <= 2,
               "and retries ever more slowly: %d attempts in 10 s after %d (1 or 2), now waiting %s ms"
               % (r1 - r0, r0, page3.eval("palpState.retryMs")))
+        # palp-web stopped for 17 s, then started again on its port: page2 says palp-web is not reachable while
+        # it is down, and is live again within 4 s of it being back (until 2026-12-06 each unanswered attempt
+        # doubled the wait, 1, 2, 4, 8, 16 s: with 17 s down the page tried again at ~31 s, ~14 s after).
+        port = web.port
+        procs.stop(web)
+        t_down = time.time()
+        down = page2.wait_for("(function(){const t=document.getElementById('conn').textContent;"
+                              "return !palpState.connected && t.indexOf('not reachable') >= 0 ? t : null;})()", 10)
+        check(down is not None, "palp-web stopped: the trainee page says %r"
+              % page2.eval("document.getElementById('conn').textContent"))
+        time.sleep(max(0.0, 17.0 - (time.time() - t_down)))
+        waiting = page2.eval("palpState.retryMs")
+        check(page2.eval("palpState.connected") is False and waiting <= 2000,
+              "after 17 s down it still retries every %s ms (<= 2000)" % waiting)
+        web = procs.web(["--token", TOKEN, "--port", str(port)], name="web-again")
+        t_back = time.time()
+        ok = page2.wait_for("palpState.connected", 20)
+        took = time.time() - t_back
+        check(ok is True and took <= 4.0, "palp-web back on port %d: the page live again %.1f s later (<= 4 s)"
+              % (port, took))
     finally:
         if browser:
             browser.close()

@@ -43,13 +43,17 @@ const PALP = (function () {
   /* Opens the WebSocket (the token from this page's own address), calls handlers[type](msg) for
    * every message and handlers.deformation(frame) for frames; reconnects, except once the bridge said
    * this page's token expired ({"type": "expired"}): its message stays shown, as no retry with the
-   * same token can succeed. The first retry comes after a second; each connection the bridge did not
-   * answer (refused at the handshake, or closed before its hello) doubles the wait, to at most 30 s,
-   * and one it answered starts again from a second: a page refused for good (no ?token= in its
-   * address, a token palp-web no longer takes, a trainee's fourth page) knocked every second and never
-   * said why. It says the bridge's reason where the bridge closes with one; after 3 refusals without,
-   * what its own address's answer tells (say()). */
-  const RETRY_MS = 1000, RETRY_MAX_MS = 30000, SAY_AFTER = 3;
+   * same token can succeed. A connection the bridge did not answer (refused at the handshake, or closed
+   * before its hello) is told apart by the page's own address (probe()): palp-web not reachable at
+   * all (stopped, restarting) is retried every second, so the page is back within a second of it;
+   * palp-web answering that address but not this page's WebSocket, or closing it with a reason, is a
+   * refusal: each doubles the wait, to at most 30 s, and one it answered starts again from a second.
+   * (Until 2026-12-06 every unanswered attempt doubled it, so a page came back up to 30 s after a
+   * restarted palp-web; before that, a page refused for good (no ?token= in its address, a token
+   * palp-web no longer takes, a trainee's fourth page) knocked every second and never said why.) It
+   * says the bridge's reason where the bridge closes with one; after 3 refusals without, what its own
+   * address's answer tells. */
+  const RETRY_MS = 1000, RETRY_MAX_MS = 30000, SAY_AFTER = 3, PROBE_MS = 2000;
   function connect(handlers) {
     const token = params().get("token");
     const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" +
@@ -63,18 +67,29 @@ const PALP = (function () {
       if (conn) { conn.textContent = text; conn.className = ok ? "conn ok" : "conn"; }
     }
     /* A handshake refused tells a page nothing (the browser gives 1006, as for a bridge that is down):
-     * the page asks for its own address, as it loaded, to tell them apart. */
-    function say(again) {
-      const at = attempt;
-      fetch(location.href, { cache: "no-store", credentials: "same-origin" }).then(function (r) {
-        return r.status === 401 ? "refused: palp-web does not take this link's token (ask for a new link)" :
-          !token ? "refused: this page's address has no ?token= (open the link with its token)" :
-          "refused by palp-web: check the link's token";
-      }, function () { return "palp-web not reachable"; }).then(function (why) {
-        if (at !== attempt || state.connected || state.expired) return; /* a newer attempt's news */
-        state.refused = why.startsWith("refused") ? why : "";
-        setConn(false, why + again);
-      });
+     * the page asks for its own address, as it loaded, to tell them apart. Resolves to why it is
+     * refused, or to "" when palp-web does not answer at all (none in PROBE_MS: a hung bridge too). */
+    function probe() {
+      const ctl = typeof AbortController === "function" ? new AbortController() : null;
+      const timer = ctl ? setTimeout(function () { ctl.abort(); }, PROBE_MS) : 0;
+      return fetch(location.href, { cache: "no-store", credentials: "same-origin", signal: ctl ? ctl.signal : undefined })
+        .then(function (r) {
+          return r.status === 401 ? "refused: palp-web does not take this link's token (ask for a new link)" :
+            !token ? "refused: this page's address has no ?token= (open the link with its token)" :
+            "refused by palp-web: check the link's token";
+        }, function () { return ""; })
+        .then(function (why) { clearTimeout(timer); return why; });
+    }
+    function retry(wait) {
+      state.retryMs = wait;
+      setTimeout(open, wait);
+    }
+    /* the next attempt after a refusal: the wait, doubled for the one after */
+    function backoff() {
+      const wait = retryMs;
+      retryMs = Math.min(RETRY_MAX_MS, 2 * retryMs);
+      retry(wait);
+      return ", retrying in " + Math.round(wait / 1000) + " s";
     }
     function open() {
       attempt++;
@@ -83,23 +98,37 @@ const PALP = (function () {
       ws.onopen = function () { setConn(true, "live"); if (handlers.open) handlers.open(send); };
       ws.onclose = function (ev) {
         if (state.expired) { setConn(false, state.expired); return; }
-        if (answered) retryMs = RETRY_MS, unanswered = 0;
-        else unanswered++;
-        const wait = retryMs, again = ", retrying in " + Math.round(wait / 1000) + " s";
-        if (!answered) retryMs = Math.min(RETRY_MAX_MS, 2 * retryMs);
+        const was = answered;
         answered = false;
         state.reconnects++;
-        state.retryMs = wait;
-        setTimeout(open, wait);
+        if (was) retryMs = RETRY_MS, unanswered = 0;
         if (ev.reason) { /* the bridge's own words (web/serve.c: a page it has no room for) */
           state.refused = "palp-web: " + ev.reason;
-          setConn(false, state.refused + again);
-        } else if (unanswered >= SAY_AFTER) {
-          setConn(false, "not connected" + again);
-          say(again);
-        } else {
-          setConn(false, "disconnected, retrying");
+          if (was) retry(RETRY_MS), setConn(false, state.refused + ", retrying in 1 s");
+          else setConn(false, state.refused + backoff());
+          return;
         }
+        if (was) {
+          setConn(false, "disconnected, retrying");
+          retry(RETRY_MS);
+          return;
+        }
+        const at = attempt;
+        probe().then(function (why) {
+          if (at !== attempt || state.connected || state.expired) return; /* a newer attempt's news */
+          if (!why) { /* not refused: not there (yet); back as soon as it is */
+            retryMs = RETRY_MS, unanswered = 0;
+            state.refused = "";
+            setConn(false, "palp-web not reachable, retrying");
+            retry(RETRY_MS);
+            return;
+          }
+          const again = backoff();
+          if (++unanswered >= SAY_AFTER) {
+            state.refused = why;
+            setConn(false, why + again);
+          } else setConn(false, "disconnected" + again);
+        });
       };
       ws.onmessage = function (ev) {
         answered = true;
