@@ -746,6 +746,11 @@ static void end_cut(recorder *r, rsession *s, const char *why) {
  * RESTART_GAP_NS after this one. A server stalled and back (the same run) passes: its clock ran on. */
 static int new_run(const rsession *s, const palp_SessionState *m, dds_instance_handle_t writer, int64_t now_ns) {
   if (m->ticks < s->last_ticks || m->duration < s->last_duration) return 1;
+  /* The state last seen, again: a server stalled past its lease and rediscovered (its writer a new
+   * handle here) re-delivers its last state before its clock runs on; a new run's first state is
+   * never the old run's to the tick and the nanosecond once that one has stepped (session 77:
+   * server_paused, now and then; at tick 0 both runs' first states may read 0 s, 0 ticks). */
+  if (s->last_ticks > 0 && m->ticks == s->last_ticks && m->duration == s->last_duration) return 0;
   if (!writer || !s->state_writer || writer == s->state_writer || !isfinite(m->duration)) return 0;
   return now_ns - (int64_t)(m->duration * 1e9) - s->start_ns > RESTART_GAP_NS;
 }

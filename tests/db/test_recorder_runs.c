@@ -277,17 +277,40 @@ int main(int argc, char **argv) {
   REQUIRE(wait_matched(x_fb, 1, 20) == 0, "the stray feedback writer never matched the recorder");
   sleep_ms(500);
   for (int k = 0; k < 5; k++) feedback(x_fb, 43, (uint64_t)k + 1), sleep_ms(12);
+  /* session 45 (session 77): a server stalled past its lease and rediscovered: its state writer is new
+   * to the recorder (a new handle) and re-delivers the last state it wrote before the stall (transient-
+   * local), the same ticks and duration, before its clock runs on. The same run: one session, ended
+   * normal (server_paused's full runs took it for a restart now and then: "server restarted: session 1's
+   * state began again (3.945 s, 316 ticks after 3.945 s, 316 ticks)"). */
+  dds_entity_t pa = dds_create_participant(DOMAIN, NULL, NULL);
+  dds_entity_t pa_state = palp_dds_create_writer(pa, palp_dds_create_topic(pa, PALP_TOPIC_SESSION_STATE),
+                                                 PALP_TOPIC_SESSION_STATE);
+  REQUIRE(wait_matched(pa_state, 1, 20) == 0, "session 45's first state writer never matched the recorder");
+  const double s45_began = now_s() - 0.5;
+  state(pa_state, 45, "sid45", 0, 0.5, 50);
+  REQUIRE(wait_log(logf, "recording session 45", 5) == 0, "session 45 never recorded");
+  dds_delete(pa);
+  sleep_ms(1500);
+  dds_entity_t pb = dds_create_participant(DOMAIN, NULL, NULL);
+  dds_entity_t pb_state = palp_dds_create_writer(pb, palp_dds_create_topic(pb, PALP_TOPIC_SESSION_STATE),
+                                                 PALP_TOPIC_SESSION_STATE);
+  REQUIRE(wait_matched(pb_state, 1, 20) == 0, "session 45's second state writer never matched the recorder");
+  state(pb_state, 45, "sid45", 0, 0.5, 50); /* the last state again */
+  sleep_ms(100);
+  state(pb_state, 45, "sid45", 0, now_s() - s45_began, 300);
   sleep_ms(300);
   state(r2.state, 41, "new41", 1, now_s() - run2_began, 100);
   state(r2.state, 42, "new42", 1, now_s() - run2_began, 100);
   state(a1_state, 43, "s43", 1, 1.0, 100);
   state(r2.state, 44, "new44", 1, now_s() - run2_began, 100);
+  state(pb_state, 45, "sid45", 1, now_s() - s45_began, 400);
   sleep_ms(600);
   int status;
   const int exited_0 = stop_recorder(pid, &status);
   dds_delete(r2.pp);
   dds_delete(a1);
   dds_delete(x);
+  dds_delete(pb);
   dds_delete(s1);
   dds_delete(s2);
   dds_delete(pp);
@@ -311,6 +334,11 @@ int main(int argc, char **argv) {
             db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'old42' AND end_reason = 'error'") == 1 &&
             db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'new42' AND end_reason = 'normal'") == 1,
         "each session id logged as two sessions, the first ended error (server restarted), the second normal");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'sid45'") == 1 &&
+            db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'sid45' AND end_reason = 'normal'") == 1,
+        "session 45: its last state re-delivered by a rediscovered writer is the same run: one session, ended normal "
+        "(%lld sessions, %lld normal)", (long long)db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'sid45'"),
+        (long long)db_scalar(h, "SELECT count(*) FROM session WHERE trainee = 'sid45' AND end_reason = 'normal'"));
   CHECK(c_old41 == 20 && f_old41 == 20,
         "session 41's first run keeps its own 20 contacts and 20 frames, none of the new run's (%lld, %lld)",
         (long long)c_old41, (long long)f_old41);
