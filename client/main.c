@@ -401,7 +401,8 @@ typedef struct feedback_ctx {
    * a stopped server's lease held). given: each finger's force from the newest sample [N]; scale: the
    * share of it the driver has now (1, fading, 0). */
   palp_vec3 given[PALP_CLI_MAX_FINGERS];
-  double scale, stale_time, fade_time;
+  double scale;
+  palp_haptic_def fade; /* its stale_time and fade_time: the renderer's (palp_haptic_fade) */
   int64_t last_rx_ns;
 } feedback_ctx;
 
@@ -456,9 +457,7 @@ static void drain_feedback(feedback_ctx *c) {
  * now_ns < 0: 0 N at once (the station stops: the driver is not left holding a force). */
 static void fade_feedback(feedback_ctx *c, int64_t now_ns) {
   if (!c->in->feedback || c->scale <= 0) return;
-  const double age = (double)(now_ns - c->last_rx_ns) * 1e-9;
-  if (now_ns >= 0 && age <= c->stale_time) return;
-  const double s = now_ns < 0 || age >= c->stale_time + c->fade_time ? 0 : 1 - (age - c->stale_time) / c->fade_time;
+  const double s = now_ns < 0 ? 0 : palp_haptic_fade(&c->fade, (double)(now_ns - c->last_rx_ns) * 1e-9);
   if (s >= c->scale) return;
   c->scale = s;
   for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++) {
@@ -1201,7 +1200,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   const palp_haptic_def render = palp_cli_haptic_default_def().render;
   feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0,
                      .max_force = o->max_force > 0 ? o->max_force : render.max_force,
-                     .stale_time = render.stale_time, .fade_time = render.fade_time};
+                     .fade = render};
   /* The safe force is the smaller of the station's and the phantom's (the catalogue's max_force), as
    * on the haptic path: the server reports a finger's force above its limit as it is (session 77). */
   if (ph->max_force > 0 && isfinite(ph->max_force) && ph->max_force < fx.max_force) fx.max_force = ph->max_force;

@@ -93,10 +93,11 @@ static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now, palp_
 
 /* The share of the model force a silent server still leaves on the hand: 1 while models
  * are fresh, down to 0 over fade_time once the newest is older than stale_time. */
-static double stale_scale(const palp_haptic *h, double now) {
-  const double age = now - h->cur_at;
-  return age > h->def.stale_time ? clamp01(1.0 - (age - h->def.stale_time) / h->def.fade_time) : 1.0;
+double palp_haptic_fade(const palp_haptic_def *d, double age) {
+  return age > d->stale_time ? clamp01(1.0 - (age - d->stale_time) / d->fade_time) : 1.0;
 }
+
+static double stale_scale(const palp_haptic *h, double now) { return palp_haptic_fade(&h->def, now - h->cur_at); }
 
 double palp_haptic_stale_scale(const palp_haptic *h, double now) {
   if (!h || !h->have) return 0.0;

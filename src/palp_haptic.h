@@ -39,6 +39,9 @@ typedef struct palp_haptic_def {
 } palp_haptic_def;
 
 palp_haptic_def palp_haptic_default_def(void);
+/* The share of a force still given age [s] after its newest model (or sample): 1 up to stale_time,
+ * down to 0 over fade_time. The renderer's stale fade, and the force-mode driver path's (client/main.c). */
+double palp_haptic_fade(const palp_haptic_def *d, double age);
 
 enum {
   PALP_HAPTIC_LIMITED = 1u << 0, /* the force was limited to max_force */
