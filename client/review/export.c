@@ -2,6 +2,7 @@
  * Numbers are printed with 17 significant digits, which round-trips every IEEE double exactly,
  * so an export gives back the logged values bit for bit. The 64-bit state hash is written as a
  * hexadecimal string: JSON readers commonly hold numbers as doubles and would round it. */
+#include <errno.h>
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
@@ -245,16 +246,14 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
       if ((rc = json_array(db, &x, arrays[k], k == T_NOTES, k, s->id))) table = arrays[k];
     fputs("}\n", f);
   }
-  int werr = ferror(f);
-  if (f != stdout) werr |= fclose(f);
-  else werr |= fflush(f);
+  const int werr = review_finish_output(f) != 0 ? errno : 0;
   if (rc) { /* which table, and why: the file holds what came before (2026-12-06: the notes ended there silently) */
     palp_log_error(log, "export: the %s could not be read: %s (the export is incomplete)", table,
                    palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
   if (werr) {
-    palp_log_error(log, "export: write error");
+    palp_log_error(log, "export: write error: %s", strerror(werr));
     return REVIEW_ERROR;
   }
   return REVIEW_OK;
