@@ -519,10 +519,15 @@ char *palp_dds_writer_participant_text(dds_entity_t reader, dds_instance_handle_
     snprintf(out, len, "a writer already gone");
     return out;
   }
-  const unsigned char *g = ep->participant_key.v;
+  palp_dds_participant_text(&ep->participant_key, out, len);
+  dds_builtintopic_free_endpoint(ep);
+  return out;
+}
+
+char *palp_dds_participant_text(const dds_guid_t *participant, char *out, size_t len) {
+  const unsigned char *g = participant->v;
   snprintf(out, len, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3], g[4],
            g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
-  dds_builtintopic_free_endpoint(ep);
   return out;
 }
 

@@ -1124,6 +1124,12 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) srv->rejected_closed[r] += s->stats.rejected[r];
   if (srv->events && srv->events->session_closed) srv->events->session_closed(srv->events->ctx, &sum);
   palp_log_info(srv->log, "session %u closed after %.1f s (%s)", s->id, sum.duration, reason);
+  if (s->stats.rejected[PALP_SRV_REJ_FOREIGN_PARTICIPANT]) /* the writers were named as they came (session.c) */
+    palp_log_warn(srv->log, "session %u: %llu contact samples refused in all from %llu writer%s not of the participant "
+                            "that joined it (%s)",
+                  s->id, (unsigned long long)s->stats.rejected[PALP_SRV_REJ_FOREIGN_PARTICIPANT],
+                  (unsigned long long)s->foreign_writers, s->foreign_writers == 1 ? "" : "s",
+                  palp_srv_reject_name(PALP_SRV_REJ_FOREIGN_PARTICIPANT));
   if (s->session_log_shed + s->session_log_failed > 0) /* its own records (session 69); more may fail still queued */
     palp_log_warn(srv->log, "session %u: the session log lost %llu of its records while it ran (%llu shed, %llu failed): "
                             "its review will be incomplete",
@@ -1329,9 +1335,9 @@ static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq) {
 }
 
 /* who: the authenticated sender (secured), NULL on plain DDS; writer: its
- * publication handle. */
+ * publication handle on `reader` (palp_session_request's or palp_station_request's). */
 static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp_srv_requester *who,
-                        uint64_t writer) {
+                        dds_entity_t reader, uint64_t writer) {
   char why[128];
   guard_counts *g = &srv->guard;
   if (rq->role > palp_ROLE_OBSERVER) {
@@ -1405,11 +1411,29 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
       refuse(srv, rq, &g->joins_refused_other, why);
       return;
     }
+    /* The session is bound to the participant whose request writer JOINed it: only that participant's
+     * contacts reach its world (server/session.c, take_contacts). A writer no longer matched has no
+     * participant to bind to, and a session bound to none would refuse its station's every contact,
+     * or (unbound) take anyone's: the JOIN is dropped unanswered, as a secured request whose writer's
+     * identity is gone is (handle_requests). A station that lives was only lost for a moment: Cyclone
+     * re-delivers its (transient-local) JOIN when it finds the station again, with a new handle, and
+     * that one is answered. */
+    dds_builtintopic_endpoint_t *joiner = dds_get_matched_publication_data(reader, writer);
+    if (!joiner) {
+      g->joins_refused_other++;
+      palp_log_warn(srv->log, "station %s: JOIN not answered: its request writer is already gone, so the session "
+                              "would have no participant to take contacts from",
+                    PALP_PRINTABLE(rq->station_id));
+      return;
+    }
+    const dds_guid_t trainee_participant = joiner->participant_key;
+    dds_builtintopic_free_endpoint(joiner);
     /* Secured, the partition carries the trainee's identity, so that only its
      * permissions (palp/s/NAME/...) allow writing contacts into it. */
     char partition[64] = "";
     if (who) palp_dds_secure_session_partition(who->name, srv->next_session_id, partition, sizeof partition);
     palp_srv_session_def d = {.id = srv->next_session_id,
+                              .trainee_participant = trainee_participant,
                               .phantom = ph,
                               .cfg = &srv->cfg,
                               .trainee_station = rq->station_id,
@@ -1660,13 +1684,14 @@ static int writers_unmatched(dds_entity_t reader) {
          (int64_t)ms.total_count_change - ms.current_count_change > 0;
 }
 
-static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, uint64_t writer, station **out_st) {
+static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, dds_entity_t reader, uint64_t writer,
+                                  station **out_st) {
   /* A station marked gone that asks again: its dispose is judged first, as it was before this
    * sample when the server slept on it. */
   station *marked = find_station(srv, rq->station_id);
   if (marked && marked->gone_due_ns) decide_gone(srv, marked);
   if (rq->op == palp_OP_JOIN) {
-    handle_join(srv, rq, NULL, writer); /* palp_station_request is not offered when secured */
+    handle_join(srv, rq, NULL, reader, writer); /* palp_station_request is not offered when secured */
     if (out_st) *out_st = find_station(srv, rq->station_id);
     return;
   }
@@ -1705,7 +1730,7 @@ static void handle_station_requests(palp_srv *srv) {
         rq.want_feedback = s->want_feedback;
         rq.want_deformation = s->want_deformation;
         station *st = NULL;
-        handle_request_sample(srv, &rq, info[i].publication_handle, &st);
+        handle_request_sample(srv, &rq, srv->station_request_r, info[i].publication_handle, &st);
         if (st) {
           st->keyed = 1;
           st->ih = info[i].instance_handle;
@@ -1854,7 +1879,7 @@ static void handle_requests(palp_srv *srv) {
           }
         }
         if (buf[i].op == palp_OP_JOIN)
-          handle_join(srv, &buf[i], secured(srv) ? &who : NULL, info[i].publication_handle);
+          handle_join(srv, &buf[i], secured(srv) ? &who : NULL, srv->request_r, info[i].publication_handle);
         else
           handle_leave(srv, &buf[i]);
         continue;

@@ -80,12 +80,18 @@ static int64_t arrival_ns(palp_srv_session *s, int finger, uint64_t seq, int64_t
 }
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err) {
+  static const dds_guid_t unknown_guid; /* all zero: no participant has it */
+  if (!memcmp(&def->trainee_participant, &unknown_guid, sizeof unknown_guid)) {
+    *err = PALP_EINVAL; /* unbound, anyone in its partition would palpate it */
+    return NULL;
+  }
   palp_srv_session *s = calloc(1, sizeof *s);
   if (!s) {
     *err = PALP_ENOMEM;
     return NULL;
   }
   s->id = def->id;
+  s->trainee_participant = def->trainee_participant;
   s->phantom = def->phantom;
   s->events = def->events;
   s->log = def->log;
@@ -387,6 +393,67 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
   return 0;
 }
 
+/* A refused writer of contacts, named in the server's log with the session and its station: the
+ * first at once, then at most one a log_interval (a flood of new writers writes no flood of lines),
+ * each naming how many went unnamed since. Its samples are counted as foreign_participant
+ * (count_rejects says their number). ep: its endpoint data, NULL when it was gone already. */
+static void say_foreign_writer(palp_srv_session *s, const dds_builtintopic_endpoint_t *ep, int64_t now_ns) {
+  s->foreign_writers++;
+  if (s->foreign_said_ns && now_ns - s->foreign_said_ns < (int64_t)(s->log_interval * 1e9)) {
+    s->foreign_unnamed++;
+    return;
+  }
+  char who[64], own[64], unnamed[96] = "";
+  if (ep)
+    palp_dds_participant_text(&ep->participant_key, who, sizeof who);
+  else
+    snprintf(who, sizeof who, "a writer already gone");
+  palp_dds_participant_text(&s->trainee_participant, own, sizeof own);
+  if (s->foreign_unnamed)
+    snprintf(unnamed, sizeof unnamed, "; %llu other such writer%s since the last one named",
+             (unsigned long long)s->foreign_unnamed, s->foreign_unnamed == 1 ? "" : "s");
+  palp_log_warn(s->log, "session %u (trainee station %s): contacts from %s%s refused: the session is palpated only "
+                        "from %s, whose request joined it (%s); its samples are counted as %s%s",
+                s->id, PALP_PRINTABLE(s->trainee_station), ep ? "a writer of " : "", who, own,
+                ep ? "another process in its partition: a stale station of that name, or a second participant of the "
+                     "same identity"
+                   : "gone before it was looked up, it cannot be shown to be the trainee's",
+                palp_srv_reject_name(PALP_SRV_REJ_FOREIGN_PARTICIPANT), unnamed);
+  s->foreign_said_ns = now_ns;
+  s->foreign_unnamed = 0;
+}
+
+/* Whether writer `pub` of a contact sample is of the participant that joined the session (1) or not
+ * (0). Kept per writer: a miss asks the reader (dds_get_matched_publication_data walks its matched
+ * writers and copies one's QoS), once for each sample taken at most, so a flood of new writers costs
+ * a tick no more lookups than the take's bound (CONTACT_MAX_INSTANCES). A writer no longer matched
+ * when first looked up cannot be shown to be the trainee's: refused (a forger could otherwise write
+ * and vanish; a station's writer lives for its session and is looked up at its first sample). */
+static int own_writer(palp_srv_session *s, dds_instance_handle_t pub, int64_t now_ns) {
+  if (pub == 0) return 0;
+  for (int i = 0; i < PALP_SRV_CONTACT_WRITERS; i++)
+    if (s->writers[i].pub == pub) return s->writers[i].own;
+  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(s->contact_reader, pub);
+  const int own = ep && !memcmp(ep->participant_key.v, s->trainee_participant.v, sizeof s->trainee_participant.v);
+  if (!own) say_foreign_writer(s, ep, now_ns);
+  if (ep) dds_builtintopic_free_endpoint(ep);
+  /* A free entry, else the next refused one from the hand, else (all the trainee's own: a station
+   * found again eight times) the hand's: a writer forgotten is looked up again. */
+  palp_srv_contact_writer *slot = NULL;
+  for (int i = 0; i < PALP_SRV_CONTACT_WRITERS && !slot; i++)
+    if (!s->writers[i].pub) slot = &s->writers[i];
+  for (int k = 0; k < PALP_SRV_CONTACT_WRITERS && !slot; k++) {
+    const unsigned at = (s->writers_hand + (unsigned)k) % PALP_SRV_CONTACT_WRITERS;
+    if (!s->writers[at].own) slot = &s->writers[at], s->writers_hand = (at + 1) % PALP_SRV_CONTACT_WRITERS;
+  }
+  if (!slot) {
+    slot = &s->writers[s->writers_hand];
+    s->writers_hand = (s->writers_hand + 1) % PALP_SRV_CONTACT_WRITERS;
+  }
+  *slot = (palp_srv_contact_writer){.pub = pub, .own = own};
+  return own;
+}
+
 /* Folds the filter's counts into the rejection counters (and the log). */
 static void fold_filtered(palp_srv_session *s, int64_t now_ns) {
   uint64_t fs = atomic_load_explicit(&s->filtered_session, memory_order_relaxed);
@@ -437,8 +504,26 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
          * from it: dds_instance_get_key scans every instance the participant
          * ever saw (quadratic under a flood of keys). */
         if (info[i].instance_state != DDS_IST_ALIVE && buf[i].session_id == s->id &&
-            buf[i].finger < PALP_SRV_MAX_FINGERS)
-          lift(s, &s->finger[buf[i].finger]);
+            buf[i].finger < PALP_SRV_MAX_FINGERS) {
+          /* Only the trainee's own writers lift its fingers: the writer that placed this one (known
+           * without a lookup: it may be gone by now, and gone it could not be looked up), or another
+           * of its participant. Another participant's dispose is refused like its contacts (until
+           * 2026-12-06 anyone in the partition could lift the trainee's finger). */
+          palp_srv_finger_state *f = &s->finger[buf[i].finger];
+          if ((f->writer && info[i].publication_handle == f->writer) ||
+              own_writer(s, info[i].publication_handle, now_ns))
+            lift(s, f);
+          else
+            count_reject(s, PALP_SRV_REJ_FOREIGN_PARTICIPANT, 0, now_ns);
+        }
+        continue;
+      }
+      /* Only the participant that joined the session palpates it (until 2026-12-06 any writer in
+       * its partition did: in an unsecured classroom anyone who knew the station's name, in a
+       * secured one a second participant of the same identity). Before the checks: a foreign
+       * sample is refused for being foreign, whatever else is wrong with it. */
+      if (!own_writer(s, info[i].publication_handle, now_ns)) {
+        count_reject(s, PALP_SRV_REJ_FOREIGN_PARTICIPANT, 0, now_ns);
         continue;
       }
       palp_srv_contact c;
@@ -474,6 +559,7 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
           palp_srv_playout_push(&f->playout, c.source_time_ns, arrival_ns(s, c.finger, c.seq, recv_ns), c.center,
                                 c.seq);
       }
+      f->writer = info[i].publication_handle;
       s->stats.contact_samples++;
       if (s->events && s->events->contact_applied)
         s->events->contact_applied(s->events->ctx, s->id, &c, palp_world_time(s->world));

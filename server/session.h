@@ -68,14 +68,29 @@ typedef struct palp_srv_finger_state {
   int world_contact;      /* model contact id, -1 when lifted */
   int mode;               /* palp_ContactMode of the applied command */
   palp_srv_contact cmd;   /* last applied command */
+  /* The writer of the last applied command (its publication handle; 0: none yet): its own dispose
+   * or going lifts the finger without a lookup, which a writer already gone could not answer. */
+  dds_instance_handle_t writer;
   palp_vec3 feedback;     /* [N] after the last step */
   /* A position-driven finger's device samples, played out at a steady delay so a
    * jittery network does not push the phantom in bunches (playout.h). */
   palp_srv_playout playout;
 } palp_srv_finger_state;
 
+/* A writer of contacts the session has looked up: of the participant that joined it or not. Cyclone
+ * never gives a publication handle twice (a writer found again gets a new one), so a verdict holds
+ * for as long as the entry is kept. */
+#define PALP_SRV_CONTACT_WRITERS 8
+typedef struct palp_srv_contact_writer {
+  dds_instance_handle_t pub; /* 0: a free entry */
+  int own;                   /* 1: the session's participant's; 0: another's, or gone before it was looked up */
+} palp_srv_contact_writer;
+
 typedef struct palp_srv_session_def {
   uint32_t id;
+  /* The participant whose request writer JOINed the session (participant_key of that writer): only
+   * its writers' contacts reach the world (take_contacts). Required: a session never runs unbound. */
+  dds_guid_t trainee_participant;
   palp_srv_phantom *phantom;
   const palp_srv_config *cfg;
   const char *trainee_station;
@@ -150,6 +165,11 @@ typedef struct palp_srv_session {
    * A slot is (seq, time), written time first; read back if its seq still matches. */
   palp_srv_arrival arrival[PALP_SRV_MAX_FINGERS][16];
 
+  /* Set at create, never changed (a station found again after a stall keeps its participant GUID;
+   * another participant re-sending its JOIN takes its station slot, not its fingers): read by the
+   * tick thread without a lock. */
+  dds_guid_t trainee_participant;
+
   /* [main] */
   uint32_t trainee_request_seq; /* the JOIN that opened it: the same request again resumes it */
   /* Its trainee station lost (a lease expired): the session stays open, its fingers lifted
@@ -171,6 +191,13 @@ typedef struct palp_srv_session {
   uint32_t deform_matched_seen; /* the deformation writer's total matched readers at the last look */
   uint64_t deformations_sent;  /* palp_deformation samples written */
   uint64_t filtered_seen_session, filtered_seen_finger; /* folded into stats.rejected so far */
+  /* The writers of its contacts, looked up once each while kept (take_contacts); a refused one is
+   * the first to make room, so a flood of new writers never pushes out the trainee's own. */
+  palp_srv_contact_writer writers[PALP_SRV_CONTACT_WRITERS];
+  unsigned writers_hand;
+  uint64_t foreign_writers;    /* writers looked up and refused: another participant's, or gone */
+  uint64_t foreign_unnamed;    /* refused writers not named in the log since the last one named */
+  int64_t foreign_said_ns;     /* when the log last named one (at most one a log_interval) */
   int64_t last_log_ns[PALP_SRV_REJ_COUNT];
   uint64_t log_suppressed[PALP_SRV_REJ_COUNT];
   palp_Feedback fb;

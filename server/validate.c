@@ -6,7 +6,7 @@
 static const char *const reject_names[PALP_SRV_REJ_COUNT] = {
     "nonfinite",  "unknown_session", "bad_finger", "bad_mode",  "bad_distribution",
     "bad_vertex", "out_of_reach",    "force_limit", "bad_radius", "model_refused",
-    "absurd_force"};
+    "absurd_force", "foreign_participant"};
 
 const char *palp_srv_reject_name(palp_srv_reject_reason r) {
   return (unsigned)r < PALP_SRV_REJ_COUNT ? reject_names[r] : "unknown";

@@ -31,6 +31,11 @@ typedef enum palp_srv_reject_reason {
   PALP_SRV_REJ_MODEL,            /* the model refused the contact (e.g. no free slot) */
   /* Reasons past the wire's rejected[10] arrays; published in palp_server_guard. */
   PALP_SRV_REJ_ABSURD_FORCE,     /* |force| > absurd_force: no hand presses that hard; never clamped */
+  /* Neither on the wire by reason (the @final ServerGuard has no field for it; counted in
+   * SessionState.rejected_samples with the rest) nor checked here: the session checks a sample's
+   * writer (server/session.c, take_contacts). In the server's log, its summary and the session log. */
+  PALP_SRV_REJ_FOREIGN_PARTICIPANT, /* written (or disposed) by a participant other than the one whose
+                                       request writer JOINed the session, or by a writer already gone */
   PALP_SRV_REJ_COUNT
 } palp_srv_reject_reason;
 

@@ -13,12 +13,19 @@
  *   slept on, 50 ms each): another station's request is answered within 1 s (>= 1.9 s before),
  *   and every one of the 40 is judged "left (request disposed)";
  * - station ids and user names with a newline are logged escaped: no forged log line;
+ * - (2026-12-06) a second participant in trainee-a's session partition, a stale station of the same
+ *   name that never JOINed, pressing 8 N at the pole with her finger 0 and 8 N with finger 1, then
+ *   disposing both: her feedback stays her own 2 N press (finger 0 active throughout, 2 +- 0.3 N),
+ *   finger 1 never shows active, its samples are counted as foreign_participant, the log names its
+ *   participant once, and her own next presses are still applied;
  * - after its start-up window, one forged identity sample {its name, number 0, started 0}
  *   leaves the server serving: the session stays open, its trainee still gets feedback, and
  *   the log warns about the claim, naming the claimant's instance.
- * Domain 138. ~9 s, most of it the start-up window's 5 s spent on the parts before. */
+ * Domain 138. ~12 s, parts 1-6 ~9 s (the start-up window's 5 s among them), the foreign writer ~1.1 s. */
 #include <fcntl.h>
+#include <math.h>
 #include <spawn.h>
+#include <stdatomic.h>
 #include <string.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -108,6 +115,48 @@ static void fresh_guard(dds_entity_t r, palp_ServerGuard *g) {
   REQUIRE(test_latest_guard(r, 3.0, g), "palp_server_guard received");
 }
 
+/* [tick threads] What the session did with contacts: applied, and refused for their writer. */
+static atomic_ullong contacts_applied, contacts_foreign;
+static void on_applied(void *ctx, uint32_t session_id, const palp_srv_contact *c, double t) {
+  (void)ctx, (void)session_id, (void)c, (void)t;
+  atomic_fetch_add(&contacts_applied, 1);
+}
+static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r, int clamped, uint64_t count) {
+  (void)ctx, (void)session_id, (void)clamped;
+  if (r == PALP_SRV_REJ_FOREIGN_PARTICIPANT) atomic_fetch_add(&contacts_foreign, count);
+}
+static const palp_srv_events contact_events = {.contact_applied = on_applied, .contact_rejected = on_rejected};
+
+/* Feedback of a station as the foreign writer's part watches it: finger 0's force range and the
+ * samples it was missing or lifted in, and whether finger 1 was ever active. */
+typedef struct finger_watch {
+  int samples, f0_inactive, f1_active;
+  double f0_min, f0_max;
+} finger_watch;
+
+static void watch_fingers(palp_cli_station *st, finger_watch *w) {
+  void *ptr[1] = {NULL};
+  dds_sample_info_t info;
+  while (dds_take(st->feedback_r, ptr, &info, 1, 1) > 0) {
+    const palp_Feedback *fb = ptr[0];
+    if (info.valid_data) {
+      int f0 = 0;
+      w->samples++;
+      for (uint32_t k = 0; k < fb->fingers._length; k++) {
+        const palp_FingerFeedback *ff = &fb->fingers._buffer[k];
+        if (ff->finger == 1 && ff->active) w->f1_active++;
+        if (ff->finger != 0 || !ff->active) continue;
+        f0 = 1;
+        const double m = sqrt(ff->force.x * ff->force.x + ff->force.y * ff->force.y + ff->force.z * ff->force.z);
+        if (m < w->f0_min) w->f0_min = m;
+        if (m > w->f0_max) w->f0_max = m;
+      }
+      w->f0_inactive += !f0;
+    }
+    dds_return_loan(st->feedback_r, ptr, 1);
+  }
+}
+
 static void identity_sample(dds_entity_t w, const char *name, uint32_t number, const char *instance, int64_t started) {
   palp_ServerIdentity m;
   memset(&m, 0, sizeof m);
@@ -137,7 +186,7 @@ int main(void) {
   palp_log plog;
   REQUIRE(log_fd >= 0 && palp_log_init(&plog, "palp-server", PALP_LOG_INFO, log_path) == 0, "server log %s", log_path);
   close(log_fd);
-  const palp_srv_def def = {.cfg = cfg, .verbose = 1, .log = &plog, .identity_wait_s = 0};
+  const palp_srv_def def = {.cfg = cfg, .verbose = 1, .log = &plog, .identity_wait_s = 0, .events = &contact_events};
   const int64_t t0 = palp_dds_now_ns();
   test_server ts = {0};
   test_server_start_def(&ts, &def);
@@ -315,6 +364,94 @@ int main(void) {
   CHECK(nl_ok == 1 && log_count(log_path, "station nl\\x0aINFO  palp-server: forged line joined", NULL) == 1 &&
             log_lines_starting(log_path, "INFO  palp-server: forged") == 0,
         "a station id with a newline is logged as \\x0a, on its own line (no forged line)");
+
+  /* 6b. Another participant in trainee-a's session partition: a stale station of the same name (in this
+   * process its station id is hers) that never JOINed. Until 2026-12-06 the server applied any contact
+   * there: its 8 N at the pole replaced her 2 N press, its finger 1 pressed too, its dispose lifted her
+   * finger. Now only the participant whose request writer JOINed the session palpates it. */
+  {
+    char err[256];
+    palp_cli_station fg;
+    REQUIRE(palp_cli_station_open(&fg, DOMAIN, "trainee-a", err, sizeof err) == 0 &&
+                strcmp(fg.station_id, a.station_id) == 0,
+            "a second participant named as trainee-a's station (%s), which never joins", fg.station_id);
+    const dds_entity_t fw = palp_dds_create_writer(palp_dds_session_publisher(fg.pp, a.partition),
+                                                   fg.topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT);
+    dds_guid_t fgid;
+    REQUIRE(fw > 0 && dds_get_guid(fg.pp, &fgid) == 0, "its contact writer in %s", a.partition);
+    char fg_text[64];
+    const unsigned char *g = fgid.v; /* the participant as the server's log names it: its GUID prefix */
+    snprintf(fg_text, sizeof fg_text, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2],
+             g[3], g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
+    uint64_t aseq = 1000;
+    for (int i = 0; i < 30; i++) { /* her press, held from here on (a force contact stays until released) */
+      test_send_force(&a, 0, 2, 25, 90, 2.0, ++aseq);
+      test_sleep(0.01);
+    }
+    dds_publication_matched_status_t pm = {0};
+    for (int i = 0; i < 200 && pm.current_count == 0; i++) {
+      dds_get_publication_matched_status(fw, &pm);
+      if (pm.current_count == 0) test_sleep(0.01);
+    }
+    REQUIRE(pm.current_count > 0, "the second participant's writer matched the session's reader");
+    finger_watch w = {.f0_min = 1e9};
+    watch_fingers(&a, &w); /* what came before */
+    w = (finger_watch){.f0_min = 1e9};
+    const uint64_t applied0 = atomic_load(&contacts_applied), foreign0 = atomic_load(&contacts_foreign);
+    int sent = 0;
+    for (int i = 0; i < 30; i++) { /* 8 N at the pole with her finger 0, 8 N with finger 1 */
+      palp_Contact c;
+      memset(&c, 0, sizeof c);
+      c.session_id = sid;
+      c.mode = palp_CONTACT_FORCE;
+      c.distribution = 2;
+      c.vertex = -1;
+      c.seq = 5000 + (uint64_t)i;
+      c.finger = 0;
+      c.center = (palp_Vec3){0, 0, 0.04};
+      c.force = (palp_Vec3){0, 0, -8};
+      sent += dds_write(fw, &c) == 0;
+      c.finger = 1;
+      c.center = (palp_Vec3){0.04 * sin(0.7), 0, 0.04 * cos(0.7)};
+      c.force = (palp_Vec3){-8 * sin(0.7), 0, -8 * cos(0.7)};
+      sent += dds_write(fw, &c) == 0;
+      test_sleep(0.01);
+      watch_fingers(&a, &w);
+    }
+    palp_Contact key;
+    memset(&key, 0, sizeof key);
+    key.session_id = sid;
+    sent += dds_dispose(fw, &key) == 0; /* her finger 0 */
+    key.finger = 1;
+    sent += dds_dispose(fw, &key) == 0;
+    for (int i = 0; i < 30; i++) { /* 0.3 s: the disposes taken (or not) */
+      test_sleep(0.01);
+      watch_fingers(&a, &w);
+    }
+    const uint64_t applied1 = atomic_load(&contacts_applied), foreign = atomic_load(&contacts_foreign) - foreign0;
+    CHECK(w.samples >= 30 && w.f0_inactive == 0 && fabs(w.f0_min - 2.0) <= 0.3 && fabs(w.f0_max - 2.0) <= 0.3,
+          "while another participant presses 8 N with her finger 0 and disposes it, trainee-a's feedback stays her 2 N "
+          "press: %d samples, finger 0 at %.3f..%.3f N (want 2 +- 0.3 N), %d without it active (want 0)",
+          w.samples, w.f0_min, w.f0_max, w.f0_inactive);
+    CHECK(w.f1_active == 0, "its finger 1 (8 N) never shows active in her feedback: %d samples did (want 0)",
+          w.f1_active);
+    CHECK(applied1 == applied0 && foreign >= 20 && foreign <= (uint64_t)sent,
+          "none of its %d samples applied (%llu applied meanwhile, want 0); %llu counted as foreign_participant (want "
+          "20..%d: best-effort, keep-last 1 may overwrite)",
+          sent, (unsigned long long)(applied1 - applied0), (unsigned long long)foreign, sent);
+    CHECK(log_count(log_path, fg_text, NULL) == 1 && log_count(log_path, fg_text, "session ") == 1,
+          "the server's log names that participant once (%s), with the session: %d line(s)", fg_text,
+          log_count(log_path, fg_text, NULL));
+    for (int i = 0; i < 10; i++) { /* her own presses still count */
+      test_send_force(&a, 0, 2, 25, 90, 2.0, ++aseq);
+      test_sleep(0.01);
+    }
+    test_sleep(0.05);
+    const uint64_t applied2 = atomic_load(&contacts_applied);
+    CHECK(applied2 > applied1, "trainee-a's own next presses are applied: %llu of 10 (want >= 1)",
+          (unsigned long long)(applied2 - applied1));
+    palp_cli_station_close(&fg);
+  }
 
   /* 7. After the start-up window, a forged identity claiming this server's name for an older one. */
   const double since = (double)(palp_dds_now_ns() - t0) * 1e-9;
