@@ -9,10 +9,13 @@ and open() refuses: lws answered its own 404 and it was counted ok, until 2026-1
 The line printed every 5 s, from the hub's thread while the web server's thread counts (which read the
 counters themselves, unlocked, until they were copied under a lock: a data race for ThreadSanitizer,
 scripts/sanitize.sh thread 'web_stats'), says exactly these counts; so does the last line, at SIGINT.
+SIGHUP three times re-opens the log three times, palp-web still running (the second killed it until
+2026-12-06: signal()'s handler, System V semantics under ISO C, was reset at the first).
 DDS domain 155. usage: test_stats.py BUILD SOURCE OUT"""
 import os
 import re
 import shutil
+import signal
 import time
 
 import harness
@@ -77,6 +80,18 @@ def run(build, source, out):
         line = [l for l in procs.log(web).splitlines() if WANT in l][:1]
         sent = re.search(r"sent (\d+) messages", line[0]) if line else None
         check(sent is not None and int(sent.group(1)) >= 1, "and at least the hello sent: %s" % (line or ["none"])[0])
+        # SIGHUP re-opens the log, again and again (a handler installed by signal() was reset at its first
+        # delivery under ISO C: the second SIGHUP killed palp-web, until 2026-12-06)
+        reopened = 0
+        for k in range(3):
+            web.send_signal(signal.SIGHUP)
+            end = time.time() + 5
+            while reopened <= k and web.poll() is None and time.time() < end:
+                time.sleep(0.05)
+                reopened = procs.log(web).count("SIGHUP: log re-opened; serving goes on")
+        time.sleep(0.2)
+        check(reopened == 3 and web.poll() is None, "SIGHUP three times: the log re-opened %d times, palp-web still "
+              "runs (exit %s)" % (reopened, web.poll()))
         rc = procs.stop(web)
         last = [l for l in procs.log(web).splitlines() if "http " in l and " ok, " in l][-1:]
         check(rc == 0 and last and WANT in last[0], "SIGINT: exit %s; the last stats line the same: %s"
