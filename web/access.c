@@ -220,7 +220,7 @@ int palp_web_trainee_tokens_parse(const char *text, const char *instructor, palp
       return PALP_EINVAL;
     }
     if (instructor && !strcmp(instructor, t->token)) {
-      snprintf(err, errlen, "line %d (%s): the same token as the bridge's own (--token)", line, t->name);
+      snprintf(err, errlen, "line %d (%s): the same token as the instructors' (--token or --token-file)", line, t->name);
       return PALP_EINVAL;
     }
     for (int k = 0; k < n; k++)

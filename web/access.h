@@ -31,6 +31,8 @@ int palp_web_token_check(const char *token);
 #define PALP_WEB_TOKEN_LIFETIME_DEFAULT_S (12.0 * 3600.0)
 /* What a page with an expired token is told (the HTTP answer's body, the WebSocket's "expired" message). */
 #define PALP_WEB_TOKEN_EXPIRED_TEXT "This access token has expired: ask your instructor for a new one."
+/* ... and a page whose token was removed or replaced in its file while it was open (SIGHUP re-reads them). */
+#define PALP_WEB_TOKEN_WITHDRAWN_TEXT "This access token was withdrawn: ask your instructor for a new one."
 
 /* 1 when a token issued at issued_s [s, Unix time] is past its lifetime at now_s [s, Unix time]:
  * now_s >= issued_s + lifetime_s; 0 while it is valid, and always for lifetime_s 0 (no expiry). The

@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
+#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,7 +28,8 @@
 #include "tls.h"
 
 static atomic_int g_stop; /* atomic: a signal may land on any thread (client/main.c) */
-static atomic_int g_hup;  /* SIGHUP: re-open --log-file (log rotation), done on the hub thread */
+static atomic_int g_hup;  /* SIGHUP: re-open --log-file (log rotation) and re-read the token files, done on the
+                          * hub thread */
 static void on_signal(int sig) {
   if (sig == SIGHUP) g_hup = 1;
   else g_stop = 1;
@@ -43,7 +45,7 @@ static void usage(FILE *f) {
           "                      and TLS, or --insecure-http)\n"
           "  --port P            TCP port (default 8090; 0 = any free port, printed)\n"
           "  --token T           access token (%d-%d characters of A-Z a-z 0-9 . _ ~ -); pages need ?token=T\n"
-          "  --token-file F      read the token from F (keeps it out of the process list)\n"
+          "  --token-file F      read the token from F (keeps it out of the process list; SIGHUP re-reads it)\n"
           "  --token-lifetime-h H   every token opens pages for H hours after it was issued: when its file\n"
           "                      (--token-file, --trainee-tokens) was last written, or at start for --token\n"
           "                      (default %g: a class day; 0 = never expire)\n"
@@ -52,6 +54,9 @@ static void usage(FILE *f) {
           "  --insecure-http     serve plain HTTP beyond loopback: the token crosses the network in clear\n"
           "  --trainee-tokens F  trainees' own tokens, \"NAME TOKEN\" per line: a page given one sees only\n"
           "                      that trainee's sessions (no dashboard); needs --token (the instructors')\n"
+          "                      New tokens without a restart: write the files, then SIGHUP: both are re-read\n"
+          "                      with the checks of start (all or nothing: one bad file keeps the old tokens);\n"
+          "                      pages of a removed or changed token are closed, the others stay open\n"
           "  --scale-mm MM       largest colour scale of the pages: 0..MM of displacement (default 30)\n"
           "  --scale-min-mm MM   smallest (default 0.5): a page's scale grows from it, in steps of 1-2-5,\n"
           "                      with its session's deepest displacement; equal to --scale-mm: fixed\n"
@@ -66,7 +71,8 @@ static void usage(FILE *f) {
           "  --www DIR           the pages (default <data>/www: share/palp/www installed, web/www in a build)\n"
           "  --three DIR         three.js from libjs-three (default %s)\n"
           "  --duration S        stop after S seconds (tests, benchmarks)\n"
-          "  --stats             print the bridge's counters every 5 s (SIGHUP re-opens --log-file)\n"
+          "  --stats             print the bridge's counters every 5 s (SIGHUP re-opens --log-file and\n"
+          "                      re-reads the token files)\n"
           "  --pki DIR --identity instructor/NAME   DDS Security in a secured classroom (or PALP_PKI,\n"
           "                      PALP_IDENTITY; scripts/make-classroom-pki.sh): the bridge is that instructor\n",
           PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX, PALP_WEB_TOKEN_LIFETIME_DEFAULT_S / 3600.0, PALP_WEB_THREE_DIR);
@@ -85,43 +91,56 @@ static int number(const char *opt, const char *v, double lo, double hi, double *
   return 0;
 }
 
-/* A secret (token, key) every user of the machine can read is no secret on a shared lab machine. */
-static int secret_private(const char *what, const char *path) {
-  struct stat st;
-  if (stat(path, &st) != 0 || !(st.st_mode & (S_IROTH | S_IWOTH))) return 0;
-  fprintf(stderr, "palp-web: %s %s is readable by every user of this machine (mode %04o): chmod o-rwx it\n", what,
-          path, (unsigned)(st.st_mode & 07777));
+/* The token files' checks write their reason into e (the same words at start, on stderr, and at SIGHUP,
+ * in the log) and return -1; 0 when the file passes. */
+typedef struct why {
+  char text[512];
+} why;
+static int say_why(why *e, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int say_why(why *e, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(e->text, sizeof e->text, fmt, ap);
+  va_end(ap);
   return -1;
 }
 
-static int read_token_file(const char *path, char *out, size_t len) {
-  if (secret_private("--token-file", path)) return -1;
+/* A secret (token, key) every user of the machine can read is no secret on a shared lab machine. */
+static int secret_private(const char *what, const char *path, why *e) {
+  struct stat st;
+  if (stat(path, &st) != 0 || !(st.st_mode & (S_IROTH | S_IWOTH))) return 0;
+  return say_why(e, "%s %s is readable by every user of this machine (mode %04o): chmod o-rwx it", what, path,
+                 (unsigned)(st.st_mode & 07777));
+}
+
+/* The instructors' token: the first line of --token-file, checked (out: PALP_WEB_TOKEN_MAX + 1 bytes). */
+static int read_token_file(const char *path, char *out, why *e) {
+  if (secret_private("--token-file", path, e)) return -1;
   FILE *f = fopen(path, "r");
-  if (!f) {
-    fprintf(stderr, "palp-web: --token-file: cannot open %s: %s\n", path, strerror(errno));
-    return -1;
-  }
-  if (!fgets(out, (int)len, f)) out[0] = 0;
+  if (!f) return say_why(e, "--token-file: cannot open %s: %s", path, strerror(errno));
+  char line[PALP_WEB_TOKEN_MAX + 2]; /* one longer than a token may be: a longer one is refused, not cut */
+  if (!fgets(line, (int)sizeof line, f)) line[0] = 0;
   fclose(f);
-  out[strcspn(out, "\r\n")] = 0;
+  line[strcspn(line, "\r\n")] = 0;
+  if (palp_web_token_check(line) != 0)
+    return say_why(e, "--token-file %s: the token must be %d-%d characters of A-Z a-z 0-9 . _ ~ -", path,
+                   PALP_WEB_TOKEN_MIN, PALP_WEB_TOKEN_MAX);
+  memcpy(out, line, strlen(line) + 1);
   return 0;
 }
 
 /* The whole of a small text file (<= 64 kB) into *out (malloc'ed, NUL-terminated); 0 or -1 said. */
-static int read_small_file(const char *path, char **out) {
+static int read_small_file(const char *what, const char *path, char **out, why *e) {
   FILE *f = fopen(path, "r");
-  if (!f) {
-    fprintf(stderr, "palp-web: cannot open %s: %s\n", path, strerror(errno));
-    return -1;
-  }
+  if (!f) return say_why(e, "%s: cannot open %s: %s", what, path, strerror(errno));
   enum { MAXB = 65536 };
   char *b = malloc(MAXB + 1);
   const size_t n = b ? fread(b, 1, MAXB + 1, f) : 0;
   fclose(f);
   if (!b || n > MAXB) {
-    fprintf(stderr, "palp-web: %s: %s\n", path, b ? "larger than 64 kB" : "out of memory");
+    const char *reason = b ? "larger than 64 kB" : "out of memory";
     free(b);
-    return -1;
+    return say_why(e, "%s %s: %s", what, path, reason);
   }
   b[n] = '\0';
   *out = b;
@@ -145,29 +164,48 @@ static double issued_at(const char *path, double start) {
   return m < start ? m : start;
 }
 
-/* At start: when the tokens expire, and a warning for one already expired (a stale file). */
-static void say_token_lifetime(palp_log *log, const palp_web_serve_def *sd, const char *token_file,
-                               const char *trainee_file, double start) {
-  if (!sd->token) return;
-  if (sd->token_lifetime_s == 0) {
-    printf("palp-web: tokens never expire (--token-lifetime-h 0)\n");
+/* The trainees' tokens of --trainee-tokens, checked against the instructors' token, each issued at the
+ * file's last write (or now, if later): their count, or -1 with the reason in e. */
+static int read_trainee_tokens(const char *path, const char *instructor, double now, palp_web_trainee_token *out,
+                               why *e) {
+  char *text = NULL, terr[256];
+  if (secret_private("--trainee-tokens", path, e) || read_small_file("--trainee-tokens", path, &text, e) != 0)
+    return -1;
+  const int n = palp_web_trainee_tokens_parse(text, instructor, out, PALP_WEB_TRAINEES_MAX, terr, sizeof terr);
+  free(text);
+  if (n < 0) return say_why(e, "--trainee-tokens %s: %s", path, terr);
+  const double issued = issued_at(path, now);
+  for (int k = 0; k < n; k++) out[k].issued_s = issued;
+  return n;
+}
+
+/* When the tokens expire, and a warning for one already expired (a stale file): at start (printed), and
+ * after a SIGHUP re-read them (logged). */
+static void say_token_lifetime(palp_log *log, double token_issued_s, int trainee_count, double trainees_issued_s,
+                               double lifetime_s, const char *token_file, const char *trainee_file, double now,
+                               int at_start) {
+  if (lifetime_s == 0) {
+    if (at_start) printf("palp-web: tokens never expire (--token-lifetime-h 0)\n");
     return;
   }
   char at[32];
   for (int k = 0; k < 2; k++) {
-    if (k && !sd->trainee_count) break;
-    const double issued = k ? sd->trainees[0].issued_s : sd->token_issued_s, end = issued + sd->token_lifetime_s;
+    if (k && !trainee_count) break;
+    const double issued = k ? trainees_issued_s : token_issued_s, end = issued + lifetime_s;
     const char *whose = k ? "the trainees' tokens" : "the instructors' token";
     palp_web_utc_text(end, at, sizeof at);
-    if (palp_web_token_expired(issued, sd->token_lifetime_s, start))
-      palp_log_warn(log, "%s expired at %s, %.1f h ago (%s was last written %.1f h ago, --token-lifetime-h %g): "
-                         "their pages are told to ask for a new one; write new tokens and restart palp-web",
-                    whose, at, (start - end) / 3600.0, k ? trainee_file : token_file ? token_file : "--token",
-                    (start - issued) / 3600.0,
-                    sd->token_lifetime_s / 3600.0);
-    else
+    if (palp_web_token_expired(issued, lifetime_s, now))
+      palp_log_warn(log, "%s%s expired at %s, %.1f h ago (%s was last written %.1f h ago, --token-lifetime-h %g): "
+                         "their pages are told to ask for a new one; write new tokens and send SIGHUP (or restart "
+                         "palp-web)",
+                    at_start ? "" : "SIGHUP: ", whose, at, (now - end) / 3600.0,
+                    k ? trainee_file : token_file ? token_file : "--token", (now - issued) / 3600.0, lifetime_s / 3600.0);
+    else if (at_start)
       printf("palp-web: %s expire%s at %s (%.1f h from now, --token-lifetime-h %g)\n", whose, k ? "" : "s", at,
-             (end - start) / 3600.0, sd->token_lifetime_s / 3600.0);
+             (end - now) / 3600.0, lifetime_s / 3600.0);
+    else
+      palp_log_info(log, "SIGHUP: %s expire%s at %s (%.1f h from now, --token-lifetime-h %g)", whose, k ? "" : "s", at,
+                    (end - now) / 3600.0, lifetime_s / 3600.0);
   }
 }
 
@@ -184,6 +222,10 @@ typedef struct watch {
   double end, next_stats;
   int stats;
   palp_log *log;
+  /* what SIGHUP re-reads (reload_tokens) */
+  const char *token_arg, *token_file, *trainee_file; /* --token (fixed), --token-file, --trainee-tokens */
+  double start, token_lifetime_s;
+  int said_fixed; /* "--token cannot change" logged (once) */
 } watch;
 
 static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) {
@@ -207,6 +249,8 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
     palp_log_warn(log, "pages told their token expired: %llu HTTP requests, %llu WebSockets (refused, or closed at "
                        "the expiry)",
                   (unsigned long long)w.http_expired, (unsigned long long)w.ws_expired);
+  if (w.ws_withdrawn) /* SIGHUP's line said each re-read's */
+    palp_log_info(log, "pages closed because a SIGHUP withdrew their token: %llu", (unsigned long long)w.ws_withdrawn);
   if (h.exercises || h.findings_written || h.findings_refused || h.local_models)
     palp_log_info(log, "exercises %llu (sessions' %llu, scores %llu), trainees' scores %llu, finding statuses %llu, "
                        "findings read %llu (%llu unanswered); findings written %llu, refused %llu; local models %llu "
@@ -227,6 +271,49 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
                   (unsigned long long)h.finding_strays, (unsigned long long)h.finding_renewals);
 }
 
+/* SIGHUP, on the hub's thread: the token files read again with every check of start, all or nothing, and the
+ * new tokens handed to the web server, which puts them in place between two of its passes and says what
+ * changed (palp_web_serve_tokens_replace): tokens rotated for the next class, or one that leaked, without the
+ * restart that dropped every open page. */
+static void reload_tokens(watch *w) {
+  if (w->token_arg && !w->said_fixed) {
+    palp_log_info(w->log, "SIGHUP: --token was given on the command line: the instructors' token cannot change "
+                          "while palp-web runs (--token-file F can: SIGHUP re-reads it)%s",
+                  w->trainee_file ? "; --trainee-tokens is re-read" : "");
+    w->said_fixed = 1;
+  }
+  if (!w->token_file && !w->trainee_file) return;
+  palp_web_tokens *t = calloc(1, sizeof *t);
+  if (!t) {
+    palp_log_error(w->log, "SIGHUP: out of memory: tokens not re-read, the old ones still served");
+    return;
+  }
+  const double now = wall_s();
+  why e = {{0}};
+  int ok = 1;
+  if (w->token_file) {
+    ok = read_token_file(w->token_file, t->token, &e) == 0;
+    t->token_issued_s = issued_at(w->token_file, now);
+  } else {
+    snprintf(t->token, sizeof t->token, "%s", w->token_arg);
+    t->token_issued_s = w->start; /* as at start: --token was issued then */
+  }
+  if (ok && w->trainee_file) {
+    t->trainee_count = read_trainee_tokens(w->trainee_file, t->token, now, t->trainees, &e);
+    ok = t->trainee_count >= 0;
+  }
+  if (!ok) {
+    palp_log_error(w->log, "SIGHUP: tokens not re-read, the old ones still served: %s", e.text);
+  } else {
+    /* said before the web server's line of what changed (it logs that when it has put them in place) */
+    say_token_lifetime(w->log, t->token_issued_s, t->trainee_count, t->trainee_count ? t->trainees[0].issued_s : 0,
+                       w->token_lifetime_s, w->token_file, w->trainee_file, now, 0);
+    if (palp_web_serve_tokens_replace(w->srv, t) != 0)
+      palp_log_error(w->log, "SIGHUP: out of memory: tokens not re-read, the old ones still served");
+  }
+  free(t);
+}
+
 static void on_wake(void *ctx) {
   watch *w = ctx;
   const double now = mono_s();
@@ -234,6 +321,7 @@ static void on_wake(void *ctx) {
   if (atomic_exchange(&g_hup, 0)) {
     if (palp_log_reopen(w->log) < 0) palp_log_error(w->log, "SIGHUP: cannot re-open %s", w->log->path);
     else palp_log_info(w->log, "SIGHUP: log re-opened; serving goes on");
+    reload_tokens(w);
   }
   palp_web_serve_wake(w->srv);
   if (w->stats && now >= w->next_stats) {
@@ -349,13 +437,18 @@ int main(int argc, char **argv) {
       return 2;
     }
   }
-  char tokbuf[PALP_WEB_TOKEN_MAX + 2];
+  char tokbuf[PALP_WEB_TOKEN_MAX + 1];
+  const char *token_arg = token; /* --token T: what SIGHUP cannot change */
+  why e = {{0}};
   if (token_file) {
     if (token) {
       fprintf(stderr, "palp-web: give --token or --token-file, not both\n");
       return 2;
     }
-    if (read_token_file(token_file, tokbuf, sizeof tokbuf)) return 2;
+    if (read_token_file(token_file, tokbuf, &e)) {
+      fprintf(stderr, "palp-web: %s\n", e.text);
+      return 2;
+    }
     token = tokbuf;
   }
   if (token && palp_web_token_check(token) != 0) {
@@ -382,7 +475,10 @@ int main(int argc, char **argv) {
       fprintf(stderr, "palp-web: %s %s: %s\n", k ? "--tls-key" : "--tls-cert", f, strerror(errno));
       return 2;
     }
-    if (k && f && secret_private("--tls-key", f)) return 2;
+    if (k && f && secret_private("--tls-key", f, &e)) {
+      fprintf(stderr, "palp-web: %s\n", e.text);
+      return 2;
+    }
   }
   if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert && !insecure_http) {
     fprintf(stderr,
@@ -405,16 +501,11 @@ int main(int argc, char **argv) {
       fprintf(stderr, "palp-web: --trainee-tokens needs --token (or --token-file): the instructors' own token\n");
       return 2;
     }
-    char *text = NULL, terr[256];
-    if (secret_private("--trainee-tokens", trainee_file) || read_small_file(trainee_file, &text) != 0) return 2;
-    const int n = palp_web_trainee_tokens_parse(text, token, trainees, PALP_WEB_TRAINEES_MAX, terr, sizeof terr);
-    free(text);
+    const int n = read_trainee_tokens(trainee_file, token, start, trainees, &e);
     if (n < 0) {
-      fprintf(stderr, "palp-web: --trainee-tokens %s: %s\n", trainee_file, terr);
+      fprintf(stderr, "palp-web: %s\n", e.text);
       return 2;
     }
-    const double issued = issued_at(trainee_file, start);
-    for (int k = 0; k < n; k++) trainees[k].issued_s = issued;
     sd.trainees = trainees;
     sd.trainee_count = n;
   }
@@ -491,7 +582,9 @@ int main(int argc, char **argv) {
   sigaction(SIGHUP, &sa, NULL);
   sa.sa_handler = SIG_IGN;
   sigaction(SIGPIPE, &sa, NULL);
-  watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats, .log = &log};
+  watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats, .log = &log,
+             .token_arg = token_arg, .token_file = token_file, .trainee_file = trainee_file, .start = start,
+             .token_lifetime_s = sd.token_lifetime_s};
   if (palp_web_hub_start(hub, on_wake, &w) != 0) {
     palp_log_error(&log, "cannot start the DDS thread");
     palp_web_serve_destroy(srv);
@@ -514,7 +607,9 @@ int main(int argc, char **argv) {
   if (!palp_web_addr_is_loopback(sd.listen) && !sd.tls_cert)
     palp_log_warn(&log, "serving plain HTTP on %s (--insecure-http): the token crosses the network in clear",
                   sd.listen);
-  say_token_lifetime(&log, &sd, token_file, trainee_file, start);
+  if (token)
+    say_token_lifetime(&log, sd.token_issued_s, sd.trainee_count, sd.trainee_count ? sd.trainees[0].issued_s : 0,
+                       sd.token_lifetime_s, token_file, trainee_file, start, 1);
   printf("palp-web: trainee page  %s://%s:%d/trainee.html%s\n", scheme, host, port, q);
   printf("palp-web: dashboard     %s://%s:%d/dashboard.html%s\n", scheme, host, port, q);
   /* Who sees the answers: the dashboard's viewers (docs/web.md, "The hidden lumps"). */

@@ -31,11 +31,22 @@ static int instructor_reserve(int max_clients) {
   return max_clients / 2 < INSTRUCTOR_RESERVE ? max_clients / 2 : INSTRUCTOR_RESERVE;
 }
 
+struct conn;
+
 struct palp_web_server {
-  palp_web_serve_def def;
-  char listen[64], token[PALP_WEB_TOKEN_MAX + 1];
+  palp_web_serve_def def; /* its token and trainees are start's: the served ones are tok's */
+  char listen[64];
   char www[512], three[512];
   int have_token;
+  /* The tokens served (the service thread alone reads them), and a set re-read at SIGHUP waiting to take
+   * their place (palp_web_serve_tokens_replace, from the hub's thread): handed over under tok_mu, put in place
+   * by the service thread between two passes (apply_tokens), so no request ever sees half of each. */
+  palp_web_tokens *tok, *pending;
+  pthread_mutex_t tok_mu;
+  /* The attached WebSocket pages (the service thread alone): a SIGHUP's new tokens are checked against every
+   * open page at once (apply_tokens). gen counts the token sets put in place. */
+  struct conn *conns;
+  unsigned gen;
   palp_web_hub *hub;
   struct lws_context *ctx;
   struct lws_vhost *vh;
@@ -54,17 +65,23 @@ struct palp_web_server {
    * service thread alone). */
   unsigned char expired_said[PALP_WEB_TRAINEES_MAX + 1];
   /* Each token's expiry, fixed at palp_web_serve_create from the wall clock and compared on the steady
-   * clock after (palp_web_token_deadline_at_start): 0 the instructors', k + 1 trainee k's. */
+   * clock after (palp_web_token_deadline_at_start): 0 the instructors', k + 1 trainee k's. Fixed anew for
+   * a token a SIGHUP brought or re-issued (apply_tokens), from the wall clock then. */
   palp_web_token_deadline deadline[PALP_WEB_TRAINEES_MAX + 1];
 };
 
 /* Per connection (HTTP or WebSocket): libwebsockets allocates and zeroes it. */
 typedef struct conn {
   palp_web_cursor cursor;
-  int who; /* authorised()'s answer at the handshake: 0 an instructor's page, k + 1 trainee k's */
+  int who; /* authorised()'s answer at the handshake: 0 an instructor's page, k + 1 trainee k's (renumbered
+            * when a SIGHUP's tokens keep its token: apply_tokens) */
   int expired; /* its token is past its lifetime: told so, then closed (tell_expired) */
+  int withdrawn; /* its token was removed or changed at a SIGHUP: told so, then closed (tell_expired) */
   int told;    /* tell_expired has written to it (lws may offer a closing connection a write again) */
   int attached;
+  unsigned gen; /* the token set it was let in by (palp_web_server.gen) */
+  struct lws *wsi;               /* attached: its connection, and its place in palp_web_server.conns */
+  struct conn *prev, *next;
   size_t rx_len;
   int rx_overflow;
   char rx[CONTROL_MAX];
@@ -86,18 +103,19 @@ static palp_web_server *server_of(struct lws *wsi) {
  * is compared, each in constant time, so the time does not tell which one nearly matched. */
 static int token_owner(const palp_web_server *s, const char *v) {
   const size_t n = strlen(v);
-  int who = palp_web_token_equal(s->token, v, n) ? 0 : -1;
-  for (int k = 0; k < s->def.trainee_count; k++)
-    if (palp_web_token_equal(s->def.trainees[k].token, v, n) && who < 0) who = k + 1;
+  const palp_web_tokens *t = s->tok;
+  int who = palp_web_token_equal(t->token, v, n) ? 0 : -1;
+  for (int k = 0; k < t->trainee_count; k++)
+    if (palp_web_token_equal(t->trainees[k].token, v, n) && who < 0) who = k + 1;
   return who;
 }
 
 static double issued_of(const palp_web_server *s, int who) {
-  return who > 0 ? s->def.trainees[who - 1].issued_s : s->def.token_issued_s;
+  return who > 0 ? s->tok->trainees[who - 1].issued_s : s->tok->token_issued_s;
 }
 
-/* 1 when who's token (token_owner's answer) is past its lifetime now: its deadline, fixed at start, on the
- * steady clock (a wall clock set by NTP mid-class moves no token's expiry). */
+/* 1 when who's token (token_owner's answer) is past its lifetime now: its deadline, fixed at start (or at the
+ * SIGHUP that brought it), on the steady clock (a wall clock set by NTP mid-class moves no token's expiry). */
 static int token_expired(const palp_web_server *s, int who) {
   return s->have_token && who >= 0 && who <= PALP_WEB_TRAINEES_MAX &&
          palp_web_token_past(&s->deadline[who], palp_web_clock_system());
@@ -111,7 +129,7 @@ static void say_expired(palp_web_server *s, int who) {
   char at[32], issued[32], whose[64];
   palp_web_utc_text(s->deadline[who].wall_s, at, sizeof at); /* by the wall clock as it read at start */
   palp_web_utc_text(issued_of(s, who), issued, sizeof issued);
-  if (who > 0) snprintf(whose, sizeof whose, "trainee %s's token", s->def.trainees[who - 1].name);
+  if (who > 0) snprintf(whose, sizeof whose, "trainee %s's token", s->tok->trainees[who - 1].name);
   else snprintf(whose, sizeof whose, "the instructors' token");
   palp_log_warn(s->def.log,
                 "%s expired at %s (issued %s, lifetime %g h, --token-lifetime-h): its pages are refused and told to "
@@ -223,7 +241,7 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
   int n = 0;
   if (from_url && s->have_token)
     n = snprintf(headers, sizeof headers, "Set-Cookie: " COOKIE "=%s; Path=/; HttpOnly; SameSite=Strict%s\x0d\x0a",
-                 who ? s->def.trainees[who - 1].token : s->token, s->def.tls_cert ? "; Secure" : "");
+                 who ? s->tok->trainees[who - 1].token : s->tok->token, s->def.tls_cert ? "; Secure" : "");
   const int rc = lws_serve_http_file(wsi, file, mime, headers, n);
   /* < 0: lws failed (it may have answered already, lws-http.h): no second answer; the connection closes */
   if (rc < 0) {
@@ -235,22 +253,28 @@ static int serve_file(struct lws *wsi, palp_web_server *s, const char *uri) {
   return 0;
 }
 
-/* Tells a WebSocket page that its token expired ({"type": "expired", "message": ...}, which the pages show
- * and stop reconnecting on) and closes it (1008, policy violation): a refused handshake tells a page
- * nothing it can show. Returns -1, the callback's "close". */
+/* Tells a WebSocket page that its token expired, or was withdrawn at a SIGHUP ({"type": "expired",
+ * "message": ...}, which the pages show and stop reconnecting on) and closes it (1008, policy violation,
+ * "token expired" or "token withdrawn"): a refused handshake tells a page nothing it can show. Returns -1,
+ * the callback's "close". */
 static int tell_expired(struct lws *wsi, palp_web_server *s, conn *c) {
   if (c->told) return -1;
   c->told = 1;
-  if (c->attached) { /* open when its token expired (checked at each of its wake-ups, <= 100 ms) */
+  if (c->withdrawn) {
+    s->stats.ws_withdrawn++;
+  } else if (c->attached) { /* open when its token expired (checked at each of its wake-ups, <= 100 ms) */
     s->stats.ws_expired++;
     say_expired(s, c->who);
   }
-  static const char msg[] = "{\"type\":\"expired\",\"message\":\"" PALP_WEB_TOKEN_EXPIRED_TEXT "\"}";
-  unsigned char buf[LWS_PRE + sizeof msg];
-  memcpy(buf + LWS_PRE, msg, sizeof msg - 1);
-  lws_write(wsi, buf + LWS_PRE, sizeof msg - 1, LWS_WRITE_TEXT);
-  static const char why[] = "token expired";
-  lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION, (unsigned char *)why, sizeof why - 1);
+  static const char expired[] = "{\"type\":\"expired\",\"message\":\"" PALP_WEB_TOKEN_EXPIRED_TEXT "\"}";
+  static const char withdrawn[] = "{\"type\":\"expired\",\"message\":\"" PALP_WEB_TOKEN_WITHDRAWN_TEXT "\"}";
+  const char *msg = c->withdrawn ? withdrawn : expired;
+  const size_t n = strlen(msg);
+  unsigned char buf[LWS_PRE + (sizeof expired > sizeof withdrawn ? sizeof expired : sizeof withdrawn)];
+  memcpy(buf + LWS_PRE, msg, n);
+  lws_write(wsi, buf + LWS_PRE, n, LWS_WRITE_TEXT);
+  const char *why = c->withdrawn ? "token withdrawn" : "token expired";
+  lws_close_reason(wsi, LWS_CLOSE_STATUS_POLICY_VIOLATION, (unsigned char *)why, strlen(why));
   return -1;
 }
 
@@ -285,6 +309,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
       return 1;
     }
     c->who = who; /* the connection's data exists from here on, zeroed */
+    c->gen = s->gen;
     /* An expired token's page is let in only to be told so (tell_expired): never attached to the hub. */
     c->expired = stale;
     return 0;
@@ -292,6 +317,11 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
 
   case LWS_CALLBACK_ESTABLISHED: {
     const int who = c->who;
+    if (c->gen != s->gen) { /* let in by tokens a SIGHUP has replaced since (who counts in the old ones) */
+      c->withdrawn = 1;
+      lws_callback_on_writable(wsi);
+      return 0;
+    }
     if (c->expired) {
       s->stats.ws_denied++;
       s->stats.ws_expired++;
@@ -312,8 +342,13 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
       return refuse_full(wsi, s, "palp-web has no room for more pages (--max-clients)");
     if (who > 0) s->trainee_pages[who]++, s->trainee_pages_all++;
     if (who > 0) /* a trainee's page: that trainee's sessions only (palp_web_hub_attach zeroed the cursor) */
-      palp_web_hub_scope(s->hub, &c->cursor, s->def.trainees[who - 1].name);
+      palp_web_hub_scope(s->hub, &c->cursor, s->tok->trainees[who - 1].name);
     c->attached = 1;
+    c->wsi = wsi;
+    c->prev = NULL;
+    c->next = s->conns;
+    if (s->conns) s->conns->prev = c;
+    s->conns = c;
     s->stats.ws_opened++;
     lws_callback_on_writable(wsi);
     return 0;
@@ -323,7 +358,12 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     if (c && c->attached) {
       palp_web_hub_detach(s->hub, &c->cursor);
       c->attached = 0;
-      if (c->who > 0 && c->who <= PALP_WEB_TRAINEES_MAX) s->trainee_pages[c->who]--, s->trainee_pages_all--;
+      if (c->prev) c->prev->next = c->next;
+      else s->conns = c->next;
+      if (c->next) c->next->prev = c->prev;
+      /* a withdrawn page no longer counts among its token's (apply_tokens) */
+      if (!c->withdrawn && c->who > 0 && c->who <= PALP_WEB_TRAINEES_MAX)
+        s->trainee_pages[c->who]--, s->trainee_pages_all--;
       s->stats.ws_closed++;
     }
     return 0;
@@ -333,7 +373,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
      * change what this page is sent; a finding reaches DDS only from a bound trainee page, after
      * the hub's checks. Anything longer than CONTROL_MAX is dropped whole. Nothing from a page
      * whose token has expired (its next write tells it and closes). */
-    if (!c->attached || c->expired || token_expired(s, c->who)) {
+    if (!c->attached || c->expired || c->withdrawn || token_expired(s, c->who)) {
       lws_callback_on_writable(wsi);
       return 0;
     }
@@ -361,7 +401,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
   case LWS_CALLBACK_SERVER_WRITEABLE: {
     /* every page is offered a write at each of the hub's wake-ups (<= 100 ms): its token's lifetime
      * is checked there too, so a page left open is closed at its token's expiry */
-    if (c->expired || (c->attached && token_expired(s, c->who))) return tell_expired(wsi, s, c);
+    if (c->expired || c->withdrawn || (c->attached && token_expired(s, c->who))) return tell_expired(wsi, s, c);
     if (!c->attached) return 0;
     unsigned char *buf = NULL;
     size_t n = 0;
@@ -405,14 +445,24 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
   snprintf(s->listen, sizeof s->listen, "%s", def->listen ? def->listen : "127.0.0.1");
   snprintf(s->www, sizeof s->www, "%s", def->www_dir);
   snprintf(s->three, sizeof s->three, "%s", def->three_dir);
+  s->tok = calloc(1, sizeof *s->tok);
+  if (!s->tok) {
+    fail(err, errlen, "out of memory");
+    free(s);
+    return NULL;
+  }
   if (def->token) {
-    snprintf(s->token, sizeof s->token, "%s", def->token);
+    snprintf(s->tok->token, sizeof s->tok->token, "%s", def->token);
     s->have_token = 1;
   }
-  s->def.listen = s->listen;
+  s->tok->token_issued_s = def->token_issued_s;
   /* the per-token arrays hold PALP_WEB_TRAINEES_MAX (main's parse reads no more) */
-  if (s->def.trainee_count > PALP_WEB_TRAINEES_MAX) s->def.trainee_count = PALP_WEB_TRAINEES_MAX;
-  for (int who = 0; who <= s->def.trainee_count; who++)
+  s->tok->trainee_count = def->trainee_count > PALP_WEB_TRAINEES_MAX ? PALP_WEB_TRAINEES_MAX : def->trainee_count;
+  if (s->tok->trainee_count > 0)
+    memcpy(s->tok->trainees, def->trainees, (size_t)s->tok->trainee_count * sizeof *def->trainees);
+  s->def.listen = s->listen;
+  s->def.token = NULL, s->def.trainees = NULL, s->def.trainee_count = 0; /* tok's from here on */
+  for (int who = 0; who <= s->tok->trainee_count; who++)
     s->deadline[who] = palp_web_token_deadline_at_start(issued_of(s, who), def->token_lifetime_s, palp_web_clock_system());
   lws_set_log_level(LLL_ERR | LLL_WARN, lws_log_to_stderr);
   s->protocols[0] = (struct lws_protocols){.name = "palp", .callback = callback, .per_session_data_size = sizeof(conn),
@@ -450,6 +500,7 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
     else
       fail(err, errlen, "cannot listen on %s port %d (in use, or not an address of this machine?)", s->listen,
            def->port);
+    free(s->tok);
     free(s);
     return NULL;
   }
@@ -457,10 +508,12 @@ palp_web_server *palp_web_serve_create(const palp_web_serve_def *def, palp_web_h
   if (!s->vh || lws_get_vhost_listen_port(s->vh) <= 0) {
     fail(err, errlen, "cannot listen on %s port %d", s->listen, def->port);
     lws_context_destroy(s->ctx);
+    free(s->tok);
     free(s);
     return NULL;
   }
   pthread_mutex_init(&s->stats_mu, NULL);
+  pthread_mutex_init(&s->tok_mu, NULL);
   return s;
 }
 
@@ -473,13 +526,102 @@ static void publish_stats(palp_web_server *s) {
   pthread_mutex_unlock(&s->stats_mu);
 }
 
+/* Puts a SIGHUP's tokens in place (palp_web_serve_tokens_replace), on the service thread between two passes:
+ * every later request and handshake is checked against them, and each open page once, now. Logs what
+ * changed. */
+static void apply_tokens(palp_web_server *s) {
+  pthread_mutex_lock(&s->tok_mu);
+  palp_web_tokens *next = s->pending;
+  s->pending = NULL;
+  pthread_mutex_unlock(&s->tok_mu);
+  if (!next) return;
+  palp_web_tokens *old = s->tok;
+  const palp_web_clock *clk = palp_web_clock_system();
+  const double life = s->def.token_lifetime_s;
+  /* map: an old `who` to the new one, -1 for a token withdrawn (removed, or changed: a trainee's name with
+   * another token). A token kept with the same issued time keeps its expiry, and whether the log named it
+   * expired; any other is given one as at start (its file rewritten: issued anew). */
+  int map[PALP_WEB_TRAINEES_MAX + 1];
+  palp_web_token_deadline deadline[PALP_WEB_TRAINEES_MAX + 1];
+  unsigned char said[PALP_WEB_TRAINEES_MAX + 1];
+  const int same_instructor = !strcmp(old->token, next->token);
+  map[0] = same_instructor ? 0 : -1;
+  const int keep0 = same_instructor && old->token_issued_s == next->token_issued_s;
+  deadline[0] = keep0 ? s->deadline[0] : palp_web_token_deadline_at_start(next->token_issued_s, life, clk);
+  said[0] = keep0 ? s->expired_said[0] : 0;
+  for (int j = 1; j <= next->trainee_count; j++) {
+    deadline[j] = palp_web_token_deadline_at_start(next->trainees[j - 1].issued_s, life, clk);
+    said[j] = 0;
+  }
+  int added = next->trainee_count, removed = 0, changed = 0;
+  for (int k = 0; k < old->trainee_count; k++) {
+    const palp_web_trainee_token *o = &old->trainees[k];
+    map[k + 1] = -1;
+    int j = 0;
+    while (j < next->trainee_count && strcmp(next->trainees[j].name, o->name)) j++;
+    if (j == next->trainee_count) {
+      removed++;
+      continue;
+    }
+    added--;
+    if (strcmp(next->trainees[j].token, o->token)) {
+      changed++;
+      continue;
+    }
+    map[k + 1] = j + 1;
+    if (next->trainees[j].issued_s == o->issued_s) deadline[j + 1] = s->deadline[k + 1], said[j + 1] = s->expired_said[k + 1];
+  }
+  s->tok = next;
+  memcpy(s->deadline, deadline, (size_t)(next->trainee_count + 1) * sizeof deadline[0]);
+  memcpy(s->expired_said, said, (size_t)(next->trainee_count + 1));
+  s->gen++;
+  /* every open page at once: renumbered, or told and closed; the trainees' counts made anew */
+  memset(s->trainee_pages, 0, sizeof s->trainee_pages);
+  s->trainee_pages_all = 0;
+  int closing = 0;
+  for (conn *c = s->conns; c; c = c->next) {
+    if (c->withdrawn) continue; /* by an earlier SIGHUP, closing already */
+    const int who = c->who >= 0 && c->who <= old->trainee_count ? map[c->who] : -1;
+    if (who < 0) {
+      c->withdrawn = 1;
+      closing++;
+      lws_callback_on_writable(c->wsi);
+      continue;
+    }
+    c->who = who;
+    if (who > 0) s->trainee_pages[who]++, s->trainee_pages_all++;
+  }
+  free(old);
+  palp_log_info(s->def.log,
+                "SIGHUP: tokens re-read: instructors' token %s, trainees' tokens %d (added %d, removed %d, changed %d); "
+                "closed %d pages whose token was withdrawn",
+                same_instructor ? "unchanged" : "replaced", next->trainee_count, added, removed, changed, closing);
+}
+
 void palp_web_serve_run(palp_web_server *s, atomic_int *stop) {
   /* The hub wakes the loop at least every 100 ms, so a stop request is seen that soon. */
   while (!*stop) {
     const int rc = lws_service(s->ctx, 0);
+    apply_tokens(s);
     publish_stats(s);
     if (rc < 0) break;
   }
+}
+
+int palp_web_serve_tokens_replace(palp_web_server *s, const palp_web_tokens *t) {
+  if (!s->have_token || !t || palp_web_token_check(t->token) != 0 || t->trainee_count < 0 ||
+      t->trainee_count > PALP_WEB_TRAINEES_MAX)
+    return PALP_EINVAL;
+  palp_web_tokens *copy = malloc(sizeof *copy);
+  if (!copy) return PALP_ENOMEM;
+  *copy = *t;
+  pthread_mutex_lock(&s->tok_mu);
+  palp_web_tokens *older = s->pending; /* not yet in place: the newer read wins */
+  s->pending = copy;
+  pthread_mutex_unlock(&s->tok_mu);
+  free(older);
+  palp_web_serve_wake(s);
+  return 0;
 }
 
 void palp_web_serve_wake(void *server) {
@@ -497,5 +639,8 @@ void palp_web_serve_destroy(palp_web_server *s) {
   if (!s) return;
   if (s->ctx) lws_context_destroy(s->ctx);
   pthread_mutex_destroy(&s->stats_mu);
+  pthread_mutex_destroy(&s->tok_mu);
+  free(s->pending);
+  free(s->tok);
   free(s);
 }

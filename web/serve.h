@@ -19,6 +19,15 @@
 #include "hub.h"
 #include "palp_log.h"
 
+/* The access tokens served: read at start, and re-read from their files at SIGHUP (main.c), then handed
+ * over whole (palp_web_serve_tokens_replace). */
+typedef struct palp_web_tokens {
+  char token[PALP_WEB_TOKEN_MAX + 1]; /* the instructors' */
+  double token_issued_s;              /* when it was issued [s, Unix time]: its file's last write, or start */
+  int trainee_count;
+  palp_web_trainee_token trainees[PALP_WEB_TRAINEES_MAX]; /* each with its issued_s */
+} palp_web_tokens;
+
 typedef struct palp_web_serve_def {
   const char *listen;    /* address to bind, default 127.0.0.1 */
   int port;              /* 0: any free port (printed) */
@@ -50,6 +59,7 @@ typedef struct palp_web_serve_stats {
   uint64_t http_expired, ws_expired; /* refused for an expired token (in http_denied, ws_denied) or, ws,
                                       * closed at its expiry */
   uint64_t ws_opened, ws_closed, ws_denied, ws_full;
+  uint64_t ws_withdrawn; /* closed because their token was withdrawn (palp_web_serve_tokens_replace) */
   uint64_t msgs, bytes, control_ok, control_bad;
 } palp_web_serve_stats;
 
@@ -62,6 +72,15 @@ int palp_web_serve_port(const palp_web_server *s);
 void palp_web_serve_run(palp_web_server *s, atomic_int *stop);
 /* Thread-safe: makes the service loop push new hub messages to the browsers. */
 void palp_web_serve_wake(void *server);
+/* Thread-safe (main calls it from the hub's thread at SIGHUP): the tokens to serve from now on, copied; the
+ * web server's thread puts them in place at its next pass (<= 100 ms), all at once, and logs what changed.
+ * From then on every request and handshake is checked against them, each token's expiry recomputed from its
+ * issued time as at start (one whose token and issued time are the same keeps its expiry); every open
+ * WebSocket whose token is the same (the instructors' unchanged, a trainee's name with the same token) stays
+ * open, one whose token was removed or changed is told (PALP_WEB_TOKEN_WITHDRAWN_TEXT) and closed (1008,
+ * "token withdrawn"). A newer call before that pass replaces the older's tokens. 0, or PALP_EINVAL for a
+ * server started without a token (nothing to replace), PALP_ENOMEM. */
+int palp_web_serve_tokens_replace(palp_web_server *s, const palp_web_tokens *t);
 /* The counters as of the service loop's last pass (a copy it makes under a lock after each): safe from
  * any thread, e.g. main's --stats line printed from the hub's. */
 void palp_web_serve_stats_get(palp_web_server *s, palp_web_serve_stats *out);
