@@ -62,12 +62,14 @@ int main(int argc, char **argv) {
   db_fresh_path(db, sizeof db, argv[1], "recorder.db");
   REQUIRE(palp_dds_use_config(argv[4]) == 0, "DDS config %s", argv[4]);
 
-  char dom[16];
+  char dom[16], logf[640];
   snprintf(dom, sizeof dom, "%d", DOMAIN);
+  snprintf(logf, sizeof logf, "%s.log", db);
+  remove(logf);
   pid_t pid = fork();
   REQUIRE(pid >= 0, "fork");
   if (pid == 0) {
-    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", (char *)NULL);
+    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", "--log-file", logf, (char *)NULL);
     _exit(127);
   }
 
@@ -285,8 +287,24 @@ int main(int argc, char **argv) {
         "a flood of 20,000 made-up contacts, 20,000 disposes of contact keys, 20,000 findings and 40,000 disposes of "
         "finding keys of made-up sessions grows the recorder by under %ld kB (+%ld kB; unbounded: ~17,400 kB without "
         "the findings, ~27,300 kB without the findings reader made anew)", bound_kb, rss1 - rss0);
+  /* Three log rotations (logrotate's SIGHUP): each re-opens --log-file and the recording goes on. Until
+   * 2026-12-06 the handler was installed by signal(), reset at its first delivery under -std=c17: the
+   * second SIGHUP killed the recorder (exit by signal 1). */
+  for (int k = 0; k < 3; k++) {
+    REQUIRE(kill(pid, SIGHUP) == 0, "SIGHUP");
+    sleep_ms(300); /* the main loop wakes at least every 100 ms */
+  }
+  CHECK(waitpid(pid, NULL, WNOHANG) == 0, "the recorder lives after three SIGHUPs");
   int status;
   CHECK(stop_recorder(pid, &status), "recorder exit status %d", status);
+  {
+    FILE *lf = fopen(logf, "r");
+    char line[1024];
+    int reopened = 0;
+    while (lf && fgets(line, sizeof line, lf)) reopened += strstr(line, "SIGHUP: log re-opened") != NULL;
+    if (lf) fclose(lf);
+    CHECK(reopened == 3, "--log-file re-opened 3 times by 3 SIGHUPs (got %d)", reopened);
+  }
   dds_delete(pp);
 
   sqlite3 *h;
