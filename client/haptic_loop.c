@@ -600,7 +600,8 @@ void palp_cli_haptic_get_view(palp_cli_haptic_loop *l, palp_cli_haptic_view *out
   pthread_mutex_unlock(&l->view_lock);
 }
 
-int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t *bad, double *latency_us) {
+int palp_cli_haptic_feed(palp_cli_haptic_loop *l, palp_cli_station *st, uint64_t *bad, double *latency_us) {
+  const dds_entity_t reader = st->local_model_r;
   int taken = 0;
   if (latency_us) *latency_us = NAN;
   for (;;) {
@@ -608,7 +609,9 @@ int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t 
     dds_sample_info_t info;
     if (dds_take(reader, ptr, &info, 1, 1) <= 0) break;
     const palp_LocalModel *w = ptr[0];
-    if (info.valid_data && w->finger == (uint8_t)l->def.finger && w->session_id == l->def.session_id) {
+    /* what the hand feels comes from the session's server alone (station.h, palp_cli_server_bind) */
+    if (info.valid_data && w->finger == (uint8_t)l->def.finger && w->session_id == l->def.session_id &&
+        palp_cli_station_from_server(st, reader, &info)) {
       palp_local_model m;
       if (palp_cli_local_model_from_wire(w, &m) == 0 && palp_cli_local_model_fits_rate(&m, l->def.physics_rate_hz) &&
           isfinite(w->max_force) && w->max_force >= 0) {

@@ -31,6 +31,7 @@
 #include "palp_haptic.h"
 #include "palp_timer_floor.h"
 #include "palp_types.h"
+#include "station.h"
 
 /* ---- mailbox: DDS thread -> haptic thread ----------------------------------------- */
 typedef struct palp_cli_mailbox {
@@ -236,11 +237,13 @@ int palp_cli_haptic_done(palp_cli_haptic_loop *l);
 void palp_cli_haptic_join(palp_cli_haptic_loop *l, palp_cli_haptic_stats *out);
 void palp_cli_haptic_get_view(palp_cli_haptic_loop *l, palp_cli_haptic_view *out);
 
-/* The DDS side: takes every palp_local_model sample of finger def.finger from
- * reader, checks it and puts it into the loop's mailbox. Returns the samples
+/* The DDS side: takes every palp_local_model sample of finger def.finger from the
+ * station's reader (st->local_model_r), checks it and puts it into the loop's mailbox.
+ * Only the session's server's samples count (palp_cli_station_from_server: another
+ * participant's are dropped and counted in st->bind, not in *bad). Returns the samples
  * taken; *bad counts dropped ones; *latency_us (if not NULL) gets the newest
  * sample's contact -> local model latency [us] (NAN if none), echoing the stamp
  * of the contact sample its step used. */
-int palp_cli_haptic_feed(palp_cli_haptic_loop *l, dds_entity_t reader, uint64_t *bad, double *latency_us);
+int palp_cli_haptic_feed(palp_cli_haptic_loop *l, palp_cli_station *st, uint64_t *bad, double *latency_us);
 
 #endif

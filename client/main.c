@@ -414,7 +414,7 @@ static void drain_feedback(feedback_ctx *c) {
     if (dds_take(c->st->feedback_r, ptr, &info, 1, 1) <= 0) break;
     const palp_Feedback *fb = ptr[0];
     int64_t rx = palp_dds_now_ns();
-    if (info.valid_data) {
+    if (info.valid_data && palp_cli_station_from_server(c->st, c->st->feedback_r, &info)) {
       c->samples++;
       c->last_top = fb->top_displacement;
       for (uint32_t k = 0; k < fb->fingers._length; k++) {
@@ -583,7 +583,7 @@ static void findings_ui_model(void *ctx, const palp_local_model *m, uint64_t fra
  * (findings_ui_frame_max); each in contact marked at the band the exercise grades, from the
  * fingertip's depth as the review measures it (the sample's own radius), on the triangles it names
  * (src/assess.c's footprint). */
-static void findings_ui_samples(findings_ui *u, const palp_cli_station *st, int finger) {
+static void findings_ui_samples(findings_ui *u, palp_cli_station *st, int finger) {
   if (!u->touched || st->finger_sample_r <= 0) return;
   const uint64_t frame_max = findings_ui_frame_max(u);
   for (;;) {
@@ -591,7 +591,8 @@ static void findings_ui_samples(findings_ui *u, const palp_cli_station *st, int 
     dds_sample_info_t info;
     if (dds_take(st->finger_sample_r, ptr, &info, 1, 1) <= 0) break;
     const palp_FingerSample *w = ptr[0];
-    if (info.valid_data && w->session_id == st->session_id && w->finger == (uint8_t)finger) {
+    if (info.valid_data && w->session_id == st->session_id && w->finger == (uint8_t)finger &&
+        palp_cli_station_from_server(st, st->finger_sample_r, &info)) {
       if (!palp_dds_finger_sample_ok(w, -1) || w->frame <= u->last_sample_frame || w->frame > frame_max) {
         u->samples_bad++;
       } else {
@@ -926,6 +927,28 @@ static void report_log(const opts *o, palp_cli_station *st, const char *role, in
   fflush(stdout);
 }
 
+/* Samples another participant wrote into the session, dropped (palp_cli_station_from_server): the user
+ * is told once, in the station's words, and the log names the participant. Said even with --quiet: what
+ * she felt and was told may have been meant to mislead her, and her instructor should know. */
+static void report_foreign(const opts *o, palp_cli_station *st, const char *role, int named) {
+  char line[400], who[64];
+  if (!palp_cli_station_foreign_news(st, line, sizeof line, who, sizeof who)) return;
+  const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
+  tprintf(o, "[%s%s%s] %s\n", role, sep, name, line);
+  fflush(stdout);
+  palp_log_warn(o->log, "session %u: samples of its server's topics from %s, not its server (the participant that "
+                        "accepted the join), ignored; further ones are counted", st->session_id, who);
+}
+
+/* The summary lines' count of those: "" when none. */
+static const char *foreign_summary(const palp_cli_station *st, char *buf, size_t len) {
+  buf[0] = 0;
+  if (st->bind.ignored)
+    snprintf(buf, len, "; %llu sample%s from participants other than its server ignored",
+             (unsigned long long)st->bind.ignored, st->bind.ignored == 1 ? "" : "s");
+  return buf;
+}
+
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
@@ -1016,7 +1039,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (!exercise_decided)
       exercise_decided = findings_ui_exercise(&fu, o, st, &in, ph, hl->def.radius, d.physics_rate_hz, t0) != 0;
     double lat_us;
-    int n = palp_cli_haptic_feed(hl, st->local_model_r, &bad, &lat_us);
+    int n = palp_cli_haptic_feed(hl, st, &bad, &lat_us);
     findings_ui_samples(&fu, st, hl->def.finger);
     models += (uint64_t)(n > 0 ? n : 0);
     if (n > 0 && isfinite(lat_us)) lat_add(&lat, lat_us);
@@ -1094,6 +1117,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       }
       report_stall(o, st, stalls_seen, "trainee", 1);
       report_log(o, st, "trainee", 1);
+      report_foreign(o, st, "trainee", 1);
       next_check = now + 100000000;
     }
   }
@@ -1121,19 +1145,20 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   }
   /* Deadlines a late wake-up skipped got no force update at all (the device held its last
    * force): said beside the late ticks, which count wake-ups, not the time they lost. */
-  char skipped[96] = "";
+  report_foreign(o, st, "trainee", 1); /* samples that came after the loop's last look */
+  char skipped[96] = "", foreign[96];
   if (hs.missed)
     snprintf(skipped, sizeof skipped, ", %llu deadline(s) skipped (the device held its last force)",
              (unsigned long long)hs.missed);
   tprintf(o, "[trainee %s] session %u: haptic loop %llu ticks at %.0f Hz, %llu late by > %.1f ms (%.3f%%, worst %.2f ms)%s; "
              "%llu local models (%llu dropped as invalid), %llu contact samples sent at %.0f Hz; contact->model latency "
-             "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s\n",
+             "p50 %.0f us p99 %.0f us; peak rendered force %.2f N%s%s%s\n",
              o->name, st->session_id, (unsigned long long)hs.ticks, d.rate_hz, (unsigned long long)hs.late_ticks,
              d.late_threshold * 1e3, hs.ticks ? 100.0 * (double)hs.late_ticks / (double)hs.ticks : 0.0, hs.late_max * 1e3,
              skipped,
              (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
-             d.physics_rate_hz, p50, p99, hs.peak_force, closed ? "; session closed by the server: " : "",
-             closed ? reason : "");
+             d.physics_rate_hz, p50, p99, hs.peak_force, foreign_summary(st, foreign, sizeof foreign),
+             closed ? "; session closed by the server: " : "", closed ? reason : "");
   if (hs.stalls)
     tprintf(o, "[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
                "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "
@@ -1290,6 +1315,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       const int was_closed = palp_cli_station_session_closed(st, reason, sizeof reason);
       report_stall(o, st, stalls_seen, "trainee", 1);
       report_log(o, st, "trainee", 1);
+      report_foreign(o, st, "trainee", 1);
       if (was_closed) {
         if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
           /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
@@ -1340,6 +1366,8 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   if (fb_csv) fclose(fb_csv);
   if (ct_csv) fclose(ct_csv);
   latency lat = fx.lat;
+  report_foreign(o, st, "trainee", 1);
+  char foreign[96];
   double p50 = NAN, p99 = NAN;
   if (lat.n) {
     qsort(lat.us, lat.n, sizeof *lat.us, cmp_double);
@@ -1347,9 +1375,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     p99 = lat.us[(size_t)((double)(lat.n - 1) * 0.99)];
   }
   tprintf(o, "[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
-             "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s\n",
+             "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s%s\n",
              o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
-             lat.n, closed ? "; session closed by the server: " : "", closed ? reason : "",
+             lat.n, foreign_summary(st, foreign, sizeof foreign), closed ? "; session closed by the server: " : "",
+             closed ? reason : "",
              rejoins ? "; rejoined after its server was lost" : "");
   if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
@@ -1422,7 +1451,8 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     dds_sample_info_t info;
     while (st->deformation_r > 0 && dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
       /* A frame that does not fit the phantom's mesh is dropped, never indexed. */
-      if (info.valid_data && palp_cli_deformation_check(ph, ptr[0]) == 0) {
+      if (info.valid_data && palp_cli_station_from_server(st, st->deformation_r, &info) &&
+          palp_cli_deformation_check(ph, ptr[0]) == 0) {
         const palp_Deformation *d = ptr[0];
         frames++;
         if (d->sim_time > world_t) world_t = d->sim_time;
@@ -1463,7 +1493,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
       dds_return_loan(st->contact_r, ptr, 1);
     }
     while (st->feedback_r > 0 && dds_take(st->feedback_r, ptr, &info, 1, 1) > 0) {
-      if (info.valid_data) {
+      if (info.valid_data && palp_cli_station_from_server(st, st->feedback_r, &info)) {
         const palp_Feedback *fb = ptr[0];
         feedbacks++;
         if (fb->sim_time > world_t) world_t = fb->sim_time;
@@ -1502,6 +1532,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
       }
       report_stall(o, st, stalls_seen, observer ? "observer" : "visual", 0);
       report_log(o, st, observer ? "observer" : "visual", 0);
+      report_foreign(o, st, observer ? "observer" : "visual", 0);
       next_check = now + 100000000;
     }
   }
@@ -1513,11 +1544,13 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     if (palp_cli_view_svg(ph, &peak.d, title, o->svg) < 0)
       palp_log_error(o->log, "cannot write %s", o->svg);
   }
+  report_foreign(o, st, observer ? "observer" : "visual", 0);
+  char foreign[96];
   tprintf(o, "[%s] session %u: %llu deformation frames, %llu contact samples seen, %llu feedback samples, peak "
-             "displacement %.2f mm%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
+             "displacement %.2f mm%s%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
           (unsigned long long)contacts, (unsigned long long)feedbacks, peak_disp * 1e3,
           o->svg && peak.valid ? ", snapshot " : "", o->svg && peak.valid ? o->svg : "",
-          closed ? "; session closed: " : "", closed ? reason : "");
+          foreign_summary(st, foreign, sizeof foreign), closed ? "; session closed: " : "", closed ? reason : "");
   if (show_map) palp_cli_view_free(&view);
   free(last.pos);
   free(peak.pos);
@@ -1707,6 +1740,7 @@ int main(int argc, char **argv) {
   palp_cli_station_leave(&st);
   if (trainee && st.in_exercise && !o.quiet && print_debrief(&o, &st) == (int)palp_DEBRIEF_LESIONS)
     print_debrief_score(&o, &st);
+  report_foreign(&o, &st, o.role, 1); /* a debrief or score another participant wrote, if not said yet */
   if (st.goodbye_unanswered) {
     /* Said even with --quiet: the instructor may otherwise read "not back" in the log as a crash. */
     printf("[%s %s] the server did not answer within %.0f s after this station's stall, so its goodbye may be lost: "

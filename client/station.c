@@ -271,8 +271,10 @@ static int send_request(palp_cli_station *st, const palp_cli_join *j, int op, pa
 }
 
 /* Waits for the reply to request seq until end_ns: 1 accepted, 0 rejected, -1 timeout, -2 the
- * caller's stop flag set (looked at only when stoppable: a leave's waits are the goodbye itself). */
-static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, int stoppable, palp_SessionReply *out) {
+ * caller's stop flag set (looked at only when stoppable: a leave's waits are the goodbye itself). *pub
+ * (may be NULL): the replier's publication handle. In a session only its server's replies count. */
+static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, int stoppable, palp_SessionReply *out,
+                          dds_instance_handle_t *pub) {
   dds_entity_t ws = dds_create_waitset(st->pp);
   dds_entity_t rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
   dds_waitset_attach(ws, rc, 0);
@@ -284,9 +286,10 @@ static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, in
     int n;
     while (result < 0 && (n = dds_take(st->reply_r, ptr, info, 4, 4)) > 0)
       for (int i = 0; i < n; i++)
-        if (info[i].valid_data && strcmp(buf[i].station_id, st->station_id) == 0 &&
-            buf[i].request_seq == seq) {
+        if (info[i].valid_data && strncmp(buf[i].station_id, st->station_id, sizeof buf[i].station_id) == 0 &&
+            buf[i].request_seq == seq && (!st->session_id || palp_cli_station_from_server(st, st->reply_r, &info[i]))) {
           *out = buf[i];
+          if (pub) *pub = info[i].publication_handle;
           result = buf[i].status == palp_REPLY_ACCEPTED;
         }
     int64_t now = palp_dds_now_ns();
@@ -302,8 +305,95 @@ static int await_reply_to(palp_cli_station *st, uint32_t seq, int64_t end_ns, in
   return result;
 }
 
-static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *out) {
-  return await_reply_to(st, st->request_seq, end_ns, 1, out);
+static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *out, dds_instance_handle_t *pub) {
+  return await_reply_to(st, st->request_seq, end_ns, 1, out, pub);
+}
+
+/* ---- the session's server (palp_cli_server_bind, 2026-12-06) ------------------------------------- */
+
+enum { FROM_GONE = -1, FROM_OTHER = 0, FROM_SERVER = 1 };
+
+/* Whose writer pub is: the server's, another participant's (*who names it), or gone before the station
+ * knew it. Asked of DDS once per writer, then kept by its handle (never reused in a process). */
+static int writer_verdict(palp_cli_station *st, dds_entity_t reader, dds_instance_handle_t pub, const dds_guid_t **who) {
+  palp_cli_server_bind *b = &st->bind;
+  *who = NULL;
+  if (!pub) return FROM_GONE;
+  for (int i = 0; i < b->n_mine; i++)
+    if (b->mine[i] == pub) return FROM_SERVER;
+  for (int i = 0; i < PALP_CLI_OTHER_WRITERS; i++)
+    if (b->other[i] == pub) {
+      *who = &b->other_pp[i];
+      return FROM_OTHER;
+    }
+  dds_guid_t g;
+  if (palp_dds_writer_participant(reader, pub, &g) < 0) return FROM_GONE;
+  if (memcmp(&g, &b->server, sizeof g) == 0) {
+    /* Full, the oldest goes: the server's writers get new handles each time this station finds its
+     * participant again after a lapse of its lease (a stall), and the old ones write no more. */
+    if (b->n_mine < PALP_CLI_SERVER_WRITERS) b->mine[b->n_mine++] = pub;
+    else b->mine[b->mine_next++ % PALP_CLI_SERVER_WRITERS] = pub;
+    return FROM_SERVER;
+  }
+  const unsigned k = b->other_next++ % PALP_CLI_OTHER_WRITERS;
+  b->other[k] = pub;
+  b->other_pp[k] = g;
+  *who = &b->other_pp[k];
+  return FROM_OTHER;
+}
+
+/* A sample dropped: counted, and its participant (NULL: a writer already gone) kept if the first. */
+static void ignored(palp_cli_server_bind *b, const dds_guid_t *who) {
+  b->ignored++;
+  if (who && !b->have_other) b->first_other = *who, b->have_other = 1;
+}
+
+int palp_cli_station_from_server(palp_cli_station *st, dds_entity_t reader, const dds_sample_info_t *info) {
+  palp_cli_server_bind *b = &st->bind;
+  if (!b->bound) return 1;
+  const dds_guid_t *who;
+  if (writer_verdict(st, reader, info->publication_handle, &who) == FROM_SERVER) {
+    b->heard_ns = palp_dds_now_ns();
+    return 1;
+  }
+  ignored(b, who);
+  return 0;
+}
+
+/* The session readers' writers, learned while they are matched (when a reader's matches changed): a
+ * sample the server wrote just before it left the domain (its debrief as it shuts down) is then still
+ * known for the server's when taken, its writer gone. */
+static void learn_writers(palp_cli_station *st) {
+  palp_cli_server_bind *b = &st->bind;
+  if (!b->bound) return;
+  const dds_entity_t rd[8] = {st->local_model_r, st->finger_sample_r, st->feedback_r,   st->deformation_r,
+                              st->finding_status_r, st->debrief_r,   st->debrief_score_r, st->session_log_r};
+  _Static_assert(sizeof rd / sizeof rd[0] == sizeof b->matched_seen / sizeof b->matched_seen[0], "one per reader");
+  for (int k = 0; k < 8; k++) {
+    dds_subscription_matched_status_t m;
+    if (rd[k] <= 0 || dds_get_subscription_matched_status(rd[k], &m) < 0 || m.total_count == b->matched_seen[k])
+      continue;
+    b->matched_seen[k] = m.total_count;
+    dds_instance_handle_t h[32];
+    const dds_return_t n = dds_get_matched_publications(rd[k], h, 32);
+    const dds_guid_t *who;
+    for (int i = 0; i < n && i < 32; i++) (void)writer_verdict(st, rd[k], h[i], &who);
+  }
+}
+
+int palp_cli_station_foreign_news(palp_cli_station *st, char *line, size_t len, char *who, size_t wholen) {
+  palp_cli_server_bind *b = &st->bind;
+  if (len) line[0] = 0;
+  if (wholen) who[0] = 0;
+  if (!b->ignored || b->told) return 0;
+  b->told = 1;
+  char pp[64] = "a writer already gone";
+  if (b->have_other) palp_dds_participant_text(&b->first_other, pp, sizeof pp);
+  snprintf(who, wholen, "%s", pp);
+  snprintf(line, len, "ignored %llu sample%s of session %u from %s, which is not this session's server: another "
+                      "program writes into your session (tell your instructor); what you feel and are told comes from "
+                      "the server alone", (unsigned long long)b->ignored, b->ignored == 1 ? "" : "s", st->session_id, pp);
+  return 1;
 }
 
 /* The session's endpoints matched by the server's before the join returns. Contacts are
@@ -352,10 +442,12 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   palp_SessionReply r;
   memset(&r, 0, sizeof r);
   int64_t asked = 0;
+  dds_instance_handle_t replier = 0;
+  memset(&st->bind, 0, sizeof st->bind); /* whoever accepts this JOIN is the session's server */
   for (;;) {
     asked = palp_dds_now_ns();
     if (send_request(st, j, palp_OP_JOIN, NULL) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
-    int got = await_reply(st, end, &r);
+    int got = await_reply(st, end, &r, &replier);
     if (got == 1) break;
     if (got == -2) return fail_stopped(err, errlen);
     if (got < 0) {
@@ -381,6 +473,14 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   if (!(r.tick_rate_hz >= PALP_CLI_PHYSICS_RATE_MIN && r.tick_rate_hz <= PALP_CLI_PHYSICS_RATE_MAX))
     return fail(err, errlen, PALP_EINVAL, "join refused: the server's physics rate %g Hz is outside %g..%g Hz",
                 r.tick_rate_hz, PALP_CLI_PHYSICS_RATE_MIN, PALP_CLI_PHYSICS_RATE_MAX);
+  /* The session's server is the participant that accepted: its writers, and no other participant's,
+   * are read in the session (palp_cli_station_from_server). Behind palp-netem that is the relay, which
+   * writes the reply and the session's topics from its one participant (tools/netem/netem.c). */
+  if (palp_dds_writer_participant(st->reply_r, replier, &st->bind.server) < 0)
+    return fail(err, errlen, PALP_EIO, "the server that accepted the join left the domain at once");
+  st->bind.bound = 1;
+  st->bind.mine[st->bind.n_mine++] = replier;
+  st->bind.heard_ns = palp_dds_now_ns();
   st->session_id = r.session_id;
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;
@@ -467,6 +567,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       st->finding_w < 0 || st->finding_status_r < 0 || st->debrief_r < 0 || st->debrief_score_r < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
   await_matched(st, end);
+  learn_writers(st);
   return 0;
 }
 
@@ -553,7 +654,7 @@ int palp_cli_station_finding_status(palp_cli_station *st, palp_FindingStatus *ou
   void *ptr[1] = {&s};
   dds_sample_info_t info;
   while (dds_take(st->finding_status_r, ptr, &info, 1, 1) > 0)
-    if (info.valid_data) *out = s, got = 1;
+    if (info.valid_data && palp_cli_station_from_server(st, st->finding_status_r, &info)) *out = s, got = 1;
   if (got) out->reason[sizeof out->reason - 1] = 0;
   return got;
 }
@@ -570,7 +671,7 @@ int palp_cli_station_debrief(palp_cli_station *st, double timeout, palp_Debrief 
      * session; anything else in this partition's instance is checked like any sample. */
     while (dds_take(st->debrief_r, ptr, &info, 1, 1) > 0) {
       const palp_Debrief *d = ptr[0];
-      if (info.valid_data && d->session_id == st->session_id) {
+      if (info.valid_data && d->session_id == st->session_id && palp_cli_station_from_server(st, st->debrief_r, &info)) {
         const uint32_t n = d->lesion._length;
         if (!palp_dds_debrief_ok(d)) {
           rc = fail(err, errlen, PALP_EPARSE, "a malformed debrief (level %d, %u lesions listed of %u, %u found): ignored",
@@ -607,6 +708,7 @@ int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_Se
     int got = 0, rc = 0;
     while (dds_take(st->debrief_score_r, ptr, &info, 1, 1) > 0) {
       if (!info.valid_data || m.session_id != st->session_id) continue;
+      if (!palp_cli_station_from_server(st, st->debrief_score_r, &info)) continue; /* a false grade */
       /* bounded strings, but terminated only by the sender: made so before any use */
       m.log_uid[sizeof m.log_uid - 1] = m.exercise_name[sizeof m.exercise_name - 1] = 0;
       m.pattern[sizeof m.pattern - 1] = m.reason[sizeof m.reason - 1] = m.log_health[sizeof m.log_health - 1] = 0;
@@ -653,7 +755,7 @@ static int ask_until_answered(palp_cli_station *st, const palp_SessionRequest *r
     if (!already_sent && dds_write(st->request_w, rq) < 0) return 0;
     already_sent = 0;
     const int64_t slice = t + 300000000;
-    if (await_reply_to(st, rq->request_seq, slice < end_ns ? slice : end_ns, 0, &r) >= 0) return 1;
+    if (await_reply_to(st, rq->request_seq, slice < end_ns ? slice : end_ns, 0, &r, NULL) >= 0) return 1;
   }
   return 0;
 }
@@ -724,7 +826,8 @@ static void watch_log(palp_cli_station *st, int64_t now) {
       if (!info[i].valid_data) continue;
       int mine = 0;
       for (uint32_t k = 0; k < m->sessions._length && !mine; k++) mine = m->sessions._buffer[k].session_id == st->session_id;
-      if (mine) palp_dds_log_view_status(&st->log, m->log_written, m->log_shed, m->log_failed, now);
+      if (mine && palp_cli_station_from_server(st, st->status_r, &info[i]))
+        palp_dds_log_view_status(&st->log, m->log_written, m->log_shed, m->log_failed, now);
     }
     dds_return_loan(st->status_r, ptr, n);
   }
@@ -733,7 +836,8 @@ static void watch_log(palp_cli_station *st, int64_t now) {
   void *one[1] = {&m};
   dds_sample_info_t mi;
   while (dds_take(st->session_log_r, one, &mi, 1, 1) > 0)
-    if (mi.valid_data && m.session_id == st->session_id) palp_dds_log_view_session(&st->log, m.shed, m.failed, now);
+    if (mi.valid_data && m.session_id == st->session_id && palp_cli_station_from_server(st, st->session_log_r, &mi))
+      palp_dds_log_view_session(&st->log, m.shed, m.failed, now);
 }
 
 int palp_cli_station_log_news(palp_cli_station *st, char *line, size_t len) {
@@ -755,10 +859,78 @@ int palp_cli_station_log_news(palp_cli_station *st, char *line, size_t len) {
   return 1;
 }
 
+/* A state of this session that another participant wrote (not its server: palp_cli_server_bind) is a
+ * forgery or a restarted server's. Either way it is not this session's server speaking, and it neither
+ * closes the session nor says the server is back. When it claims what a restart shows (this id now
+ * another trainee's session, or its ticks fallen back) it is held as a suspicion, which the session's
+ * server refutes by speaking (palp_cli_station_session_closed). */
+static void suspect_restart(palp_cli_station *st, const palp_SessionState *m) {
+  palp_cli_server_bind *b = &st->bind;
+  if (b->suspect_ns) return;
+  if (st->session_trainee[0] && strcmp(m->trainee_station, st->session_trainee) != 0)
+    snprintf(b->suspect_reason, sizeof b->suspect_reason,
+             "server lost (it restarted: session %u is now another trainee's session)", st->session_id);
+  else if (m->ticks < st->session_ticks)
+    snprintf(b->suspect_reason, sizeof b->suspect_reason,
+             "server lost (it restarted: session %u was opened anew, at tick %llu after %llu)", st->session_id,
+             (unsigned long long)m->ticks, (unsigned long long)st->session_ticks);
+  else
+    return; /* claims nothing a restart would: a forgery (a close, a state ahead) */
+  b->suspect_ns = palp_dds_now_ns();
+}
+
+/* The answers to the JOIN sent again while a restart is suspected: the server's is a sign of it. */
+static void hear_replies(palp_cli_station *st) {
+  palp_SessionReply r;
+  void *ptr[1] = {&r};
+  dds_sample_info_t info;
+  while (dds_take(st->reply_r, ptr, &info, 1, 1) > 0)
+    if (info.valid_data && strncmp(r.station_id, st->station_id, sizeof r.station_id) == 0)
+      (void)palp_cli_station_from_server(st, st->reply_r, &info);
+}
+
+/* A restart suspected (suspect_restart), and the session's server quiet for PALP_CLI_SERVER_QUIET_S (any
+ * sample of its since the suspicion refutes it): the server is asked, by its accepted JOIN sent again,
+ * which it answers again at once (server/server.c, handle_join), and its answer awaited here for up to
+ * PALP_CLI_SERVER_ASK_S: nothing of the server's is coming meanwhile anyway. Unanswered, the session is
+ * lost: 1 and the reason. */
+static int restart_confirmed(palp_cli_station *st, int64_t now, char *reason, size_t len) {
+  palp_cli_server_bind *b = &st->bind;
+  if (!b->suspect_ns) return 0;
+  hear_replies(st);
+  if (b->heard_ns > b->suspect_ns) { /* its server spoke since: a forgery */
+    b->suspect_ns = 0;
+    return 0;
+  }
+  const int64_t quiet_from = b->heard_ns > st->stall_end_ns ? b->heard_ns : st->stall_end_ns;
+  /* at most one question every 0.3 s: a flood of forged states must not become a flood of JOINs */
+  if (now - quiet_from < (int64_t)(PALP_CLI_SERVER_QUIET_S * 1e9) || now - b->asked_ns < 300000000 ||
+      !st->has_last_join)
+    return 0;
+  dds_write(st->request_w, &st->last_join);
+  b->asked_ns = palp_dds_now_ns();
+  const dds_entity_t ws = dds_create_waitset(st->pp), rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  const int64_t end = b->asked_ns + (int64_t)(PALP_CLI_SERVER_ASK_S * 1e9);
+  for (int64_t t = b->asked_ns; t < end && b->heard_ns <= b->suspect_ns; t = palp_dds_now_ns()) {
+    dds_waitset_wait(ws, NULL, 0, end - t);
+    hear_replies(st);
+  }
+  dds_delete(rc);
+  dds_delete(ws);
+  if (b->heard_ns > b->suspect_ns) {
+    b->suspect_ns = 0;
+    return 0;
+  }
+  if (reason) snprintf(reason, len, "%s", b->suspect_reason);
+  return 1;
+}
+
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
   station_alive(st, now);
   watch_log(st, now);
+  learn_writers(st);
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];
@@ -768,6 +940,12 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
       if (info[i].valid_data) {
         if (buf[i].session_id != st->session_id) continue;
         buf[i].trainee_station[sizeof buf[i].trainee_station - 1] = 0; /* terminated by the sender only */
+        if (!palp_cli_station_from_server(st, st->state_r, &info[i])) {
+          suspect_restart(st, &buf[i]);
+          continue;
+        }
+        /* Its server's own state. Behind palp-netem the server is the relay's participant, whose
+         * states a restarted server's may be: the same two signs of a restart are read here too. */
         if (!st->session_trainee[0])
           snprintf(st->session_trainee, sizeof st->session_trainee, "%s", buf[i].trainee_station);
         if (strcmp(buf[i].trainee_station, st->session_trainee) != 0) {
@@ -820,6 +998,13 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
          * of ours, PALP_CLI_SERVER_GRACE_S otherwise; then it is lost. */
         /* The key is in the invalid sample (no dds_instance_get_key scan). */
         if (buf[i].session_id != st->session_id) continue;
+        /* Disposed by another participant's writer: not its server's lease (a writer gone before it
+         * was known may be the server's: its lapse is taken for one, as before). */
+        const dds_guid_t *who;
+        if (st->bind.bound && writer_verdict(st, st->state_r, info[i].publication_handle, &who) == FROM_OTHER) {
+          ignored(&st->bind, who);
+          continue;
+        }
         /* Stopped within this call, after its start: the lapse is likely our own stall's
          * (seen in the suite: a station stopped 1 s blamed the server). */
         note_stall(st, now, palp_dds_now_ns());
@@ -830,6 +1015,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
         }
       }
     }
+  if (!closed && restart_confirmed(st, now, reason, len)) closed = 1;
   if (!closed && st->doubt_until_ns && now >= st->doubt_until_ns) {
     closed = 1;
     if (reason && st->doubt_after_stall)
@@ -924,6 +1110,7 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   if (st->contact_topic > 0) dds_delete(st->contact_topic);               /* likewise */
   st->finger_sample_topic = st->contact_topic = 0;
   st->session_id = 0;
+  memset(&st->bind, 0, sizeof st->bind); /* the next session's server is whoever accepts its JOIN */
   /* the next session's server counts from its own base */
   memset(&st->log, 0, sizeof st->log);
   memset(&st->log_said, 0, sizeof st->log_said);

@@ -34,6 +34,38 @@ typedef struct palp_cli_log_news {
  * topic filter); past it a new key's samples are dropped. */
 #define PALP_CLI_STREAM_INSTANCES 32
 
+/* The session's server (2026-12-06): the participant whose writer answered the station's accepted JOIN.
+ * Every reader of the server's topics in a session drops the samples of any other participant (in an
+ * unsecured classroom anyone may write into a session's partition: a forged local model changed what the
+ * trainee felt, a forged state closed her session, a forged score told her a false grade; in a secured
+ * one a second or a restarted server may). A writer's verdict is asked of DDS once
+ * (palp_dds_writer_participant) and kept by its publication handle, which Cyclone never reuses in a
+ * process: the local models come at up to 1 kHz. */
+#define PALP_CLI_SERVER_WRITERS 24 /* the server's writers kept (~12 a station reads; full, the oldest goes) */
+#define PALP_CLI_OTHER_WRITERS 8   /* others' writers kept, the oldest replaced first */
+typedef struct palp_cli_server_bind {
+  int bound;                /* a JOIN was accepted: `server` is its replier's participant */
+  dds_guid_t server;
+  dds_instance_handle_t mine[PALP_CLI_SERVER_WRITERS];
+  int n_mine;
+  unsigned mine_next;       /* full, the next to replace */
+  dds_instance_handle_t other[PALP_CLI_OTHER_WRITERS];
+  dds_guid_t other_pp[PALP_CLI_OTHER_WRITERS];
+  unsigned other_next;
+  uint32_t matched_seen[8]; /* the session readers' matched writers (total_count) when last learned */
+  uint64_t ignored;         /* samples dropped: another participant's, or a writer gone before it was known */
+  dds_guid_t first_other;   /* the first such participant, named to the user and in the log */
+  int have_other;           /* ... known (0: only writers already gone) */
+  int told;                 /* palp_cli_station_foreign_news said it */
+  int64_t heard_ns;         /* the last sample of the server's, any topic (palp_dds_now_ns) */
+  /* A state of this session from another participant that claims the server restarted (another
+   * trainee's session under this id, or its ticks fallen back): a restarted server's, or a forgery.
+   * Taken for a restart only when the server itself is silent (palp_cli_station_session_closed). */
+  int64_t suspect_ns;       /* since then; 0: none */
+  char suspect_reason[128];
+  int64_t asked_ns;         /* the accepted JOIN sent again, for the server to answer if it is there */
+} palp_cli_server_bind;
+
 /* A wait given up because the caller's stop flag was set (palp_cli_station.stop): the user asked
  * the station to end (Ctrl-C), not a failure. */
 #define PALP_CLI_ESTOPPED (-100)
@@ -103,6 +135,7 @@ typedef struct palp_cli_station {
   palp_cli_log_news log_said;
   int goodbye_unanswered; /* palp_cli_station_leave, after a stall: the server did not answer its JOIN
                            * (within PALP_CLI_LEAVE_WAIT_S) or then its LEAVE: the goodbye may be lost */
+  palp_cli_server_bind bind; /* the session's server (palp_cli_station_from_server) */
 } palp_cli_station;
 
 /* A gap between two palp_cli_station_session_closed calls longer than this was a stall
@@ -119,6 +152,15 @@ typedef struct palp_cli_station {
  * the server, running again, is found again and republishes its states every status
  * period (1 s by default). Past it the server is taken for lost. */
 #define PALP_CLI_SERVER_GRACE_S 1.0
+/* A state of this session from another participant that claims a restart (palp_cli_server_bind.suspect_ns)
+ * ends the session only when the session's server has sent nothing for this long [s] (from this
+ * station's last stall, if later): a pressing trainee's server sends a local model or feedback every
+ * physics step, an idle one's its state each status period (1 s by default). A forger cannot silence
+ * the server; a restarted server's old self is silent (server_lost.sh) ... */
+#define PALP_CLI_SERVER_QUIET_S 0.5
+/* ... and then did not answer its accepted JOIN, sent again, within this long [s] (it answers at once:
+ * its main thread waits on requests). palp_cli_station_session_closed waits for that answer. */
+#define PALP_CLI_SERVER_ASK_S 0.1
 /* A trainee that leaves within this long of a stall (or right out of one) first asks the
  * server to find it again: its accepted JOIN once more, waiting up to this long for the
  * answer. A stall past the participant's 1 s lease makes the server forget the station's
@@ -212,13 +254,25 @@ int palp_cli_station_debrief_score(palp_cli_station *st, double timeout, palp_Se
  * score: REASON" when it was not graded. Returns buf. */
 const char *palp_cli_score_text(const palp_SessionScore *m, char *buf, size_t len);
 
-/* Non-blocking: 1 and the state when the session's state changed to closed. Call it
- * about every 100 ms: a longer gap is taken for a stall of this process, after which
+/* Non-blocking, but for a wait of up to PALP_CLI_SERVER_ASK_S for a silent server's answer when another
+ * participant says it restarted: 1 and the reason when the session's state from its server changed to
+ * closed, or when that other participant's word was not refuted by the server (palp_cli_server_bind; a
+ * forged close is ignored). Call it about every 100 ms: a longer gap is taken for a stall of this process, after which
  * the station's JOIN is sent again (the server resumes a session it held for it; to a
  * station it never lost it only answers again) and a lapse of the server's lease seen
  * within 2 s of it waits up to PALP_CLI_SERVER_WAIT_S for the server to be found again
  * before it closes the session as "server lost". st->stalls counts the stalls. */
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);
+
+/* 1 when the sample `info` describes, taken from `reader` (a reader of the session's server's topics),
+ * was written by the session's server (palp_cli_server_bind), or when no JOIN bound a server yet; 0 when
+ * by another participant or by a writer gone before the station knew it: the caller drops it, and it is
+ * counted (st->bind.ignored) for palp_cli_station_foreign_news. */
+int palp_cli_station_from_server(palp_cli_station *st, dds_entity_t reader, const dds_sample_info_t *info);
+/* The samples other participants wrote into this session, for the station's user (2026-12-06): 1 the
+ * first time some were dropped, with the line (after "[trainee NAME] ") in line and the participant as
+ * palp_dds_participant_text names it in who (for the log); 0 otherwise: said once a session. */
+int palp_cli_station_foreign_news(palp_cli_station *st, char *line, size_t len, char *who, size_t wholen);
 
 /* A session whose server's log goes on losing records is said again at most this often [s]. */
 #define PALP_CLI_LOG_SAY_S 60.0

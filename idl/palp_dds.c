@@ -513,22 +513,28 @@ int palp_dds_exercise_bands(const palp_Exercise *ex, struct palp_band *out) {
  * station or palp-recorder kept (~100 MB with its triangles) from any peer on an unsecured domain. */
 #define PHANTOM_MAX_VERTICES PALP_MESH_MAX_VERTICES
 
-char *palp_dds_writer_participant_text(dds_entity_t reader, dds_instance_handle_t pub, char *out, size_t len) {
+int palp_dds_writer_participant(dds_entity_t reader, dds_instance_handle_t pub, dds_guid_t *out) {
   dds_builtintopic_endpoint_t *ep = pub ? dds_get_matched_publication_data(reader, pub) : NULL;
-  if (!ep) {
-    snprintf(out, len, "a writer already gone");
-    return out;
-  }
-  palp_dds_participant_text(&ep->participant_key, out, len);
+  if (!ep) return PALP_EINVAL;
+  *out = ep->participant_key;
   dds_builtintopic_free_endpoint(ep);
-  return out;
+  return 0;
 }
 
-char *palp_dds_participant_text(const dds_guid_t *participant, char *out, size_t len) {
-  const unsigned char *g = participant->v;
+char *palp_dds_participant_text(const dds_guid_t *guid, char *out, size_t len) {
+  const unsigned char *g = guid->v;
   snprintf(out, len, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2], g[3], g[4],
            g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
   return out;
+}
+
+char *palp_dds_writer_participant_text(dds_entity_t reader, dds_instance_handle_t pub, char *out, size_t len) {
+  dds_guid_t g;
+  if (palp_dds_writer_participant(reader, pub, &g) < 0) {
+    snprintf(out, len, "a writer already gone");
+    return out;
+  }
+  return palp_dds_participant_text(&g, out, len);
 }
 
 int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char *err, size_t errlen) {

@@ -225,10 +225,14 @@ int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char 
  * "participant xxxxxxxx:xxxxxxxx:xxxxxxxx" (38 characters), or "a writer already gone" when the
  * writer (pub, 0: none) is no longer matched. Returns out. */
 char *palp_dds_writer_participant_text(dds_entity_t reader, dds_instance_handle_t pub, char *out, size_t len);
-/* A participant's GUID (a writer's participant_key, dds_get_guid of a participant) as the line above
- * names it: "participant xxxxxxxx:xxxxxxxx:xxxxxxxx", its 12-byte prefix (the entity id of every
- * participant is the same). Returns out. */
-char *palp_dds_participant_text(const dds_guid_t *participant, char *out, size_t len);
+/* The participant of writer `pub` (a sample's publication_handle) matched to `reader`: 0 and its GUID
+ * (discovery's participant_key) in *out; PALP_EINVAL when pub is 0 or no longer matched (a writer already
+ * gone is nobody's). One dds_get_matched_publication_data: a caller that asks per sample caches the
+ * answer by pub (Cyclone never reuses a handle in a process). */
+int palp_dds_writer_participant(dds_entity_t reader, dds_instance_handle_t pub, dds_guid_t *out);
+/* A participant's GUID as palp's lines name it: "participant xxxxxxxx:xxxxxxxx:xxxxxxxx" (its prefix,
+ * 38 characters). Returns out. */
+char *palp_dds_participant_text(const dds_guid_t *g, char *out, size_t len);
 
 /* A session score (palp_session_score) as a reader may use it: a known status; GRADED: score in
  * [0, 100], each component in [0, 1], each coverage in [0, 1], found <= lesions, duration and

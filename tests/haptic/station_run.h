@@ -26,7 +26,18 @@ typedef struct station_run {
    * so a step between two taken models that none came for was lost on the way or overwritten in
    * the reader's history before the main thread took it. */
   uint64_t frame_first, frame_last, frames_missing;
+  /* As palp-client: the session's state looked at every 100 ms (palp_cli_station_session_closed) and
+   * what other participants wrote into the session said (palp_cli_station_foreign_news). */
+  int closed;           /* the station took its session for closed, and stopped */
+  char reason[128];
+  uint64_t ignored;     /* samples dropped as not its server's (st.bind.ignored) */
+  int news;             /* times the news said so (palp-client tells the trainee each time) */
+  char news_line[400];  /* ... its line */
 } station_run;
+
+/* Called with the joined station before the haptic loop starts (phase 0) and after it ended, before
+ * the station leaves (phase 1): a test's forger starts there and its checks run. */
+typedef void (*station_run_hook)(palp_cli_station *st, int phase, void *ctx);
 
 /* Each model the loop takes (the haptic loop's on_model, the main thread). */
 static void sr_on_model(void *ctx, const palp_local_model *m, uint64_t frame) {
@@ -45,9 +56,9 @@ static int sr_cmp(const void *a, const void *b) {
 /* Runs one trainee on `domain`, phantom `phantom`, along traj; trace_cap ticks kept. The main
  * thread sleeps feed_pause [s] after each take of the models (0: none), as a busy machine's
  * scheduler may hold palp-client's. */
-static void station_run_once(unsigned domain, uint32_t phantom, const char *label, const palp_cli_simdevice_def *traj,
-                             double station_max_force, int rt_priority, size_t trace_cap, double feed_pause,
-                             station_run *out) {
+static void station_run_hooked(unsigned domain, uint32_t phantom, const char *label, const palp_cli_simdevice_def *traj,
+                               double station_max_force, int rt_priority, size_t trace_cap, double feed_pause,
+                               station_run_hook hook, void *hook_ctx, station_run *out) {
   memset(out, 0, sizeof *out);
   palp_cli_station st;
   /* joined as palp-client joins a position-driven trainee: local models, no Feedback reader */
@@ -72,6 +83,7 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
     }
   }
   d.rt_priority = rt_priority;
+  if (hook) hook(&st, 0, hook_ctx);
   if (station_max_force > 0) d.render.max_force = station_max_force;
   d.in = &in;
   d.contact_w = st.contact_w;
@@ -92,15 +104,35 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   dds_waitset_attach(ws, rc, 0);
   size_t nl = 0, cap = 100000;
   double *lat = calloc(cap, sizeof *lat);
+  int64_t next_check = palp_dds_now_ns();
   while (!palp_cli_haptic_done(hl)) {
     dds_waitset_wait(ws, NULL, 0, DDS_MSECS(20));
     double l_us;
-    const int n = palp_cli_haptic_feed(hl, st.local_model_r, &out->bad, &l_us);
+    const int n = palp_cli_haptic_feed(hl, &st, &out->bad, &l_us);
     if (n > 0) out->models_seen += (uint64_t)n;
     if (n > 0 && isfinite(l_us) && nl < cap) lat[nl++] = l_us;
     if (feed_pause > 0) test_sleep(feed_pause);
+    if (palp_dds_now_ns() >= next_check) {
+      next_check = palp_dds_now_ns() + 100000000;
+      if (palp_cli_station_session_closed(&st, out->reason, sizeof out->reason)) {
+        out->closed = 1;
+        break;
+      }
+      char said[400], who[64];
+      if (palp_cli_station_foreign_news(&st, said, sizeof said, who, sizeof who)) {
+        out->news++;
+        snprintf(out->news_line, sizeof out->news_line, "%s", said);
+      }
+    }
   }
   palp_cli_haptic_join(hl, &out->hs);
+  if (hook) hook(&st, 1, hook_ctx);
+  char said[400], who[64];
+  if (palp_cli_station_foreign_news(&st, said, sizeof said, who, sizeof who)) {
+    out->news++;
+    snprintf(out->news_line, sizeof out->news_line, "%s", said);
+  }
+  out->ignored = st.bind.ignored;
   out->trace = d.trace;
   /* The timer floor ran beside the loop, at its rate, over the same seconds: its span in
    * periods (the wake-ups plus the deadlines skipped after a wake-up more than a period
@@ -132,6 +164,12 @@ static void station_run_once(unsigned domain, uint32_t phantom, const char *labe
   palp_cli_station_leave(&st);
   test_sleep(0.1);
   palp_cli_station_close(&st);
+}
+
+static void station_run_once(unsigned domain, uint32_t phantom, const char *label, const palp_cli_simdevice_def *traj,
+                             double station_max_force, int rt_priority, size_t trace_cap, double feed_pause,
+                             station_run *out) {
+  station_run_hooked(domain, phantom, label, traj, station_max_force, rt_priority, trace_cap, feed_pause, NULL, NULL, out);
 }
 
 #endif

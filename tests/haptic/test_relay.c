@@ -19,7 +19,10 @@
  *    difference over the trajectory, on a common 1 ms grid; max and p99 printed);
  *  - no oscillation: the force's content above ~25 Hz (|F| minus its centred
  *    40 ms moving average, RMS) is at most twice the undelayed run's plus 1% of
- *    its peak.
+ *    its peak;
+ *  - the relayed station's server is the relay (2026-12-06): it answers the JOIN and writes the
+ *    session's samples from its one participant, so the station, which reads only the participant
+ *    that accepted its JOIN, takes its local models and ignores none.
  */
 #define _DEFAULT_SOURCE /* getloadavg */
 #include <stdlib.h>
@@ -249,6 +252,10 @@ int main(void) {
   CHECK(relayed.models_seen > 0.5 * 250 * (dur - traj.start - traj.tail),
         "the relayed station received %llu local models (>= half of the physics steps: 5%% are lost, and the "
         "server's ticks overrun on a loaded machine)", (unsigned long long)relayed.models_seen);
+  CHECK(relayed.ignored == 0 && direct.ignored == 0 && !relayed.closed,
+        "behind the relay the station's server is the relay's participant: %llu samples ignored (%llu direct), "
+        "session %s", (unsigned long long)relayed.ignored, (unsigned long long)direct.ignored,
+        relayed.closed ? relayed.reason : "open");
   CHECK(peak > 0.3, "the undelayed press reaches %.3f N", peak);
   CHECK(rms <= 0.10 * peak, "relayed force within 10%% of the undelayed run's peak (RMS %.4f N <= %.4f N)", rms,
         0.10 * peak);

@@ -8,7 +8,16 @@
  * and the station limits what reaches the device and says so. And a station whose main thread
  * a busy machine holds still takes every step's model, and a flood of finger samples with made-up
  * keys in its partition (finger samples, local models) leaves no instance in its readers.
+ * And (2026-12-06) the same press while another participant writes into the station's session, as
+ * anyone may in an unsecured classroom: local models of its finger with a 2e5 N/m stiffness and 9 N at
+ * 250 Hz, with plausible frames; the session's state closed and then "restarted" (another trainee's, at
+ * tick 0); a passing score. The station reads only the participant that accepted its JOIN: its force
+ * follows the server's (the unforged press's, within 10% of its peak), its session stays open, the
+ * forged score is not told, and it tells its trainee once that it ignored them.
  */
+#include <pthread.h>
+#include <stdatomic.h>
+
 #include "station_run.h"
 
 static void config(palp_srv_config *cfg, unsigned domain, double max_force) {
@@ -161,6 +170,129 @@ static void finger_sample_flood(unsigned domain) {
   palp_cli_station_close(&st);
 }
 
+/* Another participant writing into a joined station's session (station_run_hook). */
+typedef struct forger {
+  unsigned domain;
+  dds_entity_t pp, model_w, state_w, score_w;
+  palp_LocalModel model;
+  palp_SessionState closed, restarted;
+  palp_SessionScore score;
+  pthread_t thread;
+  atomic_int stop;
+  int started;
+  uint64_t written;
+  int score_told; /* the station's palp_cli_station_debrief_score after the press: 1 told one */
+  int idle_closed; /* the station, not pressing yet, took its session for closed */
+  char idle_reason[128];
+  char who[64];   /* the forger as the station should name it */
+} forger;
+
+static void *forger_main(void *arg) {
+  forger *f = arg;
+  for (uint64_t k = 0; !atomic_load(&f->stop); k++) {
+    f->model.frame = k + 1;
+    f->model.time = (double)(k + 1) * f->model.period;
+    f->written += dds_write(f->model_w, &f->model) == 0;
+    if (k % 25 == 0) { /* every 0.1 s */
+      f->written += dds_write(f->state_w, k % 50 ? &f->closed : &f->restarted) == 0;
+      f->written += dds_write(f->score_w, &f->score) == 0;
+    }
+    test_sleep(0.004);
+  }
+  return NULL;
+}
+
+static void forger_hook(palp_cli_station *st, int phase, void *ctx) {
+  forger *f = ctx;
+  if (phase == 1) {
+    palp_SessionScore m;
+    char err[160];
+    f->score_told = palp_cli_station_debrief_score(st, 0.3, &m, err, sizeof err);
+    atomic_store(&f->stop, 1);
+    if (f->started) pthread_join(f->thread, NULL);
+    return;
+  }
+  f->pp = dds_create_participant(f->domain, NULL, NULL);
+  dds_guid_t g;
+  if (f->pp < 0 || dds_get_guid(f->pp, &g) < 0) exit(1);
+  palp_dds_participant_text(&g, f->who, sizeof f->who);
+  const dds_entity_t pub = palp_dds_session_publisher(f->pp, st->partition);
+  f->model_w = palp_dds_create_writer(pub, palp_dds_create_topic(f->pp, PALP_TOPIC_LOCAL_MODEL), PALP_TOPIC_LOCAL_MODEL);
+  f->score_w = palp_dds_create_writer(pub, palp_dds_create_topic(f->pp, PALP_TOPIC_DEBRIEF_SCORE), PALP_TOPIC_DEBRIEF_SCORE);
+  f->state_w = palp_dds_create_writer(f->pp, palp_dds_create_topic(f->pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  for (int i = 0; i < 300; i++) { /* matched by the station's readers: up to 3 s */
+    dds_publication_matched_status_t a, b, c;
+    if (dds_get_publication_matched_status(f->model_w, &a) == 0 && a.current_count > 0 &&
+        dds_get_publication_matched_status(f->score_w, &b) == 0 && b.current_count > 0 &&
+        dds_get_publication_matched_status(f->state_w, &c) == 0 && c.current_count > 0)
+      break;
+    test_sleep(0.01);
+  }
+  palp_LocalModel *m = &f->model; /* plausible: its session and finger, a 250 Hz step, in contact at the pole */
+  memset(m, 0, sizeof *m);
+  m->session_id = st->session_id;
+  m->period = 1.0 / 250;
+  m->in_contact = 1;
+  m->triangles = 6;
+  m->device = (palp_Vec3){0, 0, 0.036};
+  m->proxy = (palp_Vec3){0, 0, 0.048};
+  m->normal = (palp_Vec3){0, 0, 1};
+  m->force = (palp_Vec3){0, 0, 9};
+  m->stiffness[0] = m->stiffness[4] = m->stiffness[8] = 2e5;
+  m->area = 1e-4;
+  m->depth = 0.012;
+  m->point = (palp_Vec3){0, 0, 0.04};
+  m->max_force = 20;
+  palp_SessionState *c = &f->closed;
+  memset(c, 0, sizeof *c);
+  c->session_id = st->session_id;
+  c->phantom_id = st->phantom_id;
+  c->phase = palp_PHASE_CLOSED;
+  snprintf(c->partition, sizeof c->partition, "%s", st->partition);
+  snprintf(c->trainee_station, sizeof c->trainee_station, "%s", st->station_id);
+  c->ticks = 1000000;
+  snprintf(c->reason, sizeof c->reason, "closed by a forger");
+  f->restarted = *c; /* what a restarted server's state shows: another trainee's session, at tick 0 */
+  f->restarted.phase = palp_PHASE_OPEN;
+  f->restarted.ticks = 0;
+  snprintf(f->restarted.trainee_station, sizeof f->restarted.trainee_station, "forger/1/trainee:mallory");
+  f->restarted.reason[0] = 0;
+  palp_SessionScore *sc = &f->score;
+  memset(sc, 0, sizeof *sc);
+  sc->session_id = st->session_id;
+  sc->status = palp_SCORE_GRADED;
+  sc->score = 100;
+  sc->pass = 1;
+  for (int i = 0; i < 6; i++) sc->credit[i] = 1, sc->passed[i] = 1;
+  sc->lesions = sc->found = 2;
+  sc->coverage[0] = sc->coverage[1] = sc->coverage[2] = 1;
+  snprintf(sc->pattern, sizeof sc->pattern, "vertical_strip");
+  sc->duration = 60;
+  sc->peak_force = 5;
+  sc->log_complete = 1;
+  /* First 1.2 s before the press, the station idle: no model comes, and its server writes only its
+   * state, once a second. A forged restart every 0.1 s: the station asks its server (its JOIN again),
+   * whose answer keeps the session (without it, 0.5 s of the server's silence would end it). */
+  for (int k = 0; k < 12 && !f->idle_closed; k++) {
+    dds_write(f->state_w, &f->restarted);
+    f->written++;
+    test_sleep(0.1);
+    f->idle_closed = palp_cli_station_session_closed(st, f->idle_reason, sizeof f->idle_reason);
+  }
+  f->started = pthread_create(&f->thread, NULL, forger_main, f) == 0;
+}
+
+/* |F| rendered at each whole millisecond of a run's trace (the newest tick at or before it). */
+static int force_grid(const station_run *r, double *g, int cap) {
+  int n = 0;
+  for (size_t i = 0; i < r->hs.trace_len && n < cap; i++) {
+    const palp_vec3 f = r->trace[i].f;
+    const double m = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+    while (n < cap && n * 1e-3 <= r->trace[i].t) g[n++] = m;
+  }
+  return n;
+}
+
 int main(void) {
   test_init();
   const unsigned domain = 110;
@@ -221,7 +353,46 @@ int main(void) {
   CHECK(r.lat_p50_us > 0 && r.lat_p50_us < 100000, "latency echo: contact->model p50 %.0f us", r.lat_p50_us);
   printf("session: models for steps %llu..%llu, %llu steps with none\n", (unsigned long long)r.frame_first,
          (unsigned long long)r.frame_last, (unsigned long long)r.frames_missing);
+  CHECK(!r.closed && r.ignored == 0 && r.news == 0, "no other participant: nothing ignored, nothing said (%llu, %d)",
+        (unsigned long long)r.ignored, r.news);
+
+  /* The same press with a forger in the session (the top of this file). The press is the same
+   * trajectory on the same phantom: the force at each millisecond is the unforged run's within 10% of
+   * its peak in RMS (measured 0.005-0.013 N of 0.6-0.7 N), and its peak at most 1.5x the unforged one
+   * (a press's peak alone varied 0.57-0.71 N between runs, the two runs' timing differing by the
+   * models' latency and this machine's stalls); the forger's 9 N models would put ~9 N on the hand. */
+  static double base[12000], forged_f[12000];
+  const int nb = force_grid(&r, base, 12000);
   free(r.trace);
+  forger fg = {.domain = domain};
+  station_run rf;
+  station_run_hooked(domain, 1, "sim-forged", &traj, 0, 0, 10000, 0, forger_hook, &fg, &rf);
+  const int nf = force_grid(&rf, forged_f, 12000);
+  double fpeak = 0, bpeak = 0, worst = 0, e2 = 0;
+  const int ng = nb < nf ? nb : nf;
+  for (int k = 0; k < nb; k++) bpeak = fmax(bpeak, base[k]);
+  for (int k = 0; k < nf; k++) fpeak = fmax(fpeak, forged_f[k]);
+  for (int k = 0; k < ng; k++) worst = fmax(worst, fabs(forged_f[k] - base[k])), e2 += pow(forged_f[k] - base[k], 2);
+  const double rms = ng ? sqrt(e2 / ng) : INFINITY;
+  printf("forged: %llu samples written by %s; the station took %llu models, ignored %llu samples, said it %d "
+         "time(s): \"%s\"; peak rendered %.3f N (unforged %.3f N), difference RMS %.3f N, worst %.3f N over %d ms; %s%s\n",
+         (unsigned long long)fg.written, fg.who, (unsigned long long)rf.models_seen, (unsigned long long)rf.ignored,
+         rf.news, rf.news_line, fpeak, bpeak, rms, worst, ng, rf.closed ? "closed: " : "open",
+         rf.closed ? rf.reason : "");
+  CHECK(fg.written > 100 && rf.ignored > 100, "forged: %llu samples written into the session, %llu ignored (> 100)",
+        (unsigned long long)fg.written, (unsigned long long)rf.ignored);
+  CHECK(ng > 500 && bpeak > 0.2 && rms <= 0.1 * bpeak && fpeak <= 1.5 * bpeak,
+        "forged: the rendered force follows the server's: difference RMS %.3f N over %d ms (<= 10%% of the "
+        "unforged peak %.3f N), peak %.3f N (<= 1.5x)", rms, ng, bpeak, fpeak);
+  CHECK(!fg.idle_closed, "forged: a forged restart leaves an idle station's session open: its server answers (%s)",
+        fg.idle_closed ? fg.idle_reason : "open");
+  CHECK(!rf.closed && rf.hs.ended, "forged: a forged close and a forged restart leave the session open (%s)",
+        rf.closed ? rf.reason : "open");
+  CHECK(fg.score_told == 0, "forged: a forged passing score is not told (%d)", fg.score_told);
+  CHECK(rf.news == 1 && strstr(rf.news_line, fg.who) && strstr(rf.news_line, "not this session's server"),
+        "forged: the trainee is told once (%d), naming the participant: %s", rf.news, rf.news_line);
+  free(rf.trace);
+  if (fg.pp > 0) dds_delete(fg.pp);
 
   /* The same press with the station's main thread held 20 ms after each take of the models (5
    * physics steps), as a loaded machine holds palp-client's: the haptic loop wants only the
