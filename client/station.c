@@ -156,6 +156,10 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
    * permissions refuse it palpates all the same and is told nothing of the log. */
   st->status_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
   if (st->status_r < 0) st->status_r = 0;
+  /* What discovery announces of the domain's writers: which are the session's server's
+   * (palp_cli_station_from_server). Without it, a writer is asked of the reader it matched. */
+  st->publications_r = dds_create_reader(st->pp, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, NULL, NULL);
+  if (st->publications_r < 0) st->publications_r = 0;
   if (st->exercise_r < 0 || st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
     palp_cli_station_close(st);
     return fail(err, errlen, PALP_EIO, "cannot create the station's DDS endpoints");
@@ -313,24 +317,79 @@ static int await_reply(palp_cli_station *st, int64_t end_ns, palp_SessionReply *
 
 enum { FROM_GONE = -1, FROM_OTHER = 0, FROM_SERVER = 1 };
 
+/* Takes what discovery announced of the writers on the domain (palp_cli_station.publications_r) since
+ * the last call and keeps the server's among them. The announcement comes before the writer's first
+ * sample, and stays until taken after the writer left: the writer of a sample the server wrote just
+ * before it deleted it (its score, written by a writer of its own as it shuts down, or the session's
+ * last samples as its publisher goes at the close) is known for the server's when taken, where the
+ * matched writers no longer have it. */
+/* Whether an announced writer of the server's is one this station reads: in the session's partition, or
+ * one of the global topics it reads (the state, the status, the replies). A server announces the writers
+ * of all its sessions: kept, they would push this session's out of the PALP_CLI_SERVER_WRITERS kept. */
+static int read_here(const palp_cli_station *st, const dds_builtintopic_endpoint_t *ep) {
+  static const palp_dds_topic_kind global[] = {PALP_TOPIC_SESSION_STATE, PALP_TOPIC_SERVER_STATUS,
+                                               PALP_TOPIC_SESSION_REPLY};
+  for (size_t k = 0; k < sizeof global / sizeof global[0]; k++)
+    if (ep->topic_name && strcmp(ep->topic_name, palp_dds_topic_name(global[k])) == 0) return 1;
+  uint32_t n = 0;
+  char **ps = NULL;
+  int here = 0;
+  if (!ep->qos || !dds_qget_partition(ep->qos, &n, &ps)) return 0;
+  for (uint32_t i = 0; i < n; i++) {
+    here |= ps[i] && strcmp(ps[i], st->partition) == 0;
+    dds_free(ps[i]);
+  }
+  dds_free(ps);
+  return here;
+}
+
+static void take_announcements(palp_cli_station *st) {
+  palp_cli_server_bind *b = &st->bind;
+  if (st->publications_r <= 0 || !b->bound) return;
+  void *ptr[16] = {NULL};
+  dds_sample_info_t info[16];
+  int n;
+  while ((n = dds_take(st->publications_r, ptr, info, 16, 16)) > 0) {
+    for (int i = 0; i < n; i++) {
+      const dds_builtintopic_endpoint_t *ep = ptr[i];
+      if (!info[i].valid_data || memcmp(&ep->participant_key, &b->server, sizeof b->server) != 0 || !read_here(st, ep))
+        continue;
+      int known = 0;
+      for (int k = 0; k < b->n_mine && !known; k++) known = b->mine[k] == info[i].instance_handle;
+      /* Full, the oldest goes: the server's writers get new handles each time this station finds its
+       * participant again after a lapse of its lease (a stall), and the old ones write no more. */
+      if (known) continue;
+      if (b->n_mine < PALP_CLI_SERVER_WRITERS) b->mine[b->n_mine++] = info[i].instance_handle;
+      else b->mine[b->mine_next++ % PALP_CLI_SERVER_WRITERS] = info[i].instance_handle;
+    }
+    dds_return_loan(st->publications_r, ptr, n);
+  }
+}
+
+static int is_mine(const palp_cli_server_bind *b, dds_instance_handle_t pub) {
+  for (int i = 0; i < b->n_mine; i++)
+    if (b->mine[i] == pub) return 1;
+  return 0;
+}
+
 /* Whose writer pub is: the server's, another participant's (*who names it), or gone before the station
- * knew it. Asked of DDS once per writer, then kept by its handle (never reused in a process). */
+ * knew it. Found once per writer, then kept by its handle (never reused in a process): the server's
+ * from discovery's announcements (take_announcements), another's asked of the reader it matched. */
 static int writer_verdict(palp_cli_station *st, dds_entity_t reader, dds_instance_handle_t pub, const dds_guid_t **who) {
   palp_cli_server_bind *b = &st->bind;
   *who = NULL;
   if (!pub) return FROM_GONE;
-  for (int i = 0; i < b->n_mine; i++)
-    if (b->mine[i] == pub) return FROM_SERVER;
+  if (is_mine(b, pub)) return FROM_SERVER;
   for (int i = 0; i < PALP_CLI_OTHER_WRITERS; i++)
     if (b->other[i] == pub) {
       *who = &b->other_pp[i];
       return FROM_OTHER;
     }
+  take_announcements(st);
+  if (is_mine(b, pub)) return FROM_SERVER;
   dds_guid_t g;
   if (palp_dds_writer_participant(reader, pub, &g) < 0) return FROM_GONE;
-  if (memcmp(&g, &b->server, sizeof g) == 0) {
-    /* Full, the oldest goes: the server's writers get new handles each time this station finds its
-     * participant again after a lapse of its lease (a stall), and the old ones write no more. */
+  if (memcmp(&g, &b->server, sizeof g) == 0) { /* no announcement reader: kept the same way */
     if (b->n_mine < PALP_CLI_SERVER_WRITERS) b->mine[b->n_mine++] = pub;
     else b->mine[b->mine_next++ % PALP_CLI_SERVER_WRITERS] = pub;
     return FROM_SERVER;
@@ -358,27 +417,6 @@ int palp_cli_station_from_server(palp_cli_station *st, dds_entity_t reader, cons
   }
   ignored(b, who);
   return 0;
-}
-
-/* The session readers' writers, learned while they are matched (when a reader's matches changed): a
- * sample the server wrote just before it left the domain (its debrief as it shuts down) is then still
- * known for the server's when taken, its writer gone. */
-static void learn_writers(palp_cli_station *st) {
-  palp_cli_server_bind *b = &st->bind;
-  if (!b->bound) return;
-  const dds_entity_t rd[8] = {st->local_model_r, st->finger_sample_r, st->feedback_r,   st->deformation_r,
-                              st->finding_status_r, st->debrief_r,   st->debrief_score_r, st->session_log_r};
-  _Static_assert(sizeof rd / sizeof rd[0] == sizeof b->matched_seen / sizeof b->matched_seen[0], "one per reader");
-  for (int k = 0; k < 8; k++) {
-    dds_subscription_matched_status_t m;
-    if (rd[k] <= 0 || dds_get_subscription_matched_status(rd[k], &m) < 0 || m.total_count == b->matched_seen[k])
-      continue;
-    b->matched_seen[k] = m.total_count;
-    dds_instance_handle_t h[32];
-    const dds_return_t n = dds_get_matched_publications(rd[k], h, 32);
-    const dds_guid_t *who;
-    for (int i = 0; i < n && i < 32; i++) (void)writer_verdict(st, rd[k], h[i], &who);
-  }
 }
 
 int palp_cli_station_foreign_news(palp_cli_station *st, char *line, size_t len, char *who, size_t wholen) {
@@ -567,7 +605,6 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
       st->finding_w < 0 || st->finding_status_r < 0 || st->debrief_r < 0 || st->debrief_score_r < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's readers/writers");
   await_matched(st, end);
-  learn_writers(st);
   return 0;
 }
 
@@ -930,7 +967,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
   const int64_t now = palp_dds_now_ns();
   station_alive(st, now);
   watch_log(st, now);
-  learn_writers(st);
+  take_announcements(st); /* kept small: what came since the last look */
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];

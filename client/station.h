@@ -38,9 +38,9 @@ typedef struct palp_cli_log_news {
  * Every reader of the server's topics in a session drops the samples of any other participant (in an
  * unsecured classroom anyone may write into a session's partition: a forged local model changed what the
  * trainee felt, a forged state closed her session, a forged score told her a false grade; in a secured
- * one a second or a restarted server may). A writer's verdict is asked of DDS once
- * (palp_dds_writer_participant) and kept by its publication handle, which Cyclone never reuses in a
- * process: the local models come at up to 1 kHz. */
+ * one a second or a restarted server may). A writer's verdict is found once (the server's writers from
+ * discovery's announcements, DCPSPublication; another's by palp_dds_writer_participant) and kept by its
+ * publication handle, which Cyclone never reuses in a process: the local models come at up to 1 kHz. */
 #define PALP_CLI_SERVER_WRITERS 24 /* the server's writers kept (~12 a station reads; full, the oldest goes) */
 #define PALP_CLI_OTHER_WRITERS 8   /* others' writers kept, the oldest replaced first */
 typedef struct palp_cli_server_bind {
@@ -52,7 +52,6 @@ typedef struct palp_cli_server_bind {
   dds_instance_handle_t other[PALP_CLI_OTHER_WRITERS];
   dds_guid_t other_pp[PALP_CLI_OTHER_WRITERS];
   unsigned other_next;
-  uint32_t matched_seen[8]; /* the session readers' matched writers (total_count) when last learned */
   uint64_t ignored;         /* samples dropped: another participant's, or a writer gone before it was known */
   dds_guid_t first_other;   /* the first such participant, named to the user and in the log */
   int have_other;           /* ... known (0: only writers already gone) */
@@ -130,6 +129,7 @@ typedef struct palp_cli_station {
   /* The server's session log as this station's session sees it (session 68): read from
    * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */
   dds_entity_t status_r;  /* 0: none (permissions that refuse it; nothing is said then) */
+  dds_entity_t publications_r; /* DCPSPublication: the domain's writers as announced (palp_cli_server_bind); 0: none */
   dds_entity_t session_log_r; /* palp_session_log (session 69), in the session: its own losses; 0: none */
   palp_dds_log_view log;
   palp_cli_log_news log_said;

@@ -357,10 +357,11 @@ int main(void) {
         (unsigned long long)r.ignored, r.news);
 
   /* The same press with a forger in the session (the top of this file). The press is the same
-   * trajectory on the same phantom: the force at each millisecond is the unforged run's within 10% of
-   * its peak in RMS (measured 0.005-0.013 N of 0.6-0.7 N), and its peak at most 1.5x the unforged one
-   * (a press's peak alone varied 0.57-0.71 N between runs, the two runs' timing differing by the
-   * models' latency and this machine's stalls); the forger's 9 N models would put ~9 N on the hand. */
+   * trajectory on the same phantom: the force at each millisecond is the unforged run's within 25% of
+   * its peak in RMS, and its peak at most 2x the unforged one. The two runs' timing differs by the
+   * models' latency and this machine's stalls: measured 1-3% RMS and peaks of 0.57-0.71 N alone, 12%
+   * and 0.60 / 0.83 N in a loaded run of the suite. The forger's 9 N models put 10 N (the safe force) on
+   * the hand when taken: RMS 6.3 N. */
   static double base[12000], forged_f[12000];
   const int nb = force_grid(&r, base, 12000);
   free(r.trace);
@@ -381,9 +382,9 @@ int main(void) {
          rf.closed ? rf.reason : "");
   CHECK(fg.written > 100 && rf.ignored > 100, "forged: %llu samples written into the session, %llu ignored (> 100)",
         (unsigned long long)fg.written, (unsigned long long)rf.ignored);
-  CHECK(ng > 500 && bpeak > 0.2 && rms <= 0.1 * bpeak && fpeak <= 1.5 * bpeak,
-        "forged: the rendered force follows the server's: difference RMS %.3f N over %d ms (<= 10%% of the "
-        "unforged peak %.3f N), peak %.3f N (<= 1.5x)", rms, ng, bpeak, fpeak);
+  CHECK(ng > 500 && bpeak > 0.2 && rms <= 0.25 * bpeak && fpeak <= 2 * bpeak,
+        "forged: the rendered force follows the server's: difference RMS %.3f N over %d ms (<= 25%% of the "
+        "unforged peak %.3f N), peak %.3f N (<= 2x)", rms, ng, bpeak, fpeak);
   CHECK(!fg.idle_closed, "forged: a forged restart leaves an idle station's session open: its server answers (%s)",
         fg.idle_closed ? fg.idle_reason : "open");
   CHECK(!rf.closed && rf.hs.ended, "forged: a forged close and a forged restart leave the session open (%s)",
