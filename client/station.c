@@ -343,6 +343,19 @@ static int read_here(const palp_cli_station *st, const dds_builtintopic_endpoint
   return here;
 }
 
+/* Full, the oldest goes: the server's writers get new handles each time this station finds its
+ * participant again after a lapse of its lease (a stall), and the old ones write no more. */
+static void keep_mine(palp_cli_server_bind *b, dds_instance_handle_t pub) {
+  if (b->n_mine < PALP_CLI_SERVER_WRITERS) b->mine[b->n_mine++] = pub;
+  else b->mine[b->mine_next++ % PALP_CLI_SERVER_WRITERS] = pub;
+}
+
+static int is_mine(const palp_cli_server_bind *b, dds_instance_handle_t pub) {
+  for (int i = 0; i < b->n_mine; i++)
+    if (b->mine[i] == pub) return 1;
+  return 0;
+}
+
 static void take_announcements(palp_cli_station *st) {
   palp_cli_server_bind *b = &st->bind;
   if (st->publications_r <= 0 || !b->bound) return;
@@ -354,22 +367,10 @@ static void take_announcements(palp_cli_station *st) {
       const dds_builtintopic_endpoint_t *ep = ptr[i];
       if (!info[i].valid_data || memcmp(&ep->participant_key, &b->server, sizeof b->server) != 0 || !read_here(st, ep))
         continue;
-      int known = 0;
-      for (int k = 0; k < b->n_mine && !known; k++) known = b->mine[k] == info[i].instance_handle;
-      /* Full, the oldest goes: the server's writers get new handles each time this station finds its
-       * participant again after a lapse of its lease (a stall), and the old ones write no more. */
-      if (known) continue;
-      if (b->n_mine < PALP_CLI_SERVER_WRITERS) b->mine[b->n_mine++] = info[i].instance_handle;
-      else b->mine[b->mine_next++ % PALP_CLI_SERVER_WRITERS] = info[i].instance_handle;
+      if (!is_mine(b, info[i].instance_handle)) keep_mine(b, info[i].instance_handle);
     }
     dds_return_loan(st->publications_r, ptr, n);
   }
-}
-
-static int is_mine(const palp_cli_server_bind *b, dds_instance_handle_t pub) {
-  for (int i = 0; i < b->n_mine; i++)
-    if (b->mine[i] == pub) return 1;
-  return 0;
 }
 
 /* Whose writer pub is: the server's, another participant's (*who names it), or gone before the station
@@ -389,9 +390,8 @@ static int writer_verdict(palp_cli_station *st, dds_entity_t reader, dds_instanc
   if (is_mine(b, pub)) return FROM_SERVER;
   dds_guid_t g;
   if (palp_dds_writer_participant(reader, pub, &g) < 0) return FROM_GONE;
-  if (memcmp(&g, &b->server, sizeof g) == 0) { /* no announcement reader: kept the same way */
-    if (b->n_mine < PALP_CLI_SERVER_WRITERS) b->mine[b->n_mine++] = pub;
-    else b->mine[b->mine_next++ % PALP_CLI_SERVER_WRITERS] = pub;
+  if (memcmp(&g, &b->server, sizeof g) == 0) { /* no announcement reader, or not taken yet */
+    keep_mine(b, pub);
     return FROM_SERVER;
   }
   const unsigned k = b->other_next++ % PALP_CLI_OTHER_WRITERS;
@@ -517,7 +517,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   if (palp_dds_writer_participant(st->reply_r, replier, &st->bind.server) < 0)
     return fail(err, errlen, PALP_EIO, "the server that accepted the join left the domain at once");
   st->bind.bound = 1;
-  st->bind.mine[st->bind.n_mine++] = replier;
+  keep_mine(&st->bind, replier);
   st->bind.heard_ns = palp_dds_now_ns();
   st->session_id = r.session_id;
   st->phantom_id = r.phantom_id;
