@@ -54,6 +54,11 @@ typedef struct station {
    * liveliness turns out lapsed by gone_due_ns (decide_gone_stations); 0: nothing pending. */
   int64_t gone_due_ns;
   dds_instance_handle_t gone_writer;
+  /* The participant of its request writer (a visual station's, looked up as it JOINed): unsecured, a
+   * visual station's participant may write the session's findings (palp-web writes a bound trainee
+   * page's marks so; docs/web.md). 0: not known (gone before it was looked up, or not asked). */
+  int participant_known;
+  dds_guid_t participant;
 } station;
 
 /* How long after a keyed station's dispose the server looks whether its writer's liveliness
@@ -986,10 +991,59 @@ static int publish_debrief(palp_srv *srv, palp_srv_session *s, const char *reaso
  * bound). The session's finding reader is made anew when idl/palp_dds_strays.h says so: what it held
  * of the session's own findings is answered first. */
 
-/* One finding of this session, taken: offered, logged and answered. */
-static void offer_finding(palp_srv *srv, palp_srv_session *s, const palp_Finding *f, palp_srv_session_stats *st,
-                          int *have_st) {
-  const int ok = palp_srv_findings_offer(&s->findings, f, palp_dds_now_ns());
+/* Whether `participant` has a visual station admitted to the session (ctx: a finding_writer_ctx):
+ * unsecured, palp-web writes a bound trainee page's marks from its own participant, which joined the
+ * session as a visual station (docs/web.md, "Findings"). Secured, the bridge is an instructor, whose
+ * permissions write nothing in a trainee's partition: only the trainee's participant marks. */
+typedef struct finding_writer_ctx {
+  const palp_srv *srv;
+  uint32_t session_id;
+} finding_writer_ctx;
+
+static int visual_of_session(void *ctx, const dds_guid_t *participant) {
+  const finding_writer_ctx *c = ctx;
+  for (int i = 0; i < c->srv->station_slots; i++) {
+    const station *st = &c->srv->stations[i];
+    if (st->in_use && st->session_id == c->session_id && st->role == palp_ROLE_VISUAL && st->participant_known &&
+        !memcmp(st->participant.v, participant->v, sizeof participant->v))
+      return 1;
+  }
+  return 0;
+}
+
+/* One finding of this session, taken from `reader` (written by `pub`): offered, logged and answered,
+ * or refused for its writer. */
+static void offer_finding(palp_srv *srv, palp_srv_session *s, dds_entity_t reader, dds_instance_handle_t pub,
+                          const palp_Finding *f, palp_srv_session_stats *st, int *have_st) {
+  const int64_t now = palp_dds_now_ns();
+  /* Only the participant that joined the session marks its findings (until 2026-12-06 any writer in
+   * its partition placed and withdrew marks, and so changed the trainee's debrief and grade). Before
+   * the bucket and the checks, as another session's findings are: a foreign finding spends none of
+   * the trainee's tokens. Refused unanswered: palp_finding_status is keep-last 1 per session, and an
+   * answer to another's finding would replace the trainee's own latest. */
+  const finding_writer_ctx wctx = {.srv = srv, .session_id = s->id};
+  if (!palp_srv_session_writer_ok(s, &s->finding_writers, reader, pub, now, secured(srv) ? NULL : visual_of_session,
+                                  (void *)&wctx)) {
+    s->findings_foreign++;
+    if (!*have_st) {
+      *st = session_stats(srv, s);
+      *have_st = 1;
+    }
+    if (srv->events && srv->events->finding) {
+      char why[128];
+      snprintf(why, sizeof why, "%s: its writer is not of the participant that joined the session",
+               palp_srv_reject_name(PALP_SRV_REJ_FOREIGN_PARTICIPANT));
+      const palp_srv_finding_event ev = {.accepted = 0,
+                                         .mark_id = f->mark_id,
+                                         .withdraw = f->op == palp_FINDING_WITHDRAW,
+                                         .frame = st->last_frame,
+                                         .sim_time = st->sim_time,
+                                         .reason = why};
+      srv->events->finding(srv->events->ctx, s->id, &ev);
+    }
+    return;
+  }
+  const int ok = palp_srv_findings_offer(&s->findings, f, now);
   if (!*have_st) { /* the world's frame and time, once per batch: a snapshot under the tick lock */
     *st = session_stats(srv, s);
     *have_st = 1;
@@ -1026,7 +1080,8 @@ static void renew_finding_reader(palp_srv *srv, palp_srv_session *s, int64_t now
   int have_st = 0, n;
   while (own != 0 && (n = dds_take_instance(s->finding_reader, ptr, info, 16, 16, own)) > 0)
     for (int i = 0; i < n; i++)
-      if (info[i].valid_data) offer_finding(srv, s, &buf[i], &st, &have_st);
+      if (info[i].valid_data)
+        offer_finding(srv, s, s->finding_reader, info[i].publication_handle, &buf[i], &st, &have_st);
   dds_waitset_detach(srv->waitset, s->finding_rc);
   dds_delete(s->finding_reader); /* its read condition with it */
   s->finding_reader = palp_dds_create_reader(s->sub, s->finding_topic, PALP_TOPIC_FINDING);
@@ -1096,7 +1151,8 @@ static void handle_findings(palp_srv *srv, palp_srv_session *s) {
     palp_srv_session_stats st = {0};
     int have_st = 0;
     for (int i = 0; i < n; i++) {
-      if (info[i].valid_data) offer_finding(srv, s, &buf[i], &st, &have_st);
+      if (info[i].valid_data)
+        offer_finding(srv, s, s->finding_reader, info[i].publication_handle, &buf[i], &st, &have_st);
       else if (info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED && buf[i].session_id != s->id)
         s->finding_strays++; /* Cyclone fills an invalid sample's key */
     }
@@ -1128,7 +1184,15 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
     palp_log_warn(srv->log, "session %u: %llu contact samples refused in all from %llu writer%s not of the participant "
                             "that joined it (%s)",
                   s->id, (unsigned long long)s->stats.rejected[PALP_SRV_REJ_FOREIGN_PARTICIPANT],
-                  (unsigned long long)s->foreign_writers, s->foreign_writers == 1 ? "" : "s",
+                  (unsigned long long)s->contact_writers.foreign_writers,
+                  s->contact_writers.foreign_writers == 1 ? "" : "s",
+                  palp_srv_reject_name(PALP_SRV_REJ_FOREIGN_PARTICIPANT));
+  if (s->findings_foreign)
+    palp_log_warn(srv->log, "session %u: %llu findings refused unanswered in all from %llu writer%s not of the "
+                            "participant that joined it (%s)",
+                  s->id, (unsigned long long)s->findings_foreign,
+                  (unsigned long long)s->finding_writers.foreign_writers,
+                  s->finding_writers.foreign_writers == 1 ? "" : "s",
                   palp_srv_reject_name(PALP_SRV_REJ_FOREIGN_PARTICIPANT));
   if (s->session_log_shed + s->session_log_failed > 0) /* its own records (session 69); more may fail still queued */
     palp_log_warn(srv->log, "session %u: the session log lost %llu of its records while it ran (%llu shed, %llu failed): "
@@ -1334,6 +1398,17 @@ static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq) {
   }
 }
 
+/* The participant of a visual station's request writer, for its session's findings (visual_of_session).
+ * One lookup per admitted JOIN (join_rate bounds them). */
+static void learn_participant(station *st, dds_entity_t reader, uint64_t writer) {
+  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(reader, writer);
+  st->participant_known = ep != NULL;
+  if (ep) {
+    st->participant = ep->participant_key;
+    dds_builtintopic_free_endpoint(ep);
+  }
+}
+
 /* who: the authenticated sender (secured), NULL on plain DDS; writer: its
  * publication handle on `reader` (palp_session_request's or palp_station_request's). */
 static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp_srv_requester *who,
@@ -1363,8 +1438,10 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
      * old writer's unmatch made sweep_gone_writers declare a live station lost (until 2026-12-06).
      * Secured, the sender was checked to own this station id before any JOIN (handle_requests). A
      * writer already at stations_per_writer takes no more: that bound holds however a station came. */
-    if (again->writer != writer && stations_of_writer(srv, writer) < srv->cfg.stations_per_writer)
+    if (again->writer != writer && stations_of_writer(srv, writer) < srv->cfg.stations_per_writer) {
       again->writer = writer;
+      if (again->role == palp_ROLE_VISUAL && !secured(srv)) learn_participant(again, reader, writer);
+    }
     reply(srv, rq, cur, NULL);
     return;
   }
@@ -1546,6 +1623,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     return;
   }
   attach_station(s, st, rq);
+  if (st->role == palp_ROLE_VISUAL && !secured(srv)) learn_participant(st, reader, writer);
   reply(srv, rq, s, NULL);
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)

@@ -92,6 +92,18 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   }
   s->id = def->id;
   s->trainee_participant = def->trainee_participant;
+  s->contact_writers = (palp_srv_writer_check){.what = "contacts",
+                                               .rule = "the session is palpated only from",
+                                               .counted = "its samples are counted as foreign_participant",
+                                               .suspects = "another process in its partition: a stale station of "
+                                                           "that name, or a second participant of the same identity"};
+  s->finding_writers = (palp_srv_writer_check){.what = "findings",
+                                               .rule = "the session's findings are marked only from",
+                                               .counted = "its findings go unanswered, each a refusal in the "
+                                                          "session log",
+                                               .suspects = "another process in its partition: a stale station of "
+                                                           "that name, a second participant of the same identity, or "
+                                                           "a palp-web not joined to the session"};
   s->phantom = def->phantom;
   s->events = def->events;
   s->log = def->log;
@@ -393,65 +405,81 @@ static int apply(palp_srv_session *s, const palp_srv_contact *c) {
   return 0;
 }
 
-/* A refused writer of contacts, named in the server's log with the session and its station: the
- * first at once, then at most one a log_interval (a flood of new writers writes no flood of lines),
- * each naming how many went unnamed since. Its samples are counted as foreign_participant
- * (count_rejects says their number). ep: its endpoint data, NULL when it was gone already. */
-static void say_foreign_writer(palp_srv_session *s, const dds_builtintopic_endpoint_t *ep, int64_t now_ns) {
-  s->foreign_writers++;
-  if (s->foreign_said_ns && now_ns - s->foreign_said_ns < (int64_t)(s->log_interval * 1e9)) {
-    s->foreign_unnamed++;
+/* A refused writer, named in the server's log with the session and its station: the first at once,
+ * then at most one a log_interval per reader (a flood of new writers writes no flood of lines), each
+ * naming how many went unnamed since. e: its entry (own 0: another participant's; -1: gone already);
+ * also: whether another participant could have been let in (the log says who may write). */
+static void say_foreign_writer(palp_srv_session *s, palp_srv_writer_check *wc, const palp_srv_writer_entry *e,
+                               int also, int64_t now_ns) {
+  wc->foreign_writers++;
+  if (wc->foreign_said_ns && now_ns - wc->foreign_said_ns < (int64_t)(s->log_interval * 1e9)) {
+    wc->foreign_unnamed++;
     return;
   }
   char who[64], own[64], unnamed[96] = "";
-  if (ep)
-    palp_dds_participant_text(&ep->participant_key, who, sizeof who);
+  if (e->own == 0)
+    palp_dds_participant_text(&e->participant, who, sizeof who);
   else
     snprintf(who, sizeof who, "a writer already gone");
   palp_dds_participant_text(&s->trainee_participant, own, sizeof own);
-  if (s->foreign_unnamed)
+  if (wc->foreign_unnamed)
     snprintf(unnamed, sizeof unnamed, "; %llu other such writer%s since the last one named",
-             (unsigned long long)s->foreign_unnamed, s->foreign_unnamed == 1 ? "" : "s");
-  palp_log_warn(s->log, "session %u (trainee station %s): contacts from %s%s refused: the session is palpated only "
-                        "from %s, whose request joined it (%s); its samples are counted as %s%s",
-                s->id, PALP_PRINTABLE(s->trainee_station), ep ? "a writer of " : "", who, own,
-                ep ? "another process in its partition: a stale station of that name, or a second participant of the "
-                     "same identity"
-                   : "gone before it was looked up, it cannot be shown to be the trainee's",
-                palp_srv_reject_name(PALP_SRV_REJ_FOREIGN_PARTICIPANT), unnamed);
-  s->foreign_said_ns = now_ns;
-  s->foreign_unnamed = 0;
+             (unsigned long long)wc->foreign_unnamed, wc->foreign_unnamed == 1 ? "" : "s");
+  palp_log_warn(s->log, "session %u (trainee station %s): %s from %s%s refused: %s %s, whose request joined it%s "
+                        "(%s); %s%s",
+                s->id, PALP_PRINTABLE(s->trainee_station), wc->what, e->own == 0 ? "a writer of " : "", who, wc->rule,
+                own, also ? ", or from a visual station it admitted" : "",
+                e->own == 0 ? wc->suspects : "gone before it was looked up, it cannot be shown to be the trainee's",
+                wc->counted, unnamed);
+  wc->foreign_said_ns = now_ns;
+  wc->foreign_unnamed = 0;
 }
 
-/* Whether writer `pub` of a contact sample is of the participant that joined the session (1) or not
- * (0). Kept per writer: a miss asks the reader (dds_get_matched_publication_data walks its matched
- * writers and copies one's QoS), once for each sample taken at most, so a flood of new writers costs
- * a tick no more lookups than the take's bound (CONTACT_MAX_INSTANCES). A writer no longer matched
- * when first looked up cannot be shown to be the trainee's: refused (a forger could otherwise write
- * and vanish; a station's writer lives for its session and is looked up at its first sample). */
-static int own_writer(palp_srv_session *s, dds_instance_handle_t pub, int64_t now_ns) {
-  if (pub == 0) return 0;
-  for (int i = 0; i < PALP_SRV_CONTACT_WRITERS; i++)
-    if (s->writers[i].pub == pub) return s->writers[i].own;
-  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(s->contact_reader, pub);
-  const int own = ep && !memcmp(ep->participant_key.v, s->trainee_participant.v, sizeof s->trainee_participant.v);
-  if (!own) say_foreign_writer(s, ep, now_ns);
-  if (ep) dds_builtintopic_free_endpoint(ep);
+/* The entry of writer `pub`, looked up on `reader` when wc does not keep it. A miss asks the reader
+ * (dds_get_matched_publication_data walks its matched writers and copies one's QoS), once for each
+ * sample taken at most, so a flood of new writers costs a pass no more lookups than the take's bound.
+ * A writer no longer matched when first looked up cannot be shown to be the trainee's (own -1: a
+ * station's writer lives for its session and is looked up at its first sample). */
+static palp_srv_writer_entry *writer_entry(palp_srv_session *s, palp_srv_writer_check *wc, dds_entity_t reader,
+                                           dds_instance_handle_t pub) {
+  for (int i = 0; i < PALP_SRV_WRITERS_KEPT; i++)
+    if (wc->e[i].pub == pub) return &wc->e[i];
+  palp_srv_writer_entry n = {.pub = pub, .own = -1};
+  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(reader, pub);
+  if (ep) {
+    n.participant = ep->participant_key;
+    n.own = !memcmp(ep->participant_key.v, s->trainee_participant.v, sizeof s->trainee_participant.v);
+    dds_builtintopic_free_endpoint(ep);
+  }
   /* A free entry, else the next refused one from the hand, else (all the trainee's own: a station
    * found again eight times) the hand's: a writer forgotten is looked up again. */
-  palp_srv_contact_writer *slot = NULL;
-  for (int i = 0; i < PALP_SRV_CONTACT_WRITERS && !slot; i++)
-    if (!s->writers[i].pub) slot = &s->writers[i];
-  for (int k = 0; k < PALP_SRV_CONTACT_WRITERS && !slot; k++) {
-    const unsigned at = (s->writers_hand + (unsigned)k) % PALP_SRV_CONTACT_WRITERS;
-    if (!s->writers[at].own) slot = &s->writers[at], s->writers_hand = (at + 1) % PALP_SRV_CONTACT_WRITERS;
+  palp_srv_writer_entry *slot = NULL;
+  for (int i = 0; i < PALP_SRV_WRITERS_KEPT && !slot; i++)
+    if (!wc->e[i].pub) slot = &wc->e[i];
+  for (int k = 0; k < PALP_SRV_WRITERS_KEPT && !slot; k++) {
+    const unsigned at = (wc->hand + (unsigned)k) % PALP_SRV_WRITERS_KEPT;
+    if (wc->e[at].own != 1) slot = &wc->e[at], wc->hand = (at + 1) % PALP_SRV_WRITERS_KEPT;
   }
   if (!slot) {
-    slot = &s->writers[s->writers_hand];
-    s->writers_hand = (s->writers_hand + 1) % PALP_SRV_CONTACT_WRITERS;
+    slot = &wc->e[wc->hand];
+    wc->hand = (wc->hand + 1) % PALP_SRV_WRITERS_KEPT;
   }
-  *slot = (palp_srv_contact_writer){.pub = pub, .own = own};
-  return own;
+  *slot = n;
+  return slot;
+}
+
+int palp_srv_session_writer_ok(palp_srv_session *s, palp_srv_writer_check *wc, dds_entity_t reader,
+                               dds_instance_handle_t pub, int64_t now_ns, palp_srv_participant_ok_fn also, void *ctx) {
+  if (pub == 0) return 0;
+  palp_srv_writer_entry *e = writer_entry(s, wc, reader, pub);
+  if (e->own == 1) return 1;
+  /* Asked each time, not kept: a visual station may join after its writer's first sample, or leave. */
+  if (e->own == 0 && also && also(ctx, &e->participant)) return 1;
+  if (!e->named) {
+    e->named = 1;
+    say_foreign_writer(s, wc, e, also != NULL, now_ns);
+  }
+  return 0;
 }
 
 /* Folds the filter's counts into the rejection counters (and the log). */
@@ -511,7 +539,8 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
            * 2026-12-06 anyone in the partition could lift the trainee's finger). */
           palp_srv_finger_state *f = &s->finger[buf[i].finger];
           if ((f->writer && info[i].publication_handle == f->writer) ||
-              own_writer(s, info[i].publication_handle, now_ns))
+              palp_srv_session_writer_ok(s, &s->contact_writers, s->contact_reader, info[i].publication_handle, now_ns,
+                                         NULL, NULL))
             lift(s, f);
           else
             count_reject(s, PALP_SRV_REJ_FOREIGN_PARTICIPANT, 0, now_ns);
@@ -522,7 +551,8 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
        * its partition did: in an unsecured classroom anyone who knew the station's name, in a
        * secured one a second participant of the same identity). Before the checks: a foreign
        * sample is refused for being foreign, whatever else is wrong with it. */
-      if (!own_writer(s, info[i].publication_handle, now_ns)) {
+      if (!palp_srv_session_writer_ok(s, &s->contact_writers, s->contact_reader, info[i].publication_handle, now_ns,
+                                      NULL, NULL)) {
         count_reject(s, PALP_SRV_REJ_FOREIGN_PARTICIPANT, 0, now_ns);
         continue;
       }

@@ -77,14 +77,36 @@ typedef struct palp_srv_finger_state {
   palp_srv_playout playout;
 } palp_srv_finger_state;
 
-/* A writer of contacts the session has looked up: of the participant that joined it or not. Cyclone
- * never gives a publication handle twice (a writer found again gets a new one), so a verdict holds
- * for as long as the entry is kept. */
-#define PALP_SRV_CONTACT_WRITERS 8
-typedef struct palp_srv_contact_writer {
+/* A writer the session has looked up on one of its readers (contacts, findings): of the participant
+ * that joined it, of another, or gone before it was looked up. Cyclone never gives a publication handle
+ * twice (a writer found again gets a new one), and a writer has the one handle on every reader of the
+ * server's participant, a reader made anew included (seen on Cyclone 0.10.2, 2026-12-06), so a verdict
+ * holds for as long as the entry is kept. */
+#define PALP_SRV_WRITERS_KEPT 8
+typedef struct palp_srv_writer_entry {
   dds_instance_handle_t pub; /* 0: a free entry */
-  int own;                   /* 1: the session's participant's; 0: another's, or gone before it was looked up */
-} palp_srv_contact_writer;
+  int own;                   /* 1: the session's participant's; 0: another's; -1: gone before it was looked up */
+  dds_guid_t participant;    /* own 0: that participant */
+  int named;                 /* refused once already: the log named it, or counted it among the unnamed */
+} palp_srv_writer_entry;
+
+/* The writers one reader of a session has looked up, and what the log said of those it refused. One
+ * per reader, each used by one thread only (contacts: the tick; findings: the main thread). */
+typedef struct palp_srv_writer_check {
+  /* As the log names a refused writer: what the reader takes ("contacts"), who alone writes them ("the
+   * session is palpated only from", then the participant), what becomes of its samples, and who another
+   * participant writing them is likely to be. */
+  const char *what, *rule, *counted, *suspects;
+  palp_srv_writer_entry e[PALP_SRV_WRITERS_KEPT];
+  unsigned hand;
+  uint64_t foreign_writers;  /* writers refused: another participant's, or gone */
+  uint64_t foreign_unnamed;  /* refused writers not named in the log since the last one named */
+  int64_t foreign_said_ns;   /* when the log last named one (at most one a log_interval) */
+} palp_srv_writer_check;
+
+/* Whether a writer that is not of the session's participant may write here all the same (findings:
+ * a visual station the server admitted to the session, in an unsecured classroom). */
+typedef int (*palp_srv_participant_ok_fn)(void *ctx, const dds_guid_t *participant);
 
 typedef struct palp_srv_session_def {
   uint32_t id;
@@ -143,6 +165,11 @@ typedef struct palp_srv_session {
   uint64_t finding_strays, finding_strays_total, finding_reader_renewals;
   int64_t finding_reader_renewed_ns, finding_renewal_said_ns;
   palp_srv_findings findings;
+  /* [main] the writers of its findings (server/server.c, offer_finding): only the participant that
+   * joined the session marks its findings (unsecured, also its visual stations': palp-web writes a
+   * trainee page's marks); the rest are refused unanswered, never offered (2026-12-06). */
+  palp_srv_writer_check finding_writers;
+  uint64_t findings_foreign;   /* findings (marks, withdrawals) refused so */
   dds_entity_t debrief_writer; /* palp_debrief, written once as an exercise session closes; 0: none */
   /* palp_session_log (session 69): this session's records the log lost, as last written; 0: none */
   dds_entity_t session_log_writer;
@@ -193,11 +220,7 @@ typedef struct palp_srv_session {
   uint64_t filtered_seen_session, filtered_seen_finger; /* folded into stats.rejected so far */
   /* The writers of its contacts, looked up once each while kept (take_contacts); a refused one is
    * the first to make room, so a flood of new writers never pushes out the trainee's own. */
-  palp_srv_contact_writer writers[PALP_SRV_CONTACT_WRITERS];
-  unsigned writers_hand;
-  uint64_t foreign_writers;    /* writers looked up and refused: another participant's, or gone */
-  uint64_t foreign_unnamed;    /* refused writers not named in the log since the last one named */
-  int64_t foreign_said_ns;     /* when the log last named one (at most one a log_interval) */
+  palp_srv_writer_check contact_writers;
   int64_t last_log_ns[PALP_SRV_REJ_COUNT];
   uint64_t log_suppressed[PALP_SRV_REJ_COUNT];
   palp_Feedback fb;
@@ -229,6 +252,16 @@ void palp_srv_session_factor_settle(palp_srv_session *s);
 
 palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *err);
 void palp_srv_session_destroy(palp_srv_session *s);
+
+/* Whether the writer of a sample taken from `reader` (its publication handle `pub`, from the sample's
+ * info) may write in session s: 1 when it is of the participant whose request JOINed the session, or
+ * `also` (NULL: none) says its participant may; 0 when not, or when it was gone before it could be
+ * looked up (a forger could otherwise write and vanish). The writer is looked up once while wc keeps
+ * it (a miss costs one dds_get_matched_publication_data); a refused one is named in the server's log
+ * with the session and station once (the first at once, then at most one a log_interval, the rest
+ * counted). wc: the reader's own (palp_srv_writer_check); one thread per wc. */
+int palp_srv_session_writer_ok(palp_srv_session *s, palp_srv_writer_check *wc, dds_entity_t reader,
+                               dds_instance_handle_t pub, int64_t now_ns, palp_srv_participant_ok_fn also, void *ctx);
 
 /* 0 when this session's next tick would wait for a tangent rebuild a helper has not
  * finished (it is due at the world's frame); 1 otherwise. The ticker steps such a

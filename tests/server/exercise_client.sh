@@ -71,8 +71,11 @@ spid=$!
 "$client" --role trainee --domain 61 --phantom 7 --name fia --timeout 10 --print-period 0 \
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=0.5 > "$tmp/fia.log" 2>&1
 # Session 72: a peer writes into gus's partition (an unsecured classroom, or a trainee into her own):
-# first one withdrawal of a mark 9 naming his session, which the server answers (his station says,
-# once, that someone else writes findings into his session: mark 9 is none of his), then findings
+# first one withdrawal of a mark 9 naming his session, which the server refuses unanswered for its
+# writer (since 2026-12-06: not of the participant that joined the session; its log names it), then
+# the same from a peer that joined his session as a visual station first (as palp-web does to write a
+# trainee page's marks), which the server answers (his station says, once, that someone else writes
+# findings into his session: mark 9 is none of his), then findings
 # naming made-up sessions, 20 every 100 ms for 4 s, through his press and mark. Those became
 # instances of the server's finding reader, which refused the 65th and on for its resource limits,
 # and Cyclone retried each on its delivery path: every session's contacts stalled (his fingertip never
@@ -82,10 +85,15 @@ spid=$!
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=3,mark_s=2 > "$tmp/gus.log" 2>&1 &
 gpid=$!
 "$finding_writer" 61 gus 9 1 0.1 own > "$tmp/writer.log" 2>&1
+"$finding_writer" 61 gus 9 1 0.1 own-visual >> "$tmp/writer.log" 2>&1
 "$finding_writer" 61 gus 9 20 4 >> "$tmp/writer.log" 2>&1
 wait $gpid
 kill $spid; wait $spid; spid=
 check 'finding_writer: 1 findings naming the session itself written' "$tmp/writer.log" "a peer writes a finding into gus's session"
+check 'findings from a writer of participant [0-9a-f:]* refused' "$tmp/nolog-server.log" \
+  "  refused for its writer, which never joined his session, and named in the server's log"
+check 'finding_writer: joined session [0-9]* as a visual station' "$tmp/writer.log" \
+  "  a second peer joins his session as a visual station and writes the same"
 check 'finding_writer: [0-9]* findings naming other sessions written' "$tmp/writer.log" "  then floods it with findings naming other sessions"
 check 'debrief: you found 1 of 2 lumps with 1 mark standing' "$tmp/gus.log" "  his press reaches the lump and his mark through the flood stands"
 check 'the server answered finding 9, which this station did not send: someone else writes findings into this session' "$tmp/gus.log" \

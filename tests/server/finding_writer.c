@@ -2,9 +2,12 @@
  * finding_writer.c - a peer in a session's partition of an unsecured classroom, for
  * server_exercise_client: waits (up to 10 s) for TRAINEE's open session, then writes withdrawals of
  * mark MARK into its partition, BURST every 100 ms for SECONDS, naming made-up sessions (the
- * session's id + 1000 + k) or, with "own", the session itself (withdrawals: they never add a mark).
- * Prints what it wrote; exit 0, or 1 when no such session opened.
- * usage: test_finding_writer DOMAIN TRAINEE MARK BURST SECONDS [own]
+ * session's id + 1000 + k) or, with "own", the session itself (withdrawals: they never add a mark);
+ * "own-visual" first joins the session as a visual station, as palp-web does before it writes a
+ * trainee page's marks (since 2026-12-06 the server takes a session's findings only from the
+ * participant that joined it or, unsecured, one with a visual station in it).
+ * Prints what it wrote; exit 0, or 1 when no such session opened (or the visual join was refused).
+ * usage: test_finding_writer DOMAIN TRAINEE MARK BURST SECONDS [own|own-visual|dispose]
  * With "frames" (DOMAIN TRAINEE frames): once the session's first finger sample in contact and its
  * first local model are there, writes each back into the partition with frame 2^64 - 1 (a forged
  * far-future step, otherwise the server's own), then exits; 1 when none came within 10 s.
@@ -54,6 +57,37 @@ static int forge_frame(dds_entity_t pp, dds_entity_t pub, dds_entity_t sub, cons
   return done;
 }
 
+/* Joins session sid as a visual station from pp: 1 when accepted within 3 s. */
+static int join_visual(dds_entity_t pp, uint32_t sid) {
+  const dds_entity_t rq_w = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_REQUEST),
+                                                   PALP_TOPIC_SESSION_REQUEST);
+  const dds_entity_t rp_r = palp_dds_create_reader(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_REPLY),
+                                                   PALP_TOPIC_SESSION_REPLY);
+  for (int i = 0; i < 200 && rq_w > 0; i++) { /* matched with the server's reader: up to 2 s */
+    dds_publication_matched_status_t m;
+    if (dds_get_publication_matched_status(rq_w, &m) == 0 && m.current_count > 0) break;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  palp_SessionRequest rq;
+  memset(&rq, 0, sizeof rq);
+  snprintf(rq.station_id, sizeof rq.station_id, "finding_writer/visual");
+  snprintf(rq.user_name, sizeof rq.user_name, "finding_writer");
+  rq.request_seq = 1;
+  rq.op = palp_OP_JOIN;
+  rq.role = palp_ROLE_VISUAL;
+  rq.session_id = sid;
+  if (rq_w <= 0 || rp_r <= 0 || dds_write(rq_w, &rq) != 0) return 0;
+  for (int i = 0; i < 300; i++) {
+    palp_SessionReply b;
+    void *ptr[1] = {&b};
+    dds_sample_info_t info;
+    while (dds_take(rp_r, ptr, &info, 1, 1) > 0)
+      if (info.valid_data && !strcmp(b.station_id, rq.station_id)) return b.status == palp_REPLY_ACCEPTED;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  return 0;
+}
+
 int main(int argc, char **argv) {
   if (argc == 4 && !strcmp(argv[3], "frames")) {
     const dds_entity_t pp = dds_create_participant((dds_domainid_t)atoi(argv[1]), NULL, NULL);
@@ -83,6 +117,13 @@ int main(int argc, char **argv) {
     fprintf(stderr, "finding_writer: no open session of %s within 10 s\n", argv[2]);
     return 1;
   }
+  const int visual = argc > 6 && !strcmp(argv[6], "own-visual");
+  if (visual && !join_visual(pp, st.session_id)) {
+    fprintf(stderr, "finding_writer: session %u refused (or did not answer) its join as a visual station\n",
+            st.session_id);
+    return 1;
+  }
+  if (visual) printf("finding_writer: joined session %u as a visual station\n", st.session_id);
   const dds_entity_t pub = palp_dds_session_publisher(pp, st.partition);
   const dds_entity_t w = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINDING), PALP_TOPIC_FINDING);
   for (int i = 0; i < 200 && w > 0; i++) { /* matched with the server's reader: up to 2 s */
@@ -93,7 +134,7 @@ int main(int argc, char **argv) {
   palp_Finding f;
   memset(&f, 0, sizeof f);
   f.op = palp_FINDING_WITHDRAW;
-  const int own = argc > 6 && !strcmp(argv[6], "own");
+  const int own = argc > 6 && (!strcmp(argv[6], "own") || visual);
   const int dispose = argc > 6 && !strcmp(argv[6], "dispose"); /* disposes of the made-up keys: no sample */
   f.mark_id = (uint32_t)atoi(argv[3]);
   const int burst = atoi(argv[4]), rounds = (int)(atof(argv[5]) * 10);

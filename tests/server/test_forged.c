@@ -17,7 +17,10 @@
  *   name that never JOINed, pressing 8 N at the pole with her finger 0 and 8 N with finger 1, then
  *   disposing both: her feedback stays her own 2 N press (finger 0 active throughout, 2 +- 0.3 N),
  *   finger 1 never shows active, its samples are counted as foreign_participant, the log names its
- *   participant once, and her own next presses are still applied;
+ *   participant once, and her own next presses are still applied; its findings (a mark taking her next
+ *   mark's id, a mark near no lesion, a withdrawal of her mark 1) are refused unanswered and counted in
+ *   the session log as foreign_participant, its participant named once for them, and her mark 2 is
+ *   accepted with her two marks standing;
  * - after its start-up window, one forged identity sample {its name, number 0, started 0}
  *   leaves the server serving: the session stays open, its trainee still gets feedback, and
  *   the log warns about the claim, naming the claimant's instance.
@@ -125,7 +128,39 @@ static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r
   (void)ctx, (void)session_id, (void)clamped;
   if (r == PALP_SRV_REJ_FOREIGN_PARTICIPANT) atomic_fetch_add(&contacts_foreign, count);
 }
-static const palp_srv_events contact_events = {.contact_applied = on_applied, .contact_rejected = on_rejected};
+/* [the server's main thread] What the sessions did with findings: accepted marks and withdrawals by
+ * mark id (ids < 16), and refusals for their writer (reason foreign_participant...). */
+static atomic_uint marks_accepted, withdrawals_accepted; /* bit mark_id */
+static atomic_uint findings_foreign, findings_foreign_marks, findings_foreign_withdrawals;
+static void on_finding(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev) {
+  (void)ctx, (void)session_id;
+  if (ev->accepted && ev->mark_id < 16) atomic_fetch_or(ev->withdraw ? &withdrawals_accepted : &marks_accepted,
+                                                        1u << ev->mark_id);
+  if (!ev->accepted && ev->reason && strncmp(ev->reason, "foreign_participant", 19) == 0) {
+    atomic_fetch_add(&findings_foreign, 1);
+    atomic_fetch_add(ev->withdraw ? &findings_foreign_withdrawals : &findings_foreign_marks, 1);
+  }
+}
+static const palp_srv_events contact_events = {
+    .contact_applied = on_applied, .contact_rejected = on_rejected, .finding = on_finding};
+
+/* The newest palp_finding_status trainee-a's station got within `wait` [s] that answers `mark`; 1
+ * when one came. Every answer seen to `other` (0: none) is counted in *others. */
+static int finding_answer(palp_cli_station *st, uint32_t mark, double wait, palp_FindingStatus *out, uint32_t other,
+                          int *others) {
+  const int64_t end = palp_dds_now_ns() + (int64_t)(wait * 1e9);
+  int got = 0;
+  while (!got && palp_dds_now_ns() < end) {
+    palp_FindingStatus s;
+    if (palp_cli_station_finding_status(st, &s)) {
+      if (s.last_mark_id == mark) *out = s, got = 1;
+      if (other && s.last_mark_id == other) ++*others;
+    } else {
+      test_sleep(0.005);
+    }
+  }
+  return got;
+}
 
 /* Feedback of a station as the foreign writer's part watches it: finger 0's force range and the
  * samples it was missing or lifted in, and whether finger 1 was ever active. */
@@ -450,6 +485,60 @@ int main(void) {
     const uint64_t applied2 = atomic_load(&contacts_applied);
     CHECK(applied2 > applied1, "trainee-a's own next presses are applied: %llu of 10 (want >= 1)",
           (unsigned long long)(applied2 - applied1));
+
+    /* ... and its findings. Until 2026-12-06 the server took any palp_finding in the partition: the
+     * second participant's mark 2 took her next mark's id (hers then refused "already made"), its mark 9
+     * stood near no lesion, its withdrawal of her mark 1 took it down: her debrief and grade were its. */
+    const double R = 0.04;
+    palp_FindingStatus fs;
+    int seen_forged = 0;
+    const int m1 = palp_cli_station_mark(&a, (palp_vec3){0, 0, R}, 1.0);
+    REQUIRE(m1 == 1 && finding_answer(&a, 1, 2.0, &fs, 0, NULL) && fs.last_accepted && fs.marks == 1,
+            "trainee-a's mark 1 at the pole accepted, 1 standing");
+    const dds_entity_t ffw = palp_dds_create_writer(palp_dds_session_publisher(fg.pp, a.partition),
+                                                    fg.topic[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
+    pm = (dds_publication_matched_status_t){0};
+    for (int i = 0; i < 200 && pm.current_count == 0; i++) {
+      dds_get_publication_matched_status(ffw, &pm);
+      if (pm.current_count == 0) test_sleep(0.01);
+    }
+    REQUIRE(ffw > 0 && pm.current_count > 0, "the second participant's finding writer matched the session's reader");
+    const unsigned ff0 = atomic_load(&findings_foreign);
+    palp_Finding ff;
+    memset(&ff, 0, sizeof ff);
+    ff.session_id = sid;
+    ff.op = palp_FINDING_MARK;
+    ff.mark_id = 2; /* her next mark's id */
+    ff.point = (palp_Vec3){R * sin(0.6), 0, R * cos(0.6)};
+    int fsent = dds_write(ffw, &ff) == 0;
+    ff.mark_id = 9;
+    ff.point = (palp_Vec3){0, R * sin(0.9), R * cos(0.9)};
+    fsent += dds_write(ffw, &ff) == 0;
+    ff.op = palp_FINDING_WITHDRAW; /* hers */
+    ff.mark_id = 1;
+    ff.point = (palp_Vec3){0, 0, 0};
+    fsent += dds_write(ffw, &ff) == 0;
+    for (int i = 0; i < 100 && atomic_load(&findings_foreign) - ff0 < 3; i++) test_sleep(0.01); /* taken (or not) */
+    const int m2 = palp_cli_station_mark(&a, (palp_vec3){R * sin(0.3), R * sin(0.3), R * cos(0.3)}, 2.0);
+    const int answered = m2 == 2 && finding_answer(&a, 2, 2.0, &fs, 9, &seen_forged);
+    CHECK(answered && fs.last_accepted && fs.marks == 2,
+          "her mark 2 after the second participant's marks 2 and 9 and its withdrawal of her mark 1: %s (%s), %u "
+          "standing (want accepted, 2: hers)",
+          !answered ? "no answer" : fs.last_accepted ? "accepted" : "refused", answered ? fs.reason : "",
+          answered ? fs.marks : 0);
+    const unsigned marks = atomic_load(&marks_accepted), withdrawn = atomic_load(&withdrawals_accepted);
+    CHECK(marks == ((1u << 1) | (1u << 2)) && withdrawn == 0,
+          "the session took only her findings: marks accepted 0x%x (want 0x6: 1 and 2), withdrawals 0x%x (want 0)",
+          marks, withdrawn);
+    const unsigned ffor = atomic_load(&findings_foreign) - ff0;
+    CHECK(fsent == 3 && ffor == 3 && atomic_load(&findings_foreign_marks) == 2 &&
+              atomic_load(&findings_foreign_withdrawals) == 1 && seen_forged == 0,
+          "its %d findings refused as foreign_participant in the session log: %u (want 3: 2 marks, 1 withdrawal), "
+          "unanswered (%d answers to its mark 9 seen, want 0)",
+          fsent, ffor, seen_forged);
+    CHECK(log_count(log_path, fg_text, "findings from") == 1 && log_count(log_path, fg_text, "session ") == 2,
+          "the server's log names that participant once for its findings, with the session: %d line(s)",
+          log_count(log_path, fg_text, "findings from"));
     palp_cli_station_close(&fg);
   }
 
@@ -477,6 +566,8 @@ int main(void) {
   dds_delete(pp);
   palp_cli_station_leave(&a);
   test_sleep(0.2);
+  CHECK(log_count(log_path, "findings refused unanswered in all from 1 writer not of the participant", NULL) == 1,
+        "as her session closed, the log summed its findings refused for their writer");
   palp_cli_station_close(&a);
   test_server_stop(&ts);
   palp_log_close(&plog);
