@@ -11,8 +11,8 @@ cd "$build"
 # 2026-12-05: docs/robustness.md, "Temporary files").
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/palp-tests.XXXXXX")
 # three slots per core: a computation takes two slots and one core (the cores are a CTest resource,
-# which also keeps the timing-sensitive tests apart from the computations), and the tests that
-# mostly wait fill the other slots (tests/CMakeLists.txt, "Slots")
+# which also keeps the flood tests apart from the computations) and runs at nice 19, and the tests
+# that mostly wait fill the other slots (tests/CMakeLists.txt, "Slots")
 rc=0
 TMPDIR=$tmp ctest --output-on-failure -j"$((3 * $(nproc)))" --timeout 300 \
   --resource-spec-file "$here/tests/resources.json" || rc=$?
