@@ -45,6 +45,14 @@ int palp_app_data_path(const char *rel, char *buf, size_t len, char *err, size_t
  * existing file keeps its mode. NULL and errno on failure. */
 FILE *palp_app_fopen_private(const char *path);
 
+/* Installs handler for SIGINT, SIGTERM and SIGHUP by sigaction with SA_RESTART (a read interrupted by one
+ * goes on). Never signal(): built as ISO C (-std=c17), glibc's signal() has System V semantics, the
+ * handler reset to the default at its first delivery, so the second SIGHUP (the second log rotation)
+ * killed palp-web and palp-recorder with their sessions open (found 2026-12-06). sigaction also replaces
+ * the SIG_IGN a shell gives a script's background jobs for SIGINT, so `kill -INT` stops them cleanly.
+ * Returns 0, or -1 with errno set. */
+int palp_app_on_signals(void (*handler)(int));
+
 /* The one way every program chooses its DDS config, first that applies:
  *   flag      (--dds-config FILE): used even if CYCLONEDDS_URI is set;
  *   CYCLONEDDS_URI from the environment: left as it is;

@@ -321,16 +321,8 @@ int main(int argc, char **argv) {
     return 1;
   }
   sig_pipe_w = sc.fd[1];
-  /* sigaction also replaces the SIG_IGN that a shell gives a script's background
-   * jobs for SIGINT, so `kill -INT` from a script stops us cleanly. */
-  struct sigaction sa;
-  memset(&sa, 0, sizeof sa);
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESTART;
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
-  sigaction(SIGHUP, &sa, NULL); /* default action would kill us with every session open */
+  /* SIGHUP too: its default action would kill us with every session open */
+  palp_app_on_signals(on_signal);
   sc.log = &plog;
   sc.config_path = config_path;
   sc.file_cfg = &file_cfg;

@@ -18,7 +18,6 @@
 #include <unistd.h>
 
 #include "access.h"
-#include "palp_app.h"
 #include "hub.h"
 #include "palp.h"
 #include "palp_app.h"
@@ -569,17 +568,10 @@ int main(int argc, char **argv) {
     palp_web_hub_destroy(hub);
     return 1;
   }
-  /* sigaction, not signal(): built as ISO C (-std=c17), glibc's signal() has System V semantics, the handler
-   * reset to the default at each delivery, and the second SIGHUP (the second log rotation) killed palp-web
-   * with every page open (found 2026-12-06). SA_RESTART: a read interrupted by it goes on. */
+  palp_app_on_signals(on_signal); /* by sigaction: signal()'s handler lasted one SIGHUP (palp_app.h) */
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
-  sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESTART;
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
-  sigaction(SIGHUP, &sa, NULL);
   sa.sa_handler = SIG_IGN;
   sigaction(SIGPIPE, &sa, NULL);
   watch w = {.srv = srv, .hub = hub, .end = duration > 0 ? mono_s() + duration : 0, .stats = stats, .log = &log,

@@ -1849,17 +1849,7 @@ int main(int argc, char **argv) {
     dds_set_status_mask(rd[k], DDS_DATA_AVAILABLE_STATUS);
     dds_waitset_attach(ws, rd[k], k);
   }
-  /* sigaction, not signal(): built as ISO C (-std=c17), glibc's signal() has System V semantics, the
-   * handler reset to the default at each delivery, so the second SIGHUP (the second log rotation) killed
-   * the recorder mid-class (found 2026-12-06, as in palp-web). SA_RESTART: a read interrupted goes on. */
-  struct sigaction sa;
-  memset(&sa, 0, sizeof sa);
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESTART;
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
-  sigaction(SIGHUP, &sa, NULL);
+  palp_app_on_signals(on_signal); /* by sigaction: signal()'s handler lasted one SIGHUP (palp_app.h) */
   char security[96];
   /* Without --domain, the DDS config's default domain: named by its number, as the server and stations
    * name theirs (it said "domain -1", DDS_DOMAIN_DEFAULT, until 2026-12-06). */
