@@ -22,13 +22,8 @@ export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.x
 tmp=$(mktemp -d)
 spid=
 trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
-cat > "$tmp/server.json" <<JSON
-{ "domain_id": 172, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
-  "dds_config": "$config_dir/cyclonedds-loopback.xml",
-  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step_long_term.json", "physics_rate_hz": 250 } ] }
-JSON
-"$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
-spid=$!
+. "$(dirname "$0")/../one_dome.sh"
+one_dome_server 172 "$config_dir/paper_step_long_term.json" 250
 fail=0
 "$client" --role trainee --domain 172 --phantom 1 --name flo --timeout 10 --print-period 0 \
   --input sim:press,depth_mm=3,hold_s=1 --trace-csv "$tmp/trace.csv" > "$tmp/flo.log" 2>&1

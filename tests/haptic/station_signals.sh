@@ -16,13 +16,8 @@ tmp=$(mktemp -d)
 spid= cpid=
 trap '[ -n "$cpid" ] && kill -KILL $cpid 2>/dev/null; [ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 . "$(dirname "$0")/../wait_for.sh"
-cat > "$tmp/server.json" <<JSON
-{ "domain_id": 175, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
-  "dds_config": "$config_dir/cyclonedds-loopback.xml",
-  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step_long_term.json", "physics_rate_hz": 250 } ] }
-JSON
-"$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
-spid=$!
+. "$(dirname "$0")/../one_dome.sh"
+one_dome_server 175 "$config_dir/paper_step_long_term.json" 250
 fail=0
 ok() { echo "ok   $*"; }
 bad() { echo "FAIL $*"; fail=1; }

@@ -11,13 +11,8 @@ export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.x
 tmp=$(mktemp -d)
 spid= tpids=
 trap 'for p in $tpids $spid; do kill $p 2>/dev/null; done; for p in $tpids $spid; do wait $p 2>/dev/null; done; rm -rf "$tmp"' EXIT
-cat > "$tmp/server.json" <<JSON
-{ "domain_id": 173, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",
-  "dds_config": "$config_dir/cyclonedds-loopback.xml",
-  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step.json" } ] }
-JSON
-"$server" --config "$tmp/server.json" > "$tmp/server.log" 2>&1 &
-spid=$!
+. "$(dirname "$0")/../one_dome.sh"
+one_dome_server 173 "$config_dir/paper_step.json"
 fail=0
 # a trainee holding its session open without pressing (0 N), until killed
 for k in 1 2 3 4 5 6 7 8 9 10; do
