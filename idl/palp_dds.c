@@ -30,6 +30,22 @@ const char *palp_dds_topic_name(palp_dds_topic_kind kind) {
   return (unsigned)kind < PALP_TOPIC_COUNT ? topic_names[kind] : NULL;
 }
 
+int palp_dds_topic_in_session(palp_dds_topic_kind kind) {
+  switch (kind) {
+  case PALP_TOPIC_CONTACT:
+  case PALP_TOPIC_FEEDBACK:
+  case PALP_TOPIC_DEFORMATION:
+  case PALP_TOPIC_LOCAL_MODEL:
+  case PALP_TOPIC_FINDING:
+  case PALP_TOPIC_FINDING_STATUS:
+  case PALP_TOPIC_DEBRIEF:
+  case PALP_TOPIC_DEBRIEF_SCORE:
+  case PALP_TOPIC_SESSION_LOG:
+  case PALP_TOPIC_FINGER_SAMPLE: return 1;
+  default: return 0;
+  }
+}
+
 const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind) {
   switch (kind) {
   case PALP_TOPIC_CATALOGUE: return &palp_Phantom_desc;

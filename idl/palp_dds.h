@@ -70,6 +70,10 @@ typedef enum palp_dds_topic_kind {
 #define PALP_SESSION_EXERCISE_JSON_MAX 32767
 
 const char *palp_dds_topic_name(palp_dds_topic_kind kind);
+/* 1 if the topic is written and read in a session's partition (PALP_DDS_SESSION_PARTITION_FMT),
+ * its samples' first member the session_id; 0 for the default partition's topics. One list for
+ * every tool that must know (palp-netem relays the session topics partition by partition). */
+int palp_dds_topic_in_session(palp_dds_topic_kind kind);
 const dds_topic_descriptor_t *palp_dds_topic_descriptor(palp_dds_topic_kind kind);
 
 /* QoS for the topic and for both its readers and writers (caller deletes). */

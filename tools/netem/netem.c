@@ -15,17 +15,18 @@
 #include "palp.h"
 #include "palp_dds.h"
 
-#define MAX_PARTS 64 /* session partitions per topic and side */
+#define MAX_PARTS 64 /* session partitions per side: a 65th session's samples are dropped, counted */
 #define QUEUE_MAX 65536 /* samples in flight: bounded memory */
 
 typedef struct side {
   dds_entity_t pp, sub_global, sub_session, pub_global, ws, stop_gc;
   dds_entity_t reader[PALP_TOPIC_COUNT], topic[PALP_TOPIC_COUNT];
   dds_entity_t writer_global[PALP_TOPIC_COUNT];
-  /* session topics: a publisher + writer per partition, made on first use */
-  uint32_t part_session[PALP_TOPIC_COUNT][MAX_PARTS];
-  dds_entity_t part_writer[PALP_TOPIC_COUNT][MAX_PARTS];
-  int part_count[PALP_TOPIC_COUNT];
+  /* session topics: per session's partition a publisher and a writer of every session topic,
+   * all made when the first sample of the session crosses to this side */
+  uint32_t part_session[MAX_PARTS];
+  dds_entity_t part_writer[MAX_PARTS][PALP_TOPIC_COUNT];
+  int part_count;
   /* the relay's own writers on this side: their samples are never relayed back */
   dds_instance_handle_t own[PALP_TOPIC_COUNT * (MAX_PARTS + 1)];
   atomic_int own_count;
@@ -65,10 +66,9 @@ struct palp_netem {
   rx_arg *rx_args;
 };
 
-static int is_session_topic(int k) {
-  return k == PALP_TOPIC_CONTACT || k == PALP_TOPIC_FEEDBACK || k == PALP_TOPIC_DEFORMATION ||
-         k == PALP_TOPIC_LOCAL_MODEL || k == PALP_TOPIC_FINGER_SAMPLE;
-}
+/* palp_dds's one list: until 2026-12-07 this was a list of the relay's own that stopped at the
+ * five streams, and a station behind the relay marked lumps nobody answered and got no debrief. */
+static int is_session_topic(int k) { return palp_dds_topic_in_session((palp_dds_topic_kind)k); }
 
 static int is_reliable(int k) {
   dds_qos_t *q = palp_dds_qos((palp_dds_topic_kind)k);
@@ -160,22 +160,35 @@ static int is_own(side *s, dds_instance_handle_t h) {
   return 0;
 }
 
-static dds_entity_t writer_for(palp_netem *n, side *s, int kind, const void *sample) {
+/* The writer of a session topic on side s, its session's writers made on first use. All of them at
+ * once, not each topic's at its first sample: a writer made for a sample is written before any reader
+ * has matched it, and the server writes a session's debrief and unregisters it as the session closes
+ * (its writer goes with the session), so a debrief writer made then lost its one sample to the
+ * unregister before the station's reader matched (2026-12-07: no station behind the relay was ever
+ * debriefed). Made with the session's first feedback or contact, they match as the server's own do. */
+static dds_entity_t writer_for(side *s, int kind, const void *sample) {
   if (!is_session_topic(kind)) return s->writer_global[kind];
   const uint32_t sid = *(const uint32_t *)sample; /* session_id is every session type's first member */
-  for (int i = 0; i < s->part_count[kind]; i++)
-    if (s->part_session[kind][i] == sid) return s->part_writer[kind][i];
-  if (s->part_count[kind] >= MAX_PARTS) return 0;
+  for (int i = 0; i < s->part_count; i++)
+    if (s->part_session[i] == sid) return s->part_writer[i][kind];
+  if (s->part_count >= MAX_PARTS) return 0;
   char part[64];
   palp_dds_session_partition(sid, part, sizeof part);
-  dds_entity_t pub = palp_dds_session_publisher(s->pp, part);
-  dds_entity_t w = pub > 0 ? palp_dds_create_writer(pub, s->topic[kind], (palp_dds_topic_kind)kind) : pub;
-  if (w <= 0) return 0;
-  (void)n;
-  add_own(s, w);
-  s->part_session[kind][s->part_count[kind]] = sid;
-  s->part_writer[kind][s->part_count[kind]++] = w;
-  return w;
+  const dds_entity_t pub = palp_dds_session_publisher(s->pp, part);
+  if (pub <= 0) return 0;
+  dds_entity_t *w = s->part_writer[s->part_count];
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
+    if (!is_session_topic(k)) continue;
+    w[k] = palp_dds_create_writer(pub, s->topic[k], (palp_dds_topic_kind)k);
+    if (w[k] <= 0) {
+      dds_delete(pub); /* and the writers made so far; the session's next sample tries again */
+      return 0;
+    }
+  }
+  for (int k = 0; k < PALP_TOPIC_COUNT; k++)
+    if (is_session_topic(k)) add_own(s, w[k]);
+  s->part_session[s->part_count++] = sid;
+  return w[kind];
 }
 
 static void *tx_main(void *arg) {
@@ -205,7 +218,7 @@ static void *tx_main(void *arg) {
     if (!n->head) n->tail = NULL;
     n->queued--;
     side *s = &n->s[it->to];
-    dds_entity_t w = writer_for(n, s, it->kind, it->sample);
+    dds_entity_t w = writer_for(s, it->kind, it->sample);
     pthread_mutex_unlock(&n->lock);
     if (w > 0) {
       if (it->op == 0) dds_write(w, it->sample);
