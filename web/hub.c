@@ -122,6 +122,7 @@ typedef struct finding_slot {
   uint32_t next_mark, stack[FINDING_MARKS_MAX];
   int nstack;
   int64_t last_ns;
+  int joined; /* the bridge's visual station is in the session: the server takes its findings only then */
 } finding_slot;
 
 /* An exercise session's answers, for an instructor's dashboard (docs/web.md, "The hidden lumps"):
@@ -892,13 +893,22 @@ static void dispose_request(session *s) {
   dds_dispose(s->req_w, &key);
 }
 
+/* s->joined is the DDS thread's; its copy in the finding slot is what a page's mark is checked
+ * against (finding_request, web thread, under h->mu). */
+static void set_joined(palp_web_hub *h, session *s, int joined) {
+  s->joined = joined;
+  pthread_mutex_lock(&h->mu);
+  h->fs[s - h->s].joined = joined;
+  pthread_mutex_unlock(&h->mu);
+}
+
 static void leave(palp_web_hub *h, session *s) {
   if (!s->joined) return;
   /* As a station says goodbye: OP_LEAVE so the server tells it from a crash, then the disposal
    * so that it forgets the station (its station table is finite). */
   send_request(h, s, palp_OP_LEAVE);
   dispose_request(s);
-  s->joined = 0;
+  set_joined(h, s, 0);
   h->stats.leaves++;
   h->sessions_dirty = 1;
 }
@@ -1559,7 +1569,7 @@ static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void 
   const uint32_t sid = ((const palp_SessionState *)sample)->session_id; /* the invalid sample's key */
   int slot;
   if (find_session(h, sid, &slot)) {
-    h->s[slot].joined = 0; /* its server cannot hear a goodbye; the instance is disposed below */
+    set_joined(h, &h->s[slot], 0); /* its server cannot hear a goodbye; the instance is disposed below */
     dispose_request(&h->s[slot]);
     free_session(h, slot);
   }
@@ -2018,7 +2028,7 @@ static void manage_joins(palp_web_hub *h, int64_t now) {
       s->unwanted_since = 0;
       if (!s->joined && h->def.join && (!s->join_failed_ns || now - s->join_failed_ns > REJOIN_AFTER_NS)) {
         send_request(h, s, palp_OP_JOIN);
-        s->joined = 1;
+        set_joined(h, s, 1);
         s->join_failed_ns = 0;
         h->stats.joins++;
         h->sessions_dirty = 1;
@@ -2044,7 +2054,7 @@ static void check_replies(palp_web_hub *h, int64_t now) {
         session *s = &h->s[k];
         if (s->used && s->joined && !strcmp(s->station, buf[i].station_id) && strcmp(buf[i].reason, "left") != 0) {
           palp_log_warn(h->def.log, "the server refused to stream session %u: %s", s->id, buf[i].reason);
-          s->joined = 0;
+          set_joined(h, s, 0);
           s->join_failed_ns = now;
           h->stats.join_rejected++;
           dispose_request(s); /* forget the request instance too */
@@ -2516,6 +2526,13 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
     why = h->def.sec.kind != PALP_DDS_ID_NONE
               ? "in a secured classroom findings are marked from the trainee's own station, not from this page"
               : "the bridge cannot write findings for this session";
+  } else if (!fs->joined) {
+    /* The server takes a session's findings only from the participant that joined it or one with a
+     * visual station in it (docs/server.md); from this bridge it would refuse them unanswered. */
+    why = h->def.join ? "the bridge is not in this session: the server refused its join (it asks again every 5 s); "
+                        "mark from the trainee's station"
+                      : "this bridge runs with --no-join, so the server does not take its marks: mark from the "
+                        "trainee's station";
   } else if (fs->last_ns && now - fs->last_ns < FINDING_GAP_NS) {
     why = "too fast: one finding request per 0.5 s";
   } else if (mark && (!fs->contact || now - fs->at_ns > CONTACT_FRESH_NS)) {

@@ -373,6 +373,83 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "not touching"), "... %s", why);
 }
 
+/* A bridge that never joins (--no-join) refuses a trainee page's mark with why (2026-12-07): the server
+ * takes a session's findings only from the participant that joined it or one with a visual station in
+ * it, and refused the bridge's unanswered; the page waited for an answer that never came. Everything
+ * else a mark needs is there (an open exercise session, its findings writer, a fresh contact), and
+ * nothing reaches the session's partition. Domain 165. */
+static void test_findings_no_join(void) {
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = 165;
+  d.join = 0;
+  char err[256], part[64], why[256] = "", ctl[64];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain 165: %s", h ? "" : err);
+  if (!h) return;
+  CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
+  const uint32_t sid = 4712;
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t pp = dds_create_participant(165, NULL, NULL);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, part), sub = palp_dds_session_subscriber(pp, part);
+  const dds_entity_t t_state = palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t t_lm = palp_dds_create_topic(pp, PALP_TOPIC_LOCAL_MODEL);
+  const dds_entity_t t_ex = palp_dds_create_topic(pp, PALP_TOPIC_EXERCISE);
+  const dds_entity_t t_f = palp_dds_create_topic(pp, PALP_TOPIC_FINDING);
+  const dds_entity_t w_state = palp_dds_create_writer(pp, t_state, PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t w_lm = palp_dds_create_writer(pub, t_lm, PALP_TOPIC_LOCAL_MODEL);
+  const dds_entity_t w_ex = palp_dds_create_writer(pp, t_ex, PALP_TOPIC_EXERCISE);
+  const dds_entity_t r_f = palp_dds_create_reader(sub, t_f, PALP_TOPIC_FINDING);
+  CHECK(pp > 0 && w_state > 0 && w_lm > 0 && w_ex > 0 && r_f > 0, "the test's DDS entities on domain 165");
+  palp_web_cursor c;
+  CHECK(palp_web_hub_attach(h, &c, 4) == 0, "client");
+  palp_Exercise ex;
+  memset(&ex, 0, sizeof ex);
+  ex.phantom_id = 1;
+  snprintf(ex.name, sizeof ex.name, "easy");
+  snprintf(ex.title, sizeof ex.title, "Find the lump");
+  ex.time_limit = 300;
+  ex.max_force = 10;
+  dds_write(w_ex, &ex);
+  write_open_state(w_state, sid, 1, part, "t");
+  dds_sleepfor(DDS_MSECS(600)); /* the hub knows the session and its exercise, makes its findings writer */
+  snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sid);
+  CHECK(palp_web_hub_control(h, &c, ctl, strlen(ctl)) == 0, "bind as the session's trainee page");
+  palp_LocalModel lm;
+  memset(&lm, 0, sizeof lm);
+  lm.session_id = sid;
+  lm.finger = 0;
+  lm.frame = 10;
+  lm.in_contact = 1;
+  lm.device = (palp_Vec3){0.001, 0.002, 0.0300};
+  lm.proxy = (palp_Vec3){0.001, 0.002, 0.0380};
+  lm.force = (palp_Vec3){0, 0, 2};
+  lm.period = 0.004;
+  lm.server_time_ns = 1000000000LL;
+  lm.time = 0.2;
+  lm.point = (palp_Vec3){0.003, -0.004, 0.0385};
+  lm.area = 2e-4;
+  dds_write(w_lm, &lm);
+  dds_sleepfor(DDS_MSECS(100));
+  int ok = -1, mark = -1;
+  const char *m = "{\"finding\":\"mark\"}";
+  CHECK(palp_web_hub_control(h, &c, m, strlen(m)) == 1, "a mark through a --no-join bridge is refused");
+  CHECK(finding_reply(h, &c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "--no-join") &&
+            strstr(why, "trainee's station"),
+        "... and the page is told why, and where to mark instead: %s", why);
+  palp_Finding got;
+  void *ptr[1] = {&got};
+  dds_sample_info_t info;
+  int n = 0;
+  for (int i = 0; i < 30; i++) {
+    if (dds_take(r_f, ptr, &info, 1, 1) > 0 && info.valid_data) n++;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  CHECK(n == 0, "... and nothing is written to the session (%d findings read in 0.3 s)", n);
+  palp_web_hub_detach(h, &c);
+  palp_web_hub_destroy(h);
+  dds_delete(pp);
+}
+
 typedef struct band_want {
   uint32_t sid;
   const char *band;
@@ -1500,7 +1577,10 @@ static void test_absurd_contact(palp_web_hub *h, palp_web_cursor *c, dds_entity_
 static void test_local_model(void) {
   palp_web_hub_def d = palp_web_hub_default_def();
   d.domain = 195;
-  d.join = 0; /* nothing to join: the test writes what a server would */
+  /* No server: the test writes what one would. The bridge joins the sessions its pages follow (its
+   * requests unanswered, so it stays joined): its pages' marks are refused when it is not in the
+   * session (test_findings_no_join). */
+  d.join = 1;
   char err[256];
   palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
   CHECK(h != NULL, "hub on domain 195: %s", h ? "" : err);
@@ -1836,6 +1916,7 @@ int main(void) {
   test_control();
   test_local_model();
   test_catalogue_bound();
+  test_findings_no_join();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }
