@@ -240,13 +240,17 @@ static void refuse_identity(palp_srv *srv, const char *fmt, ...) {
     srv->refused_unlogged++;
     return;
   }
+  /* The server's log (it went to stderr alone until 2026-12-07, missing a --log-file) */
+  char what[400];
   va_list ap;
   va_start(ap, fmt);
-  fprintf(stderr, "palp-server: refused request: ");
-  vfprintf(stderr, fmt, ap);
+  vsnprintf(what, sizeof what, fmt, ap);
   va_end(ap);
-  if (srv->refused_unlogged) fprintf(stderr, " (and %llu more since the last line)", (unsigned long long)srv->refused_unlogged);
-  fputc('\n', stderr);
+  if (srv->refused_unlogged)
+    palp_logf(srv->log, PALP_LOG_WARN, "refused request: %s (and %llu more since the last line)", what,
+              (unsigned long long)srv->refused_unlogged);
+  else
+    palp_logf(srv->log, PALP_LOG_WARN, "refused request: %s", what);
   srv->refused_unlogged = 0;
   srv->refused_log_ns = now;
 }
@@ -1388,8 +1392,46 @@ static void refuse(palp_srv *srv, const palp_SessionRequest *rq, uint64_t *count
 /* A LEAVE: the station leaves what it is in (its slot freed, which schedules its reply's release),
  * or the session held for it closes. Answered "left", and alone on the domain also when there was
  * nothing to leave (with other servers, that request may be theirs). */
-static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq) {
+/* The participant that joined station st, if the server knows it: looked up at its JOIN on plain DDS
+ * (learn_participant), or, for a trainee, its session's (the participant whose JOIN opened it). */
+static int station_participant(palp_srv *srv, const station *st, dds_guid_t *out) {
+  if (st->participant_known) return *out = st->participant, 1;
+  const palp_srv_session *s = st->role == palp_ROLE_TRAINEE ? find_session(srv, st->session_id) : NULL;
+  if (s) *out = s->trainee_participant;
+  return s != NULL;
+}
+
+/* Plain DDS: whether a LEAVE of station st taken from `writer` on `reader` is the station's own. Its
+ * own request writer's, or another writer of the participant that joined it (found by Cyclone's
+ * discovery data); a LEAVE from a writer already gone that is not the station's cannot be told apart
+ * from a forgery, and is refused. Until 2026-12-07 anyone on the domain who knew a station's id (the
+ * server's log, a session's viewers) ended its session with one LEAVE. */
+static int leave_is_own(palp_srv *srv, const station *st, dds_entity_t reader, uint64_t writer,
+                        dds_guid_t *sender, int *sender_known) {
+  *sender_known = 0;
+  if (writer == st->writer) return 1;
+  dds_guid_t joined;
+  if (!station_participant(srv, st, &joined)) return 1; /* nothing to check against: as before */
+  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(reader, writer);
+  if (!ep) return 0;
+  *sender = ep->participant_key, *sender_known = 1;
+  dds_builtintopic_free_endpoint(ep);
+  return !memcmp(sender->v, joined.v, sizeof joined.v);
+}
+
+static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq, dds_entity_t reader, uint64_t writer) {
   station *st = find_station(srv, rq->station_id);
+  dds_guid_t sender;
+  int sender_known;
+  if (st && !secured(srv) && !leave_is_own(srv, st, reader, writer, &sender, &sender_known)) {
+    /* Unanswered: a reply to this station id would land on the station itself. */
+    char who[64] = "a writer already gone";
+    if (sender_known) palp_dds_participant_text(&sender, who, sizeof who);
+    refuse_identity(srv, "station \"%s\" (session %u): LEAVE from %s, which did not join it; the station stays "
+                         "(plain DDS: anyone may write requests; run the classroom with DDS Security)",
+                    PALP_PRINTABLE(rq->station_id), st->session_id, who);
+    return;
+  }
   if (st) {
     station_leave(srv, st, "left"); /* frees its slot: free_station retired its reply */
     reply(srv, rq, NULL, "left");
@@ -1440,7 +1482,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
      * writer already at stations_per_writer takes no more: that bound holds however a station came. */
     if (again->writer != writer && stations_of_writer(srv, writer) < srv->cfg.stations_per_writer) {
       again->writer = writer;
-      if (again->role == palp_ROLE_VISUAL && !secured(srv)) learn_participant(again, reader, writer);
+      if (!secured(srv)) learn_participant(again, reader, writer);
     }
     reply(srv, rq, cur, NULL);
     return;
@@ -1623,7 +1665,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     return;
   }
   attach_station(s, st, rq);
-  if (st->role == palp_ROLE_VISUAL && !secured(srv)) learn_participant(st, reader, writer);
+  if (!secured(srv)) learn_participant(st, reader, writer);
   reply(srv, rq, s, NULL);
   publish_state(srv, s, 0, NULL, NULL);
   if (srv->events && srv->events->member_changed)
@@ -1773,7 +1815,7 @@ static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, dds_en
     if (out_st) *out_st = find_station(srv, rq->station_id);
     return;
   }
-  handle_leave(srv, rq);
+  handle_leave(srv, rq, reader, writer);
   if (out_st) *out_st = NULL;
 }
 
@@ -1959,7 +2001,7 @@ static void handle_requests(palp_srv *srv) {
         if (buf[i].op == palp_OP_JOIN)
           handle_join(srv, &buf[i], secured(srv) ? &who : NULL, srv->request_r, info[i].publication_handle);
         else
-          handle_leave(srv, &buf[i]);
+          handle_leave(srv, &buf[i], srv->request_r, info[i].publication_handle);
         continue;
       }
       if (info[i].instance_state == DDS_IST_ALIVE) continue;
@@ -1982,6 +2024,18 @@ static void handle_requests(palp_srv *srv) {
       if (secured(srv) && info[i].publication_handle != st->writer) {
         refuse_identity(srv, "station \"%s\": disposed or unregistered by a writer that is not its own",
                         PALP_PRINTABLE(buf[i].station_id));
+        continue;
+      }
+      /* Plain DDS (2026-12-07): the same for a writer of another participant than the one that joined
+       * (leave_is_own); a writer gone before it was looked up, if not the station's, is refused too. */
+      dds_guid_t sender;
+      int sender_known;
+      if (!secured(srv) && !leave_is_own(srv, st, srv->request_r, info[i].publication_handle, &sender, &sender_known)) {
+        char who[64] = "a writer already gone";
+        if (sender_known) palp_dds_participant_text(&sender, who, sizeof who);
+        refuse_identity(srv, "station \"%s\" (session %u): disposed or unregistered by %s, which did not join it; the "
+                             "station stays (plain DDS: anyone may write requests; run the classroom with DDS Security)",
+                        PALP_PRINTABLE(buf[i].station_id), st->session_id, who);
         continue;
       }
       /* A station that says goodbye sends OP_LEAVE first (handled above, which

@@ -21,6 +21,8 @@
  *   mark's id, a mark near no lesion, a withdrawal of her mark 1) are refused unanswered and counted in
  *   the session log as foreign_participant, its participant named once for them, and her mark 2 is
  *   accepted with her two marks standing;
+ * - (2026-12-07) another participant's LEAVE of trainee-a's station by its id and its dispose of her
+ *   request's key are refused, its participant named in the log, and her session stays open;
  * - after its start-up window, one forged identity sample {its name, number 0, started 0}
  *   leaves the server serving: the session stays open, its trainee still gets feedback, and
  *   the log warns about the claim, naming the claimant's instance.
@@ -540,6 +542,42 @@ int main(void) {
           "the server's log names that participant once for its findings, with the session: %d line(s)",
           log_count(log_path, fg_text, "findings from"));
     palp_cli_station_close(&fg);
+  }
+
+  /* 6c. Another participant (the test's own) LEAVEs trainee-a's station by its id, then disposes her
+   * request's key. Until 2026-12-07 either ended her session on plain DDS: anyone who knew a station's
+   * id (the server's log, her session's viewers) could. Now both are refused for their participant,
+   * named in the log, and her session goes on. */
+  {
+    dds_guid_t pgid;
+    REQUIRE(dds_get_guid(pp, &pgid) == 0, "the test participant's GUID");
+    char pp_text[64];
+    const unsigned char *g = pgid.v;
+    snprintf(pp_text, sizeof pp_text, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2],
+             g[3], g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
+    test_sleep(0.6); /* > log_interval: the refusal's line is not held back by an earlier one */
+    session_request(rq_w, a.station_id, "trainee-a", palp_OP_LEAVE, palp_ROLE_TRAINEE, sid, 1);
+    test_sleep(0.6);
+    palp_SessionRequest key;
+    memset(&key, 0, sizeof key);
+    snprintf(key.station_id, sizeof key.station_id, "%s", a.station_id);
+    const int disposed = dds_dispose(rq_w, &key) == 0;
+    test_sleep(0.6);
+    uint64_t fseq = 3000;
+    for (int i = 0; i < 20; i++) {
+      test_send_force(&a, 0, 2, 25, 90, 2.0, ++fseq);
+      test_sleep(0.01);
+    }
+    int fbn = 0;
+    const double fa = test_last_feedback(&a, 0.3, &fbn);
+    CHECK(disposed && palp_srv_open_sessions(ts.srv) == 1 && fbn > 0 && fa > 0.5,
+          "another participant's LEAVE of trainee-a's station and its dispose of her request leave her session open: "
+          "%d open (want 1), her feedback %d samples, %.2f N (pressing 2 N)",
+          palp_srv_open_sessions(ts.srv), fbn, fa);
+    CHECK(log_count(log_path, pp_text, "LEAVE from") == 1 && log_count(log_path, pp_text, "disposed or unregistered by") == 1,
+          "the log names that participant for its LEAVE (%d line) and for its dispose (%d line), want 1 each",
+          log_count(log_path, pp_text, "LEAVE from"), log_count(log_path, pp_text, "disposed or unregistered by"));
+    CHECK(log_count(log_path, "session ", "trainee station left") == 0, "her session was not closed as left");
   }
 
   /* 7. After the start-up window, a forged identity claiming this server's name for an older one. */
