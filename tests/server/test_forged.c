@@ -577,7 +577,9 @@ int main(void) {
     CHECK(log_count(log_path, pp_text, "LEAVE from") == 1 && log_count(log_path, pp_text, "disposed or unregistered by") == 1,
           "the log names that participant for its LEAVE (%d line) and for its dispose (%d line), want 1 each",
           log_count(log_path, pp_text, "LEAVE from"), log_count(log_path, pp_text, "disposed or unregistered by"));
-    CHECK(log_count(log_path, "session ", "trainee station left") == 0, "her session was not closed as left");
+    CHECK(log_count(log_path, "session ", "trainee station left") == 0 && log_count(log_path, "held ", NULL) == 0,
+          "her session was neither closed as left (%d line) nor held as her station lost (%d line)",
+          log_count(log_path, "session ", "trainee station left"), log_count(log_path, "held ", NULL));
   }
 
   /* 7. After the start-up window, a forged identity claiming this server's name for an older one. */
