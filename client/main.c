@@ -738,9 +738,13 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
       if (fs.last_mark_id >= st->next_mark_id) {
         if (!u->said_stranger)
           tprintf(o, "[trainee %s] the server answered finding %u, which this station did not send: someone else "
-                     "writes findings into this session (is the classroom unsecured?); its answer: %s\n",
+                     "writes findings into this session (your trainee page in palp-web, or another program: is the "
+                     "classroom unsecured?); its answer: %s; your next mark takes a higher number\n",
                   o->name, fs.last_mark_id, fs.last_accepted ? "accepted" : fs.reason);
         u->said_stranger = 1;
+        /* The server refuses an id already made in the session: her next mark takes a higher one (until
+         * 2026-12-07 her station's next mark after her palp-web page's mark 2 was mark 2, refused). */
+        if (fs.last_mark_id < PALP_DDS_MARK_ID_FOLLOW_MAX) st->next_mark_id = fs.last_mark_id + 1;
       } else if (!fs.last_accepted) {
         tprintf(o, "[trainee %s] the server refused finding %u: %s\n", o->name, fs.last_mark_id, fs.reason);
         if (u->nsent && u->sent[u->nsent - 1] == fs.last_mark_id) u->nsent--;

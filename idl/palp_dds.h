@@ -61,6 +61,12 @@ typedef enum palp_dds_topic_kind {
  * station, the bridge and the server's counts all read them with this one mask. */
 #define PALP_DDS_LM_OUTSIDE (palp_LM_OUT_OF_RANGE | palp_LM_BEYOND_VALIDATED | palp_LM_GEL_LAW_RANGE)
 
+/* A session's mark ids are its writers' own (a station and a palp-web trainee page each number from 1),
+ * and the server refuses an id already made in the session: each writer's next mark takes an id above
+ * any other writer's it has seen, but only one below this, so that a forged 2^32 - 1 cannot wrap the
+ * next id to 0 (which the server refuses for good). */
+#define PALP_DDS_MARK_ID_FOLLOW_MAX 65536u
+
 /* Partition of a session's contact/feedback/deformation traffic. */
 #define PALP_DDS_SESSION_PARTITION_FMT "palp/session/%u"
 /* palp_finger_sample: its triangles are a sequence<long, 256> (idl/palp_types.idl), the session

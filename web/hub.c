@@ -1558,6 +1558,11 @@ static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
   pthread_mutex_lock(&h->mu);
   finding_slot *fs = &h->fs[slot];
   if (!m->last_accepted && fs->nstack > 0 && fs->stack[fs->nstack - 1] == m->last_mark_id) fs->nstack--;
+  /* A mark id the server answered, of any writer (the trainee's own station numbers hers from 1 too):
+   * this bridge's next mark takes a higher one (until 2026-12-07 a page's first mark after her
+   * station's mark 1 was mark 1 again, refused "already made"). The answers, not the findings read: a
+   * writer the server refuses unanswered moves nothing. */
+  if (m->last_mark_id < PALP_DDS_MARK_ID_FOLLOW_MAX && m->last_mark_id > fs->next_mark) fs->next_mark = m->last_mark_id;
   pthread_mutex_unlock(&h->mu);
   s->changed = 1;
   h->sessions_dirty = 1;
@@ -2571,8 +2576,8 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
        * pops a refused top mark): pop the mark withdrawn only if it is still on top, push within the
        * stack's bound (a plain nstack-- could pop another mark, or go to -1 and the next mark write
        * stack[-1]; session 75, found by review). */
-      if (mark && fs->nstack < FINDING_MARKS_MAX) fs->stack[fs->nstack++] = ++fs->next_mark;
-      else if (mark) ++fs->next_mark;
+      if (mark && fs->nstack < FINDING_MARKS_MAX) fs->stack[fs->nstack++] = f.mark_id;
+      if (mark && f.mark_id > fs->next_mark) fs->next_mark = f.mark_id; /* an answer may have raised it */
       else if (fs->nstack > 0 && fs->stack[fs->nstack - 1] == f.mark_id) fs->nstack--;
     }
     h->stats.findings_written++;

@@ -88,6 +88,15 @@ gpid=$!
 "$finding_writer" 61 gus 9 1 0.1 own-visual >> "$tmp/writer.log" 2>&1
 "$finding_writer" 61 gus 9 20 4 >> "$tmp/writer.log" 2>&1
 wait $gpid
+# 2026-12-07: a peer joined as a visual station (as palp-web does for jo's trainee page) marks lump "1"
+# at the pole early in jo's session; jo's station, which numbers its marks from 1 too, then marks at
+# 5 s. Her mark took id 1 and the server refused it "already made"; now her station follows the ids it
+# hears answered, and her mark is 2, accepted, with the peer's standing beside it.
+"$client" --role trainee --domain 61 --phantom 7 --name jo --timeout 12 --print-period 0 \
+  --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=6,mark_s=5 > "$tmp/jo.log" 2>&1 &
+jpid=$!
+"$finding_writer" 61 jo 1 1 0.1 own-visual-mark > "$tmp/jo-writer.log" 2>&1
+wait $jpid
 kill $spid; wait $spid; spid=
 check 'finding_writer: 1 findings naming the session itself written' "$tmp/writer.log" "a peer writes a finding into gus's session"
 check 'findings from a writer of participant [0-9a-f:]* refused' "$tmp/nolog-server.log" \
@@ -124,6 +133,13 @@ if [ "${refused:-0}" -le 1 ] && [ -n "$covered" ] &&
 else echo "FAIL hal's samples refused: '${refused:-0}' (want <= 1), coverage '$covered':"; cat "$tmp/hal.log"; fail=1; fi
 check "finding(s) of another writer dropped unanswered at the reader; the last names session" "$tmp/nolog-server.log" \
   "  the server logs the findings naming other sessions it dropped"
+check 'finding_writer: 1 findings naming the session itself written' "$tmp/jo-writer.log" \
+  "a visual peer marks 1 in jo's session, as her palp-web page would"
+check 'the server answered finding 1, which this station did not send' "$tmp/jo.log" "  her station hears the answer"
+check 'mark 2 sent' "$tmp/jo.log" "  her own mark then takes id 2, above the peer's"
+check 'finding 2 accepted: 2 marks standing' "$tmp/jo.log" "  and is accepted beside the peer's"
+if grep -q "already made" "$tmp/jo.log"; then echo "FAIL jo's mark was refused as already made:"; cat "$tmp/jo.log"; fail=1
+else echo "ok     not refused as already made"; fi
 check 'debrief: you found 1 of 2 lumps' "$tmp/fia.log" "a practice exercise on a server without a log: her debrief tells the lumps"
 check 'no score: this server keeps no session log to score it from; your instructor grades the session' "$tmp/fia.log" \
   "  and her station is told at once why no score comes"

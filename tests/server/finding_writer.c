@@ -4,10 +4,10 @@
  * mark MARK into its partition, BURST every 100 ms for SECONDS, naming made-up sessions (the
  * session's id + 1000 + k) or, with "own", the session itself (withdrawals: they never add a mark);
  * "own-visual" first joins the session as a visual station, as palp-web does before it writes a
- * trainee page's marks (since 2026-12-06 the server takes a session's findings only from the
+ * trainee page's marks ("own-visual-mark": then writes a mark MARK at the pole, not a withdrawal) (since 2026-12-06 the server takes a session's findings only from the
  * participant that joined it or, unsecured, one with a visual station in it).
  * Prints what it wrote; exit 0, or 1 when no such session opened (or the visual join was refused).
- * usage: test_finding_writer DOMAIN TRAINEE MARK BURST SECONDS [own|own-visual|dispose]
+ * usage: test_finding_writer DOMAIN TRAINEE MARK BURST SECONDS [own|own-visual|own-visual-mark|dispose]
  * With "frames" (DOMAIN TRAINEE frames): once the session's first finger sample in contact and its
  * first local model are there, writes each back into the partition with frame 2^64 - 1 (a forged
  * far-future step, otherwise the server's own), then exits; 1 when none came within 10 s.
@@ -117,7 +117,10 @@ int main(int argc, char **argv) {
     fprintf(stderr, "finding_writer: no open session of %s within 10 s\n", argv[2]);
     return 1;
   }
-  const int visual = argc > 6 && !strcmp(argv[6], "own-visual");
+  /* "own-visual-mark": as own-visual, but MARK is marked (at the pole), not withdrawn: what a palp-web
+   * trainee page writes beside the trainee's own station */
+  const int marks = argc > 6 && !strcmp(argv[6], "own-visual-mark");
+  const int visual = argc > 6 && (!strcmp(argv[6], "own-visual") || marks);
   if (visual && !join_visual(pp, st.session_id)) {
     fprintf(stderr, "finding_writer: session %u refused (or did not answer) its join as a visual station\n",
             st.session_id);
@@ -133,7 +136,8 @@ int main(int argc, char **argv) {
   }
   palp_Finding f;
   memset(&f, 0, sizeof f);
-  f.op = palp_FINDING_WITHDRAW;
+  f.op = marks ? palp_FINDING_MARK : palp_FINDING_WITHDRAW;
+  if (marks) f.point = (palp_Vec3){0, 0, 0.04}, f.time = 0.5; /* the dome's pole, R = 40 mm */
   const int own = argc > 6 && (!strcmp(argv[6], "own") || visual);
   const int dispose = argc > 6 && !strcmp(argv[6], "dispose"); /* disposes of the made-up keys: no sample */
   f.mark_id = (uint32_t)atoi(argv[3]);

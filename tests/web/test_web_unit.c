@@ -364,8 +364,30 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
           "at the local model's contact point and time");
     CHECK(got[1].op == palp_FINDING_WITHDRAW && got[1].mark_id == 1, "then its withdrawal");
   }
+  /* The trainee's station marks in the same session (its ids from 1 too), and the server answers its
+   * mark 5 (written here as the server would): the page's next mark takes a higher id than any the
+   * server answered (until 2026-12-07 a page and a station both made "mark 1", and the server refused
+   * the second as already made). */
+  const dds_entity_t w_fs = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINDING_STATUS),
+                                                   PALP_TOPIC_FINDING_STATUS);
+  palp_FindingStatus st_mark;
+  memset(&st_mark, 0, sizeof st_mark);
+  st_mark.session_id = sid;
+  st_mark.marks = 1;
+  st_mark.last_mark_id = 5;
+  st_mark.last_accepted = 1;
+  st_mark.time_left = 250;
+  CHECK(w_fs > 0 && dds_write(w_fs, &st_mark) == 0, "the server's answer to a station's mark 5 written");
+  dds_sleepfor(DDS_MSECS(550)); /* the hub takes it; past the 0.5 s between a page's requests */
+  nx.frame = 61;
+  dds_write(w_lm, &nx);
+  dds_sleepfor(DDS_MSECS(60));
+  CHECK(palp_web_hub_control(h, c, m, strlen(m)) == 0, "the page marks again after the answer to the station's mark 5");
+  CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && ok && mark == 6,
+        "... as mark 6, above the station's 5 (got mark %d: %s)", mark, why);
+  dds_sleepfor(DDS_MSECS(550));
   palp_LocalModel up = *lm0; /* the finger lifts */
-  up.frame = 61;
+  up.frame = 62;
   up.in_contact = 0;
   dds_write(w_lm, &up);
   dds_sleepfor(DDS_MSECS(600));
