@@ -165,7 +165,9 @@ typedef struct palp_cli_haptic_stats {
   double passivity_dissipated; /* energy it took out [J] */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
   uint64_t out_of_range_models;   /* models with any model-validity flag */
-  uint64_t out_of_range_ticks;    /* ticks rendered from such a model (PALP_CLI_FORCE_OUT_OF_RANGE) */
+  uint64_t out_of_range_ticks;    /* ticks rendered from such a model (PALP_CLI_FORCE_OUT_OF_RANGE); here and in
+                                     limited_ticks and the four below, the deadlines a late tick skipped count
+                                     with the tick before (the device held its force): periods rendered */
   uint64_t beyond_validated_ticks; /* of those, from a model flagged LM_BEYOND_VALIDATED: the fingertip
                                       deeper than the phantom's forces were checked against the FE there */
   uint64_t strained_ticks;         /* of those, from a model flagged LM_LARGE_STRAIN: a link or the skin's

@@ -408,6 +408,65 @@ static void test_safe_force(void) {
         "safe force %.3g N (min of 10 N and the phantom's 3 N), peak written %.6f N (3 N)", st.max_force, dev.peak);
 }
 
+/* 6. The summary's seconds are periods the device rendered, not ticks run (2026-12-07): a device
+ * whose read blocks the loop 20 ms every 0.1 s (a loaded machine's late wake-ups, made sure) while a
+ * model flagged deeper than validated is rendered for 0.6 s. The deadlines a late tick skips held the
+ * force of the tick before, flags and all: the flagged count is the flagged span in ms, within 5
+ * ticks (the span's two ends and a late last wake-up), though ~100 of its deadlines were skipped.
+ * Before: only the ticks run were counted, ~100 short. */
+typedef struct block_dev {
+  atomic_int model_seen;
+  double t_model, t_last, next_block;
+} block_dev;
+static int block_read(void *ctx, double t, palp_vec3 *x) {
+  block_dev *d = ctx;
+  *x = (palp_vec3){0, 0, 0.03};
+  if (atomic_load(&d->model_seen) == 1) d->t_model = t, d->next_block = t + 0.1, atomic_store(&d->model_seen, 2);
+  if (atomic_load(&d->model_seen) == 2 && t >= d->t_model + 0.6) return PALP_CLI_INPUT_END;
+  if (t > 5.0) return PALP_CLI_INPUT_END; /* no model came: fails below */
+  d->t_last = t;
+  if (atomic_load(&d->model_seen) == 2 && t >= d->next_block) {
+    d->next_block += 0.1;
+    nanosleep(&(struct timespec){0, 20000000}, NULL);
+  }
+  return 1;
+}
+static void block_model(void *ctx, const palp_local_model *m) {
+  (void)m;
+  block_dev *d = ctx;
+  int z = 0;
+  atomic_compare_exchange_strong(&d->model_seen, &z, 1);
+}
+
+static void test_skipped_deadlines(void) {
+  static block_dev dev;
+  palp_cli_input in;
+  memset(&in, 0, sizeof in);
+  in.name = "blocking", in.ctx = &dev, in.read_position = block_read, in.write_force = no_write, in.model = block_model;
+  palp_cli_haptic_def d = palp_cli_haptic_default_def();
+  d.in = &in;
+  static palp_cli_haptic_loop l;
+  char err[256] = "";
+  CHECK(palp_cli_haptic_start(&l, &d, err, sizeof err) == 0, "loop started %s", err);
+  double t = 1.0;
+  while (!palp_cli_haptic_done(&l)) { /* a fresh model every 4 ms, as the server's 250 Hz stream */
+    const palp_local_model m = contact_model(t, 0.03, 2.0, 500);
+    palp_cli_mailbox_put(&l.mailbox, &m, palp_LM_BEYOND_VALIDATED, 10.0, 0.001);
+    t += 0.004;
+    nanosleep(&(struct timespec){0, 4000000}, NULL);
+  }
+  palp_cli_haptic_stats st;
+  palp_cli_haptic_join(&l, &st);
+  const double span_ms = (dev.t_last - dev.t_model) * 1e3;
+  CHECK(atomic_load(&dev.model_seen) == 2 && st.missed >= 50,
+        "the device blocked the loop: %llu deadlines skipped (want >= 50: 5 blocks of 20 ms)",
+        (unsigned long long)st.missed);
+  CHECK(fabs((double)st.beyond_validated_ticks - span_ms) <= 5 && st.out_of_range_ticks == st.beyond_validated_ticks,
+        "deeper than validated for %llu periods of 1 ms over a flagged span of %.1f ms (want within 5), out of range "
+        "%llu (the same); %llu ticks run in all", (unsigned long long)st.beyond_validated_ticks, span_ms,
+        (unsigned long long)st.out_of_range_ticks, (unsigned long long)st.ticks);
+}
+
 int main(void) {
   test_fade_above_limit(40);
   test_fade_above_limit(1e4);
@@ -423,5 +482,6 @@ int main(void) {
   test_from_wire();
   test_physics_rate();
   test_safe_force();
+  test_skipped_deadlines();
   return check_exit();
 }
