@@ -568,19 +568,28 @@ int main(int argc, char **argv) {
   nan3.y(NAN);
   nan3.z(NAN);
   c.force(nan3);
-  c.seq(++seq);
-  for (int k = 0; k < 3; k++) w_ct->write(&c), nap(0.02); // best-effort: three times
-  c.mode(palp::CONTACT_RELEASE);
-  c.force(f);
-  for (int k = 0; k < 3; k++) c.seq(++seq), w_ct->write(&c), nap(0.02);
+  // Best-effort into the server's keep-last-1 reader: a sample the server has not taken before the
+  // next arrives is overwritten. Three NaN samples 20 ms apart, then the release, were all lost once
+  // on a loaded machine (the server's ticks late by more than 20 ms; 2026-12-07). So the NaN sample
+  // is written again every 50 ms until the session's state counts it rejected, and only then released.
+  palp::Contact release = c;
+  release.mode(palp::CONTACT_RELEASE);
+  release.force(f);
   uint64_t rejected = 0;
   const auto tr = Clock::now();
+  auto last_nan = tr - std::chrono::seconds(1);
   // ... and a status of the server (1 Hz) listing this session, read alongside
   bool status_seen = false, guard_seen = false, identity_seen = false;
   unsigned long long st_open = 0, st_contacts = 0, st_log = 0, gd_stations = 0, gd_slots = 0;
   std::string id_name;
   unsigned long id_number = 0, id_phantoms = 0, id_has_joined = 0;
+  bool released = false;
   while ((rejected == 0 || !status_seen || !guard_seen || !identity_seen) && since(tr) < 4) {
+    if (rejected == 0 && since(last_nan) >= 0.05) c.seq(++seq), w_ct->write(&c), last_nan = Clock::now();
+    if (rejected > 0 && !released) {
+      for (int k = 0; k < 3; k++) release.seq(++seq), w_ct->write(&release), nap(0.02);
+      released = true;
+    }
     palp::ServerGuard gd;
     SampleInfo gi;
     while (r_gd && r_gd->take_next_sample(&gd, &gi) == ReturnCode_t::RETCODE_OK)
@@ -611,6 +620,8 @@ int main(int argc, char **argv) {
           }
     nap(0.05);
   }
+  if (!released)
+    for (int k = 0; k < 3; k++) release.seq(++seq), w_ct->write(&release), nap(0.02);
   std::printf("result rejected_samples %llu\n", (unsigned long long)rejected);
   if (status_seen)
     std::printf("result status %llu %llu %llu %llu\n", st_open, st_contacts, st_log, (unsigned long long)seq);
