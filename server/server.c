@@ -1389,9 +1389,6 @@ static void refuse(palp_srv *srv, const palp_SessionRequest *rq, uint64_t *count
   reply_unslotted(srv, rq, why);
 }
 
-/* A LEAVE: the station leaves what it is in (its slot freed, which schedules its reply's release),
- * or the session held for it closes. Answered "left", and alone on the domain also when there was
- * nothing to leave (with other servers, that request may be theirs). */
 /* The participant that joined station st, if the server knows it: looked up at its JOIN on plain DDS
  * (learn_participant), or, for a trainee, its session's (the participant whose JOIN opened it). */
 static int station_participant(palp_srv *srv, const station *st, dds_guid_t *out) {
@@ -1419,6 +1416,10 @@ static int leave_is_own(palp_srv *srv, const station *st, dds_entity_t reader, u
   return !memcmp(sender->v, joined.v, sizeof joined.v);
 }
 
+/* A LEAVE: the station leaves what it is in (its slot freed, which schedules its reply's release),
+ * or the session held for it closes. Answered "left", and alone on the domain also when there was
+ * nothing to leave (with other servers, that request may be theirs).
+ * On plain DDS only the station's own participant's LEAVE counts (leave_is_own). */
 static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq, dds_entity_t reader, uint64_t writer) {
   station *st = find_station(srv, rq->station_id);
   dds_guid_t sender;
