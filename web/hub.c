@@ -2576,9 +2576,12 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
        * pops a refused top mark): pop the mark withdrawn only if it is still on top, push within the
        * stack's bound (a plain nstack-- could pop another mark, or go to -1 and the next mark write
        * stack[-1]; session 75, found by review). */
-      if (mark && fs->nstack < FINDING_MARKS_MAX) fs->stack[fs->nstack++] = f.mark_id;
-      if (mark && f.mark_id > fs->next_mark) fs->next_mark = f.mark_id; /* an answer may have raised it */
-      else if (fs->nstack > 0 && fs->stack[fs->nstack - 1] == f.mark_id) fs->nstack--;
+      if (mark) {
+        if (fs->nstack < FINDING_MARKS_MAX) fs->stack[fs->nstack++] = f.mark_id;
+        if (f.mark_id > fs->next_mark) fs->next_mark = f.mark_id; /* an answer may have raised it meanwhile */
+      } else if (fs->nstack > 0 && fs->stack[fs->nstack - 1] == f.mark_id) {
+        fs->nstack--;
+      }
     }
     h->stats.findings_written++;
     set_reply(c, op, 1, f.mark_id, "");
