@@ -299,6 +299,19 @@ static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark
   return next_json(h, c, 200, is_finding_reply, &w);
 }
 
+/* An exercise on phantom 1, as a server announces it (palp_exercise). */
+static void write_easy_exercise(dds_entity_t w_ex) {
+  palp_Exercise ex;
+  memset(&ex, 0, sizeof ex);
+  ex.phantom_id = 1;
+  snprintf(ex.name, sizeof ex.name, "easy");
+  snprintf(ex.title, sizeof ex.title, "Find the lump");
+  snprintf(ex.instructions, sizeof ex.instructions, "Palpate in vertical strips.");
+  ex.time_limit = 300;
+  ex.max_force = 10;
+  dds_write(w_ex, &ex);
+}
+
 /* Findings through the hub: a viewer is refused, a bound trainee page without an exercise is
  * refused, with one it marks at the local model's contact point (read back by a DDS reader in the
  * session's partition), a second request within 0.5 s is refused, and it withdraws its mark. */
@@ -324,15 +337,7 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   CHECK(palp_web_hub_control(h, c, "{\"follow\":\"all\"}", 16) == PALP_EINVAL, "a bound page cannot follow all");
   CHECK(palp_web_hub_control(h, c, m, strlen(m)) == 1, "no exercise: refused");
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "no exercise"), "... %s", why);
-  palp_Exercise ex;
-  memset(&ex, 0, sizeof ex);
-  ex.phantom_id = 1;
-  snprintf(ex.name, sizeof ex.name, "easy");
-  snprintf(ex.title, sizeof ex.title, "Find the lump");
-  snprintf(ex.instructions, sizeof ex.instructions, "Palpate in vertical strips.");
-  ex.time_limit = 300;
-  ex.max_force = 10;
-  dds_write(w_ex, &ex);
+  write_easy_exercise(w_ex);
   dds_sleepfor(DDS_MSECS(600)); /* the hub makes its writer; the reader matches it */
   palp_LocalModel nx = *lm0; /* touching now (fresh) */
   nx.frame = 60;
@@ -424,14 +429,7 @@ static void test_findings_no_join(void) {
   CHECK(pp > 0 && w_state > 0 && w_lm > 0 && w_ex > 0 && r_f > 0, "the test's DDS entities on domain 165");
   palp_web_cursor c;
   CHECK(palp_web_hub_attach(h, &c, 4) == 0, "client");
-  palp_Exercise ex;
-  memset(&ex, 0, sizeof ex);
-  ex.phantom_id = 1;
-  snprintf(ex.name, sizeof ex.name, "easy");
-  snprintf(ex.title, sizeof ex.title, "Find the lump");
-  ex.time_limit = 300;
-  ex.max_force = 10;
-  dds_write(w_ex, &ex);
+  write_easy_exercise(w_ex);
   write_open_state(w_state, sid, 1, part, "t");
   dds_sleepfor(DDS_MSECS(600)); /* the hub knows the session and its exercise, makes its findings writer */
   snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sid);
