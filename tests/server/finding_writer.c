@@ -4,8 +4,9 @@
  * mark MARK into its partition, BURST every 100 ms for SECONDS, naming made-up sessions (the
  * session's id + 1000 + k) or, with "own", the session itself (withdrawals: they never add a mark);
  * "own-visual" first joins the session as a visual station, as palp-web does before it writes a
- * trainee page's marks ("own-visual-mark": then writes a mark MARK at the pole, not a withdrawal) (since 2026-12-06 the server takes a session's findings only from the
- * participant that joined it or, unsecured, one with a visual station in it).
+ * trainee page's marks (since 2026-12-06 the server takes a session's findings only from the
+ * participant that joined it or, unsecured, one with a visual station in it); "own-visual-mark" then
+ * marks MARK at the pole instead of withdrawing it.
  * Prints what it wrote; exit 0, or 1 when no such session opened (or the visual join was refused).
  * usage: test_finding_writer DOMAIN TRAINEE MARK BURST SECONDS [own|own-visual|own-visual-mark|dispose]
  * With "frames" (DOMAIN TRAINEE frames): once the session's first finger sample in contact and its
