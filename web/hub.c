@@ -158,6 +158,9 @@ typedef struct session {
   int used;
   uint32_t id;
   palp_SessionState st;
+  /* The participant of its latest OPEN state's writer (palp_dds_origin_participant; 0: not known): its
+   * server, from which alone its server topics are taken (from_its_server) */
+  dds_instance_handle_t server_pp;
   const phantom *ph;
   palp_coverage *cov;
   /* From the server's finger samples (palp_finger_sample, session 71), touched triangles named:
@@ -269,8 +272,11 @@ struct palp_web_hub {
   dds_entity_t finding_topic_r; /* the findings reader's own, gated topic entity */
   uint64_t finding_strays, finding_renewals;
   int64_t finding_renewed_ns;
-  /* the writer of the sample drain() is handing its callback (on_phantom names a refused one's) */
-  dds_instance_handle_t sample_writer;
+  /* the writer of the sample drain() is handing its callback (on_phantom names a refused one's), and
+   * the participant of that writer when drain() had it looked up (on_state), else 0 */
+  dds_instance_handle_t sample_writer, sample_participant;
+  /* a session whose server topics another participant wrote: said once per bridge (from_its_server) */
+  int not_server_said;
   /* the publishers whose catalogue entries were refused and named in the log (refuse_phantom) */
   dds_instance_handle_t refused_pub[REFUSED_PUBLISHERS];
   int refused_pub_n, refused_pub_more;
@@ -1266,6 +1272,9 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     h->sessions_structure = 1;
   }
   s->st = *m; /* bounded strings: a plain copy */
+  /* Its server is whoever writes its state: a restarted server's new run takes over (its states
+   * come from its new participant), and so would a forger's states, which the session list shows */
+  if (h->sample_participant) s->server_pp = h->sample_participant;
   pthread_mutex_lock(&h->mu);
   snprintf(h->slot_trainee[slot], sizeof h->slot_trainee[slot], "%.*s", (int)sizeof h->slot_trainee[slot] - 1,
            s->st.trainee_name);
@@ -1952,6 +1961,34 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
  * to write elsewhere: a station that leaves disposes its contacts and deletes its writer at once,
  * so its last dispose may name a writer no longer matched (PALP_DDS_ORIGIN_UNKNOWN). Cyclone fills
  * an invalid sample's key, the session id with it. */
+static int is_fb_reader(const palp_web_hub *h, dds_entity_t rd) {
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].fb_r == rd) return 1;
+  return 0;
+}
+
+/* A sample of a session's server topic (reader rd) from the session's server: the participant of its
+ * writer is that of the session's latest OPEN state. Until 2026-12-07 any participant in a session's
+ * partition could put forces, a fingertip, marks' answers, a debrief or a score on the trainee's page
+ * and the instructor's dashboard (the station takes them from its server alone since 2026-12-06). A
+ * session the bridge has no state for, or a writer already gone (a closing session's last samples,
+ * whose publisher the server deleted), passes: nothing to tell it by. Said once, with the session. */
+static int from_its_server(palp_web_hub *h, dds_entity_t rd, const void *sample, const dds_sample_info_t *info) {
+  int slot;
+  const session *s = find_session(h, *(const uint32_t *)sample, &slot); /* the session id first (palp_dds_gate.c) */
+  if (!s || !s->server_pp) return 1;
+  const dds_instance_handle_t pp = palp_dds_origin_participant(&h->origin, rd, info);
+  if (!pp || pp == s->server_pp) return 1;
+  h->stats.not_server++;
+  if (!h->not_server_said) {
+    h->not_server_said = 1;
+    palp_log_warn(h->def.log, "session %u: samples of its server's topics from another participant than its server "
+                              "dropped (a peer writing into its partition: run the classroom with DDS Security); counted "
+                              "in --stats, not said again", s->id);
+  }
+  return 0;
+}
+
 static int from_its_partition(palp_web_hub *h, dds_entity_t rd, const void *sample, const dds_sample_info_t *info) {
   int slot;
   const session *s = find_session(h, *(const uint32_t *)sample, &slot); /* the session id first (palp_dds_gate.c) */
@@ -1990,9 +2027,16 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   dds_sample_info_t info[TAKE];
   /* the topics a trainee may write (contacts, findings): checked for where they were written */
   const int check = rd == h->contact_r || rd == h->finding_r;
+  /* a session's server topics: checked for who wrote them (its state's participant, on_state's) */
+  const int server_topic = rd == h->lm_r || rd == h->fsample_r || rd == h->fstatus_r || rd == h->debrief_r ||
+                           rd == h->debrief_score_r || rd == h->session_log_r || rd == h->deform_r || is_fb_reader(h, rd);
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
       if (check && !from_its_partition(h, rd, ptr[i], &info[i])) continue; /* data and disposes alike */
+      if (server_topic && info[i].valid_data && !from_its_server(h, rd, ptr[i], &info[i])) continue;
+      h->sample_participant = rd == h->state_r && info[i].valid_data
+                                  ? palp_dds_origin_participant(&h->origin, rd, &info[i])
+                                  : 0;
       /* a dispose of a key whose session the gate would not pass (never heard open, so not a station
        * that leaves a session that just closed); Cyclone fills an invalid sample's key */
       if (!info[i].valid_data && rd == h->finding_r && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&

@@ -126,6 +126,9 @@ typedef struct palp_web_hub_stats {
                                               * often the findings reader was made anew for them (a flood) */
   uint64_t foreign;    /* contacts and findings (disposes too) naming a session from a writer outside its partition (a
                         * trainee forging another's session id, idl/palp_dds_origin.h): dropped */
+  uint64_t not_server; /* samples of a session's server topics (feedback, deformation, local models, finger samples,
+                        * finding answers, debriefs, told scores, log losses) from another participant than the one
+                        * whose state opened it, the latest: dropped (2026-12-07) */
   uint64_t joins, leaves, join_rejected;
   uint64_t exercises, finding_statuses;            /* DDS samples taken */
   uint64_t debriefs;                               /* palp_debrief samples taken (2026-12-05) */

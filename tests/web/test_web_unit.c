@@ -470,6 +470,104 @@ static void test_findings_no_join(void) {
   dds_delete(pp);
 }
 
+#define FINGERS_SEEN 4
+
+/* A second participant in a session's partition writes the local model of finger 1 and an answer to
+ * a mark 9 (2026-12-07): the bridge takes a session's server topics only from the participant whose
+ * state opened it, so the page shows the server's finger 0 and never finger 1, and the samples are
+ * counted (not_server). Before, any participant's forces and answers went to the trainee's page and
+ * the dashboard as the server's. Domain 169. */
+static void test_not_server(void) {
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = 169;
+  d.join = 0;
+  char err[256], part[64], ctl[64];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain 169: %s", h ? "" : err);
+  if (!h) return;
+  CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
+  const uint32_t sid = 4713;
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t pp = dds_create_participant(169, NULL, NULL), pp2 = dds_create_participant(169, NULL, NULL);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t pub = palp_dds_session_publisher(pp, part);
+  const dds_entity_t w_lm = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_LOCAL_MODEL),
+                                                   PALP_TOPIC_LOCAL_MODEL);
+  /* the trainee's two position-driven fingers (this participant is her station too): a page shows a
+   * finger from its contacts, and its model's proxy when it has one */
+  const dds_entity_t w_ct = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_CONTACT), PALP_TOPIC_CONTACT);
+  const dds_entity_t pub2 = palp_dds_session_publisher(pp2, part);
+  const dds_entity_t f_lm = palp_dds_create_writer(pub2, palp_dds_create_topic(pp2, PALP_TOPIC_LOCAL_MODEL),
+                                                   PALP_TOPIC_LOCAL_MODEL);
+  const dds_entity_t f_fs = palp_dds_create_writer(pub2, palp_dds_create_topic(pp2, PALP_TOPIC_FINDING_STATUS),
+                                                   PALP_TOPIC_FINDING_STATUS);
+  CHECK(w_state > 0 && w_lm > 0 && w_ct > 0 && f_lm > 0 && f_fs > 0, "the server's and the second participant's writers");
+  palp_web_cursor c;
+  CHECK(palp_web_hub_attach(h, &c, 4) == 0, "client");
+  snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid);
+  CHECK(palp_web_hub_control(h, &c, ctl, strlen(ctl)) == 0, "follow");
+  write_open_state(w_state, sid, 1, part, "t");
+  dds_sleepfor(DDS_MSECS(400)); /* the hub knows the session, and its state's writer, before its streams */
+  palp_web_hub_stats s0;
+  palp_web_hub_stats_get(h, &s0);
+  palp_FindingStatus fs;
+  memset(&fs, 0, sizeof fs);
+  fs.session_id = sid, fs.marks = 3, fs.last_mark_id = 9, fs.last_accepted = 1, fs.time_left = 100;
+  dds_write(f_fs, &fs);
+  for (uint64_t k = 0; k < 10; k++) {
+    for (uint8_t fi = 0; fi < 2; fi++) {
+      palp_Contact ct;
+      memset(&ct, 0, sizeof ct);
+      ct.session_id = sid, ct.finger = fi, ct.mode = palp_CONTACT_FINGER, ct.seq = 1 + k;
+      ct.center = (palp_Vec3){0.01 * fi, 0, 0.035}, ct.radius = 0.008;
+      dds_write(w_ct, &ct);
+    }
+    palp_LocalModel lm;
+    memset(&lm, 0, sizeof lm);
+    lm.session_id = sid, lm.frame = 5 + k, lm.in_contact = 1, lm.period = 0.004, lm.time = 0.02 + 0.004 * (double)k;
+    lm.server_time_ns = 1000000000LL + (int64_t)k * 4000000;
+    lm.device = (palp_Vec3){0, 0, 0.035}, lm.proxy = (palp_Vec3){0, 0, 0.038}, lm.force = (palp_Vec3){0, 0, 2};
+    lm.finger = 0;
+    dds_write(w_lm, &lm); /* the server's */
+    lm.finger = 1, lm.force = (palp_Vec3){0, 0, 8};
+    dds_write(f_lm, &lm); /* the second participant's */
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  int seen[FINGERS_SEEN] = {0}, shown[FINGERS_SEEN] = {0};
+  for (int i = 0; i < 150; i++) { /* 1.5 s of the page's messages */
+    unsigned char *buf = NULL;
+    size_t len = 0;
+    int binary = 0;
+    const int r = palp_web_hub_next(h, &c, 0, &buf, &len, &binary);
+    if (r == 1 && !binary) {
+      cJSON *j = cJSON_ParseWithLength((const char *)buf, len);
+      const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+      const cJSON *f;
+      if (type && !strcmp(type, "live"))
+        cJSON_ArrayForEach(f, cJSON_GetObjectItem(j, "fingers")) {
+          const int k = (int)cJSON_GetNumberValue(cJSON_GetObjectItem(f, "finger"));
+          if (k >= 0 && k < FINGERS_SEEN) shown[k]++, seen[k] += cJSON_GetObjectItem(f, "proxy") != NULL;
+        }
+      cJSON_Delete(j);
+    }
+    free(buf);
+    if (r != 1) dds_sleepfor(DDS_MSECS(10));
+  }
+  palp_web_hub_stats s1;
+  palp_web_hub_stats_get(h, &s1);
+  CHECK(seen[0] >= 1 && shown[1] >= 1 && seen[1] == 0,
+        "the page shows finger 0 with the server's model (%d live messages) and finger 1 (%d) never with the second "
+        "participant's (%d)", seen[0], shown[1], seen[1]);
+  CHECK(s1.not_server - s0.not_server >= 2 && s1.not_server - s0.not_server <= 11,
+        "its samples dropped and counted: %llu (want 2..11: its answer and its models, keep-last may merge some)",
+        (unsigned long long)(s1.not_server - s0.not_server));
+  palp_web_hub_detach(h, &c);
+  palp_web_hub_destroy(h);
+  dds_delete(pp2);
+  dds_delete(pp);
+}
+
 typedef struct band_want {
   uint32_t sid;
   const char *band;
@@ -1937,6 +2035,7 @@ int main(void) {
   test_local_model();
   test_catalogue_bound();
   test_findings_no_join();
+  test_not_server();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }
