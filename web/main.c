@@ -235,12 +235,12 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
   palp_log_info(log,
           "%d sessions, %d pages; DDS taken: %llu deformations, %llu contacts, %llu feedbacks, %llu states, "
           "%llu dropped, %llu of no known session, %llu of new keys past the readers' bound, %llu from outside their "
-          "session's partition; joins %llu, leaves %llu; sent %llu messages (%.1f MB); "
+          "session's partition, %llu of a session's server topics not from its server; joins %llu, leaves %llu; sent %llu messages (%.1f MB); "
           "http %llu ok, %llu denied, %llu missing; ws %llu opened, %llu closed, %llu denied",
           h.sessions_open, h.clients, (unsigned long long)h.deformations, (unsigned long long)h.contacts,
           (unsigned long long)h.feedbacks, (unsigned long long)h.states, (unsigned long long)h.dropped,
           (unsigned long long)h.no_session, (unsigned long long)h.rejected, (unsigned long long)h.foreign,
-          (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
+          (unsigned long long)h.not_server, (unsigned long long)h.joins, (unsigned long long)h.leaves, (unsigned long long)w.msgs, (double)w.bytes / 1e6,
           (unsigned long long)w.http_ok, (unsigned long long)w.http_denied, (unsigned long long)w.http_missing,
           (unsigned long long)w.ws_opened,
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
