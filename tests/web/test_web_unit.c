@@ -400,20 +400,44 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && !ok && strstr(why, "not touching"), "... %s", why);
 }
 
+/* A hub on `domain`, started (join: whether it joins the sessions its pages follow); NULL, failed
+ * and said, when it cannot be made. */
+static palp_web_hub *started_hub(unsigned domain, int join) {
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = domain;
+  d.join = join;
+  char err[256];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain %u: %s", domain, h ? "" : err);
+  if (h) CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
+  return h;
+}
+
+/* Finger `finger` of session sid pressing 2 N, frame `frame` of a 250 Hz server (a 4 ms period). */
+static palp_LocalModel pressing_model(uint32_t sid, uint8_t finger, uint64_t frame) {
+  palp_LocalModel lm;
+  memset(&lm, 0, sizeof lm);
+  lm.session_id = sid, lm.finger = finger, lm.frame = frame, lm.in_contact = 1;
+  lm.device = (palp_Vec3){0.001, 0.002, 0.0300};
+  lm.proxy = (palp_Vec3){0.001, 0.002, 0.0380};
+  lm.force = (palp_Vec3){0, 0, 2};
+  lm.period = 0.004;
+  lm.server_time_ns = 1000000000LL + (int64_t)frame * 4000000;
+  lm.time = 0.004 * (double)frame;
+  lm.point = (palp_Vec3){0.003, -0.004, 0.0385};
+  lm.area = 2e-4;
+  return lm;
+}
+
 /* A bridge that never joins (--no-join) refuses a trainee page's mark with why (2026-12-07): the server
  * takes a session's findings only from the participant that joined it or one with a visual station in
  * it, and refused the bridge's unanswered; the page waited for an answer that never came. Everything
  * else a mark needs is there (an open exercise session, its findings writer, a fresh contact), and
  * nothing reaches the session's partition. Domain 165. */
 static void test_findings_no_join(void) {
-  palp_web_hub_def d = palp_web_hub_default_def();
-  d.domain = 165;
-  d.join = 0;
-  char err[256], part[64], why[256] = "", ctl[64];
-  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
-  CHECK(h != NULL, "hub on domain 165: %s", h ? "" : err);
+  char part[64], why[256] = "", ctl[64];
+  palp_web_hub *h = started_hub(165, 0);
   if (!h) return;
-  CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
   const uint32_t sid = 4712;
   palp_dds_session_partition(sid, part, sizeof part);
   const dds_entity_t pp = dds_create_participant(165, NULL, NULL);
@@ -434,20 +458,7 @@ static void test_findings_no_join(void) {
   dds_sleepfor(DDS_MSECS(600)); /* the hub knows the session and its exercise, makes its findings writer */
   snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sid);
   CHECK(palp_web_hub_control(h, &c, ctl, strlen(ctl)) == 0, "bind as the session's trainee page");
-  palp_LocalModel lm;
-  memset(&lm, 0, sizeof lm);
-  lm.session_id = sid;
-  lm.finger = 0;
-  lm.frame = 10;
-  lm.in_contact = 1;
-  lm.device = (palp_Vec3){0.001, 0.002, 0.0300};
-  lm.proxy = (palp_Vec3){0.001, 0.002, 0.0380};
-  lm.force = (palp_Vec3){0, 0, 2};
-  lm.period = 0.004;
-  lm.server_time_ns = 1000000000LL;
-  lm.time = 0.2;
-  lm.point = (palp_Vec3){0.003, -0.004, 0.0385};
-  lm.area = 2e-4;
+  const palp_LocalModel lm = pressing_model(sid, 0, 10);
   dds_write(w_lm, &lm);
   dds_sleepfor(DDS_MSECS(100));
   int ok = -1, mark = -1;
@@ -478,14 +489,9 @@ static void test_findings_no_join(void) {
  * counted (not_server). Before, any participant's forces and answers went to the trainee's page and
  * the dashboard as the server's. Domain 169. */
 static void test_not_server(void) {
-  palp_web_hub_def d = palp_web_hub_default_def();
-  d.domain = 169;
-  d.join = 0;
-  char err[256], part[64], ctl[64];
-  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
-  CHECK(h != NULL, "hub on domain 169: %s", h ? "" : err);
+  char part[64], ctl[64];
+  palp_web_hub *h = started_hub(169, 0);
   if (!h) return;
-  CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
   const uint32_t sid = 4713;
   palp_dds_session_partition(sid, part, sizeof part);
   const dds_entity_t pp = dds_create_participant(169, NULL, NULL), pp2 = dds_create_participant(169, NULL, NULL);
@@ -523,12 +529,7 @@ static void test_not_server(void) {
       ct.center = (palp_Vec3){0.01 * fi, 0, 0.035}, ct.radius = 0.008;
       dds_write(w_ct, &ct);
     }
-    palp_LocalModel lm;
-    memset(&lm, 0, sizeof lm);
-    lm.session_id = sid, lm.frame = 5 + k, lm.in_contact = 1, lm.period = 0.004, lm.time = 0.02 + 0.004 * (double)k;
-    lm.server_time_ns = 1000000000LL + (int64_t)k * 4000000;
-    lm.device = (palp_Vec3){0, 0, 0.035}, lm.proxy = (palp_Vec3){0, 0, 0.038}, lm.force = (palp_Vec3){0, 0, 2};
-    lm.finger = 0;
+    palp_LocalModel lm = pressing_model(sid, 0, 5 + k);
     dds_write(w_lm, &lm); /* the server's */
     lm.finger = 1, lm.force = (palp_Vec3){0, 0, 8};
     dds_write(f_lm, &lm); /* the second participant's */
@@ -1693,17 +1694,11 @@ static void test_absurd_contact(palp_web_hub *h, palp_web_cursor *c, dds_entity_
  * reaches a page following its session: proxy and device in metres, contact, |force| and the
  * force-limit / out-of-range bits; an older frame written after a newer one is not forwarded. */
 static void test_local_model(void) {
-  palp_web_hub_def d = palp_web_hub_default_def();
-  d.domain = 195;
   /* No server: the test writes what one would. The bridge joins the sessions its pages follow (its
    * requests unanswered, so it stays joined): its pages' marks are refused when it is not in the
    * session (test_findings_no_join). */
-  d.join = 1;
-  char err[256];
-  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
-  CHECK(h != NULL, "hub on domain 195: %s", h ? "" : err);
+  palp_web_hub *h = started_hub(195, 1);
   if (!h) return;
-  CHECK(palp_web_hub_start(h, NULL, NULL) == 0, "hub thread");
   const dds_entity_t pp = dds_create_participant(195, NULL, NULL);
   const uint32_t sid = 4711;
   char part[64];
