@@ -68,8 +68,10 @@ sed -e 's|"\.\./assess/phantom_stiff\.json"|"'"$test_dir"'/../assess/phantom_sti
 server_config "$tmp/nolog.json" "$tmp/practice.json"
 "$server" --config "$tmp/nolog.json" > "$tmp/nolog-server.log" 2>&1 &
 spid=$!
+# Her mark at 1.0 s, in the hold (the press, 3 mm above to 9 mm deep at 20 mm/s, ends at 0.6 s): at 0.5 s,
+# on the ramp, a loaded run's station had no model in contact yet and refused it (2026-12-07).
 "$client" --role trainee --domain 61 --phantom 7 --name fia --timeout 10 --print-period 0 \
-  --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=0.5 > "$tmp/fia.log" 2>&1
+  --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=1,mark_s=1.0 > "$tmp/fia.log" 2>&1
 # Session 72: a peer writes into gus's partition (an unsecured classroom, or a trainee into her own):
 # first one withdrawal of a mark 9 naming his session, which the server refuses unanswered for its
 # writer (since 2026-12-06: not of the participant that joined the session; its log names it), then
