@@ -1285,10 +1285,10 @@ static void hold_session(palp_srv *srv, palp_srv_session *s, station *st, const 
   snprintf(s->held_reason, sizeof s->held_reason, "%s", why);
   if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
-  if (srv->events && srv->events->member_changed)
-    srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 0);
   palp_log_info(srv->log, "session %u: %s; held %.0f s for it to come back with its request", s->id, why,
                 srv->cfg.station_grace);
+  if (srv->events && srv->events->member_changed) /* after its log line, as station_leave */
+    srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 0);
   free_station(srv, st);
   publish_state(srv, s, 0, NULL, NULL);
 }
@@ -1307,10 +1307,10 @@ static void resume_session(palp_srv *srv, palp_srv_session *s, const palp_Sessio
   s->held_reason[0] = 0;
   reply(srv, rq, s, NULL);
   publish_state(srv, s, 0, NULL, NULL);
-  if (srv->events && srv->events->member_changed)
-    srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 1);
   palp_log_info(srv->log, "session %u: trainee station %s came back after %.1f s; the session goes on", s->id,
                 PALP_PRINTABLE(st->id), away);
+  if (srv->events && srv->events->member_changed) /* after its log line, as station_leave */
+    srv->events->member_changed(srv->events->ctx, s->id, st->id, palp_ROLE_TRAINEE, 1);
 }
 
 /* The open session held for this trainee station, or NULL. */
@@ -1354,10 +1354,12 @@ static void station_leave(palp_srv *srv, station *st, const char *reason) {
   }
   if (st->want_deformation) atomic_fetch_sub(&s->deform_members, 1);
   if (st->want_feedback) atomic_fetch_sub(&s->want_feedback, 1);
-  if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
-  /* At the level of its join (who followed a session, and until when, is the instructor's to read). */
+  /* At the level of its join (who followed a session, and until when, is the instructor's to read).
+   * Logged before the event is told, so that whoever reacts to the event finds the line written (until
+   * 2026-12-07 the other way round: server_rewritten read the log between the two, once in a full run). */
   palp_log_info(srv->log, "station %s (%s) left session %u: %s", PALP_PRINTABLE(st->id),
                 role == palp_ROLE_VISUAL ? "visual" : "observer", sid, reason);
+  if (srv->events && srv->events->member_changed) srv->events->member_changed(srv->events->ctx, sid, st->id, role, 0);
   free_station(srv, st); /* after its last read */
   publish_state(srv, s, 0, NULL, NULL);
 }
@@ -1669,10 +1671,10 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   if (!secured(srv)) learn_participant(st, reader, writer);
   reply(srv, rq, s, NULL);
   publish_state(srv, s, 0, NULL, NULL);
-  if (srv->events && srv->events->member_changed)
-    srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
   palp_log_info(srv->log, "station %s joined session %u as %s", PALP_PRINTABLE(st->id), s->id,
-          rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
+                rq->role == palp_ROLE_VISUAL ? "visual station" : "observer");
+  if (srv->events && srv->events->member_changed) /* after its log line, as station_leave */
+    srv->events->member_changed(srv->events->ctx, s->id, st->id, st->role, 1);
 }
 
 /* A request instance that turned not-alive while its writer is still matched was

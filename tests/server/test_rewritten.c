@@ -136,7 +136,10 @@ int main(void) {
   /* Its last writer gone, the observer is lost: the checks above can see a loss. */
   dds_delete(w2);
   const int64_t end = palp_dds_now_ns() + 3000000000LL;
-  while (atomic_load(&left_viewer) == 0 && palp_dds_now_ns() < end) test_sleep(0.01);
+  /* both the event and the log line awaited (the server logs first since 2026-12-07) */
+  while ((atomic_load(&left_viewer) == 0 || log_count(log_path, "station viewer", "lost") == 0) &&
+         palp_dds_now_ns() < end)
+    test_sleep(0.01);
   CHECK(atomic_load(&left_viewer) == 1 && log_count(log_path, "station viewer", "lost") == 1,
         "the observer's last writer gone, it is lost (%d leave(s))", atomic_load(&left_viewer));
 
