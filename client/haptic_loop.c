@@ -24,6 +24,16 @@ void palp_cli_mailbox_destroy(palp_cli_mailbox *mb) { pthread_mutex_destroy(&mb-
 void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint32_t server_flags, double max_force,
                           double age) {
   pthread_mutex_lock(&mb->lock);
+  /* A model not yet taken that is newer than m stays: best-effort delivery (or a relay) may
+   * hand two models over out of order in one batch, and the older one put last replaced the
+   * newer, which the haptic thread then never saw (a model a period behind until the next).
+   * Once taken, m goes in whatever its time: the renderer refuses it if it is older, and a
+   * server whose clock started again is not shut out of the box. */
+  if (mb->seq != mb->taken && m->time < mb->model.time) {
+    mb->superseded++;
+    pthread_mutex_unlock(&mb->lock);
+    return;
+  }
   mb->age = age;
   mb->model = *m;
   mb->server_flags = server_flags;
@@ -42,6 +52,7 @@ int palp_cli_mailbox_take(palp_cli_mailbox *mb, uint64_t *seq, palp_local_model 
     *max_force = mb->max_force;
     *age = mb->age;
     *seq = mb->seq;
+    mb->taken = mb->seq;
     got = 1;
   }
   pthread_mutex_unlock(&mb->lock);
@@ -145,19 +156,28 @@ static struct timespec ts_of(int64_t ns) {
   return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
 }
 
+int palp_cli_outbox_admits(unsigned queued, int release) {
+  /* The last PALP_CLI_RELEASE_SAMPLES slots are the lift's: position samples stop short of them.
+   * Until 2026-12-07 nothing kept them, and a sender thread stalled for 64 samples' worth (256 ms
+   * at 250 Hz, 64 ms at 1 kHz) dropped all three releases: the server kept the finger down, the
+   * phantom dented, until the next press. */
+  return release ? queued < PALP_CLI_OUTBOX : queued + PALP_CLI_RELEASE_SAMPLES < PALP_CLI_OUTBOX;
+}
+
 /* The haptic thread never calls DDS: a dds_write takes locks that Cyclone's own
  * (normal-priority) threads hold, and measured in this loop it made 1% of ticks
  * late by more than 0.5 ms (worst 6.8 ms) against 0.18% for the same loop without
  * it. Samples go through a single-producer single-consumer ring to a sender
  * thread; a full ring drops the newest position sample (the next one supersedes
- * it), and the ring is large enough that a lift (three samples) always fits. */
-static void send_contact(palp_cli_haptic_loop *l, int on, palp_vec3 x, int64_t now_ns) {
-  if (l->def.contact_w <= 0) return;
+ * it), and keeps room for a lift (palp_cli_outbox_admits). Returns whether the sample
+ * was queued (1; also with no writer, nothing to send) or dropped (0). */
+static int send_contact(palp_cli_haptic_loop *l, int on, palp_vec3 x, int64_t now_ns) {
+  if (l->def.contact_w <= 0) return 1;
   const unsigned h = atomic_load_explicit(&l->out_head, memory_order_relaxed);
   const unsigned t = atomic_load_explicit(&l->out_tail, memory_order_acquire);
-  if (h - t >= PALP_CLI_OUTBOX) {
+  if (!palp_cli_outbox_admits(h - t, !on)) {
     l->stats.contacts_dropped++;
-    return;
+    return 0;
   }
   palp_Contact *m = &l->outbox[h % PALP_CLI_OUTBOX];
   memset(m, 0, sizeof *m);
@@ -171,6 +191,7 @@ static void send_contact(palp_cli_haptic_loop *l, int on, palp_vec3 x, int64_t n
   m->source_time_ns = now_ns;
   atomic_store_explicit(&l->out_head, h + 1, memory_order_release);
   sem_post(&l->out_sem);
+  return 1;
 }
 
 static void *sender_main(void *arg) {
@@ -204,6 +225,11 @@ int palp_cli_haptic_core_init(palp_cli_haptic_core *c, const palp_haptic_def *re
   if (!(physics_rate_hz > 0) || !(max_latency >= 0)) return PALP_EINVAL;
   const int rc = palp_haptic_init(&c->renderer, render);
   if (rc < 0) return rc;
+  /* Crossfades last the session's step, not each model's period: a retried step's model says
+   * the last half-step it took (down to 1/16 of the step, src/world.c), and a correction
+   * blended over 0.25 ms reached the hand as a step inside one 1 ms tick (2.0 N in one tick
+   * for a 1 -> 3 N correction at 250 Hz; 0.5 N a tick over the step). */
+  if (!(render->blend_time > 0)) c->renderer.def.blend_time = 1.0 / physics_rate_hz;
   c->compensate = latency_compensation != 0;
   c->hold_after = hold_after > 0 ? hold_after : fmax(2.0 / physics_rate_hz, 0.008);
   c->max_latency = max_latency;
@@ -234,7 +260,10 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
   const int take = m && palp_haptic_accepts(&c->renderer, m, t);
   if (take) {
     c->x_arrival_t = t;
-    c->model_age = age_ok ? age : 0;
+    /* An age not trusted (unknown, negative, beyond max_latency) is not 0: a model of unknown
+     * age had its stiffness followed for the whole horizon, longer than a known-late one. It
+     * is held at once. */
+    c->model_age = age_ok ? age : c->hold_after;
   }
   /* A model is not extrapolated beyond its horizon: its stiffness is the
    * phantom's response within one physics step, and the device's motion read
@@ -255,6 +284,13 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
   if (!on) c->offset = (palp_vec3){0, 0, 0};
   c->x_prev = x;
   const palp_vec3 xr = v3sub(x, c->offset);
+  /* A press after a lift starts from no model: the models taken while lifted (the server's
+   * last in-contact ones, a round trip of them) describe the surface where the finger was,
+   * unanchored, and the first tick of a new press rendered one at once, with no fade-in
+   * (measured: 0 -> 3.0 N in one tick pressing the same spot again 50 ms later, 0 -> 3.6 N
+   * with 2 N sideways 10 mm away). The next model then blends in over fade_time, as the
+   * first one does. */
+  if (on && !c->was_on) palp_haptic_forget(&c->renderer);
   int taken = 0;
   if (m) {
     /* Latency compensation: the model describes the surface when the device was
@@ -334,6 +370,18 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
         a *= palp_haptic_stale_scale(&c->renderer, t);
         const palp_vec3 f0 = o.force;
         o.force = v3sub(o.force, v3scale(v, a));
+        /* A surface pushes; it never pulls. The damper takes energy out along the hand's
+         * velocity, and while the hand came out of a stiff phantom that was into the surface,
+         * past the contact force: -3.1 N on a 2000 N/m plane with 40 ms late models, and 5.0 N
+         * swings in one tick (session 80's review). Its normal part stops at a force of 0 along
+         * the contact normal, as the renderer's own damper does (src/haptic.c); the energy it
+         * leaves stays in the observer (which sums the force as rendered) for the next ticks,
+         * pressing in, where the damper pushes out. */
+        if (o.flags & PALP_HAPTIC_CONTACT) {
+          const palp_vec3 nc = c->renderer.cur.normal;
+          const double fn = o.force.x * nc.x + o.force.y * nc.y + o.force.z * nc.z;
+          if (fn < 0) o.force = v3sub(o.force, v3scale(nc, fn));
+        }
         /* The safe force bounds what reaches the hand, the damper included: pressing
          * in, -a v adds to the force, and with energy left by late or jittered models
          * it took a 0.15 N limit to 0.52 N (test haptic_session on a loaded machine;
@@ -490,11 +538,10 @@ static void *haptic_main(void *arg) {
     /* To the server at the physics rate; a lift is sent at once and repeated on
      * the next ticks (best-effort: one lost sample must not leave the finger down). */
     if (on && (tick % every == 0 || !was_on)) send_contact(l, 1, x, now);
-    if (!on && was_on) release_left = 3;
-    if (!on && release_left > 0) {
-      send_contact(l, 0, x, now);
-      release_left--;
-    }
+    if (!on && was_on) release_left = PALP_CLI_RELEASE_SAMPLES;
+    if (on) release_left = 0; /* pressed again: the position samples say so */
+    /* a release the ring could not take is tried again next tick, not counted as sent */
+    if (!on && release_left > 0 && send_contact(l, 0, x, now)) release_left--;
     was_on = on;
     if (d->trace && st->trace_len < d->trace_cap)
       d->trace[st->trace_len++] = (palp_cli_haptic_sample){
@@ -519,7 +566,7 @@ static void *haptic_main(void *arg) {
     }
   }
   if (was_on)
-    for (int r = 0; r < 3; r++) send_contact(l, 0, (palp_vec3){0, 0, 0}, palp_dds_now_ns());
+    for (int r = 0; r < PALP_CLI_RELEASE_SAMPLES; r++) send_contact(l, 0, (palp_vec3){0, 0, 0}, palp_dds_now_ns());
   d->in->write_force(d->in->ctx, (palp_vec3){0, 0, 0}, 0); /* leave the hand free */
   st->max_force = l->core.renderer.def.max_force;
   st->passivity_ticks = l->core.pc_ticks;

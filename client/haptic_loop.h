@@ -41,10 +41,14 @@ typedef struct palp_cli_mailbox {
   double max_force;      /* the phantom's limit, from the model [N] */
   double age;            /* the model's age on arrival [s]: now - its contact sample's source time; < 0 unknown */
   uint64_t seq;          /* models put so far */
+  uint64_t taken;        /* seq of the last model taken */
+  uint64_t superseded;   /* models not put: older than the one waiting untaken */
 } palp_cli_mailbox;
 
 int palp_cli_mailbox_init(palp_cli_mailbox *mb);
 void palp_cli_mailbox_destroy(palp_cli_mailbox *mb);
+/* Puts m in the box, unless the model waiting there untaken is newer (by time): that one
+ * stays (counted in superseded). */
 void palp_cli_mailbox_put(palp_cli_mailbox *mb, const palp_local_model *m, uint32_t server_flags, double max_force,
                           double age);
 /* Non-blocking: 1 and a copy when a model newer than *seq is there (updates *seq);
@@ -208,6 +212,14 @@ typedef struct palp_cli_haptic_view {
   uint64_t beyond_validated_ticks, strained_ticks, limit_ticks, gel_ticks; /* the stats' counts by flag: which limit */
 } palp_cli_haptic_view;
 
+/* Contact samples queued from the haptic thread to its sender thread, and how many releases
+ * a lift sends (best-effort: one lost must not leave the finger down). */
+#define PALP_CLI_OUTBOX 64
+#define PALP_CLI_RELEASE_SAMPLES 3
+/* 1 if a sample may be queued with `queued` samples already waiting: a release while the ring
+ * has room, a position sample only while room for a whole lift stays after it. */
+int palp_cli_outbox_admits(unsigned queued, int release);
+
 typedef struct palp_cli_haptic_loop {
   palp_cli_haptic_def def;
   palp_cli_mailbox mailbox;
@@ -220,7 +232,6 @@ typedef struct palp_cli_haptic_loop {
   palp_cli_haptic_stats stats; /* written by the haptic thread; read after join, or approximately */
   uint64_t seq;                /* contact samples */
   /* contact samples, haptic thread -> sender thread (single producer, single consumer) */
-#define PALP_CLI_OUTBOX 64
   palp_Contact outbox[PALP_CLI_OUTBOX];
   atomic_uint out_head, out_tail;
   sem_t out_sem;

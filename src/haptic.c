@@ -60,6 +60,10 @@ int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
   return PALP_OK;
 }
 
+void palp_haptic_forget(palp_haptic *h) {
+  if (h) h->have = 0; /* rendered and last_x stay: the hand's force is what the next model blends from */
+}
+
 static double clamp01(double s) { return s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s); }
 
 palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags) {

@@ -71,6 +71,9 @@ typedef struct palp_haptic {
 } palp_haptic;
 
 int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def);
+/* Forgets the models (as before the first): the next one taken blends in over fade_time
+ * from the force last rendered. The parameters and counts stay. */
+void palp_haptic_forget(palp_haptic *h);
 /* A new model arrived at station time now [s]. Models older than the current one
  * (by their time), or ahead of it by more than the station time since it came plus
  * stale_time, are ignored; returns 1 if taken, 0 if ignored, < 0 on error. Every model

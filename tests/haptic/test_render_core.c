@@ -10,6 +10,7 @@
  *   stale fade: scale 1 - (age - stale_time) / fade_time, 0.25 s and 0.1 s (100 ticks).
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
@@ -467,6 +468,156 @@ static void test_skipped_deadlines(void) {
         (unsigned long long)st.out_of_range_ticks, (unsigned long long)st.ticks);
 }
 
+/* ---- session 80's review (2026-12-07) ---- */
+
+/* A plane z = 0 of stiffness k [N/m] as the server answers a device at z: force k (-z) up while
+ * z < 0, K_zz = k, the normal +z (out of contact: no force, no K, normal +z). */
+static palp_local_model plane_model(double time, double z, double k) {
+  palp_local_model m = contact_model(time, z, z < 0 ? -k * z : 0.0, z < 0 ? k : 0.0);
+  m.contact = z < 0;
+  m.proxy = (palp_vec3){0, 0, 0};
+  return m;
+}
+
+/* 8. The passivity controller on a stiff plane (2000 N/m) with models 40 ms late (every 4 ms,
+ * each of the device 40 ms before), 10 press-release cycles 10 mm deep at 50 mm/s. A plane
+ * never pulls: the rendered normal force is >= 0 on every tick (to 1e-12 N); and the device
+ * still gets back no more energy than it put in (the net work on it, sum F . dx, <= 2% of the
+ * work the hand did pressing in). Before the fix the controller's damper pulled while the
+ * hand came out: 871 ticks down to -3.1 N, swings of 5.0 N in one tick. */
+static void test_passivity_no_pull(void) {
+  palp_cli_haptic_core c;
+  core_make(&c, 1);
+  palp_haptic_out o;
+  enum { LAG = 40, N = 10 * 440 + 100 };
+  static double z_at[N + 1];
+  double least = INFINITY, worst_step = 0, prev = 0, work = 0, pushed_in = 0, zprev = 0.001;
+  int pulls = 0;
+  for (int k = 0; k <= N; ++k) {
+    const double t = k * TICK, ph = fmod(t, 0.44);
+    /* 1 mm above, down to 10 mm below at 50 mm/s (0.22 s), back up */
+    const double z = k >= 10 * 440 ? 0.001 : 0.001 - 0.05 * (ph < 0.22 ? ph : 0.44 - ph);
+    z_at[k] = z;
+    palp_local_model mk;
+    const int model = k % 4 == 0;
+    if (model) mk = plane_model(t - LAG * TICK, k >= LAG ? z_at[k - LAG] : 0.001, 2000);
+    palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, z}, t, model ? &mk : NULL, LAG * TICK, &o, NULL);
+    const double dz = z - zprev;
+    work += prev * dz;                 /* the force of the tick before acted over this tick's motion */
+    if (dz < 0) pushed_in += -prev * dz;
+    if (o.flags & PALP_HAPTIC_CONTACT) least = fmin(least, o.force.z);
+    pulls += o.force.z < -1e-12;
+    if (k > 0) worst_step = fmax(worst_step, fabs(o.force.z - prev));
+    prev = o.force.z, zprev = z;
+  }
+  printf("stiff plane, 40 ms late models: least force in contact %.4f N, %d pulling ticks, largest step %.3f N, "
+         "work on the device %.2f mJ of %.2f mJ put in, controller acted %llu ticks\n", least, pulls, worst_step,
+         1e3 * work, 1e3 * pushed_in, (unsigned long long)c.pc_ticks);
+  CHECK(pulls == 0, "the plane never pulls the finger in: %d ticks below 0 N (least in contact %.4f N)", pulls,
+        least);
+  CHECK(c.pc_ticks > 0 && work <= 0.02 * pushed_in, "passive: %.2f mJ given back net for %.2f mJ put in "
+        "(<= 2%%), the controller acting on %llu ticks", 1e3 * work, 1e3 * pushed_in, (unsigned long long)c.pc_ticks);
+}
+
+/* 9. A press after a lift (50 ms, longer than the 40 ms the server's last in-contact models
+ * still come) at the same spot: models of 3 N on 600 N/m came while pressed and while lifted,
+ * none after. The new press feels 0 N on every tick until a new model; the first one (3 N)
+ * blends in from 0: at most 3 N x 1 ms / fade_time (0.1 s) on its first tick, slack 5%. Before:
+ * 3.0 N on the press's first tick. */
+static void test_repress(double side) {
+  palp_cli_haptic_core c;
+  core_make(&c, 0);
+  palp_haptic_out o;
+  double worst_silent = 0, first_new = -1;
+  for (int k = 0; k <= 250; ++k) {
+    const double t = k * TICK;
+    const int on = k < 100 || k >= 150;                 /* lifted 100..149 ms */
+    const int model = k % 4 == 0 && (k < 140 || k >= 200); /* in-contact models until 140 ms; new ones from 200 ms */
+    palp_local_model mk = contact_model(t, 0.0, 3.0, 600);
+    const palp_vec3 x = {k >= 150 ? side : 0.0, 0, 0};
+    palp_cli_haptic_core_tick(&c, on, x, t, model ? &mk : NULL, 0.001, &o, NULL);
+    if (k >= 150 && k < 200) worst_silent = fmax(worst_silent, len(o.force));
+    if (k == 200) first_new = len(o.force);
+  }
+  CHECK(worst_silent == 0.0, "pressed again %g mm aside after a 50 ms lift: 0 N until a new model (largest %.3f N; "
+        "was 3 N at once)", 1e3 * side, worst_silent);
+  CHECK(first_new >= 0 && first_new <= 3.0 * TICK / 0.1 * 1.05, "the first new model blends in from 0: %.4f N on its "
+        "first tick (<= %.4f N)", first_new, 3.0 * TICK / 0.1 * 1.05);
+}
+
+/* 10. A correction from a retried step's model (its period 0.25 ms, 1/16 of the 4 ms step at
+ * 250 Hz) blends over the session's step, not its period: a 1 -> 3 N correction under a still
+ * device moves at most 2 N / 4 ticks = 0.5 N a tick (slack 1e-9). Before: 2.0 N in one tick. */
+static void test_retried_blend(void) {
+  palp_cli_haptic_core c;
+  core_make(&c, 0);
+  palp_haptic_out o;
+  double worst = 0, prev = 0;
+  for (int k = 0; k <= 40; ++k) {
+    palp_local_model m1 = contact_model(k * TICK, 0.0, 1.0, 600), m3 = contact_model(k * TICK, 0.0, 3.0, 600);
+    m3.period = 0.004 / 16;
+    palp_local_model *mp = k == 0 ? &m1 : (k == 20 ? &m3 : NULL);
+    palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, 0}, k * TICK, mp, 0.001, &o, NULL);
+    if (k > 20) worst = fmax(worst, fabs(o.force.z - prev));
+    prev = o.force.z;
+  }
+  CHECK(worst <= 0.5 + 1e-9 && fabs(o.force.z - 3.0) < 1e-9, "a retried step's correction: largest step %.3f N a "
+        "tick (<= 0.5 N), %.4f N at the end (3 N)", worst, o.force.z);
+}
+
+/* 11. A model whose age is not trusted (unknown -1, beyond max_latency 0.5 s) is held at once:
+ * with the hand going in at 20 mm/s its 1 N stays 1 N (to 1e-9 N) on every tick; one 1 ms old
+ * follows K for its horizon (8 ms: up to 1 + 600 x 0.02 x 0.008 = 1.096 N, > 1.05 N). Before,
+ * an untrusted age counted as 0 and followed K longest. */
+static void test_untrusted_age(double age) {
+  palp_cli_haptic_core c;
+  core_make(&c, 0);
+  palp_haptic_out o;
+  double most = 0;
+  for (int k = 0; k <= 20; ++k) {
+    palp_local_model m = contact_model(0.0, 0.0, 1.0, 600);
+    const double z = -0.02 * k * TICK;
+    palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, z}, k * TICK, k == 0 ? &m : NULL, age, &o, NULL);
+    most = fmax(most, o.force.z);
+  }
+  if (age >= 0 && age <= 0.2)
+    CHECK(most > 1.05, "a model %g s old follows K for its horizon (up to %.4f N)", age, most);
+  else
+    CHECK(fabs(most - 1.0) < 1e-9, "a model of untrusted age %g s is held at once (up to %.6f N, 1 N)", age, most);
+}
+
+/* 12. The mailbox keeps the newest model waiting: a model older than the untaken one is not put
+ * (counted); once taken, any model goes in (the renderer judges it). */
+static void test_mailbox_order(void) {
+  palp_cli_mailbox mb;
+  palp_cli_mailbox_init(&mb);
+  palp_local_model m2 = contact_model(2.0, 0, 1, 0), m1 = contact_model(1.0, 0, 1, 0), got;
+  uint32_t fl;
+  double mf, age;
+  uint64_t seq = 0;
+  palp_cli_mailbox_put(&mb, &m2, 0, 10, 0.001);
+  palp_cli_mailbox_put(&mb, &m1, 0, 10, 0.001); /* reordered in one batch */
+  const int took = palp_cli_mailbox_take(&mb, &seq, &got, &fl, &mf, &age);
+  CHECK(took == 1 && got.time == 2.0 && mb.superseded == 1, "an older model after a newer untaken one: the newer "
+        "is taken (time %g s, 2 s), 1 superseded (%llu)", got.time, (unsigned long long)mb.superseded);
+  palp_cli_mailbox_put(&mb, &m1, 0, 10, 0.001);
+  CHECK(palp_cli_mailbox_take(&mb, &seq, &got, &fl, &mf, &age) == 1 && got.time == 1.0,
+        "after a take an older model goes in (time %g s)", got.time);
+  palp_cli_mailbox_destroy(&mb);
+}
+
+/* 13. The contact ring keeps room for a lift: position samples are refused with 3 slots left,
+ * and a lift's 3 releases then all fit, a 4th not. */
+static void test_outbox_lift(void) {
+  unsigned q = 0;
+  while (palp_cli_outbox_admits(q, 0)) q++;
+  int releases = 0;
+  while (palp_cli_outbox_admits(q + (unsigned)releases, 1)) releases++;
+  CHECK(q == PALP_CLI_OUTBOX - PALP_CLI_RELEASE_SAMPLES && releases == PALP_CLI_RELEASE_SAMPLES,
+        "a full ring of position samples (%u of %d) still takes a whole lift (%d releases, %d)", q, PALP_CLI_OUTBOX,
+        releases, PALP_CLI_RELEASE_SAMPLES);
+}
+
 int main(void) {
   test_fade_above_limit(40);
   test_fade_above_limit(1e4);
@@ -483,5 +634,14 @@ int main(void) {
   test_physics_rate();
   test_safe_force();
   test_skipped_deadlines();
+  test_passivity_no_pull();
+  test_repress(0.0);
+  test_repress(0.010);
+  test_retried_blend();
+  test_untrusted_age(0.001);
+  test_untrusted_age(-1);
+  test_untrusted_age(0.5);
+  test_mailbox_order();
+  test_outbox_lift();
   return check_exit();
 }
