@@ -1,5 +1,6 @@
 /* hub.c - palp-web's DDS thread and its latest-value store of browser messages. */
 #include "hub.h"
+#include "utf8.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -1112,7 +1113,8 @@ static void on_session_exercise(palp_web_hub *h, const palp_SessionExercise *m) 
   }
   if (!ex) {
     h->stats.dropped++;
-    palp_log_warn(h->def.log, "session %u: its exercise from the server refused: %s", m->session_id, err);
+    palp_log_warn(h->def.log, "session %u: its exercise from the server refused: %s", m->session_id,
+                  PALP_PRINTABLE_LONG(err)); /* err quotes its names and its JSON: printable (2026-12-07) */
     return;
   }
   int slot;
@@ -1280,7 +1282,18 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
            s->st.trainee_name);
   pthread_mutex_unlock(&h->mu);
   int ps;
-  s->ph = find_phantom(h, m->phantom_id, 0, &ps);
+  phantom *ph = find_phantom(h, m->phantom_id, 0, &ps);
+  if (ph != s->ph && (s->cov || s->touched)) {
+    /* Its phantom changed (a restarted server's new run on another phantom under the same id, or a
+     * forged state): the coverage of the old mesh goes with it. It was kept, read with the new
+     * mesh's triangles, and with the phantom unknown a finger sample read its radius through NULL
+     * (session 80's review, 2026-12-07). */
+    palp_coverage_destroy(s->cov);
+    palp_coverage_destroy(s->touched);
+    s->cov = s->touched = NULL;
+    publish(h, &h->cover_msg[slot], NULL, 0);
+  }
+  s->ph = ph;
   attach_coverage(s);
   update_finding_writer(h, slot);
   claim_session_exercise(h, s);
@@ -1895,7 +1908,7 @@ static void on_finger_sample(palp_web_hub *h, const palp_FingerSample *m) {
     return;
   }
   s->samples_frame[m->finger] = m->frame;
-  if (!s->touched) return;
+  if (!s->touched || !s->ph) return;
   if (++s->samples == 1) h->sessions_dirty = 1, s->cover_changed = 1; /* its coverage_rule is "touched" now */
   if (!m->in_contact) return;
   const double force = sqrt(m->force.x * m->force.x + m->force.y * m->force.y + m->force.z * m->force.z);
@@ -2102,7 +2115,17 @@ static void check_replies(palp_web_hub *h, int64_t now) {
       for (int k = 0; k < PALP_WEB_MAX_SESSIONS; k++) {
         session *s = &h->s[k];
         if (s->used && s->joined && !strcmp(s->station, buf[i].station_id) && strcmp(buf[i].reason, "left") != 0) {
-          palp_log_warn(h->def.log, "the server refused to stream session %u: %s", s->id, buf[i].reason);
+          /* from the session's server alone, as its streams (from_its_server): a peer that read the
+           * bridge's station id wrote a refusal and the bridge left the session for 5 s, its page's
+           * marks refused meanwhile (session 80's review, 2026-12-07) */
+          const dds_instance_handle_t pp = palp_dds_origin_participant(&h->origin, h->reply_r, &info[i]);
+          if (s->server_pp && pp && pp != s->server_pp) {
+            h->stats.not_server++;
+            continue;
+          }
+          /* the reason printable: it comes from the network, and a newline in it forged a log line */
+          palp_log_warn(h->def.log, "the server refused to stream session %u: %s", s->id,
+                        PALP_PRINTABLE_LONG(buf[i].reason));
           set_joined(h, s, 0);
           s->join_failed_ns = now;
           h->stats.join_rejected++;
@@ -2417,6 +2440,7 @@ void palp_web_hub_destroy(palp_web_hub *h) {
   }
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
     palp_coverage_destroy(h->s[i].cov);
+    palp_coverage_destroy(h->s[i].touched); /* as free_session does (a leak at exit until 2026-12-07) */
     free(h->deform_msg[i].buf);
     free(h->live_msg[i].buf);
     free(h->answers_msg[i].buf);
@@ -2547,6 +2571,8 @@ static void set_reply(palp_web_cursor *c, const char *op, int ok, uint32_t mark_
 
 /* {"finding": "mark" | "withdraw"} from a page (web thread). Every check is made here, under the
  * mutex, against what the DDS thread holds; the write itself happens outside it. */
+static int scope_allows(const palp_web_hub *h, const palp_web_cursor *c, uint32_t id);
+
 static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
   const char *op = mark ? "mark" : "withdraw";
   const char *why = NULL;
@@ -2558,6 +2584,8 @@ static int finding_request(palp_web_hub *h, palp_web_cursor *c, int mark) {
   pthread_mutex_lock(&h->mu);
   if (!c->trainee) {
     why = "only the trainee page of a session may mark findings; this page is a viewer";
+  } else if (c->scope[0] && !scope_allows(h, c, c->trainee)) {
+    why = "the session this page was bound to is no longer this trainee's";
   } else {
     for (int i = 0; i < PALP_WEB_MAX_SESSIONS && slot < 0; i++)
       if (h->slot_sid[i] == c->trainee) slot = i;
@@ -2742,12 +2770,28 @@ static const item *oldest_after(const item *ring, const uint32_t *sids, uint32_t
   return pick;
 }
 
+/* Under h->mu: a trainee's page (scoped) lets go of a session id that is open for someone else. The
+ * scope was checked as the page bound or followed it, never again, and a restarted server numbers its
+ * sessions from 1: alice's page bound to session 77 was sent bob's live data, and his told score as
+ * hers, once a new run opened 77 for him (session 80's review, 2026-12-07). Checked at each of the
+ * page's wake-ups (<= 100 ms), before anything is picked for it. */
+static void rescope(const palp_web_hub *h, palp_web_cursor *c) {
+  if (!c->scope[0]) return;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    if (!h->slot_sid[i] || !strcmp(h->slot_trainee[i], c->scope)) continue;
+    if (c->trainee == h->slot_sid[i]) c->trainee = 0;
+    if (c->mode == PALP_WEB_FOLLOW_SESSION && c->follow == h->slot_sid[i]) c->mode = PALP_WEB_FOLLOW_NONE;
+    if (c->followed == h->slot_sid[i]) c->followed = 0;
+  }
+}
+
 int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned char **buf, size_t *len,
                       int *binary) {
   int rc = 0;
   *binary = 0;
   const int64_t now = palp_dds_now_ns();
   pthread_mutex_lock(&h->mu);
+  rescope(h, c);
   if (!c->hello_sent && h->hello.buf) {
     rc = take(&h->hello, pre, buf, len);
     if (rc > 0) c->hello_sent = 1;
@@ -2842,6 +2886,7 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   const int answers_ok = !c->scope[0] && !c->trainee && c->mode == PALP_WEB_FOLLOW_ALL;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
     if (!h->slot_sid[i] || (c->mode == PALP_WEB_FOLLOW_SESSION && h->slot_sid[i] != c->follow)) continue;
+    if (c->scope[0] && strcmp(h->slot_trainee[i], c->scope) != 0) continue; /* rescope, and by construction */
     const item *d = &h->deform_msg[i], *l = &h->live_msg[i], *a = &h->answers_msg[i], *cv = &h->cover_msg[i];
     if (answers_ok && a->buf && c->answers_ver[i] != a->ver) {
       rc = take(a, pre, buf, len);
@@ -2867,5 +2912,8 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   }
 out:
   pthread_mutex_unlock(&h->mu);
+  /* Every text frame a page is sent is valid UTF-8, cleaned here, in the page's own copy, whatever
+   * message it is and whoever wrote its strings (utf8.h). */
+  if (rc > 0 && !*binary) palp_web_utf8_clean(*buf + pre, *len);
   return rc;
 }

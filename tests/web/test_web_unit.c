@@ -13,6 +13,7 @@
 #include "access.h"
 #include "coverage.h"
 #include "hub.h"
+#include "utf8.h"
 #include "palp.h"
 #include "check.h"
 #include "palp_dds.h"
@@ -2023,6 +2024,174 @@ static void test_catalogue_bound(void) {
   palp_mesh_destroy(&dome);
 }
 
+/* ---- session 80's review (2026-12-07) ---- */
+
+/* palp_web_utf8_clean against RFC 3629's forms, the expected texts written out by hand. */
+static void test_utf8(void) {
+  static const struct {
+    const char *in, *out;
+    size_t replaced;
+    const char *what;
+  } cases[] = {
+      {"Tast\xfc" "bung", "Tast?bung", 1, "a Latin-1 byte"},
+      {"\xc3\x9c \xe2\x82\xac \xf0\x9d\x84\x9e", "\xc3\x9c \xe2\x82\xac \xf0\x9d\x84\x9e", 0, "2-, 3- and 4-byte forms"},
+      {"a\xc0\xaf" "b", "a??b", 2, "an overlong '/'"},
+      {"\xed\xa0\x80", "???", 3, "a surrogate (U+D800)"},
+      {"x\xe2\x82", "x??", 2, "a sequence cut short at the end"},
+      {"\xf4\x90\x80\x80", "????", 4, "a code point past U+10FFFF"},
+      {"\x80{\"a\":1}", "?{\"a\":1}", 1, "a stray continuation byte before JSON"},
+  };
+  for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+    unsigned char b[64];
+    const size_t n = strlen(cases[k].in);
+    memcpy(b, cases[k].in, n);
+    const size_t r = palp_web_utf8_clean(b, n);
+    CHECK(r == cases[k].replaced && !memcmp(b, cases[k].out, n), "utf8: %s: %zu byte(s) replaced (want %zu)",
+          cases[k].what, r, cases[k].replaced);
+  }
+}
+
+typedef struct title_want {
+  char title[64];
+} title_want;
+static int exercise_title(const cJSON *j, void *arg) {
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  if (!type || strcmp(type, "exercises")) return 0;
+  const cJSON *e;
+  cJSON_ArrayForEach(e, cJSON_GetObjectItem(j, "exercises")) {
+    const char *t = cJSON_GetStringValue(cJSON_GetObjectItem(e, "title"));
+    if (t && !strncmp(t, "Tast", 4)) return snprintf(((title_want *)arg)->title, 64, "%s", t), 1;
+  }
+  return 0;
+}
+
+static int is_live_of(const cJSON *j, void *arg) {
+  const char *type = cJSON_GetStringValue(cJSON_GetObjectItem(j, "type"));
+  return type && (!strcmp(type, "live") || !strcmp(type, "cover")) &&
+         (uint32_t)cJSON_GetNumberValue(cJSON_GetObjectItem(j, "session")) == *(const uint32_t *)arg;
+}
+
+/* Domain 176: the bridge's review fixes end to end.
+ *  - an exercise titled in Latin-1 reaches a page as valid UTF-8 ("Tast?bung"): before, the raw byte
+ *    went out and a browser closed every page on the exercises message;
+ *  - a session whose OPEN state names another, unknown phantom loses its coverage, and a finger sample
+ *    then is harmless: before, it read the phantom's radius through NULL (SIGSEGV: this test died);
+ *  - alice's scoped page bound to session 4730 gets nothing of bob's session 4730, a new run's under
+ *    the same id, and her mark is refused with why: before, bob's live messages came to her page. */
+static void test_review_80(void) {
+  palp_web_hub *h = started_hub(176, 0);
+  if (!h) return;
+  const dds_entity_t pp = dds_create_participant(176, NULL, NULL), pp2 = dds_create_participant(176, NULL, NULL);
+  const dds_entity_t w_cat = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_CATALOGUE), PALP_TOPIC_CATALOGUE);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t w_state2 =
+      palp_dds_create_writer(pp2, palp_dds_create_topic(pp2, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t w_ex = palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_EXERCISE), PALP_TOPIC_EXERCISE);
+  CHECK(w_cat > 0 && w_state > 0 && w_state2 > 0 && w_ex > 0, "review 80: DDS entities");
+  palp_web_cursor page;
+  CHECK(palp_web_hub_attach(h, &page, 4) == 0, "review 80: a page");
+
+  /* Latin-1 */
+  palp_Exercise ex;
+  memset(&ex, 0, sizeof ex);
+  ex.phantom_id = 2;
+  snprintf(ex.name, sizeof ex.name, "latin1");
+  snprintf(ex.title, sizeof ex.title, "Tast\xfc" "bung");
+  ex.time_limit = 300;
+  ex.max_force = 10;
+  dds_write(w_ex, &ex);
+  title_want tw = {""};
+  CHECK(next_json(h, &page, 300, exercise_title, &tw) && !strcmp(tw.title, "Tast?bung"),
+        "an exercise titled in Latin-1 reaches the page as valid UTF-8: \"%s\" (want \"Tast?bung\")", tw.title);
+
+  /* the phantom changes under a session */
+  palp_Vec3 rest[4] = {{0, 0, 0.04}, {0.04, 0, 0}, {-0.02, 0.0346, 0}, {-0.02, -0.0346, 0}};
+  int32_t tri[9] = {0, 1, 2, 0, 2, 3, 0, 3, 1};
+  palp_Phantom ph;
+  memset(&ph, 0, sizeof ph);
+  ph.phantom_id = 2;
+  snprintf(ph.name, sizeof ph.name, "review dome");
+  ph.radius = 0.04;
+  ph.dome_triangle_count = 3;
+  ph.rest = (dds_sequence_palp_Vec3){._length = 4, ._maximum = 4, ._buffer = rest, ._release = false};
+  ph.triangles = (dds_sequence_long){._length = 9, ._maximum = 9, ._buffer = tri, ._release = false};
+  dds_write(w_cat, &ph);
+  const uint32_t sid = 4720;
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t w_fs = palp_dds_create_writer(palp_dds_session_publisher(pp, part),
+                                                   palp_dds_create_topic(pp, PALP_TOPIC_FINGER_SAMPLE),
+                                                   PALP_TOPIC_FINGER_SAMPLE);
+  dds_sleepfor(DDS_MSECS(300)); /* the phantom first */
+  write_open_state(w_state, sid, 2, part, "pat");
+  dds_sleepfor(DDS_MSECS(300));
+  int32_t t0[1] = {0};
+  write_pole_sample(w_fs, sid, 1, 0.005, 2.0, t0, 1);
+  dds_sleepfor(DDS_MSECS(200));
+  write_open_state(w_state, sid, 99, part, "pat"); /* a phantom the bridge does not know */
+  dds_sleepfor(DDS_MSECS(300));
+  for (uint64_t f = 2; f < 6; f++) write_pole_sample(w_fs, sid, f, 0.005, 2.0, t0, 1);
+  dds_sleepfor(DDS_MSECS(300));
+  palp_web_hub_stats st;
+  palp_web_hub_stats_get(h, &st);
+  CHECK(st.finger_samples >= 5, "the bridge took the finger samples after its session's phantom went unknown (%llu "
+        "of 5) and lives on", (unsigned long long)st.finger_samples);
+
+  /* a session id reused for another trainee */
+  const uint32_t sa = 4730;
+  char pa[64], ctl[64];
+  palp_dds_session_partition(sa, pa, sizeof pa);
+  palp_web_cursor alice;
+  CHECK(palp_web_hub_attach(h, &alice, 4) == 0, "alice's page");
+  palp_web_hub_scope(h, &alice, "alice");
+  write_open_state(w_state, sa, 2, pa, "alice");
+  dds_sleepfor(DDS_MSECS(400));
+  snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sa);
+  CHECK(palp_web_hub_control(h, &alice, ctl, strlen(ctl)) == 0, "alice's page binds to her session %u", sa);
+  palp_SessionState closed;
+  memset(&closed, 0, sizeof closed);
+  closed.session_id = sa, closed.phase = palp_PHASE_CLOSED, closed.phantom_id = 2;
+  snprintf(closed.partition, sizeof closed.partition, "%s", pa);
+  snprintf(closed.trainee_name, sizeof closed.trainee_name, "alice");
+  dds_write(w_state, &closed);
+  dds_sleepfor(DDS_MSECS(300));
+  for (int i = 0; i < 30; i++) { /* her page reads on */
+    unsigned char *b = NULL;
+    size_t n = 0;
+    int bin = 0;
+    palp_web_hub_next(h, &alice, 0, &b, &n, &bin);
+    free(b);
+  }
+  write_open_state(w_state2, sa, 2, pa, "bob"); /* a restarted server's new run: session 4730 is bob's */
+  dds_sleepfor(DDS_MSECS(300));
+  const dds_entity_t pub2 = palp_dds_session_publisher(pp2, pa);
+  const dds_entity_t w_lm2 = palp_dds_create_writer(pub2, palp_dds_create_topic(pp2, PALP_TOPIC_LOCAL_MODEL),
+                                                    PALP_TOPIC_LOCAL_MODEL);
+  const dds_entity_t w_fs2 = palp_dds_create_writer(pub2, palp_dds_create_topic(pp2, PALP_TOPIC_FINGER_SAMPLE),
+                                                    PALP_TOPIC_FINGER_SAMPLE);
+  dds_sleepfor(DDS_MSECS(300));
+  for (uint64_t f = 1; f <= 20; f++) {
+    palp_LocalModel lm = pressing_model(sa, 0, f);
+    dds_write(w_lm2, &lm);
+    write_pole_sample(w_fs2, sa, f, 0.005, 2.0, t0, 1);
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  uint32_t want = sa;
+  const int leaked = next_json(h, &alice, 100, is_live_of, &want);
+  CHECK(!leaked, "alice's page is sent nothing live of session %u once it is bob's", sa);
+  /* her mark: refused, with why (as a live page would ask it) */
+  CHECK(palp_web_hub_control(h, &alice, "{\"finding\":\"mark\"}", 18) >= 0, "alice's page asks to mark");
+  int ok = -1, mark = -1;
+  char why[256] = "";
+  CHECK(finding_reply(h, &alice, &ok, &mark, why, sizeof why) && !ok, "her mark refused: \"%s\"", why);
+  palp_web_hub_detach(h, &alice);
+  palp_web_hub_detach(h, &page);
+  palp_web_hub_destroy(h);
+  dds_delete(pp2);
+  dds_delete(pp);
+}
+
 int main(void) {
   test_bands();
   test_access();
@@ -2031,6 +2200,8 @@ int main(void) {
   test_catalogue_bound();
   test_findings_no_join();
   test_not_server();
+  test_utf8();
+  test_review_80();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }
