@@ -604,8 +604,13 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
     return rc;
   }
   l->stats.max_force = l->core.renderer.def.max_force;
-  if (palp_cli_mailbox_init(&l->mailbox) < 0 || pthread_mutex_init(&l->view_lock, NULL) != 0 ||
-      sem_init(&l->out_sem, 0, 0) != 0) {
+  /* each made thing undone if a later one cannot be made (2026-12-07: they were left) */
+  const int mb_ok = palp_cli_mailbox_init(&l->mailbox) == 0;
+  const int view_ok = mb_ok && pthread_mutex_init(&l->view_lock, NULL) == 0;
+  const int sem_ok = view_ok && sem_init(&l->out_sem, 0, 0) == 0;
+  if (!sem_ok) {
+    if (view_ok) pthread_mutex_destroy(&l->view_lock);
+    if (mb_ok) palp_cli_mailbox_destroy(&l->mailbox);
     snprintf(err, errlen, "haptic loop: cannot create its locks");
     return PALP_ENOMEM;
   }
@@ -614,6 +619,7 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
   l->t0_ns = palp_dds_now_ns();
   if (palp_rt_thread_start(&l->thread, def->rt_priority, haptic_main, l, &l->stats.rt_ok) < 0) {
     snprintf(err, errlen, "haptic loop: cannot start the thread");
+    sem_destroy(&l->out_sem);
     palp_cli_mailbox_destroy(&l->mailbox);
     pthread_mutex_destroy(&l->view_lock);
     return PALP_ENOMEM;
@@ -632,6 +638,9 @@ int palp_cli_haptic_start(palp_cli_haptic_loop *l, const palp_cli_haptic_def *de
       pthread_join(l->thread, NULL);
       palp_timer_floor_stop(&l->floor);
       l->started = 0;
+      sem_destroy(&l->out_sem);
+      palp_cli_mailbox_destroy(&l->mailbox);
+      pthread_mutex_destroy(&l->view_lock);
       snprintf(err, errlen, "haptic loop: cannot start the sender thread");
       return PALP_ENOMEM;
     }

@@ -707,6 +707,22 @@ static int map_and_rule(const cJSON *j, void *arg) {
   return !strcmp(w->cw.bands, w->want);
 }
 
+/* A phantom of radius 40 mm: the pole and three points of the rim, three dome triangles (the first,
+ * 0-1-2, at the pole). */
+static void write_small_dome(dds_entity_t w_cat, uint32_t id, const char *name) {
+  palp_Vec3 rest[4] = {{0, 0, 0.04}, {0.04, 0, 0}, {-0.02, 0.0346, 0}, {-0.02, -0.0346, 0}};
+  int32_t tri[9] = {0, 1, 2, 0, 2, 3, 0, 3, 1};
+  palp_Phantom ph;
+  memset(&ph, 0, sizeof ph);
+  ph.phantom_id = id;
+  snprintf(ph.name, sizeof ph.name, "%s", name);
+  ph.radius = 0.04;
+  ph.dome_triangle_count = 3;
+  ph.rest = (dds_sequence_palp_Vec3){._length = 4, ._maximum = 4, ._buffer = rest, ._release = false};
+  ph.triangles = (dds_sequence_long){._length = 9, ._maximum = 9, ._buffer = tri, ._release = false};
+  dds_write(w_cat, &ph);
+}
+
 static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   const uint32_t sid = 4712;
   palp_web_cursor cur, *c = &cur; /* a page of its own: the other is bound to session 4711 */
@@ -727,18 +743,7 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
       palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_FINGER_SAMPLE), PALP_TOPIC_FINGER_SAMPLE);
   CHECK(pub > 0 && w_cat > 0 && w_state > 0 && w_ex > 0 && w_contact > 0 && w_lm > 0 && w_fs > 0,
         "exercise bands: DDS entities");
-  /* a phantom of radius 40 mm: the pole and three points of the rim, three dome triangles */
-  palp_Vec3 rest[4] = {{0, 0, 0.04}, {0.04, 0, 0}, {-0.02, 0.0346, 0}, {-0.02, -0.0346, 0}};
-  int32_t tri[9] = {0, 1, 2, 0, 2, 3, 0, 3, 1};
-  palp_Phantom ph;
-  memset(&ph, 0, sizeof ph);
-  ph.phantom_id = 2;
-  snprintf(ph.name, sizeof ph.name, "exercise dome");
-  ph.radius = 0.04;
-  ph.dome_triangle_count = 3;
-  ph.rest = (dds_sequence_palp_Vec3){._length = 4, ._maximum = 4, ._buffer = rest, ._release = false};
-  ph.triangles = (dds_sequence_long){._length = 9, ._maximum = 9, ._buffer = tri, ._release = false};
-  dds_write(w_cat, &ph);
+  write_small_dome(w_cat, 2, "exercise dome");
   palp_Exercise ex;
   memset(&ex, 0, sizeof ex);
   ex.phantom_id = 2;
@@ -2107,17 +2112,7 @@ static void test_review_80(void) {
         "an exercise titled in Latin-1 reaches the page as valid UTF-8: \"%s\" (want \"Tast?bung\")", tw.title);
 
   /* the phantom changes under a session */
-  palp_Vec3 rest[4] = {{0, 0, 0.04}, {0.04, 0, 0}, {-0.02, 0.0346, 0}, {-0.02, -0.0346, 0}};
-  int32_t tri[9] = {0, 1, 2, 0, 2, 3, 0, 3, 1};
-  palp_Phantom ph;
-  memset(&ph, 0, sizeof ph);
-  ph.phantom_id = 2;
-  snprintf(ph.name, sizeof ph.name, "review dome");
-  ph.radius = 0.04;
-  ph.dome_triangle_count = 3;
-  ph.rest = (dds_sequence_palp_Vec3){._length = 4, ._maximum = 4, ._buffer = rest, ._release = false};
-  ph.triangles = (dds_sequence_long){._length = 9, ._maximum = 9, ._buffer = tri, ._release = false};
-  dds_write(w_cat, &ph);
+  write_small_dome(w_cat, 2, "review dome");
   const uint32_t sid = 4720;
   char part[64];
   palp_dds_session_partition(sid, part, sizeof part);
