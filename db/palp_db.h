@@ -73,6 +73,15 @@ typedef enum palp_db_end_reason {
   PALP_DB_END_ERROR = 4
 } palp_db_end_reason;
 const char *palp_db_end_reason_name(palp_db_end_reason r); /* "normal", ... ; NULL if unknown */
+/* How a session ended, from the reason palp-server gives as it closes it (server/server.c,
+ * close_session: the session log's detail and the CLOSED state's reason): a reason naming a failure
+ * ("model step failed: ...", "tick pool full", "server identity conflict") is error; a lost station
+ * ("trainee station lost (...)", and its "...; not back within N s") station_vanished; "server
+ * shutdown" server_shutdown; the rest ("trainee station left", "exercise time limit reached", NULL)
+ * normal. One function for palp-server's own log (server/db_log.c) and palp-recorder's (from the
+ * CLOSED state), so the two logs of one session cannot disagree (they did until 2026-12-07: the
+ * recorder logged a failed model step as normal). Pure. */
+palp_db_end_reason palp_db_end_reason_of(const char *reason);
 
 typedef enum palp_db_contact_op {
   PALP_DB_OP_ADD = 1,

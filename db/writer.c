@@ -199,6 +199,17 @@ const char *palp_db_end_reason_name(palp_db_end_reason r) {
   return NULL;
 }
 
+palp_db_end_reason palp_db_end_reason_of(const char *reason) {
+  if (!reason) return PALP_DB_END_NORMAL;
+  /* a failure first: whatever else a reason says, a fault ended the session */
+  if (strstr(reason, "failed") || strstr(reason, "full") || strstr(reason, "error") || strstr(reason, "conflict"))
+    return PALP_DB_END_ERROR;
+  if (strstr(reason, "lost") || strstr(reason, "vanish") || strstr(reason, "liveliness"))
+    return PALP_DB_END_STATION_VANISHED;
+  if (strstr(reason, "shutdown")) return PALP_DB_END_SERVER_SHUTDOWN;
+  return PALP_DB_END_NORMAL;
+}
+
 const char *palp_db_event_kind_name(palp_db_event_kind k) {
   static const char *const n[PALP_DB_EVENT_KIND_COUNT] = {
       NULL, "join", "leave", "reject", "clamp", "overrun", "shed", "disk_error", "info", "valid_range",

@@ -186,10 +186,7 @@ static void on_closed(void *ctx, const palp_srv_session_summary *sum) {
   if (!s) return;
   flush_counts(l, s, s->last_frame);
   const char *why = sum->close_reason ? sum->close_reason : "";
-  palp_db_end_reason r = PALP_DB_END_NORMAL;
-  if (strstr(why, "lost")) r = PALP_DB_END_STATION_VANISHED;
-  else if (strstr(why, "shutdown")) r = PALP_DB_END_SERVER_SHUTDOWN;
-  else if (strstr(why, "failed") || strstr(why, "full")) r = PALP_DB_END_ERROR;
+  const palp_db_end_reason r = palp_db_end_reason_of(why); /* as palp-recorder classes the CLOSED state's reason */
   palp_db_log_event(l->w, s->h, PALP_DB_EVENT_LEAVE, s->last_frame, sum->info.trainee_station, 1);
   palp_db_log_session_end(l->w, s->h, r, why, 0);
   /* An exercise session is scored for the instructors once its end is in the log; not one the

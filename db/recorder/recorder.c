@@ -520,13 +520,6 @@ static void on_phantom(recorder *r, const palp_Phantom *p) {
   complete_sessions(r, ph, p->phantom_id);
 }
 
-static palp_db_end_reason end_reason(const char *why) {
-  if (strstr(why, "shutdown")) return PALP_DB_END_SERVER_SHUTDOWN;
-  if (strstr(why, "lost") || strstr(why, "vanish") || strstr(why, "liveliness")) return PALP_DB_END_STATION_VANISHED;
-  if (strstr(why, "error")) return PALP_DB_END_ERROR;
-  return PALP_DB_END_NORMAL;
-}
-
 static void log_exercise(recorder *r, rsession *s, const char *name, const char *json) {
   if (s->exercise) return; /* transient-local re-delivery */
   const int rc = palp_db_log_exercise(r->w, s->h, name, json);
@@ -843,7 +836,7 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
                                "not recorded (someone forged its session id)",
                                s->foreign));
   count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_LEAVE, s->frame, m->reason, 1));
-  count(r, palp_db_log_session_end(r->w, s->h, end_reason(m->reason), m->reason, 0));
+  count(r, palp_db_log_session_end(r->w, s->h, palp_db_end_reason_of(m->reason), m->reason, 0));
   palp_log_info(r->log, "session %u closed (%s)", m->session_id, PALP_PRINTABLE_LONG(m->reason));
   set_open(r, s, 0);
 }

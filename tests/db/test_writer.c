@@ -722,6 +722,39 @@ static void test_refused(void) {
   palp_db_close(db);
 }
 
+/* --- how a session ended, from palp-server's close reason ---------------------------------------
+ * Every reason server/server.c closes a session with (close_session's callers: station_leave's
+ * "trainee station " + its reason, a held session's "...; not back within N s", the model's failure,
+ * the time limit, the tick pool, the identity conflict, the shutdown), classed by hand. palp-server's
+ * own log and palp-recorder's call the one function; until 2026-12-07 the recorder had its own, which
+ * said normal for "model step failed: ..." and "tick pool full". */
+static void test_end_reason_of(void) {
+  static const struct {
+    const char *reason;
+    palp_db_end_reason want;
+  } cases[] = {
+      {"trainee station left", PALP_DB_END_NORMAL},
+      {"trainee station re-joined", PALP_DB_END_NORMAL},
+      {"trainee station left (request disposed)", PALP_DB_END_NORMAL},
+      {"exercise time limit reached", PALP_DB_END_NORMAL},
+      {"trainee station lost (liveliness lease expired)", PALP_DB_END_STATION_VANISHED},
+      {"trainee station lost (its request writer is gone)", PALP_DB_END_STATION_VANISHED},
+      {"trainee station lost (liveliness lease expired); not back within 10 s", PALP_DB_END_STATION_VANISHED},
+      {"model step failed: state became non-finite", PALP_DB_END_ERROR},
+      {"model step failed: sparse factorisation failed", PALP_DB_END_ERROR},
+      {"tick pool full", PALP_DB_END_ERROR},
+      {"server identity conflict", PALP_DB_END_ERROR},
+      {"server shutdown", PALP_DB_END_SERVER_SHUTDOWN},
+      {"", PALP_DB_END_NORMAL},
+      {NULL, PALP_DB_END_NORMAL},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    const palp_db_end_reason got = palp_db_end_reason_of(cases[i].reason);
+    CHECK(got == cases[i].want, "end reason of \"%s\": %s, want %s", cases[i].reason ? cases[i].reason : "(null)",
+          palp_db_end_reason_name(got), palp_db_end_reason_name(cases[i].want));
+  }
+}
+
 /* A session found by its exact uid is found through the uid index, not a scan of every uid: delete
  * resolves each name it is given this way, and 10,000 names on a 10,000-session log were 10^8 uid
  * comparisons (2026-12-06: 97 s for 5,000 names). SQLite's own counter of full-scan steps, read as
@@ -785,5 +818,6 @@ int main(int argc, char **argv) {
   test_debrief_detail();
   test_refused();
   test_find_exact();
+  test_end_reason_of();
   CHECK_DONE();
 }
