@@ -8,8 +8,9 @@
  * dropped. Producers signal the worker only when a batch's worth of records is waiting, so the
  * common enqueue is a lock, a memcpy and an unlock with no system call.
  *
- * Control records (session begin/end, events) may use a reserve above the data capacity, so a
- * queue flooded with frames still records who was in a session and how it ended.
+ * Control records (session begin/end, events) may use a reserve above the data capacity, in records
+ * and in bytes, so a queue flooded with frames or meshes still records who was in a session and how it
+ * ended.
  *
  * Disk errors: a failed batch is rolled back and retried after a doubling back-off
  * (retry_backoff_s, capped at 1 s) up to retry_limit times, then dropped and counted per kind and
@@ -17,6 +18,7 @@
  * count. Either way the tick loop never sees the disk. */
 #include <errno.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +29,13 @@
 #include "palp_db.h"
 
 #define CONTROL_RESERVE 1024 /* slots above queue_capacity for begin/end/event records */
+/* Bytes above queue_max_bytes that only control records may hold. Until 2026-12-07 the reserve was in
+ * slots only: a queue holding queue_max_bytes of meshes (a stalled disk) refused a session's end like a
+ * mesh, and palp-recorder left that session "(running)". The bound is the slot reserve at 4 kB a record
+ * (measured 2026-12-07: a session begin with its scene 0.8-1.8 kB, an event's or an end's detail under
+ * 0.5 kB, a shipped exercise 2-4 kB): room for every reserved slot as they are used, while a flood of
+ * large control records (a 32 kB exercise each) still leaves the queue's memory bounded. */
+#define CONTROL_RESERVE_BYTES ((size_t)4 << 20)
 #define MAX_TXN_RECORDS 16384 /* records per transaction: bounds one commit's latency */
 #define SHED_LOG_INTERVAL_S 1.0
 #define DROP_SAY_INTERVAL_S 10.0 /* stderr lines for dropped batches: a full disk fails one every ~0.4 s */
@@ -260,7 +269,9 @@ static rec *claim(palp_db_writer *w, palp_db_record_kind kind, palp_db_session s
                       kind == PALP_DB_REC_EVENT || kind == PALP_DB_REC_EXERCISE || kind == PALP_DB_REC_FINDING ||
                       kind == PALP_DB_REC_SESSION_SCENE || kind == PALP_DB_REC_SESSION_PARAMS;
   const int limit = control ? w->cap : w->data_cap;
-  if (w->count >= limit || (bytes > 0 && w->queue_bytes + bytes > w->opts.queue_max_bytes)) {
+  const size_t max_bytes = w->opts.queue_max_bytes, reserve = control ? CONTROL_RESERVE_BYTES : 0;
+  const size_t byte_limit = max_bytes > SIZE_MAX - reserve ? SIZE_MAX : max_bytes + reserve;
+  if (w->count >= limit || (bytes > 0 && (bytes > byte_limit || w->queue_bytes > byte_limit - bytes))) {
     w->st_.shed++;
     w->st_.shed_by_kind[kind]++;
     if (s > 0 && s < w->ps_cap) w->ps[s].shed++;

@@ -722,6 +722,77 @@ static void test_refused(void) {
   palp_db_close(db);
 }
 
+/* --- a session's end is taken while meshes fill the queue's bytes ----------------------------------
+ * The disk stalled as the reviewer stalled it (2026-12-07): another connection holds BEGIN EXCLUSIVE,
+ * so the worker waits in its busy handler (5 s) and retires nothing. Meshes of 1,000 vertices (24 kB),
+ * then smaller ones, fill a 256 kB byte cap to within 24 bytes; then the session's event and its end must be taken
+ * (before, the end was refused like a mesh and the session stayed "(running)"), a mesh still refused
+ * (data never use the reserve), and 256 kB session-less events taken at most 16 times (the 4 MiB
+ * reserve / 256 kB) before one is refused. Once the lock goes: the end and its detail in the row. */
+static void test_control_bytes(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "control-bytes.db");
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  o.queue_max_bytes = 256 * 1024;
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, &o, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_def d = {.uid = "control-bytes-1", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "begin");
+  REQUIRE(palp_db_writer_flush(w, 10) == 0, "flush the begin");
+  sqlite3 *lock;
+  REQUIRE(sqlite3_open(p, &lock) == SQLITE_OK && sqlite3_exec(lock, "BEGIN EXCLUSIVE", NULL, NULL, NULL) == SQLITE_OK,
+          "another connection holds the file: %s", sqlite3_errmsg(lock));
+  enum { NV = 1000 };
+  static palp_vec3 pos[NV];
+  int meshes = 0, refused = 0, frame = 0;
+  /* to the byte: meshes of 1,000 vertices, then 100, 10 and 1 (24 bytes) until each is refused */
+  for (int n = NV; n >= 1; n /= 10) {
+    int no = 0;
+    while (!no && frame < 1000) {
+      const int rc = palp_db_log_mesh(w, s, ++frame, pos, n);
+      if (rc == 0) meshes += n == NV;
+      else no = refused = rc == PALP_EFULL;
+    }
+  }
+  CHECK(refused && meshes >= 1 && meshes <= 11, "meshes fill a 256 kB queue to within 24 bytes: %d of 24 kB taken, "
+        "then refused (%d)", meshes, refused);
+  const int ev = palp_db_log_event(w, s, PALP_DB_EVENT_LEAVE, frame, "trainee station lost (liveliness lease expired)", 1);
+  const int end = palp_db_log_session_end(w, s, PALP_DB_END_NORMAL, "exercise time limit reached", 0);
+  CHECK(ev == 0 && end == 0, "with the queue's bytes full of meshes, the session's leave event (%d) and end (%d) are "
+        "taken (0), not refused (%d)", ev, end, PALP_EFULL);
+  palp_db_session s2;
+  palp_db_session_def d2 = d;
+  d2.uid = "control-bytes-2";
+  REQUIRE(palp_db_log_session_begin(w, &d2, &s2) == 0, "a second session begins (a control record)");
+  CHECK(palp_db_log_mesh(w, s2, 1, pos, NV) == PALP_EFULL, "a mesh is still refused: data never use the reserve");
+  static char big[256 * 1024];
+  memset(big, 'x', sizeof big - 1);
+  int big_taken = 0, big_refused = 0;
+  for (int i = 0; i < 40 && !big_refused; i++) {
+    const int rc = palp_db_log_event(w, 0, PALP_DB_EVENT_INFO, -1, big, 1);
+    if (rc == 0) big_taken++;
+    else big_refused = rc == PALP_EFULL;
+  }
+  printf("control bytes: %d meshes of 24 kB taken before one was refused; %d events of 256 kB over the cap\n", meshes,
+         big_taken);
+  CHECK(big_refused && big_taken >= 1 && big_taken <= 16, "256 kB events over the byte cap: %d taken, then refused "
+        "(%d): the reserve is bounded (4 MiB)", big_taken, big_refused);
+  sqlite3_exec(lock, "COMMIT", NULL, NULL, NULL);
+  sqlite3_close(lock);
+  palp_db_writer_flush(w, 20);
+  palp_db_writer_close(w);
+  sqlite3 *h;
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE uid = 'control-bytes-1' AND end_reason = 'normal' AND "
+                     "end_detail = 'exercise time limit reached'") == 1,
+        "the session's end and its detail in its row");
+  CHECK(db_scalar(h, "SELECT count(*) FROM event e JOIN session s ON s.id = e.session_id WHERE s.uid = "
+                     "'control-bytes-1' AND e.kind = 'leave'") == 1,
+        "its leave event in the log");
+  sqlite3_close(h);
+}
+
 /* --- how a session ended, from palp-server's close reason ---------------------------------------
  * Every reason server/server.c closes a session with (close_session's callers: station_leave's
  * "trainee station " + its reason, a held session's "...; not back within N s", the model's failure,
@@ -819,5 +890,6 @@ int main(int argc, char **argv) {
   test_refused();
   test_find_exact();
   test_end_reason_of();
+  test_control_bytes();
   CHECK_DONE();
 }
