@@ -156,9 +156,9 @@ typedef struct rsession {
   palp_finding_answers marks; /* findings awaiting the server's answer, and answers their finding */
   int64_t findings_unanswered;
   int closing;                  /* CLOSED seen; ended when its debrief arrives or DEBRIEF_WAIT passes */
-  dds_time_t closing_since;
+  int64_t closing_since;        /* palp_dds_now_ns() */
   palp_SessionState close_state;
-  dds_time_t lost_since; /* its state's writer lapsed then (0: alive); ended as lost RECORDER_SERVER_GRACE later */
+  int64_t lost_since; /* its state's writer lapsed then (palp_dds_now_ns(); 0: alive); ended as lost RECORDER_SERVER_GRACE later */
   int64_t foreign; /* contacts and findings naming it from a writer outside its partition: not recorded */
   /* Its contacts' rate (CONTACT_BURST): a token bucket per finger at its tick rate; the newest contact
    * over it kept (pending) until a token comes. */
@@ -202,7 +202,7 @@ typedef struct pending_open {
   int used;
   palp_SessionState state;
   dds_instance_handle_t writer, run; /* its state writer and that writer's participant */
-  dds_time_t since;
+  int64_t since;   /* palp_dds_now_ns() */
   int64_t seen_ns; /* palp_dds_now_ns() as its state was taken: its duration was its age then */
 } pending_open;
 #define MAX_PENDING 64
@@ -213,7 +213,7 @@ typedef struct pending_exercise {
   uint32_t session_id;
   char name[64];
   char *json; /* checked: it parses as an exercise */
-  dds_time_t since;
+  int64_t since; /* palp_dds_now_ns() */
 } pending_exercise;
 #define MAX_PENDING_EXERCISES 64
 #define PENDING_EXERCISE_WAIT DDS_SECS(10)
@@ -549,7 +549,7 @@ static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
     log_exercise(r, s, name, m->json);
     return;
   }
-  const dds_time_t now = dds_time();
+  const int64_t now = palp_dds_now_ns();
   pending_exercise *slot = NULL;
   for (int i = 0; i < MAX_PENDING_EXERCISES; i++) {
     pending_exercise *pe = &r->pending_ex[i];
@@ -685,7 +685,7 @@ static void open_session(recorder *r, const palp_SessionState *m, dds_instance_h
 /* Opens pending sessions whose phantom is now known, that waited long enough, or (force) whose
  * samples are arriving. */
 static void resolve_pending(recorder *r, uint32_t session_id, int force) {
-  const dds_time_t now = dds_time();
+  const int64_t now = palp_dds_now_ns();
   for (int i = 0; i < MAX_PENDING; i++) {
     pending_open *p = &r->pending[i];
     if (!p->used) continue;
@@ -801,7 +801,7 @@ static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handl
           r->pending[i].state = *m; /* fixed-size strings: a plain copy */
           r->pending[i].writer = writer;
           r->pending[i].run = run;
-          r->pending[i].since = dds_time();
+          r->pending[i].since = seen_ns;
           r->pending[i].seen_ns = seen_ns;
           return;
         }
@@ -815,7 +815,7 @@ static void on_state(recorder *r, const palp_SessionState *m, dds_instance_handl
   release_held(r, m->session_id, "its state came"); /* this run's, before it ends */
   if (s->exercise && !s->debriefed) { /* its debrief may still be on its way (DEBRIEF_WAIT) */
     s->closing = 1;
-    s->closing_since = dds_time();
+    s->closing_since = palp_dds_now_ns();
     s->close_state = *m;
     return;
   }
@@ -842,7 +842,7 @@ static void close_session(recorder *r, rsession *s, const palp_SessionState *m) 
 }
 
 /* Closed exercise sessions whose debrief arrived, or did not within DEBRIEF_WAIT. */
-static void end_closing_sessions(recorder *r, dds_time_t now) {
+static void end_closing_sessions(recorder *r, int64_t now) {
   for (int i = 0; i < MAX_SESSIONS; i++) {
     rsession *s = &r->s[i];
     if (s->open && s->closing && (s->debriefed || now - s->closing_since >= DEBRIEF_WAIT))
@@ -859,13 +859,13 @@ static void on_state_lost(recorder *r, const palp_SessionState *key) {
    * dds_instance_get_key with it (a dead server's session then stayed "running"). */
   rsession *s = find_session(r, key->session_id, 0);
   if (!s || !s->open || s->lost_since) return;
-  s->lost_since = dds_time();
+  s->lost_since = palp_dds_now_ns();
   palp_log_warn(r->log, "session %u: its server's state lapsed; kept open %.0f s for the server to come back",
                 key->session_id, (double)RECORDER_SERVER_GRACE * 1e-9);
 }
 
 /* Sessions whose server did not come back within RECORDER_SERVER_GRACE: ended as lost. */
-static void end_lost_sessions(recorder *r, dds_time_t now) {
+static void end_lost_sessions(recorder *r, int64_t now) {
   for (int i = 0; i < MAX_SESSIONS; i++) {
     rsession *s = &r->s[i];
     if (!s->open || !s->lost_since || now - s->lost_since < RECORDER_SERVER_GRACE) continue;
@@ -918,7 +918,7 @@ static void log_verdict(void *ctx, const palp_finding_sent *f, int verdict, cons
 /* Findings and answers older than the wait (all: the session ends) are given up. */
 static void settle_findings(recorder *r, rsession *s, int all) {
   verdict_ctx v = {r, s};
-  palp_finding_answers_settle(&s->marks, (double)dds_time() * 1e-9, PALP_FINDING_ANSWER_WAIT_S, all, log_verdict, &v);
+  palp_finding_answers_settle(&s->marks, (double)palp_dds_now_ns() * 1e-9, PALP_FINDING_ANSWER_WAIT_S, all, log_verdict, &v);
 }
 
 static void on_finding(recorder *r, const palp_Finding *m) {
@@ -930,14 +930,14 @@ static void on_finding(recorder *r, const palp_Finding *m) {
   palp_finding_sent f;
   palp_dds_finding_sent(m, &f);
   verdict_ctx v = {r, s};
-  palp_finding_answers_finding(&s->marks, &f, (double)dds_time() * 1e-9, log_verdict, &v);
+  palp_finding_answers_finding(&s->marks, &f, (double)palp_dds_now_ns() * 1e-9, log_verdict, &v);
 }
 
 static void on_finding_status(recorder *r, const palp_FindingStatus *m) {
   rsession *s = find_session(r, m->session_id, 0);
   if (!s) return;
   verdict_ctx v = {r, s};
-  palp_finding_answers_answer(&s->marks, m->last_mark_id, m->last_accepted, m->reason, (double)dds_time() * 1e-9,
+  palp_finding_answers_answer(&s->marks, m->last_mark_id, m->last_accepted, m->reason, (double)palp_dds_now_ns() * 1e-9,
                               log_verdict, &v);
 }
 
@@ -1852,13 +1852,17 @@ int main(int argc, char **argv) {
                 palp_app_version(), (unsigned)joined, domain == DDS_DOMAIN_DEFAULT ? " (the DDS config's default)" : "",
                 db, wildcard, dds_chosen,
                 palp_dds_security_state(&sec, security, sizeof security));
-  const dds_time_t t_end = duration > 0 ? dds_time() + (dds_duration_t)(duration * 1e9) : 0;
+  /* Its waits on the monotonic clock, as its held samples' (palp_dds_now_ns): on the wall clock, which
+   * NTP steps, a step back held a closed session, a lost server's or a pending state for as long as the
+   * step, and one forward ended them at once (until 2026-12-07). Times written into the log stay wall
+   * clock (now_unix, the writer's). */
+  const int64_t t_end = duration > 0 ? palp_dds_now_ns() + (int64_t)(duration * 1e9) : 0;
   /* No phantom 10 s after the start while other participants are on the domain: say once what may
    * be wrong (a secured classroom and a recorder without an identity records nothing). */
-  const dds_time_t t_hint = dds_time() + DDS_SECS(10);
+  const int64_t t_hint = palp_dds_now_ns() + DDS_SECS(10);
   int hinted = 0;
-  while (!stop_flag && (!t_end || dds_time() < t_end)) {
-    if (!hinted && dds_time() >= t_hint) {
+  while (!stop_flag && (!t_end || palp_dds_now_ns() < t_end)) {
+    if (!hinted && palp_dds_now_ns() >= t_hint) {
       hinted = 1;
       int any = 0;
       for (int i = 0; i < MAX_PHANTOMS && !any; i++) any = r->ph[i].used;
@@ -1936,7 +1940,6 @@ int main(int argc, char **argv) {
       }
       r->finding_strays = 0;
     }
-    const dds_time_t now = dds_time();
     const int64_t pass_ns = palp_dds_now_ns();
     for (int i = 0; i < MAX_SESSIONS; i++)
       if (r->s[i].open) {
@@ -1944,8 +1947,8 @@ int main(int argc, char **argv) {
         flush_contacts(r, &r->s[i], pass_ns, 0);
         fold_counts(r, &r->s[i], pass_ns, 0);
       }
-    end_closing_sessions(r, now);
-    end_lost_sessions(r, now);
+    end_closing_sessions(r, pass_ns);
+    end_lost_sessions(r, pass_ns);
     release_due(r, pass_ns);
     expire_held(r, pass_ns);
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
