@@ -208,12 +208,15 @@ typedef struct pending_open {
 #define MAX_PENDING 64
 #define PENDING_WAIT DDS_SECS(2)
 
-/* A session's exercise that arrived before the session's OPEN state (the two topics race). */
+/* A session's exercise that arrived before the session's OPEN state (the two topics race), with the
+ * server run that sent it and when: logged when that run opens the session within
+ * PENDING_EXERCISE_WAIT, else dropped (on_session_exercise, open_session). */
 typedef struct pending_exercise {
   uint32_t session_id;
   char name[64];
   char *json; /* checked: it parses as an exercise */
-  int64_t since; /* palp_dds_now_ns() */
+  int64_t since; /* palp_dds_now_ns() as it was taken */
+  dds_instance_handle_t run; /* its writer's participant (server_run_of; 0: not known) */
 } pending_exercise;
 #define MAX_PENDING_EXERCISES 64
 #define PENDING_EXERCISE_WAIT DDS_SECS(10)
@@ -529,8 +532,9 @@ static void log_exercise(recorder *r, rsession *s, const char *name, const char 
 }
 
 /* An exercise session's exercise, lesions included: checked as an exercise file is (it comes
- * from the network), then logged with its session, or kept until the session opens. */
-static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
+ * from the network), then logged with its session, or kept until the session opens. run: its
+ * writer's participant (0: not known). */
+static void on_session_exercise(recorder *r, const palp_SessionExercise *m, dds_instance_handle_t run) {
   char name[64], err[256];
   snprintf(name, sizeof name, "%s", m->name);
   palp_exercise *ex = malloc(sizeof *ex);
@@ -549,12 +553,23 @@ static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
     log_exercise(r, s, name, m->json);
     return;
   }
+  /* Until 2026-12-07 the first waiting entry of a session id won whatever its age and sender: another
+   * participant's exercise for id 7, or one left 12 s from an earlier run, was logged when the session
+   * opened, and the session's own, coming next, dropped as "re-delivered". Now the expired go first,
+   * the same run's again is a re-delivery, and another run's replaces it (the newest run's is the one
+   * whose session is about to open; open_session checks the run again). */
   const int64_t now = palp_dds_now_ns();
   pending_exercise *slot = NULL;
   for (int i = 0; i < MAX_PENDING_EXERCISES; i++) {
     pending_exercise *pe = &r->pending_ex[i];
-    if (pe->json && pe->session_id == m->session_id) return; /* re-delivered */
     if (pe->json && now - pe->since > PENDING_EXERCISE_WAIT) { /* its session never opened here */
+      free(pe->json);
+      memset(pe, 0, sizeof *pe);
+    }
+    if (pe->json && pe->session_id == m->session_id) {
+      if (pe->run == run) return; /* re-delivered (transient-local) */
+      palp_log_warn(r->log, "session %u: exercise \"%s\" from another participant replaces \"%s\", which waited for "
+                            "the session to open", m->session_id, PALP_PRINTABLE(name), PALP_PRINTABLE(pe->name));
       free(pe->json);
       memset(pe, 0, sizeof *pe);
     }
@@ -565,7 +580,7 @@ static void on_session_exercise(recorder *r, const palp_SessionExercise *m) {
     palp_log_warn(r->log, "session %u: its exercise arrived before the session and could not be kept", m->session_id);
     return;
   }
-  *slot = (pending_exercise){.session_id = m->session_id, .json = json, .since = now};
+  *slot = (pending_exercise){.session_id = m->session_id, .json = json, .since = now, .run = run};
   snprintf(slot->name, sizeof slot->name, "%s", name);
 }
 
@@ -672,10 +687,20 @@ static void open_session(recorder *r, const palp_SessionState *m, dds_instance_h
     snprintf(detail, sizeof detail, "%s joined as trainee from %s", m->trainee_name, m->trainee_station);
     count(r, palp_db_log_event(r->w, s->h, PALP_DB_EVENT_JOIN, -1, detail, 1));
     palp_log_info(r->log, "recording session %u as %s", m->session_id, uid);
+    /* The exercise that waited for it, if it came within PENDING_EXERCISE_WAIT of the state and from
+     * the run whose state opens it (a run not known on either side: the age alone decides). */
     for (int i = 0; i < MAX_PENDING_EXERCISES; i++) {
       pending_exercise *pe = &r->pending_ex[i];
       if (!pe->json || pe->session_id != m->session_id) continue;
-      log_exercise(r, s, pe->name, pe->json);
+      const int64_t waited = seen_ns - pe->since;
+      if (waited > PENDING_EXERCISE_WAIT)
+        palp_log_warn(r->log, "session %u: exercise \"%s\" not logged: it came %.1f s before the session opened (an "
+                              "earlier session's; the wait is %.0f s)", m->session_id, PALP_PRINTABLE(pe->name),
+                      (double)waited * 1e-9, (double)PENDING_EXERCISE_WAIT * 1e-9);
+      else if (pe->run && run && pe->run != run)
+        palp_log_warn(r->log, "session %u: exercise \"%s\" not logged: it came from another participant than the "
+                              "server run that opened the session", m->session_id, PALP_PRINTABLE(pe->name));
+      else log_exercise(r, s, pe->name, pe->json);
       free(pe->json);
       memset(pe, 0, sizeof *pe);
     }
@@ -1406,10 +1431,12 @@ static route route_sample(recorder *r, int kind, uint32_t sid, dds_instance_hand
   return ROUTE_LOG;
 }
 
-static void dispatch(recorder *r, int kind, const void *m, int64_t now_ns, palp_dds_origin_verdict v, const char *from) {
+/* run: a server sample's writer's participant (0: a station's, or not known). */
+static void dispatch(recorder *r, int kind, const void *m, int64_t now_ns, palp_dds_origin_verdict v, const char *from,
+                     dds_instance_handle_t run) {
   const uint32_t sid = *(const uint32_t *)m; /* every session topic's first key (idl/palp_dds_gate.c) */
   switch (kind) {
-  case RD_SESSION_EXERCISE: on_session_exercise(r, m); break;
+  case RD_SESSION_EXERCISE: on_session_exercise(r, m, run); break;
   case RD_CONTACT:
     if (from_its_partition(r, sid, v, from, "contact")) on_contact(r, m, now_ns);
     break;
@@ -1530,7 +1557,7 @@ static void release_held(recorder *r, uint32_t sid, const char *why) {
       const palp_dds_origin_verdict v = s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
       if (station_topic(h->kind) && v == PALP_DDS_ORIGIN_SAME && !station_writer_of(s, h->writer))
         take_station_writer(s, h->writer, h->kind);
-      dispatch(r, h->kind, h->sample, h->arrival_ns, v, from);
+      dispatch(r, h->kind, h->sample, h->arrival_ns, v, from, h->run);
       logged++;
     }
     r->held_bytes -= h->bytes;
@@ -1637,7 +1664,7 @@ static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const 
   const palp_dds_origin_verdict v =
       station && s && s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
   switch (route_sample(r, kind, sid, info->publication_handle, run, v)) {
-  case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from); break;
+  case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from, run); break;
   case ROUTE_HOLD: hold(r, kind, m, info->publication_handle, run, from); break;
   case ROUTE_EARLIER:
     if (r->earlier_run_samples++ == 0)
