@@ -1998,6 +1998,12 @@ int main(int argc, char **argv) {
   for (int i = 0; i < MAX_SESSIONS; i++) {
     rsession *s = &r->s[i];
     if (!s->open) continue;
+    /* One whose CLOSED state came, waiting for its debrief (DEBRIEF_WAIT), ended as the server ended it:
+     * until 2026-12-07 it was cut short here, its close reason and the server's counts lost. */
+    if (s->closing) {
+      close_session(r, s, &s->close_state);
+      continue;
+    }
     end_cut(r, s, "palp-recorder stopped while the session ran (the server's own log has the rest)");
     cut++;
   }

@@ -13,7 +13,12 @@
  *  - session 52: A's "stale", and 10.5 s later A's "fresh" then OPEN: "fresh" logged (before: "stale",
  *    the fresh one dropped as "re-delivered" before the expiry was looked at);
  *  - session 53: CLOSED with "model step failed: state became non-finite": ended `error`, as the
- *    server's own log ends it (before: `normal`). The test takes ~12 s: the 10 s wait is the recorder's. */
+ *    server's own log ends it (before: `normal`);
+ *  - session 54, an exercise session: CLOSED with "exercise time limit reached" and no debrief, the
+ *    recorder stopped 0.3 s later, within its 1 s wait for the debrief: ended `normal` with that reason,
+ *    the server's 3 rejected samples in a `reject` event (before: `error`, "palp-recorder stopped while
+ *    the session ran", no counts).
+ * The test takes ~12 s: the 10 s wait is the recorder's. */
 #include <math.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -57,7 +62,7 @@ static char *renamed(const char *json, const char *name) {
   return out;
 }
 
-static void state(dds_entity_t w, uint32_t id, int closed, const char *reason) {
+static void state(dds_entity_t w, uint32_t id, int closed, const char *reason, uint64_t rejected) {
   palp_SessionState ss;
   memset(&ss, 0, sizeof ss);
   ss.session_id = id;
@@ -70,6 +75,7 @@ static void state(dds_entity_t w, uint32_t id, int closed, const char *reason) {
   ss.duration = closed ? 1.0 : 0.0;
   ss.ticks = closed ? 250 : 0;
   if (reason) snprintf(ss.reason, sizeof ss.reason, "%s", reason);
+  ss.rejected_samples = rejected;
   dds_write(w, &ss);
 }
 
@@ -166,26 +172,33 @@ int main(int argc, char **argv) {
   sleep_ms(200);
   exercise(w_ex, 50, "hard", hard);
   sleep_ms(200);
-  state(w_state, 50, 0, NULL);
+  state(w_state, 50, 0, NULL, 0);
   /* session 55: B's, then A's OPEN, then A's exercise */
   exercise(w_ex_b, 55, "easy", easy);
   sleep_ms(200);
-  state(w_state, 55, 0, NULL);
+  state(w_state, 55, 0, NULL, 0);
   sleep_ms(200);
   exercise(w_ex, 55, "hard", hard);
   /* session 53: its model failed */
-  state(w_state, 53, 0, NULL);
+  state(w_state, 53, 0, NULL, 0);
   sleep_ms(200);
-  state(w_state, 53, 1, "model step failed: state became non-finite");
+  state(w_state, 53, 1, "model step failed: state became non-finite", 0);
 
   /* 10.5 s after the stale ones were written (the recorder's wait is 10 s) */
   const double wait = 10.5 - (mono_s() - t_stale);
   if (wait > 0) sleep_ms((int)(wait * 1e3));
-  state(w_state, 51, 0, NULL);
+  state(w_state, 51, 0, NULL, 0);
   sleep_ms(200);
   exercise(w_ex, 52, "fresh", fresh);
   sleep_ms(200);
-  state(w_state, 52, 0, NULL);
+  state(w_state, 52, 0, NULL, 0);
+  /* session 54: an exercise session closed by its time limit; its debrief never comes, and the recorder
+   * stops 0.3 s into its 1 s wait for it */
+  exercise(w_ex, 54, "hard", hard);
+  sleep_ms(200);
+  state(w_state, 54, 0, NULL, 0);
+  sleep_ms(200);
+  state(w_state, 54, 1, "exercise time limit reached", 3);
   sleep_ms(300);
 
   int status;
@@ -223,6 +236,16 @@ int main(int argc, char **argv) {
   CHECK(!strcmp(reason, "error") && !strcmp(detail, "model step failed: state became non-finite"),
         "session 53, closed as its model failed: ended error, the server's reason its detail (got %s, \"%s\")", reason,
         detail);
+  db_text(h, "SELECT end_reason FROM session WHERE trainee = 's54'", reason, sizeof reason);
+  db_text(h, "SELECT end_detail FROM session WHERE trainee = 's54'", detail, sizeof detail);
+  const int64_t rejected = db_scalar(h, "SELECT coalesce(sum(count), 0) FROM event WHERE kind = 'reject' AND session_id "
+                                        "IN (SELECT id FROM session WHERE trainee = 's54')");
+  printf("session 54: ended %s (%s), %lld rejected samples in its events\n", reason, detail, (long long)rejected);
+  CHECK(!strcmp(reason, "normal") && !strcmp(detail, "exercise time limit reached") && rejected == 3,
+        "session 54, closed by its time limit, the recorder stopped within its wait for the debrief: ended normal "
+        "with the server's reason and its 3 rejected samples (got %s, \"%s\", %lld)", reason, detail,
+        (long long)rejected);
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE end_unix_s IS NULL") == 0, "every session ended");
   sqlite3_close(h);
   free(easy), free(hard), free(stale), free(fresh), free(json), free(rest);
   palp_mesh_destroy(&mesh);
