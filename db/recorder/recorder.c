@@ -1748,9 +1748,14 @@ int main(int argc, char **argv) {
         return 2;
       }
     } else if (!strcmp(a, "--duration")) {
-      duration = atof(argv[++i]);
-      if (!(duration > 0)) {
-        fprintf(stderr, "palp-recorder: --duration: expected seconds > 0\n");
+      /* Read whole and bounded as palp-server reads its own (server/main.c, parse_num: 0..1e7 s; 0 is no
+       * duration here, so refused). atof took "10abc" for 10 s and "inf" for ever, and 1e10 s overflowed
+       * the wait's nanoseconds: the recorder stopped after 0.1 s (until 2026-12-07). */
+      char *end;
+      errno = 0;
+      duration = strtod(argv[++i], &end);
+      if (end == argv[i] || *end || errno || !isfinite(duration) || !(duration > 0 && duration <= 1e7)) {
+        fprintf(stderr, "palp-recorder: --duration: expected seconds in (0, 10000000], got '%s'\n", argv[i]);
         return 2;
       }
     } else {

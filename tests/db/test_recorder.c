@@ -391,6 +391,20 @@ int main(int argc, char **argv) {
            "MB'", argv[2], db);
   st = system(cmd);
   CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "--max-mb 0.5 refused with its reason");
+  /* --duration read whole and bounded (2026-12-07): atof took "10abc" for 10 s and "inf" for ever, and
+   * 1e10 s overflowed the wait (the recorder stopped after 0.1 s). Each refused at once with exit 2 and
+   * the reason; `timeout 3` stops a recorder that would run instead (exit 124). */
+  static const char *const bad_durations[] = {"inf", "1e10", "10abc", "1e7x", "nan", "0", "-1", ""};
+  for (size_t k = 0; k < sizeof bad_durations / sizeof bad_durations[0]; k++) {
+    snprintf(cmd, sizeof cmd,
+             "out=$(timeout 3 '%s' --db '%s' --domain %d --duration '%s' 2>&1); rc=$?; "
+             "[ $rc -eq 2 ] && printf '%%s' \"$out\" | grep -qF -- \"--duration: expected seconds in (0, 10000000], got "
+             "'%s'\" || { echo \"--duration '%s': exit $rc: $out\" | head -c 400; echo; exit 1; }",
+             argv[2], db, DOMAIN, bad_durations[k], bad_durations[k], bad_durations[k]);
+    st = system(cmd);
+    CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0, "--duration '%s' refused at once, exit 2, with its reason",
+          bad_durations[k]);
+  }
   free(pos);
   free(rest);
   palp_mesh_destroy(&mesh);
