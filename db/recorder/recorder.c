@@ -1304,9 +1304,13 @@ static void on_feedback(recorder *r, const palp_Feedback *m) {
     s->force[ff->finger] = (palp_vec3){ff->force.x, ff->force.y, ff->force.z};
     if (ff->active) count(r, palp_db_log_feedback(r->w, s->h, (int64_t)m->frame, ff->finger, s->force[ff->finger]));
   }
-  /* One frame row per feedback sample (every tick while a haptic station listens): force and
-   * pole displacement are exact; volume, pressure and the largest displacement come from the
-   * newest deformation sample, which the server sends only while a display watches. */
+  /* One frame row per feedback sample (every tick while a haptic station listens): the force is
+   * exact; the pole's displacement is its depth along -z only (the feedback's top_displacement,
+   * server/session.c), where the server's own frame row has the length of the pole's 3-D
+   * displacement (db/summary.c): equal for a press straight down, shorter by the pole's sideways
+   * drift otherwise. The 3-D value needs the pole's position at this frame, which no feedback sample
+   * carries (a deformation does, at 30 Hz and only while a display watches). Volume, pressure and the
+   * largest displacement come from the newest deformation sample. (Called exact until 2026-12-07.) */
   palp_vec3 sum = {0, 0, 0};
   for (int k = 0; k < FINGERS; k++)
     if (s->active[k]) sum.x += s->force[k].x, sum.y += s->force[k].y, sum.z += s->force[k].z;
