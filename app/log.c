@@ -137,8 +137,14 @@ void palp_log_debug_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_
 
 char *palp_log_printable(const char *in, char *out, size_t len) {
   size_t o = 0;
+  int c1_tail = 0; /* the second byte of a C1 control's UTF-8 form */
   for (const unsigned char *c = (const unsigned char *)(in ? in : ""); *c; c++) {
-    const int esc = *c < 0x20 || *c == 0x7f || *c == '\\';
+    /* The C1 controls U+0080..U+009F, in UTF-8 0xC2 0x80..0x9F, are escapes too: CSI (U+009B) and OSC
+     * (U+009D) clear a terminal's screen or retitle it as ESC [ and ESC ] do (session 80's review,
+     * 2026-12-07: they passed). Other bytes >= 0x80 stay: UTF-8 text is kept as it is. */
+    const int c1 = c1_tail || (*c == 0xC2 && c[1] >= 0x80 && c[1] <= 0x9F);
+    c1_tail = !c1_tail && c1;
+    const int esc = *c < 0x20 || *c == 0x7f || *c == '\\' || c1;
     const size_t need = esc ? 4 : 1;
     if (o + need >= len) break; /* cut whole: never half an escape */
     if (esc)

@@ -211,6 +211,11 @@ int palp_cli_view_svg(const palp_Phantom *ph, const palp_Deformation *d, const c
 }
 
 void palp_cli_terminal_safe(char *s) {
-  for (; s && *s; s++)
-    if (((unsigned char)*s < 0x20 && *s != '\n' && *s != '\t') || *s == 0x7f) *s = '?';
+  for (; s && *s; s++) {
+    const unsigned char c = (unsigned char)*s;
+    if ((c < 0x20 && c != '\n' && c != '\t') || c == 0x7f) *s = '?';
+    /* a C1 control in UTF-8 (0xC2 0x80..0x9F): CSI and OSC cleared a trainee's screen and retitled her
+     * terminal from an exercise's title (session 80's review, 2026-12-07); both bytes go */
+    if (c == 0xC2 && (unsigned char)s[1] >= 0x80 && (unsigned char)s[1] <= 0x9F) s[0] = s[1] = '?';
+  }
 }

@@ -2126,7 +2126,7 @@ static void check_other_servers(palp_srv *srv) {
       if (info[i].valid_data && strcmp(st->server_id, srv->server_id) != 0 && !srv->warned_other_server) {
         /* Harmless with distinct server numbers (identity.h), which refuse to start
          * otherwise; a server without identities (older palp) would answer every join. */
-        palp_log_info(srv->log, "another server (%s) publishes status on domain %u", st->server_id,
+        palp_log_info(srv->log, "another server (%s) publishes status on domain %u", PALP_PRINTABLE(st->server_id),
                       srv->cfg.domain_id);
         srv->warned_other_server = 1;
       }
@@ -2564,8 +2564,10 @@ uint64_t palp_srv_request_strays(palp_srv *srv) { return atomic_load(&srv->reque
 static void print_row(FILE *out, const palp_srv_session_summary *s, const char *state, int pw) {
   uint64_t rej = 0;
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) rej += s->rejected[r];
+  /* names printable: the table goes to the log file too, and a trainee's name from the network with a
+   * newline in it began a forged line there (until 2026-12-07) */
   fprintf(out, "%-7u %-16.16s %-*.*s %8.2f %9llu %8.2f %9.2f %9llu %8llu %8llu  %s\n", s->info.session_id,
-          s->info.trainee_name, pw, pw, s->info.phantom_name, s->duration, (unsigned long long)s->contact_samples,
+          PALP_PRINTABLE(s->info.trainee_name), pw, pw, PALP_PRINTABLE(s->info.phantom_name), s->duration, (unsigned long long)s->contact_samples,
           s->peak_force, s->peak_displacement * 1e3, (unsigned long long)s->ticks,
           (unsigned long long)s->overruns, (unsigned long long)rej, state);
 }

@@ -733,8 +733,9 @@ static void publish_local_models(palp_srv_session *s, int64_t now_ns, uint32_t f
       o->flags |= palp_LM_FORCE_LIMIT;
       s->stats.force_limited_steps++;
       if (now_ns - s->last_limit_log_ns >= (int64_t)(s->log_interval * 1e9)) {
-        fprintf(stderr, "palp-server: session %u: finger %d pushes back with %.1f N, above max_force %.1f N: "
-                        "reported to the station (which limits it), not clamped\n", s->id, i, fm, s->limits.max_force);
+        /* into the server's log, which --log-file keeps (stderr alone until 2026-12-07) */
+        palp_log_warn(s->log, "session %u: finger %d pushes back with %.1f N, above max_force %.1f N: reported to the "
+                              "station (which limits it), not clamped", s->id, i, fm, s->limits.max_force);
         s->last_limit_log_ns = now_ns;
       }
     }

@@ -207,6 +207,10 @@ int main(void) {
   char txt[] = "\033]0;x\007ok\rfake\tline\n30\xc2\xb0 \x7f";
   palp_cli_terminal_safe(txt);
   CHECK(strcmp(txt, "?]0;x?ok?fake\tline\n30\xc2\xb0 ?") == 0, "terminal-safe: \"%s\"", txt);
+  /* C1 controls in UTF-8 (CSI 2J, OSC 0;owned ST) go too, both bytes; U+00A0 and U+00E9 stay */
+  char c1[] = "T\xc2\x9b" "2J\xc2\x9d" "0;owned\xc2\x9c \xc2\xa0\xc3\xa9";
+  palp_cli_terminal_safe(c1);
+  CHECK(strcmp(c1, "T??2J??0;owned?? \xc2\xa0\xc3\xa9") == 0, "terminal-safe C1: \"%s\"", c1);
   palp_vec3 dv;
   CHECK(palp_cli_device_force((palp_vec3){3, 4, 0}, 2.5, &dv) == 1 && fabs(dv.x - 1.5) < 1e-12 && fabs(dv.y - 2.0) < 1e-12 &&
             dv.z == 0, "5 N limited to 2.5 N: (%g, %g, %g)", dv.x, dv.y, dv.z);

@@ -143,6 +143,7 @@ int main(void) {
               {"\x1b[2J\r\x7f", "\\x1b[2J\\x0d\\x7f", 64},
               {"back\\slash", "back\\x5cslash", 64},
               {"Jos\xc3\xa9", "Jos\xc3\xa9", 64},
+              {"T\xc2\x9b" "2J\xc2\xa0", "T\\xc2\\x9b2J\xc2\xa0", 64}, /* a C1 CSI escaped, U+00A0 kept */
               {"ab\ncd", "ab", 6},      /* "ab\x0a" needs 7 bytes with its NUL: cut before the escape */
               {"ab\ncd", "ab\\x0a", 7}, /* ... which fits in 7 */
               {NULL, "", 4}};
