@@ -1323,9 +1323,40 @@ static palp_srv_session *held_session_of(palp_srv *srv, const char *station_id) 
 
 /* A LEAVE from a station with no slot, whose session is held for it: it came back only to
  * say goodbye (stopped by its user right after a stall). 1 when there was one. */
-static int leave_held(palp_srv *srv, const char *station_id) {
+/* Plain DDS: whether `writer` on `reader` is of participant p (its GUID into *sender, *sender_known,
+ * when Cyclone still knows the writer; a writer already gone is of none). */
+static int writer_of(dds_entity_t reader, uint64_t writer, const dds_guid_t *p, dds_guid_t *sender,
+                     int *sender_known) {
+  *sender_known = 0;
+  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(reader, writer);
+  if (!ep) return 0;
+  *sender = ep->participant_key, *sender_known = 1;
+  dds_builtintopic_free_endpoint(ep);
+  return !memcmp(sender->v, p->v, sizeof p->v);
+}
+
+/* Says why a request for a station (or its held session) from another participant than the one that
+ * joined it is refused, unanswered: a reply to this station id would land on the station itself. */
+static void refuse_foreign_request(palp_srv *srv, const char *op, const char *station_id, uint32_t session_id,
+                                   const dds_guid_t *sender, int sender_known) {
+  char who[64] = "a writer already gone";
+  if (sender_known) palp_dds_participant_text(sender, who, sizeof who);
+  refuse_identity(srv, "station \"%s\" (session %u): %s from %s, which did not join it; the station stays "
+                       "(plain DDS: anyone may write requests; run the classroom with DDS Security)",
+                  PALP_PRINTABLE(station_id), session_id, op, who);
+}
+
+/* A LEAVE for a station whose session is held: the held session closes. On plain DDS only from the
+ * participant whose JOIN opened it (refused, said, otherwise: 1 as handled). */
+static int leave_held(palp_srv *srv, const char *station_id, dds_entity_t reader, uint64_t writer) {
   palp_srv_session *h = held_session_of(srv, station_id);
   if (!h) return 0;
+  dds_guid_t sender;
+  int sender_known;
+  if (!secured(srv) && !writer_of(reader, writer, &h->trainee_participant, &sender, &sender_known)) {
+    refuse_foreign_request(srv, "LEAVE", station_id, h->id, &sender, sender_known);
+    return 1;
+  }
   close_session(srv, h, "trainee station left");
   return 1;
 }
@@ -1400,45 +1431,38 @@ static int station_participant(palp_srv *srv, const station *st, dds_guid_t *out
   return s != NULL;
 }
 
-/* Plain DDS: whether a LEAVE of station st taken from `writer` on `reader` is the station's own. Its
- * own request writer's, or another writer of the participant that joined it (found by Cyclone's
- * discovery data); a LEAVE from a writer already gone that is not the station's cannot be told apart
- * from a forgery, and is refused. Until 2026-12-07 anyone on the domain who knew a station's id (the
- * server's log, a session's viewers) ended its session with one LEAVE. */
-static int leave_is_own(palp_srv *srv, const station *st, dds_entity_t reader, uint64_t writer,
-                        dds_guid_t *sender, int *sender_known) {
+/* Plain DDS: whether a request (LEAVE, or JOIN again) for station st taken from `writer` on `reader`
+ * is the station's own. Its own request writer's, or another writer of the participant that joined it
+ * (found by Cyclone's discovery data); one from a writer already gone that is not the station's cannot
+ * be told apart from a forgery, and is refused. Until 2026-12-07 anyone on the domain who knew a
+ * station's id (the server's log, a session's viewers) ended its session with one LEAVE; and, LEAVEs
+ * checked, until session 80 with one JOIN under its id (another request number: "re-joined"), or took
+ * the station over with its own JOIN replayed (then its LEAVE counted, the station's own not). */
+static int request_is_own(palp_srv *srv, const station *st, dds_entity_t reader, uint64_t writer,
+                          dds_guid_t *sender, int *sender_known) {
   *sender_known = 0;
   if (writer == st->writer) return 1;
   dds_guid_t joined;
   if (!station_participant(srv, st, &joined)) return 1; /* nothing to check against: as before */
-  dds_builtintopic_endpoint_t *ep = dds_get_matched_publication_data(reader, writer);
-  if (!ep) return 0;
-  *sender = ep->participant_key, *sender_known = 1;
-  dds_builtintopic_free_endpoint(ep);
-  return !memcmp(sender->v, joined.v, sizeof joined.v);
+  return writer_of(reader, writer, &joined, sender, sender_known);
 }
 
 /* A LEAVE: the station leaves what it is in (its slot freed, which schedules its reply's release),
  * or the session held for it closes. Answered "left", and alone on the domain also when there was
  * nothing to leave (with other servers, that request may be theirs).
- * On plain DDS only the station's own participant's LEAVE counts (leave_is_own). */
+ * On plain DDS only the station's own participant's LEAVE counts (request_is_own). */
 static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq, dds_entity_t reader, uint64_t writer) {
   station *st = find_station(srv, rq->station_id);
   dds_guid_t sender;
   int sender_known;
-  if (st && !secured(srv) && !leave_is_own(srv, st, reader, writer, &sender, &sender_known)) {
-    /* Unanswered: a reply to this station id would land on the station itself. */
-    char who[64] = "a writer already gone";
-    if (sender_known) palp_dds_participant_text(&sender, who, sizeof who);
-    refuse_identity(srv, "station \"%s\" (session %u): LEAVE from %s, which did not join it; the station stays "
-                         "(plain DDS: anyone may write requests; run the classroom with DDS Security)",
-                    PALP_PRINTABLE(rq->station_id), st->session_id, who);
+  if (st && !secured(srv) && !request_is_own(srv, st, reader, writer, &sender, &sender_known)) {
+    refuse_foreign_request(srv, "LEAVE", rq->station_id, st->session_id, &sender, sender_known);
     return;
   }
   if (st) {
     station_leave(srv, st, "left"); /* frees its slot: free_station retired its reply */
     reply(srv, rq, NULL, "left");
-  } else if (leave_held(srv, rq->station_id) || !palp_srv_identity_peers(srv->identity)) {
+  } else if (leave_held(srv, rq->station_id, reader, writer) || !palp_srv_identity_peers(srv->identity)) {
     reply_unslotted(srv, rq, "left");
   }
 }
@@ -1473,6 +1497,15 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
    * re-delivers it when the station's participant is found again): answered again, not
    * redone, so it neither opens a second session nor takes a join token. */
   station *again = find_station(srv, rq->station_id);
+  /* Plain DDS: a JOIN under a live station's id from another participant is not the station's: it
+   * would have ended its session ("re-joined") or, replayed, taken the station over (session 80's
+   * review, 2026-12-07). Secured, handle_requests checked the sender owns the id. */
+  dds_guid_t sender;
+  int sender_known;
+  if (again && !secured(srv) && !request_is_own(srv, again, reader, writer, &sender, &sender_known)) {
+    refuse_foreign_request(srv, "JOIN", rq->station_id, again->session_id, &sender, sender_known);
+    return;
+  }
   palp_srv_session *cur = again && again->request_seq == rq->request_seq && again->role == (int)rq->role
                               ? find_session(srv, again->session_id)
                               : NULL;
@@ -1490,7 +1523,14 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     reply(srv, rq, cur, NULL);
     return;
   }
-  palp_srv_session *held = rq->role == palp_ROLE_TRAINEE && !again ? held_session_of(srv, rq->station_id) : NULL;
+  /* A held session's station id is the held trainee's whatever the role asked: an observer's JOIN
+   * under it made the trainee's own JOIN miss its resume. */
+  palp_srv_session *held = !again ? held_session_of(srv, rq->station_id) : NULL;
+  if (held && !secured(srv) && !writer_of(reader, writer, &held->trainee_participant, &sender, &sender_known)) {
+    refuse_foreign_request(srv, "JOIN", rq->station_id, held->id, &sender, sender_known);
+    return;
+  }
+  if (held && rq->role != palp_ROLE_TRAINEE) held = NULL; /* as before: only a trainee's JOIN resumes or ends it */
   if (held && held->trainee_request_seq == rq->request_seq && held->phantom->cfg.id == rq->phantom_id) {
     resume_session(srv, held, rq, writer);
     return;
@@ -1815,7 +1855,10 @@ static void handle_request_sample(palp_srv *srv, palp_SessionRequest *rq, dds_en
   if (marked && marked->gone_due_ns) decide_gone(srv, marked);
   if (rq->op == palp_OP_JOIN) {
     handle_join(srv, rq, NULL, reader, writer); /* palp_station_request is not offered when secured */
-    if (out_st) *out_st = find_station(srv, rq->station_id);
+    /* the station this writer's JOIN made or kept: one refused (another participant's) keeps its own
+     * key instance, never the refused writer's */
+    station *st = find_station(srv, rq->station_id);
+    if (out_st) *out_st = st && st->writer == writer ? st : NULL;
     return;
   }
   handle_leave(srv, rq, reader, writer);
@@ -2030,10 +2073,10 @@ static void handle_requests(palp_srv *srv) {
         continue;
       }
       /* Plain DDS (2026-12-07): the same for a writer of another participant than the one that joined
-       * (leave_is_own); a writer gone before it was looked up, if not the station's, is refused too. */
+       * (request_is_own); a writer gone before it was looked up, if not the station's, is refused too. */
       dds_guid_t sender;
       int sender_known;
-      if (!secured(srv) && !leave_is_own(srv, st, srv->request_r, info[i].publication_handle, &sender, &sender_known)) {
+      if (!secured(srv) && !request_is_own(srv, st, srv->request_r, info[i].publication_handle, &sender, &sender_known)) {
         char who[64] = "a writer already gone";
         if (sender_known) palp_dds_participant_text(&sender, who, sizeof who);
         refuse_identity(srv, "station \"%s\" (session %u): disposed or unregistered by %s, which did not join it; the "

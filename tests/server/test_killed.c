@@ -1,6 +1,10 @@
 /* test_killed.c - a trainee station killed with SIGKILL (no goodbye) is noticed
  * through DDS liveliness within 2 s; its session is held for station_grace (it
- * might have been a stall, test_stalled.c) and then closed, saying why. */
+ * might have been a stall, test_stalled.c) and then closed, saying why.
+ * While it is held, another participant (the watcher's) writes a JOIN as an observer and a LEAVE
+ * under the lost station's id (plain DDS: anyone may write requests): neither ends the held session
+ * before its grace (until session 80, 2026-12-07, the LEAVE closed it at once as "trainee station
+ * left", and the JOIN under its id made its own JOIN miss the resume). */
 #include <signal.h>
 #include <spawn.h>
 #include <string.h>
@@ -63,8 +67,13 @@ int main(void) {
   /* A lapsed lease cannot tell a crash from a stall: the session is first held for the
    * station to come back (station_grace, 5 s by default), and says so to its viewers. */
   const double grace = cfg.station_grace;
-  int held = 0, closed = 0;
+  int held = 0, closed = 0, forged = 0;
   double t_held = -1;
+  char victim_id[sizeof s.trainee_station];
+  snprintf(victim_id, sizeof victim_id, "%s", s.trainee_station);
+  const dds_entity_t fw = palp_dds_create_writer(watch.pp, palp_dds_create_topic(watch.pp, PALP_TOPIC_SESSION_REQUEST),
+                                                 PALP_TOPIC_SESSION_REQUEST);
+  REQUIRE(fw > 0 && victim_id[0], "the forger's request writer; the victim's station id \"%s\"", victim_id);
   end = t_kill + (int64_t)((grace + 4.0) * 1e9);
   while (!closed && palp_dds_now_ns() < end) {
     if (poll_state(&watch, NULL, sid, &s)) {
@@ -75,8 +84,21 @@ int main(void) {
         fprintf(stderr, "held: \"%s\"\n", s.reason);
       }
     }
+    if (held && !forged && (double)(palp_dds_now_ns() - t_kill) * 1e-9 >= t_held + 0.5) {
+      forged = 1; /* 0.5 s into the hold: a JOIN as an observer, then a LEAVE, under the victim's id */
+      palp_SessionRequest rq;
+      memset(&rq, 0, sizeof rq);
+      snprintf(rq.station_id, sizeof rq.station_id, "%s", victim_id);
+      snprintf(rq.user_name, sizeof rq.user_name, "victim");
+      rq.request_seq = 77, rq.op = palp_OP_JOIN, rq.role = palp_ROLE_OBSERVER, rq.session_id = sid;
+      dds_write(fw, &rq);
+      test_sleep(0.2);
+      rq.request_seq = 78, rq.op = palp_OP_LEAVE, rq.role = palp_ROLE_TRAINEE;
+      dds_write(fw, &rq);
+    }
     if (!closed) test_sleep(0.01);
   }
+  CHECK(forged, "another participant's JOIN and LEAVE under the held station's id were written");
   double dt = (double)(palp_dds_now_ns() - t_kill) * 1e-9;
   /* Budget: writer liveliness lease 0.5 s, participant lease 1 s, plus the server's
    * 100 ms loop and delivery: 2 s to notice; then the grace, plus 1 s. */
