@@ -85,15 +85,15 @@ int main(void) {
       }
     }
     if (held && !forged && (double)(palp_dds_now_ns() - t_kill) * 1e-9 >= t_held + 0.5) {
-      forged = 1; /* 0.5 s into the hold: a JOIN as an observer, then a LEAVE, under the victim's id */
+      forged = 1; /* 0.5 s into the hold: a LEAVE, then a JOIN as an observer, under the victim's id */
       palp_SessionRequest rq;
       memset(&rq, 0, sizeof rq);
       snprintf(rq.station_id, sizeof rq.station_id, "%s", victim_id);
       snprintf(rq.user_name, sizeof rq.user_name, "victim");
-      rq.request_seq = 77, rq.op = palp_OP_JOIN, rq.role = palp_ROLE_OBSERVER, rq.session_id = sid;
+      rq.request_seq = 77, rq.op = palp_OP_LEAVE, rq.role = palp_ROLE_TRAINEE, rq.session_id = sid;
       dds_write(fw, &rq);
-      test_sleep(0.2);
-      rq.request_seq = 78, rq.op = palp_OP_LEAVE, rq.role = palp_ROLE_TRAINEE;
+      test_sleep(0.6); /* past log_interval: its refusal is said too */
+      rq.request_seq = 78, rq.op = palp_OP_JOIN, rq.role = palp_ROLE_OBSERVER;
       dds_write(fw, &rq);
     }
     if (!closed) test_sleep(0.01);
