@@ -21,8 +21,9 @@
  *   mark's id, a mark near no lesion, a withdrawal of her mark 1) are refused unanswered and counted in
  *   the session log as foreign_participant, its participant named once for them, and her mark 2 is
  *   accepted with her two marks standing;
- * - (2026-12-07) another participant's LEAVE of trainee-a's station by its id and its dispose of her
- *   request's key are refused, its participant named in the log, and her session stays open;
+ * - (2026-12-07) another participant's LEAVE of trainee-a's station by its id, its dispose of her
+ *   request's key and (session 80) its JOIN under her id are refused, its participant named in the
+ *   log, and her session stays open;
  * - after its start-up window, one forged identity sample {its name, number 0, started 0}
  *   leaves the server serving: the session stays open, its trainee still gets feedback, and
  *   the log warns about the claim, naming the claimant's instance.
@@ -563,6 +564,10 @@ int main(void) {
     snprintf(key.station_id, sizeof key.station_id, "%s", a.station_id);
     const int disposed = dds_dispose(rq_w, &key) == 0;
     test_sleep(0.6);
+    /* and a JOIN under her id with another request number (until session 80: "re-joined", her
+     * session closed) */
+    session_request(rq_w, a.station_id, "trainee-a", palp_OP_JOIN, palp_ROLE_OBSERVER, sid, 99);
+    test_sleep(0.6);
     uint64_t fseq = 3000;
     for (int i = 0; i < 20; i++) {
       test_send_force(&a, 0, 2, 25, 90, 2.0, ++fseq);
@@ -574,9 +579,11 @@ int main(void) {
           "another participant's LEAVE of trainee-a's station and its dispose of her request leave her session open: "
           "%d open (want 1), her feedback %d samples, %.2f N (pressing 2 N)",
           palp_srv_open_sessions(ts.srv), fbn, fa);
-    CHECK(log_count(log_path, pp_text, "LEAVE from") == 1 && log_count(log_path, pp_text, "disposed or unregistered by") == 1,
-          "the log names that participant for its LEAVE (%d line) and for its dispose (%d line), want 1 each",
-          log_count(log_path, pp_text, "LEAVE from"), log_count(log_path, pp_text, "disposed or unregistered by"));
+    CHECK(log_count(log_path, pp_text, "LEAVE from") == 1 && log_count(log_path, pp_text, "disposed or unregistered by") == 1 &&
+              log_count(log_path, pp_text, "JOIN from") == 1,
+          "the log names that participant for its LEAVE (%d line), its dispose (%d line) and its JOIN (%d line), want 1 "
+          "each", log_count(log_path, pp_text, "LEAVE from"), log_count(log_path, pp_text, "disposed or unregistered by"),
+          log_count(log_path, pp_text, "JOIN from"));
     CHECK(log_count(log_path, "session ", "trainee station left") == 0 && log_count(log_path, "held ", NULL) == 0,
           "her session was neither closed as left (%d line) nor held as her station lost (%d line)",
           log_count(log_path, "session ", "trainee station left"), log_count(log_path, "held ", NULL));
