@@ -193,8 +193,8 @@ typedef struct palp_srv_session {
   palp_srv_arrival arrival[PALP_SRV_MAX_FINGERS][16];
 
   /* Set at create, never changed (a station found again after a stall keeps its participant GUID;
-   * another participant re-sending its JOIN takes its station slot, not its fingers): read by the
-   * tick thread without a lock. */
+   * another participant's JOIN under its station id is refused since session 80, and took its station
+   * slot, never its fingers, before): read by the tick thread without a lock. */
   dds_guid_t trainee_participant;
 
   /* [main] */
