@@ -282,6 +282,16 @@ static int parse(int argc, char **argv, opts *o) {
     fprintf(stderr, "palp-client: --phantom: a trainee needs the id (or --phantom-name) of the phantom to palpate\n");
     return -1;
   }
+  /* With --server the ids are that server's local ones (PALP_DDS_ID_LOCAL_BITS): a larger one's high
+   * bits went into the server number, and --server roomA --phantom 1048577 joined roomB's phantom 1
+   * without a word (session 80's review, 2026-12-07). */
+  const uint32_t local_max = (1u << PALP_DDS_ID_LOCAL_BITS) - 1u;
+  if (o->server && (o->phantom > local_max || o->session > local_max)) {
+    fprintf(stderr, "palp-client: --server %s: --phantom and --session are that server's own ids, 1..%u (got %s %u)\n",
+            o->server, local_max, o->phantom > local_max ? "--phantom" : "--session",
+            o->phantom > local_max ? o->phantom : o->session);
+    return -1;
+  }
   return 0;
 }
 

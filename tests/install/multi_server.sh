@@ -33,6 +33,17 @@ cleanup() {
 trap cleanup EXIT
 unset CYCLONEDDS_URI
 
+# With --server the ids are that server's own (20 bits): a larger one was OR-ed into the server number
+# and joined another server's phantom without a word (until 2026-12-07). Refused before any DDS.
+"$client" --role trainee --server room-a --phantom 1048577 --dds-config "$loopback" --domain "$domain" \
+  > "$work/bigid.out" 2>&1
+rc=$?
+if [ $rc -eq 2 ] && grep -q -- "--server room-a: --phantom and --session are that server's own ids, 1..1048575" "$work/bigid.out"; then
+  ok "--server room-a --phantom 1048577 refused (exit 2): $(head -n 1 "$work/bigid.out" | sed 's/^palp-client: //')"
+else
+  bad "--server room-a --phantom 1048577: exit $rc"; head -n 3 "$work/bigid.out"
+fi
+
 make_netns() {
   [ -n "${PALP_TEST_NO_NETNS:-}" ] && { echo "PALP_TEST_NO_NETNS is set"; return 1; }
   command -v ip > /dev/null || { echo "no ip(8)"; return 1; }
