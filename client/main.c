@@ -297,6 +297,18 @@ static int parse(int argc, char **argv, opts *o) {
 
 static double norm3(palp_Vec3 v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 
+/* Closes an output file the user asked for (NULL: none), saying if it could not all be written: a full
+ * disk left a cut CSV that looked whole, and the station exited 0 (until 2026-12-07). 0, or -1 said. */
+static int close_output(const opts *o, FILE *f, const char *path) {
+  if (!f) return 0;
+  const int bad = ferror(f);
+  if (fclose(f) != 0 || bad) {
+    palp_log_error(o->log, "cannot write %s: %s (the file is incomplete)", path, strerror(errno ? errno : EIO));
+    return -1;
+  }
+  return 0;
+}
+
 static int cmp_double(const void *a, const void *b) {
   double x = *(const double *)a, y = *(const double *)b;
   return (x > y) - (x < y);
@@ -1140,6 +1152,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_delete(ws);
   palp_cli_haptic_stats hs;
   palp_cli_haptic_join(hl, &hs);
+  int out_failed = 0;
   if (trace) {
     fprintf(trace, "t_s,late_s,on,x_m,y_m,z_m,fx_N,fy_N,fz_N,requested_N,flags\n");
     for (size_t i = 0; i < hs.trace_len; i++) {
@@ -1147,7 +1160,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       fprintf(trace, "%.6f,%.6f,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%u\n", q->t, q->late, q->on, q->x.x, q->x.y,
               q->x.z, q->f.x, q->f.y, q->f.z, q->requested, q->flags);
     }
-    fclose(trace);
+    out_failed = close_output(o, trace, o->trace_csv) < 0;
   }
   if (hs.failed) palp_log_error(o->log, "%s", hs.error);
   if (in.close) in.close(in.ctx);
@@ -1204,7 +1217,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   free(lat.us);
   free(d.trace);
   free(hl);
-  return hs.failed ? 1 : (closed ? 3 : 0);
+  return hs.failed || out_failed ? 1 : (closed ? 3 : 0);
 }
 
 static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
@@ -1377,8 +1390,8 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       if (seq[f]) send_release(st, f, &seq[f]);
   fade_feedback(&fx, -1); /* the device let go before it is closed */
   if (in.close) in.close(in.ctx);
-  if (fb_csv) fclose(fb_csv);
-  if (ct_csv) fclose(ct_csv);
+  if (close_output(o, fb_csv, o->feedback_csv) < 0) failed = 1;
+  if (close_output(o, ct_csv, o->contact_csv) < 0) failed = 1;
   latency lat = fx.lat;
   report_foreign(o, st, "trainee", 1);
   char foreign[96];

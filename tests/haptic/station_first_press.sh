@@ -28,7 +28,21 @@ fail=0
 "$client" --role trainee --domain 172 --phantom 1 --name flo --timeout 10 --print-period 0 \
   --input sim:press,depth_mm=3,hold_s=1 --trace-csv "$tmp/trace.csv" > "$tmp/flo.log" 2>&1
 rc=$?
+# An output file that cannot all be written is an error, said, exit 1 (until 2026-12-07: exit 0, a cut
+# CSV that looked whole): the trace of a haptic trainee and the CSVs of a force-driven one, on /dev/full.
+"$client" --role trainee --domain 172 --phantom 1 --name flo2 --timeout 10 --print-period 0 \
+  --input sim:press,depth_mm=1,hold_s=0.1 --trace-csv /dev/full > "$tmp/full1.log" 2>&1
+rc_full1=$?
+"$client" --role trainee --domain 172 --phantom 1 --name flo3 --timeout 10 --print-period 0 --duration 0.3 \
+  --feedback-csv /dev/full --contact-csv /dev/full > "$tmp/full2.log" 2>&1
+rc_full2=$?
 kill $spid; wait $spid; spid=
+if [ $rc_full1 -eq 1 ] && grep -q "cannot write /dev/full" "$tmp/full1.log" && [ $rc_full2 -eq 1 ] &&
+   [ "$(grep -c "cannot write /dev/full" "$tmp/full2.log")" -eq 2 ]; then
+  echo "ok   --trace-csv, --feedback-csv and --contact-csv on a full disk (/dev/full): said, exit 1"
+else
+  echo "FAIL outputs on a full disk: exit $rc_full1 and $rc_full2"; cat "$tmp/full1.log" "$tmp/full2.log"; fail=1
+fi
 if [ $rc -eq 0 ]; then echo "ok   the trainee pressed and exited 0"; else echo "FAIL exit $rc"; fail=1; fi
 # t of the first tick inside the dome, of the first rendering a contact, of the first finger-on with a model
 times=$(awk -F, -v R=0.040 -v r=0.008 'NR > 1 {
