@@ -172,65 +172,92 @@ void palp_cli_station_close(palp_cli_station *st) {
   st->pp = 0;
 }
 
-/* Catalogue entries read at once: every phantom of every server on the domain must fit, or
- * a phantom past the first reads is never seen (8 hid the ninth phantom of
- * config/server-exercises.json). 16 per server (PALP_SRV_MAX_PHANTOMS) x 16 servers. */
-#define CATALOGUE_READ_MAX 256
+/* The catalogue, looked through (2026-12-07). A plain dds_read of at most N samples returns the same
+ * first N on every pass: 300 made-up entries a peer wrote before the server's hid the real phantom
+ * (the station, already joined, exited 1 "no catalogue entry for phantom 1"; tests/server/
+ * test_catalogue.c). A phantom known by its id is its instance, looked up by its key; a search (by
+ * name, or any phantom) reads every entry once, as it comes, CATALOGUE_PAGE at a time, through a reader
+ * of its own made for the search (the station's own has marked what earlier searches read). */
+#define CATALOGUE_PAGE 64
+
+/* One catalogue entry for palp_cli_station_catalogue: 0 copied into *out (the caller frees it with
+ * palp_cli_phantom_free), PALP_ENOMEM, or 1: not this one (not alive, another id, or malformed: bad
+ * says why, the first of a kind written to stderr). */
+static int take_entry(const palp_Phantom *p, const dds_sample_info_t *info, uint32_t phantom_id, char *bad,
+                      size_t badlen, palp_Phantom *out) {
+  /* Not alive: its server is gone (several servers on one domain). */
+  if (!info->valid_data || info->instance_state != DDS_IST_ALIVE || (phantom_id && p->phantom_id != phantom_id))
+    return 1;
+  /* From the network: checked before any index in it is used (a forged entry
+   * with bad triangle indices crashed the visual station). */
+  char why[200];
+  if (palp_cli_phantom_check(p, why, sizeof why) < 0) {
+    if (strcmp(bad, why) != 0) fprintf(stderr, "palp-client: ignoring a malformed catalogue entry: %s\n", why);
+    snprintf(bad, badlen, "%s", why);
+    return 1;
+  }
+  *out = *p;
+  size_t nv = p->rest._length, nt = p->triangles._length;
+  out->rest._buffer = malloc((nv ? nv : 1) * sizeof(palp_Vec3));
+  out->triangles._buffer = malloc((nt ? nt : 1) * sizeof(int32_t));
+  if (!out->rest._buffer || !out->triangles._buffer) {
+    palp_cli_phantom_free(out);
+    return PALP_ENOMEM;
+  }
+  memcpy(out->rest._buffer, p->rest._buffer, nv * sizeof(palp_Vec3));
+  memcpy(out->triangles._buffer, p->triangles._buffer, nt * sizeof(int32_t));
+  out->rest._maximum = (uint32_t)nv;
+  out->triangles._maximum = (uint32_t)nt;
+  out->rest._release = out->triangles._release = false;
+  return 0;
+}
+
+/* A search's own catalogue reader: transient-local, so it is sent the whole catalogue anew. */
+static dds_entity_t search_reader(palp_cli_station *st) {
+  return palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_CATALOGUE], PALP_TOPIC_CATALOGUE);
+}
 
 int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Phantom *out,
                                char *err, size_t errlen) {
   int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
-  dds_entity_t ws = dds_create_waitset(st->pp);
-  dds_entity_t rc = dds_create_readcondition(st->catalogue_r, DDS_ANY_STATE);
-  dds_waitset_attach(ws, rc, 0);
-  int result = PALP_EIO;
+  /* any phantom: a search through every entry */
+  const dds_entity_t rd = phantom_id ? st->catalogue_r : search_reader(st);
+  if (rd < 0) return fail(err, errlen, PALP_EIO, "cannot read the catalogue: %s", dds_strretcode(rd));
+  int result = 1;
   char bad[256] = "";
   for (;;) {
-    void *ptr[CATALOGUE_READ_MAX] = {NULL};
-    dds_sample_info_t info[CATALOGUE_READ_MAX];
-    /* read, not take: the catalogue stays available to later calls. */
-    int n = dds_read(st->catalogue_r, ptr, info, CATALOGUE_READ_MAX, CATALOGUE_READ_MAX);
-    for (int i = 0; i < n && result != 0; i++) {
-      const palp_Phantom *p = ptr[i];
-      /* Not alive: its server is gone (several servers on one domain). */
-      if (!info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE || (phantom_id && p->phantom_id != phantom_id))
-        continue;
-      /* From the network: checked before any index in it is used (a forged entry
-       * with bad triangle indices crashed the visual station). */
-      char why[200];
-      if (palp_cli_phantom_check(p, why, sizeof why) < 0) {
-        if (strcmp(bad, why) != 0) fprintf(stderr, "palp-client: ignoring a malformed catalogue entry: %s\n", why);
-        snprintf(bad, sizeof bad, "%s", why);
-        continue;
+    if (phantom_id) {
+      /* read, not take: the catalogue stays available to later calls */
+      palp_Phantom key;
+      memset(&key, 0, sizeof key);
+      key.phantom_id = phantom_id;
+      const dds_instance_handle_t ih = dds_lookup_instance(rd, &key);
+      void *ptr[1] = {NULL};
+      dds_sample_info_t info;
+      if (ih != DDS_HANDLE_NIL && dds_read_instance(rd, ptr, &info, 1, 1, ih) > 0) {
+        result = take_entry(ptr[0], &info, phantom_id, bad, sizeof bad, out);
+        dds_return_loan(rd, ptr, 1);
       }
-      *out = *p;
-      size_t nv = p->rest._length, nt = p->triangles._length;
-      out->rest._buffer = malloc((nv ? nv : 1) * sizeof(palp_Vec3));
-      out->triangles._buffer = malloc((nt ? nt : 1) * sizeof(int32_t));
-      if (!out->rest._buffer || !out->triangles._buffer) {
-        palp_cli_phantom_free(out);
-        result = PALP_ENOMEM;
-        break;
-      }
-      memcpy(out->rest._buffer, p->rest._buffer, nv * sizeof(palp_Vec3));
-      memcpy(out->triangles._buffer, p->triangles._buffer, nt * sizeof(int32_t));
-      out->rest._maximum = (uint32_t)nv;
-      out->triangles._maximum = (uint32_t)nt;
-      out->rest._release = out->triangles._release = false;
-      result = 0;
+    } else {
+      int n;
+      do {
+        void *ptr[CATALOGUE_PAGE] = {NULL};
+        dds_sample_info_t info[CATALOGUE_PAGE];
+        n = dds_read_mask(rd, ptr, info, CATALOGUE_PAGE, CATALOGUE_PAGE, DDS_NOT_READ_SAMPLE_STATE);
+        for (int i = 0; i < n && result == 1; i++) result = take_entry(ptr[i], &info[i], 0, bad, sizeof bad, out);
+        if (n > 0) dds_return_loan(rd, ptr, n);
+      } while (result == 1 && n > 0);
     }
-    if (n > 0) dds_return_loan(st->catalogue_r, ptr, n);
-    if (result != PALP_EIO) break;
+    if (result != 1) break;
     if (stopped(st)) {
       result = PALP_CLI_ESTOPPED;
       break;
     }
-    int64_t now = palp_dds_now_ns();
+    const int64_t now = palp_dds_now_ns();
     if (now >= end) break;
-    dds_waitset_wait(ws, NULL, 0, end - now < DDS_MSECS(100) ? end - now : DDS_MSECS(100));
+    nap(end - now < DDS_MSECS(20) ? (double)(end - now) * 1e-9 : 0.02);
   }
-  dds_delete(rc);
-  dds_delete(ws);
+  if (rd != st->catalogue_r) dds_delete(rd);
   if (result == PALP_CLI_ESTOPPED) return fail_stopped(err, errlen);
   if (result == PALP_ENOMEM) return fail(err, errlen, result, "out of memory");
   if (result != 0 && bad[0])
@@ -1067,30 +1094,42 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
 
 int palp_cli_station_find_phantom(palp_cli_station *st, const char *name, int64_t server_number,
                                   int64_t exclude_server, double timeout, uint32_t *out_id, char *err, size_t errlen) {
+  /* Every entry once, as it comes (a search's own reader, its samples not read yet, a page at a time
+   * until none is left): a plain read of 256 saw only the first 256 entries on every pass. */
+  const dds_entity_t rd = search_reader(st);
+  if (rd < 0) return fail(err, errlen, PALP_EIO, "cannot read the catalogue: %s", dds_strretcode(rd));
   const int64_t start = palp_dds_now_ns(), end = start + (int64_t)(timeout * 1e9);
   int64_t settle = INT64_MAX; /* after the first match, 0.3 s for the other servers' entries */
   uint32_t best = 0, best_sessions = UINT32_MAX;
   while (palp_dds_now_ns() < end && palp_dds_now_ns() < settle) {
-    void *ptr[CATALOGUE_READ_MAX] = {NULL};
-    dds_sample_info_t info[CATALOGUE_READ_MAX];
-    int n = dds_read(st->catalogue_r, ptr, info, CATALOGUE_READ_MAX, CATALOGUE_READ_MAX);
-    for (int i = 0; i < n; i++) {
-      const palp_Phantom *p = ptr[i];
-      if (!info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE || strcmp(p->name, name) != 0) continue;
-      const uint32_t srvno = PALP_DDS_ID_SERVER(p->phantom_id);
-      if ((server_number >= 0 && srvno != (uint32_t)server_number) || (exclude_server >= 0 && srvno == (uint32_t)exclude_server))
-        continue;
-      /* The least busy phantom of that name: a class spreads over the servers. */
-      if (p->active_sessions < best_sessions || (p->active_sessions == best_sessions && p->phantom_id < best)) {
-        best = p->phantom_id;
-        best_sessions = p->active_sessions;
+    int n;
+    do {
+      void *ptr[CATALOGUE_PAGE] = {NULL};
+      dds_sample_info_t info[CATALOGUE_PAGE];
+      n = dds_read_mask(rd, ptr, info, CATALOGUE_PAGE, CATALOGUE_PAGE, DDS_NOT_READ_SAMPLE_STATE);
+      for (int i = 0; i < n; i++) {
+        const palp_Phantom *p = ptr[i];
+        if (!info[i].valid_data || info[i].instance_state != DDS_IST_ALIVE || strcmp(p->name, name) != 0) continue;
+        const uint32_t srvno = PALP_DDS_ID_SERVER(p->phantom_id);
+        if ((server_number >= 0 && srvno != (uint32_t)server_number) ||
+            (exclude_server >= 0 && srvno == (uint32_t)exclude_server))
+          continue;
+        /* The least busy phantom of that name: a class spreads over the servers. */
+        if (p->active_sessions < best_sessions || (p->active_sessions == best_sessions && p->phantom_id < best)) {
+          best = p->phantom_id;
+          best_sessions = p->active_sessions;
+        }
       }
-    }
-    if (n > 0) dds_return_loan(st->catalogue_r, ptr, n);
+      if (n > 0) dds_return_loan(rd, ptr, n);
+    } while (n > 0);
     if (best && settle == INT64_MAX) settle = palp_dds_now_ns() + DDS_MSECS(300);
-    if (stopped(st)) return fail_stopped(err, errlen);
+    if (stopped(st)) {
+      dds_delete(rd);
+      return fail_stopped(err, errlen);
+    }
     nap(0.05);
   }
+  dds_delete(rd);
   if (!best) {
     char hint[PALP_DDS_HINT_MAX];
     palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
@@ -1111,7 +1150,7 @@ int palp_cli_station_server_number(palp_cli_station *st, const char *server_name
   while (!found && palp_dds_now_ns() < end) {
     /* Each identity once, as it comes (the samples not read yet, 8 at a time, until none is left): a
      * plain read of 8 returned the same first 8 on every pass, and a ninth server was never found
-     * (session 77; the catalogue's reads had the same fault, CATALOGUE_READ_MAX). */
+     * (session 77; the catalogue's reads had the same fault, fixed 2026-12-07: CATALOGUE_PAGE). */
     int n;
     do {
       void *ptr[8] = {NULL};

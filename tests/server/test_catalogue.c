@@ -1,5 +1,7 @@
 /* test_catalogue.c - a station that starts after the server still receives the
- * phantom catalogue (reliable, transient-local), with the rest mesh. */
+ * phantom catalogue (reliable, transient-local), with the rest mesh; the tenth server
+ * identity is found by name; and (2026-12-07) a phantom behind 300 made-up catalogue
+ * entries is still found, by id and by name. Domain 101, ~2.6 s. */
 #include <math.h>
 #include <string.h>
 
@@ -89,6 +91,47 @@ int main(void) {
         number, rc ? err : "");
   rc = palp_cli_station_server_number(&st, "room-1", 5.0, &number, err, sizeof err);
   CHECK(rc == 0 && number == 4001, "--server room-1 is server %u (want 4001) %s", number, rc ? err : "");
+  /* (2026-12-07) 300 made-up, valid catalogue entries (phantoms 1001..1300, named "decoy") that a peer
+   * wrote before the server's: a station that read the catalogue 256 samples at a time with a plain read
+   * saw the same first 256 on every pass, all decoys, and, already joined, exited 1 "no catalogue entry
+   * for phantom 1". It looks its phantom up by its key, and searches every entry for a name. The server
+   * is started again after a fresh station has received the decoys: its entries come after them. */
+  palp_Phantom real;
+  err[0] = 0;
+  REQUIRE(palp_cli_station_catalogue(&st, 1, 5.0, &real, err, sizeof err) == 0, "phantom 1, the decoys' mesh: %s", err);
+  test_server_stop(&ts);
+  const dds_entity_t dw = palp_dds_create_writer(fp, palp_dds_create_topic(fp, PALP_TOPIC_CATALOGUE), PALP_TOPIC_CATALOGUE);
+  REQUIRE(dw > 0, "a peer writes catalogue entries");
+  enum { DECOYS = 300 };
+  for (uint32_t k = 1; k <= DECOYS; k++) {
+    palp_Phantom d = real;
+    d.phantom_id = 1000 + k;
+    snprintf(d.name, sizeof d.name, "decoy %u", k);
+    dds_write(dw, &d);
+  }
+  palp_cli_station fresh;
+  err[0] = 0;
+  REQUIRE(palp_cli_station_open(&fresh, DOMAIN, "fresh", err, sizeof err) == 0, "a fresh station opens (%s)", err);
+  int held = 0;
+  for (int64_t until = palp_dds_now_ns() + 5000000000LL; held < DECOYS && palp_dds_now_ns() < until; test_sleep(0.02)) {
+    void *ptr[DECOYS + 20] = {NULL};
+    dds_sample_info_t info[DECOYS + 20];
+    held = dds_read(fresh.catalogue_r, ptr, info, DECOYS + 20, DECOYS + 20);
+    if (held > 0) dds_return_loan(fresh.catalogue_r, ptr, held);
+  }
+  REQUIRE(held == DECOYS, "the fresh station holds the %d decoys (%d) before the server starts again", DECOYS, held);
+  test_server_start(&ts, &cfg);
+  palp_Phantom ph1;
+  rc = palp_cli_station_catalogue(&fresh, 1, 5.0, &ph1, err, sizeof err);
+  CHECK(rc == 0 && ph1.phantom_id == 1 && strcmp(ph1.name, "test dome A") == 0,
+        "phantom 1 found behind %d decoy entries: %s", DECOYS, rc ? err : ph1.name);
+  if (rc == 0) palp_cli_phantom_free(&ph1);
+  uint32_t found = 0;
+  rc = palp_cli_station_find_phantom(&fresh, "test dome L", -1, -1, 5.0, &found, err, sizeof err);
+  CHECK(rc == 0 && found == 12, "\"test dome L\" found by name behind %d decoy entries: phantom %u %s", DECOYS, found,
+        rc ? err : "");
+  palp_cli_phantom_free(&real);
+  palp_cli_station_close(&fresh);
   dds_delete(fp);
   palp_cli_station_close(&st);
   test_server_stop(&ts);
