@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/random.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -61,6 +62,28 @@ static dds_entity_t stream_reader(const palp_cli_station *st, dds_entity_t topic
   return r;
 }
 
+/* Where this process's request numbers start (2026-12-07): random, 31 bits, never 0. The server refuses
+ * a JOIN whose (station id, request_seq) is the one that opened a session it closed (it remembers its
+ * last 1,024 closed sessions): DDS re-delivers an old JOIN when a participant is found again. A station
+ * id is "host/pid/label", and every process numbered its requests from 1: a station restarted with the
+ * same host, pid and label (a container's pid 1 and fixed hostname; a pid reused) sent the closed
+ * session's pair again and was refused "session 1 closed: trainee station left" (reproduced with
+ * `unshare -p -f palp-client --role trainee --phantom 1 --duration 1` run twice). A number, not a nonce
+ * in the id: the id's form stays "host/pid/label" (a secured one "kind/name/host/pid/label", which the
+ * server checks), and nothing reads request_seq but for equality (server/server.c; web/hub.c numbers its
+ * own). 2^31 requests from the start cannot wrap to 0 in a process's life. Without getrandom (a kernel
+ * before 3.17) the clock and the pid: distinct for two processes started apart. */
+static uint32_t first_request_seq(void) {
+  uint32_t v = 0;
+  if (getrandom(&v, sizeof v, GRND_NONBLOCK) != (ssize_t)sizeof v) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    v = (uint32_t)ts.tv_nsec ^ (uint32_t)ts.tv_sec * 2654435761u ^ (uint32_t)getpid() * 40503u;
+  }
+  v &= 0x7fffffffu;
+  return v ? v : 1;
+}
+
 int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *label, char *err, size_t errlen) {
   return palp_cli_station_open_secure(st, domain, label, NULL, err, errlen);
 }
@@ -68,6 +91,7 @@ int palp_cli_station_open(palp_cli_station *st, uint32_t domain, const char *lab
 int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const char *label,
                                  const palp_dds_security *sec, char *err, size_t errlen) {
   memset(st, 0, sizeof *st);
+  st->request_seq = first_request_seq(); /* the first request sends the next */
   if (sec) st->sec = *sec;
   const int secured = st->sec.kind != PALP_DDS_ID_NONE;
   char host[32] = "host";

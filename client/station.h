@@ -108,6 +108,9 @@ typedef struct palp_cli_station {
   int debrief_score_topic_refused; /* ... and that is why */
   int in_exercise;            /* palp_cli_station_exercise found the joined phantom's exercise */
   uint32_t next_mark_id;      /* the station numbers its marks from 1 */
+  /* The last request's number. From a random 31-bit start (2026-12-07, first_request_seq in station.c):
+   * a station restarted with the same host, pid and label has the same station id, and the server
+   * refuses the (station id, request_seq) pair that opened a session it closed. */
   uint32_t request_seq;
   palp_dds_security sec;    /* identity; kind PALP_DDS_ID_NONE: plain DDS */
   dds_entity_t request_pub; /* secured: the publisher in the identity's request partition */

@@ -1,6 +1,7 @@
 /* test_isolation.c - two trainees on the same phantom get two sessions in two
  * partitions: one pressing leaves the other's world, feedback and contact
- * stream untouched. */
+ * stream untouched. And (2026-12-07) a station restarted with the same station
+ * id joins again after its first session closed. Domain 103. */
 #include <math.h>
 #include <string.h>
 
@@ -122,6 +123,28 @@ int main(void) {
   CHECK(ticks[1] - ticks[0] >= 50 && awake[1] == awake[0],
         "idle B: %llu ticks, %llu of them awake, between two statuses (want >= 50: ticking, and 0: asleep)",
         (unsigned long long)(ticks[1] - ticks[0]), (unsigned long long)(awake[1] - awake[0]));
+  /* (2026-12-07) A station restarted with the same id (host, pid and label: a container's pid 1 and
+   * fixed hostname, a pid reused; here two stations of one process with one label) is accepted: both
+   * numbered their requests from 1, and the second's JOIN was the closed session's (station id,
+   * request_seq) pair, refused "session N closed: trainee station left". */
+  palp_cli_station first, second;
+  test_station_join(&first, DOMAIN, "restarted", palp_ROLE_TRAINEE, 2, 0, 0, 0);
+  palp_cli_station_leave(&first);
+  char why[256] = "";
+  int left = 0;
+  for (int64_t until = palp_dds_now_ns() + 3000000000LL; !left && palp_dds_now_ns() < until; test_sleep(0.02))
+    left = palp_cli_station_session_closed(&first, why, sizeof why);
+  palp_cli_station_close(&first);
+  REQUIRE(left, "the first station's session %u closed: %s", first.session_id, why);
+  err[0] = 0;
+  REQUIRE(palp_cli_station_open(&second, DOMAIN, "restarted", err, sizeof err) == 0, "the second station opens %s", err);
+  const palp_cli_join j = {.role = palp_ROLE_TRAINEE, .phantom_id = 2, .user_name = "restarted", .timeout = 5};
+  const int rc = palp_cli_station_join(&second, &j, err, sizeof err);
+  CHECK(rc == 0 && strcmp(second.station_id, first.station_id) == 0 && second.session_id != first.session_id,
+        "a second station with the first's id %s joins after the first's session %u closed: %s", second.station_id,
+        first.session_id, rc ? err : "a new session");
+  if (rc == 0) palp_cli_station_leave(&second);
+  palp_cli_station_close(&second);
   palp_cli_phantom_free(&ph);
   palp_cli_station *all[] = {&obs_a, &obs_b, &a, &b};
   for (int i = 0; i < 4; i++) palp_cli_station_leave(all[i]);
