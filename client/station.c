@@ -47,8 +47,82 @@ static bool own_session(const void *sample, void *arg) {
 _Static_assert(offsetof(palp_Contact, session_id) == 0 && offsetof(palp_Feedback, session_id) == 0 &&
                    offsetof(palp_Deformation, session_id) == 0 && offsetof(palp_FindingStatus, session_id) == 0 &&
                    offsetof(palp_Debrief, session_id) == 0 && offsetof(palp_SessionScore, session_id) == 0 &&
-                   offsetof(palp_SessionLog, session_id) == 0,
+                   offsetof(palp_SessionLog, session_id) == 0 && offsetof(palp_SessionState, session_id) == 0,
                "the session id first");
+
+/* The global topics' filters (2026-12-07). Unfiltered, every made-up key a peer wrote became an
+ * instance of the station's reader, held as long as its writer lived: an observer's RSS went from
+ * 12.8 MB to 138 MB after a peer wrote 200,000 OPEN states of distinct ids (~630 B a key). The
+ * replies: those to this station (their key is its station id; the station writes none). */
+static bool own_reply(const void *sample, void *arg) {
+  const palp_SessionReply *r = sample;
+  const palp_cli_station *st = arg;
+  return strncmp(r->station_id, st->station_id, sizeof r->station_id) == 0;
+}
+
+/* The servers' statuses: those that list this station's session, the only ones it reads (watch_log);
+ * none outside a session (a status comes every status period: none is missed for long). */
+static bool own_status(const void *sample, void *arg) {
+  const palp_ServerStatus *m = sample;
+  const palp_cli_station *st = arg;
+  for (uint32_t k = 0; st->session_id && k < m->sessions._length; k++)
+    if (m->sessions._buffer[k].session_id == st->session_id) return true;
+  return false;
+}
+
+/* The exercises: the joined phantom's (st->exercise_phantom, set before its reader exists). */
+static bool own_exercise(const void *sample, void *arg) {
+  const palp_Exercise *e = sample;
+  const palp_cli_station *st = arg;
+  return e->phantom_id == st->exercise_phantom;
+}
+
+/* A reader of kind on a topic entity of its own that carries filter f: *topic and the reader, or a
+ * negative code (nothing made). */
+static dds_entity_t filtered_reader(palp_cli_station *st, palp_dds_topic_kind kind,
+                                    bool (*f)(const void *, void *), dds_entity_t *topic) {
+  const dds_entity_t tp = palp_dds_create_topic(st->pp, kind);
+  if (tp < 0) return tp;
+  struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_ARG, .f = {.sample_arg = f}, .arg = st};
+  const dds_entity_t r = dds_set_topic_filter_extended(tp, &flt) == 0 ? palp_dds_create_reader(st->pp, tp, kind) : -1;
+  if (r < 0) {
+    dds_delete(tp);
+    return r;
+  }
+  *topic = tp;
+  return r;
+}
+
+/* The exercise reader for phantom_id (palp_cli_station.exercise_r), made anew unless it is that
+ * phantom's already. */
+static int exercise_reader(palp_cli_station *st, uint32_t phantom_id) {
+  if (st->exercise_r > 0 && st->exercise_phantom == phantom_id) return 0;
+  if (st->exercise_r > 0) dds_delete(st->exercise_r);
+  if (st->exercise_topic > 0) dds_delete(st->exercise_topic);
+  st->exercise_r = st->exercise_topic = 0;
+  st->exercise_phantom = phantom_id;
+  const dds_entity_t r = filtered_reader(st, PALP_TOPIC_EXERCISE, own_exercise, &st->exercise_topic);
+  if (r < 0) return PALP_EIO;
+  st->exercise_r = r;
+  return 0;
+}
+
+/* In a session, its own state only (state_r on st->state_topic, filtered by own_session); outside one,
+ * every state (state_r on the shared topic entity: palp-client's --trainee looks for a trainee's
+ * session before its join). Each replaces the other's reader, and with it what it held: the
+ * states read before the join are not kept through the session. */
+static int state_reader(palp_cli_station *st, int in_session) {
+  dds_entity_t tp = 0;
+  const dds_entity_t r =
+      in_session ? filtered_reader(st, PALP_TOPIC_SESSION_STATE, own_session, &tp)
+                 : palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
+  if (r < 0) return PALP_EIO;
+  if (st->state_r > 0) dds_delete(st->state_r);
+  if (st->state_topic > 0) dds_delete(st->state_topic);
+  st->state_r = r;
+  st->state_topic = tp;
+  return 0;
+}
 
 /* A best-effort stream's reader of the session (contacts, feedback, deformations), holding at most
  * PALP_CLI_STREAM_INSTANCES keys: a dispose of a made-up key passes no filter. Deformations are read
@@ -173,18 +247,22 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
   st->request_w = request_parent < 0 ? request_parent
                                      : palp_dds_create_writer(request_parent, st->topic[PALP_TOPIC_SESSION_REQUEST],
                                                               PALP_TOPIC_SESSION_REQUEST);
-  st->reply_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_REPLY], PALP_TOPIC_SESSION_REPLY);
+  /* Its replies and the statuses of its session's server only (own_reply, own_status), through topic
+   * entities of their own: st->topic[] of the global topics stays unfiltered for other readers (a
+   * benchmark's monitor reads every status through it). The states and the exercise are filtered to the
+   * session at the join (state_reader, exercise_reader). The catalogue is not: a search by name needs
+   * every entry (palp_cli_station_find_phantom), made-up ones among them. */
+  st->reply_r = filtered_reader(st, PALP_TOPIC_SESSION_REPLY, own_reply, &st->reply_topic);
   st->state_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
-  st->exercise_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_EXERCISE], PALP_TOPIC_EXERCISE);
   /* The server's status, for its session log's losses (palp_cli_station_log_news); a station whose
    * permissions refuse it palpates all the same and is told nothing of the log. */
-  st->status_r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SERVER_STATUS], PALP_TOPIC_SERVER_STATUS);
+  st->status_r = filtered_reader(st, PALP_TOPIC_SERVER_STATUS, own_status, &st->status_topic);
   if (st->status_r < 0) st->status_r = 0;
   /* What discovery announces of the domain's writers: which are the session's server's
    * (palp_cli_station_from_server). Without it, a writer is asked of the reader it matched. */
   st->publications_r = dds_create_reader(st->pp, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, NULL, NULL);
   if (st->publications_r < 0) st->publications_r = 0;
-  if (st->exercise_r < 0 || st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
+  if (st->catalogue_r < 0 || st->request_w < 0 || st->reply_r < 0 || st->state_r < 0) {
     palp_cli_station_close(st);
     return fail(err, errlen, PALP_EIO, "cannot create the station's DDS endpoints");
   }
@@ -533,6 +611,10 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   int64_t asked = 0;
   dds_instance_handle_t replier = 0;
   memset(&st->bind, 0, sizeof st->bind); /* whoever accepts this JOIN is the session's server */
+  /* The phantom's exercise reader made before the JOIN goes: its exercise (transient-local) is sent
+   * while the server answers, as to the reader made at the station's start before 2026-12-07. */
+  if (j->phantom_id && exercise_reader(st, j->phantom_id) < 0)
+    return fail(err, errlen, PALP_EIO, "cannot create the exercise reader");
   for (;;) {
     asked = palp_dds_now_ns();
     if (send_request(st, j, palp_OP_JOIN, NULL) < 0) return fail(err, errlen, PALP_EIO, "cannot send the join request");
@@ -573,6 +655,8 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->session_id = r.session_id;
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;
+  if (state_reader(st, 1) < 0 || exercise_reader(st, r.phantom_id) < 0)
+    return fail(err, errlen, PALP_EIO, "cannot create the session's state and exercise readers");
   st->join_asked_ns = asked;
   snprintf(st->session_trainee, sizeof st->session_trainee, "%s", j->role == palp_ROLE_TRAINEE ? st->station_id : "");
   st->session_ticks = 0;
@@ -696,7 +780,8 @@ int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double 
     dds_instance_handle_t ih;
     memset(&e, 0, sizeof e);
     e.phantom_id = phantom_id;
-    ih = dds_lookup_instance(st->exercise_r, &e);
+    /* only the joined phantom's is read (exercise_reader) */
+    ih = st->exercise_r > 0 && phantom_id == st->exercise_phantom ? dds_lookup_instance(st->exercise_r, &e) : DDS_HANDLE_NIL;
     if (ih != DDS_HANDLE_NIL && dds_read_instance(st->exercise_r, ptr, &info, 1, 1, ih) > 0 && info.valid_data) {
       *out = e;
       out->name[sizeof out->name - 1] = 0;
@@ -1209,6 +1294,17 @@ void palp_cli_station_end_session(palp_cli_station *st) {
   if (st->finger_sample_topic > 0) dds_delete(st->finger_sample_topic); /* its filter's, this session's */
   if (st->contact_topic > 0) dds_delete(st->contact_topic);               /* likewise */
   st->finger_sample_topic = st->contact_topic = 0;
+  /* every state again, as before the first join (state_reader); the next join makes its phantom's
+   * exercise reader */
+  if (state_reader(st, 0) < 0) {
+    if (st->state_r > 0) dds_delete(st->state_r);
+    if (st->state_topic > 0) dds_delete(st->state_topic);
+    st->state_r = st->state_topic = 0;
+  }
+  if (st->exercise_r > 0) dds_delete(st->exercise_r);
+  if (st->exercise_topic > 0) dds_delete(st->exercise_topic);
+  st->exercise_r = st->exercise_topic = 0;
+  st->exercise_phantom = 0;
   st->session_id = 0;
   memset(&st->bind, 0, sizeof st->bind); /* the next session's server is whoever accepts its JOIN */
   /* the next session's server counts from its own base */

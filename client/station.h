@@ -78,7 +78,9 @@ typedef struct palp_cli_station {
   const atomic_int *stop;
   dds_entity_t pp;
   dds_entity_t topic[PALP_TOPIC_COUNT];
-  dds_entity_t catalogue_r, request_w, reply_r, state_r;
+  /* reply_r holds this station's replies only, through reply_topic, which carries that filter
+   * (2026-12-07); state_r: below, state_topic */
+  dds_entity_t catalogue_r, request_w, reply_r, state_r, reply_topic;
   /* session endpoints, valid after a successful join */
   uint32_t session_id;
   uint32_t phantom_id;
@@ -98,7 +100,14 @@ typedef struct palp_cli_station {
   dds_entity_t finger_sample_r; /* ... and its finger samples, touched triangles named (session 71); 0: none */
   dds_entity_t finger_sample_topic; /* the reader's own topic entity, which carries its session filter */
   dds_entity_t contact_topic;       /* a viewer's contact reader's, likewise (session 72) */
-  dds_entity_t exercise_r;    /* palp_exercise (issue 13): what the trainee may know of an exercise */
+  /* palp_exercise (issue 13): what the trainee may know of an exercise. Only the joined phantom's
+   * (exercise_phantom), through a topic entity of its own that carries that filter (2026-12-07): made
+   * by the join, deleted with the session; 0: none. */
+  dds_entity_t exercise_r, exercise_topic;
+  uint32_t exercise_phantom;
+  /* In a session state_r reads its state only, through a topic entity of its own that carries the
+   * filter (2026-12-07); 0 outside one, where state_r reads every state (--trainee looks there). */
+  dds_entity_t state_topic;
   dds_entity_t finding_w, finding_status_r; /* trainee: "lump here" marks and the server's answers */
   dds_entity_t debrief_r;     /* trainee: palp_debrief, what its marks found, at its session's end; 0: none
                                * (a secured identity whose permissions predate the topic) */
@@ -132,6 +141,7 @@ typedef struct palp_cli_station {
   /* The server's session log as this station's session sees it (session 68): read from
    * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */
   dds_entity_t status_r;  /* 0: none (permissions that refuse it; nothing is said then) */
+  dds_entity_t status_topic; /* status_r's, filtered to the statuses that list this session (2026-12-07) */
   dds_entity_t publications_r; /* DCPSPublication: the domain's writers as announced (palp_cli_server_bind); 0: none */
   dds_entity_t session_log_r; /* palp_session_log (session 69), in the session: its own losses; 0: none */
   palp_dds_log_view log;
@@ -228,7 +238,8 @@ int palp_cli_station_server_number(palp_cli_station *st, const char *server_name
 void palp_cli_station_end_session(palp_cli_station *st);
 
 /* issue 13. The exercise the phantom runs (title, instructions, limits): 1 and *out
- * when there is one within timeout [s], 0 when not (a plain phantom), PALP_CLI_ESTOPPED when stopped. */
+ * when there is one within timeout [s], 0 when not (a plain phantom, or since 2026-12-07 a phantom
+ * other than the one joined: only its exercise is read), PALP_CLI_ESTOPPED when stopped. */
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out);
 /* Sends a "lump here" mark at point [m] (the fingertip's contact point, world time t)
  * and returns its mark id (> 0), or withdraws mark_id (op palp_FINDING_WITHDRAW);

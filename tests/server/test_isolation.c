@@ -47,6 +47,30 @@ static void drain(palp_cli_station *st, const palp_Phantom *ph, seen *s) {
   }
 }
 
+/* The instances reader r holds: its samples not read yet, a page at a time (keep-last 1: one an
+ * instance; the stations take, never read, these readers' samples). */
+static int instances_held(dds_entity_t r) {
+  int held = 0, n;
+  do {
+    void *ptr[64] = {NULL};
+    dds_sample_info_t info[64];
+    n = r > 0 ? dds_read_mask(r, ptr, info, 64, 64, DDS_NOT_READ_SAMPLE_STATE) : 0;
+    if (n > 0) dds_return_loan(r, ptr, n);
+    held += n > 0 ? n : 0;
+  } while (n > 0);
+  return held;
+}
+
+static long rss_kb(void) {
+  FILE *f = fopen("/proc/self/status", "r");
+  char line[256];
+  long kb = -1;
+  while (f && fgets(line, sizeof line, f))
+    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
+  if (f) fclose(f);
+  return kb;
+}
+
 int main(void) {
   test_init();
   palp_srv_config cfg;
@@ -123,6 +147,67 @@ int main(void) {
   CHECK(ticks[1] - ticks[0] >= 50 && awake[1] == awake[0],
         "idle B: %llu ticks, %llu of them awake, between two statuses (want >= 50: ticking, and 0: asleep)",
         (unsigned long long)(ticks[1] - ticks[0]), (unsigned long long)(awake[1] - awake[0]));
+  /* (2026-12-07) A peer writes made-up keys of the global topics the stations read while they are in
+   * their sessions: 20,000 OPEN states and 20,000 replies of distinct ids, 2,000 exercises and 2,000
+   * server statuses. Each became an instance of every station's reader, held while its writer lived
+   * (a reviewer's observer: 12.8 MB -> 138 MB RSS for 200,000 states). Filtered, a station holds its own
+   * session's state, its own reply, its phantom's exercise and its server's status; and A's session
+   * goes on. Written in this process: delivered to the stations' readers within each write. */
+  {
+    enum { FLOOD = 20000, FEW = 2000 };
+    const dds_entity_t fp = dds_create_participant(DOMAIN, NULL, NULL);
+    static const palp_dds_topic_kind kind[] = {PALP_TOPIC_SESSION_STATE, PALP_TOPIC_SESSION_REPLY, PALP_TOPIC_EXERCISE,
+                                               PALP_TOPIC_SERVER_STATUS};
+    dds_entity_t fw[4];
+    for (int k = 0; k < 4; k++) fw[k] = palp_dds_create_writer(fp, palp_dds_create_topic(fp, kind[k]), kind[k]);
+    REQUIRE(fp > 0 && fw[0] > 0 && fw[1] > 0 && fw[2] > 0 && fw[3] > 0, "a peer writes states, replies, exercises and statuses");
+    const long rss0 = rss_kb();
+    const int64_t t0 = palp_dds_now_ns();
+    for (uint32_t k = 1; k <= FLOOD; k++) {
+      palp_SessionState m;
+      memset(&m, 0, sizeof m);
+      m.session_id = 0x7f000000u + k; /* another server number than the harness server's (0) */
+      m.phase = palp_PHASE_OPEN;
+      snprintf(m.trainee_name, sizeof m.trainee_name, "flood");
+      snprintf(m.trainee_station, sizeof m.trainee_station, "flood/%u", k);
+      dds_write(fw[0], &m);
+      palp_SessionReply r;
+      memset(&r, 0, sizeof r);
+      snprintf(r.station_id, sizeof r.station_id, "flood/%u", k);
+      r.request_seq = k;
+      dds_write(fw[1], &r);
+      if (k > FEW) continue;
+      palp_Exercise e;
+      memset(&e, 0, sizeof e);
+      e.phantom_id = 5000 + k;
+      snprintf(e.name, sizeof e.name, "flood");
+      dds_write(fw[2], &e);
+      palp_ServerStatus ss;
+      memset(&ss, 0, sizeof ss);
+      snprintf(ss.server_id, sizeof ss.server_id, "flood/%u", k);
+      dds_write(fw[3], &ss);
+    }
+    const double flood_s = (double)(palp_dds_now_ns() - t0) * 1e-9;
+    const long rss1 = rss_kb();
+    const int hs = instances_held(a.state_r), hr = instances_held(a.reply_r), he = instances_held(a.exercise_r),
+              hst = instances_held(a.status_r), ho = instances_held(obs_a.state_r), hor = instances_held(obs_a.reply_r);
+    fprintf(stderr, "flood written in %.2f s; RSS %ld -> %ld kB (the peer's writers and 4 stations)\n", flood_s, rss0, rss1);
+    CHECK(hs <= 1 && hr <= 1 && he <= 1 && hst <= 2 && ho <= 1 && hor <= 1,
+          "after %d made-up states and replies and %d exercises and statuses, trainee A's readers hold %d states, %d "
+          "replies, %d exercises, %d statuses, her observer's %d states and %d replies (want <= 1 each, 2 statuses)",
+          FLOOD, FEW, hs, hr, he, hst, ho, hor);
+    uint64_t fseq = 1000000;
+    seen sf = {0};
+    for (const int64_t until = palp_dds_now_ns() + 500000000; palp_dds_now_ns() < until; test_sleep(0.01)) {
+      test_send_force(&a, 0, 3, 20, 0, 4.0, ++fseq);
+      drain(&a, &ph, &sf);
+    }
+    char why[256] = "";
+    const int closed = palp_cli_station_session_closed(&a, why, sizeof why);
+    CHECK(!closed && sf.max_fb > 3.0, "A's session goes on through the flood: %s, feedback %.2f N (pressing 4 N; want > 3 N)",
+          closed ? why : "open", sf.max_fb);
+    dds_delete(fp);
+  }
   /* (2026-12-07) A station restarted with the same id (host, pid and label: a container's pid 1 and
    * fixed hostname, a pid reused; here two stations of one process with one label) is accepted: both
    * numbered their requests from 1, and the second's JOIN was the closed session's (station id,
