@@ -17,6 +17,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "../open_session.h"
 #include "harness.h"
 #include "palp_dds_refusals.h"
 #include "palp_pem.h"
@@ -76,29 +77,9 @@ static int matched_subs(dds_entity_t wr) {
   return (int)dds_get_matched_subscriptions(wr, h, 8);
 }
 
-/* Waits for the open session of trainee `name` in the (public) session states. */
+/* Waits for the open session of trainee `name` in the public session states (0, or -1). */
 static int find_session(palp_cli_station *st, const char *name, double timeout, palp_SessionState *out) {
-  /* Through a reader of its own on the station's participant (transient-local: every state sent anew):
-   * a joined station's state_r holds its own session's state only (2026-12-07). */
-  const dds_entity_t r = palp_dds_create_reader(st->pp, st->topic[PALP_TOPIC_SESSION_STATE], PALP_TOPIC_SESSION_STATE);
-  const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
-  int found = -1;
-  while (r > 0 && found < 0 && palp_dds_now_ns() < end) {
-    palp_SessionState buf[8];
-    void *ptr[8];
-    dds_sample_info_t info[8];
-    for (int i = 0; i < 8; i++) ptr[i] = &buf[i];
-    int n;
-    while (found < 0 && (n = dds_read_mask(r, ptr, info, 8, 8, DDS_NOT_READ_SAMPLE_STATE)) > 0)
-      for (int i = 0; i < n; i++)
-        if (info[i].valid_data && buf[i].phase == palp_PHASE_OPEN && !strcmp(buf[i].trainee_name, name)) {
-          *out = buf[i];
-          found = 0;
-        }
-    if (found < 0) test_sleep(0.05);
-  }
-  if (r > 0) dds_delete(r);
-  return found;
+  return palp_test_open_session(st->pp, name, timeout, out) ? 0 : -1;
 }
 
 /* A request written through st's own request writer (its identity's partition)
