@@ -160,3 +160,13 @@ int test_latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out) {
   }
   return 0;
 }
+
+long test_rss_kb(void) {
+  FILE *f = fopen("/proc/self/status", "r");
+  char line[256];
+  long kb = -1;
+  while (f && fgets(line, sizeof line, f))
+    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
+  if (f) fclose(f);
+  return kb;
+}

@@ -76,5 +76,7 @@ void test_sleep(double seconds);
 int test_latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out);
 /* Uses the loopback config (CYCLONEDDS_URI) unless set. */
 void test_init(void);
+/* This process's resident set (VmRSS) [kB], or -1. */
+long test_rss_kb(void);
 
 #endif

@@ -41,16 +41,6 @@
 #define JOINS 6
 #define BURST 300
 
-static long rss_kb(void) {
-  FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
-}
-
 static int log_count(const char *path, const char *a, const char *b) {
   FILE *f = fopen(path, "r");
   char buf[4096];
@@ -241,9 +231,9 @@ int main(void) {
   palp_ServerGuard g0, g;
   wait_guard_after(guard_r, &g0);
   const uint64_t strays0 = palp_srv_request_strays(ts.srv);
-  const long rss0 = rss_kb();
+  const long rss0 = test_rss_kb();
   const int answered = run(cmd[1], done_f, 'A');
-  const long rss1 = rss_kb();
+  const long rss1 = test_rss_kb();
   test_sleep(0.3);
   wait_guard_after(guard_r, &g);
   const uint64_t filtered = g.request_keys_filtered - g0.request_keys_filtered;

@@ -35,16 +35,6 @@
 #define FINDING_DISPOSES 40000
 #define REQUEST_DISPOSES 2000
 
-static long rss_kb(void) {
-  FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
-}
-
 /* ---- the flooder (child) ------------------------------------------------------ */
 
 static int flooder(int go_fd, int done_fd) {
@@ -270,7 +260,7 @@ int main(void) {
   uint64_t seq = 0;
   tick_trace warm = {0}, flood = {0};
   trace_feedback(&good, &warm, 1.5, &seq); /* settle; also lets the flooder discover us */
-  long rss0 = rss_kb();
+  long rss0 = test_rss_kb();
   if (write(go[1], "g", 1) != 1) return 1;
   int64_t t0 = palp_dds_now_ns();
   /* Trace until the flooder is done and gone, and one more second. */
@@ -292,7 +282,7 @@ int main(void) {
   }
   trace_feedback(&good, &flood, 1.5, &seq); /* the flooder's participant is gone: its instances go not-alive */
   double secs = (double)(palp_dds_now_ns() - t0) * 1e-9;
-  long rss1 = rss_kb();
+  long rss1 = test_rss_kb();
   int status = 0;
   waitpid(child, &status, 0);
   CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0, "flooder exit status %d", WEXITSTATUS(status));
@@ -378,11 +368,11 @@ int main(void) {
    * instance of session 2's reader: these 40,000 grew this process by 23,108 kB (2026-12-06, the
    * renewal disabled; 100,000 grew a palp-server by 98 MB); now at most a quarter second of the flood
    * (+4,296..+4,568 kB measured). Under AddressSanitizer (quarantine off) ~4 MB more. */
-  const long rss_f0 = rss_kb();
+  const long rss_f0 = test_rss_kb();
   if (write(fgo[1], "g", 1) != 1) return 1;
   const int got_f = read(fdone[0], &c, 1) == 1;
   test_sleep(0.5); /* the main loop takes what arrived last */
-  const long rss_f1 = rss_kb();
+  const long rss_f1 = test_rss_kb();
   if (write(fgo[1], "x", 1) != 1) return 1;
   int status2 = 0;
   waitpid(child2, &status2, 0);

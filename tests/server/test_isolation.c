@@ -61,16 +61,6 @@ static int instances_held(dds_entity_t r) {
   return held;
 }
 
-static long rss_kb(void) {
-  FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
-}
-
 int main(void) {
   test_init();
   palp_srv_config cfg;
@@ -161,7 +151,7 @@ int main(void) {
     dds_entity_t fw[4];
     for (int k = 0; k < 4; k++) fw[k] = palp_dds_create_writer(fp, palp_dds_create_topic(fp, kind[k]), kind[k]);
     REQUIRE(fp > 0 && fw[0] > 0 && fw[1] > 0 && fw[2] > 0 && fw[3] > 0, "a peer writes states, replies, exercises and statuses");
-    const long rss0 = rss_kb();
+    const long rss0 = test_rss_kb();
     const int64_t t0 = palp_dds_now_ns();
     for (uint32_t k = 1; k <= FLOOD; k++) {
       palp_SessionState m;
@@ -188,7 +178,7 @@ int main(void) {
       dds_write(fw[3], &ss);
     }
     const double flood_s = (double)(palp_dds_now_ns() - t0) * 1e-9;
-    const long rss1 = rss_kb();
+    const long rss1 = test_rss_kb();
     const int hs = instances_held(a.state_r), hr = instances_held(a.reply_r), he = instances_held(a.exercise_r),
               hst = instances_held(a.status_r), ho = instances_held(obs_a.state_r), hor = instances_held(obs_a.reply_r);
     fprintf(stderr, "flood written in %.2f s; RSS %ld -> %ld kB (the peer's writers and 4 stations)\n", flood_s, rss0, rss1);
