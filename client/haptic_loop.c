@@ -372,8 +372,8 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
         o.force = v3sub(o.force, v3scale(v, a));
         /* A surface pushes; it never pulls. The damper takes energy out along the hand's
          * velocity, and while the hand came out of a stiff phantom that was into the surface,
-         * past the contact force: -3.1 N on a 2000 N/m plane with 40 ms late models, and 5.0 N
-         * swings in one tick (session 80's review). Its normal part stops at a force of 0 along
+         * past the contact force: down to -3.1 N on a 2000 N/m plane with 40 ms late models
+         * (session 80's review; docs/haptics.md). Its normal part stops at a force of 0 along
          * the contact normal, as the renderer's own damper does (src/haptic.c); the energy it
          * leaves stays in the observer (which sums the force as rendered) for the next ticks,
          * pressing in, where the damper pushes out. */
