@@ -1,5 +1,5 @@
-/* dds_util.h - what the db tests that play a palp-server over DDS share (test_recorder.c,
- * test_recorder_exercise.c): a sleep, a wait for a writer's match, a catalogue entry. */
+/* dds_util.h - what the db tests that play a palp-server over DDS share (test_recorder*.c): a sleep,
+ * a wait for a writer's match, the recorder started and stopped, a catalogue entry. */
 #ifndef PALP_TEST_DB_DDS_UTIL_H
 #define PALP_TEST_DB_DDS_UTIL_H
 #include <signal.h>
@@ -7,6 +7,7 @@
 #include <string.h>
 #include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "palp.h"
 #include "palp_dds.h"
@@ -24,6 +25,23 @@ static inline int wait_matched(dds_entity_t w, int want, double timeout_s) {
     sleep_ms(10);
   }
   return -1;
+}
+
+/* Starts palp-recorder `exe` on `domain` into db, logging to logf, for at most 60 s; max_mb: its --max-mb,
+ * or NULL. Its pid, or -1 when it cannot fork. */
+static inline pid_t start_recorder(const char *exe, const char *db, int domain, const char *logf, const char *max_mb) {
+  char dom[16];
+  snprintf(dom, sizeof dom, "%d", domain);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (max_mb)
+      execl(exe, exe, "--db", db, "--domain", dom, "--duration", "60", "--max-mb", max_mb, "--log-file", logf,
+            (char *)NULL);
+    else
+      execl(exe, exe, "--db", db, "--domain", dom, "--duration", "60", "--log-file", logf, (char *)NULL);
+    _exit(127);
+  }
+  return pid;
 }
 
 /* Stops the recorder (SIGTERM, as systemd does) and returns 1 when it exited 0. */

@@ -62,16 +62,11 @@ int main(int argc, char **argv) {
   db_fresh_path(db, sizeof db, argv[1], "recorder.db");
   REQUIRE(palp_dds_use_config(argv[4]) == 0, "DDS config %s", argv[4]);
 
-  char dom[16], logf[640];
-  snprintf(dom, sizeof dom, "%d", DOMAIN);
+  char logf[640];
   snprintf(logf, sizeof logf, "%s.log", db);
   remove(logf);
-  pid_t pid = fork();
+  const pid_t pid = start_recorder(argv[2], db, DOMAIN, logf, NULL);
   REQUIRE(pid >= 0, "fork");
-  if (pid == 0) {
-    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", "--log-file", logf, (char *)NULL);
-    _exit(127);
-  }
 
   dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
   REQUIRE(pp > 0, "participant: %s", dds_strretcode(pp));

@@ -130,14 +130,8 @@ int main(int argc, char **argv) {
        *fresh = renamed(json, "fresh");
   REQUIRE(easy && hard && stale && fresh, "%s names its exercise \"teaching\"", argv[4]);
 
-  char dom[16];
-  snprintf(dom, sizeof dom, "%d", DOMAIN);
-  pid_t pid = fork();
+  const pid_t pid = start_recorder(argv[2], db, DOMAIN, logf, NULL);
   REQUIRE(pid >= 0, "fork");
-  if (pid == 0) {
-    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", "--log-file", logf, (char *)NULL);
-    _exit(127);
-  }
   /* run A: the server of every session here */
   dds_entity_t pa = dds_create_participant(DOMAIN, NULL, NULL);
   REQUIRE(pa > 0, "participant A: %s", dds_strretcode(pa));

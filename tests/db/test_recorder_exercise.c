@@ -159,14 +159,8 @@ int main(int argc, char **argv) {
   char *json = read_file(argv[4]);
   REQUIRE(json != NULL, "read %s", argv[4]);
 
-  char dom[16];
-  snprintf(dom, sizeof dom, "%d", DOMAIN);
-  pid_t pid = fork();
+  const pid_t pid = start_recorder(argv[2], db, DOMAIN, log, NULL);
   REQUIRE(pid >= 0, "fork");
-  if (pid == 0) {
-    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", "--log-file", log, (char *)NULL);
-    _exit(127);
-  }
 
   dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
   REQUIRE(pp > 0, "participant: %s", dds_strretcode(pp));

@@ -111,15 +111,8 @@ int main(int argc, char **argv) {
   db_fresh_path(db, sizeof db, argv[1], "recorder_review.db");
   db_fresh_path(logf, sizeof logf, argv[1], "recorder_review.log");
   REQUIRE(palp_dds_use_config(argv[3]) == 0, "DDS config %s", argv[3]);
-  char dom[16];
-  snprintf(dom, sizeof dom, "%d", DOMAIN);
-  pid_t pid = fork();
+  const pid_t pid = start_recorder(argv[2], db, DOMAIN, logf, "1");
   REQUIRE(pid >= 0, "fork");
-  if (pid == 0) {
-    execl(argv[2], argv[2], "--db", db, "--domain", dom, "--duration", "60", "--max-mb", "1", "--log-file", logf,
-          (char *)NULL);
-    _exit(127);
-  }
   dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
   REQUIRE(pp > 0, "participant: %s", dds_strretcode(pp));
   dds_entity_t t[PALP_TOPIC_COUNT];
