@@ -1336,14 +1336,15 @@ static int writer_of(dds_entity_t reader, uint64_t writer, const dds_guid_t *p, 
 }
 
 /* Says why a request for a station (or its held session) from another participant than the one that
- * joined it is refused, unanswered: a reply to this station id would land on the station itself. */
-static void refuse_foreign_request(palp_srv *srv, const char *op, const char *station_id, uint32_t session_id,
+ * joined it is refused, unanswered: a reply to this station id would land on the station itself. what:
+ * what was done, before its sender ("LEAVE from", "disposed or unregistered by"). */
+static void refuse_foreign_request(palp_srv *srv, const char *what, const char *station_id, uint32_t session_id,
                                    const dds_guid_t *sender, int sender_known) {
   char who[64] = "a writer already gone";
   if (sender_known) palp_dds_participant_text(sender, who, sizeof who);
-  refuse_identity(srv, "station \"%s\" (session %u): %s from %s, which did not join it; the station stays "
+  refuse_identity(srv, "station \"%s\" (session %u): %s %s, which did not join it; the station stays "
                        "(plain DDS: anyone may write requests; run the classroom with DDS Security)",
-                  PALP_PRINTABLE(station_id), session_id, op, who);
+                  PALP_PRINTABLE(station_id), session_id, what, who);
 }
 
 /* A LEAVE for a station whose session is held: the held session closes. On plain DDS only from the
@@ -1354,7 +1355,7 @@ static int leave_held(palp_srv *srv, const char *station_id, dds_entity_t reader
   dds_guid_t sender;
   int sender_known;
   if (!secured(srv) && !writer_of(reader, writer, &h->trainee_participant, &sender, &sender_known)) {
-    refuse_foreign_request(srv, "LEAVE", station_id, h->id, &sender, sender_known);
+    refuse_foreign_request(srv, "LEAVE from", station_id, h->id, &sender, sender_known);
     return 1;
   }
   close_session(srv, h, "trainee station left");
@@ -1456,7 +1457,7 @@ static void handle_leave(palp_srv *srv, const palp_SessionRequest *rq, dds_entit
   dds_guid_t sender;
   int sender_known;
   if (st && !secured(srv) && !request_is_own(srv, st, reader, writer, &sender, &sender_known)) {
-    refuse_foreign_request(srv, "LEAVE", rq->station_id, st->session_id, &sender, sender_known);
+    refuse_foreign_request(srv, "LEAVE from", rq->station_id, st->session_id, &sender, sender_known);
     return;
   }
   if (st) {
@@ -1503,7 +1504,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
   dds_guid_t sender;
   int sender_known;
   if (again && !secured(srv) && !request_is_own(srv, again, reader, writer, &sender, &sender_known)) {
-    refuse_foreign_request(srv, "JOIN", rq->station_id, again->session_id, &sender, sender_known);
+    refuse_foreign_request(srv, "JOIN from", rq->station_id, again->session_id, &sender, sender_known);
     return;
   }
   palp_srv_session *cur = again && again->request_seq == rq->request_seq && again->role == (int)rq->role
@@ -1527,7 +1528,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
    * under it made the trainee's own JOIN miss its resume. */
   palp_srv_session *held = !again ? held_session_of(srv, rq->station_id) : NULL;
   if (held && !secured(srv) && !writer_of(reader, writer, &held->trainee_participant, &sender, &sender_known)) {
-    refuse_foreign_request(srv, "JOIN", rq->station_id, held->id, &sender, sender_known);
+    refuse_foreign_request(srv, "JOIN from", rq->station_id, held->id, &sender, sender_known);
     return;
   }
   if (held && rq->role != palp_ROLE_TRAINEE) held = NULL; /* as before: only a trainee's JOIN resumes or ends it */
@@ -2077,11 +2078,8 @@ static void handle_requests(palp_srv *srv) {
       dds_guid_t sender;
       int sender_known;
       if (!secured(srv) && !request_is_own(srv, st, srv->request_r, info[i].publication_handle, &sender, &sender_known)) {
-        char who[64] = "a writer already gone";
-        if (sender_known) palp_dds_participant_text(&sender, who, sizeof who);
-        refuse_identity(srv, "station \"%s\" (session %u): disposed or unregistered by %s, which did not join it; the "
-                             "station stays (plain DDS: anyone may write requests; run the classroom with DDS Security)",
-                        PALP_PRINTABLE(buf[i].station_id), st->session_id, who);
+        refuse_foreign_request(srv, "disposed or unregistered by", buf[i].station_id, st->session_id, &sender,
+                               sender_known);
         continue;
       }
       /* A station that says goodbye sends OP_LEAVE first (handled above, which
