@@ -2886,7 +2886,6 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
   const int answers_ok = !c->scope[0] && !c->trainee && c->mode == PALP_WEB_FOLLOW_ALL;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
     if (!h->slot_sid[i] || (c->mode == PALP_WEB_FOLLOW_SESSION && h->slot_sid[i] != c->follow)) continue;
-    if (c->scope[0] && strcmp(h->slot_trainee[i], c->scope) != 0) continue; /* rescope, and by construction */
     const item *d = &h->deform_msg[i], *l = &h->live_msg[i], *a = &h->answers_msg[i], *cv = &h->cover_msg[i];
     if (answers_ok && a->buf && c->answers_ver[i] != a->ver) {
       rc = take(a, pre, buf, len);
