@@ -142,7 +142,7 @@ char *palp_log_printable(const char *in, char *out, size_t len) {
     /* The C1 controls U+0080..U+009F, in UTF-8 0xC2 0x80..0x9F, are escapes too: CSI (U+009B) and OSC
      * (U+009D) clear a terminal's screen or retitle it as ESC [ and ESC ] do (session 80's review,
      * 2026-12-07: they passed). Other bytes >= 0x80 stay: UTF-8 text is kept as it is. */
-    const int c1 = c1_tail || (*c == 0xC2 && c[1] >= 0x80 && c[1] <= 0x9F);
+    const int c1 = c1_tail || palp_utf8_c1_at((const char *)c);
     c1_tail = !c1_tail && c1;
     const int esc = *c < 0x20 || *c == 0x7f || *c == '\\' || c1;
     const size_t need = esc ? 4 : 1;

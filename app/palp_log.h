@@ -78,6 +78,13 @@ char *palp_log_printable(const char *in, char *out, size_t len);
 typedef struct palp_log_field {
   char s[4 * 64];
 } palp_log_field;
+/* 1 if s begins with a C1 control U+0080..U+009F in UTF-8 (0xC2 0x80..0x9F): CSI (U+009B) and OSC
+ * (U+009D) act on a terminal as ESC [ and ESC ] do. For the log's escapes and the station's
+ * terminal-safe text alike. */
+static inline int palp_utf8_c1_at(const char *s) {
+  const unsigned char *u = (const unsigned char *)s;
+  return u[0] == 0xC2 && u[1] >= 0x80 && u[1] <= 0x9F;
+}
 #define PALP_PRINTABLE(str) (palp_log_printable((str), (palp_log_field){{0}}.s, sizeof(palp_log_field)))
 #define PALP_PRINTABLE_LONG(str) (palp_log_printable((str), (char[4 * 128]){0}, 4 * 128))
 

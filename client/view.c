@@ -8,6 +8,7 @@
 
 #include "palp.h"
 #include "palp_dds.h"
+#include "palp_log.h"
 
 /* The check is palp_dds_phantom_check (idl/), shared with palp-recorder. */
 int palp_cli_phantom_check(const palp_Phantom *ph, char *err, size_t errlen) {
@@ -216,6 +217,6 @@ void palp_cli_terminal_safe(char *s) {
     if ((c < 0x20 && c != '\n' && c != '\t') || c == 0x7f) *s = '?';
     /* a C1 control in UTF-8 (0xC2 0x80..0x9F): CSI and OSC cleared a trainee's screen and retitled her
      * terminal from an exercise's title (session 80's review, 2026-12-07); both bytes go */
-    if (c == 0xC2 && (unsigned char)s[1] >= 0x80 && (unsigned char)s[1] <= 0x9F) s[0] = s[1] = '?';
+    if (palp_utf8_c1_at(s)) s[0] = s[1] = '?';
   }
 }
