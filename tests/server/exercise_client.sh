@@ -86,8 +86,13 @@ spid=$!
 "$client" --role trainee --domain 61 --phantom 7 --name gus --timeout 10 --print-period 0 \
   --input sim:press,polar=31,azimuth=41,depth_mm=9,hold_s=3,mark_s=2 > "$tmp/gus.log" 2>&1 &
 gpid=$!
-"$finding_writer" 61 gus 9 1 0.1 own > "$tmp/writer.log" 2>&1
-"$finding_writer" 61 gus 9 1 0.1 own-visual >> "$tmp/writer.log" 2>&1
+# The first two side by side: each lingers 1 s after writing, so that a loaded server still finds its
+# writer when it takes the finding, and the flood still runs through his mark.
+"$finding_writer" 61 gus 9 1 0.1 own > "$tmp/writer-own.log" 2>&1 &
+wpid=$!
+"$finding_writer" 61 gus 9 1 0.1 own-visual > "$tmp/writer.log" 2>&1
+wait $wpid
+cat "$tmp/writer-own.log" >> "$tmp/writer.log"
 "$finding_writer" 61 gus 9 20 4 >> "$tmp/writer.log" 2>&1
 wait $gpid
 # 2026-12-07: a peer joined as a visual station (as palp-web does for jo's trainee page) marks lump "1"
