@@ -36,6 +36,12 @@
  * 0.5 kB, a shipped exercise 2-4 kB): room for every reserved slot as they are used, while a flood of
  * large control records (a 32 kB exercise each) still leaves the queue's memory bounded. */
 #define CONTROL_RESERVE_BYTES ((size_t)4 << 20)
+/* A session's end is never refused (session 81): each begin taken keeps one ring slot for its end, and
+ * the end's detail is cut to this many bytes, held outside the byte caps (so at most this much per open
+ * session). Until then an end met a queue whose control reserve a stalled disk and a flood of events had
+ * spent: refused, counted as shed in the session's own row, and the server's log left it "(running)"
+ * (palp-recorder kept it and retried). */
+#define END_DETAIL_MAX 512
 #define MAX_TXN_RECORDS 16384 /* records per transaction: bounds one commit's latency */
 #define SHED_LOG_INTERVAL_S 1.0
 #define DROP_SAY_INTERVAL_S 10.0 /* stderr lines for dropped batches: a full disk fails one every ~0.4 s */
@@ -92,6 +98,7 @@ typedef struct psess {
   int64_t shed;
   int64_t failed; /* counted by the worker (count_failed), read by any thread (palp_db_writer_session_losses) */
   uint8_t open;
+  uint8_t end_kept; /* its begin keeps a ring slot for its end (ends_kept) */
 } psess;
 
 /* Worker-side view of a session: touched by the worker only. */
@@ -153,6 +160,7 @@ struct palp_db_writer {
   int cap;       /* ring slots = data capacity + control reserve */
   int data_cap;  /* data records are refused beyond this */
   int head, tail, count;
+  int ends_kept; /* ring slots kept for the ends of the sessions begun (END_DETAIL_MAX) */
   size_t queue_bytes;
   int stop;
   int flush_waiters;
@@ -271,7 +279,14 @@ static rec *claim(palp_db_writer *w, palp_db_record_kind kind, palp_db_session s
   const int limit = control ? w->cap : w->data_cap;
   const size_t max_bytes = w->opts.queue_max_bytes, reserve = control ? CONTROL_RESERVE_BYTES : 0;
   const size_t byte_limit = max_bytes > SIZE_MAX - reserve ? SIZE_MAX : max_bytes + reserve;
-  if (w->count >= limit || (bytes > 0 && (bytes > byte_limit || w->queue_bytes > byte_limit - bytes))) {
+  /* its end's slot kept by its begin: taken whatever the queue holds (count + ends_kept <= cap) */
+  const int kept = kind == PALP_DB_REC_SESSION_END && s > 0 && s < w->ps_cap && w->ps[s].end_kept;
+  const int slots = kind == PALP_DB_REC_SESSION_BEGIN ? 2 : 1; /* a begin keeps one for its end */
+  if (kept) {
+    w->ps[s].end_kept = 0;
+    w->ends_kept--;
+  } else if (w->count >= limit || w->count + w->ends_kept + slots > w->cap ||
+             (bytes > 0 && (bytes > byte_limit || w->queue_bytes > byte_limit - bytes))) {
     w->st_.shed++;
     w->st_.shed_by_kind[kind]++;
     if (s > 0 && s < w->ps_cap) w->ps[s].shed++;
@@ -363,6 +378,8 @@ int palp_db_log_session_begin(palp_db_writer *w, const palp_db_session_def *def,
   }
   w->next_session++;
   w->ps[s].open = 1;
+  w->ps[s].end_kept = 1; /* claim counted its slot */
+  w->ends_kept++;
   w->ps[s].shed = w->ps[s].failed = 0;
   r->s = s;
   r->u.begin.blob = blob;
@@ -475,6 +492,12 @@ int palp_db_log_session_end(palp_db_writer *w, palp_db_session s, palp_db_end_re
   char *d = NULL;
   size_t bytes = 0;
   if (copy_text(detail, &d, &bytes)) return PALP_ENOMEM;
+  if (d && bytes > END_DETAIL_MAX) { /* cut at a UTF-8 character's start */
+    size_t n = END_DETAIL_MAX - 1;
+    while (n > 0 && ((unsigned char)d[n] & 0xC0) == 0x80) n--;
+    d[n] = '\0';
+    bytes = n + 1;
+  }
   if (lock_session(w, s, 0, d)) return PALP_EINVAL;
   rec *r = claim(w, PALP_DB_REC_SESSION_END, s, bytes);
   if (r) {

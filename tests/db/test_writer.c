@@ -793,6 +793,67 @@ static void test_control_bytes(void) {
   sqlite3_close(h);
 }
 
+/* --- a session's end is never refused (session 81) -----------------------------------------------
+ * The disk stalled as in test_control_bytes; three sessions begun, then session-less events fill every
+ * ring slot (1,088: 64 + the 1,024 control slots) until one is refused. Each session's end must still
+ * be taken, its 2 kB detail cut to 510 bytes, before a character the 511-byte cut would split (before: refused as PALP_EFULL and counted as shed in the session's own row, which stayed
+ * "(running)"); a fourth begin is refused (its end would have no slot). Once the lock goes: three ends
+ * in their rows, records_shed 0 for each, the writer's shed count exactly the refused events and begin. */
+static void test_end_kept(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "end-kept.db");
+  palp_db_writer_opts o = palp_db_writer_default_opts();
+  o.queue_capacity = 64;
+  o.queue_max_bytes = 64 * 1024;
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, &o, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session s[3];
+  char uid[3][32];
+  for (int i = 0; i < 3; i++) {
+    snprintf(uid[i], sizeof uid[i], "end-kept-%d", i + 1);
+    palp_db_session_def d = {.uid = uid[i], .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+    REQUIRE(palp_db_log_session_begin(w, &d, &s[i]) == 0, "begin %d", i + 1);
+  }
+  REQUIRE(palp_db_writer_flush(w, 10) == 0, "flush the begins");
+  sqlite3 *lock;
+  REQUIRE(sqlite3_open(p, &lock) == SQLITE_OK && sqlite3_exec(lock, "BEGIN EXCLUSIVE", NULL, NULL, NULL) == SQLITE_OK,
+          "another connection holds the file: %s", sqlite3_errmsg(lock));
+  int small = 0, refused = 0;
+  for (int i = 0; i < 5000 && !refused; i++) {
+    const int rc = palp_db_log_event(w, 0, PALP_DB_EVENT_INFO, -1, "x", 1);
+    if (rc == 0) small++;
+    else refused = rc == PALP_EFULL;
+  }
+  /* 1,088 slots less the three kept for the ends */
+  CHECK(refused && small == 64 + 1024 - 3, "session-less events fill the ring's slots: %d taken (want %d), then "
+        "refused (%d)", small, 64 + 1024 - 3, refused);
+  palp_db_session_def d4 = {.uid = "end-kept-4", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s4;
+  CHECK(palp_db_log_session_begin(w, &d4, &s4) == PALP_EFULL, "a fourth session's begin is refused: no slot "
+        "for its end");
+  static char detail[2048];
+  memset(detail, 'a', sizeof detail - 1);
+  memcpy(detail + 510, "\xc3\xa9", 2); /* an e-acute across the 511-byte cut (bytes 510-511): cut before it */
+  int ends_ok = 0;
+  for (int i = 0; i < 3; i++) ends_ok += palp_db_log_session_end(w, s[i], PALP_DB_END_NORMAL, detail, 0) == 0;
+  CHECK(ends_ok == 3, "with every slot taken, the three sessions' ends are taken: %d of 3", ends_ok);
+  palp_db_writer_stats st;
+  palp_db_writer_stats_get(w, &st);
+  CHECK(st.shed == 2, "the writer shed exactly the refused event and the refused begin: %lld (want 2)",
+        (long long)st.shed);
+  sqlite3_exec(lock, "COMMIT", NULL, NULL, NULL);
+  sqlite3_close(lock);
+  palp_db_writer_flush(w, 20);
+  palp_db_writer_close(w);
+  sqlite3 *h;
+  REQUIRE(sqlite3_open(p, &h) == SQLITE_OK, "open");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE uid LIKE 'end-kept-%' AND end_reason = 'normal' AND "
+                     "length(CAST(end_detail AS BLOB)) = 510 AND records_shed = 0") == 3,
+        "three ends in their rows, each detail cut to 510 bytes (before the 2-byte character at 510), none shed");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session WHERE uid = 'end-kept-4'") == 0, "no row for the refused begin");
+  sqlite3_close(h);
+}
+
 /* --- how a session ended, from palp-server's close reason ---------------------------------------
  * Every reason server/server.c closes a session with (close_session's callers: station_leave's
  * "trainee station " + its reason, a held session's "...; not back within N s", the model's failure,
@@ -891,5 +952,6 @@ int main(int argc, char **argv) {
   test_find_exact();
   test_end_reason_of();
   test_control_bytes();
+  test_end_kept();
   CHECK_DONE();
 }
