@@ -241,18 +241,6 @@ typedef struct held_sample {
   void *sample;                     /* one block (held_copy) */
 } held_sample;
 
-/* A session end the writer refused (PALP_EFULL: its queue full while the disk stalls, the control
- * reserve spent too), kept and retried each pass and at the stop: dropped, as until 2026-12-07, the
- * session stayed "(running)" in the log for ever. A bounded list: past it an end is lost, counted. */
-typedef struct refused_end {
-  palp_db_session h;
-  uint32_t id;
-  palp_db_end_reason reason;
-  double end_unix_s; /* when it ended, not when the retry is taken */
-  char detail[256];  /* the CLOSED state's reason (< 128) or the recorder's (< 200) */
-} refused_end;
-#define MAX_REFUSED_ENDS 256
-
 /* A session's run that ended (set_open): its server's participant, and one of its writers (0: the run). */
 typedef struct ended_run {
   uint32_t session_id;
@@ -297,9 +285,6 @@ typedef struct recorder {
   /* Server samples whose writer's run was looked up in the origin cache (server_run_of): each writer's
    * first in its session, not each sample. */
   int64_t origin_consults;
-  refused_end ends[MAX_REFUSED_ENDS];
-  int nends;
-  int64_t ends_lost; /* refused ends past MAX_REFUSED_ENDS: those sessions stay "(running)" */
 } recorder;
 
 /* A session opens or ends in this log: its streams pass the gate as long as it is open here. Ended,
@@ -338,35 +323,13 @@ static void count(recorder *r, int rc) {
   if (rc == PALP_EFULL) r->refused++;
 }
 
-/* A session's end into the log, kept for a retry if the writer refuses it (refused_end). */
+/* A session's end into the log. The writer keeps a slot for each session's end (db/writer.c,
+ * END_DETAIL_MAX): never refused for a full queue, as it was until session 81 (then kept here and
+ * retried each pass). */
 static void log_end(recorder *r, const rsession *s, palp_db_end_reason reason, const char *detail) {
-  const double at = now_unix();
-  const int rc = palp_db_log_session_end(r->w, s->h, reason, detail, at);
+  const int rc = palp_db_log_session_end(r->w, s->h, reason, detail, now_unix());
   count(r, rc);
-  if (rc != PALP_EFULL) return;
-  if (r->nends == MAX_REFUSED_ENDS) {
-    if (r->ends_lost++ == 0)
-      palp_log_error(r->log, "session %u: its end refused (the log's queue is full) and not kept: %d ends wait already; "
-                             "it stays \"(running)\" in the log", s->id, MAX_REFUSED_ENDS);
-    return;
-  }
-  refused_end *e = &r->ends[r->nends++];
-  *e = (refused_end){.h = s->h, .id = s->id, .reason = reason, .end_unix_s = at};
-  snprintf(e->detail, sizeof e->detail, "%s", detail ? detail : "");
-  palp_log_warn(r->log, "session %u: its end refused (the log's queue is full); retried each pass", s->id);
-}
-
-/* The refused ends again, in the order they came; those refused again kept. */
-static void retry_ends(recorder *r) {
-  int kept = 0;
-  for (int i = 0; i < r->nends; i++) {
-    const refused_end *e = &r->ends[i];
-    const int rc = palp_db_log_session_end(r->w, e->h, e->reason, e->detail, e->end_unix_s);
-    if (rc == PALP_EFULL) r->ends[kept++] = *e;
-    else if (rc == 0) palp_log_info(r->log, "session %u: its end logged at a retry", e->id);
-    else palp_log_error(r->log, "session %u: its end not logged: %s", e->id, palp_db_strerror(rc));
-  }
-  r->nends = kept;
+  if (rc < 0) palp_log_error(r->log, "session %u: its end not logged: %s", s->id, palp_db_strerror(rc));
 }
 
 static int phantom_in_use(const recorder *r, const phantom *ph) {
@@ -2031,7 +1994,6 @@ int main(int argc, char **argv) {
       }
     end_closing_sessions(r, pass_ns);
     end_lost_sessions(r, pass_ns);
-    if (r->nends) retry_ends(r);
     release_due(r, pass_ns);
     expire_held(r, pass_ns);
     /* a service runs for days: a refused peer's repeats are said a window after its last line,
@@ -2067,13 +2029,6 @@ int main(int argc, char **argv) {
   dds_delete(pp);
   palp_db_writer_stats st;
   palp_db_writer_flush(r->w, 10);
-  if (r->nends) { /* the queue emptied by the flush: the ends it refused, once more */
-    retry_ends(r);
-    palp_db_writer_flush(r->w, 10);
-    if (r->nends + r->ends_lost)
-      palp_log_error(&plog, "%lld session ends refused (the log's queue full) never logged: those sessions stay "
-                            "\"(running)\" in the log", (long long)(r->nends + r->ends_lost));
-  }
   palp_db_writer_stats_get(r->w, &st);
   palp_db_writer_close(r->w);
   palp_log_info(&plog,

@@ -796,9 +796,10 @@ static void test_control_bytes(void) {
 /* --- a session's end is never refused (session 81) -----------------------------------------------
  * The disk stalled as in test_control_bytes; three sessions begun, then session-less events fill every
  * ring slot (1,088: 64 + the 1,024 control slots) until one is refused. Each session's end must still
- * be taken, its 2 kB detail cut to 510 bytes, before a character the 511-byte cut would split (before: refused as PALP_EFULL and counted as shed in the session's own row, which stayed
- * "(running)"); a fourth begin is refused (its end would have no slot). Once the lock goes: three ends
- * in their rows, records_shed 0 for each, the writer's shed count exactly the refused events and begin. */
+ * be taken, its 2 kB detail cut to 510 bytes, before a character the 511-byte cut would split (before:
+ * refused as PALP_EFULL and counted as shed in the session's own row, which stayed "(running)"); a
+ * fourth begin is refused (its end would have no slot). Once the lock goes: three ends in their rows,
+ * records_shed 0 for each, the writer's shed count exactly the refused event and begin. */
 static void test_end_kept(void) {
   char p[600], err[512];
   path_in(p, sizeof p, "end-kept.db");
