@@ -12,6 +12,7 @@
 
 #include "palp.h"
 #include "palp_assess.h" /* PALP_ASSESS_SAMPLE_HZ */
+#include "palp_input_file.h"
 
 static int fail(char *err, size_t errlen, int code, const char *fmt, ...) {
   if (err && errlen) {
@@ -271,11 +272,9 @@ static int parse_security(const cJSON *sec, const char *base_dir, palp_srv_confi
 int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_config *cfg, char *err,
                           size_t errlen) {
   palp_srv_config_defaults(cfg);
-  cJSON *root = cJSON_Parse(json);
-  if (!root) {
-    const char *at = cJSON_GetErrorPtr();
-    return fail(err, errlen, PALP_EPARSE, "not valid JSON near \"%.20s\"", at ? at : "");
-  }
+  char why[200];
+  cJSON *root = palp_json_parse_strict(json, why, sizeof why);
+  if (!root) return fail(err, errlen, PALP_EPARSE, "%s", why);
   int rc = 0;
   const char *w = "";
   int64_t i64;
@@ -394,40 +393,11 @@ out:
 }
 
 int palp_srv_config_load(const char *path, palp_srv_config *cfg, char *err, size_t errlen) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return fail(err, errlen, PALP_EIO, "%s: cannot open", path);
-  char *buf = NULL;
-  size_t len = 0, cap = 0;
   /* A configuration is a few kB: 1 MiB (as for exercise files) bounds what a wrong path makes
-   * us hold; --config /dev/zero read until memory ran out. */
-  const size_t max_len = (size_t)1 << 20;
-  for (;;) {
-    if (len > max_len) {
-      free(buf);
-      fclose(f);
-      return fail(err, errlen, PALP_EINVAL, "%s: larger than 1 MiB; not a configuration file", path);
-    }
-    if (len + 4096 + 1 > cap) {
-      cap = cap ? 2 * cap : 16384;
-      char *nb = realloc(buf, cap);
-      if (!nb) {
-        free(buf);
-        fclose(f);
-        return fail(err, errlen, PALP_ENOMEM, "%s: out of memory", path);
-      }
-      buf = nb;
-    }
-    size_t n = fread(buf + len, 1, cap - len - 1, f);
-    len += n;
-    if (n == 0) break;
-  }
-  int ioerr = ferror(f);
-  fclose(f);
-  if (ioerr) {
-    free(buf);
-    return fail(err, errlen, PALP_EIO, "%s: read error", path);
-  }
-  buf[len] = 0;
+   * us hold; --config /dev/zero read until memory ran out, and a FIFO hung the start. */
+  char *buf, why[200];
+  const int rd = palp_input_file_read(path, (size_t)1 << 20, &buf, NULL, why, sizeof why);
+  if (rd) return fail(err, errlen, rd, "%s: %s", path, why);
   char dir[PALP_SRV_PATH_MAX];
   snprintf(dir, sizeof dir, "%s", path);
   char *slash = strrchr(dir, '/');

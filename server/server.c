@@ -17,6 +17,7 @@
 
 #include "palp.h"
 #include "palp_assess.h" /* palp_pattern_name */
+#include "palp_input_file.h"
 #include "palp_rng.h"
 #include "identity.h"
 #include "server_identity.h"
@@ -260,18 +261,8 @@ static void refuse_identity(palp_srv *srv, const char *fmt, ...) {
 /* The exercise's file text, for the log; bounded (an exercise is a few kB). */
 #define EXERCISE_FILE_MAX (256 * 1024)
 static char *read_text(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  char *buf = malloc(EXERCISE_FILE_MAX + 1);
-  size_t n = buf ? fread(buf, 1, EXERCISE_FILE_MAX + 1, f) : 0;
-  const int bad = ferror(f) || n > EXERCISE_FILE_MAX;
-  fclose(f);
-  if (!buf || bad) {
-    free(buf);
-    return NULL;
-  }
-  buf[n] = 0;
-  return buf;
+  char *buf = NULL, why[160];
+  return palp_input_file_read(path, EXERCISE_FILE_MAX, &buf, NULL, why, sizeof why) == 0 ? buf : NULL;
 }
 
 /* A random exercise's seed for one session: the stream of the run's key at the session id's place

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "palp_assess.h"
+#include "palp_input_file.h"
 #include "parse_error.h"
 #include "vec3.h"
 
@@ -374,8 +375,9 @@ static int parse_root(ctx *c, const cJSON *root, const char *dir, palp_exercise 
 int palp_exercise_parse(const char *json, const char *base_dir, palp_exercise *out, char *err, size_t errlen) {
   ctx c = {err, errlen};
   if (!json || !out) return palp_parse_fail(&c, PALP_EINVAL, "exercise: no input");
-  cJSON *root = cJSON_Parse(json);
-  if (!root) return palp_parse_fail(&c, PALP_EPARSE, "exercise: not valid JSON (near \"%.20s\")", cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "");
+  char why[200];
+  cJSON *root = palp_json_parse_strict(json, why, sizeof why);
+  if (!root) return palp_parse_fail(&c, PALP_EPARSE, "exercise: %s", why);
   const int e = parse_root(&c, root, base_dir, out);
   cJSON_Delete(root);
   return e;
@@ -383,22 +385,10 @@ int palp_exercise_parse(const char *json, const char *base_dir, palp_exercise *o
 
 int palp_exercise_load(const char *path, palp_exercise *out, char *err, size_t errlen) {
   ctx c = {err, errlen};
-  FILE *f = fopen(path, "rb");
-  if (!f) return palp_parse_fail(&c, PALP_EIO, "exercise: cannot read \"%s\"", path);
-  char *buf = NULL;
-  long n = -1;
-  if (fseek(f, 0, SEEK_END) == 0) n = ftell(f);
+  char *buf, why[200];
   /* Exercises are small: 1 MiB bounds what a bad file can make us hold. */
-  if (n >= 0 && n < (1L << 20) && fseek(f, 0, SEEK_SET) == 0) {
-    buf = malloc((size_t)n + 1);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
-      free(buf);
-      buf = NULL;
-    }
-    if (buf) buf[n] = 0;
-  }
-  fclose(f);
-  if (!buf) return palp_parse_fail(&c, PALP_EIO, "exercise: cannot read \"%s\" (or larger than 1 MiB)", path);
+  const int rc = palp_input_file_read(path, (size_t)1 << 20, &buf, NULL, why, sizeof why);
+  if (rc) return palp_parse_fail(&c, rc == PALP_ENOMEM ? rc : PALP_EIO, "exercise: cannot read \"%s\": %s", path, why);
   char dir[1024];
   snprintf(dir, sizeof dir, "%s", path);
   char *slash = strrchr(dir, '/');

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "palp.h"
+#include "palp_input_file.h"
 #include "parse_error.h"
 #include "vec3.h"
 
@@ -351,24 +352,8 @@ static int parse_contact(ctx *c, const cJSON *o, int idx, double radius, palp_sc
   return parse_profile(c, prof, p3, &sc->profile);
 }
 
-static char *read_file(const char *path) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  char *buf = NULL;
-  if (fseek(f, 0, SEEK_END) == 0) {
-    long n = ftell(f);
-    if (n >= 0 && n < (1L << 26) && fseek(f, 0, SEEK_SET) == 0) {
-      buf = malloc((size_t)n + 1);
-      if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
-        free(buf);
-        buf = NULL;
-      }
-      if (buf) buf[n] = 0;
-    }
-  }
-  fclose(f);
-  return buf;
-}
+/* A scene or its parameters: a few kB; 64 MiB bounds what a wrong path makes us hold. */
+#define SCENE_FILE_MAX ((size_t)1 << 26)
 
 /* A material profile's name: a short identifier, so that a hostile file cannot smuggle
  * text into the evaluation's messages; whether it names a known profile is the FEM's
@@ -457,11 +442,12 @@ static int parse_params_file(ctx *c, const char *dir, const char *name, palp_sce
   char path[1024];
   if (name[0] == '/' || !dir[0]) snprintf(path, sizeof path, "%s", name);
   else snprintf(path, sizeof path, "%s/%s", dir, name);
-  char *txt = read_file(path);
-  if (!txt) return palp_parse_fail(c, PALP_EIO, "parameters: cannot read \"%s\"", path);
-  cJSON *root = cJSON_Parse(txt);
+  char *txt, why[200];
+  int rc = palp_input_file_read(path, SCENE_FILE_MAX, &txt, NULL, why, sizeof why);
+  if (rc) return palp_parse_fail(c, rc == PALP_ENOMEM ? rc : PALP_EIO, "parameters: cannot read \"%s\": %s", path, why);
+  cJSON *root = palp_json_parse_strict(txt, why, sizeof why);
   free(txt);
-  if (!root) return palp_parse_fail(c, PALP_EPARSE, "parameters: \"%s\" is not valid JSON", path);
+  if (!root) return palp_parse_fail(c, PALP_EPARSE, "parameters: \"%s\": %s", path, why);
   char inner[400] = "";
   ctx ic = {inner, sizeof inner};
   static const char *const keys[] = {"membrane", "gel", "material", "validated", NULL};
@@ -643,11 +629,9 @@ static int parse_with_dir(const char *json, const char *dir, palp_scene *out, ch
   ctx c = {err, errlen};
   if (err && errlen) err[0] = 0;
   if (!json || !out) return palp_parse_fail(&c, PALP_EINVAL, "scene: no input");
-  cJSON *root = cJSON_Parse(json);
-  if (!root) {
-    const char *at = cJSON_GetErrorPtr();
-    return palp_parse_fail(&c, PALP_EPARSE, "scene: invalid JSON near \"%.24s\"", at ? at : "");
-  }
+  char why[200];
+  cJSON *root = palp_json_parse_strict(json, why, sizeof why);
+  if (!root) return palp_parse_fail(&c, PALP_EPARSE, "scene: %s", why);
   int e = parse_root(&c, root, dir, out);
   cJSON_Delete(root);
   return e;
@@ -662,10 +646,11 @@ int palp_scene_parse_in(const char *json, const char *dir, palp_scene *out, char
 }
 
 int palp_scene_load(const char *path, palp_scene *out, char *err, size_t errlen) {
-  char *txt = read_file(path);
-  if (!txt) {
-    if (err && errlen) snprintf(err, errlen, "%s: cannot read the scene file", path);
-    return PALP_EIO;
+  char *txt, why[200];
+  const int rc = palp_input_file_read(path, SCENE_FILE_MAX, &txt, NULL, why, sizeof why);
+  if (rc) {
+    if (err && errlen) snprintf(err, errlen, "%s: cannot read the scene file: %s", path, why);
+    return rc == PALP_ENOMEM ? rc : PALP_EIO;
   }
   char dir[1024];
   snprintf(dir, sizeof dir, "%s", path);

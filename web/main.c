@@ -21,6 +21,7 @@
 #include "hub.h"
 #include "palp.h"
 #include "palp_app.h"
+#include "palp_input_file.h"
 #include "palp_dds.h"
 #include "palp_dds_refusals.h"
 #include "serve.h"
@@ -128,21 +129,13 @@ static int read_token_file(const char *path, char *out, why *e) {
   return 0;
 }
 
-/* The whole of a small text file (<= 64 kB) into *out (malloc'ed, NUL-terminated); 0 or -1 said. */
+/* The whole of a small text file (<= 64 kB) into *out (malloc'ed, NUL-terminated); 0 or -1 said. A
+ * directory, a FIFO or a file with a NUL byte is refused (palp_input_file_read): until session 81 a
+ * directory read as an empty list and a NUL ended it, each trainee after it locked out without a word. */
 static int read_small_file(const char *what, const char *path, char **out, why *e) {
-  FILE *f = fopen(path, "r");
-  if (!f) return say_why(e, "%s: cannot open %s: %s", what, path, strerror(errno));
-  enum { MAXB = 65536 };
-  char *b = malloc(MAXB + 1);
-  const size_t n = b ? fread(b, 1, MAXB + 1, f) : 0;
-  fclose(f);
-  if (!b || n > MAXB) {
-    const char *reason = b ? "larger than 64 kB" : "out of memory";
-    free(b);
+  char reason[200];
+  if (palp_input_file_read(path, 65536, out, NULL, reason, sizeof reason) != 0)
     return say_why(e, "%s %s: %s", what, path, reason);
-  }
-  b[n] = '\0';
-  *out = b;
   return 0;
 }
 

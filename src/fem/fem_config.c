@@ -37,6 +37,7 @@
 #include <cjson/cJSON.h>
 
 #include "fem_internal.h"
+#include "palp_input_file.h"
 
 static palp_fem_material paper_material(double c10) {
   palp_fem_material m = {.density = 950.0, .c10 = c10, .d1 = 0.001e-6, .prony_count = 2};
@@ -260,10 +261,10 @@ static int material(const cJSON *o, const char *ctx, palp_fem_material *m, char 
 }
 
 int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, size_t errlen) {
-  cJSON *root = cJSON_Parse(json);
+  char why[200];
+  cJSON *root = palp_json_parse_strict(json, why, sizeof why);
   if (!root || !cJSON_IsObject(root)) {
-    const char *at = cJSON_GetErrorPtr();
-    snprintf(err, errlen, "config: not a JSON object%s%.20s", at ? " near: " : "", at ? at : "");
+    snprintf(err, errlen, "config: %s", root ? "not a JSON object" : why);
     cJSON_Delete(root);
     return PALP_EPARSE;
   }
@@ -353,27 +354,12 @@ int palp_fem_config_parse(const char *json, palp_fem_config *cfg, char *err, siz
 }
 
 int palp_fem_config_load(const char *path, palp_fem_config *cfg, char *err, size_t errlen) {
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    snprintf(err, errlen, "%s: cannot open", path);
-    return PALP_EIO;
+  char *buf, why[200];
+  const int rd = palp_input_file_read(path, (size_t)1 << 24, &buf, NULL, why, sizeof why);
+  if (rd) {
+    snprintf(err, errlen, "%s: %s", path, why);
+    return rd == PALP_ENOMEM ? rd : PALP_EIO;
   }
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  if (n < 0 || n > (1L << 24)) {
-    fclose(f);
-    snprintf(err, errlen, "%s: unreadable or larger than 16 MiB", path);
-    return PALP_EIO;
-  }
-  char *buf = malloc((size_t)n + 1);
-  if (!buf) {
-    fclose(f);
-    return PALP_ENOMEM;
-  }
-  size_t got = fread(buf, 1, (size_t)n, f);
-  fclose(f);
-  buf[got] = 0;
   char e2[200];
   int rc = palp_fem_config_parse(buf, cfg, e2, sizeof e2);
   if (rc) snprintf(err, errlen, "%s: %s", path, e2);

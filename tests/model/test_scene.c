@@ -295,7 +295,7 @@ int main(void) {
   expect_error("\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"support_bulk_fraction\":1.5",
                "gel.support_bulk_fraction");
   expect_error("\"effects\":[", "\"effects\":{\"a\":1},\"comment\":[", "effects");
-  expect_error("{\"name\":\"t\",", "{\"name\":\"t\",,", "invalid JSON");
+  expect_error("{\"name\":\"t\",", "{\"name\":\"t\",,", "not valid JSON");
   expect_error("\"mesh\":{", "\"parameters\":\"/nonexistent/p.json\",\"mesh\":{", "parameters");
 
   /* The FEM profile the parameters answer to ("material", docs/materials.md): an identifier,
