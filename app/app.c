@@ -98,6 +98,12 @@ static int set_uri(const char *path, char *chosen, size_t chosen_len, char *err,
     snprintf(err, errlen, "DDS config %s: %s", path, strerror(errno));
     return PALP_EIO;
   }
+  /* a directory (an empty "dds_config" resolves to the configuration's own) or a FIFO is no XML file:
+   * said here, not by Cyclone at the participant's creation (session 81) */
+  if (!is_file(abs)) {
+    snprintf(err, errlen, "DDS config %s: not a regular file (a Cyclone DDS XML configuration)", path);
+    return PALP_EINVAL;
+  }
   char uri[PATH_MAX + 16];
   if ((size_t)snprintf(uri, sizeof uri, "file://%s", abs) >= sizeof uri || setenv("CYCLONEDDS_URI", uri, 1)) {
     snprintf(err, errlen, "DDS config %s: path too long", path);

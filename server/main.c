@@ -303,7 +303,7 @@ int main(int argc, char **argv) {
     if (def.cfg.security_pki[0]) {
       palp_dds_security sec;
       char msg[400] = "";
-      if (palp_dds_security_init(&sec, def.cfg.security_pki, def.cfg.security_identity, msg, sizeof msg) < 0) {
+      if (palp_srv_security_prepare(&def.cfg, &sec, msg, sizeof msg) < 0) {
         fprintf(stderr, "palp-server: bad configuration: security: %s\n", msg);
         return 1;
       }
@@ -335,6 +335,13 @@ int main(int argc, char **argv) {
 
   palp_srv_db_log *log = NULL;
   if (def.cfg.database[0] && !no_db) {
+    /* what palp_srv_create would refuse for DDS Security, refused before the log's file is made */
+    palp_dds_security sec;
+    char msg[400] = "";
+    if (palp_srv_security_prepare(&def.cfg, &sec, msg, sizeof msg) < 0) {
+      palp_log_error(&plog, "%s: security: %s", config_path, msg);
+      return 1;
+    }
     /* The log's directory (e.g. out/) is created on first use; one level only. */
     char dir[PALP_SRV_PATH_MAX];
     snprintf(dir, sizeof dir, "%s", def.cfg.database);

@@ -2239,6 +2239,33 @@ static void publish_status(palp_srv *srv) {
   }
 }
 
+/* The server's DDS Security as its start takes it, and as --check checks it (before the session log is
+ * made): until session 81 --check read only the identity's files, so a trainee's identity, an empty
+ * one (with a PKI directory: the classroom served without DDS Security, unsaid) or a domain above 230
+ * passed it and failed (or, the empty one, went unsecured) at class time. */
+int palp_srv_security_prepare(const palp_srv_config *cfg, palp_dds_security *sec, char *msg, size_t msglen) {
+  memset(sec, 0, sizeof *sec);
+  if (!cfg->security_pki[0]) return 0;
+  if (!cfg->security_identity[0]) {
+    snprintf(msg, msglen, "identity: empty: with a PKI directory (%s) the server needs its identity in it (the "
+                          "default is \"server\"); without one it would serve the classroom without DDS Security",
+             cfg->security_pki);
+    return PALP_EINVAL;
+  }
+  if (cfg->domain_id > PALP_SRV_SECURED_DOMAIN_MAX) {
+    snprintf(msg, msglen, "domain %u: a classroom's governance covers domains 0-%d (Cyclone's parser refuses ids "
+                          "above it; docs/security.md)", cfg->domain_id, PALP_SRV_SECURED_DOMAIN_MAX);
+    return PALP_EINVAL;
+  }
+  int rc = palp_dds_security_init(sec, cfg->security_pki, cfg->security_identity, msg, msglen);
+  if (rc == 0 && sec->kind != PALP_DDS_ID_SERVER) {
+    snprintf(msg, msglen, "identity \"%s\" is not the server's (a server/NAME identity of the classroom's PKI)",
+             PALP_PRINTABLE(cfg->security_identity));
+    rc = PALP_EINVAL;
+  }
+  return rc;
+}
+
 /* ---- lifecycle ------------------------------------------------------------------- */
 
 palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t errlen) {
@@ -2299,14 +2326,9 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->refusals_ready = 1;
   if (palp_dds_refusals_install(&srv->dds_log, &srv->refusals, srv->cfg.dds_log_lines, srv->cfg.dds_log_window) == 0)
     srv->dds_log_installed = 1;
-  if (srv->cfg.security_pki[0]) {
+  {
     char msg[400] = "";
-    *rc = palp_dds_security_init(&srv->sec, srv->cfg.security_pki, srv->cfg.security_identity, msg, sizeof msg);
-    if (*rc == 0 && srv->sec.kind != PALP_DDS_ID_SERVER) {
-      snprintf(msg, sizeof msg, "identity \"%s\" is not the server's", srv->cfg.security_identity);
-      *rc = PALP_EINVAL;
-    }
-    if (*rc < 0) {
+    if ((*rc = palp_srv_security_prepare(&srv->cfg, &srv->sec, msg, sizeof msg)) < 0) {
       fail(err, errlen, "security: %s", msg);
       goto fail;
     }

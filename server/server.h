@@ -67,6 +67,14 @@ void palp_srv_destroy(palp_srv *srv);
 int palp_srv_prepare_phantom(const palp_srv_config *cfg, int index, palp_srv_phantom_cfg *pc, palp_scene *scene,
                              palp_world **world, char *err, size_t errlen);
 
+/* DDS Security as the start takes it, checked as --check checks it (before the session log is made):
+ * none without a PKI directory (cfg->security_pki empty: 0, *sec zeroed); otherwise an identity
+ * named, a domain in the governance's 0-PALP_SRV_SECURED_DOMAIN_MAX, the identity's files readable
+ * (palp_dds_security_init) and of a server. < 0 with the reason in msg. */
+#define PALP_SRV_SECURED_DOMAIN_MAX 230
+struct palp_dds_security;
+int palp_srv_security_prepare(const palp_srv_config *cfg, struct palp_dds_security *sec, char *msg, size_t msglen);
+
 /* A catalogue entry's mesh (palp_catalogue) as the server publishes a phantom's: its rest
  * positions into rest (m->vertex_count) and triangles into tri (3 m->triangle_count, the dome's
  * first), buffers the caller owns and msg then points to; its top vertex and dome triangle count.

@@ -63,6 +63,22 @@ check "a plain server with a DDS config beyond loopback is refused (exit $rc)" \
 "$server" --dds-config "$lab" --check --insecure >"$out/lab2.log" 2>&1 && "$server" --dds-config "$lab" --check --pki "$pki" >>"$out/lab2.log" 2>&1
 rc=$?
 check "the same with --insecure, or secured with --pki, passes its check (exit $rc)" "[ $rc -eq 0 ]"
+# Session 81 review: --check refuses what the start refuses for DDS Security (it passed a trainee's
+# identity, an empty one, which with a PKI served the classroom unsecured, and domain 231), and a
+# start so refused makes no session log (it made the file, schema and all, before refusing).
+for case in "--identity trainee/alice|is not the server's" "--identity ''|identity: empty: with a PKI directory" \
+            "--domain 231|domain 231: a classroom's governance covers domains 0-230"; do
+  opt=${case%%|*} want=${case#*|}
+  eval "\"\$server\" --pki \"\$pki\" $opt --check" >"$out/chk.log" 2>&1
+  rc=$?
+  check "--check $opt refused (exit $rc): $want" "[ $rc -ne 0 ] && grep -qF \"$want\" '$out/chk.log'"
+done
+printf '{"domain_id": 131, "database": "%s/newdir/s.db", "phantoms": [{"id": 1, "name": "a", "scene": "%s"}]}\n' \
+  "$out" "$(cd "$(dirname "$0")/../../config" && pwd)/paper_step.json" > "$out/db-server.json"
+"$server" --config "$out/db-server.json" --pki "$pki" --identity trainee/alice --duration 1 >"$out/dbstart.log" 2>&1
+rc=$?
+check "a start refused for its identity makes no session log (exit $rc)" \
+  "[ $rc -ne 0 ] && grep -qF \"is not the server's\" '$out/dbstart.log' && [ ! -e '$out/newdir/s.db' ]"
 # (6 s: the server names a plain participant that shows no endpoint 3 s after it first saw it)
 "$client" --role trainee --domain 131 --phantom 1 --name zed --duration 1 --timeout 6 >"$out/plain.log" 2>&1
 rc=$?
