@@ -124,6 +124,7 @@ typedef struct palp_exercise_placement {
 } palp_exercise_placement;
 
 #define PALP_EXERCISE_TEXT 1024
+#define PALP_EXERCISE_TITLE_MAX 63 /* bytes: the catalogue's name of its phantom (palp_Phantom.name) */
 typedef struct palp_exercise {
   char name[64];
   char title[128];

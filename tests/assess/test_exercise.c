@@ -98,6 +98,18 @@ int main(void) {
 
   /* 2. Bad files, each naming its field. */
   expect_error("\"title\": \"T\", ", "", "title");
+  /* session 81: a title over the catalogue's 63 bytes (64 here) refused; 63 taken whole */
+  expect_error("\"title\": \"T\"", "\"title\": \"0123456789012345678901234567890123456789012345678901234567890123\"",
+               "title: longer than 63 characters");
+  {
+    char json[4096], err[256];
+    const char *at = strstr(good, "\"title\": \"T\"");
+    snprintf(json, sizeof json, "%.*s\"title\": \"%s\"%s", (int)(at - good), good,
+             "012345678901234567890123456789012345678901234567890123456789012", at + strlen("\"title\": \"T\""));
+    palp_exercise d;
+    CHECK(palp_exercise_parse(json, "/x", &d, err, sizeof err) == 0 && strlen(d.title) == 63,
+          "a 63-byte title is taken whole (%s)", err);
+  }
   expect_error("\"depth_mm\": 10", "\"depth_mm\": 1", "lesions[0].depth_mm");
   expect_error("\"diameter_mm\": 4", "\"diameter_mm\": -4", "lesions[0].diameter_mm");
   expect_error("\"stiffness_ratio\": 3", "\"stiffness_ratio\": \"hard\"", "lesions[0].stiffness_ratio");
