@@ -489,12 +489,13 @@ typedef struct palp_world_health {
                                  > 30 deg / strained by > 0.25 within the step) */
   int64_t refactors;          /* factorisations: step size changes beyond the factor's
                                  stability margin, lagged-tangent rebuilds */
-  int64_t large_strain_steps; /* steps with a link strained beyond +-50%, where a linear
-                                 Burgers law on engineering strain is a poor model */
+  int64_t large_strain_steps; /* steps (frames: a split step counts once) with a link
+                                 strained beyond +-50%, where a linear Burgers law on
+                                 engineering strain is a poor model */
   double max_strain;          /* largest |link strain| seen [-] */
   int64_t base_contacts;      /* vertex-steps held at the rigid base plane z = 0 */
   int64_t finger_unsolved;    /* finger contact solves that ended without converging */
-  int64_t large_bend_steps;   /* steps while a hinge's linearised turn missed its true
+  int64_t large_bend_steps;   /* steps (frames, as above) while a hinge's linearised turn missed its true
                                  turn by more than 0.1 rad (src/bending.h), or by more
                                  than def.validated_hinge_error where that is larger,
                                  where the linearised bending is a poor model (only with

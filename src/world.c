@@ -210,6 +210,10 @@ struct palp_world {
   uint8_t *vfast;      /* [vertex_count] scratch of the solve's linearisation check: moves by > 0.05 min_rest_len */
   int64_t substeps, large_strain_steps;
   double max_strain, step_max_strain;
+  /* Set by any accepted part (half, quarter, ...) of the current frame's step, counted
+   * once per frame by palp_world_step_dt: the health counters are per step, as the server
+   * log and the replay summary read them, and a split step's halves are not steps. */
+  int frame_large_strain, frame_large_bend;
   double (*xs)[2];  /* Burgers internal strains (only with membrane viscosity) */
   palp_burgers burgers; /* coefficients for h_burgers */
   double h_burgers;
@@ -2918,9 +2922,9 @@ static int try_step(palp_world *w, double h, int last_resort) {
   }
   w->timings.steps++;
   w->t += h;
-  if (w->step_max_strain > 0.5) w->large_strain_steps++;
+  if (w->step_max_strain > 0.5) w->frame_large_strain = 1;
   if (w->step_max_strain > w->max_strain) w->max_strain = w->step_max_strain;
-  if (w->hbeyond_count > 0) w->large_bend_steps++;
+  if (w->hbeyond_count > 0) w->frame_large_bend = 1;
   if (w->step_max_bend > w->max_bend) w->max_bend = w->step_max_bend;
   return PALP_OK;
 }
@@ -2977,6 +2981,7 @@ int palp_world_step_dt(palp_world *w, double h) {
     if (e) return e;
   }
   const double t_end = w->t + h;
+  w->frame_large_strain = w->frame_large_bend = 0;
   int e = step_split(w, h, 0);
   if (e) {
     w->broken = (e == PALP_EUNSTABLE);
@@ -2984,6 +2989,8 @@ int palp_world_step_dt(palp_world *w, double h) {
   }
   w->t = t_end; /* halves sum to h exactly in binary, but keep the clock exact anyway */
   w->frame++;
+  w->large_strain_steps += w->frame_large_strain;
+  w->large_bend_steps += w->frame_large_bend;
   if (w->def.validated_count > 0) validated_check(w);
 
   /* Finite check and sleep: one pass over the free velocities. */
