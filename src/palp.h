@@ -556,13 +556,18 @@ uint64_t palp_world_hash(const palp_world *w);
  * 1,300 (the factor's numbers; palp_world_hash: 6 and 24 us). */
 uint64_t palp_world_state_hash(const palp_world *w);
 
-/* Per-stage timings of the last step and accumulated totals [s]. */
-#define PALP_STAGE_COUNT 13
+/* Per-stage timings of the last step and accumulated totals [s]. name[0] is "refactor",
+ * the factor's upkeep (a due rebuild installed or computed, a blend advanced, a rebuild or
+ * its request, the Burgers coefficients), then the pipeline's stages in order; unused
+ * slots have a NULL name. `last` is the last palp_world_step_dt call's, summed over the
+ * halves of a split step and any rejected attempt (all zero for a sleeping step), so
+ * that its sum is nearly the call's wall time; `total` sums every call. */
+#define PALP_STAGE_COUNT 14
 typedef struct palp_stage_timings {
   const char *name[PALP_STAGE_COUNT];
   double last[PALP_STAGE_COUNT];
   double total[PALP_STAGE_COUNT];
-  int64_t steps;
+  int64_t steps;     /* frames stepped awake (a split step counts once): total's divisor */
   int64_t refactors; /* factorisations so far (step size changes, lagged tangent rebuilds) */
   int factor_nnz;    /* off-diagonal entries of the current L */
   int unknowns;      /* size of the implicit system */

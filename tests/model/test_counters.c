@@ -1,6 +1,8 @@
 /* Health counters and stage timings per frame (session 81 review): a step the world splits
  * into halves is still one step for the counters the server log and the replay summary
  * print, and for the timings a benchmark divides by. */
+#include <time.h>
+
 #include "common.h"
 
 /* Largest |engineering strain| of any link [-], from the positions alone (rest lengths from
@@ -61,7 +63,121 @@ static void test_large_strain_per_frame(void) {
   palp_world_destroy(w);
 }
 
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmpd(const void *a, const void *b) {
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static double last_sum(const palp_world *w) {
+  palp_stage_timings t;
+  palp_world_timings(w, &t);
+  double s = 0.0;
+  for (int i = 0; i < PALP_STAGE_COUNT; ++i) s += t.last[i];
+  return s;
+}
+
+/* The share of a step's wall time [-] that its stage timings account for, over steps that
+ * rebuild the factor (a step 2.5x the factor's, then back: beyond its 1.25x and 0.5x margins) and over split steps (the
+ * 30 N point load). The stages must hold >= 80% of the wall time, in the median of the
+ * sample (a preemption outside the stages' clock reads lowers one step's share), and
+ * never more than the call's wall time (+1 us for the clock reads' own order). */
+static void test_timings_cover_the_step(void) {
+  palp_world_def d = palp_world_default_def();
+  int e;
+  palp_world *w = palp_world_create(&d, &e);
+  CHECK(w, "default world: %d", e);
+  if (!w) return;
+  const palp_mesh *m = palp_world_mesh(w);
+  palp_contact_def c = palp_contact_default_def(PALP_DIST_UNIFORM, m->rest[m->top_vertex]);
+  const int id = palp_world_add_contact(w, &c);
+  CHECK(id >= 0 && palp_world_set_contact_force(w, id, (palp_vec3){0, 0, -3.0}) == PALP_OK, "the 3 N load");
+  for (int k = 0; k < 5; ++k) CHECK(palp_world_step(w) == PALP_OK, "warm-up %d", k);
+  enum { N = 15 };
+  double share[N], worst_over = -1.0, wall_sum = 0.0, last_total = 0.0;
+  int rebuilt = 0;
+  for (int k = 0; k < N; ++k) {
+    palp_world_health a, b;
+    palp_world_get_health(w, &a);
+    const double t0 = now_s();
+    const int rc = palp_world_step_dt(w, k % 2 ? 0.01 : 0.025); /* 2.5x the factor's h: a rebuild, and back */
+    const double wall = now_s() - t0;
+    palp_world_get_health(w, &b);
+    CHECK(rc == PALP_OK, "rebuild step %d", k);
+    rebuilt += b.refactors > a.refactors;
+    const double sum = last_sum(w);
+    share[k] = sum / wall;
+    wall_sum += wall, last_total += sum;
+    if (sum - wall > worst_over) worst_over = sum - wall;
+  }
+  qsort(share, N, sizeof *share, cmpd);
+  printf("steps that rebuild the factor (%d of %d): stages %.0f%% of the wall time in the median (%.0f-%.0f%%), "
+         "mean wall %.3f ms, mean stage sum %.3f ms\n",
+         rebuilt, N, 100 * share[N / 2], 100 * share[0], 100 * share[N - 1], 1e3 * wall_sum / N, 1e3 * last_total / N);
+  CHECK(rebuilt == N, "every step of a changed size rebuilt the factor (%d of %d)", rebuilt, N);
+  CHECK(share[N / 2] >= 0.8, "a rebuild step's stages hold >= 80%% of its wall time in the median (%.0f%%)",
+        100 * share[N / 2]);
+  CHECK(worst_over <= 1e-6, "the stages never sum to more than the call (by %.3g s)", worst_over);
+  palp_world_destroy(w);
+
+  /* split steps: the reviewer's 30 N on the pole vertex */
+  w = palp_world_create(&d, &e);
+  if (!w) return;
+  c = palp_contact_default_def(PALP_DIST_SINGLE, m->rest[m->top_vertex]);
+  const int pid = palp_world_add_contact(w, &c);
+  CHECK(pid >= 0 && palp_world_set_contact_force(w, pid, (palp_vec3){0, 0, -30.0}) == PALP_OK, "the 30 N load");
+  const int frames = 60;
+  double split_share[60];
+  int ns = 0;
+  for (int f = 0; f < frames; ++f) {
+    palp_world_health a, b;
+    palp_world_get_health(w, &a);
+    const double t0 = now_s();
+    CHECK(palp_world_step(w) == PALP_OK, "frame %d", f);
+    const double wall = now_s() - t0;
+    palp_world_get_health(w, &b);
+    if (b.substeps > a.substeps) split_share[ns++] = last_sum(w) / wall;
+  }
+  palp_stage_timings t;
+  palp_world_timings(w, &t);
+  palp_world_health h;
+  palp_world_get_health(w, &h);
+  qsort(split_share, (size_t)ns, sizeof *split_share, cmpd);
+  printf("30 N on the pole vertex: %d of %d frames split (%lld halvings), timings.steps %lld; stages %.0f%% of a split "
+         "frame's wall time in the median\n",
+         ns, frames, (long long)h.substeps, (long long)t.steps, ns ? 100 * split_share[ns / 2] : 0.0);
+  CHECK(ns > 0, "frames split (%d)", ns);
+  CHECK(t.steps == frames, "timings.steps counts frames: %lld after %d frames", (long long)t.steps, frames);
+  CHECK(ns > 0 && split_share[ns / 2] >= 0.8, "a split frame's stages (both halves) hold >= 80%% of its wall time "
+        "in the median (%.0f%%)", ns ? 100 * split_share[ns / 2] : 0.0);
+  palp_world_destroy(w);
+
+  /* a sleeping step computes nothing: its `last` is all zero, and it is not a step of the totals */
+  w = palp_world_create(&d, &e);
+  if (!w) return;
+  int awake_frames = 0, f = 0;
+  for (; f < 200 && palp_world_is_awake(w); ++f) {
+    awake_frames++;
+    CHECK(palp_world_step(w) == PALP_OK, "unloaded frame %d", f);
+  }
+  CHECK(!palp_world_is_awake(w), "the unloaded world sleeps within 2 s (%d frames)", f);
+  CHECK(palp_world_step(w) == PALP_OK, "a sleeping step");
+  palp_world_timings(w, &t);
+  printf("unloaded world: asleep after %d frames; a sleeping step's stage sum %.3g s, timings.steps %lld\n", awake_frames,
+         last_sum(w), (long long)t.steps);
+  CHECK(last_sum(w) == 0.0, "a sleeping step's `last` is zero (%.3g s)", last_sum(w));
+  CHECK(t.steps == awake_frames, "timings.steps counts awake frames only: %lld vs %d", (long long)t.steps,
+        awake_frames);
+  palp_world_destroy(w);
+}
+
 int main(void) {
   test_large_strain_per_frame();
+  test_timings_cover_the_step();
   CHECK_DONE();
 }
