@@ -217,6 +217,30 @@ typedef struct palp_gel_params {
   double added_mass_fraction; /* [-] in [0, 1]: 0 = membrane mass only, 1 = the whole gel */
 } palp_gel_params;
 
+/* Upper bounds of the membrane's and the gel's values, refused beyond by palp_world_create
+ * (in the effects that use them) and by the scene parser: generous (each far above any
+ * tissue, gel or silicone value and the shipped sets, config/params/), but finite, and
+ * where measured stable: beyond them a scene read from a handed-over session log made a
+ * dome that never moved, or one that stepped "ok" to V/V0 = -1.8 (pressure 1e30 Pa). */
+#define PALP_THICKNESS_MAX_M 0.1   /* skin ~2 mm (shipped 2 mm); 10 cm is a wall, not a skin */
+#define PALP_DENSITY_MAX_KG_M3 2.5e4 /* membrane and gel: above osmium's 22.6e3 (shipped 950) */
+#define PALP_GEL_PRESSURE_MAX_PA 1e7 /* 100 atmospheres: a pressure vessel (shipped 101,325) */
+/* 30x the shipped 10 and ~40x the Tait exponent of water (~7): (V0/V)^a1 stays finite for
+ * V > V0/10. 1e3 made the default dome non-finite in 4 frames under 30 N at the pole,
+ * where 300 stepped it (session 81). */
+#define PALP_GEL_A1_MAX 300.0
+/* [Pa s/m^3]: the volume mode's damping time a2 V0 / (a1 P) is ~1.3 s at the shipped dome
+ * (V0 1.34e-4 m^3, a1 P 1.0e6 Pa): a gel whose volume no longer follows a press; 1,400x
+ * the shipped 7.1e6 (100x is the calibrator's reach). */
+#define PALP_GEL_A2_MAX 1e10
+/* [Pa/m], support_modulus and support_relax_modulus: a GPa gel (the membrane's modulus
+ * bound in scenes) over a 1 mm column (the smallest dome's radius); shipped <= 3.3e6. */
+#define PALP_SUPPORT_MODULUS_MAX 1e12
+/* [Pa s/m]: 1e14 Pa s (the membrane's viscosity bound in scenes) over 1 mm; shipped <= 6e5. */
+#define PALP_SUPPORT_VISCOSITY_MAX 1e17
+/* [s]: 11.6 days, far beyond any session: the branch no longer relaxes (shipped <= 0.54 s). */
+#define PALP_SUPPORT_RELAX_TIME_MAX 1e6
+
 /* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / (h h_prev) [Pa], a3 [s^2], h
  * this frame's step and h_prev the last one's [s], is stable only for
  *   -1/2 < a3 / (h h_prev) < 1

@@ -52,6 +52,18 @@ static int get_pos_max(ctx *c, const cJSON *obj, const char *path, const char *k
   return PALP_OK;
 }
 
+/* A number >= 0 and <= hi (a damping or a support that may be absent). */
+static int get_nonneg_max(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double hi,
+                          double *out) {
+  double v = *out;
+  int e = get_num(c, obj, path, key, required, &v);
+  if (e) return e;
+  if (!(v >= 0.0)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be >= 0 (got %g)", path, key, v);
+  if (!(v <= hi)) return palp_parse_fail(c, PALP_EPARSE, "%s%s: must be <= %g (got %g)", path, key, hi, v);
+  *out = v;
+  return PALP_OK;
+}
+
 /* |v| <= hi, for signed quantities (forces). */
 static int get_abs_max(ctx *c, const cJSON *obj, const char *path, const char *key, int required, double hi,
                        double *out) {
@@ -147,7 +159,11 @@ static const cJSON *get_obj(ctx *c, const cJSON *obj, const char *path, const ch
  * - a scripted contact's force |F| <= 1e4 N: a tonne-force, ten times the server's
  *   absurd_force of 1 kN (no hand presses that); the shipped scenes press 3 N;
  * - a sine profile's frequency <= 1e4 Hz: the fastest physics rate the server runs
- *   (physics_rate_hz <= 10 kHz); above it the load only aliases. */
+ *   (physics_rate_hz <= 10 kHz); above it the load only aliases;
+ * - the membrane's thickness and density, the gel's pressure, a1, a2, density and the
+ *   support's moduli, viscosity and relax time: palp.h's PALP_*_MAX, which the world
+ *   checks too (session 81; they had none, and pressure_Pa 1e30 stepped "ok" to
+ *   V/V0 = -1.8). */
 #define SCENE_RADIUS_MIN_M 1e-3
 #define SCENE_RADIUS_MAX_M 1.0
 #define SCENE_MODULUS_MAX_PA 1e9
@@ -164,8 +180,8 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
                                      "bending_stiffness_N_m", "rim_hinge_release", "skin_bending_stiffness_N_m", NULL};
   int e;
   if ((e = only_keys(c, m, "membrane.", keys))) return e;
-  if ((e = get_pos(c, m, "membrane.", "thickness_m", 1, &p->thickness))) return e;
-  if ((e = get_pos(c, m, "membrane.", "density_kg_m3", 1, &p->density))) return e;
+  if ((e = get_pos_max(c, m, "membrane.", "thickness_m", 1, PALP_THICKNESS_MAX_M, &p->thickness))) return e;
+  if ((e = get_pos_max(c, m, "membrane.", "density_kg_m3", 1, PALP_DENSITY_MAX_KG_M3, &p->density))) return e;
   if ((e = get_pos_max(c, m, "membrane.", "E1_Pa", 1, SCENE_MODULUS_MAX_PA, &p->E1))) return e;
   if ((e = get_pos_max(c, m, "membrane.", "eta1_Pa_s", 1, SCENE_VISCOSITY_MAX_PA_S, &p->eta1))) return e;
   if ((e = get_pos_max(c, m, "membrane.", "E2_Pa", 1, SCENE_MODULUS_MAX_PA, &p->E2))) return e;
@@ -200,23 +216,29 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
   if (strcmp(law->valuestring, "polytropic") == 0) p->law = PALP_GEL_POLYTROPIC;
   else if (strcmp(law->valuestring, "paper_literal") == 0) p->law = PALP_GEL_PAPER_LITERAL;
   else return palp_parse_fail(c, PALP_EPARSE, "gel.law: unknown law \"%s\" (polytropic, paper_literal)", law->valuestring);
-  if ((e = get_pos(c, g, "gel.", "pressure_Pa", 1, &p->pressure))) return e;
-  if ((e = get_pos(c, g, "gel.", "a1", 1, &p->a1))) return e;
-  if ((e = get_num(c, g, "gel.", "a2_Pa_s_m3", 1, &p->a2))) return e;
-  if (p->a2 < 0.0) return palp_parse_fail(c, PALP_EPARSE, "gel.a2_Pa_s_m3: must be >= 0");
+  if ((e = get_pos_max(c, g, "gel.", "pressure_Pa", 1, PALP_GEL_PRESSURE_MAX_PA, &p->pressure))) return e;
+  if ((e = get_pos_max(c, g, "gel.", "a1", 1, PALP_GEL_A1_MAX, &p->a1))) return e;
+  if ((e = get_nonneg_max(c, g, "gel.", "a2_Pa_s_m3", 1, PALP_GEL_A2_MAX, &p->a2))) return e;
   p->a3 = 0.0;
   if ((e = get_num(c, g, "gel.", "a3_s2", 0, &p->a3))) return e;
-  if ((e = get_num(c, g, "gel.", "support_modulus_Pa_m", 0, &p->support_modulus))) return e;
-  if (p->support_modulus < 0.0) return palp_parse_fail(c, PALP_EPARSE, "gel.support_modulus_Pa_m: must be >= 0");
-  if ((e = get_num(c, g, "gel.", "support_viscosity_Pa_s_m", 0, &p->support_viscosity))) return e;
-  if (p->support_viscosity < 0.0) return palp_parse_fail(c, PALP_EPARSE, "gel.support_viscosity_Pa_s_m: must be >= 0");
+  if ((e = get_nonneg_max(c, g, "gel.", "support_modulus_Pa_m", 0, PALP_SUPPORT_MODULUS_MAX, &p->support_modulus)))
+    return e;
+  if ((e = get_nonneg_max(c, g, "gel.", "support_viscosity_Pa_s_m", 0, PALP_SUPPORT_VISCOSITY_MAX,
+                          &p->support_viscosity)))
+    return e;
   if ((e = get_num(c, g, "gel.", "support_bulk_fraction", 0, &p->support_bulk_fraction))) return e;
   if (!(p->support_bulk_fraction >= 0.0 && p->support_bulk_fraction <= 1.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_bulk_fraction: must be in [0, 1] (the share of the gel's bulk shift the support follows)");
   if ((e = get_num(c, g, "gel.", "support_relax_modulus_Pa_m", 0, &p->support_relax_modulus))) return e;
   if (!(p->support_relax_modulus >= 0.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_modulus_Pa_m: must be >= 0 (0: the support does not relax)");
+  if (!(p->support_relax_modulus <= PALP_SUPPORT_MODULUS_MAX))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_modulus_Pa_m: must be <= %g (got %g)",
+                           PALP_SUPPORT_MODULUS_MAX, p->support_relax_modulus);
   if ((e = get_num(c, g, "gel.", "support_relax_time_s", 0, &p->support_relax_time))) return e;
+  if (!(p->support_relax_time <= PALP_SUPPORT_RELAX_TIME_MAX))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_time_s: must be <= %g (got %g)", PALP_SUPPORT_RELAX_TIME_MAX,
+                           p->support_relax_time);
   if (p->support_relax_modulus > 0.0 && !(p->support_relax_time > 0.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.support_relax_time_s: must be > 0 with a relaxing support (got %g s)",
                            p->support_relax_time);
@@ -237,6 +259,8 @@ static int parse_gel(ctx *c, const cJSON *g, palp_gel_params *p) {
                            "support's column; got %g)", p->support_base_reach);
   if ((e = get_num(c, g, "gel.", "density_kg_m3", 0, &p->density))) return e;
   if (!(p->density > 0.0)) return palp_parse_fail(c, PALP_EPARSE, "gel.density_kg_m3: must be > 0");
+  if (!(p->density <= PALP_DENSITY_MAX_KG_M3))
+    return palp_parse_fail(c, PALP_EPARSE, "gel.density_kg_m3: must be <= %g (got %g)", PALP_DENSITY_MAX_KG_M3, p->density);
   if ((e = get_num(c, g, "gel.", "added_mass_fraction", 0, &p->added_mass_fraction))) return e;
   if (!(p->added_mass_fraction >= 0.0 && p->added_mass_fraction <= 1.0))
     return palp_parse_fail(c, PALP_EPARSE, "gel.added_mass_fraction: must be in [0, 1] (the share of the gel's mass the surface carries)");

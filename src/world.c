@@ -1888,7 +1888,9 @@ static int validate(const palp_world_def *d) {
   if (d->max_contacts < 0 || d->max_contacts > 64) return PALP_EINVAL;
   if (d->refactor_lag < 0 || d->refactor_lag > 1000) return PALP_EINVAL;
   if (d->refactor_blend < 0 || d->refactor_blend > 1000) return PALP_EINVAL;
-  if (!(m->thickness > 0.0 && m->density > 0.0) || !isfinite(m->thickness) || !isfinite(m->density))
+  /* the bounds also refuse inf and NaN */
+  if (!(m->thickness > 0.0 && m->thickness <= PALP_THICKNESS_MAX_M) ||
+      !(m->density > 0.0 && m->density <= PALP_DENSITY_MAX_KG_M3))
     return PALP_EINVAL;
   if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
   if (!(m->bending_stiffness >= 0.0) || !isfinite(m->bending_stiffness)) return PALP_EINVAL;
@@ -1899,11 +1901,12 @@ static int validate(const palp_world_def *d) {
   if ((d->effects & PALP_EFFECT_GEL_DAMPING) && !(d->effects & (PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_SUPPORT)))
     return PALP_EINVAL;
   if (d->effects & PALP_EFFECT_GEL_SUPPORT) {
-    if (!(g->support_modulus > 0.0) || !isfinite(g->support_modulus)) return PALP_EINVAL;
-    if (!(g->support_viscosity >= 0.0) || !isfinite(g->support_viscosity)) return PALP_EINVAL;
+    if (!(g->support_modulus > 0.0 && g->support_modulus <= PALP_SUPPORT_MODULUS_MAX)) return PALP_EINVAL;
+    if (!(g->support_viscosity >= 0.0 && g->support_viscosity <= PALP_SUPPORT_VISCOSITY_MAX)) return PALP_EINVAL;
     if (!(g->support_bulk_fraction >= 0.0 && g->support_bulk_fraction <= 1.0)) return PALP_EINVAL;
-    if (!(g->support_relax_modulus >= 0.0) || !isfinite(g->support_relax_modulus)) return PALP_EINVAL;
-    if (g->support_relax_modulus > 0.0 && (!(g->support_relax_time > 0.0) || !isfinite(g->support_relax_time)))
+    if (!(g->support_relax_modulus >= 0.0 && g->support_relax_modulus <= PALP_SUPPORT_MODULUS_MAX)) return PALP_EINVAL;
+    if (g->support_relax_modulus > 0.0 &&
+        !(g->support_relax_time > 0.0 && g->support_relax_time <= PALP_SUPPORT_RELAX_TIME_MAX))
       return PALP_EINVAL;
     if (!(g->support_stiffening >= 0.0 && g->support_stiffening <= 1e3)) return PALP_EINVAL;
     if (g->support_stiffening > 0.0 && !(g->support_stiffening_power >= 1.0 && g->support_stiffening_power <= 8.0))
@@ -1917,8 +1920,9 @@ static int validate(const palp_world_def *d) {
       return PALP_EINVAL;
   }
   if (d->effects & PALP_EFFECT_GEL_PRESSURE) {
-    if (!(g->pressure > 0.0 && g->a1 > 0.0) || !isfinite(g->pressure) || !isfinite(g->a1)) return PALP_EINVAL;
-    if (!(g->a2 >= 0.0) || !isfinite(g->a2) || !isfinite(g->a3)) return PALP_EINVAL;
+    if (!(g->pressure > 0.0 && g->pressure <= PALP_GEL_PRESSURE_MAX_PA) || !(g->a1 > 0.0 && g->a1 <= PALP_GEL_A1_MAX))
+      return PALP_EINVAL;
+    if (!(g->a2 >= 0.0 && g->a2 <= PALP_GEL_A2_MAX) || !isfinite(g->a3)) return PALP_EINVAL;
     if (g->law != PALP_GEL_POLYTROPIC && g->law != PALP_GEL_PAPER_LITERAL) return PALP_EINVAL;
     /* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / (h h_prev) is stable only
      * for -1/2 < a3 / (h h_prev) < 1 (palp_gel_literal_valid): refused where the world's
@@ -1927,7 +1931,7 @@ static int validate(const palp_world_def *d) {
      * (health.gel_momentum_dropped). */
     if (g->law == PALP_GEL_PAPER_LITERAL && !palp_gel_literal_valid(g->a3, d->dt, d->dt)) return PALP_EINVAL;
   }
-  if (!(g->density > 0.0) || !isfinite(g->density) || !(g->added_mass_fraction >= 0.0) ||
+  if (!(g->density > 0.0 && g->density <= PALP_DENSITY_MAX_KG_M3) || !(g->added_mass_fraction >= 0.0) ||
       !(g->added_mass_fraction <= 1.0)) /* at most the whole gel */
     return PALP_EINVAL;
   if (!v3_isfinite(d->gravity) || !(d->sleep_speed >= 0.0) || !(d->sleep_time >= 0.0)) return PALP_EINVAL;

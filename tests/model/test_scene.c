@@ -104,6 +104,74 @@ static void test_bounds(void) {
   expect_ok("\"kind\":\"step\"", "\"kind\":\"sine\",\"frequency_Hz\":1e4", "a 10 kHz sine");
 }
 
+/* Session 81 review: the membrane's thickness and density and the gel's values had no upper
+ * bound (pressure_Pa 1e30 stepped "ok" to V/V0 = -1.8; thickness or support modulus 1e300
+ * made a dome that never moved). Each is refused past palp.h's bound, naming the key, in
+ * scene text and in a world made in code; at the bound both are accepted. The bounds
+ * themselves are written out here, not read from palp.h, so that a changed bound shows. */
+typedef struct bound_case {
+  const char *from, *over, *at, *key;
+} bound_case;
+static void test_bounds_session81(void) {
+  static const bound_case cases[] = {
+      {"\"thickness_m\":0.002", "\"thickness_m\":0.11", "\"thickness_m\":0.1", "membrane.thickness_m: must be <= 0.1"},
+      {"\"density_kg_m3\":950", "\"density_kg_m3\":3e4", "\"density_kg_m3\":2.5e4",
+       "membrane.density_kg_m3: must be <= 25000"},
+      {"\"pressure_Pa\":101325", "\"pressure_Pa\":1e30", "\"pressure_Pa\":1e7", "gel.pressure_Pa: must be <= 1e+07"},
+      {"\"a1\":10", "\"a1\":301", "\"a1\":300", "gel.a1: must be <= 300"},
+      {"\"a2_Pa_s_m3\":5e6", "\"a2_Pa_s_m3\":2e10", "\"a2_Pa_s_m3\":1e10", "gel.a2_Pa_s_m3: must be <= 1e+10"},
+      {"\"support_modulus_Pa_m\":1.5e6", "\"support_modulus_Pa_m\":1e300", "\"support_modulus_Pa_m\":1e12",
+       "gel.support_modulus_Pa_m: must be <= 1e+12"},
+      {"\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":2e17", "\"support_viscosity_Pa_s_m\":1e17",
+       "gel.support_viscosity_Pa_s_m: must be <= 1e+17"},
+      {"\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"support_relax_modulus_Pa_m\":2e12,"
+       "\"support_relax_time_s\":0.5", "\"support_viscosity_Pa_s_m\":6e5,\"support_relax_modulus_Pa_m\":1e12,"
+       "\"support_relax_time_s\":0.5", "gel.support_relax_modulus_Pa_m: must be <= 1e+12"},
+      {"\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"support_relax_modulus_Pa_m\":4e5,"
+       "\"support_relax_time_s\":2e6", "\"support_viscosity_Pa_s_m\":6e5,\"support_relax_modulus_Pa_m\":4e5,"
+       "\"support_relax_time_s\":1e6", "gel.support_relax_time_s: must be <= 1e+06"},
+      {"\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"density_kg_m3\":3e4",
+       "\"support_viscosity_Pa_s_m\":6e5,\"density_kg_m3\":2.5e4", "gel.density_kg_m3: must be <= 25000"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof *cases; ++i) {
+    const bound_case *b = &cases[i];
+    expect_error(b->from, b->over, b->key);
+    /* at the bound: parsed, and the world is made and steps the scene's 3 N press */
+    char buf[4096], err[256] = "";
+    const char *at = strstr(base, b->from);
+    CHECK(at != NULL, "test setup: \"%s\" not in the base scene", b->from);
+    if (!at) continue;
+    snprintf(buf, sizeof buf, "%.*s%s%s", (int)(at - base), base, b->at, at + strlen(b->from));
+    palp_scene s;
+    CHECK(palp_scene_parse(buf, &s, err, sizeof err) == PALP_OK, "%s is accepted: %s", b->at, err);
+    int e = 0;
+    palp_world *w = palp_scene_create_world(&s, &e);
+    CHECK(w != NULL, "%s: the world is made (%d)", b->at, e);
+    int rc = PALP_OK;
+    for (int f = 0; w && f < 20 && rc == PALP_OK; ++f) {
+      palp_scene_apply(&s, w, palp_world_time(w));
+      rc = palp_world_step(w);
+    }
+    const double vr = w ? palp_world_volume(w) / palp_world_rest_volume(w) : 0.0;
+    CHECK(rc == PALP_OK && vr > 0.9 && vr < 1.1, "%s: 20 frames of the 3 N press step, V/V0 %.4f (0.9-1.1)", b->at, vr);
+    palp_world_destroy(w);
+  }
+  /* in code: palp_world_create refuses each value past its bound, beside the parser */
+  const palp_world_def ok = palp_world_default_def();
+  palp_world_def d[10];
+  for (int i = 0; i < 10; ++i) d[i] = ok;
+  d[0].membrane.thickness = 0.11, d[1].membrane.density = 3e4, d[2].gel.pressure = 1e30, d[3].gel.a1 = 301;
+  d[4].gel.a2 = 2e10, d[5].gel.support_modulus = 1e300, d[6].gel.support_viscosity = 2e17;
+  d[7].gel.support_relax_modulus = 2e12, d[7].gel.support_relax_time = 0.5;
+  d[8].gel.support_relax_modulus = 4e5, d[8].gel.support_relax_time = 2e6, d[9].gel.density = 3e4;
+  for (int i = 0; i < 10; ++i) {
+    int e = 0;
+    palp_world *w = palp_world_create(&d[i], &e);
+    CHECK(w == NULL && e == PALP_EINVAL, "world def %d (past a bound) refused: %d", i, e);
+    palp_world_destroy(w);
+  }
+}
+
 /* Session 75 review: "parameters" is read only from a scene file (palp_scene_load, or trusted
  * text with its directory, palp_scene_parse_in), never from text palp_scene_parse is handed
  * (a session log's scene: a database whose scene named a FIFO hung palp-review); the
@@ -238,6 +306,7 @@ int main(void) {
   char err[256];
   test_unknown_keys();
   test_bounds();
+  test_bounds_session81();
   test_parameters_file();
   test_direction();
   CHECK(palp_scene_parse(base, &s, err, sizeof err) == PALP_OK, "base scene parses: %s", err);
