@@ -2865,6 +2865,10 @@ int64_t palp_world_factor_due(const palp_world *w) {
 /* ---- stepping ----------------------------------------------------------- */
 
 static int has_load(const palp_world *w) {
+  /* Gravity is a load like any other (docs/model.md lists it under loads): a sagging dome
+   * creeps on through its Maxwell dashpots, and put to sleep its sag stayed at 4.28 um
+   * where it reaches 7.12 um in 120 s awake (session 81). */
+  if (has(w, PALP_EFFECT_GRAVITY) && v3_dot(w->def.gravity, w->def.gravity) > 0.0) return 1;
   for (int c = 0; c < w->def.max_contacts; ++c) {
     const contact *k = &w->contacts[c];
     if (k->kind == CONTACT_FORCE && v3_dot(k->force, k->force) > 0.0) return 1;
@@ -2878,6 +2882,32 @@ static int has_load(const palp_world *w) {
     }
   }
   return 0;
+}
+
+/* The fastest internal creep or recovery [m/s]: each link's Maxwell flow |sigma| / eta1 and
+ * Kelvin recovery |sigma - E2 x2| / eta2 times its rest length, and each free vertex's
+ * relaxing support dashpot |u - q| / tau_r. The vertices can be slower than the sleep speed
+ * while these still move the state on (a released dome recovering through its Kelvin arms
+ * and its support's dashpots): sleeping then froze the breast-tissue dome's residual dent. */
+static double internal_rate(const palp_world *w) {
+  double r = 0.0;
+  if (w->xs) {
+    const double E2 = w->def.membrane.E2, i1 = 1.0 / w->def.membrane.eta1, i2 = 1.0 / w->def.membrane.eta2;
+    for (int l = 0; l < w->nlink; ++l) {
+      const double s = w->sigma[l], L = w->rest_len[l];
+      const double v = L * fmax(fabs(s) * i1, fabs(s - E2 * w->xs[l][1]) * i2);
+      if (!(v <= r)) r = v; /* NaN is kept: it keeps the world awake */
+    }
+  }
+  if (w->sq) {
+    const double itau = 1.0 / w->def.gel.support_relax_time;
+    for (int k = 0; k < w->nfree; ++k) {
+      const int i = w->vertex_of[k];
+      const double v = v3_len(v3_sub(v3_sub(w->pos[i], w->mesh.rest[i]), w->sq[i])) * itau;
+      if (!(v <= r)) r = v;
+    }
+  }
+  return r;
 }
 
 static int has_finger(const palp_world *w) {
@@ -3034,7 +3064,8 @@ int palp_world_step_dt(palp_world *w, double h) {
     w->broken = 1;
     return PALP_EUNSTABLE;
   }
-  if (w->def.sleep_time > 0.0 && vmax2 < w->def.sleep_speed * w->def.sleep_speed && !has_load(w)) {
+  if (w->def.sleep_time > 0.0 && vmax2 < w->def.sleep_speed * w->def.sleep_speed && !has_load(w) &&
+      internal_rate(w) < w->def.sleep_speed) {
     w->quiet += h;
     if (w->quiet >= w->def.sleep_time) {
       w->awake = 0;

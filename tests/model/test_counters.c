@@ -1,6 +1,6 @@
 /* Health counters and stage timings per frame (session 81 review): a step the world splits
  * into halves is still one step for the counters the server log and the replay summary
- * print, and for the timings a benchmark divides by. */
+ * print, and for the timings a benchmark divides by. And sleep: gravity is a load. */
 #include <time.h>
 
 #include "common.h"
@@ -176,7 +176,39 @@ static void test_timings_cover_the_step(void) {
   palp_world_destroy(w);
 }
 
+/* The hand-set phantom under gravity alone, 60 s, with the default sleep (0.5 s below
+ * 1e-5 m/s) and without (sleep_time 0): the pole's sag must agree within 5% of the awake
+ * world's. Gravity was no load for the sleep test, and the world slept at 0.66 s with a sag
+ * of 4.28 um that reaches 7.12 um awake at 120 s (session 81 review). */
+static void test_gravity_keeps_awake(void) {
+  double sag[2] = {0, 0};
+  int asleep_frames[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    palp_world_def d = handset_def();
+    d.effects |= PALP_EFFECT_GRAVITY;
+    if (k == 1) d.sleep_time = 0.0;
+    int e;
+    palp_world *w = palp_world_create(&d, &e);
+    CHECK(w, "hand-set world with gravity: %d", e);
+    if (!w) return;
+    for (int f = 0; f < 6000; ++f) {
+      CHECK(palp_world_step(w) == PALP_OK, "gravity frame %d", f);
+      asleep_frames[k] += !palp_world_is_awake(w);
+    }
+    const palp_mesh *m = palp_world_mesh(w);
+    sag[k] = m->rest[m->top_vertex].z - palp_world_positions(w)[m->top_vertex].z;
+    palp_world_destroy(w);
+  }
+  printf("gravity alone, hand-set phantom, 60 s: pole sag %.3f um with sleep (%d frames asleep), %.3f um without\n",
+         1e6 * sag[0], asleep_frames[0], 1e6 * sag[1]);
+  CHECK(sag[1] > 1e-6, "gravity sags the pole (%.3g m)", sag[1]);
+  CHECK(fabs(sag[0] - sag[1]) <= 0.05 * sag[1], "with sleep the sag is within 5%% of the awake one: %.3f vs %.3f um",
+        1e6 * sag[0], 1e6 * sag[1]);
+  CHECK(asleep_frames[0] == 0, "a world under gravity does not sleep (%d frames asleep)", asleep_frames[0]);
+}
+
 int main(void) {
+  test_gravity_keeps_awake();
   test_large_strain_per_frame();
   test_timings_cover_the_step();
   CHECK_DONE();
