@@ -42,6 +42,9 @@ typedef struct item {
   int to;        /* destination side 0 (A) / 1 (B) */
   int kind;      /* palp_dds_topic_kind */
   int op;        /* 0 write, 1 dispose, 2 unregister */
+  int after;     /* after a write: 0 nothing, 1 dispose, 2 unregister (the sample's instance was
+                  * no longer alive when the relay took it: Cyclone then carries the state on the
+                  * valid sample and queues no invalid one) */
   void *sample;  /* deep copy; freed after delivery */
   struct item *next;
 } item;
@@ -94,7 +97,7 @@ static void free_sample(int kind, void *p) {
 }
 
 /* Queues a copy for the other side; called with the lock held. */
-static void enqueue(palp_netem *n, int to, int kind, int op, void *sample) {
+static void enqueue(palp_netem *n, int to, int kind, int op, int after, void *sample) {
   if (n->queued >= QUEUE_MAX) { /* bounded: a flood is lost, as on a full link */
     n->st.dropped++;
     free_sample(kind, sample);
@@ -126,7 +129,7 @@ static void enqueue(palp_netem *n, int to, int kind, int op, void *sample) {
     n->st.dropped++;
     return;
   }
-  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .sample = sample};
+  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .after = after, .sample = sample};
   /* Insert in due order (mostly at the tail). */
   if (!n->tail || n->tail->due <= due) {
     if (n->tail) n->tail->next = it; else n->head = it;
@@ -142,6 +145,17 @@ static void enqueue(palp_netem *n, int to, int kind, int op, void *sample) {
   }
   n->queued++;
   pthread_cond_signal(&n->cond);
+}
+
+/* The relay's writers do not dispose what they unregister (Cyclone's default does): an unregister
+ * crosses as an unregister, a dispose as a dispose, and writers the relay deletes leave their
+ * instances without a writer, as a link that went down would, not disposed. */
+static dds_entity_t relay_writer(dds_entity_t parent, dds_entity_t topic, int kind) {
+  dds_qos_t *q = palp_dds_qos((palp_dds_topic_kind)kind);
+  dds_qset_writer_data_lifecycle(q, false);
+  const dds_entity_t w = dds_create_writer(parent, topic, q, NULL);
+  dds_delete_qos(q);
+  return w;
 }
 
 static void add_own(side *s, dds_entity_t w) {
@@ -179,7 +193,7 @@ static dds_entity_t writer_for(side *s, int kind, const void *sample) {
   dds_entity_t *w = s->part_writer[s->part_count];
   for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
     if (!is_session_topic(k)) continue;
-    w[k] = palp_dds_create_writer(pub, s->topic[k], (palp_dds_topic_kind)k);
+    w[k] = relay_writer(pub, s->topic[k], k);
     if (w[k] <= 0) {
       dds_delete(pub); /* and the writers made so far; the session's next sample tries again */
       return 0;
@@ -220,15 +234,16 @@ static void *tx_main(void *arg) {
     side *s = &n->s[it->to];
     dds_entity_t w = writer_for(s, it->kind, it->sample);
     pthread_mutex_unlock(&n->lock);
-    if (w > 0) {
-      if (it->op == 0) dds_write(w, it->sample);
-      else if (it->op == 1) dds_dispose(w, it->sample);
-      else dds_unregister_instance(w, it->sample);
-    }
+    /* Any failure is a drop, counted: a write refused, or an unregister of an instance this
+     * writer never registered. */
+    dds_return_t rc = w > 0 ? 0 : DDS_RETCODE_ERROR;
+    if (rc == 0 && it->op == 0) rc = dds_write(w, it->sample);
+    if (rc == 0 && (it->op == 1 || it->after == 1)) rc = dds_dispose(w, it->sample);
+    if (rc == 0 && (it->op == 2 || it->after == 2)) rc = dds_unregister_instance(w, it->sample);
     free_sample(it->kind, it->sample);
     free(it);
     pthread_mutex_lock(&n->lock);
-    if (w > 0) n->st.forwarded++;
+    if (rc == 0) n->st.forwarded++;
     else n->st.dropped++;
   }
   pthread_mutex_unlock(&n->lock);
@@ -253,7 +268,7 @@ static void *rx_main(void *arg) {
           free(buf);
           break;
         }
-        int op = 0;
+        int op = 0, after = 0;
         /* Ignore-local QoS is not enough on every Cyclone release: a sample of one
          * of the relay's own writers is never sent back (it would loop). */
         if (is_own(s, info.publication_handle)) {
@@ -261,16 +276,22 @@ static void *rx_main(void *arg) {
           continue;
         }
         if (!info.valid_data) {
-          if (info.instance_state == DDS_IST_ALIVE ||
-              dds_instance_get_key(s->reader[k], info.instance_handle, buf) != 0) {
+          /* A dispose or unregister: dds_take fills an invalid sample's key fields (session_id
+           * included, which picks the partition), as server/session.c reads a finger off it. Not
+           * dds_instance_get_key: once the take has emptied an instance that has no writer left,
+           * Cyclone frees it and the lookup fails, and until session 81 every such unregister was
+           * lost, uncounted (a stalled station's fingers stayed pressed behind the relay). */
+          if (info.instance_state == DDS_IST_ALIVE) { /* no state change to carry */
             free_sample(k, buf);
             continue;
           }
           op = info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED ? 1 : 2;
+        } else if (info.instance_state != DDS_IST_ALIVE) {
+          after = info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED ? 1 : 2;
         }
         pthread_mutex_lock(&n->lock);
-        if (op) n->st.disposals++;
-        enqueue(n, to, k, op, buf);
+        if (op || after) n->st.disposals++;
+        enqueue(n, to, k, op, after, buf);
         pthread_mutex_unlock(&n->lock);
       }
     }
@@ -307,7 +328,7 @@ static int open_side(palp_netem *n, side *s, uint32_t domain, char *err, size_t 
     s->reader[k] = palp_dds_create_reader(is_session_topic(k) ? s->sub_session : s->sub_global, s->topic[k],
                                           (palp_dds_topic_kind)k);
     if (!is_session_topic(k)) {
-      s->writer_global[k] = palp_dds_create_writer(s->pub_global, s->topic[k], (palp_dds_topic_kind)k);
+      s->writer_global[k] = relay_writer(s->pub_global, s->topic[k], k);
       if (s->writer_global[k] > 0) add_own(s, s->writer_global[k]);
     }
     dds_entity_t rc = s->reader[k] > 0 ? dds_create_readcondition(s->reader[k], DDS_ANY_STATE) : -1;
