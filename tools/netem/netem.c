@@ -108,8 +108,11 @@ static void enqueue(palp_netem *n, int to, int kind, int op, int after, void *sa
   const int lost = uniform(n) < n->def.loss;
   if (lost && op == 0 && !is_reliable(kind)) {
     n->st.dropped++;
-    free_sample(kind, sample);
-    return;
+    if (!after) {
+      free_sample(kind, sample);
+      return;
+    }
+    op = after, after = 0; /* the data is lost; its instance's end still crosses, late (below) */
   }
   if (lost) {
     d += 2 * n->def.delay; /* reliable: the retransmission comes one round trip later */
