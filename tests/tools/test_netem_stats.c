@@ -35,7 +35,7 @@ int main(void) {
     rises += d > lo; /* a later sample slower than the fastest so far: the case that was wrong */
     lo = fmin(lo, d), hi = fmax(hi, d);
     pthread_mutex_lock(&n.lock);
-    enqueue(&n, i % 2, i / 2, 0, 0, NULL);
+    enqueue(&n, i % 2, i / 2, 0, 0, 0, NULL);
     palp_netem_stats st = n.st;
     pthread_mutex_unlock(&n.lock);
     if (!(fabs(st.delay_min - lo) <= 2e-9 && fabs(st.delay_max - hi) <= 2e-9 && st.forwarded == 0)) {

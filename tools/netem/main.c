@@ -105,8 +105,9 @@ int main(int argc, char **argv) {
   palp_netem_get_stats(n, &st);
   palp_netem_stop(n);
   printf("palp-netem: %llu samples forwarded, %llu dropped, %llu retransmitted late, %llu disposals; one-way delay "
-         "%.1f..%.1f ms\n", (unsigned long long)st.forwarded, (unsigned long long)st.dropped,
-         (unsigned long long)st.retransmitted, (unsigned long long)st.disposals, st.delay_min * 1e3, st.delay_max * 1e3);
+         "%.1f..%.1f ms; %llu session slots reclaimed\n", (unsigned long long)st.forwarded, (unsigned long long)st.dropped,
+         (unsigned long long)st.retransmitted, (unsigned long long)st.disposals, st.delay_min * 1e3, st.delay_max * 1e3,
+         (unsigned long long)st.sessions_reclaimed);
   palp_log_close(&log);
   return 0;
 }

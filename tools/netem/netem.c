@@ -15,21 +15,42 @@
 #include "palp.h"
 #include "palp_dds.h"
 
-#define MAX_PARTS 64 /* session partitions per side: a 65th session's samples are dropped, counted */
+/* Session partitions per side at once. A slot is reclaimed for a new session when every instance
+ * it relayed has ended (disposed or unregistered) and nothing crossed it for PART_CLOSED_NS, or,
+ * failing that, when nothing crossed it for PART_IDLE_NS (least recently used first), so made-up
+ * session ids hold a slot at most PART_IDLE_NS after their last sample. Until session 81 a slot was
+ * never freed: the 65th session of the relay's lifetime was dropped even with nothing else open.
+ * Reclaimed only when a new session finds no free slot: a quiet live session keeps its writers. */
+#define MAX_PARTS 64
+#define PART_ALIVE_MAX 32                    /* source instances tracked per slot */
+#define PART_CLOSED_NS 1000000000LL          /* 1 s */
+#define PART_IDLE_NS 30000000000LL           /* 30 s */
 #define QUEUE_MAX 65536 /* samples in flight: bounded memory */
+
+typedef struct sess_part {
+  int used;
+  uint32_t sid;
+  dds_entity_t pub; /* 0 until its writers are made; deleting it deletes them */
+  dds_entity_t writer[PALP_TOPIC_COUNT];
+  dds_instance_handle_t own[PALP_TOPIC_COUNT]; /* the writers' handles, 0 for none */
+  int64_t last_ns;  /* the last sample that crossed it [CLOCK_MONOTONIC ns] */
+  /* the source instances it carried that are still alive (their readers' handles); lost: more
+   * than the set holds, the slot then waits for PART_IDLE_NS */
+  dds_instance_handle_t alive[PART_ALIVE_MAX];
+  int alive_count, alive_lost;
+} sess_part;
 
 typedef struct side {
   dds_entity_t pp, sub_global, sub_session, pub_global, ws, stop_gc;
   dds_entity_t reader[PALP_TOPIC_COUNT], topic[PALP_TOPIC_COUNT];
   dds_entity_t writer_global[PALP_TOPIC_COUNT];
   /* session topics: per session's partition a publisher and a writer of every session topic,
-   * all made when the first sample of the session crosses to this side */
-  uint32_t part_session[MAX_PARTS];
-  dds_entity_t part_writer[MAX_PARTS][PALP_TOPIC_COUNT];
-  int part_count;
-  /* the relay's own writers on this side: their samples are never relayed back */
-  dds_instance_handle_t own[PALP_TOPIC_COUNT * (MAX_PARTS + 1)];
-  atomic_int own_count;
+   * all made when the first sample of the session crosses to this side (under the lock) */
+  sess_part part[MAX_PARTS];
+  /* the relay's own global writers on this side (and each part's own): their samples are never
+   * relayed back; made before the threads start, read-only after */
+  dds_instance_handle_t own[PALP_TOPIC_COUNT];
+  int own_count;
 } side;
 
 typedef struct rx_arg {
@@ -42,6 +63,7 @@ typedef struct item {
   int to;        /* destination side 0 (A) / 1 (B) */
   int kind;      /* palp_dds_topic_kind */
   int op;        /* 0 write, 1 dispose, 2 unregister */
+  dds_instance_handle_t ih; /* the source instance (its reader's handle) */
   int after;     /* after a write: 0 nothing, 1 dispose, 2 unregister (the sample's instance was
                   * no longer alive when the relay took it: Cyclone then carries the state on the
                   * valid sample and queues no invalid one) */
@@ -97,7 +119,7 @@ static void free_sample(int kind, void *p) {
 }
 
 /* Queues a copy for the other side; called with the lock held. */
-static void enqueue(palp_netem *n, int to, int kind, int op, int after, void *sample) {
+static void enqueue(palp_netem *n, int to, int kind, int op, int after, dds_instance_handle_t ih, void *sample) {
   if (n->queued >= QUEUE_MAX) { /* bounded: a flood is lost, as on a full link */
     n->st.dropped++;
     free_sample(kind, sample);
@@ -132,7 +154,7 @@ static void enqueue(palp_netem *n, int to, int kind, int op, int after, void *sa
     n->st.dropped++;
     return;
   }
-  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .after = after, .sample = sample};
+  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .after = after, .ih = ih, .sample = sample};
   /* Insert in due order (mostly at the tail). */
   if (!n->tail || n->tail->due <= due) {
     if (n->tail) n->tail->next = it; else n->head = it;
@@ -163,18 +185,66 @@ static dds_entity_t relay_writer(dds_entity_t parent, dds_entity_t topic, int ki
 
 static void add_own(side *s, dds_entity_t w) {
   dds_instance_handle_t h;
-  const int i = atomic_load(&s->own_count);
-  if (i < (int)(sizeof s->own / sizeof s->own[0]) && dds_get_instance_handle(w, &h) == 0) {
-    s->own[i] = h;
-    atomic_store(&s->own_count, i + 1);
-  }
+  if (s->own_count < PALP_TOPIC_COUNT && dds_get_instance_handle(w, &h) == 0) s->own[s->own_count++] = h;
 }
 
+/* Under the lock (the transmit thread makes and reclaims the parts). */
 static int is_own(side *s, dds_instance_handle_t h) {
-  const int n = atomic_load(&s->own_count);
-  for (int i = 0; i < n; i++)
+  for (int i = 0; i < s->own_count; i++)
     if (s->own[i] == h) return 1;
+  for (int i = 0; i < MAX_PARTS; i++)
+    if (s->part[i].used)
+      for (int k = 0; k < PALP_TOPIC_COUNT; k++)
+        if (s->part[i].own[k] == h) return 1;
   return 0;
+}
+
+static void part_release(sess_part *p) {
+  if (p->pub > 0) dds_delete(p->pub); /* and its writers */
+  memset(p, 0, sizeof *p);
+}
+
+/* The slot of session sid on side s at time now: its own, a free one, or a reclaimed one (a closed
+ * session's, else the least recently used idle one); -1 when every slot is busy. A new or reclaimed
+ * slot has pub 0: the caller makes its writers. */
+static int part_slot(palp_netem *n, side *s, uint32_t sid, int64_t now) {
+  int free_i = -1, closed_i = -1, idle_i = -1;
+  for (int i = 0; i < MAX_PARTS; i++) {
+    const sess_part *p = &s->part[i];
+    if (!p->used) {
+      if (free_i < 0) free_i = i;
+      continue;
+    }
+    if (p->sid == sid) return i;
+    const int64_t idle = now - p->last_ns;
+    if (p->alive_count == 0 && !p->alive_lost && idle >= PART_CLOSED_NS &&
+        (closed_i < 0 || p->last_ns < s->part[closed_i].last_ns))
+      closed_i = i;
+    if (idle >= PART_IDLE_NS && (idle_i < 0 || p->last_ns < s->part[idle_i].last_ns)) idle_i = i;
+  }
+  const int i = free_i >= 0 ? free_i : closed_i >= 0 ? closed_i : idle_i;
+  if (i < 0) return -1;
+  if (s->part[i].used) {
+    part_release(&s->part[i]);
+    n->st.sessions_reclaimed++;
+  }
+  s->part[i].used = 1, s->part[i].sid = sid, s->part[i].last_ns = now;
+  return i;
+}
+
+/* Notes a sample crossing slot p: a write keeps its source instance alive, a dispose or unregister
+ * (alone or after a write) ends it. */
+static void part_note(sess_part *p, int64_t now, int op, int after, dds_instance_handle_t ih) {
+  p->last_ns = now;
+  int j = 0;
+  while (j < p->alive_count && p->alive[j] != ih) j++;
+  if (op == 0 && after == 0) {
+    if (j < p->alive_count) return;
+    if (p->alive_count < PART_ALIVE_MAX) p->alive[p->alive_count++] = ih;
+    else p->alive_lost = 1;
+  } else if (j < p->alive_count) {
+    p->alive[j] = p->alive[--p->alive_count];
+  }
 }
 
 /* The writer of a session topic on side s, its session's writers made on first use. All of them at
@@ -182,30 +252,33 @@ static int is_own(side *s, dds_instance_handle_t h) {
  * has matched it, and the server writes a session's debrief and unregisters it as the session closes
  * (its writer goes with the session), so a debrief writer made then lost its one sample to the
  * unregister before the station's reader matched (2026-12-07: no station behind the relay was ever
- * debriefed). Made with the session's first feedback or contact, they match as the server's own do. */
-static dds_entity_t writer_for(side *s, int kind, const void *sample) {
-  if (!is_session_topic(kind)) return s->writer_global[kind];
-  const uint32_t sid = *(const uint32_t *)sample; /* session_id is every session type's first member */
-  for (int i = 0; i < s->part_count; i++)
-    if (s->part_session[i] == sid) return s->part_writer[i][kind];
-  if (s->part_count >= MAX_PARTS) return 0;
-  char part[64];
-  palp_dds_session_partition(sid, part, sizeof part);
-  const dds_entity_t pub = palp_dds_session_publisher(s->pp, part);
-  if (pub <= 0) return 0;
-  dds_entity_t *w = s->part_writer[s->part_count];
-  for (int k = 0; k < PALP_TOPIC_COUNT; k++) {
-    if (!is_session_topic(k)) continue;
-    w[k] = relay_writer(pub, s->topic[k], k);
-    if (w[k] <= 0) {
-      dds_delete(pub); /* and the writers made so far; the session's next sample tries again */
+ * debriefed). Made with the session's first feedback or contact, they match as the server's own do.
+ * Under the lock. */
+static dds_entity_t writer_for(palp_netem *n, side *s, const item *it, int64_t now) {
+  if (!is_session_topic(it->kind)) return s->writer_global[it->kind];
+  const uint32_t sid = *(const uint32_t *)it->sample; /* session_id is every session type's first member */
+  const int i = part_slot(n, s, sid, now);
+  if (i < 0) return 0;
+  sess_part *p = &s->part[i];
+  if (p->pub <= 0) {
+    char name[64];
+    palp_dds_session_partition(sid, name, sizeof name);
+    p->pub = palp_dds_session_publisher(s->pp, name);
+    for (int k = 0; k < PALP_TOPIC_COUNT && p->pub > 0; k++) {
+      if (!is_session_topic(k)) continue;
+      p->writer[k] = relay_writer(p->pub, s->topic[k], k);
+      if (p->writer[k] <= 0 || dds_get_instance_handle(p->writer[k], &p->own[k]) != 0) {
+        part_release(p); /* and the writers made so far; the session's next sample tries again */
+        return 0;
+      }
+    }
+    if (p->pub <= 0) {
+      part_release(p);
       return 0;
     }
   }
-  for (int k = 0; k < PALP_TOPIC_COUNT; k++)
-    if (is_session_topic(k)) add_own(s, w[k]);
-  s->part_session[s->part_count++] = sid;
-  return w[kind];
+  part_note(p, now, it->op, it->after, it->ih);
+  return p->writer[it->kind];
 }
 
 static void *tx_main(void *arg) {
@@ -235,7 +308,7 @@ static void *tx_main(void *arg) {
     if (!n->head) n->tail = NULL;
     n->queued--;
     side *s = &n->s[it->to];
-    dds_entity_t w = writer_for(s, it->kind, it->sample);
+    const dds_entity_t w = writer_for(n, s, it, now);
     pthread_mutex_unlock(&n->lock);
     /* Any failure is a drop, counted: a write refused, or an unregister of an instance this
      * writer never registered. */
@@ -272,12 +345,6 @@ static void *rx_main(void *arg) {
           break;
         }
         int op = 0, after = 0;
-        /* Ignore-local QoS is not enough on every Cyclone release: a sample of one
-         * of the relay's own writers is never sent back (it would loop). */
-        if (is_own(s, info.publication_handle)) {
-          free_sample(k, buf);
-          continue;
-        }
         if (!info.valid_data) {
           /* A dispose or unregister: dds_take fills an invalid sample's key fields (session_id
            * included, which picks the partition), as server/session.c reads a finger off it. Not
@@ -293,8 +360,15 @@ static void *rx_main(void *arg) {
           after = info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED ? 1 : 2;
         }
         pthread_mutex_lock(&n->lock);
+        /* Ignore-local QoS is not enough on every Cyclone release: a sample of one
+         * of the relay's own writers is never sent back (it would loop). */
+        if (is_own(s, info.publication_handle)) {
+          pthread_mutex_unlock(&n->lock);
+          free_sample(k, buf);
+          continue;
+        }
         if (op || after) n->st.disposals++;
-        enqueue(n, to, k, op, after, buf);
+        enqueue(n, to, k, op, after, info.instance_handle, buf);
         pthread_mutex_unlock(&n->lock);
       }
     }
@@ -409,7 +483,7 @@ void palp_netem_stop(palp_netem *n) {
     it = nx;
   }
   for (int i = 0; i < 2; i++)
-    if (n->s[i].pp > 0) dds_delete(n->s[i].pp);
+    if (n->s[i].pp > 0) dds_delete(n->s[i].pp); /* and every part's publisher */
   pthread_mutex_destroy(&n->lock);
   pthread_cond_destroy(&n->cond);
   free(n->rx_args);

@@ -32,6 +32,7 @@ typedef struct palp_netem_def {
 
 typedef struct palp_netem_stats {
   uint64_t forwarded, dropped, retransmitted, disposals;
+  uint64_t sessions_reclaimed; /* session slots given to a new session (closed or idle ones') */
   double delay_min, delay_max; /* applied one-way delays [s] */
 } palp_netem_stats;
 
