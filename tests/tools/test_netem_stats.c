@@ -17,11 +17,70 @@
 
 #include "palp_rng.h"
 
+/* The queue's byte budget (session 81 review: it was bounded by count, 65536 samples, and a 10 s delay
+ * held 231 MB after 100 deformations of 100k vertices). Budget 5,000,000 bytes; ten deformations of
+ * 41667 vertices (24 bytes each: 1,000,008 bytes of positions, plus the item and the struct, under
+ * 1 kB) are queued at once with nothing forwarded (10 s delay): 4 fit (4 x ~1.0001 MB), the other 6
+ * are dropped and counted as over budget. A contact (a few hundred bytes) still fits after them, and
+ * so does a deformation's dispose (key only: a dispose may use 1/8 more than the writes). */
+static palp_Deformation *deformation(uint32_t vertices) {
+  palp_Deformation *d = calloc(1, sizeof *d);
+  d->session_id = 1;
+  d->positions._buffer = dds_sequence_palp_Vec3_allocbuf(vertices);
+  memset(d->positions._buffer, 0, vertices * sizeof(palp_Vec3));
+  d->positions._length = d->positions._maximum = vertices;
+  d->positions._release = true;
+  return d;
+}
+
+static int budget_check(void) {
+  static palp_netem n;
+  memset(&n, 0, sizeof n);
+  n.def = (palp_netem_def){.domain_a = 0, .domain_b = 1, .delay = 10, .jitter = 0, .loss = 0, .seed = 1,
+                           .queue_bytes = 5000000};
+  n.budget = n.def.queue_bytes; /* as palp_netem_start */
+  pthread_mutex_init(&n.lock, NULL);
+  pthread_cond_init(&n.cond, NULL);
+  int failures = 0;
+  pthread_mutex_lock(&n.lock);
+  for (int i = 0; i < 10; i++) enqueue(&n, 1, PALP_TOPIC_DEFORMATION, 0, 0, 100, deformation(41667));
+  const int big_queued = n.queued;
+  const palp_netem_stats after_big = n.st;
+  const size_t big_bytes = n.queued_bytes;
+  palp_Contact *c = calloc(1, sizeof *c);
+  enqueue(&n, 1, PALP_TOPIC_CONTACT, 0, 0, 200, c);
+  palp_Deformation *key = calloc(1, sizeof *key);
+  key->session_id = 1;
+  enqueue(&n, 1, PALP_TOPIC_DEFORMATION, 1, 0, 100, key);
+  pthread_mutex_unlock(&n.lock);
+  printf("budget 5000000 bytes: 10 deformations of 1000008 bytes queued at once: %d kept (%zu bytes held), %llu dropped, "
+         "%llu of them over budget (want 4 kept, 6 and 6); then a contact and a dispose: %d queued (want 6)\n",
+         big_queued, big_bytes, (unsigned long long)after_big.dropped, (unsigned long long)after_big.over_budget, n.queued);
+  if (big_queued != 4 || after_big.dropped != 6 || after_big.over_budget != 6) {
+    fprintf(stderr, "FAIL the byte budget: %d deformations kept, %llu dropped (%llu over budget); want 4, 6 (6)\n", big_queued,
+            (unsigned long long)after_big.dropped, (unsigned long long)after_big.over_budget);
+    ++failures;
+  }
+  if (!(big_bytes >= 4 * 1000008u && big_bytes <= 4 * 1001008u)) {
+    fprintf(stderr, "FAIL %zu bytes held, want 4 x (1000008 .. 1001008)\n", big_bytes);
+    ++failures;
+  }
+  if (n.queued != 6 || n.st.dropped != 6) {
+    fprintf(stderr, "FAIL a small sample or a dispose refused after the big ones: %d queued, %llu dropped\n", n.queued,
+            (unsigned long long)n.st.dropped);
+    ++failures;
+  }
+  for (item *it = n.head, *next; it; it = next) next = it->next, free_sample(it->kind, it->sample), free(it);
+  pthread_cond_destroy(&n.cond);
+  pthread_mutex_destroy(&n.lock);
+  return failures;
+}
+
 int main(void) {
   static palp_netem n; /* large (the sides' writer tables): not on the stack */
   memset(&n, 0, sizeof n);
   n.def = (palp_netem_def){.domain_a = 0, .domain_b = 1, .delay = 0.020, .jitter = 0.010, .loss = 0.0, .seed = 42};
-  n.rng = n.def.seed; /* as palp_netem_start */
+  n.rng = n.def.seed, n.budget = PALP_NETEM_QUEUE_BYTES; /* as palp_netem_start */
   pthread_mutex_init(&n.lock, NULL);
   pthread_cond_init(&n.cond, NULL);
   uint64_t r = n.def.seed;
@@ -57,6 +116,7 @@ int main(void) {
   for (item *it = n.head, *next; it; it = next) next = it->next, free(it);
   pthread_cond_destroy(&n.cond);
   pthread_mutex_destroy(&n.lock);
+  failures += budget_check();
   if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
   return failures ? 1 : 0;
 }

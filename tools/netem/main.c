@@ -42,10 +42,11 @@ int main(int argc, char **argv) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       printf("usage: palp-netem --stations DOMAIN --server DOMAIN [--delay-ms 20] [--jitter-ms 5] [--loss 0.05]\n"
-             "                  [--seed N] [--duration S]\n"
+             "                  [--seed N] [--duration S] [--queue-mb 256]\n"
              "Relays every palp topic between the stations' and the server's DDS domains on loopback,\n"
              "each sample delayed by delay +- jitter (uniform, kept in order per topic), a fraction `loss`\n"
-             "lost (best-effort topics: dropped; reliable ones: delivered a round trip later).\n");
+             "lost (best-effort topics: dropped; reliable ones: delivered a round trip later).\n"
+             "At most --queue-mb MB of samples in flight; past it samples are dropped and counted.\n");
       palp_app_common_usage(stdout, NETEM_OPTS);
       return 0;
     }
@@ -58,6 +59,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--jitter-ms")) rc = num(a, v, 0, 10000, &x), d.jitter = x * 1e-3;
     else if (!strcmp(a, "--loss")) rc = num(a, v, 0, 0.5, &x), d.loss = x;
     else if (!strcmp(a, "--seed")) rc = num(a, v, 0, 1e15, &x), d.seed = (uint64_t)x;
+    else if (!strcmp(a, "--queue-mb")) rc = num(a, v, 1, 65536, &x), d.queue_bytes = (size_t)(x * 1048576.0);
     else if (!strcmp(a, "--duration")) rc = num(a, v, 0, 1e6, &duration);
     else {
       fprintf(stderr, "palp-netem: unknown option %s\n", a);
@@ -104,10 +106,11 @@ int main(int argc, char **argv) {
   palp_netem_stats st;
   palp_netem_get_stats(n, &st);
   palp_netem_stop(n);
-  printf("palp-netem: %llu samples forwarded, %llu dropped, %llu retransmitted late, %llu disposals; one-way delay "
-         "%.1f..%.1f ms; %llu session slots reclaimed\n", (unsigned long long)st.forwarded, (unsigned long long)st.dropped,
-         (unsigned long long)st.retransmitted, (unsigned long long)st.disposals, st.delay_min * 1e3, st.delay_max * 1e3,
-         (unsigned long long)st.sessions_reclaimed);
+  printf("palp-netem: %llu samples forwarded, %llu dropped (%llu of them past the queue's %.0f MB), %llu retransmitted "
+         "late, %llu disposals; one-way delay %.1f..%.1f ms; %llu session slots reclaimed\n",
+         (unsigned long long)st.forwarded, (unsigned long long)st.dropped, (unsigned long long)st.over_budget,
+         (double)(d.queue_bytes ? d.queue_bytes : PALP_NETEM_QUEUE_BYTES) / 1048576.0, (unsigned long long)st.retransmitted,
+         (unsigned long long)st.disposals, st.delay_min * 1e3, st.delay_max * 1e3, (unsigned long long)st.sessions_reclaimed);
   palp_log_close(&log);
   return 0;
 }

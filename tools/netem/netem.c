@@ -25,7 +25,6 @@
 #define PART_ALIVE_MAX 32                    /* source instances tracked per slot */
 #define PART_CLOSED_NS 1000000000LL          /* 1 s */
 #define PART_IDLE_NS 30000000000LL           /* 30 s */
-#define QUEUE_MAX 65536 /* samples in flight: bounded memory */
 
 typedef struct sess_part {
   int used;
@@ -68,6 +67,7 @@ typedef struct item {
                   * no longer alive when the relay took it: Cyclone then carries the state on the
                   * valid sample and queues no invalid one) */
   void *sample;  /* deep copy; freed after delivery */
+  size_t bytes;  /* what it holds in memory (item_bytes) */
   struct item *next;
 } item;
 
@@ -81,6 +81,7 @@ struct palp_netem {
   pthread_cond_t cond;
   item *head, *tail; /* FIFO in due order (per link, delays are kept in order) */
   int queued;
+  size_t queued_bytes, budget; /* held by the queue's items, and at most (writes; state changes 1/8 more) */
   int64_t last_due[2][PALP_TOPIC_COUNT];
   uint64_t rng;
   palp_netem_stats st;
@@ -119,9 +120,39 @@ static void free_sample(int kind, void *p) {
 }
 
 /* Queues a copy for the other side; called with the lock held. */
+/* Bytes a queued sample holds: the item, the sample and its sequences' buffers (palp's types have
+ * no unbounded string; bounded ones are inline). By hand per type: the sequences are few and listed
+ * here; a type given a new sequence must be added (the queue then undercounts it). */
+#define SEQ_BYTES(seq) ((size_t)(seq)._length * sizeof *(seq)._buffer)
+static size_t item_bytes(int kind, const void *sample) {
+  size_t b = sizeof(item);
+  if (!sample) return b;
+  b += palp_dds_topic_descriptor((palp_dds_topic_kind)kind)->m_size;
+  switch ((palp_dds_topic_kind)kind) {
+  case PALP_TOPIC_CATALOGUE: {
+    const palp_Phantom *x = sample;
+    return b + SEQ_BYTES(x->rest) + SEQ_BYTES(x->triangles);
+  }
+  case PALP_TOPIC_FEEDBACK: return b + SEQ_BYTES(((const palp_Feedback *)sample)->fingers);
+  case PALP_TOPIC_DEFORMATION: return b + SEQ_BYTES(((const palp_Deformation *)sample)->positions);
+  case PALP_TOPIC_SERVER_STATUS: return b + SEQ_BYTES(((const palp_ServerStatus *)sample)->sessions);
+  case PALP_TOPIC_SERVER_IDENTITY: return b + SEQ_BYTES(((const palp_ServerIdentity *)sample)->phantoms);
+  case PALP_TOPIC_DEBRIEF: return b + SEQ_BYTES(((const palp_Debrief *)sample)->lesion);
+  case PALP_TOPIC_FINGER_SAMPLE: return b + SEQ_BYTES(((const palp_FingerSample *)sample)->triangles);
+  default: return b;
+  }
+}
+
 static void enqueue(palp_netem *n, int to, int kind, int op, int after, dds_instance_handle_t ih, void *sample) {
-  if (n->queued >= QUEUE_MAX) { /* bounded: a flood is lost, as on a full link */
+  /* Bounded by memory, not by count (until session 81: 65536 samples, which at a 100k-vertex
+   * deformation's 2.4 MB each is 157 GB; a 10 s delay held 231 MB after 100 of them). Past the
+   * budget a sample is lost, as on a full link, and counted; a dispose or unregister may use 1/8
+   * more, so that a flood of large samples does not also leave a finger pressed. */
+  const size_t bytes = item_bytes(kind, sample);
+  const size_t limit = op ? n->budget + n->budget / 8 : n->budget;
+  if (n->queued_bytes + bytes > limit) {
     n->st.dropped++;
+    n->st.over_budget++;
     free_sample(kind, sample);
     return;
   }
@@ -154,7 +185,7 @@ static void enqueue(palp_netem *n, int to, int kind, int op, int after, dds_inst
     n->st.dropped++;
     return;
   }
-  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .after = after, .ih = ih, .sample = sample};
+  *it = (item){.due = due, .to = to, .kind = kind, .op = op, .after = after, .ih = ih, .sample = sample, .bytes = bytes};
   /* Insert in due order (mostly at the tail). */
   if (!n->tail || n->tail->due <= due) {
     if (n->tail) n->tail->next = it; else n->head = it;
@@ -169,6 +200,7 @@ static void enqueue(palp_netem *n, int to, int kind, int op, int after, dds_inst
     p->next = it;
   }
   n->queued++;
+  n->queued_bytes += bytes;
   pthread_cond_signal(&n->cond);
 }
 
@@ -307,6 +339,7 @@ static void *tx_main(void *arg) {
     n->head = it->next;
     if (!n->head) n->tail = NULL;
     n->queued--;
+    n->queued_bytes -= it->bytes;
     side *s = &n->s[it->to];
     const dds_entity_t w = writer_for(n, s, it, now);
     pthread_mutex_unlock(&n->lock);
@@ -432,6 +465,7 @@ palp_netem *palp_netem_start(const palp_netem_def *def, char *err, size_t errlen
     return NULL;
   }
   n->def = *def;
+  n->budget = def->queue_bytes ? def->queue_bytes : PALP_NETEM_QUEUE_BYTES;
   n->rng = def->seed;
   pthread_mutex_init(&n->lock, NULL);
   pthread_condattr_t ca;

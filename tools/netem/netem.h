@@ -28,10 +28,16 @@ typedef struct palp_netem_def {
   double jitter;               /* uniform +- [s], < delay */
   double loss;                 /* probability a sample is lost, [0, 0.5] */
   uint64_t seed;               /* RNG seed: the same seed, the same draws */
+  size_t queue_bytes;          /* memory the samples in flight may hold; 0: PALP_NETEM_QUEUE_BYTES */
 } palp_netem_def;
+
+/* Default bound of the samples in flight [bytes]: what the relay holds is rate x delay, and a
+ * 100k-vertex deformation is 2.4 MB; past it samples are dropped (counted in over_budget). */
+#define PALP_NETEM_QUEUE_BYTES ((size_t)256 << 20)
 
 typedef struct palp_netem_stats {
   uint64_t forwarded, dropped, retransmitted, disposals;
+  uint64_t over_budget;        /* of the dropped: the queue held its byte budget (queue_bytes) */
   uint64_t sessions_reclaimed; /* session slots given to a new session (closed or idle ones') */
   double delay_min, delay_max; /* applied one-way delays [s] */
 } palp_netem_stats;
