@@ -12,10 +12,68 @@
  * uniform for the jitter and one for the loss draw; delay + jitter (2u - 1), truncated to
  * whole ns by the due time (tolerance 2 ns). Each sample goes to its own (side, topic) link,
  * so no order clamp applies.
+ *
+ * Since session 81 also: the queue's byte budget (budget_check) and the delays of many instances at a
+ * high rate (rate_check), each described where it runs.
  */
 #include "netem.c"
 
 #include "palp_rng.h"
+
+static void drain(palp_netem *n) {
+  for (int i = 0; i < n->queued; i++) free_sample(n->heap[i]->kind, n->heap[i]->sample), free(n->heap[i]);
+  free(n->heap);
+  n->heap = NULL, n->queued = 0;
+}
+
+/* Delays at a high rate (session 81 review: the relay kept one FIFO per topic across every session
+ * and writer, and at 20 +- 5 ms with one topic's samples 0.16 ms apart the mean was 23.4 ms, 29% above
+ * 24 ms). 16 instances (16 sessions' feedback) at 100 Hz each, staggered: the topic carries a sample
+ * every 0.625 ms, each instance one every 10 ms, no loss. An instance's consecutive draws differ by
+ * at most 2 x jitter = 10 ms = its period, so per-instance order never holds one back: its applied
+ * delays are the uniform draws themselves. Expected from U(15, 25) ms: mean 20 ms (tolerance +-0.5 ms;
+ * the standard error of 16000 draws is 0.023 ms) and 10% above 24 ms (tolerance +-1.5 points; standard
+ * error 0.24). Also printed, not asserted: one instance at 1 kHz, the bias that remains (an instance
+ * faster than one sample per 2 x jitter is still held in order behind its own late samples). */
+static void rate_run(int keys, double period_s, int count, uint64_t seed, double *mean_ms, double *above24) {
+  static palp_netem n;
+  memset(&n, 0, sizeof n);
+  n.def = (palp_netem_def){.domain_a = 0, .domain_b = 1, .delay = 0.020, .jitter = 0.005, .loss = 0, .seed = seed};
+  n.rng = n.def.seed, n.budget = PALP_NETEM_QUEUE_BYTES;
+  const int64_t t0 = 1000000000000LL, step = (int64_t)(period_s / keys * 1e9);
+  double sum = 0;
+  int above = 0;
+  for (int i = 0; i < count; i++) {
+    const int64_t now = t0 + i * step;
+    const dds_instance_handle_t key = 1000 + (dds_instance_handle_t)(i % keys);
+    enqueue_at(&n, now, 1, PALP_TOPIC_FEEDBACK, 0, 0, key, NULL);
+    /* the sample just queued: the latest seq */
+    const item *it = NULL;
+    for (int j = 0; j < n.queued; j++)
+      if (n.heap[j]->seq == n.seq - 1) it = n.heap[j];
+    const double d_ms = (double)(it->due - now) * 1e-6;
+    sum += d_ms, above += d_ms > 24.0;
+    /* what has fallen due leaves (a transmit thread would have sent it) */
+    while (n.queued && n.heap[0]->due <= now) free(heap_pop(&n));
+  }
+  drain(&n);
+  *mean_ms = sum / count, *above24 = (double)above / count;
+}
+
+static int rate_check(void) {
+  int failures = 0;
+  double mean, above;
+  rate_run(16, 0.010, 16000, 5, &mean, &above);
+  printf("16 instances at 100 Hz (one sample each 0.625 ms), 20 +- 5 ms: mean %.2f ms (want 20 +- 0.5), %.1f%% above 24 ms "
+         "(want 10 +- 1.5)\n", mean, 100 * above);
+  if (!(fabs(mean - 20.0) <= 0.5 && fabs(above - 0.10) <= 0.015)) {
+    fprintf(stderr, "FAIL delays biased at a high rate: mean %.2f ms, %.1f%% above 24 ms\n", mean, 100 * above);
+    ++failures;
+  }
+  rate_run(1, 0.001, 16000, 5, &mean, &above);
+  printf("one instance at 1 kHz (not asserted; the remaining bias): mean %.2f ms, %.1f%% above 24 ms\n", mean, 100 * above);
+  return failures;
+}
 
 /* The queue's byte budget (session 81 review: it was bounded by count, 65536 samples, and a 10 s delay
  * held 231 MB after 100 deformations of 100k vertices). Budget 5,000,000 bytes; ten deformations of
@@ -70,7 +128,7 @@ static int budget_check(void) {
             (unsigned long long)n.st.dropped);
     ++failures;
   }
-  for (item *it = n.head, *next; it; it = next) next = it->next, free_sample(it->kind, it->sample), free(it);
+  drain(&n);
   pthread_cond_destroy(&n.cond);
   pthread_mutex_destroy(&n.lock);
   return failures;
@@ -113,10 +171,11 @@ int main(void) {
     fprintf(stderr, "FAIL %d queued, want %d\n", n.queued, count);
     ++failures;
   }
-  for (item *it = n.head, *next; it; it = next) next = it->next, free(it);
+  drain(&n);
   pthread_cond_destroy(&n.cond);
   pthread_mutex_destroy(&n.lock);
   failures += budget_check();
+  failures += rate_check();
   if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
   return failures ? 1 : 0;
 }

@@ -44,7 +44,7 @@ int main(int argc, char **argv) {
       printf("usage: palp-netem --stations DOMAIN --server DOMAIN [--delay-ms 20] [--jitter-ms 5] [--loss 0.05]\n"
              "                  [--seed N] [--duration S] [--queue-mb 256]\n"
              "Relays every palp topic between the stations' and the server's DDS domains on loopback,\n"
-             "each sample delayed by delay +- jitter (uniform, kept in order per topic), a fraction `loss`\n"
+             "each sample delayed by delay +- jitter (uniform, kept in order per instance), a fraction `loss`\n"
              "lost (best-effort topics: dropped; reliable ones: delivered a round trip later).\n"
              "At most --queue-mb MB of samples in flight; past it samples are dropped and counted.\n");
       palp_app_common_usage(stdout, NETEM_OPTS);

@@ -4,8 +4,9 @@
  *
  * Stations run on domain A, the server on domain B; the relay subscribes to every
  * palp topic on both sides and republishes each sample on the other side after a
- * delay drawn from a seeded RNG (mean delay, uniform +- jitter, per direction and
- * topic kept in order as a FIFO link would), losing a fraction of the samples:
+ * delay drawn from a seeded RNG (mean delay, uniform +- jitter; each instance's samples
+ * kept in order, as DDS orders them, other instances' delayed independently), losing a
+ * fraction of the samples:
  * best-effort topics drop them, reliable topics deliver them one extra
  * round trip later (what the reliability protocol's retransmission costs).
  * Keys, partitions (palp/session/N, from the sample's session_id) and QoS
