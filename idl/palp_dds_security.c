@@ -4,6 +4,7 @@
 #include "palp_dds_security.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <fnmatch.h>
 #include <limits.h>
 #include <math.h>
@@ -174,12 +175,36 @@ static void expiry_phrase(char *buf, size_t len, const char *what, double days) 
     snprintf(buf, len, "%s expires in %.1f day(s) (%s)", what, days, date);
 }
 
-/* cert_days: the identity certificate's notAfter from now [d] (identity_pair_check); the CRL's
- * nextUpdate is read here (NAN when it cannot be: the plugins then say so at creation). */
-static void expiry_warning(palp_dds_security *s, double cert_days) {
-  char f[PALP_DDS_PKI_PATH_MAX + 96];
-  double crl_days = NAN;
-  if (file_of(s, "crl.pem", f, sizeof f) != 0 || palp_pem_crl_days(f, &crl_days) != 0) crl_days = NAN;
+/* The classroom's CRL, which every role must have: DDS Security checks revocation only when a
+ * participant is given a CRL, and each participant decides alone whom it admits (mutual
+ * authentication: the server's CRL keeps a revoked station out of the server, a station's own keeps a
+ * revoked peer, a stolen server identity included, out of that station). Until session 81 a missing or
+ * unreadable crl.pem left the property out, and revocation off without a word: a server on a copy of
+ * the PKI without it admitted the revoked trainee/dave. make-classroom-pki.sh always writes one, so its
+ * absence is a setup error. 0 and *days its nextUpdate from now [d] (NAN: none), or PALP_EIO /
+ * PALP_EINVAL naming the file. */
+static int crl_check(const palp_dds_security *s, double *days, char *err, size_t errlen) {
+  char f[PALP_DDS_PKI_PATH_MAX + 16];
+  *days = NAN;
+  if (file_of(s, "crl.pem", f, sizeof f) != 0)
+    return fail(err, errlen, PALP_EINVAL, "classroom CRL %s/crl.pem: path too long", s->pki);
+  const int rc = palp_pem_crl_days(f, days);
+  if (rc == -1)
+    return fail(err, errlen, PALP_EIO,
+                "classroom CRL %s: %s: without it revoked identities would be admitted (copy it from the classroom's "
+                "PKI; make-classroom-pki.sh DIR crl re-issues it)",
+                f, errno == ENOENT ? "missing" : strerror(errno));
+  if (rc < 0)
+    return fail(err, errlen, PALP_EINVAL,
+                "classroom CRL %s: not a PEM CRL: without it revoked identities would be admitted (copy it from the "
+                "classroom's PKI; make-classroom-pki.sh DIR crl re-issues it)",
+                f);
+  return 0;
+}
+
+/* cert_days: the identity certificate's notAfter from now [d] (identity_pair_check); crl_days: the
+ * CRL's nextUpdate (crl_check; NAN when it has none). */
+static void expiry_warning(palp_dds_security *s, double cert_days, double crl_days) {
   char a[200] = "", b[200] = "";
   const char *kind = palp_dds_id_kind_name(s->kind);
   if (cert_days < PALP_DDS_EXPIRY_WARN_DAYS) {
@@ -307,9 +332,10 @@ int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *
                 "identity %s: its private key %s is readable by every user of this machine (mode %04o): "
                 "chmod o-rwx it (make-classroom-pki.sh makes keys 0600)",
                 identity, key, (unsigned)(st.st_mode & 07777));
-  double cert_days;
+  double cert_days, crl_days;
   if ((rc = identity_pair_check(&s, identity, &cert_days, err, errlen)) < 0) return rc;
-  expiry_warning(&s, cert_days);
+  if ((rc = crl_check(&s, &crl_days, err, errlen)) < 0) return rc;
+  expiry_warning(&s, cert_days, crl_days);
   permissions_warning(&s);
   *sec = s;
   return 0;
@@ -360,11 +386,10 @@ void palp_dds_security_qos(const palp_dds_security *sec, dds_qos_t *qos) {
   set_file_prop(qos, "dds.sec.access.permissions_ca", sec, "ca.cert.pem");
   set_file_prop(qos, "dds.sec.access.governance", sec, "governance.p7s");
   set_file_prop(qos, "dds.sec.access.permissions", sec, ".permissions.p7s");
-  /* Revocation: every certificate a participant validates, its own and each
-   * remote one, is checked against the classroom's CRL when there is one. */
-  char crl[PALP_DDS_PKI_PATH_MAX + 16];
-  if (file_of(sec, "crl.pem", crl, sizeof crl) == 0 && access(crl, R_OK) == 0)
-    set_file_prop(qos, "org.eclipse.cyclonedds.sec.auth.crl", sec, "crl.pem");
+  /* Revocation: every certificate a participant validates, its own and each remote one, is checked
+   * against the classroom's CRL. Always set (palp_dds_security_init refused a PKI without a readable
+   * one): a CRL gone since makes the participant's creation fail, never revocation silently off. */
+  set_file_prop(qos, "org.eclipse.cyclonedds.sec.auth.crl", sec, "crl.pem");
 }
 
 dds_entity_t palp_dds_create_participant(dds_domainid_t domain, const palp_dds_security *sec) {

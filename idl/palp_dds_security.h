@@ -67,7 +67,9 @@ int palp_dds_identity_parse(const char *identity, palp_dds_id_kind *kind, char *
                             size_t errlen);
 
 /* Fills sec for identity in the PKI directory pki and checks that every file the
- * plugins will read exists. pki NULL or identity NULL: sec is plain (returns 0). */
+ * plugins will read exists, the classroom CRL (crl.pem) included and read as a CRL: without it
+ * revocation would be off (every role: each participant decides alone whom it admits).
+ * pki NULL or identity NULL: sec is plain (returns 0). */
 int palp_dds_security_init(palp_dds_security *sec, const char *pki, const char *identity, char *err, size_t errlen);
 
 /* As palp_dds_security_init from the environment: PALP_PKI and PALP_IDENTITY

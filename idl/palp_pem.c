@@ -5,6 +5,7 @@
 #include <openssl/pem.h>
 #include <openssl/sha.h>
 #include <openssl/x509.h>
+#include <math.h>
 #include <stdio.h>
 #include <time.h>
 
@@ -73,11 +74,14 @@ out:
 }
 
 int palp_pem_crl_days(const char *crl, double *days) {
+  *days = NAN;
   FILE *f = fopen(crl, "r");
   if (!f) return -1;
   X509_CRL *c = PEM_read_X509_CRL(f, NULL, no_passphrase, NULL);
   fclose(f);
-  const int rc = c ? days_until(X509_CRL_get0_nextUpdate(c), days) : -1;
+  /* A CRL without a nextUpdate is still a CRL: read, with no date to warn of. */
+  if (c && days_until(X509_CRL_get0_nextUpdate(c), days) != 0) *days = NAN;
+  const int rc = c ? 0 : -2;
   X509_CRL_free(c);
   ERR_clear_error();
   return rc;

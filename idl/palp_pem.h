@@ -30,7 +30,8 @@ typedef struct palp_pem_info {
  * certificate is read. The checks run in the order of the statuses above. */
 palp_pem_status palp_pem_check(const char *cert, const char *key, const char *ca, palp_pem_info *info);
 
-/* A CRL's nextUpdate from now [d] (negative: past): 0, or -1 when it cannot be read. */
+/* A CRL's nextUpdate from now [d] (negative: past; NAN when the CRL has none): 0; -1 when the file
+ * cannot be opened (errno says why), -2 when it is not a PEM CRL. */
 int palp_pem_crl_days(const char *crl, double *days);
 
 /* The first 6 bytes of the GUID prefix that DDS Security's builtin authentication gives a participant

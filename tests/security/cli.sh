@@ -125,6 +125,30 @@ chmod 644 "$out/openkey/server/server.key.pem"
 rc=$?
 check "palp-server --check: a key of mode 0640 passes (exit $rc640), 0644 is refused (exit $rc)" \
   "[ $rc640 -eq 0 ] && grep -q 'DDS Security identity readable' '$out/check640.log' && [ $rc -eq 1 ] && grep -q 'server.key.pem is readable by every user' '$out/check644.log'"
+# Revocation needs the classroom CRL (session 81): a copy of the PKI without crl.pem made palp-server
+# admit the revoked trainee/dave (no CRL property, revocation off) and its --check say ok. Refused now,
+# for every role, naming the file and what it protects; a crl.pem that is no CRL (garbage, or the CA's
+# certificate copied in its place) likewise.
+cp -r "$pki" "$out/nocrl"
+rm "$out/nocrl/crl.pem"
+"$server" --check --pki "$out/nocrl" >"$out/nocrl-check.log" 2>&1
+rc=$?
+check "palp-server --check refuses a PKI without crl.pem, naming it (exit $rc)" \
+  "[ $rc -ne 0 ] && grep -q 'classroom CRL .*/nocrl/crl.pem: missing: without it revoked identities would be admitted' '$out/nocrl-check.log' && ! grep -q ': ok (' '$out/nocrl-check.log'"
+"$client" --role trainee --domain 131 --phantom 1 --pki "$out/nocrl" --identity trainee/alice --duration 1 \
+  >"$out/nocrl-client.log" 2>&1
+rc=$?
+check "a station without crl.pem is refused before any network use (exit $rc)" \
+  "[ $rc -eq 1 ] && grep -q 'nocrl/crl.pem: missing: without it revoked identities would be admitted' '$out/nocrl-client.log'"
+cp -r "$pki" "$out/badcrl"
+printf 'not a CRL\n' >"$out/badcrl/crl.pem"
+"$server" --check --pki "$out/badcrl" >"$out/badcrl-check.log" 2>&1
+rc=$?
+cp "$pki/ca.cert.pem" "$out/badcrl/crl.pem"
+"$server" --check --pki "$out/badcrl" >"$out/cacrl-check.log" 2>&1
+rc2=$?
+check "palp-server --check refuses a crl.pem that is not a CRL: text (exit $rc), the CA certificate (exit $rc2)" \
+  "[ $rc -ne 0 ] && [ $rc2 -ne 0 ] && grep -q 'classroom CRL .*/badcrl/crl.pem: not a PEM CRL: without it revoked identities would be admitted' '$out/badcrl-check.log' && grep -q 'badcrl/crl.pem: not a PEM CRL' '$out/cacrl-check.log'"
 # Expiry ahead (2026-12-04): an identity issued for 5 days and a CRL re-issued for 3 (same CA) are
 # warned of at start, 30 days ahead: an expired CRL fails every handshake.
 cp -r "$pki" "$out/soon"

@@ -1,8 +1,9 @@
 #!/bin/sh
 # Makes the security tests' certificates at run time, into the build tree:
 #   DIR          the classroom: trainees alice, bob and dave (dave then revoked), instructor ines
-#   DIR-dave     dave's own copy of his files, kept before the revocation, without the CRL
-#                (a revoked station does not volunteer its own revocation)
+#   DIR-dave     dave's own copy of his files, kept before the revocation, with the CRL of then
+#                (a revoked station does not volunteer its own revocation; palp refuses a PKI
+#                without any crl.pem since session 81)
 #   DIR-forged   bob's genuine identity with permissions granting the server's rights, signed by
 #                a CA of his own (DIR-rogue) instead of the classroom's
 #   DIR-thief    bob's certificate and permissions, copied (they are public), with a private key
@@ -14,14 +15,14 @@ dir=$2
 rm -rf "$dir" "$dir-dave" "$dir-rogue" "$dir-forged" "$dir-thief"
 bash "$script" "$dir" classroom --trainees alice,bob,dave --instructors ines >/dev/null
 mkdir -p "$dir-dave/trainee"
-cp "$dir/ca.cert.pem" "$dir/governance.p7s" "$dir-dave/"
+cp "$dir/ca.cert.pem" "$dir/governance.p7s" "$dir/crl.pem" "$dir-dave/"
 cp "$dir/trainee/dave.cert.pem" "$dir/trainee/dave.key.pem" "$dir/trainee/dave.permissions.p7s" "$dir-dave/trainee/"
 bash "$script" "$dir" revoke trainee/dave >/dev/null
 openssl crl -in "$dir/crl.pem" -noout -text | grep -q "Serial Number" || { echo "make_pki: dave not in the CRL" >&2; exit 1; }
 
 bash "$script" "$dir-rogue" init >/dev/null
 mkdir -p "$dir-forged/trainee"
-cp "$dir/ca.cert.pem" "$dir-forged/ca.cert.pem"
+cp "$dir/ca.cert.pem" "$dir/crl.pem" "$dir-forged/"
 cp "$dir-rogue/ca.cert.pem" "$dir-forged/rogue-ca.cert.pem"
 cp "$dir-rogue/governance.p7s" "$dir-forged/governance.p7s"
 cp "$dir/trainee/bob.cert.pem" "$dir/trainee/bob.key.pem" "$dir-forged/trainee/"

@@ -442,10 +442,10 @@ static void child_dave(void) {
   dds_delete_qos(q);
   CHECK(pp < 0, "with the classroom CRL, dave's own participant is refused: %s", pp < 0 ? dds_strretcode(pp) : "created");
   if (pp > 0) dds_delete(pp);
-  /* ...and leaving the CRL out does not help him: the server checks it. */
+  /* ...and keeping the CRL from before his revocation does not help him: the server checks its own. */
   palp_cli_station dave;
   REQUIRE(palp_cli_station_open_secure(&dave, DOMAIN, "t", &sec, err, sizeof err) == 0,
-          "dave's station starts with his own files (no CRL): %s", err);
+          "dave's station starts with his own files (the CRL from before his revocation): %s", err);
   CHECK(join(&dave, palp_ROLE_TRAINEE, 1, 0, 3, err, sizeof err) < 0 && count_samples(dave.catalogue_r, 0.1) == 0 &&
             matched_pubs(dave.catalogue_r) == 0,
         "the revoked trainee dave gets no answer and no catalogue: %s", err);
