@@ -2,6 +2,7 @@
 #include "palp_dds_refusals.h"
 
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,14 +32,14 @@ typedef struct pending_line {
 
 typedef struct pending {
   int n;
-  pending_line e[PALP_DDS_REFUSAL_SLOTS + 1];
+  pending_line e[PALP_DDS_REFUSAL_SLOTS + 2]; /* one per slot, the overflow entry, one new peer */
 } pending;
 
 /* t->mu held. */
 static void say(palp_dds_refusals *t, pending *p, const palp_dds_refusal *r, uint64_t count, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
 static void say(palp_dds_refusals *t, pending *p, const palp_dds_refusal *r, uint64_t count, const char *fmt, ...) {
-  if (p->n >= (int)(sizeof p->e / sizeof p->e[0])) return; /* cannot happen: one per slot and one new peer */
+  if (p->n >= (int)(sizeof p->e / sizeof p->e[0])) return; /* cannot happen: see pending */
   pending_line *e = &p->e[p->n++];
   va_list ap;
   va_start(ap, fmt);
@@ -159,6 +160,71 @@ static void report_repeats(palp_dds_refusals *t, pending *p, palp_dds_refusal_sl
   s->reported_ns = now_ns;
 }
 
+/* FNV-1a over the peer and reason: how the overflow entry tells its peers apart without keeping them. */
+static uint64_t peer_hash(const palp_dds_refusal *r) {
+  uint64_t h = 1469598103934665603ull ^ (uint64_t)r->kind;
+  for (const char *p = r->who; *p; p++) h = (h ^ (unsigned char)*p) * 1099511628211ull;
+  h = (h ^ 0xffu) * 1099511628211ull;
+  for (const char *p = r->why; *p; p++) h = (h ^ (unsigned char)*p) * 1099511628211ull;
+  return h ? h : 1; /* 0 marks an empty cell */
+}
+
+/* Adds h to the set of cap cells (open addressing); 1 when it was not there, 0 when it was or the set
+ * is full (then the peer may be new: the count says "at least"). */
+static int set_add(uint64_t *set, int cap, uint64_t h) {
+  for (int i = 0, k = (int)(h % (uint64_t)cap); i < cap; i++, k = (k + 1) % cap) {
+    if (set[k] == h) return 0;
+    if (!set[k]) {
+      set[k] = h;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/* The overflow entry's repeats since its last line, as one line; t->mu held. */
+static void report_others(palp_dds_refusals *t, pending *p, int64_t now_ns) {
+  palp_dds_refusal_slot *o = &t->others;
+  if (!o->unreported) return;
+  const int many = t->o_since >= PALP_DDS_REFUSAL_OTHERS_SEEN;
+  palp_dds_refusal agg = {.kind = o->r.kind};
+  snprintf(agg.who, sizeof agg.who, "%s%llu other peer(s)", many ? "at least " : "", (unsigned long long)t->o_since);
+  /* cut to fit, as every field here (its return read: GCC then knows the cut is meant) */
+  if (snprintf(agg.why, sizeof agg.why, "the table of %d named peers is full; the last: %.60s %s, %.60s",
+               PALP_DDS_REFUSAL_SLOTS, o->r.who, palp_dds_refusal_kind_words(o->r.kind), o->r.why) < 0)
+    agg.why[0] = '\0';
+  say(t, p, &agg, o->unreported, "DDS Security refused %s %llu more time(s) over %.0f s (%s) (%llu in all)", agg.who,
+      (unsigned long long)o->unreported, (double)(o->seen_ns - o->reported_ns) * 1e-9, agg.why,
+      (unsigned long long)o->count);
+  o->unreported = 0;
+  o->reported_ns = now_ns;
+  t->o_since = 0;
+  memset(t->o_hash, 0, sizeof t->o_hash);
+}
+
+/* A peer refused while every slot is busy; t->mu held. Its first such refusal is said at once
+ * (naming the peer: most often the only one); the rest are summed, a line per window. */
+static void note_other(palp_dds_refusals *t, pending *p, const palp_dds_refusal *r, int64_t now_ns) {
+  palp_dds_refusal_slot *o = &t->others;
+  const uint64_t h = peer_hash(r);
+  t->o_peers += (uint64_t)set_add(t->o_all_hash, PALP_DDS_REFUSAL_OTHERS_SEEN, h);
+  o->r = *r;
+  o->count++;
+  o->seen_ns = now_ns;
+  if (!o->used) {
+    o->used = 1;
+    o->reported_ns = now_ns;
+    say(t, p, r, 1,
+        "DDS Security refused %s %s: %s; it gets no answer (the %d peers named here are all still refused: it and any "
+        "other new peer are counted together, logged at most every %.0f s)",
+        r->who, palp_dds_refusal_kind_words(r->kind), r->why, PALP_DDS_REFUSAL_SLOTS, (double)t->window_ns * 1e-9);
+    return;
+  }
+  o->unreported++;
+  t->o_since += (uint64_t)set_add(t->o_hash, PALP_DDS_REFUSAL_OTHERS_SEEN, h);
+  if (now_ns - o->reported_ns >= t->window_ns) report_others(t, p, now_ns);
+}
+
 void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *seen, int64_t now_ns) {
   pending p = {.n = 0};
   palp_dds_refusal named = *seen;
@@ -188,7 +254,16 @@ void palp_dds_refusals_note(palp_dds_refusals *t, const palp_dds_refusal *seen, 
     say_all(t, &p);
     return;
   }
-  if (!free_slot) { /* full: the peer seen longest ago makes room */
+  if (!free_slot) {
+    /* Full. A slot whose peer stopped being refused long ago makes room (its repeats said first);
+     * while all are busy, the new peer goes to the overflow entry: evicting one that still retries
+     * made each of its retries "new", a line and a record each (until session 81). */
+    if (now_ns - oldest->seen_ns < (int64_t)PALP_DDS_REFUSAL_IDLE_WINDOWS * t->window_ns) {
+      note_other(t, &p, r, now_ns);
+      pthread_mutex_unlock(&t->mu);
+      say_all(t, &p);
+      return;
+    }
     report_repeats(t, &p, oldest, now_ns);
     free_slot = oldest;
   }
@@ -212,6 +287,7 @@ void palp_dds_refusals_tick(palp_dds_refusals *t, int64_t now_ns) {
     palp_dds_refusal_slot *s = &t->slot[i];
     if (s->used && s->unreported && now_ns - s->reported_ns >= t->window_ns) report_repeats(t, &p, s, now_ns);
   }
+  if (t->others.unreported && now_ns - t->others.reported_ns >= t->window_ns) report_others(t, &p, now_ns);
   pthread_mutex_unlock(&t->mu);
   say_all(t, &p);
 }
@@ -221,6 +297,7 @@ void palp_dds_refusals_flush(palp_dds_refusals *t) {
   pthread_mutex_lock(&t->mu);
   for (int i = 0; i < PALP_DDS_REFUSAL_SLOTS; i++)
     if (t->slot[i].used) report_repeats(t, &p, &t->slot[i], t->slot[i].seen_ns);
+  report_others(t, &p, t->others.seen_ns);
   pthread_mutex_unlock(&t->mu);
   say_all(t, &p);
 }
@@ -229,6 +306,13 @@ void palp_dds_refusals_counts(palp_dds_refusals *t, uint64_t *total, uint64_t *l
   pthread_mutex_lock(&t->mu);
   if (total) *total = t->total;
   if (lines) *lines = t->lines;
+  pthread_mutex_unlock(&t->mu);
+}
+
+void palp_dds_refusals_others(palp_dds_refusals *t, uint64_t *peers, uint64_t *refusals) {
+  pthread_mutex_lock(&t->mu);
+  if (peers) *peers = t->o_peers;
+  if (refusals) *refusals = t->others.count;
   pthread_mutex_unlock(&t->mu);
 }
 
@@ -263,6 +347,14 @@ int palp_dds_refusals_describe(palp_dds_refusals *t, char *buf, size_t len) {
       return k;
     }
     at += (size_t)w;
+  }
+  uint64_t op = 0, oc = 0;
+  palp_dds_refusals_others(t, &op, &oc);
+  if (oc) { /* said only when it fits whole */
+    const int w = snprintf(buf + at, len - at, "%s%s%llu other peer(s): %llux", n ? "; " : "",
+                           op >= PALP_DDS_REFUSAL_OTHERS_SEEN ? "at least " : "", (unsigned long long)op,
+                           (unsigned long long)oc);
+    if (w < 0 || (size_t)w >= len - at) buf[at] = '\0';
   }
   return n;
 }

@@ -236,7 +236,8 @@ static void test_throttle(void) {
         "the tick's line sums the 9 repeats (this log: %llu refusals of trainee/fd, want 110)",
         logged_refusals(path, "trainee/fd"));
 
-  /* 40 peers, each refused 3 times, 1 s apart: the table keeps 16, nothing is lost. */
+  /* 40 peers, each refused 3 times, 1 s apart: the table keeps the first 16, the other 24 are counted
+   * together (session 81), nothing is lost. */
   palp_log_init(&log, "palp-server", PALP_LOG_INFO, path);
   palp_dds_refusals_init(&t, palp_log_warn_line, &log, 60.0);
   for (int round = 0; round < 3; round++)
@@ -249,20 +250,29 @@ static void test_throttle(void) {
   palp_dds_refusals_flush(&t);
   palp_dds_refusals_counts(&t, &total, &lines);
   palp_log_close(&log);
-  unsigned long long all = 0;
-  for (int p = 0; p < 40; p++) {
+  unsigned long long named = 0;
+  for (int p = 0; p < 16; p++) {
     char who[32];
     snprintf(who, sizeof who, "trainee/t%02d", p);
-    all += logged_refusals(path, who);
+    named += logged_refusals(path, who);
   }
+  uint64_t o_peers = 0, o_count = 0;
+  palp_dds_refusals_others(&t, &o_peers, &o_count);
   char desc[2000];
   const int listed = palp_dds_refusals_describe(&t, desc, sizeof desc);
-  CHECK(total == 120 && all == 120 && listed == PALP_DDS_REFUSAL_SLOTS,
-        "40 peers, 120 refusals: %llu counted, %llu in the log's lines, %d kept in a table of %d",
-        (unsigned long long)total, all, listed, PALP_DDS_REFUSAL_SLOTS);
+  /* By hand: the named 16, 3 each (48). The others: t16's first line at 16 s (1); one line at 76 s, 60 s
+   * after it, with round 0's t17-t39 (23) and round 1's t16-t36 (21): 24 peers, 44 refusals; the flush's
+   * with round 1's t37-t39 (3) and round 2's t16-t39 (24): 24 peers, 27. 1 + 44 + 27 = 72. */
+  CHECK(total == 120 && named == 48 && o_peers == 24 && o_count == 72 && listed == PALP_DDS_REFUSAL_SLOTS &&
+            strstr(desc, "; 24 other peer(s): 72x") && count_lines(path, "refused trainee/t16 at the handshake") == 1 &&
+            count_lines(path, "refused 24 other peer(s) 44 more time(s) over 60 s") == 1 &&
+            count_lines(path, "refused 24 other peer(s) 27 more time(s)") == 1,
+        "40 peers, 120 refusals: %llu counted, %llu in the 16 named peers' lines, %llu others counted %llu times, %d "
+        "kept in a table of %d", (unsigned long long)total, named, (unsigned long long)o_peers,
+        (unsigned long long)o_count, listed, PALP_DDS_REFUSAL_SLOTS);
   char small[64];
   const int cut = palp_dds_refusals_describe(&t, small, sizeof small);
-  CHECK(cut == 1 && !strcmp(small, "trainee/t32: certificate revoked (1x)"),
+  CHECK(cut == 1 && !strcmp(small, "trainee/t00: certificate revoked (3x)"),
         "a short buffer holds whole entries only: %d, \"%s\"", cut, small);
   palp_dds_refusals_destroy(&t);
   unlink(path);
@@ -559,6 +569,90 @@ static void test_focus(void) {
   palp_dds_refusals_destroy(&t);
 }
 
+/* Session 81: peers past the table's 16, all retrying. Each of P peers is refused once a second for
+ * 100 s (simulated clock, peer p at i s + p ms). With a 60 s window the 100 s hold two windows: a
+ * named peer's first line at 0 s and its repeats line at 60 s; the overflow entry's first line (its
+ * first peer named) at once and its repeats line 60 s after. So at most min(P, 16) * 2 + 2 lines,
+ * exactly 32 for 16 peers and 34 for 17 or 40 (until session 81: 17 peers gave 1700 lines and 1700
+ * records, each retry evicting a slot and said as new). After the flush the records' counts, and the
+ * named counts plus the overflow's, add up to the P * 100 refusals. */
+typedef struct tally {
+  uint64_t lines, records, recorded;
+} tally;
+static void tally_line(void *ctx, const char *line) {
+  (void)line;
+  ((tally *)ctx)->lines++;
+}
+static void tally_record(void *ctx, const palp_dds_refusal *r, uint64_t count) {
+  (void)r;
+  ((tally *)ctx)->records++;
+  ((tally *)ctx)->recorded += count;
+}
+
+static void test_overflow(void) {
+  const int peers[] = {16, 17, 40};
+  const uint64_t want_lines[] = {32, 34, 34}; /* by hand, above */
+  const int64_t S = 1000000000LL, MS = 1000000LL;
+  for (size_t c = 0; c < sizeof peers / sizeof peers[0]; c++) {
+    const int P = peers[c];
+    tally got = {0};
+    palp_dds_refusals t;
+    palp_dds_refusals_init(&t, tally_line, &got, 60.0);
+    palp_dds_refusals_on_record(&t, tally_record, &got);
+    for (int i = 0; i < 100; i++)
+      for (int p = 0; p < P; p++) {
+        palp_dds_refusal r = {.kind = PALP_DDS_REFUSED_HANDSHAKE};
+        snprintf(r.who, sizeof r.who, "trainee/p%02d", p);
+        snprintf(r.why, sizeof r.why, "certificate revoked");
+        palp_dds_refusals_note(&t, &r, i * S + p * MS);
+      }
+    uint64_t total = 0, lines = 0;
+    palp_dds_refusals_counts(&t, &total, &lines);
+    const uint64_t in_run = got.lines;
+    palp_dds_refusals_flush(&t);
+    palp_dds_refusal_entry e[PALP_DDS_REFUSAL_SLOTS];
+    const int n = palp_dds_refusals_list(&t, e, PALP_DDS_REFUSAL_SLOTS);
+    uint64_t named = 0;
+    int each100 = 1;
+    for (int k = 0; k < n; k++) named += e[k].count, each100 &= e[k].count == 100;
+    uint64_t o_peers = 0, o_count = 0;
+    palp_dds_refusals_others(&t, &o_peers, &o_count);
+    const uint64_t want_others = P > 16 ? (uint64_t)(P - 16) : 0;
+    CHECK(total == (uint64_t)P * 100 && in_run == want_lines[c] && lines == in_run &&
+              got.recorded == (uint64_t)P * 100 && got.records == got.lines && n == (P < 16 ? P : 16) && each100 &&
+              named + o_count == total && o_peers == want_others && o_count == want_others * 100,
+          "%d peers retrying each second for 100 s: %llu refusals, %llu lines in the run (want %llu), %llu records "
+          "adding up to %llu after the flush; %d named with 100 each: %s; %llu others refused %llu times",
+          P, (unsigned long long)total, (unsigned long long)in_run, (unsigned long long)want_lines[c],
+          (unsigned long long)got.records, (unsigned long long)got.recorded, n, each100 ? "yes" : "no",
+          (unsigned long long)o_peers, (unsigned long long)o_count);
+    palp_dds_refusals_destroy(&t);
+  }
+
+  /* A named peer not refused for two windows (a laptop turned off) gives its slot to a new one. */
+  tally got = {0};
+  palp_dds_refusals t;
+  palp_dds_refusals_init(&t, tally_line, &got, 60.0);
+  palp_dds_refusal r = {.kind = PALP_DDS_REFUSED_HANDSHAKE};
+  snprintf(r.why, sizeof r.why, "certificate revoked");
+  for (int p = 0; p < 16; p++) {
+    snprintf(r.who, sizeof r.who, "trainee/p%02d", p);
+    palp_dds_refusals_note(&t, &r, p * MS + (p ? 121 * S : 0)); /* p00 at 0 s, the others at 121 s */
+  }
+  snprintf(r.who, sizeof r.who, "trainee/late");
+  palp_dds_refusals_note(&t, &r, 121 * S + 500 * MS);
+  palp_dds_refusal_entry e[PALP_DDS_REFUSAL_SLOTS];
+  const int n = palp_dds_refusals_list(&t, e, PALP_DDS_REFUSAL_SLOTS);
+  int late = 0, p00 = 0;
+  for (int k = 0; k < n; k++) late += !strcmp(e[k].r.who, "trainee/late"), p00 += !strcmp(e[k].r.who, "trainee/p00");
+  uint64_t o_count = 0;
+  palp_dds_refusals_others(&t, NULL, &o_count);
+  CHECK(n == 16 && late == 1 && p00 == 0 && o_count == 0 && got.lines == 17,
+        "a peer idle 121 s gives its slot to a new one (listed: late %d, p00 %d; %llu others; %llu lines)", late, p00,
+        (unsigned long long)o_count, (unsigned long long)got.lines);
+  palp_dds_refusals_destroy(&t);
+}
+
 int main(void) {
   test_focus();
   test_startup_race();
@@ -566,6 +660,7 @@ int main(void) {
   test_stranger_name();
   test_parse();
   test_throttle();
+  test_overflow();
   test_lock_order();
   fprintf(stderr, "%s\n", failures ? "FAILED" : "passed");
   return failures ? 1 : 0;
