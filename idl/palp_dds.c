@@ -331,6 +331,26 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
     const char *why = err + 30, *who = subj + 11;
     palp_dds_copy_printable(out->why, sizeof out->why, why, (size_t)(subj - why));
     palp_dds_subject_name(out->who, sizeof out->who, who, (size_t)(body + bn - who));
+    /* The subject is the peer's word until its certificate's chain to the classroom CA verified.
+     * OpenSSL (x509_vfy.c, verify_chain) builds the chain, checks revocation, then each signature and
+     * after it each certificate's dates: "certificate has expired" and "is not yet valid" come after
+     * the signature passed; "certificate revoked" means the classroom's CRL (its signature checked)
+     * lists the serial under the CA's name. Any other error ("unable to get local issuer certificate":
+     * another CA; "certificate signature failure") vouches for nothing: a rogue CA's certificate
+     * claiming /O=palp/OU=trainee/CN=alice was named trainee/alice, and alice's own station said it
+     * was refused (until session 81). */
+    static const char *const verified[] = {"certificate revoked", "certificate has expired",
+                                           "certificate is not yet valid"};
+    int chain_ok = 0;
+    for (size_t i = 0; i < sizeof verified / sizeof verified[0]; i++)
+      chain_ok |= !strcmp(out->why, verified[i]);
+    const int ours = !strncmp(out->who, "trainee/", 8) || !strncmp(out->who, "instructor/", 11) ||
+                     !strncmp(out->who, "server/", 7); /* palp_dds_subject_name read a classroom identity */
+    if (!chain_ok && ours) {
+      char tmp[PALP_DDS_REFUSAL_WHO];
+      snprintf(tmp, sizeof tmp, "%s", out->who);
+      if (snprintf(out->who, sizeof out->who, "%s%s", PALP_DDS_UNVERIFIED_CLAIM, tmp) < 0) out->who[0] = '\0';
+    }
   } else if (kind == PALP_DDS_REFUSED_PERMISSIONS && verify) {
     char tmp[PALP_DDS_REFUSAL_WHY];
     const char *v = verify + 14;

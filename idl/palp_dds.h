@@ -140,11 +140,16 @@ const char *palp_dds_refusal_kind_words(palp_dds_refusal_kind kind);
  * palp-web's dashboard carry. */
 const char *palp_dds_refusal_kind_name(palp_dds_refusal_kind kind);
 #define PALP_DDS_REFUSAL_WHO 96
+/* How `who` begins when a certificate the handshake refused before its chain to the classroom CA
+ * verified names a classroom identity: "an unverified certificate claiming trainee/alice". */
+#define PALP_DDS_UNVERIFIED_CLAIM "an unverified certificate claiming "
 #define PALP_DDS_REFUSAL_WHY 160
 typedef struct palp_dds_refusal {
   palp_dds_refusal_kind kind;
   /* "trainee/dave" for palp's subject /O=palp/OU=trainee/CN=dave (the name
-   * palp_dds_security uses), another subject as written, or "participant GUID". */
+   * palp_dds_security uses) when the certificate's chain to the classroom CA verified (revoked,
+   * expired, not yet valid), "an unverified certificate claiming trainee/dave" when not, another
+   * subject as written, or "participant GUID". */
   char who[PALP_DDS_REFUSAL_WHO];
   /* "certificate revoked", "certificate has expired", "permissions not signed by
    * the classroom (self-signed certificate)", or Cyclone's text, shortened. */

@@ -134,7 +134,13 @@ static void name_peer(const palp_dds_refusals *t, palp_dds_refusal *r) {
 
 int palp_dds_refusal_concerns_trainee(const palp_dds_refusal *r, const char *me) {
   if (me && *me && !strcmp(r->who, me)) return 1;
-  return strncmp(r->who, "trainee/", 8) && strncmp(r->who, "instructor/", 11);
+  /* A certificate that did not verify claiming a trainee or an instructor (alice's name from a rogue
+   * CA) is not her station refused, nor a classmate: nothing the trainee can act on. One claiming the
+   * server stays her concern: a station given another classroom's CA sees the real server so. */
+  static const char claim[] = PALP_DDS_UNVERIFIED_CLAIM;
+  const char *who = r->who;
+  if (!strncmp(who, claim, sizeof claim - 1)) who += sizeof claim - 1;
+  return strncmp(who, "trainee/", 8) && strncmp(who, "instructor/", 11);
 }
 
 void palp_dds_refusals_focus(palp_dds_refusals *t, const char *me, palp_dds_refusals_emit aside, void *ctx) {

@@ -98,7 +98,8 @@ void palp_dds_refusals_on_record(palp_dds_refusals *t, palp_dds_refusals_record 
  * own identity refused (the server's answer to it), or a peer that is neither a trainee nor an
  * instructor (the server, another CA's subject, a GUID): what may stand between it and the server.
  * A classmate or an instructor refused (a revoked laptop: the server refuses it too, and its log,
- * palp-web and the review name it to the instructor) is not (0). */
+ * palp-web and the review name it to the instructor) is not (0), nor a certificate that did not
+ * verify claiming a trainee or an instructor (PALP_DDS_UNVERIFIED_CLAIM: never `me`). */
 int palp_dds_refusal_concerns_trainee(const palp_dds_refusal *r, const char *me);
 /* Before the sink is installed: the table of trainee station `me` says the lines about refusals
  * that are not its concern (palp_dds_refusal_concerns_trainee) to `aside` (its debug log) instead
