@@ -35,10 +35,67 @@ static palp_vec3 on_dome(palp_vec3 p, double R) {
 static double fnorm(palp_vec3 f) { return v3_len(f); }
 
 /* ---- findings ------------------------------------------------------------ */
-static void match_findings(const palp_exercise *ex, double R, const palp_finding *f, int nf, palp_assess_result *r,
-                           int *match) {
-  r->lesion_count = ex->lesion_count;
+/* Which standing marks find which lesions: a maximum matching between the marks and the lesions
+ * each is within reach of (radius + match_margin of the lesion's surface projection), so the number
+ * found never depends on the order of the marks (docs/assessment.md, "Sensitivity"). The greedy rule
+ * before (each mark in order took the nearest lesion not yet found) let a mark between two lumps take
+ * the one a later mark alone could reach, the other then reported missed (session 81 review).
+ *
+ * Among the maximum matchings the one kept is the old rule's wherever it already found the most:
+ * marks in log order each take the nearest lesion (the file's order on a tie) that still leaves a
+ * maximum matching possible. So a mark keeps the lump it found when a later mark lands nearer (the
+ * live debrief on palp-web does not move a lump's credit to a later mark), and only a lump the
+ * greedy rule would have lost changes hands. The counts (found, duplicates, false positives) are the
+ * same for every maximum matching; only which mark is credited follows the order.
+ *
+ * The feasibility test is a table over the in-reach marks and the subsets of lesions used:
+ * most[i][used] = the most lesions marks i.. can still find with `used` taken (<= 8 lesions: 256
+ * subsets; O(marks x 256 x lesions)). */
+static int reach_of(const palp_exercise *ex, double R, palp_vec3 point, double *dist) {
+  const palp_vec3 p = on_dome(point, R);
+  int mask = 0;
+  for (int l = 0; l < ex->lesion_count; ++l) {
+    const palp_vec3 s = palp_exercise_lesion_surface(&ex->lesion[l], R);
+    dist[l] = v3_len(v3_sub(p, s));
+    if (dist[l] <= ex->lesion[l].diameter / 2.0 + ex->match_margin) mask |= 1 << l;
+  }
+  return mask;
+}
+
+static int match_findings(const palp_exercise *ex, double R, const palp_finding *f, int nf, palp_assess_result *r,
+                          int *match) {
+  const int L = ex->lesion_count, S = 1 << L;
+  r->lesion_count = L;
   for (int l = 0; l < PALP_MAX_LESIONS; ++l) r->lesion_found[l] = -1;
+  /* the marks within reach of some lesion, in log order */
+  int nc = 0;
+  for (int i = 0; i < nf; ++i) {
+    double d[PALP_MAX_LESIONS];
+    if (!f[i].withdrawn && reach_of(ex, R, f[i].point, d)) nc++;
+  }
+  int *cand = malloc(sizeof(int) * (size_t)(nc ? nc : 1));
+  unsigned char *most = calloc((size_t)(nc + 1) * (size_t)S, 1);
+  if (!cand || !most) {
+    free(cand), free(most);
+    return PALP_ENOMEM;
+  }
+  nc = 0;
+  for (int i = 0; i < nf; ++i) {
+    double d[PALP_MAX_LESIONS];
+    if (!f[i].withdrawn && reach_of(ex, R, f[i].point, d)) cand[nc++] = i;
+  }
+  for (int k = nc - 1; k >= 0; --k) {
+    double d[PALP_MAX_LESIONS];
+    const int reach = reach_of(ex, R, f[cand[k]].point, d);
+    for (int used = 0; used < S; ++used) {
+      int best = most[(size_t)(k + 1) * S + used]; /* this mark finds nothing */
+      for (int l = 0; l < L; ++l)
+        if ((reach & ~used) >> l & 1 && 1 + most[(size_t)(k + 1) * S + (used | 1 << l)] > best)
+          best = 1 + most[(size_t)(k + 1) * S + (used | 1 << l)];
+      most[(size_t)k * S + used] = (unsigned char)best;
+    }
+  }
+  int used = 0, k = 0;
   for (int i = 0; i < nf; ++i) {
     int m;
     if (f[i].withdrawn) {
@@ -46,21 +103,23 @@ static void match_findings(const palp_exercise *ex, double R, const palp_finding
       r->withdrawn++;
     } else {
       r->findings++;
-      const palp_vec3 p = on_dome(f[i].point, R);
-      int best = -1, dup = 0;
-      double bestd = INFINITY;
-      for (int l = 0; l < ex->lesion_count; ++l) {
-        const palp_vec3 s = palp_exercise_lesion_surface(&ex->lesion[l], R);
-        const double d = v3_len(v3_sub(p, s));
-        if (!(d <= ex->lesion[l].diameter / 2.0 + ex->match_margin)) continue;
-        if (r->lesion_found[l] >= 0) dup = 1;
-        else if (d < bestd) bestd = d, best = l;
+      double d[PALP_MAX_LESIONS];
+      const int reach = reach_of(ex, R, f[i].point, d);
+      int best = -1;
+      if (reach) {
+        const int need = most[(size_t)k * S + used]; /* what the marks from this one on must still find */
+        for (int l = 0; l < L; ++l)
+          if ((reach & ~used) >> l & 1 && 1 + most[(size_t)(k + 1) * S + (used | 1 << l)] == need &&
+              (best < 0 || d[l] < d[best]))
+            best = l;
+        k++;
       }
       if (best >= 0) {
+        used |= 1 << best;
         r->lesion_found[best] = i;
         r->found++;
         m = best;
-      } else if (dup) {
+      } else if (reach) { /* within reach of a lesion another mark found */
         m = PALP_FINDING_DUPLICATE;
         r->duplicates++;
       } else {
@@ -70,7 +129,9 @@ static void match_findings(const palp_exercise *ex, double R, const palp_finding
     }
     if (match) match[i] = m;
   }
-  r->sensitivity = ex->lesion_count ? (double)r->found / ex->lesion_count : 1.0;
+  free(cand), free(most);
+  r->sensitivity = L ? (double)r->found / L : 1.0;
+  return PALP_OK;
 }
 
 /* ---- coverage ------------------------------------------------------------- */
@@ -234,8 +295,7 @@ int palp_assess_findings(const palp_exercise *ex, double dome_radius, const palp
   for (int i = 0; i < nf; ++i)
     if (!v3_isfinite(f[i].point)) return PALP_EINVAL;
   memset(out, 0, sizeof *out);
-  match_findings(ex, dome_radius, f, nf, out, match);
-  return PALP_OK;
+  return match_findings(ex, dome_radius, f, nf, out, match);
 }
 
 int palp_assess_sample_every(double physics_hz, double sample_hz) {
@@ -281,7 +341,8 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const 
   for (int i = 0; i < nf; ++i)
     if (!v3_isfinite(f[i].point) || !isfinite(f[i].t)) return PALP_EINVAL;
 
-  match_findings(ex, R, f, nf, out, match);
+  const int mrc = match_findings(ex, R, f, nf, out, match);
+  if (mrc != PALP_OK) return mrc;
 
   const int V = mesh->vertex_count;
   uint8_t *bands = calloc((size_t)V, 1);

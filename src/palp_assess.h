@@ -260,9 +260,12 @@ int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double finger_ra
                 int *finding_match, uint8_t *coverage);
 
 /* Matches findings to the exercise's lesions exactly as palp_assess does, without a session: a
- * standing finding finds the nearest lesion not yet found whose surface projection on the dome of
- * dome_radius [m] (|rest pole|) lies within its radius + match_margin of the finding projected onto
- * the dome. Fills out's lesion_count, found, lesion_found, findings, withdrawn, false_positives,
+ * standing finding reaches a lesion whose surface projection on the dome of dome_radius [m] (|rest
+ * pole|) lies within its radius + match_margin of the finding projected onto the dome; the lesions
+ * found are a maximum matching of findings to the lesions they reach (findings in order each taking
+ * the nearest that keeps it maximum), an unmatched finding that reaches one a duplicate, one that
+ * reaches none false (docs/assessment.md, "Sensitivity"). PALP_ENOMEM when the matching's table
+ * cannot be allocated. Fills out's lesion_count, found, lesion_found, findings, withdrawn, false_positives,
  * duplicates and sensitivity, the rest zeroed; match as palp_assess's finding_match. The server
  * debriefs a trainee with it (docs/assessment.md, "Debrief"). */
 int palp_assess_findings(const palp_exercise *ex, double dome_radius, const palp_finding *findings, int finding_count,

@@ -129,6 +129,57 @@ int main(void) {
     CHECK(palp_assess_findings(&ex, 0.0, f, 5, &d, NULL) == PALP_EINVAL, "  a zero radius refused");
   }
 
+  /* 1b. The order of the marks does not decide what is found (session 81 review). Two 10 mm lesions
+   * at polar 30 deg, azimuth 0 (A) and 40 deg (B), margin 10 mm: reach 15 mm. On the 40 mm dome the
+   * ring at polar 30 has radius 20 mm, so a chord between azimuths a and b is 40 sin(|a - b| / 2) mm:
+   * A-B 13.68. Mark P at azimuth 18 deg: 6.26 mm from A, 7.63 from B (reaches both); mark Q at -20
+   * deg: 6.95 from A, 20.0 from B (reaches A only). Either order: both lesions found, P finding B and
+   * Q finding A (the only maximum matching). The greedy rule before gave P the nearer A and left Q a
+   * duplicate in the order (P, Q): 1 of 2. */
+  {
+    palp_exercise two = exercise();
+    two.lesion_count = 2;
+    two.lesion[1] = two.lesion[0];
+    two.lesion[1].azimuth = 40 * PI / 180;
+    const double p30 = 30 * PI / 180;
+#define ON_RING(az_deg) {R * sin(p30) * cos((az_deg) * PI / 180), R * sin(p30) * sin((az_deg) * PI / 180), R * cos(p30)}
+    const palp_finding P = {1.0, ON_RING(18.0), 0}, Q = {2.0, ON_RING(-20.0), 0};
+    const palp_finding pq[2] = {P, Q}, qp[2] = {Q, P};
+    palp_assess_result d;
+    int dm[2];
+    CHECK(palp_assess_findings(&two, R, pq, 2, &d, dm) == 0 && d.found == 2 && d.duplicates == 0 &&
+              d.false_positives == 0 && dm[0] == 1 && dm[1] == 0 && d.lesion_found[0] == 1 && d.lesion_found[1] == 0,
+          "marks (P at 18 deg, Q at -20 deg): found %d of 2, dup %d, false %d, P -> %d, Q -> %d (want 2, 0, 0, B=1, A=0)",
+          d.found, d.duplicates, d.false_positives, dm[0], dm[1]);
+    CHECK(palp_assess_findings(&two, R, qp, 2, &d, dm) == 0 && d.found == 2 && d.duplicates == 0 &&
+              d.false_positives == 0 && dm[0] == 0 && dm[1] == 1 && d.lesion_found[0] == 0 && d.lesion_found[1] == 1,
+          "marks (Q, P): found %d of 2, dup %d, false %d, Q -> %d, P -> %d (want 2, 0, 0, A=0, B=1)", d.found,
+          d.duplicates, d.false_positives, dm[0], dm[1]);
+    /* palp_assess matches the same way */
+    CHECK(palp_assess(&two, &mesh, r, &one, 1, pq, 2, &res, match, NULL) == 0 && res.found == 2 &&
+              res.duplicates == 0 && fabs(res.sensitivity - 1.0) < 1e-12,
+          "palp_assess on (P, Q): found %d of 2, dup %d", res.found, res.duplicates);
+    /* A true duplicate stays one: Q and a mark at -10 deg (3.49 mm from A, 40 sin 25 = 16.9 mm from
+     * B: out of reach) both reach A alone, whatever their order; a mark at azimuth 180 deg (40 mm
+     * from A, 40 sin 70 = 37.6 from B) reaches neither. The first of the two in log order is
+     * credited (the nearer one coming later does not take it). B is missed. */
+    const palp_finding Q2 = {3.0, ON_RING(-10.0), 0}, far = {4.0, ON_RING(180.0), 0};
+    const palp_finding dup[3] = {Q, Q2, far};
+    int dm3[3];
+    CHECK(palp_assess_findings(&two, R, dup, 3, &d, dm3) == 0 && d.found == 1 && d.duplicates == 1 &&
+              d.false_positives == 1 && d.lesion_found[0] == 0 && d.lesion_found[1] == -1 && dm3[0] == 0 &&
+              dm3[1] == PALP_FINDING_DUPLICATE && dm3[2] == PALP_FINDING_FALSE,
+          "two marks on A alone, one far: found %d, dup %d, false %d, A by %d, B by %d (want 1, 1, 1, 0, -1)", d.found,
+          d.duplicates, d.false_positives, d.lesion_found[0], d.lesion_found[1]);
+    const palp_finding dup2[3] = {far, Q2, Q};
+    CHECK(palp_assess_findings(&two, R, dup2, 3, &d, dm3) == 0 && d.found == 1 && d.duplicates == 1 &&
+              d.false_positives == 1 && d.lesion_found[0] == 1 && dm3[0] == PALP_FINDING_FALSE && dm3[1] == 0 &&
+              dm3[2] == PALP_FINDING_DUPLICATE,
+          "reversed: found %d, dup %d, false %d, A by %d (want 1, 1, 1, 1)", d.found, d.duplicates, d.false_positives,
+          d.lesion_found[0]);
+#undef ON_RING
+  }
+
   /* 2. Coverage: one sample touching every dome triangle at 8 mm covers the whole
    * surface in the medium band and nothing in the others. */
   int *all = malloc(sizeof(int) * (size_t)mesh.dome_triangle_count);
