@@ -410,6 +410,11 @@ palp_vec3 palp_exercise_lesion_surface(const palp_exercise_lesion *l, double R) 
   return v3_scale(dir_of(l->polar, l->azimuth), R);
 }
 
+double palp_exercise_lesion_gap(const palp_exercise_lesion *a, const palp_exercise_lesion *b, double R) {
+  const double c = v3_dot(dir_of(a->polar, a->azimuth), dir_of(b->polar, b->azimuth));
+  return R * acos(fmax(-1.0, fmin(1.0, c))) - (a->diameter + b->diameter) / 2.0;
+}
+
 int palp_exercise_lesions(const palp_exercise *ex, double R, palp_lesion *out, int cap, char *err, size_t errlen) {
   ctx c = {err, errlen};
   if (!ex || !(R > 0.0) || (cap > 0 && !out)) return palp_parse_fail(&c, PALP_EINVAL, "exercise lesions: bad arguments");
@@ -424,6 +429,22 @@ int palp_exercise_lesions(const palp_exercise *ex, double R, palp_lesion *out, i
                   "lesions[%d]: a %g mm lesion %g mm deep at polar %g deg does not fit inside the dome (radius %g "
                   "mm) above its base",
                   i, L->diameter * 1e3, L->depth * 1e3, L->polar * 180.0 / PALP_PI, R * 1e3);
+    /* Two lesions whose discs on the skin overlap are one lump to a fingertip and to a mark (a mark
+     * on the overlap reaches both), yet count as two to find: a lesion listed twice asked the trainee
+     * for a second mark on the one lump she felt ("found 1 of 2"; session 81 review). Only overlap is
+     * refused, not the random draw's min_gap: a fixed exercise places its lesions by hand and has no
+     * gap of its own, and a gap of 0 (discs touching) is still two lumps to mark. A random exercise
+     * lists no places until drawn, and a draw keeps min_gap >= 0. */
+    for (int j = 0; j < i && ex->placement.kind != PALP_PLACEMENT_RANDOM; ++j) {
+      const double g = palp_exercise_lesion_gap(L, &ex->lesion[j], R);
+      if (g < 0.0)
+        return palp_parse_fail(&c, PALP_EINVAL,
+                               "lesions[%d] and lesions[%d]: their discs on the skin overlap by %.1f mm (the %g and %g "
+                               "mm lesions' centres %.1f mm apart along the skin): one lump to the finger; list it "
+                               "once or move them apart",
+                               j, i, -g * 1e3, ex->lesion[j].diameter * 1e3, L->diameter * 1e3,
+                               (g + (L->diameter + ex->lesion[j].diameter) / 2.0) * 1e3);
+    }
     out[n++] = (palp_lesion){.center = centre, .radius = a, .stiffness_ratio = L->stiffness_ratio};
   }
   return n;
@@ -438,9 +459,13 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
     snprintf(inner, sizeof inner, "%s", err && errlen ? err : "");
     return palp_parse_fail(&c, e, "phantom \"%s\": %s", ex->phantom_path, inner);
   }
-  if (out->world.lesion_count + ex->lesion_count > PALP_MAX_LESIONS)
-    return palp_parse_fail(&c, PALP_EINVAL, "lesions: the phantom has %d and the exercise %d; at most %d in all",
-                out->world.lesion_count, ex->lesion_count, PALP_MAX_LESIONS);
+  /* The phantom's own lesions would be felt but never graded (only the exercise's are matched):
+   * a mark on one counted as a false positive (session 81 review). */
+  if (out->world.lesion_count > 0)
+    return palp_parse_fail(&c, PALP_EINVAL,
+                           "phantom \"%s\": declares %d lesion%s of its own, which the assessment would not grade (a "
+                           "mark on one would count as false): put the lesions in the exercise",
+                           ex->phantom_path, out->world.lesion_count, out->world.lesion_count == 1 ? "" : "s");
   /* a random exercise: one draw, which also proves its lesions can be placed */
   palp_exercise drawn;
   if (ex->placement.kind == PALP_PLACEMENT_RANDOM) {

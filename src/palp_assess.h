@@ -153,14 +153,20 @@ int palp_exercise_parse(const char *json, const char *base_dir, palp_exercise *o
 /* The exercise's lesions as model lesions (centres in metres) on a dome of the given
  * radius: centre = (R - depth) n(polar, azimuth). Fills up to cap and returns the
  * count, or PALP_EINVAL (message in err) when a lesion does not fit inside the dome
- * above its base. */
+ * above its base, or (a fixed or drawn exercise) when two lesions' discs on the skin
+ * overlap (palp_exercise_lesion_gap < 0). */
 int palp_exercise_lesions(const palp_exercise *ex, double dome_radius, palp_lesion *out, int cap, char *err,
                           size_t errlen);
 /* A lesion's surface projection: the point of the rest dome above its centre [m]. */
 palp_vec3 palp_exercise_lesion_surface(const palp_exercise_lesion *l, double dome_radius);
+/* The gap along the skin between two lesions' surface discs [m]: the great-circle arc between the
+ * points above their centres less their two radii (negative: the discs overlap). The random draw's
+ * min_gap_mm is measured so. */
+double palp_exercise_lesion_gap(const palp_exercise_lesion *a, const palp_exercise_lesion *b, double dome_radius);
 
-/* Loads the exercise's phantom and hides its lesions in it (added to any the scene
- * declares; at most PALP_MAX_LESIONS in all). A RANDOM exercise's lesions are placed by one
+/* Loads the exercise's phantom and hides its lesions in it. A phantom that declares lesions of
+ * its own is refused (PALP_EINVAL, the message naming its file): they would be felt and never
+ * graded. A RANDOM exercise's lesions are placed by one
  * draw (seed 0): the scene is then valid, and a file whose lesions cannot be placed in its band
  * is refused at load, not at a trainee's session. */
 int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, size_t errlen);

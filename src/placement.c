@@ -27,13 +27,6 @@ static int fits(const palp_exercise_lesion *L, double R) {
   return R - L->depth + a < R && L->depth + a < 2.0 * R && c.z - a > 0.0;
 }
 
-/* The gap along the skin between two lesions' surface discs [m]: the great-circle arc between
- * the points above their centres, R * angle, less their two radii. */
-static double gap(const palp_exercise_lesion *a, const palp_exercise_lesion *b, double R) {
-  const double c = v3_dot(dir_of(a->polar, a->azimuth), dir_of(b->polar, b->azimuth));
-  return R * acos(fmax(-1.0, fmin(1.0, c))) - (a->diameter + b->diameter) / 2.0;
-}
-
 int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_exercise *out, char *err, size_t errlen) {
   palp_parse_ctx c = {err, errlen};
   if (!ex || !out || !(R > 0.0)) return palp_parse_fail(&c, PALP_EINVAL, "exercise draw: bad arguments");
@@ -78,7 +71,7 @@ int palp_exercise_draw(const palp_exercise *ex, double R, uint32_t seed, palp_ex
         L->polar = acos(c0 + (c1 - c0) * palp_rng_uniform(&s));
         L->azimuth = 2.0 * PALP_PI * palp_rng_uniform(&s);
         ok = fits(L, R);
-        for (int j = 0; j < i && ok; j++) ok = gap(L, &out->lesion[j], R) >= P->min_gap;
+        for (int j = 0; j < i && ok; j++) ok = palp_exercise_lesion_gap(L, &out->lesion[j], R) >= P->min_gap;
       }
       if (!ok) break;
       placed++;

@@ -5,7 +5,9 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <pthread.h>
 
@@ -54,6 +56,42 @@ static void *parse_many(void *arg) {
       j->bad++;
   }
   return NULL;
+}
+
+
+/* Writes text to dir/name; returns 0 on success. */
+static int write_file(const char *dir, const char *name, const char *text) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "w");
+  if (!f) return -1;
+  const int ok = fputs(text, f) >= 0;
+  return fclose(f) == 0 && ok ? 0 : -1;
+}
+
+/* An exercise on `phantom` (an absolute path) with the lesions given (JSON array items). */
+static void exercise_text(char *out, size_t n, const char *phantom, const char *lesions) {
+  snprintf(out, n,
+           "{\"name\": \"t\", \"title\": \"T\", \"phantom\": \"%s\", \"instructions\": \"go\", \"time_limit_s\": 60,"
+           " \"lesions\": [%s],"
+           " \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 4]}, \"medium\": {\"depth_mm\": [4, 9]},"
+           " \"deep\": {\"depth_mm\": [9, 18]}}, \"max_force_N\": 15, \"rubric\": {\"weights\": {\"sensitivity\": 1},"
+           " \"pass\": {\"sensitivity\": 1, \"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}",
+           phantom, lesions);
+}
+
+/* Loads exercise text (as a file in dir) and builds its scene: the scene's return code, its
+ * message in err. */
+static int scene_of(const char *dir, const char *text, char *err, size_t errlen) {
+  static palp_scene sc;
+  palp_exercise ex;
+  err[0] = 0;
+  char path[1024];
+  snprintf(path, sizeof path, "%s/ex.json", dir);
+  if (write_file(dir, "ex.json", text)) return -100;
+  const int e = palp_exercise_load(path, &ex, err, errlen);
+  if (e) return e;
+  return palp_exercise_scene(&ex, &sc, err, errlen);
 }
 
 int main(void) {
@@ -201,6 +239,82 @@ int main(void) {
     int bad = 0;
     for (int i = 0; i < started; ++i) pthread_join(th[i], NULL), bad += jobs[i].bad;
     CHECK(bad == 0, "800 parses on 4 threads: %d failed or differed from one parse alone", bad);
+  }
+
+  /* 4. What an exercise is graded on is what the phantom holds (session 81 review). */
+  {
+    char dir[] = "/tmp/palp_test_exercise_XXXXXX";
+    CHECK(mkdtemp(dir) != NULL, "temporary directory");
+    char text[4096], phantom[1200], dome[1200];
+    snprintf(dome, sizeof dome, "%s/phantoms/dome.json", PALP_CONFIG_DIR);
+    /* (a) a phantom with a lesion of its own: felt but never graded, so refused, naming its file */
+    char scene[2048];
+    snprintf(scene, sizeof scene,
+             "{\"name\": \"own\", \"mesh\": {\"radius_m\": 0.04, \"vertex_count\": 338},"
+             " \"parameters\": \"%s/params/breast_tissue.json\","
+             " \"time\": {\"dt_s\": 0.004, \"frames\": 1, \"frame_period_s\": 0.004},"
+             " \"effects\": [\"membrane_elasticity\", \"gel_pressure\", \"gel_support\", \"force_feedback\"],"
+             " \"lesions\": [{\"center_m\": [0.0, 0.0, 0.03], \"radius_m\": 0.005, \"stiffness_ratio\": 5}],"
+             " \"contacts\": []}",
+             PALP_CONFIG_DIR);
+    CHECK(write_file(dir, "own.json", scene) == 0, "phantom written");
+    snprintf(phantom, sizeof phantom, "%s/own.json", dir);
+    const char *one = "{\"polar_deg\": 30, \"azimuth_deg\": 0, \"depth_mm\": 10, \"diameter_mm\": 10, \"stiffness_ratio\": 5}";
+    exercise_text(text, sizeof text, phantom, one);
+    int e = scene_of(dir, text, err, sizeof err);
+    printf("phantom with a lesion of its own -> %d: %s\n", e, err);
+    CHECK(e == PALP_EINVAL && strstr(err, phantom) && strstr(err, "put the lesions in the exercise"),
+          "  refused, naming %s and saying where the lesions go", phantom);
+    /* the same exercise on the shipped dome (no lesions of its own) is accepted */
+    exercise_text(text, sizeof text, dome, one);
+    e = scene_of(dir, text, err, sizeof err);
+    CHECK(e == 0, "  the same exercise on dome.json: %d %s", e, err);
+    /* (b) fixed lesions: one listed twice is one lump: refused. On the 40 mm dome two 10 mm lesions
+     * at polar 30 deg, azimuths 0 and a, are an arc R acos(cos^2 30 + sin^2 30 cos a) apart along
+     * the skin, their discs overlapping when that is under 10 mm. a = 28 deg: cos = 0.75 + 0.25 x
+     * 0.88295 = 0.97074, acos 0.24252 rad, arc 9.70 mm: overlap 0.30 mm, refused. a = 40 deg:
+     * cos = 0.75 + 0.25 x 0.76604 = 0.94151, acos 0.34338 rad, arc 13.74 mm: a 3.7 mm gap, accepted. */
+    char two[512];
+    snprintf(two, sizeof two, "%s, %s", one, one);
+    exercise_text(text, sizeof text, dome, two);
+    e = scene_of(dir, text, err, sizeof err);
+    printf("one lesion listed twice -> %d: %s\n", e, err);
+    CHECK(e == PALP_EINVAL && strstr(err, "lesions[0] and lesions[1]") && strstr(err, "overlap by 10.0 mm"),
+          "  refused: the two discs overlap by their whole 10 mm");
+    snprintf(two, sizeof two, "%s, {\"polar_deg\": 30, \"azimuth_deg\": 28, \"depth_mm\": 10, \"diameter_mm\": 10, "
+             "\"stiffness_ratio\": 5}", one);
+    exercise_text(text, sizeof text, dome, two);
+    e = scene_of(dir, text, err, sizeof err);
+    printf("discs 9.70 mm apart along the skin -> %d: %s\n", e, err);
+    CHECK(e == PALP_EINVAL && strstr(err, "overlap by 0.3 mm") && strstr(err, "9.7 mm apart"),
+          "  refused: overlap 0.3 mm, centres 9.7 mm apart");
+    snprintf(two, sizeof two, "%s, {\"polar_deg\": 30, \"azimuth_deg\": 40, \"depth_mm\": 10, \"diameter_mm\": 10, "
+             "\"stiffness_ratio\": 5}", one);
+    exercise_text(text, sizeof text, dome, two);
+    e = scene_of(dir, text, err, sizeof err);
+    CHECK(e == 0, "  discs 3.7 mm apart accepted: %d %s", e, err);
+    char path[1200];
+    snprintf(path, sizeof path, "%s/ex.json", dir), unlink(path);
+    snprintf(path, sizeof path, "%s/own.json", dir), unlink(path);
+    rmdir(dir);
+    /* (c) every shipped exercise (config/exercises, which config/server-exercises.json lists) and the
+     * tests' own still load and build their scenes */
+    const char *files[] = {"exercises/easy.json", "exercises/medium.json", "exercises/hard.json",
+                           "exercises/teaching.json"};
+    for (int k = 0; k < 4; ++k) {
+      static palp_scene sc;
+      snprintf(path, sizeof path, "%s/%s", PALP_CONFIG_DIR, files[k]);
+      CHECK(palp_exercise_load(path, &ex, err, sizeof err) == 0 && palp_exercise_scene(&ex, &sc, err, sizeof err) == 0,
+            "%s loads: %s", files[k], err);
+    }
+    const char *tfiles[] = {"exercise_expert.json", "../server/exercise_short.json", "../server/exercise_wire.json",
+                            "../server/exercise_random.json"};
+    for (int k = 0; k < 4; ++k) {
+      static palp_scene sc;
+      snprintf(path, sizeof path, "%s/%s", PALP_TEST_DIR, tfiles[k]);
+      CHECK(palp_exercise_load(path, &ex, err, sizeof err) == 0 && palp_exercise_scene(&ex, &sc, err, sizeof err) == 0,
+            "%s loads: %s", tfiles[k], err);
+    }
   }
   CHECK_DONE();
 }
