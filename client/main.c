@@ -867,7 +867,7 @@ static int print_debrief(const opts *o, palp_cli_station *st) {
     /* where, in the words every palp tool uses (src/palp_place.h): no clock at the pole */
     char at[64] = "at the pole";
     if (!palp_place_at_pole(p))
-      snprintf(at, sizeof at, "at %.1f o'clock, %.0f mm from the pole along the skin", palp_place_clock_hours(p),
+      snprintf(at, sizeof at, "at %.1f o'clock, %.0f mm from the pole along the skin", palp_place_clock_shown(p),
                palp_place_arc(p) * 1e3);
     tprintf(o, "[trainee %s]   lump %u %s: %s; %.0f mm across, its centre %.0f mm deep\n", o->name, i + 1, by, at,
             l->diameter * 1e3, l->depth * 1e3);

@@ -10,6 +10,13 @@
 
 /* The clock position of p seen from above, in hours (0, 12]: 12 at +y, 3 at +x. */
 double palp_place_clock_hours(palp_vec3 p);
+/* The clock position as every tool prints and sends it, in hours: palp_place_clock_hours rounded to
+ * PALP_PLACE_CLOCK_STEP (what "%.1f" shows), a reading that rounds to 0 given as 12.0. Print and send
+ * this, never the raw hours: azimuth 90 deg (12 o'clock) reads 6e-17 h (cos 90 deg is not 0 in
+ * floating point), a hair past 0 and so not mapped to 12 by the raw function, and "%.1f" printed
+ * "0.0 o'clock" (session 81 review); so did anything within 0.05 h clockwise of +y. */
+#define PALP_PLACE_CLOCK_STEP 0.1 /* [h] */
+double palp_place_clock_shown(palp_vec3 p);
 /* The arc from the pole to p along the sphere through p centred at the base's centre [m]:
  * |p| x (angle of p from +z). */
 double palp_place_arc(palp_vec3 p);

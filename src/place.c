@@ -13,6 +13,13 @@ double palp_place_clock_hours(palp_vec3 p) {
   return h;
 }
 
+double palp_place_clock_shown(palp_vec3 p) {
+  /* whole steps, so the value printed with one decimal (or sent) is exactly the one rounded here */
+  long n = lround(palp_place_clock_hours(p) / PALP_PLACE_CLOCK_STEP);
+  if (n <= 0) n = lround(12.0 / PALP_PLACE_CLOCK_STEP); /* 12 o'clock is 12.0, never 0.0 */
+  return (double)n * PALP_PLACE_CLOCK_STEP;
+}
+
 double palp_place_arc(palp_vec3 p) {
   /* the great-circle distance from the pole of the sphere through p: r x (angle from +z) [m] */
   const double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);

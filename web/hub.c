@@ -1013,7 +1013,7 @@ static cJSON *answers_json(palp_web_hub *h, session *s) {
     const palp_vec3 p = palp_exercise_lesion_surface(L, R);
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "found_by", r.lesion_found[l] >= 0 ? a->id[r.lesion_found[l]] : 0);
-    cJSON_AddNumberToObject(o, "clock_h", round(palp_place_clock_hours(p) * 100) / 100);
+    cJSON_AddNumberToObject(o, "clock_h", palp_place_clock_shown(p)); /* as the page prints it: 12, never 0 */
     cJSON_AddBoolToObject(o, "at_pole", palp_place_at_pole(p)); /* no clock worth reading there */
     cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
     cJSON_AddNumberToObject(o, "across_mm", round(L->diameter * 1e4) / 10);
@@ -1511,7 +1511,7 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
     const palp_vec3 p = {l->point.x, l->point.y, l->point.z};
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "found_by", l->found_by);
-    cJSON_AddNumberToObject(o, "clock_h", round(palp_place_clock_hours(p) * 100) / 100);
+    cJSON_AddNumberToObject(o, "clock_h", palp_place_clock_shown(p)); /* as the page prints it: 12, never 0 */
     cJSON_AddBoolToObject(o, "at_pole", palp_place_at_pole(p)); /* no clock worth reading there */
     cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
     cJSON_AddNumberToObject(o, "across_mm", round(l->diameter * 1e4) / 10);

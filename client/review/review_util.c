@@ -117,12 +117,12 @@ int review_load_contacts(palp_db *db, int64_t sid, review_contacts *out) {
   return palp_db_each_contact(db, sid, contact_cb, out);
 }
 
-double review_clock_hours(palp_vec3 p) { return palp_place_clock_hours(p); }
+double review_clock_hours(palp_vec3 p) { return palp_place_clock_shown(p); }
 
 const char *review_clock_cell(palp_vec3 p, int width, char *buf, size_t len) {
   char cell[24];
   if (palp_place_at_pole(p)) snprintf(cell, sizeof cell, "pole");
-  else snprintf(cell, sizeof cell, "%.1f h", palp_place_clock_hours(p));
+  else snprintf(cell, sizeof cell, "%.1f h", palp_place_clock_shown(p));
   snprintf(buf, len, "%*s", width, cell);
   return buf;
 }

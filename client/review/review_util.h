@@ -25,7 +25,8 @@ typedef struct review_press {
   int updates;
 } review_press;
 int review_presses(palp_db *db, int64_t sid, const review_contacts *c, review_press **out, int *n);
-/* "3 o'clock": the clock position of a point seen from above (12 = +y, 3 = +x). */
+/* "3 o'clock": the clock position of a point seen from above (12 = +y, 3 = +x), as printed: to 0.1 h,
+ * 12.0 never 0.0 (palp_place_clock_shown). */
 double review_clock_hours(palp_vec3 p);
 /* A table's clock cell: "1.7 h", or "pole" within PALP_PLACE_POLE_ARC of the pole, where the hour is
  * noise (src/palp_place.h); right-aligned in width characters (0: as it is, for HTML). Returns buf. */

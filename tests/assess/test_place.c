@@ -12,6 +12,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "check.h"
 #include "palp_assess.h"
@@ -59,6 +60,28 @@ int main(void) {
     CHECK(palp_place_at_pole(a), "the lesion at polar 0 is at the pole (arc %.3g mm)", palp_place_arc(a) * 1e3);
     CHECK(!palp_place_at_pole(b), "the lesion at polar 30 deg is not");
     CHECK_NEAR(palp_place_clock_hours(b), 50.0 / 30.0, 1e-9, "the lesion at polar 30 deg, azimuth 40 deg: 1.667 h");
+    CHECK_NEAR(palp_place_clock_shown(b), 1.7, 1e-12, "  shown 1.7 h");
+  }
+
+  /* 12 o'clock as every tool prints it (session 81 review): a lesion at azimuth 90 deg (+y) is 12
+   * o'clock, one at 88.6 deg is 1.4 deg = 0.047 h clockwise of it, which rounds to 0.0 h at one
+   * decimal: both read 12.0. The raw hours at 90 deg were 6e-17 (cos 90 deg in floating point), not
+   * mapped to 12, and "%.1f" printed "0.0". Likewise 91.4 deg is 11.953 h: 12.0; 87 deg is 0.1 h;
+   * 180 deg (-x) 9.0; azimuth 0 (+x) 3.0. */
+  static const struct {
+    double az_deg, shown;
+  } twelve[] = {{90, 12.0}, {88.6, 12.0}, {91.4, 12.0}, {87, 0.1}, {180, 9.0}, {0, 3.0}};
+  for (size_t k = 0; k < sizeof twelve / sizeof *twelve; k++) {
+    const palp_exercise_lesion l = {.polar = 30 * PI / 180, .azimuth = twelve[k].az_deg * PI / 180, .depth = 0.01,
+                                    .diameter = 0.015, .stiffness_ratio = 5};
+    const palp_vec3 s = palp_exercise_lesion_surface(&l, R);
+    char text[16];
+    snprintf(text, sizeof text, "%.1f", palp_place_clock_shown(s));
+    char want[16];
+    snprintf(want, sizeof want, "%.1f", twelve[k].shown);
+    printf("azimuth %5.1f deg: raw %.3g h, shown %s o'clock\n", twelve[k].az_deg, palp_place_clock_hours(s), text);
+    CHECK(strcmp(text, want) == 0, "azimuth %.1f deg reads %s o'clock (want %s)", twelve[k].az_deg, text, want);
+    CHECK(palp_place_clock_shown(s) > 0.05 && palp_place_clock_shown(s) <= 12.0, "  in (0, 12]");
   }
   CHECK_DONE();
 }
