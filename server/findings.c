@@ -12,6 +12,13 @@ void palp_srv_findings_init(palp_srv_findings *f, const palp_srv_findings_limits
   f->tokens = lim->burst;
 }
 
+double palp_srv_findings_depth_max(const palp_exercise *ex) {
+  double d = 0.0;
+  for (int b = 0; ex && b < PALP_BAND_COUNT; b++)
+    if (ex->band[b].has_depth && ex->band[b].depth_max > d) d = ex->band[b].depth_max;
+  return d > 0.0 ? d + PALP_SRV_MARK_DEPTH_SLACK : PALP_SRV_MARK_DEPTH_DEFAULT;
+}
+
 static int refuse(palp_srv_findings *f, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
@@ -61,9 +68,18 @@ int palp_srv_findings_offer(palp_srv_findings *f, const palp_Finding *in, int64_
   }
   const palp_Vec3 p = in->point;
   if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z)) return refuse(f, "mark %u: point is not finite", in->mark_id);
-  if (p.x < f->lim.box_min.x || p.x > f->lim.box_max.x || p.y < f->lim.box_min.y || p.y > f->lim.box_max.y ||
-      p.z < f->lim.box_min.z || p.z > f->lim.box_max.z)
-    return refuse(f, "mark %u: point (%.3f, %.3f, %.3f) m is not on the phantom", in->mark_id, p.x, p.y, p.z);
+  /* On the skin, as a contact point is (findings.h): not below the base, and its distance from the
+   * base's centre within the shell the skin can be pressed into. */
+  const double R = f->lim.dome_radius, r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+  if (p.z < 0.0)
+    return refuse(f, "mark %u: point (%.3f, %.3f, %.3f) m is not on the phantom: below its base", in->mark_id, p.x,
+                  p.y, p.z);
+  if (r < R - f->lim.depth_max)
+    return refuse(f, "mark %u: point (%.3f, %.3f, %.3f) m is not on the phantom: %.1f mm under its skin (at most %.1f)",
+                  in->mark_id, p.x, p.y, p.z, (R - r) * 1e3, f->lim.depth_max * 1e3);
+  if (r > R + f->lim.height_max)
+    return refuse(f, "mark %u: point (%.3f, %.3f, %.3f) m is not on the phantom: %.1f mm above its skin (at most %.1f)",
+                  in->mark_id, p.x, p.y, p.z, (r - R) * 1e3, f->lim.height_max * 1e3);
   if (at >= 0) return refuse(f, "mark %u was already made (ids are not reused)", in->mark_id);
   if (f->made >= PALP_SRV_MAX_MARKS)
     return refuse(f, "mark %u: %d marks made, at most %d per session", in->mark_id, f->made, PALP_SRV_MAX_MARKS);

@@ -22,9 +22,28 @@
 #define PALP_SRV_FINDING_RATE 5.0
 #define PALP_SRV_FINDING_BURST 10
 
+/* Where a mark may lie (palp_srv_findings_offer): its distance from the base's centre within
+ * [R - depth_max, R + height_max] and z >= 0. A mark is the fingertip's contact point (LocalModel.point,
+ * on the skin the fingertip presses); measured over two scripted expert exams (tests/assess
+ * test_trainees, 2026-12, session 81) it lay 0.00-10.4 mm under the rest skin, never above it, and
+ * at most 0.10 mm deeper than the fingertip's indentation. So: no deeper than the exercise's deepest
+ * pressure band reaches plus 1 mm (PALP_SRV_MARK_DEPTH_SLACK), and no higher than
+ * PALP_SRV_MARK_HEIGHT above the skin. The bounding box grown by the largest finger radius (30 mm)
+ * that stood here before took a mark 20 mm inside the dome or 24 mm above the skin and matched it by
+ * radial projection (session 81 review). */
+#define PALP_SRV_MARK_DEPTH_SLACK 0.001 /* [m] */
+/* With no depth band to go by (force bands, or no exercise): ~22 mm is the fingertip's indentation
+ * at the server's 20 N force limit at the pole (docs/assessment.md's table: 19.8 N at 22 mm), + 1 mm. */
+#define PALP_SRV_MARK_DEPTH_DEFAULT 0.023 /* [m] */
+/* Above the rest skin: contact points were never measured there; 5 mm leaves room for the skin's
+ * bulge beside a press and a station's rounding, and is far below a fingertip's radius. */
+#define PALP_SRV_MARK_HEIGHT 0.005 /* [m] */
+
 typedef struct palp_srv_findings_limits {
   uint32_t session_id;     /* the partition's session: a finding naming another is refused */
-  palp_vec3 box_min, box_max; /* the dome's bounding box grown by the largest finger radius [m] */
+  double dome_radius;      /* R [m]: the rest pole's distance from the base's centre */
+  double depth_max;        /* how far under the rest skin a mark may lie [m] (palp_srv_findings_depth_max) */
+  double height_max;       /* how far above it [m] (PALP_SRV_MARK_HEIGHT) */
   double rate;             /* findings per second once the burst is spent */
   int burst;               /* findings accepted at once */
 } palp_srv_findings_limits;
@@ -46,6 +65,9 @@ typedef struct palp_srv_findings {
 } palp_srv_findings;
 
 void palp_srv_findings_init(palp_srv_findings *f, const palp_srv_findings_limits *lim);
+/* How far under the rest skin a mark may lie [m]: the deepest depth bound of ex's pressure bands +
+ * PALP_SRV_MARK_DEPTH_SLACK, or PALP_SRV_MARK_DEPTH_DEFAULT when ex is NULL or bands by force alone. */
+double palp_srv_findings_depth_max(const palp_exercise *ex);
 
 /* Checks one finding at monotonic time now_ns and, when it is accepted, applies it.
  * Returns 1 (accepted) or 0 (refused; f->reason says why). In either case

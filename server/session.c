@@ -226,12 +226,12 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     if (s->finding_reader < 0 || s->finding_status_writer < 0) goto dds_fail;
     s->finding_rc = dds_create_readcondition(s->finding_reader, DDS_ANY_STATE);
     if (s->finding_rc < 0) goto dds_fail;
-    /* The dome's bounding box (its base at z = 0) grown by the largest fingertip a
-     * station may use: a contact point cannot lie outside it. */
-    const double R = def->phantom->scene.world.mesh.radius, g = def->cfg->finger_radius_max;
+    /* A mark is a contact point: on the skin, or pressed into it no deeper than the exercise's
+     * deepest band (server/findings.h). */
     const palp_srv_findings_limits fl = {.session_id = s->id,
-                                         .box_min = {-R - g, -R - g, -g},
-                                         .box_max = {R + g, R + g, R + g},
+                                         .dome_radius = def->phantom->scene.world.mesh.radius,
+                                         .depth_max = palp_srv_findings_depth_max(def->phantom->exercise),
+                                         .height_max = PALP_SRV_MARK_HEIGHT,
                                          .rate = PALP_SRV_FINDING_RATE,
                                          .burst = PALP_SRV_FINDING_BURST};
     palp_srv_findings_init(&s->findings, &fl);

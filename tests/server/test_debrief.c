@@ -47,7 +47,7 @@ int main(void) {
   /* Marks: 1 on lesion 1 (withdrawn), 2 on lesion 1, 3 also on lesion 1 (a duplicate), 4 far from both
    * (the pole's other side: 40 mm from either), 5 on lesion 2. Standing: 2, 3, 4, 5. */
   palp_srv_findings f;
-  const palp_srv_findings_limits lim = {.session_id = 7, .box_min = {-0.05, -0.05, -0.01}, .box_max = {0.05, 0.05, 0.05},
+  const palp_srv_findings_limits lim = {.session_id = 7, .dome_radius = 0.04, .depth_max = 0.019, .height_max = 0.005,
                                         .rate = 5, .burst = 10};
   palp_srv_findings_init(&f, &lim);
   int64_t t = 1000000000;

@@ -40,6 +40,7 @@
 
 #include "assess_log.h"
 #include "db_log.h"
+#include "findings.h"
 #include "harness.h"
 #include "palp_assess.h"
 #include "palp_db.h"
@@ -279,8 +280,54 @@ static int on_log_event(void *user, double wall, int64_t frame, const char *kind
 }
 
 
+
+/* Unit cases of where a mark may lie (server/findings.c, session 81 review): a mark is the fingertip's
+ * contact point, on the skin or pressed into it. On the 40 mm dome with the shipped bands (deep
+ * 9-18 mm) a mark may lie 18 + 1 = 19 mm under the rest skin and 5 mm above it, z >= 0. At polar 30
+ * deg, azimuth 0, a point at distance q from the base's centre is q (sin 30, 0, cos 30). Before, a
+ * box grown by 30 mm took q = 20 mm (20 under) and q = 64 mm (24 above: (32, 0, 55.4) mm, inside
+ * +-70 mm). */
+static void offer_cases(void) {
+  static const char *json =
+      "{\"name\": \"u\", \"title\": \"U\", \"phantom\": \"p.json\", \"instructions\": \"go\", \"time_limit_s\": 60,"
+      " \"lesions\": [], \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 4]}, \"medium\": {\"depth_mm\": [4, 9]},"
+      " \"deep\": {\"depth_mm\": [9, 18]}}, \"max_force_N\": 15, \"rubric\": {\"weights\": {\"sensitivity\": 1},"
+      " \"pass\": {\"sensitivity\": 1, \"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}";
+  palp_exercise ex;
+  char err[256];
+  REQUIRE(palp_exercise_parse(json, "", &ex, err, sizeof err) == 0, "unit exercise: %s", err);
+  const double dmax = palp_srv_findings_depth_max(&ex);
+  CHECK(fabs(dmax - 0.019) < 1e-12, "depth bound: the deep band's 18 mm + 1 = 19 mm (%.6f m)", dmax);
+  CHECK(fabs(palp_srv_findings_depth_max(NULL) - 0.023) < 1e-12, "no exercise: 23 mm");
+  palp_srv_findings f;
+  const palp_srv_findings_limits lim = {.session_id = 7, .dome_radius = 0.04, .depth_max = dmax,
+                                        .height_max = PALP_SRV_MARK_HEIGHT, .rate = 5, .burst = 10};
+  palp_srv_findings_init(&f, &lim);
+  const double s30 = 0.5, c30 = sqrt(3.0) / 2.0;
+  static const struct {
+    double q_mm, z_override; /* distance from the base's centre at polar 30; z_override != 0: that point instead */
+    int accepted;
+    const char *why;
+  } cases[] = {{40, 0, 1, NULL}, {22, 0, 1, NULL}, {21.5, 0, 1, NULL}, {44.5, 0, 1, NULL},
+               {20, 0, 0, "20.0 mm under its skin (at most 19.0)"}, {64, 0, 0, "24.0 mm above its skin (at most 5.0)"},
+               {40, -1, 0, "below its base"}};
+  int64_t t = 1000000000;
+  for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+    const double q = cases[k].q_mm * 1e-3;
+    palp_vec3 p = {q * s30, 0, q * c30};
+    if (cases[k].z_override) p = (palp_vec3){0.0399, 0, -0.001}; /* 39.9 mm from the centre, 1 mm under the base */
+    const palp_Finding in = {.session_id = 7, .mark_id = (uint32_t)(k + 1), .op = palp_FINDING_MARK, .point = {p.x, p.y, p.z}};
+    const int got = palp_srv_findings_offer(&f, &in, t += 300000000);
+    printf("mark at (%.1f, %.1f, %.1f) mm: %s %s\n", p.x * 1e3, p.y * 1e3, p.z * 1e3, got ? "accepted" : "refused", f.reason);
+    CHECK(got == cases[k].accepted && (!cases[k].why || (strstr(f.reason, "is not on the phantom") && strstr(f.reason, cases[k].why))),
+          "mark %zu (%g mm from the base's centre): %s, want %s%s%s", k + 1, cases[k].q_mm, got ? "accepted" : f.reason,
+          cases[k].accepted ? "accepted" : "refused: ", cases[k].why ? cases[k].why : "", "");
+  }
+}
+
 int main(void) {
   test_init();
+  offer_cases();
   const int64_t t_start = palp_dds_now_ns();
   /* The secrets, as the server computes them from the exercise file. */
   palp_exercise ex;
