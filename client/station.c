@@ -6,6 +6,7 @@
 #include "palp_assess.h" /* palp_metric_to_work_on: the words her page uses too */
 #include "palp_log.h"    /* PALP_PRINTABLE_LONG */
 
+#include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -913,9 +914,14 @@ const char *palp_cli_score_text(const palp_SessionScore *m, char *buf, size_t le
     if (!m->passed[i])
       n += (size_t)snprintf(work + n, n < sizeof work ? sizeof work - n : 0, "%s%s", n ? ", " : " To work on: ",
                             palp_metric_to_work_on(i));
+  /* Every metric passed and still not passed: the score alone is under the pass mark (which the wire
+   * does not carry). A score not passed is floored to 0.1, as the review prints it: it never reads as
+   * a mark on a whole tenth it missed (69.96 printed 70.0). */
+  const int only_score = !m->pass && n == 0;
+  if (only_score) n += (size_t)snprintf(work, sizeof work, " To work on: %s", PALP_SCORE_TO_WORK_ON);
   if (n) snprintf(work + n, n < sizeof work ? sizeof work - n : 0, ".");
   snprintf(buf, len, "score: %.1f of 100, %s (the automatic score, as the review gives it; your instructor grades "
-                     "you).%s%s", m->score, m->pass ? "passed" : "not passed", work,
+                     "you).%s%s", palp_shown_tenths(m->score, NAN, m->pass), m->pass ? "passed" : "not passed", work,
            m->log_complete ? "" : " The session's log is incomplete: the score may be low.");
   return buf;
 }

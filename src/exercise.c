@@ -32,6 +32,12 @@ const char *palp_metric_to_work_on(int m) {
       "a systematic search pattern", "finishing within the time", "pressing within the force limit"};
   return m >= 0 && m < PALP_METRIC_COUNT ? words[m] : "?";
 }
+double palp_shown_tenths(double v, double mark, int reached) {
+  const double r = round(v * 10.0) / 10.0;
+  if (!reached && (isnan(mark) || r >= mark)) return floor(v * 10.0) / 10.0;
+  if (reached && !isnan(mark) && r < mark) return ceil(v * 10.0) / 10.0;
+  return r;
+}
 const char *palp_pattern_name(palp_pattern p) {
   return p >= PALP_PATTERN_UNSYSTEMATIC && p <= PALP_PATTERN_RADIAL ? pattern_names[p] : "?";
 }

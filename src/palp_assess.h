@@ -69,6 +69,18 @@ const char *palp_metric_name(int metric);
 /* What a trainee who did not pass the metric works on, in her words ("finding the lumps"): her
  * station and her web page say the same (session 64). */
 const char *palp_metric_to_work_on(int metric);
+/* A figure judged against a mark (a score against the rubric's pass mark, a coverage in % against
+ * its band's), as printed to one decimal: rounded to 0.1, except that one that missed the mark never
+ * reads as reaching it (floored to 0.1: 69.96 against 70 prints 69.9, not 70.0) and one that reached
+ * it never reads as below it (ceiled to 0.1). mark NAN (not known): a figure that missed is floored
+ * (so it never rounds up to a mark on a whole tenth), one that reached is rounded. A session's score
+ * is printed so by the review, her station and her page alike: mark NAN and reached = the session
+ * passed, so a score not passed is floored everywhere and the three agree. Session 81 review:
+ * "score 70.0 / 100 (pass at 70): FAIL". */
+double palp_shown_tenths(double value, double mark, int reached);
+/* What to work on when a session failed on its score alone (every metric passed, the weighted score
+ * under the pass mark): without it her station listed nothing under "To work on" (session 81 review). */
+#define PALP_SCORE_TO_WORK_ON "raising the score (below the pass mark)"
 
 typedef struct palp_rubric {
   double weight[PALP_METRIC_COUNT]; /* >= 0, at least one > 0; the score is their weighted mean x 100 */

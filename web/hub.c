@@ -1330,7 +1330,11 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
     copy_str(text, sizeof text, m->reason);
     cJSON_AddStringToObject(j, "reason", text);
   } else {
-    cJSON_AddNumberToObject(j, "score", round(m->score * 10) / 10);
+    /* as her station says it (palp_cli_score_text): not passed, floored to 0.1 so it never reads as a
+     * pass mark it missed; failed on the score alone, that named what to work on (session 81 review) */
+    int only_score = !m->pass;
+    for (int i = 0; i < PALP_METRIC_COUNT && i < 6; i++) only_score = only_score && m->passed[i];
+    cJSON_AddNumberToObject(j, "score", palp_shown_tenths(m->score, NAN, m->pass));
     cJSON_AddBoolToObject(j, "pass", m->pass);
     cJSON *cr = cJSON_AddObjectToObject(j, "credit"), *ps = cJSON_AddObjectToObject(j, "passed");
     cJSON *work = cJSON_AddArrayToObject(j, "work_on"); /* her words for what she did not pass (session 64) */
@@ -1339,6 +1343,7 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
       cJSON_AddBoolToObject(ps, palp_metric_name(i), m->passed[i]);
       if (!m->passed[i]) cJSON_AddItemToArray(work, cJSON_CreateString(palp_metric_to_work_on(i)));
     }
+    if (only_score) cJSON_AddItemToArray(work, cJSON_CreateString(PALP_SCORE_TO_WORK_ON));
     cJSON_AddNumberToObject(j, "lesions", m->lesions);
     cJSON_AddNumberToObject(j, "found", m->found);
     cJSON_AddNumberToObject(j, "false_marks", m->false_marks);

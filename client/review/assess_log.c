@@ -505,10 +505,17 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
   } else {
     fprintf(f, "  findings         %d marks, %d withdrawn (no lesions to match)\n", r->findings, r->withdrawn);
   }
-  fprintf(f, "  thoroughness     light %.1f%%, medium %.1f%%, deep %.1f%%, any %.1f%% of the dome", 100 * r->coverage[0],
-          100 * r->coverage[1], 100 * r->coverage[2], 100 * r->coverage_any);
+  /* Each band's figure as judged against its pass mark (palp_shown_tenths): 89.96% short of 90 prints
+   * 89.9, not 90.0 (session 81 review); the pass marks with %g, as many digits as they have. */
+  double shown[PALP_BAND_COUNT];
+  for (int b = 0; b < PALP_BAND_COUNT; b++)
+    shown[b] = a->has_exercise ? palp_shown_tenths(100 * r->coverage[b], 100 * rb->pass_coverage[b],
+                                                   r->coverage[b] >= rb->pass_coverage[b])
+                               : round(1000 * r->coverage[b]) / 10;
+  fprintf(f, "  thoroughness     light %.1f%%, medium %.1f%%, deep %.1f%%, any %.1f%% of the dome", shown[0], shown[1],
+          shown[2], 100 * r->coverage_any);
   if (a->has_exercise)
-    fprintf(f, " (pass at %.0f/%.0f/%.0f%%)%s", 100 * rb->pass_coverage[0], 100 * rb->pass_coverage[1],
+    fprintf(f, " (pass at %g/%g/%g%%)%s", 100 * rb->pass_coverage[0], 100 * rb->pass_coverage[1],
             100 * rb->pass_coverage[2], r->pass_metric[PALP_METRIC_THOROUGHNESS] ? "   pass" : "   FAIL");
   fputc('\n', f);
   if (a->footprint_patch) /* docs/assessment.md, "Recorded over DDS" */
@@ -544,7 +551,10 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
           r->out_of_range == 1 ? "" : "s", a->ex.max_force, r->out_of_range_time,
           !a->has_exercise ? "" : r->pass_metric[PALP_METRIC_FORCE] ? "   pass" : "   FAIL");
   if (a->has_exercise)
-    fprintf(f, "  score            %.1f / 100 (pass at %.0f): %s\n", r->score, rb->pass_score, r->pass ? "PASS" : "FAIL");
+    fprintf(f, "  score            %.1f / 100 (pass at %g): %s\n",
+            /* not passed: floored to 0.1, as her station and page print it (they do not know the mark) */
+            palp_shown_tenths(r->score, r->pass ? rb->pass_score : NAN, r->pass), rb->pass_score,
+            r->pass ? "PASS" : "FAIL");
 }
 
 int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {

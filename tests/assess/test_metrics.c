@@ -180,6 +180,17 @@ int main(void) {
 #undef ON_RING
   }
 
+  /* 1c. A figure as printed against its mark (palp_shown_tenths, session 81 review), by hand: 69.96
+   * missing 70 is floored to 69.9 (rounding gave 70.0); 70.04 reaching a mark of 70.04 is ceiled to
+   * 70.1 (rounding gave 70.0, under it); 99.625 passing rounds to 99.6; with no mark known a figure
+   * that missed is floored (18.05 -> 18.0), one that reached rounds (85.07 -> 85.1). */
+  CHECK_NEAR(palp_shown_tenths(69.96, 70, 0), 69.9, 1e-9, "69.96 short of 70");
+  CHECK_NEAR(palp_shown_tenths(70.04, 70.04, 1), 70.1, 1e-9, "70.04 at a mark of 70.04");
+  CHECK_NEAR(palp_shown_tenths(99.625, 70, 1), 99.6, 1e-9, "99.625 passing");
+  CHECK_NEAR(palp_shown_tenths(18.05, NAN, 0), 18.0, 1e-9, "18.05 not passed, mark unknown");
+  CHECK_NEAR(palp_shown_tenths(85.07, NAN, 1), 85.1, 1e-9, "85.07 passed, mark unknown");
+  CHECK_NEAR(palp_shown_tenths(65.07, 70, 0), 65.1, 1e-9, "65.07 well short of 70: rounded");
+
   /* 2. Coverage: one sample touching every dome triangle at 8 mm covers the whole
    * surface in the medium band and nothing in the others. */
   int *all = malloc(sizeof(int) * (size_t)mesh.dome_triangle_count);

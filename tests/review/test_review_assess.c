@@ -7,11 +7,13 @@
  * code runs on the same numbers). Then the issue's properties on the logged expert and novice. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "assess_log.h"
 #include "check.h"
+#include "station.h"
 #include "gen.h"
 
 static void same(const char *who, const palp_assess_result *a, const palp_assess_result *b, int with_score) {
@@ -35,7 +37,64 @@ static void same(const char *who, const palp_assess_result *a, const palp_assess
           b->pass);
 }
 
+
+/* The score and pass marks as printed (session 81 review): a figure never reads as reaching a mark it
+ * missed, pass marks with their digits, and a session failed on its score alone says so. Expected
+ * lines written out by hand. */
+static int line_has(const char *text, const char *want) { return strstr(text, want) != NULL; }
+static void metrics_text(double score, double pass_score, int pass, double cov_light, double pass_light, char *out,
+                         size_t len) {
+  static review_assessment a;
+  memset(&a, 0, sizeof a);
+  a.has_exercise = 1;
+  snprintf(a.exercise_name, sizeof a.exercise_name, "t");
+  a.ex.rubric.pass_score = pass_score;
+  a.ex.rubric.pass_coverage[0] = pass_light, a.ex.rubric.pass_coverage[1] = 0.9, a.ex.rubric.pass_coverage[2] = 0.8;
+  a.ex.lesion_count = 1;
+  a.r.lesion_count = 1, a.r.found = 1, a.r.sensitivity = 1.0;
+  a.r.coverage[0] = cov_light, a.r.coverage[1] = 0.95, a.r.coverage[2] = 0.85;
+  a.r.score = score, a.r.pass = pass;
+  char *buf = NULL;
+  size_t n = 0;
+  FILE *f = open_memstream(&buf, &n);
+  review_metrics_print(f, &a);
+  fclose(f);
+  snprintf(out, len, "%s", buf ? buf : "");
+  free(buf);
+}
+static void verdict_text_cases(void) {
+  char t[4096];
+  /* pass mark 70.4, score 70.2: before "70.2 / 100 (pass at 70): FAIL" */
+  metrics_text(70.2, 70.4, 0, 0.95, 0.9, t, sizeof t);
+  CHECK(line_has(t, "score            70.2 / 100 (pass at 70.4): FAIL"), "pass mark 70.4 printed as such:\n%s", t);
+  /* 69.96 against 70: before "70.0 / 100 (pass at 70): FAIL"; floored, 69.9 */
+  metrics_text(69.96, 70, 0, 0.95, 0.9, t, sizeof t);
+  CHECK(line_has(t, "score            69.9 / 100 (pass at 70): FAIL"), "69.96 failing prints 69.9:\n%s", t);
+  /* a pass: 99.625 rounds as before, 99.6 */
+  metrics_text(99.625, 70, 1, 0.95, 0.9, t, sizeof t);
+  CHECK(line_has(t, "score            99.6 / 100 (pass at 70): PASS"), "99.625 passing prints 99.6:\n%s", t);
+  /* coverage 89.96% short of 90: 89.9, not 90.0; a pass mark of 90.5% printed 90.5, not 90 (%.0f gave "90") */
+  metrics_text(80, 70, 0, 0.8996, 0.9, t, sizeof t);
+  CHECK(line_has(t, "light 89.9%") && line_has(t, "(pass at 90/90/80%)"), "light 89.96%% short of 90:\n%s", t);
+  metrics_text(80, 70, 0, 0.95, 0.905, t, sizeof t);
+  CHECK(line_has(t, "(pass at 90.5/90/80%)"), "pass mark 90.5%%:\n%s", t);
+  /* her station: every metric passed, score 69.96 not passed: 69.9, and what to work on */
+  palp_SessionScore m;
+  memset(&m, 0, sizeof m);
+  m.status = palp_SCORE_GRADED, m.score = 69.96, m.pass = false, m.log_complete = true;
+  for (int i = 0; i < 6; i++) m.passed[i] = true;
+  char st[512];
+  palp_cli_score_text(&m, st, sizeof st);
+  printf("station: %s\n", st);
+  CHECK(line_has(st, "score: 69.9 of 100, not passed") && line_has(st, "To work on: raising the score (below the pass mark)."),
+        "station, the score alone failed: \"%s\"", st);
+  m.passed[0] = false; /* sensitivity failed too: listed, the score not named */
+  palp_cli_score_text(&m, st, sizeof st);
+  CHECK(line_has(st, "To work on: finding the lumps.") && !line_has(st, "raising the score"), "station, lumps missed: \"%s\"", st);
+}
+
 int main(int argc, char **argv) {
+  verdict_text_cases();
   REQUIRE(argc == 3, "usage: test_review_assess TMPDIR TESTDIR");
   char path[1024];
   snprintf(path, sizeof path, "%s/review_assess.sqlite", argv[1]);
