@@ -27,6 +27,16 @@ static void match(palp_finding_answers *a, palp_finding_verdict_fn fn, void *ctx
     int k = 0;
     while (k < a->answers && a->answer[k].mark_id != a->finding[i].f.mark_id) k++;
     if (k == a->answers) continue;
+    /* A mark and its withdrawal carry one id. With both pending, the answer is the withdrawal's:
+     * the server answers findings in the order it takes them, on a keep-last-1 topic, so the answer
+     * a reader sees is the latest it wrote; taken in one pass (the usual case when the withdrawal
+     * follows at once), the mark's answer was replaced before it went out. Given to the mark, the
+     * withdrawal waited out unanswered and the log kept a withdrawn mark standing (or a refused
+     * withdrawal dropped a standing one; session 81 review). So the newest pending finding of the
+     * id takes it, and the older, as every finding before an answered one, is given up. */
+    int newer = 0;
+    for (int j = i + 1; j < a->findings && !newer; j++) newer = a->finding[j].f.mark_id == a->finding[i].f.mark_id;
+    if (newer) continue;
     for (int j = 0; j < i; j++) fn(ctx, &a->finding[j].f, PALP_VERDICT_UNANSWERED, "");
     fn(ctx, &a->finding[i].f, a->answer[k].accepted ? PALP_VERDICT_ACCEPTED : PALP_VERDICT_REFUSED,
        a->answer[k].accepted ? "" : a->answer[k].reason);

@@ -7,8 +7,10 @@
  * answer can reach a reader before the finding it answers (two topics). So a finding counts once
  * its answer is seen: accepted, or refused with the server's reason. An answer to a later finding
  * means the earlier findings' answers were replaced: those, and any finding not answered within
- * the wait, are given up as unanswered. A mark and its withdrawal carry the same mark id; each
- * answer is matched to the oldest finding of its id. Pure: no DDS, no clock of its own.
+ * the wait, are given up as unanswered. A mark and its withdrawal carry the same mark id; an
+ * answer is matched to the newest pending finding of its id (with both pending it is the
+ * withdrawal's: keep-last 1 replaced the mark's; since session 81, the oldest before). Pure: no
+ * DDS, no clock of its own.
  */
 #ifndef PALP_FINDING_ANSWERS_H
 #define PALP_FINDING_ANSWERS_H

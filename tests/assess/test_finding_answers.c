@@ -69,11 +69,12 @@ int main(void) {
   EXPECT(l, 4, 5u, 0, PALP_VERDICT_REFUSED);
   CHECK(!strcmp(l.reason[4], "mark 5: too close to mark 4"), "reason \"%s\"", l.reason[4]);
 
-  /* a mark and its withdrawal share the id; each answer goes to the oldest of them */
+  /* a mark and its withdrawal share the id. Answered one at a time (the mark's answer seen before
+   * the withdrawal is taken from the wire), each gets its own. */
   mark(&a, &l, 6, 0, 0.4);
-  mark(&a, &l, 6, 1, 0.41);
   answer(&a, &l, 6, 1, "", 0.42);
-  answer(&a, &l, 6, 1, "", 0.43);
+  mark(&a, &l, 6, 1, 0.43);
+  answer(&a, &l, 6, 1, "", 0.44);
   EXPECT(l, 5, 6u, 0, PALP_VERDICT_ACCEPTED);
   EXPECT(l, 6, 6u, 1, PALP_VERDICT_ACCEPTED);
 
@@ -83,6 +84,34 @@ int main(void) {
   CHECK(l.n == 7, "still waiting 0.1 s before the wait ends (%d verdicts)", l.n);
   palp_finding_answers_settle(&a, 1.0 + PALP_FINDING_ANSWER_WAIT_S + 0.1, PALP_FINDING_ANSWER_WAIT_S, 0, record, &l);
   EXPECT(l, 7, 7u, 0, PALP_VERDICT_UNANSWERED);
+
+  /* Session 81 review: a mark and its withdrawal both pending when the one answer comes (the server
+   * took both in one pass; keep-last 1 sent only the withdrawal's). The answer is the withdrawal's:
+   * the mark, whose answer was replaced, is given up unanswered, so no log keeps it standing. Before,
+   * the mark took it (accepted) and the withdrawal waited out unanswered: the withdrawn mark stood. */
+  {
+    static palp_finding_answers b;
+    static log_t m;
+    palp_finding_answers_reset(&b);
+    mark(&b, &m, 10, 0, 2.0);
+    mark(&b, &m, 10, 1, 2.01);
+    answer(&b, &m, 10, 1, "", 2.02);
+    EXPECT(m, 0, 10u, 0, PALP_VERDICT_UNANSWERED);
+    EXPECT(m, 1, 10u, 1, PALP_VERDICT_ACCEPTED);
+    CHECK(b.findings == 0 && b.answers == 0, "nothing left pending (%d, %d)", b.findings, b.answers);
+    /* the withdrawal refused (its mark was refused, say): the refusal is the withdrawal's, not the mark's */
+    mark(&b, &m, 11, 0, 2.1);
+    mark(&b, &m, 11, 1, 2.11);
+    answer(&b, &m, 11, 0, "withdrawal of mark 11, which is not standing", 2.12);
+    EXPECT(m, 2, 11u, 0, PALP_VERDICT_UNANSWERED);
+    EXPECT(m, 3, 11u, 1, PALP_VERDICT_REFUSED);
+    /* An answer that overtakes both findings is taken by the mark as it arrives, nothing newer of its
+     * id pending then (the wire cannot tell whose it was; the withdrawal then waits its own answer) */
+    answer(&b, &m, 12, 1, "", 2.2);
+    mark(&b, &m, 12, 0, 2.21);
+    CHECK(m.n == 5, "the answer taken by the mark while it is the only finding of its id (%d)", m.n);
+    EXPECT(m, 4, 12u, 0, PALP_VERDICT_ACCEPTED);
+  }
 
   /* a stale answer (a transient-local copy) expires; a mark of that id sent later is not taken by it */
   answer(&a, &l, 9, 1, "", 4.0);
