@@ -1,6 +1,7 @@
 /* grader.c - a closed exercise session's automatic score from the server's own log (grader.h). */
 #include "grader.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -210,8 +211,9 @@ static void *grader_main(void *arg) {
     palp_srv_score s;
     const int caught_up = grade(g, &j, &s) == 0;
     if (s.graded)
+      /* shown as the station and palp-web show it (palp_shown_tenths: a score not passed floored to 0.1) */
       palp_log_info(g->log, "session %u (%s): scored %.1f, %s, from the session log", s.session_id, s.log_uid,
-                    s.score, s.pass ? "pass" : "fail");
+                    palp_shown_tenths(s.score, NAN, s.pass), s.pass ? "pass" : "fail");
     else
       /* info: the common case is a session without a fingertip, nothing to mend; a disk's trouble
        * is the writer's warning already */

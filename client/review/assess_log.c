@@ -410,7 +410,7 @@ void review_metrics_csv_row(FILE *f, palp_db *db, const palp_db_session_info *s,
   if (r->evidence.overlap >= 0) fprintf(f, "%.3f,%.4f,", r->evidence.overlap, r->evidence.gap_share);
   else fputs(",,", f);
   fprintf(f, "%.3f,%.2f,%d,", r->duration, r->peak_force, r->out_of_range);
-  if (a->has_exercise) fprintf(f, "%.1f,%d,", r->score, r->pass);
+  if (a->has_exercise) fprintf(f, "%.1f,%d,", palp_shown_tenths(r->score, NAN, r->pass), r->pass);
   else fputs(",,", f);
   /* out_of_range above is the force's (episodes above the exercise's limit); this is the model's */
   if (outside_s >= 0) fprintf(f, "%.2f", outside_s);
@@ -626,6 +626,7 @@ int review_stored_metrics_print(palp_db *db, int64_t sid, FILE *f) {
     fprintf(f, "  strips           not stored (pruned before the log kept them)\n");
   fprintf(f, "  time             %.2f s\n  force            peak %.2f N, %d episodes out of range\n", r->duration,
           r->peak_force, r->out_of_range);
-  if (a.has_exercise) fprintf(f, "  score            %.1f / 100: %s\n", r->score, r->pass ? "PASS" : "FAIL");
+  if (a.has_exercise)
+    fprintf(f, "  score            %.1f / 100: %s\n", palp_shown_tenths(r->score, NAN, r->pass), r->pass ? "PASS" : "FAIL");
   return 0;
 }

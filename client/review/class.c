@@ -3,10 +3,12 @@
  * and each trainee's progress (score per session, oldest first). Pruned sessions appear with
  * their stored metrics and no maps. */
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "assess_svg.h"
+#include "palp_assess.h" /* palp_shown_tenths */
 #include "grades.h"
 #include "palp_app.h"
 #include "review.h"
@@ -170,7 +172,8 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
               "<td class=\"score\">%.1f</td><td%s>%s",
               m->found, m->lesion_count, m->false_positives,
               100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), strips,
-              m->duration, m->peak_force, m->score, m->pass ? "" : " class=\"fail\"", m->pass ? "pass" : "fail");
+              m->duration, m->peak_force, palp_shown_tenths(m->score, NAN, m->pass), m->pass ? "" : " class=\"fail\"",
+              m->pass ? "pass" : "fail");
       fprintf(f, "</td><td class=\"outside\">%s</td><td class=\"t\">", r->outside);
       html_str(f, r->grade);
       fputs("</td></tr>\n", f);
@@ -185,7 +188,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       if (!rows[i].computed) continue;
       fputs("<figure class=\"small-multiple\"><figcaption>", f);
       html_str(f, rows[i].s.trainee);
-      fprintf(f, " - %.1f</figcaption>\n", rows[i].a.r.score);
+      fprintf(f, " - %.1f</figcaption>\n", palp_shown_tenths(rows[i].a.r.score, NAN, rows[i].a.r.pass));
       for (int b = 0; b < 3; b++) {
         char id[64];
         snprintf(id, sizeof id, "cov-%d-%s", i + 1, palp_band_name(b));

@@ -321,7 +321,7 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
               "%d of %d lesions found, %d false positives, coverage light/medium/deep %.1f%% / %.1f%% / %.1f%%, "
               "pattern %s, score %.1f (%s).</p>\n", st.r.found, st.r.lesion_count, st.r.false_positives,
               100 * st.r.coverage[0], 100 * st.r.coverage[1], 100 * st.r.coverage[2], palp_pattern_name(st.r.pattern),
-              st.r.score, st.r.pass ? "pass" : "fail");
+              palp_shown_tenths(st.r.score, NAN, st.r.pass), st.r.pass ? "pass" : "fail");
     } else if (stored == 0) {
       /* free practice: no lesions to find and no score (stored as NULL), as show and the CSVs say */
       fprintf(f, "<p id=\"assessment-pruned\">The finger samples of this session were pruned; its stored metrics "
@@ -422,8 +422,8 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
   snprintf(m, sizeof m, "<= %d episodes", rb->pass_max_out_of_range);
   metric_row(f, "force", "Force", v, ex ? m : "-", ex ? r->pass_metric[PALP_METRIC_FORCE] : -1);
   if (ex) {
-    snprintf(v, sizeof v, "%.1f / 100", r->score);
-    snprintf(m, sizeof m, ">= %.0f and every metric", rb->pass_score);
+    snprintf(v, sizeof v, "%.1f / 100", palp_shown_tenths(r->score, r->pass ? rb->pass_score : NAN, r->pass));
+    snprintf(m, sizeof m, ">= %g and every metric", rb->pass_score);
     metric_row(f, "score", "Score", v, m, r->pass);
   }
   fputs("</table>\n", f);

@@ -7,10 +7,12 @@
  * sessions seen by exercise. --out writes the same as one self-contained HTML page (no script,
  * nothing fetched), each exercise's scores also as a small chart, to print for the talk. */
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "assess_svg.h"
+#include "palp_assess.h" /* palp_shown_tenths */
 #include "palp_app.h"
 #include "review.h"
 #include "session_row.h"
@@ -110,7 +112,8 @@ static int write_page(const char *path, const char *name, const review_row *rows
             m->false_positives, 100 * m->coverage[0], 100 * m->coverage[1], 100 * m->coverage[2],
             palp_pattern_name(m->pattern), m->duration);
     if (ex)
-      fprintf(f, "<td class=\"score\">%.1f</td><td%s>%s</td>", m->score, m->pass ? "" : " class=\"fail\"",
+      fprintf(f, "<td class=\"score\">%.1f</td><td%s>%s</td>", palp_shown_tenths(m->score, NAN, m->pass),
+              m->pass ? "" : " class=\"fail\"",
               m->pass ? "pass" : "fail");
     else fputs("<td class=\"score muted\">-</td><td class=\"muted\">-</td>", f);
     fprintf(f, "<td class=\"blind%s\">%s</td><td class=\"t grade\">", ex && r->computed && r->told[0] ? " fail" : "",
@@ -276,7 +279,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
     t[10] = '\0';
     if (ex) {
       snprintf(found, sizeof found, "%d/%d", m->found, m->lesion_count);
-      snprintf(score, sizeof score, "%.1f", m->score);
+      snprintf(score, sizeof score, "%.1f", palp_shown_tenths(m->score, NAN, m->pass));
     }
     fprintf(tty, "%-30.30s %-10s %-16.16s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %6s %-6s %-5s %s\n", r->s.uid, t,
            ex ? r->a.exercise_name : "(practice)", found, m->false_positives, 100 * m->coverage[0],
