@@ -5,9 +5,9 @@ Usage: test_tools_errors.py --config DIR [--run PALP_RUN] [--sweep PALP_SWEEP]
                             [--bench-step B] [--bench-effects B] CASE
 
 Scenes are written into a temporary directory (TMPDIR) and removed at the end. A "broken" scene
-is config/paper_step.json with a gel pressure of 1e300 Pa: the scene parser accepts any positive
-pressure, and the world's first step under load is non-finite (PALP_EUNSTABLE), so every world
-built from it refuses to step.
+is config/paper_step.json with a gel pressure of 1e300 Pa: until session 81 the scene parser took any
+positive pressure, and the world's first step under load was non-finite (PALP_EUNSTABLE); now the
+parser refuses it (its bound is 1e7 Pa), and the tools say so at load.
 """
 import argparse
 import json
@@ -155,34 +155,27 @@ def case_run_write(a, tmp):
 
 
 def case_sweep_broken(a, tmp):
-    # Every real-time point's world refuses to step: each used to go on "stepping" in ~0.3 us,
-    # two landed on the Pareto front and the sweep exited 0. Now each is marked failed in the
-    # table (never on the front), its reason printed, and the exit is 1.
+    # Every real-time point's world refused to step: each used to go on "stepping" in ~0.3 us, two
+    # landed on the Pareto front and the sweep exited 0; then (2026-12) each was marked failed, its
+    # reason printed, exit 1. Since session 81 the scene parser bounds the gel's pressure (1e7 Pa),
+    # and no scene within the bounds was found that breaks the real-time model while the FE
+    # reference runs (tried: pressure and a1 at their bounds under 3 N and 10 kN; the FE fails at
+    # 10 kN): the broken scene is refused before the FE reference runs, naming the key, exit 2. The
+    # sweep's failed-point code stays, for a failure the bounds do not foresee, untested here.
     out = os.path.join(tmp, "out")
     rc, log = run([a.sweep, "--quick", "--ref-level", "1", "--frames", "40", "--scene", broken_scene(a, tmp),
-                   "--out", out], timeout=110, cwd=tmp)  # its FEM cache (cache/fem) goes there too
-    check(rc == 1, "palp-sweep on a broken scene exits 1 (rc %d)" % rc)
-    check("FAILED: step" in log and "non-finite" in log, "each failed point is reported with its step and reason")
-    check("never on the Pareto front" in log, "the summary says the failed points are off the front")
-    rows = []
-    try:
-        with open(os.path.join(out, "sweep.csv")) as f:
-            head = f.readline().strip().split(",")
-            rows = [dict(zip(head, re.findall(r'"[^"]*"|[^,]+', line.strip()))) for line in f]
-    except OSError as e:
-        check(False, "sweep.csv written: %s" % e)
-    failed = [r for r in rows if r.get("failed") == "1"]
-    check(len(failed) == 5, "5 real-time points marked failed in sweep.csv (got %d)" % len(failed))
-    check(all(r.get("pareto") == "0" for r in failed), "no failed point on the Pareto front")
-    check(all(r.get("cost_s_per_sim_s") == "nan" for r in failed), "no cost for a failed point")
+                   "--out", out], timeout=110, cwd=tmp)
+    check(rc == 2 and "gel.pressure_Pa: must be <= 1e+07 (got 1e+300)" in log and "reference FEM" not in log,
+          "palp-sweep refuses the broken scene up front, naming the key, exit 2 (rc %d): %s" % (rc, log.strip()[-200:]))
+    check(not os.path.exists(os.path.join(out, "sweep.csv")), "and writes no sweep.csv")
 
 
 def case_bench_step_broken(a, tmp):
-    # The server core's view on a dome whose world refuses to step: stop with the case, the step
-    # and the reason (its median and p99 were of steps that did nothing).
+    # The server core's view on a dome whose world refused to step stopped with the case, the step and
+    # the reason; since session 81 that scene is refused at load, naming the key (see case_sweep_broken).
     rc, out = run([a.bench_step, "--core-only", "--quick", "--worlds", "2", "--scene", broken_scene(a, tmp)])
-    check(rc == 1 and re.search(r"bench_model_step: server core, one world, step \d+: state became non-finite", out),
-          "bench_model_step on a broken dome exits 1 naming the step (rc %d): %s" % (rc, out.strip()[-200:]))
+    check(rc == 1 and "gel.pressure_Pa: must be <= 1e+07 (got 1e+300)" in out and "median" not in out,
+          "bench_model_step refuses the broken dome at load, naming the key, exit 1 (rc %d): %s" % (rc, out.strip()[-200:]))
 
 
 def case_bench_step_zero(a, tmp):
