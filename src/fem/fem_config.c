@@ -364,6 +364,21 @@ int palp_fem_config_load(const char *path, palp_fem_config *cfg, char *err, size
   int rc = palp_fem_config_parse(buf, cfg, e2, sizeof e2);
   if (rc) snprintf(err, errlen, "%s: %s", path, e2);
   free(buf);
+  /* "inp" is read from beside the configuration, as a scene's "parameters" and an exercise's
+   * "phantom" are from beside theirs: until session 81 from the working directory, so a
+   * configuration found its mesh only when run from its own folder ("m.inp: cannot open").
+   * cache_dir stays the working directory's (a cache, not an input: docs/fem.md). */
+  const char *slash = strrchr(path, '/');
+  if (!rc && cfg->inp_path[0] && cfg->inp_path[0] != '/' && slash) {
+    char full[sizeof cfg->inp_path];
+    const int n = snprintf(full, sizeof full, "%.*s/%s", (int)(slash - path), path, cfg->inp_path);
+    if (n < 0 || (size_t)n >= sizeof full) {
+      snprintf(err, errlen, "%s: inp: \"%s\" beside the configuration makes a path longer than %zu bytes", path,
+               cfg->inp_path, sizeof full - 1);
+      return PALP_EINVAL;
+    }
+    memcpy(cfg->inp_path, full, (size_t)n + 1);
+  }
   return rc;
 }
 

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "fem_internal.h"
+#include "palp_input_file.h"
 
 int palp_fem_inp_write(const palp_fem_mesh *m, const char *path, const char *heading) {
   char tmp[1024];
@@ -101,6 +102,8 @@ typedef struct reader {
 #define INP_ID_MAX 999999999.0
 #define INP_COUNT_MAX 10000000
 #define INP_SETS_MAX 1024
+#define INP_COORD_MAX_M 1e3                /* [m]: a phantom is centimetres across */
+#define INP_FILE_MAX ((size_t)1 << 28)    /* 256 MiB: the level-3 dome's file is ~10 MB */
 
 /* An id read as a double: a whole number in 1..INP_ID_MAX, else an error. (Casting 1e19
  * to an integer is undefined behaviour and made distinct ids collide.) */
@@ -202,10 +205,21 @@ static int numbers(const char *line, double *v, int max) {
 
 int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t errlen) {
   memset(out, 0, sizeof *out);
-  FILE *f = fopen(path, "r");
+  /* Read whole and checked first (palp_input_file_read): a regular file (a FIFO hung the reader),
+   * bounded, and without a NUL byte, which fgets took for a line's end and was then reported as "line
+   * longer than 4095 characters" (session 81). */
+  char *text = NULL, why[200];
+  size_t len = 0;
+  const int rd = palp_input_file_read(path, INP_FILE_MAX, &text, &len, why, sizeof why);
+  if (rd) {
+    snprintf(err, errlen, "%s: %s", path, why);
+    return rd == PALP_ENOMEM ? rd : PALP_EIO;
+  }
+  FILE *f = len ? fmemopen(text, len, "r") : NULL;
   if (!f) {
-    snprintf(err, errlen, "%s: cannot open", path);
-    return PALP_EIO;
+    free(text);
+    snprintf(err, errlen, "%s: %s", path, len ? "cannot read" : "empty");
+    return len ? PALP_EIO : PALP_EPARSE;
   }
   reader r;
   memset(&r, 0, sizeof r);
@@ -286,6 +300,16 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
         rc = PALP_EPARSE;
         break;
       }
+      /* A phantom is centimetres across: a coordinate beyond 1 km (or not finite) is a wrong file,
+       * not a mesh, and its volumes overflowed to "degenerate (zero volume)" (session 81). */
+      for (int c = 1; c < n; ++c)
+        if (!(fabs(v[c]) <= INP_COORD_MAX_M)) {
+          snprintf(err, errlen, "%s:%d: node %ld: coordinate %.17g is not a finite number within +-%.0f m", path,
+                   lineno, nid, v[c], INP_COORD_MAX_M);
+          rc = PALP_EPARSE;
+          break;
+        }
+      if (rc) break;
       if (r.nn >= INP_COUNT_MAX) {
         snprintf(err, errlen, "%s:%d: more than %d nodes", path, lineno, INP_COUNT_MAX);
         rc = PALP_EINVAL;
@@ -375,6 +399,7 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
     }
   }
   fclose(f);
+  free(text);
   if (!rc && (r.nn == 0 || r.ne == 0)) {
     snprintf(err, errlen, "%s: no *NODE or no C3D8 *ELEMENT data", path);
     rc = PALP_EPARSE;
@@ -441,8 +466,13 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
   }
   free(nt);
   free(et);
+  /* the file's element ids, kept for the checks below: their messages name the element as the file
+   * does (until session 81 by its place in the file, "element 2" of a file numbering from 1001) */
+  long *eids = r.elem_id;
+  r.elem_id = NULL;
   reader_free(&r);
   if (rc) {
+    free(eids);
     palp_fem_mesh_destroy(out);
     return rc;
   }
@@ -463,16 +493,20 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
   for (int n = 0; n < out->node_count; ++n) nfixed += out->fixed[n];
   if (nfixed == 0) {
     snprintf(err, errlen, "%s: nothing is clamped (no NSET BASE and no node at z <= 1e-9 m)", path);
+    free(eids);
     palp_fem_mesh_destroy(out);
     return PALP_EINVAL;
   }
   palp_fem_mesh_orient(out);
   for (int e = 0; e < out->element_count; ++e)
     if (!(palp_fem_element_volume(out, e) > 0.0)) {
-      snprintf(err, errlen, "%s: element %d is degenerate (zero volume)", path, e + 1);
+      snprintf(err, errlen, "%s: element %ld is degenerate (volume %g m^3: its corners flat, folded or repeated)",
+               path, eids ? eids[e] : (long)e + 1, palp_fem_element_volume(out, e));
+      free(eids);
       palp_fem_mesh_destroy(out);
       return PALP_EINVAL;
     }
+  free(eids);
   rc = palp_fem_mesh_standard_sets(out);
   if (rc) palp_fem_mesh_destroy(out);
   return rc;

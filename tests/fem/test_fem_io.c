@@ -94,6 +94,9 @@ static void test_inp(void) {
       {"*Nset, nset=a, generate\n1, 999999999, 1\n", "makes more than 10000000 set members", PALP_EINVAL},
       {"*Nset, nset=a, generate\n10, 1, 1\n", "start <= end", PALP_EPARSE},
       {"*Nset, nset=a\n1, -3\n", "set member -3 is not a whole number", PALP_EPARSE},
+      /* session 81: a coordinate of 1e300 m overflowed the volumes, reported "degenerate (zero volume)" */
+      {"*Node\n1, 1e300, 0, 0\n", "node 1: coordinate 1.0000000000000001e+300 is not a finite number within +-1000 m",
+       PALP_EPARSE},
   };
   int rc;
   for (size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
@@ -105,6 +108,51 @@ static void test_inp(void) {
     CHECK(rc == hostile[i].rc && strstr(err, hostile[i].want) && (strstr(err, ":2:") || strstr(err, ":4:")), "hostile .inp %zu refused: %s", i,
           err);
     if (rc == 0) palp_fem_mesh_destroy(&b);
+  }
+  /* Session 81 review: a flat element is named by its id in the file (it was named by its place, "element
+   * 2", in a file numbering its elements from 1001); a NUL byte is named as such (it was "line longer
+   * than 4095 characters"). Two unit cubes, the second (1002) with its top face at z = 0: zero volume. */
+  f = fopen(path, "w");
+  fprintf(f, "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n"
+             "8, 0, 1, 1\n*Element, type=C3D8\n1001, 1, 2, 3, 4, 5, 6, 7, 8\n1002, 1, 2, 3, 4, 1, 2, 3, 4\n");
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == PALP_EINVAL && strstr(err, ": element 1002 is degenerate (volume 0 m^3"), "a flat element named by its "
+        "id: rc %d, %s", rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  f = fopen(path, "wb");
+  fwrite("*Node\n1, 0,\0 0, 0\n", 1, 19, f);
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc != 0 && strstr(err, "a NUL byte at byte 11"), "a NUL byte named: rc %d, %s", rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  /* Session 81 review: a configuration's "inp" is read from beside it, as a scene's "parameters" (it was
+   * read from the working directory: "m.inp: cannot open" unless run from the configuration's folder). */
+  {
+    char dir[512], cfgp[600], inp[600];
+    palp_test_tmp(dir, sizeof dir, "palp_fem_cfg_XXXXXX");
+    CHECK(mkdtemp(dir) != NULL, "mkdtemp");
+    snprintf(cfgp, sizeof cfgp, "%s/fem.json", dir);
+    snprintf(inp, sizeof inp, "%s/m.inp", dir);
+    palp_fem_mesh_def md = palp_fem_mesh_default_def();
+    md.level = 1;
+    palp_fem_mesh m;
+    CHECK(palp_fem_mesh_create(&md, &m) == 0 && palp_fem_inp_write(&m, inp, "beside") == 0, "write m.inp");
+    palp_fem_mesh_destroy(&m);
+    f = fopen(cfgp, "w");
+    fprintf(f, "{\"inp\": \"m.inp\"}\n");
+    fclose(f);
+    palp_fem_config cfg = palp_fem_default_config();
+    err[0] = 0;
+    rc = palp_fem_config_load(cfgp, &cfg, err, sizeof err);
+    CHECK(rc == 0 && strcmp(cfg.inp_path, inp) == 0, "\"inp\" resolved beside the configuration: rc %d, %s "
+          "(want %s) %s", rc, cfg.inp_path, inp, err);
+    rc = palp_fem_inp_read(cfg.inp_path, &b, err, sizeof err); /* from the test's working directory */
+    CHECK(rc == 0, "and read from there: %s", err);
+    if (rc == 0) palp_fem_mesh_destroy(&b);
+    remove(inp), remove(cfgp), rmdir(dir);
   }
   /* Many sets (review, 2026-12-06): set members are capped over all sets together, not per set. Each
    * block below asks for 10,000,000 members (80 MB), within a per-set cap; the second must be
