@@ -303,11 +303,19 @@ int palp_cli_simdevice_parse(const char *spec, palp_cli_simdevice_def *out, char
     char *eq = strchr(tok, '=');
     char *end = NULL;
     double v = eq ? strtod(eq + 1, &end) : NAN;
-    if (!eq || end == eq + 1 || *end || !isfinite(v) || v < 0 || v > 1e4) {
-      snprintf(err, errlen, "simulated device: \"%s\": expected key=value with a number in [0, 1e4]", tok);
+    /* azimuth may be negative, as --azimuth may (-360..360 deg); every other value is >= 0 */
+    const int signed_ok = eq && (size_t)(eq - tok) == strlen("azimuth") && !strncmp(tok, "azimuth", 7);
+    if (!eq || end == eq + 1 || *end || !isfinite(v) || v < (signed_ok ? -360 : 0) || v > 1e4) {
+      snprintf(err, errlen, "simulated device: \"%s\": expected key=value with a number in [%s, 1e4]", tok,
+               signed_ok ? "-360" : "0");
       return PALP_EINVAL;
     }
     *eq = 0;
+    /* counts are whole: circles=2.5 was cut to 2 without a word (session 81) */
+    if ((!strcmp(tok, "circles") || !strcmp(tok, "cycles") || !strcmp(tok, "strips")) && v != floor(v)) {
+      snprintf(err, errlen, "simulated device: \"%s=%s\": a count, expected a whole number", tok, eq + 1);
+      return PALP_EINVAL;
+    }
     if (!strcmp(tok, "depth_mm")) d.depth = v * 1e-3;
     else if (!strcmp(tok, "speed_mm_s")) d.speed = v * 1e-3;
     else if (!strcmp(tok, "hold_s")) d.hold = v;

@@ -966,6 +966,31 @@ static void report_foreign(const opts *o, palp_cli_station *st, const char *role
                         "accepted the join), ignored; further ones are counted", st->session_id, who);
 }
 
+/* Samples of this session the server refused (SessionState.rejected_samples rose): the trainee is
+ * told at once and then at most every 10 s while it rises, even with --quiet (her presses may be
+ * reaching nothing: a --finger-radius outside the server's range was refused sample by sample while
+ * the station said nothing, session 81). The server's log names each refusal's reason. */
+#define REJECTED_SAY_INTERVAL_NS 10000000000LL
+static void report_rejected(const opts *o, palp_cli_station *st, const char *role, int named) {
+  const int64_t now = palp_dds_now_ns();
+  if (st->rejected_samples <= st->rejected_said ||
+      (st->rejected_said_ns && now - st->rejected_said_ns < REJECTED_SAY_INTERVAL_NS))
+    return;
+  const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
+  char radius[64] = "";
+  if (o->finger_radius_mm > 0) snprintf(radius, sizeof radius, " (this station's is %g mm)", o->finger_radius_mm);
+  tprintf(o, "[%s%s%s] the server refused %llu contact sample%s of session %u so far: they reach nothing. Its log "
+             "says why: a finger radius outside its range%s, a force above its limit, or a writer not of this "
+             "session\n",
+          role, sep, name, (unsigned long long)st->rejected_samples, st->rejected_samples == 1 ? "" : "s",
+          st->session_id, radius);
+  fflush(stdout);
+  palp_log_warn(o->log, "session %u: the server refused %llu contact samples so far", st->session_id,
+                (unsigned long long)st->rejected_samples);
+  st->rejected_said = st->rejected_samples;
+  st->rejected_said_ns = now;
+}
+
 /* The summary lines' count of those: "" when none. */
 static const char *foreign_summary(const palp_cli_station *st, char *buf, size_t len) {
   buf[0] = 0;
@@ -1144,6 +1169,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       report_stall(o, st, stalls_seen, "trainee", 1);
       report_log(o, st, "trainee", 1);
       report_foreign(o, st, "trainee", 1);
+      report_rejected(o, st, "trainee", 1);
       next_check = now + 100000000;
     }
   }
@@ -1343,6 +1369,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       report_stall(o, st, stalls_seen, "trainee", 1);
       report_log(o, st, "trainee", 1);
       report_foreign(o, st, "trainee", 1);
+      report_rejected(o, st, "trainee", 1);
       if (was_closed) {
         if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
           /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */

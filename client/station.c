@@ -1150,6 +1150,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
           continue;
         }
         st->session_ticks = buf[i].ticks;
+        st->rejected_samples = buf[i].rejected_samples;
         if (buf[i].phase == palp_PHASE_CLOSED) {
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);

@@ -94,6 +94,11 @@ typedef struct palp_cli_station {
   /* SessionState.ticks last seen for this session: a server steps on, never back; fewer ticks are
    * a new session under the same id (a restarted server that took this station's JOIN again) */
   uint64_t session_ticks;
+  /* SessionState.rejected_samples last seen from its server, and the count the trainee was last told
+   * of and when (palp-client's report_rejected): a station whose samples the server refuses (a finger
+   * radius outside its range, say) pressed on a dome that never moved, told nothing (session 81) */
+  uint64_t rejected_samples, rejected_said;
+  int64_t rejected_said_ns;
   dds_entity_t pub, sub;
   dds_entity_t contact_w, contact_r, feedback_r, deformation_r;
   dds_entity_t local_model_r; /* trainee with feedback: the server's local contact models (issue 11) */

@@ -66,7 +66,8 @@ static void reload_config(sig_ctx *c) {
   static palp_srv_config nc; /* one signal thread; too large for comfort on its stack */
   char e[512];
   if (palp_srv_config_load(c->config_path, &nc, e, sizeof e) < 0) {
-    palp_log_error(c->log, "SIGHUP: %s: %s; the running configuration stays", c->config_path, e);
+    /* e names the file already (palp_srv_config_load: "<path>: ...") */
+    palp_log_error(c->log, "SIGHUP: %s; the running configuration stays", e);
     return;
   }
   palp_log_level lv;
@@ -163,7 +164,13 @@ int main(int argc, char **argv) {
     if (common) continue;
     if (!strcmp(a, "--config") && v) config_path = argv[++i];
     else if (!strcmp(a, "--database") && v) database = argv[++i];
-    else if (!strcmp(a, "--server-name") && v && v[0] && strlen(v) < 64) server_name = argv[++i];
+    else if (!strcmp(a, "--server-name") && v) {
+      if (!v[0] || strlen(v) >= 64) {
+        fprintf(stderr, "palp-server: --server-name: 1 to 63 characters (got %zu)\n", strlen(v));
+        return 2;
+      }
+      server_name = argv[++i];
+    }
     else if (!strcmp(a, "--server-number")) bad = parse_whole(a, v, 0, 4095, &server_number), i++;
     else if (!strcmp(a, "--identity-wait")) bad = parse_num(a, v, 0, 60, &identity_wait), i++;
     else if (!strcmp(a, "--domain")) bad = parse_whole(a, v, 0, 232, &domain), i++;

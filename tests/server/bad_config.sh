@@ -106,6 +106,9 @@ expect "{$dds, \"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"dome-twi
 # exercise they name)
 out=$("$server" --config /nonexistent/server.json 2>&1); rc=$?
 if [ $rc -ne 0 ] && printf '%s' "$out" | grep -q "cannot open"; then echo "ok   exit $rc: $out"; else echo "FAIL missing file: $out"; fail=1; fi
+# session 81: a --server-name of 64 characters (or none) is told its rule, not "unknown option"
+out=$("$server" --server-name "$(printf '%064d' 0)" --check 2>&1); rc=$?
+if [ $rc -eq 2 ] && printf '%s' "$out" | grep -qF -- "--server-name: 1 to 63 characters (got 64)"; then echo "ok   exit $rc: $out"; else echo "FAIL --server-name of 64: $out"; fail=1; fi
 out=$("$server" --tick-rate fast 2>&1); rc=$?
 if [ $rc -ne 0 ] && printf '%s' "$out" | grep -q -- "--tick-rate"; then echo "ok   exit $rc: $out"; else echo "FAIL bad option: $out"; fail=1; fi
 out=$("$server" --config "$config_dir/server.json" --check 2>&1); rc=$?

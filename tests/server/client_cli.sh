@@ -28,6 +28,9 @@ expect 2 "unknown option" --role trainee --phantom 1 --force 3
 expect 1 "--profile" --role trainee --phantom 1 --profile square --domain 108
 expect 1 "needs a terminal" --role trainee --phantom 1 --input keyboard --domain 108
 expect 1 "cannot open" --role trainee --phantom 1 --input replay:/nonexistent.csv --domain 108
+# session 81: a simulated device's counts are whole (circles=2.5 ran 2), its azimuth signed as --azimuth's
+expect 1 "\"circles=2.5\": a count, expected a whole number" --role trainee --phantom 1 --input sim:circles,circles=2.5 --domain 108
+expect 1 "\"azimuth=-400\": expected key=value with a number in [-360, 1e4]" --role trainee --phantom 1 --input sim:press,azimuth=-400 --domain 108
 expect 1 "device driver" --role trainee --phantom 1 --input device:/nonexistent.so --domain 108
 # a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
 expect 2 "--log-file /nonexistent/dir/c.log: cannot open it: No such file or directory" --role trainee --phantom 1 \
