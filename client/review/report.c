@@ -28,24 +28,45 @@ static double nice_step(double range, int target) {
   return p * (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10);
 }
 
+/* Axis ticks from `first` in steps of `step` up to `last`: at most MAX_TICKS, and none when the step
+ * does not move a value of that size (first + step == first: frame times of 1e17 s from a damaged log,
+ * where "v += step" never passed the end and the report wrote <line> elements until the disk filled). */
+#define MAX_TICKS 100
+static int tick_count(double first, double last, double step) {
+  if (!isfinite(first) || !isfinite(last) || !(step > 0) || !isfinite(step) || !(first + step > first)) return 0;
+  const double n = floor((last - first) / step + 1e-9) + 1;
+  return !(n >= 1) ? 0 : n > MAX_TICKS ? MAX_TICKS : (int)n;
+}
+
+/* The plot's bounds and points are of the finite values only: a log edited or damaged elsewhere may
+ * hold an infinite or NaN time or value (SQLite stores 9e999 as +Inf), which has no place on an axis;
+ * such points are left out of the line and counted under the plot. */
 static void svg_plot(FILE *f, const char *id, const char *title, const char *xlabel, const char *ylabel,
                      const series *s, int ns) {
   const double W = 760, H = 300, L = 70, R = 20, T = 36, B = 46;
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
   int any = 0;
+  long long nonfinite = 0;
   for (int k = 0; k < ns; k++)
     for (int i = 0; i < s[k].n; i++) {
+      if (!isfinite(s[k].x[i]) || !isfinite(s[k].y[i])) {
+        nonfinite++;
+        continue;
+      }
       if (!any) x0 = x1 = s[k].x[i], any = 1;
       if (s[k].x[i] < x0) x0 = s[k].x[i];
       if (s[k].x[i] > x1) x1 = s[k].x[i];
       if (s[k].y[i] > y1) y1 = s[k].y[i];
       if (s[k].y[i] < y0) y0 = s[k].y[i];
     }
-  if (!(x1 > x0)) x1 = x0 + 1;
-  if (!(y1 > y0)) y1 = y0 + 1;
+  /* A span that a value of this size can hold: x0 + 1 == x0 beyond 2^53, which divided by zero below. */
+  if (!(x1 > x0)) x1 = x0 + fmax(1.0, fabs(x0) * 1e-9);
+  if (!(y1 > y0)) y1 = y0 + fmax(1.0, fabs(y0) * 1e-9);
   const double ys = nice_step(y1 - y0, 5), xs = nice_step(x1 - x0, 8);
-  y1 = ceil(y1 / ys) * ys;
-  y0 = floor(y0 / ys) * ys;
+  if (isfinite(ceil(y1 / ys) * ys) && isfinite(floor(y0 / ys) * ys) && ceil(y1 / ys) * ys > floor(y0 / ys) * ys) {
+    y1 = ceil(y1 / ys) * ys;
+    y0 = floor(y0 / ys) * ys;
+  }
 #define PX(v) (L + ((v) - x0) / (x1 - x0) * (W - L - R))
 #define PY(v) (H - B - ((v) - y0) / (y1 - y0) * (H - T - B))
   fprintf(f, "<svg id=\"%s\" class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
@@ -53,12 +74,17 @@ static void svg_plot(FILE *f, const char *id, const char *title, const char *xla
           id, W, H, W, H, title);
   fprintf(f, "<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"#ffffff\"/>\n", W, H);
   fprintf(f, "<text x=\"%.0f\" y=\"20\" font-size=\"15\" font-weight=\"bold\">%s</text>\n", L, title);
-  for (double v = y0; v <= y1 + 1e-9 * ys; v += ys) {
+  const int nyt = tick_count(y0, y1, ys);
+  for (int k = 0; k < nyt; k++) {
+    const double v = y0 + k * ys;
     fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#e2e2e2\"/>", L, PY(v), W - R, PY(v));
     fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"end\">%g</text>\n", L - 6, PY(v) + 4,
             fabs(v) < 1e-12 ? 0.0 : v);
   }
-  for (double v = ceil(x0 / xs) * xs; v <= x1 + 1e-9 * xs; v += xs) {
+  const double xfirst = ceil(x0 / xs) * xs;
+  const int nxt = tick_count(xfirst, x1, xs);
+  for (int k = 0; k < nxt; k++) {
+    const double v = xfirst + k * xs;
     fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#f0f0f0\"/>", PX(v), T, PX(v), H - B);
     fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"middle\">%g</text>\n", PX(v), H - B + 16,
             fabs(v) < 1e-12 ? 0.0 : v);
@@ -71,7 +97,8 @@ static void svg_plot(FILE *f, const char *id, const char *title, const char *xla
           (T + H - B) / 2, (T + H - B) / 2, ylabel);
   for (int k = 0; k < ns; k++) {
     fprintf(f, "<polyline class=\"series\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.6\" points=\"", s[k].color);
-    for (int i = 0; i < s[k].n; i++) fprintf(f, "%.1f,%.1f ", PX(s[k].x[i]), PY(s[k].y[i]));
+    for (int i = 0; i < s[k].n; i++)
+      if (isfinite(s[k].x[i]) && isfinite(s[k].y[i])) fprintf(f, "%.1f,%.1f ", PX(s[k].x[i]), PY(s[k].y[i]));
     fputs("\"/>\n", f);
     fprintf(f, "<rect x=\"%.0f\" y=\"%.0f\" width=\"14\" height=\"3\" fill=\"%s\"/>", W - R - 190, T + 10 + 16.0 * k,
             s[k].color);
@@ -80,6 +107,10 @@ static void svg_plot(FILE *f, const char *id, const char *title, const char *xla
 #undef PX
 #undef PY
   fputs("</svg>\n", f);
+  if (nonfinite)
+    fprintf(f, "<p class=\"warn nonfinite\">%lld point%s of this plot not drawn: the log holds a time or value there "
+               "that is not a finite number (a damaged or edited log).</p>\n",
+            nonfinite, nonfinite == 1 ? "" : "s");
 }
 
 /* ---- time series, bucketed -------------------------------------------------------------- */

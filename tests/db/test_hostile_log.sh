@@ -49,6 +49,42 @@ else
   bad "report on a bad mesh row failed: $(cat "$dir/mesh.err")"
 fi
 
+# Frame times no axis can step through (session 81, found by review): times of 1e17 s, 16 s apart (beyond
+# 2^53 a tick step of 1 or 2 s leaves the value as it was), and every frame at +Inf (SQLite reads 9e999
+# as Inf: an axis from Inf to Inf stepped for ever), and the first frame at -Inf and the last at +Inf. Before, report wrote <line> elements for ever (1 GB in 10 s). Now: exit 0 within 10 s, the page
+# under 2 MB (the whole session's page is ~0.1 MB), and the infinite point said to be left out.
+copy bigtime
+sqlite3 "$dir/bigtime.db" "UPDATE frame SET sim_time_s = 1e17 + (frame % 2) * 16"
+copy inftime
+sqlite3 "$dir/inftime.db" "UPDATE frame SET sim_time_s = 9e999"
+copy pminf
+sqlite3 "$dir/pminf.db" "UPDATE frame SET sim_time_s = 9e999 WHERE frame = (SELECT max(frame) FROM frame);
+  UPDATE frame SET sim_time_s = -9e999 WHERE frame = (SELECT min(frame) FROM frame)"
+nframes=$(sqlite3 "$dir/base.db" "SELECT count(*) FROM frame")
+for case in bigtime inftime pminf; do
+  set +e
+  start=$(date +%s)
+  timeout 10 "$review" --db "$dir/$case.db" report "$uid" --out "$dir/$case.html" > "$dir/$case.out" 2>&1; rc=$?
+  took=$(( $(date +%s) - start ))
+  set -e
+  size=$(stat -c %s "$dir/$case.html" 2>/dev/null || echo 0)
+  rm -f "$dir/$case.db"  # a failing run may leave a 1 GB page: not kept beside it
+  if [ $rc -eq 0 ] && [ "$size" -gt 0 ] && [ "$size" -lt 2000000 ]; then
+    ok "$case: report exits 0 in ${took} s, the page $size bytes"
+  else bad "$case: report exit $rc after ${took} s, the page $size bytes: $(tail -c 300 "$dir/$case.out")"; fi
+  # the points left out, by hand: the force plot has 1 series, the displacement plot 2 (top and largest);
+  # at 1,000 frames each bucket of the 1,500-point plots is one frame
+  case $case in
+  inftime) want="$nframes points of|$((2 * nframes)) points of" ;;
+  pminf) want="2 points of|4 points of" ;;
+  *) want="" ;;
+  esac
+  [ -z "$want" ] || { [ "$(grep -Ec "class=\"warn nonfinite\">($want) this plot not drawn" "$dir/$case.html")" = 2 ] &&
+    ok "  the infinite times said under both plots: $(grep -o 'nonfinite">[0-9]* points' "$dir/$case.html" | tr '\n' ' ')" ||
+    bad "  the infinite times not said: $(grep -o 'nonfinite">[^<]*' "$dir/$case.html")"; }
+  rm -f "$dir/$case.html"
+done
+
 copy frame
 sqlite3 "$dir/frame.db" "UPDATE frame SET frame = 1000000000000 WHERE frame = (SELECT max(frame) FROM frame)"
 set +e
