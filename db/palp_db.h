@@ -464,6 +464,9 @@ typedef struct palp_db_refused {
 int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused **out, int *count);
 /* Finds a session by its uid or a unique prefix of it. */
 int palp_db_find_session(palp_db *db, const char *uid_or_prefix, palp_db_session_info *out);
+/* Finds a session by exactly its uid, never a prefix ("run7-1" is not "run7-10"): 0, PALP_DB_ENOTFOUND,
+ * PALP_EINVAL or PALP_DB_ESQL. */
+int palp_db_find_session_uid(palp_db *db, const char *uid, palp_db_session_info *out);
 /* What a SESSION argument that names no session exactly may mean, newest first, at most max in
  * out[] and the number of all of them in *total: the sessions whose uid starts with it, or, with
  * by_number and a whole number N, the sessions the stations called "session N" (uid "<run>-N",

@@ -592,6 +592,11 @@ int palp_db_find_session(palp_db *db, const char *uid, palp_db_session_info *out
   return find_one(db, "SELECT " SESSION_COLS "FROM session s WHERE " UID_PREFIX_WHERE " LIMIT 2", uid, out);
 }
 
+int palp_db_find_session_uid(palp_db *db, const char *uid, palp_db_session_info *out) {
+  if (!uid || !*uid) return PALP_EINVAL;
+  return find_one(db, "SELECT " SESSION_COLS "FROM session s WHERE s.uid = ?1", uid, out);
+}
+
 int palp_db_session_candidates(palp_db *db, const char *arg, int by_number, palp_db_session_info *out, int max,
                                int *total) {
   if (!db || !arg || !*arg || max < 0 || (max > 0 && !out) || !total) return PALP_EINVAL;

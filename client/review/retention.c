@@ -219,17 +219,24 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
   sqlite3 *h = palp_db_handle(db);
   /* Resolve every name first: a typo deletes nothing. */
   int64_t *ids = calloc((size_t)argc, sizeof *ids);
-  if (!ids) return REVIEW_ERROR;
+  char(*uids)[sizeof ((palp_db_session_info *)0)->uid] = calloc((size_t)argc, sizeof *uids);
+  if (!ids || !uids) {
+    free(ids);
+    free(uids);
+    return REVIEW_ERROR;
+  }
   for (int i = 0; i < argc; i++) {
     palp_db_session_info s;
-    int rc = palp_db_find_session(db, argv[i], &s);
-    if (rc) {
-      palp_log_error(log, "delete: session '%s': %s; nothing deleted", argv[i],
-                     rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+    /* a whole uid or a station's number, never a prefix: "run7-1" would delete run7-10 once run7-1 is gone */
+    if (review_find_session(log, db, "delete", argv[i], 0, &s)) {
+      palp_log_error(log, "delete: nothing deleted");
       free(ids);
+      free(uids);
       return REVIEW_ERROR;
     }
     ids[i] = s.id;
+    /* said as the uid deleted, not as typed: "3" is the station's number of one uid */
+    snprintf(uids[i], sizeof uids[i], "%s", s.uid);
     long long pid;
     double since;
     /* A session with no end begun while a live writer had the file open may be that writer's, still
@@ -239,8 +246,9 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
                      "delete: session '%s' has no end logged and a session log writer (pid %lld) has had the file "
                      "open since before it began: it may still be writing that session, and its records would go to "
                      "the next session given its id; nothing deleted (end the session or stop that server first)",
-                     argv[i], pid);
+                     uids[i], pid);
       free(ids);
+      free(uids);
       return REVIEW_ERROR;
     }
   }
@@ -263,7 +271,7 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
       char msg[256];
       snprintf(msg, sizeof msg, "%s", sqlite3_errmsg(h));
       sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
-      palp_log_error(log, "delete %s: %s (untouched%s%s)", argv[i], msg,
+      palp_log_error(log, "delete %s: %s (untouched%s%s)", uids[i], msg,
                      i > first ? "; the sessions named before it are deleted without it" : "",
                      i + 1 < argc ? "; the later ones not tried" : "");
       rc = REVIEW_ERROR;
@@ -279,14 +287,16 @@ int review_delete(palp_log *log, palp_db *db, const char *path, int argc, char *
       sqlite3_exec(h, "ROLLBACK", NULL, NULL, NULL);
       const int last = bad ? i : i - 1; /* the session that failed, or the transaction's last when COMMIT did */
       palp_log_error(log, "delete %s: %s (rolled back with its transaction: %s .. %s, %d session%s, untouched%s)",
-                     argv[last], msg, argv[first], argv[last], last - first + 1, last > first ? "s" : "",
+                     uids[last], msg, uids[first], uids[last], last - first + 1, last > first ? "s" : "",
                      last + 1 < argc ? "; the later ones not tried" : "");
       free(ids);
+      free(uids);
       return REVIEW_ERROR;
     }
-    for (int k = first; k < i; k++) printf("deleted %s\n", argv[k]);
+    for (int k = first; k < i; k++) printf("deleted %s\n", uids[k]);
   }
   free(ids);
+  free(uids);
   if (rc != REVIEW_OK) return rc; /* no compaction after a failure: the command stops where it failed */
   reclaim(log, h);
   printf("file %lld -> %lld bytes\n", before, palp_db_file_bytes(path));

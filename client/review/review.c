@@ -52,8 +52,10 @@ static void usage(FILE *f) {
         "never changed. A log from an older palp is read through an upgraded copy in memory, if it is at\n"
         "most PALP_REVIEW_COPY_MB megabytes (default %d; 0: never copy); a larger one is refused, naming\n"
         "migrate. annotate, delete, prune and migrate write to the file, and upgrade an older one in it.\n"
-        "SESSION is a session uid or a unique prefix of one, or the number a station showed (\"session 3\")\n"
-        "when one logged session has it (otherwise the candidates are listed).\n"
+        "SESSION is a session uid; else the number a station showed (\"session 3\", up to 9 digits) when one\n"
+        "logged session has it; else a unique prefix of a uid (otherwise the candidates are listed). A number\n"
+        "is a station's session number before it is a prefix. delete takes a whole uid or a station's\n"
+        "number, never a prefix, and prints the uid it deleted.\n"
         "DATE is YYYY-MM-DD[THH:MM[:SS]] local time.\n"
         "The database is --db, else $PALP_DB, else ./palp-sessions.db.\n"
         "Errors are log lines (timestamp, level); tables and reports go to stdout.\n",
@@ -374,44 +376,6 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   return REVIEW_OK;
 }
 
-/* A SESSION argument that names no session, or several: the instructor may have typed the
- * number a station showed ("session 3": the uid's tail, docs/naming.md) or a short prefix. One
- * session by its station number is taken (and said); otherwise the candidates are listed, newest
- * first, so the next command can name one. 0 (*s filled), REVIEW_ERROR (said), or a palp_db code. */
-static int resolve_session(palp_log *log, palp_db *db, const char *cmd, const char *arg, int why,
-                           palp_db_session_info *s) {
-  enum { SHOW = 10 };
-  palp_db_session_info c[SHOW];
-  int total = 0, by_number = 0;
-  int rc = palp_db_session_candidates(db, arg, 0, c, SHOW, &total);
-  if (rc == 0 && total == 0) {
-    by_number = 1;
-    rc = palp_db_session_candidates(db, arg, 1, c, SHOW, &total);
-  }
-  if (rc) return rc;
-  if (by_number && total == 1) {
-    palp_log_info(log, "%s: \"session %s\" on the stations is %s (%s, %s)", cmd, arg, c[0].uid, c[0].trainee,
-                  c[0].phantom_name);
-    *s = c[0];
-    return 0;
-  }
-  if (total == 0) {
-    palp_log_error(log, "%s: session '%s': %s (palp-review list shows the sessions; a station's \"session N\" is "
-                   "the uid's last number)", cmd, arg, palp_db_strerror(why));
-    return REVIEW_ERROR;
-  }
-  palp_log_error(log, "%s: session '%s' could be any of %d sessions (%s); name one by its uid:", cmd, arg, total,
-                 by_number ? "\"session N\" on the stations of several server runs" : "their uids start with it");
-  const int pw = phantom_width(c, total < SHOW ? total : SHOW);
-  for (int i = 0; i < total && i < SHOW; i++) {
-    char t0[64];
-    review_fmt_time(c[i].start_unix_s, t0, sizeof t0);
-    fprintf(stderr, "  %-36s %-14.14s %-*.*s %s\n", c[i].uid, c[i].trainee, pw, pw, c[i].phantom_name, t0);
-  }
-  if (total > SHOW) fprintf(stderr, "  ... and %d more (palp-review list)\n", total - SHOW);
-  return REVIEW_ERROR;
-}
-
 /* ---- annotate -------------------------------------------------------------------------- */
 static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *s, int argc, char **argv) {
   const char *author = NULL, *note = NULL, *score_s = NULL, *level = NULL, *grade = NULL;
@@ -605,12 +569,8 @@ static int review_main(int argc, char **argv) {
   }
   palp_db_session_info s;
   const char *uid = argv[i++];
-  rc = palp_db_find_session(db, uid, &s);
-  if (rc == PALP_DB_ENOTFOUND || rc == PALP_DB_EAMBIGUOUS) rc = resolve_session(&log, db, cmd, uid, rc, &s);
-  if (rc) {
-    if (rc != REVIEW_ERROR)
-      palp_log_error(&log, "%s: session '%s': %s", cmd, uid,
-                     rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+  /* a prefix names a session for the commands that do not destroy (delete takes none: retention.c) */
+  if (review_find_session(&log, db, cmd, uid, 1, &s)) {
     palp_db_close(db);
     return REVIEW_ERROR;
   }

@@ -451,6 +451,51 @@ gone=$(python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execut
 [ "$gone" = 0 ] && [ "${free_before:-0}" -gt 0 ] && [ "$free_after" = 0 ] &&
   ok "its writer gone, the running session is deleted; the pages freed beside the writer are given back (free pages $free_before -> $free_after)" ||
   bad "after the writer died: live-1 rows $gone, free pages $free_before -> $free_after"
+# Session 81 review fixes. mklog FILE UID...: an empty log of this schema (class.db's, its meta rows) with
+# ended sessions of those uids, started 1000 s apart in that order, trainee t-UID.
+mklog() {
+  python3 - "$db" "$@" <<'PY2'
+import sqlite3, sys
+src, dst, uids = sys.argv[1], sys.argv[2], sys.argv[3:]
+s = sqlite3.connect(src)
+d = sqlite3.connect(dst)
+for (sql,) in s.execute("select sql from sqlite_master where sql is not null and name not like 'sqlite_%' "
+                        "order by type = 'table' desc, rowid"):
+    d.execute(sql)
+d.executemany("insert into meta(key, value) values(?, ?)", s.execute("select key, value from meta"))
+d.execute("pragma user_version = %d" % s.execute("pragma user_version").fetchone()[0])
+for k, uid in enumerate(uids):
+    d.execute("insert into session(uid, trainee, station, phantom_id, phantom_name, scene_json, params_json, tick_hz, "
+              "dt_s, start_unix_s, end_unix_s, end_reason) values(?, ?, 's', '1', 'p', '{}', '{}', 100, 0.01, ?, ?, "
+              "'normal')", (uid, "t-" + uid, 1.7e9 + 1000 * k, 1.7e9 + 1000 * k + 60))
+d.commit()
+PY2
+}
+uids_left() { python3 -c "import sqlite3,sys; print(' '.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute('select uid from session order by uid')))" "$1"; }
+# 2. a SESSION argument: delete takes no prefix, and says the uid it deleted; a number is a station's
+# session number before it is a prefix (by hand: "3" is the station's number of a41d0b-3 and a prefix of
+# 3f9c1e-7; "1" is the station's number of 1795482287-28255-1 and a prefix of all three uids there)
+mklog "$dir/names.db" run7-1 run7-10
+"$review" --db "$dir/names.db" delete run7-1 > "$dir/names1.txt" 2>&1 || bad "delete run7-1 (an exact uid)"
+expect "delete prints the uid it deleted" "^deleted run7-1$" "$dir/names1.txt"
+if "$review" --db "$dir/names.db" delete run7-1 > "$dir/names2.txt" 2>&1; then bad "delete run7-1 again succeeded: $(cat "$dir/names2.txt")"
+else expect "delete run7-1 again: refused, not run7-10 (a prefix)" "never the start of a uid" "$dir/names2.txt"; fi
+[ "$(uids_left "$dir/names.db")" = "run7-10" ] && ok "  run7-10 kept" || bad "  sessions left: $(uids_left "$dir/names.db")"
+mklog "$dir/names3.db" 3f9c1e-7 a41d0b-3
+"$review" --db "$dir/names3.db" show 3 > "$dir/show3.txt" 2>&1 || bad "show 3"
+expect "show 3 is \"session 3\" on the stations (a41d0b-3), not the uid starting with 3" "^session +a41d0b-3 " "$dir/show3.txt"
+"$review" --db "$dir/names3.db" delete 3 > "$dir/delete3.txt" 2>&1 || bad "delete 3"
+expect "delete 3 deletes a41d0b-3 and says so" "^deleted a41d0b-3$" "$dir/delete3.txt"
+[ "$(uids_left "$dir/names3.db")" = "3f9c1e-7" ] && ok "  3f9c1e-7 kept" || bad "  sessions left: $(uids_left "$dir/names3.db")"
+mklog "$dir/names4.db" 1795482287-28255-1 1795482287-28255-2 1795482287-28255-12
+"$review" --db "$dir/names4.db" show 1 > "$dir/show1.txt" 2>&1 || bad "show 1 over real uids: $(cat "$dir/show1.txt")"
+expect "show 1 over real uids (all start with 1) is session 1" "^session +1795482287-28255-1 " "$dir/show1.txt"
+"$review" --db "$dir/names4.db" show 1795482287-28255-1 > "$dir/show1x.txt" 2>&1 || bad "show of an exact uid that is a prefix of another"
+expect "an exact uid that is also a prefix is that session" "^session +1795482287-28255-1 " "$dir/show1x.txt"
+"$review" --db "$dir/names4.db" show 1795482287-28255-2 > /dev/null 2>&1 &&
+  "$review" --db "$dir/names4.db" show 1795 > "$dir/show1795.txt" 2>&1 && bad "show 1795: an ambiguous prefix taken" ||
+  expect "a prefix of several (and no station number) still lists them" "could be any of 3 sessions" "$dir/show1795.txt"
+
 # a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
 "$review" --log-file /nonexistent/dir/r.log --db "$db" list > "$dir/logfile.txt" 2>&1
 rc=$?
