@@ -420,8 +420,12 @@ typedef struct palp_db_session_info {
 typedef struct palp_db_filter {
   const char *trainee;    /* exact match, NULL = any */
   const char *phantom;    /* matches phantom_id or phantom_name, NULL = any */
-  double since_unix_s;    /* start >= since; 0 = no bound */
-  double until_unix_s;    /* start < until; 0 = no bound */
+  double since_unix_s;    /* start >= since, when has_since */
+  double until_unix_s;    /* start < until, when has_until */
+  /* A bound applies when its flag is set, whatever its value (since session 81: a bound <= 0 meant
+   * none, so "list --until 1970-01-01" listed every session and a prune cutoff before 1970, from
+   * --older-than 30000, pruned every ended session). */
+  int has_since, has_until;
 } palp_db_filter;
 
 /* What a log can be trusted for, from the data itself and not only the writer's counters
@@ -453,7 +457,7 @@ void palp_db_log_health_describe(const palp_db_log_health *h, char *buf, size_t 
 /* Lists matching sessions, oldest first; *out is malloc'd (free()). */
 int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count);
 
-/* The peers DDS Security refused between f->since_unix_s and f->until_unix_s (0: open),
+/* The peers DDS Security refused between f->since_unix_s and f->until_unix_s (each if its has_ flag),
  * from the server-wide security_refused events: one row per detail, refusals summed, most
  * first. Freed by the caller (free). */
 typedef struct palp_db_refused {

@@ -1,6 +1,7 @@
 /* Reading a session log: listing, finding and walking sessions, adding notes.
  * Readers run beside the server's writer: WAL gives them a consistent snapshot per statement
  * without blocking it, and busy_timeout covers the moments a checkpoint holds a lock. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -494,8 +495,9 @@ int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_
   if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
   if (f && f->trainee) sqlite3_bind_text(st, 1, f->trainee, -1, SQLITE_STATIC);
   if (f && f->phantom) sqlite3_bind_text(st, 2, f->phantom, -1, SQLITE_STATIC);
-  if (f && f->since_unix_s > 0) sqlite3_bind_double(st, 3, f->since_unix_s);
-  if (f && f->until_unix_s > 0) sqlite3_bind_double(st, 4, f->until_unix_s);
+  /* a bound that is not a number would bind as NULL, no bound: none matches instead */
+  if (f && f->has_since) sqlite3_bind_double(st, 3, isnan(f->since_unix_s) ? INFINITY : f->since_unix_s);
+  if (f && f->has_until) sqlite3_bind_double(st, 4, isnan(f->until_unix_s) ? -INFINITY : f->until_unix_s);
   int cap = 0, n = 0, rc;
   palp_db_session_info *v = NULL;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
@@ -530,8 +532,8 @@ int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused *
                     "GROUP BY detail ORDER BY SUM(count) DESC, detail";
   if (sqlite3_prepare_v2(db->db, sql, -1, &st, NULL) != SQLITE_OK) return PALP_DB_ESQL;
   sqlite3_bind_text(st, 1, palp_db_event_kind_name(PALP_DB_EVENT_SECURITY_REFUSED), -1, SQLITE_STATIC);
-  if (f && f->since_unix_s > 0) sqlite3_bind_double(st, 2, f->since_unix_s);
-  if (f && f->until_unix_s > 0) sqlite3_bind_double(st, 3, f->until_unix_s);
+  if (f && f->has_since) sqlite3_bind_double(st, 2, isnan(f->since_unix_s) ? INFINITY : f->since_unix_s);
+  if (f && f->has_until) sqlite3_bind_double(st, 3, isnan(f->until_unix_s) ? -INFINITY : f->until_unix_s);
   int cap = 0, n = 0, rc;
   palp_db_refused *v = NULL;
   while ((rc = sqlite3_step(st)) == SQLITE_ROW) {

@@ -218,7 +218,7 @@ int review_drawn_text(const palp_exercise *ex, char *buf, size_t len) {
 int review_told_before(palp_db *db, const palp_db_session_info *s, const review_assessment *a, review_told *out) {
   memset(out, 0, sizeof *out);
   if (!a->has_exercise || !a->ex.lesion_count) return 0;
-  palp_db_filter flt = {.trainee = s->trainee, .until_unix_s = s->start_unix_s};
+  palp_db_filter flt = {.trainee = s->trainee, .until_unix_s = s->start_unix_s, .has_until = 1};
   palp_db_session_info *v = NULL;
   int n = 0;
   const int rc = palp_db_list_sessions(db, &flt, &v, &n);

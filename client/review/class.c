@@ -41,6 +41,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     else if (!strcmp(argv[i], "--out")) out = argv[++i];
     else if (!strcmp(argv[i], "--csv")) csv = argv[++i];
     else if (!strcmp(argv[i], "--since")) {
+      flt.has_since = 1;
       if (review_parse_date(argv[++i], &flt.since_unix_s)) {
         fprintf(stderr, "palp-review class: --since: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", argv[i]);
         return REVIEW_ERROR;
@@ -108,7 +109,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       used += (size_t)snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", name);
     }
     fprintf(stderr, "palp-review class: no session of exercise '%s'%s in this log (exercises logged: %s)\n", exercise,
-            flt.since_unix_s > 0 ? " since that date" : "", used ? known : "none");
+            flt.has_since ? " since that date" : "", used ? known : "none");
     free(v), free(rows);
     return REVIEW_ERROR;
   }

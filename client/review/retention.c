@@ -46,6 +46,7 @@
  * after ~21 s of retries (5 s busy timeout each): half a second keeps its wait short, and a few
  * hundred small sessions fit in it. A session larger than that still goes whole in one. */
 #define RETENTION_BATCH_SESSIONS 256
+#define RETENTION_MAX_DAYS 100000 /* prune --older-than: 274 years at most (the cap before session 81) */
 #define RETENTION_BATCH_SECONDS 0.5
 
 static double mono_s(void) {
@@ -310,10 +311,17 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
     if (!strcmp(argv[i], "--keep-graded")) keep_graded = 1;
     else if (!strcmp(argv[i], "--dry-run")) dry = 1;
     else if (!strcmp(argv[i], "--older-than") && i + 1 < argc) {
-      char *end;
-      days = strtod(argv[++i], &end);
-      if (*end || !(days >= 0) || days > 1e5) {
-        fprintf(stderr, "palp-review prune: --older-than DAYS: a number of days >= 0 is required, got '%s'\n", argv[i]);
+      /* Digits, and a fraction after a point, nothing else (since session 81: strtod took "" as 0 days,
+       * "prune everything ended", and " 5", "1e3", "0x10" as numbers). At most RETENTION_MAX_DAYS: the
+       * cutoff, before 1970 for more than ~20,000 days, is a bound all the same (has_until), where a
+       * cutoff <= 0 was taken for none and --older-than 30000 pruned every ended session. */
+      const char *a = argv[++i];
+      const size_t nd = strspn(a, "0123456789");
+      const int whole = nd > 0 && (a[nd] == '\0' || (a[nd] == '.' && a[nd + 1 + strspn(a + nd + 1, "0123456789")] == '\0'));
+      days = whole ? strtod(a, NULL) : -1;
+      if (!whole || !(days <= RETENTION_MAX_DAYS)) {
+        fprintf(stderr, "palp-review prune: --older-than DAYS: a number of days from 0 to %d (digits, a fraction "
+                "after a point) is required, got '%s'\n", RETENTION_MAX_DAYS, a);
         return REVIEW_ERROR;
       }
     } else {
@@ -327,7 +335,7 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
   }
   sqlite3 *h = palp_db_handle(db);
   const double cutoff = (double)time(NULL) - days * 86400.0;
-  palp_db_filter f = {.until_unix_s = cutoff};
+  palp_db_filter f = {.until_unix_s = cutoff, .has_until = 1};
   palp_db_session_info *v;
   int n;
   if (palp_db_list_sessions(db, &f, &v, &n)) {

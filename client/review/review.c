@@ -96,8 +96,8 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
         fprintf(stderr, "palp-review list: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", a, argv[i]);
         return REVIEW_ERROR;
       }
-      if (!strcmp(a, "--since")) f.since_unix_s = t;
-      else f.until_unix_s = t;
+      if (!strcmp(a, "--since")) f.since_unix_s = t, f.has_since = 1;
+      else f.until_unix_s = t, f.has_until = 1;
     } else {
       fprintf(stderr, "palp-review list: unknown option %s\n", a);
       return REVIEW_ERROR;
@@ -130,7 +130,8 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   free(v);
   /* Who could not join at all: no session, so nowhere above (palp-server logs them as
    * server-wide events; docs/security.md). Listed for the same time range. */
-  palp_db_filter rf = {.since_unix_s = f.since_unix_s, .until_unix_s = f.until_unix_s};
+  palp_db_filter rf = {.since_unix_s = f.since_unix_s, .until_unix_s = f.until_unix_s, .has_since = f.has_since,
+                       .has_until = f.has_until};
   palp_db_refused *rv;
   int rn;
   if (!f.trainee && !f.phantom && !ungraded && palp_db_list_refused(db, &rf, &rv, &rn) == 0) {

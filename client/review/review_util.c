@@ -79,13 +79,27 @@ void csv_str(FILE *f, const char *s) {
 int review_parse_date(const char *s, double *out) {
   struct tm tm;
   memset(&tm, 0, sizeof tm);
-  int y, mo, d, h = 0, mi = 0, se = 0;
+  int y, mo, d, h = 0, mi = 0, se = 0, end = -1;
   char sep = 0;
-  int n = sscanf(s, "%4d-%2d-%2d%c%2d:%2d:%2d", &y, &mo, &d, &sep, &h, &mi, &se);
-  if (n != 3 && n < 6) return -1;
-  if (n >= 4 && sep != 'T' && sep != ' ') return -1;
-  if (mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 || h > 23 || mi < 0 || mi > 59 || se < 0 || se > 60)
-    return -1;
+  /* The whole string, one of the three forms (since session 81: text after a date or time was ignored,
+   * "2026-03-01Tfoo" and "2026-03-01 12:00:00junk" accepted). */
+  const size_t len = strlen(s);
+  int n = sscanf(s, "%4d-%2d-%2d%n", &y, &mo, &d, &end);
+  if (n != 3 || end < 0) return -1;
+  if ((size_t)end != len) {
+    const int date_end = end;
+    end = -1;
+    n = sscanf(s + date_end, "%c%2d:%2d%n", &sep, &h, &mi, &end);
+    if (n != 3 || end < 0) return -1;
+    int at = date_end + end;
+    if ((size_t)at != len) {
+      end = -1;
+      if (sscanf(s + at, ":%2d%n", &se, &end) != 1 || end < 0 || (size_t)(at + end) != len) return -1;
+    }
+  }
+  if (sep && sep != 'T' && sep != ' ') return -1;
+  if (strspn(s, "0123456789-T: ") != len) return -1; /* no sign or space inside a field */
+  if (mo < 1 || mo > 12 || d < 1 || d > 31 || h < 0 || h > 23 || mi < 0 || mi > 59 || se < 0 || se > 59) return -1;
   tm.tm_year = y - 1900;
   tm.tm_mon = mo - 1;
   tm.tm_mday = d;
@@ -95,6 +109,9 @@ int review_parse_date(const char *s, double *out) {
   tm.tm_isdst = -1;
   time_t t = mktime(&tm);
   if (t == (time_t)-1) return -1;
+  /* mktime carries a day past the month's end into the next (2026-02-31 became 3 March): a date that
+   * is not on the calendar is refused. (A local time skipped by a clock change moves by the hour.) */
+  if (tm.tm_year != y - 1900 || tm.tm_mon != mo - 1 || tm.tm_mday != d) return -1;
   *out = (double)t;
   return 0;
 }

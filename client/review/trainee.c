@@ -183,8 +183,8 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
         fprintf(stderr, "palp-review trainee: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", argv[i], argv[i + 1]);
         return REVIEW_ERROR;
       }
-      if (!strcmp(argv[i], "--since")) flt.since_unix_s = t;
-      else flt.until_unix_s = t;
+      if (!strcmp(argv[i], "--since")) flt.since_unix_s = t, flt.has_since = 1;
+      else flt.until_unix_s = t, flt.has_until = 1;
       i++;
     } else {
       fprintf(stderr, "palp-review trainee: unknown option %s\n", argv[i]);
@@ -206,7 +206,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   }
   if (n == 0) {
     fprintf(stderr, "palp-review trainee: no session of trainee '%s'%s in this log (palp-review list gives the names)\n",
-            name, flt.since_unix_s > 0 || flt.until_unix_s > 0 ? " in that time" : "");
+            name, flt.has_since || flt.has_until ? " in that time" : "");
     free(v);
     return REVIEW_ERROR;
   }

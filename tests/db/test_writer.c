@@ -163,7 +163,7 @@ static void test_round_trip(void) {
   f.trainee = "bob";
   CHECK(palp_db_list_sessions(db, &f, &list, &n) == 0 && n == 0, "list bob n=%d", n);
   free(list);
-  f = (palp_db_filter){.since_unix_s = 1.7e9 + 1};
+  f = (palp_db_filter){.since_unix_s = 1.7e9 + 1, .has_since = 1};
   CHECK(palp_db_list_sessions(db, &f, &list, &n) == 0 && n == 0, "list since n=%d", n);
   free(list);
   sqlite3 *h = palp_db_handle(db);
@@ -714,7 +714,7 @@ static void test_refused(void) {
             v[1].count == 1 && v[0].first_unix_s <= v[0].last_unix_s,
         "two peers, most refused first: %d rows, %s %lld", n, n ? v[0].detail : "-", n ? (long long)v[0].count : 0);
   free(v);
-  palp_db_filter later = {.since_unix_s = 4102444800.0}; /* 2100-01-01: after every event */
+  palp_db_filter later = {.since_unix_s = 4102444800.0, .has_since = 1}; /* 2100-01-01: after every event */
   CHECK(palp_db_list_refused(db, &later, &v, &n) == 0 && n == 0, "none after their time (%d)", n);
   free(v);
   CHECK(db_scalar(palp_db_handle(db), "SELECT count(*) FROM event WHERE session_id IS NOT NULL") == 0,

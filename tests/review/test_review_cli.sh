@@ -464,10 +464,11 @@ for (sql,) in s.execute("select sql from sqlite_master where sql is not null and
     d.execute(sql)
 d.executemany("insert into meta(key, value) values(?, ?)", s.execute("select key, value from meta"))
 d.execute("pragma user_version = %d" % s.execute("pragma user_version").fetchone()[0])
+scene = s.execute("select scene_json from session order by id limit 1").fetchone()[0]  # one that parses: prunable
 for k, uid in enumerate(uids):
     d.execute("insert into session(uid, trainee, station, phantom_id, phantom_name, scene_json, params_json, tick_hz, "
-              "dt_s, start_unix_s, end_unix_s, end_reason) values(?, ?, 's', '1', 'p', '{}', '{}', 100, 0.01, ?, ?, "
-              "'normal')", (uid, "t-" + uid, 1.7e9 + 1000 * k, 1.7e9 + 1000 * k + 60))
+              "dt_s, start_unix_s, end_unix_s, end_reason) values(?, ?, 's', '1', 'p', ?, '{}', 100, 0.01, ?, ?, "
+              "'normal')", (uid, "t-" + uid, scene, 1.7e9 + 1000 * k, 1.7e9 + 1000 * k + 60))
 d.commit()
 PY2
 }
@@ -495,6 +496,32 @@ expect "an exact uid that is also a prefix is that session" "^session +179548228
 "$review" --db "$dir/names4.db" show 1795482287-28255-2 > /dev/null 2>&1 &&
   "$review" --db "$dir/names4.db" show 1795 > "$dir/show1795.txt" 2>&1 && bad "show 1795: an ambiguous prefix taken" ||
   expect "a prefix of several (and no station number) still lists them" "could be any of 3 sessions" "$dir/show1795.txt"
+
+# 3. a prune's or list's bound that is empty, too large or before 1970 is a bound or refused, never "no
+# limit": sessions started 2023-11-14 (1.7e9 s) and 1000 s later; --older-than 30000 days reaches back to
+# 1944 (by hand: 30000 x 86400 s = 2.592e9 s before now), so nothing is that old
+mklog "$dir/bounds.db" b-1 b-2
+pruned_n() { python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execute('select count(*) from session where pruned_unix_s is not null').fetchone()[0])" "$1"; }
+"$review" --db "$dir/bounds.db" prune --older-than "" > "$dir/prune-empty.txt" 2>&1; rc=$?
+[ $rc -eq 2 ] && [ "$(pruned_n "$dir/bounds.db")" = 0 ] && ok "prune --older-than '': exit 2, nothing pruned" ||
+  bad "prune --older-than '': exit $rc, $(pruned_n "$dir/bounds.db") pruned: $(cat "$dir/prune-empty.txt")"
+for v in " 5" 1e3 -1 0x10 100001 5x; do
+  "$review" --db "$dir/bounds.db" prune --older-than "$v" > "$dir/prune-bad.txt" 2>&1; rc=$?
+  [ $rc -eq 2 ] && [ "$(pruned_n "$dir/bounds.db")" = 0 ] || bad "prune --older-than '$v': exit $rc: $(cat "$dir/prune-bad.txt")"
+done
+ok "prune --older-than ' 5', 1e3, -1, 0x10, 100001 (over the cap), 5x: each exit 2, nothing pruned"
+"$review" --db "$dir/bounds.db" prune --older-than 30000 > "$dir/prune-30000.txt" 2>&1; rc=$?
+[ $rc -eq 0 ] && [ "$(pruned_n "$dir/bounds.db")" = 0 ] && grep -q "^0 sessions pruned" "$dir/prune-30000.txt" &&
+  ok "prune --older-than 30000: nothing that old, 0 sessions pruned" ||
+  bad "prune --older-than 30000: exit $rc, $(pruned_n "$dir/bounds.db") pruned: $(cat "$dir/prune-30000.txt")"
+"$review" --db "$dir/bounds.db" list --until 1970-01-01 > "$dir/list-1970.txt" 2>&1 || bad "list --until 1970-01-01 exit status"
+expect "list --until 1970-01-01: no session started before 1970" "^0 sessions$" "$dir/list-1970.txt"
+"$review" --db "$dir/bounds.db" list --since 1970-01-01 > "$dir/list-since1970.txt" 2>&1 || bad "list --since 1970-01-01 exit status"
+expect "list --since 1970-01-01: both" "^2 sessions$" "$dir/list-since1970.txt"
+for v in 2026-02-31 2026-02-29 "2026-03-01Tfoo" "2026-03-01T12:00:00junk" "2026-03-01x"; do
+  "$review" --db "$dir/bounds.db" list --since "$v" > "$dir/list-bad.txt" 2>&1 && bad "list --since '$v' accepted: $(cat "$dir/list-bad.txt")"
+done
+ok "list --since 2026-02-31, 2026-02-29 (not a leap year), and trailing text after a date or time: refused"
 
 # a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
 "$review" --log-file /nonexistent/dir/r.log --db "$db" list > "$dir/logfile.txt" 2>&1
