@@ -535,8 +535,11 @@ static int review_main(int argc, char **argv) {
     return REVIEW_ERROR;
   }
   if (!strcmp(cmd, "migrate")) return cmd_migrate(&log, path, argc - i);
-  /* Only these write to the log (and so may upgrade it in place); the rest read it read-only. */
-  const int writes = !strcmp(cmd, "annotate") || !strcmp(cmd, "delete") || !strcmp(cmd, "prune");
+  /* Only these write to the log (and so may upgrade it in place); the rest read it read-only, and so
+   * does a prune's dry run (since session 81: it upgraded an older palp's log in place). */
+  int dry_run = 0;
+  for (int k = i; k < argc; k++) dry_run |= !strcmp(argv[k], "--dry-run");
+  const int writes = !strcmp(cmd, "annotate") || !strcmp(cmd, "delete") || (!strcmp(cmd, "prune") && !dry_run);
   char err[1200] = "";
   palp_db *db;
   if (writes ? palp_db_open(path, 0, &db, err, sizeof err)

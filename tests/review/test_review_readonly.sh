@@ -71,10 +71,15 @@ for v in 1 4; do
   [ $rc -lt 128 ] || bad "v$v: replay crashed ($rc)"
   R class --exercise none --out "$dir/class-$v.html" > /dev/null 2>&1 # no exercise sessions: exit 2, said
   R trainee carol > "$dir/trainee-$v.txt" 2>&1 || bad "v$v: trainee exit status"
+  # a dry run only reads (session 81: prune --dry-run opened the file read-write and upgraded it in place)
+  R prune --older-than 0 --dry-run > "$dir/dry-$v.txt" 2>&1 || bad "v$v: prune --dry-run exit status: $(cat "$dir/dry-$v.txt")"
   after=$(state "$db")
   if [ "$before" = "$after" ] && [ ! -e "$db-wal" ] && [ ! -e "$db-shm" ]; then
-    ok "v$v: list, show, export, report, replay, class and trainee leave the file as it was (sha256 mtime user_version: $after), no -wal or -shm beside it"
+    ok "v$v: list, show, export, report, replay, class, trainee and prune --dry-run leave the file as it was (sha256 mtime user_version: $after), no -wal or -shm beside it"
   else bad "v$v: the file changed by reading it: $before -> $after; beside it: $(ls "$db"-* 2>&1)"; fi
+  # its scene '{}' gives no metrics: the dry run says it would keep it (a real prune would too)
+  grep -Eq "^(would prune|kept) +old-run-1" "$dir/dry-$v.txt" && ok "v$v: prune --dry-run read the session: $(grep old-run-1 "$dir/dry-$v.txt" | cut -c1-90)" ||
+    bad "v$v: prune --dry-run: $(cat "$dir/dry-$v.txt")"
   if grep -Eq "^old-run-1 +carol +dome old +- +2020-09-13 .* +0\.02 normal +1 +'B' \(free text\)$" "$dir/list-$v.txt" &&
      grep -q '^1 session$' "$dir/list-$v.txt" &&
      grep -q "a log of schema version $v (an older palp's), read through a copy upgraded to version $current in memory; the file is left as it is" "$dir/list-$v.err"; then
