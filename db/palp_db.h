@@ -415,6 +415,9 @@ typedef struct palp_db_session_info {
   int64_t records_shed, records_failed;
   int64_t frames, contact_inputs, meshes, events, notes;
   double sim_duration_s; /* last logged frame's sim time */
+  /* When palp-review prune deleted its frames, inputs, meshes and finger samples (0: it has not). Read
+   * since session 81: a pruned session looked like a complete session of 0 frames. */
+  double pruned_unix_s;
 } palp_db_session_info;
 
 typedef struct palp_db_filter {
@@ -442,6 +445,7 @@ typedef struct palp_db_log_health {
   double last_event_unix_s; /* 0: no event */
   int64_t records_shed, records_failed;
   int cut_short, damaged, complete;
+  int pruned; /* its frames deleted by a prune: never complete, what they held cannot be judged */
 } palp_db_log_health;
 int palp_db_log_health_get(palp_db *db, const palp_db_session_info *s, palp_db_log_health *out);
 /* One line for people, e.g. "complete: ended normal; 184 of 184 frames, nothing shed or lost". */

@@ -448,7 +448,7 @@ static void col_str(sqlite3_stmt *st, int i, char *dst, size_t len) {
   "(SELECT count(*) FROM mesh m WHERE m.session_id = s.id), "                                       \
   "(SELECT count(*) FROM event e WHERE e.session_id = s.id), "                                      \
   "(SELECT count(*) FROM note n WHERE n.session_id = s.id), "                                       \
-  "(SELECT sim_time_s FROM frame f WHERE f.session_id = s.id ORDER BY frame DESC LIMIT 1) "
+  "(SELECT sim_time_s FROM frame f WHERE f.session_id = s.id ORDER BY frame DESC LIMIT 1), s.pruned_unix_s "
 
 static void read_info(sqlite3_stmt *st, palp_db_session_info *o) {
   memset(o, 0, sizeof *o);
@@ -472,6 +472,11 @@ static void read_info(sqlite3_stmt *st, palp_db_session_info *o) {
   o->events = sqlite3_column_int64(st, 17);
   o->notes = sqlite3_column_int64(st, 18);
   o->sim_duration_s = sqlite3_column_double(st, 19);
+  /* any stamp, even one <= 0 or NaN from an edited file, says pruned: 1 s after 1970 stands for it */
+  if (sqlite3_column_type(st, 20) != SQLITE_NULL) {
+    o->pruned_unix_s = sqlite3_column_double(st, 20);
+    if (!(o->pruned_unix_s > 0)) o->pruned_unix_s = 1;
+  }
 }
 
 /* One growth rule for the lists read row by row: the room doubled (`first` rows at first).
@@ -954,7 +959,8 @@ int palp_db_log_health_get(palp_db *db, const palp_db_session_info *s, palp_db_l
   }
   h->cut_short = !h->ended;
   h->damaged = h->records_shed > 0 || h->records_failed > 0 || h->frames_missing > 0;
-  h->complete = !h->cut_short && !h->damaged;
+  h->pruned = s->pruned_unix_s > 0;
+  h->complete = !h->cut_short && !h->damaged && !h->pruned;
   return 0;
 }
 
@@ -971,6 +977,9 @@ void palp_db_log_health_describe(const palp_db_log_health *h, char *buf, size_t 
   if (h->complete)
     palp_db__fmt(buf, len, "complete: an end was logged; %lld of %lld frames present, no records shed or lost",
                  (long long)h->frames, (long long)h->frames_expected);
+  else if (h->pruned)
+    palp_db__fmt(buf, len, "PRUNED: its frames, inputs, meshes and finger samples were deleted (palp-review prune); "
+                 "whether the log was whole before cannot be judged now%s%s", b[0] ? "; " : "", b);
   else
     palp_db__fmt(buf, len, "%s%s%s", a, a[0] && b[0] ? "; " : "", b);
 }

@@ -130,6 +130,13 @@ static int frame_cb(void *u, const palp_db_frame *logged) {
 }
 
 int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int verbose) {
+  if (s->pruned_unix_s > 0) {
+    char tp[64];
+    review_fmt_time(s->pruned_unix_s, tp, sizeof tp);
+    palp_log_error(log, "replay: session %s was PRUNED on %s: its frames and contact inputs were deleted, so there "
+                   "is nothing to replay (its stored metrics: palp-review show)", s->uid, tp);
+    return REVIEW_ERROR;
+  }
   char *scene = NULL, *params = NULL;
   if (palp_db_session_json(db, s->id, &scene, &params)) {
     palp_log_error(log, "replay: %s", palp_db_errmsg(db));

@@ -592,9 +592,19 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     palp_db_log_health health;
     char logging[200];
     review_fmt_logging(s, palp_db_log_health_get(db, s, &health) == 0 ? &health : NULL, logging, sizeof logging);
-    snprintf(buf, sizeof buf, "%.3f s simulated, %s", s->sim_duration_s, logging);
+    char tp[64];
+    review_fmt_time(s->pruned_unix_s, tp, sizeof tp);
+    if (s->pruned_unix_s > 0) snprintf(buf, sizeof buf, "not known: its frames were pruned on %s", tp);
+    else snprintf(buf, sizeof buf, "%.3f s simulated, %s", s->sim_duration_s, logging);
     info_row(f, "Duration", buf);
     fputs("</table>\n", f);
+    if (s->pruned_unix_s > 0) {
+      fputs("<p class=\"warn\" id=\"pruned\">PRUNED on ", f);
+      html_str(f, tp);
+      fputs(": this session's frames, feedback, contact inputs, meshes and finger samples were deleted "
+            "(palp-review prune). Its plots are empty and it cannot be replayed; its metrics below are the ones "
+            "stored when it was pruned.</p>\n", f);
+    }
     if (s->records_shed || s->records_failed)
       fprintf(f, "<p class=\"warn\">This log is incomplete: %lld records were shed and %lld lost to disk errors.</p>\n",
               (long long)s->records_shed, (long long)s->records_failed);

@@ -343,7 +343,7 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
     return REVIEW_ERROR;
   }
   const long long before = palp_db_file_bytes(path);
-  int pruned = 0, rc = REVIEW_OK;
+  int pruned = 0, already = 0, rc = REVIEW_OK;
   prune_item *batch = dry ? NULL : malloc(RETENTION_BATCH_SESSIONS * sizeof *batch);
   if (!dry && !batch) {
     palp_log_error(log, "prune: out of memory");
@@ -357,6 +357,12 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
     int nb = 0;
     for (; i < n && nb < RETENTION_BATCH_SESSIONS; i++) {
       const palp_db_session_info *s = &v[i];
+      /* pruned before: nothing left to delete, and its stored metrics and stamp are not to be
+       * overwritten (until session 81 each prune said it again and stamped it anew) */
+      if (s->pruned_unix_s > 0) {
+        already++;
+        continue;
+      }
       if (!s->end_reason[0]) {
         printf("kept   %s: no end logged (may still be running)\n", s->uid);
         continue;
@@ -377,8 +383,10 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
         printf("kept   %s: its metrics could not be computed (%s)\n", s->uid, err);
         continue;
       }
-      if (dry) printf("would prune %s\n", s->uid);
-      else {
+      if (dry) {
+        printf("would prune %s\n", s->uid);
+        pruned++;
+      } else {
         prune_item *it = &batch[nb++];
         memset(it, 0, sizeof *it);
         it->index = i;
@@ -452,6 +460,8 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
   free(v);
   /* also when nothing was pruned this time: what an earlier prune freed beside a running server */
   if (!dry && (pruned || (freelist_pages(h) > 0 && !live_writer_pid(h)))) reclaim(log, h);
-  printf("%d session%s pruned; file %lld -> %lld bytes\n", pruned, pruned == 1 ? "" : "s", before, palp_db_file_bytes(path));
+  printf("%d session%s %s", pruned, pruned == 1 ? "" : "s", dry ? "would be pruned" : "pruned");
+  if (already) printf(" (%d pruned before, left as they were)", already);
+  printf("; file %lld -> %lld bytes\n", before, palp_db_file_bytes(path));
   return rc;
 }

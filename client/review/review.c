@@ -122,9 +122,17 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     palp_db_log_health h;
     int known = palp_db_log_health_get(db, &v[i], &h) == 0;
     if (palp_db_session_exercise(db, v[i].id, exname, sizeof exname, NULL) != 0) snprintf(exname, sizeof exname, "-");
-    printf("%-36s %-14s %-*.*s %-16.16s %-25s %9.2f %-16s %-5lld %s%s%s\n", v[i].uid, v[i].trainee, pw, pw, v[i].phantom_name, exname,
-           t, v[i].sim_duration_s, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)", (long long)v[i].notes,
-           grade, known && h.damaged ? "  (log damaged)" : "", !known ? "  (log unreadable)" : "");
+    char sim[32], pruned[64] = "";
+    if (v[i].pruned_unix_s > 0) { /* no frames left: its simulated time is not known, not 0 */
+      char tp[64];
+      review_fmt_time(v[i].pruned_unix_s, tp, sizeof tp);
+      snprintf(sim, sizeof sim, "-");
+      snprintf(pruned, sizeof pruned, "  (PRUNED on %.10s)", tp);
+    } else snprintf(sim, sizeof sim, "%.2f", v[i].sim_duration_s);
+    printf("%-36s %-14s %-*.*s %-16.16s %-25s %9s %-16s %-5lld %s%s%s%s\n", v[i].uid, v[i].trainee, pw, pw,
+           v[i].phantom_name, exname, t, sim, v[i].end_reason[0] ? v[i].end_reason : "(no end logged)",
+           (long long)v[i].notes, grade, pruned, known && h.damaged ? "  (log damaged)" : "",
+           !known ? "  (log unreadable)" : "");
   }
   printf("%d session%s%s\n", shown, shown == 1 ? "" : "s", ungraded ? " not graded yet" : "");
   free(v);
@@ -253,6 +261,11 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   if (s->end_reason[0])
     printf("ended      %s  (%s%s%s)\n", t1, s->end_reason, s->end_detail[0] ? ": " : "", s->end_detail);
   else printf("ended      - (still running, or the end was never logged)\n");
+  char tp[64];
+  review_fmt_time(s->pruned_unix_s, tp, sizeof tp);
+  if (s->pruned_unix_s > 0)
+    printf("PRUNED     on %s: its frames, feedback, contact inputs, meshes and finger samples were deleted "
+           "(palp-review prune); what follows is what was kept: its row, events, notes, findings, stored metrics\n", tp);
   peaks p = {0};
   palp_db_each_frame(db, s->id, peaks_cb, &p);
   palp_db_log_health health;
@@ -261,8 +274,12 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   if (health_rc) snprintf(health_err, sizeof health_err, "%s", palp_db_errmsg(db));
   char logging[200];
   review_fmt_logging(s, health_rc == 0 ? &health : NULL, logging, sizeof logging);
-  printf("duration   wall %.3f s, simulated %.3f s (%s)\n", s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0,
-         s->sim_duration_s, logging);
+  if (s->pruned_unix_s > 0)
+    printf("duration   wall %.3f s, simulated: not known (its frames were pruned on %s)\n",
+           s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0, tp);
+  else
+    printf("duration   wall %.3f s, simulated %.3f s (%s)\n", s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0,
+           s->sim_duration_s, logging);
   printf("peak force           %.2f N at t = %.2f s (the phantom's force on the load, from the logged frames)\n", p.f,
          p.f_t);
   printf("peak displacement    top vertex %.2f mm at t = %.2f s; any vertex %.2f mm at t = %.2f s\n",

@@ -283,6 +283,11 @@ int review_valid_range_text(palp_db *db, const palp_db_session_info *s, char *bu
     snprintf(buf, len, "inside at every step (the server logged no step outside it)");
     return rc;
   }
+  if (rc == REVIEW_RANGE_UNKNOWN && s->pruned_unix_s > 0) {
+    snprintf(buf, len, "not in this log, and no longer recomputable: the session was pruned (its frames and inputs "
+                       "deleted)");
+    return rc;
+  }
   if (rc == REVIEW_RANGE_UNKNOWN) {
     snprintf(buf, len, "not in this log (an earlier server, or recorded over DDS); `palp-review replay %s` "
                        "recomputes it", s->uid);

@@ -523,6 +523,29 @@ for v in 2026-02-31 2026-02-29 "2026-03-01Tfoo" "2026-03-01T12:00:00junk" "2026-
 done
 ok "list --since 2026-02-31, 2026-02-29 (not a leap year), and trailing text after a date or time: refused"
 
+# 5. a pruned session says so: show, list, report and replay name it PRUNED, its log is not "complete",
+# and a second prune leaves it (and its stamp) alone. class-bob-2 was pruned above.
+R show class-bob-2 > "$dir/show-pruned2.txt" 2>&1 || bad "show of a pruned session exit status"
+expect "show: PRUNED on its date" "^PRUNED +on [0-9]{4}-[0-9]{2}-[0-9]{2} " "$dir/show-pruned2.txt"
+expect "show: the log line says PRUNED, not complete" "^log +PRUNED: " "$dir/show-pruned2.txt"
+if grep -Eq "complete: an end was logged|simulated 0\.000 s|replay[^\n]*recomputes it" "$dir/show-pruned2.txt"; then
+  bad "show of a pruned session reads as a complete empty one: $(grep -E 'complete|simulated|recomputes' "$dir/show-pruned2.txt")"
+else ok "show: no \"complete\", no \"simulated 0.000 s\", no \"replay recomputes it\""; fi
+R list > "$dir/list-pruned.txt" 2>&1 || bad "list exit status"
+expect "list marks the pruned session, its simulated time unknown" "^class-bob-2 .* - +normal .*\(PRUNED on [0-9]{4}-[0-9]{2}-[0-9]{2}\)" "$dir/list-pruned.txt"
+R report class-bob-2 --out "$dir/bob2-pruned2.html" > /dev/null 2>&1 || bad "report of a pruned session"
+grep -q '<p class="warn" id="pruned">PRUNED on ' "$dir/bob2-pruned2.html" && ok "report: PRUNED said" || bad "report: PRUNED not said"
+R replay class-bob-2 > "$dir/replay-pruned.txt" 2>&1; rc=$?
+[ $rc -eq 2 ] && grep -q "was PRUNED on .*nothing to replay" "$dir/replay-pruned.txt" && ok "replay of a pruned session: exit 2, PRUNED said" ||
+  bad "replay of a pruned session: exit $rc: $(cat "$dir/replay-pruned.txt")"
+stamp() { python3 -c "import sqlite3,sys; print(repr(sqlite3.connect(sys.argv[1]).execute(\"select pruned_unix_s from session where uid = 'class-bob-2'\").fetchone()[0]))" "$db"; }
+stamp0=$(stamp)
+R prune --older-than 1 --keep-graded > "$dir/prune-again.txt" 2>&1 || bad "prune again exit status"
+if ! grep -q "pruned class-bob-2" "$dir/prune-again.txt" && [ "$(stamp)" = "$stamp0" ] &&
+   grep -Eq "^0 sessions pruned \([1-9][0-9]* pruned before, left as they were\)" "$dir/prune-again.txt"; then
+  ok "prune again: class-bob-2 not pruned again, its stamp $stamp0 kept: $(tail -1 "$dir/prune-again.txt" | cut -c1-80)"
+else bad "prune again: stamp $stamp0 -> $(stamp): $(cat "$dir/prune-again.txt")"; fi
+
 # a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
 "$review" --log-file /nonexistent/dir/r.log --db "$db" list > "$dir/logfile.txt" 2>&1
 rc=$?
