@@ -457,6 +457,12 @@ void palp_db_log_health_describe(const palp_db_log_health *h, char *buf, size_t 
  * (the writer logs a frame at least every 0.01 s): a frame number of 10^12 is damage,
  * not a session to step through for years. */
 #define PALP_DB_MAX_FRAME_GAP_S 60.0
+/* ... and of more than this many steps whatever the logged dt_s (session 81, found by review: the gap's
+ * steps were 60 s / dt_s, so a dt_s of 1e-7 let one frame numbered 5e8 step for hours): 60 s at the
+ * fastest rate a server steps (10 kHz, server/config.c). */
+#define PALP_DB_MAX_FRAME_GAP_STEPS 600000
+/* The step a server can have logged: 1 / (10 kHz) .. PALP_WORLD_MAX_DT; replay refuses another. */
+#define PALP_DB_MIN_DT_S 1e-4
 
 /* Lists matching sessions, oldest first; *out is malloc'd (free()). */
 int palp_db_list_sessions(palp_db *db, const palp_db_filter *f, palp_db_session_info **out, int *count);

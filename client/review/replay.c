@@ -92,7 +92,7 @@ static int frame_cb(void *u, const palp_db_frame *logged) {
   /* Checked before stepping to it: a damaged frame number (10^12) would step for years. */
   const int64_t at = palp_world_frame(r->w);
   const double g = PALP_DB_MAX_FRAME_GAP_S / r->dt;
-  const int64_t max_gap = g < 1e9 ? (int64_t)g + 1 : 1000000000;
+  const int64_t max_gap = g < PALP_DB_MAX_FRAME_GAP_STEPS ? (int64_t)g + 1 : PALP_DB_MAX_FRAME_GAP_STEPS;
   if (logged->frame < at || logged->frame - at > max_gap) {
     printf("replay: DAMAGED LOG: logged frame %" PRId64 " follows frame %" PRId64 " (at most %" PRId64
            " frames = %.0f s of simulated time may lie between two logged frames); stopping\n",
@@ -150,6 +150,14 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
                     "with the frames the recorder saw, not the frames the server applied them at, and its frames "
                     "carry no state hash, so it cannot be replayed exactly; replay the server's own log instead",
             s->uid);
+    free(scene);
+    return REVIEW_ERROR;
+  }
+  /* A step no server steps at is a damaged or edited log: 1e-7 s would make each logged second ten
+   * million steps (the gap guard below bounds one gap; this bounds the whole replay's pace). */
+  if (s->dt_s > 0 && !(s->dt_s >= PALP_DB_MIN_DT_S * (1 - 1e-9) && s->dt_s <= PALP_WORLD_MAX_DT * (1 + 1e-9))) {
+    palp_log_error(log, "replay: DAMAGED LOG: session %s logged a step of %g s; a server steps at %g .. %g s (10 Hz .. "
+                   "10 kHz): not replayed", s->uid, s->dt_s, PALP_DB_MIN_DT_S, PALP_WORLD_MAX_DT);
     free(scene);
     return REVIEW_ERROR;
   }

@@ -99,6 +99,25 @@ else
   bad "frame 10^12: exit $rc after ${took} s: $out"
 fi
 
+# A step of 1e-7 s (and a tick rate to match) with its one frame numbered 5e8 (session 81, found by review): the
+# gap guard allowed 60 s / dt_s = 6e8 steps, hours of stepping. Now a step no server steps at (1e-4 ..
+# 0.1 s) is refused at once: exit 2 within 10 s, said.
+copy tinydt
+# (the only frame left: else a frame before it, mismatching at the new step, would stop the replay first)
+sqlite3 "$dir/tinydt.db" "UPDATE session SET dt_s = 1e-7, tick_hz = 1e7; DELETE FROM frame WHERE frame < (SELECT max(frame) FROM frame);
+  UPDATE frame SET frame = 500000000"
+set +e
+start=$(date +%s)
+out=$(timeout 20 "$review" --db "$dir/tinydt.db" replay "$uid" 2>&1)
+rc=$?
+took=$(( $(date +%s) - start ))
+set -e
+if [ $rc -eq 2 ] && [ $took -le 10 ] && echo "$out" | grep -q "DAMAGED LOG: session $uid logged a step of 1e-07 s"; then
+  ok "dt_s 1e-7, a frame at 5e8: replay refuses in ${took} s, exit 2: $(echo "$out" | sed 's/.*replay: //' | cut -c1-110)"
+else
+  bad "dt_s 1e-7, a frame at 5e8: exit $rc after ${took} s: $(echo "$out" | tail -c 300)"
+fi
+
 : > "$dir/empty.db"
 set +e
 msg=$("$review" --db "$dir/empty.db" list 2>&1); rc=$?
