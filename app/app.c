@@ -485,17 +485,31 @@ int palp_app_dds_loopback_only(char *why, size_t whylen) {
   return rc;
 }
 
-FILE *palp_app_fopen_private(const char *path) {
-  const int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+FILE *palp_app_fopen_private_except(const char *path, const char *const *keep, size_t nkeep) {
+  /* Not O_TRUNC: what was opened is checked first, on the descriptor (no race with a rename). */
+  const int fd = open(path, O_WRONLY | O_CREAT | O_CLOEXEC, 0600);
   if (fd < 0) return NULL;
-  FILE *f = fdopen(fd, "w");
+  struct stat st;
+  int e = 0;
+  if (fstat(fd, &st) != 0) e = errno;
+  for (size_t k = 0; !e && k < nkeep; k++) {
+    struct stat ks;
+    if (keep[k] && stat(keep[k], &ks) == 0 && ks.st_dev == st.st_dev && ks.st_ino == st.st_ino) e = EEXIST;
+  }
+  if (!e && S_ISREG(st.st_mode)) {
+    if ((st.st_mode & 07777) != 0600 && fchmod(fd, 0600) != 0) e = errno;
+    else if (st.st_size > 0 && ftruncate(fd, 0) != 0) e = errno;
+  }
+  FILE *f = e ? NULL : fdopen(fd, "w");
   if (!f) {
-    const int e = errno;
+    if (!e) e = errno;
     close(fd);
     errno = e;
   }
   return f;
 }
+
+FILE *palp_app_fopen_private(const char *path) { return palp_app_fopen_private_except(path, NULL, 0); }
 
 int palp_app_on_signals(void (*handler)(int)) {
   struct sigaction sa;

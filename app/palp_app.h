@@ -40,10 +40,15 @@ int palp_app_data_dir(char *buf, size_t len, char *err, size_t errlen);
 /* <data dir>/rel into buf (rel e.g. "config/server.json"). */
 int palp_app_data_path(const char *rel, char *buf, size_t len, char *err, size_t errlen);
 
-/* Opens PATH for writing (created or truncated) as fopen(path, "w") does, but a file it creates
- * is its owner's alone (mode 0600): reports and exports carry trainees' names and grades. An
- * existing file keeps its mode. NULL and errno on failure. */
+/* Opens PATH for writing (created or truncated) as fopen(path, "w") does, but the file is its owner's
+ * alone (mode 0600): reports and exports carry trainees' names and grades. An existing regular file is
+ * made 0600 before it is truncated (since session 81: it kept its mode, a 0644 report stayed readable
+ * by all); a device or pipe (/dev/null, /dev/stdout) is written as it is. NULL and errno on failure. */
 FILE *palp_app_fopen_private(const char *path);
+/* The same, but the file opened is first compared (st_dev, st_ino, after symlinks) with each of the
+ * nkeep files keep[] names that exist: if it is one of them, nothing is truncated or changed, NULL with
+ * errno EEXIST (palp-review: --out naming the session log itself, or its -wal or -shm, destroyed it). */
+FILE *palp_app_fopen_private_except(const char *path, const char *const *keep, size_t nkeep);
 
 /* Installs handler for SIGINT, SIGTERM and SIGHUP by sigaction with SA_RESTART (a read interrupted by one
  * goes on). Never signal(): built as ISO C (-std=c17), glibc's signal() has System V semantics, the

@@ -141,7 +141,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   for (int i = 0; i < nr; i++)
     if (rows[i].told[0]) fprintf(tty, "not blind: %s: %s\n", rows[i].s.uid, rows[i].told);
   if (csv && review_rows_csv(log, "class", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
-  FILE *f = palp_app_fopen_private(out);
+  FILE *f = review_fopen_out(log, out);
   if (!f) {
     palp_log_error(log, "class: %s: %s", out, strerror(errno));
     rc = REVIEW_ERROR;

@@ -168,7 +168,7 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     return REVIEW_ERROR;
   }
   FILE *f = stdout;
-  if (out_path && strcmp(out_path, "-") && !(f = palp_app_fopen_private(out_path))) {
+  if (out_path && strcmp(out_path, "-") && !(f = review_fopen_out(log, out_path))) {
     perror(out_path);
     return REVIEW_ERROR;
   }

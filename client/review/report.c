@@ -563,7 +563,7 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   if (!rc) rc = review_load_contacts(db, s->id, &in);
   if (!rc) rc = review_presses(db, s->id, &in, &pr, &np);
   FILE *f = NULL;
-  if (!rc && !(f = palp_app_fopen_private(out_path))) {
+  if (!rc && !(f = review_fopen_out(log, out_path))) {
     palp_log_error(log, "report: %s: %s", out_path, strerror(errno));
     rc = PALP_EIO;
   }

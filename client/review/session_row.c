@@ -7,6 +7,7 @@
 
 #include "grades.h"
 #include "palp_app.h"
+#include "review.h"
 #include "review_util.h"
 
 int review_row_fill(palp_log *log, const char *cmd, palp_db *db, const palp_db_session_info *s, review_row *r) {
@@ -80,7 +81,7 @@ void review_html_not_blind(FILE *f, const review_row *rows, int n) {
 }
 
 int review_rows_csv(palp_log *log, const char *cmd, palp_db *db, const char *path, const review_row *rows, int n) {
-  FILE *c = strcmp(path, "-") ? palp_app_fopen_private(path) : stdout;
+  FILE *c = strcmp(path, "-") ? review_fopen_out(log, path) : stdout;
   if (!c) {
     palp_log_error(log, "%s: %s: %s", cmd, path, strerror(errno));
     return -1;

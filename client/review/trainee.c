@@ -78,9 +78,9 @@ static int exercise_scores(const review_row *rows, int nr, int first, double *sc
   return k;
 }
 
-static int write_page(const char *path, const char *name, const review_row *rows, int nr, const record *rec,
+static int write_page(palp_log *log, const char *path, const char *name, const review_row *rows, int nr, const record *rec,
                       const char *summary) {
-  FILE *f = palp_app_fopen_private(path);
+  FILE *f = review_fopen_out(log, path);
   if (!f) return -1;
   review_html_head(f, "palp trainee record: ", "Trainee record: ", "trainee", name, ".muted{color:#777}");
   fputs("<p id=\"summary\">", f);
@@ -258,7 +258,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
     record none = {0};
     if (csv && review_rows_csv(log, "trainee", db, csv, rows, 0) != 0) rc = REVIEW_ERROR;
     if (out) {
-      if (write_page(out, name, rows, 0, &none, summary) != 0) {
+      if (write_page(log, out, name, rows, 0, &none, summary) != 0) {
         palp_log_error(log, "trainee: %s: %s", out, strerror(errno));
         rc = REVIEW_ERROR;
       } else fprintf(tty, "trainee: wrote %s\n", out);
@@ -323,7 +323,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   int rc = unread ? REVIEW_ERROR : REVIEW_OK; /* the record lacks the sessions that could not be read */
   if (csv && review_rows_csv(log, "trainee", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
   if (out) {
-    if (write_page(out, name, rows, nr, &rec, summary) != 0) {
+    if (write_page(log, out, name, rows, nr, &rec, summary) != 0) {
       palp_log_error(log, "trainee: %s: %s", out, strerror(errno));
       rc = REVIEW_ERROR;
     } else fprintf(tty, "trainee: wrote %s\n", out);

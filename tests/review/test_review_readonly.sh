@@ -235,5 +235,40 @@ if [ "$(sqlite3 "$db" 'PRAGMA user_version')" = "$current" ] && [ "$(sqlite3 "$d
   ok "annotate on a v4 log: the note written, the file upgraded to $current"
 else bad "annotate on a v4 log"; fi
 
+# --out never names the log being read (session 81, found by review: report --out the --db truncated it),
+# nor its -wal or -shm (through another name: a symlink); an existing output is made 0600 as it is rewritten
+# (it kept its 0644). The log's sha256 unchanged; then report, export, class --csv and trainee over 0644 files.
+db=$dir/out.db
+old_log "$db" "$current"
+sqlite3 "$db" "PRAGMA journal_mode = DELETE" > /dev/null  # no -wal left to compare against
+before=$(sha256sum < "$db")
+cp "$db" "$dir/out2.db"  # for the modes below, whatever becomes of this one
+ln -sf "$db" "$dir/out-link.db"
+refused=""
+for out in "$db" "$dir/out-link.db"; do
+  "$review" --db "$db" report old-run-1 --out "$out" > "$dir/out-self.txt" 2>&1 && refused="$refused accepted:$out"
+  grep -q "is the session log being read" "$dir/out-self.txt" || refused="$refused unsaid:$out"
+  "$review" --db "$db" export old-run-1 --format csv --out "$out" > /dev/null 2>&1 && refused="$refused export:$out"
+  "$review" --db "$db" trainee carol --out "$out" > /dev/null 2>&1 && refused="$refused trainee:$out"
+done
+[ -z "$refused" ] && [ "$(sha256sum < "$db")" = "$before" ] &&
+  ok "--out the log itself (and through a symlink): report, export and trainee refuse, said; the log's sha256 unchanged" ||
+  bad "--out the log itself:$refused; sha256 $before -> $(sha256sum < "$db"): $(cat "$dir/out-self.txt")"
+modes=""
+for f in report.html export.csv list.csv record.html; do
+  echo old > "$dir/$f"
+  chmod 0644 "$dir/$f"
+done
+db=$dir/out2.db
+"$review" --db "$db" report old-run-1 --out "$dir/report.html" > /dev/null 2>&1 || bad "report over a 0644 file"
+"$review" --db "$db" export old-run-1 --format csv --out "$dir/export.csv" > /dev/null 2>&1 || bad "export over a 0644 file"
+"$review" --db "$db" trainee carol --csv "$dir/list.csv" --out "$dir/record.html" > /dev/null 2>&1 || bad "trainee over 0644 files"
+for f in report.html export.csv list.csv record.html; do
+  modes="$modes $f:$(stat -c %a "$dir/$f")"
+  grep -q "^old$" "$dir/$f" && modes="$modes(not rewritten)"
+done
+[ "$modes" = " report.html:600 export.csv:600 list.csv:600 record.html:600" ] &&
+  ok "outputs that were 0644 rewritten 0600:$modes" || bad "outputs over 0644 files:$modes"
+
 [ $fail -eq 0 ] && rm -rf "$dir" && echo "passed" || echo "FAILED"
 exit $fail
