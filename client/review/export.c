@@ -146,12 +146,17 @@ static int json_array(palp_db *db, exp_ctx *x, const char *name, int last, int t
 
 /* The logged JSON goes in as JSON when it parses whole, else as a string, so the export stays valid:
  * cJSON_Parse alone stops after the first value, and text after it ('{}, "frames": [...]') would
- * have gone out raw, as keys of the export's own. */
+ * have gone out raw, as keys of the export's own. What goes in is cJSON's own printing of the parsed
+ * value, not the stored text (since session 81: cJSON accepts what JSON does not, "01", "1.", a raw
+ * line break or \x01 inside a string, and the text went out as stored); text that is not UTF-8 goes
+ * in as a string, its bad bytes as U+FFFD (cJSON would print them raw). */
 static void json_embed(FILE *f, const char *s) {
-  cJSON *j = s && *s ? cJSON_ParseWithOpts(s, NULL, 1) : NULL;
-  if (j) fputs(s, f);
+  cJSON *j = s && *s && review_utf8_valid(s) ? cJSON_ParseWithOpts(s, NULL, 1) : NULL;
+  char *printed = j ? cJSON_PrintUnformatted(j) : NULL;
+  if (printed) fputs(printed, f);
   else if (s && *s) json_str(f, s);
   else fputs("null", f);
+  cJSON_free(printed);
   cJSON_Delete(j);
 }
 

@@ -37,14 +37,48 @@ int review_finish_output(FILE *f) {
   return -1;
 }
 
+int review_utf8_len(const unsigned char *p) {
+  /* RFC 3629: no overlong forms, no surrogates, nothing past U+10FFFF */
+  if (p[0] < 0x80) return 1;
+  if (p[0] >= 0xc2 && p[0] <= 0xdf) return (p[1] & 0xc0) == 0x80 ? 2 : 0;
+  if (p[0] >= 0xe0 && p[0] <= 0xef) {
+    const unsigned lo = p[0] == 0xe0 ? 0xa0 : 0x80, hi = p[0] == 0xed ? 0x9f : 0xbf;
+    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 ? 3 : 0;
+  }
+  if (p[0] >= 0xf0 && p[0] <= 0xf4) {
+    const unsigned lo = p[0] == 0xf0 ? 0x90 : 0x80, hi = p[0] == 0xf4 ? 0x8f : 0xbf;
+    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 && (p[3] & 0xc0) == 0x80 ? 4 : 0;
+  }
+  return 0;
+}
+
+int review_utf8_valid(const char *s) {
+  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p;) {
+    const int n = review_utf8_len(p);
+    if (!n) return 0;
+    p += n;
+  }
+  return 1;
+}
+
+/* A JSON string of any stored text: every control character escaped, and a byte that does not begin a
+ * well-formed UTF-8 character written as U+FFFD (since session 81: such bytes went out raw, and the
+ * export was not JSON a strict parser reads). */
 void json_str(FILE *f, const char *s) {
   fputc('"', f);
-  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
+  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p;) {
+    const int n = review_utf8_len(p);
+    if (!n) {
+      fputs("\\ufffd", f);
+      p++;
+      continue;
+    }
     if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
     else if (*p == '\n') fputs("\\n", f);
     else if (*p == '\t') fputs("\\t", f);
-    else if (*p < 0x20) fprintf(f, "\\u%04x", *p);
-    else fputc(*p, f);
+    else if (*p < 0x20 || *p == 0x7f) fprintf(f, "\\u%04x", *p);
+    else fwrite(p, 1, (size_t)n, f);
+    p += n;
   }
   fputc('"', f);
 }

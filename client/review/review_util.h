@@ -44,6 +44,9 @@ int review_parse_date(const char *s, double *out);
  * write failed and its own errno is gone): what was written is incomplete. */
 int review_finish_output(FILE *f);
 void json_str(FILE *f, const char *s);
+/* Bytes of the well-formed UTF-8 character at p (1-4), 0 if none begins there; whether all of s is. */
+int review_utf8_len(const unsigned char *p);
+int review_utf8_valid(const char *s);
 void html_str(FILE *f, const char *s);
 void csv_str(FILE *f, const char *s);
 

@@ -186,6 +186,44 @@ PY
 then ok "JSON export: a scene of a value and more text goes in as a string; no key of its own added"
 else bad "JSON export with a trailing-text scene: $(head -c 400 "$dir/text.json")"; fi
 
+# Stored JSON that cJSON takes and JSON does not, and text that is not UTF-8 (session 81, found by review:
+# the export wrote the stored scene as it was, and strings' bad bytes raw): "01", "1.", a raw line break
+# and \x01 inside a string, a \xff byte; a trainee "eve\xff\x01", a note by "Lee\n" reading "x\xc0\xafy"
+# (an overlong '/'). Each export is read by Python's json, strict (no control character inside a string,
+# no NaN or Infinity), from strict UTF-8; by hand: the scene's b is 1, its string "a\nb\x01c" whole, a bad
+# byte U+FFFD (the scene with one kept as a string), the trainee "eve\ufffd?" (a control character in a
+# name reads '?'), the note "x\ufffd\ufffdy" by "Lee\n".
+for k in 0 1 2 3; do
+  copy json
+  python3 - "$dir/json.db" $k <<'PY2'
+import sqlite3, sys
+scenes = [b'{"b": 01}', b'{"b": 1.}', b'{"b": 1, "s": "a\nb\x01c"}', b'{"b": 1, "s": "\xff"}']
+c = sqlite3.connect(sys.argv[1])
+c.execute("UPDATE session SET scene_json = CAST(? AS TEXT), trainee = CAST(? AS TEXT)", (scenes[int(sys.argv[2])], b"eve\xff\x01"))
+c.execute("INSERT INTO note(session_id, author, wall_unix_s, text) SELECT id, 'Lee' || char(10), 1.0, CAST(? AS TEXT) FROM session",
+          (b"x\xc0\xafy",))
+c.commit()
+PY2
+  "$review" --db "$dir/json.db" export "$uid" --format json --out "$dir/json.json" > "$dir/json.out" 2>&1 || bad "JSON export $k: $(cat "$dir/json.out")"
+  if python3 - "$dir/json.json" $k <<'PY2'
+import json, sys
+def no_constant(name):
+    raise ValueError("non-standard constant " + name)
+d = json.loads(open(sys.argv[1], "rb").read().decode("utf-8"), parse_constant=no_constant)
+k = int(sys.argv[2])
+s = d["session"]
+scene = s["scene"]
+if k < 3:
+    assert scene["b"] == 1 and scene.get("s", "a\nb\x01c") == "a\nb\x01c", scene
+else:
+    assert scene == '{"b": 1, "s": "\ufffd"}', scene
+assert s["trainee"] == "eve\ufffd?", s["trainee"]
+assert [(n["author"], n["text"]) for n in d["notes"]] == [("Lee\n", "x\ufffd\ufffdy")], d["notes"]
+PY2
+  then ok "JSON export $k: strict JSON in strict UTF-8, the values as stored"
+  else bad "JSON export $k: $(grep -a '"scene"\|"trainee"' "$dir/json.json" | cut -c1-120 | od -c | head -6)"; fi
+done
+
 # an escape sequence in a trainee's name (OSC: retitle the terminal, then BEL) and a line break in the
 # station's: list and show print neither byte, the name read with '?' for each control character
 copy escape
