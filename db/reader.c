@@ -551,8 +551,7 @@ int palp_db_list_refused(palp_db *db, const palp_db_filter *f, palp_db_refused *
       }
       v = nv;
     }
-    const unsigned char *d = sqlite3_column_text(st, 0);
-    snprintf(v[n].detail, sizeof v[n].detail, "%s", d ? (const char *)d : "");
+    col_str(st, 0, v[n].detail, sizeof v[n].detail); /* list prints it: no escape sequence (session 81) */
     v[n].count = sqlite3_column_int64(st, 1);
     v[n].first_unix_s = sqlite3_column_double(st, 2);
     v[n].last_unix_s = sqlite3_column_double(st, 3);
@@ -770,8 +769,7 @@ int palp_db_session_exercise(palp_db *db, int64_t session_id, char *name, size_t
     return rc == SQLITE_DONE ? PALP_DB_ENOTFOUND : PALP_DB_ESQL;
   }
   if (name && namelen) {
-    const unsigned char *n = sqlite3_column_text(st, 0);
-    snprintf(name, namelen, "%s", n ? (const char *)n : "");
+    col_str(st, 0, name, namelen); /* printed like the trainee's name: no control character (session 81) */
   }
   if (exercise_json && !(*exercise_json = dup_col(st, 1))) {
     sqlite3_finalize(st);

@@ -481,7 +481,10 @@ void review_metrics_print(FILE *f, const review_assessment *a) {
   const palp_assess_result *r = &a->r;
   const palp_rubric *rb = &a->ex.rubric;
   if (a->has_exercise) {
-    fprintf(f, "exercise   %s: %s (time limit %.0f s)\n", a->exercise_name, a->ex.title, a->ex.time_limit);
+    char title[sizeof a->ex.title];
+    snprintf(title, sizeof title, "%s", a->ex.title); /* the exercise file's, from the log: no escape (session 81) */
+    review_tty(title);
+    fprintf(f, "exercise   %s: %s (time limit %.0f s)\n", a->exercise_name, title, a->ex.time_limit);
     /* a random exercise's lesions were drawn for this session (docs/assessment.md): say so, and which
      * draw, so that the instructor reads the places below as this attempt's own */
     char drawn[160];

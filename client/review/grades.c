@@ -9,6 +9,7 @@
 #include <sqlite3.h>
 
 #include "grades.h"
+#include "review_util.h"
 
 const char *const review_levels[4] = {"insufficient", "developing", "competent", "proficient"};
 
@@ -72,6 +73,7 @@ void review_grade_text(int has_score, double score, const char *level, const cha
     snprintf(buf, len, "%s%s%s", sc, has_score && level && *level ? " " : "", level ? level : "");
   else if (free_text && *free_text) snprintf(buf, len, "'%s' (free text)", free_text);
   else snprintf(buf, len, "-");
+  review_tty(buf); /* a level or free-text grade from the file, printed by list and show */
 }
 
 /* The latest note that grades: its score (-1: none), level and free-text grade ("" when absent);

@@ -202,9 +202,13 @@ static int ev_cb(void *u, double wall, int64_t frame, const char *kind, const ch
               : strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_VALID_RANGE)) != 0 &&
                     strcmp(kind, palp_db_event_kind_name(PALP_DB_EVENT_DEBRIEF)) != 0) &&
       t->listed < 20) {
-    char ts[64];
+    char ts[64], k[64], d[1024];
     review_fmt_time(wall, ts, sizeof ts);
-    printf("    %s  frame %-8lld %-10s x%-4lld %s\n", ts, (long long)frame, kind, (long long)count, detail);
+    snprintf(k, sizeof k, "%s", kind);
+    snprintf(d, sizeof d, "%s", detail ? detail : "");
+    review_tty(k);
+    review_tty(d);
+    printf("    %s  frame %-8lld %-10s x%-4lld %s\n", ts, (long long)frame, k, (long long)count, d);
     t->listed++;
   }
   return 0;
@@ -212,9 +216,13 @@ static int ev_cb(void *u, double wall, int64_t frame, const char *kind, const ch
 
 static int note_cb(void *u, double wall, const char *author, const char *text, const char *grade) {
   (void)u;
-  char ts[64];
+  char ts[64], a[256], t[4096];
   review_fmt_time(wall, ts, sizeof ts);
-  printf("    %s  %s%s%s%s: %s\n", ts, author, grade ? " [grade " : "", grade ? grade : "", grade ? "]" : "", text);
+  snprintf(a, sizeof a, "%s", author);
+  snprintf(t, sizeof t, "%s", text);
+  review_tty(a);
+  review_tty(t);
+  printf("    %s  %s%s%s%s: %s\n", ts, a, grade ? " [grade " : "", grade ? grade : "", grade ? "]" : "", t);
   return 0;
 }
 
@@ -369,7 +377,12 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   if (palp_db_each_event(db, s->id, ev_cb, &t)) show_unreadable(db, "events", "event", why, sizeof why);
   if (t.n) {
     printf("    totals:");
-    for (int i = 0; i < t.n; i++) printf(" %s %lld%s", t.kind[i], (long long)t.count[i], i + 1 < t.n ? "," : "");
+    for (int i = 0; i < t.n; i++) {
+      char k[sizeof t.kind[0]];
+      snprintf(k, sizeof k, "%s", t.kind[i]);
+      review_tty(k);
+      printf(" %s %lld%s", k, (long long)t.count[i], i + 1 < t.n ? "," : "");
+    }
     printf("\n");
   }
   printf("notes      %lld\n", (long long)s->notes);

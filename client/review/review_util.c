@@ -61,6 +61,15 @@ int review_utf8_valid(const char *s) {
   return 1;
 }
 
+void review_tty(char *s) {
+  for (unsigned char *p = (unsigned char *)s; p && *p;) {
+    const int n = review_utf8_len(p);
+    if (n == 0 || *p < 0x20 || *p == 0x7f) *p++ = '?';
+    else if (n == 2 && p[0] == 0xc2 && p[1] < 0xa0) p[0] = p[1] = '?', p += 2; /* C1: U+0080..U+009F, CSI among them */
+    else p += n;
+  }
+}
+
 /* A JSON string of any stored text: every control character escaped, and a byte that does not begin a
  * well-formed UTF-8 character written as U+FFFD (since session 81: such bytes went out raw, and the
  * export was not JSON a strict parser reads). */

@@ -47,6 +47,10 @@ void json_str(FILE *f, const char *s);
 /* Bytes of the well-formed UTF-8 character at p (1-4), 0 if none begins there; whether all of s is. */
 int review_utf8_len(const unsigned char *p);
 int review_utf8_valid(const char *s);
+/* Text from the log made fit for a terminal, in place: control characters (C0, DEL, C1) and bytes that
+ * are not UTF-8 read '?', as the reader does for names (an ESC in a grade or an exercise's title
+ * retitled or cleared the instructor's terminal; session 81). */
+void review_tty(char *s);
 void html_str(FILE *f, const char *s);
 void csv_str(FILE *f, const char *s);
 

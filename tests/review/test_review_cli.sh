@@ -546,6 +546,33 @@ if ! grep -q "pruned class-bob-2" "$dir/prune-again.txt" && [ "$(stamp)" = "$sta
   ok "prune again: class-bob-2 not pruned again, its stamp $stamp0 kept: $(tail -1 "$dir/prune-again.txt" | cut -c1-80)"
 else bad "prune again: stamp $stamp0 -> $(stamp): $(cat "$dir/prune-again.txt")"; fi
 
+# 9. escape sequences from the log never reach the terminal: an exercise name, a free-text grade (a level
+# is one of four words, by the schema's CHECK), a DDS Security refusal's detail, an event's kind and detail and a note's author and text, each holding
+# ESC ]0;pwned BEL (retitles a terminal) or CSI 2J (clears it, as ESC [ and as the C1 byte pair C2 9B):
+# list and show print none of ESC, BEL or C2 9B, and each such character as '?'
+mklog "$dir/esc.db" esc-1
+python3 - "$dir/esc.db" <<'PY2'
+import sqlite3, sys
+c = sqlite3.connect(sys.argv[1])
+osc, csi, c1 = "\x1b]0;pwned\x07", "\x1b[2J", "\u009b2J"
+c.execute("insert into session_exercise(session_id, exercise_name, exercise_json) values(1, ?, '{}')", ("ex" + osc,))
+c.execute("insert into note(session_id, author, wall_unix_s, text, grade) values(1, ?, 1.7e9, ?, ?)", ("Lee" + csi, "t" + c1, "B" + osc))
+c.execute("insert into event(session_id, wall_unix_s, frame, kind, detail, count) values(1, 1.7e9, 1, ?, ?, 1)", ("k" + csi, "d" + osc))
+c.execute("insert into event(session_id, wall_unix_s, frame, kind, detail, count) values(NULL, 1.7e9, 0, 'security_refused', ?, 3)",
+          ("trainee/m" + osc + ": revoked (handshake)",))
+c.commit()
+PY2
+"$review" --db "$dir/esc.db" list > "$dir/esc-list.txt" 2>&1 || bad "list over escape sequences: exit status"
+"$review" --db "$dir/esc.db" show esc-1 > "$dir/esc-show.txt" 2>&1  # its scene has no exercise JSON: exit 2 allowed
+if ! LC_ALL=C grep -q "$(printf '\033')" "$dir/esc-list.txt" "$dir/esc-show.txt" &&
+   ! LC_ALL=C grep -q "$(printf '\007')" "$dir/esc-list.txt" "$dir/esc-show.txt" &&
+   ! LC_ALL=C grep -q "$(printf '\302\233')" "$dir/esc-list.txt" "$dir/esc-show.txt" &&
+   grep -q "'B?\]0;pwned?' (free text)" "$dir/esc-list.txt" && grep -q 'ex?\]0;pwned?' "$dir/esc-list.txt" &&
+   grep -q 'trainee/m?\]0;pwned?: revoked' "$dir/esc-list.txt" &&
+   grep -q 'k?\[2J' "$dir/esc-show.txt" && grep -q 'Lee?\[2J' "$dir/esc-show.txt" && grep -q 't??2J' "$dir/esc-show.txt"; then
+  ok "escape sequences in an exercise name, grades, a refusal, events and notes: list and show print '?' for each control character"
+else bad "escape sequences reach the terminal:"; od -c "$dir/esc-list.txt" | grep -n '033\|007\|302' | head -5; od -c "$dir/esc-show.txt" | grep -n '033\|007\|302' | head -5; fi
+
 # a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
 "$review" --log-file /nonexistent/dir/r.log --db "$db" list > "$dir/logfile.txt" 2>&1
 rc=$?
