@@ -214,9 +214,9 @@ static int check_palp_file(const char *path, sqlite3 **out, int *version_out, in
                    errlen);
   if (rc) return rc;
   sqlite3_stmt *st;
-  int version = -1, tables = -1, any = -1;
+  int version = -1, tables = -1, any = -1, have_version = 0;
   if (probe == SQLITE_OK && sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &st, NULL) == SQLITE_OK) {
-    if (sqlite3_step(st) == SQLITE_ROW) version = sqlite3_column_int(st, 0);
+    if (sqlite3_step(st) == SQLITE_ROW) version = sqlite3_column_int(st, 0), have_version = 1;
     sqlite3_finalize(st);
   }
   if (version >= 0 &&
@@ -231,6 +231,12 @@ static int check_palp_file(const char *path, sqlite3 **out, int *version_out, in
     palp_db__fmt(err, errlen, "%s: database schema version %d is newer than this palp (%d); upgrade palp", path,
                  version, palp_db_migration_count);
     rc = PALP_DB_ENEWER;
+  } else if (have_version && version < 0) {
+    /* an SQLite file read whole, whose header says a version no palp writes (it was "not an SQLite
+     * database: not an error" until session 81) */
+    palp_db__fmt(err, errlen, "%s: not a palp session log (an SQLite database whose schema version is %d, which no "
+                 "palp writes; left untouched)", path, version);
+    rc = PALP_EINVAL;
   } else if (version < 0 && probe != SQLITE_OK && primary != SQLITE_NOTADB && primary != SQLITE_CORRUPT) {
     /* the file may well be a log: SQLite could not read it (locked past the timeout, no -shm to be made beside a
      * -wal in a read-only directory, an I/O error) */

@@ -167,7 +167,9 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     return REVIEW_ERROR;
   }
   const int csv = !strcmp(format, "csv");
-  if (csv && strcmp(table, "frames") && strcmp(table, "contacts") && strcmp(table, "feedback") &&
+  /* JSON holds every table; a --table it is given must still be one (since session 81 "bogus" is refused
+   * there too: it was taken without a word) */
+  if (strcmp(table, "frames") && strcmp(table, "contacts") && strcmp(table, "feedback") &&
       strcmp(table, "events") && strcmp(table, "notes") && strcmp(table, "metrics")) {
     fprintf(stderr, "palp-review export: --table must be frames, contacts, feedback, events, notes or metrics\n");
     return REVIEW_ERROR;

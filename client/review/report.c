@@ -370,6 +370,10 @@ static void assessment_section(palp_log *log, palp_db *db, const palp_db_session
   }
   if (rc) {
     palp_log_warn(log, "report: assessment: %s", err);
+    /* the log could not be read: the page says it, and the exit status (since session 81: exit 0), as
+     * export, trainee and class do; a scene or exercise that does not parse stays said on the page alone */
+    if ((rc == PALP_DB_ESQL || rc == PALP_ENOMEM) && !why[0])
+      snprintf(why, whylen, "the assessment could not be computed: %s", err);
     fputs("<p class=\"warn\" id=\"assessment-error\">The assessment could not be computed: ", f);
     html_str(f, err);
     fputs("</p>\n", f);

@@ -365,6 +365,11 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
     else if (stored) show_unreadable(db, "metrics", "session_metrics", why, sizeof why);
   } else {
     printf("metrics    UNKNOWN: %s\n", aerr);
+    /* the log could not be read (a damaged page under the finger samples or findings): not a success
+     * (since session 81: exit 0), as export, trainee and class say it. A logged scene or exercise that
+     * does not parse stays said in the line alone, as before. */
+    if ((arc == PALP_DB_ESQL || arc == PALP_ENOMEM) && !why[0])
+      snprintf(why, sizeof why, "the metrics could not be computed: %.300s", aerr);
   }
   if (debrief[0]) printf("debrief    %s\n", debrief);
   /* Where the phantom's model answered outside its valid range: the forces (and so the pressure

@@ -224,6 +224,26 @@ PY2
   else bad "JSON export $k: $(grep -a '"scene"\|"trainee"' "$dir/json.json" | cut -c1-120 | od -c | head -6)"; fi
 done
 
+# Smaller ones (session 81, found by review): the finger samples unreadable (their table gone: SQLite
+# says "no such table"): show and report exit 2 as export, trainee and class do (they exited 0); a JSON
+# export of a table that is none: exit 2 (0); a header's schema version of -3: "not a palp session log"
+# with the version said (it read "not an SQLite database: not an error").
+copy nosamples
+sqlite3 "$dir/nosamples.db" "DROP TABLE finger_sample"
+set +e
+"$review" --db "$dir/nosamples.db" show "$uid" > "$dir/nosamples.out" 2>&1; rc_show=$?
+"$review" --db "$dir/nosamples.db" report "$uid" --out "$dir/nosamples.html" >> "$dir/nosamples.out" 2>&1; rc_report=$?
+"$review" --db "$dir/base.db" export "$uid" --format json --table bogus --out "$dir/bogus.json" > "$dir/bogus.out" 2>&1; rc_bogus=$?
+cp "$dir/base.db" "$dir/minus3.db"
+sqlite3 "$dir/minus3.db" "PRAGMA user_version = -3"
+msg=$("$review" --db "$dir/minus3.db" list 2>&1); rc_minus3=$?
+set -e
+[ $rc_show -eq 2 ] && [ $rc_report -eq 2 ] && [ "$(grep -c "could not be computed: .*no such table: finger_sample" "$dir/nosamples.out")" -ge 2 ] &&
+  ok "finger samples unreadable: show and report exit 2, said" || bad "finger samples unreadable: show $rc_show, report $rc_report: $(tail -3 "$dir/nosamples.out")"
+[ $rc_bogus -eq 2 ] && ok "export --format json --table bogus: exit 2: $(cat "$dir/bogus.out")" || bad "export --table bogus: exit $rc_bogus"
+[ $rc_minus3 -eq 2 ] && echo "$msg" | grep -q "not a palp session log (an SQLite database whose schema version is -3" &&
+  ok "user_version -3: $msg" | sed 's/ok   user_version -3: .*palp-review: /ok   user_version -3: /' || bad "user_version -3: exit $rc_minus3: $msg"
+
 # an escape sequence in a trainee's name (OSC: retitle the terminal, then BEL) and a line break in the
 # station's: list and show print neither byte, the name read with '?' for each control character
 copy escape
