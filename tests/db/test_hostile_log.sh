@@ -244,6 +244,25 @@ set -e
 [ $rc_minus3 -eq 2 ] && echo "$msg" | grep -q "not a palp session log (an SQLite database whose schema version is -3" &&
   ok "user_version -3: $msg" | sed 's/ok   user_version -3: .*palp-review: /ok   user_version -3: /' || bad "user_version -3: exit $rc_minus3: $msg"
 
+# 100,000 marks, all with id 7, then 100,000 withdrawals of id 8 (which names none, so each looked through
+# every mark): show took 10 s to read them (each withdrawal scanned the marks back; session 81); now the
+# withdrawals are matched by binary search: show within 5 s (by estimate 0.3 s here, most of it reading).
+copy marks
+sqlite3 "$dir/marks.db" "WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 100000)
+  INSERT INTO finding(session_id, mark_id, op, frame, sim_time_s, wall_unix_s, point_x_m, point_y_m, point_z_m)
+  SELECT (SELECT id FROM session), 7, 'mark', i, i * 1e-3, 1.0, 0, 0, 0.04 FROM n;
+  WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 100000)
+  INSERT INTO finding(session_id, mark_id, op, frame, sim_time_s, wall_unix_s) SELECT (SELECT id FROM session), 8,
+  'withdraw', 100000 + i, 100 + i * 1e-3, 1.0 FROM n;"
+set +e
+start=$(date +%s)
+timeout 60 "$review" --db "$dir/marks.db" show "$uid" > "$dir/marks.out" 2>&1; rc=$?
+took=$(( $(date +%s) - start ))
+set -e
+rm -f "$dir/marks.db"
+[ $rc -lt 124 ] && [ $took -le 5 ] && ok "100,000 marks and 100,000 withdrawals: show in ${took} s (exit $rc)" ||
+  bad "100,000 marks and 100,000 withdrawals: show exit $rc after ${took} s"
+
 # an escape sequence in a trainee's name (OSC: retitle the terminal, then BEL) and a line break in the
 # station's: list and show print neither byte, the name read with '?' for each control character
 copy escape
