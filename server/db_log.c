@@ -41,6 +41,7 @@ struct palp_srv_db_log {
   palp_db_writer *w;
   palp_srv_events ev;
   char run_id[48];
+  char numerics[24]; /* palp_numerics_fingerprint, hex: each session's params carry it (replay) */
   slot s[SLOTS];
   palp_log *log; /* may be NULL (stderr) */
   palp_srv_grader *grader; /* NULL: closed sessions are not scored live */
@@ -137,6 +138,9 @@ static void on_opened(void *ctx, const palp_srv_session_info *i) {
   cJSON_AddStringToObject(pj, "partition", i->partition);
   cJSON_AddBoolToObject(pj, "valid_range_events", 1);
   cJSON_AddBoolToObject(pj, "debrief_events", 1);
+  /* this machine's math library (session 81): a replay elsewhere tells a library's last bit from a
+   * damaged log */
+  cJSON_AddStringToObject(pj, "numerics", l->numerics);
   char *params = cJSON_PrintUnformatted(pj);
   cJSON_Delete(pj);
   /* Self-contained (parameters inlined), so the log alone rebuilds the world. */
@@ -435,6 +439,7 @@ int palp_srv_db_log_open(const char *path, int64_t max_bytes, palp_log *log, pal
   }
   /* uid = <start time>-<pid>-<session>: unique across server runs on one host. */
   snprintf(l->run_id, sizeof l->run_id, "%lld-%ld", (long long)time(NULL), (long)getpid());
+  snprintf(l->numerics, sizeof l->numerics, "%016llx", (unsigned long long)palp_numerics_fingerprint());
   l->ev = (palp_srv_events){.ctx = l,
                             .session_opened = on_opened,
                             .session_closed = on_closed,

@@ -580,6 +580,13 @@ uint64_t palp_world_hash(const palp_world *w);
  * 1,300 (the factor's numbers; palp_world_hash: 6 and 24 us). */
 uint64_t palp_world_state_hash(const palp_world *w);
 
+/* A fingerprint of this process's math library as the model calls it (exp, expm1, pow, atan2, sin,
+ * cos, acos over fixed arguments; src/numerics.c). Two machines with the same build replay each
+ * other's sessions bit for bit only if their fingerprints are equal: glibc picks its FMA/AVX2 or
+ * baseline code at run time, and they differ in the last bit. Session logs keep it ("numerics" in
+ * a session's params, palp-server since session 81). ~0.2 ms. */
+uint64_t palp_numerics_fingerprint(void);
+
 /* Per-stage timings of the last step and accumulated totals [s]. name[0] is "refactor",
  * the factor's upkeep (a due rebuild installed or computed, a blend advanced, a rebuild or
  * its request, the Burgers coefficients), then the pipeline's stages in order; unused

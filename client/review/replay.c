@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "review.h"
 
 #define MAX_SLOTS 4096
@@ -143,7 +145,25 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
     return REVIEW_ERROR;
   }
   const int recorded = params && strstr(params, "\"recorded_by\"") != NULL;
+  /* The math library of the machine that ran the session (palp_numerics_fingerprint, "numerics" in
+   * its params since session 81) against this one's: another one's last bits differ, and its replay
+   * mismatches however sound the log (said before and after). */
+  char logged_numerics[24] = "", here[24];
+  snprintf(here, sizeof here, "%016llx", (unsigned long long)palp_numerics_fingerprint());
+  {
+    cJSON *pj = params ? cJSON_Parse(params) : NULL;
+    const char *v = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(pj, "numerics"));
+    if (v && strlen(v) == 16 && strspn(v, "0123456789abcdef") == 16)
+      snprintf(logged_numerics, sizeof logged_numerics, "%s", v);
+    cJSON_Delete(pj);
+  }
   free(params);
+  const int other_numerics = logged_numerics[0] && strcmp(logged_numerics, here) != 0;
+  if (other_numerics)
+    printf("replay: %s ran on a machine whose math library computes the model's exp, pow, atan2, sin and cos "
+           "differently in the last bit (numerics %s there, %s here: glibc picks FMA/AVX2 or baseline code by the "
+           "CPU); a bit-identical replay is not expected here\n",
+           s->uid, logged_numerics, here);
   if (recorded) {
     /* palp-recorder logs inputs as received over DDS, not as the server applied them. */
     palp_log_error(log, "replay: session %s was recorded over DDS by palp-recorder: its contact inputs are stamped "
@@ -201,7 +221,12 @@ int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int
   } else if (r->step_error) {
     result = REVIEW_MISMATCH;
   } else if (r->mismatch) {
-    printf("replay: %s diverges after %" PRId64 " identical frames\n", s->uid, r->checked);
+    printf("replay: %s diverges after %" PRId64 " identical frames%s\n", s->uid, r->checked,
+           other_numerics ? ": expected on this machine, whose math library is not the logging machine's (above); "
+                            "replay it on a machine of the logging kind"
+           : logged_numerics[0] ? " (the same math library as the machine that ran it: the log or the model differs)"
+                                : " (the log keeps no numerics fingerprint: logged before session 81 or by another "
+                                  "tool; on a machine of another CPU kind the math library's last bits may be why)");
     result = REVIEW_MISMATCH;
   } else if (r->checked == 0) {
     palp_log_error(log, "replay: %s has no logged frames to compare", s->uid);

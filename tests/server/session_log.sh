@@ -49,6 +49,19 @@ if printf '%s' "$show" | grep -Eq "contacts +[1-9][0-9]* inputs"; then echo "ok 
 else echo "FAIL no contact inputs: $show"; fail=1; fi
 out=$("$review" --db "$db" replay "$uid" 2>&1); rrc=$?
 if [ $rrc -eq 0 ]; then echo "ok   replay exit 0: $out"; else echo "FAIL replay exit $rrc: $out"; fail=1; fi
+# Session 81: the same replay where glibc's math library takes its baseline code, not its FMA/AVX2
+# variants (GLIBC_TUNABLES, as on a CPU without them): their last bits differ, and the replay
+# mismatched from frame 1, "diverges" as from a damaged log. The log keeps the server's numerics
+# fingerprint: where it differs here, the replay says so up front and calls the divergence expected;
+# where the CPU has no FMA/AVX2 nothing changes and the replay is bit-identical still.
+out2=$(GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA "$review" --db "$db" replay "$uid" 2>&1); rrc2=$?
+if grep -qw fma /proc/cpuinfo && grep -qw avx2 /proc/cpuinfo; then
+  if [ $rrc2 -eq 1 ] && printf '%s' "$out2" | grep -q "ran on a machine whose math library computes the model's exp, pow, atan2, sin and cos differently in the last bit (numerics [0-9a-f]\{16\} there, [0-9a-f]\{16\} here" &&
+    printf '%s' "$out2" | grep -q "identical frames: expected on this machine, whose math library is not the logging machine's"; then
+    echo "ok   replayed with glibc's baseline math (this CPU has FMA and AVX2): the other library named, the divergence expected (exit 1)"
+  else echo "FAIL replay with glibc's baseline math (exit $rrc2): $out2"; fail=1; fi
+elif [ $rrc2 -eq 0 ]; then echo "ok   this CPU has no FMA/AVX2: the tunable changes nothing, the replay is bit-identical"
+else echo "FAIL replay with GLIBC_TUNABLES on a CPU without FMA/AVX2 (exit $rrc2): $out2"; fail=1; fi
 list=$("$review" --db "$db" list 2>&1)
 euid=$(printf '%s\n' "$list" | awk '/ erin /{print $1}')
 eshow=$("$review" --db "$db" show "$euid" 2>&1)
