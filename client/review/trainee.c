@@ -71,7 +71,7 @@ static int exercise_scores(const review_row *rows, int nr, int first, double *sc
   *passed = 0, *latest = first;
   for (int j = first; j < nr; j++) {
     if (!same_exercise(&rows[j], &rows[first])) continue;
-    sc[k++] = rows[j].a.r.score;
+    sc[k++] = palp_shown_tenths(rows[j].a.r.score, NAN, rows[j].a.r.pass); /* as every tool shows it */
     *passed += rows[j].a.r.pass;
     *latest = j;
   }
@@ -135,7 +135,7 @@ static int write_page(palp_log *log, const char *path, const char *name, const r
       fprintf(f, "</td><td>%d</td><td class=\"t scores\">", k);
       for (int j = 0; j < k; j++) fprintf(f, "%s%.1f", j ? ", " : "", sc[j]);
       fprintf(f, "</td><td>%d of %d</td><td%s>%.1f %s</td><td>", passed, k, rows[latest].a.r.pass ? "" : " class=\"fail\"",
-              rows[latest].a.r.score, rows[latest].a.r.pass ? "pass" : "fail");
+              palp_shown_tenths(rows[latest].a.r.score, NAN, rows[latest].a.r.pass), rows[latest].a.r.pass ? "pass" : "fail");
       char id[32];
       snprintf(id, sizeof id, "scores-%d", e + 1);
       review_svg_scores(f, sc, k, 160, 40, id);
@@ -303,7 +303,8 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
     const int k = exercise_scores(rows, nr, rec.exercise_first[e], sc, &passed, &latest);
     fprintf(tty, "  %-16s scores ", rows[rec.exercise_first[e]].a.exercise_name);
     for (int j = 0; j < k; j++) fprintf(tty, "%s%.1f", j ? ", " : "", sc[j]);
-    fprintf(tty, "; passed %d of %d; latest %.1f %s\n", passed, k, rows[latest].a.r.score, rows[latest].a.r.pass ? "pass" : "fail");
+    fprintf(tty, "; passed %d of %d; latest %.1f %s\n", passed, k,
+            palp_shown_tenths(rows[latest].a.r.score, NAN, rows[latest].a.r.pass), rows[latest].a.r.pass ? "pass" : "fail");
   }
   free(sc);
   if (rec.judged) {
