@@ -61,6 +61,21 @@ def run(build, source, out):
         check(r.returncode == 2 and "readable by every user" in r.stderr,
               "a world-readable --trainee-tokens file is refused (exit %d): %s" % (r.returncode, r.stderr.strip()[:100]))
         os.chmod(tokfile, 0o600)
+        # Session 81's review: a directory given as the file started palp-web with every trainee locked out,
+        # and a NUL byte ended the list (bob, after it, dropped): each refused up front, named.
+        tokdir = os.path.join(out, "tokdir")
+        os.makedirs(tokdir, mode=0o700, exist_ok=True)
+        nulfile = os.path.join(out, "tokens-nul.txt")
+        with open(nulfile, "wb") as f:
+            f.write(("alice %s\n" % ALICE).encode() + b"\0\n" + ("bob %s\n" % BOB).encode())
+        os.chmod(nulfile, 0o600)
+        for path, want in ((tokdir, "a directory, not a file"), (nulfile, "a NUL byte at byte %d" % (len(ALICE) + 7))):
+            r = subprocess.run([os.path.join(build, "web", "palp-web"), "--port", "0", "--domain", "126", "--token",
+                                INSTR, "--trainee-tokens", path], capture_output=True, text=True, timeout=20,
+                               env=procs.env)
+            check(r.returncode == 2 and want in r.stderr,
+                  "--trainee-tokens %s refused up front (exit %d): %s" % (os.path.basename(path), r.returncode,
+                                                                          r.stderr.strip()[:160]))
         # phantoms 1 and 2 as server-paper's, and the exercises; the lumps sent to instructors
         procs.server(config=harness.answers_config(source, out))
         web = procs.web(extra=["--token", INSTR, "--trainee-tokens", tokfile])
