@@ -100,3 +100,15 @@ int32_t palp_dds_gate_instances(const palp_dds_gate *g, palp_dds_topic_kind kind
 void palp_dds_gate_limit(const palp_dds_gate *g, dds_qos_t *q, palp_dds_topic_kind kind) {
   dds_qset_resource_limits(q, DDS_LENGTH_UNLIMITED, palp_dds_gate_instances(g, kind), DDS_LENGTH_UNLIMITED);
 }
+
+int palp_dds_gate_key_passes(palp_dds_gate *g, palp_dds_topic_kind kind, const void *key) {
+  return finger_keyed(kind) ? finger_passes(key, g) : session_passes(key, g);
+}
+
+uint32_t palp_dds_gate_refused_since(dds_entity_t rd, uint32_t *seen) {
+  dds_sample_rejected_status_t st;
+  if (rd <= 0 || dds_get_sample_rejected_status(rd, &st) != 0) return 0;
+  const uint32_t d = st.total_count - *seen; /* unsigned: a wrapped total still gives the increment */
+  *seen = st.total_count;
+  return d;
+}

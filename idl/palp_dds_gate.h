@@ -15,7 +15,10 @@
  * A dispose carries no sample for a filter (Cyclone 0.10 makes its instance unfiltered): a
  * best-effort stream reader also takes palp_dds_gate_limit's instance bound, as many keys as the
  * gate can pass. A reliable one cannot (Cyclone retries a reliable sample a reader refuses for
- * resource limits on the delivery path, docs/robustness.md).
+ * resource limits on the delivery path, docs/robustness.md). The bound alone let a flood of disposes
+ * fill the reader for as long as the disposing writer lived, every later session's keys refused:
+ * the owner also counts the strays it takes (palp_dds_gate_key_passes) and the samples refused
+ * (palp_dds_gate_refused_since) and makes the reader anew when idl/palp_dds_strays.h says so.
  *
  * Lock-free: the owner writes its slots, the state filter the ring, the stream filters only read.
  */
@@ -59,5 +62,15 @@ int palp_dds_gate_passes(palp_dds_gate *g, uint32_t sid);
  * the history). */
 void palp_dds_gate_limit(const palp_dds_gate *g, dds_qos_t *q, palp_dds_topic_kind kind);
 int32_t palp_dds_gate_instances(const palp_dds_gate *g, palp_dds_topic_kind kind);
+/* Whether the filter of stream `kind` would pass a sample with key fields `key` (a taken sample's,
+ * an invalid one's too: Cyclone fills its key): its session passes and, on a finger-keyed topic,
+ * its finger is 0-3. A taken dispose of a key it would not pass is a stray: an instance a flood made
+ * that the bound holds until the reader is made anew (idl/palp_dds_strays.h). */
+int palp_dds_gate_key_passes(palp_dds_gate *g, palp_dds_topic_kind kind, const void *key);
+/* The samples stream reader `rd` refused since *seen (its sample-rejected total when last asked;
+ * 0 for a new reader), *seen updated: past the instance bound a dispose of a made-up key is refused
+ * like any sample of a new key, and a full reader is what the renewal is there to empty. 0 when
+ * the status cannot be read. */
+uint32_t palp_dds_gate_refused_since(dds_entity_t rd, uint32_t *seen);
 
 #endif

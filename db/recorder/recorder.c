@@ -269,6 +269,14 @@ typedef struct recorder {
    * while its writer lives (a dispose passes no filter); past a bound the reader is made anew. */
   int64_t finding_strays, finding_strays_total, finding_renewals;
   int64_t finding_renewed_ns, finding_renewal_said_ns;
+  /* The same for the stream readers (RD_CONTACT .. RD_LOCAL_MODEL; is_stream), which also bound their
+   * instances (reader_deep): disposes of keys the gate would not pass, and samples refused at the bound,
+   * since each was made. With the bound alone a flood of disposes filled it while the disposing writer
+   * lived, and every later session's contacts, feedback and finger data were refused (the session 81
+   * review: 4,700 disposes, 0 of 100 contacts logged). Per reader, as each fills on its own. */
+  int64_t stream_strays[RD_COUNT], stream_renewed_ns[RD_COUNT];
+  uint32_t stream_refused_seen[RD_COUNT];
+  int64_t stream_strays_total, stream_renewals, stream_renewal_said_ns;
   /* Samples held until their run is known (route_sample), in the order they came. */
   held_sample held[MAX_HELD];
   int nheld, releasing;
@@ -1693,6 +1701,14 @@ static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const 
   }
 }
 
+/* The readers of a session's streams, whose strays are counted and which are made anew (recorder.stream_*). */
+static int is_stream(int k) { return k >= RD_CONTACT && k <= RD_LOCAL_MODEL; }
+static int64_t stream_strays_left(const recorder *r) {
+  int64_t n = 0;
+  for (int k = RD_CONTACT; k <= RD_LOCAL_MODEL; k++) n += r->stream_strays[k];
+  return n;
+}
+
 static dds_entity_t reader_deep(const recorder *r, dds_entity_t parent, dds_entity_t topic, palp_dds_topic_kind kind) {
   /* The topic's QoS, but a deeper reader history: the recorder, not a display, must see every
    * sample that arrives, and history depth is not part of the writer/reader match. */
@@ -1709,6 +1725,55 @@ static dds_entity_t reader_deep(const recorder *r, dds_entity_t parent, dds_enti
   dds_entity_t rd = dds_create_reader(parent, topic, q, NULL);
   dds_delete_qos(q);
   return rd;
+}
+
+/* A flood of disposes of made-up stream keys: each stream reader made anew when idl/palp_dds_strays.h
+ * says so, its strays counted as it is taken (main's pass) and its samples refused at the instance
+ * bound added here. The streams are volatile, so the new reader is handed none of the flood again,
+ * and the sessions' keys become instances again with their next samples. The new reader is made
+ * before the old goes, so that a remote writer always has a reader of this participant matched and
+ * sends on; a sample in the old reader not yet taken in that instant is lost (the pass just took
+ * them all). */
+static void renew_streams(recorder *r, palp_log *plog, dds_entity_t sub, const dds_entity_t *t,
+                          const palp_dds_topic_kind *kind, dds_entity_t *rd, dds_entity_t ws, int64_t now) {
+  int renewed = 0;
+  int64_t strays = 0;
+  for (int k = RD_CONTACT; k <= RD_LOCAL_MODEL; k++) {
+    r->stream_strays[k] += palp_dds_gate_refused_since(rd[k], &r->stream_refused_seen[k]);
+    if (!palp_dds_strays_renew_due((uint64_t)r->stream_strays[k], now, r->stream_renewed_ns[k])) continue;
+    const dds_entity_t fresh = reader_deep(r, sub, t[kind[k]], kind[k]);
+    r->stream_renewed_ns[k] = now;
+    if (fresh <= 0) {
+      /* retried PALP_DDS_RENEW_NS later, not every pass however many come; said at most every 10 s */
+      if (r->stream_strays[k] >= PALP_DDS_STRAYS_HARD) r->stream_strays[k] = PALP_DDS_STRAYS_HARD - 1;
+      if (now - r->stream_renewal_said_ns < 10000000000LL && r->stream_renewal_said_ns) continue;
+      r->stream_renewal_said_ns = now;
+      palp_log_error(plog, "the %s reader, flooded with disposes of made-up keys, could not be made anew (%s): it "
+                           "may refuse new sessions' samples until the flood's writer goes (tried again in %.2f s)",
+                     topic_word(k), dds_strretcode(fresh), PALP_DDS_RENEW_NS * 1e-9);
+      continue;
+    }
+    dds_waitset_detach(ws, rd[k]);
+    dds_delete(rd[k]);
+    rd[k] = fresh;
+    dds_set_status_mask(rd[k], DDS_DATA_AVAILABLE_STATUS);
+    dds_waitset_attach(ws, rd[k], k);
+    r->stream_refused_seen[k] = 0;
+    r->stream_strays_total += r->stream_strays[k];
+    strays += r->stream_strays[k];
+    r->stream_strays[k] = 0;
+    r->stream_renewals++;
+    renewed++;
+  }
+  if (renewed && (r->stream_renewals == renewed || now - r->stream_renewal_said_ns >= 10000000000LL)) {
+    palp_log_warn(plog, "%lld disposes of stream keys of sessions never heard open, or samples refused at the stream "
+                        "readers' bound (%lld in all; each kept while its writer lives: a flood); %d stream reader(s) "
+                        "made anew to drop them, as each will be whenever %d more come (at most every %.2f s, unless "
+                        "%d do)",
+                  (long long)strays, (long long)r->stream_strays_total, renewed, PALP_DDS_STRAYS_MIN,
+                  PALP_DDS_RENEW_NS * 1e-9, PALP_DDS_STRAYS_HARD);
+    r->stream_renewal_said_ns = now;
+  }
 }
 
 #define RECORDER_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE | PALP_APP_OPT_DDS)
@@ -1937,6 +2002,10 @@ int main(int argc, char **argv) {
             if (k == RD_FINDING && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
                 !palp_dds_gate_passes(&r->gate, *(const uint32_t *)samples[i]))
               r->finding_strays++;
+            /* a stream's: a key its filter would not pass (a made-up session, or finger past 3) */
+            if (is_stream(k) && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
+                !palp_dds_gate_key_passes(&r->gate, kind[k], samples[i]))
+              r->stream_strays[k]++;
             continue;
           }
           switch (k) {
@@ -1958,6 +2027,7 @@ int main(int argc, char **argv) {
     }
     resolve_pending(r, 0, 0);
     const int64_t renew_ns = palp_dds_now_ns();
+    renew_streams(r, &plog, sub, t, kind, rd, ws, renew_ns);
     if (palp_dds_strays_renew_due((uint64_t)r->finding_strays, renew_ns, r->finding_renewed_ns)) {
       /* As palp-server does with a session's (renew_finding_reader): the findings are volatile, so the new
        * reader is handed none of the flood again; a finding in flight in that instant is lost, and its
@@ -2037,13 +2107,15 @@ int main(int argc, char **argv) {
           "that had ended, %lld samples from an earlier run of their session's server, %lld held for the state of their run (%lld held samples dropped: it did not come), %lld "
           "server samples' writers looked up in the origin cache (%lld writers asked of DDS, %lld forgotten), %lld "
           "disposes of finding keys of sessions never heard open (the findings reader made anew %lld times), %lld "
-          "exercises refused, %lld catalogue entries refused%s%s\n",
+          "disposes of stream keys never heard open or samples refused at the streams' bound (stream readers made "
+          "anew %lld times), %lld exercises refused, %lld catalogue entries refused%s%s\n",
           (long long)st.written, (long long)st.shed, (long long)st.failed, (long long)r->unknown_session_samples,
           (long long)r->foreign_samples, (long long)r->ended_writer_samples, (long long)r->earlier_run_samples,
           (long long)r->held_total,
           (long long)(r->held_dropped + r->nheld), (long long)r->origin_consults, (long long)r->origin.lookups,
           (long long)r->origin.evictions, (long long)(r->finding_strays_total + r->finding_strays),
-          (long long)r->finding_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,
+          (long long)r->finding_renewals, (long long)(r->stream_strays_total + stream_strays_left(r)),
+          (long long)r->stream_renewals, (long long)r->exercises_refused, (long long)r->phantoms_refused,
           st.last_error[0] ? "; last error: " : "",
           st.last_error);
   for (int i = 0; i < MAX_PHANTOMS; i++) phantom_free(&r->ph[i]);
