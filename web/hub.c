@@ -155,6 +155,17 @@ typedef struct phantom {
   char name[64];
 } phantom;
 
+/* A stream reader's strays since it was made (renew_stream): disposes of keys the gate would not pass and
+ * samples refused at its instance bound. The bound alone let a flood of disposes of made-up keys fill
+ * the reader while the disposing writer lived, every later session's samples then refused (the
+ * session 81 review: 800 disposes, 0 of 100 contacts received); past idl/palp_dds_strays.h's bound
+ * the reader is made anew. */
+typedef struct stray_watch {
+  uint64_t strays;
+  uint32_t refused_seen; /* its sample-rejected total when last asked (palp_dds_gate_refused_since) */
+  int64_t renewed_ns;    /* when last made anew (0: never) */
+} stray_watch;
+
 typedef struct session {
   int used;
   uint32_t id;
@@ -200,6 +211,7 @@ typedef struct session {
   /* feedback of this session's partition, read only while a position-driven finger presses (its
    * force comes from feedback alone; a force-driven contact carries its own) */
   dds_entity_t fb_sub, fb_r;
+  stray_watch fb_strays;
   /* viewer membership, through a request writer of this session's own: the server admits at most
    * stations_per_writer (2) stations per writer (server/admission.c), as a station process has one */
   dds_entity_t req_w;
@@ -273,6 +285,10 @@ struct palp_web_hub {
   dds_entity_t finding_topic_r; /* the findings reader's own, gated topic entity */
   uint64_t finding_strays, finding_renewals;
   int64_t finding_renewed_ns;
+  /* the same for the stream readers, each on its own (renew_stream; each session's feedback reader
+   * keeps its own in its session) */
+  stray_watch contact_strays, deform_strays, lm_strays, fsample_strays;
+  int stream_renewal_said;
   /* the writer of the sample drain() is handing its callback (on_phantom names a refused one's), and
    * the participant of that writer when drain() had it looked up (on_state), else 0 */
   dds_instance_handle_t sample_writer, sample_participant;
@@ -1777,6 +1793,7 @@ static void on_contact(palp_web_hub *h, const palp_Contact *m) {
   if (f->mode == palp_CONTACT_FINGER && h->def.read_feedback && s->fb_sub <= 0 && s->st.partition[0]) {
     s->fb_sub = palp_dds_session_subscriber(h->pp, s->st.partition);
     s->fb_r = s->fb_sub > 0 ? stream_reader(h, s->fb_sub, h->topic[PALP_TOPIC_FEEDBACK], PALP_TOPIC_FEEDBACK, 1) : -1;
+    memset(&s->fb_strays, 0, sizeof s->fb_strays);
     if (s->fb_r < 0) h->stats.dropped++;
   }
   s->changed = 1;
@@ -2038,6 +2055,73 @@ static void renew_findings(palp_web_hub *h, int64_t now) {
   h->stats.finding_renewals = h->finding_renewals;
 }
 
+/* The stray count of stream reader rd and its topic; NULL for another reader. */
+static stray_watch *strays_of(palp_web_hub *h, dds_entity_t rd, palp_dds_topic_kind *kind) {
+  if (rd <= 0) return NULL;
+  if (rd == h->contact_r) return *kind = PALP_TOPIC_CONTACT, &h->contact_strays;
+  if (rd == h->deform_r) return *kind = PALP_TOPIC_DEFORMATION, &h->deform_strays;
+  if (rd == h->lm_r) return *kind = PALP_TOPIC_LOCAL_MODEL, &h->lm_strays;
+  if (rd == h->fsample_r) return *kind = PALP_TOPIC_FINGER_SAMPLE, &h->fsample_strays;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].fb_r == rd) return *kind = PALP_TOPIC_FEEDBACK, &h->s[i].fb_strays;
+  return NULL;
+}
+
+/* A flood of disposes of made-up stream keys: the stream reader *rd (under sub, of `kind`, `depth`
+ * deep) made anew when idl/palp_dds_strays.h says so (at once when full), its strays counted as
+ * drain() takes them and the samples its bound refused added here. The streams are volatile, so the
+ * new reader is handed none of the flood again, and a session's keys become instances again with its
+ * next samples (10 ms to 16 ms at the rates servers and stations write). Made before the old goes,
+ * so that a remote writer always has a reader of this participant matched; what the old one holds in
+ * that instant, taken by drain() just before, is little. `shared`: the handle is read by other
+ * threads (palp_web_hub_has_instance, under mu), so it is replaced under mu as renew_findings does;
+ * the old reader is deleted after, when no other thread can have it. */
+static void renew_stream(palp_web_hub *h, dds_entity_t *rd, stray_watch *sw, dds_entity_t sub, palp_dds_topic_kind kind,
+                         int32_t depth, int shared, int64_t now) {
+  if (*rd <= 0) return;
+  const uint32_t refused = palp_dds_gate_refused_since(*rd, &sw->refused_seen);
+  sw->strays += refused;
+  h->stats.rejected += refused;
+  if (!palp_dds_strays_renew_due(sw->strays, now, sw->renewed_ns) &&
+      !palp_dds_strays_full_due(sw->strays, sw->refused_seen, palp_dds_gate_instances(&h->gate, kind)))
+    return;
+  sw->renewed_ns = now;
+  const dds_entity_t fresh = stream_reader(h, sub, h->topic[kind], kind, depth);
+  if (fresh <= 0) {
+    /* tried again PALP_DDS_RENEW_NS later, not every pass however many come */
+    if (sw->strays >= PALP_DDS_STRAYS_HARD) sw->strays = PALP_DDS_STRAYS_HARD - 1;
+    h->stats.stream_renewals_failed++;
+    return;
+  }
+  if (shared) pthread_mutex_lock(&h->mu);
+  const dds_entity_t old = *rd;
+  *rd = fresh;
+  if (shared) pthread_mutex_unlock(&h->mu);
+  dds_delete(old);
+  sw->strays = 0;
+  sw->refused_seen = 0;
+  h->stats.stream_renewals++;
+  if (!h->stream_renewal_said) { /* then counted in --stats (web/main.c) */
+    h->stream_renewal_said = 1;
+    palp_log_warn(h->def.log, "a flood of disposes of made-up stream keys (each kept by a reader while its writer "
+                              "lives; unsecured, anyone may write them): the %s reader was made anew to drop them, "
+                              "as each stream reader will be whenever %d more come (at most every %.2f s, unless %d "
+                              "do); counted in --stats, not said again",
+                  palp_dds_topic_name(kind), PALP_DDS_STRAYS_MIN, PALP_DDS_RENEW_NS * 1e-9, PALP_DDS_STRAYS_HARD);
+  }
+}
+
+static void renew_streams(palp_web_hub *h, int64_t now) {
+  renew_stream(h, &h->contact_r, &h->contact_strays, h->sub, PALP_TOPIC_CONTACT, 1, 1, now);
+  renew_stream(h, &h->deform_r, &h->deform_strays, h->sub, PALP_TOPIC_DEFORMATION, 1, 1, now);
+  renew_stream(h, &h->lm_r, &h->lm_strays, h->sub, PALP_TOPIC_LOCAL_MODEL, LM_DEPTH, 1, now);
+  renew_stream(h, &h->fsample_r, &h->fsample_strays, h->sub, PALP_TOPIC_FINGER_SAMPLE, LM_DEPTH, 1, now);
+  /* each session's feedback reader, this thread's alone */
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++)
+    if (h->s[i].used && h->s[i].fb_r > 0)
+      renew_stream(h, &h->s[i].fb_r, &h->s[i].fb_strays, h->s[i].fb_sub, PALP_TOPIC_FEEDBACK, 1, 0, now);
+}
+
 static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, uint64_t *counter) {
   if (rd <= 0) return 0;
   int total = 0, n;
@@ -2048,8 +2132,15 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   /* a session's server topics: checked for who wrote them (its state's participant, on_state's) */
   const int server_topic = rd == h->lm_r || rd == h->fsample_r || rd == h->fstatus_r || rd == h->debrief_r ||
                            rd == h->debrief_score_r || rd == h->session_log_r || rd == h->deform_r || is_fb_reader(h, rd);
+  palp_dds_topic_kind kind = PALP_TOPIC_CONTACT;
+  stray_watch *sw = strays_of(h, rd, &kind);
   while ((n = dds_take(rd, ptr, info, TAKE, TAKE)) > 0) {
     for (int i = 0; i < n; i++) {
+      /* a stream's dispose of a key its filter would not pass (a made-up session, or a finger past 3),
+       * whoever wrote it: the instance is the reader's all the same (Cyclone fills an invalid sample's key) */
+      if (sw && !info[i].valid_data && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
+          !palp_dds_gate_key_passes(&h->gate, kind, ptr[i]))
+        sw->strays++, h->stats.stream_strays++;
       if (check && !from_its_partition(h, rd, ptr[i], &info[i])) continue; /* data and disposes alike */
       if (server_topic && info[i].valid_data && !from_its_server(h, rd, ptr[i], &info[i])) continue;
       h->sample_participant = rd == h->state_r && info[i].valid_data
@@ -2201,6 +2292,7 @@ static void *hub_main(void *arg) {
         tend_answers(h, now);
       }
       news += drain(h, h->deform_r, (sample_fn)on_deformation, NULL, &h->stats.deformations);
+      renew_streams(h, now);
     }
     check_replies(h, now);
     for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
@@ -2479,9 +2571,9 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
   memset(&key, 0, sizeof key);
   key.c.session_id = session_id;
   dds_entity_t rd;
-  /* mu: the findings reader may be made anew meanwhile by the DDS thread (renew_findings); held until
-   * the read is done so that the reader is not deleted under it. The other readers live as long as
-   * the hub. */
+  /* mu: the findings and stream readers may be made anew meanwhile by the DDS thread (renew_findings,
+   * renew_stream); held until the read is done so that the reader is not deleted under it. The other
+   * readers live as long as the hub. */
   pthread_mutex_lock(&h->mu);
   switch (topic) {
   case PALP_TOPIC_CONTACT: rd = h->contact_r, key.c.finger = (uint8_t)finger; break;
@@ -2514,18 +2606,13 @@ int palp_web_hub_has_instance(palp_web_hub *h, int topic, uint32_t session_id, u
 }
 
 void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
-  uint64_t rejected = 0;
-  const dds_entity_t streams[4] = {h->contact_r, h->deform_r, h->lm_r, h->fsample_r};
-  for (int k = 0; k < 4; k++) {
-    dds_sample_rejected_status_t st;
-    if (streams[k] > 0 && dds_get_sample_rejected_status(streams[k], &st) == 0) rejected += st.total_count;
-  }
+  /* the samples the stream readers refused are counted by the DDS thread (renew_stream), which makes
+   * those readers anew: read here from the readers, they were counted afresh with each new one */
   pthread_mutex_lock(&h->mu);
   /* the DDS thread's counters as of its last pass; the pages' finding requests count under mu */
   *out = h->stats_pub;
   out->findings_written = h->stats.findings_written;
   out->findings_refused = h->stats.findings_refused;
-  out->rejected = rejected;
   out->clients = h->nclients;
   out->sessions_open = 0;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) out->sessions_open += h->slot_sid[i] != 0;

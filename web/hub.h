@@ -124,6 +124,10 @@ typedef struct palp_web_hub_stats {
                         * disposes of made-up keys, unsecured; Cyclone's sample-rejected status) */
   uint64_t finding_strays, finding_renewals; /* disposes of finding keys of sessions it does not follow, and how
                                               * often the findings reader was made anew for them (a flood) */
+  uint64_t stream_strays, stream_renewals; /* disposes of stream keys the gate would not pass, and how often a
+                                            * stream reader was made anew for them or for samples refused at its
+                                            * bound (a flood; web/hub.c, renew_stream) */
+  uint64_t stream_renewals_failed;         /* a new stream reader that could not be made (tried again later) */
   uint64_t foreign;    /* contacts and findings (disposes too) naming a session from a writer outside its partition (a
                         * trainee forging another's session id, idl/palp_dds_origin.h): dropped */
   uint64_t not_server; /* samples of a session's server topics (feedback, deformation, local models, finger samples,

@@ -261,6 +261,12 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
     palp_log_warn(log, "%llu disposes of finding keys of sessions this bridge does not follow (a flood: each kept "
                        "while its writer lives); the findings reader was made anew %llu times to drop them",
                   (unsigned long long)h.finding_strays, (unsigned long long)h.finding_renewals);
+  if (h.stream_renewals || h.stream_renewals_failed) /* a flood of disposes of stream keys (hub.c, renew_stream) */
+    palp_log_warn(log, "%llu disposes of stream keys this bridge's gate would not pass (a flood: each kept while its "
+                       "writer lives), %llu stream samples refused at the readers' bound; stream readers made anew %llu "
+                       "times to drop them (%llu failed, tried again)",
+                  (unsigned long long)h.stream_strays, (unsigned long long)h.rejected,
+                  (unsigned long long)h.stream_renewals, (unsigned long long)h.stream_renewals_failed);
 }
 
 /* SIGHUP, on the hub's thread: the token files read again with every check of start, all or nothing, and the

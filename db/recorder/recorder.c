@@ -1728,19 +1728,23 @@ static dds_entity_t reader_deep(const recorder *r, dds_entity_t parent, dds_enti
 }
 
 /* A flood of disposes of made-up stream keys: each stream reader made anew when idl/palp_dds_strays.h
- * says so, its strays counted as it is taken (main's pass) and its samples refused at the instance
- * bound added here. The streams are volatile, so the new reader is handed none of the flood again,
- * and the sessions' keys become instances again with their next samples. The new reader is made
- * before the old goes, so that a remote writer always has a reader of this participant matched and
- * sends on; a sample in the old reader not yet taken in that instant is lost (the pass just took
- * them all). */
+ * says so (at once when full), its strays counted as it is taken (main's pass) and its samples
+ * refused at the instance bound added here. The streams are volatile, so the new reader is handed
+ * none of the flood again, and the sessions' keys become instances again with their next samples.
+ * The new reader is made before the old goes, so that a remote writer always has a reader of this
+ * participant matched and sends on; a sample in the old reader not yet taken in that instant is lost
+ * (the pass just took them all). */
 static void renew_streams(recorder *r, palp_log *plog, dds_entity_t sub, const dds_entity_t *t,
                           const palp_dds_topic_kind *kind, dds_entity_t *rd, dds_entity_t ws, int64_t now) {
   int renewed = 0;
   int64_t strays = 0;
   for (int k = RD_CONTACT; k <= RD_LOCAL_MODEL; k++) {
     r->stream_strays[k] += palp_dds_gate_refused_since(rd[k], &r->stream_refused_seen[k]);
-    if (!palp_dds_strays_renew_due((uint64_t)r->stream_strays[k], now, r->stream_renewed_ns[k])) continue;
+    /* the deformations' reader is reliable and unbounded (reader_deep): never refuses, never full */
+    if (!palp_dds_strays_renew_due((uint64_t)r->stream_strays[k], now, r->stream_renewed_ns[k]) &&
+        !palp_dds_strays_full_due((uint64_t)r->stream_strays[k], r->stream_refused_seen[k],
+                                  palp_dds_gate_instances(&r->gate, kind[k])))
+      continue;
     const dds_entity_t fresh = reader_deep(r, sub, t[kind[k]], kind[k]);
     r->stream_renewed_ns[k] = now;
     if (fresh <= 0) {
