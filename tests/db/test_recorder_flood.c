@@ -11,7 +11,7 @@
  *
  * The test plays the server (participant A: catalogue, states, the session's contacts and feedback in
  * its partition) and a flooder (participant B, in another session's partition, its writers alive to
- * the end): B disposes 4,700 made-up contact keys and 1,200 made-up feedback keys; right after, A
+ * the end): B disposes 4,700 made-up contact keys and 2,400 made-up feedback keys; right after, A
  * opens session 21 and writes 100 contacts and 100 feedback samples 10 ms apart, B flooding 4,700
  * more contact keys half-way through (a reader made anew while it holds a live session's key).
  * Checked in the file and the recorder's log:
@@ -42,7 +42,7 @@
 #define PHANTOM 5u
 #define FLOOD_SESSION 999u /* the partition the flooder writes in: any session's the recorder reads */
 #define CONTACT_FLOOD 4700u
-#define FEEDBACK_FLOOD 1200u
+#define FEEDBACK_FLOOD 2400u
 #define SAMPLES 100
 #define THIS_SESSION " session_id = (SELECT id FROM session WHERE trainee = 'fay')"
 
@@ -209,7 +209,7 @@ int main(int argc, char **argv) {
         "a session opened right after 4,700 disposes of made-up contact keys (and 4,700 more half-way through): "
         ">= 90 of its %d contacts logged (%lld; 0 with the instance bound alone)", SAMPLES, (long long)contacts);
   CHECK(feedback >= 90 && feedback <= SAMPLES,
-        "  and >= 90 of its %d feedback samples after 1,200 disposes of made-up feedback keys (%lld)", SAMPLES,
+        "  and >= 90 of its %d feedback samples after 2,400 disposes of made-up feedback keys (%lld)", SAMPLES,
         (long long)feedback);
   CHECK(first_contact >= 0 && first_contact < 20 && first_feedback >= 0 && first_feedback < 20,
         "  recovered within 200 ms of the flood: the first contact and feedback logged are #%lld and #%lld of "
