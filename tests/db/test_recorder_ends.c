@@ -193,7 +193,11 @@ int main(int argc, char **argv) {
   state(w_state, 54, 0, NULL, 0);
   sleep_ms(200);
   state(w_state, 54, 1, "exercise time limit reached", 3);
-  sleep_ms(300);
+  /* stopped once the recorder has taken the CLOSED state (its log says so), so well within its 1 s wait
+   * for the debrief: a loaded run's recorder had not yet taken session 54's states 0.3 s after the
+   * CLOSED one was written, and logged no session 54 at all (session 81) */
+  for (int i = 0; i < 150 && !log_says(logf, "session 54 closed", "exercise time limit reached"); i++) sleep_ms(20);
+  sleep_ms(100);
 
   int status;
   CHECK(stop_recorder(pid, &status), "the recorder exits 0 (status %d)", status);

@@ -54,8 +54,12 @@ grep -q "the server was silent past its lease (its machine was busy) and is back
 # The feedback kept coming after the stops: 100 Hz over 9 s is ~900 samples, of which ~2.4 s
 # fall in the stops and the lapses; before the change the 0.8 s stop alone cut it to ~200.
 fb=$(sed -n 's/.* \([0-9]*\) feedback samples.*/\1/p' "$tmp/client.log" | tail -n 1)
-if [ -n "$fb" ] && [ "$fb" -ge 500 ]; then ok "$fb feedback samples (want >= 500: the presses went on being applied)"
-else bad "$fb feedback samples (want >= 500)"; fi
+# Before the second stop ends the server has run 1.5 + 2.0 s since the session opened (stopped the rest):
+# at its 100 Hz, at most ~350 feedback samples (and a few buffered). More than 450 means more than 100
+# came after it: the presses went on being applied. (500 until session 81: a run of the suite beside two
+# builds counted 497 of ~660.)
+if [ -n "$fb" ] && [ "$fb" -ge 450 ]; then ok "$fb feedback samples (want >= 450: the presses went on being applied)"
+else bad "$fb feedback samples (want >= 450)"; fi
 rows=$(sqlite3 "$tmp/recorder.db" "SELECT trainee || ' ' || IFNULL(end_reason, 'running') FROM session")
 [ "$rows" = "sid normal" ] && ok "the recorder logged one session, ended normal" \
   || { bad "the recorder logged: $(printf '%s' "$rows" | tr '\n' ';') (want: sid normal)"; cat "$tmp/recorder.log"; }
