@@ -35,14 +35,50 @@ static double shifted_mean(const double *x, size_t n, double c) {
   return m + palp_stats_sum_value(&r) / (double)n;
 }
 
-/* sum_i ((x_i - c) - m)^2, compensated; m is a mean of x - c. */
-static double shifted_ssd(const double *x, size_t n, double c, double m) {
-  palp_stats_sum s = {0.0, 0.0};
-  for (size_t i = 0; i < n; ++i) {
-    double e = (x[i] - c) - m;
-    palp_stats_sum_add(&s, e * e);
+/* A sum of squares held scaled, as LAPACK's dlassq does: value = scale^2 * ssq,
+ * scale = the largest |term| (data units), ssq = sum (term / scale)^2 in [1, n]
+ * (dimensionless; 0 with scale 0 when every term is 0). Squaring the terms
+ * unscaled overflows to inf above ~1.3e154 (the compensated sum then turns it
+ * into NaN) and vanishes below ~1.5e-154; scaled, the ratios F and R^2 stay exact
+ * at any magnitude a double holds. */
+typedef struct ssq {
+  double scale, ssq;
+} ssq;
+
+/* Fold w * t^2 (w >= 0 a count, t a deviation in data units) into acc, given
+ * acc->scale >= |t| already (the caller found the maximum first). */
+static void ssq_add(ssq *acc, palp_stats_sum *sum, double w, double t) {
+  if (acc->scale > 0.0) {
+    double r = t / acc->scale;
+    palp_stats_sum_add(sum, w * r * r);
   }
-  return palp_stats_sum_value(&s);
+}
+
+/* The value scale^2 * ssq; +inf when beyond DBL_MAX, 0 or subnormal below DBL_MIN. */
+static double ssq_value(ssq q) { return q.scale * q.scale * q.ssq; }
+
+/* Merge b into a: both rescaled to the larger scale (ssq_a (s_a/S)^2 + ssq_b (s_b/S)^2). */
+static ssq ssq_merge(ssq a, ssq b) {
+  double big = a.scale > b.scale ? a.scale : b.scale;
+  if (big == 0.0) return (ssq){0.0, 0.0};
+  double ra = a.scale / big, rb = b.scale / big;
+  palp_stats_sum s = {0.0, 0.0};
+  palp_stats_sum_add(&s, a.ssq * ra * ra);
+  palp_stats_sum_add(&s, b.ssq * rb * rb);
+  return (ssq){big, palp_stats_sum_value(&s)};
+}
+
+/* sum_i ((x_i - c) - m)^2, scaled and compensated; m is a mean of x - c. */
+static ssq shifted_ssq(const double *x, size_t n, double c, double m) {
+  ssq q = {0.0, 0.0};
+  for (size_t i = 0; i < n; ++i) {
+    double e = fabs((x[i] - c) - m);
+    if (!(e <= q.scale)) q.scale = e; /* a NaN (x - c beyond DBL_MAX) propagates */
+  }
+  palp_stats_sum s = {0.0, 0.0};
+  for (size_t i = 0; i < n; ++i) ssq_add(&q, &s, 1.0, (x[i] - c) - m);
+  q.ssq = palp_stats_sum_value(&s);
+  return q;
 }
 
 static int all_finite(const double *x, size_t n) {
@@ -60,7 +96,20 @@ void palp_stats_mean_ssd(const double *x, size_t n, double *mean, double *ssd) {
   double c = x[0];
   double m = shifted_mean(x, n, c);
   *mean = c + m;
-  *ssd = shifted_ssd(x, n, c, m);
+  *ssd = ssq_value(shifted_ssq(x, n, c, m));
+}
+
+void palp_stats_mean_sd(const double *x, size_t n, double *mean, double *sd) {
+  if (n < 2) {
+    palp_stats_mean_ssd(x, n, mean, sd);
+    *sd = NAN;
+    return;
+  }
+  double c = x[0];
+  double m = shifted_mean(x, n, c);
+  *mean = c + m;
+  ssq q = shifted_ssq(x, n, c, m);
+  *sd = q.scale * sqrt(q.ssq / (double)(n - 1)); /* data units; never squared unscaled */
 }
 
 /* ---- RMSE ------------------------------------------------------------------ */
@@ -101,29 +150,50 @@ int palp_stats_rmse(const double *a, const double *b, size_t n, double *out) {
 
 /* ---- one-way ANOVA ------------------------------------------------------------ */
 
-/* df, mean squares, F, p and the degenerate cases from the sums of squares. */
-static void anova_finish(palp_stats_anova *r) {
-  r->ss_total = r->ss_between + r->ss_within;
+/* df, mean squares, F, p and the degenerate cases from the scaled sums of squares
+ * (SS = scale^2 ssq, data units squared). F and R^2 are formed from the scaled
+ * parts, so they are exact even when an SS itself is beyond DBL_MAX:
+ *   F   = (SS_b / df_b) / (SS_w / df_w) = (s_b / s_w)^2 (ssq_b df_w) / (ssq_w df_b)
+ *   R^2 = SS_b / (SS_b + SS_w)          = 1 / (1 + (s_w / s_b)^2 ssq_w / ssq_b)
+ * Returns PALP_EINVAL when a sum is not finite (a deviation beyond DBL_MAX), never
+ * a made-up "all equal". */
+static int anova_finish(palp_stats_anova *r, ssq between, ssq within) {
+  if (!isfinite(between.scale) || !isfinite(between.ssq) || !isfinite(within.scale) ||
+      !isfinite(within.ssq))
+    return PALP_EINVAL;
   r->df_between = r->group_count - 1;
   r->df_within = (long)(r->n - (size_t)r->group_count);
-  r->ms_between = r->ss_between / (double)r->df_between;
-  r->ms_within = r->ss_within / (double)r->df_within;
+  const double dfb = (double)r->df_between, dfw = (double)r->df_within;
+  r->ss_between = ssq_value(between);
+  r->ss_within = ssq_value(within);
+  r->ss_total = r->ss_between + r->ss_within;
+  r->ms_between = between.scale * between.scale * (between.ssq / dfb);
+  r->ms_within = within.scale * within.scale * (within.ssq / dfw);
   r->flags = 0;
-  if (r->ss_within > 0.0) {
-    r->f = r->ms_between / r->ms_within;
-    r->p = gsl_cdf_fdist_Q(r->f, (double)r->df_between, (double)r->df_within);
-  } else if (r->ss_between > 0.0) {
+  if (!isfinite(r->ss_total) || !isfinite(r->ms_between) || !isfinite(r->ms_within))
+    r->flags |= PALP_STATS_SS_OVERFLOW;
+  if (within.ssq > 0.0) {
+    double ratio = between.scale / within.scale; /* inf only when F is beyond DBL_MAX */
+    r->f = between.ssq > 0.0 ? ratio * ratio * ((between.ssq * dfw) / (within.ssq * dfb)) : 0.0;
+    r->p = gsl_cdf_fdist_Q(r->f, dfb, dfw);
+  } else if (between.ssq > 0.0) {
     /* No noise at all, yet the groups differ: the difference is certain. */
     r->flags |= PALP_STATS_ZERO_WITHIN;
     r->f = INFINITY;
     r->p = 0.0;
   } else {
-    /* Every value identical: nothing distinguishes the groups. */
+    /* Both sums exactly 0, every value identical: nothing distinguishes the groups. */
     r->flags |= PALP_STATS_ZERO_WITHIN | PALP_STATS_ALL_EQUAL;
     r->f = 0.0;
     r->p = 1.0;
   }
-  r->r_squared = r->ss_total > 0.0 ? r->ss_between / r->ss_total : 0.0;
+  if (between.ssq > 0.0) {
+    double ratio = within.scale / between.scale;
+    r->r_squared = 1.0 / (1.0 + ratio * ratio * (within.ssq / between.ssq));
+  } else {
+    r->r_squared = 0.0;
+  }
+  return PALP_OK;
 }
 
 /*
@@ -138,6 +208,7 @@ static void anova_finish(palp_stats_anova *r) {
  * difference plus a small accurate number, so M_g - G is a difference of small,
  * accurately known numbers. Without offsets c = values[0]; with offsets the true
  * values are offset[g] + x and M_g = offset[g] + x_g0 + (m_g - x_g0).
+ * Both SS are held scaled (ssq above).
  */
 static int anova_core(const double *values, const size_t *start, int group_count,
                       const double *offset, palp_stats_anova *out) {
@@ -151,35 +222,43 @@ static int anova_core(const double *values, const size_t *start, int group_count
 
   const double c = offset ? 0.0 : values[0];
   palp_stats_sum weighted = {0.0, 0.0}; /* sum n_g M_g */
-  palp_stats_sum within = {0.0, 0.0};
+  ssq within = {0.0, 0.0};
   for (int g = 0; g < group_count; ++g) {
     const double *x = values + start[g];
     size_t ng = start[g + 1] - start[g];
     double m = shifted_mean(x, ng, x[0]);
     double base = offset ? offset[g] + x[0] : x[0] - c;
     palp_stats_sum_add(&weighted, (double)ng * (base + m));
-    palp_stats_sum_add(&within, shifted_ssd(x, ng, x[0], m));
+    within = ssq_merge(within, shifted_ssq(x, ng, x[0], m));
   }
   double gm = palp_stats_sum_value(&weighted) / (double)n; /* G - c */
 
   /* Between-group SS from the same means (recomputed: k small passes are cheaper
-   * than a workspace and keep the function allocation-free). */
-  palp_stats_sum between = {0.0, 0.0};
-  for (int g = 0; g < group_count; ++g) {
-    const double *x = values + start[g];
-    size_t ng = start[g + 1] - start[g];
-    double base = offset ? offset[g] + x[0] : x[0] - c;
-    double e = (base + shifted_mean(x, ng, x[0])) - gm;
-    palp_stats_sum_add(&between, (double)ng * e * e);
+   * than a workspace and keep the function allocation-free); two passes, the
+   * largest |M_g - G| first, then sum n_g ((M_g - G) / scale)^2. */
+  ssq between = {0.0, 0.0};
+  for (int pass = 0; pass < 2; ++pass) {
+    palp_stats_sum s = {0.0, 0.0};
+    for (int g = 0; g < group_count; ++g) {
+      const double *x = values + start[g];
+      size_t ng = start[g + 1] - start[g];
+      double base = offset ? offset[g] + x[0] : x[0] - c;
+      double e = (base + shifted_mean(x, ng, x[0])) - gm;
+      if (pass == 0) {
+        if (!(fabs(e) <= between.scale)) between.scale = fabs(e);
+      } else {
+        ssq_add(&between, &s, (double)ng, e);
+      }
+    }
+    if (pass == 1) between.ssq = palp_stats_sum_value(&s);
   }
 
   palp_stats_anova r;
   r.group_count = group_count;
   r.n = n;
   r.grand_mean = c + gm;
-  r.ss_between = palp_stats_sum_value(&between);
-  r.ss_within = palp_stats_sum_value(&within);
-  anova_finish(&r);
+  int err = anova_finish(&r, between, within);
+  if (err < 0) return err;
   *out = r;
   return PALP_OK;
 }
@@ -208,20 +287,21 @@ int palp_stats_anova_two_n(const double *a, size_t na, const double *b, size_t n
   palp_stats_sum_add(&w, (double)na * ma);
   palp_stats_sum_add(&w, (double)nb * mb);
   double gm = palp_stats_sum_value(&w) / n;
-  palp_stats_sum within = {0.0, 0.0};
-  palp_stats_sum_add(&within, shifted_ssd(a, na, a[0], la));
-  palp_stats_sum_add(&within, shifted_ssd(b, nb, b[0], lb));
-  palp_stats_sum between = {0.0, 0.0};
-  palp_stats_sum_add(&between, (double)na * (ma - gm) * (ma - gm));
-  palp_stats_sum_add(&between, (double)nb * (mb - gm) * (mb - gm));
+  ssq within = ssq_merge(shifted_ssq(a, na, a[0], la), shifted_ssq(b, nb, b[0], lb));
+  double ea = ma - gm, eb = mb - gm;
+  ssq between = {fmax(fabs(ea), fabs(eb)), 0.0};
+  if (!isfinite(ea) || !isfinite(eb)) between.scale = NAN; /* b0 - a0 beyond DBL_MAX */
+  palp_stats_sum s = {0.0, 0.0};
+  ssq_add(&between, &s, (double)na, ea);
+  ssq_add(&between, &s, (double)nb, eb);
+  between.ssq = palp_stats_sum_value(&s);
 
   palp_stats_anova r;
   r.group_count = 2;
   r.n = na + nb;
   r.grand_mean = c + gm;
-  r.ss_between = palp_stats_sum_value(&between);
-  r.ss_within = palp_stats_sum_value(&within);
-  anova_finish(&r);
+  int err = anova_finish(&r, between, within);
+  if (err < 0) return err;
   *out = r;
   return PALP_OK;
 }
@@ -252,18 +332,24 @@ int palp_stats_bland_altman(const double *a, const double *b, size_t n,
   palp_stats_sum r = {0.0, 0.0};
   for (size_t i = 0; i < n; ++i) palp_stats_sum_add(&r, ((a[i] - b[i]) - c) - m);
   m += palp_stats_sum_value(&r) / (double)n;
-  palp_stats_sum q = {0.0, 0.0};
+  /* sum (d_i - bias)^2 scaled by the largest |d_i - bias| (see ssq), so SD is
+   * neither inf/NaN for differences above ~1e154 nor 0 below ~1e-154. */
+  ssq q = {0.0, 0.0};
   for (size_t i = 0; i < n; ++i) {
-    double e = ((a[i] - b[i]) - c) - m;
-    palp_stats_sum_add(&q, e * e);
+    double e = fabs(((a[i] - b[i]) - c) - m);
+    if (e > q.scale) q.scale = e;
   }
+  palp_stats_sum qs = {0.0, 0.0};
+  for (size_t i = 0; i < n; ++i) ssq_add(&q, &qs, 1.0, ((a[i] - b[i]) - c) - m);
+  q.ssq = palp_stats_sum_value(&qs);
+  if (!isfinite(q.scale) || !isfinite(q.ssq)) return PALP_EINVAL; /* spread beyond DBL_MAX */
 
   palp_stats_ba o;
   o.n = n;
   o.mean_a = a[0] + shifted_mean(a, n, a[0]);
   o.mean_b = b[0] + shifted_mean(b, n, b[0]);
   o.bias = c + m;
-  o.sd = sqrt(palp_stats_sum_value(&q) / (double)(n - 1));
+  o.sd = q.scale * sqrt(q.ssq / (double)(n - 1)); /* data units */
   o.loa_lower = o.bias - PALP_STATS_LOA_SD * o.sd;
   o.loa_upper = o.bias + PALP_STATS_LOA_SD * o.sd;
   o.band_lower = o.bias - PALP_STATS_PAPER_BAND_SD * o.sd;

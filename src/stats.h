@@ -47,7 +47,12 @@ enum {
   PALP_STATS_ZERO_WITHIN = 1u << 0,
   /* Every value is the same (SS_within = SS_between = 0): F = 0, p = 1 (no
    * evidence of any difference; the paper's criterion p > 0.05 holds). */
-  PALP_STATS_ALL_EQUAL = 1u << 1
+  PALP_STATS_ALL_EQUAL = 1u << 1,
+  /* A sum of squares, their total or a mean square is beyond DBL_MAX (data above
+   * ~1e154): that field is +inf. F, p and R^2 are formed from the scaled sums and
+   * stay exact. (Sums below DBL_MIN likewise read 0 or subnormal without this flag;
+   * the flags above are judged on the scaled sums, exactly.) */
+  PALP_STATS_SS_OVERFLOW = 1u << 2
 };
 
 typedef struct palp_stats_anova {
@@ -71,7 +76,8 @@ typedef struct palp_stats_anova {
  * so start has group_count + 1 entries, start[0] = 0 and start ascending.
  * Errors (PALP_EINVAL): group_count < 2, a group with fewer than 2 values (one
  * value carries no within-group spread and usually means a mistyped group label),
- * a non-finite value, start not ascending. */
+ * a non-finite value, start not ascending, a deviation beyond DBL_MAX (values
+ * of opposite sign near DBL_MAX): never a made-up "all equal". */
 int palp_stats_anova_oneway(const double *values, const size_t *start, int group_count,
                             palp_stats_anova *out);
 
@@ -138,6 +144,11 @@ static inline double palp_stats_sum_value(const palp_stats_sum *acc) { return ac
  * the shift x[0]: mean = x0 + sum(x - x0)/n, refined once by the mean residual,
  * then ssd = sum (x - mean)^2. n >= 1; ssd = 0 for n = 1. */
 void palp_stats_mean_ssd(const double *x, size_t n, double *mean, double *ssd);
+
+/* As palp_stats_mean_ssd, but the sample SD sqrt(ssd / (n - 1)) in x's unit,
+ * formed from a sum scaled by max |x - mean| so it neither overflows (data above
+ * ~1e154, where ssd is +inf) nor vanishes (below ~1e-154). n >= 2, else sd = NaN. */
+void palp_stats_mean_sd(const double *x, size_t n, double *mean, double *sd);
 
 /* Quantile q in [0, 1] of s[0..n), n >= 1, sorted ascending: linear interpolation
  * between order statistics (Hyndman & Fan's type 7, the default of R and NumPy; the

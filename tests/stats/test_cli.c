@@ -241,6 +241,47 @@ static void test_far_apart(void) {
   result_free(&r);
 }
 
+/* Values near 1e300 (session 81 review): the sums of squares are beyond the largest
+ * double. Before, the unscaled squares turned NaN and the command printed F 0, p 1,
+ * "every value is identical", exit 0. By hand (test_stats.c, test_scaled_sums):
+ * F(1, 2) = 1681, p = 1 - 41/sqrt(1683) = 5.943536929e-4, the same as for the data
+ * divided by 1e300; group A's SD 0.05 sqrt(2) 1e300. Bland-Altman of a = (1, 1.1)e300,
+ * b = (-1, -1)e300: SD 0.1e300/sqrt(2) = 7.0710678e298, 2 of 2 inside. */
+static void test_huge(void) {
+  write_file("huge.csv", "g,v\nA,1e300\nA,1.1e300\nB,-1e300\nB,-1e300\n");
+  result r = run("anova huge.csv --group g --value v --json");
+  check("huge anova exit 0", r.status == 0);
+  cJSON *j = cJSON_Parse(r.out);
+  if (j) {
+    check_rel("huge anova F 1681", num(j, "anova.f"), 1681.0, 1e-12);
+    check_rel("huge anova p", num(j, "anova.p"), 5.943536929214899e-4, 1e-9);
+    check("huge anova not all_equal",
+          cJSON_IsFalse(cJSON_GetObjectItem(cJSON_GetObjectItem(j, "anova"), "all_equal")));
+    check("huge anova ss_note", cJSON_GetObjectItem(cJSON_GetObjectItem(j, "anova"), "ss_note") != NULL);
+    check_rel("huge group A SD", num(cJSON_GetArrayItem(cJSON_GetObjectItem(j, "groups"), 0), "sd"),
+              0.07071067811865475e300, 1e-12);
+    cJSON_Delete(j);
+  } else {
+    check("huge anova JSON", 0);
+  }
+  result_free(&r);
+  r = run("anova huge.csv --group g --value v");
+  check("huge anova table: no false 'identical' note", strstr(r.out, "identical") == NULL &&
+                                                          strstr(r.out, "1681") != NULL);
+  result_free(&r);
+  write_file("hugepairs.csv", "a,b\n1e300,-1e300\n1.1e300,-1e300\n");
+  r = run("bland-altman hugepairs.csv --a a --b b --json");
+  check("huge BA exit 0", r.status == 0);
+  j = cJSON_Parse(r.out);
+  if (j) {
+    check_rel("huge BA SD", num(j, "sd"), 0.07071067811865475e300, 1e-12);
+    cJSON_Delete(j);
+  } else {
+    check("huge BA JSON", 0);
+  }
+  result_free(&r);
+}
+
 /* Bad input: exit 1, nothing on stdout, and a message with the file, the line and
  * the column or group at fault. */
 static void expect_error(const char *what, const char *args, int status, const char **needles) {
@@ -387,6 +428,7 @@ int main(int argc, char **argv) {
   test_anova_hand();
   test_bland_altman();
   test_far_apart();
+  test_huge();
   test_errors();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;

@@ -464,6 +464,81 @@ static void test_mean_ssd(void) {
   check_rel("NumAcc4 SSD", ssd, 10.0, 1e-6);
 }
 
+/* ---- sums of squares at the ends of the double range (session 81 review) ----------
+ * Deviations above ~1.3e154 square to inf (the compensated sum then made it NaN and the
+ * ANOVA reported "every value identical", F 0, p 1); below ~1.5e-154 they square to 0.
+ * By hand, groups {1, 1.1} and {-1, -1} (any common unit u):
+ *   means 1.05, -1; grand mean 0.025; SS_b = 2 (1.025^2 + 1.025^2) = 4.2025 u^2,
+ *   SS_w = 2 (0.05^2) = 0.005 u^2, F(1, 2) = (4.2025 / 1) / (0.005 / 2) = 1681.
+ *   With 2 denominator df, F(1, 2) = t^2 and P(|t_2| > t) = 1 - t / sqrt(t^2 + 2):
+ *   p = 1 - 41 / sqrt(1683) = 5.943536929e-4 (python: 1 - 41/math.sqrt(1683)).
+ *   R^2 = 4.2025 / 4.2075 = 1681 / 1683. The same F, p, R^2 for u = 1e300 and 1e-300.
+ * Tolerance 1e-12: 1.1e300 and 1.1e-300 carry one rounding (1.1e-16 relative), which
+ * the 0.1 spread inside group A amplifies 11 times. */
+static void test_scaled_sums(void) {
+  const double want_p = 5.943536929214899e-4;
+  const double units[3] = {1.0, 1e300, 1e-300};
+  size_t two[3] = {0, 2, 4};
+  for (int k = 0; k < 3; ++k) {
+    const double u = units[k];
+    const double v[4] = {1.0 * u, 1.1 * u, -1.0 * u, -1.0 * u};
+    char what[96];
+    palp_stats_anova a;
+    snprintf(what, sizeof what, "scaled anova u=%g ok", u);
+    check_true(what, palp_stats_anova_oneway(v, two, 2, &a) == PALP_OK);
+    snprintf(what, sizeof what, "scaled anova u=%g F = 1681", u);
+    check_rel(what, a.f, 1681.0, 1e-12);
+    snprintf(what, sizeof what, "scaled anova u=%g p = 1 - 41/sqrt(1683)", u);
+    check_rel(what, a.p, want_p, 1e-9);
+    snprintf(what, sizeof what, "scaled anova u=%g R^2 = 1681/1683", u);
+    check_rel(what, a.r_squared, 1681.0 / 1683.0, 1e-12);
+    snprintf(what, sizeof what, "scaled anova u=%g: no zero-within/all-equal flag", u);
+    check_true(what, (a.flags & (PALP_STATS_ZERO_WITHIN | PALP_STATS_ALL_EQUAL)) == 0);
+    snprintf(what, sizeof what, "scaled anova_two_n u=%g F = 1681", u);
+    check_true(what, palp_stats_anova_two_n(v, 2, v + 2, 2, &a) == PALP_OK);
+    check_rel(what, a.f, 1681.0, 1e-12);
+    double m, sd;
+    palp_stats_mean_sd(v, 2, &m, &sd);
+    /* SD of {1, 1.1} u = 0.05 sqrt(2) u = 0.0707106781186548 u */
+    snprintf(what, sizeof what, "mean_sd u=%g SD = 0.05 sqrt(2) u", u);
+    check_rel(what, sd, 0.07071067811865475 * u, 1e-12);
+  }
+  palp_stats_anova a;
+  const double v[4] = {1e300, 1.1e300, -1e300, -1e300};
+  check_true("scaled anova 1e300 ok", palp_stats_anova_oneway(v, two, 2, &a) == PALP_OK);
+  check_true("scaled anova 1e300: SS 4.2e600 flagged beyond DBL_MAX",
+             isinf(a.ss_between) && (a.flags & PALP_STATS_SS_OVERFLOW));
+  check_rel("scaled anova 1: SS_b = 4.2025", (palp_stats_anova_oneway((double[]){1, 1.1, -1, -1}, two, 2, &a),
+            a.ss_between), 4.2025, 1e-12);
+  check_true("scaled anova 1: not flagged", a.flags == 0);
+  /* A group {1e308, -1e308}: its deviations exceed DBL_MAX. An error, never "all equal". */
+  const double wide[4] = {1e308, -1e308, 0.0, 1.0};
+  check_true("deviation beyond DBL_MAX -> EINVAL",
+             palp_stats_anova_oneway(wide, two, 2, &a) == PALP_EINVAL);
+
+  /* Bland-Altman: a = (1, 1.1) u, b = (-1, -1) u: d = (2, 2.1) u, bias 2.05 u,
+   * SD = 0.05 sqrt(2) u = 0.1 u / sqrt(2); both pairs 0.05 u from the bias, inside 2 SD. */
+  for (int k = 0; k < 3; ++k) {
+    const double u = units[k];
+    const double ba_a[2] = {1.0 * u, 1.1 * u}, ba_b[2] = {-1.0 * u, -1.0 * u};
+    palp_stats_ba ba;
+    char what[96];
+    snprintf(what, sizeof what, "scaled BA u=%g ok", u);
+    check_true(what, palp_stats_bland_altman(ba_a, ba_b, 2, &ba) == PALP_OK);
+    snprintf(what, sizeof what, "scaled BA u=%g SD = 0.1 u / sqrt(2)", u);
+    check_rel(what, ba.sd, 0.07071067811865475 * u, 1e-12);
+    snprintf(what, sizeof what, "scaled BA u=%g: 2 of 2 inside, agreement 1", u);
+    check_true(what, ba.within_band == 2 && ba.agreement == 1.0);
+  }
+  /* The reviewer's tiny case: a = (1e-300, 2e-300), b = 0: d - bias = -+0.5e-300,
+   * SD = 0.5e-300 sqrt(2) = 7.0710678e-301, both inside. */
+  const double ta[2] = {1e-300, 2e-300}, tb[2] = {0.0, 0.0};
+  palp_stats_ba ba;
+  check_true("tiny BA ok", palp_stats_bland_altman(ta, tb, 2, &ba) == PALP_OK);
+  check_rel("tiny BA SD", ba.sd, 0.7071067811865476e-300, 1e-12);
+  check_true("tiny BA 100 %", ba.within_band == 2 && ba.agreement == 1.0);
+}
+
 int main(void) {
   test_sirstv();
   test_atmwtag();
@@ -484,6 +559,7 @@ int main(void) {
   test_bland_altman();
   test_paper_criteria();
   test_mean_ssd();
+  test_scaled_sums();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }

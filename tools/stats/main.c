@@ -283,6 +283,9 @@ static cJSON *anova_json(const palp_stats_anova *a) {
   cJSON_AddNumberToObject(j, "r_squared", a->r_squared);
   cJSON_AddBoolToObject(j, "zero_within", (a->flags & PALP_STATS_ZERO_WITHIN) != 0);
   cJSON_AddBoolToObject(j, "all_equal", (a->flags & PALP_STATS_ALL_EQUAL) != 0);
+  if (a->flags & PALP_STATS_SS_OVERFLOW)
+    cJSON_AddStringToObject(j, "ss_note", "a sum of squares is beyond the largest double (1.8e308) and "
+                            "printed as null; F, p and R^2 are computed from scaled sums and are exact");
   cJSON_AddBoolToObject(j, "p_above_0_05", a->p > PALP_STATS_PAPER_ALPHA);
   return j;
 }
@@ -301,6 +304,9 @@ static void print_anova_table(const palp_stats_anova *a) {
     printf("  note: every value is identical; F is reported as 0 and p as 1\n");
   else if (a->flags & PALP_STATS_ZERO_WITHIN)
     printf("  note: every group is constant but the group means differ; F is infinite, p = 0\n");
+  if (a->flags & PALP_STATS_SS_OVERFLOW)
+    printf("  note: a sum of squares is beyond the largest double (1.8e308), printed as inf; F, p and "
+           "R^2 are computed from scaled sums and are exact\n");
 }
 
 /* ---- anova --------------------------------------------------------------------------- */
@@ -440,13 +446,13 @@ static int run_anova(const options *o, const palp_csv *csv) {
     cJSON_AddNumberToObject(root, "rows_skipped", (double)skipped);
     cJSON *garr = cJSON_AddArrayToObject(root, "groups");
     for (int g = 0; g < ng; ++g) {
-      double m, ssd;
-      palp_stats_mean_ssd(values + start[g], groups[g].n, &m, &ssd);
+      double m, sd;
+      palp_stats_mean_sd(values + start[g], groups[g].n, &m, &sd);
       cJSON *gj = cJSON_CreateObject();
       cJSON_AddStringToObject(gj, "name", groups[g].name);
       cJSON_AddNumberToObject(gj, "n", (double)groups[g].n);
       cJSON_AddNumberToObject(gj, "mean", dv[groups[g].first_row].value + m);
-      cJSON_AddNumberToObject(gj, "sd", sqrt(ssd / (double)(groups[g].n - 1)));
+      cJSON_AddNumberToObject(gj, "sd", sd);
       cJSON_AddItemToArray(garr, gj);
     }
     cJSON *aj = anova_json(&a);
@@ -458,11 +464,10 @@ static int run_anova(const options *o, const palp_csv *csv) {
            csv->header[vc], csv->header[gc], o->file, a.n, ng);
     printf("  %-20s %8s %22s %14s\n", "group", "n", "mean", "SD");
     for (int g = 0; g < ng; ++g) {
-      double m, ssd;
-      palp_stats_mean_ssd(values + start[g], groups[g].n, &m, &ssd);
+      double m, sd;
+      palp_stats_mean_sd(values + start[g], groups[g].n, &m, &sd);
       printf("  %-20.20s %8zu %22.15g %14.6g\n", groups[g].name, groups[g].n,
-             dv[groups[g].first_row].value + m,
-             sqrt(ssd / (double)(groups[g].n - 1)));
+             dv[groups[g].first_row].value + m, sd);
     }
     printf("\n");
     print_anova_table(&a);

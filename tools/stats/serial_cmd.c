@@ -134,14 +134,14 @@ int run_neff(const options *o, const palp_csv *csv) {
     series_free(&s);
     return EXIT_DATA;
   }
-  double mean, ssd, r1;
-  palp_stats_mean_ssd(s.x, s.n, &mean, &ssd);
+  double mean, sd, r1;
+  palp_stats_mean_sd(s.x, s.n, &mean, &sd);
   if (palp_stats_autocorr1(s.x, s.n, &r1) != 0) {
     data_error(o->log, "%s: every value is the same; a constant series has no autocorrelation", o->file);
     series_free(&s);
     return EXIT_DATA;
   }
-  const double sd = sqrt(ssd / (double)(s.n - 1)), neff = palp_stats_neff_ar1(s.n, r1);
+  const double neff = palp_stats_neff_ar1(s.n, r1);
   const size_t block = palp_stats_block_length_ar1(s.n, r1);
   mean += s.origin;
   if (o->json) {
@@ -266,18 +266,17 @@ int run_tost(const options *o, const palp_csv *csv) {
       data_error(o->log, "%s: one unit in column \"%s\"; a t test over units needs at least 2", o->file, o->unit);
       goto done;
     }
-    double ssd;
-    palp_stats_mean_ssd(m, nobs, &est, &ssd);
-    se = sqrt(ssd / (double)(nobs - 1)) / sqrt((double)nobs);
+    double sd;
+    palp_stats_mean_sd(m, nobs, &est, &sd);
+    se = sd / sqrt((double)nobs);
     df = (double)(nobs - 1);
   } else {
     if (s.n < (o->serial ? 3u : 2u)) {
       data_error(o->log, "%s: %zu values; too few for a t test", o->file, s.n);
       goto done;
     }
-    double ssd;
-    palp_stats_mean_ssd(s.x, s.n, &est, &ssd);
-    const double sd = sqrt(ssd / (double)(s.n - 1));
+    double sd;
+    palp_stats_mean_sd(s.x, s.n, &est, &sd);
     if (o->serial) {
       if (palp_stats_autocorr1(s.x, s.n, &r1) != 0) r1 = 0.0;
       neff = palp_stats_neff_ar1(s.n, r1);
