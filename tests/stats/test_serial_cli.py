@@ -221,6 +221,45 @@ def main():
     r = stats("bootstrap", "six.csv", "--value", "x", "--block", "7")
     check(r.returncode == 1 and "longer" in r.stderr, "bootstrap: block longer than the series")
 
+    # ---- many distinct labels (session 81 review): each new label was compared with every
+    # earlier one, O(n^2): 100,000 labels took 34 s, 200,000 took 95 s. Now a hash table.
+    # 100,000 labels, each with the rows "L{i},1" and "L{i},3" (anova groups, ba-rm subjects)
+    # or one row "U{i},2" (tost units). By hand: anova, every group mean 2 and SS_within 2:
+    # SS_between = 0, so F = 0 and p = 1, df (99999, 100000); tost --unit: 100,000
+    # observations all equal to 2. Bound: 5 s of the child's CPU time (user + sys, so
+    # a loaded machine does not count); measured 0.05-0.2 s each, the old code 34 s.
+    nl = 100000
+    write("many.csv", "g,v\n" + "".join("L%d,1\nL%d,3\n" % (i, i) for i in range(nl)))
+    write("many_units.csv", "u,v\n" + "".join("U%d,2\n" % i for i in range(nl)))
+    for args, tag in ((("anova", "many.csv", "--group", "g", "--value", "v"), "anova 100,000 groups"),
+                      (("tost", "many_units.csv", "--unit", "u", "--value", "v", "--margin", "1"), "tost 100,000 units"),
+                      (("ba-rm", "many.csv", "--subject", "g", "--value", "v"), "ba-rm 100,000 subjects")):
+        before = os.times()
+        try:
+            r = subprocess.run([tool] + list(args) + ["--json"], cwd=work, capture_output=True, text=True,
+                               timeout=30)
+        except subprocess.TimeoutExpired:
+            check(False, "%s: still running after 30 s, bound 5 s of CPU (quadratic label look-up?)" % tag)
+            continue
+        after = os.times()
+        cpu = (after.children_user - before.children_user) + (after.children_system - before.children_system)
+        check(cpu < 5.0, "%s: %.2f s of CPU, bound 5 s (quadratic label look-up?)" % (tag, cpu))
+        check(r.returncode == 0, "%s: exit %d %s" % (tag, r.returncode, r.stderr[-500:]))
+        if r.returncode != 0:
+            continue
+        j = json.loads(r.stdout)
+        if args[0] == "anova":
+            a = j["anova"]
+            check(len(j["groups"]) == nl and a["between"]["df"] == nl - 1 and a["within"]["df"] == nl,
+                  "%s: %d groups, df (%r, %r)" % (tag, len(j["groups"]), a["between"]["df"], a["within"]["df"]))
+            check(a["between"]["ss"] == 0 and close(a["within"]["ss"], 2.0 * nl, 1e-12) and a["p"] == 1,
+                  "%s: SS_b 0, SS_w 2 nl, p 1 (%r, %r, %r)" % (tag, a["between"]["ss"], a["within"]["ss"], a["p"]))
+        elif args[0] == "tost":
+            check(j["observations"] == nl and close(j["estimate"], 2.0, 1e-12),
+                  "%s: %r observations, estimate %r" % (tag, j["observations"], j["estimate"]))
+        else:
+            check(j["subjects"] == nl and j["n"] == 2 * nl, "%s: %r subjects, %r pairs" % (tag, j["subjects"], j["n"]))
+
 
 main()
 print("test_serial_cli: %s" % ("ok" if failures == 0 else "%d failure(s)" % failures))

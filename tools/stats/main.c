@@ -30,6 +30,7 @@
 #include "svg_plot.h"
 #include "palp_app.h"
 #include "cli.h"
+#include "label_index.h"
 
 #define STATS_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE)
 
@@ -335,7 +336,8 @@ static int run_anova(const options *o, const palp_csv *csv) {
   double *offset = NULL;
   int ng = 0, rc = EXIT_DATA;
   size_t used = 0, skipped = 0;
-  if (!gid || !dv || !groups || !values) {
+  label_index index = {0};
+  if (!gid || !dv || !groups || !values || label_index_init(&index, 64) < 0) {
     data_error(o->log, "out of memory");
     goto done;
   }
@@ -353,9 +355,12 @@ static int run_anova(const options *o, const palp_csv *csv) {
       goto done;
     }
     if (cell_number(csv, o, r, vc, &dv[r]) < 0) goto done;
-    int g = 0;
-    while (g < ng && strcmp(groups[g].name, label) != 0) ++g;
-    if (g == ng) {
+    int added, g = label_index_get(&index, label, &added); /* O(1) expected, not a scan */
+    if (g < 0) {
+      data_error(o->log, "out of memory");
+      goto done;
+    }
+    if (added) {
       groups[ng].name = (char *)label;
       groups[ng].first_line = csv->line[r];
       groups[ng].first_row = r;
@@ -480,6 +485,7 @@ static int run_anova(const options *o, const palp_csv *csv) {
   }
   rc = 0;
 done:
+  label_index_free(&index);
   free(gid);
   free(dv);
   free(groups);

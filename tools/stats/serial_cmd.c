@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "label_index.h"
 #include "stats.h"
 
 typedef struct series {
@@ -73,6 +74,12 @@ static int read_series(const options *o, const palp_csv *csv, const char *label_
     series_free(s);
     return -1;
   }
+  label_index index = {0};
+  if (cl >= 0 && label_index_init(&index, 64) < 0) {
+    data_error(o->log, "out of memory");
+    series_free(s);
+    return -1;
+  }
   palp_dec first;
   int have_first = 0;
   for (size_t r = 0; r < nr; ++r) {
@@ -83,6 +90,7 @@ static int read_series(const options *o, const palp_csv *csv, const char *label_
     }
     palp_dec a, b;
     if (cell_number(csv, o, r, ca, &a) < 0 || (cb >= 0 && cell_number(csv, o, r, cb, &b) < 0)) {
+      label_index_free(&index);
       series_free(s);
       return -1;
     }
@@ -93,6 +101,7 @@ static int read_series(const options *o, const palp_csv *csv, const char *label_
     }
     if (!isfinite(s->x[s->n])) {
       data_error(o->log, "%s:%zu: the value is too large to analyse", o->file, csv->line[r]);
+      label_index_free(&index);
       series_free(s);
       return -1;
     }
@@ -102,16 +111,23 @@ static int read_series(const options *o, const palp_csv *csv, const char *label_
         data_error(o->log, "%s:%zu: column \"%s\" (column %d, %s) is empty; every row needs a label (or pass "
                    "--skip-empty)",
                    o->file, csv->line[r], csv->header[cl], cl + 1, label_flag);
+        label_index_free(&index);
         series_free(s);
         return -1;
       }
-      int g = 0;
-      while (g < s->labels && strcmp(palp_csv_cell(csv, s->first_row[g], cl), lab)) ++g;
-      if (g == s->labels) s->first_row[s->labels++] = r;
+      int added, g = label_index_get(&index, lab, &added); /* O(1) expected, not a scan */
+      if (g < 0) {
+        data_error(o->log, "out of memory");
+        label_index_free(&index);
+        series_free(s);
+        return -1;
+      }
+      if (added) s->first_row[s->labels++] = r;
       s->label[s->n] = g;
     }
     s->n++;
   }
+  label_index_free(&index);
   if (s->n == 0) {
     data_error(o->log, "%s: every data row was skipped as empty; nothing to analyse", o->file);
     series_free(s);
