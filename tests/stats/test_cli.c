@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
@@ -410,6 +411,22 @@ static void test_errors(void) {
   result_free(&r);
 }
 
+/* A file over the 16 MiB bound (PALP_CSV_MAX_BYTES; session 81 review: there was no
+ * bound, and the reader took 40-70 times the file size) is refused before it is read:
+ * a sparse file of 16 MiB + 1 byte (no disk, no time), exit 1 and the bound named. */
+static void test_too_big(void) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/big.csv", dir);
+  FILE *f = fopen(path, "w");
+  if (!f || fputs("a,b\n", f) < 0 || fclose(f) != 0 || truncate(path, (16L << 20) + 1) != 0) {
+    check("big.csv made", 0);
+    return;
+  }
+  const char *needles[] = {"big.csv", "more than the 16 MiB", NULL};
+  expect_error("file over 16 MiB", "rmse big.csv --a a --b b", 1, needles);
+  remove(path);
+}
+
 int main(int argc, char **argv) {
   if (argc != 3) {
     fprintf(stderr, "usage: %s PALP_STATS WORKDIR\n", argv[0]);
@@ -430,6 +447,7 @@ int main(int argc, char **argv) {
   test_far_apart();
   test_huge();
   test_errors();
+  test_too_big();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }

@@ -1,10 +1,18 @@
 /*
- * csv.c - RFC 4180 reader (see csv.h). The whole file is read at once: phantom
- * measurement files are kilobytes to a few megabytes.
+ * csv.c - RFC 4180 reader (see csv.h). The whole file is read at once (at most
+ * PALP_CSV_MAX_BYTES): phantom measurement files are kilobytes to a few megabytes.
+ * Every cell's text goes, unquoted and trimmed, into one arena of len + 2 bytes (a
+ * cell is never longer than its source span, and its NUL takes the place of the
+ * delimiter or line break after it), addressed by 32-bit offsets: about 5 bytes of
+ * memory per byte of "1,2" rows, at most ~9 for a row of bare delimiters (one malloc
+ * per cell took 40-70 times the file size; session 81 review).
  */
 #include "csv.h"
 
 #include <errno.h>
+#include <limits.h>
+#include <stdint.h>
+#include <sys/stat.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,46 +20,21 @@
 
 #include "palp.h"
 
-typedef struct strbuf {
-  char *p;
+typedef struct offvec {
+  uint32_t *p;
   size_t n, cap;
-} strbuf;
+} offvec;
 
-static int sb_put(strbuf *b, char c) {
-  if (b->n + 2 > b->cap) {
-    size_t cap = b->cap ? 2 * b->cap : 32;
-    char *p = realloc(b->p, cap);
-    if (!p) return PALP_ENOMEM;
-    b->p = p;
-    b->cap = cap;
-  }
-  b->p[b->n++] = c;
-  b->p[b->n] = '\0';
-  return 0;
-}
-
-typedef struct ptrvec {
-  char **p;
-  size_t n, cap;
-} ptrvec;
-
-static int pv_push(ptrvec *v, char *s) {
+static int ov_push(offvec *v, uint32_t off) {
   if (v->n + 1 > v->cap) {
-    size_t cap = v->cap ? 2 * v->cap : 16;
-    char **p = realloc(v->p, cap * sizeof *p);
+    size_t cap = v->cap ? 2 * v->cap : 64;
+    uint32_t *p = realloc(v->p, cap * sizeof *p);
     if (!p) return PALP_ENOMEM;
     v->p = p;
     v->cap = cap;
   }
-  v->p[v->n++] = s;
+  v->p[v->n++] = off;
   return 0;
-}
-
-static void pv_free(ptrvec *v) {
-  for (size_t i = 0; i < v->n; ++i) free(v->p[i]);
-  free(v->p);
-  v->p = NULL;
-  v->n = v->cap = 0;
 }
 
 static void msg(char *err, size_t errlen, const char *fmt, ...) {
@@ -62,25 +45,24 @@ static void msg(char *err, size_t errlen, const char *fmt, ...) {
   va_end(ap);
 }
 
-static char *trimmed_copy(const char *s, size_t n) {
+/* Appends s[0..n) trimmed of spaces and tabs, and a NUL, at arena + *w; returns the
+ * cell's offset. */
+static uint32_t put_trimmed(char *arena, size_t *w, const char *s, size_t n) {
   while (n && (*s == ' ' || *s == '\t')) ++s, --n;
   while (n && (s[n - 1] == ' ' || s[n - 1] == '\t')) --n;
-  char *r = malloc(n + 1);
-  if (!r) return NULL;
-  memcpy(r, s, n);
-  r[n] = '\0';
-  return r;
+  const uint32_t off = (uint32_t)*w;
+  memcpy(arena + *w, s, n);
+  arena[*w + n] = '\0';
+  *w += n + 1;
+  return off;
 }
 
 void palp_csv_free(palp_csv *csv) {
   if (!csv) return;
-  if (csv->header)
-    for (int i = 0; i < csv->ncols; ++i) free(csv->header[i]);
-  if (csv->cells)
-    for (size_t i = 0; i < csv->nrows * (size_t)csv->ncols; ++i) free(csv->cells[i]);
-  free(csv->header);
+  free(csv->header); /* its strings live in the arena */
   free(csv->cells);
   free(csv->line);
+  free(csv->arena);
   memset(csv, 0, sizeof *csv);
 }
 
@@ -96,21 +78,35 @@ static const char *delim_name(char d) {
 int palp_csv_parse(const char *text, size_t len, const char *name, char delim, palp_csv *out,
                    char *err, size_t errlen) {
   memset(out, 0, sizeof *out);
+  if (len > PALP_CSV_MAX_BYTES) {
+    msg(err, errlen, "%s: %zu bytes, more than the %zu MiB palp-stats reads", name, len,
+        (size_t)(PALP_CSV_MAX_BYTES >> 20));
+    return PALP_EINVAL;
+  }
   size_t i = 0;
   if (len >= 3 && (unsigned char)text[0] == 0xEF && (unsigned char)text[1] == 0xBB &&
       (unsigned char)text[2] == 0xBF)
     i = 3; /* UTF-8 byte-order mark written by spreadsheet exports */
 
-  ptrvec all = {0}, rec = {0};
+  /* Cells: text in arena (never more than len + 1 bytes, see the top of the file),
+   * offsets in all; the record being read is all[rec0 ..). */
+  char *arena = malloc(len + 2);
+  size_t w = 0;
+  offvec all = {0};
   size_t *lines = NULL, nlines = 0, cap_lines = 0;
   size_t line = 1;
   int ncols = -1;
   size_t header_line = 0;
   int rc = 0;
+  if (!arena) {
+    rc = PALP_ENOMEM;
+    goto fail;
+  }
 
   while (i < len) {
     /* One record. */
     size_t rec_line = line;
+    const size_t rec0 = all.n;
     int blank = 1;  /* nothing but whitespace so far */
     int quoted = 0; /* a quoted field was seen (even "" is content) */
     for (;;) {
@@ -121,13 +117,10 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
         blank = 0;
         quoted = 1;
         size_t quote_line = line;
-        strbuf b = {0};
-        if ((rc = sb_put(&b, '\0')) < 0) goto fail;
-        b.n = 0;
+        const uint32_t off = (uint32_t)w;
         j++;
         for (;;) {
           if (j >= len) {
-            free(b.p);
             msg(err, errlen,
                 "%s:%zu: a quoted field opened here is never closed (missing '\"'); "
                 "inside quotes a literal quote is written as \"\"",
@@ -138,7 +131,7 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
           char c = text[j];
           if (c == '"') {
             if (j + 1 < len && text[j + 1] == '"') {
-              if ((rc = sb_put(&b, '"')) < 0) { free(b.p); goto fail; }
+              arena[w++] = '"';
               j += 2;
               continue;
             }
@@ -146,20 +139,20 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
             break;
           }
           if (c == '\n' || (c == '\r' && !(j + 1 < len && text[j + 1] == '\n'))) line++;
-          if ((rc = sb_put(&b, c)) < 0) { free(b.p); goto fail; }
+          arena[w++] = c;
           j++;
         }
+        arena[w++] = '\0';
         while (j < len && (text[j] == ' ' || text[j] == '\t') && text[j] != delim) ++j;
         if (j < len && text[j] != delim && text[j] != '\n' && text[j] != '\r') {
-          free(b.p);
           msg(err, errlen,
               "%s:%zu: field %zu: unexpected text after a closing quote; quote the whole "
               "field, writing a literal quote as \"\"",
-              name, line, rec.n + 1);
+              name, line, all.n - rec0 + 1);
           rc = PALP_EPARSE;
           goto fail;
         }
-        if ((rc = pv_push(&rec, b.p)) < 0) { free(b.p); goto fail; }
+        if ((rc = ov_push(&all, off)) < 0) goto fail;
         i = j;
       } else {
         size_t k = i;
@@ -167,9 +160,7 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
           if (text[k] != ' ' && text[k] != '\t') blank = 0;
           ++k;
         }
-        char *f = trimmed_copy(text + i, k - i);
-        if (!f) { rc = PALP_ENOMEM; goto fail; }
-        if ((rc = pv_push(&rec, f)) < 0) { free(f); goto fail; }
+        if ((rc = ov_push(&all, put_trimmed(arena, &w, text + i, k - i))) < 0) goto fail;
         i = k;
       }
       if (i < len && text[i] == delim) {
@@ -188,41 +179,46 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
       break;
     }
 
-    if (blank && rec.n == 1) { /* empty line */
-      pv_free(&rec);
+    const size_t nrec = all.n - rec0;
+    if (blank && nrec == 1) { /* empty line */
+      all.n = rec0;
       continue;
     }
     if (!quoted && ncols >= 0) {
       /* ",,," rows: spreadsheets export them below the data; they hold nothing. */
       size_t k = 0;
-      while (k < rec.n && rec.p[k][0] == '\0') ++k;
-      if (k == rec.n) {
-        pv_free(&rec);
+      while (k < nrec && arena[all.p[rec0 + k]] == '\0') ++k;
+      if (k == nrec) {
+        all.n = rec0;
         continue;
       }
     }
     if (ncols < 0) {
-      ncols = (int)rec.n;
+      if (nrec > (size_t)INT_MAX) {
+        msg(err, errlen, "%s:%zu: the header has more than %d fields", name, rec_line, INT_MAX);
+        rc = PALP_EPARSE;
+        goto fail;
+      }
+      ncols = (int)nrec;
       header_line = rec_line;
-      out->header = rec.p;
+      out->header = malloc(nrec * sizeof *out->header);
+      if (!out->header) {
+        rc = PALP_ENOMEM;
+        goto fail;
+      }
+      for (size_t k = 0; k < nrec; ++k) out->header[k] = arena + all.p[rec0 + k];
       out->ncols = ncols;
-      rec.p = NULL;
-      rec.n = rec.cap = 0;
+      all.n = rec0;
       continue;
     }
-    if ((int)rec.n != ncols) {
+    if (nrec != (size_t)ncols) {
       msg(err, errlen,
           "%s:%zu: this row has %zu %s-separated fields but the header (line %zu) has %d; "
           "a field containing a %s must be enclosed in double quotes",
-          name, rec_line, rec.n, delim_name(delim), header_line, ncols, delim_name(delim));
+          name, rec_line, nrec, delim_name(delim), header_line, ncols, delim_name(delim));
       rc = PALP_EPARSE;
       goto fail;
     }
-    for (size_t k = 0; k < rec.n; ++k) {
-      if ((rc = pv_push(&all, rec.p[k])) < 0) goto fail;
-      rec.p[k] = NULL;
-    }
-    rec.n = 0;
     if (nlines + 1 > cap_lines) {
       size_t cap = cap_lines ? 2 * cap_lines : 64;
       size_t *p = realloc(lines, cap * sizeof *p);
@@ -232,29 +228,27 @@ int palp_csv_parse(const char *text, size_t len, const char *name, char delim, p
     }
     lines[nlines++] = rec_line;
   }
-  pv_free(&rec);
   if (ncols < 0) {
     msg(err, errlen, "%s: the file is empty; expected a header row naming the columns, "
                      "then one row per measurement",
         name);
     free(lines);
-    pv_free(&all);
+    free(all.p);
+    free(arena);
     return PALP_EPARSE;
   }
   out->cells = all.p;
+  out->arena = arena;
   out->nrows = nlines;
   out->line = lines;
   out->header_line = header_line;
   return 0;
 
 fail:
-  pv_free(&rec);
-  pv_free(&all);
+  free(all.p);
   free(lines);
-  if (out->header) {
-    for (int k = 0; k < out->ncols; ++k) free(out->header[k]);
-    free(out->header);
-  }
+  free(arena);
+  free(out->header);
   memset(out, 0, sizeof *out);
   if (rc == PALP_ENOMEM) msg(err, errlen, "%s: out of memory while reading", name);
   return rc;
@@ -267,10 +261,26 @@ int palp_csv_read(const char *path, char delim, palp_csv *out, char *err, size_t
     msg(err, errlen, "%s: cannot open: %s", path, strerror(errno));
     return PALP_EIO;
   }
+  struct stat st;
+  if (fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode) && (uint64_t)st.st_size > PALP_CSV_MAX_BYTES) {
+    fclose(f);
+    msg(err, errlen, "%s: %.1f MiB, more than the %zu MiB palp-stats reads (its memory grows ~50-fold with "
+                     "short rows); split the file, or drop the columns not analysed",
+        path, (double)st.st_size / 1048576.0, (size_t)(PALP_CSV_MAX_BYTES >> 20));
+    return PALP_EINVAL;
+  }
   char *buf = NULL;
   size_t n = 0, cap = 0;
   errno = 0;
   for (;;) {
+    if (n > PALP_CSV_MAX_BYTES) { /* a pipe or a file grown since fstat */
+      free(buf);
+      fclose(f);
+      msg(err, errlen, "%s: more than the %zu MiB palp-stats reads (its memory grows ~50-fold "
+                       "with short rows); split the file, or drop the columns not analysed",
+          path, (size_t)(PALP_CSV_MAX_BYTES >> 20));
+      return PALP_EINVAL;
+    }
     if (n + 65536 + 1 > cap) {
       size_t nc = cap ? 2 * cap : 65536 + 1;
       char *p = realloc(buf, nc);
