@@ -18,7 +18,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "../tmpdir.h"
 #include "eval.h"
 #include "vec3.h"
 
@@ -78,9 +80,43 @@ static void test_recovery(void) {
   CHECK(palp_eval_record_recovery(&r, 1, 0.05, &t, &reached) == PALP_EINVAL, "vertex out of range");
 }
 
+/* palp-fem finger's CSV as palp-eval --finger-from reads it (session 81's review): a good file's rows of
+ * one site, by hand; "inf" (sscanf takes it: an infinite force passed the calibration's force > 0) and
+ * a second row at one depth (counted twice toward "every fitted depth", the caller then said falsely
+ * that a depth had no row) refused, each naming the row. */
+static void test_finger_csv(void) {
+  char path[512];
+  palp_test_tmp(path, sizeof path, "palp_finger_csv_XXXXXX");
+  const int fd = mkstemp(path);
+  CHECK(fd >= 0, "mkstemp");
+  if (fd < 0) return;
+  close(fd);
+  static const char *const body[3] = {
+      "site,depth_m,fem_N,rt_N,rt_depth_m,ratio,gap_m\npole,0.0005,0.25,0.2,0.0005,0.8,0\nside,0.0005,9,9,0.0005,1,0\n"
+      "pole,0.001,0.5,0.4,0.001,0.8,0\n",
+      "site,depth_m,fem_N,rt_N,rt_depth_m,ratio,gap_m\npole,0.0005,inf,0.2,0.0005,0.8,0\n",
+      "site,depth_m,fem_N,rt_N,rt_depth_m,ratio,gap_m\npole,0.001,0.5,0.4,0.001,0.8,0\npole,0.001,0.6,0.4,0.001,0.8,0\n"};
+  static const char *const want[3] = {NULL, "row 1 (site pole): a number is not finite",
+                                      "row 2: site pole at depth 0.001 m given twice"};
+  for (int i = 0; i < 3; i++) {
+    FILE *f = fopen(path, "w");
+    fputs(body[i], f);
+    fclose(f);
+    double d[8], fo[8];
+    char err[256] = "";
+    const int n = palp_eval_finger_csv_read(path, "pole", 8, d, fo, NULL, err, sizeof err);
+    if (!want[i])
+      CHECK(n == 2 && d[0] == 0.0005 && fo[0] == 0.25 && d[1] == 0.001 && fo[1] == 0.5, "the pole's two rows: %d (%s)",
+            n, err);
+    else CHECK(n < 0 && strstr(err, want[i]), "file %d refused, \"%s\": %d, %s", i, want[i], n, err);
+  }
+  remove(path);
+}
+
 int main(void) {
   test_draw();
   test_recovery();
+  test_finger_csv();
   printf("test_eval_sites: %d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }

@@ -187,7 +187,22 @@ int palp_eval_finger_csv_read(const char *path, const char *site, int max, doubl
       fclose(f);
       return -1;
     }
-    if (strcmp(name, site) != 0 || n == max) continue;
+    if (strcmp(name, site) != 0) continue;
+    /* sscanf takes "inf" and "nan": an infinite force passed the calibration's force > 0 (session 81) */
+    if (!isfinite(d) || !isfinite(fe) || !isfinite(rt) || !isfinite(rd) || !isfinite(ratio) || !isfinite(g)) {
+      snprintf(err, errlen, "%s: row %d (site %s): a number is not finite", path, row, name);
+      fclose(f);
+      return -1;
+    }
+    /* one row per (site, depth): a second one counted twice toward "every fitted depth" and the
+     * caller then said, falsely, that a depth had no row */
+    for (int j = 0; j < n; ++j)
+      if (fabs(depth[j] - d) < 1e-12) {
+        snprintf(err, errlen, "%s: row %d: site %s at depth %g m given twice", path, row, name, d);
+        fclose(f);
+        return -1;
+      }
+    if (n == max) continue;
     depth[n] = d, force[n] = fe;
     if (gap) gap[n] = g;
     ++n;
