@@ -5,7 +5,8 @@
 # checker works here), and the unit's ExecStart command line, run as systemd would run
 # it (its state and log paths moved into a temporary directory), must start the server,
 # log timestamped lines to the unit's --log-file and stop cleanly on the unit's
-# KillSignal; palp-web's unit is ordered after time-sync.target. What this cannot check
+# KillSignal; palp-web's unit is ordered after time-sync.target; the three units name one
+# User= and Group= (they share /var/lib/palp and /var/log/palp). What this cannot check
 # without systemd as PID 1: DynamicUser, StateDirectory/LogsDirectory creation and the
 # sandboxing options (docs/deploy.md).
 # usage: systemd_units.sh BUILD_DIR DOMAIN
@@ -37,6 +38,26 @@ for u in palp-server palp-recorder palp-web; do
   if [ $rc -eq 0 ] && [ -z "$out" ]; then ok "systemd-analyze verify $u.service: exit 0, no warning"; else bad "verify $u.service: exit $rc: $out"; fi
   grep -q "^ExecStart=$prefix/bin/$u " "$f" && ok "$u.service runs the installed $prefix/bin/$u" || bad "$u.service ExecStart: $(grep ExecStart "$f")"
 done
+# One service user for the three units (session 81): they share StateDirectory/LogsDirectory palp, and
+# each DynamicUser without User= got a UID of its own, so systemd chowned /var/lib/palp and /var/log/palp
+# to whichever started last and the server lost its database and its log. One dynamic user name = one UID.
+users=""
+for u in palp-server palp-recorder palp-web; do
+  f=$units/$u.service
+  us=$(sed -n 's/^User=//p' "$f"); gs=$(sed -n 's/^Group=//p' "$f")
+  if [ -n "$us" ] && [ "$(printf '%s\n' "$us" | wc -l)" -eq 1 ] && [ -n "$gs" ] && [ "$(printf '%s\n' "$gs" | wc -l)" -eq 1 ]; then
+    users="$users $u:$us:$gs"
+  else
+    bad "$u.service names no single User= and Group= (User='$us' Group='$gs'): with DynamicUser each unit gets its own UID"
+  fi
+done
+n=$(printf '%s\n' $users | sed 's/^[^:]*://' | sort -u | wc -l)
+if [ "$(printf '%s\n' $users | wc -l)" -eq 3 ] && [ "$n" -eq 1 ]; then
+  ok "the three units run as one user and group ($(printf '%s\n' $users | sed 's/^[^:]*://' | sort -u)), sharing /var/lib/palp and /var/log/palp"
+else
+  bad "the units' users and groups differ:$users"
+fi
+
 # Negative controls: an unknown key and a missing program must be reported.
 sed 's/^Restart=/Restrat=/' "$units/palp-server.service" > "$work/broken-key.service"
 out=$(cd "$work" && systemd-analyze verify "$work/broken-key.service" 2>&1)
