@@ -76,6 +76,11 @@ check_kind() {
   case $1 in trainee | instructor | server) ;; *) die "bad kind \"$1\": trainee, instructor or server" ;; esac
 }
 
+# The CA's openssl configuration names the CA's directory by its absolute path, so it is written for the
+# directory this run works on, at the start of every command that signs or revokes (ca_ready), not only by
+# init: until session 81 only init wrote it, and a copied PKI (cp -a) signed with and revoked into the
+# ORIGINAL's ca/serial and index.txt, a moved one could not sign at all, and a copy's init then issued
+# serials the original had already used (a new trainee born revoked).
 write_ca_config() {
   mkdir -p "$dir/ca/newcerts"
   chmod 700 "$dir/ca"
@@ -83,6 +88,8 @@ write_ca_config() {
   [ -f "$dir/ca/serial" ] || echo 1000 >"$dir/ca/serial"
   [ -f "$dir/ca/crlnumber" ] || echo 1000 >"$dir/ca/crlnumber"
   cat >"$dir/ca/ca.cnf" <<EOF
+# written by make-classroom-pki.sh for $dir at each of its runs: copy or move DIR freely, then run the
+# script on the new DIR (never openssl ca -config with a copied ca.cnf: it names the directory it came from)
 [ ca ]
 default_ca = classroom
 [ classroom ]
@@ -112,6 +119,16 @@ keyUsage = critical, digitalSignature, keyAgreement
 subjectKeyIdentifier = hash
 authorityKeyIdentifier = keyid
 EOF
+}
+
+# Before a command that signs or revokes with the CA (add, revoke, crl, web): the CA is there, with the
+# database openssl keeps (a new, empty one would re-issue serials already used and forget revocations),
+# and its configuration names this DIR.
+ca_ready() {
+  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  [ -f "$dir/ca/index.txt" ] && [ -f "$dir/ca/serial" ] ||
+    die "$dir/ca: the CA's database (index.txt, serial) is missing: restore $dir/ca/ from its backup"
+  write_ca_config
 }
 
 sign() { # xml -> p7s, S/MIME signed by the CA (what Cyclone's access control plugin reads)
@@ -366,7 +383,7 @@ web_cert() {
     fi
   done
   [ -n "$san" ] || die "usage: $0 DIR web HOST[,HOST...] [--days N]"
-  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  ca_ready
   mkdir -p "$dir/web"
   base="$dir/web/$(echo "$first" | tr ':' '_')"
   (umask 077 && openssl ecparam -name prime256v1 -genkey -noout -out "$base.key.pem")
@@ -460,7 +477,10 @@ add)
   [ "${1:-}" = --days ] && days=${2:?--days N}
   [[ $days =~ ^[0-9]+$ ]] && [ "$days" -ge 1 ] || die "--days: expected a positive integer"
   dir=$(cd "$dir" && pwd)
+  check_kind "$kind"
+  check_name "$name"
   [ ! -f "$dir/$kind/$name.cert.pem" ] || die "$kind/$name exists; revoke it first to re-issue"
+  ca_ready
   add "$kind" "$name"
   ;;
 revoke)
@@ -468,6 +488,7 @@ revoke)
   dir=$(cd "$dir" && pwd)
   cert="$dir/$1.cert.pem"
   [ -f "$cert" ] || die "no identity $1 in $dir"
+  ca_ready
   # Again after a revoke whose CRL failed (the CA's index already says revoked): finished, not refused.
   if ! err=$(openssl ca -config "$dir/ca/ca.cnf" -revoke "$cert" 2>&1); then
     case $err in
@@ -487,7 +508,7 @@ crl)
   # Re-issued whenever a certificate is revoked; also by hand before it expires (default_crl_days,
   # 365): an expired CRL fails every handshake. palp warns 30 days ahead.
   dir=$(cd "$dir" && pwd)
-  [ -f "$dir/ca/ca.key.pem" ] || die "$dir: no CA; run '$0 $dir init' first"
+  ca_ready
   crl
   echo "make-classroom-pki: $dir/crl.pem re-issued, next update $(openssl crl -in "$dir/crl.pem" -noout -nextupdate | cut -d= -f2); copy it to every participant"
   ;;

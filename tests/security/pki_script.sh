@@ -12,6 +12,8 @@
 #    on the space into mary and ann before), an empty name, a capital, a '.', '*' are refused, exit 2,
 #    naming the name, before anything is made (no directory); 'mary-ann,bob' makes exactly those
 #    identities, CN=mary-ann.
+#  - (session 81) a copied PKI signs and revokes in its own CA database, the original's untouched; a moved
+#    one signs; the new certificates verify with their CRL; serials stay distinct.
 # usage: pki_script.sh MAKE_CLASSROOM_PKI_SH
 set -u
 script=$1
@@ -74,5 +76,45 @@ made=$(cd "$names" 2>/dev/null && ls trainee/*.cert.pem instructor/*.cert.pem 2>
 cn=$(openssl x509 -in "$names/trainee/mary-ann.cert.pem" -noout -subject 2>/dev/null)
 check "--trainees mary-ann,bob --instructors ines: exit $rc, exactly those identities ($made), $cn" \
   "[ $rc -eq 0 ] && [ '$made' = 'instructor/ines.cert.pem trainee/bob.cert.pem trainee/mary-ann.cert.pem ' ] && echo '$cn' | grep -q 'CN *= *mary-ann$'"
+
+# (session 81) A copied or moved PKI signs and revokes with its OWN CA database: ca/ca.cnf named the
+# directory init ran in, and only init rewrote it, so a copy (cp -a) signed with and revoked into the
+# original's ca/serial and index.txt, and a moved one could not sign at all.
+orig=$out/orig
+bash "$script" "$orig" classroom --trainees ann,bea >/dev/null 2>&1
+cp -a "$orig" "$out/copy"
+copy=$out/copy
+state() { (cd "$1" && md5sum ca/serial ca/index.txt crl.pem | tr '\n' ' '); }
+o0=$(state "$orig") c0=$(state "$copy")
+bash "$script" "$copy" add trainee cid >"$out/copy-add.log" 2>&1
+rc1=$?
+ann_serial=$(openssl x509 -in "$copy/trainee/ann.cert.pem" -noout -serial | cut -d= -f2)
+bash "$script" "$copy" revoke trainee/ann >"$out/copy-revoke.log" 2>&1
+rc2=$?
+o1=$(state "$orig") c1=$(state "$copy")
+check "a copy (cp -a) adds (exit $rc1) and revokes (exit $rc2) in its own ca/serial, index.txt and crl.pem; the original's untouched" \
+  "[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ '$o0' = '$o1' ] && [ '$c0' != '$c1' ] && grep -q 'CN=cid' '$copy/ca/index.txt' && ! grep -q 'CN=cid' '$orig/ca/index.txt' && grep -q '^R.*CN=ann' '$copy/ca/index.txt' && ! grep -q '^R' '$orig/ca/index.txt' && openssl crl -in '$copy/crl.pem' -noout -text | grep -q 'Serial Number: $ann_serial'"
+bash "$script" "$copy" add trainee dan >"$out/copy-add2.log" 2>&1
+rc=$?
+v=$(openssl verify -crl_check -CAfile "$copy/ca.cert.pem" -CRLfile "$copy/crl.pem" "$copy/trainee/dan.cert.pem" 2>&1)
+vann=$(openssl verify -crl_check -CAfile "$copy/ca.cert.pem" -CRLfile "$copy/crl.pem" "$copy"/revoked/trainee_ann-*.cert.pem 2>&1)
+serials=$(cut -f4 "$copy/ca/index.txt" | sort | tr '\n' ' ')
+dups=$(cut -f4 "$copy/ca/index.txt" | sort | uniq -d | tr '\n' ' ')
+check "the copy's next trainee (exit $rc) verifies with the copy's CRL ($v), the revoked ann does not; serials all distinct ($serials)" \
+  "[ $rc -eq 0 ] && [ '$v' = '$copy/trainee/dan.cert.pem: OK' ] && ! echo '$vann' | grep -q ': OK\$' && [ -z '$dups' ] && [ \$(echo $serials | wc -w) -eq 5 ]"
+mv "$orig" "$out/moved"
+moved=$out/moved
+bash "$script" "$moved" add trainee eve >"$out/moved-add.log" 2>&1
+rc=$?
+v=$(openssl verify -crl_check -CAfile "$moved/ca.cert.pem" -CRLfile "$moved/crl.pem" "$moved/trainee/eve.cert.pem" 2>&1)
+dups=$(cut -f4 "$moved/ca/index.txt" | sort | uniq -d | tr '\n' ' ')
+serials=$(cut -f4 "$moved/ca/index.txt" | sort | tr '\n' ' ')
+check "a moved PKI adds (exit $rc: $(tr '\n' ' ' <"$out/moved-add.log" | cut -c1-120)), verifies with its CRL ($v), serials distinct ($serials)" \
+  "[ $rc -eq 0 ] && [ '$v' = '$moved/trainee/eve.cert.pem: OK' ] && [ -z '$dups' ] && [ \$(echo $serials | wc -w) -eq 4 ] && [ ! -e '$orig' ]"
+bash "$script" "$moved" crl >/dev/null 2>&1 && bash "$script" "$moved" web lab-host >/dev/null 2>&1
+rc=$?
+check "a moved PKI re-issues its CRL and makes a web certificate (exit $rc)" \
+  "[ $rc -eq 0 ] && openssl verify -crl_check -CAfile '$moved/ca.cert.pem' -CRLfile '$moved/crl.pem' '$moved/web/lab-host.cert.pem' >/dev/null 2>&1"
+
 rm -rf "$out"
 exit $fail
