@@ -10,7 +10,7 @@
 #                                            (NAMEs separated by commas; a space is refused)
 #   make-classroom-pki.sh DIR init           CA (10 years), governance, empty CRL, identity server
 #   make-classroom-pki.sh DIR add KIND NAME [--days N]   KIND: trainee | instructor | server
-#   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem
+#   make-classroom-pki.sh DIR revoke KIND/NAME           adds the certificate to DIR/crl.pem (or web/HOST)
 #   make-classroom-pki.sh DIR list                       identities, validity, whether their permissions are
 #                                                        current (init mends them), revocation
 #   make-classroom-pki.sh DIR web HOST[,HOST...] [--days N]   a TLS certificate for palp-web (HTTPS)
@@ -485,8 +485,23 @@ add)
   ;;
 revoke)
   [ $# -eq 1 ] || die "usage: $0 DIR revoke KIND/NAME"
+  # Only an identity or a palp-web certificate, named as this script names them: KIND/NAME, or web/HOST
+  # (the certificate's file name: its first host, ':' as '_'). Anything else was taken as a path under DIR
+  # until session 81: 'revoke ca' revoked the CA's own certificate, moved ca.cert.pem into revoked/ and
+  # broke every later add. Refused before anything changes.
+  case $1 in
+  */*) kind=${1%%/*} name=${1#*/} ;;
+  *) die "revoke: \"$1\" is not an identity: give KIND/NAME (KIND trainee, instructor or server; e.g. trainee/alice) or web/HOST (a palp-web certificate, as 'list' names it)" ;;
+  esac
+  if [ "$kind" = web ]; then
+    [[ $name =~ ^[A-Za-z0-9_][A-Za-z0-9._-]{0,252}$ ]] ||
+      die "revoke: bad web certificate \"$name\": web/HOST, HOST as $dir/web/HOST.cert.pem names it"
+  else
+    check_kind "$kind"
+    check_name "$name"
+  fi
   dir=$(cd "$dir" && pwd)
-  cert="$dir/$1.cert.pem"
+  cert="$dir/$kind/$name.cert.pem"
   [ -f "$cert" ] || die "no identity $1 in $dir"
   ca_ready
   # Again after a revoke whose CRL failed (the CA's index already says revoked): finished, not refused.

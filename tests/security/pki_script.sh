@@ -13,7 +13,8 @@
 #    naming the name, before anything is made (no directory); 'mary-ann,bob' makes exactly those
 #    identities, CN=mary-ann.
 #  - (session 81) a copied PKI signs and revokes in its own CA database, the original's untouched; a moved
-#    one signs; the new certificates verify with their CRL; serials stay distinct.
+#    one signs; the new certificates verify with their CRL; serials stay distinct. revoke refuses anything
+#    but KIND/NAME or web/HOST ('revoke ca' moved the CA certificate away), exit 2, nothing changed.
 # usage: pki_script.sh MAKE_CLASSROOM_PKI_SH
 set -u
 script=$1
@@ -116,5 +117,22 @@ rc=$?
 check "a moved PKI re-issues its CRL and makes a web certificate (exit $rc)" \
   "[ $rc -eq 0 ] && openssl verify -crl_check -CAfile '$moved/ca.cert.pem' -CRLfile '$moved/crl.pem' '$moved/web/lab-host.cert.pem' >/dev/null 2>&1"
 
+# (session 81) revoke takes only KIND/NAME or web/HOST: 'revoke ca' exited 0, moved ca.cert.pem into
+# revoked/ and broke every later add. Each refused with exit 2, nothing changed in DIR.
+tree() { (cd "$1" && find . -type f -exec md5sum {} + | sort | md5sum); }
+t0=$(tree "$moved")
+for bad in ca ca/ca.key ca.cert.pem trainee trainee/ /trainee/bea trainee/Bea "trainee/bea/../../ca" \
+           ../ca student/bea web/ "web/../ca" "web/.x"; do
+  bash "$script" "$moved" revoke "$bad" >"$out/badrevoke.log" 2>&1
+  rc=$?
+  check "revoke '$bad': refused (exit $rc: $(head -c 150 "$out/badrevoke.log")), nothing changed" \
+    "[ $rc -eq 2 ] && grep -qE 'is not an identity: give KIND/NAME|bad kind|bad name|bad web certificate' '$out/badrevoke.log' && [ '$t0' = \"\$(tree '$moved')\" ]"
+done
+bash "$script" "$moved" add trainee fay >/dev/null 2>&1
+rc1=$?
+bash "$script" "$moved" revoke web/lab-host >"$out/webrevoke.log" 2>&1
+rc2=$?
+check "after them, add still signs (exit $rc1); revoke web/lab-host revokes palp-web's certificate (exit $rc2)" \
+  "[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ -f '$moved/ca.cert.pem' ] && [ ! -e '$moved/web/lab-host.cert.pem' ] && ls '$moved'/revoked/web_lab-host-*.cert.pem >/dev/null 2>&1"
 rm -rf "$out"
 exit $fail
