@@ -63,6 +63,33 @@ check "a plain server with a DDS config beyond loopback is refused (exit $rc)" \
 "$server" --dds-config "$lab" --check --insecure >"$out/lab2.log" 2>&1 && "$server" --dds-config "$lab" --check --pki "$pki" >>"$out/lab2.log" 2>&1
 rc=$?
 check "the same with --insecure, or secured with --pki, passes its check (exit $rc)" "[ $rc -eq 0 ]"
+# Session 81 review (operations): config/default-palp.example's lab lines, as an administrator copies them
+# (/etc/palp = the installed config/ with cyclonedds-lab.xml from its example, /etc/palp/certs = this PKI):
+# its PALP_SERVER_ARGS had no --pki, so the server refused the lab DDS config (exit 2) and its unit
+# restarted it every 2 s. The server's line now passes --check; the recorder's and palp-web's name the PKI
+# and an instructor identity (each of them refuses a PKI without one). --check makes no participant.
+example=$(dirname "$0")/../../config/default-palp.example
+etc=$out/etc/palp
+mkdir -p "$out/etc" && cp -rL "$(dirname "$0")/../../config" "$etc" && cp "$etc/cyclonedds-lab.xml.example" "$etc/cyclonedds-lab.xml" \
+  && ln -s "$(cd "$pki" && pwd)" "$etc/certs"
+example_args() { sed -n "s|^#*$1=\"\(.*\)\"\$|\1|p" "$example" | sed "s|/etc/palp|$etc|g"; }
+sargs=$(example_args PALP_SERVER_ARGS)
+# shellcheck disable=SC2086 # split as systemd splits $PALP_SERVER_ARGS
+"$server" $sargs --check >"$out/example.log" 2>&1
+rc=$?
+check "default-palp.example's PALP_SERVER_ARGS pass palp-server --check with the lab DDS config (exit $rc: $(head -c 200 "$out/example.log"))" \
+  "[ $rc -eq 0 ] && grep -q 'DDS Security identity readable' '$out/example.log' && printf '%s\\n' '$sargs' | grep -qF -- '--dds-config $etc/cyclonedds-lab.xml'"
+"$server" $(printf '%s\n' "$sargs" | sed 's|--pki [^ ]*||') --check >"$out/example-nopki.log" 2>&1
+rc=$?
+check "the same line without its --pki is refused (exit $rc: the lab config reaches beyond loopback)" \
+  "[ $rc -eq 2 ] && grep -q 'refusing to serve beyond loopback' '$out/example-nopki.log'"
+for v in PALP_RECORDER_ARGS PALP_WEB_ARGS; do
+  a=$(example_args $v)
+  id=$(printf '%s\n' "$a" | sed -n 's|.*--identity \(instructor/[a-z0-9_-]*\).*|\1|p')
+  check "default-palp.example's $v: --pki $etc/certs and an instructor identity (${id:-none})" \
+    "printf '%s\\n' '$a' | grep -qF -- '--pki $etc/certs' && [ -n '$id' ] && printf '%s\\n' '$a' | grep -qF -- '--dds-config $etc/cyclonedds-lab.xml'"
+done
+
 # Session 81 review: --check refuses what the start refuses for DDS Security (it passed a trainee's
 # identity, an empty one, which with a PKI served the classroom unsecured, and domain 231), and a
 # start so refused makes no session log (it made the file, schema and all, before refusing).
