@@ -53,20 +53,35 @@ function(palp_install_rules)
   install(FILES ${CMAKE_BINARY_DIR}/install/palpConfig.cmake ${CMAKE_BINARY_DIR}/install/palpConfigVersion.cmake
           DESTINATION ${cmdir})
 
-  # Configs. The installed server.json differs from the source tree's in one
-  # field: its session database lives under var/lib/palp of the prefix (the
-  # systemd unit passes /var/lib/palp explicitly).
+  # Configs. The installed server configs (server.json, server-exercises.json, server-classroom.json,
+  # server-paper.json: every config/server*.json) differ from the source tree's in their paths into
+  # the source tree's out/: the session database lives under var/lib/palp of the prefix (the systemd
+  # unit passes /var/lib/palp explicitly), and server-classroom.json's PKI under etc/palp/certs of the
+  # prefix (keys never beside the database: docs/deploy.md). Both relative to the config, so they
+  # follow the prefix. Until session 81 only server.json was rewritten, and the others logged into
+  # <prefix>/share/palp/out/.
   set(datadir ${CMAKE_INSTALL_DATADIR}/palp)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/config/ DESTINATION ${datadir}/config
-          PATTERN "server.json" EXCLUDE PATTERN "systemd" EXCLUDE)
+          PATTERN "server*.json" EXCLUDE PATTERN "systemd" EXCLUDE)
   file(RELATIVE_PATH to_state /${datadir}/config /${CMAKE_INSTALL_LOCALSTATEDIR}/lib/palp)
-  file(READ ${CMAKE_SOURCE_DIR}/config/server.json server_json)
-  string(REPLACE "\"../out/palp-sessions.db\"" "\"${to_state}/palp-sessions.db\"" server_json "${server_json}")
-  if(NOT server_json MATCHES "${to_state}/palp-sessions.db")
-    message(FATAL_ERROR "config/server.json: \"database\" is no longer ../out/palp-sessions.db; update cmake/PalpInstall.cmake")
-  endif()
-  file(WRITE ${CMAKE_BINARY_DIR}/install/server.json "${server_json}")
-  install(FILES ${CMAKE_BINARY_DIR}/install/server.json DESTINATION ${datadir}/config)
+  file(RELATIVE_PATH to_certs /${datadir}/config /${CMAKE_INSTALL_SYSCONFDIR}/palp/certs)
+  file(GLOB server_configs RELATIVE ${CMAKE_SOURCE_DIR}/config ${CMAKE_SOURCE_DIR}/config/server*.json)
+  foreach(cf ${server_configs}) # re-read at a configure after an edit
+    set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${CMAKE_SOURCE_DIR}/config/${cf})
+  endforeach()
+  foreach(cf ${server_configs})
+    file(READ ${CMAKE_SOURCE_DIR}/config/${cf} json)
+    string(REPLACE "\"../out/palp-sessions.db\"" "\"${to_state}/palp-sessions.db\"" json "${json}")
+    string(REPLACE "\"../out/pki\"" "\"${to_certs}\"" json "${json}")
+    string(REPLACE "bash scripts/make-classroom-pki.sh out/pki classroom"
+                   "bash share/palp/scripts/make-classroom-pki.sh etc/palp/certs classroom (under the prefix)" json "${json}")
+    if(NOT json MATCHES "\"${to_state}/palp-sessions.db\"" OR json MATCHES "\\.\\./out/")
+      message(FATAL_ERROR "config/${cf}: \"database\" is no longer ../out/palp-sessions.db, or another path "
+                          "leads into ../out/; update cmake/PalpInstall.cmake")
+    endif()
+    file(WRITE ${CMAKE_BINARY_DIR}/install/${cf} "${json}")
+    install(FILES ${CMAKE_BINARY_DIR}/install/${cf} DESTINATION ${datadir}/config)
+  endforeach()
   install(DIRECTORY DESTINATION ${CMAKE_INSTALL_LOCALSTATEDIR}/lib/palp)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/db/migrations/ DESTINATION ${datadir}/db/migrations)
   install(DIRECTORY ${CMAKE_SOURCE_DIR}/web/www/ DESTINATION ${datadir}/www)

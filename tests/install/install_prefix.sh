@@ -111,6 +111,36 @@ fi
 [ -e "$src/out/palp-sessions.db" ] && [ "$src/out/palp-sessions.db" -nt "$work/install.log" ] \
   && bad "the installed server wrote into the source tree"
 
+# 3a. Every installed server config (session 81: only server.json's database was moved out of ../out/, so
+# server-exercises.json, server-classroom.json and server-paper.json logged into <prefix>/share/palp/out/,
+# and server-classroom.json's PKI was share/palp/out/pki): its database resolves into the prefix's
+# var/lib/palp, its PKI into etc/palp/certs, nothing leads into ../out/, and --check passes (the
+# classroom's with a PKI made where its config says, by the installed script).
+f0=$fail; fail=0
+cfgdir=$root/share/palp/config
+resolve_dir() { (cd "$cfgdir" && cd "$(dirname "$1")" 2>/dev/null && pwd); }
+n=0
+for cf in server.json server-exercises.json server-classroom.json server-paper.json; do
+  f=$cfgdir/$cf
+  [ -f "$f" ] || { bad "$cf not installed"; continue; }
+  dbp=$(sed -n 's/^ *"database": *"\([^"]*\)".*/\1/p' "$f")
+  if [ -n "$dbp" ] && [ "$(resolve_dir "$dbp")" = "$root/var/lib/palp" ] && [ "$(basename "$dbp")" = palp-sessions.db ]; then :
+  else bad "installed $cf: \"database\": \"$dbp\" is not in $root/var/lib/palp"; fi
+  grep -q '\.\./out/' "$f" && bad "installed $cf still leads into ../out/: $(grep -n '\.\./out/' "$f" | head -2)"
+  n=$((n + 1))
+done
+pkip=$(sed -n 's/.*"pki": *"\([^"]*\)".*/\1/p' "$cfgdir/server-classroom.json")
+bash "$root/share/palp/scripts/make-classroom-pki.sh" "$root/etc/palp/certs" classroom > "$work/cpki.log" 2>&1 \
+  || { bad "make-classroom-pki.sh into etc/palp/certs"; cat "$work/cpki.log"; }
+[ -n "$pkip" ] && [ "$(cd "$cfgdir" && cd "$pkip" 2>/dev/null && pwd)" = "$root/etc/palp/certs" ] \
+  || bad "installed server-classroom.json: \"pki\": \"$pkip\" is not $root/etc/palp/certs"
+for cf in server.json server-exercises.json server-classroom.json server-paper.json; do
+  out=$("$root/bin/palp-server" --config "$cfgdir/$cf" --check 2>&1) || bad "palp-server --config installed $cf --check: $out"
+done
+[ $fail -eq 0 ] && ok "the $n installed server configs keep their database in $root/var/lib/palp (server-classroom.json its PKI in etc/palp/certs), none leads into ../out/, each passes --check"
+rm -rf "$root/etc/palp"
+fail=$((fail | f0))
+
 # 3b. A secured classroom from the installed tree alone: the installed PKI script makes the
 # certificates, the installed server and client find Debian's DDS Security plugins.
 if bash "$root/share/palp/scripts/make-classroom-pki.sh" "$work/pki" classroom --trainees installed-sec \
