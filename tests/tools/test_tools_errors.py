@@ -134,9 +134,10 @@ def case_run_write(a, tmp):
         check(rc != 0 and "full_%s_%s.csv: cannot write it: No space left on device" % (which, which) in out
               and "step median" not in out, "palp-run with %s_%s.csv on a full disk exits %d, naming it: %s"
               % ("full_" + which, which, rc, out.strip()[-200:]))
+    # two levels missing: only one is created (as palp-server's log directory), so this still fails, saying why
     rc, out = run([a.run, scene_path, "--frames", "3", "--out", os.path.join(tmp, "no", "dir", "x"), "--quiet"])
-    check(rc != 0 and "no/dir/x_frames.csv: No such file or directory" in out,
-          "palp-run --out into a missing directory exits %d with the reason: %s" % (rc, out.strip()[-200:]))
+    check(rc != 0 and "no/dir/x_frames.csv: No such file or directory" in out and not os.path.exists(os.path.join(tmp, "no")),
+          "palp-run --out into a directory two levels missing exits %d with the reason: %s" % (rc, out.strip()[-200:]))
     # the summary on stdout to a full disk: written to nothing, so exit 1 and why
     with open("/dev/full", "w") as full:
         r = subprocess.run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001"], stdout=full,
@@ -147,6 +148,23 @@ def case_run_write(a, tmp):
     rc, out = run([a.run, scene_path, "--frames", "3", "--log-file", os.path.join(tmp, "no", "run.log")])
     check(rc == 2 and "cannot open it: No such file or directory" in out,
           "palp-run --log-file in a missing directory exits %d with the reason: %s" % (rc, out.strip()[-200:]))
+    # (session 81) the README's `--out out/run` in a fresh clone: the prefix's directory is missing and its
+    # parent exists. palp-run creates it (one level, as palp-server does its log's; 0777 & umask) and writes
+    # there; relative to its working directory too. It said "cannot write nodir/run_frames.csv".
+    old_umask = os.umask(0o027)
+    try:
+        rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--out",
+                       "nodir/run", "--quiet"], cwd=tmp)
+    finally:
+        os.umask(old_umask)
+    made = os.path.join(tmp, "nodir")
+    mode = os.stat(made).st_mode & 0o7777 if os.path.isdir(made) else None
+    lines = [sum(1 for _ in open(os.path.join(made, "run_%s.csv" % w))) for w in ("frames", "vertices")] \
+        if rc == 0 and mode is not None else []
+    check(rc == 0 and mode == 0o750 and lines == [4, 4],
+          "palp-run --out nodir/run (nodir missing) creates nodir/ with mode 0777 & umask 027 (%s) and writes both "
+          "CSVs, 4 lines each, exit %d (%s): %s" % (oct(mode) if mode is not None else "none", rc, lines,
+                                                    out.strip()[-200:]))
     # and a writable prefix: both files whole (a header and 3 frames), exit 0
     prefix = os.path.join(tmp, "ok")
     rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--out", prefix, "--quiet"])

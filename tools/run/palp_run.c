@@ -6,7 +6,8 @@
  *
  * PREFIX_frames.csv: time, top-vertex displacement, max displacement, volume,
  * pressure, applied and feedback force per frame; PREFIX_vertices.csv: the
- * displacement of every vertex per frame. A summary goes to stdout.
+ * displacement of every vertex per frame (PREFIX's directory is created if its parent exists). A summary
+ * goes to stdout.
  */
 #include <ctype.h>
 #include <errno.h>
@@ -14,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include "palp.h"
@@ -308,6 +310,19 @@ int main(int argc, char **argv) {
   if (!quiet)
     printf("palp-run: scene \"%s\", %d vertices, dt %.4g s, %d frames of %.4g s\n", s.name,
            s.world.mesh.vertex_count, s.world.dt, s.frames, s.frame_period);
+  /* The prefix's directory (README's `--out out/run` in a fresh clone, which has no out/) is created, one
+   * level only and with mode 0777 & umask, as palp-server creates its session log's; deeper missing
+   * directories stay an error, said by the CSV's open (until session 81 `--out nodir/run` failed:
+   * "cannot write nodir/run_frames.csv"). */
+  if (prefix) {
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s", prefix);
+    char *slash = strrchr(dir, '/');
+    if (slash && slash != dir) {
+      *slash = 0;
+      if (mkdir(dir, 0777) == 0) palp_log_info(&log, "created %s/", dir);
+    }
+  }
   for (int d = first; d <= last; ++d) {
     palp_scene sd = s;
     if (dist)
