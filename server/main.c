@@ -24,7 +24,8 @@ static void usage(FILE *f) {
   fprintf(f,
           "usage: palp-server [options]\n"
           "  --config PATH        server configuration (default <data>/config/server.json)\n"
-          "  --database PATH      override the config's \"database\" (the SQLite session log)\n"
+          "  --database PATH      override the config's \"database\" (the SQLite session log); also --db,\n"
+          "                       as palp-recorder and palp-review name it\n"
           "  --domain N           override domain_id\n"
           "  --server-name NAME   override server_name (identity on the domain; default the host name)\n"
           "  --server-number N    override server_number (0..4095; the high bits of every phantom/session id)\n"
@@ -163,7 +164,8 @@ int main(int argc, char **argv) {
     if (common < 0) return 2;
     if (common) continue;
     if (!strcmp(a, "--config") && v) config_path = argv[++i];
-    else if (!strcmp(a, "--database") && v) database = argv[++i];
+    /* --db: palp-recorder's and palp-review's name for the same file (docs/naming.md) */
+    else if ((!strcmp(a, "--database") || !strcmp(a, "--db")) && v) database = argv[++i];
     else if (!strcmp(a, "--server-name") && v) {
       if (!v[0] || strlen(v) >= 64) {
         fprintf(stderr, "palp-server: --server-name: 1 to 63 characters (got %zu)\n", strlen(v));

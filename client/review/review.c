@@ -57,7 +57,8 @@ static void usage(FILE *f) {
         "is a station's session number before it is a prefix. delete takes a whole uid or a station's\n"
         "number, never a prefix, and prints the uid it deleted.\n"
         "DATE is YYYY-MM-DD[THH:MM[:SS]] local time.\n"
-        "The database is --db, else $PALP_DB, else ./palp-sessions.db.\n"
+        "The database is --db, else $PALP_DB, else ./palp-sessions.db. --database is the same option\n"
+        "(palp-server's name for it).\n"
         "Errors are log lines (timestamp, level); tables and reports go to stdout.\n",
         REVIEW_COPY_MB_DEFAULT);
   palp_app_common_usage(f, REVIEW_OPTS);
@@ -532,7 +533,7 @@ static int review_main(int argc, char **argv) {
   if (!path || !*path) path = "palp-sessions.db";
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-review");
-  /* --db and the log options may come anywhere: take them out before the
+  /* --db (or --database) and the log options may come anywhere: take them out before the
    * command's own options are parsed. */
   for (int k = 1; k < argc; k++) {
     int c = k;
@@ -545,9 +546,10 @@ static int review_main(int argc, char **argv) {
       k--;
       continue;
     }
-    if (strcmp(argv[k], "--db")) continue;
+    /* --database: palp-server's name for the same file (docs/naming.md) */
+    if (strcmp(argv[k], "--db") && strcmp(argv[k], "--database")) continue;
     if (k + 1 >= argc) {
-      fprintf(stderr, "palp-review: --db needs a file\n");
+      fprintf(stderr, "palp-review: %s needs a file\n", argv[k]);
       return REVIEW_ERROR;
     }
     path = argv[k + 1];

@@ -1785,6 +1785,7 @@ static void renew_streams(recorder *r, palp_log *plog, dds_entity_t sub, const d
 static void usage(FILE *f) {
   fputs("usage: palp-recorder --db FILE [--domain N] [--dds-config FILE] [--duration S] [--max-mb MB]\n"
         "                     [--pki DIR --identity instructor/NAME]   (DDS Security; or PALP_PKI, PALP_IDENTITY)\n"
+        "--db FILE (also --database, as palp-server names it): the session log (SQLite).\n"
         "Records every classroom session seen on DDS into the session log until SIGINT/SIGTERM\n"
         "(or for S seconds). SIGHUP re-opens --log-file. --max-mb caps the log's file (0: no cap, or\n"
         ">= 1; at the cap it is full, as on a full disk: records lost are counted and said as they happen).\n",
@@ -1811,7 +1812,7 @@ int main(int argc, char **argv) {
       fprintf(stderr, "palp-recorder: %s needs a value\n", a);
       return 2;
     }
-    if (!strcmp(a, "--db")) db = argv[++i];
+    if (!strcmp(a, "--db") || !strcmp(a, "--database")) db = argv[++i]; /* palp-server's name (docs/naming.md) */
     else if (!strcmp(a, "--pki")) pki = argv[++i];
     else if (!strcmp(a, "--identity")) identity = argv[++i];
     else if (!strcmp(a, "--domain")) {

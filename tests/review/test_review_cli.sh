@@ -20,6 +20,12 @@ expect() { # expect DESCRIPTION PATTERN FILE
 }
 "$gen" "$db" "$testdir" || { echo "FAIL review_gen"; exit 1; }
 R() { "$review" --db "$db" "$@"; }
+# --database, palp-server's name for the same file, is taken too (session 81, docs/naming.md): the same list
+"$review" --database "$db" list > "$dir/list-database.txt" 2>&1; rc=$?
+R list > "$dir/list-db.txt" 2>&1
+if [ $rc -eq 0 ] && cmp -s "$dir/list-database.txt" "$dir/list-db.txt" && grep -q alice "$dir/list-db.txt"; then
+  ok "palp-review --database FILE list: exit 0, the same sessions as --db FILE ($(wc -l < "$dir/list-db.txt") lines)"
+else bad "palp-review --database FILE list: exit $rc:"; cat "$dir/list-database.txt"; fi
 
 R show class-alice-1 > "$dir/show-alice.txt" 2>&1 || bad "show alice exit status"
 expect "show: the expert found 2 of 2" "sensitivity +2 of 2 lesions found \(100%\) +pass" "$dir/show-alice.txt"
