@@ -40,7 +40,12 @@ int palp_input_file_read(const char *path, size_t max_bytes, char **out, size_t 
     return say(why, whylen, PALP_EIO, msg);
   }
   struct stat st;
-  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+  if (fstat(fd, &st) != 0) {
+    snprintf(msg, sizeof msg, "cannot read: %s", strerror(errno));
+    close(fd);
+    return say(why, whylen, PALP_EIO, msg);
+  }
+  if (!S_ISREG(st.st_mode)) {
     close(fd);
     return say(why, whylen, PALP_EINVAL, S_ISDIR(st.st_mode) ? "a directory, not a file" : "not a regular file");
   }
