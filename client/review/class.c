@@ -133,8 +133,8 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     class_strips(m, strips, sizeof strips);
     fprintf(tty, "%-12.12s %-30.30s %-10s %7s %5d %6.1f%% %6.1f%% %6.1f%% %-15s %-9s %7.1f %6.1f %-6s %10s %s\n",
            rows[i].s.trainee, rows[i].s.uid, t, found, m->false_positives, 100 * m->coverage[0],
-           100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), strips, m->duration, m->score,
-           m->pass ? "pass" : "fail", rows[i].outside,
+           100 * m->coverage[1], 100 * m->coverage[2], palp_pattern_name(m->pattern), strips, m->duration,
+           palp_shown_tenths(m->score, NAN, m->pass), m->pass ? "pass" : "fail", rows[i].outside,
            rows[i].grade[0] ? rows[i].grade : "-");
   }
   /* Attempts that were not blind (docs/assessment.md, "Debrief"), under the table they qualify. */
@@ -205,7 +205,8 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
       if (done[i]) continue;
       int k = 0;
       for (int j = i; j < nr; j++)
-        if (!done[j] && !strcmp(rows[j].s.trainee, rows[i].s.trainee)) done[j] = 1, sc[k++] = rows[j].a.r.score;
+        if (!done[j] && !strcmp(rows[j].s.trainee, rows[i].s.trainee))
+          done[j] = 1, sc[k++] = palp_shown_tenths(rows[j].a.r.score, NAN, rows[j].a.r.pass);
       fputs("<tr class=\"progress-row\" data-trainee=\"", f);
       html_str(f, rows[i].s.trainee);
       fputs("\"><td class=\"t\">", f);
