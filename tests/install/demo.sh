@@ -123,6 +123,11 @@ fay_csv=$(awk -F, 'NR > 1 { printf "%s%.1f", n++ ? ", " : "", $24 }' "$out/demo/
 fay_rec=$(sed -n 's/^  medium  *scores \(.*\); passed 0 of 2; latest .* fail$/\1/p' "$txt")
 check "fay's record lists her two attempts at medium with the class report's scores (record: ${fay_rec:-none}; class CSV: ${fay_csv:-none})" \
   "grep -q '^trainee fay: 2 sessions assessed, ' '$txt' && [ -n \"$fay_rec\" ] && [ \"$fay_rec\" = \"$fay_csv\" ] && [ \$(grep -c 'class=\"record-row\"' '$out/demo/record-fay.html') -eq 2 ]"
+# ... and the class table printed on the terminal gives the same (session 81: it printed a failing 18.05
+# as 18.1 where the CSV, the record and her station said 18.0)
+fay_tty=$(awk '$1 == "fay" && $2 ~ /-[0-9]+$/ && $(NF - 3) ~ /^[0-9.]+$/ { printf "%s%s", n++ ? ", " : "", $(NF - 3) }' "$txt")
+check "the class table on the terminal gives fay's scores as the class CSV does (table: ${fay_tty:-none}; CSV: ${fay_csv:-none})" \
+  "[ -n \"$fay_tty\" ] && [ \"$fay_tty\" = \"$fay_csv\" ]"
 # The logging machine's copy (palp-recorder as instructor ines, session 60): it ran secured, lost
 # nothing, and the review of its own file assesses fay's two attempts as the server's log does: the
 # same lesions, found, marks and false marks, the score within 3 points (its coverage takes a disc
