@@ -556,14 +556,17 @@ int main(void) {
     const unsigned char *g = pgid.v;
     snprintf(pp_text, sizeof pp_text, "participant %02x%02x%02x%02x:%02x%02x%02x%02x:%02x%02x%02x%02x", g[0], g[1], g[2],
              g[3], g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11]);
-    test_sleep(0.6); /* > log_interval: the refusal's line is not held back by an earlier one */
+    /* 1.1 s apart, > 2 x log_interval: each refusal gets a line of its own (refuse_identity says one a
+     * log_interval) even when the server takes one of them up to 0.6 s late (a fresh clone's run of the
+     * suite had the dispose's refusal held back at 0.6 s apart, session 81) */
+    test_sleep(1.1);
     session_request(rq_w, a.station_id, "trainee-a", palp_OP_LEAVE, palp_ROLE_TRAINEE, sid, 1);
-    test_sleep(0.6);
+    test_sleep(1.1);
     palp_SessionRequest key;
     memset(&key, 0, sizeof key);
     snprintf(key.station_id, sizeof key.station_id, "%s", a.station_id);
     const int disposed = dds_dispose(rq_w, &key) == 0;
-    test_sleep(0.6);
+    test_sleep(1.1);
     /* and a JOIN under her id with another request number (until session 80: "re-joined", her
      * session closed) */
     session_request(rq_w, a.station_id, "trainee-a", palp_OP_JOIN, palp_ROLE_OBSERVER, sid, 99);
