@@ -4,6 +4,8 @@
  * hexadecimal string: JSON readers commonly hold numbers as doubles and would round it. */
 #include <errno.h>
 #include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -13,6 +15,19 @@
 #include "grades.h"
 #include "palp_app.h"
 #include "review.h"
+
+/* A number as JSON: 17 significant digits, or null for one not finite (a damaged log's +Inf or NaN
+ * was written "inf"/"nan", and the export was not JSON; session 81). Returned by value: its text
+ * lives to the end of the full expression that calls it (C11 6.2.4), so several fit one fprintf. */
+typedef struct jnum {
+  char s[32];
+} jnum;
+static jnum jn(double v) {
+  jnum j;
+  if (isfinite(v)) snprintf(j.s, sizeof j.s, "%.17g", v);
+  else snprintf(j.s, sizeof j.s, "null");
+  return j;
+}
 
 typedef struct exp_ctx {
   FILE *f;
@@ -37,11 +52,11 @@ static int frame_cb(void *u, const palp_db_frame *f) {
             f->top_disp_m, f->max_disp_m, f->volume_m3, f->pressure_pa, f->contact_force_n, f->state_hash);
   else
     fprintf(x->f,
-            "{\"frame\": %" PRId64 ", \"sim_time_s\": %.17g, \"top_disp_m\": %.17g, \"max_disp_m\": %.17g, "
-            "\"volume_m3\": %.17g, \"pressure_pa\": %.17g, \"contact_force_n\": %.17g, "
+            "{\"frame\": %" PRId64 ", \"sim_time_s\": %s, \"top_disp_m\": %s, \"max_disp_m\": %s, "
+            "\"volume_m3\": %s, \"pressure_pa\": %s, \"contact_force_n\": %s, "
             "\"state_hash\": \"0x%016" PRIx64 "\"}",
-            f->frame, f->sim_time_s, f->top_disp_m, f->max_disp_m, f->volume_m3, f->pressure_pa,
-            f->contact_force_n, f->state_hash);
+            f->frame, jn(f->sim_time_s).s, jn(f->top_disp_m).s, jn(f->max_disp_m).s, jn(f->volume_m3).s,
+            jn(f->pressure_pa).s, jn(f->contact_force_n).s, f->state_hash);
   return 0;
 }
 
@@ -58,18 +73,20 @@ static int contact_cb(void *u, const palp_db_contact *c) {
             c->def.offset_dir.y, c->def.offset_dir.z);
     return 0;
   }
-  fprintf(x->f, "{\"frame\": %" PRId64 ", \"sim_time_s\": %.17g, \"slot\": %d, \"op\": \"%s\", \"kind\": \"%s\"",
-          c->frame, c->sim_time_s, c->slot, op_name(c->op), force ? "force" : "finger");
+  fprintf(x->f, "{\"frame\": %" PRId64 ", \"sim_time_s\": %s, \"slot\": %d, \"op\": \"%s\", \"kind\": \"%s\"",
+          c->frame, jn(c->sim_time_s).s, c->slot, op_name(c->op), force ? "force" : "finger");
   if (c->op != PALP_DB_OP_REMOVE) {
-    fprintf(x->f, ", \"center_m\": [%.17g, %.17g, %.17g]", c->center_m.x, c->center_m.y, c->center_m.z);
-    if (force) fprintf(x->f, ", \"force_n\": [%.17g, %.17g, %.17g]", c->force_n.x, c->force_n.y, c->force_n.z);
-    else fprintf(x->f, ", \"radius_m\": %.17g", c->radius_m);
+    fprintf(x->f, ", \"center_m\": [%s, %s, %s]", jn(c->center_m.x).s, jn(c->center_m.y).s, jn(c->center_m.z).s);
+    if (force)
+      fprintf(x->f, ", \"force_n\": [%s, %s, %s]", jn(c->force_n.x).s, jn(c->force_n.y).s, jn(c->force_n.z).s);
+    else fprintf(x->f, ", \"radius_m\": %s", jn(c->radius_m).s);
     if (force && c->def.distribution)
       fprintf(x->f,
-              ", \"distribution\": %d, \"patch_area_m2\": %.17g, \"sigma_fraction\": %.17g, "
-              "\"offset_fraction\": %.17g, \"offset_dir\": [%.17g, %.17g, %.17g]",
-              (int)c->def.distribution, c->def.patch_area, c->def.sigma_fraction, c->def.offset_fraction,
-              c->def.offset_dir.x, c->def.offset_dir.y, c->def.offset_dir.z);
+              ", \"distribution\": %d, \"patch_area_m2\": %s, \"sigma_fraction\": %s, "
+              "\"offset_fraction\": %s, \"offset_dir\": [%s, %s, %s]",
+              (int)c->def.distribution, jn(c->def.patch_area).s, jn(c->def.sigma_fraction).s,
+              jn(c->def.offset_fraction).s, jn(c->def.offset_dir.x).s, jn(c->def.offset_dir.y).s,
+              jn(c->def.offset_dir.z).s);
   }
   fputc('}', x->f);
   return 0;
@@ -80,8 +97,8 @@ static int feedback_cb(void *u, int64_t frame, int slot, palp_vec3 f) {
   sep(x);
   if (x->csv) fprintf(x->f, "%" PRId64 ",%d,%.17g,%.17g,%.17g\n", frame, slot, f.x, f.y, f.z);
   else
-    fprintf(x->f, "{\"frame\": %" PRId64 ", \"slot\": %d, \"force_n\": [%.17g, %.17g, %.17g]}", frame, slot, f.x,
-            f.y, f.z);
+    fprintf(x->f, "{\"frame\": %" PRId64 ", \"slot\": %d, \"force_n\": [%s, %s, %s]}", frame, slot, jn(f.x).s,
+            jn(f.y).s, jn(f.z).s);
   return 0;
 }
 
@@ -96,7 +113,7 @@ static int event_cb(void *u, double wall, int64_t frame, const char *kind, const
     fputc('\n', x->f);
     return 0;
   }
-  fprintf(x->f, "{\"wall_unix_s\": %.17g, \"frame\": %" PRId64 ", \"kind\": ", wall, frame);
+  fprintf(x->f, "{\"wall_unix_s\": %s, \"frame\": %" PRId64 ", \"kind\": ", jn(wall).s, frame);
   json_str(x->f, kind);
   fprintf(x->f, ", \"count\": %" PRId64 ", \"detail\": ", count);
   json_str(x->f, detail);
@@ -117,7 +134,7 @@ static int note_cb(void *u, double wall, const char *author, const char *text, c
     fputc('\n', x->f);
     return 0;
   }
-  fprintf(x->f, "{\"wall_unix_s\": %.17g, \"author\": ", wall);
+  fprintf(x->f, "{\"wall_unix_s\": %s, \"author\": ", jn(wall).s);
   json_str(x->f, author);
   fputs(", \"text\": ", x->f);
   json_str(x->f, text);
@@ -233,9 +250,9 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     json_str(f, s->phantom_id);
     fputs(", \"phantom_name\": ", f);
     json_str(f, s->phantom_name);
-    fprintf(f, ", \"tick_hz\": %.17g, \"dt_s\": %.17g, \"start_unix_s\": %.17g, \"end_unix_s\": ", s->tick_hz,
-            s->dt_s, s->start_unix_s);
-    if (s->end_reason[0]) fprintf(f, "%.17g, \"end_reason\": ", s->end_unix_s), json_str(f, s->end_reason);
+    fprintf(f, ", \"tick_hz\": %s, \"dt_s\": %s, \"start_unix_s\": %s, \"end_unix_s\": ", jn(s->tick_hz).s,
+            jn(s->dt_s).s, jn(s->start_unix_s).s);
+    if (s->end_reason[0]) fprintf(f, "%s, \"end_reason\": ", jn(s->end_unix_s).s), json_str(f, s->end_reason);
     else fputs("null, \"end_reason\": null", f);
     fputs(", \"end_detail\": ", f);
     json_str(f, s->end_detail);

@@ -223,6 +223,22 @@ PY2
   then ok "JSON export $k: strict JSON in strict UTF-8, the values as stored"
   else bad "JSON export $k: $(grep -a '"scene"\|"trainee"' "$dir/json.json" | cut -c1-120 | od -c | head -6)"; fi
 done
+# ... and a frame's pressure +Inf and top displacement -Inf (a damaged log; SQLite reads 9e999 as Inf):
+# the JSON export writes null for each (it wrote "inf", which no JSON reader takes; session 81)
+copy jinf
+sqlite3 "$dir/jinf.db" "UPDATE frame SET pressure_pa = 9e999, top_disp_m = -9e999 WHERE frame = (SELECT min(frame) FROM frame)"
+"$review" --db "$dir/jinf.db" export "$uid" --format json --out "$dir/jinf.json" > "$dir/jinf.out" 2>&1 || bad "JSON export of infinite values: $(cat "$dir/jinf.out")"
+if python3 - "$dir/jinf.json" <<'PY2'
+import json, sys
+def no_constant(name):
+    raise ValueError("non-standard constant " + name)
+d = json.loads(open(sys.argv[1], "rb").read().decode("utf-8"), parse_constant=no_constant)
+f = d["frames"][0]
+assert f["pressure_pa"] is None and f["top_disp_m"] is None, f
+assert all(isinstance(g["pressure_pa"], (int, float)) for g in d["frames"][1:]), "the other frames values as numbers"
+PY2
+then ok "JSON export: a frame's infinite values written null, the document strict JSON"
+else bad "JSON export of infinite values: $(grep -a -m1 'pressure_pa' "$dir/jinf.json" | cut -c1-200)"; fi
 
 # Smaller ones (session 81, found by review): the finger samples unreadable (their table gone: SQLite
 # says "no such table"): show and report exit 2 as export, trainee and class do (they exited 0); a JSON
