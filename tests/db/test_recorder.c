@@ -34,6 +34,7 @@
 #include "sqlite_util.h"
 #include "palp.h"
 #include "palp_dds.h"
+#include "../proc_rss.h"
 
 #define DOMAIN 161
 #define SESSION 7u
@@ -42,17 +43,6 @@
 #define DANA " session_id = (SELECT id FROM session WHERE trainee = 'dana')"
 
 /* A process's resident set [kB] (/proc/PID/status VmRSS), or -1. */
-static long rss_kb(pid_t pid) {
-  char path[64], line[256];
-  snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
-  FILE *f = fopen(path, "r");
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
-}
-
 int main(int argc, char **argv) {
   if (argc < 5) {
     fprintf(stderr, "usage: %s TMPDIR PALP_RECORDER PALP_REVIEW DDS_CONFIG\n", argv[0]);
@@ -249,7 +239,7 @@ int main(int argc, char **argv) {
    * +8.45-8.49 MB, +27.3 MB with the renewal disabled (measured 2026-12-06). */
   dds_entity_t w_find = palp_dds_create_writer(pub, t[PALP_TOPIC_FINDING], PALP_TOPIC_FINDING);
   REQUIRE(wait_matched(w_find, 1, 20) == 0, "the findings writer never matched the recorder");
-  const long rss0 = rss_kb(pid);
+  const long rss0 = palp_test_rss_kb(pid);
   int flooded = 0;
   for (uint32_t k = 0; k < 20000; k++) {
     palp_Contact c;
@@ -271,7 +261,7 @@ int main(int argc, char **argv) {
     }
   }
   sleep_ms(1500);
-  const long rss1 = rss_kb(pid);
+  const long rss1 = palp_test_rss_kb(pid);
   printf("flood: %d samples and disposes of made-up keys; the recorder's RSS %ld kB -> %ld kB (+%ld kB)\n", flooded,
          rss0, rss1, rss1 - rss0);
   /* Under AddressSanitizer, its quarantine off, its allocator and shadow add ~4.7 MB (+8152 kB measured):

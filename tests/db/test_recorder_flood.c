@@ -36,6 +36,7 @@
 #include "sqlite_util.h"
 #include "palp.h"
 #include "palp_dds.h"
+#include "../proc_rss.h"
 
 #define DOMAIN 177
 #define SESSION 21u
@@ -47,17 +48,6 @@
 #define THIS_SESSION " session_id = (SELECT id FROM session WHERE trainee = 'fay')"
 
 /* A process's resident set [kB] (/proc/PID/status VmRSS), or -1. */
-static long rss_kb(pid_t pid) {
-  char path[64], line[256];
-  snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
-  FILE *f = fopen(path, "r");
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
-}
-
 /* `n` disposes of made-up contact keys (sessions from `first` on, never open), each a key no filter sees. */
 static int dispose_contacts(dds_entity_t w, uint32_t first, uint32_t n) {
   int done = 0;
@@ -123,7 +113,7 @@ int main(int argc, char **argv) {
   palp_Phantom ph = test_phantom(PHANTOM, "flooded dome", &md, &mesh, rest, 1000);
   REQUIRE(dds_write(w_cat, &ph) == 0, "catalogue");
   sleep_ms(500); /* the recorder settled with its phantom before the RSS is read */
-  const long rss0 = rss_kb(pid);
+  const long rss0 = palp_test_rss_kb(pid);
 
   /* The flood, its writers alive to the end: each key an instance while they live. */
   int flooded = dispose_contacts(f_con, 500000, CONTACT_FLOOD);
@@ -176,7 +166,7 @@ int main(int argc, char **argv) {
   rel.seq = SAMPLES + 1;
   dds_write(w_con, &rel);
   sleep_ms(300);
-  const long rss1 = rss_kb(pid);
+  const long rss1 = palp_test_rss_kb(pid);
   ss.phase = palp_PHASE_CLOSED;
   ss.duration = written_s;
   snprintf(ss.reason, sizeof ss.reason, "trainee station left");

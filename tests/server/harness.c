@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include "input.h"
+#include "../proc_rss.h"
 
 int palp_test_failures;
 int palp_test_last;
@@ -161,12 +162,4 @@ int test_latest_guard(dds_entity_t r, double wait, palp_ServerGuard *out) {
   return 0;
 }
 
-long test_rss_kb(void) {
-  FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
-}
+long test_rss_kb(void) { return palp_test_rss_kb(0); }

@@ -31,6 +31,7 @@
 #include "check.h"
 #include "hub.h"
 #include "palp_dds.h"
+#include "../proc_rss.h"
 
 #define DOMAIN 178
 #define SESSION 31u
@@ -51,16 +52,6 @@
 static void sleep_ms(int ms) {
   struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
   nanosleep(&ts, NULL);
-}
-
-static long rss_kb(void) {
-  FILE *f = fopen("/proc/self/status", "r");
-  char line[256];
-  long kb = -1;
-  while (f && fgets(line, sizeof line, f))
-    if (sscanf(line, "VmRSS: %ld kB", &kb) == 1) break;
-  if (f) fclose(f);
-  return kb;
 }
 
 static int wait_matched(dds_entity_t w, double timeout_s) {
@@ -170,7 +161,7 @@ int main(void) {
 
   palp_web_hub_stats st0, st1;
   palp_web_hub_stats_get(h, &st0);
-  const long rss0 = rss_kb();
+  const long rss0 = palp_test_rss_kb(0);
   int flooded = flood(down[1], up[0]);
   palp_SessionState ss;
   memset(&ss, 0, sizeof ss);
@@ -200,7 +191,7 @@ int main(void) {
   }
   sleep_ms(200);
   const counts c1 = taken(h);
-  const long rss1 = rss_kb();
+  const long rss1 = palp_test_rss_kb(0);
   palp_web_hub_stats_get(h, &st1);
   const uint64_t got[4] = {c1.contacts - c0.contacts, c1.local_models - c0.local_models,
                            c1.finger_samples - c0.finger_samples, c1.deformations - c0.deformations};
