@@ -722,6 +722,20 @@ static void test_refused(void) {
   palp_db_close(db);
 }
 
+/* The disk stalled as a reviewer stalled it (2026-12-07): another connection holds the file in BEGIN
+ * EXCLUSIVE, so the writer's worker waits in its busy handler and retires nothing, until release_disk. */
+static sqlite3 *stall_disk(const char *path) {
+  sqlite3 *lock = NULL;
+  REQUIRE(sqlite3_open(path, &lock) == SQLITE_OK && sqlite3_exec(lock, "BEGIN EXCLUSIVE", NULL, NULL, NULL) == SQLITE_OK,
+          "another connection holds the file: %s", sqlite3_errmsg(lock));
+  return lock;
+}
+
+static void release_disk(sqlite3 *lock) {
+  sqlite3_exec(lock, "COMMIT", NULL, NULL, NULL);
+  sqlite3_close(lock);
+}
+
 /* --- a session's end is taken while meshes fill the queue's bytes ----------------------------------
  * The disk stalled as the reviewer stalled it (2026-12-07): another connection holds BEGIN EXCLUSIVE,
  * so the worker waits in its busy handler (5 s) and retires nothing. Meshes of 1,000 vertices (24 kB),
@@ -740,9 +754,7 @@ static void test_control_bytes(void) {
   palp_db_session s;
   REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "begin");
   REQUIRE(palp_db_writer_flush(w, 10) == 0, "flush the begin");
-  sqlite3 *lock;
-  REQUIRE(sqlite3_open(p, &lock) == SQLITE_OK && sqlite3_exec(lock, "BEGIN EXCLUSIVE", NULL, NULL, NULL) == SQLITE_OK,
-          "another connection holds the file: %s", sqlite3_errmsg(lock));
+  sqlite3 *lock = stall_disk(p);
   enum { NV = 1000 };
   static palp_vec3 pos[NV];
   int meshes = 0, refused = 0, frame = 0;
@@ -778,8 +790,7 @@ static void test_control_bytes(void) {
          big_taken);
   CHECK(big_refused && big_taken >= 1 && big_taken <= 16, "256 kB events over the byte cap: %d taken, then refused "
         "(%d): the reserve is bounded (4 MiB)", big_taken, big_refused);
-  sqlite3_exec(lock, "COMMIT", NULL, NULL, NULL);
-  sqlite3_close(lock);
+  release_disk(lock);
   palp_db_writer_flush(w, 20);
   palp_db_writer_close(w);
   sqlite3 *h;
@@ -816,9 +827,7 @@ static void test_end_kept(void) {
     REQUIRE(palp_db_log_session_begin(w, &d, &s[i]) == 0, "begin %d", i + 1);
   }
   REQUIRE(palp_db_writer_flush(w, 10) == 0, "flush the begins");
-  sqlite3 *lock;
-  REQUIRE(sqlite3_open(p, &lock) == SQLITE_OK && sqlite3_exec(lock, "BEGIN EXCLUSIVE", NULL, NULL, NULL) == SQLITE_OK,
-          "another connection holds the file: %s", sqlite3_errmsg(lock));
+  sqlite3 *lock = stall_disk(p);
   int small = 0, refused = 0;
   for (int i = 0; i < 5000 && !refused; i++) {
     const int rc = palp_db_log_event(w, 0, PALP_DB_EVENT_INFO, -1, "x", 1);
@@ -842,8 +851,7 @@ static void test_end_kept(void) {
   palp_db_writer_stats_get(w, &st);
   CHECK(st.shed == 2, "the writer shed exactly the refused event and the refused begin: %lld (want 2)",
         (long long)st.shed);
-  sqlite3_exec(lock, "COMMIT", NULL, NULL, NULL);
-  sqlite3_close(lock);
+  release_disk(lock);
   palp_db_writer_flush(w, 20);
   palp_db_writer_close(w);
   sqlite3 *h;
