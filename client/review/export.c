@@ -229,7 +229,7 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
         if (stored != PALP_DB_ENOTFOUND)
           snprintf(err, sizeof err, "the session_metrics table could not be read: %s", palp_db_errmsg(db));
         palp_log_error(log, "export metrics: %s", err);
-        if (f != stdout) fclose(f);
+        review_abandon_out(f);
         return REVIEW_ERROR;
       } else rc = 1; /* computed: free it below */
       review_metrics_csv_header(f);
@@ -270,14 +270,16 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
       if ((rc = json_array(db, &x, arrays[k], k == T_NOTES, k, s->id))) table = arrays[k];
     fputs("}\n", f);
   }
-  const int werr = review_finish_output(f) != 0 ? errno : 0;
+  const int to_stdout = f == stdout;
+  const int werr = review_close_out(f) != 0 ? errno : 0;
   if (rc) { /* which table, and why: the file holds what came before (2026-12-06: the notes ended there silently) */
     palp_log_error(log, "export: the %s could not be read: %s (the export is incomplete)", table,
                    palp_db_errmsg(db));
     return REVIEW_ERROR;
   }
   if (werr) {
-    palp_log_error(log, "export: write error: %s", strerror(werr));
+    if (to_stdout) palp_log_error(log, "export: standard output: %s (the export is incomplete)", strerror(werr));
+    else palp_log_error(log, "export: %s: %s (not written; a file already there is kept)", out_path, strerror(werr));
     return REVIEW_ERROR;
   }
   return REVIEW_OK;

@@ -485,22 +485,6 @@ static long long copy_max_bytes(palp_log *log) {
   return mb * 1048576;
 }
 
-/* The log the command reads: the output files are never it (review_fopen_out). */
-static const char *review_db_path;
-
-FILE *review_fopen_out(palp_log *log, const char *path) {
-  char wal[PATH_MAX], shm[PATH_MAX];
-  const char *p = review_db_path ? review_db_path : "";
-  snprintf(wal, sizeof wal, "%s-wal", p);
-  snprintf(shm, sizeof shm, "%s-shm", p);
-  const char *const keep[] = {review_db_path, wal, shm};
-  FILE *f = palp_app_fopen_private_except(path, keep, review_db_path ? 3 : 0);
-  if (!f && errno == EEXIST)
-    palp_log_error(log, "%s is the session log being read (%s, or its -wal or -shm): not overwritten; name another "
-                   "file", path, p);
-  return f;
-}
-
 /* ---- migrate --------------------------------------------------------------------------- */
 /* The one command that only upgrades: what the read-only commands name for a log too large to copy.
  * palp_db_open upgrades in one transaction (a crash leaves the old schema or the new one). */
@@ -588,7 +572,7 @@ static int review_main(int argc, char **argv) {
     return REVIEW_ERROR;
   }
   if (!strcmp(cmd, "migrate")) return cmd_migrate(&log, path, argc - i);
-  review_db_path = path;
+  review_out_protect(path);
   /* Only these write to the log (and so may upgrade it in place); the rest read it read-only, and so
    * does a prune's dry run (since session 81: it upgraded an older palp's log in place). */
   int dry_run = 0;

@@ -7,6 +7,7 @@
 #include "palp_db.h"
 #include "palp_log.h"
 #include "review_util.h"
+#include "out_file.h"
 
 /* Exit codes: 0 ok, 1 the check failed (replay mismatch), 2 bad input or an error. */
 enum { REVIEW_OK = 0, REVIEW_MISMATCH = 1, REVIEW_ERROR = 2 };
@@ -15,10 +16,6 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
                   const char *out_path);
 int review_replay(palp_log *log, palp_db *db, const palp_db_session_info *s, int verbose);
 int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, const char *out_path);
-/* Opens an output file (--out, --csv) as palp_app_fopen_private does (0600, an existing one made 0600),
- * refusing the session log itself and its -wal and -shm (said, naming the file; errno EEXIST): before
- * session 81, "report S --out sessions.db" truncated the log it read. review.c. */
-FILE *review_fopen_out(palp_log *log, const char *path);
 
 /* palp-review class --exercise NAME [--since DATE] --out FILE.html [--csv FILE] (class.c). */
 int review_class(palp_log *log, palp_db *db, int argc, char **argv);

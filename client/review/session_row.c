@@ -88,7 +88,8 @@ int review_rows_csv(palp_log *log, const char *cmd, palp_db *db, const char *pat
   }
   review_metrics_csv_header(c);
   for (int i = 0; i < n; i++) review_metrics_csv_row(c, db, &rows[i].s, &rows[i].a, rows[i].outside_s);
-  if (review_finish_output(c) == 0) return 0;
-  palp_log_error(log, "%s: %s: %s (the CSV is incomplete)", cmd, c == stdout ? "standard output" : path, strerror(errno));
+  if (review_close_out(c) == 0) return 0;
+  palp_log_error(log, "%s: %s: %s (%s)", cmd, c == stdout ? "standard output" : path, strerror(errno),
+                 c == stdout ? "the CSV is incomplete" : "not written; a file already there is kept");
   return -1;
 }

@@ -291,6 +291,26 @@ for cmd in class trainee; do
   if [ $rc = 2 ] && grep -q "$cmd: standard output: No space left on device" "$dir/full.err"; then ok "$cmd --csv - > /dev/full: exit 2, said"
   else bad "$cmd --csv - > /dev/full: exit $rc"; cat "$dir/full.err"; fi
 done
+# A write that fails half way over a report already there (session 82): the report is written beside
+# its name and renamed over it only when whole, so the old one is kept, byte for byte, and no
+# temporary file is left. RLIMIT_FSIZE (ulimit -f, in 512-byte blocks; SIGXFSZ ignored so that write()
+# says EFBIG) stops every write at 64 KiB: above the log's 32 KiB -shm, below both pages (the session's
+# 300 KiB, the class's 560 KiB; this log's exports are smaller). export and the CSVs take the same
+# review_fopen_out and review_close_out (client/review/out_file.c).
+cp "$dir/alice.html" "$dir/kept.html"
+for args in "report class-alice-1 --out $dir/kept.html" "class --exercise test-two-lumps --out $dir/kept.html"; do
+  # shellcheck disable=SC2086
+  (trap '' XFSZ; ulimit -f 128; R $args) > /dev/null 2> "$dir/fsize.err"; rc=$?
+  if [ $rc = 2 ] && grep -q ": File too large (not written; a file already there is kept)" "$dir/fsize.err" &&
+     cmp -s "$dir/kept.html" "$dir/alice.html" && [ -z "$(find "$dir" -name '*.palp-*')" ]; then
+    ok "$args, files limited to 64 KiB: exit 2, said, the file there before kept byte for byte, no temporary left"
+  else bad "$args under ulimit -f 128: exit $rc, $(wc -c < "$dir/kept.html") bytes kept of $(wc -c < "$dir/alice.html"):"
+    cat "$dir/fsize.err"; find "$dir" -name '*.palp-*'; fi
+done
+R report class-alice-1 --out "$dir/kept.html" > /dev/null 2>&1 || bad "report over kept.html"
+if [ "$(stat -c %a "$dir/kept.html")" = 600 ] && cmp -s "$dir/kept.html" "$dir/alice.html"; then
+  ok "report over an existing page: renamed into place, mode 0600, the same bytes as the first"
+else bad "report over kept.html: mode $(stat -c %a "$dir/kept.html")"; fi
 # what list and show print, on a full disk (2026-12-06, found by review: exit 0, the text lost unsaid)
 for args in "list" "show class-alice-1"; do
   # shellcheck disable=SC2086
