@@ -1203,10 +1203,12 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
    * the helper had finished it waited for it (docs/haptics.md), and how many rebuilds
    * were made on the tick because the factor reached its stability margin before its
    * due frame (palp_world_health.margin_rebuilds, ~0.5 ms each). */
-  if (s->stats.overruns > 0 || s->stats.factor_waits > 0)
-    palp_log_info(srv->log, "session %u: %llu of %llu ticks overran; %llu tangent rebuilds off the tick, %llu waited "
-                            "for (%.1f ms in all), %lld made on the tick at the stability margin", s->id,
+  if (s->stats.overruns > 0 || s->stats.skipped > 0 || s->stats.factor_waits > 0)
+    palp_log_info(srv->log, "session %u: %llu of %llu steps late, %llu tick slots skipped behind schedule; %llu "
+                            "tangent rebuilds off the tick, %llu waited for (%.1f ms in all), %lld made on the tick "
+                            "at the stability margin", s->id,
                   (unsigned long long)s->stats.overruns, (unsigned long long)s->stats.ticks,
+                  (unsigned long long)s->stats.skipped,
                   (unsigned long long)s->stats.factor_jobs, (unsigned long long)s->stats.factor_waits,
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
   /* What the network's jitter cost: the delay the device samples were played out at
@@ -2465,7 +2467,7 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   }
   if (nrates == 0) rates[nrates++] = srv->cfg.tick_rate_hz;
   srv->ticker = palp_srv_ticker_create_rates(srv->cfg.tick_threads, rates, nrates, srv->cfg.max_sessions,
-                                             srv->cfg.tick_priority, &rt_ok, rc);
+                                             srv->cfg.tick_priority, srv->cfg.status_rate_hz, &rt_ok, rc);
   if (!srv->ticker) {
     fail(err, errlen, "cannot start the tick threads: %s", palp_strerror(*rc));
     goto fail;
@@ -2620,10 +2622,10 @@ static void print_row(FILE *out, const palp_srv_session_summary *s, const char *
   for (int r = 0; r < PALP_SRV_REJ_COUNT; r++) rej += s->rejected[r];
   /* names printable: the table goes to the log file too, and a trainee's name from the network with a
    * newline in it began a forged line there (until 2026-12-07) */
-  fprintf(out, "%-7u %-16.16s %-*.*s %8.2f %9llu %8.2f %9.2f %9llu %8llu %8llu  %s\n", s->info.session_id,
+  fprintf(out, "%-7u %-16.16s %-*.*s %8.2f %9llu %8.2f %9.2f %9llu %8llu %8llu %8llu  %s\n", s->info.session_id,
           PALP_PRINTABLE(s->info.trainee_name), pw, pw, PALP_PRINTABLE(s->info.phantom_name), s->duration, (unsigned long long)s->contact_samples,
           s->peak_force, s->peak_displacement * 1e3, (unsigned long long)s->ticks,
-          (unsigned long long)s->overruns, (unsigned long long)rej, state);
+          (unsigned long long)s->overruns, (unsigned long long)s->skipped, (unsigned long long)rej, state);
 }
 
 /* A column width *w grown to fit name, at most 44 characters. */
@@ -2652,8 +2654,9 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
     palp_srv_session_info_fill(srv->sessions[i], &info);
     widen_to(&pw, info.phantom_name);
   }
-  fprintf(out, "%-7s %-16s %-*s %8s %9s %8s %9s %9s %8s %8s  %s\n", "session", "trainee", pw, "phantom", "dur[s]",
-          "samples", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "rejected", "closed because");
+  /* "late": of its ticks (steps taken); "skipped": slots its group dropped, no step taken (session 82) */
+  fprintf(out, "%-7s %-16s %-*s %8s %9s %8s %9s %9s %8s %8s %8s  %s\n", "session", "trainee", pw, "phantom", "dur[s]",
+          "samples", "Fmax[N]", "dmax[mm]", "ticks", "late", "skipped", "rejected", "closed because");
   if (srv->sessions_forgotten)
     fprintf(out, "(%llu older closed sessions not kept)\n", (unsigned long long)srv->sessions_forgotten);
   for (int i = 0; i < srv->closed_count; i++) {
@@ -2674,11 +2677,12 @@ void palp_srv_destroy(palp_srv *srv) {
     palp_srv_ticker_stats(srv->ticker, &ts);
     if (ts.steps > 0)
       palp_log_info(srv->log, "ticks: %llu session steps, %llu late (%.3f%%), %llu put last to wait for a rebuild; "
-                    "%llu of %llu tick passes overran, %llu tick slots dropped behind schedule",
+                    "%llu of %llu tick passes overran, %llu tick slots dropped behind schedule (%llu session steps "
+                    "skipped)",
                     (unsigned long long)ts.steps,
                     (unsigned long long)ts.late_steps, 100.0 * (double)ts.late_steps / (double)ts.steps,
                     (unsigned long long)ts.deferred, (unsigned long long)ts.overruns, (unsigned long long)ts.ticks,
-                    (unsigned long long)ts.lost_slots);
+                    (unsigned long long)ts.lost_slots, (unsigned long long)ts.skipped_steps);
   }
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);

@@ -909,6 +909,7 @@ void palp_srv_session_summary_fill(const palp_srv_session *s, const char *reason
   out->duration = (double)(now_ns - s->opened_ns) * 1e-9;
   out->ticks = s->stats.ticks;
   out->overruns = s->stats.overruns;
+  out->skipped = s->stats.skipped;
   out->awake_ticks = s->stats.awake_ticks;
   out->contact_samples = s->stats.contact_samples;
   memcpy(out->rejected, s->stats.rejected, sizeof out->rejected);

@@ -42,7 +42,10 @@ typedef struct palp_srv_phantom {
 } palp_srv_phantom;
 
 typedef struct palp_srv_session_stats {
-  uint64_t ticks, overruns, awake_ticks;
+  /* ticks: steps taken; overruns: those of them that ended late (<= ticks); skipped: tick
+   * slots its group dropped behind schedule, in which it took no step (since session 82
+   * apart from overruns) */
+  uint64_t ticks, overruns, skipped, awake_ticks;
   uint64_t contact_samples;                 /* applied (accepted or clamped) */
   uint64_t rejected[PALP_SRV_REJ_COUNT];    /* per reason; force_limit counts clamps too */
   double peak_force;                        /* [N] */

@@ -18,27 +18,33 @@
 typedef struct palp_srv_ticker palp_srv_ticker;
 
 typedef struct palp_srv_tick_stats {
-  double tick_us_p50, tick_us_p99, tick_us_max; /* work time per tick over the period, all threads [us] */
+  /* work time per tick pass over the status period, all threads [us]: every pass of a period up to 1.5
+   * status periods long (the max of any period) */
+  double tick_us_p50, tick_us_p99, tick_us_max;
   double load;                                  /* worst thread's busy fraction over the period */
   uint64_t ticks, overruns;                     /* since start, all threads */
   uint64_t period_ticks, period_overruns;       /* since the previous call */
   /* since start, all threads: session steps taken and those that ended late (each
-   * session's own deadline, the next tick's start); tick slots dropped behind
-   * schedule; steps put last in their group to wait for a rebuild */
-  uint64_t steps, late_steps, lost_slots, deferred;
+   * session's own deadline, the next tick's start; late_steps <= steps); tick slots
+   * dropped behind schedule, and the session steps they skipped (a slot of a group of
+   * n sessions skips n; not counted in late_steps since session 82); steps put last in
+   * their group to wait for a rebuild */
+  uint64_t steps, late_steps, lost_slots, skipped_steps, deferred;
 } palp_srv_tick_stats;
 
 /* threads <= 0: one per online core. max_sessions bounds every group.
  * priority 1..99 asks for SCHED_FIFO (needs CAP_SYS_NICE / rtprio limit); when
- * refused the threads run at normal priority and *rt_ok is 0. */
-palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int priority, int *rt_ok,
-                                        int *err);
+ * refused the threads run at normal priority and *rt_ok is 0. status_rate_hz
+ * (0.01..1000): how often palp_srv_ticker_stats is called, which sizes the pass
+ * times kept for its percentiles. */
+palp_srv_ticker *palp_srv_ticker_create(int threads, double rate_hz, int max_sessions, int priority,
+                                        double status_rate_hz, int *rt_ok, int *err);
 /* Groups per rate (issue 11): `threads` threads for each of rate_count rates
  * (each phantom may step at its own physics rate); a session joins a group of its
  * phantom's rate. At most PALP_SRV_TICKER_MAX_RATES distinct rates. */
 #define PALP_SRV_TICKER_MAX_RATES PALP_SRV_MAX_PHANTOMS
 palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_hz, int rate_count, int max_sessions,
-                                              int priority, int *rt_ok, int *err);
+                                              int priority, double status_rate_hz, int *rt_ok, int *err);
 /* Stops and joins the threads; sessions still attached are not destroyed. */
 void palp_srv_ticker_destroy(palp_srv_ticker *t);
 int palp_srv_ticker_threads(const palp_srv_ticker *t);
