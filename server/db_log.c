@@ -28,8 +28,11 @@ typedef struct slot {
   /* issue 13 */
   int sample_every;            /* log a finger sample every this many frames */
   int frame_every, mesh_every; /* frames at ~100 Hz, meshes at ~2 Hz of this session's physics rate */
-  int64_t findings_refused;    /* refusals not logged one by one since the last flush */
-  int refusals_logged;         /* logged one by one since the last flush */
+  /* Finding refusals: counted by the main thread (on_finding), flushed by the session's tick thread
+   * (flush_counts, from on_frame), so atomic, and taken with an exchange (until session 82 plain
+   * fields both threads wrote: a refusal could be lost or counted twice). */
+  atomic_int_fast64_t findings_refused; /* refusals not logged one by one since the last flush */
+  atomic_int refusals_logged;           /* logged one by one since the last flush */
   double finger_radius[SLOT_FINGERS]; /* per model contact id, from the world ops [m] */
   palp_db_valid_range range;          /* steps outside the model's valid range since the last flush */
   /* session 63: an exercise session is scored from this log once it closes (grader.h) */
@@ -92,12 +95,11 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_CLAMP, frame, "force_limit", (int64_t)s->clamped);
     s->clamped = 0;
   }
-  if (s->findings_refused) {
+  const int64_t refused = (int64_t)atomic_exchange(&s->findings_refused, 0);
+  if (refused)
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_REJECT, frame, "finding refused (more, not logged one by one)",
-                      s->findings_refused);
-    s->findings_refused = 0;
-  }
-  s->refusals_logged = 0;
+                      refused);
+  atomic_store(&s->refusals_logged, 0);
   if (s->range.steps) {
     char detail[256]; /* the longest detail, every number at its bound, is 212 characters */
     palp_db_valid_range_format(&s->range, detail, sizeof detail);
@@ -223,11 +225,11 @@ static void on_finding(void *ctx, uint32_t session_id, const palp_srv_finding_ev
     palp_db_log_finding(l->w, s->h, &f);
     return;
   }
-  if (s->refusals_logged >= REFUSALS_LOGGED_PER_FLUSH) {
-    s->findings_refused++;
+  /* One ticket each: a refusal past the flush's allowance is counted for the next flush. */
+  if (atomic_fetch_add(&s->refusals_logged, 1) >= REFUSALS_LOGGED_PER_FLUSH) {
+    atomic_fetch_add(&s->findings_refused, 1);
     return;
   }
-  s->refusals_logged++;
   char detail[200];
   snprintf(detail, sizeof detail, "finding %u refused: %s", ev->mark_id, ev->reason ? ev->reason : "");
   palp_db_log_event(l->w, s->h, PALP_DB_EVENT_REJECT, ev->frame, detail, 1);
