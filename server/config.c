@@ -159,6 +159,28 @@ static const char *const security_keys[] = {"pki", "identity", "comment", NULL};
 static const char *const phantom_keys[] = {"id", "name", "scene", "physics_rate_hz", "comment", NULL};
 static const char *const exercise_keys[] = {"id", "file", "physics_rate_hz", "comment", NULL};
 
+/* "phantoms[i].name" or "exercises[j] (its title)": the entry a hosted phantom's name comes from. */
+static void name_entry(int i, int plain, char *out, size_t len) {
+  if (i < plain) snprintf(out, len, "phantoms[%d].name", i);
+  else snprintf(out, len, "exercises[%d] (its title)", i - plain);
+}
+
+int palp_srv_config_check_names(const char *const *names, int count, int plain, char *err, size_t errlen) {
+  char a[48], b[48];
+  for (int i = 0; i < count; i++) {
+    name_entry(i, plain, a, sizeof a);
+    if (!names[i][0]) return fail(err, errlen, PALP_EINVAL, "%s: empty (a station chooses a phantom by its name)", a);
+    for (int j = 0; j < i; j++)
+      if (strcmp(names[i], names[j]) == 0) {
+        name_entry(j, plain, b, sizeof b);
+        return fail(err, errlen, PALP_EINVAL,
+                    "%s: \"%s\" is already used by %s (a station chooses a phantom by its name: one name, one "
+                    "phantom)", a, names[i], b);
+      }
+  }
+  return 0;
+}
+
 int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen) {
   /* A numbered server puts its number in the high bits of every id it hands out
    * (PALP_DDS_ID): its own ids must leave them free. */
@@ -196,6 +218,11 @@ static int parse_phantoms(const cJSON *arr, const char *base_dir, palp_srv_confi
         return fail(err, errlen, PALP_EINVAL, "%sid: %u is already used by phantoms[%d]", where, ph->id,
                     j);
     if ((rc = get_string(p, "name", where, 1, ph->name, sizeof ph->name, err, errlen))) return rc;
+    {
+      const char *names[PALP_SRV_MAX_PHANTOMS];
+      for (int j = 0; j <= i; j++) names[j] = cfg->phantom[j].name;
+      if ((rc = palp_srv_config_check_names(names, i + 1, i + 1, err, errlen))) return rc;
+    }
     char scene[PALP_SRV_PATH_MAX];
     if ((rc = get_string(p, "scene", where, 1, scene, sizeof scene, err, errlen))) return rc;
     if (resolve(base_dir, scene, ph->scene_path, sizeof ph->scene_path))
@@ -312,7 +339,18 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
               cfg->finger_radius_max, cfg->finger_radius_min);
     goto out;
   }
-  if ((rc = get_number(root, "log_interval", w, 0, 3600, 0, &cfg->log_interval, err, errlen))) goto out;
+  /* Above 0 (since session 82): it bounds the server's log lines of a flood of bad samples, each
+   * reason's at one a log_interval; 0 wrote a line (and a flush) per sample on the tick thread. */
+  {
+    const cJSON *li = cJSON_GetObjectItemCaseSensitive(root, "log_interval");
+    if (cJSON_IsNumber(li) && isfinite(li->valuedouble) && li->valuedouble < 0.1) {
+      rc = fail(err, errlen, PALP_EINVAL,
+                "log_interval: %g is outside [0.1, 3600] (it bounds a flood's log lines to one per interval "
+                "and reason)", li->valuedouble);
+      goto out;
+    }
+  }
+  if ((rc = get_number(root, "log_interval", w, 0.1, 3600, 0, &cfg->log_interval, err, errlen))) goto out;
   /* 0 (no cap) or at least 1 MB: a smaller cap would hold less than a minute's session; at most 10 TB */
   if ((rc = get_number(root, "session_log_max_mb", w, 0, 1e7, 0, &cfg->session_log_max_mb, err, errlen))) goto out;
   if (cfg->session_log_max_mb > 0 && cfg->session_log_max_mb < 1) {

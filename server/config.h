@@ -108,6 +108,12 @@ int palp_srv_config_parse(const char *json, const char *base_dir, palp_srv_confi
 /* With server_number > 0, every phantom id must be at most PALP_SRV_MAX_LOCAL_ID
  * (also checked after command-line overrides). 0 or PALP_EINVAL. */
 int palp_srv_config_check_ids(const palp_srv_config *cfg, char *err, size_t errlen);
+/* One name for one phantom (session 82): a station picks a phantom by its name (--phantom-name,
+ * --rejoin), so every hosted phantom's name must be non-empty and its own. names[0..count): the
+ * hosted phantoms' names as served, the first `plain` of them config phantoms, the rest exercises
+ * (named by their titles once loaded). PALP_EINVAL naming both entries, else 0. Run by the parse on
+ * the phantoms, and by the start and --check once the exercises' titles are known. */
+int palp_srv_config_check_names(const char *const *names, int count, int plain, char *err, size_t errlen);
 /* Reads and parses a file; relative paths resolve against the file's directory. */
 int palp_srv_config_load(const char *path, palp_srv_config *cfg, char *err, size_t errlen);
 

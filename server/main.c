@@ -285,6 +285,8 @@ int main(int argc, char **argv) {
         rc = ex ? palp_exercise_load(def.cfg.phantom[i].exercise_path, ex, msg, sizeof msg) : PALP_ENOMEM;
         if (rc == 0) rc = palp_exercise_scene(ex, &sc, msg, sizeof msg);
         if (rc == 0) snprintf(pc.scene_path, sizeof pc.scene_path, "%s", ex->phantom_path);
+        /* its title is its name, as the start makes it (load_exercise), for the names' check below */
+        if (rc == 0) snprintf(def.cfg.phantom[i].name, sizeof def.cfg.phantom[i].name, "%.63s", ex->title);
         free(ex);
         if (rc < 0) {
           fprintf(stderr, "palp-server: bad configuration: exercises[%d].file: %s: %s\n", i - plain,
@@ -303,6 +305,17 @@ int main(int argc, char **argv) {
       rc = palp_srv_prepare_phantom(&def.cfg, i, &pc, &sc, &w, msg, sizeof msg);
       palp_world_destroy(w);
       if (rc < 0) {
+        fprintf(stderr, "palp-server: bad configuration: %s: %s\n", config_path, msg);
+        return 1;
+      }
+    }
+    {
+      /* one name for one phantom (session 82), the exercises by their titles, as the start checks */
+      const char *names[PALP_SRV_MAX_PHANTOMS];
+      char msg[320] = "";
+      for (int i = 0; i < def.cfg.phantom_count; i++) names[i] = def.cfg.phantom[i].name;
+      if (palp_srv_config_check_names(names, def.cfg.phantom_count, def.cfg.phantom_count - def.cfg.exercise_count, msg,
+                                      sizeof msg) < 0) {
         fprintf(stderr, "palp-server: bad configuration: %s: %s\n", config_path, msg);
         return 1;
       }

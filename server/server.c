@@ -2323,6 +2323,17 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
     srv->phantom_count = i + (srv->phantom[i].template_world != NULL);
     if (*rc < 0) goto fail;
   }
+  {
+    /* One name for one phantom, the exercises' titles now known: a station picks a phantom by name. */
+    const char *names[PALP_SRV_MAX_PHANTOMS];
+    char msg[320] = "";
+    for (int i = 0; i < srv->phantom_count; i++) names[i] = srv->phantom[i].cfg.name;
+    if ((*rc = palp_srv_config_check_names(names, srv->phantom_count, srv->cfg.phantom_count - srv->cfg.exercise_count,
+                                           msg, sizeof msg)) < 0) {
+      fail(err, errlen, "%s", msg);
+      goto fail;
+    }
+  }
   palp_dds_refusals_init(&srv->refusals, palp_log_warn_line, srv->log, PALP_DDS_REFUSAL_WINDOW_S);
   palp_dds_refusals_on_record(&srv->refusals, record_refusal, srv);
   srv->refusals_ready = 1;

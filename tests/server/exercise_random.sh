@@ -24,10 +24,13 @@ tmp=$(mktemp -d)
 spid=
 trap '[ -n "$spid" ] && kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 # the same exercise hiding none of its lesions ("count": [0, 0]): a breast with no lump
+# (each its own title: a title is its phantom's name, one name for one phantom since session 82)
 sed -e 's|"name": "test-random"|"name": "test-none"|' -e 's|"min_gap_mm": 10 }|"min_gap_mm": 10, "count": [0, 0] }|' \
+  -e 's|"title": "Test: lesions drawn for each session"|"title": "Test: no lesion"|' \
   -e "s|\"\.\./assess/|\"$test_dir/../assess/|" "$test_dir/exercise_random.json" > "$tmp/exercise_none.json"
 # ... and drawn once per server run ("per": "run"): an examination, the same for a class, new for the next
 sed -e 's|"name": "test-random"|"name": "test-run"|' -e 's|"min_gap_mm": 10 }|"min_gap_mm": 10, "per": "run" }|' \
+  -e 's|"title": "Test: lesions drawn for each session"|"title": "Test: lesions drawn for the run"|' \
   -e "s|\"\.\./assess/|\"$test_dir/../assess/|" "$test_dir/exercise_random.json" > "$tmp/exercise_run.json"
 cat > "$tmp/server.json" <<JSON
 { "domain_id": 181, "tick_rate_hz": 100, "tick_threads": 1, "database": "$tmp/log.db",

@@ -55,6 +55,39 @@ int main(void) {
   expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"a\", \"scene\": \"s\", \"physics_rate_hz\": \"fast\"}]}",
                "phantoms[0].physics_rate_hz: expected a number", PALP_EPARSE);
 
+  /* session 82: log_interval bounds a flood's log lines, so above 0; one name for one phantom. */
+  expect_error("{\"log_interval\": 0, " PH "}", "log_interval: 0 is outside [0.1, 3600]", PALP_EINVAL);
+  expect_error("{\"log_interval\": 0.05, " PH "}", "log_interval: 0.05 is outside [0.1, 3600]", PALP_EINVAL);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"\", \"scene\": \"s\"}]}", "phantoms[0].name: empty",
+               PALP_EINVAL);
+  expect_error("{\"phantoms\": [{\"id\": 1, \"name\": \"dome A\", \"scene\": \"s\"}, {\"id\": 2, \"name\": "
+               "\"b\", \"scene\": \"s\"}, {\"id\": 3, \"name\": \"dome A\", \"scene\": \"t\"}]}",
+               "phantoms[2].name: \"dome A\" is already used by phantoms[0]", PALP_EINVAL);
+  {
+    /* an exercise's title, known once it is loaded, against the phantoms' names and the other titles */
+    const char *const names[] = {"a", "b", "easy", "a"}, *const titles[] = {"a", "b", "easy", "easy"};
+    const char *const empty[] = {"a", ""};
+    char e1[512] = "", e2[512] = "", e3[512] = "", e4[512] = "";
+    const int r1 = palp_srv_config_check_names(names, 4, 2, e1, sizeof e1);
+    const int r2 = palp_srv_config_check_names(titles, 4, 2, e2, sizeof e2);
+    const int r3 = palp_srv_config_check_names(empty, 2, 1, e3, sizeof e3);
+    const int r4 = palp_srv_config_check_names(names, 3, 2, e4, sizeof e4);
+    const int good = r1 == PALP_EINVAL && strstr(e1, "exercises[1] (its title): \"a\" is already used by phantoms[0]") == e1 &&
+                     r2 == PALP_EINVAL && strstr(e2, "exercises[1] (its title): \"easy\" is already used by exercises[0]") == e2 &&
+                     r3 == PALP_EINVAL && strstr(e3, "exercises[0] (its title): empty") == e3 && r4 == 0;
+    fprintf(stderr, "%s hosted names: \"%s\"; \"%s\"; \"%s\"; distinct names %d\n", good ? "ok  " : "FAIL", e1, e2, e3,
+            r4);
+    failures += !good;
+  }
+  {
+    palp_srv_config c;
+    char e[512] = "";
+    const int r = palp_srv_config_parse("{\"log_interval\": 0.1, " PH "}", "/base", &c, e, sizeof e);
+    const int good = r == 0 && c.log_interval == 0.1;
+    fprintf(stderr, "%s log_interval 0.1 accepted (%d %s)\n", good ? "ok  " : "FAIL", r, e);
+    failures += !good;
+  }
+
   /* issue 13: exercises, each one more phantom after the phantoms. */
   expect_error("{" PH ", \"exercises\": {}}", "exercises: expected an array", PALP_EPARSE);
   expect_error("{" PH ", \"exercises\": [{\"id\": 2}]}", "exercises[0].file: missing", PALP_EPARSE);
