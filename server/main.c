@@ -2,6 +2,7 @@
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,7 +59,9 @@ typedef struct sig_ctx {
   const char *config_path;
   palp_srv_config *file_cfg; /* the config file as last read (before command-line overrides) */
   int level_fixed;           /* --log-level/--verbose/--quiet given: the file's log_level is ignored */
-  int signo;
+  /* The SIGINT/SIGTERM that stopped the run (0: none): written by the signal thread, read by main
+   * while that thread runs, so atomic (a plain int until session 82). */
+  atomic_int signo;
 } sig_ctx;
 
 /* SIGHUP: what can change without touching a session is re-read (log_level); any
@@ -114,7 +117,7 @@ static void *signal_main(void *arg) {
       reload_config(c);
       continue;
     }
-    c->signo = b;
+    atomic_store(&c->signo, b);
     palp_log_info(c->log, "%s: shutting down", b == SIGINT ? "SIGINT" : "SIGTERM");
     palp_srv_request_stop(c->srv);
     return NULL;
@@ -338,6 +341,7 @@ int main(int argc, char **argv) {
 
   sig_ctx sc;
   memset(&sc, 0, sizeof sc);
+  atomic_init(&sc.signo, 0);
   if (pipe(sc.fd) != 0) {
     fprintf(stderr, "palp-server: cannot create the signal pipe: %s\n", strerror(errno));
     return 1;
@@ -395,9 +399,12 @@ int main(int argc, char **argv) {
     return 1;
   }
   rc = palp_srv_run(srv, duration);
+  /* What ended the run, read once as it ended: a signal stores it before it asks the stop, and one
+   * coming after the run ended by itself is not named as its end. */
+  const int stopped_by = atomic_load(&sc.signo);
   /* Wake the signal thread if no signal came. */
   const unsigned char zero = 0;
-  if (!sc.signo && write(sc.fd[1], &zero, 1) < 0) pthread_cancel(sig_thread);
+  if (!stopped_by && write(sc.fd[1], &zero, 1) < 0) pthread_cancel(sig_thread);
   pthread_join(sig_thread, NULL);
   printf("\npalp-server session summary\n");
   palp_srv_print_summary(srv, stdout);
@@ -412,8 +419,8 @@ int main(int argc, char **argv) {
   palp_srv_destroy(srv);
   palp_srv_db_log_close(log);
   palp_log_info(&plog, "stopped (%s)",
-                sc.signo == SIGINT    ? "SIGINT"
-                : sc.signo == SIGTERM ? "SIGTERM"
+                stopped_by == SIGINT    ? "SIGINT"
+                : stopped_by == SIGTERM ? "SIGTERM"
                 : rc < 0              ? "server identity conflict"
                                       : "end of run");
   palp_log_close(&plog);

@@ -878,6 +878,11 @@ static void remember_closed(palp_srv *srv, const palp_srv_session_summary *sum, 
   c->sum.info.trainee_name = c->name;
   c->sum.info.partition = c->partition;
   c->sum.close_reason = c->reason;
+  /* Not copied, and the session's (its own scene and exercise for a drawn one) are freed with it:
+   * none kept to dangle (until session 82 they were, unread). scene_path is its phantom's. */
+  c->sum.info.scene = NULL;
+  c->sum.info.exercise_name = NULL;
+  c->sum.info.exercise_json = NULL;
 }
 
 /* The newest closed session this trainee station opened, if it was opened by request
