@@ -6,7 +6,8 @@
  * Threads: the caller's thread runs palp_srv_run (a waitset loop over session
  * requests, a guard condition for stop, and a timeout for the status period);
  * the tick pool (ticker.h) steps the sessions. palp_srv_request_stop may be
- * called from any thread (not from a signal handler: use sigwait, see main.c).
+ * called from any thread, not from a signal handler: main.c's handler writes the
+ * signal's number into a pipe that a signal thread reads and calls it from.
  */
 #ifndef PALP_SRV_SERVER_H
 #define PALP_SRV_SERVER_H
