@@ -81,7 +81,7 @@ typedef struct palp_srv_debrief_event {
 typedef struct palp_srv_session_summary {
   palp_srv_session_info info;
   double duration;             /* [s] wall time open */
-  uint64_t ticks, overruns, awake_ticks; /* steps taken, those that ended late (<= ticks) */
+  uint64_t ticks, overruns, awake_ticks; /* steps taken; late ones, skipped slots included */
   uint64_t skipped;            /* tick slots skipped behind schedule: no step taken (session 82) */
   uint64_t contact_samples;    /* accepted or clamped */
   uint64_t rejected[PALP_SRV_REJ_COUNT];

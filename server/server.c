@@ -1209,10 +1209,10 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
    * were made on the tick because the factor reached its stability margin before its
    * due frame (palp_world_health.margin_rebuilds, ~0.5 ms each). */
   if (s->stats.overruns > 0 || s->stats.skipped > 0 || s->stats.factor_waits > 0)
-    palp_log_info(srv->log, "session %u: %llu of %llu steps late, %llu tick slots skipped behind schedule; %llu "
+    palp_log_info(srv->log, "session %u: %llu of %llu steps late (%llu of them slots skipped behind schedule); %llu "
                             "tangent rebuilds off the tick, %llu waited for (%.1f ms in all), %lld made on the tick "
                             "at the stability margin", s->id,
-                  (unsigned long long)s->stats.overruns, (unsigned long long)s->stats.ticks,
+                  (unsigned long long)s->stats.overruns, (unsigned long long)(s->stats.ticks + s->stats.skipped),
                   (unsigned long long)s->stats.skipped,
                   (unsigned long long)s->stats.factor_jobs, (unsigned long long)s->stats.factor_waits,
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
@@ -2670,9 +2670,10 @@ void palp_srv_print_summary(const palp_srv *srv, FILE *out) {
     palp_srv_session_info_fill(srv->sessions[i], &info);
     widen_to(&pw, info.phantom_name);
   }
-  /* "late": of its ticks (steps taken); "skipped": slots its group dropped, no step taken (session 82) */
+  /* "overruns": its late steps, skipped slots included; "skipped": the slots its group dropped behind
+   * schedule, in which it took no step (session 82) */
   fprintf(out, "%-7s %-16s %-*s %8s %9s %8s %9s %9s %8s %8s %8s  %s\n", "session", "trainee", pw, "phantom", "dur[s]",
-          "samples", "Fmax[N]", "dmax[mm]", "ticks", "late", "skipped", "rejected", "closed because");
+          "samples", "Fmax[N]", "dmax[mm]", "ticks", "overruns", "skipped", "rejected", "closed because");
   if (srv->sessions_forgotten)
     fprintf(out, "(%llu older closed sessions not kept)\n", (unsigned long long)srv->sessions_forgotten);
   for (int i = 0; i < srv->closed_count; i++) {
@@ -2692,11 +2693,11 @@ void palp_srv_destroy(palp_srv *srv) {
     palp_srv_tick_stats ts;
     palp_srv_ticker_stats(srv->ticker, &ts);
     if (ts.steps > 0)
-      palp_log_info(srv->log, "ticks: %llu session steps, %llu late (%.3f%%), %llu put last to wait for a rebuild; "
+      palp_log_info(srv->log, "ticks: %llu session steps due, %llu late (%.3f%%), %llu put last to wait for a rebuild; "
                     "%llu of %llu tick passes overran, %llu tick slots dropped behind schedule (%llu session steps "
-                    "skipped)",
-                    (unsigned long long)ts.steps,
-                    (unsigned long long)ts.late_steps, 100.0 * (double)ts.late_steps / (double)ts.steps,
+                    "skipped, counted late)",
+                    (unsigned long long)(ts.steps + ts.skipped_steps), (unsigned long long)ts.late_steps,
+                    100.0 * (double)ts.late_steps / (double)(ts.steps + ts.skipped_steps),
                     (unsigned long long)ts.deferred, (unsigned long long)ts.overruns, (unsigned long long)ts.ticks,
                     (unsigned long long)ts.lost_slots, (unsigned long long)ts.skipped_steps);
   }

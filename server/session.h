@@ -42,9 +42,9 @@ typedef struct palp_srv_phantom {
 } palp_srv_phantom;
 
 typedef struct palp_srv_session_stats {
-  /* ticks: steps taken; overruns: those of them that ended late (<= ticks); skipped: tick
-   * slots its group dropped behind schedule, in which it took no step (since session 82
-   * apart from overruns) */
+  /* ticks: steps taken; overruns: steps late, those that ended after their deadline and the
+   * slots its group skipped behind schedule; skipped: those slots alone (session 82), so that
+   * overruns <= ticks + skipped */
   uint64_t ticks, overruns, skipped, awake_ticks;
   uint64_t contact_samples;                 /* applied (accepted or clamped) */
   uint64_t rejected[PALP_SRV_REJ_COUNT];    /* per reason; force_limit counts clamps too */

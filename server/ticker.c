@@ -48,10 +48,12 @@ static struct timespec ts_of(int64_t ns) {
   return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
 }
 
-/* A late step of session s, late_ns past its deadline: its counters and its log. */
-static void session_late(palp_srv_session *s, int64_t late_ns) {
-  s->stats.overruns++;
-  if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, late_ns);
+/* n late steps of session s, late_ns past their deadline: its counters and its log. A slot its
+ * group skipped behind schedule is one (the step it was due came late: simulated time lags). */
+static void session_late(palp_srv_session *s, uint64_t n, int64_t late_ns) {
+  s->stats.overruns += n;
+  if (s->events && s->events->overrun)
+    for (uint64_t k = 0; k < n; k++) s->events->overrun(s->events->ctx, s->id, late_ns);
 }
 
 /* One session's tick. Late when its own work ends after the next tick should have
@@ -61,7 +63,7 @@ static int tick_one(palp_srv_session *s, int64_t next, int64_t deadline) {
   palp_srv_session_tick(s, next);
   const int64_t end = palp_dds_now_ns();
   if (end <= deadline) return 0;
-  session_late(s, end - deadline);
+  session_late(s, 1, end - deadline);
   return 1;
 }
 
@@ -111,11 +113,16 @@ static void *group_main(void *arg) {
       int64_t lost = (t1 - next) / period_ns + 1;
       next += lost * period_ns;
       g->lost_slots += (uint64_t)lost;
-      /* Every session of the group missed them: counted as its skipped slots, apart from its
-       * late steps (until session 82 they were added to its overruns, which then outnumbered
-       * its ticks after a stall: "168 of 136 ticks overran"). A share of late steps is of the
-       * steps taken and stays <= 100%; the skipped slots say how far the group fell behind. */
-      for (int i = 0; i < g->count; i++) g->sessions[i]->stats.skipped += (uint64_t)lost;
+      /* Every session of the group missed them: counted as late steps (its overruns, its log's
+       * overrun events, the wire's as since 2026-12-02), so that a session's overruns never
+       * flatter a group that fell behind, and as its skipped slots too: a share of late steps is
+       * of the slots due, steps taken plus slots skipped, and stays <= 100% (until session 82
+       * it was of the steps taken alone: "168 of 136 ticks overran" after a stall). */
+      for (int i = 0; i < g->count; i++) {
+        session_late(g->sessions[i], (uint64_t)lost, t1 - deadline);
+        g->sessions[i]->stats.skipped += (uint64_t)lost;
+      }
+      g->late_steps += (uint64_t)lost * (uint64_t)g->count;
       g->skipped_steps += (uint64_t)lost * (uint64_t)g->count;
     }
     pthread_mutex_unlock(&g->lock);

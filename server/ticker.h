@@ -24,11 +24,11 @@ typedef struct palp_srv_tick_stats {
   double load;                                  /* worst thread's busy fraction over the period */
   uint64_t ticks, overruns;                     /* since start, all threads */
   uint64_t period_ticks, period_overruns;       /* since the previous call */
-  /* since start, all threads: session steps taken and those that ended late (each
-   * session's own deadline, the next tick's start; late_steps <= steps); tick slots
-   * dropped behind schedule, and the session steps they skipped (a slot of a group of
-   * n sessions skips n; not counted in late_steps since session 82); steps put last in
-   * their group to wait for a rebuild */
+  /* since start, all threads: session steps taken and those late (each session's own
+   * deadline, the next tick's start, and every step a dropped slot skipped); tick slots
+   * dropped behind schedule, and the session steps they skipped (a slot of a group of n
+   * sessions skips n; late_steps <= steps + skipped_steps); steps put last in their group
+   * to wait for a rebuild */
   uint64_t steps, late_steps, lost_slots, skipped_steps, deferred;
 } palp_srv_tick_stats;
 

@@ -410,8 +410,7 @@ static stats rtt_run(double rate, const char *self) {
 
 typedef struct status_window {
   uint64_t ticks, overruns;
-  uint64_t steps, late; /* summed over the sessions (SessionLoad): their steps, and those late (since session 82
-                         * not the slots skipped behind schedule, which the wire has no field for) */
+  uint64_t steps, late; /* summed over the sessions (SessionLoad): their steps, and those late or missed */
   double p99, max, load;
   uint32_t open;
   int ok;
@@ -675,9 +674,8 @@ static void haptic_run(double rate) {
          "more than a period late, and the deadlines they dropped, are what the machine alone makes of the late-step "
          "criterion)\n",
          rt_priority <= 0 ? " (normal scheduling)" : fl_rt ? " (SCHED_FIFO)" : " (SCHED_FIFO refused: normal)");
-  printf("  (late steps: the sessions' physics steps that ended after the next tick's start, over their steps (slots "
-         "skipped behind schedule not counted since session 82); group ticks: the tick threads' passes whose work "
-         "ended late)\n");
+  printf("  (late steps: the sessions' physics steps that ended after the next tick's start, or were missed behind "
+         "schedule, over their steps; group ticks: the tick threads' passes whose work ended late)\n");
   printf("  (server cores: the server process's CPU seconds per second over the window, all its threads: ticks, "
          "helpers, DDS, the session log)\n");
   printf("  sessions  late steps  group ticks  tick p99 [us]  tick max [us]  load  station late ticks  models/s  timer floor"
@@ -704,7 +702,8 @@ static void haptic_run(double rate) {
     if (join_failed) break;
     nap(1.0);
     status_window a = read_status(status_r, 1.5);
-    const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models, ft_a = atomic_load(&fl.ticks), fl_a = atomic_load(&fl.late_ticks);
+    const uint64_t t_a = f.ticks, l_a = f.late, m_a = f.models, ft_a = atomic_load(&fl.ticks), fl_a = atomic_load(&fl.late_ticks),
+                   fm_a = atomic_load(&fl.missed);
     const int64_t w0 = palp_dds_now_ns();
     const double cpu0 = proc_cpu_s(srv);
     nap(2.0);
@@ -718,9 +717,10 @@ static void haptic_run(double rate) {
     const double gfrac = b.ticks > a.ticks ? (double)(b.overruns - a.overruns) / (double)(b.ticks - a.ticks) : 1;
     const double frac = b.steps > a.steps ? (double)(b.late - a.late) / (double)(b.steps - a.steps) : 1;
     const double late = f.ticks > t_a ? (double)(f.late - l_a) / (double)(f.ticks - t_a) : 1;
-    const uint64_t ft_b = atomic_load(&fl.ticks), fl_b = atomic_load(&fl.late_ticks);
-    /* counted as the sessions' late steps are (since session 82): of the ticks taken, a dropped deadline not in it */
-    const double floor_late = ft_b > ft_a ? (double)(fl_b - fl_a) / (double)(ft_b - ft_a) : 0;
+    const uint64_t ft_b = atomic_load(&fl.ticks), fl_b = atomic_load(&fl.late_ticks), fm_b = atomic_load(&fl.missed);
+    /* counted as the sessions' late steps are: a dropped deadline is a late one */
+    const double floor_late =
+        ft_b > ft_a ? (double)(fl_b - fl_a + fm_b - fm_a) / (double)(ft_b - ft_a + fm_b - fm_a) : 0;
     printf("  %8d  %9.2f%%  %10.2f%%  %13.0f  %13.0f  %3.0f%%  %16.2f%%  %8.0f  %10.2f%%  %10.2f\n", n, 100 * frac,
            100 * gfrac, b.p99, b.max, 100 * b.load, 100 * late, (double)(f.models - m_a) / span, 100 * floor_late,
            srv_cores);
