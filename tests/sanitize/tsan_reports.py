@@ -9,6 +9,9 @@ binary is the library's) is counted as a library's and not printed: Debian's Cyc
 runtime and OpenBLAS are not instrumented, so TSan cannot see their atomics and takes their
 internal hand-offs for races. Every other report is printed, and the exit status is 1 if there is
 any.
+A report of TSan's own end (ERROR: a deadly signal such as SEGV, FATAL, or CHECK failed) is a
+finding whoever's frames it holds (since session 82): sanitize.sh runs with exitcode=0, which
+also makes a crashed program exit 0, so this report is the only trace the crash leaves.
 Usage: tsan_reports.py LOGFILE...
 """
 import re
@@ -44,6 +47,28 @@ def reports(text):
             yield block
 
 
+# TSan's own end: "==PID==ERROR: ThreadSanitizer: SEGV on unknown address ...", "FATAL:
+# ThreadSanitizer: ...", "ThreadSanitizer: CHECK failed: ...". Such a report is not inside the
+# "=================" lines of a warning, so it is looked for line by line in the whole log.
+DEADLY = re.compile(r"(?:ERROR|FATAL): ThreadSanitizer\b|ThreadSanitizer: CHECK failed")
+
+
+def deadly(text):
+    """Each deadly report: its first line and the frames under it (up to TSan's ABORTING line, a
+    warning's separator or 40 lines)."""
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        if DEADLY.search(line):
+            body = []
+            for more in lines[i + 1:i + 41]:
+                if DEADLY.search(more) or more.startswith("=================="):
+                    break
+                body.append(more)
+                if "ABORTING" in more:
+                    break
+            yield re.sub(r"^==\d+==", "", line.strip()), body
+
+
 def main(paths):
     own, lib = [], 0
     for p in paths:
@@ -68,12 +93,22 @@ def main(paths):
                 lib += 1
                 continue
             own.append((p, kind, tops))
+    crashes = []
+    for p in paths:
+        for head, body in deadly(open(p, errors="replace").read()):
+            crashes.append((p, head, body))
+    for p, head, body in crashes:
+        print(f"{p}: {head}")
+        for line in body:
+            if FRAME.match(line):
+                print(f"    {line.strip()}")
     for p, kind, tops in own:
         print(f"{p}: {kind}")
         for head, (fn, where, module, _) in tops:
             print(f"    {head[:60]:60s} {fn} {where} {module}")
-    print(f"tsan_reports: {len(own)} report(s) in palp's code, {lib} inside uninstrumented libraries only (not shown)")
-    return 1 if own else 0
+    print(f"tsan_reports: {len(crashes)} crash/fatal report(s), {len(own)} report(s) in palp's code, "
+          f"{lib} inside uninstrumented libraries only (not shown)")
+    return 1 if own or crashes else 0
 
 
 if __name__ == "__main__":
