@@ -208,6 +208,23 @@ def case_bench_effects_zero(a, tmp):
           "bench_model_effects --steps 0 refused (rc %d): %s" % (rc, out.strip()[-200:]))
 
 
+def case_bench_effects_asleep(a, tmp):
+    # Session 82 review: the asleep row ran with gravity on, a world that since session 81 never
+    # sleeps, and said "the world sleeps"; the reduced models' rows timed a collapsed dome unmarked.
+    rc, out = run([a.bench_effects, "--steps", "100"])
+    asleep = [l for l in out.splitlines() if l.startswith("all but gravity, asleep")]
+    check(rc == 0 and len(asleep) == 1 and "0 of 100 timed steps awake" in asleep[0],
+          "bench_model_effects' asleep row slept in all its timed steps (rc %d): %s" % (rc, out.strip()[-300:]))
+    # a row whose dome lay on its base (base_vtx > 0) says so; a row with none does not
+    for l in out.splitlines()[2:-1]:
+        f = l[34:].split()
+        if len(f) >= 7:
+            on_base = int(f[6]) > 0
+            check(on_base == ("COLLAPSED" in l), "bench_model_effects marks a collapsed row, and only one: %s" % l)
+    rc, out = run([a.bench_effects, "--load", "0"])
+    check(rc == 2 and "--load must be a force in N above 0" in out, "bench_model_effects --load 0 refused (rc %d): %s" % (rc, out.strip()[-200:]))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--config", required=True)
