@@ -516,7 +516,12 @@ revoke)
   mkdir -p "$dir/revoked"
   set +f
   stamp=$(date -u +%Y%m%dT%H%M%S)
-  for f in "$dir/$1".*; do mv "$f" "$dir/revoked/$(echo "$1" | tr / _)-$stamp.${f#"$dir/$1".}"; done
+  # Only this name's own files: a web HOST may hold dots, and "$1".* also matched every host named
+  # HOST.SOMETHING (revoking web/lab moved lab.local's certificate and key; until session 82).
+  for ext in cert.pem key.pem permissions.xml permissions.p7s csr ext; do
+    f="$dir/$1.$ext"
+    [ -e "$f" ] && mv "$f" "$dir/revoked/$(echo "$1" | tr / _)-$stamp.$ext"
+  done
   echo "make-classroom-pki: $1 revoked; distribute $dir/crl.pem to every station and restart the server"
   ;;
 crl)

@@ -15,6 +15,7 @@
 #  - (session 81) a copied PKI signs and revokes in its own CA database, the original's untouched; a moved
 #    one signs; the new certificates verify with their CRL; serials stay distinct. revoke refuses anything
 #    but KIND/NAME or web/HOST ('revoke ca' moved the CA certificate away), exit 2, nothing changed.
+#  - (session 82) revoke web/lab moves lab's certificate and key only, not lab.local's.
 # usage: pki_script.sh MAKE_CLASSROOM_PKI_SH
 set -u
 script=$1
@@ -134,5 +135,18 @@ bash "$script" "$moved" revoke web/lab-host >"$out/webrevoke.log" 2>&1
 rc2=$?
 check "after them, add still signs (exit $rc1); revoke web/lab-host revokes palp-web's certificate (exit $rc2)" \
   "[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ -f '$moved/ca.cert.pem' ] && [ ! -e '$moved/web/lab-host.cert.pem' ] && ls '$moved'/revoked/web_lab-host-*.cert.pem >/dev/null 2>&1"
+
+# (session 82) revoke web/HOST moves HOST's own files only: "HOST".* also matched lab.local's
+# certificate and key when web/lab was revoked, and palp-web serving lab.local lost them.
+bash "$script" "$moved" web lab >/dev/null 2>&1 && bash "$script" "$moved" web lab.local >/dev/null 2>&1
+rc1=$?
+ll0=$(cat "$moved/web/lab.local.cert.pem" "$moved/web/lab.local.key.pem" 2>/dev/null | md5sum)
+bash "$script" "$moved" revoke web/lab >"$out/webrevoke2.log" 2>&1
+rc2=$?
+ll1=$(cat "$moved/web/lab.local.cert.pem" "$moved/web/lab.local.key.pem" 2>/dev/null | md5sum)
+moved_lab=$(ls "$moved"/revoked/ | grep -c '^web_lab-[0-9T]*\.' || true)
+moved_local=$(ls "$moved"/revoked/ | grep -c '^web_lab-[0-9T]*\.local' || true)
+check "revoke web/lab (exit $rc1, $rc2): lab's certificate and key moved aside ($moved_lab files), lab.local's left in web/ unchanged ($moved_local moved)" \
+  "[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ ! -e '$moved/web/lab.cert.pem' ] && [ ! -e '$moved/web/lab.key.pem' ] && [ -f '$moved/web/lab.local.cert.pem' ] && [ -f '$moved/web/lab.local.key.pem' ] && [ '$ll0' = '$ll1' ] && [ $moved_lab -eq 2 ] && [ $moved_local -eq 0 ]"
 rm -rf "$out"
 exit $fail
