@@ -38,7 +38,9 @@
  *
  * usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N]
  *        [--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT]
- *        [--haptic-domain ID] [--motion press|strip] [--rate HZ]
+ *        [--haptic-domain ID] [--domain-base B] [--motion press|strip] [--rate HZ]
+ * DDS domains 150-152 (secured 142-144), or B..B+5 with --domain-base; always the loopback config
+ * (a CYCLONEDDS_URI in the environment is ignored, said on stderr).
  * --overrun-limit: keep adding sessions until this share of ticks overruns (default 1; in `haptic`, of
  * the sessions' physics steps late), e.g. 100 to compare tick time and load at equal session counts.
  * --scene: the phantoms' scene (any path; default config/paper_step.json with the
@@ -69,13 +71,11 @@
 
 extern char **environ;
 
-#define DOMAIN_LAT 150
-#define DOMAIN_CAP 151
-#define DOMAIN_RTT 152
-/* secured runs: the security work's own domain range (130-149) */
-#define DOMAIN_LAT_SECURE 142
-#define DOMAIN_CAP_SECURE 143
-#define DOMAIN_HAPTIC_SECURE 144
+/* DDS domains: latency, capacity and the round trip 150-152, secured runs 142-144 (the security
+ * work's own range, 130-149); --domain-base B moves them to B..B+2 and B+3..B+5 (session 82), so
+ * that two runs, or a run beside the tests, need not share one. */
+static unsigned domain_base = 0; /* 0: the defaults above */
+static unsigned dom(unsigned offset, unsigned fixed) { return domain_base ? domain_base + offset : fixed; }
 /* The server's config, log, database and the PKI live in the run's scratch directory
  * (bench_tmp.h; fixed names in /tmp until 2026-12-05). */
 static char bench_pki[600];
@@ -91,9 +91,10 @@ static double overrun_limit = 0.01; /* --overrun-limit PCT: stop adding sessions
 static int secure = 0;             /* this pass runs with DDS Security */
 static palp_dds_security bench_sec; /* trainee/bench in bench_pki */
 
-static unsigned lat_domain(void) { return secure ? DOMAIN_LAT_SECURE : DOMAIN_LAT; }
-static unsigned cap_domain(void) { return secure ? DOMAIN_CAP_SECURE : DOMAIN_CAP; }
-static unsigned hap_domain(void) { return secure ? DOMAIN_HAPTIC_SECURE : haptic_domain; }
+static unsigned lat_domain(void) { return secure ? dom(3, 142) : dom(0, 150); }
+static unsigned cap_domain(void) { return secure ? dom(4, 143) : dom(1, 151); }
+static unsigned rtt_domain(void) { return dom(2, 152); }
+static unsigned hap_domain(void) { return secure ? dom(5, 144) : haptic_domain; }
 static int max_given = 0;
 static int strip_motion = 0;     /* --motion strip: the exercises' search instead of press cycles */
 static double only_rate = 0.0;   /* --rate HZ: one physics rate instead of 250 Hz then 1 kHz */
@@ -195,6 +196,30 @@ static void stop_child(pid_t pid) {
   kill(pid, SIGINT);
   int st;
   waitpid(pid, &st, 0);
+}
+
+/* The server ended, or sent no status with new ticks in ten tries: say so with the end of its
+ * log (its scratch directory is removed at exit, so the log is printed here) and exit 1. A loop
+ * that waited for a dead server's status never ended (until session 82). */
+static void server_failed(pid_t srv, int ended, int st, const char *why) {
+  if (ended)
+    fprintf(stderr, "bench: palp-server ended (%s %d) %s; the end of its log:\n",
+            WIFEXITED(st) ? "exit" : "signal", WIFEXITED(st) ? WEXITSTATUS(st) : WTERMSIG(st), why);
+  else {
+    fprintf(stderr, "bench: %s; the end of palp-server's log:\n", why);
+    stop_child(srv);
+  }
+  char log_path[600];
+  FILE *lf = bench_tmp_path("palp-bench-server", "server.log", log_path, sizeof log_path) ? fopen(log_path, "r") : NULL;
+  if (lf) {
+    char buf[2048];
+    if (fseek(lf, -(long)(sizeof buf - 1), SEEK_END) != 0) rewind(lf);
+    const size_t n = fread(buf, 1, sizeof buf - 1, lf);
+    buf[n] = 0;
+    fprintf(stderr, "%s\n", buf);
+    fclose(lf);
+  }
+  exit(1);
 }
 
 /* 0, or -1 with the reason in err (the station closed). */
@@ -307,7 +332,7 @@ static stats latency_run(double rate) {
 
 /* Child: takes palp_Contact on "palp_bench_ping", answers a palp_Feedback echoing it on "palp_bench_pong". */
 static int echo_main(void) {
-  dds_entity_t pp = dds_create_participant(DOMAIN_RTT, NULL, NULL);
+  dds_entity_t pp = dds_create_participant(rtt_domain(), NULL, NULL);
   dds_qos_t *qc = palp_dds_qos(PALP_TOPIC_CONTACT), *qf = palp_dds_qos(PALP_TOPIC_FEEDBACK);
   dds_entity_t tping = dds_create_topic(pp, &palp_Contact_desc, "palp_bench_ping", qc, NULL);
   dds_entity_t tpong = dds_create_topic(pp, &palp_Feedback_desc, "palp_bench_pong", qf, NULL);
@@ -345,10 +370,12 @@ static int echo_main(void) {
 }
 
 static stats rtt_run(double rate, const char *self) {
-  char *argv[] = {(char *)self, "echo", NULL};
+  char base[16]; /* the echo child answers on this run's round-trip domain */
+  snprintf(base, sizeof base, "%u", domain_base);
+  char *argv[] = {(char *)self, "echo", "--domain-base", base, NULL};
   const pid_t pid = spawn_tied(self, argv, NULL);
   if (pid < 0) exit(1);
-  dds_entity_t pp = dds_create_participant(DOMAIN_RTT, NULL, NULL);
+  dds_entity_t pp = dds_create_participant(rtt_domain(), NULL, NULL);
   dds_qos_t *qc = palp_dds_qos(PALP_TOPIC_CONTACT), *qf = palp_dds_qos(PALP_TOPIC_FEEDBACK);
   dds_entity_t tping = dds_create_topic(pp, &palp_Contact_desc, "palp_bench_ping", qc, NULL);
   dds_entity_t tpong = dds_create_topic(pp, &palp_Feedback_desc, "palp_bench_pong", qf, NULL);
@@ -483,7 +510,11 @@ static void capacity_run(void) {
     int64_t settle = palp_dds_now_ns() + 1000000000, next = palp_dds_now_ns();
     status_window a = {0}, b = {0};
     int64_t window_end = 0;
+    int reads = 0; /* status reads for this window: at most 10 (1.5 s each) */
     for (;;) {
+      int wst;
+      if (waitpid(srv, &wst, WNOHANG) == srv) server_failed(srv, 1, wst, "during a capacity window");
+      if (reads > 10) server_failed(srv, 0, 0, "no status with new ticks from palp-server in 10 tries");
       int64_t now = palp_dds_now_ns();
       if (now >= next) {
         press_all(st, n, seq, (double)(now - t0) * 1e-9);
@@ -491,12 +522,12 @@ static void capacity_run(void) {
       }
       drain_all(st, n);
       if (now >= settle && !a.ok) {
-        a = read_status(status_r, 1.5);
+        a = read_status(status_r, 1.5), ++reads;
         window_end = palp_dds_now_ns() + 2000000000;
       }
       if (a.ok && now >= window_end) {
         /* first status published after the window ends */
-        b = read_status(status_r, 1.5);
+        b = read_status(status_r, 1.5), ++reads;
         if (b.ok && b.ticks > a.ticks) break;
         window_end = palp_dds_now_ns() + 200000000;
       }
@@ -616,19 +647,36 @@ static double baseline_rebuilds_per_s; /* the baseline world's tangent rebuilds 
 static stats step_baseline(double rate) {
   palp_scene sc;
   char err[256];
-  if (palp_scene_load(scene_path, &sc, err, sizeof err) < 0) exit(1);
+  /* every return code checked: a world that refuses to step "steps" in under a microsecond and
+   * would be printed as the baseline (until session 82 a failed create was dereferenced) */
+  if (palp_scene_load(scene_path, &sc, err, sizeof err) < 0) {
+    fprintf(stderr, "bench: the baseline's scene %s: %s\n", scene_path, err);
+    exit(1);
+  }
   sc.world.dt = 1.0 / rate;
   int rc;
   palp_world *w = palp_scene_create_world(&sc, &rc);
+  if (!w) {
+    fprintf(stderr, "bench: the baseline's world: %s\n", palp_strerror(rc));
+    exit(1);
+  }
   for (int i = 0; i < sc.contact_count; i++) palp_world_remove_contact(w, i);
   const int f = palp_world_add_finger(w, farm_device(0, 0), 0.008);
+  if (f < 0) {
+    fprintf(stderr, "bench: the baseline's finger: %s\n", palp_strerror(f));
+    exit(1);
+  }
   enum { N = 2000 };
   static double us[N];
   for (int k = 0; k < N; k++) {
-    palp_world_set_finger(w, f, farm_device(0, k / rate), 0.008);
+    rc = palp_world_set_finger(w, f, farm_device(0, k / rate), 0.008);
     const int64_t a = palp_dds_now_ns();
-    palp_world_step(w);
+    if (rc >= 0) rc = palp_world_step(w);
     us[k] = (double)(palp_dds_now_ns() - a) * 1e-3;
+    if (rc < 0) {
+      fprintf(stderr, "bench: the baseline's step %d: %s\n", k, palp_strerror(rc));
+      exit(1);
+    }
   }
   palp_stage_timings tm;
   palp_world_timings(w, &tm);
@@ -772,6 +820,15 @@ int main(int argc, char **argv) {
       scene_path = realpath(argv[++i], abs_scene) ? abs_scene : argv[i];
     }
     else if (!strcmp(argv[i], "--haptic-domain") && i + 1 < argc) haptic_domain = (unsigned)atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--domain-base") && i + 1 < argc) {
+      char *end;
+      const long v = strtol(argv[++i], &end, 10);
+      if (*end || end == argv[i] || v < 0 || v > 227) { /* B+5 within Cyclone's 0-232; 0: the defaults */
+        fprintf(stderr, "bench_server: --domain-base must be a whole number from 1 to 227, or 0 for the defaults (got \"%s\")\n", argv[i]);
+        return 2;
+      }
+      domain_base = (unsigned)v;
+    }
     else if (!strcmp(argv[i], "--motion") && i + 1 < argc && (!strcmp(argv[i + 1], "strip") || !strcmp(argv[i + 1], "press")))
       strip_motion = !strcmp(argv[++i], "strip");
     else if (!strcmp(argv[i], "--rate") && i + 1 < argc && atof(argv[i + 1]) > 0) only_rate = atof(argv[++i]);
@@ -779,10 +836,16 @@ int main(int argc, char **argv) {
     else {
       fprintf(stderr, "usage: bench_server [latency|rtt|capacity|haptic|all] [--seconds S] [--threads N] [--max N] "
                       "[--contact-rate HZ] [--rt-priority N] [--no-db] [--scene FILE] [--secure] [--overrun-limit PCT] "
-                      "[--haptic-domain ID] [--motion press|strip] [--rate HZ]\n");
+                      "[--haptic-domain ID] [--domain-base B] [--motion press|strip] [--rate HZ]\n");
       return 2;
     }
   }
+  /* The loopback config for this process's participants too, whatever the caller exported: the
+   * server it starts always runs on it, and a lab's CYCLONEDDS_URI put the bench's own
+   * participants on the lab network, where the server is not (kept until session 82). */
+  const char *lab = getenv("CYCLONEDDS_URI");
+  if (lab && *lab && strcmp(what, "echo")) fprintf(stderr, "bench_server: CYCLONEDDS_URI ignored: the benchmark runs on loopback\n");
+  unsetenv("CYCLONEDDS_URI");
   if (palp_dds_use_config(PALP_DDS_DEFAULT_CONFIG) < 0) {
     fprintf(stderr, "bench: cannot read %s\n", PALP_DDS_DEFAULT_CONFIG);
     return 1;

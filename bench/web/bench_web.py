@@ -11,7 +11,7 @@ Phases, in one run (same machine state, so the comparison is fair):
   A2  baseline again (drift check)
 For each: the server's tick figures (palp_server_status, read by bench_web_status, not the bridge),
 the bridge's CPU share (of one core, from /proc), frames per second each page/client receives and
-the gaps between frames (median, p99). DDS domain 200.
+the gaps between frames (median, p99). DDS domain 202 (200 until session 82: a test's).
 
 usage: bench_web.py BUILD_DIR [--seconds S] [--rounds R] [--sessions N] [--no-browser] [--domain D]
 (default: 3 rounds of A and W, 10 s each, then B and A2 for 10 s: about 2.5 min)
@@ -31,7 +31,7 @@ sys.path.insert(0, os.path.join(SOURCE, "tests", "web"))
 import cdp  # noqa: E402
 import harness  # noqa: E402
 
-DOMAIN = 200
+DOMAIN = 202  # not a test's: 200 is db_recorder_ends' (until session 82 the default)
 TCK = os.sysconf("SC_CLK_TCK")
 
 
@@ -158,7 +158,7 @@ def main():
     no_browser = "--no-browser" in sys.argv
     global DOMAIN
     for i, a in enumerate(sys.argv):
-        if a == "--domain":  # another engineer may be running this benchmark on 200 at the same time
+        if a == "--domain":  # another engineer may be running this benchmark on 202 at the same time
             DOMAIN = int(sys.argv[i + 1])
     out = os.path.join(build, "bench", "web", "out")
     procs = harness.Procs(build, SOURCE, out, DOMAIN)
