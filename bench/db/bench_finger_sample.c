@@ -8,7 +8,9 @@
  * A fingertip (8 mm) pressed 9 mm into the dome at polar 30 deg, stepped STEPS times per
  * variant, alternating blocks of 250 steps so that both variants see the same machine load:
  * step only; step + sample every step (the worst case: physics at or below assess_sample_hz).
- * Prints the median and p90 per-step cost of each and the median difference. */
+ * Prints the median, p90 and p99 per-step cost of each, the differences and the ratios to
+ * "step only", the baseline of the same run (p99 and ratios since session 82). Every world
+ * call is checked: a world that refuses to step would be timed at under a microsecond. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,6 +31,15 @@ static double now_us(void) {
 static int cmp(const void *a, const void *b) {
   const double x = *(const double *)a, y = *(const double *)b;
   return (x > y) - (x < y);
+}
+
+/* A world or log call that failed: say which and stop (exit 1). */
+static void check(int rc, const char *what, int step) {
+  if (rc >= 0) return;
+  fprintf(stderr, "bench_finger_sample: %s", what);
+  if (step >= 0) fprintf(stderr, ", step %d", step);
+  fprintf(stderr, ": %s\n", palp_strerror(rc));
+  exit(1);
 }
 
 static int g_part; /* 0: all; 1: local model only; 2: + contacts (no enqueue) */
@@ -56,7 +67,17 @@ int main(int argc, char **argv) {
   char scratch[600];
   const char *db = argc > 2 ? argv[2] : bench_tmp_path("palp-bench-finger-sample", "bench.db", scratch, sizeof scratch);
   if (!db) return 1;
-  const int steps = argc > 3 ? atoi(argv[3]) : 5000;
+  int steps = 5000;
+  if (argc > 3) {
+    char *end;
+    const long v = strtol(argv[3], &end, 10);
+    /* the median is of these steps: none (0 read t0[0] of malloc(0)) is no run */
+    if (*end || end == argv[3] || v < 1 || v > 10000000) {
+      fprintf(stderr, "bench_finger_sample: STEPS must be a whole number from 1 to 10000000 (got \"%s\")\n", argv[3]);
+      return 2;
+    }
+    steps = (int)v;
+  }
   g_part = argc > 4 ? atoi(argv[4]) : 0;
   palp_scene sc;
   char err[256];
@@ -67,9 +88,10 @@ int main(int argc, char **argv) {
   sc.world.dt = 1.0 / 250;
   int e = 0;
   palp_world *w = palp_world_create(&sc.world, &e);
-  if (!w) return 1;
+  if (!w) check(e, "cannot create the world", -1);
   const double R = sc.world.mesh.radius, r = 0.008, p = 30 * 3.14159265358979 / 180;
   const int f = palp_world_add_finger(w, (palp_vec3){0, 0, R + r + 0.003}, r);
+  check(f, "the finger", -1);
   unlink(db);
   palp_db_writer *wr = NULL;
   palp_db_writer_opts o = palp_db_writer_default_opts();
@@ -81,23 +103,25 @@ int main(int argc, char **argv) {
                            .phantom_name = "bench", .scene_json = "{}", .params_json = "{}", .tick_hz = 250,
                            .dt_s = 1.0 / 250};
   palp_db_session s = 0;
-  palp_db_log_session_begin(wr, &d, &s);
+  check(palp_db_log_session_begin(wr, &d, &s), "the log's session", -1);
   /* press 9 mm in along the normal over 0.5 s, then hold */
   for (int k = 0; k < 250; k++) {
     const double depth = 0.009 * fmin(1.0, k / 125.0), q = R + r - depth;
-    palp_world_set_finger(w, f, (palp_vec3){q * sin(p), 0, q * cos(p)}, r);
-    palp_world_step(w);
+    check(palp_world_set_finger(w, f, (palp_vec3){q * sin(p), 0, q * cos(p)}, r), "the press", k);
+    check(palp_world_step(w), "the press", k);
   }
   double *t0 = malloc(sizeof(double) * (size_t)steps), *t1 = malloc(sizeof(double) * (size_t)steps);
+  if (!t0 || !t1) check(PALP_ENOMEM, "the step times", -1);
   int n0 = 0, n1 = 0, tris = 0;
   for (int block = 0; n0 < steps || n1 < steps; block++) {
     const int with = block % 2;
     for (int k = 0; k < 250; k++) {
       palp_world_wake(w); /* a held finger keeps the world awake anyway; be sure */
       const double a = now_us();
-      palp_world_step(w);
+      const int rc = palp_world_step(w);
       if (with) sample(w, f, wr, s);
       const double b = now_us();
+      check(rc, with ? "step + sample" : "step only", block * 250 + k);
       if (with && n1 < steps) t1[n1++] = b - a;
       if (!with && n0 < steps) t0[n0++] = b - a;
     }
@@ -115,10 +139,14 @@ int main(int argc, char **argv) {
   palp_db_writer_stats_get(wr, &st);
   palp_db_writer_close(wr);
   printf("finger 9 mm in at polar 30 deg, %d triangles touched; %d steps per variant\n", tris, steps);
-  printf("step only:            median %.1f us, p90 %.1f us\n", t0[n0 / 2], t0[n0 * 9 / 10]);
-  printf("step + finger sample: median %.1f us, p90 %.1f us\n", t1[n1 / 2], t1[n1 * 9 / 10]);
-  printf("added by the sample: %.1f us (median), %.1f us (p90); log: %lld records written, %lld shed\n",
-         t1[n1 / 2] - t0[n0 / 2], t1[n1 * 9 / 10] - t0[n0 * 9 / 10], (long long)st.written, (long long)st.shed);
+  /* p99 as the other benchmarks take it: sorted[floor(0.99 (n-1))] */
+  const double m0 = t0[n0 / 2], m1 = t1[n1 / 2], q0 = t0[n0 * 9 / 10], q1 = t1[n1 * 9 / 10];
+  const double r0 = t0[(int)floor(0.99 * (n0 - 1))], r1 = t1[(int)floor(0.99 * (n1 - 1))];
+  printf("step only:            median %.1f us, p90 %.1f us, p99 %.1f us\n", m0, q0, r0);
+  printf("step + finger sample: median %.1f us, p90 %.1f us, p99 %.1f us\n", m1, q1, r1);
+  printf("added by the sample: %.1f us (median), %.1f us (p90), %.1f us (p99); log: %lld records written, %lld shed\n",
+         m1 - m0, q1 - q0, r1 - r0, (long long)st.written, (long long)st.shed);
+  printf("step + sample / step only (same run): median %.3f, p99 %.3f\n", m1 / m0, r1 / r0);
   free(t0), free(t1);
   palp_world_destroy(w);
   return 0;

@@ -362,7 +362,10 @@ int main(int argc, char **argv) {
       palp_fem_cap_traction(&mesh, force, area, 6, f);
       const double t0 = now_s();
       if (palp_fem_solve_static(&m, f, palp_inc, INFINITY) == 0) uz_p = m.u[3 * mesh.top_node + 2];
-      else fprintf(stderr, "ccx_crosscheck: palp level %d: %s\n", L, m.err);
+      else {
+        fprintf(stderr, "ccx_crosscheck: palp level %d: %s\n", L, m.err);
+        fail = 1; /* a palp solve that fails is a failed run, as a ccx one is (exit 0 until session 82) */
+      }
       tp = now_s() - t0;
       newton = m.newton_iterations;
       struct rusage ru;

@@ -40,6 +40,17 @@ static palp_vec3 press_device(double t, double R) {
   return (palp_vec3){0.2 * h, 0, sqrt(1 - 0.04) * h};
 }
 
+/* 1 (said on stderr) when a world call failed: a world that refuses its finger or a job would
+ * still "step", in under a microsecond, and be printed as the session's cost (unchecked until
+ * session 82). */
+static int failed(int rc, const char *path, const char *what, int step) {
+  if (rc >= 0) return 0;
+  fprintf(stderr, "%s: %s", path, what);
+  if (step >= 0) fprintf(stderr, ", step %d", step);
+  fprintf(stderr, ": %s\n", palp_strerror(rc));
+  return 1;
+}
+
 static int run(const char *path, double rate, double seconds, int strip, double *share) {
   palp_scene sc;
   char err[256];
@@ -59,7 +70,12 @@ static int run(const char *path, double rate, double seconds, int strip, double 
   for (int k = 0; k < sc.contact_count; ++k) palp_world_remove_contact(w, k);
   const double R = sc.world.mesh.radius;
   const int f = palp_world_add_finger(w, strip ? palp_bench_strip_device(0, 0) : press_device(0, R), 0.008);
+  if (failed(f, path, "the finger", -1)) return 1;
   const int steps = (int)(seconds * rate + 0.5);
+  if (steps < 1) {
+    fprintf(stderr, "%s: %g s at %g Hz is no step\n", path, seconds, rate);
+    return 1;
+  }
   double *ts = malloc(sizeof(double) * (size_t)steps), *tj = malloc(sizeof(double) * (size_t)steps);
   if (!ts || !tj) return 1;
   int jobs = 0;
@@ -67,9 +83,11 @@ static int run(const char *path, double rate, double seconds, int strip, double 
   palp_factor_job *pending = NULL;
   for (int k = 0; k < steps; ++k) {
     const double t = k / rate;
-    palp_world_set_finger(w, f, strip ? palp_bench_strip_device(0, t) : press_device(t, R), 0.008);
+    if (failed(palp_world_set_finger(w, f, strip ? palp_bench_strip_device(0, t) : press_device(t, R), 0.008), path,
+               "the finger's device", k))
+      return 1;
     if (pending && palp_world_factor_due(w) <= palp_world_frame(w)) {
-      palp_world_factor_done(w, pending);
+      if (failed(palp_world_factor_done(w, pending), path, "installing a rebuild", k)) return 1;
       pending = NULL;
     }
     const double a = now_s();
@@ -83,8 +101,9 @@ static int run(const char *path, double rate, double seconds, int strip, double 
     palp_factor_job *j = palp_world_factor_claim(w);
     if (j) {
       const double b = now_s();
-      palp_factor_job_run(j);
+      const int jr = palp_factor_job_run(j);
       tj[jobs] = now_s() - b;
+      if (failed(jr, path, "a rebuild job", k)) return 1;
       job_sum += tj[jobs++];
       pending = j;
     }
