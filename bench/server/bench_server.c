@@ -869,8 +869,9 @@ int main(int argc, char **argv) {
     printf("  %-34s %9s %9s %9s %9s %7s\n", "", "p50[us]", "p99[us]", "max[us]", "mean[us]", "n");
     for (int k = 0; k < 2; k++) {
       double rate = k ? 1000.0 : 100.0;
+      stats s = {NAN, NAN, NAN, NAN, 0};
       if (all || !strcmp(what, "latency")) {
-        stats s = latency_run(rate);
+        s = latency_run(rate);
         printf("  contact->feedback at %4.0f Hz ticks   %9.0f %9.0f %9.0f %9.0f %7zu\n", rate, s.p50, s.p99, s.max,
                s.mean, s.n);
       }
@@ -878,6 +879,9 @@ int main(int argc, char **argv) {
       stats b = rtt_run(rate, argv[0]);
       printf("  plain DDS round trip, %4.0f Hz sends %9.0f %9.0f %9.0f %9.0f %7zu\n", rate, b.p50, b.p99, b.max, b.mean,
              b.n);
+      /* the same-run baseline as a ratio (session 82): what the server's tick and step add to two DDS hops */
+      if (s.n && b.n)
+        printf("  contact->feedback / round trip       %9.2f %9.2f\n", s.p50 / b.p50, s.p99 / b.p99);
       fflush(stdout);
     }
     printf("  (target: p99 < 3000 us at 1 kHz; the tick adds up to one period of waiting, mean half a period)\n");
