@@ -119,6 +119,10 @@ int main(int argc, char **argv) {
          scene.name, scene.frames, full, scene.frame_period);
   char buf[64];
   snprintf(buf, sizeof buf, "%s", levels);
+  /* The same-run baseline (session 82): the first level of --levels; each later level's median
+   * frame is printed as a ratio to it. */
+  double base_med = 0, base_p99 = 0;
+  int base_level = 0;
   for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
     palp_fem_config cfg = palp_fem_default_config();
     cfg.mesh.level = atoi(tok);
@@ -234,15 +238,20 @@ int main(int argc, char **argv) {
       if (dt[i] > 0.5) printf(" %d (%.2f s)", i + 1, dt[i]), ++over;
     printf("%s\n", over ? "" : " none");
     qsort(dt, (size_t)n, sizeof *dt, cmp);
-    const double med = dt[n / 2], p90 = dt[(int)(0.9 * (n - 1))], mx = dt[n - 1];
+    const double med = dt[n / 2], p90 = dt[(int)(0.9 * (n - 1))], p99 = dt[(int)floor(0.99 * (n - 1))], mx = dt[n - 1];
     const double total = st.t[n] - run0, run_setup = st.t[0] - run0;
     printf("level %s: %d nodes, %d hexahedra, %d free DOFs; nnz(L) %.3g, %.3g Gflop per factorisation\n", tok,
            mesh.node_count, mesh.element_count, r.dof_count, lnz, 1e-9 * fl);
     printf("  setup (model, sparsity, symbolic, 1 assembly) %.2f s; one numeric factorisation %.2f s\n", setup, tf);
     printf("  the run's setup before frame 1 (mesh, map, model, symbolic analysis, first numeric factorisation): "
            "%.2f s (not in the frame times below)\n", run_setup);
-    printf("  per 10 ms frame: mean %.3f s, median %.3f s, p90 %.3f s, max %.3f s (first frame %.3f s)\n", mean, med,
-           p90, mx, first);
+    printf("  per 10 ms frame: mean %.3f s, median %.3f s, p90 %.3f s, p99 %.3f s, max %.3f s (first frame %.3f s)\n",
+           mean, med, p90, p99, mx, first);
+    if (!base_level)
+      base_med = med, base_p99 = p99, base_level = cfg.mesh.level;
+    else
+      printf("  vs level %d, this run's baseline (the first of --levels): median x%.2f, p99 x%.2f\n", base_level,
+             med / base_med, p99 / base_p99);
     {
       double a, b, c, d, e, f;
       frame_stats(st.ct, n, &a, &b, &c);
