@@ -785,6 +785,9 @@ static void haptic_run(double rate) {
     printf("  (the server alone used %.3f of a core per session at the largest count held: two cores of its own, "
            "stations elsewhere, would give it room for ~%.0f sessions at 100%% of both, a projection, not a hold)\n",
            cores_per_session, 2.0 / cores_per_session);
+  if (cores_per_session > 0 && base.mean > 0) /* the same-run baseline as a ratio (session 82) */
+    printf("  (the server's core per session over the baseline model step's own, mean %.0f us x %.0f Hz = %.3f of a core: "
+           "x%.2f)\n", base.mean, rate, base.mean * 1e-6 * rate, cores_per_session / (base.mean * 1e-6 * rate));
   printf("  (by the tick passes' share alone, this benchmark's criterion until 2026-12-02, which neither counts the slots "
          "a pass that fell behind dropped nor tells one session's late step from its group's: %d, up to where this run "
          "stopped)\n", held_passes);
