@@ -21,6 +21,14 @@ double palp_place_clock_shown(palp_vec3 p);
  * |p| x (angle of p from +z). */
 double palp_place_arc(palp_vec3 p);
 
+/* A length of a place or a lump [m] in the whole millimetres every tool prints it with ("%.0f" of
+ * metres x 1e3, the station's debrief and palp-review), as a number to send: rounded as printf rounds
+ * (to nearest, a tie to even, in the default rounding mode), so a page that prints it with no decimals
+ * reads what the station does. Send this, not a value rounded to 0.1 mm: the page's toFixed(0) then
+ * rounded it again, ties up, and 24.46 mm read "25" on the page and "24" on the station (session 82
+ * review). Non-finite in, 0 out. */
+double palp_place_mm_shown(double metres);
+
 /* Nearer the pole than this along the surface [m], a place has no clock position worth reading, and
  * every tool says "the pole" instead of a clock. One clock hour there spans less than 2 pi s / 12 =
  * 0.52 mm of skin, less than the fingertip's own wander while it holds still (0.1-0.5 mm in the logs),

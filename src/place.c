@@ -20,6 +20,12 @@ double palp_place_clock_shown(palp_vec3 p) {
   return (double)n * PALP_PLACE_CLOCK_STEP;
 }
 
+double palp_place_mm_shown(double metres) {
+  const double mm = metres * 1e3;
+  /* nearbyint: the current rounding mode (to nearest, ties to even), as printf's "%.0f" of the same double */
+  return isfinite(mm) ? nearbyint(mm) : 0.0;
+}
+
 double palp_place_arc(palp_vec3 p) {
   /* the great-circle distance from the pole of the sphere through p: r x (angle from +z) [m] */
   const double r = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);

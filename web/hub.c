@@ -1031,9 +1031,10 @@ static cJSON *answers_json(palp_web_hub *h, session *s) {
     cJSON_AddNumberToObject(o, "found_by", r.lesion_found[l] >= 0 ? a->id[r.lesion_found[l]] : 0);
     cJSON_AddNumberToObject(o, "clock_h", palp_place_clock_shown(p)); /* as the page prints it: 12, never 0 */
     cJSON_AddBoolToObject(o, "at_pole", palp_place_at_pole(p)); /* no clock worth reading there */
-    cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
-    cJSON_AddNumberToObject(o, "across_mm", round(L->diameter * 1e4) / 10);
-    cJSON_AddNumberToObject(o, "deep_mm", round(L->depth * 1e4) / 10);
+    /* whole mm as the station and palp-review print them (palp_place_mm_shown; 0.1 mm before session 82) */
+    cJSON_AddNumberToObject(o, "arc_mm", palp_place_mm_shown(palp_place_arc(p)));
+    cJSON_AddNumberToObject(o, "across_mm", palp_place_mm_shown(L->diameter));
+    cJSON_AddNumberToObject(o, "deep_mm", palp_place_mm_shown(L->depth));
     cJSON_AddItemToObject(o, "point_mm", place_json(p));
     cJSON_AddItemToArray(lumps, o);
   }
@@ -1534,9 +1535,10 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
     cJSON_AddNumberToObject(o, "found_by", l->found_by);
     cJSON_AddNumberToObject(o, "clock_h", palp_place_clock_shown(p)); /* as the page prints it: 12, never 0 */
     cJSON_AddBoolToObject(o, "at_pole", palp_place_at_pole(p)); /* no clock worth reading there */
-    cJSON_AddNumberToObject(o, "arc_mm", round(palp_place_arc(p) * 1e4) / 10);
-    cJSON_AddNumberToObject(o, "across_mm", round(l->diameter * 1e4) / 10);
-    cJSON_AddNumberToObject(o, "deep_mm", round(l->depth * 1e4) / 10);
+    /* whole mm as the station and palp-review print them (palp_place_mm_shown; 0.1 mm before session 82) */
+    cJSON_AddNumberToObject(o, "arc_mm", palp_place_mm_shown(palp_place_arc(p)));
+    cJSON_AddNumberToObject(o, "across_mm", palp_place_mm_shown(l->diameter));
+    cJSON_AddNumberToObject(o, "deep_mm", palp_place_mm_shown(l->depth));
     const double pt[3] = {round(p.x * 1e4) / 10, round(p.y * 1e4) / 10, round(p.z * 1e4) / 10};
     cJSON_AddItemToObject(o, "point_mm", cJSON_CreateDoubleArray(pt, 3));
     cJSON_AddItemToArray(arr, o);

@@ -141,11 +141,15 @@ def run(build, source, out):
               % (name, c and ["%.1f%%" % (100 * x) for x in c], d.get("coverage_rule"),
                  ["%.1f%%" % (100 * x) for x in station_cov], 100 * TOLERANCE))
         for (k, verdict, clock, arc, across, deep), l in zip(lumps, d["lumps"]):
-            same = (verdict == "MISSED") == (l["found_by"] == 0) and abs(float(clock) - l["clock_h"]) <= 0.051 and \
-                abs(float(arc) - l["arc_mm"]) <= 0.51 and abs(float(across) - l["across_mm"]) <= 0.51 and \
-                abs(float(deep) - l["deep_mm"]) <= 0.51 and l.get("at_pole") is (l["arc_mm"] < 1.0)
-            check(same, "%s: lump %s on the page (%s, %.2f h, %.1f mm from the pole (at_pole %s: within 1 mm), %.1f across, "
-                  "%.1f deep) is the station's (%s, %s h, %s mm, %s, %s; tolerance the printed rounding)"
+            # The words the pages print (PALP.debriefLump: clock_h.toFixed(1), the millimetres toFixed(0)) are the
+            # station's, string for string: the bridge sends the numbers as the station prints them (since
+            # session 82; a 0.51 mm tolerance had let the page read 1 mm off the station in 1 lump of 20).
+            page = ("%.1f" % l["clock_h"], "%.0f" % l["arc_mm"], "%.0f" % l["across_mm"], "%.0f" % l["deep_mm"])
+            same = (verdict == "MISSED") == (l["found_by"] == 0) and page == (clock, arc, across, deep) and \
+                all(float(x).is_integer() for x in (l["arc_mm"], l["across_mm"], l["deep_mm"])) and \
+                l.get("at_pole") is False  # the station printed a clock: not at the pole
+            check(same, "%s: lump %s on the page (%s, %s h, %s mm from the pole (at_pole %s), %s across, "
+                  "%s deep) is the station's (%s, %s h, %s mm, %s, %s; string for string)"
                   % (name, k, "found" if l["found_by"] else "missed", l["clock_h"], l["arc_mm"], l.get("at_pole"), l["across_mm"],
                      l["deep_mm"], verdict, clock, arc, across, deep))
 
