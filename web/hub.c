@@ -2663,6 +2663,12 @@ static void set_reply(palp_web_cursor *c, const char *op, int ok, uint32_t mark_
   c->reply_len = n > 0 && (size_t)n < sizeof c->reply ? (size_t)n : 0;
 }
 
+/* A control refused for the page's token, told to the page: {"type": "refused", "message": ...}. */
+static void set_refused(palp_web_cursor *c, const char *why) {
+  const int n = snprintf(c->reply, sizeof c->reply, "{\"type\":\"refused\",\"message\":\"%s\"}", why);
+  c->reply_len = n > 0 && (size_t)n < sizeof c->reply ? (size_t)n : 0;
+}
+
 /* {"finding": "mark" | "withdraw"} from a page (web thread). Every check is made here, under the
  * mutex, against what the DDS thread holds; the write itself happens outside it. */
 static int scope_allows(const palp_web_hub *h, const palp_web_cursor *c, uint32_t id);
@@ -2819,6 +2825,10 @@ int palp_web_hub_control(palp_web_hub *h, palp_web_cursor *c, const char *msg, s
   /* A scoped page (a trainee's token) sees that trainee's sessions only: no dashboard, and a session
    * it follows must be known to be that trainee's. */
   if (c->scope[0] && (mode == PALP_WEB_FOLLOW_ALL || (mode == PALP_WEB_FOLLOW_SESSION && !scope_allows(h, c, id)))) {
+    /* refused, and told why (since session 82: the dashboard opened with a trainee's token said "live"
+     * and waited for ever); still an error for the counters */
+    set_refused(c, mode == PALP_WEB_FOLLOW_ALL ? "this link's token is a trainee's: the dashboard is for instructors"
+                                               : "this link's token is a trainee's: that session is not hers");
     pthread_mutex_unlock(&h->mu);
     return PALP_EINVAL;
   }

@@ -391,6 +391,7 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
         lws_callback_on_writable(wsi);
       } else {
         s->stats.control_bad++;
+        lws_callback_on_writable(wsi); /* a refusal the hub explains (a trainee's token's dashboard) is sent */
       }
       c->rx_len = 0;
       c->rx_overflow = 0;

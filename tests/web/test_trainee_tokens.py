@@ -5,7 +5,8 @@ palp-web with --token (the instructors') and --trainee-tokens (alice's and bob's
 bob each press a sine on their own phantom. With alice's token:
 - the pages are served (200) and the cookie set is alice's token, not the instructors';
 - the session list names alice's session only, no server status is sent;
-- following bob's session, or every session (the dashboard), gets nothing: no frame in 3 s;
+- following bob's session, or every session (the dashboard), gets nothing: no frame in 3 s, and one
+  `refused` message saying why (since session 82);
 - following her own session streams it;
 - while bob's exercise session ("easy") runs, the instructors' dashboard is sent where its lump is hidden
   (an `answers` message: the server runs with "session_exercise": "always", this test's copy of
@@ -127,6 +128,11 @@ def run(build, source, out):
         k2, f_all = harness.ws_messages(ws, 3.0)
         check(f_bob == 0 and f_all == 0, "following bob's session or every session gets alice's page nothing "
               "(%d and %d frames in 3 s)" % (f_bob, f_all))
+        # ... but told why, each time (since session 82: the dashboard with her token said "live" and waited)
+        r1, r2 = k1.get("refused", []), k2.get("refused", [])
+        check(len(r1) == 1 and "not hers" in r1[0]["message"] and len(r2) == 1 and
+              "dashboard is for instructors" in r2[0]["message"],
+              "and is told why: %r, %r" % ([m["message"] for m in r1], [m["message"] for m in r2]))
         ws.send(json.dumps({"follow": ids["alice"]}))
         k3, f_mine = harness.ws_messages(ws, 3.0)
         check(f_mine >= 15, "following her own session streams it: %d frames in 3 s (>= 15)" % f_mine)
