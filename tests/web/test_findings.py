@@ -334,9 +334,10 @@ def run(build, source, out):
         red = "rgb(176, 0, 32)"  # the dashboard's warning colour (the cards' "warn", the server's "bad")
 
         def shows_it(r, exercise):
-            covered = re.match(r"^(\d+) / (\d+) / (\d+) %$", r["cells"][8]) if r is not None else None
+            # %, 1 decimal (docs/naming.md; 0 decimals before session 82)
+            covered = re.match(r"^(\d+\.\d) / (\d+\.\d) / (\d+\.\d) %$", r["cells"][8]) if r is not None else None
             return (r is not None and r["rows"] == 1 and r["cells"][:8] == want[:2] + [exercise] + want[3:] and
-                    covered is not None and all(abs(int(x) - 100 * c) <= 0.5 + 1e-9 for x, c in zip(covered.groups(), cov)) and
+                    covered is not None and all(abs(float(x) - 100 * c) <= 0.05 + 1e-9 for x, c in zip(covered.groups(), cov)) and
                     [t for t, _ in r["lumps"]] == page_lumps and
                     all((c == red) == (l["found_by"] == 0) for (_, c), l in zip(r["lumps"], told["lumps"])))
 

@@ -15,17 +15,48 @@ const PALP = (function () {
 
   function params() { return new URLSearchParams(window.location.search); }
 
+  /* The access token: read once from this page's address, kept in this tab's sessionStorage and taken
+   * out of the address (history.replaceState), so that the address bar and the history of a projected
+   * dashboard do not show the instructors' token to the class (since session 82). A reload, or a page
+   * this tab opens, finds it there; the HttpOnly cookie of the first load keeps serving the files. */
+  const TOKEN_KEY = "palp_token";
+  const token = (function () {
+    let u;
+    try { u = new URL(window.location.href); } catch (e) { return null; }
+    const given = u.searchParams.get("token");
+    let kept = null;
+    try {
+      if (given) window.sessionStorage.setItem(TOKEN_KEY, given);
+      kept = window.sessionStorage.getItem(TOKEN_KEY);
+    } catch (e) { kept = null; } /* no storage (a locked-down browser): the address's own */
+    if (u.searchParams.has("token")) {
+      u.searchParams.delete("token");
+      try { window.history.replaceState(window.history.state, "", u.pathname + u.search + u.hash); } catch (e) { /* kept */ }
+    }
+    return given || kept || null;
+  })();
+  /* the page's token (or null), and a link to another page of this bridge carrying it */
+  function getToken() { return token; }
+  function withToken(href) {
+    return token ? href + (href.indexOf("?") >= 0 ? "&" : "?") + "token=" + encodeURIComponent(token) : href;
+  }
+
   /* Binary frame, little-endian (web/hub.h): u32 magic 'PDEF', u32 session, u32 phantom, u32 n,
    * f64 frame, f64 sim_time [s], then n x 3 f32 displacement from rest [m]. */
-  const MAGIC = 0x46454450, HEADER = 32;
+  const MAGIC = 0x46454450, HEADER = 32, DISP_MAX_M = 10; /* [m], the visual station's bound */
   function decodeDeformation(buf) {
     if (buf.byteLength < HEADER) return null;
     const v = new DataView(buf);
     if (v.getUint32(0, true) !== MAGIC) return null;
     const n = v.getUint32(12, true);
     if (buf.byteLength !== HEADER + 12 * n) return null;
+    /* the values too, as the visual station checks them (palp_cli_deformation_check): a non-finite or
+     * absurd displacement (beyond DISP_MAX_M) would pin the session's scale at its top for good and
+     * make the mesh vanish (since session 82) */
+    const disp = new Float32Array(buf, HEADER, 3 * n);
+    for (let i = 0; i < disp.length; i++) if (!(Math.abs(disp[i]) <= DISP_MAX_M)) return null;
     return { session: v.getUint32(4, true), phantom: v.getUint32(8, true), n: n, frame: v.getFloat64(16, true),
-      sim_time: v.getFloat64(24, true), disp: new Float32Array(buf, HEADER, 3 * n) };
+      sim_time: v.getFloat64(24, true), disp: disp };
   }
 
   /* The bridge's finding replies a page keeps (for its messages and the tests): the newest REPLIES_KEPT
@@ -40,7 +71,7 @@ const PALP = (function () {
     frames: 0, messages: 0, reconnects: 0, findingReplies: [], expired: null };
   window.palpState = state;
 
-  /* Opens the WebSocket (the token from this page's own address), calls handlers[type](msg) for
+  /* Opens the WebSocket (the token this page was opened with, PALP.token()), calls handlers[type](msg) for
    * every message and handlers.deformation(frame) for frames; reconnects, except once the bridge said
    * this page's token expired ({"type": "expired"}): its message stays shown, as no retry with the
    * same token can succeed. A connection the bridge did not answer (refused at the handshake, or closed
@@ -55,7 +86,6 @@ const PALP = (function () {
    * address's answer tells. */
   const RETRY_MS = 1000, RETRY_MAX_MS = 30000, SAY_AFTER = 3, PROBE_MS = 2000;
   function connect(handlers) {
-    const token = params().get("token");
     const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" +
       (token ? "?token=" + encodeURIComponent(token) : "");
     const conn = document.getElementById("conn");
@@ -141,11 +171,18 @@ const PALP = (function () {
         }
         let m;
         try { m = JSON.parse(ev.data); } catch (e) { return; }
+        /* a message is an object with a string type; anything else (null, a number, an array) is
+         * ignored, not read (since session 82: a null threw) */
+        if (!m || typeof m !== "object" || Array.isArray(m) || typeof m.type !== "string") return;
         if (m.type === "hello") state.hello = m;
         else if (m.type === "phantom") state.phantoms[m.id] = m;
-        else if (m.type === "sessions") state.sessions = m.sessions;
+        else if (m.type === "sessions") { if (!Array.isArray(m.sessions)) return; state.sessions = m.sessions; }
         else if (m.type === "status") state.status = m;
         else if (m.type === "finding_reply") keepReply(state.findingReplies, m);
+        else if (m.type === "refused") { /* a control this page's token may not send (a trainee's dashboard) */
+          state.refusedControl = String(m.message);
+          if (conn) { conn.textContent = "refused: " + state.refusedControl; conn.className = "conn"; }
+        }
         else if (m.type === "expired") { state.expired = String(m.message); setConn(false, state.expired); }
         if (handlers[m.type]) handlers[m.type](m);
       };
@@ -218,9 +255,18 @@ const PALP = (function () {
   }
   /* one lump of a debrief at "lesions" (i from 0), or of the dashboard's hidden lumps, where it is in the words every palp tool uses for a
    * place (docs/naming.md: the clock seen from above, the arc from the pole along the skin) */
+  /* a lump of a `debrief` or `answers` message with the fields debriefLump and the drawings read (since session 82) */
+  function lumpValid(l) {
+    return !!l && typeof l === "object" && Number.isFinite(l.found_by) && Number.isFinite(l.clock_h) &&
+      Number.isFinite(l.arc_mm) && Number.isFinite(l.across_mm) && Number.isFinite(l.deep_mm) &&
+      Array.isArray(l.point_mm) && l.point_mm.length === 3 && l.point_mm.every(Number.isFinite);
+  }
   function debriefLump(l, i, live) {
     /* live: the dashboard's hidden lumps while the session runs (an `answers` message): not missed yet */
-    /* at_pole: within 1 mm of it (src/palp_place.h), where a clock hour is noise */
+    /* at_pole: within 1 mm of it (src/palp_place.h), where a clock hour is noise. arc_mm, across_mm and
+     * deep_mm come as the whole millimetres the station and palp-review print (the bridge rounds them as
+     * "%.0f" does, palp_place_mm_shown): toFixed(0) only writes them (since session 82; rounded twice,
+     * 0.1 mm by the bridge and ties up here, one lump in 20 read 1 mm off the station's) */
     return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : live ? "not found yet" : "MISSED") + ": " +
       (l.at_pole ? "at the pole; " : "at " + l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; ") +
       l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
@@ -236,9 +282,9 @@ const PALP = (function () {
   }
   function coverValid(bands, n) { return typeof bands === "string" && bands.length === n && /^[0-9a-f]*$/.test(bands); }
 
-  return { viridis: viridis, css: css, params: params, connect: connect, state: state, coverColour: coverColour,
+  return { viridis: viridis, css: css, params: params, token: getToken, withToken: withToken, connect: connect, state: state, coverColour: coverColour,
     coverValid: coverValid,
     decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
-    plural: plural, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump,
+    plural: plural, lumpValid: lumpValid, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump,
     minutes: minutes, coveredText: coveredText, keepReply: keepReply, REPLIES_KEPT: REPLIES_KEPT };
 })();

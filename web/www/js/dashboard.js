@@ -4,7 +4,7 @@
  * sessions that ended lately, each with what its trainee's marks found (the server's debrief). */
 "use strict";
 (function () {
-  const st = PALP.state, token = PALP.params().get("token");
+  const st = PALP.state;
   st.dashboard = { cards: [], frames: 0, fpsPerSession: {} };
   const grid = document.getElementById("grid"), cards = new Map();
   let scaleMin = 30, scaleMax = 30; /* the bridge's bounds of each card's own scale (PALP.scaleFor) */
@@ -37,7 +37,7 @@
     el.append(h, cv, lumps, tb);
     el.addEventListener("click", function () {
       /* followed as an observer: the instructor's view of a trainee page never marks findings */
-      location.href = "trainee.html?session=" + s.id + "&role=observer" + (token ? "&token=" + encodeURIComponent(token) : "");
+      location.href = PALP.withToken("trainee.html?session=" + s.id + "&role=observer"); /* taken out of the address there */
     });
     grid.appendChild(el);
     const c = { el: el, name: name, band: band, canvas: cv, table: tb, lumps: lumps, proj: null, disp: null, phantom: 0, frames: 0, t0: performance.now(), fps: 0,
@@ -188,8 +188,8 @@
         "keeps its session a few seconds to come back (docs/server.md, station_grace)"],
       ["exercise", s.exercise || "none"],
       s.band_rule === "exercise" ?
-        ["coverage l / m / d", fmt(100 * s.coverage[0], 0) + " / " + fmt(100 * s.coverage[1], 0) + " / " +
-          fmt(100 * s.coverage[2], 0) + " %", false,
+        ["coverage l / m / d", fmt(100 * s.coverage[0], 1) + " / " + fmt(100 * s.coverage[1], 1) + " / " +
+          fmt(100 * s.coverage[2], 1) + " %", false, /* %, 1 decimal (docs/naming.md) */
           "share of the dome's skin pressed at light, medium and deep pressure, each level itself, as the exercise " +
           "grades thoroughness (by the fingertip's depth), since the bridge began following the session: the skin under " +
           "the fingertip at the physics steps the review samples (a force-driven finger: the footprint disc around each " +
@@ -406,6 +406,8 @@
       PALP.minutes(s.duration) + " palpating, peak " + s.peak_force + " N; the log: " + s.log_health;
   }
   function debrief(m) {
+    if (!Number.isFinite(m.session) || (m.level === "lesions" && !(Array.isArray(m.lumps) && m.lumps.every(PALP.lumpValid))))
+      return; /* checked before use (since session 82) */
     const old = endedRows.get(m.session);
     if (old) old.remove(); /* a reconnect's replay: each session once, in the bridge's order */
     const tr = document.createElement("tr"), told = m.level !== "none";
@@ -422,7 +424,7 @@
     cell(tr, m.reason + (Number.isFinite(m.duration) ? " after " + PALP.minutes(m.duration) : ""), "",
       "why the session ended (the server's word), and after how long (m:ss, the server's figure)");
     const cov = PALP.coveredText(m); /* as the card's "coverage l / m / d" while it ran */
-    cell(tr, cov ? m.coverage.map(function (f) { return (100 * f).toFixed(0); }).join(" / ") + " %" : "n/a", "n",
+    cell(tr, cov ? m.coverage.map(function (f) { return (100 * f).toFixed(1); }).join(" / ") + " %" : "n/a", "n",
       cov ? "the skin pressed at light, medium and deep pressure, each level itself, as the exercise grades thoroughness " +
         "(the bridge's own figure since it began following the session; the review's within a few points): " + cov
         : "the bridge saw no coverage in the exercise's bands for this session");
@@ -479,7 +481,7 @@
     cell(tr, "before this page's bridge followed it" + (g ? "; palpated " + PALP.minutes(m.duration) : ""), "muted",
       "the bridge did not see this session end (it was restarted since); the time is the score's, first to last " +
       "finger sample");
-    cell(tr, g ? m.coverage.map(function (f) { return Number(f).toFixed(0); }).join(" / ") + " %" : "n/a", "n",
+    cell(tr, g ? m.coverage.map(function (f) { return Number(f).toFixed(1); }).join(" / ") + " %" : "n/a", "n",
       "the skin pressed at light, medium and deep pressure, as the server's score grades thoroughness");
     tr.insertCell().className = "score";
     cell(tr, "not seen by this bridge: " + rest, "lumps muted");
@@ -508,7 +510,8 @@
     hello: function (m) {
       scaleMax = m.scale_mm;
       scaleMin = m.scale_min_mm !== undefined ? m.scale_min_mm : m.scale_mm;
-      for (const c of cards.values()) c.scaleMm = scaleMin;
+      /* the bounds only: a reconnect keeps each open session's scale, clamped to them (since session 82) */
+      for (const c of cards.values()) c.scaleMm = Math.min(scaleMax, Math.max(scaleMin, c.scaleMm));
       PALP.drawColourbar(document.getElementById("colourbar"), 1, " x");
     },
     phantom: function () {
@@ -546,6 +549,10 @@
       draw(c, c.disp);
     },
     answers: function (m) {
+      if (!Number.isFinite(m.session) || !Array.isArray(m.lumps) || !m.lumps.every(PALP.lumpValid) ||
+          !Array.isArray(m.marks_at) || !m.marks_at.every(function (k) {
+            return k && Array.isArray(k.point_mm) && k.point_mm.length === 3 && k.point_mm.every(Number.isFinite);
+          })) return; /* checked before use (since session 82) */
       if (m.ended) {
         keepEnded(endedAnswers, "endedAnswers", m);
         const tr = endedRows.get(m.session);

@@ -29,17 +29,30 @@
   T.score = null;         /* its score, where the exercise tells the lesions (a practice exercise) */
   let exercises = [], lastSession = null, findings = null, findingsAt = 0;
   let followedLast = 0; /* the session this page followed before T.session, whose debrief may come late */
-  const token = p.get("token");
-  if (token) document.getElementById("back").href = "dashboard.html?token=" + encodeURIComponent(token);
+  document.getElementById("back").href = PALP.withToken("dashboard.html");
 
   /* ---- three.js scene, z up as on the wire ---- */
   const view = document.getElementById("view");
   /* No multisampling and one pixel per CSS pixel: a classroom PC may render in software (as the
-   * tests do, SwiftShader), where both multiply the cost of a frame. */
-  const renderer = new THREE.WebGLRenderer({ antialias: false });
-  renderer.setPixelRatio(1);
-  renderer.setClearColor(0xf4f5f7);
-  view.insertBefore(renderer.domElement, view.firstChild);
+   * tests do, SwiftShader), where both multiply the cost of a frame. A browser with no WebGL (a
+   * blocklisted GPU, a VM, remote desktop: three.js throws) loses the 3D view only: the page says so
+   * and everything else (force, gauge, coverage, exercise, findings, debrief) works without it
+   * (since session 82; before, the throw stopped the whole script and the page said "connecting"
+   * for ever). */
+  let renderer = null;
+  T.view = "3d";
+  try {
+    renderer = new THREE.WebGLRenderer({ antialias: false });
+    renderer.setPixelRatio(1);
+    renderer.setClearColor(0xf4f5f7);
+    view.insertBefore(renderer.domElement, view.firstChild);
+  } catch (e) {
+    renderer = null;
+    const why = String((e && e.message) || e || "no WebGL").replace(/[.\s]+$/, "");
+    T.view = "3D view unavailable: " + why;
+    document.getElementById("waiting").textContent = T.view + " (this browser gives no WebGL; the force, " +
+      "coverage, exercise and findings still work)";
+  }
   const scene = new THREE.Scene();
   const camera = new THREE.PerspectiveCamera(40, 1, 0.001, 10);
   camera.up.set(0, 0, 1);
@@ -47,9 +60,11 @@
   const sun = new THREE.DirectionalLight(0xffffff, 0.55);
   sun.position.set(0.5, -0.6, 1.2);
   scene.add(sun);
-  const controls = new THREE.OrbitControls(camera, renderer.domElement);
-  controls.enableDamping = false;
-  controls.addEventListener("change", function () { dirty = true; });
+  const controls = renderer ? new THREE.OrbitControls(camera, renderer.domElement) : null;
+  if (controls) {
+    controls.enableDamping = false;
+    controls.addEventListener("change", function () { dirty = true; });
+  }
 
   let mesh = null, geom = null, rest = null, phantom = null, dirty = true, latest = null;
   let scaleMm = 30, scaleMin = 30, scaleMax = 30; /* this session's scale; the bridge's bounds (hello) */
@@ -63,7 +78,7 @@
 
   function resize() {
     const w = view.clientWidth || 600, h = view.clientHeight || 400;
-    renderer.setSize(w, h, false);
+    if (renderer) renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
     dirty = true;
@@ -123,11 +138,13 @@
     setDisplacement(null);
     const R = ph.radius;
     camera.position.set(1.6 * R, -2.6 * R, 2.3 * R);
-    controls.target.set(0, 0, 0.3 * R);
-    controls.minDistance = 0.8 * R;
-    controls.maxDistance = 12 * R;
-    controls.update();
-    document.getElementById("waiting").textContent = "";
+    if (controls) {
+      controls.target.set(0, 0, 0.3 * R);
+      controls.minDistance = 0.8 * R;
+      controls.maxDistance = 12 * R;
+      controls.update();
+    }
+    if (renderer) document.getElementById("waiting").textContent = ""; /* else it keeps saying why there is no view */
     T.phantom = ph.id;
     dirty = true;
   }
@@ -151,7 +168,7 @@
     geom.computeVertexNormals();
     geom.computeBoundingSphere();
     T.maxDispMm = max;
-    document.getElementById("maxdisp").textContent = max.toFixed(max < 10 ? 2 : 1);
+    document.getElementById("maxdisp").textContent = max.toFixed(2); /* mm, 2 decimals (docs/naming.md) */
     dirty = true;
   }
 
@@ -168,7 +185,7 @@
   const tipGeom = new THREE.SphereBufferGeometry(1, 20, 14), deviceGeom = new THREE.SphereBufferGeometry(0.0025, 12, 8);
   const pool = { tip: [], device: [], arrow: [] };
   T.fingerObjects = 0;            /* objects ever made for the fingers, for tests */
-  T.memory = renderer.info.memory; /* the renderer's geometries and textures, for tests */
+  T.memory = renderer ? renderer.info.memory : null; /* the renderer's geometries and textures, for tests */
   function pooled(kind, i, make) {
     if (i < pool[kind].length) return pool[kind][i];
     const o = make();
@@ -179,6 +196,8 @@
     T.fingerObjects++;
     return o;
   }
+  /* three finite numbers */
+  function vec3(v) { return Array.isArray(v) && v.length === 3 && v.every(Number.isFinite); }
   T.proxy = null; /* the newest drawn proxy, for tests: {proxy, device, in_contact, force_limit, out_of_range} */
   function setFingers(list) {
     fingerObjs.length = 0;
@@ -190,7 +209,8 @@
     }
     let flagsSeen = 0, drawnProxy = null; /* the drawn fingers' local-model flags, together */
     for (const f of list) {
-      const hasProxy = f.mode === "finger" && Array.isArray(f.proxy) && Array.isArray(f.device);
+      if (!f || !vec3(f.center) || !vec3(f.force)) continue; /* checked before use (since session 82) */
+      const hasProxy = f.mode === "finger" && vec3(f.proxy) && vec3(f.device);
       const at = hasProxy ? f.proxy : f.center;
       const c = new THREE.Vector3(at[0], at[1], at[2]);
       if (f.mode === "force" && geom) {
@@ -219,11 +239,13 @@
       }
       const F = new THREE.Vector3(f.force[0], f.force[1], f.force[2]), mag = F.length();
       if (f.mode === "force" && mag > 1e-3) {
-        const len = 0.01 * mag, dir = F.clone().normalize();
-        const a = take("arrow", function () { return new THREE.ArrowHelper(dir, c, len, 0xd55e00, 0.006, 0.004); });
+        /* 10 mm per newton, head included: the head at most half the arrow (a fixed 6 mm head drew every
+         * force under 0.6 N as a 6 mm arrow, its cone past the tail; since session 82) */
+        const len = 0.01 * mag, dir = F.clone().normalize(), head = Math.min(0.006, 0.5 * len);
+        const a = take("arrow", function () { return new THREE.ArrowHelper(dir, c, len, 0xd55e00, head, 0.67 * head); });
         a.position.copy(c).addScaledVector(dir, -len);
         a.setDirection(dir);
-        a.setLength(len, 0.006, 0.004);
+        a.setLength(len, head, 0.67 * head);
       }
     }
     T.proxy = drawnProxy;
@@ -300,8 +322,21 @@
     }
     return best ? best.id : 0;
   }
+  /* The server holds a lost trainee station's session a few seconds (the list's `status`): its last force
+   * is stale (the server lifted the finger), so the page says "station lost" instead, as the dashboard
+   * does (since session 82: it showed the last press frozen as if live). */
+  function stationLost() { return !!(lastSession && lastSession.status); }
+  function showLost() {
+    document.getElementById("force").textContent = "-";
+    const b = document.getElementById("band");
+    b.textContent = "station lost";
+    b.className = "band";
+    document.getElementById("depth").textContent = "";
+    drawGauge(0);
+  }
   function showSession(s) {
     const rows = [["session", s.id], ["trainee", s.trainee], ["phantom", s.phantom_name || s.phantom],
+      ["trainee station", s.status ? s.status : "connected"],
       ["tick rate", s.tick_hz + " Hz"], ["late physics steps", s.overruns], ["rejected samples", s.rejected],
       ["findings", s.findings === null ? "n/a" : s.findings]];
     const tb = document.getElementById("session");
@@ -313,6 +348,7 @@
     }
     document.getElementById("info").textContent = s.trainee + " on " + (s.phantom_name || "phantom " + s.phantom) +
       " (session " + s.id + ")";
+    if (s.status) showLost();
   }
 
   /* The server's session log losing records while her session runs, in her station's words (the bridge
@@ -383,6 +419,7 @@
     dirty = true;
   }
   function showDebrief(m) {
+    if (!Array.isArray(m.lumps) || !m.lumps.every(PALP.lumpValid)) return; /* checked before use (since session 82) */
     clearDebrief();
     T.debrief = m;
     document.getElementById("debrief-text").textContent = debriefText(m);
@@ -470,8 +507,11 @@
     hello: function (m) {
       scaleMax = m.scale_mm;
       scaleMin = m.scale_min_mm !== undefined ? m.scale_min_mm : m.scale_mm; /* an older bridge: fixed */
+      /* the bounds only: a reconnect within the followed session keeps its scale (clamped to them), so
+       * a colour still means the same depth (since session 82; a new session starts at scaleMin) */
+      const keep = T.session && scaleMm > 0 ? Math.min(scaleMax, Math.max(scaleMin, scaleMm)) : scaleMin;
       scaleMm = -1;
-      setScale(scaleMin);
+      setScale(keep);
       bands = m.bands;
       bandLegend();
       drawGauge(0);
@@ -530,10 +570,14 @@
     },
     live: function (m) {
       if (m.session !== T.session) return;
+      /* the fields checked before use (since session 82) */
+      if (!Number.isFinite(m.force) || typeof m.band !== "string" || !Array.isArray(m.coverage) ||
+          m.coverage.length !== 3 || !m.coverage.every(Number.isFinite) || !Array.isArray(m.fingers) ||
+          (m.depth_mm !== undefined && m.depth_mm !== null && !Number.isFinite(m.depth_mm))) return;
       T.force = m.force;
       T.band = m.band;
       T.bandRule = m.band_rule || "force";
-      T.depthMm = m.depth_mm === undefined ? null : m.depth_mm;
+      T.depthMm = m.depth_mm === undefined || m.depth_mm === null ? null : m.depth_mm;
       if (T.bandRule !== rule) {
         rule = T.bandRule;
         bandLegend();
@@ -549,11 +593,14 @@
       document.getElementById("depth").textContent = rule === "exercise" ?
         (T.depthMm === null ? "fingertip not pressing" : "pressed " + T.depthMm.toFixed(1) + " mm deep") : "";
       T.coverage = m.coverage;
-      document.getElementById("force").textContent = m.force.toFixed(2);
-      const b = document.getElementById("band");
-      b.textContent = m.band;
-      b.className = "band " + m.band;
-      drawGauge(m.force, T.depthMm);
+      if (stationLost()) showLost();
+      else {
+        document.getElementById("force").textContent = m.force.toFixed(2);
+        const b = document.getElementById("band");
+        b.textContent = m.band;
+        b.className = "band " + m.band;
+        drawGauge(m.force, T.depthMm);
+      }
       for (let k = 0; k < 3; k++) {
         const pc = (100 * m.coverage[k]).toFixed(1);
         document.getElementById("cov" + k).textContent = pc;
@@ -577,7 +624,7 @@
       setDisplacement(latest);
       latest = null;
     }
-    if (dirty && mesh) {
+    if (dirty && mesh && renderer) {
       renderer.render(scene, camera);
       dirty = false;
       T.rendered++;
@@ -615,7 +662,7 @@
   window.palpModelNote = modelNote;
   /* For tests: where a point of the phantom [m] appears on the page, in CSS pixels. */
   window.palpProject = function (x, y, z) {
-    const v = new THREE.Vector3(x, y, z).project(camera), r = renderer.domElement.getBoundingClientRect();
+    const v = new THREE.Vector3(x, y, z).project(camera), r = (renderer ? renderer.domElement : view).getBoundingClientRect();
     return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
   };
 })();
