@@ -111,8 +111,8 @@ void palp_cli_view_render(const palp_cli_view *v, const palp_Deformation *d, FIL
     }
     fputs(color ? "\033[0m\n" : "\n", out);
   }
-  fprintf(out, "frame %llu  t = %.3f s  max displacement %.2f mm (full scale %.2f mm)  volume %.1f%% of rest  "
-               "pressure %+.0f Pa\n",
+  fprintf(out, "frame %llu  t = %.2f s  max displacement %.2f mm (full scale %.2f mm)  volume %.1f%% of rest  "
+               "pressure %+.0f Pa  (top view, 12 o'clock at the top)\n",
           (unsigned long long)d->frame, d->sim_time, maxd * 1e3, scale * 1e3,
           d->rest_volume > 0 ? 100.0 * d->volume / d->rest_volume : 0.0, d->pressure);
 }
@@ -132,13 +132,40 @@ static void colour(double f, int *r, int *g, int *b) {
   }
 }
 
+/* The length of the well-formed UTF-8 character at p (RFC 3629: no overlong form, no surrogate, nothing
+ * past U+10FFFF), 0 if none begins there; the rule of client/review's review_utf8_len. */
+static int utf8_len(const unsigned char *p) {
+  if (p[0] < 0x80) return 1;
+  if (p[0] >= 0xc2 && p[0] <= 0xdf) return (p[1] & 0xc0) == 0x80 ? 2 : 0;
+  if (p[0] >= 0xe0 && p[0] <= 0xef) {
+    const unsigned lo = p[0] == 0xe0 ? 0xa0 : 0x80, hi = p[0] == 0xed ? 0x9f : 0xbf;
+    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 ? 3 : 0;
+  }
+  if (p[0] >= 0xf0 && p[0] <= 0xf4) {
+    const unsigned lo = p[0] == 0xf0 ? 0x90 : 0x80, hi = p[0] == 0xf4 ? 0x8f : 0xbf;
+    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 && (p[3] & 0xc0) == 0x80 ? 4 : 0;
+  }
+  return 0;
+}
+
+/* Text for the SVG (XML 1.0): the markup characters escaped, and '?' for a C0 control other than tab
+ * and newline, DEL, and every byte that does not begin a well-formed UTF-8 character. The title holds
+ * the phantom's name from the network or a Latin-1 scene file: before session 82 such a byte made the
+ * snapshot ill-formed, which no viewer opens, while the station said it was written. */
 static void put_escaped(FILE *f, const char *s) {
-  for (; s && *s; s++) {
-    if (*s == '<') fputs("&lt;", f);
-    else if (*s == '>') fputs("&gt;", f);
-    else if (*s == '&') fputs("&amp;", f);
-    else if (*s == '"') fputs("&quot;", f);
-    else fputc(*s, f);
+  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p;) {
+    const int n = utf8_len(p);
+    if (*p == '<') fputs("&lt;", f);
+    else if (*p == '>') fputs("&gt;", f);
+    else if (*p == '&') fputs("&amp;", f);
+    else if (*p == '"') fputs("&quot;", f);
+    else if (n == 0 || (*p < 0x20 && *p != '\t' && *p != '\n') || *p == 0x7f) fputc('?', f);
+    else {
+      fwrite(p, 1, (size_t)n, f);
+      p += n;
+      continue;
+    }
+    p++;
   }
 }
 
@@ -177,8 +204,8 @@ int palp_cli_view_svg(const palp_Phantom *ph, const palp_Deformation *d, const c
   fprintf(f, "<text x=\"10\" y=\"18\" font-family=\"sans-serif\" font-size=\"12\">");
   put_escaped(f, title);
   fprintf(f, "</text>\n");
-  fprintf(f, "<text x=\"10\" y=\"36\" font-family=\"sans-serif\" font-size=\"12\">frame %llu, t = %.3f s, "
-             "max displacement %.2f mm, top view</text>\n",
+  fprintf(f, "<text x=\"10\" y=\"36\" font-family=\"sans-serif\" font-size=\"12\">frame %llu, t = %.2f s, "
+             "max displacement %.2f mm, top view, 12 o'clock (+y) at the top</text>\n",
           (unsigned long long)d->frame, d->sim_time, maxd * 1e3);
   fprintf(f, "<g transform=\"translate(220,250)\" stroke=\"#333\" stroke-width=\"0.3\">\n");
   for (int k = 0; k < nt; k++) {
