@@ -1526,15 +1526,19 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
         int now_pressing = c->mode != palp_CONTACT_RELEASE;
         if (observer && !o->quiet && now_pressing != pressing) {
           if (now_pressing) {
-            double r = norm3(c->center);
-            double polar = r > 0 ? acos(c->center.z / r) * 180 / 3.14159265358979 : 0;
-            double az = atan2(c->center.y, c->center.x) * 180 / 3.14159265358979;
+            /* where, in the words every palp tool uses (src/palp_place.h: the clock seen from above and the
+             * arc from the pole; since session 82, polar and azimuth angles before, the azimuth from +x) */
+            const palp_vec3 at = {c->center.x, c->center.y, c->center.z};
+            char where[80] = "at the pole";
+            if (!palp_place_at_pole(at))
+              snprintf(where, sizeof where, "at %.1f o'clock, %.0f mm from the pole", palp_place_clock_shown(at),
+                       palp_place_arc(at) * 1e3);
             if (c->mode == palp_CONTACT_FORCE)
-              printf("[observer] t=%6.2f s  trainee presses: force-driven, distribution %s, at polar %.0f deg "
-                     "azimuth %.0f deg, |F| = %.2f N\n", world_t >= 0 ? world_t : t, dist_name(c->distribution), polar, az, norm3(c->force));
+              printf("[observer] t=%6.2f s  trainee presses: force-driven, distribution %s, %s, |F| = %.2f N\n",
+                     world_t >= 0 ? world_t : t, dist_name(c->distribution), where, norm3(c->force));
             else
-              printf("[observer] t=%6.2f s  trainee presses: finger of radius %.1f mm at polar %.0f deg azimuth "
-                     "%.0f deg\n", world_t >= 0 ? world_t : t, c->radius * 1e3, polar, az);
+              printf("[observer] t=%6.2f s  trainee presses: finger of radius %.1f mm %s\n", world_t >= 0 ? world_t : t,
+                     c->radius * 1e3, where);
           } else {
             printf("[observer] t=%6.2f s  trainee lifts the finger\n", world_t >= 0 ? world_t : t);
           }
