@@ -1974,7 +1974,9 @@ static void on_deformation(palp_web_hub *h, const palp_Deformation *m) {
     const palp_Vec3 *p = &m->positions._buffer[i];
     const double *r = s->ph->rest + 3 * i;
     double dx = p->x - r[0], dy = p->y - r[1], dz = p->z - r[2];
-    if (!isfinite(dx) || !isfinite(dy) || !isfinite(dz)) dx = dy = dz = 0; /* drawn at rest, never NaN */
+    /* drawn at rest, never NaN, nor beyond the visual station's 10 m bound (palp_cli_deformation_check),
+     * whose float would be infinite and which the pages refuse (since session 82) */
+    if (!(fabs(dx) <= 10.0) || !(fabs(dy) <= 10.0) || !(fabs(dz) <= 10.0)) dx = dy = dz = 0;
     d[3 * i] = (float)dx, d[3 * i + 1] = (float)dy, d[3 * i + 2] = (float)dz;
     const double d2 = dx * dx + dy * dy + dz * dz;
     if (d2 > max2) max2 = d2;
