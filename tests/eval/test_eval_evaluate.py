@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """test_eval_evaluate - palp-eval evaluate, checked from the outside.
 
-    test_eval_evaluate.py PALP_EVAL SCENE tables|errors|shipped
+    test_eval_evaluate.py PALP_EVAL SCENE tables|errors|shipped|clock|...
 
 tables: runs `evaluate` on the paper's scene with the coarsest FEM level and a
 few frames, then recomputes every statistic of Tables V and VI from the written
@@ -59,6 +59,9 @@ III and IV, not stored, the model is 0.19-0.22 s quicker than the FEM instead: d
 then this compared with the level-2 FEM (6% / 16%), whose peak is 15% below level 4's: the
 set's +13.9% there was mostly the reference's (docs/materials.md, "The fingertip references
 at level 3").
+
+clock: the real-time model's step force switches at the FEM's time, not at the
+world's summed clock (see test_clock).
 
 errors: bad inputs end with a clear message on stderr, nothing on stdout and a
 non-zero exit status (1 for unusable inputs, 2 for command-line errors).
@@ -427,6 +430,47 @@ def test_shipped(tool, scene):
     check(rmse["handset"] > 0.5, "hand-set: displacement RMSE %.4f cm, expected > 0.5" % rmse["handset"])
 
 
+
+def test_clock(tool, scene):
+    """Both models on one clock (session 82 review, defect 1). With 10 ms steps a step force
+    released at t_off = 0.1 s is on for exactly the steps starting at 0, 10, ..., 90 ms: ten
+    steps, as with t_off = 0.095 s. The world's clock sums 0.01 ten times to
+    0.09999999999999999 < 0.1, so before the fix the real-time model saw an eleventh loaded
+    step with t_off 0.1 (frame 10 moved by 0.219 cm) while the FEM, on f x period + q x dt,
+    did not. Asserted: the real-time |u| of every free vertex at every one of 15 frames
+    (distribution II, FEM level 1) is the same for t_off 0.1 and 0.095 s (within 1e-12 cm:
+    the same forces in the same order give the same numbers), and so is the FEM's (the
+    control). And the test can see a step: t_off 0.105 s (eleven loaded steps on both
+    clocks) moves the real-time frame 10 by more than 0.01 cm against t_off 0.1 s."""
+    tmp = scratch("palp_eval_clock_")
+    cache = os.path.join(tmp, "cache")
+    sc = json.load(open(scene))
+    sc["parameters"] = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
+    cols = {}
+    for t_off in ("0.1", "0.095", "0.105"):
+        sc["contacts"][0]["profile"]["t_off_s"] = float(t_off)
+        path = os.path.join(tmp, "step_%s.json" % t_off)
+        json.dump(sc, open(path, "w"))
+        out = os.path.join(tmp, "out_" + t_off)
+        r = run([tool, "evaluate", "--scene", path, "--level", "1", "--frames", "15", "--distributions", "2",
+                 "--no-plots", "--out", out, "--cache-dir", cache, "--quiet"])
+        check(r.returncode == 0, "t_off %s: evaluate exited %d: %s" % (t_off, r.returncode, r.stderr))
+        if r.returncode:
+            return
+        pairs = list(csv.DictReader(open(os.path.join(out, "displacement_d2.csv"))))
+        cols[t_off] = {(int(p["frame"]), int(p["vertex"])): (float(p["rt_cm"]), float(p["fem_cm"])) for p in pairs}
+    a, b, c = cols["0.1"], cols["0.095"], cols["0.105"]
+    check(set(a) == set(b) and len({f for f, _ in a}) == 15, "t_off 0.1 / 0.095: the same 15 frames and vertices")
+    for side, name in ((0, "real-time"), (1, "FEM")):
+        worst = max((abs(a[k][side] - b[k][side]), k) for k in a if k in b)
+        check(worst[0] <= 1e-12, "%s |u| differs between t_off 0.1 and 0.095 s by %.3g cm at (frame, vertex) %s: "
+              "the two clocks disagree at the step's edge" % (name, worst[0], worst[1]))
+    d10 = max(abs(a[k][0] - c[k][0]) for k in a if k[0] == 10 and k in c)
+    check(d10 > 0.01, "t_off 0.105 s (11 loaded steps) moved the real-time frame 10 by only %.3g cm against "
+          "0.1 s (10 steps): the test cannot see one step of load" % d10)
+    print("t_off 0.1 vs 0.105 s at frame 10: %.3f cm" % d10)
+
+
 DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
 LEVEL4_D2 = os.path.join(DATA_DIR, "fem_level4_long_term_d2.csv")
 
@@ -564,7 +608,7 @@ def test_breast_tissue(tool, scene):
 
 def main():
     tool, scene, which = sys.argv[1], sys.argv[2], sys.argv[3]
-    {"tables": test_tables, "errors": test_errors, "shipped": test_shipped,
+    {"tables": test_tables, "errors": test_errors, "shipped": test_shipped, "clock": test_clock,
      "long_term": test_long_term, "level4_guard": test_level4_guard, "breast_tissue": test_breast_tissue}[which](tool, scene)
     if failures:
         print("%d check(s) failed" % failures, file=sys.stderr)
