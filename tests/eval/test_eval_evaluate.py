@@ -387,6 +387,24 @@ def test_errors(tool, scene):
         (["calibrate", "--scene", scene, "--recovery-target", "0"], 2, ["--recovery-target", ">= 0.01"]),
         # a scene whose parameter file names a profile the FEM does not know: refused, named
         (["evaluate", "--scene", bad_material_scene], 1, ["material", "no_such_profile"]),
+        # session 82: the FEM's own level bound is the command line's (17 was an input error, exit 1)
+        (["evaluate", "--scene", scene, "--level", "17"], 2, ["--level", "1 to 16", "\"17\""]),
+        # a repeated entry is no second run (it was pooled as one: an SD of 0, "equivalent")
+        (["evaluate", "--scene", scene, "--distributions", "2,2"], 2, ["--distributions", "2 given twice"]),
+        (["evaluate", "--scene", scene, "--sites", "2", "--forces", "3,1,3"], 2, ["--forces", "3 N given twice"]),
+        (["calibrate", "--scene", scene, "--finger", "pole,45deg,pole"], 2, ["--finger", "\"pole\" given twice"]),
+        (["calibrate", "--scene", scene, "--finger", "pole,elbow"], 2, ["--finger", "elbow"]),
+        # an empty selection ran nothing and exited 0 with empty tables (calibrate: exit 1)
+        (["evaluate", "--scene", scene, "--distributions", ""], 2, ["--distributions"]),
+        (["evaluate", "--scene", scene, "--distributions", ",,,"], 2, ["--distributions", ",,,"]),
+        (["calibrate", "--scene", scene, "--distributions", ""], 2, ["--distributions"]),
+        (["evaluate", "--scene", scene, "--distributions", "1,"], 2, ["--distributions", "1,"]),
+        # --finger-depths as the last argument read *NULL: a segmentation fault, exit 139
+        (["calibrate", "--scene", scene, "--out", out, "--finger-depths"], 2,
+         ["palp-eval: --finger-depths needs a value"]),
+        (["evaluate", "--scene", scene, "--out", out, "--finger-depths"], 2,
+         ["palp-eval: --finger-depths needs a value"]),
+        (["calibrate", "--scene", scene, "--finger-depths", "2,1"], 2, ["palp-eval: --finger-depths", "\"2,1\""]),
     ]
     for args, status, words in cases:
         r = run([tool] + args + ["--out", out] if args[0] in ("evaluate", "calibrate") and "--out" not in args

@@ -17,7 +17,8 @@ A tiny configuration (2 sites, 1 force, 12 frames, a 0.06 s step, FEM level 1):
 - determinism: the same seed gives the same sites, the same runs and
   byte-identical tables (the second run from the FEM cache); another seed gives
   other sites;
-- command-line errors exit with status 2.
+- command-line errors exit with status 2, among them one run per distribution
+  (--sites 1 with one force) and a repeated force.
 """
 import csv
 import math
@@ -152,7 +153,11 @@ def main():
     # command-line errors
     for bad in (["--sites", "0"], ["--sites", "2", "--forces", "0"], ["--sites", "2", "--forces", "1,x"],
                 ["--sites", "2", "--polar-max", "95"], ["--sites", "2", "--polar-min", "50", "--polar-max", "40"],
-                ["--sites", "2", "--on-seconds", "9"]):
+                ["--sites", "2", "--on-seconds", "9"],
+                # session 82: one run per distribution has no statistics over runs (it gave empty tables, exit 0)
+                ["--sites", "1"], ["--sites", "1", "--forces", "2"],
+                # a repeated force is no second run (it turned the TOST verdict round)
+                ["--sites", "2", "--forces", "3,3"], ["--sites", "2", "--forces", "1,3,1"]):
         r = subprocess.run([tool, "evaluate", "--scene", scene, "--frames", "12", "--level", "1", "--cache-dir",
                             os.path.join(work, "cache"), "--out", os.path.join(work, "bad")] + bad,
                            capture_output=True, text=True, timeout=60)

@@ -40,6 +40,8 @@ typedef struct options {
   const char *cache_dir;
   const char *fit;
   const char *distributions;
+  int dist[4]; /* --distributions, parsed: 1..4 each at most once */
+  int dist_count;
   int level; /* 0: the FEM config's */
   int frames;
   int quiet;
@@ -126,11 +128,82 @@ static int parse_forces(const char *opt, const char *v, options *o) {
       fprintf(stderr, "palp-eval: %s expects up to 8 comma-separated forces in (0, 20] N, got \"%s\"\n", opt, v);
       return -1;
     }
+    /* a repeated force is no second run: identical runs shrink the SE and add degrees of
+     * freedom, and turned a TOST verdict round (session 82 review) */
+    for (int j = 0; j < o->force_count; ++j)
+      if (o->forces[j] == x) {
+        fprintf(stderr, "palp-eval: %s: force %g N given twice in \"%s\"; each force is one run per site\n", opt, x, v);
+        return -1;
+      }
     o->forces[o->force_count++] = x;
     p = *end ? end + 1 : end;
   }
   if (!o->force_count) {
     fprintf(stderr, "palp-eval: %s expects up to 8 comma-separated forces in (0, 20] N, got \"%s\"\n", opt, v ? v : "");
+    return -1;
+  }
+  return 0;
+}
+
+/* "1,3" or "all": each of 1..4 at most once, at least one. An empty list ran nothing and
+ * exited 0 with empty tables, and a repeated one was pooled as a second, identical run
+ * (an SD of 0 between them, "equivalent" with 1 df) until session 82. */
+static int parse_distributions(const char *v, options *o) {
+  o->dist_count = 0;
+  if (v && !strcmp(v, "all")) {
+    for (int d = 1; d <= 4; ++d) o->dist[o->dist_count++] = d;
+    return 0;
+  }
+  for (const char *p = v; p && *p; ++p) {
+    if (*p < '1' || *p > '4' || (p[1] && (p[1] != ',' || !p[2]))) {
+      fprintf(stderr, "palp-eval: --distributions expects a list of 1..4 (e.g. 1,3) or all, got \"%s\"\n", v);
+      return -1;
+    }
+    for (int j = 0; j < o->dist_count; ++j)
+      if (o->dist[j] == *p - '0') {
+        fprintf(stderr, "palp-eval: --distributions: %c given twice in \"%s\"; each distribution is one run\n", *p,
+                v);
+        return -1;
+      }
+    o->dist[o->dist_count++] = *p - '0';
+    if (p[1]) ++p;
+  }
+  if (!o->dist_count) {
+    fprintf(stderr, "palp-eval: --distributions expects a list of 1..4 (e.g. 1,3) or all, got \"%s\"\n", v ? v : "");
+    return -1;
+  }
+  return 0;
+}
+
+/* --finger pole,45deg,...: known sites, each at most once (a repeated one doubled its weight
+ * in the fit until session 82), checked here so that a typo costs no FEM press. */
+static int parse_finger(const char *v) {
+  static const char *const known[4] = {"pole", "45deg", "70deg", "pole_lesion"};
+  const char *seen[4];
+  int n = 0;
+  char list[128];
+  if (!v || !*v || strlen(v) >= sizeof list) {
+    fprintf(stderr, "palp-eval: --finger expects up to 4 of pole, 45deg, 70deg, pole_lesion, got \"%s\"\n", v ? v : "");
+    return -1;
+  }
+  snprintf(list, sizeof list, "%s", v);
+  for (char *save = NULL, *tok = strtok_r(list, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+    int q = -1;
+    for (int j = 0; j < 4; ++j)
+      if (!strcmp(tok, known[j])) q = j;
+    if (q < 0) {
+      fprintf(stderr, "palp-eval: --finger: unknown site \"%s\" (pole, 45deg, 70deg, pole_lesion)\n", tok);
+      return -1;
+    }
+    for (int j = 0; j < n; ++j)
+      if (seen[j] == known[q]) {
+        fprintf(stderr, "palp-eval: --finger: site \"%s\" given twice in \"%s\"\n", tok, v);
+        return -1;
+      }
+    seen[n++] = known[q];
+  }
+  if (!n) {
+    fprintf(stderr, "palp-eval: --finger expects up to 4 of pole, 45deg, 70deg, pole_lesion, got \"%s\"\n", v);
     return -1;
   }
   return 0;
@@ -176,11 +249,17 @@ static int parse_args(int argc, char **argv, options *o) {
     else if (!strcmp(a, "--params")) o->params = v;
     else if (!strcmp(a, "--cache-dir")) o->cache_dir = v;
     else if (!strcmp(a, "--fit")) o->fit = v;
-    else if (!strcmp(a, "--distributions")) o->distributions = v;
-    else if (!strcmp(a, "--finger")) o->finger = v;
+    else if (!strcmp(a, "--distributions")) o->distributions = v, bad = v && parse_distributions(v, o);
+    else if (!strcmp(a, "--finger")) o->finger = v, bad = v && parse_finger(v);
     else if (!strcmp(a, "--finger-from")) o->finger_from = v;
     else if (!strcmp(a, "--finger-depths")) {
       /* "0.5,1,2,5,10" [mm]: a soft profile's fingertip reaches 5 N only ~10 mm deep */
+      if (!v) {
+        /* the generic check below comes after this option's own parsing, which read *NULL
+         * (a crash when --finger-depths was the last argument, until session 82) */
+        fprintf(stderr, "palp-eval: %s needs a value\n", a);
+        return -1;
+      }
       int n = 0;
       const char *q = v;
       while (!bad && *q) {
@@ -194,14 +273,18 @@ static int parse_args(int argc, char **argv, options *o) {
         if (!bad && *end && *end != ',') bad = 1;
       }
       if (bad || n == 0) {
-        fprintf(stderr, "--finger-depths: expected up to %d increasing depths in (0, 30] mm, e.g. 0.5,1,2,5,10\n",
-                PALP_EVAL_FINGER_MAX_DEPTHS);
+        fprintf(stderr,
+                "palp-eval: --finger-depths: expected up to %d increasing depths in (0, 30] mm, e.g. 0.5,1,2,5,10, "
+                "got \"%s\"\n",
+                PALP_EVAL_FINGER_MAX_DEPTHS, v);
         bad = 1;
       }
       o->finger_depth_count = n;
     }
     else if (!strcmp(a, "--finger-weight")) bad = parse_double(a, v, 0.0, &o->finger_weight);
-    else if (!strcmp(a, "--level")) bad = parse_int(a, v, 1, 64, &o->level);
+    /* the FEM's own bound (palp_fem_config_validate): 17..64 used to pass here and end as an
+     * input error, exit 1 */
+    else if (!strcmp(a, "--level")) bad = parse_int(a, v, 1, 16, &o->level);
     else if (!strcmp(a, "--frames")) bad = parse_int(a, v, 2, 1000000, &o->frames);
     else if (!strcmp(a, "--frame-stride")) bad = parse_int(a, v, 1, 1000, &o->frame_stride);
     else if (!strcmp(a, "--vertex-stride")) bad = parse_int(a, v, 1, 1000, &o->vertex_stride);
@@ -260,6 +343,14 @@ static int parse_args(int argc, char **argv, options *o) {
     return -1;
   }
   if (o->sites && !o->force_count) o->forces[0] = 3.0, o->force_count = 1;
+  /* one run per distribution has no spread over runs: both statistics tables came out empty
+   * and the command exited 0 until session 82 */
+  if (o->sites && o->sites * o->force_count < 2) {
+    fprintf(stderr, "palp-eval: --sites %d with %d force is one run per distribution; the statistics over runs need "
+                    "at least 2 (--sites 2, or --forces with two levels)\n",
+            o->sites, o->force_count);
+    return -1;
+  }
   return 0;
 }
 
@@ -436,17 +527,10 @@ static int load_setup(const options *o, setup *s) {
     palp_log_error(o->log, "FEM configuration: %s", err);
     return 1;
   }
-  if (o->distributions && strcmp(o->distributions, "all")) {
-    for (const char *p = o->distributions; *p; ++p) {
-      if (*p == ',') continue;
-      if (*p < '1' || *p > '4' || (p[1] && p[1] != ',') || s->dist_count == 4) {
-        palp_log_error(o->log, "--distributions expects a list of 1..4 (e.g. 1,3) or all, got \"%s\"",
-                o->distributions);
-        return 2;
-      }
-      s->dist[s->dist_count++] = *p - '0';
-    }
-  } else
+  /* parsed and checked with the command line (parse_distributions) */
+  if (o->distributions)
+    for (int k = 0; k < o->dist_count; ++k) s->dist[s->dist_count++] = o->dist[k];
+  else
     for (int d = 1; d <= 4; ++d) s->dist[s->dist_count++] = d;
   return 0;
 }
@@ -1162,7 +1246,8 @@ static int cmd_calibrate(const options *o) {
       for (int j = 0; j < 4; ++j)
         if (!strcmp(tok, known[j].name)) q = j;
       if (q < 0 || nfref == 4) {
-        palp_log_error(o->log, "--finger: unknown or repeated site \"%s\" (pole, 45deg, 70deg, pole_lesion)", tok);
+        /* parse_finger refused it already; kept as a guard */
+        palp_log_error(o->log, "--finger: unknown site \"%s\" (pole, 45deg, 70deg, pole_lesion)", tok);
         bad = 1;
         break;
       }
@@ -1206,9 +1291,18 @@ static int cmd_calibrate(const options *o) {
         bad = 1;
         break;
       }
-      if (!o->quiet)
-        palp_log_info(o->log, "FEM finger %s: %.3f / %.3f / %.3f N at 0.5 / 1 / 2 mm (%.1f s, %ld Newton iterations)",
-                      f->name, f->force[0], f->force[1], f->force[2], now_s() - tf, newton);
+      if (!o->quiet) {
+        /* the depths fitted (--finger-depths), not a fixed 0.5 / 1 / 2 mm: one depth printed two
+         * unset forces as 0.000 N until session 82 */
+        char fs[PALP_EVAL_FINGER_MAX_DEPTHS * 24] = "", ds[PALP_EVAL_FINGER_MAX_DEPTHS * 24] = "";
+        size_t lf = 0, ld = 0;
+        for (int k = 0; k < f->count && lf < sizeof fs && ld < sizeof ds; ++k) {
+          lf += (size_t)snprintf(fs + lf, sizeof fs - lf, "%s%.3f", k ? " / " : "", f->force[k]);
+          ld += (size_t)snprintf(ds + ld, sizeof ds - ld, "%s%g", k ? " / " : "", 1e3 * f->depth[k]);
+        }
+        palp_log_info(o->log, "FEM finger %s: %s N at %s mm (%.1f s, %ld Newton iterations)", f->name, fs, ds,
+                      now_s() - tf, newton);
+      }
       ++nfref;
     }
     palp_fem_mesh_destroy(&mesh);
