@@ -60,6 +60,8 @@ then this compared with the level-2 FEM (6% / 16%), whose peak is 15% below leve
 set's +13.9% there was mostly the reference's (docs/materials.md, "The fingertip references
 at level 3").
 
+material: the tables name the FEM material profile (see test_material).
+
 clock: the real-time model's step force switches at the FEM's time, not at the
 world's summed clock (see test_clock).
 
@@ -328,6 +330,21 @@ def test_tables(tool, scene):
         mg = jp["margin"]
         p = max(t_tail((mb + mg) / se, 3), t_tail((mg - mb) / se, 3))
         check(close(jp["tost_p"], p, 1e-7, 1e-12), "Table %s pooled: TOST p %s, recomputed %.17g" % (t, jp["tost_p"], p))
+    # the caveat under each paper table (session 82 review, defect 9): "up to N pairs" is the
+    # largest row's pair count, and the claim that the ANOVA's p "measures the sample size" is
+    # made only when every distribution's lag-1 autocorrelation (tables.json sound.r1) is at
+    # least 0.5 (force's is near -0.24 in a 400-frame run, where the frames are nearly independent)
+    caveats = [l for l in r.stdout.splitlines() if l.startswith("caveat: the ANOVA pools")]
+    check(len(caveats) == 2, "one caveat under each paper table, got %d" % len(caveats))
+    for t, line in zip(("V", "VI"), caveats):
+        jt = [x for x in js["tables"] if x["table"] == t][0]
+        nmax = max(x["pairs"] for x in jt["rows"])
+        r1 = [x["sound"]["r1"] for x in jt["rows"] if "sound" in x]
+        check(("up to %d " % nmax) in line, "Table %s caveat %r: expected up to %d pairs" % (t, line, nmax))
+        claims = "so its p measures the sample size" in line
+        check(claims == (min(r1) >= 0.5), "Table %s caveat %r with r1 %s: the sample-size claim %s" %
+              (t, line, r1, "made" if claims else "missing"))
+        check(("from %.3f to %.3f" % (min(r1), max(r1))) in line, "Table %s caveat %r: r1 range %s" % (t, line, r1))
     # plots: well-formed SVG for every distribution
     for k in range(1, 5):
         for name in ("top_vertex_d%d.svg", "peak_vertex_d%d.svg", "bland_altman_displacement_d%d.svg",
@@ -489,6 +506,37 @@ def test_clock(tool, scene):
     print("t_off 0.1 vs 0.105 s at frame 10: %.3f cm" % d10)
 
 
+
+def test_material(tool, scene):
+    """The tables name the FEM material profile they were measured against (session 82 review,
+    defect 5: stdout, tables.json and tables.md named the level only, so tables from --material X
+    read like the default). Expected names from the inputs, not from palp-eval: the scene's
+    parameter file's "material" key (read here) and the --material given; the load map
+    documented per profile in docs/materials.md (paper_instantaneous reads the loads
+    literally, "point"; breast_tissue "patch"). 4 frames, distribution II, FEM level 1."""
+    tmp = scratch("palp_eval_material_")
+    sc = json.load(open(scene))
+    params = os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])
+    own = json.load(open(params))["material"]
+    for name, extra, material, load_map in ((own, [], own, "point"),
+                                             ("breast_tissue", ["--material", "breast_tissue"], "breast_tissue",
+                                              "patch")):
+        out = os.path.join(tmp, name)
+        r = run([tool, "evaluate", "--scene", scene, "--level", "1", "--frames", "4", "--distributions", "2",
+                 "--no-plots", "--out", out, "--cache-dir", os.path.join(tmp, "cache"), "--quiet"] + extra)
+        check(r.returncode == 0, "%s: evaluate exited %d: %s" % (name, r.returncode, r.stderr))
+        if r.returncode:
+            continue
+        ref = json.load(open(os.path.join(out, "tables.json")))["reference"]
+        check(ref.get("material") == material and ref.get("load_map") == load_map,
+              "%s: tables.json reference %s, expected material %s, load map %s" % (name, ref, material, load_map))
+        line = [l for l in r.stdout.splitlines() if l.startswith("reference: FEM level 1")]
+        check(len(line) == 1 and ("material profile %s, %s load map" % (material, load_map)) in line[0],
+              "%s: stdout's reference line %r lacks the profile %s" % (name, line, material))
+        md = open(os.path.join(out, "tables.md")).read().splitlines()[0]
+        check(("material profile `%s`" % material) in md, "%s: tables.md header %r lacks the profile" % (name, md))
+
+
 DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
 LEVEL4_D2 = os.path.join(DATA_DIR, "fem_level4_long_term_d2.csv")
 
@@ -627,6 +675,7 @@ def test_breast_tissue(tool, scene):
 def main():
     tool, scene, which = sys.argv[1], sys.argv[2], sys.argv[3]
     {"tables": test_tables, "errors": test_errors, "shipped": test_shipped, "clock": test_clock,
+     "material": test_material,
      "long_term": test_long_term, "level4_guard": test_level4_guard, "breast_tissue": test_breast_tissue}[which](tool, scene)
     if failures:
         print("%d check(s) failed" % failures, file=sys.stderr)

@@ -14,6 +14,8 @@ A tiny configuration (2 sites, 1 force, 12 frames, a 0.06 s step, FEM level 1):
   p < 0.05 and with the 90% interval lying inside the margins; the bootstrap
   verdict agrees with its own interval; the repeated-measures limits are
   bias -+ 1.96 SD;
+- the header names the FEM material profile and the caveat the measured lag-1
+  autocorrelation (session 82);
 - determinism: the same seed gives the same sites, the same runs and
   byte-identical tables (the second run from the FEM cache); another seed gives
   other sites;
@@ -21,6 +23,7 @@ A tiny configuration (2 sites, 1 force, 12 frames, a 0.06 s step, FEM level 1):
   (--sites 1 with one force) and a repeated force.
 """
 import csv
+import json
 import math
 import os
 import shutil
@@ -70,6 +73,12 @@ def main():
     if a.returncode:
         return
     check("Paper-literal" in a.stdout and "Sound (runs as units)" in a.stdout, "both tables printed")
+    # session 82: the header names the FEM material profile (the scene's parameter file's
+    # "material", read here), not the C10 reading (which called breast_tissue "long-term")
+    sc = json.load(open(scene))
+    material = json.load(open(os.path.join(os.path.dirname(os.path.abspath(scene)), sc["parameters"])))["material"]
+    check(("FEM level 1, material profile %s," % material) in a.stdout,
+          "the header names the material profile %s: %r" % (material, a.stdout[:400]))
     runs = rows(os.path.join(work, "a", "runs.csv"))
     check(len(runs) == 8, "8 runs (4 distributions x 2 sites x 1 force), got %d" % len(runs))
     keys = sorted((int(r["distribution"]), int(r["site"])) for r in runs)
@@ -130,6 +139,13 @@ def main():
               close(float(d["site_ci_lower"]), float(d["t_ci_lower"]), 1e-9, 1e-12) and
               d["site_equivalent"] == d["equivalent"], tag + ": site-level TOST = run-level TOST with one force")
         check(float(d["paper_rmse"]) > 0 and 0 <= float(d["paper_agree_percent"]) <= 100, tag + ": paper columns")
+
+    # session 82: the caveat prints the measured lag-1 autocorrelation (distributions.csv
+    # frames_r1, 9 digits), not a fixed "~0.99"
+    r1 = [float(d["frames_r1"]) for d in dists]
+    check(("measured here: %.3f to %.3f)" % (min(r1), max(r1))) in a.stdout,
+          "the caveat states the measured r1 %.3f to %.3f" % (min(r1), max(r1)))
+    check("~0.99" not in a.stdout, "no fixed ~0.99 in the caveat")
 
     # determinism: same seed, second run from the FEM cache
     b = run(tool, scene, work, "b", 5)

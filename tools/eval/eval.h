@@ -388,7 +388,7 @@ typedef struct palp_eval_run {
   double disp_bias, disp_rmse, disp_max_abs; /* over all free vertex-frames */
   double disp_peak_rt, disp_peak_ref;        /* largest |u| of each model in the run */
   double peak_error;                         /* (peak_rt - peak_ref) / peak_ref [-] */
-  double disp_margin;                        /* max(1 mm, 5% of peak_ref) */
+  double disp_margin;                        /* max(5% of peak_ref, min(1 mm, 15% of it)): palp_eval_disp_margin */
   double disp_r1, disp_n_eff;                /* of the per-frame mean difference */
   int has_force;
   double force_bias, force_rmse, force_peak_ref, force_margin; /* 15% of force_peak_ref */
@@ -426,6 +426,13 @@ int palp_eval_sites_summarise(const double *a, const double *b, const size_t *st
                               const double *margin, unsigned long long seed, palp_eval_sites_summary *out);
 
 
+/* The lag-1 autocorrelation of the per-frame mean difference above which the caveats say
+ * the paper-literal ANOVA's p measures the number of pairs: at r1 = 0.5 the AR(1) effective
+ * number of frames n (1 - r1) / (1 + r1) is a third of n, and it falls to 0 as r1 -> 1.
+ * Below it (force: r1 near -0.24 in a 400-frame run) the caveat names the repeated
+ * measures only, since the frames are then close to independent. */
+#define PALP_EVAL_CAVEAT_R1 0.5
+
 /* ---- the evaluation report ---------------------------------------------------- */
 typedef struct palp_eval_dist {
   int distribution;   /* 1..4 (I..IV) */
@@ -448,6 +455,11 @@ typedef struct palp_eval_report {
   int vertex_count;
   int ref_level;         /* FEM mesh level */
   int ref_elements, ref_nodes;
+  /* the FEM's material profile (palp_fem_config.material, or "custom, ... C10 reading" for
+   * materials a FEM config set by hand) and load map ("patch" / "point"): the profile decides
+   * the whole reference, so the tables name it (session 82) */
+  char ref_material[64];
+  char ref_load_map[8];
   int dist_count;
   palp_eval_dist dist[4];
   palp_eval_sound_pool pool[2]; /* displacement, force over the runs (valid when pooled[t]) */
