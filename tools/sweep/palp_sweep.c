@@ -18,6 +18,15 @@
  * mesh: the FEM is mapped to a 1,300-vertex real-time mesh, every point's vertex is
  * compared with the nearest probe vertex (rest positions), and forces as the total
  * force on the contact, which does not depend on the mesh.
+ *
+ * These are not palp-eval's quantities under the same names (docs/evaluation.md):
+ * the sweep's displacement RMSE is of the vector difference u_point - u_ref over every
+ * vertex, the clamped rim included, and its agreement is the Bland-Altman share of the
+ * |u| differences over every vertex too; palp-eval's Table V RMSE and agreement are of
+ * |u_rt| - |u_FEM| over the free vertices only (the rim's identical zero pairs pad the
+ * agreement). The sweep ranks configurations against one reference; its figures are
+ * not comparable with palp-eval's tables. The reference row has no error: its RMSEs
+ * and agreement are written empty.
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -242,9 +251,9 @@ static int cmp_cost(const void *a, const void *b) {
   return (x->cost > y->cost) - (x->cost < y->cost);
 }
 
-static void write_svg(const char *path, const point *p, int n) {
+static FILE *write_svg(const char *path, const point *p, int n) {
   FILE *f = fopen(path, "w");
-  if (!f) return;
+  if (!f) return NULL;
   const double W = 920, H = 520, L = 80, Rm = 190, T = 62, B = 60;
   double xmin = INFINITY, xmax = 0, ymin = INFINITY, ymax = 0;
   for (int i = 0; i < n; ++i) {
@@ -316,9 +325,9 @@ static void write_svg(const char *path, const point *p, int n) {
           "<text x=\"%g\" y=\"%g\" fill=\"#d62728\">&#8212; Pareto front</text>"
           "<text x=\"%g\" y=\"%g\">&#9711; server default</text></g>\n</svg>\n",
           lx, T + 12, lx, T + 28, lx, T + 44, lx, T + 60);
-  fclose(f);
 #undef SX
 #undef SY
+  return f; /* closed and checked by the caller */
 }
 
 static void print_point(const point *p) {
@@ -330,6 +339,29 @@ static void print_point(const point *p) {
 }
 
 #define SWEEP_OPTS (PALP_APP_OPT_VERSION | PALP_APP_OPT_LOG | PALP_APP_OPT_VERBOSE)
+
+/* The whole string an integer in [lo, hi]: atoi read "2x" as 2 and "abc" as 0 (all frames)
+ * until session 82. */
+static int parse_int(const char *opt, const char *v, int lo, int hi, int *out) {
+  char *end = NULL;
+  errno = 0;
+  const long x = v ? strtol(v, &end, 10) : 0;
+  if (!v || !*v || *end || errno || x < lo || x > hi) {
+    fprintf(stderr, "palp-sweep: %s expects an integer from %d to %d, got \"%s\"\n", opt, lo, hi, v ? v : "");
+    return -1;
+  }
+  *out = (int)x;
+  return 0;
+}
+
+/* A written file's stream closed, its errors reported: a full disk used to leave a truncated
+ * sweep.csv or sweep.md (fclose unchecked) and no sweep.svg (fopen unchecked) with exit 0. */
+static int close_checked(palp_log *log, FILE *f, const char *path) {
+  int bad = ferror(f);
+  bad |= fclose(f) != 0;
+  if (bad) palp_log_error(log, "cannot write %s", path);
+  return bad ? -1 : 0;
+}
 
 static void usage(FILE *f) {
   fprintf(f, "usage: palp-sweep [--scene FILE] [--distribution single|uniform|gaussian|gaussian_offset]\n"
@@ -350,14 +382,27 @@ int main(int argc, char **argv) {
     const int common = palp_app_common_opt(&ao, SWEEP_OPTS, argc, argv, &i);
     if (common < 0) return 2;
     if (common) continue;
-    if (!strcmp(a, "--scene") && v) scene_path = v, ++i;
-    else if (!strcmp(a, "--distribution") && v) dist = v, ++i;
-    else if (!strcmp(a, "--ref-level") && v) ref_level = atoi(v), ++i;
-    else if (!strcmp(a, "--frames") && v) frames = atoi(v), ++i;
-    else if (!strcmp(a, "--out") && v) out = v, ++i;
+    const int valued = !strcmp(a, "--scene") || !strcmp(a, "--distribution") || !strcmp(a, "--ref-level") ||
+                       !strcmp(a, "--frames") || !strcmp(a, "--out");
+    if (valued && !v) {
+      fprintf(stderr, "palp-sweep: %s needs a value\n", a);
+      return usage(stderr), 2;
+    }
+    if (!strcmp(a, "--scene")) scene_path = v, ++i;
+    else if (!strcmp(a, "--distribution")) dist = v, ++i;
+    else if (!strcmp(a, "--ref-level")) {
+      if (parse_int(a, v, 1, 6, &ref_level)) return usage(stderr), 2;
+      ++i;
+    } else if (!strcmp(a, "--frames")) {
+      if (parse_int(a, v, 1, 100000000, &frames)) return usage(stderr), 2;
+      ++i;
+    } else if (!strcmp(a, "--out")) out = v, ++i;
     else if (!strcmp(a, "--quick")) quick = 1;
     else if (!strcmp(a, "--help") || !strcmp(a, "-h")) return usage(stdout), 0;
-    else return usage(stderr), 2;
+    else {
+      fprintf(stderr, "palp-sweep: unknown option \"%s\"\n", a);
+      return usage(stderr), 2;
+    }
   }
   if (ao.version) {
     palp_app_print_version(stdout, "palp-sweep");
@@ -377,15 +422,14 @@ int main(int argc, char **argv) {
     }
     scene_path = installed_scene;
   }
-  if (ref_level < 1 || ref_level > 6) {
-    palp_log_error(&log, "--ref-level must be 1 to 6");
-    return 2;
-  }
   palp_scene s;
   char err[512];
+  /* an unusable input is exit 1 (a command-line error is 2), as in palp-eval; the loader's
+   * message names the file already */
   if (palp_scene_load(scene_path, &s, err, sizeof err)) {
-    palp_log_error(&log, "%s: %s", scene_path, err);
-    return 2;
+    if (strstr(err, scene_path)) palp_log_error(&log, "%s", err);
+    else palp_log_error(&log, "%s: %s", scene_path, err);
+    return 1;
   }
   const char *names[] = {"single", "uniform", "gaussian", "gaussian_offset"};
   int d = 0;
@@ -519,19 +563,23 @@ int main(int argc, char **argv) {
     p->fem = 1, p->level = ref_level, p->vertices = PROBE_VERTICES;
     p->step_median_s = ref.wall_seconds / ref.frames;
     p->cost = ref.wall_seconds / (ref.frames * s.frame_period);
-    p->disp_rmse = NAN;
+    /* no error against itself: NaN, written empty (the memset's 0 wrote force_rmse 0 and
+     * agreement 0.0000 until session 82, read as a perfect force and no agreement) */
+    p->disp_rmse = p->force_rmse = p->agreement = NAN;
   }
   /* The reference has no error to plot: leave it out of the front and the plot. */
   const int nplot = n - 1;
   mark_pareto(pts, nplot);
 
-  char path[1024];
-  snprintf(path, sizeof path, "%s/sweep.csv", out);
-  FILE *csv = fopen(path, "w");
-  snprintf(path, sizeof path, "%s/sweep.md", out);
-  FILE *md = fopen(path, "w");
+  char path[1024], csv_path[1024], md_path[1024];
+  snprintf(csv_path, sizeof csv_path, "%s/sweep.csv", out);
+  FILE *csv = fopen(csv_path, "w");
+  snprintf(md_path, sizeof md_path, "%s/sweep.md", out);
+  FILE *md = fopen(md_path, "w");
   if (!csv || !md) {
-    palp_log_error(&log, "cannot write into %s", out);
+    palp_log_error(&log, "cannot write %s: %s", !csv ? csv_path : md_path, strerror(errno));
+    if (csv) fclose(csv);
+    if (md) fclose(md);
     return 1;
   }
   fprintf(csv, "name,model,vertices,fem_level,dt_s,step_or_frame_s,cost_s_per_sim_s,disp_rmse_m,force_rmse_N,"
@@ -540,9 +588,13 @@ int main(int argc, char **argv) {
               "agreement | Pareto |\n|---|---|---|---|---|---|---|\n");
   for (int i = 0; i < n; ++i) {
     const point *p = &pts[i];
-    fprintf(csv, "\"%s\",%s,%d,%d,%g,%.6g,%.6g,%.6g,%.6g,%.4f,%d,%d,%d\n", p->name, p->fem ? "fem" : "rt", p->vertices,
-            p->level, p->dt, p->step_median_s, p->cost, p->disp_rmse, p->force_rmse, p->agreement, p->pareto,
-            p->is_default, p->failed);
+    if (i < nplot || p->failed)
+      fprintf(csv, "\"%s\",%s,%d,%d,%g,%.6g,%.6g,%.6g,%.6g,%.4f,%d,%d,%d\n", p->name, p->fem ? "fem" : "rt",
+              p->vertices, p->level, p->dt, p->step_median_s, p->cost, p->disp_rmse, p->force_rmse, p->agreement,
+              p->pareto, p->is_default, p->failed);
+    else /* the reference: no error against itself, so its error columns are empty */
+      fprintf(csv, "\"%s\",%s,%d,%d,%g,%.6g,%.6g,,,,%d,%d,%d\n", p->name, p->fem ? "fem" : "rt", p->vertices, p->level,
+              p->dt, p->step_median_s, p->cost, p->pareto, p->is_default, p->failed);
     if (p->failed)
       fprintf(md, "| %s%s | failed: %s | | | | | |\n", p->name, p->is_default ? " **(server default)**" : "", p->reason);
     else if (i < nplot)
@@ -553,10 +605,21 @@ int main(int argc, char **argv) {
     else
       fprintf(md, "| %s | %.4f | %.4g s/frame | (reference) | | | |\n", p->name, p->cost, p->step_median_s);
   }
-  fclose(csv);
-  fclose(md);
+  int wbad = close_checked(&log, csv, csv_path);
+  wbad |= close_checked(&log, md, md_path);
   snprintf(path, sizeof path, "%s/sweep.svg", out);
-  write_svg(path, pts, nplot);
+  FILE *svg = write_svg(path, pts, nplot);
+  if (!svg) {
+    palp_log_error(&log, "cannot write %s: %s", path, strerror(errno));
+    wbad = -1;
+  } else
+    wbad |= close_checked(&log, svg, path);
+  if (wbad) {
+    free(R.force);
+    palp_mesh_destroy(&pm);
+    palp_fem_result_destroy(&ref);
+    return 1;
+  }
   int front = 0, failed = 0;
   for (int i = 0; i < nplot; ++i) front += pts[i].pareto, failed += pts[i].failed;
   printf("wrote %s/sweep.csv, sweep.md, sweep.svg (%d points, %d on the Pareto front)\n", out, n, front);
