@@ -422,6 +422,13 @@ def test_errors(tool, scene):
         (["evaluate", "--scene", scene, "--out", out, "--finger-depths"], 2,
          ["palp-eval: --finger-depths needs a value"]),
         (["calibrate", "--scene", scene, "--finger-depths", "2,1"], 2, ["palp-eval: --finger-depths", "\"2,1\""]),
+        # an option of another command, refused and the command it belongs to named (session 82:
+        # `evaluate --forces 1` ran the scene's 3 N without a word, `--fit E9x` passed under evaluate)
+        (["evaluate", "--scene", scene, "--forces", "1"], 2, ["--forces belongs to evaluate --sites"]),
+        (["evaluate", "--scene", scene, "--fit", "E9x"], 2, ["--fit belongs to calibrate"]),
+        (["evaluate", "--scene", scene, "--sites", "2", "--peak-weight", "3"], 2, ["--peak-weight belongs to calibrate"]),
+        (["calibrate", "--scene", scene, "--sites", "2"], 2, ["--sites belongs to evaluate --sites"]),
+        (["calibrate", "--scene", scene, "--no-plots"], 2, ["--no-plots belongs to evaluate"]),
     ]
     for args, status, words in cases:
         r = run([tool] + args + ["--out", out] if args[0] in ("evaluate", "calibrate") and "--out" not in args

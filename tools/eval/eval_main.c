@@ -209,6 +209,38 @@ static int parse_finger(const char *v) {
   return 0;
 }
 
+/* Which command each option belongs to: one of another was accepted and ignored until
+ * session 82 (`evaluate --forces 1` ran the scene's 3 N without a word; `--fit E9x` passed
+ * under evaluate), as palp-stats refused already (docs/statistics.md). */
+enum { MODE_EVALUATE = 1, MODE_SITES = 2, MODE_CALIBRATE = 4, MODE_ALL = 7 };
+static const struct {
+  const char *name;
+  int modes;
+} option_modes[] = {
+    {"--scene", MODE_ALL},           {"--out", MODE_ALL},           {"--fem-config", MODE_ALL},
+    {"--material", MODE_ALL},        {"--params", MODE_ALL},        {"--cache-dir", MODE_ALL},
+    {"--distributions", MODE_ALL},   {"--level", MODE_ALL},         {"--frames", MODE_ALL},
+    {"--quiet", MODE_ALL},           {"--no-plots", MODE_EVALUATE | MODE_SITES},
+    {"--sites", MODE_SITES},         {"--forces", MODE_SITES},      {"--seed", MODE_SITES},
+    {"--polar-min", MODE_SITES},     {"--polar-max", MODE_SITES},   {"--on-seconds", MODE_SITES},
+    {"--fit", MODE_CALIBRATE},       {"--frame-stride", MODE_CALIBRATE}, {"--vertex-stride", MODE_CALIBRATE},
+    {"--max-iter", MODE_CALIBRATE},  {"--force-weight", MODE_CALIBRATE}, {"--bound", MODE_CALIBRATE},
+    {"--bias-weight", MODE_CALIBRATE}, {"--peak-weight", MODE_CALIBRATE}, {"--max-minutes", MODE_CALIBRATE},
+    {"--prior-weight", MODE_CALIBRATE}, {"--recovery", MODE_CALIBRATE}, {"--recovery-target", MODE_CALIBRATE},
+    {"--finger", MODE_CALIBRATE},    {"--finger-from", MODE_CALIBRATE}, {"--finger-depths", MODE_CALIBRATE},
+    {"--finger-weight", MODE_CALIBRATE},
+};
+#define OPTION_MODE_COUNT ((int)(sizeof option_modes / sizeof *option_modes))
+
+static const char *mode_name(int modes) {
+  switch (modes) {
+  case MODE_SITES: return "evaluate --sites";
+  case MODE_CALIBRATE: return "calibrate";
+  case MODE_EVALUATE | MODE_SITES: return "evaluate";
+  default: return "another command";
+  }
+}
+
 static int parse_args(int argc, char **argv, options *o) {
   memset(o, 0, sizeof *o);
   o->plots = 1;
@@ -236,12 +268,16 @@ static int parse_args(int argc, char **argv, options *o) {
     fprintf(stderr, "palp-eval: unknown command \"%s\" (evaluate, calibrate)\n", o->cmd);
     return -1;
   }
+  int seen[OPTION_MODE_COUNT];
+  memset(seen, 0, sizeof seen);
   for (int i = 2; i < argc; ++i) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     int takes = 1, bad = 0;
     const int common = palp_app_common_opt(&o->app, EVAL_OPTS, argc, argv, &i);
     if (common < 0) return -1;
     if (common) continue;
+    for (int k = 0; k < OPTION_MODE_COUNT; ++k)
+      if (!strcmp(a, option_modes[k].name)) seen[k] = 1;
     if (!strcmp(a, "--scene")) o->scene = v;
     else if (!strcmp(a, "--out")) o->out = v;
     else if (!strcmp(a, "--fem-config")) o->fem_config = v;
@@ -333,6 +369,13 @@ static int parse_args(int argc, char **argv, options *o) {
       ++i;
     }
   }
+  const int mode = !strcmp(o->cmd, "calibrate") ? MODE_CALIBRATE : o->sites ? MODE_SITES : MODE_EVALUATE;
+  for (int k = 0; k < OPTION_MODE_COUNT; ++k)
+    if (seen[k] && !(option_modes[k].modes & mode)) {
+      fprintf(stderr, "palp-eval: %s belongs to %s, not %s\n", option_modes[k].name, mode_name(option_modes[k].modes),
+              mode == MODE_CALIBRATE ? "calibrate" : mode == MODE_SITES ? "evaluate --sites" : "evaluate");
+      return -1;
+    }
   if (o->sites && !(o->polar_min < o->polar_max && o->polar_max <= 90.0)) {
     fprintf(stderr, "palp-eval: --polar-min %g and --polar-max %g must satisfy 0 <= min < max <= 90 degrees\n",
             o->polar_min, o->polar_max);
