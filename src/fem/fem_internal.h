@@ -244,6 +244,17 @@ int palp_fem_map_create(const palp_fem_mesh *mesh, const palp_vec3 *points, int 
 /* PALP_FEM_LOAD_PATCH: rt's dome triangles carry its vertices' hat functions. */
 int palp_fem_map_create_patch(const palp_fem_mesh *mesh, const palp_mesh *rt, palp_fem_map *out);
 void palp_fem_map_destroy(palp_fem_map *map);
+/* The FE dome's outer radius (the largest |x| of any node: the base centre is the
+ * origin) against the scene's dome radius [m]: both load maps project radially, so a
+ * mesh of another size or unit would "match" anywhere. PALP_EINVAL with both radii
+ * in err beyond PALP_FEM_RADIUS_TOL (relative). */
+#define PALP_FEM_RADIUS_TOL 0.02
+int palp_fem_check_radius(const palp_fem_mesh *mesh, double scene_radius, char *err, size_t errlen);
+/* The nodal load palp_fem_run applies at time t [s] for cfg and scene (for tests):
+ * *mesh gets the FE mesh (palp_fem_mesh_destroy), *fext [3 * node_count] the load
+ * (free). Clamped nodes carry none. */
+int palp_fem_run_load(const palp_fem_config *cfg, const palp_scene *scene, double t, palp_fem_mesh *mesh,
+                      double **fext, char *err, size_t errlen);
 
 /* ---- hashing -------------------------------------------------------------- */
 static inline uint64_t palp_fem_fnv(uint64_t h, const void *data, size_t n) {

@@ -112,11 +112,13 @@ typedef struct run_ws {
   palp_fem_map map;
   palp_fem_model model;
   int have_mesh, have_rt, have_map, have_model;
+  int total;        /* contact vertices */
   int *cv;          /* contact vertex (real-time index) */
   int *cof;         /* its contact */
   double *lambda;   /* its load weight */
+  double *scale;    /* 1 / (its map's weight on free nodes) when the map touches the clamp, else 1 */
   palp_vec3 dir[PALP_SCENE_MAX_CONTACTS];
-  double *den;      /* [node_count] sum_j w_ja lambda_j */
+  double *den;      /* [node_count] sum_j w_ja scale_j lambda_j over free nodes */
   double *fext;
 } run_ws;
 
@@ -128,8 +130,166 @@ static void ws_free(run_ws *w) {
   free(w->cv);
   free(w->cof);
   free(w->lambda);
+  free(w->scale);
   free(w->den);
   free(w->fext);
+}
+
+int palp_fem_check_radius(const palp_fem_mesh *mesh, double scene_radius, char *err, size_t errlen) {
+  double r2 = 0.0;
+  for (int i = 0; i < mesh->node_count; ++i) {
+    const double *x = mesh->x[i];
+    const double q = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+    if (q > r2) r2 = q;
+  }
+  const double r = sqrt(r2);
+  if (!(scene_radius > 0.0) || !(fabs(r - scene_radius) <= PALP_FEM_RADIUS_TOL * scene_radius)) {
+    snprintf(err, errlen,
+             "FE dome radius %.6g m vs the scene's %.6g m (more than %.0f%% apart): the FE mesh must be the scene's "
+             "dome, in metres (a mesh written in mm is 1000x too large); set mesh.radius or the scene's radius_m",
+             r, scene_radius, 100 * PALP_FEM_RADIUS_TOL);
+    return PALP_EINVAL;
+  }
+  return PALP_OK;
+}
+
+/* The FE mesh of the config (generated or read from cfg->inp_path). */
+static int ws_mesh(run_ws *w, const palp_fem_config *cfg, char *err, size_t errlen) {
+  int rc;
+  if (cfg->inp_path[0]) rc = palp_fem_inp_read(cfg->inp_path, &w->mesh, err, errlen);
+  else {
+    rc = palp_fem_mesh_create(&cfg->mesh, &w->mesh);
+    if (rc) snprintf(err, errlen, "mesh: invalid definition (level %d)", cfg->mesh.level);
+  }
+  if (!rc) w->have_mesh = 1;
+  return rc;
+}
+
+/* The real-time dome, the surface map and every contact vertex with its load weight.
+ *
+ * Clamped FE nodes carry no load (since session 82): a map weight on a base node
+ * would put that share of the vertex's force into the clamp, where the residual
+ * ignores it, and its f_int there is the support's reaction, not the finger's force.
+ * A contact vertex whose map touches the base (a patch or face in the lowest ring of
+ * elements) has its weights renormalised over its free nodes, so the FE receives
+ * the scene's whole force, as the real-time model (whose contact vertices are never
+ * clamped) does; one whose map has no free node is refused. Vertices clear of the
+ * base keep their weights bit for bit (scale 1). */
+static int ws_loads(run_ws *w, const palp_fem_config *cfg, const palp_scene *scene, char *err, size_t errlen) {
+  int rc = palp_fem_check_radius(&w->mesh, scene->world.mesh.radius, err, errlen);
+  if (rc) return rc;
+  rc = palp_mesh_create(&scene->world.mesh, &w->rt);
+  if (rc) {
+    snprintf(err, errlen, "real-time mesh: %s", palp_strerror(rc));
+    return rc;
+  }
+  w->have_rt = 1;
+  rc = cfg->load_map == PALP_FEM_LOAD_PATCH ? palp_fem_map_create_patch(&w->mesh, &w->rt, &w->map)
+                                             : palp_fem_map_create(&w->mesh, w->rt.rest, w->rt.vertex_count, &w->map);
+  if (rc) {
+    snprintf(err, errlen, "surface map: a real-time vertex misses the FE surface (%s); do the geometries match?",
+             palp_strerror(rc));
+    return rc;
+  }
+  w->have_map = 1;
+  const int V = w->rt.vertex_count;
+  const uint8_t *fixed = w->mesh.fixed;
+  int total = 0;
+  int *tmpv = malloc(sizeof(int) * (size_t)V);
+  double *tmpw = malloc(sizeof(double) * (size_t)V);
+  w->cv = malloc(sizeof(int) * (size_t)V * (size_t)(scene->contact_count + 1));
+  w->cof = malloc(sizeof(int) * (size_t)V * (size_t)(scene->contact_count + 1));
+  w->lambda = malloc(sizeof(double) * (size_t)V * (size_t)(scene->contact_count + 1));
+  w->scale = malloc(sizeof(double) * (size_t)V * (size_t)(scene->contact_count + 1));
+  w->den = calloc((size_t)w->mesh.node_count, sizeof(double));
+  w->fext = calloc((size_t)w->mesh.node_count * 3, sizeof(double));
+  if (!tmpv || !tmpw || !w->cv || !w->cof || !w->lambda || !w->scale || !w->den || !w->fext) rc = PALP_ENOMEM;
+  for (int c = 0; !rc && c < scene->contact_count; ++c) {
+    const palp_scene_contact *sc = &scene->contact[c];
+    const int n = palp_contact_weights(&w->rt, w->rt.rest, &sc->def, tmpv, tmpw, V);
+    if (n < 0) {
+      rc = n;
+      snprintf(err, errlen, "contact %d: no load weights (%s)", c, palp_strerror(n));
+      break;
+    }
+    palp_vec3 d = sc->direction;
+    double len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (len == 0.0) { /* as palp_scene_apply: inward radial normal at the centre vertex */
+      const int v = palp_mesh_nearest_vertex(&w->rt, w->rt.rest, sc->def.center);
+      d = (palp_vec3){-w->rt.rest[v].x, -w->rt.rest[v].y, -w->rt.rest[v].z};
+      len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    }
+    if (!(len > 0.0) || !isfinite(len)) {
+      rc = PALP_EINVAL;
+      snprintf(err, errlen, "contact %d: no usable force direction", c);
+      break;
+    }
+    w->dir[c] = (palp_vec3){d.x / len, d.y / len, d.z / len};
+    for (int i = 0; i < n && !rc; ++i, ++total) {
+      const int v = tmpv[i];
+      double wfree = 0.0;
+      int touches = 0;
+      for (int a = w->map.start[v]; a < w->map.start[v + 1]; ++a) {
+        if (fixed[w->map.node[a]]) touches = 1;
+        else wfree += w->map.w[a];
+      }
+      if (touches && !(wfree > 1e-9)) {
+        rc = PALP_EINVAL;
+        snprintf(err, errlen, "contact %d: real-time vertex %d maps onto clamped FE nodes only; its load would go into "
+                 "the clamp", c, v);
+        break;
+      }
+      w->cv[total] = v;
+      w->cof[total] = c;
+      w->lambda[total] = tmpw[i];
+      w->scale[total] = touches ? 1.0 / wfree : 1.0;
+      for (int a = w->map.start[v]; a < w->map.start[v + 1]; ++a)
+        if (!fixed[w->map.node[a]]) w->den[w->map.node[a]] += w->map.w[a] * w->scale[total] * tmpw[i];
+    }
+  }
+  w->total = total;
+  free(tmpv);
+  free(tmpw);
+  if (rc == PALP_ENOMEM) snprintf(err, errlen, "out of memory");
+  return rc;
+}
+
+/* The nodal load at time t (the profile at the start of the step) into w->fext;
+ * clamped nodes get none (ws_loads). */
+static void ws_fext(run_ws *w, const palp_scene *scene, double t) {
+  memset(w->fext, 0, sizeof(double) * 3 * (size_t)w->mesh.node_count);
+  for (int k = 0; k < w->total; ++k) {
+    const int c = w->cof[k], v = w->cv[k];
+    const double mag = palp_profile_eval(&scene->contact[c].profile, t) * w->lambda[k];
+    const double fv[3] = {mag * w->dir[c].x, mag * w->dir[c].y, mag * w->dir[c].z};
+    for (int a = w->map.start[v]; a < w->map.start[v + 1]; ++a) {
+      const int node = w->map.node[a];
+      if (w->mesh.fixed[node]) continue;
+      const double wa = w->map.w[a] * w->scale[k];
+      for (int d = 0; d < 3; ++d) w->fext[3 * node + d] += wa * fv[d];
+    }
+  }
+}
+
+int palp_fem_run_load(const palp_fem_config *cfg, const palp_scene *scene, double t, palp_fem_mesh *mesh,
+                      double **fext, char *err, size_t errlen) {
+  char dummy[8];
+  if (!err) err = dummy, errlen = sizeof dummy;
+  err[0] = 0;
+  *fext = NULL;
+  memset(mesh, 0, sizeof *mesh);
+  if (!cfg || !scene) return PALP_EINVAL;
+  run_ws w;
+  memset(&w, 0, sizeof w);
+  int rc = ws_mesh(&w, cfg, err, errlen);
+  if (!rc) rc = ws_loads(&w, cfg, scene, err, errlen);
+  if (!rc) {
+    ws_fext(&w, scene, t);
+    *fext = w.fext, w.fext = NULL;
+    *mesh = w.mesh, w.have_mesh = 0;
+  }
+  ws_free(&w);
+  return rc;
 }
 
 int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_result *out, palp_fem_progress_fn cb,
@@ -156,81 +316,21 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   }
   run_ws w;
   memset(&w, 0, sizeof w);
-  if (cfg->inp_path[0]) rc = palp_fem_inp_read(cfg->inp_path, &w.mesh, err, errlen);
-  else {
-    rc = palp_fem_mesh_create(&cfg->mesh, &w.mesh);
-    if (rc) snprintf(err, errlen, "mesh: invalid definition (level %d)", cfg->mesh.level);
-  }
+  rc = ws_mesh(&w, cfg, err, errlen);
   if (rc) return rc;
-  w.have_mesh = 1;
   const uint64_t key = palp_fem_run_key(cfg, &w.mesh, scene);
   if (cfg->cache_dir[0] && palp_fem_cache_load(cfg->cache_dir, key, out) == 0) {
     ws_free(&w);
     return PALP_OK;
   }
   const double t_start = wall();
-  rc = palp_mesh_create(&scene->world.mesh, &w.rt);
+  rc = ws_loads(&w, cfg, scene, err, errlen);
   if (rc) {
-    snprintf(err, errlen, "real-time mesh: %s", palp_strerror(rc));
     ws_free(&w);
     return rc;
   }
-  w.have_rt = 1;
-  rc = cfg->load_map == PALP_FEM_LOAD_PATCH ? palp_fem_map_create_patch(&w.mesh, &w.rt, &w.map)
-                                             : palp_fem_map_create(&w.mesh, w.rt.rest, w.rt.vertex_count, &w.map);
-  if (rc) {
-    snprintf(err, errlen, "surface map: a real-time vertex misses the FE surface (%s); do the geometries match?",
-             palp_strerror(rc));
-    ws_free(&w);
-    return rc;
-  }
-  w.have_map = 1;
-  /* contact vertices and their load weights */
   const int V = w.rt.vertex_count;
-  int total = 0;
-  int *tmpv = malloc(sizeof(int) * (size_t)V);
-  double *tmpw = malloc(sizeof(double) * (size_t)V);
-  w.cv = malloc(sizeof(int) * (size_t)V * (size_t)(scene->contact_count + 1));
-  w.cof = malloc(sizeof(int) * (size_t)V * (size_t)(scene->contact_count + 1));
-  w.lambda = malloc(sizeof(double) * (size_t)V * (size_t)(scene->contact_count + 1));
-  w.den = calloc((size_t)w.mesh.node_count, sizeof(double));
-  w.fext = calloc((size_t)w.mesh.node_count * 3, sizeof(double));
-  if (!tmpv || !tmpw || !w.cv || !w.cof || !w.lambda || !w.den || !w.fext) rc = PALP_ENOMEM;
-  for (int c = 0; !rc && c < scene->contact_count; ++c) {
-    const palp_scene_contact *sc = &scene->contact[c];
-    const int n = palp_contact_weights(&w.rt, w.rt.rest, &sc->def, tmpv, tmpw, V);
-    if (n < 0) {
-      rc = n;
-      snprintf(err, errlen, "contact %d: no load weights (%s)", c, palp_strerror(n));
-      break;
-    }
-    palp_vec3 d = sc->direction;
-    double len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    if (len == 0.0) { /* as palp_scene_apply: inward radial normal at the centre vertex */
-      const int v = palp_mesh_nearest_vertex(&w.rt, w.rt.rest, sc->def.center);
-      d = (palp_vec3){-w.rt.rest[v].x, -w.rt.rest[v].y, -w.rt.rest[v].z};
-      len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    }
-    if (!(len > 0.0) || !isfinite(len)) {
-      rc = PALP_EINVAL;
-      snprintf(err, errlen, "contact %d: no usable force direction", c);
-      break;
-    }
-    w.dir[c] = (palp_vec3){d.x / len, d.y / len, d.z / len};
-    for (int i = 0; i < n; ++i, ++total) {
-      w.cv[total] = tmpv[i];
-      w.cof[total] = c;
-      w.lambda[total] = tmpw[i];
-      for (int a = w.map.start[tmpv[i]]; a < w.map.start[tmpv[i] + 1]; ++a) w.den[w.map.node[a]] += w.map.w[a] * tmpw[i];
-    }
-  }
-  free(tmpv);
-  free(tmpw);
-  if (rc) {
-    if (rc == PALP_ENOMEM) snprintf(err, errlen, "out of memory");
-    ws_free(&w);
-    return rc;
-  }
+  const int total = w.total;
   rc = palp_fem_model_create(&w.model, &w.mesh, cfg);
   if (!rc) {
     w.have_model = 1;
@@ -270,7 +370,6 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   memcpy(out->contact_vertex, w.cv, sizeof(int) * (size_t)total);
   memcpy(out->contact_of, w.cof, sizeof(int) * (size_t)total);
   palp_fem_model *m = &w.model;
-  const size_t nd = (size_t)m->ndof;
   if (cb && cb(ud, 0, F, 0.0)) { /* setup done */
     snprintf(err, errlen, "cancelled before frame 1");
     rc = PALP_EINVAL;
@@ -278,14 +377,7 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   for (int f = 0; f < F && !rc; ++f) {
     for (int s = 0; s < sub && !rc; ++s) {
       const double t = f * period + s * dt; /* the profile at the start of the step */
-      memset(w.fext, 0, sizeof(double) * nd);
-      for (int k = 0; k < total; ++k) {
-        const int c = w.cof[k], v = w.cv[k];
-        const double mag = palp_profile_eval(&scene->contact[c].profile, t) * w.lambda[k];
-        const double fv[3] = {mag * w.dir[c].x, mag * w.dir[c].y, mag * w.dir[c].z};
-        for (int a = w.map.start[v]; a < w.map.start[v + 1]; ++a)
-          for (int d = 0; d < 3; ++d) w.fext[3 * w.map.node[a] + d] += w.map.w[a] * fv[d];
-      }
+      ws_fext(&w, scene, t);
       rc = palp_fem_step(m, w.fext, dt);
       if (rc) snprintf(err, errlen, "frame %d: %s", f, m->err[0] ? m->err : palp_strerror(rc));
     }
@@ -303,8 +395,8 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
       double fb[3] = {0, 0, 0};
       for (int a = w.map.start[v]; a < w.map.start[v + 1]; ++a) {
         const int node = w.map.node[a];
-        if (!(w.den[node] > 0.0)) continue;
-        const double share = w.map.w[a] * w.lambda[k] / w.den[node];
+        if (w.mesh.fixed[node] || !(w.den[node] > 0.0)) continue; /* f_int at the clamp is its reaction */
+        const double share = w.map.w[a] * w.scale[k] * w.lambda[k] / w.den[node];
         for (int d = 0; d < 3; ++d) fb[d] -= share * m->fint[3 * node + d];
       }
       out->feedback[(size_t)f * (size_t)total + (size_t)k] = (palp_vec3){fb[0], fb[1], fb[2]};

@@ -269,6 +269,97 @@ static void case_rim(void) {
   }
 }
 
+/* The load and the feedback next to the clamp (since session 82): at 86 deg polar a
+ * contact's surface map reaches the lowest ring of elements, whose base nodes are
+ * clamped. The FE must still receive the scene's whole force (the real-time model,
+ * whose contact vertices are never clamped, does), nothing may be loaded onto a
+ * clamped node, and the feedback must be the finger's force, not the clamp's
+ * reaction. 3 N Gaussian held from t = 0, level 1, both load maps:
+ *  - the nodal load the run applies (palp_fem_run_load at t = 0.5 s) sums over the
+ *    free nodes (a load on a clamped DOF is ignored by the residual) to F d
+ *    within 1% of F, d the inward radial normal at the real-time vertex nearest the
+ *    centre (scene.c's rule for a contact without a direction); exactly zero on every
+ *    clamped node;
+ *  - the summed feedback at t = 1.0 s (near equilibrium: inertia of the creep is
+ *    negligible) equals -F d within 5% of F (before the fix: 80 deg off, 3.1 N). */
+static void case_rimload(void) {
+  const palp_fem_load_map maps[2] = {PALP_FEM_LOAD_POINT, PALP_FEM_LOAD_PATCH};
+  for (int i = 0; i < 2; ++i) {
+    const char *mname = maps[i] == PALP_FEM_LOAD_POINT ? "point" : "patch";
+    palp_scene s;
+    if (base_scene(&s, 100)) {
+      CHECK(0, "scene %s", scene_path);
+      return;
+    }
+    const double F = 3.0;
+    set_contact(&s, 0, PALP_DIST_GAUSSIAN, 86, 0, F, 0.0, 10.0);
+    palp_fem_config cfg = fast_config(1);
+    cfg.load_map = maps[i];
+    /* the expected direction, from the real-time mesh alone */
+    palp_mesh rt;
+    if (palp_mesh_create(&s.world.mesh, &rt)) {
+      CHECK(0, "real-time mesh");
+      return;
+    }
+    const palp_vec3 pc = rt.rest[palp_mesh_nearest_vertex(&rt, rt.rest, s.contact[0].def.center)];
+    const double lc = vnorm(pc);
+    const double d[3] = {-pc.x / lc, -pc.y / lc, -pc.z / lc};
+    palp_mesh_destroy(&rt);
+    /* the load delivered */
+    palp_fem_mesh fm;
+    double *fext = NULL;
+    char err[256];
+    int rc = palp_fem_run_load(&cfg, &s, 0.5, &fm, &fext, err, sizeof err);
+    CHECK(rc == 0, "%s map: palp_fem_run_load: %s", mname, err);
+    if (rc) return;
+    double sum[3] = {0, 0, 0}, on_clamp = 0.0;
+    int clamped_touched = 0;
+    for (int a = 0; a < fm.node_count; ++a)
+      for (int k = 0; k < 3; ++k) {
+        if (fm.fixed[a]) on_clamp += fabs(fext[3 * a + k]); /* the residual ignores it: lost */
+        else sum[k] += fext[3 * a + k];
+      }
+    /* the case is meaningful only if the map does reach the base's ring of nodes */
+    for (int e = 0; e < fm.element_count; ++e)
+      for (int c = 0; c < 8; ++c) {
+        const int a = fm.hex[e][c];
+        if (!fm.fixed[a]) continue;
+        for (int c2 = 0; c2 < 8; ++c2)
+          if (fext[3 * fm.hex[e][c2]] != 0.0 || fext[3 * fm.hex[e][c2] + 2] != 0.0) clamped_touched = 1;
+      }
+    const double miss = sqrt((sum[0] - F * d[0]) * (sum[0] - F * d[0]) + (sum[1] - F * d[1]) * (sum[1] - F * d[1]) +
+                             (sum[2] - F * d[2]) * (sum[2] - F * d[2]));
+    printf("rim load (%s map): delivered (%.4f %.4f %.4f) N, scene F d = (%.4f %.4f %.4f) N, |diff| %.2e N, on "
+           "clamped nodes %.2e N\n",
+           mname, sum[0], sum[1], sum[2], F * d[0], F * d[1], F * d[2], miss, on_clamp);
+    CHECK(clamped_touched, "%s map: the 86 deg contact loads an element with clamped nodes (else the case tests "
+          "nothing)", mname);
+    CHECK(miss <= 0.01 * F, "%s map: delivered load within 1%% of the scene's %.1f N (|diff| %.4f N)", mname, F, miss);
+    CHECK(on_clamp == 0.0, "%s map: no load on clamped nodes (%.3g N)", mname, on_clamp);
+    free(fext);
+    palp_fem_mesh_destroy(&fm);
+    /* the feedback */
+    measured m = run(&cfg, &s);
+    report(mname, &m);
+    CHECK(m.rc == 0, "%s map: run failed: %s", mname, m.err);
+    if (m.rc == 0) {
+      const int f = 99; /* t = 1.0 s */
+      double fb[3] = {0, 0, 0};
+      for (int k = 0; k < m.r.contact_vertex_count; ++k) {
+        const palp_vec3 v = m.r.feedback[(size_t)f * (size_t)m.r.contact_vertex_count + (size_t)k];
+        fb[0] += v.x, fb[1] += v.y, fb[2] += v.z;
+      }
+      const double e = sqrt((fb[0] + F * d[0]) * (fb[0] + F * d[0]) + (fb[1] + F * d[1]) * (fb[1] + F * d[1]) +
+                            (fb[2] + F * d[2]) * (fb[2] + F * d[2]));
+      printf("rim feedback (%s map) at 1.0 s: (%.4f %.4f %.4f) N, expected -F d = (%.4f %.4f %.4f) N, |diff| %.4f N\n",
+             mname, fb[0], fb[1], fb[2], -F * d[0], -F * d[1], -F * d[2], e);
+      CHECK(e <= 0.05 * F, "%s map: summed feedback within 5%% of -F d (|diff| %.4f N, bound %.3f N)", mname, e,
+            0.05 * F);
+    }
+    done(&m);
+  }
+}
+
 /* Several fingers at once: three contacts of different kinds and times (3 N
  * gaussian at 20 deg from 0 to 0.5 s, 3 N uniform at 35 deg from 0.1 to 0.4 s,
  * 2 N single at 50 deg from 0.2 to 0.5 s). While all three press, each contact's
@@ -656,14 +747,14 @@ static void case_twice(void) {
 
 int main(int argc, char **argv) {
   if (argc < 2) {
-    fprintf(stderr, "usage: %s force30|point|rim|multi|fasttau|stiffsoft|cutback|newton|dt|fevolume|twice [SCENE]\n", argv[0]);
+    fprintf(stderr, "usage: %s force30|point|rim|rimload|multi|fasttau|stiffsoft|cutback|newton|dt|fevolume|twice [SCENE]\n", argv[0]);
     return 2;
   }
   if (argc > 2) scene_path = argv[2];
   static const struct {
     const char *name;
     void (*fn)(void);
-  } cases[] = {{"force30", case_force30}, {"point", case_point},         {"rim", case_rim},
+  } cases[] = {{"force30", case_force30}, {"point", case_point},         {"rim", case_rim}, {"rimload", case_rimload},
                {"multi", case_multi},     {"fasttau", case_fasttau},     {"stiffsoft", case_stiffsoft},
                {"cutback", case_cutback}, {"newton", case_newton},   {"dt", case_dt}, {"fevolume", case_fevolume}, {"twice", case_twice}};
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i)
