@@ -8,8 +8,14 @@
   depths went on to 18 mm for hours);
 - each FE depth is printed to stderr as it is computed ("FE row K: " and the CSV row with the
   real-time columns empty), and those rows carry the same FE force and gap as the CSV (exactly:
-  the same printf format).
+  the same printf format);
+- since session 82: a failed FE press (70 deg pressed towards 1000 N: the level-1 press stops
+  converging long before) exits nonzero with a message, leaves --out untouched and its rows in
+  --out.partial; a --site token that names no site is refused; `--fe-from X --out X` keeps the
+  stored FE columns (it used to truncate X before reading it); a scene whose dome radius differs
+  from the FE mesh's by more than 2% is refused with both radii.
 """
+import json
 import csv
 import os
 import shutil
@@ -46,6 +52,58 @@ def main():
         check(len(f) == 7 and f[0] == "pole" and f[1] == x["depth_m"] and f[2] == x["fem_N"] and
               f[3:6] == ["", "", ""] and f[6] == x["fem_min_gap_m"],
               "progress row %s matches the CSV's FE columns" % p)
+
+    # --fe-from X --out X: the FE columns come back unchanged (X is read before it is replaced)
+    ref = open(out).read()
+    r = subprocess.run([tool, "finger", "--scene", scene, "--level", "1", "--site", "pole", "--depths", "2",
+                        "--no-force-table", "--fe-from", out, "--out", out], capture_output=True, text=True,
+                       timeout=240)
+    check(r.returncode == 0, "--fe-from X --out X exited %d: %s" % (r.returncode, r.stderr[-400:]))
+    again = list(csv.DictReader(l for l in open(out) if not l.startswith("#")))
+    check([(x["depth_m"], x["fem_N"], x["fem_min_gap_m"]) for x in again] ==
+          [(x["depth_m"], x["fem_N"], x["fem_min_gap_m"]) for x in rows],
+          "--fe-from X --out X: X still holds the same FE columns (%d rows)" % len(again))
+    check(not os.path.exists(out + ".tmp"), "no temporary file left beside --out")
+
+    # a failed FE press is an error, and the file named by --out is not replaced by a short curve
+    deep = os.path.join(scratch, "deep.csv")
+    with open(deep, "w") as f:
+        f.write(ref)
+    r = subprocess.run([tool, "finger", "--scene", scene, "--level", "1", "--site", "70deg", "--no-force-table",
+                        "--max-force", "1000", "--out", deep], capture_output=True, text=True, timeout=240)
+    check(r.returncode != 0, "a press that fails before --max-force exits nonzero (exit %d)" % r.returncode)
+    check("press failed" in r.stderr and "70deg" in r.stderr, "the message says the press failed and where: %s" %
+          r.stderr.strip().splitlines()[-1:] if r.stderr.strip() else "no message")
+    check(open(deep).read() == ref, "--out is left as it was")
+    part = deep + ".partial"
+    prow = list(csv.DictReader(l for l in open(part) if not l.startswith("#"))) if os.path.exists(part) else []
+    check(0 < len(prow) < 24 and all(float(x["fem_N"]) < 1000 for x in prow),
+          "the rows computed before the failure are in --out.partial (%d rows, all below 1000 N)" % len(prow))
+
+    # a --site token naming no site
+    r = subprocess.run([tool, "finger", "--scene", scene, "--level", "1", "--site", "pol", "--depths", "1",
+                        "--no-force-table", "--out", os.path.join(scratch, "typo.csv")], capture_output=True,
+                       text=True, timeout=240)
+    check(r.returncode != 0 and '"pol"' in r.stderr, "--site pol refused naming the token (exit %d)" % r.returncode)
+    check(not os.path.exists(os.path.join(scratch, "typo.csv")), "nothing written for a refused --site")
+
+    # a scene whose dome is not the FE mesh's
+    sc = json.load(open(scene))
+    sc["mesh"]["radius_m"] = 0.03
+    # the scene names files relative to its folder (../params/...): the copy sits at the same depth
+    os.makedirs(os.path.join(scratch, "phantoms"), exist_ok=True)
+    for name in os.listdir(os.path.dirname(os.path.dirname(os.path.abspath(scene)))):
+        if not os.path.exists(os.path.join(scratch, name)):
+            os.symlink(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(scene))), name),
+                       os.path.join(scratch, name))
+    small = os.path.join(scratch, "phantoms", "small.json")
+    with open(small, "w") as f:
+        json.dump(sc, f)
+    r = subprocess.run([tool, "finger", "--scene", small, "--level", "1", "--site", "pole", "--depths", "1",
+                        "--no-force-table"], capture_output=True, text=True, timeout=240)
+    check(r.returncode != 0 and "0.04" in r.stderr and "0.03" in r.stderr,
+          "a 30 mm scene against the 40 mm FE dome refused naming both radii (exit %d): %s" %
+          (r.returncode, r.stderr.strip()[-300:]))
 
 
 if __name__ == "__main__":

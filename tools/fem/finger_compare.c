@@ -23,10 +23,13 @@
  * (the two are independent: --no-force-table once meant "all depths" too, and a run
  * asked for 14 depths went on to 18 mm).
  */
+/* stat: POSIX. */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include "eval.h"
@@ -101,6 +104,11 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     snprintf(err, errlen, "invalid mesh definition");
     return -1;
   }
+  /* the FE dome is the scene's (both are pressed at the same centres) */
+  if (palp_fem_check_radius(&mesh, scene->world.mesh.radius, err, errlen)) {
+    palp_fem_mesh_destroy(&mesh);
+    return -1;
+  }
   const double R = cfg.mesh.radius;
   const palp_lesion lump = {.center = {0, 0, R - lesion_depth}, .radius = 0.005, .stiffness_ratio = lesion_ratio};
   /* inside the dome, clear of the surface and of the base (the scene's rule) */
@@ -116,9 +124,36 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
   static const double depths[MAXD] = {0.25e-3, 0.5e-3, 0.75e-3, 1e-3, 1.5e-3, 2e-3, 2.5e-3, 3e-3,
                                       4e-3,    5e-3,   6e-3,    7e-3, 8e-3,   10e-3, 12e-3, 14e-3,
                                       16e-3,   18e-3,  20e-3,   22e-3, 24e-3, 26e-3, 28e-3, 30e-3};
+  /* every --site token names a site (a typo once computed nothing and exited 0) */
+  for (const char *p = only; p && *p && strcmp(only, "all") != 0;) {
+    const char *end = strchr(p, ',');
+    const size_t len = end ? (size_t)(end - p) : strlen(p);
+    int known = 0;
+    for (int s = 0; s < (int)(sizeof sites / sizeof sites[0]); ++s)
+      known |= strlen(sites[s].name) == len && strncmp(p, sites[s].name, len) == 0;
+    if (!known) {
+      snprintf(err, errlen, "--site: \"%.*s\" names no site (all, or a list of pole, 45deg, 60deg, 70deg, "
+               "pole_lesion)", (int)(len < 64 ? len : 64), p);
+      palp_fem_mesh_destroy(&mesh);
+      return -1;
+    }
+    p = end ? end + 1 : NULL;
+  }
+  /* --out goes to CSV.tmp, renamed over CSV only when the run succeeded: --fe-from may
+   * name the same file (re-running the real-time side in place), and a level-4 curve
+   * it holds took hours. A failed run leaves its rows in CSV.partial. A path that is
+   * not a regular file (/dev/null, a FIFO) is written in place. */
   FILE *out = NULL;
-  if (csv && !(out = fopen(csv, "w"))) {
-    snprintf(err, errlen, "cannot write %s", csv);
+  char tmp[4096] = "";
+  struct stat sb;
+  const int special = csv && stat(csv, &sb) == 0 && !S_ISREG(sb.st_mode);
+  if (csv && !special && snprintf(tmp, sizeof tmp, "%s.tmp", csv) >= (int)sizeof tmp) {
+    snprintf(err, errlen, "%s: path too long", csv);
+    palp_fem_mesh_destroy(&mesh);
+    return -1;
+  }
+  if (csv && !(out = fopen(special ? csv : tmp, "w"))) {
+    snprintf(err, errlen, "cannot write %s", special ? csv : tmp);
     palp_fem_mesh_destroy(&mesh);
     return -1;
   }
@@ -146,9 +181,22 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     const double t1 = now_s();
     if (nd <= 0) {
       if (fe_from && nd == 0) snprintf(err, errlen, "%s has no rows of site %s", fe_from, sites[s].name);
+      else if (!fe_from && nd == 0) {
+        char why[256];
+        snprintf(why, sizeof why, "%s", err[0] ? err : "no reason given");
+        snprintf(err, errlen, "site %s: the FE press failed at its first depth, %.2f mm: %s", sites[s].name,
+                 1e3 * depths[0], why);
+      }
       rc = -1;
       break;
     }
+    /* a curve that ends before its last depth without passing max_force is a failed press,
+     * not a finished curve: its rows are printed and kept, then the run fails */
+    char failed[384] = "";
+    if (!fe_from && nd < maxd && !(F[nd - 1] > max_force))
+      snprintf(failed, sizeof failed, "site %s: the FE press failed at %.2f mm after %d of %d depths (%.3g N, below "
+               "--max-force %g N): %s", sites[s].name, 1e3 * depths[nd], nd, maxd, F[nd - 1], max_force,
+               err[0] ? err : "no reason given");
     if (palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, nd, 1.0, Fr, Dr, err, errlen) <
         0) {
       rc = -1;
@@ -172,7 +220,7 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     /* force-matched: the depth each model needs for 0.3, 1, 3, 5 N (the real-time
      * curve continued to 30 mm, ~90% of the real-time cost: skipped without force_table;
      * linear interpolation between held depths) */
-    if (force_table) {
+    if (force_table && !failed[0]) {
       double Fl[MAXD], Dl[MAXD];
       const int nl =
           palp_eval_finger_rt(&scene->world, &lump, sites[s].lesion, n, 0.008, depths, MAXD, 1.0, Fl, Dl, err, errlen);
@@ -196,13 +244,40 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
                isnan(drt) ? "  (not reached by 30 mm)" : "");
       }
     }
+    if (failed[0]) {
+      snprintf(err, errlen, "%s", failed);
+      rc = -1;
+      break;
+    }
+    if (out) fflush(out);
     if (s == 0) {
       nplain = nd;
       memcpy(Fplain, F, sizeof F);
       memcpy(Rplain, Fr, sizeof Fr);
     }
   }
-  if (out && fclose(out) != 0) rc = -1;
+  if (out) {
+    const int bad = ferror(out);
+    if (fclose(out) != 0 || bad) {
+      if (!rc) snprintf(err, errlen, "%s: write error", special ? csv : tmp);
+      rc = -1;
+    }
+  }
+  if (out && !special) {
+    if (!rc && rename(tmp, csv) != 0) {
+      snprintf(err, errlen, "cannot rename %s to %s", tmp, csv);
+      rc = -1;
+      remove(tmp);
+    } else if (rc) { /* keep what was computed beside, not over, the file named */
+      char part[4200];
+      snprintf(part, sizeof part, "%s.partial", csv);
+      if (rename(tmp, part) == 0) {
+        const size_t n = strlen(err);
+        if (n + 1 < errlen) snprintf(err + n, errlen - n, " (the rows written are in %s; %s is unchanged)", part, csv);
+      } else
+        remove(tmp);
+    }
+  }
   palp_fem_mesh_destroy(&mesh);
   return rc;
 }
