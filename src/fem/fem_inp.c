@@ -203,6 +203,25 @@ static int numbers(const char *line, double *v, int max) {
   return n;
 }
 
+/* The first (1-based) of the 2x2x2 Gauss points of element e whose Jacobian determinant
+ * is not positive, or 0. */
+static int inverted_gauss_point(const palp_fem_mesh *mesh, int e) {
+  for (int g = 0; g < 8; ++g) {
+    double dN[8][3], J[3][3] = {{0}};
+    palp_fem_hex_dshape(palp_fem_gauss[g], dN);
+    for (int a = 0; a < 8; ++a) {
+      const double *x = mesh->x[mesh->hex[e][a]];
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) J[i][k] += x[i] * dN[a][k];
+    }
+    const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                       J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                       J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    if (!(det > 0.0)) return g + 1;
+  }
+  return 0;
+}
+
 int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t errlen) {
   memset(out, 0, sizeof *out);
   /* Read whole and checked first (palp_input_file_read): a regular file (a FIFO hung the reader),
@@ -445,6 +464,29 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
         out->hex[e][a] = idx;
       }
   }
+  /* A node no element uses (a reference or leftover node, common in Abaqus files) would
+   * get three free equations with no stiffness and no mass: a singular tangent, reported
+   * as a solver failure. Refused here, naming the first few (since session 82). */
+  if (!rc) {
+    uint8_t *used = calloc((size_t)r.nn, 1);
+    if (!used) rc = PALP_ENOMEM;
+    for (int e = 0; !rc && e < r.ne; ++e)
+      for (int a = 0; a < 8; ++a) used[out->hex[e][a]] = 1;
+    int unused = 0;
+    char ids[160] = "";
+    for (int i = 0; !rc && i < r.nn; ++i)
+      if (!used[i] && unused++ < 8) {
+        const size_t n = strlen(ids);
+        snprintf(ids + n, sizeof ids - n, "%s%ld", n ? ", " : "", r.node_id[i]);
+      }
+    if (!rc && unused) {
+      snprintf(err, errlen, "%s: %d node%s belong%s to no element (id%s %s%s): remove %s", path, unused,
+               unused > 1 ? "s" : "", unused > 1 ? "" : "s", unused > 1 ? "s" : "", ids, unused > 8 ? ", ..." : "",
+               unused > 1 ? "them" : "it");
+      rc = PALP_EINVAL;
+    }
+    free(used);
+  }
   for (int s = 0; !rc && s < r.nsets; ++s) {
     raw_set *rs = &r.sets[s];
     int *items = malloc(sizeof(int) * (size_t)(rs->count ? rs->count : 1));
@@ -506,6 +548,19 @@ int palp_fem_inp_read(const char *path, palp_fem_mesh *out, char *err, size_t er
       palp_fem_mesh_destroy(out);
       return PALP_EINVAL;
     }
+  /* A positive total volume is not enough: corners out of order can fold an element so
+   * that some Gauss-point determinants are negative while their sum is not. The model
+   * checks the same 8 points (fem_model.c); here the message names the file's element id. */
+  for (int e = 0; e < out->element_count; ++e) {
+    const int g = inverted_gauss_point(out, e);
+    if (g) {
+      snprintf(err, errlen, "%s: element %ld is inverted at Gauss point %d (non-positive Jacobian: its corners are "
+               "out of the C3D8 order)", path, eids ? eids[e] : (long)e + 1, g);
+      free(eids);
+      palp_fem_mesh_destroy(out);
+      return PALP_EINVAL;
+    }
+  }
   free(eids);
   rc = palp_fem_mesh_standard_sets(out);
   if (rc) palp_fem_mesh_destroy(out);

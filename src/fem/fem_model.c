@@ -146,8 +146,13 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
                          J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
                          J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
       if (!(det > 0.0)) {
-        snprintf(m->err, sizeof m->err, "element %d has a non-positive Jacobian at Gauss point %d", e + 1, g + 1);
+        /* destroy clears the model, err included: the message is kept across it */
+        char why[sizeof m->err];
+        snprintf(why, sizeof why,
+                 "element %d (1-based, in mesh order) has a non-positive Jacobian at Gauss point %d (inverted or "
+                 "its corners out of the C3D8 order)", e + 1, g + 1);
         palp_fem_model_destroy(m);
+        memcpy(m->err, why, sizeof m->err);
         return PALP_EINVAL;
       }
       double Ji[3][3];

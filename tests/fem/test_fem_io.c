@@ -77,6 +77,45 @@ static void test_inp(void) {
   fclose(f);
   CHECK(palp_fem_inp_read(path, &b, err, sizeof err) == PALP_EPARSE && strstr(err, "undefined node"),
         "dangling node refused: %s", err);
+  int rc;
+  /* Since session 82: a node no element uses is refused naming its id (it made the
+   * tangent singular, reported as a solver failure) ... */
+  f = fopen(path, "w");
+  fprintf(f, "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n"
+             "8, 0, 1, 1\n9999, 0.5, 0.5, 3\n*Element, type=C3D8\n1, 1, 2, 3, 4, 5, 6, 7, 8\n");
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == PALP_EINVAL && strstr(err, "no element") && strstr(err, "9999"), "orphan node refused naming it: %d %s",
+        rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  /* ... and so is an element whose corners are out of order (top corners 7 and 8 swapped:
+   * a bow-tie face) although its total volume stays positive; the message names the
+   * file's element id, 1001 */
+  f = fopen(path, "w");
+  fprintf(f, "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n"
+             "8, 0, 1, 1\n*Element, type=C3D8\n1001, 1, 2, 3, 4, 5, 6, 8, 7\n");
+  fclose(f);
+  err[0] = 0;
+  rc = palp_fem_inp_read(path, &b, err, sizeof err);
+  CHECK(rc == PALP_EINVAL && strstr(err, "element 1001") && strstr(err, "inverted"),
+        "bow-tie element refused naming element 1001: %d %s", rc, err);
+  if (rc == 0) palp_fem_mesh_destroy(&b);
+  /* the model's own check keeps its message (palp_fem_model_destroy used to clear it) */
+  {
+    palp_fem_mesh bm;
+    block_mesh(&bm, 1, 1, 1, 0.0);
+    const int t = bm.hex[0][6];
+    bm.hex[0][6] = bm.hex[0][7], bm.hex[0][7] = t;
+    bm.fixed[bm.hex[0][0]] = 1;
+    palp_fem_model model;
+    const palp_fem_config mc = palp_fem_default_config();
+    rc = palp_fem_model_create(&model, &bm, &mc);
+    CHECK(rc == PALP_EINVAL && strstr(model.err, "element 1") && strstr(model.err, "Jacobian"),
+          "model of a bow-tie element: %d, message \"%s\"", rc, model.err);
+    if (rc == 0) palp_fem_model_destroy(&model);
+    palp_fem_mesh_destroy(&bm);
+  }
   printf("inp: bad files refused (\"%s\")\n", err);
 
   /* Hostile files found by fuzzing (issue 15): each refused with its line and reason,
@@ -98,7 +137,6 @@ static void test_inp(void) {
       {"*Node\n1, 1e300, 0, 0\n", "node 1: coordinate 1.0000000000000001e+300 is not a finite number within +-1000 m",
        PALP_EPARSE},
   };
-  int rc;
   for (size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
     f = fopen(path, "w");
     fputs(hostile[i].body, f);
