@@ -406,13 +406,46 @@ static int check_material(const palp_fem_material *m, const char *name, char *er
   return 0;
 }
 
+double palp_fem_memory_estimate_gb(double elements) {
+  return 5.0 * pow(elements / 87040.0, 4.0 / 3.0);
+}
+
 int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen) {
   int rc = check_material(&c->membrane, "membrane", err, errlen);
   if (!rc) rc = check_material(&c->gel, "gel", err, errlen);
   if (rc) return rc;
-  if (!c->inp_path[0] && (c->mesh.level < 1 || c->mesh.level > 16)) {
-    snprintf(err, errlen, "mesh.level: expected 1..16");
+  /* Level 8 (87,040 hexahedra, 5.0 GB peak) is the largest ever run. The elements grow as
+   * level^3 and a 3D factor's fill as (elements)^(4/3), so memory as level^4: level 9
+   * ~8 GB (ccx_crosscheck's own estimate), level 16, once accepted, ~80 GB. Refused up
+   * front with the estimate (since session 82), instead of failing as a "singular"
+   * factorisation or swapping for hours. */
+  if (!c->inp_path[0] && (c->mesh.level < 1 || c->mesh.level > PALP_FEM_MAX_LEVEL)) {
+    if (c->mesh.level > PALP_FEM_MAX_LEVEL)
+      snprintf(err, errlen, "mesh.level: %d is above %d: it would need roughly %.0f GB (level 8 took 5 GB; memory "
+               "grows as level^4)", c->mesh.level, PALP_FEM_MAX_LEVEL, palp_fem_memory_estimate_gb(
+                   224.0 * pow((double)c->mesh.level, 3.0) * (87040.0 / (224.0 * 512.0))));
+    else
+      snprintf(err, errlen, "mesh.level: expected 1..%d", PALP_FEM_MAX_LEVEL);
     return PALP_EINVAL;
+  }
+  /* the mesh's own fields, named (palp_fem_mesh_create's checks; its failure only said
+   * "invalid mesh definition (level N)") */
+  if (!c->inp_path[0]) {
+    const palp_fem_mesh_def *d = &c->mesh;
+    const char *bad = !(d->radius > 0.0 && d->radius <= 10.0)                         ? "mesh.radius: expected (0, 10] m"
+                      : !(d->membrane_thickness > 0.0 && d->membrane_thickness < 0.5 * d->radius)
+                          ? "mesh.membrane_thickness: expected (0, radius / 2) m"
+                      : !(d->core_fraction > 0.05 && d->core_fraction < 0.9) ? "mesh.core_fraction: expected (0.05, 0.9)"
+                      : d->membrane_layers < 0 || d->membrane_layers == 1 || d->membrane_layers > 32
+                          ? "mesh.membrane_layers: expected 0 (automatic) or 2..32"
+                      : !(d->grading >= 0.0 && d->grading <= 1.0) ? "mesh.grading: expected [0, 1]"
+                      : !(d->grading_polar_deg >= 0.0 && d->grading_polar_deg <= 90.0)
+                          ? "mesh.grading_polar_deg: expected [0, 90] deg"
+                          : NULL;
+    if (bad) {
+      snprintf(err, errlen, "%s", bad);
+      return PALP_EINVAL;
+    }
   }
   if (!(c->dt >= 0.0) || c->dt > 1.0) {
     snprintf(err, errlen, "dt: expected 0 (one step per frame) or a step in (0, 1] s");
@@ -433,6 +466,20 @@ int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen)
       c->factor_lag < 0 || c->factor_lag > 64 ||
       !(c->newton_rtol > 0.0) || !(c->newton_atol >= 0.0)) {
     snprintf(err, errlen, "newton: max_newton 1..60, max_cutbacks 0..20, rtol > 0, atol >= 0, pcg_refactor >= 0, threads 1..16, factor_lag 0..64");
+    return PALP_EINVAL;
+  }
+  /* Upper bounds (since session 82): with rtol >= 1, or atol above the load's norm, the
+   * first residual (|f_ext| at rest) "converged" at iteration 0 and the run returned all
+   * zeros as a valid, cached reference. rtol is relative to the force scale; the tools'
+   * smallest loads are ~0.1 N, so atol <= 1e-3 N keeps it below 1% of any of them. */
+  if (c->newton_rtol > PALP_FEM_MAX_RTOL) {
+    snprintf(err, errlen, "newton_rtol: %g is above %g (a looser test accepts the unloaded state as converged)",
+             c->newton_rtol, PALP_FEM_MAX_RTOL);
+    return PALP_EINVAL;
+  }
+  if (c->newton_atol > PALP_FEM_MAX_ATOL) {
+    snprintf(err, errlen, "newton_atol: %g N is above %g N (a looser test accepts the unloaded state as converged)",
+             c->newton_atol, PALP_FEM_MAX_ATOL);
     return PALP_EINVAL;
   }
   return 0;

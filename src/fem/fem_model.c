@@ -1023,22 +1023,30 @@ int palp_fem_step(palp_fem_model *m, const double *fext, double dt) {
   if (h < 1) h = 1;
   if (h > full) h = full;
   long done = 0;
+  int halvings = 0;
   const double t_start = m->time;
   while (done < full) {
     if (h > full - done) h = full - done;
     const double hs = dt * (double)h / (double)full; /* [s] */
     const int rc = try_step(m, fext, hs);
-    if (rc == PALP_ENOMEM) return rc;
+    if (rc == PALP_ENOMEM) { /* not retried: a smaller step needs the same factor */
+      snprintf(m->err, sizeof m->err, "time step at t = %.6g s: out of memory (the sparse factor of %d equations)",
+               m->time, m->nfree);
+      return rc;
+    }
     if (rc) {
       if (h < 2) {
+        /* the halvings made in this call: a step that starts from a remembered shorter
+         * h_next makes fewer than max_cutbacks (the message used to print max_cutbacks) */
         snprintf(m->err, sizeof m->err,
                  "time step at t = %.6g s failed after %d cut-backs (dt = %.3g s): %s", m->time,
-                 m->max_cutbacks, hs,
+                 halvings, hs,
                  rc == PALP_EUNSTABLE ? "an element inverted or the residual became non-finite"
                                       : "Newton did not converge or the tangent was singular");
         return rc == PALP_ESOLVER ? PALP_ESOLVER : PALP_EUNSTABLE;
       }
       h /= 2;
+      halvings++;
       m->cutbacks++;
       m->streak = 0;
       continue;

@@ -162,6 +162,12 @@ static int ws_mesh(run_ws *w, const palp_fem_config *cfg, char *err, size_t errl
     if (rc) snprintf(err, errlen, "mesh: invalid definition (level %d)", cfg->mesh.level);
   }
   if (!rc) w->have_mesh = 1;
+  if (!rc && w->mesh.element_count > PALP_FEM_MAX_ELEMENTS) {
+    snprintf(err, errlen, "FE mesh of %d hexahedra: above the %d allowed (it would need roughly %.0f GB; level 8's "
+             "87,040 took 5 GB)", w->mesh.element_count, PALP_FEM_MAX_ELEMENTS,
+             palp_fem_memory_estimate_gb((double)w->mesh.element_count));
+    rc = PALP_EINVAL;
+  }
   return rc;
 }
 

@@ -196,6 +196,9 @@ static int solver_factor(palp_fem_solver *s, const double *val) {
   s->last = s->L;
   if (cholmod_factorize(s->A, s->L, &s->cc) && s->cc.status == CHOLMOD_OK && s->L->minor >= (size_t)s->n)
     return PALP_OK;
+  /* out of memory is not an indefinite matrix: no LDL^T retry, and the step stops at once
+   * with "out of memory" instead of cutting back 8 times (since session 82) */
+  if (s->cc.status == CHOLMOD_OUT_OF_MEMORY) return PALP_ENOMEM;
   if (!s->Lldl) {
     const int sn = s->cc.supernodal, ll = s->cc.final_ll;
     s->cc.supernodal = CHOLMOD_SIMPLICIAL;
@@ -203,11 +206,12 @@ static int solver_factor(palp_fem_solver *s, const double *val) {
     s->Lldl = cholmod_analyze(s->A, &s->cc);
     s->cc.supernodal = sn;
     s->cc.final_ll = ll;
-    if (!s->Lldl) return PALP_ESOLVER;
+    if (!s->Lldl) return s->cc.status == CHOLMOD_OUT_OF_MEMORY ? PALP_ENOMEM : PALP_ESOLVER;
   }
   s->ldl_count++;
   s->last = s->Lldl;
   const int ok = cholmod_factorize(s->A, s->Lldl, &s->cc);
+  if (s->cc.status == CHOLMOD_OUT_OF_MEMORY) return PALP_ENOMEM;
   if (!ok || s->Lldl->minor < (size_t)s->n) return PALP_ESOLVER;
   /* a zero or non-finite pivot leaves minor < n; anything else is usable */
   return PALP_OK;
@@ -215,7 +219,8 @@ static int solver_factor(palp_fem_solver *s, const double *val) {
 
 static int solver_solve(palp_fem_solver *s, const double *b, double *x) {
   memcpy(s->b->x, b, sizeof(double) * (size_t)s->n);
-  if (!cholmod_solve2(CHOLMOD_A, s->last ? s->last : s->L, s->b, NULL, &s->x, NULL, &s->Y, &s->E, &s->cc)) return PALP_ESOLVER;
+  if (!cholmod_solve2(CHOLMOD_A, s->last ? s->last : s->L, s->b, NULL, &s->x, NULL, &s->Y, &s->E, &s->cc))
+    return s->cc.status == CHOLMOD_OUT_OF_MEMORY ? PALP_ENOMEM : PALP_ESOLVER;
   memcpy(x, s->x->x, sizeof(double) * (size_t)s->n);
   return PALP_OK;
 }

@@ -55,6 +55,17 @@ typedef struct palp_fem_mesh {
  * membrane_thickness), five radial gel blocks out to the membrane, and
  * membrane_layers element layers through the membrane. Level n >= 1 uses 2n core
  * cells across half the cube and 2n gel layers; level 4 has 10,496 hexahedra. */
+/* Validation bounds (palp_fem_config_validate, since session 82): the finest generated
+ * level (level 8 took 5 GB; each level ~2.5x more), the loosest Newton tolerances. */
+#define PALP_FEM_MAX_LEVEL 8
+#define PALP_FEM_MAX_RTOL 1e-2
+#define PALP_FEM_MAX_ATOL 1e-3 /* [N] */
+/* An --inp mesh's ceiling, of level 8's order (87,040 hexahedra). */
+#define PALP_FEM_MAX_ELEMENTS 100000
+/* Peak memory [GB] of a run on a hex mesh of this many elements: level 8's 5.0 GB
+ * scaled by (elements / 87,040)^(4/3), a 3D sparse factor's fill. A rough estimate. */
+double palp_fem_memory_estimate_gb(double elements);
+
 typedef struct palp_fem_mesh_def {
   double radius;             /* [m], 0.04 */
   double membrane_thickness; /* [m], 0.002 (Table I) */

@@ -451,6 +451,74 @@ static void test_cache(void) {
   CHECK(system(cmd) == 0, "cleanup");
 }
 
+/* Since session 82: what a config or scene may ask is bounded, and each refusal names
+ * its field. Newton tolerances: rtol <= 1e-2, atol <= 1e-3 N (rtol 1 or atol 1e6 N
+ * made the unloaded state "converged": an all-zero reference); the mesh level <= 8,
+ * with a memory estimate in the message; the mesh's fields named; and a scene whose
+ * dome radius is not the FE mesh's (30 vs 40 mm) refused by palp_fem_run naming both. */
+static void test_config(void) {
+  char err[256];
+  palp_fem_config c = palp_fem_default_config();
+  CHECK(palp_fem_config_validate(&c, err, sizeof err) == 0, "default config valid: %s", err);
+  c.newton_rtol = 1e-2, c.newton_atol = 1e-3;
+  CHECK(palp_fem_config_validate(&c, err, sizeof err) == 0, "rtol 1e-2, atol 1e-3 N (the bounds) accepted: %s", err);
+  const struct {
+    double rtol, atol;
+    const char *want;
+  } tol[] = {{1.0, 1e-9, "newton_rtol"}, {0.011, 1e-9, "newton_rtol"}, {1e-4, 1e6, "newton_atol"},
+             {1e-4, 0.0011, "newton_atol"}};
+  for (size_t i = 0; i < sizeof tol / sizeof tol[0]; ++i) {
+    c = palp_fem_default_config();
+    c.newton_rtol = tol[i].rtol, c.newton_atol = tol[i].atol;
+    err[0] = 0;
+    CHECK(palp_fem_config_validate(&c, err, sizeof err) == PALP_EINVAL && strstr(err, tol[i].want),
+          "rtol %g atol %g refused naming %s: %s", tol[i].rtol, tol[i].atol, tol[i].want, err);
+  }
+  c = palp_fem_default_config();
+  c.mesh.level = 8;
+  CHECK(palp_fem_config_validate(&c, err, sizeof err) == 0, "level 8 accepted: %s", err);
+  for (int L = 9; L <= 16; L += 7) {
+    c.mesh.level = L;
+    err[0] = 0;
+    CHECK(palp_fem_config_validate(&c, err, sizeof err) == PALP_EINVAL && strstr(err, "mesh.level") &&
+              strstr(err, "GB"),
+          "level %d refused with a memory estimate: %s", L, err);
+  }
+  const struct {
+    int field;
+    double v;
+    const char *want;
+  } mf[] = {{0, -1.0, "mesh.radius"}, {1, 0.03, "mesh.membrane_thickness"}, {2, 2.0, "mesh.core_fraction"},
+            {3, 1.0, "mesh.membrane_layers"}, {4, 1.5, "mesh.grading"}};
+  for (size_t i = 0; i < sizeof mf / sizeof mf[0]; ++i) {
+    c = palp_fem_default_config();
+    if (mf[i].field == 0) c.mesh.radius = mf[i].v;
+    if (mf[i].field == 1) c.mesh.membrane_thickness = mf[i].v;
+    if (mf[i].field == 2) c.mesh.core_fraction = mf[i].v;
+    if (mf[i].field == 3) c.mesh.membrane_layers = (int)mf[i].v;
+    if (mf[i].field == 4) c.mesh.grading = mf[i].v;
+    err[0] = 0;
+    CHECK(palp_fem_config_validate(&c, err, sizeof err) == PALP_EINVAL && strstr(err, mf[i].want),
+          "%s = %g refused naming the field: %s", mf[i].want, mf[i].v, err);
+  }
+  palp_scene s;
+  if (make_scene(&s, 2, "uniform")) {
+    CHECK(0, "scene");
+    return;
+  }
+  s.world.mesh.radius = 0.03;
+  c = palp_fem_default_config();
+  c.mesh.level = 1;
+  c.cache_dir[0] = 0;
+  palp_fem_result r;
+  err[0] = 0;
+  const int rc = palp_fem_run(&c, &s, &r, NULL, NULL, err, sizeof err);
+  CHECK(rc == PALP_EINVAL && strstr(err, "0.04") && strstr(err, "0.03") && strstr(err, "radius"),
+        "a 30 mm scene on the 40 mm FE dome refused naming both radii: %d %s", rc, err);
+  if (rc == 0) palp_fem_result_destroy(&r);
+  printf("config: bounds refused (\"%s\")\n", err);
+}
+
 int main(int argc, char **argv) {
   const char *c = argc > 1 ? argv[1] : "all";
   if (argc > 2) scene_path = argv[2];
@@ -459,6 +527,7 @@ int main(int argc, char **argv) {
   if (all || !strcmp(c, "run")) test_run();
   if (all || !strcmp(c, "cache")) test_cache();
   if (all || !strcmp(c, "ring")) test_ring();
+  if (all || !strcmp(c, "config")) test_config();
   if (fem_failures) fprintf(stderr, "%d check(s) failed\n", fem_failures);
   return fem_failures ? 1 : 0;
 }

@@ -13,7 +13,8 @@
   converging long before) exits nonzero with a message, leaves --out untouched and its rows in
   --out.partial; a --site token that names no site is refused; `--fe-from X --out X` keeps the
   stored FE columns (it used to truncate X before reading it); a scene whose dome radius differs
-  from the FE mesh's by more than 2% is refused with both radii.
+  from the FE mesh's by more than 2% is refused with both radii; `palp-fem run` refuses a negative
+  --dt and its --reading alias switches a paper profile's load map with its name.
 """
 import json
 import csv
@@ -104,6 +105,20 @@ def main():
     check(r.returncode != 0 and "0.04" in r.stderr and "0.03" in r.stderr,
           "a 30 mm scene against the 40 mm FE dome refused naming both radii (exit %d): %s" %
           (r.returncode, r.stderr.strip()[-300:]))
+
+    # palp-fem run's options (since session 82): a negative --dt is refused (it was the "unset"
+    # sentinel, silently ignored); --reading instantaneous on a paper profile runs the profile's
+    # point map, and the summary names the map
+    r = subprocess.run([tool, "run", "--scene", scene, "--level", "1", "--frames", "1", "--dt", "-0.005",
+                        "--no-cache", "--quiet"], capture_output=True, text=True, timeout=240)
+    check(r.returncode != 0 and "--dt" in r.stderr, "--dt -0.005 refused (exit %d)" % r.returncode)
+    paper = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(scene))), "paper_step.json")
+    r = subprocess.run([tool, "run", "--scene", paper, "--level", "1", "--frames", "1", "--material",
+                        "paper_long_term", "--reading", "instantaneous", "--no-cache"], capture_output=True,
+                       text=True, timeout=240)
+    lines = [l for l in r.stdout.splitlines() if l.startswith("material") or l.startswith("load map")]
+    check(r.returncode == 0 and len(lines) == 2 and "paper_instantaneous" in lines[0] and "point" in lines[1],
+          "--reading instantaneous: the paper_instantaneous profile with its point map (%s)" % lines)
 
 
 if __name__ == "__main__":

@@ -134,6 +134,9 @@ static int write_csv(const char *path, const palp_fem_result *r) {
 static void summary(const palp_fem_config *cfg, const palp_scene *s, const palp_fem_result *r, double wall) {
   printf("material         %s: %s\n", cfg->material[0] ? cfg->material : "custom",
          cfg->material[0] ? palp_fem_material_label(cfg->material) : "materials set field by field");
+  /* the map belongs to the run's identity: the same material under the two maps differs */
+  printf("load map         %s\n", cfg->load_map == PALP_FEM_LOAD_POINT ? "point (nodal, the paper's literal load)"
+                                                                         : "patch (each vertex's one-ring)");
   double peak = 0.0, t_peak = 0.0, at_release = NAN, residual = NAN, recovery = NAN, t_release = -1.0;
   palp_vec3 fb_release = {NAN, NAN, NAN};
   for (int c = 0; c < s->contact_count; ++c)
@@ -237,7 +240,13 @@ static int parse(int argc, char **argv, opts *o) {
         fprintf(stderr, "palp-fem: %s: not a number: %s\n", a, argv[i]);
         return -1;
       }
-      if (strcmp(a, "--dt") == 0) o->dt = v;
+      if (strcmp(a, "--dt") == 0) {
+      if (!(v >= 0.0)) { /* -1 is the "unset" sentinel: a negative --dt was silently ignored */
+        fprintf(stderr, "palp-fem: --dt: expected 0 (one step per frame) or a step in seconds: %s\n", argv[i]);
+        return -1;
+      }
+      o->dt = v;
+    }
       else if (positive_opt && !(v > 0.0)) {
         fprintf(stderr, "palp-fem: %s: expected a positive number: %s\n", a, argv[i]);
         return -1;
@@ -303,11 +312,15 @@ static int build_config(const opts *o, const palp_scene *scene, palp_fem_config 
       palp_log_error(o->log, "--reading: expected long_term or instantaneous");
       return -1;
     }
-    /* the alias of the two paper profiles */
-    if (strncmp(cfg->material, "paper_", 6) == 0)
+    /* the alias of the two paper profiles, as the config file's c10_reading: the name and
+     * the profile's load map switch together (since session 82; the map used to stay, so
+     * "paper_instantaneous" named two different runs) */
+    if (strncmp(cfg->material, "paper_", 6) == 0) {
       snprintf(cfg->material, sizeof cfg->material, "%s",
                cfg->c10_reading == PALP_FEM_C10_LONG_TERM ? "paper_long_term" : "paper_instantaneous");
-    else if (cfg->material[0]) cfg->material[0] = 0;
+      cfg->load_map = cfg->c10_reading == PALP_FEM_C10_LONG_TERM ? PALP_FEM_LOAD_PATCH : PALP_FEM_LOAD_POINT;
+    } else if (cfg->material[0])
+      cfg->material[0] = 0;
   }
   if (palp_fem_config_validate(cfg, err, sizeof err) != 0) {
     palp_log_error(o->log, "%s", err);
