@@ -418,7 +418,8 @@ int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen)
    * level^3 and a 3D factor's fill as (elements)^(4/3), so memory as level^4: level 9
    * ~8 GB (ccx_crosscheck's own estimate), level 16, once accepted, ~80 GB. Refused up
    * front with the estimate (since session 82), instead of failing as a "singular"
-   * factorisation or swapping for hours. */
+   * factorisation or swapping for hours. (palp_fem_mesh_create keeps its own 1..16: the
+   * sha256 of fem_mesh.c is held by the refined-mesh guard references.) */
   if (!c->inp_path[0] && (c->mesh.level < 1 || c->mesh.level > PALP_FEM_MAX_LEVEL)) {
     if (c->mesh.level > PALP_FEM_MAX_LEVEL)
       snprintf(err, errlen, "mesh.level: %d is above %d: it would need roughly %.0f GB (level 8 took 5 GB; memory "

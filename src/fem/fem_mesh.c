@@ -115,7 +115,7 @@ static double grade(double s, double s0, double lo, double hi, double alpha) {
 int palp_fem_mesh_create(const palp_fem_mesh_def *def, palp_fem_mesh *out) {
   memset(out, 0, sizeof *out);
   const int L = def->level;
-  if (L < 1 || L > PALP_FEM_MAX_LEVEL || !(def->radius > 0.0) || !(def->membrane_thickness > 0.0) ||
+  if (L < 1 || L > 16 || !(def->radius > 0.0) || !(def->membrane_thickness > 0.0) ||
       !(def->membrane_thickness < 0.5 * def->radius) || !(def->core_fraction > 0.05) ||
       !(def->core_fraction < 0.9) || def->membrane_layers < 0 || def->membrane_layers > 32 ||
       !(def->grading >= 0.0 && def->grading <= 1.0) ||

@@ -322,18 +322,27 @@ int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_r
   }
   run_ws w;
   memset(&w, 0, sizeof w);
-  rc = ws_mesh(&w, cfg, err, errlen);
-  if (rc) return rc;
-  const uint64_t key = palp_fem_run_key(cfg, &w.mesh, scene);
-  if (cfg->cache_dir[0] && palp_fem_cache_load(cfg->cache_dir, key, out) == 0) {
-    ws_free(&w);
-    return PALP_OK;
-  }
   const double t_start = wall();
-  rc = ws_loads(&w, cfg, scene, err, errlen);
+  rc = ws_mesh(&w, cfg, err, errlen);
+  if (!rc) rc = ws_loads(&w, cfg, scene, err, errlen);
   if (rc) {
     ws_free(&w);
     return rc;
+  }
+  /* A run with a contact vertex whose map touches the clamp was computed differently
+   * before session 82 (load and feedback at the clamped nodes): its key gets a marker so
+   * such cache entries are recomputed, while every other key, and PALP_FEM_CODE_VERSION
+   * (which stored guard references carry: docs/fem.md), stay as they were. */
+  uint64_t key = palp_fem_run_key(cfg, &w.mesh, scene);
+  for (int k = 0; k < w.total; ++k)
+    if (w.scale[k] != 1.0) {
+      static const char rule[] = "no load at clamped nodes (session 82)";
+      key = palp_fem_fnv(key, rule, sizeof rule);
+      break;
+    }
+  if (cfg->cache_dir[0] && palp_fem_cache_load(cfg->cache_dir, key, out) == 0) {
+    ws_free(&w);
+    return PALP_OK;
   }
   const int V = w.rt.vertex_count;
   const int total = w.total;

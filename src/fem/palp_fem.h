@@ -243,7 +243,8 @@ typedef int (*palp_fem_progress_fn)(void *ud, int frame, int frames, double sim_
  * cfg->cache_dir first and stores it there afterwards. err gets a message. */
 int palp_fem_run(const palp_fem_config *cfg, const palp_scene *scene, palp_fem_result *out,
                  palp_fem_progress_fn cb, void *ud, char *err, size_t errlen);
-/* The cache key of a run: FNV-1a over every input and PALP_FEM_CODE_VERSION. */
+/* The cache key of a run: FNV-1a over every input and PALP_FEM_CODE_VERSION. (palp_fem_run
+ * adds a marker to it when a contact's load map touches the clamped base: docs/fem.md.) */
 uint64_t palp_fem_run_key(const palp_fem_config *cfg, const palp_fem_mesh *mesh, const palp_scene *scene);
 
 int palp_fem_cache_load(const char *dir, uint64_t key, palp_fem_result *out);

@@ -47,7 +47,9 @@ awk '
     d = (cf - c1) / cf; if (d < 0) d = -d
     if (cf != 0 && d <= 1e-5) print "ok   ccx quarter deck " c1 " mm = full deck " cf " mm at level 1"
     else { print "FAIL ccx quarter deck " c1 " mm against full deck " cf " mm at level 1"; fail = 1 }
-    if (pp == p1 && p1 != "") print "ok   palp alone " pp " mm = palp beside ccx at level 1"
+    # numeric and finite (a failed palp side printed "nan", and "nan" == "nan" passed)
+    if (p1 !~ /^-?[0-9]+(\.[0-9]+)?$/ || pp !~ /^-?[0-9]+(\.[0-9]+)?$/) { print "FAIL palp pole displacement not a finite number: " pp " / " p1; fail = 1 }
+    else if (pp == p1) print "ok   palp alone " pp " mm = palp beside ccx at level 1"
     else { print "FAIL palp alone " pp " mm against " p1 " mm at level 1"; fail = 1 }
     exit fail
   }' "$dir.txt" "$dir.f.txt" "$dir.p.txt" || exit 1
