@@ -9,6 +9,16 @@
  * keeps the force continuous at the arrival and lets it reach the new model within
  * one physics period; a model arriving in the middle of a blend restarts it from
  * the force actually rendered, so the force stays continuous however models come.
+ *
+ * Why an onset is a gain, not an offset: the first model (after none, a forget or a stale
+ * fade-out) must reach the hand over fade_time, and the models keep coming every period
+ * meanwhile. As a long offset, each of them restarted the blend from the ~4% then
+ * rendered over one period, so the onset was over in 4 ticks (0 -> 2 N at 0.48 N a tick;
+ * session 82's review); and the offset, -F_new at the arrival, pulled the finger into the
+ * surface once it withdrew (F_new -> 0, the offset left alone: -0.56 N on a quick tap).
+ * Rendered as g(t) F(x), g rising from the share the hand felt to 1 over fade_time on the
+ * station's clock, the onset keeps its length whatever arrives, and a gain on a unilateral
+ * force stays unilateral. The offsets left (corrections) are cut where they would pull.
  */
 #include <math.h>
 #include <string.h>
@@ -57,6 +67,7 @@ int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
     return PALP_EINVAL;
   memset(h, 0, sizeof *h);
   h->def = d;
+  h->onset_from = 1.0; /* no onset running */
   return PALP_OK;
 }
 
@@ -81,18 +92,49 @@ static double offset_share(const palp_haptic *h, double now) {
   return 1.0 - (h->blend_len > 0.0 ? clamp01((now - h->cur_at) / h->blend_len) : 1.0);
 }
 
-/* The models' force before damping and fade: the newest model, each model limited to
- * max_force before it is blended (a 40 N model against a 10 N limit contributes 10 N, so
- * a fade or a crossfade of it moves the rendered force over its whole length rather than
- * holding the limit until the scale falls below 10/40), plus the decaying offset of the
- * last arrival, the sum limited again. *raw (if not NULL) gets the same sum without any
- * limit (what the models ask for) and *flags PALP_HAPTIC_LIMITED when a limit acted. */
+/* The onset gain at now: from onset_from up to 1 over fade_time since onset_at, on the
+ * station's clock alone (models arriving meanwhile do not shorten it). */
+static double onset_gain(const palp_haptic *h, double now) {
+  if (!(h->onset_from < 1.0)) return 1.0;
+  return h->onset_from + (1.0 - h->onset_from) * clamp01((now - h->onset_at) / h->def.fade_time);
+}
+
+int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n) {
+  if (!h) return 0;
+  palp_vec3 u = h->last_normal; /* unit, or 0 before any model in contact */
+  if (h->have && h->cur.contact) {
+    const double l = v3_len(h->cur.normal);
+    if (l > 0.0 && isfinite(l)) u = v3_scale(h->cur.normal, 1.0 / l);
+  }
+  if (!(v3_len(u) > 0.0)) return 0;
+  if (n) *n = u;
+  return 1;
+}
+
+/* f without its component into the surface (along -n): a surface pushes, never pulls. */
+static palp_vec3 no_pull(palp_vec3 f, palp_vec3 n) {
+  const double fn = v3_dot(f, n);
+  return fn < 0.0 ? v3_sub(f, v3_scale(n, fn)) : f; /* NaN passes through to the clamp, which zeroes it */
+}
+
+/* The models' force before damping and fade: the newest model, limited to max_force before
+ * it is scaled by the onset gain (a 40 N model against a 10 N limit contributes 10 N, so an
+ * onset or a fade of it moves the rendered force over its whole length rather than holding
+ * the limit until the scale falls below 10/40), plus the decaying offset of the last
+ * arrival; the sum's component into the surface cut (palp_haptic_push_normal), then
+ * limited again. *raw (if not NULL) gets the same sum without any limit (what the models
+ * ask for) and *flags PALP_HAPTIC_LIMITED when a limit acted. */
 static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now, palp_vec3 *raw, unsigned *flags) {
   const double age = fmin(now - h->cur_at, h->def.max_extrapolation);
+  const double g = onset_gain(h, now);
   const palp_vec3 f = palp_local_model_force(&h->cur, x, age);
   const palp_vec3 off = v3_scale(h->prev.force, offset_share(h, now)); /* prev.force holds the offset delta */
-  if (raw) *raw = v3_add(f, off);
-  return palp_haptic_clamp(v3_add(palp_haptic_clamp(f, h->def.max_force, flags), off), h->def.max_force, flags);
+  palp_vec3 n;
+  const int hn = palp_haptic_push_normal(h, &n);
+  palp_vec3 sum = v3_add(v3_scale(palp_haptic_clamp(f, h->def.max_force, flags), g), off);
+  if (raw) *raw = hn ? no_pull(v3_add(v3_scale(f, g), off), n) : v3_add(v3_scale(f, g), off);
+  if (hn) sum = no_pull(sum, n);
+  return palp_haptic_clamp(sum, h->def.max_force, flags);
 }
 
 /* The share of the model force a silent server still leaves on the hand: 1 while models
@@ -129,17 +171,32 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
   palp_vec3 delta = v3(0, 0, 0);
   double blend = h->def.blend_time > 0.0 ? h->def.blend_time : m->period;
   if (h->rendered) {
-    /* What the hand feels now (before damping; limited and faded as rendered) minus the
-     * new model's answer, limited as it will be rendered: the blend then starts from the
-     * force the hand actually feels. Before the first model the hand felt nothing, and a
+    /* What the hand feels now (before damping; limited, gained and faded as rendered) minus
+     * the new model's answer as it will be rendered: the blend then starts from the force
+     * the hand actually feels. Before the first model the hand felt nothing, and a
      * faded-out stale model left only its faded share: a device already pressed in when
      * the models (re)start must not get the whole force in one tick (it did: 0 -> 2.1 N
-     * when the demo's first model came 0.8 s after the press), so those onsets blend over
-     * fade_time, not a period. */
+     * when the demo's first model came 0.8 s after the press), so those start an onset,
+     * the gain rising from the share felt to 1 over fade_time (onset_gain); a model that
+     * arrives while one runs leaves it running. */
     const double keep = h->have ? stale_scale(h, now) : 0.0;
+    const double g_now = h->have ? onset_gain(h, now) : 0.0;
     const palp_vec3 was = h->have ? v3_scale(model_part(h, h->last_x, now, NULL, NULL), keep) : v3(0, 0, 0);
-    delta = v3_sub(was, palp_haptic_clamp(palp_local_model_force(m, h->last_x, 0.0), h->def.max_force, NULL));
-    if (keep < 1.0) blend = fmax(blend, h->def.fade_time);
+    if (keep < 1.0) {
+      h->onset_from = keep * g_now; /* the share the hand felt */
+      h->onset_at = now;
+      /* the faded models' disagreement, if any, goes over the onset's length */
+      blend = fmax(blend, h->def.fade_time);
+    }
+    const double g_new = keep < 1.0 ? h->onset_from : g_now;
+    delta = v3_sub(was, v3_scale(palp_haptic_clamp(palp_local_model_force(m, h->last_x, 0.0), h->def.max_force, NULL),
+                                 g_new));
+    /* A blend still running keeps its end: its offset goes on at its own slope. */
+    if (h->have && offset_share(h, now) > 0.0) blend = fmax(blend, h->blend_len - (now - h->cur_at));
+  }
+  if (m->contact) {
+    const double l = v3_len(m->normal);
+    if (l > 0.0 && isfinite(l)) h->last_normal = v3_scale(m->normal, 1.0 / l);
   }
   h->prev = h->cur;
   h->prev.force = delta;
@@ -181,10 +238,10 @@ void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out
     o.proxy = v3_add(h->cur.proxy, v3_sub(dx, v3_scale(n, v3_dot(dx, n))));
     const double fn0 = v3_dot(f, n);
     /* Damper along the normal on the device's velocity, never pulling into the surface,
-     * scaled with the fade. */
+     * scaled with the fade and the onset gain (it has no step at an onset either). */
     if (h->rendered && now > h->last_t && h->def.damping > 0.0) {
       const double vn = v3_dot(v3_sub(x, h->last_x), n) / (now - h->last_t); /* [m/s], < 0 going in */
-      const palp_vec3 fd = v3_scale(n, fmax(-keep * h->def.damping * vn, -fn0));
+      const palp_vec3 fd = v3_scale(n, fmax(-keep * onset_gain(h, now) * h->def.damping * vn, -fn0));
       f = v3_add(f, fd);
       raw = v3_add(raw, fd);
     }

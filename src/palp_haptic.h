@@ -7,7 +7,10 @@
  * at the device's current position every haptic tick; when a new model arrives the
  * force crossfades from the old model's prediction to the new one's over one
  * physics period, so a correction never reaches the hand as a step; the first model, and
- * the first after a stale fade-out, blend in from what the hand felt over fade_time. A model that
+ * the first after a stale fade-out, fade in as a gain on the model force that rises from the
+ * share the hand felt to 1 over fade_time, however many models arrive meanwhile (a gain on a
+ * unilateral force stays unilateral). The sum never pulls: its component into the surface
+ * (against the current contact normal, or the last one while an offset decays) is cut. A model that
  * is late is extrapolated for at most max_extrapolation, then held; a model older
  * than stale_time fades the force out over fade_time (a vanished server must not
  * leave a force on the hand). Each model's force is limited to max_force before it is
@@ -61,8 +64,12 @@ typedef struct palp_haptic {
   palp_haptic_def def;
   palp_local_model cur, prev;
   double cur_at;          /* station time the current model arrived [s] */
-  double blend_len;       /* the current arrival's crossfade [s]: the model's period, or
-                             fade_time when models (re)start under a pressed device */
+  double blend_len;       /* the current arrival's crossfade [s]: the model's period (or
+                             what is left of a longer one still running) */
+  double onset_at;        /* station time the running onset began [s] */
+  double onset_from;      /* the onset gain's start, the share the hand felt [0, 1];
+                             1 = no onset running */
+  palp_vec3 last_normal;  /* unit contact normal of the last model in contact (0 before any) */
   int have;               /* models received: 0, 1 or 2 (= both valid) */
   palp_vec3 last_x;       /* device point of the last render [m] */
   double last_t;          /* [s] */
@@ -87,6 +94,9 @@ double palp_haptic_stale_scale(const palp_haptic *h, double now);
 /* f limited to a magnitude of max_force [N] (sets PALP_HAPTIC_LIMITED in *flags, if not
  * NULL, when it acted); a non-finite f gives 0 N, flagged. */
 palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags);
+/* The unit normal the rendered force never pulls against: the current model's contact
+ * normal, or else the last model in contact's (an offset may still decay). 0 if none. */
+int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n);
 /* The force for device point x [m] at station time now [s]. */
 void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out *out);
 

@@ -37,7 +37,12 @@ static palp_local_model contact_model(double time, double z0, double fz, double 
  * fade_time in steps of at most L / 100 ticks (slack 1%); so does its onset under a pressed
  * device, and its return after the silence. Before the fix (limit after the fade) the fade
  * held L until the scale fell below L/R and then dropped R/100 a tick: 0.4 N at R = 40 N,
- * 10 N in one tick at R = 1e4 N. */
+ * 10 N in one tick at R = 1e4 N. The models come as the server sends them, one every period
+ * (4 ms) from t = 0 to 148 ms, then none (session 82: with one model only, the onset's
+ * fade_time was never tested against the next model; each one restarted the ramp and the
+ * onset took 4 ticks, 2.4 N a tick at L = 10 N). Expected, by hand: the onset gain t / 0.1 s,
+ * L/2 at 50 ms, L from 100 ms; the last model (148 ms) stale from 398 ms, faded to 0 at
+ * 498 ms, L/2 at 448 ms. */
 static void test_fade_above_limit(double R) {
   palp_haptic_def def = palp_haptic_default_def(); /* L = 10 N, stale 0.25 s, fade 0.1 s */
   def.damping = 0;
@@ -47,42 +52,51 @@ static void test_fade_above_limit(double R) {
   const palp_vec3 x = {0, 0, 0.03};
   palp_haptic_out o;
   palp_haptic_render(&h, x, -TICK, &o); /* pressed before the first model: the hand feels 0 N */
-  palp_local_model m = contact_model(1.0, 0.03, R, 500);
-  CHECK(palp_haptic_update(&h, &m, 0.0) == 1, "R = %g N: first model taken", R);
   double prev = 0, worst_on = 0, worst_off = 0, at_half_on = -1, at_half_off = -1, at_full = -1, after = -1;
-  for (int k = 0; k <= 500; ++k) {
+  int taken = 0;
+  for (int k = 0; k <= 600; ++k) {
     const double t = k * TICK;
+    if (k % 4 == 0 && k <= 148) {
+      palp_local_model m = contact_model(1.0 + t, 0.03, R, 500);
+      taken += palp_haptic_update(&h, &m, t) == 1;
+    }
     palp_haptic_render(&h, x, t, &o);
     const double f = len(o.force);
-    if (k <= 150) worst_on = fmax(worst_on, fabs(f - prev));
+    if (k <= 250) worst_on = fmax(worst_on, fabs(f - prev));
     else worst_off = fmax(worst_off, fabs(f - prev));
     if (k == 50) at_half_on = f;
     if (k == 200) at_full = f;
-    if (k == 300) at_half_off = f; /* 50 ms into the 100 ms fade */
-    if (k == 360) after = f;
+    if (k == 448) at_half_off = f; /* 50 ms into the 100 ms fade */
+    if (k == 510) after = f;
     prev = f;
   }
+  CHECK(taken == 38, "R = %g N: %d of the 38 models (every 4 ms to 148 ms) taken", R, taken);
   CHECK(worst_on <= bound && fabs(at_half_on - 0.5 * L) < 1e-9,
-        "R = %g N, onset under a pressed device: largest tick step %.4f N <= %.4f N (L / 100 ticks, +1%%), %.6f N "
-        "half way (5 N)", R, worst_on, bound, at_half_on);
+        "R = %g N, onset under a pressed device, a model every period: largest tick step %.4f N <= %.4f N (L / 100 "
+        "ticks, +1%%), %.6f N half way (5 N)", R, worst_on, bound, at_half_on);
   CHECK(fabs(at_full - L) < 1e-9, "R = %g N: limited to %.6f N once in (10 N)", R, at_full);
   CHECK(worst_off <= bound && fabs(at_half_off - 0.5 * L) < 1e-9 && after == 0.0,
         "R = %g N, silent server: largest tick step %.4f N <= %.4f N, %.6f N half way through the fade (5 N), "
         "%.6f N after it (0)", R, worst_off, bound, at_half_off, after);
-  /* The server comes back under the pressed device: the same ramp up. */
-  palp_local_model m2 = contact_model(1.004, 0.03, R, 500);
-  CHECK(palp_haptic_update(&h, &m2, 0.501) == 1, "R = %g N: the returning server's model taken", R);
+  /* The server comes back under the pressed device, a model every period again: the same ramp up. */
   prev = 0;
   double worst_back = 0, half_back = -1;
+  int back = 0;
   for (int k = 0; k <= 150; ++k) {
-    palp_haptic_render(&h, x, 0.501 + k * TICK, &o);
+    const double t = 0.601 + k * TICK;
+    if (k % 4 == 0) {
+      palp_local_model m2 = contact_model(1.4 + k * TICK, 0.03, R, 500);
+      back += palp_haptic_update(&h, &m2, t) == 1;
+    }
+    palp_haptic_render(&h, x, t, &o);
     worst_back = fmax(worst_back, fabs(len(o.force) - prev));
     if (k == 50) half_back = len(o.force);
     prev = len(o.force);
   }
+  CHECK(back == 38, "R = %g N: %d of the returning server's 38 models taken", R, back);
   CHECK(worst_back <= bound && fabs(half_back - 0.5 * L) < 1e-9 && fabs(prev - L) < 1e-9,
-        "R = %g N, restart: largest tick step %.4f N <= %.4f N, %.6f N half way (5 N), %.6f N at the end (10 N)", R,
-        worst_back, bound, half_back, prev);
+        "R = %g N, restart, a model every period: largest tick step %.4f N <= %.4f N, %.6f N half way (5 N), %.6f N "
+        "at the end (10 N)", R, worst_back, bound, half_back, prev);
 }
 
 /* 1. A crossfade from a model asking 40 N to one asking 5 N (limit 10 N) over its 4 ms
@@ -525,13 +539,15 @@ static void test_passivity_no_pull(void) {
  * still come) at the same spot: models of 3 N on 600 N/m came while pressed and while lifted,
  * none after. The new press feels 0 N on every tick until a new model; the first one (3 N)
  * blends in from 0: at most 3 N x 1 ms / fade_time (0.1 s) on its first tick, slack 5%. Before:
- * 3.0 N on the press's first tick. */
+ * 3.0 N on the press's first tick. The new models come every period (4 ms) from 200 ms, as the
+ * server sends them: the whole onset rises by at most 3 N / 100 ticks a tick (+1e-9 N) and is
+ * 3 N from 300 ms (session 82: the second model finished the ramp within 4 ticks, 0.7 N a tick). */
 static void test_repress(double side) {
   palp_cli_haptic_core c;
   core_make(&c, 0);
   palp_haptic_out o;
-  double worst_silent = 0, first_new = -1;
-  for (int k = 0; k <= 250; ++k) {
+  double worst_silent = 0, first_new = -1, worst_onset = 0, prev = 0, at_half = -1;
+  for (int k = 0; k <= 320; ++k) {
     const double t = k * TICK;
     const int on = k < 100 || k >= 150;                 /* lifted 100..149 ms */
     const int model = k % 4 == 0 && (k < 140 || k >= 200); /* in-contact models until 140 ms; new ones from 200 ms */
@@ -540,11 +556,17 @@ static void test_repress(double side) {
     palp_cli_haptic_core_tick(&c, on, x, t, model ? &mk : NULL, 0.001, &o, NULL);
     if (k >= 150 && k < 200) worst_silent = fmax(worst_silent, len(o.force));
     if (k == 200) first_new = len(o.force);
+    if (k == 250) at_half = len(o.force);
+    if (k >= 200) worst_onset = fmax(worst_onset, fabs(len(o.force) - prev));
+    prev = len(o.force);
   }
   CHECK(worst_silent == 0.0, "pressed again %g mm aside after a 50 ms lift: 0 N until a new model (largest %.3f N; "
         "was 3 N at once)", 1e3 * side, worst_silent);
   CHECK(first_new >= 0 && first_new <= 3.0 * TICK / 0.1 * 1.05, "the first new model blends in from 0: %.4f N on its "
         "first tick (<= %.4f N)", first_new, 3.0 * TICK / 0.1 * 1.05);
+  CHECK(worst_onset <= 0.03 + 1e-9 && fabs(at_half - 1.5) < 1e-9 && fabs(prev - 3.0) < 1e-9,
+        "a model every 4 ms through the onset: largest tick step %.4f N (<= 0.03 N: 3 N over 100 ticks), %.6f N at "
+        "50 ms (1.5 N), %.6f N at the end (3 N)", worst_onset, at_half, prev);
 }
 
 /* 10. A correction from a retried step's model (its period 0.25 ms, 1/16 of the 4 ms step at
@@ -620,6 +642,62 @@ static void test_outbox_lift(void) {
         releases, PALP_CLI_RELEASE_SAMPLES);
 }
 
+/* ---- session 82's review ---- */
+
+/* 14. The onset through the station core as palp-client runs it (250 Hz, compensation and
+ * passivity on, the default renderer with its damper): the finger held 2 mm into a 1000 N/m
+ * surface, a 2 N model at t = 0 and then every 4 ms. Expected, by hand: the gain t / fade_time,
+ * 2 N x 1 ms / 0.1 s = 0.02 N a tick (+1e-9 N), 1 N at 50 ms, 2 N from 100 ms. Before: the second
+ * model finished the ramp over one period, 0.48 N a tick (24x the bound), 2 N at 8 ms. */
+static void test_onset_stream(void) {
+  palp_cli_haptic_core c;
+  palp_haptic_def def = palp_haptic_default_def();
+  palp_cli_haptic_core_init(&c, &def, 250, 1, 0, 0.2);
+  palp_haptic_out o;
+  const palp_vec3 x = {0, 0, -0.002};
+  double prev = 0, worst = 0, half = -1;
+  int taken = 0;
+  for (int k = -5; k <= 150; ++k) {
+    const double t = k * TICK;
+    palp_local_model m = plane_model(1.0 + t, -0.002, 1000);
+    taken += palp_cli_haptic_core_tick(&c, 1, x, t, k >= 0 && k % 4 == 0 ? &m : NULL, 0.001, &o, NULL) == 1;
+    worst = fmax(worst, fabs(o.force.z - prev));
+    if (k == 50) half = o.force.z;
+    prev = o.force.z;
+  }
+  printf("onset through the core, a 2 N model every 4 ms: largest tick step %.4f N, %.4f N at 50 ms, %.4f N at 150 "
+         "ms\n", worst, half, prev);
+  CHECK(taken == 38 && worst <= 0.02 + 1e-9 && fabs(half - 1.0) < 1e-9 && fabs(prev - 2.0) < 1e-9,
+        "onset with a model every period (%d taken, 38): largest tick step %.4f N (<= 0.02 N: F / 100 ticks), %.6f N "
+        "at 50 ms (1 N), %.6f N at the end (2 N)", taken, worst, half, prev);
+}
+
+/* 15. A quick tap (the review's): 1 mm into 1000 N/m, the first model (1 N) at t = 0, then one
+ * every 4 ms of the plane at the device point 1 ms before (or none for 40 ms after the first:
+ * a late server); the hand lifts at 200 mm/s from 1 ms. A surface never pulls: F_z >= -1e-9 N on
+ * every tick, passivity on or off. Before: the onset's offset (-F_new at the arrival) was left
+ * alone as F_new fell to 0, down to -0.56 N (-0.94 N with the pause, held by the core's hold). */
+static double tap_z(int i) { return -0.001 + (i > 1 ? 0.2 * (i * TICK - 0.001) : 0); }
+static void test_tap(int passivity, double pause) {
+  palp_cli_haptic_core c;
+  palp_haptic_def def = palp_haptic_default_def();
+  palp_cli_haptic_core_init(&c, &def, 250, 1, 0, 0.2);
+  c.passivity = passivity;
+  palp_haptic_out o;
+  double least = 0, most = 0;
+  int at = -1;
+  for (int i = -5; i <= 80; ++i) {
+    const double t = i * TICK, z = tap_z(i), zl = tap_z(i - 1);
+    palp_local_model m = plane_model(1.0 + t, zl, 1000);
+    const int model = i >= 0 && i % 4 == 0 && (i == 0 || t >= pause);
+    palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, z}, t, model ? &m : NULL, 0.001, &o, NULL);
+    if (o.force.z < least) least = o.force.z, at = i;
+    most = fmax(most, o.force.z);
+  }
+  CHECK(least >= -1e-9, "a quick tap, passivity %d, models paused %.0f ms after the first: most negative F_z %.3e N "
+        "(at %d ms; >= -1e-9 N), largest %.4f N", passivity, 1e3 * pause, least, at, most);
+}
+
 int main(void) {
   test_fade_above_limit(40);
   test_fade_above_limit(1e4);
@@ -645,5 +723,10 @@ int main(void) {
   test_untrusted_age(0.5);
   test_mailbox_order();
   test_outbox_lift();
+  test_onset_stream();
+  test_tap(1, 0.0);
+  test_tap(0, 0.0);
+  test_tap(1, 0.040);
+  test_tap(0, 0.040);
   return check_exit();
 }

@@ -466,16 +466,25 @@ static void test_renderer(void) {
     palp_haptic_render(&h0, m.device, -0.010, &o);
     CHECK(o.flags & PALP_HAPTIC_NO_MODEL, "no model: flagged");
     CHECK(len(o.force) == 0.0, "no model: no force");
-    palp_haptic_update(&h0, &m, 0.0);
+    /* The server's models come every period (4 ms) through the onset, as on a station: each
+     * one leaves the onset running (session 82: the second finished it within 4 ticks). */
     double prev = 0.0, worst = 0.0, at_half = 0.0;
+    int taken = 0;
     for (int k = 0; k <= 150; ++k) {
+      if (k % 4 == 0) {
+        palp_local_model mk = m;
+        mk.time = 1.0 + 0.001 * k;
+        taken += palp_haptic_update(&h0, &mk, 0.001 * k) == 1;
+      }
       palp_haptic_render(&h0, m.device, 0.001 * k, &o);
       worst = fmax(worst, fabs(o.force.z - prev));
       prev = o.force.z;
       if (k == 50) at_half = o.force.z;
     }
     /* linear over fade_time (0.1 s): 1 N in 100 ticks, 0.01 N a tick */
-    CHECK(worst <= 0.0101, "onset: largest tick-to-tick step %.4f N (bound 0.0101 N: 1 N over 100 ticks)", worst);
+    CHECK(taken == 38, "onset: %d of the 38 models taken", taken);
+    CHECK(worst <= 0.0101, "onset, a model every 4 ms: largest tick-to-tick step %.4f N (bound 0.0101 N: 1 N over "
+          "100 ticks)", worst);
     CHECK(fabs(at_half - 0.5) < 1e-9, "onset: half the force half way (%.4f N)", at_half);
     CHECK(fabs(prev - 1.0) < 1e-12, "onset: the model's force once faded in (%.6f N)", prev);
   }
@@ -526,13 +535,19 @@ static void test_renderer(void) {
   const double faded = o.force.z;
   CHECK(palp_haptic_update(&h, &m3, 0.41) == 1, "a newer model after the silence is taken");
   double prev = faded, worst = 0.0;
+  int resumed = 1;
   for (int k = 0; k <= 120; ++k) {
+    if (k > 0 && k % 4 == 0) { /* the resumed server's stream, every 4 ms */
+      palp_local_model mk = m3;
+      mk.time = 1.5 + 0.001 * k;
+      resumed += palp_haptic_update(&h, &mk, 0.41 + 0.001 * k) == 1;
+    }
     palp_haptic_render(&h, (palp_vec3){0, 0, 0.029}, 0.41 + 0.001 * k, &o);
     worst = fmax(worst, fabs(o.force.z - prev));
     prev = o.force.z;
   }
-  CHECK(faded == 0.0 && worst <= 0.0131, "resumed: from %.4f N, largest tick step %.4f N (bound 0.0131: 1.3 N over 100 ticks)",
-        faded, worst);
+  CHECK(resumed == 31 && faded == 0.0 && worst <= 0.0131, "resumed, a model every 4 ms (%d of 31 taken): from %.4f N, "
+        "largest tick step %.4f N (bound 0.0131: 1.3 N over 100 ticks)", resumed, faded, worst);
   CHECK(fabs(prev - 1.3) < 1e-9, "resumed: the new model's force after fade_time (%.4f N)", prev);
 }
 
