@@ -86,7 +86,10 @@ int palp_cli_local_model_from_wire(const palp_LocalModel *in, palp_local_model *
   /* K = -dF/dx is symmetric and positive semi-definite (palp.h; palp_contact_stiffness
    * symmetrises it exactly), so its diagonal is >= 0: an asymmetric K (beyond 1e-6 of its
    * largest entry, for any rounding on the way) or a negative diagonal entry (a surface
-   * pulling the hand on as it goes in) is no phantom's. */
+   * pulling the hand on as it goes in) is no phantom's. A non-negative diagonal does not make
+   * K positive semi-definite, and nothing here bounds its size below 1e6 N/m: the renderer
+   * projects every K it takes to positive semi-definite and caps it at render.max_stiffness
+   * (palp_haptic_limit_stiffness), flagged, rather than refusing a model for round-off. */
   const double ktol = 1e-6 * kmax;
   for (int i = 0; i < 3; i++) {
     if (in->stiffness[4 * i] < -ktol) return PALP_EINVAL;
@@ -576,6 +579,7 @@ static void *haptic_main(void *arg) {
     for (int r = 0; r < PALP_CLI_RELEASE_SAMPLES; r++) send_contact(l, 0, (palp_vec3){0, 0, 0}, palp_dds_now_ns());
   d->in->write_force(d->in->ctx, (palp_vec3){0, 0, 0}, 0); /* leave the hand free */
   st->max_force = l->core.renderer.def.max_force;
+  st->stiffness_limited_models = l->core.renderer.stiffness_limited;
   st->passivity_ticks = l->core.pc_ticks;
   st->passivity_dissipated = l->core.dissipated;
   palp_timer_floor_request_stop(&l->floor); /* it measures beside the loop, not after it */

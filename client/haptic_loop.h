@@ -168,6 +168,9 @@ typedef struct palp_cli_haptic_stats {
   uint64_t passivity_ticks;  /* ticks the passivity controller damped */
   double passivity_dissipated; /* energy it took out [J] */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
+  uint64_t stiffness_limited_models; /* models whose K the renderer limited (above render.max_stiffness, or
+                                        indefinite: palp_haptic_limit_stiffness); their ticks in contact count
+                                        in limited_ticks */
   uint64_t out_of_range_models;   /* models with any model-validity flag */
   uint64_t out_of_range_ticks;    /* ticks rendered from such a model (PALP_CLI_FORCE_OUT_OF_RANGE); here and in
                                      limited_ticks and the four below, the deadlines a late tick skipped count

@@ -1225,6 +1225,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   if (hs.limited_ticks)
     tprintf(o, "[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
                o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
+  if (hs.stiffness_limited_models)
+    tprintf(o, "[trainee %s] STIFFNESS LIMITED: %llu model(s) asked a stiffness above this station's %.0f N/m or one "
+               "that would push the hand on; rendered limited (their seconds in contact are among the limited ones)\n",
+               o->name, (unsigned long long)hs.stiffness_limited_models, d.render.max_stiffness);
   if (hs.passivity_ticks)
     tprintf(o, "[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
                "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);

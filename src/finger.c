@@ -301,7 +301,7 @@ palp_vec3 palp_smooth_closest(palp_vec3 p, palp_vec3 a, palp_vec3 b, palp_vec3 c
   return S;
 }
 
-palp_vec3 palp_sym3_pinv_apply(const double K[3][3], palp_vec3 r, double rel_tol) {
+void palp_sym3_eig(const double K[3][3], double lambda[3], double V[3][3]) {
   double a[3][3], v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   memcpy(a, K, sizeof a);
   /* a <- J^T a J until off-diagonal round-off: 3x3 converges in a few sweeps */
@@ -328,6 +328,14 @@ palp_vec3 palp_sym3_pinv_apply(const double K[3][3], palp_vec3 r, double rel_tol
         }
       }
   }
+  for (int e = 0; e < 3; ++e) lambda[e] = a[e][e];
+  memcpy(V, v, sizeof v);
+}
+
+palp_vec3 palp_sym3_pinv_apply(const double K[3][3], palp_vec3 r, double rel_tol) {
+  double a[3][3] = {{0}}, v[3][3], l[3];
+  palp_sym3_eig(K, l, v);
+  for (int e = 0; e < 3; ++e) a[e][e] = l[e];
   const double lmax = fmax(fmax(a[0][0], a[1][1]), a[2][2]);
   const double rv[3] = {r.x, r.y, r.z};
   double out[3] = {0, 0, 0};

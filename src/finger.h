@@ -31,6 +31,10 @@ int palp_lcp_solve(int m, const double *W, const double *b, double *lambda, doub
 int palp_contact_stiffness(int m, const double *W, const palp_vec3 *n, const double *lambda, double K[3][3],
                            double *work);
 
+/* The eigen-decomposition of a symmetric 3x3 K (cyclic Jacobi, to round-off): K = V diag(lambda)
+ * V^T, lambda[e] the eigenvalue of column e of V (orthonormal), in no particular order. Pure. */
+void palp_sym3_eig(const double K[3][3], double lambda[3], double V[3][3]);
+
 /* K^+ r for a symmetric positive semi-definite 3x3 K (cyclic Jacobi; eigenvalues at or
  * below rel_tol of the largest are taken as zero, so r's part outside K's range is
  * dropped): the motion that K turns into the force r, where K can turn any into it. */

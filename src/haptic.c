@@ -23,6 +23,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "finger.h"
 #include "palp_haptic.h"
 #include "vec3.h"
 
@@ -32,7 +33,8 @@ palp_haptic_def palp_haptic_default_def(void) {
                            .blend_time = 0.0,
                            .max_extrapolation = 0.010,
                            .stale_time = 0.25,
-                           .fade_time = 0.1};
+                           .fade_time = 0.1,
+                           .max_stiffness = 4000.0};
 }
 
 palp_vec3 palp_local_model_force(const palp_local_model *m, palp_vec3 x, double age) {
@@ -49,6 +51,31 @@ palp_vec3 palp_local_model_force(const palp_local_model *m, palp_vec3 x, double 
   return f;
 }
 
+int palp_haptic_limit_stiffness(double K[3][3], double max_stiffness) {
+  double l[3], V[3][3];
+  palp_sym3_eig((const double(*)[3])K, l, V);
+  const double big = fmax(fmax(fabs(l[0]), fabs(l[1])), fabs(l[2]));
+  int change = 0, limited = 0;
+  for (int e = 0; e < 3; ++e) {
+    /* K = -dF/dx of a surface is positive semi-definite: a negative eigenvalue pushes the hand
+     * on along its motion (the review's K: +1 N along 1 mm of motion). Round-off is not
+     * flagged; it is projected all the same. */
+    if (l[e] < 0.0) {
+      if (l[e] < -1e-6 * big) limited = 1;
+      l[e] = 0.0, change = 1;
+    }
+    /* A device is never asked to render more than the coupling allows (docs/haptics.md); a K of
+     * 1e6 N/m against the hand's damping is a limit cycle of several newtons. */
+    if (l[e] > max_stiffness) l[e] = max_stiffness, change = limited = 1;
+  }
+  if (!change) return 0; /* K stays bit for bit */
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) K[i][j] = V[i][0] * l[0] * V[j][0] + V[i][1] * l[1] * V[j][1] + V[i][2] * l[2] * V[j][2];
+  for (int i = 0; i < 3; ++i) /* exactly symmetric */
+    for (int j = 0; j < i; ++j) K[i][j] = K[j][i] = 0.5 * (K[i][j] + K[j][i]);
+  return limited;
+}
+
 static int model_ok(const palp_local_model *m) {
   if (!(isfinite(m->time) && isfinite(m->period) && m->period >= 0.0)) return 0;
   if (!v3_isfinite(m->device) || !v3_isfinite(m->force) || !v3_isfinite(m->drift) || !v3_isfinite(m->normal))
@@ -63,7 +90,8 @@ int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
   if (!h) return PALP_EINVAL;
   const palp_haptic_def d = def ? *def : palp_haptic_default_def();
   if (!(d.max_force > 0.0) || !(d.damping >= 0.0) || !(d.blend_time >= 0.0) || !(d.max_extrapolation >= 0.0) ||
-      !(d.stale_time > 0.0) || !(d.fade_time > 0.0) || !isfinite(d.max_force) || !isfinite(d.damping))
+      !(d.stale_time > 0.0) || !(d.fade_time > 0.0) || !isfinite(d.max_force) || !isfinite(d.damping) ||
+      !(d.max_stiffness > 0.0))
     return PALP_EINVAL;
   memset(h, 0, sizeof *h);
   h->def = d;
@@ -164,10 +192,14 @@ int palp_haptic_accepts(const palp_haptic *h, const palp_local_model *m, double 
   return m->time - h->cur.time <= (now - h->cur_at) + h->def.stale_time || now - h->cur_at > h->def.stale_time;
 }
 
-int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
-  if (!h || !m || !isfinite(now)) return PALP_EINVAL;
-  if (!model_ok(m)) return PALP_EINVAL;
-  if (!palp_haptic_accepts(h, m, now)) return 0;
+int palp_haptic_update(palp_haptic *h, const palp_local_model *m_in, double now) {
+  if (!h || !m_in || !isfinite(now)) return PALP_EINVAL;
+  if (!model_ok(m_in)) return PALP_EINVAL;
+  if (!palp_haptic_accepts(h, m_in, now)) return 0;
+  /* The model as the station will render it: K positive semi-definite and within max_stiffness. */
+  palp_local_model mk = *m_in;
+  const palp_local_model *m = &mk;
+  const int klim = palp_haptic_limit_stiffness(mk.stiffness, h->def.max_stiffness);
   palp_vec3 delta = v3(0, 0, 0);
   double blend = h->def.blend_time > 0.0 ? h->def.blend_time : m->period;
   if (h->rendered) {
@@ -201,6 +233,8 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m, double now) {
   h->prev = h->cur;
   h->prev.force = delta;
   h->cur = *m;
+  h->cur_stiffness_limited = klim;
+  if (klim) h->stiffness_limited++;
   h->cur_at = now;
   h->blend_len = blend;
   h->have = h->have ? 2 : 1;
@@ -250,6 +284,7 @@ void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out
    * when no limit acted it is the rendered force, so requested > max_force implies LIMITED. */
   o.requested = v3_len(raw);
   f = palp_haptic_clamp(f, h->def.max_force, &lim);
+  if (contact && h->cur_stiffness_limited) lim |= PALP_HAPTIC_LIMITED; /* rendered from a limited K */
   if (!v3_isfinite(raw)) o.requested = INFINITY;
   o.flags |= lim;
   if (lim) h->limited_ticks++;

@@ -39,6 +39,9 @@ typedef struct palp_haptic_def {
   double max_extrapolation; /* drift extrapolation limit [s], default 0.010 */
   double stale_time;        /* no model for this long: fade out [s], default 0.25 */
   double fade_time;         /* [s], default 0.1 */
+  double max_stiffness;     /* largest eigenvalue of K rendered [N/m], default 4000: twice the coupling
+                               k_c (2000 N/m) that bounds the server's K (docs/haptics.md); a model's K
+                               is also projected to positive semi-definite (palp_haptic_limit_stiffness) */
 } palp_haptic_def;
 
 palp_haptic_def palp_haptic_default_def(void);
@@ -47,7 +50,8 @@ palp_haptic_def palp_haptic_default_def(void);
 double palp_haptic_fade(const palp_haptic_def *d, double age);
 
 enum {
-  PALP_HAPTIC_LIMITED = 1u << 0, /* the force was limited to max_force */
+  PALP_HAPTIC_LIMITED = 1u << 0, /* the force was limited to max_force, or is rendered from a model whose
+                                    K was limited (max_stiffness, or indefinite) */
   PALP_HAPTIC_STALE = 1u << 1,   /* no recent model: fading out */
   PALP_HAPTIC_CONTACT = 1u << 2, /* the finger touches the surface */
   PALP_HAPTIC_NO_MODEL = 1u << 3 /* no model yet: zero force */
@@ -74,7 +78,9 @@ typedef struct palp_haptic {
   palp_vec3 last_x;       /* device point of the last render [m] */
   double last_t;          /* [s] */
   int rendered;
+  int cur_stiffness_limited; /* the current model's K was limited (palp_haptic_limit_stiffness) */
   unsigned long long models, limited_ticks;
+  unsigned long long stiffness_limited; /* models taken whose K was limited */
 } palp_haptic;
 
 int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def);
@@ -97,6 +103,12 @@ palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags);
 /* The unit normal the rendered force never pulls against: the current model's contact
  * normal, or else the last model in contact's (an offset may still decay). 0 if none. */
 int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n);
+/* K (symmetric 3x3 [N/m]) made renderable, in place: projected to positive semi-definite
+ * (negative eigenvalues to 0) and each eigenvalue capped at max_stiffness. Returns 1 if that
+ * changed K beyond round-off (an eigenvalue above the cap, or one below -1e-6 of the largest:
+ * a surface that would push the hand on along its motion), else 0. palp_haptic_update applies
+ * it to every model it takes and flags its force PALP_HAPTIC_LIMITED when it returned 1. */
+int palp_haptic_limit_stiffness(double K[3][3], double max_stiffness);
 /* The force for device point x [m] at station time now [s]. */
 void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out *out);
 

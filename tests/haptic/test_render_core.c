@@ -15,6 +15,7 @@
 #include <time.h>
 
 #include "check.h"
+#include "finger.h"
 #include "haptic_loop.h"
 #include "palp_haptic.h"
 
@@ -124,8 +125,10 @@ static void test_crossfade_above_limit(void) {
         "%.6f N after (5 N)", worst, prev);
 }
 
-/* 8. A finite K that overflows: K_zz = -1e308 N/m read 10 m off gives F = +inf; scaled by
- * L / inf it rendered NaN. Now 0 N, flagged limited; and the clamp itself. */
+/* 8. A finite K that overflowed: K_zz = -1e308 N/m read 10 m off gave F = +inf; scaled by
+ * L / inf it rendered NaN, then 0 N (session 75). Since session 82 the renderer projects K to
+ * positive semi-definite within max_stiffness, so that K is 0 N/m: the model's own 1 N, flagged
+ * limited (palp_haptic_limit_stiffness). The clamp's non-finite path is checked on its own. */
 static void test_nonfinite(void) {
   unsigned fl = 0;
   palp_vec3 f = palp_haptic_clamp((palp_vec3){NAN, 0, 1}, 10, &fl);
@@ -146,9 +149,10 @@ static void test_nonfinite(void) {
   CHECK(palp_haptic_update(&h, &m, 0.0) == 1, "an overflowing (finite) K is a model the renderer takes");
   palp_haptic_out o;
   palp_haptic_render(&h, (palp_vec3){0, 0, 10}, 0.001, &o);
-  CHECK(isfinite(o.force.x) && isfinite(o.force.y) && isfinite(o.force.z) && len(o.force) == 0.0 &&
+  CHECK(isfinite(o.force.x) && isfinite(o.force.y) && isfinite(o.force.z) && fabs(o.force.z - 1.0) < 1e-12 &&
             (o.flags & PALP_HAPTIC_LIMITED),
-        "K d = -inf: rendered %g N (0, limited), requested %g", len(o.force), o.requested);
+        "K_zz = -1e308 N/m, 10 m off: rendered %g N (its K projected to 0: the model's 1 N, limited), requested %g",
+        len(o.force), o.requested);
 }
 
 /* 5. One model stamped 1e300 s must not stop the models after it. */
@@ -724,6 +728,84 @@ static void test_leaving_passivity(double k, double lag) {
         (unsigned long long)c.pc_ticks);
 }
 
+/* 17. palp_sym3_eig on K = [[2,1,0],[1,2,0],[0,0,3]]: eigenvalues 1, 3, 3 by hand (2 -+ 1 on the
+ * xy block, 3 on z); V orthonormal and V diag(l) V^T = K, to 1e-12. */
+static void test_sym3_eig(void) {
+  const double K[3][3] = {{2, 1, 0}, {1, 2, 0}, {0, 0, 3}};
+  double l[3], V[3][3], worst_k = 0, worst_o = 0;
+  palp_sym3_eig(K, l, V);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double r = 0, o = 0;
+      for (int e = 0; e < 3; ++e) r += V[i][e] * l[e] * V[j][e], o += V[e][i] * V[e][j];
+      worst_k = fmax(worst_k, fabs(r - K[i][j]));
+      worst_o = fmax(worst_o, fabs(o - (i == j)));
+    }
+  const double lo = fmin(fmin(l[0], l[1]), l[2]), hi = fmax(fmax(l[0], l[1]), l[2]);
+  CHECK(fabs(lo - 1) < 1e-12 && fabs(hi - 3) < 1e-12 && fabs(l[0] + l[1] + l[2] - 7) < 1e-12 && worst_k < 1e-12 &&
+            worst_o < 1e-12,
+        "palp_sym3_eig: eigenvalues %.15g %.15g %.15g (1, 3, 3), |V L V^T - K| %.1e, |V^T V - I| %.1e", l[0], l[1], l[2],
+        worst_k, worst_o);
+}
+
+/* 18. The station's stiffness bound. (a) The review's indefinite K, [[0, 1000, 0], [1000, 0, 0],
+ * [0, 0, 1000]] N/m: diagonal >= 0, so the wire check passes it, but its eigenvalue along
+ * u = (1, -1, 0)/sqrt2 is -1000 N/m. Projected (by hand: 1000 (v v^T + z z^T), v = (1, 1, 0)/sqrt2,
+ * which has no part along u), 1 mm along u renders the model's own 1 N along z, nothing along
+ * the motion (to 1e-9 N), flagged limited. Before: (0.707, -0.707, 1) N, +1 N along the motion.
+ * (b) K_zz = 1e6 N/m: 1 mm in renders 1 N + max_stiffness (4000 N/m) x 1 mm = 5 N (to 1e-9 N),
+ * flagged. Before: 1001 N asked, 10 N (the force limit). (c) A positive definite K under the cap
+ * is left bit for bit; a rank-1 K's round-off is projected but not flagged. */
+static void test_stiffness_limit(void) {
+  palp_LocalModel w = wire_ok();
+  const double Kw[9] = {0, 1000, 0, 1000, 0, 0, 0, 0, 1000};
+  memcpy(w.stiffness, Kw, sizeof Kw);
+  palp_local_model m;
+  CHECK(palp_cli_local_model_from_wire(&w, &m) == 0, "the indefinite K passes the wire check (diagonal >= 0)");
+  palp_haptic_def def = palp_haptic_default_def();
+  def.damping = 0;
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  CHECK(palp_haptic_update(&h, &m, 0.0) == 1, "the model with the indefinite K is taken");
+  palp_haptic_out o;
+  const double r = 0.001 / sqrt(2.0);
+  palp_haptic_render(&h, (palp_vec3){r, -r, 0}, 0.0, &o);
+  const double along = (o.force.x - o.force.y) / sqrt(2.0);
+  CHECK(fabs(o.force.x) < 1e-9 && fabs(o.force.y) < 1e-9 && fabs(o.force.z - 1.0) < 1e-9 && along <= 1e-9 &&
+            (o.flags & PALP_HAPTIC_LIMITED) && h.stiffness_limited == 1,
+        "indefinite K, 1 mm along its negative direction: force (%.6f, %.6f, %.6f) N ((0, 0, 1)), %.2e N along the "
+        "motion (<= 1e-9; was +1 N), limited flag %d, %llu model counted", o.force.x, o.force.y, o.force.z, along,
+        (o.flags & PALP_HAPTIC_LIMITED) != 0, (unsigned long long)h.stiffness_limited);
+  palp_haptic_init(&h, &def);
+  palp_local_model stiff = contact_model(1.0, 0.0, 1.0, 1e6);
+  palp_haptic_update(&h, &stiff, 0.0);
+  palp_haptic_render(&h, (palp_vec3){0, 0, -0.001}, 0.0, &o);
+  CHECK(fabs(o.force.z - (1.0 + def.max_stiffness * 0.001)) < 1e-9 && (o.flags & PALP_HAPTIC_LIMITED) &&
+            h.stiffness_limited == 1,
+        "K_zz = 1e6 N/m, 1 mm in: %.6f N (1 N + %.0f N/m x 1 mm = 5 N; was the 10 N limit), flagged limited",
+        o.force.z, def.max_stiffness);
+  /* through the station core, as palp-client renders it: flagged on the tick */
+  palp_cli_haptic_core c;
+  core_make(&c, 1);
+  palp_local_model s2 = contact_model(1.0, 0.0, 1.0, 1e6);
+  palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, 0}, 0.0, &s2, 0.001, &o, NULL);
+  palp_cli_haptic_core_tick(&c, 1, (palp_vec3){0, 0, -0.0001}, TICK, NULL, 0.001, &o, NULL);
+  CHECK((o.flags & PALP_HAPTIC_LIMITED) && fabs(o.force.z - (1.0 + def.max_stiffness * 0.0001)) < 1e-9 &&
+            c.renderer.stiffness_limited == 1,
+        "through the core: K_zz = 1e6 N/m, 0.1 mm in, %.6f N (1.4 N), flagged limited", o.force.z);
+  double K[3][3] = {{100, 20, 0}, {20, 100, 0}, {0, 0, 600}}, K0[3][3];
+  memcpy(K0, K, sizeof K);
+  CHECK(palp_haptic_limit_stiffness(K, 4000) == 0 && memcmp(K, K0, sizeof K) == 0,
+        "a positive definite K under the cap: not limited, bit for bit");
+  double R1[3][3] = {{360, 480, 0}, {480, 640, 0}, {0, 0, 0}}; /* 1000 n n^T, n = (0.6, 0.8, 0) */
+  double dev = 0;
+  const int r1 = palp_haptic_limit_stiffness(R1, 4000);
+  const double R0[3][3] = {{360, 480, 0}, {480, 640, 0}, {0, 0, 0}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) dev = fmax(dev, fabs(R1[i][j] - R0[i][j]));
+  CHECK(r1 == 0 && dev < 1e-9, "a rank-1 K: not flagged, changed by %.1e N/m at most (round-off)", dev);
+}
+
 int main(void) {
   test_fade_above_limit(40);
   test_fade_above_limit(1e4);
@@ -759,5 +841,7 @@ int main(void) {
     test_leaving_passivity(600, lags[i]);
     test_leaving_passivity(2000, lags[i]);
   }
+  test_sym3_eig();
+  test_stiffness_limit();
   return check_exit();
 }
