@@ -41,7 +41,10 @@ double palp_support_column_scale(const palp_lesion *les, int count, palp_vec3 x,
   if (!(length > 0.0) || !(full > 0.0)) return 1.0;
   const double C0 = S(length, c);
   double C = C0;
-  for (int l = 0; l < count; ++l) {
+  /* Each lesion's chord [z1, z2] on the column and its compliance ratio q. */
+  double z1s[PALP_MAX_LESIONS], z2s[PALP_MAX_LESIONS], qs[PALP_MAX_LESIONS];
+  int nc = 0, overlap = 0;
+  for (int l = 0; l < count && l < PALP_MAX_LESIONS; ++l) {
     /* column p(z) = x - z n, z in [0, length]; chord inside |p - centre| <= a */
     const palp_vec3 d = v3_sub(x, les[l].center);
     const double a = les[l].radius;
@@ -52,10 +55,38 @@ double palp_support_column_scale(const palp_lesion *les, int count, palp_vec3 x,
     z1 = fmax(z1, 0.0), z2 = fmin(z2, length);
     if (!(z2 > z1)) continue;
     const double s = les[l].stiffness_ratio;
-    const double q = s >= 1.0 ? 1.0 / s : 1.0 / (1.0 + PALP_LESION_SOFT_BETA * (s - 1.0));
-    C -= (1.0 - q) * (S(z2, c) - S(z1, c));
+    for (int k = 0; k < nc; ++k) overlap |= z1 < z2s[k] && z1s[k] < z2;
+    z1s[nc] = z1, z2s[nc] = z2, qs[nc] = s >= 1.0 ? 1.0 / s : 1.0 / (1.0 + PALP_LESION_SOFT_BETA * (s - 1.0));
+    nc++;
   }
-  /* q < 1 / (1 - beta) = 1.67 for any cyst, so C stays above 0.33 C0; kept > 0 anyway.
+  if (!overlap) {
+    for (int k = 0; k < nc; ++k) C -= (1.0 - qs[k]) * (S(z2s[k], c) - S(z1s[k], c));
+  } else {
+    /* Overlapping chords (a harder core inside a mass, a lesion listed twice) are one piece of
+     * tissue: each was subtracted in full, so the overlap counted twice, C went negative and the
+     * floor below made the support 1000x stiffer (session 82's review: 2.382 for one lesion,
+     * 1000 for the same listed twice). On each stretch between the chords' ends the stiffest
+     * lesion covering it (the smallest q) stands for the tissue there. */
+    double zb[2 * PALP_MAX_LESIONS];
+    int nb = 0;
+    for (int k = 0; k < nc; ++k) zb[nb++] = z1s[k], zb[nb++] = z2s[k];
+    for (int i = 1; i < nb; ++i) /* insertion sort: at most 16 ends */
+      for (int j = i; j > 0 && zb[j] < zb[j - 1]; --j) {
+        const double t = zb[j];
+        zb[j] = zb[j - 1], zb[j - 1] = t;
+      }
+    for (int i = 0; i + 1 < nb; ++i) {
+      const double lo = zb[i], hi = zb[i + 1];
+      if (!(hi > lo)) continue;
+      double q = -1.0;
+      for (int k = 0; k < nc; ++k)
+        if (z1s[k] <= lo && z2s[k] >= hi && (q < 0.0 || qs[k] < q)) q = qs[k];
+      if (q >= 0.0) C -= (1.0 - q) * (S(hi, c) - S(lo, c));
+    }
+  }
+  /* With the chords merged C >= q C0 > 0 for the smallest q (>= 1e-6: the scene's bound on
+   * stiffness_ratio); q < 1 / (1 - beta) = 1.67 for any cyst. The floor only acts for a lesion
+   * over 1000x the gel's stiffness covering nearly the whole column.
    * A shorter column than the full one (the base cuts it, world.c) is stiffer by
    * S(full) / S(length); with equal lengths that factor is exactly 1, as before. */
   const double base = full == length ? 1.0 : S(full, c) / C0;

@@ -480,7 +480,8 @@ double palp_lesion_support_scale(const palp_lesion *lesions, int count, palp_vec
 /* The support's stiffness scale of a column of column_length [m] against a full column of
  * full_length [m] (the pole's, the dome's radius), lesions included: S(full) / C(column),
  * C the column's Boussinesq-weighted compliance with the lesions' chords (lesion.c); equal to
- * palp_lesion_support_scale when the two lengths are equal. */
+ * palp_lesion_support_scale when the two lengths are equal. Overlapping lesions count once where
+ * they overlap (the stiffest there); at most PALP_MAX_LESIONS lesions are read. */
 double palp_support_column_scale(const palp_lesion *lesions, int count, palp_vec3 surface_point, palp_vec3 normal,
                                  double column_length, double full_length);
 

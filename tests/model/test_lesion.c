@@ -35,6 +35,58 @@ static double column_scale_numeric(const palp_lesion *L, palp_vec3 x, palp_vec3 
   return column_scale_numeric_q(L, x, n, length, 1.0 / L->stiffness_ratio);
 }
 
+/* The same integration for several lesions: at each z the stiffest lesion containing the point
+ * (the smallest q, 1 / ratio for a stiff one), or the gel (1). Written from the rule, not from
+ * src/lesion.c's chord merging. */
+static double column_scale_numeric_many(const palp_lesion *L, int count, palp_vec3 x, palp_vec3 n, double length) {
+  const double c = PALP_LESION_CONTACT_SCALE;
+  const int N = 200000;
+  double C0 = 0.0, C = 0.0;
+  for (int k = 0; k < N; ++k) {
+    const double z = (k + 0.5) * length / N;
+    const double s = 1.0 - z * z * z / pow(c * c + z * z, 1.5);
+    double q = 1.0;
+    for (int l = 0; l < count; ++l) {
+      const palp_vec3 p = {x.x - z * n.x - L[l].center.x, x.y - z * n.y - L[l].center.y, x.z - z * n.z - L[l].center.z};
+      if (p.x * p.x + p.y * p.y + p.z * p.z <= L[l].radius * L[l].radius) q = fmin(q, 1.0 / L[l].stiffness_ratio);
+    }
+    C0 += s;
+    C += s * q;
+  }
+  return C0 / C;
+}
+
+/* Overlapping lesions (session 82's review): each chord was subtracted in full, so a lesion listed
+ * twice made the column's compliance negative and the 1e-3 floor a 1000x stiffer support (2.382
+ * for one stiff lesion 2..14 mm deep, 1000 for the same twice). Now: listed twice = once (to
+ * 1e-12), and a harder core inside a mass, or two lesions that overlap in part, match the
+ * numerical integration of the stiffest-lesion rule to 1e-4. */
+static void test_overlap(void) {
+  const palp_vec3 pole = {0, 0, R}, up = {0, 0, 1};
+  const palp_lesion one = {.center = {0, 0, R - 0.008}, .radius = 0.006, .stiffness_ratio = 5.0};
+  const double ratios[2] = {5.0, 20.0}; /* before: 13.96 and 1000 (the floor) listed twice */
+  for (int i = 0; i < 2; ++i) {
+    palp_lesion l1 = one;
+    l1.stiffness_ratio = ratios[i];
+    const palp_lesion twice[2] = {l1, l1};
+    const double s1 = palp_lesion_support_scale(&l1, 1, pole, up, R), s2 = palp_lesion_support_scale(twice, 2, pole, up, R);
+    printf("a %gx lesion 2..14 mm deep at the pole: support scale %.6f once, %.6f listed twice\n", ratios[i], s1, s2);
+    CHECK(fabs(s2 - s1) < 1e-12 * s1, "a %gx lesion listed twice: support scale %.6f, once %.6f", ratios[i], s2, s1);
+  }
+  const palp_lesion core[2] = {one, {.center = {0, 0, R - 0.009}, .radius = 0.002, .stiffness_ratio = 20.0}};
+  const palp_lesion part[2] = {one, {.center = {0.002, 0, R - 0.015}, .radius = 0.005, .stiffness_ratio = 3.0}};
+  for (int k = 0; k < 3; ++k) {
+    const double th = k * 3.0 * PI / 180.0;
+    const palp_vec3 n = {sin(th), 0, cos(th)}, x = {R * n.x, 0, R * n.z};
+    const double a = palp_lesion_support_scale(core, 2, x, n, R), b = column_scale_numeric_many(core, 2, x, n, R);
+    const double c = palp_lesion_support_scale(part, 2, x, n, R), d = column_scale_numeric_many(part, 2, x, n, R);
+    printf("overlapping lesions %d deg off the pole: core in a mass %.6f (numerical %.6f), in part %.6f (%.6f)\n",
+           3 * k, a, b, c, d);
+    CHECK_NEAR(a, b, 1e-4 * b, "a 20x core inside a 5x mass: closed form vs numerical integration");
+    CHECK_NEAR(c, d, 1e-4 * d, "two lesions overlapping in part: closed form vs numerical integration");
+  }
+}
+
 /* The fingertip pressed at the pole to depth and held; the force's magnitude [N], and
  * the world's state hash then (when hash is not NULL). */
 static double press_def(palp_world_def d, const palp_lesion *les, int count, double depth, uint64_t *hash) {
@@ -189,6 +241,7 @@ static void test_base_column(void) {
 }
 
 int main(void) {
+  test_overlap();
   /* 1. The closed form against numerical integration, on and off the lesion's axis. */
   const palp_lesion L = {.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
   for (int k = 0; k < 4; ++k) {
