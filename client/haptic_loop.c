@@ -379,16 +379,9 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
          * (session 80's review; docs/haptics.md). Its normal part stops at a force of 0 along
          * the contact normal, as the renderer's own damper does (src/haptic.c); the energy it
          * leaves stays in the observer (which sums the force as rendered) for the next ticks,
-         * pressing in, where the damper pushes out. The clamp acts whenever there is a
-         * surface to clamp against, not only under the CONTACT flag: coming off, the renderer
-         * clears CONTACT while a correction's offset still leaves a force, so the observer's
-         * energy stays, and the damper pulled the lifting finger down to -3.3 N (session 82's
-         * review: models 10-20 ms late, 80-84 ticks a run). The renderer's normal is the
-         * current model's in contact, else the last contact's (palp_haptic_push_normal).
-         * Resetting the energy once the model says "no contact" was not chosen: it would drop
-         * the excess the observer keeps for the next press, which is what the controller is for. */
-        palp_vec3 nc;
-        if (palp_haptic_push_normal(&c->renderer, &nc)) {
+         * pressing in, where the damper pushes out. */
+        if (o.flags & PALP_HAPTIC_CONTACT) {
+          const palp_vec3 nc = c->renderer.cur.normal;
           const double fn = o.force.x * nc.x + o.force.y * nc.y + o.force.z * nc.z;
           if (fn < 0) o.force = v3sub(o.force, v3scale(nc, fn));
         }

@@ -217,14 +217,14 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m_in, double now)
     if (keep < 1.0) {
       h->onset_from = keep * g_now; /* the share the hand felt */
       h->onset_at = now;
-      /* the faded models' disagreement, if any, goes over the onset's length */
-      blend = fmax(blend, h->def.fade_time);
     }
     const double g_new = keep < 1.0 ? h->onset_from : g_now;
     delta = v3_sub(was, v3_scale(palp_haptic_clamp(palp_local_model_force(m, h->last_x, 0.0), h->def.max_force, NULL),
                                  g_new));
-    /* A blend still running keeps its end: its offset goes on at its own slope. */
-    if (h->have && offset_share(h, now) > 0.0) blend = fmax(blend, h->blend_len - (now - h->cur_at));
+    /* delta is a correction like any other (0 for a first model; the faded models' disagreement,
+     * scaled by the share felt, after a silence): one period. Blends of fade_time for it, kept to
+     * their end by later models, made every correction of an onset's first 0.1 s that long, and
+     * the late-model press cycles of haptic_multirate_stiff gave back 1.5% in a cycle (bound 1%). */
   }
   if (m->contact) {
     const double l = v3_len(m->normal);

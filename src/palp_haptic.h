@@ -68,8 +68,7 @@ typedef struct palp_haptic {
   palp_haptic_def def;
   palp_local_model cur, prev;
   double cur_at;          /* station time the current model arrived [s] */
-  double blend_len;       /* the current arrival's crossfade [s]: the model's period (or
-                             what is left of a longer one still running) */
+  double blend_len;       /* the current arrival's crossfade [s]: blend_time or the model's period */
   double onset_at;        /* station time the running onset began [s] */
   double onset_from;      /* the onset gain's start, the share the hand felt [0, 1];
                              1 = no onset running */
