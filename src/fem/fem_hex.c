@@ -29,18 +29,24 @@ void palp_fem_hex_dshape(const double xi[3], double dN[8][3]) {
   }
 }
 
+double palp_fem_hex_jacobian(const palp_fem_mesh *mesh, int e, int g, double dN[8][3], double J[3][3]) {
+  palp_fem_hex_dshape(palp_fem_gauss[g], dN);
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) J[i][k] = 0.0;
+  for (int a = 0; a < 8; ++a) {
+    const double *x = mesh->x[mesh->hex[e][a]];
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) J[i][k] += x[i] * dN[a][k];
+  }
+  return J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) - J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+         J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+}
+
 double palp_fem_element_volume(const palp_fem_mesh *mesh, int e) {
   double vol = 0.0;
   for (int g = 0; g < 8; ++g) {
-    double dN[8][3], J[3][3] = {{0}};
-    palp_fem_hex_dshape(palp_fem_gauss[g], dN);
-    for (int a = 0; a < 8; ++a) {
-      const double *x = mesh->x[mesh->hex[e][a]];
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) J[i][k] += x[i] * dN[a][k];
-    }
-    vol += J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) - J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
-           J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    double dN[8][3], J[3][3];
+    vol += palp_fem_hex_jacobian(mesh, e, g, dN, J); /* Gauss weights are 1 */
   }
   return vol;
 }

@@ -207,17 +207,8 @@ static int numbers(const char *line, double *v, int max) {
  * is not positive, or 0. */
 static int inverted_gauss_point(const palp_fem_mesh *mesh, int e) {
   for (int g = 0; g < 8; ++g) {
-    double dN[8][3], J[3][3] = {{0}};
-    palp_fem_hex_dshape(palp_fem_gauss[g], dN);
-    for (int a = 0; a < 8; ++a) {
-      const double *x = mesh->x[mesh->hex[e][a]];
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) J[i][k] += x[i] * dN[a][k];
-    }
-    const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
-                       J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
-                       J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
-    if (!(det > 0.0)) return g + 1;
+    double dN[8][3], J[3][3];
+    if (!(palp_fem_hex_jacobian(mesh, e, g, dN, J) > 0.0)) return g + 1;
   }
   return 0;
 }

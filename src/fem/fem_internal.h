@@ -51,6 +51,10 @@ double palp_fem_prony_update(const palp_fem_material *m, double dt, const double
 /* Trilinear shape-function derivatives dN/dxi at the 2x2x2 Gauss points. */
 void palp_fem_hex_dshape(const double xi[3], double dN[8][3]);
 extern const double palp_fem_gauss[8][3];
+/* Element e's reference Jacobian at Gauss point g: dN (the shape gradients dN/dxi there) and
+ * J = dX/dxi = sum_a X_a (x) dN_a filled; returns det J [m^3 per unit reference volume]. One
+ * place for the model's set-up, the volume and the .inp reader's inverted-element check. */
+double palp_fem_hex_jacobian(const palp_fem_mesh *mesh, int e, int g, double dN[8][3], double J[3][3]);
 
 /* ---- model (fem_model.c) --------------------------------------------------- */
 typedef struct palp_fem_solver palp_fem_solver;

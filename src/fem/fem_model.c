@@ -135,16 +135,8 @@ int palp_fem_model_create(palp_fem_model *m, const palp_fem_mesh *mesh, const pa
   for (int e = 0; e < E; ++e) {
     double vol = 0.0;
     for (int g = 0; g < 8; ++g) {
-      double dN[8][3], J[3][3] = {{0}};
-      palp_fem_hex_dshape(palp_fem_gauss[g], dN);
-      for (int a = 0; a < 8; ++a) {
-        const double *x = mesh->x[mesh->hex[e][a]];
-        for (int i = 0; i < 3; ++i)
-          for (int k = 0; k < 3; ++k) J[i][k] += x[i] * dN[a][k];
-      }
-      const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
-                         J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
-                         J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+      double dN[8][3], J[3][3];
+      const double det = palp_fem_hex_jacobian(mesh, e, g, dN, J);
       if (!(det > 0.0)) {
         /* destroy clears the model, err included: the message is kept across it */
         char why[sizeof m->err];
