@@ -9,6 +9,7 @@
 #include "palp.h"
 #include "palp_dds.h"
 #include "palp_log.h"
+#include "palp_utf8.h"
 
 /* The check is palp_dds_phantom_check (idl/), shared with palp-recorder. */
 int palp_cli_phantom_check(const palp_Phantom *ph, char *err, size_t errlen) {
@@ -132,29 +133,13 @@ static void colour(double f, int *r, int *g, int *b) {
   }
 }
 
-/* The length of the well-formed UTF-8 character at p (RFC 3629: no overlong form, no surrogate, nothing
- * past U+10FFFF), 0 if none begins there; the rule of client/review's review_utf8_len. */
-static int utf8_len(const unsigned char *p) {
-  if (p[0] < 0x80) return 1;
-  if (p[0] >= 0xc2 && p[0] <= 0xdf) return (p[1] & 0xc0) == 0x80 ? 2 : 0;
-  if (p[0] >= 0xe0 && p[0] <= 0xef) {
-    const unsigned lo = p[0] == 0xe0 ? 0xa0 : 0x80, hi = p[0] == 0xed ? 0x9f : 0xbf;
-    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 ? 3 : 0;
-  }
-  if (p[0] >= 0xf0 && p[0] <= 0xf4) {
-    const unsigned lo = p[0] == 0xf0 ? 0x90 : 0x80, hi = p[0] == 0xf4 ? 0x8f : 0xbf;
-    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 && (p[3] & 0xc0) == 0x80 ? 4 : 0;
-  }
-  return 0;
-}
-
 /* Text for the SVG (XML 1.0): the markup characters escaped, and '?' for a C0 control other than tab
  * and newline, DEL, and every byte that does not begin a well-formed UTF-8 character. The title holds
  * the phantom's name from the network or a Latin-1 scene file: before session 82 such a byte made the
  * snapshot ill-formed, which no viewer opens, while the station said it was written. */
 static void put_escaped(FILE *f, const char *s) {
   for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p;) {
-    const int n = utf8_len(p);
+    const int n = (int)palp_utf8_len(p, p[0] ? 4 : 1); /* a C string: its NUL ends a cut sequence */
     if (*p == '<') fputs("&lt;", f);
     else if (*p == '>') fputs("&gt;", f);
     else if (*p == '&') fputs("&amp;", f);

@@ -11,6 +11,7 @@
 #include <cjson/cJSON.h>
 
 #include "palp_place.h"
+#include "palp_utf8.h"
 #include "review_util.h"
 
 
@@ -38,18 +39,8 @@ int review_finish_output(FILE *f) {
 }
 
 int review_utf8_len(const unsigned char *p) {
-  /* RFC 3629: no overlong forms, no surrogates, nothing past U+10FFFF */
-  if (p[0] < 0x80) return 1;
-  if (p[0] >= 0xc2 && p[0] <= 0xdf) return (p[1] & 0xc0) == 0x80 ? 2 : 0;
-  if (p[0] >= 0xe0 && p[0] <= 0xef) {
-    const unsigned lo = p[0] == 0xe0 ? 0xa0 : 0x80, hi = p[0] == 0xed ? 0x9f : 0xbf;
-    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 ? 3 : 0;
-  }
-  if (p[0] >= 0xf0 && p[0] <= 0xf4) {
-    const unsigned lo = p[0] == 0xf0 ? 0x90 : 0x80, hi = p[0] == 0xf4 ? 0x8f : 0xbf;
-    return p[1] >= lo && p[1] <= hi && (p[2] & 0xc0) == 0x80 && (p[3] & 0xc0) == 0x80 ? 4 : 0;
-  }
-  return 0;
+  /* a C string: its NUL ends any sequence it cuts short (the bytes before it are not continuations) */
+  return (int)palp_utf8_len(p, p[0] ? 4 : 1);
 }
 
 int review_utf8_valid(const char *s) {
