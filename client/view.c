@@ -139,7 +139,7 @@ static void colour(double f, int *r, int *g, int *b) {
  * snapshot ill-formed, which no viewer opens, while the station said it was written. */
 static void put_escaped(FILE *f, const char *s) {
   for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p;) {
-    const int n = (int)palp_utf8_len(p, p[0] ? 4 : 1); /* a C string: its NUL ends a cut sequence */
+    const int n = (int)palp_utf8_xml_len(p, p[0] ? 4 : 1); /* a C string: its NUL ends a cut sequence */
     if (*p == '<') fputs("&lt;", f);
     else if (*p == '>') fputs("&gt;", f);
     else if (*p == '&') fputs("&amp;", f);

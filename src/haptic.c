@@ -127,7 +127,9 @@ static double onset_gain(const palp_haptic *h, double now) {
   return h->onset_from + (1.0 - h->onset_from) * clamp01((now - h->onset_at) / h->def.fade_time);
 }
 
-int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n) {
+/* The unit normal the rendered force never pulls against: the current model's contact
+ * normal, or else the last model in contact's (an offset may still decay). 0 if none. */
+static int push_normal(const palp_haptic *h, palp_vec3 *n) {
   if (!h) return 0;
   palp_vec3 u = h->last_normal; /* unit, or 0 before any model in contact */
   if (h->have && h->cur.contact) {
@@ -149,7 +151,7 @@ static palp_vec3 no_pull(palp_vec3 f, palp_vec3 n) {
  * it is scaled by the onset gain (a 40 N model against a 10 N limit contributes 10 N, so an
  * onset or a fade of it moves the rendered force over its whole length rather than holding
  * the limit until the scale falls below 10/40), plus the decaying offset of the last
- * arrival; the sum's component into the surface cut (palp_haptic_push_normal), then
+ * arrival; the sum's component into the surface cut (push_normal), then
  * limited again. *raw (if not NULL) gets the same sum without any limit (what the models
  * ask for) and *flags PALP_HAPTIC_LIMITED when a limit acted. */
 static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now, palp_vec3 *raw, unsigned *flags) {
@@ -157,8 +159,8 @@ static palp_vec3 model_part(const palp_haptic *h, palp_vec3 x, double now, palp_
   const double g = onset_gain(h, now);
   const palp_vec3 f = palp_local_model_force(&h->cur, x, age);
   const palp_vec3 off = v3_scale(h->prev.force, offset_share(h, now)); /* prev.force holds the offset delta */
-  palp_vec3 n;
-  const int hn = palp_haptic_push_normal(h, &n);
+  palp_vec3 n = {0, 0, 0};
+  const int hn = push_normal(h, &n);
   palp_vec3 sum = v3_add(v3_scale(palp_haptic_clamp(f, h->def.max_force, flags), g), off);
   if (raw) *raw = hn ? no_pull(v3_add(v3_scale(f, g), off), n) : v3_add(v3_scale(f, g), off);
   if (hn) sum = no_pull(sum, n);

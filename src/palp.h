@@ -647,6 +647,11 @@ char *palp_scene_to_json(const palp_scene *s);
 palp_world *palp_scene_create_world(const palp_scene *s, int *err);
 /* Applies every contact's profile at time t [s] (call before each step). */
 int palp_scene_apply(const palp_scene *s, palp_world *w, double t);
+/* The start [s] of substep q (0..frame_period/dt - 1) of frame f: f * frame_period + q * world.dt,
+ * the FE reference's clock. The offline tools apply the profiles at it, not at palp_world_time,
+ * which sums dt step by step: 0.01 summed ten times is 0.09999999999999999, and a step edge at
+ * 0.1 s loaded the real-time model one step longer than the FEM (session 82's review). */
+double palp_scene_step_time(const palp_scene *s, long f, int q);
 
 #ifdef __cplusplus
 }

@@ -70,8 +70,9 @@ typedef struct palp_haptic {
   double cur_at;          /* station time the current model arrived [s] */
   double blend_len;       /* the current arrival's crossfade [s]: blend_time or the model's period */
   double onset_at;        /* station time the running onset began [s] */
-  double onset_from;      /* the onset gain's start, the share the hand felt [0, 1];
-                             1 = no onset running */
+  double onset_from;      /* the onset gain's start, the share the hand felt [0, 1]; 1
+                             before any onset (the gain is 1 too once fade_time has passed
+                             since onset_at) */
   palp_vec3 last_normal;  /* unit contact normal of the last model in contact (0 before any) */
   int have;               /* models received: 0, 1 or 2 (= both valid) */
   palp_vec3 last_x;       /* device point of the last render [m] */
@@ -99,9 +100,6 @@ double palp_haptic_stale_scale(const palp_haptic *h, double now);
 /* f limited to a magnitude of max_force [N] (sets PALP_HAPTIC_LIMITED in *flags, if not
  * NULL, when it acted); a non-finite f gives 0 N, flagged. */
 palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags);
-/* The unit normal the rendered force never pulls against: the current model's contact
- * normal, or else the last model in contact's (an offset may still decay). 0 if none. */
-int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n);
 /* K (symmetric 3x3 [N/m]) made renderable, in place: projected to positive semi-definite
  * (negative eigenvalues to 0) and each eigenvalue capped at max_stiffness. Returns 1 if that
  * changed K beyond round-off (an eigenvalue above the cap, or one below -1e-6 of the largest:

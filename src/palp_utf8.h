@@ -9,5 +9,8 @@
  * (ED A0..BF), a code point past U+10FFFF (F4 90.., F5..FF), or a sequence cut short by n. A NUL
  * is a character of length 1 (a C string's end is the caller's). */
 size_t palp_utf8_len(const unsigned char *s, size_t n);
+/* The same for XML 1.0 text (an SVG): 0 also for U+FFFE and U+FFFF (EF BF BE, EF BF BF), well-formed
+ * UTF-8 that XML's Char production excludes. Control characters are the caller's rule. */
+size_t palp_utf8_xml_len(const unsigned char *s, size_t n);
 
 #endif

@@ -851,6 +851,10 @@ palp_world *palp_scene_create_world(const palp_scene *s, int *err) {
   return w;
 }
 
+double palp_scene_step_time(const palp_scene *s, long f, int q) {
+  return (double)f * s->frame_period + (double)q * s->world.dt;
+}
+
 int palp_scene_apply(const palp_scene *s, palp_world *w, double t) {
   const palp_mesh *m = palp_world_mesh(w);
   for (int i = 0; i < s->contact_count; ++i) {

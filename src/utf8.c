@@ -1,5 +1,5 @@
-/* The one UTF-8 rule (palp_utf8.h). Until session 82 palp-review, the visual station's SVG and
- * palp-web each had a copy of it. */
+/* The one UTF-8 rule (palp_utf8.h). Until session 82 palp-review, the visual station's SVG,
+ * palp-eval's SVG and palp-web each had a copy of it. */
 #include "palp_utf8.h"
 
 size_t palp_utf8_len(const unsigned char *s, size_t n) {
@@ -19,5 +19,12 @@ size_t palp_utf8_len(const unsigned char *s, size_t n) {
   if (n < len || s[1] < lo || s[1] > hi) return 0;
   for (size_t k = 2; k < len; k++)
     if (s[k] < 0x80 || s[k] > 0xBF) return 0;
+  return len;
+}
+
+size_t palp_utf8_xml_len(const unsigned char *s, size_t n) {
+  const size_t len = palp_utf8_len(s, n);
+  /* U+FFFE, U+FFFF: not XML characters (a parser refuses the document) */
+  if (len == 3 && s[0] == 0xEF && s[1] == 0xBF && s[2] >= 0xBE) return 0;
   return len;
 }

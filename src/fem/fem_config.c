@@ -424,7 +424,7 @@ int palp_fem_config_validate(const palp_fem_config *c, char *err, size_t errlen)
     if (c->mesh.level > PALP_FEM_MAX_LEVEL)
       snprintf(err, errlen, "mesh.level: %d is above %d: it would need roughly %.0f GB (level 8 took 5 GB; memory "
                "grows as level^4)", c->mesh.level, PALP_FEM_MAX_LEVEL, palp_fem_memory_estimate_gb(
-                   224.0 * pow((double)c->mesh.level, 3.0) * (87040.0 / (224.0 * 512.0))));
+                   87040.0 * pow(c->mesh.level / 8.0, 3.0))); /* the elements: level 8's 87,040 x (level / 8)^3 */
     else
       snprintf(err, errlen, "mesh.level: expected 1..%d", PALP_FEM_MAX_LEVEL);
     return PALP_EINVAL;

@@ -182,6 +182,10 @@ static int ws_mesh(run_ws *w, const palp_fem_config *cfg, char *err, size_t errl
  * clamped) does; one whose map has no free node is refused. Vertices clear of the
  * base keep their weights bit for bit (scale 1). */
 static int ws_loads(run_ws *w, const palp_fem_config *cfg, const palp_scene *scene, char *err, size_t errlen) {
+  if (scene->contact_count < 0 || scene->contact_count > PALP_SCENE_MAX_CONTACTS) { /* w->dir's bound, checked here */
+    snprintf(err, errlen, "scene: at most %d contacts", PALP_SCENE_MAX_CONTACTS);
+    return PALP_EINVAL;
+  }
   int rc = palp_fem_check_radius(&w->mesh, scene->world.mesh.radius, err, errlen);
   if (rc) return rc;
   rc = palp_mesh_create(&scene->world.mesh, &w->rt);

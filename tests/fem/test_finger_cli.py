@@ -64,7 +64,8 @@ def main():
     check([(x["depth_m"], x["fem_N"], x["fem_min_gap_m"]) for x in again] ==
           [(x["depth_m"], x["fem_N"], x["fem_min_gap_m"]) for x in rows],
           "--fe-from X --out X: X still holds the same FE columns (%d rows)" % len(again))
-    check(not os.path.exists(out + ".tmp"), "no temporary file left beside --out")
+    left = [n for n in os.listdir(os.path.dirname(out)) if n.startswith(os.path.basename(out) + ".")]
+    check(not left, "no temporary file left beside --out (%s)" % left)
 
     # a failed FE press is an error, and the file named by --out is not replaced by a short curve
     deep = os.path.join(scratch, "deep.csv")

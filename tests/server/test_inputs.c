@@ -149,19 +149,21 @@ int main(void) {
   if (s) fclose(s);
   CHECK(polys == mesh.dome_triangle_count && esc == 1, "%d polygons (want %d dome triangles), title escaped %d", polys,
         mesh.dome_triangle_count, esc);
-  /* A name from a Latin-1 scene file or a peer (a stray 0xfc, a control byte, a truncated sequence, DEL)
-   * keeps the snapshot XML: each such byte written as '?', the well-formed UTF-8 kept (session 82 review:
-   * the file was not XML, and the station said it was written). */
-  CHECK(palp_cli_view_svg(&ph, &def, "Brust\xfc\x01 T\xc3\xbc" "bingen\x7f \xe2\x82", svg) == 0, "SVG written");
+  /* A name from a Latin-1 scene file or a peer (a stray 0xfc, a control byte, a truncated sequence, DEL,
+   * and U+FFFF, well-formed UTF-8 that is no XML character) keeps the snapshot XML: each such byte
+   * written as '?', the well-formed UTF-8 kept (session 82 review: the file was not XML, and the station
+   * said it was written). */
+  CHECK(palp_cli_view_svg(&ph, &def, "Brust\xfc\x01 T\xc3\xbc" "bingen\x7f \xef\xbf\xbf \xe2\x82", svg) == 0,
+        "SVG written");
   s = fopen(svg, "r");
   int clean = 0, ctl = 0;
   while (s && fgets(line, sizeof line, s)) {
-    clean += strstr(line, ">Brust?\? T\xc3\xbc" "bingen? ?\?</text>") != NULL;
+    clean += strstr(line, ">Brust?\? T\xc3\xbc" "bingen? ?\?\? ?\?</text>") != NULL;
     for (const unsigned char *p = (const unsigned char *)line; *p; p++) ctl += (*p < 0x20 && *p != '\n') || *p == 0x7f;
   }
   if (s) fclose(s);
   CHECK(clean == 1 && ctl == 0, "a name with bytes that are no UTF-8 and control bytes: the title written as "
-        "\"Brust?\? T\\u00fc" "bingen? ?\?\" (%d) and no control byte in the file (%d)", clean, ctl);
+        "\"Brust?\? T\\u00fc" "bingen? ?\?\? ?\?\" (%d) and no control byte in the file (%d)", clean, ctl);
   remove(svg);
 
   /* A forged catalogue entry is refused before any index in it is used (the

@@ -44,7 +44,7 @@ typedef struct palp_eval_record {
 void palp_eval_record_destroy(palp_eval_record *r);
 
 /* Runs the real-time model through a scene exactly as palp-run does (apply the
- * profiles at the world's time, step, read back per output frame). Fails with
+ * profiles at palp_scene_step_time, step, read back per output frame). Fails with
  * PALP_EUNSTABLE when the model blows up (e.g. during a calibration trial). */
 int palp_eval_run_rt(const palp_scene *s, palp_eval_record *out, char *err, size_t errlen);
 

@@ -1,13 +1,13 @@
 /*
  * eval_record.c - a run of the real-time model as a per-frame record.
  *
- * The loop is palp-run's (tools/run/palp_run.c), with one difference: before
- * step q of frame f the scene's profiles are applied at t = f * frame_period +
- * q * dt, the FEM's expression (src/fem/fem_run.c), not at the world's clock.
- * The world sums its time step by step (t += dt), and 0.01 added ten times is
+ * The loop is palp-run's (tools/run/palp_run.c), palp-sweep's too: before step q of
+ * frame f the scene's profiles are applied at palp_scene_step_time, f * frame_period
+ * + q * dt, the FEM's expression (src/fem/fem_run.c), not at the world's clock. The
+ * world sums its time step by step (t += dt), and 0.01 added ten times is
  * 0.09999999999999999, not 0.1: a step edge at t_off = 0.1 s (or 2.5, 3.0, 3.5 s,
- * about half of the 10 ms edges in a 4 s run) then loads the real-time model one
- * step longer than the FEM, and the comparison books that extra 10 ms of load as
+ * about half of the 10 ms edges in a 4 s run) then loaded the real-time model one
+ * step longer than the FEM, and the comparison booked that extra 10 ms of load as
  * model error (session 82 review). Both models on one clock compare the models.
  * After the frame's last sub-step the state is read back, so frame f holds the
  * state at t = (f + 1) * frame_period, the time stamp the FEM reference uses too.
@@ -96,7 +96,7 @@ int palp_eval_run_rt(const palp_scene *s, palp_eval_record *out, char *err, size
   for (int f = 0; !rc && f < s->frames; ++f) {
     for (int q = 0; !rc && q < sub; ++q) {
       /* the FEM's clock (see the top of the file), not palp_world_time(w) */
-      rc = palp_scene_apply(s, w, (double)f * s->frame_period + (double)q * s->world.dt);
+      rc = palp_scene_apply(s, w, palp_scene_step_time(s, f, q));
       if (!rc) rc = palp_world_step(w);
     }
     if (rc) {

@@ -8,6 +8,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "svg_plot.h"
 
+#include "palp_utf8.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -32,25 +34,6 @@ static void msg(char *err, size_t errlen, const char *fmt, ...) {
   va_end(ap);
 }
 
-/* Length of the valid UTF-8 sequence at s, or 0 if it is invalid. */
-static size_t utf8_len(const unsigned char *s) {
-  if (s[0] < 0x80) return 1;
-  size_t n;
-  unsigned cp;
-  if ((s[0] & 0xE0) == 0xC0) n = 2, cp = s[0] & 0x1F;
-  else if ((s[0] & 0xF0) == 0xE0) n = 3, cp = s[0] & 0x0F;
-  else if ((s[0] & 0xF8) == 0xF0) n = 4, cp = s[0] & 0x07;
-  else return 0;
-  for (size_t i = 1; i < n; ++i) {
-    if ((s[i] & 0xC0) != 0x80) return 0;
-    cp = (cp << 6) | (s[i] & 0x3F);
-  }
-  /* Reject overlong forms, surrogates and beyond U+10FFFF (not valid XML chars). */
-  if ((n == 2 && cp < 0x80) || (n == 3 && cp < 0x800) || (n == 4 && cp < 0x10000)) return 0;
-  if ((cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF || cp == 0xFFFE || cp == 0xFFFF) return 0;
-  return n;
-}
-
 void palp_svg_write_text(FILE *out, const char *s) {
   if (!s) return;
   const unsigned char *p = (const unsigned char *)s;
@@ -68,7 +51,7 @@ void palp_svg_write_text(FILE *out, const char *s) {
       ++p;
       continue;
     }
-    size_t n = utf8_len(p);
+    size_t n = palp_utf8_xml_len(p, 4); /* a C string: its NUL ends a cut sequence */
     if (n == 0) {
       fputc('?', out);
       ++p;

@@ -31,6 +31,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "eval.h"
 #include "fem_finger.h"
@@ -139,7 +140,8 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
     }
     p = end ? end + 1 : NULL;
   }
-  /* --out goes to CSV.tmp, renamed over CSV only when the run succeeded: --fe-from may
+  /* --out goes to CSV.XXXXXX (mkstemp: its own name, 0600, no symlink followed, two runs
+   * apart), renamed over CSV only when the run succeeded: --fe-from may
    * name the same file (re-running the real-time side in place), and a level-4 curve
    * it holds took hours. A failed run leaves its rows in CSV.partial. A path that is
    * not a regular file (/dev/null, a FIFO) is written in place. */
@@ -147,12 +149,20 @@ int palp_fem_finger_compare(const palp_fem_config *cfg0, const palp_scene *scene
   char tmp[4096] = "";
   struct stat sb;
   const int special = csv && stat(csv, &sb) == 0 && !S_ISREG(sb.st_mode);
-  if (csv && !special && snprintf(tmp, sizeof tmp, "%s.tmp", csv) >= (int)sizeof tmp) {
+  if (csv && !special && snprintf(tmp, sizeof tmp, "%s.XXXXXX", csv) >= (int)sizeof tmp) {
     snprintf(err, errlen, "%s: path too long", csv);
     palp_fem_mesh_destroy(&mesh);
     return -1;
   }
-  if (csv && !(out = fopen(special ? csv : tmp, "w"))) {
+  if (csv && !special) {
+    const int fd = mkstemp(tmp);
+    if (fd >= 0 && !(out = fdopen(fd, "w"))) {
+      close(fd);
+      remove(tmp);
+    }
+  } else if (csv)
+    out = fopen(csv, "w");
+  if (csv && !out) {
     snprintf(err, errlen, "cannot write %s", special ? csv : tmp);
     palp_fem_mesh_destroy(&mesh);
     return -1;

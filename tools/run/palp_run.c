@@ -117,7 +117,7 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
   for (int f = 0; f < s->frames; ++f) {
     double applied = 0.0;
     for (int q = 0; q < sub; ++q, ++k) {
-      err = palp_scene_apply(s, w, palp_world_time(w));
+      err = palp_scene_apply(s, w, palp_scene_step_time(s, f, q)); /* the FE reference's clock */
       if (err) {
         palp_log_error(log, "step %ld: the scene's forces: %s", k, palp_strerror(err));
         break;
@@ -143,7 +143,7 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
       return 1;
     }
     for (int c = 0; c < s->contact_count; ++c)
-      applied += palp_profile_eval(&s->contact[c].profile, palp_world_time(w) - s->world.dt);
+      applied += palp_profile_eval(&s->contact[c].profile, palp_scene_step_time(s, f, sub - 1));
     const palp_vec3 *p = palp_world_positions(w);
     const double t = palp_world_time(w);
     const palp_vec3 d = {p[top].x - m->rest[top].x, p[top].y - m->rest[top].y, p[top].z - m->rest[top].z};

@@ -193,7 +193,8 @@ static int run_rt(palp_log *log, const palp_scene *s, const reference *R, point 
   double wall = 0.0;
   for (int f = 0; !rc && f < R->frames; ++f) {
     for (int q = 0; q < sub; ++q, ++k) {
-      const double t0 = now_s(), t = palp_world_time(w); /* the step's start: a failed one may leave halves */
+      /* the step's start on the FE reference's clock (a failed one may leave halves) */
+      const double t0 = now_s(), t = palp_scene_step_time(s, f, q);
       err = palp_scene_apply(s, w, t);
       if (err) {
         rc = fail_point(log, pt, "step %ld (from t = %g s): the scene's forces: %s", k, t, palp_strerror(err));
