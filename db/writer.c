@@ -181,6 +181,8 @@ struct palp_db_writer {
   int64_t drop_unsaid;                /* records in dropped batches not yet said on stderr */
   int drop_unsaid_batches, drop_said; /* ... in so many batches; a line was printed already */
   double drop_said_at, shed_said_at;  /* when the last such line was printed [s, monotonic] */
+  uint8_t pick[MAX_TXN_RECORDS];    /* rescue_control: the records it tries */
+  uint8_t scratch[MAX_TXN_RECORDS]; /* rescue_control: the records a constraint refused */
   palp_db_session *touched; /* sessions whose row was inserted in the current attempt */
   int touched_n, touched_cap;
 };
@@ -900,16 +902,17 @@ static int write_rec(palp_db_writer *w, rec *r) {
   }
 }
 
-/* One attempt at committing slots [tail, tail + n). On a disk error everything is rolled back
+/* One attempt at committing slots [tail, tail + n) (those `only` marks, when not NULL). On a disk error everything is rolled back
  * and *rc holds the error. Records refused by a constraint (a duplicate frame) are counted as
  * failed and skipped without failing the batch. Returns the number of records refused. */
-static int attempt_batch(palp_db_writer *w, int tail, int n, int *rc_out, uint8_t *refused) {
+static int attempt_batch(palp_db_writer *w, int tail, int n, int *rc_out, uint8_t *refused, const uint8_t *only) {
   w->touched_n = 0;
   int rc = sqlite3_exec(w->db, "BEGIN", NULL, NULL, NULL);
   int bad = 0;
   for (int i = 0; rc == SQLITE_OK && i < n; i++) {
     rec *r = &w->ring[(tail + i) % w->cap];
     refused[i] = 0;
+    if (only && !only[i]) continue;
     int rr = write_rec(w, r);
     if (rr == SQLITE_DONE || rr == SQLITE_OK) continue;
     if (is_disk_error(rr)) {
@@ -1098,6 +1101,38 @@ static void count_failed(palp_db_writer *w, int tail, int n, const uint8_t *refu
   pthread_mutex_unlock(&w->mu);
 }
 
+/* A batch dropped after its retries: its session ends, and the begins, events and findings that go
+ * with them, get a transaction of their own (session 82). An end is an UPDATE in place, which still
+ * fits a full file (its cap, or a full disk) where the batch's frames and meshes did not: dropped with
+ * them, a session kept end_reason NULL for good and the reason it ended was lost. First the control
+ * records together, in the batch's order; if they do not fit either, the ends alone (a begin's row
+ * that is not in the file is still inserted first, by session_rowid). On return lost[i] marks the
+ * batch's records not written; returns how many were written. */
+static int64_t rescue_control(palp_db_writer *w, int tail, int n, uint8_t *lost) {
+  uint8_t *pick = w->pick, *refused = w->scratch;
+  int64_t saved = 0;
+  for (int pass = 0; pass < 2; pass++) {
+    int any = 0;
+    for (int i = 0; i < n; i++) {
+      const int k = w->ring[(tail + i) % w->cap].kind;
+      pick[i] = k == PALP_DB_REC_SESSION_END || (pass == 0 && (k == PALP_DB_REC_SESSION_BEGIN ||
+                                                                 k == PALP_DB_REC_EVENT || k == PALP_DB_REC_FINDING));
+      any |= pick[i];
+    }
+    if (!any) break;
+    int rc;
+    (void)attempt_batch(w, tail, n, &rc, refused, pick);
+    if (rc != SQLITE_OK) continue;
+    for (int i = 0; i < n; i++)
+      if (pick[i] && !refused[i]) {
+        lost[i] = 0;
+        saved++;
+      }
+    break;
+  }
+  return saved;
+}
+
 static void *worker(void *arg) {
   palp_db_writer *w = arg;
   uint8_t *refused = malloc(MAX_TXN_RECORDS);
@@ -1122,7 +1157,7 @@ static void *worker(void *arg) {
       int rc = SQLITE_OK, bad = 0;
       double backoff = w->opts.retry_backoff_s;
       for (int attempt = 0;; attempt++) {
-        bad = attempt_batch(w, tail, n, &rc, refused);
+        bad = attempt_batch(w, tail, n, &rc, refused, NULL);
         if (rc == SQLITE_OK) break;
         set_error(w, rc, "writing the session log");
         if (attempt >= w->opts.retry_limit) break;
@@ -1132,9 +1167,10 @@ static void *worker(void *arg) {
       int64_t failed_by_kind[PALP_DB_REC_KIND_COUNT] = {0};
       int64_t written = n;
       if (rc != SQLITE_OK) { /* dropped after retries: count every record, per kind and session */
-        written = 0;
-        count_failed(w, tail, n, NULL, failed_by_kind);
-        say_dropped(w, n, 0);
+        memset(refused, 1, (size_t)n); /* now: the records lost */
+        written = rescue_control(w, tail, n, refused);
+        count_failed(w, tail, n, refused, failed_by_kind);
+        say_dropped(w, n - (int)written, 0);
       } else {
         written = n - bad;
         if (bad) count_failed(w, tail, n, refused, failed_by_kind);
