@@ -109,6 +109,7 @@ typedef struct wsess {
   int64_t shed_synced; /* records_shed last written */
   int64_t failed_synced;
   int ended;
+  int dup; /* its uid's row in the file is another session's (session 82): its records are refused */
 } wsess;
 
 enum { ST_BEGIN, ST_SEL_SESSION, ST_END, ST_CONTACT, ST_FEEDBACK, ST_FRAME, ST_MESH, ST_EVENT,
@@ -118,7 +119,7 @@ static const char *const stmt_sql[ST_COUNT] = {
     [ST_BEGIN] = "INSERT INTO session(uid, trainee, station, phantom_id, phantom_name, scene_json, "
                  "params_json, tick_hz, dt_s, start_unix_s) VALUES(?1,?2,?3,?4,?5,?6,?7,?8,?9,?10) "
                  "ON CONFLICT(uid) DO NOTHING",
-    [ST_SEL_SESSION] = "SELECT id FROM session WHERE uid = ?1",
+    [ST_SEL_SESSION] = "SELECT id, trainee, station, phantom_id FROM session WHERE uid = ?1",
     [ST_END] = "UPDATE session SET end_unix_s = ?2, end_reason = ?3, end_detail = ?4, "
                "records_shed = ?5, records_failed = ?6 WHERE id = ?1",
     [ST_CONTACT] = "INSERT INTO contact_input(session_id, frame, sim_time_s, slot, op, kind, "
@@ -696,6 +697,7 @@ static int session_rowid(palp_db_writer *w, palp_db_session s, int64_t *rowid) {
     *rowid = ws->rowid;
     return SQLITE_OK;
   }
+  if (ws->dup) return SQLITE_CONSTRAINT_UNIQUE; /* refused at its begin: every record counted failed */
   if (!ws->blob) return SQLITE_MISUSE; /* begin never seen: cannot happen with a FIFO queue */
   const palp_db_session_def *d = &ws->def;
   sqlite3_stmt *st = w->st[ST_BEGIN];
@@ -711,12 +713,38 @@ static int session_rowid(palp_db_writer *w, palp_db_session s, int64_t *rowid) {
   sqlite3_bind_double(st, 10, d->start_unix_s);
   int rc = step_reset(st);
   if (rc != SQLITE_DONE) return rc;
+  /* No row inserted: the uid is in the file already (a rolled-back row is not, so this is never this
+   * writer's own). The same trainee, station and phantom: the same session begun again (palp-recorder
+   * restarted within the millisecond its uid is built from), which goes on in that row as before
+   * session 82. Anything else is another session under a uid already taken (another writer's, a
+   * server run whose id repeated, a forgery): refused, so that its records never join the old
+   * session's or overwrite its end. */
+  const int inserted = sqlite3_changes(w->db) > 0;
   st = w->st[ST_SEL_SESSION];
   bind_text(st, 1, d->uid);
   rc = sqlite3_step(st);
-  if (rc == SQLITE_ROW) ws->rowid = sqlite3_column_int64(st, 0);
+  int same = 1;
+  if (rc == SQLITE_ROW && !inserted) {
+    const char *have[3] = {(const char *)sqlite3_column_text(st, 1), (const char *)sqlite3_column_text(st, 2),
+                           (const char *)sqlite3_column_text(st, 3)};
+    const char *want[3] = {d->trainee, d->station, d->phantom_id};
+    for (int i = 0; i < 3; i++) same &= !strcmp(have[i] ? have[i] : "", want[i] ? want[i] : "");
+  }
+  if (rc == SQLITE_ROW && same) ws->rowid = sqlite3_column_int64(st, 0);
   sqlite3_reset(st);
   sqlite3_clear_bindings(st);
+  if (rc == SQLITE_ROW && !same) {
+    ws->dup = 1;
+    char msg[256];
+    palp_db__fmt(msg, sizeof msg, "session uid \"%.100s\" refused: the file holds another session under it "
+                 "(another trainee, station or phantom); its records are not logged", d->uid);
+    fprintf(stderr, "palp_db: %s: %s\n", w->path, msg);
+    pthread_mutex_lock(&w->mu);
+    palp_db__fmt(w->st_.last_error, sizeof w->st_.last_error, "%s", msg);
+    w->st_.last_error_code = SQLITE_CONSTRAINT_UNIQUE;
+    pthread_mutex_unlock(&w->mu);
+    return SQLITE_CONSTRAINT_UNIQUE;
+  }
   if (rc != SQLITE_ROW) return rc == SQLITE_DONE ? SQLITE_ERROR : rc;
   /* The new row counts no loss; records this session lost before it existed go in at the next pass. */
   ws->shed_synced = ws->failed_synced = 0;
@@ -766,9 +794,22 @@ static wsess *take_begin(palp_db_writer *w, rec *r) {
 /* Writes one record inside the open transaction. Returns an SQLite code. */
 static int write_rec(palp_db_writer *w, rec *r) {
   if (r->kind == PALP_DB_REC_SESSION_BEGIN) {
-    if (!take_begin(w, r)) return SQLITE_NOMEM;
+    wsess *ws = take_begin(w, r);
+    if (!ws) return SQLITE_NOMEM;
     int64_t id;
-    return session_rowid(w, r->s, &id);
+    const int rc = session_rowid(w, r->s, &id);
+    if (!ws->dup) return rc;
+    /* refused (a uid already in the file): a session-less event says so, in this transaction */
+    char detail[256];
+    palp_db__fmt(detail, sizeof detail, "session begin refused: uid \"%.100s\" is another session's in this file "
+                 "(trainee \"%.40s\"); its records are not logged", ws->def.uid, ws->def.trainee ? ws->def.trainee : "");
+    sqlite3_stmt *st = w->st[ST_EVENT];
+    sqlite3_bind_double(st, 2, palp_db__now());
+    bind_text(st, 4, palp_db_event_kind_name(PALP_DB_EVENT_REJECT));
+    bind_text(st, 5, detail);
+    sqlite3_bind_int64(st, 6, 1);
+    const int erc = step_reset(st);
+    return is_disk_error(erc) ? erc : rc;
   }
   int64_t sid = 0;
   if (r->s > 0) {

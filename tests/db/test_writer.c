@@ -512,6 +512,71 @@ static void test_end_survives_full(void) {
   sqlite3_close(h);
 }
 
+/* --- a begin whose uid is already in the file (session 82 review, defect 2) -------------------------
+ * Three writers one after the other on one file, all with uid "run1-3". alice: frames 0-99, ended
+ * normal. mallory (another trainee): frames 50-149, ended error "forged": before session 82 merged
+ * into alice's row (her end and detail overwritten, 150 frames). Now refused: alice's row as she left
+ * it, the 102 records of mallory's session (begin, 100 frames, end) counted failed, a reject event
+ * and the writer's last error naming the uid. Then alice's session begun again by the same trainee,
+ * station and phantom (palp-recorder restarted): frames 100-109 go on in her row. */
+static int run_writer(const char *p, const char *trainee, int64_t f0, int64_t nf, palp_db_end_reason why,
+                      const char *detail, palp_db_writer_stats *st, int64_t *failed) {
+  char err[512];
+  palp_db_writer *w;
+  if (palp_db_writer_open(p, NULL, &w, err, sizeof err) != 0) return -1;
+  palp_db_session_def d = {.uid = "run1-3", .trainee = trainee, .station = "st-1", .phantom_id = "7",
+                           .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s;
+  int rc = palp_db_log_session_begin(w, &d, &s);
+  for (int64_t i = f0; rc == 0 && i < f0 + nf; i++) {
+    palp_db_frame f = frame_of(i);
+    rc = palp_db_log_frame(w, s, &f);
+  }
+  if (rc == 0) rc = palp_db_log_session_end(w, s, why, detail, 1765000000.0 + (double)f0);
+  palp_db_writer_flush(w, 20);
+  palp_db_writer_stats_get(w, st);
+  int64_t shed;
+  palp_db_writer_session_losses(w, s, &shed, failed);
+  palp_db_writer_close(w);
+  return rc;
+}
+
+static void test_duplicate_uid(void) {
+  char p[600];
+  path_in(p, sizeof p, "dup-uid.db");
+  palp_db_writer_stats st;
+  int64_t failed;
+  REQUIRE(run_writer(p, "alice", 0, 100, PALP_DB_END_NORMAL, "done", &st, &failed) == 0, "alice's writer");
+  CHECK(st.written == 102 && failed == 0, "alice: 102 records written (%lld), none failed (%lld)", (long long)st.written,
+        (long long)failed);
+  REQUIRE(run_writer(p, "mallory", 50, 100, PALP_DB_END_ERROR, "forged", &st, &failed) == 0, "mallory's writer");
+  CHECK(failed == 102 && st.failed == 102, "mallory: begin, 100 frames and end counted failed (session %lld, writer %lld)",
+        (long long)failed, (long long)st.failed);
+  CHECK(strstr(st.last_error, "run1-3") != NULL, "the writer's last error names the uid: \"%s\"", st.last_error);
+  sqlite3 *h;
+  REQUIRE(sqlite3_open_v2(p, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK, "reopen");
+  char t[64], reason[64], detail[64];
+  db_text(h, "SELECT trainee FROM session WHERE uid = 'run1-3'", t, sizeof t);
+  db_text(h, "SELECT end_reason FROM session WHERE uid = 'run1-3'", reason, sizeof reason);
+  db_text(h, "SELECT end_detail FROM session WHERE uid = 'run1-3'", detail, sizeof detail);
+  CHECK(db_scalar(h, "SELECT count(*) FROM session") == 1 && !strcmp(t, "alice"), "one session row, alice's ('%s')", t);
+  CHECK(!strcmp(reason, "normal") && !strcmp(detail, "done"), "alice's end kept: '%s' '%s'", reason, detail);
+  CHECK(db_scalar(h, "SELECT records_failed FROM session") == 0, "alice's row counts none of mallory's losses");
+  CHECK(db_scalar(h, "SELECT count(*) FROM frame") == 100 && db_scalar(h, "SELECT max(frame) FROM frame") == 99,
+        "alice's 100 frames only, 0-99");
+  CHECK(db_scalar(h, "SELECT count(*) FROM event WHERE kind = 'reject' AND session_id IS NULL AND "
+                     "detail LIKE '%\"run1-3\"%mallory%'") == 1,
+        "a session-less reject event names the uid and the refused trainee");
+  sqlite3_close(h);
+  REQUIRE(run_writer(p, "alice", 100, 10, PALP_DB_END_NORMAL, "again", &st, &failed) == 0, "alice's again");
+  CHECK(failed == 0 && st.written == 12, "the same session begun again: nothing failed (%lld), 12 written (%lld)",
+        (long long)failed, (long long)st.written);
+  REQUIRE(sqlite3_open_v2(p, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK, "reopen");
+  CHECK(db_scalar(h, "SELECT count(*) FROM session") == 1 && db_scalar(h, "SELECT count(*) FROM frame") == 110,
+        "it goes on in alice's row: 1 session, 110 frames");
+  sqlite3_close(h);
+}
+
 /* --- a session that begins while the file is full gets its row once space is back ------------
  * A batch that fails on a full file fails at its first record and is dropped after its retries. A
  * session's begin behind another session's mesh in such a batch was never reached: until session 75
@@ -1018,6 +1083,7 @@ int main(int argc, char **argv) {
   test_full_disk();
   test_full_disk_new_session();
   test_end_survives_full();
+  test_duplicate_uid();
   test_valid_range_detail();
   test_debrief_detail();
   test_refused();
