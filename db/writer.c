@@ -182,6 +182,9 @@ struct palp_db_writer {
   int64_t drop_unsaid;                /* records in dropped batches not yet said on stderr */
   int drop_unsaid_batches, drop_said; /* ... in so many batches; a line was printed already */
   double drop_said_at, shed_said_at;  /* when the last such line was printed [s, monotonic] */
+  /* The worker's per-batch marks, here rather than malloc'd at the thread's start (session 82: that
+   * malloc was unchecked, and a failure became a NULL write in the worker at its first batch). */
+  uint8_t refused[MAX_TXN_RECORDS]; /* attempt_batch: the records a constraint refused */
   uint8_t pick[MAX_TXN_RECORDS];    /* rescue_control: the records it tries */
   uint8_t scratch[MAX_TXN_RECORDS]; /* rescue_control: the records a constraint refused */
   palp_db_session *touched; /* sessions whose row was inserted in the current attempt */
@@ -1176,7 +1179,7 @@ static int64_t rescue_control(palp_db_writer *w, int tail, int n, uint8_t *lost)
 
 static void *worker(void *arg) {
   palp_db_writer *w = arg;
-  uint8_t *refused = malloc(MAX_TXN_RECORDS);
+  uint8_t *refused = w->refused;
   pthread_mutex_lock(&w->mu);
   for (;;) {
     if (w->count == 0 && !w->stop) {
@@ -1246,7 +1249,6 @@ static void *worker(void *arg) {
   /* The last pass may have read stop = 0 and skipped the rate-limited shed event; a closing
    * writer always accounts for every record it shed. */
   write_accounting(w, 1);
-  free(refused);
   return NULL;
 }
 
