@@ -203,7 +203,9 @@ int palp_db_log_session_begin(palp_db_writer *w, const palp_db_session_def *def,
 int palp_db_log_contact(palp_db_writer *w, palp_db_session s, const palp_db_contact *c);
 int palp_db_log_feedback(palp_db_writer *w, palp_db_session s, int64_t frame, int slot, palp_vec3 force_n);
 int palp_db_log_frame(palp_db_writer *w, palp_db_session s, const palp_db_frame *f);
-/* Copies vertex_count positions [m]. */
+/* The most vertices a mesh may have (since session 82): its blob stays under INT_MAX bytes. */
+#define PALP_DB_MESH_MAX_VERTICES (2147483647 / 24)
+/* Copies vertex_count positions [m]; PALP_EINVAL beyond PALP_DB_MESH_MAX_VERTICES. */
 int palp_db_log_mesh(palp_db_writer *w, palp_db_session s, int64_t frame, const palp_vec3 *pos,
                      int vertex_count);
 /* s = 0 for a server-wide event; frame < 0 if none; detail may be NULL. */

@@ -443,7 +443,9 @@ static void put_le_doubles(double *dst, const palp_vec3 *pos, int n) {
 
 int palp_db_log_mesh(palp_db_writer *w, palp_db_session s, int64_t frame, const palp_vec3 *pos,
                      int vertex_count) {
-  if (!w || !pos || vertex_count <= 0) return PALP_EINVAL;
+  /* A blob of at most INT_MAX bytes (session 82): the worker's length was an int, which overflowed
+   * past 89,478,485 vertices (possible with a queue_max_bytes over 2 GiB); refused before the copy. */
+  if (!w || !pos || vertex_count <= 0 || vertex_count > PALP_DB_MESH_MAX_VERTICES) return PALP_EINVAL;
   size_t bytes = (size_t)vertex_count * 3 * sizeof(double);
   double *xyz = malloc(bytes);
   if (!xyz) return PALP_ENOMEM;
@@ -890,8 +892,17 @@ static int write_rec(palp_db_writer *w, rec *r) {
     sqlite3_bind_int64(st, 1, sid);
     sqlite3_bind_int64(st, 2, r->u.mesh.frame);
     sqlite3_bind_int(st, 3, r->u.mesh.n);
-    sqlite3_bind_blob(st, 4, r->u.mesh.xyz, r->u.mesh.n * 3 * (int)sizeof(double), SQLITE_STATIC);
+  {
+    /* in 64 bits; a blob over SQLite's own length limit (SQLITE_TOOBIG) refuses this record only */
+    const int brc = sqlite3_bind_blob64(st, 4, r->u.mesh.xyz, (sqlite3_uint64)r->u.mesh.n * 3 * sizeof(double),
+                                        SQLITE_STATIC);
+    if (brc != SQLITE_OK) {
+      sqlite3_reset(st);
+      sqlite3_clear_bindings(st);
+      return brc;
+    }
     return step_reset(st);
+  }
   case PALP_DB_REC_EVENT:
     st = w->st[ST_EVENT];
     if (sid) sqlite3_bind_int64(st, 1, sid);

@@ -577,6 +577,33 @@ static void test_duplicate_uid(void) {
   sqlite3_close(h);
 }
 
+/* --- a mesh's byte length (session 82 review, defect 4) ----------------------------------------------
+ * 2,147,483,647 / 24 = 89,478,485 vertices is the most whose blob (24 bytes a vertex) stays within an
+ * int. One more is refused as PALP_EINVAL before anything is copied (the caller's array here holds one
+ * vertex: before session 82 the call copied 2 GiB from it). A 1,000-vertex mesh still goes in whole:
+ * 24,000 bytes. */
+static void test_mesh_bound(void) {
+  char p[600], err[512];
+  path_in(p, sizeof p, "mesh-bound.db");
+  palp_db_writer *w;
+  REQUIRE(palp_db_writer_open(p, NULL, &w, err, sizeof err) == 0, "open: %s", err);
+  palp_db_session_def d = {.uid = "mesh-1", .scene_json = "{}", .tick_hz = 1000, .dt_s = 0.001};
+  palp_db_session s;
+  REQUIRE(palp_db_log_session_begin(w, &d, &s) == 0, "begin");
+  static palp_vec3 one[1];
+  CHECK(palp_db_log_mesh(w, s, 1, one, 89478486) == PALP_EINVAL, "89,478,486 vertices refused");
+  static palp_vec3 pos[1000];
+  for (int v = 0; v < 1000; v++) pos[v] = (palp_vec3){1e-3 * v, -2e-3 * v, 0.5};
+  CHECK(palp_db_log_mesh(w, s, 2, pos, 1000) == 0, "1,000 vertices taken");
+  palp_db_writer_close(w);
+  sqlite3 *h;
+  REQUIRE(sqlite3_open_v2(p, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK, "reopen");
+  CHECK(db_scalar(h, "SELECT count(*) FROM mesh") == 1, "one mesh in the file");
+  CHECK(db_scalar(h, "SELECT length(positions_m) FROM mesh WHERE vertex_count = 1000 AND frame = 2") == 24000,
+        "its blob 24,000 bytes");
+  sqlite3_close(h);
+}
+
 /* --- a session that begins while the file is full gets its row once space is back ------------
  * A batch that fails on a full file fails at its first record and is dropped after its retries. A
  * session's begin behind another session's mesh in such a batch was never reached: until session 75
@@ -1084,6 +1111,7 @@ int main(int argc, char **argv) {
   test_full_disk_new_session();
   test_end_survives_full();
   test_duplicate_uid();
+  test_mesh_bound();
   test_valid_range_detail();
   test_debrief_detail();
   test_refused();
