@@ -223,8 +223,31 @@ int palp_db__connect(const char *path, int create, const char *app_version, sqli
   /* WAL: readers (palp-review) never block the server's writer and vice versa. synchronous=NORMAL
    * in WAL mode survives a process crash with every commit; only power loss can roll back the
    * commits made since the last checkpoint. */
-  if ((rc = exec_fmt(db, err, errlen, path, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL; "
-                                             "PRAGMA foreign_keys=ON")) != 0 ||
+  /* SQLite says a refused change (no shared memory on the file system, an in-memory database) by
+   * answering the mode it kept, not by an error: read the answer (session 82). In a rollback journal
+   * the writer and palp-review would block each other, and the durability docs/db.md states would not
+   * hold: refused, naming the mode, rather than run so without a word. */
+  sqlite3_stmt *jm = NULL;
+  char mode[32] = "";
+  rc = sqlite3_prepare_v2(db, "PRAGMA journal_mode=WAL", -1, &jm, NULL);
+  if (rc == SQLITE_OK && (rc = sqlite3_step(jm)) == SQLITE_ROW) {
+    const unsigned char *m = sqlite3_column_text(jm, 0);
+    snprintf(mode, sizeof mode, "%s", m ? (const char *)m : "");
+    rc = SQLITE_OK;
+  }
+  sqlite3_finalize(jm);
+  if (rc != SQLITE_OK) {
+    palp_db__fmt(err, errlen, "%s: setting WAL mode: %s", path, sqlite3_errmsg(db));
+    sqlite3_close(db);
+    return PALP_DB_ESQL;
+  }
+  if (strcmp(mode, "wal") != 0) {
+    palp_db__fmt(err, errlen, "%s: SQLite kept journal mode \"%s\" where WAL was asked (a file system without "
+                 "shared memory?); a session log needs WAL", path, mode);
+    sqlite3_close(db);
+    return PALP_EIO;
+  }
+  if ((rc = exec_fmt(db, err, errlen, path, "PRAGMA synchronous=NORMAL; PRAGMA foreign_keys=ON")) != 0 ||
       (rc = palp_db__migrate(db, path, app_version, err, errlen)) != 0) {
     sqlite3_close(db);
     return rc;

@@ -604,6 +604,30 @@ static void test_mesh_bound(void) {
   sqlite3_close(h);
 }
 
+/* --- WAL confirmed at open (session 82 review, defect 5) ---------------------------------------------
+ * SQLite answers a refused journal-mode change with the mode it kept, not an error. An in-memory
+ * database (a URI with mode=memory; this SQLite is built with USE_URI) keeps "memory": the writer must
+ * refuse it, naming that mode, where it used to run on without WAL. A file opens, and is in WAL. */
+static void test_wal_confirmed(void) {
+  char uri[700], err[512] = "";
+  snprintf(uri, sizeof uri, "file:%s/wal-mem.db?mode=memory&cache=private", dir);
+  palp_db_writer *w = NULL;
+  const int rc = palp_db_writer_open(uri, NULL, &w, err, sizeof err);
+  CHECK(rc != 0 && w == NULL, "a database that keeps journal mode \"memory\" is refused (rc %d)", rc);
+  CHECK(strstr(err, "\"memory\"") && strstr(err, "WAL"), "the error names the mode kept: \"%s\"", err);
+  if (w) palp_db_writer_close(w);
+  char p[600];
+  path_in(p, sizeof p, "wal-file.db");
+  REQUIRE(palp_db_writer_open(p, NULL, &w, err, sizeof err) == 0, "a file opens: %s", err);
+  sqlite3 *h;
+  REQUIRE(sqlite3_open_v2(p, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK, "reopen");
+  char mode[32];
+  db_text(h, "PRAGMA journal_mode", mode, sizeof mode);
+  CHECK(!strcmp(mode, "wal"), "the file is in WAL ('%s')", mode);
+  sqlite3_close(h);
+  palp_db_writer_close(w);
+}
+
 /* --- a session that begins while the file is full gets its row once space is back ------------
  * A batch that fails on a full file fails at its first record and is dropped after its retries. A
  * session's begin behind another session's mesh in such a batch was never reached: until session 75
@@ -1112,6 +1136,7 @@ int main(int argc, char **argv) {
   test_end_survives_full();
   test_duplicate_uid();
   test_mesh_bound();
+  test_wal_confirmed();
   test_valid_range_detail();
   test_debrief_detail();
   test_refused();
