@@ -189,7 +189,9 @@ def run(build, source, out):
         # margin, and about one fingertip radius (8 mm) from the proxy (the finger barely moves while held).
         check(R - 0.015 < rp < R + 0.001, "the point lies on the pressed skin: R - 15 mm < |p| < R + 1 mm")
         check(0.004 < d < 0.012, "about a fingertip radius (8 mm) from the proxy: %.1f mm" % (d * 1e3))
-        check(page.wait_for("palpState.trainee.marks === 1 && document.getElementById('ex-marks').textContent === '1'", 5)
+        # (the server's status goes server -> bridge -> page; 5 s ran out once in a full run beside a build,
+        # session 82: the property is that it comes, its speed is the click's, asserted above)
+        check(page.wait_for("palpState.trainee.marks === 1 && document.getElementById('ex-marks').textContent === '1'", 15)
               is True, "the page shows 1 mark (the server's finding status)")
         reply = page.eval("palpState.findingReplies[palpState.findingReplies.length-1]")
         check(reply["ok"] is True and reply["mark_id"] == 1, "the bridge answered ok, mark 1: %s" % reply)

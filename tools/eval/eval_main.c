@@ -175,10 +175,24 @@ static int parse_distributions(const char *v, options *o) {
   return 0;
 }
 
+/* The fingertip sites --finger names: where on the dome, and whether the stiff lesion under the
+ * pole is there (one table for the command line's check and the calibration's presses). */
+static const struct finger_site {
+  const char *name;
+  double polar_deg;
+  int lesion;
+} finger_sites[4] = {{"pole", 0, 0}, {"45deg", 45, 0}, {"70deg", 70, 0}, {"pole_lesion", 0, 1}};
+
+/* The index of the site named tok in finger_sites, or -1. */
+static int finger_site_of(const char *tok) {
+  for (int j = 0; j < 4; ++j)
+    if (!strcmp(tok, finger_sites[j].name)) return j;
+  return -1;
+}
+
 /* --finger pole,45deg,...: known sites, each at most once (a repeated one doubled its weight
  * in the fit until session 82), checked here so that a typo costs no FEM press. */
 static int parse_finger(const char *v) {
-  static const char *const known[4] = {"pole", "45deg", "70deg", "pole_lesion"};
   const char *seen[4];
   int n = 0;
   char list[128];
@@ -188,19 +202,17 @@ static int parse_finger(const char *v) {
   }
   snprintf(list, sizeof list, "%s", v);
   for (char *save = NULL, *tok = strtok_r(list, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-    int q = -1;
-    for (int j = 0; j < 4; ++j)
-      if (!strcmp(tok, known[j])) q = j;
+    const int q = finger_site_of(tok);
     if (q < 0) {
       fprintf(stderr, "palp-eval: --finger: unknown site \"%s\" (pole, 45deg, 70deg, pole_lesion)\n", tok);
       return -1;
     }
     for (int j = 0; j < n; ++j)
-      if (seen[j] == known[q]) {
+      if (seen[j] == finger_sites[q].name) {
         fprintf(stderr, "palp-eval: --finger: site \"%s\" given twice in \"%s\"\n", tok, v);
         return -1;
       }
-    seen[n++] = known[q];
+    seen[n++] = finger_sites[q].name;
   }
   if (!n) {
     fprintf(stderr, "palp-eval: --finger expects up to 4 of pole, 45deg, 70deg, pole_lesion, got \"%s\"\n", v);
@@ -1294,11 +1306,6 @@ static int cmd_calibrate(const options *o) {
   palp_eval_finger_ref fref[4];
   int nfref = 0;
   if (o->finger) {
-    static const struct {
-      const char *name;
-      double polar_deg;
-      int lesion;
-    } known[4] = {{"pole", 0, 0}, {"45deg", 45, 0}, {"70deg", 70, 0}, {"pole_lesion", 0, 1}};
     palp_fem_mesh mesh;
     if (palp_fem_mesh_create(&s.fem.mesh, &mesh)) {
       palp_log_error(o->log, "--finger: cannot build the FEM mesh");
@@ -1310,22 +1317,19 @@ static int cmd_calibrate(const options *o) {
     snprintf(list, sizeof list, "%s", o->finger);
     int bad = 0;
     for (char *tok = strtok(list, ","); tok && !bad; tok = strtok(NULL, ",")) {
-      int q = -1;
-      for (int j = 0; j < 4; ++j)
-        if (!strcmp(tok, known[j].name)) q = j;
+      const int q = finger_site_of(tok); /* known, and at most 4: parse_finger checked the list */
       if (q < 0 || nfref == 4) {
-        /* parse_finger refused it already; kept as a guard */
-        palp_log_error(o->log, "--finger: unknown site \"%s\" (pole, 45deg, 70deg, pole_lesion)", tok);
+        palp_log_error(o->log, "--finger: \"%s\" is no site parse_finger passed", tok); /* not reached */
         bad = 1;
         break;
       }
       palp_eval_finger_ref *f = &fref[nfref];
       memset(f, 0, sizeof *f);
-      f->name = known[q].name;
-      const double th = known[q].polar_deg * 3.14159265358979323846 / 180.0;
+      f->name = finger_sites[q].name;
+      const double th = finger_sites[q].polar_deg * 3.14159265358979323846 / 180.0;
       f->n = (palp_vec3){sin(th), 0.0, cos(th)};
       f->radius = 0.008;
-      if (known[q].lesion) {
+      if (finger_sites[q].lesion) {
         f->lesion_count = 1;
         f->lesion[0] = (palp_lesion){.center = {0, 0, R - 0.010}, .radius = 0.005, .stiffness_ratio = 5.0};
       }
