@@ -172,6 +172,38 @@ def case_run_write(a, tmp):
     check(rc == 0 and lines == [4, 4], "palp-run --out writes 4 lines to each CSV, exit 0 (rc %d, %s)" % (rc, lines))
 
 
+def case_run_out_long(a, tmp):
+    # (session 82) a --out PREFIX too long for palp-run's path buffers was cut without a word: with
+    # --distribution all the "_d1".."_d4" were lost and the four runs overwrote one file, exit 0. Now
+    # refused before any run: exit 2, naming --out and the limit (1000 bytes), no file written.
+    scene_path = os.path.join(a.config, "paper_step.json")
+    base = tmp
+    while len(base) < 800:  # a real, existing directory deep enough for a long prefix
+        base = os.path.join(base, "d" * 200)
+        os.mkdir(base)
+    for plen, dist in ((1001, "all"), (1027, "single")):
+        d = os.path.join(base, "%d" % plen)
+        os.mkdir(d)
+        prefix = os.path.join(d, "p" * (plen - len(d) - 1))
+        assert len(prefix) == plen
+        rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--distribution", dist,
+                       "--out", prefix, "--quiet"])
+        written = [f for f in os.listdir(d) if f.endswith(".csv")]
+        check(rc == 2 and "--out" in out and "limit of 1000" in out and "step median" not in out and not written,
+              "palp-run --out PREFIX of %d bytes (--distribution %s) refused, exit %d, no CSV (%s): %s"
+              % (plen, dist, rc, written, out.strip()[-200:]))
+    # at the limit: taken, and --distribution all writes four distinct pairs of files
+    d = os.path.join(base, "1000")
+    os.mkdir(d)
+    prefix = os.path.join(d, "p" * (1000 - len(d) - 1))
+    rc, out = run([a.run, scene_path, "--frames", "3", "--vertices", "19", "--dt", "0.001", "--distribution", "all",
+                   "--out", prefix, "--quiet"])
+    want = sorted("%s_d%d_%s.csv" % (os.path.basename(prefix), k, w) for k in range(1, 5) for w in ("frames", "vertices"))
+    got = sorted(f for f in os.listdir(d) if f.endswith(".csv"))
+    check(rc == 0 and got == want, "palp-run --out PREFIX of 1000 bytes, --distribution all: 8 CSVs, exit %d (%d files)"
+          % (rc, len(got)))
+
+
 def case_sweep_broken(a, tmp):
     # Every real-time point's world refused to step: each used to go on "stepping" in ~0.3 us, two
     # landed on the Pareto front and the sweep exited 0; then (2026-12) each was marked failed, its

@@ -6,7 +6,8 @@
  *
  * PREFIX_frames.csv: time, top-vertex displacement, max displacement, volume,
  * pressure, applied and feedback force per frame; PREFIX_vertices.csv: the
- * displacement of every vertex per frame (PREFIX's directory is created if its parent exists). A summary
+ * displacement of every vertex per frame (PREFIX's directory is created if its parent exists; PREFIX may
+ * be up to 1000 bytes, longer is refused). A summary
  * goes to stdout.
  */
 #include <ctype.h>
@@ -29,6 +30,23 @@
  * With 2^20 samples (8 MB) the p99 of a longer run is off by ~0.01 percentile points (one
  * standard deviation, sqrt(0.99 * 0.01 / 2^20)). */
 #define STEP_SAMPLES (1L << 20)
+
+/* The longest --out PREFIX taken: every path built from it ("_d4" and "_vertices.csv" added) fits
+ * the buffers below. A longer one was cut without a word (session 82's review: "_d1".."_d4" lost,
+ * so four runs overwrote one file, exit 0); now it is refused, exit 2. */
+#define RUN_PREFIX_MAX 1000
+#define RUN_PATH_LEN (RUN_PREFIX_MAX + 32)
+
+/* snprintf into a path buffer; 0, or -1 when the path did not fit (said, naming --out and the limit) */
+static int path_fmt(char *buf, size_t len, const char *prefix, const char *suffix) {
+  const int n = snprintf(buf, len, "%s%s", prefix, suffix);
+  if (n < 0 || (size_t)n >= len) {
+    fprintf(stderr, "palp-run: --out: PREFIX followed by \"%s\" is too long (PREFIX may be at most %d bytes)\n",
+            suffix, RUN_PREFIX_MAX);
+    return -1;
+  }
+  return 0;
+}
 
 typedef struct run_summary {
   double peak_top, t_peak, top_at_release, residual_1s, recovery_time, max_vol_err, peak_pressure;
@@ -75,10 +93,12 @@ static int run(palp_log *log, const palp_scene *s, const char *prefix, run_summa
   const int probe = s->contact_count ? palp_mesh_nearest_vertex(m, m->rest, s->contact[0].def.center) : top;
   const int sub = (int)lround(s->frame_period / s->world.dt);
   FILE *ff = NULL, *fv = NULL;
-  char fpath[1100], vpath[1100];
+  char fpath[RUN_PATH_LEN], vpath[RUN_PATH_LEN];
   if (prefix) {
-    snprintf(fpath, sizeof fpath, "%s_frames.csv", prefix);
-    snprintf(vpath, sizeof vpath, "%s_vertices.csv", prefix);
+    if (path_fmt(fpath, sizeof fpath, prefix, "_frames.csv") || path_fmt(vpath, sizeof vpath, prefix, "_vertices.csv")) {
+      palp_world_destroy(w);
+      return 2;
+    }
     errno = 0;
     ff = fopen(fpath, "w");
     if (!ff) palp_log_error(log, "cannot write %s: %s", fpath, strerror(errno));
@@ -255,7 +275,14 @@ int main(int argc, char **argv) {
     } else if (!strcmp(a, "--frames") && v) {
       if (whole_opt(a, v, 1, 100000000, &frames) < 0) return 2;
       ++i;
-    } else if (!strcmp(a, "--out") && v) prefix = v, ++i;
+    } else if (!strcmp(a, "--out") && v) {
+      if (strlen(v) > RUN_PREFIX_MAX) {
+        fprintf(stderr, "palp-run: --out: PREFIX is %zu bytes, longer than the limit of %d\n", strlen(v),
+                RUN_PREFIX_MAX);
+        return 2;
+      }
+      prefix = v, ++i;
+    }
     else if (!strcmp(a, "--quiet")) quiet = 1;
     else if (!strcmp(a, "-h") || !strcmp(a, "--help")) return usage(), 0;
     else if (a[0] != '-' && !scene_path) scene_path = a;
@@ -315,8 +342,11 @@ int main(int argc, char **argv) {
    * directories stay an error, said by the CSV's open (until session 81 `--out nodir/run` failed:
    * "cannot write nodir/run_frames.csv"). */
   if (prefix) {
-    char dir[1024];
-    snprintf(dir, sizeof dir, "%s", prefix);
+    char dir[RUN_PATH_LEN];
+    if (path_fmt(dir, sizeof dir, prefix, "")) {
+      rc = 2;
+      goto out;
+    }
     char *slash = strrchr(dir, '/');
     if (slash && slash != dir) {
       *slash = 0;
@@ -327,12 +357,17 @@ int main(int argc, char **argv) {
     palp_scene sd = s;
     if (dist)
       for (int c = 0; c < sd.contact_count; ++c) sd.contact[c].def.distribution = (palp_distribution)d;
-    char pre[1024];
-    if (prefix && first != last) snprintf(pre, sizeof pre, "%s_d%d", prefix, d);
-    else if (prefix) snprintf(pre, sizeof pre, "%s", prefix);
+    char pre[RUN_PATH_LEN], dn[16];
+    snprintf(dn, sizeof dn, "_d%d", d);
+    if (prefix && path_fmt(pre, sizeof pre, prefix, first != last ? dn : "")) {
+      rc = 2;
+      break;
+    }
     run_summary sum;
-    if (run(&log, &sd, prefix ? pre : NULL, &sum)) {
-      rc = 1;
+    const int r = run(&log, &sd, prefix ? pre : NULL, &sum);
+    if (r) {
+      if (r > rc) rc = r;
+      if (r == 2) break;
       continue;
     }
     const int dd = sd.contact_count ? (int)sd.contact[0].def.distribution : 0;
