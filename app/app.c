@@ -22,11 +22,10 @@ void palp_app_print_version(FILE *f, const char *prog) {
 }
 
 int palp_app_handle_version(int argc, char **argv, const char *prog) {
-  for (int i = 1; i < argc; i++)
-    if (!strcmp(argv[i], "--version")) {
-      palp_app_print_version(stdout, prog);
-      return 1;
-    }
+  if (argc > 1 && !strcmp(argv[1], "--version")) {
+    palp_app_print_version(stdout, prog);
+    return 1;
+  }
   return 0;
 }
 

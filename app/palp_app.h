@@ -30,8 +30,12 @@ const char *palp_app_version(void);
 /* Prints "prog version" and the model/wire contract it speaks, to f. */
 void palp_app_print_version(FILE *f, const char *prog);
 
-/* For programs with their own option parsers: if any argument is exactly
- * "--version", prints the version to stdout and returns 1 (the caller exits 0). */
+/* For programs with a command word (palp-review, palp-fem, palp-eval, palp-stats): if argv[1] is
+ * exactly "--version", prints the version to stdout and returns 1 (the caller exits 0). Only there:
+ * further on "--version" may be the value of another option (`--note "--version"` printed the
+ * version and exited 0 without storing the note, until session 82), so a later one is taken by the
+ * program's own option loop (palp_app_common_opt, PALP_APP_OPT_VERSION), which knows which options
+ * take a value. */
 int palp_app_handle_version(int argc, char **argv, const char *prog);
 
 /* The data directory (see above) into buf. Returns 0 or a negative PALP_E*

@@ -511,6 +511,17 @@ static int cmd_migrate(palp_log *log, const char *path, int nargs) {
   return REVIEW_OK;
 }
 
+/* Every command option that takes a value (usage() above; each command's parser takes the word after
+ * it as its value, whatever it looks like): the pre-scan in review_main skips that word. */
+static int review_opt_takes_value(const char *a) {
+  static const char *const with_value[] = {"--trainee", "--phantom", "--since",  "--until", "--format",
+                                           "--table",   "--out",     "--author", "--note",  "--score",
+                                           "--level",   "--grade",   "--exercise", "--csv", "--older-than"};
+  for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
+    if (!strcmp(a, with_value[k])) return 1;
+  return 0;
+}
+
 static int review_main(int argc, char **argv) {
   if (palp_app_handle_version(argc, argv, "palp-review")) return 0;
   const char *path = getenv("PALP_DB");
@@ -518,8 +529,14 @@ static int review_main(int argc, char **argv) {
   palp_app_opts ao;
   palp_app_opts_init(&ao, "palp-review");
   /* --db (or --database) and the log options may come anywhere: take them out before the
-   * command's own options are parsed. */
+   * command's own options are parsed. The value of a command's option is skipped, never read as one
+   * of these (`annotate --note "--version"` printed the version, exit 0, the note not stored; `--note
+   * --log-file` opened a log file; until session 82). */
   for (int k = 1; k < argc; k++) {
+    if (review_opt_takes_value(argv[k])) {
+      k++;
+      continue;
+    }
     int c = k;
     const int common = palp_app_common_opt(&ao, REVIEW_OPTS, argc, argv, &c);
     if (common < 0) return REVIEW_ERROR;
@@ -540,6 +557,10 @@ static int review_main(int argc, char **argv) {
     for (int j = k; j + 2 <= argc; j++) argv[j] = argv[j + 2];
     argc -= 2;
     k--;
+  }
+  if (ao.version) {
+    palp_app_print_version(stdout, "palp-review");
+    return REVIEW_OK;
   }
   int i = 1;
   while (i < argc && argv[i][0] == '-') {

@@ -604,5 +604,27 @@ else bad "escape sequences reach the terminal:"; od -c "$dir/esc-list.txt" | gre
 rc=$?
 [ $rc -ne 0 ] && grep -q -- "--log-file /nonexistent/dir/r.log: cannot open it: No such file or directory" "$dir/logfile.txt" &&
   ok "a log file it cannot open: exit $rc, the reason said" || bad "a log file it cannot open: exit $rc: $(cat "$dir/logfile.txt")"
+
+# (session 82) an option's value that reads like a common option is the value: --note "--version" printed the
+# version and exited 0 without storing the note; --note --log-file 5 opened a log file ./5. On a copy of the log.
+cp "$db" "$dir/ver.db"
+mkdir -p "$dir/vercwd"
+(cd "$dir/vercwd" && "$review" --db "$dir/ver.db" annotate class-carol-1 --author Lee --note "--version" > "$dir/ver.txt" 2>&1)
+rc=$?
+notes=$(python3 -c "import sqlite3,sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select text from note join session on session.id = note.session_id where session.uid = 'class-carol-1' order by note.id\")))" "$dir/ver.db")
+if [ $rc -eq 0 ] && [ "$notes" = "--version" ] && ! grep -q "^palp-review [0-9]" "$dir/ver.txt"; then
+  ok "annotate --note \"--version\": exit 0, the note stored as written, no version printed"
+else bad "annotate --note \"--version\": exit $rc, notes '$notes': $(cat "$dir/ver.txt")"; fi
+(cd "$dir/vercwd" && "$review" --db "$dir/ver.db" annotate class-carol-1 --author Lee --note "--log-file" --score 5 > "$dir/ver.txt" 2>&1)
+rc=$?
+notes=$(python3 -c "import sqlite3,sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select text from note join session on session.id = note.session_id where session.uid = 'class-carol-1' order by note.id\")))" "$dir/ver.db")
+if [ $rc -eq 0 ] && [ "$notes" = "--version|--log-file" ] && [ -z "$(ls "$dir/vercwd")" ]; then
+  ok "annotate --note --log-file --score 5: exit 0, the note stored, no log file opened"
+else bad "annotate --note --log-file --score 5: exit $rc, notes '$notes', files '$(ls "$dir/vercwd")': $(cat "$dir/ver.txt")"; fi
+# and --version where it is an option, after the command word too: printed, exit 0
+"$review" --db "$dir/ver.db" list --version > "$dir/ver.txt" 2>&1
+rc=$?
+[ $rc -eq 0 ] && grep -q "^palp-review [0-9]" "$dir/ver.txt" && ok "list --version: the version, exit 0" ||
+  bad "list --version: exit $rc: $(cat "$dir/ver.txt")"
 [ $fail -eq 0 ] && echo "passed" || echo "FAILED"
 exit $fail

@@ -381,6 +381,7 @@ static int parse_args(int argc, char **argv, options *o) {
       ++i;
     }
   }
+  if (o->app.version) return 0; /* main prints it; the checks below are for a run */
   const int mode = !strcmp(o->cmd, "calibrate") ? MODE_CALIBRATE : o->sites ? MODE_SITES : MODE_EVALUATE;
   for (int k = 0; k < OPTION_MODE_COUNT; ++k)
     if (seen[k] && !(option_modes[k].modes & mode)) {
@@ -1535,6 +1536,10 @@ int main(int argc, char **argv) {
   if (parse_args(argc, argv, &o)) {
     usage(stderr);
     return 2;
+  }
+  if (o.app.version) { /* after the command word: read by parse_args, never as another option's value */
+    palp_app_print_version(stdout, "palp-eval");
+    return 0;
   }
   palp_log log;
   if (palp_log_init(&log, "palp-eval", o.app.log_level, o.app.log_file) < 0) {

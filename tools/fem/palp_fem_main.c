@@ -470,6 +470,10 @@ int main(int argc, char **argv) {
     usage();
     return 2;
   }
+  if (o.app.version) { /* after the command word: read by parse(), never as another option's value */
+    palp_app_print_version(stdout, "palp-fem");
+    return 0;
+  }
   palp_log log;
   if (palp_log_init(&log, "palp-fem", o.app.log_level, o.app.log_file) < 0) {
     fprintf(stderr, "palp-fem: --log-file %s: cannot open it: %s\n", o.app.log_file, strerror(errno));

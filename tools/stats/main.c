@@ -881,6 +881,10 @@ int main(int argc, char **argv) {
     if (o.file) return usage_error("more than one input file given (\"%s\" and \"%s\")", o.file, s);
     o.file = s;
   }
+  if (ao.version) { /* after the command word: read by the loop above, never as another option's value */
+    palp_app_print_version(stdout, "palp-stats");
+    return stdout_done(0);
+  }
   if (!o.file) return usage_error("%s: no input CSV file given", o.command);
   /* An option of another command is refused, naming that command: it was dropped unread, and
    * bland-altman --subject s gave plain Bland-Altman where the repeated-measures one was meant. */
