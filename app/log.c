@@ -48,7 +48,10 @@ int palp_log_init(palp_log *l, const char *prog, palp_log_level level, const cha
 void palp_log_close(palp_log *l) {
   if (!l) return;
   pthread_mutex_lock(&l->mu);
-  if (l->f && l->f != stderr) fclose(l->f);
+  if (l->f && l->f != stderr && fclose(l->f) != 0 && !l->failing) l->write_errors++;
+  if (l->write_errors)
+    fprintf(stderr, "%s: log file %s: %lu line(s) could not be written to it (they went to stderr)\n", l->prog,
+            l->path, l->write_errors);
   l->f = stderr;
   pthread_mutex_unlock(&l->mu);
   pthread_mutex_destroy(&l->mu);
@@ -61,6 +64,7 @@ int palp_log_reopen(palp_log *l) {
   pthread_mutex_lock(&l->mu);
   FILE *old = l->f;
   l->f = f;
+  l->failing = 0; /* a new file: its first failure is said again */
   pthread_mutex_unlock(&l->mu);
   if (old && old != stderr) fclose(old);
   return PALP_OK;
@@ -127,9 +131,30 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {
     return;
   }
   pthread_mutex_lock(&l->mu);
-  fwrite(line, 1, len, l->f);
-  fflush(l->f);
+  errno = 0;
+  const int ok = fwrite(line, 1, len, l->f) == len && fflush(l->f) == 0;
+  if (!ok && l->f != stderr) {
+    /* A full disk hid every later line, errors included, without a word (session 82's review): the
+     * line goes to stderr as well, and the failure is said there once, not once a line. */
+    const int e = errno ? errno : EIO;
+    clearerr(l->f);
+    l->write_errors++;
+    if (!l->failing)
+      fprintf(stderr, "%s: log file %s: cannot write to it: %s; its lines go to stderr too\n", l->prog, l->path,
+              strerror(e));
+    l->failing = 1;
+    fwrite(line, 1, len, stderr);
+  } else if (ok)
+    l->failing = 0;
   pthread_mutex_unlock(&l->mu);
+}
+
+unsigned long palp_log_write_errors(palp_log *l) {
+  if (!l) return 0;
+  pthread_mutex_lock(&l->mu);
+  const unsigned long n = l->write_errors;
+  pthread_mutex_unlock(&l->mu);
+  return n;
 }
 
 void palp_log_warn_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_WARN, "%s", line); }

@@ -34,6 +34,10 @@ typedef struct palp_log {
   pthread_mutex_t mu;
   FILE *f;                       /* stderr, or the file at path */
   char path[PALP_LOG_PATH_MAX]; /* "" = stderr */
+  /* Lines the file did not take (a full disk, an I/O error; under mu): each such line goes to stderr
+   * too, and the failure is said there once (again after a line is written or the file re-opened). */
+  unsigned long write_errors;
+  int failing;
 } palp_log;
 
 /* path NULL or "" logs to stderr; otherwise appends to the file (created 0640).
@@ -44,6 +48,8 @@ void palp_log_close(palp_log *l);
 /* Re-opens the log file (after logrotate moved it); a no-op on stderr.
  * On failure keeps the old stream and returns a negative code. */
 int palp_log_reopen(palp_log *l);
+/* How many lines the log file failed to take (each also written to stderr); 0 on stderr. */
+unsigned long palp_log_write_errors(palp_log *l);
 
 void palp_log_set_level(palp_log *l, palp_log_level level);
 palp_log_level palp_log_get_level(const palp_log *l);

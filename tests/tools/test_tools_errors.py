@@ -204,6 +204,19 @@ def case_run_out_long(a, tmp):
           % (rc, len(got)))
 
 
+def case_run_log_full(a, tmp):
+    # (session 82) a --log-file that cannot take its lines (a full disk: /dev/full) lost every line, errors
+    # included, without a word: exit 2 and nothing on stderr. Now the failure is said once on stderr, naming
+    # the file and why, the lines go to stderr too, and the program goes on to its own exit status.
+    missing = os.path.join(tmp, "missing.json")
+    r = subprocess.run([a.run, missing, "--log-file", "/dev/full"], capture_output=True, text=True, timeout=100)
+    said = r.stderr.count("log file /dev/full: cannot write to it: No space left on device")
+    check(r.returncode == 2 and said == 1 and "ERROR palp-run: %s:" % missing in r.stderr
+          and "could not be written" in r.stderr,
+          "palp-run MISSING.json --log-file /dev/full: exit %d, the scene's error and the log file's failure (said %d "
+          "time(s)) on stderr: %s" % (r.returncode, said, r.stderr.strip()[-400:]))
+
+
 def case_sweep_broken(a, tmp):
     # Every real-time point's world refused to step: each used to go on "stepping" in ~0.3 us, two
     # landed on the Pareto front and the sweep exited 0; then (2026-12) each was marked failed, its
