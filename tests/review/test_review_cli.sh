@@ -609,18 +609,20 @@ rc=$?
 # version and exited 0 without storing the note; --note --log-file 5 opened a log file ./5. On a copy of the log.
 cp "$db" "$dir/ver.db"
 mkdir -p "$dir/vercwd"
-(cd "$dir/vercwd" && "$review" --db "$dir/ver.db" annotate class-carol-1 --author Lee --note "--version" > "$dir/ver.txt" 2>&1)
+uid=$(python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execute('select uid from session order by id limit 1').fetchone()[0])" "$dir/ver.db")
+last_note() { python3 -c "import sqlite3,sys; r = sqlite3.connect(sys.argv[1]).execute('select note.text from note join session on session.id = note.session_id where session.uid = ? order by note.id desc limit 1', (sys.argv[2],)).fetchone(); print(r[0] if r else '')" "$dir/ver.db" "$uid"; }
+(cd "$dir/vercwd" && "$review" --db "$dir/ver.db" annotate "$uid" --author Lee --note "--version" > "$dir/ver.txt" 2>&1)
 rc=$?
-notes=$(python3 -c "import sqlite3,sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select text from note join session on session.id = note.session_id where session.uid = 'class-carol-1' order by note.id\")))" "$dir/ver.db")
-if [ $rc -eq 0 ] && [ "$notes" = "--version" ] && ! grep -q "^palp-review [0-9]" "$dir/ver.txt"; then
-  ok "annotate --note \"--version\": exit 0, the note stored as written, no version printed"
-else bad "annotate --note \"--version\": exit $rc, notes '$notes': $(cat "$dir/ver.txt")"; fi
-(cd "$dir/vercwd" && "$review" --db "$dir/ver.db" annotate class-carol-1 --author Lee --note "--log-file" --score 5 > "$dir/ver.txt" 2>&1)
+note=$(last_note)
+if [ $rc -eq 0 ] && [ "$note" = "--version" ] && ! grep -q "^palp-review [0-9]" "$dir/ver.txt"; then
+  ok "annotate $uid --note \"--version\": exit 0, the note stored as written, no version printed"
+else bad "annotate $uid --note \"--version\": exit $rc, last note '$note': $(cat "$dir/ver.txt")"; fi
+(cd "$dir/vercwd" && "$review" --db "$dir/ver.db" annotate "$uid" --author Lee --note "--log-file" --score 5 > "$dir/ver.txt" 2>&1)
 rc=$?
-notes=$(python3 -c "import sqlite3,sys; print('|'.join(r[0] for r in sqlite3.connect(sys.argv[1]).execute(\"select text from note join session on session.id = note.session_id where session.uid = 'class-carol-1' order by note.id\")))" "$dir/ver.db")
-if [ $rc -eq 0 ] && [ "$notes" = "--version|--log-file" ] && [ -z "$(ls "$dir/vercwd")" ]; then
-  ok "annotate --note --log-file --score 5: exit 0, the note stored, no log file opened"
-else bad "annotate --note --log-file --score 5: exit $rc, notes '$notes', files '$(ls "$dir/vercwd")': $(cat "$dir/ver.txt")"; fi
+note=$(last_note)
+if [ $rc -eq 0 ] && [ "$note" = "--log-file" ] && [ -z "$(ls "$dir/vercwd")" ]; then
+  ok "annotate $uid --note --log-file --score 5: exit 0, the note stored, no log file opened"
+else bad "annotate $uid --note --log-file --score 5: exit $rc, last note '$note', files '$(ls "$dir/vercwd")': $(cat "$dir/ver.txt")"; fi
 # and --version where it is an option, after the command word too: printed, exit 0
 "$review" --db "$dir/ver.db" list --version > "$dir/ver.txt" 2>&1
 rc=$?
