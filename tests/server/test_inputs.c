@@ -100,6 +100,23 @@ int main(void) {
               strstr(err, bad[k].field),
           "\"%s\" is refused naming line 3 and \"%s\": %s", bad[k].row, bad[k].field, err);
   }
+  /* (session 82) a line longer than the reader's 511 bytes is refused naming the file and line: a
+   * valid row, 500 blanks and another valid row was read as two rows (two contact commands) */
+  w = fopen(path, "w");
+  fprintf(w, "t_s,finger\n0.1,0,1,3,0,0,0.04,0,0,-1,0%500s0.2,0,1,3,0,0,0.04,0,0,-2,0\n", "");
+  fclose(w);
+  err[0] = '\0';
+  CHECK(palp_cli_replay_input(path, &in, err, sizeof err) == PALP_EPARSE && strstr(err, path) &&
+            strstr(err, ":2: line longer than 511 bytes"),
+        "a 554-byte line (two 27-byte rows joined by 500 blanks) is refused naming the file and line 2: %s", err);
+  /* and a last row of 511 bytes that ends at the file's end without a newline still passes */
+  w = fopen(path, "w");
+  fprintf(w, "t_s,finger\n0.1,0,1,3,0,0,0.04,0,0,-1,0%484s", ""); /* 27 + 484 = 511 bytes */
+  fclose(w);
+  err[0] = '\0';
+  const int last = palp_cli_replay_input(path, &in, err, sizeof err);
+  CHECK(last == 0, "a last row padded to 511 bytes, no newline at the end, passes: %s", err);
+  if (last == 0) in.close(in.ctx);
   /* what --contact-csv writes stays good: a release of distribution 0 and radius 0, a finger row
    * of radius 8 mm, CRLF line ends */
   w = fopen(path, "w");
