@@ -178,7 +178,9 @@ int palp_cli_simdevice_at(const palp_cli_simdevice_def *def, double R, double t,
 double palp_cli_simdevice_duration(const palp_cli_simdevice_def *def, double R);
 
 /* ---- keyboard (raw terminal) -------------------------------------------------- */
-int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen);
+/* max_force [N]: the station's safe force (--max-force, else the renderer's default); the force keys
+ * stop there, and the status line says MAX. */
+int palp_cli_keyboard_input(palp_cli_input *out, double max_force, char *err, size_t errlen);
 /* Position-driven keyboard (issue 11): arrows move a virtual fingertip over the
  * surface, +/- change its depth in 1 mm steps, space lifts/lowers; the force the
  * station renders is shown. */

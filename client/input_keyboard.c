@@ -1,8 +1,9 @@
 /* input_keyboard.c - the keyboard as a haptic stand-in, in a raw terminal.
  *
  * Arrow up/down move the finger towards the pole/rim, left/right around the
- * dome; + and - change the force by 0.25 N; space presses/lifts; 1-4 choose the
- * paper's distribution; q ends. The terminal is restored on close (and by palp-client on
+ * dome; + and - change the force by 0.25 N, up to the station's safe force; space presses/lifts; 1-4 choose the
+ * paper's distribution; q ends. Arrows come as ESC [ A..D or, in a terminal's application cursor
+ * mode, ESC O A..D. The terminal is restored on close (and by palp-client on
  * SIGQUIT, SIGHUP, a crash or exit, which never reach close: client/main.c, guard_tty). */
 #include <math.h>
 #include <stdatomic.h>
@@ -22,10 +23,16 @@ typedef struct keyboard {
   double R;
   double polar, azimuth; /* [deg] */
   double force;          /* [N] */
+  double max_force;      /* [N] the station's safe force: + stops there (0: the finger keyboard, no force keys) */
   int pressed, distribution, quit;
-  int esc;               /* escape sequence progress */
+  int esc;               /* escape sequence progress: 1 after ESC, 2 after ESC [ or ESC O */
+  double now, esc_t;     /* the poll's time, and when the ESC came [s] */
   double last_status;
 } keyboard;
+
+/* A lone ESC (the Esc key) is over when no byte follows within this long [s]: a terminal sends an
+ * arrow's bytes in one write, and a person's next key comes later. */
+#define KEY_ESC_TIMEOUT 0.05
 
 /* The terminal in raw mode (no line buffering, no echo) for single keys; restored by close. */
 static int k_raw(keyboard *k, double R) {
@@ -44,14 +51,20 @@ static int k_raw(keyboard *k, double R) {
 static int k_open(void *ctx, double R) {
   keyboard *k = ctx;
   int rc = k_raw(k, R);
-  if (rc == 0) fprintf(stderr, "keyboard: arrows move, +/- force, space press/lift, 1-4 distribution, q quit\n");
+  if (rc == 0)
+    fprintf(stderr, "keyboard: arrows move, +/- force (up to the station's safe force, %.2f N), space press/lift, "
+                    "1-4 distribution, q quit\n", k->max_force);
   return rc;
 }
 
-static void key(keyboard *k, int c) {
+/* An escape sequence's byte: 1 when c was taken as part of one (an arrow moves the finger), 0 when c
+ * is a key of its own. After ESC only '[' or 'O' go on (ESC O A..D: application cursor mode, whose
+ * arrows did nothing); any other byte ends the ESC and is its own key (ESC then q lost the q until
+ * session 82). */
+static int key_esc(keyboard *k, int c) {
   if (k->esc == 1) {
-    k->esc = c == '[' ? 2 : 0;
-    return;
+    k->esc = c == '[' || c == 'O' ? 2 : 0;
+    return k->esc == 2;
   }
   if (k->esc == 2) {
     k->esc = 0;
@@ -61,11 +74,25 @@ static void key(keyboard *k, int c) {
     if (c == 'D') k->azimuth -= 5;
     if (k->polar < 0) k->polar = 0;
     if (k->polar > 80) k->polar = 80; /* keep off the fixed rim */
-    return;
+    return 1;
   }
+  return 0;
+}
+
+/* Before the keys of a poll at t: an ESC with nothing after it for KEY_ESC_TIMEOUT was the Esc key
+ * alone, so the next key ('[' included) is a key of its own. */
+static void key_time(keyboard *k, double t) {
+  k->now = t;
+  if (k->esc && !(t - k->esc_t <= KEY_ESC_TIMEOUT)) k->esc = 0;
+}
+
+static void key(keyboard *k, int c) {
+  if (key_esc(k, c)) return;
   switch (c) {
-  case 27: k->esc = 1; break;
-  case '+': case '=': k->force += 0.25; break;
+  case 27: k->esc = 1, k->esc_t = k->now; break;
+  /* bounded at the station's safe force, as the finger keyboard's depth keys are bounded: past it the
+   * renderer clamped every sample while the status line showed ever larger forces (session 82) */
+  case '+': case '=': k->force = k->force + 0.25 > k->max_force ? k->max_force : k->force + 0.25; break;
   case '-': case '_': k->force = k->force > 0.25 ? k->force - 0.25 : 0; break;
   case ' ': k->pressed = !k->pressed; break;
   case '1': case '2': case '3': case '4': k->distribution = c - '0'; break;
@@ -93,11 +120,13 @@ static void key_cb(void *arg, unsigned char c) { key(arg, c); }
 
 static int k_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
   keyboard *k = ctx;
+  key_time(k, t);
   drain_keys(key_cb, k);
   if (k->quit) return PALP_CLI_INPUT_END;
   if (t - k->last_status >= 0.5) {
-    fprintf(stderr, "\rkeyboard: %s dist %d at polar %.0f deg azimuth %.0f deg, %.2f N   ",
-            k->pressed ? "PRESS" : "lift ", k->distribution, k->polar, k->azimuth, k->force);
+    fprintf(stderr, "\rkeyboard: %s dist %d at polar %.0f deg azimuth %.0f deg, %.2f N%s   ",
+            k->pressed ? "PRESS" : "lift ", k->distribution, k->polar, k->azimuth, k->force,
+            k->force >= k->max_force ? " MAX" : "");
     k->last_status = t;
   }
   if (cap < 1) return 0;
@@ -116,7 +145,11 @@ static void k_close(void *ctx) {
   free(k);
 }
 
-int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen) {
+int palp_cli_keyboard_input(palp_cli_input *out, double max_force, char *err, size_t errlen) {
+  if (!(max_force > 0) || !isfinite(max_force)) {
+    snprintf(err, errlen, "--input keyboard: the safe force %g N is not a force > 0", max_force);
+    return PALP_EINVAL;
+  }
   if (!isatty(STDIN_FILENO)) {
     snprintf(err, errlen, "--input keyboard needs a terminal on standard input");
     return PALP_EINVAL;
@@ -124,7 +157,8 @@ int palp_cli_keyboard_input(palp_cli_input *out, char *err, size_t errlen) {
   keyboard *k = calloc(1, sizeof *k);
   if (!k) return PALP_ENOMEM;
   k->polar = 0;
-  k->force = 1.0;
+  k->max_force = max_force;
+  k->force = max_force < 1.0 ? max_force : 1.0;
   k->distribution = 3;
   *out = (palp_cli_input){.name = "keyboard", .ctx = k, .open = k_open, .poll = k_poll, .close = k_close};
   return 0;
@@ -181,10 +215,7 @@ static int kf_open(void *ctx, double R) {
 
 static void fkey(kfinger *f, int c) {
   keyboard *k = &f->k;
-  if (k->esc) {
-    key(k, c); /* arrows */
-    return;
-  }
+  if (key_esc(k, c)) return; /* arrows */
   switch (c) {
   case '+': case '=': f->depth = f->depth + f->step > 0.035 ? 0.035 : f->depth + f->step; break;
   case '-': case '_': f->depth = f->depth - f->step < -0.010 ? -0.010 : f->depth - f->step; break;
@@ -201,6 +232,7 @@ static void fkey_cb(void *arg, unsigned char c) { fkey(arg, c); }
 
 static int kf_read(void *ctx, double t, palp_vec3 *x) {
   kfinger *f = ctx;
+  key_time(&f->k, t);
   drain_keys(fkey_cb, f);
   if (f->k.quit) return PALP_CLI_INPUT_END;
   f->t = t;

@@ -349,7 +349,9 @@ static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errle
     return palp_cli_script_input(&d, in);
   }
   if (!strncmp(o->input, "replay:", 7)) return palp_cli_replay_input(o->input + 7, in, err, errlen);
-  if (!strcmp(o->input, "keyboard")) return palp_cli_keyboard_input(in, err, errlen);
+  if (!strcmp(o->input, "keyboard"))
+    return palp_cli_keyboard_input(in, o->max_force > 0 ? o->max_force : palp_cli_haptic_default_def().render.max_force,
+                                   err, errlen);
   if (!strcmp(o->input, "keyboard-finger")) return palp_cli_keyboard_finger_input(in, err, errlen);
   if (!strncmp(o->input, "sim:expert", 10) || !strncmp(o->input, "sim:novice", 10)) {
     palp_cli_trainee_def d;

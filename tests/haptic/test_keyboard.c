@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -101,6 +102,79 @@ static void test_status_depth(void) {
   in.close(in.ctx);
 }
 
+/* Keys typed at the terminal: written to the pty's master, then given a moment to reach the slave. */
+static void type(int master, const char *keys) {
+  if (write(master, keys, strlen(keys)) != (ssize_t)strlen(keys)) CHECK(0, "typing \"%s\"", keys);
+  nanosleep(&(struct timespec){0, 20000000}, NULL);
+}
+
+/* What the finger keyboard's status line says after a tick at t (position and step), or "". */
+static void finger_status(palp_cli_input *in, double t, char *out, size_t outlen) {
+  status_line(in, t, DOME_R + TIP_R - 0.005, out, outlen);
+}
+
+/* 2. (session 82) Escape sequences: ESC O A..D (a terminal's application cursor mode) moves the
+ * fingertip as ESC [ A..D does; a byte after ESC that starts no sequence is a key of its own (ESC
+ * then ']' doubled no step: the ']' was dropped); an ESC with nothing after it for 50 ms is over,
+ * so a '[' typed later halves the step instead of starting an arrow; ESC then q ends the input. */
+static void test_escape(int master) {
+  palp_cli_input in;
+  char err[256] = "", line[1024];
+  if (palp_cli_keyboard_finger_input(&in, err, sizeof err) != 0 || in.open(in.ctx, DOME_R) != 0) {
+    CHECK(0, "the finger keyboard opens on a pty: %s", err);
+    return;
+  }
+  type(master, "\033OB\033OC\033[B"); /* down (polar +2) twice, right (azimuth +5) once */
+  finger_status(&in, 1.0, line, sizeof line);
+  CHECK(strstr(line, "at polar 4 deg azimuth 5 deg") != NULL, "ESC O B, ESC O C, ESC [ B: polar 4 deg, azimuth 5 deg (%s)",
+        line + (line[0] == '\r'));
+  type(master, "\033]"); /* Esc, then ]: the step doubles, 1 -> 2 mm */
+  finger_status(&in, 2.0, line, sizeof line);
+  CHECK(strstr(line, "(step 2 mm)") != NULL, "ESC then ]: the ] is taken, step 2 mm (%s)", line + (line[0] == '\r'));
+  type(master, "\033"); /* Esc alone ... */
+  palp_vec3 x;
+  in.read_position(in.ctx, 2.5, &x);
+  type(master, "[B"); /* ... and 100 ms later [ (halve the step) and B (no key) */
+  finger_status(&in, 2.6, line, sizeof line);
+  CHECK(strstr(line, "(step 1 mm)") != NULL && strstr(line, "at polar 4 deg"),
+        "a lone ESC, then [ B 100 ms later: the step halves to 1 mm, the fingertip stays at polar 4 deg (%s)",
+        line + (line[0] == '\r'));
+  type(master, "\033q");
+  CHECK(in.read_position(in.ctx, 3.0, &x) == PALP_CLI_INPUT_END, "ESC then q: the input ends");
+  in.close(in.ctx);
+}
+
+/* 3. (session 82) The force keyboard's + stops at the station's safe force (2 N here), and the status
+ * line says MAX; it went on by 0.25 N a press without bound (40 presses: 11 N). */
+static void test_force_bound(int master) {
+  palp_cli_input in;
+  char err[256] = "";
+  if (palp_cli_keyboard_input(&in, 2.0, err, sizeof err) != 0 || in.open(in.ctx, DOME_R) != 0) {
+    CHECK(0, "the force keyboard opens on a pty: %s", err);
+    return;
+  }
+  type(master, "++++++++++++++++++++++++++++++++++++++++ "); /* 40 presses, then space: press */
+  palp_cli_cmd c[4];
+  FILE *cap = tmpfile();
+  fflush(stderr);
+  const int saved = dup(STDERR_FILENO);
+  dup2(fileno(cap), STDERR_FILENO);
+  const int n = in.poll(in.ctx, 1.0, c, 4);
+  fflush(stderr);
+  dup2(saved, STDERR_FILENO);
+  close(saved);
+  char line[512];
+  rewind(cap);
+  line[fread(line, 1, sizeof line - 1, cap)] = '\0';
+  fclose(cap);
+  const double f = n == 1 ? sqrt(c[0].force.x * c[0].force.x + c[0].force.y * c[0].force.y + c[0].force.z * c[0].force.z) : -1;
+  CHECK(n == 1 && c[0].mode == 1 && fabs(f - 2.0) < 1e-12 && strstr(line, "2.00 N MAX"),
+        "40 presses of + with a safe force of 2 N: a press of %.3f N (2 N within 1e-12), the line says \"2.00 N MAX\" (%s)",
+        f, line + (line[0] == '\r'));
+  in.close(in.ctx);
+  CHECK(palp_cli_keyboard_input(&in, 0.0, err, sizeof err) == PALP_EINVAL, "a safe force of 0 N is refused: %s", err);
+}
+
 int main(void) {
   const int master = pty_stdin();
   if (master < 0) {
@@ -108,6 +182,8 @@ int main(void) {
     return check_exit();
   }
   test_status_depth();
+  test_escape(master);
+  test_force_bound(master);
   close(master);
   return check_exit();
 }
