@@ -96,8 +96,9 @@ int review_close_out(FILE *f) {
   int err = 0;
   if (fflush(f)) err = errno;
   if (!err && ferror(f)) err = EIO;
-  /* synced before the rename: a crash after it finds the new bytes under the name, not an empty file */
-  if (!err && fsync(fileno(f))) err = errno;
+  /* Not fsynced: a report can be written again, and a disk flush per file would make a class's many
+   * reports wait on every other writer of the disk. What the rename guards against is a write that
+   * fails half way (a full disk, a quota): the old file is kept. */
   if (fclose(f) && !err) err = errno;
   if (!err && is_protected(p->path)) err = EEXIST; /* made the log since it was opened: not replaced */
   if (!err && rename(p->tmp, p->path)) err = errno;
