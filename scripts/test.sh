@@ -18,7 +18,7 @@ TMPDIR=$tmp ctest --no-tests=error --output-on-failure -j"$((3 * $(nproc)))" --t
   --resource-spec-file "$here/tests/resources.json" || rc=$?
 left=$(find "$tmp" -mindepth 1 -maxdepth 1 | sort)
 if [ "$rc" -ne 0 ]; then
-  [ -n "$left" ] && echo "The failed tests' temporary files are kept in $tmp"
+  if [ -n "$left" ]; then echo "The failed tests' temporary files are kept in $tmp"; else rmdir "$tmp"; fi
   exit "$rc"
 fi
 if [ -n "$left" ]; then
