@@ -13,21 +13,33 @@
 #define PI 3.14159265358979323846
 static const double R = 0.04, r = 0.008;
 
-/* Trapezoid integration of the Boussinesq weight along the column (independent of
- * the closed form in src/lesion.c), the chord's compliance q times the gel's. */
-static double column_scale_numeric_q(const palp_lesion *L, palp_vec3 x, palp_vec3 n, double length, double q) {
+/* Trapezoid integration of the Boussinesq weight along the column (independent of the closed
+ * forms in src/lesion.c): at each z the chord's compliance is the smallest q[l] of the lesions
+ * containing the point (the stiffest), or the gel's (1). Written from the rule, not from
+ * src/lesion.c's chord merging. */
+static double column_scale_numeric_qs(const palp_lesion *L, const double *q, int count, palp_vec3 x, palp_vec3 n,
+                                      double length) {
   const double c = PALP_LESION_CONTACT_SCALE;
   const int N = 200000;
   double C0 = 0.0, C = 0.0;
   for (int k = 0; k < N; ++k) {
     const double z = (k + 0.5) * length / N;
     const double s = 1.0 - z * z * z / pow(c * c + z * z, 1.5);
-    const palp_vec3 p = {x.x - z * n.x - L->center.x, x.y - z * n.y - L->center.y, x.z - z * n.z - L->center.z};
-    const int in = p.x * p.x + p.y * p.y + p.z * p.z <= L->radius * L->radius;
+    double qz = 1.0;
+    int in = 0;
+    for (int l = 0; l < count; ++l) {
+      const palp_vec3 p = {x.x - z * n.x - L[l].center.x, x.y - z * n.y - L[l].center.y, x.z - z * n.z - L[l].center.z};
+      if (p.x * p.x + p.y * p.y + p.z * p.z <= L[l].radius * L[l].radius) qz = in++ ? fmin(qz, q[l]) : q[l];
+    }
     C0 += s;
-    C += in ? s * q : s;
+    C += s * qz;
   }
   return C0 / C;
+}
+
+/* One lesion of chord compliance q (a cyst's may exceed 1). */
+static double column_scale_numeric_q(const palp_lesion *L, palp_vec3 x, palp_vec3 n, double length, double q) {
+  return column_scale_numeric_qs(L, &q, 1, x, n, length);
 }
 
 /* A stiff lesion in series with the column: q = 1 / ratio. */
@@ -35,25 +47,11 @@ static double column_scale_numeric(const palp_lesion *L, palp_vec3 x, palp_vec3 
   return column_scale_numeric_q(L, x, n, length, 1.0 / L->stiffness_ratio);
 }
 
-/* The same integration for several lesions: at each z the stiffest lesion containing the point
- * (the smallest q, 1 / ratio for a stiff one), or the gel (1). Written from the rule, not from
- * src/lesion.c's chord merging. */
+/* Several stiff lesions, each q = 1 / its ratio (count <= 8). */
 static double column_scale_numeric_many(const palp_lesion *L, int count, palp_vec3 x, palp_vec3 n, double length) {
-  const double c = PALP_LESION_CONTACT_SCALE;
-  const int N = 200000;
-  double C0 = 0.0, C = 0.0;
-  for (int k = 0; k < N; ++k) {
-    const double z = (k + 0.5) * length / N;
-    const double s = 1.0 - z * z * z / pow(c * c + z * z, 1.5);
-    double q = 1.0;
-    for (int l = 0; l < count; ++l) {
-      const palp_vec3 p = {x.x - z * n.x - L[l].center.x, x.y - z * n.y - L[l].center.y, x.z - z * n.z - L[l].center.z};
-      if (p.x * p.x + p.y * p.y + p.z * p.z <= L[l].radius * L[l].radius) q = fmin(q, 1.0 / L[l].stiffness_ratio);
-    }
-    C0 += s;
-    C += s * q;
-  }
-  return C0 / C;
+  double q[8];
+  for (int l = 0; l < count && l < 8; ++l) q[l] = 1.0 / L[l].stiffness_ratio;
+  return column_scale_numeric_qs(L, q, count < 8 ? count : 8, x, n, length);
 }
 
 /* Overlapping lesions (session 82's review): each chord was subtracted in full, so a lesion listed

@@ -326,14 +326,16 @@
    * is stale (the server lifted the finger), so the page says "station lost" instead, as the dashboard
    * does (since session 82: it showed the last press frozen as if live). */
   function stationLost() { return !!(lastSession && lastSession.status); }
-  function showLost() {
-    document.getElementById("force").textContent = "-";
+  /* the force panel with no force on the hand: its figure, the band badge's words and class */
+  function showNoForce(force, band, cls) {
+    document.getElementById("force").textContent = force;
     const b = document.getElementById("band");
-    b.textContent = "station lost";
-    b.className = "band";
+    b.textContent = band;
+    b.className = cls;
     document.getElementById("depth").textContent = "";
     drawGauge(0);
   }
+  function showLost() { showNoForce("-", "station lost", "band"); }
   function showSession(s) {
     const rows = [["session", s.id], ["trainee", s.trainee], ["phantom", s.phantom_name || s.phantom],
       ["trainee station", s.status ? s.status : "connected"],
@@ -537,12 +539,7 @@
            * (the debrief's rings are drawn on the rest skin) */
           latest = null;
           if (geom) setDisplacement(null);
-          document.getElementById("force").textContent = "0.00";
-          const b = document.getElementById("band");
-          b.textContent = "none";
-          b.className = "band none";
-          document.getElementById("depth").textContent = "";
-          drawGauge(0);
+          showNoForce("0.00", "none", "band none");
         }
       }
       const s = m.sessions.find(function (x) { return x.id === id; });
