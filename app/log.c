@@ -149,14 +149,6 @@ void palp_logf(palp_log *l, palp_log_level level, const char *fmt, ...) {
   pthread_mutex_unlock(&l->mu);
 }
 
-unsigned long palp_log_write_errors(palp_log *l) {
-  if (!l) return 0;
-  pthread_mutex_lock(&l->mu);
-  const unsigned long n = l->write_errors;
-  pthread_mutex_unlock(&l->mu);
-  return n;
-}
-
 void palp_log_warn_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_WARN, "%s", line); }
 void palp_log_debug_line(void *ctx, const char *line) { palp_logf(ctx, PALP_LOG_DEBUG, "%s", line); }
 

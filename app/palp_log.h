@@ -48,8 +48,6 @@ void palp_log_close(palp_log *l);
 /* Re-opens the log file (after logrotate moved it); a no-op on stderr.
  * On failure keeps the old stream and returns a negative code. */
 int palp_log_reopen(palp_log *l);
-/* How many lines the log file failed to take (each also written to stderr); 0 on stderr. */
-unsigned long palp_log_write_errors(palp_log *l);
 
 void palp_log_set_level(palp_log *l, palp_log_level level);
 palp_log_level palp_log_get_level(const palp_log *l);
