@@ -36,10 +36,16 @@ crc=$?
 t1=$(date +%s%N)
 ms=$(( (t1 - t0) / 1000000 ))
 fail=0
-if [ $crc -eq 3 ] && [ $ms -le 3000 ] && grep -q "server lost" "$tmp/client.log"; then
-  echo "ok   client ended ${ms} ms after the server's SIGKILL (want <= 3000 ms), exit 3: $(tail -c 80 "$tmp/client.log")"
+# A station that did not run for a while itself (a loaded machine: 0.9 s in the suite, 2026-12-07)
+# takes the lapse that follows for likely its own and waits PALP_CLI_SERVER_WAIT_S (5 s) for the
+# server to be found again (client/station.h); it must then say so, and the bound is that wait plus
+# the 1 s lease and 2 s of slack: 8000 ms.
+want=3000 why="server lost"
+if grep -q "this station did not run for" "$tmp/client.log"; then want=8000 why="of this station's"; fi
+if [ $crc -eq 3 ] && [ $ms -le $want ] && grep -q "$why" "$tmp/client.log"; then
+  echo "ok   client ended ${ms} ms after the server's SIGKILL (want <= $want ms), exit 3: $(tail -c 80 "$tmp/client.log")"
 else
-  echo "FAIL client exit $crc after ${ms} ms (want 3 within 3000 ms):"; cat "$tmp/client.log"; fail=1
+  echo "FAIL client exit $crc after ${ms} ms (want 3 within $want ms, \"$why\"):"; cat "$tmp/client.log"; fail=1
 fi
 
 # ---- a server restarted at once: a session id reused for another trainee
