@@ -28,6 +28,7 @@ for v in PALP_DEMO_OUT PALP_PKI_DIR PALP_DEMO_DB PALP_DEMO_RECORDED_DB; do
 done
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+. scripts/debian-path.sh # Debian's programs first (its comment)
 build=${PALP_BUILD_DIR:-build}
 
 # Where the demo writes, and deletes the previous run's files: only a directory it made itself (the

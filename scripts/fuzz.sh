@@ -13,6 +13,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+. scripts/debian-path.sh # Debian's programs first (its comment)
 all=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access debrief)
 usage() {
   echo "usage: bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]   (targets: ${all[*]})" >&2

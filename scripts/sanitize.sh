@@ -36,6 +36,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+. scripts/debian-path.sh # Debian's programs first (its comment)
 kind=${1:-}
 regex=${2:-}
 case "$kind" in

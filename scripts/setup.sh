@@ -4,6 +4,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+. scripts/debian-path.sh # Debian's programs first (its comment)
 
 mapfile -t pkgs < <(grep -vE '^\s*(#|$)' scripts/debian-packages.txt)
 missing=()

@@ -3,6 +3,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+. scripts/debian-path.sh # Debian's programs first (its comment)
 bash scripts/setup.sh
 build=${PALP_BUILD_DIR:-build}
 cd "$build"

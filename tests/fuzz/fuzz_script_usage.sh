@@ -8,7 +8,7 @@ src=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 mkdir -p "$tmp/scripts" "$tmp/bin"
-cp "$src/scripts/fuzz.sh" "$tmp/scripts/"
+cp "$src/scripts/fuzz.sh" "$src/scripts/debian-path.sh" "$tmp/scripts/"
 printf '#!/bin/sh\necho "apt-get stub: not here" >&2; exit 1\n' > "$tmp/bin/apt-get"
 chmod +x "$tmp/bin/apt-get"
 fail=0

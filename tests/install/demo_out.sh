@@ -19,7 +19,7 @@ src=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 mkdir -p "$tmp/repo/scripts" "$tmp/build/server" "$tmp/build/client"
-cp "$src/scripts/demo.sh" "$tmp/repo/scripts/"
+cp "$src/scripts/demo.sh" "$src/scripts/debian-path.sh" "$tmp/repo/scripts/"
 printf '#!/bin/sh\necho "started $*" >> "%s/started"\nexit 1\n' "$tmp" > "$tmp/build/server/palp-server"
 printf '#!/bin/sh\nexit 1\n' > "$tmp/build/client/palp-client"
 chmod +x "$tmp/build/server/palp-server" "$tmp/build/client/palp-client"

@@ -643,7 +643,9 @@ int main(int argc, char **argv) {
     Topic *tp_lm = pp->create_topic("palp_local_model", t_lm.get_type_name(), TOPIC_QOS_DEFAULT);
     DataReaderQos rq_lm = DATAREADER_QOS_DEFAULT;
     rq_lm.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-    rq_lm.history().depth = 1;
+    // every model the network brings kept until this loop takes it (32: 0.32 s at 100 Hz): at depth 1 a
+    // loop slowed by the suite's load read 81 of ~160 (2026-12-07), its own pace, not the stream's
+    rq_lm.history().depth = 32;
     DataReader *r_lm = tp_lm ? ssub->create_datareader(tp_lm, rq_lm) : nullptr;
     if (!r_lm) return fail("cannot create the local model reader");
     // ... and the assessment's finger samples (palp_finger_sample, session 71: a bounded sequence of
