@@ -7,7 +7,7 @@
  * Trainees know where their hand is (the device point they command) and what they feel
  * (the force after each physics step), never where the lesions are. They drive a hand
  * through one callback, so the same script runs on an in-process world
- * (tests/assess/trainee.h) and on a station over DDS (input_trainee.c). Pure: no DDS.
+ * (tests/assess/recorder.h) and on a station over DDS (input_trainee.c). Pure: no DDS.
  */
 #ifndef PALP_CLI_TRAINEE_H
 #define PALP_CLI_TRAINEE_H

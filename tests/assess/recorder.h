@@ -1,5 +1,5 @@
 /*
- * trainee.h - the scripted trainees of client/trainee.c (the same code a station runs
+ * recorder.h - the scripted trainees of client/trainee.c (the same code a station runs
  * over DDS: --input sim:expert / sim:novice) driving a fingertip in an in-process
  * palp_world, and the recorder that turns each step into a palp_assess_sample (the
  * fields the server logs: time, device, proxy, force, contact point, footprint area,
