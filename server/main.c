@@ -207,8 +207,11 @@ int main(int argc, char **argv) {
   verbose = ao.log_level >= PALP_LOG_DEBUG;
   palp_log plog;
   if (palp_log_init(&plog, "palp-server", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-server: --log-file %s: %s\n", ao.log_file, strerror(errno));
-    return 1;
+    /* 2, as every program's: a log file that cannot be opened is a setting a restart cannot mend
+     * (the unit's RestartPreventExitStatus=2, docs/deploy.md); it was 1, and systemd restarted a
+     * server whose /var/log/palp it could not write every 2 s until the start limit. */
+    fprintf(stderr, "palp-server: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
+    return 2;
   }
   if (!config_path) {
     if (palp_app_data_path("config/server.json", default_config, sizeof default_config, err, sizeof err) < 0) {

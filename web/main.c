@@ -509,7 +509,7 @@ int main(int argc, char **argv) {
   }
   static palp_log log; /* static: Cyclone's threads may log through it until the process ends */
   if (palp_log_init(&log, "palp-web", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-web: --log-file %s: %s\n", ao.log_file, strerror(errno));
+    fprintf(stderr, "palp-web: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
     return 2;
   }
   hd.log = &log;

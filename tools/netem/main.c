@@ -74,8 +74,9 @@ int main(int argc, char **argv) {
   }
   palp_log log;
   if (palp_log_init(&log, "palp-netem", ao.log_level, ao.log_file) < 0) {
-    fprintf(stderr, "palp-netem: --log-file %s: %s\n", ao.log_file, strerror(errno));
-    return 1;
+    /* 2 and this wording, as every program's (docs/deploy.md): a refused setting, not a failure */
+    fprintf(stderr, "palp-netem: --log-file %s: cannot open it: %s\n", ao.log_file, strerror(errno));
+    return 2;
   }
   char derr[256], chosen[1100];
   if (palp_app_use_dds_config(ao.dds_config, NULL, chosen, sizeof chosen, derr, sizeof derr) < 0) {
