@@ -178,7 +178,8 @@ void palp_app_common_usage(FILE *f, unsigned which) {
           f);
   if (which & PALP_APP_OPT_LOG)
     fputs("  --log-level LEVEL    error, warn, info (default) or debug\n"
-          "  --log-file FILE      append log lines to FILE instead of stderr (palp-server and palp-recorder re-open it on SIGHUP)\n",
+          "  --log-file FILE      append log lines to FILE instead of stderr (palp-server, palp-recorder\n"
+          "                       and palp-web re-open it on SIGHUP)\n",
           f);
   if (which & PALP_APP_OPT_VERBOSE) fputs("  --verbose, --quiet   aliases of --log-level debug / warn\n", f);
   if (which & PALP_APP_OPT_VERSION) fputs("  --version            print the version and exit\n", f);

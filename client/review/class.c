@@ -32,7 +32,12 @@ static void uid_list_add(char *buf, size_t len, const char *uid) {
 int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   const char *exercise = NULL, *out = NULL, *csv = NULL;
   palp_db_filter flt = {0};
+  static const char *const takes_value[] = {"--exercise", "--out", "--csv", "--since", NULL};
   for (int i = 0; i < argc; i++) {
+    if (!review_option_known(argv[i], takes_value)) {
+      fprintf(stderr, "palp-review class: unknown option %s\n", argv[i]);
+      return REVIEW_ERROR;
+    }
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review class: %s needs a value\n", argv[i]);
       return REVIEW_ERROR;
@@ -40,15 +45,12 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
     if (!strcmp(argv[i], "--exercise")) exercise = argv[++i];
     else if (!strcmp(argv[i], "--out")) out = argv[++i];
     else if (!strcmp(argv[i], "--csv")) csv = argv[++i];
-    else if (!strcmp(argv[i], "--since")) {
+    else { /* --since */
       flt.has_since = 1;
       if (review_parse_date(argv[++i], &flt.since_unix_s)) {
         fprintf(stderr, "palp-review class: --since: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", argv[i]);
         return REVIEW_ERROR;
       }
-    } else {
-      fprintf(stderr, "palp-review class: unknown option %s\n", argv[i]);
-      return REVIEW_ERROR;
     }
   }
   if (!exercise || !out) {

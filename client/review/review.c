@@ -59,7 +59,8 @@ static void usage(FILE *f) {
         "DATE is YYYY-MM-DD[THH:MM[:SS]] local time.\n"
         "The database is --db, else $PALP_DB, else ./palp-sessions.db. --database is the same option\n"
         "(palp-server's name for it).\n"
-        "Errors are log lines (timestamp, level); tables and reports go to stdout.\n",
+        "A command-line mistake is one plain line (\"palp-review list: unknown option --x\"); other\n"
+        "errors are log lines (timestamp, level); tables and reports go to stdout.\n",
         REVIEW_COPY_MB_DEFAULT);
   palp_app_common_usage(f, REVIEW_OPTS);
 }
@@ -85,13 +86,18 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
       ungraded = 1;
       continue;
     }
+    static const char *const takes_value[] = {"--trainee", "--phantom", "--since", "--until", NULL};
+    if (!review_option_known(a, takes_value)) {
+      fprintf(stderr, "palp-review list: unknown option %s\n", a);
+      return REVIEW_ERROR;
+    }
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review list: %s needs a value\n", a);
       return REVIEW_ERROR;
     }
     if (!strcmp(a, "--trainee")) f.trainee = argv[++i];
     else if (!strcmp(a, "--phantom")) f.phantom = argv[++i];
-    else if (!strcmp(a, "--since") || !strcmp(a, "--until")) {
+    else { /* --since, --until */
       double t;
       if (review_parse_date(argv[++i], &t)) {
         fprintf(stderr, "palp-review list: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", a, argv[i]);
@@ -99,9 +105,6 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
       }
       if (!strcmp(a, "--since")) f.since_unix_s = t, f.has_since = 1;
       else f.until_unix_s = t, f.has_until = 1;
-    } else {
-      fprintf(stderr, "palp-review list: unknown option %s\n", a);
-      return REVIEW_ERROR;
     }
   }
   palp_db_session_info *v;
@@ -416,7 +419,12 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
 /* ---- annotate -------------------------------------------------------------------------- */
 static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *s, int argc, char **argv) {
   const char *author = NULL, *note = NULL, *score_s = NULL, *level = NULL, *grade = NULL;
+  static const char *const takes_value[] = {"--author", "--note", "--score", "--level", "--grade", NULL};
   for (int i = 0; i < argc; i++) {
+    if (!review_option_known(argv[i], takes_value)) {
+      fprintf(stderr, "palp-review annotate: unknown option %s\n", argv[i]);
+      return REVIEW_ERROR;
+    }
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review annotate: %s needs a value\n", argv[i]);
       return REVIEW_ERROR;
@@ -425,11 +433,7 @@ static int cmd_annotate(palp_log *log, palp_db *db, const palp_db_session_info *
     else if (!strcmp(argv[i], "--note")) note = argv[++i];
     else if (!strcmp(argv[i], "--score")) score_s = argv[++i];
     else if (!strcmp(argv[i], "--level")) level = argv[++i];
-    else if (!strcmp(argv[i], "--grade")) grade = argv[++i];
-    else {
-      fprintf(stderr, "palp-review annotate: unknown option %s\n", argv[i]);
-      return REVIEW_ERROR;
-    }
+    else grade = argv[++i]; /* --grade */
   }
   if (!author || !*author || !note) {
     fprintf(stderr, "palp-review annotate: --author and --note are required\n");
@@ -650,6 +654,12 @@ static int review_main(int argc, char **argv) {
       verbose = 1;
       continue;
     }
+    static const char *const takes_value[] = {"--format", "--table", "--out", NULL};
+    if (!review_option_known(a, takes_value)) {
+      fprintf(stderr, "palp-review %s: unknown option %s\n", cmd, a);
+      palp_db_close(db);
+      return REVIEW_ERROR;
+    }
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review %s: %s needs a value\n", cmd, a);
       palp_db_close(db);
@@ -657,12 +667,7 @@ static int review_main(int argc, char **argv) {
     }
     if (!strcmp(a, "--format")) format = argv[++i];
     else if (!strcmp(a, "--table")) table = argv[++i];
-    else if (!strcmp(a, "--out")) out = argv[++i];
-    else {
-      fprintf(stderr, "palp-review %s: unknown option %s\n", cmd, a);
-      palp_db_close(db);
-      return REVIEW_ERROR;
-    }
+    else out = argv[++i]; /* --out */
   }
   if (!strcmp(cmd, "show")) rc = cmd_show(&log, db, &s);
   else if (!strcmp(cmd, "export")) rc = review_export(&log, db, &s, format, table, out);

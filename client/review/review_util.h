@@ -39,6 +39,10 @@ const char *review_dist_name(palp_distribution d);
 void review_fmt_time(double unix_s, char *buf, size_t len); /* local time, with offset */
 /* YYYY-MM-DD[THH:MM[:SS]] (or a space for T) as local time; 0 or -1. */
 int review_parse_date(const char *s, double *out);
+/* 1 when a is one of names (NULL-terminated): a command's options that take a value, checked before
+ * "needs a value", so that an unknown option in last place is called unknown (until session 83
+ * `list --bogus` said "--bogus needs a value"). */
+int review_option_known(const char *a, const char *const *names);
 /* Finishes a file the review wrote: flushed, its error flag read (a write that failed on the way,
  * the disk full), closed unless it is stdout. 0, or -1 with errno saying why (EIO where an earlier
  * write failed and its own errno is gone): what was written is incomplete. */

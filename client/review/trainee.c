@@ -171,13 +171,18 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
       name = argv[i];
       continue;
     }
+    static const char *const takes_value[] = {"--csv", "--out", "--since", "--until", NULL};
+    if (!review_option_known(argv[i], takes_value)) {
+      fprintf(stderr, "palp-review trainee: unknown option %s\n", argv[i]);
+      return REVIEW_ERROR;
+    }
     if (i + 1 >= argc) {
       fprintf(stderr, "palp-review trainee: %s needs a value\n", argv[i]);
       return REVIEW_ERROR;
     }
     if (!strcmp(argv[i], "--csv")) csv = argv[++i];
     else if (!strcmp(argv[i], "--out")) out = argv[++i];
-    else if (!strcmp(argv[i], "--since") || !strcmp(argv[i], "--until")) {
+    else { /* --since, --until */
       double t;
       if (review_parse_date(argv[i + 1], &t)) {
         fprintf(stderr, "palp-review trainee: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", argv[i], argv[i + 1]);
@@ -186,9 +191,6 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
       if (!strcmp(argv[i], "--since")) flt.since_unix_s = t, flt.has_since = 1;
       else flt.until_unix_s = t, flt.has_until = 1;
       i++;
-    } else {
-      fprintf(stderr, "palp-review trainee: unknown option %s\n", argv[i]);
-      return REVIEW_ERROR;
     }
   }
   if (!name || !name[0]) {

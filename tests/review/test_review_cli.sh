@@ -628,5 +628,28 @@ else bad "annotate $uid --note --log-file --score 5: exit $rc, last note '$note'
 rc=$?
 [ $rc -eq 0 ] && grep -q "^palp-review [0-9]" "$dir/ver.txt" && ok "list --version: the version, exit 0" ||
   bad "list --version: exit $rc: $(cat "$dir/ver.txt")"
+# (session 83) an unknown option in last place is called unknown, not "needs a value" (`list --bogus` said
+# "--bogus needs a value"); a known one there still needs its value. Each exit 2, one plain line. annotate on
+# the copy.
+argerr() { # DESCRIPTION EXPECTED-LINE ARGS...: exit 2, exactly that line
+  what=$1 want=$2; shift 2
+  out=$("$review" "$@" 2>&1); rc=$?
+  if [ $rc -eq 2 ] && [ "$out" = "$want" ]; then ok "$what: exit 2, \"$out\""
+  else bad "$what: exit $rc (want 2 and exactly \"$want\"): $out"; fi
+}
+for c in "list" "show class-alice-1" "export class-alice-1" "report class-alice-1" "annotate $uid" "class" "trainee alice"; do
+  word=${c%% *}
+  # shellcheck disable=SC2086 # the command and its session, two words
+  argerr "$c --bogus" "palp-review $word: unknown option --bogus" --db "$dir/ver.db" $c --bogus
+done
+argerr "list --trainee" "palp-review list: --trainee needs a value" --db "$db" list --trainee
+argerr "show class-alice-1 --out" "palp-review show: --out needs a value" --db "$db" show class-alice-1 --out
+argerr "annotate $uid --author" "palp-review annotate: --author needs a value" --db "$dir/ver.db" annotate "$uid" --author
+argerr "class --exercise" "palp-review class: --exercise needs a value" --db "$db" class --exercise
+argerr "trainee alice --since" "palp-review trainee: --since needs a value" --db "$db" trainee alice --since
+# --help says what it does: a command-line mistake is a plain line, and the SIGHUP note names palp-web too
+"$review" --help > "$dir/help.txt" 2>&1
+expect "--help: a command-line mistake is one plain line" "A command-line mistake is one plain line" "$dir/help.txt"
+expect "--help: palp-web re-opens its --log-file on SIGHUP too" "and palp-web re-open it on SIGHUP" "$dir/help.txt"
 [ $fail -eq 0 ] && echo "passed" || echo "FAILED"
 exit $fail
