@@ -109,13 +109,13 @@ void csv_str(FILE *f, const char *s) {
   fputc('"', f);
 }
 
-/* Parses YYYY-MM-DD[THH:MM[:SS]] (or a space instead of T) as local time. */
 int review_option_known(const char *a, const char *const *names) {
   for (; *names; names++)
     if (!strcmp(a, *names)) return 1;
   return 0;
 }
 
+/* Parses YYYY-MM-DD[THH:MM[:SS]] (or a space instead of T) as local time. */
 int review_parse_date(const char *s, double *out) {
   struct tm tm;
   memset(&tm, 0, sizeof tm);
