@@ -241,9 +241,10 @@ int main(void) {
   }
   /* The relay did what it was asked: one-way delays within 20 +- 5 ms (a reliable
    * sample "lost" comes one round trip, 40 ms, later), and about 5% of the samples
-   * lost (best-effort dropped + reliable retransmitted; binomial 3 sigma). */
+   * lost (best-effort dropped + reliable retransmitted + best-effort disposes and unregisters a loss draw
+   * hit, which cross anyway: each draw that hits counted once; binomial 3 sigma). */
   const double n_all = (double)(ns.forwarded + ns.dropped);
-  const double lost = n_all > 0 ? (double)(ns.dropped + ns.retransmitted) / n_all : 0;
+  const double lost = n_all > 0 ? (double)(ns.dropped + ns.retransmitted + ns.ends_kept) / n_all : 0;
   CHECK(ns.delay_min >= 0.015 - 1e-6 && ns.delay_max <= 0.025 + 0.040 + 1e-3 &&
             (ns.retransmitted > 0 || ns.delay_max <= 0.025 + 1e-3),
         "relay delays %.2f..%.2f ms (20 +- 5 ms, + 40 ms for a retransmission)", ns.delay_min * 1e3, ns.delay_max * 1e3);

@@ -14,7 +14,8 @@
  * so no order clamp applies.
  *
  * Since session 81 also: the queue's byte budget (budget_check) and the delays of many instances at a
- * high rate (rate_check), each described where it runs.
+ * high rate (rate_check); since session 83 the loss fraction and the count of best-effort instance ends
+ * (loss_check); each described where it runs.
  */
 #include "netem.c"
 
@@ -134,6 +135,81 @@ static int budget_check(void) {
   return failures;
 }
 
+/* Loss (session 83 review "wire" #6: no test asserted that --loss p loses a fraction p, and best-effort
+ * instance ends were counted as "retransmitted", some twice). One relay state per run, a 20 +- 5 ms link
+ * (10 s: nothing falls due), every sample of one instance at one instant. Expected values: the loss
+ * draws from palp_rng.h (each sample's second uniform < loss), and the fraction from the binomial:
+ * 10,000 samples at p = 0.2 have a standard error sqrt(0.2 x 0.8 / 10000) = 0.004, tolerance 3 of them
+ * (0.012).
+ *  - 10,000 best-effort writes (feedback) at 0.2: dropped = the lost draws, within 0.2 +- 0.012 of them;
+ *    none retransmitted; the rest queued.
+ *  - 10,000 reliable writes (deformation) at 0.2: none dropped, every one queued, retransmitted = the
+ *    lost draws, within 0.2 +- 0.012.
+ *  - loss 0.5: 1000 best-effort writes each ending its instance (feedback, after = unregister) and 1000
+ *    best-effort disposes (contact): all 2000 queued (an end always crosses), dropped = the writes whose
+ *    data was lost, retransmitted 0, ends_kept = the disposes drawn lost. Before the fix: 506 dropped and 1020
+ *    "retransmitted" of these 2000 (the reviewer's white-box run). */
+static int loss_run(double loss, int count, int kind, int op, int after, int kind2, int op2, int count2,
+                    palp_netem_stats *st, int *queued, int *lost_draws, int *lost_first) {
+  static palp_netem n;
+  memset(&n, 0, sizeof n);
+  n.def = (palp_netem_def){.domain_a = 0, .domain_b = 1, .delay = 10, .jitter = 0.005, .loss = loss, .seed = 7};
+  n.rng = n.def.seed, n.budget = PALP_NETEM_QUEUE_BYTES;
+  uint64_t r = n.def.seed;
+  *lost_draws = *lost_first = 0;
+  for (int i = 0; i < count + count2; i++) {
+    (void)palp_rng_uniform(&r); /* the jitter draw */
+    const int lost = palp_rng_uniform(&r) < loss;
+    *lost_draws += lost, *lost_first += lost && i < count;
+    if (i < count) enqueue_at(&n, 1000000000000LL, 1, kind, op, after, 100, NULL);
+    else enqueue_at(&n, 1000000000000LL, 1, kind2, op2, 0, 200, NULL);
+  }
+  *st = n.st, *queued = n.queued;
+  drain(&n);
+  return 0;
+}
+
+static int loss_check(void) {
+  int failures = 0, queued, lost, lost_first;
+  palp_netem_stats st;
+  if (is_reliable(PALP_TOPIC_FEEDBACK) || is_reliable(PALP_TOPIC_CONTACT) || !is_reliable(PALP_TOPIC_DEFORMATION)) {
+    fprintf(stderr, "FAIL test setup: feedback and contact must be best-effort, deformation reliable\n");
+    return 1;
+  }
+  loss_run(0.2, 10000, PALP_TOPIC_FEEDBACK, 0, 0, 0, 0, 0, &st, &queued, &lost, &lost_first);
+  double f = st.dropped / 10000.0;
+  printf("loss 0.2, 10000 best-effort writes: %llu dropped (fraction %.4f, want 0.2 +- 0.012; %d lost draws), %llu "
+         "retransmitted, %d queued\n", (unsigned long long)st.dropped, f, lost, (unsigned long long)st.retransmitted, queued);
+  if (!(fabs(f - 0.2) <= 0.012 && st.dropped == (uint64_t)lost && st.retransmitted == 0 && st.ends_kept == 0 &&
+        queued == 10000 - lost)) {
+    fprintf(stderr, "FAIL best-effort loss: %llu dropped of 10000 (%d drawn lost), %llu retransmitted, %d queued\n",
+            (unsigned long long)st.dropped, lost, (unsigned long long)st.retransmitted, queued);
+    ++failures;
+  }
+  loss_run(0.2, 10000, PALP_TOPIC_DEFORMATION, 0, 0, 0, 0, 0, &st, &queued, &lost, &lost_first);
+  f = st.retransmitted / 10000.0;
+  printf("loss 0.2, 10000 reliable writes: %llu retransmitted (fraction %.4f, want 0.2 +- 0.012; %d lost draws), %llu "
+         "dropped, %d queued\n", (unsigned long long)st.retransmitted, f, lost, (unsigned long long)st.dropped, queued);
+  if (!(fabs(f - 0.2) <= 0.012 && st.retransmitted == (uint64_t)lost && st.dropped == 0 && queued == 10000)) {
+    fprintf(stderr, "FAIL reliable loss: %llu retransmitted of 10000 (%d drawn lost), %llu dropped, %d queued\n",
+            (unsigned long long)st.retransmitted, lost, (unsigned long long)st.dropped, queued);
+    ++failures;
+  }
+  loss_run(0.5, 1000, PALP_TOPIC_FEEDBACK, 0, 2, PALP_TOPIC_CONTACT, 1, 1000, &st, &queued, &lost, &lost_first);
+  printf("loss 0.5, 1000 best-effort writes ending their instance + 1000 best-effort disposes: %d queued (want 2000), "
+         "%llu dropped (want %d, the lost writes), %llu retransmitted (want 0), %llu ends kept (want %d, the lost "
+         "disposes)\n", queued, (unsigned long long)st.dropped, lost_first, (unsigned long long)st.retransmitted,
+         (unsigned long long)st.ends_kept, lost - lost_first);
+  if (!(queued == 2000 && st.dropped == (uint64_t)lost_first && st.retransmitted == 0 &&
+        st.ends_kept == (uint64_t)(lost - lost_first) &&
+        fabs(lost_first - 500.0) <= 3 * sqrt(1000 * 0.25))) {
+    fprintf(stderr, "FAIL best-effort instance ends: %d queued, %llu dropped, %llu retransmitted, %llu ends kept\n", queued,
+            (unsigned long long)st.dropped, (unsigned long long)st.retransmitted, (unsigned long long)st.ends_kept);
+    ++failures;
+  }
+  return failures;
+}
+
 int main(void) {
   static palp_netem n; /* large (the sides' writer tables): not on the stack */
   memset(&n, 0, sizeof n);
@@ -176,6 +252,7 @@ int main(void) {
   pthread_mutex_destroy(&n.lock);
   failures += budget_check();
   failures += rate_check();
+  failures += loss_check();
   if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
   return failures ? 1 : 0;
 }

@@ -2,7 +2,7 @@
 """The offline tools and the model benchmarks on inputs that break them (tests/tools/CMakeLists.txt).
 
 Usage: test_tools_errors.py --config DIR [--run PALP_RUN] [--sweep PALP_SWEEP]
-                            [--bench-step B] [--bench-effects B] CASE
+                            [--bench-step B] [--bench-effects B] [--netem PALP_NETEM] CASE
 
 Scenes are written into a temporary directory (TMPDIR) and removed at the end. A "broken" scene
 is config/paper_step.json with a gel pressure of 1e300 Pa: until session 81 the scene parser took any
@@ -271,6 +271,80 @@ def case_bench_effects_asleep(a, tmp):
     check(rc == 2 and "--load must be a force in N above 0" in out, "bench_model_effects --load 0 refused (rc %d): %s" % (rc, out.strip()[-200:]))
 
 
+def netem_config(a, tmp, address="192.0.2.1"):
+    """The loopback DDS config with its interface moved to a documentation address (TEST-NET-1): a config
+    that may reach a network. No host has that interface, so even a relay that took it would send
+    nothing."""
+    with open(os.path.join(a.config, "cyclonedds-loopback.xml")) as f:
+        x = f.read()
+    y = x.replace('<NetworkInterface address="127.0.0.1"', '<NetworkInterface address="%s"' % address)
+    assert y != x, "the loopback config's NetworkInterface line changed: update this test"
+    return write_text(y, os.path.join(tmp, "network.xml"))
+
+
+def write_text(text, path):
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def case_netem_network(a, tmp):
+    # Session 83 review "wire" #2: palp-netem (no DDS Security) started on any DDS config, so with a lab
+    # config on one side it would bridge a loopback-only, unsecured palp-server onto the network, which
+    # palp-server itself refuses. Now it refuses as the server does, before any participant: exit 2.
+    want = "palp-netem: refusing: the DDS config %s may reach a network"
+    cfg = netem_config(a, tmp)
+    rc, out = run([a.netem, "--stations", "201", "--server", "202", "--duration", "1", "--dds-config", cfg], timeout=30)
+    check(rc == 2 and (want % cfg) in out and "192.0.2.1" in out and "the relay is for loopback tests" in out,
+          "palp-netem --dds-config (interface 192.0.2.1) refused, naming the config and why, exit %d: %s"
+          % (rc, out.strip()[-300:]))
+    lab = os.path.join(a.config, "cyclonedds-lab.xml.example")
+    env = dict(os.environ, PALP_DDS_INTERFACE="palpnone0", PALP_DDS_PEER_1="192.0.2.2", PALP_DDS_PEER_2="192.0.2.3",
+               PALP_DDS_PEER_3="192.0.2.4")
+    env.pop("CYCLONEDDS_URI", None)
+    r = subprocess.run([a.netem, "--stations", "201", "--server", "202", "--duration", "1", "--dds-config", lab],
+                       capture_output=True, text=True, timeout=30, env=env)
+    out = r.stdout + r.stderr
+    check(r.returncode == 2 and (want % lab) in out,
+          "palp-netem --dds-config cyclonedds-lab.xml.example refused, exit %d: %s" % (r.returncode, out.strip()[-300:]))
+    # the same by CYCLONEDDS_URI, taken from the environment as it is
+    env["CYCLONEDDS_URI"] = "file://" + cfg
+    r = subprocess.run([a.netem, "--stations", "201", "--server", "202", "--duration", "1"], capture_output=True,
+                       text=True, timeout=30, env=env)
+    out = r.stdout + r.stderr
+    check(r.returncode == 2 and "may reach a network" in out,
+          "palp-netem with CYCLONEDDS_URI naming that config refused, exit %d: %s" % (r.returncode, out.strip()[-300:]))
+
+
+def case_netem_args(a, tmp):
+    # Session 83 review "wire" #7: a hidden 5 ms default jitter made --delay-ms 2 (or 0) fail with one
+    # message naming no value, and fractional domains were truncated (201.9 -> 201). Each request that
+    # passes the checks here goes on to the DDS config, refused (case_netem_network): so no participant
+    # is made, and reaching that refusal shows the arguments were taken.
+    cfg = netem_config(a, tmp)
+    base = [a.netem, "--duration", "1", "--dds-config", cfg]
+    past = "may reach a network"
+    for args, ok, want, what in [
+            (["--stations", "201", "--server", "202", "--delay-ms", "2"], True, past,
+             "--delay-ms 2 alone taken (the default jitter: min(5 ms, the delay))"),
+            (["--stations", "201", "--server", "202", "--delay-ms", "0", "--loss", "0.1"], True, past,
+             "--delay-ms 0 --loss 0.1 taken"),
+            (["--stations", "201", "--server", "202", "--delay-ms", "2", "--jitter-ms", "5"], False,
+             "--jitter-ms 5 exceeds --delay-ms 2: give --jitter-ms <= 2", "--jitter-ms 5 with --delay-ms 2 refused"),
+            (["--stations", "201", "--server", "202", "--jitter-ms", "30"], False,
+             "--jitter-ms 30 exceeds --delay-ms 20 (the default): give --jitter-ms <= 20",
+             "--jitter-ms 30 with the default delay refused, naming the default"),
+            (["--stations", "201", "--server", "201"], False,
+             "--stations 201 and --server 201: the two domains must differ", "equal domains refused, naming them"),
+            (["--stations", "201.9", "--server", "201.2"], False,
+             '--stations: expected a whole number from 0 to 232, got "201.9"', "a fractional domain refused"),
+            (["--stations", "201", "--server", "202", "--seed", "1.5"], False,
+             "--seed: expected a whole number", "a fractional seed refused")]:
+        rc, out = run(base + args, timeout=30)
+        check(rc == 2 and want in out and (ok or past not in out),
+              "palp-netem %s: %s, exit %d: %s" % (" ".join(args), what, rc, out.strip()[-300:]))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--config", required=True)
@@ -278,6 +352,7 @@ def main():
     ap.add_argument("--sweep")
     ap.add_argument("--bench-step", dest="bench_step")
     ap.add_argument("--bench-effects", dest="bench_effects")
+    ap.add_argument("--netem")
     ap.add_argument("case")
     a = ap.parse_args()
     fn = globals().get("case_" + a.case)

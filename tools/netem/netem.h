@@ -7,8 +7,10 @@
  * delay drawn from a seeded RNG (mean delay, uniform +- jitter; each instance's samples
  * kept in order, as DDS orders them, other instances' delayed independently), losing a
  * fraction of the samples:
- * best-effort topics drop them, reliable topics deliver them one extra
- * round trip later (what the reliability protocol's retransmission costs).
+ * best-effort topics drop them (a lost sample's instance end, and a dispose or
+ * unregister, still cross: never lost, never delayed extra), reliable topics
+ * deliver them one extra round trip later (what the reliability protocol's
+ * retransmission costs).
  * Keys, partitions (palp/session/N, from the sample's session_id) and QoS
  * (palp_dds_qos) are preserved; disposals and unregistrations are forwarded.
  *
@@ -39,6 +41,10 @@ typedef struct palp_netem_def {
 typedef struct palp_netem_stats {
   uint64_t forwarded, dropped, retransmitted, disposals;
   uint64_t over_budget;        /* of the dropped: the queue held its byte budget (queue_bytes) */
+  uint64_t ends_kept;          /* best-effort disposes and unregisters whose loss draw lost them, sent
+                                * anyway at their own delay (a lost write's end crosses too, counted
+                                * in dropped): each draw that hits is in one of dropped, retransmitted
+                                * and ends_kept */
   uint64_t sessions_reclaimed; /* session slots given to a new session (closed or idle ones') */
   double delay_min, delay_max; /* applied one-way delays [s] */
 } palp_netem_stats;
