@@ -580,8 +580,14 @@ int palp_dds_phantom_check(const palp_Phantom *ph, int triangles_optional, char 
              ph->phantom_id, nv, PHANTOM_MAX_VERTICES);
     return PALP_EINVAL;
   }
-  if ((ni == 0 && !triangles_optional) || ni % 3 != 0 || ni / 3 > 2u * PHANTOM_MAX_VERTICES) {
+  if ((ni == 0 && !triangles_optional) || ni % 3 != 0) {
     snprintf(err, errlen, "phantom %u: %u triangle indices (want a positive multiple of 3)", ph->phantom_id, ni);
+    return PALP_EINVAL;
+  }
+  /* (its own reason: 1,200,003 indices are a positive multiple of 3, and were refused as not one) */
+  if (ni / 3 > 2u * PHANTOM_MAX_VERTICES) {
+    snprintf(err, errlen, "phantom %u: %u triangles (at most %u, twice the largest mesh a palp-server publishes)",
+             ph->phantom_id, ni / 3, 2u * PHANTOM_MAX_VERTICES);
     return PALP_EINVAL;
   }
   if (ni && !ph->triangles._buffer) {

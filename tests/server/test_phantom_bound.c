@@ -74,6 +74,11 @@ static void check_counts(void) {
     if (c[i].nt == 1 && !c[i].ok)
       CHECK(strstr(why, "want 4..200000, the largest mesh a palp-server publishes") != NULL,
             "  the reason names the bound: \"%s\"", why);
+    /* (session 83 review "wire" #8: 1,200,003 indices, a positive multiple of 3, were refused as "want a
+     * positive multiple of 3") */
+    if (c[i].nt > 2 * BOUND)
+      CHECK(strstr(why, "400001 triangles (at most 400000, twice the largest mesh a palp-server publishes)") != NULL,
+            "  the reason names the triangle bound: \"%s\"", why);
     entry_free(&ph);
   }
 }
