@@ -56,7 +56,9 @@ check_finger_samples() {
 # The phantom pushes back with the applied load once the press has settled (docs/model.md: within 5%
 # from 0.03 s), so 1.5 s in the feedback reads 3 N within 5%; the default long-term dome dents
 # 0.37-0.6 mm under the 3 N patch (the FEM 0.5 mm, docs/materials.md; a dome at rest stays under
-# 0.01 mm), so the meshes show at least 0.2 mm; the NaN force sample is counted as rejected.
+# 0.01 mm), so the meshes show at least 0.2 mm; the NaN force sample is counted as rejected for its
+# reason, nonfinite (the server's status per session and reason; the session state's rejected_samples sums
+# every reason, so any earlier rejection satisfied it until session 83), and for no other reason.
 check_press() {
   num_in "$(r "$1" feedback_last_N)" 2.85 3.15 && num_ge "$(r "$1" feedback_samples)" 50 \
     && ok "feedback: $(r "$1" feedback_samples) samples, last |F| $(r "$1" feedback_last_N) N (3 N press, want within 5%)" \
@@ -65,6 +67,10 @@ check_press() {
     && num_ge "$(r "$1" deformation_max_mm)" 0.2 \
     && ok "deformation: $(r "$1" deformation_samples) meshes of 338 vertices, max displacement $(r "$1" deformation_max_mm) mm" \
     || bad "deformation: $(r "$1" deformation_samples) samples, $(r "$1" deformation_vertices) vertices, $(r "$1" deformation_max_mm) mm"
-  num_ge "$(r "$1" rejected_samples)" 1 && ok "NaN sample rejected by the server ($(r "$1" rejected_samples) in the session state)" \
-    || bad "NaN sample not rejected: $(r "$1" rejected_samples)"
+  set -- $(r "$1" rejected_reasons) "$(r "$1" rejected_samples)"
+  if [ $# -eq 3 ] && num_ge "$1" 1 && [ "$2" = 0 ] && num_ge "$3" 1; then
+    ok "NaN sample rejected by the server as nonfinite ($1 in the status for reason 0, $2 for the other nine; $3 in the session state)"
+  else
+    bad "NaN sample not rejected as nonfinite: reasons \"$1 $2\" (nonfinite, others), $3 in the session state"
+  fi
 }

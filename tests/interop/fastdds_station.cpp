@@ -571,7 +571,10 @@ int main(int argc, char **argv) {
   // Best-effort into the server's keep-last-1 reader: a sample the server has not taken before the
   // next arrives is overwritten. Three NaN samples 20 ms apart, then the release, were all lost once
   // on a loaded machine (the server's ticks late by more than 20 ms; 2026-12-07). So the NaN sample
-  // is written again every 50 ms until the session's state counts it rejected, and only then released.
+  // is written again every 50 ms until it is counted, and only then released. Counted for its reason:
+  // the session state's rejected_samples sums every reason (an earlier foreign or out-of-reach sample
+  // would do), so the loop waits for the server's status (1 Hz) to list this session with a rejection
+  // for reason 0, nonfinite (SessionLoad.rejected[0]; server/validate.h), and prints the other nine.
   palp::Contact release = c;
   release.mode(palp::CONTACT_RELEASE);
   release.force(f);
@@ -581,12 +584,13 @@ int main(int argc, char **argv) {
   // ... and a status of the server (1 Hz) listing this session, read alongside
   bool status_seen = false, guard_seen = false, identity_seen = false;
   unsigned long long st_open = 0, st_contacts = 0, st_log = 0, gd_stations = 0, gd_slots = 0;
+  unsigned long long st_nonfinite = 0, st_other = 0; // this session's rejections: reason 0, reasons 1-9
   std::string id_name;
   unsigned long id_number = 0, id_phantoms = 0, id_has_joined = 0;
   bool released = false;
-  while ((rejected == 0 || !status_seen || !guard_seen || !identity_seen) && since(tr) < 4) {
-    if (rejected == 0 && since(last_nan) >= 0.05) c.seq(++seq), w_ct->write(&c), last_nan = Clock::now();
-    if (rejected > 0 && !released) {
+  while ((st_nonfinite == 0 || rejected == 0 || !status_seen || !guard_seen || !identity_seen) && since(tr) < 4) {
+    if (st_nonfinite == 0 && since(last_nan) >= 0.05) c.seq(++seq), w_ct->write(&c), last_nan = Clock::now();
+    if (st_nonfinite > 0 && !released) {
       for (int k = 0; k < 3; k++) release.seq(++seq), w_ct->write(&release), nap(0.02);
       released = true;
     }
@@ -617,12 +621,17 @@ int main(int argc, char **argv) {
             st_open = ss.sessions_open();
             st_contacts = l.contact_samples();
             st_log = ss.log_written();
+            st_nonfinite = l.rejected()[0];
+            st_other = 0;
+            for (size_t k = 1; k < l.rejected().size(); k++) st_other += l.rejected()[k];
           }
     nap(0.05);
   }
   if (!released)
     for (int k = 0; k < 3; k++) release.seq(++seq), w_ct->write(&release), nap(0.02);
   std::printf("result rejected_samples %llu\n", (unsigned long long)rejected);
+  if (status_seen) std::printf("result rejected_reasons %llu %llu\n", st_nonfinite, st_other);
+  else std::printf("result rejected_reasons none\n");
   if (status_seen)
     std::printf("result status %llu %llu %llu %llu\n", st_open, st_contacts, st_log, (unsigned long long)seq);
   else
