@@ -23,7 +23,8 @@ curves: a rigid 8 mm sphere pressed by position into the relaxed breast-tissue F
 level 3 (4,320 hexahedra), at the pole, 45, 60 and 70 deg and at the pole over the 10 mm lesion
 (5x the gel, centre 10 mm deep). Against level 2, which the
 set was first validated against, level 3 is 7-19% softer at the pole and 14-36% at 70 deg
-(docs/materials.md, "The fingertip references at level 3"). Asserted:
+(docs/materials.md, "The fingertip references at level 3"). Asserted while the table rested on these
+curves (until 2026-11-30; the record, no longer run: what runs now is the first paragraph's list):
 
 - the real-time proxy reached each FE depth up to the table's within 5 um or 0.5% of it (matched
   positions);

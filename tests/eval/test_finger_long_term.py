@@ -348,6 +348,8 @@ def graded(tool, scene, data, graded_csv, graded5_csv=None, bounds=None, gain_fl
               % (1e3 * d[k], 100 * gf, 100 * gu, 100 * gr, gr / gf))
         check(gf >= 0.08 and not gf < gu - 0.01, "lesion gain at %.2f mm: graded FE %+.1f%%, uniform level 4 %+.1f%%"
               % (1e3 * d[k], 100 * gf, 100 * gu))
+        check(gain_floor is None or gr >= gain_floor * gf, "lesion gain at %.2f mm: real-time %+.1f%%, %.2f of the "
+              "graded FE's %+.1f%%, below the floor %.2f" % (1e3 * d[k], 100 * gr, gr / gf, 100 * gf, gain_floor or 0.0))
     check(n >= 4, "graded lesion gain compared at %d depths" % n)
     return rows
 

@@ -18,10 +18,11 @@ fail=0
 "$client" --role trainee --domain 115 --phantom 1 --name fay --timeout 10 --print-period 0 \
   --input sim:press,depth_mm=3,hold_s=4 > "$tmp/fay.log" 2>&1 &
 cpid=$!
-# 0.5 s after the join: inside the station's first second, spent waiting for an exercise the
-# phantom does not have, before its loop's first check (a stop there was blamed on the server
-# until 2026-12-03: seen once in a full run with the stop at 1.0 s, the edge of that wait; 0.5 s
-# fails it every time without the fix in palp_cli_station_exercise)
+# 0.5 s after the join: early in the press, the station's main loop already running. Until
+# 2026-12-06 this fell inside the station's first second, spent waiting for an exercise the phantom
+# does not have, before its loop's first check (a stop there was blamed on the server until
+# 2026-12-03, mended in palp_cli_station_exercise); that wait is gone since (station_first_press.sh),
+# so the stop no longer exercises it: this checks a stall in the press as such.
 stall_station $cpid "$tmp/fay.log" 0.5 1.0
 wait $cpid
 rc=$?

@@ -54,14 +54,15 @@ int main(void) {
   const size_t noviscous = heap_in_use() - h0;
   palp_world_destroy(w);
   printf("world heap: all effects %zu B, without viscosity %zu B (%d links)\n", full, noviscous, links);
-  CHECK(full - noviscous >= (size_t)links * 2 * sizeof(double), "viscosity off frees its 16 B per link");
+  /* full >= other + need, not full - other >= need: size_t would wrap if the other took more */
+  CHECK(full >= noviscous + (size_t)links * 2 * sizeof(double), "viscosity off frees its 16 B per link");
   d.effects = all & ~(uint32_t)(PALP_EFFECT_GEL_PRESSURE | PALP_EFFECT_GEL_DAMPING);
   h0 = heap_in_use();
   w = palp_world_create(&d, &e);
   const size_t nogel = heap_in_use() - h0;
   palp_world_destroy(w);
-  CHECK(full - nogel >= (size_t)nv * 3 * sizeof(double), "gel off frees its per-vertex gradient (%zu B less)",
-        full - nogel);
+  CHECK(full >= nogel + (size_t)nv * 3 * sizeof(double), "gel off frees its per-vertex gradient (%lld B less)",
+        (long long)full - (long long)nogel);
 
   /* Without any viscosity (membrane and gel damping off) there is no creep: once the
    * elastic transient of the implicit step has passed (~0.3 s at 10 ms), the pole's

@@ -167,8 +167,8 @@ static void test_counted(void) {
     const double lim = palp_world_validated_depth(&d, th);
     if (site == 0) {
       CHECK(d12 > 0.008 && d12 < 0.010, "pole: the press reaches 8-10 mm (%.2f mm)", 1e3 * d12);
-      CHECK(h.beyond_validated_steps == 0, "pole, %.2f mm (validated to 14): no step counted (%lld)", 1e3 * d12,
-            (long long)h.beyond_validated_steps);
+      CHECK(h.beyond_validated_steps == 0, "pole, %.2f mm (validated to %.1f): no step counted (%lld)", 1e3 * d12,
+            1e3 * lim, (long long)h.beyond_validated_steps);
       CHECK(dmax < 0.0, "pole: never deeper than validated on the way (%.2f mm short at the closest)", -1e3 * dmax);
       const double d17 = press(w, f, th, R, r, 11.0, 30.0, &dmax);
       palp_world_get_health(w, &h);
@@ -176,8 +176,8 @@ static void test_counted(void) {
       CHECK(h.beyond_validated_steps > 0, "pole, %.2f mm: steps counted (%lld)", 1e3 * d17,
             (long long)h.beyond_validated_steps);
       CHECK_NEAR(h.max_beyond_validated, dmax, 1e-12, "pole: largest excess over the validated depth [m]");
-      printf("pole: %.2f mm of indentation: 0 steps beyond the validated 14 mm; %.2f mm: %lld steps, by up to %.2f mm\n",
-             1e3 * d12, 1e3 * d17, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
+      printf("pole: %.2f mm of indentation: 0 steps beyond the validated %.1f mm; %.2f mm: %lld steps, by up to %.2f mm\n",
+             1e3 * d12, 1e3 * lim, 1e3 * d17, (long long)h.beyond_validated_steps, 1e3 * h.max_beyond_validated);
     } else if (site == 1) {
       CHECK(d12 > lim + 0.001, "70 deg: the press passes the validated %.1f mm by 1 mm (%.2f mm)", 1e3 * lim, 1e3 * d12);
       CHECK(h.beyond_validated_steps > 0, "70 deg, %.2f mm (validated to %.1f): steps counted (%lld)", 1e3 * d12,

@@ -1,7 +1,8 @@
 /* test_flood.c - a hostile participant floods the contact topic: 20,000 distinct
  * keys, 5,000 disposes of unknown keys, 2,000 samples with an out-of-range enum.
- * Properties: another session sharing the tick thread keeps every tick within one
- * period of its slot; the server's memory stays bounded; the flood is counted;
+ * Properties: another session sharing the tick thread keeps its ticks on time (at most
+ * 0.5% of its frame-to-frame gaps + 3 longer than 2 periods, none longer than 10); the
+ * server's memory stays bounded; the flood is counted;
  * Cyclone's per-sample warnings are rate-limited; and a finger whose instance is
  * disposed is still lifted (the key is read from the invalid sample).
  * Then a second one disposes 40,000 made-up keys of the finding topic in the same

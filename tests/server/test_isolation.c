@@ -98,11 +98,17 @@ int main(void) {
   CHECK(sa.max_fb > 3.0, "A's feedback reaches %.2f N (pressing 4 N; want > 3 N)", sa.max_fb);
   CHECK(soa.contacts > 50 && soa.max_disp > 1e-3, "A's observer sees %d of A's contacts and %.2f mm displacement",
         soa.contacts, soa.max_disp * 1e3);
-  CHECK(sb.max_fb == 0.0, "B's feedback stays exactly 0 N (max %.3g N over %d samples)", sb.max_fb, sb.feedback);
+  /* the idle session is sent feedback too (its finger inactive): samples received, all at 0 N */
+  CHECK(sb.feedback > 0 && sb.max_fb == 0.0, "B's feedback stays exactly 0 N (max %.3g N over %d samples; want > 0 "
+                                              "samples)", sb.max_fb, sb.feedback);
   CHECK(sob.contacts == 0, "B's observer sees %d contact samples (want 0: A's are in another partition)", sob.contacts);
   /* B's world never received a load: its only motion is settling under gravity,
    * far below A's millimetres. 0.1 mm tolerance. */
   CHECK(sob.max_disp < 1e-4, "B's displacement stays below 0.1 mm (max %.4f mm over %d frames)", sob.max_disp * 1e3,
+        sob.deformations);
+  /* A positive control for the zeros above: B's observer does receive B's world (a sleeping world's
+   * shape is sent again once a second, test_contact.c), so its readers are matched in B's partition. */
+  CHECK(sob.deformations > 0, "B's observer received B's world: %d frames in 1.7 s (want > 0: its reader is matched)",
         sob.deformations);
   CHECK(sa.foreign_feedback == 0 && sb.foreign_feedback == 0 && soa.foreign_deformations == 0 &&
             sob.foreign_deformations == 0,
@@ -137,6 +143,33 @@ int main(void) {
   CHECK(ticks[1] - ticks[0] >= 50 && awake[1] == awake[0],
         "idle B: %llu ticks, %llu of them awake, between two statuses (want >= 50: ticking, and 0: asleep)",
         (unsigned long long)(ticks[1] - ticks[0]), (unsigned long long)(awake[1] - awake[0]));
+  /* The other positive control: B presses 0.5 s (4 N, as A did); B's feedback and B's observer's contacts
+   * arrive (the readers that saw nothing above do receive their own session), A's observer sees none of
+   * B's contacts (A is not pressing now), and no station a sample of the other session. */
+  {
+    seen sb2 = {0}, sob2 = {0}, sa2 = {0}, soa2 = {0};
+    uint64_t bseq = 0;
+    for (const int64_t until = palp_dds_now_ns() + 500000000; palp_dds_now_ns() < until; test_sleep(0.01)) {
+      test_send_force(&b, 0, 3, 20, 0, 4.0, ++bseq);
+      drain(&b, &ph, &sb2);
+      drain(&obs_b, &ph, &sob2);
+      drain(&a, &ph, &sa2);
+      drain(&obs_a, &ph, &soa2);
+    }
+    test_sleep(0.2);
+    drain(&b, &ph, &sb2);
+    drain(&obs_b, &ph, &sob2);
+    drain(&a, &ph, &sa2);
+    drain(&obs_a, &ph, &soa2);
+    CHECK(sb2.feedback > 0 && sb2.max_fb > 1.0 && sob2.contacts > 0,
+          "B pressing 4 N for 0.5 s: B's feedback %d samples up to %.2f N (want > 1 N), B's observer %d contacts "
+          "(want > 0)", sb2.feedback, sb2.max_fb, sob2.contacts);
+    CHECK(soa2.contacts == 0 && sa2.foreign_feedback == 0 && soa2.foreign_deformations == 0 &&
+              sb2.foreign_feedback == 0 && sob2.foreign_deformations == 0,
+          "while B presses, A's observer sees %d contacts; samples of the other session: %d, %d, %d, %d (want 0 each)",
+          soa2.contacts, sa2.foreign_feedback, soa2.foreign_deformations, sb2.foreign_feedback,
+          sob2.foreign_deformations);
+  }
   /* (2026-12-07) A peer writes made-up keys of the global topics the stations read while they are in
    * their sessions: 20,000 OPEN states and 20,000 replies of distinct ids, 2,000 exercises and 2,000
    * server statuses. Each became an instance of every station's reader, held while its writer lived
