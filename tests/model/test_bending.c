@@ -28,7 +28,7 @@
  *   (below), which the world counts;
  * - the valid range is the linearisation's own error, |true - linear| turn <= 0.1 rad
  *   (PALP_HINGE_LINEAR_ERR_MAX), or the miss the set's validated fingertip presses
- *   reached where larger (palp_world_def.validated_hinge_error: 0.344 rad for the
+ *   reached where larger (palp_world_def.validated_hinge_error: 0.352 rad for the
  *   breast-tissue set, test_validated), checked against the test's own hinges (every edge
  *   of two triangles, enumerated here, true angles by palp_hinge_angle) at every step
  *   of a fingertip pressed at the pole of the breast-tissue dome (the exercises')
