@@ -240,7 +240,7 @@ typedef struct palp_cli_haptic_loop {
   sem_t out_sem;
   pthread_t sender;
   int sender_started;
-  uint64_t sent;
+  _Atomic uint64_t sent; /* by the sender thread; the station's main thread reads it (report_rejected) */
   palp_timer_floor floor; /* def.timer_floor; copied into stats at join */
   int64_t t0_ns;          /* the haptic thread's first deadline [ns], set before either thread starts */
 } palp_cli_haptic_loop;

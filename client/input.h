@@ -103,6 +103,11 @@ enum {
  * and the outward unit normal there. */
 palp_vec3 palp_cli_dome_point(double R, double polar_deg, double azimuth_deg, palp_vec3 *normal);
 
+/* A force distribution 1-4 in its one name (docs/naming.md: the paper's numeral, then the scene file's
+ * keyword): "I single" .. "IV gaussian_offset", "?" for any other number. The observer and the force
+ * keyboard's status line (palp-review has review_dist_name). */
+const char *palp_cli_dist_name(int distribution);
+
 /* ---- scripted profiles ----------------------------------------------------- */
 typedef struct palp_cli_script_def {
   int finger_mode;      /* 0: force-driven (profile in N); 1: position-driven (profile is depth [m]) */

@@ -16,6 +16,7 @@
 
 #include "input.h"
 #include "palp_assess.h" /* palp_band_of: the band a press is in, as the assessment grades it */
+#include "palp_place.h"  /* palp_place_words: a place in the words every palp tool prints */
 
 typedef struct keyboard {
   struct termios saved;
@@ -28,7 +29,16 @@ typedef struct keyboard {
   int esc;               /* escape sequence progress: 1 after ESC, 2 after ESC [ or ESC O */
   double now, esc_t;     /* the poll's time, and when the ESC came [s] */
   double last_status;
+  const char *erase;     /* after a status line: erase what a longer one before it left (a terminal's EL) */
 } keyboard;
+
+/* Where the keys put the finger, in the one phrase every palp tool prints for a place (docs/naming.md:
+ * the clock seen from above and the arc from the pole, "at the pole" within 1 mm of it), on the
+ * undeformed dome. The status lines said "at polar 4 deg azimuth 5 deg" until session 83 (the azimuth
+ * from +x, which no other tool shows). */
+static const char *key_place(const keyboard *k, char *buf, size_t len) {
+  return palp_place_words(palp_cli_dome_point(k->R, k->polar, k->azimuth, NULL), buf, len);
+}
 
 /* A lone ESC (the Esc key) is over when no byte follows within this long [s]: a terminal sends an
  * arrow's bytes in one write, and a person's next key comes later. */
@@ -37,6 +47,7 @@ typedef struct keyboard {
 /* The terminal in raw mode (no line buffering, no echo) for single keys; restored by close. */
 static int k_raw(keyboard *k, double R) {
   k->R = R;
+  k->erase = isatty(STDERR_FILENO) ? "\033[K" : "   ";
   struct termios t;
   if (tcgetattr(STDIN_FILENO, &k->saved) != 0) return PALP_EIO;
   t = k->saved;
@@ -124,9 +135,11 @@ static int k_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
   drain_keys(key_cb, k);
   if (k->quit) return PALP_CLI_INPUT_END;
   if (t - k->last_status >= 0.5) {
-    fprintf(stderr, "\rkeyboard: %s dist %d at polar %.0f deg azimuth %.0f deg, %.2f N%s   ",
-            k->pressed ? "PRESS" : "lift ", k->distribution, k->polar, k->azimuth, k->force,
-            k->force >= k->max_force ? " MAX" : "");
+    /* the distribution in its one name (I-IV and its keyword; "dist 3" until session 83) */
+    char at[64];
+    fprintf(stderr, "\rkeyboard: %s %s, distribution %s, %.2f N%s%s", k->pressed ? "PRESS" : "lift ",
+            key_place(k, at, sizeof at), palp_cli_dist_name(k->distribution), k->force,
+            k->force >= k->max_force ? " MAX" : "", k->erase);
     k->last_status = t;
   }
   if (cap < 1) return 0;
@@ -160,6 +173,7 @@ int palp_cli_keyboard_input(palp_cli_input *out, double max_force, char *err, si
   k->max_force = max_force;
   k->force = max_force < 1.0 ? max_force : 1.0;
   k->distribution = 3;
+  k->erase = "";
   *out = (palp_cli_input){.name = "keyboard", .ctx = k, .open = k_open, .poll = k_poll, .close = k_close};
   return 0;
 }
@@ -273,10 +287,11 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
         snprintf(tip + n, sizeof tip - (size_t)n, " (%s)", b >= 0 ? palp_band_name(b) : "no band");
       }
     }
-    fprintf(stderr, "\rkeyboard: %s at polar %.0f deg azimuth %.0f deg, device %+.3g mm (step %g mm)%s: force %.2f N%s%s   ",
-            f->lifted ? "lifted " : "finger ", f->k.polar, f->k.azimuth, f->depth * 1e3, f->step * 1e3, tip, m,
+    char at[64];
+    fprintf(stderr, "\rkeyboard: %s %s, device %+.3g mm (step %g mm)%s: force %.2f N%s%s%s",
+            f->lifted ? "lifted" : "finger", key_place(&f->k, at, sizeof at), f->depth * 1e3, f->step * 1e3, tip, m,
             (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "",
-            (flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? " OUTSIDE VALID RANGE" : "");
+            (flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? " OUTSIDE VALID RANGE" : "", f->k.erase);
     f->last_status = f->t;
   }
 }
@@ -314,6 +329,7 @@ int palp_cli_keyboard_finger_input(palp_cli_input *out, char *err, size_t errlen
   kfinger *f = calloc(1, sizeof *f);
   if (!f) return PALP_ENOMEM;
   f->k.distribution = 3;
+  f->k.erase = "";
   f->depth = -0.002; /* start 2 mm above the pole */
   f->step = 0.001;
   f->radius = 0.008;

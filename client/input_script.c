@@ -12,6 +12,11 @@ palp_vec3 palp_cli_dome_point(double R, double polar_deg, double azimuth_deg, pa
   return (palp_vec3){R * n.x, R * n.y, R * n.z};
 }
 
+const char *palp_cli_dist_name(int d) {
+  static const char *const n[] = {"?", "I single", "II uniform", "III gaussian", "IV gaussian_offset"};
+  return d >= 1 && d <= 4 ? n[d] : n[0];
+}
+
 typedef struct script {
   palp_cli_script_def def;
   double R;

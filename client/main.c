@@ -22,6 +22,7 @@
 #include "palp_coverage.h"
 #include "palp_dds_refusals.h"
 #include "palp_place.h"
+#include "palp_utf8.h"
 #include "station.h"
 #include "view.h"
 
@@ -171,6 +172,67 @@ static int num(const char *opt, const char *v, double lo, double hi, double *out
   return 0;
 }
 
+/* The longest name the wire carries whole: SessionRequest.user_name and SessionState.trainee_name are
+ * string<63>. A longer --name was cut at byte 63 (inside a UTF-8 character, it could be), so the server's
+ * log, the review and a viewer's --trainee knew another name than the one the station printed. */
+#define NAME_MAX_BYTES 63
+/* A viewer's snapshot names: the --svg prefix, "-NNNN.svg" (svg_no: up to 10 digits), the NUL. */
+#define SVG_PATH_MAX 1100
+/* --input device:LIB.so[:ARG]'s copy, split at the first ':' after the path. */
+#define DEVICE_SPEC_MAX 1024
+
+/* A name for the wire (--name, --trainee): at most NAME_MAX_BYTES bytes of UTF-8 text. 0 ok; -1 said. */
+static int name_option(const char *opt, const char *v) {
+  const size_t n = strlen(v);
+  if (n > NAME_MAX_BYTES) {
+    fprintf(stderr, "palp-client: %s: at most %d bytes (the session's records carry that many), got %zu\n", opt,
+            NAME_MAX_BYTES, n);
+    return -1;
+  }
+  for (size_t i = 0, k; i < n; i += k)
+    if ((k = palp_utf8_len((const unsigned char *)v + i, n - i)) == 0) {
+      fprintf(stderr, "palp-client: %s: not UTF-8 text (byte %zu)\n", opt, i + 1);
+      return -1;
+    }
+  return 0;
+}
+
+/* A trainee's --profile and --input as given (docs/deploy.md: a bad option value is a command-line mistake,
+ * exit 2; session 83 review: --profile square and --input sim:circles,circles=2.5 exited 1, as a failure).
+ * What only opening the input can tell (a replay file, a driver, a terminal) stays a failure, exit 1.
+ * 0 ok; -1 with why in err. */
+static int check_input_option(const opts *o, char *err, size_t errlen) {
+  if (strcmp(o->profile, "paper") && strcmp(o->profile, "step") && strcmp(o->profile, "ramp") &&
+      strcmp(o->profile, "sine")) {
+    snprintf(err, errlen, "--profile: expected paper, step, ramp or sine, got \"%s\"", o->profile);
+    return -1;
+  }
+  const char *in = o->input;
+  if (!strcmp(in, "script") || !strncmp(in, "replay:", 7) || !strcmp(in, "keyboard") || !strcmp(in, "keyboard-finger"))
+    return 0;
+  if (!strncmp(in, "sim:expert", 10) || !strncmp(in, "sim:novice", 10)) {
+    palp_cli_trainee_def d;
+    return palp_cli_trainee_parse(in + 4, &d, err, errlen) < 0 ? -1 : 0;
+  }
+  if (!strncmp(in, "sim:", 4)) {
+    palp_cli_simdevice_def d;
+    return palp_cli_simdevice_parse(in + 4, &d, err, errlen) < 0 ? -1 : 0;
+  }
+  if (!strncmp(in, "device:", 7)) {
+    /* a longer path was cut and the cut one dlopen()ed: possibly another file (session 83 review) */
+    if (strlen(in + 7) >= DEVICE_SPEC_MAX) {
+      snprintf(err, errlen, "--input device:...: at most %d bytes of path and argument, got %zu", DEVICE_SPEC_MAX - 1,
+               strlen(in + 7));
+      return -1;
+    }
+    return 0;
+  }
+  snprintf(err, errlen,
+           "--input: expected script, replay:FILE, keyboard, keyboard-finger, sim:TRAJ or device:LIB.so[:ARG], got \"%s\"",
+           in);
+  return -1;
+}
+
 static int parse(int argc, char **argv, opts *o) {
   *o = (opts){.role = NULL, .name = "", .input = "script", .profile = "paper", .distribution = 2, .polar = 30,
               .azimuth = 40, .timeout = 10, .print_period = 0.5, .color = isatty(STDOUT_FILENO), .map_every = 0.5,
@@ -282,6 +344,18 @@ static int parse(int argc, char **argv, opts *o) {
     fprintf(stderr, "palp-client: --phantom: a trainee needs the id (or --phantom-name) of the phantom to palpate\n");
     return -1;
   }
+  char why[320];
+  if (!strcmp(o->role, "trainee") && check_input_option(o, why, sizeof why) < 0) {
+    fprintf(stderr, "palp-client: %s\n", why);
+    return -1;
+  }
+  if (name_option("--name", o->name) < 0 || (o->trainee && name_option("--trainee", o->trainee) < 0)) return -1;
+  /* a longer prefix's snapshots were written under a cut name (session 83 review) */
+  if (o->svg && strlen(o->svg) + sizeof "-2147483647.svg" > SVG_PATH_MAX) {
+    fprintf(stderr, "palp-client: --svg: at most %zu bytes, got %zu\n", SVG_PATH_MAX - sizeof "-2147483647.svg",
+            strlen(o->svg));
+    return -1;
+  }
   /* With --server the ids are that server's local ones (PALP_DDS_ID_LOCAL_BITS): a larger one's high
    * bits went into the server number, and --server roomA --phantom 1048577 joined roomB's phantom 1
    * without a word (session 80's review, 2026-12-07). */
@@ -370,7 +444,7 @@ static int make_input(const opts *o, palp_cli_input *in, char *err, size_t errle
     return rc;
   }
   if (!strncmp(o->input, "device:", 7)) {
-    char path[1024];
+    char path[DEVICE_SPEC_MAX]; /* parse() refused a longer one */
     snprintf(path, sizeof path, "%s", o->input + 7);
     char *arg = strchr(path, ':');
     if (arg) *arg++ = 0;
@@ -406,6 +480,14 @@ static void lat_add(latency *l, double us) {
 #define PLOT_BINS 4096
 #define PLOT_BIN_S 0.02
 
+/* A trainee station's lines carry t = the session's world time (docs/naming.md, "time"), as the observer's
+ * do: the newest the server sent, Feedback.sim_time (force-driven: every 0.1 s at least) or the rendered
+ * LocalModel.time (position-driven: while the finger is down), what palp-review show prints for the same
+ * moment. Until session 83 a trainee printed its own clock since its loop started, which a stalled or
+ * late server, a held session or a rejoin set apart from the log's: "t= 12.30 s OUTSIDE THE MODEL'S
+ * VALID RANGE" could not be found at 12.30 s in the review. A periodic line waits for the first world
+ * time (no line before the server has said one). */
+
 typedef struct feedback_ctx {
   palp_cli_station *st;
   palp_cli_input *in;
@@ -428,6 +510,7 @@ typedef struct feedback_ctx {
   double scale;
   palp_haptic_def fade; /* its stale_time and fade_time: the renderer's (palp_haptic_fade) */
   int64_t last_rx_ns;
+  double world_t; /* the newest feedback's sim_time [s]; < 0: none yet */
 } feedback_ctx;
 
 /* Takes every feedback sample; latency from the echoed contact stamp. */
@@ -441,6 +524,7 @@ static void drain_feedback(feedback_ctx *c) {
     if (info.valid_data && palp_cli_station_from_server(c->st, c->st->feedback_r, &info)) {
       c->samples++;
       c->last_top = fb->top_displacement;
+      if (isfinite(fb->sim_time)) c->world_t = fb->sim_time;
       for (uint32_t k = 0; k < fb->fingers._length; k++) {
         const palp_FingerFeedback *ff = &fb->fingers._buffer[k];
         double lat_us = NAN;
@@ -866,11 +950,10 @@ static int print_debrief(const opts *o, palp_cli_station *st) {
     const palp_vec3 p = {l->point.x, l->point.y, l->point.z};
     char by[32] = "MISSED";
     if (l->found_by) snprintf(by, sizeof by, "found by mark %u", l->found_by);
-    /* where, in the words every palp tool uses (src/palp_place.h): no clock at the pole */
-    char at[64] = "at the pole";
-    if (!palp_place_at_pole(p))
-      snprintf(at, sizeof at, "at %.1f o'clock, %.0f mm from the pole along the skin", palp_place_clock_shown(p),
-               palp_place_arc(p) * 1e3);
+    /* where, in the one phrase every palp tool uses (palp_place_words: no clock at the pole; "along the
+     * skin" after the arc until session 83, which the review's debrief line did not say) */
+    char at[64];
+    palp_place_words(p, at, sizeof at);
     tprintf(o, "[trainee %s]   lump %u %s: %s; %.0f mm across, its centre %.0f mm deep\n", o->name, i + 1, by, at,
             l->diameter * 1e3, l->depth * 1e3);
   }
@@ -929,18 +1012,22 @@ static const char *valid_range_why(int why, char *buf, size_t len) {
   return buf;
 }
 
-/* A stall of this process (palp_cli_station_session_closed saw one): the trainee is told,
- * since the hand felt nothing for that long and the server may have held the session. */
-static void report_stall(const opts *o, const palp_cli_station *st, unsigned seen[2], const char *role, int named) {
+/* A stall of this process (palp_cli_station_session_closed saw one): the trainee is told, since the hand
+ * felt nothing for that long and the server may have held the session; and that the station asked the
+ * server to go on only when it did (the server's state said it held the session: the JOIN sent again).
+ * Until session 83 every stall said "asked the server to go on", whether anything was sent or not. */
+static void report_stall(const opts *o, const palp_cli_station *st, unsigned seen[3], const char *role, int named) {
   const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
   if (st->stalls != seen[0] && !o->quiet)
-    printf("[%s%s%s] this station did not run for %.2f s (its machine was busy); asked the server to go on with "
-           "session %u\n", role, sep, name, st->stall_s, st->session_id);
+    printf("[%s%s%s] this station did not run for %.2f s (its machine was busy)\n", role, sep, name, st->stall_s);
+  if (st->held_asks != seen[2] && !o->quiet)
+    printf("[%s%s%s] the server held session %u, not having heard from this station; asked it to go on\n", role, sep,
+           name, st->session_id);
   /* the server's lease lapsed and it came back (it did not run for a while) */
   if (st->server_returns != seen[1] && !o->quiet)
     printf("[%s%s%s] the server was silent past its lease (its machine was busy) and is back; session %u goes on\n",
            role, sep, name, st->session_id);
-  seen[0] = st->stalls, seen[1] = st->server_returns;
+  seen[0] = st->stalls, seen[1] = st->server_returns, seen[2] = st->held_asks;
   fflush(stdout);
 }
 
@@ -973,7 +1060,11 @@ static void report_foreign(const opts *o, palp_cli_station *st, const char *role
  * reaching nothing: a --finger-radius outside the server's range was refused sample by sample while
  * the station said nothing, session 81). The server's log names each refusal's reason. */
 #define REJECTED_SAY_INTERVAL_NS 10000000000LL
-static void report_rejected(const opts *o, palp_cli_station *st, const char *role, int named) {
+/* sent: the contact samples this station sent in the session so far. The server's count is of every
+ * writer's samples in the session: more than she sent are another writer's (a peer of an unsecured
+ * classroom, or a station whose server restarted under her session's id: hana was told of 9 refused
+ * while she had sent none, session 83 review). */
+static void report_rejected(const opts *o, palp_cli_station *st, const char *role, int named, uint64_t sent) {
   const int64_t now = palp_dds_now_ns();
   if (st->rejected_samples <= st->rejected_said ||
       (st->rejected_said_ns && now - st->rejected_said_ns < REJECTED_SAY_INTERVAL_NS))
@@ -981,16 +1072,30 @@ static void report_rejected(const opts *o, palp_cli_station *st, const char *rol
   const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
   char radius[64] = "";
   if (o->finger_radius_mm > 0) snprintf(radius, sizeof radius, " (this station's is %g mm)", o->finger_radius_mm);
-  tprintf(o, "[%s%s%s] the server refused %llu contact sample%s of session %u so far: they reach nothing. Its log "
+  char whose[96] = "";
+  if (sent == 0)
+    snprintf(whose, sizeof whose, " (this station sent none: another writer's)");
+  else if (st->rejected_samples > sent)
+    snprintf(whose, sizeof whose, " (more than the %llu this station sent: some are another writer's)", (unsigned long long)sent);
+  tprintf(o, "[%s%s%s] the server refused %llu contact sample%s of session %u so far%s: they reach nothing. Its log "
              "says why: a finger radius outside its range%s, a force above its limit, or a writer not of this "
              "session\n",
           role, sep, name, (unsigned long long)st->rejected_samples, st->rejected_samples == 1 ? "" : "s",
-          st->session_id, radius);
+          st->session_id, whose, radius);
   fflush(stdout);
   palp_log_warn(o->log, "session %u: the server refused %llu contact samples so far", st->session_id,
                 (unsigned long long)st->rejected_samples);
   st->rejected_said = st->rejected_samples;
   st->rejected_said_ns = now;
+}
+
+/* The words before a closed session's reason in a summary line: the server's close (closed_words), or
+ * "; session ended: " for the station's own verdict that the server was lost (palp_cli_station_session_closed
+ * composes those reasons, "server lost (...)"): the server did not close that session, its station gave
+ * it up (the trainee's said "session closed by the server: server lost" until session 83). */
+static int server_lost(const char *reason) { return !strncmp(reason, "server lost", 11); }
+static const char *close_words(const char *reason, const char *closed_words) {
+  return server_lost(reason) ? "; session ended: " : closed_words;
 }
 
 /* The summary lines' count of those: "" when none. */
@@ -1075,7 +1180,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_waitset_attach(ws, lm_cond, 0);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_print = t0, next_check = t0;
-  unsigned stalls_seen[2] = {0, 0};
+  unsigned stalls_seen[3] = {0, 0, 0};
   int closed = 0;
   palp_cli_episode lim_ep = palp_cli_episode_make(PALP_CLI_LIMIT_HOLD_S);
   palp_cli_episode oor_ep = palp_cli_episode_make(PALP_CLI_RANGE_HOLD_S);
@@ -1104,6 +1209,8 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     }
     palp_cli_haptic_view v;
     palp_cli_haptic_get_view(hl, &v);
+    /* the lines' t: the world time of the model the haptic thread renders (v.t is its own clock) */
+    const int have_world = v.model_time > 0;
     const double fm = sqrt(v.force.x * v.force.x + v.force.y * v.force.y + v.force.z * v.force.z);
     const int64_t now = palp_dds_now_ns();
     int bin = (int)((double)(now - plot.t0) * 1e-9 / PLOT_BIN_S);
@@ -1120,12 +1227,13 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     const int lim = palp_cli_episode_update(&lim_ep, v.t, limited);
     if (lim == PALP_CLI_EPISODE_BEGAN && !o->quiet) {
       tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
-                 "device gets %.1f N\n", o->name, v.t, fm, fm);
+                 "device gets %.1f N\n", o->name, v.model_time, fm, fm);
       fflush(stdout);
     }
     if (lim == PALP_CLI_EPISODE_OVER && !o->quiet) {
+      /* it cleared PALP_CLI_LIMIT_HOLD_S ago on the haptic clock: the world then, a model's step before or after */
       tprintf(o, "[trainee %s] t=%6.2f s  force back under the limit (the phantom asked up to %.2f N)\n", o->name,
-                 lim_ep.clear_since, episode_peak);
+                 fmax(0.0, v.model_time - (v.t - lim_ep.clear_since)), episode_peak);
       fflush(stdout);
     }
     if (!lim_ep.shown) episode_peak = 0;
@@ -1143,24 +1251,26 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       oor_why = 0;
       if (!o->quiet) {
         tprintf(o, "[trainee %s] t=%6.2f s  OUTSIDE THE MODEL'S VALID RANGE: %s; what you feel here is less certain\n",
-                   o->name, v.t, valid_range_why(why, why_text, sizeof why_text));
+                   o->name, v.model_time, valid_range_why(why, why_text, sizeof why_text));
         fflush(stdout);
       }
     }
     if (oor) oor_why |= why;
     if (out == PALP_CLI_EPISODE_OVER && !o->quiet) {
-      tprintf(o, "[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name, v.t,
+      tprintf(o, "[trainee %s] t=%6.2f s  back inside the model's valid range (outside for %.2f s: %s)\n", o->name,
+                 v.model_time,
                  oor_ep.last_on - oor_ep.began, valid_range_why(oor_why, why_text, sizeof why_text));
       fflush(stdout);
     }
-    if (o->print_period > 0 && !o->quiet && now >= next_print) {
+    if (o->print_period > 0 && !o->quiet && now >= next_print && have_world) {
       const int touching = v.on && (v.flags & PALP_CLI_FORCE_CONTACT);
       tprintf(o, "[trainee %s] t=%6.2f s  finger %s  device %5.1f mm below the proxy  rendered |F| = %5.2f N%s%s%s\n",
-                 o->name, v.t, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
+                 o->name, v.model_time, !v.on ? "lifted  " : touching ? "touching" : "free    ", touching ? v.depth * 1e3 : 0.0, fm,
                  limited ? "  LIMITED" : "", (v.flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? "  OUTSIDE VALID RANGE" : "",
                  (v.flags & PALP_CLI_FORCE_STALE) ? "  (server silent: fading out)" : "");
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
+      if (next_print <= now) next_print = now + (int64_t)(o->print_period * 1e9); /* after a wait for the world's time */
     }
     findings_ui_tick(&fu, o, st, in.button ? in.button(in.ctx) : 0, &v);
     if (now >= next_check) {
@@ -1171,7 +1281,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
       report_stall(o, st, stalls_seen, "trainee", 1);
       report_log(o, st, "trainee", 1);
       report_foreign(o, st, "trainee", 1);
-      report_rejected(o, st, "trainee", 1);
+      report_rejected(o, st, "trainee", 1, atomic_load_explicit(&hl->sent, memory_order_relaxed));
       next_check = now + 100000000;
     }
   }
@@ -1213,7 +1323,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
              skipped,
              (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
              d.physics_rate_hz, p50, p99, hs.peak_force, foreign_summary(st, foreign, sizeof foreign),
-             closed ? "; session closed by the server: " : "", closed ? reason : "");
+             closed ? close_words(reason, "; session closed by the server: ") : "", closed ? reason : "");
   if (hs.stalls)
     tprintf(o, "[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
                "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "
@@ -1277,14 +1387,14 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   const int64_t period = (int64_t)(1e9 / rate);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next = t0, next_print = t0, next_state_check = t0;
-  unsigned stalls_seen[2] = {0, 0};
+  unsigned stalls_seen[3] = {0, 0, 0};
   uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
   int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
   uint64_t sent = 0;
   const palp_haptic_def render = palp_cli_haptic_default_def().render;
   feedback_ctx fx = {.st = st, .in = &in, .csv = fb_csv, .t0 = t0,
                      .max_force = o->max_force > 0 ? o->max_force : render.max_force,
-                     .fade = render};
+                     .fade = render, .world_t = -1};
   /* The safe force is the smaller of the station's and the phantom's (the catalogue's max_force), as
    * on the haptic path: the server reports a finger's force above its limit as it is (session 77). */
   if (ph->max_force > 0 && isfinite(ph->max_force) && ph->max_force < fx.max_force) fx.max_force = ph->max_force;
@@ -1294,6 +1404,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   dds_waitset_attach(ws, fb_cond, 0);
   char reason[128] = "";
   int closed = 0, ended = 0, rejoins = 0, failed = 0;
+  uint32_t gone_session = 0; /* a session a failed --rejoin ended (st->session_id is then 0) */
   while (!g_stop) {
     tick_refusals(o);
     int64_t now = palp_dds_now_ns();
@@ -1364,18 +1475,19 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     }
     drain_feedback(&fx);
     fade_feedback(&fx, palp_dds_now_ns());
-    if (o->print_period > 0 && !o->quiet && now >= next_print) {
-      tprintf(o, "[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, t,
+    if (o->print_period > 0 && !o->quiet && now >= next_print && fx.world_t >= 0) {
+      tprintf(o, "[trainee %s] t=%6.2f s  finger 0: %s  feedback |F| = %5.2f N  pole z %+5.2f mm\n", o->name, fx.world_t,
                  down[0] ? "pressing" : "lifted  ", fx.last, -fx.last_top * 1e3);
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
+      if (next_print <= now) next_print = now + (int64_t)(o->print_period * 1e9); /* after a wait for the world's time */
     }
     if (now >= next_state_check) {
       const int was_closed = palp_cli_station_session_closed(st, reason, sizeof reason);
       report_stall(o, st, stalls_seen, "trainee", 1);
       report_log(o, st, "trainee", 1);
       report_foreign(o, st, "trainee", 1);
-      report_rejected(o, st, "trainee", 1);
+      report_rejected(o, st, "trainee", 1, sent);
       if (was_closed) {
         if (o->rejoin && !strncmp(reason, "server lost", 11) && rejoins < 8) {
           /* Its server is gone: the same phantom (by name) on another server, same input, same clock. */
@@ -1388,8 +1500,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
           if (palp_cli_station_find_phantom(st, ph->name, -1, lost_server, o->timeout, &id, err, sizeof err) == 0 &&
               (j.phantom_id = id, palp_cli_station_join(st, &j, err, sizeof err)) == 0) {
             rejoins++;
-            tprintf(o, "[trainee %s] t=%6.2f s  server of session %u lost; rejoined as session %u on phantom %u \"%s\"\n",
-                       o->name, (double)(palp_dds_now_ns() - t0) * 1e-9, lost_session, st->session_id, id, ph->name);
+            tprintf(o, "[trainee %s] server of session %u lost after t=%.2f s of its world; rejoined as session %u on "
+                       "phantom %u \"%s\"\n", o->name, lost_session, fx.world_t > 0 ? fx.world_t : 0.0, st->session_id, id,
+                       ph->name);
+            fx.world_t = -1; /* the new session's world: its own time */
             fflush(stdout);
             fb_cond = dds_create_readcondition(st->feedback_r, DDS_ANY_STATE);
             dds_waitset_attach(ws, fb_cond, 0);
@@ -1401,6 +1515,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
           }
           if (!g_stop) palp_log_error(o->log, "server lost and no other server to rejoin: %s", err);
           fb_cond = 0;
+          gone_session = lost_session; /* ended above: the summary names the lost one, not "session 0" */
         }
         closed = 1;
         break;
@@ -1436,9 +1551,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   }
   tprintf(o, "[trainee %s] session %u: %llu contact samples sent at %.0f Hz, %llu feedback samples, peak feedback %.2f N, "
              "contact->feedback latency p50 %.0f us p99 %.0f us (%zu samples)%s%s%s%s\n",
-             o->name, st->session_id, (unsigned long long)sent, rate, (unsigned long long)fx.samples, fx.peak, p50, p99,
-             lat.n, foreign_summary(st, foreign, sizeof foreign), closed ? "; session closed by the server: " : "",
-             closed ? reason : "",
+             o->name, gone_session ? gone_session : st->session_id, (unsigned long long)sent, rate,
+             (unsigned long long)fx.samples, fx.peak, p50, p99,
+             lat.n, foreign_summary(st, foreign, sizeof foreign),
+             closed ? close_words(reason, "; session closed by the server: ") : "", closed ? reason : "",
              rejoins ? "; rejoined after its server was lost" : "");
   if (o->plot) plot_feedback(&fx, stdout);
   free(lat.us);
@@ -1469,10 +1585,19 @@ static void deform_store(deform_copy *c, const palp_Deformation *d) {
   c->valid = 1;
 }
 
-static const char *dist_name(int d) {
-  static const char *n[] = {"?", "I single", "II uniform", "III gaussian", "IV gaussian_offset"};
-  return d >= 1 && d <= 4 ? n[d] : n[0];
-}
+/* The trainee's contact samples a viewer keeps until it knows her station's writer (run_viewer): the
+ * newest of finger 0, enough to hold the one the server's feedback echoes as applied (its contact_seq)
+ * a few hundred milliseconds at her station's rate. */
+#define VIEW_CONTACTS 32
+/* A press the server's feedback shows is told with the trainee's own sample (where, how hard) when one
+ * comes within this long [ns], else without them. */
+#define VIEW_PRESS_WAIT_NS 300000000LL
+
+typedef struct seen_contact {
+  palp_Contact c;
+  dds_instance_handle_t writer;
+} seen_contact;
+
 
 static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *ph, int observer) {
   palp_cli_view view;
@@ -1482,12 +1607,23 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
   double peak_disp = 0;
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_map = t0, next_svg = t0 + (int64_t)(o->svg_every * 1e9), next_print = t0, next_check = t0;
-  unsigned stalls_seen[2] = {0, 0};
-  int svg_no = 0;
-  uint64_t frames = 0, contacts = 0, feedbacks = 0;
-  palp_Contact last_contact;
-  memset(&last_contact, 0, sizeof last_contact);
-  int have_contact = 0, pressing = 0;
+  unsigned stalls_seen[3] = {0, 0, 0};
+  int svg_no = 0, svg_failed = 0, snapshot_written = 0;
+  uint64_t frames = 0, frames_misfit = 0, contacts = 0, contacts_foreign = 0, feedbacks = 0;
+  /* Presses and lifts as the server applied them (session 83 review): its feedback, which only it writes
+   * (palp_cli_station_from_server), says whether the trainee's finger 0 is down. The contact stream is
+   * any participant's in an unsecured classroom (the server refuses other writers' samples, the viewer
+   * was not told): a peer's 15 N showed as the trainee's press. Her samples say where and how hard once
+   * one of them matched the feedback's echo of the sample the server applied (contact_seq and its
+   * source_time_ns): that sample's writer is her station's, and only its samples count from then on. */
+  seen_contact ring[VIEW_CONTACTS];
+  int ring_n = 0, ring_head = 0;
+  dds_instance_handle_t trainee_writer = 0;
+  palp_Contact applied; /* her station's newest sample of finger 0 (valid when have_applied) */
+  memset(&applied, 0, sizeof applied);
+  int have_applied = 0, server_down = 0, pressing = 0;
+  uint64_t echo_seq = 0;
+  int64_t echo_time = 0, press_seen_ns = 0;
   double last_fb = 0, last_top = 0;
   char reason[128] = "";
   int closed = 0;
@@ -1510,9 +1646,12 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
     void *ptr[1] = {NULL};
     dds_sample_info_t info;
     while (st->deformation_r > 0 && dds_take(st->deformation_r, ptr, &info, 1, 1) > 0) {
-      /* A frame that does not fit the phantom's mesh is dropped, never indexed. */
-      if (info.valid_data && palp_cli_station_from_server(st, st->deformation_r, &info) &&
-          palp_cli_deformation_check(ph, ptr[0]) == 0) {
+      /* A frame that does not fit the phantom's mesh is dropped, never indexed; counted for the summary
+       * (a mismatch read "0 deformation frames" and nothing more, session 83 review). */
+      const int ours = info.valid_data && palp_cli_station_from_server(st, st->deformation_r, &info);
+      const int fits = ours && palp_cli_deformation_check(ph, ptr[0]) == 0;
+      if (ours && !fits) frames_misfit++;
+      if (fits) {
         const palp_Deformation *d = ptr[0];
         frames++;
         if (d->sim_time > world_t) world_t = d->sim_time;
@@ -1529,30 +1668,15 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
       if (info.valid_data) {
         const palp_Contact *c = ptr[0];
         contacts++;
-        int now_pressing = c->mode != palp_CONTACT_RELEASE;
-        if (observer && !o->quiet && now_pressing != pressing) {
-          if (now_pressing) {
-            /* where, in the words every palp tool uses (src/palp_place.h: the clock seen from above and the
-             * arc from the pole; since session 82, polar and azimuth angles before, the azimuth from +x) */
-            const palp_vec3 at = {c->center.x, c->center.y, c->center.z};
-            char where[80] = "at the pole";
-            if (!palp_place_at_pole(at))
-              snprintf(where, sizeof where, "at %.1f o'clock, %.0f mm from the pole", palp_place_clock_shown(at),
-                       palp_place_arc(at) * 1e3);
-            if (c->mode == palp_CONTACT_FORCE)
-              printf("[observer] t=%6.2f s  trainee presses: force-driven, distribution %s, %s, |F| = %.2f N\n",
-                     world_t >= 0 ? world_t : t, dist_name(c->distribution), where, norm3(c->force));
-            else
-              printf("[observer] t=%6.2f s  trainee presses: finger of radius %.1f mm %s\n", world_t >= 0 ? world_t : t,
-                     c->radius * 1e3, where);
-          } else {
-            printf("[observer] t=%6.2f s  trainee lifts the finger\n", world_t >= 0 ? world_t : t);
-          }
-          fflush(stdout);
+        if (c->finger == 0 && trainee_writer && info.publication_handle != trainee_writer) {
+          contacts_foreign++;
+        } else if (c->finger == 0 && trainee_writer) {
+          applied = *c, have_applied = 1;
+        } else if (c->finger == 0) {
+          ring[ring_head] = (seen_contact){*c, info.publication_handle};
+          ring_head = (ring_head + 1) % VIEW_CONTACTS;
+          if (ring_n < VIEW_CONTACTS) ring_n++;
         }
-        pressing = now_pressing;
-        last_contact = *c;
-        have_contact = 1;
       }
       dds_return_loan(st->contact_r, ptr, 1);
     }
@@ -1562,16 +1686,73 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
         feedbacks++;
         if (fb->sim_time > world_t) world_t = fb->sim_time;
         last_top = fb->top_displacement;
-        last_fb = fb->fingers._length ? norm3(fb->fingers._buffer[0].force) : 0;
+        /* finger 0's entry (a finger never used has none): down as the server applies it, its force,
+         * and which of the trainee's samples it applied last */
+        server_down = 0, last_fb = 0;
+        for (uint32_t k = 0; k < fb->fingers._length; k++) {
+          const palp_FingerFeedback *ff = &fb->fingers._buffer[k];
+          if (ff->finger != 0) continue;
+          server_down = ff->active != 0;
+          last_fb = norm3(ff->force);
+          echo_seq = ff->contact_seq, echo_time = ff->contact_source_time_ns;
+        }
       }
       dds_return_loan(st->feedback_r, ptr, 1);
     }
+    /* Her station's writer: the one that wrote the sample the server applied (newest first). The others
+     * kept meanwhile are counted as another writer's; from now on her samples are taken as they come. */
+    for (int k = 0; !trainee_writer && echo_seq && k < ring_n; k++) {
+      const seen_contact *e = &ring[(ring_head - 1 - k + VIEW_CONTACTS) % VIEW_CONTACTS];
+      if (e->c.seq != echo_seq || e->c.source_time_ns != echo_time) continue;
+      trainee_writer = e->writer;
+      for (int q = ring_n - 1; q >= 0; q--) { /* oldest first: the newest of hers is left in applied */
+        const seen_contact *x = &ring[(ring_head - 1 - q + VIEW_CONTACTS) % VIEW_CONTACTS];
+        if (x->writer == trainee_writer) applied = x->c, have_applied = 1;
+        else contacts_foreign++;
+      }
+      ring_n = 0;
+    }
     now = palp_dds_now_ns();
+    /* A press told once the server shows the finger down, with her sample if it came (within
+     * VIEW_PRESS_WAIT_NS: her station writes to the viewer directly, the server's feedback comes after
+     * it applied the sample); a lift once it shows the finger up. */
+    const double shown_t = world_t >= 0 ? world_t : t;
+    const int hers = have_applied && applied.mode != palp_CONTACT_RELEASE;
+    if (!server_down) press_seen_ns = 0;
+    else if (!press_seen_ns) press_seen_ns = now;
+    if (server_down && !pressing && (hers || now - press_seen_ns >= VIEW_PRESS_WAIT_NS)) {
+      pressing = 1;
+      if (observer && !o->quiet) {
+        /* where, in the one phrase every palp tool uses (palp_place_words); the force is the one her
+         * station commanded: the server may have clamped it at the phantom's max_force */
+        const palp_vec3 at = {applied.center.x, applied.center.y, applied.center.z};
+        char where[64];
+        palp_place_words(at, where, sizeof where);
+        if (!hers)
+          printf("[observer] t=%6.2f s  trainee presses (her station's samples not seen here: where and how hard "
+                 "unknown)\n", shown_t);
+        else if (applied.mode == palp_CONTACT_FORCE)
+          printf("[observer] t=%6.2f s  trainee presses: force-driven, distribution %s, %s, |F| commanded %.2f N\n",
+                 shown_t, palp_cli_dist_name(applied.distribution), where, norm3(applied.force));
+        else
+          printf("[observer] t=%6.2f s  trainee presses: finger of radius %.1f mm %s\n", shown_t,
+                 applied.radius * 1e3, where);
+        fflush(stdout);
+      }
+    } else if (!server_down && pressing) {
+      pressing = 0;
+      if (observer && !o->quiet) {
+        printf("[observer] t=%6.2f s  trainee lifts the finger\n", shown_t);
+        fflush(stdout);
+      }
+    }
     if (observer && !o->quiet && o->print_period > 0 && now >= next_print) {
-      printf("[observer] t=%6.2f s  session %u: %s  |F| applied %.2f N, feedback %.2f N, pole z %+.2f mm, "
-             "max displacement %.2f mm\n", world_t >= 0 ? world_t : t, st->session_id, pressing ? "pressing" : "lifted  ",
-             have_contact && pressing ? norm3(last_contact.force) : 0.0, last_fb, -last_top * 1e3,
-             last.valid ? palp_cli_max_displacement(ph, &last.d, NULL) * 1e3 : 0.0);
+      /* "commanded": her station's force command, not what the server applied (it clamps at max_force);
+       * "|F| applied" until session 83 */
+      printf("[observer] t=%6.2f s  session %u: %s  |F| commanded %.2f N, feedback %.2f N, pole z %+.2f mm, "
+             "max displacement %.2f mm\n", shown_t, st->session_id, pressing ? "pressing" : "lifted  ",
+             pressing && hers && applied.mode == palp_CONTACT_FORCE ? norm3(applied.force) : 0.0, last_fb,
+             -last_top * 1e3, last.valid ? palp_cli_max_displacement(ph, &last.d, NULL) * 1e3 : 0.0);
       fflush(stdout);
       next_print += (int64_t)(o->print_period * 1e9);
     }
@@ -1583,10 +1764,14 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
       next_map = now + (int64_t)(o->map_every * 1e9);
     }
     if (o->svg && o->svg_every > 0 && last.valid && now >= next_svg) {
-      char path[1100], title[160];
-      snprintf(path, sizeof path, "%s-%04d.svg", o->svg, ++svg_no);
+      char path[SVG_PATH_MAX], title[160];
+      const int n = snprintf(path, sizeof path, "%s-%04d.svg", o->svg, ++svg_no);
       snprintf(title, sizeof title, "palp session %u, phantom \"%s\"", st->session_id, ph->name);
-      palp_cli_view_svg(ph, &last.d, title, path);
+      /* said at the first failure, counted after (until session 83 none was looked at) */
+      if (n < 0 || (size_t)n >= sizeof path || palp_cli_view_svg(ph, &last.d, title, path) < 0) {
+        if (!svg_failed++)
+          palp_log_error(o->log, "cannot write %s (the station's later snapshots are counted in its summary)", path);
+      }
       next_svg = now + (int64_t)(o->svg_every * 1e9);
     }
     if (now >= next_check) {
@@ -1605,20 +1790,36 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
   if (o->svg && peak.valid) {
     char title[160];
     snprintf(title, sizeof title, "palp session %u, \"%s\", peak frame", st->session_id, ph->name);
-    if (palp_cli_view_svg(ph, &peak.d, title, o->svg) < 0)
+    if (palp_cli_view_svg(ph, &peak.d, title, o->svg) < 0) {
       palp_log_error(o->log, "cannot write %s", o->svg);
+      svg_failed++;
+    } else {
+      snapshot_written = 1;
+    }
   }
   report_foreign(o, st, observer ? "observer" : "visual", 0);
-  char foreign[96];
-  tprintf(o, "[%s] session %u: %llu deformation frames, %llu contact samples seen, %llu feedback samples, peak "
-             "displacement %.2f mm%s%s%s%s%s\n", observer ? "observer" : "visual", st->session_id, (unsigned long long)frames,
-          (unsigned long long)contacts, (unsigned long long)feedbacks, peak_disp * 1e3,
-          o->svg && peak.valid ? ", snapshot " : "", o->svg && peak.valid ? o->svg : "",
-          foreign_summary(st, foreign, sizeof foreign), closed ? "; session closed: " : "", closed ? reason : "");
+  char foreign[96], misfit[96] = "", others[96] = "", unwritten[96] = "";
+  if (frames_misfit)
+    snprintf(misfit, sizeof misfit, " (%llu more dropped: they do not fit phantom %u's mesh)",
+             (unsigned long long)frames_misfit, ph->phantom_id);
+  if (contacts_foreign)
+    snprintf(others, sizeof others, " (%llu of them from a writer not the trainee's station, ignored)",
+             (unsigned long long)contacts_foreign);
+  if (svg_failed)
+    snprintf(unwritten, sizeof unwritten, ", %d snapshot%s not written", svg_failed, svg_failed == 1 ? "" : "s");
+  tprintf(o, "[%s] session %u: %llu deformation frames%s, %llu contact samples seen%s, %llu feedback samples, peak "
+             "displacement %.2f mm%s%s%s%s%s%s\n", observer ? "observer" : "visual", st->session_id,
+          (unsigned long long)frames, misfit, (unsigned long long)contacts, others, (unsigned long long)feedbacks,
+          peak_disp * 1e3, snapshot_written ? ", snapshot " : "", snapshot_written ? o->svg : "", unwritten,
+          foreign_summary(st, foreign, sizeof foreign), closed ? close_words(reason, "; session closed: ") : "",
+          closed ? reason : "");
   if (show_map) palp_cli_view_free(&view);
   free(last.pos);
   free(peak.pos);
-  return 0;
+  /* docs/station.md's exit statuses: 1 a snapshot asked for and not written (as the trainee's output
+   * files, session 80), 3 the server lost; a session its trainee ended, or one the server closed, is
+   * a viewer's normal end (it exited 0 on every close until session 83) */
+  return svg_failed ? 1 : closed && server_lost(reason) ? 3 : 0;
 }
 
 int main(int argc, char **argv) {

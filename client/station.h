@@ -142,6 +142,7 @@ typedef struct palp_cli_station {
   int doubt_after_stall;  /* ... and it lapsed right after a stall of this station's own */
   unsigned server_returns; /* lapses of the server's lease it came back from */
   int64_t next_held_ask_ns;  /* the server holds our session for us: the JOIN again, not before this */
+  unsigned held_asks;        /* JOINs sent again because the server held our session (the station says so) */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
   /* The server's session log as this station's session sees it (session 68): read from
    * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */

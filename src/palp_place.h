@@ -6,6 +6,8 @@
 #ifndef PALP_PLACE_H
 #define PALP_PLACE_H
 
+#include <stddef.h>
+
 #include "palp.h"
 
 /* The clock position of p seen from above, in hours (0, 12]: 12 at +y, 3 at +x. */
@@ -38,5 +40,13 @@ double palp_place_mm_shown(double metres);
 #define PALP_PLACE_POLE_ARC 1.0e-3
 /* 1 when p is within PALP_PLACE_POLE_ARC of the pole along the surface (palp_place_arc), else 0. */
 int palp_place_at_pole(palp_vec3 p);
+
+/* The place p in the one phrase every tool prints (docs/naming.md, "position on the phantom"):
+ * "at the pole" within PALP_PLACE_POLE_ARC of it, else "at H.H o'clock, N mm from the pole", the
+ * clock palp_place_clock_shown's and N the arc (palp_place_arc) in palp_place_mm_shown's whole mm.
+ * Written into buf (cut to len - 1 bytes, always terminated when len > 0); returns buf. One function
+ * since session 83: the station's debrief and palp-web's trainee page said "mm from the pole along the
+ * skin", palp-review and the observer "mm from the pole" (web/www/js/common.js mirrors this). */
+char *palp_place_words(palp_vec3 p, char *buf, size_t len);
 
 #endif

@@ -2,6 +2,7 @@
 #include "palp_place.h"
 
 #include <math.h>
+#include <stdio.h>
 
 #include "vec3.h" /* PALP_PI */
 
@@ -33,3 +34,12 @@ double palp_place_arc(palp_vec3 p) {
 }
 
 int palp_place_at_pole(palp_vec3 p) { return palp_place_arc(p) < PALP_PLACE_POLE_ARC; }
+
+char *palp_place_words(palp_vec3 p, char *buf, size_t len) {
+  if (!buf || len == 0) return buf;
+  if (palp_place_at_pole(p)) snprintf(buf, len, "at the pole");
+  else
+    snprintf(buf, len, "at %.1f o'clock, %.0f mm from the pole", palp_place_clock_shown(p),
+             palp_place_mm_shown(palp_place_arc(p)));
+  return buf;
+}

@@ -233,10 +233,9 @@ void review_debrief_text(int status, const palp_db_debrief *d, const review_asse
     cat(buf, len, &n, "%s lump %d ", l ? "," : ";", l + 1);
     if (d->found_by[l]) cat(buf, len, &n, "found by mark %u", (unsigned)d->found_by[l]);
     else cat(buf, len, &n, "MISSED");
-    if (places && palp_place_at_pole(a->lesion_surface[l])) cat(buf, len, &n, " (at the pole)");
-    else if (places)
-      cat(buf, len, &n, " (at %.1f o'clock, %.0f mm from the pole)", review_clock_hours(a->lesion_surface[l]),
-          review_arc_m(a->lesion_surface[l]) * 1e3);
+    /* where, in the one phrase of every tool (palp_place_words: the station's debrief says the same) */
+    char at[64];
+    if (places) cat(buf, len, &n, " (%s)", palp_place_words(a->lesion_surface[l], at, sizeof at));
   }
   cat(buf, len, &n, "; %d mark%s standing, %d near no lump", d->marks, d->marks == 1 ? "" : "s", d->false_marks);
   if (d->duplicates) cat(buf, len, &n, ", %d on a lump already found", d->duplicates);

@@ -70,10 +70,10 @@ static void station_debrief(const char *path, const char *trainee, said_debrief 
   if (!f) return;
   char line[1024], head[160], found[160], missed[160];
   snprintf(head, sizeof head, "[trainee %s] debrief: you found ", trainee);
-  snprintf(found, sizeof found, "[trainee %s]   lump %%d found by mark %%d: at %%lf o'clock, %%lf mm from the pole along "
-           "the skin; %%lf mm across, its centre %%lf mm deep", trainee);
-  snprintf(missed, sizeof missed, "[trainee %s]   lump %%d MISSED: at %%lf o'clock, %%lf mm from the pole along "
-           "the skin; %%lf mm across, its centre %%lf mm deep", trainee);
+  snprintf(found, sizeof found, "[trainee %s]   lump %%d found by mark %%d: at %%lf o'clock, %%lf mm from the pole; "
+           "%%lf mm across, its centre %%lf mm deep", trainee);
+  snprintf(missed, sizeof missed, "[trainee %s]   lump %%d MISSED: at %%lf o'clock, %%lf mm from the pole; "
+           "%%lf mm across, its centre %%lf mm deep", trainee);
   while (fgets(line, sizeof line, f)) {
     int i, by;
     double c, a, w, dp;

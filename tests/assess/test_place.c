@@ -8,7 +8,9 @@
  *  - "at the pole" below 1 mm of arc: polar 0, and polar 0.9 / 40 rad (0.9 mm) are; 1.1 / 40 rad
  *    (1.1 mm) is not, whatever the azimuth; the apex dented 5 mm, (0, 0, 35) mm, still is;
  *  - an exercise file's lesion at polar 0 has its surface point at the pole (the debrief then says "at
- *    the pole"), one at polar 30 deg does not.
+ *    the pole"), one at polar 30 deg does not;
+ *  - (session 83) the phrase every tool prints, palp_place_words: "at the pole" or "at H.H o'clock, N mm
+ *    from the pole".
  */
 #include <math.h>
 #include <stdio.h>
@@ -83,5 +85,28 @@ int main(void) {
     CHECK(strcmp(text, want) == 0, "azimuth %.1f deg reads %s o'clock (want %s)", twelve[k].az_deg, text, want);
     CHECK(palp_place_clock_shown(s) > 0.05 && palp_place_clock_shown(s) <= 12.0, "  in (0, 12]");
   }
+
+  /* The one phrase for a place (palp_place_words, session 83): worked by hand as above. Polar 30 deg,
+   * azimuth 40 deg: 1.667 h shown 1.7, arc 20.944 mm shown 21; the pole's apex, and 0.9 mm of arc, "at
+   * the pole"; 12 o'clock at azimuth 90 deg, arc 20.944 mm; the rim of the 40 mm dome at +x (polar 90
+   * deg): 3 o'clock, 40 x pi/2 = 62.83 mm shown 63. A buffer too short is cut, never overrun. */
+  static const struct {
+    double polar_deg, az_deg;
+    const char *want;
+  } words[] = {{30, 40, "at 1.7 o'clock, 21 mm from the pole"},
+               {0, 0, "at the pole"},
+               {0.9e-3 / R * 180 / PI, 200, "at the pole"},
+               {30, 90, "at 12.0 o'clock, 21 mm from the pole"},
+               {90, 0, "at 3.0 o'clock, 63 mm from the pole"}};
+  for (size_t k = 0; k < sizeof words / sizeof *words; k++) {
+    char text[64];
+    const char *got = palp_place_words(on_dome(words[k].polar_deg * PI / 180, words[k].az_deg * PI / 180), text, sizeof text);
+    CHECK(got == text && strcmp(text, words[k].want) == 0, "polar %.3g deg, azimuth %g deg: \"%s\" (want \"%s\")",
+          words[k].polar_deg, words[k].az_deg, text, words[k].want);
+  }
+  char small[8];
+  memset(small, 'x', sizeof small);
+  palp_place_words(p, small, 6);
+  CHECK(strcmp(small, "at 1.") == 0 && small[6] == 'x', "a 6-byte buffer gets \"at 1.\" and nothing past it (%.5s)", small);
   CHECK_DONE();
 }

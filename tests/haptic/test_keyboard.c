@@ -126,7 +126,10 @@ static void test_escape(int master) {
   }
   type(master, "\033OB\033OC\033[B"); /* down (polar +2) twice, right (azimuth +5) once */
   finger_status(&in, 1.0, line, sizeof line);
-  CHECK(strstr(line, "at polar 4 deg azimuth 5 deg") != NULL, "ESC O B, ESC O C, ESC [ B: polar 4 deg, azimuth 5 deg (%s)",
+  /* polar 4 deg, azimuth 5 deg (from +x) on the 58 mm dome, in the words every tool prints (session 83):
+   * 90 - 5 = 85 deg clockwise from +y = 2.83 h, "2.8 o'clock"; arc 58 mm x 4 pi / 180 = 4.05 mm, "4 mm" */
+  CHECK(strstr(line, "finger at 2.8 o'clock, 4 mm from the pole, device") != NULL,
+        "ESC O B, ESC O C, ESC [ B: polar 4 deg, azimuth 5 deg, at 2.8 o'clock, 4 mm from the pole (%s)",
         line + (line[0] == '\r'));
   type(master, "\033]"); /* Esc, then ]: the step doubles, 1 -> 2 mm */
   finger_status(&in, 2.0, line, sizeof line);
@@ -136,8 +139,8 @@ static void test_escape(int master) {
   in.read_position(in.ctx, 2.5, &x);
   type(master, "[B"); /* ... and 100 ms later [ (halve the step) and B (no key) */
   finger_status(&in, 2.6, line, sizeof line);
-  CHECK(strstr(line, "(step 1 mm)") != NULL && strstr(line, "at polar 4 deg"),
-        "a lone ESC, then [ B 100 ms later: the step halves to 1 mm, the fingertip stays at polar 4 deg (%s)",
+  CHECK(strstr(line, "(step 1 mm)") != NULL && strstr(line, "at 2.8 o'clock, 4 mm from the pole"),
+        "a lone ESC, then [ B 100 ms later: the step halves to 1 mm, the fingertip stays at 2.8 o'clock, 4 mm (%s)",
         line + (line[0] == '\r'));
   type(master, "\033q");
   CHECK(in.read_position(in.ctx, 3.0, &x) == PALP_CLI_INPUT_END, "ESC then q: the input ends");
@@ -171,6 +174,11 @@ static void test_force_bound(int master) {
   CHECK(n == 1 && c[0].mode == 1 && fabs(f - 2.0) < 1e-12 && strstr(line, "2.00 N MAX"),
         "40 presses of + with a safe force of 2 N: a press of %.3f N (2 N within 1e-12), the line says \"2.00 N MAX\" (%s)",
         f, line + (line[0] == '\r'));
+  /* the place and the distribution as every tool names them (session 83: "dist 3 at polar 0 deg azimuth 0
+   * deg" before): the keyboard starts at the pole with distribution 3 */
+  CHECK(strstr(line, "keyboard: PRESS at the pole, distribution III gaussian, 2.00 N") != NULL,
+        "the force keyboard's line names the place and distribution: \"PRESS at the pole, distribution III gaussian\" (%s)",
+        line + (line[0] == '\r'));
   in.close(in.ctx);
   CHECK(palp_cli_keyboard_input(&in, 0.0, err, sizeof err) == PALP_EINVAL, "a safe force of 0 N is refused: %s", err);
 }

@@ -12,6 +12,14 @@
  * With "frames" (DOMAIN TRAINEE frames): once the session's first finger sample in contact and its
  * first local model are there, writes each back into the partition with frame 2^64 - 1 (a forged
  * far-future step, otherwise the server's own), then exits; 1 when none came within 10 s.
+ * With "contacts" (DOMAIN TRAINEE contacts SECONDS READERS, session 83): once the session is open and
+ * READERS readers of its partition's contacts are matched (the server's, and the viewers the test
+ * started; at most 5 s), writes 15 N force contacts of finger 0 into its partition, distribution II at
+ * polar 30 deg, azimuth 0 (3 o'clock, 21 mm from the pole of the 40 mm dome), every 50 ms for SECONDS:
+ * what a peer of an unsecured classroom may write, which the server refuses (foreign_participant) and a
+ * viewer must not show as the trainee's. Every 50 ms, not faster: the server's contact reader keeps the
+ * newest sample of a finger, and a peer writing faster takes the place of most of the trainee's own
+ * (her lift among them: the server then holds her finger down).
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -93,7 +101,48 @@ static int join_visual(dds_entity_t pp, uint32_t sid) {
   return 0;
 }
 
+/* "contacts": 15 N presses of finger 0 into st's partition every 50 ms for `seconds`; the count written. */
+static int forge_contacts(dds_entity_t pp, const palp_SessionState *st, double seconds, int readers) {
+  const dds_entity_t pub = palp_dds_session_publisher(pp, st->partition);
+  const dds_entity_t w = palp_dds_create_writer(pub, palp_dds_create_topic(pp, PALP_TOPIC_CONTACT), PALP_TOPIC_CONTACT);
+  for (int i = 0; i < 500 && w > 0; i++) { /* matched (best-effort): up to 5 s */
+    dds_publication_matched_status_t m;
+    if (dds_get_publication_matched_status(w, &m) == 0 && (int)m.current_count >= readers) break;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  const double R = 0.040, s30 = 0.5, c30 = 0.86602540378443864676; /* polar 30 deg, azimuth 0: along +x */
+  palp_Contact c;
+  memset(&c, 0, sizeof c);
+  c.session_id = st->session_id;
+  c.finger = 0;
+  c.mode = palp_CONTACT_FORCE;
+  c.distribution = 2;
+  c.vertex = -1;
+  c.center = (palp_Vec3){R * s30, 0, R * c30};
+  c.force = (palp_Vec3){-15 * s30, 0, -15 * c30}; /* 15 N along the inward normal */
+  int written = 0;
+  for (int k = 0; k < (int)(seconds * 20) && w > 0; k++) {
+    c.seq = (uint64_t)k + 1;
+    c.source_time_ns = dds_time();
+    written += dds_write(w, &c) == 0;
+    dds_sleepfor(DDS_MSECS(50));
+  }
+  return written;
+}
+
 int main(int argc, char **argv) {
+  if (argc == 6 && !strcmp(argv[3], "contacts")) {
+    const dds_entity_t pp = dds_create_participant((dds_domainid_t)atoi(argv[1]), NULL, NULL);
+    palp_SessionState st;
+    if (!palp_test_open_session(pp, argv[2], 10.0, &st)) {
+      fprintf(stderr, "finding_writer: no open session of %s within 10 s\n", argv[2]);
+      return 1;
+    }
+    const int n = forge_contacts(pp, &st, atof(argv[4]), atoi(argv[5]));
+    printf("finding_writer: %d contact samples of 15 N written into session %u's partition\n", n, st.session_id);
+    dds_delete(pp);
+    return n > 0 ? 0 : 1;
+  }
   if (argc == 4 && !strcmp(argv[3], "frames")) {
     const dds_entity_t pp = dds_create_participant((dds_domainid_t)atoi(argv[1]), NULL, NULL);
     palp_SessionState st;

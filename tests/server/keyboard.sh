@@ -14,10 +14,12 @@ trap 'kill $spid 2>/dev/null; rm -rf "$tmp"' EXIT
 "$server" --config "$config_dir/server.json" --domain 109 --no-db > "$tmp/server.log" 2>&1 &
 spid=$!
 . "$(dirname "$0")/../wait_for.sh"
+# The status line names the place and the distribution as every tool does (docs/naming.md; since session 83:
+# "PRESS dist 3 at polar 0 deg azimuth 0 deg" before)
 (wait_for "$tmp/client.log" "keyboard: arrows move"; sleep 0.5; printf ' '
- wait_for "$tmp/client.log" "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.00 N"; sleep 0.8; printf '++'
- wait_for "$tmp/client.log" "PRESS dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 1.5; printf ' '
- wait_for "$tmp/client.log" "lift  dist 3 at polar 0 deg azimuth 0 deg, 1.50 N"; sleep 0.5; printf 'q') |
+ wait_for "$tmp/client.log" "PRESS at the pole, distribution III gaussian, 1.00 N"; sleep 0.8; printf '++'
+ wait_for "$tmp/client.log" "PRESS at the pole, distribution III gaussian, 1.50 N"; sleep 1.5; printf ' '
+ wait_for "$tmp/client.log" "lift  at the pole, distribution III gaussian, 1.50 N"; sleep 0.5; printf 'q') |
   script -qec "$client --role trainee --domain 109 --phantom 1 --name keys --input keyboard --print-period 0" \
     /dev/null > "$tmp/client.log" 2>&1
 crc=$?

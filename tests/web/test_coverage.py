@@ -125,7 +125,7 @@ def run(build, source, out):
         head = re.search(r"\[trainee %s\] debrief: you found (\d+) of (\d+) lumps? with (\d+) marks? standing; (\d+) "
                          % name, log)
         lumps = re.findall(r"\[trainee %s\]   lump (\d+) (MISSED|found by mark \d+): at ([0-9.]+) o'clock, (\d+) mm from the "
-                           r"pole along the skin; (\d+) mm across, its centre (\d+) mm deep" % name, log)
+                           r"pole; (\d+) mm across, its centre (\d+) mm deep" % name, log)
         check(d is not None and d.get("level") == "lesions" and head is not None,
               "%s: the bridge sent the session's debrief (%s) and the station printed it" % (name, d and d.get("level")))
         said = [int(x) for x in head.groups()]

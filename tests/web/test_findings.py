@@ -253,7 +253,7 @@ def run(build, source, out):
         got = dash.eval(lumps)
         check(ok is True and got[0][1] == "hidden lumps, the trainee does not see them: found 0 of 1 lump; "
               "0 marks standing, 0 near no lump" and got[0][0] == "warn" and
-              re.match(r"lump 1 not found yet: at 11\.0 o'clock, 21 mm from the pole along the skin; 20 mm across, "
+              re.match(r"lump 1 not found yet: at 11\.0 o'clock, 21 mm from the pole; 20 mm across, "
                        r"its centre 12 mm deep$", got[1][1]),
               "the dashboard shows where pat's lump is hidden, not found yet: %s" % got)
         # where she has pressed so far (docs/web.md, "The pressed skin"): a digit per vertex of her phantom
@@ -291,8 +291,8 @@ def run(build, source, out):
                           "Array.from(document.querySelectorAll('#debrief-lumps li')).map(function(l){"
                           "return [l.className, l.textContent];})]")
         check(ok is True and shown[0].startswith("You found 0 of 1 lump with 0 marks standing") and len(shown[1]) == 1 and
-              shown[1][0][0] == "missed" and re.match(r"lump 1 MISSED: at 11\.0 o'clock, 21 mm from the pole along the "
-                                                      r"skin; 20 mm across, its centre 12 mm deep$", shown[1][0][1]),
+              shown[1][0][0] == "missed" and re.match(r"lump 1 MISSED: at 11\.0 o'clock, 21 mm from the pole; 20 mm "
+                                                      r"across, its centre 12 mm deep$", shown[1][0][1]),
               "pat's page shows her debrief: %s" % shown)
         check(page.eval("palpState.trainee.coverVertices") > 0,
               "the pressed skin stays beside the debrief's rings (%s vertices)" % page.eval("palpState.trainee.coverVertices"))
@@ -423,7 +423,7 @@ def run(build, source, out):
         check(got is not None and got["found"] == "found 0 of 1 lump" and re.match(r"^trainee station left after 0:[01]\d$", got["ended"]) and
               got["items"][0] == ["warn", "hidden lumps, the trainee was not told: found 0 of 1 lump; 0 marks standing, "
                                           "0 near no lump"] and
-              got["items"][1] == ["bad", "lump 1 MISSED: at 8.3 o'clock, 24 mm from the pole along the skin; 10 mm "
+              got["items"][1] == ["bad", "lump 1 MISSED: at 8.3 o'clock, 24 mm from the pole; 10 mm "
                                          "across, its centre 10 mm deep"],
               "sam's ended examination on the dashboard (his station runs 6 s, joining included: ended after at most 0:19): told the count, "
               "the instructor shown where the lump was: %s (sam's station %s)" % (got or dash2.eval(sam_row), sam.poll()))
@@ -434,7 +434,7 @@ def run(build, source, out):
                            "deep_mm: 10}, 0, false), PALP.debriefLump({found_by: 2, clock_h: 1.67, at_pole: false, "
                            "arc_mm: 20.9, across_mm: 15, deep_mm: 10}, 1, false)]")
         check(words == ["lump 1 MISSED: at the pole; 15 mm across, its centre 10 mm deep",
-                        "lump 2 found by mark 2: at 1.7 o'clock, 21 mm from the pole along the skin; 15 mm across, "
+                        "lump 2 found by mark 2: at 1.7 o'clock, 21 mm from the pole; 15 mm across, "
                         "its centre 10 mm deep"],
               "the pages' words for a lump at the pole and one away from it: %s" % words)
         click(dash2, "show-answers")

@@ -255,6 +255,13 @@ const PALP = (function () {
   }
   /* one lump of a debrief at "lesions" (i from 0), or of the dashboard's hidden lumps, where it is in the words every palp tool uses for a
    * place (docs/naming.md: the clock seen from above, the arc from the pole along the skin) */
+  /* A place in the one phrase of every palp tool, palp_place_words (src/place.c) mirrored: "at the pole", or
+   * "at H.H o'clock, N mm from the pole" (since session 83; "... mm from the pole along the skin" before,
+   * which the review's and the observer's lines did not say). clock_h and arc_mm come rounded as the
+   * station prints them (palp_place_clock_shown, palp_place_mm_shown): toFixed only writes them. */
+  function placeWords(atPole, clockH, arcMm) {
+    return atPole ? "at the pole" : "at " + clockH.toFixed(1) + " o'clock, " + arcMm.toFixed(0) + " mm from the pole";
+  }
   /* a lump of a `debrief` or `answers` message with the fields debriefLump and the drawings read (since session 82) */
   function lumpValid(l) {
     return !!l && typeof l === "object" && Number.isFinite(l.found_by) && Number.isFinite(l.clock_h) &&
@@ -268,7 +275,7 @@ const PALP = (function () {
      * "%.0f" does, palp_place_mm_shown): toFixed(0) only writes them (since session 82; rounded twice,
      * 0.1 mm by the bridge and ties up here, one lump in 20 read 1 mm off the station's) */
     return "lump " + (i + 1) + " " + (l.found_by ? "found by mark " + l.found_by : live ? "not found yet" : "MISSED") + ": " +
-      (l.at_pole ? "at the pole; " : "at " + l.clock_h.toFixed(1) + " o'clock, " + l.arc_mm.toFixed(0) + " mm from the pole along the skin; ") +
+      placeWords(l.at_pole, l.clock_h, l.arc_mm) + "; " +
       l.across_mm.toFixed(0) + " mm across, its centre " + l.deep_mm.toFixed(0) + " mm deep";
   }
 
@@ -285,6 +292,6 @@ const PALP = (function () {
   return { viridis: viridis, css: css, params: params, token: getToken, withToken: withToken, connect: connect, state: state, coverColour: coverColour,
     coverValid: coverValid,
     decodeDeformation: decodeDeformation, drawColourbar: drawColourbar, scaleFor: scaleFor,
-    plural: plural, lumpValid: lumpValid, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump,
+    plural: plural, lumpValid: lumpValid, debriefFound: debriefFound, debriefSummary: debriefSummary, debriefLump: debriefLump, placeWords: placeWords,
     minutes: minutes, coveredText: coveredText, keepReply: keepReply, REPLIES_KEPT: REPLIES_KEPT };
 })();
