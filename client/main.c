@@ -155,8 +155,8 @@ static void usage(FILE *f) {
           "viewers:  follow --session ID, --trainee NAME (an open session of that trainee), or the newest\n"
           "          session on --phantom ID\n"
           "servers:  --server NAME (--phantom ID is that server's local id)  --phantom-name NAME (the least\n"
-          "          busy phantom of that name, on --server if given)  --rejoin (trainee: when the server is\n"
-          "          lost, join a phantom of the same name on another server and go on)\n");
+          "          busy phantom of that name, on --server if given)  --rejoin (a force-driven trainee: when\n"
+          "          the server is lost, join a phantom of the same name on another server and go on)\n");
   palp_app_common_usage(f, CLIENT_OPTS);
 }
 
@@ -1109,6 +1109,11 @@ static const char *foreign_summary(const palp_cli_station *st, char *buf, size_t
 
 static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *ph, palp_cli_input in) {
   int rc;
+  /* A position-driven trainee does not rejoin: its haptic thread renders one session's local models
+   * (review s83 #12: it ended with exit 3 on a lost server without a word about --rejoin). */
+  if (o->rejoin)
+    palp_log_warn(o->log, "--rejoin is for force-driven trainees: input %s does not rejoin; a lost server ends "
+                          "this session (exit 3)", in.name);
   if (in.open && (rc = in.open(in.ctx, ph->radius)) < 0) {
     const char *why = in.error ? in.error(in.ctx) : NULL;
     palp_log_error(o->log, "input %s: cannot open: %s", in.name, why ? why : palp_strerror(rc));
@@ -1411,7 +1416,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
     double t = (double)(now - t0) * 1e-9;
     if (o->duration > 0 && t >= o->duration) break;
     palp_cli_cmd cmd[PALP_CLI_MAX_FINGERS];
-    int n = in.poll(in.ctx, t, cmd, PALP_CLI_MAX_FINGERS);
+    /* The contacts go at --rate; the loop also wakes for the state's 100 ms checks (review s83 #6: at
+     * --rate 1 every check came a second late, each taken for a stall of this station). */
+    const int due = now >= next;
+    int n = due ? in.poll(in.ctx, t, cmd, PALP_CLI_MAX_FINGERS) : 0;
     if (n == PALP_CLI_INPUT_END) {
       ended = 1;
       break;
@@ -1456,7 +1464,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
         if (release_left[c->finger] > 0) release_left[c->finger]--;
       }
     }
-    for (int f = 0; f < PALP_CLI_MAX_FINGERS; f++) {
+    for (int f = 0; due && f < PALP_CLI_MAX_FINGERS; f++) {
       if (want[f]) {
         down[f] = 1;
         /* Best-effort: a lift is repeated on the next ticks so one lost sample
@@ -1522,9 +1530,10 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
       }
       next_state_check = now + 100000000;
     }
-    next += period;
-    if (next < palp_dds_now_ns()) next = palp_dds_now_ns();
-    for (int64_t w; !g_stop && (w = next - palp_dds_now_ns()) > 0;) {
+    if (due) next += period;
+    if (due && next < palp_dds_now_ns()) next = palp_dds_now_ns();
+    const int64_t wake = next < next_state_check ? next : next_state_check;
+    for (int64_t w; !g_stop && (w = wake - palp_dds_now_ns()) > 0;) {
       dds_waitset_wait(ws, NULL, 0, w);
       drain_feedback(&fx);
       fade_feedback(&fx, palp_dds_now_ns());

@@ -65,9 +65,11 @@ static bool own_reply(const void *sample, void *arg) {
  * none outside a session (a status comes every status period: none is missed for long). */
 static bool own_status(const void *sample, void *arg) {
   const palp_ServerStatus *m = sample;
-  const palp_cli_station *st = arg;
-  for (uint32_t k = 0; st->session_id && k < m->sessions._length; k++)
-    if (m->sessions._buffer[k].session_id == st->session_id) return true;
+  palp_cli_station *st = arg;
+  /* the atomic copy: this reader lives while the main thread joins and ends sessions */
+  const uint32_t id = atomic_load_explicit(&st->status_session_id, memory_order_relaxed);
+  for (uint32_t k = 0; id && k < m->sessions._length; k++)
+    if (m->sessions._buffer[k].session_id == id) return true;
   return false;
 }
 
@@ -96,8 +98,14 @@ static dds_entity_t filtered_reader(palp_cli_station *st, palp_dds_topic_kind ki
 
 /* The exercise reader for phantom_id (palp_cli_station.exercise_r), made anew unless it is that
  * phantom's already. */
+static void server_only_close(palp_cli_station *st, palp_cli_server_only *so);
+static int server_only_open(palp_cli_station *st, palp_cli_server_only *so, palp_dds_topic_kind kind,
+                            dds_entity_t known_by, uint32_t phantom, int force);
+static void server_only_count(palp_cli_station *st, palp_cli_server_only *so);
+
 static int exercise_reader(palp_cli_station *st, uint32_t phantom_id) {
   if (st->exercise_r > 0 && st->exercise_phantom == phantom_id) return 0;
+  server_only_close(st, &st->exercise_srv);
   if (st->exercise_r > 0) dds_delete(st->exercise_r);
   if (st->exercise_topic > 0) dds_delete(st->exercise_topic);
   st->exercise_r = st->exercise_topic = 0;
@@ -323,13 +331,28 @@ static dds_entity_t search_reader(palp_cli_station *st) {
 int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Phantom *out,
                                char *err, size_t errlen) {
   int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
+  /* In a session, the server's entry alone (review s83 #1): through a reader of its own that drops other
+   * writers' samples before they enter its history, made when the server's catalogue writer is known (the
+   * station's own reader matched it long before), and sent the server's entry anew (transient-local).
+   * The session's phantom is the one wanted then. */
+  const int bound = st->bind.bound;
+  if (bound && !phantom_id) phantom_id = st->phantom_id;
+  palp_cli_server_only srv;
+  memset(&srv, 0, sizeof srv);
   /* any phantom: a search through every entry */
-  const dds_entity_t rd = phantom_id ? st->catalogue_r : search_reader(st);
+  dds_entity_t rd = bound ? 0 : phantom_id ? st->catalogue_r : search_reader(st);
   if (rd < 0) return fail(err, errlen, PALP_EIO, "cannot read the catalogue: %s", dds_strretcode(rd));
   int result = 1;
   char bad[256] = "";
-  for (;;) {
-    if (phantom_id) {
+  for (int pass = 0;; pass++) {
+    if (bound) {
+      if (server_only_open(st, &srv, PALP_TOPIC_CATALOGUE, st->catalogue_r, phantom_id, pass == 0) < 0) {
+        result = PALP_EIO;
+        break;
+      }
+      rd = srv.reader;
+    }
+    if (phantom_id && rd > 0) {
       /* read, not take: the catalogue stays available to later calls */
       palp_Phantom key;
       memset(&key, 0, sizeof key);
@@ -341,7 +364,7 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
         result = take_entry(ptr[0], &info, phantom_id, bad, sizeof bad, out);
         dds_return_loan(rd, ptr, 1);
       }
-    } else {
+    } else if (!phantom_id) {
       int n;
       do {
         void *ptr[CATALOGUE_PAGE] = {NULL};
@@ -360,12 +383,23 @@ int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double
     if (now >= end) break;
     nap(end - now < DDS_MSECS(20) ? (double)(end - now) * 1e-9 : 0.02);
   }
-  if (rd != st->catalogue_r) dds_delete(rd);
+  /* what another participant wrote for the phantom, named before its reader goes */
+  const unsigned long long forged = bound ? atomic_load(&srv.refused) : 0;
+  char forger[64] = "a writer already gone";
+  if (forged) palp_dds_writer_participant_text(srv.reader, (dds_instance_handle_t)atomic_load(&srv.first_refused),
+                                               forger, sizeof forger);
+  if (bound) server_only_close(st, &srv); /* its refusals counted (bind.ignored), said with the session's */
+  else if (rd != st->catalogue_r) dds_delete(rd);
   if (result == PALP_CLI_ESTOPPED) return fail_stopped(err, errlen);
   if (result == PALP_ENOMEM) return fail(err, errlen, result, "out of memory");
+  if (result == PALP_EIO) return fail(err, errlen, result, "cannot read the catalogue");
   if (result != 0 && bad[0])
     return fail(err, errlen, PALP_EINVAL, "no valid catalogue entry for phantom %u within %.1f s: %s", phantom_id,
                 timeout, bad);
+  if (result != 0 && forged)
+    return fail(err, errlen, PALP_EIO,
+                "phantom %u's catalogue entry comes from %s, not this session's server (%llu sample%s ignored); none "
+                "from the server within %.1f s", phantom_id, forger, forged, forged == 1 ? "" : "s", timeout);
   if (result != 0) {
     char hint[PALP_DDS_HINT_MAX];
     palp_dds_unanswered_hint(st->pp, &st->sec, hint, sizeof hint);
@@ -533,7 +567,7 @@ static int writer_verdict(palp_cli_station *st, dds_entity_t reader, dds_instanc
 
 /* A sample dropped: counted, and its participant (NULL: a writer already gone) kept if the first. */
 static void ignored(palp_cli_server_bind *b, const dds_guid_t *who) {
-  b->ignored++;
+  if (!b->ignored++) b->first_ignored_ns = palp_dds_now_ns();
   if (who && !b->have_other) b->first_other = *who, b->have_other = 1;
 }
 
@@ -549,18 +583,119 @@ int palp_cli_station_from_server(palp_cli_station *st, dds_entity_t reader, cons
   return 0;
 }
 
+/* ---- the server's own catalogue entry and exercise (palp_cli_server_only, review s83 #1) ----------- */
+
+/* [receive thread] The phantom's samples from the writers in so->pub pass; the phantom's from any other
+ * writer are dropped and counted; another phantom's are dropped uncounted (not this session's: other
+ * servers' entries). Both types' key, phantom_id, comes first. */
+static bool server_only_accepts(const void *sample, const dds_sample_info_t *si, void *arg) {
+  palp_cli_server_only *so = arg;
+  if (*(const uint32_t *)sample != so->phantom) return false;
+  for (int i = 0; i < so->n; i++)
+    if (so->pub[i] == si->publication_handle) return true;
+  unsigned long long none = 0;
+  atomic_compare_exchange_strong(&so->first_refused, &none, (unsigned long long)si->publication_handle);
+  atomic_fetch_add_explicit(&so->refused, 1, memory_order_relaxed);
+  return false;
+}
+_Static_assert(offsetof(palp_Phantom, phantom_id) == 0 && offsetof(palp_Exercise, phantom_id) == 0,
+               "the phantom id first");
+
+/* What so's filter dropped since the last look, added to the session's count (bind.ignored) and its first
+ * participant named, as palp_cli_station_from_server does for the session's streams. */
+static void server_only_count(palp_cli_station *st, palp_cli_server_only *so) {
+  const uint64_t refused = atomic_load(&so->refused);
+  if (refused <= so->counted) return;
+  const uint64_t fresh = refused - so->counted;
+  so->counted = refused;
+  if (!st->bind.ignored) st->bind.first_ignored_ns = palp_dds_now_ns();
+  st->bind.ignored += fresh;
+  dds_guid_t g;
+  const dds_instance_handle_t first = (dds_instance_handle_t)atomic_load(&so->first_refused);
+  if (!st->bind.have_other && so->reader > 0 && first && palp_dds_writer_participant(so->reader, first, &g) == 0)
+    st->bind.first_other = g, st->bind.have_other = 1;
+}
+
+static void server_only_close(palp_cli_station *st, palp_cli_server_only *so) {
+  if (so->reader > 0) server_only_count(st, so);
+  if (so->reader > 0) dds_delete(so->reader);
+  if (so->topic > 0) dds_delete(so->topic);
+  so->reader = so->topic = 0;
+  so->n = 0;
+  atomic_store(&so->refused, 0);
+  atomic_store(&so->first_refused, 0);
+  so->counted = 0;
+}
+
+/* so reading kind's samples of phantom from the session's server alone: its writers of the topic are those
+ * known_by (a reader of the topic that has long matched every writer of it) has matched from the server's
+ * participant. Made anew when that set grew (a server writer matched later than the last look: its samples
+ * were dropped meanwhile, and a new transient-local reader is sent them again); looked at most every
+ * 0.2 s unless asked (force). 0, or a negative code; so->reader 0 while no server writer is matched. */
+static int server_only_open(palp_cli_station *st, palp_cli_server_only *so, palp_dds_topic_kind kind,
+                            dds_entity_t known_by, uint32_t phantom, int force) {
+  const int64_t now = palp_dds_now_ns();
+  if (so->phantom != phantom) server_only_close(st, so);
+  if (!force && now - so->looked_ns < 200000000) return 0;
+  so->looked_ns = now;
+  dds_instance_handle_t h[32], mine[PALP_CLI_SERVER_ONLY_WRITERS];
+  const dds_return_t m = known_by > 0 ? dds_get_matched_publications(known_by, h, 32) : 0;
+  int n = 0, fresh = so->reader <= 0;
+  for (int i = 0; i < (m < 32 ? m : 32) && n < PALP_CLI_SERVER_ONLY_WRITERS; i++) {
+    dds_guid_t g;
+    if (palp_dds_writer_participant(known_by, h[i], &g) < 0 || memcmp(&g, &st->bind.server, sizeof g) != 0) continue;
+    mine[n++] = h[i];
+    int had = 0;
+    for (int k = 0; k < so->n; k++) had |= so->pub[k] == h[i];
+    fresh |= !had;
+  }
+  if (!fresh || n == 0) return 0;
+  server_only_close(st, so); /* the filter's set changes only with no reader of it */
+  memcpy(so->pub, mine, (size_t)n * sizeof *mine);
+  so->n = n;
+  so->phantom = phantom;
+  so->looked_ns = now;
+  const dds_entity_t tp = palp_dds_create_topic(st->pp, kind);
+  if (tp < 0) return PALP_EIO;
+  struct dds_topic_filter flt = {.mode = DDS_TOPIC_FILTER_SAMPLE_SAMPLEINFO_ARG,
+                                 .f = {.sample_sampleinfo_arg = server_only_accepts}, .arg = so};
+  const dds_entity_t r = dds_set_topic_filter_extended(tp, &flt) == 0 ? palp_dds_create_reader(st->pp, tp, kind) : -1;
+  if (r < 0) {
+    dds_delete(tp);
+    return PALP_EIO;
+  }
+  so->topic = tp;
+  so->reader = r;
+  return 0;
+}
+
 int palp_cli_station_foreign_news(palp_cli_station *st, char *line, size_t len, char *who, size_t wholen) {
   palp_cli_server_bind *b = &st->bind;
   if (len) line[0] = 0;
   if (wholen) who[0] = 0;
+  /* Held until the server is heard after the first of them, or the session is over: a restarted server's
+   * reply, status or state comes before its restart shows, and a restart suspected and unresolved may be
+   * one (review s83 #5: a trainee was told to report an intrusion as her server restarted). */
   if (!b->ignored || b->told) return 0;
+  const int over = st->closed_seen || b->left;
+  const int heard_since = b->heard_ns > b->first_ignored_ns;
+  if (!over && !b->restarted && (b->suspect_ns || !heard_since)) return 0;
   b->told = 1;
   char pp[64] = "a writer already gone";
   if (b->have_other) palp_dds_participant_text(&b->first_other, pp, sizeof pp);
   snprintf(who, wholen, "%s", pp);
-  snprintf(line, len, "ignored %llu sample%s of session %u from %s, which is not this session's server: another "
-                      "program writes into your session (tell your instructor); what you feel and are told comes from "
-                      "the server alone", (unsigned long long)b->ignored, b->ignored == 1 ? "" : "s", st->session_id, pp);
+  const unsigned long long n = (unsigned long long)b->ignored;
+  if (b->restarted)
+    snprintf(line, len, "ignored %llu sample%s of session %u from %s: the restarted server's, not this session's "
+                        "server's", n, n == 1 ? "" : "s", st->session_id, pp);
+  else if (heard_since && !b->suspect_ns)
+    snprintf(line, len, "ignored %llu sample%s of session %u from %s, which is not this session's server: another "
+                        "program writes into your session (tell your instructor); what you feel and are told comes "
+                        "from the server alone", n, n == 1 ? "" : "s", st->session_id, pp);
+  else /* over with its server silent since: a restarted server's, perhaps, whose restart did not show */
+    snprintf(line, len, "ignored %llu sample%s of session %u from %s, which is not this session's server (silent "
+                        "since: perhaps it restarted); what you felt and were told came from the server alone", n,
+             n == 1 ? "" : "s", st->session_id, pp);
   return 1;
 }
 
@@ -611,6 +746,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   memset(&r, 0, sizeof r);
   int64_t asked = 0;
   dds_instance_handle_t replier = 0;
+  server_only_close(st, &st->exercise_srv); /* the last session's server's */
   memset(&st->bind, 0, sizeof st->bind); /* whoever accepts this JOIN is the session's server */
   /* The phantom's exercise reader made before the JOIN goes: its exercise (transient-local) is sent
    * while the server answers, as to the reader made at the station's start before 2026-12-07. */
@@ -654,8 +790,13 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   keep_mine(&st->bind, replier);
   st->bind.heard_ns = palp_dds_now_ns();
   st->session_id = r.session_id;
+  atomic_store_explicit(&st->status_session_id, r.session_id, memory_order_relaxed);
   st->phantom_id = r.phantom_id;
   st->tick_rate_hz = r.tick_rate_hz;
+  /* the server's refusals are this session's: the last one's count, which --rejoin left here, kept the
+   * first refusals of the new session from being told (review s83 #12) */
+  st->rejected_samples = st->rejected_said = 0;
+  st->rejected_said_ns = 0;
   if (state_reader(st, 1) < 0 || exercise_reader(st, r.phantom_id) < 0)
     return fail(err, errlen, PALP_EIO, "cannot create the session's state and exercise readers");
   st->join_asked_ns = asked;
@@ -781,9 +922,17 @@ int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double 
     dds_instance_handle_t ih;
     memset(&e, 0, sizeof e);
     e.phantom_id = phantom_id;
-    /* only the joined phantom's is read (exercise_reader) */
-    ih = st->exercise_r > 0 && phantom_id == st->exercise_phantom ? dds_lookup_instance(st->exercise_r, &e) : DDS_HANDLE_NIL;
-    if (ih != DDS_HANDLE_NIL && dds_read_instance(st->exercise_r, ptr, &info, 1, 1, ih) > 0 && info.valid_data) {
+    /* only the joined phantom's is read (exercise_reader); in a session, only its server's (review s83
+     * #1): exercise_r, made before the JOIN, has matched the server's writer by now, and the reader read
+     * takes that writer's samples alone (server_only_open; looked for again every 0.2 s meanwhile) */
+    dds_entity_t rd = st->exercise_r;
+    if (st->bind.bound && rd > 0 && phantom_id == st->exercise_phantom) {
+      (void)server_only_open(st, &st->exercise_srv, PALP_TOPIC_EXERCISE, st->exercise_r, phantom_id, 0);
+      rd = st->exercise_srv.reader; /* 0 (nothing read) until the server's writer is known */
+      server_only_count(st, &st->exercise_srv);
+    }
+    ih = rd > 0 && phantom_id == st->exercise_phantom ? dds_lookup_instance(rd, &e) : DDS_HANDLE_NIL;
+    if (ih != DDS_HANDLE_NIL && dds_read_instance(rd, ptr, &info, 1, 1, ih) > 0 && info.valid_data) {
       *out = e;
       out->name[sizeof out->name - 1] = 0;
       out->title[sizeof out->title - 1] = 0;
@@ -983,6 +1132,7 @@ int palp_cli_station_leave(palp_cli_station *st) {
   /* Unanswered (the server is stopped, starved or gone): the goodbye still goes, but the
    * user is told it may not arrive, so a session logged as "not back" is no surprise. */
   st->goodbye_unanswered = careful && !answered;
+  st->bind.left = 1; /* nothing more comes: the samples ignored are said now (palp_cli_station_foreign_news) */
   palp_SessionRequest key;
   memset(&key, 0, sizeof key);
   snprintf(key.station_id, sizeof key.station_id, "%s", st->station_id);
@@ -1058,14 +1208,41 @@ static void suspect_restart(palp_cli_station *st, const palp_SessionState *m) {
   b->suspect_ns = palp_dds_now_ns();
 }
 
-/* The answers to the JOIN sent again while a restart is suspected: the server's is a sign of it. */
-static void hear_replies(palp_cli_station *st) {
+/* The answers to this station's JOIN in its session: any of its server's is a sign of it (a restart
+ * suspected is refuted by it). A trainee's accepted JOIN refused by its server means the server no longer
+ * holds the session (an open or held one is answered "accepted" again): it closed it while this station
+ * did not run, and the answer says why, "session N closed: REASON" from the server's memory of closed
+ * requests (review s83 #3). The refusal and its reason are kept (bind.refused) for
+ * palp_cli_station_session_closed. A JOIN is answered so when the station sends it again (after a stall,
+ * on a held state, ask_after_stall) and when DDS re-delivers it as the two find each other again. An
+ * acceptance is never taken for proof of anything: it may be the old answer, re-delivered likewise. */
+static void take_replies(palp_cli_station *st) {
   palp_SessionReply r;
   void *ptr[1] = {&r};
   dds_sample_info_t info;
-  while (dds_take(st->reply_r, ptr, &info, 1, 1) > 0)
-    if (info.valid_data && strncmp(r.station_id, st->station_id, sizeof r.station_id) == 0)
-      (void)palp_cli_station_from_server(st, st->reply_r, &info);
+  palp_cli_server_bind *b = &st->bind;
+  const int trainee = st->has_last_join && st->last_join.role == palp_ROLE_TRAINEE;
+  while (dds_take(st->reply_r, ptr, &info, 1, 1) > 0) {
+    if (!info.valid_data || strncmp(r.station_id, st->station_id, sizeof r.station_id) != 0 ||
+        !palp_cli_station_from_server(st, st->reply_r, &info) || !trainee || !st->session_id || b->refused ||
+        r.request_seq != st->last_join.request_seq)
+      continue;
+    r.reason[sizeof r.reason - 1] = 0; /* terminated by the sender only */
+    char head[32];
+    const int n = snprintf(head, sizeof head, "session %u closed: ", st->session_id);
+    if (r.status == palp_REPLY_ACCEPTED && r.session_id != st->session_id)
+      /* it forgot the close and opened another session for the JOIN: the leave that follows ends it */
+      snprintf(b->refused_reason, sizeof b->refused_reason,
+               "session %u closed by the server while this station did not run", st->session_id);
+    else if (r.status == palp_REPLY_ACCEPTED)
+      continue;
+    else if (n > 0 && (size_t)n < sizeof head && strncmp(r.reason, head, (size_t)n) == 0)
+      snprintf(b->refused_reason, sizeof b->refused_reason, "%s", r.reason + n);
+    else /* a refusal that names no close: the server is there all the same, and holds no session for it */
+      snprintf(b->refused_reason, sizeof b->refused_reason, "the server no longer holds session %u (it said: %.60s)",
+               st->session_id, r.reason);
+    b->refused = 1;
+  }
 }
 
 /* A restart suspected (suspect_restart), and the session's server quiet for PALP_CLI_SERVER_QUIET_S (any
@@ -1076,7 +1253,7 @@ static void hear_replies(palp_cli_station *st) {
 static int restart_confirmed(palp_cli_station *st, int64_t now, char *reason, size_t len) {
   palp_cli_server_bind *b = &st->bind;
   if (!b->suspect_ns) return 0;
-  hear_replies(st);
+  take_replies(st);
   if (b->heard_ns > b->suspect_ns) { /* its server spoke since: a forgery */
     b->suspect_ns = 0;
     return 0;
@@ -1093,7 +1270,7 @@ static int restart_confirmed(palp_cli_station *st, int64_t now, char *reason, si
   const int64_t end = b->asked_ns + (int64_t)(PALP_CLI_SERVER_ASK_S * 1e9);
   for (int64_t t = b->asked_ns; t < end && b->heard_ns <= b->suspect_ns; t = palp_dds_now_ns()) {
     dds_waitset_wait(ws, NULL, 0, end - t);
-    hear_replies(st);
+    take_replies(st);
   }
   dds_delete(rc);
   dds_delete(ws);
@@ -1105,11 +1282,55 @@ static int restart_confirmed(palp_cli_station *st, int64_t now, char *reason, si
   return 1;
 }
 
+/* The server's lease lapsed as this station sees it (its session state not alive, its writer gone): a
+ * crash, or a server its machine did not run for a while, or this station's own view of a lease it could
+ * not renew while stalled itself. The server's state may come back (found again, its transient-local state
+ * re-delivered): for PALP_CLI_SERVER_WAIT_S after a stall of ours that explains the lapse,
+ * PALP_CLI_SERVER_GRACE_S otherwise; then it is lost. now: the start of the check [ns]. */
+static void lapse_seen(palp_cli_station *st, int64_t now) {
+  /* Stopped within this call, after its start: the lapse is likely our own stall's (seen in the suite: a
+   * station stopped 1 s blamed the server). */
+  note_stall(st, now, palp_dds_now_ns());
+  /* ... but only a stall long enough to outlast the server's lease, and just over: a shorter one, or one
+   * the server's traffic has renewed the lease since, is no cause of it (review s83 #2;
+   * PALP_CLI_STALL_LAPSE_FRACTION). A stall ending within this call ends after now. */
+  const int after_stall = st->stall_end_ns && st->stall_s >= PALP_CLI_STALL_LAPSE_FRACTION * PALP_DDS_SERVER_LEASE_S &&
+                          now - st->stall_end_ns <= (int64_t)(PALP_CLI_STALL_LAPSE_SEEN_S * 1e9);
+  if (!st->doubt_until_ns) {
+    st->doubt_until_ns = now + (int64_t)((after_stall ? PALP_CLI_SERVER_WAIT_S : PALP_CLI_SERVER_GRACE_S) * 1e9);
+    st->doubt_after_stall = after_stall;
+  }
+}
+
+/* The doubt after a stall of this station's ran out with no state of the server's (review s83 #3). A
+ * server alive all along may have closed the session meanwhile and retired its state (closed_retention: a
+ * station stopped past station_grace + closed_retention, >= 15 s by default, is never sent it again), so
+ * a trainee asks before it says "server lost": its accepted JOIN again, whose refusal take_replies keeps
+ * (an open session's state would have come: the server republishes it every status period). Waits up to
+ * PALP_CLI_LOST_ASK_S for it; 1 when refused (bind.refused_reason says why), 0 unanswered or not a trainee
+ * (a viewer's JOIN may name no session). */
+static int ask_after_stall(palp_cli_station *st) {
+  if (st->bind.refused) return 1;
+  if (!st->has_last_join || st->last_join.role != palp_ROLE_TRAINEE || dds_write(st->request_w, &st->last_join) < 0)
+    return 0;
+  const int64_t end = palp_dds_now_ns() + (int64_t)(PALP_CLI_LOST_ASK_S * 1e9);
+  const dds_entity_t ws = dds_create_waitset(st->pp), rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  for (int64_t t = palp_dds_now_ns(); t < end && !st->bind.refused; t = palp_dds_now_ns()) {
+    dds_waitset_wait(ws, NULL, 0, end - t);
+    take_replies(st);
+  }
+  dds_delete(rc);
+  dds_delete(ws);
+  return st->bind.refused;
+}
+
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
   station_alive(st, now);
   watch_log(st, now);
   take_announcements(st); /* kept small: what came since the last look */
+  take_replies(st);        /* the server's refusal of the accepted JOIN, if it came (below) */
   palp_SessionState buf[4];
   void *ptr[4] = {&buf[0], &buf[1], &buf[2], &buf[3]};
   dds_sample_info_t info[4];
@@ -1132,7 +1353,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
            * sessions from 1 again. Taken for "back" (and not even doubted when the new server's state
            * came before the old one's lease lapsed), the station pressed on into that trainee's
            * session, its contacts applied there (session 77). Its own session is gone. */
-          closed = 1;
+          closed = st->bind.restarted = 1;
           if (reason)
             snprintf(reason, len, "server lost (it restarted: session %u is now another trainee's session)",
                      st->session_id);
@@ -1143,7 +1364,7 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
            * restarted server took this station's last JOIN again (the request topic keeps it) and
            * opened a new session for it, a fresh phantom, exercise and clock, its marks forgotten.
            * Taken for "back", the station went on into it unaware (session 77). Its session is gone. */
-          closed = 1;
+          closed = st->bind.restarted = 1;
           if (reason)
             snprintf(reason, len, "server lost (it restarted: session %u was opened anew, at tick %llu after %llu)",
                      st->session_id, (unsigned long long)buf[i].ticks, (unsigned long long)st->session_ticks);
@@ -1155,8 +1376,20 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
           closed = 1;
           if (reason) snprintf(reason, len, "%s", buf[i].reason);
         } else {
-          if (st->doubt_until_ns && !st->doubt_after_stall) st->server_returns++; /* it, not we, was silent */
-          st->doubt_until_ns = 0; /* its server is there */
+          /* The lapse can come with the state itself: Cyclone adds no invalid sample when the
+           * instance's latest sample is unread as its writer goes. A state that came while this
+           * station was stopped, read as it runs again after the server's lease lapsed, said "open"
+           * and nothing ever ended the session (a trainee stopped 2 s, its server killed meanwhile,
+           * pressed on into nothing for her whole --duration; review s83, the "second risk" of #3).
+           * Its writer still matched: a dispose by another participant, not a lapse. */
+          dds_guid_t g;
+          const int lapsed = info[i].instance_state != DDS_IST_ALIVE &&
+                             palp_dds_writer_participant(st->state_r, info[i].publication_handle, &g) < 0;
+          if (lapsed) lapse_seen(st, now);
+          else {
+            if (st->doubt_until_ns && !st->doubt_after_stall) st->server_returns++; /* it, not we, was silent */
+            st->doubt_until_ns = 0;                                                /* its server is there */
+          }
           /* Open with a reason: the server waits for its trainee station, i.e. it lost this
            * one (its view of our leases lapsed while we, or it, did not run) and holds the
            * session for the same request. Ask again, once a second while it says so:
@@ -1186,20 +1419,21 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
           ignored(&st->bind, who);
           continue;
         }
-        /* Stopped within this call, after its start: the lapse is likely our own stall's
-         * (seen in the suite: a station stopped 1 s blamed the server). */
-        note_stall(st, now, palp_dds_now_ns());
-        const int after_stall = st->stall_end_ns && now - st->stall_end_ns < 2000000000;
-        if (!st->doubt_until_ns) {
-          st->doubt_until_ns = now + (int64_t)((after_stall ? PALP_CLI_SERVER_WAIT_S : PALP_CLI_SERVER_GRACE_S) * 1e9);
-          st->doubt_after_stall = after_stall;
-        }
+        lapse_seen(st, now);
       }
     }
-  if (!closed && restart_confirmed(st, now, reason, len)) closed = 1;
+  if (!closed && restart_confirmed(st, now, reason, len)) closed = st->bind.restarted = 1;
+  /* The server, asked again (or sent the JOIN again by DDS as the two found each other), no longer holds
+   * the session: its word for why, as soon as it came, rather than a lapse waited out */
+  if (!closed && st->bind.refused) {
+    closed = 1;
+    if (reason) snprintf(reason, len, "%s", st->bind.refused_reason);
+  }
   if (!closed && st->doubt_until_ns && now >= st->doubt_until_ns) {
     closed = 1;
-    if (reason && st->doubt_after_stall)
+    if (st->doubt_after_stall && ask_after_stall(st)) {
+      if (reason) snprintf(reason, len, "%s", st->bind.refused_reason); /* the server answered: its reason */
+    } else if (reason && st->doubt_after_stall)
       snprintf(reason, len, "server lost (liveliness lease expired; not back within %.0f s of this station's %.1f s stall)",
                PALP_CLI_SERVER_WAIT_S, st->stall_s);
     else if (reason)
@@ -1338,11 +1572,13 @@ void palp_cli_station_end_session(palp_cli_station *st) {
     if (st->state_topic > 0) dds_delete(st->state_topic);
     st->state_r = st->state_topic = 0;
   }
+  server_only_close(st, &st->exercise_srv);
   if (st->exercise_r > 0) dds_delete(st->exercise_r);
   if (st->exercise_topic > 0) dds_delete(st->exercise_topic);
   st->exercise_r = st->exercise_topic = 0;
   st->exercise_phantom = 0;
   st->session_id = 0;
+  atomic_store_explicit(&st->status_session_id, 0, memory_order_relaxed);
   memset(&st->bind, 0, sizeof st->bind); /* the next session's server is whoever accepts its JOIN */
   /* the next session's server counts from its own base */
   memset(&st->log, 0, sizeof st->log);

@@ -56,6 +56,9 @@ typedef struct palp_cli_server_bind {
   dds_guid_t first_other;   /* the first such participant, named to the user and in the log */
   int have_other;           /* ... known (0: only writers already gone) */
   int told;                 /* palp_cli_station_foreign_news said it */
+  int64_t first_ignored_ns; /* when the first was dropped (palp_dds_now_ns): heard_ns past it, the server is
+                             * there while another participant writes */
+  int left;                 /* palp_cli_station_leave ran: nothing more comes, what there is is said */
   int64_t heard_ns;         /* the last sample of the server's, any topic (palp_dds_now_ns) */
   /* A state of this session from another participant that claims the server restarted (another
    * trainee's session under this id, or its ticks fallen back): a restarted server's, or a forgery.
@@ -63,7 +66,35 @@ typedef struct palp_cli_server_bind {
   int64_t suspect_ns;       /* since then; 0: none */
   char suspect_reason[128];
   int64_t asked_ns;         /* the accepted JOIN sent again, for the server to answer if it is there */
+  /* The session ended as its server restarted (either sign, from the bound server's own states or from
+   * another participant's confirmed): the samples ignored were likely the restarted server's, and
+   * palp_cli_station_foreign_news says so rather than an intrusion (review s83 #5). */
+  int restarted;
+  /* The session's server refused the accepted JOIN, sent again: it no longer holds the session (closed
+   * while this station did not run, review s83 #3); refused_reason is its word for why. */
+  int refused;
+  char refused_reason[128];
 } palp_cli_server_bind;
+
+/* A reader of a global topic the session's server writes for all its stations, the catalogue or an exercise,
+ * that takes only the server's writers' samples (review s83 #1). Read after the JOIN bound the server, from
+ * any participant as before, another's entry or exercise replaced the server's in a keep-last-1 reader
+ * (a forger writing every 5 ms gave the trainee its phantom's radius and max_force, a mesh her frames did
+ * not fit, a title, instructions and pressure bands); a deeper history does not stop a fast forger. The
+ * filter runs on Cyclone's receive thread: its writer set is fixed while the reader lives (the server's
+ * writers of the topic as a reader made before matched them), and what it drops is counted (atomics) and
+ * added to palp_cli_server_bind.ignored on the main thread. */
+#define PALP_CLI_SERVER_ONLY_WRITERS 8
+typedef struct palp_cli_server_only {
+  dds_entity_t topic, reader; /* 0: none */
+  int n;
+  dds_instance_handle_t pub[PALP_CLI_SERVER_ONLY_WRITERS]; /* the server's writers when the reader was made */
+  uint32_t phantom;          /* the one phantom whose samples are read (others pass uncounted) */
+  atomic_ullong refused;     /* [receive thread] samples of that phantom from other writers, dropped */
+  atomic_ullong first_refused; /* ... the first one's publication handle; 0: none */
+  uint64_t counted;          /* refused already added to bind.ignored */
+  int64_t looked_ns;         /* the server's writers last looked for (palp_dds_now_ns) */
+} palp_cli_server_only;
 
 /* A wait given up because the caller's stop flag was set (palp_cli_station.stop): the user asked
  * the station to end (Ctrl-C), not a failure. */
@@ -83,6 +114,10 @@ typedef struct palp_cli_station {
   dds_entity_t catalogue_r, request_w, reply_r, state_r, reply_topic;
   /* session endpoints, valid after a successful join */
   uint32_t session_id;
+  /* A copy of session_id for own_status, the filter of a reader that lives from open on: it runs on
+   * Cyclone's receive thread while the main thread joins and ends sessions (a data race on the plain
+   * field, review s83 #13). The other filters' readers exist only while session_id stays put. */
+  atomic_uint status_session_id;
   uint32_t phantom_id;
   char partition[64];
   double tick_rate_hz;
@@ -110,6 +145,9 @@ typedef struct palp_cli_station {
    * by the join, deleted with the session; 0: none. */
   dds_entity_t exercise_r, exercise_topic;
   uint32_t exercise_phantom;
+  /* ... and in a session, where exercise_r only finds the server's writers, the exercise read: the
+   * server's alone (palp_cli_server_only); made by palp_cli_station_exercise, deleted with the session */
+  palp_cli_server_only exercise_srv;
   /* In a session state_r reads its state only, through a topic entity of its own that carries the
    * filter (2026-12-07); 0 outside one, where state_r reads every state (--trainee looks there). */
   dds_entity_t state_topic;
@@ -165,6 +203,22 @@ typedef struct palp_cli_station {
  * taken for lost: its participant must be found again (SPDP every ~0.1 s on the
  * loopback config) and its state re-delivered. */
 #define PALP_CLI_SERVER_WAIT_S 5.0
+/* Which lapses a stall of this station's own explains (review s83 #2): the station's view of the server's
+ * participant lease (PALP_DDS_SERVER_LEASE_S) lapses while it is stopped only if the stop lasted about that
+ * long. The server renews it with every message (SPDP every ~0.1 s on the loopback config, its samples
+ * more often), so a stop of 0.8 of the lease can outlast it; a shorter one cannot. And the lapse a stall
+ * causes is there as the station runs again, seen by the first check after it (100 ms on): one seen later
+ * than PALP_CLI_STALL_LAPSE_SEEN_S after the stall's end is the server's own (the server's traffic renewed
+ * the lease since). Before, any stall over PALP_CLI_STALL_S within 2 s bought a dead server 5 s (a 0.5 s
+ * hiccup and a SIGKILL 0.2 s later: "not back within 5 s of this station's 0.6 s stall"). */
+#define PALP_CLI_STALL_LAPSE_FRACTION 0.8
+#define PALP_CLI_STALL_LAPSE_SEEN_S 0.5
+/* That wait over, the station asks the server before it says "server lost" (review s83 #3): its accepted
+ * JOIN again, the answer awaited this long [s] (an alive server answers in milliseconds). A station
+ * stopped past station_grace + closed_retention (>= 15 s by default) finds its session's state retired,
+ * never re-delivered, and the server alive: it answers "session N closed: trainee station lost ..." (it
+ * remembers its last 1,024 closed requests), and that reason is the session's. */
+#define PALP_CLI_LOST_ASK_S 0.3
 /* A lapse of the server's lease with no stall of this station's before it: the server
  * crashed, or its machine did not run it for a while (a starved or stopped process lets
  * its lease lapse just as a dead one does). Its session state may come back until then:
@@ -214,7 +268,10 @@ int palp_cli_station_open_secure(palp_cli_station *st, uint32_t domain, const ch
 void palp_cli_station_close(palp_cli_station *st);
 
 /* Waits up to timeout [s] for phantom_id in the catalogue (0: any; the first
- * seen). On success *out is a copy the caller frees with palp_cli_phantom_free. */
+ * seen). On success *out is a copy the caller frees with palp_cli_phantom_free. In a session (a JOIN
+ * bound its server) only the server's entry is taken, 0 meaning the session's phantom: other
+ * participants' entries are dropped and counted (bind.ignored), and when only those came the error
+ * names their participant (review s83 #1). */
 int palp_cli_station_catalogue(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Phantom *out,
                                char *err, size_t errlen);
 
@@ -245,7 +302,8 @@ void palp_cli_station_end_session(palp_cli_station *st);
 
 /* issue 13. The exercise the phantom runs (title, instructions, limits): 1 and *out
  * when there is one within timeout [s], 0 when not (a plain phantom, or since 2026-12-07 a phantom
- * other than the one joined: only its exercise is read), PALP_CLI_ESTOPPED when stopped. */
+ * other than the one joined: only its exercise is read), PALP_CLI_ESTOPPED when stopped. In a session
+ * only the server's exercise is taken; other participants' are dropped and counted (review s83 #1). */
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out);
 /* Sends a "lump here" mark at point [m] (the fingertip's contact point, world time t)
  * and returns its mark id (> 0), or withdraws mark_id (op palp_FINDING_WITHDRAW);
@@ -279,9 +337,11 @@ const char *palp_cli_score_text(const palp_SessionScore *m, char *buf, size_t le
  * closed, or when that other participant's word was not refuted by the server (palp_cli_server_bind; a
  * forged close is ignored). Call it about every 100 ms: a longer gap is taken for a stall of this process, after which
  * the station's JOIN is sent again (the server resumes a session it held for it; to a
- * station it never lost it only answers again) and a lapse of the server's lease seen
- * within 2 s of it waits up to PALP_CLI_SERVER_WAIT_S for the server to be found again
- * before it closes the session as "server lost". st->stalls counts the stalls. */
+ * station it never lost it only answers again) and a lapse of the server's lease that such a
+ * stall explains (PALP_CLI_STALL_LAPSE_FRACTION) waits up to PALP_CLI_SERVER_WAIT_S for the server
+ * to be found again; then a trainee asks the server (PALP_CLI_LOST_ASK_S, waited for here) and
+ * takes its word for why the session closed, and only an unanswered question closes it as "server
+ * lost". st->stalls counts the stalls. */
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len);
 
 /* 1 when the sample `info` describes, taken from `reader` (a reader of the session's server's topics),
@@ -291,7 +351,12 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
 int palp_cli_station_from_server(palp_cli_station *st, dds_entity_t reader, const dds_sample_info_t *info);
 /* The samples other participants wrote into this session, for the station's user (2026-12-06): 1 the
  * first time some were dropped, with the line (after "[trainee NAME] ") in line and the participant as
- * palp_dds_participant_text names it in who (for the log); 0 otherwise: said once a session. */
+ * palp_dds_participant_text names it in who (for the log); 0 otherwise: said once a session. Until the
+ * session is over (closed, or left) it is held while the server has not been heard since the first was
+ * dropped or another participant's claim that it restarted is unresolved (bind.suspect_ns): a restarted
+ * server's reply, status or state comes before its restart shows (review s83 #5). Then it is said as an
+ * intrusion when the server spoke since (it is there while another writes), as the restarted server's
+ * samples when the session ended so, and plainly otherwise. */
 int palp_cli_station_foreign_news(palp_cli_station *st, char *line, size_t len, char *who, size_t wholen);
 
 /* A session whose server's log goes on losing records is said again at most this often [s]. */

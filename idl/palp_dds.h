@@ -48,6 +48,12 @@ typedef enum palp_dds_topic_kind {
 /* Liveliness lease of every station writer [s]: automatic, so the DDS stack
  * asserts it; a station that vanishes is seen as not alive after ~this long. */
 #define PALP_DDS_STATION_LEASE_S 0.5
+/* The server's participant lease [s] as the shipped Cyclone configs set it (LeaseDuration: 1 s in
+ * config/cyclonedds-loopback.xml, 3 s in cyclonedds-lab.xml.example): the shortest, so a station that
+ * asks whether a stall of its own can have outlasted it never answers no when it could (a longer lease
+ * only makes more stalls look like the cause: the station then waits longer for the server, as before;
+ * client/station.h, PALP_CLI_STALL_LAPSE_FRACTION). */
+#define PALP_DDS_SERVER_LEASE_S 1.0
 
 /* Phantom and session ids are qualified by the server that hands them out:
  * server_number * 2^20 + the server's local id (palp_server_identity). */

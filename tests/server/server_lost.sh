@@ -19,7 +19,49 @@ server=$1 client=$2 config_dir=$3
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 tmp=$(mktemp -d)
 spid= cpid= hpid=
-trap 'kill $spid $cpid $hpid 2>/dev/null; rm -rf "$tmp"' EXIT
+trap 'kill $spid $cpid $hpid $(cat "$tmp"/*.pid 2>/dev/null) 2>/dev/null; rm -rf "$tmp"' EXIT
+
+# ---- review s83 #2 and #3, beside the parts below on domain 206 (two servers of their own, numbers 5 and 6;
+# no wall time added): which lapse a stall of the station's own explains, and a live server asked before
+# "server lost". Each scenario NAME SERVER_EXTRA STOP_S KILL_AFTER_S (KILL_AFTER_S "-": the server lives)
+# leaves "RC MS" in $tmp/NAME.rc, MS from the server's SIGKILL (or the SIGCONT when it lives) to the exit.
+s83() {
+  cat > "$tmp/$1.json" <<JSON
+{ "domain_id": 206, "tick_rate_hz": 100, "tick_threads": 1, "server_name": "room-$1", "server_number": $2, $3
+  "dds_config": "$config_dir/cyclonedds-loopback.xml",
+  "phantoms": [ { "id": 1, "name": "dome", "scene": "$config_dir/paper_step_long_term.json" } ] }
+JSON
+  "$server" --config "$tmp/$1.json" --no-db > "$tmp/$1-server.log" 2>&1 &
+  _s=$!
+  "$client" --role trainee --domain 206 --server "room-$1" --phantom 1 --name "$1" --profile step --magnitude 1 \
+    --t-on 0 --t-off 30 --duration 20 --print-period 0 --timeout 10 > "$tmp/$1.log" 2>&1 &
+  _c=$!
+  echo "$_s $_c" > "$tmp/$1.pid"
+  _n=0
+  until grep -q "joined session" "$tmp/$1.log" || [ $_n -ge 100 ]; do sleep 0.1; _n=$((_n+1)); done
+  sleep 0.5
+  kill -STOP $_c; sleep "$4"; kill -CONT $_c
+  if [ "$5" != - ]; then sleep "$5"; kill -9 $_s; fi
+  _t0=$(date +%s%N)
+  wait $_c
+  _rc=$?
+  echo "$_rc $(( ($(date +%s%N) - _t0) / 1000000 ))" > "$tmp/$1.rc"
+  kill $_s 2>/dev/null; wait $_s 2>/dev/null
+  rm -f "$tmp/$1.pid"
+}
+# kim: stopped 0.5 s (short of the server's 1 s lease), her server killed 0.2 s after it: the lapse, seen
+# ~1.2 s after her stall, is the server's (#2): "not back within 1.0 s", exit 3 within 3 s. Before, any
+# stall over 0.4 s within 2 s bought the dead server 5 s: "not back within 5 s of this station's 0.6 s stall".
+s83 kim 5 "" 0.5 0.2 &
+# lou: stopped 2 s while her server, alive, loses her station (0.5 s writer lease), holds her session 0.8 s
+# (station_grace), closes it (she no longer known to it: her 1 s participant lease ran out first, so its
+# close never reaches her) and retires its state 0.2 s later (closed_retention): the state is never sent
+# again. Her station takes the server's refusal of her accepted JOIN, which DDS re-delivers as the two find
+# each other again (~0.3 s after the SIGCONT), or, that lost, the refusal of the JOIN it sends when its 5 s
+# wait runs out (#3): exit 3 with the server's reason, "trainee station lost ...", within 8 s of the
+# SIGCONT. Before, her station never ended (its lapse came with an unread state: exit 0 after its 20 s) or
+# said "server lost (...)" of a live server.
+s83 lou 6 '"station_grace": 0.8, "closed_retention": 0.2,' 2 - &
 "$server" --config "$config_dir/server.json" --domain 107 --no-db > "$tmp/server.log" 2>&1 &
 spid=$!
 "$client" --role trainee --domain 107 --phantom 1 --name frank --profile sine --t-on 0 --t-off 30 \
@@ -107,6 +149,16 @@ else echo "FAIL gil's station: exit $crc after ${ms} ms (want 3 within 3000 ms, 
 if [ -n "$applied" ] && [ "$applied" -le 30 ]; then
   echo "ok   $applied of gil's contact samples applied to hana's session (want <= 30)"
 else echo "FAIL '$applied' of gil's contact samples applied to hana's session (want <= 30)"; fail=1; fi
+# The restarted server's samples, which gil's station ignores (its state, status, replies), are no
+# intrusion: he is not told "another program writes into your session (tell your instructor)", and what
+# was ignored is said as the restarted server's (review s83 #5; before, the intrusion line, every run).
+restart_words() { # FILE NAME
+  if ! grep -q "another program writes into your session" "$1" &&
+     { ! grep -q "ignored [0-9]* sample" "$1" || grep -q "ignored [0-9]* samples\{0,1\} of session [0-9]* from participant [0-9a-f:]*: the restarted server's" "$1"; }; then
+    echo "ok   $2's station tells no intrusion: $(grep -o 'ignored [0-9]* samples\{0,1\} [^,]*' "$1" | head -1)"
+  else echo "FAIL $2's station took its restarted server for an intrusion:"; cat "$1"; fail=1; fi
+}
+restart_words "$tmp/gil.log" gil
 
 # ---- the same server restarted with gil's phantom: it takes gil's last JOIN again (the request topic
 # keeps it) and opens session 1 anew, naming gil's own station. Gil's station must see the new
@@ -136,4 +188,16 @@ echo "the restarted server opened ida's session $isid anew: $reopened time(s) (0
 if [ $crc -eq 3 ] && [ $ms -le 3000 ] && grep -q "server lost" "$tmp/ida.log"; then
   echo "ok   ida's station ended ${ms} ms after its server's SIGKILL (want <= 3000 ms), exit 3: $(grep -o 'server lost[^;]*' "$tmp/ida.log" | tail -1)"
 else echo "FAIL ida's station: exit $crc after ${ms} ms (want 3 within 3000 ms, server lost):"; cat "$tmp/ida.log"; fail=1; fi
+restart_words "$tmp/ida.log" ida
+
+wait # the s83 scenarios, long done
+read krc kms < "$tmp/kim.rc" || krc=
+if [ "$krc" = 3 ] && [ "$kms" -le 3000 ] && grep -q "server lost (liveliness lease expired; not back within 1.0 s)" "$tmp/kim.log"; then
+  echo "ok   kim, stopped 0.5 s, ended ${kms} ms after her server's SIGKILL 0.2 s later, exit 3: not her stall's lapse"
+else echo "FAIL kim: exit '$krc' after '$kms' ms (want 3 within 3000 ms, \"not back within 1.0 s\"):"; cat "$tmp/kim.log"; fail=1; fi
+read lrc lms < "$tmp/lou.rc" || lrc=
+if [ "$lrc" = 3 ] && [ "$lms" -le 8000 ] && grep -q "session closed by the server: trainee station lost" "$tmp/lou.log" &&
+   ! grep -q "server lost" "$tmp/lou.log"; then
+  echo "ok   lou, stopped 2 s past her session's retirement, ended ${lms} ms after, exit 3, the server's reason: $(grep -o 'trainee station lost[^;]*' "$tmp/lou.log" | tail -1)"
+else echo "FAIL lou: exit '$lrc' after '$lms' ms (want 3 within 8000 ms, the server's \"trainee station lost\"):"; cat "$tmp/lou.log"; tail -3 "$tmp/lou-server.log"; fail=1; fi
 exit $fail
