@@ -1233,14 +1233,14 @@ static void take_replies(palp_cli_station *st) {
     if (r.status == palp_REPLY_ACCEPTED && r.session_id != st->session_id)
       /* it forgot the close and opened another session for the JOIN: the leave that follows ends it */
       snprintf(b->refused_reason, sizeof b->refused_reason,
-               "session %u closed by the server while this station did not run", st->session_id);
+               "closed while this station did not run (its JOIN, sent again, opened session %u)", r.session_id);
     else if (r.status == palp_REPLY_ACCEPTED)
       continue;
     else if (n > 0 && (size_t)n < sizeof head && strncmp(r.reason, head, (size_t)n) == 0)
       snprintf(b->refused_reason, sizeof b->refused_reason, "%s", r.reason + n);
     else /* a refusal that names no close: the server is there all the same, and holds no session for it */
-      snprintf(b->refused_reason, sizeof b->refused_reason, "the server no longer holds session %u (it said: %.60s)",
-               st->session_id, r.reason);
+      snprintf(b->refused_reason, sizeof b->refused_reason, "no longer held (its JOIN, sent again, refused: %.60s)",
+               r.reason);
     b->refused = 1;
   }
 }
