@@ -394,7 +394,7 @@ int palp_world_step_dt(palp_world *w, double dt);
  * nothing: after a step, claim the job; run it anywhere (it touches only its own
  * memory); hand it back on the stepping thread before stepping frame
  * palp_world_factor_due (a due job not handed back makes the step fail with
- * PALP_EBUSY). Unclaimed jobs are computed by the step at their due frame. Only
+ * PALP_EBUSY and change nothing: hand it back and step again). Unclaimed jobs are computed by the step at their due frame. Only
  * rebuilds while a finger is down are deferred; force-driven loads rebuild at once. */
 typedef struct palp_factor_job palp_factor_job;
 palp_factor_job *palp_world_factor_claim(palp_world *w); /* the job just requested, or NULL */

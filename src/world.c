@@ -3015,10 +3015,18 @@ int palp_world_step_dt(palp_world *w, double h) {
   if (!w) return PALP_EINVAL;
   if (w->broken) return PALP_EUNSTABLE;
   if (!(h > 0.0 && h <= 0.1) || !isfinite(h)) return PALP_EINVAL;
+  /* A sleeping world without a load only advances its clock, due job or not (as before). */
+  const int sleeping = !w->awake && !has_load(w);
+  /* A due job not handed back: refused before anything changes (the blend's weight, u, the
+   * timings, the wake), so that the host's retry after palp_world_factor_done steps the very
+   * world a host on time stepped. The blend was advanced first until session 83: a job that
+   * fell due inside a blend (a margin rebuild made while it was pending) was blended one frame
+   * ahead on the retry, and the late host's world diverged from its replay. */
+  if (!sleeping && w->job_state == JOB_CLAIMED && w->frame >= w->job_due) return PALP_EBUSY;
   /* `last` is this frame's: zero while asleep (nothing is computed), else summed below */
   memset(w->timings.last, 0, sizeof w->timings.last);
   if (!w->awake) {
-    if (!has_load(w)) {
+    if (sleeping) {
       w->t += h;
       w->frame++;
       return PALP_OK;
@@ -3030,8 +3038,8 @@ int palp_world_step_dt(palp_world *w, double h) {
     const double t0 = now_s();
     if (w->blend_k > 0) blend_advance(w);
     if (w->job_state != JOB_NONE && w->frame >= w->job_due) {
-      /* Installed at its due frame whoever computed it: replay gets the same bits. */
-      if (w->job_state == JOB_CLAIMED) return PALP_EBUSY; /* the host must hand it back first */
+      /* Installed at its due frame whoever computed it: replay gets the same bits (a claimed
+       * one was handed back: refused above). */
       if (w->job_state == JOB_REQUESTED && !w->job_obsolete) palp_factor_job_run(w->job);
       const int e = job_install(w);
       if (e) return e;

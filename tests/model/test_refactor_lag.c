@@ -7,6 +7,8 @@
  *   same whole-state hash, palp_world_state_hash, in every frame no thread holds a job);
  * - each claimed job is due exactly k frames after the step that requested it, and a
  *   due job not handed back makes the step fail with PALP_EBUSY without advancing;
+ * - a late host (steps, is refused, hands back, steps again) keeps the on-time host's world,
+ *   also when the job falls due inside a blend (late_host_in_blend; ~1 s);
  * - the finger's force with the deferral stays near the force with rebuilds made at
  *   once (blended in as the deferred ones are): RMS within 2% and every frame within
  *   10% (+ 1 mN) on the shipped palpation domes (the paper's puddle has its own: main).
@@ -181,7 +183,91 @@ static void spares_250hz(void) {
   palp_world_destroy(w);
 }
 
+/* The fingertip 8 mm deep (pressed in over 0.1 s at the pole), then sliding to and fro along the
+ * x meridian, +-40 deg at up to 150 mm/s on the 40 mm dome: margin rebuilds come while jobs are
+ * pending, so that some jobs fall due inside the blend of such a rebuild. */
+static palp_vec3 slide_at(int f) {
+  const double t = 0.001 * f, R = 0.040, r = 0.008, pi = 3.14159265358979323846;
+  const double depth = t < 0.1 ? 0.008 * t / 0.1 : 0.008;
+  const double amp = 40.0 * pi / 180.0, omega = 0.150 / (R * amp); /* peak speed R amp omega = 150 mm/s */
+  const double th = t < 0.1 ? 0.0 : amp * sin(omega * (t - 0.1));
+  const double rho = R + r - depth;
+  return (palp_vec3){rho * sin(th), 0.0, rho * cos(th)};
+}
+
+/* Session 83 review: a host that steps a due frame before handing its job back gets PALP_EBUSY,
+ * and the step must change nothing (the state hash, which covers the blend's weight and the kept
+ * A^{-1} g, is the same before and after the refused call), so that its retry after
+ * palp_world_factor_done steps the world an on-time host stepped. The blend used to be advanced
+ * before the refusal: with a job due inside a blend the late host ran a blend frame ahead (state
+ * hashes first differed at frame 585 of this slide, logged hashes later). Two worlds of the
+ * long-term dome at 1 kHz with the server's lag and blend: host A hands each job back the frame
+ * before it is due, host B only after its step at the due frame was refused. Asserted: every
+ * refused step left the state hash as it was; the two worlds' state hashes and logged hashes are
+ * equal after every frame; and the case was met: a job due within refactor_blend frames after a
+ * margin rebuild (made at once, and blended in, while that job was pending). */
+static void late_host_in_blend(void) {
+  palp_world_def d = scene_def(PALP_CONFIG_DIR "/paper_step_long_term.json");
+  d.dt = 0.001;
+  d.refactor_lag = palp_world_refactor_lag_for(d.dt);
+  d.refactor_blend = palp_world_refactor_blend_for(d.dt);
+  int e;
+  palp_world *wa = palp_world_create(&d, &e), *wb = palp_world_create(&d, &e);
+  CHECK(wa && wb, "long-term dome at 1 kHz created");
+  if (!wa || !wb) return;
+  const palp_finger_def fd = palp_finger_default_def();
+  const int fa = palp_world_add_finger_def(wa, &fd, slide_at(0)), fb = palp_world_add_finger_def(wb, &fd, slide_at(0));
+  const int frames = 700;
+  int busy = 0, busy_changed = 0, in_blend = 0, first_diff = -1;
+  int64_t last_margin_frame = -1000000, margins = 0;
+  palp_factor_job *ja = NULL, *jb = NULL;
+  for (int f = 0; f < frames; ++f) {
+    const palp_vec3 p = slide_at(f);
+    palp_world_set_finger_device(wa, fa, p);
+    palp_world_set_finger_device(wb, fb, p);
+    /* host A: on time */
+    if (ja && palp_world_factor_due(wa) == palp_world_frame(wa)) {
+      CHECK(palp_world_factor_done(wa, ja) == PALP_OK, "A hands back at frame %d", f);
+      ja = NULL;
+    }
+    CHECK(palp_world_step(wa) == PALP_OK, "A steps frame %d", f);
+    /* host B: steps first, hands back when refused, steps again */
+    const int due_b = jb && palp_world_factor_due(wb) == palp_world_frame(wb);
+    const uint64_t before = palp_world_state_hash(wb), logged_before = palp_world_hash(wb);
+    int rc = palp_world_step(wb);
+    if (due_b) {
+      CHECK(rc == PALP_EBUSY, "B's step at its job's due frame %d refused (%d)", f, rc);
+      busy++;
+      if (palp_world_state_hash(wb) != before || palp_world_hash(wb) != logged_before || palp_world_frame(wb) != f)
+        busy_changed++;
+      if (palp_world_frame(wb) - last_margin_frame <= d.refactor_blend) in_blend++;
+      CHECK(palp_world_factor_done(wb, jb) == PALP_OK, "B hands back at frame %d", f);
+      jb = NULL;
+      rc = palp_world_step(wb);
+    }
+    CHECK(rc == PALP_OK, "B steps frame %d", f);
+    if (first_diff < 0 && (palp_world_state_hash(wa) != palp_world_state_hash(wb) || palp_world_hash(wa) != palp_world_hash(wb)))
+      first_diff = f;
+    palp_world_health h;
+    palp_world_get_health(wa, &h);
+    if (h.margin_rebuilds > margins) last_margin_frame = palp_world_frame(wa), margins = h.margin_rebuilds;
+    palp_factor_job *j = palp_world_factor_claim(wa);
+    if (j) palp_factor_job_run(ja = j);
+    j = palp_world_factor_claim(wb);
+    if (j) palp_factor_job_run(jb = j);
+  }
+  printf("late host, long-term dome sliding at 150 mm/s: %d refused steps (%d of them due within %d frames after a "
+         "margin rebuild; %lld margin rebuilds), first frame the hosts' worlds differ: %d\n",
+         busy, in_blend, d.refactor_blend, (long long)margins, first_diff);
+  CHECK(busy >= 10, "the late host was refused at its jobs' due frames (%d)", busy);
+  CHECK(busy_changed == 0, "a refused step changes neither hash nor the frame (%d of %d did)", busy_changed, busy);
+  CHECK(in_blend >= 1, "a job fell due inside a margin rebuild's blend (%d times)", in_blend);
+  CHECK(first_diff < 0, "the late host's world is the on-time host's after every frame (first differs at %d)", first_diff);
+  palp_world_destroy(wa), palp_world_destroy(wb);
+}
+
 int main(void) {
+  late_host_in_blend();
   spares_250hz();
   run("breast-tissue dome", scene_def(PALP_CONFIG_DIR "/phantoms/dome.json"), 0.02, 0.10, 0.001);
   run("long-term dome", scene_def(PALP_CONFIG_DIR "/paper_step_long_term.json"), 0.02, 0.10, 0.001);
