@@ -240,6 +240,12 @@ typedef struct palp_gel_params {
 #define PALP_SUPPORT_VISCOSITY_MAX 1e17
 /* [s]: 11.6 days, far beyond any session: the branch no longer relaxes (shipped <= 0.54 s). */
 #define PALP_SUPPORT_RELAX_TIME_MAX 1e6
+/* [N m], membrane.bending_stiffness (and so skin_bending_stiffness, at most it): 250x the
+ * largest shipped D (0.040 N m, params/paper_long_term_level2.json; the others <= 0.02), so
+ * beyond the calibrator's reach from it (100x its start), and ~3e4x a skin's own plate
+ * (~3e-4 N m). Unbounded until session 83: at 1e30 a 3 N press at the pole moved nothing and
+ * every step said "ok" (no halving, no cap, no health counter); 1e3 still dented it 0.013 mm. */
+#define PALP_BENDING_MAX_N_M 10.0
 
 /* The literal law's momentum term a3 (p_{i-1} - p_{i-2}) / (h h_prev) [Pa], a3 [s^2], h
  * this frame's step and h_prev the last one's [s], is stable only for

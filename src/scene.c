@@ -163,7 +163,8 @@ static const cJSON *get_obj(ctx *c, const cJSON *obj, const char *path, const ch
  * - the membrane's thickness and density, the gel's pressure, a1, a2, density and the
  *   support's moduli, viscosity and relax time: palp.h's PALP_*_MAX, which the world
  *   checks too (session 81; they had none, and pressure_Pa 1e30 stepped "ok" to
- *   V/V0 = -1.8). */
+ *   V/V0 = -1.8); the membrane's bending stiffness too (session 83: 1e30 made a dome
+ *   that never moved). */
 #define SCENE_RADIUS_MIN_M 1e-3
 #define SCENE_RADIUS_MAX_M 1.0
 #define SCENE_MODULUS_MAX_PA 1e9
@@ -187,9 +188,8 @@ static int parse_membrane(ctx *c, const cJSON *m, palp_membrane_params *p) {
   if ((e = get_pos_max(c, m, "membrane.", "E2_Pa", 1, SCENE_MODULUS_MAX_PA, &p->E2))) return e;
   if ((e = get_pos_max(c, m, "membrane.", "eta2_Pa_s", 1, SCENE_VISCOSITY_MAX_PA_S, &p->eta2))) return e;
   /* optional: absent is the paper's membrane, without bending */
-  if ((e = get_num(c, m, "membrane.", "bending_stiffness_N_m", 0, &p->bending_stiffness))) return e;
-  if (p->bending_stiffness < 0.0)
-    return palp_parse_fail(c, PALP_EPARSE, "membrane.bending_stiffness_N_m: must be >= 0 (got %g)", p->bending_stiffness);
+  if ((e = get_nonneg_max(c, m, "membrane.", "bending_stiffness_N_m", 0, PALP_BENDING_MAX_N_M, &p->bending_stiffness)))
+    return e;
   if ((e = get_num(c, m, "membrane.", "rim_hinge_release", 0, &p->rim_hinge_release))) return e;
   if (!(p->rim_hinge_release >= 0.0 && p->rim_hinge_release <= 1.0))
     return palp_parse_fail(c, PALP_EPARSE, "membrane.rim_hinge_release: must be in [0, 1] (0 clamps the rim, 1 pins it; got %g)",

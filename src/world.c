@@ -1893,7 +1893,7 @@ static int validate(const palp_world_def *d) {
       !(m->density > 0.0 && m->density <= PALP_DENSITY_MAX_KG_M3))
     return PALP_EINVAL;
   if (d->effects & ~(uint32_t)PALP_EFFECT_ALL) return PALP_EINVAL;
-  if (!(m->bending_stiffness >= 0.0) || !isfinite(m->bending_stiffness)) return PALP_EINVAL;
+  if (!(m->bending_stiffness >= 0.0 && m->bending_stiffness <= PALP_BENDING_MAX_N_M)) return PALP_EINVAL;
   if (!(m->rim_hinge_release >= 0.0 && m->rim_hinge_release <= 1.0)) return PALP_EINVAL;
   if (!(m->skin_bending_stiffness >= 0.0 && m->skin_bending_stiffness <= m->bending_stiffness)) return PALP_EINVAL;
   if ((d->effects & PALP_EFFECT_MEMBRANE_VISCOSITY) && !(d->effects & PALP_EFFECT_MEMBRANE_ELASTICITY))

@@ -132,6 +132,9 @@ static void test_bounds_session81(void) {
        "\"support_relax_time_s\":1e6", "gel.support_relax_time_s: must be <= 1e+06"},
       {"\"support_viscosity_Pa_s_m\":6e5", "\"support_viscosity_Pa_s_m\":6e5,\"density_kg_m3\":3e4",
        "\"support_viscosity_Pa_s_m\":6e5,\"density_kg_m3\":2.5e4", "gel.density_kg_m3: must be <= 25000"},
+      /* session 83: D 1e30 N m made a dome that a 3 N press did not move, every step "ok" */
+      {"\"eta2_Pa_s\":8e5", "\"eta2_Pa_s\":8e5,\"bending_stiffness_N_m\":1e30", "\"eta2_Pa_s\":8e5,\"bending_stiffness_N_m\":10",
+       "membrane.bending_stiffness_N_m: must be <= 10"},
   };
   for (size_t i = 0; i < sizeof cases / sizeof *cases; ++i) {
     const bound_case *b = &cases[i];
@@ -158,13 +161,14 @@ static void test_bounds_session81(void) {
   }
   /* in code: palp_world_create refuses each value past its bound, beside the parser */
   const palp_world_def ok = palp_world_default_def();
-  palp_world_def d[10];
-  for (int i = 0; i < 10; ++i) d[i] = ok;
+  palp_world_def d[11];
+  for (int i = 0; i < 11; ++i) d[i] = ok;
   d[0].membrane.thickness = 0.11, d[1].membrane.density = 3e4, d[2].gel.pressure = 1e30, d[3].gel.a1 = 301;
   d[4].gel.a2 = 2e10, d[5].gel.support_modulus = 1e300, d[6].gel.support_viscosity = 2e17;
   d[7].gel.support_relax_modulus = 2e12, d[7].gel.support_relax_time = 0.5;
   d[8].gel.support_relax_modulus = 4e5, d[8].gel.support_relax_time = 2e6, d[9].gel.density = 3e4;
-  for (int i = 0; i < 10; ++i) {
+  d[10].membrane.bending_stiffness = 10.5;
+  for (int i = 0; i < 11; ++i) {
     int e = 0;
     palp_world *w = palp_world_create(&d[i], &e);
     CHECK(w == NULL && e == PALP_EINVAL, "world def %d (past a bound) refused: %d", i, e);
