@@ -122,8 +122,10 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->scene = &def->phantom->scene;
   s->exercise_json = def->phantom->exercise_json;
   if (s->exercise && s->exercise->placement.kind == PALP_PLACEMENT_RANDOM) {
-    /* This session's own lesions: the phantom's scene with the exercise's lesions (the last
-     * lesion_count of the scene's) moved to a draw of their own. */
+    /* This session's own lesions: the phantom's scene with the exercise's lesions moved to a draw
+     * of their own. The scene's lesions are all the exercise's (a phantom with lesions of its own
+     * is refused, palp_exercise_scene), as many as count_max of them (session 83; all those listed
+     * before), so the session's draw replaces them from index 0. */
     s->own_exercise = malloc(sizeof *s->own_exercise);
     s->own_scene = malloc(sizeof *s->own_scene);
     if (!s->own_exercise || !s->own_scene) {
@@ -133,20 +135,19 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
     char msg[256] = "";
     const double R = def->phantom->scene.world.mesh.radius;
     *s->own_scene = def->phantom->scene;
-    const int base = s->own_scene->world.lesion_count - s->exercise->lesion_count;
-    /* A file whose lesions fit its band only now and then (the server's start proved one draw) must
+    /* A file whose lesions fit its band only now and then (the server's start proved one draw of
+     * each set a session may hide) must
      * not turn a trainee away: other seeds, derived from hers, before giving up. */
     int rc = PALP_EINVAL, tries = 0;
-    for (; base >= 0 && tries < 16 && rc != 0; tries++)
+    for (; tries < 16 && rc != 0; tries++)
       rc = palp_exercise_draw(s->exercise, R, def->placement_seed + 0x9e3779b9u * (uint32_t)tries, s->own_exercise, msg,
                               sizeof msg);
     if (rc == 0 && tries > 1)
       palp_log_warn(def->log, "session %u: its lesions were placed at the %d-th seed (%s)", def->id, tries, msg);
     if (rc == 0) {
       /* this session's lesions in place of the exercise's (as many as its draw hides: maybe fewer) */
-      rc = palp_exercise_lesions(s->own_exercise, R, s->own_scene->world.lesion + base, PALP_MAX_LESIONS - base, msg,
-                                 sizeof msg);
-      if (rc >= 0) s->own_scene->world.lesion_count = base + rc;
+      rc = palp_exercise_lesions(s->own_exercise, R, s->own_scene->world.lesion, PALP_MAX_LESIONS, msg, sizeof msg);
+      if (rc >= 0) s->own_scene->world.lesion_count = rc;
     }
     if (rc >= 0 && !(s->own_exercise_json = palp_exercise_drawn_json(def->phantom->exercise_json, s->own_exercise)))
       rc = PALP_ENOMEM;

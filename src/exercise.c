@@ -472,14 +472,41 @@ int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, siz
                            "phantom \"%s\": declares %d lesion%s of its own, which the assessment would not grade (a "
                            "mark on one would count as false): put the lesions in the exercise",
                            ex->phantom_path, out->world.lesion_count, out->world.lesion_count == 1 ? "" : "s");
-  /* a random exercise: one draw, which also proves its lesions can be placed */
+  /* A random exercise: the draws that prove its lesions can be placed. A session hides at most
+   * hi = count_max of the n listed (placement.count; all by default), any hi of them, so every set
+   * of hi, in the file's order, is drawn once (seed 0; a session tries 16 seeds, server/session.c):
+   * C(n, hi) <= 70 draws, each of a few dozen tries when the band has room. The first set (the
+   * first hi listed) is the phantom's scene; the sessions replace it with their own draws. Until
+   * session 83 all n were placed at once: a pool (8 listed, "count": [1, 1]) whose 8 did not fit
+   * together was refused at the server's start although every session's draw placed its one
+   * lesion, and the message named 8 lesions. With hi = n this is that one draw, unchanged. */
   palp_exercise drawn;
   if (ex->placement.kind == PALP_PLACEMENT_RANDOM) {
-    /* all the lesions listed, the hardest draw: the scene then holds each (the server's sessions
-     * replace them with their own draws, server/session.c) */
-    palp_exercise all = *ex;
-    all.placement.count_min = all.placement.count_max = ex->lesion_count;
-    if ((e = palp_exercise_draw(&all, out->world.mesh.radius, 0u, &drawn, err, errlen))) return e;
+    const int n = ex->lesion_count, cmax = ex->placement.count_max;
+    const int hi = cmax >= 0 && cmax <= n ? cmax : n;
+    int pick[PALP_MAX_LESIONS];
+    for (int i = 0; i < hi; i++) pick[i] = i;
+    for (int first = 1;; first = 0) {
+      palp_exercise set = *ex, other;
+      for (int i = 0; i < hi; i++) set.lesion[i] = ex->lesion[pick[i]];
+      set.lesion_count = hi;
+      set.placement.count_min = set.placement.count_max = hi;
+      if ((e = palp_exercise_draw(&set, out->world.mesh.radius, 0u, first ? &drawn : &other, err, errlen))) {
+        if (hi == n) return e;
+        char inner[256], which[64] = "";
+        snprintf(inner, sizeof inner, "%s", err && errlen ? err : "");
+        for (int i = 0, k = 0; i < hi && k < (int)sizeof which; i++)
+          k += snprintf(which + k, sizeof which - (size_t)k, "%s%d", i ? ", " : "", pick[i]);
+        return palp_parse_fail(&c, e, "%s: lesions[%s] of the %d listed (a session hides up to %d of them, any %d)",
+                               inner, which, n, hi, hi);
+      }
+      /* the next set of hi indices in lexicographic order */
+      int i = hi - 1;
+      while (i >= 0 && pick[i] == n - hi + i) i--;
+      if (i < 0) break;
+      pick[i]++;
+      for (int j = i + 1; j < hi; j++) pick[j] = pick[j - 1] + 1;
+    }
     ex = &drawn;
   }
   const int n = palp_exercise_lesions(ex, out->world.mesh.radius, out->world.lesion + out->world.lesion_count,

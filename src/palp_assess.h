@@ -178,9 +178,11 @@ double palp_exercise_lesion_gap(const palp_exercise_lesion *a, const palp_exerci
 
 /* Loads the exercise's phantom and hides its lesions in it. A phantom that declares lesions of
  * its own is refused (PALP_EINVAL, the message naming its file): they would be felt and never
- * graded. A RANDOM exercise's lesions are placed by one
- * draw (seed 0): the scene is then valid, and a file whose lesions cannot be placed in its band
- * is refused at load, not at a trainee's session. */
+ * graded. A RANDOM exercise hides at most count_max of its lesions in a session, any of them: each
+ * set of count_max (all of them by default) is drawn once (seed 0), and the first, the first
+ * count_max listed, is the scene's. So a file of which some session's lesions could not be placed
+ * in its band is refused at load, not at a trainee's session, and a pool (more listed than a
+ * session hides) need not fit all at once. */
 int palp_exercise_scene(const palp_exercise *ex, palp_scene *out, char *err, size_t errlen);
 
 /* One session's lesions of a RANDOM exercise (src/placement.c): out is ex with how many of its

@@ -14,7 +14,12 @@
  *  - the file's text with a draw written in parses back to the same places (within 1e-12 rad) as
  *    kind "drawn" with its seed; a random file with places, or a seed, is refused;
  *  - "count": how many of the file's lesions a session hides, uniform in [min, max], which ones
- *    uniform and in the file's order; a draw of fewer, or of none, reads back from its logged text.
+ *    uniform and in the file's order; a draw of fewer, or of none, reads back from its logged text;
+ *  - a pool (session 83 review): 8 lesions listed that cannot be placed all at once, "count" [1, 1]:
+ *    every session's draw places one, and the exercise's load (palp_exercise_scene) accepts it, its
+ *    scene holding one lesion, the first listed, in the band; a pool of which some set a session may
+ *    hide cannot be placed is refused, the message naming that set; without a count the scene holds
+ *    the seed-0 draw of all the lesions, as before.
  */
 #include <math.h>
 #include <stdio.h>
@@ -287,6 +292,97 @@ int main(void) {
             br.placement.kind == PALP_PLACEMENT_DRAWN,
         "  and reads back from the drawn text as per run (%s)", err);
   free(rtxt), free(per_run);
+  /* A pool (session 83 review): 8 lesions of 15 mm, 10 mm deep, stiffness 2-9, in the band 20-40
+   * deg at least 10 mm apart, a session hiding one ("count": [1, 1]), on the shipped 40 mm dome. */
+  {
+    char pool[4096], ls[1200] = "";
+    for (int i = 0, k = 0; i < 8; i++)
+      k += snprintf(ls + k, sizeof ls - (size_t)k, "%s{\"depth_mm\": 10, \"diameter_mm\": 15, \"stiffness_ratio\": %d}",
+                    i ? ", " : "", 2 + i);
+    snprintf(pool, sizeof pool,
+             "{\"name\": \"pool\", \"title\": \"P\", \"phantom\": \"dome.json\", \"instructions\": \"go\", "
+             "\"time_limit_s\": 60, \"placement\": {\"kind\": \"random\", \"polar_deg\": [20, 40], \"min_gap_mm\": 10, "
+             "\"count\": [1, 1]}, \"lesions\": [%s], \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 4]}, "
+             "\"medium\": {\"depth_mm\": [4, 9]}, \"deep\": {\"depth_mm\": [9, 18]}}, \"max_force_N\": 15, "
+             "\"debrief\": \"lesions\", \"rubric\": {\"weights\": {\"sensitivity\": 1}, \"pass\": {\"sensitivity\": 1, "
+             "\"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}",
+             ls);
+    static palp_exercise ep, all8;
+    static palp_scene sc;
+    REQUIRE(palp_exercise_parse(pool, PALP_CONFIG_DIR "/phantoms", &ep, err, sizeof err) == 0 && ep.lesion_count == 8 &&
+                ep.placement.count_min == 1 && ep.placement.count_max == 1,
+            "the pool parses: 8 listed, count [1, 1] (%s)", err);
+    /* the premise: the 8 do not fit in the band together */
+    all8 = ep;
+    all8.placement.count_min = all8.placement.count_max = 8;
+    palp_exercise d8;
+    CHECK(palp_exercise_draw(&all8, R, 0u, &d8, err, sizeof err) == PALP_EINVAL,
+          "premise: all 8 at once cannot be placed (%s)", err);
+    int placed = 0;
+    for (uint32_t seed = 0; seed < 200; seed++) {
+      palp_exercise d, t = ep; /* t: the lesion the draw took, to check the draw against */
+      if (palp_exercise_draw(&ep, R, seed, &d, err, sizeof err) != 0 || d.lesion_count != 1) continue;
+      t.lesion[0] = ep.lesion[d.placement.source[0]];
+      t.lesion_count = 1;
+      placed += valid_draw(&t, &d, why, sizeof why);
+    }
+    CHECK(placed == 200, "the pool: 200 sessions' draws each place one lesion, valid (%d)", placed);
+    err[0] = 0;
+    const int rc_pool = palp_exercise_scene(&ep, &sc, err, sizeof err);
+    printf("pool of 8, count [1, 1]: palp_exercise_scene %d %s\n", rc_pool, err);
+    const palp_vec3 c = sc.world.lesion[0].center;
+    const double r = sqrt(c.x * c.x + c.y * c.y + c.z * c.z), polar = acos(c.z / r) * 180 / PI;
+    CHECK(rc_pool == 0 && sc.world.lesion_count == 1 && fabs(r - 0.030) < 1e-12 && polar >= 20 - 1e-9 &&
+              polar <= 40 + 1e-9 && fabs(sc.world.lesion[0].radius - 0.0075) < 1e-12 &&
+              sc.world.lesion[0].stiffness_ratio == 2,
+          "  its load accepts it: one lesion in the scene, the first listed (ratio 2: %g), 10 mm deep (centre %.3f mm "
+          "from the dome's), at polar %.1f deg in the band", rc_pool == 0 ? sc.world.lesion[0].stiffness_ratio : 0.0,
+          r * 1e3, polar);
+  }
+  /* A pool of which not every set a session may hide fits: two 6 mm lesions and two 20 mm ones in a
+   * ring 30-30.5 deg, 30 mm apart, two hidden a session. Two points of the ring are at most
+   * 2 x 30.5 deg = 42.6 mm apart along the skin: the small pair needs 30 + 6 = 36 mm, a small and a
+   * large one 30 + 13 = 43 mm. The first set that cannot be placed, lesions 0 and 2, is named. */
+  {
+    static const char *ring =
+        "{\"name\": \"ring\", \"title\": \"R\", \"phantom\": \"dome.json\", \"instructions\": \"go\", \"time_limit_s\": 60,"
+        " \"placement\": {\"kind\": \"random\", \"polar_deg\": [30, 30.5], \"min_gap_mm\": 30, \"count\": [2, 2]},"
+        " \"lesions\": [{\"depth_mm\": 10, \"diameter_mm\": 6, \"stiffness_ratio\": 5},"
+        "               {\"depth_mm\": 10, \"diameter_mm\": 6, \"stiffness_ratio\": 5},"
+        "               {\"depth_mm\": 12, \"diameter_mm\": 20, \"stiffness_ratio\": 5},"
+        "               {\"depth_mm\": 12, \"diameter_mm\": 20, \"stiffness_ratio\": 5}],"
+        " \"pressure_bands\": {\"light\": {\"depth_mm\": [1, 4]}, \"medium\": {\"depth_mm\": [4, 9]}, \"deep\": {\"depth_mm\": [9, 18]}},"
+        " \"max_force_N\": 15, \"debrief\": \"lesions\", \"rubric\": {\"weights\": {\"sensitivity\": 1},"
+        " \"pass\": {\"sensitivity\": 1, \"coverage\": {\"light\": 0.5, \"medium\": 0.5, \"deep\": 0.5}, \"score\": 50}}}";
+    static palp_exercise er;
+    static palp_scene sr;
+    REQUIRE(palp_exercise_parse(ring, PALP_CONFIG_DIR "/phantoms", &er, err, sizeof err) == 0, "the ring parses: %s", err);
+    err[0] = 0;
+    const int rc_ring = palp_exercise_scene(&er, &sr, err, sizeof err);
+    printf("ring: %s\n", err);
+    CHECK(rc_ring == PALP_EINVAL && strstr(err, "placement: cannot place 2 lesions in the band 30-30.5 deg") &&
+              strstr(err, "lesions[0, 2] of the 4 listed (a session hides up to 2 of them, any 2)"),
+          "  refused at load, naming the set lesions[0, 2] (%d: %s)", rc_ring, err);
+  }
+  /* Without a count (all of them), the scene holds the seed-0 draw of all the lesions, as before. */
+  {
+    char *dome3 = replaced(random3, "\"phantom\": \"p.json\"", "\"phantom\": \"dome.json\"");
+    static palp_exercise e3;
+    static palp_scene s3;
+    palp_exercise d0;
+    palp_lesion want[PALP_MAX_LESIONS];
+    REQUIRE(dome3 && palp_exercise_parse(dome3, PALP_CONFIG_DIR "/phantoms", &e3, err, sizeof err) == 0, "dome3: %s", err);
+    const int nw = palp_exercise_draw(&e3, R, 0u, &d0, err, sizeof err) == 0
+                       ? palp_exercise_lesions(&d0, R, want, PALP_MAX_LESIONS, err, sizeof err)
+                       : -1;
+    int same3 = nw == 3 && palp_exercise_scene(&e3, &s3, err, sizeof err) == 0 && s3.world.lesion_count == 3;
+    for (int i = 0; same3 && i < 3; i++)
+      same3 = want[i].center.x == s3.world.lesion[i].center.x && want[i].center.y == s3.world.lesion[i].center.y &&
+              want[i].center.z == s3.world.lesion[i].center.z && want[i].radius == s3.world.lesion[i].radius &&
+              want[i].stiffness_ratio == s3.world.lesion[i].stiffness_ratio;
+    CHECK(same3, "without a count the scene holds the seed-0 draw of all three, bit for bit (%s)", err);
+    free(dome3);
+  }
   free(counted), free(one_of);
   free(one), free(tight), free(logged);
   CHECK_DONE();
