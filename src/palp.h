@@ -310,7 +310,11 @@ typedef struct palp_world_def {
   double sleep_speed; /* below this vertex speed [m/s] with no load the world may sleep, default 1e-5 */
   double sleep_time;  /* [s] of quiet before sleeping, default 0.5 */
   double max_speed;   /* a solved vertex speed above this [m/s] (default 20) means the
-                         step cannot be trusted: it is retried as two half steps */
+                         step cannot be trusted: it is retried as two half steps. Tested
+                         per component, |v_x|, |v_y| or |v_z| > max_speed / sqrt 3 (one
+                         cheap pass; it catches every vertex above max_speed, and also
+                         one moving along an axis at 0.58-1 max_speed); at the last
+                         halving only vertices above max_speed itself are capped */
   int refactor_lag;   /* frames a lagged-tangent rebuild waits before it is installed (0,
                          the default: at once); see palp_world_factor_claim */
   int refactor_blend; /* frames over which a rebuilt tangent takes over from the one it
@@ -533,8 +537,9 @@ typedef struct palp_world_health {
                                  membrane.bending_stiffness > 0; each hinge checked
                                  once per 0.2 s of simulated time) */
   double max_bend;            /* largest linearised hinge turn from rest seen [rad] */
-  int64_t clamped_steps;      /* sub-steps at the last halving (h/16) whose velocities were
-                                 capped at max_speed rather than failing the world: a load
+  int64_t clamped_steps;      /* sub-steps at the last halving (h/16) in which some vertex's
+                                 velocity was capped at max_speed rather than failing the world
+                                 (not those accepted uncapped, session 83): a load
                                  far beyond the model (e.g. 30 N on one vertex of a soft
                                  phantom) */
   double max_bend_error;      /* largest |true - linearised| hinge turn seen [rad] */

@@ -767,7 +767,15 @@ static void stage_solve(palp_world *w, double h) {
    * is rejected here and the step retried in halves (palp_world_step_dt). At the
    * last halving a finite but too fast solution has its speeds capped at max_speed
    * (Box2D's per-step translation limit): a load far beyond the model then deforms
-   * the phantom at a bounded rate instead of failing the session. */
+   * the phantom at a bounded rate instead of failing the session.
+   * "Too fast" is tested on the largest velocity component, |v_c| > max_speed / sqrt 3
+   * (max_square's one pass, SIMD): it never misses a vertex above max_speed (one of its
+   * components is at least |v| / sqrt 3), but it also rejects one between max_speed / sqrt 3
+   * and max_speed along an axis (palp.h, def.max_speed). Kept so: a per-vertex test would
+   * change which steps are halved, and so the bits of logged sessions. The cap itself is per
+   * vertex (|v| > max_speed), and clamped_steps counts only a sub-step that capped one (it
+   * also counted those whose bound tripped with every vertex under max_speed, until
+   * session 83: the health report and LM_CLAMPED_STEP said capped where nothing was). */
   const double v2max = max_square(x, 3 * n);
   const double vmax = w->def.max_speed; /* [m/s] */
   if (!isfinite(v2max)) {
@@ -779,15 +787,17 @@ static void stage_solve(palp_world *w, double h) {
       w->reject = 1;
       return;
     }
+    int capped = 0;
     for (int r = 0; r < n; ++r) {
       double *v = x + 3 * r;
       const double s2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
       if (s2 > vmax * vmax) {
         const double f = vmax / sqrt(s2);
         v[0] *= f, v[1] *= f, v[2] *= f;
+        capped = 1;
       }
     }
-    w->clamped_steps++;
+    w->clamped_steps += capped;
     return;
   }
   /* The step is linearised about x_n: a link that turns by more than 30 degrees or
