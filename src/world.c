@@ -2874,7 +2874,14 @@ int64_t palp_world_factor_due(const palp_world *w) {
 
 /* ---- stepping ----------------------------------------------------------- */
 
-static int has_load(const palp_world *w) {
+/* path: also a finger whose proxy's path to its device (the segment finger_collect searches)
+ * passes near the surface. Asked only of a sleeping world (session 83 review): a device set from
+ * 30 mm above the pole to 20 mm inside the dome, no vertex within reach of either point, left the
+ * world asleep and the finger without a contact (an awake world pressed 27 mm there). An awake
+ * world keeps the device-point test: after each of its steps a finger without force has its proxy
+ * at its device (stage_fingers), so its sleep decision is the same either way, and the wake of
+ * palp_world_set_finger_device (which restarts its quiet time) stays as it was. */
+static int has_load(const palp_world *w, int path) {
   /* Gravity is a load like any other (docs/model.md lists it under loads): a sagging dome
    * creeps on through its Maxwell dashpots, and put to sleep its sag stayed at 4.28 um
    * where it reaches 7.12 um in 120 s awake (session 81). */
@@ -2887,8 +2894,12 @@ static int has_load(const palp_world *w) {
        * the facet's nearest vertex, so a device farther than that hovers. */
       if (v3_dot(k->total, k->total) > 0.0) return 1;
       const double reach = k->fdef.radius + 0.5 * (w->fs ? w->fs->max_link : 0.0);
-      for (int r = 0; r < w->nfree; ++r)
-        if (v3_len(v3_sub(w->pos[w->vertex_of[r]], k->device)) < reach) return 1;
+      const int moved = path && (k->proxy.x != k->device.x || k->proxy.y != k->device.y || k->proxy.z != k->device.z);
+      for (int r = 0; r < w->nfree; ++r) {
+        const palp_vec3 p = w->pos[w->vertex_of[r]];
+        if (v3_len(v3_sub(p, k->device)) < reach) return 1;
+        if (moved && seg_dist2(p, k->proxy, k->device) < reach * reach) return 1;
+      }
     }
   }
   return 0;
@@ -3026,7 +3037,7 @@ int palp_world_step_dt(palp_world *w, double h) {
   if (w->broken) return PALP_EUNSTABLE;
   if (!(h > 0.0 && h <= 0.1) || !isfinite(h)) return PALP_EINVAL;
   /* A sleeping world without a load only advances its clock, due job or not (as before). */
-  const int sleeping = !w->awake && !has_load(w);
+  const int sleeping = !w->awake && !has_load(w, 1);
   /* A due job not handed back: refused before anything changes (the blend's weight, u, the
    * timings, the wake), so that the host's retry after palp_world_factor_done steps the very
    * world a host on time stepped. The blend was advanced first until session 83: a job that
@@ -3082,7 +3093,7 @@ int palp_world_step_dt(palp_world *w, double h) {
     w->broken = 1;
     return PALP_EUNSTABLE;
   }
-  if (w->def.sleep_time > 0.0 && vmax2 < w->def.sleep_speed * w->def.sleep_speed && !has_load(w) &&
+  if (w->def.sleep_time > 0.0 && vmax2 < w->def.sleep_speed * w->def.sleep_speed && !has_load(w, 0) &&
       internal_rate(w) < w->def.sleep_speed) {
     w->quiet += h;
     if (w->quiet >= w->def.sleep_time) {
@@ -3330,7 +3341,7 @@ int palp_world_set_finger_device(palp_world *w, int c, palp_vec3 device) {
   if (!v3_isfinite(device)) return PALP_EINVAL;
   if (device.x != k->device.x || device.y != k->device.y || device.z != k->device.z) {
     k->device = device;
-    if (has_load(w)) palp_world_wake(w);
+    if (has_load(w, !w->awake)) palp_world_wake(w);
   }
   return PALP_OK;
 }

@@ -1,6 +1,7 @@
 /* Health counters and stage timings per frame (session 81 review): a step the world splits
  * into halves is still one step for the counters the server log and the replay summary
- * print, and for the timings a benchmark divides by. And sleep: gravity is a load. */
+ * print, and for the timings a benchmark divides by. And sleep: gravity is a load; a finger
+ * whose device is set into the dome wakes a sleeping world (session 83 review). */
 #include <time.h>
 
 #include "common.h"
@@ -207,7 +208,50 @@ static void test_gravity_keeps_awake(void) {
   CHECK(asleep_frames[0] == 0, "a world under gravity does not sleep (%d frames asleep)", asleep_frames[0]);
 }
 
+/* Session 83 review: the default world (paper's dome, 10 ms steps) with a fingertip hovering
+ * 30 mm above the pole until it sleeps; then the device is set 20 mm below the pole, inside the
+ * dome, more than 20 mm from every vertex, with no explicit wake (as a host other than the server
+ * and replay, which wake after every input, sets it). Within 0.1 s the world must be awake and
+ * the finger pressing (> 0.5 N): the contact search follows the proxy's path to the device, and
+ * the sleeping world asked only whether a vertex was near the device point, so it stayed asleep,
+ * no contact, 0 N (awake the same move pressed 3.2 N within 0.1 s at 250 Hz). */
+static void test_finger_wakes_sleeping_world(void) {
+  palp_world_def d = palp_world_default_def();
+  int e;
+  palp_world *w = palp_world_create(&d, &e);
+  CHECK(w, "default world: %d", e);
+  if (!w) return;
+  const palp_mesh *m = palp_world_mesh(w);
+  const double R = m->rest[m->top_vertex].z;
+  const palp_finger_def fd = palp_finger_default_def();
+  const int f = palp_world_add_finger_def(w, &fd, (palp_vec3){0, 0, R + fd.radius + 0.030});
+  CHECK(f >= 0, "finger added (%d)", f);
+  int k = 0;
+  for (; k < 400 && palp_world_is_awake(w); ++k) palp_world_step(w);
+  CHECK(!palp_world_is_awake(w), "the world with a hovering finger sleeps (after %d frames)", k);
+  const palp_vec3 inside = {0, 0, R - 0.020};
+  const palp_vec3 *x = palp_world_positions(w);
+  double nearest = 1e9;
+  for (int i = 0; i < m->vertex_count; ++i) {
+    const double dx = x[i].x - inside.x, dy = x[i].y - inside.y, dz = x[i].z - inside.z;
+    nearest = fmin(nearest, sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  CHECK(nearest > 0.015, "the test's case: the new device point is %.1f mm from the nearest vertex (> 15 mm)",
+        nearest * 1e3);
+  CHECK(palp_world_set_finger_device(w, f, inside) == PALP_OK, "device set inside the dome");
+  for (int i = 0; i < 10; ++i) CHECK(palp_world_step(w) == PALP_OK, "frame %d after the move", i);
+  palp_local_model lm;
+  palp_world_finger_local_model(w, f, &lm);
+  const double F = sqrt(lm.force.x * lm.force.x + lm.force.y * lm.force.y + lm.force.z * lm.force.z);
+  const double dent = R - palp_world_positions(w)[m->top_vertex].z;
+  printf("finger set 20 mm into a sleeping dome: 0.1 s later awake %d, contact %d, |F| %.3f N, pole dent %.2f mm\n",
+         palp_world_is_awake(w), lm.contact, F, dent * 1e3);
+  CHECK(palp_world_is_awake(w) && lm.contact && F > 0.5, "the world woke and the finger presses (%.3f N > 0.5 N)", F);
+  palp_world_destroy(w);
+}
+
 int main(void) {
+  test_finger_wakes_sleeping_world();
   test_gravity_keeps_awake();
   test_large_strain_per_frame();
   test_timings_cover_the_step();
