@@ -572,23 +572,31 @@ void palp_world_get_health(const palp_world *w, palp_world_health *out);
 /* FNV-1a, in 64-bit words, over the phantom's recorded state: positions, velocities,
  * link strains, Burgers and support-relaxation states, gel volume and pressure, time and
  * frame. It is logged with every frame (db/palp_db.h) and `palp-review replay` compares
- * it, so it keeps its definition: equal hashes mean those are bit-identical, not the
- * whole world. It leaves out state a later step reads (the literal gel law's previous
+ * it, so it keeps its definition. It is a 64-bit checksum, not a proof: each word is folded
+ * as h = (h ^ w) P with P odd, so a word's bit k reaches only bits k and above of h, and
+ * some differences cancel, e.g. the signs of two doubles flipped (the pole's vx and vy:
+ * equal hashes, session 83 review). A replay compares every frame, and a lasting
+ * divergence shows in the next frame's hash. Equal hashes say nothing of the rest of the
+ * world either: it leaves out state a later step reads (the literal gel law's previous
  * pressure and step, the fingers' proxies, warm starts, local models and drift observers,
  * the installed tangent, a blend or a pending rebuild, the sleep timer), so two worlds
  * can hash equal and diverge later; where that matters, palp_world_state_hash. */
 uint64_t palp_world_hash(const palp_world *w);
-/* FNV-1a over everything of the world's state that a later step or query reads: the
+/* A hash over everything of the world's state that a later step or query reads: the
  * above, and the links' directions and stresses, the literal gel's previous pressure and
  * step, the reported gel pressure and rate, the solve's kept A^{-1} g, the installed
  * tangent (its factor's numbers, the link data it is checked against, whether it must be
  * rebuilt), a blend's replaced factor, a pending rebuild's matrix, the sleep state, and
  * every contact (loads, fingers' devices, proxies, constraint rows and their warm-start
- * forces, feedback, local models, drift observers). Two worlds built from the same def
- * with equal state hashes are bit-identical in all of it, so they step and answer alike.
+ * forces, feedback, local models, drift observers). Each word is mixed (the splitmix64
+ * finaliser) before FNV-1a's fold, so that a changed bit, the sign's too, changes about
+ * half the bits folded in, and differences cancel only by chance (~2^-64; since session
+ * 83: it was the logged hash's fold, and the sign pairs above cancelled in it too). Two
+ * worlds built from the same def with equal state hashes are bit-identical in all of it
+ * (but for that chance), so they step and answer alike.
  * Left out: caches whose contents are the same bits whoever fills them (the finger's
  * compliance columns, Burgers coefficients), scratch, the health counters and the
- * timings. Not logged, and not for every tick: ~46 us at 338 vertices, ~0.36 ms at
+ * timings. Not logged, and not for every tick: ~53 us at 338 vertices, ~0.45 ms at
  * 1,300 (the factor's numbers; palp_world_hash: 6 and 24 us). */
 uint64_t palp_world_state_hash(const palp_world *w);
 

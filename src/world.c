@@ -3454,6 +3454,34 @@ static uint64_t fnv1a64(uint64_t h, const void *data, size_t n) {
   return h;
 }
 
+/* The splitmix64 finaliser (src/palp_rng.h): each bit of z reaches every bit of the result. */
+static inline uint64_t mix64(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+/* palp_world_state_hash's fold: FNV-1a's (h ^ w) P with each word mixed first. In fnv1a64 a bit k
+ * of a word reaches only bits k and above of h (P is odd), so the top bit, a double's sign, only
+ * flips h's top bit, and two such flips cancel: two worlds whose pole velocity differed in the
+ * signs of vx and vy hashed equal (session 83 review). Mixed, a changed word changes about half
+ * the bits of what is folded in. A tail shorter than a word is folded zero-padded. */
+static uint64_t mixfold(uint64_t h, const void *data, size_t n) {
+  const unsigned char *p = data;
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    uint64_t w;
+    memcpy(&w, p + i, 8);
+    h = (h ^ mix64(w)) * 1099511628211ull;
+  }
+  if (i < n) {
+    uint64_t w = 0;
+    memcpy(&w, p + i, n - i);
+    h = (h ^ mix64(w)) * 1099511628211ull;
+  }
+  return h;
+}
+
 uint64_t palp_world_hash(const palp_world *w) {
   uint64_t h = 14695981039346656037ull;
   const size_t nv = (size_t)w->mesh.vertex_count;
@@ -3473,108 +3501,117 @@ uint64_t palp_world_hash(const palp_world *w) {
  * scalar L and 1/D. The ordering is the analysis's, the same for every factor of a world. */
 static uint64_t ldl_hash(uint64_t h, const palp_ldl *f) {
   if (f->nb > 0) {
-    h = fnv1a64(h, f->blk, sizeof(float) * 9 * (size_t)f->bcolp[f->nb]);
-    h = fnv1a64(h, f->bdiag, sizeof(double) * 3 * (size_t)f->nb);
+    h = mixfold(h, f->blk, sizeof(float) * 9 * (size_t)f->bcolp[f->nb]);
+    h = mixfold(h, f->bdiag, sizeof(double) * 3 * (size_t)f->nb);
   } else if (f->n > 0) {
-    h = fnv1a64(h, f->val, sizeof(double) * (size_t)f->colp[f->n]);
+    h = mixfold(h, f->val, sizeof(double) * (size_t)f->colp[f->n]);
   }
-  if (f->n > 0) h = fnv1a64(h, f->dinv, sizeof(double) * (size_t)f->n);
+  if (f->n > 0) h = mixfold(h, f->dinv, sizeof(double) * (size_t)f->n);
   return h;
 }
 
 static uint64_t vec3_hash(uint64_t h, palp_vec3 v) {
   const double d[3] = {v.x, v.y, v.z};
-  return fnv1a64(h, d, sizeof d);
+  return mixfold(h, d, sizeof d);
 }
 
 /* A contact: its load or finger, what it touched and fed back, and the finger's local
  * model and drift observer. Field by field: the structs' padding is not state. */
 static uint64_t contact_hash(uint64_t h, const contact *k) {
   const int head[3] = {k->kind, k->count, k->kind == CONTACT_FINGER ? k->ncon : 0};
-  h = fnv1a64(h, head, sizeof head);
+  h = mixfold(h, head, sizeof head);
   if (k->kind == CONTACT_NONE) return h;
-  h = fnv1a64(h, k->vertex, sizeof(int) * (size_t)k->count);
-  h = fnv1a64(h, k->feedback, sizeof(palp_vec3) * (size_t)k->count);
+  h = mixfold(h, k->vertex, sizeof(int) * (size_t)k->count);
+  h = mixfold(h, k->feedback, sizeof(palp_vec3) * (size_t)k->count);
   h = vec3_hash(h, k->total);
   if (k->kind == CONTACT_FORCE) {
-    h = fnv1a64(h, k->weight, sizeof(double) * (size_t)k->count);
+    h = mixfold(h, k->weight, sizeof(double) * (size_t)k->count);
     return vec3_hash(h, k->force);
   }
   const double fd[3] = {k->fdef.radius, k->fdef.coupling_stiffness, k->fdef.pad_stiffness};
-  h = fnv1a64(h, fd, sizeof fd);
+  h = mixfold(h, fd, sizeof fd);
   h = vec3_hash(vec3_hash(h, k->device), k->proxy);
   const size_t n = (size_t)k->ncon;
-  h = fnv1a64(h, &k->nfinger, sizeof k->nfinger);
-  h = fnv1a64(h, k->ctri, sizeof(int) * n);
-  h = fnv1a64(h, k->cbary, sizeof(double[3]) * n);
-  h = fnv1a64(h, k->cn, sizeof(palp_vec3) * n);
-  h = fnv1a64(h, k->cq, sizeof(palp_vec3) * n);
-  h = fnv1a64(h, k->clam, sizeof(double) * n); /* the next step's warm start (with ckey) */
-  h = fnv1a64(h, k->ckey, sizeof(int64_t) * n);
+  h = mixfold(h, &k->nfinger, sizeof k->nfinger);
+  h = mixfold(h, k->ctri, sizeof(int) * n);
+  h = mixfold(h, k->cbary, sizeof(double[3]) * n);
+  h = mixfold(h, k->cn, sizeof(palp_vec3) * n);
+  h = mixfold(h, k->cq, sizeof(palp_vec3) * n);
+  h = mixfold(h, k->clam, sizeof(double) * n); /* the next step's warm start (with ckey) */
+  h = mixfold(h, k->ckey, sizeof(int64_t) * n);
   const palp_local_model *m = &k->lm; /* the next step's drift observer reads it */
   const int mi[2] = {m->contact, m->triangles};
-  h = fnv1a64(h, mi, sizeof mi);
+  h = mixfold(h, mi, sizeof mi);
   const double md[3] = {m->period, m->area, m->depth}; /* its time is the world's (set when queried) */
-  h = fnv1a64(h, md, sizeof md);
-  h = fnv1a64(h, m->stiffness, sizeof m->stiffness);
+  h = mixfold(h, md, sizeof md);
+  h = mixfold(h, m->stiffness, sizeof m->stiffness);
   const palp_vec3 mv[6] = {m->device, m->proxy, m->normal, m->force, m->drift, m->point};
   for (int q = 0; q < 6; ++q) h = vec3_hash(h, mv[q]);
   return vec3_hash(h, k->drift_corr);
 }
 
 uint64_t palp_world_state_hash(const palp_world *w) {
-  uint64_t h = palp_world_hash(w);
+  uint64_t h = 14695981039346656037ull;
   const size_t nv = (size_t)w->mesh.vertex_count, nl = (size_t)w->nlink;
+  /* what palp_world_hash covers, here mixed */
+  h = mixfold(h, w->pos, sizeof *w->pos * nv);
+  h = mixfold(h, w->vel, sizeof *w->vel * nv);
+  if (w->nlink) h = mixfold(h, w->eps, sizeof(double) * (size_t)w->nlink);
+  if (w->xs) h = mixfold(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
+  if (w->sq) h = mixfold(h, w->sq, sizeof *w->sq * nv);
+  const double scalars[3] = {w->V, w->p_abs, w->t};
+  h = mixfold(h, scalars, sizeof scalars);
+  h = mixfold(h, &w->frame, sizeof w->frame);
   /* the links' state beyond their strains: directions and stresses (the feedback's) */
   if (nl) {
-    h = fnv1a64(h, w->dir, sizeof(palp_vec3) * nl);
-    h = fnv1a64(h, w->sigma, sizeof(double) * nl);
+    h = mixfold(h, w->dir, sizeof(palp_vec3) * nl);
+    h = mixfold(h, w->sigma, sizeof(double) * nl);
   }
   /* the gel: the literal law's previous pressure and step, the reported pressure and rate,
    * and the solve's kept A^{-1} g (reused while the gradient turns little) */
   const double gel[4] = {w->p_abs_prev, w->h_gel_prev, w->p_gauge, w->Vdot};
-  h = fnv1a64(h, gel, sizeof gel);
+  h = mixfold(h, gel, sizeof gel);
   if (w->u) {
-    h = fnv1a64(h, &w->u_valid, sizeof w->u_valid);
+    h = mixfold(h, &w->u_valid, sizeof w->u_valid);
     if (w->u_valid) {
-      h = fnv1a64(h, w->u, sizeof(double) * 3 * (size_t)w->nfree);
-      h = fnv1a64(h, w->g_u, sizeof(double) * 3 * (size_t)w->nfree);
+      h = mixfold(h, w->u, sizeof(double) * 3 * (size_t)w->nfree);
+      h = mixfold(h, w->g_u, sizeof(double) * 3 * (size_t)w->nfree);
     }
   }
   /* the installed tangent: its factor, what the steps check it against, whether it must
    * be rebuilt; a blend's replaced factor; a deferred rebuild's matrix */
-  h = fnv1a64(h, &w->h_factored, sizeof w->h_factored);
+  h = mixfold(h, &w->h_factored, sizeof w->h_factored);
   h = ldl_hash(h, &w->ldl);
   if (nl) {
-    h = fnv1a64(h, w->fdir, sizeof(palp_vec3) * nl);
-    h = fnv1a64(h, w->fbeta, sizeof(double) * nl);
-    h = fnv1a64(h, w->fslack, sizeof(double) * nl);
+    h = mixfold(h, w->fdir, sizeof(palp_vec3) * nl);
+    h = mixfold(h, w->fbeta, sizeof(double) * nl);
+    h = mixfold(h, w->fslack, sizeof(double) * nl);
   }
-  if (w->fsu) h = fnv1a64(h, w->fsu, sizeof(palp_vec3) * nv);
-  if (w->fsoft) h = fnv1a64(h, w->fsoft, sizeof(double) * ((size_t)w->nfree + 1));
+  if (w->fsu) h = mixfold(h, w->fsu, sizeof(palp_vec3) * nv);
+  if (w->fsoft) h = mixfold(h, w->fsoft, sizeof(double) * ((size_t)w->nfree + 1));
   const int flags[5] = {w->stale, w->unsafe, w->blend_k, w->job_state != JOB_NONE, w->job_obsolete};
-  h = fnv1a64(h, flags, sizeof flags);
+  h = mixfold(h, flags, sizeof flags);
   if (w->blend_k > 0) h = ldl_hash(h, &w->ldl_prev);
   if (w->job_state != JOB_NONE) {
     /* who computes it (the state a host moves it through) does not change its bits */
     const palp_factor_job *j = w->job;
-    h = fnv1a64(h, &w->job_due, sizeof w->job_due);
-    h = fnv1a64(h, &j->h, sizeof j->h);
-    h = fnv1a64(h, &j->nnz, sizeof j->nnz);
-    h = fnv1a64(h, j->ti, sizeof(int) * (size_t)j->nnz);
-    h = fnv1a64(h, j->tj, sizeof(int) * (size_t)j->nnz);
-    h = fnv1a64(h, j->tx, sizeof(double) * (size_t)j->nnz);
+    h = mixfold(h, &w->job_due, sizeof w->job_due);
+    h = mixfold(h, &j->h, sizeof j->h);
+    h = mixfold(h, &j->nnz, sizeof j->nnz);
+    h = mixfold(h, j->ti, sizeof(int) * (size_t)j->nnz);
+    h = mixfold(h, j->tj, sizeof(int) * (size_t)j->nnz);
+    h = mixfold(h, j->tx, sizeof(double) * (size_t)j->nnz);
     if (nl) {
-      h = fnv1a64(h, j->fdir, sizeof(palp_vec3) * nl);
-      h = fnv1a64(h, j->fbeta, sizeof(double) * nl);
-      h = fnv1a64(h, j->fslack, sizeof(double) * nl);
+      h = mixfold(h, j->fdir, sizeof(palp_vec3) * nl);
+      h = mixfold(h, j->fbeta, sizeof(double) * nl);
+      h = mixfold(h, j->fslack, sizeof(double) * nl);
     }
-    if (j->fsu) h = fnv1a64(h, j->fsu, sizeof(palp_vec3) * nv);
+    if (j->fsu) h = mixfold(h, j->fsu, sizeof(palp_vec3) * nv);
   }
   /* sleep */
   const int wake[2] = {w->awake, w->broken};
-  h = fnv1a64(h, wake, sizeof wake);
-  h = fnv1a64(h, &w->quiet, sizeof w->quiet);
+  h = mixfold(h, wake, sizeof wake);
+  h = mixfold(h, &w->quiet, sizeof w->quiet);
   /* contacts */
   for (int c = 0; c < w->def.max_contacts; ++c) h = contact_hash(h, &w->contacts[c]);
   return h;
