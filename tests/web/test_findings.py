@@ -532,10 +532,12 @@ def run(build, source, out):
         # 2026-12-06 it drew the bridge's 1 N / 3 N: the marker stood in its deep zone under a "medium" badge.)
         fay_page = browser.new_page(web2.base + "/trainee.html?trainee=fay")
         check(fay_page.wait_for("window.palpState && palpState.connected", 20) is True, "fay's page connected")
-        procs.trainee("fay", phantom=15, extra=["--input", "sim:press,hold_s=20", "--duration", "30"])
+        # 45 s and a 40 s hold: a wait, not a property (25 s once ran out with her press not yet in, the suite
+        # beside five builds, 2026-12-07); the condition ends it at once when met
+        procs.trainee("fay", phantom=15, extra=["--input", "sim:press,hold_s=40", "--duration", "50"])
         g = fay_page.wait_for("(function(){const t=palpState.trainee; if (!(t.bandRule === 'exercise' && t.proxy && "
                               "t.proxy.in_contact && t.band === 'medium' && t.force > 3)) return null; return %s;})()"
-                              % GAUGE, 25)
+                              % GAUGE, 45)
         check(g is not None and g["rows"] >= 2 and g["above"] == ZONE["medium"] and g["below"] == ZONE["medium"] and
               "light 0.2-2 N, medium 2-8 N, deep 8-15 N" in g["legend"],
               "fay's gauge (easy_force, by force) shades the exercise's medium band at its marker, as the badge "
