@@ -7,6 +7,7 @@
 void palp_finding_answers_reset(palp_finding_answers *a) {
   a->findings = 0;
   a->answers = 0;
+  a->last.valid = 0;
 }
 
 static void drop_finding(palp_finding_answers *a, int i) {
@@ -58,14 +59,24 @@ void palp_finding_answers_finding(palp_finding_answers *a, const palp_finding_se
 }
 
 void palp_finding_answers_answer(palp_finding_answers *a, uint32_t mark_id, int accepted, const char *reason,
-                                 double now, palp_finding_verdict_fn fn, void *ctx) {
-  /* A stale answer (the transient-local copy a reader that started mid-session receives) finds no
-   * finding and expires after the wait. */
-  if (mark_id == 0) return;
+                                 uint32_t marks, int historical, double now, palp_finding_verdict_fn fn, void *ctx) {
+  /* A repeat of the status before (the server's 2 Hz refresh) or a historical copy (the one a
+   * reader that joined mid-session is handed) answers nothing: queued, it was taken by the next
+   * finding of its id (palp_finding_answers.h). Either still becomes the status to compare with. */
+  char why[sizeof a->last.reason];
+  snprintf(why, sizeof why, "%s", reason ? reason : "");
+  const int repeat = a->last.valid && a->last.mark_id == mark_id && a->last.accepted == (accepted != 0) &&
+                     a->last.marks == marks && !strcmp(a->last.reason, why);
+  a->last.valid = 1;
+  a->last.mark_id = mark_id;
+  a->last.marks = marks;
+  a->last.accepted = accepted != 0;
+  memcpy(a->last.reason, why, sizeof why);
+  if (mark_id == 0 || repeat || historical) return;
   if (a->answers == PALP_FINDING_ANSWERS_QUEUED) drop_answer(a, 0);
   a->answer[a->answers].mark_id = mark_id;
   a->answer[a->answers].accepted = accepted != 0;
-  snprintf(a->answer[a->answers].reason, sizeof a->answer[0].reason, "%s", reason ? reason : "");
+  snprintf(a->answer[a->answers].reason, sizeof a->answer[0].reason, "%s", why);
   a->answer[a->answers++].since = now;
   match(a, fn, ctx);
 }

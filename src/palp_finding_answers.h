@@ -9,8 +9,19 @@
  * means the earlier findings' answers were replaced: those, and any finding not answered within
  * the wait, are given up as unanswered. A mark and its withdrawal carry the same mark id; an
  * answer is matched to the newest pending finding of its id (with both pending it is the
- * withdrawal's: keep-last 1 replaced the mark's; since session 81, the oldest before). Pure: no
- * DDS, no clock of its own.
+ * withdrawal's: keep-last 1 replaced the mark's; since session 81, the oldest before).
+ *
+ * Not every status is an answer (session 83 review). The server writes its status again at 2 Hz
+ * (the time left moves) with the last answer in it, and a reader that starts mid-session is
+ * handed the writer's last status (transient-local) for a finding it never saw (palp_finding is
+ * volatile). Queued for the wait, such a copy was taken by the next finding of that mark id, a
+ * double press of "withdraw" within 2 s: a withdrawal the server refused was logged accepted. So
+ * a status equal to the one received before it (mark id, verdict, reason and marks standing;
+ * the time left aside) is a repeat and answers nothing, and neither does a historical one, which
+ * the caller knows by its source timestamp (written before the caller's reader was made). The
+ * one answer lost so: a second refusal of the same id for the same reason right after the first
+ * (its finding then counts as unanswered, never as the wrong verdict). Pure: no DDS, no clock of
+ * its own.
  */
 #ifndef PALP_FINDING_ANSWERS_H
 #define PALP_FINDING_ANSWERS_H
@@ -54,16 +65,24 @@ typedef struct palp_finding_answers {
     double since;
   } answer[PALP_FINDING_ANSWERS_QUEUED]; /* oldest first */
   int answers;
+  struct { /* the status received last, answer or not: a repeat of it answers nothing */
+    int valid;
+    uint32_t mark_id, marks;
+    int accepted;
+    char reason[128];
+  } last;
 } palp_finding_answers;
 
 void palp_finding_answers_reset(palp_finding_answers *a);
 /* A finding taken from the wire at `now` [s]. */
 void palp_finding_answers_finding(palp_finding_answers *a, const palp_finding_sent *f, double now,
                                   palp_finding_verdict_fn fn, void *ctx);
-/* The server's answer to mark_id (palp_finding_status: last_mark_id, last_accepted, reason); an
- * answer naming mark 0 (none yet) is ignored. */
+/* A server's status (palp_finding_status: last_mark_id, last_accepted, reason, marks standing):
+ * the answer to mark_id, unless it names mark 0 (none yet), repeats the status received before it,
+ * or is historical (1: the caller's reader was handed it as it joined: written before the reader
+ * was made, by its source timestamp). */
 void palp_finding_answers_answer(palp_finding_answers *a, uint32_t mark_id, int accepted, const char *reason,
-                                 double now, palp_finding_verdict_fn fn, void *ctx);
+                                 uint32_t marks, int historical, double now, palp_finding_verdict_fn fn, void *ctx);
 /* Gives up findings and answers older than `wait` [s] at `now`, or all of them (the session ended). */
 void palp_finding_answers_settle(palp_finding_answers *a, double now, double wait, int all,
                                  palp_finding_verdict_fn fn, void *ctx);

@@ -292,6 +292,10 @@ struct palp_web_hub {
   /* the writer of the sample drain() is handing its callback (on_phantom names a refused one's), and
    * the participant of that writer when drain() had it looked up (on_state), else 0 */
   dds_instance_handle_t sample_writer, sample_participant;
+  /* and its source timestamp (DDS's clock); readers_since: that clock as the readers were made. A
+   * finding status written before it is the historical copy a reader is handed as it joins a
+   * running session: it answers no finding this bridge saw (palp_finding_answers.h) */
+  dds_time_t sample_source, readers_since;
   /* a session whose server topics another participant wrote: said once per bridge (from_its_server) */
   int not_server_said;
   /* the publishers whose catalogue entries were refused and named in the log (refuse_phantom) */
@@ -1596,8 +1600,8 @@ static void on_finding_status(palp_web_hub *h, const palp_FindingStatus *m) {
   answers *a = session_answers(h, s);
   if (a) {
     verdict_ctx v = {h, a};
-    palp_finding_answers_answer(&a->pairs, m->last_mark_id, m->last_accepted, m->reason,
-                                (double)palp_dds_now_ns() * 1e-9, on_verdict, &v);
+    palp_finding_answers_answer(&a->pairs, m->last_mark_id, m->last_accepted, m->reason, m->marks,
+                                h->sample_source < h->readers_since, (double)palp_dds_now_ns() * 1e-9, on_verdict, &v);
   }
   /* A mark the server refused does not stand: "withdraw last" must not name it. */
   pthread_mutex_lock(&h->mu);
@@ -2157,6 +2161,7 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
         h->finding_strays++, h->stats.finding_strays++;
       if (info[i].valid_data) {
         h->sample_writer = info[i].publication_handle;
+        h->sample_source = info[i].source_timestamp;
         on(h, ptr[i]);
         (*counter)++;
       } else if (lost && info[i].instance_state != DDS_IST_ALIVE) {
@@ -2448,6 +2453,7 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     h->req_pub = palp_dds_session_publisher(h->pp, part);
   }
   h->sub = palp_dds_session_subscriber(h->pp, wildcard);
+  h->readers_since = dds_time();
   h->contact_r = stream_reader(h, h->sub, h->topic[PALP_TOPIC_CONTACT], PALP_TOPIC_CONTACT, 1);
   h->deform_r = stream_reader(h, h->sub, h->topic[PALP_TOPIC_DEFORMATION], PALP_TOPIC_DEFORMATION, 1);
   /* local models in full (not just the newest), every frame, for late updates */

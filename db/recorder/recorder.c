@@ -235,6 +235,7 @@ typedef struct held_sample {
   dds_instance_handle_t writer;     /* its writer */
   dds_instance_handle_t run;        /* a server's sample: its writer's participant; 0 for a station's */
   int64_t arrival_ns;               /* palp_dds_now_ns() as it was taken */
+  int historical;                   /* a finding status written before the readers were made */
   int from_known;                   /* a station's: its writer's partition is known, */
   char from[PALP_DDS_ORIGIN_PARTITION]; /* and is this (checked against the session it is logged in) */
   size_t bytes;
@@ -293,6 +294,10 @@ typedef struct recorder {
   /* Server samples whose writer's run was looked up in the origin cache (server_run_of): each writer's
    * first in its session, not each sample. */
   int64_t origin_consults;
+  /* DDS's clock (the writers' source timestamps) as the readers were made: a finding status written
+   * before it is the historical copy a reader is handed as it joins a running session, which answers
+   * no finding this recorder saw (palp_finding_answers.h). */
+  dds_time_t readers_since;
 } recorder;
 
 /* A session opens or ends in this log: its streams pass the gate as long as it is open here. Ended,
@@ -975,12 +980,12 @@ static void on_finding(recorder *r, const palp_Finding *m) {
   palp_finding_answers_finding(&s->marks, &f, (double)palp_dds_now_ns() * 1e-9, log_verdict, &v);
 }
 
-static void on_finding_status(recorder *r, const palp_FindingStatus *m) {
+static void on_finding_status(recorder *r, const palp_FindingStatus *m, int historical) {
   rsession *s = find_session(r, m->session_id, 0);
   if (!s) return;
   verdict_ctx v = {r, s};
-  palp_finding_answers_answer(&s->marks, m->last_mark_id, m->last_accepted, m->reason, (double)palp_dds_now_ns() * 1e-9,
-                              log_verdict, &v);
+  palp_finding_answers_answer(&s->marks, m->last_mark_id, m->last_accepted, m->reason, m->marks, historical,
+                              (double)palp_dds_now_ns() * 1e-9, log_verdict, &v);
 }
 
 /* What the trainee was told as the session closed, logged as the server logs it (db/debrief.c);
@@ -1452,9 +1457,10 @@ static route route_sample(recorder *r, int kind, uint32_t sid, dds_instance_hand
   return ROUTE_LOG;
 }
 
-/* run: a server sample's writer's participant (0: a station's, or not known). */
+/* run: a server sample's writer's participant (0: a station's, or not known); historical: a finding
+ * status written before the readers were made. */
 static void dispatch(recorder *r, int kind, const void *m, int64_t now_ns, palp_dds_origin_verdict v, const char *from,
-                     dds_instance_handle_t run) {
+                     dds_instance_handle_t run, int historical) {
   const uint32_t sid = *(const uint32_t *)m; /* every session topic's first key (idl/palp_dds_gate.c) */
   switch (kind) {
   case RD_SESSION_EXERCISE: on_session_exercise(r, m, run); break;
@@ -1468,7 +1474,7 @@ static void dispatch(recorder *r, int kind, const void *m, int64_t now_ns, palp_
   case RD_FINDING:
     if (from_its_partition(r, sid, v, from, "finding")) on_finding(r, m);
     break;
-  case RD_FINDING_STATUS: on_finding_status(r, m); break;
+  case RD_FINDING_STATUS: on_finding_status(r, m, historical); break;
   default: on_debrief(r, m); break;
   }
 }
@@ -1523,7 +1529,7 @@ static const char *topic_word(int kind) {
 }
 
 static void hold(recorder *r, int kind, const void *m, dds_instance_handle_t writer, dds_instance_handle_t run,
-                 const char *from) {
+                 const char *from, int historical) {
   const uint32_t sid = *(const uint32_t *)m;
   size_t bytes = 0;
   void *copy = r->nheld < MAX_HELD ? held_copy(kind, m, &bytes) : NULL;
@@ -1538,7 +1544,7 @@ static void hold(recorder *r, int kind, const void *m, dds_instance_handle_t wri
   for (int i = 0; i < r->nheld && first; i++) first = r->held[i].session_id != sid;
   held_sample *h = &r->held[r->nheld++];
   *h = (held_sample){.kind = kind, .session_id = sid, .writer = writer, .run = run, .arrival_ns = palp_dds_now_ns(),
-                     .from_known = from != NULL, .bytes = bytes, .sample = copy};
+                     .historical = historical, .from_known = from != NULL, .bytes = bytes, .sample = copy};
   snprintf(h->from, sizeof h->from, "%s", from ? from : "");
   r->held_bytes += bytes;
   r->held_total++;
@@ -1578,7 +1584,7 @@ static void release_held(recorder *r, uint32_t sid, const char *why) {
       const palp_dds_origin_verdict v = s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
       if (station_topic(h->kind) && v == PALP_DDS_ORIGIN_SAME && !station_writer_of(s, h->writer))
         take_station_writer(s, h->writer, h->kind);
-      dispatch(r, h->kind, h->sample, h->arrival_ns, v, from, h->run);
+      dispatch(r, h->kind, h->sample, h->arrival_ns, v, from, h->run, h->historical);
       logged++;
     }
     r->held_bytes -= h->bytes;
@@ -1684,9 +1690,10 @@ static void on_session_sample(recorder *r, int kind, dds_entity_t reader, const 
                                                                           : palp_dds_origin_partition(&r->origin, reader, info);
   const palp_dds_origin_verdict v =
       station && s && s->partition[0] ? origin_of(from, s->partition) : PALP_DDS_ORIGIN_SAME;
+  const int historical = kind == RD_FINDING_STATUS && info->source_timestamp < r->readers_since;
   switch (route_sample(r, kind, sid, info->publication_handle, run, v)) {
-  case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from, run); break;
-  case ROUTE_HOLD: hold(r, kind, m, info->publication_handle, run, from); break;
+  case ROUTE_LOG: dispatch(r, kind, m, palp_dds_now_ns(), v, from, run, historical); break;
+  case ROUTE_HOLD: hold(r, kind, m, info->publication_handle, run, from, historical); break;
   case ROUTE_EARLIER:
     if (r->earlier_run_samples++ == 0)
       palp_log_warn(r->log, "session %u: a %s from a run of its server that had ended (it came late): not recorded, "
@@ -1941,6 +1948,7 @@ int main(int argc, char **argv) {
       PALP_TOPIC_CONTACT,   PALP_TOPIC_FEEDBACK,      PALP_TOPIC_DEFORMATION,    PALP_TOPIC_FINGER_SAMPLE,
       PALP_TOPIC_LOCAL_MODEL, PALP_TOPIC_FINDING,     PALP_TOPIC_FINDING_STATUS, PALP_TOPIC_DEBRIEF};
   dds_entity_t rd[RD_COUNT];
+  r->readers_since = dds_time();
   for (int k = 0; k < RD_COUNT; k++) rd[k] = reader_deep(r, k < RD_CONTACT ? pp : sub, t[kind[k]], kind[k]);
   dds_entity_t ws = dds_create_waitset(pp);
   for (int k = 0; k < RD_COUNT; k++) {
