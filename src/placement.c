@@ -1,8 +1,12 @@
 /*
  * placement.c - one session's lesions of a random exercise (palp_exercise_draw; docs/assessment.md,
  * "Lesions drawn for each session"). Pure and deterministic: SplitMix64 (src/palp_rng.h), seeded by
- * the server per session, so that the same seed gives the same lesions on every machine and a logged
- * draw can be checked by drawing it again.
+ * the server per session, so that the same seed gives the same lesions on every machine. A logged draw
+ * can be checked by drawing it again from the exercise file with its seed; from its own logged text
+ * (read back as kind random, with its seed) only when its count is fixed (lo = hi, or no count): the text keeps the k lesions drawn, not the n
+ * listed, and the draw takes hi from those listed (min(hi, n)), so a draw of k < hi would be redrawn
+ * with another hi and may pick another k (review session 83: with count [0, 3], 119 of 200 logged
+ * draws redrew the same). Nothing redraws today: the review uses the logged places.
  */
 #include <math.h>
 #include <stdint.h>
