@@ -25,6 +25,7 @@
 #include "finger.h"
 #include "gel.h"
 #include "palp.h"
+#include "palp_rng.h"
 #include "sparse_ldl.h"
 #include "vec3.h"
 
@@ -3454,13 +3455,6 @@ static uint64_t fnv1a64(uint64_t h, const void *data, size_t n) {
   return h;
 }
 
-/* The splitmix64 finaliser (src/palp_rng.h): each bit of z reaches every bit of the result. */
-static inline uint64_t mix64(uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 /* palp_world_state_hash's fold: FNV-1a's (h ^ w) P with each word mixed first. In fnv1a64 a bit k
  * of a word reaches only bits k and above of h (P is odd), so the top bit, a double's sign, only
  * flips h's top bit, and two such flips cancel: two worlds whose pole velocity differed in the
@@ -3472,12 +3466,12 @@ static uint64_t mixfold(uint64_t h, const void *data, size_t n) {
   for (; i + 8 <= n; i += 8) {
     uint64_t w;
     memcpy(&w, p + i, 8);
-    h = (h ^ mix64(w)) * 1099511628211ull;
+    h = (h ^ palp_rng_mix(w)) * 1099511628211ull;
   }
   if (i < n) {
     uint64_t w = 0;
     memcpy(&w, p + i, n - i);
-    h = (h ^ mix64(w)) * 1099511628211ull;
+    h = (h ^ palp_rng_mix(w)) * 1099511628211ull;
   }
   return h;
 }
