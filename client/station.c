@@ -1245,6 +1245,21 @@ static void take_replies(palp_cli_station *st) {
   }
 }
 
+/* The replies to a JOIN sent again, taken as they come (take_replies) until done(st) or end [ns]: the one
+ * wait of restart_confirmed and ask_after_stall. */
+static void await_replies(palp_cli_station *st, int64_t end, int (*done)(const palp_cli_station *)) {
+  const dds_entity_t ws = dds_create_waitset(st->pp), rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
+  dds_waitset_attach(ws, rc, 0);
+  for (int64_t t = palp_dds_now_ns(); t < end && !done(st); t = palp_dds_now_ns()) {
+    dds_waitset_wait(ws, NULL, 0, end - t);
+    take_replies(st);
+  }
+  dds_delete(rc);
+  dds_delete(ws);
+}
+static int heard_since_suspicion(const palp_cli_station *st) { return st->bind.heard_ns > st->bind.suspect_ns; }
+static int join_refused(const palp_cli_station *st) { return st->bind.refused; }
+
 /* A restart suspected (suspect_restart), and the session's server quiet for PALP_CLI_SERVER_QUIET_S (any
  * sample of its since the suspicion refutes it): the server is asked, by its accepted JOIN sent again,
  * which it answers again at once (server/server.c, handle_join), and its answer awaited here for up to
@@ -1265,15 +1280,7 @@ static int restart_confirmed(palp_cli_station *st, int64_t now, char *reason, si
     return 0;
   dds_write(st->request_w, &st->last_join);
   b->asked_ns = palp_dds_now_ns();
-  const dds_entity_t ws = dds_create_waitset(st->pp), rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
-  dds_waitset_attach(ws, rc, 0);
-  const int64_t end = b->asked_ns + (int64_t)(PALP_CLI_SERVER_ASK_S * 1e9);
-  for (int64_t t = b->asked_ns; t < end && b->heard_ns <= b->suspect_ns; t = palp_dds_now_ns()) {
-    dds_waitset_wait(ws, NULL, 0, end - t);
-    take_replies(st);
-  }
-  dds_delete(rc);
-  dds_delete(ws);
+  await_replies(st, b->asked_ns + (int64_t)(PALP_CLI_SERVER_ASK_S * 1e9), heard_since_suspicion);
   if (b->heard_ns > b->suspect_ns) {
     b->suspect_ns = 0;
     return 0;
@@ -1313,15 +1320,7 @@ static int ask_after_stall(palp_cli_station *st) {
   if (st->bind.refused) return 1;
   if (!st->has_last_join || st->last_join.role != palp_ROLE_TRAINEE || dds_write(st->request_w, &st->last_join) < 0)
     return 0;
-  const int64_t end = palp_dds_now_ns() + (int64_t)(PALP_CLI_LOST_ASK_S * 1e9);
-  const dds_entity_t ws = dds_create_waitset(st->pp), rc = dds_create_readcondition(st->reply_r, DDS_ANY_STATE);
-  dds_waitset_attach(ws, rc, 0);
-  for (int64_t t = palp_dds_now_ns(); t < end && !st->bind.refused; t = palp_dds_now_ns()) {
-    dds_waitset_wait(ws, NULL, 0, end - t);
-    take_replies(st);
-  }
-  dds_delete(rc);
-  dds_delete(ws);
+  await_replies(st, palp_dds_now_ns() + (int64_t)(PALP_CLI_LOST_ASK_S * 1e9), join_refused);
   return st->bind.refused;
 }
 
