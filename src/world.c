@@ -3476,20 +3476,23 @@ static uint64_t mixfold(uint64_t h, const void *data, size_t n) {
   return h;
 }
 
-uint64_t palp_world_hash(const palp_world *w) {
-  uint64_t h = 14695981039346656037ull;
+/* What the logged hash covers, folded by fold (fnv1a64 for palp_world_hash, mixfold for the state
+ * hash): one list, so the two cannot drift apart. Word by word, V, p_abs and t folded one after the
+ * other are the words of an array of the three. */
+static uint64_t fold_logged(const palp_world *w, uint64_t h, uint64_t (*fold)(uint64_t, const void *, size_t)) {
   const size_t nv = (size_t)w->mesh.vertex_count;
-  h = fnv1a64(h, w->pos, sizeof *w->pos * nv);
-  h = fnv1a64(h, w->vel, sizeof *w->vel * nv);
-  if (w->nlink) h = fnv1a64(h, w->eps, sizeof(double) * (size_t)w->nlink);
-  if (w->xs) h = fnv1a64(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
-  if (w->sq) h = fnv1a64(h, w->sq, sizeof *w->sq * nv);
-  h = fnv1a64(h, &w->V, sizeof w->V);
-  h = fnv1a64(h, &w->p_abs, sizeof w->p_abs);
-  h = fnv1a64(h, &w->t, sizeof w->t);
-  h = fnv1a64(h, &w->frame, sizeof w->frame);
-  return h;
+  h = fold(h, w->pos, sizeof *w->pos * nv);
+  h = fold(h, w->vel, sizeof *w->vel * nv);
+  if (w->nlink) h = fold(h, w->eps, sizeof(double) * (size_t)w->nlink);
+  if (w->xs) h = fold(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
+  if (w->sq) h = fold(h, w->sq, sizeof *w->sq * nv);
+  h = fold(h, &w->V, sizeof w->V);
+  h = fold(h, &w->p_abs, sizeof w->p_abs);
+  h = fold(h, &w->t, sizeof w->t);
+  return fold(h, &w->frame, sizeof w->frame);
 }
+
+uint64_t palp_world_hash(const palp_world *w) { return fold_logged(w, 14695981039346656037ull, fnv1a64); }
 
 /* A factor's numbers: its 3x3 blocks and diagonal (the block form the solves use), or its
  * scalar L and 1/D. The ordering is the analysis's, the same for every factor of a world. */
@@ -3545,17 +3548,8 @@ static uint64_t contact_hash(uint64_t h, const contact *k) {
 }
 
 uint64_t palp_world_state_hash(const palp_world *w) {
-  uint64_t h = 14695981039346656037ull;
   const size_t nv = (size_t)w->mesh.vertex_count, nl = (size_t)w->nlink;
-  /* what palp_world_hash covers, here mixed */
-  h = mixfold(h, w->pos, sizeof *w->pos * nv);
-  h = mixfold(h, w->vel, sizeof *w->vel * nv);
-  if (w->nlink) h = mixfold(h, w->eps, sizeof(double) * (size_t)w->nlink);
-  if (w->xs) h = mixfold(h, w->xs, sizeof *w->xs * (size_t)w->nlink);
-  if (w->sq) h = mixfold(h, w->sq, sizeof *w->sq * nv);
-  const double scalars[3] = {w->V, w->p_abs, w->t};
-  h = mixfold(h, scalars, sizeof scalars);
-  h = mixfold(h, &w->frame, sizeof w->frame);
+  uint64_t h = fold_logged(w, 14695981039346656037ull, mixfold); /* what palp_world_hash covers, here mixed */
   /* the links' state beyond their strains: directions and stresses (the feedback's) */
   if (nl) {
     h = mixfold(h, w->dir, sizeof(palp_vec3) * nl);
