@@ -15,7 +15,7 @@
  *     along the device path, sum F_k . (x_{k+1} - x_k), is <= 0 within 1% of
  *     the energy the device put in (and per cycle, no cycle returns more than
  *     1% of its input beyond what it took).
- * (c) the force limit: the same cycles with the limit at 60% of the peak, models on
+ * (c) the force limit: the same 100 cycles with the limit at 60% of the peak, models on
  *     time and late: no tick renders more than the limit (tolerance 1e-12 relative),
  *     the passivity controller's damper included; (d) that damper alone, pressing in
  *     with energy held from earlier, stays under a 0.15 N limit.
@@ -26,6 +26,8 @@
  * for 29.5 mJ put in).
  */
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
@@ -85,26 +87,39 @@ static palp_vec3 world_force(palp_world *w, int f) {
 #define HAPTIC_HZ 1000
 #define PHYSICS_HZ 250
 
-/* One multi-rate run through the station's own per-tick logic
- * (palp_cli_haptic_core: re-anchoring, horizon, palp_haptic): the 250 Hz world
- * steps with the device point of its tick, and its model reaches the station
- * `latency` ticks later (0: in the same tick); fills force[k] (rendered), x[k]
- * (device) and held[k] (the step's force held, the baseline) per 1 kHz tick. */
-#define LAT_MAX 128
-static int run_multirate(const palp_cli_simdevice_def *traj, const palp_haptic_def *hd, int latency, palp_vec3 *x,
-                         palp_vec3 *force, palp_vec3 *held, int cap, unsigned *flags_or) {
-  palp_vec3 last = {0, 0, 0};
+/* The server's side of a multi-rate run: the 250 Hz world stepped along the device
+ * trajectory, once. The world sees the device point only, never the rendered force, so
+ * the models it answers with are the same whatever the station does with them and
+ * whenever they reach it: one physics run serves every replay below (models on time and
+ * late, any force limit). Until 2026-12-07 each replay stepped its own world: the
+ * accuracy trajectory's worlds twice (and its 1 kHz reference twice), the cycles' four
+ * times (100 cycles on time and late, 20 for each limit run). */
+typedef struct physics_run {
+  int n;               /* 1 kHz ticks until the trajectory ends */
+  palp_vec3 *x;        /* device point per tick */
+  int *on;             /* the device's on flag per tick (palp_cli_simdevice_at) */
+  palp_local_model *m; /* the model of the 250 Hz step taken at tick 4 j, at j */
+} physics_run;
+
+static void *xalloc(size_t n, size_t size) {
+  void *p = calloc(n, size);
+  if (!p) {
+    fprintf(stderr, "out of memory\n");
+    exit(2);
+  }
+  return p;
+}
+
+/* Steps the 250 Hz world along traj for up to cap 1 kHz ticks, each step with the device
+ * point of its tick; its local models and the device samples kept in *run. */
+static void run_physics(const palp_cli_simdevice_def *traj, int cap, physics_run *run) {
   const int every = HAPTIC_HZ / PHYSICS_HZ;
   palp_world *w = make_world(1.0 / PHYSICS_HZ);
   const double R = palp_world_get_def(w)->mesh.radius;
-  palp_cli_haptic_core core;
-  palp_cli_haptic_core_init(&core, hd, PHYSICS_HZ, 1, 0, 0.2);
-  /* models in flight: (due tick, model, tick its device sample was taken) */
-  static palp_local_model q[LAT_MAX];
-  static int q_due[LAT_MAX], q_sent[LAT_MAX];
-  int qh = 0, qt = 0;
+  run->x = xalloc((size_t)cap, sizeof *run->x);
+  run->on = xalloc((size_t)cap, sizeof *run->on);
+  run->m = xalloc((size_t)cap / every + 1, sizeof *run->m);
   int f = -1, n = 0;
-  *flags_or = 0;
   for (int k = 0; k < cap; k++) {
     const double t = (double)k / HAPTIC_HZ;
     palp_vec3 p;
@@ -118,9 +133,43 @@ static int run_multirate(const palp_cli_simdevice_def *traj, const palp_haptic_d
         fprintf(stderr, "250 Hz step failed at t=%.3f\n", t);
         exit(2);
       }
-      palp_local_model m;
-      palp_world_finger_local_model(w, f, &m);
-      q[qh % LAT_MAX] = m;
+      palp_world_finger_local_model(w, f, &run->m[k / every]);
+    }
+    run->x[k] = p;
+    run->on[k] = on;
+    n = k + 1;
+  }
+  run->n = n;
+  palp_world_destroy(w);
+}
+
+static void free_physics(physics_run *run) {
+  free(run->x), free(run->on), free(run->m);
+  memset(run, 0, sizeof *run);
+}
+
+/* One multi-rate run through the station's own per-tick logic
+ * (palp_cli_haptic_core: re-anchoring, horizon, palp_haptic) on a physics run's
+ * models, each reaching the station `latency` ticks after the device sample its step
+ * used (0: in the same tick); fills force[k] (rendered) and held[k] (the step's force
+ * held, the baseline) per 1 kHz tick. */
+#define LAT_MAX 128
+static int run_multirate(const physics_run *run, const palp_haptic_def *hd, int latency, palp_vec3 *force,
+                         palp_vec3 *held, unsigned *flags_or) {
+  palp_vec3 last = {0, 0, 0};
+  const int every = HAPTIC_HZ / PHYSICS_HZ;
+  palp_cli_haptic_core core;
+  palp_cli_haptic_core_init(&core, hd, PHYSICS_HZ, 1, 0, 0.2);
+  /* models in flight: (due tick, model, tick its device sample was taken) */
+  static palp_local_model q[LAT_MAX];
+  static int q_due[LAT_MAX], q_sent[LAT_MAX];
+  int qh = 0, qt = 0;
+  *flags_or = 0;
+  for (int k = 0; k < run->n; k++) {
+    const double t = (double)k / HAPTIC_HZ;
+    const palp_vec3 p = run->x[k];
+    if (k % every == 0) {
+      q[qh % LAT_MAX] = run->m[k / every];
       q_due[qh % LAT_MAX] = k + latency;
       q_sent[qh % LAT_MAX] = k;
       qh++;
@@ -135,18 +184,26 @@ static int run_multirate(const palp_cli_simdevice_def *traj, const palp_haptic_d
       qt++;
     }
     palp_haptic_out o;
-    palp_cli_haptic_core_tick(&core, on, p, t, mp, age, &o, NULL);
+    palp_cli_haptic_core_tick(&core, run->on[k], p, t, mp, age, &o, NULL);
     *flags_or |= o.flags;
-    x[k] = p;
     force[k] = o.force;
     if (held) held[k] = last;
-    n = k + 1;
   }
-  palp_world_destroy(w);
-  return n;
+  return run->n;
 }
 
-static void test_accuracy(int latency) {
+/* The accuracy trajectory's physics: the 250 Hz world's models and the reference, the
+ * same finger computed at 1 kHz by the model itself (fref, its peak). Computed once for
+ * the runs on time and late: neither world sees the station. */
+enum { ACC_CAP = 8000 };
+typedef struct accuracy_physics {
+  palp_cli_simdevice_def traj;
+  physics_run run;
+  palp_vec3 *fref;
+  double peak;
+} accuracy_physics;
+
+static void accuracy_physics_run(accuracy_physics *a) {
   palp_cli_simdevice_def traj = palp_cli_simdevice_default_def(PALP_CLI_SIM_SLIDE);
   traj.polar_deg = 15;
   traj.azimuth_deg = 30;
@@ -155,15 +212,11 @@ static void test_accuracy(int latency) {
   traj.hold = 0.3;
   traj.slide_speed = 0.05; /* 50 mm/s along the surface */
   traj.slide_distance = 0.02;
-  enum { CAP = 8000 };
-  static palp_vec3 x[CAP], fr[CAP], fref[CAP], fzoh[CAP];
-  palp_haptic_def hd = palp_haptic_default_def();
-  hd.max_force = 100; /* no limiting: the accuracy of the model is measured */
-  hd.damping = 0;     /* the device-side damper is not part of the phantom's force */
-  unsigned fl = 0;
-  const int n = run_multirate(&traj, &hd, latency, x, fr, fzoh, CAP, &fl);
-
-  /* The reference: the same finger computed at 1 kHz by the model itself. */
+  a->traj = traj;
+  run_physics(&traj, ACC_CAP, &a->run);
+  const int n = a->run.n;
+  const palp_vec3 *x = a->run.x;
+  a->fref = xalloc((size_t)ACC_CAP, sizeof *a->fref);
   palp_world *w = make_world(1.0 / HAPTIC_HZ);
   int f = -1;
   double peak = 0;
@@ -174,10 +227,24 @@ static void test_accuracy(int latency) {
       fprintf(stderr, "1 kHz step failed\n");
       exit(2);
     }
-    fref[k] = world_force(w, f);
-    if (len3(fref[k]) > peak) peak = len3(fref[k]);
+    a->fref[k] = world_force(w, f);
+    if (len3(a->fref[k]) > peak) peak = len3(a->fref[k]);
   }
   palp_world_destroy(w);
+  a->peak = peak;
+}
+
+static void test_accuracy(const accuracy_physics *a, int latency) {
+  enum { CAP = ACC_CAP };
+  static palp_vec3 fr[CAP], fzoh[CAP];
+  const palp_cli_simdevice_def traj = a->traj;
+  const palp_vec3 *fref = a->fref;
+  const double peak = a->peak;
+  palp_haptic_def hd = palp_haptic_default_def();
+  hd.max_force = 100; /* no limiting: the accuracy of the model is measured */
+  hd.damping = 0;     /* the device-side damper is not part of the phantom's force */
+  unsigned fl = 0;
+  const int n = run_multirate(&a->run, &hd, latency, fr, fzoh, &fl);
   /* Errors against the 1 kHz model: the rendered force (local model), the
    * baseline that holds each physics step's force for its period (what a station
    * without a local model renders), and the 250 Hz physics itself at its own
@@ -259,13 +326,17 @@ static palp_cli_simdevice_def cycles_traj(int count) {
   return traj;
 }
 
-static double test_passivity(int latency) {
+enum { CYC_CAP = 45000 };
+
+/* the 100 cycles of (b) and (c) stepped by the 250 Hz world (physics_run) */
+static double test_passivity(const physics_run *run, int latency) {
   const palp_cli_simdevice_def traj = cycles_traj(100);
-  enum { CAP = 45000 };
-  static palp_vec3 x[CAP], fr[CAP];
+  enum { CAP = CYC_CAP };
+  static palp_vec3 fr[CAP];
+  const palp_vec3 *x = run->x;
   palp_haptic_def hd = palp_haptic_default_def(); /* as the station renders: damper on, 10 N limit */
   unsigned fl = 0;
-  const int n = run_multirate(&traj, &hd, latency, x, fr, NULL, CAP, &fl);
+  const int n = run_multirate(run, &hd, latency, fr, NULL, &fl);
   const double cyc = 2 * (traj.depth + traj.approach) / traj.speed; /* [s] */
   double in = 0, out = 0, worst_cycle = -INFINITY, peak = 0;
   double cin = 0, cnet = 0;
@@ -300,18 +371,18 @@ static double test_passivity(int latency) {
   return peak;
 }
 
-/* (c) the safe force holds whatever adds to the force: the same cycles (20 of them),
- * the limit at 60% of the peak the unlimited rendering reached. With late models the
- * passivity controller's damper acts on top of the renderer's (limited) force; once it
- * took the force 3.5x past a 0.15 N limit (test haptic_session, a loaded machine). */
-static void test_limit(int latency, double peak) {
-  const palp_cli_simdevice_def traj = cycles_traj(20);
-  enum { CAP = 10000 };
-  static palp_vec3 x[CAP], fr[CAP];
+/* (c) the safe force holds whatever adds to the force: the same cycles (all 100 of (b)'s
+ * physics run since 2026-12-07, 20 of them before, each on a world of its own), the limit
+ * at 60% of the peak the unlimited rendering reached. With late models the passivity
+ * controller's damper acts on top of the renderer's (limited) force; once it took the
+ * force 3.5x past a 0.15 N limit (test haptic_session, a loaded machine). */
+static void test_limit(const physics_run *run, int latency, double peak) {
+  enum { CAP = CYC_CAP };
+  static palp_vec3 fr[CAP];
   palp_haptic_def hd = palp_haptic_default_def();
   hd.max_force = 0.6 * peak;
   unsigned fl = 0;
-  const int n = run_multirate(&traj, &hd, latency, x, fr, NULL, CAP, &fl);
+  const int n = run_multirate(run, &hd, latency, fr, NULL, &fl);
   double top = 0;
   int at_limit = 0;
   for (int k = 0; k < n; k++) {
@@ -374,14 +445,22 @@ int main(int argc, char **argv) {
     return 2;
   }
   printf("phantom %s, depths x%.2f\n", scene_path, depth_scale);
-  test_accuracy(0);
-  test_passivity(0);
+  accuracy_physics acc;
+  accuracy_physics_run(&acc);
+  physics_run cyc;
+  const palp_cli_simdevice_def cycles = cycles_traj(100);
+  run_physics(&cycles, CYC_CAP, &cyc);
+  test_accuracy(&acc, 0);
+  test_passivity(&cyc, 0);
   /* The same with every model reaching the station late_ms (40) after the device
    * sample its step used (a 40 ms round trip), through the same station logic. */
-  test_accuracy(late_ms);
-  const double peak = test_passivity(late_ms);
+  test_accuracy(&acc, late_ms);
+  const double peak = test_passivity(&cyc, late_ms);
   test_limit_controller();
-  test_limit(0, peak);
-  test_limit(late_ms, peak);
+  test_limit(&cyc, 0, peak);
+  test_limit(&cyc, late_ms, peak);
+  free_physics(&acc.run);
+  free(acc.fref);
+  free_physics(&cyc);
   return check_exit();
 }
