@@ -20,3 +20,9 @@ palp_chromium_run() {
 palp_chromium_render() {
   palp_chromium_run --window-size="$(echo "$5" | tr x ,)" --screenshot="$2" --dump-dom "file://$1" >"$3" 2>"$4"
 }
+# palp_chromium_render_many WIDTHxHEIGHT LOG HTML PNG DOM [HTML PNG DOM ...]: the same for several pages in one
+# Chromium, over DevTools (tests/chromium_render.py; the three reports of test_review_cli.sh had been three starts).
+palp_chromium_render_many() {
+  # (sourced by a script in tests/AREA/: its $0's folder)
+  timeout 150 /usr/bin/python3 "$(dirname "$0")/../chromium_render.py" "$@"
+}

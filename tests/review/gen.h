@@ -38,7 +38,8 @@ typedef enum { GEN_EXPERT = 0, GEN_NOVICE = 1, GEN_FREE = 2 } gen_kind;
  * debrief: NULL, a log as a server before session 59 wrote it (no debriefs logged, no
  * "debrief_events" key); "", a server that logs debriefs and logged none; else the debrief
  * event's detail, as the server would have logged it (a fixture: the review reads it back). */
-static int gen_session(palp_db_writer *w, const char *test_dir, const char *uid, const char *trainee, gen_kind kind,
+/* inline: test_review_assess includes this header for gen_slurp alone (it reads review_gen's class) */
+static inline int gen_session(palp_db_writer *w, const char *test_dir, const char *uid, const char *trainee, gen_kind kind,
                        unsigned seed, double start_unix_s, palp_assess_result *ref, const char *debrief) {
   char ex_path[1024], sc_path[1024], err[512] = "";
   snprintf(ex_path, sizeof ex_path, "%s/exercise_expert.json", test_dir);

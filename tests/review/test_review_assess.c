@@ -1,7 +1,9 @@
 /* Metrics from the log equal the in-process assessment (issue 13).
- * usage: test_review_assess TMPDIR TESTDIR
+ * usage: test_review_assess TMPDIR TESTDIR CLASSDIR
  * An expert, a novice and a free-practice session are logged through the writer into a real
- * SQLite file (gen.h); palp-review's review_assess reads them back (exercise JSON, scene ->
+ * SQLite file (gen.h: review_gen, the fixture review_class_log, writes CLASSDIR/class.db and the
+ * in-process assessments CLASSDIR/class.refs once for this test and review_cli; this test works on a
+ * copy); palp-review's review_assess reads them back (exercise JSON, scene ->
  * rest mesh, finger samples, findings) and must give exactly what palp_assess gave on the
  * samples in memory: tolerance 0 (SQLite stores IEEE doubles bit for bit and the same pure
  * code runs on the same numbers). Then the issue's properties on the logged expert and novice. */
@@ -10,6 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+#include <sqlite3.h>
 
 #include "assess_log.h"
 #include "check.h"
@@ -95,17 +99,36 @@ static void verdict_text_cases(void) {
 
 int main(int argc, char **argv) {
   verdict_text_cases();
-  REQUIRE(argc == 3, "usage: test_review_assess TMPDIR TESTDIR");
-  char path[1024];
+  REQUIRE(argc == 4, "usage: test_review_assess TMPDIR TESTDIR CLASSDIR");
+  char path[1024], src[1024];
   snprintf(path, sizeof path, "%s/review_assess.sqlite", argv[1]);
   unlink(path);
   char err[512] = "";
+  /* the class review_gen logged (the fixture), copied through SQLite's backup API (its WAL, if any, with it) */
+  {
+    snprintf(src, sizeof src, "%s/class.db", argv[3]);
+    sqlite3 *from = NULL, *to = NULL;
+    REQUIRE(sqlite3_open_v2(src, &from, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK &&
+                sqlite3_open(path, &to) == SQLITE_OK,
+            "open %s and %s", src, path);
+    sqlite3_backup *b = sqlite3_backup_init(to, "main", from, "main");
+    REQUIRE(b && sqlite3_backup_step(b, -1) == SQLITE_DONE && sqlite3_backup_finish(b) == SQLITE_OK,
+            "copy %s: %s", src, sqlite3_errmsg(to));
+    sqlite3_close(from);
+    sqlite3_close(to);
+  }
+  /* review_gen's in-process assessments: class-bob-1 (novice, seed 7), class-alice-1 (expert), class-bob-2,
+   * class-carol-1 (free practice) */
+  palp_assess_result gen_ref[4], ref[3];
+  {
+    snprintf(src, sizeof src, "%s/class.refs", argv[3]);
+    FILE *f = fopen(src, "rb");
+    REQUIRE(f && fread(gen_ref, sizeof gen_ref, 1, f) == 1, "read %s", src);
+    fclose(f);
+    ref[0] = gen_ref[1], ref[1] = gen_ref[0], ref[2] = gen_ref[3];
+  }
   palp_db_writer *w;
   REQUIRE(palp_db_writer_open(path, NULL, &w, err, sizeof err) == 0, "writer: %s", err);
-  palp_assess_result ref[3];
-  REQUIRE(gen_session(w, argv[2], "ra-expert", "alice", GEN_EXPERT, 0, 1.7e9, &ref[0], NULL) == 0, "expert logged");
-  REQUIRE(gen_session(w, argv[2], "ra-novice", "bob", GEN_NOVICE, 7u, 1.7e9 + 1000, &ref[1], NULL) == 0, "novice logged");
-  REQUIRE(gen_session(w, argv[2], "ra-free", "carol", GEN_FREE, 3u, 1.7e9 + 2000, &ref[2], NULL) == 0, "free logged");
   /* dora's attempts at the same exercise, each logged as a server would (no samples: the "not
    * blind" rule reads only the sessions' ends, exercises and debriefs): 1 its debrief not sent,
    * 2 told the count, 3 a log from before debriefs were logged, 4 a server that logs them and
@@ -146,7 +169,7 @@ int main(int argc, char **argv) {
 
   palp_db *db;
   REQUIRE(palp_db_open(path, 0, &db, err, sizeof err) == 0, "open: %s", err);
-  const char *uid[3] = {"ra-expert", "ra-novice", "ra-free"};
+  const char *uid[3] = {"class-alice-1", "class-bob-1", "class-carol-1"};
   review_assessment a[3];
   for (int i = 0; i < 3; i++) {
     palp_db_session_info s;

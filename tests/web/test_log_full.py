@@ -134,6 +134,7 @@ def run(build, source, out):
                                       r"\): it will be incomplete in the review\.", page_all)
         check(m is not None and said is not None and int(m.group(1)) >= int(said.group(1)),
               "  and her page, the session over, says the loss in all as her station does: %r" % page_all)
+        ann_page.close()  # done with: an open page keeps its animation frames running (Chromium's CPU)
         quiet = page.wait_for("(function(){const r=%s; return r && r.text.indexOf('LOSING') < 0 ? r : null;})()"
                               % line, 20)
         m = quiet and re.fullmatch(r"(\d+) records lost \(0 shed: its queue was full; (\d+) failed: its file reached "

@@ -31,7 +31,7 @@ def run(build, source, out):
         check(r.returncode == 2 and "token must be" in r.stderr, "a short token is refused: %s" % r.stderr.strip())
 
         procs.server()
-        procs.trainee("alice", 1, ["--profile", "step", "--magnitude", "2", "--t-on", "0.5", "--t-off", "60",
+        alice = procs.trainee("alice", 1, ["--profile", "step", "--magnitude", "2", "--t-on", "0.5", "--t-off", "60",
                                    "--duration", "60"])
         web = procs.web(["--token", TOKEN])
         base = web.base
@@ -112,6 +112,11 @@ def run(build, source, out):
         ok = page2.wait_for("window.palpState && palpState.connected && palpState.trainee.rendered > 0", 20)
         page2.screenshot(os.path.join(out, "token-granted.png"))
         check(ok is True, "Chromium with the token: connected and drawing")
+        # What follows is about the pages' connections, not what they draw: alice's station and the refused page
+        # go, so that page2 draws no more frames over the next ~30 s (a software WebGL render for each: the test's
+        # Chromium took ~14 s of CPU of the test's ~23 with them, 2026-12-07).
+        procs.stop(alice)
+        page.close()
         # A page loaded by the cookie alone (the one page2 was given; no ?token= in its address) is refused its
         # WebSocket for good: it says why, and its attempts slow down. Waits from 1 s, doubling to at most
         # 30 s: after the 3rd refusal (~3 s) 4 s, then 8 s, so over the next 10 s 1 or 2 attempts (retried every
