@@ -63,10 +63,21 @@
   const controls = renderer ? new THREE.OrbitControls(camera, renderer.domElement) : null;
   if (controls) {
     controls.enableDamping = false;
-    controls.addEventListener("change", function () { dirty = true; });
+    controls.addEventListener("change", function () { dirty = true; wake(); });
   }
 
   let mesh = null, geom = null, rest = null, phantom = null, dirty = true, latest = null;
+  /* A frame is asked for only when something changed (a deformation, the camera, a finger, the
+   * window): an animation loop that asked for every frame kept a still page drawing nothing 60
+   * times a second, ~0.1 s of CPU a second in headless Chromium against ~0.01 s for a still page
+   * (2026-12-07), and a trainee's laptop pays the same. */
+  let frameAsked = false;
+  function wake() {
+    if (!frameAsked) {
+      frameAsked = true;
+      requestAnimationFrame(loop);
+    }
+  }
   let scaleMm = 30, scaleMin = 30, scaleMax = 30; /* this session's scale; the bridge's bounds (hello) */
   function setScale(mm) {
     if (mm === scaleMm) return;
@@ -81,7 +92,7 @@
     if (renderer) renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
-    dirty = true;
+    dirty = true; wake();
   }
   window.addEventListener("resize", resize);
 
@@ -115,9 +126,9 @@
     coverPts.visible = showCover.checked;
     coverPts.renderOrder = 5; /* after the skin, which is offset behind its depth: a dot at a vertex passes the depth test */
     scene.add(coverPts);
-    dirty = true;
+    dirty = true; wake();
   }
-  showCover.addEventListener("change", function () { if (coverPts) coverPts.visible = showCover.checked; dirty = true; });
+  showCover.addEventListener("change", function () { if (coverPts) coverPts.visible = showCover.checked; dirty = true; wake(); });
 
   function buildMesh(ph) {
     if (mesh) { scene.remove(mesh); geom.dispose(); }
@@ -146,7 +157,7 @@
     }
     if (renderer) document.getElementById("waiting").textContent = ""; /* else it keeps saying why there is no view */
     T.phantom = ph.id;
-    dirty = true;
+    dirty = true; wake();
   }
 
   /* Positions = rest + displacement; colour = |displacement| on the session's scale, grown
@@ -169,7 +180,7 @@
     geom.computeBoundingSphere();
     T.maxDispMm = max;
     document.getElementById("maxdisp").textContent = max.toFixed(2); /* mm, 2 decimals (docs/naming.md) */
-    dirty = true;
+    dirty = true; wake();
   }
 
   /* Fingers: a position-driven finger is its sphere; a force-driven one a marker at the contact
@@ -255,14 +266,14 @@
       note.className = note.textContent ? "warn" : "muted";
     }
     for (const k in pool) pool[k].forEach(function (o, i) { o.visible = showFingers && i < used[k]; }); /* the rest wait */
-    dirty = true;
+    dirty = true; wake();
   }
   let showFingers = true;
   /* For tests: hide the fingers so that a screenshot shows the phantom's own change only. */
   window.palpShowFingers = function (on) {
     showFingers = !!on;
     for (const o of fingerObjs) o.visible = showFingers;
-    dirty = true;
+    dirty = true; wake();
   };
 
   /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded. In an exercise the bridge bands the
@@ -418,7 +429,7 @@
     document.getElementById("debrief-score").hidden = true;
     T.debrief = null;
     T.score = null;
-    dirty = true;
+    dirty = true; wake();
   }
   function showDebrief(m) {
     if (!Array.isArray(m.lumps) || !m.lumps.every(PALP.lumpValid)) return; /* checked before use (since session 82) */
@@ -443,7 +454,7 @@
       debriefObjs.push(o);
     });
     document.getElementById("debrief").hidden = false;
-    dirty = true;
+    dirty = true; wake();
   }
   window.palpDebriefText = function (m) { return [debriefText(m)].concat(m.lumps.map(PALP.debriefLump)); };
 
@@ -559,6 +570,7 @@
       /* Kept, and shaded at the next animation frame: a frame that arrives while the page cannot
        * draw (busy, hidden) costs nothing but its copy. */
       latest = f.disp;
+      wake();
       T.frames++;
       /* arrival times [ms] of the newest frames, for the benchmark's inter-frame gaps */
       T.arrivals.push(performance.now());
@@ -616,7 +628,17 @@
     }
   });
 
-  function loop(now) {
+  /* frames received and drawn a second, counted by the clock: no frame is asked for while nothing changes */
+  setInterval(function () {
+    const now = performance.now();
+    T.fpsReceived = fpsFrames * 1000 / (now - fpsT0);
+    T.fpsRendered = fpsRendered * 1000 / (now - fpsT0);
+    fpsFrames = fpsRendered = 0;
+    fpsT0 = now;
+  }, 1000);
+
+  function loop() {
+    frameAsked = false;
     if (latest && geom && latest.length === rest.length) {
       setDisplacement(latest);
       latest = null;
@@ -627,16 +649,8 @@
       T.rendered++;
       fpsRendered++;
     }
-    if (now - fpsT0 >= 1000) {
-      T.fpsReceived = fpsFrames * 1000 / (now - fpsT0);
-      T.fpsRendered = fpsRendered * 1000 / (now - fpsT0);
-      fpsFrames = fpsRendered = 0;
-      fpsT0 = now;
-    }
-    requestAnimationFrame(loop);
   }
   resize();
-  requestAnimationFrame(loop);
 
   /* The note under the view from the local models' flags (LocalModel.flags, as palp-web
    * passes them: LM_FORCE_LIMIT 1, LM_OUT_OF_RANGE 30, LM_BEYOND_VALIDATED 64,
