@@ -12,24 +12,31 @@
 # 3 s, with the same pole uz to the 4 decimals the tool prints (-0.6378 mm both, 2026-12-04). Level 1
 # is solved again on the full deck (--ccx-only) and by palp alone (--palp-only): both must give the
 # quarter run's pole uz as the tool prints it (0.1 um; the quarter deck's .dat agrees with the
-# full deck's to all 7 printed digits). ~3 s more.
+# full deck's to all 7 printed digits; both decks in the same increments). ~3 s more.
 # The same two levels for breast_tissue (the exercises' material: E 15 kPa gel under 334 kPa skin,
 # ~5 mm at the pole), ccx on the quarter deck with load increments of 0.1: the same opposite-side
 # approach and 20% at level 2 (measured 14.6%; docs/materials.md has ccx to level 5). ~20 s more.
 # The converged comparison is bench/fem/ccx_crosscheck.
 # ccx runs on one thread here (--ccx-threads 1; the tool's default is both cores): its two OpenMP
 # threads beside the suite's other computations spun, 57-63 s against 15 s alone (2026-12-06).
+# ccx is most of the test's CPU (2026-12-07: ~19 of ~21 s; SPOOLES, which orders and factors the
+# system at every iteration, ~65% of ccx's). paper_long_term's load goes in increments of 0.5
+# (--ccx-inc 0.5; the tool's default 0.25): 2 increments of 3-4 iterations at levels 1 and 2, 7
+# each against 14 (1.0: a cut-back, 18 at level 2), the same pole uz to the 4 decimals the tool
+# prints (full precision: -0.7182113 / -0.6378107 mm against -0.7182162 / -0.6378185 with 0.25,
+# ccx's own tolerance). Breast tissue keeps 0.1: 31 iterations at level 2; 0.125 / 0.2 / 0.25 / 0.5
+# took 35 / 31 / 43 / 53 (0.25 and 0.5 cut back; 0.2 no cheaper).
 # usage: test_ccx.sh CCX_CROSSCHECK TMPDIR
 set -u
 tool=$1 tmp=$2
 command -v ccx >/dev/null 2>&1 || { echo "FAIL ccx (calculix-ccx) is not installed: scripts/debian-packages.txt lists it"; exit 1; }
 dir=$tmp/ccx
 rm -rf "$dir"
-"$tool" --levels 1,2 --profile paper_long_term --ccx-quarter --force 3 --ccx-threads 1 --dir "$dir" > "$dir.txt" 2>&1
+"$tool" --levels 1,2 --profile paper_long_term --ccx-quarter --ccx-inc 0.5 --force 3 --ccx-threads 1 --dir "$dir" > "$dir.txt" 2>&1
 st=$?
 cat "$dir.txt"
 [ $st -eq 0 ] || { echo "FAIL ccx_crosscheck exit $st"; exit 1; }
-"$tool" --levels 1 --profile paper_long_term --ccx-only --force 3 --ccx-threads 1 --dir "$dir/full" > "$dir.f.txt" 2>&1
+"$tool" --levels 1 --profile paper_long_term --ccx-only --ccx-inc 0.5 --force 3 --ccx-threads 1 --dir "$dir/full" > "$dir.f.txt" 2>&1
 st=$?
 cat "$dir.f.txt"
 [ $st -eq 0 ] || { echo "FAIL ccx_crosscheck --ccx-only (full deck) exit $st"; exit 1; }
