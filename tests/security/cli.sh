@@ -135,9 +135,9 @@ openssl pkey -in "$pki/trainee/alice.key.pem" -aes128 -passout pass:lab -out "$o
 rc=$?
 check "a key with a passphrase is refused as such, not prompted for (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'or has a passphrase (palp gives none)' '$out/passphrase.log'"
-bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/otherca" classroom --trainees alice >/dev/null 2>&1
+# (alice of the fixture's other CA, PKI_DIR-rogue: make_pki.sh)
 cp -r "$pki" "$out/foreign"
-cp "$out/otherca/trainee/alice.cert.pem" "$out/otherca/trainee/alice.key.pem" "$out/foreign/trainee/"
+cp "$pki-rogue/trainee/alice.cert.pem" "$pki-rogue/trainee/alice.key.pem" "$out/foreign/trainee/"
 "$client" --role trainee --domain 131 --phantom 1 --pki "$out/foreign" --identity trainee/alice --duration 1 \
   >"$out/foreign.log" 2>&1
 rc=$?

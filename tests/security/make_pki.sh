@@ -8,6 +8,8 @@
 #                a CA of his own (DIR-rogue) instead of the classroom's
 #   DIR-thief    bob's certificate and permissions, copied (they are public), with a private key
 #                of the thief's own: an impersonation the handshake's signature must expose
+#   DIR-rogue    the other CA, with a trainee alice of its own (cli.sh: a certificate another classroom's
+#                CA issued; it made a third classroom of its own for it until session 84)
 # usage: make_pki.sh make-classroom-pki.sh DIR
 set -eu
 script=$1
@@ -20,7 +22,7 @@ cp "$dir/trainee/dave.cert.pem" "$dir/trainee/dave.key.pem" "$dir/trainee/dave.p
 bash "$script" "$dir" revoke trainee/dave >/dev/null
 openssl crl -in "$dir/crl.pem" -noout -text | grep -q "Serial Number" || { echo "make_pki: dave not in the CRL" >&2; exit 1; }
 
-bash "$script" "$dir-rogue" init >/dev/null
+bash "$script" "$dir-rogue" classroom --trainees alice >/dev/null
 mkdir -p "$dir-forged/trainee"
 cp "$dir/ca.cert.pem" "$dir/crl.pem" "$dir-forged/"
 cp "$dir-rogue/ca.cert.pem" "$dir-forged/rogue-ca.cert.pem"
