@@ -53,14 +53,19 @@ check "a recorder with a trainee identity is refused up front: it needs an instr
 "$client" --pki "$pki" --identity trainee/dave --role trainee --phantom 1 --duration 1 >"$out/dave.log" 2>&1; rc=$?
 check "a revoked identity is told it was revoked, and how to get a new one (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'identity trainee/dave was revoked in this classroom (its files were moved to .*/revoked/trainee_dave-[0-9T]*\\.\\*): ask the instructor for a new one (make-classroom-pki.sh DIR add trainee dave)' '$out/dave.log'"
+# The --check runs below that assert a refusal (or its absence) for DDS Security or the DDS config run on
+# check-server.json, one dome: no phantom takes part in what they assert, and config/server.json's five
+# domes cost each run ~0.25 s of CPU building their models (one: ~0.05 s; 2026-12-07). The lines
+# default-palp.example gives keep their own config.
+check_server() { "$server" --config "$(dirname "$0")/check-server.json" "$@"; }
 # A DDS config that may reach a network (the lab example): refused unsecured, before any participant
 # exists (--check stops there too), accepted with --insecure or --pki. Nothing here creates one.
 lab=$(dirname "$0")/../../config/cyclonedds-lab.xml.example
-"$server" --dds-config "$lab" --check >"$out/lab.log" 2>&1
+check_server --dds-config "$lab" --check >"$out/lab.log" 2>&1
 rc=$?
 check "a plain server with a DDS config beyond loopback is refused (exit $rc)" \
   "[ $rc -eq 2 ] && grep -q 'refusing to serve beyond loopback without DDS Security' '$out/lab.log' && grep -q 'PALP_DDS_INTERFACE' '$out/lab.log'"
-"$server" --dds-config "$lab" --check --insecure >"$out/lab2.log" 2>&1 && "$server" --dds-config "$lab" --check --pki "$pki" >>"$out/lab2.log" 2>&1
+check_server --dds-config "$lab" --check --insecure >"$out/lab2.log" 2>&1 && check_server --dds-config "$lab" --check --pki "$pki" >>"$out/lab2.log" 2>&1
 rc=$?
 check "the same with --insecure, or secured with --pki, passes its check (exit $rc)" "[ $rc -eq 0 ]"
 # Session 81 review (operations): config/default-palp.example's lab lines, as an administrator copies them
@@ -96,7 +101,7 @@ done
 for case in "--identity trainee/alice|is not the server's" "--identity ''|identity: empty: with a PKI directory" \
             "--domain 231|domain 231: a classroom's governance covers domains 0-230"; do
   opt=${case%%|*} want=${case#*|}
-  eval "\"\$server\" --pki \"\$pki\" $opt --check" >"$out/chk.log" 2>&1
+  eval "check_server --pki \"\$pki\" $opt --check" >"$out/chk.log" 2>&1
   rc=$?
   check "--check $opt refused (exit $rc): $want" "[ $rc -ne 0 ] && grep -qF \"$want\" '$out/chk.log'"
 done
@@ -145,10 +150,10 @@ check "a certificate of another classroom's CA is refused before any network use
   "[ $rc -eq 1 ] && grep -q \"was not issued by this classroom's CA\" '$out/foreign.log'"
 # The rule's edge, seen by the server's --check: group-readable (a service's group, docs/deploy.md) passes.
 chmod 640 "$out/openkey/server/server.key.pem"
-"$server" --check --pki "$out/openkey" >"$out/check640.log" 2>&1
+check_server --check --pki "$out/openkey" >"$out/check640.log" 2>&1
 rc640=$?
 chmod 644 "$out/openkey/server/server.key.pem"
-"$server" --check --pki "$out/openkey" >"$out/check644.log" 2>&1
+check_server --check --pki "$out/openkey" >"$out/check644.log" 2>&1
 rc=$?
 check "palp-server --check: a key of mode 0640 passes (exit $rc640), 0644 is refused (exit $rc)" \
   "[ $rc640 -eq 0 ] && grep -q 'DDS Security identity readable' '$out/check640.log' && [ $rc -eq 1 ] && grep -q 'server.key.pem is readable by every user' '$out/check644.log'"
@@ -158,7 +163,7 @@ check "palp-server --check: a key of mode 0640 passes (exit $rc640), 0644 is ref
 # certificate copied in its place) likewise.
 cp -r "$pki" "$out/nocrl"
 rm "$out/nocrl/crl.pem"
-"$server" --check --pki "$out/nocrl" >"$out/nocrl-check.log" 2>&1
+check_server --check --pki "$out/nocrl" >"$out/nocrl-check.log" 2>&1
 rc=$?
 check "palp-server --check refuses a PKI without crl.pem, naming it (exit $rc)" \
   "[ $rc -ne 0 ] && grep -q 'classroom CRL .*/nocrl/crl.pem: missing: without it revoked identities would be admitted' '$out/nocrl-check.log' && ! grep -q ': ok (' '$out/nocrl-check.log'"
@@ -169,10 +174,10 @@ check "a station without crl.pem is refused before any network use (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'nocrl/crl.pem: missing: without it revoked identities would be admitted' '$out/nocrl-client.log'"
 cp -r "$pki" "$out/badcrl"
 printf 'not a CRL\n' >"$out/badcrl/crl.pem"
-"$server" --check --pki "$out/badcrl" >"$out/badcrl-check.log" 2>&1
+check_server --check --pki "$out/badcrl" >"$out/badcrl-check.log" 2>&1
 rc=$?
 cp "$pki/ca.cert.pem" "$out/badcrl/crl.pem"
-"$server" --check --pki "$out/badcrl" >"$out/cacrl-check.log" 2>&1
+check_server --check --pki "$out/badcrl" >"$out/cacrl-check.log" 2>&1
 rc2=$?
 check "palp-server --check refuses a crl.pem that is not a CRL: text (exit $rc), the CA certificate (exit $rc2)" \
   "[ $rc -ne 0 ] && [ $rc2 -ne 0 ] && grep -q 'classroom CRL .*/badcrl/crl.pem: not a PEM CRL: without it revoked identities would be admitted' '$out/badcrl-check.log' && grep -q 'badcrl/crl.pem: not a PEM CRL' '$out/cacrl-check.log'"
@@ -181,7 +186,7 @@ check "palp-server --check refuses a crl.pem that is not a CRL: text (exit $rc),
 cp -r "$pki" "$out/soon"
 bash "$(dirname "$0")/../../scripts/make-classroom-pki.sh" "$out/soon" add trainee shorty --days 5 >/dev/null
 (cd "$out/soon" && openssl ca -config ca/ca.cnf -gencrl -crldays 3 -out crl.pem 2>/dev/null)
-"$server" --check --pki "$out/soon" >"$out/soon-check.log" 2>&1
+check_server --check --pki "$out/soon" >"$out/soon-check.log" 2>&1
 rc=$?
 "$client" --role trainee --domain 131 --phantom 1 --pki "$out/soon" --identity trainee/shorty --duration 1 --timeout 4 \
   --quiet >"$out/soon-client.log" 2>&1
@@ -253,7 +258,7 @@ wait $opid
 rc=$?
 check "a server whose permissions predate palp_debrief serves, and warns that it cannot debrief (exit $rc)" \
   "[ $rc -eq 0 ] && grep -q 'no debriefs: the server.s permissions do not allow topic palp_debrief' '$out/oldperm-server.log'"
-"$server" --config "$(dirname "$0")/../../config/server.json" --pki "$out/oldperm" --check >"$out/oldperm-check.log" 2>&1
+check_server --pki "$out/oldperm" --check >"$out/oldperm-check.log" 2>&1
 check "  ... and says at start that its permissions are older than this palp's, --check too" \
   "grep -q 'WARN  palp-server: DDS Security: the permissions of server/server are version 1, older than this palp.s $pv' '$out/oldperm-server.log' && grep -q '^palp-server: warning: DDS Security: the permissions of server/server are version 1, older than this palp.s $pv' '$out/oldperm-check.log'"
 check "  ... nor send its exercises to recorders, and says that their lesions stay on it" \
