@@ -244,10 +244,11 @@ sed -i -e '/palp permissions, version/d' -e '/<topic>palp_debrief<\/topic>/d; /<
   -e '/<topic>palp_session_exercise<\/topic>/d; /<topic>palp_session_log<\/topic>/d; /<topic>palp_session_closed<\/topic>/d' \
   -e '/<topic>palp_finger_sample<\/topic>/d' "$out/oldperm/server/server.permissions.xml"
 resign "$out/oldperm" server/server.permissions
-# It hosts the shipped exercises and logs: alice (her permissions old too) takes "easy" by position
+# It hosts the shipped exercise "easy" (server-easy.json: phantom 11, as config/server-exercises.json has
+# it, without the seven phantoms nothing here uses) and logs: alice (her permissions old too) takes "easy" by position
 # and leaves; nobody can write her debrief, her station says why, and the session log records that
 # none was sent, and why, so that her next attempt is not taken for one after a debrief (session 59).
-"$server" --domain 132 --config "$(dirname "$0")/../../config/server-exercises.json" --database "$out/oldperm.db" \
+"$server" --domain 132 --config "$(dirname "$0")/server-easy.json" --database "$out/oldperm.db" \
   --pki "$out/oldperm" --duration 30 >"$out/oldperm-server.log" 2>&1 &
 opid=$!
 sleep 1
@@ -320,7 +321,7 @@ check "init re-issues their permissions alone, naming them, with palp_debrief, p
 "$recorder" --domain 132 --db "$out/rec-ex.db" --pki "$out/oldperm" --identity instructor/ines --duration 30 \
   >"$out/rec-ex.log" 2>&1 &
 rpid=$!
-"$server" --domain 132 --config "$(dirname "$0")/../../config/server-exercises.json" --database "$out/ex.db" \
+"$server" --domain 132 --config "$(dirname "$0")/server-easy.json" --database "$out/ex.db" \
   --pki "$out/oldperm" --duration 30 >"$out/ex-server.log" 2>&1 &
 opid=$!
 "$web" --domain 132 --pki "$out/oldperm" --identity instructor/ines --port 0 --no-join --duration 12 \
