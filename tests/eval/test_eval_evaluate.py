@@ -22,15 +22,15 @@ long_term: the default parameters, for the long-term reading
 the level-4 long-term FEM of distribution II stored in
 tests/data/fem_level4_long_term_d2.csv (written by tests/data/make_long_term_level4.py;
 every vertex at 32 of the 400 frames, the FEM's most displaced vertex at all 400),
-the model's side from a level-2 evaluate run here: RMSE over the stored frames at
+the model's side from an evaluate run here: RMSE over the stored frames at
 most 3% of the level-4 FEM's peak and the model's peak within 10% of it (the
 issue's target; measured 2.18% over the stored frames, 2.4% over all 400 in evaluate, and
 1.064); figures in docs/materials.md, "The patch map and the support". Recovery to 5% of
 the peak after the release, at the FEM's most displaced vertex (vertex 35, stored at every
 frame): within 0.15 s of the level-4 FEM's (measured 0.744 s against 0.687 s). The FEM side is the
 patch load map (docs/fem.md, "Surface map"), the default.
-The same run's level-2 FEM peak must equal the one recorded in the data file
-(relative 1e-6): the stored level-4 field was written by the FEM the tests build
+The level-2 FEM peak (a level-2 run of the hold's 200 frames, where the peak is) must equal the one
+recorded in the data file (relative 1e-6): the stored level-4 field was written by the FEM the tests build
 (eval_level4_guard recomputes its first 12 frames). The level-2-fitted set
 (config/params/paper_long_term_level2.json) fails the peak bound (-11.9% against the
 patch-mapped level-4 FEM; -16.9% against the point-mapped one).
@@ -581,29 +581,49 @@ def recovery_s(trace, t_release=2.0):
     return None
 
 
+HOLD_FRAMES = 200  # the scenes' step load is on for 2 s: frames 0-199 at 10 ms
+
+
 def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, label, maker, rec_tol, rec_band=None):
-    """Distribution II of a set (its model side from a level-2 evaluate run here) against the
+    """Distribution II of a set (its model side from an evaluate run here) against the
     level-4 FEM field stored in data: RMSE over the stored full frames at most rmse_bound of the
-    level-4 peak, the model's peak within peak_bound of it; the run's level-2 FEM peak equal to
-    the one recorded with the stored field (the FEM did not change since). Recovery: at the
+    level-4 peak, the model's peak within peak_bound of it; the level-2 FEM peak (over the hold,
+    where it lies) equal to the one recorded with the stored field (the FEM did not change since). Recovery: at the
     FEM's most displaced vertex (stored at every frame), the model's time to 5% of its peak
     after the 2 s release within rec_tol seconds of the FEM's, and inside rec_band (lo, hi)
     when one is given."""
     lt_scene = os.path.join(os.path.dirname(scene), scene_name)
     tmp = scratch("palp_eval_level4_ref_")
-    out = os.path.join(tmp, "out")
-    r = run([tool, "evaluate", "--scene", lt_scene, "--level", "2", "--distributions", "2", "--no-plots", "--out", out,
-             "--cache-dir", os.path.join(tmp, "cache"), "--quiet"])
-    check(r.returncode == 0, "evaluate exited %d: %s" % (r.returncode, r.stderr))
-    if r.returncode:
-        return
+    # Two runs, each only as long as what it is read for (until 2026-12-07 one level-2 run of all 400
+    # frames, whose FEM was ~95% of the test: 11.2 s CPU long-term, 14.4 s breast tissue):
+    # - the model's side, all 400 frames, from a level-1 run (the real-time record does not depend on
+    #   the FEM level: measured bit-identical to the level-2 run's; level 1's FEM is the cheapest, ~1.5 s);
+    # - the level-2 FEM for the guard, its first HOLD_FRAMES (the 2 s hold): the FEM steps forward in
+    #   time only, so they equal the 400-frame run's first 200 bit for bit (measured, long-term), and the
+    #   peak recorded with the stored field lies in them (frame 199 long-term, 198 breast tissue: the
+    #   data files' level-2 peak is the whole run's; frames 200-399 reach at most 96% of it long-term,
+    #   45% breast tissue, measured). What the guard no longer sees is an FEM change confined to the
+    #   release that lifts a frame there above the hold's peak (the old guard saw only that there too).
+    outs = {}
+    for name, extra in (("rt", ["--level", "1"]), ("fem2", ["--level", "2", "--frames", str(HOLD_FRAMES)])):
+        outs[name] = os.path.join(tmp, name)
+        r = run([tool, "evaluate", "--scene", lt_scene, "--distributions", "2", "--no-plots", "--out", outs[name],
+                 "--cache-dir", os.path.join(tmp, "cache"), "--quiet"] + extra)
+        check(r.returncode == 0, "evaluate (%s) exited %d: %s" % (" ".join(extra), r.returncode, r.stderr))
+        if r.returncode:
+            return
     rt, fem2, time_of = {}, {}, {}
-    with open(os.path.join(out, "displacement_d2.csv")) as f:
+    with open(os.path.join(outs["rt"], "displacement_d2.csv")) as f:
         for row in csv.DictReader(f):
             key = (int(row["frame"]), int(row["vertex"]))
-            rt[key], fem2[key] = float(row["rt_cm"]), float(row["fem_cm"])
+            rt[key] = float(row["rt_cm"])
             time_of[key[0]] = float(row["time_s"])
+    with open(os.path.join(outs["fem2"], "displacement_d2.csv")) as f:
+        for row in csv.DictReader(f):
+            fem2[(int(row["frame"]), int(row["vertex"]))] = float(row["fem_cm"])
     check(len(rt) == 400 * 296, "pairs: %d, expected 400 frames x 296 free vertices" % len(rt))
+    check(len(fem2) == HOLD_FRAMES * 296 and all(k in rt for k in fem2),
+          "level-2 pairs: %d, expected the model's first %d frames x 296 vertices" % (len(fem2), HOLD_FRAMES))
     head, ref = read_level4_d2(data)
     frames = {}
     for fr, _ in ref:
@@ -614,14 +634,15 @@ def check_stored_level4(tool, scene, scene_name, data, rmse_bound, peak_bound, l
     sq = [(rt[(fr, v)] - ref[(fr, v)]) ** 2 for fr, v in ref if fr in full]
     rmse = math.sqrt(math.fsum(sq) / len(sq))
     peak4, peak_rt, peak2 = max(ref.values()), max(rt.values()), max(fem2.values())
-    sq2 = [(rt[k] - fem2[k]) ** 2 for k in rt]
+    sq2 = [(rt[k] - fem2[k]) ** 2 for k in fem2]
     rmse2 = math.sqrt(math.fsum(sq2) / len(sq2))
     print("%s, distribution II, FEM level 4 (stored): RMSE %.4f mm = %.2f%% of the FEM peak %.4f mm "
           "(bound %.0f%%); model peak %.4f mm, ratio %.3f (bound 1 +- %.2f)" %
           (label, 10 * rmse, 100 * rmse / peak4, 10 * peak4, 100 * rmse_bound, 10 * peak_rt, peak_rt / peak4,
            peak_bound))
-    print("  level 2 (for reference): FEM peak %.4f mm (stored %.4f mm), model / level 2 %.3f, RMSE %.2f%% of it" %
-          (10 * peak2, 10 * head.get("peak2", float("nan")), peak_rt / peak2, 100 * rmse2 / peak2))
+    print("  level 2 (for reference, the hold's %d frames): FEM peak %.4f mm (stored %.4f mm), model / level 2 %.3f, "
+          "RMSE %.2f%% of it" % (HOLD_FRAMES, 10 * peak2, 10 * head.get("peak2", float("nan")), peak_rt / peak2,
+                                 100 * rmse2 / peak2))
     check(close(peak2, head.get("peak2", float("nan")), 1e-6),
           "the level-2 FEM peak %.9g cm is not the %r cm recorded with the stored level-4 field: the FEM changed, "
           "rerun tests/data/%s" % (peak2, head.get("peak2"), maker))
