@@ -575,19 +575,10 @@
     }
   });
 
-  /* A frame is asked for only when a deformation arrived: a loop that asked for every frame cost a
-   * still page ~0.1 s of CPU a second in headless Chromium (trainee.js, wake). */
-  let frameAsked = false;
-  function wake() {
-    if (!frameAsked) {
-      frameAsked = true;
-      requestAnimationFrame(loop);
-    }
-  }
-  function loop() {
-    frameAsked = false;
+  /* A frame only when a deformation arrived (PALP.frameOnDemand) */
+  const wake = PALP.frameOnDemand(function () {
     for (const c of cards.values()) if (c.latest) { draw(c, c.latest); c.latest = null; }
-  }
+  });
 
   setInterval(function () {
     const now = performance.now();

@@ -63,20 +63,16 @@
   const controls = renderer ? new THREE.OrbitControls(camera, renderer.domElement) : null;
   if (controls) {
     controls.enableDamping = false;
-    controls.addEventListener("change", function () { dirty = true; wake(); });
+    controls.addEventListener("change", redraw);
   }
 
   let mesh = null, geom = null, rest = null, phantom = null, dirty = true, latest = null;
-  /* A frame is asked for only when something changed (a deformation, the camera, a finger, the
-   * window): an animation loop that asked for every frame kept a still page drawing nothing 60
-   * times a second, ~0.1 s of CPU a second in headless Chromium against ~0.01 s for a still page
-   * (2026-12-07), and a trainee's laptop pays the same. */
-  let frameAsked = false;
-  function wake() {
-    if (!frameAsked) {
-      frameAsked = true;
-      requestAnimationFrame(loop);
-    }
+  /* A frame only when something changed (a deformation, the camera, a finger, the window: PALP.frameOnDemand);
+   * redraw() when the scene changed, wake() when only a new deformation waits in `latest`. */
+  const wake = PALP.frameOnDemand(loop);
+  function redraw() {
+    dirty = true;
+    wake();
   }
   let scaleMm = 30, scaleMin = 30, scaleMax = 30; /* this session's scale; the bridge's bounds (hello) */
   function setScale(mm) {
@@ -92,7 +88,7 @@
     if (renderer) renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
-    dirty = true; wake();
+    redraw();
   }
   window.addEventListener("resize", resize);
 
@@ -126,9 +122,9 @@
     coverPts.visible = showCover.checked;
     coverPts.renderOrder = 5; /* after the skin, which is offset behind its depth: a dot at a vertex passes the depth test */
     scene.add(coverPts);
-    dirty = true; wake();
+    redraw();
   }
-  showCover.addEventListener("change", function () { if (coverPts) coverPts.visible = showCover.checked; dirty = true; wake(); });
+  showCover.addEventListener("change", function () { if (coverPts) coverPts.visible = showCover.checked; redraw(); });
 
   function buildMesh(ph) {
     if (mesh) { scene.remove(mesh); geom.dispose(); }
@@ -157,7 +153,7 @@
     }
     if (renderer) document.getElementById("waiting").textContent = ""; /* else it keeps saying why there is no view */
     T.phantom = ph.id;
-    dirty = true; wake();
+    redraw();
   }
 
   /* Positions = rest + displacement; colour = |displacement| on the session's scale, grown
@@ -180,7 +176,7 @@
     geom.computeBoundingSphere();
     T.maxDispMm = max;
     document.getElementById("maxdisp").textContent = max.toFixed(2); /* mm, 2 decimals (docs/naming.md) */
-    dirty = true; wake();
+    redraw();
   }
 
   /* Fingers: a position-driven finger is its sphere; a force-driven one a marker at the contact
@@ -266,14 +262,14 @@
       note.className = note.textContent ? "warn" : "muted";
     }
     for (const k in pool) pool[k].forEach(function (o, i) { o.visible = showFingers && i < used[k]; }); /* the rest wait */
-    dirty = true; wake();
+    redraw();
   }
   let showFingers = true;
   /* For tests: hide the fingers so that a screenshot shows the phantom's own change only. */
   window.palpShowFingers = function (on) {
     showFingers = !!on;
     for (const o of fingerObjs) o.visible = showFingers;
-    dirty = true; wake();
+    redraw();
   };
 
   /* ---- force gauge: 0 .. 2x the deep threshold, bands shaded. In an exercise the bridge bands the
@@ -429,7 +425,7 @@
     document.getElementById("debrief-score").hidden = true;
     T.debrief = null;
     T.score = null;
-    dirty = true; wake();
+    redraw();
   }
   function showDebrief(m) {
     if (!Array.isArray(m.lumps) || !m.lumps.every(PALP.lumpValid)) return; /* checked before use (since session 82) */
@@ -454,7 +450,7 @@
       debriefObjs.push(o);
     });
     document.getElementById("debrief").hidden = false;
-    dirty = true; wake();
+    redraw();
   }
   window.palpDebriefText = function (m) { return [debriefText(m)].concat(m.lumps.map(PALP.debriefLump)); };
 
@@ -638,7 +634,6 @@
   }, 1000);
 
   function loop() {
-    frameAsked = false;
     if (latest && geom && latest.length === rest.length) {
       setDisplacement(latest);
       latest = null;
