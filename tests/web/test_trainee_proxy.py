@@ -72,9 +72,10 @@ def run(build, source, out):
         mem = "JSON.stringify([palpState.messages - palpState.frames, palpState.trainee.rendered, " \
               "palpState.trainee.memory.geometries])"
         texts0, rendered0, geoms0 = json.loads(page.eval(mem))
-        # up to 60 s: 288 in 30 s once among the first tests of a fresh clone's run (session 84: ~10 a second,
-        # palp-web and the page starved; ~35 a second alone)
-        page.wait_for("palpState.messages - palpState.frames >= %d" % (texts0 + 300), 60)
+        # up to 60 s for both: among the first tests of a fresh clone's run (session 84) 288 messages in 30 s once
+        # (~10 a second, palp-web and the page starved; ~35 a second alone), and 41 frames drawn over 307 once
+        page.wait_for("palpState.messages - palpState.frames >= %d && palpState.trainee.rendered >= %d"
+                      % (texts0 + 300, rendered0 + 50), 60)
         texts1, rendered1, geoms1 = json.loads(page.eval(mem))
         print("over %d text messages and %d frames drawn: geometries %d -> %d, finger objects made %s"
               % (texts1 - texts0, rendered1 - rendered0, geoms0, geoms1, page.eval("palpState.trainee.fingerObjects")))
