@@ -100,7 +100,11 @@ for k, (sid, uid, scene_json, ex_json) in enumerate(rows):
     for l, d in zip(les, n):
         h = math.degrees(math.atan2(d[0], d[1])) / 30  # clockwise from +y (12 o'clock), +x at 3: (0, 12]
         h = h + 12 if h <= 0 else h
-        want.append(("%.1f" % h, "%.0f" % (R * math.radians(l["polar_deg"]) * 1e3)))
+        # shown to 0.1 h, and 12 o'clock is 12.0, never 0.0 (src/place.c): h in (0, 0.05) reads 12.0 (until
+        # session 84 this said "0.0" there, and failed a run whose lump was drawn < 1.5 deg east of 12 o'clock)
+        hs = "%.1f" % h
+        hs = "12.0" if hs == "0.0" else hs
+        want.append((hs, "%.0f" % (R * math.radians(l["polar_deg"]) * 1e3)))
     check([(c, a) for _, c, a in said] == want, "  dora's debrief named these places: %s (computed here: %s)" % (said, want))
     draws.append((p.get("seed"), [(l["polar_deg"], l["azimuth_deg"]) for l in les]))
 check(len(draws) == 2 and draws[0][0] != draws[1][0] and draws[0][1] != draws[1][1],

@@ -150,8 +150,11 @@ def run(build, source, out):
         held = page.wait_for("(function (v) { return v && v[0].includes('held') && v[1] === 'warn'; })(%s)"
                              % station_js, 3)
         seen = page.eval(station_js)
-        band_held = page.eval("Array.from(document.querySelectorAll('.card')).filter(e => e.querySelector('h3 span')"
-                              ".textContent.startsWith('bob, session ')).map(e => e.querySelector('.band').textContent)[0]")
+        # polled (up to 1 s, bob still stopped): once among a fresh clone's first tests (session 84) a single read
+        # found no badge on his card, which the page was drawing anew
+        band_held = page.wait_for("(Array.from(document.querySelectorAll('.card')).filter(e => e.querySelector('h3 span')"
+                                  ".textContent.startsWith('bob, session ')).map(e => { const b = e.querySelector('.band'); "
+                                  "return b ? b.textContent : null; })[0] || null)", 1.0)
         page.screenshot(os.path.join(out, "dashboard-station-held.png"))
         time.sleep(max(0.0, t_stop + 1.5 - time.time()))
         bob.send_signal(signal.SIGCONT)
