@@ -5,6 +5,7 @@
  * values are worked by hand or come from the model's own mesh code. */
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -300,6 +301,29 @@ static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark
   return next_json(h, c, 200, is_finding_reply, &w);
 }
 
+/* Waits up to 5 s for the hub to have taken more samples than `before` of the counter at offset `off` of its
+ * stats (offsetof(palp_web_hub_stats, ...)): 1 if it did. A fixed sleep was not enough in a CI run's first
+ * minutes (stop 97: the local model written 60 ms before a mark was not yet taken, "not touching"). */
+static int hub_took(palp_web_hub *h, size_t off, uint64_t before) {
+  for (int i = 0; i < 500; i++) {
+    palp_web_hub_stats st;
+    palp_web_hub_stats_get(h, &st);
+    uint64_t now;
+    memcpy(&now, (const char *)&st + off, sizeof now);
+    if (now > before) return 1;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  return 0;
+}
+
+static uint64_t hub_count(palp_web_hub *h, size_t off) {
+  palp_web_hub_stats st;
+  palp_web_hub_stats_get(h, &st);
+  uint64_t n;
+  memcpy(&n, (const char *)&st + off, sizeof n);
+  return n;
+}
+
 /* An exercise on phantom 1, as a server announces it (palp_exercise). */
 static void write_easy_exercise(dds_entity_t w_ex) {
   palp_Exercise ex;
@@ -343,8 +367,10 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   palp_LocalModel nx = *lm0; /* touching now (fresh) */
   nx.frame = 60;
   nx.server_time_ns = 2000000000LL;
+  const size_t LM = offsetof(palp_web_hub_stats, local_models), FST = offsetof(palp_web_hub_stats, finding_statuses);
+  uint64_t before = hub_count(h, LM);
   dds_write(w_lm, &nx);
-  dds_sleepfor(DDS_MSECS(60));
+  CHECK(hub_took(h, LM, before), "the hub took the touching local model within 5 s");
   const int rc = palp_web_hub_control(h, c, m, strlen(m));
   CHECK(rc == 0, "a bound trainee page marks a finding (rc %d)", rc);
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && ok && mark == 1, "... answered ok, mark 1 (%s)", why);
@@ -383,11 +409,14 @@ static void test_findings(palp_web_hub *h, palp_web_cursor *c, dds_entity_t pp, 
   st_mark.last_mark_id = 5;
   st_mark.last_accepted = 1;
   st_mark.time_left = 250;
+  before = hub_count(h, FST);
   CHECK(w_fs > 0 && dds_write(w_fs, &st_mark) == 0, "the server's answer to a station's mark 5 written");
-  dds_sleepfor(DDS_MSECS(550)); /* the hub takes it; past the 0.5 s between a page's requests */
+  CHECK(hub_took(h, FST, before), "the hub took the server's answer within 5 s");
+  dds_sleepfor(DDS_MSECS(550)); /* past the 0.5 s between a page's requests */
   nx.frame = 61;
+  before = hub_count(h, LM);
   dds_write(w_lm, &nx);
-  dds_sleepfor(DDS_MSECS(60));
+  CHECK(hub_took(h, LM, before), "the hub took the touching local model within 5 s");
   CHECK(palp_web_hub_control(h, c, m, strlen(m)) == 0, "the page marks again after the answer to the station's mark 5");
   CHECK(finding_reply(h, c, &ok, &mark, why, sizeof why) && ok && mark == 6,
         "... as mark 6, above the station's 5 (got mark %d: %s)", mark, why);
