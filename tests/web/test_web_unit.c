@@ -324,6 +324,18 @@ static uint64_t hub_count(palp_web_hub *h, size_t off) {
   return n;
 }
 
+/* The hub's session states taken (palp_session_state samples), and a wait of up to 5 s for it to have
+ * taken `target` of them: the sessions a test just opened are known to it (a fixed 300-500 ms was the
+ * wait before; web_unit failed on such waits among a CI run's first tests, stop 97). */
+#define STATES offsetof(palp_web_hub_stats, states)
+static int hub_reached(palp_web_hub *h, size_t off, uint64_t target) {
+  for (int i = 0; i < 500; i++) {
+    if (hub_count(h, off) >= target) return 1;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  return 0;
+}
+
 /* A mark from the bound trainee page once the hub has caught up: a refusal that says only that the hub has
  * not yet taken what the test wrote (the exercise, its findings writer's match with the server's reader, the
  * touching local model: each a DDS delivery the hub's thread takes on its own time) is asked again, with a fresh
@@ -842,7 +854,7 @@ static void test_exercise_bands(palp_web_hub *h, dds_entity_t pp) {
   for (int i = 0; i < 100 && strcmp(cw.bands, "6000"); i++) next_json(h, &dash, 5, is_cover, &cw);
   CHECK(!strcmp(cw.bands, "6000"), "the dashboard's pressed-skin map: \"%s\" (want \"6000\")", cw.bands);
   cover_want own = {sid, ""};
-  for (int i = 0; i < 30 && strcmp(own.bands, "6000"); i++) next_json(h, c, 5, is_cover, &own);
+  for (int i = 0; i < 100 && strcmp(own.bands, "6000"); i++) next_json(h, c, 5, is_cover, &own);
   CHECK(!strcmp(own.bands, "6000"), "the page following the session is sent the same map (\"%s\")", own.bands);
   /* From the server's finger samples (session 71) the map is the triangles they name, at the band of
    * the sample's own depth: triangle 1 (vertices 0, 2, 3) 2 mm deep, light; a sample with a NaN force
@@ -903,6 +915,7 @@ static void test_debriefs(palp_web_hub *h, dds_entity_t pp) {
       palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
   const dds_entity_t t_db = palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF);
   dds_entity_t w_db[2];
+  const uint64_t states0 = hub_count(h, STATES);
   for (int k = 0; k < 2; k++) {
     char part[64];
     palp_dds_session_partition(sid[k], part, sizeof part);
@@ -916,6 +929,7 @@ static void test_debriefs(palp_web_hub *h, dds_entity_t pp) {
   snprintf(ctl, sizeof ctl, "{\"follow\":%u}", sid[0]);
   CHECK(palp_web_hub_control(h, &before, ctl, strlen(ctl)) == 0, "it follows ann's session");
   dds_sleepfor(DDS_MSECS(500)); /* the hub knows both sessions (their trainees), and the readers matched */
+  CHECK(hub_reached(h, STATES, states0 + 2), "debriefs: the hub took both sessions' states within 5 s");
   CHECK(palp_web_hub_control(h, &before, "{\"follow\":null}", 15) == 0, "... and lets go of it (its session closing)");
   /* ann's session closes after 123.44 s (the server's CLOSED state) before her debrief comes; bea's
    * stays open */
@@ -1067,10 +1081,12 @@ static void test_answers(palp_web_hub *h, dds_entity_t pp) {
   snprintf(sx.name, sizeof sx.name, "answers-test");
   dds_write(w_sx, &sx);
   dds_sleepfor(DDS_MSECS(200));
+  const uint64_t states0 = hub_count(h, STATES);
   write_open_state(w_state, sid, 2, part, "cat");
   write_open_state(w_state, 4732, 2, "palp/session/4732", "dan");
   write_open_state(w_state, 4733, 2, "palp/session/4733", "eve");
   dds_sleepfor(DDS_MSECS(300)); /* cat's session known: her own page may follow it */
+  CHECK(hub_reached(h, STATES, states0 + 3), "answers: the hub took the three sessions' states within 5 s");
   CHECK(palp_web_hub_control(h, &own, follow, strlen(follow)) == 0, "a page of cat's own token follows her session");
   CHECK(palp_web_hub_control(h, &bound, bind, strlen(bind)) == 0, "a page bound as her trainee page");
   answers_seen a = {.sid = sid};
@@ -1144,7 +1160,8 @@ static void test_answers(palp_web_hub *h, dds_entity_t pp) {
     if (step[k].answered && !step[k].answer_first) dds_write(w_fs, &fs), dds_sleepfor(DDS_MSECS(60));
     if (k == 1) { /* before the withdrawal: mark 2 stands near no lump */
       char got[64] = "";
-      for (int i = 0; i < 30 && strcmp(got, "1:1 2:0"); i++) {
+      /* up to ~5 s (was 1.5 s: not enough at a load average of 18, session 85) */
+      for (int i = 0; i < 100 && strcmp(got, "1:1 2:0"); i++) {
         read_answers(h, &dash, 5, &a);
         if (a.last) marks_text(a.last, got, sizeof got);
       }
@@ -1153,7 +1170,7 @@ static void test_answers(palp_web_hub *h, dds_entity_t pp) {
     }
   }
   char got[64] = "";
-  for (int i = 0; i < 40 && strcmp(got, "1:1 5:2"); i++) {
+  for (int i = 0; i < 100 && strcmp(got, "1:1 5:2"); i++) {
     read_answers(h, &dash, 5, &a);
     if (a.last) marks_text(a.last, got, sizeof got);
   }
@@ -1398,10 +1415,12 @@ static void test_scores(palp_web_hub *h, dds_entity_t pp) {
     const dds_entity_t pub = palp_dds_session_publisher(pp, part);
     w_db[k] = palp_dds_create_writer(pub, t_db, PALP_TOPIC_DEBRIEF);
     w_told[k] = palp_dds_create_writer(pub, t_told, PALP_TOPIC_DEBRIEF_SCORE);
+    const uint64_t states0 = hub_count(h, STATES);
     write_open_state(w_state, ps[k], 1, part, pt[k]);
     snprintf(bindc, sizeof bindc, "{\"trainee\":%u}", ps[k]);
     CHECK(palp_web_hub_attach(h, &page[k], 8) == 0, "scores: %s's trainee page", pt[k]);
     dds_sleepfor(DDS_MSECS(300)); /* the hub knows her session, the debrief writer matched */
+    CHECK(hub_reached(h, STATES, states0 + 1), "  the hub took her session's state within 5 s");
     CHECK(palp_web_hub_control(h, &page[k], bindc, strlen(bindc)) == 0, "  bound to her session %u", ps[k]);
   }
   for (int k = 0; k < 2; k++) {
@@ -2205,8 +2224,10 @@ static void test_review_80(void) {
   palp_web_cursor alice;
   CHECK(palp_web_hub_attach(h, &alice, 4) == 0, "alice's page");
   palp_web_hub_scope(h, &alice, "alice");
+  const uint64_t states0 = hub_count(h, STATES);
   write_open_state(w_state, sa, 2, pa, "alice");
   dds_sleepfor(DDS_MSECS(400));
+  CHECK(hub_reached(h, STATES, states0 + 1), "the hub took alice's session's state within 5 s");
   snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sa);
   CHECK(palp_web_hub_control(h, &alice, ctl, strlen(ctl)) == 0, "alice's page binds to her session %u", sa);
   palp_SessionState closed;
