@@ -1266,8 +1266,13 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
   if (m->phase != palp_PHASE_OPEN) {
-    if (s && isfinite(m->duration) && m->duration >= 0) s->st.duration = m->duration; /* its last: kept for the debrief */
-    if (s) free_session(h, slot);
+    if (!s) return;
+    if (isfinite(m->duration) && m->duration >= 0) s->st.duration = m->duration; /* its last: kept for the debrief */
+    /* One line as the bridge takes the CLOSED state, before it lets go of the session: an operator reads
+     * when the bridge knew, beside the server's own "closed" line (web_dashboard times the two legs,
+     * server -> bridge and bridge -> page, from these lines) */
+    palp_log_info(h->def.log, "session %u closed by its server (%s)", m->session_id, PALP_PRINTABLE_LONG(m->reason));
+    free_session(h, slot);
     return;
   }
   if (!s) {
@@ -1293,6 +1298,9 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     pthread_mutex_unlock(&h->mu);
     palp_dds_gate_set(&h->gate, slot, s->id);
     h->sessions_structure = 1;
+    /* as it closes below: one line for each session the bridge takes on, and one as it lets it go */
+    palp_log_info(h->def.log, "session %u opened: trainee \"%s\" on phantom %u", m->session_id,
+                  PALP_PRINTABLE(m->trainee_name), m->phantom_id);
   }
   s->st = *m; /* bounded strings: a plain copy */
   /* Its server is whoever writes its state: a restarted server's new run takes over (its states
@@ -1623,6 +1631,8 @@ static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void 
   const uint32_t sid = ((const palp_SessionState *)sample)->session_id; /* the invalid sample's key */
   int slot;
   if (find_session(h, sid, &slot)) {
+    palp_log_info(h->def.log, "session %u closed: its server's state is gone (its server stopped, was lost or let it go)",
+                  sid);
     set_joined(h, &h->s[slot], 0); /* its server cannot hear a goodbye; the instance is disposed below */
     dispose_request(&h->s[slot]);
     free_session(h, slot);
