@@ -138,7 +138,12 @@ class Chromium:
         env = dict(os.environ, TMPDIR=tmp)
         self.proc = subprocess.Popen(args, stdout=self.log, stderr=self.log, start_new_session=True, env=env)
         port_file = os.path.join(self.dir, "DevToolsActivePort")
-        end = time.time() + 30
+        # 60 s: a start, not a property. Alone it takes ~1 s, beside two busy loops too; beside a test's own server,
+        # palp-web and 3 trainee stations and two busy loops 4.5-49 s (session 85). 30 s, the bound until then,
+        # failed 7 of 27 web_dashboard runs beside two loops (other tests at times running too), 3 of 7 beside three,
+        # none of 13 beside one.
+        wait = 60
+        end = time.time() + wait
         while time.time() < end:
             if os.path.exists(port_file):
                 lines = open(port_file).read().split()
@@ -148,8 +153,10 @@ class Chromium:
             if self.proc.poll() is not None:
                 break
             time.sleep(0.05)
+        rc = self.proc.poll()
         self.close()
-        raise RuntimeError("Chromium did not start (no DevToolsActivePort)")
+        raise RuntimeError("Chromium did not start in %d s (no DevToolsActivePort; %s)"
+                           % (wait, "exit %s" % rc if rc is not None else "still running"))
 
     def new_page(self, url):
         # Chromium takes the whole query as the URL and unescapes it: a '&' of the page's own
