@@ -337,6 +337,10 @@ struct palp_web_hub {
     char trainee[64];
   } closed_names[CLOSED_NAMES];
   int closed_names_next;
+  /* the session open/close lines of the last SESSION_LINES_WINDOW_NS (session_line_ok): a flood of made-up
+   * session states (unsecured, anyone may write them) must not become a flood of log lines */
+  int64_t lines_window_ns;
+  unsigned lines_in_window, lines_skipped;
   /* the scores the server told trainees lately (palp_debrief_score, session 64: practice sessions
    * alone, the server decides), each for its session's bound page */
   item told_scores[DEBRIEFS];
@@ -1262,6 +1266,25 @@ static void free_session(palp_web_hub *h, int slot) {
   h->sessions_dirty = h->sessions_structure = 1;
 }
 
+/* [DDS thread] Whether a session's open or close may be logged: at most SESSION_LINES_MAX lines in any
+ * window of SESSION_LINES_WINDOW_NS (a class of 32 opening and closing at once is logged whole); those
+ * beyond are counted and said in one line as the next window opens. */
+#define SESSION_LINES_MAX 100
+#define SESSION_LINES_WINDOW_NS 10000000000LL
+static int session_line_ok(palp_web_hub *h) {
+  const int64_t now = palp_dds_now_ns();
+  if (!h->lines_window_ns || now - h->lines_window_ns >= SESSION_LINES_WINDOW_NS) {
+    if (h->lines_skipped)
+      palp_log_warn(h->def.log, "%u session opens and closes not logged in the last %.0f s (more than %d: a flood of "
+                    "session states, or a class far larger than this bridge's sessions)", h->lines_skipped,
+                    (double)(now - h->lines_window_ns) * 1e-9, SESSION_LINES_MAX);
+    h->lines_window_ns = now, h->lines_in_window = 0, h->lines_skipped = 0;
+  }
+  if (h->lines_in_window < SESSION_LINES_MAX) return ++h->lines_in_window, 1;
+  h->lines_skipped++;
+  return 0;
+}
+
 static void on_state(palp_web_hub *h, const palp_SessionState *m) {
   int slot;
   session *s = find_session(h, m->session_id, &slot);
@@ -1271,7 +1294,8 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     /* One line as the bridge takes the CLOSED state, before it lets go of the session: an operator reads
      * when the bridge knew, beside the server's own "closed" line (web_dashboard times the two legs,
      * server -> bridge and bridge -> page, from these lines) */
-    palp_log_info(h->def.log, "session %u closed by its server (%s)", m->session_id, PALP_PRINTABLE_LONG(m->reason));
+    if (session_line_ok(h))
+      palp_log_info(h->def.log, "session %u closed by its server (%s)", m->session_id, PALP_PRINTABLE_LONG(m->reason));
     free_session(h, slot);
     return;
   }
@@ -1299,7 +1323,8 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     palp_dds_gate_set(&h->gate, slot, s->id);
     h->sessions_structure = 1;
     /* as it closes below: one line for each session the bridge takes on, and one as it lets it go */
-    palp_log_info(h->def.log, "session %u opened: trainee \"%s\" on phantom %u", m->session_id,
+    if (session_line_ok(h))
+      palp_log_info(h->def.log, "session %u opened: trainee \"%s\" on phantom %u", m->session_id,
                   PALP_PRINTABLE(m->trainee_name), m->phantom_id);
   }
   s->st = *m; /* bounded strings: a plain copy */
@@ -1631,7 +1656,8 @@ static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void 
   const uint32_t sid = ((const palp_SessionState *)sample)->session_id; /* the invalid sample's key */
   int slot;
   if (find_session(h, sid, &slot)) {
-    palp_log_info(h->def.log, "session %u closed: its server's state is gone (its server stopped, was lost or let it go)",
+    if (session_line_ok(h))
+      palp_log_info(h->def.log, "session %u closed: its server's state is gone (its server stopped, was lost or let it go)",
                   sid);
     set_joined(h, &h->s[slot], 0); /* its server cannot hear a goodbye; the instance is disposed below */
     dispose_request(&h->s[slot]);

@@ -2112,6 +2112,78 @@ static void test_catalogue_bound(void) {
   palp_mesh_destroy(&dome);
 }
 
+/* The bridge logs each session it takes on and lets go (session 85), and a flood of made-up session states
+ * (unsecured, anyone may write them) does not become a flood of log lines: 64 sessions opened (the hub's
+ * table) and closed, 128 lines unbounded, give at most 100 in a 10 s window (web/hub.c, session_line_ok),
+ * more only if the writes took longer than a window; the first open's line names its trainee. Domain 205. */
+static void test_session_lines(void) {
+  char logpath[512];
+  palp_test_tmp(logpath, sizeof logpath, "palp_web_unit_lines_XXXXXX");
+  const int fd = mkstemp(logpath);
+  CHECK(fd >= 0, "temporary log %s", logpath);
+  if (fd < 0) return;
+  close(fd);
+  static palp_log log;
+  CHECK(palp_log_init(&log, "palp-web", PALP_LOG_INFO, logpath) == 0, "log to %s", logpath);
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = 205;
+  d.join = 0;
+  d.log = &log;
+  char err[256];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain 205: %s", h ? "" : err);
+  const dds_entity_t pp = dds_create_participant(205, NULL, NULL);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  if (h && w_state > 0 && palp_web_hub_start(h, NULL, NULL) == 0) {
+    dds_publication_matched_status_t ms = {0};
+    for (int i = 0; i < 500 && ms.current_count == 0; i++) {
+      dds_get_publication_matched_status(w_state, &ms);
+      if (ms.current_count == 0) dds_sleepfor(DDS_MSECS(10));
+    }
+    CHECK(ms.current_count > 0, "the state writer matched the hub");
+    const int64_t t0 = palp_dds_now_ns();
+    for (uint32_t k = 0; k < PALP_WEB_MAX_SESSIONS; k++) {
+      char part[64];
+      palp_dds_session_partition(9001 + k, part, sizeof part);
+      write_open_state(w_state, 9001 + k, 1, part, k ? "someone" : "flo\nod");
+    }
+    palp_web_hub_stats hs;
+    memset(&hs, 0, sizeof hs);
+    for (int i = 0; i < 500 && hs.sessions_open < PALP_WEB_MAX_SESSIONS; i++) {
+      dds_sleepfor(DDS_MSECS(10));
+      palp_web_hub_stats_get(h, &hs);
+    }
+    CHECK(hs.sessions_open == PALP_WEB_MAX_SESSIONS, "%d sessions opened (%d)", PALP_WEB_MAX_SESSIONS, hs.sessions_open);
+    const uint64_t states0 = hs.states;
+    for (uint32_t k = 0; k < PALP_WEB_MAX_SESSIONS; k++) {
+      palp_SessionState closed;
+      memset(&closed, 0, sizeof closed);
+      closed.session_id = 9001 + k, closed.phase = palp_PHASE_CLOSED, closed.phantom_id = 1;
+      snprintf(closed.reason, sizeof closed.reason, "flood");
+      dds_write(w_state, &closed);
+    }
+    CHECK(hub_reached(h, STATES, states0 + PALP_WEB_MAX_SESSIONS), "... and their %d CLOSED states taken",
+          PALP_WEB_MAX_SESSIONS);
+    const double took = (double)(palp_dds_now_ns() - t0) * 1e-9;
+    palp_web_hub_stop(h);
+    char first[1024] = "";
+    const int opened = lines_with(logpath, "opened: trainee", NULL, 0);
+    const int closed = lines_with(logpath, "closed by its server (flood)", NULL, 0);
+    lines_with(logpath, "session 9001 opened", first, sizeof first);
+    const int bound = 100 * (1 + (int)(took / 10.0));
+    CHECK(opened + closed <= bound && opened + closed >= (bound < 2 * PALP_WEB_MAX_SESSIONS ? bound : 2 * PALP_WEB_MAX_SESSIONS),
+          "%d open and %d close lines for %d opens and closes in %.1f s (at most %d: 100 a 10 s window)", opened, closed,
+          2 * PALP_WEB_MAX_SESSIONS, took, bound);
+    CHECK(strstr(first, "session 9001 opened: trainee \"flo\\x0aod\" on phantom 1") != NULL,
+          "the first names its trainee, made printable: %s", first);
+  }
+  if (pp > 0) dds_delete(pp);
+  palp_web_hub_destroy(h);
+  palp_log_close(&log);
+  remove(logpath);
+}
+
 /* ---- session 80's review (2026-12-07) ---- */
 
 /* palp_web_utf8_clean against RFC 3629's forms, the expected texts written out by hand. */
@@ -2280,6 +2352,7 @@ int main(void) {
   test_control();
   test_local_model();
   test_catalogue_bound();
+  test_session_lines();
   test_findings_no_join();
   test_not_server();
   test_utf8();
