@@ -1990,6 +1990,28 @@ static void guid_text(dds_entity_t pp, char *out, size_t len) {
            v[6], v[7], v[8], v[9], v[10], v[11]);
 }
 
+/* A hub (not started, no join) on `domain` logging at INFO to a new temporary file (mkstemp `pattern`, its
+ * path in path): *made 0 if the file could not be made (nothing else done), else 1; NULL if the hub could
+ * not be made (checked). The caller destroys the hub, closes the log and removes the file. */
+static palp_web_hub *logged_hub(uint32_t domain, const char *pattern, char *path, size_t plen, palp_log *log,
+                                int *made) {
+  palp_test_tmp(path, plen, pattern);
+  const int fd = mkstemp(path);
+  CHECK(fd >= 0, "temporary log %s", path);
+  *made = fd >= 0;
+  if (fd < 0) return NULL;
+  close(fd);
+  CHECK(palp_log_init(log, "palp-web", PALP_LOG_INFO, path) == 0, "log to %s", path);
+  palp_web_hub_def d = palp_web_hub_default_def();
+  d.domain = domain;
+  d.join = 0;
+  d.log = log;
+  char err[256];
+  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
+  CHECK(h != NULL, "hub on domain %u: %s", domain, h ? "" : err);
+  return h;
+}
+
 /* The catalogue's mesh bound (docs/web.md): the largest mesh a palp-server can publish is taken and
  * sent to the pages; one vertex more is refused, never sent, and its publisher named in the log once
  * however many it sends; a second publisher named once too. Domain 154. */
@@ -2010,20 +2032,10 @@ static void test_catalogue_bound(void) {
   if (big_rc != 0 || dome_rc != 0) return;
 
   char logpath[512];
-  palp_test_tmp(logpath, sizeof logpath, "palp_web_unit_catalogue_XXXXXX");
-  const int fd = mkstemp(logpath);
-  CHECK(fd >= 0, "temporary log %s", logpath);
-  if (fd < 0) return;
-  close(fd);
   static palp_log log;
-  CHECK(palp_log_init(&log, "palp-web", PALP_LOG_INFO, logpath) == 0, "log to %s", logpath);
-  palp_web_hub_def d = palp_web_hub_default_def();
-  d.domain = 154;
-  d.join = 0;
-  d.log = &log;
-  char err[256];
-  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
-  CHECK(h != NULL, "hub on domain 154: %s", h ? "" : err);
+  int made = 0;
+  palp_web_hub *h = logged_hub(154, "palp_web_unit_catalogue_XXXXXX", logpath, sizeof logpath, &log, &made);
+  if (!made) return;
   const dds_entity_t pa = dds_create_participant(154, NULL, NULL), pb = dds_create_participant(154, NULL, NULL);
   const dds_entity_t ta = palp_dds_create_topic(pa, PALP_TOPIC_CATALOGUE), tb = palp_dds_create_topic(pb, PALP_TOPIC_CATALOGUE);
   const dds_entity_t wa = palp_dds_create_writer(pa, ta, PALP_TOPIC_CATALOGUE);
@@ -2118,20 +2130,10 @@ static void test_catalogue_bound(void) {
  * more only if the writes took longer than a window; the first open's line names its trainee. Domain 205. */
 static void test_session_lines(void) {
   char logpath[512];
-  palp_test_tmp(logpath, sizeof logpath, "palp_web_unit_lines_XXXXXX");
-  const int fd = mkstemp(logpath);
-  CHECK(fd >= 0, "temporary log %s", logpath);
-  if (fd < 0) return;
-  close(fd);
   static palp_log log;
-  CHECK(palp_log_init(&log, "palp-web", PALP_LOG_INFO, logpath) == 0, "log to %s", logpath);
-  palp_web_hub_def d = palp_web_hub_default_def();
-  d.domain = 205;
-  d.join = 0;
-  d.log = &log;
-  char err[256];
-  palp_web_hub *h = palp_web_hub_create(&d, err, sizeof err);
-  CHECK(h != NULL, "hub on domain 205: %s", h ? "" : err);
+  int made = 0;
+  palp_web_hub *h = logged_hub(205, "palp_web_unit_lines_XXXXXX", logpath, sizeof logpath, &log, &made);
+  if (!made) return;
   const dds_entity_t pp = dds_create_participant(205, NULL, NULL);
   const dds_entity_t w_state =
       palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
