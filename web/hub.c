@@ -1325,7 +1325,7 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     /* as it closes below: one line for each session the bridge takes on, and one as it lets it go */
     if (session_line_ok(h))
       palp_log_info(h->def.log, "session %u opened: trainee \"%s\" on phantom %u", m->session_id,
-                  PALP_PRINTABLE(m->trainee_name), m->phantom_id);
+                    PALP_PRINTABLE(m->trainee_name), m->phantom_id);
   }
   s->st = *m; /* bounded strings: a plain copy */
   /* Its server is whoever writes its state: a restarted server's new run takes over (its states
@@ -1657,8 +1657,8 @@ static void on_state_lost(palp_web_hub *h, dds_instance_handle_t ih, const void 
   int slot;
   if (find_session(h, sid, &slot)) {
     if (session_line_ok(h))
-      palp_log_info(h->def.log, "session %u closed: its server's state is gone (its server stopped, was lost or let it go)",
-                  sid);
+      palp_log_info(h->def.log,
+                    "session %u closed: its server's state is gone (its server stopped, was lost or let it go)", sid);
     set_joined(h, &h->s[slot], 0); /* its server cannot hear a goodbye; the instance is disposed below */
     dispose_request(&h->s[slot]);
     free_session(h, slot);
