@@ -301,21 +301,7 @@ static int finding_reply(palp_web_hub *h, palp_web_cursor *c, int *ok, int *mark
   return next_json(h, c, 200, is_finding_reply, &w);
 }
 
-/* Waits up to 5 s for the hub to have taken more samples than `before` of the counter at offset `off` of its
- * stats (offsetof(palp_web_hub_stats, ...)): 1 if it did. A fixed sleep was not enough in a CI run's first
- * minutes (stop 97: the local model written 60 ms before a mark was not yet taken, "not touching"). */
-static int hub_took(palp_web_hub *h, size_t off, uint64_t before) {
-  for (int i = 0; i < 500; i++) {
-    palp_web_hub_stats st;
-    palp_web_hub_stats_get(h, &st);
-    uint64_t now;
-    memcpy(&now, (const char *)&st + off, sizeof now);
-    if (now > before) return 1;
-    dds_sleepfor(DDS_MSECS(10));
-  }
-  return 0;
-}
-
+/* The hub's counter at offset `off` of its stats (offsetof(palp_web_hub_stats, ...)). */
 static uint64_t hub_count(palp_web_hub *h, size_t off) {
   palp_web_hub_stats st;
   palp_web_hub_stats_get(h, &st);
@@ -324,10 +310,10 @@ static uint64_t hub_count(palp_web_hub *h, size_t off) {
   return n;
 }
 
-/* The hub's session states taken (palp_session_state samples), and a wait of up to 5 s for it to have
- * taken `target` of them: the sessions a test just opened are known to it (a fixed 300-500 ms was the
- * wait before; web_unit failed on such waits among a CI run's first tests, stop 97). */
-#define STATES offsetof(palp_web_hub_stats, states)
+/* Waits up to 5 s for that counter to reach `target`: 1 if it did. The samples a test just wrote (a local
+ * model, a server's answer, the sessions' states) are taken by the hub's thread on its own time: fixed sleeps
+ * of 60-600 ms were not enough in a CI run's first minutes (stop 97: a local model written 60 ms before a
+ * mark was not yet taken, "not touching"). */
 static int hub_reached(palp_web_hub *h, size_t off, uint64_t target) {
   for (int i = 0; i < 500; i++) {
     if (hub_count(h, off) >= target) return 1;
@@ -335,6 +321,11 @@ static int hub_reached(palp_web_hub *h, size_t off, uint64_t target) {
   }
   return 0;
 }
+
+/* ... more than `before` */
+static int hub_took(palp_web_hub *h, size_t off, uint64_t before) { return hub_reached(h, off, before + 1); }
+
+#define STATES offsetof(palp_web_hub_stats, states)
 
 /* A mark from the bound trainee page once the hub has caught up: a refusal that says only that the hub has
  * not yet taken what the test wrote (the exercise, its findings writer's match with the server's reader, the
