@@ -31,14 +31,26 @@
 #define MAX_GAP_NS 20000000LL     /* ... from two samples at most this far apart */
 #define MIN_GAP_NS 1000000LL      /* ... and at least this far */
 
-void palp_srv_playout_init(palp_srv_playout *p, double reach) {
+void palp_srv_playout_init(palp_srv_playout *p, double reach, double step) {
   memset(p, 0, sizeof *p);
   p->reach = reach > 0 ? reach : 0;
+  /* a step of a day or more is no world's (and CATCHUP steps of it stay far inside int64) */
+  p->step_ns = step > 0 && step < 86400.0 ? (int64_t)(step * 1e9) : 0;
 }
 
 void palp_srv_playout_clear(palp_srv_playout *p) {
   p->head = p->n = 0;
-  p->playing = 0;
+  p->playing = p->have_played = 0;
+}
+
+int palp_srv_playout_start(palp_srv_playout *p, int64_t src_ns, palp_vec3 x, uint64_t seq) {
+  if (src_ns >= LIM || src_ns <= -LIM) return PALP_EINVAL; /* not a clock reading (LIM) */
+  palp_srv_playout_clear(p);
+  p->s[0] = (palp_srv_playout_sample){.src_ns = src_ns, .x = x, .seq = seq};
+  p->n = 1;
+  p->played_ns = src_ns;
+  p->have_played = 1;
+  return PALP_OK;
 }
 
 static const palp_srv_playout_sample *at(const palp_srv_playout *p, int i) {
@@ -61,7 +73,7 @@ int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, 
   if (p->n > 0 && src_ns <= at(p, p->n - 1)->src_ns) {
     /* two stamps: exact (LIM) */
     if (at(p, p->n - 1)->src_ns - src_ns < RESTART_NS) return 0; /* repeated or overtaken: the newer stands */
-    palp_srv_playout_init(p, p->reach); /* the station's clock went back (a restart): start over */
+    palp_srv_playout_init(p, p->reach, 1e-9 * (double)p->step_ns); /* the station's clock went back (a restart): start over */
   }
   const int64_t off = recv_ns - src_ns; /* |off| <= 2^63 - 2 (LIM) */
   /* Windowed minimum in two 1 s buckets: the fastest path lately, without a
@@ -86,6 +98,11 @@ int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, 
     s = &p->s[(p->head + p->n) % PALP_SRV_PLAYOUT_SAMPLES];
     p->n++;
   } else {
+    /* Full. While a gap is caught up, the oldest two samples may be the ones around the point
+     * played (the last before the gap, the first after it): the second of them goes instead,
+     * so that the point keeps a sample on either side and moves on from where it is (a
+     * straight path across the gap to a later sample) rather than jumping to the oldest kept. */
+    if (p->have_played && at(p, 1)->src_ns > p->played_ns) p->s[(p->head + 1) % PALP_SRV_PLAYOUT_SAMPLES] = p->s[p->head];
     s = &p->s[p->head];
     p->head = (p->head + 1) % PALP_SRV_PLAYOUT_SAMPLES;
   }
@@ -153,16 +170,35 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
   p->last_now_ns = now_ns;
   if (d > p->delay_max) p->delay_max = d;
 
-  const int64_t T = p->play_ns;
+  /* S: the station time played at this step. T, unless a gap is being caught up: then the
+   * last one played plus what the catch-up allows (playout.h, "A gap is caught up"). Both are
+   * in [-LIM, LIM], so their difference is held (exact where it matters, up to LIM). */
+  int64_t S = p->play_ns;
   const palp_srv_playout_sample *newest = at(p, p->n - 1);
-  if (T >= newest->src_ns) {
+  if (p->have_played && p->step_ns > 0) {
+    /* lag: how far the station time played trails the latest there is to play (the newest
+     * sample, or T if that is earlier). most: the advance allowed, CATCHUP steps, or lag
+     * step / CATCHUP_TIME when more (a long gap then shrinks by e^-1 every CATCHUP_TIME).
+     * A lag beyond CATCHUP_MAX is jumped. */
+    const int64_t due = S < newest->src_ns ? S : newest->src_ns, lag = sub_held(due, p->played_ns);
+    int64_t most = PALP_SRV_PLAYOUT_CATCHUP * p->step_ns;
+    const double prop = (double)lag * ((double)p->step_ns / (PALP_SRV_PLAYOUT_CATCHUP_TIME * 1e9));
+    if (prop > (double)most) most = (int64_t)prop;
+    if (lag > most && lag <= (int64_t)(PALP_SRV_PLAYOUT_CATCHUP_MAX * 1e9)) { /* played + most < due: no overflow */
+      S = p->played_ns + most;
+      p->behind_steps++;
+      if (1e-9 * (double)(lag - most) > p->behind_max) p->behind_max = 1e-9 * (double)(lag - most);
+    }
+  }
+
+  if (S >= newest->src_ns) {
     *x = newest->x;
     *src_ns = newest->src_ns;
     *seq = newest->seq;
     /* A sample late for its turn: continue the last motion for a little while
      * rather than stop and then jump to catch up (a palpating hand moves smoothly:
      * at 20 mm/s a reversal within EXTRAPOLATE_NS overshoots by at most 0.2 mm). */
-    const int64_t ahead = T - newest->src_ns;
+    const int64_t ahead = S - newest->src_ns;
     if (p->n >= 2 && ahead > 0 && d > 0) {
       const palp_srv_playout_sample *a = at(p, p->n - 2);
       const int64_t gap = newest->src_ns - a->src_ns;
@@ -181,24 +217,30 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
         }
       }
     }
+    p->played_ns = *src_ns;
+    p->have_played = 1;
     return 1;
   }
-  int k = p->n - 2; /* the last sample at or before T */
-  while (k >= 0 && at(p, k)->src_ns > T) k--;
+  int k = p->n - 2; /* the last sample at or before S */
+  while (k >= 0 && at(p, k)->src_ns > S) k--;
   if (k < 0) { /* before the oldest kept: the oldest */
     *x = at(p, 0)->x;
     *src_ns = at(p, 0)->src_ns;
     *seq = at(p, 0)->seq;
+    p->played_ns = *src_ns;
+    p->have_played = 1;
     return 1;
   }
   const palp_srv_playout_sample *a = at(p, k), *b = at(p, k + 1);
-  /* a <= T < b (k is the last at or before T; b is after it), so w is in [0, 1); held there
+  /* a <= S < b (k is the last at or before S; b is after it), so w is in [0, 1); held there
    * against rounding, since a weight outside it would move the device beyond both samples. */
-  double w = (double)(T - a->src_ns) / (double)(b->src_ns - a->src_ns);
+  double w = (double)(S - a->src_ns) / (double)(b->src_ns - a->src_ns);
   if (!(w >= 0)) w = 0;
   if (w > 1) w = 1;
   *x = (palp_vec3){a->x.x + w * (b->x.x - a->x.x), a->x.y + w * (b->x.y - a->x.y), a->x.z + w * (b->x.z - a->x.z)};
-  *src_ns = T;
+  *src_ns = S;
   *seq = a->seq;
+  p->played_ns = S;
+  p->have_played = 1;
   return 1;
 }

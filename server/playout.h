@@ -26,7 +26,27 @@
  * is steered towards its target at most 10% faster or slower, so a changing
  * estimate bends the device's motion instead of making it jump.
  * With D = 0 (loopback, a steady link) T is never behind the newest sample and the
- * world sees exactly what it saw without the buffer: the newest point. Measured
+ * world sees exactly what it saw without the buffer: the newest point.
+ *
+ * A gap is caught up, not jumped (2026-12-07). A station or a server that does not run for
+ * a while (a machine that swaps, a core lost to other work) leaves a gap in the station
+ * times the world has played: the next sample is the hand's motion over the whole gap, and
+ * played at once it moved the finger millimetres within one 4 ms step, which the phantom's
+ * viscous response turns into newtons the hand never pushed with (measured, the paper's
+ * membrane, a 12 mm slide at 20 mm/s whose peak is 0.36 N: 0.92 N after a 0.3 s stop of
+ * the station, 1.11 N after a 0.2 s stop of the server; and 0.44-13.5 N in 14 of ~100 runs
+ * of test_relay on a starved machine). The session log recorded them as the trainee's.
+ * The station time played therefore advances by at most PALP_SRV_PLAYOUT_CATCHUP world
+ * steps per step: after a gap the finger travels the hand's path (straight across the gap,
+ * where no sample says otherwise) at most twice as fast as the hand did, and is back on time
+ * after as long again as the gap. A lag over 0.5 s is caught up faster, shrinking at
+ * (lag / PALP_SRV_PLAYOUT_CATCHUP_TIME - 1) s per s (the finger lag / 0.25 s times as fast as
+ * the hand), so that no gap keeps the phantom behind the hand for more than a second or so (a
+ * 1 s gap: 0.78 s; measured, a 0.6 s stop of the server: 0.96 N jumped, 0.43 N caught up). A
+ * gap over PALP_SRV_PLAYOUT_CATCHUP_MAX (2 s) is jumped as before.
+ * Without a gap the bound never acts (one step of the station's clock per step of the
+ * world's; a sample a step late is two). While a gap is caught up the samples around the
+ * point played are kept, however many come (palp_srv_playout_push). Measured
  * (test_relay, 20 +- 5 ms, 5% loss): D 6.6-9.4 ms; the device's per-step motion on
  * the server as even as the undelayed station's; the force's content above ~25 Hz
  * while pressed (median of 100 ms windows) 0.0007-0.0010 N, against 0.0055-0.0058 N
@@ -43,11 +63,18 @@
 
 #include "palp.h"
 
-#define PALP_SRV_PLAYOUT_SAMPLES 32 /* kept for interpolation: 128 ms at 250 Hz */
+#define PALP_SRV_PLAYOUT_SAMPLES 64 /* kept for interpolation: 256 ms at 250 Hz, 64 ms at 1 kHz */
 #define PALP_SRV_PLAYOUT_OFFSETS 64 /* arrivals the jitter estimate looks at */
 /* The most latency the buffer may add [s]: beyond it smoothness costs more than
  * it buys (a 30 ms older device point is 0.6 mm at a palpation's 20 mm/s). */
 #define PALP_SRV_PLAYOUT_MAX_DELAY 0.030
+/* After a gap, the station time played advances by at most this many world steps per step,
+ * or by lag / PALP_SRV_PLAYOUT_CATCHUP_TIME [s] of it per second when that is more: the finger
+ * moves at most max(2, gap / 0.25 s) times as fast as the hand moved. */
+#define PALP_SRV_PLAYOUT_CATCHUP 2
+#define PALP_SRV_PLAYOUT_CATCHUP_TIME 0.25
+/* A gap longer than this [s] is jumped as before: the hand may be anywhere after it. */
+#define PALP_SRV_PLAYOUT_CATCHUP_MAX 2.0
 
 typedef struct palp_srv_playout_sample {
   int64_t src_ns; /* station clock */
@@ -66,16 +93,27 @@ typedef struct palp_srv_playout {
   double reach;                         /* [m], 0: none */
   int64_t last_now_ns;
   int playing;
+  int64_t step_ns;   /* the world's step [ns]; 0: no catch-up bound */
+  int64_t played_ns; /* the station time played last; valid when have_played */
+  int have_played;
   /* reported */
   uint64_t samples, late; /* taken; of them, arrived after their playout time */
   double delay_max;       /* largest D used [s] */
+  uint64_t behind_steps;  /* steps played behind their turn, catching a gap up */
+  double behind_max;      /* the most they were behind [s] */
 } palp_srv_playout;
 
 /* reach: the largest |device point| [m] the validator lets through (0: no bound); a
- * late turn is not bridged beyond it. */
-void palp_srv_playout_init(palp_srv_playout *p, double reach);
+ * late turn is not bridged beyond it. step: the world's step [s], one per palp_srv_playout_at
+ * (0: gaps are jumped, not caught up). */
+void palp_srv_playout_init(palp_srv_playout *p, double reach, double step);
 /* Forgets the samples (a finger lifted or re-placed); keeps the offset estimate. */
 void palp_srv_playout_clear(palp_srv_playout *p);
+/* Forgets the samples and starts from a finger the world already has at x, standing for
+ * station time src_ns: the samples pushed next are caught up from it as after a gap (a
+ * finger placed below the phantom's surface is brought in from it; session.c, place).
+ * PALP_EINVAL (nothing changed) for a stamp that is no clock reading. */
+int palp_srv_playout_start(palp_srv_playout *p, int64_t src_ns, palp_vec3 x, uint64_t seq);
 /* A sample received at recv_ns (server clock). Returns 1 when taken, 0 when it is
  * not newer than the newest (repeated or out of order: the newer one stands; a
  * stamp more than 1 s older is a station clock that went back, and starts the

@@ -178,8 +178,10 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
                                 .phantom_radius = def->phantom->scene.world.mesh.radius,
                                 .vertex_count = mesh->vertex_count,
                                 .rest = mesh->rest};
-  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) /* within the validator's reach */
-    palp_srv_playout_init(&s->finger[i].playout, PALP_SRV_FINGER_REACH_RADII * s->limits.phantom_radius);
+  /* Within the validator's reach; a gap caught up at most PALP_SRV_PLAYOUT_CATCHUP world steps a step. */
+  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++)
+    palp_srv_playout_init(&s->finger[i].playout, PALP_SRV_FINGER_REACH_RADII * s->limits.phantom_radius,
+                          palp_world_get_def(s->world)->dt);
 
   s->deformation.session_id = s->id;
   s->deformation.positions._buffer = calloc((size_t)mesh->vertex_count, sizeof(palp_Vec3));
@@ -511,6 +513,33 @@ static void play_out(palp_srv_session *s, int64_t recv_ns, int64_t now_ns) {
   }
 }
 
+/* Where a finger placed below the phantom's surface is placed instead (docs/server.md, "A finger
+ * placed below the surface"). A station that comes back from a stall longer than its lease (its
+ * fingers lifted meanwhile: the server could not tell it from a station gone), or one that joins
+ * with its device pressed in, places its finger millimetres deep in a phantom at rest, and the
+ * world answered within one step with the phantom's viscous response to those millimetres in 4 ms
+ * (measured, the paper's membrane, 12 mm deep in a slide whose peak is 0.36 N: 4.40 N after a
+ * 0.6 s stop of the station). The finger is placed where its tip touches the undeformed dome, on
+ * the dome's radius through the device point, standing for the station time the hand would have
+ * been there pressing in at a palpation's speed (ENTRY_SPEED); the playout then brings it to the
+ * device point as it catches a gap up (playout.h). 1 when *placed was moved. */
+#define ENTRY_MIN 0.0005  /* [m] a first point this shallow is placed where it is */
+#define ENTRY_SPEED 0.020 /* [m/s] a palpating hand's pressing speed (docs/station.md) */
+#define ENTRY_LEAD_MAX 1.0 /* [s] */
+static int entry_point(const palp_srv_session *s, const palp_srv_contact *c, palp_srv_contact *placed) {
+  const double touch = s->limits.phantom_radius + c->radius; /* |x| where the tip meets the dome [m] */
+  const double r = norm3(c->center), depth = touch - r;
+  if (!(depth > ENTRY_MIN) || !(c->center.z > 0)) return 0; /* above it, or beside its base */
+  /* at most 1 s before it (a 20 mm deep point: brought in at 20 mm/s or faster), which the playout
+   * catches up rather than jumps (its CATCHUP_MAX) */
+  const double lead_ns = fmin(depth / ENTRY_SPEED, ENTRY_LEAD_MAX) * 1e9;
+  if ((double)c->source_time_ns - lead_ns <= -4.6e18) return 0; /* before any clock reading: as it is */
+  placed->center = r > 1e-9 ? (palp_vec3){c->center.x * touch / r, c->center.y * touch / r, c->center.z * touch / r}
+                            : (palp_vec3){0, 0, touch};
+  placed->source_time_ns = c->source_time_ns - (int64_t)lead_ns;
+  return 1;
+}
+
 static void take_contacts(palp_srv_session *s, int64_t now_ns) {
   fold_filtered(s, now_ns);
   /* Now: when the samples of this take had all arrived. Each one's own arrival is
@@ -580,12 +609,19 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
           }
         }
       } else {
-        if (apply(s, &c) < 0) {
+        /* A finger placed (or re-placed) below the surface is placed on it and brought in. */
+        palp_srv_contact placed = c;
+        const int entry = c.mode == palp_CONTACT_FINGER && entry_point(s, &c, &placed);
+        if (apply(s, &placed) < 0) {
           count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
           continue;
         }
-        /* A finger placed (or re-placed): its playout starts from this point. */
+        /* Its playout starts from this point (or from the one it is brought in from). */
         palp_srv_playout_clear(&f->playout);
+        if (entry) {
+          palp_srv_playout_start(&f->playout, placed.source_time_ns, placed.center, c.seq);
+          s->stats.entries++;
+        }
         if (c.mode == palp_CONTACT_FINGER)
           palp_srv_playout_push(&f->playout, c.source_time_ns, arrival_ns(s, c.finger, c.seq, recv_ns), c.center,
                                 c.seq);

@@ -47,6 +47,7 @@ typedef struct palp_srv_session_stats {
    * overruns <= ticks + skipped */
   uint64_t ticks, overruns, skipped, awake_ticks;
   uint64_t contact_samples;                 /* applied (accepted or clamped) */
+  uint64_t entries;                         /* fingers placed below the surface, brought in from it */
   uint64_t rejected[PALP_SRV_REJ_COUNT];    /* per reason; force_limit counts clamps too */
   double peak_force;                        /* [N] */
   double peak_displacement;                 /* [m] */

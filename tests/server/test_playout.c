@@ -54,7 +54,7 @@ static void simulate(double jitter_ms, double loss, int64_t clock, int stop_at, 
     if (!lost) prev = a;
   }
   palp_srv_playout p;
-  palp_srv_playout_init(&p, 0.4);
+  palp_srv_playout_init(&p, 0.4, PERIOD * 1e-9);
   memset(r, 0, sizeof *r);
   int next = 0;
   double newest = NAN;
@@ -88,6 +88,45 @@ static double unevenness(const double *z, int from, int to) {
   double s = 0;
   for (int k = from + 1; k < to; k++) s += pow((z[k - 1] - z[k]) - step, 2);
   return sqrt(s / (to - from - 1)) / step;
+}
+
+/* A gap (playout.h, "A gap is caught up"): a steady 20 ms link, a press at 10 mm/s sampled every
+ * `period`, ticks every `step`; from 1 s on, either the station does not run for `gap` (no
+ * samples stamped in it) or the server does not (no ticks in it; after it the reader has kept the
+ * newest sample only). Reports the largest per-tick motion as a multiple of the hand's per tick,
+ * the largest distance of a played point from the press at the station time it stands for, and
+ * when the played station time is the newest sample's again (s after the gap's end). */
+typedef struct gap_result {
+  double ratio, off_path, back_after;
+  int ticks;
+} gap_result;
+
+static void gap_run(int64_t period, int64_t step, int64_t gap, int server_stall, double catchup_step, gap_result *g) {
+  palp_srv_playout p;
+  palp_srv_playout_init(&p, 0.4, catchup_step);
+  memset(g, 0, sizeof *g);
+  g->back_after = INFINITY;
+  const int64_t t0 = 1000 * MS, t1 = t0 + gap, end = 3000 * MS;
+  int64_t sent = 0; /* next sample's station time */
+  double prev = NAN;
+  int behind = 0;
+  for (int64_t now = 21 * MS + 300000; now < end; now += step) {
+    if (server_stall && now >= t0 && now < t1) continue; /* no tick */
+    int64_t take = -1;                                  /* the reader keeps the newest */
+    for (; sent + 20 * MS <= now; sent += period)
+      if (server_stall || sent < t0 || sent >= t1) take = sent;
+    if (take >= 0) palp_srv_playout_push(&p, take, take + 20 * MS, (palp_vec3){0, 0, 0.04 - SPEED * take * 1e-9}, 1);
+    palp_vec3 x;
+    int64_t src;
+    uint64_t seq;
+    if (palp_srv_playout_at(&p, now, &x, &src, &seq) != 1) continue;
+    if (g->ticks++ > 0) g->ratio = fmax(g->ratio, fabs(prev - x.z) / (SPEED * step * 1e-9));
+    prev = x.z;
+    g->off_path = fmax(g->off_path, fabs(x.z - (0.04 - SPEED * src * 1e-9)));
+    const int on_time = src == (take >= 0 ? take : src) && now >= t1 && src >= t1;
+    if (now >= t1 && !on_time) behind = 1;
+    if (now >= t1 && on_time && isinf(g->back_after) && behind) g->back_after = 1e-9 * (double)(now - t1);
+  }
 }
 
 int main(void) {
@@ -188,7 +227,7 @@ int main(void) {
    * link (arrivals 20 or 30 ms after sending: D = 10 ms), then the last two samples. */
   for (int forged = 0; forged < 2; forged++) {
     palp_srv_playout q;
-    palp_srv_playout_init(&q, 0.4);
+    palp_srv_playout_init(&q, 0.4, PERIOD * 1e-9);
     for (int k = 0; k < 20; k++)
       palp_srv_playout_push(&q, k * PERIOD, k * PERIOD + (k % 2 ? 30 : 20) * MS, (palp_vec3){0, 0, 0.3}, k + 1);
     /* forged: two stamps 1 ns apart 0.05 m apart (a made-up 5e7 m/s); else a fast
@@ -207,7 +246,7 @@ int main(void) {
 
   /* What a station may send that is not a newer sample. */
   palp_srv_playout p;
-  palp_srv_playout_init(&p, 0.4);
+  palp_srv_playout_init(&p, 0.4, PERIOD * 1e-9);
   const palp_vec3 a = {0, 0, 0.03}, b = {0, 0, 0.02}, c = {0, 0, 0.01};
   palp_vec3 x;
   int64_t src;
@@ -234,7 +273,7 @@ int main(void) {
    * samples (within 1e-15 m). */
   {
     palp_srv_playout e;
-    palp_srv_playout_init(&e, 0.4);
+    palp_srv_playout_init(&e, 0.4, PERIOD * 1e-9);
     const int64_t L = (1LL << 62) - 1;
     const palp_vec3 lo = {0, 0, 0.0}, hi = {0, 0, 0.01};
     palp_vec3 y[2];
@@ -271,7 +310,7 @@ int main(void) {
    * -fsanitize=undefined in a scratch tree (docs/robustness.md) and reports nothing here. */
   {
     palp_srv_playout e;
-    palp_srv_playout_init(&e, 0.4);
+    palp_srv_playout_init(&e, 0.4, PERIOD * 1e-9);
     const int64_t L = (1LL << 62) - 1;
     const palp_vec3 lo = {0, 0, 0.0}, hi = {0, 0, 0.01};
     const int ta = palp_srv_playout_push(&e, -L, L, lo, 1), tb = palp_srv_playout_push(&e, L, -L, hi, 2);
@@ -290,6 +329,71 @@ int main(void) {
     }
     CHECK(good && e.delay == 0, "stamps -(2^62 - 1) then 2^62 - 1 arriving at 2^62 - 1 then -(2^62 - 1): taken "
           "(%d, %d); asked at -L, 0, L the newer point plays (D %.0f)", ta, tb, e.delay);
+  }
+
+  /* Gaps (playout.h, "A gap is caught up"). Played at once, the hand's motion over a gap moved
+   * the finger within one step: the motion per step was the gap's, hundreds of times the hand's.
+   * Caught up, it is at most twice the hand's (a lag up to 0.5 s) or lag / 0.25 s (a longer one),
+   * every point on the hand's path (a press here: interpolation across the gap is exact, 1e-12 m),
+   * and the playout is on time again within the link's latency and the lag after the gap (0.5 s +
+   * 0.25 s ln(lag / 0.25 s - 1) for a longer one), plus two steps. At 1 kHz the samples kept (64) cover 64 ms: the two around
+   * the point played are kept however many come (a jump to the oldest otherwise). */
+  {
+    const struct {
+      int64_t period, step, gap;
+      int server;
+      const char *what;
+    } gaps[] = {{PERIOD, PERIOD, 300 * MS, 0, "250 Hz, the station stopped 0.3 s"},
+                {PERIOD, PERIOD, 200 * MS, 1, "250 Hz, the server stopped 0.2 s"},
+                {PERIOD, PERIOD, 1000 * MS, 0, "250 Hz, the station stopped 1 s"},
+                {MS, MS, 300 * MS, 0, "1 kHz, the station stopped 0.3 s"},
+                {MS, MS, 300 * MS, 1, "1 kHz, the server stopped 0.3 s"}};
+    for (size_t i = 0; i < sizeof gaps / sizeof gaps[0]; i++) {
+      gap_result jumped, caught;
+      gap_run(gaps[i].period, gaps[i].step, gaps[i].gap, gaps[i].server, 0, &jumped);
+      gap_run(gaps[i].period, gaps[i].step, gaps[i].gap, gaps[i].server, 1e-9 * (double)gaps[i].step, &caught);
+      /* lag: the gap and a sample period (the last sample before it was played); caught up from
+       * the first sample after it, 20 ms after the gap (the link's latency), L > 0.5 s shrinking as
+       * dL/dt = -(L / 0.25 s - 1) down to 0.5 s, then by 1 s per s. */
+      const double g = 1e-9 * (double)gaps[i].gap, L = g + 1e-9 * (double)gaps[i].period, most = fmax(2.0, L / 0.25);
+      const double back = 0.020 + (L <= 0.5 ? L : 0.5 + 0.25 * log(L / 0.25 - 1)) + 2e-9 * (double)gaps[i].step;
+      CHECK(jumped.ratio >= 0.9 * g / (1e-9 * (double)gaps[i].step), "%s: jumped, the finger moved %.0f times as "
+            "fast as the hand in one step (the gap's motion: >= %.0f)", gaps[i].what, jumped.ratio,
+            0.9 * g / (1e-9 * (double)gaps[i].step));
+      CHECK(caught.ratio <= most * (1 + 1e-6) && caught.off_path <= 1e-12 && caught.back_after <= back,
+            "%s: caught up, at most %.2f times as fast as the hand (<= %.2f), %.1e m off its path (<= 1e-12), on "
+            "time %.3f s after the gap (<= %.3f)", gaps[i].what, caught.ratio, most, caught.off_path,
+            caught.back_after, back);
+    }
+  }
+
+  /* A finger placed below the surface (session.c, entry_point): started where it touches, 12 mm
+   * above the first sample and 0.6 s before it (12 mm at 20 mm/s), then brought to the samples at
+   * most max(2, lag / 0.25 s) = 2.4 times as fast as that, along the line between them. */
+  {
+    palp_srv_playout e;
+    palp_srv_playout_init(&e, 0.4, PERIOD * 1e-9);
+    const int64_t first = 2000 * MS;
+    const int rc = palp_srv_playout_start(&e, first - 600 * MS, (palp_vec3){0, 0, 0.052}, 1);
+    double prev = 0.052, fastest = 0;
+    int64_t back = -1;
+    for (int k = 0; k < 500; k++) { /* the finger held at 0.040 m from the first sample on */
+      const int64_t t = first + k * PERIOD;
+      palp_srv_playout_push(&e, t, t + 20 * MS, (palp_vec3){0, 0, 0.040}, (uint64_t)k + 2);
+      palp_vec3 y;
+      int64_t ys;
+      uint64_t yq;
+      palp_srv_playout_at(&e, t + 20 * MS, &y, &ys, &yq);
+      fastest = fmax(fastest, (prev - y.z) / (PERIOD * 1e-9));
+      prev = y.z;
+      if (back < 0 && y.z == 0.040) back = k * PERIOD;
+    }
+    CHECK(rc == PALP_OK && fastest <= 2.4 * 0.020 * (1 + 1e-6) && fastest >= 2.0 * 0.020 && back > 0 &&
+              back <= 500 * MS,
+          "a finger brought in from the surface: at most %.1f mm/s (<= 48, 2.4 x 20 mm/s), at the device %.2f s "
+          "after its first sample (<= 0.5 s)", fastest * 1e3, back * 1e-9);
+    CHECK(palp_srv_playout_start(&e, -(1LL << 62), (palp_vec3){0, 0, 0.052}, 1) == PALP_EINVAL,
+          "a start stamp that is no clock reading is refused (PALP_EINVAL)");
   }
 
   fprintf(stderr, failures ? "%d check(s) FAILED\n" : "all checks passed\n", failures);
