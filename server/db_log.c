@@ -35,6 +35,10 @@ typedef struct slot {
   atomic_int refusals_logged;           /* logged one by one since the last flush */
   double finger_radius[SLOT_FINGERS]; /* per model contact id, from the world ops [m] */
   palp_db_valid_range range;          /* steps outside the model's valid range since the last flush */
+  /* gaps in the device points caught up, fingers brought in from the surface, since the last flush
+   * (server/playout.h, server/session.c): the longest gap [s], the deepest placement [m] */
+  uint64_t gaps, entries;
+  double gap_max, entry_max;
   /* session 63: an exercise session is scored from this log once it closes (grader.h) */
   char uid[96];
   char exercise[64];                  /* "" for none */
@@ -106,6 +110,21 @@ static void flush_counts(palp_srv_db_log *l, slot *s, int64_t frame) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_VALID_RANGE, frame, detail, s->range.steps);
     s->range.steps = s->range.depth_steps = s->range.skin_steps = s->range.limit_steps = 0; /* deepest: so far */
     s->range.gel_steps = s->range.gel_frames = 0;
+  }
+  if (s->gaps) {
+    char detail[200];
+    snprintf(detail, sizeof detail, "device points resumed after a gap (a stalled station or server), the longest "
+             "%.2f s: the phantom was given the hand's path over it, not the jump (docs/station.md)", s->gap_max);
+    palp_db_log_event(l->w, s->h, PALP_DB_EVENT_INFO, frame, detail, (int64_t)s->gaps);
+    s->gaps = 0, s->gap_max = 0;
+  }
+  if (s->entries) {
+    char detail[200];
+    snprintf(detail, sizeof detail, "a finger placed below the surface (a station back from a stall, a device "
+             "pressed in), the deepest %.1f mm: brought in from the surface at a pressing hand's speed",
+             1e3 * s->entry_max);
+    palp_db_log_event(l->w, s->h, PALP_DB_EVENT_INFO, frame, detail, (int64_t)s->entries);
+    s->entries = 0, s->entry_max = 0;
   }
   if (s->overruns) {
     palp_db_log_event(l->w, s->h, PALP_DB_EVENT_OVERRUN, frame, "tick ended after the next tick's start",
@@ -303,6 +322,20 @@ static void on_rejected(void *ctx, uint32_t session_id, palp_srv_reject_reason r
   else if ((unsigned)r < PALP_SRV_REJ_COUNT) s->rejected[r] += count;
 }
 
+static void on_input_gap(void *ctx, uint32_t session_id, int64_t frame, int finger, double gap_s, double depth_m) {
+  (void)frame, (void)finger;
+  palp_srv_db_log *l = ctx;
+  slot *s = find(l, session_id);
+  if (!s) return;
+  if (depth_m > 0) {
+    s->entries++;
+    if (depth_m > s->entry_max) s->entry_max = depth_m;
+  } else {
+    s->gaps++;
+    if (gap_s > s->gap_max) s->gap_max = gap_s;
+  }
+}
+
 static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {
   (void)late_ns;
   palp_srv_db_log *l = ctx;
@@ -450,6 +483,7 @@ int palp_srv_db_log_open(const char *path, int64_t max_bytes, palp_log *log, pal
                             .contact_rejected = on_rejected,
                             .frame = on_frame,
                             .overrun = on_overrun,
+                            .input_gap = on_input_gap,
                             .valid_range = on_valid_range,
                             .finding = on_finding,
                             .debrief = on_debrief,

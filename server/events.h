@@ -145,6 +145,10 @@ typedef struct palp_srv_events {
   void (*finding)(void *ctx, uint32_t session_id, const palp_srv_finding_event *ev);
   /* [main thread] an exercise session's debrief, once, as it closes (before session_closed). */
   void (*debrief)(void *ctx, uint32_t session_id, const palp_srv_debrief_event *ev);
+  /* [tick thread] at frame, finger's device points came after a gap of gap_s [s] (a stalled station
+   * or server), caught up rather than jumped (server/playout.h); or, with depth_m > 0, the finger
+   * was placed depth_m [m] below the surface and is brought in from it (server/session.c). */
+  void (*input_gap)(void *ctx, uint32_t session_id, int64_t frame, int finger, double gap_s, double depth_m);
   /* [tick thread] a tick of this session ended late by late_ns after its deadline. */
   void (*overrun)(void *ctx, uint32_t session_id, int64_t late_ns);
   /* [tick thread] after a step that left the model's valid range (issue 12; docs/model.md,

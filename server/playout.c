@@ -40,7 +40,7 @@ void palp_srv_playout_init(palp_srv_playout *p, double reach, double step) {
 
 void palp_srv_playout_clear(palp_srv_playout *p) {
   p->head = p->n = 0;
-  p->playing = p->have_played = 0;
+  p->playing = p->have_played = p->catching = 0;
 }
 
 int palp_srv_playout_start(palp_srv_playout *p, int64_t src_ns, palp_vec3 x, uint64_t seq) {
@@ -50,6 +50,7 @@ int palp_srv_playout_start(palp_srv_playout *p, int64_t src_ns, palp_vec3 x, uin
   p->n = 1;
   p->played_ns = src_ns;
   p->have_played = 1;
+  p->catching = 1; /* a placement brought in, not a gap: not counted as one */
   return PALP_OK;
 }
 
@@ -184,11 +185,14 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
     int64_t most = PALP_SRV_PLAYOUT_CATCHUP * p->step_ns;
     const double prop = (double)lag * ((double)p->step_ns / (PALP_SRV_PLAYOUT_CATCHUP_TIME * 1e9));
     if (prop > (double)most) most = (int64_t)prop;
-    if (lag > most && lag <= (int64_t)(PALP_SRV_PLAYOUT_CATCHUP_MAX * 1e9)) { /* played + most < due: no overflow */
+    const int catching = lag > most && lag <= (int64_t)(PALP_SRV_PLAYOUT_CATCHUP_MAX * 1e9);
+    if (catching) { /* played + most < due: no overflow */
       S = p->played_ns + most;
       p->behind_steps++;
       if (1e-9 * (double)(lag - most) > p->behind_max) p->behind_max = 1e-9 * (double)(lag - most);
+      if (!p->catching && 1e-9 * (double)lag >= PALP_SRV_PLAYOUT_GAP_NOTED) p->gaps++, p->gap_last = 1e-9 * (double)lag;
     }
+    p->catching = catching;
   }
 
   if (S >= newest->src_ns) {

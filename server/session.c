@@ -505,7 +505,10 @@ static void play_out(palp_srv_session *s, int64_t recv_ns, int64_t now_ns) {
     palp_srv_finger_state *f = &s->finger[i];
     if (f->mode != palp_CONTACT_FINGER || f->world_contact < 0) continue;
     palp_srv_contact c = f->cmd;
+    const uint64_t gaps = f->playout.gaps;
     if (palp_srv_playout_at(&f->playout, recv_ns, &c.center, &c.source_time_ns, &c.seq) <= 0) continue;
+    if (f->playout.gaps != gaps && s->events && s->events->input_gap)
+      s->events->input_gap(s->events->ctx, s->id, palp_world_frame(s->world), i, f->playout.gap_last, 0);
     if (c.source_time_ns == f->cmd.source_time_ns && c.center.x == f->cmd.center.x &&
         c.center.y == f->cmd.center.y && c.center.z == f->cmd.center.z)
       continue;
@@ -621,6 +624,11 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
         if (entry) {
           palp_srv_playout_start(&f->playout, placed.source_time_ns, placed.center, c.seq);
           s->stats.entries++;
+          if (s->events && s->events->input_gap)
+            s->events->input_gap(s->events->ctx, s->id, palp_world_frame(s->world), c.finger,
+                                 1e-9 * (double)(c.source_time_ns - placed.source_time_ns),
+                                 norm3((palp_vec3){c.center.x - placed.center.x, c.center.y - placed.center.y,
+                                                   c.center.z - placed.center.z}));
         }
         if (c.mode == palp_CONTACT_FINGER)
           palp_srv_playout_push(&f->playout, c.source_time_ns, arrival_ns(s, c.finger, c.seq, recv_ns), c.center,

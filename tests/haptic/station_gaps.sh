@@ -9,9 +9,9 @@
 # phantom's viscous answer was 0.97 N, 4.96 N and 1.69 N (this test on the code before, 2026-12-07:
 # 2.7-14 times the baseline's 0.36 N), all logged as the trainee's. Each session's peak force (the
 # server's Fmax) must stay within twice the baseline's (since: 0.36, 0.46, 0.43 N), and the server
-# must say what it caught up and brought in.
+# must say what it caught up and brought in, in its log and in the session log the review reads.
 set -u
-server=$1 client=$2 config_dir=$3 test_dir=$4
+server=$1 client=$2 config_dir=$3 test_dir=$4 review=$5
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
 . "$test_dir/stall.sh"
 tmp=$(mktemp -d)
@@ -89,5 +89,19 @@ if grep -q "caught up over [1-9][0-9]* steps.*; 1 finger(s) placed below the sur
   grep -q "trainee station lost" "$tmp/one.log"; then
   echo "ok   the lapsed trainee's finger was placed again below the surface and brought in"
 else echo "FAIL no finger brought in after the lease lapsed"; fail=1; fi
+# The instructor's review tells the two apart from the trainee's own pressing (info events).
+uid_of() { "$review" --db "$1" list 2>/dev/null | awk -v n="$2" '$2 == n { print $1 }'; }
+gshow=$("$review" --db "$tmp/one.db" show "$(uid_of "$tmp/one.db" gap)" 2>&1)
+lshow=$("$review" --db "$tmp/one.db" show "$(uid_of "$tmp/one.db" lapse)" 2>&1)
+bshow=$("$review" --db "$tmp/one.db" show "$(uid_of "$tmp/one.db" base)" 2>&1)
+if printf '%s' "$gshow" | grep -q "info .*device points resumed after a gap (a stalled station or server), the longest 0\.[2-9][0-9] s"; then
+  echo "ok   the review of the stopped station's session names its gap (0.2-1 s)"
+else echo "FAIL the review of 'gap' names no gap of 0.2-1 s"; printf '%s\n' "$gshow" | tail -n 12; fail=1; fi
+if printf '%s' "$lshow" | grep -q "info .*a finger placed below the surface .*, the deepest [0-9.]* mm: brought in"; then
+  echo "ok   the review of the lapsed station's session names its finger brought in"
+else echo "FAIL the review of 'lapse' names no finger brought in"; printf '%s\n' "$lshow" | tail -n 12; fail=1; fi
+if printf '%s' "$bshow" | grep -q "resumed after a gap\|placed below the surface"; then
+  echo "FAIL the undisturbed session's review names a gap or a finger brought in"; fail=1
+else echo "ok   the undisturbed session's review names neither"; fi
 [ $fail -eq 0 ] || tail -n 25 "$tmp/one.log" "$tmp/two.log"
 exit $fail
