@@ -99,6 +99,8 @@ static double unevenness(const double *z, int from, int to) {
 typedef struct gap_result {
   double ratio, off_path, back_after;
   int ticks;
+  uint64_t gaps; /* catch-ups told (the session log's events) */
+  double gap_last;
 } gap_result;
 
 static void gap_run(int64_t period, int64_t step, int64_t gap, int server_stall, double catchup_step, gap_result *g) {
@@ -127,6 +129,8 @@ static void gap_run(int64_t period, int64_t step, int64_t gap, int server_stall,
     if (now >= t1 && !on_time) behind = 1;
     if (now >= t1 && on_time && isinf(g->back_after) && behind) g->back_after = 1e-9 * (double)(now - t1);
   }
+  g->gaps = p.gaps;
+  g->gap_last = p.gap_last;
 }
 
 int main(void) {
@@ -364,6 +368,9 @@ int main(void) {
             "%s: caught up, at most %.2f times as fast as the hand (<= %.2f), %.1e m off its path (<= 1e-12), on "
             "time %.3f s after the gap (<= %.3f)", gaps[i].what, caught.ratio, most, caught.off_path,
             caught.back_after, back);
+      CHECK(caught.gaps == 1 && fabs(caught.gap_last - L) <= 1e-9 * (double)gaps[i].period + 1e-9,
+            "%s: told as %llu gap of %.3f s (1, the lag %.3f s, to a sample period)", gaps[i].what,
+            (unsigned long long)caught.gaps, caught.gap_last, L);
     }
   }
 
@@ -388,6 +395,7 @@ int main(void) {
       prev = y.z;
       if (back < 0 && y.z == 0.040) back = k * PERIOD;
     }
+    CHECK(e.gaps == 0, "a finger brought in from the surface is not told as a gap (%llu)", (unsigned long long)e.gaps);
     CHECK(rc == PALP_OK && fastest <= 2.4 * 0.020 * (1 + 1e-6) && fastest >= 2.0 * 0.020 && back > 0 &&
               back <= 500 * MS,
           "a finger brought in from the surface: at most %.1f mm/s (<= 48, 2.4 x 20 mm/s), at the device %.2f s "
