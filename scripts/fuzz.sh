@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes every parser that reads the network or a file (issue 15), for a bounded time each.
 #
-#   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     # default 60 s, all 13 targets
+#   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     # default 60 s, all 14 targets
 #
 # Builds build-fuzz/ with clang-14, -DPALP_FUZZ=ON (libFuzzer + AddressSanitizer +
 # UndefinedBehaviorSanitizer), then runs each fuzz_<target> with tests/fuzz/corpus/<target>/ as
@@ -14,7 +14,7 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
 . scripts/debian-path.sh # Debian's programs first (its comment)
-all=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access debrief)
+all=(scene server_config fem_config inp stats_csv replay contact valid_range refusal local_model exercise web_access debrief playout)
 usage() {
   echo "usage: bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]   (targets: ${all[*]})" >&2
   exit 2

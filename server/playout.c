@@ -184,7 +184,8 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
     const int64_t due = S < newest->src_ns ? S : newest->src_ns, lag = sub_held(due, p->played_ns);
     int64_t most = PALP_SRV_PLAYOUT_CATCHUP * p->step_ns;
     const double prop = (double)lag * ((double)p->step_ns / (PALP_SRV_PLAYOUT_CATCHUP_TIME * 1e9));
-    if (prop > (double)most) most = (int64_t)prop;
+    /* held at lag before the conversion: a day-long step times a 146-year lag is no int64 */
+    if (prop > (double)most) most = prop >= (double)lag ? lag : (int64_t)prop;
     const int catching = lag > most && lag <= (int64_t)(PALP_SRV_PLAYOUT_CATCHUP_MAX * 1e9);
     if (catching) { /* played + most < due: no overflow */
       S = p->played_ns + most;
