@@ -74,7 +74,8 @@ int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, 
   if (p->n > 0 && src_ns <= at(p, p->n - 1)->src_ns) {
     /* two stamps: exact (LIM) */
     if (at(p, p->n - 1)->src_ns - src_ns < RESTART_NS) return 0; /* repeated or overtaken: the newer stands */
-    palp_srv_playout_init(p, p->reach, 1e-9 * (double)p->step_ns); /* the station's clock went back (a restart): start over */
+    /* the station's clock went back (a restart): start over */
+    palp_srv_playout_init(p, p->reach, 1e-9 * (double)p->step_ns);
   }
   const int64_t off = recv_ns - src_ns; /* |off| <= 2^63 - 2 (LIM) */
   /* Windowed minimum in two 1 s buckets: the fastest path lately, without a
@@ -103,7 +104,8 @@ int palp_srv_playout_push(palp_srv_playout *p, int64_t src_ns, int64_t recv_ns, 
      * played (the last before the gap, the first after it): the second of them goes instead,
      * so that the point keeps a sample on either side and moves on from where it is (a
      * straight path across the gap to a later sample) rather than jumping to the oldest kept. */
-    if (p->have_played && at(p, 1)->src_ns > p->played_ns) p->s[(p->head + 1) % PALP_SRV_PLAYOUT_SAMPLES] = p->s[p->head];
+    if (p->have_played && at(p, 1)->src_ns > p->played_ns)
+      p->s[(p->head + 1) % PALP_SRV_PLAYOUT_SAMPLES] = p->s[p->head];
     s = &p->s[p->head];
     p->head = (p->head + 1) % PALP_SRV_PLAYOUT_SAMPLES;
   }
@@ -191,7 +193,8 @@ int palp_srv_playout_at(palp_srv_playout *p, int64_t now_ns, palp_vec3 *x, int64
       S = p->played_ns + most;
       p->behind_steps++;
       if (1e-9 * (double)(lag - most) > p->behind_max) p->behind_max = 1e-9 * (double)(lag - most);
-      if (!p->catching && 1e-9 * (double)lag >= PALP_SRV_PLAYOUT_GAP_NOTED) p->gaps++, p->gap_last = 1e-9 * (double)lag;
+      if (!p->catching && 1e-9 * (double)lag >= PALP_SRV_PLAYOUT_GAP_NOTED)
+        p->gaps++, p->gap_last = 1e-9 * (double)lag;
     }
     p->catching = catching;
   }

@@ -1231,19 +1231,20 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
                   delay_max * 1e3, (unsigned long long)late, (unsigned long long)played);
   /* What the gaps in them cost (a stalled station or server; playout.h, "A gap is caught up"), and
    * the fingers placed below the surface and brought in (session.c, entry_point). */
-  uint64_t behind = 0;
+  /* Said when a gap of 50 ms or more was (a loaded link's sample a step late is caught up too). */
+  uint64_t behind = 0, gaps = 0;
   double behind_max = 0;
   for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
     const palp_srv_playout *p = &s->finger[i].playout;
-    behind += p->behind_steps;
+    behind += p->behind_steps, gaps += p->gaps;
     if (p->behind_max > behind_max) behind_max = p->behind_max;
   }
-  if (behind > 0 || s->stats.entries > 0)
-    palp_log_info(srv->log, "session %u: gaps in the station's device points (a stalled station or server) caught up "
-                            "over %llu steps, up to %.0f ms behind, the finger never more than twice as fast as the "
-                            "hand (or a gap over 0.5 s shrinking by e^-1 every 0.25 s); %llu finger(s) placed below "
-                            "the surface brought in from it", s->id, (unsigned long long)behind, behind_max * 1e3,
-                  (unsigned long long)s->stats.entries);
+  if (gaps > 0 || s->stats.entries > 0)
+    palp_log_info(srv->log, "session %u: %llu gap(s) in the station's device points (a stalled station or server) "
+                            "caught up over %llu steps, up to %.0f ms behind, the finger never more than twice as fast "
+                            "as the hand (lags over 0.5 s shrinking by e^-1 every 0.25 s); %llu finger(s) placed below "
+                            "the surface brought in from it", s->id, (unsigned long long)gaps, (unsigned long long)behind,
+                  behind_max * 1e3, (unsigned long long)s->stats.entries);
   /* Where the model's answers were extrapolations (the stations were told each step,
    * LM_LARGE_STRAIN; docs/model.md, "Valid range"). */
   if (h.large_strain_steps > 0 || h.large_bend_steps > 0)

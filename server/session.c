@@ -612,9 +612,11 @@ static void take_contacts(palp_srv_session *s, int64_t now_ns) {
           }
         }
       } else {
-        /* A finger placed (or re-placed) below the surface is placed on it and brought in. */
+        /* A finger placed below the surface is placed on it and brought in; one already placed (a new
+         * radius) stays where it is. */
         palp_srv_contact placed = c;
-        const int entry = c.mode == palp_CONTACT_FINGER && entry_point(s, &c, &placed);
+        const int placing = f->mode != palp_CONTACT_FINGER || f->world_contact < 0;
+        const int entry = c.mode == palp_CONTACT_FINGER && placing && entry_point(s, &c, &placed);
         if (apply(s, &placed) < 0) {
           count_reject(s, PALP_SRV_REJ_MODEL, 0, now_ns);
           continue;
