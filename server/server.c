@@ -1218,12 +1218,13 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
                   (double)s->stats.factor_wait_ns * 1e-6, (long long)h.margin_rebuilds);
   /* What the network's jitter cost: the delay the device samples were played out at
    * (server/playout.h; none on a steady link). */
-  uint64_t played = 0, late = 0;
-  double delay_max = 0;
+  uint64_t played = 0, late = 0, behind = 0, gaps = 0;
+  double delay_max = 0, behind_max = 0;
   for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
     const palp_srv_playout *p = &s->finger[i].playout;
-    played += p->samples, late += p->late;
+    played += p->samples, late += p->late, behind += p->behind_steps, gaps += p->gaps;
     if (p->delay_max > delay_max) delay_max = p->delay_max;
+    if (p->behind_max > behind_max) behind_max = p->behind_max;
   }
   if (delay_max > 0)
     palp_log_info(srv->log, "session %u: the station's device points came with jitter and were played out up to "
@@ -1232,13 +1233,6 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
   /* What the gaps in them cost (a stalled station or server; playout.h, "A gap is caught up"), and
    * the fingers placed below the surface and brought in (session.c, entry_point). */
   /* Said when a gap of 50 ms or more was (a loaded link's sample a step late is caught up too). */
-  uint64_t behind = 0, gaps = 0;
-  double behind_max = 0;
-  for (int i = 0; i < PALP_SRV_MAX_FINGERS; i++) {
-    const palp_srv_playout *p = &s->finger[i].playout;
-    behind += p->behind_steps, gaps += p->gaps;
-    if (p->behind_max > behind_max) behind_max = p->behind_max;
-  }
   if (gaps > 0 || s->stats.entries > 0)
     palp_log_info(srv->log, "session %u: %llu gap(s) in the station's device points (a stalled station or server) "
                             "caught up over %llu steps, up to %.0f ms behind, the finger never more than twice as fast "

@@ -106,7 +106,10 @@ void test_send_force(palp_cli_station *st, int finger, int d, double polar, doub
 }
 
 void test_send_finger(palp_cli_station *st, double polar, double azimuth, double depth, uint64_t seq) {
-  const double r = 0.008;
+  test_send_finger_r(st, polar, azimuth, depth, 0.008, seq);
+}
+
+void test_send_finger_r(palp_cli_station *st, double polar, double azimuth, double depth, double r, uint64_t seq) {
   const palp_vec3 c = palp_cli_dome_point(0.04 + r - depth, polar, azimuth, NULL);
   palp_Contact m;
   memset(&m, 0, sizeof m);

@@ -66,6 +66,8 @@ void test_send_raw(palp_cli_station *st, const palp_Contact *c);
 /* Sends one position-driven 8 mm fingertip (finger 0) whose sphere goes depth [m] below the 40 mm
  * dome's undeformed surface along the normal at polar/azimuth [deg]. */
 void test_send_finger(palp_cli_station *st, double polar, double azimuth, double depth, uint64_t seq);
+/* The same with a fingertip of radius r [m]. */
+void test_send_finger_r(palp_cli_station *st, double polar, double azimuth, double depth, double r, uint64_t seq);
 
 /* Takes feedback samples for `seconds`, returning the last finger-0 force magnitude [N]. */
 double test_last_feedback(palp_cli_station *st, double seconds, int *samples);

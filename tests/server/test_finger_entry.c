@@ -22,26 +22,13 @@
 #include <string.h>
 
 #include "harness.h"
-#include "input.h"
 
 #define DOMAIN 214
 #define TIP 0.008 /* [m] */
 
+/* The tip's sphere `depth` below the 40 mm dome's undeformed surface, at the pole. */
 static void send_at(palp_cli_station *st, double depth, double radius, uint64_t seq) {
-  /* the tip's sphere `depth` below the 40 mm dome's undeformed surface, at the pole */
-  const palp_vec3 c = palp_cli_dome_point(0.04 + radius - depth, 0, 0, NULL);
-  palp_Contact m;
-  memset(&m, 0, sizeof m);
-  m.session_id = st->session_id;
-  m.finger = 0;
-  m.seq = seq;
-  m.source_time_ns = palp_dds_now_ns();
-  m.mode = palp_CONTACT_FINGER;
-  m.distribution = 1;
-  m.vertex = -1;
-  m.center = (palp_Vec3){c.x, c.y, c.z};
-  m.radius = radius;
-  dds_write(st->contact_w, &m);
+  test_send_finger_r(st, 0, 0, depth, radius, seq);
 }
 
 typedef struct trace {
