@@ -24,6 +24,7 @@
 #include "palp_dds.h"
 #include "admission.h"
 #include "retire.h"
+#include "palp_dds_reaper.h"
 #include "palp_dds_refusals.h"
 #include "palp_dds_strangers.h"
 #include "palp_dds_security.h"
@@ -111,6 +112,10 @@ struct palp_srv {
   int phantom_count;
 
   dds_entity_t pp;
+  /* Deletes a closed session's publisher (and a rotated score's) beside the main loop (palp_dds_reaper.h);
+   * close_longest_s: the longest the main loop spent on one closing session's entities and world [s] */
+  palp_dds_reaper *reaper;
+  double close_longest_s;
   dds_entity_t topic[PALP_TOPIC_COUNT];
   dds_entity_t station_request_r, station_request_rc;
   /* palp_station_request writers whose liveliness lapsed (Cyclone's listener thread
@@ -488,7 +493,8 @@ static void write_told_score(palp_srv *srv, const char *partition, const palp_Se
     return;
   }
   dds_entity_t *slot = &srv->told_pub[srv->told_next];
-  if (*slot > 0) dds_delete(*slot); /* its writer, and the sample it kept for a late reader */
+  /* its writer, and the sample it kept for a late reader; beside the main loop (a writer's delete waits) */
+  if (*slot > 0 && (!srv->reaper || palp_dds_reaper_put(srv->reaper, *slot) != 0)) dds_delete(*slot);
   *slot = pub;
   srv->told_next = (srv->told_next + 1) % TOLD_KEPT;
 }
@@ -1268,7 +1274,10 @@ static void close_session(palp_srv *srv, palp_srv_session *s, const char *reason
       break;
     }
   palp_srv_phantom *ph = s->phantom;
+  const int64_t t0 = palp_dds_now_ns();
   palp_srv_session_destroy(s);
+  const double took = (double)(palp_dds_now_ns() - t0) * 1e-9;
+  if (took > srv->close_longest_s) srv->close_longest_s = took;
   publish_catalogue(srv, ph);
 }
 
@@ -1622,6 +1631,7 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
                               .events = srv->events,
                               .partition = partition,
                               .log = srv->log,
+                              .reaper = srv->reaper,
                               .placement_seed = placement_seed(srv->placement_key, srv->next_session_id)};
     int rc = 0;
     char refusal[200] = "";
@@ -2365,6 +2375,12 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   /* a peer refused for its permissions named by its identity, not its GUID */
   if (palp_dds_security_name_peers(&srv->sec, &srv->refusals) < 0)
     palp_log_warn(srv->log, "out of memory naming the classroom's identities");
+  srv->reaper = palp_dds_reaper_create(2 * srv->cfg.max_sessions + TOLD_KEPT); /* a class closing at once, and room */
+  if (!srv->reaper) {
+    *rc = PALP_ENOMEM;
+    fail(err, errlen, "cannot start the thread that deletes closed sessions' publishers");
+    goto fail;
+  }
   srv->pp = palp_dds_create_participant((dds_domainid_t)srv->cfg.domain_id, &srv->sec);
   if (srv->pp < 0) {
     *rc = PALP_EIO;
@@ -2713,6 +2729,16 @@ void palp_srv_destroy(palp_srv *srv) {
   }
   palp_srv_ticker_destroy(srv->ticker);
   for (int i = 0; i < srv->session_count; i++) palp_srv_session_destroy(srv->sessions[i]);
+  if (srv->reaper) {
+    palp_dds_reaper_stats rs;
+    palp_dds_reaper_stats_get(srv->reaper, &rs);
+    if (rs.handed > 0)
+      palp_log_info(srv->log, "closed sessions: the main loop let go of each in at most %.3f s; %llu publishers "
+                    "deleted beside it (their writers waiting for the stations' acknowledgements), the longest in "
+                    "%.3f s, %d still to delete", srv->close_longest_s, (unsigned long long)rs.handed,
+                    (double)rs.longest_ns * 1e-9, rs.pending);
+  }
+  palp_dds_reaper_destroy(srv->reaper); /* what it still holds deleted before their participant */
   if (srv->strangers_ready) palp_dds_strangers_destroy(&srv->strangers); /* its readers, before their participant */
   if (srv->pp > 0) dds_delete(srv->pp);
   palp_srv_identity_destroy(srv->identity);

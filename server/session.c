@@ -107,6 +107,7 @@ palp_srv_session *palp_srv_session_create(const palp_srv_session_def *def, int *
   s->phantom = def->phantom;
   s->events = def->events;
   s->log = def->log;
+  s->reaper = def->reaper;
   s->log_interval = def->cfg->log_interval;
   s->deformation_period = 1.0 / def->cfg->deformation_rate_hz;
   s->assess_sample_hz = def->cfg->assess_sample_hz;
@@ -279,9 +280,13 @@ void palp_srv_session_factor_settle(palp_srv_session *s) {
 void palp_srv_session_destroy(palp_srv_session *s) {
   if (!s) return;
   palp_srv_session_factor_settle(s); /* the helper may still be writing into the world's job */
-  /* Deleting the publisher/subscriber deletes their readers and writers. */
+  /* Deleting the publisher/subscriber deletes their readers and writers. The subscriber here and now: its
+   * readers' filters take s as their argument. The publisher's writers have just written the CLOSED
+   * state's companions (the debrief, the answers, the last feedback), whose acknowledgement by the stations
+   * their delete waits for: 5-100 ms a session in the demo, 1 s against a stalled station, the main loop
+   * answering no request meanwhile (until 2026-12-07): the reaper's thread waits instead. */
   if (s->sub > 0) dds_delete(s->sub);
-  if (s->pub > 0) dds_delete(s->pub);
+  if (s->pub > 0 && (!s->reaper || palp_dds_reaper_put(s->reaper, s->pub) != 0)) dds_delete(s->pub);
   /* After its reader: nothing calls the filter (whose argument is s) any more. */
   if (s->contact_topic > 0) dds_delete(s->contact_topic);
   if (s->finding_topic > 0) dds_delete(s->finding_topic);

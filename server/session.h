@@ -23,6 +23,7 @@
 #include "palp.h"
 #include "palp_assess.h"
 #include "palp_dds.h" /* PALP_FINGER_SAMPLE_TRIANGLES_MAX */
+#include "palp_dds_reaper.h"
 #include "palp_types.h"
 #include "playout.h"
 #include "findings.h"
@@ -131,6 +132,9 @@ typedef struct palp_srv_session_def {
   const palp_srv_events *events; /* may be NULL */
   const char *partition;         /* NULL: "palp/session/<id>"; secured: "palp/s/<trainee>/<id>" */
   palp_log *log;                 /* may be NULL (stderr) */
+  /* The server's (may be NULL): the session's publisher, whose writers wait for the stations'
+   * acknowledgements as they are deleted, is deleted on its thread, not the caller's (palp_dds_reaper.h) */
+  palp_dds_reaper *reaper;
   uint32_t placement_seed;       /* a random exercise's draw for this session (palp_exercise_draw) */
   char *refusal;                 /* NULL, or where palp_srv_session_create says why it failed, in */
   size_t refusal_len;            /* the trainee's words, when it can say more than its error code */
@@ -155,6 +159,7 @@ typedef struct palp_srv_session {
   char trainee_name[64];
   int64_t opened_ns;
   dds_entity_t sub, pub, contact_reader, feedback_writer, deformation_writer, local_model_writer;
+  palp_dds_reaper *reaper; /* def.reaper */
   dds_entity_t contact_topic; /* this session's own topic entity: it carries the filter below */
   /* issue 13: "lump here" marks, read and answered by the main thread (findings.h) */
   dds_entity_t finding_reader, finding_status_writer, finding_rc;

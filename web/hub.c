@@ -20,6 +20,7 @@
 #include "palp_dds.h"
 #include "palp_dds_gate.h"
 #include "palp_dds_origin.h"
+#include "palp_dds_reaper.h"
 #include "palp_dds_strays.h"
 #include "palp_dds_log_view.h"
 #include "palp_dds_strangers.h"
@@ -273,6 +274,9 @@ struct palp_web_hub {
   palp_web_wake_fn wake;
   void *wake_ctx;
   uint32_t request_seq;
+  /* A closed session's writers and their publishers and subscribers, deleted on a thread of their own: the
+   * delete of a writer waits for its readers' acknowledgements (idl/palp_dds_reaper.h). */
+  palp_dds_reaper *reaper;
   /* The sessions the stream readers' topic filters pass (contacts, feedback, deformations, local
    * models, finger samples): the hub's table, slot by slot, and the sessions heard open lately; a
    * flood of made-up keys in an unsecured classroom becomes no reader instance (idl/palp_dds_gate.h). */
@@ -1235,19 +1239,31 @@ static void session_end_of(palp_web_hub *h, int slot, session_end *e) {
   pthread_mutex_unlock(&h->mu);
 }
 
+/* An entity the DDS thread is done with, deleted by the reaper (or here when its queue is full). */
+static void delete_later(palp_web_hub *h, dds_entity_t e) {
+  if (e <= 0) return;
+  if (!h->reaper || palp_dds_reaper_put(h->reaper, e) != 0) dds_delete(e);
+}
+
 static void free_session(palp_web_hub *h, int slot) {
   session *s = &h->s[slot];
   keep_ended_answers(h, slot);
   session_end end;
   session_end_of(h, slot, &end);
+  const int64_t t0 = palp_dds_now_ns();
   leave(h, s);
-  if (s->req_w > 0) dds_delete(s->req_w);
+  /* The request writer has just written the LEAVE and the dispose, whose acknowledgement its delete would
+   * wait for: 0.1-0.2 s (the server's answer to its next heartbeat), 1 s against a stalled server, the
+   * DDS thread sending no frames meanwhile, per session of a class closing at once (until 2026-12-07). */
+  delete_later(h, s->req_w);
   pthread_mutex_lock(&h->mu);
   const dds_entity_t fpub = h->fs[slot].pub;
   memset(&h->fs[slot], 0, sizeof h->fs[slot]);
   pthread_mutex_unlock(&h->mu);
-  if (fpub > 0) dds_delete(fpub);
-  if (s->fb_sub > 0) dds_delete(s->fb_sub);
+  delete_later(h, fpub); /* the findings writer's, as slow with a mark just written */
+  delete_later(h, s->fb_sub);
+  const double took = (double)(palp_dds_now_ns() - t0) * 1e-9;
+  if (took > h->stats.free_longest_s) h->stats.free_longest_s = took;
   palp_coverage_destroy(s->cov);
   palp_coverage_destroy(s->touched);
   if (s->ans) free(s->ans->ex);
@@ -2451,6 +2467,12 @@ palp_web_hub *palp_web_hub_create(const palp_web_hub_def *def, char *err, size_t
     palp_web_hub_destroy(h);
     return NULL;
   }
+  h->reaper = palp_dds_reaper_create(4 * PALP_WEB_MAX_SESSIONS); /* three entities a session, and room */
+  if (!h->reaper) {
+    fail(err, errlen, "cannot start the thread that deletes closed sessions' entities");
+    palp_web_hub_destroy(h);
+    return NULL;
+  }
   h->pp = palp_dds_create_participant((dds_domainid_t)def->domain, &def->sec);
   if (h->pp < 0) {
     fail(err, errlen, "cannot create a DDS participant on domain %u: %s%s", def->domain, dds_strretcode(h->pp),
@@ -2574,6 +2596,7 @@ void palp_web_hub_stop(palp_web_hub *h) {
 void palp_web_hub_destroy(palp_web_hub *h) {
   if (!h) return;
   palp_web_hub_stop(h);
+  palp_dds_reaper_destroy(h->reaper); /* what it still holds deleted before their participant */
   if (h->strangers_ready) palp_dds_strangers_destroy(&h->strangers);
   if (h->pp > 0) dds_delete(h->pp);
   for (int i = 0; i < PALP_WEB_MAX_PHANTOMS; i++) {
@@ -2660,6 +2683,11 @@ void palp_web_hub_stats_get(palp_web_hub *h, palp_web_hub_stats *out) {
   out->findings_written = h->stats.findings_written;
   out->findings_refused = h->stats.findings_refused;
   out->clients = h->nclients;
+  palp_dds_reaper_stats rs = {0};
+  if (h->reaper) palp_dds_reaper_stats_get(h->reaper, &rs);
+  out->reaped = rs.deleted;
+  out->reap_pending = rs.pending;
+  out->reap_longest_s = (double)rs.longest_ns * 1e-9;
   out->sessions_open = 0;
   for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) out->sessions_open += h->slot_sid[i] != 0;
   pthread_mutex_unlock(&h->mu);

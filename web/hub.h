@@ -144,6 +144,13 @@ typedef struct palp_web_hub_stats {
   uint64_t findings_unanswered;                    /* findings whose answer the bridge did not see */
   uint64_t findings_written, findings_refused;     /* browser finding requests */
   uint64_t late_haptic, lost_haptic;               /* local models late / missing, all sessions */
+  /* A closed session let go of (2026-12-07): the longest the DDS thread spent on one [s]; its request and
+   * findings writers and feedback reader, deleted by the reaper (idl/palp_dds_reaper.h): deleted, still
+   * to delete, and the longest single delete [s] (a writer waits for its readers' acknowledgements) */
+  double free_longest_s;
+  uint64_t reaped;
+  int reap_pending;
+  double reap_longest_s;
   int sessions_open, clients;
 } palp_web_hub_stats;
 

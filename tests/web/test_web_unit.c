@@ -5,6 +5,9 @@
  * values are worked by hand or come from the model's own mesh code. */
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -2339,7 +2342,138 @@ static void test_review_80(void) {
   dds_delete(pp);
 }
 
-int main(void) {
+/* ---- a class closing at once (2026-12-07) ---- */
+
+/* The child of test_close_stalled (this program run again, --request-reader DOMAIN): a reliable reader of
+ * the request topic, as a server's, that prints "matched N" on its stdout each time its count of matched
+ * writers changes, and otherwise only lives (its acknowledgements are Cyclone's, stopped with it). */
+static int request_reader(unsigned domain) {
+  const dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
+  const dds_entity_t r = palp_dds_create_reader(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_REQUEST),
+                                                PALP_TOPIC_SESSION_REQUEST);
+  if (r <= 0) return 1;
+  printf("ready\n");
+  fflush(stdout);
+  int32_t last = -1;
+  for (;;) { /* until its parent kills it */
+    dds_subscription_matched_status_t ms;
+    if (dds_get_subscription_matched_status(r, &ms) == 0 && (int32_t)ms.current_count != last) {
+      last = (int32_t)ms.current_count;
+      printf("matched %d\n", (int)last);
+      fflush(stdout);
+    }
+    dds_sleepfor(DDS_MSECS(5));
+  }
+}
+
+/* Reads the child's lines until one that starts with `want` (1), or `timeout_ms` pass (0). */
+static int child_says(FILE *f, int fd, const char *want, int timeout_ms) {
+  char line[64];
+  for (int waited = 0; waited < timeout_ms; waited += 50) {
+    struct pollfd p = {.fd = fd, .events = POLLIN};
+    if (poll(&p, 1, 50) == 1) {
+      if (!fgets(line, sizeof line, f)) return 0;
+      if (!strncmp(line, want, strlen(want))) return 1;
+    }
+  }
+  return 0;
+}
+
+/* A session's request writer has just written its LEAVE and dispose as the session closes; deleting it
+ * waits until the server's reader acknowledges them (Cyclone's writer linger: up to 1 s). The hub's DDS
+ * thread did that delete itself: 0.20 s in web_dashboard, and a full second per session against a server
+ * that does not acknowledge, the pages sent nothing meanwhile (a class of N closing at once: N seconds).
+ * Here the server's request reader is a process of its own, stopped (SIGSTOP) as N joined sessions close:
+ * the hub must let go of all N within 1 s, none taking it more than 0.25 s (the old code: ~1 s each, the
+ * last freed after ~N s), while the deletes wait beside it; continued, the reaper finishes them. */
+static void test_close_stalled(const char *self) {
+  enum { N = 6 };
+  const unsigned domain = 213;
+  int fd[2];
+  if (pipe(fd) != 0) {
+    CHECK(0, "pipe");
+    return;
+  }
+  const pid_t child = fork();
+  if (child == 0) {
+    dup2(fd[1], 1);
+    close(fd[0]);
+    execl(self, self, "--request-reader", "213", (char *)NULL);
+    _exit(127);
+  }
+  close(fd[1]);
+  FILE *from = fdopen(fd[0], "r");
+  CHECK(child > 0 && from && child_says(from, fd[0], "ready", 30000), "the stand-in server's request reader started");
+  palp_web_hub *h = started_hub(domain, 1);
+  const dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  palp_web_cursor c;
+  if (h && w_state > 0 && palp_web_hub_attach(h, &c, 4) == 0 &&
+      palp_web_hub_control(h, &c, "{\"follow\":\"all\"}", 16) == 0) {
+    for (uint32_t k = 0; k < N; k++) {
+      char part[64];
+      palp_dds_session_partition(7301 + k, part, sizeof part);
+      write_open_state(w_state, 7301 + k, 1, part, "class");
+    }
+    CHECK(hub_reached(h, offsetof(palp_web_hub_stats, joins), N), "the hub joined the %d sessions", N);
+    char want[32];
+    snprintf(want, sizeof want, "matched %d", N);
+    CHECK(child_says(from, fd[0], want, 20000), "the stand-in server's reader matched the %d request writers", N);
+    dds_sleepfor(DDS_MSECS(300)); /* the JOINs acknowledged: only the LEAVEs will wait */
+    kill(child, SIGSTOP);
+    palp_web_hub_stats hs;
+    palp_web_hub_stats_get(h, &hs);
+    const uint64_t states0 = hs.states;
+    const int64_t t0 = palp_dds_now_ns();
+    for (uint32_t k = 0; k < N; k++) {
+      palp_SessionState closed;
+      memset(&closed, 0, sizeof closed);
+      closed.session_id = 7301 + k, closed.phase = palp_PHASE_CLOSED, closed.phantom_id = 1;
+      snprintf(closed.reason, sizeof closed.reason, "class over");
+      dds_write(w_state, &closed);
+    }
+    CHECK(hub_reached(h, STATES, states0 + N), "their CLOSED states taken");
+    for (int i = 0; i < 300 && hs.sessions_open > 0; i++) {
+      dds_sleepfor(DDS_MSECS(10));
+      palp_web_hub_stats_get(h, &hs);
+    }
+    const double took = (double)(palp_dds_now_ns() - t0) * 1e-9;
+    CHECK(hs.sessions_open == 0 && took < 1.0, "%d sessions closing at once let go of in %.2f s (< 1 s; %d open)", N,
+          took, hs.sessions_open);
+    CHECK(hs.leaves == N && hs.free_longest_s < 0.25,
+          "%llu LEAVEs; the DDS thread spent at most %.3f s on one (< 0.25 s: no writer's linger)",
+          (unsigned long long)hs.leaves, hs.free_longest_s);
+    CHECK(hs.reap_pending > 0, "their deletes wait beside it for the stopped reader (%d pending)", hs.reap_pending);
+    dds_sleepfor(DDS_MSECS(700));
+    kill(child, SIGCONT);
+    for (int i = 0; i < 1000 && (hs.reap_pending > 0 || hs.reaped < N); i++) {
+      dds_sleepfor(DDS_MSECS(10));
+      palp_web_hub_stats_get(h, &hs);
+    }
+    CHECK(hs.reap_pending == 0 && hs.reaped >= N,
+          "continued, the reaper deleted them all (%llu deleted, %d pending)", (unsigned long long)hs.reaped,
+          hs.reap_pending);
+    CHECK(hs.reap_longest_s >= 0.5, "the stopped reader held a delete %.2f s (>= 0.5 s): the wait was real",
+          hs.reap_longest_s);
+    printf("a class closing against a stopped server: %d sessions let go of in %.3f s, the DDS thread at most %.3f s "
+           "on one; the longest delete beside it %.2f s\n", N, took, hs.free_longest_s, hs.reap_longest_s);
+    palp_web_hub_detach(h, &c);
+  } else {
+    CHECK(0, "the hub, its state writer and a page following every session");
+  }
+  if (child > 0) {
+    kill(child, SIGCONT);
+    kill(child, SIGKILL);
+    waitpid(child, NULL, 0);
+  }
+  if (from) fclose(from);
+  if (pp > 0) dds_delete(pp);
+  palp_web_hub_destroy(h);
+}
+
+int main(int argc, char **argv) {
+  if (argc == 3 && !strcmp(argv[1], "--request-reader")) return request_reader((unsigned)atoi(argv[2]));
   test_bands();
   test_access();
   test_control();
@@ -2350,6 +2484,7 @@ int main(void) {
   test_not_server();
   test_utf8();
   test_review_80();
+  test_close_stalled(argv[0]);
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }
