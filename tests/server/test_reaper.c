@@ -43,15 +43,26 @@ static int reader(void) {
   }
 }
 
-/* Reads the child's lines until one that starts with `want` (1), or timeout_ms pass (0). */
-static int child_says(FILE *f, int fd, const char *want, int timeout_ms) {
+/* Reads the child's lines (unbuffered: a FILE would hold lines poll cannot see) until one that starts with
+ * `want` (1), or timeout_ms pass (0). */
+static int child_says(int fd, const char *want, int timeout_ms) {
   char line[64];
-  for (int waited = 0; waited < timeout_ms; waited += 50) {
+  size_t len = 0;
+  for (int waited = 0; waited < timeout_ms;) {
     struct pollfd p = {.fd = fd, .events = POLLIN};
-    if (poll(&p, 1, 50) == 1) {
-      if (!fgets(line, sizeof line, f)) return 0;
-      if (!strncmp(line, want, strlen(want))) return 1;
+    if (poll(&p, 1, 50) != 1) {
+      waited += 50;
+      continue;
     }
+    char ch;
+    if (read(fd, &ch, 1) != 1) return 0;
+    if (ch != '\n') {
+      if (len < sizeof line - 1) line[len++] = ch;
+      continue;
+    }
+    line[len] = 0;
+    len = 0;
+    if (!strncmp(line, want, strlen(want))) return 1;
   }
   return 0;
 }
@@ -71,15 +82,20 @@ int main(int argc, char **argv) {
     _exit(127);
   }
   close(fd[1]);
-  FILE *from = fdopen(fd[0], "r");
   const dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
   const dds_entity_t topic = palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE);
   const dds_entity_t pub = dds_create_publisher(pp, NULL, NULL);
   const dds_entity_t w = palp_dds_create_writer(pub, topic, PALP_TOPIC_SESSION_STATE);
   palp_dds_reaper *r = palp_dds_reaper_create(2);
-  CHECK(child > 0 && from && pp > 0 && w > 0 && r, "a reader process, a writer and a reaper of 2");
-  if (child > 0 && from && w > 0 && r) {
-    CHECK(child_says(from, fd[0], "matched 1", 30000), "the reader matched the writer");
+  CHECK(child > 0 && pp > 0 && w > 0 && r, "a reader process, a writer and a reaper of 2");
+  if (child > 0 && w > 0 && r) {
+    /* matched both ways: a writer that has not yet matched the reader has nobody to wait for */
+    dds_publication_matched_status_t pm = {0};
+    for (int i = 0; i < 3000 && pm.current_count == 0; i++) {
+      dds_get_publication_matched_status(w, &pm);
+      if (pm.current_count == 0) dds_sleepfor(DDS_MSECS(10));
+    }
+    CHECK(child_says(fd[0], "matched 1", 30000) && pm.current_count == 1, "the reader and the writer matched");
     dds_sleepfor(DDS_MSECS(300));
     kill(child, SIGSTOP);
     palp_SessionState st;
@@ -126,7 +142,7 @@ int main(int argc, char **argv) {
     kill(child, SIGKILL);
     waitpid(child, NULL, 0);
   }
-  if (from) fclose(from);
+  close(fd[0]);
   if (r) palp_dds_reaper_destroy(r);
   if (pp > 0) dds_delete(pp);
   return failures != 0;
