@@ -4,13 +4,13 @@
  * is done once the reader runs again. The bound: a reaper of 2 refuses a third entity, which stays the
  * caller's (alive), and its destroy deletes what it took. Domain 215; the server's closed sessions and
  * palp-web's take this path (server/session.c, web/hub.c; the hub's in web_unit's test_close_stalled). */
-#include <poll.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
+#include "../child_lines.h"
 #include "check.h"
 #include "palp_dds.h"
 #include "palp_dds_reaper.h"
@@ -43,30 +43,6 @@ static int reader(void) {
   }
 }
 
-/* Reads the child's lines (unbuffered: a FILE would hold lines poll cannot see) until one that starts with
- * `want` (1), or timeout_ms pass (0). */
-static int child_says(int fd, const char *want, int timeout_ms) {
-  char line[64];
-  size_t len = 0;
-  for (int waited = 0; waited < timeout_ms;) {
-    struct pollfd p = {.fd = fd, .events = POLLIN};
-    if (poll(&p, 1, 50) != 1) {
-      waited += 50;
-      continue;
-    }
-    char ch;
-    if (read(fd, &ch, 1) != 1) return 0;
-    if (ch != '\n') {
-      if (len < sizeof line - 1) line[len++] = ch;
-      continue;
-    }
-    line[len] = 0;
-    len = 0;
-    if (!strncmp(line, want, strlen(want))) return 1;
-  }
-  return 0;
-}
-
 /* Whether e is a live entity (its parent can be read). */
 static int alive(dds_entity_t e) { return dds_get_parent(e) > 0; }
 
@@ -95,7 +71,7 @@ int main(int argc, char **argv) {
       dds_get_publication_matched_status(w, &pm);
       if (pm.current_count == 0) dds_sleepfor(DDS_MSECS(10));
     }
-    CHECK(child_says(fd[0], "matched 1", 30000) && pm.current_count == 1, "the reader and the writer matched");
+    CHECK(palp_test_child_says(fd[0], "matched 1", 0, 30000) && pm.current_count == 1, "the reader and the writer matched");
     dds_sleepfor(DDS_MSECS(300));
     kill(child, SIGSTOP);
     palp_SessionState st;

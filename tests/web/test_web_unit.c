@@ -5,7 +5,6 @@
  * values are worked by hand or come from the model's own mesh code. */
 #include <cjson/cJSON.h>
 #include <math.h>
-#include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <stddef.h>
@@ -22,6 +21,7 @@
 #include "check.h"
 #include "palp_dds.h"
 #include "palp_log.h"
+#include "../child_lines.h"
 #include "../tmpdir.h"
 
 #define PI 3.14159265358979323846
@@ -2373,32 +2373,6 @@ static int request_reader(unsigned domain) {
   }
 }
 
-/* Reads the child's lines (unbuffered: a FILE would hold lines poll cannot see) until one that starts with
- * `want`, followed by a number >= `at_least` when at_least > 0: 1; or 0 after timeout_ms. */
-static int child_says(int fd, const char *want, long at_least, int timeout_ms) {
-  char line[64];
-  size_t len = 0;
-  for (int waited = 0; waited < timeout_ms;) {
-    struct pollfd p = {.fd = fd, .events = POLLIN};
-    if (poll(&p, 1, 50) != 1) {
-      waited += 50;
-      continue;
-    }
-    char ch;
-    if (read(fd, &ch, 1) != 1) return 0;
-    if (ch != '\n') {
-      if (len < sizeof line - 1) line[len++] = ch;
-      continue;
-    }
-    line[len] = 0;
-    len = 0;
-    const size_t wl = strlen(want);
-    if (strncmp(line, want, wl) != 0) continue;
-    if (at_least <= 0 || atol(line + wl) >= at_least) return 1;
-  }
-  return 0;
-}
-
 /* A session's request writer has just written its LEAVE and dispose as the session closes; deleting it
  * waits until the server's reader acknowledges them (Cyclone's writer linger: up to 1 s). The hub's DDS
  * thread did that delete itself: 0.20 s in web_dashboard, and a full second per session against a server
@@ -2422,7 +2396,7 @@ static void test_close_stalled(const char *self) {
     _exit(127);
   }
   close(fd[1]);
-  CHECK(child > 0 && child_says(fd[0], "ready", 0, 30000), "the stand-in server's request reader started");
+  CHECK(child > 0 && palp_test_child_says(fd[0], "ready", 0, 30000), "the stand-in server's request reader started");
   palp_web_hub *h = started_hub(domain, 1);
   const dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
   const dds_entity_t w_state =
@@ -2436,7 +2410,7 @@ static void test_close_stalled(const char *self) {
       write_open_state(w_state, 7301 + k, 1, part, "class");
     }
     CHECK(hub_reached(h, offsetof(palp_web_hub_stats, joins), N), "the hub joined the %d sessions", N);
-    CHECK(child_says(fd[0], "taken ", N, 30000), "the stand-in server's reader took the %d JOINs", N);
+    CHECK(palp_test_child_says(fd[0], "taken ", N, 30000), "the stand-in server's reader took the %d JOINs", N);
     dds_sleepfor(DDS_MSECS(300)); /* the JOINs acknowledged: only the LEAVEs will wait */
     kill(child, SIGSTOP);
     palp_web_hub_stats hs;
