@@ -4,6 +4,7 @@
 #define PALP_TESTS_CHILD_LINES_H
 
 #include <poll.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -32,6 +33,17 @@ static inline int palp_test_child_says(int fd, const char *want, long at_least, 
     if (at_least <= 0 || atol(line + wl) >= at_least) return 1;
   }
   return 0;
+}
+
+/* [the child, before its participant] Its participant's lease `lease` (Cyclone's duration text, "30s")
+ * instead of the loopback config's 1 s, the rest of the config as given: a child the test stops (SIGSTOP)
+ * stands for a stalled peer, not a lost one, however long the loaded machine starves it. */
+static inline void palp_test_child_lease(const char *lease) {
+  const char *uri = getenv("CYCLONEDDS_URI");
+  char cfg[1024];
+  snprintf(cfg, sizeof cfg, "%s%s<Discovery><LeaseDuration>%s</LeaseDuration></Discovery>", uri ? uri : "",
+           uri && uri[0] ? "," : "", lease);
+  setenv("CYCLONEDDS_URI", cfg, 1);
 }
 
 #endif

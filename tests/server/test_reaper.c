@@ -27,14 +27,9 @@ static double now_s(void) {
 /* The child: a reliable reader of the session-state topic that prints "matched N" as its count of matched
  * writers changes, until killed. */
 static int reader(void) {
-  /* A stalled server, not a lost one: a lease (1 s in the loopback config) that lapsed while it stands stopped, or
-   * while the loaded machine starved it, unmatches it, and a delete then has nobody to wait for (a fresh
-   * clone's run saw no wait at all); 30 s here, the rest of the config as given. */
-  const char *uri = getenv("CYCLONEDDS_URI");
-  char cfg[1024];
-  snprintf(cfg, sizeof cfg, "%s%s<Discovery><LeaseDuration>30s</LeaseDuration></Discovery>", uri ? uri : "",
-           uri && uri[0] ? "," : "");
-  setenv("CYCLONEDDS_URI", cfg, 1);
+  /* a stalled server, not a lost one: with the loopback config's 1 s lease, lapsed under a fresh clone's load,
+   * no delete had anybody to wait for */
+  palp_test_child_lease("30s");
   const dds_entity_t pp = dds_create_participant(DOMAIN, NULL, NULL);
   const dds_entity_t r =
       palp_dds_create_reader(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);

@@ -2349,14 +2349,9 @@ static void test_review_80(void) {
  * (N in all), and otherwise only lives (its acknowledgements are Cyclone's, stopped with it). A request taken
  * is a writer that has matched this reader: its LEAVE will wait for this reader's acknowledgement. */
 static int request_reader(unsigned domain) {
-  /* A stalled server, not a lost one: a lease (1 s in the loopback config) that lapsed while it stands stopped, or
-   * while the loaded machine starved it, unmatches it, and a delete then has nobody to wait for (a fresh
-   * clone's run saw no wait at all); 30 s here, the rest of the config as given. */
-  const char *uri = getenv("CYCLONEDDS_URI");
-  char cfg[1024];
-  snprintf(cfg, sizeof cfg, "%s%s<Discovery><LeaseDuration>30s</LeaseDuration></Discovery>", uri ? uri : "",
-           uri && uri[0] ? "," : "");
-  setenv("CYCLONEDDS_URI", cfg, 1);
+  /* a stalled server, not a lost one: with the loopback config's 1 s lease, lapsed under a fresh clone's load,
+   * no delete had anybody to wait for */
+  palp_test_child_lease("30s");
   const dds_entity_t pp = dds_create_participant(domain, NULL, NULL);
   const dds_entity_t r = palp_dds_create_reader(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_REQUEST),
                                                 PALP_TOPIC_SESSION_REQUEST);
