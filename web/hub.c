@@ -41,6 +41,7 @@
 #define SESSIONS_PERIOD_NS 200000000LL /* the list's live figures (force, coverage) at 5 Hz */
 #define COVER_PERIOD_NS 500000000LL    /* a session's pressed-skin map to its pages at most at 2 Hz */
 #define REJOIN_AFTER_NS 5000000000LL
+#define REASK_AFTER_NS 1000000000LL /* rejoin_if_dropped: not sooner after joining, nor more often */
 /* Streams are polled at this period rather than woken per sample: 8 sessions at 30 Hz would wake
  * the thread 240 times a second, and on a virtual machine every wake-up costs more than the work
  * (bench/web). Adds at most 16.7 ms to a frame's way to the page. */
@@ -218,6 +219,9 @@ typedef struct session {
   dds_entity_t req_w;
   int joined;
   int64_t unwanted_since, join_failed_ns;
+  int64_t next_ask_ns; /* when its JOIN may be sent again (rejoin_if_dropped) */
+  int asked_again;      /* JOINs sent again (the first said in the log) */
+  uint32_t join_seq;    /* the request_seq of its last JOIN */
   char station[64];
 } session;
 
@@ -900,11 +904,15 @@ static void on_phantom(palp_web_hub *h, const palp_Phantom *p) {
   h->sessions_dirty = h->sessions_structure = 1; /* phantom names in the list */
 }
 
-static void send_request(palp_web_hub *h, session *s, int op) {
+/* seq 0: a new request (the next of the bridge's numbers); a JOIN's number is kept, so that the same JOIN
+ * can be sent again (rejoin_if_dropped): the server answers a station it holds under that number again,
+ * and takes one it dropped back (server/server.c, handle_join). */
+static void send_request_seq(palp_web_hub *h, session *s, int op, uint32_t seq) {
   palp_SessionRequest rq;
   memset(&rq, 0, sizeof rq);
   snprintf(rq.station_id, sizeof rq.station_id, "%s", s->station);
-  rq.request_seq = ++h->request_seq;
+  rq.request_seq = seq ? seq : ++h->request_seq;
+  if (op == palp_OP_JOIN) s->join_seq = rq.request_seq;
   rq.op = op;
   rq.role = palp_ROLE_VISUAL;
   rq.phantom_id = s->st.phantom_id;
@@ -919,6 +927,8 @@ static void send_request(palp_web_hub *h, session *s, int op) {
   if (s->req_w > 0) dds_write(s->req_w, &rq);
 }
 
+static void send_request(palp_web_hub *h, session *s, int op) { send_request_seq(h, s, op, 0); }
+
 /* Forgets the session's request instance (the server's station table is finite). */
 static void dispose_request(session *s) {
   if (s->req_w <= 0) return;
@@ -932,6 +942,7 @@ static void dispose_request(session *s) {
  * against (finding_request, web thread, under h->mu). */
 static void set_joined(palp_web_hub *h, session *s, int joined) {
   s->joined = joined;
+  if (joined) s->next_ask_ns = palp_dds_now_ns() + REASK_AFTER_NS;
   pthread_mutex_lock(&h->mu);
   h->fs[s - h->s].joined = joined;
   pthread_mutex_unlock(&h->mu);
@@ -2227,6 +2238,24 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
   return total;
 }
 
+/* A session the bridge joined whose server counts no visual station: the server dropped the bridge (its
+ * request writer's 0.5 s liveliness lapsed while palp-web did not run, a loaded machine) and streams the
+ * session's deformation to nobody, while the bridge believed itself joined for good: the view stood still
+ * until the session ended (web_disconnect in a fresh clone's run, 2026-12-07: joined, dropped 0.97 s later).
+ * The JOIN is sent again, as a trainee station asks again after a stall; the server answers a station it
+ * still holds again, harmlessly. Not in the first second after joining (the server's state may not count
+ * the bridge yet), and at most once a second. A drop while another visual station is in the session leaves
+ * the count above zero: not seen. */
+static void rejoin_if_dropped(palp_web_hub *h, session *s, int64_t now) {
+  if (!s->joined || s->st.visual_count > 0 || now < s->next_ask_ns) return;
+  send_request_seq(h, s, palp_OP_JOIN, s->join_seq); /* the same JOIN */
+  s->next_ask_ns = now + REASK_AFTER_NS;
+  h->stats.rejoins++;
+  if (s->asked_again++ == 0)
+    palp_log_warn(h->def.log, "session %u: its server counts no visual station, so it dropped this bridge (did palp-web "
+                              "not run for a while?): JOIN sent again", s->id);
+}
+
 static void manage_joins(palp_web_hub *h, int64_t now) {
   int want[PALP_WEB_MAX_SESSIONS];
   pthread_mutex_lock(&h->mu);
@@ -2251,6 +2280,8 @@ static void manage_joins(palp_web_hub *h, int64_t now) {
         s->join_failed_ns = 0;
         h->stats.joins++;
         h->sessions_dirty = 1;
+      } else {
+        rejoin_if_dropped(h, s, now);
       }
     } else if (s->joined) {
       if (!s->unwanted_since) s->unwanted_since = now;

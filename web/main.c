@@ -239,10 +239,13 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
   /* What letting go of the closed sessions cost: the DDS thread, and the reaper beside it (whose delete of a
    * writer waits for the readers' acknowledgements; idl/palp_dds_reaper.h). */
+  if (h.rejoins) /* rejoin_if_dropped: the server had dropped this bridge from a session it follows */
+    palp_log_info(log, "JOINs sent again to sessions whose server had dropped this bridge (palp-web not run for a while): "
+                       "%llu", (unsigned long long)h.rejoins);
   if (h.leaves || h.reaped)
     palp_log_info(log, "closed sessions let go of in at most %.3f s each on the DDS thread; %llu of their writers and "
-                       "readers deleted beside it, the longest in %.3f s",
-                  h.free_longest_s, (unsigned long long)h.reaped, h.reap_longest_s);
+                       "readers deleted beside it, the longest in %.3f s, %d still to delete",
+                  h.free_longest_s, (unsigned long long)h.reaped, h.reap_longest_s, h.reap_pending);
   if (w.http_expired || w.ws_expired) /* each token's first refusal is named in the log (serve.c) */
     palp_log_warn(log, "pages told their token expired: %llu HTTP requests, %llu WebSockets (refused, or closed at "
                        "the expiry)",

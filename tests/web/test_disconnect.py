@@ -6,6 +6,8 @@ longer needs (the server's member count drops), and a new client gets the stream
 DDS domain 194. usage: test_disconnect.py BUILD SOURCE OUT"""
 import json
 import os
+import re
+import signal
 import socket
 import struct
 import time
@@ -18,7 +20,7 @@ def run(build, source, out):
     procs = harness.Procs(build, source, out, 194)
     browser = None
     try:
-        procs.server()
+        srv = procs.server()
         web = procs.web()
         procs.trainee("alice", 1, ["--profile", "sine", "--magnitude", "1", "--offset", "1.5", "--frequency", "1",
                                    "--t-on", "0.5", "--t-off", "60", "--duration", "60"])
@@ -61,6 +63,25 @@ def run(build, source, out):
               "(the dashboard rate is 10/s; >= 15)" % frames)
         status, body, _ = harness.http_get(web.base + "/trainee.html")
         check(status == 200 and b"trainee" in body, "pages are still served (%d)" % status)
+
+        # palp-web not run for 0.8 s (SIGSTOP; a loaded machine): past its request writer's 0.5 s liveliness,
+        # within its participant's 1 s lease, so DDS re-delivers nothing; the server drops the bridge from the
+        # session. Its state then counts no visual station, and the bridge sends its JOIN again
+        # (rejoin_if_dropped): a page following the session gets frames again. Before 2026-12-07 it stood still
+        # until the session ended (a fresh clone's run of this test, dropped 0.97 s after joining).
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=10)
+        ws.send(json.dumps({"follow": "all"}))
+        _, before = harness.ws_messages(ws, 2.0)
+        web.send_signal(signal.SIGSTOP)
+        time.sleep(0.8)
+        web.send_signal(signal.SIGCONT)
+        _, after = harness.ws_messages(ws, 5.0)
+        ws.close()
+        lines = procs.log(srv)
+        dropped = len(re.findall(r"web-s1 \(visual\) left session 1: lost", lines))
+        check(dropped >= 1, "stopped 0.8 s, the bridge was dropped by the server (%d lines say so)" % dropped)
+        check("JOIN sent again" in procs.log(web) and after >= 15,
+              "and joined again by itself: %d frames in the 5 s after (>= 15; %d in the 2 s before)" % (after, before))
         rc = procs.stop(web)
         log = procs.log(web)
         check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)

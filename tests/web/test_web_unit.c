@@ -2466,6 +2466,71 @@ static void test_close_stalled(const char *self) {
   palp_web_hub_destroy(h);
 }
 
+/* A bridge the server dropped (its request writer's liveliness lapsed while palp-web did not run: web_disconnect
+ * in a fresh clone's run saw it 0.97 s after the join, and the page no frame again) sends its JOIN again when the
+ * session's state counts no visual station, at most once a second and not in the first second after joining;
+ * while the state counts one, never. The test plays the server: its states, and a reader of the requests in this
+ * process (domain 216). */
+/* JOINs of session sid taken from r_req over ms milliseconds, polled every 10 ms. */
+static int joins_over(dds_entity_t r_req, uint32_t sid, int ms) {
+  int n = 0;
+  for (int t = 0; t < ms / 10; t++) {
+    palp_SessionRequest rq;
+    void *p = &rq;
+    dds_sample_info_t info;
+    while (dds_take(r_req, &p, &info, 1, 1) == 1) n += info.valid_data && rq.op == palp_OP_JOIN && rq.session_id == sid;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  return n;
+}
+
+static void test_rejoin(void) {
+  palp_web_hub *h = started_hub(216, 1);
+  const dds_entity_t pp = dds_create_participant(216, NULL, NULL);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const dds_entity_t r_req = palp_dds_create_reader(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_REQUEST),
+                                                   PALP_TOPIC_SESSION_REQUEST);
+  palp_web_cursor c;
+  if (!h || w_state <= 0 || r_req <= 0 || palp_web_hub_attach(h, &c, 4) != 0) {
+    CHECK(0, "rejoin: the hub, a state writer, a request reader and a page");
+    if (pp > 0) dds_delete(pp);
+    palp_web_hub_destroy(h);
+    return;
+  }
+  CHECK(palp_web_hub_control(h, &c, "{\"follow\":\"all\"}", 16) == 0, "rejoin: a page following every session");
+  const uint32_t sid = 7401;
+  char part[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  palp_SessionState st;
+  memset(&st, 0, sizeof st);
+  st.session_id = sid, st.phase = palp_PHASE_OPEN, st.phantom_id = 1;
+  snprintf(st.partition, sizeof st.partition, "%s", part);
+  snprintf(st.trainee_name, sizeof st.trainee_name, "rae");
+  dds_write(w_state, &st);
+  const int first = joins_over(r_req, sid, 3000); /* the join, and (no state counting it yet) one JOIN again each second after */
+  st.visual_count = 1;                /* the server took it */
+  dds_write(w_state, &st);
+  dds_sleepfor(DDS_MSECS(200));
+  const int held = joins_over(r_req, sid, 2500);
+  st.visual_count = 0; /* dropped: its lease lapsed */
+  dds_write(w_state, &st);
+  const int again = joins_over(r_req, sid, 1500);
+  palp_web_hub_stats hs;
+  palp_web_hub_stats_get(h, &hs);
+  CHECK(first >= 2 && first <= 4, "rejoin: over the first 3 s, the state counting no visual station: %d JOINs (the join and "
+        "one a second after its first second: 2-4)", first);
+  CHECK(held == 0, "rejoin: while the state counts a visual station, no JOIN again in 2.5 s (%d)", held);
+  CHECK(again >= 1 && again <= 2, "rejoin: the state counting none again, the JOIN sent again within 1.5 s (%d; 1-2)", again);
+  CHECK(hs.joins == 1 && hs.rejoins == (uint64_t)(first - 1 + again), "rejoin: counted: %llu join, %llu again",
+        (unsigned long long)hs.joins, (unsigned long long)hs.rejoins);
+  printf("rejoin: %d JOINs in the first 3 s (no state counting the bridge), %d while counted, %d within 1.5 s of "
+         "a state counting none\n", first, held, again);
+  palp_web_hub_detach(h, &c);
+  dds_delete(pp);
+  palp_web_hub_destroy(h);
+}
+
 int main(int argc, char **argv) {
   if (argc == 3 && !strcmp(argv[1], "--request-reader")) return request_reader((unsigned)atoi(argv[2]));
   test_bands();
@@ -2479,6 +2544,7 @@ int main(int argc, char **argv) {
   test_utf8();
   test_review_80();
   test_close_stalled(argv[0]);
+  test_rejoin();
   printf("%d checks, %d failures\n", checks, failures);
   return failures ? 1 : 0;
 }
