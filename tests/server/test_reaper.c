@@ -77,6 +77,10 @@ int main(int argc, char **argv) {
     CHECK(palp_test_child_says(fd[0], "matched 1", 0, 30000) && pm.current_count == 1, "the reader and the writer matched");
     dds_sleepfor(DDS_MSECS(300));
     kill(child, SIGSTOP);
+    /* stopped for certain before anything is written: a reader still running on the other core acked the
+     * write in the moment the signal took (a fresh clone's run: no delete waited) */
+    int wst = 0;
+    CHECK(waitpid(child, &wst, WUNTRACED) == child && WIFSTOPPED(wst), "the stand-in reader stopped");
     palp_SessionState st;
     memset(&st, 0, sizeof st);
     st.session_id = 1, st.phase = palp_PHASE_CLOSED;

@@ -2416,6 +2416,10 @@ static void test_close_stalled(const char *self) {
     CHECK(palp_test_child_says(fd[0], "taken ", N, 30000), "the stand-in server's reader took the %d JOINs", N);
     dds_sleepfor(DDS_MSECS(300)); /* the JOINs acknowledged: only the LEAVEs will wait */
     kill(child, SIGSTOP);
+    /* stopped for certain before anything is written: a reader still running on the other core acked the
+     * write in the moment the signal took (a fresh clone's run: no delete waited) */
+    int wst = 0;
+    CHECK(waitpid(child, &wst, WUNTRACED) == child && WIFSTOPPED(wst), "the stand-in reader stopped");
     palp_web_hub_stats hs;
     palp_web_hub_stats_get(h, &hs);
     const uint64_t states0 = hs.states;
