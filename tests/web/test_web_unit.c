@@ -261,6 +261,15 @@ static void write_open_state(dds_entity_t w, uint32_t sid, uint32_t phantom, con
   dds_write(w, &st);
 }
 
+/* A session's CLOSED state as its server writes it, with the reason it closed. */
+static void write_closed_state(dds_entity_t w, uint32_t sid, uint32_t phantom, const char *reason) {
+  palp_SessionState st;
+  memset(&st, 0, sizeof st);
+  st.session_id = sid, st.phase = palp_PHASE_CLOSED, st.phantom_id = phantom;
+  snprintf(st.reason, sizeof st.reason, "%s", reason);
+  dds_write(w, &st);
+}
+
 /* Reads this cursor's messages, up to `tries` waits of 10 ms when none is there, passing each JSON
  * message to match(); 1 as soon as match() returns nonzero, 0 if none did. */
 static int next_json(palp_web_hub *h, palp_web_cursor *c, int tries, int (*match)(const cJSON *j, void *arg), void *arg) {
@@ -2152,13 +2161,7 @@ static void test_session_lines(void) {
     }
     CHECK(hs.sessions_open == PALP_WEB_MAX_SESSIONS, "%d sessions opened (%d)", PALP_WEB_MAX_SESSIONS, hs.sessions_open);
     const uint64_t states0 = hs.states;
-    for (uint32_t k = 0; k < PALP_WEB_MAX_SESSIONS; k++) {
-      palp_SessionState closed;
-      memset(&closed, 0, sizeof closed);
-      closed.session_id = 9001 + k, closed.phase = palp_PHASE_CLOSED, closed.phantom_id = 1;
-      snprintf(closed.reason, sizeof closed.reason, "flood");
-      dds_write(w_state, &closed);
-    }
+    for (uint32_t k = 0; k < PALP_WEB_MAX_SESSIONS; k++) write_closed_state(w_state, 9001 + k, 1, "flood");
     CHECK(hub_reached(h, STATES, states0 + PALP_WEB_MAX_SESSIONS), "... and their %d CLOSED states taken",
           PALP_WEB_MAX_SESSIONS);
     const double took = (double)(palp_dds_now_ns() - t0) * 1e-9;
@@ -2424,13 +2427,7 @@ static void test_close_stalled(const char *self) {
     palp_web_hub_stats_get(h, &hs);
     const uint64_t states0 = hs.states;
     const int64_t t0 = palp_dds_now_ns();
-    for (uint32_t k = 0; k < N; k++) {
-      palp_SessionState closed;
-      memset(&closed, 0, sizeof closed);
-      closed.session_id = 7301 + k, closed.phase = palp_PHASE_CLOSED, closed.phantom_id = 1;
-      snprintf(closed.reason, sizeof closed.reason, "class over");
-      dds_write(w_state, &closed);
-    }
+    for (uint32_t k = 0; k < N; k++) write_closed_state(w_state, 7301 + k, 1, "class over");
     CHECK(hub_reached(h, STATES, states0 + N), "their CLOSED states taken");
     for (int i = 0; i < 300 && hs.sessions_open > 0; i++) {
       dds_sleepfor(DDS_MSECS(10));
