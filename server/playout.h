@@ -75,8 +75,9 @@
 #define PALP_SRV_PLAYOUT_CATCHUP_TIME 0.25
 /* A gap longer than this [s] is jumped as before: the hand may be anywhere after it. */
 #define PALP_SRV_PLAYOUT_CATCHUP_MAX 2.0
-/* A catch-up that begins this far behind [s] is a gap worth telling (the session log's events):
- * a loaded link's late sample is a step or two. */
+/* A catch-up this far behind [s] is a gap worth telling (the session log's events), once, when its
+ * lag first reaches it (one already under way for a smaller lag included): a loaded link's late
+ * sample is a step or two. */
 #define PALP_SRV_PLAYOUT_GAP_NOTED 0.05
 
 typedef struct palp_srv_playout_sample {
@@ -104,9 +105,10 @@ typedef struct palp_srv_playout {
   double delay_max;       /* largest D used [s] */
   uint64_t behind_steps;  /* steps played behind their turn, catching a gap up */
   double behind_max;      /* the most they were behind [s] */
-  uint64_t gaps;          /* catch-ups that began PALP_SRV_PLAYOUT_GAP_NOTED or more behind */
-  double gap_last;        /* how far behind the last of them began [s] */
+  uint64_t gaps;          /* catch-ups that were PALP_SRV_PLAYOUT_GAP_NOTED or more behind */
+  double gap_last;        /* how far behind the last of them was when it reached that [s] */
   int catching;           /* the last step played behind its turn */
+  int told;               /* this catch-up is counted in gaps */
 } palp_srv_playout;
 
 /* reach: the largest |device point| [m] the validator lets through (0: no bound); a

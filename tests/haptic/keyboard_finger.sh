@@ -15,7 +15,7 @@
 # session to SQLite, and the instructor's review (palp-review show) says the same: outside the
 # valid range, deeper than validated for as long as the station's summary says (within 0.1 s
 # plus 10%: the station counts 1 kHz ticks rendered from flagged models, the log counts the
-# flagged 4 ms steps).
+# flagged 4 ms steps; less by the steps a loaded server skipped).
 # Domain 114.
 set -u
 server=$1 client=$2 config_dir=$3 review=$4
@@ -75,15 +75,22 @@ vmax=$(awk -F, 'NR > 2 && $1 - t >= 0.0005 { d = sqrt(($4 - x) ^ 2 + ($5 - y) ^ 
 limited=$(grep -c "FORCE LIMITED: the phantom pushes back harder" "$tmp/lines")
 # the 250 Hz session's log holds every 3rd step's frame (server/db_log.c: ~100 Hz): show says both rates
 stride=$(grep -c "^duration .*([0-9]* frames logged, one every 3 physics steps (83.3 Hz) of 250 Hz, dt 0.004 s)$" "$tmp/show.txt")
+# The log counts simulated steps and the station its wall-clock ticks: a loaded server that drops tick
+# slots behind schedule (it says how many as the session closes) simulates less time than passed, and
+# the log's seconds fall short by up to those steps' 4 ms each (a fresh clone's run beside other work,
+# 2026-12-08: 2.03 s logged against the station's 2.57 s).
+skipped=$(sed -n 's/.*session [0-9]*: [0-9]* of [0-9]* steps late (\([0-9]*\) of them slots skipped behind schedule).*/\1/p' "$tmp/server.log" | tail -n 1)
+[ -n "$skipped" ] || skipped=0
 log_deep_s=$(sed -n 's/^valid range OUTSIDE for [0-9.]* s of [0-9.]* s simulated ([0-9]* steps of 4 ms): \([0-9.]*\) s pressed deeper than this place of the phantom was checked against the reference model (by up to [0-9.]* mm).*/\1/p' "$tmp/show.txt")
 if [ $crc -eq 0 ] && [ -n "$f5" ] && [ -n "$f10" ] && [ -n "$tip10" ] && awk -v t="$tip10" 'BEGIN { exit !(t > 5 && t < 10) }'  && [ -n "$f9" ] && [ -n "$f23" ] && [ -n "$models" ] &&
    [ "$deep" -ge 1 ] && [ "$shallow" -eq 0 ] && [ "$stride" -eq 1 ] && [ "$periodic" -eq 0 ] && [ "$forcehelp" -eq 0 ] && [ "$cleared" -eq 1 ] && [ "$limited" -eq 1 ] &&
    awk -v v="$vmax" 'BEGIN { exit !(v >= 0.040 && v <= 0.051) }' && [ "$announced" -ge 1 ] && [ -n "$deep_s" ] && [ -n "$log_deep_s" ] &&
-   awk -v a="$f5" -v b="$f10" -v c="$f9" -v m="$models" -v s="$deep_s" -v g="$log_deep_s" \
-     'BEGIN { d = g - s; if (d < 0) d = -d; exit !(a > 0.01 && b > a && c > a && c < b && m > 100 && s > 0.1 && d <= 0.1 + 0.1 * s) }'; then
+   awk -v a="$f5" -v b="$f10" -v c="$f9" -v m="$models" -v s="$deep_s" -v g="$log_deep_s" -v k="$skipped" \
+     'BEGIN { d = g - s; tol = 0.1 + 0.1 * s; if (d < 0) { d = -d; tol += 0.004 * k }
+              exit !(a > 0.01 && b > a && c > a && c < b && m > 100 && s > 0.1 && d <= tol) }'; then
   echo "ok   keyboard finger: exit 0, force $f5 N at 5 mm < $f9 N at 9 mm (0.25 mm steps) < $f10 N at 10 mm (the fingertip $tip10 mm deep), $models local models;" \
        "at 23 mm ($f23 N) the status line says OUTSIDE VALID RANGE ($deep lines, $announced announcement(s) naming the limit;" \
-       "$deep_s s deeper than validated in the summary, $log_deep_s s in the review of the session's log), at 5-10 mm never;" \
+       "$deep_s s deeper than validated in the summary, $log_deep_s s in the review of the session's log, $skipped steps skipped), at 5-10 mm never;" \
        "the review says the log holds one frame every 3 physics steps of 250 Hz; no periodic line beside the status line," \
        "no force-keyboard help, the station's lines clear the status line, one force-limit announcement at 23 mm;" \
        "the device moved at most $vmax m/s between ticks"
@@ -92,9 +99,10 @@ fi
 echo "FAIL exit $crc, force at 5 mm '$f5' N, at 9 mm '$f9' N, at 10 mm '$f10' N (fingertip '$tip10' mm deep, want 5-10), at 23 mm '$f23' N, models '$models';" \
      "23 mm lines saying OUTSIDE VALID RANGE '$deep' (want >= 1), 5-10 mm lines saying it '$shallow' (want 0)," \
      "announcements naming the limit '$announced' (want >= 1), summary's seconds deeper than validated '$deep_s' (want > 0.1)," \
-     "the review's '$log_deep_s' (want within 0.1 s + 10% of the summary's), duration lines naming the log's stride '$stride' (want 1)," \
+     "the review's '$log_deep_s' (want within 0.1 s + 10% of the summary's, less by up to 4 ms for each of the '$skipped' steps skipped), duration lines naming the log's stride '$stride' (want 1)," \
      "periodic lines '$periodic' (want 0), force-keyboard help lines '$forcehelp' (want 0), lines clearing the status line '$cleared' (want 1)," \
      "force-limit announcements '$limited' (want 1), the device's fastest move '$vmax' m/s (want 0.040-0.051):"
 cat "$tmp/lines"
 cat "$tmp/show.txt"
+grep "steps late" "$tmp/server.log"
 exit 1

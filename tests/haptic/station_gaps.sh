@@ -31,9 +31,9 @@ JSON
   "$server" --config "$tmp/$1.json" > "$tmp/$1.log" 2>&1 &
   spid=$!
 }
-trainee() { # $1 name, $2 phantom
-  "$client" --role trainee --domain 179 --phantom "$2" --name "$1" --timeout 10 --print-period 0 --input "$slide" \
-    > "$tmp/$1.log" 2>&1 &
+trainee() { # $1 name, $2 phantom, $3 status print period [s] (default 0: none)
+  "$client" --role trainee --domain 179 --phantom "$2" --name "$1" --timeout 10 --print-period "${3:-0}" \
+    --input "$slide" > "$tmp/$1.log" 2>&1 &
 }
 stop_server() {
   kill $spid
@@ -58,11 +58,20 @@ wait $lpid; lrc=$?
 stop_server
 
 start_server two
-trainee srv 1
+trainee srv 1 0.05
 rpid=$!
+# Stopped once the station renders 0.1 N or more: a local model under its finger, which the server
+# streams only for a finger whose device points it has played, so there is a played point for the
+# gap to begin at however long the station's first points took (until 2026-12-08: 1.2 s after
+# "joined session"). Session 87's CI run told no gap here: the stop came while the server caught up
+# a loaded link's 40 ms bunch, and a gap was told only for a catch-up that began 50 ms behind
+# (server/playout.c; test_server_playout's "bunch" case).
 _n=0
-until grep -q "joined session" "$tmp/srv.log" || [ $_n -ge 100 ]; do sleep 0.1; _n=$((_n + 1)); done
-sleep 1.2
+until grep -Eq "finger touching .*rendered \|F\| = +([1-9]|0\.[1-9])" "$tmp/srv.log" || [ $_n -ge 100 ]; do
+  sleep 0.1
+  _n=$((_n + 1))
+done
+touched=$_n
 kill -STOP $spid
 sleep 0.3
 kill -CONT $spid
@@ -82,6 +91,10 @@ for who in gap lapse srv; do
     fail=1
   fi
 done
+if [ "$touched" -ge 100 ]; then
+  echo "FAIL srv's station rendered no 0.1 N within 10 s of its start: the server was stopped without a point played"
+  fail=1
+fi
 if grep -q "session [0-9]*: [1-9][0-9]* gap(s) in the station's device points .* caught up over [1-9][0-9]* steps" "$tmp/two.log"; then
   echo "ok   the server said it caught the gap up"
 else echo "FAIL no 'caught up' line for the stopped server"; fail=1; fi
@@ -100,8 +113,13 @@ else echo "FAIL the review of 'gap' names no gap of 0.2-1 s"; printf '%s\n' "$gs
 if printf '%s' "$lshow" | grep -q "info .*a finger placed below the surface .*, the deepest [0-9.]* mm: brought in"; then
   echo "ok   the review of the lapsed station's session names its finger brought in"
 else echo "FAIL the review of 'lapse' names no finger brought in"; printf '%s\n' "$lshow" | tail -n 12; fail=1; fi
-if printf '%s' "$bshow" | grep -q "resumed after a gap\|placed below the surface"; then
-  echo "FAIL the undisturbed session's review names a gap or a finger brought in"; fail=1
-else echo "ok   the undisturbed session's review names neither"; fi
-[ $fail -eq 0 ] || tail -n 25 "$tmp/one.log" "$tmp/two.log"
+# A loaded machine stalls an undisturbed station too (this test beside a full test run, 2026-12-08: in
+# 4 of 14 runs the baseline's review named gaps of 0.06-0.27 s, the server's log up to 0.33 s behind):
+# real gaps, rightly named. That none is named where none was is test_server_playout's (a steady and
+# a jittery link); here, no finger brought in (a lapsed lease) and no gap of 0.5 s or more.
+if printf '%s' "$bshow" | grep -q "resumed after a gap.*the longest \(0\.[5-9]\|[1-9]\)\|placed below the surface"; then
+  echo "FAIL the undisturbed session's review names a gap of 0.5 s or more or a finger brought in"
+  printf '%s\n' "$bshow" | grep "resumed after\|placed below"; fail=1
+else echo "ok   the undisturbed session's review names no finger brought in and no gap of 0.5 s or more"; fi
+[ $fail -eq 0 ] || { tail -n 25 "$tmp/one.log" "$tmp/two.log"; grep -v " t= " "$tmp/srv.log" | tail -n 8; }
 exit $fail
