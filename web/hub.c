@@ -42,6 +42,11 @@
 #define COVER_PERIOD_NS 500000000LL    /* a session's pressed-skin map to its pages at most at 2 Hz */
 #define REJOIN_AFTER_NS 5000000000LL
 #define REASK_AFTER_NS 1000000000LL /* rejoin_if_dropped: not sooner after joining, nor more often */
+/* A turn of the DDS thread this long after the last one: palp-web did not run (stopped, a loaded
+ * machine), long enough for its request writer's 0.5 s liveliness to lapse at the server, which then
+ * drops the bridge from the sessions it streams (rejoin_if_dropped). Its turns are 16.7 ms apart. */
+#define STALL_NS 300000000LL
+#define STALL_ASKS 2 /* JOINs sent again after a stall: at once, and REASK_AFTER_NS later */
 /* Streams are polled at this period rather than woken per sample: 8 sessions at 30 Hz would wake
  * the thread 240 times a second, and on a virtual machine every wake-up costs more than the work
  * (bench/web). Adds at most 16.7 ms to a frame's way to the page. */
@@ -221,6 +226,7 @@ typedef struct session {
   int64_t unwanted_since, join_failed_ns;
   int64_t next_ask_ns; /* when its JOIN may be sent again (rejoin_if_dropped) */
   int asked_again;      /* JOINs sent again (the first said in the log) */
+  int stall_asks;       /* JOINs still to send again after a stall of palp-web (STALL_ASKS) */
   uint32_t join_seq;    /* the request_seq of its last JOIN */
   char station[64];
 } session;
@@ -319,6 +325,7 @@ struct palp_web_hub {
   int closed_next;
   pending_exercise pending_ex[SESSION_EXERCISES_PENDING];
   int64_t next_sessions_ns, next_join_ns, next_wake_ns, next_poll_ns;
+  int64_t turn_ns; /* the DDS thread's last turn (STALL_NS) */
 
   /* shared with the web thread, under mu */
   pthread_mutex_t mu;
@@ -2245,13 +2252,20 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
  * The JOIN is sent again, as a trainee station asks again after a stall; the server answers a station it
  * still holds again, harmlessly. Not in the first second after joining (the server's state may not count
  * the bridge yet), and at most once a second. A drop while another visual station is in the session leaves
- * the count above zero: not seen. */
+ * the count above zero, and the bridge's own stall is what tells it then (2026-12-08): after a turn of its
+ * DDS thread STALL_NS late the JOIN goes again at once and a second later, whatever the count (the
+ * deformation still came, for the other station, but the server refused the trainee page's marks from a
+ * bridge no longer its member). */
 static void rejoin_if_dropped(palp_web_hub *h, session *s, int64_t now) {
-  if (!s->joined || s->st.visual_count > 0 || now < s->next_ask_ns) return;
+  if (!s->joined || now < s->next_ask_ns) return;
+  const int after_stall = s->stall_asks > 0;
+  if (s->st.visual_count > 0 && !after_stall) return;
   send_request_seq(h, s, palp_OP_JOIN, s->join_seq); /* the same JOIN */
   s->next_ask_ns = now + REASK_AFTER_NS;
   h->stats.rejoins++;
-  if (s->asked_again++ == 0)
+  if (after_stall)
+    s->stall_asks--; /* said once for all sessions (note_stall) */
+  else if (s->asked_again++ == 0)
     palp_log_warn(h->def.log, "session %u: its server counts no visual station, so it dropped this bridge (did palp-web "
                               "not run for a while?): JOIN sent again", s->id);
 }
@@ -2346,6 +2360,27 @@ static void publish_stats(palp_web_hub *h) {
   pthread_mutex_unlock(&h->mu);
 }
 
+/* A turn of the DDS thread STALL_NS or more after the last: every session the bridge joined sends its
+ * JOIN again (rejoin_if_dropped), said once per stall. */
+static void note_stall(palp_web_hub *h, int64_t now) {
+  const int64_t gap = h->turn_ns ? now - h->turn_ns : 0;
+  h->turn_ns = now;
+  if (gap < STALL_NS) return;
+  int joined = 0;
+  for (int i = 0; i < PALP_WEB_MAX_SESSIONS; i++) {
+    session *s = &h->s[i];
+    if (!s->used || !s->joined) continue;
+    s->stall_asks = STALL_ASKS;
+    s->next_ask_ns = 0;
+    joined++;
+  }
+  h->stats.stalls++;
+  if (joined)
+    palp_log_warn(h->def.log, "palp-web's DDS thread was away %.2f s (the process stopped or starved, or one long "
+                              "turn): the server may have dropped it from the %d session(s) it streams; JOIN sent again "
+                              "to each", 1e-9 * (double)gap, joined);
+}
+
 static void *hub_main(void *arg) {
   palp_web_hub *h = arg;
   const int64_t live_period = (int64_t)(1e9 / h->def.live_hz);
@@ -2356,6 +2391,7 @@ static void *hub_main(void *arg) {
     if (h->next_poll_ns > now) dds_waitset_wait(h->ws, NULL, 0, h->next_poll_ns - now);
     if (!h->running) break;
     now = palp_dds_now_ns();
+    note_stall(h, now);
     const int poll_due = now >= h->next_poll_ns;
     if (poll_due) h->next_poll_ns = now + POLL_NS;
     int news = 0;

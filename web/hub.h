@@ -134,7 +134,9 @@ typedef struct palp_web_hub_stats {
                         * finding answers, debriefs, told scores, log losses) from another participant than the one
                         * whose state opened it, the latest: dropped (2026-12-07) */
   uint64_t joins, leaves, join_rejected;
-  uint64_t rejoins; /* JOINs sent again to a server whose state counted no visual station (web/hub.c, rejoin_if_dropped) */
+  uint64_t rejoins; /* JOINs sent again to a server whose state counted no visual station, or after a stall of the
+                     * bridge's own (web/hub.c, rejoin_if_dropped) */
+  uint64_t stalls;  /* turns of the DDS thread 0.3 s or more after the last (palp-web not run: STALL_NS) */
   uint64_t exercises, finding_statuses;            /* DDS samples taken */
   uint64_t debriefs;                               /* palp_debrief samples taken (2026-12-05) */
   uint64_t session_exercises, findings_read;       /* palp_session_exercise, palp_finding samples taken */

@@ -239,9 +239,10 @@ static void print_stats(palp_log *log, palp_web_hub *hub, palp_web_server *srv) 
           (unsigned long long)w.ws_closed, (unsigned long long)w.ws_denied);
   /* What letting go of the closed sessions cost: the DDS thread, and the reaper beside it (whose delete of a
    * writer waits for the readers' acknowledgements; idl/palp_dds_reaper.h). */
-  if (h.rejoins) /* rejoin_if_dropped: the server had dropped this bridge from a session it follows */
-    palp_log_info(log, "JOINs sent again to sessions whose server had dropped this bridge (palp-web not run for a while): "
-                       "%llu", (unsigned long long)h.rejoins);
+  if (h.rejoins) /* rejoin_if_dropped: the server had dropped this bridge from a session it follows, or may have */
+    palp_log_info(log, "JOINs sent again to sessions whose server had dropped this bridge or may have (palp-web not run "
+                       "for a while: %llu stall(s) of 0.3 s or more): %llu", (unsigned long long)h.stalls,
+                  (unsigned long long)h.rejoins);
   if (h.leaves || h.reaped)
     palp_log_info(log, "closed sessions let go of in at most %.3f s each on the DDS thread; %llu of their writers and "
                        "readers deleted beside it, the longest in %.3f s, %d still to delete",

@@ -85,6 +85,44 @@ def run(build, source, out):
         how = "its JOIN sent again" if "JOIN sent again" in procs.log(web) else "the JOIN re-delivered by DDS"
         check(after >= 15, "and joined again (%s): %d frames in the 5 s after (>= 15; %d in the 2 s before)"
               % (how, after, before))
+        # The same stop with another visual station in the session (palp-client --role visual): dropped, the
+        # bridge leaves the server's count at 1, not 0, and rejoin_if_dropped's count test never fires. Its
+        # own stall tells it (2026-12-08): a turn of its DDS thread 0.3 s or more late sends its JOIN again.
+        # Before, it stayed out of the session (the deformation still came, for the other station) and the
+        # server refused its trainee pages' marks.
+        exe = os.path.join(build, "client", "palp-client")
+        procs.start("visual-vic", [exe, "--role", "visual", "--domain", "194", "--phantom", "1", "--name", "vic",
+                                   "--quiet"])
+        ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=10)
+        ws.send(json.dumps({"follow": "all"}))
+        two = harness.ws_until(ws, 15, lambda m: m["type"] == "sessions" and bool(m["sessions"])
+                               and m["sessions"][0]["visual"] == 2)
+        check(two is not None, "a visual station joins beside the bridge: the server counts 2 visual members")
+        lost_re, join_re = r"web-s1 \(visual\) left session 1: lost", r"web-s1 joined session 1 as visual station"
+        drops_before = len(re.findall(lost_re, procs.log(srv)))
+        joins_before = len(re.findall(join_re, procs.log(srv)))
+        said_before = procs.log(web).count("JOIN sent again to each")
+        web.send_signal(signal.SIGSTOP)
+        time.sleep(0.8)
+        web.send_signal(signal.SIGCONT)
+        t_cont = time.time()
+        back_after = None
+        while time.time() - t_cont < 6 and back_after is None:  # the server's word: it took the bridge again
+            if len(re.findall(join_re, procs.log(srv))) > joins_before:
+                back_after = time.time() - t_cont
+            else:
+                time.sleep(0.1)
+        two_again = harness.ws_until(ws, 3, lambda m: m["type"] == "sessions" and bool(m["sessions"])
+                                     and m["sessions"][0]["visual"] == 2)
+        ws.close()
+        lines = procs.log(srv)
+        drops = len(re.findall(lost_re, lines)) - drops_before
+        said = procs.log(web).count("JOIN sent again to each") > said_before
+        check(drops >= 1, "stopped 0.8 s beside another visual station, the bridge was dropped by the server (%d "
+              "line(s))" % drops)
+        check(said and back_after is not None and two_again is not None,
+              "and, having said it was away, joined again: the server took it %.1f s after the stop (within 6 s) and "
+              "counts 2 visual members again" % (back_after if back_after is not None else float("nan")))
         rc = procs.stop(web)
         log = procs.log(web)
         check(rc == 0, "palp-web stops cleanly on SIGINT (exit %s)" % rc)

@@ -2512,22 +2512,43 @@ static void test_rejoin(void) {
   snprintf(st.partition, sizeof st.partition, "%s", part);
   snprintf(st.trainee_name, sizeof st.trainee_name, "rae");
   dds_write(w_state, &st);
+  /* A stall of the hub's own thread (0.3 s, a loaded machine) sends the JOIN again twice whatever the
+   * count (note_stall): each phase's bounds allow 2 more for each stall the hub counted in it. */
+  palp_web_hub_stats hs;
+  palp_web_hub_stats_get(h, &hs);
+  const uint64_t stalls_start = hs.stalls;
+  uint64_t stalls0 = hs.stalls;
   const int first = joins_over(r_req, sid, 3000); /* the join, and (no state counting it yet) one JOIN again each second after */
+  palp_web_hub_stats_get(h, &hs);
+  const int first_stalls = (int)(hs.stalls - stalls0);
   st.visual_count = 1;                /* the server took it */
   dds_write(w_state, &st);
   dds_sleepfor(DDS_MSECS(200));
+  palp_web_hub_stats_get(h, &hs);
+  stalls0 = hs.stalls;
   const int held = joins_over(r_req, sid, 2500);
+  palp_web_hub_stats_get(h, &hs);
+  const int held_stalls = (int)(hs.stalls - stalls0);
+  stalls0 = hs.stalls;
   st.visual_count = 0; /* dropped: its lease lapsed */
   dds_write(w_state, &st);
   const int again = joins_over(r_req, sid, 1500);
-  palp_web_hub_stats hs;
   palp_web_hub_stats_get(h, &hs);
-  CHECK(first >= 2 && first <= 4, "rejoin: over the first 3 s, the state counting no visual station: %d JOINs (the join and "
-        "one a second after its first second: 2-4)", first);
-  CHECK(held == 0, "rejoin: while the state counts a visual station, no JOIN again in 2.5 s (%d)", held);
-  CHECK(again >= 1 && again <= 2, "rejoin: the state counting none again, the JOIN sent again within 1.5 s (%d; 1-2)", again);
-  CHECK(hs.joins == 1 && hs.rejoins == (uint64_t)(first - 1 + again), "rejoin: counted: %llu join, %llu again",
-        (unsigned long long)hs.joins, (unsigned long long)hs.rejoins);
+  const int again_stalls = (int)(hs.stalls - stalls0);
+  CHECK(first >= 2 && first <= 4 + 2 * first_stalls, "rejoin: over the first 3 s, the state counting no visual station: "
+        "%d JOINs (the join and one a second after its first second: 2-4, and 2 for each of %d stall(s))", first,
+        first_stalls);
+  CHECK(held <= 2 * held_stalls, "rejoin: while the state counts a visual station, no JOIN again in 2.5 s (%d; %d "
+        "stall(s) of the hub's own)", held, held_stalls);
+  CHECK(again >= 1 && again <= 2 + 2 * again_stalls, "rejoin: the state counting none again, the JOIN sent again within "
+        "1.5 s (%d; 1-2, and 2 for each of %d stall(s))", again, again_stalls);
+  /* every JOIN again read was counted; a stall's JOINs between the windows (or in flight at one's end) were
+   * counted and not read */
+  const uint64_t seen = (uint64_t)(first - 1 + held + again), stalls = hs.stalls - stalls_start;
+  CHECK(hs.joins == 1 && hs.rejoins >= seen && hs.rejoins <= seen + 2 * stalls,
+        "rejoin: counted: %llu join, %llu again (%llu read, and up to 2 for each of %llu stall(s))",
+        (unsigned long long)hs.joins, (unsigned long long)hs.rejoins, (unsigned long long)seen,
+        (unsigned long long)stalls);
   printf("rejoin: %d JOINs in the first 3 s (no state counting the bridge), %d while counted, %d within 1.5 s of "
          "a state counting none\n", first, held, again);
   palp_web_hub_detach(h, &c);
