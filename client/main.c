@@ -1028,7 +1028,7 @@ static const char *valid_range_why(int why, char *buf, size_t len) {
  * felt nothing for that long and the server may have held the session; and that the station asked the
  * server to go on only when it did (the server's state said it held the session: the JOIN sent again).
  * Until session 83 every stall said "asked the server to go on", whether anything was sent or not. */
-static void report_stall(const opts *o, const palp_cli_station *st, unsigned seen[3], const char *role, int named) {
+static void report_stall(const opts *o, const palp_cli_station *st, unsigned seen[4], const char *role, int named) {
   const char *sep = named && o->name ? " " : "", *name = named && o->name ? o->name : "";
   if (st->stalls != seen[0] && !o->quiet)
     printf("[%s%s%s] this station did not run for %.2f s (its machine was busy)\n", role, sep, name, st->stall_s);
@@ -1039,7 +1039,11 @@ static void report_stall(const opts *o, const palp_cli_station *st, unsigned see
   if (st->server_returns != seen[1] && !o->quiet)
     printf("[%s%s%s] the server was silent past its lease (its machine was busy) and is back; session %u goes on\n",
            role, sep, name, st->session_id);
-  seen[0] = st->stalls, seen[1] = st->server_returns, seen[2] = st->held_asks;
+  /* a viewer: its JOIN again, in case the server dropped it (station.h, next_viewer_ask_ns) */
+  if (st->viewer_asks != seen[3] && !o->quiet)
+    printf("[%s%s%s] asked the server again to stream session %u to this station (it may have dropped it: %s)\n", role,
+           sep, name, st->session_id, st->stalls != seen[0] ? "this station did not run" : "its state counted no viewer like it");
+  seen[0] = st->stalls, seen[1] = st->server_returns, seen[2] = st->held_asks, seen[3] = st->viewer_asks;
   fflush(stdout);
 }
 
@@ -1197,7 +1201,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_waitset_attach(ws, lm_cond, 0);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_print = t0, next_check = t0;
-  unsigned stalls_seen[3] = {0, 0, 0};
+  unsigned stalls_seen[4] = {0, 0, 0, 0};
   int closed = 0;
   palp_cli_episode lim_ep = palp_cli_episode_make(PALP_CLI_LIMIT_HOLD_S);
   palp_cli_episode oor_ep = palp_cli_episode_make(PALP_CLI_RANGE_HOLD_S);
@@ -1404,7 +1408,7 @@ static int run_trainee(const opts *o, palp_cli_station *st, const palp_Phantom *
   const int64_t period = (int64_t)(1e9 / rate);
   const int64_t t0 = palp_dds_now_ns();
   int64_t next = t0, next_print = t0, next_state_check = t0;
-  unsigned stalls_seen[3] = {0, 0, 0};
+  unsigned stalls_seen[4] = {0, 0, 0, 0};
   uint64_t seq[PALP_CLI_MAX_FINGERS] = {0};
   int down[PALP_CLI_MAX_FINGERS] = {0}, release_left[PALP_CLI_MAX_FINGERS] = {0};
   uint64_t sent = 0;
@@ -1628,7 +1632,7 @@ static int run_viewer(const opts *o, palp_cli_station *st, const palp_Phantom *p
   double peak_disp = 0;
   const int64_t t0 = palp_dds_now_ns();
   int64_t next_map = t0, next_svg = t0 + (int64_t)(o->svg_every * 1e9), next_print = t0, next_check = t0;
-  unsigned stalls_seen[3] = {0, 0, 0};
+  unsigned stalls_seen[4] = {0, 0, 0, 0};
   int svg_no = 0, svg_failed = 0, snapshot_written = 0;
   uint64_t frames = 0, frames_misfit = 0, contacts = 0, contacts_foreign = 0, feedbacks = 0;
   /* Presses and lifts as the server applied them (session 83 review): its feedback, which only it writes

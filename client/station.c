@@ -806,6 +806,8 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->last_check_ns = st->stall_end_ns = st->doubt_until_ns = 0;
   st->closed_seen = 0;
   st->next_held_ask_ns = 0;
+  st->next_viewer_ask_ns = palp_dds_now_ns() + 1000000000; /* the state may not count it yet */
+  st->viewer_stalls = st->stalls;
   memset(&st->log, 0, sizeof st->log);
   memset(&st->log_said, 0, sizeof st->log_said);
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
@@ -1324,6 +1326,24 @@ static int ask_after_stall(palp_cli_station *st) {
   return st->bind.refused;
 }
 
+/* A viewer's JOIN again (station.h, next_viewer_ask_ns). The server drops a visual station or observer
+ * whose request writer's 0.5 s liveliness lapses, as it does a crashed one, and holds nothing for it: a
+ * visual station its machine did not run for 0.8 s was left out of its session, and if it was the only
+ * one the server stopped streaming the deformation (it streams it only to members who want it), its view
+ * standing still until the session ended (test server_viewer_rejoin, 2026-12-08; palp-web had the same,
+ * mended 2026-12-07). The accepted JOIN again, its request number kept, so that a server that still counts
+ * this station answers it again harmlessly; naming its session, so that one that dropped it takes it back
+ * into this session and not the phantom's newest (a viewer's first JOIN may name none). */
+static void viewer_ask(palp_cli_station *st, int64_t now) {
+  if (!st->has_last_join || st->last_join.role == palp_ROLE_TRAINEE || now < st->next_viewer_ask_ns) return;
+  palp_SessionRequest rq = st->last_join;
+  rq.session_id = st->session_id;
+  if (dds_write(st->request_w, &rq) < 0) return;
+  st->last_join = rq;
+  st->viewer_asks++;
+  st->next_viewer_ask_ns = now + 1000000000;
+}
+
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
   const int64_t now = palp_dds_now_ns();
   station_alive(st, now);
@@ -1400,6 +1420,10 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
             st->held_asks++;
             st->next_held_ask_ns = now + 1000000000;
           }
+          /* A viewer the state does not count: dropped (its stall, or the server's) */
+          if (st->has_last_join && st->last_join.role != palp_ROLE_TRAINEE &&
+              (st->last_join.role == palp_ROLE_VISUAL ? buf[i].visual_count : buf[i].observer_count) == 0)
+            viewer_ask(st, now);
         }
       } else if (info[i].instance_state != DDS_IST_ALIVE) {
         /* The server never disposes a state; a not-alive one means its writer's
@@ -1421,6 +1445,13 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
         lapse_seen(st, now);
       }
     }
+  /* A viewer after a stall of its own: dropped or not, the JOIN again (the state may still count the
+   * session's other viewers) */
+  if (!closed && st->stalls != st->viewer_stalls && st->has_last_join && st->last_join.role != palp_ROLE_TRAINEE) {
+    st->viewer_stalls = st->stalls;
+    st->next_viewer_ask_ns = 0;
+    viewer_ask(st, now);
+  }
   if (!closed && restart_confirmed(st, now, reason, len)) closed = st->bind.restarted = 1;
   /* The server, asked again (or sent the JOIN again by DDS as the two found each other), no longer holds
    * the session: its word for why, as soon as it came, rather than a lapse waited out */

@@ -181,6 +181,12 @@ typedef struct palp_cli_station {
   unsigned server_returns; /* lapses of the server's lease it came back from */
   int64_t next_held_ask_ns;  /* the server holds our session for us: the JOIN again, not before this */
   unsigned held_asks;        /* JOINs sent again because the server held our session (the station says so) */
+  /* A viewer (visual station, observer) the server dropped (its writers' 0.5 s liveliness lapsed while it,
+   * or the server, did not run) is not held: the JOIN again, naming its session, after a stall of its
+   * own or when the session's state counts no viewer of its role (viewer_ask in client/station.c). */
+  int64_t next_viewer_ask_ns; /* not before this (1 s after the join, then at most once a second) */
+  unsigned viewer_asks;       /* JOINs sent again as a viewer */
+  unsigned viewer_stalls;     /* the stalls already answered with one */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
   /* The server's session log as this station's session sees it (session 68): read from
    * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */
