@@ -808,6 +808,7 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
   st->next_held_ask_ns = 0;
   st->next_viewer_ask_ns = palp_dds_now_ns() + 1000000000; /* the state may not count it yet */
   st->viewer_stalls = st->stalls;
+  st->viewer_stall_asks = 0;
   memset(&st->log, 0, sizeof st->log);
   memset(&st->log_said, 0, sizeof st->log_said);
   snprintf(st->partition, sizeof st->partition, "%s", r.partition);
@@ -1334,14 +1335,15 @@ static int ask_after_stall(palp_cli_station *st) {
  * mended 2026-12-07). The accepted JOIN again, its request number kept, so that a server that still counts
  * this station answers it again harmlessly; naming its session, so that one that dropped it takes it back
  * into this session and not the phantom's newest (a viewer's first JOIN may name none). */
-static void viewer_ask(palp_cli_station *st, int64_t now) {
-  if (!st->has_last_join || st->last_join.role == palp_ROLE_TRAINEE || now < st->next_viewer_ask_ns) return;
+static int viewer_ask(palp_cli_station *st, int64_t now) {
+  if (!st->has_last_join || st->last_join.role == palp_ROLE_TRAINEE || now < st->next_viewer_ask_ns) return 0;
   palp_SessionRequest rq = st->last_join;
   rq.session_id = st->session_id;
-  if (dds_write(st->request_w, &rq) < 0) return;
+  if (dds_write(st->request_w, &rq) < 0) return 0;
   st->last_join = rq;
   st->viewer_asks++;
   st->next_viewer_ask_ns = now + 1000000000;
+  return 1;
 }
 
 int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t len) {
@@ -1446,12 +1448,14 @@ int palp_cli_station_session_closed(palp_cli_station *st, char *reason, size_t l
       }
     }
   /* A viewer after a stall of its own: dropped or not, the JOIN again (the state may still count the
-   * session's other viewers) */
+   * session's other viewers), at once and a second later (a lapse the server had not yet acted on when
+   * the first came: answered as a member's, then dropped) */
   if (!closed && st->stalls != st->viewer_stalls && st->has_last_join && st->last_join.role != palp_ROLE_TRAINEE) {
     st->viewer_stalls = st->stalls;
+    st->viewer_stall_asks = 2;
     st->next_viewer_ask_ns = 0;
-    viewer_ask(st, now);
   }
+  if (!closed && st->viewer_stall_asks > 0 && viewer_ask(st, now)) st->viewer_stall_asks--;
   if (!closed && restart_confirmed(st, now, reason, len)) closed = st->bind.restarted = 1;
   /* The server, asked again (or sent the JOIN again by DDS as the two found each other), no longer holds
    * the session: its word for why, as soon as it came, rather than a lapse waited out */

@@ -187,6 +187,7 @@ typedef struct palp_cli_station {
   int64_t next_viewer_ask_ns; /* not before this (1 s after the join, then at most once a second) */
   unsigned viewer_asks;       /* JOINs sent again as a viewer */
   unsigned viewer_stalls;     /* the stalls already answered with one */
+  int viewer_stall_asks;      /* JOINs still to send after the last stall (two: at once, a second later) */
   int closed_seen;        /* palp_cli_station_session_closed said closed: nothing left to leave gently */
   /* The server's session log as this station's session sees it (session 68): read from
    * palp_server_status by palp_cli_station_session_closed, said by palp_cli_station_log_news. */

@@ -6,7 +6,8 @@
 # view stood still until the session ended: deformation frames for its first ~1.5 s only. It now sends
 # its accepted JOIN again, naming its session, after a stall of its own or when the state counts no
 # visual station (client/station.c, viewer_ask): the server drops it and takes it back, the station says
-# it asked, and frames come again. A force-driven trainee presses 1 N throughout.
+# it asked, and frames come again. Then the same stop beside another visual station, whose count keeps
+# the state's above zero: taken back on its own stall's word. A force-driven trainee presses throughout.
 set -u
 server=$1 client=$2 config_dir=$3 test_dir=$4
 export CYCLONEDDS_URI=${CYCLONEDDS_URI:-file://$config_dir/cyclonedds-loopback.xml}
@@ -29,6 +30,18 @@ vpid=$!
 stall_station $vpid "$tmp/vic.log" 1.5 0.8
 wait $vpid
 vrc=$?
+# The same stop beside another visual station (val, not stopped): the count stays at 1 and only the
+# stopped station's own stall tells it to ask (two JOINs, at once and a second later).
+"$client" --role visual --domain 218 --phantom 1 --name val --timeout 10 --duration 8 --print-period 0 \
+  > "$tmp/val.log" 2>&1 &
+apid=$!
+"$client" --role visual --domain 218 --phantom 1 --name vik --timeout 10 --duration 6 --print-period 0 \
+  > "$tmp/vik.log" 2>&1 &
+kpid=$!
+stall_station $kpid "$tmp/vik.log" 1.5 0.8
+wait $kpid
+krc=$?
+wait $apid
 kill $tpid; wait $tpid; tpid=
 kill $spid; wait $spid; spid=
 frames=$(sed -n 's/.*session [0-9]*: \([0-9]*\) deformation frames.*/\1/p' "$tmp/vic.log" | tail -n 1)
@@ -44,5 +57,12 @@ else echo "FAIL not taken back ($joins join line(s)), or the station did not say
 # frames after the stop too: 189 in 7 s with the JOIN again, 56 without (2026-12-08); at least 90
 if [ -n "$frames" ] && [ "$frames" -ge 90 ]; then echo "ok   its view moved on after the stop: $frames frames in 7 s (>= 90)"
 else echo "FAIL '$frames' deformation frames in 7 s (want >= 90: the stream did not come back)"; fail=1; fi
+kdrops=$(grep -c "vik (visual) left session 1: lost" "$tmp/server.log")
+kjoins=$(grep -c "vik joined session 1 as visual station" "$tmp/server.log")
+echo "     vik (beside val): exit $krc, dropped $kdrops time(s), joined $kjoins time(s)"
+if [ $krc -eq 0 ] && [ "$kdrops" -ge 1 ] && [ "$kjoins" -ge 2 ] &&
+   grep -q "asked the server again to stream session 1 to this station (it may have dropped it: this station did not run)" "$tmp/vik.log"; then
+  echo "ok   beside another visual station, the stopped one was dropped and, asking after its own stall, taken back"
+else echo "FAIL beside another visual station: exit $krc, dropped $kdrops, joined $kjoins, or no word of its asking"; cat "$tmp/vik.log"; fail=1; fi
 [ $fail -eq 0 ] || { cat "$tmp/vic.log"; tail -n 20 "$tmp/server.log"; }
 exit $fail
