@@ -117,7 +117,7 @@ start_server "$work/pki" server-revoked
 # server names it by its vendor and GUID prefix (idl/palp_dds_strangers.c), once
 timeout 20 "$station" "$domain" 1 station 4 > "$work/plain.out" 2>&1 &
 ppid_=$!
-timeout 60 "$station" "$domain" 1 session 4 "$work/pki-fd" trainee/fd > "$work/revoked.out" 2>&1; rc=$?
+PALP_FD_CATALOGUE_WAIT_S=15 timeout 60 "$station" "$domain" 1 session 4 "$work/pki-fd" trainee/fd > "$work/revoked.out" 2>&1; rc=$?
 if [ $rc -ne 0 ] && [ -z "$(r revoked vertices)" ] && [ "$(r revoked catalogue_writers_matched)" = 0 ] \
    && grep -q "FAIL no catalogue entry" "$work/revoked.out"; then
   ok "trainee/fd revoked (in the classroom CRL; the station's own copy holds the old one): refused at the handshake, matched $(r revoked catalogue_writers_matched) server writers, no catalogue in 15 s"
