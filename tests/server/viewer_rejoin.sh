@@ -24,19 +24,20 @@ fail=0
 tpid=$!
 _n=0
 until grep -q "joined session" "$tmp/tia.log" || [ $_n -ge 100 ]; do sleep 0.1; _n=$((_n + 1)); done
-"$client" --role visual --domain 218 --phantom 1 --name vic --timeout 10 --duration 7 --print-period 0 \
-  > "$tmp/vic.log" 2>&1 &
+visual() { # NAME DURATION: a visual station of session 1 in the background, its output in $tmp/NAME.log
+  "$client" --role visual --domain 218 --phantom 1 --name "$1" --timeout 10 --duration "$2" --print-period 0 \
+    > "$tmp/$1.log" 2>&1 &
+}
+visual vic 7
 vpid=$!
 stall_station $vpid "$tmp/vic.log" 1.5 0.8
 wait $vpid
 vrc=$?
 # The same stop beside another visual station (val, not stopped): the count stays at 1 and only the
 # stopped station's own stall tells it to ask (two JOINs, at once and a second later).
-"$client" --role visual --domain 218 --phantom 1 --name val --timeout 10 --duration 8 --print-period 0 \
-  > "$tmp/val.log" 2>&1 &
+visual val 8
 apid=$!
-"$client" --role visual --domain 218 --phantom 1 --name vik --timeout 10 --duration 6 --print-period 0 \
-  > "$tmp/vik.log" 2>&1 &
+visual vik 6
 kpid=$!
 stall_station $kpid "$tmp/vik.log" 1.5 0.8
 wait $kpid
