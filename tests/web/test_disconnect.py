@@ -47,12 +47,13 @@ def run(build, source, out):
         time.sleep(0.3)
         check(web.poll() is None, "palp-web is alive after a connection reset mid-frame")
 
-        # Nobody follows the session now: the bridge leaves it after its linger (2 s).
+        # Nobody follows the session now: the bridge leaves it after its linger (2 s); ~2.1 s alone, 5.0 s in a
+        # fresh clone's run at the suite's busiest start (2026-12-08), so within 8 s.
         ws = harness.cdp.WebSocket("ws://127.0.0.1:%d/ws" % web.port, timeout=10)
-        left = harness.ws_until(ws, 8, lambda m: m["type"] == "sessions" and bool(m["sessions"])
+        left = harness.ws_until(ws, 12, lambda m: m["type"] == "sessions" and bool(m["sessions"])
                                 and m["sessions"][0]["visual"] == 0)
         left_after = time.time() - t_kill if left else None
-        check(left_after is not None and left_after < 5,
+        check(left_after is not None and left_after < 8,
               "the bridge left the session nobody watches: the server counts 0 visual members %.1f s after the kill"
               % (left_after or float("nan")))
         ws.send(json.dumps({"follow": "all"}))
