@@ -249,8 +249,8 @@ static void test_control(void) {
   if (hb) palp_web_hub_destroy(hb);
 }
 
-/* An open session's state, as a server writes it. */
-static void write_open_state(dds_entity_t w, uint32_t sid, uint32_t phantom, const char *part, const char *trainee) {
+/* An open session's state, as a server fills it (the counts left 0). */
+static palp_SessionState open_state(uint32_t sid, uint32_t phantom, const char *part, const char *trainee) {
   palp_SessionState st;
   memset(&st, 0, sizeof st);
   st.session_id = sid;
@@ -258,6 +258,12 @@ static void write_open_state(dds_entity_t w, uint32_t sid, uint32_t phantom, con
   st.phantom_id = phantom;
   snprintf(st.partition, sizeof st.partition, "%s", part);
   snprintf(st.trainee_name, sizeof st.trainee_name, "%s", trainee);
+  return st;
+}
+
+/* ... and written. */
+static void write_open_state(dds_entity_t w, uint32_t sid, uint32_t phantom, const char *part, const char *trainee) {
+  const palp_SessionState st = open_state(sid, phantom, part, trainee);
   dds_write(w, &st);
 }
 
@@ -2301,11 +2307,8 @@ static void test_review_80(void) {
   CHECK(hub_reached(h, STATES, states0 + 1), "the hub took alice's session's state within 5 s");
   snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sa);
   CHECK(palp_web_hub_control(h, &alice, ctl, strlen(ctl)) == 0, "alice's page binds to her session %u", sa);
-  palp_SessionState closed;
-  memset(&closed, 0, sizeof closed);
-  closed.session_id = sa, closed.phase = palp_PHASE_CLOSED, closed.phantom_id = 2;
-  snprintf(closed.partition, sizeof closed.partition, "%s", pa);
-  snprintf(closed.trainee_name, sizeof closed.trainee_name, "alice");
+  palp_SessionState closed = open_state(sa, 2, pa, "alice");
+  closed.phase = palp_PHASE_CLOSED;
   dds_write(w_state, &closed);
   dds_sleepfor(DDS_MSECS(300));
   for (int i = 0; i < 30; i++) { /* her page reads on */
@@ -2506,11 +2509,7 @@ static void test_rejoin(void) {
   const uint32_t sid = 7401;
   char part[64];
   palp_dds_session_partition(sid, part, sizeof part);
-  palp_SessionState st;
-  memset(&st, 0, sizeof st);
-  st.session_id = sid, st.phase = palp_PHASE_OPEN, st.phantom_id = 1;
-  snprintf(st.partition, sizeof st.partition, "%s", part);
-  snprintf(st.trainee_name, sizeof st.trainee_name, "rae");
+  palp_SessionState st = open_state(sid, 1, part, "rae");
   dds_write(w_state, &st);
   /* A stall of the hub's own thread (0.3 s, a loaded machine) sends the JOIN again twice whatever the
    * count (note_stall): each phase's bounds allow 2 more for each stall the hub counted in it. */
