@@ -2470,11 +2470,6 @@ static void test_close_stalled(const char *self) {
   palp_web_hub_destroy(h);
 }
 
-/* A bridge the server dropped (its request writer's liveliness lapsed while palp-web did not run: web_disconnect
- * in a fresh clone's run saw it 0.97 s after the join, and the page no frame again) sends its JOIN again when the
- * session's state counts no visual station, at most once a second and not in the first second after joining;
- * while the state counts one, never. The test plays the server: its states, and a reader of the requests in this
- * process (domain 216). */
 /* JOINs of session sid taken from r_req over ms milliseconds of the clock (not of polls: on a loaded machine
  * 300 polls of 10 ms took longer than 3 s, and the bridge's once-a-second JOINs outnumbered the bound: a fresh
  * clone's run), polled every 10 ms. */
@@ -2491,6 +2486,11 @@ static int joins_over(dds_entity_t r_req, uint32_t sid, int ms) {
   return n;
 }
 
+/* A bridge the server dropped (its request writer's liveliness lapsed while palp-web did not run: web_disconnect
+ * in a fresh clone's run saw it 0.97 s after the join, and the page no frame again) sends its JOIN again when the
+ * session's state counts no visual station, at most once a second and not in the first second after joining;
+ * while the state counts one, never, but for a stall of its own (two each). The test plays the server: its states,
+ * and a reader of the requests in this process (domain 216). */
 static void test_rejoin(void) {
   palp_web_hub *h = started_hub(216, 1);
   const dds_entity_t pp = dds_create_participant(216, NULL, NULL);
