@@ -340,8 +340,12 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
     const double dt = t - c->t_prev;
     if (c->was_on && on && dt > 0) c->energy += c->f_prev.x * (x.x - c->x_prev_pc.x) + c->f_prev.y * (x.y - c->x_prev_pc.y) +
                                                  c->f_prev.z * (x.z - c->x_prev_pc.z);
-    if (!(o.flags & PALP_HAPTIC_CONTACT) && !(len3(o.force) > 0)) c->energy = 0; /* free: nothing stored */
-    if (on && c->was_on && dt > 0 && c->energy > 0) {
+    const int pushing = (o.flags & PALP_HAPTIC_CONTACT) || len3(o.force) > 0;
+    if (!pushing) c->energy = 0; /* free: nothing stored */
+    /* The damper acts only on a force there is: in free space -a v would be a drag (or a pull)
+     * the phantom never makes. */
+    int damped = 0;
+    if (on && c->was_on && dt > 0 && c->energy > 0 && pushing) {
       const palp_vec3 v = v3scale(v3sub(x, c->x_prev_pc), 1.0 / dt);
       const double v2 = v.x * v.x + v.y * v.y + v.z * v.z;
       if (v2 > 1e-12) {
@@ -377,11 +381,13 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
          * velocity, and while the hand came out of a stiff phantom that was into the surface,
          * past the contact force: down to -3.1 N on a 2000 N/m plane with 40 ms late models
          * (session 80's review; docs/haptics.md). Its normal part stops at a force of 0 along
-         * the contact normal, as the renderer's own damper does (src/haptic.c); the energy it
-         * leaves stays in the observer (which sums the force as rendered) for the next ticks,
-         * pressing in, where the damper pushes out. */
-        if (o.flags & PALP_HAPTIC_CONTACT) {
-          const palp_vec3 nc = c->renderer.cur.normal;
+         * the renderer's push normal (the contact normal, or the last one while an offset
+         * decays after contact is lost), as the renderer's own damper does (src/haptic.c).
+         * Cut only in contact (sessions 80-88), the hand leaving the surface was pulled in:
+         * -1.11 N on a 2000 N/m plane with models 4 ms late (session 82's review #3). What
+         * it cannot take out coming off, the cut below does: it lessens the push itself. */
+        palp_vec3 nc;
+        if (palp_haptic_push_normal(&c->renderer, &nc)) {
           const double fn = o.force.x * nc.x + o.force.y * nc.y + o.force.z * nc.z;
           if (fn < 0) o.force = v3sub(o.force, v3scale(nc, fn));
         }
@@ -402,6 +408,35 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
         const palp_vec3 df = v3sub(o.force, f0);
         c->dissipated += -(df.x * v.x + df.y * v.y + df.z * v.z) * dt;
         c->pc_ticks++;
+        damped = 1;
+      }
+    }
+    /* Coming off, the push gives back no more than the press put in. While the hand leaves
+     * the surface (v . n > 0) the force about to act over the next tick does work F . v dt
+     * on the device; if that would take the observer above 0 the push along the normal is
+     * lessened, down to 0 N, so that it does not: dF_n = (E + F . v dt) / (v_n dt) [N]. The
+     * damper above cannot do it: it takes out the excess of the tick gone, and a late model's
+     * force still rises as the hand comes out (it renders where the hand was), so one tick's
+     * rise stayed on the hand every tick (the pull above removed, this cut not yet there:
+     * ~0.08 N over the last 1.2 mm of each release on the stiff phantom with 20 ms late
+     * models, 0.13 mJ, 30% of the cycle's input). Sessions 80-88 took that out by pulling the
+     * hand as it left (-1.11 N on a 2000 N/m plane); now nothing pulls, and this only takes
+     * a push away: the force stays between 0 and the model's, so the damping limit (which
+     * guards a damper that adds force) does not apply. */
+    if (on && c->was_on && dt > 0 && pushing) {
+      palp_vec3 nc;
+      const palp_vec3 v = v3scale(v3sub(x, c->x_prev_pc), 1.0 / dt);
+      if (palp_haptic_push_normal(&c->renderer, &nc)) {
+        const double vn = v.x * nc.x + v.y * nc.y + v.z * nc.z;                /* [m/s] */
+        const double fn = o.force.x * nc.x + o.force.y * nc.y + o.force.z * nc.z; /* [N] */
+        const double next = c->energy + (o.force.x * v.x + o.force.y * v.y + o.force.z * v.z) * dt; /* [J] */
+        if (vn > 0 && fn > 0 && next > 0) {
+          const double cut = fmin(next / (vn * dt), fn);
+          o.force = v3sub(o.force, v3scale(nc, cut));
+          c->dissipated += cut * vn * dt;
+          c->cut_ticks++;
+          if (!damped) c->pc_ticks++;
+        }
       }
     }
     c->f_prev = on ? o.force : (palp_vec3){0, 0, 0};

@@ -94,7 +94,8 @@ typedef struct palp_cli_haptic_core {
   palp_vec3 x_prev_pc;    /* device point at the previous tick [m] */
   double t_prev;
   double dissipated;      /* by the controller, total [J] */
-  uint64_t pc_ticks;      /* ticks the controller acted */
+  uint64_t pc_ticks;      /* ticks the controller acted (damped, lessened a push, or both) */
+  uint64_t cut_ticks;     /* ticks it lessened a push coming off (never past 0 N) */
 } palp_cli_haptic_core;
 
 /* hold_after 0: max(2 physics periods, 8 ms). The passivity controller is on
@@ -165,7 +166,7 @@ typedef struct palp_cli_haptic_stats {
   uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
   uint64_t held_ticks; /* ticks rendered with the force held (model late) */
-  uint64_t passivity_ticks;  /* ticks the passivity controller damped */
+  uint64_t passivity_ticks;  /* ticks the passivity controller acted (damped or lessened a push) */
   double passivity_dissipated; /* energy it took out [J] */
   uint64_t server_limited_models; /* models the server flagged LM_FORCE_LIMIT */
   uint64_t stiffness_limited_models; /* models whose K the renderer limited (above render.max_stiffness, or

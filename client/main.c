@@ -1363,7 +1363,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                "that would push the hand on; rendered limited (their seconds in contact are among the limited ones)\n",
                o->name, (unsigned long long)hs.stiffness_limited_models, d.render.max_stiffness);
   if (hs.passivity_ticks)
-    tprintf(o, "[trainee %s] passivity controller: damped %llu ticks, took out %.2f mJ the late models would have "
+    tprintf(o, "[trainee %s] passivity controller: acted on %llu ticks, took out %.2f mJ the late models would have "
                "generated\n", o->name, (unsigned long long)hs.passivity_ticks, hs.passivity_dissipated * 1e3);
   /* the gel law's part only where a scene's literal law met it (most never do) */
   char gel_text[160] = "";

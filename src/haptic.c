@@ -141,6 +141,8 @@ static int push_normal(const palp_haptic *h, palp_vec3 *n) {
   return 1;
 }
 
+int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n) { return push_normal(h, n); }
+
 /* f without its component into the surface (along -n): a surface pushes, never pulls. */
 static palp_vec3 no_pull(palp_vec3 f, palp_vec3 n) {
   const double fn = v3_dot(f, n);

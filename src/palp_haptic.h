@@ -97,6 +97,10 @@ int palp_haptic_accepts(const palp_haptic *h, const palp_local_model *m, double 
 /* The share of the model force left at now [0, 1]: 1 while models are fresh, down to 0
  * over fade_time once the newest is older than stale_time; 0 before any model. */
 double palp_haptic_stale_scale(const palp_haptic *h, double now);
+/* The unit normal the rendered force never pulls against (*n): the current model's contact
+ * normal, or else the last in-contact model's while an offset of it may still decay.
+ * Returns 0 (n untouched) if there is none: before any model in contact. */
+int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n);
 /* f limited to a magnitude of max_force [N] (sets PALP_HAPTIC_LIMITED in *flags, if not
  * NULL, when it acted); a non-finite f gives 0 N, flagged. */
 palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags);
