@@ -17,9 +17,11 @@
  * B goes on for 6 rounds 50 ms apart, 4,700 contact keys each and 2,400 feedback keys in the first 4
  * (49,600 disposes in all).
  * Checked in the file and the recorder's log:
- *  - >= 90 of the 100 contacts and >= 90 of the 100 feedback samples logged (best effort on
- *    loopback: test_recorder.c's 10 %; before the fix 0 and 0), and the first logged within the
- *    first 20 (200 ms after the flood: the recovery time);
+ *  - the first contact and feedback sample logged within the first 20 (200 ms after the flood: the
+ *    recovery time), and >= 90 % of those from it on logged (best effort on loopback: test_recorder.c's
+ *    10 %); before the fix 0 and 0. (Until session 89 the bound was >= 90 of all 100, which a recovery
+ *    inside its own 200 ms could fail: 89 logged, the first #11 and every one after it, in one of
+ *    session 88's local full runs; seen once before.)
  *  - the recorder says its stream readers were made anew;
  *  - its RSS grows by under 12 MB through the flood (the instances the bound allows: ~0.7 kB each).
  *    Measured 2026-12-07 (scratch builds): +5.8-7.9 MB; +30.2-32.4 MB with the old readers kept at
@@ -222,15 +224,18 @@ int main(int argc, char **argv) {
          (long long)feedback, (long long)first_contact, (long long)first_feedback, rss0, rss1, rss1 - rss0, renewed);
   CHECK(flooded == (int)((2 + AFTER_FLOOD) * CONTACT_FLOOD + (1 + AFTER_FEEDBACK) * FEEDBACK_FLOOD),
         "the flood written (%d)", flooded);
-  CHECK(contacts >= 90 && contacts <= SAMPLES,
-        "a session opened right after 4,700 disposes of made-up contact keys (and 4,700 more half-way through): "
-        ">= 90 of its %d contacts logged (%lld; 0 with the instance bound alone)", SAMPLES, (long long)contacts);
-  CHECK(feedback >= 90 && feedback <= SAMPLES,
-        "  and >= 90 of its %d feedback samples after 2,400 disposes of made-up feedback keys (%lld)", SAMPLES,
-        (long long)feedback);
   CHECK(first_contact >= 0 && first_contact < 20 && first_feedback >= 0 && first_feedback < 20,
-        "  recovered within 200 ms of the flood: the first contact and feedback logged are #%lld and #%lld of "
-        "0..99 (10 ms apart)", (long long)first_contact, (long long)first_feedback);
+        "a session opened right after 4,700 disposes of made-up contact keys and 2,400 of feedback keys recovered "
+        "within 200 ms: the first contact and feedback logged are #%lld and #%lld of 0..99 (10 ms apart)",
+        (long long)first_contact, (long long)first_feedback);
+  /* from the first logged on, best effort's 10 % (0 logged with the instance bound alone) */
+  CHECK(first_contact >= 0 && contacts <= SAMPLES - first_contact && 10 * contacts >= 9 * (SAMPLES - first_contact),
+        "  then >= 90%% of its contacts from #%lld on logged, 4,700 more disposes half-way through (%lld of %lld)",
+        (long long)first_contact, (long long)contacts, (long long)(SAMPLES - first_contact));
+  CHECK(first_feedback >= 0 && feedback <= SAMPLES - first_feedback &&
+            10 * feedback >= 9 * (SAMPLES - first_feedback),
+        "  and >= 90%% of its feedback samples from #%lld on (%lld of %lld)", (long long)first_feedback,
+        (long long)feedback, (long long)(SAMPLES - first_feedback));
   CHECK(renewed >= 1, "the recorder says its stream readers were made anew (%d lines)", renewed);
   const char *bound_env = getenv("PALP_TEST_RECORDER_RSS_KB"); /* scripts/sanitize.sh: ASan's allocator adds */
   const long bound_kb = bound_env && atol(bound_env) > 0 ? atol(bound_env) : 12288;
