@@ -336,11 +336,11 @@ static void on_input_gap(void *ctx, uint32_t session_id, int64_t frame, int fing
   }
 }
 
-static void on_overrun(void *ctx, uint32_t session_id, int64_t late_ns) {
+static void on_overrun(void *ctx, uint32_t session_id, uint64_t n, int64_t late_ns) {
   (void)late_ns;
   palp_srv_db_log *l = ctx;
   slot *s = find(l, session_id);
-  if (s) s->overruns++;
+  if (s) s->overruns += n;
 }
 
 /* The parts are the station's (client/haptic_loop.c): depth, skin, the model's limits and the

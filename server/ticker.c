@@ -52,8 +52,7 @@ static struct timespec ts_of(int64_t ns) {
  * group skipped behind schedule is one (the step it was due came late: simulated time lags). */
 static void session_late(palp_srv_session *s, uint64_t n, int64_t late_ns) {
   s->stats.overruns += n;
-  if (s->events && s->events->overrun)
-    for (uint64_t k = 0; k < n; k++) s->events->overrun(s->events->ctx, s->id, late_ns);
+  if (s->events && s->events->overrun) s->events->overrun(s->events->ctx, s->id, n, late_ns);
 }
 
 /* One session's tick. Late when its own work ends after the next tick should have

@@ -7,7 +7,9 @@
  *   lock: 0), and the closed one is not stepped once palp_srv_ticker_remove has returned;
  * - a pass stalled 60 ms (12 slots at 200 Hz): each session's skipped slots counted apart from its late
  *   steps (>= 8 skipped; late <= ticks: until session 82 the slots were added to its overruns, which then
- *   outnumbered its ticks after a stall);
+ *   outnumbered its ticks after a stall), and told to the session's log in one overrun event for the
+ *   stall's skipped slots, not one per slot (until session 89: 12 calls here; 60,000 per session, under
+ *   the group's lock, after a 60 s stop at 1 kHz);
  * - a stall 4.6 s into a 5 s status period (0.2 Hz) is in that period's tick_us_max (>= 50 ms): until
  *   session 82 the pass times were kept for the first 4 s only. */
 #include <stdatomic.h>
@@ -66,20 +68,36 @@ void palp_srv_session_factor_settle(palp_srv_session *s) {
   s->factor.job = NULL;
 }
 
+/* The session log's overrun events: calls and the late steps they carry, per session. */
+static atomic_int overrun_calls[2];
+static atomic_llong overrun_steps[2];
+static void on_overrun(void *ctx, uint32_t session_id, uint64_t n, int64_t late_ns) {
+  (void)ctx, (void)late_ns;
+  const int k = session_id == 1 ? 0 : 1;
+  atomic_fetch_add(&overrun_calls[k], 1);
+  atomic_fetch_add(&overrun_steps[k], (long long)n);
+}
+
 typedef struct counts {
   uint64_t ticks[2], overruns[2], skipped[2];
+  int calls[2];       /* overrun events so far */
+  long long told[2];  /* the late steps they carried */
 } counts;
 
 static void read_one(void *ctx, palp_srv_session *s) {
   counts *c = ctx;
   const int k = (int)(stub_of(s) - stubs);
   c->ticks[k] = s->stats.ticks, c->overruns[k] = s->stats.overruns, c->skipped[k] = s->stats.skipped;
+  /* under the group's lock, as the events are told: the same moment as the counters */
+  c->calls[k] = atomic_load(&overrun_calls[k]), c->told[k] = atomic_load(&overrun_steps[k]);
 }
 
 int main(void) {
   palp_srv_session *a = calloc(1, sizeof *a), *b = calloc(1, sizeof *b);
   if (!a || !b) return 2;
   a->id = 1, b->id = 2;
+  const palp_srv_events ev = {.overrun = on_overrun};
+  a->events = &ev, b->events = &ev;
   stubs[0].s = a, stubs[1].s = b;
   int rt = 0, err = 0;
   const double rate = RATE_HZ;
@@ -94,10 +112,20 @@ int main(void) {
   nap_ns(300000000);
 
   /* A pass stalled 60 ms: 12 slots at 200 Hz, each a slot skipped by both sessions. */
+  int calls0[2];
+  for (int k = 0; k < 2; k++) calls0[k] = atomic_load(&overrun_calls[k]);
   atomic_store(&stubs[0].stall_ns, 60000000);
   nap_ns(300000000);
   counts c = {0};
   palp_srv_ticker_each(t, read_one, &c);
+  for (int k = 0; k < 2; k++) {
+    const int calls = c.calls[k] - calls0[k];
+    const long long steps = c.told[k];
+    /* the stalled tick itself (session 1), the skipped slots once; a loaded machine may add a late tick or two */
+    CHECK(calls >= 1 && calls <= 4 && steps == (long long)c.overruns[k],
+          "session %d's log told of its %llu late steps in %d overrun event(s) over the stall (want 1..4, carrying "
+          "%lld steps: all of them)", k + 1, (unsigned long long)c.overruns[k], calls, steps);
+  }
   for (int k = 0; k < 2; k++)
     CHECK(c.skipped[k] >= 8 && c.overruns[k] >= c.skipped[k] && c.overruns[k] <= c.ticks[k] + c.skipped[k],
           "session %d after a 60 ms stall: %llu of %llu steps taken and slots skipped late, %llu slots skipped (want "
