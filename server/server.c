@@ -171,6 +171,7 @@ struct palp_srv {
   palp_srv_session **sessions; /* open sessions, [cfg.max_sessions] */
   atomic_int session_count; /* changed by the server's thread; read by any (palp_srv_open_sessions) */
   uint32_t next_session_id;
+  uint32_t session_local_max; /* local ids 1..this, then 1 again (def.session_local_max) */
   uint64_t placement_key; /* this run's secret for random exercises' draws (placement_seed) */
   uint64_t sessions_total;
   uint64_t rejected_closed[PALP_SRV_REJ_COUNT]; /* counters of sessions already closed */
@@ -723,9 +724,11 @@ static void snap_one(void *ctx, palp_srv_session *s) {
   }
 }
 
+/* Its own group's lock alone (until session 89 every group's, one after the other, for each batch of
+ * findings: a flood of foreign findings in one session took the lock of every group's real-time tick). */
 static palp_srv_session_stats session_stats(palp_srv *srv, palp_srv_session *s) {
   stats_snapshot sn = {.id = s->id};
-  palp_srv_ticker_each(srv->ticker, snap_one, &sn);
+  palp_srv_ticker_with(srv->ticker, s, snap_one, &sn);
   return sn.found ? sn.st : s->stats; /* detached: the tick thread no longer writes it */
 }
 
@@ -791,6 +794,21 @@ static palp_srv_session *find_session(palp_srv *srv, uint32_t id) {
   for (int i = 0; i < srv->session_count; i++)
     if (srv->sessions[i]->id == id) return srv->sessions[i];
   return NULL;
+}
+
+/* The id the next session gets. Local ids wrap after session_local_max (2^20 - 1) sessions, keeping
+ * the server's number, and skip any a session still open (or held for its station) has: until session
+ * 89 a session open across the wrap shared its id with a new one (its partition, its feedback and
+ * findings, its log), ~14.6 h of JOINs and LEAVEs at the default join_rate away. Fewer than 2^20
+ * sessions are ever open, so a free id is always found. */
+static void next_session_id(palp_srv *srv) {
+  uint32_t tries = 0;
+  do {
+    srv->next_session_id++;
+    if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0 ||
+        PALP_DDS_ID_LOCAL(srv->next_session_id) > srv->session_local_max)
+      srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
+  } while (find_session(srv, srv->next_session_id) && ++tries < srv->session_local_max);
 }
 
 static station *find_station(palp_srv *srv, const char *id) {
@@ -1670,12 +1688,9 @@ static void handle_join(palp_srv *srv, const palp_SessionRequest *rq, const palp
     }
     publish_session_exercise(srv, s, info.exercise_name, info.exercise_json);
     publish_session_log(srv, s);
-    srv->next_session_id++;
-    /* Local ids wrap after 2^20 - 1 sessions, keeping the server's number. */
-    if (PALP_DDS_ID_LOCAL(srv->next_session_id) == 0)
-      srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
     srv->sessions_total++;
     srv->sessions[srv->session_count++] = s;
+    next_session_id(srv); /* past s's own id too */
     if (s->finding_rc > 0) dds_waitset_attach(srv->waitset, s->finding_rc, 0);
     publish_finding_status(s);
     st->session_id = s->id;
@@ -2309,6 +2324,9 @@ palp_srv *palp_srv_create(const palp_srv_def *def, int *rc, char *err, size_t er
   srv->verbose = def->verbose;
   srv->log = def->log;
   srv->next_session_id = PALP_DDS_ID(srv->cfg.server_number, 1);
+  const uint32_t local_all = (1u << PALP_DDS_ID_LOCAL_BITS) - 1u;
+  srv->session_local_max =
+      def->session_local_max > 0 && def->session_local_max < local_all ? def->session_local_max : local_all;
   srv->start_ns = palp_dds_now_ns();
   /* Unpredictable, so that a trainee cannot work out a random exercise's lesions from her session
    * number; each draw's seed is logged with it (docs/assessment.md, "Lesions drawn for each session"). */

@@ -253,6 +253,9 @@ typedef struct palp_srv_session {
    * world computes them itself at their due frame). */
   palp_srv_factor_pool *factor_pool;
   palp_srv_factor_slot factor;
+  /* The ticker's group that steps it, + 1; 0 while in none (the ticker's add and remove set it,
+   * on the thread that owns the session). palp_srv_ticker_with locks that group alone. */
+  int tick_group;
 } palp_srv_session;
 
 /* Hands an in-flight rebuild back to the world (waiting for the helper): before the

@@ -167,7 +167,15 @@ palp_srv_ticker *palp_srv_ticker_create_rates(int threads, const double *rates_h
     const int cap = (int)(rate_hz / status_rate_hz * 1.5) + 16;
     g->owner = t;
     g->period_ns = (int64_t)(1e9 / rate_hz + 0.5);
-    pthread_mutex_init(&g->lock, NULL);
+    /* Priority inheritance: the main thread (ordinary priority) takes a group's lock for a
+     * snapshot; preempted while holding it, it would hold up the group's SCHED_FIFO tick for as
+     * long as other ordinary work runs. With inheritance it runs at the tick's priority until it
+     * lets go. Where the protocol is not supported the lock is an ordinary one. */
+    pthread_mutexattr_t ma;
+    pthread_mutexattr_init(&ma);
+    if (pthread_mutexattr_setprotocol(&ma, PTHREAD_PRIO_INHERIT) != 0 || pthread_mutex_init(&g->lock, &ma) != 0)
+      pthread_mutex_init(&g->lock, NULL);
+    pthread_mutexattr_destroy(&ma);
     g->sessions = calloc((size_t)max_sessions, sizeof *g->sessions);
     g->deferred = calloc((size_t)max_sessions, sizeof *g->deferred);
     g->work_us = calloc((size_t)cap, sizeof *g->work_us);
@@ -246,6 +254,7 @@ int palp_srv_ticker_add_rate(palp_srv_ticker *t, palp_srv_session *s, double rat
   int rc = PALP_EFULL;
   if (g->count < t->max_sessions) {
     s->factor_pool = t->factor;
+    s->tick_group = best + 1;
     g->sessions[g->count++] = s;
     rc = 0;
   }
@@ -275,6 +284,21 @@ void palp_srv_ticker_remove(palp_srv_ticker *t, palp_srv_session *s) {
     palp_srv_session_factor_settle(s);
     s->factor_pool = NULL;
   }
+  s->tick_group = 0;
+}
+
+int palp_srv_ticker_with(palp_srv_ticker *t, palp_srv_session *s, void (*fn)(void *ctx, palp_srv_session *s),
+                         void *ctx) {
+  const int i = s->tick_group - 1;
+  if (i < 0 || i >= t->n) return 0;
+  tick_group *g = &t->g[i];
+  int found = 0;
+  pthread_mutex_lock(&g->lock);
+  for (int k = 0; k < g->count && !found; k++)
+    if (g->sessions[k] == s) found = 1;
+  if (found) fn(ctx, s);
+  pthread_mutex_unlock(&g->lock);
+  return found;
 }
 
 void palp_srv_ticker_each(palp_srv_ticker *t, void (*fn)(void *ctx, palp_srv_session *s), void *ctx) {

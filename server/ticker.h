@@ -56,6 +56,10 @@ int palp_srv_ticker_add_rate(palp_srv_ticker *t, palp_srv_session *s, double rat
 void palp_srv_ticker_remove(palp_srv_ticker *t, palp_srv_session *s);
 /* Calls fn for every attached session under its group's lock (short work only). */
 void palp_srv_ticker_each(palp_srv_ticker *t, void (*fn)(void *ctx, palp_srv_session *s), void *ctx);
+/* Calls fn for s alone under its own group's lock (short work only): no other group's tick waits
+ * for it. Returns 1, or 0 (fn not called) if s is attached to no group of t. */
+int palp_srv_ticker_with(palp_srv_ticker *t, palp_srv_session *s, void (*fn)(void *ctx, palp_srv_session *s),
+                         void *ctx);
 /* Snapshot of the timing since the previous call. */
 void palp_srv_ticker_stats(palp_srv_ticker *t, palp_srv_tick_stats *out);
 

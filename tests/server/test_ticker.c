@@ -11,7 +11,10 @@
  *   stall's skipped slots, not one per slot (until session 89: 12 calls here; 60,000 per session, under
  *   the group's lock, after a 60 s stop at 1 kHz);
  * - a stall 4.6 s into a 5 s status period (0.2 Hz) is in that period's tick_us_max (>= 50 ms): until
- *   session 82 the pass times were kept for the first 4 s only. */
+ *   session 82 the pass times were kept for the first 4 s only;
+ * - with two groups, one session's snapshot (palp_srv_ticker_with, the server's session_stats since
+ *   session 89) is taken while the other group's pass is stalled 300 ms, not after it: it locks its own
+ *   group alone (palp_srv_ticker_each waits for every group); none once the session is removed. */
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <time.h>
@@ -29,6 +32,7 @@ typedef struct stub {
   atomic_llong stall_ns;  /* the next step takes this long, once */
   atomic_int settling;    /* its settle is in progress */
   atomic_int other_steps; /* the other session's steps during the settle */
+  atomic_int stalling;    /* its stalled step is in progress */
 } stub;
 static stub stubs[2];
 
@@ -46,7 +50,11 @@ int64_t palp_srv_session_tick(palp_srv_session *s, int64_t now_ns) {
   s->stats.ticks++;
   atomic_fetch_add(&st->steps, 1);
   const long long stall = atomic_exchange(&st->stall_ns, 0);
-  if (stall > 0) nap_ns(stall);
+  if (stall > 0) {
+    atomic_store(&st->stalling, 1);
+    nap_ns(stall);
+    atomic_store(&st->stalling, 0);
+  }
   return 0;
 }
 
@@ -162,6 +170,29 @@ int main(void) {
         (unsigned long long)ts.steps, (unsigned long long)ts.lost_slots, (unsigned long long)ts.skipped_steps);
   palp_srv_ticker_remove(t, b);
   palp_srv_ticker_destroy(t);
+
+  /* Two groups at 200 Hz, a in the first and b in the second (each to the group with fewer). */
+  palp_srv_ticker *t2 = palp_srv_ticker_create_rates(2, &rate, 1, 4, 0, 0.2, &rt, &err);
+  if (!t2) {
+    fprintf(stderr, "FAIL ticker of two groups not created (%d)\n", err);
+    return 1;
+  }
+  CHECK(palp_srv_ticker_add(t2, a) == 0 && palp_srv_ticker_add(t2, b) == 0 && a->tick_group != b->tick_group,
+        "a and b in groups %d and %d", a->tick_group, b->tick_group);
+  nap_ns(50000000);
+  atomic_store(&stubs[1].stall_ns, 300000000);
+  for (int i = 0; i < 200 && !atomic_load(&stubs[1].stalling); i++) nap_ns(5000000);
+  const int b_stalled = atomic_load(&stubs[1].stalling);
+  counts c2 = {0};
+  const int with = palp_srv_ticker_with(t2, a, read_one, &c2);
+  const int still = atomic_load(&stubs[1].stalling);
+  CHECK(b_stalled && with == 1 && still && c2.ticks[0] > 0,
+        "a's snapshot taken while b's group is in a 300 ms pass (b stalling %d then %d, taken %d, a's steps %llu)",
+        b_stalled, still, with, (unsigned long long)c2.ticks[0]);
+  palp_srv_ticker_remove(t2, a);
+  CHECK(palp_srv_ticker_with(t2, a, read_one, &c2) == 0 && a->tick_group == 0, "none of a once removed");
+  palp_srv_ticker_remove(t2, b);
+  palp_srv_ticker_destroy(t2);
   free(a);
   free(b);
   fprintf(stderr, "%s\n", failures ? "FAILED" : "passed");
