@@ -30,6 +30,8 @@ typedef struct palp_srv_def {
   palp_log *log;                 /* may be NULL (stderr); must outlive the server */
   double identity_wait_s;        /* listen this long for servers already on the domain before
                                     announcing (identity.h); 0: announce at once */
+  uint32_t session_local_max;    /* local session ids run 1..this and wrap (0: 2^20 - 1, the wire's
+                                    PALP_DDS_ID_LOCAL_BITS); smaller only for tests of the wrap */
 } palp_srv_def;
 
 /* Loads every phantom's scene, creates the DDS participant (CYCLONEDDS_URI must
