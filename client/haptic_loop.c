@@ -341,12 +341,12 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
     if (c->was_on && on && dt > 0) c->energy += c->f_prev.x * (x.x - c->x_prev_pc.x) + c->f_prev.y * (x.y - c->x_prev_pc.y) +
                                                  c->f_prev.z * (x.z - c->x_prev_pc.z);
     const int pushing = (o.flags & PALP_HAPTIC_CONTACT) || len3(o.force) > 0;
+    const palp_vec3 v = dt > 0 ? v3scale(v3sub(x, c->x_prev_pc), 1.0 / dt) : (palp_vec3){0, 0, 0}; /* [m/s] */
     if (!pushing) c->energy = 0; /* free: nothing stored */
     /* The damper acts only on a force there is: in free space -a v would be a drag (or a pull)
      * the phantom never makes. */
     int damped = 0;
     if (on && c->was_on && dt > 0 && c->energy > 0 && pushing) {
-      const palp_vec3 v = v3scale(v3sub(x, c->x_prev_pc), 1.0 / dt);
       const double v2 = v.x * v.x + v.y * v.y + v.z * v.z;
       if (v2 > 1e-12) {
         double a = c->energy / (v2 * dt);
@@ -425,7 +425,6 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
      * guards a damper that adds force) does not apply. */
     if (on && c->was_on && dt > 0 && pushing) {
       palp_vec3 nc;
-      const palp_vec3 v = v3scale(v3sub(x, c->x_prev_pc), 1.0 / dt);
       if (palp_haptic_push_normal(&c->renderer, &nc)) {
         const double vn = v.x * nc.x + v.y * nc.y + v.z * nc.z;                /* [m/s] */
         const double fn = o.force.x * nc.x + o.force.y * nc.y + o.force.z * nc.z; /* [N] */
