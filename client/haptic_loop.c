@@ -386,11 +386,7 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
          * Cut only in contact (sessions 80-88), the hand leaving the surface was pulled in:
          * -1.11 N on a 2000 N/m plane with models 4 ms late (session 82's review #3). What
          * it cannot take out coming off, the cut below does: it lessens the push itself. */
-        palp_vec3 nc;
-        if (palp_haptic_push_normal(&c->renderer, &nc)) {
-          const double fn = o.force.x * nc.x + o.force.y * nc.y + o.force.z * nc.z;
-          if (fn < 0) o.force = v3sub(o.force, v3scale(nc, fn));
-        }
+        o.force = palp_haptic_no_pull(&c->renderer, o.force);
         /* The safe force bounds what reaches the hand, the damper included: pressing
          * in, -a v adds to the force, and with energy left by late or jittered models
          * it took a 0.15 N limit to 0.52 N (test haptic_session on a loaded machine;
@@ -433,7 +429,6 @@ int palp_cli_haptic_core_tick(palp_cli_haptic_core *c, int on, palp_vec3 x, doub
           const double cut = fmin(next / (vn * dt), fn);
           o.force = v3sub(o.force, v3scale(nc, cut));
           c->dissipated += cut * vn * dt;
-          c->cut_ticks++;
           if (!damped) c->pc_ticks++;
         }
       }

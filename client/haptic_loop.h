@@ -95,7 +95,6 @@ typedef struct palp_cli_haptic_core {
   double t_prev;
   double dissipated;      /* by the controller, total [J] */
   uint64_t pc_ticks;      /* ticks the controller acted (damped, lessened a push, or both) */
-  uint64_t cut_ticks;     /* ticks it lessened a push coming off (never past 0 N) */
 } palp_cli_haptic_core;
 
 /* hold_after 0: max(2 physics periods, 8 ms). The passivity controller is on

@@ -710,26 +710,14 @@ static palp_srv_phantom *find_phantom(palp_srv *srv, uint32_t id) {
 
 /* ---- session state ----------------------------------------------------------- */
 
-typedef struct stats_snapshot {
-  uint32_t id;
-  palp_srv_session_stats st;
-  int found;
-} stats_snapshot;
-
-static void snap_one(void *ctx, palp_srv_session *s) {
-  stats_snapshot *sn = ctx;
-  if (s->id == sn->id) {
-    sn->st = s->stats;
-    sn->found = 1;
-  }
-}
+static void snap_one(void *ctx, palp_srv_session *s) { *(palp_srv_session_stats *)ctx = s->stats; }
 
 /* Its own group's lock alone (until session 89 every group's, one after the other, for each batch of
  * findings: a flood of foreign findings in one session took the lock of every group's real-time tick). */
 static palp_srv_session_stats session_stats(palp_srv *srv, palp_srv_session *s) {
-  stats_snapshot sn = {.id = s->id};
-  palp_srv_ticker_with(srv->ticker, s, snap_one, &sn);
-  return sn.found ? sn.st : s->stats; /* detached: the tick thread no longer writes it */
+  palp_srv_session_stats st;
+  if (palp_srv_ticker_with(srv->ticker, s, snap_one, &st)) return st;
+  return s->stats; /* detached: the tick thread no longer writes it */
 }
 
 static void member_counts(const palp_srv *srv, uint32_t sid, uint32_t *visual, uint32_t *observer) {

@@ -149,6 +149,11 @@ static palp_vec3 no_pull(palp_vec3 f, palp_vec3 n) {
   return fn < 0.0 ? v3_sub(f, v3_scale(n, fn)) : f; /* NaN passes through to the clamp, which zeroes it */
 }
 
+palp_vec3 palp_haptic_no_pull(const palp_haptic *h, palp_vec3 f) {
+  palp_vec3 n;
+  return push_normal(h, &n) ? no_pull(f, n) : f;
+}
+
 /* The models' force before damping and fade: the newest model, limited to max_force before
  * it is scaled by the onset gain (a 40 N model against a 10 N limit contributes 10 N, so an
  * onset or a fade of it moves the rendered force over its whole length rather than holding

@@ -101,6 +101,9 @@ double palp_haptic_stale_scale(const palp_haptic *h, double now);
  * normal, or else the last in-contact model's while an offset of it may still decay.
  * Returns 0 (n untouched) if there is none: before any model in contact. */
 int palp_haptic_push_normal(const palp_haptic *h, palp_vec3 *n);
+/* f without its component into the surface along that normal (unchanged if there is none): a
+ * surface pushes, never pulls. */
+palp_vec3 palp_haptic_no_pull(const palp_haptic *h, palp_vec3 f);
 /* f limited to a magnitude of max_force [N] (sets PALP_HAPTIC_LIMITED in *flags, if not
  * NULL, when it acted); a non-finite f gives 0 N, flagged. */
 palp_vec3 palp_haptic_clamp(palp_vec3 f, double max_force, unsigned *flags);
