@@ -257,6 +257,7 @@ typedef struct session_end {
   int cov_rule;
   int cov_touched; /* from the server's finger samples (session 71): the review's footprint */
   double duration;
+  dds_instance_handle_t server_pp; /* the participant that wrote its states (0: not known) */
 } session_end;
 
 typedef struct debrief_item {
@@ -350,6 +351,7 @@ struct palp_web_hub {
   struct {
     uint32_t sid; /* 0: free */
     char trainee[64];
+    dds_instance_handle_t server_pp; /* the participant that wrote it (0: not known) */
   } closed_names[CLOSED_NAMES];
   int closed_names_next;
   /* the session open/close lines of the last SESSION_LINES_WINDOW_NS (session_line_ok): a flood of made-up
@@ -360,6 +362,7 @@ struct palp_web_hub {
    * alone, the server decides), each for its session's bound page */
   item told_scores[DEBRIEFS];
   uint32_t told_scores_sid[DEBRIEFS];
+  char told_scores_trainee[DEBRIEFS][64]; /* whose session it was, as trainee_of_session found it ("": not known) */
   int told_scores_next;
   /* palp_session_log (session 69): the newest own-loss counts per session, kept so that one read
    * before its session's state is applied once the session is known (on_status) */
@@ -1246,7 +1249,7 @@ static void keep_ended_answers(palp_web_hub *h, int slot) {
 /* The session's figures for its debrief (session_end); the trainee's name under h->mu. */
 static void session_end_of(palp_web_hub *h, int slot, session_end *e) {
   const session *s = &h->s[slot];
-  *e = (session_end){.sid = s->id, .phantom = s->st.phantom_id, .duration = s->st.duration};
+  *e = (session_end){.sid = s->id, .phantom = s->st.phantom_id, .duration = s->st.duration, .server_pp = s->server_pp};
   if (s->cov) {
     e->cov_rule = s->exercise_bands ? 2 : 1;
     e->cov_touched = s->samples && s->touched;
@@ -1295,6 +1298,7 @@ static void free_session(palp_web_hub *h, int slot) {
   h->closed[h->closed_next] = end;
   h->closed_next = (h->closed_next + 1) % DEBRIEFS;
   h->slot_sid[slot] = 0;
+  h->slot_trainee[slot][0] = '\0';
   pthread_mutex_unlock(&h->mu);
   palp_dds_gate_set(&h->gate, slot, 0);
   h->sessions_dirty = h->sessions_structure = 1;
@@ -1351,8 +1355,13 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
     else
       snprintf(s->station, sizeof s->station, "%.24s/%ld/web-s%u", h->host, (long)getpid(), m->session_id);
     s->fps_t0 = palp_dds_now_ns();
+    /* its id and its trainee under one lock: between the two, a page's scope was checked against the
+     * slot's previous trainee, and alice's page could bind to bob's new session until the next rescope
+     * (<= 100 ms; until session 90, found by review) */
     pthread_mutex_lock(&h->mu);
     h->slot_sid[slot] = s->id;
+    snprintf(h->slot_trainee[slot], sizeof h->slot_trainee[slot], "%.*s", (int)sizeof h->slot_trainee[slot] - 1,
+             m->trainee_name);
     pthread_mutex_unlock(&h->mu);
     palp_dds_gate_set(&h->gate, slot, s->id);
     h->sessions_structure = 1;
@@ -1390,6 +1399,26 @@ static void on_state(palp_web_hub *h, const palp_SessionState *m) {
 
 static void copy_str(char *out, size_t outlen, const char *in) { snprintf(out, outlen, "%s", in ? in : ""); }
 
+/* [DDS thread] Whose session sid was, for a score written by participant pp (0: not known): the open
+ * session's trainee, or a closed one's as the bridge saw it close, or as its server said it
+ * (palp_session_closed, session 69, for a session this bridge did not see close); NULL if none is
+ * known. A session id is its server run's alone: a restarted server numbers its sessions from 1, so a
+ * name is taken only from the same server participant as the score's where both are known. Until
+ * session 90 the first name kept under the id was taken: a restarted run's session 5, which the bridge
+ * did not see open, had its score named, and told to the page still bound to the old run's session 5,
+ * as that one's trainee's (found by review). */
+static int same_server(dds_instance_handle_t a, dds_instance_handle_t b) { return !a || !b || a == b; }
+static const char *trainee_of_session(palp_web_hub *h, uint32_t sid, dds_instance_handle_t pp) {
+  int slot;
+  const session *s = find_session(h, sid, &slot);
+  if (s && same_server(s->server_pp, pp)) return s->st.trainee_name;
+  for (int k = 0; k < DEBRIEFS; k++)
+    if (h->closed[k].sid == sid && same_server(h->closed[k].server_pp, pp)) return h->closed[k].trainee;
+  for (int k = 0; k < CLOSED_NAMES; k++)
+    if (h->closed_names[k].sid == sid && same_server(h->closed_names[k].server_pp, pp)) return h->closed_names[k].trainee;
+  return NULL;
+}
+
 /* A closed exercise session's score as the pages get it ("score", docs/web.md): malloc'd JSON, or
  * NULL when m does not make sense (refused and counted) or memory ran out (counted). */
 static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
@@ -1401,11 +1430,7 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
   cJSON *j = cJSON_CreateObject();
   cJSON_AddStringToObject(j, "type", "score");
   cJSON_AddNumberToObject(j, "session", m->session_id);
-  const char *trainee = NULL;
-  for (int k = 0; k < DEBRIEFS && !trainee; k++)
-    if (h->closed[k].sid == m->session_id) trainee = h->closed[k].trainee;
-  for (int k = 0; k < CLOSED_NAMES && !trainee; k++) /* a session this bridge did not see close (session 69) */
-    if (h->closed_names[k].sid == m->session_id) trainee = h->closed_names[k].trainee;
+  const char *trainee = trainee_of_session(h, m->session_id, h->sample_participant);
   if (trainee) cJSON_AddStringToObject(j, "trainee", trainee);
   else cJSON_AddNullToObject(j, "trainee");
   copy_str(text, sizeof text, m->exercise_name);
@@ -1453,9 +1478,10 @@ static char *score_json(palp_web_hub *h, const palp_SessionScore *m) {
   return out;
 }
 
-/* Keeps msg in ring[*next] (the oldest replaced; sid beside it when sids is not NULL) and wakes the
- * web thread. */
-static void keep_score(palp_web_hub *h, char *msg, item *ring, uint32_t *sids, int *next, uint32_t sid) {
+/* Keeps msg in ring[*next] (the oldest replaced; sid beside it when sids is not NULL, and its trainee
+ * when names is not NULL) and wakes the web thread. */
+static void keep_score(palp_web_hub *h, char *msg, item *ring, uint32_t *sids, char (*names)[64], int *next,
+                       uint32_t sid, const char *trainee) {
   if (!msg) return;
   pthread_mutex_lock(&h->mu);
   const int k = *next;
@@ -1463,6 +1489,7 @@ static void keep_score(palp_web_hub *h, char *msg, item *ring, uint32_t *sids, i
   unsigned char *old = ring[k].buf;
   ring[k] = (item){.buf = (unsigned char *)msg, .len = strlen(msg), .ver = ++h->next_ver};
   if (sids) sids[k] = sid;
+  if (names) copy_str(names[k], sizeof names[k], trainee);
   pthread_mutex_unlock(&h->mu);
   free(old);
   if (h->wake) h->wake(h->wake_ctx);
@@ -1472,7 +1499,7 @@ static void keep_score(palp_web_hub *h, char *msg, item *ring, uint32_t *sids, i
  * session 63): kept beside the ended answers for the dashboard's list of ended sessions, where the
  * instructor reads it with the session's id in the log (palp-review show takes it). */
 static void on_score(palp_web_hub *h, const palp_SessionScore *m) {
-  keep_score(h, score_json(h, m), h->scores, h->scores_sid, &h->scores_next, m->session_id);
+  keep_score(h, score_json(h, m), h->scores, h->scores_sid, NULL, &h->scores_next, m->session_id, NULL);
 }
 
 /* Who a closed session was (palp_session_closed, session 69): kept for the scores to come, and given
@@ -1491,6 +1518,7 @@ static void on_session_closed(palp_web_hub *h, const palp_SessionClosed *m) {
     h->closed_names_next = (h->closed_names_next + 1) % CLOSED_NAMES;
   }
   h->closed_names[k].sid = m->session_id;
+  h->closed_names[k].server_pp = h->sample_participant;
   copy_str(h->closed_names[k].trainee, sizeof h->closed_names[k].trainee, m->trainee_name);
   for (int i = 0; i < DEBRIEFS; i++) {
     if (h->scores_sid[i] != m->session_id || !h->scores[i].buf) continue;
@@ -1518,7 +1546,8 @@ static void on_session_closed(palp_web_hub *h, const palp_SessionClosed *m) {
  * only for a practice session, after a debrief that told her the lesions: for her bound page. The
  * server decides who is told, in either security mode; the bridge relays it to her session's page. */
 static void on_debrief_score(palp_web_hub *h, const palp_SessionScore *m) {
-  keep_score(h, score_json(h, m), h->told_scores, h->told_scores_sid, &h->told_scores_next, m->session_id);
+  keep_score(h, score_json(h, m), h->told_scores, h->told_scores_sid, h->told_scores_trainee, &h->told_scores_next,
+             m->session_id, trainee_of_session(h, m->session_id, h->sample_participant));
 }
 
 static void on_exercise(palp_web_hub *h, const palp_Exercise *m) {
@@ -2221,9 +2250,10 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
         sw->strays++, h->stats.stream_strays++;
       if (check && !from_its_partition(h, rd, ptr[i], &info[i])) continue; /* data and disposes alike */
       if (server_topic && info[i].valid_data && !from_its_server(h, rd, ptr[i], &info[i])) continue;
-      h->sample_participant = rd == h->state_r && info[i].valid_data
-                                  ? palp_dds_origin_participant(&h->origin, rd, &info[i])
-                                  : 0;
+      /* the states' writer (on_state), and the closed sessions' and scores' (trainee_of_session): rare
+       * topics, one discovery lookup a sample */
+      const int whose = rd == h->state_r || rd == h->closed_r || rd == h->score_r || rd == h->debrief_score_r;
+      h->sample_participant = whose && info[i].valid_data ? palp_dds_origin_participant(&h->origin, rd, &info[i]) : 0;
       /* a dispose of a key whose session the gate would not pass (never heard open, so not a station
        * that leaves a session that just closed); Cyclone fills an invalid sample's key */
       if (!info[i].valid_data && rd == h->finding_r && info[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED &&
@@ -3003,12 +3033,11 @@ static int take(const item *it, size_t pre, unsigned char **buf, size_t *len) {
   return 1;
 }
 
-/* The oldest message of a ring that is newer than ver (a page's cursor into it), or NULL; with sids,
- * only one kept for session sid. */
-static const item *oldest_after(const item *ring, const uint32_t *sids, uint32_t sid, int n, uint64_t ver) {
+/* The oldest message of a ring that is newer than ver (a page's cursor into it), or NULL. */
+static const item *oldest_after(const item *ring, int n, uint64_t ver) {
   const item *pick = NULL;
   for (int k = 0; k < n; k++)
-    if (ring[k].buf && ring[k].ver > ver && (!sids || sids[k] == sid) && (!pick || ring[k].ver < pick->ver))
+    if (ring[k].buf && ring[k].ver > ver && (!pick || ring[k].ver < pick->ver))
       pick = &ring[k];
   return pick;
 }
@@ -3097,10 +3126,17 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       if (rc > 0) c->debrief_ver = pick->msg.ver;
       goto out;
     }
-    /* a page's own trainee session's score, where the server told her it (on_debrief_score) */
-    const item *mine = c->trainee ? oldest_after(h->told_scores, h->told_scores_sid, c->trainee, DEBRIEFS,
-                                                 c->scores_ver)
-                                  : NULL;
+    /* a page's own trainee session's score, where the server told her it (on_debrief_score); to a
+     * trainee's page (scoped) only when it was hers, as its debrief (her page may still be bound to
+     * a closed session whose id a restarted server gave another trainee: trainee_of_session) */
+    const item *mine = NULL;
+    for (int k = 0; k < DEBRIEFS && c->trainee; k++) {
+      const item *it = &h->told_scores[k];
+      if (!it->buf || it->ver <= c->scores_ver || h->told_scores_sid[k] != c->trainee || (mine && it->ver >= mine->ver))
+        continue;
+      if (c->scope[0] && strcmp(c->scope, h->told_scores_trainee[k]) != 0) continue;
+      mine = it;
+    }
     if (mine) {
       rc = take(mine, pre, buf, len);
       if (rc > 0) c->scores_ver = mine->ver;
@@ -3114,7 +3150,7 @@ int palp_web_hub_next(palp_web_hub *h, palp_web_cursor *c, size_t pre, unsigned 
       uint64_t *ver;
     } const kept[] = {{h->ended_answers, &c->ended_answers_ver}, {h->scores, &c->scores_ver}};
     for (size_t r = 0; r < sizeof kept / sizeof kept[0] && replay && h->def.answers; r++) {
-      const item *next = oldest_after(kept[r].ring, NULL, 0, DEBRIEFS, *kept[r].ver);
+      const item *next = oldest_after(kept[r].ring, DEBRIEFS, *kept[r].ver);
       if (!next) continue;
       rc = take(next, pre, buf, len);
       if (rc > 0) *kept[r].ver = next->ver;

@@ -344,6 +344,8 @@ static int hub_reached(palp_web_hub *h, size_t off, uint64_t target) {
 static int hub_took(palp_web_hub *h, size_t off, uint64_t before) { return hub_reached(h, off, before + 1); }
 
 #define STATES offsetof(palp_web_hub_stats, states)
+#define TOLD_SCORES offsetof(palp_web_hub_stats, told_scores)
+#define DROPPED offsetof(palp_web_hub_stats, dropped)
 
 /* A mark from the bound trainee page once the hub has caught up: a refusal that says only that the hub has
  * not yet taken what the test wrote (the exercise, its findings writer's match with the server's reader, the
@@ -2348,6 +2350,74 @@ static void test_review_80(void) {
   dds_delete(pp);
 }
 
+/* ---- session 90's review ---- */
+
+/* Domain 221: a trainee's page is told only her own score. alice's scoped page bound to her session 4740,
+ * which closed; a restarted server (another participant) numbers its sessions from 1 and its session
+ * 4740 is bob's, whose open this bridge never saw (its slots full, or OPEN and CLOSED read at once). The
+ * server tells bob his score: it must not reach alice's page, still bound to 4740 (until session 90 it
+ * did, named as nothing or as hers: the told scores were matched by session id alone). Her own server's
+ * told score for her 4740 does reach it, once, named hers. */
+static void test_told_score_reused_id(void) {
+  palp_web_hub *h = started_hub(221, 0);
+  if (!h) return;
+  const dds_entity_t pp = dds_create_participant(221, NULL, NULL), pp2 = dds_create_participant(221, NULL, NULL);
+  const dds_entity_t w_state =
+      palp_dds_create_writer(pp, palp_dds_create_topic(pp, PALP_TOPIC_SESSION_STATE), PALP_TOPIC_SESSION_STATE);
+  const uint32_t sid = 4740;
+  char part[64], ctl[64];
+  palp_dds_session_partition(sid, part, sizeof part);
+  const dds_entity_t w_told = palp_dds_create_writer(palp_dds_session_publisher(pp, part),
+                                                     palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF_SCORE),
+                                                     PALP_TOPIC_DEBRIEF_SCORE);
+  const dds_entity_t w_told2 = palp_dds_create_writer(palp_dds_session_publisher(pp2, part),
+                                                      palp_dds_create_topic(pp2, PALP_TOPIC_DEBRIEF_SCORE),
+                                                      PALP_TOPIC_DEBRIEF_SCORE);
+  CHECK(w_state > 0 && w_told > 0 && w_told2 > 0, "told scores: DDS entities");
+  palp_web_cursor alice;
+  CHECK(palp_web_hub_attach(h, &alice, 8) == 0, "told scores: alice's page");
+  palp_web_hub_scope(h, &alice, "alice");
+  const uint64_t states0 = hub_count(h, STATES);
+  write_open_state(w_state, sid, 1, part, "alice");
+  dds_sleepfor(DDS_MSECS(400));
+  CHECK(hub_reached(h, STATES, states0 + 1), "the hub took alice's session's state within 5 s");
+  snprintf(ctl, sizeof ctl, "{\"trainee\":%u}", sid);
+  CHECK(palp_web_hub_control(h, &alice, ctl, strlen(ctl)) == 0, "alice's page binds to her session %u", sid);
+  palp_SessionState closed = open_state(sid, 1, part, "alice");
+  closed.phase = palp_PHASE_CLOSED;
+  dds_write(w_state, &closed);
+  CHECK(hub_reached(h, STATES, states0 + 2), "the hub took her session's close within 5 s");
+  dds_sleepfor(DDS_MSECS(300)); /* the told-score writers matched */
+
+  palp_SessionScore m;
+  score_sample(&m, sid, palp_SCORE_GRADED);
+  snprintf(m.pattern, sizeof m.pattern, "unsystematic");
+  m.score = 77.7, m.pass = 1;
+  const uint64_t told0 = hub_count(h, TOLD_SCORES), dropped0 = hub_count(h, DROPPED);
+  CHECK(dds_write(w_told2, &m) == 0, "the new run's server tells bob his score for its session %u", sid);
+  CHECK(hub_reached(h, TOLD_SCORES, told0 + 1), "the hub took it within 5 s");
+  scores_seen bob = {0};
+  next_json(h, &alice, 40, is_score, &bob);
+  CHECK(bob.n == 0, "alice's page, bound to her closed session %u, is sent no score of the new run's (%d)", sid,
+        bob.n);
+  m.score = 42.5, m.pass = 0;
+  CHECK(dds_write(w_told, &m) == 0, "her own server tells alice her score for session %u", sid);
+  CHECK(hub_reached(h, TOLD_SCORES, told0 + 2), "the hub took it within 5 s");
+  CHECK(hub_count(h, DROPPED) == dropped0, "neither score refused as malformed (%llu dropped)",
+        (unsigned long long)(hub_count(h, DROPPED) - dropped0));
+  scores_seen hers = {0};
+  next_json(h, &alice, 40, is_score, &hers);
+  const char *who = hers.n == 1 ? cJSON_GetStringValue(cJSON_GetObjectItem(hers.msg[0], "trainee")) : NULL;
+  CHECK(hers.n == 1 && fabs(cJSON_GetNumberValue(cJSON_GetObjectItem(hers.msg[0], "score")) - 42.5) < 1e-9 && who &&
+            !strcmp(who, "alice"),
+        "her page is sent hers, once, 42.5, named \"%s\" (%d score messages)", who ? who : "(none)", hers.n);
+  scores_free(&bob), scores_free(&hers);
+  palp_web_hub_detach(h, &alice);
+  palp_web_hub_destroy(h);
+  dds_delete(pp2);
+  dds_delete(pp);
+}
+
 /* ---- a class closing at once (2026-12-07) ---- */
 
 /* The child of test_close_stalled (this program run again, --request-reader DOMAIN): a reliable reader of
@@ -2567,6 +2637,7 @@ int main(int argc, char **argv) {
   test_not_server();
   test_utf8();
   test_review_80();
+  test_told_score_reused_id();
   test_close_stalled(argv[0]);
   test_rejoin();
   printf("%d checks, %d failures\n", checks, failures);
