@@ -159,6 +159,10 @@ static struct timespec ts_of(int64_t ns) {
   return (struct timespec){.tv_sec = (time_t)(ns / 1000000000), .tv_nsec = (long)(ns % 1000000000)};
 }
 
+int palp_cli_haptic_can_mark(unsigned flags) {
+  return (flags & PALP_HAPTIC_CONTACT) && !(flags & PALP_HAPTIC_STALE);
+}
+
 int palp_cli_outbox_admits(unsigned queued, int release) {
   /* The last PALP_CLI_RELEASE_SAMPLES slots are the lift's: position samples stop short of them.
    * Until 2026-12-07 nothing kept them, and a sender thread stalled for 64 samples' worth (256 ms
@@ -587,7 +591,7 @@ static void *haptic_main(void *arg) {
                                      .depth = (o.flags & PALP_HAPTIC_CONTACT) ? l->core.renderer.cur.depth : 0,
                                      .flags = o.flags, .on = on,
                                      .point = l->core.renderer.cur.point,
-                                     .model_contact = l->core.renderer.cur.contact,
+                                     .model_contact = palp_cli_haptic_can_mark(o.flags),
                                      .model_time = l->core.renderer.cur.time,
                                      .out_of_range_ticks = st->out_of_range_ticks,
                                      .beyond_validated_ticks = st->beyond_validated_ticks,

@@ -206,7 +206,7 @@ typedef struct palp_cli_haptic_view {
   palp_vec3 xr;  /* the renderer's device point: x minus the motion made while the force was held */
   /* issue 13: the server's newest local model, for a "lump here" mark at its contact point */
   palp_vec3 point;      /* LocalModel.point [m] */
-  int model_contact;    /* LocalModel.in_contact */
+  int model_contact;    /* a mark may be taken at point (palp_cli_haptic_can_mark) */
   double model_time;    /* LocalModel.time: world time of the step [s] */
   double requested, depth;
   unsigned flags;
@@ -222,6 +222,12 @@ typedef struct palp_cli_haptic_view {
 /* 1 if a sample may be queued with `queued` samples already waiting: a release while the ring
  * has room, a position sample only while room for a whole lift stays after it. */
 int palp_cli_outbox_admits(unsigned queued, int release);
+/* Whether a "lump here" mark may be taken at the renderer's current model, given the tick's flags
+ * (palp_haptic_out): in contact and pushing (PALP_HAPTIC_CONTACT), and the model fresh. A model past
+ * stale_time (a server gone quiet) still fades on the hand for fade_time, its contact point where the
+ * finger was; until session 90 a mark was sent there, with its time, and graded where she no longer was
+ * (found by review). A new press (palp_haptic_forget) has no model until the server's first. */
+int palp_cli_haptic_can_mark(unsigned flags);
 
 typedef struct palp_cli_haptic_loop {
   palp_cli_haptic_def def;

@@ -825,7 +825,11 @@ static void findings_ui_tick(findings_ui *u, const opts *o, palp_cli_station *st
   if (button == PALP_CLI_BUTTON_MARK) {
     /* Refused here, not sent: a mark needs a contact point, which exists only while
      * the fingertip touches the phantom. */
-    if (!v->on || !v->model_contact)
+    if (v->on && (v->flags & PALP_HAPTIC_CONTACT) && !v->model_contact)
+      tprintf(o, "[trainee %s] mark refused here: the server has sent no contact model for over %.2f s, so where "
+                 "the fingertip touches is not known (its force fades out); mark again once the force is back\n",
+              o->name, palp_haptic_default_def().stale_time);
+    else if (!v->on || !v->model_contact)
       tprintf(o, "[trainee %s] mark refused here: the fingertip is not touching the phantom\n", o->name);
     else if (u->nsent >= UI_MARKS)
       tprintf(o, "[trainee %s] mark refused here: %d marks standing\n", o->name, u->nsent);

@@ -830,6 +830,48 @@ static void test_stiffness_limit(void) {
   CHECK(r1 == 0 && dev < 1e-9, "a rank-1 K: not flagged, changed by %.1e N/m at most (round-off)", dev);
 }
 
+/* 15. Where a mark may be taken (session 90's review): a pressing model every 4 ms to 100 ms, then a
+ * server gone quiet. By hand: stale from 100 + 250 = 350 ms, faded to 0 N at 450 ms. At 200 ms (fresh,
+ * 2 N) a mark is allowed; at 400 ms the hand still feels half the force (1 N, contact) but its point is
+ * 300 ms old: no mark (before: allowed, at the old point); at 460 ms, faded, no contact and no mark.
+ * After a new press (palp_haptic_forget) there is no model, so no mark until the server's next. */
+static void test_can_mark(void) {
+  palp_haptic_def def = palp_haptic_default_def(); /* stale 0.25 s, fade 0.1 s */
+  def.damping = 0;
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  const palp_vec3 x = {0, 0, 0.03};
+  palp_haptic_out o;
+  int at200 = -1, at400 = -1, at460 = -1;
+  unsigned f400 = 0;
+  double force400 = -1;
+  for (int k = 0; k <= 460; ++k) {
+    const double t = k * TICK;
+    if (k % 4 == 0 && k <= 100) {
+      palp_local_model m = contact_model(1.0 + t, 0.03, 2.0, 500);
+      palp_haptic_update(&h, &m, t);
+    }
+    palp_haptic_render(&h, x, t, &o);
+    if (k == 200) at200 = palp_cli_haptic_can_mark(o.flags);
+    if (k == 400) at400 = palp_cli_haptic_can_mark(o.flags), f400 = o.flags, force400 = len(o.force);
+    if (k == 460) at460 = palp_cli_haptic_can_mark(o.flags);
+  }
+  CHECK(at200 == 1, "marks: a fresh pressing model at 200 ms allows a mark (%d)", at200);
+  CHECK((f400 & PALP_HAPTIC_CONTACT) && fabs(force400 - 1.0) < 1e-9 && at400 == 0,
+        "  300 ms after its last model the hand still feels %.6f N (1 N: half faded), in contact, but no mark (%d)",
+        force400, at400);
+  CHECK(at460 == 0, "  faded out at 460 ms: no mark (%d)", at460);
+  palp_local_model m = contact_model(2.0, 0.03, 2.0, 500);
+  palp_haptic_update(&h, &m, 0.5);
+  palp_haptic_render(&h, x, 0.501, &o);
+  const int fresh = palp_cli_haptic_can_mark(o.flags);
+  palp_haptic_forget(&h);
+  palp_haptic_render(&h, x, 0.502, &o);
+  CHECK(fresh == 1 && palp_cli_haptic_can_mark(o.flags) == 0,
+        "  the server back: a mark allowed (%d); a new press before its first model: none (%d)", fresh,
+        palp_cli_haptic_can_mark(o.flags));
+}
+
 int main(void) {
   test_fade_above_limit(40);
   test_fade_above_limit(1e4);
@@ -867,5 +909,6 @@ int main(void) {
   test_tap(0, 0.040);
   test_sym3_eig();
   test_stiffness_limit();
+  test_can_mark();
   return check_exit();
 }
