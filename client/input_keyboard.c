@@ -6,6 +6,8 @@
  * mode, ESC O A..D. The terminal is restored on close (and by palp-client on
  * SIGQUIT, SIGHUP, a crash or exit, which never reach close: client/main.c, guard_tty). */
 #include <math.h>
+#include <poll.h>
+#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,7 +46,21 @@ static const char *key_place(const keyboard *k, char *buf, size_t len) {
  * arrow's bytes in one write, and a person's next key comes later. */
 #define KEY_ESC_TIMEOUT 0.05
 
-/* The terminal in raw mode (no line buffering, no echo) for single keys; restored by close. */
+/* The status line, written from the haptic thread (the finger's) or the contact loop: only when stderr
+ * can take it now, else skipped until the next (every 0.5 s). A terminal whose output is stopped, or
+ * stderr piped to a slow reader, blocked fprintf, and with it the 1 kHz loop: no ticks, no contact
+ * samples, the server holding her last point (session 90's review). */
+static void status_line(const char *fmt, ...) {
+  struct pollfd p = {.fd = STDERR_FILENO, .events = POLLOUT};
+  if (poll(&p, 1, 0) != 1 || !(p.revents & POLLOUT)) return;
+  va_list ap;
+  va_start(ap, fmt);
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+}
+
+/* The terminal in raw mode (no line buffering, no echo, no XON/XOFF: Ctrl-S stops no output) for
+ * single keys; restored by close. */
 static int k_raw(keyboard *k, double R) {
   k->R = R;
   k->erase = isatty(STDERR_FILENO) ? "\033[K" : "   ";
@@ -52,6 +68,7 @@ static int k_raw(keyboard *k, double R) {
   if (tcgetattr(STDIN_FILENO, &k->saved) != 0) return PALP_EIO;
   t = k->saved;
   t.c_lflag &= ~(tcflag_t)(ICANON | ECHO);
+  t.c_iflag &= ~(tcflag_t)IXON; /* Ctrl-S would stop the terminal's output, and a status write with it */
   t.c_cc[VMIN] = 0;
   t.c_cc[VTIME] = 0;
   if (tcsetattr(STDIN_FILENO, TCSANOW, &t) != 0) return PALP_EIO;
@@ -137,7 +154,7 @@ static int k_poll(void *ctx, double t, palp_cli_cmd *cmd, int cap) {
   if (t - k->last_status >= 0.5) {
     /* the distribution in its one name (I-IV and its keyword; "dist 3" until session 83) */
     char at[64];
-    fprintf(stderr, "\rkeyboard: %s %s, distribution %s, %.2f N%s%s", k->pressed ? "PRESS" : "lift ",
+    status_line("\rkeyboard: %s %s, distribution %s, %.2f N%s%s", k->pressed ? "PRESS" : "lift ",
             key_place(k, at, sizeof at), palp_cli_dist_name(k->distribution), k->force,
             k->force >= k->max_force ? " MAX" : "", k->erase);
     k->last_status = t;
@@ -288,7 +305,7 @@ static void kf_write(void *ctx, palp_vec3 force, unsigned flags) {
       }
     }
     char at[64];
-    fprintf(stderr, "\rkeyboard: %s %s, device %+.3g mm (step %g mm)%s: force %.2f N%s%s%s",
+    status_line("\rkeyboard: %s %s, device %+.3g mm (step %g mm)%s: force %.2f N%s%s%s",
             f->lifted ? "lifted" : "finger", key_place(&f->k, at, sizeof at), f->depth * 1e3, f->step * 1e3, tip, m,
             (flags & PALP_CLI_FORCE_LIMITED) ? " LIMITED" : "",
             (flags & PALP_CLI_FORCE_OUT_OF_RANGE) ? " OUTSIDE VALID RANGE" : "", f->k.erase);

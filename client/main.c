@@ -1251,8 +1251,18 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
     if (limited && v.requested > episode_peak) episode_peak = v.requested;
     const int lim = palp_cli_episode_update(&lim_ep, v.t, limited);
     if (lim == PALP_CLI_EPISODE_BEGAN && !o->quiet) {
-      tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N; your "
-                 "device gets %.1f N\n", o->name, v.model_time, fm, fm);
+      /* which limit acted: the safe force, or (asking no more than it) the stiffness this station renders
+       * (palp_haptic.h). Until session 90 both figures were the rendered force: a stiffness-limited press
+       * at 0.4 N read "harder than the safe 0.4 N" with a safe force of 10 N (found by review). */
+      const palp_haptic_def *rd = &hl->core.renderer.def;
+      if (v.requested > rd->max_force)
+        tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom pushes back harder than the safe %.1f N (it "
+                   "asks %.2f N); your device gets %.1f N\n", o->name, v.model_time, rd->max_force, v.requested, fm);
+      else
+        tprintf(o, "[trainee %s] t=%6.2f s  FORCE LIMITED: the phantom is stiffer here than this station's safe "
+                   "%.0f N/m (or would push the hand on); your device gets %.2f N, rendered softer\n", o->name,
+                   v.model_time, rd->max_stiffness,
+                   fm);
       fflush(stdout);
     }
     if (lim == PALP_CLI_EPISODE_OVER && !o->quiet) {
@@ -1359,9 +1369,13 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                (double)(hs.floor_ticks + hs.floor_missed) / d.rate_hz, d.late_threshold * 1e3, (unsigned long long)hs.floor_late_ticks,
                (unsigned long long)hs.floor_ticks, 100.0 * (double)hs.floor_late_ticks / (double)hs.floor_ticks,
                hs.floor_late_max * 1e3);
-  if (hs.limited_ticks)
+  if (hs.limited_ticks && hs.peak_requested > hs.max_force)
     tprintf(o, "[trainee %s] FORCE LIMITED for %.3f s: the phantom asked up to %.2f N, the device got at most %.2f N\n",
                o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested, hs.max_force);
+  else if (hs.limited_ticks) /* the stiffness alone (below): never more than the safe force asked */
+    tprintf(o, "[trainee %s] FORCE LIMITED for %.3f s by the stiffness alone: the phantom asked up to %.2f N, under "
+               "the safe %.2f N, rendered softer\n", o->name, (double)hs.limited_ticks / d.rate_hz, hs.peak_requested,
+               hs.max_force);
   if (hs.stiffness_limited_models)
     tprintf(o, "[trainee %s] STIFFNESS LIMITED: %llu model(s) asked a stiffness above this station's %.0f N/m or one "
                "that would push the hand on; rendered limited (their seconds in contact are among the limited ones)\n",

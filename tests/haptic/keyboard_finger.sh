@@ -29,7 +29,10 @@ spid=$!
 # on a loaded machine the station may join seconds late, and keys typed before it reads them
 # would arrive as one burst, skipping the depths checked below), then lets the force settle.
 . "$(dirname "$0")/../wait_for.sh"
-(wait_for "$tmp/client.log" "haptic thread at"; sleep 0.5; printf '+++++++'
+# Ctrl-S first: the terminal's XON/XOFF is off in the station's raw mode, so it is a key like any other
+# (ignored), not a stop of the terminal's output that blocked the status line's write in the haptic
+# thread, and the whole loop with it (until session 90: nothing more came, the presses below not shown).
+(wait_for "$tmp/client.log" "haptic thread at"; sleep 0.5; printf '\023+++++++'
  wait_for "$tmp/client.log" "device +5 mm (step 1 mm), fingertip"; sleep 1.5; printf '+++++'
  wait_for "$tmp/client.log" "device +10 mm (step 1 mm), fingertip"; sleep 1.5; printf '[[----'
  wait_for "$tmp/client.log" "device +9 mm (step 0.25 mm), fingertip"; sleep 1.5; printf ']]]+++++++'
@@ -72,7 +75,9 @@ vmax=$(awk -F, 'NR > 2 && $1 - t >= 0.0005 { d = sqrt(($4 - x) ^ 2 + ($5 - y) ^ 
                 NR > 1 { t = $1; x = $4; y = $5; z = $6 } END { printf "%.4f", m }' "$tmp/trace.csv" 2>/dev/null)
 [ -n "$vmax" ] || vmax=-1
 # one press held at the 10 N safe force (23 mm): one announcement, however the force wavers at the limit
-limited=$(grep -c "FORCE LIMITED: the phantom pushes back harder" "$tmp/lines")
+# with its figures: the safe force, what the phantom asked, what the device got (until session 90 the
+# line gave the rendered force for the first and had no second)
+limited=$(grep -c "FORCE LIMITED: the phantom pushes back harder than the safe 10.0 N (it asks [0-9.]* N); your device gets 10.0 N" "$tmp/lines")
 # the 250 Hz session's log holds every 3rd step's frame (server/db_log.c: ~100 Hz): show says both rates
 stride=$(grep -c "^duration .*([0-9]* frames logged, one every 3 physics steps (83.3 Hz) of 250 Hz, dt 0.004 s)$" "$tmp/show.txt")
 # The log counts simulated steps and the station its wall-clock ticks: a loaded server that drops tick
