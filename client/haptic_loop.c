@@ -524,18 +524,23 @@ static void *haptic_main(void *arg) {
     uint32_t sflags = 0;
     double smax = 0, age = -1;
     const int got = palp_cli_mailbox_take(&l->mailbox, &mb_seq, &m, &sflags, &smax, &age);
-    if (got) {
-      model_flags = sflags;
-      if (d->in->model) d->in->model(d->in->ctx, &m);
-      if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
-      if (sflags & PALP_DDS_LM_OUTSIDE) st->out_of_range_models++;
-      /* The safe force is the station's and the phantom's (palp_cli_haptic_start), not
-       * each model's max_force: lowered to any model's, one sample of 1e-9 N left the
-       * device without force for the rest of the session. */
-    }
+    palp_local_model wire; /* as the server sent it: the core re-anchors m at the device point */
+    if (got) wire = m;
     palp_haptic_out o;
     palp_vec3 xr;
     const int taken = palp_cli_haptic_core_tick(&l->core, on, x, t, got ? &m : NULL, age, &o, &xr);
+    /* A model's flags and the driver's word of it count once the renderer took it, and only then: one
+     * refused (older than the one rendered, a relay's reordering, or too far ahead) flagged the force of
+     * the model still rendered, counted, and handed the driver an older model (until session 90, found
+     * by review). The safe force is the station's and the phantom's (palp_cli_haptic_start), not each
+     * model's max_force: lowered to any model's, one sample of 1e-9 N left the device without force for
+     * the rest of the session. */
+    if (got && taken > 0) {
+      model_flags = sflags;
+      if (d->in->model) d->in->model(d->in->ctx, &wire);
+      if (sflags & palp_LM_FORCE_LIMIT) st->server_limited_models++;
+      if (sflags & PALP_DDS_LM_OUTSIDE) st->out_of_range_models++;
+    }
     if (!fin3((palp_Vec3){x.x, x.y, x.z})) { /* the core rendered from the last good reading, or as lifted */
       x = l->core.x_prev;
       if (!l->core.have_x) on = 0;

@@ -830,6 +830,51 @@ static void test_stiffness_limit(void) {
   CHECK(r1 == 0 && dev < 1e-9, "a rank-1 K: not flagged, changed by %.1e N/m at most (round-off)", dev);
 }
 
+/* 16. A refused model says nothing (session 90's review): the loop renders model A (time 1.0 s, no
+ * flags); then B comes, older (0.9 s: a relay's reordering) and flagged outside the valid range. The
+ * renderer refuses B, so the driver hears of A alone, no model is counted outside the range and no
+ * tick is flagged (before: B was handed to the driver, counted, and its flag put on A's force until
+ * the next model). */
+typedef struct order_dev {
+  atomic_int models, stop;
+  double last_time;
+} order_dev;
+static int order_read(void *ctx, double t, palp_vec3 *x) {
+  order_dev *d = ctx;
+  *x = (palp_vec3){0, 0, 0.03};
+  return atomic_load(&d->stop) || t > 5.0 ? PALP_CLI_INPUT_END : 1;
+}
+static void order_model(void *ctx, const palp_local_model *m) {
+  order_dev *d = ctx;
+  d->last_time = m->time;
+  atomic_fetch_add(&d->models, 1);
+}
+static void test_refused_says_nothing(void) {
+  static order_dev dev;
+  palp_cli_input in;
+  memset(&in, 0, sizeof in);
+  in.name = "order", in.ctx = &dev, in.read_position = order_read, in.write_force = no_write, in.model = order_model;
+  palp_cli_haptic_def d = palp_cli_haptic_default_def();
+  d.in = &in;
+  static palp_cli_haptic_loop l;
+  char err[256] = "";
+  CHECK(palp_cli_haptic_start(&l, &d, err, sizeof err) == 0, "refused model: loop started %s", err);
+  palp_local_model a = contact_model(1.0, 0.03, 2.0, 500), b = contact_model(0.9, 0.03, 2.0, 500);
+  palp_cli_mailbox_put(&l.mailbox, &a, 0, 10, 0.001);
+  for (int i = 0; i < 500 && atomic_load(&dev.models) < 1; i++) nanosleep(&(struct timespec){0, 2000000}, NULL);
+  palp_cli_mailbox_put(&l.mailbox, &b, palp_LM_BEYOND_VALIDATED, 10, 0.001);
+  nanosleep(&(struct timespec){0, 100000000}, NULL); /* 100 ticks rendering A after B came */
+  atomic_store(&dev.stop, 1);
+  palp_cli_haptic_stats st;
+  palp_cli_haptic_join(&l, &st);
+  CHECK(atomic_load(&dev.models) == 1 && dev.last_time == 1.0 && st.models == 1,
+        "  the driver told of model A alone (%d, last at %.1f s), 1 model rendered (%llu)", atomic_load(&dev.models),
+        dev.last_time, (unsigned long long)st.models);
+  CHECK(st.out_of_range_models == 0 && st.out_of_range_ticks == 0,
+        "  the refused B flagged nothing: %llu models counted outside the range, %llu ticks (0, 0)",
+        (unsigned long long)st.out_of_range_models, (unsigned long long)st.out_of_range_ticks);
+}
+
 /* 15. Where a mark may be taken (session 90's review): a pressing model every 4 ms to 100 ms, then a
  * server gone quiet. By hand: stale from 100 + 250 = 350 ms, faded to 0 N at 450 ms. At 200 ms (fresh,
  * 2 N) a mark is allowed; at 400 ms the hand still feels half the force (1 N, contact) but its point is
@@ -910,5 +955,6 @@ int main(void) {
   test_sym3_eig();
   test_stiffness_limit();
   test_can_mark();
+  test_refused_says_nothing();
   return check_exit();
 }
