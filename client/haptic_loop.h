@@ -163,6 +163,8 @@ typedef struct palp_cli_haptic_stats {
   uint64_t missed;
   uint64_t models;              /* models taken from the mailbox */
   uint64_t contacts_sent, contacts_dropped; /* dropped: the sender's ring was full */
+  uint64_t contacts_failed;                 /* the sender's writes DDS refused */
+  uint64_t bad_x_ticks;                     /* ticks whose device reading was not finite (core.bad_x_ticks) */
   uint64_t limited_ticks, stale_ticks, contact_ticks;
   uint64_t held_ticks; /* ticks rendered with the force held (model late) */
   uint64_t passivity_ticks;  /* ticks the passivity controller acted (damped or lessened a push) */
@@ -247,6 +249,7 @@ typedef struct palp_cli_haptic_loop {
   pthread_t sender;
   int sender_started;
   _Atomic uint64_t sent; /* by the sender thread; the station's main thread reads it (report_rejected) */
+  uint64_t write_failed; /* by the sender thread alone, read after it is joined */
   palp_timer_floor floor; /* def.timer_floor; copied into stats at join */
   int64_t t0_ns;          /* the haptic thread's first deadline [ns], set before either thread starts */
 } palp_cli_haptic_loop;

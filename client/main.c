@@ -1192,10 +1192,19 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
                             "rtprio limit, e.g. LimitRTPRIO=50 or limits.conf, or pass --rt-priority 0); its ticks "
                             "are likelier to be late", o->rt_priority);
   }
+  /* The contact samples go every `every` ticks: the physics rate when it divides the haptic rate, else
+   * the nearest such rate, said (until session 90 the summary gave the physics rate: a 600 Hz phantom was
+   * "sent at 600 Hz" at 500; found by review) */
+  const long every = palp_cli_contact_every(d.rate_hz, d.physics_rate_hz);
+  const double sent_hz = d.rate_hz / (double)every;
+  char sent_note[96] = "";
+  if (fabs(sent_hz - d.physics_rate_hz) > 0.01 * d.physics_rate_hz)
+    snprintf(sent_note, sizeof sent_note, ": %.0f a second, the nearest the %.0f Hz haptic rate divides into", sent_hz,
+             d.rate_hz);
   if (!o->quiet)
     tprintf(o, "[trainee %s] haptic thread at %.0f Hz; the server steps the phantom at %.0f Hz (a contact sample every "
-               "%d ticks); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz,
-               (int)palp_cli_contact_every(d.rate_hz, d.physics_rate_hz), hl->core.renderer.def.max_force);
+               "%ld ticks%s); safe force %.1f N\n", o->name, d.rate_hz, d.physics_rate_hz, every, sent_note,
+               hl->core.renderer.def.max_force);
   fflush(stdout);
   feedback_ctx plot = {.st = st, .in = &in, .t0 = palp_dds_now_ns(), .max_force = hl->core.renderer.def.max_force};
   latency lat = {0};
@@ -1334,6 +1343,10 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
               q->x.z, q->f.x, q->f.y, q->f.z, q->requested, q->flags);
     }
     out_failed = close_output(o, trace, o->trace_csv) < 0;
+    if (hs.ticks > hs.trace_len) /* its buffer holds d.trace_cap ticks (until session 90 cut without a word) */
+      tprintf(o, "[trainee %s] %s holds the first %.1f s of the %.1f s the haptic loop ran (%zu of %llu ticks)\n",
+              o->name, o->trace_csv, (double)hs.trace_len / d.rate_hz, (double)hs.ticks / d.rate_hz, hs.trace_len,
+              (unsigned long long)hs.ticks);
   }
   if (hs.failed) palp_log_error(o->log, "%s", hs.error);
   if (in.close) in.close(in.ctx);
@@ -1357,8 +1370,17 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
              d.late_threshold * 1e3, hs.ticks ? 100.0 * (double)hs.late_ticks / (double)hs.ticks : 0.0, hs.late_max * 1e3,
              skipped,
              (unsigned long long)hs.models, (unsigned long long)bad, (unsigned long long)hs.contacts_sent,
-             d.physics_rate_hz, p50, p99, hs.peak_force, foreign_summary(st, foreign, sizeof foreign),
+             sent_hz, p50, p99, hs.peak_force, foreign_summary(st, foreign, sizeof foreign),
              closed ? close_words(reason, "; session closed by the server: ") : "", closed ? reason : "");
+  /* what was counted and never said until session 90 (found by review) */
+  if (hs.contacts_dropped || hs.contacts_failed)
+    tprintf(o, "[trainee %s] %llu contact sample(s) not sent: %llu found the sender's queue full (its thread starved), "
+               "%llu refused by DDS; the server held the last position it had\n", o->name,
+               (unsigned long long)(hs.contacts_dropped + hs.contacts_failed), (unsigned long long)hs.contacts_dropped,
+               (unsigned long long)hs.contacts_failed);
+  if (hs.bad_x_ticks)
+    tprintf(o, "[trainee %s] the device gave %llu reading(s) that were not numbers (NaN or infinite); the last good one "
+               "stood in for each\n", o->name, (unsigned long long)hs.bad_x_ticks);
   if (hs.stalls)
     tprintf(o, "[trainee %s] this station was not run %llu time(s) for %.2f s in all (longest %.2f s: its machine was "
                "busy or it was stopped); the device's force was not updated meanwhile; not counted among the late ticks "

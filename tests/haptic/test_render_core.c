@@ -875,6 +875,36 @@ static void test_refused_says_nothing(void) {
         (unsigned long long)st.out_of_range_models, (unsigned long long)st.out_of_range_ticks);
 }
 
+/* 17. The loop's summary has the device's bad readings (session 90's review: counted in the core,
+ * never copied out): a device whose reads 10-16 are NaN (7 of them) and which ends at read 50. */
+typedef struct nan_dev {
+  int reads;
+} nan_dev;
+static int nan_read(void *ctx, double t, palp_vec3 *x) {
+  (void)t;
+  nan_dev *d = ctx;
+  const int k = d->reads++;
+  *x = k >= 10 && k <= 16 ? (palp_vec3){NAN, 0, 0.03} : (palp_vec3){0, 0, 0.03};
+  return k >= 50 ? PALP_CLI_INPUT_END : 1;
+}
+static void test_bad_readings_counted(void) {
+  static nan_dev dev;
+  palp_cli_input in;
+  memset(&in, 0, sizeof in);
+  in.name = "nan", in.ctx = &dev, in.read_position = nan_read, in.write_force = no_write;
+  palp_cli_haptic_def d = palp_cli_haptic_default_def();
+  d.in = &in;
+  static palp_cli_haptic_loop l;
+  char err[256] = "";
+  CHECK(palp_cli_haptic_start(&l, &d, err, sizeof err) == 0, "bad readings: loop started %s", err);
+  while (!palp_cli_haptic_done(&l)) nanosleep(&(struct timespec){0, 10000000}, NULL);
+  palp_cli_haptic_stats st;
+  palp_cli_haptic_join(&l, &st);
+  CHECK(st.bad_x_ticks == 7 && st.contacts_failed == 0,
+        "  7 readings not numbers reach the summary (%llu), no contact write failed (%llu)",
+        (unsigned long long)st.bad_x_ticks, (unsigned long long)st.contacts_failed);
+}
+
 /* 15. Where a mark may be taken (session 90's review): a pressing model every 4 ms to 100 ms, then a
  * server gone quiet. By hand: stale from 100 + 250 = 350 ms, faded to 0 N at 450 ms. At 200 ms (fresh,
  * 2 N) a mark is allowed; at 400 ms the hand still feels half the force (1 N, contact) but its point is
@@ -956,5 +986,6 @@ int main(void) {
   test_stiffness_limit();
   test_can_mark();
   test_refused_says_nothing();
+  test_bad_readings_counted();
   return check_exit();
 }
