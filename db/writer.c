@@ -1236,12 +1236,18 @@ static void *worker(void *arg) {
       retire(w, n, written, rc == SQLITE_OK, failed_by_kind);
     }
     write_accounting(w, stop);
-    /* Ended sessions no longer need their strings for lazy re-inserts. */
-    for (int s = 1; s < w->ws_cap; s++)
-      if (w->ws[s].ended && w->ws[s].rowid && w->ws[s].blob) {
-        free(w->ws[s].blob);
-        w->ws[s].blob = NULL;
+    /* Ended sessions no longer need their strings for lazy re-inserts, nor does a session refused at
+     * its begin (dup: its reject event is in, every later record of it refused before its strings are
+     * read); until session 90 a refused session's strings were kept until the writer closed, its end
+     * never marked (found by review). Its def's pointers go with them. */
+    for (int s = 1; s < w->ws_cap; s++) {
+      wsess *ws = &w->ws[s];
+      if (ws->blob && ((ws->ended && ws->rowid) || ws->dup)) {
+        free(ws->blob);
+        ws->blob = NULL;
+        memset(&ws->def, 0, sizeof ws->def);
       }
+    }
 
     struct timespec cpu;
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu);
