@@ -1333,6 +1333,11 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   dds_delete(lm_cond);
   dds_delete(ws);
   palp_cli_haptic_stats hs;
+  /* The loop's last look is a check: what follows (the join, a trace of up to 120 s of ticks, the
+   * summary) is this station's own work, marked as such below, so that the leave does not take a slow
+   * shutdown for a stall (its careful path: the JOIN again, the LEAVE repeated for 1 s, and "did not
+   * answer ... after this station's stall" from a busy server; until session 90, found by review). */
+  palp_cli_station_alive(st);
   palp_cli_haptic_join(hl, &hs);
   int out_failed = 0;
   if (trace) {
@@ -1343,6 +1348,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
               q->x.z, q->f.x, q->f.y, q->f.z, q->requested, q->flags);
     }
     out_failed = close_output(o, trace, o->trace_csv) < 0;
+    palp_cli_station_alive(st);
     if (hs.ticks > hs.trace_len) /* its buffer holds d.trace_cap ticks (until session 90 cut without a word) */
       tprintf(o, "[trainee %s] %s holds the first %.1f s of the %.1f s the haptic loop ran (%zu of %llu ticks)\n",
               o->name, o->trace_csv, (double)hs.trace_len / d.rate_hz, (double)hs.ticks / d.rate_hz, hs.trace_len,
@@ -1420,6 +1426,7 @@ static int run_haptic_trainee(const opts *o, palp_cli_station *st, const palp_Ph
   free(lat.us);
   free(d.trace);
   free(hl);
+  palp_cli_station_alive(st);
   return hs.failed || out_failed ? 1 : (closed ? 3 : 0);
 }
 

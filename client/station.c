@@ -907,6 +907,8 @@ static void station_alive(palp_cli_station *st, int64_t now) {
   st->last_check_ns = now;
 }
 
+void palp_cli_station_alive(palp_cli_station *st) { station_alive(st, palp_dds_now_ns()); }
+
 int palp_cli_station_exercise(palp_cli_station *st, uint32_t phantom_id, double timeout, palp_Exercise *out) {
   const int64_t end = palp_dds_now_ns() + (int64_t)(timeout * 1e9);
   for (;;) {

@@ -294,6 +294,9 @@ int palp_cli_station_join(palp_cli_station *st, const palp_cli_join *j, char *er
  * answer, st->goodbye_unanswered is set (the caller tells the user: the server may log the
  * session as "not back" after its station_grace) and the goodbye goes anyway. */
 int palp_cli_station_leave(palp_cli_station *st);
+/* This station's own work runs now (its haptic thread joined, its trace written): the time since its
+ * last check is work, not a stall, for the leave that follows. A stall before it is noted as one. */
+void palp_cli_station_alive(palp_cli_station *st);
 
 /* Several servers on one domain (docs/deploy.md). The alive phantom called name
  * with the fewest active sessions, on server server_number (-1: any) and not on
