@@ -271,12 +271,16 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     fputs("}\n", f);
   }
   const int to_stdout = f == stdout;
-  const int werr = review_close_out(f) != 0 ? errno : 0;
-  if (rc) { /* which table, and why: the file holds what came before (2026-12-06: the notes ended there silently) */
-    palp_log_error(log, "export: the %s could not be read: %s (the export is incomplete)", table,
-                   palp_db_errmsg(db));
+  if (rc) { /* which table, and why (2026-12-06: the notes ended there silently) */
+    /* A file is not written: the cut export (invalid JSON, a CSV short of rows) replaced a whole one
+     * already there until session 90 (found by review); standard output has had what came before. */
+    const char *what = to_stdout ? "the export is incomplete" : "not written; a file already there is kept";
+    palp_log_error(log, "export: the %s could not be read: %s (%s)", table, palp_db_errmsg(db), what);
+    if (to_stdout) review_close_out(f);
+    else review_abandon_out(f);
     return REVIEW_ERROR;
   }
+  const int werr = review_close_out(f) != 0 ? errno : 0;
   if (werr) {
     if (to_stdout) palp_log_error(log, "export: standard output: %s (the export is incomplete)", strerror(werr));
     else palp_log_error(log, "export: %s: %s (not written; a file already there is kept)", out_path, strerror(werr));

@@ -279,7 +279,12 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
     printf("PRUNED     on %s: its frames, feedback, contact inputs, meshes and finger samples were deleted "
            "(palp-review prune); what follows is what was kept: its row, events, notes, findings, stored metrics\n", tp);
   peaks p = {0};
-  palp_db_each_frame(db, s->id, peaks_cb, &p);
+  /* A table that cannot be read is said where its figures go, and the exit status says the show is
+   * incomplete (until session 90 the frames' and the presses' reads were unchecked: "0 force contacts, 0
+   * fingers" and exit 0 over an unreadable feedback table; found by review). */
+  const int frames_rc = palp_db_each_frame(db, s->id, peaks_cb, &p);
+  char frames_err[256] = "";
+  if (frames_rc) snprintf(frames_err, sizeof frames_err, "%s", palp_db_errmsg(db));
   palp_db_log_health health;
   const int health_rc = palp_db_log_health_get(db, s, &health);
   char health_err[256] = ""; /* said below, after other reads have replaced SQLite's message */
@@ -292,10 +297,15 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   else
     printf("duration   wall %.3f s, simulated %.3f s (%s)\n", s->end_unix_s > 0 ? s->end_unix_s - s->start_unix_s : 0.0,
            s->sim_duration_s, logging);
-  printf("peak force           %.2f N at t = %.2f s (the phantom's force on the load, from the logged frames)\n", p.f,
-         p.f_t);
-  printf("peak displacement    top vertex %.2f mm at t = %.2f s; any vertex %.2f mm at t = %.2f s\n",
-         p.top * 1e3, p.top_t, p.max * 1e3, p.max_t);
+  if (frames_rc) {
+    printf("peaks      UNREADABLE: the frame table could not be read: %s\n", frames_err);
+    if (!why[0]) snprintf(why, sizeof why, "the frame table could not be read: %s", frames_err);
+  } else {
+    printf("peak force           %.2f N at t = %.2f s (the phantom's force on the load, from the logged frames)\n", p.f,
+           p.f_t);
+    printf("peak displacement    top vertex %.2f mm at t = %.2f s; any vertex %.2f mm at t = %.2f s\n",
+           p.top * 1e3, p.top_t, p.max * 1e3, p.max_t);
+  }
   if (p.ngel)
     printf("gel                  pressure %.3f .. %.3f Pa, volume %.4f .. %.4f cm^3\n", p.p_min, p.p_max,
            p.v_min * 1e6, p.v_max * 1e6);
@@ -307,14 +317,22 @@ static int cmd_show(palp_log *log, palp_db *db, const palp_db_session_info *s) {
   }
   review_press *pr = NULL;
   int np = 0;
-  review_presses(db, s->id, &c, &pr, &np);
+  const int presses_rc = review_presses(db, s->id, &c, &pr, &np);
   int nforce = 0, nfinger = 0;
   for (int i = 0; i < np; i++) {
     if (pr[i].kind == PALP_DB_KIND_FORCE) nforce++;
     else nfinger++;
   }
-  printf("contacts   %d inputs: %d force contact%s, %d finger%s\n", c.n, nforce, nforce == 1 ? "" : "s", nfinger,
-         nfinger == 1 ? "" : "s");
+  if (presses_rc == PALP_ENOMEM) {
+    printf("contacts   %d inputs: their presses not counted (out of memory)\n", c.n);
+    if (!why[0]) snprintf(why, sizeof why, "out of memory counting the presses");
+  } else if (presses_rc) {
+    printf("contacts   %d inputs; their presses UNREADABLE: the feedback table could not be read: %s\n", c.n,
+           palp_db_errmsg(db));
+    if (!why[0]) snprintf(why, sizeof why, "the feedback table could not be read: %s", palp_db_errmsg(db));
+  } else
+    printf("contacts   %d inputs: %d force contact%s, %d finger%s\n", c.n, nforce, nforce == 1 ? "" : "s", nfinger,
+           nfinger == 1 ? "" : "s");
   /* The finger's touches come from its logged samples (the assessment's reading of them): a
    * finger slot lives for the whole session, and its input is the device point above the
    * surface, so the slot alone says neither where nor how often the trainee touched. */
@@ -636,8 +654,10 @@ static int review_main(int argc, char **argv) {
   }
   palp_db_session_info s;
   const char *uid = argv[i++];
-  /* a prefix names a session for the commands that do not destroy (delete takes none: retention.c) */
-  if (review_find_session(&log, db, cmd, uid, 1, &s)) {
+  /* a prefix names a session for the commands that only read (delete takes none: retention.c), nor does
+   * annotate: a grade put on the wrong session cannot be taken back ("annotate run-1" graded run-10 once
+   * run-1 was deleted, until session 90; found by review) */
+  if (review_find_session(&log, db, cmd, uid, strcmp(cmd, "annotate") != 0, &s)) {
     palp_db_close(db);
     return REVIEW_ERROR;
   }

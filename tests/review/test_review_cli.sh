@@ -176,6 +176,28 @@ expect "report: bob's note with its score" '<tr><td>[^<]*</td><td>Lee</td><td>35
 R export class-bob-1 --format json --out "$dir/bob.json" || bad "export json"
 if python3 -c "import json, sys; n = json.load(open(sys.argv[1]))['notes']; assert [(x['text'], x['grade']) for x in n if x['grade']] == [('missed both lumps', '35')], n" "$dir/bob.json"
 then ok "export json: bob's note with its score"; else bad "export json: the notes' grades"; fi
+# A log whose feedback table cannot be read (session 90's review): export keeps the whole file already
+# there (before: replaced by the cut export, invalid JSON, exit 2), show says where the presses go that
+# they are unreadable and exits 2 (before: "0 force contacts, 0 fingers", exit 0); and annotate takes no
+# prefix of a uid (before: "annotate class-bob" graded whichever one session its prefix matched).
+cp "$db" "$dir/cut.db" && sqlite3 "$dir/cut.db" "DROP TABLE feedback" || bad "a copy without its feedback table"
+cp "$dir/bob.json" "$dir/bob-whole.json"
+"$review" --db "$dir/cut.db" export class-bob-1 --format json --out "$dir/bob.json" > "$dir/cut-export.txt" 2>&1; rc=$?
+if [ $rc -eq 2 ] && cmp -s "$dir/bob.json" "$dir/bob-whole.json" &&
+   grep -q "export: the feedback could not be read: .* (not written; a file already there is kept)" "$dir/cut-export.txt"
+then ok "export over an unreadable feedback table: exit 2, the whole export already there kept"
+else bad "export over an unreadable feedback table: exit $rc: $(cat "$dir/cut-export.txt")"; fi
+"$review" --db "$dir/cut.db" show class-bob-1 > "$dir/cut-show.txt" 2>&1; rc=$?
+if [ $rc -eq 2 ] && grep -q "^contacts .* inputs; their presses UNREADABLE: the feedback table could not be read" "$dir/cut-show.txt"
+then ok "show over an unreadable feedback table: the presses said UNREADABLE, exit 2"
+else bad "show over an unreadable feedback table: exit $rc:"; cat "$dir/cut-show.txt"; fi
+notes0=$(sqlite3 "$dir/cut.db" "SELECT COUNT(*) FROM note")
+"$review" --db "$dir/cut.db" annotate class-bob-2 --author Lee --note "whole uid" > /dev/null 2>&1 || bad "annotate class-bob-2"
+"$review" --db "$dir/cut.db" annotate class-alice --author Lee --note x --score 80 > "$dir/cut-annotate.txt" 2>&1; rc=$?
+notes1=$(sqlite3 "$dir/cut.db" "SELECT COUNT(*) FROM note")
+if [ $rc -eq 2 ] && [ "$notes1" = $((notes0 + 1)) ] && grep -q "never the start of a uid" "$dir/cut-annotate.txt"
+then ok "annotate: a whole uid graded, the prefix class-alice refused (exit 2, no note: $notes0 -> $notes1 with the one above)"
+else bad "annotate by a prefix: exit $rc, notes $notes0 -> $notes1: $(cat "$dir/cut-annotate.txt")"; fi
 expect "report: the strips and their order" '<tr data-metric="strips"><th>Strips and their order</th><td class="value">1[3-5] strips, in order (0\.9[0-9]|1\.00)' "$dir/alice.html"
 expect "report: the touches table, the expert's one touch" '<table id="touches">.*' "$dir/alice.html"
 if [ "$(sed -n '/<table id="touches">/,/<\/table>/p' "$dir/bob.html" | grep -c '^<tr><td>')" = 5 ]; then
