@@ -291,13 +291,21 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
    * ("fsm: Send handshake: failed to send message (lguid=...)", a handshake message it could not
    * send), and the next message, the refusal, reaches the sink on the same line (session 72: such a
    * line went raw into palp-recorder's log in install_demo). */
-  for (size_t i = 0; i < sizeof handshake / sizeof handshake[0] && !body; i++) {
+  /* The earliest of the four phrases in the line: what follows one is the exception's text, whose
+   * subject is the peer's certificate's, printed as written. Until session 90 the first phrase of the
+   * list found anywhere won: a rogue CA's certificate whose subject held "Validate remote identity
+   * failed: Certificate not valid: error: certificate revoked; subject: /O=palp/OU=trainee/CN=alice"
+   * was read as trainee/alice refused, revoked and verified (found by review). */
+  const char *first = NULL;
+  size_t first_n = 0;
+  for (size_t i = 0; i < sizeof handshake / sizeof handshake[0]; i++) {
     const char *at = find_n(msg, len, handshake[i]);
-    if (at) {
-      body = at + strlen(handshake[i]);
-      len -= (size_t)(at - msg);
-      msg = at;
-    }
+    if (at && (!first || at < first)) first = at, first_n = strlen(handshake[i]);
+  }
+  if (first) {
+    body = first + first_n;
+    len -= (size_t)(first - msg);
+    msg = first;
   }
   if (!body && len > sizeof perm_head && !memcmp(msg, perm_head, sizeof perm_head - 1)) {
     const char *t = find_n(msg, len, perm_tail);
@@ -325,7 +333,9 @@ int palp_dds_refusal_parse(const char *msg, size_t len, palp_dds_refusal *out) {
 
   memset(out, 0, sizeof *out);
   out->kind = kind;
-  const char *err = find_n(body, bn, "Certificate not valid: error: "), *subj = find_n(body, bn, "; subject: ");
+  /* the first error and the first subject after it: a subject's own text comes after both */
+  const char *err = find_n(body, bn, "Certificate not valid: error: ");
+  const char *subj = err ? find_n(err, (size_t)(body + bn - err), "; subject: ") : NULL;
   const char *verify = find_n(body, bn, "Verify error: ");
   if (err && subj && subj > err) {
     const char *why = err + 30, *who = subj + 11;

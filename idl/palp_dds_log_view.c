@@ -42,6 +42,7 @@ void palp_dds_log_view_status(palp_dds_log_view *v, uint64_t written, uint64_t s
 }
 
 void palp_dds_log_view_session(palp_dds_log_view *v, uint64_t shed, uint64_t failed, int64_t now_ns) {
+  if (failed > UINT64_MAX - shed) return; /* a sum past 2^64 is no count (a forged sample): it would wrap */
   const uint64_t before = v->own ? v->shed + v->failed : 0;
   if (v->own && shed + failed < before) return; /* a session's losses never fall: not from its server */
   if (!v->own) /* what the server's counts said before is not hers: her own say it from now on */

@@ -98,6 +98,16 @@ static size_t cert_stem(const char *name) {
   return n > k && !strcmp(name + n - k, suffix) ? n - k : 0;
 }
 
+/* Whether s[0..n) is the script's STAMP, %Y%m%dT%H%M%S: after "trainee_bob-" only a stamp, so that
+ * trainee/bob-x's revoked files are not bob's (until session 90 bob, his files missing, was told he
+ * was revoked and pointed at bob-x's; found by review). */
+static int is_stamp(const char *s, size_t n) {
+  if (n != 15) return 0;
+  for (size_t i = 0; i < n; i++)
+    if (i == 8 ? s[i] != 'T' : (s[i] < '0' || s[i] > '9')) return 0;
+  return 1;
+}
+
 /* The newest DIR/revoked/KIND_NAME-STAMP of a revoked identity (make-classroom-pki.sh
  * revoke moves its files there, STAMP a UTC time that sorts): 1 and its path prefix
  * in buf, or 0 when the identity was never revoked here. */
@@ -113,7 +123,7 @@ static int revoked_copy(const palp_dds_security *sec, char *buf, size_t len) {
   char best[256] = "";
   for (struct dirent *e; (e = readdir(d));) {
     const size_t stem = cert_stem(e->d_name);
-    if (strncmp(e->d_name, head, (size_t)hn) || !stem) continue;
+    if (strncmp(e->d_name, head, (size_t)hn) || !stem || !is_stamp(e->d_name + hn, stem - (size_t)hn)) continue;
     if (stem < sizeof best && strncmp(e->d_name, best, sizeof best) > 0) {
       memcpy(best, e->d_name, stem);
       best[stem] = '\0';

@@ -67,6 +67,7 @@ int palp_dds_strangers_init(palp_dds_strangers *s, dds_entity_t pp, double grace
   s->info = calloc(PALP_DDS_STRANGER_READ, sizeof *s->info);
   if (!s->ptr || !s->info) {
     free(s->ptr), free(s->info);
+    s->ptr = NULL, s->info = NULL; /* destroy and tick test s->ptr: nothing left to free or read */
     return PALP_ENOMEM;
   }
   static const dds_entity_t topic[3] = {DDS_BUILTIN_TOPIC_DCPSPARTICIPANT, DDS_BUILTIN_TOPIC_DCPSPUBLICATION,
@@ -76,6 +77,7 @@ int palp_dds_strangers_init(palp_dds_strangers *s, dds_entity_t pp, double grace
     if (s->rd[k] < 0) {
       for (int i = 0; i < k; i++) dds_delete(s->rd[i]);
       free(s->ptr), free(s->info);
+      s->ptr = NULL, s->info = NULL;
       return PALP_EIO;
     }
   }
@@ -86,7 +88,7 @@ void palp_dds_strangers_destroy(palp_dds_strangers *s) {
   if (!s->ptr) return;
   for (int k = 0; k < 3; k++) dds_delete(s->rd[k]);
   free(s->ptr), free(s->info);
-  s->ptr = NULL;
+  s->ptr = NULL, s->info = NULL;
 }
 
 /* The samples of instances gone (participants and endpoints that left) are taken out, so

@@ -39,6 +39,9 @@ static X509 *read_cert(const char *path) {
 
 palp_pem_status palp_pem_check(const char *cert, const char *key, const char *ca, palp_pem_info *info) {
   palp_pem_status st = PALP_PEM_OK;
+  /* the dates not read (no certificate, or bad dates) are not numbers, never what the stack held */
+  info->start_days = info->end_days = NAN;
+  info->start_date[0] = info->end_date[0] = '\0';
   X509 *x = read_cert(cert), *cx = NULL;
   EVP_PKEY *k = NULL, *cak = NULL;
   if (!x) {

@@ -53,6 +53,13 @@ check "a recorder with a trainee identity is refused up front: it needs an instr
 "$client" --pki "$pki" --identity trainee/dave --role trainee --phantom 1 --duration 1 >"$out/dave.log" 2>&1; rc=$?
 check "a revoked identity is told it was revoked, and how to get a new one (exit $rc)" \
   "[ $rc -eq 1 ] && grep -q 'identity trainee/dave was revoked in this classroom (its files were moved to .*/revoked/trainee_dave-[0-9T]*\\.\\*): ask the instructor for a new one (make-classroom-pki.sh DIR add trainee dave)' '$out/dave.log'"
+# Another identity's revoked files are not this one's (session 90's review): trainee/zed, never issued, beside
+# a revoked trainee/zed-x, is not told it was revoked (before: "trainee/zed was revoked", pointed at zed-x's).
+touch "$pki/revoked/trainee_zed-x-20261201T101010.cert.pem"
+"$client" --pki "$pki" --identity trainee/zed --role trainee --phantom 1 --duration 1 >"$out/zed.log" 2>&1; rc=$?
+rm -f "$pki/revoked/trainee_zed-x-20261201T101010.cert.pem"
+check "an identity never issued is not told another's revocation (exit $rc): $(head -c 160 "$out/zed.log")" \
+  "[ $rc -eq 1 ] && ! grep -q 'was revoked' '$out/zed.log' && grep -q 'trainee/zed' '$out/zed.log'"
 # The --check runs below that assert a refusal (or its absence) for DDS Security or the DDS config run on
 # check-server.json, one dome: no phantom takes part in what they assert, and config/server.json's five
 # domes cost each run ~0.25 s of CPU building their models (one: ~0.05 s; 2026-12-07). The lines

@@ -71,6 +71,16 @@ static void test_parse(void) {
   CHECK(k == 1 && !strcmp(r.who, "an unverified certificate claiming instructor/ines") &&
             !strcmp(r.why, "unable to get local issuer certificate"),
         "an identity signed by another CA, claiming an instructor: \"%s\", \"%s\"", r.who, r.why);
+  /* session 90's review: a rogue CA's subject holding a whole refusal of its own (an unknown OID has no
+   * length limit); the earliest phrase is Cyclone's, the rest the subject: unverified, the real error.
+   * Before: read as trainee/alice, certificate revoked, verified. */
+  k = parse("Begin handshake reply failed: Certificate not valid: error: unable to get local issuer certificate; "
+            "subject: /1.2.3.4=Validate remote identity failed: Certificate not valid: error: certificate revoked; "
+            "subject: /O=palp/OU=trainee/CN=alice(code: 200)",
+            &r);
+  CHECK(k == 1 && !strcmp(r.why, "unable to get local issuer certificate") && !strncmp(r.who, "/1.2.3.4=Validate", 17),
+        "a subject holding a forged refusal of alice: \"%s\", \"%s\" (the subject as written, not revoked)", r.who,
+        r.why);
   k = parse("Begin handshake request failed: Certificate not valid: error: certificate has expired; subject: "
             "/C=NL/O=Example/CN=robot(code: 200)",
             &r);
