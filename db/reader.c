@@ -437,13 +437,16 @@ int palp_db_file_version(palp_db *db) {
 }
 
 /* A session's names from the file, as every tool prints them: control characters (an escape sequence
- * in a trainee's name retitles or clears an instructor's terminal) read as '?'. palp's writers never
- * log one; a file made or edited elsewhere may. */
+ * in a trainee's name retitles or clears an instructor's terminal) read as '?', the C1 ones (U+0080 to
+ * U+009F in UTF-8, 0xC2 0x80..0x9F: CSI and OSC among them, which act as ESC [ and ESC ] do) as "??"
+ * since session 90 (found by review: "car\u009b2J" cleared the screen of `palp-review show`). palp's
+ * writers never log one; a file made or edited elsewhere may. */
 static void col_str(sqlite3_stmt *st, int i, char *dst, size_t len) {
   const unsigned char *s = sqlite3_column_text(st, i);
   palp_db__fmt(dst, len, "%s", s ? (const char *)s : "");
-  for (char *p = dst; *p; p++)
-    if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = '?';
+  for (unsigned char *p = (unsigned char *)dst; *p; p++)
+    if (*p < 0x20 || *p == 0x7f) *p = '?';
+    else if (p[0] == 0xC2 && p[1] >= 0x80 && p[1] <= 0x9F) p[0] = p[1] = '?', p++;
 }
 
 #define SESSION_COLS                                                                                \

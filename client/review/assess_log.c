@@ -339,6 +339,7 @@ int review_assess(palp_db *db, const palp_db_session_info *s, review_assessment 
   if (!out->has_exercise) {
     snprintf(out->exercise_name, sizeof out->exercise_name, "%s", "");
     review_params_string(db, s->id, "exercise_name", out->exercise_unlogged, sizeof out->exercise_unlogged);
+    review_tty(out->exercise_unlogged); /* from the recorder's params, off the wire: printed as every name is */
   }
   char footprint[16] = "";
   out->footprint_patch = review_params_string(db, s->id, "footprint", footprint, sizeof footprint) &&
@@ -629,6 +630,7 @@ int review_stored_metrics(palp_db *db, int64_t sid, review_assessment *out) {
     const char *ex = (const char *)sqlite3_column_text(st, 0);
     out->has_exercise = ex != NULL;
     snprintf(out->exercise_name, sizeof out->exercise_name, "%s", ex ? ex : "");
+    review_tty(out->exercise_name); /* printed on the instructor's terminal: no control characters (review_tty) */
     out->samples = sqlite3_column_int(st, 1);
     r->lesion_count = sqlite3_column_int(st, 2);
     r->found = sqlite3_column_int(st, 3);

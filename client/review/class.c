@@ -145,7 +145,7 @@ int review_class(palp_log *log, palp_db *db, int argc, char **argv) {
   if (csv && review_rows_csv(log, "class", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
   FILE *f = review_fopen_out(log, out);
   if (!f) {
-    palp_log_error(log, "class: %s: %s", out, strerror(errno));
+    if (errno != EINVAL) palp_log_error(log, "class: %s: %s", out, strerror(errno)); /* EINVAL: said already */
     rc = REVIEW_ERROR;
   } else {
     review_html_head(f, "palp class report: ", "Class report: exercise ", "exercise", exercise,

@@ -77,7 +77,9 @@ void review_grade_text(int has_score, double score, const char *level, const cha
 }
 
 /* The latest note that grades: its score (-1: none), level and free-text grade ("" when absent);
- * 1 when there is one, else 0. One query for review_latest_grade and its parts. */
+ * 1 when there is one, 0 when none, -1 when the notes could not be read (a damaged page: until session 90
+ * that read as "no grade", and prune --keep-graded pruned a graded session; found by review). One query
+ * for review_latest_grade and its parts. */
 static int latest_grade(palp_db *db, int64_t sid, double *score, char level[32], char text[128]) {
   *score = -1, level[0] = text[0] = '\0';
   sqlite3_stmt *st;
@@ -86,10 +88,11 @@ static int latest_grade(palp_db *db, int64_t sid, double *score, char level[32],
                          "(score IS NOT NULL OR level IS NOT NULL OR (grade IS NOT NULL AND grade <> '')) "
                          "ORDER BY id DESC LIMIT 1",
                          -1, &st, NULL) != SQLITE_OK)
-    return 0;
+    return -1;
   sqlite3_bind_int64(st, 1, sid);
-  const int found = sqlite3_step(st) == SQLITE_ROW;
-  if (found) {
+  const int step = sqlite3_step(st);
+  const int found = step == SQLITE_ROW ? 1 : step == SQLITE_DONE ? 0 : -1;
+  if (found > 0) {
     if (sqlite3_column_type(st, 0) != SQLITE_NULL) *score = sqlite3_column_double(st, 0);
     const char *l = (const char *)sqlite3_column_text(st, 1), *g = (const char *)sqlite3_column_text(st, 2);
     snprintf(level, 32, "%s", l ? l : "");
@@ -99,16 +102,18 @@ static int latest_grade(palp_db *db, int64_t sid, double *score, char level[32],
   return found;
 }
 
-void review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len) {
+int review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len) {
   double score;
   char level[32], text[128];
-  if (latest_grade(db, sid, &score, level, text)) review_grade_text(score >= 0, score, level, text, buf, len);
-  else snprintf(buf, len, "-");
+  const int rc = latest_grade(db, sid, &score, level, text);
+  if (rc > 0) review_grade_text(score >= 0, score, level, text, buf, len);
+  else snprintf(buf, len, rc < 0 ? "unreadable" : "-");
+  return rc;
 }
 
 int review_latest_grade_parts(palp_db *db, int64_t sid, double *score, char *level, size_t len) {
   char l[32], text[128];
-  latest_grade(db, sid, score, l, text);
+  if (latest_grade(db, sid, score, l, text) < 0) *score = -1, l[0] = '\0';
   if (len) snprintf(level, len, "%s", l);
   return *score >= 0 || l[0];
 }

@@ -20,8 +20,9 @@ int review_add_graded_note(palp_db *db, int64_t sid, const char *author, const c
                            const char *level);
 
 /* The latest grade of a session as one short string: "82 competent", "82", "competent",
- * "'B+' (free text)" for a pre-schema-3 grade, or "-". */
-void review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len);
+ * "'B+' (free text)" for a pre-schema-3 grade, "-" (none), or "unreadable" (the notes could not be
+ * read). 1 graded, 0 not, -1 not known (prune --keep-graded keeps it). */
+int review_latest_grade(palp_db *db, int64_t sid, char *buf, size_t len);
 /* The parts of the grade review_latest_grade shows: *score (-1 when it gave none) and level (""
  * when none); 1 when it has either, 0 when the session is ungraded or its latest grade is an old
  * free-text one (which has neither). */

@@ -52,6 +52,12 @@ static FILE *open_in_place(const char *path) {
 
 FILE *review_fopen_out(palp_log *log, const char *path) {
   FILE *f = NULL;
+  if (!strcmp(path, "-")) { /* export and the CSVs take it for standard output; a report, a page, is a file */
+    palp_log_error(log, "'-' is not a file name here: give the file to write (FILE.html), or /dev/stdout for "
+                   "standard output");
+    errno = EINVAL;
+    return NULL;
+  }
   struct stat st;
   const int exists = lstat(path, &st) == 0;
   out_pending *slot = NULL;

@@ -568,9 +568,10 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   if (!rc) rc = review_presses(db, s->id, &in, &pr, &np);
   FILE *f = NULL;
   int werr = 0; /* errno of a write that failed: nothing renamed over out_path */
+  int open_said = 0; /* the file could not be opened, and that was said: once */
   if (!rc && !(f = review_fopen_out(log, out_path))) {
-    palp_log_error(log, "report: %s: %s", out_path, strerror(errno));
-    rc = PALP_EIO;
+    if (errno != EINVAL) palp_log_error(log, "report: %s: %s", out_path, strerror(errno)); /* EINVAL: it said why */
+    rc = PALP_EIO, open_said = 1;
   }
   if (!rc) {
     fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>palp session ", f);
@@ -671,7 +672,8 @@ int review_report(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     return REVIEW_ERROR;
   }
   if (rc) {
-    palp_log_error(log, "report: %s: %s", out_path, rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
+    if (!open_said)
+      palp_log_error(log, "report: %s: %s", out_path, rc == PALP_DB_ESQL ? palp_db_errmsg(db) : palp_db_strerror(rc));
     return REVIEW_ERROR;
   }
   if (why[0]) {

@@ -369,8 +369,12 @@ int review_prune(palp_log *log, palp_db *db, const char *path, int argc, char **
       }
       if (keep_graded) {
         char g[160];
-        review_latest_grade(db, s->id, g, sizeof g);
-        if (strcmp(g, "-")) {
+        const int graded = review_latest_grade(db, s->id, g, sizeof g);
+        if (graded < 0) { /* whether it was graded is not known: kept (found by review, session 90) */
+          printf("kept   %s: its grade could not be read (%s)\n", s->uid, palp_db_errmsg(db));
+          continue;
+        }
+        if (graded > 0) {
           printf("kept   %s: graded (%s)\n", s->uid, g);
           continue;
         }

@@ -43,6 +43,7 @@ static void usage(FILE *f) {
         "  class    --exercise NAME [--since DATE] --out FILE.html [--csv FILE]\n"
         "  trainee  NAME [--since DATE] [--until DATE] [--csv FILE] [--out FILE.html]\n"
         "           (her sessions oldest first, each exercise's scores, what to work on)\n"
+        "           DATE is YYYY-MM-DD[THH:MM[:SS]], local time; --until a day alone takes in that whole day\n"
         "  delete   SESSION...                  (the sessions and all their data)\n"
         "  prune    --older-than DAYS [--keep-graded] [--dry-run]\n"
         "           (ended sessions: frames, feedback, contacts, meshes, finger samples go; the session,\n"
@@ -99,7 +100,8 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
     else if (!strcmp(a, "--phantom")) f.phantom = argv[++i];
     else { /* --since, --until */
       double t;
-      if (review_parse_date(argv[++i], &t)) {
+      const int until = !strcmp(a, "--until");
+      if ((until ? review_parse_until : review_parse_date)(argv[++i], &t)) {
         fprintf(stderr, "palp-review list: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", a, argv[i]);
         return REVIEW_ERROR;
       }
@@ -119,8 +121,8 @@ static int cmd_list(palp_log *log, palp_db *db, int argc, char **argv) {
   int shown = 0;
   for (int i = 0; i < n; i++) {
     char t[64], exname[64] = "-", grade[160];
-    review_latest_grade(db, v[i].id, grade, sizeof grade);
-    if (ungraded && strcmp(grade, "-")) continue;
+    /* --ungraded lists the sessions not known to be graded: an unreadable grade ("unreadable") too */
+    if (review_latest_grade(db, v[i].id, grade, sizeof grade) > 0 && ungraded) continue;
     shown++;
     review_fmt_time(v[i].start_unix_s, t, sizeof t);
     palp_db_log_health h;

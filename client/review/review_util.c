@@ -156,6 +156,24 @@ int review_parse_date(const char *s, double *out) {
   return 0;
 }
 
+int review_parse_until(const char *s, double *out) {
+  if (review_parse_date(s, out)) return -1;
+  if (strlen(s) != 10) return 0; /* a time given: that instant */
+  /* A date alone: its whole day, to the next day's 00:00 local (mktime carries the 32nd into the next
+   * month and keeps a clock change's hour right). Until session 90 it was its 00:00, so "--since D
+   * --until D" found nothing and "--until D" left D out (found by review). */
+  const time_t t0 = (time_t)*out;
+  struct tm tm;
+  if (!localtime_r(&t0, &tm)) return -1;
+  tm.tm_mday++;
+  tm.tm_hour = tm.tm_min = tm.tm_sec = 0;
+  tm.tm_isdst = -1;
+  const time_t t1 = mktime(&tm);
+  if (t1 == (time_t)-1) return -1;
+  *out = (double)t1;
+  return 0;
+}
+
 static int contact_cb(void *u, const palp_db_contact *c) {
   review_contacts *v = u;
   if (v->n == v->cap) {

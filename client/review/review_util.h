@@ -39,6 +39,9 @@ const char *review_dist_name(palp_distribution d);
 void review_fmt_time(double unix_s, char *buf, size_t len); /* local time, with offset */
 /* YYYY-MM-DD[THH:MM[:SS]] (or a space for T) as local time; 0 or -1. */
 int review_parse_date(const char *s, double *out);
+/* The same for an --until bound (exclusive): a date alone means to the end of that day, the next
+ * day's 00:00 local; with a time, that instant. */
+int review_parse_until(const char *s, double *out);
 /* 1 when a is one of names (NULL-terminated): a command's options that take a value, checked before
  * "needs a value", so that an unknown option in last place is called unknown (until session 83
  * `list --bogus` said "--bogus needs a value"). */

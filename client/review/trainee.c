@@ -184,7 +184,8 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
     else if (!strcmp(argv[i], "--out")) out = argv[++i];
     else { /* --since, --until */
       double t;
-      if (review_parse_date(argv[i + 1], &t)) {
+      const int until = !strcmp(argv[i], "--until");
+      if ((until ? review_parse_until : review_parse_date)(argv[i + 1], &t)) {
         fprintf(stderr, "palp-review trainee: %s: expected YYYY-MM-DD[THH:MM[:SS]], got '%s'\n", argv[i], argv[i + 1]);
         return REVIEW_ERROR;
       }
@@ -261,7 +262,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
     if (csv && review_rows_csv(log, "trainee", db, csv, rows, 0) != 0) rc = REVIEW_ERROR;
     if (out) {
       if (write_page(log, out, name, rows, 0, &none, summary) != 0) {
-        palp_log_error(log, "trainee: %s: %s", out, strerror(errno));
+        if (errno != EINVAL) palp_log_error(log, "trainee: %s: %s", out, strerror(errno)); /* EINVAL: said */
         rc = REVIEW_ERROR;
       } else fprintf(tty, "trainee: wrote %s\n", out);
     }
@@ -327,7 +328,7 @@ int review_trainee(palp_log *log, palp_db *db, int argc, char **argv) {
   if (csv && review_rows_csv(log, "trainee", db, csv, rows, nr) != 0) rc = REVIEW_ERROR;
   if (out) {
     if (write_page(log, out, name, rows, nr, &rec, summary) != 0) {
-      palp_log_error(log, "trainee: %s: %s", out, strerror(errno));
+      if (errno != EINVAL) palp_log_error(log, "trainee: %s: %s", out, strerror(errno)); /* EINVAL: said */
       rc = REVIEW_ERROR;
     } else fprintf(tty, "trainee: wrote %s\n", out);
   }

@@ -378,11 +378,29 @@ if "$review" --db "$dir/dan.db" trainee dan --csv "$dir/dan.csv" --out "$dir/dan
     ok "trainee dan (nothing to assess): exit 0, the CSV's header alone and a page saying why written over the old files, both reasons counted"
   else bad "trainee dan (nothing to assess)"; cat "$dir/trainee-dan.txt" "$dir/trainee-dan.err" "$dir/dan.csv" "$dir/dan.html"; fi
 else bad "trainee dan (nothing to assess) exit status"; cat "$dir/trainee-dan.txt" "$dir/trainee-dan.err"; fi
+# --until a date alone takes in that whole day (session 90's review: it was the day's 00:00, so a day's
+# own sessions were left out and --since D --until D found none); the sessions start at 11:00 UTC
+R list --until 2026-01-05 > "$dir/until.txt" 2>&1
+R trainee alice --since 2026-01-06 --until 2026-01-06 > "$dir/trainee-day.txt" 2>&1; rc=$?
+if grep -q "^class-bob-1 " "$dir/until.txt" && grep -q "^1 session$" "$dir/until.txt" && [ $rc -eq 0 ] &&
+   grep -q "class-alice-1" "$dir/trainee-day.txt"
+then ok "--until 2026-01-05 lists that day's class-bob-1 (1 session); trainee alice on 2026-01-06 alone finds hers"
+else bad "--until a date alone: exit $rc"; cat "$dir/until.txt" "$dir/trainee-day.txt"; fi
 if R trainee alice --since 2026-01-07 > "$dir/trainee-none.txt" 2>&1; then bad "trainee alice since 2026-01-07 (none) succeeded"
 else expect "trainee: none in the time asked, said" "no session of trainee 'alice' in that time" "$dir/trainee-none.txt"; fi
 if R trainee > "$dir/trainee-noname.txt" 2>&1; then bad "trainee without a name succeeded"
 else expect "trainee: the name is asked for" "NAME is required" "$dir/trainee-noname.txt"; fi
 
+# prune --keep-graded over notes that cannot be read keeps every session, saying why (session 90's review:
+# an unreadable note table read as "no grade" and graded sessions lost their frames for good)
+# (a note table whose grade columns are gone: the sessions list, their grades cannot be read)
+cp "$db" "$dir/nonotes.db" && sqlite3 "$dir/nonotes.db" "ALTER TABLE note RENAME TO note_x;
+  CREATE VIEW note AS SELECT id, session_id, wall_unix_s, author, text FROM note_x" || bad "a copy whose notes cannot be read"
+"$review" --db "$dir/nonotes.db" prune --older-than 1 --keep-graded > "$dir/prune-nonotes.txt" 2>&1
+if [ "$(grep -c '^kept   class-[a-z]*-[0-9]: its grade could not be read' "$dir/prune-nonotes.txt")" = 4 ] &&
+   ! grep -q '^pruned' "$dir/prune-nonotes.txt"
+then ok "prune --keep-graded, the notes unreadable: the 4 sessions kept, none pruned"
+else bad "prune --keep-graded, the notes unreadable:"; cat "$dir/prune-nonotes.txt"; fi
 # Retention: prune keeps graded sessions; pruned ones keep their metrics; delete removes one.
 R prune --older-than 1 --keep-graded > "$dir/prune.txt" 2>&1 || bad "prune exit status"
 expect "prune: graded sessions kept" "kept +class-alice-1: graded" "$dir/prune.txt"
@@ -570,7 +588,7 @@ ok "prune --older-than ' 5', 1e3, -1, 0x10, 100001 (over the cap), 5x: each exit
   ok "prune --older-than 30000: nothing that old, 0 sessions pruned" ||
   bad "prune --older-than 30000: exit $rc, $(pruned_n "$dir/bounds.db") pruned: $(cat "$dir/prune-30000.txt")"
 "$review" --db "$dir/bounds.db" list --until 1970-01-01 > "$dir/list-1970.txt" 2>&1 || bad "list --until 1970-01-01 exit status"
-expect "list --until 1970-01-01: no session started before 1970" "^0 sessions$" "$dir/list-1970.txt"
+expect "list --until 1970-01-01: no session started by the end of 1970-01-01" "^0 sessions$" "$dir/list-1970.txt"
 "$review" --db "$dir/bounds.db" list --since 1970-01-01 > "$dir/list-since1970.txt" 2>&1 || bad "list --since 1970-01-01 exit status"
 expect "list --since 1970-01-01: both" "^2 sessions$" "$dir/list-since1970.txt"
 for v in 2026-02-31 2026-02-29 "2026-03-01Tfoo" "2026-03-01T12:00:00junk" "2026-03-01x"; do
@@ -611,6 +629,7 @@ import sqlite3, sys
 c = sqlite3.connect(sys.argv[1])
 osc, csi, c1 = "\x1b]0;pwned\x07", "\x1b[2J", "\u009b2J"
 c.execute("insert into session_exercise(session_id, exercise_name, exercise_json) values(1, ?, '{}')", ("ex" + osc,))
+c.execute("update session set trainee = ? where id = 1", ("car" + c1,))  # session 90: a C1 CSI in a name
 c.execute("insert into note(session_id, author, wall_unix_s, text, grade) values(1, ?, 1.7e9, ?, ?)", ("Lee" + csi, "t" + c1, "B" + osc))
 c.execute("insert into event(session_id, wall_unix_s, frame, kind, detail, count) values(1, 1.7e9, 1, ?, ?, 1)", ("k" + csi, "d" + osc))
 c.execute("insert into event(session_id, wall_unix_s, frame, kind, detail, count) values(NULL, 1.7e9, 0, 'security_refused', ?, 3)",
@@ -624,8 +643,9 @@ if ! LC_ALL=C grep -q "$(printf '\033')" "$dir/esc-list.txt" "$dir/esc-show.txt"
    ! LC_ALL=C grep -q "$(printf '\302\233')" "$dir/esc-list.txt" "$dir/esc-show.txt" &&
    grep -q "'B?\]0;pwned?' (free text)" "$dir/esc-list.txt" && grep -q 'ex?\]0;pwned?' "$dir/esc-list.txt" &&
    grep -q 'trainee/m?\]0;pwned?: revoked' "$dir/esc-list.txt" &&
+   grep -q 'car??2J' "$dir/esc-list.txt" && grep -q 'car??2J' "$dir/esc-show.txt" &&
    grep -q 'k?\[2J' "$dir/esc-show.txt" && grep -q 'Lee?\[2J' "$dir/esc-show.txt" && grep -q 't??2J' "$dir/esc-show.txt"; then
-  ok "escape sequences in an exercise name, grades, a refusal, events and notes: list and show print '?' for each control character"
+  ok "escape sequences in an exercise name, grades, a refusal, events, notes and (C1) a trainee's name: list and show print '?' for each control character"
 else bad "escape sequences reach the terminal:"; od -c "$dir/esc-list.txt" | grep -n '033\|007\|302' | head -5; od -c "$dir/esc-show.txt" | grep -n '033\|007\|302' | head -5; fi
 
 # a log file it cannot open: the reason with it (session 77; it said only "cannot open it")
@@ -676,6 +696,13 @@ argerr "show class-alice-1 --out" "palp-review show: --out needs a value" --db "
 argerr "annotate $uid --author" "palp-review annotate: --author needs a value" --db "$dir/ver.db" annotate "$uid" --author
 argerr "class --exercise" "palp-review class: --exercise needs a value" --db "$db" class --exercise
 argerr "trainee alice --since" "palp-review trainee: --since needs a value" --db "$db" trainee alice --since
+# --out - for a report or a page is refused, said once (session 90's review: it wrote a file named "-")
+mkdir -p "$dir/dashcwd"
+(cd "$dir/dashcwd" && "$review" --db "$dir/ver.db" report "$uid" --out - > "$dir/dash.txt" 2>&1); rc=$?
+if [ $rc -eq 2 ] && [ ! -e "$dir/dashcwd/-" ] && [ "$(grep -c "'-' is not a file name here" "$dir/dash.txt")" = 1 ] &&
+   [ "$(wc -l < "$dir/dash.txt")" = 1 ]
+then ok "report --out -: exit 2, no file '-', one line: $(cut -c26- "$dir/dash.txt")"
+else bad "report --out -: exit $rc, files: $(ls -A "$dir/dashcwd"):"; cat "$dir/dash.txt"; fi
 # --help says what it does: a command-line mistake is a plain line, and the SIGHUP note names palp-web too
 "$review" --help > "$dir/help.txt" 2>&1
 expect "--help: a command-line mistake is one plain line" "A command-line mistake is one plain line" "$dir/help.txt"
