@@ -160,6 +160,12 @@ def case_run_dt(a, tmp):
     rc, out = run([a.run, os.path.join(a.config, "paper_step.json"), "--frames", "3", "--vertices", "19", "--dt", "0.001"])
     check(rc == 0 and "19 vertices, dt 0.001 s, 3 frames of" in out, "palp-run --frames 3 --vertices 19 --dt 0.001 runs (rc %d): %s"
           % (rc, out.strip()[:200]))
+    # a run that ends before its release (2 s) says the recovery figures were not reached (session 90's
+    # review: "1 s after release 0.000 mm (0.0%)", a perfect recovery, and "feedback at release (0, 0, 0) N")
+    check(rc == 0 and "1 s after release (not reached: the run ends at" in out and
+          "feedback at release (not reached: the run ends at" in out and "not back within 5% of its peak" in out and
+          "0.000 mm (0.0%)" not in out, "palp-run's 3 frames: the recovery figures not reached, said so: %s"
+          % out.strip()[-300:])
 
 
 def case_run_write(a, tmp):
