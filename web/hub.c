@@ -1591,8 +1591,11 @@ static void on_debrief(palp_web_hub *h, const palp_Debrief *m) {
   session_end e;
   int slot, known = 0;
   if (find_session(h, m->session_id, &slot)) session_end_of(h, slot, &e), known = 1;
+  /* a closed one's from the same server participant (trainee_of_session): a restarted run's debrief of
+   * its own session under the id went to the page of the old run's trainee as hers until session 90 */
   for (int k = 0; k < DEBRIEFS && !known; k++)
-    if (h->closed[k].sid == m->session_id) e = h->closed[k], known = 1;
+    if (h->closed[k].sid == m->session_id && same_server(h->closed[k].server_pp, h->sample_participant))
+      e = h->closed[k], known = 1;
   if (!known) {
     h->stats.no_session++;
     return;
@@ -2250,9 +2253,10 @@ static int drain(palp_web_hub *h, dds_entity_t rd, sample_fn on, lost_fn lost, u
         sw->strays++, h->stats.stream_strays++;
       if (check && !from_its_partition(h, rd, ptr[i], &info[i])) continue; /* data and disposes alike */
       if (server_topic && info[i].valid_data && !from_its_server(h, rd, ptr[i], &info[i])) continue;
-      /* the states' writer (on_state), and the closed sessions' and scores' (trainee_of_session): rare
+      /* the states' writer (on_state), and the closed sessions', scores' and debriefs' (trainee_of_session): rare
        * topics, one discovery lookup a sample */
-      const int whose = rd == h->state_r || rd == h->closed_r || rd == h->score_r || rd == h->debrief_score_r;
+      const int whose = rd == h->state_r || rd == h->closed_r || rd == h->score_r || rd == h->debrief_score_r ||
+                        rd == h->debrief_r;
       h->sample_participant = whose && info[i].valid_data ? palp_dds_origin_participant(&h->origin, rd, &info[i]) : 0;
       /* a dispose of a key whose session the gate would not pass (never heard open, so not a station
        * that leaves a session that just closed); Cyclone fills an invalid sample's key */

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
@@ -192,6 +193,8 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
     return REVIEW_ERROR;
   }
   FILE *f = stdout;
+  /* whether --out names a file already there: an export cut short never replaces it (below) */
+  const int had_file = out_path && strcmp(out_path, "-") && access(out_path, F_OK) == 0;
   if (out_path && strcmp(out_path, "-") && !(f = review_fopen_out(log, out_path))) {
     perror(out_path);
     return REVIEW_ERROR;
@@ -272,12 +275,14 @@ int review_export(palp_log *log, palp_db *db, const palp_db_session_info *s, con
   }
   const int to_stdout = f == stdout;
   if (rc) { /* which table, and why (2026-12-06: the notes ended there silently) */
-    /* A file is not written: the cut export (invalid JSON, a CSV short of rows) replaced a whole one
-     * already there until session 90 (found by review); standard output has had what came before. */
-    const char *what = to_stdout ? "the export is incomplete" : "not written; a file already there is kept";
+    /* What came before the damage is written (the rows read), except over a file already there: the
+     * cut export (invalid JSON, a CSV short of rows) replaced a whole one until session 90 (found by
+     * review); that file is kept. */
+    const char *what = !had_file ? "the export is incomplete: it holds what came before"
+                                 : "not written; the file already there is kept";
     palp_log_error(log, "export: the %s could not be read: %s (%s)", table, palp_db_errmsg(db), what);
-    if (to_stdout) review_close_out(f);
-    else review_abandon_out(f);
+    if (had_file) review_abandon_out(f);
+    else review_close_out(f);
     return REVIEW_ERROR;
   }
   const int werr = review_close_out(f) != 0 ? errno : 0;

@@ -184,7 +184,7 @@ cp "$db" "$dir/cut.db" && sqlite3 "$dir/cut.db" "DROP TABLE feedback" || bad "a 
 cp "$dir/bob.json" "$dir/bob-whole.json"
 "$review" --db "$dir/cut.db" export class-bob-1 --format json --out "$dir/bob.json" > "$dir/cut-export.txt" 2>&1; rc=$?
 if [ $rc -eq 2 ] && cmp -s "$dir/bob.json" "$dir/bob-whole.json" &&
-   grep -q "export: the feedback could not be read: .* (not written; a file already there is kept)" "$dir/cut-export.txt"
+   grep -q "export: the feedback could not be read: .* (not written; the file already there is kept)" "$dir/cut-export.txt"
 then ok "export over an unreadable feedback table: exit 2, the whole export already there kept"
 else bad "export over an unreadable feedback table: exit $rc: $(cat "$dir/cut-export.txt")"; fi
 "$review" --db "$dir/cut.db" show class-bob-1 > "$dir/cut-show.txt" 2>&1; rc=$?

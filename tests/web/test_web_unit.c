@@ -2352,7 +2352,7 @@ static void test_review_80(void) {
 
 /* ---- session 90's review ---- */
 
-/* Domain 221: a trainee's page is told only her own score. alice's scoped page bound to her session 4740,
+/* Domain 221: a trainee's page is told only her own debrief and score. alice's scoped page bound to her session 4740,
  * which closed; a restarted server (another participant) numbers its sessions from 1 and its session
  * 4740 is bob's, whose open this bridge never saw (its slots full, or OPEN and CLOSED read at once). The
  * server tells bob his score: it must not reach alice's page, still bound to 4740 (until session 90 it
@@ -2373,7 +2373,11 @@ static void test_told_score_reused_id(void) {
   const dds_entity_t w_told2 = palp_dds_create_writer(palp_dds_session_publisher(pp2, part),
                                                       palp_dds_create_topic(pp2, PALP_TOPIC_DEBRIEF_SCORE),
                                                       PALP_TOPIC_DEBRIEF_SCORE);
-  CHECK(w_state > 0 && w_told > 0 && w_told2 > 0, "told scores: DDS entities");
+  const dds_entity_t w_db = palp_dds_create_writer(palp_dds_session_publisher(pp, part),
+                                                   palp_dds_create_topic(pp, PALP_TOPIC_DEBRIEF), PALP_TOPIC_DEBRIEF);
+  const dds_entity_t w_db2 = palp_dds_create_writer(palp_dds_session_publisher(pp2, part),
+                                                    palp_dds_create_topic(pp2, PALP_TOPIC_DEBRIEF), PALP_TOPIC_DEBRIEF);
+  CHECK(w_state > 0 && w_told > 0 && w_told2 > 0 && w_db > 0 && w_db2 > 0, "told scores: DDS entities");
   palp_web_cursor alice;
   CHECK(palp_web_hub_attach(h, &alice, 8) == 0, "told scores: alice's page");
   palp_web_hub_scope(h, &alice, "alice");
@@ -2389,6 +2393,19 @@ static void test_told_score_reused_id(void) {
   CHECK(hub_reached(h, STATES, states0 + 2), "the hub took her session's close within 5 s");
   dds_sleepfor(DDS_MSECS(300)); /* the told-score writers matched */
 
+  /* the debriefs first, as the server writes them: the new run's of bob's 4740, then alice's own */
+  palp_Debrief db;
+  memset(&db, 0, sizeof db);
+  db.session_id = sid;
+  db.level = palp_DEBRIEF_COUNT;
+  snprintf(db.reason, sizeof db.reason, "trainee station left");
+  CHECK(dds_write(w_db2, &db) == 0, "the new run's server writes bob's debrief of its session %u", sid);
+  dds_sleepfor(DDS_MSECS(300));
+  debriefs_seen bobs = debriefs_sent(h, &alice, 40);
+  CHECK(bobs.n == 0, "alice's page is sent no debrief of the new run's %u (%d)", sid, bobs.n);
+  CHECK(dds_write(w_db, &db) == 0, "her own server writes alice's debrief");
+  debriefs_seen hers_db = debriefs_sent(h, &alice, 100);
+  CHECK(hers_db.n == 1 && hers_db.sid[0] == sid, "her page is sent hers, once (%d)", hers_db.n);
   palp_SessionScore m;
   score_sample(&m, sid, palp_SCORE_GRADED);
   snprintf(m.pattern, sizeof m.pattern, "unsystematic");
