@@ -330,7 +330,10 @@ int palp_assess_touches(const palp_assess_sample *s, int n, double R, double r, 
 
 int palp_assess(const palp_exercise *ex, const palp_mesh *mesh, double r, const palp_assess_sample *s, int n,
                 const palp_finding *f, int nf, palp_assess_result *out, int *match, uint8_t *coverage) {
-  if (!ex || !mesh || !out || n < 0 || nf < 0 || (n && !s) || (nf && !f) || !(r > 0.0) || !mesh->vertex_area)
+  /* the lesion count as palp_assess_findings checks it: more than PALP_MAX_LESIONS overran the matcher's
+   * arrays (an exercise built by a caller, not the parser, which bounds it; session 90's review) */
+  if (!ex || !mesh || !out || n < 0 || nf < 0 || (n && !s) || (nf && !f) || !(r > 0.0) || !mesh->vertex_area ||
+      ex->lesion_count < 0 || ex->lesion_count > PALP_MAX_LESIONS)
     return PALP_EINVAL;
   memset(out, 0, sizeof *out);
   const double R = v3_len(mesh->rest[mesh->top_vertex]); /* the pole lies on the dome's radius */

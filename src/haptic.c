@@ -91,8 +91,8 @@ int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
   const palp_haptic_def d = def ? *def : palp_haptic_default_def();
   if (!(d.max_force > 0.0) || !(d.damping >= 0.0) || !(d.blend_time >= 0.0) || !(d.max_extrapolation >= 0.0) ||
       !(d.stale_time > 0.0) || !(d.fade_time > 0.0) || !isfinite(d.max_force) || !isfinite(d.damping) ||
-      !(d.max_stiffness > 0.0))
-    return PALP_EINVAL;
+      !(d.max_stiffness > 0.0) || !isfinite(d.stale_time) || !isfinite(d.fade_time) || !isfinite(d.blend_time))
+    return PALP_EINVAL; /* an infinite stale or fade time: a silent server's force would never fade */
   memset(h, 0, sizeof *h);
   h->def = d;
   h->onset_from = 1.0; /* no onset running */
@@ -102,6 +102,8 @@ int palp_haptic_init(palp_haptic *h, const palp_haptic_def *def) {
 void palp_haptic_forget(palp_haptic *h) {
   if (h) h->have = 0; /* rendered and last_x stay: the hand's force is what the next model blends from */
 }
+
+#define PALP_HAPTIC_DAMPER_DT_MIN 0.5e-3 /* [s] the damper's shortest velocity interval */
 
 static double clamp01(double s) { return s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s); }
 
@@ -208,6 +210,14 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m_in, double now)
   /* The model as the station will render it: K positive semi-definite and within max_stiffness. */
   palp_local_model mk = *m_in;
   const palp_local_model *m = &mk;
+  /* The contact normal as a unit vector: the damper and its floor read it as one, and a normal of
+   * length 3 let the damper pull the withdrawing hand into the surface (-4 N; session 90's review;
+   * the station refuses such a model from the wire, this is the library's own guard). */
+  if (mk.contact) {
+    const double l = v3_len(mk.normal);
+    if (!(l > 1e-9)) return PALP_EINVAL; /* in contact along no direction */
+    mk.normal = v3_scale(mk.normal, 1.0 / l);
+  }
   const int klim = palp_haptic_limit_stiffness(mk.stiffness, h->def.max_stiffness);
   palp_vec3 delta = v3(0, 0, 0);
   double blend = h->def.blend_time > 0.0 ? h->def.blend_time : m->period;
@@ -230,6 +240,7 @@ int palp_haptic_update(palp_haptic *h, const palp_local_model *m_in, double now)
     const double g_new = keep < 1.0 ? h->onset_from : g_now;
     delta = v3_sub(was, v3_scale(palp_haptic_clamp(palp_local_model_force(m, h->last_x, 0.0), h->def.max_force, NULL),
                                  g_new));
+
     /* delta is a correction like any other (0 for a first model; the faded models' disagreement,
      * scaled by the share felt, after a silence): one period. Blends of fade_time for it, kept to
      * their end by later models, made every correction of an onset's first 0.1 s that long, and
@@ -283,7 +294,10 @@ void palp_haptic_render(palp_haptic *h, palp_vec3 x, double now, palp_haptic_out
     /* Damper along the normal on the device's velocity, never pulling into the surface,
      * scaled with the fade and the onset gain (it has no step at an onset either). */
     if (h->rendered && now > h->last_t && h->def.damping > 0.0) {
-      const double vn = v3_dot(v3_sub(x, h->last_x), n) / (now - h->last_t); /* [m/s], < 0 going in */
+      /* over at least half a tick of 1 kHz: a tick just after a late one (10 us) made encoder noise of
+       * 10 um a velocity of 1 m/s and the damper 2 N in one tick (session 90's review) */
+      const double dt = fmax(now - h->last_t, PALP_HAPTIC_DAMPER_DT_MIN);
+      const double vn = v3_dot(v3_sub(x, h->last_x), n) / dt; /* [m/s], < 0 going in */
       const palp_vec3 fd = v3_scale(n, fmax(-keep * onset_gain(h, now) * h->def.damping * vn, -fn0));
       f = v3_add(f, fd);
       raw = v3_add(raw, fd);

@@ -113,6 +113,16 @@ int main(void) {
   CHECK(res.false_positives == 2 && res.duplicates == 1 && res.withdrawn == 1 && res.findings == 4,
         "fp %d dup %d withdrawn %d findings %d", res.false_positives, res.duplicates, res.withdrawn, res.findings);
   CHECK_NEAR(res.sensitivity, 1.0, 0.0, "sensitivity");
+  { /* session 90's review: a lesion count past PALP_MAX_LESIONS (a caller's own exercise) is refused, as
+     * palp_assess_findings refuses it; it overran the matcher's arrays (d[PALP_MAX_LESIONS]) */
+    palp_exercise many = ex;
+    many.lesion_count = PALP_MAX_LESIONS + 1;
+    palp_exercise none = ex;
+    none.lesion_count = -1;
+    CHECK(palp_assess(&many, &mesh, r, &one, 1, f, 5, &res, match, NULL) == PALP_EINVAL &&
+              palp_assess(&none, &mesh, r, &one, 1, f, 5, &res, match, NULL) == PALP_EINVAL,
+          "lesion counts %d and -1 refused (PALP_EINVAL)", PALP_MAX_LESIONS + 1);
+  }
   /* The same findings without a session (the server's debrief): the same verdicts, on the dome of
    * the mesh's pole radius (40 mm, the default mesh). */
   {

@@ -905,6 +905,52 @@ static void test_bad_readings_counted(void) {
         (unsigned long long)st.bad_x_ticks, (unsigned long long)st.contacts_failed);
 }
 
+/* 18. The renderer's own guards (session 90's review of src/haptic.c):
+ *  - the damper's velocity over at least 0.5 ms: a render 10 us after the last with the device 10 um
+ *    further in adds at most damping x 10 um / 0.5 ms = 2 x 0.02 = 0.04 N (before: 2 x 1 m/s = 2 N);
+ *  - a model's contact normal of length 3 is taken as its unit vector: the hand withdrawing at
+ *    0.1 m/s from a 1 N press never feels a pull (before: -0.8 N, the damper's floor read against |n|^2);
+ *  - an infinite stale or fade time is refused at init (a silent server's force would never fade). */
+static void test_renderer_guards(void) {
+  palp_haptic_def def = palp_haptic_default_def(); /* damping 2 N s/m */
+  palp_haptic h;
+  palp_haptic_init(&h, &def);
+  palp_haptic_out o;
+  palp_local_model m = contact_model(1.0, 0.03, 1.0, 0);
+  palp_haptic_update(&h, &m, 0.0);
+  for (int k = 0; k <= 200; ++k) palp_haptic_render(&h, (palp_vec3){0, 0, 0.03}, k * TICK, &o); /* onset over */
+  const double f0 = o.force.z;
+  palp_haptic_render(&h, (palp_vec3){0, 0, 0.03 - 10e-6}, 0.200 + 10e-6, &o);
+  CHECK(fabs(f0 - 1.0) < 1e-9 && o.force.z - f0 <= 0.04 + 1e-9,
+        "a render 10 us after the last, 10 um further in: the damper adds %.4f N (<= 0.04 N; before 2 N)", o.force.z - f0);
+
+  palp_haptic h2;
+  palp_haptic_init(&h2, &def);
+  palp_local_model m3 = contact_model(1.0, 0.03, 1.0, 0);
+  m3.normal = (palp_vec3){0, 0, 3};
+  CHECK(palp_haptic_update(&h2, &m3, 0.0) == 1, "a model with a normal of length 3 is taken");
+  double least = 1e9;
+  for (int k = 0; k <= 200; ++k) palp_haptic_render(&h2, (palp_vec3){0, 0, 0.03}, k * TICK, &o);
+  for (int k = 1; k <= 20; ++k) { /* withdrawing at 0.1 m/s: 0.1 mm a tick */
+    palp_haptic_render(&h2, (palp_vec3){0, 0, 0.03 + k * 1e-4}, 0.200 + k * TICK, &o);
+    least = fmin(least, o.force.z);
+  }
+  CHECK(least >= 0.0, "  withdrawing from it at 0.1 m/s: the least force along the normal %.4f N (never a pull; "
+        "before -0.80 N)", least);
+  m3.normal = (palp_vec3){0, 0, 0};
+  m3.time = 2.0;
+  CHECK(palp_haptic_update(&h2, &m3, 0.3) == PALP_EINVAL, "  one in contact along no direction (normal 0) refused");
+
+  palp_haptic h3;
+  palp_haptic_def inf = palp_haptic_default_def();
+  inf.stale_time = INFINITY;
+  const int r1 = palp_haptic_init(&h3, &inf);
+  inf = palp_haptic_default_def();
+  inf.fade_time = INFINITY;
+  const int r2 = palp_haptic_init(&h3, &inf);
+  CHECK(r1 == PALP_EINVAL && r2 == PALP_EINVAL, "an infinite stale_time (%d) or fade_time (%d) refused at init", r1, r2);
+}
+
 /* 15. Where a mark may be taken (session 90's review): a pressing model every 4 ms to 100 ms, then a
  * server gone quiet. By hand: stale from 100 + 250 = 350 ms, faded to 0 N at 450 ms. At 200 ms (fresh,
  * 2 N) a mark is allowed; at 400 ms the hand still feels half the force (1 N, contact) but its point is
@@ -987,5 +1033,6 @@ int main(void) {
   test_can_mark();
   test_refused_says_nothing();
   test_bad_readings_counted();
+  test_renderer_guards();
   return check_exit();
 }
